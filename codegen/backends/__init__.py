@@ -1,0 +1,1 @@
+"""One package per target language: ``c``, ``python``, ``casadi``."""

@@ -1,0 +1,176 @@
+"""Common-subexpression elimination across all outputs of one function, and op counts.
+
+``cse_function`` is the only transformation a backend applies to a spec's expressions:
+``sympy.cse`` over every output at once (so a mass matrix and its derivative share their
+sines), followed by one printing-driven step: the compound base of a power that prints as
+a repeated product (``(a + b)**2`` -> ``_t*_t``) becomes a temporary so it is evaluated
+once. Temporaries are named ``_t0, _t1, ...`` in order of definition, so the result (and
+every file printed from it) is the same whatever the hash seed.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import sympy as sp
+
+from codegen.layout import check_spec
+from codegen.printer_base import CountingPrinter
+from codegen.spec import FunctionSpec
+
+
+@dataclass(frozen=True)
+class CseResult:
+    """A function after CSE: temporaries in evaluation order, then outputs.
+
+    ``outputs[k]`` holds the row-major expressions of ``spec.outputs[k]`` in terms of the
+    input symbols and the temporaries.
+    """
+
+    spec: FunctionSpec
+    temps: tuple[tuple[sp.Symbol, sp.Expr], ...]
+    outputs: tuple[tuple[sp.Expr, ...], ...]
+
+    def used_symbols(self) -> frozenset[sp.Symbol]:
+        """Input symbols the computation reads (others need not be loaded)."""
+        used: set[sp.Basic] = set()
+        for _, e in self.temps:
+            used |= e.free_symbols
+        for exprs in self.outputs:
+            for e in exprs:
+                used |= e.free_symbols
+        inputs = set(self.spec.input_symbols())
+        return frozenset(s for s in used if s in inputs and isinstance(s, sp.Symbol))
+
+
+@dataclass(frozen=True)
+class OpCount:
+    """Arithmetic after CSE, as printed. Negations are free; ``x**3`` is two ``mul``;
+    ``other`` lists remaining calls and comparisons by name (sorted)."""
+
+    add: int = 0
+    mul: int = 0
+    div: int = 0
+    sincos: int = 0
+    sqrt: int = 0
+    other: tuple[tuple[str, int], ...] = ()
+
+    def summary(self) -> str:
+        """E.g. ``41 add, 63 mul, 2 div, 2 sin/cos, 0 sqrt`` (+ ``, 1 fmax`` if any)."""
+        text = (
+            f"{self.add} add, {self.mul} mul, {self.div} div, "
+            f"{self.sincos} sin/cos, {self.sqrt} sqrt"
+        )
+        return text + "".join(f", {n} {name}" for name, n in self.other)
+
+    def comment(self) -> str:
+        """The line each generated function's documentation carries."""
+        return f"operations after CSE: {self.summary()}"
+
+
+def _needs_single_base(expr: sp.Pow) -> bool:
+    """True if printing ``expr`` repeats its base (|n| >= 2, or n/2 with |n| >= 3)."""
+    exponent = expr.exp
+    if not isinstance(exponent, sp.Rational) or exponent.q not in (1, 2):
+        return False
+    return abs(exponent) >= 2 if exponent.q == 1 else abs(exponent) >= sp.Rational(3, 2)
+
+
+def _temp_names(taken: set[str]) -> Iterator[str]:
+    i = 0
+    while True:
+        name = f"_t{i}"
+        if name not in taken:
+            yield name
+        i += 1
+
+
+def cse_function(spec: FunctionSpec) -> CseResult:
+    """Eliminate common subexpressions across all outputs of ``spec``."""
+    check_spec(spec)
+    flat = [e for arg in spec.outputs for e in arg.exprs]
+    taken = {str(s) for e in flat for s in e.free_symbols}
+    # Placeholder names first; final names are given in definition order below.
+    raw = sp.numbered_symbols("_cse_tmp", start=0)
+    pairs, reduced = sp.cse(flat, symbols=raw, optimizations="basic", order="canonical")
+
+    # Hoist compound bases of repeated-product powers into temporaries.
+    hoisted: list[tuple[sp.Symbol, sp.Expr]] = []
+    base_temps: dict[sp.Expr, sp.Symbol] = {}
+    memo: dict[sp.Basic, sp.Basic] = {}
+    counter = itertools.count()
+
+    def visit(expr: sp.Basic) -> sp.Basic:
+        if expr.is_Atom:
+            return expr
+        if expr in memo:
+            return memo[expr]
+        args = [visit(a) for a in expr.args]
+        out = (
+            expr.func(*args)
+            if any(a is not b for a, b in zip(args, expr.args, strict=True))
+            else expr
+        )
+        if (
+            isinstance(out, sp.Pow)
+            and _needs_single_base(out)
+            and not isinstance(out.base, sp.Symbol)
+            and out.base.free_symbols
+        ):
+            base = out.base
+            if base not in base_temps:
+                sym = sp.Symbol(f"_cse_pow{next(counter)}")
+                base_temps[base] = sym
+                hoisted.append((sym, base))
+            out = sp.Pow(base_temps[base], out.exp)
+        memo[expr] = out
+        return out
+
+    for sym, e in pairs:
+        new_e = visit(e)
+        hoisted.append((sym, new_e))  # bases found inside e were appended first
+    outputs_flat = [visit(e) for e in reduced]
+
+    # Final names _t0, _t1, ... in definition order (skipping names of input symbols).
+    names = _temp_names(taken)
+    rename = {sym: sp.Symbol(next(names)) for sym, _ in hoisted}
+    temps = tuple((rename[s], e.xreplace(rename)) for s, e in hoisted)
+    outputs_flat = [e.xreplace(rename) for e in outputs_flat]
+
+    outputs: list[tuple[sp.Expr, ...]] = []
+    offset = 0
+    for arg in spec.outputs:
+        n = len(arg.exprs)
+        outputs.append(tuple(outputs_flat[offset : offset + n]))
+        offset += n
+    return CseResult(spec=spec, temps=temps, outputs=tuple(outputs))
+
+
+def count_ops(result: CseResult) -> OpCount:
+    """Count the operations of a CSE result exactly as the C and Python printers print it."""
+    names = {s: str(s) for s in result.spec.input_symbols()}
+    names.update({s: str(s) for s, _ in result.temps})
+    printer = CountingPrinter(names)
+    for _, e in result.temps:
+        printer.expr_code(e)
+    for exprs in result.outputs:
+        for e in exprs:
+            printer.expr_code(e)
+    return op_count_from(printer.ops)
+
+
+def op_count_from(ops: Counter[str]) -> OpCount:
+    """Fold a printer's raw counter into an :class:`OpCount`."""
+    main = {"add", "mul", "div", "sin", "cos", "sqrt"}
+    other = tuple(sorted((k, v) for k, v in ops.items() if k not in main and v))
+    return OpCount(
+        add=ops["add"],
+        mul=ops["mul"],
+        div=ops["div"],
+        sincos=ops["sin"] + ops["cos"],
+        sqrt=ops["sqrt"],
+        other=other,
+    )

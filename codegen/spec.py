@@ -1,0 +1,75 @@
+"""What a generated function is, independent of the target language.
+
+`modeling/` produces SymPy expressions; `codegen/` wraps each group of outputs that share
+inputs into a :class:`FunctionSpec` and hands it to every backend (C, Python, CasADi).
+Backends never do mathematics beyond common-subexpression elimination: every expression
+here is final.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import sympy as sp
+
+ArgKind = Literal["params", "struct", "array"]
+
+
+@dataclass(frozen=True)
+class Field:
+    """One named member of a struct argument: a scalar (shape (1, 1)) or a fixed array."""
+
+    name: str
+    symbols: tuple[sp.Symbol, ...]  # row-major
+    shape: tuple[int, int] = (1, 1)
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Argument:
+    """An input or output of a generated function.
+
+    kind
+        ``"array"``: a flat row-major array of ``symbols`` (C ``const wmr_real_t *name`` for
+        inputs, ``wmr_real_t *name`` for outputs; NumPy array in Python).
+        ``"params"``: the robot's lumped parameters, C ``const wmr_params_t *name``,
+        a mapping with keys ``field.name`` in Python.
+        ``"struct"``: a named C struct ``ctype`` with ``fields``; a mapping / object with
+        those attribute names in Python.
+    For outputs, ``symbols`` is unused and ``exprs`` holds the expressions (row-major).
+    """
+
+    name: str
+    kind: ArgKind
+    shape: tuple[int, int] = (1, 1)
+    symbols: tuple[sp.Symbol, ...] = ()
+    exprs: tuple[sp.Expr, ...] = ()
+    fields: tuple[Field, ...] = ()
+    ctype: str = ""
+    doc: str = ""
+
+    def all_symbols(self) -> tuple[sp.Symbol, ...]:
+        if self.kind == "array":
+            return self.symbols
+        return tuple(s for f in self.fields for s in f.symbols)
+
+
+@dataclass(frozen=True)
+class FunctionSpec:
+    """A pure function: outputs are expressions in the inputs' symbols only.
+
+    ``name`` is the C name without the ``wmr_`` prefix (e.g. ``mass_matrix``) and the
+    Python name. ``equations`` cites the paper, e.g. ``("(14)",)``.
+    """
+
+    name: str
+    doc: str
+    inputs: tuple[Argument, ...]
+    outputs: tuple[Argument, ...]
+    equations: tuple[str, ...] = ()
+    returns_status: bool = False
+    extra: dict[str, str] = field(default_factory=dict)
+
+    def input_symbols(self) -> tuple[sp.Symbol, ...]:
+        return tuple(s for a in self.inputs for s in a.all_symbols())

@@ -1,0 +1,330 @@
+"""Lagrangian mechanics with Pfaffian constraints, for any robot.
+
+From generalised coordinates q, a kinetic energy T(q, q̇) (and optionally a potential
+V(q)), Pfaffian velocity constraints A(q) q̇ = 0 and an input map B, this module computes
+
+* the Euler–Lagrange form (9):  M(q) q̈ + H(q, q̇) = B τ − Aᵀ(q) λ;
+* a null-space basis S(q) with A S = 0 from a split of q into dependent and independent
+  coordinates, so that q̇ = S(q) η with η the independent velocities;
+* the multipliers λ as functions of (q, q̇, q̈ᵢ) — the route of (10)–(12) — and of
+  (q, q̇, τ) through the minimal form;
+* the reduced, multiplier-free form of (14):  M̃(q) q̈ + H̃(q, q̇) = B τ, built exactly as
+  the paper describes (dependent rows: (9) with λ(q, q̇, q̈ᵢ) substituted; independent rows:
+  (9) with λ solved from the dependent rows);
+* the minimal form in η:  Sᵀ M S η̇ + Sᵀ(M Ṡ η + H) = Sᵀ B τ.
+
+Nothing here knows about wheels. Symbols are plain ``sympy.Symbol``; time derivatives use
+the chain rule on (q, q̇, q̈).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import sympy as sp
+
+from modeling.symbolic_linalg import (
+    Simplifier,
+    adjugate_and_determinant,
+    inverse_by_cofactors,
+    time_derivative,
+)
+
+
+def default_simplify(expr: sp.Expr) -> sp.Expr:
+    """Cheap canonical form: expanded, with sin² + cos² = 1 applied (see trig_canonical)."""
+    return trig_canonical(sp.expand(expr))
+
+
+def trig_canonical(expr: sp.Expr) -> sp.Expr:
+    """Reduce a polynomial in sin(a), cos(a) modulo sin²(a) + cos²(a) − 1 for each angle a.
+
+    The remainder (degree ≤ 1 in sin) is a canonical form, so an identity such as
+    M S − S M = 0 is recognised by expansion alone; this is orders of magnitude faster
+    than ``trigsimp`` and never changes the value. Expressions with a trigonometric
+    function in a denominator are returned unchanged.
+    """
+    angles = sorted({f.args[0] for f in expr.atoms(sp.sin, sp.cos)}, key=sp.default_sort_key)
+    for angle in angles:
+        s_, c_ = sp.Dummy("s"), sp.Dummy("c")
+        sub = sp.expand(expr.subs({sp.sin(angle): s_, sp.cos(angle): c_}))
+        try:
+            rem = sp.Poly(sub, s_).rem(sp.Poly(s_**2 + c_**2 - 1, s_))
+        except sp.PolynomialError:
+            continue
+        expr = sp.expand(rem.as_expr()).subs({s_: sp.sin(angle), c_: sp.cos(angle)})
+    return expr
+
+
+@dataclass(frozen=True)
+class ConstrainedSystem:
+    """A mechanical system given by its energies, constraints and inputs.
+
+    ``independent`` indexes the coordinates whose velocities stay free once the
+    constraints hold (for a differential-drive robot: the two wheel angles). The remaining
+    (dependent) block of A must be invertible.
+    """
+
+    q: tuple[sp.Symbol, ...]
+    qdot: tuple[sp.Symbol, ...]
+    qddot: tuple[sp.Symbol, ...]
+    kinetic_energy: sp.Expr
+    constraint_matrix: sp.Matrix  # A(q), rows = constraints
+    input_matrix: sp.Matrix  # B
+    independent: tuple[int, ...]
+    potential_energy: sp.Expr = sp.S.Zero
+    simplify: Simplifier = default_simplify
+
+    def __post_init__(self) -> None:
+        n = len(self.q)
+        if not (len(self.qdot) == len(self.qddot) == n):
+            raise ValueError("q, qdot and qddot must have the same length")
+        if self.constraint_matrix.cols != n or self.input_matrix.rows != n:
+            raise ValueError("A must have n columns and B n rows")
+        if len(self.independent) + self.constraint_matrix.rows != n:
+            raise ValueError(
+                "the number of independent coordinates plus the number of constraints "
+                "must equal the number of coordinates"
+            )
+
+    # --- index bookkeeping -------------------------------------------------------------
+    @cached_property
+    def dependent(self) -> tuple[int, ...]:
+        return tuple(i for i in range(len(self.q)) if i not in self.independent)
+
+    @property
+    def eta(self) -> tuple[sp.Symbol, ...]:
+        """Independent velocities η (a subset of q̇)."""
+        return tuple(self.qdot[i] for i in self.independent)
+
+    @property
+    def eta_dot(self) -> tuple[sp.Symbol, ...]:
+        return tuple(self.qddot[i] for i in self.independent)
+
+    def _rows(self, m: sp.Matrix, idx: tuple[int, ...]) -> sp.Matrix:
+        return m.extract(list(idx), list(range(m.cols)))
+
+    def _cols(self, m: sp.Matrix, idx: tuple[int, ...]) -> sp.Matrix:
+        return m.extract(list(range(m.rows)), list(idx))
+
+    def ddt(self, expr: sp.MatrixBase | sp.Expr, with_accel: bool = False) -> sp.Expr:
+        return time_derivative(expr, self.q, self.qdot, self.qddot if with_accel else None)
+
+    # --- (9): Euler–Lagrange ----------------------------------------------------------
+    @cached_property
+    def mass_matrix(self) -> sp.Matrix:
+        """M(q) of (9): the Hessian of T in q̇."""
+        qd = sp.Matrix(self.qdot)
+        return sp.hessian(self.kinetic_energy, qd).applyfunc(self.simplify)
+
+    @cached_property
+    def bias(self) -> sp.Matrix:
+        """H(q, q̇) of (9): d/dt ∂T/∂q̇ − M q̈ − ∂T/∂q + ∂V/∂q (Coriolis, centripetal, gravity)."""
+        t = self.kinetic_energy
+        h = []
+        for i, qi in enumerate(self.q):
+            dT_dqdot = sp.diff(t, self.qdot[i])
+            d_dt = self.ddt(dT_dqdot)  # velocity part of d/dt(∂T/∂q̇ᵢ)
+            h.append(self.simplify(d_dt - sp.diff(t, qi) + sp.diff(self.potential_energy, qi)))
+        return sp.Matrix(h)
+
+    @cached_property
+    def constraint_rate_term(self) -> sp.Matrix:
+        """Ȧ q̇: differentiating A q̇ = 0 gives A q̈ + Ȧ q̇ = 0."""
+        a_qdot = self.constraint_matrix * sp.Matrix(self.qdot)
+        return sp.Matrix([self.simplify(self.ddt(e)) for e in a_qdot])
+
+    # --- null space -------------------------------------------------------------------
+    @cached_property
+    def dependent_block_inverse(self) -> sp.Matrix:
+        """A_d⁻¹, the inverse of A's columns of the dependent coordinates."""
+        a_d = self._cols(self.constraint_matrix, self.dependent)
+        return inverse_by_cofactors(a_d, self.simplify)
+
+    @cached_property
+    def null_space(self) -> sp.Matrix:
+        """S(q) with A S = 0 and q̇ = S η: the dependent rows are −A_d⁻¹ A_i, the rest identity.
+
+        For a wheeled robot the dependent rows are the kinematics (31).
+        """
+        a_i = self._cols(self.constraint_matrix, self.independent)
+        s_dep = (-self.dependent_block_inverse * a_i).applyfunc(self.simplify)
+        n, k = len(self.q), len(self.independent)
+        s = sp.zeros(n, k)
+        for row, i in enumerate(self.dependent):
+            s[i, :] = s_dep[row, :]
+        for col, i in enumerate(self.independent):
+            s[i, col] = sp.S.One
+        return s
+
+    @cached_property
+    def on_manifold(self) -> dict[sp.Symbol, sp.Expr]:
+        """Substitution q̇_d → (S η)_d: restricts an expression to constraint-consistent velocities."""
+        sv = self.null_space * sp.Matrix(self.eta)
+        return {self.qdot[i]: sv[i] for i in self.dependent}
+
+    @cached_property
+    def null_space_rate(self) -> sp.Matrix:
+        """Ṡ η on the constraint manifold (the velocity-product part of q̈ = S η̇ + Ṡ η)."""
+        s_eta = self.null_space * sp.Matrix(self.eta)
+        rate = self.ddt(s_eta)  # ∂(Sη)/∂q · q̇ with η held fixed
+        return rate.subs(self.on_manifold).applyfunc(self.simplify)
+
+    # --- minimal form -----------------------------------------------------------------
+    @cached_property
+    def minimal_mass_matrix(self) -> sp.Matrix:
+        """Sᵀ M S."""
+        s = self.null_space
+        return (s.T * self.mass_matrix * s).applyfunc(self.simplify)
+
+    @cached_property
+    def minimal_bias(self) -> sp.Matrix:
+        """Sᵀ(M Ṡ η + H), with H on the constraint manifold."""
+        s = self.null_space
+        h = self.bias.subs(self.on_manifold)
+        return (s.T * (self.mass_matrix * self.null_space_rate + h)).applyfunc(self.simplify)
+
+    @cached_property
+    def minimal_input_matrix(self) -> sp.Matrix:
+        """Sᵀ B: the Lagrange multipliers do no work along S, so only Sᵀ B τ drives η."""
+        return (self.null_space.T * self.input_matrix).applyfunc(self.simplify)
+
+    # --- multipliers ------------------------------------------------------------------
+    def multipliers_given_accelerations(self, tau: sp.Matrix) -> sp.Matrix:
+        """λ(q, q̇, η̇, τ): the dependent rows of (9) with q̈ = S η̇ + Ṡ η — the route of (10)–(12).
+
+        A_dᵀ λ = (B τ − H − M q̈)_d.
+        """
+        qdd = self.null_space * sp.Matrix(self.eta_dot) + self.null_space_rate
+        rhs = self.input_matrix * tau - self.bias.subs(self.on_manifold) - self.mass_matrix * qdd
+        a_d_inv_t = self.dependent_block_inverse.T
+        return (a_d_inv_t * self._rows(rhs, self.dependent)).applyfunc(self.simplify)
+
+    def multipliers_given_full_accelerations(self, tau: sp.Matrix) -> sp.Matrix:
+        """λ(q, q̇, q̈, τ) from the dependent rows of (9) alone, without the constraints."""
+        rhs = self.input_matrix * tau - self.bias - self.mass_matrix * sp.Matrix(self.qddot)
+        return self.dependent_block_inverse.T * self._rows(rhs, self.dependent)
+
+    # --- (14): reduced, multiplier-free form ------------------------------------------
+    def _require_unactuated_dependent_rows(self) -> None:
+        b_d = self._rows(self.input_matrix, self.dependent)
+        if any(e != 0 for e in b_d):
+            raise ValueError(
+                "the reduced form (14) assumes the inputs act on independent coordinates "
+                "only (the dependent rows of B must be zero)"
+            )
+
+    @cached_property
+    def reduced_mass_matrix(self) -> sp.Matrix:
+        """M̃ of (14).
+
+        Dependent rows: M_d q̈ + H_d + A_dᵀ λ(q, q̇, η̇) = 0 reduces to M_d q̈ − (M S)_d η̇ − (M Ṡ η)_d,
+        i.e. M_dd (q̈_d − S_d η̇ − (Ṡη)_d) = 0: the constraints' second derivative weighted by M.
+        Independent rows: (9)ᵢ with λ from (9)_d: M_i − A_iᵀ A_d⁻ᵀ M_d. M̃ is not symmetric.
+        """
+        self._require_unactuated_dependent_rows()
+        m = self.mass_matrix
+        n = len(self.q)
+        out = sp.zeros(n, n)
+        ms = m * self.null_space
+        for i in self.dependent:
+            out[i, :] = m[i, :]
+            for col, j in enumerate(self.independent):
+                out[i, j] = m[i, j] - ms[i, col]
+        a_i = self._cols(self.constraint_matrix, self.independent)
+        g = a_i.T * self.dependent_block_inverse.T  # A_iᵀ A_d⁻ᵀ
+        m_d = self._rows(m, self.dependent)
+        m_ind = self._rows(m, self.independent) - g * m_d
+        for row, i in enumerate(self.independent):
+            out[i, :] = m_ind[row, :]
+        return out.applyfunc(self.simplify)
+
+    @cached_property
+    def reduced_bias(self) -> sp.Matrix:
+        """H̃ of (14): −(M Ṡ η)_d in the dependent rows, H_i − A_iᵀ A_d⁻ᵀ H_d in the others."""
+        self._require_unactuated_dependent_rows()
+        n = len(self.q)
+        out = sp.zeros(n, 1)
+        ms_rate = self.mass_matrix * self.null_space_rate
+        for i in self.dependent:
+            out[i] = -ms_rate[i]
+        a_i = self._cols(self.constraint_matrix, self.independent)
+        g = a_i.T * self.dependent_block_inverse.T
+        h_ind = self._rows(self.bias, self.independent) - g * self._rows(self.bias, self.dependent)
+        for row, i in enumerate(self.independent):
+            out[i] = h_ind[row]
+        return out.applyfunc(self.simplify)
+
+    # --- forward dynamics -------------------------------------------------------------
+    @cached_property
+    def minimal_mass_matrix_inverse(self) -> sp.Matrix:
+        """(Sᵀ M S)⁻¹ by cofactors: the minimal form has as many rows as inputs (2 for a WMR)."""
+        return inverse_by_cofactors(self.minimal_mass_matrix, self.simplify)
+
+    @cached_property
+    def _minimal_adjugate(self) -> tuple[sp.Matrix, sp.Expr]:
+        return adjugate_and_determinant(self.minimal_mass_matrix, self.simplify)
+
+    def _minimal_numerator(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Expr]:
+        adj, det = self._minimal_adjugate
+        rhs = self.minimal_input_matrix * tau - self.minimal_bias
+        return (adj * rhs).applyfunc(self.simplify), det
+
+    def minimal_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
+        """η̇ = (Sᵀ M S)⁻¹ (Sᵀ B τ − Sᵀ(M Ṡ η + H)), as adj(·) rhs / det(·)."""
+        num, det = self._minimal_numerator(tau)
+        return num / det
+
+    def reduced_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
+        """q̈ solving (14) with u = B τ, by structured elimination instead of a 5×5 solve.
+
+        The dependent rows of (14) say M_dd (q̈_d − S_d η̇ − (Ṡη)_d) = 0 and M_dd is a
+        positive-definite block, so q̈ = S η̇ + Ṡ η. The independent rows times S give
+        (M_i − A_iᵀA_d⁻ᵀ M_d) S = Sᵀ M S because S_d = −A_d⁻¹ A_i, so η̇ is the minimal
+        form's. (The tests check this against a numerical solve of (14) and of the KKT
+        system.) Only η = q̇ᵢ enters: q̇ is taken on the constraint manifold.
+        """
+        num, det = self._minimal_numerator(tau)
+        return (self.null_space * num).applyfunc(self.simplify) / det + self.null_space_rate
+
+    @cached_property
+    def reduced_mass_matrix_inverse(self) -> sp.Matrix:
+        """M̃⁻¹ of (14) by block elimination.
+
+        M̃ x = y: the dependent rows give x_d = S_d xᵢ + M_dd⁻¹ y_d; substituting in the
+        independent rows N_d x_d + N_i xᵢ = yᵢ with N_d S_d + N_i = Sᵀ M S gives
+        xᵢ = (Sᵀ M S)⁻¹ (yᵢ − N_d M_dd⁻¹ y_d).
+        """
+        n = len(self.q)
+        dep, ind = list(self.dependent), list(self.independent)
+        m_dd_inv = inverse_by_cofactors(
+            self.mass_matrix.extract(dep, dep), self.simplify
+        )
+        n_d = self.reduced_mass_matrix.extract(ind, dep)
+        mbar_inv = self.minimal_mass_matrix_inverse
+        s_d = self.null_space.extract(dep, list(range(len(ind))))
+        # x_i = Mbar⁻¹ [ −N_d M_dd⁻¹ | I ] y ;  x_d = S_d x_i + [ M_dd⁻¹ | 0 ] y
+        e_d = sp.zeros(len(dep), n)
+        e_i = sp.zeros(len(ind), n)
+        for row, i in enumerate(dep):
+            e_d[row, i] = 1
+        for row, i in enumerate(ind):
+            e_i[row, i] = 1
+        x_i = mbar_inv * (e_i - n_d * m_dd_inv * e_d)
+        x_d = s_d * x_i + m_dd_inv * e_d
+        out = sp.zeros(n, n)
+        for row, i in enumerate(dep):
+            out[i, :] = x_d[row, :]
+        for row, i in enumerate(ind):
+            out[i, :] = x_i[row, :]
+        return out  # left unexpanded: CSE shares the blocks; tests check M̃ M̃⁻¹ = I numerically
+
+    def kkt_matrix(self) -> tuple[sp.Matrix, sp.Matrix]:
+        """The saddle-point system of (9) with A q̈ + Ȧ q̇ = 0, for tests:
+        [[M, Aᵀ], [A, 0]] [q̈; λ] = [B τ − H; −Ȧ q̇] returns (lhs, rhs-without-Bτ)."""
+        a = self.constraint_matrix
+        k = a.rows
+        lhs = sp.BlockMatrix([[self.mass_matrix, a.T], [a, sp.zeros(k, k)]]).as_explicit()
+        rhs = sp.Matrix.vstack(-self.bias, -self.constraint_rate_term)
+        return lhs, rhs

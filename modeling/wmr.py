@@ -1,0 +1,180 @@
+"""The differential-drive wheeled mobile robot of Roy et al. (2017), as one instance of
+:mod:`modeling.lagrange`.
+
+Hand-typed physics, and only this: where the bodies sit, the kinetic energy of a planar
+rigid body, the rolling constraints at the wheels, and that each motor torque acts on its
+wheel angle. Everything else — (1)–(5), (9)–(14), (31), the minimal form and the lumped
+relations for m, I and K — is derived.
+
+Frames and assumptions
+----------------------
+* q = (x_c, y_c, θ, θ_r, θ_l): (x_c, y_c) is the reference point C on the robot's axis of
+  symmetry, a distance d ahead of the axle midpoint (so that (6) is the no-side-slip
+  condition of the axle); θ is the heading; θ_r, θ_l are wheel angles, positive when the
+  wheel rolls forward.
+* The wheels (mass m_w, spin inertia I_w, inertia I_m about a vertical diameter) sit on the
+  axle at ±b/2 from its midpoint; they roll without slipping on radius r.
+* The platform (mass m_P, inertia I_P about its own centre of mass) has its centre of mass
+  at (x_P, y_P) in the body frame, measured from the axle midpoint (x forward, y left).
+  The paper's relation I = I_P + m_P d² + 2 m_w (b²/4 + d²) + 2 I_m is the case
+  x_P = y_P = 0 (platform centre of mass on the axle), for which K = m d.
+* A point payload (issue 4) is another body of the same kind.
+
+The lumped kinetic energy is then, exactly,
+  T = ½ m (ẋ² + ẏ²) + ½ I θ̇² + K θ̇ (ẋ sin θ − ẏ cos θ) − K_lat θ̇ (ẋ cos θ + ẏ sin θ)
+      + ½ I_w (θ̇_r² + θ̇_l²),
+with K the first moment of mass behind C and K_lat the first moment to the left of C.
+The paper's model has K_lat = 0 (mass symmetric about the robot's axis).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import sympy as sp
+
+from modeling.lagrange import ConstrainedSystem
+
+# ---------------------------------------------------------------------------------------
+# Symbols
+# ---------------------------------------------------------------------------------------
+COORDINATE_NAMES = ("x_c", "y_c", "theta", "theta_r", "theta_l")
+q = sp.symbols("x_c y_c theta theta_r theta_l", real=True)
+qdot = sp.symbols("xdot_c ydot_c thetadot thetadot_r thetadot_l", real=True)
+qddot = sp.symbols("xddot_c yddot_c thetaddot thetaddot_r thetaddot_l", real=True)
+tau = sp.Matrix(sp.symbols("tau_r tau_l", real=True))
+
+x_c, y_c, theta, theta_r, theta_l = q
+xd_c, yd_c, thd, thd_r, thd_l = qdot
+
+# Lumped parameters (the paper's m, I, K, I_w, r, b, d, plus the lateral first moment).
+m, I_z, K, K_lat, I_w, r, b, d = sp.symbols("m I K K_lat I_w r b d", real=True)
+LUMPED_SYMBOLS: tuple[sp.Symbol, ...] = (m, I_z, K, I_w, r, b, d)
+PLANT_SYMBOLS: tuple[sp.Symbol, ...] = (m, I_z, K, K_lat, I_w, r, b, d)
+POSITIVE_LUMPED = {m, I_z, I_w, r, b}
+
+# Physical parameters.
+m_P, I_P, x_P, y_P, m_w, I_m = sp.symbols("m_P I_P x_P y_P m_w I_m", real=True)
+PHYSICAL_SYMBOLS: tuple[sp.Symbol, ...] = (m_P, I_P, x_P, y_P, m_w, I_w, I_m, r, b, d)
+
+
+@dataclass(frozen=True)
+class Body:
+    """A planar rigid body fixed to the robot: mass, inertia about its own centre of mass
+    (vertical axis) and the centre of mass in the body frame relative to C."""
+
+    name: str
+    mass: sp.Expr
+    inertia: sp.Expr
+    forward: sp.Expr
+    lateral: sp.Expr
+
+
+def heading_vectors() -> tuple[sp.Matrix, sp.Matrix]:
+    """e = (cos θ, sin θ) along the robot's axis, n = (−sin θ, cos θ) to its left."""
+    return sp.Matrix([sp.cos(theta), sp.sin(theta)]), sp.Matrix([-sp.sin(theta), sp.cos(theta)])
+
+
+def point_velocity(forward: sp.Expr, lateral: sp.Expr) -> sp.Matrix:
+    """World velocity of the body-frame point C + forward·e + lateral·n."""
+    e, n = heading_vectors()
+    # ė = θ̇ n and ṅ = −θ̇ e for a rotating frame.
+    return sp.Matrix([xd_c, yd_c]) + thd * (forward * n - lateral * e)
+
+
+def physical_bodies() -> tuple[Body, ...]:
+    """The platform and the two wheels of the paper, positions relative to C."""
+    return (
+        Body("platform", m_P, I_P, x_P - d, y_P),
+        Body("right wheel", m_w, I_m, -d, -b / 2),
+        Body("left wheel", m_w, I_m, -d, b / 2),
+    )
+
+
+def kinetic_energy_of_bodies(bodies: tuple[Body, ...]) -> sp.Expr:
+    """T = Σ ½ mᵢ |vᵢ|² + ½ Iᵢ θ̇² over the bodies, plus the wheels' spin ½ I_w (θ̇_r² + θ̇_l²)."""
+    t = sp.S.Zero
+    for body in bodies:
+        v = point_velocity(body.forward, body.lateral)
+        t += sp.Rational(1, 2) * body.mass * (v.T * v)[0] + sp.Rational(1, 2) * body.inertia * thd**2
+    t += sp.Rational(1, 2) * I_w * (thd_r**2 + thd_l**2)
+    return sp.expand(t)
+
+
+def lumped_kinetic_energy(lateral_moment: bool = False) -> sp.Expr:
+    """The kinetic energy in the lumped parameters (see the module docstring)."""
+    e_dot = xd_c * sp.sin(theta) - yd_c * sp.cos(theta)
+    t = (
+        sp.Rational(1, 2) * m * (xd_c**2 + yd_c**2)
+        + sp.Rational(1, 2) * I_z * thd**2
+        + K * thd * e_dot
+        + sp.Rational(1, 2) * I_w * (thd_r**2 + thd_l**2)
+    )
+    if lateral_moment:
+        t -= K_lat * thd * (xd_c * sp.cos(theta) + yd_c * sp.sin(theta))
+    return sp.expand(t)
+
+
+def lumped_relations(bodies: tuple[Body, ...]) -> dict[sp.Symbol, sp.Expr]:
+    """m, I, K, K_lat of a set of bodies, read off the Hessian of their kinetic energy.
+
+    m = ∂²T/∂ẋ², I = ∂²T/∂θ̇², and ∂²T/∂ẋ∂θ̇ = K sin θ − K_lat cos θ.
+    """
+    t = kinetic_energy_of_bodies(bodies)
+    mass = sp.diff(t, xd_c, 2)
+    inertia = sp.diff(t, thd, 2)
+    coupling = sp.expand(sp.diff(t, xd_c, thd))
+    k_long = coupling.subs(theta, sp.pi / 2)
+    k_lat = -coupling.subs(theta, 0)
+    return {
+        m: sp.factor_terms(sp.expand(mass)),
+        I_z: sp.collect(sp.expand(inertia), [m_P, m_w]),
+        K: sp.collect(sp.expand(k_long), [m_P, m_w]),
+        K_lat: sp.expand(k_lat),
+    }
+
+
+def constraint_matrix() -> sp.Matrix:
+    """A(q) of (9), rows in the paper's sign convention, built from contact velocities.
+
+    Row 1, (6): the axle midpoint (body point (−d, 0)) has no sideways velocity.
+    Rows 2–3, (7)–(8) negated as in the paper's A: r θ̇_w − (wheel-centre velocity · e) = 0.
+    """
+    e, n = heading_vectors()
+    axle = point_velocity(-d, sp.S.Zero)
+    right = point_velocity(-d, -b / 2)
+    left = point_velocity(-d, b / 2)
+    rows = [
+        (axle.T * n)[0],
+        r * thd_r - (right.T * e)[0],
+        r * thd_l - (left.T * e)[0],
+    ]
+    a = sp.Matrix([[sp.expand(sp.diff(row, v)) for v in qdot] for row in rows])
+    return a.applyfunc(sp.trigsimp)
+
+
+def input_matrix() -> sp.Matrix:
+    """B of (9): τ_r acts on θ_r, τ_l on θ_l."""
+    bm = sp.zeros(5, 2)
+    bm[3, 0] = 1
+    bm[4, 1] = 1
+    return bm
+
+
+@cache
+def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
+    """The WMR as a constrained Lagrangian system in the lumped parameters.
+
+    ``lateral_moment=False`` is the paper's (and the controllers') model; ``True`` adds the
+    lateral first moment K_lat that an off-axis payload creates (the plant of issue 4).
+    """
+    return ConstrainedSystem(
+        q=q,
+        qdot=qdot,
+        qddot=qddot,
+        kinetic_energy=lumped_kinetic_energy(lateral_moment),
+        constraint_matrix=constraint_matrix(),
+        input_matrix=input_matrix(),
+        independent=(3, 4),
+    )
