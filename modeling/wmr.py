@@ -34,7 +34,7 @@ from functools import cache
 
 import sympy as sp
 
-from modeling.lagrange import ConstrainedSystem
+from modeling.lagrange import ConstrainedSystem, trig_canonical
 
 # ---------------------------------------------------------------------------------------
 # Symbols
@@ -123,13 +123,13 @@ def lumped_relations(bodies: tuple[Body, ...]) -> dict[sp.Symbol, sp.Expr]:
     """
     t = kinetic_energy_of_bodies(bodies)
     mass = sp.diff(t, xd_c, 2)
-    inertia = sp.diff(t, thd, 2)
+    inertia = trig_canonical(sp.expand(sp.diff(t, thd, 2)))
     coupling = sp.expand(sp.diff(t, xd_c, thd))
     k_long = coupling.subs(theta, sp.pi / 2)
     k_lat = -coupling.subs(theta, 0)
     return {
         m: sp.factor_terms(sp.expand(mass)),
-        I_z: sp.collect(sp.expand(inertia), [m_P, m_w]),
+        I_z: sp.collect(sp.expand(inertia), [m_P, m_w], sp.factor),
         K: sp.collect(sp.expand(k_long), [m_P, m_w]),
         K_lat: sp.expand(k_lat),
     }

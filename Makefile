@@ -1,0 +1,35 @@
+# Each target creates the virtual environment it needs (see README).
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: model test check lint reproduce bench clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+## Derive the model and regenerate generated/ (C, Python, CasADi, MODEL.md).
+model: $(STAMP)
+	$(PY) -m codegen $(if $(ROBOT),--robot $(ROBOT))
+
+## Lint, type-check, verify generated/ is fresh, run the test suite.
+test: $(STAMP) lint
+	$(PY) -m codegen --check
+	$(PY) -m pytest -q
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check modeling codegen runtime tests
+	$(VENV)/bin/mypy
+
+reproduce: $(STAMP)
+	$(PY) -m runtime reproduce
+
+bench: $(STAMP)
+	$(PY) -m runtime bench
+
+clean:
+	rm -rf build out reproduction .pytest_cache .mypy_cache .ruff_cache

@@ -1,0 +1,173 @@
+"""Robot description files (TOML): the lumped parameters of the model, or the physical
+ones from which ``modeling.wmr.lumped_relations`` derives them.
+
+Two forms are accepted::
+
+    name = "drishti"
+    [lumped]                      # the paper's parameters, used directly
+    m = 36.0  I = 5.72  K = 0.34  Iw = 0.07  r = 0.096  b = 0.414  d = 0.12
+
+    name = "my-robot"
+    [physical]                    # platform + two wheels (see modeling.wmr)
+    m_P = 30.0  I_P = 2.0  x_P = 0.0  y_P = 0.0  m_w = 3.0  Iw = 0.07  Im = 0.04
+    r = 0.096  b = 0.414  d = 0.12
+
+Every error names the file and the offending field; nothing is half-loaded.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import sympy as sp
+
+LUMPED_FIELDS: dict[str, str] = {
+    "m": "total mass [kg]",
+    "I": "yaw inertia about C [kg m^2]",
+    "K": "first moment of mass behind C [kg m]",
+    "Iw": "wheel spin inertia [kg m^2]",
+    "r": "wheel radius [m]",
+    "b": "track width [m]",
+    "d": "distance of C ahead of the axle midpoint [m]",
+}
+PHYSICAL_FIELDS: dict[str, str] = {
+    "m_P": "platform mass [kg]",
+    "I_P": "platform yaw inertia about its centre of mass [kg m^2]",
+    "x_P": "platform centre of mass ahead of the axle midpoint [m]",
+    "y_P": "platform centre of mass left of the axis [m]",
+    "m_w": "wheel mass [kg]",
+    "Iw": "wheel spin inertia [kg m^2]",
+    "Im": "wheel inertia about a vertical diameter [kg m^2]",
+    "r": "wheel radius [m]",
+    "b": "track width [m]",
+    "d": "distance of C ahead of the axle midpoint [m]",
+}
+# Must be > 0; K (a first moment) and the offsets may have either sign; d ≥ 0 by the
+# paper's convention (C ahead of the axle), and d = 0 is allowed (C on the axle).
+POSITIVE = {"m", "I", "Iw", "r", "b", "m_P", "I_P", "m_w"}
+NON_NEGATIVE = {"d", "Im"}
+
+
+class RobotFileError(ValueError):
+    """A robot file that cannot describe a robot; the message names the field."""
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A robot's lumped parameters (keys m, I, K, Iw, r, b, d) and, when the file gave
+    them, its physical parameters and the lateral first moment K_lat they imply."""
+
+    name: str
+    lumped: dict[str, float]
+    physical: dict[str, float] | None = None
+    K_lat: float = 0.0
+    source: str = "<built-in>"
+
+
+DEFAULT_ROBOT = "drishti"
+
+
+def _number(where: str, key: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise RobotFileError(f"{where}: field '{key}' must be a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise RobotFileError(f"{where}: field '{key}' must be finite, got {value!r}")
+    if key in POSITIVE and x <= 0:
+        raise RobotFileError(f"{where}: field '{key}' must be positive, got {value!r}")
+    if key in NON_NEGATIVE and x < 0:
+        raise RobotFileError(f"{where}: field '{key}' must be non-negative, got {value!r}")
+    return x
+
+
+def _table(where: str, section: str, data: Any, fields: dict[str, str]) -> dict[str, float]:
+    if not isinstance(data, dict):
+        raise RobotFileError(f"{where}: [{section}] must be a table")
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        raise RobotFileError(
+            f"{where}: unknown field '{unknown[0]}' in [{section}] (expected: {', '.join(fields)})"
+        )
+    missing = [k for k in fields if k not in data]
+    if missing:
+        raise RobotFileError(
+            f"{where}: missing field '{missing[0]}' in [{section}] ({fields[missing[0]]})"
+        )
+    return {k: _checked(where, section, k, data[k]) for k in fields}
+
+
+def _checked(where: str, section: str, key: str, value: Any) -> float:
+    try:
+        return _number(where, key, value)
+    except RobotFileError as exc:
+        raise RobotFileError(str(exc).replace(f"field '{key}'", f"field '{section}.{key}'")) from None
+
+
+def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], float]:
+    """m, I, K (and K_lat) from the physical parameters via the derived lumped relations."""
+    from modeling import wmr
+
+    rel = wmr.lumped_relations(wmr.physical_bodies())
+    values = {
+        wmr.m_P: phys["m_P"], wmr.I_P: phys["I_P"], wmr.x_P: phys["x_P"], wmr.y_P: phys["y_P"],
+        wmr.m_w: phys["m_w"], wmr.I_m: phys["Im"], wmr.b: phys["b"], wmr.d: phys["d"],
+    }
+    ev = {str(k): float(sp.N(v.subs(values))) for k, v in rel.items()}
+    lumped = {"m": ev["m"], "I": ev["I"], "K": ev["K"], "Iw": phys["Iw"], "r": phys["r"],
+              "b": phys["b"], "d": phys["d"]}
+    return lumped, ev["K_lat"]
+
+
+def check_lumped(where: str, p: dict[str, float], k_lat: float = 0.0) -> None:
+    """The kinetic energy must be positive definite: m > 0 and I > (K² + K_lat²)/m."""
+    if p["I"] <= (p["K"] ** 2 + k_lat**2) / p["m"]:
+        raise RobotFileError(
+            f"{where}: field 'I' = {p['I']} must exceed (K² + K_lat²)/m = "
+            f"{(p['K'] ** 2 + k_lat**2) / p['m']:.6g}: otherwise the kinetic energy is not "
+            "positive definite (I is the inertia about C, at least the centre-of-mass term)"
+        )
+
+
+def parse_robot(text: str, where: str = "<string>") -> Robot:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotFileError(f"{where}: not valid TOML: {exc}") from None
+    unknown = sorted(set(data) - {"name", "lumped", "physical"})
+    if unknown:
+        raise RobotFileError(
+            f"{where}: unknown field '{unknown[0]}' (expected name and [lumped] or [physical])"
+        )
+    name = data.get("name", Path(where).stem)
+    if not isinstance(name, str) or not name:
+        raise RobotFileError(f"{where}: field 'name' must be a non-empty string")
+    if ("lumped" in data) == ("physical" in data):
+        raise RobotFileError(f"{where}: give exactly one of the tables [lumped] or [physical]")
+    if "lumped" in data:
+        lumped = _table(where, "lumped", data["lumped"], LUMPED_FIELDS)
+        check_lumped(where, lumped)
+        return Robot(name, lumped, source=where)
+    phys = _table(where, "physical", data["physical"], PHYSICAL_FIELDS)
+    lumped, k_lat = lumped_from_physical(phys)
+    check_lumped(where, lumped, k_lat)
+    return Robot(name, lumped, phys, k_lat, source=where)
+
+
+def load_robot(path: str | Path | None = None) -> Robot:
+    """Load a robot file; ``None`` loads the packaged default, Drishti."""
+    if path is None:
+        text = resources.files("modeling").joinpath(f"robots/{DEFAULT_ROBOT}.toml").read_text()
+        return parse_robot(text, f"modeling/robots/{DEFAULT_ROBOT}.toml")
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise RobotFileError(f"{p}: robot file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RobotFileError(f"{p}: cannot read robot file: {exc}") from None
+    return parse_robot(text, str(p))
