@@ -88,14 +88,31 @@ def _temp_names(taken: set[str]) -> Iterator[str]:
         i += 1
 
 
+_CACHE: dict[tuple[object, ...], CseResult] = {}
+
+
 def cse_function(spec: FunctionSpec) -> CseResult:
-    """Eliminate common subexpressions across all outputs of ``spec``."""
+    """Eliminate common subexpressions across all outputs of ``spec``.
+
+    Memoised on the spec's name, inputs and output expressions: every backend and the
+    report ask for the same CSE, and it is the expensive step of generation.
+    """
+    key = (spec.name, spec.input_symbols(), tuple((a.name, a.exprs) for a in spec.outputs))
+    hit = _CACHE.get(key)
+    if hit is not None and hit.spec == spec:
+        return hit
+    result = _cse_function(spec)
+    _CACHE[key] = result
+    return result
+
+
+def _cse_function(spec: FunctionSpec) -> CseResult:
     check_spec(spec)
     flat = [e for arg in spec.outputs for e in arg.exprs]
     taken = {str(s) for e in flat for s in e.free_symbols}
     # Placeholder names first; final names are given in definition order below.
     raw = sp.numbered_symbols("_cse_tmp", start=0)
-    pairs, reduced = sp.cse(flat, symbols=raw, optimizations="basic", order="canonical")
+    pairs, reduced = sp.cse(flat, symbols=raw, optimizations=None, order="canonical")
 
     # Hoist compound bases of repeated-product powers into temporaries.
     hoisted: list[tuple[sp.Symbol, sp.Expr]] = []

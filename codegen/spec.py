@@ -8,7 +8,7 @@ here is final.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import sympy as sp
@@ -56,6 +56,18 @@ class Argument:
 
 
 @dataclass(frozen=True)
+class Guard:
+    """A precondition of a status-returning function: ``condition > 0`` must hold, else the
+    function returns ``status`` (C) / raises ``ValueError`` naming it (Python) and writes
+    no output. ``condition`` is an expression of the inputs (CSE shares it with the outputs).
+    """
+
+    status: str
+    condition: sp.Expr
+    doc: str
+
+
+@dataclass(frozen=True)
 class FunctionSpec:
     """A pure function: outputs are expressions in the inputs' symbols only.
 
@@ -70,6 +82,22 @@ class FunctionSpec:
     equations: tuple[str, ...] = ()
     returns_status: bool = False
     extra: dict[str, str] = field(default_factory=dict)
+    # With ``returns_status``: non-finite inputs return ``nonfinite_input``, guards are
+    # checked in order, and non-finite results return ``nonfinite_output``; on any error
+    # no output is written.
+    guards: tuple[Guard, ...] = ()
+    nonfinite_input: str = ""
+    nonfinite_output: str = ""
+
+    def checked_spec(self) -> FunctionSpec:
+        """This spec with the guard conditions as a trailing output ``guard_`` (for CSE)."""
+        if not self.guards:
+            return self
+        guard_arg = Argument(
+            "guard_", "array", shape=(len(self.guards), 1),
+            exprs=tuple(g.condition for g in self.guards),
+        )
+        return replace(self, outputs=(*self.outputs, guard_arg))
 
     def input_symbols(self) -> tuple[sp.Symbol, ...]:
         return tuple(s for a in self.inputs for s in a.all_symbols())

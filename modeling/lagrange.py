@@ -262,19 +262,15 @@ class ConstrainedSystem:
         """(Sᵀ M S)⁻¹ by cofactors: the minimal form has as many rows as inputs (2 for a WMR)."""
         return inverse_by_cofactors(self.minimal_mass_matrix, self.simplify)
 
-    @cached_property
-    def _minimal_adjugate(self) -> tuple[sp.Matrix, sp.Expr]:
-        return adjugate_and_determinant(self.minimal_mass_matrix, self.simplify)
-
-    def _minimal_numerator(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Expr]:
-        adj, det = self._minimal_adjugate
-        rhs = self.minimal_input_matrix * tau - self.minimal_bias
-        return (adj * rhs).applyfunc(self.simplify), det
-
     def minimal_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
-        """η̇ = (Sᵀ M S)⁻¹ (Sᵀ B τ − Sᵀ(M Ṡ η + H)), as adj(·) rhs / det(·)."""
-        num, det = self._minimal_numerator(tau)
-        return num / det
+        """η̇ = (Sᵀ M S)⁻¹ (Sᵀ B τ − Sᵀ(M Ṡ η + H)) as adj(M̄)(rhs)/det(M̄), left unexpanded.
+
+        Expanding the product would multiply out parameter polynomials (over 100 mul after
+        CSE for two outputs); kept as a product, CSE shares the entries of M̄ and H̄.
+        """
+        adj, det = adjugate_and_determinant(self.minimal_mass_matrix, self.simplify)
+        rhs = self.minimal_input_matrix * tau - self.minimal_bias
+        return (adj * rhs) / det
 
     def reduced_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
         """q̈ solving (14) with u = B τ, by structured elimination instead of a 5×5 solve.
@@ -285,8 +281,7 @@ class ConstrainedSystem:
         form's. (The tests check this against a numerical solve of (14) and of the KKT
         system.) Only η = q̇ᵢ enters: q̇ is taken on the constraint manifold.
         """
-        num, det = self._minimal_numerator(tau)
-        return (self.null_space * num).applyfunc(self.simplify) / det + self.null_space_rate
+        return self.null_space * self.minimal_forward_dynamics(tau) + self.null_space_rate
 
     @cached_property
     def reduced_mass_matrix_inverse(self) -> sp.Matrix:

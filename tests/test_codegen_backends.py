@@ -29,6 +29,7 @@ import pytest
 import sympy as sp
 
 from codegen.backends import c as c_backend
+from codegen.backends.c.config import CConfig
 from codegen.backends import casadi as casadi_backend
 from codegen.backends import python as py_backend
 from codegen.cse import count_ops, cse_function
@@ -308,13 +309,14 @@ def _call_c(ffi: Any, lib: Any, spec: FunctionSpec, values: dict[sp.Symbol, floa
         obj = ffi.new(f"{ctype} *")
         for f in arg.fields:
             vals = [values[s] for s in f.symbols]
+            cname = CConfig().c_field(f.name)
             if f.shape == (1, 1):
-                setattr(obj, f.name, vals[0])
+                setattr(obj, cname, vals[0])
             elif 1 in f.shape:
-                setattr(obj, f.name, vals)
+                setattr(obj, cname, vals)
             else:
                 cols = f.shape[1]
-                setattr(obj, f.name, [vals[i : i + cols] for i in range(0, len(vals), cols)])
+                setattr(obj, cname, [vals[i : i + cols] for i in range(0, len(vals), cols)])
         args.append(obj)
     outs: list[Any] = []
     for arg in spec.outputs:
@@ -375,7 +377,7 @@ def test_c_in_place_update_is_safe(c_build: dict[str, Any]) -> None:
     q = ffi.new("wmr_real_t[3]", [values[v] for v in (x, y, theta)])
     u = ffi.new("wmr_real_t[2]", [values[u_r], values[u_l]])
     p = ffi.new("wmr_params_t *")
-    p.m, p.I, p.r, p.b, p.d = (values[v] for v in (m, I, r, b, d))
+    p.m, p.Iz, p.r, p.b, p.d = (values[v] for v in (m, I, r, b, d))
     p.gains = [values[k1], values[k2]]
     tau = ffi.new("wmr_real_t[2]")
     assert lib.wmr_ctrl_step(state, q, u, p, state, tau) == lib.WMR_OK

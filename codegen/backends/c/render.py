@@ -27,7 +27,7 @@ from pathlib import Path
 from codegen import template_util
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.printer import CPrinter
-from codegen.cse import CseResult, cse_function, op_count_from
+from codegen.cse import cse_function, op_count_from
 from codegen.layout import (
     argument_size,
     input_slots,
@@ -115,13 +115,16 @@ def _structs(specs: Sequence[FunctionSpec], config: CConfig) -> list[_Struct]:
     args = [a for a in args if a.kind == "params"] + [a for a in args if a.kind == "struct"]
     for arg in args:
         ctype = _ctype(arg, config)
-        bad = [f.name for f in arg.fields if not _usable_field(f.name)]
+        bad = [f.name for f in arg.fields if not _usable_field(config.c_field(f.name))]
         if bad:
             raise ValueError(f"{ctype}: field names {bad} are not usable in C")
         struct = _Struct(
             ctype=ctype,
             doc=arg.doc,
-            fields=tuple(_StructField(f.name, _dims(f.shape), _field_doc(f)) for f in arg.fields),
+            fields=tuple(
+                _StructField(config.c_field(f.name), _dims(f.shape), _field_doc(f))
+                for f in arg.fields
+            ),
         )
         if ctype not in found:
             found[ctype] = struct
@@ -179,11 +182,11 @@ def _param_doc(arg: Argument, is_input: bool, config: CConfig, spec: FunctionSpe
     return _comment_text(f"@param{direction} {arg.name} {what}{doc}")
 
 
-def _access(arg: Argument, f: Field | None, index: int) -> str:
+def _access(arg: Argument, f: Field | None, index: int, config: CConfig) -> str:
     """C lvalue/rvalue of element ``index`` (row-major) of an array or struct field."""
     if f is None:
         return f"{arg.name}[{index}]"
-    base = f"{arg.name}->{f.name}"
+    base = f"{arg.name}->{config.c_field(f.name)}"
     if is_scalar(f.shape):
         return base
     if is_vector(f.shape):
@@ -191,7 +194,8 @@ def _access(arg: Argument, f: Field | None, index: int) -> str:
     return f"{base}[{index // f.shape[1]}][{index % f.shape[1]}]"
 
 
-def _function_context(spec: FunctionSpec, result: CseResult, config: CConfig) -> dict[str, object]:
+def _function_context(spec: FunctionSpec, config: CConfig) -> dict[str, object]:
+    result = cse_function(spec.checked_spec())
     slots = input_slots(spec)
     reserved = {a.name for a in (*spec.inputs, *spec.outputs)}
     names = local_names(slots, reserved, _usable_c_name)
@@ -200,17 +204,28 @@ def _function_context(spec: FunctionSpec, result: CseResult, config: CConfig) ->
     printer_names.update({s: str(s) for s, _ in result.temps})
     printer = CPrinter(config, printer_names)
 
-    loads = [(names[s.symbol], _access(s.arg, s.field, s.index)) for s in slots if s.symbol in used]
+    loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config)) for s in slots if s.symbol in used]
     unused = [a.name for a in spec.inputs if not any(s in used for s in a.all_symbols())]
     temps = [(str(s), printer.expr_code(e)) for s, e in result.temps]
     stores: list[tuple[str, str]] = []
-    for arg, exprs in zip(spec.outputs, result.outputs, strict=True):
+    guard_values = result.outputs[len(spec.outputs):]
+    guards = [
+        (printer.expr_code(e), g.status, _comment_text(g.doc))
+        for g, e in zip(spec.guards, guard_values[0] if guard_values else (), strict=True)
+    ]
+    for arg, exprs in zip(spec.outputs, result.outputs[: len(spec.outputs)], strict=True):
         if arg.kind == "array":
-            stores += [(_access(arg, None, i), printer.expr_code(e)) for i, e in enumerate(exprs)]
+            stores += [(_access(arg, None, i, config), printer.expr_code(e)) for i, e in enumerate(exprs)]
         else:
             for f, chunk in split_fields(arg, exprs):
-                stores += [(_access(arg, f, i), printer.expr_code(e)) for i, e in enumerate(chunk)]
+                stores += [(_access(arg, f, i, config), printer.expr_code(e)) for i, e in enumerate(chunk)]
     ops = op_count_from(printer.ops)
+    checked = spec.returns_status and bool(spec.nonfinite_output)
+    if checked:  # compute into locals, check, then store: no output written on error
+        results = [(f"r_{k}", value) for k, (_, value) in enumerate(stores)]
+        stores = [(target, f"r_{k}") for k, (target, _) in enumerate(stores)]
+    else:
+        results = []
 
     name = f"{config.prefix}{spec.name}"
     ret = config.status_type if spec.returns_status else "void"
@@ -223,7 +238,12 @@ def _function_context(spec: FunctionSpec, result: CseResult, config: CConfig) ->
     doc += [_param_doc(a, True, config, spec) for a in spec.inputs]
     doc += [_param_doc(a, False, config, spec) for a in spec.outputs]
     if spec.returns_status:
-        doc.append(f"@return {config.status_codes[0].name} on success.")
+        doc.append(f"@return {config.status_codes[0].name} on success; on error no output is written:")
+        if spec.nonfinite_input:
+            doc.append(f"        {spec.nonfinite_input} if an input is NaN or infinite,")
+        doc += [f"        {g.status} if not ({_comment_text(g.doc)})," for g in spec.guards]
+        if spec.nonfinite_output:
+            doc.append(f"        {spec.nonfinite_output} if a result is not finite.")
     doc += ["", ops.comment()]
     return {
         "name": name,
@@ -237,6 +257,15 @@ def _function_context(spec: FunctionSpec, result: CseResult, config: CConfig) ->
         "temps": temps,
         "stores": stores,
         "status_ok": config.status_codes[0].name if spec.returns_status else "",
+        "input_check": (
+            " || ".join(f"!isfinite({n})" for n, _ in loads)
+            if spec.returns_status and spec.nonfinite_input and loads else ""
+        ),
+        "nonfinite_input": spec.nonfinite_input,
+        "guards": guards,
+        "results": results,
+        "output_check": " || ".join(f"!isfinite({n})" for n, _ in results),
+        "nonfinite_output": spec.nonfinite_output,
     }
 
 
@@ -284,7 +313,7 @@ def render(
     names = [s.name for s in specs]
     if len(set(names)) != len(names):
         raise ValueError(f"{module}: duplicate function names {names}")
-    functions = [_function_context(spec, cse_function(spec), config) for spec in specs]
+    functions = [_function_context(spec, config) for spec in specs]
     files: dict[str, str] = {}
     for suffix, template in ((".h", "module.h.jinja"), (".c", "module.c.jinja")):
         files[module + suffix] = template_util.render(

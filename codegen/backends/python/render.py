@@ -27,7 +27,7 @@ import sympy as sp
 from codegen import template_util
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
-from codegen.cse import CseResult, cse_function, op_count_from
+from codegen.cse import cse_function, op_count_from
 from codegen.layout import (
     InputSlot,
     input_slots,
@@ -128,9 +128,8 @@ def _describe(arg: Argument) -> str:
     return text + (f". {arg.doc}" if arg.doc else "")
 
 
-def _function_context(
-    spec: FunctionSpec, result: CseResult, config: PythonConfig
-) -> dict[str, object]:
+def _function_context(spec: FunctionSpec, config: PythonConfig) -> dict[str, object]:
+    result = cse_function(spec.checked_spec())
     slots = input_slots(spec)
     reserved = frozenset(config.reserved_names)
     arg_names = {a.name for a in (*spec.inputs, *spec.outputs)}
@@ -145,8 +144,13 @@ def _function_context(
     args = _signature_order(spec)
     loads = [load for a in args for load in _loads(a, slots, names, used)]
     temps = [(str(s), printer.expr_code(e)) for s, e in result.temps]
+    guard_values = result.outputs[len(spec.outputs):]
+    guards = [
+        (printer.expr_code(e), g.status, g.doc.replace('"', "'"))
+        for g, e in zip(spec.guards, guard_values[0] if guard_values else (), strict=True)
+    ]
     outputs: list[dict[str, object]] = []
-    for arg, exprs in zip(spec.outputs, result.outputs, strict=True):
+    for arg, exprs in zip(spec.outputs, result.outputs[: len(spec.outputs)], strict=True):
         if arg.kind == "array":
             value = _value(arg.shape, [printer.expr_code(e) for e in exprs], False)
             outputs.append({"name": arg.name, "struct": False, "value": value})
@@ -174,7 +178,20 @@ def _function_context(
         "temps": temps,
         "outputs": outputs,
         "returns": [o["name"] for o in outputs],
+        "guards": guards,
+        "input_check": spec.returns_status and bool(spec.nonfinite_input),
+        "nonfinite_input": spec.nonfinite_input,
+        "input_names": [t for load in loads for t in _load_targets(load)],
+        "nonfinite_output": spec.nonfinite_output if spec.returns_status else "",
     }
+
+
+def _load_targets(load: dict[str, object]) -> list[str]:
+    if load["kind"] == "scalar":
+        return [str(load["target"])]
+    if load["kind"] == "flat":
+        return [str(t) for t in load["targets"] if t != "_"]  # type: ignore[attr-defined]
+    return []
 
 
 def render(
@@ -201,6 +218,6 @@ def render(
         preamble=template_util.preamble_lines(source, TEMPLATE_DIR, template),
         module=module,
         exports=sorted(names),
-        functions=[_function_context(spec, cse_function(spec), config) for spec in specs],
+        functions=[_function_context(spec, config) for spec in specs],
     )
     return {module + ".py": text}

@@ -1,0 +1,249 @@
+"""The four controllers of Roy et al. (2017) as symbolic laws: TDC, TDROC, ROC and ASMC.
+
+Every law acts on a model  M(q) q̈ + H(q, q̇) = u  in one of two formulations:
+
+* ``paper``: the five coordinates of (14), M = M̃(q) (not symmetric), u = B τ. The law
+  computes a 5-vector u, but only τ = (τ_r, τ_l) can be applied: we take τ = Bᵀ u (rows
+  4–5 of u, the least-squares solution of B τ = u since BᵀB = I). Rows 1–3 of u are
+  discarded; the controllers report their norm (the cost of this choice).
+* ``minimal``: the two wheel angles, M = M̄ = Sᵀ M S (constant), H = H̄, u = τ exactly.
+  The law then tracks the wheel angles of a kinematically consistent reference; the pose
+  is not fed back (drift of the pose is not corrected).
+
+Common to all (e = q_d − q):
+  (18)  û_a = q̈_d + K1 e + K2 ė,  K1 = diag(k1), K2 = diag(k2) > 0
+  (22)  u_a = û_a + Δu_a
+  (24)/(25)  Δu_a = k s / max(‖s‖, ε)   — k s/‖s‖ outside the boundary layer, k s/ε inside
+        s = Bᵀ P e, P from Aᵀ P + P A = −Q (per coordinate, see ``lyapunov_p``):
+        s_j = p12_j e_j + p22_j ė_j.
+
+TDC   (16)–(18): u = M̂(q) û_a + Ĥ1, no switching term.
+TDROC (16), (17), (22), (25): u = M̂(q) u_a + Ĥ1 with the gain
+        k̂ = ‖M̂(q)⁻¹‖_F · Σ_{i=1..n} w_i ‖Ω(i) − Ω(i+1)‖ / Σ w_i,
+        Ω(i) = u(t − ih) − M̂(q(t − ih)) q̈(t − ih)   (Ω(1) is Ĥ1 of (17)).
+        Weights w_i = a^(i−1) (i = 1 is the most recent difference), normalised: the
+        printed (25) is unreadable here; Remark 3 asks that recent data weigh most, which
+        a^(i−1) does for 0 < a < 1 (a = 1: equal weights). ‖·‖_F bounds the spectral
+        norm from above, so the robustness argument of (23) still holds.
+ROC   (Ryu & Agarwal's robust control in its standard Lyapunov-redesign form):
+        u = M̂(q) u_a + Ĥ(q, q̇) (full nominal model), gain
+        ρ = (α (‖q̈_d‖ + ‖K1 e + K2 ė‖) + φ) / (1 − α),
+        α ≥ ‖M⁻¹ M̂ − I‖ and φ ≥ ‖M⁻¹ (H − Ĥ)‖ over the predefined uncertainty box
+        (30 % above nominal), computed when the configuration is built.
+ASMC  (Chen et al.'s adaptive sliding mode): u = M̂(q) u_a + Ĥ(q, q̇), gain adapted by
+        dk̂/dt = γ ‖s‖ (explicit Euler over one sample h): k̂ never decreases.
+
+q̈(t − h) in (17) is estimated from the measured rates by a central difference,
+        q̈(t − h) ≈ (q̇(t) − q̇(t − 2h)) / (2h),
+second-order accurate at exactly the instant (17) needs (a backward difference would be
+first-order and half a sample late).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+from typing import Literal
+
+import sympy as sp
+
+from modeling import wmr
+from modeling.lagrange import ConstrainedSystem
+
+Formulation = Literal["paper", "minimal"]
+FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
+CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+
+
+def _vec(name: str, n: int) -> sp.Matrix:
+    return sp.Matrix(sp.symbols(f"{name}0:{n}", real=True))
+
+
+@dataclass(frozen=True)
+class ControlModel:
+    """M̂(q), Ĥ(q, q̇) and Bᵀ-selection of one formulation at the nominal parameters.
+
+    ``coordinates`` are the symbols the model depends on (θ for the paper form; none for
+    the minimal form), ``size`` is the number of controlled coordinates and
+    ``offset`` where they start in the five-coordinate q.
+    """
+
+    formulation: Formulation
+    size: int
+    offset: int
+    mass: sp.Matrix
+    bias: sp.Matrix
+    mass_inverse: sp.Matrix
+    velocities: tuple[sp.Symbol, ...]
+
+
+@cache
+def control_model(formulation: Formulation) -> ControlModel:
+    """The model a controller uses. Paper: M̃, H̃ of (14); minimal: M̄, H̄ (Sᵀ M S form)."""
+    s: ConstrainedSystem = wmr.wmr_system()
+    if formulation == "paper":
+        return ControlModel(
+            formulation, 5, 0, s.reduced_mass_matrix, s.reduced_bias,
+            s.reduced_mass_matrix_inverse, tuple(wmr.qdot[3:]),
+        )
+    if formulation == "minimal":
+        return ControlModel(
+            formulation, 2, 3, s.minimal_mass_matrix, s.minimal_bias,
+            s.minimal_mass_matrix_inverse, tuple(wmr.qdot[3:]),
+        )
+    raise ValueError(f"unknown formulation {formulation!r} (expected one of {FORMULATIONS})")
+
+
+def lyapunov_p(k1: sp.Expr, k2: sp.Expr, q1: sp.Expr, q2: sp.Expr) -> tuple[sp.Expr, ...]:
+    """(p11, p12, p22) solving Aᵀ P + P A = −diag(q1, q2) for A = [[0, 1], [−k1, −k2]].
+
+    With K1, K2 and Q diagonal, the 2n×2n Lyapunov equation of (20) splits into one 2×2
+    equation per coordinate; it is solved here symbolically, not typed.
+    """
+    p11, p12, p22 = sp.symbols("p11 p12 p22")
+    a = sp.Matrix([[0, 1], [-k1, -k2]])
+    p = sp.Matrix([[p11, p12], [p12, p22]])
+    eqs = a.T * p + p * a + sp.diag(q1, q2)
+    sol = sp.solve([eqs[0, 0], eqs[0, 1], eqs[1, 1]], [p11, p12, p22], dict=True)[0]
+    return tuple(sp.factor(sol[v]) for v in (p11, p12, p22))
+
+
+@dataclass(frozen=True)
+class LawSymbols:
+    """Input symbols shared by the laws of one formulation (size n)."""
+
+    e: sp.Matrix
+    edot: sp.Matrix
+    qddot_des: sp.Matrix
+    h1: sp.Matrix
+    k1: sp.Matrix
+    k2: sp.Matrix
+    p12: sp.Matrix
+    p22: sp.Matrix
+    gain: sp.Symbol
+    eps: sp.Symbol
+    alpha: sp.Symbol
+    phi: sp.Symbol
+
+
+def law_symbols(n: int) -> LawSymbols:
+    return LawSymbols(
+        e=_vec("e", n), edot=_vec("edot", n), qddot_des=_vec("qdd_des", n),
+        h1=_vec("H1hat", n), k1=_vec("k1_", n), k2=_vec("k2_", n),
+        p12=_vec("p12_", n), p22=_vec("p22_", n),
+        gain=sp.Symbol("gain", real=True), eps=sp.Symbol("eps", positive=True),
+        alpha=sp.Symbol("alpha", real=True), phi=sp.Symbol("phi", real=True),
+    )
+
+
+def _norm(v: sp.Matrix) -> sp.Expr:
+    return sp.sqrt(sum((x**2 for x in v), sp.S.Zero))
+
+
+def nominal_acceleration(ls: LawSymbols) -> sp.Matrix:
+    """(18): û_a = q̈_d + K1 e + K2 ė with diagonal gains."""
+    n = ls.e.rows
+    return sp.Matrix([ls.qddot_des[j] + ls.k1[j] * ls.e[j] + ls.k2[j] * ls.edot[j]
+                      for j in range(n)])
+
+
+def sliding_variable(ls: LawSymbols) -> sp.Matrix:
+    """s = Bᵀ P e (below (24)): s_j = p12_j e_j + p22_j ė_j."""
+    return sp.Matrix([ls.p12[j] * ls.e[j] + ls.p22[j] * ls.edot[j] for j in range(ls.e.rows)])
+
+
+def switching_term(ls: LawSymbols, gain: sp.Expr) -> tuple[sp.Matrix, sp.Expr]:
+    """(24)/(25): Δu_a = k s / max(‖s‖, ε); returns (Δu_a, ‖s‖)."""
+    s = sliding_variable(ls)
+    s_norm = _norm(s)
+    return s * (gain / sp.Max(s_norm, ls.eps)), s_norm
+
+
+@dataclass(frozen=True)
+class Law:
+    """Outputs of one control law: u (n), s (n), ‖s‖, and the gain actually used."""
+
+    u: sp.Matrix
+    s: sp.Matrix
+    s_norm: sp.Expr
+    gain: sp.Expr
+
+
+def tde_law(formulation: Formulation, switching: bool) -> tuple[Law, LawSymbols]:
+    """TDC (16)–(18) when ``switching`` is False; TDROC (16), (22), (25) with the gain
+    symbol ``ls.gain`` (k̂, computed by ``tdroc_gain``) when True. Ĥ1 is an input (17)."""
+    cm = control_model(formulation)
+    ls = law_symbols(cm.size)
+    ua = nominal_acceleration(ls)
+    if switching:
+        du, s_norm = switching_term(ls, ls.gain)
+        ua = ua + du
+        gain: sp.Expr = ls.gain
+    else:
+        s_norm, gain = sp.S.Zero, sp.S.Zero
+    u = cm.mass * ua + ls.h1
+    return Law(u, sliding_variable(ls), s_norm, gain), ls
+
+
+def model_law(formulation: Formulation, controller: Literal["roc", "asmc"]) -> tuple[Law, LawSymbols]:
+    """ROC and ASMC: u = M̂ u_a + Ĥ(q, q̇) with the nominal model's Ĥ.
+
+    ROC's gain is ρ = (α(‖q̈_d‖ + ‖K1 e + K2 ė‖) + φ)/(1 − α); ASMC's is the input k̂.
+    """
+    cm = control_model(formulation)
+    ls = law_symbols(cm.size)
+    ua_hat = nominal_acceleration(ls)
+    if controller == "roc":
+        feedback = ua_hat - ls.qddot_des
+        gain = (ls.alpha * (_norm(ls.qddot_des) + _norm(feedback)) + ls.phi) / (1 - ls.alpha)
+    else:
+        gain = ls.gain
+    du, s_norm = switching_term(ls, gain)
+    u = cm.mass * (ua_hat + du) + cm.bias
+    return Law(u, sliding_variable(ls), s_norm, gain), ls
+
+
+@dataclass(frozen=True)
+class TdeSymbols:
+    q_prev: sp.Matrix  # q(t − h), five coordinates
+    u_prev: sp.Matrix  # u(t − h) actually applied (B τ for the paper form)
+    qdot_now: sp.Matrix  # q̇(t), size n
+    qdot_prev2: sp.Matrix  # q̇(t − 2h), size n
+    h: sp.Symbol
+
+
+def tde_estimate(formulation: Formulation) -> tuple[sp.Matrix, TdeSymbols]:
+    """(17): Ĥ1(t) = Ω(1) = u(t − h) − M̂(q(t − h)) q̈(t − h), with the central difference
+    q̈(t − h) ≈ (q̇(t) − q̇(t − 2h)) / (2h)."""
+    cm = control_model(formulation)
+    n = cm.size
+    ts = TdeSymbols(
+        q_prev=_vec("qp", 5), u_prev=_vec("up", n), qdot_now=_vec("qd_now", n),
+        qdot_prev2=_vec("qd_pp", n), h=sp.Symbol("h", positive=True),
+    )
+    qdd = (ts.qdot_now - ts.qdot_prev2) / (2 * ts.h)
+    mass = cm.mass.subs(dict(zip(wmr.q, ts.q_prev, strict=True)))
+    return ts.u_prev - mass * qdd, ts
+
+
+def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
+    """(25): k̂ = ‖M̂(q)⁻¹‖_F Σ_{i=1..window} w_i ‖Ω(i) − Ω(i+1)‖ with the weights w_i
+    given normalised (Σ w_i = 1 over the active window, 0 beyond it) by the caller.
+
+    Returns (k̂, Ω window symbols ((window + 1) × n, row i = Ω(i + 1)), weight symbols).
+    """
+    cm = control_model(formulation)
+    n = cm.size
+    omega = sp.Matrix(window + 1, n, lambda i, j: sp.Symbol(f"Om{i}_{j}", real=True))
+    w = _vec("w", window)
+    total = sp.S.Zero
+    for i in range(window):
+        total += w[i] * _norm((omega[i, :] - omega[i + 1, :]).T)
+    minv_norm = _norm(sp.Matrix(list(cm.mass_inverse)))
+    return minv_norm * total, omega, w
+
+
+def asmc_adaptation(gain: sp.Symbol, gamma: sp.Symbol, s_norm: sp.Symbol,
+                    h: sp.Symbol) -> sp.Expr:
+    """ASMC: k̂(t + h) = k̂(t) + h γ ‖s(t)‖ (explicit Euler of dk̂/dt = γ‖s‖)."""
+    return gain + h * gamma * s_norm

@@ -1,0 +1,99 @@
+"""Shared numeric views of the symbolic WMR model (lambdified once per session).
+
+Every function takes (q, qdot, qddot, tau, p) with p = (m, I, K, K_lat, I_w, r, b, d) in the
+order of ``wmr.PLANT_SYMBOLS``; arguments an expression does not use are ignored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import cache
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from modeling import wmr
+from modeling.robot_file import load_robot
+
+ARGS = (wmr.q, wmr.qdot, wmr.qddot, tuple(wmr.tau), wmr.PLANT_SYMBOLS)
+NumFn = Callable[..., np.ndarray]
+
+
+def numeric(expr: sp.Expr | sp.MatrixBase) -> NumFn:
+    """f(q, qdot, qddot, tau, p) -> float or 2-D array."""
+    f = sp.lambdify(ARGS, expr, "numpy", cse=True)
+
+    def call(q, qd=(0.0,) * 5, qdd=(0.0,) * 5, tau=(0.0, 0.0), p=None):  # type: ignore[no-untyped-def]
+        assert p is not None
+        return np.asarray(f(q, qd, qdd, tau, p), dtype=float)
+
+    return call
+
+
+class NumericWMR:
+    """Lambdified pieces of ``wmr.wmr_system(lateral_moment)``."""
+
+    def __init__(self, lateral_moment: bool) -> None:
+        s = wmr.wmr_system(lateral_moment)
+        self.system = s
+        self.M = numeric(s.mass_matrix)
+        self.H = numeric(s.bias)
+        self.A = numeric(s.constraint_matrix)
+        self.Adot_qdot = numeric(s.constraint_rate_term)
+        self.B = numeric(s.input_matrix)
+        self.S = numeric(s.null_space)
+        self.Sdot_eta = numeric(s.null_space_rate)
+        self.M_red = numeric(s.reduced_mass_matrix)
+        self.H_red = numeric(s.reduced_bias)
+        self.M_red_inv = numeric(s.reduced_mass_matrix_inverse)
+        self.M_min = numeric(s.minimal_mass_matrix)
+        self.H_min = numeric(s.minimal_bias)
+        self.B_min = numeric(s.minimal_input_matrix)
+        self.eta_dot = numeric(s.minimal_forward_dynamics(wmr.tau))
+        self.qdd_red = numeric(s.reduced_forward_dynamics(wmr.tau))
+        # λ(q, q̇, η̇, τ): η̇ is read from qddot[3:5].
+        self.multipliers = numeric(s.multipliers_given_accelerations(wmr.tau))
+        lhs, rhs = s.kkt_matrix()
+        self.kkt_lhs = numeric(lhs)
+        self.kkt_rhs = numeric(rhs)
+        self.T = numeric(s.kinetic_energy)
+
+    def qdot_on_manifold(self, q: np.ndarray, eta: np.ndarray, p: np.ndarray) -> np.ndarray:
+        return (self.S(q, p=p) @ eta).ravel()
+
+    def kkt_solve(
+        self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray, p: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(q̈, λ) from [[M, Aᵀ], [A, 0]] [q̈; λ] = [B τ − H; −Ȧ q̇]."""
+        lhs = self.kkt_lhs(q, qd, p=p)
+        rhs = self.kkt_rhs(q, qd, p=p).ravel()
+        rhs[:5] += (self.B(q, p=p) @ tau).ravel()
+        sol = np.linalg.solve(lhs, rhs)
+        return sol[:5], sol[5:]
+
+
+@cache
+def numeric_wmr(lateral_moment: bool) -> NumericWMR:
+    return NumericWMR(lateral_moment)
+
+
+def drishti_params() -> np.ndarray:
+    """(m, I, K, K_lat, I_w, r, b, d) of Drishti from the packaged robot file."""
+    p = load_robot().lumped
+    return np.array([p["m"], p["I"], p["K"], 0.0, p["Iw"], p["r"], p["b"], p["d"]])
+
+
+@pytest.fixture(scope="session")
+def paper_model() -> NumericWMR:
+    return numeric_wmr(False)
+
+
+@pytest.fixture(scope="session")
+def lateral_model() -> NumericWMR:
+    return numeric_wmr(True)
+
+
+@pytest.fixture(scope="session")
+def drishti() -> np.ndarray:
+    return drishti_params()
