@@ -34,11 +34,14 @@ STATUS_CODES: tuple[StatusCode, ...] = (
     StatusCode("WMR_ERR_BAD_FORMULATION", -14, "formulation is not PAPER or MINIMAL"),
     StatusCode("WMR_ERR_NOT_INITIALISED", -15, "state not initialised by _init"),
     StatusCode("WMR_ERR_BAD_BOUNDS", -16, "ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0"),
+    StatusCode("WMR_ERR_BAD_ESTIMATOR", -17, "accel_estimator is not BACKWARD or CENTRAL"),
 )
 
 DEFINES: tuple[tuple[str, str, str], ...] = (
     ("WMR_FORMULATION_PAPER", "0", "the five coordinates of (14), tau = B^T u"),
     ("WMR_FORMULATION_MINIMAL", "1", "the two wheel angles, tau = u"),
+    ("WMR_ACCEL_BACKWARD", "0", "qddot(t-h) = (qdot(t) - qdot(t-h))/h (default)"),
+    ("WMR_ACCEL_CENTRAL", "1", "qddot(t-h) = (qdot(t) - qdot(t-2h))/(2h)"),
     ("WMR_MAX_WINDOW", str(MAX_WINDOW), "largest TDROC window n (history size)"),
     ("WMR_NQ", "5", "generalised coordinates"),
     ("WMR_STATE_MAGIC", "0x574d52", "marks an initialised controller state"),

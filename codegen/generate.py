@@ -17,7 +17,13 @@ from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
 from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
 from codegen.controller_api import CONTROLLERS, DEFINES, MAX_ABS_INPUT, STATUS_CODES
 from codegen.cse import count_ops, cse_function
-from codegen.wmr_functions import MAX_WINDOW, PARAM_FIELDS, law_specs, model_specs
+from codegen.wmr_functions import (
+    MAX_WINDOW,
+    PARAM_FIELDS,
+    law_specs,
+    model_specs,
+    plant_specs,
+)
 from modeling.robot_file import Robot
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "generated"
@@ -28,7 +34,8 @@ LAW_SOURCE = "modeling/controllers.py"
 
 def _c_files(robot: Robot) -> dict[str, str]:
     files = c_backend.render_all(
-        {"wmr_model": model_specs(), "wmr_laws": law_specs()}, C_CONFIG,
+        {"wmr_model": model_specs(), "wmr_laws": law_specs(), "wmr_plant": plant_specs()},
+        C_CONFIG,
         source=f"{MODEL_SOURCE}, {LAW_SOURCE}",
     )
     for info in CONTROLLERS:
@@ -57,6 +64,7 @@ def _python_files(robot: Robot) -> dict[str, str]:
     files = {}
     files.update(py_backend.render(model_specs(), "wmr_model", source=MODEL_SOURCE))
     files.update(py_backend.render(law_specs(), "wmr_laws", source=LAW_SOURCE))
+    files.update(py_backend.render(plant_specs(), "wmr_plant", source=MODEL_SOURCE))
     template = "controllers.py.jinja"
     files["controllers.py"] = template_util.render(
         PY_TEMPLATES, template,
@@ -80,7 +88,7 @@ def _python_files(robot: Robot) -> dict[str, str]:
 def op_counts() -> dict[str, str]:
     """``function -> "operations after CSE: ..."`` for every generated function."""
     return {s.name: count_ops(cse_function(s.checked_spec())).comment()
-            for s in (*model_specs(), *law_specs())}
+            for s in (*model_specs(), *law_specs(), *plant_specs())}
 
 
 def generate_files(robot: Robot, *, report: bool = True) -> dict[str, bytes]:
@@ -92,7 +100,9 @@ def generate_files(robot: Robot, *, report: bool = True) -> dict[str, bytes]:
     out: dict[str, bytes] = {}
     out.update({f"c/{k}": v.encode() for k, v in _c_files(robot).items()})
     out.update({f"python/{k}": v.encode() for k, v in _python_files(robot).items()})
-    for module, specs in (("wmr_model", model_specs()), ("wmr_laws", law_specs())):
+    modules = (("wmr_model", model_specs()), ("wmr_laws", law_specs()),
+               ("wmr_plant", plant_specs()))
+    for module, specs in modules:
         for k, data in casadi_backend.render(specs, module, source=MODEL_SOURCE).items():
             out[f"casadi/{k}"] = data
     out["__init__.py"] = b'"""Generated code (python -m codegen). DO NOT EDIT."""\n'

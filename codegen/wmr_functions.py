@@ -171,11 +171,12 @@ def law_specs() -> tuple[FunctionSpec, ...]:
         specs.append(FunctionSpec(
             f"{f}_tde",
             f"({f} formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with\n"
-            "qddot(t-h) = (qdot(t) - qdot(t-2h)) / (2h).",
+            "qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).",
             (_nominal(), array("q_prev", ts.q_prev, "q(t-h)"),
              array("u_prev", ts.u_prev, "u(t-h) applied"),
              array("qdot_now", ts.qdot_now, "qdot(t)"),
-             array("qdot_prev2", ts.qdot_prev2, "qdot(t-2h)"), array("h", (ts.h,), "sample time")),
+             array("qdot_then", ts.qdot_then, "qdot(t-span)"),
+             array("span", (ts.span,), "h or 2h")),
             (out("H1hat", tde),), ("(17)",),
         ))
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW)
@@ -236,3 +237,46 @@ def law_specs() -> tuple[FunctionSpec, ...]:
         ))
         del n
     return tuple(specs)
+
+
+PLANT_FIELDS: tuple[tuple[str, sp.Symbol, str], ...] = (
+    *PARAM_FIELDS[:3],
+    ("K_lat", wmr.K_lat, "first moment of mass left of C [kg m] (off-axis payload)"),
+    *PARAM_FIELDS[3:],
+)
+
+
+def plant_params_arg(name: str = "pp") -> Argument:
+    return Argument(
+        name, "params", ctype="wmr_plant_params_t",
+        fields=tuple(Field(n, (s,), doc=d) for n, s, d in PLANT_FIELDS),
+        doc="true parameters of the simulated robot, including K_lat",
+    )
+
+
+@cache
+def plant_specs() -> tuple[FunctionSpec, ...]:
+    """``wmr_plant``: the simulated robot (issue 4) — the same machinery with K_lat ≠ 0."""
+    s = wmr.wmr_system(lateral_moment=True)
+    eta = tuple(wmr.qdot[3:])
+    x = array("x", (*wmr.q, *eta), "q (5), then the wheel rates (2)")
+    tau = array("tau", wmr.tau, "wheel torques after friction")
+    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *s.minimal_forward_dynamics(wmr.tau)])
+    rel = wmr.payload_relations()
+    payload = array("payload", (wmr.m_L, wmr.x_L, wmr.y_L),
+                    "payload mass, position ahead of C, position left of C")
+    base = [rel.get(sym, sym) for _, sym, _ in PLANT_FIELDS]
+    return (
+        FunctionSpec(
+            "plant_state_derivative",
+            "x_dot = (S(q) eta, eta_dot) of the plant: the minimal form derived with the\n"
+            "lateral first moment K_lat (an off-axis payload).",
+            (plant_params_arg(), x, tau), (out("xdot", xdot),), ("(9)", "(31)"),
+        ),
+        FunctionSpec(
+            "plant_params_with_payload",
+            "Plant parameters (m, I, K, K_lat, Iw, r, b, d) of a robot carrying a point payload,\n"
+            "from the Hessian of the combined kinetic energy (modeling.wmr.payload_relations).",
+            (plant_params_arg("base"), payload), (out("params", base),), (),
+        ),
+    )

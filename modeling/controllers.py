@@ -33,10 +33,14 @@ ROC   (Ryu & Agarwal's robust control in its standard Lyapunov-redesign form):
 ASMC  (Chen et al.'s adaptive sliding mode): u = M̂(q) u_a + Ĥ(q, q̇), gain adapted by
         dk̂/dt = γ ‖s‖ (explicit Euler over one sample h): k̂ never decreases.
 
-q̈(t − h) in (17) is estimated from the measured rates by a central difference,
-        q̈(t − h) ≈ (q̇(t) − q̇(t − 2h)) / (2h),
-second-order accurate at exactly the instant (17) needs (a backward difference would be
-first-order and half a sample late).
+q̈(t − h) in (17) is estimated from the measured rates by a difference quotient
+        q̈(t − h) ≈ (q̇(t) − q̇(t − Δ)) / Δ,
+a configuration choice (READING.md item 6):
+  * backward (default), Δ = h: the mean acceleration over [t − h, t], exactly the period
+    during which u(t − h) was held (zero-order hold), so Ĥ1 pairs each input with the
+    acceleration it produced; exact for a constant H1.
+  * central, Δ = 2h: second-order accurate at the instant t − h for a smooth motion, but
+    it mixes the responses to u(t − h) and u(t − 2h); measured in the reproduction.
 """
 
 from __future__ import annotations
@@ -208,20 +212,20 @@ class TdeSymbols:
     q_prev: sp.Matrix  # q(t − h), five coordinates
     u_prev: sp.Matrix  # u(t − h) actually applied (B τ for the paper form)
     qdot_now: sp.Matrix  # q̇(t), size n
-    qdot_prev2: sp.Matrix  # q̇(t − 2h), size n
-    h: sp.Symbol
+    qdot_then: sp.Matrix  # q̇(t − Δ), size n
+    span: sp.Symbol  # Δ
 
 
 def tde_estimate(formulation: Formulation) -> tuple[sp.Matrix, TdeSymbols]:
-    """(17): Ĥ1(t) = Ω(1) = u(t − h) − M̂(q(t − h)) q̈(t − h), with the central difference
-    q̈(t − h) ≈ (q̇(t) − q̇(t − 2h)) / (2h)."""
+    """(17): Ĥ1(t) = Ω(1) = u(t − h) − M̂(q(t − h)) q̈(t − h), with the difference quotient
+    q̈(t − h) ≈ (q̇(t) − q̇(t − Δ)) / Δ (Δ = h backward, 2h central)."""
     cm = control_model(formulation)
     n = cm.size
     ts = TdeSymbols(
         q_prev=_vec("qp", 5), u_prev=_vec("up", n), qdot_now=_vec("qd_now", n),
-        qdot_prev2=_vec("qd_pp", n), h=sp.Symbol("h", positive=True),
+        qdot_then=_vec("qd_then", n), span=sp.Symbol("span", positive=True),
     )
-    qdd = (ts.qdot_now - ts.qdot_prev2) / (2 * ts.h)
+    qdd = (ts.qdot_now - ts.qdot_then) / ts.span
     mass = cm.mass.subs(dict(zip(wmr.q, ts.q_prev, strict=True)))
     return ts.u_prev - mass * qdd, ts
 

@@ -190,6 +190,7 @@ class Transcription:
     on_manifold: bool = False
     note: str = ""  # the one-line explanation shown when the verdict is an erratum
     reconstruction: str = ""  # what was rebuilt, for printed=None
+    printed_display: str = ""  # LaTeX of what is printed instead, for printed=None
 
 
 @dataclass(frozen=True)
@@ -209,15 +210,15 @@ class Judgement:
             equation=t.equation,
             verdict=self.verdict,
             evidence=self.evidence,
-            derived_latex=t.derived.latex(tidy),
-            printed_latex="" if t.printed is None else t.printed.latex(),
+            derived_latex=t.derived.latex(in_printed_terms if t.on_manifold else tidy),
+            printed_latex=t.printed_display if t.printed is None else t.printed.latex(),
         )
 
     def printed_resolved_latex(self) -> str:
         """The printed form with the chosen signs substituted for the slots."""
         t = self.transcription
         if t.printed is None:
-            return ""
+            return t.printed_display
         p = t.printed
         subs = {s: sp.Integer(v) for s, v in self.assignment.items()}
         resolved = Form(
@@ -294,7 +295,10 @@ def in_printed_terms(expr: sp.Expr) -> sp.Expr:
 
 
 def tidy(expr: sp.Expr) -> sp.Expr:
-    """Collect on sin/cos and on the state variables, factoring each coefficient."""
+    """Collect on sin/cos and on the state variables, factoring each coefficient.
+
+    An expression of the parameters alone is returned as it is."""
+    original = expr
     expr = sp.expand(expr)
     if expr == 0:
         return expr
@@ -305,7 +309,7 @@ def tidy(expr: sp.Expr) -> sp.Expr:
     ]
     keys += state
     if not keys:
-        return sp.factor(expr)
+        return original
     collected = sp.collect(expr, keys, evaluate=False)
     if set(collected) == {sp.S.One}:
         return sp.factor(expr)
@@ -411,14 +415,14 @@ def _components(eqs: list[sp.Expr]) -> list[tuple[list[sp.Symbol], list[sp.Expr]
 class _Match:
     assignment: dict[sp.Symbol, int]
     failures: int
-    magnitude: sp.Rational
+    magnitude: sp.Expr
 
 
 def _solve_signs(eqs: list[sp.Expr], slots: Sequence[sp.Symbol]) -> _Match:
     """The sign assignment that makes the most coefficient equations vanish."""
     assignment: dict[sp.Symbol, int] = {}
     failures = 0
-    magnitude: sp.Rational = sp.Integer(0)
+    magnitude: sp.Expr = sp.Integer(0)
     for members, group in _components(eqs):
         # Rank: fewest non-vanishing coefficients, then their total magnitude, then the
         # most minus signs restored (a slot marks where the extraction may have lost one;
@@ -518,11 +522,14 @@ def judge(t: Transcription) -> Judgement:
         dims = " Not dimensionally homogeneous: " + ", ".join(
             f"`{text(o)}` [{unit_text(o)}]" for o in outliers
         ) + "."
-    evidence = (
-        f"No sign assignment matches ({match.failures} coefficient(s) differ for every "
-        f"one). Best reading ({slot_info}{'; negated' if sign == -1 else ''}): "
-        f"printed − derived = {diff}.{dims} {t.note}"
-    ).strip()
+    if t.slots:
+        head = (
+            f"No sign assignment matches (the best leaves {match.failures} coefficient(s) "
+            f"non-zero). Best reading ({slot_info}{'; negated' if sign == -1 else ''}): "
+        )
+    else:
+        head = "Differs as printed (no sign could have been lost here): "
+    evidence = f"{head}printed − derived = {diff}.{dims} {t.note}".strip()
     return Judgement(t, "erratum", evidence, match.assignment, sign == -1, residual)
 
 
@@ -687,9 +694,9 @@ def _multipliers(s: ConstrainedSystem) -> list[Transcription]:
         "(€ur  €ul)/2b  mbdu_ 2 + r2 (u_ 2r  u_ 2l)(md  K)/4b",
         Form(_one(p11), label=r"\lambda_{2}", definitions=((Omega1, o1),)),
         Form(_one(lam[1]), label=r"\lambda_{2}"), σ.done(), on_manifold=True,
-        note="Ω1 and the K b θ̇² term disagree with λ2 from (1)–(3) on the manifold by factors "
-        "of 2 (the θ̈r + θ̈l, θ̇² and θ̇r² − θ̇l² terms); the printed λ2 does not satisfy "
-        "(1)–(3).",
+        note="Each of Ω1's four terms and the K b θ̇² term is 2 or ½ times the derived one "
+        "(only θ̈(I − Kd) is right), so the printed λ2 does not satisfy (1)–(3) on the "
+        "constraint manifold.",
     ))
 
     σ = _Slots()
@@ -807,6 +814,8 @@ def _lumped(s: ConstrainedSystem) -> list[Transcription]:
     out.append(Transcription(
         "K relation", "expression of K is given in Nandy et al.; K = 0.34 kg m",
         None, Form(_one(rel[K]), label="K"), reconstruction=_k_reconstruction(rel),
+        printed_display=rf"K = {PRINTED_PARAMETERS['K']:g}\ \mathrm{{kg\,m}}"
+        r"\quad\text{(value only; the relation is not printed)}",
     ))
     return out
 
@@ -819,6 +828,11 @@ def _k_reconstruction(rel: dict[sp.Symbol, sp.Expr]) -> str:
     k_axle_m = sp.simplify(k_axle.subs(wmr.m_P, m - 2 * wmr.m_w))
     value_axle = float(k_axle_m.subs({m: p["m"], d: p["d"]}))
     offset_mm = 1000 * p["K"] / p["m"]
+    # (d − x_P)² = d² also for x_P = 2d: the platform's centre of mass d ahead of C.
+    k_ahead = sp.expand(k_general.subs({wmr.x_P: 2 * d}))
+    m_w_needed = sp.solve(
+        sp.Eq(k_ahead.subs(wmr.m_P, m - 2 * wmr.m_w), K), wmr.m_w
+    )[0].subs({m: p["m"], d: p["d"], K: p["K"]})
     return (
         f"Not printed (\"given in Nandy et al.\"); rebuilt from the kinetic energy as the "
         f"first moment of mass behind C: K = `{text(k_general)}` (x_P = platform centre of "
@@ -826,8 +840,10 @@ def _k_reconstruction(rel: dict[sp.Symbol, sp.Expr]) -> str:
         f"x_P = y_P = 0, for which K = `{text(k_axle_m)}` = {value_axle:.2f} kg m with the "
         f"printed m = {p['m']:g} kg, d = {p['d']:g} m; the paper prints K = {p['K']:g} kg m, "
         f"i.e. a centre of mass {offset_mm:.1f} mm behind C (and the text calls C the centre "
-        f"of mass, which would make K = 0). The printed numbers are inconsistent with the "
-        f"printed I relation; the model keeps K a parameter and uses the printed value."
+        f"of mass, which would make K = 0). The other reading of m_P d², x_P = 2d, gives "
+        f"K = `{text(k_ahead)}`, which is 0.34 kg m only with m_w = {float(m_w_needed):.1f} kg "
+        f"per wheel of the {p['m']:g} kg. The printed numbers are inconsistent with the printed I "
+        f"relation; the model keeps K a parameter and uses the printed value."
     )
 
 

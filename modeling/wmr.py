@@ -135,6 +135,29 @@ def lumped_relations(bodies: tuple[Body, ...]) -> dict[sp.Symbol, sp.Expr]:
     }
 
 
+# Point payload at (x_L ahead of C, y_L left of C), mass m_L.
+m_L, x_L, y_L = sp.symbols("m_L x_L y_L", real=True)
+
+
+def payload_relations() -> dict[sp.Symbol, sp.Expr]:
+    """m, I, K, K_lat of the robot (lumped m, I, K, K_lat) carrying a point payload.
+
+    Derived like ``lumped_relations``: the Hessian of T_lumped + ½ m_L |v_L|² read off in
+    the lumped form, so an off-axis payload (y_L ≠ 0) yields the lateral moment K_lat
+    that the controllers' model (K_lat = 0) does not have.
+    """
+    v = point_velocity(x_L, y_L)
+    t = lumped_kinetic_energy(lateral_moment=True) + sp.Rational(1, 2) * m_L * (v.T * v)[0]
+    t = sp.expand(t)
+    coupling = sp.expand(sp.diff(t, xd_c, thd))
+    return {
+        m: sp.expand(sp.diff(t, xd_c, 2)),
+        I_z: trig_canonical(sp.expand(sp.diff(t, thd, 2))),
+        K: coupling.subs(theta, sp.pi / 2),
+        K_lat: -coupling.subs(theta, 0),
+    }
+
+
 def constraint_matrix() -> sp.Matrix:
     """A(q) of (9), rows in the paper's sign convention, built from contact velocities.
 

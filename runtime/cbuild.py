@@ -1,0 +1,91 @@
+"""Build the generated C (and runtime C helpers) into a shared library loaded with cffi.
+
+The declarations for cffi come from the generated headers themselves, preprocessed with
+an empty ``<math.h>`` (so only our typedefs, enums and prototypes remain and every
+``#define`` size is expanded): the Python side can never drift from the C API.
+Libraries are cached under ``build/`` by a hash of sources and flags.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cffi
+
+ROOT = Path(__file__).resolve().parent.parent
+GENERATED_C = ROOT / "generated" / "c"
+RUNTIME_C = Path(__file__).resolve().parent / "csrc"
+BUILD_DIR = ROOT / "build" / "cffi"
+CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
+HEADERS = ("wmr_types.h", "wmr_model.h", "wmr_laws.h", "wmr_plant.h", "wmr_tdc.h",
+           "wmr_tdroc.h", "wmr_roc.h", "wmr_asmc.h")
+
+
+@dataclass(frozen=True)
+class CLibrary:
+    """A loaded build: ``ffi`` for types and buffers, ``lib`` for the functions."""
+
+    ffi: Any
+    lib: Any
+    float32: bool
+    path: Path
+
+    @property
+    def real(self) -> str:
+        return "float" if self.float32 else "double"
+
+
+def _sources(extra: tuple[Path, ...]) -> list[Path]:
+    return sorted(p for p in GENERATED_C.glob("wmr_*.c")) + list(extra)
+
+
+def declarations(float32: bool, headers: tuple[str, ...] = HEADERS,
+                 extra_headers: tuple[Path, ...] = ()) -> str:
+    """The generated headers, preprocessed for ``cffi.FFI.cdef``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        fake = Path(tmp)
+        (fake / "math.h").write_text("")
+        src = fake / "all.h"
+        includes = [f'#include "{GENERATED_C / h}"' for h in headers]
+        includes += [f'#include "{h}"' for h in extra_headers]
+        src.write_text("\n".join(includes) + "\n")
+        cmd = ["gcc", "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{GENERATED_C}", str(src)]
+        if float32:
+            cmd.insert(3, "-DWMR_FLOAT32")
+        text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    return text
+
+
+def build(float32: bool = False, *, extra_sources: tuple[Path, ...] = (),
+          extra_headers: tuple[Path, ...] = (), flags: tuple[str, ...] = ()) -> CLibrary:
+    """Compile (or reuse) the library and load it."""
+    sources = _sources(extra_sources)
+    all_flags = (*CFLAGS, *flags, *(("-DWMR_FLOAT32",) if float32 else ()))
+    digest = hashlib.sha256()
+    for p in (*sources, *(GENERATED_C / h for h in HEADERS), *extra_headers):
+        digest.update(p.name.encode() + p.read_bytes())
+    digest.update(" ".join(all_flags).encode())
+    BUILD_DIR.mkdir(parents=True, exist_ok=True)
+    so = BUILD_DIR / f"libwmr_{digest.hexdigest()[:16]}.so"
+    if not so.exists():
+        tmp = so.with_suffix(".tmp.so")
+        cmd = ["gcc", *all_flags, f"-I{GENERATED_C}", f"-I{RUNTIME_C}",
+               *map(str, sources), "-lm", "-o", str(tmp)]
+        subprocess.run(cmd, check=True, capture_output=True, text=True)
+        tmp.replace(so)  # atomic: concurrent builds never load a half-written file
+    ffi = cffi.FFI()
+    ffi.cdef(declarations(float32, extra_headers=extra_headers))
+    return CLibrary(ffi, ffi.dlopen(str(so)), float32, so)
+
+
+def params_struct(lib: CLibrary, params: dict[str, float], ctype: str = "wmr_params_t") -> Any:
+    """A C parameter struct from a dict with the Python keys (``I`` → C field ``Iz``)."""
+    obj = lib.ffi.new(f"{ctype} *")
+    for key, value in params.items():
+        setattr(obj, "Iz" if key == "I" else key, float(value))
+    return obj

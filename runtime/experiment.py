@@ -1,0 +1,136 @@
+"""Experiment files (TOML): the paper's setting is the default; every field is checked.
+
+    [controller]   gains and TDROC/ROC/ASMC parameters (paper: K1 = K2 = 4 I, Q = I,
+                   a = 0.9, n = 4, eps = 0.1, h = 0.1 s, ROC bounds 30 %)
+    [plant]        integration rate, encoder resolution, friction, payload schedule
+    [paths]        which paths, their duration
+
+A field that is unknown, missing its type, non-finite or out of range is rejected with an
+error naming it (``section.field``).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+
+class ExperimentFileError(ValueError):
+    """An experiment file that cannot be run; the message names the field."""
+
+
+@dataclass(frozen=True)
+class ControllerSettings:
+    k1: float = 4.0  # K1 = k1 I (paper)
+    k2: float = 4.0  # K2 = k2 I
+    q_pos: float = 1.0  # Q = I
+    q_vel: float = 1.0
+    h: float = 0.1  # s, sampling time of Drishti
+    eps: float = 0.1
+    n: int = 4
+    a: float = 0.9
+    uncertainty: float = 0.3  # ROC: bounds 30 % above nominal
+    gamma: float = 2.0  # ASMC adaptation rate
+    tau_max: float = 40.0  # N m per wheel
+
+
+@dataclass(frozen=True)
+class PlantSettings:
+    substeps: int = 100  # RK4 steps per control sample (1 kHz at h = 0.1 s)
+    encoder_ppr: int = 500  # pulses per revolution, quadrature: 4 counts per pulse
+    viscous: float = 0.05  # N m s/rad per wheel, unknown to the controllers
+    coulomb: float = 0.3  # N m per wheel
+    fixed_payload: float = 6.0  # kg, rangefinder, always on
+    fixed_payload_x: float = -0.05  # m ahead of C (on the axis)
+    fixed_payload_y: float = 0.0
+    extra_payload: float = 3.0  # kg, added and removed periodically
+    extra_payload_x: float = 0.10  # off the robot's axis ...
+    extra_payload_y: float = 0.12  # ... to the left: K_lat the model does not have
+    extra_on_at: float = 5.0  # s: first time the extra payload is put on
+    extra_period: float = 20.0  # s: on for half a period, off for the other half
+
+
+@dataclass(frozen=True)
+class PathSettings:
+    circle_duration: float = 30.0
+    lawnmower_duration: float = 60.0
+
+
+@dataclass(frozen=True)
+class Experiment:
+    controller: ControllerSettings = ControllerSettings()
+    plant: PlantSettings = PlantSettings()
+    paths: PathSettings = PathSettings()
+    source: str = "<paper defaults>"
+
+
+_POSITIVE = {"k1", "k2", "q_pos", "q_vel", "h", "eps", "a", "tau_max", "substeps", "encoder_ppr",
+             "coulomb_speed", "circle_duration", "lawnmower_duration", "extra_period"}
+_NON_NEGATIVE = {"uncertainty", "gamma", "viscous", "coulomb", "fixed_payload", "extra_payload",
+                 "extra_on_at"}
+
+
+def _section(where: str, name: str, data: Any, cls: type) -> Any:
+    if not isinstance(data, dict):
+        raise ExperimentFileError(f"{where}: [{name}] must be a table")
+    known = {f.name: f for f in fields(cls)}
+    values: dict[str, Any] = {}
+    for key, value in data.items():
+        label = f"{name}.{key}"
+        if key not in known:
+            raise ExperimentFileError(
+                f"{where}: unknown field '{label}' (expected one of {', '.join(known)})")
+        want_int = known[key].type in ("int", int)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ExperimentFileError(f"{where}: field '{label}' must be a number, got {value!r}")
+        if want_int and not isinstance(value, int):
+            raise ExperimentFileError(f"{where}: field '{label}' must be an integer, got {value!r}")
+        if not math.isfinite(value):
+            raise ExperimentFileError(f"{where}: field '{label}' must be finite, got {value!r}")
+        if key in _POSITIVE and value <= 0:
+            raise ExperimentFileError(f"{where}: field '{label}' must be positive, got {value!r}")
+        if key in _NON_NEGATIVE and value < 0:
+            raise ExperimentFileError(
+                f"{where}: field '{label}' must be non-negative, got {value!r}")
+        values[key] = int(value) if want_int else float(value)
+    out = replace(cls(), **values)
+    if cls is ControllerSettings:
+        if not 2 <= out.n <= 8:
+            raise ExperimentFileError(f"{where}: field 'controller.n' must be in 2..8, got {out.n}")
+        if out.a > 1:
+            raise ExperimentFileError(f"{where}: field 'controller.a' must be in (0, 1], got {out.a}")
+        if out.uncertainty >= 1:
+            raise ExperimentFileError(
+                f"{where}: field 'controller.uncertainty' must be below 1, got {out.uncertainty}")
+    return out
+
+
+def parse_experiment(text: str, where: str = "<string>") -> Experiment:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ExperimentFileError(f"{where}: not valid TOML: {exc}") from None
+    sections = {"controller": ControllerSettings, "plant": PlantSettings, "paths": PathSettings}
+    unknown = sorted(set(data) - set(sections))
+    if unknown:
+        raise ExperimentFileError(
+            f"{where}: unknown section '{unknown[0]}' (expected controller, plant, paths)")
+    parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
+    return Experiment(**parts, source=where)
+
+
+def load_experiment(path: str | Path | None = None) -> Experiment:
+    """The paper's setting (``None``) or a TOML file overriding some of its fields."""
+    if path is None:
+        return Experiment()
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ExperimentFileError(f"{p}: experiment file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ExperimentFileError(f"{p}: cannot read experiment file: {exc}") from None
+    return parse_experiment(text, str(p))

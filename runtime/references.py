@@ -1,0 +1,139 @@
+"""Reference trajectories that satisfy the constraints (6)–(8) exactly (READING.md item 9).
+
+A reference is defined by smooth wheel-rate profiles η_d(t); the pose follows from
+integrating the kinematics (31) (DOP853, rtol 1e-11), and the accelerations from the chain rule
+q̈_d = ∂(S η)/∂(q, η) · (q̇_d, η̇_d) (rows 1–5 of the generated linearisation's A).
+So every reference fed to a controller is a motion the robot can make.
+
+The paper's printed definitions are kept beside ours (``printed_*``) for the plots:
+
+* circle: printed x_d, y_d on R1 = 1.5 m with θ_d = θ0 + θ̇_d t, wheel rates assuming the
+  axle centre is on R1. Ours: the same angular rate θ̇_d = 0.25 rad/s, C (not the axle
+  centre) exactly on the circle of radius R1: axle radius √(R1² − d²), heading tangent
+  to the axle's circle, wheel rates (v ± θ̇_d b/2)/r with v = θ̇_d √(R1² − d²).
+* lawn mower: printed x_d = 0.1 t + 0.3 sin(0.4 t), y_d = 1.2 + 1.2 cos(0.2 t − T) with
+  square-wave wheel rates (levels a = 3, b = 1.6 rad/s, T = 25 s) — two different motions.
+  Ours: the square waves made consistent: straight legs with both wheels at a = 3 rad/s,
+  U-turns with one wheel at b = 1.6 rad/s (alternating left and right), each turn lasting
+  exactly π/ω so the legs are parallel; switching smoothed with tanh over 0.3 s.
+Both start from rest (the wheel rates ramp up over the first ~2 s).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.integrate import solve_ivp
+
+from runtime.generated_modules import wmr_model
+
+R1 = 1.5
+THETA_DOT = 0.25
+CIRCLE_START = (1.5, 1.5, 0.0)
+LAWN_A, LAWN_B, LAWN_T = 3.0, 1.6, 25.0
+RAMP = 0.3  # s, tanh time constant of every wheel-rate switch
+START_AT = 1.0  # s, centre of the start-up ramp
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Samples at t = k h: q_d, q̇_d, q̈_d (each (N, 5)); ``name`` of the path."""
+
+    name: str
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]
+    qdot: NDArray[np.float64]
+    qddot: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class WheelProfile:
+    """η(t) = Σ_k Δη_k s(t − t_k), s a tanh step: switches at times t_k by Δη_k."""
+
+    times: tuple[float, ...]
+    jumps: tuple[tuple[float, float], ...]
+
+    def rates(self, t: float) -> NDArray[np.float64]:
+        out = np.zeros(2)
+        for tk, (dr, dl) in zip(self.times, self.jumps, strict=True):
+            s = 0.5 * (1.0 + math.tanh((t - tk) / RAMP))
+            out += s * np.array([dr, dl])
+        return out
+
+    def accels(self, t: float) -> NDArray[np.float64]:
+        out = np.zeros(2)
+        for tk, (dr, dl) in zip(self.times, self.jumps, strict=True):
+            ds = 0.5 / RAMP / math.cosh((t - tk) / RAMP) ** 2
+            out += ds * np.array([dr, dl])
+        return out
+
+
+def circle_profile(params: dict[str, float]) -> WheelProfile:
+    r, b, d = params["r"], params["b"], params["d"]
+    v = THETA_DOT * math.sqrt(R1**2 - d**2)
+    wr, wl = (v + THETA_DOT * b / 2) / r, (v - THETA_DOT * b / 2) / r
+    return WheelProfile((START_AT,), ((wr, wl),))
+
+
+def lawnmower_profile(params: dict[str, float], duration: float) -> WheelProfile:
+    r, b = params["r"], params["b"]
+    turn_time = math.pi / (r * (LAWN_A - LAWN_B) / b)  # half a turn at rate ω
+    leg = LAWN_T / 2 - turn_time / 2  # straight legs: a full cycle lasts T on average
+    times, jumps = [START_AT], [(LAWN_A, LAWN_A)]
+    t, left = START_AT + leg, True
+    while t < duration:
+        drop = (0.0, LAWN_B - LAWN_A) if left else (LAWN_B - LAWN_A, 0.0)
+        times += [t, t + turn_time]
+        jumps += [drop, (-drop[0], -drop[1])]
+        t += turn_time + leg
+        left = not left
+    return WheelProfile(tuple(times), tuple(jumps))
+
+
+def integrate(name: str, profile: WheelProfile, start: tuple[float, float, float],
+              params: dict[str, float], h: float, duration: float) -> Reference:
+    """Integrate (31) (DOP853, rtol 1e-11) and sample every h."""
+    n = int(round(duration / h)) + 1
+    ts = np.arange(n) * h
+
+    def rhs(tt: float, qq: NDArray[np.float64]) -> NDArray[np.float64]:
+        eta = profile.rates(tt)
+        return np.concatenate([wmr_model.kinematics(qq, eta, params), eta])
+
+    sol = solve_ivp(rhs, (0.0, ts[-1]), [*start, 0.0, 0.0], method="DOP853", t_eval=ts,
+                    rtol=1e-11, atol=1e-12, max_step=RAMP / 2)
+    if not sol.success:
+        raise RuntimeError(f"reference {name}: integration failed: {sol.message}")
+    qs = sol.y.T
+    qds, qdds = [], []
+    for tk, q in zip(ts, qs, strict=True):
+        eta, eta_dot = profile.rates(tk), profile.accels(tk)
+        qdot = np.concatenate([wmr_model.kinematics(q, eta, params), eta])
+        a_mat, _ = wmr_model.linearization(q, eta, np.zeros(2), params)
+        qds.append(qdot)
+        qdds.append(a_mat[:5, :] @ np.concatenate([qdot, eta_dot]))
+    return Reference(name, ts, qs, np.array(qds), np.array(qdds))
+
+
+def circle(params: dict[str, float], h: float, duration: float) -> Reference:
+    return integrate("circle", circle_profile(params), CIRCLE_START, params, h, duration)
+
+
+def lawnmower(params: dict[str, float], h: float, duration: float) -> Reference:
+    return integrate("lawnmower", lawnmower_profile(params, duration), (0.0, 0.0, 0.0),
+                     params, h, duration)
+
+
+def printed_circle(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The printed circle's (x_d, y_d): centre (0, 1.5)... as printed, radius R1 = 1.5 m,
+    starting at (1.5, 1.5) — shown beside ours, not used for control."""
+    return np.stack([R1 * np.cos(THETA_DOT * t), 1.5 + R1 * np.sin(THETA_DOT * t)], axis=1)
+
+
+def printed_lawnmower(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The printed lawn-mower (x_d, y_d) with T = 25 s — shown beside ours, not used."""
+    return np.stack([0.1 * t + 0.3 * np.sin(0.4 * t), 1.2 + 1.2 * np.cos(0.2 * t - LAWN_T)],
+                    axis=1)

@@ -1,0 +1,217 @@
+"""Closed-loop simulation: the generated C controllers against the simulated robot.
+
+Plant: the constrained dynamics derived with a lateral first moment (``wmr_plant``),
+true parameters = robot + payload schedule, wheel friction (viscous + Coulomb) unknown to
+the controllers, fixed-step RK4 in C (``runtime/csrc/wmr_sim.c``) at ``substeps / h``.
+Controllers: sampled every h with zero-order hold, fed what Drishti measures — wheel
+angles from quadrature encoders (4 × ppr counts per revolution), wheel rates by
+differencing them, and the pose by integrating (31) from those angles (odometry).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from runtime import cbuild
+from runtime.experiment import Experiment
+from runtime.generated_modules import wmr_model, wmr_plant
+from runtime.references import Reference
+
+CSRC = Path(__file__).resolve().parent / "csrc"
+CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+FORMULATIONS = {"paper": 0, "minimal": 1}
+
+
+@cache
+def sim_library(float32: bool = False) -> cbuild.CLibrary:
+    """Generated C + the RK4 helper, compiled once per precision."""
+    return cbuild.build(float32, extra_sources=(CSRC / "wmr_sim.c",),
+                        extra_headers=((CSRC / "wmr_sim.h").resolve(),))
+
+
+def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[np.float64]:
+    """True (m, I, K, K_lat, Iw, r, b, d) at time t: robot + fixed payload + periodic payload."""
+    pl = exp.plant
+    base = {**robot, "K_lat": 0.0}
+    p = wmr_plant.plant_params_with_payload(
+        [pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y], base)
+    if extra_payload_on(exp, t):
+        keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
+        p = wmr_plant.plant_params_with_payload(
+            [pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y], dict(zip(keys, p, strict=True)))
+    return p
+
+
+def extra_payload_on(exp: Experiment, t: float) -> bool:
+    pl = exp.plant
+    if t < pl.extra_on_at:
+        return False
+    return ((t - pl.extra_on_at) % pl.extra_period) < pl.extra_period / 2
+
+
+def roc_bounds(nominal: dict[str, float], uncertainty: float, formulation: str,
+               max_rate: float = 8.0) -> tuple[float, float]:
+    """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
+    I, K and Iw are each nominal or ``uncertainty`` above it, over headings and wheel rates
+    up to ``max_rate`` (sampled on a grid). This is where the toolchain checks the TDE
+    condition ‖M⁻¹M̂ − I‖ < 1 for a configuration."""
+    alpha, phi = 0.0, 0.0
+    rng = np.random.default_rng(7)
+    corners = [
+        {**nominal, **{k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
+                       for i, k in enumerate(("m", "I", "K", "Iw"))}}
+        for mask in range(16)
+    ]
+    for theta in np.linspace(-math.pi, math.pi, 9):
+        q = np.array([0.0, 0.0, theta, 0.0, 0.0])
+        for p in corners:
+            if formulation == "paper":
+                m_true, m_hat = wmr_model.mass_matrix(q, p), wmr_model.mass_matrix(q, nominal)
+            else:
+                m_true = wmr_model.minimal_mass_matrix(q, p)
+                m_hat = wmr_model.minimal_mass_matrix(q, nominal)
+            inv = np.linalg.inv(m_true)
+            alpha = max(alpha, float(np.linalg.norm(inv @ m_hat - np.eye(len(m_hat)), 2)))
+            for eta in rng.uniform(-max_rate, max_rate, size=(4, 2)):
+                qdot = np.concatenate([wmr_model.kinematics(q, eta, p), eta])
+                if formulation == "paper":
+                    dh = wmr_model.bias_forces(q, qdot, p) - wmr_model.bias_forces(q, qdot, nominal)
+                else:
+                    dh = (wmr_model.minimal_bias_forces(q, eta, p)
+                          - wmr_model.minimal_bias_forces(q, eta, nominal))
+                phi = max(phi, float(np.linalg.norm(inv @ dh)))
+    return alpha, phi
+
+
+def controller_config(lib: cbuild.CLibrary, name: str, formulation: str,
+                      nominal: dict[str, float], exp: Experiment) -> Any:
+    c = exp.controller
+    cfg = lib.ffi.new(f"wmr_{name}_config_t *")
+    cfg.nominal = cbuild.params_struct(lib, nominal)[0]
+    cfg.formulation = FORMULATIONS[formulation]
+    cfg.k1 = [c.k1] * 5
+    cfg.k2 = [c.k2] * 5
+    cfg.q_pos, cfg.q_vel, cfg.h, cfg.tau_max = c.q_pos, c.q_vel, c.h, c.tau_max
+    if name != "tdc":
+        cfg.eps = c.eps
+    if name == "tdroc":
+        cfg.n, cfg.a = c.n, c.a
+    if name == "roc":
+        cfg.alpha, cfg.phi = roc_bounds(nominal, c.uncertainty, formulation)
+    if name == "asmc":
+        cfg.gamma, cfg.gain0 = c.gamma, 0.0
+    return cfg
+
+
+@dataclass(frozen=True)
+class Run:
+    """One closed-loop run, sampled at the control instants."""
+
+    controller: str
+    formulation: str
+    path: str
+    t: NDArray[np.float64]
+    q: NDArray[np.float64]  # true state (N, 5)
+    q_meas: NDArray[np.float64]
+    q_des: NDArray[np.float64]
+    tau: NDArray[np.float64]  # (N, 2)
+    gain: NDArray[np.float64]
+    s_norm: NDArray[np.float64]
+    u_discarded: NDArray[np.float64]
+    payload: NDArray[np.float64]  # true total mass
+    saturated: int
+    failed_at: float | None
+
+    @property
+    def position_error(self) -> NDArray[np.float64]:
+        return np.linalg.norm(self.q[:, :2] - self.q_des[:, :2], axis=1)
+
+
+class Odometry:
+    """Encoders (quantised wheel angles) and pose integration by (31)."""
+
+    def __init__(self, q0: NDArray[np.float64], ppr: int, h: float, params: dict[str, float]):
+        self.counts_per_rad = 4 * ppr / (2 * math.pi)
+        self.h = h
+        self.params = params
+        self.pose = q0[:3].copy()
+        self.angles = self.quantise(q0[3:5])
+        self.rates = np.zeros(2)
+
+    def quantise(self, angles: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.floor(angles * self.counts_per_rad) / self.counts_per_rad
+
+    def measure(self, true_angles: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        angles = self.quantise(true_angles)
+        delta = angles - self.angles
+        p = self.params
+        dtheta = p["r"] * (delta[0] - delta[1]) / p["b"]
+        mid = np.array([*self.pose[:2], self.pose[2] + dtheta / 2, 0.0, 0.0])
+        self.pose = self.pose + wmr_model.kinematics(mid, delta, p)
+        self.angles = angles
+        self.rates = delta / self.h
+        q = np.concatenate([self.pose, angles])
+        qdot = np.concatenate([wmr_model.kinematics(q, self.rates, p), self.rates])
+        return q, qdot
+
+
+def run(name: str, formulation: str, ref: Reference, robot: dict[str, float],
+        exp: Experiment, float32: bool = False) -> Run:
+    """Simulate one controller on one reference."""
+    lib = sim_library(float32)
+    ffi, clib = lib.ffi, lib.lib
+    cfg = controller_config(lib, name, formulation, robot, exp)
+    state = ffi.new(f"wmr_{name}_state_t *")
+    status = getattr(clib, f"wmr_{name}_init")(state, cfg)
+    if status != 0:
+        raise RuntimeError(f"{name}/{formulation}: init failed with status {status}")
+    step = getattr(clib, f"wmr_{name}_step")
+    h, nsub = exp.controller.h, exp.plant.substeps
+    friction = ffi.new("sim_friction_t *", [exp.plant.viscous, exp.plant.coulomb, 0.05])
+    x = ffi.new("wmr_real_t[7]", [*ref.q[0], 0.0, 0.0])
+    buf = {k: ffi.new("wmr_real_t[5]") for k in ("q", "qdot", "qd", "qdd", "qddd")}
+    tau = ffi.new("wmr_real_t[2]")
+    pp = ffi.new("wmr_plant_params_t *")
+    odo = Odometry(np.array(ref.q[0]), exp.plant.encoder_ppr, h, robot)
+    n = len(ref.t)
+    rec: dict[str, list[Any]] = {k: [] for k in ("q", "qm", "tau", "gain", "s", "ud", "mass")}
+    saturated, failed_at = 0, None
+    keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
+    for k in range(n):
+        t = ref.t[k]
+        true_q = np.array([x[i] for i in range(5)])
+        q_meas, qdot_meas = odo.measure(true_q[3:5]) if k else (ref.q[0].copy(), np.zeros(5))
+        buf["q"][0:5] = list(q_meas)
+        buf["qdot"][0:5] = list(qdot_meas)
+        buf["qd"][0:5] = list(ref.q[k])
+        buf["qdd"][0:5] = list(ref.qdot[k])
+        buf["qddd"][0:5] = list(ref.qddot[k])
+        status = step(state, cfg, buf["q"], buf["qdot"], buf["qd"], buf["qdd"], buf["qddd"], tau)
+        if status < 0:
+            failed_at = float(t)
+            break
+        saturated += status == 1
+        true_p = plant_params(robot, exp, float(t))
+        for key, value in zip(keys, true_p, strict=True):
+            setattr(pp, "Iz" if key == "I" else key, float(value))
+        rec["q"].append(true_q)
+        rec["qm"].append(q_meas)
+        rec["tau"].append([tau[0], tau[1]])
+        rec["gain"].append(state.gain)
+        rec["s"].append(state.s_norm)
+        rec["ud"].append(state.u_discarded)
+        rec["mass"].append(true_p[0])
+        if k < n - 1 and clib.sim_plant_advance(pp, friction, x, tau, h / nsub, nsub) != 0:
+            failed_at = float(t)
+            break
+    m = len(rec["q"])
+    return Run(name, formulation, ref.name, ref.t[:m], np.array(rec["q"]), np.array(rec["qm"]),
+               ref.q[:m], np.array(rec["tau"]), np.array(rec["gain"]), np.array(rec["s"]),
+               np.array(rec["ud"]), np.array(rec["mass"]), int(saturated), failed_at)
