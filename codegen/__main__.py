@@ -26,12 +26,20 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         prog="python -m codegen",
         description="Derive the WMR model and controllers and regenerate generated/.",
     )
-    parser.add_argument("--robot", type=Path, default=None,
-                        help="robot TOML file (default: the packaged drishti.toml)")
-    parser.add_argument("--check", action="store_true",
-                        help="do not write; exit 1 and print a diff if generated/ is stale")
-    parser.add_argument("--out", type=Path, default=GENERATED_DIR,
-                        help="output directory (default: generated/)")
+    parser.add_argument(
+        "--robot",
+        type=Path,
+        default=None,
+        help="robot TOML file (default: the packaged drishti.toml)",
+    )
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="do not write; exit 1 and print a diff if generated/ is stale",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=GENERATED_DIR, help="output directory (default: generated/)"
+    )
     return parser.parse_args(argv)
 
 
@@ -81,8 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(files[name])
-    print(f"{robot.name}: {len(files)} files in {args.out} ({len(stale)} changed), "
-          f"{elapsed:.1f} s")
+    print(f"{robot.name}: {len(files)} files in {args.out} ({len(stale)} changed), {elapsed:.1f} s")
     return 0
 
 

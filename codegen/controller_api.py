@@ -33,7 +33,9 @@ STATUS_CODES: tuple[StatusCode, ...] = (
     StatusCode("WMR_ERR_BAD_TORQUE_LIMIT", -13, "torque limit <= 0 or NaN"),
     StatusCode("WMR_ERR_BAD_FORMULATION", -14, "formulation is not PAPER or MINIMAL"),
     StatusCode("WMR_ERR_NOT_INITIALISED", -15, "state not initialised by _init"),
-    StatusCode("WMR_ERR_BAD_BOUNDS", -16, "ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0"),
+    StatusCode(
+        "WMR_ERR_BAD_BOUNDS", -16, "ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0"
+    ),
     StatusCode("WMR_ERR_BAD_ESTIMATOR", -17, "accel_estimator is not BACKWARD or CENTRAL"),
 )
 
@@ -62,10 +64,27 @@ class ControllerInfo:
 
 CONTROLLERS: tuple[ControllerInfo, ...] = (
     ControllerInfo("tdc", "time-delay control", "(16)-(18)", True, False, False, False, False),
-    ControllerInfo("tdroc", "time-delayed robust optimal control", "(16)-(18), (22)-(25)",
-                   True, True, True, False, False),
-    ControllerInfo("roc", "robust control with predefined bounds", "(22), (24)",
-                   False, True, False, True, False),
-    ControllerInfo("asmc", "adaptive sliding-mode control", "(22), (24)",
-                   False, True, False, False, True),
+    ControllerInfo(
+        "tdroc",
+        "time-delayed robust optimal control",
+        "(16)-(18), (22)-(25)",
+        True,
+        True,
+        True,
+        False,
+        False,
+    ),
+    ControllerInfo(
+        "roc",
+        "robust control with predefined bounds",
+        "(22), (24)",
+        False,
+        True,
+        False,
+        True,
+        False,
+    ),
+    ControllerInfo(
+        "asmc", "adaptive sliding-mode control", "(22), (24)", False, True, False, False, True
+    ),
 )

@@ -42,20 +42,26 @@ def _c_files(robot: Robot) -> dict[str, str]:
         for suffix in ("h", "c"):
             template = f"controller.{suffix}.jinja"
             files[f"wmr_{info.name}.{suffix}"] = template_util.render(
-                C_TEMPLATES, template,
+                C_TEMPLATES,
+                template,
                 preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
-                c=info, max_abs_input=MAX_ABS_INPUT,
+                c=info,
+                max_abs_input=MAX_ABS_INPUT,
             )
     fields = [(C_CONFIG.c_field(name), repr(robot.lumped[name])) for name, _, _ in PARAM_FIELDS]
     files["wmr_robot.h"] = template_util.render(
-        C_TEMPLATES, "robot.h.jinja",
+        C_TEMPLATES,
+        "robot.h.jinja",
         preamble=template_util.preamble_lines(robot.source, C_TEMPLATES, "robot.h.jinja"),
-        robot_name=robot.name, fields=fields,
+        robot_name=robot.name,
+        fields=fields,
     )
     files["example_main.c"] = template_util.render(
-        C_TEMPLATES, "example_main.c.jinja",
-        preamble=template_util.preamble_lines("codegen/generate.py", C_TEMPLATES,
-                                              "example_main.c.jinja"),
+        C_TEMPLATES,
+        "example_main.c.jinja",
+        preamble=template_util.preamble_lines(
+            "codegen/generate.py", C_TEMPLATES, "example_main.c.jinja"
+        ),
     )
     return files
 
@@ -67,11 +73,16 @@ def _python_files(robot: Robot) -> dict[str, str]:
     files.update(py_backend.render(plant_specs(), "wmr_plant", source=MODEL_SOURCE))
     template = "controllers.py.jinja"
     files["controllers.py"] = template_util.render(
-        PY_TEMPLATES, template,
+        PY_TEMPLATES,
+        template,
         preamble=template_util.preamble_lines(LAW_SOURCE, PY_TEMPLATES, template),
-        status_codes=STATUS_CODES, controllers=CONTROLLERS,
-        formulation_paper=0, formulation_minimal=1, max_window=MAX_WINDOW,
-        max_abs_input=MAX_ABS_INPUT, param_keys=[name for name, _, _ in PARAM_FIELDS],
+        status_codes=STATUS_CODES,
+        controllers=CONTROLLERS,
+        formulation_paper=0,
+        formulation_minimal=1,
+        max_window=MAX_WINDOW,
+        max_abs_input=MAX_ABS_INPUT,
+        param_keys=[name for name, _, _ in PARAM_FIELDS],
     )
     params = ", ".join(f'"{k}": {robot.lumped[k]!r}' for k, _, _ in PARAM_FIELDS)
     files["robot.py"] = (
@@ -87,8 +98,10 @@ def _python_files(robot: Robot) -> dict[str, str]:
 
 def op_counts() -> dict[str, str]:
     """``function -> "operations after CSE: ..."`` for every generated function."""
-    return {s.name: count_ops(cse_function(s.checked_spec())).comment()
-            for s in (*model_specs(), *law_specs(), *plant_specs())}
+    return {
+        s.name: count_ops(cse_function(s.checked_spec())).comment()
+        for s in (*model_specs(), *law_specs(), *plant_specs())
+    }
 
 
 def generate_files(robot: Robot, *, report: bool = True) -> dict[str, bytes]:
@@ -100,8 +113,11 @@ def generate_files(robot: Robot, *, report: bool = True) -> dict[str, bytes]:
     out: dict[str, bytes] = {}
     out.update({f"c/{k}": v.encode() for k, v in _c_files(robot).items()})
     out.update({f"python/{k}": v.encode() for k, v in _python_files(robot).items()})
-    modules = (("wmr_model", model_specs()), ("wmr_laws", law_specs()),
-               ("wmr_plant", plant_specs()))
+    modules = (
+        ("wmr_model", model_specs()),
+        ("wmr_laws", law_specs()),
+        ("wmr_plant", plant_specs()),
+    )
     for module, specs in modules:
         for k, data in casadi_backend.render(specs, module, source=MODEL_SOURCE).items():
             out[f"casadi/{k}"] = data

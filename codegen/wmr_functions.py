@@ -13,6 +13,7 @@ Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi function
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cache
 
 import sympy as sp
@@ -40,19 +41,26 @@ STATUS_NONFINITE_OUTPUT = "WMR_ERR_NONFINITE_OUTPUT"
 
 def params_arg(name: str = "p", doc: str = "lumped robot parameters") -> Argument:
     return Argument(
-        name, "params",
-        fields=tuple(Field(n, (s,), doc=d) for n, s, d in PARAM_FIELDS), doc=doc,
+        name,
+        "params",
+        fields=tuple(Field(n, (s,), doc=d) for n, s, d in PARAM_FIELDS),
+        doc=doc,
     )
 
 
-def array(name: str, symbols: sp.Matrix | tuple[sp.Symbol, ...], doc: str = "",
-          shape: tuple[int, int] | None = None) -> Argument:
+def array(
+    name: str,
+    symbols: sp.Matrix | tuple[sp.Symbol, ...],
+    doc: str = "",
+    shape: tuple[int, int] | None = None,
+) -> Argument:
     syms = tuple(symbols)
     return Argument(name, "array", shape=shape or (len(syms), 1), symbols=syms, doc=doc)
 
 
-def out(name: str, exprs: sp.Matrix | list[sp.Expr], doc: str = "",
-        shape: tuple[int, int] | None = None) -> Argument:
+def out(
+    name: str, exprs: sp.Matrix | list[sp.Expr], doc: str = "", shape: tuple[int, int] | None = None
+) -> Argument:
     if isinstance(exprs, sp.MatrixBase):
         shape = shape or exprs.shape
         values = tuple(exprs)  # row-major
@@ -89,59 +97,83 @@ def model_specs() -> tuple[FunctionSpec, ...]:
     xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
     jac_x = xdot.jacobian(x)
     jac_u = xdot.jacobian(wmr.tau)
-    checked = {
-        "returns_status": True,
-        "guards": _param_guards(),
-        "nonfinite_input": STATUS_NONFINITE_INPUT,
-        "nonfinite_output": STATUS_NONFINITE_OUTPUT,
-    }
+    guards = _param_guards()
+
+    def checked(spec: FunctionSpec) -> FunctionSpec:
+        return replace(
+            spec,
+            returns_status=True,
+            guards=guards,
+            nonfinite_input=STATUS_NONFINITE_INPUT,
+            nonfinite_output=STATUS_NONFINITE_OUTPUT,
+        )
+
     return (
         FunctionSpec(
             "mass_matrix",
             "M(q) of (14), the reduced (multiplier-free) mass matrix; not symmetric.",
-            (p, q), (out("M", s.reduced_mass_matrix, "5x5 row-major"),), ("(14)",),
+            (p, q),
+            (out("M", s.reduced_mass_matrix, "5x5 row-major"),),
+            ("(14)",),
         ),
         FunctionSpec(
             "bias_forces",
             "H(q, qdot) of (14). Rows 1-3 hold the velocity-product terms of the twice\n"
             "differentiated constraints; valid for qdot on the constraint manifold.",
-            (p, q, qdot), (out("H", s.reduced_bias),), ("(14)",),
+            (p, q, qdot),
+            (out("H", s.reduced_bias),),
+            ("(14)",),
         ),
-        FunctionSpec(
-            "forward_dynamics",
-            "qddot solving (14) with u = B tau, by structured elimination:\n"
-            "eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)), qddot = S eta_dot + Sdot eta.\n"
-            "Only the wheel rates qdot[3], qdot[4] are read: the other velocities follow\n"
-            "from the constraints (6)-(8).",
-            (p, q, qdot, tau), (out("qddot", qdd),), ("(9)", "(14)", "(31)"), **checked,
+        checked(
+            FunctionSpec(
+                "forward_dynamics",
+                "qddot solving (14) with u = B tau, by structured elimination:\n"
+                "eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)),\n"
+                "qddot = S eta_dot + Sdot eta.\n"
+                "Only the wheel rates qdot[3], qdot[4] are read: the other velocities follow\n"
+                "from the constraints (6)-(8).",
+                (p, q, qdot, tau),
+                (out("qddot", qdd),),
+                ("(9)", "(14)", "(31)"),
+            )
         ),
         FunctionSpec(
             "kinematics",
             "(31): pose rates (x_c, y_c, theta) from the wheel rates, xi_dot = S_d(q) eta.",
             (p, q, wheel_rates),
-            (out("pose_rates", s.null_space[:3, :] * sp.Matrix(eta)),), ("(31)", "(13)"),
+            (out("pose_rates", s.null_space[:3, :] * sp.Matrix(eta)),),
+            ("(31)", "(13)"),
         ),
         FunctionSpec(
             "minimal_mass_matrix",
             "Mbar = S^T M S of the minimal two-coordinate model (constant for K_lat = 0).",
-            (p, q), (out("M", s.minimal_mass_matrix, "2x2 row-major"),), ("(9)",),
+            (p, q),
+            (out("M", s.minimal_mass_matrix, "2x2 row-major"),),
+            ("(9)",),
         ),
         FunctionSpec(
             "minimal_bias_forces",
             "Hbar = S^T (M Sdot eta + H) of the minimal model.",
-            (p, q, wheel_rates), (out("H", s.minimal_bias),), ("(9)",),
+            (p, q, wheel_rates),
+            (out("H", s.minimal_bias),),
+            ("(9)",),
         ),
-        FunctionSpec(
-            "minimal_forward_dynamics",
-            "Wheel accelerations of the minimal model: Mbar eta_dot + Hbar = tau.",
-            (p, q, wheel_rates, tau), (out("wheel_accels", eta_dot),), ("(9)",), **checked,
+        checked(
+            FunctionSpec(
+                "minimal_forward_dynamics",
+                "Wheel accelerations of the minimal model: Mbar eta_dot + Hbar = tau.",
+                (p, q, wheel_rates, tau),
+                (out("wheel_accels", eta_dot),),
+                ("(9)",),
+            )
         ),
         FunctionSpec(
             "linearization",
             "Jacobians of the state equation x_dot = f(x, tau), x = (q, theta_r rate,\n"
             "theta_l rate), f = (S(q) eta, eta_dot): A = df/dx (7x7), B = df/dtau (7x2).",
             (p, q, wheel_rates, tau),
-            (out("A", jac_x, "7x7 row-major"), out("B", jac_u, "7x2 row-major")), ("(9)", "(31)"),
+            (out("A", jac_x, "7x7 row-major"), out("B", jac_u, "7x2 row-major")),
+            ("(9)", "(31)"),
         ),
     )
 
@@ -156,85 +188,144 @@ def law_specs() -> tuple[FunctionSpec, ...]:
     specs: list[FunctionSpec] = []
     k1, k2, q1, q2 = sp.symbols("k1 k2 q1 q2", positive=True)
     p11, p12, p22 = ctl.lyapunov_p(k1, k2, q1, q2)
-    specs.append(FunctionSpec(
-        "lyapunov_p",
-        "P = [[p11, p12], [p12, p22]] solving A^T P + P A = -diag(q1, q2) for one\n"
-        "coordinate of (20), A = [[0, 1], [-k1, -k2]].",
-        (array("gains", (k1, k2, q1, q2), "k1, k2, q1, q2"),),
-        (out("P", [p11, p12, p22], "p11, p12, p22"),), ("(20)",),
-    ))
+    specs.append(
+        FunctionSpec(
+            "lyapunov_p",
+            "P = [[p11, p12], [p12, p22]] solving A^T P + P A = -diag(q1, q2) for one\n"
+            "coordinate of (20), A = [[0, 1], [-k1, -k2]].",
+            (array("gains", (k1, k2, q1, q2), "k1, k2, q1, q2"),),
+            (out("P", [p11, p12, p22], "p11, p12, p22"),),
+            ("(20)",),
+        )
+    )
     theta_q = array("q", wmr.q, "measured q (five coordinates)")
     for f in ctl.FORMULATIONS:
         cm = ctl.control_model(f)
         n = cm.size
         tde, ts = ctl.tde_estimate(f)
-        specs.append(FunctionSpec(
-            f"{f}_tde",
-            f"({f} formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with\n"
-            "qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).",
-            (_nominal(), array("q_prev", ts.q_prev, "q(t-h)"),
-             array("u_prev", ts.u_prev, "u(t-h) applied"),
-             array("qdot_now", ts.qdot_now, "qdot(t)"),
-             array("qdot_then", ts.qdot_then, "qdot(t-span)"),
-             array("span", (ts.span,), "h or 2h")),
-            (out("H1hat", tde),), ("(17)",),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_tde",
+                f"({f} formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with\n"
+                "qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).",
+                (
+                    _nominal(),
+                    array("q_prev", ts.q_prev, "q(t-h)"),
+                    array("u_prev", ts.u_prev, "u(t-h) applied"),
+                    array("qdot_now", ts.qdot_now, "qdot(t)"),
+                    array("qdot_then", ts.qdot_then, "qdot(t-span)"),
+                    array("span", (ts.span,), "h or 2h"),
+                ),
+                (out("H1hat", tde),),
+                ("(17)",),
+            )
+        )
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW)
-        specs.append(FunctionSpec(
-            f"{f}_tdroc_gain",
-            f"({f} formulation) (25): khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||\n"
-            "with normalised weights (zero beyond the active window).",
-            (_nominal(), theta_q,
-             array("omega", tuple(omega), "row i is Omega(i+1)", shape=omega.shape),
-             array("w", tuple(w), "weights")),
-            (out("gain", [gain]),), ("(25)",),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdroc_gain",
+                f"({f} formulation) (25):\n"
+                "khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||\n"
+                "with normalised weights (zero beyond the active window).",
+                (
+                    _nominal(),
+                    theta_q,
+                    array("omega", tuple(omega), "row i is Omega(i+1)", shape=omega.shape),
+                    array("w", tuple(w), "weights"),
+                ),
+                (out("gain", [gain]),),
+                ("(25)",),
+            )
+        )
         common = lambda ls: (  # noqa: E731 - the argument list every law shares
-            array("e", ls.e, "q_des - q"), array("edot", ls.edot, "qdot_des - qdot"),
+            array("e", ls.e, "q_des - q"),
+            array("edot", ls.edot, "qdot_des - qdot"),
             array("qddot_des", ls.qddot_des, "desired acceleration"),
-            array("k1", ls.k1, "diagonal of K1"), array("k2", ls.k2, "diagonal of K2"),
-            array("p12", ls.p12, "P entries per coordinate"), array("p22", ls.p22, ""),
+            array("k1", ls.k1, "diagonal of K1"),
+            array("k2", ls.k2, "diagonal of K2"),
+            array("p12", ls.p12, "P entries per coordinate"),
+            array("p22", ls.p22, ""),
         )
         law, ls = ctl.tde_law(f, switching=False)
-        specs.append(FunctionSpec(
-            f"{f}_tdc_law", f"({f} formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.",
-            (_nominal(), theta_q, *common(ls), array("H1hat", ls.h1, "(17)")),
-            (out("u", law.u),), ("(16)", "(18)"),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdc_law",
+                f"({f} formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.",
+                (_nominal(), theta_q, *common(ls), array("H1hat", ls.h1, "(17)")),
+                (out("u", law.u),),
+                ("(16)", "(18)"),
+            )
+        )
         law, ls = ctl.tde_law(f, switching=True)
-        specs.append(FunctionSpec(
-            f"{f}_tdroc_law",
-            f"({f} formulation) TDROC (16), (22), (25): u = Mhat(q)(ua_hat + gain s/max(|s|, eps))\n"
-            "+ H1hat, s = B^T P e.",
-            (_nominal(), theta_q, *common(ls), array("H1hat", ls.h1, "(17)"),
-             array("gain", (ls.gain,), "khat of (25)"), array("eps", (ls.eps,), "boundary layer")),
-            (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm])),
-            ("(16)", "(22)", "(24)", "(25)"),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdroc_law",
+                f"({f} formulation) TDROC (16), (22), (25):\n"
+                "u = Mhat(q)(ua_hat + gain s/max(|s|, eps))\n"
+                "+ H1hat, s = B^T P e.",
+                (
+                    _nominal(),
+                    theta_q,
+                    *common(ls),
+                    array("H1hat", ls.h1, "(17)"),
+                    array("gain", (ls.gain,), "khat of (25)"),
+                    array("eps", (ls.eps,), "boundary layer"),
+                ),
+                (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm])),
+                ("(16)", "(22)", "(24)", "(25)"),
+            )
+        )
         qdot_c = array("qdot", wmr.qdot, "measured qdot")
         law, ls = ctl.model_law(f, "roc")
-        specs.append(FunctionSpec(
-            f"{f}_roc_law",
-            f"({f} formulation) ROC: u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),\n"
-            "rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).",
-            (_nominal(), theta_q, qdot_c, *common(ls),
-             array("bounds", (ls.alpha, ls.phi), "alpha, phi"), array("eps", (ls.eps,), "")),
-            (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm]),
-             out("gain", [law.gain])), ("(22)", "(24)"),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_roc_law",
+                f"({f} formulation) ROC:\n"
+                "u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),\n"
+                "rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).",
+                (
+                    _nominal(),
+                    theta_q,
+                    qdot_c,
+                    *common(ls),
+                    array("bounds", (ls.alpha, ls.phi), "alpha, phi"),
+                    array("eps", (ls.eps,), ""),
+                ),
+                (
+                    out("u", law.u),
+                    out("s", law.s),
+                    out("s_norm", [law.s_norm]),
+                    out("gain", [law.gain]),
+                ),
+                ("(22)", "(24)"),
+            )
+        )
         law, ls = ctl.model_law(f, "asmc")
         gamma, h = sp.symbols("gamma h", positive=True)
-        specs.append(FunctionSpec(
-            f"{f}_asmc_law",
-            f"({f} formulation) ASMC: u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);\n"
-            "gain_next = khat + h gamma |s|.",
-            (_nominal(), theta_q, qdot_c, *common(ls),
-             array("gain", (ls.gain,), "khat"), array("eps", (ls.eps,), ""),
-             array("adapt", (gamma, h), "gamma, h")),
-            (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm]),
-             out("gain_next", [ctl.asmc_adaptation(ls.gain, gamma, law.s_norm, h)])),
-            ("(22)", "(24)"),
-        ))
+        specs.append(
+            FunctionSpec(
+                f"{f}_asmc_law",
+                f"({f} formulation) ASMC:\n"
+                "u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);\n"
+                "gain_next = khat + h gamma |s|.",
+                (
+                    _nominal(),
+                    theta_q,
+                    qdot_c,
+                    *common(ls),
+                    array("gain", (ls.gain,), "khat"),
+                    array("eps", (ls.eps,), ""),
+                    array("adapt", (gamma, h), "gamma, h"),
+                ),
+                (
+                    out("u", law.u),
+                    out("s", law.s),
+                    out("s_norm", [law.s_norm]),
+                    out("gain_next", [ctl.asmc_adaptation(ls.gain, gamma, law.s_norm, h)]),
+                ),
+                ("(22)", "(24)"),
+            )
+        )
         del n
     return tuple(specs)
 
@@ -248,7 +339,9 @@ PLANT_FIELDS: tuple[tuple[str, sp.Symbol, str], ...] = (
 
 def plant_params_arg(name: str = "pp") -> Argument:
     return Argument(
-        name, "params", ctype="wmr_plant_params_t",
+        name,
+        "params",
+        ctype="wmr_plant_params_t",
         fields=tuple(Field(n, (s,), doc=d) for n, s, d in PLANT_FIELDS),
         doc="true parameters of the simulated robot, including K_lat",
     )
@@ -263,20 +356,27 @@ def plant_specs() -> tuple[FunctionSpec, ...]:
     tau = array("tau", wmr.tau, "wheel torques after friction")
     xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *s.minimal_forward_dynamics(wmr.tau)])
     rel = wmr.payload_relations()
-    payload = array("payload", (wmr.m_L, wmr.x_L, wmr.y_L),
-                    "payload mass, position ahead of C, position left of C")
+    payload = array(
+        "payload",
+        (wmr.m_L, wmr.x_L, wmr.y_L),
+        "payload mass, position ahead of C, position left of C",
+    )
     base = [rel.get(sym, sym) for _, sym, _ in PLANT_FIELDS]
     return (
         FunctionSpec(
             "plant_state_derivative",
             "x_dot = (S(q) eta, eta_dot) of the plant: the minimal form derived with the\n"
             "lateral first moment K_lat (an off-axis payload).",
-            (plant_params_arg(), x, tau), (out("xdot", xdot),), ("(9)", "(31)"),
+            (plant_params_arg(), x, tau),
+            (out("xdot", xdot),),
+            ("(9)", "(31)"),
         ),
         FunctionSpec(
             "plant_params_with_payload",
             "Plant parameters (m, I, K, K_lat, Iw, r, b, d) of a robot carrying a point payload,\n"
             "from the Hessian of the combined kinetic energy (modeling.wmr.payload_relations).",
-            (plant_params_arg("base"), payload), (out("params", base),), (),
+            (plant_params_arg("base"), payload),
+            (out("params", base),),
+            (),
         ),
     )

@@ -87,13 +87,23 @@ def control_model(formulation: Formulation) -> ControlModel:
     s: ConstrainedSystem = wmr.wmr_system()
     if formulation == "paper":
         return ControlModel(
-            formulation, 5, 0, s.reduced_mass_matrix, s.reduced_bias,
-            s.reduced_mass_matrix_inverse, tuple(wmr.qdot[3:]),
+            formulation,
+            5,
+            0,
+            s.reduced_mass_matrix,
+            s.reduced_bias,
+            s.reduced_mass_matrix_inverse,
+            tuple(wmr.qdot[3:]),
         )
     if formulation == "minimal":
         return ControlModel(
-            formulation, 2, 3, s.minimal_mass_matrix, s.minimal_bias,
-            s.minimal_mass_matrix_inverse, tuple(wmr.qdot[3:]),
+            formulation,
+            2,
+            3,
+            s.minimal_mass_matrix,
+            s.minimal_bias,
+            s.minimal_mass_matrix_inverse,
+            tuple(wmr.qdot[3:]),
         )
     raise ValueError(f"unknown formulation {formulation!r} (expected one of {FORMULATIONS})")
 
@@ -132,11 +142,18 @@ class LawSymbols:
 
 def law_symbols(n: int) -> LawSymbols:
     return LawSymbols(
-        e=_vec("e", n), edot=_vec("edot", n), qddot_des=_vec("qdd_des", n),
-        h1=_vec("H1hat", n), k1=_vec("k1_", n), k2=_vec("k2_", n),
-        p12=_vec("p12_", n), p22=_vec("p22_", n),
-        gain=sp.Symbol("gain", real=True), eps=sp.Symbol("eps", positive=True),
-        alpha=sp.Symbol("alpha", real=True), phi=sp.Symbol("phi", real=True),
+        e=_vec("e", n),
+        edot=_vec("edot", n),
+        qddot_des=_vec("qdd_des", n),
+        h1=_vec("H1hat", n),
+        k1=_vec("k1_", n),
+        k2=_vec("k2_", n),
+        p12=_vec("p12_", n),
+        p22=_vec("p22_", n),
+        gain=sp.Symbol("gain", real=True),
+        eps=sp.Symbol("eps", positive=True),
+        alpha=sp.Symbol("alpha", real=True),
+        phi=sp.Symbol("phi", real=True),
     )
 
 
@@ -147,8 +164,9 @@ def _norm(v: sp.Matrix) -> sp.Expr:
 def nominal_acceleration(ls: LawSymbols) -> sp.Matrix:
     """(18): û_a = q̈_d + K1 e + K2 ė with diagonal gains."""
     n = ls.e.rows
-    return sp.Matrix([ls.qddot_des[j] + ls.k1[j] * ls.e[j] + ls.k2[j] * ls.edot[j]
-                      for j in range(n)])
+    return sp.Matrix(
+        [ls.qddot_des[j] + ls.k1[j] * ls.e[j] + ls.k2[j] * ls.edot[j] for j in range(n)]
+    )
 
 
 def sliding_variable(ls: LawSymbols) -> sp.Matrix:
@@ -189,7 +207,9 @@ def tde_law(formulation: Formulation, switching: bool) -> tuple[Law, LawSymbols]
     return Law(u, sliding_variable(ls), s_norm, gain), ls
 
 
-def model_law(formulation: Formulation, controller: Literal["roc", "asmc"]) -> tuple[Law, LawSymbols]:
+def model_law(
+    formulation: Formulation, controller: Literal["roc", "asmc"]
+) -> tuple[Law, LawSymbols]:
     """ROC and ASMC: u = M̂ u_a + Ĥ(q, q̇) with the nominal model's Ĥ.
 
     ROC's gain is ρ = (α(‖q̈_d‖ + ‖K1 e + K2 ė‖) + φ)/(1 − α); ASMC's is the input k̂.
@@ -222,8 +242,11 @@ def tde_estimate(formulation: Formulation) -> tuple[sp.Matrix, TdeSymbols]:
     cm = control_model(formulation)
     n = cm.size
     ts = TdeSymbols(
-        q_prev=_vec("qp", 5), u_prev=_vec("up", n), qdot_now=_vec("qd_now", n),
-        qdot_then=_vec("qd_then", n), span=sp.Symbol("span", positive=True),
+        q_prev=_vec("qp", 5),
+        u_prev=_vec("up", n),
+        qdot_now=_vec("qd_now", n),
+        qdot_then=_vec("qd_then", n),
+        span=sp.Symbol("span", positive=True),
     )
     qdd = (ts.qdot_now - ts.qdot_then) / ts.span
     mass = cm.mass.subs(dict(zip(wmr.q, ts.q_prev, strict=True)))
@@ -247,7 +270,6 @@ def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matri
     return minv_norm * total, omega, w
 
 
-def asmc_adaptation(gain: sp.Symbol, gamma: sp.Symbol, s_norm: sp.Symbol,
-                    h: sp.Symbol) -> sp.Expr:
+def asmc_adaptation(gain: sp.Symbol, gamma: sp.Symbol, s_norm: sp.Symbol, h: sp.Symbol) -> sp.Expr:
     """ASMC: k̂(t + h) = k̂(t) + h γ ‖s(t)‖ (explicit Euler of dk̂/dt = γ‖s‖)."""
     return gain + h * gamma * s_norm

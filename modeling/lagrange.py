@@ -160,7 +160,7 @@ class ConstrainedSystem:
 
     @cached_property
     def on_manifold(self) -> dict[sp.Symbol, sp.Expr]:
-        """Substitution q̇_d → (S η)_d: restricts an expression to constraint-consistent velocities."""
+        """Substitution q̇_d → (S η)_d: restricts an expression to the constraint manifold."""
         sv = self.null_space * sp.Matrix(self.eta)
         return {self.qdot[i]: sv[i] for i in self.dependent}
 

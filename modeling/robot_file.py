@@ -105,7 +105,9 @@ def _checked(where: str, section: str, key: str, value: Any) -> float:
     try:
         return _number(where, key, value)
     except RobotFileError as exc:
-        raise RobotFileError(str(exc).replace(f"field '{key}'", f"field '{section}.{key}'")) from None
+        raise RobotFileError(
+            str(exc).replace(f"field '{key}'", f"field '{section}.{key}'")
+        ) from None
 
 
 def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], float]:
@@ -114,12 +116,25 @@ def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], floa
 
     rel = wmr.lumped_relations(wmr.physical_bodies())
     values = {
-        wmr.m_P: phys["m_P"], wmr.I_P: phys["I_P"], wmr.x_P: phys["x_P"], wmr.y_P: phys["y_P"],
-        wmr.m_w: phys["m_w"], wmr.I_m: phys["Im"], wmr.b: phys["b"], wmr.d: phys["d"],
+        wmr.m_P: phys["m_P"],
+        wmr.I_P: phys["I_P"],
+        wmr.x_P: phys["x_P"],
+        wmr.y_P: phys["y_P"],
+        wmr.m_w: phys["m_w"],
+        wmr.I_m: phys["Im"],
+        wmr.b: phys["b"],
+        wmr.d: phys["d"],
     }
     ev = {str(k): float(sp.N(v.subs(values))) for k, v in rel.items()}
-    lumped = {"m": ev["m"], "I": ev["I"], "K": ev["K"], "Iw": phys["Iw"], "r": phys["r"],
-              "b": phys["b"], "d": phys["d"]}
+    lumped = {
+        "m": ev["m"],
+        "I": ev["I"],
+        "K": ev["K"],
+        "Iw": phys["Iw"],
+        "r": phys["r"],
+        "b": phys["b"],
+        "d": phys["d"],
+    }
     return lumped, ev["K_lat"]
 
 

@@ -97,7 +97,8 @@ def kinetic_energy_of_bodies(bodies: tuple[Body, ...]) -> sp.Expr:
     t = sp.S.Zero
     for body in bodies:
         v = point_velocity(body.forward, body.lateral)
-        t += sp.Rational(1, 2) * body.mass * (v.T * v)[0] + sp.Rational(1, 2) * body.inertia * thd**2
+        half = sp.Rational(1, 2)
+        t += half * body.mass * (v.T * v)[0] + half * body.inertia * thd**2
     t += sp.Rational(1, 2) * I_w * (thd_r**2 + thd_l**2)
     return sp.expand(t)
 

@@ -22,8 +22,16 @@ GENERATED_C = ROOT / "generated" / "c"
 RUNTIME_C = Path(__file__).resolve().parent / "csrc"
 BUILD_DIR = ROOT / "build" / "cffi"
 CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
-HEADERS = ("wmr_types.h", "wmr_model.h", "wmr_laws.h", "wmr_plant.h", "wmr_tdc.h",
-           "wmr_tdroc.h", "wmr_roc.h", "wmr_asmc.h")
+HEADERS = (
+    "wmr_types.h",
+    "wmr_model.h",
+    "wmr_laws.h",
+    "wmr_plant.h",
+    "wmr_tdc.h",
+    "wmr_tdroc.h",
+    "wmr_roc.h",
+    "wmr_asmc.h",
+)
 
 
 @dataclass(frozen=True)
@@ -44,8 +52,9 @@ def _sources(extra: tuple[Path, ...]) -> list[Path]:
     return sorted(p for p in GENERATED_C.glob("wmr_*.c")) + list(extra)
 
 
-def declarations(float32: bool, headers: tuple[str, ...] = HEADERS,
-                 extra_headers: tuple[Path, ...] = ()) -> str:
+def declarations(
+    float32: bool, headers: tuple[str, ...] = HEADERS, extra_headers: tuple[Path, ...] = ()
+) -> str:
     """The generated headers, preprocessed for ``cffi.FFI.cdef``."""
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
@@ -61,8 +70,13 @@ def declarations(float32: bool, headers: tuple[str, ...] = HEADERS,
     return text
 
 
-def build(float32: bool = False, *, extra_sources: tuple[Path, ...] = (),
-          extra_headers: tuple[Path, ...] = (), flags: tuple[str, ...] = ()) -> CLibrary:
+def build(
+    float32: bool = False,
+    *,
+    extra_sources: tuple[Path, ...] = (),
+    extra_headers: tuple[Path, ...] = (),
+    flags: tuple[str, ...] = (),
+) -> CLibrary:
     """Compile (or reuse) the library and load it."""
     sources = _sources(extra_sources)
     all_flags = (*CFLAGS, *flags, *(("-DWMR_FLOAT32",) if float32 else ()))
@@ -74,8 +88,16 @@ def build(float32: bool = False, *, extra_sources: tuple[Path, ...] = (),
     so = BUILD_DIR / f"libwmr_{digest.hexdigest()[:16]}.so"
     if not so.exists():
         tmp = so.with_suffix(".tmp.so")
-        cmd = ["gcc", *all_flags, f"-I{GENERATED_C}", f"-I{RUNTIME_C}",
-               *map(str, sources), "-lm", "-o", str(tmp)]
+        cmd = [
+            "gcc",
+            *all_flags,
+            f"-I{GENERATED_C}",
+            f"-I{RUNTIME_C}",
+            *map(str, sources),
+            "-lm",
+            "-o",
+            str(tmp),
+        ]
         subprocess.run(cmd, check=True, capture_output=True, text=True)
         tmp.replace(so)  # atomic: concurrent builds never load a half-written file
     ffi = cffi.FFI()

@@ -67,10 +67,31 @@ class Experiment:
     source: str = "<paper defaults>"
 
 
-_POSITIVE = {"k1", "k2", "q_pos", "q_vel", "h", "eps", "a", "tau_max", "substeps", "encoder_ppr",
-             "coulomb_speed", "circle_duration", "lawnmower_duration", "extra_period"}
-_NON_NEGATIVE = {"uncertainty", "gamma", "viscous", "coulomb", "fixed_payload", "extra_payload",
-                 "extra_on_at"}
+_POSITIVE = {
+    "k1",
+    "k2",
+    "q_pos",
+    "q_vel",
+    "h",
+    "eps",
+    "a",
+    "tau_max",
+    "substeps",
+    "encoder_ppr",
+    "coulomb_speed",
+    "circle_duration",
+    "lawnmower_duration",
+    "extra_period",
+}
+_NON_NEGATIVE = {
+    "uncertainty",
+    "gamma",
+    "viscous",
+    "coulomb",
+    "fixed_payload",
+    "extra_payload",
+    "extra_on_at",
+}
 
 
 def _section(where: str, name: str, data: Any, cls: type) -> Any:
@@ -82,7 +103,8 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
         label = f"{name}.{key}"
         if key not in known:
             raise ExperimentFileError(
-                f"{where}: unknown field '{label}' (expected one of {', '.join(known)})")
+                f"{where}: unknown field '{label}' (expected one of {', '.join(known)})"
+            )
         want_int = known[key].type in ("int", int)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise ExperimentFileError(f"{where}: field '{label}' must be a number, got {value!r}")
@@ -94,17 +116,21 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
             raise ExperimentFileError(f"{where}: field '{label}' must be positive, got {value!r}")
         if key in _NON_NEGATIVE and value < 0:
             raise ExperimentFileError(
-                f"{where}: field '{label}' must be non-negative, got {value!r}")
+                f"{where}: field '{label}' must be non-negative, got {value!r}"
+            )
         values[key] = int(value) if want_int else float(value)
     out = replace(cls(), **values)
     if cls is ControllerSettings:
         if not 2 <= out.n <= 8:
             raise ExperimentFileError(f"{where}: field 'controller.n' must be in 2..8, got {out.n}")
         if out.a > 1:
-            raise ExperimentFileError(f"{where}: field 'controller.a' must be in (0, 1], got {out.a}")
+            raise ExperimentFileError(
+                f"{where}: field 'controller.a' must be in (0, 1], got {out.a}"
+            )
         if out.uncertainty >= 1:
             raise ExperimentFileError(
-                f"{where}: field 'controller.uncertainty' must be below 1, got {out.uncertainty}")
+                f"{where}: field 'controller.uncertainty' must be below 1, got {out.uncertainty}"
+            )
     return out
 
 
@@ -117,7 +143,8 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     unknown = sorted(set(data) - set(sections))
     if unknown:
         raise ExperimentFileError(
-            f"{where}: unknown section '{unknown[0]}' (expected controller, plant, paths)")
+            f"{where}: unknown section '{unknown[0]}' (expected controller, plant, paths)"
+        )
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
     return Experiment(**parts, source=where)
 

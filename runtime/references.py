@@ -78,6 +78,13 @@ def circle_profile(params: dict[str, float]) -> WheelProfile:
     return WheelProfile((START_AT,), ((wr, wl),))
 
 
+def lawnmower_leg_spacing(params: dict[str, float]) -> float:
+    """Distance between neighbouring legs: the U-turn's diameter 2 v/ω of the axle centre."""
+    r, b = params["r"], params["b"]
+    v, w = r * (LAWN_A + LAWN_B) / 2, r * (LAWN_A - LAWN_B) / b
+    return 2 * v / w
+
+
 def lawnmower_profile(params: dict[str, float], duration: float) -> WheelProfile:
     r, b = params["r"], params["b"]
     turn_time = math.pi / (r * (LAWN_A - LAWN_B) / b)  # half a turn at rate ω
@@ -93,21 +100,35 @@ def lawnmower_profile(params: dict[str, float], duration: float) -> WheelProfile
     return WheelProfile(tuple(times), tuple(jumps))
 
 
-def integrate(name: str, profile: WheelProfile, start: tuple[float, float, float],
-              params: dict[str, float], h: float, duration: float) -> Reference:
+def integrate(
+    name: str,
+    profile: WheelProfile,
+    start: tuple[float, float, float],
+    params: dict[str, float],
+    h: float,
+    duration: float,
+) -> Reference:
     """Integrate (31) (DOP853, rtol 1e-11) and sample every h."""
-    n = int(round(duration / h)) + 1
-    ts = np.arange(n) * h
+    n = round(duration / h) + 1
+    ts: NDArray[np.float64] = np.arange(n, dtype=np.float64) * h
 
     def rhs(tt: float, qq: NDArray[np.float64]) -> NDArray[np.float64]:
         eta = profile.rates(tt)
         return np.concatenate([wmr_model.kinematics(qq, eta, params), eta])
 
-    sol = solve_ivp(rhs, (0.0, ts[-1]), [*start, 0.0, 0.0], method="DOP853", t_eval=ts,
-                    rtol=1e-11, atol=1e-12, max_step=RAMP / 2)
+    sol = solve_ivp(
+        rhs,
+        (0.0, ts[-1]),
+        [*start, 0.0, 0.0],
+        method="DOP853",
+        t_eval=ts,
+        rtol=1e-11,
+        atol=1e-12,
+        max_step=RAMP / 2,
+    )
     if not sol.success:
         raise RuntimeError(f"reference {name}: integration failed: {sol.message}")
-    qs = sol.y.T
+    qs: NDArray[np.float64] = np.asarray(sol.y.T, dtype=np.float64)
     qds, qdds = [], []
     for tk, q in zip(ts, qs, strict=True):
         eta, eta_dot = profile.rates(tk), profile.accels(tk)
@@ -123,8 +144,9 @@ def circle(params: dict[str, float], h: float, duration: float) -> Reference:
 
 
 def lawnmower(params: dict[str, float], h: float, duration: float) -> Reference:
-    return integrate("lawnmower", lawnmower_profile(params, duration), (0.0, 0.0, 0.0),
-                     params, h, duration)
+    return integrate(
+        "lawnmower", lawnmower_profile(params, duration), (0.0, 0.0, 0.0), params, h, duration
+    )
 
 
 def printed_circle(t: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -135,5 +157,4 @@ def printed_circle(t: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def printed_lawnmower(t: NDArray[np.float64]) -> NDArray[np.float64]:
     """The printed lawn-mower (x_d, y_d) with T = 25 s — shown beside ours, not used."""
-    return np.stack([0.1 * t + 0.3 * np.sin(0.4 * t), 1.2 + 1.2 * np.cos(0.2 * t - LAWN_T)],
-                    axis=1)
+    return np.stack([0.1 * t + 0.3 * np.sin(0.4 * t), 1.2 + 1.2 * np.cos(0.2 * t - LAWN_T)], axis=1)

@@ -47,22 +47,30 @@ class Metrics:
     failed_at: float | None
 
 
-def path_scale(path: str, ref: references.Reference) -> float:
-    """The length the paper's percentages refer to: R1 for the circle; for the lawn mower
-    the lateral extent of the path."""
+def path_scale(path: str, params: dict[str, float]) -> float:
+    """The length the percentages refer to: R1 for the circle, the U-turn diameter (the
+    spacing of the legs) for the lawn mower."""
     if path == "circle":
         return references.R1
-    return float(np.ptp(ref.q[:, 1]))
+    return references.lawnmower_leg_spacing(params)
 
 
-def metrics(r: Run, ref: references.Reference) -> Metrics:
+def metrics(r: Run, params: dict[str, float]) -> Metrics:
     e = r.position_error
     rms = float(np.sqrt(np.mean(e**2)))
     return Metrics(
-        r.controller, r.formulation, r.path, rms, float(e.max()),
-        100.0 * rms / path_scale(r.path, ref), float(np.sqrt(np.mean(r.tau**2))),
-        float(np.abs(np.diff(r.tau, axis=0)).sum()), float(np.median(r.gain)),
-        float(r.gain.max()), r.saturated, float(np.sqrt(np.mean(r.u_discarded**2))),
+        r.controller,
+        r.formulation,
+        r.path,
+        rms,
+        float(e.max()),
+        100.0 * rms / path_scale(r.path, params),
+        float(np.sqrt(np.mean(r.tau**2))),
+        float(np.abs(np.diff(r.tau, axis=0)).sum()),
+        float(np.median(r.gain)),
+        float(r.gain.max()),
+        r.saturated,
+        float(np.sqrt(np.mean(r.u_discarded**2))),
         r.failed_at,
     )
 
@@ -77,8 +85,9 @@ class Reproduction:
     seconds: float
 
 
-def reproduce(exp: Experiment, robot: dict[str, float] | None = None,
-              progress: bool = False) -> Reproduction:
+def reproduce(
+    exp: Experiment, robot: dict[str, float] | None = None, progress: bool = False
+) -> Reproduction:
     """Run every experiment (no files written)."""
     start = time.perf_counter()
     robot = dict(robot or default_robot.PARAMS)
@@ -95,16 +104,19 @@ def reproduce(exp: Experiment, robot: dict[str, float] | None = None,
             for name in CONTROLLERS:
                 r = run(name, formulation, ref, robot, exp)
                 runs[(name, formulation, path)] = r
-                table.append(metrics(r, ref))
+                table.append(metrics(r, robot))
                 if progress:
                     m = table[-1]
-                    print(f"[{len(table):2d}/{total}] {path:9s} {formulation:7s} "
-                          f"{LABELS[name]:5s} RMS {m.rms_error * 1000:8.2f} mm", flush=True)
+                    print(
+                        f"[{len(table):2d}/{total}] {path:9s} {formulation:7s} "
+                        f"{LABELS[name]:5s} RMS {m.rms_error * 1000:8.2f} mm",
+                        flush=True,
+                    )
     sweep = []
     for eps in EPS_SWEEP:
         e2 = replace(exp, controller=replace(exp.controller, eps=eps))
-        for path, ref in refs.items():
-            sweep.append((eps, metrics(run("tdroc", "paper", ref, robot, e2), ref)))
+        for ref in refs.values():
+            sweep.append((eps, metrics(run("tdroc", "paper", ref, robot, e2), robot)))
     return Reproduction(exp, refs, runs, table, sweep, time.perf_counter() - start)
 
 
@@ -131,15 +143,41 @@ def metrics_markdown(rep: Reproduction) -> str:
 def write_csv(rep: Reproduction, path: Path) -> None:
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["path", "formulation", "controller", "rms_error_m", "max_error_m",
-                    "rms_percent", "rms_torque_Nm", "torque_variation_Nm", "median_gain",
-                    "max_gain", "saturated_steps", "rms_discarded_u", "failed_at_s"])
+        w.writerow(
+            [
+                "path",
+                "formulation",
+                "controller",
+                "rms_error_m",
+                "max_error_m",
+                "rms_percent",
+                "rms_torque_Nm",
+                "torque_variation_Nm",
+                "median_gain",
+                "max_gain",
+                "saturated_steps",
+                "rms_discarded_u",
+                "failed_at_s",
+            ]
+        )
         for m in rep.table:
-            w.writerow([m.path, m.formulation, m.controller, f"{m.rms_error:.6g}",
-                        f"{m.max_error:.6g}", f"{m.rms_percent:.4g}", f"{m.rms_torque:.4g}",
-                        f"{m.torque_variation:.4g}", f"{m.median_gain:.4g}",
-                        f"{m.max_gain:.4g}", m.saturated_steps, f"{m.discarded_u:.4g}",
-                        "" if m.failed_at is None else f"{m.failed_at:.3g}"])
+            w.writerow(
+                [
+                    m.path,
+                    m.formulation,
+                    m.controller,
+                    f"{m.rms_error:.6g}",
+                    f"{m.max_error:.6g}",
+                    f"{m.rms_percent:.4g}",
+                    f"{m.rms_torque:.4g}",
+                    f"{m.torque_variation:.4g}",
+                    f"{m.median_gain:.4g}",
+                    f"{m.max_gain:.4g}",
+                    m.saturated_steps,
+                    f"{m.discarded_u:.4g}",
+                    "" if m.failed_at is None else f"{m.failed_at:.3g}",
+                ]
+            )
 
 
 @dataclass(frozen=True)
@@ -158,27 +196,41 @@ def claims(rep: Reproduction) -> list[Claim]:
     """The paper's three claims, evaluated on this reproduction (paper formulation)."""
     out = []
     winners = {p: best(rep, p, "paper") for p in rep.refs}
-    out.append(Claim(
-        "TDROC has the lowest tracking error of the four controllers on both paths",
-        all(w == "tdroc" for w in winners.values()),
-        ", ".join(f"{p}: lowest RMS error by {LABELS[w]}" for p, w in winners.items()),
-    ))
-    diffs = [float(np.diff(rep.runs[("asmc", f, p)].gain).min())
-             for f in ("paper", "minimal") for p in rep.refs]
-    out.append(Claim(
-        "ASMC's switching gain grows monotonically",
-        min(diffs) >= 0.0, f"smallest step-to-step change of k̂: {min(diffs):.3g}",
-    ))
+    out.append(
+        Claim(
+            "TDROC has the lowest tracking error of the four controllers on both paths",
+            all(w == "tdroc" for w in winners.values()),
+            ", ".join(f"{p}: lowest RMS error by {LABELS[w]}" for p, w in winners.items()),
+        )
+    )
+    diffs = [
+        float(np.diff(rep.runs[("asmc", f, p)].gain).min())
+        for f in ("paper", "minimal")
+        for p in rep.refs
+    ]
+    out.append(
+        Claim(
+            "ASMC's switching gain grows monotonically",
+            min(diffs) >= 0.0,
+            f"smallest step-to-step change of k̂: {min(diffs):.3g}",
+        )
+    )
     lowest = {}
     for p in rep.refs:
-        med = {c: float(np.median(rep.runs[(c, "paper", p)].gain)) for c in ("tdroc", "roc", "asmc")}
+        med = {
+            c: float(np.median(rep.runs[(c, "paper", p)].gain)) for c in ("tdroc", "roc", "asmc")
+        }
         lowest[p] = (min(med, key=lambda c: med[c]), med)
-    out.append(Claim(
-        "TDROC's switching gain is the lowest of TDROC, ROC and ASMC",
-        all(c == "tdroc" for c, _ in lowest.values()),
-        "; ".join(f"{p}: median gains " + ", ".join(f"{LABELS[c]} {v:.3g}" for c, v in med.items())
-                  for p, (_, med) in lowest.items()),
-    ))
+    out.append(
+        Claim(
+            "TDROC's switching gain is the lowest of TDROC, ROC and ASMC",
+            all(c == "tdroc" for c, _ in lowest.values()),
+            "; ".join(
+                f"{p}: median gains " + ", ".join(f"{LABELS[c]} {v:.3g}" for c, v in med.items())
+                for p, (_, med) in lowest.items()
+            ),
+        )
+    )
     return out
 
 
@@ -192,10 +244,17 @@ def plot(rep: Reproduction, out: Path) -> list[Path]:
     # Figures 4 and 11: path tracking (paper formulation) with the printed paths beside.
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.2))
     for ax, (path, ref) in zip(axes, rep.refs.items(), strict=True):
-        printed = (references.printed_circle if path == "circle"
-                   else references.printed_lawnmower)(ref.t)
-        ax.plot(printed[:, 0], printed[:, 1], color="0.75", ls=":", lw=1.5,
-                label="printed reference (inconsistent)")
+        printed = (references.printed_circle if path == "circle" else references.printed_lawnmower)(
+            ref.t
+        )
+        ax.plot(
+            printed[:, 0],
+            printed[:, 1],
+            color="0.75",
+            ls=":",
+            lw=1.5,
+            label="printed reference (inconsistent)",
+        )
         ax.plot(ref.q[:, 0], ref.q[:, 1], "k--", lw=1.5, label="reference (consistent)")
         for c in CONTROLLERS:
             r = rep.runs[(c, "paper", path)]
@@ -215,11 +274,13 @@ def plot(rep: Reproduction, out: Path) -> list[Path]:
     for col, path in enumerate(rep.refs):
         for c in CONTROLLERS:
             r = rep.runs[(c, "paper", path)]
-            axes[0, col].semilogy(r.t, np.maximum(r.position_error, 1e-5), color=COLORS[c],
-                                  lw=1, label=LABELS[c])
+            axes[0, col].semilogy(
+                r.t, np.maximum(r.position_error, 1e-5), color=COLORS[c], lw=1, label=LABELS[c]
+            )
             if c != "tdc":
-                axes[1, col].semilogy(r.t, np.maximum(r.gain, 1e-4), color=COLORS[c], lw=1,
-                                      label=LABELS[c])
+                axes[1, col].semilogy(
+                    r.t, np.maximum(r.gain, 1e-4), color=COLORS[c], lw=1, label=LABELS[c]
+                )
         r = rep.runs[("tdroc", "paper", path)]
         axes[2, col].plot(r.t, r.payload, color="k", lw=1)
         axes[0, col].set_title(f"{path}: position error |p − p_d| [m]")
@@ -260,8 +321,10 @@ def report_markdown(rep: Reproduction, figures: list[Path]) -> str:
         "",
         "| claim | reproduces? | evidence |",
         "|---|---|---|",
-        *[f"| {cl.text} | {'yes' if cl.holds else '**no**'} | {cl.evidence} |"
-          for cl in claims(rep)],
+        *[
+            f"| {cl.text} | {'yes' if cl.holds else '**no**'} | {cl.evidence} |"
+            for cl in claims(rep)
+        ],
         "",
         "## TDROC's boundary layer ε (paper formulation)",
         "",
@@ -272,18 +335,26 @@ def report_markdown(rep: Reproduction, figures: list[Path]) -> str:
         "",
         "| ε | path | RMS error [mm] | max error [mm] | median k̂ | saturated steps |",
         "|---:|---|---:|---:|---:|---:|",
-        *[f"| {eps} | {m.path} | {_fmt_mm(m.rms_error)} | {_fmt_mm(m.max_error)} "
-          f"| {m.median_gain:.3g} | {m.saturated_steps} |" for eps, m in rep.sweep],
+        *[
+            f"| {eps} | {m.path} | {_fmt_mm(m.rms_error)} | {_fmt_mm(m.max_error)} "
+            f"| {m.median_gain:.3g} | {m.saturated_steps} |"
+            for eps, m in rep.sweep
+        ],
         "",
     ]
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m runtime reproduce",
-                                     description="Reproduce the paper's experiments.")
-    parser.add_argument("--experiment", type=Path, default=None,
-                        help="experiment TOML (default: the paper's setting)")
+    parser = argparse.ArgumentParser(
+        prog="python -m runtime reproduce", description="Reproduce the paper's experiments."
+    )
+    parser.add_argument(
+        "--experiment",
+        type=Path,
+        default=None,
+        help="experiment TOML (default: the paper's setting)",
+    )
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder")
     parser.add_argument("--no-plots", action="store_true", help="skip the figures")
     args = parser.parse_args(argv)
@@ -299,7 +370,9 @@ def main(argv: list[str] | None = None) -> int:
     write_csv(rep, args.out / "metrics.csv")
     (args.out / "REPORT.md").write_text(report_markdown(rep, figures))
     for cl in claims(rep):
-        print(f"claim: {cl.text}: {'reproduces' if cl.holds else 'does NOT reproduce'} "
-              f"({cl.evidence})")
+        print(
+            f"claim: {cl.text}: {'reproduces' if cl.holds else 'does NOT reproduce'} "
+            f"({cl.evidence})"
+        )
     print(f"wrote {args.out} in {rep.seconds:.1f} s (simulation) ")
     return 0

@@ -32,8 +32,11 @@ FORMULATIONS = {"paper": 0, "minimal": 1}
 @cache
 def sim_library(float32: bool = False) -> cbuild.CLibrary:
     """Generated C + the RK4 helper, compiled once per precision."""
-    return cbuild.build(float32, extra_sources=(CSRC / "wmr_sim.c",),
-                        extra_headers=((CSRC / "wmr_sim.h").resolve(),))
+    return cbuild.build(
+        float32,
+        extra_sources=(CSRC / "wmr_sim.c",),
+        extra_headers=((CSRC / "wmr_sim.h").resolve(),),
+    )
 
 
 def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[np.float64]:
@@ -41,11 +44,14 @@ def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[
     pl = exp.plant
     base = {**robot, "K_lat": 0.0}
     p = wmr_plant.plant_params_with_payload(
-        [pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y], base)
+        [pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y], base
+    )
     if extra_payload_on(exp, t):
         keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
         p = wmr_plant.plant_params_with_payload(
-            [pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y], dict(zip(keys, p, strict=True)))
+            [pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y],
+            dict(zip(keys, p, strict=True)),
+        )
     return p
 
 
@@ -56,8 +62,9 @@ def extra_payload_on(exp: Experiment, t: float) -> bool:
     return ((t - pl.extra_on_at) % pl.extra_period) < pl.extra_period / 2
 
 
-def roc_bounds(nominal: dict[str, float], uncertainty: float, formulation: str,
-               max_rate: float = 8.0) -> tuple[float, float]:
+def roc_bounds(
+    nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = 8.0
+) -> tuple[float, float]:
     """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
     I, K and Iw are each nominal or ``uncertainty`` above it, over headings and wheel rates
     up to ``max_rate`` (sampled on a grid). This is where the toolchain checks the TDE
@@ -65,8 +72,13 @@ def roc_bounds(nominal: dict[str, float], uncertainty: float, formulation: str,
     alpha, phi = 0.0, 0.0
     rng = np.random.default_rng(7)
     corners = [
-        {**nominal, **{k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
-                       for i, k in enumerate(("m", "I", "K", "Iw"))}}
+        {
+            **nominal,
+            **{
+                k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
+                for i, k in enumerate(("m", "I", "K", "Iw"))
+            },
+        }
         for mask in range(16)
     ]
     for theta in np.linspace(-math.pi, math.pi, 9):
@@ -84,14 +96,16 @@ def roc_bounds(nominal: dict[str, float], uncertainty: float, formulation: str,
                 if formulation == "paper":
                     dh = wmr_model.bias_forces(q, qdot, p) - wmr_model.bias_forces(q, qdot, nominal)
                 else:
-                    dh = (wmr_model.minimal_bias_forces(q, eta, p)
-                          - wmr_model.minimal_bias_forces(q, eta, nominal))
+                    dh = wmr_model.minimal_bias_forces(q, eta, p) - wmr_model.minimal_bias_forces(
+                        q, eta, nominal
+                    )
                 phi = max(phi, float(np.linalg.norm(inv @ dh)))
     return alpha, phi
 
 
-def controller_config(lib: cbuild.CLibrary, name: str, formulation: str,
-                      nominal: dict[str, float], exp: Experiment) -> Any:
+def controller_config(
+    lib: cbuild.CLibrary, name: str, formulation: str, nominal: dict[str, float], exp: Experiment
+) -> Any:
     c = exp.controller
     cfg = lib.ffi.new(f"wmr_{name}_config_t *")
     cfg.nominal = cbuild.params_struct(lib, nominal)[0]
@@ -148,7 +162,9 @@ class Odometry:
     def quantise(self, angles: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.floor(angles * self.counts_per_rad) / self.counts_per_rad
 
-    def measure(self, true_angles: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def measure(
+        self, true_angles: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         angles = self.quantise(true_angles)
         delta = angles - self.angles
         p = self.params
@@ -162,8 +178,14 @@ class Odometry:
         return q, qdot
 
 
-def run(name: str, formulation: str, ref: Reference, robot: dict[str, float],
-        exp: Experiment, float32: bool = False) -> Run:
+def run(
+    name: str,
+    formulation: str,
+    ref: Reference,
+    robot: dict[str, float],
+    exp: Experiment,
+    float32: bool = False,
+) -> Run:
     """Simulate one controller on one reference."""
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
@@ -212,6 +234,19 @@ def run(name: str, formulation: str, ref: Reference, robot: dict[str, float],
             failed_at = float(t)
             break
     m = len(rec["q"])
-    return Run(name, formulation, ref.name, ref.t[:m], np.array(rec["q"]), np.array(rec["qm"]),
-               ref.q[:m], np.array(rec["tau"]), np.array(rec["gain"]), np.array(rec["s"]),
-               np.array(rec["ud"]), np.array(rec["mass"]), int(saturated), failed_at)
+    return Run(
+        name,
+        formulation,
+        ref.name,
+        ref.t[:m],
+        np.array(rec["q"]),
+        np.array(rec["qm"]),
+        ref.q[:m],
+        np.array(rec["tau"]),
+        np.array(rec["gain"]),
+        np.array(rec["s"]),
+        np.array(rec["ud"]),
+        np.array(rec["mass"]),
+        int(saturated),
+        failed_at,
+    )

@@ -29,9 +29,9 @@ import pytest
 import sympy as sp
 
 from codegen.backends import c as c_backend
-from codegen.backends.c.config import CConfig
 from codegen.backends import casadi as casadi_backend
 from codegen.backends import python as py_backend
+from codegen.backends.c.config import CConfig
 from codegen.cse import count_ops, cse_function
 from codegen.layout import argument_size, split_fields
 from codegen.spec import Argument, Field, FunctionSpec

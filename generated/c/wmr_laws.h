@@ -61,7 +61,8 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
 #define WMR_PAPER_TDROC_GAIN_GAIN_SIZE 1
 
 /**
- * (paper formulation) (25): khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+ * (paper formulation) (25):
+ * khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
  * with normalised weights (zero beyond the active window).
  *
  * Paper equations: (25).
@@ -124,7 +125,8 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
 #define WMR_PAPER_TDROC_LAW_S_NORM_SIZE 1
 
 /**
- * (paper formulation) TDROC (16), (22), (25): u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+ * (paper formulation) TDROC (16), (22), (25):
+ * u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
  * + H1hat, s = B^T P e.
  *
  * Paper equations: (16), (22), (24), (25).
@@ -166,7 +168,8 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 #define WMR_PAPER_ROC_LAW_GAIN_SIZE 1
 
 /**
- * (paper formulation) ROC: u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
+ * (paper formulation) ROC:
+ * u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
  * rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).
  *
  * Paper equations: (22), (24).
@@ -210,7 +213,8 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
 #define WMR_PAPER_ASMC_LAW_GAIN_NEXT_SIZE 1
 
 /**
- * (paper formulation) ASMC: u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
+ * (paper formulation) ASMC:
+ * u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
  * gain_next = khat + h gamma |s|.
  *
  * Paper equations: (22), (24).
@@ -270,7 +274,8 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
 #define WMR_MINIMAL_TDROC_GAIN_GAIN_SIZE 1
 
 /**
- * (minimal formulation) (25): khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+ * (minimal formulation) (25):
+ * khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
  * with normalised weights (zero beyond the active window).
  *
  * Paper equations: (25).
@@ -333,7 +338,8 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 #define WMR_MINIMAL_TDROC_LAW_S_NORM_SIZE 1
 
 /**
- * (minimal formulation) TDROC (16), (22), (25): u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+ * (minimal formulation) TDROC (16), (22), (25):
+ * u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
  * + H1hat, s = B^T P e.
  *
  * Paper equations: (16), (22), (24), (25).
@@ -375,7 +381,8 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
 #define WMR_MINIMAL_ROC_LAW_GAIN_SIZE 1
 
 /**
- * (minimal formulation) ROC: u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
+ * (minimal formulation) ROC:
+ * u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
  * rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).
  *
  * Paper equations: (22), (24).
@@ -419,7 +426,8 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 #define WMR_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE 1
 
 /**
- * (minimal formulation) ASMC: u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
+ * (minimal formulation) ASMC:
+ * u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
  * gain_next = khat + h gamma |s|.
  *
  * Paper equations: (22), (24).

@@ -56,7 +56,8 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
 
 /**
  * qddot solving (14) with u = B tau, by structured elimination:
- * eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)), qddot = S eta_dot + Sdot eta.
+ * eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)),
+ * qddot = S eta_dot + Sdot eta.
  * Only the wheel rates qdot[3], qdot[4] are read: the other velocities follow
  * from the constraints (6)-(8).
  *

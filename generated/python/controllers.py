@@ -212,11 +212,11 @@ class _Controller:
             H1hat = np.zeros(5)
             if self.steps >= 2:
                 up = self.u_prev[0:5] if paper else self.u_prev[3:5]
-                kernel = laws.paper_tde if paper else laws.minimal_tde
+                tde_fn = laws.paper_tde if paper else laws.minimal_tde
                 central = c.accel_estimator == ACCEL_CENTRAL
                 then = self.qdot_prev2 if central else self.qdot_prev
                 span = 2.0 * c.h if central else c.h
-                H1hat[:nc] = kernel(self.q_prev, up, qdv[sl], then[sl], [span], p)
+                H1hat[:nc] = tde_fn(self.q_prev, up, qdv[sl], then[sl], [span], p)
         if self.window:
             if self.steps >= 2:
                 omega[1:] = self.omega[:-1]
@@ -233,22 +233,22 @@ class _Controller:
                     w[i] = wi if i < active else 0.0
                     wi *= c.a
                 w = w / w.sum()
-                kernel = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
-                gain = float(kernel(qv, omega[:, :nc], w, p)[0])
+                gain_fn = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
+                gain = float(gain_fn(qv, omega[:, :nc], w, p)[0])
         common = (e, edot, qdd, k1, k2, p12, p22)
         if self.name == "tdc":
             u = (laws.paper_tdc_law if paper else laws.minimal_tdc_law)(qv, *common, H1hat[:nc], p)
         elif self.name == "tdroc":
-            kernel = laws.paper_tdroc_law if paper else laws.minimal_tdroc_law
-            u, _, sn = kernel(qv, *common, H1hat[:nc], [gain], [c.eps], p)
+            tdroc_fn = laws.paper_tdroc_law if paper else laws.minimal_tdroc_law
+            u, _, sn = tdroc_fn(qv, *common, H1hat[:nc], [gain], [c.eps], p)
             s_norm = float(sn[0])
         elif self.name == "roc":
-            kernel = laws.paper_roc_law if paper else laws.minimal_roc_law
-            u, _, sn, g = kernel(qv, qdv, *common, [c.alpha, c.phi], [c.eps], p)
+            roc_fn = laws.paper_roc_law if paper else laws.minimal_roc_law
+            u, _, sn, g = roc_fn(qv, qdv, *common, [c.alpha, c.phi], [c.eps], p)
             s_norm, gain = float(sn[0]), float(g[0])
         else:
-            kernel = laws.paper_asmc_law if paper else laws.minimal_asmc_law
-            u, _, sn, g = kernel(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
+            asmc_fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
+            u, _, sn, g = asmc_fn(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
             s_norm, gain = float(sn[0]), float(g[0])
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
         u_discarded = math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2) if paper else 0.0

@@ -128,7 +128,8 @@ def paper_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_th
 
 
 def paper_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> NDArray[np.float64]:
-    """(paper formulation) (25): khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+    """(paper formulation) (25):
+    khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
     with normalised weights (zero beyond the active window).
 
     Paper equations: (25).
@@ -368,7 +369,8 @@ def paper_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayL
 
 
 def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(paper formulation) TDROC (16), (22), (25): u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    """(paper formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
     + H1hat, s = B^T P e.
 
     Paper equations: (16), (22), (24), (25).
@@ -459,7 +461,8 @@ def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
 
 
 def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, bounds: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(paper formulation) ROC: u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
+    """(paper formulation) ROC:
+    u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
     rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).
 
     Paper equations: (22), (24).
@@ -571,7 +574,8 @@ def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, 
 
 
 def paper_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, gain: ArrayLike, eps: ArrayLike, adapt: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(paper formulation) ASMC: u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
+    """(paper formulation) ASMC:
+    u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
     gain_next = khat + h gamma |s|.
 
     Paper equations: (22), (24).
@@ -724,7 +728,8 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
 
 
 def minimal_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> NDArray[np.float64]:
-    """(minimal formulation) (25): khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+    """(minimal formulation) (25):
+    khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
     with normalised weights (zero beyond the active window).
 
     Paper equations: (25).
@@ -848,7 +853,8 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
 
 
 def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(minimal formulation) TDROC (16), (22), (25): u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    """(minimal formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
     + H1hat, s = B^T P e.
 
     Paper equations: (16), (22), (24), (25).
@@ -915,7 +921,8 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
 
 
 def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, bounds: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(minimal formulation) ROC: u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
+    """(minimal formulation) ROC:
+    u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),
     rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).
 
     Paper equations: (22), (24).
@@ -994,7 +1001,8 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
 
 
 def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, gain: ArrayLike, eps: ArrayLike, adapt: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """(minimal formulation) ASMC: u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
+    """(minimal formulation) ASMC:
+    u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);
     gain_next = khat + h gamma |s|.
 
     Paper equations: (22), (24).

@@ -138,7 +138,8 @@ def bias_forces(q: ArrayLike, qdot: ArrayLike, p: Any) -> NDArray[np.float64]:
 
 def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> NDArray[np.float64]:
     """qddot solving (14) with u = B tau, by structured elimination:
-    eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)), qddot = S eta_dot + Sdot eta.
+    eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)),
+    qddot = S eta_dot + Sdot eta.
     Only the wheel rates qdot[3], qdot[4] are read: the other velocities follow
     from the constraints (6)-(8).
 

@@ -204,7 +204,11 @@ def _function_context(spec: FunctionSpec, config: CConfig) -> dict[str, object]:
     printer_names.update({s: str(s) for s, _ in result.temps})
     printer = CPrinter(config, printer_names)
 
-    loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config)) for s in slots if s.symbol in used]
+    loads = [
+        (names[s.symbol], _access(s.arg, s.field, s.index, config))
+        for s in slots
+        if s.symbol in used
+    ]
     unused = [a.name for a in spec.inputs if not any(s in used for s in a.all_symbols())]
     temps = [(str(s), printer.expr_code(e)) for s, e in result.temps]
     stores: list[tuple[str, str]] = []
@@ -215,10 +219,15 @@ def _function_context(spec: FunctionSpec, config: CConfig) -> dict[str, object]:
     ]
     for arg, exprs in zip(spec.outputs, result.outputs[: len(spec.outputs)], strict=True):
         if arg.kind == "array":
-            stores += [(_access(arg, None, i, config), printer.expr_code(e)) for i, e in enumerate(exprs)]
+            stores += [
+                (_access(arg, None, i, config), printer.expr_code(e)) for i, e in enumerate(exprs)
+            ]
         else:
             for f, chunk in split_fields(arg, exprs):
-                stores += [(_access(arg, f, i, config), printer.expr_code(e)) for i, e in enumerate(chunk)]
+                stores += [
+                    (_access(arg, f, i, config), printer.expr_code(e))
+                    for i, e in enumerate(chunk)
+                ]
     ops = op_count_from(printer.ops)
     checked = spec.returns_status and bool(spec.nonfinite_output)
     if checked:  # compute into locals, check, then store: no output written on error
@@ -238,7 +247,8 @@ def _function_context(spec: FunctionSpec, config: CConfig) -> dict[str, object]:
     doc += [_param_doc(a, True, config, spec) for a in spec.inputs]
     doc += [_param_doc(a, False, config, spec) for a in spec.outputs]
     if spec.returns_status:
-        doc.append(f"@return {config.status_codes[0].name} on success; on error no output is written:")
+        ok = config.status_codes[0].name
+        doc.append(f"@return {ok} on success; on error no output is written:")
         if spec.nonfinite_input:
             doc.append(f"        {spec.nonfinite_input} if an input is NaN or infinite,")
         doc += [f"        {g.status} if not ({_comment_text(g.doc)})," for g in spec.guards]
