@@ -220,16 +220,26 @@ def law_specs() -> tuple[FunctionSpec, ...]:
                 ("(17)",),
             )
         )
+        specs.append(
+            FunctionSpec(
+                f"{f}_minv_norm",
+                f"({f} formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T\n"
+                "an orthogonal heading rotation, so the norm depends on the parameters only.",
+                (_nominal(),),
+                (out("norm", [ctl.mass_inverse_norm(f)]),),
+                ("(25)",),
+            )
+        )
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW)
         specs.append(
             FunctionSpec(
                 f"{f}_tdroc_gain",
                 f"({f} formulation) (25):\n"
-                "khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||\n"
+                "khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||\n"
                 "with normalised weights (zero beyond the active window).",
                 (
-                    _nominal(),
-                    theta_q,
+                    array("minv_norm", (sp.Symbol("minv_norm", positive=True),),
+                          "from _minv_norm"),
                     array("omega", tuple(omega), "row i is Omega(i+1)", shape=omega.shape),
                     array("w", tuple(w), "weights"),
                 ),

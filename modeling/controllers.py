@@ -253,9 +253,39 @@ def tde_estimate(formulation: Formulation) -> tuple[sp.Matrix, TdeSymbols]:
     return ts.u_prev - mass * qdd, ts
 
 
+def heading_rotation(size: int) -> sp.Matrix:
+    """T(θ): rotates the (x, y) rows by θ (identity for the minimal form's wheel angles)."""
+    t = sp.eye(size)
+    if size == 5:
+        c, s = sp.cos(wmr.theta), sp.sin(wmr.theta)
+        t[0, 0], t[0, 1], t[1, 0], t[1, 1] = c, -s, s, c
+    return t
+
+
+def rotation_residual(formulation: Formulation) -> sp.Matrix:
+    """M̂(θ) − T(θ) M̂(0) T(θ)ᵀ, which is zero: the model is invariant under heading.
+
+    So M̂(θ)⁻¹ = T M̂(0)⁻¹ Tᵀ with T orthogonal, and every unitarily invariant norm of
+    M̂⁻¹ (Frobenius, spectral) is independent of θ — (25) needs it for the parameters
+    only. Tests assert the residual simplifies to zero.
+    """
+    cm = control_model(formulation)
+    t = heading_rotation(cm.size)
+    at_zero = cm.mass.subs(wmr.theta, 0)
+    return (cm.mass - t * at_zero * t.T).applyfunc(wmr.wmr_system().simplify)
+
+
+def mass_inverse_norm(formulation: Formulation) -> sp.Expr:
+    """‖M̂⁻¹‖_F of (25), evaluated at θ = 0 (exact for every θ, see rotation_residual)."""
+    cm = control_model(formulation)
+    return _norm(sp.Matrix(list(cm.mass_inverse.subs(wmr.theta, 0))))
+
+
 def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
-    """(25): k̂ = ‖M̂(q)⁻¹‖_F Σ_{i=1..window} w_i ‖Ω(i) − Ω(i+1)‖ with the weights w_i
+    """(25): k̂ = ‖M̂⁻¹‖_F Σ_{i=1..window} w_i ‖Ω(i) − Ω(i+1)‖ with the weights w_i
     given normalised (Σ w_i = 1 over the active window, 0 beyond it) by the caller.
+    ‖M̂⁻¹‖_F depends on the nominal parameters only (``mass_inverse_norm``): it is an
+    input here (symbol ``minv_norm``), computed when the nominal parameters change.
 
     Returns (k̂, Ω window symbols ((window + 1) × n, row i = Ω(i + 1)), weight symbols).
     """
@@ -266,8 +296,7 @@ def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matri
     total = sp.S.Zero
     for i in range(window):
         total += w[i] * _norm((omega[i, :] - omega[i + 1, :]).T)
-    minv_norm = _norm(sp.Matrix(list(cm.mass_inverse)))
-    return minv_norm * total, omega, w
+    return sp.Symbol("minv_norm", positive=True) * total, omega, w
 
 
 def asmc_adaptation(gain: sp.Symbol, gamma: sp.Symbol, s_norm: sp.Symbol, h: sp.Symbol) -> sp.Expr:

@@ -42,7 +42,8 @@ int main(void)
     config.q_vel = WMR_LIT(1.0);
     config.h = WMR_LIT(0.01);
     config.tau_max = WMR_LIT(50.0);
-    config.eps = WMR_LIT(0.1);
+    config.eps = WMR_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1 s */
+    config.accel_estimator = WMR_ACCEL_BACKWARD;
     config.n = 4;
     config.a = WMR_LIT(0.9);
     status = wmr_tdroc_init(&state, &config);

@@ -53,7 +53,22 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
  */
 void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat);
 
-#define WMR_PAPER_TDROC_GAIN_Q_SIZE 5
+#define WMR_PAPER_MINV_NORM_NORM_SIZE 1
+
+/**
+ * (paper formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T
+ * an orthogonal heading rotation, so the norm depends on the parameters only.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[out] norm [1] row-major (WMR_PAPER_MINV_NORM_NORM_SIZE)
+ *
+ * operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt
+ */
+void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
+
+#define WMR_PAPER_TDROC_GAIN_MINV_NORM_SIZE 1
 #define WMR_PAPER_TDROC_GAIN_OMEGA_SIZE 45
 #define WMR_PAPER_TDROC_GAIN_OMEGA_ROWS 9
 #define WMR_PAPER_TDROC_GAIN_OMEGA_COLS 5
@@ -62,20 +77,19 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
 
 /**
  * (paper formulation) (25):
- * khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+ * khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
  * with normalised weights (zero beyond the active window).
  *
  * Paper equations: (25).
  *
- * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_PAPER_TDROC_GAIN_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  minv_norm [1] row-major (WMR_PAPER_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from _minv_norm
  * @param[in]  omega [9x5] row-major (WMR_PAPER_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4 -- row i is Omega(i+1)
  * @param[in]  w [8] row-major (WMR_PAPER_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 -- weights
  * @param[out] gain [1] row-major (WMR_PAPER_TDROC_GAIN_GAIN_SIZE)
  *
- * operations after CSE: 178 add, 221 mul, 5 div, 2 sin/cos, 9 sqrt
+ * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt
  */
-void wmr_paper_tdroc_gain(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
+void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
 
 #define WMR_PAPER_TDC_LAW_Q_SIZE 5
 #define WMR_PAPER_TDC_LAW_E_SIZE 5
@@ -266,7 +280,22 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
  */
 void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat);
 
-#define WMR_MINIMAL_TDROC_GAIN_Q_SIZE 5
+#define WMR_MINIMAL_MINV_NORM_NORM_SIZE 1
+
+/**
+ * (minimal formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T
+ * an orthogonal heading rotation, so the norm depends on the parameters only.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[out] norm [1] row-major (WMR_MINIMAL_MINV_NORM_NORM_SIZE)
+ *
+ * operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt
+ */
+void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
+
+#define WMR_MINIMAL_TDROC_GAIN_MINV_NORM_SIZE 1
 #define WMR_MINIMAL_TDROC_GAIN_OMEGA_SIZE 18
 #define WMR_MINIMAL_TDROC_GAIN_OMEGA_ROWS 9
 #define WMR_MINIMAL_TDROC_GAIN_OMEGA_COLS 2
@@ -275,20 +304,19 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
 
 /**
  * (minimal formulation) (25):
- * khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+ * khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
  * with normalised weights (zero beyond the active window).
  *
  * Paper equations: (25).
  *
- * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_MINIMAL_TDROC_GAIN_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  minv_norm [1] row-major (WMR_MINIMAL_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from _minv_norm
  * @param[in]  omega [9x2] row-major (WMR_MINIMAL_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 -- row i is Omega(i+1)
  * @param[in]  w [8] row-major (WMR_MINIMAL_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 -- weights
  * @param[out] gain [1] row-major (WMR_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
- * operations after CSE: 51 add, 78 mul, 2 div, 0 sin/cos, 9 sqrt
+ * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
  */
-void wmr_minimal_tdroc_gain(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
+void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
 
 #define WMR_MINIMAL_TDC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_TDC_LAW_E_SIZE 2

@@ -18,6 +18,12 @@ static int wmr_tdroc_finite_bounded(const wmr_real_t *x, int n)
     return 1;
 }
 
+static int wmr_tdroc_same_params(const wmr_params_t *a, const wmr_params_t *b)
+{
+    return a->m == b->m && a->Iz == b->Iz && a->K == b->K && a->Iw == b->Iw && a->r == b->r
+        && a->b == b->b && a->d == b->d;
+}
+
 static int wmr_tdroc_positive(wmr_real_t x)
 {
     return isfinite(x) && x > WMR_LIT(0.0);
@@ -116,6 +122,13 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         }
     }
     fresh.omega_count = 0;
+    fresh.minv_paper = config->formulation == WMR_FORMULATION_PAPER;
+    fresh.minv_for = config->nominal;
+    if (fresh.minv_paper) {
+        wmr_paper_minv_norm(&config->nominal, &fresh.minv_norm);
+    } else {
+        wmr_minimal_minv_norm(&config->nominal, &fresh.minv_norm);
+    }
     fresh.gain = WMR_LIT(0.0);
     fresh.s_norm = WMR_LIT(0.0);
     fresh.u_discarded = WMR_LIT(0.0);
@@ -220,10 +233,20 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
                 om[i * nc + j] = next.omega[i][j];
             }
         }
+        if (!wmr_tdroc_same_params(&next.minv_for, &config->nominal) || next.minv_paper != paper) {
+            /* ||Mhat^-1|| depends on the nominal parameters only: recomputed when they change. */
+            if (paper) {
+                wmr_paper_minv_norm(&config->nominal, &next.minv_norm);
+            } else {
+                wmr_minimal_minv_norm(&config->nominal, &next.minv_norm);
+            }
+            next.minv_for = config->nominal;
+            next.minv_paper = paper;
+        }
         if (paper) {
-            wmr_paper_tdroc_gain(&config->nominal, q, om, w, &next.gain);
+            wmr_paper_tdroc_gain(&next.minv_norm, om, w, &next.gain);
         } else {
-            wmr_minimal_tdroc_gain(&config->nominal, q, om, w, &next.gain);
+            wmr_minimal_tdroc_gain(&next.minv_norm, om, w, &next.gain);
         }
     }
     /* The law. */

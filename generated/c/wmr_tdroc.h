@@ -43,6 +43,9 @@ typedef struct {
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t omega[WMR_MAX_WINDOW + 1][5]; /* Omega(1..), newest first */
     int omega_count;        /* valid rows of omega */
+    wmr_real_t minv_norm;   /* ||Mhat^-1||_F for minv_for (25) */
+    wmr_params_t minv_for;  /* nominal parameters minv_norm was computed for */
+    int minv_paper;         /* ... and the formulation */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
     wmr_real_t s_norm;      /* ||s|| in the last step */

@@ -233,8 +233,10 @@ class _Controller:
                     w[i] = wi if i < active else 0.0
                     wi *= c.a
                 w = w / w.sum()
+                norm_fn = laws.paper_minv_norm if paper else laws.minimal_minv_norm
+                minv_norm = float(norm_fn(p)[0])  # parameters only (see wmr_laws)
                 gain_fn = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
-                gain = float(gain_fn(qv, omega[:, :nc], w, p)[0])
+                gain = float(gain_fn([minv_norm], omega[:, :nc], w)[0])
         common = (e, edot, qdd, k1, k2, p12, p22)
         if self.name == "tdc":
             u = (laws.paper_tdc_law if paper else laws.minimal_tdc_law)(qv, *common, H1hat[:nc], p)

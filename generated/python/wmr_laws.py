@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_roc_law", "paper_tdc_law", "paper_tde", "paper_tdroc_gain", "paper_tdroc_law"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_roc_law", "paper_tdc_law", "paper_tde", "paper_tdroc_gain", "paper_tdroc_law"]
 
 
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
@@ -127,27 +127,20 @@ def paper_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_th
     return H1hat
 
 
-def paper_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> NDArray[np.float64]:
-    """(paper formulation) (25):
-    khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
-    with normalised weights (zero beyond the active window).
+def paper_minv_norm(p: Any) -> NDArray[np.float64]:
+    """(paper formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T
+    an orthogonal heading rotation, so the norm depends on the parameters only.
 
     Paper equations: (25).
 
     Args:
-        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. measured q (five coordinates)
-        omega: array of 45 (shape 9x5, row-major): Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4. row i is Omega(i+1)
-        w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
         p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
 
     Returns:
-        gain: array of 1 (shape 1x1, row-major)
+        norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 178 add, 221 mul, 5 div, 2 sin/cos, 9 sqrt
+    operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt
     """
-    _, _, theta, _, _ = _flat(q, 5, "q")
-    Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4 = _flat(omega, 45, "omega")
-    w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
     m = float(_field(p, "m"))
     I = float(_field(p, "I"))
     K = float(_field(p, "K"))
@@ -163,132 +156,135 @@ def paper_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> ND
     _t5 = 4.0*_t4
     _t6 = b*b
     _t7 = I_w*I_w*_t6
-    _t8 = K*d
-    _t9 = _t8*m
-    _t10 = _t6*m
-    _t11 = _t1*_t10
-    _t12 = 8.0*_t1
+    _t8 = _t1*d
+    _t9 = d*m
+    _t10 = 8.0*K
+    _t11 = _t6*m
+    _t12 = _t1*_t11
     _t13 = d*d
     _t14 = _t13*m
-    _t15 = m*m
-    _t16 = _t13*_t15
-    _t17 = _t0*_t10/(-16.0*_t1*_t8 + 2.0*_t11 + _t12*_t14 + _t16*_t5 + 8.0*_t2 + _t3*_t5 - 8.0*_t4*_t9 + 4.0*_t7)
-    _t18 = 2.0*_t4
-    _t19 = 1.0/(4.0*_t1*_t14 + _t11 - _t12*_t8 + _t16*_t18 + _t18*_t3 + 4.0*_t2 - _t5*_t9 + 2.0*_t7)
-    _t20 = 2.0*_t19
-    _t21 = _t0*_t20
-    _t22 = I*_t21 - 4.0*_t0*_t19*_t8 + _t14*_t21
-    _t23 = -_t17 + _t22
-    _t24 = I_w*_t20*_t6 + _t17 + _t22
-    _t25 = 1.0/b
-    _t26 = _t25*r
-    _t27 = _t23*_t26 - _t24*_t26
-    _t28 = math.sin(theta)
-    _t29 = 0.5*r
-    _t30 = _t28*_t29
-    _t31 = math.cos(theta)
-    _t32 = _t26*d
-    _t33 = _t31*_t32
-    _t34 = _t30 - _t33
-    _t35 = _t30 + _t33
-    _t36 = _t29*_t31
-    _t37 = _t28*_t32
-    _t38 = _t36 - _t37
-    _t39 = _t36 + _t37
-    _t40 = I*_t26 - K*_t32
-    _t41 = -_t40
-    _t42 = K*K
-    _t43 = 1.0/(_t3 - _t42)
-    _t44 = _t43*m
-    _t45 = _t30*m
-    _t46 = K*_t26
-    _t47 = _t31*_t46
-    _t48 = _t33*m
-    _t49 = _t45 + _t47 - _t48
-    _t50 = K*_t43
-    _t51 = _t31*_t50
-    _t52 = _t36*m
-    _t53 = _t28*_t46
-    _t54 = _t37*m
-    _t55 = _t52 - _t53 + _t54
-    _t56 = K*_t28*_t43*_t55 - _t41*_t44 - _t49*_t51
-    _t57 = _t45 - _t47 + _t48
-    _t58 = _t52 + _t53 - _t54
-    _t59 = K*_t28*_t43*_t58 - _t40*_t44 - _t51*_t57
-    _t60 = _t23*_t56 + _t24*_t59
-    _t61 = _t23*_t59 + _t24*_t56
-    _t62 = _t28*_t50
-    _t63 = 1.0/(I*_t15 - _t42*m)
-    _t64 = _t42*_t63
-    _t65 = _t28*_t31*_t64
-    _t66 = _t3*_t63
-    _t67 = _t31*_t31*_t64
-    _t68 = _t66 - _t67
-    _t69 = _t40*_t62 + _t57*_t65 - _t58*_t68
-    _t70 = _t41*_t62 + _t49*_t65 - _t55*_t68
-    _t71 = _t23*_t69 + _t24*_t70
-    _t72 = _t23*_t70 + _t24*_t69
-    _t73 = -_t64 + _t66 + _t67
-    _t74 = _t28*_t31*_t42*_t55*_t63 - _t41*_t51 - _t49*_t73
-    _t75 = _t28*_t31*_t42*_t58*_t63 - _t40*_t51 - _t57*_t73
-    _t76 = _t23*_t74 + _t24*_t75
-    _t77 = _t23*_t75 + _t24*_t74
-    _t78 = -_t65
-    _t79 = _t23*_t34 + _t24*_t35
-    _t80 = _t23*_t35 + _t24*_t34
-    _t81 = _t23*_t38 + _t24*_t39
-    _t82 = _t23*_t39 + _t24*_t38
-    _t83 = _t26*_t60 - _t26*_t61 + _t44
-    _t84 = _t26*_t76 - _t26*_t77 + _t51
-    _t85 = _t34*_t61 + _t35*_t60 + _t51
-    _t86 = _t38*_t72 + _t39*_t71 + _t68
-    _t87 = _t34*_t77 + _t35*_t76 + _t73
-    _t88 = _t34*_t71 + _t35*_t72 + _t78
-    _t89 = _t38*_t76 + _t39*_t77 + _t78
-    _t90 = _t38*_t60 + _t39*_t61 - _t62
-    _t91 = _t25*_t72*r - _t26*_t71 - _t62
-    _t92 = Om0_0 - Om1_0
-    _t93 = Om0_1 - Om1_1
-    _t94 = Om0_2 - Om1_2
-    _t95 = Om0_3 - Om1_3
-    _t96 = Om0_4 - Om1_4
-    _t97 = Om1_0 - Om2_0
-    _t98 = Om1_1 - Om2_1
-    _t99 = Om1_2 - Om2_2
-    _t100 = Om1_3 - Om2_3
-    _t101 = Om1_4 - Om2_4
-    _t102 = Om2_0 - Om3_0
-    _t103 = Om2_1 - Om3_1
-    _t104 = Om2_2 - Om3_2
-    _t105 = Om2_3 - Om3_3
-    _t106 = Om2_4 - Om3_4
-    _t107 = Om3_0 - Om4_0
-    _t108 = Om3_1 - Om4_1
-    _t109 = Om3_2 - Om4_2
-    _t110 = Om3_3 - Om4_3
-    _t111 = Om3_4 - Om4_4
-    _t112 = Om4_0 - Om5_0
-    _t113 = Om4_1 - Om5_1
-    _t114 = Om4_2 - Om5_2
-    _t115 = Om4_3 - Om5_3
-    _t116 = Om4_4 - Om5_4
-    _t117 = Om5_0 - Om6_0
-    _t118 = Om5_1 - Om6_1
-    _t119 = Om5_2 - Om6_2
-    _t120 = Om5_3 - Om6_3
-    _t121 = Om5_4 - Om6_4
-    _t122 = Om6_0 - Om7_0
-    _t123 = Om6_1 - Om7_1
-    _t124 = Om6_2 - Om7_2
-    _t125 = Om6_3 - Om7_3
-    _t126 = Om6_4 - Om7_4
-    _t127 = Om7_0 - Om8_0
-    _t128 = Om7_1 - Om8_1
-    _t129 = Om7_2 - Om8_2
-    _t130 = Om7_3 - Om8_3
-    _t131 = Om7_4 - Om8_4
+    _t15 = _t1*_t14
+    _t16 = m*m
+    _t17 = _t13*_t16
+    _t18 = _t0*_t11/(-16.0*K*_t8 - _t10*_t4*_t9 + 2.0*_t12 + 8.0*_t15 + _t17*_t5 + 8.0*_t2 + _t3*_t5 + 4.0*_t7)
+    _t19 = 2.0*_t4
+    _t20 = 1.0/(-K*_t5*_t9 - _t10*_t8 + _t12 + 4.0*_t15 + _t17*_t19 + _t19*_t3 + 4.0*_t2 + 2.0*_t7)
+    _t21 = 2.0*_t20
+    _t22 = _t0*_t21
+    _t23 = I*_t22 - 4.0*K*_t0*_t20*d + _t14*_t22
+    _t24 = -_t18 + _t23
+    _t25 = I_w*_t21*_t6 + _t18 + _t23
+    _t26 = 0.5*r
+    _t27 = _t24*_t26
+    _t28 = _t25*_t26
+    _t29 = 1.0/b
+    _t30 = _t29*r
+    _t31 = _t24*_t30
+    _t32 = _t25*_t30
+    _t33 = _t31 - _t32
+    _t34 = _t31*d - _t32*d
+    _t35 = K*K
+    _t36 = 1.0/(I*_t16 - _t35*m)
+    _t37 = _t3*_t36
+    _t38 = -_t35*_t36 + _t37
+    _t39 = _t38*m
+    _t40 = -_t27*_t39 - _t28*_t39
+    _t41 = K*_t30
+    _t42 = -_t29*d*m*r + _t41
+    _t43 = -_t42
+    _t44 = 1.0/(_t3 - _t35)
+    _t45 = K*_t44
+    _t46 = I*_t30 - _t41*d
+    _t47 = _t44*m
+    _t48 = -_t43*_t45 - _t46*_t47
+    _t49 = -_t46
+    _t50 = -_t42*_t45 - _t47*_t49
+    _t51 = _t24*_t48 + _t25*_t50
+    _t52 = _t24*_t50 + _t25*_t48
+    _t53 = -_t37*_t43 - _t45*_t46
+    _t54 = -_t37*_t42 - _t45*_t49
+    _t55 = _t24*_t53 + _t25*_t54
+    _t56 = _t24*_t54 + _t25*_t53
+    _t57 = _t30*_t52
+    _t58 = _t30*_t51
+    _t59 = _t30*_t56
+    _t60 = _t30*_t55
+    _t61 = _t38 + _t40*r
+    _t62 = _t26*_t51 + _t26*_t52
+    _t63 = _t26*_t55 + _t26*_t56
+    _t64 = _t37 + _t59*d - _t60*d
+    _t65 = _t45 + _t59 - _t60
+    _t66 = _t45 + _t57*d - _t58*d
+    _t67 = _t47 + _t57 - _t58
+    _t68 = _t27 + _t28
+    norm = np.array([
+        math.sqrt(2.0*_t24*_t24 + 2.0*_t25*_t25 + 2.0*_t33*_t33 + 2.0*_t34*_t34 + 2.0*_t40*_t40 + _t51*_t51 + _t52*_t52 + _t55*_t55 + _t56*_t56 + _t61*_t61 + _t62*_t62 + _t63*_t63 + _t64*_t64 + _t65*_t65 + _t66*_t66 + _t67*_t67 + 2.0*_t68*_t68),
+    ])
+    return norm
+
+
+def paper_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+    """(paper formulation) (25):
+    khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+    with normalised weights (zero beyond the active window).
+
+    Paper equations: (25).
+
+    Args:
+        minv_norm: array of 1 (shape 1x1, row-major): minv_norm. from _minv_norm
+        omega: array of 45 (shape 9x5, row-major): Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4. row i is Omega(i+1)
+        w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
+
+    Returns:
+        gain: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt
+    """
+    minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
+    Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4 = _flat(omega, 45, "omega")
+    w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
+    _t0 = Om0_0 - Om1_0
+    _t1 = Om0_1 - Om1_1
+    _t2 = Om0_2 - Om1_2
+    _t3 = Om0_3 - Om1_3
+    _t4 = Om0_4 - Om1_4
+    _t5 = Om1_0 - Om2_0
+    _t6 = Om1_1 - Om2_1
+    _t7 = Om1_2 - Om2_2
+    _t8 = Om1_3 - Om2_3
+    _t9 = Om1_4 - Om2_4
+    _t10 = Om2_0 - Om3_0
+    _t11 = Om2_1 - Om3_1
+    _t12 = Om2_2 - Om3_2
+    _t13 = Om2_3 - Om3_3
+    _t14 = Om2_4 - Om3_4
+    _t15 = Om3_0 - Om4_0
+    _t16 = Om3_1 - Om4_1
+    _t17 = Om3_2 - Om4_2
+    _t18 = Om3_3 - Om4_3
+    _t19 = Om3_4 - Om4_4
+    _t20 = Om4_0 - Om5_0
+    _t21 = Om4_1 - Om5_1
+    _t22 = Om4_2 - Om5_2
+    _t23 = Om4_3 - Om5_3
+    _t24 = Om4_4 - Om5_4
+    _t25 = Om5_0 - Om6_0
+    _t26 = Om5_1 - Om6_1
+    _t27 = Om5_2 - Om6_2
+    _t28 = Om5_3 - Om6_3
+    _t29 = Om5_4 - Om6_4
+    _t30 = Om6_0 - Om7_0
+    _t31 = Om6_1 - Om7_1
+    _t32 = Om6_2 - Om7_2
+    _t33 = Om6_3 - Om7_3
+    _t34 = Om6_4 - Om7_4
+    _t35 = Om7_0 - Om8_0
+    _t36 = Om7_1 - Om8_1
+    _t37 = Om7_2 - Om8_2
+    _t38 = Om7_3 - Om8_3
+    _t39 = Om7_4 - Om8_4
     gain = np.array([
-        (w0*math.sqrt(_t92*_t92 + _t93*_t93 + _t94*_t94 + _t95*_t95 + _t96*_t96) + w1*math.sqrt(_t100*_t100 + _t101*_t101 + _t97*_t97 + _t98*_t98 + _t99*_t99) + w2*math.sqrt(_t102*_t102 + _t103*_t103 + _t104*_t104 + _t105*_t105 + _t106*_t106) + w3*math.sqrt(_t107*_t107 + _t108*_t108 + _t109*_t109 + _t110*_t110 + _t111*_t111) + w4*math.sqrt(_t112*_t112 + _t113*_t113 + _t114*_t114 + _t115*_t115 + _t116*_t116) + w5*math.sqrt(_t117*_t117 + _t118*_t118 + _t119*_t119 + _t120*_t120 + _t121*_t121) + w6*math.sqrt(_t122*_t122 + _t123*_t123 + _t124*_t124 + _t125*_t125 + _t126*_t126) + w7*math.sqrt(_t127*_t127 + _t128*_t128 + _t129*_t129 + _t130*_t130 + _t131*_t131))*math.sqrt(2.0*_t23*_t23 + 2.0*_t24*_t24 + 2.0*_t27*_t27 + _t60*_t60 + _t61*_t61 + _t71*_t71 + _t72*_t72 + _t76*_t76 + _t77*_t77 + _t79*_t79 + _t80*_t80 + _t81*_t81 + _t82*_t82 + _t83*_t83 + _t84*_t84 + _t85*_t85 + _t86*_t86 + _t87*_t87 + _t88*_t88 + _t89*_t89 + _t90*_t90 + _t91*_t91),
+        minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4) + w1*math.sqrt(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9) + w2*math.sqrt(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14) + w3*math.sqrt(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19) + w4*math.sqrt(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + w5*math.sqrt(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29) + w6*math.sqrt(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34) + w7*math.sqrt(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39)),
     ])
     return gain
 
@@ -727,27 +723,20 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     return H1hat
 
 
-def minimal_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> NDArray[np.float64]:
-    """(minimal formulation) (25):
-    khat = ||Mhat(q)^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
-    with normalised weights (zero beyond the active window).
+def minimal_minv_norm(p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T
+    an orthogonal heading rotation, so the norm depends on the parameters only.
 
     Paper equations: (25).
 
     Args:
-        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. measured q (five coordinates)
-        omega: array of 18 (shape 9x2, row-major): Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1. row i is Omega(i+1)
-        w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
         p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
 
     Returns:
-        gain: array of 1 (shape 1x1, row-major)
+        norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 51 add, 78 mul, 2 div, 0 sin/cos, 9 sqrt
+    operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt
     """
-    del q  # not used by this function
-    Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 = _flat(omega, 18, "omega")
-    w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
     m = float(_field(p, "m"))
     I = float(_field(p, "I"))
     K = float(_field(p, "K"))
@@ -779,24 +768,48 @@ def minimal_tdroc_gain(q: ArrayLike, omega: ArrayLike, w: ArrayLike, p: Any) -> 
     _t21 = I*_t20 - 4.0*_t0*_t18*_t8 + _t14*_t20
     _t22 = -_t16 + _t21
     _t23 = I_w*_t19*_t6 + _t16 + _t21
-    _t24 = Om0_0 - Om1_0
-    _t25 = Om0_1 - Om1_1
-    _t26 = Om1_0 - Om2_0
-    _t27 = Om1_1 - Om2_1
-    _t28 = Om2_0 - Om3_0
-    _t29 = Om2_1 - Om3_1
-    _t30 = Om3_0 - Om4_0
-    _t31 = Om3_1 - Om4_1
-    _t32 = Om4_0 - Om5_0
-    _t33 = Om4_1 - Om5_1
-    _t34 = Om5_0 - Om6_0
-    _t35 = Om5_1 - Om6_1
-    _t36 = Om6_0 - Om7_0
-    _t37 = Om6_1 - Om7_1
-    _t38 = Om7_0 - Om8_0
-    _t39 = Om7_1 - Om8_1
+    norm = np.array([math.sqrt(2.0*_t22*_t22 + 2.0*_t23*_t23)])
+    return norm
+
+
+def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+    """(minimal formulation) (25):
+    khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||
+    with normalised weights (zero beyond the active window).
+
+    Paper equations: (25).
+
+    Args:
+        minv_norm: array of 1 (shape 1x1, row-major): minv_norm. from _minv_norm
+        omega: array of 18 (shape 9x2, row-major): Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1. row i is Omega(i+1)
+        w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
+
+    Returns:
+        gain: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
+    """
+    minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
+    Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 = _flat(omega, 18, "omega")
+    w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
+    _t0 = Om0_0 - Om1_0
+    _t1 = Om0_1 - Om1_1
+    _t2 = Om1_0 - Om2_0
+    _t3 = Om1_1 - Om2_1
+    _t4 = Om2_0 - Om3_0
+    _t5 = Om2_1 - Om3_1
+    _t6 = Om3_0 - Om4_0
+    _t7 = Om3_1 - Om4_1
+    _t8 = Om4_0 - Om5_0
+    _t9 = Om4_1 - Om5_1
+    _t10 = Om5_0 - Om6_0
+    _t11 = Om5_1 - Om6_1
+    _t12 = Om6_0 - Om7_0
+    _t13 = Om6_1 - Om7_1
+    _t14 = Om7_0 - Om8_0
+    _t15 = Om7_1 - Om8_1
     gain = np.array([
-        math.sqrt(2.0*_t22*_t22 + 2.0*_t23*_t23)*(w0*math.sqrt(_t24*_t24 + _t25*_t25) + w1*math.sqrt(_t26*_t26 + _t27*_t27) + w2*math.sqrt(_t28*_t28 + _t29*_t29) + w3*math.sqrt(_t30*_t30 + _t31*_t31) + w4*math.sqrt(_t32*_t32 + _t33*_t33) + w5*math.sqrt(_t34*_t34 + _t35*_t35) + w6*math.sqrt(_t36*_t36 + _t37*_t37) + w7*math.sqrt(_t38*_t38 + _t39*_t39)),
+        minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1) + w1*math.sqrt(_t2*_t2 + _t3*_t3) + w2*math.sqrt(_t4*_t4 + _t5*_t5) + w3*math.sqrt(_t6*_t6 + _t7*_t7) + w4*math.sqrt(_t8*_t8 + _t9*_t9) + w5*math.sqrt(_t10*_t10 + _t11*_t11) + w6*math.sqrt(_t12*_t12 + _t13*_t13) + w7*math.sqrt(_t14*_t14 + _t15*_t15)),
     ])
     return gain
 
