@@ -1,0 +1,73 @@
+"""The symbolic controller laws (modeling/controllers.py) — facts the generated code uses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from modeling import controllers as ctl
+from modeling import wmr
+
+
+@pytest.mark.parametrize("formulation", ctl.FORMULATIONS)
+def test_model_is_heading_invariant(formulation: ctl.Formulation) -> None:
+    """M̂(θ) = T M̂(0) Tᵀ, which makes ‖M̂⁻¹‖ of (25) a function of the parameters only."""
+    shape = ctl.control_model(formulation).mass.shape
+    assert ctl.rotation_residual(formulation) == sp.zeros(*shape)
+
+
+def test_mass_inverse_norm_matches_numpy_at_any_heading() -> None:
+    cm = ctl.control_model("paper")
+    values = {wmr.m: 36.0, wmr.I_z: 5.72, wmr.K: 0.34, wmr.I_w: 0.07, wmr.r: 0.096,
+              wmr.b: 0.414, wmr.d: 0.12}
+    norm = float(ctl.mass_inverse_norm("paper").subs(values))
+    f = sp.lambdify(wmr.theta, cm.mass.subs(values), "numpy")
+    for theta in np.linspace(-3.0, 3.0, 7):
+        assert abs(np.linalg.norm(np.linalg.inv(f(theta))) - norm) < 1e-12 * norm
+
+
+def test_lyapunov_solution_solves_the_equation_and_is_positive_definite() -> None:
+    k1, k2, q1, q2 = sp.symbols("k1 k2 q1 q2", positive=True)
+    p11, p12, p22 = ctl.lyapunov_p(k1, k2, q1, q2)
+    a = sp.Matrix([[0, 1], [-k1, -k2]])
+    p = sp.Matrix([[p11, p12], [p12, p22]])
+    assert sp.simplify(a.T * p + p * a + sp.diag(q1, q2)) == sp.zeros(2, 2)
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        vals = dict(zip((k1, k2, q1, q2), rng.uniform(0.1, 10.0, 4), strict=True))
+        pn = np.array(p.subs(vals), dtype=float)
+        assert np.all(np.linalg.eigvalsh(pn) > 0)
+    # The paper's gains: K1 = K2 = 4, Q = I.
+    assert (p12.subs({k1: 4, k2: 4, q1: 1, q2: 1}), p22.subs({k1: 4, k2: 4, q1: 1, q2: 1})) == (
+        sp.Rational(1, 8), sp.Rational(5, 32))
+
+
+def test_switching_term_is_continuous_at_the_boundary_layer() -> None:
+    law, ls = ctl.tde_law("minimal", switching=True)
+    s = ctl.sliding_variable(ls)
+    du, s_norm = ctl.switching_term(ls, ls.gain)
+    # On ‖s‖ = ε both branches of (25) give k s/ε.
+    vals = {ls.e[0]: 0.3, ls.e[1]: -0.1, ls.edot[0]: 0.2, ls.edot[1]: 0.05,
+            ls.p12[0]: 0.125, ls.p12[1]: 0.125, ls.p22[0]: 0.15625, ls.p22[1]: 0.15625,
+            ls.gain: 2.0}
+    eps = float(s_norm.subs(vals))
+    inside = du.subs({**vals, ls.eps: eps * (1 + 1e-12)})
+    outside = du.subs({**vals, ls.eps: eps * (1 - 1e-12)})
+    assert float((inside - outside).norm()) < 1e-9
+    del law, s
+
+
+def test_tde_is_exact_for_a_constant_h1_under_zero_order_hold() -> None:
+    """With q̈ constant over the period (ZOH) the backward quotient recovers it exactly."""
+    h1, ts = ctl.tde_estimate("minimal")
+    cm = ctl.control_model("minimal")
+    qdd = sp.Matrix([0.7, -0.2])
+    vals = {wmr.m: 36.0, wmr.I_z: 5.72, wmr.K: 0.34, wmr.I_w: 0.07, wmr.r: 0.096,
+            wmr.b: 0.414, wmr.d: 0.12, ts.span: 0.1}
+    u_prev = cm.mass.subs(vals) * qdd + sp.Matrix([0.3, 0.4])  # true H1 = (0.3, 0.4)
+    sub = {**vals, **dict(zip(ts.u_prev, u_prev, strict=True)),
+           **dict(zip(ts.qdot_now, [1.0 + 0.07, 2.0 - 0.02], strict=True)),
+           **dict(zip(ts.qdot_then, [1.0, 2.0], strict=True))}
+    est = h1.subs(sub)
+    assert float((est - sp.Matrix([0.3, 0.4])).norm()) < 1e-12
