@@ -76,6 +76,8 @@ def _param_guards() -> tuple[Guard, ...]:
     return (
         Guard(STATUS_BAD_PARAMS, wmr.r, "r > 0"),
         Guard(STATUS_BAD_PARAMS, wmr.b, "b > 0"),
+        # Sylvester: both leading minors of S^T M S positive <=> positive definite.
+        Guard(STATUS_BAD_PARAMS, s.minimal_mass_matrix[0, 0], "(S^T M S)[0][0] > 0"),
         Guard(STATUS_BAD_PARAMS, det, "det(S^T M S) > 0: a positive-definite model"),
     )
 

@@ -64,6 +64,9 @@ wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
         wmr_real_t acc[2];
         if (!wmr_asmc_positive(p->m) || !wmr_asmc_positive(p->Iz)
             || !wmr_asmc_positive(p->Iw) || !isfinite(p->K) || !isfinite(p->d)
+            /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a
+               factor of det M-tilde, so the paper form's M-hat is singular without it. */
+            || !(p->m * p->Iz - p->K * p->K > WMR_LIT(0.0))
             || wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
             return WMR_ERR_BAD_NOMINAL;
         }

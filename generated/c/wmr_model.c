@@ -179,6 +179,9 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
+    if (!(_t35 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
     if (!(WMR_LIT(0.5)*_t12*_t38*_t40 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
@@ -315,6 +318,9 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(_t17 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(WMR_LIT(0.5)*_t20*_t21*_t4 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */

@@ -72,6 +72,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
  *         WMR_ERR_BAD_PARAMS if not (r > 0),
  *         WMR_ERR_BAD_PARAMS if not (b > 0),
+ *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
@@ -152,6 +153,7 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
  *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
  *         WMR_ERR_BAD_PARAMS if not (r > 0),
  *         WMR_ERR_BAD_PARAMS if not (b > 0),
+ *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *

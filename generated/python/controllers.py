@@ -175,6 +175,8 @@ class _Controller:
         if not (_positive(values["m"]) and _positive(values["I"]) and _positive(values["Iw"])
                 and math.isfinite(values["K"]) and math.isfinite(values["d"])):
             raise ControllerError("WMR_ERR_BAD_NOMINAL", "m, I, Iw must be > 0; K, d finite")
+        if not values["m"] * values["I"] - values["K"] * values["K"] > 0.0:  # det M-tilde factor
+            raise ControllerError("WMR_ERR_BAD_NOMINAL", "m I - K^2 must be > 0 (inertia about the CoM)")
         try:
             model.minimal_forward_dynamics(np.zeros(5), np.zeros(2), np.zeros(2), values)
         except ValueError as exc:

@@ -168,62 +168,67 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     d = float(_field(p, "d"))
     if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of forward_dynamics is NaN or infinite")
-    _t0 = thetadot_l*thetadot_l
-    _t1 = math.sin(theta)
-    _t2 = 1.0/b
-    _t3 = _t1*_t2
-    _t4 = r*r
-    _t5 = 0.5*_t4
-    _t6 = _t3*_t5
-    _t7 = thetadot_r*thetadot_r
-    _t8 = math.cos(theta)
-    _t9 = _t4*d
-    _t10 = _t8*_t9
-    _t11 = b*b
-    _t12 = 1.0/_t11
-    _t13 = 2.0*_t12
-    _t14 = thetadot_l*thetadot_r
-    _t15 = _t13*_t14
-    _t16 = _t0*_t12
-    _t17 = _t12*_t7
-    _t18 = 0.5*r
-    _t19 = _t18*_t8
-    _t20 = d*r
-    _t21 = _t20*_t3
-    _t22 = _t4*m
-    _t23 = 0.25*_t22
-    _t24 = I*_t4
-    _t25 = _t22*d*d
-    _t26 = K*_t9
-    _t27 = _t12*_t24 + _t12*_t25 - _t13*_t26
-    _t28 = -_t23 + _t27
-    _t29 = r*r*r
-    _t30 = K*_t29
-    _t31 = _t29*d*m
-    _t32 = _t12*_t14
-    _t33 = _t30*_t32 - _t31*_t32
-    _t34 = -_t16*_t30 + _t16*_t31 + _t33 + tau_r
-    _t35 = I_w + _t23 + _t27
-    _t36 = -_t17*_t30 + _t17*_t31 + _t33 + tau_l
-    _t37 = _t28*_t34 + _t35*_t36
-    _t38 = 2.0*I_w + _t22
-    _t39 = 1.0/_t38
-    _t40 = I_w*_t11 + 2.0*_t24 + 2.0*_t25 - 4.0*_t26
-    _t41 = 1.0/_t40
-    _t42 = 2.0*_t39*_t41
-    _t43 = _t11*_t42
-    _t44 = _t37*_t43
-    _t45 = _t28*_t36 + _t34*_t35
-    _t46 = _t43*_t45
-    _t47 = _t2*_t8
-    _t48 = _t47*_t5
-    _t49 = _t1*_t9
-    _t50 = _t1*_t18
-    _t51 = _t20*_t47
+    try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
+        _t0 = thetadot_l*thetadot_l
+        _t1 = math.sin(theta)
+        _t2 = 1.0/b
+        _t3 = _t1*_t2
+        _t4 = r*r
+        _t5 = 0.5*_t4
+        _t6 = _t3*_t5
+        _t7 = thetadot_r*thetadot_r
+        _t8 = math.cos(theta)
+        _t9 = _t4*d
+        _t10 = _t8*_t9
+        _t11 = b*b
+        _t12 = 1.0/_t11
+        _t13 = 2.0*_t12
+        _t14 = thetadot_l*thetadot_r
+        _t15 = _t13*_t14
+        _t16 = _t0*_t12
+        _t17 = _t12*_t7
+        _t18 = 0.5*r
+        _t19 = _t18*_t8
+        _t20 = d*r
+        _t21 = _t20*_t3
+        _t22 = _t4*m
+        _t23 = 0.25*_t22
+        _t24 = I*_t4
+        _t25 = _t22*d*d
+        _t26 = K*_t9
+        _t27 = _t12*_t24 + _t12*_t25 - _t13*_t26
+        _t28 = -_t23 + _t27
+        _t29 = r*r*r
+        _t30 = K*_t29
+        _t31 = _t29*d*m
+        _t32 = _t12*_t14
+        _t33 = _t30*_t32 - _t31*_t32
+        _t34 = -_t16*_t30 + _t16*_t31 + _t33 + tau_r
+        _t35 = I_w + _t23 + _t27
+        _t36 = -_t17*_t30 + _t17*_t31 + _t33 + tau_l
+        _t37 = _t28*_t34 + _t35*_t36
+        _t38 = 2.0*I_w + _t22
+        _t39 = 1.0/_t38
+        _t40 = I_w*_t11 + 2.0*_t24 + 2.0*_t25 - 4.0*_t26
+        _t41 = 1.0/_t40
+        _t42 = 2.0*_t39*_t41
+        _t43 = _t11*_t42
+        _t44 = _t37*_t43
+        _t45 = _t28*_t36 + _t34*_t35
+        _t46 = _t43*_t45
+        _t47 = _t2*_t8
+        _t48 = _t47*_t5
+        _t49 = _t1*_t9
+        _t50 = _t1*_t18
+        _t51 = _t20*_t47
+    except ZeroDivisionError:
+        raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires b > 0")
+    if not (_t35 > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
     if not (0.5*_t12*_t38*_t40 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
     qddot = np.array([
@@ -378,33 +383,38 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     d = float(_field(p, "d"))
     if not all(map(math.isfinite, (thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of minimal_forward_dynamics is NaN or infinite")
-    _t0 = r*r
-    _t1 = _t0*m
-    _t2 = 0.25*_t1
-    _t3 = b*b
-    _t4 = 1.0/_t3
-    _t5 = I*_t0
-    _t6 = _t1*d*d
-    _t7 = K*_t0*d
-    _t8 = _t4*_t5 + _t4*_t6 - 2.0*_t4*_t7
-    _t9 = -_t2 + _t8
-    _t10 = thetadot_r*thetadot_r
-    _t11 = _t4*r*r*r
-    _t12 = K*_t11
-    _t13 = _t11*d*m
-    _t14 = thetadot_l*thetadot_r
-    _t15 = _t12*_t14 - _t13*_t14
-    _t16 = -_t10*_t12 + _t10*_t13 + _t15 + tau_l
-    _t17 = I_w + _t2 + _t8
-    _t18 = thetadot_l*thetadot_l
-    _t19 = -_t12*_t18 + _t13*_t18 + _t15 + tau_r
-    _t20 = 2.0*I_w + _t1
-    _t21 = I_w*_t3 + 2.0*_t5 + 2.0*_t6 - 4.0*_t7
-    _t22 = 2.0*_t3/(_t20*_t21)
+    try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
+        _t0 = r*r
+        _t1 = _t0*m
+        _t2 = 0.25*_t1
+        _t3 = b*b
+        _t4 = 1.0/_t3
+        _t5 = I*_t0
+        _t6 = _t1*d*d
+        _t7 = K*_t0*d
+        _t8 = _t4*_t5 + _t4*_t6 - 2.0*_t4*_t7
+        _t9 = -_t2 + _t8
+        _t10 = thetadot_r*thetadot_r
+        _t11 = _t4*r*r*r
+        _t12 = K*_t11
+        _t13 = _t11*d*m
+        _t14 = thetadot_l*thetadot_r
+        _t15 = _t12*_t14 - _t13*_t14
+        _t16 = -_t10*_t12 + _t10*_t13 + _t15 + tau_l
+        _t17 = I_w + _t2 + _t8
+        _t18 = thetadot_l*thetadot_l
+        _t19 = -_t12*_t18 + _t13*_t18 + _t15 + tau_r
+        _t20 = 2.0*I_w + _t1
+        _t21 = I_w*_t3 + 2.0*_t5 + 2.0*_t6 - 4.0*_t7
+        _t22 = 2.0*_t3/(_t20*_t21)
+    except ZeroDivisionError:
+        raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires b > 0")
+    if not (_t17 > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
     if not (0.5*_t20*_t21*_t4 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
     wheel_accels = np.array([_t22*(_t16*_t9 + _t17*_t19), _t22*(_t16*_t17 + _t19*_t9)])
