@@ -234,6 +234,50 @@ def claims(rep: Reproduction) -> list[Claim]:
     return out
 
 
+@dataclass(frozen=True)
+class StabilityRow:
+    controller: str
+    path: str
+    tde_bound: float  # k̄ of (23), measured: max ‖M̂⁻¹‖ ‖Ĥ1(t + h) − Ĥ1(t)‖
+    varpi: float  # ϖ1 of (21) (TDC) or ϖ3 of (30) (TDROC)
+    ultimate_bound: float  # √(λmax(P)/λmin(P)) ϖ
+    measured: float  # max ‖(e, ė)‖ after the start-up (t > 5 s)
+
+
+def stability(rep: Reproduction, robot: dict[str, float] | None = None) -> list[StabilityRow]:
+    """The ultimate bounds (21) (TDC) and (30) (TDROC) for the experiments' gains and the
+    measured time-delay estimation error, beside the measured errors (paper formulation).
+
+    (21): ϖ1 = 2‖PB‖ k̄ / λmin(Q); (30): ϖ3 = √(ε k̄² / (2 k̂ λmin(Q))) with k̂ the median
+    switching gain; both bounds are √(λmax(P)/λmin(P)) ϖ. (27) (between them in the
+    paper) is lost from the extracted text and not reconstructed.
+    """
+    from runtime.generated_modules import wmr_laws
+
+    robot = dict(robot or default_robot.PARAMS)
+    c = rep.experiment.controller
+    p11, p12, p22 = wmr_laws.lyapunov_p([c.k1, c.k2, c.q_pos, c.q_vel])
+    eig = np.linalg.eigvalsh(np.array([[p11, p12], [p12, p22]]))
+    cond = float(np.sqrt(eig.max() / eig.min()))
+    pb = float(np.hypot(p12, p22))
+    lam_q = min(c.q_pos, c.q_vel)
+    minv = float(wmr_laws.paper_minv_norm(robot)[0])
+    rows = []
+    for path in rep.refs:
+        for ctrl in ("tdc", "tdroc"):
+            r = rep.runs[(ctrl, "paper", path)]
+            late = r.t[1:] > min(2.0, 0.25 * r.t[-1])
+            kbar = float(minv * np.linalg.norm(np.diff(r.h1hat, axis=0), axis=1)[late].max())
+            if ctrl == "tdc":
+                varpi = 2 * pb * kbar / lam_q
+            else:
+                khat = max(float(np.median(r.gain)), 1e-12)
+                varpi = float(np.sqrt(c.eps * kbar**2 / (2 * khat * lam_q)))
+            measured = float(r.error_norm[r.t >= min(5.0, 0.5 * r.t[-1])].max())
+            rows.append(StabilityRow(ctrl, path, kbar, varpi, cond * varpi, measured))
+    return rows
+
+
 def plot(rep: Reproduction, out: Path) -> list[Path]:
     import matplotlib
 
@@ -326,6 +370,18 @@ def report_markdown(rep: Reproduction, figures: list[Path]) -> str:
             for cl in claims(rep)
         ],
         "",
+        "## Stability numbers (paper formulation)",
+        "",
+        "Ultimate bounds of (21) (TDC) and (30) (TDROC) from the gains and the measured",
+        "time-delay estimation error k̄ (23), beside the largest measured ‖(e, ė)‖ after 5 s.",
+        "(27) is lost from the extracted text. A bound below the measurement means the",
+        "measured k̄ underestimates the true TDE (it sees only sample-to-sample changes).",
+        "",
+        "| controller | path | k̄ measured | ϖ | ultimate bound | measured max ‖(e, ė)‖ |",
+        "|---|---|---:|---:|---:|---:|",
+        *[f"| {LABELS[s.controller]} | {s.path} | {s.tde_bound:.3g} | {s.varpi:.3g} "
+          f"| {s.ultimate_bound:.3g} | {s.measured:.3g} |" for s in stability(rep)],
+        "",
         "## TDROC's boundary layer ε (paper formulation)",
         "",
         "Inside the boundary layer Δu_a = k̂ s/ε acts as an extra feedback gain k̂/ε. Sampled at",
@@ -369,6 +425,9 @@ def main(argv: list[str] | None = None) -> int:
     (args.out / "metrics.md").write_text(metrics_markdown(rep))
     write_csv(rep, args.out / "metrics.csv")
     (args.out / "REPORT.md").write_text(report_markdown(rep, figures))
+    for s in stability(rep):
+        print(f"stability: {LABELS[s.controller]:5s} {s.path:9s} ultimate bound "
+              f"{s.ultimate_bound:.3g}, measured {s.measured:.3g}")
     for cl in claims(rep):
         print(
             f"claim: {cl.text}: {'reproduces' if cl.holds else 'does NOT reproduce'} "

@@ -142,6 +142,8 @@ class Run:
     payload: NDArray[np.float64]  # true total mass
     saturated: int
     failed_at: float | None
+    h1hat: NDArray[np.float64]  # the controller's Ĥ1 (TDC/TDROC) per step, (N, 5)
+    error_norm: NDArray[np.float64]  # ‖(e, ė)‖ as the controller measures it
 
     @property
     def position_error(self) -> NDArray[np.float64]:
@@ -203,7 +205,9 @@ def run(
     pp = ffi.new("wmr_plant_params_t *")
     odo = Odometry(np.array(ref.q[0]), exp.plant.encoder_ppr, h, robot)
     n = len(ref.t)
-    rec: dict[str, list[Any]] = {k: [] for k in ("q", "qm", "tau", "gain", "s", "ud", "mass")}
+    keys_rec = ("q", "qm", "tau", "gain", "s", "ud", "mass", "h1", "en")
+    rec: dict[str, list[Any]] = {k: [] for k in keys_rec}
+    sl = slice(0, 5) if formulation == "paper" else slice(3, 5)
     saturated, failed_at = 0, None
     keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
     for k in range(n):
@@ -230,6 +234,9 @@ def run(
         rec["s"].append(state.s_norm)
         rec["ud"].append(state.u_discarded)
         rec["mass"].append(true_p[0])
+        rec["h1"].append([state.H1hat[i] for i in range(5)])
+        err = np.concatenate([ref.q[k, sl] - q_meas[sl], ref.qdot[k, sl] - qdot_meas[sl]])
+        rec["en"].append(float(np.linalg.norm(err)))
         if k < n - 1 and clib.sim_plant_advance(pp, friction, x, tau, h / nsub, nsub) != 0:
             failed_at = float(t)
             break
@@ -249,4 +256,6 @@ def run(
         np.array(rec["mass"]),
         int(saturated),
         failed_at,
+        np.array(rec["h1"]),
+        np.array(rec["en"]),
     )

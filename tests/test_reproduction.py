@@ -179,3 +179,16 @@ def test_reproduce_cli_writes_the_report(tmp_path: Path) -> None:
 
 def test_experiment_errors_are_value_errors() -> None:
     assert issubclass(ExperimentFileError, ValueError)
+
+
+def test_tdc_stays_within_its_ultimate_bound(paper: Reproduction) -> None:
+    """(21) with the measured TDE bound k̄ holds for TDC (stable): measured ≤ bound. For
+    TDROC at ε = 0.1 the sampled loop is unstable and (30) — a continuous-time bound — is
+    exceeded, which the report states."""
+    from runtime.reproduce import stability
+
+    rows = {(s.controller, s.path): s for s in stability(paper)}
+    for path in ("circle", "lawnmower"):
+        tdc = rows[("tdc", path)]
+        assert 0 < tdc.measured <= tdc.ultimate_bound
+        assert rows[("tdroc", path)].measured > rows[("tdroc", path)].ultimate_bound
