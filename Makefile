@@ -30,6 +30,7 @@ reproduce: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m runtime bench
+	$(PY) -m runtime.firmware_report
 
 clean:
 	rm -rf build out reproduction .pytest_cache .mypy_cache .ruff_cache

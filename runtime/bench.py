@@ -115,9 +115,12 @@ def _ours_wrapper(spec: FunctionSpec, prefix: str, real: str) -> str:
         outs.append(f"out + {o}")
         o += size
     fn = f"{'f32_' if real == 'float' else ''}wmr_{spec.name}"
-    return (f"static void {prefix}_{spec.name}(const void *in_, void *out_)\n{{\n"
-            f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
-            + "\n".join(body) + f"\n    {fn}({', '.join(args + outs)});\n}}\n")
+    return (
+        f"static void {prefix}_{spec.name}(const void *in_, void *out_)\n{{\n"
+        f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
+        + "\n".join(body)
+        + f"\n    {fn}({', '.join(args + outs)});\n}}\n"
+    )
 
 
 def _casadi_wrapper(spec: FunctionSpec) -> str:
@@ -126,11 +129,13 @@ def _casadi_wrapper(spec: FunctionSpec) -> str:
     args = ", ".join(f"in + {o}" for o in offs)
     out_offs = np.cumsum([0, *output_sizes(spec)])[:-1]
     res = ", ".join(f"out + {o}" for o in out_offs)
-    return (f"static void casadi_w_{spec.name}(const void *in_, void *out_)\n{{\n"
-            f"    const double *in = (const double *)in_;\n    double *out = (double *)out_;\n"
-            f"    const double *arg[{len(sizes)}] = {{{args}}};\n"
-            f"    double *res[{len(out_offs)}] = {{{res}}};\n"
-            f"    casadi_{spec.name}(arg, res, 0, 0, 0);\n}}\n")
+    return (
+        f"static void casadi_w_{spec.name}(const void *in_, void *out_)\n{{\n"
+        f"    const double *in = (const double *)in_;\n    double *out = (double *)out_;\n"
+        f"    const double *arg[{len(sizes)}] = {{{args}}};\n"
+        f"    double *res[{len(out_offs)}] = {{{res}}};\n"
+        f"    casadi_{spec.name}(arg, res, 0, 0, 0);\n}}\n"
+    )
 
 
 HARNESS = r"""
@@ -184,8 +189,7 @@ static void run(const bench_case *c, long calls, int repeats) {
 """
 
 
-def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, FunctionSpec]
-                ) -> Path:
+def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, FunctionSpec]) -> Path:
     """Compile every variant into one executable; returns its path."""
     used = sorted({c["spec"] for c in cases})
     spec_list = [specs[n] for n in used]
@@ -196,32 +200,44 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
     gen_sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
     for src in gen_sources:  # ours, double
         obj = workdir / f"d_{src.stem}.o"
-        subprocess.run(["gcc", *CFLAGS, "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)],
-                       check=True)
+        subprocess.run(
+            ["gcc", *CFLAGS, "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)], check=True
+        )
         objs.append(str(obj))
     for src in gen_sources:  # ours, float32, symbols renamed wmr_ -> f32_wmr_
         obj = workdir / f"f_{src.stem}.o"
-        subprocess.run(["gcc", *CFLAGS, "-DWMR_FLOAT32", "-c", f"-I{GENERATED_C}", str(src),
-                        "-o", str(obj)], check=True)
-        names = subprocess.run(["nm", "--defined-only", "-g", str(obj)], check=True,
-                               capture_output=True, text=True).stdout.split()
+        subprocess.run(
+            ["gcc", *CFLAGS, "-DWMR_FLOAT32", "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)],
+            check=True,
+        )
+        names = subprocess.run(
+            ["nm", "--defined-only", "-g", str(obj)], check=True, capture_output=True, text=True
+        ).stdout.split()
         mapping = workdir / f"{src.stem}.redefine"
         mapping.write_text("".join(f"{n} f32_{n}\n" for n in names if n.startswith("wmr_")))
         # Undefined references to other wmr_ objects must be renamed too.
-        undefined = subprocess.run(["nm", "-u", str(obj)], check=True, capture_output=True,
-                                   text=True).stdout.split()
+        undefined = subprocess.run(
+            ["nm", "-u", str(obj)], check=True, capture_output=True, text=True
+        ).stdout.split()
         extra = "".join(f"{n} f32_{n}\n" for n in undefined if n.startswith("wmr_"))
         mapping.write_text(mapping.read_text() + extra)
         subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
         objs.append(str(obj))
     for src in (workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c"):
         obj = workdir / f"x_{src.stem}.o"
-        subprocess.run(["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", str(src), "-o",
-                        str(obj)], check=True)
+        subprocess.run(
+            ["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", str(src), "-o", str(obj)],
+            check=True,
+        )
         objs.append(str(obj))
     # Harness.
-    lines = ['#include "wmr_model.h"', '#include "wmr_laws.h"', '#include "casadi_gen.h"',
-             '#include "hand_model.h"', HARNESS]
+    lines = [
+        '#include "wmr_model.h"',
+        '#include "wmr_laws.h"',
+        '#include "casadi_gen.h"',
+        '#include "hand_model.h"',
+        HARNESS,
+    ]
     for name in used:
         spec = specs[name]
         n_in = input_size(spec)
@@ -231,8 +247,10 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         lo, hi = zip(*input_ranges(spec), strict=True)
         lines.append(f"static const double lo_{name}[{n_in}] = {{{', '.join(map(repr, lo))}}};")
         lines.append(f"static const double hi_{name}[{n_in}] = {{{', '.join(map(repr, hi))}}};")
-        lines.append(f"static void sympy_w_{name}(const void *in, void *out) "
-                     f"{{ sympy_{name}((const double *)in, (double *)out); }}")
+        lines.append(
+            f"static void sympy_w_{name}(const void *in, void *out) "
+            f"{{ sympy_{name}((const double *)in, (double *)out); }}"
+        )
     # float32 prototypes: our signatures with float and the renamed symbols.
     for name in used:
         spec = specs[name]
@@ -243,32 +261,60 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         lines.append(f"void f32_wmr_{name}({', '.join(params)});")
     lines.insert(0, "typedef struct { float m, Iz, K, Iw, r, b, d; } wmr_params_f32_t;")
     for name in used:
-        lines.append(_ours_wrapper(specs[name], "ours32", "float").replace(
-            "const wmr_params_t", "const wmr_params_f32_t"))
+        lines.append(
+            _ours_wrapper(specs[name], "ours32", "float").replace(
+                "const wmr_params_t", "const wmr_params_f32_t"
+            )
+        )
     for name in HAND_WRITTEN & set(used):
-        lines.append(f"static void hand_w_{name}(const void *in, void *out) "
-                     f"{{ hand_{name}((const double *)in, (double *)out); }}")
+        lines.append(
+            f"static void hand_w_{name}(const void *in, void *out) "
+            f"{{ hand_{name}((const double *)in, (double *)out); }}"
+        )
     lines.append("int main(int argc, char **argv) {")
-    lines.append("    long calls = argc > 1 ? atol(argv[1]) : 1000000; "
-                 "int repeats = argc > 2 ? atoi(argv[2]) : 5;")
+    lines.append(
+        "    long calls = argc > 1 ? atol(argv[1]) : 1000000; "
+        "int repeats = argc > 2 ? atoi(argv[2]) : 5;"
+    )
     lines.append("    bench_case cases[] = {")
     for c in cases:
         name, variant = c["spec"], c["variant"]
         spec = specs[name]
-        fn = {"ours": f"ours_{name}", "ours_float32": f"ours32_{name}",
-              "casadi": f"casadi_w_{name}", "sympy": f"sympy_w_{name}",
-              "hand": f"hand_w_{name}"}[variant]
-        lines.append(f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
-                     f'{sum(output_sizes(spec))}, {int(variant == "ours_float32")}, '
-                     f"lo_{name}, hi_{name}}},")
-    lines.append("    };\n    size_t k;\n"
-                 "    for (k = 0; k < sizeof cases / sizeof cases[0]; ++k) "
-                 "run(&cases[k], calls, repeats);\n    return 0;\n}")
+        fn = {
+            "ours": f"ours_{name}",
+            "ours_float32": f"ours32_{name}",
+            "casadi": f"casadi_w_{name}",
+            "sympy": f"sympy_w_{name}",
+            "hand": f"hand_w_{name}",
+        }[variant]
+        lines.append(
+            f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
+            f"{sum(output_sizes(spec))}, {int(variant == 'ours_float32')}, "
+            f"lo_{name}, hi_{name}}},"
+        )
+    lines.append(
+        "    };\n    size_t k;\n"
+        "    for (k = 0; k < sizeof cases / sizeof cases[0]; ++k) "
+        "run(&cases[k], calls, repeats);\n    return 0;\n}"
+    )
     src = workdir / "bench_main.c"
     src.write_text("#define _POSIX_C_SOURCE 199309L\n#include <stdlib.h>\n" + "\n".join(lines))
     exe = workdir / "bench"
-    subprocess.run(["gcc", *CFLAGS, f"-I{GENERATED_C}", f"-I{workdir}", f"-I{CSRC}", str(src),
-                    *objs, "-lm", "-o", str(exe)], check=True)
+    subprocess.run(
+        [
+            "gcc",
+            *CFLAGS,
+            f"-I{GENERATED_C}",
+            f"-I{workdir}",
+            f"-I{CSRC}",
+            str(src),
+            *objs,
+            "-lm",
+            "-o",
+            str(exe),
+        ],
+        check=True,
+    )
     return exe
 
 
@@ -287,8 +333,9 @@ def run_c(calls: int, repeats: int) -> list[dict[str, Any]]:
     specs = specs_by_name()
     with tempfile.TemporaryDirectory() as tmp:
         exe = build_bench(Path(tmp), c_cases(specs), specs)
-        out = subprocess.run([str(exe), str(calls), str(repeats)], check=True,
-                             capture_output=True, text=True).stdout
+        out = subprocess.run(
+            [str(exe), str(calls), str(repeats)], check=True, capture_output=True, text=True
+        ).stdout
     return [json.loads(line) for line in out.splitlines() if line.startswith("{")]
 
 
@@ -296,14 +343,18 @@ def summarise_c(rows: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, f
     out = {}
     for r in rows:
         ns = r["ns"]
-        out[(r["function"], r["variant"])] = {"median": statistics.median(ns), "min": min(ns),
-                                              "max": max(ns)}
+        out[(r["function"], r["variant"])] = {
+            "median": statistics.median(ns),
+            "min": min(ns),
+            "max": max(ns),
+        }
     # Controller steps: sum of their kernels' medians (and of mins and maxes).
     for ctrl, kernels in STEP_KERNELS.items():
         for variant in ("ours", "ours_float32", "casadi", "sympy"):
             parts = [out[(k, variant)] for k in kernels]
             out[(f"{ctrl}_step_kernels", variant)] = {
-                key: sum(p[key] for p in parts) for key in ("median", "min", "max")}
+                key: sum(p[key] for p in parts) for key in ("median", "min", "max")
+            }
     return out
 
 
@@ -311,10 +362,23 @@ def casadi_op_count(spec: FunctionSpec) -> dict[str, int]:
     import casadi as ca
 
     f = to_casadi(spec)
-    names = {ca.OP_ADD: "add", ca.OP_SUB: "add", ca.OP_MUL: "mul", ca.OP_DIV: "div",
-             ca.OP_SIN: "sin/cos", ca.OP_COS: "sin/cos", ca.OP_SQRT: "sqrt", ca.OP_SQ: "mul",
-             ca.OP_NEG: "neg", ca.OP_FMAX: "other", ca.OP_FABS: "other", ca.OP_TWICE: "add",
-             ca.OP_INV: "div", ca.OP_POW: "other", ca.OP_CONSTPOW: "other"}
+    names = {
+        ca.OP_ADD: "add",
+        ca.OP_SUB: "add",
+        ca.OP_MUL: "mul",
+        ca.OP_DIV: "div",
+        ca.OP_SIN: "sin/cos",
+        ca.OP_COS: "sin/cos",
+        ca.OP_SQRT: "sqrt",
+        ca.OP_SQ: "mul",
+        ca.OP_NEG: "neg",
+        ca.OP_FMAX: "other",
+        ca.OP_FABS: "other",
+        ca.OP_TWICE: "add",
+        ca.OP_INV: "div",
+        ca.OP_POW: "other",
+        ca.OP_CONSTPOW: "other",
+    }
     counts: dict[str, int] = {}
     for k in range(f.n_instructions()):
         op = f.instruction_id(k)
@@ -358,8 +422,13 @@ def python_bench(number: int) -> list[dict[str, Any]]:
     for label, fn in cases.items():
         times = timeit.repeat(fn, number=number, repeat=5)
         per = [t / number * 1e6 for t in times]
-        rows.append({"function": "forward_dynamics", "variant": label,
-                     "us": {"median": statistics.median(per), "min": min(per), "max": max(per)}})
+        rows.append(
+            {
+                "function": "forward_dynamics",
+                "variant": label,
+                "us": {"median": statistics.median(per), "min": min(per), "max": max(per)},
+            }
+        )
     return rows
 
 
@@ -380,24 +449,46 @@ print(time.perf_counter() - t0)
 
 def toolchain_times() -> dict[str, float]:
     """Cold-start wall times in fresh interpreters (median of 3 for the derivation)."""
-    runs = [float(subprocess.run([sys.executable, "-c", DERIVATION_SNIPPET], check=True,
-                                 capture_output=True, text=True, cwd=ROOT).stdout)
-            for _ in range(3)]
+    runs = [
+        float(
+            subprocess.run(
+                [sys.executable, "-c", DERIVATION_SNIPPET],
+                check=True,
+                capture_output=True,
+                text=True,
+                cwd=ROOT,
+            ).stdout
+        )
+        for _ in range(3)
+    ]
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "codegen", "--out", tmp], check=True,
-                       capture_output=True, cwd=ROOT)
+        subprocess.run(
+            [sys.executable, "-m", "codegen", "--out", tmp],
+            check=True,
+            capture_output=True,
+            cwd=ROOT,
+        )
         model = time.perf_counter() - t0
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "runtime", "reproduce", "--out", tmp + "/r"],
-                       check=True, capture_output=True, cwd=ROOT)
+        subprocess.run(
+            [sys.executable, "-m", "runtime", "reproduce", "--out", tmp + "/r"],
+            check=True,
+            capture_output=True,
+            cwd=ROOT,
+        )
         rep = time.perf_counter() - t0
     return {"derivation_s": statistics.median(runs), "make_model_s": model, "reproduce_s": rep}
 
 
-def write_report(c: dict[tuple[str, str], dict[str, float]], py: list[dict[str, Any]],
-                 ops: dict[str, dict[str, Any]], tool: dict[str, float], calls: int,
-                 repeats: int) -> str:
+def write_report(
+    c: dict[tuple[str, str], dict[str, float]],
+    py: list[dict[str, Any]],
+    ops: dict[str, dict[str, Any]],
+    tool: dict[str, float],
+    calls: int,
+    repeats: int,
+) -> str:
     funcs = [*MODEL_FUNCTIONS, *(f"{k}_step_kernels" for k in STEP_KERNELS)]
     lines = [
         "# Benchmarks",
@@ -433,8 +524,11 @@ def write_report(c: dict[tuple[str, str], dict[str, float]], py: list[dict[str, 
         "",
         "| variant | median (min–max) |",
         "|---|---:|",
-        *[f"| {r['variant']} | {r['us']['median']:.2f} ({r['us']['min']:.2f}–"
-          f"{r['us']['max']:.2f}) |" for r in py],
+        *[
+            f"| {r['variant']} | {r['us']['median']:.2f} ({r['us']['min']:.2f}–"
+            f"{r['us']['max']:.2f}) |"
+            for r in py
+        ],
         "",
         "## Operations after CSE: ours vs CasADi's SX graph",
         "",
@@ -480,9 +574,18 @@ def main(argv: list[str] | None = None) -> int:
     text = write_report(c, py, ops, tool, args.calls, args.repeats)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "BENCHMARKS.md").write_text(text)
-    (args.out / "benchmarks.json").write_text(json.dumps({
-        "c_ns": {f"{f}/{v}": s for (f, v), s in sorted(c.items())},
-        "python_us": py, "ops": ops, "toolchain": tool,
-    }, indent=1, sort_keys=True) + "\n")
+    (args.out / "benchmarks.json").write_text(
+        json.dumps(
+            {
+                "c_ns": {f"{f}/{v}": s for (f, v), s in sorted(c.items())},
+                "python_us": py,
+                "ops": ops,
+                "toolchain": tool,
+            },
+            indent=1,
+            sort_keys=True,
+        )
+        + "\n"
+    )
     print(text)
     return 0

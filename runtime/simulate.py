@@ -189,9 +189,13 @@ def run(
     float32: bool = False,
 ) -> Run:
     """Simulate one controller on one reference."""
+    from runtime.nominal_check import checked_controller_config
+
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
-    cfg = controller_config(lib, name, formulation, robot, exp)
+    # The toolchain checks the TDE condition ||M^-1 Mhat - I|| < 1 over the uncertainty box
+    # when it builds a TDC/TDROC configuration (ValueError naming alpha otherwise).
+    cfg = checked_controller_config(lib, name, formulation, robot, exp)
     state = ffi.new(f"wmr_{name}_state_t *")
     status = getattr(clib, f"wmr_{name}_init")(state, cfg)
     if status != 0:

@@ -265,7 +265,10 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     out_tau[0] = paper ? u[3] : u[0];
     out_tau[1] = paper ? u[4] : u[1];
     next.u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
-    if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)) {
+    /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
+       then s/||s|| in the switching term is 0, so that step is not done either. */
+    if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
+        || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     for (i = 0; i < 2; ++i) {

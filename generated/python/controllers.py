@@ -255,8 +255,10 @@ class _Controller:
             u, _, sn, g = asmc_fn(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
             s_norm, gain = float(sn[0]), float(g[0])
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
-        u_discarded = math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2) if paper else 0.0
-        if not (np.all(np.isfinite(tau)) and math.isfinite(gain)):
+        u_discarded = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) if paper else 0.0
+        # As in C: an overflowed ||s|| or ||u rows 1-3|| voids the step (see wmr_<ctrl>.c).
+        if not (np.all(np.isfinite(tau)) and math.isfinite(gain) and math.isfinite(s_norm)
+                and math.isfinite(u_discarded)):
             raise ControllerError("WMR_ERR_NONFINITE_OUTPUT", "the control law produced NaN/Inf")
         status = "WMR_OK"
         if np.any(np.abs(tau) > c.tau_max):

@@ -1,0 +1,136 @@
+"""Cross-build for a Cortex-M4F (``runtime.firmware_report``): every generated .c compiles
+with ``-Werror`` in float32 and double; the float32 image of each controller links with
+newlib-nano and contains no double-precision helper; sizes and worst-case stack; the
+float32 TDROC step emulated in Unicorn on a recorded closed loop agrees with the host
+builds. Skipped when ``arm-none-eabi-gcc`` (or newlib) is not installed; ``.ci/run``
+installs it. About 15 s.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from runtime import firmware_report as fr
+
+pytestmark = pytest.mark.skipif(
+    not fr.have_toolchain() or not fr.have_newlib(),
+    reason="arm-none-eabi-gcc with newlib not installed "
+    "(apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi; .ci/run does)",
+)
+HAVE_UNICORN = importlib.util.find_spec("unicorn") is not None
+STACK_BUDGET = 2048  # bytes for a controller step, through every callee
+GENERATED_BUDGET = 16 * 1024  # bytes of generated code in one controller image
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory) -> fr.Report:
+    return fr.build_report(tmp_path_factory.mktemp("arm"), emulate_run=HAVE_UNICORN)
+
+
+def test_every_generated_file_compiles_without_diagnostics(report: fr.Report) -> None:
+    names = {p.stem for p in fr.generated_sources()}
+    assert "example_main" not in names and {"wmr_model", "wmr_tdroc"} <= names
+    for objs in (report.float_objs, report.double_objs):
+        assert {p.stem for p in objs.objects} == names
+        assert all(p.stat().st_size > 0 for p in objs.objects)
+        assert objs.warnings.strip() == ""
+        assert len(objs.su) == len(names)
+
+
+@pytest.mark.parametrize("name", fr.CONTROLLERS)
+def test_float_image_has_no_double_arithmetic(report: fr.Report, name: str) -> None:
+    elf = report.elves[name]
+    assert report.doubles[name] == [], report.doubles[name]
+    syms = fr.all_symbol_names(elf)
+    assert f"wmr_{name}_step" in syms and f"wmr_{name}_init" in syms
+    assert not any(s.startswith("__aeabi_d") for s in syms)
+    sizes = report.sizes[name]
+    assert sizes["text"] > report.own_text[name] > 1000
+    assert report.own_text[name] < GENERATED_BUDGET
+
+
+def test_the_double_check_catches_double_arithmetic(tmp_path: Path) -> None:
+    """The symbol check is not vacuous: a float build that uses a double does link one."""
+    src = tmp_path / "d.c"
+    src.write_text(
+        "volatile double x = 1.5; volatile float y;\n"
+        "int main(void) { y = (float)(x * x); return 0; }\n"
+    )
+    elf = tmp_path / "d.elf"
+    fr._run(
+        [
+            fr.ARM_GCC,
+            *fr.ARM_FLAGS,
+            str(src),
+            "--specs=nano.specs",
+            "--specs=nosys.specs",
+            "-o",
+            str(elf),
+        ]
+    )
+    assert "__aeabi_dmul" in fr.double_symbols(elf)
+
+
+def test_stack_usage_is_static_and_bounded(report: fr.Report) -> None:
+    assert report.functions
+    for name, size, own, qual, bound in report.functions:
+        assert qual == "static", (name, qual)  # no VLA, no alloca
+        assert bound.complete, (name, bound.path)  # every callee known, no recursion
+        assert size > 0 and bound.bytes >= own
+    for name, bound in report.step_stack.items():
+        assert bound.complete and bound.bytes <= STACK_BUDGET, (name, bound)
+        assert bound.path[0] == f"wmr_{name}_step"
+
+
+def test_elf_frames_agree_with_stack_usage_files(report: fr.Report) -> None:
+    """The disassembly reader (used for library callees) gives the compiler's own numbers
+    for every generated function in the images."""
+    su = fr.parse_su(report.float_objs.su)
+    checked = 0
+    for name, (own, _) in su.items():
+        frame = report.library.get(name)
+        if frame is not None:
+            assert frame.own == own, (name, frame.own, own)
+            checked += 1
+    assert checked >= 20
+
+
+@pytest.mark.skipif(not HAVE_UNICORN, reason="unicorn (PyPI) not installed")
+def test_emulated_tdroc_matches_the_host_builds(report: fr.Report) -> None:
+    emu, cmp = report.emulation, report.comparison
+    assert emu is not None and cmp is not None
+    assert emu.steps == 601  # 60 s lawn mower at h = 0.1 s
+    assert cmp.same_status and cmp.host_float_reproduces_loop
+    # ARM float32 vs host float32 (different libm, measured 1.25): within 4 ulp of the
+    # run's largest torque.
+    assert cmp.scale_ulps_vs_float <= 4.0, cmp
+    # ... and vs the host double build, within float precision of the torque scale.
+    assert cmp.max_rel_vs_double <= 1e-5, cmp
+    assert 1000 < max(emu.instructions) < 10_000
+    # The measured stack (harness included) stays under the static bound of the step
+    # plus the harness's own frame.
+    assert 0 < emu.stack_bytes <= report.step_stack["tdroc"].bytes + 64
+
+
+def test_report_renders(report: fr.Report) -> None:
+    text = fr.render(report)
+    for name in fr.CONTROLLERS:
+        assert f"| {name.upper()} |" in text
+    assert ("instructions per step" in text) == HAVE_UNICORN
+
+
+def test_committed_doc_matches_this_toolchain(report: fr.Report) -> None:
+    """docs/FIRMWARE.md is this report's output (compared up to the emulation section,
+    whose host-float numbers depend on the host's libm), if written by this toolchain."""
+    if not fr.DOC.exists():
+        pytest.fail("docs/FIRMWARE.md missing: run `python -m runtime.firmware_report`")
+    committed = fr.DOC.read_text()
+    if report.version not in committed:
+        pytest.skip(f"docs/FIRMWARE.md was written by another toolchain than {report.version}")
+    marker = "## Emulated run"
+    assert committed.split(marker)[0] == fr.render(report).split(marker)[0], (
+        "docs/FIRMWARE.md is stale: run `python -m runtime.firmware_report`"
+    )

@@ -1,0 +1,134 @@
+"""Bad input to the generated C controllers (cffi, double build): every case of
+``runtime.bad_input_table`` returns its own documented status code, leaves the state's
+bytes and tau unchanged, and the next valid step equals that of a twin that never saw
+the bad input; saturation is clipped and reported. ``docs/BAD_INPUT.md`` is the table
+the same code produces. Also the TDE condition ‖M⁻¹M̂ − I‖ < 1 over a parameter box
+(``runtime.nominal_check``)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from codegen.controller_api import STATUS_CODES
+from runtime import bad_input_table as bit
+from runtime import cbuild
+from runtime.experiment import Experiment
+from runtime.nominal_check import check_nominal, checked_controller_config, tde_alpha
+
+DRISHTI = bit.DRISHTI
+CASES = bit.cases(8)
+
+
+@pytest.fixture(scope="module")
+def lib() -> cbuild.CLibrary:
+    return cbuild.build(False)
+
+
+@pytest.fixture(scope="module")
+def outcomes(lib: cbuild.CLibrary) -> list[bit.Outcome]:
+    return bit.run_all(lib)
+
+
+def test_c_status_enum_is_the_documented_one(lib: cbuild.CLibrary) -> None:
+    assert bit.status_names(lib) == {s.value: s.name for s in STATUS_CODES}
+    assert bit.max_window(lib) == 8
+    assert [c.id for c in bit.cases(bit.max_window(lib))] == [c.id for c in CASES]
+
+
+def test_case_ids_are_unique() -> None:
+    ids = [c.id for c in CASES]
+    assert len(ids) == len(set(ids))
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_bad_input_case(lib: cbuild.CLibrary, case: bit.Case) -> None:
+    values = bit.status_values(lib)
+    runs = [
+        bit.run_case(lib, name, form, case)
+        for name in bit.CONTROLLERS
+        if name in case.applies
+        for form in bit.FORMULATIONS
+    ]
+    assert runs
+    for o in runs:
+        assert o.status == values[case.expected], (o.controller, o.formulation, o.status)
+    assert bit.failures(runs, lib) == []
+    if case.kind in ("input", "config", "null"):
+        assert all(o.twin_equal for o in runs)
+    if case.kind == "config":
+        assert all(o.init_status == o.check_status == o.status for o in runs)
+
+
+def test_every_documented_status_is_exercised(outcomes: list[bit.Outcome]) -> None:
+    seen = {o.case.expected for o in outcomes}
+    unreachable_by_step = {
+        "WMR_OK",  # success
+        "WMR_ERR_NONFINITE_INPUT",  # model functions only (see test_firmware_fuzz)
+        "WMR_ERR_BAD_PARAMS",  # model functions only
+        "WMR_ERR_NONFINITE_OUTPUT",  # needs finite, bounded inputs giving inf: fuzzed
+    }
+    assert seen | unreachable_by_step == {s.name for s in STATUS_CODES}
+
+
+def test_doc_equals_the_scripts_output(lib: cbuild.CLibrary, outcomes: list[bit.Outcome]) -> None:
+    assert bit.failures(outcomes, lib) == []
+    text = bit.render(outcomes, bit.status_names(lib), bit.alpha_rows())
+    assert bit.DOC.exists(), "run `python -m runtime.bad_input_table`"
+    assert bit.DOC.read_text() == text, (
+        "docs/BAD_INPUT.md is stale: run `python -m runtime.bad_input_table`"
+    )
+
+
+# ------------------------------------------------------------------ the TDE condition
+def test_check_nominal_accepts_the_robot() -> None:
+    for form in ("paper", "minimal"):
+        alpha = check_nominal(DRISHTI, 0.3, formulation=form)
+        assert 0.3 < alpha < 0.6, alpha  # ±30 % around an exact model
+        assert check_nominal(DRISHTI, 0.0, formulation=form) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_check_nominal_rejects_a_nominal_three_times_too_heavy() -> None:
+    heavy = {**DRISHTI, "m": 3 * DRISHTI["m"], "I": 3 * DRISHTI["I"], "K": 3 * DRISHTI["K"]}
+    for form in ("paper", "minimal"):
+        with pytest.raises(ValueError, match=r"TDE condition \|\|M\^-1 Mhat - I\|\| < 1"):
+            check_nominal(heavy, 0.3, true_params=DRISHTI, formulation=form)
+        assert tde_alpha(heavy, 0.3, true_params=DRISHTI, formulation=form)[0] > 2.0
+
+
+def test_check_nominal_alpha_grows_with_the_box() -> None:
+    alphas = [check_nominal(DRISHTI, box) for box in (0.05, 0.1, 0.2, 0.3)]
+    assert alphas == sorted(alphas)
+    with pytest.raises(ValueError, match="TDE condition"):
+        check_nominal(DRISHTI, 0.6)  # true robots down to 40 % of the model
+
+
+@pytest.mark.parametrize(
+    ("nominal", "box", "match"),
+    [
+        ({**DRISHTI, "m": 0.0}, 0.3, "'m' must be positive"),
+        ({**DRISHTI, "K": math.nan}, 0.3, "'K' must be finite"),
+        ({**DRISHTI, "I": 0.001}, 0.3, "m I - K\\^2"),
+        ({k: v for k, v in DRISHTI.items() if k != "d"}, 0.3, "missing parameter"),
+        (DRISHTI, 1.0, "box must be in"),
+        (DRISHTI, -0.1, "box must be in"),
+    ],
+)
+def test_check_nominal_rejects_invalid_arguments(
+    nominal: dict[str, float], box: float, match: str
+) -> None:
+    with pytest.raises(ValueError, match=match):
+        check_nominal(nominal, box)
+
+
+def test_checked_controller_config(lib: cbuild.CLibrary) -> None:
+    exp = Experiment()
+    cfg = checked_controller_config(lib, "tdroc", "paper", dict(DRISHTI), exp, DRISHTI)
+    state = lib.ffi.new("wmr_tdroc_state_t *")
+    assert lib.lib.wmr_tdroc_init(state, cfg) == 0
+    heavy = {**DRISHTI, "m": 108.0, "I": 17.16, "K": 1.02}
+    with pytest.raises(ValueError, match="TDE condition"):
+        checked_controller_config(lib, "tdc", "minimal", heavy, exp, DRISHTI)
+    # ROC/ASMC do not use the time-delay estimate: no check.
+    checked_controller_config(lib, "asmc", "paper", heavy, exp, DRISHTI)
