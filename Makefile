@@ -31,6 +31,7 @@ reproduce: $(STAMP)
 bench: $(STAMP)
 	$(PY) -m runtime bench
 	$(PY) -m runtime.firmware_report
+	$(PY) -m runtime.firmware_compare
 
 clean:
 	rm -rf build out reproduction .pytest_cache .mypy_cache .ruff_cache
