@@ -339,6 +339,24 @@ def plot(rep: Reproduction, out: Path) -> list[Path]:
     files.append(out / "errors_gains_payload.png")
     fig.savefig(files[-1], dpi=110)
     plt.close(fig)
+    # Figures 7, 8, 13, 14: the switching term on the right and left wheel.
+    fig, axes = plt.subplots(2, 2, figsize=(12, 6.5), sharex="col")
+    for col, path in enumerate(rep.refs):
+        for row, wheel in enumerate(("right", "left")):
+            ax = axes[row, col]
+            for c in ("tdroc", "roc", "asmc"):
+                r = rep.runs[(c, "paper", path)]
+                ax.plot(r.t, r.wheel_switching[:, row], color=COLORS[c], lw=0.8,
+                        label=LABELS[c])
+            ax.set_title(f"{path}: {wheel}-wheel switching term Δu_a [rad/s²]")
+            ax.set_yscale("symlog", linthresh=0.1)
+            ax.grid(alpha=0.3)
+        axes[1, col].set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    files.append(out / "wheel_switching.png")
+    fig.savefig(files[-1], dpi=110)
+    plt.close(fig)
     return files
 
 

@@ -144,6 +144,7 @@ class Run:
     failed_at: float | None
     h1hat: NDArray[np.float64]  # the controller's Ĥ1 (TDC/TDROC) per step, (N, 5)
     error_norm: NDArray[np.float64]  # ‖(e, ė)‖ as the controller measures it
+    wheel_switching: NDArray[np.float64]  # (N, 2): Δu_a of (24)/(25) on the right, left wheel
 
     @property
     def position_error(self) -> NDArray[np.float64]:
@@ -209,10 +210,11 @@ def run(
     pp = ffi.new("wmr_plant_params_t *")
     odo = Odometry(np.array(ref.q[0]), exp.plant.encoder_ppr, h, robot)
     n = len(ref.t)
-    keys_rec = ("q", "qm", "tau", "gain", "s", "ud", "mass", "h1", "en")
+    keys_rec = ("q", "qm", "tau", "gain", "s", "ud", "mass", "h1", "en", "sw")
     rec: dict[str, list[Any]] = {k: [] for k in keys_rec}
     sl = slice(0, 5) if formulation == "paper" else slice(3, 5)
     saturated, failed_at = 0, None
+    prev_gain = float(state.gain)  # ASMC: the gain before each step's adaptation
     keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
     for k in range(n):
         t = ref.t[k]
@@ -241,6 +243,14 @@ def run(
         rec["h1"].append([state.H1hat[i] for i in range(5)])
         err = np.concatenate([ref.q[k, sl] - q_meas[sl], ref.qdot[k, sl] - qdot_meas[sl]])
         rec["en"].append(float(np.linalg.norm(err)))
+        # Δu_a = k s/max(‖s‖, ε) on the wheel rows, s_j = p12_j e_j + p22_j ė_j (from the
+        # state's P), with the gain and ‖s‖ the C step used (ASMC: the gain before adaptation).
+        used_gain = prev_gain if name == "asmc" else state.gain
+        s_w = [state.p12[i] * (ref.q[k, i] - q_meas[i])
+               + state.p22[i] * (ref.qdot[k, i] - qdot_meas[i]) for i in (3, 4)]
+        denom = max(state.s_norm, exp.controller.eps)
+        rec["sw"].append([used_gain * v / denom for v in s_w] if name != "tdc" else [0.0, 0.0])
+        prev_gain = state.gain
         if k < n - 1 and clib.sim_plant_advance(pp, friction, x, tau, h / nsub, nsub) != 0:
             failed_at = float(t)
             break
@@ -262,4 +272,5 @@ def run(
         failed_at,
         np.array(rec["h1"]),
         np.array(rec["en"]),
+        np.array(rec["sw"]),
     )

@@ -192,3 +192,13 @@ def test_tdc_stays_within_its_ultimate_bound(paper: Reproduction) -> None:
         tdc = rows[("tdc", path)]
         assert 0 < tdc.measured <= tdc.ultimate_bound
         assert rows[("tdroc", path)].measured > rows[("tdroc", path)].ultimate_bound
+
+
+def test_wheel_switching_terms_are_bounded_by_the_gain(paper: Reproduction) -> None:
+    """|Δu_a,j| = k |s_j| / max(‖s‖, ε) ≤ k for every wheel and step (ASMC: the gain
+    before that step's adaptation, which is ≤ the recorded one)."""
+    for (ctrl, _form, _path), run in paper.runs.items():
+        if ctrl == "tdc":
+            assert not run.wheel_switching.any()
+            continue
+        assert np.all(np.abs(run.wheel_switching) <= run.gain[:, None] * (1 + 1e-9) + 1e-12)
