@@ -38,6 +38,14 @@ def _c_files(robot: Robot) -> dict[str, str]:
         C_CONFIG,
         source=f"{MODEL_SOURCE}, {LAW_SOURCE}",
     )
+    for suffix in ("h", "c"):
+        template = f"controller_common.{suffix}.jinja"
+        files[f"wmr_controller.{suffix}"] = template_util.render(
+            C_TEMPLATES,
+            template,
+            preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
+            max_abs_input=MAX_ABS_INPUT,
+        )
     for info in CONTROLLERS:
         for suffix in ("h", "c"):
             template = f"controller.{suffix}.jinja"

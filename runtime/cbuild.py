@@ -27,6 +27,7 @@ HEADERS = (
     "wmr_model.h",
     "wmr_laws.h",
     "wmr_plant.h",
+    "wmr_controller.h",
     "wmr_tdc.h",
     "wmr_tdroc.h",
     "wmr_roc.h",

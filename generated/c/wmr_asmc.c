@@ -4,78 +4,29 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "wmr_asmc.h"
+#include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
-static int wmr_asmc_finite_bounded(const wmr_real_t *x, int n)
-{
-    int i;
-    for (i = 0; i < n; ++i) {
-        if (!isfinite(x[i]) || WMR_FABS(x[i]) > WMR_LIT(1.0e6)) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
-static int wmr_asmc_positive(wmr_real_t x)
-{
-    return isfinite(x) && x > WMR_LIT(0.0);
-}
-
 wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
 {
-    const wmr_params_t *p;
-    wmr_real_t mbar[4];
-    int i;
+    wmr_status_t status;
     if (config == 0) {
         return WMR_ERR_NULL_POINTER;
     }
-    p = &config->nominal;
-    if (config->formulation != WMR_FORMULATION_PAPER && config->formulation != WMR_FORMULATION_MINIMAL) {
-        return WMR_ERR_BAD_FORMULATION;
+    status = wmr_check_base_config(config->formulation, config->h, config->k1, config->k2,
+                                   config->q_pos, config->q_vel, config->tau_max);
+    if (status != WMR_OK) {
+        return status;
     }
-    if (!wmr_asmc_positive(config->h)) {
-        return WMR_ERR_BAD_SAMPLE_TIME;
-    }
-    for (i = 0; i < 5; ++i) {
-        if (!wmr_asmc_positive(config->k1[i]) || !wmr_asmc_positive(config->k2[i])) {
-            return WMR_ERR_BAD_GAINS;
-        }
-    }
-    if (!wmr_asmc_positive(config->q_pos) || !wmr_asmc_positive(config->q_vel)) {
-        return WMR_ERR_BAD_GAINS;
-    }
-    if (!isfinite(config->tau_max) || !(config->tau_max > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_TORQUE_LIMIT;
-    }
-    if (!wmr_asmc_positive(config->eps)) {
+    if (!wmr_positive(config->eps)) {
         return WMR_ERR_BAD_EPS;
     }
     if (!isfinite(config->gamma) || config->gamma < WMR_LIT(0.0)
         || !isfinite(config->gain0) || config->gain0 < WMR_LIT(0.0)) {
         return WMR_ERR_BAD_BOUNDS;
     }
-    /* M-hat must be a valid, positive-definite model: the generated check of S^T M S. */
-    {
-        const wmr_real_t q0[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
-        const wmr_real_t rates0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
-        const wmr_real_t tau0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
-        wmr_real_t acc[2];
-        if (!wmr_asmc_positive(p->m) || !wmr_asmc_positive(p->Iz)
-            || !wmr_asmc_positive(p->Iw) || !isfinite(p->K) || !isfinite(p->d)
-            /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a
-               factor of det M-tilde, so the paper form's M-hat is singular without it. */
-            || !(p->m * p->Iz - p->K * p->K > WMR_LIT(0.0))
-            || wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
-            return WMR_ERR_BAD_NOMINAL;
-        }
-        wmr_minimal_mass_matrix(p, q0, mbar);
-        if (!(mbar[0] > WMR_LIT(0.0)) || !(mbar[0] * mbar[3] - mbar[1] * mbar[2] > WMR_LIT(0.0))) {
-            return WMR_ERR_BAD_NOMINAL;
-        }
-    }
-    return WMR_OK;
+    return wmr_check_nominal(&config->nominal);
 }
 
 wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *config)
@@ -92,16 +43,8 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     }
     fresh.magic = WMR_STATE_MAGIC;
     fresh.steps = 0;
+    wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
     for (i = 0; i < 5; ++i) {
-        wmr_real_t gains[4];
-        wmr_real_t pmat[3];
-        gains[0] = config->k1[i];
-        gains[1] = config->k2[i];
-        gains[2] = config->q_pos;
-        gains[3] = config->q_vel;
-        wmr_lyapunov_p(gains, pmat);
-        fresh.p12[i] = pmat[1];
-        fresh.p22[i] = pmat[2];
         fresh.q_prev[i] = WMR_LIT(0.0);
         fresh.qdot_prev[i] = WMR_LIT(0.0);
         fresh.qdot_prev2[i] = WMR_LIT(0.0);
@@ -141,12 +84,9 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     if (status != WMR_OK) {
         return status;
     }
-    if (!wmr_asmc_finite_bounded(q, 5) || !wmr_asmc_finite_bounded(qdot, 5)) {
-        return WMR_ERR_BAD_MEASUREMENT;
-    }
-    if (!wmr_asmc_finite_bounded(q_des, 5) || !wmr_asmc_finite_bounded(qdot_des, 5)
-        || !wmr_asmc_finite_bounded(qddot_des, 5)) {
-        return WMR_ERR_BAD_REFERENCE;
+    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des);
+    if (status != WMR_OK) {
+        return status;
     }
     next = *state;  /* work on a copy: the state is committed only on success */
     for (i = 0; i < nc; ++i) {
@@ -179,15 +119,7 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
         || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
-    for (i = 0; i < 2; ++i) {
-        if (out_tau[i] > config->tau_max) {
-            out_tau[i] = config->tau_max;
-            status = WMR_WARN_SATURATED;
-        } else if (out_tau[i] < -config->tau_max) {
-            out_tau[i] = -config->tau_max;
-            status = WMR_WARN_SATURATED;
-        }
-    }
+    status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 5; ++i) {
         next.q_prev[i] = q[i];
