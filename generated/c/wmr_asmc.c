@@ -68,11 +68,8 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     wmr_asmc_state_t next;
     wmr_status_t status = WMR_OK;
     const int paper = config != 0 && config->formulation == WMR_FORMULATION_PAPER;
-    const int nc = paper ? 5 : 2;   /* controlled coordinates */
-    const int off = paper ? 0 : 3;  /* where they start in q */
     wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
     wmr_real_t out_tau[2];
-    int i;
     if (state == 0 || config == 0 || q == 0 || qdot == 0 || q_des == 0 || qdot_des == 0
         || qddot_des == 0 || tau == 0) {
         return WMR_ERR_NULL_POINTER;
@@ -89,15 +86,9 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
         return status;
     }
     next = *state;  /* work on a copy: the state is committed only on success */
-    for (i = 0; i < nc; ++i) {
-        e[i] = q_des[off + i] - q[off + i];
-        edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = config->k1[off + i];
-        k2[i] = config->k2[off + i];
-        p12[i] = state->p12[off + i];
-        p22[i] = state->p22[off + i];
-    }
+    (void)wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
+                              config->k1, config->k2, state->p12, state->p22,
+                              e, edot, qdd, k1, k2, p12, p22);
     /* The law. */
     {
         wmr_real_t s[5];
@@ -121,14 +112,7 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 5; ++i) {
-        next.q_prev[i] = q[i];
-        next.qdot_prev2[i] = state->qdot_prev[i];
-        next.qdot_prev[i] = qdot[i];
-        next.u_prev[i] = WMR_LIT(0.0);
-    }
-    next.u_prev[3] = out_tau[0];
-    next.u_prev[4] = out_tau[1];
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, q, qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

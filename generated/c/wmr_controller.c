@@ -102,6 +102,43 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     return WMR_OK;
 }
 
+int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
+    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
+    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5])
+{
+    const int paper = formulation == WMR_FORMULATION_PAPER;
+    const int nc = paper ? 5 : 2;
+    const int off = paper ? 0 : 3;
+    int i;
+    for (i = 0; i < nc; ++i) {
+        e[i] = q_des[off + i] - q[off + i];
+        edot[i] = qdot_des[off + i] - qdot[off + i];
+        qdd[i] = qddot_des[off + i];
+        k1[i] = k1_all[off + i];
+        k2[i] = k2_all[off + i];
+        p12[i] = p12_all[off + i];
+        p22[i] = p22_all[off + i];
+    }
+    return nc;
+}
+
+void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],
+    wmr_real_t u_prev[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t tau[2])
+{
+    int i;
+    for (i = 0; i < 5; ++i) {
+        q_prev[i] = q[i];
+        qdot_prev2[i] = qdot_prev[i];
+        qdot_prev[i] = qdot[i];
+        u_prev[i] = WMR_LIT(0.0);
+    }
+    u_prev[3] = tau[0];
+    u_prev[4] = tau[1];
+}
+
 wmr_status_t wmr_saturate(wmr_real_t tau[2], wmr_real_t tau_max)
 {
     wmr_status_t status = WMR_OK;

@@ -42,6 +42,21 @@ void wmr_controller_p(const wmr_real_t k1[5], const wmr_real_t k2[5], wmr_real_t
 wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5]);
 
+/**
+ * The controlled coordinates (paper: all five; minimal: the two wheels) of e = q_des - q,
+ * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
+ */
+int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
+    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
+    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5]);
+
+/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h) and u(t-h) = B tau. */
+void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],
+    wmr_real_t u_prev[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t tau[2]);
+
 /** Clip tau to +-tau_max: WMR_WARN_SATURATED if it had to, else WMR_OK. */
 wmr_status_t wmr_saturate(wmr_real_t tau[2], wmr_real_t tau_max);
 

@@ -85,11 +85,11 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     wmr_tdroc_state_t next;
     wmr_status_t status = WMR_OK;
     const int paper = config != 0 && config->formulation == WMR_FORMULATION_PAPER;
-    const int nc = paper ? 5 : 2;   /* controlled coordinates */
-    const int off = paper ? 0 : 3;  /* where they start in q */
+    const int off = paper ? 0 : 3;  /* where the controlled coordinates start in q */
+    int nc;
+    int i;
     wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
     wmr_real_t out_tau[2];
-    int i;
     if (state == 0 || config == 0 || q == 0 || qdot == 0 || q_des == 0 || qdot_des == 0
         || qddot_des == 0 || tau == 0) {
         return WMR_ERR_NULL_POINTER;
@@ -106,15 +106,9 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         return status;
     }
     next = *state;  /* work on a copy: the state is committed only on success */
-    for (i = 0; i < nc; ++i) {
-        e[i] = q_des[off + i] - q[off + i];
-        edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = config->k1[off + i];
-        k2[i] = config->k2[off + i];
-        p12[i] = state->p12[off + i];
-        p22[i] = state->p22[off + i];
-    }
+    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
+                              config->k1, config->k2, state->p12, state->p22,
+                              e, edot, qdd, k1, k2, p12, p22);
     /* (17): H1hat from the previous input and a difference quotient of the rates. */
     if (state->steps >= 2) {
         const int central = config->accel_estimator == WMR_ACCEL_CENTRAL;
@@ -207,14 +201,7 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 5; ++i) {
-        next.q_prev[i] = q[i];
-        next.qdot_prev2[i] = state->qdot_prev[i];
-        next.qdot_prev[i] = qdot[i];
-        next.u_prev[i] = WMR_LIT(0.0);
-    }
-    next.u_prev[3] = out_tau[0];
-    next.u_prev[4] = out_tau[1];
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, q, qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;
