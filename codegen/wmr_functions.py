@@ -72,12 +72,14 @@ def out(
 
 def _param_guards() -> tuple[Guard, ...]:
     s = wmr.wmr_system()
-    det = sp.factor(s.minimal_mass_matrix.det())
+    # The same grouped entries as compact_forward_dynamics, so CSE shares them.
+    mbar = s.minimal_mass_matrix.applyfunc(wmr.compact_form)
+    det = mbar[0, 0] * mbar[1, 1] - mbar[0, 1] * mbar[1, 0]
     return (
         Guard(STATUS_BAD_PARAMS, wmr.r, "r > 0"),
         Guard(STATUS_BAD_PARAMS, wmr.b, "b > 0"),
         # Sylvester: both leading minors of S^T M S positive <=> positive definite.
-        Guard(STATUS_BAD_PARAMS, s.minimal_mass_matrix[0, 0], "(S^T M S)[0][0] > 0"),
+        Guard(STATUS_BAD_PARAMS, mbar[0, 0], "(S^T M S)[0][0] > 0"),
         Guard(STATUS_BAD_PARAMS, det, "det(S^T M S) > 0: a positive-definite model"),
     )
 
@@ -92,8 +94,8 @@ def model_specs() -> tuple[FunctionSpec, ...]:
     wheel_rates = array("wheel_rates", eta, "theta_r rate, theta_l rate")
     tau = array("tau", wmr.tau, "wheel torques tau_r, tau_l")
     p = params_arg()
-    qdd = s.reduced_forward_dynamics(wmr.tau)
-    eta_dot = s.minimal_forward_dynamics(wmr.tau)
+    # Evaluation forms (equal to reduced_/minimal_forward_dynamics; tests check it).
+    eta_dot, qdd = s.compact_forward_dynamics(wmr.tau, wmr.compact_form)
     # State x = (q, η): ẋ = (S(q) η, η̇(q, η, τ)); its Jacobians linearise the robot.
     x = sp.Matrix([*wmr.q, *eta])
     xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
@@ -366,7 +368,8 @@ def plant_specs() -> tuple[FunctionSpec, ...]:
     eta = tuple(wmr.qdot[3:])
     x = array("x", (*wmr.q, *eta), "q (5), then the wheel rates (2)")
     tau = array("tau", wmr.tau, "wheel torques after friction")
-    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *s.minimal_forward_dynamics(wmr.tau)])
+    eta_dot, _ = s.compact_forward_dynamics(wmr.tau, wmr.compact_form)
+    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
     rel = wmr.payload_relations()
     payload = array(
         "payload",

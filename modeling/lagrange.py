@@ -283,6 +283,33 @@ class ConstrainedSystem:
         """
         return self.null_space * self.minimal_forward_dynamics(tau) + self.null_space_rate
 
+    def compact_forward_dynamics(
+        self, tau: sp.Matrix, form: Simplifier
+    ) -> tuple[sp.Matrix, sp.Matrix]:
+        """(η̇, q̈) for evaluation: the same values as ``minimal_forward_dynamics`` and
+        ``reduced_forward_dynamics``, arranged so that CSE finds the shared factors.
+
+        ``form`` puts each entry of Sᵀ M S in a grouped, unexpanded form (the robot knows
+        which groups: for the WMR, powers of r/b times the inertia about the axle); H̄, S
+        and Ṡη are factored; the 2×2 solve is written out with 1/det computed once.
+        Expanded polynomials in the parameters, which the canonical forms above use,
+        cost about twice the multiplications. Tests check both forms are equal.
+        """
+        mbar = self.minimal_mass_matrix.applyfunc(form)
+        if mbar.shape != (2, 2):
+            raise ValueError("compact_forward_dynamics is written for two independent speeds")
+        hbar = self.minimal_bias.applyfunc(sp.factor)
+        rhs = self.minimal_input_matrix * tau - hbar
+        inv_det = 1 / (mbar[0, 0] * mbar[1, 1] - mbar[0, 1] * mbar[1, 0])
+        eta_dot = sp.Matrix([
+            mbar[1, 1] * rhs[0] - mbar[0, 1] * rhs[1],
+            mbar[0, 0] * rhs[1] - mbar[1, 0] * rhs[0],
+        ]) * inv_det
+        qdd = self.null_space.applyfunc(sp.factor) * eta_dot + self.null_space_rate.applyfunc(
+            sp.factor
+        )
+        return eta_dot, qdd
+
     @cached_property
     def reduced_mass_matrix_inverse(self) -> sp.Matrix:
         """M̃⁻¹ of (14) by block elimination.

@@ -136,6 +136,12 @@ def lumped_relations(bodies: tuple[Body, ...]) -> dict[sp.Symbol, sp.Expr]:
     }
 
 
+def compact_form(expr: sp.Expr) -> sp.Expr:
+    """Group an entry of Sᵀ M S as the physics does: I_w + (r²/4) m + (r/b)² (I − 2Kd + md²),
+    the last bracket being the yaw inertia about the axle midpoint (evaluation form only)."""
+    return sp.collect(sp.expand(expr), [r**2 / b**2, r**2], sp.factor)
+
+
 # Point payload at (x_L ahead of C, y_L left of C), mass m_L.
 m_L, x_L, y_L = sp.symbols("m_L x_L y_L", real=True)
 

@@ -103,7 +103,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
     H[4] = _t17;
 }
 
-/* wmr_forward_dynamics: documented in wmr_model.h. operations after CSE: 35 add, 83 mul, 4 div, 2 sin/cos, 0 sqrt */
+/* wmr_forward_dynamics: documented in wmr_model.h. operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
     const wmr_real_t m = p->m;
@@ -121,75 +121,51 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
     if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r) || !isfinite(b) || !isfinite(d) || !isfinite(theta) || !isfinite(thetadot_r) || !isfinite(thetadot_l) || !isfinite(tau_r) || !isfinite(tau_l)) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = thetadot_l*thetadot_l;
-    const wmr_real_t _t1 = WMR_SIN(theta);
-    const wmr_real_t _t2 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t3 = _t1*_t2;
-    const wmr_real_t _t4 = r*r;
-    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
-    const wmr_real_t _t6 = _t3*_t5;
-    const wmr_real_t _t7 = thetadot_r*thetadot_r;
-    const wmr_real_t _t8 = WMR_COS(theta);
-    const wmr_real_t _t9 = _t4*d;
-    const wmr_real_t _t10 = _t8*_t9;
-    const wmr_real_t _t11 = b*b;
-    const wmr_real_t _t12 = WMR_LIT(1.0)/_t11;
-    const wmr_real_t _t13 = WMR_LIT(2.0)*_t12;
-    const wmr_real_t _t14 = thetadot_l*thetadot_r;
-    const wmr_real_t _t15 = _t13*_t14;
-    const wmr_real_t _t16 = _t0*_t12;
-    const wmr_real_t _t17 = _t12*_t7;
-    const wmr_real_t _t18 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t19 = _t18*_t8;
-    const wmr_real_t _t20 = d*r;
-    const wmr_real_t _t21 = _t20*_t3;
-    const wmr_real_t _t22 = _t4*m;
-    const wmr_real_t _t23 = WMR_LIT(0.25)*_t22;
-    const wmr_real_t _t24 = I*_t4;
-    const wmr_real_t _t25 = _t22*d*d;
-    const wmr_real_t _t26 = K*_t9;
-    const wmr_real_t _t27 = _t12*_t24 + _t12*_t25 - _t13*_t26;
-    const wmr_real_t _t28 = -_t23 + _t27;
-    const wmr_real_t _t29 = r*r*r;
-    const wmr_real_t _t30 = K*_t29;
-    const wmr_real_t _t31 = _t29*d*m;
-    const wmr_real_t _t32 = _t12*_t14;
-    const wmr_real_t _t33 = _t30*_t32 - _t31*_t32;
-    const wmr_real_t _t34 = -_t16*_t30 + _t16*_t31 + _t33 + tau_r;
-    const wmr_real_t _t35 = I_w + _t23 + _t27;
-    const wmr_real_t _t36 = -_t17*_t30 + _t17*_t31 + _t33 + tau_l;
-    const wmr_real_t _t37 = _t28*_t34 + _t35*_t36;
-    const wmr_real_t _t38 = WMR_LIT(2.0)*I_w + _t22;
-    const wmr_real_t _t39 = WMR_LIT(1.0)/_t38;
-    const wmr_real_t _t40 = I_w*_t11 + WMR_LIT(2.0)*_t24 + WMR_LIT(2.0)*_t25 - WMR_LIT(4.0)*_t26;
-    const wmr_real_t _t41 = WMR_LIT(1.0)/_t40;
-    const wmr_real_t _t42 = WMR_LIT(2.0)*_t39*_t41;
-    const wmr_real_t _t43 = _t11*_t42;
-    const wmr_real_t _t44 = _t37*_t43;
-    const wmr_real_t _t45 = _t28*_t36 + _t34*_t35;
-    const wmr_real_t _t46 = _t43*_t45;
-    const wmr_real_t _t47 = _t2*_t8;
-    const wmr_real_t _t48 = _t47*_t5;
-    const wmr_real_t _t49 = _t1*_t9;
-    const wmr_real_t _t50 = _t1*_t18;
-    const wmr_real_t _t51 = _t20*_t47;
+    const wmr_real_t _t0 = WMR_SIN(theta);
+    const wmr_real_t _t1 = _t0*b;
+    const wmr_real_t _t2 = WMR_COS(theta);
+    const wmr_real_t _t3 = WMR_LIT(2.0)*d;
+    const wmr_real_t _t4 = _t2*_t3;
+    const wmr_real_t _t5 = thetadot_l - thetadot_r;
+    const wmr_real_t _t6 = r*r;
+    const wmr_real_t _t7 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t8 = _t6*_t7;
+    const wmr_real_t _t9 = WMR_LIT(0.5)*_t5*_t8;
+    const wmr_real_t _t10 = _t2*b;
+    const wmr_real_t _t11 = _t0*_t3;
+    const wmr_real_t _t12 = WMR_LIT(0.25)*_t6*m;
+    const wmr_real_t _t13 = I - K*_t3 + d*d*m;
+    const wmr_real_t _t14 = _t12 - _t13*_t8;
+    const wmr_real_t _t15 = I_w + _t12 + _t13*_t8;
+    const wmr_real_t _t16 = -_t14*_t14 + _t15*_t15;
+    const wmr_real_t _t17 = WMR_LIT(1.0)/_t16;
+    const wmr_real_t _t18 = _t5*_t7*r*r*r*(-K + d*m);
+    const wmr_real_t _t19 = _t18*thetadot_l + tau_r;
+    const wmr_real_t _t20 = -_t18*thetadot_r + tau_l;
+    const wmr_real_t _t21 = _t17*(-_t14*_t20 + _t15*_t19);
+    const wmr_real_t _t22 = r/b;
+    const wmr_real_t _t23 = _t21*_t22;
+    const wmr_real_t _t24 = WMR_LIT(0.5)*_t23;
+    const wmr_real_t _t25 = _t17*(-_t14*_t19 + _t15*_t20);
+    const wmr_real_t _t26 = _t22*_t25;
+    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t35 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t15 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(WMR_LIT(0.5)*_t12*_t38*_t40 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t16 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t0*_t6 + _t10*_t15 - _t10*_t16 - _t10*_t17 + _t44*(_t19 + _t21) + _t46*(_t19 - _t21) - _t6*_t7;
-    const wmr_real_t r_1 = -_t0*_t48 + _t15*_t49 - _t16*_t49 - _t17*_t49 + _t44*(_t50 - _t51) + _t46*(_t50 + _t51) + _t48*_t7;
-    const wmr_real_t r_2 = -_t37*_t42*b*r + WMR_LIT(2.0)*_t39*_t41*_t45*b*r;
-    const wmr_real_t r_3 = _t46;
-    const wmr_real_t r_4 = _t44;
+    const wmr_real_t r_0 = _t24*(_t10 - _t11) + _t27*(_t10 + _t11) + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r);
+    const wmr_real_t r_1 = _t24*(_t1 + _t4) + _t27*(_t1 - _t4) - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r);
+    const wmr_real_t r_2 = _t23 - _t26;
+    const wmr_real_t r_3 = _t21;
+    const wmr_real_t r_4 = _t25;
     if (!isfinite(r_0) || !isfinite(r_1) || !isfinite(r_2) || !isfinite(r_3) || !isfinite(r_4)) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
@@ -273,7 +249,7 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
     H[1] = K*_t1*_t2*_t8 + _t1*_t2*d*m*thetadot_l*thetadot_r - _t6 - _t7*_t8;
 }
 
-/* wmr_minimal_forward_dynamics: documented in wmr_model.h. operations after CSE: 18 add, 44 mul, 2 div, 0 sin/cos, 0 sqrt */
+/* wmr_minimal_forward_dynamics: documented in wmr_model.h. operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt */
 wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels)
 {
     (void)q;
@@ -292,42 +268,31 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(0.25)*_t1;
-    const wmr_real_t _t3 = b*b;
-    const wmr_real_t _t4 = WMR_LIT(1.0)/_t3;
-    const wmr_real_t _t5 = I*_t0;
-    const wmr_real_t _t6 = _t1*d*d;
-    const wmr_real_t _t7 = K*_t0*d;
-    const wmr_real_t _t8 = _t4*_t5 + _t4*_t6 - WMR_LIT(2.0)*_t4*_t7;
-    const wmr_real_t _t9 = -_t2 + _t8;
-    const wmr_real_t _t10 = thetadot_r*thetadot_r;
-    const wmr_real_t _t11 = _t4*r*r*r;
-    const wmr_real_t _t12 = K*_t11;
-    const wmr_real_t _t13 = _t11*d*m;
-    const wmr_real_t _t14 = thetadot_l*thetadot_r;
-    const wmr_real_t _t15 = _t12*_t14 - _t13*_t14;
-    const wmr_real_t _t16 = -_t10*_t12 + _t10*_t13 + _t15 + tau_l;
-    const wmr_real_t _t17 = I_w + _t2 + _t8;
-    const wmr_real_t _t18 = thetadot_l*thetadot_l;
-    const wmr_real_t _t19 = -_t12*_t18 + _t13*_t18 + _t15 + tau_r;
-    const wmr_real_t _t20 = WMR_LIT(2.0)*I_w + _t1;
-    const wmr_real_t _t21 = I_w*_t3 + WMR_LIT(2.0)*_t5 + WMR_LIT(2.0)*_t6 - WMR_LIT(4.0)*_t7;
-    const wmr_real_t _t22 = WMR_LIT(2.0)*_t3/(_t20*_t21);
+    const wmr_real_t _t1 = WMR_LIT(0.25)*_t0*m;
+    const wmr_real_t _t2 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t3 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t4 = _t0*_t3;
+    const wmr_real_t _t5 = _t1 - _t2*_t4;
+    const wmr_real_t _t6 = I_w + _t1 + _t2*_t4;
+    const wmr_real_t _t7 = -_t5*_t5 + _t6*_t6;
+    const wmr_real_t _t8 = WMR_LIT(1.0)/_t7;
+    const wmr_real_t _t9 = _t3*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r);
+    const wmr_real_t _t10 = _t9*thetadot_l + tau_r;
+    const wmr_real_t _t11 = -_t9*thetadot_r + tau_l;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t17 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t6 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(WMR_LIT(0.5)*_t20*_t21*_t4 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t7 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t22*(_t16*_t9 + _t17*_t19);
-    const wmr_real_t r_1 = _t22*(_t16*_t17 + _t19*_t9);
+    const wmr_real_t r_0 = _t8*(_t10*_t6 - _t11*_t5);
+    const wmr_real_t r_1 = _t8*(-_t10*_t5 + _t11*_t6);
     if (!isfinite(r_0) || !isfinite(r_1)) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
@@ -336,7 +301,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     return WMR_OK;
 }
 
-/* wmr_linearization: documented in wmr_model.h. operations after CSE: 26 add, 65 mul, 3 div, 2 sin/cos, 0 sqrt */
+/* wmr_linearization: documented in wmr_model.h. operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt */
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B)
 {
     (void)tau;
@@ -363,31 +328,22 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t _t10 = _t0*_t5;
     const wmr_real_t _t11 = -_t10 + _t9;
     const wmr_real_t _t12 = _t10 + _t9;
-    const wmr_real_t _t13 = b*b;
-    const wmr_real_t _t14 = WMR_LIT(1.0)/_t13;
-    const wmr_real_t _t15 = r*r*r;
-    const wmr_real_t _t16 = _t14*_t15;
-    const wmr_real_t _t17 = K*_t16;
-    const wmr_real_t _t18 = _t17*thetadot_l;
-    const wmr_real_t _t19 = _t16*d*m;
-    const wmr_real_t _t20 = _t18 - _t19*thetadot_l;
-    const wmr_real_t _t21 = r*r;
-    const wmr_real_t _t22 = _t21*m;
-    const wmr_real_t _t23 = WMR_LIT(0.25)*_t22;
-    const wmr_real_t _t24 = I*_t21;
-    const wmr_real_t _t25 = _t22*d*d;
-    const wmr_real_t _t26 = K*_t21*d;
-    const wmr_real_t _t27 = _t14*_t24 + _t14*_t25 - WMR_LIT(2.0)*_t14*_t26;
-    const wmr_real_t _t28 = I_w + _t23 + _t27;
-    const wmr_real_t _t29 = -_t23 + _t27;
-    const wmr_real_t _t30 = _t17*thetadot_r;
-    const wmr_real_t _t31 = _t19*thetadot_r;
-    const wmr_real_t _t32 = _t20 - WMR_LIT(2.0)*_t30 + WMR_LIT(2.0)*_t31;
-    const wmr_real_t _t33 = WMR_LIT(2.0)*_t13/((WMR_LIT(2.0)*I_w + _t22)*(I_w*_t13 + WMR_LIT(2.0)*_t24 + WMR_LIT(2.0)*_t25 - WMR_LIT(4.0)*_t26));
-    const wmr_real_t _t34 = _t30 - _t31;
-    const wmr_real_t _t35 = K*_t14*_t15*thetadot_r + WMR_LIT(2.0)*_t14*_t15*d*m*thetadot_l - WMR_LIT(2.0)*_t18 - _t31;
-    const wmr_real_t _t36 = _t28*_t33;
-    const wmr_real_t _t37 = _t29*_t33;
+    const wmr_real_t _t13 = r*r;
+    const wmr_real_t _t14 = WMR_LIT(0.25)*_t13*m;
+    const wmr_real_t _t15 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t16 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t17 = _t13*_t16;
+    const wmr_real_t _t18 = _t14 - _t15*_t17;
+    const wmr_real_t _t19 = I_w + _t14 + _t15*_t17;
+    const wmr_real_t _t20 = WMR_LIT(1.0)/(-_t18*_t18 + _t19*_t19);
+    const wmr_real_t _t21 = _t16*r*r*r*(-K + d*m);
+    const wmr_real_t _t22 = _t21*thetadot_l;
+    const wmr_real_t _t23 = _t21*thetadot_r;
+    const wmr_real_t _t24 = _t21*(thetadot_l - thetadot_r);
+    const wmr_real_t _t25 = _t23 - _t24;
+    const wmr_real_t _t26 = _t22 + _t24;
+    const wmr_real_t _t27 = _t19*_t20;
+    const wmr_real_t _t28 = -_t18*_t20;
     A[0] = WMR_LIT(0.0);
     A[1] = WMR_LIT(0.0);
     A[2] = -_t7*thetadot_l - _t8*thetadot_r;
@@ -428,15 +384,15 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     A[37] = WMR_LIT(0.0);
     A[38] = WMR_LIT(0.0);
     A[39] = WMR_LIT(0.0);
-    A[40] = _t33*(_t20*_t28 + _t29*_t32);
-    A[41] = _t33*(_t28*_t35 + _t29*_t34);
+    A[40] = _t20*(-_t18*_t25 - _t19*_t22);
+    A[41] = _t20*(_t18*_t23 + _t19*_t26);
     A[42] = WMR_LIT(0.0);
     A[43] = WMR_LIT(0.0);
     A[44] = WMR_LIT(0.0);
     A[45] = WMR_LIT(0.0);
     A[46] = WMR_LIT(0.0);
-    A[47] = _t33*(_t20*_t29 + _t28*_t32);
-    A[48] = _t33*(_t28*_t34 + _t29*_t35);
+    A[47] = _t20*(_t18*_t22 + _t19*_t25);
+    A[48] = _t20*(-_t18*_t26 - _t19*_t23);
     B[0] = WMR_LIT(0.0);
     B[1] = WMR_LIT(0.0);
     B[2] = WMR_LIT(0.0);
@@ -447,8 +403,8 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     B[7] = WMR_LIT(0.0);
     B[8] = WMR_LIT(0.0);
     B[9] = WMR_LIT(0.0);
-    B[10] = _t36;
-    B[11] = _t37;
-    B[12] = _t37;
-    B[13] = _t36;
+    B[10] = _t27;
+    B[11] = _t28;
+    B[12] = _t28;
+    B[13] = _t27;
 }

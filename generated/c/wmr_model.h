@@ -76,7 +76,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 35 add, 83 mul, 4 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
 
@@ -157,7 +157,7 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 18 add, 44 mul, 2 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels);
 
@@ -184,7 +184,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
  * @param[out] A [7x7] row-major (WMR_LINEARIZATION_A_SIZE) -- 7x7 row-major
  * @param[out] B [7x2] row-major (WMR_LINEARIZATION_B_SIZE) -- 7x2 row-major
  *
- * operations after CSE: 26 add, 65 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt
  */
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
 

@@ -5,7 +5,7 @@
  */
 #include "wmr_plant.h"
 
-/* wmr_plant_state_derivative: documented in wmr_plant.h. operations after CSE: 31 add, 76 mul, 3 div, 2 sin/cos, 0 sqrt */
+/* wmr_plant_state_derivative: documented in wmr_plant.h. operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
 void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x, const wmr_real_t *tau, wmr_real_t *xdot)
 {
     const wmr_real_t m = pp->m;
@@ -32,40 +32,27 @@ void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *
     const wmr_real_t _t8 = _t1*_t3;
     const wmr_real_t _t9 = _t0*_t6;
     const wmr_real_t _t10 = r*r;
-    const wmr_real_t _t11 = _t10*m;
-    const wmr_real_t _t12 = WMR_LIT(0.25)*_t11;
-    const wmr_real_t _t13 = b*b;
-    const wmr_real_t _t14 = WMR_LIT(1.0)/_t13;
-    const wmr_real_t _t15 = I*_t10;
-    const wmr_real_t _t16 = d*d;
-    const wmr_real_t _t17 = _t11*_t16;
-    const wmr_real_t _t18 = K*_t14;
-    const wmr_real_t _t19 = -WMR_LIT(2.0)*_t10*_t18*d + _t14*_t15 + _t14*_t17;
-    const wmr_real_t _t20 = -_t12 + _t19;
-    const wmr_real_t _t21 = thetadot_r*thetadot_r;
-    const wmr_real_t _t22 = r*r*r;
-    const wmr_real_t _t23 = _t18*_t22;
-    const wmr_real_t _t24 = _t14*_t22*d*m;
-    const wmr_real_t _t25 = thetadot_l*thetadot_r;
-    const wmr_real_t _t26 = _t23*_t25 - _t24*_t25;
-    const wmr_real_t _t27 = -_t21*_t23 + _t21*_t24 + _t26 + tau_l;
-    const wmr_real_t _t28 = K_lat*_t10*_t4;
-    const wmr_real_t _t29 = I_w + _t12 + _t19;
-    const wmr_real_t _t30 = thetadot_l*thetadot_l;
-    const wmr_real_t _t31 = -_t23*_t30 + _t24*_t30 + _t26 + tau_r;
-    const wmr_real_t _t32 = WMR_LIT(4.0)*I_w;
-    const wmr_real_t _t33 = r*r*r*r;
-    const wmr_real_t _t34 = WMR_LIT(2.0)*_t33;
-    const wmr_real_t _t35 = WMR_LIT(2.0)*_t13;
-    const wmr_real_t _t36 = K*d;
-    const wmr_real_t _t37 = _t35/(I*_t34*m + I_w*I_w*_t35 - WMR_LIT(8.0)*I_w*_t10*_t36 + I_w*_t11*_t13 - K_lat*K_lat*_t34 + _t15*_t32 + _t16*_t34*m*m + _t17*_t32 - WMR_LIT(4.0)*_t33*_t36*m);
+    const wmr_real_t _t11 = WMR_LIT(0.25)*_t10;
+    const wmr_real_t _t12 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t13 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t14 = _t10*_t13;
+    const wmr_real_t _t15 = _t11*m - _t12*_t14;
+    const wmr_real_t _t16 = WMR_LIT(4.0)*K_lat;
+    const wmr_real_t _t17 = _t11*_t4;
+    const wmr_real_t _t18 = I_w + _t12*_t14;
+    const wmr_real_t _t19 = _t17*(-_t16 + b*m) + _t18;
+    const wmr_real_t _t20 = _t17*(_t16 + b*m) + _t18;
+    const wmr_real_t _t21 = WMR_LIT(1.0)/(-_t15*_t15 + _t19*_t20);
+    const wmr_real_t _t22 = _t13*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r);
+    const wmr_real_t _t23 = -_t22*thetadot_r + tau_l;
+    const wmr_real_t _t24 = _t22*thetadot_l + tau_r;
     xdot[0] = thetadot_l*(_t2 + _t7) + thetadot_r*(_t2 - _t7);
     xdot[1] = thetadot_l*(_t8 - _t9) + thetadot_r*(_t8 + _t9);
     xdot[2] = _t4*r*thetadot_r - _t5*thetadot_l;
     xdot[3] = thetadot_r;
     xdot[4] = thetadot_l;
-    xdot[5] = _t37*(_t20*_t27 + _t31*(_t28 + _t29));
-    xdot[6] = _t37*(_t20*_t31 + _t27*(-_t28 + _t29));
+    xdot[5] = _t21*(-_t15*_t23 + _t20*_t24);
+    xdot[6] = _t21*(-_t15*_t24 + _t19*_t23);
 }
 
 /* wmr_plant_params_with_payload: documented in wmr_plant.h. operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */

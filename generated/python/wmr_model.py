@@ -154,7 +154,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 5 (shape 5x1, row-major)
 
-    operations after CSE: 35 add, 83 mul, 4 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -169,74 +169,50 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of forward_dynamics is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = thetadot_l*thetadot_l
-        _t1 = math.sin(theta)
-        _t2 = 1.0/b
-        _t3 = _t1*_t2
-        _t4 = r*r
-        _t5 = 0.5*_t4
-        _t6 = _t3*_t5
-        _t7 = thetadot_r*thetadot_r
-        _t8 = math.cos(theta)
-        _t9 = _t4*d
-        _t10 = _t8*_t9
-        _t11 = b*b
-        _t12 = 1.0/_t11
-        _t13 = 2.0*_t12
-        _t14 = thetadot_l*thetadot_r
-        _t15 = _t13*_t14
-        _t16 = _t0*_t12
-        _t17 = _t12*_t7
-        _t18 = 0.5*r
-        _t19 = _t18*_t8
-        _t20 = d*r
-        _t21 = _t20*_t3
-        _t22 = _t4*m
-        _t23 = 0.25*_t22
-        _t24 = I*_t4
-        _t25 = _t22*d*d
-        _t26 = K*_t9
-        _t27 = _t12*_t24 + _t12*_t25 - _t13*_t26
-        _t28 = -_t23 + _t27
-        _t29 = r*r*r
-        _t30 = K*_t29
-        _t31 = _t29*d*m
-        _t32 = _t12*_t14
-        _t33 = _t30*_t32 - _t31*_t32
-        _t34 = -_t16*_t30 + _t16*_t31 + _t33 + tau_r
-        _t35 = I_w + _t23 + _t27
-        _t36 = -_t17*_t30 + _t17*_t31 + _t33 + tau_l
-        _t37 = _t28*_t34 + _t35*_t36
-        _t38 = 2.0*I_w + _t22
-        _t39 = 1.0/_t38
-        _t40 = I_w*_t11 + 2.0*_t24 + 2.0*_t25 - 4.0*_t26
-        _t41 = 1.0/_t40
-        _t42 = 2.0*_t39*_t41
-        _t43 = _t11*_t42
-        _t44 = _t37*_t43
-        _t45 = _t28*_t36 + _t34*_t35
-        _t46 = _t43*_t45
-        _t47 = _t2*_t8
-        _t48 = _t47*_t5
-        _t49 = _t1*_t9
-        _t50 = _t1*_t18
-        _t51 = _t20*_t47
+        _t0 = math.sin(theta)
+        _t1 = _t0*b
+        _t2 = math.cos(theta)
+        _t3 = 2.0*d
+        _t4 = _t2*_t3
+        _t5 = thetadot_l - thetadot_r
+        _t6 = r*r
+        _t7 = 1.0/(b*b)
+        _t8 = _t6*_t7
+        _t9 = 0.5*_t5*_t8
+        _t10 = _t2*b
+        _t11 = _t0*_t3
+        _t12 = 0.25*_t6*m
+        _t13 = I - K*_t3 + d*d*m
+        _t14 = _t12 - _t13*_t8
+        _t15 = I_w + _t12 + _t13*_t8
+        _t16 = -_t14*_t14 + _t15*_t15
+        _t17 = 1.0/_t16
+        _t18 = _t5*_t7*r*r*r*(-K + d*m)
+        _t19 = _t18*thetadot_l + tau_r
+        _t20 = -_t18*thetadot_r + tau_l
+        _t21 = _t17*(-_t14*_t20 + _t15*_t19)
+        _t22 = r/b
+        _t23 = _t21*_t22
+        _t24 = 0.5*_t23
+        _t25 = _t17*(-_t14*_t19 + _t15*_t20)
+        _t26 = _t22*_t25
+        _t27 = 0.5*_t26
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires b > 0")
-    if not (_t35 > 0.0):
+    if not (_t15 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (0.5*_t12*_t38*_t40 > 0.0):
+    if not (_t16 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
     qddot = np.array([
-        _t0*_t6 + _t10*_t15 - _t10*_t16 - _t10*_t17 + _t44*(_t19 + _t21) + _t46*(_t19 - _t21) - _t6*_t7,
-        -_t0*_t48 + _t15*_t49 - _t16*_t49 - _t17*_t49 + _t44*(_t50 - _t51) + _t46*(_t50 + _t51) + _t48*_t7,
-        -_t37*_t42*b*r + 2.0*_t39*_t41*_t45*b*r,
-        _t46,
-        _t44,
+        _t24*(_t10 - _t11) + _t27*(_t10 + _t11) + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r),
+        _t24*(_t1 + _t4) + _t27*(_t1 - _t4) - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r),
+        _t23 - _t26,
+        _t21,
+        _t25,
     ])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
@@ -369,7 +345,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 18 add, 44 mul, 2 div, 0 sin/cos, 0 sqrt
+    operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt
     """
     del q  # not used by this function
     thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
@@ -385,39 +361,28 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of minimal_forward_dynamics is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
         _t0 = r*r
-        _t1 = _t0*m
-        _t2 = 0.25*_t1
-        _t3 = b*b
-        _t4 = 1.0/_t3
-        _t5 = I*_t0
-        _t6 = _t1*d*d
-        _t7 = K*_t0*d
-        _t8 = _t4*_t5 + _t4*_t6 - 2.0*_t4*_t7
-        _t9 = -_t2 + _t8
-        _t10 = thetadot_r*thetadot_r
-        _t11 = _t4*r*r*r
-        _t12 = K*_t11
-        _t13 = _t11*d*m
-        _t14 = thetadot_l*thetadot_r
-        _t15 = _t12*_t14 - _t13*_t14
-        _t16 = -_t10*_t12 + _t10*_t13 + _t15 + tau_l
-        _t17 = I_w + _t2 + _t8
-        _t18 = thetadot_l*thetadot_l
-        _t19 = -_t12*_t18 + _t13*_t18 + _t15 + tau_r
-        _t20 = 2.0*I_w + _t1
-        _t21 = I_w*_t3 + 2.0*_t5 + 2.0*_t6 - 4.0*_t7
-        _t22 = 2.0*_t3/(_t20*_t21)
+        _t1 = 0.25*_t0*m
+        _t2 = I - 2.0*K*d + d*d*m
+        _t3 = 1.0/(b*b)
+        _t4 = _t0*_t3
+        _t5 = _t1 - _t2*_t4
+        _t6 = I_w + _t1 + _t2*_t4
+        _t7 = -_t5*_t5 + _t6*_t6
+        _t8 = 1.0/_t7
+        _t9 = _t3*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r)
+        _t10 = _t9*thetadot_l + tau_r
+        _t11 = -_t9*thetadot_r + tau_l
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires b > 0")
-    if not (_t17 > 0.0):
+    if not (_t6 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (0.5*_t20*_t21*_t4 > 0.0):
+    if not (_t7 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    wheel_accels = np.array([_t22*(_t16*_t9 + _t17*_t19), _t22*(_t16*_t17 + _t19*_t9)])
+    wheel_accels = np.array([_t8*(_t10*_t6 - _t11*_t5), _t8*(-_t10*_t5 + _t11*_t6)])
     if not np.all(np.isfinite(wheel_accels)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of minimal_forward_dynamics is not finite")
     return wheel_accels
@@ -439,7 +404,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 49 (shape 7x7, row-major). 7x7 row-major
         B: array of 14 (shape 7x2, row-major). 7x2 row-major
 
-    operations after CSE: 26 add, 65 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
@@ -464,39 +429,30 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t10 = _t0*_t5
     _t11 = -_t10 + _t9
     _t12 = _t10 + _t9
-    _t13 = b*b
-    _t14 = 1.0/_t13
-    _t15 = r*r*r
-    _t16 = _t14*_t15
-    _t17 = K*_t16
-    _t18 = _t17*thetadot_l
-    _t19 = _t16*d*m
-    _t20 = _t18 - _t19*thetadot_l
-    _t21 = r*r
-    _t22 = _t21*m
-    _t23 = 0.25*_t22
-    _t24 = I*_t21
-    _t25 = _t22*d*d
-    _t26 = K*_t21*d
-    _t27 = _t14*_t24 + _t14*_t25 - 2.0*_t14*_t26
-    _t28 = I_w + _t23 + _t27
-    _t29 = -_t23 + _t27
-    _t30 = _t17*thetadot_r
-    _t31 = _t19*thetadot_r
-    _t32 = _t20 - 2.0*_t30 + 2.0*_t31
-    _t33 = 2.0*_t13/((2.0*I_w + _t22)*(I_w*_t13 + 2.0*_t24 + 2.0*_t25 - 4.0*_t26))
-    _t34 = _t30 - _t31
-    _t35 = K*_t14*_t15*thetadot_r + 2.0*_t14*_t15*d*m*thetadot_l - 2.0*_t18 - _t31
-    _t36 = _t28*_t33
-    _t37 = _t29*_t33
+    _t13 = r*r
+    _t14 = 0.25*_t13*m
+    _t15 = I - 2.0*K*d + d*d*m
+    _t16 = 1.0/(b*b)
+    _t17 = _t13*_t16
+    _t18 = _t14 - _t15*_t17
+    _t19 = I_w + _t14 + _t15*_t17
+    _t20 = 1.0/(-_t18*_t18 + _t19*_t19)
+    _t21 = _t16*r*r*r*(-K + d*m)
+    _t22 = _t21*thetadot_l
+    _t23 = _t21*thetadot_r
+    _t24 = _t21*(thetadot_l - thetadot_r)
+    _t25 = _t23 - _t24
+    _t26 = _t22 + _t24
+    _t27 = _t19*_t20
+    _t28 = -_t18*_t20
     A = np.array([
         [0.0, 0.0, -_t7*thetadot_l - _t8*thetadot_r, 0.0, 0.0, _t11, _t12],
         [0.0, 0.0, _t11*thetadot_r + _t12*thetadot_l, 0.0, 0.0, _t8, _t7],
         [0.0, 0.0, 0.0, 0.0, 0.0, _t4, -_t4],
         [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
         [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-        [0.0, 0.0, 0.0, 0.0, 0.0, _t33*(_t20*_t28 + _t29*_t32), _t33*(_t28*_t35 + _t29*_t34)],
-        [0.0, 0.0, 0.0, 0.0, 0.0, _t33*(_t20*_t29 + _t28*_t32), _t33*(_t28*_t34 + _t29*_t35)],
+        [0.0, 0.0, 0.0, 0.0, 0.0, _t20*(-_t18*_t25 - _t19*_t22), _t20*(_t18*_t23 + _t19*_t26)],
+        [0.0, 0.0, 0.0, 0.0, 0.0, _t20*(_t18*_t22 + _t19*_t25), _t20*(-_t18*_t26 - _t19*_t23)],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -504,7 +460,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t36, _t37],
-        [_t37, _t36],
+        [_t27, _t28],
+        [_t28, _t27],
     ])
     return A, B

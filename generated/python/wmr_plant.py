@@ -44,7 +44,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 7 (shape 7x1, row-major)
 
-    operations after CSE: 31 add, 76 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _, thetadot_r, thetadot_l = _flat(x, 7, "x")
     tau_r, tau_l = _flat(tau, 2, "tau")
@@ -67,41 +67,28 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t8 = _t1*_t3
     _t9 = _t0*_t6
     _t10 = r*r
-    _t11 = _t10*m
-    _t12 = 0.25*_t11
-    _t13 = b*b
-    _t14 = 1.0/_t13
-    _t15 = I*_t10
-    _t16 = d*d
-    _t17 = _t11*_t16
-    _t18 = K*_t14
-    _t19 = -2.0*_t10*_t18*d + _t14*_t15 + _t14*_t17
-    _t20 = -_t12 + _t19
-    _t21 = thetadot_r*thetadot_r
-    _t22 = r*r*r
-    _t23 = _t18*_t22
-    _t24 = _t14*_t22*d*m
-    _t25 = thetadot_l*thetadot_r
-    _t26 = _t23*_t25 - _t24*_t25
-    _t27 = -_t21*_t23 + _t21*_t24 + _t26 + tau_l
-    _t28 = K_lat*_t10*_t4
-    _t29 = I_w + _t12 + _t19
-    _t30 = thetadot_l*thetadot_l
-    _t31 = -_t23*_t30 + _t24*_t30 + _t26 + tau_r
-    _t32 = 4.0*I_w
-    _t33 = r*r*r*r
-    _t34 = 2.0*_t33
-    _t35 = 2.0*_t13
-    _t36 = K*d
-    _t37 = _t35/(I*_t34*m + I_w*I_w*_t35 - 8.0*I_w*_t10*_t36 + I_w*_t11*_t13 - K_lat*K_lat*_t34 + _t15*_t32 + _t16*_t34*m*m + _t17*_t32 - 4.0*_t33*_t36*m)
+    _t11 = 0.25*_t10
+    _t12 = I - 2.0*K*d + d*d*m
+    _t13 = 1.0/(b*b)
+    _t14 = _t10*_t13
+    _t15 = _t11*m - _t12*_t14
+    _t16 = 4.0*K_lat
+    _t17 = _t11*_t4
+    _t18 = I_w + _t12*_t14
+    _t19 = _t17*(-_t16 + b*m) + _t18
+    _t20 = _t17*(_t16 + b*m) + _t18
+    _t21 = 1.0/(-_t15*_t15 + _t19*_t20)
+    _t22 = _t13*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r)
+    _t23 = -_t22*thetadot_r + tau_l
+    _t24 = _t22*thetadot_l + tau_r
     xdot = np.array([
         thetadot_l*(_t2 + _t7) + thetadot_r*(_t2 - _t7),
         thetadot_l*(_t8 - _t9) + thetadot_r*(_t8 + _t9),
         _t4*r*thetadot_r - _t5*thetadot_l,
         thetadot_r,
         thetadot_l,
-        _t37*(_t20*_t27 + _t31*(_t28 + _t29)),
-        _t37*(_t20*_t31 + _t27*(-_t28 + _t29)),
+        _t21*(-_t15*_t23 + _t20*_t24),
+        _t21*(-_t15*_t24 + _t19*_t23),
     ])
     return xdot
 
