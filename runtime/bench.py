@@ -23,11 +23,14 @@ import tempfile
 import time
 import timeit
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from codegen.backends import c as c_backend
+from codegen.backends.c.config import CConfig, StatusCode
 from codegen.backends.casadi import generate_c, to_casadi
 from codegen.cse import count_ops, cse_function
 from codegen.spec import FunctionSpec
@@ -223,7 +226,22 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         mapping.write_text(mapping.read_text() + extra)
         subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
         objs.append(str(obj))
-    for src in (workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c"):
+    # Ours without input/guard/output validation, to measure what the checks cost: the
+    # same specs rendered by the same backend under another prefix (wmrn_).
+    unchecked = [
+        replace(specs[n], returns_status=False, guards=(), nonfinite_input="",
+                nonfinite_output="")
+        for n in used if specs[n].returns_status
+    ]
+    cfg = CConfig(prefix="wmrn_", types_header="wmrn_types.h", real_type="wmrn_real_t",
+                  status_type="wmrn_status_t", params_ctype="wmrn_params_t",
+                  literal_macro="WMRN_LIT", status_codes=(StatusCode("WMRN_OK", 0, "ok"),))
+    for fname, text in c_backend.render_all({"wmrn_model": unchecked}, cfg).items():
+        (workdir / fname).write_text(text)
+    sources = [workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c"]
+    if unchecked:
+        sources.append(workdir / "wmrn_model.c")
+    for src in sources:
         obj = workdir / f"x_{src.stem}.o"
         subprocess.run(
             ["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", str(src), "-o", str(obj)],
@@ -266,6 +284,12 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
                 "const wmr_params_t", "const wmr_params_f32_t"
             )
         )
+    if unchecked:
+        lines.insert(0, '#include "wmrn_model.h"')
+    for spec in unchecked:
+        lines.append(_ours_wrapper(spec, "oursn", "double").replace(
+            "const wmr_params_t", "const wmrn_params_t").replace(
+            f"wmr_{spec.name}(", f"wmrn_{spec.name}("))
     for name in HAND_WRITTEN & set(used):
         lines.append(
             f"static void hand_w_{name}(const void *in, void *out) "
@@ -283,6 +307,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         fn = {
             "ours": f"ours_{name}",
             "ours_float32": f"ours32_{name}",
+            "ours_unchecked": f"oursn_{name}",
             "casadi": f"casadi_w_{name}",
             "sympy": f"sympy_w_{name}",
             "hand": f"hand_w_{name}",
@@ -323,6 +348,8 @@ def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
     cases = []
     for name in (*MODEL_FUNCTIONS, *kernels):
         variants = ["ours", "ours_float32", "casadi", "sympy"]
+        if specs[name].returns_status:
+            variants.append("ours_unchecked")
         if name in HAND_WRITTEN:
             variants.append("hand")
         cases += [{"spec": name, "variant": v} for v in variants]
@@ -501,13 +528,14 @@ def write_report(
         "",
         "## C, ns per call (ratio = variant / ours double)",
         "",
-        "| function | ours double | ours float32 | CasADi C | SymPy ccode | hand-written |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| function | ours double | ours float32 | ours, no validation | CasADi C | SymPy ccode "
+        "| hand-written |",
+        "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for f in funcs:
         ours = c[(f, "ours")]["median"]
         cells = []
-        for v in ("ours", "ours_float32", "casadi", "sympy", "hand"):
+        for v in ("ours", "ours_float32", "ours_unchecked", "casadi", "sympy", "hand"):
             if (f, v) not in c:
                 cells.append("—")
                 continue
@@ -517,6 +545,8 @@ def write_report(
         lines.append(f"| {f} | " + " | ".join(cells) + " |")
     lines += [
         "",
+        "“No validation”: the same specs without the finite-input, parameter-guard and",
+        "finite-output checks (rendered under the prefix wmrn_), i.e. what the checks cost.",
         "A controller step here is the sum of its kernels (TDE (17), TDROC gain (25), law);",
         "our complete `wmr_<ctrl>_step` adds validation, history and saturation on top.",
         "",
