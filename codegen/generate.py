@@ -90,6 +90,7 @@ def _python_files(robot: Robot) -> dict[str, str]:
         formulation_minimal=1,
         max_window=MAX_WINDOW,
         max_abs_input=MAX_ABS_INPUT,
+        c_field_names=dict(C_CONFIG.field_renames),
         param_keys=[name for name, _, _ in PARAM_FIELDS],
     )
     params = ", ".join(f'"{k}": {robot.lumped[k]!r}' for k, _, _ in PARAM_FIELDS)

@@ -104,8 +104,7 @@ def _set_item(name: str, index: int, value: float) -> Callable[[Any], None]:
 
 def _nominal(**changes: float) -> Callable[[Any], None]:
     def mutate(cfg: Any) -> None:
-        for key, value in changes.items():
-            setattr(cfg.nominal, "Iz" if key == "I" else key, value)
+        cbuild.fill_params(cfg.nominal, changes)
 
     return mutate
 

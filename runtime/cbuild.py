@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import subprocess
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -106,9 +107,16 @@ def build(
     return CLibrary(ffi, ffi.dlopen(str(so)), float32, so)
 
 
-def params_struct(lib: CLibrary, params: dict[str, float], ctype: str = "wmr_params_t") -> Any:
-    """A C parameter struct from a dict with the Python keys (``I`` → C field ``Iz``)."""
-    obj = lib.ffi.new(f"{ctype} *")
+def fill_params(obj: Any, params: Mapping[str, float]) -> Any:
+    """Set a C parameter struct's fields from a mapping with the Python keys, spelled as
+    the C backend spells them (``I`` → ``Iz``; the generated ``C_FIELD_NAMES``)."""
+    from runtime.generated_modules import controllers
+
     for key, value in params.items():
-        setattr(obj, "Iz" if key == "I" else key, float(value))
+        setattr(obj, controllers.C_FIELD_NAMES.get(key, key), float(value))
     return obj
+
+
+def params_struct(lib: CLibrary, params: Mapping[str, float], ctype: str = "wmr_params_t") -> Any:
+    """A new C parameter struct from a mapping with the Python keys."""
+    return fill_params(lib.ffi.new(f"{ctype} *"), params)

@@ -168,10 +168,9 @@ class CModel:
         return self.ffi.new("wmr_real_t[]", n)
 
     def params(self, p: Mapping[str, float]) -> Any:
-        obj = self.ffi.new("wmr_params_t *")
-        for key in hw.PARAM_KEYS:
-            setattr(obj, "Iz" if key == "I" else key, float(p[key]))
-        return obj
+        from runtime import cbuild
+
+        return cbuild.fill_params(self.ffi.new("wmr_params_t *"), {k: p[k] for k in hw.PARAM_KEYS})
 
     def read(self, buf: Any, n: int) -> Arr:
         return np.array([buf[i] for i in range(n)], dtype=np.float64)
@@ -606,8 +605,9 @@ class CController:
         self.kind = kind
         self.cfg = ffi.new(f"wmr_{kind}_config_t *")
         fields = {name for name, _ in ffi.typeof(f"wmr_{kind}_config_t").fields}
-        for key in hw.PARAM_KEYS:
-            setattr(self.cfg.nominal, "Iz" if key == "I" else key, float(nominal[key]))
+        from runtime import cbuild
+
+        cbuild.fill_params(self.cfg.nominal, {k: nominal[k] for k in hw.PARAM_KEYS})
         self.cfg.formulation = 0 if s.formulation == "paper" else 1
         for i in range(5):
             self.cfg.k1[i] = float(np.asarray(s.k1)[i])

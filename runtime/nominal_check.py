@@ -57,7 +57,10 @@ def _validate(params: Mapping[str, float], label: str) -> dict[str, float]:
     return out
 
 
-def _mass(q: NDArray[np.float64], p: Mapping[str, float], formulation: str) -> NDArray[np.float64]:
+def mass_matrix_for(
+    q: NDArray[np.float64], p: Mapping[str, float], formulation: str
+) -> NDArray[np.float64]:
+    """M̃(q) of (14) (``paper``) or Sᵀ M S (``minimal``) at parameters ``p``."""
     if formulation == "paper":
         return np.asarray(wmr_model.mass_matrix(q, p), dtype=np.float64)
     return np.asarray(wmr_model.minimal_mass_matrix(q, p), dtype=np.float64)
@@ -90,7 +93,7 @@ def tde_alpha(
             )
         for theta in HEADINGS:
             q = np.array([0.0, 0.0, theta, 0.0, 0.0])
-            m_true, m_hat = _mass(q, p, formulation), _mass(q, nom, formulation)
+            m_true, m_hat = mass_matrix_for(q, p, formulation), mass_matrix_for(q, nom, formulation)
             dev = np.linalg.solve(m_true, m_hat) - np.eye(len(m_hat))
             alpha = float(np.linalg.norm(dev, 2))
             if alpha > worst[0]:

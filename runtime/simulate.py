@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.generated_modules import wmr_model, wmr_plant
+from runtime.nominal_check import UNCERTAIN, checked_controller_config, mass_matrix_for
 from runtime.references import Reference
 
 CSRC = Path(__file__).resolve().parent / "csrc"
@@ -66,9 +67,9 @@ def roc_bounds(
     nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = 8.0
 ) -> tuple[float, float]:
     """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
-    I, K and Iw are each nominal or ``uncertainty`` above it, over headings and wheel rates
-    up to ``max_rate`` (sampled on a grid). This is where the toolchain checks the TDE
-    condition ‖M⁻¹M̂ − I‖ < 1 for a configuration."""
+    I, K and Iw are each nominal or ``uncertainty`` above it ("30 % above nominal"), over
+    headings and random wheel rates up to ``max_rate``. (The TDE condition for TDC/TDROC,
+    over a symmetric box, is ``nominal_check.check_nominal``.)"""
     alpha, phi = 0.0, 0.0
     rng = np.random.default_rng(7)
     corners = [
@@ -76,20 +77,16 @@ def roc_bounds(
             **nominal,
             **{
                 k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
-                for i, k in enumerate(("m", "I", "K", "Iw"))
+                for i, k in enumerate(UNCERTAIN)
             },
         }
-        for mask in range(16)
+        for mask in range(2 ** len(UNCERTAIN))
     ]
     for theta in np.linspace(-math.pi, math.pi, 9):
         q = np.array([0.0, 0.0, theta, 0.0, 0.0])
+        m_hat = mass_matrix_for(q, nominal, formulation)
         for p in corners:
-            if formulation == "paper":
-                m_true, m_hat = wmr_model.mass_matrix(q, p), wmr_model.mass_matrix(q, nominal)
-            else:
-                m_true = wmr_model.minimal_mass_matrix(q, p)
-                m_hat = wmr_model.minimal_mass_matrix(q, nominal)
-            inv = np.linalg.inv(m_true)
+            inv = np.linalg.inv(mass_matrix_for(q, p, formulation))
             alpha = max(alpha, float(np.linalg.norm(inv @ m_hat - np.eye(len(m_hat)), 2)))
             for eta in rng.uniform(-max_rate, max_rate, size=(4, 2)):
                 qdot = np.concatenate([wmr_model.kinematics(q, eta, p), eta])
@@ -190,8 +187,6 @@ def run(
     float32: bool = False,
 ) -> Run:
     """Simulate one controller on one reference."""
-    from runtime.nominal_check import checked_controller_config
-
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
     # The toolchain checks the TDE condition ||M^-1 Mhat - I|| < 1 over the uncertainty box
@@ -231,8 +226,7 @@ def run(
             break
         saturated += status == 1
         true_p = plant_params(robot, exp, float(t))
-        for key, value in zip(keys, true_p, strict=True):
-            setattr(pp, "Iz" if key == "I" else key, float(value))
+        cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
         rec["q"].append(true_q)
         rec["qm"].append(q_meas)
         rec["tau"].append([tau[0], tau[1]])
@@ -246,8 +240,11 @@ def run(
         # Δu_a = k s/max(‖s‖, ε) on the wheel rows, s_j = p12_j e_j + p22_j ė_j (from the
         # state's P), with the gain and ‖s‖ the C step used (ASMC: the gain before adaptation).
         used_gain = prev_gain if name == "asmc" else state.gain
-        s_w = [state.p12[i] * (ref.q[k, i] - q_meas[i])
-               + state.p22[i] * (ref.qdot[k, i] - qdot_meas[i]) for i in (3, 4)]
+        s_w = [
+            state.p12[i] * (ref.q[k, i] - q_meas[i])
+            + state.p22[i] * (ref.qdot[k, i] - qdot_meas[i])
+            for i in (3, 4)
+        ]
         denom = max(state.s_norm, exp.controller.eps)
         rec["sw"].append([used_gain * v / denom for v in s_w] if name != "tdc" else [0.0, 0.0])
         prev_gain = state.gain

@@ -55,6 +55,8 @@ ACCEL_BACKWARD = 0
 ACCEL_CENTRAL = 1
 MAX_WINDOW = 8
 MAX_ABS_INPUT = 1.0e6
+# Python key -> C struct field where they differ (the C backend's field_renames).
+C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
 PARAM_KEYS = ("m", "I", "K", "Iw", "r", "b", "d", )
 
 
