@@ -36,7 +36,12 @@ STATUS_CODES: tuple[StatusCode, ...] = (
     StatusCode(
         "WMR_ERR_BAD_BOUNDS", -16, "ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0"
     ),
-    StatusCode("WMR_ERR_BAD_ESTIMATOR", -17, "accel_estimator is not BACKWARD or CENTRAL"),
+    StatusCode(
+        "WMR_ERR_BAD_ESTIMATOR",
+        -17,
+        "accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]",
+    ),
+    StatusCode("WMR_ERR_BAD_HELD_GAIN", -18, "TDROC hold_gain is not 0 or 1, or held_gain < 0"),
 )
 
 DEFINES: tuple[tuple[str, str, str], ...] = (
@@ -44,6 +49,11 @@ DEFINES: tuple[tuple[str, str, str], ...] = (
     ("WMR_FORMULATION_MINIMAL", "1", "the two wheel angles, tau = u"),
     ("WMR_ACCEL_BACKWARD", "0", "qddot(t-h) = (qdot(t) - qdot(t-h))/h (default)"),
     ("WMR_ACCEL_CENTRAL", "1", "qddot(t-h) = (qdot(t) - qdot(t-2h))/(2h)"),
+    (
+        "WMR_ACCEL_MATCHED",
+        "2",
+        "backward quotient paired with (1-c) u(t-h) + c u(t-2h), c = rate_window/(2h)",
+    ),
     ("WMR_MAX_WINDOW", str(MAX_WINDOW), "largest TDROC window n (history size)"),
     ("WMR_NQ", "5", "generalised coordinates"),
     ("WMR_STATE_MAGIC", "0x574d52", "marks an initialised controller state"),

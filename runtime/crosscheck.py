@@ -60,6 +60,8 @@ DOUBLE_TOL = 1e-9
 #: separates rounding from a real difference (a 1 % parameter error gives > 1e-3).
 FLOAT32_TOL = 1e-4
 IMPLS = ("python", "c64", "casadi", "c32")
+# accel_estimator codes of the generated configs (WMR_ACCEL_*).
+ACCEL_CODES: dict[str, int] = {"backward": 0, "central": 1, "matched": 2}
 IMPL_TITLES = {"python": "gen-python", "c64": "C double", "casadi": "CasADi", "c32": "C float32"}
 Arr = NDArray[np.float64]
 Params = dict[str, float]
@@ -475,6 +477,7 @@ def random_sequence(
     saturation), and a random configuration."""
     h = float(rng.uniform(0.05, 0.15))
     nominal = {k: v * rng.uniform(0.8, 1.2) for k, v in hw.DRISHTI.items()}
+    accel: hc.Accel = rng.choice(list(ACCEL_CODES)).item()
     settings = hc.Settings(
         nominal=nominal,
         formulation=formulation,
@@ -484,7 +487,8 @@ def random_sequence(
         q_vel=float(rng.uniform(0.5, 2.0)),
         h=h,
         tau_max=float(rng.choice([50.0, 4.0])),
-        accel=str(rng.choice(["backward", "central"])),  # type: ignore[arg-type]
+        accel=accel,
+        rate_window=float(rng.uniform(0.0, h)) if accel == "matched" else 0.0,
         eps=float(rng.uniform(0.02, 0.5)),
         n=int(rng.integers(2, hc.MAX_WINDOW + 1)),
         a=float(rng.uniform(0.5, 1.0)),
@@ -572,7 +576,8 @@ def python_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
         q_vel=s.q_vel,
         h=s.h,
         tau_max=s.tau_max,
-        accel_estimator=gc.ACCEL_CENTRAL if s.accel == "central" else gc.ACCEL_BACKWARD,
+        accel_estimator=ACCEL_CODES[s.accel],
+        rate_window=s.rate_window,
         eps=s.eps,
         n=s.n,
         a=s.a,
@@ -614,7 +619,8 @@ class CController:
             self.cfg.k2[i] = float(np.asarray(s.k2)[i])
         values: dict[str, float | int] = {
             "q_pos": s.q_pos, "q_vel": s.q_vel, "h": s.h, "tau_max": s.tau_max,
-            "accel_estimator": 1 if s.accel == "central" else 0, "eps": s.eps, "n": s.n,
+            "accel_estimator": ACCEL_CODES[s.accel], "rate_window": s.rate_window,
+            "eps": s.eps, "n": s.n,
             "a": s.a, "alpha": s.alpha, "phi": s.phi, "gamma": s.gamma, "gain0": s.gain0,
         }  # fmt: skip
         for key, value in values.items():
@@ -649,6 +655,7 @@ class CController:
             st.p12[i], st.p22[i] = float(p12[i]), float(p22[i])
             st.q_prev[i], st.qdot_prev[i] = float(hist.q_prev[i]), float(hist.qdot_prev[i])
             st.qdot_prev2[i], st.u_prev[i] = float(hist.qdot_prev2[i]), float(hist.u_prev[i])
+            st.u_prev2[i] = float(hist.u_prev2[i])
             st.H1hat[i] = float(hist.H1hat[i])
         if "omega" in self.state_fields:
             for i in range(hc.MAX_WINDOW + 1):
@@ -671,7 +678,8 @@ def c_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
 def rounded_history(h: hc.History) -> hc.History:
     return hc.History(
         steps=h.steps, q_prev=f32(h.q_prev), qdot_prev=f32(h.qdot_prev),
-        qdot_prev2=f32(h.qdot_prev2), u_prev=f32(h.u_prev), omega=f32(h.omega),
+        qdot_prev2=f32(h.qdot_prev2), u_prev=f32(h.u_prev), u_prev2=f32(h.u_prev2),
+        omega=f32(h.omega),
         omega_count=h.omega_count, H1hat=f32(h.H1hat), gain=f32(h.gain),
         s_norm=f32(h.s_norm), u_discarded=f32(h.u_discarded), tau=f32(h.tau),
     )  # fmt: skip
@@ -681,7 +689,8 @@ def rounded_settings(s: hc.Settings, nominal: Params) -> hc.Settings:
     return hc.Settings(
         nominal=f32_params(nominal), formulation=s.formulation, k1=f32(s.k1), k2=f32(s.k2),
         q_pos=f32(s.q_pos), q_vel=f32(s.q_vel), h=f32(s.h), tau_max=f32(s.tau_max),
-        accel=s.accel, eps=f32(s.eps), n=s.n, a=f32(s.a), alpha=f32(s.alpha), phi=f32(s.phi),
+        accel=s.accel, rate_window=f32(s.rate_window), eps=f32(s.eps), n=s.n, a=f32(s.a),
+        alpha=f32(s.alpha), phi=f32(s.phi),
         gamma=f32(s.gamma), gain0=f32(s.gain0),
     )  # fmt: skip
 
@@ -789,7 +798,8 @@ def check_controllers(
     rows: dict[str, Row] = {}
     cover = dict.fromkeys(
         ("steps", "saturated", "inside boundary layer", "outside boundary layer",
-         "TDE active", "central estimator", "window full (n Ω differences)"), 0
+         "TDE active", "central estimator", "matched estimator",
+         "window full (n Ω differences)"), 0
     )  # fmt: skip
     for kind, seq in sequences:
         form = seq.settings.formulation
@@ -806,6 +816,7 @@ def check_controllers(
                 cover["outside boundary layer"] += rec.s_norm >= s.eps
             cover["TDE active"] += rec.tde_inputs is not None
             cover["central estimator"] += rec.tde_inputs is not None and s.accel == "central"
+            cover["matched estimator"] += rec.tde_inputs is not None and s.accel == "matched"
             cover["window full (n Ω differences)"] += (
                 rec.window is not None and int(np.count_nonzero(rec.window[1])) == s.n
             )

@@ -2,7 +2,9 @@
 
     [controller]   gains and TDROC/ROC/ASMC parameters (paper: K1 = K2 = 4 I, Q = I,
                    a = 0.9, n = 4, eps = 0.1, h = 0.1 s, ROC bounds 30 %)
-    [plant]        integration rate, encoder resolution, friction, payload schedule
+    [plant]        integration rate, friction, payload schedule
+    [sensing]      how wheel angles and rates are measured, and the estimator of q̈(t − h)
+                   that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        which paths, their duration
 
 A field that is unknown, missing its type, non-finite or out of range is rejected with an
@@ -40,7 +42,6 @@ class ControllerSettings:
 @dataclass(frozen=True)
 class PlantSettings:
     substeps: int = 100  # RK4 steps per control sample (1 kHz at h = 0.1 s)
-    encoder_ppr: int = 500  # pulses per revolution, quadrature: 4 counts per pulse
     viscous: float = 0.05  # N m s/rad per wheel, unknown to the controllers
     coulomb: float = 0.3  # N m per wheel
     fixed_payload: float = 6.0  # kg, rangefinder, always on
@@ -53,6 +54,45 @@ class PlantSettings:
     extra_period: float = 20.0  # s: on for half a period, off for the other half
 
 
+VELOCITY_MODELS = ("sample-instant", "encoder-average", "motor-encoder")
+ACCEL_ESTIMATORS = ("matched", "backward", "central")
+
+
+@dataclass(frozen=True)
+class SensingSettings:
+    """How the controller's measurements are made (an open choice of the paper, which only
+    says that Drishti has 500-ppr wheel encoders and that h = 100 ms is set by its link).
+
+    ``velocity``:
+      * ``sample-instant`` (default): the wheel rate at the sample instant, as a motor drive
+        that runs its own fast loop reports it over the link. The paper's h is the link's
+        period, not the drive's, so this is the reading closest to Drishti's architecture.
+      * ``encoder-average``: the wheel-encoder counts differenced over the whole sample,
+        Δθ/h: the mean rate over [t − h, t], half a sample old.
+      * ``motor-encoder``: an encoder on the motor side of a ``gear_ratio`` gearbox
+        (``encoder_ppr`` per motor revolution), the rate taken over the last ``window`` s.
+    Wheel angles (and the odometry pose from them) are always the quantised encoder angles.
+
+    ``accel_estimator`` is q̈(t − h) of (17): ``matched`` (default) pairs the backward
+    quotient with the blend of inputs that produced it for this sensing, exact under
+    zero-order hold for a constant H1; ``backward`` and ``central`` are the plain quotients.
+    """
+
+    velocity: str = "sample-instant"
+    encoder_ppr: int = 500  # pulses per revolution, quadrature: 4 counts per pulse
+    gear_ratio: float = 20.0  # motor revolutions per wheel revolution (motor-encoder)
+    window: float = 0.01  # s, span of the motor-encoder rate (motor-encoder)
+    accel_estimator: str = "matched"
+
+    def rate_window(self, h: float) -> float:
+        """The span over which the rate is measured: 0, h or ``window``."""
+        return {"sample-instant": 0.0, "encoder-average": h}.get(self.velocity, self.window)
+
+    def counts_per_wheel_rev(self) -> float:
+        gear = self.gear_ratio if self.velocity == "motor-encoder" else 1.0
+        return 4.0 * self.encoder_ppr * gear
+
+
 @dataclass(frozen=True)
 class PathSettings:
     circle_duration: float = 30.0
@@ -63,6 +103,7 @@ class PathSettings:
 class Experiment:
     controller: ControllerSettings = ControllerSettings()
     plant: PlantSettings = PlantSettings()
+    sensing: SensingSettings = SensingSettings()
     paths: PathSettings = PathSettings()
     source: str = "<paper defaults>"
 
@@ -78,6 +119,8 @@ _POSITIVE = {
     "tau_max",
     "substeps",
     "encoder_ppr",
+    "gear_ratio",
+    "window",
     "coulomb_speed",
     "circle_duration",
     "lawnmower_duration",
@@ -94,6 +137,10 @@ _NON_NEGATIVE = {
 }
 
 
+_CHOICES = {"velocity": VELOCITY_MODELS, "accel_estimator": ACCEL_ESTIMATORS}
+_MOVED = {"plant.encoder_ppr": "sensing.encoder_ppr"}
+
+
 def _section(where: str, name: str, data: Any, cls: type) -> Any:
     if not isinstance(data, dict):
         raise ExperimentFileError(f"{where}: [{name}] must be a table")
@@ -101,10 +148,22 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
     values: dict[str, Any] = {}
     for key, value in data.items():
         label = f"{name}.{key}"
+        if label in _MOVED:
+            raise ExperimentFileError(
+                f"{where}: field '{label}' has moved to '{_MOVED[label]}' ([sensing] section)"
+            )
         if key not in known:
             raise ExperimentFileError(
                 f"{where}: unknown field '{label}' (expected one of {', '.join(known)})"
             )
+        if key in _CHOICES:
+            if value not in _CHOICES[key]:
+                raise ExperimentFileError(
+                    f"{where}: field '{label}' must be one of "
+                    f"{', '.join(repr(c) for c in _CHOICES[key])}, got {value!r}"
+                )
+            values[key] = value
+            continue
         want_int = known[key].type in ("int", int)
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise ExperimentFileError(f"{where}: field '{label}' must be a number, got {value!r}")
@@ -139,14 +198,40 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ExperimentFileError(f"{where}: not valid TOML: {exc}") from None
-    sections = {"controller": ControllerSettings, "plant": PlantSettings, "paths": PathSettings}
+    sections = {
+        "controller": ControllerSettings,
+        "plant": PlantSettings,
+        "sensing": SensingSettings,
+        "paths": PathSettings,
+    }
     unknown = sorted(set(data) - set(sections))
     if unknown:
         raise ExperimentFileError(
-            f"{where}: unknown section '{unknown[0]}' (expected controller, plant, paths)"
+            f"{where}: unknown section '{unknown[0]}' (expected {', '.join(sections)})"
         )
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
-    return Experiment(**parts, source=where)
+    exp = Experiment(**parts, source=where)
+    check_sensing(exp, where)
+    return exp
+
+
+def check_sensing(exp: Experiment, where: str = "<experiment>") -> None:
+    """The motor-encoder window must fit in a sample and on the simulator's time grid."""
+    sensing, h = exp.sensing, exp.controller.h
+    if sensing.velocity != "motor-encoder":
+        return
+    if sensing.window > h:
+        raise ExperimentFileError(
+            f"{where}: field 'sensing.window' = {sensing.window!r} s must not exceed the "
+            f"sample time controller.h = {h!r} s"
+        )
+    dt = h / exp.plant.substeps
+    steps = sensing.window / dt
+    if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+        raise ExperimentFileError(
+            f"{where}: field 'sensing.window' = {sensing.window!r} s must be a multiple of "
+            f"the integration step controller.h / plant.substeps = {dt:.6g} s"
+        )
 
 
 def load_experiment(path: str | Path | None = None) -> Experiment:

@@ -133,6 +133,7 @@ def checked_controller_config(
     nominal: dict[str, float],
     exp: Experiment,
     true_params: Mapping[str, float] | None = None,
+    held_gain: float | None = None,
 ) -> Any:
     """``simulate.controller_config`` after :func:`check_nominal` over the experiment's
     uncertainty box (``controller.uncertainty``) for the time-delay controllers."""
@@ -142,4 +143,4 @@ def checked_controller_config(
         check_nominal(
             nominal, exp.controller.uncertainty, true_params=true_params, formulation=formulation
         )
-    return simulate.controller_config(lib, name, formulation, nominal, exp)
+    return simulate.controller_config(lib, name, formulation, nominal, exp, held_gain)

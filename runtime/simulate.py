@@ -3,9 +3,11 @@
 Plant: the constrained dynamics derived with a lateral first moment (``wmr_plant``),
 true parameters = robot + payload schedule, wheel friction (viscous + Coulomb) unknown to
 the controllers, fixed-step RK4 in C (``runtime/csrc/wmr_sim.c``) at ``substeps / h``.
-Controllers: sampled every h with zero-order hold, fed what Drishti measures — wheel
-angles from quadrature encoders (4 × ppr counts per revolution), wheel rates by
-differencing them, and the pose by integrating (31) from those angles (odometry).
+Controllers: sampled every h with zero-order hold, fed what the experiment's ``[sensing]``
+says is measured — wheel angles from quadrature encoders (4 × ppr counts per revolution,
+times the gear ratio for a motor-side encoder), wheel rates at the sample instant, or
+differenced over the sample or over a short window, and the pose by integrating (31) from
+the encoder angles (odometry).
 """
 
 from __future__ import annotations
@@ -100,9 +102,20 @@ def roc_bounds(
     return alpha, phi
 
 
+# accel_estimator of the experiment file -> WMR_ACCEL_* of the generated configs.
+ACCEL_CODES = {"backward": 0, "central": 1, "matched": 2}
+
+
 def controller_config(
-    lib: cbuild.CLibrary, name: str, formulation: str, nominal: dict[str, float], exp: Experiment
+    lib: cbuild.CLibrary,
+    name: str,
+    formulation: str,
+    nominal: dict[str, float],
+    exp: Experiment,
+    held_gain: float | None = None,
 ) -> Any:
+    """The C configuration of one controller for the experiment. ``held_gain`` (TDROC only)
+    holds k̂ at that value instead of (25): the stability analysis' verification."""
     c = exp.controller
     cfg = lib.ffi.new(f"wmr_{name}_config_t *")
     cfg.nominal = cbuild.params_struct(lib, nominal)[0]
@@ -110,10 +123,17 @@ def controller_config(
     cfg.k1 = [c.k1] * 5
     cfg.k2 = [c.k2] * 5
     cfg.q_pos, cfg.q_vel, cfg.h, cfg.tau_max = c.q_pos, c.q_vel, c.h, c.tau_max
+    if name in ("tdc", "tdroc"):
+        cfg.accel_estimator = ACCEL_CODES[exp.sensing.accel_estimator]
+        cfg.rate_window = exp.sensing.rate_window(c.h)
     if name != "tdc":
         cfg.eps = c.eps
     if name == "tdroc":
         cfg.n, cfg.a = c.n, c.a
+        if held_gain is not None:
+            cfg.hold_gain, cfg.held_gain = 1, held_gain
+    elif held_gain is not None:
+        raise ValueError(f"held_gain applies to TDROC only, not {name}")
     if name == "roc":
         cfg.alpha, cfg.phi = roc_bounds(nominal, c.uncertainty, formulation)
     if name == "asmc":
@@ -148,34 +168,60 @@ class Run:
         return np.linalg.norm(self.q[:, :2] - self.q_des[:, :2], axis=1)
 
 
-class Odometry:
-    """Encoders (quantised wheel angles) and pose integration by (31)."""
+class Sensors:
+    """Encoders (quantised wheel angles), wheel rates by the experiment's sensing model, and
+    the pose by integrating (31) from the encoder angles (odometry)."""
 
-    def __init__(self, q0: NDArray[np.float64], ppr: int, h: float, params: dict[str, float]):
-        self.counts_per_rad = 4 * ppr / (2 * math.pi)
-        self.h = h
+    def __init__(self, q0: NDArray[np.float64], exp: Experiment, params: dict[str, float]):
+        self.sensing = exp.sensing
+        self.counts_per_rad = self.sensing.counts_per_wheel_rev() / (2 * math.pi)
+        self.h = exp.controller.h
+        self.window = self.sensing.rate_window(self.h)
         self.params = params
         self.pose = q0[:3].copy()
         self.angles = self.quantise(q0[3:5])
-        self.rates = np.zeros(2)
 
     def quantise(self, angles: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.floor(angles * self.counts_per_rad) / self.counts_per_rad
 
+    def rates(
+        self,
+        angles: NDArray[np.float64],
+        true_rates: NDArray[np.float64],
+        window_start: NDArray[np.float64] | None,
+    ) -> NDArray[np.float64]:
+        """Wheel rates as measured: at the instant, over the sample, or over the window."""
+        v = self.sensing.velocity
+        if v == "sample-instant":
+            return true_rates.copy()
+        if v == "encoder-average":
+            return (angles - self.angles) / self.h
+        assert window_start is not None, "motor-encoder needs the angles at t - window"
+        return (angles - self.quantise(window_start)) / self.window
+
     def measure(
-        self, true_angles: NDArray[np.float64]
+        self,
+        true_angles: NDArray[np.float64],
+        true_rates: NDArray[np.float64],
+        window_start: NDArray[np.float64] | None = None,
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """(q, q̇) as the controller sees them at a sample instant."""
         angles = self.quantise(true_angles)
         delta = angles - self.angles
         p = self.params
         dtheta = p["r"] * (delta[0] - delta[1]) / p["b"]
         mid = np.array([*self.pose[:2], self.pose[2] + dtheta / 2, 0.0, 0.0])
         self.pose = self.pose + wmr_model.kinematics(mid, delta, p)
+        rates = self.rates(angles, true_rates, window_start)
         self.angles = angles
-        self.rates = delta / self.h
         q = np.concatenate([self.pose, angles])
-        qdot = np.concatenate([wmr_model.kinematics(q, self.rates, p), self.rates])
+        qdot = np.concatenate([wmr_model.kinematics(q, rates, p), rates])
         return q, qdot
+
+
+def advance(clib: Any, pp: Any, friction: Any, x: Any, tau: Any, dt: float, nsub: int) -> bool:
+    """RK4 over ``nsub`` steps under zero-order hold; False if the state became non-finite."""
+    return nsub == 0 or clib.sim_plant_advance(pp, friction, x, tau, dt, nsub) == 0
 
 
 def run(
@@ -185,13 +231,14 @@ def run(
     robot: dict[str, float],
     exp: Experiment,
     float32: bool = False,
+    held_gain: float | None = None,
 ) -> Run:
-    """Simulate one controller on one reference."""
+    """Simulate one controller on one reference (``held_gain``: TDROC with k̂ held)."""
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
     # The toolchain checks the TDE condition ||M^-1 Mhat - I|| < 1 over the uncertainty box
     # when it builds a TDC/TDROC configuration (ValueError naming alpha otherwise).
-    cfg = checked_controller_config(lib, name, formulation, robot, exp)
+    cfg = checked_controller_config(lib, name, formulation, robot, exp, held_gain=held_gain)
     state = ffi.new(f"wmr_{name}_state_t *")
     status = getattr(clib, f"wmr_{name}_init")(state, cfg)
     if status != 0:
@@ -203,7 +250,10 @@ def run(
     buf = {k: ffi.new("wmr_real_t[5]") for k in ("q", "qdot", "qd", "qdd", "qddd")}
     tau = ffi.new("wmr_real_t[2]")
     pp = ffi.new("wmr_plant_params_t *")
-    odo = Odometry(np.array(ref.q[0]), exp.plant.encoder_ppr, h, robot)
+    sensors = Sensors(np.array(ref.q[0]), exp, robot)
+    # Substeps before the motor-encoder window opens (all of them for the other models).
+    n_window = round(sensors.window / (h / nsub)) if exp.sensing.velocity == "motor-encoder" else 0
+    window_start: NDArray[np.float64] | None = None
     n = len(ref.t)
     keys_rec = ("q", "qm", "tau", "gain", "s", "ud", "mass", "h1", "en", "sw")
     rec: dict[str, list[Any]] = {k: [] for k in keys_rec}
@@ -214,7 +264,12 @@ def run(
     for k in range(n):
         t = ref.t[k]
         true_q = np.array([x[i] for i in range(5)])
-        q_meas, qdot_meas = odo.measure(true_q[3:5]) if k else (ref.q[0].copy(), np.zeros(5))
+        true_rates = np.array([x[5], x[6]])
+        q_meas, qdot_meas = (
+            sensors.measure(true_q[3:5], true_rates, window_start)
+            if k
+            else (ref.q[0].copy(), np.zeros(5))
+        )
         buf["q"][0:5] = list(q_meas)
         buf["qdot"][0:5] = list(qdot_meas)
         buf["qd"][0:5] = list(ref.q[k])
@@ -248,7 +303,13 @@ def run(
         denom = max(state.s_norm, exp.controller.eps)
         rec["sw"].append([used_gain * v / denom for v in s_w] if name != "tdc" else [0.0, 0.0])
         prev_gain = state.gain
-        if k < n - 1 and clib.sim_plant_advance(pp, friction, x, tau, h / nsub, nsub) != 0:
+        if k == n - 1:
+            break
+        ok = advance(clib, pp, friction, x, tau, h / nsub, nsub - n_window)
+        if ok and n_window:  # the motor encoder's window opens n_window substeps before t + h
+            window_start = np.array([x[3], x[4]])
+            ok = advance(clib, pp, friction, x, tau, h / nsub, n_window)
+        if not ok:
             failed_at = float(t)
             break
     m = len(rec["q"])

@@ -43,7 +43,12 @@ int main(void)
     config.h = WMR_LIT(0.01);
     config.tau_max = WMR_LIT(50.0);
     config.eps = WMR_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1 s */
-    config.accel_estimator = WMR_ACCEL_BACKWARD;
+    /* Rates read at the sample instant (a drive's report): the matched estimate with a zero
+       window. Encoder counts differenced over h would need rate_window = h. */
+    config.accel_estimator = WMR_ACCEL_MATCHED;
+    config.rate_window = WMR_LIT(0.0);
+    config.hold_gain = 0;
+    config.held_gain = WMR_LIT(0.0);
     config.n = 4;
     config.a = WMR_LIT(0.9);
     status = wmr_tdroc_init(&state, &config);

@@ -125,7 +125,7 @@ int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_
 }
 
 void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],
-    wmr_real_t u_prev[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
+    wmr_real_t u_prev[5], wmr_real_t u_prev2[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t tau[2])
 {
     int i;
@@ -133,6 +133,7 @@ void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t 
         q_prev[i] = q[i];
         qdot_prev2[i] = qdot_prev[i];
         qdot_prev[i] = qdot[i];
+        u_prev2[i] = u_prev[i];
         u_prev[i] = WMR_LIT(0.0);
     }
     u_prev[3] = tau[0];

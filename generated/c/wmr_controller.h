@@ -52,9 +52,9 @@ int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_
     const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
     wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5]);
 
-/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h) and u(t-h) = B tau. */
+/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
 void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],
-    wmr_real_t u_prev[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
+    wmr_real_t u_prev[5], wmr_real_t u_prev2[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t tau[2]);
 
 /** Clip tau to +-tau_max: WMR_WARN_SATURATED if it had to, else WMR_OK. */

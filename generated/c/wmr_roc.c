@@ -49,6 +49,7 @@ wmr_status_t wmr_roc_init(wmr_roc_state_t *state, const wmr_roc_config_t *config
         fresh.qdot_prev[i] = WMR_LIT(0.0);
         fresh.qdot_prev2[i] = WMR_LIT(0.0);
         fresh.u_prev[i] = WMR_LIT(0.0);
+        fresh.u_prev2[i] = WMR_LIT(0.0);
         fresh.H1hat[i] = WMR_LIT(0.0);
     }
     (void)j;
@@ -112,7 +113,8 @@ wmr_status_t wmr_roc_step(wmr_roc_state_t *state, const wmr_roc_config_t *config
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, q, qdot, out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
+                     out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

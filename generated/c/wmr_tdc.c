@@ -19,7 +19,12 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     if (status != WMR_OK) {
         return status;
     }
-    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator != WMR_ACCEL_CENTRAL) {
+    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator != WMR_ACCEL_CENTRAL
+        && config->accel_estimator != WMR_ACCEL_MATCHED) {
+        return WMR_ERR_BAD_ESTIMATOR;
+    }
+    if (!isfinite(config->rate_window) || config->rate_window < WMR_LIT(0.0)
+        || config->rate_window > config->h) {
         return WMR_ERR_BAD_ESTIMATOR;
     }
     return wmr_check_nominal(&config->nominal);
@@ -45,6 +50,7 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
         fresh.qdot_prev[i] = WMR_LIT(0.0);
         fresh.qdot_prev2[i] = WMR_LIT(0.0);
         fresh.u_prev[i] = WMR_LIT(0.0);
+        fresh.u_prev2[i] = WMR_LIT(0.0);
         fresh.H1hat[i] = WMR_LIT(0.0);
     }
     (void)j;
@@ -88,13 +94,19 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
                               config->k1, config->k2, state->p12, state->p22,
                               e, edot, qdd, k1, k2, p12, p22);
-    /* (17): H1hat from the previous input and a difference quotient of the rates. */
+    /* (17): H1hat from the input that produced the estimated acceleration and a difference
+       quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
+       the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
+       u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2) {
         const int central = config->accel_estimator == WMR_ACCEL_CENTRAL;
         const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
+        const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
+            ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
         wmr_real_t up[5], qdn[5], qdthen[5];
         for (i = 0; i < nc; ++i) {
-            up[i] = state->u_prev[paper ? i : 3 + i];
+            const int row = paper ? i : 3 + i;
+            up[i] = (WMR_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
             qdn[i] = qdot[off + i];
             qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
@@ -128,7 +140,8 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, q, qdot, out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
+                     out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

@@ -25,7 +25,9 @@ typedef struct {
     wmr_real_t q_vel;
     wmr_real_t h;           /* sample time [s] */
     wmr_real_t tau_max;     /* torque limit [N m]; larger torques are clipped and reported */
-    int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD or WMR_ACCEL_CENTRAL */
+    int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD, _CENTRAL or _MATCHED */
+    wmr_real_t rate_window; /* span [s] over which qdot is measured, 0..h (MATCHED): 0 for a
+                               rate at the sample instant, h for encoder counts over h */
 } wmr_tdc_config_t;
 
 /* Caller-owned state of TDC; fixed size, no heap. */
@@ -38,6 +40,7 @@ typedef struct {
     wmr_real_t qdot_prev[5];  /* qdot(t-h) */
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    wmr_real_t u_prev2[5];  /* u(t-2h) applied */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
     wmr_real_t s_norm;      /* ||s|| in the last step */

@@ -25,10 +25,14 @@ typedef struct {
     wmr_real_t q_vel;
     wmr_real_t h;           /* sample time [s] */
     wmr_real_t tau_max;     /* torque limit [N m]; larger torques are clipped and reported */
-    int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD or WMR_ACCEL_CENTRAL */
+    int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD, _CENTRAL or _MATCHED */
+    wmr_real_t rate_window; /* span [s] over which qdot is measured, 0..h (MATCHED): 0 for a
+                               rate at the sample instant, h for encoder counts over h */
     wmr_real_t eps;         /* boundary layer of (24)/(25) */
     int n;                  /* window of past instants, 2..WMR_MAX_WINDOW */
     wmr_real_t a;           /* discount, 0 < a <= 1; weights a^(i-1), normalised */
+    int hold_gain;          /* 0: k-hat from (25); 1: k-hat held at held_gain */
+    wmr_real_t held_gain;   /* >= 0, used when hold_gain = 1 */
 } wmr_tdroc_config_t;
 
 /* Caller-owned state of TDROC; fixed size, no heap. */
@@ -41,6 +45,7 @@ typedef struct {
     wmr_real_t qdot_prev[5];  /* qdot(t-h) */
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    wmr_real_t u_prev2[5];  /* u(t-2h) applied */
     wmr_real_t omega[WMR_MAX_WINDOW + 1][5]; /* Omega(1..), newest first */
     int omega_count;        /* valid rows of omega */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F for minv_for (25) */

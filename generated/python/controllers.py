@@ -47,12 +47,14 @@ STATUS: dict[str, int] = {
     "WMR_ERR_BAD_FORMULATION": -14,  # formulation is not PAPER or MINIMAL
     "WMR_ERR_NOT_INITIALISED": -15,  # state not initialised by _init
     "WMR_ERR_BAD_BOUNDS": -16,  # ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0
-    "WMR_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD or CENTRAL
+    "WMR_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
+    "WMR_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1
 ACCEL_BACKWARD = 0
 ACCEL_CENTRAL = 1
+ACCEL_MATCHED = 2
 MAX_WINDOW = 8
 MAX_ABS_INPUT = 1.0e6
 # Python key -> C struct field where they differ (the C backend's field_renames).
@@ -82,6 +84,9 @@ class Config:
     h: float = 0.1
     tau_max: float = 50.0
     accel_estimator: int = ACCEL_BACKWARD
+    rate_window: float = 0.0
+    hold_gain: int = 0
+    held_gain: float = 0.0
     eps: float = 0.1
     n: int = 4
     a: float = 0.9
@@ -128,6 +133,7 @@ class _Controller:
         self.qdot_prev = np.zeros(5)
         self.qdot_prev2 = np.zeros(5)
         self.u_prev = np.zeros(5)
+        self.u_prev2 = np.zeros(5)
         self.omega = np.zeros((MAX_WINDOW + 1, 5))
         self.omega_count = 0
         self.H1hat = np.zeros(5)
@@ -154,8 +160,13 @@ class _Controller:
             raise ControllerError("WMR_ERR_BAD_GAINS", "Q must be positive definite")
         if not (math.isfinite(c.tau_max) and c.tau_max > 0.0):
             raise ControllerError("WMR_ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}")
-        if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL):
+        if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED):
             raise ControllerError("WMR_ERR_BAD_ESTIMATOR", f"accel_estimator = {c.accel_estimator!r}")
+        if cls.tde and not (math.isfinite(c.rate_window) and 0.0 <= c.rate_window <= c.h):
+            raise ControllerError("WMR_ERR_BAD_ESTIMATOR", f"rate_window = {c.rate_window!r} outside [0, h]")
+        if cls.window and not (c.hold_gain in (0, 1) and math.isfinite(c.held_gain) and c.held_gain >= 0.0):
+            raise ControllerError("WMR_ERR_BAD_HELD_GAIN",
+                                  f"hold_gain = {c.hold_gain!r}, held_gain = {c.held_gain!r}")
         if cls.switching and not _positive(c.eps):
             raise ControllerError("WMR_ERR_BAD_EPS", f"eps = {c.eps!r} must be > 0")
         if cls.window:
@@ -215,7 +226,9 @@ class _Controller:
         if self.tde:
             H1hat = np.zeros(5)
             if self.steps >= 2:
-                up = self.u_prev[0:5] if paper else self.u_prev[3:5]
+                # MATCHED: rates averaged over rate_window pair with a blend of the last two inputs.
+                c2 = c.rate_window / (2.0 * c.h) if c.accel_estimator == ACCEL_MATCHED else 0.0
+                up = ((1.0 - c2) * self.u_prev + c2 * self.u_prev2)[sl]
                 tde_fn = laws.paper_tde if paper else laws.minimal_tde
                 central = c.accel_estimator == ACCEL_CENTRAL
                 then = self.qdot_prev2 if central else self.qdot_prev
@@ -229,7 +242,9 @@ class _Controller:
                 if omega_count <= MAX_WINDOW:
                     omega_count += 1
             gain = 0.0
-            if omega_count >= 2:
+            if c.hold_gain:
+                gain = float(c.held_gain)
+            elif omega_count >= 2:
                 active = min(omega_count - 1, c.n)
                 w = np.zeros(MAX_WINDOW)
                 wi = 1.0
@@ -272,6 +287,7 @@ class _Controller:
         self.q_prev = qv.copy()
         self.qdot_prev2 = self.qdot_prev.copy()
         self.qdot_prev = qdv.copy()
+        self.u_prev2 = self.u_prev
         self.u_prev = np.array([0.0, 0.0, 0.0, tau[0], tau[1]])
         self.tau = tau.copy()
         self.steps += 1

@@ -44,6 +44,7 @@ from runtime.handwritten import model
 Vec = NDArray[np.float64]
 Kind = Literal["tdc", "tdroc", "roc", "asmc"]
 Formulation = Literal["paper", "minimal"]
+Accel = Literal["backward", "central", "matched"]
 KINDS: tuple[Kind, ...] = ("tdc", "tdroc", "roc", "asmc")
 FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
 MAX_WINDOW = 8  # history rows kept for Ω (the generated C state has MAX_WINDOW + 1 rows)
@@ -61,7 +62,8 @@ class Settings:
     q_vel: float = 1.0
     h: float = 0.1
     tau_max: float = 50.0
-    accel: Literal["backward", "central"] = "backward"
+    accel: Accel = "backward"
+    rate_window: float = 0.0  # s, span of the rate measurement (matched estimator)
     eps: float = 0.1
     n: int = 4
     a: float = 0.9
@@ -80,6 +82,7 @@ class History:
     qdot_prev: Vec = field(default_factory=lambda: np.zeros(5))
     qdot_prev2: Vec = field(default_factory=lambda: np.zeros(5))
     u_prev: Vec = field(default_factory=lambda: np.zeros(5))  # B τ actually applied
+    u_prev2: Vec = field(default_factory=lambda: np.zeros(5))  # the one before
     omega: NDArray[np.float64] = field(default_factory=lambda: np.zeros((MAX_WINDOW + 1, 5)))
     omega_count: int = 0
     H1hat: Vec = field(default_factory=lambda: np.zeros(5))
@@ -204,10 +207,14 @@ class Controller:
                 span = 2.0 * cfg.h if central else cfg.h
                 then = (hist.qdot_prev2 if central else hist.qdot_prev)[sl]
                 qdd_est = (qd_[sl] - then) / span
-                H1[:nc] = hist.u_prev[sl] - self.mass(hist.q_prev) @ qdd_est
+                # Rates averaged over w: the quotient is (1 − c) q̈ under u(t − h) + c q̈ under
+                # u(t − 2h), c = w / 2h; pair it with the same blend of inputs.
+                c2 = cfg.rate_window / (2.0 * cfg.h) if cfg.accel == "matched" else 0.0
+                u_paired = ((1.0 - c2) * hist.u_prev + c2 * hist.u_prev2)[sl]
+                H1[:nc] = u_paired - self.mass(hist.q_prev) @ qdd_est
                 tde_inputs = (
                     hist.q_prev.copy(),
-                    hist.u_prev[sl].copy(),
+                    u_paired.copy(),
                     qd_[sl].copy(),
                     then.copy(),
                     span,
@@ -267,6 +274,7 @@ class Controller:
             qdot_prev=qd_.copy(),
             qdot_prev2=hist.qdot_prev.copy(),
             u_prev=np.array([0.0, 0.0, 0.0, tau[0], tau[1]]),
+            u_prev2=hist.u_prev.copy(),
             omega=omega,
             omega_count=count,
             H1hat=H1,
