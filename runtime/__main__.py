@@ -2,6 +2,7 @@
 
 python -m runtime crosscheck            # generated code vs hand-written equations
 python -m runtime reproduce [--experiment F.toml] [--out DIR] [--quick]
+python -m runtime stability [--experiment F.toml] [--robot F.toml] [--json]
 python -m runtime bench [--quick]
 """
 
@@ -20,6 +21,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     sub.add_parser(
         "reproduce", help="run the paper's experiments, write plots and tables", add_help=False
+    )
+    sub.add_parser(
+        "stability",
+        help="predict each controller's sampled-data stability on a robot",
+        add_help=False,
     )
     sub.add_parser("bench", help="benchmark the generated code", add_help=False)
     args, rest = parser.parse_known_args(argv)

@@ -143,4 +143,52 @@ def checked_controller_config(
         check_nominal(
             nominal, exp.controller.uncertainty, true_params=true_params, formulation=formulation
         )
+    check_sampled_loop(name, formulation, nominal, exp)
     return simulate.controller_config(lib, name, formulation, nominal, exp, held_gain)
+
+
+class UnstableConfiguration(ValueError):
+    """The sampled closed loop of a configuration is predicted unstable on its robot."""
+
+
+class SwitchingGainWarning(UserWarning):
+    """A switching gain at the configuration's setting exceeds the stable boundary-layer gain."""
+
+
+def check_sampled_loop(name: str, formulation: str, nominal: dict[str, float],
+                       exp: Experiment) -> None:
+    """Refuse a configuration whose sampled closed loop (``runtime.stability``: plant under
+    ZOH, the experiment's sensing and estimator, the law, linearised on the circle) is
+    unstable without any switching gain; warn when ROC's gain at zero error (ρ/ε) is beyond
+    the largest stable boundary-layer gain."""
+    import warnings
+
+    from runtime import stability
+
+    pen = stability.pencil(stability.setting(name, formulation, nominal, exp))
+    radius = pen.radius(0.0)
+    if radius >= 1.0:
+        other = "minimal" if formulation == "paper" else "paper"
+        alt = stability.pencil(stability.setting(name, other, nominal, exp)).radius(0.0)
+        hint = (
+            f"; the {other} formulation is predicted stable (spectral radius {alt:.3f})"
+            if alt < 1.0
+            else f"; the {other} formulation is unstable too (spectral radius {alt:.3f})"
+        )
+        raise UnstableConfiguration(
+            f"{name}/{formulation}: the sampled closed loop is predicted unstable on this "
+            f"robot (spectral radius {radius:.3f} >= 1 per sample of h = {exp.controller.h} s "
+            f"with {exp.sensing.velocity} rates, before any switching gain){hint}. "
+            "See `python -m runtime stability` and docs/CONTROLLERS.md."
+        )
+    if name == "roc":
+        g, _, _ = stability.setting_gain(name, formulation, nominal, exp, measure=False)
+        g_max = pen.max_stable_gain()
+        if g >= g_max:
+            warnings.warn(
+                f"roc/{formulation}: the switching gain at zero error rho/eps = {g:.3g} is "
+                f"beyond the largest stable boundary-layer gain {g_max:.3g}: expect "
+                "chattering or divergence inside the boundary layer (raise eps)",
+                SwitchingGainWarning,
+                stacklevel=2,
+            )
