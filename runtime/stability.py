@@ -143,7 +143,7 @@ class ClosedLoop:
         pm = [wmr_laws.lyapunov_p([s.k1, s.k2, s.q_pos, s.q_vel]) for _ in range(5)]
         self.p12 = np.array([p[1] for p in pm])
         self.p22 = np.array([p[2] for p in pm])
-        self.ref = references.circle(dict(self.nom), s.h, ANALYSIS_TIME + 3 * s.h)
+        self.ref = references.circle(dict(self.nom), s.h, ANALYSIS_TIME + 20 * s.h)
         self.k = round(ANALYSIS_TIME / s.h)
 
     # -- one sample ------------------------------------------------------------------
@@ -339,9 +339,7 @@ def pencil(s: LoopSetting) -> Pencil:
     j1 = loop.jacobian(1.0) - j0
     states = loop_states(j0 + j1)
     ix = np.ix_(states, states)
-    neutral = min(
-        neutral_count(np.linalg.eigvals(j0[ix] + g * j1[ix])) for g in (0.0, 1.0, 10.0)
-    )
+    neutral = min(neutral_count(np.linalg.eigvals(j0[ix] + g * j1[ix])) for g in (0.0, 1.0, 10.0))
     return Pencil(j0[ix], j1[ix], tuple(states), neutral)
 
 
@@ -408,8 +406,9 @@ class Analysis:
     measured_khat: float | None
 
 
-def measured_gain(controller: str, formulation: str, robot: dict[str, float],
-                  exp: Experiment) -> float:
+def measured_gain(
+    controller: str, formulation: str, robot: dict[str, float], exp: Experiment
+) -> float:
     """Median switching gain over a closed-loop circle at the experiment's setting."""
     from runtime.simulate import run
 
@@ -420,7 +419,10 @@ def measured_gain(controller: str, formulation: str, robot: dict[str, float],
 
 
 def setting_gain(
-    controller: str, formulation: str, robot: dict[str, float], exp: Experiment,
+    controller: str,
+    formulation: str,
+    robot: dict[str, float],
+    exp: Experiment,
     measure: bool,
 ) -> tuple[float, str, float | None]:
     """(g at the experiment's setting, where it comes from, the measured k̂ or None)."""
@@ -479,9 +481,7 @@ def analyse(
 def analyse_all(
     robot: dict[str, float], exp: Experiment, plant: str = "nominal", measure: bool = True
 ) -> list[Analysis]:
-    return [
-        analyse(c, f, robot, exp, plant, measure) for c in CONTROLLERS for f in FORMULATIONS
-    ]
+    return [analyse(c, f, robot, exp, plant, measure) for c in CONTROLLERS for f in FORMULATIONS]
 
 
 def _json_number(x: float | None) -> float | str | None:
@@ -551,8 +551,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         print(json.dumps(as_json(rows, name), indent=2))
     else:
-        print(f"robot {name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
-              f"plant {args.plant}, ε = {exp.controller.eps}")
+        print(
+            f"robot {name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
+            f"plant {args.plant}, ε = {exp.controller.eps}"
+        )
         print(table(rows))
     return 0
 

@@ -29,9 +29,7 @@ def linear_experiment(exp: Experiment) -> Experiment:
     return replace(
         exp,
         controller=replace(exp.controller, eps=EPS, tau_max=1.0e4),
-        plant=replace(
-            exp.plant, viscous=0.0, coulomb=0.0, fixed_payload=0.0, extra_payload=0.0
-        ),
+        plant=replace(exp.plant, viscous=0.0, coulomb=0.0, fixed_payload=0.0, extra_payload=0.0),
         paths=replace(exp.paths, circle_duration=DURATION),
     )
 
