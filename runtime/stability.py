@@ -289,7 +289,7 @@ def loop_states(jac: NDArray[np.float64], tol: float = 1e-9) -> list[int]:
 NEUTRAL_TOL = 1e-6
 
 
-def neutral_count(eigs: NDArray[np.complex128]) -> int:
+def neutral_count(eigs: NDArray[Any]) -> int:
     return int(np.count_nonzero(np.abs(eigs - 1.0) < NEUTRAL_TOL))
 
 
