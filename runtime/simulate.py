@@ -32,14 +32,16 @@ CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 FORMULATIONS = {"paper": 0, "minimal": 1}
 
 
-@cache
-def sim_library(float32: bool = False) -> cbuild.CLibrary:
-    """Generated C + the RK4 helper, compiled once per precision."""
+def build_sim_library(float32: bool = False) -> cbuild.CLibrary:
+    """Generated C + the RK4 helper (``sim_library`` caches it; tests may replace that)."""
     return cbuild.build(
         float32,
         extra_sources=(CSRC / "wmr_sim.c",),
         extra_headers=((CSRC / "wmr_sim.h").resolve(),),
     )
+
+
+sim_library = cache(build_sim_library)
 
 
 def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[np.float64]:

@@ -121,19 +121,25 @@ class LoopSetting:
     estimator: str
 
 
+@cache
+def double_library() -> cbuild.CLibrary:
+    """The simulator's plant in double precision, whatever ``simulate.sim_library`` is."""
+    from runtime.simulate import build_sim_library
+
+    return build_sim_library(False)
+
+
 class ClosedLoop:
     """The one-sample map z_k ↦ z_{k+1} of the sampled closed loop (no quantisation,
     no saturation, no friction), in the global frame, about the circle reference."""
 
     def __init__(self, s: LoopSetting) -> None:
-        from runtime.simulate import sim_library
-
         self.s = s
         self.nom = dict(s.nominal)
         self.plant = dict(s.plant)
         self.paper = s.formulation == "paper"
         self.sl = slice(0, 5) if self.paper else slice(3, 5)
-        self.lib = sim_library(False)
+        self.lib = double_library()
         ffi = self.lib.ffi
         self.pp = ffi.new("wmr_plant_params_t *")
         cbuild.fill_params(self.pp, self.plant)

@@ -27,7 +27,7 @@ from modeling.robot_file import load_robot
 from runtime import references, simulate
 from runtime.bad_input_table import to_python
 from runtime.cbuild import CLibrary
-from runtime.experiment import Experiment
+from runtime.experiment import Experiment, SensingSettings
 from runtime.references import Reference
 
 FULL_FLOAT_BOUND = 2.5e-3  # m: float32 controller and float32 plant (measured ≤ 1.86 mm)
@@ -38,7 +38,12 @@ CASES = {"tdroc": 0.5, "tdc": None}  # controller: eps
 @pytest.fixture(scope="module")
 def setting() -> tuple[dict[str, float], Experiment, Reference]:
     robot = dict(load_robot().lumped)
-    exp = Experiment()
+    # The ≤ 1 mm goal was set and met with encoder-averaged rates (the sensing of the time);
+    # with rates at the sample instant the float32 and double paths part by ~14 mm (open,
+    # see the issue note): the sensing is stated here, not inherited from the default.
+    exp = Experiment(
+        sensing=SensingSettings(velocity="encoder-average", accel_estimator="backward")
+    )
     ref = references.lawnmower(robot, exp.controller.h, exp.paths.lawnmower_duration)
     return robot, exp, ref
 

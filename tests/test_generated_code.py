@@ -724,7 +724,7 @@ def _bad_cases() -> list[BadCase]:
         ("tau_max=nan", "WMR_ERR_BAD_TORQUE_LIMIT", {"tau_max": math.nan}, None),
         ("formulation=2", "WMR_ERR_BAD_FORMULATION", {"formulation": 2}, None),
         ("formulation=-1", "WMR_ERR_BAD_FORMULATION", {"formulation": -1}, None),
-        ("estimator=2", "WMR_ERR_BAD_ESTIMATOR", {"accel_estimator": 2}, lambda i: i.tde),
+        ("estimator=3", "WMR_ERR_BAD_ESTIMATOR", {"accel_estimator": 3}, lambda i: i.tde),
         ("alpha=1", "WMR_ERR_BAD_BOUNDS", {"alpha": 1.0}, lambda i: i.bounds),
         ("phi<0", "WMR_ERR_BAD_BOUNDS", {"phi": -1.0}, lambda i: i.bounds),
         ("gamma<0", "WMR_ERR_BAD_BOUNDS", {"gamma": -1.0}, lambda i: i.adaptive),

@@ -177,10 +177,17 @@ static void random_params(wmr_params_t *p)
         }                                                                             \
     } while (0)
 
-static void extra_tdc(wmr_tdc_config_t *c) { c->accel_estimator = rint_below(2); }
+static void extra_tdc(wmr_tdc_config_t *c)
+{
+    c->accel_estimator = rint_below(3);
+    c->rate_window = c->h * (wmr_real_t)unif(0.0, 1.0);
+}
 static void extra_tdroc(wmr_tdroc_config_t *c)
 {
-    c->accel_estimator = rint_below(2);
+    c->accel_estimator = rint_below(3);
+    c->rate_window = c->h * (wmr_real_t)unif(0.0, 1.0);
+    c->hold_gain = 0;
+    c->held_gain = (wmr_real_t)0.0;
     c->eps = (wmr_real_t)unif(0.01, 2.0);
     c->n = 2 + rint_below(WMR_MAX_WINDOW - 1);
     c->a = rint_below(5) ? (wmr_real_t)unif(0.05, 1.0) : (wmr_real_t)1.0;
@@ -197,7 +204,7 @@ static void extra_asmc(wmr_asmc_config_t *c)
     c->gamma = (wmr_real_t)unif(0.0, 10.0);
     c->gain0 = (wmr_real_t)unif(0.0, 5.0);
 }
-static void corrupt_tdc(wmr_tdc_config_t *c) { c->accel_estimator = rint_below(2) ? 2 : -1; }
+static void corrupt_tdc(wmr_tdc_config_t *c) { c->accel_estimator = rint_below(2) ? 3 : -1; }
 static void corrupt_tdroc(wmr_tdroc_config_t *c)
 {
     switch (rint_below(4)) {
