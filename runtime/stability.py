@@ -456,7 +456,8 @@ def analyse(
     measure: bool = True,
 ) -> Analysis:
     """Stability of one controller and formulation at the experiment's setting."""
-    pen = pencil(setting(controller, formulation, robot, exp, plant))
+    loop_setting = setting(controller, formulation, robot, exp, plant)
+    pen = pencil(loop_setting)
     g_max = pen.max_stable_gain()
     # Nothing to measure where the loop diverges before any switching gain (and the
     # toolchain refuses to build that configuration).
@@ -472,7 +473,7 @@ def analyse(
         max_stable_gain=g_max,
         spectral_radius=radius,
         stable=radius < 1.0,
-        estimator=setting(controller, formulation, robot, exp, plant).estimator,
+        estimator=loop_setting.estimator,
         h=exp.controller.h,
         plant=plant,
         gain_at_setting=g,
