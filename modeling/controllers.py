@@ -51,12 +51,20 @@ from typing import Literal
 
 import sympy as sp
 
-from modeling import wmr
-from modeling.lagrange import ConstrainedSystem
+from modeling.robot_model import RobotModel
 
 Formulation = Literal["paper", "minimal"]
 FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+
+
+def _model(model: RobotModel | None) -> RobotModel:
+    """``model``, or the paper's robot for callers written before robots were generic."""
+    if model is not None:
+        return model
+    from modeling import wmr  # transitional default: the paper's robot
+
+    return wmr.robot_model()
 
 
 def _vec(name: str, n: int) -> sp.Matrix:
@@ -67,45 +75,52 @@ def _vec(name: str, n: int) -> sp.Matrix:
 class ControlModel:
     """M̂(q), Ĥ(q, q̇) and Bᵀ-selection of one formulation at the nominal parameters.
 
-    ``coordinates`` are the symbols the model depends on (θ for the paper form; none for
-    the minimal form), ``size`` is the number of controlled coordinates and
-    ``offset`` where they start in the five-coordinate q.
+    ``size`` is the number of controlled coordinates and ``rows`` their indices in q
+    (all of q for the paper form; the actuated wheel angles for the minimal form).
     """
 
     formulation: Formulation
     size: int
-    offset: int
+    rows: tuple[int, ...]
     mass: sp.Matrix
     bias: sp.Matrix
     mass_inverse: sp.Matrix
     velocities: tuple[sp.Symbol, ...]
 
 
-@cache
-def control_model(formulation: Formulation) -> ControlModel:
+def control_model(formulation: Formulation, model: RobotModel | None = None) -> ControlModel:
     """The model a controller uses. Paper: M̃, H̃ of (14); minimal: M̄, H̄ (Sᵀ M S form)."""
-    s: ConstrainedSystem = wmr.wmr_system()
-    if formulation == "paper":
+    return _control_model(formulation, _model(model))
+
+
+@cache
+def _control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
+    s = model.system
+    rates = tuple(model.qdot[i] for i in model.actuated)
+    if formulation == "paper" and model.paper:
         return ControlModel(
             formulation,
-            5,
-            0,
+            model.nq,
+            tuple(range(model.nq)),
             s.reduced_mass_matrix,
             s.reduced_bias,
             s.reduced_mass_matrix_inverse,
-            tuple(wmr.qdot[3:]),
+            rates,
         )
     if formulation == "minimal":
         return ControlModel(
             formulation,
-            2,
-            3,
+            model.nu,
+            model.actuated,
             s.minimal_mass_matrix,
             s.minimal_bias,
             s.minimal_mass_matrix_inverse,
-            tuple(wmr.qdot[3:]),
+            rates,
         )
-    raise ValueError(f"unknown formulation {formulation!r} (expected one of {FORMULATIONS})")
+    raise ValueError(
+        f"formulation {formulation!r} is not available for robot '{model.name}' "
+        f"(available: {', '.join(model.formulations)})"
+    )
 
 
 def lyapunov_p(k1: sp.Expr, k2: sp.Expr, q1: sp.Expr, q2: sp.Expr) -> tuple[sp.Expr, ...]:
@@ -191,10 +206,12 @@ class Law:
     gain: sp.Expr
 
 
-def tde_law(formulation: Formulation, switching: bool) -> tuple[Law, LawSymbols]:
+def tde_law(
+    formulation: Formulation, switching: bool, model: RobotModel | None = None
+) -> tuple[Law, LawSymbols]:
     """TDC (16)–(18) when ``switching`` is False; TDROC (16), (22), (25) with the gain
     symbol ``ls.gain`` (k̂, computed by ``tdroc_gain``) when True. Ĥ1 is an input (17)."""
-    cm = control_model(formulation)
+    cm = control_model(formulation, model)
     ls = law_symbols(cm.size)
     ua = nominal_acceleration(ls)
     if switching:
@@ -208,13 +225,15 @@ def tde_law(formulation: Formulation, switching: bool) -> tuple[Law, LawSymbols]
 
 
 def model_law(
-    formulation: Formulation, controller: Literal["roc", "asmc"]
+    formulation: Formulation,
+    controller: Literal["roc", "asmc"],
+    model: RobotModel | None = None,
 ) -> tuple[Law, LawSymbols]:
     """ROC and ASMC: u = M̂ u_a + Ĥ(q, q̇) with the nominal model's Ĥ.
 
     ROC's gain is ρ = (α(‖q̈_d‖ + ‖K1 e + K2 ė‖) + φ)/(1 − α); ASMC's is the input k̂.
     """
-    cm = control_model(formulation)
+    cm = control_model(formulation, model)
     ls = law_symbols(cm.size)
     ua_hat = nominal_acceleration(ls)
     if controller == "roc":
@@ -229,59 +248,72 @@ def model_law(
 
 @dataclass(frozen=True)
 class TdeSymbols:
-    q_prev: sp.Matrix  # q(t − h), five coordinates
+    q_prev: sp.Matrix  # q(t − h), all n coordinates
     u_prev: sp.Matrix  # u(t − h) actually applied (B τ for the paper form)
     qdot_now: sp.Matrix  # q̇(t), size n
     qdot_then: sp.Matrix  # q̇(t − Δ), size n
     span: sp.Symbol  # Δ
 
 
-def tde_estimate(formulation: Formulation) -> tuple[sp.Matrix, TdeSymbols]:
+def tde_estimate(
+    formulation: Formulation, model: RobotModel | None = None
+) -> tuple[sp.Matrix, TdeSymbols]:
     """(17): Ĥ1(t) = Ω(1) = u(t − h) − M̂(q(t − h)) q̈(t − h), with the difference quotient
     q̈(t − h) ≈ (q̇(t) − q̇(t − Δ)) / Δ (Δ = h backward, 2h central)."""
-    cm = control_model(formulation)
+    rm = _model(model)
+    cm = control_model(formulation, rm)
     n = cm.size
     ts = TdeSymbols(
-        q_prev=_vec("qp", 5),
+        q_prev=_vec("qp", rm.nq),
         u_prev=_vec("up", n),
         qdot_now=_vec("qd_now", n),
         qdot_then=_vec("qd_then", n),
         span=sp.Symbol("span", positive=True),
     )
     qdd = (ts.qdot_now - ts.qdot_then) / ts.span
-    mass = cm.mass.subs(dict(zip(wmr.q, ts.q_prev, strict=True)))
+    mass = cm.mass.subs(dict(zip(rm.q, ts.q_prev, strict=True)))
     return ts.u_prev - mass * qdd, ts
 
 
-def heading_rotation(size: int) -> sp.Matrix:
-    """T(θ): rotates the (x, y) rows by θ (identity for the minimal form's wheel angles)."""
+def heading_rotation(formulation: Formulation, model: RobotModel | None = None) -> sp.Matrix:
+    """T(θ): rotates the root's (x, y) rows by its yaw θ in the paper form (q starts with
+    them); the identity for the minimal form's wheel angles."""
+    rm = _model(model)
+    size = control_model(formulation, rm).size
     t = sp.eye(size)
-    if size == 5:
-        c, s = sp.cos(wmr.theta), sp.sin(wmr.theta)
+    if formulation == "paper":
+        c, s = sp.cos(rm.heading), sp.sin(rm.heading)
         t[0, 0], t[0, 1], t[1, 0], t[1, 1] = c, -s, s, c
     return t
 
 
-def rotation_residual(formulation: Formulation) -> sp.Matrix:
+def rotation_residual(formulation: Formulation, model: RobotModel | None = None) -> sp.Matrix:
     """M̂(θ) − T(θ) M̂(0) T(θ)ᵀ, which is zero: the model is invariant under heading.
 
     So M̂(θ)⁻¹ = T M̂(0)⁻¹ Tᵀ with T orthogonal, and every unitarily invariant norm of
     M̂⁻¹ (Frobenius, spectral) is independent of θ — (25) needs it for the parameters
     only. Tests assert the residual simplifies to zero.
     """
-    cm = control_model(formulation)
-    t = heading_rotation(cm.size)
-    at_zero = cm.mass.subs(wmr.theta, 0)
-    return (cm.mass - t * at_zero * t.T).applyfunc(wmr.wmr_system().simplify)
+    rm = _model(model)
+    cm = control_model(formulation, rm)
+    t = heading_rotation(formulation, rm)
+    at_zero = cm.mass.subs(rm.heading, 0)
+    return (cm.mass - t * at_zero * t.T).applyfunc(rm.system.simplify)
 
 
-def mass_inverse_norm(formulation: Formulation) -> sp.Expr:
-    """‖M̂⁻¹‖_F of (25), evaluated at θ = 0 (exact for every θ, see rotation_residual)."""
-    cm = control_model(formulation)
-    return _norm(sp.Matrix(list(cm.mass_inverse.subs(wmr.theta, 0))))
+def mass_inverse_norm(formulation: Formulation, model: RobotModel | None = None) -> sp.Expr:
+    """‖M̂⁻¹‖_F of (25). The paper form is evaluated at θ = 0 (exact for every θ, see
+    rotation_residual); the minimal form as it is — a constant for a single body, a
+    function of the hitch angles for a robot with trailers (then an input of the kernel)."""
+    rm = _model(model)
+    cm = control_model(formulation, rm)
+    inverse = cm.mass_inverse.subs(rm.heading, 0) if formulation == "paper" else cm.mass_inverse
+    return _norm(sp.Matrix(list(inverse)))
 
 
-def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
+def tdroc_gain(
+    formulation: Formulation, window: int, model: RobotModel | None = None
+) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
     """(25): k̂ = ‖M̂⁻¹‖_F Σ_{i=1..window} w_i ‖Ω(i) − Ω(i+1)‖ with the weights w_i
     given normalised (Σ w_i = 1 over the active window, 0 beyond it) by the caller.
     ‖M̂⁻¹‖_F depends on the nominal parameters only (``mass_inverse_norm``): it is an
@@ -289,7 +321,7 @@ def tdroc_gain(formulation: Formulation, window: int) -> tuple[sp.Expr, sp.Matri
 
     Returns (k̂, Ω window symbols ((window + 1) × n, row i = Ω(i + 1)), weight symbols).
     """
-    cm = control_model(formulation)
+    cm = control_model(formulation, model)
     n = cm.size
     omega = sp.Matrix(window + 1, n, lambda i, j: sp.Symbol(f"Om{i}_{j}", real=True))
     w = _vec("w", window)

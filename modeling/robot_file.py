@@ -22,9 +22,12 @@ import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
+
+if TYPE_CHECKING:
+    from modeling.robot_model import RobotModel
 
 LUMPED_FIELDS: dict[str, str] = {
     "m": "total mass [kg]",
@@ -186,3 +189,44 @@ def load_robot(path: str | Path | None = None) -> Robot:
     except (OSError, UnicodeDecodeError) as exc:
         raise RobotFileError(f"{p}: cannot read robot file: {exc}") from None
     return parse_robot(text, str(p))
+
+
+# ---------------------------------------------------------------------------------------
+# Any robot file: the lumped/physical form of the paper's robot, or bodies and wheels
+# ---------------------------------------------------------------------------------------
+ROBOTS_DIR = Path(__file__).resolve().parent / "robots"
+
+
+def is_description(path: str | Path) -> bool:
+    """Whether a robot file describes bodies, joints and wheels (``[[body]]`` tables)."""
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False  # load_robot reports the error with the file's name
+    return "body" in data
+
+
+def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]:
+    """The generic model of a robot file and its parameter values.
+
+    A file with ``[[body]]`` tables is derived by ``modeling.description`` (run-time
+    parameters: base inertial parameters and wheel radii); a ``[lumped]``/``[physical]``
+    file is the paper's differential drive with those numbers. ``Robot.lumped`` holds the
+    values of the model's ``params``. Raises ``RobotFileError`` naming the problem.
+    """
+    from modeling.robot_model import described_model
+
+    if path is not None and is_description(path):
+        model = described_model(Path(path).as_posix())
+        return model, Robot(model.name, model.param_values(), source=Path(path).as_posix())
+    from modeling import wmr
+
+    robot = load_robot(path)
+    return wmr.robot_model(), robot
+
+
+def shipped_robot_files() -> list[Path]:
+    """The robots ``make model`` generates: every ``modeling/robots/*.toml``, the default
+    (Drishti) first."""
+    files = sorted(ROBOTS_DIR.glob("*.toml"))
+    return sorted(files, key=lambda p: (p.stem != DEFAULT_ROBOT, p.stem))

@@ -35,6 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
+from modeling.robot_model import Parameter, RobotModel
 
 # ---------------------------------------------------------------------------------------
 # Symbols
@@ -207,4 +208,63 @@ def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
         constraint_matrix=constraint_matrix(),
         input_matrix=input_matrix(),
         independent=(3, 4),
+    )
+
+
+# ---------------------------------------------------------------------------------------
+# The robot as the generic layers see it
+# ---------------------------------------------------------------------------------------
+PARAMETER_DOCS: tuple[tuple[str, sp.Symbol, str], ...] = (
+    ("m", m, "total mass [kg]"),
+    ("I", I_z, "yaw inertia about C [kg m^2] (C field Iz)"),
+    ("K", K, "first moment of mass behind C [kg m]"),
+    ("Iw", I_w, "wheel spin inertia [kg m^2]"),
+    ("r", r, "wheel radius [m]"),
+    ("b", b, "track width [m]"),
+    ("d", d, "C ahead of the axle midpoint [m]"),
+)
+K_LAT_DOC = ("K_lat", K_lat, "first moment of mass left of C [kg m] (off-axis payload)")
+
+
+@cache
+def robot_model() -> RobotModel:
+    """The paper's robot in its lumped parameters: prefix ``wmr``, output at the root of
+    ``generated/``, the plant with the lateral first moment K_lat the controllers lack,
+    the payload ``payload_relations``, and the paper formulation."""
+    params = tuple(Parameter(k, s, doc) for k, s, doc in PARAMETER_DOCS)
+    plant = (*params[:3], Parameter(*K_LAT_DOC), *params[3:])
+    rel = payload_relations()
+    defaults = {"m": 36.0, "I": 5.72, "K": 0.34, "K_lat": 0.0, "Iw": 0.07, "r": 0.096,
+                "b": 0.414, "d": 0.12}
+    return RobotModel(
+        name="drishti",
+        prefix="wmr",
+        output_dir="",
+        source="modeling/wmr.py",
+        system=wmr_system(),
+        plant_system=wmr_system(lateral_moment=True),
+        coordinate_names=COORDINATE_NAMES,
+        tau=tau,
+        params=params,
+        plant_params=plant,
+        values=defaults,
+        positive=("r", "b"),
+        payload=(m_L, x_L, y_L),
+        payload_relations={p.symbol: rel.get(p.symbol, p.symbol) for p in plant},
+        heading=theta,
+        paper=True,
+        evaluation_form=compact_form,
+        docs={
+            "plant_params": "true parameters of the simulated robot, including K_lat",
+            "payload": "payload mass, position ahead of C, position left of C",
+            "plant_state_derivative": (
+                "x_dot = (S(q) eta, eta_dot) of the plant: the minimal form derived with the\n"
+                "lateral first moment K_lat (an off-axis payload)."
+            ),
+            "plant_params_with_payload": (
+                "Plant parameters (m, I, K, K_lat, Iw, r, b, d) of a robot carrying a point "
+                "payload,\nfrom the Hessian of the combined kinetic energy "
+                "(modeling.wmr.payload_relations)."
+            ),
+        },
     )

@@ -7,7 +7,7 @@ coordinates), A, Sᵀ M S and Sᵀ(M Ṡ η + H) symbolically, and S, Ṡη, the
 reduced (14) forms and the forward dynamics numerically at N_STATES random consistent
 states for Drishti's parameters and perturbed ones, to RTOL = 1e-12 relative to each
 quantity's largest value over the states (see ``compare_with_wmr``). The
-packaged ``drishti_bodies.toml`` (the same robot written as numbers) is compared likewise.
+``tests/robots/drishti_bodies.toml`` (the same robot written as numbers) is compared likewise.
 """
 
 from __future__ import annotations
@@ -43,6 +43,8 @@ from modeling.description.canonical import trig_reduce
 from modeling.description.elimination import block_triangular_inverse
 from modeling.lagrange import default_simplify
 from modeling.robot_file import RobotFileError, load_robot
+
+ROBOTS = Path(__file__).resolve().parent / "robots"
 
 RTOL = 1e-12
 N_STATES = 100
@@ -171,7 +173,7 @@ def test_lumped_drishti_reduced_forms_match_wmr_numerically(
 def test_drishti_bodies_file_is_drishti(paper_model: Any, drishti: np.ndarray) -> None:
     """The packaged file holds drishti_from_lumped at the paper's numbers (to the float
     rounding of K/m and I − K²/m), and its model is the paper's (symbols per field)."""
-    from_file = packaged_description("drishti_bodies")
+    from_file = load_description(ROBOTS / "drishti_bodies.toml")
     m, i, k, _, iw, r, b, d = drishti
     built = drishti_from_lumped(m, i, k, iw, r, b, d)
     assert replace(from_file, name="drishti") == built
@@ -183,7 +185,7 @@ def test_drishti_bodies_file_is_drishti(paper_model: Any, drishti: np.ndarray) -
 
 def test_drishti_comparison_has_teeth(paper_model: Any, drishti: np.ndarray) -> None:
     """A 1 % error in the platform's centre of mass is seen by the comparison."""
-    desc = packaged_description("drishti_bodies")
+    desc = load_description(ROBOTS / "drishti_bodies.toml")
     body = desc.bodies[0]
     wrong = replace(desc, bodies=(replace(body, com=(1.01 * body.com[0], body.com[1])),))
     model = numeric_description(desc)
@@ -402,6 +404,7 @@ def test_python_descriptions_are_validated_too() -> None:
 
 def test_packaged_descriptions_load() -> None:
     loaders: list[Callable[[], RobotDescription]] = [
-        lambda: packaged_description("trailer"), lambda: packaged_description("drishti_bodies")]
+        lambda: packaged_description("trailer"),
+        lambda: load_description(ROBOTS / "drishti_bodies.toml")]
     for load in loaders:
         assert load().bodies

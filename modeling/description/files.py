@@ -96,5 +96,5 @@ def load_description(path: str | Path) -> RobotDescription:
 
 
 def packaged_description(name: str) -> RobotDescription:
-    """A description shipped in ``modeling/robots`` (e.g. "trailer", "drishti_bodies")."""
+    """A description shipped in ``modeling/robots`` (e.g. "trailer")."""
     return load_description(Path(__file__).resolve().parent.parent / "robots" / f"{name}.toml")

@@ -1,0 +1,482 @@
+"""A robot's generated functions: the symbolic model and control laws of ``modeling``
+wrapped as FunctionSpecs with named, documented inputs and outputs, for any
+``modeling.robot_model.RobotModel`` (n coordinates, m driven wheels).
+
+Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi functions each;
+``<prefix>`` is the robot's, ``wmr`` for the paper's robot):
+
+* ``<prefix>_model``: M and H of (14), forward dynamics, kinematics (31), the minimal form
+  and the linearisation of the state equation x = (q, η), η the driven wheels' rates.
+* ``<prefix>_laws``: the controllers' pure kernels — the time-delay estimate (17), the
+  TDROC gain (25), the four laws, P of the Lyapunov equation — for each formulation.
+  The controller step functions (``wmr_tdroc_step`` …) are templates around these that
+  own validation, history and status; they do no arithmetic of their own beyond copying.
+* ``<prefix>_plant``: the simulated robot's state derivative and the payload relations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from functools import cache
+
+import sympy as sp
+
+from codegen.spec import Argument, Field, FunctionSpec, Guard
+from modeling import controllers as ctl
+from modeling.description.derive import cofactor_determinant
+from modeling.robot_model import Parameter, RobotModel
+
+MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
+NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight",
+                "nine", "ten", "eleven", "twelve")
+
+STATUS_NONFINITE_INPUT = "WMR_ERR_NONFINITE_INPUT"
+STATUS_BAD_PARAMS = "WMR_ERR_BAD_PARAMS"
+STATUS_NONFINITE_OUTPUT = "WMR_ERR_NONFINITE_OUTPUT"
+
+
+def _fields(params: tuple[Parameter, ...]) -> tuple[Field, ...]:
+    return tuple(Field(p.key, (p.symbol,), doc=p.doc) for p in params)
+
+
+def params_arg(
+    model: RobotModel, name: str = "p", doc: str = "lumped robot parameters"
+) -> Argument:
+    return Argument(name, "params", fields=_fields(model.params), doc=doc)
+
+
+def array(
+    name: str,
+    symbols: sp.Matrix | tuple[sp.Symbol, ...],
+    doc: str = "",
+    shape: tuple[int, int] | None = None,
+) -> Argument:
+    syms = tuple(symbols)
+    return Argument(name, "array", shape=shape or (len(syms), 1), symbols=syms, doc=doc)
+
+
+def out(
+    name: str, exprs: sp.Matrix | list[sp.Expr], doc: str = "", shape: tuple[int, int] | None = None
+) -> Argument:
+    if isinstance(exprs, sp.MatrixBase):
+        shape = shape or exprs.shape
+        values = tuple(exprs)  # row-major
+    else:
+        values = tuple(exprs)
+        shape = shape or (len(values), 1)
+    return Argument(name, "array", shape=shape, exprs=values, doc=doc)
+
+
+def _leading_minors(mbar: sp.Matrix) -> list[sp.Expr]:
+    def minor(k: int) -> sp.Expr:
+        if k == 2:  # written out: the form CSE already shares with the 2x2 solve
+            return mbar[0, 0] * mbar[1, 1] - mbar[0, 1] * mbar[1, 0]
+        return cofactor_determinant(mbar.extract(list(range(k)), list(range(k))))
+
+    return [minor(k) for k in range(1, mbar.rows + 1)]
+
+
+def _minor_doc(k: int, n: int) -> str:
+    if k == 1:
+        return "(S^T M S)[0][0] > 0"
+    if k == n:
+        return "det(S^T M S) > 0: a positive-definite model"
+    return f"leading {k}x{k} minor of S^T M S > 0"
+
+
+@cache
+def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
+    # The same grouped entries as the forward dynamics, so CSE shares them.
+    mbar = model.system.minimal_mass_matrix.applyfunc(model.evaluation_form)
+    by_key = {p.key: p.symbol for p in model.params}
+    positive = [Guard(STATUS_BAD_PARAMS, by_key[k], f"{k} > 0") for k in model.positive]
+    # Sylvester: all leading minors of S^T M S positive <=> positive definite.
+    minors = _leading_minors(mbar)
+    return (
+        *positive,
+        *(Guard(STATUS_BAD_PARAMS, m, _minor_doc(k + 1, len(minors)))
+          for k, m in enumerate(minors)),
+    )
+
+
+def forward_dynamics_forms(
+    model: RobotModel, system: object | None = None
+) -> tuple[sp.Matrix, sp.Matrix]:
+    """(η̇, q̈) in evaluation form: the grouped 2×2 solve when there are two driven wheels
+    (``ConstrainedSystem.compact_forward_dynamics``), else adj(M̄)/det(M̄) left unexpanded."""
+    s = model.system if system is None else system
+    tau = model.tau
+    if model.nu == 2:
+        return s.compact_forward_dynamics(tau, model.evaluation_form)  # type: ignore[attr-defined]
+    eta_dot = s.minimal_forward_dynamics(tau)  # type: ignore[attr-defined]
+    return eta_dot, s.null_space * eta_dot + s.null_space_rate  # type: ignore[attr-defined]
+
+
+def _words(n: int) -> str:
+    return NUMBER_WORDS[n] if n < len(NUMBER_WORDS) else str(n)
+
+
+@cache
+def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
+    """``<prefix>_model``: the functions the C API of issue 3 names."""
+    s = model.system
+    n, m = model.nq, model.nu
+    names = model.coordinate_names
+    q = array("q", model.q, ", ".join(names))
+    qdot = array("qdot", model.qdot, "generalised velocities")
+    eta = tuple(model.qdot[i] for i in model.actuated)
+    wheel_rates = array(
+        "wheel_rates", eta, ", ".join(f"{names[i]} rate" for i in model.actuated)
+    )
+    tau = array("tau", model.tau, "wheel torques " + ", ".join(model.input_names))
+    p = params_arg(model)
+    # Evaluation forms (equal to reduced_/minimal_forward_dynamics; tests check it).
+    eta_dot, qdd = forward_dynamics_forms(model)
+    # State x = (q, η): ẋ = (S(q) η, η̇(q, η, τ)); its Jacobians linearise the robot.
+    x = sp.Matrix([*model.q, *eta])
+    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
+    jac_x = xdot.jacobian(x)
+    jac_u = xdot.jacobian(model.tau)
+    guards = _param_guards(model)
+    dependent = [i for i in range(n) if i not in model.actuated]
+    dep_names = ", ".join(names[i] for i in dependent)
+    rate_list = ", ".join(f"qdot[{i}]" for i in model.actuated)
+    state_doc = ", ".join(f"{names[i]} rate" for i in model.actuated)
+
+    def checked(spec: FunctionSpec) -> FunctionSpec:
+        return replace(
+            spec,
+            returns_status=True,
+            guards=guards,
+            nonfinite_input=STATUS_NONFINITE_INPUT,
+            nonfinite_output=STATUS_NONFINITE_OUTPUT,
+        )
+
+    paper_specs = (
+        FunctionSpec(
+            "mass_matrix",
+            "M(q) of (14), the reduced (multiplier-free) mass matrix; not symmetric.",
+            (p, q),
+            (out("M", s.reduced_mass_matrix, f"{n}x{n} row-major"),),
+            ("(14)",),
+        ),
+        FunctionSpec(
+            "bias_forces",
+            f"H(q, qdot) of (14). Rows {_row_span(dependent)} hold the velocity-product terms "
+            "of the twice\n"
+            "differentiated constraints; valid for qdot on the constraint manifold.",
+            (p, q, qdot),
+            (out("H", s.reduced_bias),),
+            ("(14)",),
+        ),
+    ) if model.paper else ()
+    return (
+        *paper_specs,
+        checked(
+            FunctionSpec(
+                "forward_dynamics",
+                "qddot solving (14) with u = B tau, by structured elimination:\n"
+                "eta_dot = (S^T M S)^-1 (tau - S^T(M Sdot eta + H)),\n"
+                "qddot = S eta_dot + Sdot eta.\n"
+                f"Only the wheel rates {rate_list} are read: the other velocities follow\n"
+                "from the constraints (6)-(8).",
+                (p, q, qdot, tau),
+                (out("qddot", qdd),),
+                ("(9)", "(14)", "(31)"),
+            )
+        ),
+        FunctionSpec(
+            "kinematics",
+            f"(31): pose rates ({dep_names}) from the wheel rates, xi_dot = S_d(q) eta.",
+            (p, q, wheel_rates),
+            (out("pose_rates", s.null_space.extract(dependent, list(range(m)))
+                 * sp.Matrix(eta)),),
+            ("(31)", "(13)"),
+        ),
+        FunctionSpec(
+            "minimal_mass_matrix",
+            f"Mbar = S^T M S of the minimal {_words(m)}-coordinate model"
+            + (" (constant for K_lat = 0)." if not _depends_on_q(s.minimal_mass_matrix, model)
+               else " (depends on q)."),
+            (p, q),
+            (out("M", s.minimal_mass_matrix, f"{m}x{m} row-major"),),
+            ("(9)",),
+        ),
+        FunctionSpec(
+            "minimal_bias_forces",
+            "Hbar = S^T (M Sdot eta + H) of the minimal model.",
+            (p, q, wheel_rates),
+            (out("H", s.minimal_bias),),
+            ("(9)",),
+        ),
+        checked(
+            FunctionSpec(
+                "minimal_forward_dynamics",
+                "Wheel accelerations of the minimal model: Mbar eta_dot + Hbar = tau.",
+                (p, q, wheel_rates, tau),
+                (out("wheel_accels", eta_dot),),
+                ("(9)",),
+            )
+        ),
+        FunctionSpec(
+            "linearization",
+            _wrap(f"Jacobians of the state equation x_dot = f(x, tau), x = (q, {state_doc}), "
+                  f"f = (S(q) eta, eta_dot): A = df/dx ({n + m}x{n + m}), "
+                  f"B = df/dtau ({n + m}x{m})."),
+            (p, q, wheel_rates, tau),
+            (out("A", jac_x, f"{n + m}x{n + m} row-major"),
+             out("B", jac_u, f"{n + m}x{m} row-major")),
+            ("(9)", "(31)"),
+        ),
+    )
+
+
+def _wrap(text: str, width: int = 79) -> str:
+    """Break a doc string into lines of at most ``width`` characters (word boundaries)."""
+    lines: list[str] = []
+    for word in text.split(" "):
+        if lines and len(lines[-1]) + 1 + len(word) <= width:
+            lines[-1] += " " + word
+        else:
+            lines.append(word)
+    return "\n".join(lines)
+
+
+def _row_span(rows: list[int]) -> str:
+    """1-based row numbers: ``1-3`` for a contiguous run, else a list."""
+    ones = [r + 1 for r in rows]
+    if ones and ones == list(range(ones[0], ones[-1] + 1)) and len(ones) > 1:
+        return f"{ones[0]}-{ones[-1]}"
+    return ", ".join(map(str, ones))
+
+
+def _depends_on_q(matrix: sp.Matrix, model: RobotModel) -> bool:
+    return bool(matrix.free_symbols & set(model.q))
+
+
+def _nominal(model: RobotModel, doc: str = "nominal parameters of M-hat") -> Argument:
+    return params_arg(model, "p", doc)
+
+
+def _minv_norm_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
+    norm = ctl.mass_inverse_norm(f, model)
+    if _depends_on_q(sp.Matrix([norm]), model):
+        return FunctionSpec(
+            f"{f}_minv_norm",
+            f"({f} formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,\n"
+            "so the norm is evaluated at the measured q in every step.",
+            (_nominal(model), array("q", model.q, "measured q")),
+            (out("norm", [norm]),),
+            ("(25)",),
+        )
+    return FunctionSpec(
+        f"{f}_minv_norm",
+        f"({f} formulation) ||Mhat^-1||_F of (25). Mhat(theta) = T Mhat(0) T^T with T\n"
+        "an orthogonal heading rotation, so the norm depends on the parameters only.",
+        (_nominal(model),),
+        (out("norm", [norm]),),
+        ("(25)",),
+    )
+
+
+def minv_norm_needs_q(model: RobotModel) -> bool:
+    """Whether the minimal formulation's ‖M̂⁻¹‖ depends on q (a robot with a trailer)."""
+    return len(_minv_norm_spec(model, "minimal").inputs) > 1
+
+
+@cache
+def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
+    """``<prefix>_laws``: pure kernels of the four controllers, each formulation."""
+    specs: list[FunctionSpec] = []
+    k1, k2, q1, q2 = sp.symbols("k1 k2 q1 q2", positive=True)
+    p11, p12, p22 = ctl.lyapunov_p(k1, k2, q1, q2)
+    specs.append(
+        FunctionSpec(
+            "lyapunov_p",
+            "P = [[p11, p12], [p12, p22]] solving A^T P + P A = -diag(q1, q2) for one\n"
+            "coordinate of (20), A = [[0, 1], [-k1, -k2]].",
+            (array("gains", (k1, k2, q1, q2), "k1, k2, q1, q2"),),
+            (out("P", [p11, p12, p22], "p11, p12, p22"),),
+            ("(20)",),
+        )
+    )
+    theta_q = array("q", model.q, f"measured q ({_words(model.nq)} coordinates)")
+    for f in model.formulations:
+        tde, ts = ctl.tde_estimate(f, model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_tde",
+                f"({f} formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with\n"
+                "qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).",
+                (
+                    _nominal(model),
+                    array("q_prev", ts.q_prev, "q(t-h)"),
+                    array("u_prev", ts.u_prev, "u(t-h) applied"),
+                    array("qdot_now", ts.qdot_now, "qdot(t)"),
+                    array("qdot_then", ts.qdot_then, "qdot(t-span)"),
+                    array("span", (ts.span,), "h or 2h"),
+                ),
+                (out("H1hat", tde),),
+                ("(17)",),
+            )
+        )
+        specs.append(_minv_norm_spec(model, f))
+        gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW, model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdroc_gain",
+                f"({f} formulation) (25):\n"
+                "khat = ||Mhat^-1||_F sum_i w_i ||Omega(i) - Omega(i+1)||\n"
+                "with normalised weights (zero beyond the active window).",
+                (
+                    array("minv_norm", (sp.Symbol("minv_norm", positive=True),),
+                          "from _minv_norm"),
+                    array("omega", tuple(omega), "row i is Omega(i+1)", shape=omega.shape),
+                    array("w", tuple(w), "weights"),
+                ),
+                (out("gain", [gain]),),
+                ("(25)",),
+            )
+        )
+        common = lambda ls: (  # noqa: E731 - the argument list every law shares
+            array("e", ls.e, "q_des - q"),
+            array("edot", ls.edot, "qdot_des - qdot"),
+            array("qddot_des", ls.qddot_des, "desired acceleration"),
+            array("k1", ls.k1, "diagonal of K1"),
+            array("k2", ls.k2, "diagonal of K2"),
+            array("p12", ls.p12, "P entries per coordinate"),
+            array("p22", ls.p22, ""),
+        )
+        law, ls = ctl.tde_law(f, switching=False, model=model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdc_law",
+                f"({f} formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.",
+                (_nominal(model), theta_q, *common(ls), array("H1hat", ls.h1, "(17)")),
+                (out("u", law.u),),
+                ("(16)", "(18)"),
+            )
+        )
+        law, ls = ctl.tde_law(f, switching=True, model=model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_tdroc_law",
+                f"({f} formulation) TDROC (16), (22), (25):\n"
+                "u = Mhat(q)(ua_hat + gain s/max(|s|, eps))\n"
+                "+ H1hat, s = B^T P e.",
+                (
+                    _nominal(model),
+                    theta_q,
+                    *common(ls),
+                    array("H1hat", ls.h1, "(17)"),
+                    array("gain", (ls.gain,), "khat of (25)"),
+                    array("eps", (ls.eps,), "boundary layer"),
+                ),
+                (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm])),
+                ("(16)", "(22)", "(24)", "(25)"),
+            )
+        )
+        qdot_c = array("qdot", model.qdot, "measured qdot")
+        law, ls = ctl.model_law(f, "roc", model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_roc_law",
+                f"({f} formulation) ROC:\n"
+                "u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),\n"
+                "rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).",
+                (
+                    _nominal(model),
+                    theta_q,
+                    qdot_c,
+                    *common(ls),
+                    array("bounds", (ls.alpha, ls.phi), "alpha, phi"),
+                    array("eps", (ls.eps,), ""),
+                ),
+                (
+                    out("u", law.u),
+                    out("s", law.s),
+                    out("s_norm", [law.s_norm]),
+                    out("gain", [law.gain]),
+                ),
+                ("(22)", "(24)"),
+            )
+        )
+        law, ls = ctl.model_law(f, "asmc", model)
+        gamma, h = sp.symbols("gamma h", positive=True)
+        specs.append(
+            FunctionSpec(
+                f"{f}_asmc_law",
+                f"({f} formulation) ASMC:\n"
+                "u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);\n"
+                "gain_next = khat + h gamma |s|.",
+                (
+                    _nominal(model),
+                    theta_q,
+                    qdot_c,
+                    *common(ls),
+                    array("gain", (ls.gain,), "khat"),
+                    array("eps", (ls.eps,), ""),
+                    array("adapt", (gamma, h), "gamma, h"),
+                ),
+                (
+                    out("u", law.u),
+                    out("s", law.s),
+                    out("s_norm", [law.s_norm]),
+                    out("gain_next", [ctl.asmc_adaptation(ls.gain, gamma, law.s_norm, h)]),
+                ),
+                ("(22)", "(24)"),
+            )
+        )
+    return tuple(specs)
+
+
+def plant_params_arg(model: RobotModel, name: str = "pp") -> Argument:
+    return Argument(
+        name,
+        "params",
+        ctype=f"{model.prefix}_plant_params_t",
+        fields=_fields(model.plant_params),
+        doc=model.docs.get("plant_params", "true parameters of the simulated robot"),
+    )
+
+
+@cache
+def plant_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
+    """``<prefix>_plant``: the simulated robot (issue 4) — the same machinery in the plant
+    parameters (for the paper's robot, with the lateral first moment K_lat ≠ 0)."""
+    s = model.plant_system
+    n, m = model.nq, model.nu
+    eta = tuple(model.qdot[i] for i in model.actuated)
+    x = array("x", (*model.q, *eta), f"q ({n}), then the wheel rates ({m})")
+    tau = array("tau", model.tau, "wheel torques after friction")
+    eta_dot, _ = forward_dynamics_forms(model, s)
+    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
+    payload = array(
+        "payload",
+        model.payload,
+        model.docs.get("payload", "payload mass, position ahead of and left of the root "
+                       "body's frame origin"),
+    )
+    base = [model.payload_relations.get(p.symbol, p.symbol) for p in model.plant_params]
+    keys = ", ".join(p.key for p in model.plant_params)
+    return (
+        FunctionSpec(
+            "plant_state_derivative",
+            model.docs.get("plant_state_derivative",
+                           "x_dot = (S(q) eta, eta_dot) of the plant: the minimal form in the "
+                           "plant\nparameters."),
+            (plant_params_arg(model), x, tau),
+            (out("xdot", xdot),),
+            ("(9)", "(31)"),
+        ),
+        FunctionSpec(
+            "plant_params_with_payload",
+            model.docs.get("plant_params_with_payload",
+                           _wrap(f"Plant parameters ({keys}) of a robot carrying a point "
+                                 "payload, from the kinetic energy of the loaded robot in "
+                                 "the same base parameters (modeling.robot_model).")),
+            (plant_params_arg(model, "base"), payload),
+            (out("params", base),),
+            (),
+        ),
+    )

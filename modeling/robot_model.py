@@ -1,0 +1,202 @@
+"""What the code generator needs to know about a robot, whichever robot it is.
+
+A :class:`RobotModel` bundles the controllers' constrained system (9) in run-time
+parameter symbols, the simulated plant's system (which may have parameters the
+controllers' model lacks), the parameter tables with their default values, how a point
+payload on the root body changes the plant parameters, and the naming (C prefix, output
+folder). ``codegen`` and the controller laws read only this; they never import a robot.
+
+Instances: the paper's robot from its lumped parameters (``modeling.wmr.robot_model``) and
+any robot described as bodies, joints and wheels (``described_model``), whose run-time
+parameters are its base inertial parameters (``modeling.base_parameters``) and wheel radii.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from functools import cache
+from pathlib import Path
+from typing import Literal
+
+import sympy as sp
+
+from modeling.base_parameters import reduce_to_base, split_terms
+from modeling.lagrange import ConstrainedSystem
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One run-time parameter: Python key / C field ``key``, its symbol, a doc string."""
+
+    key: str
+    symbol: sp.Symbol
+    doc: str
+
+
+def _identity(expr: sp.Expr) -> sp.Expr:
+    return expr
+
+
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """A robot as the generic layers see it (identity-hashed: one object per robot).
+
+    ``system``: the controllers' model; ``plant_system``: the simulated robot's (the same
+    object when the controllers' model has every parameter of the plant).
+    ``positive``: keys of parameters that must be > 0 for the model to exist (guards).
+    ``payload``: (m_L, x_L, y_L), a point mass at (x_L, y_L) in the root body's frame, and
+    ``payload_relations`` each plant parameter of the loaded robot in terms of the unloaded
+    one's and the payload. ``evaluation_form`` groups an entry of Sᵀ M S for evaluation
+    (the paper's robot has a physically grouped form; identity otherwise).
+    ``heading``: the root yaw, about which the paper formulation's M̂ is invariant.
+    ``paper``: whether the paper formulation (all n coordinates, τ = Bᵀ u) is generated.
+    """
+
+    name: str
+    prefix: str
+    output_dir: str  # relative to generated/; "" for the default robot
+    source: str
+    system: ConstrainedSystem
+    plant_system: ConstrainedSystem
+    coordinate_names: tuple[str, ...]
+    tau: sp.Matrix
+    params: tuple[Parameter, ...]
+    plant_params: tuple[Parameter, ...]
+    values: dict[str, float]
+    positive: tuple[str, ...]
+    payload: tuple[sp.Symbol, sp.Symbol, sp.Symbol]
+    payload_relations: dict[sp.Symbol, sp.Expr]
+    heading: sp.Symbol
+    paper: bool
+    evaluation_form: Callable[[sp.Expr], sp.Expr] = field(default=_identity)
+    docs: dict[str, str] = field(default_factory=dict)  # doc strings a robot words itself
+
+    @property
+    def q(self) -> tuple[sp.Symbol, ...]:
+        return tuple(self.system.q)
+
+    @property
+    def qdot(self) -> tuple[sp.Symbol, ...]:
+        return tuple(self.system.qdot)
+
+    @property
+    def nq(self) -> int:
+        return len(self.system.q)
+
+    @property
+    def nu(self) -> int:
+        return int(self.tau.rows)
+
+    @property
+    def actuated(self) -> tuple[int, ...]:
+        """Index in q of each input's coordinate (the minimal form's coordinates)."""
+        return tuple(self.system.independent)
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return tuple(str(t) for t in self.tau)
+
+    @property
+    def formulations(self) -> tuple[Literal["paper", "minimal"], ...]:
+        return ("paper", "minimal") if self.paper else ("minimal",)
+
+    def param_values(self) -> dict[str, float]:
+        """Defaults of the controllers' parameters (keys of ``params``)."""
+        return {p.key: self.values[p.key] for p in self.params}
+
+
+def c_identifier(name: str) -> str:
+    """A C/Python identifier prefix from a robot name: ``my-robot`` → ``my_robot``."""
+    ident = re.sub(r"\W+", "_", name.strip()).strip("_").lower()
+    if not ident or ident[0].isdigit():
+        ident = f"robot_{ident}"
+    return ident
+
+
+# ---------------------------------------------------------------------------------------
+# Robots described as bodies, joints and wheels
+# ---------------------------------------------------------------------------------------
+PAYLOAD = sp.symbols("m_L x_L y_L", real=True)
+
+
+@cache
+def described_model(path: str) -> RobotModel:
+    """The model of a robot file with ``[[body]]`` tables (``modeling.description``).
+
+    Run-time parameters: the base inertial parameters of T (``J_*`` generalised
+    inertias, ``K_*`` first moments) and the wheel radii. The plant is the same model (a
+    described robot's base parameters already include every first moment), and a payload
+    adds a point body on the root: its relations are read off T of the loaded robot in
+    the same base parameters. The paper formulation is generated only for a single rigid
+    body: with a hitch, M̂ depends on the hitch angle and (25)'s ‖M̂⁻¹‖ is no longer a
+    function of the parameters alone (see docs/CONTROLLERS.md).
+    """
+    from modeling.description import description_system, load_description
+    from modeling.description.canonical import trig_reduce
+    from modeling.description.kinematics import body_poses, coordinates, velocity
+    from modeling.description.schema import symbolize
+
+    desc = load_description(path)
+    base_system = description_system(desc)
+    names = dict(zip(base_system.qdot, base_system.coordinate_names, strict=True))
+    variables = [*base_system.q, *base_system.qdot]
+    reduction = reduce_to_base(base_system.kinetic_energy, variables, names)
+    system = replace(base_system, kinetic_energy=reduction.kinetic_energy)
+    physical = dict(base_system.description.values if base_system.description else {})
+    beta = reduction.values(physical)
+
+    # Payload: a point mass on the root body, T_loaded = T(β) + ½ m_L |v_L|².
+    sym = symbolize(desc)
+    coords = coordinates(sym)
+    root = sym.bodies[0].name
+    m_l, x_l, y_l = PAYLOAD
+    v = velocity(body_poses(sym, coords)[root].point((x_l, y_l)), coords)
+    loaded = trig_reduce(reduction.kinetic_energy + sp.Rational(1, 2) * m_l * (v.T * v)[0])
+    payload_terms = split_terms(loaded - reduction.kinetic_energy, set(variables))
+    relations: dict[sp.Symbol, sp.Expr] = {}
+    for b in reduction.parameters:
+        relations[b.symbol] = b.symbol + b.natural * payload_terms.get(b.monomial, sp.S.Zero)
+    if trig_reduce(reduction.kinetic_energy.subs(relations, simultaneous=True) - loaded) != 0:
+        raise ValueError(
+            f"robot '{desc.name}': a payload on '{root}' changes the kinetic energy in a way "
+            "its base parameters cannot carry"
+        )
+
+    params = tuple(
+        Parameter(str(b.symbol), b.symbol, f"{b.expression} (multiplies {b.monomial} in T)")
+        for b in reduction.parameters
+    )
+    radii = tuple(
+        Parameter(str(s), s, "wheel radius [m]")
+        for s in system.parameters
+        if str(s).startswith("radius_")
+    )
+    table = params + radii
+    values = {str(k): v for k, v in beta.items()}
+    values.update({str(p.symbol): physical[p.symbol] for p in radii})
+    for p in radii:
+        relations[p.symbol] = p.symbol
+    positive = tuple(p.key for p in radii) + tuple(
+        p.key for p in params if p.key.startswith("J_")
+    )
+    prefix = c_identifier(desc.name)
+    return RobotModel(
+        name=desc.name,
+        prefix=prefix,
+        output_dir=prefix,
+        source=Path(path).as_posix(),
+        system=system,
+        plant_system=system,
+        coordinate_names=base_system.coordinate_names,
+        tau=base_system.tau,
+        params=table,
+        plant_params=table,
+        values=values,
+        positive=positive,
+        payload=PAYLOAD,
+        payload_relations=relations,
+        heading=base_system.q[2],
+        paper=len(desc.bodies) == 1,
+    )
