@@ -30,8 +30,8 @@ reproduce: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m runtime bench
-	$(PY) -m runtime.firmware_report
-	$(PY) -m runtime.firmware_compare
+	$(PY) -m runtime.tooling.firmware.report
+	$(PY) -m runtime.tooling.firmware.compare_casadi
 
 clean:
 	rm -rf build out reproduction .pytest_cache .mypy_cache .ruff_cache

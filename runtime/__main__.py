@@ -12,6 +12,14 @@ import argparse
 import importlib
 import sys
 
+# command -> the module whose main(argv) runs it
+COMMANDS = {
+    "crosscheck": "runtime.tooling.crosscheck.command",
+    "reproduce": "runtime.reproduce",
+    "stability": "runtime.stability",
+    "bench": "runtime.tooling.bench.report",
+}
+
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m runtime", description=__doc__.splitlines()[0])
@@ -30,7 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser("bench", help="benchmark the generated code", add_help=False)
     args, rest = parser.parse_known_args(argv)
     # Imported on demand: each command pulls in only what it needs.
-    module = importlib.import_module(f"runtime.{args.command}")
+    module = importlib.import_module(COMMANDS[args.command])
     status: int = module.main(rest)
     return status
 

@@ -2,8 +2,8 @@
 
 TDC and TDROC estimate the unknown dynamics from the last sample (17); the estimate
 converges only if the nominal inertia M̂ is not too far from the true M: ‖M⁻¹ M̂ − I‖₂ < 1
-(Roy et al. 2017, the condition under (17); ``runtime.simulate.roc_bounds`` computes the
-same α for ROC's bound). :func:`check_nominal` evaluates
+(Roy et al. 2017, the condition under (17); ``runtime.controller_config.roc_bounds``
+computes the same α for ROC's bound). :func:`check_nominal` evaluates
 
     α = max ‖M(p)⁻¹ M̂ − I‖₂
 
@@ -12,8 +12,9 @@ values; r, b, d as given) and over headings θ, and raises ``ValueError`` when �
 The box is sampled on a three-level grid (lower face, centre, upper face: 81 points, the
 16 corners included) × 9 headings in [−π, π]; M(p) is the generated ``wmr_model``.
 
-:func:`checked_controller_config` is ``simulate.controller_config`` behind this check:
-use it to build a configuration for a nominal model that should be rejected early.
+:func:`check_sampled_loop` refuses a configuration whose sampled closed loop is predicted
+unstable. ``runtime.controller_config.checked_controller_config`` builds a configuration
+behind both checks (this module imports neither it nor ``runtime.simulate``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,7 +30,6 @@ from numpy.typing import NDArray
 from runtime.generated_modules import wmr_model
 
 if TYPE_CHECKING:
-    from runtime.cbuild import CLibrary
     from runtime.experiment import Experiment
 
 UNCERTAIN = ("m", "I", "K", "Iw")
@@ -124,27 +124,6 @@ def check_nominal(
             "the robot's: choose it closer (roughly, 0 < M-hat < 2 M for every robot in the box)."
         )
     return alpha
-
-
-def checked_controller_config(
-    lib: CLibrary,
-    name: str,
-    formulation: str,
-    nominal: dict[str, float],
-    exp: Experiment,
-    true_params: Mapping[str, float] | None = None,
-    held_gain: float | None = None,
-) -> Any:
-    """``simulate.controller_config`` after :func:`check_nominal` over the experiment's
-    uncertainty box (``controller.uncertainty``) for the time-delay controllers."""
-    from runtime import simulate  # local: simulate builds C libraries on import paths
-
-    if name in ("tdc", "tdroc"):
-        check_nominal(
-            nominal, exp.controller.uncertainty, true_params=true_params, formulation=formulation
-        )
-    check_sampled_loop(name, formulation, nominal, exp)
-    return simulate.controller_config(lib, name, formulation, nominal, exp, held_gain)
 
 
 class UnstableConfiguration(ValueError):

@@ -12,24 +12,26 @@ from collections import defaultdict
 
 import pytest
 
-from runtime import bench
+from runtime.tooling.bench.c_bench import run_c
+from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
+from runtime.tooling.bench.op_counts import casadi_op_count
 
 
 @pytest.fixture(scope="module")
 def checksums() -> dict[str, dict[str, float]]:
     out: dict[str, dict[str, float]] = defaultdict(dict)
-    for row in bench.run_c(2000, 1):
+    for row in run_c(2000, 1):
         out[row["function"]][row["variant"]] = row["checksum"]
     return out
 
 
 def test_every_function_has_every_variant(checksums: dict[str, dict[str, float]]) -> None:
-    for name in bench.MODEL_FUNCTIONS:
+    for name in MODEL_FUNCTIONS:
         expected = {"ours", "ours_float32", "casadi", "sympy", "hand"}
         if name == "forward_dynamics":  # the one with validation to measure
             expected.add("ours_unchecked")
         assert set(checksums[name]) == expected
-    for kernels in bench.STEP_KERNELS.values():
+    for kernels in STEP_KERNELS.values():
         for k in kernels:
             assert set(checksums[k]) == {"ours", "ours_float32", "casadi", "sympy"}
 
@@ -44,6 +46,6 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
 
 
 def test_casadi_op_counts_are_counted() -> None:
-    spec = bench.specs_by_name()["forward_dynamics"]
-    counts = bench.casadi_op_count(spec)
+    spec = specs_by_name()["forward_dynamics"]
+    counts = casadi_op_count(spec)
     assert counts["mul"] > 10 and counts["add"] > 10 and counts["sin/cos"] == 2

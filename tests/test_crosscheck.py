@@ -9,11 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import crosscheck
 from runtime.handwritten import controllers as hc
 from runtime.handwritten import model as hw
+from runtime.tooling.crosscheck import command as crosscheck
+from runtime.tooling.crosscheck.deviation import IMPLS, Deviation
 
-HANDWRITTEN = Path(crosscheck.__file__).resolve().parent / "handwritten"
+HANDWRITTEN = Path(hw.__file__).resolve().parent
 
 
 def test_crosscheck_passes(capsys: pytest.CaptureFixture[str]) -> None:
@@ -33,7 +34,7 @@ def test_crosscheck_exercises_every_branch() -> None:
     # every implementation is compared for every function and controller × formulation
     assert len(report.ctrl_rows) == len(hc.KINDS) * len(hc.FORMULATIONS)
     for row in (*report.model_rows, *report.ctrl_rows):
-        assert set(row.cells) == set(crosscheck.IMPLS)
+        assert set(row.cells) == set(IMPLS)
 
 
 @pytest.mark.parametrize(
@@ -60,7 +61,7 @@ def test_cli_exit_status_on_deviation(capsys: pytest.CaptureFixture[str]) -> Non
 
 
 def test_deviation_flags_mismatch_and_nan() -> None:
-    d = crosscheck.Deviation()
+    d = Deviation()
     d.add("x", [np.array([1.0, 2.0])], [np.array([1.0, 2.0])])
     assert d.value == 0.0
     d.add("y", [np.array([1.0, 2.0 + 1e-6])], [np.array([1.0, 2.0])])

@@ -1,4 +1,4 @@
-"""Cross-build for a Cortex-M4F (``runtime.firmware_report``): every generated .c compiles
+"""Cross-build for a Cortex-M4F (``runtime.tooling.firmware``): every generated .c compiles
 with ``-Werror`` in float32 and double; the float32 image of each controller links with
 newlib-nano and contains no double-precision helper; sizes and worst-case stack; the
 float32 TDROC step emulated in Unicorn on a recorded closed loop agrees with the host
@@ -13,10 +13,13 @@ from pathlib import Path
 
 import pytest
 
-from runtime import firmware_report as fr
+from runtime.tooling.firmware import build
+from runtime.tooling.firmware import report as fr
+from runtime.tooling.firmware.stack import parse_su
+from runtime.tooling.firmware.symbols import all_symbol_names, double_symbols
 
 pytestmark = pytest.mark.skipif(
-    not fr.have_toolchain() or not fr.have_newlib(),
+    not build.have_toolchain() or not build.have_newlib(),
     reason="arm-none-eabi-gcc with newlib not installed "
     "(apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi; .ci/run does)",
 )
@@ -31,7 +34,7 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> fr.Report:
 
 
 def test_every_generated_file_compiles_without_diagnostics(report: fr.Report) -> None:
-    names = {p.stem for p in fr.generated_sources()}
+    names = {p.stem for p in build.generated_sources()}
     assert "example_main" not in names and {"wmr_model", "wmr_tdroc"} <= names
     for objs in (report.float_objs, report.double_objs):
         assert {p.stem for p in objs.objects} == names
@@ -40,11 +43,11 @@ def test_every_generated_file_compiles_without_diagnostics(report: fr.Report) ->
         assert len(objs.su) == len(names)
 
 
-@pytest.mark.parametrize("name", fr.CONTROLLERS)
+@pytest.mark.parametrize("name", build.CONTROLLERS)
 def test_float_image_has_no_double_arithmetic(report: fr.Report, name: str) -> None:
     elf = report.elves[name]
     assert report.doubles[name] == [], report.doubles[name]
-    syms = fr.all_symbol_names(elf)
+    syms = all_symbol_names(elf)
     assert f"wmr_{name}_step" in syms and f"wmr_{name}_init" in syms
     assert not any(s.startswith("__aeabi_d") for s in syms)
     sizes = report.sizes[name]
@@ -60,10 +63,10 @@ def test_the_double_check_catches_double_arithmetic(tmp_path: Path) -> None:
         "int main(void) { y = (float)(x * x); return 0; }\n"
     )
     elf = tmp_path / "d.elf"
-    fr._run(
+    build.run_tool(
         [
-            fr.ARM_GCC,
-            *fr.ARM_FLAGS,
+            build.ARM_GCC,
+            *build.ARM_FLAGS,
             str(src),
             "--specs=nano.specs",
             "--specs=nosys.specs",
@@ -71,7 +74,7 @@ def test_the_double_check_catches_double_arithmetic(tmp_path: Path) -> None:
             str(elf),
         ]
     )
-    assert "__aeabi_dmul" in fr.double_symbols(elf)
+    assert "__aeabi_dmul" in double_symbols(elf)
 
 
 def test_stack_usage_is_static_and_bounded(report: fr.Report) -> None:
@@ -88,7 +91,7 @@ def test_stack_usage_is_static_and_bounded(report: fr.Report) -> None:
 def test_elf_frames_agree_with_stack_usage_files(report: fr.Report) -> None:
     """The disassembly reader (used for library callees) gives the compiler's own numbers
     for every generated function in the images."""
-    su = fr.parse_su(report.float_objs.su)
+    su = parse_su(report.float_objs.su)
     checked = 0
     for name, (own, _) in su.items():
         frame = report.library.get(name)
@@ -117,7 +120,7 @@ def test_emulated_tdroc_matches_the_host_builds(report: fr.Report) -> None:
 
 def test_report_renders(report: fr.Report) -> None:
     text = fr.render(report)
-    for name in fr.CONTROLLERS:
+    for name in build.CONTROLLERS:
         assert f"| {name.upper()} |" in text
     assert ("instructions per step" in text) == HAVE_UNICORN
 
@@ -126,11 +129,11 @@ def test_committed_doc_matches_this_toolchain(report: fr.Report) -> None:
     """docs/FIRMWARE.md is this report's output (compared up to the emulation section,
     whose host-float numbers depend on the host's libm), if written by this toolchain."""
     if not fr.DOC.exists():
-        pytest.fail("docs/FIRMWARE.md missing: run `python -m runtime.firmware_report`")
+        pytest.fail("docs/FIRMWARE.md missing: run `python -m runtime.tooling.firmware.report`")
     committed = fr.DOC.read_text()
     if report.version not in committed:
         pytest.skip(f"docs/FIRMWARE.md was written by another toolchain than {report.version}")
     marker = "## Emulated run"
     assert committed.split(marker)[0] == fr.render(report).split(marker)[0], (
-        "docs/FIRMWARE.md is stale: run `python -m runtime.firmware_report`"
+        "docs/FIRMWARE.md is stale: run `python -m runtime.tooling.firmware.report`"
     )

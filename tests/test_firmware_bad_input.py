@@ -1,5 +1,5 @@
 """Bad input to the generated C controllers (cffi, double build): every case of
-``runtime.bad_input_table`` returns its own documented status code, leaves the state's
+``runtime.tooling.bad_input`` returns its own documented status code, leaves the state's
 bytes and tau unchanged, and the next valid step equals that of a twin that never saw
 the bad input; saturation is clipped and reported. ``docs/BAD_INPUT.md`` is the table
 the same code produces. Also the TDE condition ‖M⁻¹M̂ − I‖ < 1 over a parameter box
@@ -12,13 +12,15 @@ import math
 import pytest
 
 from codegen.controller_api import STATUS_CODES
-from runtime import bad_input_table as bit
 from runtime import cbuild
+from runtime.controller_config import checked_controller_config
 from runtime.experiment import Experiment
-from runtime.nominal_check import check_nominal, checked_controller_config, tde_alpha
+from runtime.nominal_check import check_nominal, tde_alpha
+from runtime.tooling.bad_input import cases as bad_cases
+from runtime.tooling.bad_input import runner, table
 
-DRISHTI = bit.DRISHTI
-CASES = bit.cases(8)
+DRISHTI = bad_cases.DRISHTI
+CASES = bad_cases.cases(8)
 
 
 @pytest.fixture(scope="module")
@@ -27,14 +29,14 @@ def lib() -> cbuild.CLibrary:
 
 
 @pytest.fixture(scope="module")
-def outcomes(lib: cbuild.CLibrary) -> list[bit.Outcome]:
-    return bit.run_all(lib)
+def outcomes(lib: cbuild.CLibrary) -> list[runner.Outcome]:
+    return runner.run_all(lib)
 
 
 def test_c_status_enum_is_the_documented_one(lib: cbuild.CLibrary) -> None:
-    assert bit.status_names(lib) == {s.value: s.name for s in STATUS_CODES}
-    assert bit.max_window(lib) == 8
-    assert [c.id for c in bit.cases(bit.max_window(lib))] == [c.id for c in CASES]
+    assert runner.status_names(lib) == {s.value: s.name for s in STATUS_CODES}
+    assert bad_cases.max_window(lib) == 8
+    assert [c.id for c in bad_cases.cases(bad_cases.max_window(lib))] == [c.id for c in CASES]
 
 
 def test_case_ids_are_unique() -> None:
@@ -43,25 +45,25 @@ def test_case_ids_are_unique() -> None:
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
-def test_bad_input_case(lib: cbuild.CLibrary, case: bit.Case) -> None:
-    values = bit.status_values(lib)
+def test_bad_input_case(lib: cbuild.CLibrary, case: bad_cases.Case) -> None:
+    values = runner.status_values(lib)
     runs = [
-        bit.run_case(lib, name, form, case)
-        for name in bit.CONTROLLERS
+        runner.run_case(lib, name, form, case)
+        for name in bad_cases.CONTROLLERS
         if name in case.applies
-        for form in bit.FORMULATIONS
+        for form in bad_cases.FORMULATIONS
     ]
     assert runs
     for o in runs:
         assert o.status == values[case.expected], (o.controller, o.formulation, o.status)
-    assert bit.failures(runs, lib) == []
+    assert runner.failures(runs, lib) == []
     if case.kind in ("input", "config", "null"):
         assert all(o.twin_equal for o in runs)
     if case.kind == "config":
         assert all(o.init_status == o.check_status == o.status for o in runs)
 
 
-def test_every_documented_status_is_exercised(outcomes: list[bit.Outcome]) -> None:
+def test_every_documented_status_is_exercised(outcomes: list[runner.Outcome]) -> None:
     seen = {o.case.expected for o in outcomes}
     unreachable_by_step = {
         "WMR_OK",  # success
@@ -72,12 +74,14 @@ def test_every_documented_status_is_exercised(outcomes: list[bit.Outcome]) -> No
     assert seen | unreachable_by_step == {s.name for s in STATUS_CODES}
 
 
-def test_doc_equals_the_scripts_output(lib: cbuild.CLibrary, outcomes: list[bit.Outcome]) -> None:
-    assert bit.failures(outcomes, lib) == []
-    text = bit.render(outcomes, bit.status_names(lib), bit.alpha_rows())
-    assert bit.DOC.exists(), "run `python -m runtime.bad_input_table`"
-    assert bit.DOC.read_text() == text, (
-        "docs/BAD_INPUT.md is stale: run `python -m runtime.bad_input_table`"
+def test_doc_equals_the_scripts_output(
+    lib: cbuild.CLibrary, outcomes: list[runner.Outcome]
+) -> None:
+    assert runner.failures(outcomes, lib) == []
+    text = table.render(outcomes, runner.status_names(lib), table.alpha_rows())
+    assert table.DOC.exists(), "run `python -m runtime.tooling.bad_input.table`"
+    assert table.DOC.read_text() == text, (
+        "docs/BAD_INPUT.md is stale: run `python -m runtime.tooling.bad_input.table`"
     )
 
 

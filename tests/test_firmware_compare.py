@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime import firmware_compare
+from runtime.tooling.firmware import compare_casadi as firmware_compare
 
 pytestmark = pytest.mark.skipif(shutil.which("arm-none-eabi-gcc") is None,
                                 reason="arm-none-eabi-gcc not installed (see .ci/run)")

@@ -25,10 +25,10 @@ import pytest
 
 from modeling.robot_file import load_robot
 from runtime import references, simulate
-from runtime.bad_input_table import to_python
 from runtime.cbuild import CLibrary
 from runtime.experiment import Experiment, SensingSettings
 from runtime.references import Reference
+from runtime.tooling.bad_input.runner import to_python
 
 FULL_FLOAT_BOUND = 2.5e-3  # m: float32 controller and float32 plant (measured ≤ 1.86 mm)
 CONTROLLER_BOUND = 1.0e-3  # m: float32 controller, double plant (measured ≤ 0.65 mm)

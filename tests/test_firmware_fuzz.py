@@ -19,7 +19,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from runtime import cbuild
-from runtime.bad_input_table import DRISHTI, base_config, status_names
+from runtime.tooling.bad_input.cases import DRISHTI
+from runtime.tooling.bad_input.runner import base_config, status_names
 
 EXAMPLES = 300
 FUZZ = settings(

@@ -1,7 +1,9 @@
 """Cortex-M4 code size and stack: our generated C against CasADi's generated C for the same
 symbolic functions, float32 and double (issue 6). Writes ``docs/FIRMWARE_VS_CASADI.md``.
 
-    python -m runtime.firmware_compare       (part of ``make bench``; needs arm-none-eabi-gcc)
+    python -m runtime.tooling.firmware.compare_casadi   (part of ``make bench``)
+
+Needs arm-none-eabi-gcc.
 
 Each CasADi function is generated into its own file (``CodeGenerator`` with
 ``casadi_real`` float or double) so its object's ``.text`` is exactly that function with
@@ -23,9 +25,10 @@ from pathlib import Path
 from codegen.backends.casadi import generate_c
 from codegen.wmr_functions import law_specs, model_specs
 from runtime.cbuild import GENERATED_C
-from runtime.firmware_report import ARM_FLAGS, ARM_GCC, DOUBLE_SYMBOL, have_toolchain
+from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, have_toolchain
+from runtime.tooling.firmware.symbols import DOUBLE_SYMBOL
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[3]  # the repository
 DOC = ROOT / "docs" / "FIRMWARE_VS_CASADI.md"
 FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics", "paper_tde",
              "paper_minv_norm", "paper_tdroc_gain", "paper_tdroc_law")
@@ -108,7 +111,7 @@ def render(results: dict[tuple[str, str, str], Size]) -> str:
     lines = [
         "# Cortex-M4: our generated C against CasADi's",
         "",
-        "Written by `python -m runtime.firmware_compare` (`make bench`). Flags: "
+        "Written by `python -m runtime.tooling.firmware.compare_casadi` (`make bench`). Flags: "
         f"`{' '.join(ARM_FLAGS)}` (`-Werror` dropped for CasADi's C, which warns).",
         "`.text` in bytes; stack = `-fstack-usage` frames (CasADi: entry + internal function);",
         "“double” marks objects that call soft-float double helpers (`__aeabi_d*`).",
@@ -136,7 +139,7 @@ def render(results: dict[tuple[str, str, str], Size]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m runtime.firmware_compare")
+    parser = argparse.ArgumentParser(prog="python -m runtime.tooling.firmware.compare_casadi")
     parser.add_argument("--out", type=Path, default=DOC)
     args = parser.parse_args(argv)
     if not have_toolchain():

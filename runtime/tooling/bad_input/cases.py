@@ -1,0 +1,220 @@
+"""Every bad input tried on the generated C controllers, in the order of the table: bad
+measurements and references, bad configuration fields, uninitialised states, NULL
+pointers, and a torque beyond the limit; with the valid configuration they start from.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from runtime import cbuild
+
+CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+FORMULATIONS = {"paper": 0, "minimal": 1}
+INPUT_NAMES = ("q", "qdot", "q_des", "qdot_des", "qddot_des")
+WARMUP = 5
+SENTINEL = (111.0, -222.0)
+# Which controllers have which configuration fields.
+SWITCHING = ("tdroc", "roc", "asmc")
+TDE = ("tdc", "tdroc")
+DRISHTI = {"m": 36.0, "I": 5.72, "K": 0.34, "Iw": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
+BASE: dict[str, Any] = {
+    "k1": (4.0, 5.0, 6.0, 7.0, 8.0),
+    "k2": (3.0, 3.5, 4.0, 4.5, 5.0),
+    "q_pos": 1.5,
+    "q_vel": 0.8,
+    "h": 0.01,
+    "tau_max": 200.0,
+    "accel_estimator": 2,
+    "rate_window": 0.005,
+    "hold_gain": 0,
+    "held_gain": 0.0,
+    "eps": 0.05,
+    "n": 4,
+    "a": 0.8,
+    "alpha": 0.3,
+    "phi": 2.0,
+    "gamma": 2.0,
+    "gain0": 0.5,
+}
+SATURATION_LIMIT = 0.5
+
+
+@dataclass(frozen=True)
+class Case:
+    """One bad input. ``row`` groups cases into one line of the table."""
+
+    row: str
+    kind: str  # input | config | state | null | init-null | saturate
+    expected: str
+    applies: tuple[str, ...] = CONTROLLERS
+    inputs: tuple[int, int, float] | None = None  # (which input, index, value)
+    mutate: Callable[[Any], None] | None = None  # changes a copy of the configuration
+    fill: bytes | None = None  # state cases: bytes the state is filled with (None: magic only)
+    null_arg: int | None = None  # null cases: which argument of step is NULL
+    id: str = ""
+
+
+def _set(name: str, value: Any) -> Callable[[Any], None]:
+    def mutate(cfg: Any) -> None:
+        setattr(cfg, name, value)
+
+    return mutate
+
+
+def _set_item(name: str, index: int, value: float) -> Callable[[Any], None]:
+    def mutate(cfg: Any) -> None:
+        getattr(cfg, name)[index] = value
+
+    return mutate
+
+
+def _nominal(**changes: float) -> Callable[[Any], None]:
+    def mutate(cfg: Any) -> None:
+        cbuild.fill_params(cfg.nominal, changes)
+
+    return mutate
+
+
+def max_window(lib: cbuild.CLibrary) -> int:
+    """WMR_MAX_WINDOW, read from the C state (omega has WMR_MAX_WINDOW + 1 rows)."""
+    fields = dict(lib.ffi.typeof("wmr_tdroc_state_t").fields)
+    return int(fields["omega"].type.length) - 1
+
+
+def cases(max_win: int) -> list[Case]:
+    """Every bad input, in the order of the table."""
+    out: list[Case] = []
+    for which, label in enumerate(INPUT_NAMES):
+        status = "WMR_ERR_BAD_MEASUREMENT" if which < 2 else "WMR_ERR_BAD_REFERENCE"
+        bad_values = (
+            ("NaN", math.nan),
+            ("+Inf", math.inf),
+            ("-Inf", -math.inf),
+            ("1e9", 1e9),
+            ("-1e9", -1e9),
+        )
+        for text, value in bad_values:
+            for index in range(5):
+                out.append(
+                    Case(
+                        f"`{label}[i]` = {text}",
+                        "input",
+                        status,
+                        inputs=(which, index, value),
+                        id=f"{label}[{index}]={text}",
+                    )
+                )
+    k2m = DRISHTI["K"] ** 2 / DRISHTI["m"]
+    config: list[tuple[str, str, Callable[[Any], None], tuple[str, ...]]] = [
+        ("`eps` = 0", "WMR_ERR_BAD_EPS", _set("eps", 0.0), SWITCHING),
+        ("`eps` = -0.1", "WMR_ERR_BAD_EPS", _set("eps", -0.1), SWITCHING),
+        ("`eps` = NaN", "WMR_ERR_BAD_EPS", _set("eps", math.nan), SWITCHING),
+        ("`n` = 1", "WMR_ERR_BAD_WINDOW", _set("n", 1), ("tdroc",)),
+        (
+            f"`n` = WMR_MAX_WINDOW + 1 = {max_win + 1}",
+            "WMR_ERR_BAD_WINDOW",
+            _set("n", max_win + 1),
+            ("tdroc",),
+        ),
+        ("`a` = 0", "WMR_ERR_BAD_DISCOUNT", _set("a", 0.0), ("tdroc",)),
+        ("`a` = 1.5", "WMR_ERR_BAD_DISCOUNT", _set("a", 1.5), ("tdroc",)),
+        ("`a` = NaN", "WMR_ERR_BAD_DISCOUNT", _set("a", math.nan), ("tdroc",)),
+        ("`h` = 0", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 0.0), CONTROLLERS),
+        ("`h` = -0.01", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", -0.01), CONTROLLERS),
+        ("`h` = NaN", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.nan), CONTROLLERS),
+        ("`h` = +Inf", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.inf), CONTROLLERS),
+        ("`k1[1]` = 0", "WMR_ERR_BAD_GAINS", _set_item("k1", 1, 0.0), CONTROLLERS),
+        ("`k1[3]` = -4", "WMR_ERR_BAD_GAINS", _set_item("k1", 3, -4.0), CONTROLLERS),
+        ("`k2[4]` = -5", "WMR_ERR_BAD_GAINS", _set_item("k2", 4, -5.0), CONTROLLERS),
+        ("`k2[0]` = NaN", "WMR_ERR_BAD_GAINS", _set_item("k2", 0, math.nan), CONTROLLERS),
+        ("Q: `q_pos` = 0", "WMR_ERR_BAD_GAINS", _set("q_pos", 0.0), CONTROLLERS),
+        ("Q: `q_vel` = -1", "WMR_ERR_BAD_GAINS", _set("q_vel", -1.0), CONTROLLERS),
+        ("nominal `m` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(m=0.0), CONTROLLERS),
+        ("nominal `m` = -36", "WMR_ERR_BAD_NOMINAL", _nominal(m=-36.0), CONTROLLERS),
+        ("nominal `K` = NaN", "WMR_ERR_BAD_NOMINAL", _nominal(K=math.nan), CONTROLLERS),
+        (
+            "nominal `I` = K²/m (M-hat singular)",
+            "WMR_ERR_BAD_NOMINAL",
+            _nominal(I=k2m),
+            CONTROLLERS,
+        ),
+        (
+            "nominal `I` = K²/(2m) (M-hat not positive definite)",
+            "WMR_ERR_BAD_NOMINAL",
+            _nominal(I=0.5 * k2m),
+            CONTROLLERS,
+        ),
+        ("nominal `Iw` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(Iw=0.0), CONTROLLERS),
+        ("nominal `b` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(b=0.0), CONTROLLERS),
+        ("nominal `r` = +Inf", "WMR_ERR_BAD_NOMINAL", _nominal(r=math.inf), CONTROLLERS),
+        ("`tau_max` = 0", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", 0.0), CONTROLLERS),
+        ("`tau_max` = -5", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", -5.0), CONTROLLERS),
+        ("`tau_max` = NaN", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.nan), CONTROLLERS),
+        ("`tau_max` = +Inf", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.inf), CONTROLLERS),
+        ("`formulation` = 2", "WMR_ERR_BAD_FORMULATION", _set("formulation", 2), CONTROLLERS),
+        ("`formulation` = -1", "WMR_ERR_BAD_FORMULATION", _set("formulation", -1), CONTROLLERS),
+        ("`accel_estimator` = -1", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", -1), TDE),
+        ("`accel_estimator` = 3", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", 3), TDE),
+        ("`rate_window` = -0.001", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", -0.001), TDE),
+        ("`rate_window` > h", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", 0.02), TDE),
+        ("`rate_window` = NaN", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", math.nan), TDE),
+        ("TDROC `hold_gain` = 2", "WMR_ERR_BAD_HELD_GAIN", _set("hold_gain", 2), ("tdroc",)),
+        ("TDROC `held_gain` = -1", "WMR_ERR_BAD_HELD_GAIN", _set("held_gain", -1.0), ("tdroc",)),
+        (
+            "TDROC `held_gain` = NaN",
+            "WMR_ERR_BAD_HELD_GAIN",
+            _set("held_gain", math.nan),
+            ("tdroc",),
+        ),
+        ("ROC `alpha` = 1", "WMR_ERR_BAD_BOUNDS", _set("alpha", 1.0), ("roc",)),
+        ("ROC `alpha` = -0.1", "WMR_ERR_BAD_BOUNDS", _set("alpha", -0.1), ("roc",)),
+        ("ROC `phi` = -1", "WMR_ERR_BAD_BOUNDS", _set("phi", -1.0), ("roc",)),
+        ("ROC `phi` = NaN", "WMR_ERR_BAD_BOUNDS", _set("phi", math.nan), ("roc",)),
+        ("ASMC `gamma` = -1", "WMR_ERR_BAD_BOUNDS", _set("gamma", -1.0), ("asmc",)),
+        ("ASMC `gain0` = -1", "WMR_ERR_BAD_BOUNDS", _set("gain0", -1.0), ("asmc",)),
+    ]
+    for row, status, mutate, applies in config:
+        out.append(Case(row, "config", status, applies, mutate=mutate, id=row))
+    for row, fill in (
+        ("state never initialised (zero-filled)", b"\x00"),
+        ("state never initialised (filled with 0x5a)", b"\x5a"),
+        ("initialised state with `magic` overwritten", None),
+    ):
+        out.append(Case(row, "state", "WMR_ERR_NOT_INITIALISED", fill=fill, id=row))
+    step_args = ("state", "config", *INPUT_NAMES, "tau")
+    for index, arg in enumerate(step_args):
+        out.append(
+            Case(
+                f"`{arg}` = NULL in `_step`",
+                "null",
+                "WMR_ERR_NULL_POINTER",
+                null_arg=index,
+                id=f"step:{arg}=NULL",
+            )
+        )
+    for index, arg in enumerate(("state", "config")):
+        out.append(
+            Case(
+                f"`{arg}` = NULL in `_init`",
+                "init-null",
+                "WMR_ERR_NULL_POINTER",
+                null_arg=index,
+                id=f"init:{arg}=NULL",
+            )
+        )
+    out.append(
+        Case("`config` = NULL in `_check_config`", "init-null", "WMR_ERR_NULL_POINTER", id="check")
+    )
+    out.append(
+        Case(
+            f"torque beyond `tau_max` = {SATURATION_LIMIT}",
+            "saturate",
+            "WMR_WARN_SATURATED",
+            id="saturate",
+        )
+    )
+    return out

@@ -1,0 +1,229 @@
+"""The C benchmark: every variant compiled into one executable (gcc -O2; our float32
+objects' symbols renamed; ours without validation rendered under the prefix wmrn_), run,
+and summarised per function and per controller step (median, min, max).
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from codegen.backends import c as c_backend
+from codegen.backends.c.config import CConfig, StatusCode
+from codegen.backends.casadi import generate_c
+from codegen.spec import FunctionSpec
+from runtime.cbuild import GENERATED_C
+from runtime.tooling.bench.c_variants import (
+    HAND_WRITTEN,
+    HARNESS,
+    MODEL_FUNCTIONS,
+    STEP_KERNELS,
+    casadi_wrapper,
+    input_ranges,
+    input_size,
+    ours_wrapper,
+    output_sizes,
+    specs_by_name,
+    sympy_c,
+)
+
+CSRC = Path(__file__).resolve().parents[2] / "csrc"  # runtime/csrc
+CFLAGS = ["-std=c99", "-O2"]
+
+
+def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, FunctionSpec]) -> Path:
+    """Compile every variant into one executable; returns its path."""
+    used = sorted({c["spec"] for c in cases})
+    spec_list = [specs[n] for n in used]
+    # CasADi's own C for the same symbolic functions.
+    generate_c(spec_list, workdir, "casadi_gen", prefix="casadi_")
+    (workdir / "sympy_gen.c").write_text(sympy_c(spec_list))
+    objs: list[str] = []
+    gen_sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
+    for src in gen_sources:  # ours, double
+        obj = workdir / f"d_{src.stem}.o"
+        subprocess.run(
+            ["gcc", *CFLAGS, "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)], check=True
+        )
+        objs.append(str(obj))
+    for src in gen_sources:  # ours, float32, symbols renamed wmr_ -> f32_wmr_
+        obj = workdir / f"f_{src.stem}.o"
+        subprocess.run(
+            ["gcc", *CFLAGS, "-DWMR_FLOAT32", "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)],
+            check=True,
+        )
+        names = subprocess.run(
+            ["nm", "--defined-only", "-g", str(obj)], check=True, capture_output=True, text=True
+        ).stdout.split()
+        mapping = workdir / f"{src.stem}.redefine"
+        mapping.write_text("".join(f"{n} f32_{n}\n" for n in names if n.startswith("wmr_")))
+        # Undefined references to other wmr_ objects must be renamed too.
+        undefined = subprocess.run(
+            ["nm", "-u", str(obj)], check=True, capture_output=True, text=True
+        ).stdout.split()
+        extra = "".join(f"{n} f32_{n}\n" for n in undefined if n.startswith("wmr_"))
+        mapping.write_text(mapping.read_text() + extra)
+        subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
+        objs.append(str(obj))
+    # Ours without input/guard/output validation, to measure what the checks cost: the
+    # same specs rendered by the same backend under another prefix (wmrn_).
+    unchecked = [
+        replace(specs[n], returns_status=False, guards=(), nonfinite_input="",
+                nonfinite_output="")
+        for n in used if specs[n].returns_status
+    ]
+    cfg = CConfig(prefix="wmrn_", types_header="wmrn_types.h", real_type="wmrn_real_t",
+                  status_type="wmrn_status_t", params_ctype="wmrn_params_t",
+                  literal_macro="WMRN_LIT", status_codes=(StatusCode("WMRN_OK", 0, "ok"),))
+    for fname, text in c_backend.render_all({"wmrn_model": unchecked}, cfg).items():
+        (workdir / fname).write_text(text)
+    sources = [workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c"]
+    if unchecked:
+        sources.append(workdir / "wmrn_model.c")
+    for src in sources:
+        obj = workdir / f"x_{src.stem}.o"
+        subprocess.run(
+            ["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", str(src), "-o", str(obj)],
+            check=True,
+        )
+        objs.append(str(obj))
+    # Harness.
+    lines = [
+        '#include "wmr_model.h"',
+        '#include "wmr_laws.h"',
+        '#include "casadi_gen.h"',
+        '#include "hand_model.h"',
+        HARNESS,
+    ]
+    for name in used:
+        spec = specs[name]
+        n_in = input_size(spec)
+        lines.append(f"void sympy_{name}(const double *in, double *out);")
+        lines.append(ours_wrapper(spec, "ours", "double"))
+        lines.append(casadi_wrapper(spec))
+        lo, hi = zip(*input_ranges(spec), strict=True)
+        lines.append(f"static const double lo_{name}[{n_in}] = {{{', '.join(map(repr, lo))}}};")
+        lines.append(f"static const double hi_{name}[{n_in}] = {{{', '.join(map(repr, hi))}}};")
+        lines.append(
+            f"static void sympy_w_{name}(const void *in, void *out) "
+            f"{{ sympy_{name}((const double *)in, (double *)out); }}"
+        )
+    # float32 prototypes: our signatures with float and the renamed symbols.
+    for name in used:
+        spec = specs[name]
+        params = []
+        for a in spec.inputs:
+            params.append("const wmr_params_f32_t *" if a.kind == "params" else "const float *")
+        params += ["float *"] * len(spec.outputs)
+        lines.append(f"void f32_wmr_{name}({', '.join(params)});")
+    lines.insert(0, "typedef struct { float m, Iz, K, Iw, r, b, d; } wmr_params_f32_t;")
+    for name in used:
+        lines.append(
+            ours_wrapper(specs[name], "ours32", "float").replace(
+                "const wmr_params_t", "const wmr_params_f32_t"
+            )
+        )
+    if unchecked:
+        lines.insert(0, '#include "wmrn_model.h"')
+    for spec in unchecked:
+        lines.append(ours_wrapper(spec, "oursn", "double").replace(
+            "const wmr_params_t", "const wmrn_params_t").replace(
+            f"wmr_{spec.name}(", f"wmrn_{spec.name}("))
+    for name in HAND_WRITTEN & set(used):
+        lines.append(
+            f"static void hand_w_{name}(const void *in, void *out) "
+            f"{{ hand_{name}((const double *)in, (double *)out); }}"
+        )
+    lines.append("int main(int argc, char **argv) {")
+    lines.append(
+        "    long calls = argc > 1 ? atol(argv[1]) : 1000000; "
+        "int repeats = argc > 2 ? atoi(argv[2]) : 5;"
+    )
+    lines.append("    bench_case cases[] = {")
+    for c in cases:
+        name, variant = c["spec"], c["variant"]
+        spec = specs[name]
+        fn = {
+            "ours": f"ours_{name}",
+            "ours_float32": f"ours32_{name}",
+            "ours_unchecked": f"oursn_{name}",
+            "casadi": f"casadi_w_{name}",
+            "sympy": f"sympy_w_{name}",
+            "hand": f"hand_w_{name}",
+        }[variant]
+        lines.append(
+            f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
+            f"{sum(output_sizes(spec))}, {int(variant == 'ours_float32')}, "
+            f"lo_{name}, hi_{name}}},"
+        )
+    lines.append(
+        "    };\n    size_t k;\n"
+        "    for (k = 0; k < sizeof cases / sizeof cases[0]; ++k) "
+        "run(&cases[k], calls, repeats);\n    return 0;\n}"
+    )
+    src = workdir / "bench_main.c"
+    src.write_text("#define _POSIX_C_SOURCE 199309L\n#include <stdlib.h>\n" + "\n".join(lines))
+    exe = workdir / "bench"
+    subprocess.run(
+        [
+            "gcc",
+            *CFLAGS,
+            f"-I{GENERATED_C}",
+            f"-I{workdir}",
+            f"-I{CSRC}",
+            str(src),
+            *objs,
+            "-lm",
+            "-o",
+            str(exe),
+        ],
+        check=True,
+    )
+    return exe
+
+
+def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
+    kernels = sorted({k for ks in STEP_KERNELS.values() for k in ks})
+    cases = []
+    for name in (*MODEL_FUNCTIONS, *kernels):
+        variants = ["ours", "ours_float32", "casadi", "sympy"]
+        if specs[name].returns_status:
+            variants.append("ours_unchecked")
+        if name in HAND_WRITTEN:
+            variants.append("hand")
+        cases += [{"spec": name, "variant": v} for v in variants]
+    return cases
+
+
+def run_c(calls: int, repeats: int) -> list[dict[str, Any]]:
+    specs = specs_by_name()
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = build_bench(Path(tmp), c_cases(specs), specs)
+        out = subprocess.run(
+            [str(exe), str(calls), str(repeats)], check=True, capture_output=True, text=True
+        ).stdout
+    return [json.loads(line) for line in out.splitlines() if line.startswith("{")]
+
+
+def summarise_c(rows: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, float]]:
+    out = {}
+    for r in rows:
+        ns = r["ns"]
+        out[(r["function"], r["variant"])] = {
+            "median": statistics.median(ns),
+            "min": min(ns),
+            "max": max(ns),
+        }
+    # Controller steps: sum of their kernels' medians (and of mins and maxes).
+    for ctrl, kernels in STEP_KERNELS.items():
+        for variant in ("ours", "ours_float32", "casadi", "sympy"):
+            parts = [out[(k, variant)] for k in kernels]
+            out[(f"{ctrl}_step_kernels", variant)] = {
+                key: sum(p[key] for p in parts) for key in ("median", "min", "max")
+            }
+    return out

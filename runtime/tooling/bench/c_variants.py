@@ -1,0 +1,165 @@
+"""What the C benchmark compares: the functions (model functions and the kernels of each
+controller step), their plausible input ranges, and the C source of each variant — plain
+SymPy ``ccode``, the ``(in, out)`` wrappers around ours and CasADi's functions, and the
+timing harness every variant runs in.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from codegen.spec import FunctionSpec
+from codegen.wmr_functions import law_specs, model_specs
+
+MODEL_FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics")
+# One controller step = the kernels it evaluates (paper formulation).
+STEP_KERNELS = {
+    "tdc": ("paper_tde", "paper_tdc_law"),
+    "tdroc": ("paper_tde", "paper_tdroc_gain", "paper_tdroc_law"),
+    "roc": ("paper_roc_law",),
+    "asmc": ("paper_asmc_law",),
+}
+HAND_WRITTEN = set(MODEL_FUNCTIONS)
+
+
+def specs_by_name() -> dict[str, FunctionSpec]:
+    return {s.name: s for s in (*model_specs(), *law_specs())}
+
+
+def input_size(spec: FunctionSpec) -> int:
+    return len(spec.input_symbols())
+
+
+def output_sizes(spec: FunctionSpec) -> list[int]:
+    return [len(a.exprs) for a in spec.outputs]
+
+
+def input_ranges(spec: FunctionSpec) -> list[tuple[float, float]]:
+    """Plausible ranges per flattened input: parameters ±20 % around Drishti's, angles,
+    rates, gains; keeps every variant on the same, physically meaningful inputs."""
+    drishti = {"m": 36.0, "I": 5.72, "K": 0.34, "I_w": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
+    out = []
+    for s in spec.input_symbols():
+        name = str(s)
+        if name in drishti:
+            out.append((0.8 * drishti[name], 1.2 * drishti[name]))
+        elif name.startswith(("w", "eps", "h", "span", "k1", "k2", "p12", "p22", "gamma")):
+            out.append((0.1, 1.0))
+        elif name in ("alpha",):
+            out.append((0.1, 0.5))
+        else:
+            out.append((-3.0, 3.0))
+    return out
+
+
+def sympy_c(specs: Sequence[FunctionSpec]) -> str:
+    """Plain SymPy: ``cse`` then ``ccode``, one ``sympy_<name>(in, out)`` per function."""
+    import sympy as sp
+
+    lines = ["#include <math.h>", ""]
+    for spec in specs:
+        syms = spec.input_symbols()
+        names = {s: sp.Symbol(f"in[{k}]") for k, s in enumerate(syms)}
+        exprs = [e.xreplace(names) for a in spec.outputs for e in a.exprs]
+        temps, reduced = sp.cse(exprs)
+        lines.append(f"void sympy_{spec.name}(const double *in, double *out)\n{{")
+        for t, e in temps:
+            lines.append(f"    const double {t} = {sp.ccode(e)};")
+        for k, e in enumerate(reduced):
+            lines.append(f"    out[{k}] = {sp.ccode(e)};")
+        lines.append("}\n")
+    return "\n".join(lines)
+
+
+def ours_wrapper(spec: FunctionSpec, prefix: str, real: str) -> str:
+    """``<prefix>_<name>(in, out)`` calling our generated function (params struct first)."""
+    args, off = [], 0
+    body = []
+    for a in spec.inputs:
+        n = len(a.all_symbols())
+        if a.kind == "params":
+            fields = ", ".join(f"in[{off + k}]" for k in range(n))
+            body.append(f"    const wmr_params_t {a.name}_s = {{{fields}}};")
+            args.append(f"&{a.name}_s")
+        else:
+            args.append(f"in + {off}")
+        off += n
+    outs, o = [], 0
+    for size in output_sizes(spec):
+        outs.append(f"out + {o}")
+        o += size
+    fn = f"{'f32_' if real == 'float' else ''}wmr_{spec.name}"
+    return (
+        f"static void {prefix}_{spec.name}(const void *in_, void *out_)\n{{\n"
+        f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
+        + "\n".join(body)
+        + f"\n    {fn}({', '.join(args + outs)});\n}}\n"
+    )
+
+
+def casadi_wrapper(spec: FunctionSpec) -> str:
+    sizes = [len(a.all_symbols()) for a in spec.inputs]
+    offs = np.cumsum([0, *sizes])[:-1]
+    args = ", ".join(f"in + {o}" for o in offs)
+    out_offs = np.cumsum([0, *output_sizes(spec)])[:-1]
+    res = ", ".join(f"out + {o}" for o in out_offs)
+    return (
+        f"static void casadi_w_{spec.name}(const void *in_, void *out_)\n{{\n"
+        f"    const double *in = (const double *)in_;\n    double *out = (double *)out_;\n"
+        f"    const double *arg[{len(sizes)}] = {{{args}}};\n"
+        f"    double *res[{len(out_offs)}] = {{{res}}};\n"
+        f"    casadi_{spec.name}(arg, res, 0, 0, 0);\n}}\n"
+    )
+
+
+HARNESS = r"""
+#include <stdio.h>
+#include <time.h>
+
+typedef void (*bench_fn)(const void *in, void *out);
+typedef struct { const char *function; const char *variant; bench_fn fn; int n_in; int n_out;
+                 int is_float; const double *lo; const double *hi; } bench_case;
+
+#define NSETS 256
+static double now_ns(void) {
+    struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
+    return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
+}
+static unsigned long long rng = 88172645463325252ULL;
+static double urand(void) {
+    rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17;
+    return (double)(rng >> 11) / 9007199254740992.0;
+}
+static double din[NSETS * 512], dout[512];
+static float fin[NSETS * 512], fout[512];
+
+static void run(const bench_case *c, long calls, int repeats) {
+    int k, rep; long i; double sink = 0.0;
+    rng = 88172645463325252ULL;  /* the same inputs for every variant of a function */
+    for (k = 0; k < NSETS * c->n_in; ++k) {
+        int j = k % c->n_in;
+        din[k] = c->lo[j] + (c->hi[j] - c->lo[j]) * urand();
+        fin[k] = (float)din[k];
+    }
+    printf("{\"function\": \"%s\", \"variant\": \"%s\", \"ns\": [", c->function, c->variant);
+    for (rep = 0; rep < repeats; ++rep) {
+        double t0 = now_ns(), t1;
+        for (i = 0; i < calls; ++i) {
+            const int set = (int)(i & (NSETS - 1));
+            if (c->is_float) {
+                c->fn(fin + set * c->n_in, fout);
+                sink += (double)fout[i % c->n_out];
+            } else {
+                c->fn(din + set * c->n_in, dout);
+                sink += dout[i % c->n_out];
+            }
+        }
+        t1 = now_ns();
+        printf("%s%.4f", rep ? ", " : "", (t1 - t0) / (double)calls);
+    }
+    printf("], \"checksum\": %.15e}\n", sink);
+    fflush(stdout);
+}
+"""

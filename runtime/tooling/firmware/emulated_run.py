@@ -1,0 +1,199 @@
+"""The emulated run: the controller calls of a closed loop (lawn-mower path through
+``runtime.simulate.run(float32=True)``) recorded, replayed on the emulated Cortex-M4 and on
+the host builds (float32 and double), and the torques compared (in ulps and absolute).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from runtime.tooling.firmware.emulator import PARAM_FIELDS, Emulator
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A closed-loop run's controller inputs and outputs, step by step."""
+
+    config: dict[str, Any]
+    inputs: list[list[list[float]]]  # per step: q, qdot, q_des, qdot_des, qddot_des
+    status: list[int]
+    tau: list[list[float]]
+    gain: list[float]
+
+
+def record_closed_loop(
+    controller: str = "tdroc", formulation: str = "paper", eps: float = 0.5, float32: bool = True
+) -> Recording:
+    """Run ``simulate.run`` on the lawn-mower path and record every controller call."""
+    from modeling.robot_file import load_robot
+    from runtime import references, simulate
+    from runtime.cbuild import CLibrary
+    from runtime.experiment import Experiment
+
+    robot = dict(load_robot().lumped)
+    exp = Experiment()
+    exp = replace(exp, controller=replace(exp.controller, eps=eps))
+    ref = references.lawnmower(robot, exp.controller.h, exp.paths.lawnmower_duration)
+    real = simulate.sim_library(float32)
+    rec: dict[str, list[Any]] = {"inputs": [], "status": [], "tau": [], "gain": [], "cfg": []}
+    step_name = f"wmr_{controller}_step"
+
+    class Recorder:
+        def __getattr__(self, attr: str) -> Any:
+            fn = getattr(real.lib, attr)
+            if attr != step_name:
+                return fn
+
+            def step(state: Any, cfg: Any, *args: Any) -> int:
+                status = int(fn(state, cfg, *args))
+                if not rec["cfg"]:
+                    rec["cfg"].append(config_values(real.ffi, cfg))
+                rec["inputs"].append([[float(x) for x in a] for a in args[:5]])
+                rec["status"].append(status)
+                rec["tau"].append([float(args[5][0]), float(args[5][1])])
+                rec["gain"].append(float(state.gain))
+                return status
+
+            return step
+
+    original = simulate.sim_library
+
+    def recording_library(float32: bool = False) -> CLibrary:
+        return CLibrary(real.ffi, Recorder(), real.float32, real.path)
+
+    simulate.sim_library = recording_library  # type: ignore[assignment]
+    try:
+        simulate.run(controller, formulation, ref, robot, exp, float32=float32)
+    finally:
+        simulate.sim_library = original
+    return Recording(rec["cfg"][0], rec["inputs"], rec["status"], rec["tau"], rec["gain"])
+
+
+def config_values(ffi: Any, cfg: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {"params": [float(getattr(cfg.nominal, p)) for p in PARAM_FIELDS]}
+    for name, _ in ffi.typeof(cfg[0]).fields:
+        if name == "nominal":
+            continue
+        value = getattr(cfg, name)
+        out[name] = [float(x) for x in value] if isinstance(value, ffi.CData) else value
+    return out
+
+
+def replay_host(rec: Recording, float32: bool) -> tuple[list[int], list[list[float]], list[float]]:
+    """The recorded inputs through the host build (cffi), TDROC: (status, tau, gain)."""
+    from runtime import cbuild
+
+    lib = cbuild.build(float32)
+    ffi = lib.ffi
+    cfg = ffi.new("wmr_tdroc_config_t *")
+    for i, p in enumerate(PARAM_FIELDS):
+        setattr(cfg.nominal, p, rec.config["params"][i])
+    for name, value in rec.config.items():
+        if name != "params":
+            setattr(cfg, name, value)
+    state = ffi.new("wmr_tdroc_state_t *")
+    if lib.lib.wmr_tdroc_init(state, cfg) != 0:
+        raise RuntimeError("host init failed")
+    tau = ffi.new("wmr_real_t[2]")
+    statuses, taus, gains = [], [], []
+    for inputs in rec.inputs:
+        arrays = [ffi.new("wmr_real_t[5]", v) for v in inputs]
+        statuses.append(int(lib.lib.wmr_tdroc_step(state, cfg, *arrays, tau)))
+        taus.append([float(tau[0]), float(tau[1])])
+        gains.append(float(state.gain))
+    return statuses, taus, gains
+
+
+@dataclass(frozen=True)
+class EmulationResult:
+    steps: int
+    instructions: list[int]
+    stack_bytes: int  # high-water mark over all steps (measured)
+    init_instructions: int
+    status: list[int]
+    tau: list[list[float]]
+    gain: list[float]
+
+
+def emulate(rec: Recording, elf: Path, binary: Path) -> EmulationResult:
+    emu = Emulator(elf, binary)
+    cfg = rec.config
+    emu.write("params", cfg["params"])
+    for name in ("k1", "k2"):
+        emu.write(name, cfg[name])
+    for name in (
+        "q_pos",
+        "q_vel",
+        "h",
+        "tau_max",
+        "eps",
+        "a",
+        "formulation",
+        "accel_estimator",
+        "n",
+    ):
+        emu.write(name, [cfg[name]])
+    init_insns, _ = emu.call("harness_init")
+    if emu.read("status")[0] != 0:
+        raise RuntimeError(f"emulated init failed: {emu.read('status')[0]}")
+    counts, stack, status, taus, gains = [], 0, [], [], []
+    for inputs in rec.inputs:
+        emu.write("in", [x for v in inputs for x in v])
+        n, used = emu.call("harness_step")
+        counts.append(n)
+        stack = max(stack, used)
+        status.append(int(emu.read("status")[0]))
+        taus.append(list(emu.read("tau")))
+        gains.append(float(emu.read("gain")[0]))
+    return EmulationResult(len(counts), counts, stack, init_insns, status, taus, gains)
+
+
+def ulps(a: float, b: float) -> int:
+    """Distance between two float32 values in units in the last place."""
+
+    def ordered(x: float) -> int:
+        i: int = struct.unpack("<i", struct.pack("<f", x))[0]
+        return i if i >= 0 else -(i & 0x7FFFFFFF)
+
+    if math.isnan(a) or math.isnan(b):
+        return 2**31
+    return abs(ordered(a) - ordered(b))
+
+
+@dataclass(frozen=True)
+class Comparison:
+    max_ulps: int  # ARM vs host float32, torques
+    median_ulps: float
+    max_abs_vs_float: float
+    scale_ulps_vs_float: float  # max abs difference in ulps of the run's largest |torque|
+    torque_scale: float  # the run's largest |torque| (host double) [N m]
+    max_abs_vs_double: float  # ARM vs host double, torques [N m]
+    max_rel_vs_double: float  # relative to max |tau| of the run
+    host_float_reproduces_loop: bool
+    same_status: bool
+
+
+def compare(rec: Recording, emu: EmulationResult) -> Comparison:
+    s_f, tau_f, _ = replay_host(rec, True)
+    s_d, tau_d, _ = replay_host(rec, False)
+    arm = np.array(emu.tau)
+    tf, td = np.array(tau_f), np.array(tau_d)
+    dist = [ulps(a, b) for a, b in zip(arm.ravel(), tf.ravel(), strict=True)]
+    scale = float(np.max(np.abs(td)))
+    return Comparison(
+        max_ulps=max(dist),
+        median_ulps=float(np.median(dist)),
+        max_abs_vs_float=float(np.max(np.abs(arm - tf))),
+        scale_ulps_vs_float=float(np.max(np.abs(arm - tf)) / np.spacing(np.float32(scale))),
+        torque_scale=scale,
+        max_abs_vs_double=float(np.max(np.abs(arm - td))),
+        max_rel_vs_double=float(np.max(np.abs(arm - td)) / scale),
+        host_float_reproduces_loop=tau_f == rec.tau and s_f == rec.status,
+        same_status=emu.status == s_f == s_d,
+    )
