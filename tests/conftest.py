@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import cache
+from typing import Any
 
 import numpy as np
 import pytest
@@ -97,3 +98,12 @@ def lateral_model() -> NumericWMR:
 @pytest.fixture(scope="session")
 def drishti() -> np.ndarray:
     return drishti_params()
+
+
+@pytest.fixture(scope="session")
+def c_builds(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    """The generated C compiled with the strict flags in both precisions (see
+    ``generated_code_support.build_generated_c``), shared by ``tests/test_generated_*.py``."""
+    from generated_code_support import build_generated_c
+
+    return build_generated_c(tmp_path_factory)

@@ -1,0 +1,100 @@
+"""``python -m codegen``: byte-identical output under two hash seeds, ``--check`` on the
+repository, ``--check`` on an edited copy, ``--robot`` with a bad file.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from generated_code_support import DRISHTI, GENERATED, ROOT
+
+
+# These run `python -m codegen` (about 10 s each, four at once on two cores).
+@pytest.fixture(scope="module")
+def codegen_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    tmp = tmp_path_factory.mktemp("codegen")
+    edited = tmp / "edited"
+    shutil.copytree(GENERATED, edited, ignore=shutil.ignore_patterns("__pycache__"))
+    target = edited / "c" / "wmr_model.h"
+    target.write_text(target.read_text().replace("#define WMR_MODEL_H", "#define WMR_MODEL_H  "))
+    base = [sys.executable, "-m", "codegen"]
+    runs = {
+        "a": ([*base, "--out", str(tmp / "a")], "0"),
+        "b": ([*base, "--out", str(tmp / "b")], "12345"),
+        "check": ([*base, "--check"], None),
+        "edited": ([*base, "--check", "--out", str(edited)], None),
+    }
+    procs = {}
+    for key, (cmd, seed) in runs.items():
+        env = dict(os.environ)
+        if seed is not None:
+            env["PYTHONHASHSEED"] = seed
+        procs[key] = subprocess.Popen(
+            cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+    results: dict[str, Any] = {"tmp": tmp}
+    for key, proc in procs.items():
+        out, err = proc.communicate(timeout=300)
+        results[key] = (proc.returncode, out, err)
+    return results
+
+
+def _tree(root: Path) -> dict[str, bytes]:
+    return {
+        p.relative_to(root).as_posix(): p.read_bytes()
+        for p in sorted(root.rglob("*"))
+        if p.is_file() and "__pycache__" not in p.parts
+    }
+
+
+def _stale_files(diff: str) -> set[str]:
+    return set(re.findall(r"^--- generated/(\S+)", diff, flags=re.M))
+
+
+def test_codegen_is_deterministic_across_hash_seeds(codegen_runs: dict[str, Any]) -> None:
+    for key in ("a", "b"):
+        assert codegen_runs[key][0] == 0, codegen_runs[key]
+    a, b = _tree(codegen_runs["tmp"] / "a"), _tree(codegen_runs["tmp"] / "b")
+    assert len(a) > 40 and a.keys() == b.keys()
+    assert [k for k in a if a[k] != b[k]] == []
+
+
+def test_codegen_check_passes_on_repository(codegen_runs: dict[str, Any]) -> None:
+    rc, out, err = codegen_runs["check"]
+    assert rc == 0, f"generated/ is stale: {sorted(_stale_files(out))}\n{err}"
+    assert "up to date" in out
+
+
+def test_codegen_check_reports_an_edited_file(codegen_runs: dict[str, Any]) -> None:
+    rc, out, err = codegen_runs["edited"]
+    assert rc == 1, (out, err)
+    assert "--- generated/c/wmr_model.h" in out and "+++ regenerated/c/wmr_model.h" in out
+    assert "-#define WMR_MODEL_H  " in out and "+#define WMR_MODEL_H\n" in out
+    stale_in_repo = _stale_files(codegen_runs["check"][1])
+    assert _stale_files(out) == {"c/wmr_model.h"} | stale_in_repo
+    assert "stale" in err
+
+
+def test_codegen_bad_robot_file(tmp_path: Path) -> None:
+    robot = tmp_path / "bad.toml"
+    fields = {k: v for k, v in DRISHTI.items() if k != "Iw"}
+    lines = "".join(f"{k} = {v!r}\n" for k, v in fields.items())
+    robot.write_text(f'name = "bad"\n[lumped]\n{lines}')
+    out = tmp_path / "out"
+    proc = subprocess.run(
+        [sys.executable, "-m", "codegen", "--robot", str(robot), "--out", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2, proc
+    assert "'Iw'" in proc.stderr and str(robot) in proc.stderr
+    assert not out.exists()
