@@ -33,34 +33,43 @@ LAW_SOURCE = "modeling/controllers.py"
 
 
 def _c_files(robot: Robot) -> dict[str, str]:
+    from codegen.controller_layout import DRISHTI_LAYOUT
+
+    layout = DRISHTI_LAYOUT
+    pre = layout.prefix
     files = c_backend.render_all(
-        {"wmr_model": model_specs(), "wmr_laws": law_specs(), "wmr_plant": plant_specs()},
+        {f"{pre}_model": model_specs(), f"{pre}_laws": law_specs(), f"{pre}_plant": plant_specs()},
         C_CONFIG,
         source=f"{MODEL_SOURCE}, {LAW_SOURCE}",
     )
+    param_fields = [C_CONFIG.c_field(name) for name, _, _ in PARAM_FIELDS]
     for suffix in ("h", "c"):
         template = f"controller_common.{suffix}.jinja"
-        files[f"wmr_controller.{suffix}"] = template_util.render(
+        files[f"{pre}_controller.{suffix}"] = template_util.render(
             C_TEMPLATES,
             template,
             preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
+            layout=layout,
+            param_fields=param_fields,
             max_abs_input=MAX_ABS_INPUT,
         )
     for info in CONTROLLERS:
         for suffix in ("h", "c"):
             template = f"controller.{suffix}.jinja"
-            files[f"wmr_{info.name}.{suffix}"] = template_util.render(
+            files[f"{pre}_{info.name}.{suffix}"] = template_util.render(
                 C_TEMPLATES,
                 template,
                 preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
+                layout=layout,
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
             )
     fields = [(C_CONFIG.c_field(name), repr(robot.lumped[name])) for name, _, _ in PARAM_FIELDS]
-    files["wmr_robot.h"] = template_util.render(
+    files[f"{pre}_robot.h"] = template_util.render(
         C_TEMPLATES,
         "robot.h.jinja",
         preamble=template_util.preamble_lines(robot.source, C_TEMPLATES, "robot.h.jinja"),
+        layout=layout,
         robot_name=robot.name,
         fields=fields,
     )
@@ -70,21 +79,29 @@ def _c_files(robot: Robot) -> dict[str, str]:
         preamble=template_util.preamble_lines(
             "codegen/generate.py", C_TEMPLATES, "example_main.c.jinja"
         ),
+        layout=layout,
+        param_fields=param_fields,
     )
     return files
 
 
 def _python_files(robot: Robot) -> dict[str, str]:
+    from codegen.controller_api import status_codes
+    from codegen.controller_layout import DRISHTI_LAYOUT
+
+    layout = DRISHTI_LAYOUT
+    pre = layout.prefix
     files = {}
-    files.update(py_backend.render(model_specs(), "wmr_model", source=MODEL_SOURCE))
-    files.update(py_backend.render(law_specs(), "wmr_laws", source=LAW_SOURCE))
-    files.update(py_backend.render(plant_specs(), "wmr_plant", source=MODEL_SOURCE))
+    files.update(py_backend.render(model_specs(), f"{pre}_model", source=MODEL_SOURCE))
+    files.update(py_backend.render(law_specs(), f"{pre}_laws", source=LAW_SOURCE))
+    files.update(py_backend.render(plant_specs(), f"{pre}_plant", source=MODEL_SOURCE))
     template = "controllers.py.jinja"
     files["controllers.py"] = template_util.render(
         PY_TEMPLATES,
         template,
         preamble=template_util.preamble_lines(LAW_SOURCE, PY_TEMPLATES, template),
-        status_codes=STATUS_CODES,
+        layout=layout,
+        status_codes=status_codes(layout),
         controllers=CONTROLLERS,
         formulation_paper=0,
         formulation_minimal=1,

@@ -1,0 +1,343 @@
+"""The controller templates rendered for a layout other than Drishti's.
+
+A made-up robot (prefix ``toy``, 8 coordinates, 2 inputs driving coordinates 4 and 5, no
+paper formulation, ``||Mhat^-1||`` depending on q) exercises every generic path of the C
+and Python controller templates. Its kernels do not exist, so the C is only inspected;
+the Python module is compiled and run against stub kernels that check what they are
+given. Drishti's byte-identical output is ``python -m codegen --check``.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import types
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from codegen import template_util
+from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
+from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
+from codegen.controller_api import (
+    CONTROLLERS,
+    DEFINES,
+    MAX_ABS_INPUT,
+    STATUS_CODES,
+    defines,
+    status_codes,
+)
+from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout, row_span, wrap_terms
+from codegen.robot_functions import MAX_WINDOW
+
+TOY = ControllerLayout(
+    prefix="toy",
+    nq=8,
+    nu=2,
+    actuated=(4, 5),
+    paper=False,
+    minv_needs_q=True,
+    coordinate_names=("x", "y", "theta", "phi", "theta_r", "theta_l", "psi", "chi"),
+    input_names=("tau_r", "tau_l"),
+)
+TOY_PARAMS = ("J_theta", "J_phi", "K_x", "K_y", "radius_r", "radius_l")
+PREAMBLE = ("Generated for tests/test_controller_layout.py",)
+
+
+def _c_texts(layout: ControllerLayout) -> dict[str, str]:
+    texts = {}
+    for suffix in ("h", "c"):
+        texts[f"controller.{suffix}"] = template_util.render(
+            C_TEMPLATES,
+            f"controller_common.{suffix}.jinja",
+            preamble=PREAMBLE,
+            layout=layout,
+            param_fields=list(TOY_PARAMS),
+            max_abs_input=MAX_ABS_INPUT,
+        )
+        for info in CONTROLLERS:
+            texts[f"{info.name}.{suffix}"] = template_util.render(
+                C_TEMPLATES,
+                f"controller.{suffix}.jinja",
+                preamble=PREAMBLE,
+                layout=layout,
+                c=info,
+                max_abs_input=MAX_ABS_INPUT,
+            )
+    texts["robot.h"] = template_util.render(
+        C_TEMPLATES,
+        "robot.h.jinja",
+        preamble=PREAMBLE,
+        layout=layout,
+        robot_name="toy",
+        fields=[(k, "1.0") for k in TOY_PARAMS],
+    )
+    texts["example_main.c"] = template_util.render(
+        C_TEMPLATES,
+        "example_main.c.jinja",
+        preamble=PREAMBLE,
+        layout=layout,
+        param_fields=list(TOY_PARAMS),
+    )
+    return texts
+
+
+def _python_text(layout: ControllerLayout) -> str:
+    return template_util.render(
+        PY_TEMPLATES,
+        "controllers.py.jinja",
+        preamble=PREAMBLE,
+        layout=layout,
+        status_codes=status_codes(layout),
+        controllers=CONTROLLERS,
+        formulation_paper=0,
+        formulation_minimal=1,
+        max_window=MAX_WINDOW,
+        max_abs_input=MAX_ABS_INPUT,
+        c_field_names={},
+        param_keys=list(TOY_PARAMS),
+    )
+
+
+@pytest.fixture(scope="module")
+def c_texts() -> dict[str, str]:
+    return _c_texts(TOY)
+
+
+def _function_body(text: str, name: str) -> str:
+    """The body of C function ``name`` (from its definition to the closing brace)."""
+    match = re.search(rf"^\w+ {re.escape(name)}\(.*?^\{{\n(.*?)^\}}\n", text, re.S | re.M)
+    assert match, f"no definition of {name}"
+    return match.group(1)
+
+
+def test_no_drishti_names_remain(c_texts: dict[str, str]) -> None:
+    for name, text in {**c_texts, "controllers.py": _python_text(TOY)}.items():
+        assert not re.search("wmr", text, re.I), f"{name} still names wmr"
+        assert "toy" in text.lower(), name
+
+
+def test_no_paper_kernels(c_texts: dict[str, str]) -> None:
+    for name, text in c_texts.items():
+        assert "_paper_" not in text, name
+        assert "minv_paper" not in text, name
+        assert not re.search(r"\bpaper\b ?\?", text), f"{name} branches on paper"
+    py = _python_text(TOY)
+    assert "laws.paper_" not in py
+    assert "if paper" not in py
+
+
+def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
+    for name in ("controller.h", "controller.c", "tdroc.h", "tdroc.c", "tdc.c", "asmc.c"):
+        assert "[8]" in c_texts[name], name
+        assert "[2]" in c_texts[name], name
+        assert not re.search(r"_t \w+\[5\]", c_texts[name]), name  # no 5-wide array
+    step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step")
+    assert "const int off = 4;" in step
+    assert "out_tau[1] = u[1];" in step
+    history = _function_body(c_texts["controller.c"], "toy_push_history")
+    assert "u_prev[4] = tau[0];" in history and "u_prev[5] = tau[1];" in history
+    assert "for (i = 0; i < 8; ++i)" in history
+    assert (
+        "toy_real_t k1[8];       /* diagonal of K1 (18); the minimal form uses k1[4], k1[5] */"
+        in (c_texts["tdc.h"])
+    )
+    assert "writes tau[2] = (tau_r, tau_l)" in c_texts["roc.h"]
+
+
+def test_formulation_paper_is_rejected(c_texts: dict[str, str]) -> None:
+    base = _function_body(c_texts["controller.c"], "toy_check_base_config")
+    assert "if (formulation != TOY_FORMULATION_MINIMAL)" in base
+    assert "return TOY_ERR_BAD_FORMULATION;" in base
+    assert "TOY_FORMULATION_MINIMAL" in c_texts["example_main.c"]
+
+
+def test_minv_norm_is_evaluated_at_q_in_the_step(c_texts: dict[str, str]) -> None:
+    tdroc = c_texts["tdroc.c"]
+    step = _function_body(tdroc, "toy_tdroc_step")
+    assert "toy_minimal_minv_norm(&config->nominal, q, &next.minv_norm);" in step
+    assert "same_params" not in step
+    init = _function_body(tdroc, "toy_tdroc_init")
+    assert "minv_norm(" not in init
+    assert "minv_for" not in c_texts["tdroc.h"]
+    for name in ("tdc.c", "roc.c", "asmc.c"):
+        assert "minv_norm" not in c_texts[name], name
+
+
+def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
+    body = _function_body(c_texts["controller.c"], "toy_check_nominal")
+    assert "toy_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TOY_OK" in body
+    assert "p->m" not in body and "mbar" not in body
+    assert "TOY_LIT(0.0), " * 7 + "TOY_LIT(0.0)}" in body
+    same = _function_body(c_texts["controller.c"], "toy_same_params")
+    assert "a->J_theta == b->J_theta" in same and "a->radius_l == b->radius_l;" in same
+    assert all(len(line) <= 100 for line in same.splitlines())
+
+
+def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:
+    main = c_texts["example_main.c"]
+    assert "toy_real_t pose_rates[6];" in main
+    assert "toy_kinematics(&plant, q, &qdot[4], pose_rates);" in main
+    assert "qdot[7] = pose_rates[5];" in main
+    assert "qd_dot[4] = wheel_ref[0];" in main
+    assert "plant.J_theta = nominal.J_theta * TOY_LIT(1.2);" in main
+    assert "plant.radius_r" not in main
+
+
+def test_api_tables_follow_the_layout() -> None:
+    assert status_codes(DRISHTI_LAYOUT) == STATUS_CODES
+    assert defines(DRISHTI_LAYOUT) == DEFINES
+    names = [s.name for s in status_codes(TOY)]
+    assert names[0] == "TOY_OK" and all(n.startswith("TOY_") for n in names)
+    table = {name: value for name, value, _ in defines(TOY)}
+    assert table["TOY_NQ"] == "8"
+    assert table["TOY_STATE_MAGIC"] == "0x544f59"
+    assert dict((n, v) for n, v, _ in DEFINES)["WMR_STATE_MAGIC"] == "0x574d52"
+
+
+def test_layout_helpers() -> None:
+    assert DRISHTI_LAYOUT.PREFIX == "WMR"
+    assert DRISHTI_LAYOUT.unactuated == (0, 1, 2)
+    assert row_span(TOY.unactuated) == "1, 2, 3, 4, 7, 8"
+    assert row_span(DRISHTI_LAYOUT.unactuated) == "1-3"
+    assert TOY.scatter("tau", "0.0") == ["0.0"] * 4 + ["tau[0]", "tau[1]", "0.0", "0.0"]
+    assert wrap_terms(["aa", "bb", "cc"], "x ", "  ", " + ", ";", width=9) == [
+        "x aa + bb",
+        "  + cc;",
+    ]
+    with pytest.raises(ValueError, match="consecutive"):
+        ControllerLayout("toy", 8, 2, (4, 6), False, True, TOY.coordinate_names, ("a", "b"))
+    with pytest.raises(ValueError, match="minimal formulation only"):
+        ControllerLayout("toy", 8, 2, (4, 5), True, True, TOY.coordinate_names, ("a", "b"))
+
+
+# ------------------------------------------------------------ the Python module, run
+
+
+class _Stubs:
+    """Kernels of the toy robot's ``toy_laws``/``toy_model`` that check their arguments."""
+
+    def __init__(self) -> None:
+        self.minv_q: list[np.ndarray] = []
+
+    def laws(self) -> types.ModuleType:
+        nq, nu = TOY.nq, TOY.nu
+        mod = types.ModuleType("toy_laws")
+
+        def sized(x: Any, n: int) -> np.ndarray:
+            a = np.asarray(x, dtype=np.float64).reshape(-1)
+            assert a.size == n, (a.size, n)
+            return a
+
+        def lyapunov_p(gains: Any) -> np.ndarray:
+            sized(gains, 4)
+            return np.array([1.0, 0.25, 0.5])
+
+        def minimal_tde(q_prev: Any, up: Any, qdn: Any, qdthen: Any, span: Any, p: Any) -> Any:
+            sized(q_prev, nq)
+            for v in (up, qdn, qdthen):
+                sized(v, nu)
+            return np.full(nu, 0.1)
+
+        def minimal_minv_norm(q: Any, p: Any) -> np.ndarray:
+            self.minv_q.append(sized(q, nq).copy())
+            return np.array([2.0])
+
+        def minimal_tdroc_gain(minv: Any, om: Any, w: Any) -> np.ndarray:
+            assert np.shape(om) == (MAX_WINDOW + 1, nu)
+            sized(w, MAX_WINDOW)
+            return np.array([float(minv[0])])
+
+        def law(qv: Any, *args: Any) -> Any:
+            sized(qv, nq)
+            for v in args[:7]:
+                sized(v, nu)
+            return np.array([1.0, -1.0]), np.zeros(nu), np.array([0.5])
+
+        def roc_law(qv: Any, qdv: Any, *args: Any) -> Any:
+            sized(qdv, nq)
+            u, s, sn = law(qv, *args)
+            return u, s, sn, np.array([0.3])
+
+        def tdc_law(qv: Any, *args: Any) -> Any:
+            return law(qv, *args)[0]
+
+        mod.__dict__.update(
+            lyapunov_p=lyapunov_p,
+            minimal_tde=minimal_tde,
+            minimal_minv_norm=minimal_minv_norm,
+            minimal_tdroc_gain=minimal_tdroc_gain,
+            minimal_tdc_law=tdc_law,
+            minimal_tdroc_law=law,
+            minimal_roc_law=roc_law,
+            minimal_asmc_law=roc_law,
+        )
+        return mod
+
+    @staticmethod
+    def model() -> types.ModuleType:
+        mod = types.ModuleType("toy_model")
+
+        def minimal_forward_dynamics(q: Any, rates: Any, tau: Any, p: Any) -> np.ndarray:
+            assert np.size(q) == TOY.nq and np.size(rates) == TOY.nu == np.size(tau)
+            if p["J_theta"] <= 0.0:
+                raise ValueError("TOY_ERR_BAD_PARAMS: J_theta > 0")
+            return np.zeros(TOY.nu)
+
+        mod.minimal_forward_dynamics = minimal_forward_dynamics  # type: ignore[attr-defined]
+        return mod
+
+
+@pytest.fixture
+def toy_controllers() -> Iterator[tuple[Any, _Stubs]]:
+    text = _python_text(TOY)
+    code = compile(text, "toy_controllers.py", "exec")
+    stubs = _Stubs()
+    saved = {k: sys.modules.get(k) for k in ("toy_laws", "toy_model")}
+    sys.modules["toy_laws"] = stubs.laws()
+    sys.modules["toy_model"] = stubs.model()
+    try:
+        module = types.ModuleType("toy_controllers")
+        module.__dict__["__name__"] = "toy_controllers"
+        sys.modules["toy_controllers"] = module
+        exec(code, module.__dict__)
+        yield module, stubs
+    finally:
+        sys.modules.pop("toy_controllers", None)
+        for k, v in saved.items():
+            if v is None:
+                sys.modules.pop(k, None)
+            else:
+                sys.modules[k] = v
+
+
+def test_python_module_compiles() -> None:
+    compile(_python_text(TOY), "toy_controllers.py", "exec")
+    compile(_python_text(DRISHTI_LAYOUT), "controllers.py", "exec")
+
+
+def test_python_controllers_run_on_the_layout(toy_controllers: tuple[Any, _Stubs]) -> None:
+    mod, stubs = toy_controllers
+    nominal = dict.fromkeys(TOY_PARAMS, 1.0)
+    config = mod.Config(nominal=nominal, eps=0.5)
+    assert config.formulation == mod.FORMULATION_MINIMAL
+    with pytest.raises(mod.ControllerError) as err:
+        mod.TDROC(mod.Config(nominal=nominal, formulation=mod.FORMULATION_PAPER))
+    assert err.value.status == "TOY_ERR_BAD_FORMULATION"
+    with pytest.raises(mod.ControllerError) as err:
+        mod.TDC(mod.Config(nominal={**nominal, "J_theta": -1.0}))
+    assert err.value.status == "TOY_ERR_BAD_NOMINAL"
+    for cls in (mod.TDC, mod.TDROC, mod.ROC, mod.ASMC):
+        ctrl = cls(config)
+        zeros = np.zeros(TOY.nq)
+        for k in range(5):
+            q = np.full(TOY.nq, 0.01 * k)
+            tau = ctrl.step(q, zeros, zeros, zeros, zeros)
+            assert tau.shape == (TOY.nu,)
+        assert ctrl.last_status == "TOY_OK"
+        assert list(ctrl.u_prev) == [0.0] * 4 + [1.0, -1.0, 0.0, 0.0]
+        assert ctrl.u_discarded == 0.0
+    # TDROC evaluated ||Mhat(q)^-1|| at the measured q of each step once the gain was due.
+    assert [float(q[0]) for q in stubs.minv_q] == pytest.approx([0.03, 0.04])
