@@ -1,12 +1,15 @@
-"""``python -m codegen``: derive the model and regenerate everything in ``generated/``.
+"""``python -m codegen``: derive every shipped robot and regenerate ``generated/``.
 
-    python -m codegen                    # Drishti (modeling/robots/drishti.toml)
-    python -m codegen --robot my.toml    # another robot
+    python -m codegen                    # every robot in modeling/robots/ (Drishti at the
+                                         # root of generated/, others in generated/<name>/)
+    python -m codegen --robot my.toml    # one robot (a [lumped]/[physical] file replaces
+                                         # the default robot's numbers; a [[body]] file
+                                         # goes to generated/<name>/)
     python -m codegen --check            # exit 1 with a diff if generated/ is stale
     python -m codegen --out DIR          # write elsewhere (tests, experiments)
 
 The generated code takes the robot's parameters at run time; the robot file only sets the
-defaults written into ``wmr_robot.h`` / ``robot.py`` and the report.
+defaults written into ``<prefix>_robot.h`` / ``robot.py`` and the report.
 """
 
 from __future__ import annotations
@@ -18,19 +21,21 @@ import time
 from pathlib import Path
 
 from codegen.generate import GENERATED_DIR, generate_files
-from modeling.robot_file import RobotFileError, load_robot
+from modeling.robot_file import RobotFileError, load_robot_model, shipped_robot_files
+
+ROOT_OWNED = ("c", "python", "casadi")  # the default robot's folders at generated/'s root
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog="python -m codegen",
-        description="Derive the WMR model and controllers and regenerate generated/.",
+        description="Derive the robots' models and controllers and regenerate generated/.",
     )
     parser.add_argument(
         "--robot",
         type=Path,
         default=None,
-        help="robot TOML file (default: the packaged drishti.toml)",
+        help="one robot TOML file (default: every robot in modeling/robots/)",
     )
     parser.add_argument(
         "--check",
@@ -43,14 +48,26 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
-def _existing(out: Path) -> dict[str, bytes]:
+def _owned(name: str, root: str) -> bool:
+    """Whether generated/<name> belongs to the robot whose files sit under ``root``."""
+    if root:
+        return name.startswith(f"{root}/")
+    first = name.split("/", 1)[0]
+    return "/" not in name or first in ROOT_OWNED
+
+
+def _existing(out: Path, roots: list[str] | None) -> dict[str, bytes]:
+    """Files under ``out``; with ``roots``, only those of these robots' folders."""
     if not out.is_dir():
         return {}
-    return {
+    found = {
         p.relative_to(out).as_posix(): p.read_bytes()
         for p in sorted(out.rglob("*"))
         if p.is_file() and "__pycache__" not in p.parts
     }
+    if roots is None:
+        return found
+    return {k: v for k, v in found.items() if any(_owned(k, r) for r in roots)}
 
 
 def _diff(name: str, old: bytes | None, new: bytes | None) -> str:
@@ -64,15 +81,27 @@ def _diff(name: str, old: bytes | None, new: bytes | None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parse(argv)
-    start = time.perf_counter()
-    try:
-        robot = load_robot(args.robot)
-    except RobotFileError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    files = generate_files(robot)
-    elapsed = time.perf_counter() - start
-    old = _existing(args.out)
+    paths: list[Path | None] = [args.robot] if args.robot is not None else list(
+        shipped_robot_files())
+    files: dict[str, bytes] = {}
+    roots: list[str] = []
+    summary: list[str] = []
+    for path in paths:
+        start = time.perf_counter()
+        try:
+            model, robot = load_robot_model(path)
+        except RobotFileError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        produced = generate_files(robot, model)
+        files.update(produced)
+        roots.append(model.output_dir)
+        where = f"generated/{model.output_dir}" if model.output_dir else "generated/"
+        summary.append(f"{robot.name}: {len(produced)} files for {where} "
+                       f"({time.perf_counter() - start:.1f} s)")
+    # Regenerating every robot owns all of generated/ (files of removed robots go);
+    # one robot owns only its own folders.
+    old = _existing(args.out, roots if args.robot is not None else None)
     stale = sorted(n for n in set(files) | set(old) if files.get(n) != old.get(n))
     if args.check:
         if not stale:
@@ -89,7 +118,9 @@ def main(argv: list[str] | None = None) -> int:
             continue
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(files[name])
-    print(f"{robot.name}: {len(files)} files in {args.out} ({len(stale)} changed), {elapsed:.1f} s")
+    for line in summary:
+        print(line)
+    print(f"{len(files)} files in {args.out} ({len(stale)} changed)")
     return 0
 
 

@@ -1,11 +1,15 @@
-"""Everything in ``generated/`` as a mapping path → bytes (written or diffed by __main__).
+"""Everything in ``generated/`` for one robot, as a mapping path → bytes (written or diffed
+by __main__). Paths are relative to ``generated/``: the default robot's files sit at its
+root (``c/``, ``python/``, ``casadi/``, ``MODEL.md``), every other robot's under
+``<output_dir>/``.
 
-Pure: the same robot gives byte-identical output whatever the hash seed.
+Pure: the same robot gives byte-identical output whatever the hash seed. Nothing here
+knows a robot: the ``RobotModel`` says what to generate, the backends how.
 """
 
 from __future__ import annotations
 
-import time
+import importlib
 from pathlib import Path
 
 from codegen import template_util
@@ -15,34 +19,76 @@ from codegen.backends import python as py_backend
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
 from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
-from codegen.controller_api import CONTROLLERS, DEFINES, MAX_ABS_INPUT, STATUS_CODES
+from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
+from codegen.controller_layout import ControllerLayout
 from codegen.cse import count_ops, cse_function
-from codegen.wmr_functions import (
+from codegen.robot_functions import (
     MAX_WINDOW,
-    PARAM_FIELDS,
     law_specs,
+    minv_norm_needs_q,
     model_specs,
     plant_specs,
 )
+from codegen.spec import FunctionSpec
 from modeling.robot_file import Robot
+from modeling.robot_model import RobotModel
 
 GENERATED_DIR = Path(__file__).resolve().parent.parent / "generated"
-C_CONFIG = CConfig(status_codes=STATUS_CODES, defines=DEFINES)
-MODEL_SOURCE = "modeling/wmr.py, modeling/lagrange.py"
 LAW_SOURCE = "modeling/controllers.py"
 
 
-def _c_files(robot: Robot) -> dict[str, str]:
-    from codegen.controller_layout import DRISHTI_LAYOUT
+def layout_for(model: RobotModel) -> ControllerLayout:
+    """What the controller templates need to know about ``model``."""
+    return ControllerLayout(
+        model.prefix, model.nq, model.nu, model.actuated, model.paper,
+        minv_norm_needs_q(model), model.coordinate_names, model.input_names,
+    )
 
-    layout = DRISHTI_LAYOUT
+
+def c_config(model: RobotModel) -> CConfig:
+    """The C backend's names for ``model``: ``<prefix>_real_t``, ``<PREFIX>_LIT`` …"""
+    layout = layout_for(model)
+    p, big = model.prefix, model.prefix.upper()
+    return CConfig(
+        prefix=f"{p}_", types_header=f"{p}_types.h", real_type=f"{p}_real_t",
+        status_type=f"{p}_status_t", params_ctype=f"{p}_params_t",
+        float32_define=f"{big}_FLOAT32", literal_macro=f"{big}_LIT",
+        status_codes=status_codes(layout), defines=defines(layout),
+    )
+
+
+def model_source(model: RobotModel) -> str:
+    return model.docs.get("model_source", f"{model.source}, modeling/description/, "
+                          "modeling/lagrange.py")
+
+
+def plant_values(model: RobotModel, robot: Robot) -> dict[str, float]:
+    """The simulated robot's parameters: the robot file's numbers, the model's defaults
+    for plant-only parameters the file does not set (a lateral moment: 0 unless given)."""
+    given = {**robot.lumped, "K_lat": robot.K_lat}
+    return {p.key: float(given.get(p.key, model.values[p.key])) for p in model.plant_params}
+
+
+def _modules(model: RobotModel) -> tuple[tuple[str, tuple[FunctionSpec, ...], str], ...]:
+    p = model.prefix
+    src = model_source(model)
+    return (
+        (f"{p}_model", model_specs(model), src),
+        (f"{p}_laws", law_specs(model), LAW_SOURCE),
+        (f"{p}_plant", plant_specs(model), src),
+    )
+
+
+def _c_files(model: RobotModel, robot: Robot) -> dict[str, str]:
+    layout = layout_for(model)
+    config = c_config(model)
     pre = layout.prefix
     files = c_backend.render_all(
-        {f"{pre}_model": model_specs(), f"{pre}_laws": law_specs(), f"{pre}_plant": plant_specs()},
-        C_CONFIG,
-        source=f"{MODEL_SOURCE}, {LAW_SOURCE}",
+        {name: specs for name, specs, _ in _modules(model)},
+        config,
+        source=f"{model_source(model)}, {LAW_SOURCE}",
     )
-    param_fields = [C_CONFIG.c_field(name) for name, _, _ in PARAM_FIELDS]
+    param_fields = [config.c_field(p.key) for p in model.params]
     for suffix in ("h", "c"):
         template = f"controller_common.{suffix}.jinja"
         files[f"{pre}_controller.{suffix}"] = template_util.render(
@@ -64,7 +110,7 @@ def _c_files(robot: Robot) -> dict[str, str]:
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
             )
-    fields = [(C_CONFIG.c_field(name), repr(robot.lumped[name])) for name, _, _ in PARAM_FIELDS]
+    fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in model.params]
     files[f"{pre}_robot.h"] = template_util.render(
         C_TEMPLATES,
         "robot.h.jinja",
@@ -85,16 +131,34 @@ def _c_files(robot: Robot) -> dict[str, str]:
     return files
 
 
-def _python_files(robot: Robot) -> dict[str, str]:
-    from codegen.controller_api import status_codes
-    from codegen.controller_layout import DRISHTI_LAYOUT
+def _robot_py(model: RobotModel, robot: Robot) -> str:
+    params = ", ".join(f'"{p.key}": {robot.lumped[p.key]!r}' for p in model.params)
+    text = (
+        f'"""Default parameters of robot "{robot.name}" (from {robot.source}).\n\n'
+        'Generated by `python -m codegen`. DO NOT EDIT.\n"""\n\n'
+        f'NAME = "{robot.name}"\nPARAMS: dict[str, float] = {{{params}}}\n'
+    )
+    plant = ", ".join(f'"{k}": {v!r}' for k, v in plant_values(model, robot).items())
+    names = ", ".join(f'"{n}"' for n in model.coordinate_names)
+    inputs = ", ".join(f'"{n}"' for n in model.input_names)
+    return text + (
+        f'PLANT_PARAMS: dict[str, float] = {{{plant}}}\n'
+        f'PREFIX = "{model.prefix}"\n'
+        f"NQ = {model.nq}  # generalised coordinates\n"
+        f"NU = {model.nu}  # inputs (driven wheels)\n"
+        f"ACTUATED = {model.actuated!r}  # index in q of each input's wheel angle\n"
+        f"COORDINATES = ({names},)\n"
+        f"INPUTS = ({inputs},)\n"
+        f"FORMULATIONS = {tuple(model.formulations)!r}\n"
+    )
 
-    layout = DRISHTI_LAYOUT
-    pre = layout.prefix
-    files = {}
-    files.update(py_backend.render(model_specs(), f"{pre}_model", source=MODEL_SOURCE))
-    files.update(py_backend.render(law_specs(), f"{pre}_laws", source=LAW_SOURCE))
-    files.update(py_backend.render(plant_specs(), f"{pre}_plant", source=MODEL_SOURCE))
+
+def _python_files(model: RobotModel, robot: Robot) -> dict[str, str]:
+    layout = layout_for(model)
+    config = c_config(model)
+    files: dict[str, str] = {}
+    for name, specs, source in _modules(model):
+        files.update(py_backend.render(specs, name, source=source))
     template = "controllers.py.jinja"
     files["controllers.py"] = template_util.render(
         PY_TEMPLATES,
@@ -107,51 +171,51 @@ def _python_files(robot: Robot) -> dict[str, str]:
         formulation_minimal=1,
         max_window=MAX_WINDOW,
         max_abs_input=MAX_ABS_INPUT,
-        c_field_names=dict(C_CONFIG.field_renames),
-        param_keys=[name for name, _, _ in PARAM_FIELDS],
+        c_field_names=dict(config.field_renames),
+        param_keys=[p.key for p in model.params],
     )
-    params = ", ".join(f'"{k}": {robot.lumped[k]!r}' for k, _, _ in PARAM_FIELDS)
-    files["robot.py"] = (
-        f'"""Default parameters of robot "{robot.name}" (from {robot.source}).\n\n'
-        'Generated by `python -m codegen`. DO NOT EDIT.\n"""\n\n'
-        f'NAME = "{robot.name}"\nPARAMS: dict[str, float] = {{{params}}}\n'
-    )
+    files["robot.py"] = _robot_py(model, robot)
     files["__init__.py"] = (
         '"""Generated NumPy-only model and controllers. DO NOT EDIT (python -m codegen)."""\n'
     )
     return files
 
 
-def op_counts() -> dict[str, str]:
+def op_counts(model: RobotModel) -> dict[str, str]:
     """``function -> "operations after CSE: ..."`` for every generated function."""
     return {
         s.name: count_ops(cse_function(s.checked_spec())).comment()
-        for s in (*model_specs(), *law_specs(), *plant_specs())
+        for _, specs, _ in _modules(model)
+        for s in specs
     }
 
 
-def generate_files(robot: Robot, *, report: bool = True) -> dict[str, bytes]:
-    """All generated files for ``robot`` (paths relative to ``generated/``)."""
-    start = time.perf_counter()
-    model_specs()
-    law_specs()
-    derivation_seconds = time.perf_counter() - start
-    out: dict[str, bytes] = {}
-    out.update({f"c/{k}": v.encode() for k, v in _c_files(robot).items()})
-    out.update({f"python/{k}": v.encode() for k, v in _python_files(robot).items()})
-    modules = (
-        ("wmr_model", model_specs()),
-        ("wmr_laws", law_specs()),
-        ("wmr_plant", plant_specs()),
-    )
-    for module, specs in modules:
-        for k, data in casadi_backend.render(specs, module, source=MODEL_SOURCE).items():
-            out[f"casadi/{k}"] = data
-    out["__init__.py"] = b'"""Generated code (python -m codegen). DO NOT EDIT."""\n'
-    if report:
-        from codegen.report import model_report_context, render_model_report
+def generate_files(
+    robot: Robot, model: RobotModel | None = None, *, report: bool = True
+) -> dict[str, bytes]:
+    """All generated files for ``robot`` (paths relative to ``generated/``). ``model``
+    defaults to the paper's robot (a ``[lumped]``/``[physical]`` robot file)."""
+    if model is None:
+        from modeling.robot_file import load_robot_model
 
-        context = model_report_context(robot.lumped, robot.name, None, op_counts())
-        out["MODEL.md"] = render_model_report(context).encode()
-    del derivation_seconds  # a timing would break byte-identical output; see make bench
+        model = load_robot_model(None)[0]
+    root = f"{model.output_dir}/" if model.output_dir else ""
+    out: dict[str, bytes] = {}
+    out.update({f"{root}c/{k}": v.encode() for k, v in _c_files(model, robot).items()})
+    out.update({f"{root}python/{k}": v.encode() for k, v in _python_files(model, robot).items()})
+    for module, specs, _ in _modules(model):
+        # (the CasADi files name the model's source for all three modules)
+        for k, data in casadi_backend.render(specs, module, source=model_source(model)).items():
+            out[f"{root}casadi/{k}"] = data
+    out[f"{root}__init__.py"] = b'"""Generated code (python -m codegen). DO NOT EDIT."""\n'
+    if report:
+        renderer = importlib.import_module(model.docs.get("report", "codegen.robot_report"))
+        out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(model)).encode()
     return out
+
+
+def default_c_config() -> CConfig:
+    """The default robot's C config (``wmr_`` names), for tools built around it."""
+    from modeling.robot_file import load_robot_model
+
+    return c_config(load_robot_model(None)[0])

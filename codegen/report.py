@@ -282,3 +282,8 @@ def model_report_context(
 def render_model_report(context: dict[str, Any]) -> str:
     """Lay out a context from :func:`model_report_context` as Markdown."""
     return template_util.render(TEMPLATE_DIR, TEMPLATE, **context)
+
+
+def render(model: Any, robot: Any, op_counts: dict[str, str]) -> str:
+    """The paper robot's MODEL.md (the generator's report hook, ``RobotModel.docs``)."""
+    return render_model_report(model_report_context(robot.lumped, robot.name, None, op_counts))

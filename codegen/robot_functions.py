@@ -30,9 +30,12 @@ MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
 NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight",
                 "nine", "ten", "eleven", "twelve")
 
-STATUS_NONFINITE_INPUT = "WMR_ERR_NONFINITE_INPUT"
-STATUS_BAD_PARAMS = "WMR_ERR_BAD_PARAMS"
-STATUS_NONFINITE_OUTPUT = "WMR_ERR_NONFINITE_OUTPUT"
+
+
+def status(model: RobotModel, name: str) -> str:
+    """A status code's C name for ``model``: ``WMR_ERR_BAD_PARAMS`` for prefix ``wmr``."""
+    return f"{model.prefix.upper()}_{name}"
+
 
 
 def _fields(params: tuple[Parameter, ...]) -> tuple[Field, ...]:
@@ -89,12 +92,13 @@ def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
     # The same grouped entries as the forward dynamics, so CSE shares them.
     mbar = model.system.minimal_mass_matrix.applyfunc(model.evaluation_form)
     by_key = {p.key: p.symbol for p in model.params}
-    positive = [Guard(STATUS_BAD_PARAMS, by_key[k], f"{k} > 0") for k in model.positive]
+    bad = status(model, "ERR_BAD_PARAMS")
+    positive = [Guard(bad, by_key[k], f"{k} > 0") for k in model.positive]
     # Sylvester: all leading minors of S^T M S positive <=> positive definite.
     minors = _leading_minors(mbar)
     return (
         *positive,
-        *(Guard(STATUS_BAD_PARAMS, m, _minor_doc(k + 1, len(minors)))
+        *(Guard(bad, m, _minor_doc(k + 1, len(minors)))
           for k, m in enumerate(minors)),
     )
 
@@ -148,8 +152,8 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             spec,
             returns_status=True,
             guards=guards,
-            nonfinite_input=STATUS_NONFINITE_INPUT,
-            nonfinite_output=STATUS_NONFINITE_OUTPUT,
+            nonfinite_input=status(model, "ERR_NONFINITE_INPUT"),
+            nonfinite_output=status(model, "ERR_NONFINITE_OUTPUT"),
         )
 
     paper_specs = (

@@ -216,13 +216,25 @@ def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]
     """
     from modeling.robot_model import described_model
 
+    if path is not None and Path(path).resolve() == ROBOTS_DIR / f"{DEFAULT_ROBOT}.toml":
+        path = None  # the packaged default: its source reads modeling/robots/drishti.toml
     if path is not None and is_description(path):
-        model = described_model(Path(path).as_posix())
-        return model, Robot(model.name, model.param_values(), source=Path(path).as_posix())
+        model = described_model(str(Path(path).resolve()), source_label(path))
+        return model, Robot(model.name, model.param_values(), source=model.source)
     from modeling import wmr
 
     robot = load_robot(path)
     return wmr.robot_model(), robot
+
+
+def source_label(path: str | Path) -> str:
+    """A robot file's name for generated preambles: relative to the repository when it is
+    inside it (generated output must not depend on where the clone lives)."""
+    p = Path(path).resolve()
+    try:
+        return p.relative_to(ROBOTS_DIR.parent.parent).as_posix()
+    except ValueError:
+        return Path(path).as_posix()
 
 
 def shipped_robot_files() -> list[Path]:

@@ -122,7 +122,7 @@ PAYLOAD = sp.symbols("m_L x_L y_L", real=True)
 
 
 @cache
-def described_model(path: str) -> RobotModel:
+def described_model(path: str, label: str = "") -> RobotModel:
     """The model of a robot file with ``[[body]]`` tables (``modeling.description``).
 
     Run-time parameters: the base inertial parameters of T (``J_*`` generalised
@@ -131,7 +131,8 @@ def described_model(path: str) -> RobotModel:
     adds a point body on the root: its relations are read off T of the loaded robot in
     the same base parameters. The paper formulation is generated only for a single rigid
     body: with a hitch, M̂ depends on the hitch angle and (25)'s ‖M̂⁻¹‖ is no longer a
-    function of the parameters alone (see docs/CONTROLLERS.md).
+    function of the parameters alone (see docs/CONTROLLERS.md). ``label`` names the file
+    in generated preambles (default: ``path``).
     """
     from modeling.description import description_system, load_description
     from modeling.description.canonical import trig_reduce
@@ -186,7 +187,7 @@ def described_model(path: str) -> RobotModel:
         name=desc.name,
         prefix=prefix,
         output_dir=prefix,
-        source=Path(path).as_posix(),
+        source=label or Path(path).as_posix(),
         system=system,
         plant_system=system,
         coordinate_names=base_system.coordinate_names,

@@ -255,6 +255,8 @@ def robot_model() -> RobotModel:
         paper=True,
         evaluation_form=compact_form,
         docs={
+            "model_source": "modeling/wmr.py, modeling/lagrange.py",
+            "report": "codegen.report",  # MODEL.md with the paper's verdicts
             "plant_params": "true parameters of the simulated robot, including K_lat",
             "payload": "payload mass, position ahead of C, position left of C",
             "plant_state_derivative": (

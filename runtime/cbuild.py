@@ -23,17 +23,15 @@ GENERATED_C = ROOT / "generated" / "c"
 RUNTIME_C = Path(__file__).resolve().parent / "csrc"
 BUILD_DIR = ROOT / "build" / "cffi"
 CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
-HEADERS = (
-    "wmr_types.h",
-    "wmr_model.h",
-    "wmr_laws.h",
-    "wmr_plant.h",
-    "wmr_controller.h",
-    "wmr_tdc.h",
-    "wmr_tdroc.h",
-    "wmr_roc.h",
-    "wmr_asmc.h",
-)
+MODULES = ("types", "model", "laws", "plant", "controller", "tdc", "tdroc", "roc", "asmc")
+
+
+def headers_for(prefix: str) -> tuple[str, ...]:
+    """The generated headers of a robot whose C prefix is ``prefix``."""
+    return tuple(f"{prefix}_{m}.h" for m in MODULES)
+
+
+HEADERS = headers_for("wmr")
 
 
 @dataclass(frozen=True)
@@ -50,24 +48,29 @@ class CLibrary:
         return "float" if self.float32 else "double"
 
 
-def _sources(extra: tuple[Path, ...]) -> list[Path]:
-    return sorted(p for p in GENERATED_C.glob("wmr_*.c")) + list(extra)
+def _sources(extra: tuple[Path, ...], c_dir: Path = GENERATED_C,
+             prefix: str = "wmr") -> list[Path]:
+    return sorted(p for p in c_dir.glob(f"{prefix}_*.c")) + list(extra)
 
 
 def declarations(
-    float32: bool, headers: tuple[str, ...] = HEADERS, extra_headers: tuple[Path, ...] = ()
+    float32: bool,
+    headers: tuple[str, ...] = HEADERS,
+    extra_headers: tuple[Path, ...] = (),
+    c_dir: Path = GENERATED_C,
+    prefix: str = "wmr",
 ) -> str:
     """The generated headers, preprocessed for ``cffi.FFI.cdef``."""
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
         (fake / "math.h").write_text("")
         src = fake / "all.h"
-        includes = [f'#include "{GENERATED_C / h}"' for h in headers]
+        includes = [f'#include "{c_dir / h}"' for h in headers]
         includes += [f'#include "{h}"' for h in extra_headers]
         src.write_text("\n".join(includes) + "\n")
-        cmd = ["gcc", "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{GENERATED_C}", str(src)]
+        cmd = ["gcc", "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{c_dir}", str(src)]
         if float32:
-            cmd.insert(3, "-DWMR_FLOAT32")
+            cmd.insert(3, f"-D{prefix.upper()}_FLOAT32")
         text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     return text
 
@@ -78,22 +81,26 @@ def build(
     extra_sources: tuple[Path, ...] = (),
     extra_headers: tuple[Path, ...] = (),
     flags: tuple[str, ...] = (),
+    c_dir: Path = GENERATED_C,
+    prefix: str = "wmr",
 ) -> CLibrary:
-    """Compile (or reuse) the library and load it."""
-    sources = _sources(extra_sources)
-    all_flags = (*CFLAGS, *flags, *(("-DWMR_FLOAT32",) if float32 else ()))
+    """Compile (or reuse) the library of the generated C in ``c_dir`` (C prefix
+    ``prefix``; default: the default robot's) and load it."""
+    sources = _sources(extra_sources, c_dir, prefix)
+    headers = headers_for(prefix)
+    all_flags = (*CFLAGS, *flags, *((f"-D{prefix.upper()}_FLOAT32",) if float32 else ()))
     digest = hashlib.sha256()
-    for p in (*sources, *(GENERATED_C / h for h in HEADERS), *extra_headers):
+    for p in (*sources, *(c_dir / h for h in headers), *extra_headers):
         digest.update(p.name.encode() + p.read_bytes())
     digest.update(" ".join(all_flags).encode())
     BUILD_DIR.mkdir(parents=True, exist_ok=True)
-    so = BUILD_DIR / f"libwmr_{digest.hexdigest()[:16]}.so"
+    so = BUILD_DIR / f"lib{prefix}_{digest.hexdigest()[:16]}.so"
     if not so.exists():
         tmp = so.with_suffix(".tmp.so")
         cmd = [
             "gcc",
             *all_flags,
-            f"-I{GENERATED_C}",
+            f"-I{c_dir}",
             f"-I{RUNTIME_C}",
             *map(str, sources),
             "-lm",
@@ -103,7 +110,7 @@ def build(
         subprocess.run(cmd, check=True, capture_output=True, text=True)
         tmp.replace(so)  # atomic: concurrent builds never load a half-written file
     ffi = cffi.FFI()
-    ffi.cdef(declarations(float32, extra_headers=extra_headers))
+    ffi.cdef(declarations(float32, headers, extra_headers, c_dir, prefix))
     return CLibrary(ffi, ffi.dlopen(str(so)), float32, so)
 
 

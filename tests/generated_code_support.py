@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from codegen.controller_api import CONTROLLERS, STATUS_CODES
-from codegen.generate import C_CONFIG
+from codegen.generate import default_c_config
 from codegen.wmr_functions import PARAM_FIELDS, PARAM_KEYS
 from modeling.robot_file import load_robot
 from runtime.generated_modules import controllers as pyctl
@@ -139,7 +139,7 @@ def _c_params(ffi: Any, values: Sequence[float] | dict[str, float]) -> Any:
     obj = ffi.new("wmr_params_t *")
     items = values.items() if isinstance(values, dict) else zip(PARAM_KEYS, values, strict=True)
     for key, value in items:
-        setattr(obj, C_CONFIG.c_field(key), float(value))
+        setattr(obj, default_c_config().c_field(key), float(value))
     return obj
 
 

@@ -1,0 +1,1 @@
+"""Generated code (python -m codegen). DO NOT EDIT."""

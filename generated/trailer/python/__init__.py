@@ -1,0 +1,1 @@
+"""Generated NumPy-only model and controllers. DO NOT EDIT (python -m codegen)."""
