@@ -47,6 +47,15 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
     if (!wmr_positive(q_pos) || !wmr_positive(q_vel)) {
         return WMR_ERR_BAD_GAINS;
     }
+    for (i = 0; i < 5; ++i) {
+        /* P of (20) must be finite: a denormal or huge gain overflows it. */
+        const wmr_real_t gains[4] = {k1[i], k2[i], q_pos, q_vel};
+        wmr_real_t pmat[3];
+        wmr_lyapunov_p(gains, pmat);
+        if (!isfinite(pmat[0]) || !isfinite(pmat[1]) || !isfinite(pmat[2])) {
+            return WMR_ERR_BAD_GAINS;
+        }
+    }
     if (!isfinite(tau_max) || !(tau_max > WMR_LIT(0.0))) {
         return WMR_ERR_BAD_TORQUE_LIMIT;
     }

@@ -56,6 +56,15 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h, co
     if (!trailer_positive(q_pos) || !trailer_positive(q_vel)) {
         return TRAILER_ERR_BAD_GAINS;
     }
+    for (i = 0; i < 8; ++i) {
+        /* P of (20) must be finite: a denormal or huge gain overflows it. */
+        const trailer_real_t gains[4] = {k1[i], k2[i], q_pos, q_vel};
+        trailer_real_t pmat[3];
+        trailer_lyapunov_p(gains, pmat);
+        if (!isfinite(pmat[0]) || !isfinite(pmat[1]) || !isfinite(pmat[2])) {
+            return TRAILER_ERR_BAD_GAINS;
+        }
+    }
     if (!isfinite(tau_max) || !(tau_max > TRAILER_LIT(0.0))) {
         return TRAILER_ERR_BAD_TORQUE_LIMIT;
     }

@@ -159,6 +159,10 @@ class _Controller:
             raise ControllerError("TRAILER_ERR_BAD_GAINS", "K1 and K2 must be positive definite")
         if not (_positive(c.q_pos) and _positive(c.q_vel)):
             raise ControllerError("TRAILER_ERR_BAD_GAINS", "Q must be positive definite")
+        for a, b in zip(k1, k2, strict=True):
+            pm = laws.lyapunov_p([float(a), float(b), float(c.q_pos), float(c.q_vel)])
+            if not np.all(np.isfinite(pm)):
+                raise ControllerError("TRAILER_ERR_BAD_GAINS", "P of (20) is not finite for these gains")
         if not (math.isfinite(c.tau_max) and c.tau_max > 0.0):
             raise ControllerError("TRAILER_ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}")
         if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED):
