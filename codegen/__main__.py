@@ -23,8 +23,6 @@ from pathlib import Path
 from codegen.generate import GENERATED_DIR, generate_files
 from modeling.robot_file import RobotFileError, load_robot_model, shipped_robot_files
 
-ROOT_OWNED = ("c", "python", "casadi")  # the default robot's folders at generated/'s root
-
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
@@ -48,16 +46,13 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     return parser.parse_args(argv)
 
 
-def _owned(name: str, root: str) -> bool:
-    """Whether generated/<name> belongs to the robot whose files sit under ``root``."""
-    if root:
-        return name.startswith(f"{root}/")
-    first = name.split("/", 1)[0]
-    return "/" not in name or first in ROOT_OWNED
+def _top(name: str) -> str:
+    return name.split("/", 1)[0]
 
 
-def _existing(out: Path, roots: list[str] | None) -> dict[str, bytes]:
-    """Files under ``out``; with ``roots``, only those of these robots' folders."""
+def _existing(out: Path, owned: set[str] | None) -> dict[str, bytes]:
+    """Files under ``out``; with ``owned``, only those whose top-level entry (a folder such
+    as ``c`` or ``trailer``, or a file such as ``MODEL.md``) the regenerated robot writes."""
     if not out.is_dir():
         return {}
     found = {
@@ -65,9 +60,9 @@ def _existing(out: Path, roots: list[str] | None) -> dict[str, bytes]:
         for p in sorted(out.rglob("*"))
         if p.is_file() and "__pycache__" not in p.parts
     }
-    if roots is None:
+    if owned is None:
         return found
-    return {k: v for k, v in found.items() if any(_owned(k, r) for r in roots)}
+    return {k: v for k, v in found.items() if _top(k) in owned}
 
 
 def _diff(name: str, old: bytes | None, new: bytes | None) -> str:
@@ -84,7 +79,6 @@ def main(argv: list[str] | None = None) -> int:
     paths: list[Path | None] = [args.robot] if args.robot is not None else list(
         shipped_robot_files())
     files: dict[str, bytes] = {}
-    roots: list[str] = []
     summary: list[str] = []
     for path in paths:
         start = time.perf_counter()
@@ -95,13 +89,12 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         produced = generate_files(robot, model)
         files.update(produced)
-        roots.append(model.output_dir)
         where = f"generated/{model.output_dir}" if model.output_dir else "generated/"
         summary.append(f"{robot.name}: {len(produced)} files for {where} "
                        f"({time.perf_counter() - start:.1f} s)")
     # Regenerating every robot owns all of generated/ (files of removed robots go);
     # one robot owns only its own folders.
-    old = _existing(args.out, roots if args.robot is not None else None)
+    old = _existing(args.out, {_top(n) for n in files} if args.robot is not None else None)
     stale = sorted(n for n in set(files) | set(old) if files.get(n) != old.get(n))
     if args.check:
         if not stale:

@@ -10,6 +10,7 @@ knows a robot: the ``RobotModel`` says what to generate, the backends how.
 from __future__ import annotations
 
 import importlib
+from functools import cache
 from pathlib import Path
 
 from codegen import template_util
@@ -37,6 +38,7 @@ GENERATED_DIR = Path(__file__).resolve().parent.parent / "generated"
 LAW_SOURCE = "modeling/controllers.py"
 
 
+@cache
 def layout_for(model: RobotModel) -> ControllerLayout:
     """What the controller templates need to know about ``model``."""
     return ControllerLayout(
@@ -45,6 +47,7 @@ def layout_for(model: RobotModel) -> ControllerLayout:
     )
 
 
+@cache
 def c_config(model: RobotModel) -> CConfig:
     """The C backend's names for ``model``: ``<prefix>_real_t``, ``<PREFIX>_LIT`` …"""
     layout = layout_for(model)
@@ -64,8 +67,8 @@ def model_source(model: RobotModel) -> str:
 
 def plant_values(model: RobotModel, robot: Robot) -> dict[str, float]:
     """The simulated robot's parameters: the robot file's numbers, the model's defaults
-    for plant-only parameters the file does not set (a lateral moment: 0 unless given)."""
-    given = {**robot.lumped, "K_lat": robot.K_lat}
+    for plant-only parameters the file does not set."""
+    given = robot.plant_values()
     return {p.key: float(given.get(p.key, model.values[p.key])) for p in model.plant_params}
 
 

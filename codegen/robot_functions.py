@@ -21,14 +21,14 @@ from functools import cache
 
 import sympy as sp
 
+from codegen.controller_layout import row_span, words
 from codegen.spec import Argument, Field, FunctionSpec, Guard
 from modeling import controllers as ctl
 from modeling.description.derive import cofactor_determinant
+from modeling.lagrange import ConstrainedSystem
 from modeling.robot_model import Parameter, RobotModel
 
 MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
-NUMBER_WORDS = ("zero", "one", "two", "three", "four", "five", "six", "seven", "eight",
-                "nine", "ten", "eleven", "twelve")
 
 
 
@@ -104,20 +104,16 @@ def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
 
 
 def forward_dynamics_forms(
-    model: RobotModel, system: object | None = None
+    model: RobotModel, system: ConstrainedSystem | None = None
 ) -> tuple[sp.Matrix, sp.Matrix]:
     """(η̇, q̈) in evaluation form: the grouped 2×2 solve when there are two driven wheels
     (``ConstrainedSystem.compact_forward_dynamics``), else adj(M̄)/det(M̄) left unexpanded."""
     s = model.system if system is None else system
     tau = model.tau
     if model.nu == 2:
-        return s.compact_forward_dynamics(tau, model.evaluation_form)  # type: ignore[attr-defined]
-    eta_dot = s.minimal_forward_dynamics(tau)  # type: ignore[attr-defined]
-    return eta_dot, s.null_space * eta_dot + s.null_space_rate  # type: ignore[attr-defined]
-
-
-def _words(n: int) -> str:
-    return NUMBER_WORDS[n] if n < len(NUMBER_WORDS) else str(n)
+        return s.compact_forward_dynamics(tau, model.evaluation_form)
+    eta_dot = s.minimal_forward_dynamics(tau)
+    return eta_dot, s.null_space * eta_dot + s.null_space_rate
 
 
 @cache
@@ -166,7 +162,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
         ),
         FunctionSpec(
             "bias_forces",
-            f"H(q, qdot) of (14). Rows {_row_span(dependent)} hold the velocity-product terms "
+            f"H(q, qdot) of (14). Rows {row_span(dependent)} hold the velocity-product terms "
             "of the twice\n"
             "differentiated constraints; valid for qdot on the constraint manifold.",
             (p, q, qdot),
@@ -199,7 +195,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
         ),
         FunctionSpec(
             "minimal_mass_matrix",
-            f"Mbar = S^T M S of the minimal {_words(m)}-coordinate model"
+            f"Mbar = S^T M S of the minimal {words(m)}-coordinate model"
             + (" (constant for K_lat = 0)." if not _depends_on_q(s.minimal_mass_matrix, model)
                else " (depends on q)."),
             (p, q),
@@ -244,14 +240,6 @@ def _wrap(text: str, width: int = 79) -> str:
         else:
             lines.append(word)
     return "\n".join(lines)
-
-
-def _row_span(rows: list[int]) -> str:
-    """1-based row numbers: ``1-3`` for a contiguous run, else a list."""
-    ones = [r + 1 for r in rows]
-    if ones and ones == list(range(ones[0], ones[-1] + 1)) and len(ones) > 1:
-        return f"{ones[0]}-{ones[-1]}"
-    return ", ".join(map(str, ones))
 
 
 def _depends_on_q(matrix: sp.Matrix, model: RobotModel) -> bool:
@@ -304,7 +292,7 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(20)",),
         )
     )
-    theta_q = array("q", model.q, f"measured q ({_words(model.nq)} coordinates)")
+    theta_q = array("q", model.q, f"measured q ({words(model.nq)} coordinates)")
     for f in model.formulations:
         tde, ts = ctl.tde_estimate(f, model)
         specs.append(

@@ -71,6 +71,11 @@ class Robot:
     K_lat: float = 0.0
     source: str = "<built-in>"
 
+    def plant_values(self) -> dict[str, float]:
+        """The numbers the file gives the simulated robot: the lumped parameters and the
+        lateral first moment its physical parameters imply (the plant-only K_lat)."""
+        return {**self.lumped, "K_lat": self.K_lat}
+
 
 DEFAULT_ROBOT = "drishti"
 

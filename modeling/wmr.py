@@ -35,7 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
-from modeling.robot_model import Parameter, RobotModel
+from modeling.robot_model import PAYLOAD, Parameter, RobotModel
 
 # ---------------------------------------------------------------------------------------
 # Symbols
@@ -144,7 +144,7 @@ def compact_form(expr: sp.Expr) -> sp.Expr:
 
 
 # Point payload at (x_L ahead of C, y_L left of C), mass m_L.
-m_L, x_L, y_L = sp.symbols("m_L x_L y_L", real=True)
+m_L, x_L, y_L = PAYLOAD
 
 
 def payload_relations() -> dict[sp.Symbol, sp.Expr]:
@@ -234,8 +234,9 @@ def robot_model() -> RobotModel:
     params = tuple(Parameter(k, s, doc) for k, s, doc in PARAMETER_DOCS)
     plant = (*params[:3], Parameter(*K_LAT_DOC), *params[3:])
     rel = payload_relations()
-    defaults = {"m": 36.0, "I": 5.72, "K": 0.34, "K_lat": 0.0, "Iw": 0.07, "r": 0.096,
-                "b": 0.414, "d": 0.12}
+    from modeling.robot_file import load_robot
+
+    defaults = load_robot().plant_values()  # modeling/robots/drishti.toml
     return RobotModel(
         name="drishti",
         prefix="wmr",

@@ -114,16 +114,26 @@ def build(
     return CLibrary(ffi, ffi.dlopen(str(so)), float32, so)
 
 
-def fill_params(obj: Any, params: Mapping[str, float]) -> Any:
+def fill_params(
+    obj: Any, params: Mapping[str, float], field_names: Mapping[str, str] | None = None
+) -> Any:
     """Set a C parameter struct's fields from a mapping with the Python keys, spelled as
-    the C backend spells them (``I`` → ``Iz``; the generated ``C_FIELD_NAMES``)."""
-    from runtime.generated_modules import controllers
+    the C backend spells them (``I`` → ``Iz``): ``field_names`` is the robot's generated
+    ``C_FIELD_NAMES`` (default: the default robot's)."""
+    if field_names is None:
+        from runtime.generated_modules import controllers
 
+        field_names = controllers.C_FIELD_NAMES
     for key, value in params.items():
-        setattr(obj, controllers.C_FIELD_NAMES.get(key, key), float(value))
+        setattr(obj, field_names.get(key, key), float(value))
     return obj
 
 
-def params_struct(lib: CLibrary, params: Mapping[str, float], ctype: str = "wmr_params_t") -> Any:
+def params_struct(
+    lib: CLibrary,
+    params: Mapping[str, float],
+    ctype: str = "wmr_params_t",
+    field_names: Mapping[str, str] | None = None,
+) -> Any:
     """A new C parameter struct from a mapping with the Python keys."""
-    return fill_params(lib.ffi.new(f"{ctype} *"), params)
+    return fill_params(lib.ffi.new(f"{ctype} *"), params, field_names)
