@@ -3,6 +3,11 @@ by __main__). Paths are relative to ``generated/``: the default robot's files si
 root (``c/``, ``python/``, ``casadi/``, ``MODEL.md``), every other robot's under
 ``<output_dir>/``.
 
+The driver derives the robot's functions once, in their shared form
+(:class:`codegen.backend.RobotTarget`), and hands the same target to every backend the
+registry (:mod:`codegen.backends`) lists; each writes its own folder. It names none of
+them: the report (``MODEL.md``) and the package ``__init__.py`` are its own.
+
 Pure: the same robot gives byte-identical output whatever the hash seed. Nothing here
 knows a robot: the ``RobotModel`` says what to generate, the backends how.
 """
@@ -13,24 +18,10 @@ import importlib
 from functools import cache
 from pathlib import Path
 
-from codegen import template_util
-from codegen.backends import c as c_backend
-from codegen.backends import casadi as casadi_backend
-from codegen.backends import python as py_backend
-from codegen.backends.c.config import CConfig
-from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
-from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
-from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
+from codegen import backends
+from codegen.backend import Module, RobotTarget, function_ir
 from codegen.controller_layout import ControllerLayout
-from codegen.cse import count_ops, cse_function
-from codegen.robot_functions import (
-    MAX_WINDOW,
-    law_specs,
-    minv_norm_needs_q,
-    model_specs,
-    plant_specs,
-)
-from codegen.spec import FunctionSpec
+from codegen.robot_functions import law_specs, minv_norm_needs_q, model_specs, plant_specs
 from modeling.robot_file import Robot
 from modeling.robot_model import RobotModel
 
@@ -47,150 +38,31 @@ def layout_for(model: RobotModel) -> ControllerLayout:
     )
 
 
-@cache
-def c_config(model: RobotModel) -> CConfig:
-    """The C backend's names for ``model``: ``<prefix>_real_t``, ``<PREFIX>_LIT`` …"""
-    layout = layout_for(model)
-    p, big = model.prefix, model.prefix.upper()
-    return CConfig(
-        prefix=f"{p}_", types_header=f"{p}_types.h", real_type=f"{p}_real_t",
-        status_type=f"{p}_status_t", params_ctype=f"{p}_params_t",
-        float32_define=f"{big}_FLOAT32", literal_macro=f"{big}_LIT",
-        status_codes=status_codes(layout), defines=defines(layout),
-    )
-
-
 def model_source(model: RobotModel) -> str:
     return model.docs.get("model_source", f"{model.source}, modeling/description/, "
                           "modeling/lagrange.py")
 
 
-def plant_values(model: RobotModel, robot: Robot) -> dict[str, float]:
-    """The simulated robot's parameters: the robot file's numbers, the model's defaults
-    for plant-only parameters the file does not set."""
-    given = robot.plant_values()
-    return {p.key: float(given.get(p.key, model.values[p.key])) for p in model.plant_params}
-
-
-def _modules(model: RobotModel) -> tuple[tuple[str, tuple[FunctionSpec, ...], str], ...]:
+def robot_target(model: RobotModel, robot: Robot) -> RobotTarget:
+    """What every backend is given for ``robot``: its functions (CSE'd once each here),
+    grouped in modules ``<prefix>_model``, ``<prefix>_laws``, ``<prefix>_plant``."""
     p = model.prefix
     src = model_source(model)
-    return (
+    groups = (
         (f"{p}_model", model_specs(model), src),
         (f"{p}_laws", law_specs(model), LAW_SOURCE),
         (f"{p}_plant", plant_specs(model), src),
     )
-
-
-def _c_files(model: RobotModel, robot: Robot) -> dict[str, str]:
-    layout = layout_for(model)
-    config = c_config(model)
-    pre = layout.prefix
-    files = c_backend.render_all(
-        {name: specs for name, specs, _ in _modules(model)},
-        config,
-        source=f"{model_source(model)}, {LAW_SOURCE}",
+    modules = tuple(
+        Module(name, tuple(function_ir(s) for s in specs), source)
+        for name, specs, source in groups
     )
-    param_fields = [config.c_field(p.key) for p in model.params]
-    for suffix in ("h", "c"):
-        template = f"controller_common.{suffix}.jinja"
-        files[f"{pre}_controller.{suffix}"] = template_util.render(
-            C_TEMPLATES,
-            template,
-            preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
-            layout=layout,
-            param_fields=param_fields,
-            max_abs_input=MAX_ABS_INPUT,
-        )
-    for info in CONTROLLERS:
-        for suffix in ("h", "c"):
-            template = f"controller.{suffix}.jinja"
-            files[f"{pre}_{info.name}.{suffix}"] = template_util.render(
-                C_TEMPLATES,
-                template,
-                preamble=template_util.preamble_lines(LAW_SOURCE, C_TEMPLATES, template),
-                layout=layout,
-                c=info,
-                max_abs_input=MAX_ABS_INPUT,
-            )
-    fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in model.params]
-    files[f"{pre}_robot.h"] = template_util.render(
-        C_TEMPLATES,
-        "robot.h.jinja",
-        preamble=template_util.preamble_lines(robot.source, C_TEMPLATES, "robot.h.jinja"),
-        layout=layout,
-        robot_name=robot.name,
-        fields=fields,
-    )
-    files["example_main.c"] = template_util.render(
-        C_TEMPLATES,
-        "example_main.c.jinja",
-        preamble=template_util.preamble_lines(
-            "codegen/generate.py", C_TEMPLATES, "example_main.c.jinja"
-        ),
-        layout=layout,
-        param_fields=param_fields,
-    )
-    return files
+    return RobotTarget(model, robot, layout_for(model), modules, src, LAW_SOURCE)
 
 
-def _robot_py(model: RobotModel, robot: Robot) -> str:
-    params = ", ".join(f'"{p.key}": {robot.lumped[p.key]!r}' for p in model.params)
-    text = (
-        f'"""Default parameters of robot "{robot.name}" (from {robot.source}).\n\n'
-        'Generated by `python -m codegen`. DO NOT EDIT.\n"""\n\n'
-        f'NAME = "{robot.name}"\nPARAMS: dict[str, float] = {{{params}}}\n'
-    )
-    plant = ", ".join(f'"{k}": {v!r}' for k, v in plant_values(model, robot).items())
-    names = ", ".join(f'"{n}"' for n in model.coordinate_names)
-    inputs = ", ".join(f'"{n}"' for n in model.input_names)
-    return text + (
-        f'PLANT_PARAMS: dict[str, float] = {{{plant}}}\n'
-        f'PREFIX = "{model.prefix}"\n'
-        f"NQ = {model.nq}  # generalised coordinates\n"
-        f"NU = {model.nu}  # inputs (driven wheels)\n"
-        f"ACTUATED = {model.actuated!r}  # index in q of each input's wheel angle\n"
-        f"COORDINATES = ({names},)\n"
-        f"INPUTS = ({inputs},)\n"
-        f"FORMULATIONS = {tuple(model.formulations)!r}\n"
-    )
-
-
-def _python_files(model: RobotModel, robot: Robot) -> dict[str, str]:
-    layout = layout_for(model)
-    config = c_config(model)
-    files: dict[str, str] = {}
-    for name, specs, source in _modules(model):
-        files.update(py_backend.render(specs, name, source=source))
-    template = "controllers.py.jinja"
-    files["controllers.py"] = template_util.render(
-        PY_TEMPLATES,
-        template,
-        preamble=template_util.preamble_lines(LAW_SOURCE, PY_TEMPLATES, template),
-        layout=layout,
-        status_codes=status_codes(layout),
-        controllers=CONTROLLERS,
-        formulation_paper=0,
-        formulation_minimal=1,
-        max_window=MAX_WINDOW,
-        max_abs_input=MAX_ABS_INPUT,
-        c_field_names=dict(config.field_renames),
-        param_keys=[p.key for p in model.params],
-    )
-    files["robot.py"] = _robot_py(model, robot)
-    files["__init__.py"] = (
-        '"""Generated NumPy-only model and controllers. DO NOT EDIT (python -m codegen)."""\n'
-    )
-    return files
-
-
-def op_counts(model: RobotModel) -> dict[str, str]:
+def op_counts(target: RobotTarget) -> dict[str, str]:
     """``function -> "operations after CSE: ..."`` for every generated function."""
-    return {
-        s.name: count_ops(cse_function(s.checked_spec())).comment()
-        for _, specs, _ in _modules(model)
-        for s in specs
-    }
+    return {f.name: f.ops.comment() for f in target.functions()}
 
 
 def generate_files(
@@ -203,22 +75,15 @@ def generate_files(
 
         model = load_robot_model(None)[0]
     root = f"{model.output_dir}/" if model.output_dir else ""
+    target = robot_target(model, robot)
     out: dict[str, bytes] = {}
-    out.update({f"{root}c/{k}": v.encode() for k, v in _c_files(model, robot).items()})
-    out.update({f"{root}python/{k}": v.encode() for k, v in _python_files(model, robot).items()})
-    for module, specs, _ in _modules(model):
-        # (the CasADi files name the model's source for all three modules)
-        for k, data in casadi_backend.render(specs, module, source=model_source(model)).items():
-            out[f"{root}casadi/{k}"] = data
+    for backend in backends.registered():
+        for name, data in backend.render(target).items():
+            out[f"{root}{backend.folder}/{name}"] = (
+                data.encode() if isinstance(data, str) else data
+            )
     out[f"{root}__init__.py"] = b'"""Generated code (python -m codegen). DO NOT EDIT."""\n'
     if report:
         renderer = importlib.import_module(model.docs.get("report", "codegen.robot_report"))
-        out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(model)).encode()
+        out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(target)).encode()
     return out
-
-
-def default_c_config() -> CConfig:
-    """The default robot's C config (``wmr_`` names), for tools built around it."""
-    from modeling.robot_file import load_robot_model
-
-    return c_config(load_robot_model(None)[0])

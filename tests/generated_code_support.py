@@ -20,8 +20,8 @@ import cffi
 import numpy as np
 import pytest
 
+from codegen.backends.c.backend import default_config as default_c_config
 from codegen.controller_api import CONTROLLERS, STATUS_CODES
-from codegen.generate import default_c_config
 from codegen.wmr_functions import PARAM_FIELDS, PARAM_KEYS
 from modeling.robot_file import load_robot
 from runtime.generated_modules import controllers as pyctl

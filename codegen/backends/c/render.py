@@ -25,9 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from codegen import template_util
+from codegen.backend import FunctionIR, function_ir
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.printer import CPrinter
-from codegen.cse import cse_function, op_count_from
+from codegen.cse import op_count_from
 from codegen.layout import (
     argument_size,
     input_slots,
@@ -194,8 +195,8 @@ def _access(arg: Argument, f: Field | None, index: int, config: CConfig) -> str:
     return f"{base}[{index // f.shape[1]}][{index % f.shape[1]}]"
 
 
-def _function_context(spec: FunctionSpec, config: CConfig) -> dict[str, object]:
-    result = cse_function(spec.checked_spec())
+def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
+    spec, result = ir.spec, ir.cse
     slots = input_slots(spec)
     reserved = {a.name for a in (*spec.inputs, *spec.outputs)}
     names = local_names(slots, reserved, _usable_c_name)
@@ -317,13 +318,24 @@ def render(
     it goes into each file's preamble. Struct types live in ``wmr_types.h``
     (:func:`render_types`).
     """
+    return render_module([function_ir(s) for s in specs], module, config, source=source)
+
+
+def render_module(
+    functions: Sequence[FunctionIR],
+    module: str,
+    config: CConfig | None = None,
+    *,
+    source: str = "",
+) -> dict[str, str]:
+    """:func:`render` from the functions' shared form (no CSE here)."""
     config = config or CConfig()
     if not module.isidentifier():
         raise ValueError(f"module name {module!r} is not an identifier")
-    names = [s.name for s in specs]
+    names = [f.name for f in functions]
     if len(set(names)) != len(names):
         raise ValueError(f"{module}: duplicate function names {names}")
-    functions = [_function_context(spec, config) for spec in specs]
+    contexts = [_function_context(f, config) for f in functions]
     files: dict[str, str] = {}
     for suffix, template in ((".h", "module.h.jinja"), (".c", "module.c.jinja")):
         files[module + suffix] = template_util.render(
@@ -333,7 +345,7 @@ def render(
             module=module,
             guard=_guard(module + "_H", config),
             header=module + ".h",
-            functions=functions,
+            functions=contexts,
         )
     return files
 
@@ -345,11 +357,25 @@ def render_all(
     source: str = "",
 ) -> dict[str, str]:
     """``wmr_types.h`` for all modules plus each module's ``.h``/``.c``."""
+    return render_all_ir(
+        {name: [function_ir(s) for s in specs] for name, specs in modules.items()},
+        config,
+        source=source,
+    )
+
+
+def render_all_ir(
+    modules: Mapping[str, Sequence[FunctionIR]],
+    config: CConfig | None = None,
+    *,
+    source: str = "",
+) -> dict[str, str]:
+    """:func:`render_all` from the functions' shared form (no CSE here)."""
     config = config or CConfig()
-    all_specs = [spec for specs in modules.values() for spec in specs]
+    all_specs = [f.spec for functions in modules.values() for f in functions]
     files = render_types(all_specs, config, source=source)
     for module in sorted(modules):
-        files.update(render(modules[module], module, config, source=source))
+        files.update(render_module(modules[module], module, config, source=source))
     return files
 
 

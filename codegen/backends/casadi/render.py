@@ -19,9 +19,10 @@ from pathlib import Path
 import casadi as ca
 
 from codegen import template_util
+from codegen.backend import FunctionIR, function_ir
 from codegen.backends.casadi.config import CasadiConfig
 from codegen.backends.casadi.convert import SXConverter
-from codegen.cse import count_ops, cse_function
+from codegen.cse import CseResult, count_ops, cse_function
 from codegen.layout import argument_size
 from codegen.spec import Argument, FunctionSpec
 
@@ -31,7 +32,12 @@ TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 def to_casadi(spec: FunctionSpec, name: str | None = None) -> ca.Function:
     """``casadi.Function(name or spec.name, inputs, outputs)``; one flat SX column per
     argument, named after the argument."""
-    result = cse_function(spec)
+    return _function(cse_function(spec), name)
+
+
+def _function(result: CseResult, name: str | None = None) -> ca.Function:
+    """The Function of a CSE of a spec's outputs (no guard rows: CasADi has no status)."""
+    spec = result.spec
     inputs = [ca.SX.sym(arg.name, argument_size(arg)) for arg in spec.inputs]
     env = {}
     for arg, sx in zip(spec.inputs, inputs, strict=True):
@@ -76,33 +82,45 @@ def render(
     source: str = "",
 ) -> dict[str, bytes]:
     """``{"<name>.casadi": Function.save bytes, ...}`` (+ ``<module>.casadi.txt``)."""
+    return render_module([function_ir(s) for s in specs], module, config, source=source)
+
+
+def render_module(
+    functions: Sequence[FunctionIR],
+    module: str,
+    config: CasadiConfig | None = None,
+    *,
+    source: str = "",
+) -> dict[str, bytes]:
+    """:func:`render` from the functions' shared form: each Function is converted from
+    ``FunctionIR.plain`` (the CSE of the outputs alone; no CSE here)."""
     config = config or CasadiConfig()
     files: dict[str, bytes] = {}
-    for spec in specs:
-        key = spec.name + config.suffix
+    for f in functions:
+        key = f.name + config.suffix
         if key in files:
-            raise ValueError(f"{module}: duplicate function {spec.name}")
-        files[key] = _saved_bytes(to_casadi(spec))
+            raise ValueError(f"{module}: duplicate function {f.name}")
+        files[key] = _saved_bytes(_function(f.plain))
     if config.manifest:
         template = "manifest.txt.jinja"
-        functions = [
+        manifest = [
             {
-                "name": spec.name,
-                "file": spec.name + config.suffix,
-                "doc": spec.doc.strip().splitlines()[0] if spec.doc.strip() else "",
-                "equations": ", ".join(spec.equations),
-                "inputs": [(a.name, _describe(a)) for a in spec.inputs],
-                "outputs": [(a.name, _describe(a)) for a in spec.outputs],
-                "ops": count_ops(cse_function(spec)).comment(),
+                "name": f.name,
+                "file": f.name + config.suffix,
+                "doc": f.spec.doc.strip().splitlines()[0] if f.spec.doc.strip() else "",
+                "equations": ", ".join(f.spec.equations),
+                "inputs": [(a.name, _describe(a)) for a in f.spec.inputs],
+                "outputs": [(a.name, _describe(a)) for a in f.spec.outputs],
+                "ops": (f.ops if f.plain is f.cse else count_ops(f.plain)).comment(),
             }
-            for spec in specs
+            for f in functions
         ]
         text = template_util.render(
             TEMPLATE_DIR,
             template,
             preamble=template_util.preamble_lines(source, TEMPLATE_DIR, template),
             module=module,
-            functions=functions,
+            functions=manifest,
         )
         files[f"{module}{config.suffix}.txt"] = text.encode()
     return files

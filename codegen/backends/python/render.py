@@ -25,9 +25,10 @@ from pathlib import Path
 import sympy as sp
 
 from codegen import template_util
+from codegen.backend import FunctionIR, function_ir
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
-from codegen.cse import cse_function, op_count_from
+from codegen.cse import op_count_from
 from codegen.layout import (
     InputSlot,
     input_slots,
@@ -128,8 +129,8 @@ def _describe(arg: Argument) -> str:
     return text + (f". {arg.doc}" if arg.doc else "")
 
 
-def _function_context(spec: FunctionSpec, config: PythonConfig) -> dict[str, object]:
-    result = cse_function(spec.checked_spec())
+def _function_context(ir: FunctionIR, config: PythonConfig) -> dict[str, object]:
+    spec, result = ir.spec, ir.cse
     slots = input_slots(spec)
     reserved = frozenset(config.reserved_names)
     arg_names = {a.name for a in (*spec.inputs, *spec.outputs)}
@@ -202,10 +203,21 @@ def render(
     source: str = "",
 ) -> dict[str, str]:
     """``{"<module>.py": text}`` for ``specs``; ``source`` goes into the preamble."""
+    return render_module([function_ir(s) for s in specs], module, config, source=source)
+
+
+def render_module(
+    functions: Sequence[FunctionIR],
+    module: str,
+    config: PythonConfig | None = None,
+    *,
+    source: str = "",
+) -> dict[str, str]:
+    """:func:`render` from the functions' shared form (no CSE here)."""
     config = config or PythonConfig()
     if not module.isidentifier():
         raise ValueError(f"module name {module!r} is not an identifier")
-    names = [s.name for s in specs]
+    names = [f.name for f in functions]
     if len(set(names)) != len(names):
         raise ValueError(f"{module}: duplicate function names {names}")
     bad = [n for n in names if n.startswith("_") or n in config.reserved_names]
@@ -218,6 +230,6 @@ def render(
         preamble=template_util.preamble_lines(source, TEMPLATE_DIR, template),
         module=module,
         exports=sorted(names),
-        functions=[_function_context(spec, config) for spec in specs],
+        functions=[_function_context(f, config) for f in functions],
     )
     return {module + ".py": text}

@@ -1,0 +1,88 @@
+"""The C99 backend as the driver sees it: every C file of a robot, from its target.
+
+``c/``: ``<prefix>_types.h``, one ``.h``/``.c`` pair per module, the controllers
+(``<prefix>_controller.{h,c}`` and ``<prefix>_<controller>.{h,c}`` from the layout),
+``<prefix>_robot.h`` (the robot file's numbers) and ``example_main.c``.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+from codegen import template_util
+from codegen.backend import RobotTarget
+from codegen.backends.c.config import CConfig
+from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir
+from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
+from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout
+
+
+@cache
+def config_for(layout: ControllerLayout) -> CConfig:
+    """The C names for a robot: ``<prefix>_real_t``, ``<PREFIX>_LIT``, its status codes and
+    integer constants."""
+    p, big = layout.prefix, layout.PREFIX
+    return CConfig(
+        prefix=f"{p}_", types_header=f"{p}_types.h", real_type=f"{p}_real_t",
+        status_type=f"{p}_status_t", params_ctype=f"{p}_params_t",
+        float32_define=f"{big}_FLOAT32", literal_macro=f"{big}_LIT",
+        status_codes=status_codes(layout), defines=defines(layout),
+    )
+
+
+def default_config() -> CConfig:
+    """The default robot's C config (``wmr_`` names), for tools built around it."""
+    return config_for(DRISHTI_LAYOUT)
+
+
+def _template(name: str, source: str, **context: object) -> str:
+    return template_util.render(
+        TEMPLATE_DIR,
+        name,
+        preamble=template_util.preamble_lines(source, TEMPLATE_DIR, name),
+        **context,
+    )
+
+
+class CBackend:
+    """C99 over ``<prefix>_real_t`` (double, or float with ``-D<PREFIX>_FLOAT32``)."""
+
+    name = "c"
+    folder = "c"
+
+    def render(self, target: RobotTarget) -> dict[str, str]:
+        layout = target.layout
+        config = config_for(layout)
+        pre = layout.prefix
+        law = target.law_source
+        files = render_all_ir(
+            {m.name: m.functions for m in target.modules},
+            config,
+            source=f"{target.model_source}, {law}",
+        )
+        param_fields = [config.c_field(p.key) for p in target.model.params]
+        for suffix in ("h", "c"):
+            files[f"{pre}_controller.{suffix}"] = _template(
+                f"controller_common.{suffix}.jinja", law, layout=layout,
+                param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
+            )
+        for info in CONTROLLERS:
+            for suffix in ("h", "c"):
+                files[f"{pre}_{info.name}.{suffix}"] = _template(
+                    f"controller.{suffix}.jinja", law, layout=layout, c=info,
+                    max_abs_input=MAX_ABS_INPUT,
+                )
+        robot = target.robot
+        fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]
+        files[f"{pre}_robot.h"] = _template(
+            "robot.h.jinja", robot.source, layout=layout, robot_name=robot.name, fields=fields
+        )
+        # (the example's preamble has always named the driver as its source)
+        files["example_main.c"] = _template(
+            "example_main.c.jinja", "codegen/generate.py", layout=layout,
+            param_fields=param_fields,
+        )
+        return files
+
+
+BACKEND = CBackend()
