@@ -1,7 +1,7 @@
 """``python -m runtime <command>``: crosscheck, reproduce, bench.
 
 python -m runtime crosscheck            # generated code vs hand-written equations
-python -m runtime reproduce [--experiment F.toml] [--out DIR] [--quick]
+python -m runtime reproduce [--experiment F.toml] [--robot F.toml] [--out DIR]
 python -m runtime stability [--experiment F.toml] [--robot F.toml] [--json]
 python -m runtime bench [--quick]
 """
@@ -15,7 +15,7 @@ import sys
 # command -> the module whose main(argv) runs it
 COMMANDS = {
     "crosscheck": "runtime.tooling.crosscheck.command",
-    "reproduce": "runtime.reproduce",
+    "reproduce": "runtime.reproduce_command",
     "stability": "runtime.stability",
     "bench": "runtime.tooling.bench.report",
 }

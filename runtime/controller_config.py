@@ -10,55 +10,18 @@ are also importable from there.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
 from runtime import cbuild
 from runtime.experiment import Experiment
-from runtime.generated_modules import wmr_model
-from runtime.nominal_check import UNCERTAIN, check_nominal, check_sampled_loop, mass_matrix_for
+from runtime.nominal_check import check_nominal, roc_bounds
+from runtime.sampled_loop import check_sampled_loop
+
+__all__ = ["ACCEL_CODES", "FORMULATIONS", "checked_controller_config", "controller_config",
+           "roc_bounds"]
 
 FORMULATIONS = {"paper": 0, "minimal": 1}
-
-
-def roc_bounds(
-    nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = 8.0
-) -> tuple[float, float]:
-    """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
-    I, K and Iw are each nominal or ``uncertainty`` above it ("30 % above nominal"), over
-    headings and random wheel rates up to ``max_rate``. (The TDE condition for TDC/TDROC,
-    over a symmetric box, is ``nominal_check.check_nominal``.)"""
-    alpha, phi = 0.0, 0.0
-    rng = np.random.default_rng(7)
-    corners = [
-        {
-            **nominal,
-            **{
-                k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
-                for i, k in enumerate(UNCERTAIN)
-            },
-        }
-        for mask in range(2 ** len(UNCERTAIN))
-    ]
-    for theta in np.linspace(-math.pi, math.pi, 9):
-        q = np.array([0.0, 0.0, theta, 0.0, 0.0])
-        m_hat = mass_matrix_for(q, nominal, formulation)
-        for p in corners:
-            inv = np.linalg.inv(mass_matrix_for(q, p, formulation))
-            alpha = max(alpha, float(np.linalg.norm(inv @ m_hat - np.eye(len(m_hat)), 2)))
-            for eta in rng.uniform(-max_rate, max_rate, size=(4, 2)):
-                qdot = np.concatenate([wmr_model.kinematics(q, eta, p), eta])
-                if formulation == "paper":
-                    dh = wmr_model.bias_forces(q, qdot, p) - wmr_model.bias_forces(q, qdot, nominal)
-                else:
-                    dh = wmr_model.minimal_bias_forces(q, eta, p) - wmr_model.minimal_bias_forces(
-                        q, eta, nominal
-                    )
-                phi = max(phi, float(np.linalg.norm(inv @ dh)))
-    return alpha, phi
 
 
 # accel_estimator of the experiment file -> WMR_ACCEL_* of the generated configs.

@@ -6,6 +6,8 @@
     [sensing]      how wheel angles and rates are measured, and the estimator of q̈(t − h)
                    that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        which paths, their duration
+    robot = "F"    (top level, optional) the robot file the experiment is for, relative to
+                   the experiment file; ``reproduce`` then runs it on that robot
 
 A field that is unknown, missing its type, non-finite or out of range is rejected with an
 error naming it (``section.field``).
@@ -106,6 +108,7 @@ class Experiment:
     sensing: SensingSettings = SensingSettings()
     paths: PathSettings = PathSettings()
     source: str = "<paper defaults>"
+    robot: str | None = None  # robot file named by the experiment (resolved path)
 
 
 _POSITIVE = {
@@ -204,13 +207,19 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
         "sensing": SensingSettings,
         "paths": PathSettings,
     }
+    robot = data.pop("robot", None)
+    if robot is not None and (not isinstance(robot, str) or not robot.strip()):
+        raise ExperimentFileError(
+            f"{where}: field 'robot' must be the path of a robot file, got {robot!r}"
+        )
     unknown = sorted(set(data) - set(sections))
     if unknown:
         raise ExperimentFileError(
-            f"{where}: unknown section '{unknown[0]}' (expected {', '.join(sections)})"
+            f"{where}: unknown section '{unknown[0]}' (expected {', '.join(sections)}, "
+            "or a top-level robot = \"FILE\")"
         )
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
-    exp = Experiment(**parts, source=where)
+    exp = Experiment(**parts, source=where, robot=robot)
     check_sensing(exp, where)
     return exp
 
@@ -245,4 +254,7 @@ def load_experiment(path: str | Path | None = None) -> Experiment:
         raise ExperimentFileError(f"{p}: experiment file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ExperimentFileError(f"{p}: cannot read experiment file: {exc}") from None
-    return parse_experiment(text, str(p))
+    exp = parse_experiment(text, str(p))
+    if exp.robot is not None:  # relative to the experiment file, as a user reads it
+        exp = replace(exp, robot=str(p.parent / exp.robot))
+    return exp

@@ -25,7 +25,6 @@ so the PNG bytes depend only on the data: two renders of the same reproduction a
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -39,7 +38,7 @@ from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
 from runtime import references
-from runtime.reproduce import COLORS, LABELS, Reproduction
+from runtime.reproduce import COLORS, LABELS, Figure, Reproduction
 from runtime.simulate import CONTROLLERS, Run, plant_params
 
 DPI = 100
@@ -62,15 +61,6 @@ SWITCHING = ("tdroc", "roc", "asmc")
 LINTHRESH = 1e-3  # rad/s²: TDROC's switching term stays near 1e-3 inside its boundary layer
 PRINTED_STYLE: dict[str, Any] = {"color": "0.6", "ls": ":", "lw": 1.4}
 REF_STYLE: dict[str, Any] = {"color": "k", "ls": "--", "lw": 1.2}
-
-
-@dataclass(frozen=True)
-class Figure:
-    """A written figure: its file, the title (naming the paper's figure) and a caption."""
-
-    path: Path
-    title: str
-    caption: str
 
 
 def save(fig: MplFigure, path: Path) -> None:

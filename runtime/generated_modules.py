@@ -8,23 +8,52 @@ actuated coordinates, parameter defaults), so that nothing here knows a robot.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import importlib.util
 import sys
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
 if str(ROOT) not in sys.path:  # generated/ is not an installed package by design
     sys.path.insert(0, str(ROOT))
 
-from generated.python import controllers, robot, wmr_laws, wmr_model, wmr_plant  # noqa: E402
+# The default robot's modules, for the runtime written around the paper's robot: imported
+# on first use, so that a generated/ holding some other robot fails with a sentence, not an
+# ImportError deep in an unrelated command.
+_DEFAULT_MODULES = {"controllers": "controllers", "robot": "robot", "wmr_laws": "wmr_laws",
+                    "wmr_model": "wmr_model", "wmr_plant": "wmr_plant"}
+
+if TYPE_CHECKING:  # the names __getattr__ provides, for the type checker and linters
+    from generated.python import controllers, robot, wmr_laws, wmr_model, wmr_plant
 
 __all__ = ["RobotCode", "controllers", "load_robot_code", "robot", "wmr_laws", "wmr_model",
            "wmr_plant"]
+
+
+def __getattr__(name: str) -> ModuleType:
+    if name not in _DEFAULT_MODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    try:
+        robot_mod = importlib.import_module("generated.python.robot")
+        prefix = getattr(robot_mod, "PREFIX", "wmr")
+    except ImportError as exc:
+        raise ImportError(f"{GENERATED / 'python'}: no generated default robot ({exc}); "
+                          "run `make model`") from None
+    if prefix != "wmr":
+        raise ImportError(
+            f"{GENERATED / 'python'} holds robot '{robot_mod.NAME}' (prefix {prefix}_), not "
+            "the paper's differential drive (wmr_) this command is written for; regenerate "
+            "it with `make model`, or use `--robot FILE` for other robots"
+        )
+    module = importlib.import_module(f"generated.python.{_DEFAULT_MODULES[name]}")
+    globals()[name] = module
+    return module
 
 
 @dataclass(frozen=True)
@@ -38,6 +67,11 @@ class RobotCode:
     plant: ModuleType
     controllers: ModuleType
     robot: ModuleType
+    folder: Path = GENERATED  # holds python/, c/, casadi/
+
+    @property
+    def c_dir(self) -> Path:
+        return self.folder / "c"
 
     @property
     def nq(self) -> int:
@@ -71,9 +105,13 @@ class RobotCode:
 
 
 @cache
-def load_robot_code(output_dir: str = "") -> RobotCode:
-    """The generated Python of the robot in ``generated/<output_dir>`` ("" = the default
-    robot). Raises ``FileNotFoundError`` naming the folder if it was not generated."""
+def load_robot_code(output_dir: str | Path = "") -> RobotCode:
+    """The generated Python of a robot: ``generated/<output_dir>`` for a name ("" = the
+    default robot), or any folder holding ``python/robot.py`` for a ``Path`` (the output of
+    ``python -m codegen --out DIR``). Raises ``FileNotFoundError`` naming the folder if no
+    robot was generated there."""
+    if isinstance(output_dir, Path):
+        return _load_from_folder(output_dir.resolve() / "python")
     folder = GENERATED / output_dir / "python" if output_dir else GENERATED / "python"
     if not (folder / "robot.py").is_file():
         raise FileNotFoundError(f"{folder}: no generated robot here (run `make model`)")
@@ -86,5 +124,28 @@ def load_robot_code(output_dir: str = "") -> RobotCode:
 
     return RobotCode(
         robot_mod.NAME, prefix, module("model"), module("laws"), module("plant"),
-        importlib.import_module(f"{package}.controllers"), robot_mod,
+        importlib.import_module(f"{package}.controllers"), robot_mod, folder.parent,
     )
+
+
+def _load_from_folder(folder: Path) -> RobotCode:
+    """The generated ``python/`` folder imported as a package of its own, under a name
+    unique to the folder (its modules import each other relatively)."""
+    if not (folder / "robot.py").is_file() or not (folder / "__init__.py").is_file():
+        raise FileNotFoundError(f"{folder}: no generated robot here (python/robot.py)")
+    tag = "_generated_" + hashlib.sha256(str(folder).encode()).hexdigest()[:12]
+    if tag not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            tag, folder / "__init__.py", submodule_search_locations=[str(folder)])
+        assert spec is not None and spec.loader is not None
+        package = importlib.util.module_from_spec(spec)
+        sys.modules[tag] = package
+        spec.loader.exec_module(package)
+    robot_mod = importlib.import_module(f"{tag}.robot")
+    prefix = robot_mod.PREFIX
+
+    def module(stem: str) -> ModuleType:
+        return importlib.import_module(f"{tag}.{stem}")
+
+    return RobotCode(robot_mod.NAME, prefix, module(f"{prefix}_model"), module(f"{prefix}_laws"),
+                     module(f"{prefix}_plant"), module("controllers"), robot_mod, folder.parent)

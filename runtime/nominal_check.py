@@ -2,8 +2,8 @@
 
 TDC and TDROC estimate the unknown dynamics from the last sample (17); the estimate
 converges only if the nominal inertia M̂ is not too far from the true M: ‖M⁻¹ M̂ − I‖₂ < 1
-(Roy et al. 2017, the condition under (17); ``runtime.controller_config.roc_bounds``
-computes the same α for ROC's bound). :func:`check_nominal` evaluates
+(Roy et al. 2017, the condition under (17); :func:`roc_bounds` computes the same α, and
+φ, for ROC's bound over the box above nominal). :func:`check_nominal` evaluates
 
     α = max ‖M(p)⁻¹ M̂ − I‖₂
 
@@ -12,9 +12,10 @@ values; r, b, d as given) and over headings θ, and raises ``ValueError`` when �
 The box is sampled on a three-level grid (lower face, centre, upper face: 81 points, the
 16 corners included) × 9 headings in [−π, π]; M(p) is the generated ``wmr_model``.
 
-:func:`check_sampled_loop` refuses a configuration whose sampled closed loop is predicted
-unstable. ``runtime.controller_config.checked_controller_config`` builds a configuration
-behind both checks (this module imports neither it nor ``runtime.simulate``).
+``runtime.sampled_loop.check_sampled_loop`` refuses a configuration whose sampled closed
+loop is predicted unstable; ``runtime.controller_config.checked_controller_config`` builds
+a configuration behind both checks. This module imports no other runtime module but the
+generated code's.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from numpy.typing import NDArray
 from runtime.generated_modules import wmr_model
 
 if TYPE_CHECKING:
-    from runtime.experiment import Experiment
+    pass
 
 UNCERTAIN = ("m", "I", "K", "Iw")
 KEYS = ("m", "I", "K", "Iw", "r", "b", "d")
@@ -126,48 +127,38 @@ def check_nominal(
     return alpha
 
 
-class UnstableConfiguration(ValueError):
-    """The sampled closed loop of a configuration is predicted unstable on its robot."""
-
-
-class SwitchingGainWarning(UserWarning):
-    """A switching gain at the configuration's setting exceeds the stable boundary-layer gain."""
-
-
-def check_sampled_loop(name: str, formulation: str, nominal: dict[str, float],
-                       exp: Experiment) -> None:
-    """Refuse a configuration whose sampled closed loop (``runtime.stability``: plant under
-    ZOH, the experiment's sensing and estimator, the law, linearised on the circle) is
-    unstable without any switching gain; warn when ROC's gain at zero error (ρ/ε) is beyond
-    the largest stable boundary-layer gain."""
-    import warnings
-
-    from runtime import stability
-
-    pen = stability.pencil(stability.setting(name, formulation, nominal, exp))
-    radius = pen.radius(0.0)
-    if radius >= 1.0:
-        other = "minimal" if formulation == "paper" else "paper"
-        alt = stability.pencil(stability.setting(name, other, nominal, exp)).radius(0.0)
-        hint = (
-            f"; the {other} formulation is predicted stable (spectral radius {alt:.3f})"
-            if alt < 1.0
-            else f"; the {other} formulation is unstable too (spectral radius {alt:.3f})"
-        )
-        raise UnstableConfiguration(
-            f"{name}/{formulation}: the sampled closed loop is predicted unstable on this "
-            f"robot (spectral radius {radius:.3f} >= 1 per sample of h = {exp.controller.h} s "
-            f"with {exp.sensing.velocity} rates, before any switching gain){hint}. "
-            "See `python -m runtime stability` and docs/CONTROLLERS.md."
-        )
-    if name == "roc":
-        g, _, _ = stability.setting_gain(name, formulation, nominal, exp, measure=False)
-        g_max = pen.max_stable_gain()
-        if g >= g_max:
-            warnings.warn(
-                f"roc/{formulation}: the switching gain at zero error rho/eps = {g:.3g} is "
-                f"beyond the largest stable boundary-layer gain {g_max:.3g}: expect "
-                "chattering or divergence inside the boundary layer (raise eps)",
-                SwitchingGainWarning,
-                stacklevel=2,
-            )
+def roc_bounds(
+    nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = 8.0
+) -> tuple[float, float]:
+    """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
+    I, K and Iw are each nominal or ``uncertainty`` above it ("30 % above nominal"), over
+    headings and random wheel rates up to ``max_rate``. (The TDE condition for TDC/TDROC,
+    over a symmetric box, is ``nominal_check.check_nominal``.)"""
+    alpha, phi = 0.0, 0.0
+    rng = np.random.default_rng(7)
+    corners = [
+        {
+            **nominal,
+            **{
+                k: nominal[k] * (1 + uncertainty * ((mask >> i) & 1))
+                for i, k in enumerate(UNCERTAIN)
+            },
+        }
+        for mask in range(2 ** len(UNCERTAIN))
+    ]
+    for theta in np.linspace(-math.pi, math.pi, 9):
+        q = np.array([0.0, 0.0, theta, 0.0, 0.0])
+        m_hat = mass_matrix_for(q, nominal, formulation)
+        for p in corners:
+            inv = np.linalg.inv(mass_matrix_for(q, p, formulation))
+            alpha = max(alpha, float(np.linalg.norm(inv @ m_hat - np.eye(len(m_hat)), 2)))
+            for eta in rng.uniform(-max_rate, max_rate, size=(4, 2)):
+                qdot = np.concatenate([wmr_model.kinematics(q, eta, p), eta])
+                if formulation == "paper":
+                    dh = wmr_model.bias_forces(q, qdot, p) - wmr_model.bias_forces(q, qdot, nominal)
+                else:
+                    dh = wmr_model.minimal_bias_forces(q, eta, p) - wmr_model.minimal_bias_forces(
+                        q, eta, nominal
+                    )
+                phi = max(phi, float(np.linalg.norm(inv @ dh)))
+    return alpha, phi

@@ -18,30 +18,30 @@ The wall time is printed on the console only.
 
 from __future__ import annotations
 
-import argparse
 import csv
-import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from runtime import references
 from runtime.experiment import (
-    VELOCITY_MODELS,
     Experiment,
-    ExperimentFileError,
-    check_sensing,
-    load_experiment,
 )
 from runtime.generated_modules import robot as default_robot
 from runtime.simulate import CONTROLLERS, Run, run
 
-if TYPE_CHECKING:
-    from runtime.figures import Figure
+
+@dataclass(frozen=True)
+class Figure:
+    """A written figure: its file, the title (naming the paper's figure) and a caption."""
+
+    path: Path
+    title: str
+    caption: str
+
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "docs" / "reproduction"
@@ -263,7 +263,7 @@ def reproduce(
 # --------------------------------------------------------------------------- tables
 
 
-def _fmt_mm(x: float) -> str:
+def fmt_mm(x: float) -> str:
     return f"{x * 1000:.2f}"
 
 
@@ -284,8 +284,8 @@ def metrics_table(rows: Iterable[Metrics]) -> list[str]:
     ]
     for m in rows:
         lines.append(
-            f"| {m.path} | {m.formulation} | {LABELS[m.controller]} | {_fmt_mm(m.rms_error)} "
-            f"| {_fmt_mm(m.max_error)} | {m.rms_percent:.2f} | {m.rms_torque:.2f} "
+            f"| {m.path} | {m.formulation} | {LABELS[m.controller]} | {fmt_mm(m.rms_error)} "
+            f"| {fmt_mm(m.max_error)} | {m.rms_percent:.2f} | {m.rms_torque:.2f} "
             f"| {m.torque_variation:.1f} | {m.median_gain:.3f} | {m.max_gain:.3f} "
             f"| {m.saturated_steps} | {m.discarded_u:.2f} |"
         )
@@ -375,9 +375,9 @@ def claims(rep: Reproduction, sensing: str) -> list[Claim]:
             "TDROC has the lowest tracking error of the four controllers on both paths",
             all(w == "tdroc" for w in winners.values()),
             "; ".join(
-                f"{p}: lowest RMS by {LABELS[w]} (TDROC {_fmt_mm(rms_of[(p, 'tdroc')])} mm, "
-                f"TDC {_fmt_mm(rms_of[(p, 'tdc')])} mm, ROC {_fmt_mm(rms_of[(p, 'roc')])} mm, "
-                f"ASMC {_fmt_mm(rms_of[(p, 'asmc')])} mm; TDROC/TDC "
+                f"{p}: lowest RMS by {LABELS[w]} (TDROC {fmt_mm(rms_of[(p, 'tdroc')])} mm, "
+                f"TDC {fmt_mm(rms_of[(p, 'tdc')])} mm, ROC {fmt_mm(rms_of[(p, 'roc')])} mm, "
+                f"ASMC {fmt_mm(rms_of[(p, 'asmc')])} mm; TDROC/TDC "
                 f"{rms_of[(p, 'tdroc')] / rms_of[(p, 'tdc')]:.3f})"
                 for p, w in winners.items()
             ),
@@ -679,9 +679,9 @@ def contrast_sentence(rep: Reproduction) -> list[str]:
     out = []
     for path in rep.refs:
         parts = [
-            f"`{r.estimator}` {_fmt_mm(r.metrics.rms_error)} mm RMS "
+            f"`{r.estimator}` {fmt_mm(r.metrics.rms_error)} mm RMS "
             f"({'stable' if r.stable else 'unstable'}, {r.ratio:.2f}× TDC's "
-            f"{_fmt_mm(r.tdc_rms)} mm, {r.metrics.saturated_steps} saturated steps)"
+            f"{fmt_mm(r.tdc_rms)} mm, {r.metrics.saturated_steps} saturated steps)"
             for r in at_eps
             if r.metrics.path == path
         ]
@@ -741,8 +741,8 @@ def section_sweep(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
         "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
         *[
             f"| {s.sensing} | {s.estimator} | {s.eps:g} | {s.metrics.path} "
-            f"| {_fmt_mm(s.metrics.rms_error)} | {_fmt_mm(s.metrics.max_error)} "
-            f"| {_fmt_mm(s.tdc_rms)} | {s.ratio:.2f} | {s.metrics.median_gain:.3g} "
+            f"| {fmt_mm(s.metrics.rms_error)} | {fmt_mm(s.metrics.max_error)} "
+            f"| {fmt_mm(s.tdc_rms)} | {s.ratio:.2f} | {s.metrics.median_gain:.3g} "
             f"| {s.metrics.median_gain / s.eps:.3g} "
             f"| {s.metrics.saturated_steps} | {'stable' if s.stable else '**unstable**'} |"
             for s in rep.sweep
@@ -775,91 +775,3 @@ def report_markdown(
     while lines and lines[-1] == "":
         lines.pop()
     return "\n".join(lines) + "\n"
-
-
-# --------------------------------------------------------------------------- CLI
-
-
-def parse_sensings(text: str) -> tuple[str, ...]:
-    """``MODEL[,MODEL]`` → the velocity models, in order, without repeats."""
-    names = tuple(dict.fromkeys(s.strip() for s in text.split(",") if s.strip()))
-    bad = [s for s in names if s not in VELOCITY_MODELS]
-    if not names or bad:
-        raise ExperimentFileError(
-            f"--sensing: expected one or more of {', '.join(VELOCITY_MODELS)} separated by "
-            f"commas, got {text!r}"
-        )
-    return names
-
-
-def write_outputs(rep: Reproduction, out: Path, plots: bool) -> list[Figure]:
-    """Figures, ``metrics.md``, ``metrics.csv`` and ``REPORT.md`` into ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
-    figures: list[Figure] = []
-    if plots:
-        from runtime import figures as figs
-
-        figures = figs.render_all(rep, out)
-    (out / "metrics.md").write_text(metrics_markdown(rep), encoding="utf-8")
-    write_csv(rep, out / "metrics.csv")
-    (out / "REPORT.md").write_text(report_markdown(rep, figures), encoding="utf-8")
-    return figures
-
-
-def print_summary(rep: Reproduction) -> None:
-    for sensing in rep.sensings:
-        for s in stability(rep, sensing):
-            print(
-                f"stability [{sensing}]: {LABELS[s.controller]:5s} {s.path:9s} ultimate "
-                f"bound {s.ultimate_bound:.3g}, measured {s.measured:.3g}"
-            )
-        for cl in claims(rep, sensing):
-            verdict = "reproduces" if cl.holds else "does NOT reproduce"
-            print(f"claim [{sensing}]: {cl.text}: {verdict} ({cl.evidence})")
-    for row in rep.sweep:
-        print(
-            f"sweep: {row.sensing:15s} {row.estimator:8s} eps {row.eps:<4g} "
-            f"{row.metrics.path:9s} RMS {_fmt_mm(row.metrics.rms_error):>8s} mm "
-            f"({row.ratio:.2f}x TDC) {'stable' if row.stable else 'UNSTABLE'}"
-        )
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m runtime reproduce", description="Reproduce the paper's experiments."
-    )
-    parser.add_argument(
-        "--experiment",
-        type=Path,
-        default=None,
-        help="experiment TOML (default: the paper's setting)",
-    )
-    parser.add_argument(
-        "--sensing",
-        default=",".join(DEFAULT_SENSINGS),
-        metavar="MODEL[,MODEL]",
-        help=f"velocity models to run, of {', '.join(VELOCITY_MODELS)} "
-        f"(default: {','.join(DEFAULT_SENSINGS)})",
-    )
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder")
-    parser.add_argument("--no-plots", action="store_true", help="skip the figures")
-    args = parser.parse_args(argv)
-    start = time.perf_counter()
-    try:
-        exp = load_experiment(args.experiment)
-        sensings = parse_sensings(args.sensing)
-        for s in sensings:
-            check_sensing(with_sensing(exp, s), str(args.experiment or "--sensing"))
-    except ExperimentFileError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    rep = reproduce(exp, progress=True, sensings=sensings)
-    t_plot = time.perf_counter()
-    write_outputs(rep, args.out, plots=not args.no_plots)
-    end = time.perf_counter()
-    print_summary(rep)
-    print(
-        f"wrote {args.out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
-        f"figures and files {end - t_plot:.1f} s)"
-    )
-    return 0

@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -30,8 +29,10 @@ from runtime.controller_config import (
     roc_bounds,
 )
 from runtime.experiment import Experiment
-from runtime.generated_modules import wmr_model, wmr_plant
+from runtime.generated_modules import wmr_model
+from runtime.payload_schedule import extra_payload_on, plant_params
 from runtime.references import Reference
+from runtime.sim_library import build_sim_library
 
 __all__ = [
     "ACCEL_CODES",
@@ -48,43 +49,10 @@ __all__ = [
     "sim_library",
 ]
 
-CSRC = Path(__file__).resolve().parent / "csrc"
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 
 
-def build_sim_library(float32: bool = False) -> cbuild.CLibrary:
-    """Generated C + the RK4 helper (``sim_library`` caches it; tests may replace that)."""
-    return cbuild.build(
-        float32,
-        extra_sources=(CSRC / "wmr_sim.c",),
-        extra_headers=((CSRC / "wmr_sim.h").resolve(),),
-    )
-
-
 sim_library = cache(build_sim_library)
-
-
-def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[np.float64]:
-    """True (m, I, K, K_lat, Iw, r, b, d) at time t: robot + fixed payload + periodic payload."""
-    pl = exp.plant
-    base = {**robot, "K_lat": 0.0}
-    p = wmr_plant.plant_params_with_payload(
-        [pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y], base
-    )
-    if extra_payload_on(exp, t):
-        keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
-        p = wmr_plant.plant_params_with_payload(
-            [pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y],
-            dict(zip(keys, p, strict=True)),
-        )
-    return p
-
-
-def extra_payload_on(exp: Experiment, t: float) -> bool:
-    pl = exp.plant
-    if t < pl.extra_on_at:
-        return False
-    return ((t - pl.extra_on_at) % pl.extra_period) < pl.extra_period / 2
 
 
 @dataclass(frozen=True)

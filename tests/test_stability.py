@@ -19,7 +19,7 @@ import pytest
 from runtime import references, stability, stability_check
 from runtime.experiment import Experiment, SensingSettings
 from runtime.generated_modules import robot
-from runtime.nominal_check import UnstableConfiguration
+from runtime.sampled_loop import UnstableConfiguration
 from runtime.simulate import run
 
 DRISHTI = dict(robot.PARAMS)

@@ -1,0 +1,124 @@
+"""From a robot file to the generated code and numbers a simulation of it needs.
+
+* A ``[lumped]``/``[physical]`` file is the paper's differential drive with other numbers:
+  the default generated code (``wmr_``) with the file's parameters.
+* A ``[[body]]``/``[[wheel]]`` file has code of its own: the generated folder whose
+  ``robot.py`` names the robot (``generated/<name>/`` after ``python -m codegen --robot
+  FILE``, or under ``--generated DIR``), refused when it was generated from another version
+  of the file (``SOURCE_SHA256``) — its parameters are then the file's.
+
+No SymPy for described robots: their numbers are read from the generated ``robot.py``.
+(Physical parameters of a ``[physical]`` file go through the lumped relations, which is
+``modeling.robot_file``.)
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
+
+
+class RobotSourceError(ValueError):
+    """A robot file that cannot be simulated; the message says why and what to run."""
+
+
+@dataclass(frozen=True)
+class RobotSetup:
+    """A robot to simulate: its generated code, the controllers' nominal parameters and the
+    simulated robot's (before any payload)."""
+
+    name: str
+    source: str
+    code: RobotCode
+    nominal: dict[str, float]
+    plant: dict[str, float]
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes, as ``robot.py``'s ``SOURCE_SHA256`` records it."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _read(path: Path) -> dict[str, object]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise RobotSourceError(f"{path}: robot file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RobotSourceError(f"{path}: cannot read robot file: {exc}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotSourceError(f"{path}: not valid TOML: {exc}") from None
+
+
+def generated_robots(root: Path) -> list[Path]:
+    """Folders under ``root`` (itself included) that hold a generated robot."""
+    found = [root] if (root / "python" / "robot.py").is_file() else []
+    if root.is_dir():
+        found += sorted(p.parent.parent for p in root.glob("*/python/robot.py"))
+    return found
+
+
+def resolve(path: Path, generated: Path | None = None) -> RobotSetup:
+    """The setup of robot file ``path``; ``generated`` is the folder to look for its code in
+    (default: the repository's ``generated/``)."""
+    data = _read(path)
+    if "body" in data or "wheel" in data:
+        return _described(path, data, generated or GENERATED)
+    return _lumped(path, generated)
+
+
+def _described(path: Path, data: dict[str, object], root: Path) -> RobotSetup:
+    name = data.get("name")
+    if not isinstance(name, str) or not name:
+        raise RobotSourceError(f"{path}: field 'name' must be a non-empty string")
+    matches = [d for d in generated_robots(root)
+               if _robot_name(d / "python" / "robot.py") == name]
+    hint = (f"run `python -m codegen --robot {path}` (writes generated/<name>/) or "
+            f"`python -m codegen --robot {path} --out DIR` and pass --generated DIR")
+    if not matches:
+        raise RobotSourceError(f"{path}: no generated code for robot '{name}' under {root}; "
+                               f"{hint}")
+    code = load_robot_code(matches[0].resolve())
+    recorded = getattr(code.robot, "SOURCE_SHA256", None)
+    if recorded != file_digest(path):
+        raise RobotSourceError(
+            f"{path}: {matches[0]} was generated from "
+            f"{'another version of this file' if recorded else 'an unrecorded source'} "
+            f"(robot.py SOURCE_SHA256); regenerate: {hint}"
+        )
+    return RobotSetup(name, str(path), code, code.params, code.plant_defaults)
+
+
+def _robot_name(robot_py: Path) -> str | None:
+    """``NAME`` of a generated ``robot.py``, read without importing it."""
+    for line in robot_py.read_text(encoding="utf-8").splitlines():
+        if line.startswith("NAME = "):
+            value = ast.literal_eval(line.split("=", 1)[1].strip())
+            return value if isinstance(value, str) else None
+    return None
+
+
+def _lumped(path: Path, generated: Path | None) -> RobotSetup:
+    from modeling.robot_file import RobotFileError, load_robot
+
+    try:
+        robot = load_robot(path)
+    except RobotFileError as exc:
+        raise RobotSourceError(str(exc)) from None
+    code = load_robot_code(generated.resolve() if generated else "")
+    if code.prefix != "wmr" or set(code.params) != set(robot.lumped):
+        raise RobotSourceError(
+            f"{path}: a lumped robot file runs on the paper robot's generated code (wmr_, "
+            f"parameters {', '.join(robot.lumped)}), but {code.folder} holds robot "
+            f"'{code.name}' ({code.prefix}_); regenerate it with `make model`"
+        )
+    values = robot.plant_values()
+    plant = {k: float(values.get(k, 0.0)) for k in code.plant_defaults}
+    return RobotSetup(robot.name, str(path), code, dict(robot.lumped), plant)

@@ -1,0 +1,222 @@
+"""``reproduce --robot FILE``: the paper's experiment scaled to any robot.
+
+What is checked: the robot's sizes measured on its generated code equal the file's
+numbers; the scaling rules; the scaled references are motions the robot can make (q̇ and
+q̈ agree with finite differences of q and q̇, the root drives the circle it was asked to);
+odometry from the encoders follows the true motion; the four controllers close the loop
+through the robot's generated C; the command runs end to end for a lumped robot file and
+for a described one (the trailer) and names every problem with a file before any work.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from runtime.experiment import Experiment, parse_experiment
+from runtime.generated_modules import GENERATED, load_robot_code
+from runtime.reproduce_command import main
+from runtime.robot_paths import body_yaws, circle, lawnmower
+from runtime.robot_scale import (
+    DRISHTI_MASS,
+    RobotScale,
+    inertial_keys,
+    robot_scale,
+    scaled_experiment,
+)
+from runtime.robot_simulation import Odometry
+from runtime.robot_source import RobotSourceError, resolve
+
+ROOT = Path(__file__).resolve().parent.parent
+SMALL = ROOT.parent / "shared" / "cases" / "small_robot.toml"
+TRAILER = next((ROOT / "modeling" / "robots").rglob("trailer.toml"))
+SHORT = "[paths]\ncircle_duration = 6.0\nlawnmower_duration = 8.0\n"
+
+
+def test_scale_measured_on_generated_code_equals_the_files_numbers() -> None:
+    drishti = load_robot_code("")
+    s = robot_scale(drishti, drishti.params)
+    assert s.wheel_radius == pytest.approx(0.096, rel=1e-12)
+    assert s.track == pytest.approx(0.414, rel=1e-12)
+    assert s.mass == pytest.approx(DRISHTI_MASS, rel=1e-12)
+    trailer = load_robot_code("trailer")
+    t = robot_scale(trailer, trailer.params)
+    # 30 + 15 + 4 wheels (3, 3, 1.25, 1.25) kg, plus spin inertias over r²
+    expected = 53.5 + 2 * 0.07 / 0.096**2 + 2 * 0.004 / 0.08**2
+    assert (t.wheel_radius, t.track) == pytest.approx((0.096, 0.414), rel=1e-12)
+    assert t.mass == pytest.approx(expected, rel=1e-12)
+
+
+def test_inertial_keys_are_what_the_kinematics_ignores() -> None:
+    drishti = load_robot_code("")
+    assert inertial_keys(drishti, drishti.params) == ("m", "I", "K", "Iw")
+    trailer = load_robot_code("trailer")
+    keys = inertial_keys(trailer, trailer.params)
+    assert set(keys) == {k for k in trailer.params if not k.startswith("radius_")}
+
+
+def test_scaling_keeps_what_an_experiment_sets_and_scales_the_rest() -> None:
+    half = RobotScale(0.048, 0.207, DRISHTI_MASS / 4)  # half the size, a quarter the heft
+    exp = parse_experiment("[controller]\ntau_max = 7.0\n")
+    out, lines = scaled_experiment(exp, half)
+    assert out.controller.tau_max == 7.0  # set by the file
+    assert any("tau_max = 7 (set by the experiment; kept)" in line for line in lines)
+    torque = 0.25 * 0.5 * 0.5
+    assert out.plant.coulomb == pytest.approx(0.3 * torque)
+    assert out.plant.fixed_payload == pytest.approx(6.0 / 4)
+    assert out.plant.extra_payload_x == pytest.approx(0.10 / 2)
+    same, _ = scaled_experiment(Experiment(), RobotScale(0.096, 0.414, DRISHTI_MASS))
+    assert same == Experiment()  # Drishti's own size changes nothing
+
+
+@pytest.mark.parametrize("folder", ["", "trailer"])
+def test_scaled_references_are_consistent_motions(folder: str) -> None:
+    code = load_robot_code(folder)
+    s = robot_scale(code, code.params)
+    h = 0.01
+    for path in (circle(code, s, code.params, h, 12.0), lawnmower(code, s, code.params, h, 30.0)):
+        ref = path.ref
+        dq = (ref.q[2:] - ref.q[:-2]) / (2 * h)
+        ddq = (ref.qdot[2:] - ref.qdot[:-2]) / (2 * h)
+        assert np.max(np.abs(dq - ref.qdot[1:-1])) < 1e-3 * max(1.0, np.abs(ref.qdot).max())
+        assert np.max(np.abs(ddq - ref.qddot[1:-1])) < 2e-2 * max(1.0, np.abs(ref.qddot).max())
+    ref = circle(code, s, code.params, 0.05, 40.0).ref
+    late = ref.t > 15.0  # after the start-up ramp: on the circle of radius R1 · size
+    radius = np.hypot(ref.q[late, 0], ref.q[late, 1] - np.mean(ref.q[late, 1]))
+    centre = np.array([np.mean(ref.q[late, 0]), np.mean(ref.q[late, 1])])
+    radius = np.linalg.norm(ref.q[late, :2] - centre, axis=1)
+    assert np.ptp(radius) < 0.02 * radius.mean()
+    assert radius.mean() == pytest.approx(1.5 * s.size, rel=0.05)
+
+
+def test_trailer_starts_with_a_straight_hitch() -> None:
+    code = load_robot_code("trailer")
+    assert body_yaws(code) == (code.robot.COORDINATES.index("theta_cart"),)
+    ref = circle(code, robot_scale(code, code.params), code.params, 0.1, 1.0).ref
+    assert ref.q[0, 3] == ref.q[0, 2]
+
+
+@pytest.mark.parametrize("velocity", ["sample-instant", "encoder-average"])
+def test_odometry_follows_the_true_motion(velocity: str) -> None:
+    """Fed the reference's own wheel angles, odometry reproduces the whole configuration
+    (pose, hitch, passive wheels) to within the encoder resolution's effect."""
+    code = load_robot_code("trailer")
+    s = robot_scale(code, code.params)
+    h = 0.02
+    ref = lawnmower(code, s, code.params, h, 20.0).ref
+    exp = parse_experiment(f'[sensing]\nvelocity = "{velocity}"\nencoder_ppr = 100000\n'
+                           f"[controller]\nh = {h}\n")
+    odo = Odometry(code, ref.q[0], exp, code.params)
+    act = list(code.actuated)
+    worst_q, worst_rate = 0.0, 0.0
+    for k in range(1, len(ref.t)):
+        q, qdot = odo.measure(ref.q[k, act], ref.qdot[k, act], None)
+        worst_q = max(worst_q, float(np.max(np.abs(q - ref.q[k]))))
+        if velocity == "sample-instant":
+            worst_rate = max(worst_rate, float(np.max(np.abs(qdot[act] - ref.qdot[k, act]))))
+            worst_q = max(worst_q, float(np.max(np.abs(qdot - ref.qdot[k]))))
+    assert worst_q < 2e-3, worst_q
+    assert worst_rate == 0.0  # the driven wheels' rates are passed through
+
+
+def _run_cli(tmp_path: Path, *args: str) -> tuple[int, Path]:
+    exp = tmp_path / "short.toml"
+    exp.write_text(SHORT)
+    out = tmp_path / "out"
+    code = main(["--experiment", str(exp), "--sensing", "sample-instant", "--out", str(out),
+                 *args])
+    return code, out
+
+
+def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out = _run_cli(tmp_path, "--robot", str(SMALL), "--no-plots")
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "controller.tau_max = 0.2179 (paper 40 x 0.005448, torque)" in printed
+    report = (out / "REPORT.md").read_text()
+    assert "robot 'small_robot'" in report and "τ_max = 0.2179 N m" in report
+    rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
+    assert len(rows) == 2 * 2 * 4  # paths × formulations × controllers
+    minimal_tdc = [r for r in rows if r[2] == "minimal" and r[3] == "tdc"]
+    assert all(float(r[4]) < 0.01 for r in minimal_tdc)  # metres
+
+
+def test_trailer_end_to_end_with_plot(tmp_path: Path) -> None:
+    code, out = _run_cli(tmp_path, "--robot", str(TRAILER))
+    assert code == 0
+    rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
+    assert len(rows) == 2 * 4 and all(r[2] == "minimal" for r in rows)
+    assert all(r[11] == "" for r in rows)  # no run failed
+    tdroc = [float(r[4]) for r in rows if r[3] == "tdroc"]
+    assert max(tdroc) < 0.01
+    assert (out / "tracking.png").stat().st_size > 10_000
+
+
+def test_experiment_file_names_its_robot(tmp_path: Path) -> None:
+    exp = tmp_path / "exp.toml"
+    robot = tmp_path / "robots" / "small.toml"
+    robot.parent.mkdir()
+    shutil.copy(SMALL, robot)
+    exp.write_text('robot = "robots/small.toml"\n' + SHORT)
+    out = tmp_path / "out"
+    assert main(["--experiment", str(exp), "--sensing", "sample-instant", "--no-plots",
+                 "--out", str(out)]) == 0
+    assert "robot 'small_robot'" in (out / "REPORT.md").read_text()
+
+
+def test_bad_robot_files_are_named(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    missing = tmp_path / "nope.toml"
+    assert _run_cli(tmp_path, "--robot", str(missing))[0] == 2
+    assert "robot file not found" in capsys.readouterr().err
+    other = tmp_path / "other.toml"
+    other.write_text(TRAILER.read_text().replace('name = "trailer"', 'name = "other"'))
+    assert _run_cli(tmp_path, "--robot", str(other))[0] == 2
+    err = capsys.readouterr().err
+    assert "no generated code for robot 'other'" in err and "python -m codegen --robot" in err
+    edited = tmp_path / "trailer.toml"
+    edited.write_text(TRAILER.read_text().replace("mass = 15.0", "mass = 16.0"))
+    assert _run_cli(tmp_path, "--robot", str(edited))[0] == 2
+    assert "another version of this file" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing ran, nothing written
+
+
+def test_generated_folder_outside_the_repository(tmp_path: Path) -> None:
+    copy = tmp_path / "gen"
+    shutil.copytree(GENERATED / "trailer", copy / "trailer")
+    setup = resolve(TRAILER, copy)
+    assert setup.code.folder == (copy / "trailer").resolve()
+    assert setup.code.c_dir.is_dir()
+    with pytest.raises(RobotSourceError, match="holds robot 'trailer'"):
+        resolve(SMALL, copy / "trailer")  # a lumped file needs the paper robot's code
+
+
+def test_stability_names_what_it_cannot_analyse(capsys: pytest.CaptureFixture[str]) -> None:
+    from runtime import stability
+
+    assert stability.main(["--robot", str(TRAILER), "--no-measure"]) == 2
+    assert "reproduce --robot" in capsys.readouterr().err
+
+
+def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> None:
+    """generated/ regenerated for another robot: the paper robot's runtime stops with a
+    sentence naming the robot it found and what to run, not an ImportError."""
+    import subprocess
+    import sys
+
+    shutil.copytree(ROOT / "runtime", tmp_path / "runtime",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "generated").mkdir()
+    (tmp_path / "generated" / "__init__.py").write_text("")
+    shutil.copytree(GENERATED / "trailer" / "python", tmp_path / "generated" / "python",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    probe = ("import runtime.generated_modules as g\n"
+             "assert g.load_robot_code('').name == 'trailer'\n"
+             "from runtime.generated_modules import wmr_model\n")
+    result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
+                            text=True, check=False)
+    assert result.returncode == 1
+    assert "holds robot 'trailer' (prefix trailer_)" in result.stderr
+    assert "make model" in result.stderr
