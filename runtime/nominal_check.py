@@ -23,18 +23,14 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from runtime.generated_modules import wmr_model
+from runtime.generated_modules import robot, wmr_model
 
-if TYPE_CHECKING:
-    pass
-
-UNCERTAIN = ("m", "I", "K", "Iw")
-KEYS = ("m", "I", "K", "Iw", "r", "b", "d")
+UNCERTAIN = ("m", "I", "K", "Iw")  # the inertial parameters: what a payload changes
+KEYS = tuple(robot.PARAMS)  # the generated model's parameter table
 HEADINGS = tuple(float(x) for x in np.linspace(-math.pi, math.pi, 9))
 LEVELS = (-1.0, 0.0, 1.0)
 

@@ -7,6 +7,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from runtime.experiment import Experiment
+from runtime.generated_modules import robot as generated_robot
 from runtime.generated_modules import wmr_plant
 
 
@@ -18,10 +19,9 @@ def plant_params(robot: dict[str, float], exp: Experiment, t: float) -> NDArray[
         [pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y], base
     )
     if extra_payload_on(exp, t):
-        keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
         p = wmr_plant.plant_params_with_payload(
             [pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y],
-            dict(zip(keys, p, strict=True)),
+            dict(zip(generated_robot.PLANT_PARAMS, p, strict=True)),
         )
     return p
 

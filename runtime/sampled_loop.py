@@ -48,6 +48,7 @@ from numpy.typing import NDArray
 
 from runtime import cbuild, references
 from runtime.experiment import Experiment
+from runtime.generated_modules import robot as generated_robot
 from runtime.generated_modules import wmr_laws, wmr_model
 from runtime.nominal_check import roc_bounds
 from runtime.payload_schedule import extra_payload_on, plant_params
@@ -56,7 +57,7 @@ from runtime.sim_library import build_sim_library
 Vec = NDArray[np.float64]
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 FORMULATIONS = ("paper", "minimal")
-PLANT_KEYS = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
+PLANT_KEYS = tuple(generated_robot.PLANT_PARAMS)
 ANALYSIS_TIME = 10.0  # s: a sample of the circle well after its start-up ramp
 GAIN_CEILING = 1.0e4  # largest boundary-layer gain searched
 # Loop memory: (name, size, kind). kind "q": a q-space vector (rows 0, 1 planar), "pose":

@@ -29,6 +29,7 @@ from runtime.controller_config import (
     roc_bounds,
 )
 from runtime.experiment import Experiment
+from runtime.generated_modules import robot as generated_robot
 from runtime.generated_modules import wmr_model
 from runtime.payload_schedule import extra_payload_on, plant_params
 from runtime.references import Reference
@@ -181,7 +182,7 @@ def run(
     sl = slice(0, 5) if formulation == "paper" else slice(3, 5)
     saturated, failed_at = 0, None
     prev_gain = float(state.gain)  # ASMC: the gain before each step's adaptation
-    keys = ("m", "I", "K", "K_lat", "Iw", "r", "b", "d")
+    keys = tuple(generated_robot.PLANT_PARAMS)
     for k in range(n):
         t = ref.t[k]
         true_q = np.array([x[i] for i in range(5)])
