@@ -1,20 +1,27 @@
-"""Build the generated C (and runtime C helpers) into a shared library loaded with cffi.
+"""Build C (the generated code, runtime C helpers, or any sources a test renders) into a
+shared library loaded with cffi: the one binding layer between Python and C.
 
-The declarations for cffi come from the generated headers themselves, preprocessed with
-an empty ``<math.h>`` (so only our typedefs, enums and prototypes remain and every
-``#define`` size is expanded): the Python side can never drift from the C API.
-Libraries are cached under ``build/`` by a hash of sources and flags.
+:func:`build` compiles a robot's generated C (cached under ``build/``, per object, by a
+hash of source, headers and flags). The declarations for cffi come from the generated
+headers themselves, preprocessed with an empty ``<math.h>`` (:func:`declarations`: only our
+typedefs, enums and prototypes remain and every ``#define`` size is expanded), so the
+Python side can never drift from the C API. Tests that compile C of their own (strict
+flags, objects for ``nm``, an executable) use the same pieces: :func:`gcc_command` and
+:func:`run_compiler` to compile, :func:`load` (or :func:`build_library`) to bind.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import shutil
 import subprocess
 import tempfile
-from collections.abc import Mapping
+import uuid
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import cffi
 
@@ -22,7 +29,9 @@ ROOT = Path(__file__).resolve().parent.parent
 GENERATED_C = ROOT / "generated" / "c"
 RUNTIME_C = Path(__file__).resolve().parent / "csrc"
 BUILD_DIR = ROOT / "build" / "cffi"
-CFLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
+OBJECT_DIR = BUILD_DIR / "objects"  # one object per source, flags and headers: a regenerated
+# module recompiles alone
+CFLAGS = ("-std=c99", "-O2")  # and -fPIC -shared (gcc_command, kind="shared")
 MODULES = ("types", "model", "laws", "plant", "controller", "tdc", "tdroc", "roc", "asmc")
 
 
@@ -53,6 +62,78 @@ def _sources(extra: tuple[Path, ...], c_dir: Path = GENERATED_C,
     return sorted(p for p in c_dir.glob(f"{prefix}_*.c")) + list(extra)
 
 
+class BuildError(RuntimeError):
+    """A compiler command failed (or, when it had to be silent, printed something)."""
+
+    def __init__(self, command: Sequence[str], output: str) -> None:
+        super().__init__(f"{' '.join(command)}\n{output}")
+        self.command = list(command)
+        self.output = output
+
+
+def compiler() -> str:
+    """The C compiler (gcc on the PATH)."""
+    return shutil.which("gcc") or "gcc"
+
+
+def gcc_command(
+    sources: Iterable[Path | str],
+    output: Path,
+    *,
+    kind: Literal["shared", "object", "executable"] = "shared",
+    flags: Sequence[str] = (),
+    include_dirs: Sequence[Path] = (),
+    libs: Sequence[str] = (),
+) -> list[str]:
+    """The gcc command line that compiles (or links) ``sources`` into ``output``: a shared
+    library (adds ``-fPIC -shared``), an object (``-c``) or an executable; ``flags`` come
+    first, ``libs`` (e.g. ``-lm``) last."""
+    mode = {"shared": ["-fPIC", "-shared"], "object": ["-c"], "executable": []}[kind]
+    return [compiler(), *flags, *mode, *(f"-I{d}" for d in include_dirs),
+            *map(str, sources), *libs, "-o", str(output)]
+
+
+def run_compiler(commands: Sequence[Sequence[str]], *, jobs: int = 1,
+                 silent: bool = False) -> None:
+    """Run compiler commands, ``jobs`` at a time; raise :class:`BuildError` if one fails
+    (or, with ``silent``, prints anything: a warning the flags did not make an error)."""
+    for i in range(0, len(commands), max(1, jobs)):
+        procs = [
+            (cmd, subprocess.Popen(list(cmd), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                   text=True))
+            for cmd in commands[i : i + max(1, jobs)]
+        ]
+        for cmd, proc in procs:
+            out, err = proc.communicate()
+            if proc.returncode != 0 or (silent and (out + err).strip()):
+                raise BuildError(cmd, out + err)
+
+
+def load(so: Path, cdef: str | Sequence[str], *, float32: bool = False) -> CLibrary:
+    """Bind a compiled library: ``cdef`` (one text or several) declares what Python sees."""
+    ffi = cffi.FFI()
+    for text in [cdef] if isinstance(cdef, str) else cdef:
+        ffi.cdef(text)
+    return CLibrary(ffi, ffi.dlopen(str(so)), float32, Path(so))
+
+
+def build_library(
+    sources: Sequence[Path],
+    so: Path,
+    cdef: str | Sequence[str],
+    *,
+    float32: bool = False,
+    flags: Sequence[str] = (),
+    include_dirs: Sequence[Path] = (),
+    libs: Sequence[str] = ("-lm",),
+) -> CLibrary:
+    """Compile ``sources`` into the shared library ``so`` (no cache: for C a caller renders
+    itself, e.g. a test's generated module) and bind it with ``cdef``."""
+    run_compiler([gcc_command(sources, so, flags=flags, include_dirs=include_dirs,
+                              libs=libs)])
+    return load(so, cdef, float32=float32)
+
+
 def declarations(
     float32: bool,
     headers: tuple[str, ...] = HEADERS,
@@ -68,7 +149,7 @@ def declarations(
         includes = [f'#include "{c_dir / h}"' for h in headers]
         includes += [f'#include "{h}"' for h in extra_headers]
         src.write_text("\n".join(includes) + "\n")
-        cmd = ["gcc", "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{c_dir}", str(src)]
+        cmd = [compiler(), "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{c_dir}", str(src)]
         if float32:
             cmd.insert(3, f"-D{prefix.upper()}_FLOAT32")
         text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
@@ -85,33 +166,40 @@ def build(
     prefix: str = "wmr",
 ) -> CLibrary:
     """Compile (or reuse) the library of the generated C in ``c_dir`` (C prefix
-    ``prefix``; default: the default robot's) and load it."""
+    ``prefix``; default: the default robot's) and load it. Objects are cached per source
+    (with its flags and every header it may include), so a modified or regenerated module
+    recompiles alone; the library is cached by its objects."""
     sources = _sources(extra_sources, c_dir, prefix)
     headers = headers_for(prefix)
     all_flags = (*CFLAGS, *flags, *((f"-D{prefix.upper()}_FLOAT32",) if float32 else ()))
-    digest = hashlib.sha256()
-    for p in (*sources, *(c_dir / h for h in headers), *extra_headers):
-        digest.update(p.name.encode() + p.read_bytes())
-    digest.update(" ".join(all_flags).encode())
-    BUILD_DIR.mkdir(parents=True, exist_ok=True)
+    # Every header a source may include: any change recompiles every object.
+    included = hashlib.sha256()
+    for h in (*sorted(c_dir.glob("*.h")), *sorted(RUNTIME_C.glob("*.h")), *extra_headers):
+        included.update(h.name.encode() + h.read_bytes())
+    objects, compile_cmds, renames = [], [], []
+    for src in sources:
+        key = included.copy()
+        key.update(src.name.encode() + src.read_bytes() + " ".join(all_flags).encode())
+        obj = OBJECT_DIR / f"{prefix}_{src.stem}_{key.hexdigest()[:16]}.o"
+        objects.append(obj)
+        if not obj.exists():
+            tmp = obj.with_suffix(f".{uuid.uuid4().hex[:8]}.tmp.o")
+            compile_cmds.append(gcc_command([src], tmp, kind="object",
+                                            flags=(*all_flags, "-fPIC"),
+                                            include_dirs=(c_dir, RUNTIME_C)))
+            renames.append((tmp, obj))
+    OBJECT_DIR.mkdir(parents=True, exist_ok=True)
+    run_compiler(compile_cmds, jobs=min(4, os.cpu_count() or 1))
+    for tmp, obj in renames:
+        tmp.replace(obj)  # atomic: concurrent builds never use a half-written file
+    digest = hashlib.sha256(" ".join(o.name for o in objects).encode())
     so = BUILD_DIR / f"lib{prefix}_{digest.hexdigest()[:16]}.so"
     if not so.exists():
-        tmp = so.with_suffix(".tmp.so")
-        cmd = [
-            "gcc",
-            *all_flags,
-            f"-I{c_dir}",
-            f"-I{RUNTIME_C}",
-            *map(str, sources),
-            "-lm",
-            "-o",
-            str(tmp),
-        ]
-        subprocess.run(cmd, check=True, capture_output=True, text=True)
-        tmp.replace(so)  # atomic: concurrent builds never load a half-written file
-    ffi = cffi.FFI()
-    ffi.cdef(declarations(float32, headers, extra_headers, c_dir, prefix))
-    return CLibrary(ffi, ffi.dlopen(str(so)), float32, so)
+        tmp = so.with_suffix(f".{uuid.uuid4().hex[:8]}.tmp.so")
+        run_compiler([gcc_command(objects, tmp, kind="shared", libs=("-lm",))])
+        tmp.replace(so)
+    return load(so, declarations(float32, headers, extra_headers, c_dir, prefix),
+                float32=float32)
 
 
 def fill_params(

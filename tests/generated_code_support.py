@@ -3,20 +3,19 @@
 ``c_builds`` of ``conftest.py`` calls :func:`build_generated_c`), the C and Python
 controller configurations, a cffi controller wrapper and smooth input sequences.
 
-The C is compiled from a snapshot of generated/c into pytest tmp directories.
+The C is compiled from a snapshot of generated/c into pytest tmp directories, and bound,
+through ``runtime.cbuild`` (the one cffi layer).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import shutil
-import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cffi
 import numpy as np
 import pytest
 
@@ -24,6 +23,7 @@ from codegen.backends.c.backend import default_config as default_c_config
 from codegen.controller_api import CONTROLLERS, STATUS_CODES
 from codegen.wmr_functions import PARAM_FIELDS, PARAM_KEYS
 from modeling.robot_file import load_robot
+from runtime import cbuild
 from runtime.generated_modules import controllers as pyctl
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -64,39 +64,17 @@ def _gcc() -> str:
     return gcc
 
 
-def _run_all(cmds: list[list[str]]) -> None:
-    """Run the commands two at a time (2 cores); every one must succeed silently."""
-    for i in range(0, len(cmds), 2):
-        procs = [
-            (c, subprocess.Popen(c, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
-            for c in cmds[i : i + 2]
-        ]
-        for cmd, proc in procs:
-            out, err = proc.communicate()
-            assert proc.returncode == 0, f"{' '.join(cmd)}\n{out}{err}"
-            assert not err.strip(), f"{' '.join(cmd)} printed:\n{err}"
-
-
-def _cdef(gcc: str, src: Path, float32: bool) -> str:
-    """The generated headers preprocessed (empty <math.h>): typedefs, enums, prototypes."""
-    fake = src / "fake_include"
-    fake.mkdir(exist_ok=True)
-    (fake / "math.h").write_text("")
+def _headers(src: Path) -> tuple[str, ...]:
+    """The generated headers for cffi (types first; not the robot's constants header)."""
     others = ("wmr_types.h", "wmr_robot.h")
-    headers = ["wmr_types.h", *sorted(p.name for p in src.glob("wmr_*.h") if p.name not in others)]
-    all_h = src / f"all_{'float' if float32 else 'double'}.h"
-    all_h.write_text("".join(f'#include "{h}"\n' for h in headers))
-    cmd = [gcc, "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{src}", str(all_h)]
-    if float32:
-        cmd.insert(2, "-DWMR_FLOAT32")
-    return subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-
+    return ("wmr_types.h", *sorted(p.name for p in src.glob("wmr_*.h") if p.name not in others))
 
 
 def build_generated_c(tmp_path_factory: pytest.TempPathFactory) -> dict[str, CBuild]:
     """Every generated .c compiled with the strict flags in both precisions (objects, a
-    shared library of the wmr_*.c for cffi, and the example executable)."""
-    gcc = _gcc()
+    shared library of the wmr_*.c for cffi, and the example executable), through
+    ``runtime.cbuild``; every compiler run must succeed silently."""
+    _gcc()
     root = tmp_path_factory.mktemp("generated_c")
     src = root / "src"
     shutil.copytree(GENERATED / "c", src)  # a snapshot: concurrent regeneration is harmless
@@ -111,26 +89,28 @@ def build_generated_c(tmp_path_factory: pytest.TempPathFactory) -> dict[str, CBu
         defines = ["-DWMR_FLOAT32"] if precision == "float" else []
         objects[precision] = {p.name: out / f"{p.stem}.o" for p in sources}
         cmds += [
-            [gcc, *C_FLAGS, "-O2", "-fPIC", *defines, f"-I{src}", "-c", str(p), "-o", str(o)]
+            cbuild.gcc_command([p], o, kind="object", flags=[*C_FLAGS, "-O2", "-fPIC", *defines],
+                               include_dirs=[src])
             for p, o in zip(sources, objects[precision].values(), strict=True)
         ]
-    _run_all(cmds)
+    cbuild.run_compiler(cmds, jobs=2, silent=True)  # 2 cores
     links = []
     for precision in ("double", "float"):
         objs = objects[precision]
-        lib_objs = [str(o) for n, o in objs.items() if n != "example_main.c"]
+        lib_objs = [o for n, o in objs.items() if n != "example_main.c"]
         so = root / precision / "libwmr.so"
         exe = root / precision / "example_main"
-        links.append([gcc, "-shared", *lib_objs, "-lm", "-o", str(so)])
-        links.append([gcc, str(objs["example_main.c"]), *lib_objs, "-lm", "-o", str(exe)])
-    _run_all(links)
+        links.append(cbuild.gcc_command(lib_objs, so, kind="shared", libs=["-lm"]))
+        links.append(cbuild.gcc_command([objs["example_main.c"], *lib_objs], exe,
+                                        kind="executable", libs=["-lm"]))
+    cbuild.run_compiler(links, jobs=2, silent=True)
     for precision in ("double", "float"):
         float32 = precision == "float"
-        ffi = cffi.FFI()
-        ffi.cdef(_cdef(gcc, src, float32))
-        lib = ffi.dlopen(str(root / precision / "libwmr.so"))
+        lib = cbuild.load(root / precision / "libwmr.so",
+                          cbuild.declarations(float32, _headers(src), c_dir=src),
+                          float32=float32)
         builds[precision] = CBuild(
-            ffi, lib, float32, objects[precision], root / precision / "example_main"
+            lib.ffi, lib.lib, float32, objects[precision], root / precision / "example_main"
         )
     return builds
 

@@ -22,7 +22,6 @@ from pathlib import Path
 from typing import Any
 
 import casadi as ca
-import cffi
 import mpmath
 import numpy as np
 import pytest
@@ -35,6 +34,7 @@ from codegen.backends.c.config import CConfig
 from codegen.cse import count_ops, cse_function
 from codegen.layout import argument_size, split_fields
 from codegen.spec import Argument, Field, FunctionSpec
+from runtime import cbuild
 
 MODULE = "wmr_toy"
 SOURCE = "tests/test_codegen_backends.py (toy specs)"
@@ -51,7 +51,6 @@ C_FLAGS = [
     "-Wconversion",
     "-Werror",
 ]
-SO_FLAGS = ["-fPIC", "-shared", "-O2"]
 
 # ---------------------------------------------------------------------------- toy specs
 x, y, theta = sp.symbols("x y theta", real=True)
@@ -276,25 +275,26 @@ def _render_c(directory: Path) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def c_build(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    """Render the C files and compile them in both precisions with the strict flags."""
-    gcc = _gcc()
+    """Render the C files and compile them in both precisions with the strict flags
+    (``runtime.cbuild`` compiles and binds)."""
+    _gcc()
     directory = tmp_path_factory.mktemp("c")
     _render_c(directory)
-    sources = [str(directory / f"{MODULE}.c"), str(directory / "check_macros.c")]
+    sources = [directory / f"{MODULE}.c", directory / "check_macros.c"]
     out: dict[str, Any] = {"dir": directory}
     for precision, defines in (("double", []), ("float", ["-DWMR_FLOAT32"])):
+        float32 = precision == "float"
         so = directory / f"lib{MODULE}_{precision}.so"
-        cmd = [gcc, *C_FLAGS, *SO_FLAGS, *defines, "-I", str(directory), *sources, "-o", str(so)]
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
+        lib = cbuild.build_library(
+            sources, so,
+            [c_backend.cdef(SPECS, float32=float32), "int wmr_check_macros(wmr_real_t v);"],
+            float32=float32, flags=[*C_FLAGS, "-O2", *defines], include_dirs=[directory],
+            libs=[],
+        )  # fmt: skip
         obj = directory / f"{MODULE}_{precision}.o"
-        cmd = [gcc, *C_FLAGS, "-O2", "-c", *defines, sources[0], "-o", str(obj)]
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        assert proc.returncode == 0, proc.stderr
-        ffi = cffi.FFI()
-        ffi.cdef(c_backend.cdef(SPECS, float32=precision == "float"))
-        ffi.cdef("int wmr_check_macros(wmr_real_t v);")
-        out[precision] = (ffi, ffi.dlopen(str(so)), obj)
+        cbuild.run_compiler([cbuild.gcc_command(sources[:1], obj, kind="object",
+                                                flags=[*C_FLAGS, "-O2", *defines])])
+        out[precision] = (lib.ffi, lib.lib, obj)
     return out
 
 
@@ -619,14 +619,10 @@ def test_casadi_matrix_layout_is_row_major() -> None:
 
 def test_casadi_generated_c_matches(tmp_path: Path) -> None:
     """CasADi's own C (for the benchmark) compiles and agrees with SymPy."""
-    gcc = _gcc()
+    _gcc()
     c_file, h_file = casadi_backend.generate_c(SPECS, tmp_path, "casadi_toy")
     assert c_file.exists() and h_file.exists()
     so = tmp_path / "libcasadi_toy.so"
-    cmd = [gcc, "-std=c99", "-O2", *SO_FLAGS[:2], str(c_file), "-o", str(so), "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    ffi = cffi.FFI()
     decls = []
     for spec in SPECS:
         n = f"casadi_{spec.name}"
@@ -635,8 +631,8 @@ def test_casadi_generated_c_matches(tmp_path: Path) -> None:
             f"int {n}_work(long long* sz_arg, long long* sz_res, long long* sz_iw,"
             f" long long* sz_w);"
         )
-    ffi.cdef("\n".join(decls))
-    lib = ffi.dlopen(str(so))
+    built = cbuild.build_library([c_file], so, "\n".join(decls), flags=["-std=c99", "-O2"])
+    ffi, lib = built.ffi, built.lib
     for spec in SPECS:
         sizes = [ffi.new("long long *") for _ in range(4)]
         assert getattr(lib, f"casadi_{spec.name}_work")(*sizes) == 0
