@@ -1,34 +1,64 @@
-"""The crosscheck: generated Python, C (double, float32) and CasADi against the hand-written
-equations (runtime/handwritten), and that it would notice a deviating implementation."""
+"""The crosscheck: for the paper's robot, generated Python, C (double, float32) and CasADi
+against the hand-written equations (runtime/handwritten); for every generated robot, C and
+CasADi against its generated NumPy and the C controllers against its Python classes; and
+that each comparison would notice a deviating implementation."""
 
 from __future__ import annotations
 
 import ast
+import re
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from runtime.generated_modules import GENERATED
 from runtime.handwritten import controllers as hc
 from runtime.handwritten import model as hw
 from runtime.tooling.crosscheck import command as crosscheck
-from runtime.tooling.crosscheck.deviation import IMPLS, Deviation
+from runtime.tooling.crosscheck import generated_functions
+from runtime.tooling.crosscheck.deviation import (
+    CONTROLLER_IMPLS,
+    FUNCTION_IMPLS,
+    IMPLS,
+    Deviation,
+    generated_tolerance,
+)
+from runtime.tooling.crosscheck.report import CrosscheckReport
+from runtime.tooling.crosscheck.targets import Target, all_targets, resolve, target_of
 
 HANDWRITTEN = Path(hw.__file__).resolve().parent
+TRAILER = GENERATED / "trailer"
+needs_trailer = pytest.mark.skipif(not (TRAILER / "python" / "robot.py").is_file(),
+                                   reason="no trailer generated")
 
 
-def test_crosscheck_passes(capsys: pytest.CaptureFixture[str]) -> None:
-    status = crosscheck.main([])
-    out = capsys.readouterr().out
-    assert status == 0, out
+@pytest.fixture(scope="module")
+def drishti() -> Target:
+    return resolve("drishti")
+
+
+@pytest.fixture(scope="module")
+def all_robots() -> CrosscheckReport:
+    """The default selection (every generated robot), quick sample counts."""
+    return crosscheck.crosscheck(quick=True)
+
+
+def test_crosscheck_passes(all_robots: CrosscheckReport) -> None:
+    out = all_robots.render()
+    assert not all_robots.failing(), out
     assert "PASSED" in out
     for name in ("tdroc/paper", "asmc/minimal", "M (14)", "kinematics (31)"):
         assert name in out
+    assert {r.name for r in all_robots.robots} == {t.name for t in all_targets()}
+    for robot in all_robots.robots:
+        assert f"Robot {robot.name} (" in out  # the report names each robot
 
 
-def test_crosscheck_exercises_every_branch() -> None:
-    report = crosscheck.crosscheck(quick=True)
-    assert not report.failing()
+def test_crosscheck_exercises_every_branch(all_robots: CrosscheckReport) -> None:
+    report = all_robots.robot("drishti").handwritten
+    assert report is not None and not report.failing()
     for branch, count in report.cover.items():
         assert count > 0, branch
     # every implementation is compared for every function and controller × formulation
@@ -46,8 +76,10 @@ def test_crosscheck_exercises_every_branch() -> None:
         ("c32", "m", 1.01),  # float32 is checked to 1e-4: a 1 % error must show
     ],
 )
-def test_crosscheck_detects_a_deviating_implementation(impl: str, key: str, factor: float) -> None:
-    report = crosscheck.crosscheck(quick=True, perturb={impl: {key: factor}})
+def test_crosscheck_detects_a_deviating_implementation(
+    drishti: Target, impl: str, key: str, factor: float
+) -> None:
+    report = crosscheck.handwritten_crosscheck(drishti, quick=True, perturb={impl: {key: factor}})
     failing = report.failing()
     assert failing, report.render()
     # only the perturbed implementation fails, and it fails somewhere in the controllers too
@@ -56,8 +88,102 @@ def test_crosscheck_detects_a_deviating_implementation(impl: str, key: str, fact
 
 
 def test_cli_exit_status_on_deviation(capsys: pytest.CaptureFixture[str]) -> None:
-    assert crosscheck.main(["--quick", "--perturb", "c64:b=1.00001"]) == 1
-    assert "FAILED" in capsys.readouterr().out
+    assert crosscheck.main(["--robot", "drishti", "--quick", "--perturb", "c64:b=1.00001"]) == 1
+    out = capsys.readouterr().out
+    assert "FAILED" in out and "Robot drishti (" in out and "Robot trailer" not in out
+
+
+# ------------------------------------------------------------------ any generated robot
+@needs_trailer
+def test_trailer_checks_every_generated_function_and_controller(
+    all_robots: CrosscheckReport,
+) -> None:
+    """No hand-written reference: every function of the generated model, laws and plant
+    (enumerated from the generated modules) in C double, float32 and CasADi at ≥ 100
+    random states, and the four C controllers in both precisions, every branch taken."""
+    robot = all_robots.robot("trailer")
+    assert robot.handwritten is None
+    report = robot.generated
+    code = resolve("trailer").code
+    expected = {n for m in (code.model, code.laws, code.plant) for n in m.__all__}
+    assert {r.name for r in report.function_rows} == expected
+    assert len(expected) >= 15 and report.n_samples >= 100
+    for row in report.function_rows:
+        assert set(row.cells) == set(FUNCTION_IMPLS)
+    assert [r.name for r in report.ctrl_rows] == [
+        f"{k}/minimal" for k in ("tdc", "tdroc", "roc", "asmc")]
+    for row in report.ctrl_rows:
+        assert set(row.cells) == set(CONTROLLER_IMPLS)
+    assert report.n_steps >= 200
+    for branch, count in report.cover.items():
+        assert count > 0, branch
+    assert not robot.failing(), robot.render()
+
+
+@needs_trailer
+def test_trailer_header_sizes_match_the_robot() -> None:
+    """The function enumeration reads argument sizes from the generated header."""
+    target = resolve("trailer")
+    fns = {f.name: f for f in generated_functions.functions(target)}
+    fd = fns["forward_dynamics"]
+    assert [(a.name, a.size) for a in fd.inputs if not a.struct] == [
+        ("q", target.code.nq), ("qdot", target.code.nq), ("tau", target.code.nu)]
+    assert fd.returns_status and [a.name for a in fd.outputs] == ["qddot"]
+    assert fns["plant_state_derivative"].outputs[0].size == target.code.nq + target.code.nu
+
+
+@needs_trailer
+@pytest.mark.parametrize(("impl", "key", "factor"),
+                         [("casadi", "J_x_tractor", 1.000001), ("c32", "J_theta_tractor", 1.01)])
+def test_trailer_crosscheck_detects_a_deviating_implementation(
+    impl: str, key: str, factor: float
+) -> None:
+    target = resolve("trailer")
+    perturb = {impl: {key: factor}}
+    if impl == "casadi":  # CasADi has no controller: its laws are compared as functions
+        samples = generated_functions.random_samples(target, np.random.default_rng(1), 100)
+        rows = generated_functions.check_functions(target, samples, perturb)
+        failing = {(r.name, i) for r in rows for i, d in r.cells.items()
+                   if not d.value <= generated_tolerance(i)}
+        assert failing and {i for _, i in failing} == {impl}
+        return
+    report = crosscheck.generated_crosscheck(target, quick=True, perturb=perturb)
+    failing = report.failing()
+    assert failing, "\n".join(report.sections())
+    assert {i for _, i in failing} == {impl}
+    assert any(row in {r.name for r in report.ctrl_rows} for row, _ in failing)
+
+
+@needs_trailer
+def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> None:
+    """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law`` scales
+    u[0] by 1 + 1e-6: the crosscheck of that folder fails for C double, in that function's
+    row and in the TDC controller that calls it, and nowhere else."""
+    copy = tmp_path / "trailer"
+    shutil.copytree(TRAILER / "python", copy / "python")
+    shutil.copytree(TRAILER / "c", copy / "c")
+    (copy / "casadi").symlink_to(TRAILER / "casadi", target_is_directory=True)
+    laws = copy / "c" / "trailer_laws.c"
+    text = laws.read_text()
+    end = text.index("\n}\n", text.index("void trailer_minimal_tdc_law("))  # void: no return
+    laws.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
+    out_file = tmp_path / "report.txt"
+    status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])
+    out = out_file.read_text()
+    assert status == 1, out
+    assert "Robot trailer (" in out and "FAILED" in out
+    failing = [ln.split()[0] for ln in out.splitlines() if re.search(r"\bFAIL\b", ln)]
+    assert failing == ["minimal_tdc_law", "tdc/minimal"], out
+    for ln in out.splitlines():
+        if ln.startswith(("minimal_tdc_law", "tdc/minimal")):
+            assert ln.count("FAIL") == 1, ln  # C double only: 1e-6 is float32 rounding
+    # The unmodified folder passes (the failure is the modification, not the copy).
+    assert not crosscheck.generated_crosscheck(target_of(TRAILER), quick=True).failing()
+
+
+def test_unknown_robot_is_refused() -> None:
+    with pytest.raises(SystemExit, match="not a generated robot"):
+        crosscheck.main(["--robot", "no-such-robot"])
 
 
 def test_deviation_flags_mismatch_and_nan() -> None:

@@ -1,6 +1,6 @@
-"""How the crosscheck calls the generated code that is not Python: the C library through
-cffi (double or float32, built by ``runtime.cbuild``, cached) and the CasADi functions
-loaded from generated/casadi.
+"""How the crosscheck calls the generated code that is not Python: a robot's C library
+through cffi (double or float32, built by ``runtime.cbuild``, cached) and its CasADi
+functions (``<target>/casadi/*.casadi``).
 """
 
 from __future__ import annotations
@@ -12,62 +12,80 @@ from typing import Any
 
 import numpy as np
 
-from runtime.handwritten import model as hw
 from runtime.tooling.crosscheck.deviation import Arr
-
-ROOT = Path(__file__).resolve().parents[3]  # the repository
-CASADI_DIR = ROOT / "generated" / "casadi"
-# accel_estimator codes of the generated configs (WMR_ACCEL_*).
-ACCEL_CODES: dict[str, int] = {"backward": 0, "central": 1, "matched": 2}
+from runtime.tooling.crosscheck.targets import Target
 
 
 @cache
-def c_library(float32: bool) -> Any:
+def _c_library(c_dir: Path, prefix: str, float32: bool) -> Any:
     from runtime import cbuild
 
-    return cbuild.build(float32)
+    return cbuild.build(float32, c_dir=c_dir, prefix=prefix)
+
+
+def c_library(target: Target, float32: bool) -> Any:
+    """The target's generated C built in double or float32 (a ``cbuild.CLibrary``)."""
+    return _c_library(target.c_dir, target.prefix, float32)
 
 
 @cache
-def casadi_function(name: str) -> Any:
+def _casadi_function(path: Path) -> Any:
     import casadi
 
-    return casadi.Function.load(str(CASADI_DIR / f"{name}.casadi"))
+    return casadi.Function.load(str(path))
 
 
-def casadi_call(name: str, *args: Any) -> list[Arr]:
-    out = casadi_function(name).call([np.asarray(a, dtype=np.float64).reshape(-1, 1) for a in args])
+def casadi_function(target: Target, name: str) -> Any:
+    return _casadi_function(target.casadi_dir / f"{name}.casadi")
+
+
+def casadi_call(target: Target, name: str, *args: Any) -> list[Arr]:
+    """Call a CasADi function with flat inputs (in its input order); flat outputs."""
+    out = casadi_function(target, name).call(
+        [np.asarray(a, dtype=np.float64).reshape(-1, 1) for a in args]
+    )
     return [np.asarray(o, dtype=np.float64).ravel() for o in out]
 
 
-def pvec(p: Mapping[str, float]) -> Arr:
-    return np.array([float(p[k]) for k in hw.PARAM_KEYS])
+def pvec(target: Target, p: Mapping[str, float]) -> Arr:
+    """Nominal parameters as the CasADi ``p`` vector (the robot's PARAM_KEYS order)."""
+    return np.array([float(p[k]) for k in target.code.controllers.PARAM_KEYS])
 
 
 class CModel:
-    """The generated model functions through cffi."""
+    """A robot's generated C functions through cffi (``<prefix>_<fn>``)."""
 
-    def __init__(self, float32: bool) -> None:
-        self.lib = c_library(float32)
+    def __init__(self, target: Target, float32: bool) -> None:
+        self.target = target
+        self.prefix = target.prefix
+        self.lib = c_library(target, float32)
         self.ffi, self.c = self.lib.ffi, self.lib.lib
+        self.field_names: Mapping[str, str] = target.code.controllers.C_FIELD_NAMES
+        self.real = f"{self.prefix}_real_t"
 
     def arr(self, x: Any) -> Any:
-        return self.ffi.new("wmr_real_t[]", [float(v) for v in np.asarray(x).ravel()])
+        return self.ffi.new(f"{self.real}[]", [float(v) for v in np.asarray(x).ravel()])
 
     def out(self, n: int) -> Any:
-        return self.ffi.new("wmr_real_t[]", n)
+        return self.ffi.new(f"{self.real}[]", n)
 
-    def params(self, p: Mapping[str, float]) -> Any:
+    def struct(self, ctype: str, values: Mapping[str, float]) -> Any:
+        """A new C struct ``ctype`` (a parameter struct) from a mapping with Python keys."""
         from runtime import cbuild
 
-        return cbuild.fill_params(self.ffi.new("wmr_params_t *"), {k: p[k] for k in hw.PARAM_KEYS})
+        return cbuild.fill_params(self.ffi.new(f"{ctype} *"), values, self.field_names)
+
+    def params(self, p: Mapping[str, float]) -> Any:
+        keys = self.target.code.controllers.PARAM_KEYS
+        return self.struct(f"{self.prefix}_params_t", {k: p[k] for k in keys})
 
     def read(self, buf: Any, n: int) -> Arr:
         return np.array([buf[i] for i in range(n)], dtype=np.float64)
 
     def call(self, fn: str, p: Mapping[str, float], args: Sequence[Any], n_out: int) -> Arr:
+        """``<prefix>_<fn>(params, args..., out)`` with one output of ``n_out`` values."""
         out = self.out(n_out)
-        status = getattr(self.c, f"wmr_{fn}")(self.params(p), *map(self.arr, args), out)
+        status = getattr(self.c, f"{self.prefix}_{fn}")(self.params(p), *map(self.arr, args), out)
         if status not in (None, 0):
-            raise RuntimeError(f"wmr_{fn} returned {status}")
+            raise RuntimeError(f"{self.prefix}_{fn} returned {status}")
         return self.read(out, n_out)

@@ -1,8 +1,12 @@
-"""``python -m runtime crosscheck``: run every comparison and print the report.
+"""``python -m runtime crosscheck``: run every comparison for every robot and print the
+report (``--out FILE`` also writes it).
 
-Exit status 1 if any deviation exceeds its tolerance. ``--perturb IMPL:KEY=FACTOR``
-multiplies parameter KEY of the (nominal) parameters passed to IMPL (python, c64, c32,
-casadi) by FACTOR: the check must then fail (used by the tests).
+``--robot NAME_OR_DIR`` (repeatable; default: every robot found under generated/) selects
+the robots. Exit status 1 if any deviation exceeds its tolerance. ``--perturb
+IMPL:KEY=FACTOR`` multiplies parameter KEY of the (nominal and plant) parameters passed to
+IMPL (python, c64, c32, casadi) by FACTOR, in every selected robot that has KEY: the check
+must then fail (used by the tests). ``python`` is compared only with the hand-written
+equations; against a robot's generated NumPy (the reference there) it is not perturbed.
 """
 
 from __future__ import annotations
@@ -10,20 +14,25 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from pathlib import Path
 
-import numpy as np
-
-from runtime.handwritten import controllers as hc
-from runtime.handwritten import model as hw
-from runtime.tooling.crosscheck.controller_checks import check_controllers
 from runtime.tooling.crosscheck.deviation import IMPLS
-from runtime.tooling.crosscheck.inputs import Sequence_, closed_loop, model_samples, random_sequence
-from runtime.tooling.crosscheck.model_checks import check_models, self_checks
-from runtime.tooling.crosscheck.report import Report
+from runtime.tooling.crosscheck.generated_check import generated_crosscheck
+from runtime.tooling.crosscheck.handwritten_check import applies_to, handwritten_crosscheck
+from runtime.tooling.crosscheck.report import CrosscheckReport, RobotReport
+from runtime.tooling.crosscheck.targets import Target, all_targets, resolve
+
+__all__ = ["crosscheck", "generated_crosscheck", "handwritten_crosscheck", "main",
+           "parse_perturb"]
 
 
-def parse_perturb(items: Sequence[str]) -> dict[str, dict[str, float]]:
+def _keys(targets: Sequence[Target]) -> set[str]:
+    return {k for t in targets for k in (*t.code.params, *t.code.plant_defaults)}
+
+
+def parse_perturb(items: Sequence[str], targets: Sequence[Target]) -> dict[str, dict[str, float]]:
+    keys = _keys(targets)
     out: dict[str, dict[str, float]] = {}
     for item in items:
         try:
@@ -31,52 +40,59 @@ def parse_perturb(items: Sequence[str]) -> dict[str, dict[str, float]]:
             key, factor = rest.split("=", 1)
         except ValueError:
             raise SystemExit(f"--perturb {item!r}: expected IMPL:KEY=FACTOR") from None
-        if impl not in IMPLS or key not in hw.PARAM_KEYS:
-            raise SystemExit(f"--perturb {item!r}: IMPL in {IMPLS}, KEY in {hw.PARAM_KEYS}")
+        if impl not in IMPLS or key not in keys:
+            raise SystemExit(f"--perturb {item!r}: IMPL in {IMPLS}, KEY a parameter of the "
+                             f"robots checked ({', '.join(sorted(keys))})")
         out.setdefault(impl, {})[key] = float(factor)
     return out
 
 
 def crosscheck(
-    seed: int = 20170316, quick: bool = False, perturb: dict[str, dict[str, float]] | None = None
-) -> Report:
-    """Run every comparison; ``quick``: fewer samples and shorter sequences."""
-    perturb = perturb or {}
+    targets: Sequence[Target] | None = None,
+    seed: int = 20170316,
+    quick: bool = False,
+    perturb: Mapping[str, Mapping[str, float]] | None = None,
+) -> CrosscheckReport:
+    """Every comparison for each target (default: every generated robot)."""
     t0 = time.perf_counter()
-    rng = np.random.default_rng(seed)
-    n_samples = 40 if quick else 200
-    loop_seconds, rand_steps = (3.0, 15) if quick else (6.0, 40)
-    samples = model_samples(rng, n_samples)
-    checks = self_checks(samples)
-    model_rows = check_models(samples, perturb)
-    sequences: list[tuple[hc.Kind, Sequence_]] = []
-    for kind in hc.KINDS:
-        for form in hc.FORMULATIONS:
-            sequences.append((kind, closed_loop(kind, form, loop_seconds)))
-            for near in (True, False):
-                sequences.append((kind, random_sequence(rng, kind, form, near, rand_steps)))
-    ctrl_rows, cover = check_controllers(sequences, perturb)
-    return Report(
-        checks, model_rows, ctrl_rows, cover, n_samples, len(sequences),
-        sum(len(s.q) for _, s in sequences), time.perf_counter() - t0, perturb,
-    )  # fmt: skip
+    targets = all_targets() if targets is None else list(targets)
+    pert = {impl: dict(v) for impl, v in (perturb or {}).items()}
+    robots = []
+    for target in targets:
+        hand = handwritten_crosscheck(target, seed, quick, pert) if applies_to(target) else None
+        gen = generated_crosscheck(target, seed, quick, pert)
+        robots.append(RobotReport(target.name, target.label, hand, gen))
+    return CrosscheckReport(robots, time.perf_counter() - t0, pert)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m runtime crosscheck",
-        description="Compare the generated Python, C (double, float32) and CasADi code with "
-        "the hand-written equations (runtime/handwritten).",
+        description="Compare the generated Python, C (double, float32) and CasADi code of every "
+        "robot: with the hand-written equations (runtime/handwritten) where they exist, and C "
+        "and CasADi with the generated NumPy for every robot.",
     )
+    parser.add_argument(
+        "--robot", action="append", default=[], metavar="NAME_OR_DIR",
+        help="a generated robot's name or folder (repeatable; default: all under generated/)",
+    )  # fmt: skip
     parser.add_argument("--seed", type=int, default=20170316)
     parser.add_argument("--quick", action="store_true", help="fewer samples and shorter runs")
     parser.add_argument(
         "--perturb", action="append", default=[], metavar="IMPL:KEY=FACTOR",
         help="scale parameter KEY passed to IMPL (python, c64, c32, casadi); the check must fail",
     )  # fmt: skip
+    parser.add_argument("--out", type=Path, help="also write the report to this file")
     args = parser.parse_args(argv)
-    report = crosscheck(args.seed, args.quick, parse_perturb(args.perturb))
-    print(report.render())
+    targets = [resolve(r) for r in args.robot] if args.robot else all_targets()
+    report = crosscheck(targets, args.seed, args.quick, parse_perturb(args.perturb, targets))
+    text = report.render()
+    print(text)
+    if args.out is not None:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(text + "\n")
     return 1 if report.failing() else 0
+
+
 if __name__ == "__main__":
     sys.exit(main())

@@ -1,6 +1,7 @@
-"""The controller rows of the crosscheck: every implementation's per-step τ, switching gain,
-‖s‖, Ĥ1 and ‖u₁₋₃‖ against the hand-written controller's, the CasADi law kernels on the
-inputs the reference used, and how often each branch of the step was exercised.
+"""The controller rows of the hand-written comparison (the paper's robot): every
+implementation's per-step τ, switching gain, ‖s‖, Ĥ1 and ‖u₁₋₃‖ against the hand-written
+controller's, the CasADi law kernels on the inputs the reference used, and how often each
+branch of the step was exercised.
 """
 
 from __future__ import annotations
@@ -12,16 +13,12 @@ from typing import Any
 import numpy as np
 
 from runtime.handwritten import controllers as hc
-from runtime.tooling.crosscheck.bindings import casadi_call, casadi_function, pvec
-from runtime.tooling.crosscheck.controller_runs import (
-    Trace,
-    c32_synced_run,
-    c_run,
-    hand_run,
-    python_run,
-)
-from runtime.tooling.crosscheck.deviation import IMPLS, Deviation, Params, Row, perturbed
+from runtime.tooling.crosscheck.bindings import casadi_call as call
+from runtime.tooling.crosscheck.bindings import casadi_function, pvec
+from runtime.tooling.crosscheck.controller_runs import c32_synced_run, c_run, hand_run, python_run
+from runtime.tooling.crosscheck.deviation import IMPLS, Deviation, Params, Row, Trace, perturbed
 from runtime.tooling.crosscheck.inputs import Sequence_
+from runtime.tooling.crosscheck.targets import Target
 
 
 def compare_traces(dev: Deviation, got: Trace, ref: Trace, nc: int, check_status: bool) -> None:
@@ -35,11 +32,19 @@ def compare_traces(dev: Deviation, got: Trace, ref: Trace, nc: int, check_status
 
 
 def casadi_kernels(
-    seq: Sequence_, kind: hc.Kind, records: list[hc.StepRecord], nominal: Params
+    target: Target,
+    seq: Sequence_,
+    kind: hc.Kind,
+    records: list[hc.StepRecord],
+    nominal: Params,
 ) -> Deviation:
     """The CasADi law kernels on the inputs the reference used, step by step."""
     form = seq.settings.formulation
-    pv = pvec(nominal)
+    pv = pvec(target, nominal)
+
+    def casadi_call(name: str, *args: Any) -> list[Any]:
+        return call(target, name, *args)
+
     dev = Deviation()
     got: dict[str, list[Any]] = {}
     want: dict[str, list[Any]] = {}
@@ -59,7 +64,7 @@ def casadi_kernels(
             )
         if rec.window is not None:
             om, w, minv_norm = rec.window
-            if casadi_function(f"{form}_tdroc_gain").name_in(0) == "minv_norm":
+            if casadi_function(target, f"{form}_tdroc_gain").name_in(0) == "minv_norm":
                 add("minv_norm", casadi_call(f"{form}_minv_norm", pv)[0], [minv_norm])
                 gain = casadi_call(f"{form}_tdroc_gain", [minv_norm], om.ravel(), w)[0]
             else:  # older signature: (p, q, omega, w)
@@ -108,7 +113,9 @@ def casadi_kernels(
 
 
 def check_controllers(
-    sequences: list[tuple[hc.Kind, Sequence_]], perturb: Mapping[str, Mapping[str, float]]
+    target: Target,
+    sequences: list[tuple[hc.Kind, Sequence_]],
+    perturb: Mapping[str, Mapping[str, float]],
 ) -> tuple[list[Row], dict[str, int]]:
     """Rows of the controller table, and how often each branch of the step was exercised."""
     rows: dict[str, Row] = {}
@@ -139,16 +146,17 @@ def check_controllers(
         cells = {impl: row.cells.setdefault(impl, Deviation()) for impl in IMPLS}
         compare_traces(
             cells["python"],
-            python_run(seq, kind, perturbed(nominal, "python", perturb)),
+            python_run(target, seq, kind, perturbed(nominal, "python", perturb)),
             ref,
             nc,
             True,
         )
         compare_traces(
-            cells["c64"], c_run(seq, kind, perturbed(nominal, "c64", perturb)), ref, nc, True
+            cells["c64"], c_run(target, seq, kind, perturbed(nominal, "c64", perturb)), ref, nc,
+            True,
         )
-        kd = casadi_kernels(seq, kind, records, perturbed(nominal, "casadi", perturb))
+        kd = casadi_kernels(target, seq, kind, records, perturbed(nominal, "casadi", perturb))
         cells["casadi"].merge(kd.value, kd.worst)
-        got32, want32 = c32_synced_run(seq, kind, perturb)
+        got32, want32 = c32_synced_run(target, seq, kind, perturb)
         compare_traces(cells["c32"], got32, want32, nc, False)
     return list(rows.values()), cover

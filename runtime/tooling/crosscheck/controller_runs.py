@@ -1,43 +1,21 @@
-"""Each implementation of a controller stepped over a recorded sequence, open loop:
-the hand-written reference, the generated Python classes, the C double build, and the C
-float32 build restarted every step from the reference's (rounded) state.
+"""The hand-written comparison (the paper's robot): each implementation of a controller
+stepped over a recorded sequence, open loop — the hand-written reference, the generated
+Python classes, the C double build, and the C float32 build restarted every step from the
+reference's (rounded) state.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from runtime.handwritten import controllers as hc
 from runtime.handwritten import model as hw
-from runtime.tooling.crosscheck.bindings import ACCEL_CODES, CModel
-from runtime.tooling.crosscheck.deviation import Arr, Params, f32, f32_params, perturbed
-from runtime.tooling.crosscheck.inputs import Sequence_
-
-
-@dataclass
-class Trace:
-    """Per-step outputs of one implementation."""
-
-    tau: list[Arr] = field(default_factory=list)
-    gain: list[float] = field(default_factory=list)
-    s_norm: list[float] = field(default_factory=list)
-    H1hat: list[Arr] = field(default_factory=list)
-    u_discarded: list[float] = field(default_factory=list)
-    saturated: list[bool] = field(default_factory=list)
-
-    def record(
-        self, tau: Any, gain: float, s_norm: float, h1: Any, u_disc: float, sat: bool
-    ) -> None:
-        self.tau.append(np.array(tau, dtype=np.float64))
-        self.gain.append(float(gain))
-        self.s_norm.append(float(s_norm))
-        self.H1hat.append(np.array(h1, dtype=np.float64))
-        self.u_discarded.append(float(u_disc))
-        self.saturated.append(bool(sat))
+from runtime.tooling.crosscheck.bindings import CModel
+from runtime.tooling.crosscheck.deviation import Arr, Params, Trace, f32, f32_params, perturbed
+from runtime.tooling.crosscheck.inputs import Sequence_, accel_code
+from runtime.tooling.crosscheck.targets import Target
 
 
 def hand_run(seq: Sequence_, kind: hc.Kind) -> tuple[Trace, list[hc.StepRecord]]:
@@ -52,9 +30,8 @@ def hand_run(seq: Sequence_, kind: hc.Kind) -> tuple[Trace, list[hc.StepRecord]]
     return trace, records
 
 
-def python_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
-    from runtime.generated_modules import controllers as gc
-
+def python_run(target: Target, seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
+    gc = target.code.controllers
     s = seq.settings
     cfg = gc.Config(
         nominal=nominal,
@@ -65,7 +42,7 @@ def python_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
         q_vel=s.q_vel,
         h=s.h,
         tau_max=s.tau_max,
-        accel_estimator=ACCEL_CODES[s.accel],
+        accel_estimator=accel_code(target, s.accel),
         rate_window=s.rate_window,
         eps=s.eps,
         n=s.n,
@@ -85,7 +62,7 @@ def python_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
             ctrl.s_norm,
             ctrl.H1hat,
             ctrl.u_discarded,
-            ctrl.last_status == "WMR_WARN_SATURATED",
+            ctrl.last_status.endswith("_WARN_SATURATED"),
         )
     return trace
 
@@ -93,41 +70,47 @@ def python_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
 class CController:
     """A generated C controller (config + state structs) through cffi."""
 
-    def __init__(self, float32: bool, kind: hc.Kind, s: hc.Settings, nominal: Params) -> None:
-        self.m = CModel(float32)
-        ffi = self.m.ffi
+    def __init__(
+        self, target: Target, float32: bool, kind: hc.Kind, s: hc.Settings, nominal: Params
+    ) -> None:
+        self.m = CModel(target, float32)
+        ffi, pre = self.m.ffi, self.m.prefix
         self.kind = kind
-        self.cfg = ffi.new(f"wmr_{kind}_config_t *")
-        fields = {name for name, _ in ffi.typeof(f"wmr_{kind}_config_t").fields}
+        self.cfg = ffi.new(f"{pre}_{kind}_config_t *")
+        fields = {name for name, _ in ffi.typeof(f"{pre}_{kind}_config_t").fields}
         from runtime import cbuild
 
-        cbuild.fill_params(self.cfg.nominal, {k: nominal[k] for k in hw.PARAM_KEYS})
+        cbuild.fill_params(
+            self.cfg.nominal, {k: nominal[k] for k in hw.PARAM_KEYS}, self.m.field_names
+        )
         self.cfg.formulation = 0 if s.formulation == "paper" else 1
         for i in range(5):
             self.cfg.k1[i] = float(np.asarray(s.k1)[i])
             self.cfg.k2[i] = float(np.asarray(s.k2)[i])
         values: dict[str, float | int] = {
             "q_pos": s.q_pos, "q_vel": s.q_vel, "h": s.h, "tau_max": s.tau_max,
-            "accel_estimator": ACCEL_CODES[s.accel], "rate_window": s.rate_window,
+            "accel_estimator": accel_code(target, s.accel), "rate_window": s.rate_window,
             "eps": s.eps, "n": s.n,
             "a": s.a, "alpha": s.alpha, "phi": s.phi, "gamma": s.gamma, "gain0": s.gain0,
         }  # fmt: skip
         for key, value in values.items():
             if key in fields:
                 setattr(self.cfg, key, value)
-        self.state = ffi.new(f"wmr_{kind}_state_t *")
-        self.state_fields = {name for name, _ in ffi.typeof(f"wmr_{kind}_state_t").fields}
-        status = getattr(self.m.c, f"wmr_{kind}_init")(self.state, self.cfg)
+        self.state = ffi.new(f"{pre}_{kind}_state_t *")
+        self.state_fields = {name for name, _ in ffi.typeof(f"{pre}_{kind}_state_t").fields}
+        status = getattr(self.m.c, f"{pre}_{kind}_init")(self.state, self.cfg)
         if status != 0:
-            raise RuntimeError(f"wmr_{kind}_init returned {status}")
-        self.tau = ffi.new("wmr_real_t[2]")
+            raise RuntimeError(f"{pre}_{kind}_init returned {status}")
+        self.tau = ffi.new(f"{pre}_real_t[2]")
 
     def step(self, q: Arr, qdot: Arr, qd: Arr, qdd: Arr, qddd: Arr) -> int:
         a = self.m.arr
-        fn = getattr(self.m.c, f"wmr_{self.kind}_step")
-        status: int = fn(self.state, self.cfg, a(q), a(qdot), a(qd), a(qdd), a(qddd), self.tau)
+        name = f"{self.m.prefix}_{self.kind}_step"
+        status: int = getattr(self.m.c, name)(
+            self.state, self.cfg, a(q), a(qdot), a(qd), a(qdd), a(qddd), self.tau
+        )
         if status < 0:
-            raise RuntimeError(f"wmr_{self.kind}_step returned {status}")
+            raise RuntimeError(f"{name} returned {status}")
         return status
 
     def record(self, trace: Trace, status: int) -> None:
@@ -155,8 +138,8 @@ class CController:
         st.tau[0], st.tau[1] = float(hist.tau[0]), float(hist.tau[1])
 
 
-def c_run(seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
-    ctrl = CController(False, kind, seq.settings, nominal)
+def c_run(target: Target, seq: Sequence_, kind: hc.Kind, nominal: Params) -> Trace:
+    ctrl = CController(target, False, kind, seq.settings, nominal)
     trace = Trace()
     for k in range(len(seq.q)):
         status = ctrl.step(seq.q[k], seq.qdot[k], seq.q_des[k], seq.qdot_des[k], seq.qddot_des[k])
@@ -185,7 +168,7 @@ def rounded_settings(s: hc.Settings, nominal: Params) -> hc.Settings:
 
 
 def c32_synced_run(
-    seq: Sequence_, kind: hc.Kind, perturb: Mapping[str, Mapping[str, float]]
+    target: Target, seq: Sequence_, kind: hc.Kind, perturb: Mapping[str, Mapping[str, float]]
 ) -> tuple[Trace, Trace]:
     """float32 C per step from the reference's state, on identical (float32) inputs.
 
@@ -193,7 +176,7 @@ def c32_synced_run(
     s32 = rounded_settings(seq.settings, dict(seq.settings.nominal))
     ref = hc.Controller(kind, s32)
     ref.p12, ref.p22 = f32(ref.p12), f32(ref.p22)
-    c32 = CController(True, kind, s32, perturbed(dict(s32.nominal), "c32", perturb))
+    c32 = CController(target, True, kind, s32, perturbed(dict(s32.nominal), "c32", perturb))
     got, want = Trace(), Trace()
     for k in range(len(seq.q)):
         ref.history = rounded_history(ref.history)

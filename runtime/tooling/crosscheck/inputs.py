@@ -1,7 +1,8 @@
-"""The inputs every implementation is fed: random samples for the model functions and
-measurement/reference sequences for the controllers — a closed loop (the hand-written
-controller driving the generated forward dynamics with perturbed true parameters, RK4) and
-random smooth motions near and far from the reference with random configurations.
+"""The inputs of the hand-written comparison (the paper's robot, Drishti): random samples
+for the model functions and measurement/reference sequences for the controllers — a closed
+loop (the hand-written controller driving the generated forward dynamics with perturbed
+true parameters, RK4) and random smooth motions near and far from the reference with random
+configurations.
 """
 
 from __future__ import annotations
@@ -14,8 +15,15 @@ import numpy as np
 
 from runtime.handwritten import controllers as hc
 from runtime.handwritten import model as hw
-from runtime.tooling.crosscheck.bindings import ACCEL_CODES
 from runtime.tooling.crosscheck.deviation import Arr, Params
+from runtime.tooling.crosscheck.targets import Target
+
+ACCEL_NAMES: tuple[hc.Accel, ...] = ("backward", "central", "matched")
+
+
+def accel_code(target: Target, accel: str) -> int:
+    """The generated code's ``ACCEL_*`` constant of an estimator name."""
+    return int(getattr(target.code.controllers, f"ACCEL_{accel.upper()}"))
 
 
 def model_samples(rng: np.random.Generator, n: int) -> list[tuple[Params, Arr, Arr, Arr]]:
@@ -120,12 +128,13 @@ def wheel_profile(
     return rates
 
 
-def closed_loop(kind: hc.Kind, formulation: hc.Formulation, seconds: float) -> Sequence_:
+def closed_loop(
+    target: Target, kind: hc.Kind, formulation: hc.Formulation, seconds: float
+) -> Sequence_:
     """The hand-written controller driving the generated forward dynamics + kinematics
     (true parameters ≠ nominal: +9 kg payload behind C), tracking a circle with modulated
     wheel rates (R1 = 1.5 m, θ̇d = 0.25 rad/s as in the paper), RK4 at h/10."""
-    from runtime.generated_modules import wmr_model
-
+    model = target.code.model
     p = dict(hw.DRISHTI)
     true = {**p, "m": 45.0, "I": 7.1, "K": 0.34 + 9.0 * 0.08, "Iw": 0.075}
     h, steps = 0.1, round(seconds / 0.1)
@@ -144,15 +153,15 @@ def closed_loop(kind: hc.Kind, formulation: hc.Formulation, seconds: float) -> S
 
     def deriv(x: Arr, tau: Arr) -> Arr:
         q, eta = x[:5], x[5:]
-        qdot = np.concatenate([wmr_model.kinematics(q, eta, true), eta])
-        return np.concatenate([qdot, wmr_model.forward_dynamics(q, qdot, tau, true)[3:5]])
+        qdot = np.concatenate([model.kinematics(q, eta, true), eta])
+        return np.concatenate([qdot, model.forward_dynamics(q, qdot, tau, true)[3:5]])
 
     qs, qds = [], []
     sub = 10
     dt = h / sub
     for k in range(steps):
         q, eta = x[:5].copy(), x[5:].copy()
-        qdot = np.concatenate([wmr_model.kinematics(q, eta, true), eta])
+        qdot = np.concatenate([model.kinematics(q, eta, true), eta])
         qs.append(q)
         qds.append(qdot)
         tau = ctrl.step(q, qdot, ref[0][k], ref[1][k], ref[2][k])
@@ -175,7 +184,7 @@ def random_sequence(
     saturation), and a random configuration."""
     h = float(rng.uniform(0.05, 0.15))
     nominal = {k: v * rng.uniform(0.8, 1.2) for k, v in hw.DRISHTI.items()}
-    accel: hc.Accel = rng.choice(list(ACCEL_CODES)).item()
+    accel: hc.Accel = rng.choice(list(ACCEL_NAMES)).item()
     settings = hc.Settings(
         nominal=nominal,
         formulation=formulation,

@@ -1,5 +1,6 @@
-"""The model functions of every implementation against the hand-written (14), (31) and
-minimal forms, and the hand-written equations' consistency with each other and with (9).
+"""The hand-written comparison (the paper's robot): the model functions of every
+implementation against the hand-written (14), (31) and minimal forms, and the hand-written
+equations' consistency with each other and with (9).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from runtime.tooling.crosscheck.deviation import (
     perturbed,
 )
 from runtime.tooling.crosscheck.inputs import model_args
+from runtime.tooling.crosscheck.targets import Target
 
 ModelFn = Callable[[str, Params, tuple[Arr, ...]], Arr]
 # name, hand-written function, argument layout, generated python name, C name, output size
@@ -39,11 +41,12 @@ MODEL_FUNCTIONS: tuple[tuple[str, Callable[..., Arr], str, int], ...] = (
 
 
 def check_models(
-    samples: list[tuple[Params, Arr, Arr, Arr]], perturb: Mapping[str, Mapping[str, float]]
+    target: Target,
+    samples: list[tuple[Params, Arr, Arr, Arr]],
+    perturb: Mapping[str, Mapping[str, float]],
 ) -> list[Row]:
-    from runtime.generated_modules import wmr_model
-
-    cm = {"c64": CModel(False), "c32": CModel(True)}
+    model = target.code.model
+    cm = {"c64": CModel(target, False), "c32": CModel(target, True)}
     rows = []
     for title, ref_fn, gen, n_out in MODEL_FUNCTIONS:
         row = Row(title)
@@ -52,11 +55,11 @@ def check_models(
             args = model_args(gen, q, eta, tau, p)
             results["ref"].append(np.ravel(ref_fn(*args, p)))
             results["python"].append(
-                np.ravel(getattr(wmr_model, gen)(*args, perturbed(p, "python", perturb)))
+                np.ravel(getattr(model, gen)(*args, perturbed(p, "python", perturb)))
             )
             results["c64"].append(cm["c64"].call(gen, perturbed(p, "c64", perturb), args, n_out))
             results["casadi"].append(
-                casadi_call(gen, pvec(perturbed(p, "casadi", perturb)), *args)[0]
+                casadi_call(target, gen, pvec(target, perturbed(p, "casadi", perturb)), *args)[0]
             )
             # float32: rounded inputs; the reference sees exactly those rounded values.
             p32 = f32_params(p)
