@@ -3,7 +3,8 @@
 What the toolchain derived and generated for it: coordinates, the wheel constraints kept
 and dropped, the run-time (base) parameters with their physical meaning and defaults, the
 formulations generated, the dependence of M̄ on q, and the operation counts. There is no
-printed paper to compare with (the paper's robot has its own report, ``codegen.report``).
+printed paper to compare with (the paper's robot has its own report,
+``modeling.robots.drishti.report``, which its ``RobotModel.docs["report"]`` names).
 Deterministic: no timestamps, no absolute paths.
 """
 

@@ -7,7 +7,7 @@ tractor with a trailer: 24 of them, 11 distinct combinations). Each distinct coe
 up to a rational factor, becomes one base parameter β_j; T, and everything derived from it
 ((9)–(14), the minimal form), is then linear in β, and the generated code takes β at run
 time. For the paper's robot this is exactly the step from the physical parameters to its
-lumped m, I, K, I_w (``modeling.wmr.lumped_relations``).
+lumped m, I, K, I_w (``modeling.robots.drishti.model.lumped_relations``).
 
 Coefficients are grouped by their primitive part (the polynomial divided by its rational
 content, sign normalised), so c_k = s_k β_j with a rational s_k. A coefficient that is a

@@ -62,9 +62,9 @@ def _model(model: RobotModel | None) -> RobotModel:
     """``model``, or the paper's robot for callers written before robots were generic."""
     if model is not None:
         return model
-    from modeling import wmr  # transitional default: the paper's robot
+    from modeling.robots.drishti.model import robot_model  # transitional default
 
-    return wmr.robot_model()
+    return robot_model()
 
 
 def _vec(name: str, n: int) -> sp.Matrix:

@@ -1,5 +1,5 @@
 """Robot description files (TOML): the lumped parameters of the model, or the physical
-ones from which ``modeling.wmr.lumped_relations`` derives them.
+ones from which ``modeling.robots.drishti.model.lumped_relations`` derives them.
 
 Two forms are accepted::
 
@@ -8,7 +8,7 @@ Two forms are accepted::
     m = 36.0  I = 5.72  K = 0.34  Iw = 0.07  r = 0.096  b = 0.414  d = 0.12
 
     name = "my-robot"
-    [physical]                    # platform + two wheels (see modeling.wmr)
+    [physical]                    # platform + two wheels (modeling.robots.drishti.model)
     m_P = 30.0  I_P = 2.0  x_P = 0.0  y_P = 0.0  m_w = 3.0  Iw = 0.07  Im = 0.04
     r = 0.096  b = 0.414  d = 0.12
 
@@ -120,7 +120,7 @@ def _checked(where: str, section: str, key: str, value: Any) -> float:
 
 def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], float]:
     """m, I, K (and K_lat) from the physical parameters via the derived lumped relations."""
-    from modeling import wmr
+    from modeling.robots.drishti import model as wmr
 
     rel = wmr.lumped_relations(wmr.physical_bodies())
     values = {
@@ -184,8 +184,9 @@ def parse_robot(text: str, where: str = "<string>") -> Robot:
 def load_robot(path: str | Path | None = None) -> Robot:
     """Load a robot file; ``None`` loads the packaged default, Drishti."""
     if path is None:
-        text = resources.files("modeling").joinpath(f"robots/{DEFAULT_ROBOT}.toml").read_text()
-        return parse_robot(text, f"modeling/robots/{DEFAULT_ROBOT}.toml")
+        where = f"robots/{DEFAULT_ROBOT}/{DEFAULT_ROBOT}.toml"
+        return parse_robot(resources.files("modeling").joinpath(where).read_text(),
+                           f"modeling/{where}")
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -200,6 +201,11 @@ def load_robot(path: str | Path | None = None) -> Robot:
 # Any robot file: the lumped/physical form of the paper's robot, or bodies and wheels
 # ---------------------------------------------------------------------------------------
 ROBOTS_DIR = Path(__file__).resolve().parent / "robots"
+
+
+def shipped_robot_file(name: str) -> Path:
+    """The robot file of a shipped robot: ``modeling/robots/<name>/<name>.toml``."""
+    return ROBOTS_DIR / name / f"{name}.toml"
 
 
 def is_description(path: str | Path) -> bool:
@@ -221,12 +227,12 @@ def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]
     """
     from modeling.robot_model import described_model
 
-    if path is not None and Path(path).resolve() == ROBOTS_DIR / f"{DEFAULT_ROBOT}.toml":
-        path = None  # the packaged default: its source reads modeling/robots/drishti.toml
+    if path is not None and Path(path).resolve() == shipped_robot_file(DEFAULT_ROBOT):
+        path = None  # the packaged default: its source reads modeling/robots/drishti/...
     if path is not None and is_description(path):
         model = described_model(str(Path(path).resolve()), source_label(path))
         return model, Robot(model.name, model.param_values(), source=model.source)
-    from modeling import wmr
+    from modeling.robots.drishti import model as wmr
 
     robot = load_robot(path)
     return wmr.robot_model(), robot
@@ -243,7 +249,8 @@ def source_label(path: str | Path) -> str:
 
 
 def shipped_robot_files() -> list[Path]:
-    """The robots ``make model`` generates: every ``modeling/robots/*.toml``, the default
-    (Drishti) first."""
-    files = sorted(ROBOTS_DIR.glob("*.toml"))
-    return sorted(files, key=lambda p: (p.stem != DEFAULT_ROBOT, p.stem))
+    """The robots ``make model`` generates: every ``modeling/robots/<name>/<name>.toml``,
+    the default (Drishti) first."""
+    files = [shipped_robot_file(d.name) for d in ROBOTS_DIR.iterdir() if d.is_dir()]
+    return sorted((f for f in files if f.is_file()),
+                  key=lambda p: (p.stem != DEFAULT_ROBOT, p.stem))

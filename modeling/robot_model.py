@@ -6,9 +6,10 @@ controllers' model lacks), the parameter tables with their default values, how a
 payload on the root body changes the plant parameters, and the naming (C prefix, output
 folder). ``codegen`` and the controller laws read only this; they never import a robot.
 
-Instances: the paper's robot from its lumped parameters (``modeling.wmr.robot_model``) and
-any robot described as bodies, joints and wheels (``described_model``), whose run-time
-parameters are its base inertial parameters (``modeling.base_parameters``) and wheel radii.
+Instances: the paper's robot from its lumped parameters
+(``modeling.robots.drishti.model.robot_model``) and any robot described as bodies, joints
+and wheels (``described_model``), whose run-time parameters are its base inertial
+parameters (``modeling.base_parameters``) and wheel radii.
 """
 
 from __future__ import annotations

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from modeling import wmr
 from modeling.robot_file import load_robot
+from modeling.robots.drishti import model as wmr
 
 ARGS = (wmr.q, wmr.qdot, wmr.qddot, tuple(wmr.tau), wmr.PLANT_SYMBOLS)
 NumFn = Callable[..., np.ndarray]

@@ -21,8 +21,8 @@ import pytest
 
 from codegen.backends.c.backend import default_config as default_c_config
 from codegen.controller_api import CONTROLLERS, STATUS_CODES
-from codegen.wmr_functions import PARAM_FIELDS, PARAM_KEYS
 from modeling.robot_file import load_robot
+from modeling.robots.drishti.model import PARAM_FIELDS, PARAM_KEYS
 from runtime import cbuild
 from runtime.generated_modules import controllers as pyctl
 

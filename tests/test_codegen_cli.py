@@ -15,6 +15,8 @@ from typing import Any
 import pytest
 from generated_code_support import DRISHTI, GENERATED, ROOT
 
+from modeling.robot_file import shipped_robot_file
+
 
 # These run `python -m codegen`. The two seeded runs and the edited copy regenerate the
 # default robot only (about 10 s each); the repository check regenerates every robot
@@ -28,7 +30,7 @@ def codegen_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     target = edited / "c" / "wmr_model.h"
     target.write_text(target.read_text().replace("#define WMR_MODEL_H", "#define WMR_MODEL_H  "))
     base = [sys.executable, "-m", "codegen"]
-    one = [*base, "--robot", str(ROOT / "modeling" / "robots" / "drishti.toml")]
+    one = [*base, "--robot", str(shipped_robot_file("drishti"))]
     runs = {
         "a": ([*one, "--out", str(tmp / "a")], "0"),
         "b": ([*one, "--out", str(tmp / "b")], "12345"),

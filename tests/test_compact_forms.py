@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from modeling import wmr
+from modeling.robots.drishti import model as wmr
 
 
 @pytest.mark.parametrize("lateral", [False, True])

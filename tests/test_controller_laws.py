@@ -7,7 +7,7 @@ import pytest
 import sympy as sp
 
 from modeling import controllers as ctl
-from modeling import wmr
+from modeling.robots.drishti import model as wmr
 
 
 @pytest.mark.parametrize("formulation", ctl.FORMULATIONS)

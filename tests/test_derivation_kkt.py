@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from modeling import wmr
 from modeling.robot_file import load_robot
+from modeling.robots.drishti import model as wmr
 
 NumericWMR = Any  # tests/conftest.py: NumericWMR (lambdified model), via fixtures
 

@@ -1,12 +1,12 @@
 """Robot descriptions: Drishti described as bodies and wheels is the paper's model, the
 structural checks (redundant rows, degrees of freedom, existence of S), and bad files.
 
-Drishti from its lumped parameters (``modeling.description.drishti``) is compared with
-``modeling.wmr``: the kinetic energy symbolically (exact equality after renaming the
-coordinates), A, Sᵀ M S and Sᵀ(M Ṡ η + H) symbolically, and S, Ṡη, the minimal and the
-reduced (14) forms and the forward dynamics numerically at N_STATES random consistent
-states for Drishti's parameters and perturbed ones, to RTOL = 1e-12 relative to each
-quantity's largest value over the states (see ``compare_with_wmr``). The
+Drishti from its lumped parameters (``modeling.robots.drishti.description``) is compared
+with ``modeling.robots.drishti.model``: the kinetic energy symbolically (exact equality
+after renaming the coordinates), A, Sᵀ M S and Sᵀ(M Ṡ η + H) symbolically, and S, Ṡη, the
+minimal and the reduced (14) forms and the forward dynamics numerically at N_STATES random
+consistent states for Drishti's parameters and perturbed ones, to RTOL = 1e-12 relative to
+each quantity's largest value over the states (see ``compare_with_wmr``). The
 ``tests/robots/drishti_bodies.toml`` (the same robot written as numbers) is compared likewise.
 """
 
@@ -22,7 +22,6 @@ import pytest
 import sympy as sp
 from description_numeric import numeric_description, parameter_vector, trailer
 
-from modeling import wmr
 from modeling.description import (
     BodySpec,
     DescriptionError,
@@ -32,17 +31,17 @@ from modeling.description import (
     coordinates,
     description_kinetic_energy,
     description_system,
-    drishti_from_lumped,
     load_description,
     packaged_description,
     parse_description,
     symbolize,
-    wmr_renaming,
 )
 from modeling.description.canonical import trig_reduce
 from modeling.description.elimination import block_triangular_inverse
 from modeling.lagrange import default_simplify
-from modeling.robot_file import RobotFileError, load_robot
+from modeling.robot_file import RobotFileError, load_robot, shipped_robot_file
+from modeling.robots.drishti import model as wmr
+from modeling.robots.drishti.description import drishti_from_lumped, wmr_renaming
 
 ROBOTS = Path(__file__).resolve().parent / "robots"
 
@@ -56,7 +55,7 @@ def zero(m: sp.Matrix) -> bool:
 
 
 # ---------------------------------------------------------------------------------------
-# Drishti from the lumped parameters ≡ modeling.wmr
+# Drishti from the lumped parameters ≡ modeling.robots.drishti.model
 # ---------------------------------------------------------------------------------------
 def test_lumped_drishti_kinetic_energy_is_wmrs_exactly() -> None:
     desc = drishti_from_lumped()
@@ -292,8 +291,7 @@ def test_dependent_at_values_only_is_refused() -> None:
 # ---------------------------------------------------------------------------------------
 # Bad description files: each error names the field
 # ---------------------------------------------------------------------------------------
-TRAILER_TEXT = (Path(__file__).resolve().parent.parent / "modeling" / "robots"
-                / "trailer.toml").read_text()
+TRAILER_TEXT = shipped_robot_file("trailer").read_text()
 
 
 def edit(old: str, new: str, count: int = 1) -> str:

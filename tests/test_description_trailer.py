@@ -1,4 +1,4 @@
-"""The tractor-trailer of ``modeling/robots/trailer.toml``: the forms that
+"""The tractor-trailer of ``modeling/robots/trailer/trailer.toml``: the forms that
 ``ConstrainedSystem`` derives from the description, against the KKT system, and the
 physics along integrated trajectories.
 

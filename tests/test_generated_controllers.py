@@ -30,9 +30,10 @@ from generated_code_support import (
 )
 
 from codegen.controller_api import ControllerInfo
-from codegen.wmr_functions import MAX_WINDOW, PARAM_KEYS
+from codegen.robot_functions import MAX_WINDOW
 from modeling import controllers as ctl
-from modeling import wmr
+from modeling.robots.drishti import model as wmr
+from modeling.robots.drishti.model import PARAM_KEYS
 from runtime.generated_modules import controllers as pyctl
 
 RTOL_SYMPY_LAW = 1e-9  # steps vs the SymPy laws evaluated directly (other rounding)

@@ -36,7 +36,8 @@ from generated_code_support import (
 
 from codegen.controller_api import ControllerInfo
 from codegen.layout import argument_size
-from codegen.wmr_functions import MAX_WINDOW, PARAM_KEYS, model_specs
+from codegen.robot_functions import MAX_WINDOW, model_specs
+from modeling.robots.drishti.model import PARAM_KEYS, robot_model
 from runtime.generated_modules import controllers as pyctl
 from runtime.generated_modules import wmr_model as py_model
 
@@ -256,7 +257,7 @@ def test_forward_dynamics_guards(
     the same status."""
     build = c_builds[precision]
     ffi, lib = build.ffi, build.lib
-    spec = next(s for s in model_specs() if s.name == function)
+    spec = next(s for s in model_specs(robot_model()) if s.name == function)
     paper = function == "forward_dynamics"
     good = {
         "q": [0.3, -0.2, 0.4, 1.0, -1.0],

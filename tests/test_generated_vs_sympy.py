@@ -24,15 +24,17 @@ import sympy as sp
 from generated_code_support import DRISHTI, FLOOR, GENERATED, STATUS, CBuild, _c_params
 
 from codegen.layout import argument_size
+from codegen.robot_functions import law_specs, model_specs
 from codegen.spec import Argument, FunctionSpec
-from codegen.wmr_functions import PARAM_KEYS, law_specs, model_specs
+from modeling.robots.drishti.model import PARAM_KEYS, robot_model
 from runtime.generated_modules import controllers as pyctl
 from runtime.generated_modules import wmr_model as py_model
 
 N_SAMPLES = 100
 RTOL_DOUBLE = 1e-12
 RTOL_FLOAT = 1e-4
-SPECS: tuple[FunctionSpec, ...] = (*model_specs(), *law_specs())
+MODEL_SPECS = model_specs(robot_model())
+SPECS: tuple[FunctionSpec, ...] = (*MODEL_SPECS, *law_specs(robot_model()))
 SPEC_IDS = [s.name for s in SPECS]
 # Max deviation per (backend, spec), printed at the end of the session.
 DEVIATIONS: dict[tuple[str, str], float] = {}
@@ -178,7 +180,7 @@ def _call_c(build: CBuild, spec: FunctionSpec, row: list[np.ndarray]) -> np.ndar
 
 
 def _call_python(spec: FunctionSpec, row: list[np.ndarray]) -> np.ndarray:
-    module = py_model if spec in model_specs() else pyctl.laws
+    module = py_model if spec in MODEL_SPECS else pyctl.laws
     function = getattr(module, spec.name)
     ordered: list[Any] = []
     params: list[Any] = []

@@ -1,6 +1,6 @@
 """An independent derivation of the WMR dynamics with sympy.physics.mechanics (Kane).
 
-Nothing here comes from ``modeling.wmr`` except the final comparison: the robot is built
+Nothing here comes from Drishti's ``model.py`` except the final comparison: the robot is built
 from its bodies with ReferenceFrame/Point kinematics — a platform rigid body (mass m_P, yaw
 inertia I_P about its centre of mass at (x_P, y_P) from the axle midpoint) and two wheel
 rigid bodies (mass m_w, inertia I_w about the axle and I_m about a diameter) that spin
@@ -28,7 +28,7 @@ import pytest
 import sympy as sp
 import sympy.physics.mechanics as me
 
-from modeling import wmr
+from modeling.robots.drishti import model as wmr
 
 RTOL = 1e-10
 N_ROBOTS = 4

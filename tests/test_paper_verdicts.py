@@ -1,11 +1,11 @@
 """The verdicts on the paper's printed equations, pinned so that none changes silently.
 
-The engine of ``modeling.printed_paper`` compares each printed equation (transcribed with
-sign slots where the extraction may have lost a minus) with the derivation. These tests
-fix the verdict of every equation, check the evidence behind the errata, and make sure the
-engine is not a rubber stamp: a transcription with one coefficient or one sign wrong must
-come out as an erratum. The model report built from the verdicts is checked for
-determinism at the end.
+The engine of ``modeling.robots.drishti.paper`` compares each printed equation
+(transcribed with sign slots where the extraction may have lost a minus) with the
+derivation. These tests fix the verdict of every equation, check the evidence behind the
+errata, and make sure the engine is not a rubber stamp: a transcription with one
+coefficient or one sign wrong must come out as an erratum. The model report built from
+the verdicts is checked for determinism at the end.
 """
 
 from __future__ import annotations
@@ -19,7 +19,11 @@ from pathlib import Path
 import pytest
 import sympy as sp
 
-from modeling import printed_paper as pp
+from modeling.robots.drishti.paper import symbols as ps
+from modeling.robots.drishti.paper.display import dimension_outliers
+from modeling.robots.drishti.paper.signs import Judgement, Verdict, judge
+from modeling.robots.drishti.paper.transcriptions import Transcription
+from modeling.robots.drishti.paper.verdicts import judgements, verdict_table, verdicts
 
 EXPECTED: dict[str, str] = {
     "(1)": "confirmed",
@@ -49,28 +53,28 @@ EXPECTED: dict[str, str] = {
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _judgement(equation: str) -> pp.Judgement:
-    (j,) = [j for j in pp.judgements() if j.transcription.equation == equation]
+def _judgement(equation: str) -> Judgement:
+    (j,) = [j for j in judgements() if j.transcription.equation == equation]
     return j
 
 
-def _transcription(equation: str) -> pp.Transcription:
+def _transcription(equation: str) -> Transcription:
     return _judgement(equation).transcription
 
 
-def _slot(t: pp.Transcription, label: str) -> sp.Symbol:
+def _slot(t: Transcription, label: str) -> sp.Symbol:
     (s,) = [s for s, lab in t.slots if lab == label]
     return s
 
 
 # ------------------------------------------------------------------------------ verdicts
 def test_every_verdict_is_pinned() -> None:
-    assert pp.verdict_table() == EXPECTED
+    assert verdict_table() == EXPECTED
 
 
 def test_verdicts_are_frozen_and_complete() -> None:
-    for v in pp.verdicts():
-        assert isinstance(v, pp.Verdict)
+    for v in verdicts():
+        assert isinstance(v, Verdict)
         assert v.verdict in ("confirmed", "reconstructed", "erratum")
         assert v.evidence and v.derived_latex and v.printed_latex
         with pytest.raises(dataclasses.FrozenInstanceError):
@@ -94,7 +98,7 @@ def test_confirmed_equations_report_the_signs_they_needed() -> None:
 
 
 def test_erratum_residuals() -> None:
-    r, lam2, lam3 = pp.r, pp.lam2, pp.lam3
+    r, lam2, lam3 = ps.r, ps.lam2, ps.lam3
     # (4): λ3 printed where λ2 belongs.
     res4 = _judgement("(4)").residual
     assert res4 is not None
@@ -102,7 +106,7 @@ def test_erratum_residuals() -> None:
     # (31): b where b/2 belongs, in the cos θ / sin θ terms of rows 1–2 only.
     res31 = _judgement("(31)").residual
     assert res31 is not None
-    expected = sp.Matrix([[r * pp.COS / 2] * 2, [r * pp.SIN / 2] * 2, [0, 0]])
+    expected = sp.Matrix([[r * ps.COS / 2] * 2, [r * ps.SIN / 2] * 2, [0, 0]])
     assert (res31 - expected).applyfunc(sp.expand) == sp.zeros(3, 2)
     # (12): the m b² d θ̇² term is one length too many.
     ev12 = _judgement("(12)").evidence
@@ -117,14 +121,14 @@ def test_k_relation_evidence_names_the_inconsistency() -> None:
 
 
 def test_confirmed_printed_forms_are_dimensionally_homogeneous() -> None:
-    for j in pp.judgements():
+    for j in judgements():
         t = j.transcription
         if j.verdict != "confirmed" or t.printed is None:
             continue
         values = {s: sp.Integer(v) for s, v in j.assignment.items()}
         residual = t.printed.residual().subs(values)
         for entry in residual:
-            assert pp.dimension_outliers(entry) == [], (t.equation, entry)
+            assert dimension_outliers(entry) == [], (t.equation, entry)
 
 
 # ---------------------------------------------------------------- the engine is not blind
@@ -132,13 +136,13 @@ def test_a_wrong_coefficient_is_an_erratum() -> None:
     t = _transcription("(10)")
     assert t.printed is not None
     # m r²/(2b) → m r²/b in the printed λ1.
-    wrong = t.printed.rhs.applyfunc(lambda e: e.subs(pp.m * pp.r**2, 2 * pp.m * pp.r**2))
+    wrong = t.printed.rhs.applyfunc(lambda e: e.subs(ps.m * ps.r**2, 2 * ps.m * ps.r**2))
     assert wrong != t.printed.rhs
     mutated = dataclasses.replace(t, printed=dataclasses.replace(t.printed, rhs=wrong))
-    j = pp.judge(mutated)
+    j = judge(mutated)
     assert j.verdict == "erratum"
     assert j.residual is not None and j.residual[0] != 0
-    assert pp.judge(t).verdict == "confirmed"
+    assert judge(t).verdict == "confirmed"
 
 
 def test_a_wrong_sign_is_an_erratum() -> None:
@@ -153,7 +157,7 @@ def test_a_wrong_sign_is_an_erratum() -> None:
         printed=dataclasses.replace(t.printed, lhs=wrong.subs(s1, 1)),
         slots=tuple(x for x in t.slots if x[0] != s1),
     )
-    assert pp.judge(mutated).verdict == "erratum"
+    assert judge(mutated).verdict == "erratum"
 
 
 def test_a_wrong_matrix_entry_is_an_erratum() -> None:
@@ -163,7 +167,7 @@ def test_a_wrong_matrix_entry_is_an_erratum() -> None:
     rhs = t.printed.rhs.copy()
     rhs[1, 2] = 2 * rhs[1, 2]
     mutated = dataclasses.replace(t, printed=dataclasses.replace(t.printed, rhs=rhs))
-    j = pp.judge(mutated)
+    j = judge(mutated)
     assert j.verdict == "erratum"
     assert "(2,3)" in j.evidence
 
@@ -175,7 +179,7 @@ def test_a_dropped_term_on_the_manifold_is_an_erratum() -> None:
     rhs = t.printed.rhs.copy()
     rhs[4] = 0
     mutated = dataclasses.replace(t, printed=dataclasses.replace(t.printed, rhs=rhs))
-    assert pp.judge(mutated).verdict == "erratum"
+    assert judge(mutated).verdict == "erratum"
 
 
 # --------------------------------------------------------------------------- the report
@@ -188,13 +192,13 @@ REPORT_ARGS = (
 
 
 def test_model_report_is_deterministic_and_complete() -> None:
-    from codegen.report import model_report_context, render_model_report
+    from modeling.robots.drishti.report import model_report_context, render_model_report
 
     report = render_model_report(model_report_context(*REPORT_ARGS))
     # The same report from a fresh interpreter with another hash seed.
     script = (
         "import sys\n"
-        "from codegen.report import model_report_context, render_model_report\n"
+        "from modeling.robots.drishti.report import model_report_context, render_model_report\n"
         f"sys.stdout.write(render_model_report(model_report_context(*{REPORT_ARGS!r})))\n"
     )
     seed = "1" if os.environ.get("PYTHONHASHSEED") != "1" else "2"

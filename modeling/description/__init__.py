@@ -6,8 +6,8 @@ no-side-slip constraints ((6)–(8) of Roy et al. 2017 for the paper's robot) an
 map, as a ``modeling.lagrange.ConstrainedSystem`` whose generic machinery gives (9)–(14)
 and the minimal form. Modules: ``schema`` (dataclasses, validation, symbols), ``files`` (TOML),
 ``kinematics`` (coordinates, point velocities), ``derive`` (T, A, B, the system),
-``elimination`` (exact ranks, block-triangular inverse), ``drishti`` (the paper's robot
-from its lumped parameters).
+``elimination`` (exact ranks, block-triangular inverse). The paper's robot written this
+way is ``modeling.robots.drishti.description``.
 
 TOML format
 -----------
@@ -56,7 +56,6 @@ from modeling.description.derive import (
     description_kinetic_energy,
     description_system,
 )
-from modeling.description.drishti import drishti_from_lumped, wmr_renaming
 from modeling.description.files import (
     load_description,
     packaged_description,
@@ -85,11 +84,9 @@ __all__ = [
     "description_input_matrix",
     "description_kinetic_energy",
     "description_system",
-    "drishti_from_lumped",
     "load_description",
     "packaged_description",
     "parse_description",
     "symbolize",
     "validate",
-    "wmr_renaming",
 ]

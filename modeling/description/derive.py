@@ -5,7 +5,7 @@
   centre, its vertical axis turning with its body).
 * Constraints, for each wheel with centre velocity v and body axes e (forward), n (left):
   no side slip v·n = 0 — (6) for the paper's robot — and rolling r θ̇_w − v·e = 0, which is
-  (7)–(8) with the paper's sign (so that Drishti's A is ``wmr.constraint_matrix()``). Rows
+  (7)–(8) with the paper's sign (so that Drishti's A is ``model.constraint_matrix()``). Rows
   are taken in a fixed order — no-side-slip rows in wheel file order, then rolling rows in
   coordinate order — and a row is dropped when it is a combination of the rows kept before
   it (two wheels on one axle give the same no-side-slip row). Rolling rows are never

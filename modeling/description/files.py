@@ -24,6 +24,7 @@ from modeling.description.schema import (
     fail,
     validate,
 )
+from modeling.robot_file import shipped_robot_file
 
 
 def _entry(where: str, section: str, index: int, data: Any) -> dict[str, Any]:
@@ -96,5 +97,5 @@ def load_description(path: str | Path) -> RobotDescription:
 
 
 def packaged_description(name: str) -> RobotDescription:
-    """A description shipped in ``modeling/robots`` (e.g. "trailer")."""
-    return load_description(Path(__file__).resolve().parent.parent / "robots" / f"{name}.toml")
+    """A description shipped in ``modeling/robots/<name>/`` (e.g. "trailer")."""
+    return load_description(shipped_robot_file(name))

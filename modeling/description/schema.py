@@ -10,7 +10,7 @@ Parameter values are Python numbers or SymPy expressions. ``symbolize`` applies 
 * a Python number in an *inertial* field (masses, inertias, centres of mass) or a wheel
   radius becomes a symbol named after the field and its owner (``mass_tractor``,
   ``com_x_cart``, ``radius_right``) and its value goes into ``values``, so that the
-  derivation is symbolic in them (as ``modeling.wmr`` is in m, I, K, …);
+  derivation is symbolic in them (as Drishti's ``model`` is in m, I, K, …);
 * a Python number in a *geometric* field that decides the constraint structure (wheel
   positions, hitch points) becomes the exact rational of its decimal form (0.207 → 207/1000).
   Which rows are redundant and whether S(q) exists depend on equalities between these
@@ -19,7 +19,7 @@ Parameter values are Python numbers or SymPy expressions. ``symbolize`` applies 
 * with ``numeric=True`` every Python number becomes an exact rational (no symbols);
 * SymPy expressions (symbols, ``sp.Integer(0)``, ``b/2``) are taken as they are: a caller
   who wants symbolic geometry shares the symbols that express the structure (see
-  ``modeling.description.drishti``).
+  ``modeling.robots.drishti.description``).
 """
 
 from __future__ import annotations

@@ -10,8 +10,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from codegen.robot_functions import law_specs, model_specs
 from codegen.spec import FunctionSpec
-from codegen.wmr_functions import law_specs, model_specs
+from modeling.robots.drishti.model import robot_model
 
 MODEL_FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics")
 # One controller step = the kernels it evaluates (paper formulation).
@@ -25,7 +26,7 @@ HAND_WRITTEN = set(MODEL_FUNCTIONS)
 
 
 def specs_by_name() -> dict[str, FunctionSpec]:
-    return {s.name: s for s in (*model_specs(), *law_specs())}
+    return {s.name: s for s in (*model_specs(robot_model()), *law_specs(robot_model()))}
 
 
 def input_size(spec: FunctionSpec) -> int:

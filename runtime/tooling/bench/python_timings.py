@@ -70,7 +70,7 @@ def python_bench(number: int) -> list[dict[str, Any]]:
 DERIVATION_SNIPPET = """
 import time
 t0 = time.perf_counter()
-from modeling import wmr
+from modeling.robots.drishti import model as wmr
 s = wmr.wmr_system()
 for name in ("mass_matrix", "bias", "null_space", "null_space_rate", "reduced_mass_matrix",
              "reduced_bias", "minimal_mass_matrix", "minimal_bias", "reduced_mass_matrix_inverse"):

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from codegen.backends.casadi import generate_c
-from codegen.wmr_functions import law_specs, model_specs
+from codegen.robot_functions import law_specs, model_specs
+from modeling.robots.drishti.model import robot_model
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, have_toolchain
 from runtime.tooling.firmware.symbols import DOUBLE_SYMBOL
@@ -80,7 +81,7 @@ def _frames(su: Path) -> dict[str, int]:
 
 
 def measure(workdir: Path) -> dict[tuple[str, str, str], Size]:
-    specs = {s.name: s for s in (*model_specs(), *law_specs())}
+    specs = {s.name: s for s in (*model_specs(robot_model()), *law_specs(robot_model()))}
     results: dict[tuple[str, str, str], Size] = {}
     for float32 in (True, False):
         precision = "float32" if float32 else "double"

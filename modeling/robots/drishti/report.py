@@ -1,12 +1,16 @@
-"""The model report (``MODEL.md``): what was derived, what the paper prints, and why they differ.
+"""Drishti's model report (``MODEL.md``): what was derived, what the paper prints, and why
+they differ.
 
 :func:`model_report_context` assembles everything the report shows — the derived equations
 as LaTeX, the lumped relations with their assumptions, one verdict per printed equation
-(from :mod:`modeling.printed_paper`), the robot's parameters and, optionally, the
+(from :mod:`modeling.robots.drishti.paper`), the robot's parameters and, optionally, the
 generated code's operation counts and the derivation time — and
-:func:`render_model_report` lays it out with ``templates/model_report.md.jinja``. The
-template does layout only; every number and formula is produced here. The output is
+:func:`render_model_report` lays it out with ``model_report.md.jinja`` (beside this file).
+The template does layout only; every number and formula is produced here. The output is
 deterministic: no timestamps, no absolute paths, and nothing that depends on the hash seed.
+
+``python -m codegen`` calls :func:`render` because the model names this module in
+``RobotModel.docs["report"]``; codegen itself never imports a robot.
 """
 
 from __future__ import annotations
@@ -18,18 +22,21 @@ from typing import Any
 import sympy as sp
 
 from codegen import template_util
-from modeling import printed_paper, wmr
 from modeling.robot_file import LUMPED_FIELDS
+from modeling.robots.drishti import model as wmr
+from modeling.robots.drishti.paper import display, symbols
+from modeling.robots.drishti.paper.transcriptions import PRINTED_PARAMETERS
+from modeling.robots.drishti.paper.verdicts import judgements
 
-TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
+TEMPLATE_DIR = Path(__file__).resolve().parent
 TEMPLATE = "model_report.md.jinja"
-SOURCE = "modeling/wmr.py, modeling/lagrange.py, modeling/printed_paper.py"
+SOURCE = f"{wmr.SOURCE}, modeling/lagrange.py, modeling/robots/drishti/paper/"
 
 _UNITS = {"m": "kg", "I": "kg m²", "K": "kg m", "Iw": "kg m²", "r": "m", "b": "m", "d": "m"}
 
 
 def _latex(expr: sp.Basic) -> str:
-    return sp.latex(expr, symbol_names=printed_paper.LATEX_NAMES)
+    return sp.latex(expr, symbol_names=display.LATEX_NAMES)
 
 
 def _cell(text: str) -> str:
@@ -42,7 +49,7 @@ def _block(caption: str, latex: str) -> dict[str, str]:
 
 
 def _tidy_matrix(mat: sp.Matrix, on_manifold: bool = False) -> sp.Matrix:
-    f = printed_paper.in_printed_terms if on_manifold else printed_paper.tidy
+    f = display.in_printed_terms if on_manifold else display.tidy
     return mat.applyfunc(f)
 
 
@@ -53,21 +60,20 @@ def _reduced_mass_with_k(s: Any) -> tuple[sp.Matrix, list[tuple[sp.Symbol, sp.Ex
     equal to ±k_i is shown as ±k_i (found by comparison, not assumed).
     """
     mt = s.reduced_mass_matrix
-    names = (printed_paper.k1, printed_paper.k2, printed_paper.k3, printed_paper.k4,
-             printed_paper.k5)
+    names = (symbols.k1, symbols.k2, symbols.k3, symbols.k4, symbols.k5)
     positions = ((0, 3), (0, 4), (1, 3), (1, 4), (2, 4))
     defs = [(k, mt[i, j]) for k, (i, j) in zip(names, positions, strict=True)]
     shown = sp.zeros(mt.rows, mt.cols)
     for i in range(mt.rows):
         for j in range(mt.cols):
             entry = mt[i, j]
-            shown[i, j] = printed_paper.tidy(entry)
+            shown[i, j] = display.tidy(entry)
             for k, v in defs:
                 if entry != 0 and sp.expand(entry - v) == 0:
                     shown[i, j] = k
                 elif entry != 0 and sp.expand(entry + v) == 0:
                     shown[i, j] = -k
-    return shown, [(k, printed_paper.tidy(v)) for k, v in defs]
+    return shown, [(k, display.tidy(v)) for k, v in defs]
 
 
 def _derived_sections() -> list[dict[str, Any]]:
@@ -75,7 +81,7 @@ def _derived_sections() -> list[dict[str, Any]]:
     q = sp.Matrix(s.q)
     eta = sp.Matrix(s.eta)
     eta_dot = sp.Matrix(s.eta_dot)
-    lam = printed_paper.LAMBDA
+    lam = symbols.LAMBDA
     tau = wmr.tau
     sections: list[dict[str, Any]] = []
 
@@ -89,7 +95,7 @@ def _derived_sections() -> list[dict[str, Any]]:
         ),
         "blocks": [
             _block("Kinetic energy (lumped parameters)",
-                   "T = " + _latex(printed_paper.tidy(s.kinetic_energy))),
+                   "T = " + _latex(display.tidy(s.kinetic_energy))),
             _block("Equation (9)",
                    r"M(q)\,\ddot{q} + H(q,\dot{q}) = B\,\tau - A^{T}(q)\,\lambda,\qquad "
                    rf"q = {_latex(q.T)}^{{T}},\quad \lambda = {_latex(lam.T)}^{{T}},"
@@ -114,7 +120,7 @@ def _derived_sections() -> list[dict[str, Any]]:
         ),
         "blocks": [
             _block(f"({10 + i})", rf"\lambda_{{{i + 1}}} = "
-                   + _latex(printed_paper.in_printed_terms(lam_eta[i])))
+                   + _latex(display.in_printed_terms(lam_eta[i])))
             for i in range(3)
         ],
     })
@@ -190,7 +196,7 @@ def _lumped_section() -> dict[str, Any]:
         "axis); an off-axis payload makes K_lat ≠ 0.",
     ]
     return {
-        "kinetic_energy": _latex(printed_paper.tidy(wmr.lumped_kinetic_energy(True))),
+        "kinetic_energy": _latex(display.tidy(wmr.lumped_kinetic_energy(True))),
         "assumptions": assumptions,
         "relations": relations,
         "paper_case": paper_case,
@@ -203,7 +209,7 @@ def _robot_rows(robot_lumped: dict[str, float]) -> tuple[list[dict[str, str]],
     for key in list(LUMPED_FIELDS) + sorted(set(robot_lumped) - set(LUMPED_FIELDS)):
         if key not in robot_lumped:
             continue
-        printed = printed_paper.PRINTED_PARAMETERS.get(key)
+        printed = PRINTED_PARAMETERS.get(key)
         rows.append({
             "name": key,
             "value": f"{robot_lumped[key]:g}",
@@ -233,13 +239,13 @@ def model_report_context(
     op_counts: dict[str, str],
 ) -> dict[str, Any]:
     """Everything the report shows, as strings ready for layout."""
-    judgements = printed_paper.judgements()
+    judged = judgements()
     verdict_rows = [
         {"equation": j.transcription.equation, "verdict": j.verdict,
          "evidence": _cell(j.evidence)}
-        for j in judgements
+        for j in judged
     ]
-    counts = {k: sum(1 for j in judgements if j.verdict == k)
+    counts = {k: sum(1 for j in judged if j.verdict == k)
               for k in ("confirmed", "erratum", "reconstructed")}
     differences = [
         {
@@ -249,16 +255,16 @@ def model_report_context(
             "printed_latex": j.printed_resolved_latex(),
             "derived_latex": j.as_verdict().derived_latex,
         }
-        for j in judgements
+        for j in judged
         if j.verdict != "confirmed"
     ]
     notes = [
         {"equation": j.transcription.equation,
          "note": " ".join(j.transcription.note.removeprefix("Note:").split())}
-        for j in judgements
+        for j in judged
         if j.verdict == "confirmed" and j.transcription.note.startswith("Note:")
     ]
-    negated = [j.transcription.equation for j in judgements if j.negated]
+    negated = [j.transcription.equation for j in judged if j.negated]
     parameters, derived_numbers = _robot_rows(robot_lumped)
     return {
         "preamble": list(template_util.preamble_lines(SOURCE, TEMPLATE_DIR, TEMPLATE)),

@@ -5,22 +5,23 @@ One platform body of mass m whose centre of mass sits K/m behind the reference p
 (the body frame's origin, a distance d ahead of the axle midpoint), with yaw inertia
 I − K²/m about that centre of mass (parallel axis: about C it is then I), and two massless
 wheels with spin inertia I_w and no diameter inertia at (−d, −b/2) (right) and (−d, b/2)
-(left). Its kinetic energy is exactly ``wmr.lumped_kinetic_energy()``:
+(left). Its kinetic energy is exactly ``model.lumped_kinetic_energy()``:
 ½ m |v_C − (K/m) θ̇ n|² + ½ (I − K²/m) θ̇² = ½ m |v_C|² + ½ I θ̇² + K θ̇ (ẋ sin θ − ẏ cos θ).
 
-With the default arguments the description is in ``modeling.wmr``'s symbols, so the two
-derivations can be compared symbolically after renaming the coordinates
-(``wmr_renaming``).
+With the default arguments the description is in :mod:`modeling.robots.drishti.model`'s
+symbols, so the two derivations can be compared symbolically after renaming the
+coordinates (``wmr_renaming``). ``tests/robots/drishti_bodies.toml`` is this description
+at the paper's numbers, written as a robot file.
 """
 
 from __future__ import annotations
 
 import sympy as sp
 
-from modeling import wmr
 from modeling.description.kinematics import Coordinates
 from modeling.description.schema import BodySpec, RobotDescription, Value, WheelSpec
 from modeling.lagrange import ConstrainedSystem
+from modeling.robots.drishti import model as wmr
 
 
 def drishti_from_lumped(
@@ -53,7 +54,7 @@ def drishti_from_lumped(
 
 
 def wmr_renaming(system: ConstrainedSystem | Coordinates) -> dict[sp.Symbol, sp.Symbol]:
-    """The description's q, q̇, q̈ → ``modeling.wmr``'s (x_c, y_c, θ, θ_r, θ_l) ones."""
+    """The description's q, q̇, q̈ → the model's (x_c, y_c, θ, θ_r, θ_l) ones."""
     pairs = zip((*system.q, *system.qdot, *system.qddot), (*wmr.q, *wmr.qdot, *wmr.qddot),
                 strict=True)
     return dict(pairs)

@@ -1,5 +1,5 @@
-"""The differential-drive wheeled mobile robot of Roy et al. (2017), as one instance of
-:mod:`modeling.lagrange`.
+"""Drishti, the differential-drive wheeled mobile robot of Roy et al. (2017), as one
+instance of :mod:`modeling.lagrange` (the paper's robot: C prefix ``wmr``).
 
 Hand-typed physics, and only this: where the bodies sit, the kinetic energy of a planar
 rigid body, the rolling constraints at the wheels, and that each motor torque acts on its
@@ -36,6 +36,8 @@ import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
 from modeling.robot_model import PAYLOAD, Parameter, RobotModel
+
+SOURCE = "modeling/robots/drishti/model.py"  # this file, as generated preambles name it
 
 # ---------------------------------------------------------------------------------------
 # Symbols
@@ -214,7 +216,8 @@ def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
 # ---------------------------------------------------------------------------------------
 # The robot as the generic layers see it
 # ---------------------------------------------------------------------------------------
-PARAMETER_DOCS: tuple[tuple[str, sp.Symbol, str], ...] = (
+# (key, symbol, doc) of each controller parameter, in the order of the generated structs.
+PARAM_FIELDS: tuple[tuple[str, sp.Symbol, str], ...] = (
     ("m", m, "total mass [kg]"),
     ("I", I_z, "yaw inertia about C [kg m^2] (C field Iz)"),
     ("K", K, "first moment of mass behind C [kg m]"),
@@ -223,6 +226,7 @@ PARAMETER_DOCS: tuple[tuple[str, sp.Symbol, str], ...] = (
     ("b", b, "track width [m]"),
     ("d", d, "C ahead of the axle midpoint [m]"),
 )
+PARAM_KEYS: tuple[str, ...] = tuple(key for key, _, _ in PARAM_FIELDS)
 K_LAT_DOC = ("K_lat", K_lat, "first moment of mass left of C [kg m] (off-axis payload)")
 
 
@@ -231,17 +235,17 @@ def robot_model() -> RobotModel:
     """The paper's robot in its lumped parameters: prefix ``wmr``, output at the root of
     ``generated/``, the plant with the lateral first moment K_lat the controllers lack,
     the payload ``payload_relations``, and the paper formulation."""
-    params = tuple(Parameter(k, s, doc) for k, s, doc in PARAMETER_DOCS)
+    params = tuple(Parameter(k, s, doc) for k, s, doc in PARAM_FIELDS)
     plant = (*params[:3], Parameter(*K_LAT_DOC), *params[3:])
     rel = payload_relations()
     from modeling.robot_file import load_robot
 
-    defaults = load_robot().plant_values()  # modeling/robots/drishti.toml
+    defaults = load_robot().plant_values()  # drishti.toml beside this file
     return RobotModel(
         name="drishti",
         prefix="wmr",
         output_dir="",
-        source="modeling/wmr.py",
+        source=SOURCE,
         system=wmr_system(),
         plant_system=wmr_system(lateral_moment=True),
         coordinate_names=COORDINATE_NAMES,
@@ -256,8 +260,8 @@ def robot_model() -> RobotModel:
         paper=True,
         evaluation_form=compact_form,
         docs={
-            "model_source": "modeling/wmr.py, modeling/lagrange.py",
-            "report": "codegen.report",  # MODEL.md with the paper's verdicts
+            "model_source": f"{SOURCE}, modeling/lagrange.py",
+            "report": "modeling.robots.drishti.report",  # MODEL.md with the paper's verdicts
             "plant_params": "true parameters of the simulated robot, including K_lat",
             "payload": "payload mass, position ahead of C, position left of C",
             "plant_state_derivative": (
@@ -266,8 +270,8 @@ def robot_model() -> RobotModel:
             ),
             "plant_params_with_payload": (
                 "Plant parameters (m, I, K, K_lat, Iw, r, b, d) of a robot carrying a point "
-                "payload,\nfrom the Hessian of the combined kinetic energy "
-                "(modeling.wmr.payload_relations)."
+                "payload,\nfrom the Hessian of the combined kinetic energy\n"
+                "(modeling.robots.drishti.model.payload_relations)."
             ),
         },
     )
