@@ -24,8 +24,6 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import sympy as sp
-
 if TYPE_CHECKING:
     from modeling.robot_model import RobotModel
 
@@ -119,7 +117,10 @@ def _checked(where: str, section: str, key: str, value: Any) -> float:
 
 
 def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], float]:
-    """m, I, K (and K_lat) from the physical parameters via the derived lumped relations."""
+    """m, I, K (and K_lat) from the physical parameters via the derived lumped relations
+    (SymPy is imported here, not at module level: a [lumped] file is read without it)."""
+    import sympy as sp
+
     from modeling.robots.drishti import model as wmr
 
     rel = wmr.lumped_relations(wmr.physical_bodies())

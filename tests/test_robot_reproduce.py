@@ -220,3 +220,20 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
     assert result.returncode == 1
     assert "holds robot 'trailer' (prefix trailer_)" in result.stderr
     assert "make model" in result.stderr
+
+
+def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
+    """The runtime reads generated code and robot files; SymPy and codegen are tooling."""
+    import subprocess
+    import sys
+
+    probe = (
+        "import sys\nfrom pathlib import Path\n"
+        "import runtime.reproduce_command, runtime.robot_reproduce\n"
+        "from runtime.robot_source import resolve\n"
+        f"resolve(Path({str(SMALL)!r})); resolve(Path({str(TRAILER)!r}))\n"
+        "print(sorted(m for m in ('sympy', 'codegen', 'casadi') if m in sys.modules))\n"
+    )
+    result = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True,
+                            text=True, check=True)
+    assert result.stdout.strip() == "[]"
