@@ -16,7 +16,7 @@ import sys
 COMMANDS = {
     "crosscheck": "runtime.tooling.crosscheck.command",
     "reproduce": "runtime.reproduce_command",
-    "stability": "runtime.stability",
+    "stability": "runtime.paper.stability",
     "bench": "runtime.tooling.bench.report",
 }
 

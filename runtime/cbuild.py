@@ -27,7 +27,6 @@ import cffi
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED_C = ROOT / "generated" / "c"
-RUNTIME_C = Path(__file__).resolve().parent / "csrc"
 BUILD_DIR = ROOT / "build" / "cffi"
 OBJECT_DIR = BUILD_DIR / "objects"  # one object per source, flags and headers: a regenerated
 # module recompiles alone
@@ -172,10 +171,12 @@ def build(
     sources = _sources(extra_sources, c_dir, prefix)
     headers = headers_for(prefix)
     all_flags = (*CFLAGS, *flags, *((f"-D{prefix.upper()}_FLOAT32",) if float32 else ()))
-    # Every header a source may include: any change recompiles every object.
+    # Every header a source may include: any change recompiles every object. An extra
+    # source finds its own headers (and an extra header's folder is searched too).
     included = hashlib.sha256()
-    for h in (*sorted(c_dir.glob("*.h")), *sorted(RUNTIME_C.glob("*.h")), *extra_headers):
+    for h in (*sorted(c_dir.glob("*.h")), *extra_headers):
         included.update(h.name.encode() + h.read_bytes())
+    include_dirs = tuple(dict.fromkeys((c_dir, *(Path(h).parent for h in extra_headers))))
     objects, compile_cmds, renames = [], [], []
     for src in sources:
         key = included.copy()
@@ -186,7 +187,7 @@ def build(
             tmp = obj.with_suffix(f".{uuid.uuid4().hex[:8]}.tmp.o")
             compile_cmds.append(gcc_command([src], tmp, kind="object",
                                             flags=(*all_flags, "-fPIC"),
-                                            include_dirs=(c_dir, RUNTIME_C)))
+                                            include_dirs=include_dirs))
             renames.append((tmp, obj))
     OBJECT_DIR.mkdir(parents=True, exist_ok=True)
     run_compiler(compile_cmds, jobs=min(4, os.cpu_count() or 1))

@@ -4,7 +4,7 @@ Plant: the generated ``<prefix>_plant.plant_state_derivative`` (the constrained 
 the minimal form), fixed-step RK4 under zero-order hold, ``substeps`` per sample.
 Controller: the generated controller classes (the NumPy mirror of the C API, checked
 against the C by the cross-check tests), sampled every h, fed the true q and q̇ at the
-sample instant (no sensor model: the paper's robot has its own, ``runtime.simulate``).
+sample instant (no sensor model: the paper's robot has its own, ``runtime.paper.simulate``).
 Reference: constant driven-wheel rates η_d from a consistent initial pose, integrated
 through the generated kinematics q̇ = S(q) η — for a differential drive, a circle; for a
 tractor with a trailer, a circle with the trailer settling onto its own circle.

@@ -58,6 +58,8 @@ class PlantSettings:
 
 VELOCITY_MODELS = ("sample-instant", "encoder-average", "motor-encoder")
 ACCEL_ESTIMATORS = ("matched", "backward", "central")
+# accel_estimator of the experiment file -> <PREFIX>_ACCEL_* of the generated configs.
+ACCEL_CODES = {"backward": 0, "central": 1, "matched": 2}
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""``python -m runtime reproduce``: the command line of :mod:`runtime.reproduce` (the paper's
+"""``python -m runtime reproduce``: the command line of :mod:`runtime.paper.reproduce` (the paper's
 experiments on Drishti) and of :mod:`runtime.robot_reproduce` (``--robot FILE``: the
 experiment scaled to any robot). Checks every argument before any simulation runs.
 """
@@ -17,7 +17,7 @@ from runtime.experiment import (
     check_sensing,
     load_experiment,
 )
-from runtime.reproduce import (
+from runtime.paper.reproduce import (
     DEFAULT_OUT,
     DEFAULT_SENSINGS,
     LABELS,
@@ -53,7 +53,7 @@ def write_outputs(rep: Reproduction, out: Path, plots: bool) -> list[Figure]:
     out.mkdir(parents=True, exist_ok=True)
     figures: list[Figure] = []
     if plots:
-        from runtime import figures as figs
+        from runtime.paper import figures as figs
 
         figures = figs.render_all(rep, out)
     (out / "metrics.md").write_text(metrics_markdown(rep), encoding="utf-8")

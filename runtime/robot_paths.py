@@ -1,6 +1,6 @@
 """The paper's two paths for any generated differential-drive robot, scaled to its size.
 
-Same construction as :mod:`runtime.references` (smooth driven-wheel rate profiles η_d(t),
+Same construction as :mod:`runtime.paper.references` (smooth driven-wheel rate profiles η_d(t),
 the configuration integrated through the generated kinematics q̇ = S(q) η with DOP853,
 q̈_d by the chain rule through the generated linearisation), but nothing here knows the
 robot: coordinates, actuated indices and kinematics come from its generated code, and the
@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from runtime import references
 from runtime.closed_loop import Reference, velocities
 from runtime.generated_modules import RobotCode
+from runtime.paper import references
 from runtime.robot_scale import DRISHTI_RADIUS, RobotScale
 
 Array = NDArray[np.float64]
@@ -108,7 +108,7 @@ def body_yaws(code: RobotCode) -> tuple[int, ...]:
 def lawnmower(code: RobotCode, scale: RobotScale, params: dict[str, float], h: float,
               duration: float) -> Path:
     """Straight legs and alternating U-turns (the paper's square-wave wheel rates made
-    consistent, :func:`runtime.references.lawnmower_profile`), with Drishti's leg speed and
+    consistent, :func:`runtime.paper.references.lawnmower_profile`), with Drishti's leg speed and
     U-turn diameter times ``size``."""
     _check_two_wheels(code)
     speed = scale.size * DRISHTI_RADIUS / scale.wheel_radius

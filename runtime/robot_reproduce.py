@@ -1,6 +1,6 @@
 """``python -m runtime reproduce --robot FILE``: the paper's experiment on any robot.
 
-The experiment of :mod:`runtime.reproduce` — circle and lawn mower, the four controllers in
+The experiment of :mod:`runtime.paper.reproduce` — circle and lawn mower, the four controllers in
 every formulation the robot's code has, each ``--sensing`` model, payload put on and taken
 off, friction the controllers do not know — scaled to the robot
 (:mod:`runtime.robot_scale`; the scaled settings are printed and written), simulated through

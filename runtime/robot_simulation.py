@@ -1,7 +1,7 @@
 """Closed loop of any generated robot through its generated C, with the experiment's
 sensors, friction and payload schedule.
 
-What :mod:`runtime.simulate` does for the paper's robot, for a robot known only by its
+What :mod:`runtime.paper.simulate` does for the paper's robot, for a robot known only by its
 generated code (``generated/<dir>/{c,python}``):
 
 * Plant: the generated C ``<prefix>_plant_state_derivative`` (x = (q, η), the constrained
@@ -30,14 +30,13 @@ from numpy.typing import NDArray
 
 from runtime import cbuild
 from runtime.closed_loop import Reference, velocities
-from runtime.controller_config import ACCEL_CODES
-from runtime.experiment import Experiment
+from runtime.experiment import ACCEL_CODES, Experiment
 from runtime.generated_modules import RobotCode
 from runtime.robot_model_checks import ModelBounds, model_bounds
 
 Array = NDArray[np.float64]
 FORMULATION_CODES = {"paper": 0, "minimal": 1}
-COULOMB_SPEED = 0.05  # rad/s, as runtime/csrc/wmr_sim.c
+COULOMB_SPEED = 0.05  # rad/s, as runtime/paper/csrc/wmr_sim.c
 
 
 @dataclass(frozen=True)

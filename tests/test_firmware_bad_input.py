@@ -3,7 +3,7 @@
 bytes and tau unchanged, and the next valid step equals that of a twin that never saw
 the bad input; saturation is clipped and reported. ``docs/BAD_INPUT.md`` is the table
 the same code produces. Also the TDE condition ‖M⁻¹M̂ − I‖ < 1 over a parameter box
-(``runtime.nominal_check``)."""
+(``runtime.paper.nominal_check``)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import pytest
 
 from codegen.controller_api import STATUS_CODES
 from runtime import cbuild
-from runtime.controller_config import checked_controller_config
 from runtime.experiment import Experiment
-from runtime.nominal_check import check_nominal, tde_alpha
+from runtime.paper.controller_config import checked_controller_config
+from runtime.paper.nominal_check import check_nominal, tde_alpha
 from runtime.tooling.bad_input import cases as bad_cases
 from runtime.tooling.bad_input import runner, table
 

@@ -1,7 +1,7 @@
 """Float32 in the loop: the lawn-mower experiment (paper formulation) with the float32
 build against the double build, TDROC (ε = 0.5) and TDC.
 
-``runtime.simulate.run(float32=True)`` switches the whole C library to float32: the
+``runtime.paper.simulate.run(float32=True)`` switches the whole C library to float32: the
 controller *and* the simulated plant (RK4 at 1 kHz). Measured largest deviation of the
 robot's path (point C) between the float32 and double runs:
 
@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 
 from modeling.robot_file import load_robot
-from runtime import references, simulate
 from runtime.cbuild import CLibrary
 from runtime.experiment import Experiment, SensingSettings
-from runtime.references import Reference
+from runtime.paper import references, simulate
+from runtime.paper.references import Reference
 from runtime.tooling.bad_input.runner import to_python
 
 FULL_FLOAT_BOUND = 2.5e-3  # m: float32 controller and float32 plant (measured ≤ 1.86 mm)

@@ -1,6 +1,6 @@
 """The generated C under AddressSanitizer and UndefinedBehaviorSanitizer.
 
-``runtime/csrc/fuzz_driver.c`` (a seeded xorshift inside C) runs every controller in both
+``runtime/paper/csrc/fuzz_driver.c`` (a seeded xorshift inside C) runs every controller in both
 formulations for ``STEPS`` randomised steps (random valid configurations, re-initialised
 every 20..400 steps, and now and then invalid configurations, NaN/Inf/huge/subnormal
 inputs, NULL arguments, a wrong magic) and ``FD_CALLS`` calls to each of
@@ -25,7 +25,7 @@ import pytest
 
 from runtime.cbuild import GENERATED_C
 
-CSRC = Path(__file__).resolve().parent.parent / "runtime" / "csrc"
+CSRC = Path(__file__).resolve().parent.parent / "runtime" / "paper" / "csrc"
 DRIVER = CSRC / "fuzz_driver.c"
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all")
 CFLAGS = ("-std=c99", "-O1", "-g", "-fno-omit-frame-pointer", "-Wall", "-Wextra", "-Werror")

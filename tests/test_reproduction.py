@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import references
 from runtime.experiment import Experiment, ExperimentFileError, parse_experiment
 from runtime.generated_modules import robot
-from runtime.reproduce import (
+from runtime.paper import references
+from runtime.paper.reproduce import (
     CONTRAST,
     CSV_COLUMNS,
     Reproduction,
@@ -96,7 +96,7 @@ def test_references_satisfy_the_constraints(path: str) -> None:
 
 
 def test_circle_reference_puts_c_on_radius_r1() -> None:
-    from runtime.reproduce import circle_centre
+    from runtime.paper.reproduce import circle_centre
 
     ref = references.circle(PARAMS, 0.1, 40.0)
     centre = circle_centre(ref)
@@ -252,7 +252,7 @@ def test_one_figure_renders_to_identical_bytes(paper: Reproduction, tmp_path: Pa
     """The same figure rendered twice gives the same PNG bytes, with no text metadata."""
     from matplotlib import rc_context
 
-    from runtime import figures
+    from runtime.paper import figures
 
     blobs = []
     for name in ("a", "b"):

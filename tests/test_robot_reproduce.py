@@ -194,7 +194,7 @@ def test_generated_folder_outside_the_repository(tmp_path: Path) -> None:
 
 
 def test_stability_names_what_it_cannot_analyse(capsys: pytest.CaptureFixture[str]) -> None:
-    from runtime import stability
+    from runtime.paper import stability
 
     assert stability.main(["--robot", str(TRAILER), "--no-measure"]) == 2
     assert "reproduce --robot" in capsys.readouterr().err

@@ -1,7 +1,7 @@
 """The sampled-data stability analysis: its output, and its predictions against simulation.
 
-Prediction: ``runtime.stability`` (linearised one-sample map). Simulation: TDROC with k̂
-held, bisected between stable and diverging closed-loop runs (``runtime.stability_check``).
+Prediction: ``runtime.paper.stability`` (linearised one-sample map). Simulation: TDROC with k̂
+held, bisected between stable and diverging closed-loop runs (``runtime.paper.stability_check``).
 Conditions: Drishti, h = 0.1 s, K1 = K2 = 4 I, Q = I, nominal plant without friction or
 payload, the circle; each sensing model with its matched estimator, and encoder-average
 with the plain backward quotient (the estimator that made the old reproduction unstable).
@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime import references, stability, stability_check
 from runtime.experiment import Experiment, SensingSettings
 from runtime.generated_modules import robot
-from runtime.sampled_loop import UnstableConfiguration
-from runtime.simulate import run
+from runtime.paper import references, stability, stability_check
+from runtime.paper.sampled_loop import UnstableConfiguration
+from runtime.paper.simulate import run
 
 DRISHTI = dict(robot.PARAMS)
 SMALL_ROBOT = Path(__file__).resolve().parents[2] / "shared" / "cases" / "small_robot.toml"

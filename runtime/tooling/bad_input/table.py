@@ -91,7 +91,7 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "",
         "## The time-delay estimation condition over a parameter box",
         "",
-        "`runtime.nominal_check.check_nominal(nominal, box)` computes",
+        "`runtime.paper.nominal_check.check_nominal(nominal, box)` computes",
         "alpha = max ||M^-1 M-hat - I||_2 over true robots whose m, I, K and Iw are each within",
         "±box of Drishti's (a 3-level grid of the box × 9 headings) and raises `ValueError` when",
         "alpha >= 1, the condition (17) needs. `checked_controller_config` applies it when a",
@@ -118,7 +118,7 @@ NOMINAL_VARIANTS: tuple[tuple[str, dict[str, float]], ...] = (
 
 def alpha_rows(box: float = 0.3) -> list[list[str]]:
     """The TDE-condition table: α for scaled nominal models against Drishti ± box."""
-    from runtime.nominal_check import check_nominal, tde_alpha
+    from runtime.paper.nominal_check import check_nominal, tde_alpha
 
     rows = []
     for label, scale in NOMINAL_VARIANTS:

@@ -32,7 +32,7 @@ from runtime.tooling.bench.c_variants import (
     sympy_c,
 )
 
-CSRC = Path(__file__).resolve().parents[2] / "csrc"  # runtime/csrc
+CSRC = Path(__file__).resolve().parents[2] / "paper" / "csrc"  # runtime/paper/csrc
 CFLAGS = ["-std=c99", "-O2"]
 
 

@@ -69,8 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m runtime crosscheck",
         description="Compare the generated Python, C (double, float32) and CasADi code of every "
-        "robot: with the hand-written equations (runtime/handwritten) where they exist, and C "
-        "and CasADi with the generated NumPy for every robot.",
+        "robot: with the hand-written equations (runtime/paper/handwritten) where they exist, "
+        "and C and CasADi with the generated NumPy for every robot.",
     )
     parser.add_argument(
         "--robot", action="append", default=[], metavar="NAME_OR_DIR",

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from runtime.handwritten import controllers as hc
+from runtime.paper.handwritten import controllers as hc
 from runtime.tooling.crosscheck.bindings import casadi_call as call
 from runtime.tooling.crosscheck.bindings import casadi_function, pvec
 from runtime.tooling.crosscheck.controller_runs import c32_synced_run, c_run, hand_run, python_run

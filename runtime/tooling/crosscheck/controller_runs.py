@@ -10,8 +10,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from runtime.handwritten import controllers as hc
-from runtime.handwritten import model as hw
+from runtime.paper.handwritten import controllers as hc
+from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel
 from runtime.tooling.crosscheck.deviation import Arr, Params, Trace, f32, f32_params, perturbed
 from runtime.tooling.crosscheck.inputs import Sequence_, accel_code

@@ -1,5 +1,5 @@
 """The hand-written comparison, for the robot whose equations are typed by hand in
-``runtime/handwritten`` (the paper's robot, Drishti): derivation self-checks, the model
+``runtime/paper/handwritten`` (the paper's robot, Drishti): derivation self-checks, the model
 functions and the four controllers of every implementation (generated NumPy, C double and
 float32, CasADi) against the hand-written equations.
 """
@@ -11,8 +11,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from runtime.handwritten import controllers as hc
-from runtime.handwritten import model as hw
+from runtime.paper.handwritten import controllers as hc
+from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.controller_checks import check_controllers
 from runtime.tooling.crosscheck.inputs import Sequence_, closed_loop, model_samples, random_sequence
 from runtime.tooling.crosscheck.model_checks import check_models, self_checks

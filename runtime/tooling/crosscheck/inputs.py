@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.handwritten import controllers as hc
-from runtime.handwritten import model as hw
+from runtime.paper.handwritten import controllers as hc
+from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.deviation import Arr, Params
 from runtime.tooling.crosscheck.targets import Target
 

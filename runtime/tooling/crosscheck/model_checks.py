@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from runtime.handwritten import controllers as hc
-from runtime.handwritten import model as hw
+from runtime.paper.handwritten import controllers as hc
+from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel, casadi_call, pvec
 from runtime.tooling.crosscheck.deviation import (
     IMPLS,

@@ -1,5 +1,5 @@
 """The emulated run: the controller calls of a closed loop (lawn-mower path through
-``runtime.simulate.run(float32=True)``) recorded, replayed on the emulated Cortex-M4 and on
+``runtime.paper.simulate.run(float32=True)``) recorded, replayed on the emulated Cortex-M4 and on
 the host builds (float32 and double), and the torques compared (in ulps and absolute).
 """
 
@@ -32,9 +32,9 @@ def record_closed_loop(
 ) -> Recording:
     """Run ``simulate.run`` on the lawn-mower path and record every controller call."""
     from modeling.robot_file import load_robot
-    from runtime import references, simulate
     from runtime.cbuild import CLibrary
     from runtime.experiment import Experiment
+    from runtime.paper import references, simulate
 
     robot = dict(load_robot().lumped)
     exp = Experiment()

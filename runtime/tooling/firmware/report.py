@@ -202,7 +202,7 @@ def render(r: Report) -> str:
             "The float32 TDROC step (paper formulation, ε = 0.5, the experiment's other",
             "defaults), linked with newlib-nano's libm into a flat image and run in Unicorn",
             "(`UC_CPU_ARM_CORTEX_M4`), on the controller inputs recorded from",
-            "`runtime.simulate.run('tdroc', 'paper', lawn mower, float32=True)`. The host",
+            "`runtime.paper.simulate.run('tdroc', 'paper', lawn mower, float32=True)`. The host",
             "builds replay the same inputs (x86-64 gcc, cffi).",
             "",
             "| quantity | value |",

@@ -4,8 +4,8 @@ Independent of ``modeling/``, ``codegen/`` and ``generated/`` on purpose: nothin
 imported from them and no expression is copied from them. Every function is typed from
 the paper's printed equations, with the minus signs that the text extraction lost put
 back (READING.md) and with the corrections listed below, each of which I re-derived by
-hand before typing it (the derivation is in the docstrings; ``runtime.crosscheck`` also
-checks it numerically, e.g. that A(q) S(q) = 0 and that (14) is (9) on the manifold).
+hand before typing it (the derivation is in the docstrings; ``runtime.tooling.crosscheck``
+also checks it numerically, e.g. that A(q) S(q) = 0 and that (14) is (9) on the manifold).
 
 Coordinates q = (x_c, y_c, θ, θ_r, θ_l), wheel rates η = (θ̇_r, θ̇_l), parameters a dict
 with keys m, I, K, Iw, r, b, d (the paper's lumped parameters; K is the first moment of
@@ -227,7 +227,7 @@ def mass_matrix_14(q: ArrayLike, p: Params) -> Mat:
 
     The printed row 3 "K sin θ  K cos θ  I  k5  k5" and rows 4–5 "k1 k3 k5 Iw 0",
     "k2 k4 k5 0 Iw" are this matrix with the minus signs lost (checked numerically
-    against the block formula in ``runtime.crosscheck``).
+    against the block formula in ``runtime.tooling.crosscheck``).
     """
     m, I, K, Iw, _, _, _ = _params(p)
     th = _vec(q, 5)[2]
@@ -318,7 +318,7 @@ def pose_acceleration(
     return null_space(q, p) @ _vec(wheel_accels, 2) + null_space_rate_times_eta(q, wheel_rates, p)
 
 
-# Names of the generated functions, for callers that compare like with like (runtime.bench).
+# Names of the generated functions, for callers that compare like with like (runtime.tooling.bench).
 mass_matrix = mass_matrix_14
 bias_forces = bias_14
 forward_dynamics = forward_dynamics_14

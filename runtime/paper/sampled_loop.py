@@ -1,6 +1,6 @@
 """The sampled closed loop of the paper's robot, linearised: the pencil J(g) = J0 + g J1.
 
-(The analysis command built on it is :mod:`runtime.stability`; the configuration check
+(The analysis command built on it is :mod:`runtime.paper.stability`; the configuration check
 that refuses an unstable loop, :func:`check_sampled_loop`, is here so that the simulator
 can use it without importing the analysis, which simulates.)
 
@@ -46,13 +46,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from runtime import cbuild, references
+from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.generated_modules import robot as generated_robot
 from runtime.generated_modules import wmr_laws, wmr_model
-from runtime.nominal_check import roc_bounds
-from runtime.payload_schedule import extra_payload_on, plant_params
-from runtime.sim_library import build_sim_library
+from runtime.paper import references
+from runtime.paper.nominal_check import roc_bounds
+from runtime.paper.payload_schedule import extra_payload_on, plant_params
+from runtime.paper.sim_library import build_sim_library
 
 Vec = NDArray[np.float64]
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
@@ -387,7 +388,7 @@ def setting(
 
 def roc_gain(formulation: str, robot: dict[str, float], exp: Experiment) -> float:
     """ROC's boundary-layer gain at zero error, ρ/ε, with ρ = φ/(1 − α) (q̈_d = 0 on the
-    wheels) and (α, φ) of :func:`runtime.nominal_check.roc_bounds`."""
+    wheels) and (α, φ) of :func:`runtime.paper.nominal_check.roc_bounds`."""
     alpha, phi = roc_bounds(robot, exp.controller.uncertainty, formulation)
     return phi / (1 - alpha) / exp.controller.eps
 
@@ -402,7 +403,7 @@ class SwitchingGainWarning(UserWarning):
 
 def check_sampled_loop(name: str, formulation: str, nominal: dict[str, float],
                        exp: Experiment) -> None:
-    """Refuse a configuration whose sampled closed loop (``runtime.stability``: plant under
+    """Refuse a configuration whose sampled closed loop (``runtime.paper.stability``: plant under
     ZOH, the experiment's sensing and estimator, the law, linearised on the circle) is
     unstable without any switching gain; warn when ROC's gain at zero error (ρ/ε) is beyond
     the largest stable boundary-layer gain."""

@@ -1,6 +1,6 @@
 """The paper's robot's generated C with the simulator's RK4 plant helper, as one library.
 
-``runtime/csrc/wmr_sim.c`` integrates the generated plant with wheel friction (viscous and
+``runtime/paper/csrc/wmr_sim.c`` integrates the generated plant with wheel friction (viscous and
 tanh-smoothed Coulomb) in C, so a simulated sample costs one call from Python.
 """
 
@@ -14,7 +14,7 @@ CSRC = Path(__file__).resolve().parent / "csrc"
 
 
 def build_sim_library(float32: bool = False) -> cbuild.CLibrary:
-    """Generated C + the RK4 helper (``runtime.simulate.sim_library`` caches it; tests may
+    """Generated C + the RK4 helper (``runtime.paper.simulate.sim_library`` caches it; tests may
     replace that)."""
     return cbuild.build(
         float32,

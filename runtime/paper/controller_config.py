@@ -3,8 +3,8 @@
 :func:`controller_config` fills ``wmr_<name>_config_t`` from the experiment's
 ``[controller]`` and ``[sensing]`` tables and a nominal model (ROC's α and φ from
 :func:`roc_bounds`); :func:`checked_controller_config` builds the same configuration after
-the checks of ``runtime.nominal_check`` (the TDE condition over the uncertainty box, the
-sampled loop's predicted stability). ``runtime.simulate`` runs the result; these names
+the checks of ``runtime.paper.nominal_check`` (the TDE condition over the uncertainty box, the
+sampled loop's predicted stability). ``runtime.paper.simulate`` runs the result; these names
 are also importable from there.
 """
 
@@ -14,18 +14,14 @@ from collections.abc import Mapping
 from typing import Any
 
 from runtime import cbuild
-from runtime.experiment import Experiment
-from runtime.nominal_check import check_nominal, roc_bounds
-from runtime.sampled_loop import check_sampled_loop
+from runtime.experiment import ACCEL_CODES, Experiment
+from runtime.paper.nominal_check import check_nominal, roc_bounds
+from runtime.paper.sampled_loop import check_sampled_loop
 
 __all__ = ["ACCEL_CODES", "FORMULATIONS", "checked_controller_config", "controller_config",
            "roc_bounds"]
 
 FORMULATIONS = {"paper": 0, "minimal": 1}
-
-
-# accel_estimator of the experiment file -> WMR_ACCEL_* of the generated configs.
-ACCEL_CODES = {"backward": 0, "central": 1, "matched": 2}
 
 
 def controller_config(

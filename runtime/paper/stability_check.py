@@ -2,7 +2,7 @@
 
 TDROC is simulated with its switching gain held (``hold_gain``) at k̂ = g ε, with ε so
 large that ‖s‖ never leaves the boundary layer: the switching term is then exactly g s,
-the boundary-layer gain of :mod:`runtime.stability`. The plant is the analysed one (the
+the boundary-layer gain of :mod:`runtime.paper.stability`. The plant is the analysed one (the
 nominal robot, no friction, no payload), the torque limit out of reach, the encoders as
 configured (their quantisation keeps exciting the loop). A run is unstable when it fails,
 when a torque reaches the (far) limit, when ‖(e, ė)‖ exceeds ``DIVERGED`` anywhere, or when
@@ -15,8 +15,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from runtime import references
 from runtime.experiment import Experiment
+from runtime.paper import references
 
 GROWTH = 3.0
 DIVERGED = 1.0  # ‖(e, ė)‖ [rad, rad/s, m, m/s]: far beyond any tracking of these runs
@@ -38,7 +38,7 @@ def simulated_unstable(
     gain: float, formulation: str, robot: dict[str, float], exp: Experiment
 ) -> bool:
     """True if TDROC with boundary-layer gain ``gain`` diverges on the circle."""
-    from runtime.simulate import run
+    from runtime.paper.simulate import run
 
     lin = linear_experiment(exp)
     ref = references.circle(robot, lin.controller.h, lin.paths.circle_duration)

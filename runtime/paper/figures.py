@@ -37,9 +37,9 @@ from matplotlib.figure import Figure as MplFigure
 from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
-from runtime import references
-from runtime.reproduce import COLORS, LABELS, Figure, Reproduction
-from runtime.simulate import CONTROLLERS, Run, plant_params
+from runtime.paper import references
+from runtime.paper.reproduce import COLORS, LABELS, Figure, Reproduction
+from runtime.paper.simulate import CONTROLLERS, Run, plant_params
 
 DPI = 100
 Bounds = tuple[float, float, float, float]  # inset (x0, y0, width, height), axes fraction
@@ -352,7 +352,7 @@ def fig_switching(rep: Reproduction, out: Path, sensing: str, path: str) -> Figu
         f"**Paper Figures {nums[0]} and {nums[1]} (right and left wheel switching gain "
         f"comparison, {'circular' if path == 'circle' else 'lawn mower'} path).** Solid: the "
         "wheel rows of the switching term Δu_a = k̂ s / max(‖s‖, ε) of (24)/(25) "
-        "(`runtime/simulate.py`, `Run.wheel_switching`; ASMC with the gain before each "
+        "(`runtime/paper/simulate.py`, `Run.wheel_switching`; ASMC with the gain before each "
         "step's adaptation), in rad/s². Dashed: the gain k̂ itself, which bounds |Δu_a| on "
         f"every row; its unit is the switching term's ({GAIN_UNIT['paper']} in the paper "
         f"formulation; {GAIN_UNIT['minimal']} in the minimal one). Symmetric-log scale, "

@@ -3,7 +3,7 @@
 The closed loop that runs on a robot is a discrete-time system: the plant under zero-order
 hold over h, the sensing model (``[sensing]`` of the experiment), the estimator of (17)
 and the control law, with memory (the encoder angles and odometry pose of the last sample,
-q(t − h), q̇(t − h), q̇(t − 2h), u(t − h), u(t − 2h)). :mod:`runtime.sampled_loop` builds
+q(t − h), q̇(t − h), q̇(t − 2h), u(t − h), u(t − 2h)). :mod:`runtime.paper.sampled_loop` builds
 that one-sample map from the generated model and laws and the simulator's RK4 plant,
 linearises it about the experiment's circle (a relative equilibrium: constant wheel
 rates), and this module reads stability off its spectral radius.
@@ -43,7 +43,6 @@ from typing import Any
 
 import numpy as np
 
-from runtime import references
 from runtime.experiment import (
     VELOCITY_MODELS,
     Experiment,
@@ -52,7 +51,8 @@ from runtime.experiment import (
     load_experiment,
 )
 from runtime.generated_modules import robot as default_robot
-from runtime.sampled_loop import (
+from runtime.paper import references
+from runtime.paper.sampled_loop import (
     CONTROLLERS,
     FORMULATIONS,
     ClosedLoop,
@@ -62,7 +62,7 @@ from runtime.sampled_loop import (
     roc_gain,
     setting,
 )
-from runtime.simulate import run
+from runtime.paper.simulate import run
 
 __all__ = ["CONTROLLERS", "FORMULATIONS", "Analysis", "ClosedLoop", "LoopSetting", "Pencil",
            "analyse", "analyse_all", "main", "pencil", "setting"]

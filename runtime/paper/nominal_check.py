@@ -12,8 +12,8 @@ values; r, b, d as given) and over headings θ, and raises ``ValueError`` when �
 The box is sampled on a three-level grid (lower face, centre, upper face: 81 points, the
 16 corners included) × 9 headings in [−π, π]; M(p) is the generated ``wmr_model``.
 
-``runtime.sampled_loop.check_sampled_loop`` refuses a configuration whose sampled closed
-loop is predicted unstable; ``runtime.controller_config.checked_controller_config`` builds
+``runtime.paper.sampled_loop.check_sampled_loop`` refuses a configuration whose sampled closed
+loop is predicted unstable; ``runtime.paper.controller_config.checked_controller_config`` builds
 a configuration behind both checks. This module imports no other runtime module but the
 generated code's.
 """

@@ -11,7 +11,7 @@ with the plain ``backward`` estimator: the pairing that made TDROC unstable at �
 before the matched estimator existed.
 
 Writes to the output folder (default ``docs/reproduction``): the figures of
-:mod:`runtime.figures` (PNG), ``metrics.csv``, ``metrics.md`` and ``REPORT.md``. Nothing
+:mod:`runtime.paper.figures` (PNG), ``metrics.csv``, ``metrics.md`` and ``REPORT.md``. Nothing
 written depends on the wall time or the machine's clock, so two runs give the same bytes.
 The wall time is printed on the console only.
 """
@@ -26,12 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime import references
 from runtime.experiment import (
     Experiment,
 )
 from runtime.generated_modules import robot as default_robot
-from runtime.simulate import CONTROLLERS, Run, run
+from runtime.paper import references
+from runtime.paper.simulate import CONTROLLERS, Run, run
 
 
 @dataclass(frozen=True)
@@ -43,7 +43,7 @@ class Figure:
     caption: str
 
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DEFAULT_OUT = ROOT / "docs" / "reproduction"
 DEFAULT_SENSINGS = ("sample-instant", "encoder-average")
 EPS_SWEEP = (0.1, 0.2, 0.5, 1.0)
@@ -545,9 +545,10 @@ def section_references(rep: Reproduction, figures: Sequence[Figure]) -> list[str
         "",
         "The paper's printed definitions are not kinematically consistent: no robot obeying",
         "the constraints (6)–(8) can follow them exactly. The controllers are fed references",
-        "built from wheel-rate profiles and integrated through (31) (`runtime/references.py`), so",
-        "every reference is a motion the robot can make; the printed ones are drawn beside",
-        "ours in Figures 4, 9, 10 and 11 (`printed_circle`, `printed_lawnmower`).",
+        "built from wheel-rate profiles and integrated through (31)",
+        "(`runtime/paper/references.py`), so every reference is a motion the robot can make;",
+        "the printed ones are drawn beside ours in Figures 4, 9, 10 and 11 (`printed_circle`,",
+        "`printed_lawnmower`).",
         "",
         f"* **Circle** (R1 = {references.R1} m, θ̇d = {th} rad/s, start (1.5, 1.5, 0)). Printed:",
         "  x_dc = R1 cos(θ̇d t + θ0), y_dc = R1 + R1 sin(θ̇d t + θ0), θd = θ0 + θ̇d t,",

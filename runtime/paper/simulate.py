@@ -2,7 +2,7 @@
 
 Plant: the constrained dynamics derived with a lateral first moment (``wmr_plant``),
 true parameters = robot + payload schedule, wheel friction (viscous + Coulomb) unknown to
-the controllers, fixed-step RK4 in C (``runtime/csrc/wmr_sim.c``) at ``substeps / h``.
+the controllers, fixed-step RK4 in C (``runtime/paper/csrc/wmr_sim.c``) at ``substeps / h``.
 Controllers: sampled every h with zero-order hold, fed what the experiment's ``[sensing]``
 says is measured — wheel angles from quadrature encoders (4 × ppr counts per revolution,
 times the gear ratio for a motor-side encoder), wheel rates at the sample instant, or
@@ -21,19 +21,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from runtime import cbuild
-from runtime.controller_config import (
+from runtime.experiment import Experiment
+from runtime.generated_modules import robot as generated_robot
+from runtime.generated_modules import wmr_model
+from runtime.paper.controller_config import (
     ACCEL_CODES,
     FORMULATIONS,
     checked_controller_config,
     controller_config,
     roc_bounds,
 )
-from runtime.experiment import Experiment
-from runtime.generated_modules import robot as generated_robot
-from runtime.generated_modules import wmr_model
-from runtime.payload_schedule import extra_payload_on, plant_params
-from runtime.references import Reference
-from runtime.sim_library import build_sim_library
+from runtime.paper.payload_schedule import extra_payload_on, plant_params
+from runtime.paper.references import Reference
+from runtime.paper.sim_library import build_sim_library
 
 __all__ = [
     "ACCEL_CODES",
