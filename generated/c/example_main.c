@@ -25,7 +25,8 @@ int main(void)
     wmr_real_t q[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
     wmr_real_t qdot[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
     wmr_real_t qd[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
-    wmr_real_t qd_dot[5], qd_ddot[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
+    wmr_real_t qd_dot[5], qd_ddot[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0),
+            WMR_LIT(0.0)};
     const wmr_real_t wheel_ref[2] = {WMR_LIT(2.0), WMR_LIT(1.5)}; /* rad/s: a circle */
     wmr_real_t tau[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
     wmr_status_t status;
@@ -42,7 +43,8 @@ int main(void)
     config.q_vel = WMR_LIT(1.0);
     config.h = WMR_LIT(0.01);
     config.tau_max = WMR_LIT(50.0);
-    config.eps = WMR_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1 s */
+    config.eps = WMR_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1
+                                  s */
     /* Rates read at the sample instant (a drive's report): the matched estimate with a zero
        window. Encoder counts differenced over h would need rate_window = h. */
     config.accel_estimator = WMR_ACCEL_MATCHED;

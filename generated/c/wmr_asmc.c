@@ -95,10 +95,12 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
         wmr_real_t s[5];
         if (paper) {
             const wmr_real_t adapt[2] = {config->gamma, config->h};
-            wmr_paper_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
+            wmr_paper_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22,
+                    &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
         } else {
             const wmr_real_t adapt[2] = {config->gamma, config->h};
-            wmr_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
+            wmr_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22,
+                    &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -113,8 +115,8 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

@@ -5,7 +5,8 @@
  */
 #include "wmr_laws.h"
 
-/* wmr_lyapunov_p: documented in wmr_laws.h. operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt */
+/* wmr_lyapunov_p: documented in wmr_laws.h.
+   operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt */
 void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P)
 {
     const wmr_real_t k1 = gains[0];
@@ -19,8 +20,11 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P)
     P[2] = _t1*(k1*q2 + q1);
 }
 
-/* wmr_paper_tde: documented in wmr_laws.h. operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt */
-void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat)
+/* wmr_paper_tde: documented in wmr_laws.h.
+   operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt */
+void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
+    const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
+    wmr_real_t *H1hat)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -84,7 +88,8 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
     H1hat[4] = -I_w*_t20 - _t19*_t27 - _t26*_t30 - _t29*_t4 + up4;
 }
 
-/* wmr_paper_minv_norm: documented in wmr_laws.h. operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt */
+/* wmr_paper_minv_norm: documented in wmr_laws.h.
+   operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt */
 void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 {
     const wmr_real_t m = p->m;
@@ -112,9 +117,11 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     const wmr_real_t _t15 = _t1*_t14;
     const wmr_real_t _t16 = m*m;
     const wmr_real_t _t17 = _t13*_t16;
-    const wmr_real_t _t18 = _t0*_t11/(-WMR_LIT(16.0)*K*_t8 - _t10*_t4*_t9 + WMR_LIT(2.0)*_t12 + WMR_LIT(8.0)*_t15 + _t17*_t5 + WMR_LIT(8.0)*_t2 + _t3*_t5 + WMR_LIT(4.0)*_t7);
+    const wmr_real_t _t18 = _t0*_t11/(-WMR_LIT(16.0)*K*_t8 - _t10*_t4*_t9 + WMR_LIT(2.0)*_t12
+            + WMR_LIT(8.0)*_t15 + _t17*_t5 + WMR_LIT(8.0)*_t2 + _t3*_t5 + WMR_LIT(4.0)*_t7);
     const wmr_real_t _t19 = WMR_LIT(2.0)*_t4;
-    const wmr_real_t _t20 = WMR_LIT(1.0)/(-K*_t5*_t9 - _t10*_t8 + _t12 + WMR_LIT(4.0)*_t15 + _t17*_t19 + _t19*_t3 + WMR_LIT(4.0)*_t2 + WMR_LIT(2.0)*_t7);
+    const wmr_real_t _t20 = WMR_LIT(1.0)/(-K*_t5*_t9 - _t10*_t8 + _t12 + WMR_LIT(4.0)*_t15
+            + _t17*_t19 + _t19*_t3 + WMR_LIT(4.0)*_t2 + WMR_LIT(2.0)*_t7);
     const wmr_real_t _t21 = WMR_LIT(2.0)*_t20;
     const wmr_real_t _t22 = _t0*_t21;
     const wmr_real_t _t23 = I*_t22 - WMR_LIT(4.0)*K*_t0*_t20*d + _t14*_t22;
@@ -163,11 +170,16 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     const wmr_real_t _t66 = _t45 + _t57*d - _t58*d;
     const wmr_real_t _t67 = _t47 + _t57 - _t58;
     const wmr_real_t _t68 = _t27 + _t28;
-    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t24*_t24 + WMR_LIT(2.0)*_t25*_t25 + WMR_LIT(2.0)*_t33*_t33 + WMR_LIT(2.0)*_t34*_t34 + WMR_LIT(2.0)*_t40*_t40 + _t51*_t51 + _t52*_t52 + _t55*_t55 + _t56*_t56 + _t61*_t61 + _t62*_t62 + _t63*_t63 + _t64*_t64 + _t65*_t65 + _t66*_t66 + _t67*_t67 + WMR_LIT(2.0)*_t68*_t68);
+    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t24*_t24 + WMR_LIT(2.0)*_t25*_t25 + WMR_LIT(2.0)*_t33*_t33
+            + WMR_LIT(2.0)*_t34*_t34 + WMR_LIT(2.0)*_t40*_t40 + _t51*_t51 + _t52*_t52 + _t55*_t55
+            + _t56*_t56 + _t61*_t61 + _t62*_t62 + _t63*_t63 + _t64*_t64 + _t65*_t65 + _t66*_t66
+            + _t67*_t67 + WMR_LIT(2.0)*_t68*_t68);
 }
 
-/* wmr_paper_tdroc_gain: documented in wmr_laws.h. operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt */
-void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain)
+/* wmr_paper_tdroc_gain: documented in wmr_laws.h.
+   operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt */
+void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
+    wmr_real_t *gain)
 {
     const wmr_real_t minv_norm_1 = minv_norm[0];
     const wmr_real_t Om0_0 = omega[0];
@@ -263,11 +275,21 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
     const wmr_real_t _t37 = Om7_2 - Om8_2;
     const wmr_real_t _t38 = Om7_3 - Om8_3;
     const wmr_real_t _t39 = Om7_4 - Om8_4;
-    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4) + w1*WMR_SQRT(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9) + w2*WMR_SQRT(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14) + w3*WMR_SQRT(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19) + w4*WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + w5*WMR_SQRT(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29) + w6*WMR_SQRT(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34) + w7*WMR_SQRT(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39));
+    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)
+            + w1*WMR_SQRT(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9)
+            + w2*WMR_SQRT(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14)
+            + w3*WMR_SQRT(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19)
+            + w4*WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24)
+            + w5*WMR_SQRT(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29)
+            + w6*WMR_SQRT(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34)
+            + w7*WMR_SQRT(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39));
 }
 
-/* wmr_paper_tdc_law: documented in wmr_laws.h. operations after CSE: 40 add, 46 mul, 1 div, 2 sin/cos, 0 sqrt */
-void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
+/* wmr_paper_tdc_law: documented in wmr_laws.h.
+   operations after CSE: 40 add, 46 mul, 1 div, 2 sin/cos, 0 sqrt */
+void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
 {
     (void)p12;
     (void)p22;
@@ -343,8 +365,12 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     u[4] = H1hat4 + I_w*_t16 + _t0*_t17 + _t18*_t24 + _t2*_t26;
 }
 
-/* wmr_paper_tdroc_law: documented in wmr_laws.h. operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax */
-void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
+/* wmr_paper_tdroc_law: documented in wmr_laws.h.
+   operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax */
+void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -443,8 +469,12 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     s_norm[0] = _t5;
 }
 
-/* wmr_paper_roc_law: documented in wmr_laws.h. operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax */
-void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
+/* wmr_paper_roc_law: documented in wmr_laws.h.
+   operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax */
+void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -520,7 +550,9 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t _t22 = e2*k1_2 + edot2*k2_2;
     const wmr_real_t _t23 = e3*k1_3 + edot3*k2_3;
     const wmr_real_t _t24 = e4*k1_4 + edot4*k2_4;
-    const wmr_real_t _t25 = (alpha*(WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1 + qdd_des2*qdd_des2 + qdd_des3*qdd_des3 + qdd_des4*qdd_des4)) + phi)/(WMR_LIT(1.0) - alpha);
+    const wmr_real_t _t25 = (alpha*(WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23
+            + _t24*_t24) + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1 + qdd_des2*qdd_des2
+            + qdd_des3*qdd_des3 + qdd_des4*qdd_des4)) + phi)/(WMR_LIT(1.0) - alpha);
     const wmr_real_t _t26 = _t25/WMR_FMAX(_t19, eps_1);
     const wmr_real_t _t27 = _t14*_t26 + _t20 + qdd_des0;
     const wmr_real_t _t28 = _t16*_t26 + _t22 + qdd_des2;
@@ -548,8 +580,10 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t _t50 = I*_t32 - K*_t35;
     const wmr_real_t _t51 = -_t50;
     const wmr_real_t _t52 = K*_t30*thetadot*thetadot;
-    u[0] = -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t29 + _t27*m - _t37*_t38 - _t39*_t40 + _t6*_t7;
-    u[1] = _t1*_t41 + _t10*_t5 - _t12*_t5 - _t13*_t41 - _t29*_t8 - _t38*_t48 - _t40*_t47 + _t41*_t7 + _t42*m;
+    u[0] = -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t29 + _t27*m - _t37*_t38
+            - _t39*_t40 + _t6*_t7;
+    u[1] = _t1*_t41 + _t10*_t5 - _t12*_t5 - _t13*_t41 - _t29*_t8 - _t38*_t48 - _t40*_t47 + _t41*_t7
+            + _t42*m;
     u[2] = I*_t28 - _t1*_t49 + _t27*_t33 + _t38*_t51 + _t40*_t50 - _t42*_t44 + _t49*_t7;
     u[3] = I_w*_t38 + _t27*_t37 + _t28*_t50 + _t42*_t48 + _t52;
     u[4] = I_w*_t40 + _t27*_t39 + _t28*_t51 + _t42*_t47 + _t52;
@@ -562,8 +596,13 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     gain[0] = _t25;
 }
 
-/* wmr_paper_asmc_law: documented in wmr_laws.h. operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax */
-void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next)
+/* wmr_paper_asmc_law: documented in wmr_laws.h.
+   operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax */
+void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
+    const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
+    wmr_real_t *s_norm, wmr_real_t *gain_next)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -662,8 +701,10 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t _t44 = I*_t26 - K*_t29;
     const wmr_real_t _t45 = -_t44;
     const wmr_real_t _t46 = K*_t24*thetadot*thetadot;
-    u[0] = -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t23 + _t21*m - _t31*_t32 - _t33*_t34 + _t6*_t7;
-    u[1] = _t1*_t35 + _t10*_t5 - _t12*_t5 - _t13*_t35 - _t23*_t8 - _t32*_t42 - _t34*_t41 + _t35*_t7 + _t36*m;
+    u[0] = -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t23 + _t21*m - _t31*_t32
+            - _t33*_t34 + _t6*_t7;
+    u[1] = _t1*_t35 + _t10*_t5 - _t12*_t5 - _t13*_t35 - _t23*_t8 - _t32*_t42 - _t34*_t41 + _t35*_t7
+            + _t36*m;
     u[2] = I*_t22 - _t1*_t43 + _t21*_t27 + _t32*_t45 + _t34*_t44 - _t36*_t38 + _t43*_t7;
     u[3] = I_w*_t32 + _t21*_t31 + _t22*_t44 + _t36*_t42 + _t46;
     u[4] = I_w*_t34 + _t21*_t33 + _t22*_t45 + _t36*_t41 + _t46;
@@ -676,8 +717,11 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     gain_next[0] = _t19*adapt_0*h + gain_1;
 }
 
-/* wmr_minimal_tde: documented in wmr_laws.h. operations after CSE: 11 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt */
-void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat)
+/* wmr_minimal_tde: documented in wmr_laws.h.
+   operations after CSE: 11 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt */
+void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
+    const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
+    wmr_real_t *H1hat)
 {
     (void)q_prev;
     const wmr_real_t m = p->m;
@@ -708,7 +752,8 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
     H1hat[1] = -_t5*_t9 - _t7*_t8 + up1;
 }
 
-/* wmr_minimal_minv_norm: documented in wmr_laws.h. operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt */
+/* wmr_minimal_minv_norm: documented in wmr_laws.h.
+   operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt */
 void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 {
     const wmr_real_t m = p->m;
@@ -734,9 +779,11 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     const wmr_real_t _t13 = d*d;
     const wmr_real_t _t14 = _t13*m;
     const wmr_real_t _t15 = _t13*m*m;
-    const wmr_real_t _t16 = _t0*_t10/(-WMR_LIT(16.0)*_t1*_t8 + WMR_LIT(2.0)*_t11 + _t12*_t14 + _t15*_t5 + WMR_LIT(8.0)*_t2 + _t3*_t5 - WMR_LIT(8.0)*_t4*_t9 + WMR_LIT(4.0)*_t7);
+    const wmr_real_t _t16 = _t0*_t10/(-WMR_LIT(16.0)*_t1*_t8 + WMR_LIT(2.0)*_t11 + _t12*_t14
+            + _t15*_t5 + WMR_LIT(8.0)*_t2 + _t3*_t5 - WMR_LIT(8.0)*_t4*_t9 + WMR_LIT(4.0)*_t7);
     const wmr_real_t _t17 = WMR_LIT(2.0)*_t4;
-    const wmr_real_t _t18 = WMR_LIT(1.0)/(WMR_LIT(4.0)*_t1*_t14 + _t11 - _t12*_t8 + _t15*_t17 + _t17*_t3 + WMR_LIT(4.0)*_t2 - _t5*_t9 + WMR_LIT(2.0)*_t7);
+    const wmr_real_t _t18 = WMR_LIT(1.0)/(WMR_LIT(4.0)*_t1*_t14 + _t11 - _t12*_t8 + _t15*_t17
+            + _t17*_t3 + WMR_LIT(4.0)*_t2 - _t5*_t9 + WMR_LIT(2.0)*_t7);
     const wmr_real_t _t19 = WMR_LIT(2.0)*_t18;
     const wmr_real_t _t20 = _t0*_t19;
     const wmr_real_t _t21 = I*_t20 - WMR_LIT(4.0)*_t0*_t18*_t8 + _t14*_t20;
@@ -745,8 +792,10 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t22*_t22 + WMR_LIT(2.0)*_t23*_t23);
 }
 
-/* wmr_minimal_tdroc_gain: documented in wmr_laws.h. operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt */
-void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain)
+/* wmr_minimal_tdroc_gain: documented in wmr_laws.h.
+   operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt */
+void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
+    const wmr_real_t *w, wmr_real_t *gain)
 {
     const wmr_real_t minv_norm_1 = minv_norm[0];
     const wmr_real_t Om0_0 = omega[0];
@@ -791,11 +840,17 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
     const wmr_real_t _t13 = Om6_1 - Om7_1;
     const wmr_real_t _t14 = Om7_0 - Om8_0;
     const wmr_real_t _t15 = Om7_1 - Om8_1;
-    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1) + w1*WMR_SQRT(_t2*_t2 + _t3*_t3) + w2*WMR_SQRT(_t4*_t4 + _t5*_t5) + w3*WMR_SQRT(_t6*_t6 + _t7*_t7) + w4*WMR_SQRT(_t8*_t8 + _t9*_t9) + w5*WMR_SQRT(_t10*_t10 + _t11*_t11) + w6*WMR_SQRT(_t12*_t12 + _t13*_t13) + w7*WMR_SQRT(_t14*_t14 + _t15*_t15));
+    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1) + w1*WMR_SQRT(_t2*_t2 + _t3*_t3)
+            + w2*WMR_SQRT(_t4*_t4 + _t5*_t5) + w3*WMR_SQRT(_t6*_t6 + _t7*_t7)
+            + w4*WMR_SQRT(_t8*_t8 + _t9*_t9) + w5*WMR_SQRT(_t10*_t10 + _t11*_t11)
+            + w6*WMR_SQRT(_t12*_t12 + _t13*_t13) + w7*WMR_SQRT(_t14*_t14 + _t15*_t15));
 }
 
-/* wmr_minimal_tdc_law: documented in wmr_laws.h. operations after CSE: 13 add, 22 mul, 1 div, 0 sin/cos, 0 sqrt */
-void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
+/* wmr_minimal_tdc_law: documented in wmr_laws.h.
+   operations after CSE: 13 add, 22 mul, 1 div, 0 sin/cos, 0 sqrt */
+void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
 {
     (void)q;
     (void)p12;
@@ -832,8 +887,12 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     u[1] = H1hat1 + _t0*_t8 + _t6*_t7;
 }
 
-/* wmr_minimal_tdroc_law: documented in wmr_laws.h. operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
-void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
+/* wmr_minimal_tdroc_law: documented in wmr_laws.h.
+   operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
     (void)q;
     const wmr_real_t m = p->m;
@@ -881,8 +940,12 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
     s_norm[0] = _t8;
 }
 
-/* wmr_minimal_roc_law: documented in wmr_laws.h. operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax */
-void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
+/* wmr_minimal_roc_law: documented in wmr_laws.h.
+   operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax */
+void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
 {
     (void)q;
     const wmr_real_t m = p->m;
@@ -922,7 +985,8 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t _t8 = WMR_SQRT(_t6*_t6 + _t7*_t7);
     const wmr_real_t _t9 = e0*k1_0 + edot0*k2_0;
     const wmr_real_t _t10 = e1*k1_1 + edot1*k2_1;
-    const wmr_real_t _t11 = (alpha*(WMR_SQRT(_t10*_t10 + _t9*_t9) + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(WMR_LIT(1.0) - alpha);
+    const wmr_real_t _t11 = (alpha*(WMR_SQRT(_t10*_t10 + _t9*_t9)
+            + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(WMR_LIT(1.0) - alpha);
     const wmr_real_t _t12 = _t11/WMR_FMAX(_t8, eps_1);
     const wmr_real_t _t13 = _t12*_t6 + _t9 + qdd_des0;
     const wmr_real_t _t14 = WMR_LIT(0.25)*_t0*m - _t4;
@@ -942,8 +1006,13 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     gain[0] = _t11;
 }
 
-/* wmr_minimal_asmc_law: documented in wmr_laws.h. operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
-void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next)
+/* wmr_minimal_asmc_law: documented in wmr_laws.h.
+   operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
+    const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
+    wmr_real_t *s_norm, wmr_real_t *gain_next)
 {
     (void)q;
     const wmr_real_t m = p->m;

@@ -43,15 +43,20 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
  * @param[in]  q_prev [5] row-major (WMR_PAPER_TDE_Q_PREV_SIZE): qp0, qp1, qp2, qp3, qp4 -- q(t-h)
- * @param[in]  u_prev [5] row-major (WMR_PAPER_TDE_U_PREV_SIZE): up0, up1, up2, up3, up4 -- u(t-h) applied
- * @param[in]  qdot_now [5] row-major (WMR_PAPER_TDE_QDOT_NOW_SIZE): qd_now0, qd_now1, qd_now2, qd_now3, qd_now4 -- qdot(t)
- * @param[in]  qdot_then [5] row-major (WMR_PAPER_TDE_QDOT_THEN_SIZE): qd_then0, qd_then1, qd_then2, qd_then3, qd_then4 -- qdot(t-span)
+ * @param[in]  u_prev [5] row-major (WMR_PAPER_TDE_U_PREV_SIZE): up0, up1, up2, up3, up4 -- u(t-h)
+ *     applied
+ * @param[in]  qdot_now [5] row-major (WMR_PAPER_TDE_QDOT_NOW_SIZE): qd_now0, qd_now1, qd_now2,
+ *     qd_now3, qd_now4 -- qdot(t)
+ * @param[in]  qdot_then [5] row-major (WMR_PAPER_TDE_QDOT_THEN_SIZE): qd_then0, qd_then1, qd_then2,
+ *     qd_then3, qd_then4 -- qdot(t-span)
  * @param[in]  span [1] row-major (WMR_PAPER_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [5] row-major (WMR_PAPER_TDE_H1HAT_SIZE)
  *
  * operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt
  */
-void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat);
+void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
+    const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
+    wmr_real_t *H1hat);
 
 #define WMR_PAPER_MINV_NORM_NORM_SIZE 1
 
@@ -82,14 +87,21 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *
  * Paper equations: (25).
  *
- * @param[in]  minv_norm [1] row-major (WMR_PAPER_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from _minv_norm
- * @param[in]  omega [9x5] row-major (WMR_PAPER_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4 -- row i is Omega(i+1)
- * @param[in]  w [8] row-major (WMR_PAPER_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 -- weights
+ * @param[in]  minv_norm [1] row-major (WMR_PAPER_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from
+ *     _minv_norm
+ * @param[in]  omega [9x5] row-major (WMR_PAPER_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om0_2, Om0_3,
+ *     Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1,
+ *     Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4,
+ *     Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2,
+ *     Om8_3, Om8_4 -- row i is Omega(i+1)
+ * @param[in]  w [8] row-major (WMR_PAPER_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 --
+ *     weights
  * @param[out] gain [1] row-major (WMR_PAPER_TDROC_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt
  */
-void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
+void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
+    wmr_real_t *gain);
 
 #define WMR_PAPER_TDC_LAW_Q_SIZE 5
 #define WMR_PAPER_TDC_LAW_E_SIZE 5
@@ -108,20 +120,29 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
  * Paper equations: (16), (18).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_PAPER_TDC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  q [5] row-major (WMR_PAPER_TDC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
  * @param[in]  e [5] row-major (WMR_PAPER_TDC_LAW_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
- * @param[in]  edot [5] row-major (WMR_PAPER_TDC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4 -- qdot_des - qdot
- * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
- * @param[in]  k1 [5] row-major (WMR_PAPER_TDC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 -- diagonal of K1
- * @param[in]  k2 [5] row-major (WMR_PAPER_TDC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 -- diagonal of K2
- * @param[in]  p12 [5] row-major (WMR_PAPER_TDC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 -- P entries per coordinate
+ * @param[in]  edot [5] row-major (WMR_PAPER_TDC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4
+ *     -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1,
+ *     qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_TDC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_TDC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_TDC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 --
+ *     P entries per coordinate
  * @param[in]  p22 [5] row-major (WMR_PAPER_TDC_LAW_P22_SIZE): p22_0, p22_1, p22_2, p22_3, p22_4
- * @param[in]  H1hat [5] row-major (WMR_PAPER_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1, H1hat2, H1hat3, H1hat4 -- (17)
+ * @param[in]  H1hat [5] row-major (WMR_PAPER_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1, H1hat2, H1hat3,
+ *     H1hat4 -- (17)
  * @param[out] u [5] row-major (WMR_PAPER_TDC_LAW_U_SIZE)
  *
  * operations after CSE: 40 add, 46 mul, 1 div, 2 sin/cos, 0 sqrt
  */
-void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
+void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
 
 #define WMR_PAPER_TDROC_LAW_Q_SIZE 5
 #define WMR_PAPER_TDROC_LAW_E_SIZE 5
@@ -146,15 +167,22 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * Paper equations: (16), (22), (24), (25).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_PAPER_TDROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  q [5] row-major (WMR_PAPER_TDROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
  * @param[in]  e [5] row-major (WMR_PAPER_TDROC_LAW_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
- * @param[in]  edot [5] row-major (WMR_PAPER_TDROC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4 -- qdot_des - qdot
- * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
- * @param[in]  k1 [5] row-major (WMR_PAPER_TDROC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 -- diagonal of K1
- * @param[in]  k2 [5] row-major (WMR_PAPER_TDROC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 -- diagonal of K2
- * @param[in]  p12 [5] row-major (WMR_PAPER_TDROC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 -- P entries per coordinate
+ * @param[in]  edot [5] row-major (WMR_PAPER_TDROC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4
+ *     -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1,
+ *     qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_TDROC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_TDROC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_TDROC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4
+ *     -- P entries per coordinate
  * @param[in]  p22 [5] row-major (WMR_PAPER_TDROC_LAW_P22_SIZE): p22_0, p22_1, p22_2, p22_3, p22_4
- * @param[in]  H1hat [5] row-major (WMR_PAPER_TDROC_LAW_H1HAT_SIZE): H1hat0, H1hat1, H1hat2, H1hat3, H1hat4 -- (17)
+ * @param[in]  H1hat [5] row-major (WMR_PAPER_TDROC_LAW_H1HAT_SIZE): H1hat0, H1hat1, H1hat2, H1hat3,
+ *     H1hat4 -- (17)
  * @param[in]  gain [1] row-major (WMR_PAPER_TDROC_LAW_GAIN_SIZE): gain -- khat of (25)
  * @param[in]  eps [1] row-major (WMR_PAPER_TDROC_LAW_EPS_SIZE): eps -- boundary layer
  * @param[out] u [5] row-major (WMR_PAPER_TDROC_LAW_U_SIZE)
@@ -163,7 +191,10 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax
  */
-void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);
+void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);
 
 #define WMR_PAPER_ROC_LAW_Q_SIZE 5
 #define WMR_PAPER_ROC_LAW_QDOT_SIZE 5
@@ -189,14 +220,21 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * Paper equations: (22), (24).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_PAPER_ROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
- * @param[in]  qdot [5] row-major (WMR_PAPER_ROC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- measured qdot
+ * @param[in]  q [5] row-major (WMR_PAPER_ROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
+ * @param[in]  qdot [5] row-major (WMR_PAPER_ROC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- measured qdot
  * @param[in]  e [5] row-major (WMR_PAPER_ROC_LAW_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
- * @param[in]  edot [5] row-major (WMR_PAPER_ROC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4 -- qdot_des - qdot
- * @param[in]  qddot_des [5] row-major (WMR_PAPER_ROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
- * @param[in]  k1 [5] row-major (WMR_PAPER_ROC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 -- diagonal of K1
- * @param[in]  k2 [5] row-major (WMR_PAPER_ROC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 -- diagonal of K2
- * @param[in]  p12 [5] row-major (WMR_PAPER_ROC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 -- P entries per coordinate
+ * @param[in]  edot [5] row-major (WMR_PAPER_ROC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4
+ *     -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_ROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1,
+ *     qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_ROC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_ROC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_ROC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 --
+ *     P entries per coordinate
  * @param[in]  p22 [5] row-major (WMR_PAPER_ROC_LAW_P22_SIZE): p22_0, p22_1, p22_2, p22_3, p22_4
  * @param[in]  bounds [2] row-major (WMR_PAPER_ROC_LAW_BOUNDS_SIZE): alpha, phi -- alpha, phi
  * @param[in]  eps [1] row-major (WMR_PAPER_ROC_LAW_EPS_SIZE): eps
@@ -207,7 +245,10 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax
  */
-void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain);
+void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain);
 
 #define WMR_PAPER_ASMC_LAW_Q_SIZE 5
 #define WMR_PAPER_ASMC_LAW_QDOT_SIZE 5
@@ -234,14 +275,21 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * Paper equations: (22), (24).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_PAPER_ASMC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
- * @param[in]  qdot [5] row-major (WMR_PAPER_ASMC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- measured qdot
+ * @param[in]  q [5] row-major (WMR_PAPER_ASMC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
+ * @param[in]  qdot [5] row-major (WMR_PAPER_ASMC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- measured qdot
  * @param[in]  e [5] row-major (WMR_PAPER_ASMC_LAW_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
- * @param[in]  edot [5] row-major (WMR_PAPER_ASMC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4 -- qdot_des - qdot
- * @param[in]  qddot_des [5] row-major (WMR_PAPER_ASMC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
- * @param[in]  k1 [5] row-major (WMR_PAPER_ASMC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 -- diagonal of K1
- * @param[in]  k2 [5] row-major (WMR_PAPER_ASMC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 -- diagonal of K2
- * @param[in]  p12 [5] row-major (WMR_PAPER_ASMC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 -- P entries per coordinate
+ * @param[in]  edot [5] row-major (WMR_PAPER_ASMC_LAW_EDOT_SIZE): edot0, edot1, edot2, edot3, edot4
+ *     -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_ASMC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1,
+ *     qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_ASMC_LAW_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_ASMC_LAW_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_ASMC_LAW_P12_SIZE): p12_0, p12_1, p12_2, p12_3, p12_4 --
+ *     P entries per coordinate
  * @param[in]  p22 [5] row-major (WMR_PAPER_ASMC_LAW_P22_SIZE): p22_0, p22_1, p22_2, p22_3, p22_4
  * @param[in]  gain [1] row-major (WMR_PAPER_ASMC_LAW_GAIN_SIZE): gain -- khat
  * @param[in]  eps [1] row-major (WMR_PAPER_ASMC_LAW_EPS_SIZE): eps
@@ -253,7 +301,11 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax
  */
-void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next);
+void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
+    const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
+    wmr_real_t *s_norm, wmr_real_t *gain_next);
 
 #define WMR_MINIMAL_TDE_Q_PREV_SIZE 5
 #define WMR_MINIMAL_TDE_U_PREV_SIZE 2
@@ -272,13 +324,16 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
  * @param[in]  q_prev [5] row-major (WMR_MINIMAL_TDE_Q_PREV_SIZE): qp0, qp1, qp2, qp3, qp4 -- q(t-h)
  * @param[in]  u_prev [2] row-major (WMR_MINIMAL_TDE_U_PREV_SIZE): up0, up1 -- u(t-h) applied
  * @param[in]  qdot_now [2] row-major (WMR_MINIMAL_TDE_QDOT_NOW_SIZE): qd_now0, qd_now1 -- qdot(t)
- * @param[in]  qdot_then [2] row-major (WMR_MINIMAL_TDE_QDOT_THEN_SIZE): qd_then0, qd_then1 -- qdot(t-span)
+ * @param[in]  qdot_then [2] row-major (WMR_MINIMAL_TDE_QDOT_THEN_SIZE): qd_then0, qd_then1 --
+ *     qdot(t-span)
  * @param[in]  span [1] row-major (WMR_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (WMR_MINIMAL_TDE_H1HAT_SIZE)
  *
  * operations after CSE: 11 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt
  */
-void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span, wmr_real_t *H1hat);
+void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
+    const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
+    wmr_real_t *H1hat);
 
 #define WMR_MINIMAL_MINV_NORM_NORM_SIZE 1
 
@@ -309,14 +364,19 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *
  * Paper equations: (25).
  *
- * @param[in]  minv_norm [1] row-major (WMR_MINIMAL_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from _minv_norm
- * @param[in]  omega [9x2] row-major (WMR_MINIMAL_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 -- row i is Omega(i+1)
- * @param[in]  w [8] row-major (WMR_MINIMAL_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 -- weights
+ * @param[in]  minv_norm [1] row-major (WMR_MINIMAL_TDROC_GAIN_MINV_NORM_SIZE): minv_norm -- from
+ *     _minv_norm
+ * @param[in]  omega [9x2] row-major (WMR_MINIMAL_TDROC_GAIN_OMEGA_SIZE): Om0_0, Om0_1, Om1_0,
+ *     Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1,
+ *     Om8_0, Om8_1 -- row i is Omega(i+1)
+ * @param[in]  w [8] row-major (WMR_MINIMAL_TDROC_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 --
+ *     weights
  * @param[out] gain [1] row-major (WMR_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
  */
-void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w, wmr_real_t *gain);
+void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
+    const wmr_real_t *w, wmr_real_t *gain);
 
 #define WMR_MINIMAL_TDC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_TDC_LAW_E_SIZE 2
@@ -335,20 +395,25 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
  * Paper equations: (16), (18).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_MINIMAL_TDC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  q [5] row-major (WMR_MINIMAL_TDC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
  * @param[in]  e [2] row-major (WMR_MINIMAL_TDC_LAW_E_SIZE): e0, e1 -- q_des - q
  * @param[in]  edot [2] row-major (WMR_MINIMAL_TDC_LAW_EDOT_SIZE): edot0, edot1 -- qdot_des - qdot
- * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_TDC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 -- desired acceleration
+ * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_TDC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 --
+ *     desired acceleration
  * @param[in]  k1 [2] row-major (WMR_MINIMAL_TDC_LAW_K1_SIZE): k1_0, k1_1 -- diagonal of K1
  * @param[in]  k2 [2] row-major (WMR_MINIMAL_TDC_LAW_K2_SIZE): k2_0, k2_1 -- diagonal of K2
- * @param[in]  p12 [2] row-major (WMR_MINIMAL_TDC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per coordinate
+ * @param[in]  p12 [2] row-major (WMR_MINIMAL_TDC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per
+ *     coordinate
  * @param[in]  p22 [2] row-major (WMR_MINIMAL_TDC_LAW_P22_SIZE): p22_0, p22_1
  * @param[in]  H1hat [2] row-major (WMR_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (WMR_MINIMAL_TDC_LAW_U_SIZE)
  *
  * operations after CSE: 13 add, 22 mul, 1 div, 0 sin/cos, 0 sqrt
  */
-void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
+void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
 
 #define WMR_MINIMAL_TDROC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_TDROC_LAW_E_SIZE 2
@@ -373,13 +438,16 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * Paper equations: (16), (22), (24), (25).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_MINIMAL_TDROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
+ * @param[in]  q [5] row-major (WMR_MINIMAL_TDROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
  * @param[in]  e [2] row-major (WMR_MINIMAL_TDROC_LAW_E_SIZE): e0, e1 -- q_des - q
  * @param[in]  edot [2] row-major (WMR_MINIMAL_TDROC_LAW_EDOT_SIZE): edot0, edot1 -- qdot_des - qdot
- * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_TDROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 -- desired acceleration
+ * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_TDROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 --
+ *     desired acceleration
  * @param[in]  k1 [2] row-major (WMR_MINIMAL_TDROC_LAW_K1_SIZE): k1_0, k1_1 -- diagonal of K1
  * @param[in]  k2 [2] row-major (WMR_MINIMAL_TDROC_LAW_K2_SIZE): k2_0, k2_1 -- diagonal of K2
- * @param[in]  p12 [2] row-major (WMR_MINIMAL_TDROC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per coordinate
+ * @param[in]  p12 [2] row-major (WMR_MINIMAL_TDROC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per
+ *     coordinate
  * @param[in]  p22 [2] row-major (WMR_MINIMAL_TDROC_LAW_P22_SIZE): p22_0, p22_1
  * @param[in]  H1hat [2] row-major (WMR_MINIMAL_TDROC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[in]  gain [1] row-major (WMR_MINIMAL_TDROC_LAW_GAIN_SIZE): gain -- khat of (25)
@@ -390,7 +458,10 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
  */
-void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);
+void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);
 
 #define WMR_MINIMAL_ROC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_ROC_LAW_QDOT_SIZE 5
@@ -416,14 +487,18 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  * Paper equations: (22), (24).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_MINIMAL_ROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
- * @param[in]  qdot [5] row-major (WMR_MINIMAL_ROC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- measured qdot
+ * @param[in]  q [5] row-major (WMR_MINIMAL_ROC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
+ * @param[in]  qdot [5] row-major (WMR_MINIMAL_ROC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- measured qdot
  * @param[in]  e [2] row-major (WMR_MINIMAL_ROC_LAW_E_SIZE): e0, e1 -- q_des - q
  * @param[in]  edot [2] row-major (WMR_MINIMAL_ROC_LAW_EDOT_SIZE): edot0, edot1 -- qdot_des - qdot
- * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_ROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 -- desired acceleration
+ * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_ROC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 --
+ *     desired acceleration
  * @param[in]  k1 [2] row-major (WMR_MINIMAL_ROC_LAW_K1_SIZE): k1_0, k1_1 -- diagonal of K1
  * @param[in]  k2 [2] row-major (WMR_MINIMAL_ROC_LAW_K2_SIZE): k2_0, k2_1 -- diagonal of K2
- * @param[in]  p12 [2] row-major (WMR_MINIMAL_ROC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per coordinate
+ * @param[in]  p12 [2] row-major (WMR_MINIMAL_ROC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per
+ *     coordinate
  * @param[in]  p22 [2] row-major (WMR_MINIMAL_ROC_LAW_P22_SIZE): p22_0, p22_1
  * @param[in]  bounds [2] row-major (WMR_MINIMAL_ROC_LAW_BOUNDS_SIZE): alpha, phi -- alpha, phi
  * @param[in]  eps [1] row-major (WMR_MINIMAL_ROC_LAW_EPS_SIZE): eps
@@ -434,7 +509,10 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  *
  * operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax
  */
-void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain);
+void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain);
 
 #define WMR_MINIMAL_ASMC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_ASMC_LAW_QDOT_SIZE 5
@@ -461,14 +539,18 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * Paper equations: (22), (24).
  *
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
- * @param[in]  q [5] row-major (WMR_MINIMAL_ASMC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- measured q (five coordinates)
- * @param[in]  qdot [5] row-major (WMR_MINIMAL_ASMC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- measured qdot
+ * @param[in]  q [5] row-major (WMR_MINIMAL_ASMC_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
+ * @param[in]  qdot [5] row-major (WMR_MINIMAL_ASMC_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- measured qdot
  * @param[in]  e [2] row-major (WMR_MINIMAL_ASMC_LAW_E_SIZE): e0, e1 -- q_des - q
  * @param[in]  edot [2] row-major (WMR_MINIMAL_ASMC_LAW_EDOT_SIZE): edot0, edot1 -- qdot_des - qdot
- * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_ASMC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 -- desired acceleration
+ * @param[in]  qddot_des [2] row-major (WMR_MINIMAL_ASMC_LAW_QDDOT_DES_SIZE): qdd_des0, qdd_des1 --
+ *     desired acceleration
  * @param[in]  k1 [2] row-major (WMR_MINIMAL_ASMC_LAW_K1_SIZE): k1_0, k1_1 -- diagonal of K1
  * @param[in]  k2 [2] row-major (WMR_MINIMAL_ASMC_LAW_K2_SIZE): k2_0, k2_1 -- diagonal of K2
- * @param[in]  p12 [2] row-major (WMR_MINIMAL_ASMC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per coordinate
+ * @param[in]  p12 [2] row-major (WMR_MINIMAL_ASMC_LAW_P12_SIZE): p12_0, p12_1 -- P entries per
+ *     coordinate
  * @param[in]  p22 [2] row-major (WMR_MINIMAL_ASMC_LAW_P22_SIZE): p22_0, p22_1
  * @param[in]  gain [1] row-major (WMR_MINIMAL_ASMC_LAW_GAIN_SIZE): gain -- khat
  * @param[in]  eps [1] row-major (WMR_MINIMAL_ASMC_LAW_EPS_SIZE): eps
@@ -480,7 +562,11 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
  */
-void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next);
+void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
+    const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
+    wmr_real_t *s_norm, wmr_real_t *gain_next);
 
 #ifdef __cplusplus
 }

@@ -5,7 +5,8 @@
  */
 #include "wmr_model.h"
 
-/* wmr_mass_matrix: documented in wmr_model.h. operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt */
+/* wmr_mass_matrix: documented in wmr_model.h.
+   operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt */
 void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 {
     const wmr_real_t m = p->m;
@@ -66,8 +67,10 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
     M[24] = I_w;
 }
 
-/* wmr_bias_forces: documented in wmr_model.h. operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt */
-void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, wmr_real_t *H)
+/* wmr_bias_forces: documented in wmr_model.h.
+   operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt */
+void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    wmr_real_t *H)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t K = p->K;
@@ -103,8 +106,10 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
     H[4] = _t17;
 }
 
-/* wmr_forward_dynamics: documented in wmr_model.h. operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt */
-wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
+/* wmr_forward_dynamics: documented in wmr_model.h.
+   operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt */
+wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -118,7 +123,9 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r) || !isfinite(b) || !isfinite(d) || !isfinite(theta) || !isfinite(thetadot_r) || !isfinite(thetadot_l) || !isfinite(tau_r) || !isfinite(tau_l)) {
+    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r)
+            || !isfinite(b) || !isfinite(d) || !isfinite(theta) || !isfinite(thetadot_r)
+            || !isfinite(thetadot_l) || !isfinite(tau_r) || !isfinite(tau_l)) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_SIN(theta);
@@ -161,8 +168,10 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
     if (!(_t16 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t24*(_t10 - _t11) + _t27*(_t10 + _t11) + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r);
-    const wmr_real_t r_1 = _t24*(_t1 + _t4) + _t27*(_t1 - _t4) - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r);
+    const wmr_real_t r_0 = _t24*(_t10 - _t11) + _t27*(_t10 + _t11)
+            + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r);
+    const wmr_real_t r_1 = _t24*(_t1 + _t4) + _t27*(_t1 - _t4)
+            - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r);
     const wmr_real_t r_2 = _t23 - _t26;
     const wmr_real_t r_3 = _t21;
     const wmr_real_t r_4 = _t25;
@@ -177,8 +186,10 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
     return WMR_OK;
 }
 
-/* wmr_kinematics: documented in wmr_model.h. operations after CSE: 7 add, 14 mul, 1 div, 2 sin/cos, 0 sqrt */
-void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, wmr_real_t *pose_rates)
+/* wmr_kinematics: documented in wmr_model.h.
+   operations after CSE: 7 add, 14 mul, 1 div, 2 sin/cos, 0 sqrt */
+void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
+    wmr_real_t *pose_rates)
 {
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
@@ -201,7 +212,8 @@ void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t
     pose_rates[2] = _t4*r*thetadot_r - _t5*thetadot_l;
 }
 
-/* wmr_minimal_mass_matrix: documented in wmr_model.h. operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
+/* wmr_minimal_mass_matrix: documented in wmr_model.h.
+   operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
 void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 {
     (void)q;
@@ -225,8 +237,10 @@ void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_rea
     M[3] = _t5;
 }
 
-/* wmr_minimal_bias_forces: documented in wmr_model.h. operations after CSE: 6 add, 23 mul, 1 div, 0 sin/cos, 0 sqrt */
-void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, wmr_real_t *H)
+/* wmr_minimal_bias_forces: documented in wmr_model.h.
+   operations after CSE: 6 add, 23 mul, 1 div, 0 sin/cos, 0 sqrt */
+void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, wmr_real_t *H)
 {
     (void)q;
     const wmr_real_t m = p->m;
@@ -249,8 +263,10 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
     H[1] = K*_t1*_t2*_t8 + _t1*_t2*d*m*thetadot_l*thetadot_r - _t6 - _t7*_t8;
 }
 
-/* wmr_minimal_forward_dynamics: documented in wmr_model.h. operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt */
-wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels)
+/* wmr_minimal_forward_dynamics: documented in wmr_model.h.
+   operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt */
+wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels)
 {
     (void)q;
     const wmr_real_t m = p->m;
@@ -264,7 +280,9 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r) || !isfinite(b) || !isfinite(d) || !isfinite(thetadot_r) || !isfinite(thetadot_l) || !isfinite(tau_r) || !isfinite(tau_l)) {
+    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r)
+            || !isfinite(b) || !isfinite(d) || !isfinite(thetadot_r) || !isfinite(thetadot_l)
+            || !isfinite(tau_r) || !isfinite(tau_l)) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = r*r;
@@ -301,8 +319,10 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     return WMR_OK;
 }
 
-/* wmr_linearization: documented in wmr_model.h. operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt */
-void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B)
+/* wmr_linearization: documented in wmr_model.h.
+   operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt */
+void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
+    const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B)
 {
     (void)tau;
     const wmr_real_t m = p->m;

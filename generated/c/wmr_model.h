@@ -23,7 +23,8 @@ extern "C" {
  * Paper equations: (14).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_MASS_MATRIX_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  q [5] row-major (WMR_MASS_MATRIX_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c,
+ *     y_c, theta, theta_r, theta_l
  * @param[out] M [5x5] row-major (WMR_MASS_MATRIX_M_SIZE) -- 5x5 row-major
  *
  * operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt
@@ -41,13 +42,16 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
  * Paper equations: (14).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_BIAS_FORCES_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  qdot [5] row-major (WMR_BIAS_FORCES_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- generalised velocities
+ * @param[in]  q [5] row-major (WMR_BIAS_FORCES_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c,
+ *     y_c, theta, theta_r, theta_l
+ * @param[in]  qdot [5] row-major (WMR_BIAS_FORCES_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r,
+ *     thetadot_l -- generalised velocities
  * @param[out] H [5] row-major (WMR_BIAS_FORCES_H_SIZE)
  *
  * operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt
  */
-void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, wmr_real_t *H);
+void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    wmr_real_t *H);
 
 #define WMR_FORWARD_DYNAMICS_Q_SIZE 5
 #define WMR_FORWARD_DYNAMICS_QDOT_SIZE 5
@@ -64,9 +68,12 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  * Paper equations: (9), (14), (31).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_FORWARD_DYNAMICS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  qdot [5] row-major (WMR_FORWARD_DYNAMICS_QDOT_SIZE): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l -- generalised velocities
- * @param[in]  tau [2] row-major (WMR_FORWARD_DYNAMICS_TAU_SIZE): tau_r, tau_l -- wheel torques tau_r, tau_l
+ * @param[in]  q [5] row-major (WMR_FORWARD_DYNAMICS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  qdot [5] row-major (WMR_FORWARD_DYNAMICS_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- generalised velocities
+ * @param[in]  tau [2] row-major (WMR_FORWARD_DYNAMICS_TAU_SIZE): tau_r, tau_l -- wheel torques
+ *     tau_r, tau_l
  * @param[out] qddot [5] row-major (WMR_FORWARD_DYNAMICS_QDDOT_SIZE)
  * @return WMR_OK on success; on error no output is written:
  *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
@@ -78,7 +85,8 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *
  * operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt
  */
-wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
+wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
 
 #define WMR_KINEMATICS_Q_SIZE 5
 #define WMR_KINEMATICS_WHEEL_RATES_SIZE 2
@@ -90,13 +98,16 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, co
  * Paper equations: (31), (13).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_KINEMATICS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_KINEMATICS_WHEEL_RATES_SIZE): thetadot_r, thetadot_l -- theta_r rate, theta_l rate
+ * @param[in]  q [5] row-major (WMR_KINEMATICS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c,
+ *     y_c, theta, theta_r, theta_l
+ * @param[in]  wheel_rates [2] row-major (WMR_KINEMATICS_WHEEL_RATES_SIZE): thetadot_r, thetadot_l
+ *     -- theta_r rate, theta_l rate
  * @param[out] pose_rates [3] row-major (WMR_KINEMATICS_POSE_RATES_SIZE)
  *
  * operations after CSE: 7 add, 14 mul, 1 div, 2 sin/cos, 0 sqrt
  */
-void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, wmr_real_t *pose_rates);
+void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
+    wmr_real_t *pose_rates);
 
 #define WMR_MINIMAL_MASS_MATRIX_Q_SIZE 5
 #define WMR_MINIMAL_MASS_MATRIX_M_SIZE 4
@@ -109,7 +120,8 @@ void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t
  * Paper equations: (9).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_MINIMAL_MASS_MATRIX_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  q [5] row-major (WMR_MINIMAL_MASS_MATRIX_Q_SIZE): x_c, y_c, theta, theta_r, theta_l
+ *     -- x_c, y_c, theta, theta_r, theta_l
  * @param[out] M [2x2] row-major (WMR_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
  * operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt
@@ -126,13 +138,16 @@ void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_rea
  * Paper equations: (9).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_MINIMAL_BIAS_FORCES_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_MINIMAL_BIAS_FORCES_WHEEL_RATES_SIZE): thetadot_r, thetadot_l -- theta_r rate, theta_l rate
+ * @param[in]  q [5] row-major (WMR_MINIMAL_BIAS_FORCES_Q_SIZE): x_c, y_c, theta, theta_r, theta_l
+ *     -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  wheel_rates [2] row-major (WMR_MINIMAL_BIAS_FORCES_WHEEL_RATES_SIZE): thetadot_r,
+ *     thetadot_l -- theta_r rate, theta_l rate
  * @param[out] H [2] row-major (WMR_MINIMAL_BIAS_FORCES_H_SIZE)
  *
  * operations after CSE: 6 add, 23 mul, 1 div, 0 sin/cos, 0 sqrt
  */
-void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, wmr_real_t *H);
+void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, wmr_real_t *H);
 
 #define WMR_MINIMAL_FORWARD_DYNAMICS_Q_SIZE 5
 #define WMR_MINIMAL_FORWARD_DYNAMICS_WHEEL_RATES_SIZE 2
@@ -145,9 +160,12 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
  * Paper equations: (9).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_WHEEL_RATES_SIZE): thetadot_r, thetadot_l -- theta_r rate, theta_l rate
- * @param[in]  tau [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_TAU_SIZE): tau_r, tau_l -- wheel torques tau_r, tau_l
+ * @param[in]  q [5] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_Q_SIZE): x_c, y_c, theta, theta_r,
+ *     theta_l -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  wheel_rates [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_WHEEL_RATES_SIZE):
+ *     thetadot_r, thetadot_l -- theta_r rate, theta_l rate
+ * @param[in]  tau [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_TAU_SIZE): tau_r, tau_l -- wheel
+ *     torques tau_r, tau_l
  * @param[out] wheel_accels [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_WHEEL_ACCELS_SIZE)
  * @return WMR_OK on success; on error no output is written:
  *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
@@ -159,7 +177,8 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const w
  *
  * operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt
  */
-wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels);
+wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels);
 
 #define WMR_LINEARIZATION_Q_SIZE 5
 #define WMR_LINEARIZATION_WHEEL_RATES_SIZE 2
@@ -178,15 +197,19 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
  * Paper equations: (9), (31).
  *
  * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_LINEARIZATION_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_LINEARIZATION_WHEEL_RATES_SIZE): thetadot_r, thetadot_l -- theta_r rate, theta_l rate
- * @param[in]  tau [2] row-major (WMR_LINEARIZATION_TAU_SIZE): tau_r, tau_l -- wheel torques tau_r, tau_l
+ * @param[in]  q [5] row-major (WMR_LINEARIZATION_Q_SIZE): x_c, y_c, theta, theta_r, theta_l -- x_c,
+ *     y_c, theta, theta_r, theta_l
+ * @param[in]  wheel_rates [2] row-major (WMR_LINEARIZATION_WHEEL_RATES_SIZE): thetadot_r,
+ *     thetadot_l -- theta_r rate, theta_l rate
+ * @param[in]  tau [2] row-major (WMR_LINEARIZATION_TAU_SIZE): tau_r, tau_l -- wheel torques tau_r,
+ *     tau_l
  * @param[out] A [7x7] row-major (WMR_LINEARIZATION_A_SIZE) -- 7x7 row-major
  * @param[out] B [7x2] row-major (WMR_LINEARIZATION_B_SIZE) -- 7x2 row-major
  *
  * operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt
  */
-void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
+void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
+    const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
 
 #ifdef __cplusplus
 }

@@ -5,8 +5,10 @@
  */
 #include "wmr_plant.h"
 
-/* wmr_plant_state_derivative: documented in wmr_plant.h. operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
-void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x, const wmr_real_t *tau, wmr_real_t *xdot)
+/* wmr_plant_state_derivative: documented in wmr_plant.h.
+   operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
+void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x,
+    const wmr_real_t *tau, wmr_real_t *xdot)
 {
     const wmr_real_t m = pp->m;
     const wmr_real_t I = pp->Iz;
@@ -55,8 +57,10 @@ void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *
     xdot[6] = _t21*(-_t15*_t24 + _t19*_t23);
 }
 
-/* wmr_plant_params_with_payload: documented in wmr_plant.h. operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-void wmr_plant_params_with_payload(const wmr_plant_params_t *base, const wmr_real_t *payload, wmr_real_t *params)
+/* wmr_plant_params_with_payload: documented in wmr_plant.h.
+   operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
+void wmr_plant_params_with_payload(const wmr_plant_params_t *base, const wmr_real_t *payload,
+    wmr_real_t *params)
 {
     const wmr_real_t m = base->m;
     const wmr_real_t I = base->Iz;

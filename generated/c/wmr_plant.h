@@ -23,13 +23,16 @@ extern "C" {
  * Paper equations: (9), (31).
  *
  * @param[in]  pp wmr_plant_params_t -- true parameters of the simulated robot, including K_lat
- * @param[in]  x [7] row-major (WMR_PLANT_STATE_DERIVATIVE_X_SIZE): x_c, y_c, theta, theta_r, theta_l, thetadot_r, thetadot_l -- q (5), then the wheel rates (2)
- * @param[in]  tau [2] row-major (WMR_PLANT_STATE_DERIVATIVE_TAU_SIZE): tau_r, tau_l -- wheel torques after friction
+ * @param[in]  x [7] row-major (WMR_PLANT_STATE_DERIVATIVE_X_SIZE): x_c, y_c, theta, theta_r,
+ *     theta_l, thetadot_r, thetadot_l -- q (5), then the wheel rates (2)
+ * @param[in]  tau [2] row-major (WMR_PLANT_STATE_DERIVATIVE_TAU_SIZE): tau_r, tau_l -- wheel
+ *     torques after friction
  * @param[out] xdot [7] row-major (WMR_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
  * operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
  */
-void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x, const wmr_real_t *tau, wmr_real_t *xdot);
+void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x,
+    const wmr_real_t *tau, wmr_real_t *xdot);
 
 #define WMR_PLANT_PARAMS_WITH_PAYLOAD_PAYLOAD_SIZE 3
 #define WMR_PLANT_PARAMS_WITH_PAYLOAD_PARAMS_SIZE 8
@@ -40,12 +43,14 @@ void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *
  * (modeling.robots.drishti.model.payload_relations).
  *
  * @param[in]  base wmr_plant_params_t -- true parameters of the simulated robot, including K_lat
- * @param[in]  payload [3] row-major (WMR_PLANT_PARAMS_WITH_PAYLOAD_PAYLOAD_SIZE): m_L, x_L, y_L -- payload mass, position ahead of C, position left of C
+ * @param[in]  payload [3] row-major (WMR_PLANT_PARAMS_WITH_PAYLOAD_PAYLOAD_SIZE): m_L, x_L, y_L --
+ *     payload mass, position ahead of C, position left of C
  * @param[out] params [8] row-major (WMR_PLANT_PARAMS_WITH_PAYLOAD_PARAMS_SIZE)
  *
  * operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt
  */
-void wmr_plant_params_with_payload(const wmr_plant_params_t *base, const wmr_real_t *payload, wmr_real_t *params);
+void wmr_plant_params_with_payload(const wmr_plant_params_t *base, const wmr_real_t *payload,
+    wmr_real_t *params);
 
 #ifdef __cplusplus
 }

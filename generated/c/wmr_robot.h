@@ -12,6 +12,14 @@
 #include "wmr_types.h"
 
 #define WMR_ROBOT_NAME "drishti"
-#define WMR_ROBOT_PARAMS_INIT { .m = WMR_LIT(36.0), .Iz = WMR_LIT(5.72), .K = WMR_LIT(0.34), .Iw = WMR_LIT(0.07), .r = WMR_LIT(0.096), .b = WMR_LIT(0.414), .d = WMR_LIT(0.12) }
+#define WMR_ROBOT_PARAMS_INIT { \
+    .m = WMR_LIT(36.0), \
+    .Iz = WMR_LIT(5.72), \
+    .K = WMR_LIT(0.34), \
+    .Iw = WMR_LIT(0.07), \
+    .r = WMR_LIT(0.096), \
+    .b = WMR_LIT(0.414), \
+    .d = WMR_LIT(0.12) \
+}
 
 #endif /* WMR_ROBOT_H */

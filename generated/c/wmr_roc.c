@@ -95,10 +95,12 @@ wmr_status_t wmr_roc_step(wmr_roc_state_t *state, const wmr_roc_config_t *config
         wmr_real_t s[5];
         if (paper) {
             const wmr_real_t bounds[2] = {config->alpha, config->phi};
-            wmr_paper_roc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, bounds, &config->eps, u, s, &next.s_norm, &next.gain);
+            wmr_paper_roc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, bounds,
+                    &config->eps, u, s, &next.s_norm, &next.gain);
         } else {
             const wmr_real_t bounds[2] = {config->alpha, config->phi};
-            wmr_minimal_roc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, bounds, &config->eps, u, s, &next.s_norm, &next.gain);
+            wmr_minimal_roc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, bounds,
+                    &config->eps, u, s, &next.s_norm, &next.gain);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -113,8 +115,8 @@ wmr_status_t wmr_roc_step(wmr_roc_state_t *state, const wmr_roc_config_t *config
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

@@ -19,8 +19,8 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     if (status != WMR_OK) {
         return status;
     }
-    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator != WMR_ACCEL_CENTRAL
-        && config->accel_estimator != WMR_ACCEL_MATCHED) {
+    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator
+        != WMR_ACCEL_CENTRAL && config->accel_estimator != WMR_ACCEL_MATCHED) {
         return WMR_ERR_BAD_ESTIMATOR;
     }
     if (!isfinite(config->rate_window) || config->rate_window < WMR_LIT(0.0)
@@ -140,8 +140,8 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

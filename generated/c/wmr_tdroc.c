@@ -22,8 +22,8 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
     if (!wmr_positive(config->eps)) {
         return WMR_ERR_BAD_EPS;
     }
-    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator != WMR_ACCEL_CENTRAL
-        && config->accel_estimator != WMR_ACCEL_MATCHED) {
+    if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator
+        != WMR_ACCEL_CENTRAL && config->accel_estimator != WMR_ACCEL_MATCHED) {
         return WMR_ERR_BAD_ESTIMATOR;
     }
     if (!isfinite(config->rate_window) || config->rate_window < WMR_LIT(0.0)
@@ -202,9 +202,11 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_paper_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat, &next.gain, &config->eps, u, s, &next.s_norm);
+            wmr_paper_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
+                    &next.gain, &config->eps, u, s, &next.s_norm);
         } else {
-            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat, &next.gain, &config->eps, u, s, &next.s_norm);
+            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
+                    &next.gain, &config->eps, u, s, &next.s_norm);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -219,8 +221,8 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

@@ -85,7 +85,8 @@ typedef enum {
     WMR_ERR_BAD_FORMULATION = -14, /* formulation is not PAPER or MINIMAL */
     WMR_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
     WMR_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
-    WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h] */
+    WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
+                                    rate_window is outside [0, h] */
     WMR_ERR_BAD_HELD_GAIN = -18 /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
 } wmr_status_t;
 
@@ -93,7 +94,8 @@ typedef enum {
 #define WMR_FORMULATION_MINIMAL 1 /* the two wheel angles, tau = u */
 #define WMR_ACCEL_BACKWARD 0 /* qddot(t-h) = (qdot(t) - qdot(t-h))/h (default) */
 #define WMR_ACCEL_CENTRAL 1 /* qddot(t-h) = (qdot(t) - qdot(t-2h))/(2h) */
-#define WMR_ACCEL_MATCHED 2 /* backward quotient paired with (1-c) u(t-h) + c u(t-2h), c = rate_window/(2h) */
+/* backward quotient paired with (1-c) u(t-h) + c u(t-2h), c = rate_window/(2h) */
+#define WMR_ACCEL_MATCHED 2
 #define WMR_MAX_WINDOW 8 /* largest TDROC window n (history size) */
 #define WMR_NQ 5 /* generalised coordinates */
 #define WMR_STATE_MAGIC 0x574d52 /* marks an initialised controller state */

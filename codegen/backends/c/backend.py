@@ -12,6 +12,7 @@ from functools import cache
 from codegen import template_util
 from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
+from codegen.backends.c.format import format_c
 from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir
 from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
 from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout
@@ -36,12 +37,13 @@ def default_config() -> CConfig:
 
 
 def _template(name: str, source: str, **context: object) -> str:
-    return template_util.render(
+    text = template_util.render(
         TEMPLATE_DIR,
         name,
         preamble=template_util.preamble_lines(source, TEMPLATE_DIR, name),
         **context,
     )
+    return format_c(text)
 
 
 class CBackend:

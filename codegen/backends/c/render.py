@@ -27,6 +27,7 @@ from pathlib import Path
 from codegen import template_util
 from codegen.backend import FunctionIR, function_ir
 from codegen.backends.c.config import CConfig
+from codegen.backends.c.format import WIDTH, format_c
 from codegen.backends.c.printer import CPrinter
 from codegen.cse import op_count_from
 from codegen.layout import (
@@ -301,8 +302,9 @@ def render_types(
         guard=_guard(config.types_header, config),
         macros=[(m.name.upper(), m.name, ", ".join("xyz"[: m.arity])) for m in config.math_macros],
         structs=_structs(specs, config),
+        width=WIDTH,
     )
-    return {config.types_header: text}
+    return {config.types_header: format_c(text)}
 
 
 def render(
@@ -338,14 +340,16 @@ def render_module(
     contexts = [_function_context(f, config) for f in functions]
     files: dict[str, str] = {}
     for suffix, template in ((".h", "module.h.jinja"), (".c", "module.c.jinja")):
-        files[module + suffix] = template_util.render(
-            TEMPLATE_DIR,
-            template,
-            **_base_context(config, source, template),
-            module=module,
-            guard=_guard(module + "_H", config),
-            header=module + ".h",
-            functions=contexts,
+        files[module + suffix] = format_c(
+            template_util.render(
+                TEMPLATE_DIR,
+                template,
+                **_base_context(config, source, template),
+                module=module,
+                guard=_guard(module + "_H", config),
+                header=module + ".h",
+                functions=contexts,
+            )
         )
     return files
 

@@ -22,10 +22,16 @@ int main(void)
     trailer_params_t plant = nominal;
     trailer_tdroc_config_t config;
     trailer_tdroc_state_t state;
-    trailer_real_t q[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
-    trailer_real_t qdot[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
-    trailer_real_t qd[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
-    trailer_real_t qd_dot[8], qd_ddot[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
+    trailer_real_t q[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
+    trailer_real_t qdot[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0)};
+    trailer_real_t qd[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
+    trailer_real_t qd_dot[8], qd_ddot[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0)};
     const trailer_real_t wheel_ref[2] = {TRAILER_LIT(2.0), TRAILER_LIT(1.5)}; /* rad/s: a circle */
     trailer_real_t tau[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     trailer_real_t pose_rates[6];
@@ -53,7 +59,8 @@ int main(void)
     config.q_vel = TRAILER_LIT(1.0);
     config.h = TRAILER_LIT(0.01);
     config.tau_max = TRAILER_LIT(50.0);
-    config.eps = TRAILER_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1 s */
+    config.eps = TRAILER_LIT(0.5); /* see docs/reproduction: eps = 0.1 destabilises TDROC at h = 0.1
+                                      s */
     /* Rates read at the sample instant (a drive's report): the matched estimate with a zero
        window. Encoder counts differenced over h would need rate_window = h. */
     config.accel_estimator = TRAILER_ACCEL_MATCHED;

@@ -43,7 +43,8 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
     }
     fresh.magic = TRAILER_STATE_MAGIC;
     fresh.steps = 0;
-    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
+    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
+            fresh.p22);
     for (i = 0; i < 8; ++i) {
         fresh.q_prev[i] = TRAILER_LIT(0.0);
         fresh.qdot_prev[i] = TRAILER_LIT(0.0);
@@ -93,13 +94,15 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
     {
         trailer_real_t s[8];
         const trailer_real_t adapt[2] = {config->gamma, config->h};
-        trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
+        trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22,
+                &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
     out_tau[1] = u[1];
     next.u_discarded = TRAILER_LIT(0.0);
-    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is finite:
+    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
+       finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
     if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
         || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
@@ -107,8 +110,8 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
     }
     status = trailer_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

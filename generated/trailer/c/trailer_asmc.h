@@ -18,7 +18,8 @@ extern "C" {
 /* Configuration of ASMC; validated by trailer_asmc_init and by every step. */
 typedef struct {
     trailer_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
-    int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not generated) */
+    int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not
+                               generated) */
     trailer_real_t k1[8];       /* diagonal of K1 (18); the minimal form uses k1[4], k1[5] */
     trailer_real_t k2[8];       /* diagonal of K2 (18) */
     trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation */
@@ -44,7 +45,8 @@ typedef struct {
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
     trailer_real_t s_norm;      /* ||s|| in the last step */
-    trailer_real_t u_discarded; /* ||u rows 1, 2, 3, 4, 7, 8|| dropped by tau = B^T u (paper form) */
+    trailer_real_t u_discarded; /* ||u rows 1, 2, 3, 4, 7, 8|| dropped by tau = B^T u (paper
+                                   form) */
     trailer_real_t tau[2];      /* last torque applied */
 } trailer_asmc_state_t;
 
@@ -52,7 +54,8 @@ typedef struct {
  * Validate the configuration and reset the state (P from K1, K2, Q; empty history).
  * @return TRAILER_OK, or the TRAILER_ERR_* code naming the bad field (state then untouched).
  */
-trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_asmc_config_t *config);
+trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state,
+    const trailer_asmc_config_t *config);
 
 /**
  * One control step at time t: measured q, qdot (8 each), reference q_des, qdot_des,

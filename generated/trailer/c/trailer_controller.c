@@ -38,8 +38,9 @@ int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b)
         && a->radius_right == b->radius_right;
 }
 
-trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h, const trailer_real_t k1[8],
-    const trailer_real_t k2[8], trailer_real_t q_pos, trailer_real_t q_vel, trailer_real_t tau_max)
+trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
+    const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
+    trailer_real_t q_vel, trailer_real_t tau_max)
 {
     int i;
     if (formulation != TRAILER_FORMULATION_MINIMAL) {  /* the paper formulation is not generated */
@@ -73,7 +74,9 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h, co
 
 trailer_status_t trailer_check_nominal(const trailer_params_t *p)
 {
-    const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
+    const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
+            TRAILER_LIT(0.0)};
     const trailer_real_t rates0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     const trailer_real_t tau0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     trailer_real_t acc[2];
@@ -84,8 +87,8 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p)
     return TRAILER_OK;
 }
 
-void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
-    trailer_real_t q_vel, trailer_real_t p12[8], trailer_real_t p22[8])
+void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8],
+    trailer_real_t q_pos, trailer_real_t q_vel, trailer_real_t p12[8], trailer_real_t p22[8])
 {
     int i;
     for (i = 0; i < 8; ++i) {
@@ -98,7 +101,8 @@ void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8]
 }
 
 trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8])
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8])
 {
     if (!trailer_finite_bounded(q, 8) || !trailer_finite_bounded(qdot, 8)) {
         return TRAILER_ERR_BAD_MEASUREMENT;
@@ -110,11 +114,13 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
     return TRAILER_OK;
 }
 
-int trailer_controlled_slice(int formulation, const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8],
-    const trailer_real_t k1_all[8], const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8], trailer_real_t qdd[8],
-    trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8], trailer_real_t p22[8])
+int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
+    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
+    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
+    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
+    trailer_real_t p22[8])
 {
     const int nc = 2;
     const int off = 4;
@@ -132,9 +138,9 @@ int trailer_controlled_slice(int formulation, const trailer_real_t q[8], const t
     return nc;
 }
 
-void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8], trailer_real_t qdot_prev2[8],
-    trailer_real_t u_prev[8], trailer_real_t u_prev2[8], const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t tau[2])
+void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],
+    trailer_real_t qdot_prev2[8], trailer_real_t u_prev[8], trailer_real_t u_prev2[8],
+    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t tau[2])
 {
     int i;
     for (i = 0; i < 8; ++i) {

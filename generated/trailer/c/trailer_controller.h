@@ -28,34 +28,38 @@ int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b);
  * The configuration fields every controller has, in the order the status codes are
  * checked: formulation, h, K1 and K2, Q, torque limit.
  */
-trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h, const trailer_real_t k1[8],
-    const trailer_real_t k2[8], trailer_real_t q_pos, trailer_real_t q_vel, trailer_real_t tau_max);
+trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
+    const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
+    trailer_real_t q_vel, trailer_real_t tau_max);
 
 /** The nominal model: the generated guards of S^T M S (positive parameters, positive definite). */
 trailer_status_t trailer_check_nominal(const trailer_params_t *p);
 
 /** P of (20) per coordinate from K1, K2 and Q (the p12, p22 entries s = B^T P e needs). */
-void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
-    trailer_real_t q_vel, trailer_real_t p12[8], trailer_real_t p22[8]);
+void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8],
+    trailer_real_t q_pos, trailer_real_t q_vel, trailer_real_t p12[8], trailer_real_t p22[8]);
 
 /** TRAILER_ERR_BAD_MEASUREMENT, TRAILER_ERR_BAD_REFERENCE or TRAILER_OK for one step's inputs. */
 trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8]);
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8]);
 
 /**
  * The controlled coordinates (the two wheels) of e = q_des - q,
  * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
  */
-int trailer_controlled_slice(int formulation, const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8],
-    const trailer_real_t k1_all[8], const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8], trailer_real_t qdd[8],
-    trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8], trailer_real_t p22[8]);
+int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
+    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
+    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
+    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
+    trailer_real_t p22[8]);
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8], trailer_real_t qdot_prev2[8],
-    trailer_real_t u_prev[8], trailer_real_t u_prev2[8], const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t tau[2]);
+void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],
+    trailer_real_t qdot_prev2[8], trailer_real_t u_prev[8], trailer_real_t u_prev2[8],
+    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t tau[2]);
 
 /** Clip tau to +-tau_max: TRAILER_WARN_SATURATED if it had to, else TRAILER_OK. */
 trailer_status_t trailer_saturate(trailer_real_t tau[2], trailer_real_t tau_max);

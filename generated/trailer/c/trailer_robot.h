@@ -12,6 +12,22 @@
 #include "trailer_types.h"
 
 #define TRAILER_ROBOT_NAME "trailer"
-#define TRAILER_ROBOT_PARAMS_INIT { .J_theta_cart = TRAILER_LIT(5.141500000000001), .J_theta_cart_left = TRAILER_LIT(0.004), .J_theta_cart_right = TRAILER_LIT(0.004), .J_theta_left = TRAILER_LIT(0.07), .J_theta_right = TRAILER_LIT(0.07), .J_theta_tractor = TRAILER_LIT(3.421094), .J_x_tractor = TRAILER_LIT(53.5), .K_theta_cart_x_tractor = TRAILER_LIT(8.25), .K_theta_cart_x_tractor_2 = TRAILER_LIT(0.0), .K_theta_tractor_x_tractor = TRAILER_LIT(3.75), .K_theta_tractor_x_tractor_2 = TRAILER_LIT(0.0), .radius_cart_left = TRAILER_LIT(0.08), .radius_cart_right = TRAILER_LIT(0.08), .radius_left = TRAILER_LIT(0.096), .radius_right = TRAILER_LIT(0.096) }
+#define TRAILER_ROBOT_PARAMS_INIT { \
+    .J_theta_cart = TRAILER_LIT(5.141500000000001), \
+    .J_theta_cart_left = TRAILER_LIT(0.004), \
+    .J_theta_cart_right = TRAILER_LIT(0.004), \
+    .J_theta_left = TRAILER_LIT(0.07), \
+    .J_theta_right = TRAILER_LIT(0.07), \
+    .J_theta_tractor = TRAILER_LIT(3.421094), \
+    .J_x_tractor = TRAILER_LIT(53.5), \
+    .K_theta_cart_x_tractor = TRAILER_LIT(8.25), \
+    .K_theta_cart_x_tractor_2 = TRAILER_LIT(0.0), \
+    .K_theta_tractor_x_tractor = TRAILER_LIT(3.75), \
+    .K_theta_tractor_x_tractor_2 = TRAILER_LIT(0.0), \
+    .radius_cart_left = TRAILER_LIT(0.08), \
+    .radius_cart_right = TRAILER_LIT(0.08), \
+    .radius_left = TRAILER_LIT(0.096), \
+    .radius_right = TRAILER_LIT(0.096) \
+}
 
 #endif /* TRAILER_ROBOT_H */

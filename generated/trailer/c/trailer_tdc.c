@@ -19,8 +19,8 @@ trailer_status_t trailer_tdc_check_config(const trailer_tdc_config_t *config)
     if (status != TRAILER_OK) {
         return status;
     }
-    if (config->accel_estimator != TRAILER_ACCEL_BACKWARD && config->accel_estimator != TRAILER_ACCEL_CENTRAL
-        && config->accel_estimator != TRAILER_ACCEL_MATCHED) {
+    if (config->accel_estimator != TRAILER_ACCEL_BACKWARD && config->accel_estimator
+        != TRAILER_ACCEL_CENTRAL && config->accel_estimator != TRAILER_ACCEL_MATCHED) {
         return TRAILER_ERR_BAD_ESTIMATOR;
     }
     if (!isfinite(config->rate_window) || config->rate_window < TRAILER_LIT(0.0)
@@ -44,7 +44,8 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
     }
     fresh.magic = TRAILER_STATE_MAGIC;
     fresh.steps = 0;
-    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
+    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
+            fresh.p22);
     for (i = 0; i < 8; ++i) {
         fresh.q_prev[i] = TRAILER_LIT(0.0);
         fresh.qdot_prev[i] = TRAILER_LIT(0.0);
@@ -123,7 +124,8 @@ trailer_status_t trailer_tdc_step(trailer_tdc_state_t *state, const trailer_tdc_
     out_tau[0] = u[0];
     out_tau[1] = u[1];
     next.u_discarded = TRAILER_LIT(0.0);
-    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is finite:
+    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
+       finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
     if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
         || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
@@ -131,8 +133,8 @@ trailer_status_t trailer_tdc_step(trailer_tdc_state_t *state, const trailer_tdc_
     }
     status = trailer_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

@@ -22,8 +22,8 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
     if (!trailer_positive(config->eps)) {
         return TRAILER_ERR_BAD_EPS;
     }
-    if (config->accel_estimator != TRAILER_ACCEL_BACKWARD && config->accel_estimator != TRAILER_ACCEL_CENTRAL
-        && config->accel_estimator != TRAILER_ACCEL_MATCHED) {
+    if (config->accel_estimator != TRAILER_ACCEL_BACKWARD && config->accel_estimator
+        != TRAILER_ACCEL_CENTRAL && config->accel_estimator != TRAILER_ACCEL_MATCHED) {
         return TRAILER_ERR_BAD_ESTIMATOR;
     }
     if (!isfinite(config->rate_window) || config->rate_window < TRAILER_LIT(0.0)
@@ -43,7 +43,8 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
     return trailer_check_nominal(&config->nominal);
 }
 
-trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state, const trailer_tdroc_config_t *config)
+trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config)
 {
     trailer_tdroc_state_t fresh;
     trailer_status_t status;
@@ -57,7 +58,8 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state, const trailer_
     }
     fresh.magic = TRAILER_STATE_MAGIC;
     fresh.steps = 0;
-    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
+    trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
+            fresh.p22);
     for (i = 0; i < 8; ++i) {
         fresh.q_prev[i] = TRAILER_LIT(0.0);
         fresh.qdot_prev[i] = TRAILER_LIT(0.0);
@@ -82,9 +84,10 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state, const trailer_
     return TRAILER_OK;
 }
 
-trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state, const trailer_tdroc_config_t *config,
-    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t q_des[8],
-    const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8], trailer_real_t tau[2])
+trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2])
 {
     trailer_tdroc_state_t next;
     trailer_status_t status = TRAILER_OK;
@@ -178,13 +181,15 @@ trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state, const trailer_
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat, &next.gain, &config->eps, u, s, &next.s_norm);
+        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
+                &next.gain, &config->eps, u, s, &next.s_norm);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
     out_tau[1] = u[1];
     next.u_discarded = TRAILER_LIT(0.0);
-    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is finite:
+    /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
+       finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
     if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
         || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
@@ -192,8 +197,8 @@ trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state, const trailer_
     }
     status = trailer_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
-    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q, qdot,
-                     out_tau);
+    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
+                     qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
     next.steps = state->steps + 1;

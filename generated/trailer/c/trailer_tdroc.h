@@ -18,7 +18,8 @@ extern "C" {
 /* Configuration of TDROC; validated by trailer_tdroc_init and by every step. */
 typedef struct {
     trailer_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
-    int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not generated) */
+    int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not
+                               generated) */
     trailer_real_t k1[8];       /* diagonal of K1 (18); the minimal form uses k1[4], k1[5] */
     trailer_real_t k2[8];       /* diagonal of K2 (18) */
     trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation */
@@ -52,7 +53,8 @@ typedef struct {
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
     trailer_real_t s_norm;      /* ||s|| in the last step */
-    trailer_real_t u_discarded; /* ||u rows 1, 2, 3, 4, 7, 8|| dropped by tau = B^T u (paper form) */
+    trailer_real_t u_discarded; /* ||u rows 1, 2, 3, 4, 7, 8|| dropped by tau = B^T u (paper
+                                   form) */
     trailer_real_t tau[2];      /* last torque applied */
 } trailer_tdroc_state_t;
 
@@ -60,7 +62,8 @@ typedef struct {
  * Validate the configuration and reset the state (P from K1, K2, Q; empty history).
  * @return TRAILER_OK, or the TRAILER_ERR_* code naming the bad field (state then untouched).
  */
-trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state, const trailer_tdroc_config_t *config);
+trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config);
 
 /**
  * One control step at time t: measured q, qdot (8 each), reference q_des, qdot_des,
@@ -68,9 +71,10 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state, const trailer_
  * @return TRAILER_OK, TRAILER_WARN_SATURATED (tau clipped, step done), or a TRAILER_ERR_* code;
  *         on error neither the state nor tau is changed.
  */
-trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state, const trailer_tdroc_config_t *config,
-    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t q_des[8],
-    const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8], trailer_real_t tau[2]);
+trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2]);
 
 /** Check a configuration without touching any state. */
 trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config);
