@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from codegen.backends.c.config import StatusCode
-from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout, words
+from codegen.controller_layout import ControllerLayout, words
 from codegen.robot_functions import MAX_WINDOW
 
 # Input magnitudes beyond this are rejected as absurd (a lying sensor), not clipped.
@@ -77,8 +77,6 @@ def defines(layout: ControllerLayout) -> tuple[tuple[str, str, str], ...]:
 
 
 # The paper's robot (importers written before robots were generic).
-STATUS_CODES: tuple[StatusCode, ...] = status_codes(DRISHTI_LAYOUT)
-DEFINES: tuple[tuple[str, str, str], ...] = defines(DRISHTI_LAYOUT)
 
 
 @dataclass(frozen=True)

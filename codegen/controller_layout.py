@@ -3,7 +3,8 @@
 The controller step functions (C ``<prefix>_<ctrl>.c``, Python ``controllers.py``) are
 the same for every wheeled robot except for sizes, the actuated coordinates, the C
 prefix and which kernels exist. A :class:`ControllerLayout` carries exactly that; the
-templates read nothing else about the robot. ``DRISHTI_LAYOUT`` is the paper's robot.
+templates read nothing else about the robot (``codegen.generate.layout_for`` builds it from
+a ``RobotModel``).
 
 Requirements the templates rely on (checked on construction): the actuated coordinates
 are consecutive and ascending in q (the minimal formulation's coordinates are the slice
@@ -32,11 +33,6 @@ NUMBER_WORDS = (
     "eleven",
     "twelve",
 )
-# The paper's lumped parameters (Python keys; C spells I as Iz): a robot with these gets
-# the paper's by-name plausibility checks of the nominal model before the generated guards.
-LUMPED_KEYS = frozenset({"m", "K", "Iw", "r", "b", "d"})
-
-
 def words(n: int) -> str:
     """``5`` -> ``"five"`` (digits beyond twelve)."""
     return NUMBER_WORDS[n] if 0 <= n < len(NUMBER_WORDS) else str(n)
@@ -48,12 +44,6 @@ def row_span(rows: Iterable[int]) -> str:
     if len(ones) > 1 and ones == list(range(ones[0], ones[-1] + 1)):
         return f"{ones[0]}-{ones[-1]}"
     return ", ".join(map(str, ones))
-
-
-def lumped_params(keys: Iterable[str]) -> bool:
-    """Whether the parameter struct has the paper's lumped parameters (m, I, Iw, K, r, b, d)."""
-    names = set(keys)
-    return names >= LUMPED_KEYS and bool(names & {"I", "Iz"})
 
 
 def wrap_terms(
@@ -146,32 +136,8 @@ class ControllerLayout:
             for i in range(self.nq)
         ]
 
-    def lumped(self, param_keys: Iterable[str]) -> bool:
-        """Whether ``param_keys`` are the paper's lumped parameters (see ``lumped_params``)."""
-        return lumped_params(param_keys)
-
-    def heavier(self, param_keys: Iterable[str]) -> list[str]:
-        """The fields the example scales to make its plant 20 % heavier than the nominal
-        model: the mass of the lumped parameters, else every inertial (non-radius) one."""
-        keys = list(param_keys)
-        if lumped_params(keys):
-            return ["m"]
-        return [k for k in keys if not k.startswith("radius_")]
-
     def wrap(
         self, terms: Sequence[str], first: str, cont: str, sep: str, end: str = ""
     ) -> list[str]:
         """``wrap_terms`` for templates (C lines of at most 100 characters)."""
         return wrap_terms(terms, first, cont, sep, end)
-
-
-DRISHTI_LAYOUT = ControllerLayout(
-    "wmr",
-    5,
-    2,
-    (3, 4),
-    True,
-    False,
-    ("x_c", "y_c", "theta", "theta_r", "theta_l"),
-    ("tau_r", "tau_l"),
-)

@@ -36,6 +36,15 @@ class Parameter:
     doc: str
 
 
+@dataclass(frozen=True)
+class NominalCondition:
+    """A condition ``expr > 0`` on the controllers' nominal parameters that the generated
+    guards of the minimal form do not already impose (``doc`` says why it is needed)."""
+
+    expr: sp.Expr
+    doc: str
+
+
 def _identity(expr: sp.Expr) -> sp.Expr:
     return expr
 
@@ -53,6 +62,9 @@ class RobotModel:
     (the paper's robot has a physically grouped form; identity otherwise).
     ``heading``: the root yaw, about which the paper formulation's M̂ is invariant.
     ``paper``: whether the paper formulation (all n coordinates, τ = Bᵀ u) is generated.
+    ``nominal_conditions``: what a controller's config check requires of the nominal
+    parameters beyond the minimal form's generated guards (finite parameters, the positive
+    ones positive, Sᵀ M S positive definite).
     """
 
     name: str
@@ -72,6 +84,7 @@ class RobotModel:
     heading: sp.Symbol
     paper: bool
     evaluation_form: Callable[[sp.Expr], sp.Expr] = field(default=_identity)
+    nominal_conditions: tuple[NominalCondition, ...] = ()
     docs: dict[str, str] = field(default_factory=dict)  # doc strings a robot words itself
 
     @property

@@ -20,9 +20,10 @@ import numpy as np
 import pytest
 
 from codegen.backends.c.backend import default_config as default_c_config
-from codegen.controller_api import CONTROLLERS, STATUS_CODES
+from codegen.controller_api import CONTROLLERS, status_codes
+from codegen.generate import layout_for
 from modeling.robot_file import load_robot
-from modeling.robots.drishti.model import PARAM_FIELDS, PARAM_KEYS
+from modeling.robots.drishti.model import PARAM_FIELDS, PARAM_KEYS, robot_model
 from runtime import cbuild
 from runtime.generated_modules import controllers as pyctl
 
@@ -40,6 +41,7 @@ C_FLAGS = [
     "-Wconversion",
     "-Werror",
 ]
+STATUS_CODES = status_codes(layout_for(robot_model()))
 STATUS = {s.name: s.value for s in STATUS_CODES}
 DRISHTI = load_robot().lumped
 PARAM_SYMBOLS = tuple(sym for _, sym, _ in PARAM_FIELDS)

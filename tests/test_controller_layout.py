@@ -23,14 +23,14 @@ from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
 from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
 from codegen.controller_api import (
     CONTROLLERS,
-    DEFINES,
     MAX_ABS_INPUT,
-    STATUS_CODES,
     defines,
     status_codes,
 )
-from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout, row_span, wrap_terms
+from codegen.controller_layout import ControllerLayout, row_span, wrap_terms
+from codegen.generate import layout_for
 from codegen.robot_functions import MAX_WINDOW
+from modeling.robots.drishti.model import robot_model
 
 TOY = ControllerLayout(
     prefix="toy",
@@ -43,6 +43,8 @@ TOY = ControllerLayout(
     input_names=("tau_r", "tau_l"),
 )
 TOY_PARAMS = ("J_theta", "J_phi", "K_x", "K_y", "radius_r", "radius_l")
+TOY_CONDITION = ("p->J_theta * p->J_phi - p->K_x * p->K_x", "J_theta J_phi - K_x^2 > 0")
+DRISHTI_LAYOUT = layout_for(robot_model())
 PREAMBLE = ("Generated for tests/test_controller_layout.py",)
 
 
@@ -56,6 +58,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
             layout=layout,
             param_fields=list(TOY_PARAMS),
             max_abs_input=MAX_ABS_INPUT,
+            nominal_conditions=[TOY_CONDITION],
         )
         for info in CONTROLLERS:
             texts[f"{info.name}.{suffix}"] = template_util.render(
@@ -80,6 +83,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
         preamble=PREAMBLE,
         layout=layout,
         param_fields=list(TOY_PARAMS),
+        heavier=["J_theta", "J_phi", "K_x", "K_y"],
     )
     return texts
 
@@ -98,6 +102,7 @@ def _python_text(layout: ControllerLayout) -> str:
         max_abs_input=MAX_ABS_INPUT,
         c_field_names={},
         param_keys=list(TOY_PARAMS),
+        nominal_conditions=[('values["J_theta"] * values["J_phi"]', "'J_theta J_phi > 0'")],
     )
 
 
@@ -187,14 +192,14 @@ def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:
 
 
 def test_api_tables_follow_the_layout() -> None:
-    assert status_codes(DRISHTI_LAYOUT) == STATUS_CODES
-    assert defines(DRISHTI_LAYOUT) == DEFINES
+    names = {s.name: s.value for s in status_codes(DRISHTI_LAYOUT)}
+    assert names["WMR_OK"] == 0 and names["WMR_ERR_BAD_NOMINAL"] < 0
     names = [s.name for s in status_codes(TOY)]
     assert names[0] == "TOY_OK" and all(n.startswith("TOY_") for n in names)
     table = {name: value for name, value, _ in defines(TOY)}
     assert table["TOY_NQ"] == "8"
     assert table["TOY_STATE_MAGIC"] == "0x544f59"
-    assert dict((n, v) for n, v, _ in DEFINES)["WMR_STATE_MAGIC"] == "0x574d52"
+    assert dict((n, v) for n, v, _ in defines(DRISHTI_LAYOUT))["WMR_STATE_MAGIC"] == "0x574d52"
 
 
 def test_layout_helpers() -> None:

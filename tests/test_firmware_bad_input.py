@@ -11,7 +11,9 @@ import math
 
 import pytest
 
-from codegen.controller_api import STATUS_CODES
+from codegen.controller_api import status_codes
+from codegen.generate import layout_for
+from modeling.robots.drishti.model import robot_model
 from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.paper.controller_config import checked_controller_config
@@ -19,6 +21,7 @@ from runtime.paper.nominal_check import check_nominal, tde_alpha
 from runtime.tooling.bad_input import cases as bad_cases
 from runtime.tooling.bad_input import runner, table
 
+STATUS_CODES = status_codes(layout_for(robot_model()))
 DRISHTI = bad_cases.DRISHTI
 CASES = bad_cases.cases(8)
 

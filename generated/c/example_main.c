@@ -5,8 +5,8 @@
  *
  * A complete control loop with the generated code: TDROC (paper formulation) steers a
  * simulated robot (the generated forward dynamics, 10 kHz explicit Euler between control
- * samples, the real robot 20 % heavier than the controller's nominal model) around a
- * circle whose reference comes from the kinematics (31), so it satisfies (6)-(8).
+ * samples; the parameters a payload changes 20 % above the controller's nominal model)
+ * around a circle whose reference comes from the kinematics (31), so it satisfies (6)-(8).
  *
  *     cc -std=c99 -O2 -I. example_main.c wmr_*.c -lm && ./a.out
  */
@@ -33,6 +33,8 @@ int main(void)
     int i, k, sub;
 
     plant.m = nominal.m * WMR_LIT(1.2);
+    plant.Iz = nominal.Iz * WMR_LIT(1.2);
+    plant.K = nominal.K * WMR_LIT(1.2);
     config.nominal = nominal;
     config.formulation = WMR_FORMULATION_PAPER;
     for (i = 0; i < 5; ++i) {

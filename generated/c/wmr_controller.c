@@ -68,18 +68,26 @@ wmr_status_t wmr_check_nominal(const wmr_params_t *p)
     const wmr_real_t rates0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
     const wmr_real_t tau0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
     wmr_real_t acc[2];
-    wmr_real_t mbar[4];
-    if (!wmr_positive(p->m) || !wmr_positive(p->Iz) || !wmr_positive(p->Iw) || !isfinite(p->K)
-        || !isfinite(p->d)
-        /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a
-           factor of det M-tilde, so the paper form's M-hat is singular without it. */
-        || !(p->m * p->Iz - p->K * p->K > WMR_LIT(0.0))
-        /* The generated guards of S^T M S (r, b > 0, positive definite). */
-        || wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
+    /* The generated guards of S^T M S (finite parameters, the positive ones positive,
+       positive definite). */
+    if (wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
         return WMR_ERR_BAD_NOMINAL;
     }
-    wmr_minimal_mass_matrix(p, q0, mbar);
-    if (!(mbar[0] > WMR_LIT(0.0)) || !(mbar[0] * mbar[3] - mbar[1] * mbar[2] > WMR_LIT(0.0))) {
+    /* m > 0 */
+    if (!(p->m > WMR_LIT(0.0))) {
+        return WMR_ERR_BAD_NOMINAL;
+    }
+    /* I > 0 */
+    if (!(p->Iz > WMR_LIT(0.0))) {
+        return WMR_ERR_BAD_NOMINAL;
+    }
+    /* Iw > 0 */
+    if (!(p->Iw > WMR_LIT(0.0))) {
+        return WMR_ERR_BAD_NOMINAL;
+    }
+    /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det
+       M-tilde, so the paper form's M-hat is singular without it */
+    if (!(p->Iz*p->m - p->K*p->K > WMR_LIT(0.0))) {
         return WMR_ERR_BAD_NOMINAL;
     }
     return WMR_OK;

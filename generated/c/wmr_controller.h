@@ -31,7 +31,11 @@ int wmr_same_params(const wmr_params_t *a, const wmr_params_t *b);
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],
     const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max);
 
-/** The nominal model: m, I, Iw > 0, K and d finite, m I > K^2, S^T M S positive definite. */
+/**
+ * The nominal model: the generated guards of S^T M S (finite parameters, the positive ones
+ * positive, positive definite) and 4 conditions of the robot's
+ * (m > 0; I > 0; Iw > 0; m I - K^2 > 0).
+ */
 wmr_status_t wmr_check_nominal(const wmr_params_t *p);
 
 /** P of (20) per coordinate from K1, K2 and Q (the p12, p22 entries s = B^T P e needs). */

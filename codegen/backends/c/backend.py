@@ -13,9 +13,10 @@ from codegen import template_util
 from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import format_c
+from codegen.backends.c.printer import CPrinter
 from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir
 from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
-from codegen.controller_layout import DRISHTI_LAYOUT, ControllerLayout
+from codegen.controller_layout import ControllerLayout
 
 
 @cache
@@ -33,7 +34,24 @@ def config_for(layout: ControllerLayout) -> CConfig:
 
 def default_config() -> CConfig:
     """The default robot's C config (``wmr_`` names), for tools built around it."""
-    return config_for(DRISHTI_LAYOUT)
+    from codegen.generate import layout_for
+    from modeling.robot_file import load_robot_model
+
+    return config_for(layout_for(load_robot_model(None)[0]))
+
+
+def nominal_conditions(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
+    """The robot's conditions on nominal parameters as (C expression over ``p->``, doc)."""
+    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in target.model.params}
+    printer = CPrinter(config, names)
+    return [(printer.expr_code(c.expr), c.doc) for c in target.model.nominal_conditions]
+
+
+def payload_dependent(target: RobotTarget, config: CConfig) -> list[str]:
+    """C fields of the parameters a payload changes (the example's heavier plant)."""
+    model = target.model
+    return [config.c_field(p.key) for p in model.params
+            if model.payload_relations.get(p.symbol, p.symbol) != p.symbol]
 
 
 def _template(name: str, source: str, **context: object) -> str:
@@ -67,6 +85,7 @@ class CBackend:
             files[f"{pre}_controller.{suffix}"] = _template(
                 f"controller_common.{suffix}.jinja", law, layout=layout,
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
+                nominal_conditions=nominal_conditions(target, config),
             )
         for info in CONTROLLERS:
             for suffix in ("h", "c"):
@@ -82,7 +101,7 @@ class CBackend:
         # (the example's preamble has always named the driver as its source)
         files["example_main.c"] = _template(
             "example_main.c.jinja", "codegen/generate.py", layout=layout,
-            param_fields=param_fields,
+            param_fields=param_fields, heavier=payload_dependent(target, config),
         )
         return files
 

@@ -14,6 +14,8 @@ from pathlib import Path
 from codegen import template_util
 from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
+from codegen.backends.python.config import PythonConfig
+from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
 from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, status_codes
 from codegen.robot_functions import MAX_WINDOW
@@ -58,6 +60,14 @@ def robot_py(target: RobotTarget) -> str:
     )
 
 
+def nominal_conditions(target: RobotTarget) -> list[tuple[str, str]]:
+    """The robot's conditions on nominal parameters as (Python expression over
+    ``values[key]``, doc)."""
+    names = {p.symbol: f'values["{p.key}"]' for p in target.model.params}
+    printer = PyPrinter(PythonConfig(), names)
+    return [(printer.expr_code(c.expr), repr(c.doc)) for c in target.model.nominal_conditions]
+
+
 class PythonBackend:
     """Plain functions over Python floats (``math``), NumPy arrays in and out."""
 
@@ -84,6 +94,7 @@ class PythonBackend:
             # the controllers accept C structs (cffi) as parameters: C's field spellings
             c_field_names=dict(CConfig().field_renames),
             param_keys=[p.key for p in target.model.params],
+            nominal_conditions=nominal_conditions(target),
         )
         files["robot.py"] = robot_py(target)
         files["__init__.py"] = INIT

@@ -5,8 +5,8 @@
  *
  * A complete control loop with the generated code: TDROC (minimal formulation) steers a
  * simulated robot (the generated forward dynamics, 10 kHz explicit Euler between control
- * samples, the real robot 20 % heavier than the controller's nominal model) around a
- * circle whose reference comes from the kinematics (31), so it satisfies (6)-(8).
+ * samples; the parameters a payload changes 20 % above the controller's nominal model)
+ * around a circle whose reference comes from the kinematics (31), so it satisfies (6)-(8).
  *
  *     cc -std=c99 -O2 -I. example_main.c trailer_*.c -lm && ./a.out
  */
@@ -38,15 +38,8 @@ int main(void)
     trailer_status_t status;
     int i, k, sub;
 
-    plant.J_theta_cart = nominal.J_theta_cart * TRAILER_LIT(1.2);
-    plant.J_theta_cart_left = nominal.J_theta_cart_left * TRAILER_LIT(1.2);
-    plant.J_theta_cart_right = nominal.J_theta_cart_right * TRAILER_LIT(1.2);
-    plant.J_theta_left = nominal.J_theta_left * TRAILER_LIT(1.2);
-    plant.J_theta_right = nominal.J_theta_right * TRAILER_LIT(1.2);
     plant.J_theta_tractor = nominal.J_theta_tractor * TRAILER_LIT(1.2);
     plant.J_x_tractor = nominal.J_x_tractor * TRAILER_LIT(1.2);
-    plant.K_theta_cart_x_tractor = nominal.K_theta_cart_x_tractor * TRAILER_LIT(1.2);
-    plant.K_theta_cart_x_tractor_2 = nominal.K_theta_cart_x_tractor_2 * TRAILER_LIT(1.2);
     plant.K_theta_tractor_x_tractor = nominal.K_theta_tractor_x_tractor * TRAILER_LIT(1.2);
     plant.K_theta_tractor_x_tractor_2 = nominal.K_theta_tractor_x_tractor_2 * TRAILER_LIT(1.2);
     config.nominal = nominal;

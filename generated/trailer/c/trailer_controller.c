@@ -80,7 +80,8 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p)
     const trailer_real_t rates0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     const trailer_real_t tau0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     trailer_real_t acc[2];
-    /* The generated guards of S^T M S (positive parameters, positive definite). */
+    /* The generated guards of S^T M S (finite parameters, the positive ones positive,
+       positive definite). */
     if (trailer_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TRAILER_OK) {
         return TRAILER_ERR_BAD_NOMINAL;
     }

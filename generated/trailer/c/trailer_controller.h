@@ -32,7 +32,10 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
     trailer_real_t q_vel, trailer_real_t tau_max);
 
-/** The nominal model: the generated guards of S^T M S (positive parameters, positive definite). */
+/**
+ * The nominal model: the generated guards of S^T M S (finite parameters, the positive ones
+ * positive, positive definite).
+ */
 trailer_status_t trailer_check_nominal(const trailer_params_t *p);
 
 /** P of (20) per coordinate from K1, K2 and Q (the p12, p22 entries s = B^T P e needs). */

@@ -35,7 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
-from modeling.robot_model import PAYLOAD, Parameter, RobotModel
+from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
 
 SOURCE = "modeling/robots/drishti/model.py"  # this file, as generated preambles name it
 
@@ -259,6 +259,16 @@ def robot_model() -> RobotModel:
         heading=theta,
         paper=True,
         evaluation_form=compact_form,
+        nominal_conditions=(
+            NominalCondition(m, "m > 0"),
+            NominalCondition(I_z, "I > 0"),
+            NominalCondition(I_w, "Iw > 0"),
+            NominalCondition(
+                m * I_z - K**2,
+                "m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a "
+                "factor of det M-tilde, so the paper form's M-hat is singular without it",
+            ),
+        ),
         docs={
             "model_source": f"{SOURCE}, modeling/lagrange.py",
             "report": "modeling.robots.drishti.report",  # MODEL.md with the paper's verdicts
