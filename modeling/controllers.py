@@ -58,15 +58,6 @@ FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 
 
-def _model(model: RobotModel | None) -> RobotModel:
-    """``model``, or the paper's robot for callers written before robots were generic."""
-    if model is not None:
-        return model
-    from modeling.robots.drishti.model import robot_model  # transitional default
-
-    return robot_model()
-
-
 def _vec(name: str, n: int) -> sp.Matrix:
     return sp.Matrix(sp.symbols(f"{name}0:{n}", real=True))
 
@@ -88,9 +79,9 @@ class ControlModel:
     velocities: tuple[sp.Symbol, ...]
 
 
-def control_model(formulation: Formulation, model: RobotModel | None = None) -> ControlModel:
+def control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
     """The model a controller uses. Paper: M̃, H̃ of (14); minimal: M̄, H̄ (Sᵀ M S form)."""
-    return _control_model(formulation, _model(model))
+    return _control_model(formulation, model)
 
 
 @cache
@@ -207,7 +198,7 @@ class Law:
 
 
 def tde_law(
-    formulation: Formulation, switching: bool, model: RobotModel | None = None
+    formulation: Formulation, switching: bool, model: RobotModel
 ) -> tuple[Law, LawSymbols]:
     """TDC (16)–(18) when ``switching`` is False; TDROC (16), (22), (25) with the gain
     symbol ``ls.gain`` (k̂, computed by ``tdroc_gain``) when True. Ĥ1 is an input (17)."""
@@ -227,7 +218,7 @@ def tde_law(
 def model_law(
     formulation: Formulation,
     controller: Literal["roc", "asmc"],
-    model: RobotModel | None = None,
+    model: RobotModel,
 ) -> tuple[Law, LawSymbols]:
     """ROC and ASMC: u = M̂ u_a + Ĥ(q, q̇) with the nominal model's Ĥ.
 
@@ -256,11 +247,11 @@ class TdeSymbols:
 
 
 def tde_estimate(
-    formulation: Formulation, model: RobotModel | None = None
+    formulation: Formulation, model: RobotModel
 ) -> tuple[sp.Matrix, TdeSymbols]:
     """(17): Ĥ1(t) = Ω(1) = u(t − h) − M̂(q(t − h)) q̈(t − h), with the difference quotient
     q̈(t − h) ≈ (q̇(t) − q̇(t − Δ)) / Δ (Δ = h backward, 2h central)."""
-    rm = _model(model)
+    rm = model
     cm = control_model(formulation, rm)
     n = cm.size
     ts = TdeSymbols(
@@ -275,10 +266,10 @@ def tde_estimate(
     return ts.u_prev - mass * qdd, ts
 
 
-def heading_rotation(formulation: Formulation, model: RobotModel | None = None) -> sp.Matrix:
+def heading_rotation(formulation: Formulation, model: RobotModel) -> sp.Matrix:
     """T(θ): rotates the root's (x, y) rows by its yaw θ in the paper form (q starts with
     them); the identity for the minimal form's wheel angles."""
-    rm = _model(model)
+    rm = model
     size = control_model(formulation, rm).size
     t = sp.eye(size)
     if formulation == "paper":
@@ -287,32 +278,32 @@ def heading_rotation(formulation: Formulation, model: RobotModel | None = None) 
     return t
 
 
-def rotation_residual(formulation: Formulation, model: RobotModel | None = None) -> sp.Matrix:
+def rotation_residual(formulation: Formulation, model: RobotModel) -> sp.Matrix:
     """M̂(θ) − T(θ) M̂(0) T(θ)ᵀ, which is zero: the model is invariant under heading.
 
     So M̂(θ)⁻¹ = T M̂(0)⁻¹ Tᵀ with T orthogonal, and every unitarily invariant norm of
     M̂⁻¹ (Frobenius, spectral) is independent of θ — (25) needs it for the parameters
     only. Tests assert the residual simplifies to zero.
     """
-    rm = _model(model)
+    rm = model
     cm = control_model(formulation, rm)
     t = heading_rotation(formulation, rm)
     at_zero = cm.mass.subs(rm.heading, 0)
     return (cm.mass - t * at_zero * t.T).applyfunc(rm.system.simplify)
 
 
-def mass_inverse_norm(formulation: Formulation, model: RobotModel | None = None) -> sp.Expr:
+def mass_inverse_norm(formulation: Formulation, model: RobotModel) -> sp.Expr:
     """‖M̂⁻¹‖_F of (25). The paper form is evaluated at θ = 0 (exact for every θ, see
     rotation_residual); the minimal form as it is — a constant for a single body, a
     function of the hitch angles for a robot with trailers (then an input of the kernel)."""
-    rm = _model(model)
+    rm = model
     cm = control_model(formulation, rm)
     inverse = cm.mass_inverse.subs(rm.heading, 0) if formulation == "paper" else cm.mass_inverse
     return _norm(sp.Matrix(list(inverse)))
 
 
 def tdroc_gain(
-    formulation: Formulation, window: int, model: RobotModel | None = None
+    formulation: Formulation, window: int, model: RobotModel
 ) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
     """(25): k̂ = ‖M̂⁻¹‖_F Σ_{i=1..window} w_i ‖Ω(i) − Ω(i+1)‖ with the weights w_i
     given normalised (Σ w_i = 1 over the active window, 0 beyond it) by the caller.

@@ -9,19 +9,21 @@ import sympy as sp
 from modeling import controllers as ctl
 from modeling.robots.drishti import model as wmr
 
+DRISHTI = wmr.robot_model()
+
 
 @pytest.mark.parametrize("formulation", ctl.FORMULATIONS)
 def test_model_is_heading_invariant(formulation: ctl.Formulation) -> None:
     """M̂(θ) = T M̂(0) Tᵀ, which makes ‖M̂⁻¹‖ of (25) a function of the parameters only."""
-    shape = ctl.control_model(formulation).mass.shape
-    assert ctl.rotation_residual(formulation) == sp.zeros(*shape)
+    shape = ctl.control_model(formulation, DRISHTI).mass.shape
+    assert ctl.rotation_residual(formulation, DRISHTI) == sp.zeros(*shape)
 
 
 def test_mass_inverse_norm_matches_numpy_at_any_heading() -> None:
-    cm = ctl.control_model("paper")
+    cm = ctl.control_model("paper", DRISHTI)
     values = {wmr.m: 36.0, wmr.I_z: 5.72, wmr.K: 0.34, wmr.I_w: 0.07, wmr.r: 0.096,
               wmr.b: 0.414, wmr.d: 0.12}
-    norm = float(ctl.mass_inverse_norm("paper").subs(values))
+    norm = float(ctl.mass_inverse_norm("paper", DRISHTI).subs(values))
     f = sp.lambdify(wmr.theta, cm.mass.subs(values), "numpy")
     for theta in np.linspace(-3.0, 3.0, 7):
         assert abs(np.linalg.norm(np.linalg.inv(f(theta))) - norm) < 1e-12 * norm
@@ -44,7 +46,7 @@ def test_lyapunov_solution_solves_the_equation_and_is_positive_definite() -> Non
 
 
 def test_switching_term_is_continuous_at_the_boundary_layer() -> None:
-    law, ls = ctl.tde_law("minimal", switching=True)
+    law, ls = ctl.tde_law("minimal", switching=True, model=DRISHTI)
     s = ctl.sliding_variable(ls)
     du, s_norm = ctl.switching_term(ls, ls.gain)
     # On ‖s‖ = ε both branches of (25) give k s/ε.
@@ -60,8 +62,8 @@ def test_switching_term_is_continuous_at_the_boundary_layer() -> None:
 
 def test_tde_is_exact_for_a_constant_h1_under_zero_order_hold() -> None:
     """With q̈ constant over the period (ZOH) the backward quotient recovers it exactly."""
-    h1, ts = ctl.tde_estimate("minimal")
-    cm = ctl.control_model("minimal")
+    h1, ts = ctl.tde_estimate("minimal", DRISHTI)
+    cm = ctl.control_model("minimal", DRISHTI)
     qdd = sp.Matrix([0.7, -0.2])
     vals = {wmr.m: 36.0, wmr.I_z: 5.72, wmr.K: 0.34, wmr.I_w: 0.07, wmr.r: 0.096,
             wmr.b: 0.414, wmr.d: 0.12, ts.span: 0.1}

@@ -36,6 +36,8 @@ from modeling.robots.drishti import model as wmr
 from modeling.robots.drishti.model import PARAM_KEYS
 from runtime.generated_modules import controllers as pyctl
 
+DRISHTI = wmr.robot_model()
+
 RTOL_SYMPY_LAW = 1e-9  # steps vs the SymPy laws evaluated directly (other rounding)
 
 
@@ -86,18 +88,18 @@ class SympyLaws:
 @cache
 def _sympy_laws(name: str, form: str) -> SympyLaws:
     f: ctl.Formulation = "paper" if form == "paper" else "minimal"
-    tde, ts = ctl.tde_estimate(f)
+    tde, ts = ctl.tde_estimate(f, DRISHTI)
     tde_fn = sp.lambdify(
         [*PARAM_SYMBOLS, *ts.q_prev, *ts.u_prev, *ts.qdot_now, *ts.qdot_then, ts.span], list(tde)
     )
-    gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW)
+    gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW, DRISHTI)
     # ||Mhat^-1||_F may be a separate input symbol of (25): substitute its expression.
-    gain = gain.subs(sp.Symbol("minv_norm", positive=True), ctl.mass_inverse_norm(f))
+    gain = gain.subs(sp.Symbol("minv_norm", positive=True), ctl.mass_inverse_norm(f, DRISHTI))
     gain_fn = sp.lambdify([*PARAM_SYMBOLS, *wmr.q, *omega, *w], gain)
     if name in ("tdc", "tdroc"):
-        law, ls = ctl.tde_law(f, switching=name == "tdroc")
+        law, ls = ctl.tde_law(f, switching=name == "tdroc", model=DRISHTI)
     else:
-        law, ls = ctl.model_law(f, name)  # type: ignore[arg-type]
+        law, ls = ctl.model_law(f, name, DRISHTI)  # type: ignore[arg-type]
     law_args = [
         *PARAM_SYMBOLS, *wmr.q, *wmr.qdot, *ls.e, *ls.edot, *ls.qddot_des, *ls.k1, *ls.k2,
         *ls.p12, *ls.p22, *ls.h1, ls.gain, ls.eps, ls.alpha, ls.phi,
@@ -105,7 +107,7 @@ def _sympy_laws(name: str, form: str) -> SympyLaws:
     law_fn = sp.lambdify(law_args, [*law.u, law.s_norm, law.gain])
     k1, k2, q1, q2 = sp.symbols("k1 k2 q1 q2", positive=True)
     lyap_fn = sp.lambdify([k1, k2, q1, q2], list(ctl.lyapunov_p(k1, k2, q1, q2)))
-    return SympyLaws(tde_fn, gain_fn, law_fn, lyap_fn, ctl.control_model(f).size)
+    return SympyLaws(tde_fn, gain_fn, law_fn, lyap_fn, ctl.control_model(f, DRISHTI).size)
 
 
 class SympyController:
