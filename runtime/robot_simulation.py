@@ -81,8 +81,11 @@ def plant_params_at(code: RobotCode, exp: Experiment, t: float,
 
 def controller_config(lib: cbuild.CLibrary, code: RobotCode, name: str, formulation: str,
                       nominal: dict[str, float], exp: Experiment,
-                      bounds: ModelBounds | None = None) -> Any:
-    """``<prefix>_<name>_config_t`` from the experiment's [controller] and [sensing]."""
+                      bounds: ModelBounds | tuple[float, float] | None = None,
+                      held_gain: float | None = None) -> Any:
+    """``<prefix>_<name>_config_t`` from the experiment's [controller] and [sensing].
+    ``bounds``: ROC's (α, φ) (default: :func:`model_bounds` over the experiment's box);
+    ``held_gain`` (TDROC only) holds k̂ at that value instead of (25)."""
     c = exp.controller
     cfg = lib.ffi.new(f"{code.prefix}_{name}_config_t *")
     cfg.nominal = cbuild.params_struct(lib, nominal, f"{code.prefix}_params_t",
@@ -98,9 +101,13 @@ def controller_config(lib: cbuild.CLibrary, code: RobotCode, name: str, formulat
         cfg.eps = c.eps
     if name == "tdroc":
         cfg.n, cfg.a = c.n, c.a
+        if held_gain is not None:
+            cfg.hold_gain, cfg.held_gain = 1, held_gain
+    elif held_gain is not None:
+        raise ValueError(f"held_gain applies to TDROC only, not {name}")
     if name == "roc":
         b = bounds or model_bounds(code, nominal, c.uncertainty, formulation)
-        cfg.alpha, cfg.phi = b.alpha, b.phi
+        cfg.alpha, cfg.phi = (b.alpha, b.phi) if isinstance(b, ModelBounds) else b
     if name == "asmc":
         cfg.gamma, cfg.gain0 = c.gamma, 0.0
     return cfg

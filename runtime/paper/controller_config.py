@@ -15,8 +15,10 @@ from typing import Any
 
 from runtime import cbuild
 from runtime.experiment import ACCEL_CODES, Experiment
+from runtime.generated_modules import load_robot_code
 from runtime.paper.nominal_check import check_nominal, roc_bounds
 from runtime.paper.sampled_loop import check_sampled_loop
+from runtime.robot_simulation import controller_config as generic_config
 
 __all__ = ["ACCEL_CODES", "FORMULATIONS", "checked_controller_config", "controller_config",
            "roc_bounds"]
@@ -34,29 +36,11 @@ def controller_config(
 ) -> Any:
     """The C configuration of one controller for the experiment. ``held_gain`` (TDROC only)
     holds k̂ at that value instead of (25): the stability analysis' verification."""
-    c = exp.controller
-    cfg = lib.ffi.new(f"wmr_{name}_config_t *")
-    cfg.nominal = cbuild.params_struct(lib, nominal)[0]
-    cfg.formulation = FORMULATIONS[formulation]
-    cfg.k1 = [c.k1] * 5
-    cfg.k2 = [c.k2] * 5
-    cfg.q_pos, cfg.q_vel, cfg.h, cfg.tau_max = c.q_pos, c.q_vel, c.h, c.tau_max
-    if name in ("tdc", "tdroc"):
-        cfg.accel_estimator = ACCEL_CODES[exp.sensing.accel_estimator]
-        cfg.rate_window = exp.sensing.rate_window(c.h)
-    if name != "tdc":
-        cfg.eps = c.eps
-    if name == "tdroc":
-        cfg.n, cfg.a = c.n, c.a
-        if held_gain is not None:
-            cfg.hold_gain, cfg.held_gain = 1, held_gain
-    elif held_gain is not None:
-        raise ValueError(f"held_gain applies to TDROC only, not {name}")
-    if name == "roc":
-        cfg.alpha, cfg.phi = roc_bounds(nominal, c.uncertainty, formulation)
-    if name == "asmc":
-        cfg.gamma, cfg.gain0 = c.gamma, 0.0
-    return cfg
+    bounds = (
+        roc_bounds(nominal, exp.controller.uncertainty, formulation) if name == "roc" else None
+    )
+    return generic_config(lib, load_robot_code(""), name, formulation, nominal, exp, bounds,
+                          held_gain)
 
 
 def checked_controller_config(

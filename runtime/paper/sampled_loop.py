@@ -4,13 +4,12 @@
 that refuses an unstable loop, :func:`check_sampled_loop`, is here so that the simulator
 can use it without importing the analysis, which simulates.)
 
-
 The closed loop that runs on a robot is a discrete-time system: the plant under zero-order
 hold over h, the sensing model (``[sensing]`` of the experiment), the estimator of (17)
 and the control law, with memory (the encoder angles and odometry pose of the last sample,
 q(t − h), q̇(t − h), q̇(t − 2h), u(t − h), u(t − 2h)). This module builds that one-sample
-map from the generated model and laws and the simulator's RK4 plant, linearises it about
-the experiment's circle (a relative equilibrium: constant wheel rates), and reads stability
+map from the generated model and laws and the simulator's RK4 plant and linearises it about
+the experiment's circle (a relative equilibrium: constant wheel rates); stability is read
 off its spectral radius.
 
 Inside the boundary layer (‖s‖ < ε) every controller is the same linear law

@@ -1,33 +1,11 @@
 """Sampled-data stability of the generated controllers on a given robot, sampling and sensing.
 
-The closed loop that runs on a robot is a discrete-time system: the plant under zero-order
-hold over h, the sensing model (``[sensing]`` of the experiment), the estimator of (17)
-and the control law, with memory (the encoder angles and odometry pose of the last sample,
-q(t − h), q̇(t − h), q̇(t − 2h), u(t − h), u(t − 2h)). :mod:`runtime.paper.sampled_loop` builds
-that one-sample map from the generated model and laws and the simulator's RK4 plant,
-linearises it about the experiment's circle (a relative equilibrium: constant wheel
-rates), and this module reads stability off its spectral radius.
-
-Inside the boundary layer (‖s‖ < ε) every controller is the same linear law
-
-    u = M̂ (q̈_d + K1 e + K2 ė + g s) + Ĥ,     s = Bᵀ P e  (the (22), (24)/(25) form),
-
-with Ĥ the time-delay estimate (17) (TDC, TDROC) or the nominal model Ĥ(q, q̇) (ROC,
-ASMC), and g the boundary-layer gain: 0 for TDC, k̂/ε for TDROC and ASMC, ρ/ε for ROC.
-So the linearised map is J(g) = J₀ + g J₁ exactly (s = 0 on the reference), and the
-largest g with spectral radius below 1 — ``max_stable_gain`` — is found by bisection on
-that pencil. For TDROC, k̂ measured in closed loop then gives the predicted stable range of
-ε: ε > k̂ / g_max.
-
-Frame: the circle is invariant under rotation, so the Jacobian of step k is conjugated into
-the reference's heading frame (planar components of every q-space quantity rotated by
-−θ_d(t_k)); there it is the same for every k. States the controller never reads (the true
-pose: it sees odometry) are outputs, not loop states, and are left out of the spectrum.
-
-Conditions a verdict holds for (all stated in ``Analysis``): the robot's nominal parameters
-for the plant unless ``plant="payload"`` (robot plus the experiment's fixed and extra
-payload, the heaviest case), no friction, no quantisation (it adds noise, not dynamics),
-the experiment's h, gains, sensing and estimator, and the circle's wheel rates.
+:mod:`runtime.paper.sampled_loop` builds the sampled closed loop's one-sample map and its
+pencil J(g) = J₀ + g J₁ in the boundary-layer gain g (the model, the frame and the
+conditions a verdict holds for are stated there). This module turns it into verdicts: the
+largest stable g per controller and formulation, the spectral radius at the experiment's
+setting (k̂ measured in closed loop for TDROC and ASMC, ρ/ε for ROC), TDROC's predicted
+stable range ε > k̂ / g_max, and the ``python -m runtime stability`` command.
 """
 
 from __future__ import annotations
