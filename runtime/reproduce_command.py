@@ -1,6 +1,9 @@
 """``python -m runtime reproduce``: the command line of :mod:`runtime.paper.reproduce` (the paper's
 experiments on Drishti) and of :mod:`runtime.robot_reproduce` (``--robot FILE``: the
-experiment scaled to any robot). Checks every argument before any simulation runs.
+experiment scaled to any robot). Checks every argument before any simulation runs, then
+writes the figures, the tables of :mod:`runtime.paper.reproduction_tables` and the report
+of :mod:`runtime.paper.reproduction_report`, and prints the verdicts of
+:mod:`runtime.paper.reproduction_verdicts`.
 """
 
 from __future__ import annotations
@@ -23,15 +26,12 @@ from runtime.paper.reproduce import (
     LABELS,
     Figure,
     Reproduction,
-    claims,
-    fmt_mm,
-    metrics_markdown,
-    report_markdown,
     reproduce,
-    stability,
     with_sensing,
-    write_csv,
 )
+from runtime.paper.reproduction_report import report_markdown
+from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, write_csv
+from runtime.paper.reproduction_verdicts import claims, stability
 
 # --------------------------------------------------------------------------- CLI
 

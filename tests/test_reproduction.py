@@ -22,16 +22,10 @@ import pytest
 from runtime.experiment import Experiment, ExperimentFileError, parse_experiment
 from runtime.generated_modules import robot
 from runtime.paper import references
-from runtime.paper.reproduce import (
-    CONTRAST,
-    CSV_COLUMNS,
-    Reproduction,
-    SweepRow,
-    claims,
-    report_markdown,
-    reproduce,
-    stability,
-)
+from runtime.paper.reproduce import CONTRAST, Reproduction, SweepRow, reproduce
+from runtime.paper.reproduction_report import report_markdown
+from runtime.paper.reproduction_tables import CSV_COLUMNS
+from runtime.paper.reproduction_verdicts import claims, stability
 
 ROOT = Path(__file__).resolve().parent.parent
 PARAMS = dict(robot.PARAMS)
@@ -96,7 +90,7 @@ def test_references_satisfy_the_constraints(path: str) -> None:
 
 
 def test_circle_reference_puts_c_on_radius_r1() -> None:
-    from runtime.paper.reproduce import circle_centre
+    from runtime.paper.reproduction_report import circle_centre
 
     ref = references.circle(PARAMS, 0.1, 40.0)
     centre = circle_centre(ref)
