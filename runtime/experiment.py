@@ -223,7 +223,25 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
     exp = Experiment(**parts, source=where, robot=robot)
     check_sensing(exp, where)
+    check_sample_count(exp, where)
     return exp
+
+
+MAX_SAMPLES = 1_000_000  # per path: the runs keep every sample in memory
+
+
+def check_sample_count(exp: Experiment, where: str = "<experiment>") -> None:
+    """Each path's duration / h must stay within MAX_SAMPLES (a tiny h would otherwise try
+    to allocate gigabytes before the first step)."""
+    h = exp.controller.h
+    for name in ("circle_duration", "lawnmower_duration"):
+        duration = getattr(exp.paths, name)
+        if duration / h > MAX_SAMPLES:
+            raise ExperimentFileError(
+                f"{where}: field 'controller.h' = {h!r} s gives {duration / h:.3g} samples over "
+                f"paths.{name} = {duration!r} s; at most {MAX_SAMPLES:,} (raise h or shorten "
+                "the path)"
+            )
 
 
 def check_sensing(exp: Experiment, where: str = "<experiment>") -> None:

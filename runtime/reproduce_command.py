@@ -20,6 +20,7 @@ from runtime.experiment import (
     check_sensing,
     load_experiment,
 )
+from runtime.output_folder import OutputFolderError, writable_folder
 from runtime.paper.reproduce import (
     DEFAULT_OUT,
     DEFAULT_SENSINGS,
@@ -130,7 +131,11 @@ def main(argv: list[str] | None = None) -> int:
     robot_file = args.robot or (Path(exp.robot) if exp.robot else None)
     if robot_file is not None or args.generated is not None:
         return _main_robot(robot_file, args, exp, sensings, start)
-    args.out = args.out or DEFAULT_OUT
+    try:
+        args.out = writable_folder(args.out or DEFAULT_OUT)
+    except OutputFolderError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     rep = reproduce(exp, progress=True, sensings=sensings)
     t_plot = time.perf_counter()
     write_outputs(rep, args.out, plots=not args.no_plots)
@@ -162,9 +167,10 @@ def _main_robot(
     except RobotSourceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    out = args.out or Path("reproduction") / setup.name
-    if out.exists() and not out.is_dir():
-        print(f"error: --out {out}: exists and is not a folder", file=sys.stderr)
+    try:
+        out = writable_folder(args.out or Path("reproduction") / setup.name)
+    except OutputFolderError as exc:
+        print(f"error: {exc}", file=sys.stderr)
         return 2
     try:
         rep = reproduce_robot(setup, exp, sensings, progress=True)

@@ -75,6 +75,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
         preamble=PREAMBLE,
         layout=layout,
         robot_name="toy",
+        robot_name_literal='"toy"',
         fields=[(k, "1.0") for k in TOY_PARAMS],
     )
     texts["example_main.c"] = template_util.render(
@@ -346,3 +347,19 @@ def test_python_controllers_run_on_the_layout(toy_controllers: tuple[Any, _Stubs
         assert ctrl.u_discarded == 0.0
     # TDROC evaluated ||Mhat(q)^-1|| at the measured q of each step once the gain was due.
     assert [float(q[0]) for q in stubs.minv_q] == pytest.approx([0.03, 0.04])
+
+
+def test_any_robot_name_gives_a_valid_c_string(tmp_path: Any) -> None:
+    """Quotes, backslashes, control characters, '?' (trigraphs) and UTF-8 in a robot's name
+    come out of the C string literal byte for byte."""
+    import subprocess
+
+    from codegen.backends.c.backend import c_string
+
+    name = 'my "robot" \\ v2?? \t*/ é'
+    src = tmp_path / "name.c"
+    src.write_text("#include <stdio.h>\nint main(void) { fputs(" + c_string(name)
+                   + ", stdout); return 0; }\n")
+    exe = tmp_path / "name"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Werror", "-o", str(exe), str(src)], check=True)
+    assert subprocess.run([str(exe)], capture_output=True, check=True).stdout == name.encode()

@@ -232,3 +232,10 @@ def test_mass_matrix_14_is_not_symmetric() -> None:
     assert m[3, 0] == -m[0, 3] == -k1 and m[3, 1] == -m[1, 3] == -k3
     assert m[4, 0] == -k2 and m[4, 1] == -k4
     assert m[3, 2] == k5 == -m[2, 3] and m[4, 2] == -k5 == -m[2, 4]
+
+
+def test_out_naming_a_folder_fails_before_any_work(tmp_path: Path) -> None:
+    from runtime.tooling.crosscheck.command import main as crosscheck_main
+
+    with pytest.raises(SystemExit, match="is a folder; name the report file"):
+        crosscheck_main(["--out", str(tmp_path)])

@@ -10,6 +10,7 @@ for a described one (the trailer) and names every problem with a file before any
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -245,3 +246,32 @@ def test_small_robot_copy_matches_the_shared_case() -> None:
         pytest.skip("shared/cases is not beside this clone")
     ours = SMALL.read_text().split("\n", 2)[2]  # without the two lines naming the origin
     assert ours == shared.read_text()
+
+
+def test_output_folder_is_checked_before_any_run(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    a_file = tmp_path / "taken"
+    a_file.write_text("")
+    assert main(["--out", str(a_file)]) == 2  # the paper reproduction
+    assert "exists and is not a folder" in capsys.readouterr().err
+    assert main(["--robot", str(SMALL), "--out", str(a_file)]) == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        import os
+
+        if os.access(locked, os.W_OK):  # root writes anywhere: nothing to check
+            pytest.skip("this user can write to a read-only folder")
+        assert main(["--robot", str(SMALL), "--out", str(locked / "sub")]) == 2
+        assert "cannot write there" in capsys.readouterr().err
+    finally:
+        locked.chmod(0o700)
+
+
+def test_a_tiny_sampling_time_is_refused_with_its_field() -> None:
+    from runtime.experiment import ExperimentFileError
+
+    with pytest.raises(ExperimentFileError, match=re.escape("'controller.h' = 1e-09 s gives 3e")):
+        parse_experiment("[controller]\nh = 1e-9\n")

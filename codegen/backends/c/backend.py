@@ -54,6 +54,21 @@ def payload_dependent(target: RobotTarget, config: CConfig) -> list[str]:
             if model.payload_relations.get(p.symbol, p.symbol) != p.symbol]
 
 
+def c_string(text: str) -> str:
+    """A C string literal of ``text``: quotes, backslashes, non-printable and non-ASCII
+    bytes (of its UTF-8) escaped in octal, so any robot name gives a valid header."""
+    out = []
+    for byte in text.encode("utf-8"):
+        ch = chr(byte)
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif 0x20 <= byte < 0x7F and ch != "?":  # '?' could start a trigraph
+            out.append(ch)
+        else:
+            out.append(f"\\{byte:03o}")
+    return '"' + "".join(out) + '"'
+
+
 def _template(name: str, source: str, **context: object) -> str:
     text = template_util.render(
         TEMPLATE_DIR,
@@ -96,7 +111,8 @@ class CBackend:
         robot = target.robot
         fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]
         files[f"{pre}_robot.h"] = _template(
-            "robot.h.jinja", robot.source, layout=layout, robot_name=robot.name, fields=fields
+            "robot.h.jinja", robot.source, layout=layout, fields=fields,
+            robot_name=robot.name.replace("*/", "* /"), robot_name_literal=c_string(robot.name),
         )
         # (the example's preamble has always named the driver as its source)
         files["example_main.c"] = _template(
