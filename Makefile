@@ -28,7 +28,10 @@ lint: $(STAMP)
 reproduce: $(STAMP)
 	$(PY) -m runtime reproduce
 
+## Benchmarks and firmware reports; checks the Cortex-M4 cross-compiler first, so that a
+## missing one fails before BENCHMARKS.md is rewritten.
 bench: $(STAMP)
+	@command -v arm-none-eabi-gcc >/dev/null 2>&1 || { echo "make bench: arm-none-eabi-gcc not found (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi, as .ci/run does)" >&2; exit 2; }
 	$(PY) -m runtime bench
 	$(PY) -m runtime.tooling.firmware.report
 	$(PY) -m runtime.tooling.firmware.compare_casadi
