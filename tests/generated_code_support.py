@@ -37,7 +37,7 @@ C_FLAGS = [
     "-Wextra",
     "-Wpedantic",
     "-Wshadow",
-    "-Wdouble-promotion",
+    "-Wdouble-promotion", "-Wfloat-equal",
     "-Wconversion",
     "-Werror",
 ]

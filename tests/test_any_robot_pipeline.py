@@ -31,7 +31,7 @@ from runtime.closed_loop import run, velocities, wheel_rate_reference
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
 
 STRICT = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wdouble-promotion",
-          "-Werror")
+          "-Wfloat-equal", "-Werror")
 OUTPUT_DIRS = [load_robot_model(p)[0].output_dir for p in shipped_robot_files()]
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 

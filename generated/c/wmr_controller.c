@@ -25,8 +25,12 @@ int wmr_finite_bounded(const wmr_real_t *x, int n)
 
 int wmr_same_params(const wmr_params_t *a, const wmr_params_t *b)
 {
-    return a->m == b->m && a->Iz == b->Iz && a->K == b->K && a->Iw == b->Iw && a->r == b->r
-        && a->b == b->b && a->d == b->d;
+    /* Equal as numbers, without floating-point == (-Wfloat-equal): both are validated
+       finite before this cache key is compared. */
+    return !(a->m < b->m || a->m > b->m) && !(a->Iz < b->Iz || a->Iz > b->Iz)
+        && !(a->K < b->K || a->K > b->K) && !(a->Iw < b->Iw || a->Iw > b->Iw)
+        && !(a->r < b->r || a->r > b->r) && !(a->b < b->b || a->b > b->b)
+        && !(a->d < b->d || a->d > b->d);
 }
 
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],

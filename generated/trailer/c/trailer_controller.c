@@ -25,17 +25,28 @@ int trailer_finite_bounded(const trailer_real_t *x, int n)
 
 int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b)
 {
-    return a->J_theta_cart == b->J_theta_cart && a->J_theta_cart_left == b->J_theta_cart_left
-        && a->J_theta_cart_right == b->J_theta_cart_right && a->J_theta_left == b->J_theta_left
-        && a->J_theta_right == b->J_theta_right && a->J_theta_tractor == b->J_theta_tractor
-        && a->J_x_tractor == b->J_x_tractor
-        && a->K_theta_cart_x_tractor == b->K_theta_cart_x_tractor
-        && a->K_theta_cart_x_tractor_2 == b->K_theta_cart_x_tractor_2
-        && a->K_theta_tractor_x_tractor == b->K_theta_tractor_x_tractor
-        && a->K_theta_tractor_x_tractor_2 == b->K_theta_tractor_x_tractor_2
-        && a->radius_cart_left == b->radius_cart_left
-        && a->radius_cart_right == b->radius_cart_right && a->radius_left == b->radius_left
-        && a->radius_right == b->radius_right;
+    /* Equal as numbers, without floating-point == (-Wfloat-equal): both are validated
+       finite before this cache key is compared. */
+    return !(a->J_theta_cart < b->J_theta_cart || a->J_theta_cart > b->J_theta_cart)
+        && !(a->J_theta_cart_left < b->J_theta_cart_left || a->J_theta_cart_left
+        > b->J_theta_cart_left) && !(a->J_theta_cart_right < b->J_theta_cart_right
+        || a->J_theta_cart_right > b->J_theta_cart_right) && !(a->J_theta_left < b->J_theta_left
+        || a->J_theta_left > b->J_theta_left) && !(a->J_theta_right < b->J_theta_right
+        || a->J_theta_right > b->J_theta_right) && !(a->J_theta_tractor < b->J_theta_tractor
+        || a->J_theta_tractor > b->J_theta_tractor) && !(a->J_x_tractor < b->J_x_tractor
+        || a->J_x_tractor > b->J_x_tractor) && !(a->K_theta_cart_x_tractor
+        < b->K_theta_cart_x_tractor || a->K_theta_cart_x_tractor > b->K_theta_cart_x_tractor)
+        && !(a->K_theta_cart_x_tractor_2 < b->K_theta_cart_x_tractor_2
+        || a->K_theta_cart_x_tractor_2 > b->K_theta_cart_x_tractor_2)
+        && !(a->K_theta_tractor_x_tractor < b->K_theta_tractor_x_tractor
+        || a->K_theta_tractor_x_tractor > b->K_theta_tractor_x_tractor)
+        && !(a->K_theta_tractor_x_tractor_2 < b->K_theta_tractor_x_tractor_2
+        || a->K_theta_tractor_x_tractor_2 > b->K_theta_tractor_x_tractor_2)
+        && !(a->radius_cart_left < b->radius_cart_left || a->radius_cart_left > b->radius_cart_left)
+        && !(a->radius_cart_right < b->radius_cart_right || a->radius_cart_right
+        > b->radius_cart_right) && !(a->radius_left < b->radius_left || a->radius_left
+        > b->radius_left) && !(a->radius_right < b->radius_right || a->radius_right
+        > b->radius_right);
 }
 
 trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
