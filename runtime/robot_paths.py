@@ -114,17 +114,7 @@ def lawnmower(code: RobotCode, scale: RobotScale, params: dict[str, float], h: f
     speed = scale.size * DRISHTI_RADIUS / scale.wheel_radius
     a, b = references.LAWN_A * speed, references.LAWN_B * speed
     r, track = scale.wheel_radius, scale.track
-    turn_time = math.pi / (r * (a - b) / track)
-    leg = references.LAWN_T / 2 - turn_time / 2
-    times, jumps = [references.START_AT], [(a, a)]
-    t, left = references.START_AT + leg, True
-    while t < duration:
-        drop = (0.0, b - a) if left else (b - a, 0.0)
-        times += [t, t + turn_time]
-        jumps += [drop, (-drop[0], -drop[1])]
-        t += turn_time + leg
-        left = not left
-    profile = references.WheelProfile(tuple(times), tuple(jumps))
+    profile = references.lawnmower_profile({"r": r, "b": track}, duration, (a, b))
     spacing = 2 * (r * (a + b) / 2) / (r * (a - b) / track)
     ref = integrate(code, profile, np.zeros(code.nq), params, h, duration)
     return Path("lawnmower", ref, spacing)

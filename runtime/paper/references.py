@@ -85,14 +85,20 @@ def lawnmower_leg_spacing(params: dict[str, float]) -> float:
     return 2 * v / w
 
 
-def lawnmower_profile(params: dict[str, float], duration: float) -> WheelProfile:
+def lawnmower_profile(
+    params: dict[str, float], duration: float, rates: tuple[float, float] = (LAWN_A, LAWN_B)
+) -> WheelProfile:
+    """The lawn mower's square-wave wheel rates made consistent, for wheel radius
+    ``params["r"]`` and track ``params["b"]``; ``rates`` = (straight, inner wheel in a turn)
+    in rad/s (the paper's a, b by default)."""
     r, b = params["r"], params["b"]
-    turn_time = math.pi / (r * (LAWN_A - LAWN_B) / b)  # half a turn at rate ω
+    fast, slow = rates
+    turn_time = math.pi / (r * (fast - slow) / b)  # half a turn at rate ω
     leg = LAWN_T / 2 - turn_time / 2  # straight legs: a full cycle lasts T on average
-    times, jumps = [START_AT], [(LAWN_A, LAWN_A)]
+    times, jumps = [START_AT], [(fast, fast)]
     t, left = START_AT + leg, True
     while t < duration:
-        drop = (0.0, LAWN_B - LAWN_A) if left else (LAWN_B - LAWN_A, 0.0)
+        drop = (0.0, slow - fast) if left else (slow - fast, 0.0)
         times += [t, t + turn_time]
         jumps += [drop, (-drop[0], -drop[1])]
         t += turn_time + leg
