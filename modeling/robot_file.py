@@ -17,6 +17,7 @@ Every error names the file and the offending field; nothing is half-loaded.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import tomllib
 from dataclasses import dataclass
@@ -68,6 +69,7 @@ class Robot:
     physical: dict[str, float] | None = None
     K_lat: float = 0.0
     source: str = "<built-in>"
+    digest: str = ""  # text_digest of the file it was read from ("" if none)
 
     def plant_values(self) -> dict[str, float]:
         """The numbers the file gives the simulated robot: the lumped parameters and the
@@ -157,6 +159,12 @@ def check_lumped(where: str, p: dict[str, float], k_lat: float = 0.0) -> None:
         )
 
 
+def text_digest(text: str) -> str:
+    """SHA-256 of a robot file's text (as read, UTF-8): generated ``robot.py`` records it,
+    and the runtime refuses code generated from another version of the file."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
 def parse_robot(text: str, where: str = "<string>") -> Robot:
     try:
         data = tomllib.loads(text)
@@ -175,11 +183,11 @@ def parse_robot(text: str, where: str = "<string>") -> Robot:
     if "lumped" in data:
         lumped = _table(where, "lumped", data["lumped"], LUMPED_FIELDS)
         check_lumped(where, lumped)
-        return Robot(name, lumped, source=where)
+        return Robot(name, lumped, source=where, digest=text_digest(text))
     phys = _table(where, "physical", data["physical"], PHYSICAL_FIELDS)
     lumped, k_lat = lumped_from_physical(phys)
     check_lumped(where, lumped, k_lat)
-    return Robot(name, lumped, phys, k_lat, source=where)
+    return Robot(name, lumped, phys, k_lat, source=where, digest=text_digest(text))
 
 
 def load_robot(path: str | Path | None = None) -> Robot:
@@ -232,7 +240,9 @@ def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]
         path = None  # the packaged default: its source reads modeling/robots/drishti/...
     if path is not None and is_description(path):
         model = described_model(str(Path(path).resolve()), source_label(path))
-        return model, Robot(model.name, model.param_values(), source=model.source)
+        digest = text_digest(Path(path).read_text(encoding="utf-8"))
+        return model, Robot(model.name, model.param_values(), source=model.source,
+                            digest=digest)
     from modeling.robots.drishti import model as wmr
 
     robot = load_robot(path)

@@ -15,11 +15,11 @@ No SymPy for described robots: their numbers are read from the generated ``robot
 from __future__ import annotations
 
 import ast
-import hashlib
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from modeling.robot_file import RobotFileError, load_robot, text_digest
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
 
 
@@ -39,12 +39,7 @@ class RobotSetup:
     plant: dict[str, float]
 
 
-def file_digest(path: Path) -> str:
-    """SHA-256 of a file's bytes, as ``robot.py``'s ``SOURCE_SHA256`` records it."""
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _read(path: Path) -> dict[str, object]:
+def _read(path: Path) -> tuple[str, dict[str, object]]:
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -52,7 +47,7 @@ def _read(path: Path) -> dict[str, object]:
     except (OSError, UnicodeDecodeError) as exc:
         raise RobotSourceError(f"{path}: cannot read robot file: {exc}") from None
     try:
-        return tomllib.loads(text)
+        return text, tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RobotSourceError(f"{path}: not valid TOML: {exc}") from None
 
@@ -68,13 +63,13 @@ def generated_robots(root: Path) -> list[Path]:
 def resolve(path: Path, generated: Path | None = None) -> RobotSetup:
     """The setup of robot file ``path``; ``generated`` is the folder to look for its code in
     (default: the repository's ``generated/``)."""
-    data = _read(path)
+    text, data = _read(path)
     if "body" in data or "wheel" in data:
-        return _described(path, data, generated or GENERATED)
+        return _described(path, text, data, generated or GENERATED)
     return _lumped(path, generated)
 
 
-def _described(path: Path, data: dict[str, object], root: Path) -> RobotSetup:
+def _described(path: Path, text: str, data: dict[str, object], root: Path) -> RobotSetup:
     name = data.get("name")
     if not isinstance(name, str) or not name:
         raise RobotSourceError(f"{path}: field 'name' must be a non-empty string")
@@ -87,7 +82,7 @@ def _described(path: Path, data: dict[str, object], root: Path) -> RobotSetup:
                                f"{hint}")
     code = load_robot_code(matches[0].resolve())
     recorded = getattr(code.robot, "SOURCE_SHA256", None)
-    if recorded != file_digest(path):
+    if recorded != text_digest(text):
         raise RobotSourceError(
             f"{path}: {matches[0]} was generated from "
             f"{'another version of this file' if recorded else 'an unrecorded source'} "
@@ -106,8 +101,6 @@ def _robot_name(robot_py: Path) -> str | None:
 
 
 def _lumped(path: Path, generated: Path | None) -> RobotSetup:
-    from modeling.robot_file import RobotFileError, load_robot
-
     try:
         robot = load_robot(path)
     except RobotFileError as exc:
