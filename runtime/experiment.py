@@ -55,6 +55,12 @@ class PlantSettings:
     extra_on_at: float = 5.0  # s: first time the extra payload is put on
     extra_period: float = 20.0  # s: on for half a period, off for the other half
 
+    def extra_on(self, t: float) -> bool:
+        """Whether the extra payload is on board at time t."""
+        if t < self.extra_on_at:
+            return False
+        return ((t - self.extra_on_at) % self.extra_period) < self.extra_period / 2
+
 
 VELOCITY_MODELS = ("sample-instant", "encoder-average", "motor-encoder")
 ACCEL_ESTIMATORS = ("matched", "backward", "central")

@@ -115,7 +115,9 @@ def reproduce_robot(setup: RobotSetup, exp: Experiment, sensings: Sequence[str],
         for name, path in paths.items():
             for form in forms:
                 for ctrl in CONTROLLERS:
-                    r = _run(lib, setup, ctrl, form, path, e, bounds[form])
+                    # the simulated robot: the file's numbers, with the experiment's payloads
+                    r = run(lib, code, ctrl, form, name, path.ref, setup.nominal, e,
+                            bounds[form], plant_base=setup.plant)
                     runs[(sensing, name, form, ctrl)] = r
                     rows.append(_row(r, sensing, path.scale))
                     if progress:
@@ -124,18 +126,6 @@ def reproduce_robot(setup: RobotSetup, exp: Experiment, sensings: Sequence[str],
                               flush=True)
     return RobotReproduction(setup, exp, scale, lines, tuple(sensings), paths, bounds, tde,
                              runs, rows, time.perf_counter() - start)
-
-
-def _run(lib: cbuild.CLibrary, setup: RobotSetup, ctrl: str, form: str, path: RefPath,
-         exp: Experiment, bounds: ModelBounds) -> RobotRun:
-    # The simulated robot: the file's numbers (plant_params_at adds the payloads to them).
-    base = setup.plant
-
-    def plant_at(t: float) -> dict[str, float]:
-        return plant_params_at(setup.code, exp, t, base)
-
-    return run(lib, setup.code, ctrl, form, path.name, path.ref, setup.nominal, exp, bounds,
-               plant_at=plant_at)
 
 
 # --------------------------------------------------------------------------- outputs

@@ -21,7 +21,6 @@ generated code (``generated/<dir>/{c,python}``):
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +34,6 @@ from runtime.generated_modules import RobotCode
 from runtime.robot_model_checks import ModelBounds, model_bounds
 
 Array = NDArray[np.float64]
-FORMULATION_CODES = {"paper": 0, "minimal": 1}
 COULOMB_SPEED = 0.05  # rad/s, as runtime/paper/csrc/wmr_sim.c
 
 
@@ -64,19 +62,20 @@ class RobotRun:
 
 def plant_params_at(code: RobotCode, exp: Experiment, t: float,
                     base: dict[str, float] | None = None) -> dict[str, float]:
-    """The simulated robot's parameters at time t: ``base`` (default: the robot's) with the
-    experiment's fixed payload, and the extra one when it is on."""
+    """The simulated robot's parameters at time t (keys in the generated ``PLANT_PARAMS``
+    order): ``base`` (default: the robot's) with the experiment's fixed payload, and the
+    extra one when it is on."""
     pl = exp.plant
     keys = list(code.plant_defaults)
     p = dict(code.plant_defaults if base is None else base)
     loads = [(pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y)]
-    if t >= pl.extra_on_at and ((t - pl.extra_on_at) % pl.extra_period) < pl.extra_period / 2:
+    if pl.extra_on(t):
         loads.append((pl.extra_payload, pl.extra_payload_x, pl.extra_payload_y))
     for load in loads:
         if load[0] > 0:
             values = code.plant.plant_params_with_payload(list(load), p)
             p = dict(zip(keys, (float(v) for v in values), strict=True))
-    return p
+    return {k: p[k] for k in keys}
 
 
 def controller_config(lib: cbuild.CLibrary, code: RobotCode, name: str, formulation: str,
@@ -90,7 +89,7 @@ def controller_config(lib: cbuild.CLibrary, code: RobotCode, name: str, formulat
     cfg = lib.ffi.new(f"{code.prefix}_{name}_config_t *")
     cfg.nominal = cbuild.params_struct(lib, nominal, f"{code.prefix}_params_t",
                                        code.controllers.C_FIELD_NAMES)[0]
-    cfg.formulation = FORMULATION_CODES[formulation]
+    cfg.formulation = getattr(code.controllers, f"FORMULATION_{formulation.upper()}")
     cfg.k1 = [c.k1] * code.nq
     cfg.k2 = [c.k2] * code.nq
     cfg.q_pos, cfg.q_vel, cfg.h, cfg.tau_max = c.q_pos, c.q_vel, c.h, c.tau_max
@@ -136,7 +135,6 @@ class Odometry:
         delta = angles - self.q[self.act]
         # q̇ = S(q) η is linear in η: the increment over the sample is S(q_mid) Δθ.
         mid = self.q + 0.5 * velocities(self.code, self.q, delta, self.params)
-        mid[self.act] = self.q[self.act] + delta / 2
         step = velocities(self.code, mid, delta, self.params)
         v = self.sensing.velocity
         if v == "sample-instant":
@@ -191,10 +189,10 @@ class _Plant:
 def run(lib: cbuild.CLibrary, code: RobotCode, name: str, formulation: str, path: str,
         ref: Reference, nominal: dict[str, float], exp: Experiment,
         bounds: ModelBounds | None = None,
-        plant_at: Callable[[float], dict[str, float]] | None = None) -> RobotRun:
+        plant_base: dict[str, float] | None = None) -> RobotRun:
     """One controller on one reference; the plant starts on it at rest and has the
-    parameters ``plant_at(t)`` (default: the robot's defaults with the experiment's
-    payload schedule)."""
+    parameters ``plant_base`` (default: the robot's defaults) with the experiment's
+    payload schedule."""
     ffi, clib = lib.ffi, lib.lib
     cfg = controller_config(lib, code, name, formulation, nominal, exp, bounds)
     state = ffi.new(f"{code.prefix}_{name}_state_t *")
@@ -218,6 +216,7 @@ def run(lib: cbuild.CLibrary, code: RobotCode, name: str, formulation: str, path
     window_start: Array | None = None
     rec: dict[str, list[Any]] = {k: [] for k in ("q", "qm", "tau", "gain")}
     saturated, failed_at, failure = 0, None, "ok"
+    extra_on: bool | None = None  # the payload state the plant's parameters were set for
     for k in range(len(ref.t)):
         t = float(ref.t[k])
         q_true = x[: code.nq]
@@ -238,7 +237,9 @@ def run(lib: cbuild.CLibrary, code: RobotCode, name: str, formulation: str, path
         rec["gain"].append(float(state.gain))
         if k == len(ref.t) - 1:
             break
-        plant.set_params(plant_at(t) if plant_at else plant_params_at(code, exp, t))
+        if exp.plant.extra_on(t) != extra_on:  # the payload changes only at its switches
+            extra_on = exp.plant.extra_on(t)
+            plant.set_params(plant_params_at(code, exp, t, plant_base))
         x = plant.advance(x, tau_now, h / nsub, nsub - n_window)
         if n_window:  # the motor encoder's window opens n_window substeps before t + h
             window_start = x[act].copy()

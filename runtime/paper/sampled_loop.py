@@ -51,7 +51,7 @@ from runtime.generated_modules import robot as generated_robot
 from runtime.generated_modules import wmr_laws, wmr_model
 from runtime.paper import references
 from runtime.paper.nominal_check import roc_bounds
-from runtime.paper.payload_schedule import extra_payload_on, plant_params
+from runtime.paper.payload_schedule import plant_params
 from runtime.paper.sim_library import build_sim_library
 
 Vec = NDArray[np.float64]
@@ -352,7 +352,7 @@ def plant_parameters(robot: dict[str, float], exp: Experiment, plant: str) -> di
     if plant != "payload":
         raise ValueError(f"plant must be 'nominal' or 'payload', got {plant!r}")
     t = exp.plant.extra_on_at
-    assert extra_payload_on(exp, t)
+    assert exp.plant.extra_on(t)
     return dict(zip(PLANT_KEYS, (float(v) for v in plant_params(robot, exp, t)), strict=True))
 
 

@@ -31,7 +31,7 @@ from runtime.paper.controller_config import (
     controller_config,
     roc_bounds,
 )
-from runtime.paper.payload_schedule import extra_payload_on, plant_params
+from runtime.paper.payload_schedule import plant_params
 from runtime.paper.references import Reference
 from runtime.paper.sim_library import build_sim_library
 
@@ -43,7 +43,6 @@ __all__ = [
     "Sensors",
     "build_sim_library",
     "controller_config",
-    "extra_payload_on",
     "plant_params",
     "roc_bounds",
     "run",
