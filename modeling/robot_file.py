@@ -20,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -196,14 +197,18 @@ def load_robot(path: str | Path | None = None) -> Robot:
         where = f"robots/{DEFAULT_ROBOT}/{DEFAULT_ROBOT}.toml"
         return parse_robot(resources.files("modeling").joinpath(where).read_text(),
                            f"modeling/{where}")
+    return parse_robot(read_robot_text(path), str(path))
+
+
+def read_robot_text(path: str | Path) -> str:
+    """A robot file's text; ``RobotFileError`` naming the file if it cannot be read."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        return p.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise RobotFileError(f"{p}: robot file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise RobotFileError(f"{p}: cannot read robot file: {exc}") from None
-    return parse_robot(text, str(p))
 
 
 # ---------------------------------------------------------------------------------------
@@ -217,13 +222,18 @@ def shipped_robot_file(name: str) -> Path:
     return ROBOTS_DIR / name / f"{name}.toml"
 
 
+def describes_bodies(data: Mapping[str, Any]) -> bool:
+    """Whether a parsed robot file describes bodies, joints and wheels (``[[body]]``)."""
+    return "body" in data
+
+
 def is_description(path: str | Path) -> bool:
     """Whether a robot file describes bodies, joints and wheels (``[[body]]`` tables)."""
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False  # load_robot reports the error with the file's name
-    return "body" in data
+    return describes_bodies(data)
 
 
 def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]:

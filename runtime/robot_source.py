@@ -19,7 +19,13 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from modeling.robot_file import RobotFileError, load_robot, text_digest
+from modeling.robot_file import (
+    RobotFileError,
+    describes_bodies,
+    load_robot,
+    read_robot_text,
+    text_digest,
+)
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
 
 
@@ -41,11 +47,9 @@ class RobotSetup:
 
 def _read(path: Path) -> tuple[str, dict[str, object]]:
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RobotSourceError(f"{path}: robot file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RobotSourceError(f"{path}: cannot read robot file: {exc}") from None
+        text = read_robot_text(path)
+    except RobotFileError as exc:
+        raise RobotSourceError(str(exc)) from None
     try:
         return text, tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -64,7 +68,7 @@ def resolve(path: Path, generated: Path | None = None) -> RobotSetup:
     """The setup of robot file ``path``; ``generated`` is the folder to look for its code in
     (default: the repository's ``generated/``)."""
     text, data = _read(path)
-    if "body" in data or "wheel" in data:
+    if describes_bodies(data):
         return _described(path, text, data, generated or GENERATED)
     return _lumped(path, generated)
 
