@@ -26,8 +26,7 @@ if str(ROOT) not in sys.path:  # generated/ is not an installed package by desig
 # The default robot's modules, for the runtime written around the paper's robot: imported
 # on first use, so that a generated/ holding some other robot fails with a sentence, not an
 # ImportError deep in an unrelated command.
-_DEFAULT_MODULES = {"controllers": "controllers", "robot": "robot", "wmr_laws": "wmr_laws",
-                    "wmr_model": "wmr_model", "wmr_plant": "wmr_plant"}
+_DEFAULT_MODULES = ("controllers", "robot", "wmr_laws", "wmr_model", "wmr_plant")
 
 if TYPE_CHECKING:  # the names __getattr__ provides, for the type checker and linters
     from generated.python import controllers, robot, wmr_laws, wmr_model, wmr_plant
@@ -51,7 +50,7 @@ def __getattr__(name: str) -> ModuleType:
             "the paper's differential drive (wmr_) this command is written for; regenerate "
             "it with `make model`, or use `--robot FILE` for other robots"
         )
-    module = importlib.import_module(f"generated.python.{_DEFAULT_MODULES[name]}")
+    module = importlib.import_module(f"generated.python.{name}")
     globals()[name] = module
     return module
 
