@@ -86,7 +86,6 @@ def test_scaled_references_are_consistent_motions(folder: str) -> None:
         assert np.max(np.abs(ddq - ref.qddot[1:-1])) < 2e-2 * max(1.0, np.abs(ref.qddot).max())
     ref = circle(code, s, code.params, 0.05, 40.0).ref
     late = ref.t > 15.0  # after the start-up ramp: on the circle of radius R1 · size
-    radius = np.hypot(ref.q[late, 0], ref.q[late, 1] - np.mean(ref.q[late, 1]))
     centre = np.array([np.mean(ref.q[late, 0]), np.mean(ref.q[late, 1])])
     radius = np.linalg.norm(ref.q[late, :2] - centre, axis=1)
     assert np.ptp(radius) < 0.02 * radius.mean()
