@@ -25,8 +25,9 @@ from scipy.integrate import solve_ivp
 
 from runtime.closed_loop import Reference, velocities
 from runtime.generated_modules import RobotCode
-from runtime.paper import references
-from runtime.robot_scale import DRISHTI_RADIUS, RobotScale
+from runtime.paper import paths as paper_paths
+from runtime.paper.paths import DRISHTI_RADIUS
+from runtime.robot_scale import RobotScale
 
 Array = NDArray[np.float64]
 
@@ -49,7 +50,7 @@ def _check_two_wheels(code: RobotCode) -> None:
 
 def integrate(
     code: RobotCode,
-    profile: references.WheelProfile,
+    profile: paper_paths.WheelProfile,
     start: Array,
     params: dict[str, float],
     h: float,
@@ -63,7 +64,7 @@ def integrate(
         return velocities(code, qq, profile.rates(tt), params)
 
     sol = solve_ivp(rhs, (0.0, ts[-1]), start, method="DOP853", t_eval=ts, rtol=1e-11,
-                    atol=1e-12, max_step=references.RAMP / 2)
+                    atol=1e-12, max_step=paper_paths.RAMP / 2)
     if not sol.success:
         raise RuntimeError(f"robot '{code.name}': reference integration failed: {sol.message}")
     qs: Array = np.asarray(sol.y.T, dtype=np.float64)
@@ -84,10 +85,10 @@ def circle(code: RobotCode, scale: RobotScale, params: dict[str, float], h: floa
     """The root body's axle midpoint on a circle of radius R1 · size at θ̇ = 0.25 rad/s,
     counter-clockwise from rest (the first driven wheel is taken as the right one)."""
     _check_two_wheels(code)
-    radius = references.R1 * scale.size
-    w, r, b = references.THETA_DOT, scale.wheel_radius, scale.track
+    radius = paper_paths.R1 * scale.size
+    w, r, b = paper_paths.THETA_DOT, scale.wheel_radius, scale.track
     v = w * radius
-    profile = references.WheelProfile((references.START_AT,), (((v + w * b / 2) / r,
+    profile = paper_paths.WheelProfile((paper_paths.START_AT,), (((v + w * b / 2) / r,
                                                                  (v - w * b / 2) / r),))
     start = np.zeros(code.nq)
     start[:2] = radius, 0.0
@@ -108,13 +109,13 @@ def body_yaws(code: RobotCode) -> tuple[int, ...]:
 def lawnmower(code: RobotCode, scale: RobotScale, params: dict[str, float], h: float,
               duration: float) -> Path:
     """Straight legs and alternating U-turns (the paper's square-wave wheel rates made
-    consistent, :func:`runtime.paper.references.lawnmower_profile`), with Drishti's leg speed and
+    consistent, :func:`runtime.paper.paper_paths.lawnmower_profile`), with Drishti's leg speed and
     U-turn diameter times ``size``."""
     _check_two_wheels(code)
     speed = scale.size * DRISHTI_RADIUS / scale.wheel_radius
-    a, b = references.LAWN_A * speed, references.LAWN_B * speed
+    a, b = paper_paths.LAWN_A * speed, paper_paths.LAWN_B * speed
     r, track = scale.wheel_radius, scale.track
-    profile = references.lawnmower_profile({"r": r, "b": track}, duration, (a, b))
+    profile = paper_paths.lawnmower_profile({"r": r, "b": track}, duration, (a, b))
     spacing = 2 * (r * (a + b) / 2) / (r * (a - b) / track)
     ref = integrate(code, profile, np.zeros(code.nq), params, h, duration)
     return Path("lawnmower", ref, spacing)

@@ -21,11 +21,11 @@ import numpy as np
 
 from runtime import cbuild
 from runtime.experiment import Experiment
+from runtime.paper.paths import DRISHTI_RADIUS, ROC_MAX_RATE
 from runtime.robot_model_checks import ModelBounds, model_bounds, schedule_tde
 from runtime.robot_paths import Path as RefPath
 from runtime.robot_paths import circle, lawnmower
 from runtime.robot_scale import (
-    DRISHTI_RADIUS,
     RobotScale,
     inertial_keys,
     robot_scale,
@@ -100,7 +100,7 @@ def reproduce_robot(setup: RobotSetup, exp: Experiment, sensings: Sequence[str],
     }
     forms = tuple(code.robot.FORMULATIONS)
     # ROC's bounds over wheel rates up to Drishti's 8 rad/s scaled like the paths' rates.
-    max_rate = 8.0 * scale.size * DRISHTI_RADIUS / scale.wheel_radius
+    max_rate = ROC_MAX_RATE * scale.size * DRISHTI_RADIUS / scale.wheel_radius
     bounds = {f: model_bounds(code, setup.nominal, exp.controller.uncertainty, f, max_rate)
               for f in forms}
     loaded = [plant_params_at(code, exp, 0.0, setup.plant),

@@ -25,10 +25,7 @@ import numpy as np
 from runtime.closed_loop import velocities
 from runtime.experiment import ControllerSettings, Experiment, PlantSettings
 from runtime.generated_modules import RobotCode
-
-DRISHTI_RADIUS = 0.096  # m, the paper's r
-DRISHTI_TRACK = 0.414  # m, the paper's b
-DRISHTI_MASS = 36.0 + 2 * 0.07 / DRISHTI_RADIUS**2  # kg: m + 2 I_w / r²
+from runtime.paper.paths import DRISHTI_MASS, DRISHTI_RADIUS, DRISHTI_TRACK
 
 
 @dataclass(frozen=True)

@@ -19,10 +19,10 @@ import pytest
 
 from runtime.experiment import Experiment, parse_experiment
 from runtime.generated_modules import GENERATED, load_robot_code
+from runtime.paper.paths import DRISHTI_MASS
 from runtime.reproduce_command import main
 from runtime.robot_paths import body_yaws, circle, lawnmower
 from runtime.robot_scale import (
-    DRISHTI_MASS,
     RobotScale,
     inertial_keys,
     robot_scale,
@@ -214,6 +214,7 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
                     ignore=shutil.ignore_patterns("__pycache__"))
     probe = ("import runtime.generated_modules as g\n"
              "assert g.load_robot_code('').name == 'trailer'\n"
+             "import runtime.robot_reproduce  # the generic runtime needs no paper robot\n"
              "from runtime.generated_modules import wmr_model\n")
     result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
                             text=True, check=False)

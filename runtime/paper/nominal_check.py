@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from runtime.generated_modules import robot, wmr_model
+from runtime.paper.paths import ROC_MAX_RATE
 
 UNCERTAIN = ("m", "I", "K", "Iw")  # the inertial parameters: what a payload changes
 KEYS = tuple(robot.PARAMS)  # the generated model's parameter table
@@ -124,7 +125,7 @@ def check_nominal(
 
 
 def roc_bounds(
-    nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = 8.0
+    nominal: dict[str, float], uncertainty: float, formulation: str, max_rate: float = ROC_MAX_RATE
 ) -> tuple[float, float]:
     """(α, φ) for ROC: α = max ‖M⁻¹ M̂ − I‖₂ and φ = max ‖M⁻¹ (H − Ĥ)‖ over the box where m,
     I, K and Iw are each nominal or ``uncertainty`` above it ("30 % above nominal"), over

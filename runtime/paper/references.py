@@ -29,13 +29,23 @@ from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
 from runtime.generated_modules import wmr_model
+from runtime.paper.paths import (
+    LAWN_A,
+    LAWN_B,
+    LAWN_T,
+    R1,
+    RAMP,
+    START_AT,
+    THETA_DOT,
+    WheelProfile,
+    lawnmower_profile,
+)
 
-R1 = 1.5
-THETA_DOT = 0.25
+__all__ = ["LAWN_A", "LAWN_B", "LAWN_T", "R1", "RAMP", "START_AT", "THETA_DOT", "Reference",
+           "WheelProfile", "circle", "circle_profile", "lawnmower", "lawnmower_leg_spacing",
+           "lawnmower_profile", "printed_circle", "printed_lawnmower"]
+
 CIRCLE_START = (1.5, 1.5, 0.0)
-LAWN_A, LAWN_B, LAWN_T = 3.0, 1.6, 25.0
-RAMP = 0.3  # s, tanh time constant of every wheel-rate switch
-START_AT = 1.0  # s, centre of the start-up ramp
 
 
 @dataclass(frozen=True)
@@ -47,28 +57,6 @@ class Reference:
     q: NDArray[np.float64]
     qdot: NDArray[np.float64]
     qddot: NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class WheelProfile:
-    """η(t) = Σ_k Δη_k s(t − t_k), s a tanh step: switches at times t_k by Δη_k."""
-
-    times: tuple[float, ...]
-    jumps: tuple[tuple[float, float], ...]
-
-    def rates(self, t: float) -> NDArray[np.float64]:
-        out = np.zeros(2)
-        for tk, (dr, dl) in zip(self.times, self.jumps, strict=True):
-            s = 0.5 * (1.0 + math.tanh((t - tk) / RAMP))
-            out += s * np.array([dr, dl])
-        return out
-
-    def accels(self, t: float) -> NDArray[np.float64]:
-        out = np.zeros(2)
-        for tk, (dr, dl) in zip(self.times, self.jumps, strict=True):
-            ds = 0.5 / RAMP / math.cosh((t - tk) / RAMP) ** 2
-            out += ds * np.array([dr, dl])
-        return out
 
 
 def circle_profile(params: dict[str, float]) -> WheelProfile:
@@ -83,27 +71,6 @@ def lawnmower_leg_spacing(params: dict[str, float]) -> float:
     r, b = params["r"], params["b"]
     v, w = r * (LAWN_A + LAWN_B) / 2, r * (LAWN_A - LAWN_B) / b
     return 2 * v / w
-
-
-def lawnmower_profile(
-    params: dict[str, float], duration: float, rates: tuple[float, float] = (LAWN_A, LAWN_B)
-) -> WheelProfile:
-    """The lawn mower's square-wave wheel rates made consistent, for wheel radius
-    ``params["r"]`` and track ``params["b"]``; ``rates`` = (straight, inner wheel in a turn)
-    in rad/s (the paper's a, b by default)."""
-    r, b = params["r"], params["b"]
-    fast, slow = rates
-    turn_time = math.pi / (r * (fast - slow) / b)  # half a turn at rate ω
-    leg = LAWN_T / 2 - turn_time / 2  # straight legs: a full cycle lasts T on average
-    times, jumps = [START_AT], [(fast, fast)]
-    t, left = START_AT + leg, True
-    while t < duration:
-        drop = (0.0, slow - fast) if left else (slow - fast, 0.0)
-        times += [t, t + turn_time]
-        jumps += [drop, (-drop[0], -drop[1])]
-        t += turn_time + leg
-        left = not left
-    return WheelProfile(tuple(times), tuple(jumps))
 
 
 def integrate(
