@@ -22,6 +22,7 @@ from codegen import backends
 from codegen.backend import Module, RobotTarget, function_ir
 from codegen.controller_layout import ControllerLayout
 from codegen.robot_functions import law_specs, minv_norm_needs_q, model_specs, plant_specs
+from codegen.template_util import generated_by
 from modeling.robot_file import Robot
 from modeling.robot_model import RobotModel
 
@@ -82,7 +83,7 @@ def generate_files(
             out[f"{root}{backend.folder}/{name}"] = (
                 data.encode() if isinstance(data, str) else data
             )
-    out[f"{root}__init__.py"] = b'"""Generated code (python -m codegen). DO NOT EDIT."""\n'
+    out[f"{root}__init__.py"] = f'"""{generated_by()} DO NOT EDIT."""\n'.encode()
     if report:
         renderer = importlib.import_module(model.docs.get("report", "codegen.robot_report"))
         out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(target)).encode()
