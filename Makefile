@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 ## Derive the model and regenerate generated/ (C, Python, CasADi, MODEL.md).
 model: $(STAMP)
-	$(PY) -m codegen $(if $(ROBOT),--robot $(ROBOT))
+	$(PY) -m codegen $(if $(ROBOT),--robot $(ROBOT) --out $(or $(OUT),generated))
 
 ## Lint, type-check, verify generated/ is fresh, run the test suite.
 test: $(STAMP) lint
@@ -26,7 +26,7 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy
 
 reproduce: $(STAMP)
-	$(PY) -m runtime reproduce
+	$(PY) -m runtime reproduce --out docs/reproduction
 
 ## Benchmarks and firmware reports; checks the Cortex-M4 cross-compiler first, so that a
 ## missing one fails before BENCHMARKS.md is rewritten.

@@ -1,12 +1,18 @@
-"""``python -m codegen``: derive every shipped robot and regenerate ``generated/``.
+"""``wmr model`` (``python -m codegen``): derive robots and generate their code.
 
-    python -m codegen                    # every robot in modeling/robots/ (Drishti at the
-                                         # root of generated/, others in generated/<name>/)
-    python -m codegen --robot my.toml    # one robot (a [lumped]/[physical] file replaces
-                                         # the default robot's numbers; a [[body]] file
-                                         # goes to generated/<name>/)
-    python -m codegen --check            # exit 1 with a diff if generated/ is stale
-    python -m codegen --out DIR          # write elsewhere (tests, experiments)
+    wmr model                    # every shipped robot (modeling/robots/): Drishti at the
+                                 # root of the output, others in <out>/<name>/
+    wmr model --robot my.toml    # one robot: a [lumped]/[physical] file is the paper's
+                                 # robot with its numbers (code at the root of the output),
+                                 # a [[body]] file goes to <out>/<name>/
+    wmr model --check            # exit 1 with a diff if the output is stale
+    wmr model --out DIR          # write to DIR
+
+Where output goes (``--out``'s default): the shipped robots regenerate the package's own
+``generated/`` in a source checkout (what ``make model`` does) and ``./generated`` in the
+working directory for an installed package; ``--robot`` writes to ``./generated`` in the
+working directory, and refuses to write into the shipped ``generated/`` unless ``--out``
+names it. Nothing is ever written into site-packages.
 
 The generated code takes the robot's parameters at run time; the robot file only sets the
 defaults written into ``<prefix>_robot.h`` / ``robot.py`` and the report.
@@ -20,14 +26,16 @@ import sys
 import time
 from pathlib import Path
 
-from codegen.generate import GENERATED_DIR, generate_files
+from codegen.generate import generate_files
+from modeling.package_paths import SHIPPED_GENERATED, inside, source_checkout
 from modeling.robot_file import RobotFileError, load_robot_model, shipped_robot_files
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
-        prog="python -m codegen",
-        description="Derive the robots' models and controllers and regenerate generated/.",
+        prog="wmr model",
+        description="Derive robots' models and controllers and generate their C, NumPy and "
+        "CasADi code.",
     )
     parser.add_argument(
         "--robot",
@@ -41,9 +49,34 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         help="do not write; exit 1 and print a diff if generated/ is stale",
     )
     parser.add_argument(
-        "--out", type=Path, default=GENERATED_DIR, help="output directory (default: generated/)"
-    )
+        "--out", type=Path, default=None,
+        help="output directory (default: the shipped generated/ in a source checkout, "
+        "./generated in the working directory otherwise or with --robot)",
+    )  # fmt: skip
     return parser.parse_args(argv)
+
+
+class OutputError(ValueError):
+    """An output folder this command must not write to."""
+
+
+def output_folder(out: Path | None, robot: Path | None, check: bool) -> Path:
+    """Where to write (or, with ``check``, what to compare): see the module docstring."""
+    if out is None:
+        shipped = robot is None and (check or source_checkout())
+        out = SHIPPED_GENERATED if shipped else Path("generated")
+        if not check and robot is not None and inside(out, SHIPPED_GENERATED):
+            raise OutputError(
+                f"{out.resolve()} is the shipped generated/ folder: --robot does not write "
+                "there unless --out names it (e.g. --out generated); give another --out"
+            )
+    if not check:
+        if not source_checkout() and inside(out, SHIPPED_GENERATED):
+            raise OutputError(f"{out}: the installed package's generated/ is read-only by "
+                              "design; give --out DIR")
+        if out.exists() and not out.is_dir():
+            raise OutputError(f"--out {out}: exists and is not a folder")
+    return out
 
 
 def _top(name: str) -> str:
@@ -76,6 +109,11 @@ def _diff(name: str, old: bytes | None, new: bytes | None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parse(argv)
+    try:
+        args.out = output_folder(args.out, args.robot, args.check)
+    except OutputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     paths: list[Path | None] = [args.robot] if args.robot is not None else list(
         shipped_robot_files())
     files: dict[str, bytes] = {}
@@ -89,20 +127,23 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         produced = generate_files(robot, model)
         files.update(produced)
-        where = f"generated/{model.output_dir}" if model.output_dir else "generated/"
+        where = args.out / model.output_dir if model.output_dir else args.out
         summary.append(f"{robot.name}: {len(produced)} files for {where} "
                        f"({time.perf_counter() - start:.1f} s)")
-    # Regenerating every robot owns all of generated/ (files of removed robots go);
-    # one robot owns only its own folders.
-    old = _existing(args.out, {_top(n) for n in files} if args.robot is not None else None)
+    # Regenerating every robot into the shipped generated/ owns all of it (files of removed
+    # robots go); otherwise only the top-level entries written are owned, so nothing else in
+    # a user's --out folder is ever deleted.
+    owns_all = args.robot is None and inside(args.out, SHIPPED_GENERATED)
+    old = _existing(args.out, None if owns_all else {_top(n) for n in files})
     stale = sorted(n for n in set(files) | set(old) if files.get(n) != old.get(n))
     if args.check:
         if not stale:
-            print(f"generated/ is up to date ({len(files)} files)")
+            print(f"{args.out} is up to date ({len(files)} files)")
             return 0
         for name in stale:
             sys.stdout.write(_diff(name, old.get(name), files.get(name))[:20000])
-        print(f"\n{len(stale)} generated file(s) are stale: run `make model`", file=sys.stderr)
+        print(f"\n{len(stale)} generated file(s) in {args.out} are stale: run `wmr model` "
+              "(`make model` in a source checkout)", file=sys.stderr)
         return 1
     for name in stale:
         path = args.out / name

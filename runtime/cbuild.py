@@ -25,9 +25,11 @@ from typing import Any, Literal
 
 import cffi
 
-ROOT = Path(__file__).resolve().parent.parent
-GENERATED_C = ROOT / "generated" / "c"
-BUILD_DIR = ROOT / "build" / "cffi"
+from modeling.package_paths import SHIPPED_GENERATED, cache_dir
+
+GENERATED_C = SHIPPED_GENERATED / "c"
+# build/ of a source checkout; a user cache for an installed package (never site-packages)
+BUILD_DIR = cache_dir() / "cffi"
 OBJECT_DIR = BUILD_DIR / "objects"  # one object per source, flags and headers: a regenerated
 # module recompiles alone
 CFLAGS = ("-std=c99", "-O2")  # and -fPIC -shared (gcc_command, kind="shared")

@@ -18,9 +18,11 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-ROOT = Path(__file__).resolve().parent.parent
-GENERATED = ROOT / "generated"
-if str(ROOT) not in sys.path:  # generated/ is not an installed package by design
+from modeling.package_paths import PACKAGE_ROOT, SHIPPED_GENERATED
+
+ROOT = PACKAGE_ROOT
+GENERATED = SHIPPED_GENERATED
+if str(ROOT) not in sys.path:  # a source tree used without installing it
     sys.path.insert(0, str(ROOT))
 
 # The default robot's modules, for the runtime written around the paper's robot: imported

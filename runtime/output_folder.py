@@ -25,3 +25,12 @@ def writable_folder(path: Path, option: str = "--out") -> Path:
     except OSError as exc:
         raise OutputFolderError(f"{option} {path}: cannot write there ({exc.strerror})") from None
     return path
+
+
+def writable_file(path: Path, option: str = "--out") -> Path:
+    """``path`` checked to be a file this process can write: not a folder, and its folder
+    (created if missing) writable. Raises ``OutputFolderError``."""
+    if path.is_dir():
+        raise OutputFolderError(f"{option} {path}: is a folder; name the file to write")
+    writable_folder(path.parent, option)
+    return path

@@ -83,7 +83,7 @@ def print_summary(rep: Reproduction) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m runtime reproduce", description="Reproduce the paper's experiments."
+        prog="wmr reproduce", description="Reproduce the paper's experiments."
     )
     parser.add_argument(
         "--experiment",
@@ -115,7 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--out", type=Path, default=None,
-        help=f"output folder (default: {DEFAULT_OUT}, or reproduction/<robot> with --robot)",
+        help="output folder (default: docs/reproduction of a source checkout, ./reproduction "
+        "when installed; ./reproduction/<robot> with --robot)",
     )  # fmt: skip
     parser.add_argument("--no-plots", action="store_true", help="skip the figures")
     args = parser.parse_args(argv)

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from modeling.package_paths import default_output
 from runtime.experiment import Experiment
 from runtime.generated_modules import robot as default_robot
 from runtime.paper import references
@@ -50,8 +51,7 @@ class Figure:
     caption: str
 
 
-ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_OUT = ROOT / "docs" / "reproduction"
+DEFAULT_OUT = default_output("docs/reproduction")  # ./reproduction when installed
 DEFAULT_SENSINGS = ("sample-instant", "encoder-average")
 EPS_SWEEP = (0.1, 0.2, 0.5, 1.0)
 FORMULATIONS = ("paper", "minimal")

@@ -389,6 +389,8 @@ def roc_gain(formulation: str, robot: dict[str, float], exp: Experiment) -> floa
     """ROC's boundary-layer gain at zero error, ρ/ε, with ρ = φ/(1 − α) (q̈_d = 0 on the
     wheels) and (α, φ) of :func:`runtime.paper.nominal_check.roc_bounds`."""
     alpha, phi = roc_bounds(robot, exp.controller.uncertainty, formulation)
+    if not alpha < 1.0:  # ρ = φ/(1 − α) exists only for α < 1; ROC's init refuses the rest
+        raise ValueError(f"ROC needs alpha < 1 over the uncertainty box, got {alpha:.3g}")
     return phi / (1 - alpha) / exp.controller.eps
 
 

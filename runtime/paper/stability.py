@@ -89,10 +89,16 @@ def setting_gain(
     if controller == "tdc":
         return 0.0, "TDC has no switching term", None
     if controller == "roc":
-        return roc_gain(formulation, robot, exp), "ROC's ρ at zero error / ε", None
+        try:
+            return roc_gain(formulation, robot, exp), "ROC's ρ at zero error / ε", None
+        except ValueError as exc:  # ROC's bounds do not exist over the uncertainty box
+            return math.nan, f"no ROC gain: {exc}", None
     if not measure:
         return 0.0, "not measured", None
-    khat = measured_gain(controller, formulation, robot, exp)
+    try:
+        khat = measured_gain(controller, formulation, robot, exp)
+    except ValueError as exc:  # the toolchain refuses to configure it: nothing to measure
+        return 0.0, f"not measured: the configuration is refused ({exc})", None
     return khat / eps, "median k̂ of the closed-loop circle / ε", khat
 
 
@@ -113,7 +119,7 @@ def analyse(
     g, source, khat = setting_gain(
         controller, formulation, robot, exp, measure and pen.radius(0.0) < 1.0
     )
-    radius = pen.radius(g)
+    radius = pen.radius(g) if math.isfinite(g) else math.inf  # nan: no configuration exists
     eps_min = khat / g_max if khat is not None and g_max > 0 else None
     return Analysis(
         controller=controller,
@@ -143,7 +149,7 @@ def analyse_all(
 def _json_number(x: float | None) -> float | str | None:
     if x is None or math.isfinite(x):
         return x
-    return "inf"
+    return "nan" if math.isnan(x) else "inf"
 
 
 def as_json(rows: Sequence[Analysis], robot_name: str) -> dict[str, Any]:
@@ -169,12 +175,14 @@ def table(rows: Sequence[Analysis]) -> str:
             f"| {r.max_stable_gain:.4g} | {r.gain_at_setting:.4g} | {r.spectral_radius:.4f} "
             f"| {'yes' if r.stable else '**no**'} | {eps_min} |"
         )
-    return "\n".join(lines) + "\n"
+    notes = [f"* {r.controller.upper()} {r.formulation}: {r.gain_source}" for r in rows
+             if r.gain_source.startswith(("not measured:", "no ROC gain"))]
+    return "\n".join(lines + (["", *notes] if notes else [])) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m runtime stability",
+        prog="wmr stability",
         description="Predict whether each generated controller is stable on a robot with the "
         "experiment's sampling, sensing and estimator (linearised sampled-data loop).",
     )
@@ -203,6 +211,10 @@ def main(argv: list[str] | None = None) -> int:
     except (ExperimentFileError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.robot is not None:  # the paper's setting scaled to the robot, as reproduce does
+        exp, lines = scaled_for(robot, exp)
+        if not args.json:
+            print(f"robot '{name}' from {args.robot}:", *lines, sep="\n  ")
     rows = analyse_all(robot, exp, args.plant, measure=not args.no_measure)
     if args.json:
         print(json.dumps(as_json(rows, name), indent=2))
@@ -213,6 +225,15 @@ def main(argv: list[str] | None = None) -> int:
         )
         print(table(rows))
     return 0
+
+
+def scaled_for(robot: dict[str, float], exp: Experiment) -> tuple[Experiment, list[str]]:
+    """The experiment scaled to a robot of the paper's structure (sizes, torques, payloads:
+    :func:`runtime.robot_scale.scaled_experiment`), and the lines saying what was scaled."""
+    from runtime.generated_modules import load_robot_code
+    from runtime.robot_scale import robot_scale, scaled_experiment
+
+    return scaled_experiment(exp, robot_scale(load_robot_code(""), robot))
 
 
 def robot_from(path: Path | None) -> tuple[dict[str, float], str]:

@@ -9,12 +9,12 @@ import sys
 from collections.abc import Iterable
 from pathlib import Path
 
+from modeling.package_paths import default_output
 from runtime import cbuild
 from runtime.tooling.bad_input.cases import CONTROLLERS, DRISHTI, FORMULATIONS, WARMUP
 from runtime.tooling.bad_input.runner import Outcome, failures, run_all, status_names
 
-ROOT = Path(__file__).resolve().parents[3]  # the repository
-DOC = ROOT / "docs" / "BAD_INPUT.md"
+DOC = default_output("docs/BAD_INPUT.md")  # ./BAD_INPUT.md when installed
 
 
 def _controllers_label(names: Iterable[str]) -> str:

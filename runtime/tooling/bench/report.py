@@ -12,12 +12,13 @@ from pathlib import Path
 from typing import Any
 
 from codegen.cse import count_ops, cse_function
+from modeling.package_paths import default_output
 from runtime.tooling.bench.c_bench import run_c, summarise_c
 from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
 from runtime.tooling.bench.op_counts import casadi_op_count
 from runtime.tooling.bench.python_timings import python_bench, toolchain_times
 
-ROOT = Path(__file__).resolve().parents[3]  # the repository
+ROOT = default_output(".")  # BENCHMARKS.md and benchmarks.json: the repository's, else ./
 
 
 def write_report(
@@ -91,7 +92,7 @@ def write_report(
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m runtime bench")
+    parser = argparse.ArgumentParser(prog="wmr bench")
     parser.add_argument("--calls", type=int, default=1_000_000, help="calls per repetition")
     parser.add_argument("--repeats", type=int, default=5, help="repetitions (≥ 5)")
     parser.add_argument("--out", type=Path, default=ROOT, help="folder for the reports")

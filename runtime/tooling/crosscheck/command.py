@@ -68,7 +68,7 @@ def crosscheck(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m runtime crosscheck",
+        prog="wmr crosscheck",
         description="Compare the generated Python, C (double, float32) and CasADi code of every "
         "robot: with the hand-written equations (runtime/paper/handwritten) where they exist, "
         "and C and CasADi with the generated NumPy for every robot.",

@@ -24,13 +24,13 @@ from pathlib import Path
 
 from codegen.backends.casadi import generate_c
 from codegen.robot_functions import law_specs, model_specs
+from modeling.package_paths import default_output
 from modeling.robots.drishti.model import robot_model
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, have_toolchain
 from runtime.tooling.firmware.symbols import DOUBLE_SYMBOL
 
-ROOT = Path(__file__).resolve().parents[3]  # the repository
-DOC = ROOT / "docs" / "FIRMWARE_VS_CASADI.md"
+DOC = default_output("docs/FIRMWARE_VS_CASADI.md")  # ./FIRMWARE_VS_CASADI.md when installed
 FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics", "paper_tde",
              "paper_minv_norm", "paper_tdroc_gain", "paper_tdroc_law")
 

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from modeling.package_paths import default_output
+from runtime.output_folder import OutputFolderError, writable_file
 from runtime.tooling.firmware.build import (
     ARM_FLAGS,
     ARM_GCC,
@@ -41,8 +43,7 @@ from runtime.tooling.firmware.stack import (
 )
 from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, symbols
 
-ROOT = Path(__file__).resolve().parents[3]  # the repository
-DOC = ROOT / "docs" / "FIRMWARE.md"
+DOC = default_output("docs/FIRMWARE.md")  # ./FIRMWARE.md when installed
 
 
 @dataclass
@@ -238,13 +239,29 @@ def render(r: Report) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description="Cortex-M4 cross-build report")
-    parser.add_argument("--out", type=Path, default=DOC)
-    parser.add_argument("--no-emulation", action="store_true")
+    parser = argparse.ArgumentParser(
+        prog="wmr firmware",
+        description="Cortex-M4 cross-build report of the generated controllers: code size, "
+        "worst-case stack, emulated instructions per step (needs arm-none-eabi-gcc).",
+    )
+    parser.add_argument(
+        "--out", type=Path, default=DOC,
+        help="report file (default: docs/FIRMWARE.md of a source checkout, ./FIRMWARE.md "
+        "when installed)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-emulation", action="store_true", help="skip counting instructions in the emulator"
+    )
     args = parser.parse_args(argv)
     if not have_toolchain():
-        print(f"{ARM_GCC} not found: install gcc-arm-none-eabi libnewlib-arm-none-eabi")
-        return 1
+        print(f"error: {ARM_GCC} not found: install gcc-arm-none-eabi libnewlib-arm-none-eabi",
+              file=sys.stderr)
+        return 2
+    try:
+        args.out = writable_file(args.out)
+    except OutputFolderError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     with tempfile.TemporaryDirectory() as tmp:
         report = build_report(Path(tmp), emulate_run=not args.no_emulation)
         text = render(report)

@@ -1,0 +1,80 @@
+"""``wmr``: the toolchain's command line (also ``python -m runtime``).
+
+    wmr model [--robot FILE] [--out DIR]      derive robots, generate C, NumPy and CasADi
+    wmr check [--robot FILE] [--out DIR]      exit 1 if generated code is stale
+    wmr reproduce [--robot FILE] [--out DIR]  the paper's experiments, or scaled to a robot
+    wmr crosscheck [--robot NAME_OR_DIR]      every implementation against the hand-written
+    wmr stability [--robot FILE]              sampled-data stability of each controller
+    wmr bench                                 benchmarks of the generated code
+    wmr firmware                              Cortex-M4 size, stack and instruction counts
+
+Each subcommand has its own ``--help``. A command's module is imported only when it runs, so
+``wmr reproduce`` never imports SymPy or the code generator.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: the module whose ``main(argv)`` runs it, and arguments it always gets."""
+
+    module: str
+    help: str
+    fixed_args: tuple[str, ...] = ()
+
+
+COMMANDS: dict[str, Command] = {
+    "model": Command("codegen.__main__", "derive robots and generate their code"),
+    "check": Command(
+        "codegen.__main__", "exit 1 with a diff if generated code is stale", ("--check",)
+    ),
+    "reproduce": Command(
+        "runtime.reproduce_command", "run the paper's experiments, write plots and tables"
+    ),
+    "crosscheck": Command(
+        "runtime.tooling.crosscheck.command",
+        "compare every implementation with the hand-written one",
+    ),
+    "stability": Command(
+        "runtime.paper.stability",
+        "predict each controller's sampled-data stability on a robot",
+    ),
+    "bench": Command("runtime.tooling.bench.report", "benchmark the generated code"),
+    "firmware": Command(
+        "runtime.tooling.firmware.report",
+        "Cortex-M4 code size, stack and emulated instructions of the generated C",
+    ),
+}
+
+
+def parser(prog: str) -> argparse.ArgumentParser:
+    from modeling.version import VERSION
+
+    p = argparse.ArgumentParser(
+        prog=prog,
+        description="From a wheeled robot's Lagrangian to verified controller firmware.",
+        epilog="Run `%(prog)s COMMAND --help` for a command's options.",
+    )
+    p.add_argument("--version", action="version", version=f"wmr-toolchain {VERSION}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, cmd in COMMANDS.items():
+        sub.add_parser(name, help=cmd.help, add_help=False)
+    return p
+
+
+def main(argv: list[str] | None = None, prog: str = "wmr") -> int:
+    args, rest = parser(prog).parse_known_args(argv)
+    cmd = COMMANDS[args.command]
+    module = importlib.import_module(cmd.module)
+    status: int = module.main([*cmd.fixed_args, *rest])
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
