@@ -110,12 +110,15 @@ def test_stability_on_a_small_robot_is_scaled_and_says_what_it_could_not_measure
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     """shared/cases/small_robot.toml: once a traceback (the unscaled paper setting put a
-    6 kg payload on a 2 kg robot, and the refused TDROC configuration was not caught)."""
+    6 kg payload on a 2 kg robot, and measuring k̂ tripped the TDE check over the box)."""
     assert wmr(["stability", "--robot", str(SMALL)]) == 0
     out = capsys.readouterr().out
     assert "controller.tau_max = 0.2179" in out  # the paper's 40 N m, scaled
-    assert "* TDROC minimal: not measured: the configuration is refused" in out
+    row = next(line for line in out.splitlines() if line.startswith("| TDROC | minimal"))
+    assert float(row.split("|")[6]) > 0.0  # k̂ measured on the nominal robot
     assert "* ROC paper: no ROC gain: ROC needs alpha < 1" in out
+    assert "* TDE condition, minimal formulation: the box ±30% around the true parameters "\
+        "contains a robot whose mass matrix is not positive definite" in out
 
 
 @pytest.mark.skipif(shutil.which("wmr") is None and not (Path(sys.executable).parent / "wmr")

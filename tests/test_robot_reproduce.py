@@ -275,3 +275,16 @@ def test_a_tiny_sampling_time_is_refused_with_its_field() -> None:
 
     with pytest.raises(ExperimentFileError, match=re.escape("'controller.h' = 1e-09 s gives 3e")):
         parse_experiment("[controller]\nh = 1e-9\n")
+
+
+def test_wheel_profile_derivative_over_a_long_path() -> None:
+    """The tanh steps' derivative once overflowed (math.cosh) 710 ramps after a switch, so a
+    circle of 150 s crashed the reproduction; it is the rates' derivative everywhere."""
+    from runtime.paper.paths import RAMP, WheelProfile
+
+    profile = WheelProfile((1.0, 4.0), ((2.0, 1.0), (-1.0, 0.5)))
+    for t in (0.0, 1.0, 1.0 + RAMP, 3.9, 5.0, 300.0, 1e6):
+        dt = 1e-6
+        numeric = (profile.rates(t + dt) - profile.rates(t - dt)) / (2 * dt)
+        assert np.all(np.isfinite(profile.accels(t)))
+        np.testing.assert_allclose(profile.accels(t), numeric, rtol=1e-6, atol=1e-9)

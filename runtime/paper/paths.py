@@ -45,7 +45,10 @@ class WheelProfile:
     def accels(self, t: float) -> NDArray[np.float64]:
         out = np.zeros(2)
         for tk, (dr, dl) in zip(self.times, self.jumps, strict=True):
-            ds = 0.5 / RAMP / math.cosh((t - tk) / RAMP) ** 2
+            # d/dt of the tanh step: sech² written with exp(−2|x|), which cannot overflow
+            # (cosh does, 710 ramps from a switch: a path of a few minutes)
+            e = math.exp(-2.0 * abs((t - tk) / RAMP))
+            ds = 0.5 / RAMP * 4.0 * e / (1.0 + e) ** 2
             out += ds * np.array([dr, dl])
         return out
 
