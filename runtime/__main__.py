@@ -1,8 +1,9 @@
-"""``python -m runtime <command>``: crosscheck, reproduce, bench.
+"""``python -m runtime <command>``: crosscheck, reproduce, stability, faults, bench.
 
 python -m runtime crosscheck            # generated code vs hand-written equations
 python -m runtime reproduce [--experiment F.toml] [--robot F.toml] [--out DIR]
 python -m runtime stability [--experiment F.toml] [--robot F.toml] [--json]
+python -m runtime faults [--experiment F.toml] [--out DIR]
 python -m runtime bench [--quick]
 """
 
@@ -17,6 +18,7 @@ COMMANDS = {
     "crosscheck": "runtime.tooling.crosscheck.command",
     "reproduce": "runtime.reproduce_command",
     "stability": "runtime.paper.stability",
+    "faults": "runtime.paper.fault_table",
     "bench": "runtime.tooling.bench.report",
 }
 
@@ -33,6 +35,11 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser(
         "stability",
         help="predict each controller's sampled-data stability on a robot",
+        add_help=False,
+    )
+    sub.add_parser(
+        "faults",
+        help="inject sensor and actuator faults, tabulate status and recovery",
         add_help=False,
     )
     sub.add_parser("bench", help="benchmark the generated code", add_help=False)
