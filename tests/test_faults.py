@@ -253,6 +253,20 @@ def test_nothing_diverges_and_nothing_is_silent(table: ft.FaultTable) -> None:
         assert r.false_alarms == 0
 
 
+def test_verdicts_tell_a_refused_step_from_divergence(table: ft.FaultTable) -> None:
+    row = table.rows[0]
+    stopped = replace(row, stopped_at=8.1, stop_status="WMR_ERR_BAD_MEASUREMENT", recovery=None)
+    diverged = replace(row, stopped_at=8.1, stop_status=None, recovery=None)
+    assert stopped.verdict(H).startswith("stopped: step returned `WMR_ERR_BAD_MEASUREMENT`")
+    assert not stopped.diverged and diverged.diverged
+    assert diverged.verdict(H) == "diverged: non-finite state at 8.1 s"
+    late = replace(row, recovery=None, last_outside=29.9, end_error=0.0123, base_end_error=0.001)
+    assert late.verdict(H) == (
+        "bounded, not recovered: outside the tolerance until 29.9 s; 12.3 mm at the end "
+        "(fault-free 1.0)"
+    )
+
+
 def test_command_runs_the_experiments_faults(tmp_path: Path) -> None:
     exp_file = tmp_path / "e.toml"
     exp_file.write_text(

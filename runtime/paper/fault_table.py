@@ -204,15 +204,19 @@ class Row:
     last_outside: float | None  # s: the last sample outside the tolerance (true position)
     peak_torque: float  # N m, commanded
     stopped_at: float | None
+    stop_status: str | None  # the status < 0 that stopped the run (None: non-finite state)
     false_alarms: int  # monitor flags in the fault-free run after SETTLE
 
     @property
     def diverged(self) -> bool:
-        return self.stopped_at is not None
+        """The simulated state became non-finite (the run stopped without a status)."""
+        return self.stopped_at is not None and self.stop_status is None
 
     def verdict(self, h: float) -> str:
         if self.diverged:
-            return f"diverged: stopped at {self.stopped_at:g} s"
+            return f"diverged: non-finite state at {self.stopped_at:g} s"
+        if self.stopped_at is not None:
+            return f"stopped: step returned `{self.stop_status}` at {self.stopped_at:g} s"
         if self.recovery is not None:
             return f"recovered in {self.recovery} samples ({self.recovery * h:.1f} s)"
         return (
@@ -239,6 +243,10 @@ def fault_row(fault: Fault, base: Run, faulted: Run, exp: Experiment, n: int) ->
         for c in st
         if c != generated_controllers.STATUS["WMR_OK"]
     )
+    stop = None
+    if faulted.stop_status is not None:
+        stop = names.get(faulted.stop_status, f"status {faulted.stop_status}")
+        counts[stop] += 1
     monitors = Monitors.calibrate(base, exp)
     e, e0 = faulted.position_error, base.position_error
     m = len(e)
@@ -258,6 +266,7 @@ def fault_row(fault: Fault, base: Run, faulted: Run, exp: Experiment, n: int) ->
         last_outside=float(faulted.t[outside[-1]]) if len(outside) else None,
         peak_torque=float(np.abs(faulted.tau).max()),
         stopped_at=faulted.failed_at,
+        stop_status=stop,
         false_alarms=monitors.false_alarms(base, exp),
     )
 
@@ -341,6 +350,7 @@ def csv_text(table: FaultTable) -> str:
             "recovery_samples_odometry",
             "peak_torque_nm",
             "stopped_at_s",
+            "verdict",
         ]
     )
     for r in table.rows:
@@ -364,6 +374,7 @@ def csv_text(table: FaultTable) -> str:
                 "" if r.recovery_odometry is None else r.recovery_odometry,
                 f"{r.peak_torque:.6g}",
                 "" if r.stopped_at is None else f"{r.stopped_at:g}",
+                r.verdict(table.experiment.controller.h),
             ]
         )
     return out.getvalue()
@@ -435,8 +446,10 @@ def markdown(table: FaultTable) -> str:
         f"+ {SLACK * 1e3:g} mm and stays there to the end of the run, with at least "
         f"{MIN_TAIL} samples left; *never* otherwise. *true*: the robot's position; "
         "*odometry*: the position the controller is given.",
-        "* **verdict**: *diverged* if the run stopped (a status < 0 or a non-finite state); "
-        "otherwise recovered or bounded.",
+        "* **verdict**: *stopped* if `step` returned a status < 0 (the run ends there: the "
+        "controller reported the fault and refused the step); *diverged* if the simulated "
+        "state became non-finite; otherwise recovered or bounded (finite state and torque "
+        "to the end of the run).",
         "",
         "| fault | ctrl | form | status | monitors | peak error, mm | recovery true / "
         "odometry | peak τ, N m | verdict |",
@@ -476,12 +489,13 @@ def summary(table: FaultTable) -> list[str]:
         flagged = [r for r in rows if r.flags]
         recovered = [r for r in rows if r.recovery is not None]
         diverged = [r for r in rows if r.diverged]
+        stopped = [r for r in rows if r.stop_status is not None]
         worst = max((r.recovery for r in recovered if r.recovery is not None), default=None)
         out.append(
             f"* {f.describe()}: a controller status reported it in {len(reported)} of "
             f"{len(rows)} runs, a monitor in {len(flagged)}; recovered in {len(recovered)}"
             + (f" (slowest {worst} samples)" if worst is not None else "")
-            + f", diverged in {len(diverged)}."
+            + f", stopped by a status in {len(stopped)}, diverged in {len(diverged)}."
         )
     out += [
         "",

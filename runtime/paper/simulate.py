@@ -86,6 +86,7 @@ class Run:
     status: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     qdot_meas: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 5)))
     tau_applied: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 2)))
+    stop_status: int | None = None  # the status < 0 that stopped the run at failed_at, if one did
 
     @property
     def position_error(self) -> NDArray[np.float64]:
@@ -225,6 +226,7 @@ def run(
     sl = slice(0, 5) if formulation == "paper" else slice(3, 5)
     delivered = (ref.q[0].copy(), np.zeros(5))
     saturated, failed_at = 0, None
+    stop_status: int | None = None
     prev_gain = float(state.gain)  # ASMC: the gain before each step's adaptation
     keys = tuple(generated_robot.PLANT_PARAMS)
     for k in range(n):
@@ -255,7 +257,7 @@ def run(
                 state, cfg, buf["q"], buf["qdot"], buf["qd"], buf["qdd"], buf["qddd"], tau
             )
             if status < 0:
-                failed_at = float(t)
+                failed_at, stop_status = float(t), int(status)
                 break
             saturated += status == 1
         true_p = plant_params(robot, exp, float(t))
@@ -325,4 +327,5 @@ def run(
         np.array(rec["st"], dtype=np.int64),
         np.array(rec["qdm"]).reshape(-1, 5),
         np.array(rec["ta"]).reshape(-1, 2),
+        stop_status,
     )
