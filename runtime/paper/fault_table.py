@@ -490,10 +490,17 @@ def summary(table: FaultTable) -> list[str]:
         recovered = [r for r in rows if r.recovery is not None]
         diverged = [r for r in rows if r.diverged]
         stopped = [r for r in rows if r.stop_status is not None]
+        skipped = [r for r in rows if "not called" in r.statuses]
         worst = max((r.recovery for r in recovered if r.recovery is not None), default=None)
         out.append(
             f"* {f.describe()}: a controller status reported it in {len(reported)} of "
-            f"{len(rows)} runs, a monitor in {len(flagged)}; recovered in {len(recovered)}"
+            f"{len(rows)} runs, a monitor in {len(flagged)}"
+            + (
+                f", the control task's own count of skipped steps in {len(skipped)}"
+                if skipped
+                else ""
+            )
+            + f"; recovered in {len(recovered)}"
             + (f" (slowest {worst} samples)" if worst is not None else "")
             + f", stopped by a status in {len(stopped)}, diverged in {len(diverged)}."
         )
