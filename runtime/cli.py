@@ -5,6 +5,7 @@
     wmr reproduce [--robot FILE] [--out DIR]  the paper's experiments, or scaled to a robot
     wmr crosscheck [--robot NAME_OR_DIR]      every implementation against the hand-written
     wmr stability [--robot FILE]              sampled-data stability of each controller
+    wmr faults [--experiment FILE] [--out DIR]  encoder, sample, traction, torque faults
     wmr bench                                 benchmarks of the generated code
     wmr firmware                              Cortex-M4 size, stack and instruction counts
 
@@ -44,6 +45,10 @@ COMMANDS: dict[str, Command] = {
     "stability": Command(
         "runtime.paper.stability",
         "predict each controller's sampled-data stability on a robot",
+    ),
+    "faults": Command(
+        "runtime.paper.fault_table",
+        "sensor and actuator faults in the closed loop: what each controller reports",
     ),
     "bench": Command("runtime.tooling.bench.report", "benchmark the generated code"),
     "firmware": Command(

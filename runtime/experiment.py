@@ -6,6 +6,8 @@
     [sensing]      how wheel angles and rates are measured, and the estimator of q̈(t − h)
                    that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        which paths, their duration
+    [[fault]]      (optional, repeatable) a sensor or actuator fault for
+                   ``python -m runtime faults`` (see :mod:`runtime.faults`)
     robot = "F"    (top level, optional) the robot file the experiment is for, relative to
                    the experiment file; ``reproduce`` then runs it on that robot
 
@@ -20,6 +22,8 @@ import tomllib
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
+
+from runtime.faults import Fault, FaultSpecError, fault_from_table
 
 
 class ExperimentFileError(ValueError):
@@ -117,6 +121,7 @@ class Experiment:
     paths: PathSettings = PathSettings()
     source: str = "<paper defaults>"
     robot: str | None = None  # robot file named by the experiment (resolved path)
+    faults: tuple[Fault, ...] = ()  # [[fault]] tables, in file order
 
 
 _POSITIVE = {
@@ -216,6 +221,7 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
         "paths": PathSettings,
     }
     robot = data.pop("robot", None)
+    faults = parse_faults(data.pop("fault", []), where)
     if robot is not None and (not isinstance(robot, str) or not robot.strip()):
         raise ExperimentFileError(
             f"{where}: field 'robot' must be the path of a robot file, got {robot!r}"
@@ -224,13 +230,26 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     if unknown:
         raise ExperimentFileError(
             f"{where}: unknown section '{unknown[0]}' (expected {', '.join(sections)}, "
-            "or a top-level robot = \"FILE\")"
+            "[[fault]], or a top-level robot = \"FILE\")"
         )
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
-    exp = Experiment(**parts, source=where, robot=robot)
+    exp = Experiment(**parts, source=where, robot=robot, faults=faults)
     check_sensing(exp, where)
     check_sample_count(exp, where)
     return exp
+
+
+def parse_faults(data: Any, where: str) -> tuple[Fault, ...]:
+    """The ``[[fault]]`` tables; an error names the table by its position."""
+    if not isinstance(data, list):
+        raise ExperimentFileError(f"{where}: 'fault' must be an array of tables ([[fault]])")
+    out = []
+    for i, table in enumerate(data, 1):
+        try:
+            out.append(fault_from_table(table))
+        except FaultSpecError as exc:
+            raise ExperimentFileError(f"{where}: [[fault]] #{i}: {exc}") from None
+    return tuple(out)
 
 
 MAX_SAMPLES = 1_000_000  # per path: the runs keep every sample in memory

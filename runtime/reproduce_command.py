@@ -129,6 +129,12 @@ def main(argv: list[str] | None = None) -> int:
     except ExperimentFileError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if exp.faults:
+        print(
+            f"note: {exp.source}: {len(exp.faults)} [[fault]] table(s) not used here; "
+            "`python -m runtime faults` runs them",
+            file=sys.stderr,
+        )
     robot_file = args.robot or (Path(exp.robot) if exp.robot else None)
     if robot_file is not None or args.generated is not None:
         return _main_robot(robot_file, args, exp, sensings, start)

@@ -17,4 +17,13 @@ typedef struct {
 int sim_plant_advance(const wmr_plant_params_t *pp, const sim_friction_t *friction,
                       wmr_real_t x[7], const wmr_real_t tau[2], wmr_real_t dt, int nsub);
 
+/* The same with wheel slip (runtime/paper/faults.py, traction loss): wheel i passes
+ * (1 - loss[i]) of its net torque to the ground, the rest spins it relative to the ground on
+ * its inertia Iw. slip = (sigma_r, sigma_l, rate_r, rate_l): the wheels' angles and rates
+ * relative to rolling, which an encoder on the wheel adds to x[3..6]. x[3], x[4] stay the
+ * rolling angles. Returns 0, or -1 if the state became non-finite (x, slip then untouched). */
+int sim_plant_advance_slip(const wmr_plant_params_t *pp, const sim_friction_t *friction,
+                           wmr_real_t x[7], wmr_real_t slip[4], const wmr_real_t tau[2],
+                           const wmr_real_t loss[2], wmr_real_t dt, int nsub);
+
 #endif
