@@ -17,6 +17,56 @@ from codegen.robot_functions import MAX_WINDOW
 # Input magnitudes beyond this are rejected as absurd (a lying sensor), not clipped.
 MAX_ABS_INPUT = "1.0e6"
 
+# Plausibility bounds of the configuration (issue 13): an accepted configuration must not
+# be able to put a value into the state from which a later valid step cannot succeed.
+H_MIN = "1.0e-6"  # sample time [s]: a 1 MHz loop at most ...
+H_MAX = "1.0"  # ... and a 1 Hz loop at least
+GAIN_MAX = "1.0e6"  # K1, K2, Q, eps, phi, gamma, held_gain, gain0; and the adaptive gains' cap
+TORQUE_LIMIT_MAX = "1.0e6"  # tau_max [N m]
+NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|, 1)
+STEPS_MAX = "4294967295"  # the saturating step counter (uint32_t)
+# FNV-1a (32 bit) of the configuration's field values, kept in the state.
+FNV_OFFSET = "2166136261"
+FNV_PRIME = "16777619"
+
+# Which input or field an error is about (``<prefix>_error_detail_t.field``). Stable values:
+# append, never renumber.
+FIELDS: tuple[tuple[str, str], ...] = (
+    ("NONE", "no error"),
+    ("STATE", "the state pointer, or a state never initialised"),
+    ("CONFIG", "the config pointer, or a config changed since _init"),
+    ("Q", "q[index]"),
+    ("QDOT", "qdot[index]"),
+    ("Q_DES", "q_des[index]"),
+    ("QDOT_DES", "qdot_des[index]"),
+    ("QDDOT_DES", "qddot_des[index]"),
+    ("TAU", "tau (NULL), or the torque tau[index] computed"),
+    ("NOMINAL", "nominal parameter index (struct order); -1: the parameters together"),
+    ("FORMULATION", "formulation"),
+    ("K1", "k1[index]"),
+    ("K2", "k2[index]"),
+    ("Q_POS", "q_pos"),
+    ("Q_VEL", "q_vel"),
+    ("H", "h"),
+    ("TAU_MAX", "tau_max"),
+    ("ACCEL_ESTIMATOR", "accel_estimator"),
+    ("RATE_WINDOW", "rate_window"),
+    ("EPS", "eps"),
+    ("N", "n"),
+    ("A", "a"),
+    ("HOLD_GAIN", "hold_gain"),
+    ("HELD_GAIN", "held_gain"),
+    ("ALPHA", "alpha"),
+    ("PHI", "phi"),
+    ("GAMMA", "gamma"),
+    ("GAIN0", "gain0"),
+    ("GAIN", "the switching gain computed"),
+    ("S_NORM", "||s|| computed"),
+    ("U_DISCARDED", "||u rows dropped by tau = B^T u|| computed"),
+    ("P", "P of (20) from k1[index], k2[index], q_pos, q_vel is not finite"),
+)
+FIELD_IDS: dict[str, int] = {name: i for i, (name, _) in enumerate(FIELDS)}
+
 
 def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
     """The values of ``<prefix>_status_t`` (names carry ``layout.PREFIX``)."""
@@ -51,6 +101,11 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
         StatusCode(
             f"{P}_ERR_BAD_HELD_GAIN", -18, "TDROC hold_gain is not 0 or 1, or held_gain < 0"
         ),
+        StatusCode(
+            f"{P}_ERR_CONFIG_CHANGED",
+            -19,
+            "the configuration differs from the one given to _init (fingerprint)",
+        ),
     )
 
 
@@ -73,7 +128,67 @@ def defines(layout: ControllerLayout) -> tuple[tuple[str, str, str], ...]:
         (f"{P}_MAX_WINDOW", str(MAX_WINDOW), "largest TDROC window n (history size)"),
         (f"{P}_NQ", str(layout.nq), "generalised coordinates"),
         (f"{P}_STATE_MAGIC", layout.state_magic, "marks an initialised controller state"),
+        (f"{P}_STEPS_MAX", STEPS_MAX + "u", "the step counter saturates here (uint32_t)"),
     )
+
+
+def real_bounds() -> tuple[tuple[str, str, str], ...]:
+    """Real constants of the plausibility bounds: (name without prefix, value, doc)."""
+    return (
+        ("H_MIN", H_MIN, "smallest sample time h [s]"),
+        ("H_MAX", H_MAX, "largest sample time h [s]"),
+        ("GAIN_MAX", GAIN_MAX, "largest gain, eps, phi, gamma; cap of the adaptive gains"),
+        ("TORQUE_LIMIT_MAX", TORQUE_LIMIT_MAX, "largest tau_max [N m]"),
+        ("NOMINAL_FACTOR", NOMINAL_FACTOR, "|nominal p| <= this * max(|robot file's p|, 1)"),
+    )
+
+
+def c_common_context() -> dict[str, object]:
+    """What ``controller_common.{h,c}.jinja`` needs besides the robot: bounds, fields, hash."""
+    return {"real_bounds": real_bounds(), "fields": FIELDS, "fnv_prime": FNV_PRIME}
+
+
+def c_controller_context(info: ControllerInfo) -> dict[str, object]:
+    """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot."""
+    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET}
+
+
+def python_context() -> dict[str, object]:
+    """What ``controllers.py.jinja`` needs besides the robot (the C constants, mirrored)."""
+    return {
+        "real_bounds": real_bounds(),
+        "steps_max": STEPS_MAX,
+        "fields": FIELDS,
+        "fnv_offset": FNV_OFFSET,
+        "fnv_prime": FNV_PRIME,
+        "config_fields": {c.name: config_fields(c) for c in CONTROLLERS},
+    }
+
+
+def nominal_bound(default: float) -> float:
+    """The bound on a nominal parameter's magnitude: ``NOMINAL_FACTOR * max(|default|, 1)``."""
+    return float(NOMINAL_FACTOR) * max(abs(float(default)), 1.0)
+
+
+def config_fields(info: ControllerInfo) -> tuple[tuple[str, str, int], ...]:
+    """The fields of ``<prefix>_<ctrl>_config_t`` after ``nominal``, in struct order:
+    (name, "real" or "int", count). The fingerprint hashes the nominal parameters, then
+    these, in this order (C and Python alike)."""
+    out: list[tuple[str, str, int]] = [("formulation", "int", 1)]
+    out += [("k1", "real", 0), ("k2", "real", 0)]  # count 0: nq
+    out += [(f, "real", 1) for f in ("q_pos", "q_vel", "h", "tau_max")]
+    if info.tde:
+        out += [("accel_estimator", "int", 1), ("rate_window", "real", 1)]
+    if info.switching:
+        out.append(("eps", "real", 1))
+    if info.window:
+        out += [("n", "int", 1), ("a", "real", 1), ("hold_gain", "int", 1),
+                ("held_gain", "real", 1)]
+    if info.bounds:
+        out += [("alpha", "real", 1), ("phi", "real", 1)]
+    if info.adaptive:
+        out += [("gamma", "real", 1), ("gain0", "real", 1)]
+    return tuple(out)
 
 
 # The paper's robot (importers written before robots were generic).

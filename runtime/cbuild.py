@@ -142,10 +142,12 @@ def declarations(
     c_dir: Path = GENERATED_C,
     prefix: str = "wmr",
 ) -> str:
-    """The generated headers, preprocessed for ``cffi.FFI.cdef``."""
+    """The generated headers, preprocessed for ``cffi.FFI.cdef`` (with empty ``<math.h>``
+    and ``<stdint.h>``: cffi declares the fixed-width integer types itself)."""
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
         (fake / "math.h").write_text("")
+        (fake / "stdint.h").write_text("")  # cffi knows uint32_t and friends itself
         src = fake / "all.h"
         includes = [f'#include "{c_dir / h}"' for h in headers]
         includes += [f'#include "{h}"' for h in extra_headers]

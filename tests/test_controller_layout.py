@@ -24,7 +24,10 @@ from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
+    c_common_context,
+    c_controller_context,
     defines,
+    python_context,
     status_codes,
 )
 from codegen.controller_layout import ControllerLayout, row_span, wrap_terms
@@ -59,6 +62,8 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
             param_fields=list(TOY_PARAMS),
             max_abs_input=MAX_ABS_INPUT,
             nominal_conditions=[TOY_CONDITION],
+            nominal_bounds=[(k, "1000.0") for k in TOY_PARAMS],
+            **c_common_context(),
         )
         for info in CONTROLLERS:
             texts[f"{info.name}.{suffix}"] = template_util.render(
@@ -68,6 +73,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
                 layout=layout,
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
+                **c_controller_context(info),
             )
     texts["robot.h"] = template_util.render(
         C_TEMPLATES,
@@ -104,6 +110,8 @@ def _python_text(layout: ControllerLayout) -> str:
         c_field_names={},
         param_keys=list(TOY_PARAMS),
         nominal_conditions=[('values["J_theta"] * values["J_phi"]', "'J_theta J_phi > 0'")],
+        nominal_bounds={k: 1000.0 for k in TOY_PARAMS},
+        **python_context(),
     )
 
 
@@ -140,14 +148,15 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
         assert "[8]" in c_texts[name], name
         assert "[2]" in c_texts[name], name
         assert not re.search(r"_t \w+\[5\]", c_texts[name]), name  # no 5-wide array
-    step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step")
+    step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step_detail")
     assert "const int off = 4;" in step
     assert "out_tau[1] = u[1];" in step
     history = _function_body(c_texts["controller.c"], "toy_push_history")
     assert "u_prev[4] = tau[0];" in history and "u_prev[5] = tau[1];" in history
     assert "for (i = 0; i < 8; ++i)" in history
     assert (
-        "toy_real_t k1[8];       /* diagonal of K1 (18); the minimal form uses k1[4], k1[5] */"
+        "toy_real_t k1[8];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses "
+        "k1[4], k1[5] */"
         in (c_texts["tdc.h"])
     )
     assert "writes tau[2] = (tau_r, tau_l)" in c_texts["roc.h"]
@@ -156,13 +165,13 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
 def test_formulation_paper_is_rejected(c_texts: dict[str, str]) -> None:
     base = _function_body(c_texts["controller.c"], "toy_check_base_config")
     assert "if (formulation != TOY_FORMULATION_MINIMAL)" in base
-    assert "return TOY_ERR_BAD_FORMULATION;" in base
+    assert "return toy_fail(detail, TOY_ERR_BAD_FORMULATION, TOY_FIELD_FORMULATION, -1);" in base
     assert "TOY_FORMULATION_MINIMAL" in c_texts["example_main.c"]
 
 
 def test_minv_norm_is_evaluated_at_q_in_the_step(c_texts: dict[str, str]) -> None:
     tdroc = c_texts["tdroc.c"]
-    step = _function_body(tdroc, "toy_tdroc_step")
+    step = _function_body(tdroc, "toy_tdroc_step_detail")
     assert "toy_minimal_minv_norm(&config->nominal, q, &next.minv_norm);" in step
     assert "same_params" not in step
     init = _function_body(tdroc, "toy_tdroc_init")
@@ -177,11 +186,14 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     assert "toy_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TOY_OK" in body
     assert "p->m" not in body and "mbar" not in body
     assert "TOY_LIT(0.0), " * 7 + "TOY_LIT(0.0)}" in body
-    same = _function_body(c_texts["controller.c"], "toy_same_params")
-    assert "!(a->J_theta < b->J_theta || a->J_theta > b->J_theta)" in same
-    assert "!(a->radius_l < b->radius_l || a->radius_l > b->radius_l);" in same
-    assert "==" not in same.split("*/", 1)[1]  # no floating-point == (-Wfloat-equal)
-    assert all(len(line) <= 100 for line in same.splitlines())
+    # Each parameter bounded, its index in the error detail; no robot name in the code.
+    assert (
+        "if (!isfinite(p->radius_l) || TOY_FABS(p->radius_l) > TOY_LIT(1000.0)) {\n"
+        "        return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, 5);" in body
+    )
+    hashed = _function_body(c_texts["controller.c"], "toy_hash_params")
+    assert "out = toy_hash_real(out, p->J_theta);" in hashed
+    assert "out = toy_hash_real(out, p->radius_l);" in hashed
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:

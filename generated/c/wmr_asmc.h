@@ -9,31 +9,39 @@
 #ifndef WMR_ASMC_H
 #define WMR_ASMC_H
 
+#include "wmr_controller.h"
 #include "wmr_types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Configuration of ASMC; validated by wmr_asmc_init and by every step. */
+/* Configuration of ASMC; validated by wmr_asmc_init and by every step, against
+   the bounds of wmr_controller.h. A step refuses a configuration that differs from the one
+   given to _init (WMR_ERR_CONFIG_CHANGED): call _init to change it. */
 typedef struct {
     wmr_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* WMR_FORMULATION_PAPER or WMR_FORMULATION_MINIMAL */
-    wmr_real_t k1[5];       /* diagonal of K1 (18); the minimal form uses k1[3], k1[4] */
-    wmr_real_t k2[5];       /* diagonal of K2 (18) */
-    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation */
+    wmr_real_t k1[5];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[3],
+                               k1[4] */
+    wmr_real_t k2[5];       /* diagonal of K2 (18), (0, GAIN_MAX] */
+    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0, GAIN_MAX] */
     wmr_real_t q_vel;
-    wmr_real_t h;           /* sample time [s] */
-    wmr_real_t tau_max;     /* torque limit [N m]; larger torques are clipped and reported */
-    wmr_real_t eps;         /* boundary layer of (24)/(25) */
-    wmr_real_t gamma;       /* adaptation rate of the switching gain, >= 0 */
-    wmr_real_t gain0;       /* initial switching gain, >= 0 */
+    wmr_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
+    wmr_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
+                               clipped */
+    wmr_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
+    wmr_real_t gamma;       /* adaptation rate of the switching gain, [0, GAIN_MAX] */
+    wmr_real_t gain0;       /* initial switching gain, [0, GAIN_MAX]; the gain is capped at
+                               GAIN_MAX */
 } wmr_asmc_config_t;
 
 /* Caller-owned state of ASMC; fixed size, no heap. */
 typedef struct {
     long magic;             /* WMR_STATE_MAGIC once initialised */
-    long steps;             /* completed steps */
+    uint32_t steps;         /* completed steps, saturating at WMR_STEPS_MAX (only steps >= 2
+                               matters) */
+    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
     wmr_real_t p12[5];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     wmr_real_t p22[5];
     wmr_real_t q_prev[5];   /* q(t-h) */
@@ -42,7 +50,9 @@ typedef struct {
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
-    wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
+    wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
+                               GAIN_MAX */
+    wmr_real_t gain0;       /* the initial gain (config gain0 at _init), for _reset */
     wmr_real_t s_norm;      /* ||s|| in the last step */
     wmr_real_t u_discarded; /* ||u rows 1-3|| dropped by tau = B^T u (paper form) */
     wmr_real_t tau[2];      /* last torque applied */
@@ -55,6 +65,13 @@ typedef struct {
 wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *config);
 
 /**
+ * Back to the state _init left (same configuration): history, step count, estimates and
+ * the adapted gain (to gain0) cleared; P and the configuration fingerprint kept.
+ * @return WMR_OK, WMR_ERR_NULL_POINTER or WMR_ERR_NOT_INITIALISED (state then untouched).
+ */
+wmr_status_t wmr_asmc_reset(wmr_asmc_state_t *state);
+
+/**
  * One control step at time t: measured q, qdot (5 each), reference q_des, qdot_des,
  * qddot_des (5 each, kinematically consistent); writes tau[2] = (tau_r, tau_l).
  * @return WMR_OK, WMR_WARN_SATURATED (tau clipped, step done), or a WMR_ERR_* code;
@@ -64,8 +81,22 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2]);
 
+/**
+ * wmr_asmc_step, and what it returned with the field and entry it is about in *detail
+ * (when detail is not NULL; written on every call, success included). Only *detail is
+ * written on error: state and tau are not.
+ */
+wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail);
+
 /** Check a configuration without touching any state. */
 wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config);
+
+/** wmr_asmc_check_config, with the bad field and entry in *detail (when not NULL). */
+wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
+    wmr_error_detail_t *detail);
 
 #ifdef __cplusplus
 }

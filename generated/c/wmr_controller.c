@@ -7,49 +7,100 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
+wmr_status_t wmr_fail(wmr_error_detail_t *detail, wmr_status_t status, int field, int index)
+{
+    if (detail != 0) {
+        detail->status = status;
+        detail->field = field;
+        detail->index = index;
+    }
+    return status;
+}
+
 int wmr_positive(wmr_real_t x)
 {
     return isfinite(x) && x > WMR_LIT(0.0);
 }
 
-int wmr_finite_bounded(const wmr_real_t *x, int n)
+int wmr_positive_at_most(wmr_real_t x, wmr_real_t max)
+{
+    return isfinite(x) && x > WMR_LIT(0.0) && x <= max;
+}
+
+int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max)
+{
+    return isfinite(x) && x >= WMR_LIT(0.0) && x <= max;
+}
+
+/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1. */
+static int wmr_first_unbounded(const wmr_real_t *x, int n)
 {
     int i;
     for (i = 0; i < n; ++i) {
         if (!isfinite(x[i]) || WMR_FABS(x[i]) > WMR_LIT(1.0e6)) {
-            return 0;
+            return i;
         }
     }
-    return 1;
+    return -1;
 }
 
-int wmr_same_params(const wmr_params_t *a, const wmr_params_t *b)
+static uint32_t wmr_hash_bytes(uint32_t hash, const unsigned char *bytes, unsigned int n)
 {
-    /* Equal as numbers, without floating-point == (-Wfloat-equal): both are validated
-       finite before this cache key is compared. */
-    return !(a->m < b->m || a->m > b->m) && !(a->Iz < b->Iz || a->Iz > b->Iz)
-        && !(a->K < b->K || a->K > b->K) && !(a->Iw < b->Iw || a->Iw > b->Iw)
-        && !(a->r < b->r || a->r > b->r) && !(a->b < b->b || a->b > b->b)
-        && !(a->d < b->d || a->d > b->d);
+    uint32_t out = hash;
+    unsigned int i;
+    for (i = 0u; i < n; ++i) {
+        out = (out ^ (uint32_t)bytes[i]) * 16777619u;
+    }
+    return out;
+}
+
+uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x)
+{
+    return wmr_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+}
+
+uint32_t wmr_hash_int(uint32_t hash, int x)
+{
+    return wmr_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+}
+
+uint32_t wmr_hash_params(uint32_t hash, const wmr_params_t *p)
+{
+    uint32_t out = hash;
+    out = wmr_hash_real(out, p->m);
+    out = wmr_hash_real(out, p->Iz);
+    out = wmr_hash_real(out, p->K);
+    out = wmr_hash_real(out, p->Iw);
+    out = wmr_hash_real(out, p->r);
+    out = wmr_hash_real(out, p->b);
+    out = wmr_hash_real(out, p->d);
+    return out;
 }
 
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],
-    const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max)
+    const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max,
+    wmr_error_detail_t *detail)
 {
     int i;
     if (formulation != WMR_FORMULATION_PAPER && formulation != WMR_FORMULATION_MINIMAL) {
-        return WMR_ERR_BAD_FORMULATION;
+        return wmr_fail(detail, WMR_ERR_BAD_FORMULATION, WMR_FIELD_FORMULATION, -1);
     }
-    if (!wmr_positive(h)) {
-        return WMR_ERR_BAD_SAMPLE_TIME;
+    if (!isfinite(h) || !(h >= WMR_H_MIN) || !(h <= WMR_H_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_SAMPLE_TIME, WMR_FIELD_H, -1);
     }
     for (i = 0; i < 5; ++i) {
-        if (!wmr_positive(k1[i]) || !wmr_positive(k2[i])) {
-            return WMR_ERR_BAD_GAINS;
+        if (!wmr_positive_at_most(k1[i], WMR_GAIN_MAX)) {
+            return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_K1, i);
+        }
+        if (!wmr_positive_at_most(k2[i], WMR_GAIN_MAX)) {
+            return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_K2, i);
         }
     }
-    if (!wmr_positive(q_pos) || !wmr_positive(q_vel)) {
-        return WMR_ERR_BAD_GAINS;
+    if (!wmr_positive_at_most(q_pos, WMR_GAIN_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_Q_POS, -1);
+    }
+    if (!wmr_positive_at_most(q_vel, WMR_GAIN_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_Q_VEL, -1);
     }
     for (i = 0; i < 5; ++i) {
         /* P of (20) must be finite: a denormal or huge gain overflows it. */
@@ -57,42 +108,64 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
         wmr_real_t pmat[3];
         wmr_lyapunov_p(gains, pmat);
         if (!isfinite(pmat[0]) || !isfinite(pmat[1]) || !isfinite(pmat[2])) {
-            return WMR_ERR_BAD_GAINS;
+            return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_P, i);
         }
     }
-    if (!isfinite(tau_max) || !(tau_max > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_TORQUE_LIMIT;
+    if (!wmr_positive_at_most(tau_max, WMR_TORQUE_LIMIT_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_TORQUE_LIMIT, WMR_FIELD_TAU_MAX, -1);
     }
     return WMR_OK;
 }
 
-wmr_status_t wmr_check_nominal(const wmr_params_t *p)
+wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail)
 {
     const wmr_real_t q0[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
     const wmr_real_t rates0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
     const wmr_real_t tau0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
     wmr_real_t acc[2];
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
+    if (!isfinite(p->m) || WMR_FABS(p->m) > WMR_LIT(36000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 0);
+    }
+    if (!isfinite(p->Iz) || WMR_FABS(p->Iz) > WMR_LIT(5720.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 1);
+    }
+    if (!isfinite(p->K) || WMR_FABS(p->K) > WMR_LIT(1000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 2);
+    }
+    if (!isfinite(p->Iw) || WMR_FABS(p->Iw) > WMR_LIT(1000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 3);
+    }
+    if (!isfinite(p->r) || WMR_FABS(p->r) > WMR_LIT(1000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 4);
+    }
+    if (!isfinite(p->b) || WMR_FABS(p->b) > WMR_LIT(1000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 5);
+    }
+    if (!isfinite(p->d) || WMR_FABS(p->d) > WMR_LIT(1000.0)) {
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 6);
+    }
     /* The generated guards of S^T M S (finite parameters, the positive ones positive,
        positive definite). */
     if (wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
-        return WMR_ERR_BAD_NOMINAL;
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     /* m > 0 */
     if (!(p->m > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_NOMINAL;
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     /* I > 0 */
     if (!(p->Iz > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_NOMINAL;
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     /* Iw > 0 */
     if (!(p->Iw > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_NOMINAL;
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det
        M-tilde, so the paper form's M-hat is singular without it */
     if (!(p->Iz*p->m - p->K*p->K > WMR_LIT(0.0))) {
-        return WMR_ERR_BAD_NOMINAL;
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     return WMR_OK;
 }
@@ -111,16 +184,26 @@ void wmr_controller_p(const wmr_real_t k1[5], const wmr_real_t k2[5], wmr_real_t
 }
 
 wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    wmr_error_detail_t *detail)
 {
-    if (!wmr_finite_bounded(q, 5) || !wmr_finite_bounded(qdot, 5)) {
-        return WMR_ERR_BAD_MEASUREMENT;
-    }
-    if (!wmr_finite_bounded(q_des, 5) || !wmr_finite_bounded(qdot_des, 5)
-        || !wmr_finite_bounded(qddot_des, 5)) {
-        return WMR_ERR_BAD_REFERENCE;
+    const wmr_real_t *const inputs[5] = {q, qdot, q_des, qdot_des, qddot_des};
+    const int fields[5] = {WMR_FIELD_Q, WMR_FIELD_QDOT, WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES,
+                           WMR_FIELD_QDDOT_DES};
+    int k;
+    for (k = 0; k < 5; ++k) {
+        const int bad = wmr_first_unbounded(inputs[k], 5);
+        if (bad >= 0) {
+            return wmr_fail(detail, k < 2 ? WMR_ERR_BAD_MEASUREMENT : WMR_ERR_BAD_REFERENCE,
+                            fields[k], bad);
+        }
     }
     return WMR_OK;
+}
+
+wmr_real_t wmr_cap_gain(wmr_real_t gain)
+{
+    return gain <= WMR_GAIN_MAX ? gain : WMR_GAIN_MAX;
 }
 
 int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],

@@ -9,34 +9,107 @@
 #ifndef WMR_CONTROLLER_H
 #define WMR_CONTROLLER_H
 
+#include <stdint.h>
+
 #include "wmr_types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* Plausibility bounds of every configuration (docs/BAD_INPUT.md): a value outside them is
+   rejected with the field's status code, so that no accepted value can leave the state
+   where a later valid step cannot succeed. */
+#define WMR_H_MIN WMR_LIT(1.0e-6) /* smallest sample time h [s] */
+#define WMR_H_MAX WMR_LIT(1.0) /* largest sample time h [s] */
+#define WMR_GAIN_MAX WMR_LIT(1.0e6) /* largest gain, eps, phi, gamma; cap of the adaptive gains */
+#define WMR_TORQUE_LIMIT_MAX WMR_LIT(1.0e6) /* largest tau_max [N m] */
+#define WMR_NOMINAL_FACTOR WMR_LIT(1.0e3) /* |nominal p| <= this * max(|robot file's p|, 1) */
+
+/* Which input or field an error is about: wmr_error_detail_t.field. */
+typedef enum {
+    WMR_FIELD_NONE = 0, /* no error */
+    WMR_FIELD_STATE = 1, /* the state pointer, or a state never initialised */
+    WMR_FIELD_CONFIG = 2, /* the config pointer, or a config changed since _init */
+    WMR_FIELD_Q = 3, /* q[index] */
+    WMR_FIELD_QDOT = 4, /* qdot[index] */
+    WMR_FIELD_Q_DES = 5, /* q_des[index] */
+    WMR_FIELD_QDOT_DES = 6, /* qdot_des[index] */
+    WMR_FIELD_QDDOT_DES = 7, /* qddot_des[index] */
+    WMR_FIELD_TAU = 8, /* tau (NULL), or the torque tau[index] computed */
+    WMR_FIELD_NOMINAL = 9, /* nominal parameter index (struct order); -1: the parameters together */
+    WMR_FIELD_FORMULATION = 10, /* formulation */
+    WMR_FIELD_K1 = 11, /* k1[index] */
+    WMR_FIELD_K2 = 12, /* k2[index] */
+    WMR_FIELD_Q_POS = 13, /* q_pos */
+    WMR_FIELD_Q_VEL = 14, /* q_vel */
+    WMR_FIELD_H = 15, /* h */
+    WMR_FIELD_TAU_MAX = 16, /* tau_max */
+    WMR_FIELD_ACCEL_ESTIMATOR = 17, /* accel_estimator */
+    WMR_FIELD_RATE_WINDOW = 18, /* rate_window */
+    WMR_FIELD_EPS = 19, /* eps */
+    WMR_FIELD_N = 20, /* n */
+    WMR_FIELD_A = 21, /* a */
+    WMR_FIELD_HOLD_GAIN = 22, /* hold_gain */
+    WMR_FIELD_HELD_GAIN = 23, /* held_gain */
+    WMR_FIELD_ALPHA = 24, /* alpha */
+    WMR_FIELD_PHI = 25, /* phi */
+    WMR_FIELD_GAMMA = 26, /* gamma */
+    WMR_FIELD_GAIN0 = 27, /* gain0 */
+    WMR_FIELD_GAIN = 28, /* the switching gain computed */
+    WMR_FIELD_S_NORM = 29, /* ||s|| computed */
+    WMR_FIELD_U_DISCARDED = 30, /* ||u rows dropped by tau = B^T u|| computed */
+    WMR_FIELD_P = 31 /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+} wmr_field_t;
+
+/**
+ * What a failed call was about, for the caller's log: the status it returned, the field
+ * (wmr_field_t) and the entry (index into the array or the nominal parameters in struct
+ * order; -1 for a scalar or the whole). On success: WMR_OK, WMR_FIELD_NONE, -1.
+ */
+typedef struct {
+    wmr_status_t status;
+    int field;
+    int index;
+} wmr_error_detail_t;
+
+/** Write {status, field, index} to detail (when not NULL) and return status. */
+wmr_status_t wmr_fail(wmr_error_detail_t *detail, wmr_status_t status, int field, int index);
+
+/** 1 if x is finite, > 0 and <= max. */
+int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
+
+/** 1 if x is finite, >= 0 and <= max. */
+int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max);
+
+/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x);
+
+/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+uint32_t wmr_hash_int(uint32_t hash, int x);
+
+/** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
+uint32_t wmr_hash_params(uint32_t hash, const wmr_params_t *p);
+
 /** 1 if x is finite and > 0. */
 int wmr_positive(wmr_real_t x);
-
-/** 1 if all n values are finite and no larger in magnitude than 1.0e6. */
-int wmr_finite_bounded(const wmr_real_t *x, int n);
-
-/** 1 if the two parameter sets are equal field by field. */
-int wmr_same_params(const wmr_params_t *a, const wmr_params_t *b);
 
 /**
  * The configuration fields every controller has, in the order the status codes are
  * checked: formulation, h, K1 and K2, Q, torque limit.
  */
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],
-    const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max);
+    const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max,
+    wmr_error_detail_t *detail);
 
 /**
- * The nominal model: the generated guards of S^T M S (finite parameters, the positive ones
+ * The nominal model: each parameter finite and |p| <= WMR_NOMINAL_FACTOR * max(|robot file's
+ * p|, 1) (detail index: the parameter), then the generated guards of S^T M S (finite parameters,
+ * the positive ones
  * positive, positive definite) and 4 conditions of the robot's
  * (m > 0; I > 0; Iw > 0; m I - K^2 > 0).
  */
-wmr_status_t wmr_check_nominal(const wmr_params_t *p);
+wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail);
 
 /** P of (20) per coordinate from K1, K2 and Q (the p12, p22 entries s = B^T P e needs). */
 void wmr_controller_p(const wmr_real_t k1[5], const wmr_real_t k2[5], wmr_real_t q_pos,
@@ -44,7 +117,11 @@ void wmr_controller_p(const wmr_real_t k1[5], const wmr_real_t k2[5], wmr_real_t
 
 /** WMR_ERR_BAD_MEASUREMENT, WMR_ERR_BAD_REFERENCE or WMR_OK for one step's inputs. */
 wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5]);
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    wmr_error_detail_t *detail);
+
+/** Cap an adaptive gain at WMR_GAIN_MAX (NaN and +Inf count as beyond it). */
+wmr_real_t wmr_cap_gain(wmr_real_t gain);
 
 /**
  * The controlled coordinates (paper: all five; minimal: the two wheels) of e = q_des - q,

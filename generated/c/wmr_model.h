@@ -76,7 +76,8 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *     tau_r, tau_l
  * @param[out] qddot [5] row-major (WMR_FORWARD_DYNAMICS_QDDOT_SIZE)
  * @return WMR_OK on success; on error no output is written:
- *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[3], q[4], qdot[0], qdot[1], qdot[2]),
  *         WMR_ERR_BAD_PARAMS if not (r > 0),
  *         WMR_ERR_BAD_PARAMS if not (b > 0),
  *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
@@ -168,7 +169,8 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
  *     torques tau_r, tau_l
  * @param[out] wheel_accels [2] row-major (WMR_MINIMAL_FORWARD_DYNAMICS_WHEEL_ACCELS_SIZE)
  * @return WMR_OK on success; on error no output is written:
- *         WMR_ERR_NONFINITE_INPUT if an input is NaN or infinite,
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[2], q[3], q[4]),
  *         WMR_ERR_BAD_PARAMS if not (r > 0),
  *         WMR_ERR_BAD_PARAMS if not (b > 0),
  *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),

@@ -8,33 +8,82 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
-wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
+wmr_status_t wmr_tdc_check_config_detail(const wmr_tdc_config_t *config,
+    wmr_error_detail_t *detail)
 {
     wmr_status_t status;
     if (config == 0) {
-        return WMR_ERR_NULL_POINTER;
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_base_config(config->formulation, config->h, config->k1, config->k2,
-                                   config->q_pos, config->q_vel, config->tau_max);
+                                   config->q_pos, config->q_vel, config->tau_max, detail);
     if (status != WMR_OK) {
         return status;
     }
     if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator
         != WMR_ACCEL_CENTRAL && config->accel_estimator != WMR_ACCEL_MATCHED) {
-        return WMR_ERR_BAD_ESTIMATOR;
+        return wmr_fail(detail, WMR_ERR_BAD_ESTIMATOR, WMR_FIELD_ACCEL_ESTIMATOR, -1);
     }
-    if (!isfinite(config->rate_window) || config->rate_window < WMR_LIT(0.0)
-        || config->rate_window > config->h) {
-        return WMR_ERR_BAD_ESTIMATOR;
+    if (!wmr_nonnegative_at_most(config->rate_window, config->h)) {
+        return wmr_fail(detail, WMR_ERR_BAD_ESTIMATOR, WMR_FIELD_RATE_WINDOW, -1);
     }
-    return wmr_check_nominal(&config->nominal);
+    status = wmr_check_nominal(&config->nominal, detail);
+    if (status != WMR_OK) {
+        return status;
+    }
+    return wmr_fail(detail, WMR_OK, WMR_FIELD_NONE, -1);
+}
+
+wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
+{
+    return wmr_tdc_check_config_detail(config, 0);
+}
+
+/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+static uint32_t wmr_tdc_fingerprint(const wmr_tdc_config_t *config)
+{
+    uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
+    int i;
+    fp = wmr_hash_int(fp, config->formulation);
+    for (i = 0; i < 5; ++i) {
+        fp = wmr_hash_real(fp, config->k1[i]);
+    }
+    for (i = 0; i < 5; ++i) {
+        fp = wmr_hash_real(fp, config->k2[i]);
+    }
+    fp = wmr_hash_real(fp, config->q_pos);
+    fp = wmr_hash_real(fp, config->q_vel);
+    fp = wmr_hash_real(fp, config->h);
+    fp = wmr_hash_real(fp, config->tau_max);
+    fp = wmr_hash_int(fp, config->accel_estimator);
+    fp = wmr_hash_real(fp, config->rate_window);
+    return fp;
+}
+
+/* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
+static void wmr_tdc_clear(wmr_tdc_state_t *s)
+{
+    int i;
+    s->steps = 0u;
+    for (i = 0; i < 5; ++i) {
+        s->q_prev[i] = WMR_LIT(0.0);
+        s->qdot_prev[i] = WMR_LIT(0.0);
+        s->qdot_prev2[i] = WMR_LIT(0.0);
+        s->u_prev[i] = WMR_LIT(0.0);
+        s->u_prev2[i] = WMR_LIT(0.0);
+        s->H1hat[i] = WMR_LIT(0.0);
+    }
+    s->gain = WMR_LIT(0.0);
+    s->s_norm = WMR_LIT(0.0);
+    s->u_discarded = WMR_LIT(0.0);
+    s->tau[0] = WMR_LIT(0.0);
+    s->tau[1] = WMR_LIT(0.0);
 }
 
 wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config)
 {
     wmr_tdc_state_t fresh;
     wmr_status_t status;
-    int i, j;
     if (state == 0 || config == 0) {
         return WMR_ERR_NULL_POINTER;
     }
@@ -43,29 +92,36 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
         return status;
     }
     fresh.magic = WMR_STATE_MAGIC;
-    fresh.steps = 0;
+    fresh.config_fp = wmr_tdc_fingerprint(config);
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
-    for (i = 0; i < 5; ++i) {
-        fresh.q_prev[i] = WMR_LIT(0.0);
-        fresh.qdot_prev[i] = WMR_LIT(0.0);
-        fresh.qdot_prev2[i] = WMR_LIT(0.0);
-        fresh.u_prev[i] = WMR_LIT(0.0);
-        fresh.u_prev2[i] = WMR_LIT(0.0);
-        fresh.H1hat[i] = WMR_LIT(0.0);
-    }
-    (void)j;
-    fresh.gain = WMR_LIT(0.0);
-    fresh.s_norm = WMR_LIT(0.0);
-    fresh.u_discarded = WMR_LIT(0.0);
-    fresh.tau[0] = WMR_LIT(0.0);
-    fresh.tau[1] = WMR_LIT(0.0);
+    wmr_tdc_clear(&fresh);
     *state = fresh;
+    return WMR_OK;
+}
+
+wmr_status_t wmr_tdc_reset(wmr_tdc_state_t *state)
+{
+    if (state == 0) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (state->magic != WMR_STATE_MAGIC) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
+    wmr_tdc_clear(state);
     return WMR_OK;
 }
 
 wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config,
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
+{
+    return wmr_tdc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+}
+
+wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
 {
     wmr_tdc_state_t next;
     wmr_status_t status = WMR_OK;
@@ -75,18 +131,29 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     int i;
     wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
     wmr_real_t out_tau[2];
-    if (state == 0 || config == 0 || q == 0 || qdot == 0 || q_des == 0 || qdot_des == 0
-        || qddot_des == 0 || tau == 0) {
-        return WMR_ERR_NULL_POINTER;
+    {
+        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
+        const int fields[8] = {WMR_FIELD_STATE, WMR_FIELD_CONFIG, WMR_FIELD_Q, WMR_FIELD_QDOT,
+                               WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES, WMR_FIELD_QDDOT_DES,
+                               WMR_FIELD_TAU};
+        int k;
+        for (k = 0; k < 8; ++k) {
+            if (args[k] == 0) {
+                return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
+            }
+        }
     }
     if (state->magic != WMR_STATE_MAGIC) {
-        return WMR_ERR_NOT_INITIALISED;
+        return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
-    status = wmr_tdc_check_config(config);
+    status = wmr_tdc_check_config_detail(config, detail);
     if (status != WMR_OK) {
         return status;
     }
-    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des);
+    if (wmr_tdc_fingerprint(config) != state->config_fp) {
+        return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
+    }
+    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
@@ -98,7 +165,7 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
-    if (state->steps >= 2) {
+    if (state->steps >= 2u) {
         const int central = config->accel_estimator == WMR_ACCEL_CENTRAL;
         const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
         const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
@@ -134,9 +201,20 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     next.u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
     /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
-        || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
-        return WMR_ERR_NONFINITE_OUTPUT;
+    if (!isfinite(out_tau[0])) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
+    }
+    if (!isfinite(out_tau[1])) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
+    }
+    if (!isfinite(next.gain)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
+    }
+    if (!isfinite(next.s_norm)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
+    }
+    if (!isfinite(next.u_discarded)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
@@ -144,9 +222,10 @@ wmr_status_t wmr_tdc_step(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
                      qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
-    next.steps = state->steps + 1;
+    /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
+    next.steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     *state = next;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return status;
+    return wmr_fail(detail, status, WMR_FIELD_NONE, -1);
 }

@@ -8,46 +8,109 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
-wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
+wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
+    wmr_error_detail_t *detail)
 {
     wmr_status_t status;
     if (config == 0) {
-        return WMR_ERR_NULL_POINTER;
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_base_config(config->formulation, config->h, config->k1, config->k2,
-                                   config->q_pos, config->q_vel, config->tau_max);
+                                   config->q_pos, config->q_vel, config->tau_max, detail);
     if (status != WMR_OK) {
         return status;
     }
-    if (!wmr_positive(config->eps)) {
-        return WMR_ERR_BAD_EPS;
+    if (!wmr_positive_at_most(config->eps, WMR_GAIN_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_EPS, WMR_FIELD_EPS, -1);
     }
     if (config->accel_estimator != WMR_ACCEL_BACKWARD && config->accel_estimator
         != WMR_ACCEL_CENTRAL && config->accel_estimator != WMR_ACCEL_MATCHED) {
-        return WMR_ERR_BAD_ESTIMATOR;
+        return wmr_fail(detail, WMR_ERR_BAD_ESTIMATOR, WMR_FIELD_ACCEL_ESTIMATOR, -1);
     }
-    if (!isfinite(config->rate_window) || config->rate_window < WMR_LIT(0.0)
-        || config->rate_window > config->h) {
-        return WMR_ERR_BAD_ESTIMATOR;
+    if (!wmr_nonnegative_at_most(config->rate_window, config->h)) {
+        return wmr_fail(detail, WMR_ERR_BAD_ESTIMATOR, WMR_FIELD_RATE_WINDOW, -1);
     }
-    if ((config->hold_gain != 0 && config->hold_gain != 1) || !isfinite(config->held_gain)
-        || config->held_gain < WMR_LIT(0.0)) {
-        return WMR_ERR_BAD_HELD_GAIN;
+    if (config->hold_gain != 0 && config->hold_gain != 1) {
+        return wmr_fail(detail, WMR_ERR_BAD_HELD_GAIN, WMR_FIELD_HOLD_GAIN, -1);
+    }
+    if (!wmr_nonnegative_at_most(config->held_gain, WMR_GAIN_MAX)) {
+        return wmr_fail(detail, WMR_ERR_BAD_HELD_GAIN, WMR_FIELD_HELD_GAIN, -1);
     }
     if (config->n < 2 || config->n > WMR_MAX_WINDOW) {
-        return WMR_ERR_BAD_WINDOW;
+        return wmr_fail(detail, WMR_ERR_BAD_WINDOW, WMR_FIELD_N, -1);
     }
-    if (!wmr_positive(config->a) || config->a > WMR_LIT(1.0)) {
-        return WMR_ERR_BAD_DISCOUNT;
+    if (!wmr_positive_at_most(config->a, WMR_LIT(1.0))) {
+        return wmr_fail(detail, WMR_ERR_BAD_DISCOUNT, WMR_FIELD_A, -1);
     }
-    return wmr_check_nominal(&config->nominal);
+    status = wmr_check_nominal(&config->nominal, detail);
+    if (status != WMR_OK) {
+        return status;
+    }
+    return wmr_fail(detail, WMR_OK, WMR_FIELD_NONE, -1);
+}
+
+wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
+{
+    return wmr_tdroc_check_config_detail(config, 0);
+}
+
+/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+static uint32_t wmr_tdroc_fingerprint(const wmr_tdroc_config_t *config)
+{
+    uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
+    int i;
+    fp = wmr_hash_int(fp, config->formulation);
+    for (i = 0; i < 5; ++i) {
+        fp = wmr_hash_real(fp, config->k1[i]);
+    }
+    for (i = 0; i < 5; ++i) {
+        fp = wmr_hash_real(fp, config->k2[i]);
+    }
+    fp = wmr_hash_real(fp, config->q_pos);
+    fp = wmr_hash_real(fp, config->q_vel);
+    fp = wmr_hash_real(fp, config->h);
+    fp = wmr_hash_real(fp, config->tau_max);
+    fp = wmr_hash_int(fp, config->accel_estimator);
+    fp = wmr_hash_real(fp, config->rate_window);
+    fp = wmr_hash_real(fp, config->eps);
+    fp = wmr_hash_int(fp, config->n);
+    fp = wmr_hash_real(fp, config->a);
+    fp = wmr_hash_int(fp, config->hold_gain);
+    fp = wmr_hash_real(fp, config->held_gain);
+    return fp;
+}
+
+/* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
+static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
+{
+    int i;
+    int j;
+    s->steps = 0u;
+    for (i = 0; i < 5; ++i) {
+        s->q_prev[i] = WMR_LIT(0.0);
+        s->qdot_prev[i] = WMR_LIT(0.0);
+        s->qdot_prev2[i] = WMR_LIT(0.0);
+        s->u_prev[i] = WMR_LIT(0.0);
+        s->u_prev2[i] = WMR_LIT(0.0);
+        s->H1hat[i] = WMR_LIT(0.0);
+    }
+    for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
+        for (j = 0; j < 5; ++j) {
+            s->omega[i][j] = WMR_LIT(0.0);
+        }
+    }
+    s->omega_count = 0;
+    s->gain = WMR_LIT(0.0);
+    s->s_norm = WMR_LIT(0.0);
+    s->u_discarded = WMR_LIT(0.0);
+    s->tau[0] = WMR_LIT(0.0);
+    s->tau[1] = WMR_LIT(0.0);
 }
 
 wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config)
 {
     wmr_tdroc_state_t fresh;
     wmr_status_t status;
-    int i, j;
     if (state == 0 || config == 0) {
         return WMR_ERR_NULL_POINTER;
     }
@@ -56,41 +119,41 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         return status;
     }
     fresh.magic = WMR_STATE_MAGIC;
-    fresh.steps = 0;
+    fresh.config_fp = wmr_tdroc_fingerprint(config);
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
-    for (i = 0; i < 5; ++i) {
-        fresh.q_prev[i] = WMR_LIT(0.0);
-        fresh.qdot_prev[i] = WMR_LIT(0.0);
-        fresh.qdot_prev2[i] = WMR_LIT(0.0);
-        fresh.u_prev[i] = WMR_LIT(0.0);
-        fresh.u_prev2[i] = WMR_LIT(0.0);
-        fresh.H1hat[i] = WMR_LIT(0.0);
-    }
-    for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
-        for (j = 0; j < 5; ++j) {
-            fresh.omega[i][j] = WMR_LIT(0.0);
-        }
-    }
-    fresh.omega_count = 0;
-    fresh.minv_paper = config->formulation == WMR_FORMULATION_PAPER;
-    fresh.minv_for = config->nominal;
-    if (fresh.minv_paper) {
+    if (config->formulation == WMR_FORMULATION_PAPER) {
         wmr_paper_minv_norm(&config->nominal, &fresh.minv_norm);
     } else {
         wmr_minimal_minv_norm(&config->nominal, &fresh.minv_norm);
     }
-    fresh.gain = WMR_LIT(0.0);
-    fresh.s_norm = WMR_LIT(0.0);
-    fresh.u_discarded = WMR_LIT(0.0);
-    fresh.tau[0] = WMR_LIT(0.0);
-    fresh.tau[1] = WMR_LIT(0.0);
+    wmr_tdroc_clear(&fresh);
     *state = fresh;
+    return WMR_OK;
+}
+
+wmr_status_t wmr_tdroc_reset(wmr_tdroc_state_t *state)
+{
+    if (state == 0) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (state->magic != WMR_STATE_MAGIC) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
+    wmr_tdroc_clear(state);
     return WMR_OK;
 }
 
 wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
+{
+    return wmr_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+}
+
+wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
 {
     wmr_tdroc_state_t next;
     wmr_status_t status = WMR_OK;
@@ -100,18 +163,29 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     int i;
     wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
     wmr_real_t out_tau[2];
-    if (state == 0 || config == 0 || q == 0 || qdot == 0 || q_des == 0 || qdot_des == 0
-        || qddot_des == 0 || tau == 0) {
-        return WMR_ERR_NULL_POINTER;
+    {
+        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
+        const int fields[8] = {WMR_FIELD_STATE, WMR_FIELD_CONFIG, WMR_FIELD_Q, WMR_FIELD_QDOT,
+                               WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES, WMR_FIELD_QDDOT_DES,
+                               WMR_FIELD_TAU};
+        int k;
+        for (k = 0; k < 8; ++k) {
+            if (args[k] == 0) {
+                return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
+            }
+        }
     }
     if (state->magic != WMR_STATE_MAGIC) {
-        return WMR_ERR_NOT_INITIALISED;
+        return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
-    status = wmr_tdroc_check_config(config);
+    status = wmr_tdroc_check_config_detail(config, detail);
     if (status != WMR_OK) {
         return status;
     }
-    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des);
+    if (wmr_tdroc_fingerprint(config) != state->config_fp) {
+        return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
+    }
+    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
@@ -123,7 +197,7 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
-    if (state->steps >= 2) {
+    if (state->steps >= 2u) {
         const int central = config->accel_estimator == WMR_ACCEL_CENTRAL;
         const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
         const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
@@ -146,7 +220,7 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         }
     }
     /* (25): push Omega(1) = H1hat, then the discounted, normalised gain. */
-    if (state->steps >= 2) {
+    if (state->steps >= 2u) {
         int j;
         for (i = WMR_MAX_WINDOW; i > 0; --i) {
             for (j = 0; j < 5; ++j) {
@@ -182,21 +256,14 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
                 om[i * nc + j] = next.omega[i][j];
             }
         }
-        if (!wmr_same_params(&next.minv_for, &config->nominal) || next.minv_paper != paper) {
-            /* ||Mhat^-1|| depends on the nominal parameters only: recomputed when they change. */
-            if (paper) {
-                wmr_paper_minv_norm(&config->nominal, &next.minv_norm);
-            } else {
-                wmr_minimal_minv_norm(&config->nominal, &next.minv_norm);
-            }
-            next.minv_for = config->nominal;
-            next.minv_paper = paper;
-        }
+        /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
         if (paper) {
             wmr_paper_tdroc_gain(&next.minv_norm, om, w, &next.gain);
         } else {
             wmr_minimal_tdroc_gain(&next.minv_norm, om, w, &next.gain);
         }
+        /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
+        next.gain = wmr_cap_gain(next.gain);
     }
     /* The law. */
     {
@@ -215,9 +282,20 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     next.u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
     /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
-        || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
-        return WMR_ERR_NONFINITE_OUTPUT;
+    if (!isfinite(out_tau[0])) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
+    }
+    if (!isfinite(out_tau[1])) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
+    }
+    if (!isfinite(next.gain)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
+    }
+    if (!isfinite(next.s_norm)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
+    }
+    if (!isfinite(next.u_discarded)) {
+        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
     status = wmr_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
@@ -225,9 +303,10 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
                      qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
-    next.steps = state->steps + 1;
+    /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
+    next.steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     *state = next;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return status;
+    return wmr_fail(detail, status, WMR_FIELD_NONE, -1);
 }

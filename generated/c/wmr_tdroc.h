@@ -9,36 +9,43 @@
 #ifndef WMR_TDROC_H
 #define WMR_TDROC_H
 
+#include "wmr_controller.h"
 #include "wmr_types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Configuration of TDROC; validated by wmr_tdroc_init and by every step. */
+/* Configuration of TDROC; validated by wmr_tdroc_init and by every step, against
+   the bounds of wmr_controller.h. A step refuses a configuration that differs from the one
+   given to _init (WMR_ERR_CONFIG_CHANGED): call _init to change it. */
 typedef struct {
     wmr_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* WMR_FORMULATION_PAPER or WMR_FORMULATION_MINIMAL */
-    wmr_real_t k1[5];       /* diagonal of K1 (18); the minimal form uses k1[3], k1[4] */
-    wmr_real_t k2[5];       /* diagonal of K2 (18) */
-    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation */
+    wmr_real_t k1[5];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[3],
+                               k1[4] */
+    wmr_real_t k2[5];       /* diagonal of K2 (18), (0, GAIN_MAX] */
+    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0, GAIN_MAX] */
     wmr_real_t q_vel;
-    wmr_real_t h;           /* sample time [s] */
-    wmr_real_t tau_max;     /* torque limit [N m]; larger torques are clipped and reported */
+    wmr_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
+    wmr_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
+                               clipped */
     int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD, _CENTRAL or _MATCHED */
     wmr_real_t rate_window; /* span [s] over which qdot is measured, 0..h (MATCHED): 0 for a
                                rate at the sample instant, h for encoder counts over h */
-    wmr_real_t eps;         /* boundary layer of (24)/(25) */
+    wmr_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
     int n;                  /* window of past instants, 2..WMR_MAX_WINDOW */
     wmr_real_t a;           /* discount, 0 < a <= 1; weights a^(i-1), normalised */
     int hold_gain;          /* 0: k-hat from (25); 1: k-hat held at held_gain */
-    wmr_real_t held_gain;   /* >= 0, used when hold_gain = 1 */
+    wmr_real_t held_gain;   /* [0, GAIN_MAX], used when hold_gain = 1 */
 } wmr_tdroc_config_t;
 
 /* Caller-owned state of TDROC; fixed size, no heap. */
 typedef struct {
     long magic;             /* WMR_STATE_MAGIC once initialised */
-    long steps;             /* completed steps */
+    uint32_t steps;         /* completed steps, saturating at WMR_STEPS_MAX (only steps >= 2
+                               matters) */
+    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
     wmr_real_t p12[5];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     wmr_real_t p22[5];
     wmr_real_t q_prev[5];   /* q(t-h) */
@@ -48,11 +55,10 @@ typedef struct {
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
     wmr_real_t omega[WMR_MAX_WINDOW + 1][5]; /* Omega(1..), newest first */
     int omega_count;        /* valid rows of omega */
-    wmr_real_t minv_norm;   /* ||Mhat^-1||_F for minv_for (25) */
-    wmr_params_t minv_for;  /* nominal parameters minv_norm was computed for */
-    int minv_paper;         /* ... and the formulation */
+    wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
-    wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
+    wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
+                               GAIN_MAX */
     wmr_real_t s_norm;      /* ||s|| in the last step */
     wmr_real_t u_discarded; /* ||u rows 1-3|| dropped by tau = B^T u (paper form) */
     wmr_real_t tau[2];      /* last torque applied */
@@ -65,6 +71,13 @@ typedef struct {
 wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
 
 /**
+ * Back to the state _init left (same configuration): history, step count, estimates and
+ * the last outputs cleared; P, ||Mhat^-1|| and the configuration fingerprint kept.
+ * @return WMR_OK, WMR_ERR_NULL_POINTER or WMR_ERR_NOT_INITIALISED (state then untouched).
+ */
+wmr_status_t wmr_tdroc_reset(wmr_tdroc_state_t *state);
+
+/**
  * One control step at time t: measured q, qdot (5 each), reference q_des, qdot_des,
  * qddot_des (5 each, kinematically consistent); writes tau[2] = (tau_r, tau_l).
  * @return WMR_OK, WMR_WARN_SATURATED (tau clipped, step done), or a WMR_ERR_* code;
@@ -74,8 +87,22 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2]);
 
+/**
+ * wmr_tdroc_step, and what it returned with the field and entry it is about in *detail
+ * (when detail is not NULL; written on every call, success included). Only *detail is
+ * written on error: state and tau are not.
+ */
+wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail);
+
 /** Check a configuration without touching any state. */
 wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config);
+
+/** wmr_tdroc_check_config, with the bad field and entry in *detail (when not NULL). */
+wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
+    wmr_error_detail_t *detail);
 
 #ifdef __cplusplus
 }

@@ -87,7 +87,9 @@ typedef enum {
     WMR_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                     rate_window is outside [0, h] */
-    WMR_ERR_BAD_HELD_GAIN = -18 /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
+    WMR_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
+    WMR_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init
+                                    (fingerprint) */
 } wmr_status_t;
 
 #define WMR_FORMULATION_PAPER 0 /* the five coordinates of (14), tau = B^T u */
@@ -99,6 +101,7 @@ typedef enum {
 #define WMR_MAX_WINDOW 8 /* largest TDROC window n (history size) */
 #define WMR_NQ 5 /* generalised coordinates */
 #define WMR_STATE_MAGIC 0x574d52 /* marks an initialised controller state */
+#define WMR_STEPS_MAX 4294967295u /* the step counter saturates here (uint32_t) */
 
 /* wmr_params_t: lumped robot parameters */
 typedef struct {

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import math
+import struct
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -49,6 +50,7 @@ STATUS: dict[str, int] = {
     "WMR_ERR_BAD_BOUNDS": -16,  # ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0
     "WMR_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "WMR_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
+    "WMR_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (fingerprint)
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1
@@ -57,18 +59,79 @@ ACCEL_CENTRAL = 1
 ACCEL_MATCHED = 2
 MAX_WINDOW = 8
 MAX_ABS_INPUT = 1.0e6
+# Plausibility bounds of the configuration (as <prefix>_controller.h).
+H_MIN = 1.0e-6  # smallest sample time h [s]
+H_MAX = 1.0  # largest sample time h [s]
+GAIN_MAX = 1.0e6  # largest gain, eps, phi, gamma; cap of the adaptive gains
+TORQUE_LIMIT_MAX = 1.0e6  # largest tau_max [N m]
+NOMINAL_FACTOR = 1.0e3  # |nominal p| <= this * max(|robot file's p|, 1)
+STEPS_MAX = 4294967295  # the step counter saturates here (uint32_t in C)
+# |nominal p| <= NOMINAL_BOUNDS[key] (NOMINAL_FACTOR times the robot file's |p|, or 1)
+NOMINAL_BOUNDS: dict[str, float] = {'m': 36000.0, 'I': 5720.0, 'K': 1000.0, 'Iw': 1000.0, 'r': 1000.0, 'b': 1000.0, 'd': 1000.0}
+# <prefix>_field_t: which input or field an error is about.
+FIELDS: dict[str, int] = {
+    "NONE": 0,  # no error
+    "STATE": 1,  # the state pointer, or a state never initialised
+    "CONFIG": 2,  # the config pointer, or a config changed since _init
+    "Q": 3,  # q[index]
+    "QDOT": 4,  # qdot[index]
+    "Q_DES": 5,  # q_des[index]
+    "QDOT_DES": 6,  # qdot_des[index]
+    "QDDOT_DES": 7,  # qddot_des[index]
+    "TAU": 8,  # tau (NULL), or the torque tau[index] computed
+    "NOMINAL": 9,  # nominal parameter index (struct order); -1: the parameters together
+    "FORMULATION": 10,  # formulation
+    "K1": 11,  # k1[index]
+    "K2": 12,  # k2[index]
+    "Q_POS": 13,  # q_pos
+    "Q_VEL": 14,  # q_vel
+    "H": 15,  # h
+    "TAU_MAX": 16,  # tau_max
+    "ACCEL_ESTIMATOR": 17,  # accel_estimator
+    "RATE_WINDOW": 18,  # rate_window
+    "EPS": 19,  # eps
+    "N": 20,  # n
+    "A": 21,  # a
+    "HOLD_GAIN": 22,  # hold_gain
+    "HELD_GAIN": 23,  # held_gain
+    "ALPHA": 24,  # alpha
+    "PHI": 25,  # phi
+    "GAMMA": 26,  # gamma
+    "GAIN0": 27,  # gain0
+    "GAIN": 28,  # the switching gain computed
+    "S_NORM": 29,  # ||s|| computed
+    "U_DISCARDED": 30,  # ||u rows dropped by tau = B^T u|| computed
+    "P": 31,  # P of (20) from k1[index], k2[index], q_pos, q_vel is not finite
+}
+_FNV_OFFSET = 2166136261
+_FNV_PRIME = 16777619
 # Python key -> C struct field where they differ (the C backend's field_renames).
 C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
 PARAM_KEYS = ("m", "I", "K", "Iw", "r", "b", "d", )
 
 
 class ControllerError(ValueError):
-    """A rejected configuration or step; ``status`` is the C status name, ``code`` its value."""
+    """A rejected configuration or step; ``status`` is the C status name, ``code`` its value,
+    ``field`` and ``index`` what ``<prefix>_error_detail_t`` says (a ``FIELDS`` name and an
+    entry, -1 for a scalar or the whole)."""
 
-    def __init__(self, status: str, message: str) -> None:
+    def __init__(self, status: str, message: str, field: str = "NONE", index: int = -1) -> None:
         super().__init__(f"{status}: {message}")
         self.status = status
         self.code = STATUS[status]
+        self.field = field
+        self.index = index
+
+    @property
+    def detail(self) -> tuple[int, int, int]:
+        """(status, field, index) as the C ``<prefix>_error_detail_t``."""
+        return self.code, FIELDS[self.field], self.index
+
+
+def _fnv(hash_: int, data: bytes) -> int:
+    for byte in data:
+        hash_ = ((hash_ ^ byte) * _FNV_PRIME) & 0xFFFFFFFF
+    return hash_
 
 
 @dataclass
@@ -100,8 +163,25 @@ def _positive(x: float) -> bool:
     return math.isfinite(x) and x > 0.0
 
 
-def _finite_bounded(x: NDArray[np.float64]) -> bool:
-    return bool(np.all(np.isfinite(x)) and np.all(np.abs(x) <= MAX_ABS_INPUT))
+def _positive_at_most(x: float, top: float) -> bool:
+    return math.isfinite(x) and 0.0 < x <= top
+
+
+def _nonnegative_at_most(x: float, top: float) -> bool:
+    return math.isfinite(x) and 0.0 <= x <= top
+
+
+def _first_unbounded(x: NDArray[np.float64]) -> int:
+    """The first entry that is not finite or beyond MAX_ABS_INPUT in magnitude, or -1."""
+    for i, v in enumerate(x):
+        if not (math.isfinite(float(v)) and abs(float(v)) <= MAX_ABS_INPUT):
+            return i
+    return -1
+
+
+def cap_gain(gain: float) -> float:
+    """An adaptive gain capped at GAIN_MAX (NaN and +Inf count as beyond it), as C."""
+    return gain if gain <= GAIN_MAX else GAIN_MAX
 
 
 def _vector(x: ArrayLike, label: str, size: int = 5) -> NDArray[np.float64]:
@@ -113,6 +193,7 @@ def _vector(x: ArrayLike, label: str, size: int = 5) -> NDArray[np.float64]:
 
 class _Controller:
     name = ""
+    config_fields: tuple[tuple[str, str], ...] = ()
     tde = False
     switching = False
     window = False
@@ -122,12 +203,19 @@ class _Controller:
     def __init__(self, config: Config) -> None:
         self.check_config(config)
         self.config = config
+        self.config_fp = self.fingerprint(config)
         self.p12 = np.zeros(5)
         self.p22 = np.zeros(5)
         for i in range(5):
             pm = laws.lyapunov_p([float(np.asarray(config.k1)[i]), float(np.asarray(config.k2)[i]),
                                   config.q_pos, config.q_vel])
             self.p12[i], self.p22[i] = pm[1], pm[2]
+        if self.adaptive:
+            self.gain0 = float(config.gain0)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the state the constructor left (mirrors ``wmr_<ctrl>_reset``)."""
         self.steps = 0
         self.q_prev = np.zeros(5)
         self.qdot_prev = np.zeros(5)
@@ -137,70 +225,104 @@ class _Controller:
         self.omega = np.zeros((MAX_WINDOW + 1, 5))
         self.omega_count = 0
         self.H1hat = np.zeros(5)
-        self.gain = float(config.gain0) if self.adaptive else 0.0
+        self.gain = self.gain0 if self.adaptive else 0.0
         self.s_norm = 0.0
         self.u_discarded = 0.0
         self.tau = np.zeros(2)
         self.last_status = "WMR_OK"
 
     @classmethod
+    def fingerprint(cls, c: Config) -> int:
+        """FNV-1a (32 bit) of the configuration's values in C struct order, as the C
+        ``config_fp`` (double build: the values' native bytes)."""
+        data = b"".join(struct.pack("=d", float(c.nominal[k])) for k in PARAM_KEYS)
+        for name, kind in cls.config_fields:
+            value = getattr(c, name)
+            if kind == "vector":
+                data += b"".join(struct.pack("=d", float(x)) for x in np.asarray(value).reshape(-1))
+            elif kind == "int":
+                data += struct.pack("=i", int(value))
+            else:
+                data += struct.pack("=d", float(value))
+        return _fnv(_FNV_OFFSET, data)
+
+    @classmethod
     def check_config(cls, c: Config) -> None:
-        """Raise ControllerError naming the first bad field (same order as the C check)."""
+        """Raise ControllerError naming the first bad field (same order and detail as C)."""
+        def bad(status: str, message: str, field: str, index: int = -1) -> ControllerError:
+            return ControllerError("WMR_" + status, message, field, index)
+
         if c.formulation not in (FORMULATION_PAPER, FORMULATION_MINIMAL):
-            raise ControllerError("WMR_ERR_BAD_FORMULATION", f"formulation = {c.formulation!r}")
-        if not _positive(c.h):
-            raise ControllerError("WMR_ERR_BAD_SAMPLE_TIME", f"h = {c.h!r} must be > 0")
+            raise bad("ERR_BAD_FORMULATION", f"formulation = {c.formulation!r}", "FORMULATION")
+        if not (math.isfinite(c.h) and H_MIN <= c.h <= H_MAX):
+            raise bad("ERR_BAD_SAMPLE_TIME", f"h = {c.h!r} outside [{H_MIN}, {H_MAX}] s", "H")
         k1 = np.asarray(c.k1, dtype=np.float64).reshape(-1)
         k2 = np.asarray(c.k2, dtype=np.float64).reshape(-1)
         if k1.size != 5 or k2.size != 5:
-            raise ControllerError("WMR_ERR_BAD_GAINS", "k1 and k2 need 5 entries each")
-        if not all(_positive(float(x)) for x in (*k1, *k2)):
-            raise ControllerError("WMR_ERR_BAD_GAINS", "K1 and K2 must be positive definite")
-        if not (_positive(c.q_pos) and _positive(c.q_vel)):
-            raise ControllerError("WMR_ERR_BAD_GAINS", "Q must be positive definite")
-        for a, b in zip(k1, k2, strict=True):
+            raise bad("ERR_BAD_GAINS", "k1 and k2 need 5 entries each", "K1")
+        for i in range(5):
+            if not _positive_at_most(float(k1[i]), GAIN_MAX):
+                raise bad("ERR_BAD_GAINS", f"k1[{i}] = {k1[i]!r} outside (0, {GAIN_MAX}]", "K1", i)
+            if not _positive_at_most(float(k2[i]), GAIN_MAX):
+                raise bad("ERR_BAD_GAINS", f"k2[{i}] = {k2[i]!r} outside (0, {GAIN_MAX}]", "K2", i)
+        if not _positive_at_most(c.q_pos, GAIN_MAX):
+            raise bad("ERR_BAD_GAINS", f"q_pos = {c.q_pos!r} outside (0, {GAIN_MAX}]", "Q_POS")
+        if not _positive_at_most(c.q_vel, GAIN_MAX):
+            raise bad("ERR_BAD_GAINS", f"q_vel = {c.q_vel!r} outside (0, {GAIN_MAX}]", "Q_VEL")
+        for i, (a, b) in enumerate(zip(k1, k2, strict=True)):
             pm = laws.lyapunov_p([float(a), float(b), float(c.q_pos), float(c.q_vel)])
             if not np.all(np.isfinite(pm)):
-                raise ControllerError("WMR_ERR_BAD_GAINS", "P of (20) is not finite for these gains")
-        if not (math.isfinite(c.tau_max) and c.tau_max > 0.0):
-            raise ControllerError("WMR_ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}")
+                raise bad("ERR_BAD_GAINS", "P of (20) is not finite for these gains", "P", i)
+        if not _positive_at_most(c.tau_max, TORQUE_LIMIT_MAX):
+            raise bad("ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}", "TAU_MAX")
+        if cls.switching and not _positive_at_most(c.eps, GAIN_MAX):
+            raise bad("ERR_BAD_EPS", f"eps = {c.eps!r} outside (0, {GAIN_MAX}]", "EPS")
         if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED):
-            raise ControllerError("WMR_ERR_BAD_ESTIMATOR", f"accel_estimator = {c.accel_estimator!r}")
-        if cls.tde and not (math.isfinite(c.rate_window) and 0.0 <= c.rate_window <= c.h):
-            raise ControllerError("WMR_ERR_BAD_ESTIMATOR", f"rate_window = {c.rate_window!r} outside [0, h]")
-        if cls.window and not (c.hold_gain in (0, 1) and math.isfinite(c.held_gain) and c.held_gain >= 0.0):
-            raise ControllerError("WMR_ERR_BAD_HELD_GAIN",
-                                  f"hold_gain = {c.hold_gain!r}, held_gain = {c.held_gain!r}")
-        if cls.switching and not _positive(c.eps):
-            raise ControllerError("WMR_ERR_BAD_EPS", f"eps = {c.eps!r} must be > 0")
+            raise bad("ERR_BAD_ESTIMATOR", f"accel_estimator = {c.accel_estimator!r}",
+                      "ACCEL_ESTIMATOR")
+        if cls.tde and not _nonnegative_at_most(c.rate_window, c.h):
+            raise bad("ERR_BAD_ESTIMATOR", f"rate_window = {c.rate_window!r} outside [0, h]",
+                      "RATE_WINDOW")
         if cls.window:
+            if c.hold_gain not in (0, 1):
+                raise bad("ERR_BAD_HELD_GAIN", f"hold_gain = {c.hold_gain!r}", "HOLD_GAIN")
+            if not _nonnegative_at_most(c.held_gain, GAIN_MAX):
+                raise bad("ERR_BAD_HELD_GAIN", f"held_gain = {c.held_gain!r}", "HELD_GAIN")
             if isinstance(c.n, bool) or not isinstance(c.n, int) or not 2 <= c.n <= MAX_WINDOW:
-                raise ControllerError("WMR_ERR_BAD_WINDOW", f"n = {c.n!r} outside 2..{MAX_WINDOW}")
-            if not (_positive(c.a) and c.a <= 1.0):
-                raise ControllerError("WMR_ERR_BAD_DISCOUNT", f"a = {c.a!r} outside (0, 1]")
-        if cls.bounds and not (math.isfinite(c.alpha) and 0.0 <= c.alpha < 1.0
-                               and math.isfinite(c.phi) and c.phi >= 0.0):
-            raise ControllerError("WMR_ERR_BAD_BOUNDS", f"alpha = {c.alpha!r}, phi = {c.phi!r}")
-        if cls.adaptive and not (math.isfinite(c.gamma) and c.gamma >= 0.0
-                                 and math.isfinite(c.gain0) and c.gain0 >= 0.0):
-            raise ControllerError("WMR_ERR_BAD_BOUNDS", f"gamma = {c.gamma!r}, gain0 = {c.gain0!r}")
+                raise bad("ERR_BAD_WINDOW", f"n = {c.n!r} outside 2..{MAX_WINDOW}", "N")
+            if not _positive_at_most(c.a, 1.0):
+                raise bad("ERR_BAD_DISCOUNT", f"a = {c.a!r} outside (0, 1]", "A")
+        if cls.bounds:
+            if not (math.isfinite(c.alpha) and 0.0 <= c.alpha < 1.0):
+                raise bad("ERR_BAD_BOUNDS", f"alpha = {c.alpha!r} outside [0, 1)", "ALPHA")
+            if not _nonnegative_at_most(c.phi, GAIN_MAX):
+                raise bad("ERR_BAD_BOUNDS", f"phi = {c.phi!r} outside [0, {GAIN_MAX}]", "PHI")
+        if cls.adaptive:
+            if not _nonnegative_at_most(c.gamma, GAIN_MAX):
+                raise bad("ERR_BAD_BOUNDS", f"gamma = {c.gamma!r} outside [0, {GAIN_MAX}]", "GAMMA")
+            if not _nonnegative_at_most(c.gain0, GAIN_MAX):
+                raise bad("ERR_BAD_BOUNDS", f"gain0 = {c.gain0!r} outside [0, {GAIN_MAX}]", "GAIN0")
         p = c.nominal
         try:
             values = {k: float(p[k]) for k in PARAM_KEYS}
         except (KeyError, TypeError, ValueError) as exc:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", f"nominal parameters: {exc}") from None
+            raise bad("ERR_BAD_NOMINAL", f"nominal parameters: {exc}", "NOMINAL") from None
+        for i, k in enumerate(PARAM_KEYS):
+            if not (math.isfinite(values[k]) and abs(values[k]) <= NOMINAL_BOUNDS[k]):
+                raise bad("ERR_BAD_NOMINAL", f"nominal {k} = {values[k]!r} beyond "
+                          f"{NOMINAL_BOUNDS[k]!r} in magnitude", "NOMINAL", i)
         try:  # the generated guards of S^T M S (positive parameters, positive definite)
             model.minimal_forward_dynamics(np.zeros(5), np.zeros(2), np.zeros(2), values)
         except ValueError as exc:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", str(exc)) from None
+            raise bad("ERR_BAD_NOMINAL", str(exc), "NOMINAL") from None
         if not values["m"] > 0.0:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", "nominal parameters violate " + 'm > 0')
+            raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + 'm > 0', "NOMINAL")
         if not values["I"] > 0.0:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", "nominal parameters violate " + 'I > 0')
+            raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + 'I > 0', "NOMINAL")
         if not values["Iw"] > 0.0:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", "nominal parameters violate " + 'Iw > 0')
+            raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + 'Iw > 0', "NOMINAL")
         if not values["I"]*values["m"] - values["K"]*values["K"] > 0.0:
-            raise ControllerError("WMR_ERR_BAD_NOMINAL", "nominal parameters violate " + "m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det M-tilde, so the paper form's M-hat is singular without it")
+            raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + "m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det M-tilde, so the paper form's M-hat is singular without it", "NOMINAL")
 
     def state(self) -> dict[str, Any]:
         """A deep copy of the state (for inspection and for the C/Python cross-check)."""
@@ -211,12 +333,18 @@ class _Controller:
         """One step; mirrors ``wmr_<ctrl>_step``. Returns tau (2,)."""
         c = self.config if config is None else config
         self.check_config(c)
+        if self.fingerprint(c) != self.config_fp:
+            raise ControllerError("WMR_ERR_CONFIG_CHANGED",
+                                  "the configuration differs from the constructor's", "CONFIG")
         qv, qdv = _vector(q, "q"), _vector(qdot, "qdot")
         qd, qdd_des, qddd = _vector(q_des, "q_des"), _vector(qdot_des, "qdot_des"), _vector(qddot_des, "qddot_des")
-        if not (_finite_bounded(qv) and _finite_bounded(qdv)):
-            raise ControllerError("WMR_ERR_BAD_MEASUREMENT", "q or qdot is NaN, infinite or absurd")
-        if not (_finite_bounded(qd) and _finite_bounded(qdd_des) and _finite_bounded(qddd)):
-            raise ControllerError("WMR_ERR_BAD_REFERENCE", "a reference is NaN, infinite or absurd")
+        for k, (label, x) in enumerate((("Q", qv), ("QDOT", qdv), ("Q_DES", qd),
+                                        ("QDOT_DES", qdd_des), ("QDDOT_DES", qddd))):
+            bad_index = _first_unbounded(x)
+            if bad_index >= 0:
+                status = "WMR_ERR_BAD_MEASUREMENT" if k < 2 else "WMR_ERR_BAD_REFERENCE"
+                raise ControllerError(status, f"{label.lower()}[{bad_index}] is NaN, infinite or absurd",
+                                      label, bad_index)
         p = {k: float(c.nominal[k]) for k in PARAM_KEYS}
         paper = c.formulation == FORMULATION_PAPER
         nc, off = (5, 0) if paper else (2, 3)
@@ -259,7 +387,7 @@ class _Controller:
                 norm_fn = laws.paper_minv_norm if paper else laws.minimal_minv_norm
                 minv_norm = float(norm_fn(p)[0])  # parameters only (see wmr_laws)
                 gain_fn = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
-                gain = float(gain_fn([minv_norm], omega[:, :nc], w)[0])
+                gain = cap_gain(float(gain_fn([minv_norm], omega[:, :nc], w)[0]))
         common = (e, edot, qdd, k1, k2, p12, p22)
         if self.name == "tdc":
             u = (laws.paper_tdc_law if paper else laws.minimal_tdc_law)(qv, *common, H1hat[:nc], p)
@@ -274,13 +402,16 @@ class _Controller:
         else:
             asmc_fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
             u, _, sn, g = asmc_fn(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
-            s_norm, gain = float(sn[0]), float(g[0])
+            s_norm, gain = float(sn[0]), cap_gain(float(g[0]))
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
         u_discarded = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) if paper else 0.0
         # As in C: an overflowed ||s|| or ||u rows 1-3|| voids the step (see wmr_<ctrl>.c).
-        if not (np.all(np.isfinite(tau)) and math.isfinite(gain) and math.isfinite(s_norm)
-                and math.isfinite(u_discarded)):
-            raise ControllerError("WMR_ERR_NONFINITE_OUTPUT", "the control law produced NaN/Inf")
+        for k in range(2):
+            if not math.isfinite(float(tau[k])):
+                raise ControllerError("WMR_ERR_NONFINITE_OUTPUT", f"tau[{k}] is NaN/Inf", "TAU", k)
+        for label, value in (("GAIN", gain), ("S_NORM", s_norm), ("U_DISCARDED", u_discarded)):
+            if not math.isfinite(value):
+                raise ControllerError("WMR_ERR_NONFINITE_OUTPUT", f"{label.lower()} is NaN/Inf", label)
         status = "WMR_OK"
         if np.any(np.abs(tau) > c.tau_max):
             tau = np.clip(tau, -c.tau_max, c.tau_max)
@@ -294,7 +425,7 @@ class _Controller:
         self.u_prev2 = self.u_prev
         self.u_prev = np.array([0.0, 0.0, 0.0, tau[0], tau[1]])
         self.tau = tau.copy()
-        self.steps += 1
+        self.steps = min(self.steps + 1, STEPS_MAX)  # saturating, as the C uint32_t
         self.last_status = status
         return tau
 
@@ -308,6 +439,8 @@ class TDC(_Controller):
     window = False
     bounds = False
     adaptive = False
+    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), )
 
 
 class TDROC(_Controller):
@@ -319,6 +452,8 @@ class TDROC(_Controller):
     window = True
     bounds = False
     adaptive = False
+    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), ("eps", "real"), ("n", "int"), ("a", "real"), ("hold_gain", "int"), ("held_gain", "real"), )
 
 
 class ROC(_Controller):
@@ -330,6 +465,8 @@ class ROC(_Controller):
     window = False
     bounds = True
     adaptive = False
+    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("alpha", "real"), ("phi", "real"), )
 
 
 class ASMC(_Controller):
@@ -341,3 +478,5 @@ class ASMC(_Controller):
     window = False
     bounds = False
     adaptive = True
+    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )

@@ -15,7 +15,15 @@ from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import format_c
 from codegen.backends.c.printer import CPrinter
 from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir
-from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, defines, status_codes
+from codegen.controller_api import (
+    CONTROLLERS,
+    MAX_ABS_INPUT,
+    c_common_context,
+    c_controller_context,
+    defines,
+    nominal_bound,
+    status_codes,
+)
 from codegen.controller_layout import ControllerLayout
 
 
@@ -45,6 +53,13 @@ def nominal_conditions(target: RobotTarget, config: CConfig) -> list[tuple[str, 
     names = {p.symbol: f"p->{config.c_field(p.key)}" for p in target.model.params}
     printer = CPrinter(config, names)
     return [(printer.expr_code(c.expr), c.doc) for c in target.model.nominal_conditions]
+
+
+def nominal_bounds(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
+    """(C field, bound on |p|) per nominal parameter: ``NOMINAL_FACTOR`` times the robot
+    file's value, or times 1 when that is smaller than 1 in magnitude."""
+    return [(config.c_field(p.key), repr(nominal_bound(target.robot.lumped[p.key])))
+            for p in target.model.params]
 
 
 def payload_dependent(target: RobotTarget, config: CConfig) -> list[str]:
@@ -101,12 +116,13 @@ class CBackend:
                 f"controller_common.{suffix}.jinja", law, layout=layout,
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
                 nominal_conditions=nominal_conditions(target, config),
+                nominal_bounds=nominal_bounds(target, config), **c_common_context(),
             )
         for info in CONTROLLERS:
             for suffix in ("h", "c"):
                 files[f"{pre}_{info.name}.{suffix}"] = _template(
                     f"controller.{suffix}.jinja", law, layout=layout, c=info,
-                    max_abs_input=MAX_ABS_INPUT,
+                    max_abs_input=MAX_ABS_INPUT, **c_controller_context(info),
                 )
         robot = target.robot
         fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]

@@ -252,7 +252,13 @@ def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
         ok = config.status_codes[0].name
         doc.append(f"@return {ok} on success; on error no output is written:")
         if spec.nonfinite_input:
-            doc.append(f"        {spec.nonfinite_input} if an input is NaN or infinite,")
+            doc.append(f"        {spec.nonfinite_input} if an input it reads is NaN or infinite")
+            unread = [_access(s.arg, s.field, s.index, config).replace("->", ".")
+                      for s in slots if s.symbol not in used]
+            if unread:
+                doc.append(f"        (it does not read, and ignores: {', '.join(unread)}),")
+            else:
+                doc[-1] += " (it reads every input),"
         doc += [f"        {g.status} if not ({_comment_text(g.doc)})," for g in spec.guards]
         if spec.nonfinite_output:
             doc.append(f"        {spec.nonfinite_output} if a result is not finite.")

@@ -15,7 +15,13 @@ from codegen.backends.c.config import CConfig
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
-from codegen.controller_api import CONTROLLERS, MAX_ABS_INPUT, status_codes
+from codegen.controller_api import (
+    CONTROLLERS,
+    MAX_ABS_INPUT,
+    nominal_bound,
+    python_context,
+    status_codes,
+)
 from codegen.robot_functions import MAX_WINDOW
 from codegen.template_util import generated_by
 from modeling.version import VERSION
@@ -84,6 +90,9 @@ class PythonBackend:
             c_field_names=dict(CConfig().field_renames),
             param_keys=[p.key for p in target.model.params],
             nominal_conditions=nominal_conditions(target),
+            nominal_bounds={p.key: nominal_bound(target.robot.lumped[p.key])
+                            for p in target.model.params},
+            **python_context(),
         )
         files["robot.py"] = robot_py(target)
         files["__init__.py"] = (

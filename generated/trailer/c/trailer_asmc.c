@@ -8,32 +8,85 @@
 #include "trailer_laws.h"
 #include "trailer_model.h"
 
-trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config)
+trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *config,
+    trailer_error_detail_t *detail)
 {
     trailer_status_t status;
     if (config == 0) {
-        return TRAILER_ERR_NULL_POINTER;
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_base_config(config->formulation, config->h, config->k1, config->k2,
-                                   config->q_pos, config->q_vel, config->tau_max);
+                                   config->q_pos, config->q_vel, config->tau_max, detail);
     if (status != TRAILER_OK) {
         return status;
     }
-    if (!trailer_positive(config->eps)) {
-        return TRAILER_ERR_BAD_EPS;
+    if (!trailer_positive_at_most(config->eps, TRAILER_GAIN_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_EPS, TRAILER_FIELD_EPS, -1);
     }
-    if (!isfinite(config->gamma) || config->gamma < TRAILER_LIT(0.0)
-        || !isfinite(config->gain0) || config->gain0 < TRAILER_LIT(0.0)) {
-        return TRAILER_ERR_BAD_BOUNDS;
+    if (!trailer_nonnegative_at_most(config->gamma, TRAILER_GAIN_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_BOUNDS, TRAILER_FIELD_GAMMA, -1);
     }
-    return trailer_check_nominal(&config->nominal);
+    if (!trailer_nonnegative_at_most(config->gain0, TRAILER_GAIN_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_BOUNDS, TRAILER_FIELD_GAIN0, -1);
+    }
+    status = trailer_check_nominal(&config->nominal, detail);
+    if (status != TRAILER_OK) {
+        return status;
+    }
+    return trailer_fail(detail, TRAILER_OK, TRAILER_FIELD_NONE, -1);
+}
+
+trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config)
+{
+    return trailer_asmc_check_config_detail(config, 0);
+}
+
+/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+static uint32_t trailer_asmc_fingerprint(const trailer_asmc_config_t *config)
+{
+    uint32_t fp = trailer_hash_params(2166136261u, &config->nominal);
+    int i;
+    fp = trailer_hash_int(fp, config->formulation);
+    for (i = 0; i < 8; ++i) {
+        fp = trailer_hash_real(fp, config->k1[i]);
+    }
+    for (i = 0; i < 8; ++i) {
+        fp = trailer_hash_real(fp, config->k2[i]);
+    }
+    fp = trailer_hash_real(fp, config->q_pos);
+    fp = trailer_hash_real(fp, config->q_vel);
+    fp = trailer_hash_real(fp, config->h);
+    fp = trailer_hash_real(fp, config->tau_max);
+    fp = trailer_hash_real(fp, config->eps);
+    fp = trailer_hash_real(fp, config->gamma);
+    fp = trailer_hash_real(fp, config->gain0);
+    return fp;
+}
+
+/* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
+static void trailer_asmc_clear(trailer_asmc_state_t *s)
+{
+    int i;
+    s->steps = 0u;
+    for (i = 0; i < 8; ++i) {
+        s->q_prev[i] = TRAILER_LIT(0.0);
+        s->qdot_prev[i] = TRAILER_LIT(0.0);
+        s->qdot_prev2[i] = TRAILER_LIT(0.0);
+        s->u_prev[i] = TRAILER_LIT(0.0);
+        s->u_prev2[i] = TRAILER_LIT(0.0);
+        s->H1hat[i] = TRAILER_LIT(0.0);
+    }
+    s->gain = s->gain0;
+    s->s_norm = TRAILER_LIT(0.0);
+    s->u_discarded = TRAILER_LIT(0.0);
+    s->tau[0] = TRAILER_LIT(0.0);
+    s->tau[1] = TRAILER_LIT(0.0);
 }
 
 trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_asmc_config_t *config)
 {
     trailer_asmc_state_t fresh;
     trailer_status_t status;
-    int i, j;
     if (state == 0 || config == 0) {
         return TRAILER_ERR_NULL_POINTER;
     }
@@ -42,24 +95,24 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
         return status;
     }
     fresh.magic = TRAILER_STATE_MAGIC;
-    fresh.steps = 0;
+    fresh.config_fp = trailer_asmc_fingerprint(config);
     trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
-    for (i = 0; i < 8; ++i) {
-        fresh.q_prev[i] = TRAILER_LIT(0.0);
-        fresh.qdot_prev[i] = TRAILER_LIT(0.0);
-        fresh.qdot_prev2[i] = TRAILER_LIT(0.0);
-        fresh.u_prev[i] = TRAILER_LIT(0.0);
-        fresh.u_prev2[i] = TRAILER_LIT(0.0);
-        fresh.H1hat[i] = TRAILER_LIT(0.0);
-    }
-    (void)j;
-    fresh.gain = config->gain0;
-    fresh.s_norm = TRAILER_LIT(0.0);
-    fresh.u_discarded = TRAILER_LIT(0.0);
-    fresh.tau[0] = TRAILER_LIT(0.0);
-    fresh.tau[1] = TRAILER_LIT(0.0);
+    fresh.gain0 = config->gain0;
+    trailer_asmc_clear(&fresh);
     *state = fresh;
+    return TRAILER_OK;
+}
+
+trailer_status_t trailer_asmc_reset(trailer_asmc_state_t *state)
+{
+    if (state == 0) {
+        return TRAILER_ERR_NULL_POINTER;
+    }
+    if (state->magic != TRAILER_STATE_MAGIC) {
+        return TRAILER_ERR_NOT_INITIALISED;
+    }
+    trailer_asmc_clear(state);
     return TRAILER_OK;
 }
 
@@ -67,22 +120,41 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
     const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t q_des[8],
     const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8], trailer_real_t tau[2])
 {
+    return trailer_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+}
+
+trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
+    const trailer_asmc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+{
     trailer_asmc_state_t next;
     trailer_status_t status = TRAILER_OK;
     trailer_real_t e[8], edot[8], qdd[8], k1[8], k2[8], p12[8], p22[8], u[8];
     trailer_real_t out_tau[2];
-    if (state == 0 || config == 0 || q == 0 || qdot == 0 || q_des == 0 || qdot_des == 0
-        || qddot_des == 0 || tau == 0) {
-        return TRAILER_ERR_NULL_POINTER;
+    {
+        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
+        const int fields[8] = {TRAILER_FIELD_STATE, TRAILER_FIELD_CONFIG, TRAILER_FIELD_Q,
+                               TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES, TRAILER_FIELD_QDOT_DES,
+                               TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
+        int k;
+        for (k = 0; k < 8; ++k) {
+            if (args[k] == 0) {
+                return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
+            }
+        }
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
-        return TRAILER_ERR_NOT_INITIALISED;
+        return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
     }
-    status = trailer_asmc_check_config(config);
+    status = trailer_asmc_check_config_detail(config, detail);
     if (status != TRAILER_OK) {
         return status;
     }
-    status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des);
+    if (trailer_asmc_fingerprint(config) != state->config_fp) {
+        return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
+    }
+    status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {
         return status;
     }
@@ -97,6 +169,7 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
         trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22,
                 &state->gain, &config->eps, adapt, u, s, &next.s_norm, &next.gain);
     }
+    next.gain = trailer_cap_gain(next.gain);  /* the adapted gain never exceeds TRAILER_GAIN_MAX */
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
     out_tau[1] = u[1];
@@ -104,9 +177,20 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
     /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
        finite:
        then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0]) || !isfinite(out_tau[1]) || !isfinite(next.gain)
-        || !isfinite(next.s_norm) || !isfinite(next.u_discarded)) {
-        return TRAILER_ERR_NONFINITE_OUTPUT;
+    if (!isfinite(out_tau[0])) {
+        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 0);
+    }
+    if (!isfinite(out_tau[1])) {
+        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 1);
+    }
+    if (!isfinite(next.gain)) {
+        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_GAIN, -1);
+    }
+    if (!isfinite(next.s_norm)) {
+        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_S_NORM, -1);
+    }
+    if (!isfinite(next.u_discarded)) {
+        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_U_DISCARDED, -1);
     }
     status = trailer_saturate(out_tau, config->tau_max);
     /* History for (17): the input actually applied, u = B tau. */
@@ -114,9 +198,10 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
                      qdot, out_tau);
     next.tau[0] = out_tau[0];
     next.tau[1] = out_tau[1];
-    next.steps = state->steps + 1;
+    /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
+    next.steps = state->steps < TRAILER_STEPS_MAX ? state->steps + 1u : TRAILER_STEPS_MAX;
     *state = next;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return status;
+    return trailer_fail(detail, status, TRAILER_FIELD_NONE, -1);
 }

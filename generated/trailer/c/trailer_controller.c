@@ -7,66 +7,109 @@
 #include "trailer_laws.h"
 #include "trailer_model.h"
 
+trailer_status_t trailer_fail(trailer_error_detail_t *detail, trailer_status_t status, int field,
+    int index)
+{
+    if (detail != 0) {
+        detail->status = status;
+        detail->field = field;
+        detail->index = index;
+    }
+    return status;
+}
+
 int trailer_positive(trailer_real_t x)
 {
     return isfinite(x) && x > TRAILER_LIT(0.0);
 }
 
-int trailer_finite_bounded(const trailer_real_t *x, int n)
+int trailer_positive_at_most(trailer_real_t x, trailer_real_t max)
+{
+    return isfinite(x) && x > TRAILER_LIT(0.0) && x <= max;
+}
+
+int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max)
+{
+    return isfinite(x) && x >= TRAILER_LIT(0.0) && x <= max;
+}
+
+/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1. */
+static int trailer_first_unbounded(const trailer_real_t *x, int n)
 {
     int i;
     for (i = 0; i < n; ++i) {
         if (!isfinite(x[i]) || TRAILER_FABS(x[i]) > TRAILER_LIT(1.0e6)) {
-            return 0;
+            return i;
         }
     }
-    return 1;
+    return -1;
 }
 
-int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b)
+static uint32_t trailer_hash_bytes(uint32_t hash, const unsigned char *bytes, unsigned int n)
 {
-    /* Equal as numbers, without floating-point == (-Wfloat-equal): both are validated
-       finite before this cache key is compared. */
-    return !(a->J_theta_cart < b->J_theta_cart || a->J_theta_cart > b->J_theta_cart)
-        && !(a->J_theta_cart_left < b->J_theta_cart_left || a->J_theta_cart_left
-        > b->J_theta_cart_left) && !(a->J_theta_cart_right < b->J_theta_cart_right
-        || a->J_theta_cart_right > b->J_theta_cart_right) && !(a->J_theta_left < b->J_theta_left
-        || a->J_theta_left > b->J_theta_left) && !(a->J_theta_right < b->J_theta_right
-        || a->J_theta_right > b->J_theta_right) && !(a->J_theta_tractor < b->J_theta_tractor
-        || a->J_theta_tractor > b->J_theta_tractor) && !(a->J_x_tractor < b->J_x_tractor
-        || a->J_x_tractor > b->J_x_tractor) && !(a->K_theta_cart_x_tractor
-        < b->K_theta_cart_x_tractor || a->K_theta_cart_x_tractor > b->K_theta_cart_x_tractor)
-        && !(a->K_theta_cart_x_tractor_2 < b->K_theta_cart_x_tractor_2
-        || a->K_theta_cart_x_tractor_2 > b->K_theta_cart_x_tractor_2)
-        && !(a->K_theta_tractor_x_tractor < b->K_theta_tractor_x_tractor
-        || a->K_theta_tractor_x_tractor > b->K_theta_tractor_x_tractor)
-        && !(a->K_theta_tractor_x_tractor_2 < b->K_theta_tractor_x_tractor_2
-        || a->K_theta_tractor_x_tractor_2 > b->K_theta_tractor_x_tractor_2)
-        && !(a->radius_cart_left < b->radius_cart_left || a->radius_cart_left > b->radius_cart_left)
-        && !(a->radius_cart_right < b->radius_cart_right || a->radius_cart_right
-        > b->radius_cart_right) && !(a->radius_left < b->radius_left || a->radius_left
-        > b->radius_left) && !(a->radius_right < b->radius_right || a->radius_right
-        > b->radius_right);
+    uint32_t out = hash;
+    unsigned int i;
+    for (i = 0u; i < n; ++i) {
+        out = (out ^ (uint32_t)bytes[i]) * 16777619u;
+    }
+    return out;
+}
+
+uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x)
+{
+    return trailer_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+}
+
+uint32_t trailer_hash_int(uint32_t hash, int x)
+{
+    return trailer_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+}
+
+uint32_t trailer_hash_params(uint32_t hash, const trailer_params_t *p)
+{
+    uint32_t out = hash;
+    out = trailer_hash_real(out, p->J_theta_cart);
+    out = trailer_hash_real(out, p->J_theta_cart_left);
+    out = trailer_hash_real(out, p->J_theta_cart_right);
+    out = trailer_hash_real(out, p->J_theta_left);
+    out = trailer_hash_real(out, p->J_theta_right);
+    out = trailer_hash_real(out, p->J_theta_tractor);
+    out = trailer_hash_real(out, p->J_x_tractor);
+    out = trailer_hash_real(out, p->K_theta_cart_x_tractor);
+    out = trailer_hash_real(out, p->K_theta_cart_x_tractor_2);
+    out = trailer_hash_real(out, p->K_theta_tractor_x_tractor);
+    out = trailer_hash_real(out, p->K_theta_tractor_x_tractor_2);
+    out = trailer_hash_real(out, p->radius_cart_left);
+    out = trailer_hash_real(out, p->radius_cart_right);
+    out = trailer_hash_real(out, p->radius_left);
+    out = trailer_hash_real(out, p->radius_right);
+    return out;
 }
 
 trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
-    trailer_real_t q_vel, trailer_real_t tau_max)
+    trailer_real_t q_vel, trailer_real_t tau_max, trailer_error_detail_t *detail)
 {
     int i;
     if (formulation != TRAILER_FORMULATION_MINIMAL) {  /* the paper formulation is not generated */
-        return TRAILER_ERR_BAD_FORMULATION;
+        return trailer_fail(detail, TRAILER_ERR_BAD_FORMULATION, TRAILER_FIELD_FORMULATION, -1);
     }
-    if (!trailer_positive(h)) {
-        return TRAILER_ERR_BAD_SAMPLE_TIME;
+    if (!isfinite(h) || !(h >= TRAILER_H_MIN) || !(h <= TRAILER_H_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_SAMPLE_TIME, TRAILER_FIELD_H, -1);
     }
     for (i = 0; i < 8; ++i) {
-        if (!trailer_positive(k1[i]) || !trailer_positive(k2[i])) {
-            return TRAILER_ERR_BAD_GAINS;
+        if (!trailer_positive_at_most(k1[i], TRAILER_GAIN_MAX)) {
+            return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_K1, i);
+        }
+        if (!trailer_positive_at_most(k2[i], TRAILER_GAIN_MAX)) {
+            return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_K2, i);
         }
     }
-    if (!trailer_positive(q_pos) || !trailer_positive(q_vel)) {
-        return TRAILER_ERR_BAD_GAINS;
+    if (!trailer_positive_at_most(q_pos, TRAILER_GAIN_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_Q_POS, -1);
+    }
+    if (!trailer_positive_at_most(q_vel, TRAILER_GAIN_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_Q_VEL, -1);
     }
     for (i = 0; i < 8; ++i) {
         /* P of (20) must be finite: a denormal or huge gain overflows it. */
@@ -74,16 +117,16 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
         trailer_real_t pmat[3];
         trailer_lyapunov_p(gains, pmat);
         if (!isfinite(pmat[0]) || !isfinite(pmat[1]) || !isfinite(pmat[2])) {
-            return TRAILER_ERR_BAD_GAINS;
+            return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_P, i);
         }
     }
-    if (!isfinite(tau_max) || !(tau_max > TRAILER_LIT(0.0))) {
-        return TRAILER_ERR_BAD_TORQUE_LIMIT;
+    if (!trailer_positive_at_most(tau_max, TRAILER_TORQUE_LIMIT_MAX)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_TORQUE_LIMIT, TRAILER_FIELD_TAU_MAX, -1);
     }
     return TRAILER_OK;
 }
 
-trailer_status_t trailer_check_nominal(const trailer_params_t *p)
+trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_detail_t *detail)
 {
     const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
             TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
@@ -91,10 +134,64 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p)
     const trailer_real_t rates0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     const trailer_real_t tau0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
     trailer_real_t acc[2];
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
+    if (!isfinite(p->J_theta_cart) || TRAILER_FABS(p->J_theta_cart)
+            > TRAILER_LIT(5141.500000000001)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 0);
+    }
+    if (!isfinite(p->J_theta_cart_left) || TRAILER_FABS(p->J_theta_cart_left)
+            > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 1);
+    }
+    if (!isfinite(p->J_theta_cart_right) || TRAILER_FABS(p->J_theta_cart_right)
+            > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 2);
+    }
+    if (!isfinite(p->J_theta_left) || TRAILER_FABS(p->J_theta_left) > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 3);
+    }
+    if (!isfinite(p->J_theta_right) || TRAILER_FABS(p->J_theta_right) > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 4);
+    }
+    if (!isfinite(p->J_theta_tractor) || TRAILER_FABS(p->J_theta_tractor) > TRAILER_LIT(3421.094)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 5);
+    }
+    if (!isfinite(p->J_x_tractor) || TRAILER_FABS(p->J_x_tractor) > TRAILER_LIT(53500.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 6);
+    }
+    if (!isfinite(p->K_theta_cart_x_tractor) || TRAILER_FABS(p->K_theta_cart_x_tractor)
+            > TRAILER_LIT(8250.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 7);
+    }
+    if (!isfinite(p->K_theta_cart_x_tractor_2) || TRAILER_FABS(p->K_theta_cart_x_tractor_2)
+            > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 8);
+    }
+    if (!isfinite(p->K_theta_tractor_x_tractor) || TRAILER_FABS(p->K_theta_tractor_x_tractor)
+            > TRAILER_LIT(3750.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 9);
+    }
+    if (!isfinite(p->K_theta_tractor_x_tractor_2) || TRAILER_FABS(p->K_theta_tractor_x_tractor_2)
+            > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 10);
+    }
+    if (!isfinite(p->radius_cart_left) || TRAILER_FABS(p->radius_cart_left) > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 11);
+    }
+    if (!isfinite(p->radius_cart_right) || TRAILER_FABS(p->radius_cart_right)
+            > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 12);
+    }
+    if (!isfinite(p->radius_left) || TRAILER_FABS(p->radius_left) > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 13);
+    }
+    if (!isfinite(p->radius_right) || TRAILER_FABS(p->radius_right) > TRAILER_LIT(1000.0)) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 14);
+    }
     /* The generated guards of S^T M S (finite parameters, the positive ones positive,
        positive definite). */
     if (trailer_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TRAILER_OK) {
-        return TRAILER_ERR_BAD_NOMINAL;
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
     }
     return TRAILER_OK;
 }
@@ -114,16 +211,25 @@ void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8]
 
 trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8])
+    const trailer_real_t qddot_des[8], trailer_error_detail_t *detail)
 {
-    if (!trailer_finite_bounded(q, 8) || !trailer_finite_bounded(qdot, 8)) {
-        return TRAILER_ERR_BAD_MEASUREMENT;
-    }
-    if (!trailer_finite_bounded(q_des, 8) || !trailer_finite_bounded(qdot_des, 8)
-        || !trailer_finite_bounded(qddot_des, 8)) {
-        return TRAILER_ERR_BAD_REFERENCE;
+    const trailer_real_t *const inputs[5] = {q, qdot, q_des, qdot_des, qddot_des};
+    const int fields[5] = {TRAILER_FIELD_Q, TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES,
+                           TRAILER_FIELD_QDOT_DES, TRAILER_FIELD_QDDOT_DES};
+    int k;
+    for (k = 0; k < 5; ++k) {
+        const int bad = trailer_first_unbounded(inputs[k], 8);
+        if (bad >= 0) {
+            return trailer_fail(detail, k < 2 ? TRAILER_ERR_BAD_MEASUREMENT
+                            : TRAILER_ERR_BAD_REFERENCE, fields[k], bad);
+        }
     }
     return TRAILER_OK;
+}
+
+trailer_real_t trailer_cap_gain(trailer_real_t gain)
+{
+    return gain <= TRAILER_GAIN_MAX ? gain : TRAILER_GAIN_MAX;
 }
 
 int trailer_controlled_slice(int formulation, const trailer_real_t q[8],

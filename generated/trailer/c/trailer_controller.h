@@ -9,20 +9,92 @@
 #ifndef TRAILER_CONTROLLER_H
 #define TRAILER_CONTROLLER_H
 
+#include <stdint.h>
+
 #include "trailer_types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* Plausibility bounds of every configuration (docs/BAD_INPUT.md): a value outside them is
+   rejected with the field's status code, so that no accepted value can leave the state
+   where a later valid step cannot succeed. */
+#define TRAILER_H_MIN TRAILER_LIT(1.0e-6) /* smallest sample time h [s] */
+#define TRAILER_H_MAX TRAILER_LIT(1.0) /* largest sample time h [s] */
+#define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6) /* largest gain, eps, phi, gamma; cap of the adaptive gains */
+#define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6) /* largest tau_max [N m] */
+#define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3) /* |nominal p| <= this * max(|robot file's p|, 1) */
+
+/* Which input or field an error is about: trailer_error_detail_t.field. */
+typedef enum {
+    TRAILER_FIELD_NONE = 0, /* no error */
+    TRAILER_FIELD_STATE = 1, /* the state pointer, or a state never initialised */
+    TRAILER_FIELD_CONFIG = 2, /* the config pointer, or a config changed since _init */
+    TRAILER_FIELD_Q = 3, /* q[index] */
+    TRAILER_FIELD_QDOT = 4, /* qdot[index] */
+    TRAILER_FIELD_Q_DES = 5, /* q_des[index] */
+    TRAILER_FIELD_QDOT_DES = 6, /* qdot_des[index] */
+    TRAILER_FIELD_QDDOT_DES = 7, /* qddot_des[index] */
+    TRAILER_FIELD_TAU = 8, /* tau (NULL), or the torque tau[index] computed */
+    TRAILER_FIELD_NOMINAL = 9, /* nominal parameter index (struct order); -1: the parameters
+                                  together */
+    TRAILER_FIELD_FORMULATION = 10, /* formulation */
+    TRAILER_FIELD_K1 = 11, /* k1[index] */
+    TRAILER_FIELD_K2 = 12, /* k2[index] */
+    TRAILER_FIELD_Q_POS = 13, /* q_pos */
+    TRAILER_FIELD_Q_VEL = 14, /* q_vel */
+    TRAILER_FIELD_H = 15, /* h */
+    TRAILER_FIELD_TAU_MAX = 16, /* tau_max */
+    TRAILER_FIELD_ACCEL_ESTIMATOR = 17, /* accel_estimator */
+    TRAILER_FIELD_RATE_WINDOW = 18, /* rate_window */
+    TRAILER_FIELD_EPS = 19, /* eps */
+    TRAILER_FIELD_N = 20, /* n */
+    TRAILER_FIELD_A = 21, /* a */
+    TRAILER_FIELD_HOLD_GAIN = 22, /* hold_gain */
+    TRAILER_FIELD_HELD_GAIN = 23, /* held_gain */
+    TRAILER_FIELD_ALPHA = 24, /* alpha */
+    TRAILER_FIELD_PHI = 25, /* phi */
+    TRAILER_FIELD_GAMMA = 26, /* gamma */
+    TRAILER_FIELD_GAIN0 = 27, /* gain0 */
+    TRAILER_FIELD_GAIN = 28, /* the switching gain computed */
+    TRAILER_FIELD_S_NORM = 29, /* ||s|| computed */
+    TRAILER_FIELD_U_DISCARDED = 30, /* ||u rows dropped by tau = B^T u|| computed */
+    TRAILER_FIELD_P = 31 /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+} trailer_field_t;
+
+/**
+ * What a failed call was about, for the caller's log: the status it returned, the field
+ * (trailer_field_t) and the entry (index into the array or the nominal parameters in struct
+ * order; -1 for a scalar or the whole). On success: TRAILER_OK, TRAILER_FIELD_NONE, -1.
+ */
+typedef struct {
+    trailer_status_t status;
+    int field;
+    int index;
+} trailer_error_detail_t;
+
+/** Write {status, field, index} to detail (when not NULL) and return status. */
+trailer_status_t trailer_fail(trailer_error_detail_t *detail, trailer_status_t status, int field,
+    int index);
+
+/** 1 if x is finite, > 0 and <= max. */
+int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
+
+/** 1 if x is finite, >= 0 and <= max. */
+int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max);
+
+/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x);
+
+/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+uint32_t trailer_hash_int(uint32_t hash, int x);
+
+/** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
+uint32_t trailer_hash_params(uint32_t hash, const trailer_params_t *p);
+
 /** 1 if x is finite and > 0. */
 int trailer_positive(trailer_real_t x);
-
-/** 1 if all n values are finite and no larger in magnitude than 1.0e6. */
-int trailer_finite_bounded(const trailer_real_t *x, int n);
-
-/** 1 if the two parameter sets are equal field by field. */
-int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b);
 
 /**
  * The configuration fields every controller has, in the order the status codes are
@@ -30,13 +102,15 @@ int trailer_same_params(const trailer_params_t *a, const trailer_params_t *b);
  */
 trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
-    trailer_real_t q_vel, trailer_real_t tau_max);
+    trailer_real_t q_vel, trailer_real_t tau_max, trailer_error_detail_t *detail);
 
 /**
- * The nominal model: the generated guards of S^T M S (finite parameters, the positive ones
+ * The nominal model: each parameter finite and |p| <= TRAILER_NOMINAL_FACTOR * max(|robot file's
+ * p|, 1) (detail index: the parameter), then the generated guards of S^T M S (finite parameters,
+ * the positive ones
  * positive, positive definite).
  */
-trailer_status_t trailer_check_nominal(const trailer_params_t *p);
+trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_detail_t *detail);
 
 /** P of (20) per coordinate from K1, K2 and Q (the p12, p22 entries s = B^T P e needs). */
 void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8],
@@ -45,7 +119,10 @@ void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8]
 /** TRAILER_ERR_BAD_MEASUREMENT, TRAILER_ERR_BAD_REFERENCE or TRAILER_OK for one step's inputs. */
 trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8]);
+    const trailer_real_t qddot_des[8], trailer_error_detail_t *detail);
+
+/** Cap an adaptive gain at TRAILER_GAIN_MAX (NaN and +Inf count as beyond it). */
+trailer_real_t trailer_cap_gain(trailer_real_t gain);
 
 /**
  * The controlled coordinates (the two wheels) of e = q_des - q,

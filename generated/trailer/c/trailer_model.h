@@ -39,7 +39,9 @@ extern "C" {
  *     torques tau_right, tau_left
  * @param[out] qddot [8] row-major (TRAILER_FORWARD_DYNAMICS_QDDOT_SIZE)
  * @return TRAILER_OK on success; on error no output is written:
- *         TRAILER_ERR_NONFINITE_INPUT if an input is NaN or infinite,
+ *         TRAILER_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[4], q[5], q[6], q[7], qdot[0], qdot[1],
+ *         qdot[2], qdot[3], qdot[6], qdot[7]),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_left > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_right > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_left > 0),
@@ -150,7 +152,8 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *     wheel torques tau_right, tau_left
  * @param[out] wheel_accels [2] row-major (TRAILER_MINIMAL_FORWARD_DYNAMICS_WHEEL_ACCELS_SIZE)
  * @return TRAILER_OK on success; on error no output is written:
- *         TRAILER_ERR_NONFINITE_INPUT if an input is NaN or infinite,
+ *         TRAILER_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[4], q[5], q[6], q[7]),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_left > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_right > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (radius_left > 0),

@@ -9,37 +9,45 @@
 #ifndef TRAILER_TDROC_H
 #define TRAILER_TDROC_H
 
+#include "trailer_controller.h"
 #include "trailer_types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Configuration of TDROC; validated by trailer_tdroc_init and by every step. */
+/* Configuration of TDROC; validated by trailer_tdroc_init and by every step, against
+   the bounds of trailer_controller.h. A step refuses a configuration that differs from the one
+   given to _init (TRAILER_ERR_CONFIG_CHANGED): call _init to change it. */
 typedef struct {
     trailer_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not
                                generated) */
-    trailer_real_t k1[8];       /* diagonal of K1 (18); the minimal form uses k1[4], k1[5] */
-    trailer_real_t k2[8];       /* diagonal of K2 (18) */
-    trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation */
+    trailer_real_t k1[8];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[4],
+                                   k1[5] */
+    trailer_real_t k2[8];       /* diagonal of K2 (18), (0, GAIN_MAX] */
+    trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0,
+                                   GAIN_MAX] */
     trailer_real_t q_vel;
-    trailer_real_t h;           /* sample time [s] */
-    trailer_real_t tau_max;     /* torque limit [N m]; larger torques are clipped and reported */
+    trailer_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
+    trailer_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
+                                   clipped */
     int accel_estimator;    /* qddot(t-h) for (17): TRAILER_ACCEL_BACKWARD, _CENTRAL or _MATCHED */
     trailer_real_t rate_window; /* span [s] over which qdot is measured, 0..h (MATCHED): 0 for a
                                rate at the sample instant, h for encoder counts over h */
-    trailer_real_t eps;         /* boundary layer of (24)/(25) */
+    trailer_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
     int n;                  /* window of past instants, 2..TRAILER_MAX_WINDOW */
     trailer_real_t a;           /* discount, 0 < a <= 1; weights a^(i-1), normalised */
     int hold_gain;          /* 0: k-hat from (25); 1: k-hat held at held_gain */
-    trailer_real_t held_gain;   /* >= 0, used when hold_gain = 1 */
+    trailer_real_t held_gain;   /* [0, GAIN_MAX], used when hold_gain = 1 */
 } trailer_tdroc_config_t;
 
 /* Caller-owned state of TDROC; fixed size, no heap. */
 typedef struct {
     long magic;             /* TRAILER_STATE_MAGIC once initialised */
-    long steps;             /* completed steps */
+    uint32_t steps;         /* completed steps, saturating at TRAILER_STEPS_MAX (only steps >= 2
+                               matters) */
+    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
     trailer_real_t p12[8];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer_real_t p22[8];
     trailer_real_t q_prev[8];   /* q(t-h) */
@@ -51,7 +59,8 @@ typedef struct {
     int omega_count;        /* valid rows of omega */
     trailer_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
-    trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain) */
+    trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
+                                   GAIN_MAX */
     trailer_real_t s_norm;      /* ||s|| in the last step */
     trailer_real_t u_discarded; /* ||u rows 1, 2, 3, 4, 7, 8|| dropped by tau = B^T u (paper
                                    form) */
@@ -66,6 +75,14 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
     const trailer_tdroc_config_t *config);
 
 /**
+ * Back to the state _init left (same configuration): history, step count, estimates and
+ * the last outputs cleared; P, ||Mhat^-1|| and the configuration fingerprint kept.
+ * @return TRAILER_OK, TRAILER_ERR_NULL_POINTER or TRAILER_ERR_NOT_INITIALISED (state then
+ *     untouched).
+ */
+trailer_status_t trailer_tdroc_reset(trailer_tdroc_state_t *state);
+
+/**
  * One control step at time t: measured q, qdot (8 each), reference q_des, qdot_des,
  * qddot_des (8 each, kinematically consistent); writes tau[2] = (tau_right, tau_left).
  * @return TRAILER_OK, TRAILER_WARN_SATURATED (tau clipped, step done), or a TRAILER_ERR_* code;
@@ -76,8 +93,22 @@ trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2]);
 
+/**
+ * trailer_tdroc_step, and what it returned with the field and entry it is about in *detail
+ * (when detail is not NULL; written on every call, success included). Only *detail is
+ * written on error: state and tau are not.
+ */
+trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail);
+
 /** Check a configuration without touching any state. */
 trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config);
+
+/** trailer_tdroc_check_config, with the bad field and entry in *detail (when not NULL). */
+trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t *config,
+    trailer_error_detail_t *detail);
 
 #ifdef __cplusplus
 }

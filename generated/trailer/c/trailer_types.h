@@ -88,7 +88,9 @@ typedef enum {
     TRAILER_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     TRAILER_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                         rate_window is outside [0, h] */
-    TRAILER_ERR_BAD_HELD_GAIN = -18 /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
+    TRAILER_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
+    TRAILER_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init
+                                        (fingerprint) */
 } trailer_status_t;
 
 /* the eight coordinates of (14), tau = B^T u: not generated for this robot
@@ -102,6 +104,7 @@ typedef enum {
 #define TRAILER_MAX_WINDOW 8 /* largest TDROC window n (history size) */
 #define TRAILER_NQ 8 /* generalised coordinates */
 #define TRAILER_STATE_MAGIC 0x545241 /* marks an initialised controller state */
+#define TRAILER_STEPS_MAX 4294967295u /* the step counter saturates here (uint32_t) */
 
 /* trailer_params_t: lumped robot parameters */
 typedef struct {

@@ -140,7 +140,7 @@ static void random_params(wmr_params_t *p)
         (c)->q_pos = (wmr_real_t)unif(0.05, 10.0);                                \
         (c)->q_vel = (wmr_real_t)unif(0.05, 10.0);                                \
         (c)->h = (wmr_real_t)unif(0.001, 0.2);                                    \
-        (c)->tau_max = (wmr_real_t)(rint_below(10) ? unif(1.0, 500.0) : 1.0e30); \
+        (c)->tau_max = (wmr_real_t)(rint_below(10) ? unif(1.0, 500.0) : 1.0e6);  \
     } while (0)
 
 /* Break one shared field; returns 1 (the config is now invalid). */

@@ -48,7 +48,7 @@ class Case:
     """One bad input. ``row`` groups cases into one line of the table."""
 
     row: str
-    kind: str  # input | config | state | null | init-null | saturate
+    kind: str  # input | config | changed | state | null | init-null | reset | saturate
     expected: str
     applies: tuple[str, ...] = CONTROLLERS
     inputs: tuple[int, int, float] | None = None  # (which input, index, value)
@@ -176,9 +176,38 @@ def cases(max_win: int) -> list[Case]:
         ("ROC `phi` = NaN", "WMR_ERR_BAD_BOUNDS", _set("phi", math.nan), ("roc",)),
         ("ASMC `gamma` = -1", "WMR_ERR_BAD_BOUNDS", _set("gamma", -1.0), ("asmc",)),
         ("ASMC `gain0` = -1", "WMR_ERR_BAD_BOUNDS", _set("gain0", -1.0), ("asmc",)),
+        # Plausibility bounds (issue 13): accepted absurd values used to latch failure.
+        ("`h` = 1.8e306 (> `WMR_H_MAX` = 1 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1.8e306),
+         CONTROLLERS),
+        ("`h` = 2 (> `WMR_H_MAX`)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 2.0), CONTROLLERS),
+        ("`h` = 1e-7 (< `WMR_H_MIN` = 1e-6 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1e-7),
+         CONTROLLERS),
+        ("`k1[2]` = 2e6 (> `WMR_GAIN_MAX` = 1e6)", "WMR_ERR_BAD_GAINS", _set_item("k1", 2, 2e6),
+         CONTROLLERS),
+        ("Q: `q_vel` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_GAINS", _set("q_vel", 1e7),
+         CONTROLLERS),
+        ("`tau_max` = 1e7 (> `WMR_TORQUE_LIMIT_MAX` = 1e6)", "WMR_ERR_BAD_TORQUE_LIMIT",
+         _set("tau_max", 1e7), CONTROLLERS),
+        ("`eps` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_EPS", _set("eps", 1e7), SWITCHING),
+        ("TDROC `held_gain` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_HELD_GAIN",
+         _set("held_gain", 1e7), ("tdroc",)),
+        ("ROC `phi` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("phi", 1e7), ("roc",)),
+        ("ASMC `gamma` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gamma", 1e7),
+         ("asmc",)),
+        ("ASMC `gain0` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gain0", 1e7),
+         ("asmc",)),
+        ("nominal `Iw` = 1e25 (> 1000 × max(0.07, 1))", "WMR_ERR_BAD_NOMINAL",
+         _nominal(Iw=1e25), CONTROLLERS),
+        ("nominal `m` = 1e6 (> 1000 × 36)", "WMR_ERR_BAD_NOMINAL", _nominal(m=1e6), CONTROLLERS),
     ]
     for row, status, mutate, applies in config:
         out.append(Case(row, "config", status, applies, mutate=mutate, id=row))
+    for row, mutate in (
+        ("valid `k1[0]` = 4.5 after `_init`", _set_item("k1", 0, 4.5)),
+        ("valid nominal `m` = 40 after `_init`", _nominal(m=40.0)),
+        ("valid `tau_max` = 100 after `_init`", _set("tau_max", 100.0)),
+    ):
+        out.append(Case(row, "changed", "WMR_ERR_CONFIG_CHANGED", mutate=mutate, id=row))
     for row, fill in (
         ("state never initialised (zero-filled)", b"\x00"),
         ("state never initialised (filled with 0x5a)", b"\x5a"),
@@ -209,6 +238,9 @@ def cases(max_win: int) -> list[Case]:
     out.append(
         Case("`config` = NULL in `_check_config`", "init-null", "WMR_ERR_NULL_POINTER", id="check")
     )
+    out.append(Case("`_reset` after 5 steps", "reset", "WMR_OK", id="reset"))
+    out.append(Case("`state` = NULL in `_reset`", "init-null", "WMR_ERR_NULL_POINTER",
+                    null_arg=2, id="reset:state=NULL"))
     out.append(
         Case(
             f"torque beyond `tau_max` = {SATURATION_LIMIT}",

@@ -38,12 +38,18 @@ class Outcome:
     init_untouched: bool | None = None
     check_status: int | None = None
     twin_equal: bool | None = None  # None: no twin comparison for this kind
+    detail: tuple[str, int] | None = None  # (field name, index) from _step_detail
     extra: dict[str, Any] = field(default_factory=dict)
 
 
 def status_names(lib: cbuild.CLibrary) -> dict[int, str]:
     """value → name of ``wmr_status_t``, read from the C declarations."""
     return dict(lib.ffi.typeof("wmr_status_t").elements)
+
+
+def field_names(lib: cbuild.CLibrary) -> dict[int, str]:
+    """value → name of ``wmr_field_t``, read from the C declarations."""
+    return dict(lib.ffi.typeof("wmr_field_t").elements)
 
 
 def status_values(lib: cbuild.CLibrary) -> dict[str, int]:
@@ -103,13 +109,20 @@ class Controller:
             raise RuntimeError(f"{name}: init failed with {status}")
 
     def step(
-        self, inputs: Iterable[list[float]], cfg: Any = None, tau: Any = None
+        self, inputs: Iterable[list[float]], cfg: Any = None, tau: Any = None,
+        detail: Any = None,
     ) -> tuple[int, list[float]]:
+        """One step; with ``detail`` (a ``wmr_error_detail_t *``) through ``_step_detail``."""
         ffi = self.lib.ffi
         tau = ffi.new("wmr_real_t[2]") if tau is None else tau
         arrays = [ffi.new("wmr_real_t[5]", list(v)) for v in inputs]
-        fn = getattr(self.lib.lib, f"wmr_{self.name}_step")
-        status = fn(self.state, self.cfg if cfg is None else cfg, *arrays, tau)
+        config = self.cfg if cfg is None else cfg
+        if detail is None:
+            fn = getattr(self.lib.lib, f"wmr_{self.name}_step")
+            status = fn(self.state, config, *arrays, tau)
+        else:
+            fn = getattr(self.lib.lib, f"wmr_{self.name}_step_detail")
+            status = fn(self.state, config, *arrays, tau, detail)
         return int(status), [float(tau[0]), float(tau[1])]
 
     def raw(self) -> bytes:
@@ -141,7 +154,17 @@ def _pattern_state(lib: cbuild.CLibrary, name: str, byte: bytes) -> Any:
 def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> Outcome:
     """Run one case on one controller and formulation; see the module docstring."""
     ffi, clib = lib.ffi, lib.lib
-    step_fn = getattr(clib, f"wmr_{name}_step")
+    step_fn = getattr(clib, f"wmr_{name}_step_detail")
+    reset_fn = getattr(clib, f"wmr_{name}_reset")
+    fields = field_names(lib)
+    detail = ffi.new("wmr_error_detail_t *", {"status": 99, "field": 99, "index": 99})
+
+    def detail_of(status: int) -> tuple[str, int] | None:
+        """The detail written, if it agrees with the status returned (else None)."""
+        if int(detail.status) != status:
+            return None
+        return fields.get(int(detail.field), "?"), int(detail.index)
+
     init_fn = getattr(clib, f"wmr_{name}_init")
     check_fn = getattr(clib, f"wmr_{name}_check_config")
     cfg = base_config(lib, name, formulation)
@@ -174,12 +197,25 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
         twin.step(inputs)
     good = seq[WARMUP]
 
+    if case.kind == "reset":
+        fresh = Controller(lib, name, cfg)
+        status = int(reset_fn(bad.state))
+        return outcome(
+            status,
+            state_unchanged=False,
+            tau_unchanged=None,
+            twin_equal=_twin_equal(bad, fresh, good),
+            extra={"reset_equals_init": bad.fields() == fresh.fields()},
+        )
+
     if case.kind == "init-null":
         before = bad.raw()
         if case.null_arg == 0:
             status = int(init_fn(ffi.NULL, cfg))
         elif case.null_arg == 1:
             status = int(init_fn(bad.state, ffi.NULL))
+        elif case.null_arg == 2:
+            status = int(reset_fn(ffi.NULL))
         else:
             status = int(check_fn(ffi.NULL))
         return outcome(
@@ -196,9 +232,10 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
             ffi.memmove(bad.state, case.fill * ffi.sizeof(bad.state[0]), ffi.sizeof(bad.state[0]))
         before = bad.raw()
         tau = ffi.new("wmr_real_t[2]", list(SENTINEL))
-        status, tau_after = bad.step(good, tau=tau)
+        status, tau_after = bad.step(good, tau=tau, detail=detail)
         return outcome(
-            status, state_unchanged=bad.raw() == before, tau_unchanged=tau_after == list(SENTINEL)
+            status, state_unchanged=bad.raw() == before, tau_unchanged=tau_after == list(SENTINEL),
+            detail=detail_of(status),
         )
 
     step_cfg = cfg
@@ -217,6 +254,14 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
         init_status = int(init_fn(fresh, step_cfg))
         init_untouched = bytes(ffi.buffer(fresh)) == pattern
         check_status = int(check_fn(step_cfg))
+    elif case.kind == "changed":
+        assert case.mutate is not None
+        step_cfg = copy_config(lib, name, cfg)
+        case.mutate(step_cfg)
+        fresh = _pattern_state(lib, name, b"\xab")
+        init_status = int(init_fn(fresh, step_cfg))  # valid: _init takes it
+        init_untouched = init_status == 0
+        check_status = int(check_fn(step_cfg))
 
     before = bad.raw()
     tau = ffi.new("wmr_real_t[2]", list(SENTINEL))
@@ -224,12 +269,12 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
         args = [bad.state, step_cfg, *[ffi.new("wmr_real_t[5]", v) for v in step_inputs], tau]
         assert case.null_arg is not None
         args[case.null_arg] = ffi.NULL
-        status = int(step_fn(*args))
+        status = int(step_fn(*args, detail))
         tau_unchanged: bool | None = (
             None if case.null_arg == len(args) - 1 else list(tau) == list(SENTINEL)
         )
     else:
-        status, tau_after = bad.step(step_inputs, cfg=step_cfg, tau=tau)
+        status, tau_after = bad.step(step_inputs, cfg=step_cfg, tau=tau, detail=detail)
         tau_unchanged = tau_after == list(SENTINEL)
     return outcome(
         status,
@@ -239,6 +284,7 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
         init_untouched=init_untouched,
         check_status=check_status,
         twin_equal=_twin_equal(bad, twin, good),
+        detail=detail_of(status),
     )
 
 
@@ -273,10 +319,21 @@ def failures(outcomes: list[Outcome], lib: cbuild.CLibrary) -> list[str]:
             if not o.extra.get("clipped_correctly"):
                 bad.append(f"{where}: torque not clipped to the limit")
             continue
+        if c.kind == "reset":
+            if not o.extra.get("reset_equals_init") or not o.twin_equal:
+                bad.append(f"{where}: _reset is not the state _init leaves")
+            continue
+        if c.kind in ("input", "config", "changed", "state", "null") and o.detail is None:
+            bad.append(f"{where}: _step_detail did not report the status it returned")
+        if c.kind == "input" and c.inputs is not None and o.detail is not None \
+                and o.detail[1] != c.inputs[1]:
+                bad.append(f"{where}: detail index {o.detail[1]}, expected {c.inputs[1]}")
         if not o.state_unchanged:
             bad.append(f"{where}: state bytes changed")
         if o.tau_unchanged is False:
             bad.append(f"{where}: tau changed")
+        if c.kind == "changed" and (o.init_status != 0 or o.check_status != 0):
+            bad.append(f"{where}: the changed config is valid, init/check must accept it")
         if c.kind == "config":
             if o.init_status != code or o.check_status != code:
                 bad.append(f"{where}: init {o.init_status}, check_config {o.check_status}")

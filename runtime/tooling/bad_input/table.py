@@ -29,6 +29,24 @@ def _yes(flags: list[bool | None]) -> str:
     return "yes" if all(known) else f"**no** ({known.count(False)} of {len(known)})"
 
 
+def _detail(group: list[Outcome]) -> str:
+    """The ``wmr_error_detail_t`` of a row: field and index ("i": the entry made bad)."""
+    details = [o.detail for o in group]
+    if all(d is None for d in details):
+        return "n/a"
+    if any(d is None for d in details):
+        return "**missing**"
+    c = group[0].case
+    if c.kind == "input" and all(
+        o.detail is not None and o.case.inputs is not None and o.detail[1] == o.case.inputs[1]
+        for o in group
+    ):
+        names = sorted({d[0] for d in details if d is not None})
+        return ", ".join(f"`{n}`" for n in names) + ", i"
+    shown = sorted({(d[0], d[1]) for d in details if d is not None})
+    return ", ".join(f"`{n}`" + ("" if i < 0 else f" [{i}]") for n, i in shown)
+
+
 def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list[str]]) -> str:
     """docs/BAD_INPUT.md from the outcomes (and the TDE-condition rows)."""
     rows: dict[str, list[Outcome]] = {}
@@ -52,11 +70,14 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "* **init/check**: for a bad configuration, `wmr_<ctrl>_init` (on a state filled with",
         "  0xab) and `wmr_<ctrl>_check_config` return the same code and init writes nothing;",
         "* **next step = twin**: the next valid step (status, tau, every state field) equals",
-        "  that of a second controller that never saw the bad input.",
+        "  that of a second controller that never saw the bad input;",
+        "* **detail**: the `wmr_error_detail_t` that `wmr_<ctrl>_step_detail` wrote for the",
+        "  same call: the field (`wmr_field_t`, `WMR_FIELD_` omitted) and the entry (i: the one",
+        "  made bad; none: a scalar or the whole).",
         "",
         "| bad input | controllers | runs | status | state, tau untouched | init/check | "
-        "next step = twin |",
-        "|---|---|---|---|---|---|---|",
+        "next step = twin | detail |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for row, group in rows.items():
         statuses = sorted({o.status for o in group}, key=lambda s: -s)
@@ -65,6 +86,11 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         if kind == "saturate":
             untouched = "clipped to ±tau_max, step committed"
             twin = "n/a"
+        elif kind == "reset":
+            untouched = "state = a fresh `_init`'s: " + _yes(
+                [o.extra.get("reset_equals_init") for o in group]
+            )
+            twin = _yes([o.twin_equal for o in group]) + " (twin: a fresh controller)"
         else:
             flags: list[bool | None] = [o.state_unchanged for o in group]
             flags += [o.tau_unchanged for o in group]
@@ -74,11 +100,17 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
             init_check = _yes(
                 [o.init_status == o.status == o.check_status and o.init_untouched for o in group]
             )
+        elif kind == "changed":
+            init_check = "accepted (valid): " + _yes(
+                [o.init_status == 0 == o.check_status for o in group]
+            )
         else:
             init_check = "n/a"
         ctrls = _controllers_label(o.controller for o in group)
+        detail = _detail(group).replace("WMR_FIELD_", "")
         lines.append(
-            f"| {row} | {ctrls} | {len(group)} | {status} | {untouched} | {init_check} | {twin} |"
+            f"| {row} | {ctrls} | {len(group)} | {status} | {untouched} | {init_check} | {twin} "
+            f"| {detail} |"
         )
     lines += [
         "",
@@ -88,6 +120,40 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "configuration is re-validated on every step, so a configuration corrupted after",
         "`_init` is caught too. A step works on a copy of the state and commits it only on",
         "success.",
+        "",
+        "## Plausibility bounds, no latching, counters, configuration changes",
+        "",
+        "* **Bounds** (`wmr_controller.h`; `WMR_FIELD_*` says which one failed):",
+        "  h in [`WMR_H_MIN`, `WMR_H_MAX`] = [1e-6, 1] s; K1, K2 entries, q_pos, q_vel and",
+        "  eps in (0, `WMR_GAIN_MAX` = 1e6]; phi, gamma, gain0, held_gain in [0, 1e6];",
+        "  tau_max in (0, `WMR_TORQUE_LIMIT_MAX` = 1e6] N m; alpha in [0, 1); a in (0, 1];",
+        "  n in 2..`WMR_MAX_WINDOW`; rate_window in [0, h]; every nominal parameter finite",
+        "  with |p| <= `WMR_NOMINAL_FACTOR` (1000) × max(|the robot file's p|, 1), then the",
+        "  model's guards (index -1).",
+        "* **Adaptive gains capped**: ASMC's adapted gain and TDROC's k-hat never exceed",
+        "  `WMR_GAIN_MAX` (a NaN or overflowed estimate counts as beyond it). Together with",
+        "  the bounds, no state reached by accepted inputs keeps a valid step from succeeding:",
+        "  `tests/test_controller_contract.py` drives every controller (both formulations,",
+        "  double and float32) with adversarial accepted configurations and inputs, including",
+        "  the issue's two (h = 1.8e306 once for ASMC, now refused; nominal Iw = 1e25 on the",
+        "  third float32 TDROC step, now refused), then asserts that the first valid step",
+        "  succeeds (N = 1).",
+        "* **Step counter**: `uint32_t steps` saturates at `WMR_STEPS_MAX` (49.7 days at",
+        "  1 kHz); only `steps >= 2` is ever asked, so there is no undefined behaviour and no",
+        "  change of behaviour for the robot's life (tested from `WMR_STEPS_MAX - 1`, also",
+        "  under UBSan).",
+        "* **Configuration changes**: `_init` stores an FNV-1a fingerprint of every field of",
+        "  the configuration (values, not padding). A step given a valid configuration that",
+        "  differs from it returns `WMR_ERR_CONFIG_CHANGED` (-19), state untouched: P, ||Mhat^-1||",
+        "  and the initial gain were derived from the configuration at `_init`, so a change",
+        "  is adopted only by calling `_init` again (a collision, 2^-32, would go unnoticed).",
+        "* **`wmr_<ctrl>_reset(state)`** clears history, estimates, step count and the adapted",
+        "  gain (back to gain0) of an initialised state and keeps P, ||Mhat^-1|| and the",
+        "  fingerprint: every field of the state is what `_init` left.",
+        "* **Inputs a function does not read**: the step functions validate every entry of",
+        "  every input. A generated model or law function (e.g. `wmr_forward_dynamics`) checks",
+        "  exactly the entries it reads and ignores the others, NaN or not; its header lists",
+        "  them (`it does not read, and ignores: q[0], q[1]`).",
         "",
         "## The time-delay estimation condition over a parameter box",
         "",
