@@ -4,6 +4,8 @@ python -m runtime crosscheck            # generated code vs hand-written equatio
 python -m runtime reproduce [--experiment F.toml] [--robot F.toml] [--out DIR]
 python -m runtime stability [--experiment F.toml] [--robot F.toml] [--json]
 python -m runtime bench [--quick]
+python -m runtime campaign [--spec F.toml] [--robot F] [--runs N] [--scheduler ADDR]
+                           [--workers N] --out DIR
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ COMMANDS = {
     "reproduce": "runtime.reproduce_command",
     "stability": "runtime.paper.stability",
     "bench": "runtime.tooling.bench.report",
+    "campaign": "runtime.campaign.command",
 }
 
 
@@ -36,6 +39,9 @@ def main(argv: list[str] | None = None) -> int:
         add_help=False,
     )
     sub.add_parser("bench", help="benchmark the generated code", add_help=False)
+    sub.add_parser(
+        "campaign", help="closed-loop runs over the uncertainty box on Dask", add_help=False
+    )
     args, rest = parser.parse_known_args(argv)
     # Imported on demand: each command pulls in only what it needs.
     module = importlib.import_module(COMMANDS[args.command])

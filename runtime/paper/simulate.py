@@ -147,9 +147,12 @@ def run(
     float32: bool = False,
     held_gain: float | None = None,
     check: bool = True,
+    plant: dict[str, float] | None = None,
 ) -> Run:
     """Simulate one controller on one reference (``held_gain``: TDROC with k̂ held;
-    ``check=False`` skips the configuration checks, to show what they prevent)."""
+    ``check=False`` skips the configuration checks, to show what they prevent; ``plant``:
+    the simulated robot's parameters before payload when they differ from the controllers'
+    model ``robot``, as a campaign's parameter error)."""
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
     # The toolchain checks the TDE condition ||M^-1 Mhat - I|| < 1 over the uncertainty box
@@ -201,7 +204,7 @@ def run(
             failed_at = float(t)
             break
         saturated += status == 1
-        true_p = plant_params(robot, exp, float(t))
+        true_p = plant_params(robot if plant is None else plant, exp, float(t))
         cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
         rec["q"].append(true_q)
         rec["qm"].append(q_meas)
