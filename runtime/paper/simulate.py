@@ -184,6 +184,7 @@ def run(
     sl = slice(0, 5) if formulation == "paper" else slice(3, 5)
     saturated, failed_at = 0, None
     prev_gain = float(state.gain)  # ASMC: the gain before each step's adaptation
+    payload_on: bool | None = None  # the payload state the plant's parameters were set for
     keys = tuple(generated_robot.PLANT_PARAMS)
     for k in range(n):
         t = ref.t[k]
@@ -204,8 +205,10 @@ def run(
             failed_at = float(t)
             break
         saturated += status == 1
-        true_p = plant_params(robot if plant is None else plant, exp, float(t))
-        cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
+        if exp.plant.extra_on(float(t)) != payload_on:  # the payload changes at its switches
+            payload_on = exp.plant.extra_on(float(t))
+            true_p = plant_params(robot if plant is None else plant, exp, float(t))
+            cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
         rec["q"].append(true_q)
         rec["qm"].append(q_meas)
         rec["tau"].append([tau[0], tau[1]])
