@@ -128,3 +128,22 @@ def test_a_failing_run_is_recorded_with_its_error() -> None:
     assert rec["status"] == "error" and rec["index"] == 3 and not rec["stable"]
     assert "sensing.window" in rec["error"] and rec["p.sensing.velocity"] == "motor-encoder"
     assert math.isnan(rec["rms_error"])
+
+
+def test_robot_of_bodies_runs_without_a_predicted_boundary(tmp_path: Path) -> None:
+    from runtime.campaign.command import resolve_campaign
+    from runtime.campaign.prediction import predict
+    from runtime.campaign.runner import run_one
+
+    trailer = Path(__file__).resolve().parents[1] / "modeling/robots/trailer/trailer.toml"
+    default, _ = resolve_campaign(None, trailer, 1)  # its inertial parameters drawn, none at 0
+    assert "robot.J_theta_tractor" in dict(default.vary)
+    spec = tmp_path / "c.toml"
+    spec.write_text('duration = 1.5\ncontrollers = ["tdroc"]\n'
+                    '[vary."robot.J_theta_tractor"]\nspread = 0.3\n')
+    c, tgt = resolve_campaign(spec, trailer, 1)
+    assert tgt.kind == "described" and c.robot_sha256
+    rec = run_one(c, 0, tgt, base_values(c, tgt.plant))
+    assert rec["status"] == "ok", rec["error"]
+    assert 0 < rec["rms_error"] < 0.1
+    assert "no boundary is predicted" in (predict(c, tgt).unavailable or "")

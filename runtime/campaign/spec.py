@@ -296,9 +296,9 @@ def check_ranges(where: str, vary: tuple[tuple[str, Distribution], ...], exp: Ex
         label = f'vary."{name}"'
         if section == "robot":
             lo, hi = dist.bounds(robot[key])
-            if not lo > 0:
-                raise CampaignSpecError(f"{where}: '{label}' can draw {lo:g}; robot "
-                                        "parameters must stay positive")
+            if robot[key] > 0 and not lo > 0:  # a mass or inertia (a first moment may be < 0)
+                raise CampaignSpecError(f"{where}: '{label}' can draw {lo:g}; a positive "
+                                        "robot parameter must stay positive")
             continue
         if dist.choices:
             extremes: list[Value] = list(dist.choices)
@@ -415,7 +415,7 @@ def default_campaign(robot: dict[str, float], inertial: tuple[str, ...], track: 
     spread = Distribution(spread=0.3)
     box = 0.36 * track
     pos = Distribution(low=-box, high=box)
-    vary: dict[str, Distribution] = {f"robot.{k}": spread for k in inertial}
+    vary: dict[str, Distribution] = {f"robot.{k}": spread for k in inertial if robot[k] != 0}
     vary.update({f"plant.{k}": spread for k in ("viscous", "coulomb", "fixed_payload",
                                                 "extra_payload")})
     vary.update({f"plant.{k}": pos for k in ("fixed_payload_x", "fixed_payload_y",
