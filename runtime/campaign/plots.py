@@ -20,6 +20,7 @@ def stability_map(table: pa.Table, campaign: Campaign, pred: Prediction,
     """Write the map to ``path`` (PNG)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     ctrls = campaign.controllers
     fig = Figure(figsize=(5.2 * len(ctrls), 4.6), dpi=100, layout="constrained")
@@ -43,13 +44,24 @@ def stability_map(table: pa.Table, campaign: Campaign, pred: Prediction,
         if other.any():
             ax.scatter(eps[other], ys[other], s=14, c="black", marker="s",
                        label="init refused / error")
-        for k, ((bc, vel), b) in enumerate(sorted(pred.boundaries.items())):
+        vels = sorted({v for _, v in pred.boundaries})
+        notes = []
+        for (bc, vel), b in sorted(pred.boundaries.items()):
             if bc != c:
                 continue
             x = np.array([b.eps_at(y) for y in b.y])
-            ax.plot(np.where(np.isfinite(x), x, np.nan), b.y, color="tab:blue",
-                    ls=STYLES[k % len(STYLES)], lw=2,
-                    label=f"predicted ε_min ({vel})")
+            drawn = np.isfinite(x) & (x > 0)
+            if drawn.any():
+                ax.plot(np.where(drawn, x, np.nan), b.y, color="tab:blue",
+                        ls=STYLES[vels.index(vel) % len(STYLES)], lw=2,
+                        label=f"predicted ε_min ({vel})")
+            if (x == 0).any():
+                notes.append(f"{vel}: predicted stable at every ε")
+            if np.isinf(x).any():
+                notes.append(f"{vel}: predicted unstable at some {campaign.map_y} for every ε")
+        if notes:
+            ax.text(0.02, 0.02, "\n".join(notes), transform=ax.transAxes, fontsize=7,
+                    va="bottom", color="tab:blue")
         agr = per[c]["agreement"]
         title = c.upper()
         if agr is not None and agr["runs"]:
@@ -58,6 +70,7 @@ def stability_map(table: pa.Table, campaign: Campaign, pred: Prediction,
             title += ": predicted boundary not available"
         ax.set_title(title, fontsize=10)
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("ε (boundary layer)")
         ax.set_ylabel(campaign.map_y)
         ax.legend(fontsize=7, loc="best")
