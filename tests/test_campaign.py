@@ -170,6 +170,7 @@ def test_out_file_and_bad_spec_and_unreachable_scheduler(
                  str(tmp_path / "o2")]) == 2
     err = capsys.readouterr().err
     assert "--scheduler tcp://127.0.0.1:9: cannot connect" in err and err.count("\n") == 1
+    assert not (tmp_path / "o2" / store.SPEC_FILE).exists()
     assert time.perf_counter() - t0 < 30
 
 

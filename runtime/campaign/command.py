@@ -99,13 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs)
         out = writable_folder(args.out)
-        done = store.prepare(out, campaign)
+        store.check_folder(out, campaign)
     except (CampaignSpecError, OutputFolderError, store.CampaignFolderError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     from runtime.campaign.execution import CampaignExecutionError, connect, execute
 
-    todo = [i for i in range(campaign.runs) if i not in done]
     workers = args.workers or os.cpu_count() or 1
     try:
         cluster = connect(args.scheduler, workers, campaign.robot)
@@ -113,6 +112,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     try:
+        done = store.prepare(out, campaign)  # nothing is written before the cluster is up
+        todo = [i for i in range(campaign.runs) if i not in done]
         if not args.quiet:
             print(f"campaign {campaign.digest()[:12]}: {campaign.runs} runs, "
                   f"{campaign.runs - len(todo)} already in {out}, {len(todo)} to run on "

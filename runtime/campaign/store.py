@@ -46,22 +46,30 @@ def schema(campaign: Campaign) -> pa.Schema:
     return pa.schema(cols)
 
 
-def prepare(out: Path, campaign: Campaign) -> set[int]:
-    """Record the campaign in ``out`` (or check it is the one recorded there) and return
-    the indices of the runs already finished."""
+def check_folder(out: Path, campaign: Campaign) -> None:
+    """Raise ``CampaignFolderError`` if ``out`` holds a campaign of another identity (writes
+    nothing)."""
     spec = out / SPEC_FILE
-    digest = campaign.digest()
     if spec.exists():
         try:
             recorded = json.loads(spec.read_text(encoding="utf-8"))
             old = recorded["sha256"]
         except (OSError, ValueError, KeyError) as exc:
             raise CampaignFolderError(f"--out {out}: unreadable {SPEC_FILE} ({exc})") from None
+        digest = campaign.digest()
         if old != digest:
             raise CampaignFolderError(
                 f"--out {out}: holds a campaign of another spec (sha256 {old[:12]}…, this one "
                 f"{digest[:12]}…); resume with the same spec and robot or use another --out")
-    else:
+
+
+def prepare(out: Path, campaign: Campaign) -> set[int]:
+    """Record the campaign in ``out`` (or check it is the one recorded there) and return
+    the indices of the runs already finished."""
+    spec = out / SPEC_FILE
+    digest = campaign.digest()
+    check_folder(out, campaign)
+    if not spec.exists():
         atomic_write_text(spec, json.dumps({"sha256": digest, "campaign":
                                             campaign.to_payload()}, indent=2, sort_keys=True))
     (out / PARTS).mkdir(exist_ok=True)

@@ -139,7 +139,8 @@ def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: lis
         "Outcome: ok; diverged (a step failed, the plant became non-finite, or position error "
         f"> {campaign.diverged_error:g} m); init refused (the C init's status); error. Simulated "
         f"unstable: not ok, or chatter RMS(Δτ)/RMS(τ) ≥ {campaign.chatter_limit:g} in the "
-        "second half (a sampled-data limit cycle).",
+        "second half (a sampled-data limit cycle of the switching term, or encoder "
+        "quantisation amplified into the torque as strongly, which the prediction leaves out).",
         "",
         "| controller | runs | ok | diverged | init refused | error | failure rate "
         "| unstable | RMS error p50 / p90 / p99 / max [mm] | worst max error [mm] (run) "

@@ -9,8 +9,10 @@ controllers in turn). Worker counts are interleaved (1, 2, 1, 2, …) in one ses
 the machine's other load affects both alike; the rate is the runs over the time from the
 first submission to the last part written (cluster start and the workers' one-time library
 load excluded, as :func:`runtime.campaign.execution.connect` does them before). Also the
-in-process rate of one run without Dask (the per-worker ceiling), and with ``--big N`` the
-wall time of an N-run campaign on 2 workers, from the command line's start to its summary.
+in-process rate of one run without Dask (the per-worker ceiling), the CPU seconds the
+workers and this process used (runs per worker CPU second do not depend on the machine's
+other load), and with ``--big N`` the wall time of an N-run campaign on 2 workers, from the
+command line's start to its summary.
 Not part of ``make bench``: the default takes several minutes.
 """
 
@@ -42,16 +44,26 @@ def in_process_rate(runs: int) -> float:
     return runs / (time.perf_counter() - t0)
 
 
-def cluster_rate(workers: int, runs: int) -> float:
+def cluster_rate(workers: int, runs: int) -> dict[str, float]:
+    """Runs per wall second, and the CPU seconds the workers and this process (client,
+    scheduler, Parquet writing) used: on a machine shared with other work the wall rate
+    falls, runs per worker CPU second does not."""
     campaign, _ = resolve_campaign(None, None, runs)
     cluster = connect(None, workers, None)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp)
             store.prepare(out, campaign)
+            cpu0 = cluster.client.run(time.process_time)
+            main0 = time.process_time()
             t0 = time.perf_counter()
             n = execute(cluster, campaign, list(range(runs)), out, progress=False)
-            return n / (time.perf_counter() - t0)
+            wall = time.perf_counter() - t0
+            main_cpu = time.process_time() - main0
+            cpu1 = cluster.client.run(time.process_time)
+            worker_cpu = sum(cpu1[w] - cpu0[w] for w in cpu0)
+            return {"runs_per_s": n / wall, "wall_s": wall, "worker_cpu_s": worker_cpu,
+                    "runs_per_worker_cpu_s": n / worker_cpu, "main_cpu_s": main_cpu}
     finally:
         cluster.close()
 
@@ -86,10 +98,13 @@ def main(argv: list[str] | None = None) -> int:
     print(f"in process (no Dask): {result['in_process']:.1f} runs/s", flush=True)
     for _ in range(args.rounds):
         for w in (1, 2):
-            rate = cluster_rate(w, args.runs)
-            result["rates"][str(w)].append(rate)
-            print(f"{w} worker{'s' if w > 1 else ''}: {rate:.1f} runs/s", flush=True)
-    best = {w: max(v) for w, v in result["rates"].items()}
+            m = cluster_rate(w, args.runs)
+            result["rates"][str(w)].append(m)
+            print(f"{w} worker{'s' if w > 1 else ''}: {m['runs_per_s']:.1f} runs/s "
+                  f"({m['runs_per_worker_cpu_s']:.1f} runs per worker CPU second, "
+                  f"client+scheduler {m['main_cpu_s']:.1f} CPU s, load average "
+                  f"{os.getloadavg()[0]:.1f})", flush=True)
+    best = {w: max(m["runs_per_s"] for m in v) for w, v in result["rates"].items()}
     result["speedup"] = best["2"] / best["1"]
     print(f"best: 1 worker {best['1']:.1f}, 2 workers {best['2']:.1f} runs/s, "
           f"speed-up {result['speedup']:.2f}x", flush=True)
