@@ -24,6 +24,7 @@ sample: chatter ≈ 2; a stable loop's torque varies slowly: chatter ≪ 1).
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from dataclasses import dataclass, replace
@@ -81,8 +82,6 @@ def target(robot_file: str | None) -> Target:
 
 @lru_cache(maxsize=8)
 def _campaign(text: str) -> Campaign:
-    import json
-
     return from_payload(json.loads(text))
 
 

@@ -352,9 +352,10 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
         raise CampaignSpecError(f"{where}: field 'controllers' must be a list of distinct names "
                                 f"of {', '.join(CONTROLLERS)}, got {controllers!r}")
     for key, allowed in (("formulation", FORMULATIONS), ("path", PATHS)):
-        if data.get(key, getattr(c, key)) not in allowed:
+        value = data.get(key, getattr(c, key))
+        if value not in allowed:
             raise CampaignSpecError(f"{where}: field '{key}' must be one of "
-                                    f"{', '.join(allowed)}, got {data[key]!r}")
+                                    f"{', '.join(allowed)}, got {value!r}")
     exp = Experiment()
     if "experiment" in data:
         if not isinstance(data["experiment"], str) or not data["experiment"].strip():
@@ -387,8 +388,6 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
     grid = int(_number(where, "map.grid", map_data.get("grid", c.map_grid), integer=True,
                        low=2, high=100))
     check_ranges(where, vary, exp, robot)
-    exp_check = parse_experiment(experiment_text(exp), where)  # the base itself
-    del exp_check
     return Campaign(seed=seed, runs=runs, controllers=tuple(controllers),
                     formulation=data.get("formulation", c.formulation),
                     path=data.get("path", c.path), duration=duration, chunk=chunk,
