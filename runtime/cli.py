@@ -6,6 +6,7 @@
     wmr crosscheck [--robot NAME_OR_DIR]      every implementation against the hand-written
     wmr stability [--robot FILE]              sampled-data stability of each controller
     wmr faults [--experiment FILE] [--out DIR]  encoder, sample, traction, torque faults
+    wmr campaign [--spec FILE] [--runs N] [--scheduler ADDR] --out DIR  robustness campaigns
     wmr bench                                 benchmarks of the generated code
     wmr firmware                              Cortex-M4 size, stack and instruction counts
 
@@ -49,6 +50,10 @@ COMMANDS: dict[str, Command] = {
     "faults": Command(
         "runtime.paper.fault_table",
         "sensor and actuator faults in the closed loop: what each controller reports",
+    ),
+    "campaign": Command(
+        "runtime.campaign.command",
+        "thousands of closed-loop runs over the uncertainty box, on Dask",
     ),
     "bench": Command("runtime.tooling.bench.report", "benchmark the generated code"),
     "firmware": Command(

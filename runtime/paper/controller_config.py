@@ -11,6 +11,7 @@ are also importable from there.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import lru_cache
 from typing import Any
 
 from runtime import cbuild
@@ -26,6 +27,14 @@ __all__ = ["ACCEL_CODES", "FORMULATIONS", "checked_controller_config", "controll
 FORMULATIONS = {"paper": 0, "minimal": 1}
 
 
+@lru_cache(maxsize=64)
+def _roc_bounds(nominal: tuple[tuple[str, float], ...], uncertainty: float,
+                formulation: str) -> tuple[float, float]:
+    """:func:`roc_bounds` once per nominal model (it samples a box: ~0.1 s, as long as a
+    run; a campaign's ROC runs share a few nominal models)."""
+    return roc_bounds(dict(nominal), uncertainty, formulation)
+
+
 def controller_config(
     lib: cbuild.CLibrary,
     name: str,
@@ -37,7 +46,9 @@ def controller_config(
     """The C configuration of one controller for the experiment. ``held_gain`` (TDROC only)
     holds k̂ at that value instead of (25): the stability analysis' verification."""
     bounds = (
-        roc_bounds(nominal, exp.controller.uncertainty, formulation) if name == "roc" else None
+        _roc_bounds(tuple(sorted(nominal.items())), exp.controller.uncertainty, formulation)
+        if name == "roc"
+        else None
     )
     return generic_config(lib, load_robot_code(""), name, formulation, nominal, exp, bounds,
                           held_gain)

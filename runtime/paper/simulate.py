@@ -187,10 +187,13 @@ def run(
     held_gain: float | None = None,
     check: bool = True,
     faults: Sequence[Fault] = (),
+    plant: dict[str, float] | None = None,
 ) -> Run:
     """Simulate one controller on one reference (``held_gain``: TDROC with k̂ held;
     ``check=False`` skips the configuration checks, to show what they prevent; ``faults``:
-    injected as ``runtime.faults`` describes)."""
+    injected as ``runtime.faults`` describes; ``plant``: the simulated robot's parameters
+    before payload when they differ from the controllers' model ``robot``, as a campaign's
+    parameter error)."""
     lib = sim_library(float32)
     ffi, clib = lib.ffi, lib.lib
     # The toolchain checks the TDE condition ||M^-1 Mhat - I|| < 1 over the uncertainty box
@@ -228,6 +231,7 @@ def run(
     saturated, failed_at = 0, None
     stop_status: int | None = None
     prev_gain = float(state.gain)  # ASMC: the gain before each step's adaptation
+    payload_on: bool | None = None  # the payload state the plant's parameters were set for
     keys = tuple(generated_robot.PLANT_PARAMS)
     for k in range(n):
         t = ref.t[k]
@@ -260,8 +264,10 @@ def run(
                 failed_at, stop_status = float(t), int(status)
                 break
             saturated += status == 1
-        true_p = plant_params(robot, exp, float(t))
-        cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
+        if exp.plant.extra_on(float(t)) != payload_on:  # the payload changes at its switches
+            payload_on = exp.plant.extra_on(float(t))
+            true_p = plant_params(robot if plant is None else plant, exp, float(t))
+            cbuild.fill_params(pp, dict(zip(keys, true_p, strict=True)))
         rec["q"].append(true_q)
         rec["qm"].append(q_meas)
         rec["tau"].append([tau[0], tau[1]])

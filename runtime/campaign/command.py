@@ -1,0 +1,172 @@
+"""``python -m runtime campaign``: a robustness campaign on Dask, resumable, summarised.
+
+    python -m runtime campaign [--spec FILE.toml] [--robot FILE] [--runs N]
+                               [--scheduler tcp://HOST:PORT] [--workers N] --out DIR
+
+Every argument is checked before any run (one-line error, exit status 2); then the runs not
+yet in DIR run on a LocalCluster (``--workers``, default: the CPU count) or on the cluster of
+``--scheduler``, each finished task is written to DIR/parts, and DIR gets ``results.parquet``,
+``summary.md``, ``summary.json`` and ``stability_map.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from runtime.campaign import store
+from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
+from runtime.output_folder import OutputFolderError, writable_folder
+
+
+def _positive_int(option: str) -> Any:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"{option} must be a whole number, got {text!r}") from None
+        if value < 1:
+            raise argparse.ArgumentTypeError(f"{option} must be at least 1, got {value}")
+        return value
+
+    return parse
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="wmr campaign",
+        description="Closed-loop runs over the uncertainty box through the generated C, on a "
+        "local Dask cluster or an existing one; resumable; summary and stability map.")
+    p.add_argument("--spec", type=Path, default=None, metavar="FILE.toml",
+                   help="campaign file (default: the paper's setting, every parameter ±30 %%, "
+                   "payload positions random)")
+    p.add_argument("--robot", type=Path, default=None, metavar="FILE",
+                   help="robot file (default: the paper's Drishti)")
+    p.add_argument("--runs", type=_positive_int("--runs"), default=None,
+                   help="number of runs (default: the spec's runs, 1000)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a "
+                   "LocalCluster on this machine)")
+    p.add_argument("--workers", type=_positive_int("--workers"), default=None,
+                   help="LocalCluster worker processes (default: the CPU count)")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    p.add_argument("--no-plots", action="store_true", help="skip stability_map.png")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def resolve_campaign(spec: Path | None, robot: Path | None, runs: int | None) -> tuple[
+        Campaign, Any]:
+    """The checked campaign and its robot target (raises ``CampaignSpecError`` or
+    ``ValueError`` with a one-line message)."""
+    from runtime.campaign.runner import target
+
+    robot_file = str(robot.resolve()) if robot is not None else None
+    if robot is not None and not robot.is_file():
+        raise CampaignSpecError(f"--robot {robot}: robot file not found")
+    tgt = target(robot_file)
+    if spec is None:
+        campaign = default_campaign(tgt.plant, tgt.inertial, tgt.track)
+    else:
+        campaign = load_campaign(spec, tgt.plant)
+    if tgt.kind == "described":  # the experiment scaled to the robot, as reproduce --robot
+        from runtime.robot_scale import robot_scale, scaled_experiment
+        from runtime.robot_source import resolve
+
+        code = resolve(Path(robot_file or "")).code
+        exp, _ = scaled_experiment(campaign.experiment, robot_scale(code, tgt.nominal))
+        campaign = replace(campaign, experiment=exp)
+    return replace(campaign, runs=runs or campaign.runs, robot=robot_file,
+                   robot_sha256=tgt.sha256,
+                   source=str(spec) if spec else campaign.source), tgt
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    start = time.perf_counter()
+    if args.scheduler is not None and args.workers is not None:
+        print("error: --workers sizes the local cluster; with --scheduler the cluster's own "
+              "workers run the campaign", file=sys.stderr)
+        return 2
+    try:
+        campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs)
+        out = writable_folder(args.out)
+        store.check_folder(out, campaign)
+    except (CampaignSpecError, OutputFolderError, store.CampaignFolderError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    from runtime.campaign.execution import CampaignExecutionError, connect, execute
+
+    workers = args.workers or os.cpu_count() or 1
+    try:
+        cluster = connect(args.scheduler, workers, campaign.robot)
+    except CampaignExecutionError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        done = store.prepare(out, campaign)  # nothing is written before the cluster is up
+        todo = [i for i in range(campaign.runs) if i not in done]
+        if not args.quiet:
+            print(f"campaign {campaign.digest()[:12]}: {campaign.runs} runs, "
+                  f"{campaign.runs - len(todo)} already in {out}, {len(todo)} to run on "
+                  f"{cluster.where} ({cluster.workers} workers)", file=sys.stderr, flush=True)
+        t0 = time.perf_counter()
+        written = execute(cluster, campaign, todo, out, progress=not args.quiet)
+        seconds = time.perf_counter() - t0
+    finally:
+        cluster.close()
+    text = report(out, campaign, tgt, cluster.where, plots=not args.no_plots)
+    print(text)
+    rate = written / seconds if seconds > 0 else math.nan
+    print(f"wrote {out}: {written} runs in {seconds:.1f} s ({rate:.1f} runs/s), wall time "
+          f"{time.perf_counter() - start:.1f} s")
+    return 0
+
+
+def report(out: Path, campaign: Campaign, tgt: Any, where: str, plots: bool = True) -> str:
+    """results.parquet, the summary and the map from the parts in ``out``; the summary's
+    Markdown."""
+    import pyarrow.compute as pc
+
+    from runtime.campaign.prediction import predict
+    from runtime.campaign.summary import markdown, summarise
+
+    sch = store.schema(campaign)
+    table = store.read_results(out, sch)
+    table = table.filter(pc.less(table.column("index"), campaign.runs))
+    store.write_results(out, table)
+    pred = predict(campaign, tgt)
+    summary = summarise(table, campaign, pred)
+    names = []
+    if plots:
+        from runtime.campaign.plots import stability_map
+
+        stability_map(table, campaign, pred, summary, out / "stability_map.png")
+        names.append("stability_map.png")
+    text = markdown(summary, campaign, where, names)
+    store.atomic_write_text(out / "summary.md", text)
+    store.atomic_write_text(out / "summary.json",
+                            json.dumps(_json_safe(summary), indent=2, sort_keys=True))
+    return text
+
+
+def _json_safe(x: Any) -> Any:
+    if isinstance(x, float) and not math.isfinite(x):
+        return None if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_json_safe(v) for v in x]
+    return x
+
+
+if __name__ == "__main__":
+    sys.exit(main())

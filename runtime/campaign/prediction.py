@@ -1,0 +1,99 @@
+"""The stability boundary the sampled-data analysis predicts on a campaign's map.
+
+:func:`runtime.paper.stability.analyse` gives, for a controller at a setting, the largest
+stable boundary-layer gain g_max and the gain the setting gives, g = N/ε with N = 0 (TDC),
+k̂ measured in closed loop (TDROC, ASMC) or ρ (ROC). So the loop is predicted stable for
+ε > ε_min = N / g_max (no ε if it is unstable without switching: ε_min = ∞). ε_min is
+computed at ``map.grid`` points of the map's y parameter over its drawn range, for each
+controller and each sensing model the campaign draws, every other parameter at its base
+value (nominal robot, no payload, no friction: the analysis' conditions), and interpolated
+in between. Only the paper's differential drive has the analysis: for a robot file of
+bodies and wheels the boundary is reported as not available.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from runtime.campaign.runner import Target
+from runtime.campaign.spec import Campaign, with_values
+
+BIG = 1e12
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """ε_min over the y grid for one controller and sensing model."""
+
+    controller: str
+    velocity: str
+    y: tuple[float, ...]
+    eps_min: tuple[float, ...]  # inf: unstable without switching; 0: stable for every ε
+
+    def eps_at(self, y: float) -> float:
+        e = np.minimum(np.array(self.eps_min), BIG)
+        v = float(np.interp(y, self.y, e)) if len(self.y) > 1 else float(e[0])
+        return math.inf if v >= BIG else v
+
+    def predicts_stable(self, eps: float, y: float) -> bool:
+        return eps > self.eps_at(y)
+
+
+@dataclass(frozen=True)
+class Prediction:
+    boundaries: dict[tuple[str, str], Boundary]
+    unavailable: str | None = None  # why there is no prediction
+
+
+def y_grid(campaign: Campaign, base: float) -> list[float]:
+    """The points of the map's y parameter where the boundary is computed."""
+    dist = dict(campaign.vary).get(campaign.map_y)
+    if dist is None or dist.choices:
+        values = [float(c) for c in dist.choices] if dist is not None else [base]
+        return sorted(set(values))
+    lo, hi = dist.bounds(base)
+    grid = np.linspace(lo, hi, campaign.map_grid)
+    if dist.step is not None:
+        grid = np.unique(np.round(grid / dist.step) * dist.step)
+    return [float(f"{g:.12g}") for g in grid]
+
+
+def velocities(campaign: Campaign) -> list[str]:
+    dist = dict(campaign.vary).get("sensing.velocity")
+    if dist is None:
+        return [campaign.experiment.sensing.velocity]
+    return [str(c) for c in dist.choices]
+
+
+def predict(campaign: Campaign, tgt: Target) -> Prediction:
+    """ε_min on the map for every controller and sensing model of the campaign."""
+    if tgt.kind != "paper":
+        return Prediction({}, unavailable=(
+            f"robot '{tgt.name}' is described as bodies and wheels; the sampled-data analysis "
+            "is written for the paper's differential drive, so no boundary is predicted"))
+    from runtime.paper.stability import analyse
+
+    section, _, key = campaign.map_y.partition(".")
+    base_y = float(getattr(getattr(campaign.experiment, section), key))
+    ys = y_grid(campaign, base_y)
+    out: dict[tuple[str, str], Boundary] = {}
+    exp0 = replace(campaign.experiment, paths=replace(
+        campaign.experiment.paths, circle_duration=campaign.duration))
+    for velocity in velocities(campaign):
+        for ctrl in campaign.controllers:
+            eps_min = []
+            for y in ys:
+                exp = with_values(exp0, {campaign.map_y: y, "sensing.velocity": velocity})
+                a = analyse(ctrl, campaign.formulation, tgt.nominal, exp)
+                numerator = a.gain_at_setting * a.eps
+                if a.radius_without_switching >= 1.0:
+                    eps_min.append(math.inf)
+                elif numerator == 0 or math.isinf(a.max_stable_gain):
+                    eps_min.append(0.0)
+                else:
+                    eps_min.append(numerator / a.max_stable_gain)
+            out[(ctrl, velocity)] = Boundary(ctrl, velocity, tuple(ys), tuple(eps_min))
+    return Prediction(out)
