@@ -387,7 +387,7 @@ def test_unread_inputs_are_ignored_as_documented() -> None:
     assert call([0.0, 0.0, math.nan, 0.0, 0.0]) == _status(lib, "WMR_ERR_NONFINITE_INPUT")
 
 
-# clang -Weverything, minus two documented exclusions (docs/FIRMWARE.md): -Wpadded (the
+# clang -Weverything, minus two documented exclusions (docs/STATIC_CHECKS.md): -Wpadded (the
 # compiler pads the configuration structs; informational, the layout is the caller's ABI)
 # and -Wdeclaration-after-statement (a C90-compatibility warning: the code is C99).
 CLANG_EXCLUSIONS = ("-Wno-padded", "-Wno-declaration-after-statement")

@@ -3,13 +3,16 @@
  * Source: modeling/controllers.py
  * Template: codegen/backends/c/templates/controller_common.c.jinja
  */
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
 wmr_status_t wmr_fail(wmr_error_detail_t *detail, wmr_status_t status, int field, int index)
 {
-    if (detail != 0) {
+    if (detail != NULL) {
         detail->status = status;
         detail->field = field;
         detail->index = index;
@@ -212,7 +215,7 @@ int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_
     const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
     wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5])
 {
-    const int paper = formulation == WMR_FORMULATION_PAPER;
+    const bool paper = formulation == WMR_FORMULATION_PAPER;
     const int nc = paper ? 5 : 2;
     const int off = paper ? 0 : 3;
     int i;
@@ -255,6 +258,8 @@ wmr_status_t wmr_saturate(wmr_real_t tau[2], wmr_real_t tau_max)
         } else if (tau[i] < -tau_max) {
             tau[i] = -tau_max;
             status = WMR_WARN_SATURATED;
+        } else {
+            /* within the limit: unchanged (MISRA C:2012 rule 15.7) */
         }
     }
     return status;

@@ -4,6 +4,9 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "wmr_roc.h"
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
@@ -12,7 +15,7 @@ wmr_status_t wmr_roc_check_config_detail(const wmr_roc_config_t *config,
     wmr_error_detail_t *detail)
 {
     wmr_status_t status;
-    if (config == 0) {
+    if (config == NULL) {
         return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_base_config(config->formulation, config->h, config->k1, config->k2,
@@ -88,7 +91,7 @@ wmr_status_t wmr_roc_init(wmr_roc_state_t *state, const wmr_roc_config_t *config
 {
     wmr_roc_state_t fresh;
     wmr_status_t status;
-    if (state == 0 || config == 0) {
+    if (state == NULL || config == NULL) {
         return WMR_ERR_NULL_POINTER;
     }
     status = wmr_roc_check_config(config);
@@ -105,7 +108,7 @@ wmr_status_t wmr_roc_init(wmr_roc_state_t *state, const wmr_roc_config_t *config
 
 wmr_status_t wmr_roc_reset(wmr_roc_state_t *state)
 {
-    if (state == 0) {
+    if (state == NULL) {
         return WMR_ERR_NULL_POINTER;
     }
     if (state->magic != WMR_STATE_MAGIC) {
@@ -129,7 +132,7 @@ wmr_status_t wmr_roc_step_detail(wmr_roc_state_t *state, const wmr_roc_config_t 
 {
     wmr_roc_state_t next;
     wmr_status_t status = WMR_OK;
-    const int paper = config != 0 && config->formulation == WMR_FORMULATION_PAPER;
+    const bool paper = config != NULL && config->formulation == WMR_FORMULATION_PAPER;
     wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
     wmr_real_t out_tau[2];
     {
@@ -139,7 +142,7 @@ wmr_status_t wmr_roc_step_detail(wmr_roc_state_t *state, const wmr_roc_config_t 
                                WMR_FIELD_TAU};
         int k;
         for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
+            if (args[k] == NULL) {
                 return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
             }
         }

@@ -4,6 +4,9 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "wmr_tdroc.h"
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
@@ -12,7 +15,7 @@ wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
     wmr_error_detail_t *detail)
 {
     wmr_status_t status;
-    if (config == 0) {
+    if (config == NULL) {
         return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_base_config(config->formulation, config->h, config->k1, config->k2,
@@ -111,7 +114,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
 {
     wmr_tdroc_state_t fresh;
     wmr_status_t status;
-    if (state == 0 || config == 0) {
+    if (state == NULL || config == NULL) {
         return WMR_ERR_NULL_POINTER;
     }
     status = wmr_tdroc_check_config(config);
@@ -133,7 +136,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
 
 wmr_status_t wmr_tdroc_reset(wmr_tdroc_state_t *state)
 {
-    if (state == 0) {
+    if (state == NULL) {
         return WMR_ERR_NULL_POINTER;
     }
     if (state->magic != WMR_STATE_MAGIC) {
@@ -157,7 +160,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
 {
     wmr_tdroc_state_t next;
     wmr_status_t status = WMR_OK;
-    const int paper = config != 0 && config->formulation == WMR_FORMULATION_PAPER;
+    const bool paper = config != NULL && config->formulation == WMR_FORMULATION_PAPER;
     const int off = paper ? 0 : 3;  /* where the controlled coordinates start in q */
     int nc;
     int i;
@@ -170,7 +173,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
                                WMR_FIELD_TAU};
         int k;
         for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
+            if (args[k] == NULL) {
                 return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
             }
         }
@@ -198,7 +201,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const int central = config->accel_estimator == WMR_ACCEL_CENTRAL;
+        const bool central = config->accel_estimator == WMR_ACCEL_CENTRAL;
         const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
         const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
             ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
@@ -235,7 +238,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
     }
     next.gain = WMR_LIT(0.0);
-    if (config->hold_gain) {
+    if (config->hold_gain != 0) {
         next.gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (next.omega_count >= 2) {
         wmr_real_t w[WMR_MAX_WINDOW];
@@ -264,6 +267,8 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         next.gain = wmr_cap_gain(next.gain);
+    } else {
+        /* fewer than two Omega's: no estimate yet, k-hat stays 0 (MISRA C:2012 rule 15.7) */
     }
     /* The law. */
     {

@@ -4,6 +4,9 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "trailer_asmc.h"
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
@@ -12,7 +15,7 @@ trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *c
     trailer_error_detail_t *detail)
 {
     trailer_status_t status;
-    if (config == 0) {
+    if (config == NULL) {
         return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_base_config(config->formulation, config->h, config->k1, config->k2,
@@ -87,7 +90,7 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
 {
     trailer_asmc_state_t fresh;
     trailer_status_t status;
-    if (state == 0 || config == 0) {
+    if (state == NULL || config == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     status = trailer_asmc_check_config(config);
@@ -106,7 +109,7 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
 
 trailer_status_t trailer_asmc_reset(trailer_asmc_state_t *state)
 {
-    if (state == 0) {
+    if (state == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
@@ -139,7 +142,7 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
                                TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
         int k;
         for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
+            if (args[k] == NULL) {
                 return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
             }
         }

@@ -3,6 +3,9 @@
  * Source: modeling/controllers.py
  * Template: codegen/backends/c/templates/controller_common.c.jinja
  */
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
@@ -10,7 +13,7 @@
 trailer_status_t trailer_fail(trailer_error_detail_t *detail, trailer_status_t status, int field,
     int index)
 {
-    if (detail != 0) {
+    if (detail != NULL) {
         detail->status = status;
         detail->field = field;
         detail->index = index;
@@ -283,6 +286,8 @@ trailer_status_t trailer_saturate(trailer_real_t tau[2], trailer_real_t tau_max)
         } else if (tau[i] < -tau_max) {
             tau[i] = -tau_max;
             status = TRAILER_WARN_SATURATED;
+        } else {
+            /* within the limit: unchanged (MISRA C:2012 rule 15.7) */
         }
     }
     return status;

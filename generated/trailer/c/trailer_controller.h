@@ -20,11 +20,16 @@ extern "C" {
 /* Plausibility bounds of every configuration (docs/BAD_INPUT.md): a value outside them is
    rejected with the field's status code, so that no accepted value can leave the state
    where a later valid step cannot succeed. */
-#define TRAILER_H_MIN TRAILER_LIT(1.0e-6) /* smallest sample time h [s] */
-#define TRAILER_H_MAX TRAILER_LIT(1.0) /* largest sample time h [s] */
-#define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6) /* largest gain, eps, phi, gamma; cap of the adaptive gains */
-#define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6) /* largest tau_max [N m] */
-#define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3) /* |nominal p| <= this * max(|robot file's p|, 1) */
+/* smallest sample time h [s] */
+#define TRAILER_H_MIN TRAILER_LIT(1.0e-6)
+/* largest sample time h [s] */
+#define TRAILER_H_MAX TRAILER_LIT(1.0)
+/* largest gain, eps, phi, gamma; cap of the adaptive gains */
+#define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6)
+/* largest tau_max [N m] */
+#define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6)
+/* |nominal p| <= this * max(|robot file's p|, 1) */
+#define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3)
 
 /* Which input or field an error is about: trailer_error_detail_t.field. */
 typedef enum {

@@ -4,6 +4,9 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "trailer_tdc.h"
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
@@ -12,7 +15,7 @@ trailer_status_t trailer_tdc_check_config_detail(const trailer_tdc_config_t *con
     trailer_error_detail_t *detail)
 {
     trailer_status_t status;
-    if (config == 0) {
+    if (config == NULL) {
         return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_base_config(config->formulation, config->h, config->k1, config->k2,
@@ -84,7 +87,7 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
 {
     trailer_tdc_state_t fresh;
     trailer_status_t status;
-    if (state == 0 || config == 0) {
+    if (state == NULL || config == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     status = trailer_tdc_check_config(config);
@@ -102,7 +105,7 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
 
 trailer_status_t trailer_tdc_reset(trailer_tdc_state_t *state)
 {
-    if (state == 0) {
+    if (state == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
@@ -138,7 +141,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
                                TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
         int k;
         for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
+            if (args[k] == NULL) {
                 return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
             }
         }
@@ -166,7 +169,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const int central = config->accel_estimator == TRAILER_ACCEL_CENTRAL;
+        const bool central = config->accel_estimator == TRAILER_ACCEL_CENTRAL;
         const trailer_real_t span = central ? TRAILER_LIT(2.0) * config->h : config->h;
         const trailer_real_t c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
             ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);

@@ -4,6 +4,9 @@
  * Template: codegen/backends/c/templates/controller.c.jinja
  */
 #include "trailer_tdroc.h"
+#include <stdbool.h>
+#include <stddef.h>
+
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
@@ -12,7 +15,7 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
     trailer_error_detail_t *detail)
 {
     trailer_status_t status;
-    if (config == 0) {
+    if (config == NULL) {
         return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_base_config(config->formulation, config->h, config->k1, config->k2,
@@ -112,7 +115,7 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
 {
     trailer_tdroc_state_t fresh;
     trailer_status_t status;
-    if (state == 0 || config == 0) {
+    if (state == NULL || config == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     status = trailer_tdroc_check_config(config);
@@ -131,7 +134,7 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
 
 trailer_status_t trailer_tdroc_reset(trailer_tdroc_state_t *state)
 {
-    if (state == 0) {
+    if (state == NULL) {
         return TRAILER_ERR_NULL_POINTER;
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
@@ -168,7 +171,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
                                TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
         int k;
         for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
+            if (args[k] == NULL) {
                 return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
             }
         }
@@ -196,7 +199,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const int central = config->accel_estimator == TRAILER_ACCEL_CENTRAL;
+        const bool central = config->accel_estimator == TRAILER_ACCEL_CENTRAL;
         const trailer_real_t span = central ? TRAILER_LIT(2.0) * config->h : config->h;
         const trailer_real_t c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
             ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
@@ -229,7 +232,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         }
     }
     next.gain = TRAILER_LIT(0.0);
-    if (config->hold_gain) {
+    if (config->hold_gain != 0) {
         next.gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (next.omega_count >= 2) {
         trailer_real_t w[TRAILER_MAX_WINDOW];
@@ -255,6 +258,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         trailer_minimal_tdroc_gain(&next.minv_norm, om, w, &next.gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         next.gain = trailer_cap_gain(next.gain);
+    } else {
+        /* fewer than two Omega's: no estimate yet, k-hat stays 0 (MISRA C:2012 rule 15.7) */
     }
     /* The law. */
     {

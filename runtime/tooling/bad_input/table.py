@@ -168,8 +168,53 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "|---|---|---|---|---|",
         *("| " + " | ".join(r) + " |" for r in alpha_rows),
         "",
+        *SEE_ALSO,
     ]
     return "\n".join(lines)
+
+
+# What the rest of the toolchain does with bad input, beside the C contract above.
+SEE_ALSO = (
+    "## Faults in the closed loop",
+    "",
+    "Encoder miscounts and read errors, dropped and repeated samples, loss of traction and",
+    "an actuator torque limit, injected into the simulated closed loop (`wmr faults`, or",
+    "`[[fault]]` tables in an experiment file): what each controller's step returns, what",
+    "runtime monitors see, the peak error and the samples to recover, per controller and",
+    "formulation, in [`FAULTS.md`](FAULTS.md). A sensor fault is a valid measurement to the",
+    "controllers: none of them reports one, which is why the table adds the monitors.",
+    "",
+    "## Static checks",
+    "",
+    "The generated C under gcc's strict warnings, clang `-Weverything` and cppcheck's MISRA",
+    "C:2012 addon, with every exclusion and deviation justified:",
+    "[`STATIC_CHECKS.md`](STATIC_CHECKS.md).",
+    "",
+    "## Bad input on the Python side",
+    "",
+    "Each is refused with a one-line error naming the problem before any work is done",
+    "(exit status 2), and tested:",
+    "",
+    "| input | error |",
+    "|---|---|",
+    "| a robot or experiment file with an unknown, missing or out-of-range field | names the "
+    "file and the field (`robot.toml: field 'lumped.Iw' must be positive, got -0.07`) |",
+    "| `--out` naming a file, or a folder that cannot be written (`reproduce`, `faults`, "
+    "`crosscheck`, `campaign`, `firmware`) | names the option and the reason |",
+    "| `wmr model --robot FILE` without `--out` in a source checkout | refuses to write into "
+    "the shipped `generated/` |",
+    "| `[controller] h` giving more than 10^6 samples per path | names `controller.h` |",
+    "| a robot `name` with quotes, backslashes or control characters | accepted: written as "
+    "a valid C string and Python literal |",
+    "| generated code from another version of the robot file (`--robot` with "
+    "`--generated`) | says which file and what to run |",
+    "| a campaign spec with an unknown or out-of-range field, `--runs 0`, an unreachable "
+    "`--scheduler`, resuming into a folder made by another spec | names the field or the "
+    "reason |",
+    "| `make bench` without the Cortex-M4 cross-compiler | fails before `BENCHMARKS.md` is "
+    "rewritten |",
+    "",
+)
 
 
 NOMINAL_VARIANTS: tuple[tuple[str, dict[str, float]], ...] = (
