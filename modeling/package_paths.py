@@ -8,11 +8,26 @@ take ``--out`` or write to a stated default in the working directory.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from pathlib import Path
 
 PACKAGE_ROOT = Path(__file__).resolve().parent.parent  # holds modeling/, codegen/, generated/
-SHIPPED_GENERATED = PACKAGE_ROOT / "generated"
+
+
+def _generated_folder() -> Path:
+    """The folder of the ``generated`` package Python imports (installed, editable or the
+    working directory's), else the one beside these packages. Nothing is imported."""
+    try:
+        spec = importlib.util.find_spec("generated")
+    except (ImportError, ValueError):
+        spec = None
+    if spec is not None and spec.submodule_search_locations:
+        return Path(next(iter(spec.submodule_search_locations))).resolve()
+    return PACKAGE_ROOT / "generated"
+
+
+SHIPPED_GENERATED = _generated_folder()
 
 
 def source_checkout() -> bool:

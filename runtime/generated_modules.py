@@ -18,11 +18,11 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
-from modeling.package_paths import PACKAGE_ROOT, SHIPPED_GENERATED
+from modeling.package_paths import SHIPPED_GENERATED
 
-ROOT = PACKAGE_ROOT
-GENERATED = SHIPPED_GENERATED
-if str(ROOT) not in sys.path:  # a source tree used without installing it
+GENERATED = SHIPPED_GENERATED  # the generated package Python finds (see package_paths)
+ROOT = GENERATED.parent
+if str(ROOT) not in sys.path:  # so that `generated` imports from that same folder
     sys.path.insert(0, str(ROOT))
 
 # The default robot's modules, for the runtime written around the paper's robot: imported
