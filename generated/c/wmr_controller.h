@@ -20,11 +20,26 @@ extern "C" {
 /* Plausibility bounds of every configuration (docs/BAD_INPUT.md): a value outside them is
    rejected with the field's status code, so that no accepted value can leave the state
    where a later valid step cannot succeed. */
-#define WMR_H_MIN WMR_LIT(1.0e-6) /* smallest sample time h [s] */
-#define WMR_H_MAX WMR_LIT(1.0) /* largest sample time h [s] */
-#define WMR_GAIN_MAX WMR_LIT(1.0e6) /* largest gain, eps, phi, gamma; cap of the adaptive gains */
-#define WMR_TORQUE_LIMIT_MAX WMR_LIT(1.0e6) /* largest tau_max [N m] */
-#define WMR_NOMINAL_FACTOR WMR_LIT(1.0e3) /* |nominal p| <= this * max(|robot file's p|, 1) */
+/* smallest sample time h [s] */
+#define WMR_H_MIN WMR_LIT(1.0e-6)
+/* largest sample time h [s] */
+#define WMR_H_MAX WMR_LIT(1.0)
+/* largest gain, eps, phi, gamma; cap of the adaptive gains */
+#define WMR_GAIN_MAX WMR_LIT(1.0e6)
+/* largest tau_max [N m] */
+#define WMR_TORQUE_LIMIT_MAX WMR_LIT(1.0e6)
+/* |nominal p| <= this * max(|robot file's p|, 1) */
+#define WMR_NOMINAL_FACTOR WMR_LIT(1.0e3)
+
+/* The formulation, chosen at run time by config->formulation (default), or at compile time:
+   build with -DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER (or _MINIMAL) and the
+   controllers accept that one only (the other is WMR_ERR_BAD_FORMULATION, as an invalid value),
+   and the other formulation's kernels are not referenced, so the linker drops them. */
+#ifdef WMR_FORMULATION_ONLY
+#define WMR_IS_PAPER(formulation) (WMR_FORMULATION_ONLY == WMR_FORMULATION_PAPER)
+#else
+#define WMR_IS_PAPER(formulation) ((formulation) == WMR_FORMULATION_PAPER)
+#endif
 
 /* Which input or field an error is about: wmr_error_detail_t.field. */
 typedef enum {
@@ -82,10 +97,10 @@ int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
 uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
 uint32_t wmr_hash_int(uint32_t hash, int x);
 
 /** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
@@ -119,6 +134,12 @@ void wmr_controller_p(const wmr_real_t k1[5], const wmr_real_t k2[5], wmr_real_t
 wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
     wmr_error_detail_t *detail);
+
+/**
+ * The normalised weights of (25) for the `active` most recent differences: a^(i-1), then
+ * divided by their sum (0 beyond active). _init stores those of the full window (active = n).
+ */
+void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 
 /** Cap an adaptive gain at WMR_GAIN_MAX (NaN and +Inf count as beyond it). */
 wmr_real_t wmr_cap_gain(wmr_real_t gain);

@@ -20,11 +20,16 @@ extern "C" {
 /* Plausibility bounds of every configuration (docs/BAD_INPUT.md): a value outside them is
    rejected with the field's status code, so that no accepted value can leave the state
    where a later valid step cannot succeed. */
-#define TRAILER_H_MIN TRAILER_LIT(1.0e-6) /* smallest sample time h [s] */
-#define TRAILER_H_MAX TRAILER_LIT(1.0) /* largest sample time h [s] */
-#define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6) /* largest gain, eps, phi, gamma; cap of the adaptive gains */
-#define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6) /* largest tau_max [N m] */
-#define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3) /* |nominal p| <= this * max(|robot file's p|, 1) */
+/* smallest sample time h [s] */
+#define TRAILER_H_MIN TRAILER_LIT(1.0e-6)
+/* largest sample time h [s] */
+#define TRAILER_H_MAX TRAILER_LIT(1.0)
+/* largest gain, eps, phi, gamma; cap of the adaptive gains */
+#define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6)
+/* largest tau_max [N m] */
+#define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6)
+/* |nominal p| <= this * max(|robot file's p|, 1) */
+#define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3)
 
 /* Which input or field an error is about: trailer_error_detail_t.field. */
 typedef enum {
@@ -84,10 +89,10 @@ int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
 uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
 uint32_t trailer_hash_int(uint32_t hash, int x);
 
 /** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
@@ -120,6 +125,12 @@ void trailer_controller_p(const trailer_real_t k1[8], const trailer_real_t k2[8]
 trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_error_detail_t *detail);
+
+/**
+ * The normalised weights of (25) for the `active` most recent differences: a^(i-1), then
+ * divided by their sum (0 beyond active). _init stores those of the full window (active = n).
+ */
+void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAILER_MAX_WINDOW]);
 
 /** Cap an adaptive gain at TRAILER_GAIN_MAX (NaN and +Inf count as beyond it). */
 trailer_real_t trailer_cap_gain(trailer_real_t gain);
