@@ -124,6 +124,9 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
         }
     }
     s->omega_count = 0;
+    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+        s->omega_dnorm[i] = WMR_LIT(0.0);
+    }
     s->gain = WMR_LIT(0.0);
     s->s_norm = WMR_LIT(0.0);
     s->u_discarded = WMR_LIT(0.0);
@@ -193,6 +196,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     wmr_real_t H1hat[5];
     wmr_real_t gain, s_norm, u_discarded;
     wmr_real_t omega_new[5];  /* Omega(1) of this step (pushed on commit) */
+    wmr_real_t dnorm_new = WMR_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
     int omega_count;
     int pushed;
     {
@@ -268,6 +272,11 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         for (i = 0; i < 5; ++i) {
             omega_new[i] = i < nc ? H1hat[i] : WMR_LIT(0.0);
         }
+        if (paper) {
+            wmr_paper_omega_difference(omega_new, state->omega[0], &dnorm_new);
+        } else {
+            wmr_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
+        }
         if (omega_count <= WMR_MAX_WINDOW) {
             omega_count += 1;
         }
@@ -277,27 +286,19 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
         wmr_real_t w_warm[WMR_MAX_WINDOW];
-        wmr_real_t om[(WMR_MAX_WINDOW + 1) * 5];
+        wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
         const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
-        int j;
         if (active < config->n) {  /* the window is still filling */
             wmr_window_weights(active, config->a, w_warm);
             w = w_warm;
         }
-        for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
-            const wmr_real_t *row = pushed ? (i == 0 ? omega_new : state->omega[i - 1])
-                                          : state->omega[i];
-            for (j = 0; j < nc; ++j) {
-                om[i * nc + j] = row[j];
-            }
+        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
+                    : state->omega_dnorm[i];
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
-        if (paper) {
-            wmr_paper_tdroc_gain(&state->minv_norm, om, w, &gain);
-        } else {
-            wmr_minimal_tdroc_gain(&state->minv_norm, om, w, &gain);
-        }
+        wmr_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = wmr_cap_gain(gain);
     }
@@ -350,6 +351,10 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         for (j = 0; j < 5; ++j) {
             state->omega[0][j] = omega_new[j];
         }
+        for (i = WMR_MAX_WINDOW - 1; i > 0; --i) {
+            state->omega_dnorm[i] = state->omega_dnorm[i - 1];
+        }
+        state->omega_dnorm[0] = dnorm_new;
         state->omega_count = omega_count;
     }
     state->gain = gain;

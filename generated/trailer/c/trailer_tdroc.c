@@ -124,6 +124,9 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
         }
     }
     s->omega_count = 0;
+    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+        s->omega_dnorm[i] = TRAILER_LIT(0.0);
+    }
     s->gain = TRAILER_LIT(0.0);
     s->s_norm = TRAILER_LIT(0.0);
     s->u_discarded = TRAILER_LIT(0.0);
@@ -190,6 +193,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     trailer_real_t gain, s_norm, u_discarded;
     trailer_real_t minv_norm;
     trailer_real_t omega_new[8];  /* Omega(1) of this step (pushed on commit) */
+    trailer_real_t dnorm_new = TRAILER_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
     int omega_count;
     int pushed;
     {
@@ -261,6 +265,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         for (i = 0; i < 8; ++i) {
             omega_new[i] = i < nc ? H1hat[i] : TRAILER_LIT(0.0);
         }
+        trailer_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
         if (omega_count <= TRAILER_MAX_WINDOW) {
             omega_count += 1;
         }
@@ -270,24 +275,20 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
         trailer_real_t w_warm[TRAILER_MAX_WINDOW];
-        trailer_real_t om[(TRAILER_MAX_WINDOW + 1) * 8];
+        trailer_real_t dn[TRAILER_MAX_WINDOW];  /* the window's difference norms after this step */
         const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
         const trailer_real_t *w = state->weights;  /* the full window's, from _init */
-        int j;
         if (active < config->n) {  /* the window is still filling */
             trailer_window_weights(active, config->a, w_warm);
             w = w_warm;
         }
-        for (i = 0; i <= TRAILER_MAX_WINDOW; ++i) {
-            const trailer_real_t *row = pushed ? (i == 0 ? omega_new : state->omega[i - 1])
-                                          : state->omega[i];
-            for (j = 0; j < nc; ++j) {
-                om[i * nc + j] = row[j];
-            }
+        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
+                    : state->omega_dnorm[i];
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
         trailer_minimal_minv_norm(&config->nominal, q, &minv_norm);
-        trailer_minimal_tdroc_gain(&minv_norm, om, w, &gain);
+        trailer_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer_cap_gain(gain);
     }
@@ -336,6 +337,10 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         for (j = 0; j < 8; ++j) {
             state->omega[0][j] = omega_new[j];
         }
+        for (i = TRAILER_MAX_WINDOW - 1; i > 0; --i) {
+            state->omega_dnorm[i] = state->omega_dnorm[i - 1];
+        }
+        state->omega_dnorm[0] = dnorm_new;
         state->omega_count = omega_count;
     }
     state->minv_norm = minv_norm;

@@ -18,7 +18,7 @@ MODEL_FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics
 # One controller step = the kernels it evaluates (paper formulation).
 STEP_KERNELS = {
     "tdc": ("paper_tde", "paper_tdc_law"),
-    "tdroc": ("paper_tde", "paper_tdroc_gain", "paper_tdroc_law"),
+    "tdroc": ("paper_tde", "paper_omega_difference", "tdroc_weighted_gain", "paper_tdroc_law"),
     "roc": ("paper_roc_law",),
     "asmc": ("paper_asmc_law",),
 }
