@@ -239,10 +239,8 @@ wmr_real_t wmr_cap_gain(wmr_real_t gain)
 }
 
 int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
-    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
-    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
-    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5])
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], wmr_real_t e[5],
+    wmr_real_t edot[5])
 {
     const int paper = WMR_IS_PAPER(formulation);
     const int nc = paper ? 5 : 2;
@@ -252,11 +250,6 @@ int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_
     for (i = 0; i < nc; ++i) {
         e[i] = q_des[off + i] - q[off + i];
         edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = k1_all[off + i];
-        k2[i] = k2_all[off + i];
-        p12[i] = p12_all[off + i];
-        p22[i] = p22_all[off + i];
     }
     return nc;
 }

@@ -145,14 +145,14 @@ void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 wmr_real_t wmr_cap_gain(wmr_real_t gain);
 
 /**
- * The controlled coordinates (paper: all five; minimal: the two wheels) of e = q_des - q,
- * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
+ * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
+ * minimal: the actuated ones), packed from index 0. Returns their number; they start at
+ * index 3 of q in the minimal form, 0 in the paper form (the caller passes
+ * the other per-coordinate arrays from there, without copying them).
  */
 int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
-    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
-    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
-    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5]);
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], wmr_real_t e[5],
+    wmr_real_t edot[5]);
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
 void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],

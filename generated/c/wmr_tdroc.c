@@ -190,7 +190,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
-    wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
+    wmr_real_t e[5], edot[5], u[5];
     wmr_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     wmr_real_t H1hat[5];
@@ -199,17 +199,29 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     wmr_real_t dnorm_new = WMR_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
     int omega_count;
     int pushed;
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {WMR_FIELD_STATE, WMR_FIELD_CONFIG, WMR_FIELD_Q, WMR_FIELD_QDOT,
-                               WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES, WMR_FIELD_QDDOT_DES,
-                               WMR_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
-                return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    if (state == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
+    }
+    if (config == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
+    }
+    if (q == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q, -1);
+    }
+    if (qdot == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT, -1);
+    }
+    if (q_des == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == 0) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_TAU, -1);
     }
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
@@ -232,9 +244,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
-    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -306,10 +316,12 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_paper_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, H1hat, &gain,
+            wmr_paper_tdroc_law(&config->nominal, q, e, edot, qddot_des + off, config->k1 + off,
+                    config->k2 + off, state->p12 + off, state->p22 + off, H1hat, &gain,
                     &config->eps, u, s, &s_norm);
         } else {
-            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, H1hat, &gain,
+            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, qddot_des + off, config->k1 + off,
+                    config->k2 + off, state->p12 + off, state->p22 + off, H1hat, &gain,
                     &config->eps, u, s, &s_norm);
         }
     }

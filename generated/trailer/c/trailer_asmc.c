@@ -153,21 +153,34 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
 {
     trailer_status_t status = TRAILER_OK;
-    trailer_real_t e[8], edot[8], qdd[8], k1[8], k2[8], p12[8], p22[8], u[8];
+    int off;  /* where the controlled coordinates start in q */
+    trailer_real_t e[8], edot[8], u[8];
     trailer_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer_real_t gain, s_norm, u_discarded;
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {TRAILER_FIELD_STATE, TRAILER_FIELD_CONFIG, TRAILER_FIELD_Q,
-                               TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES, TRAILER_FIELD_QDOT_DES,
-                               TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
-                return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    if (state == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
+    }
+    if (config == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
+    }
+    if (q == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q, -1);
+    }
+    if (qdot == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT, -1);
+    }
+    if (q_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_TAU, -1);
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
@@ -186,17 +199,17 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     if (status != TRAILER_OK) {
         return status;
     }
+    off = 4;
     gain = state->gain;
     s_norm = state->s_norm;
-    (void)trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    (void)trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* The law. */
     {
         trailer_real_t s[8];
         const trailer_real_t adapt[2] = {config->gamma, config->h};
-        trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22,
-                &state->gain, &config->eps, adapt, u, s, &s_norm, &gain);
+        trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, qddot_des + off, config->k1
+                + off, config->k2 + off, state->p12 + off, state->p22 + off, &state->gain,
+                &config->eps, adapt, u, s, &s_norm, &gain);
     }
     gain = trailer_cap_gain(gain);  /* the adapted gain never exceeds TRAILER_GAIN_MAX */
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */

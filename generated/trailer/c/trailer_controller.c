@@ -262,11 +262,7 @@ trailer_real_t trailer_cap_gain(trailer_real_t gain)
 
 int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
-    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
-    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
-    trailer_real_t p22[8])
+    trailer_real_t e[8], trailer_real_t edot[8])
 {
     const int nc = 2;
     const int off = 4;
@@ -275,11 +271,6 @@ int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     for (i = 0; i < nc; ++i) {
         e[i] = q_des[off + i] - q[off + i];
         edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = k1_all[off + i];
-        k2[i] = k2_all[off + i];
-        p12[i] = p12_all[off + i];
-        p22[i] = p22_all[off + i];
     }
     return nc;
 }

@@ -136,16 +136,14 @@ void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAIL
 trailer_real_t trailer_cap_gain(trailer_real_t gain);
 
 /**
- * The controlled coordinates (the two wheels) of e = q_des - q,
- * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
+ * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
+ * minimal: the actuated ones), packed from index 0. Returns their number; they start at
+ * index 4 of q in the minimal form, 0 in the paper form (the caller passes
+ * the other per-coordinate arrays from there, without copying them).
  */
 int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
-    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
-    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
-    trailer_real_t p22[8]);
+    trailer_real_t e[8], trailer_real_t edot[8]);
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
 void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],

@@ -186,7 +186,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
-    trailer_real_t e[8], edot[8], qdd[8], k1[8], k2[8], p12[8], p22[8], u[8];
+    trailer_real_t e[8], edot[8], u[8];
     trailer_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer_real_t H1hat[8];
@@ -196,17 +196,29 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     trailer_real_t dnorm_new = TRAILER_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
     int omega_count;
     int pushed;
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {TRAILER_FIELD_STATE, TRAILER_FIELD_CONFIG, TRAILER_FIELD_Q,
-                               TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES, TRAILER_FIELD_QDOT_DES,
-                               TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == 0) {
-                return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    if (state == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
+    }
+    if (config == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
+    }
+    if (q == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q, -1);
+    }
+    if (qdot == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT, -1);
+    }
+    if (q_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == 0) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_TAU, -1);
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
@@ -229,9 +241,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     gain = state->gain;
     s_norm = state->s_norm;
     minv_norm = state->minv_norm;
-    nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -295,8 +305,9 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, H1hat, &gain,
-                &config->eps, u, s, &s_norm);
+        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, qddot_des + off, config->k1 + off,
+                config->k2 + off, state->p12 + off, state->p22 + off, H1hat, &gain, &config->eps, u,
+                s, &s_norm);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
