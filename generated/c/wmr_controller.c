@@ -32,6 +32,27 @@ int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max)
     return isfinite(x) && x >= WMR_LIT(0.0) && x <= max;
 }
 
+/* |x| as its bit pattern: for IEEE 754 values of one sign the order of the numbers is that of
+   their bits, and +Inf and every NaN lie above every finite value, so |x| <= bound (finite)
+   is magnitude_bits(x) <= magnitude_bits(bound), NaN and Inf included, in integer compares. */
+#ifdef WMR_FLOAT32
+typedef uint32_t wmr_bits_t;
+#define WMR_MAGNITUDE_MASK 0x7fffffffu
+#else
+typedef uint64_t wmr_bits_t;
+#define WMR_MAGNITUDE_MASK UINT64_C(0x7fffffffffffffff)
+#endif
+
+static wmr_bits_t wmr_magnitude_bits(wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        wmr_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits & WMR_MAGNITUDE_MASK;
+}
+
 /* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1
    (!(|x| <= bound) is true for NaN and for +-Inf as well: one comparison per entry). */
 static int wmr_first_unbounded(const wmr_real_t *x, int n)
@@ -208,7 +229,20 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     const wmr_real_t *const inputs[5] = {q, qdot, q_des, qdot_des, qddot_des};
     const int fields[5] = {WMR_FIELD_Q, WMR_FIELD_QDOT, WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES,
                            WMR_FIELD_QDDOT_DES};
+    const wmr_bits_t bound = wmr_magnitude_bits(WMR_LIT(1.0e6));
+    wmr_bits_t worst = 0u;
     int k;
+    int i;
+    /* One pass of integer maxima, no branch per entry; only a bad step looks for which. */
+    for (k = 0; k < 5; ++k) {
+        for (i = 0; i < 5; ++i) {
+            const wmr_bits_t m = wmr_magnitude_bits(inputs[k][i]);
+            worst = m > worst ? m : worst;
+        }
+    }
+    if (worst <= bound) {
+        return WMR_OK;
+    }
     for (k = 0; k < 5; ++k) {
         const int bad = wmr_first_unbounded(inputs[k], 5);
         if (bad >= 0) {

@@ -354,19 +354,25 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         state->H1hat[i] = H1hat[i];
     }
     if (pushed) {
+        /* Each row moves down one place and the new one enters at the top, carried element by
+           element (a shift written as a copy loop becomes a call to memmove, which is byte by
+           byte in newlib-nano). */
         int j;
-        for (i = WMR_MAX_WINDOW; i > 0; --i) {
-            for (j = 0; j < 5; ++j) {
-                state->omega[i][j] = state->omega[i - 1][j];
+        wmr_real_t carry, next;
+        for (j = 0; j < 5; ++j) {
+            carry = omega_new[j];
+            for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
+                next = state->omega[i][j];
+                state->omega[i][j] = carry;
+                carry = next;
             }
         }
-        for (j = 0; j < 5; ++j) {
-            state->omega[0][j] = omega_new[j];
+        carry = dnorm_new;
+        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+            next = state->omega_dnorm[i];
+            state->omega_dnorm[i] = carry;
+            carry = next;
         }
-        for (i = WMR_MAX_WINDOW - 1; i > 0; --i) {
-            state->omega_dnorm[i] = state->omega_dnorm[i - 1];
-        }
-        state->omega_dnorm[0] = dnorm_new;
         state->omega_count = omega_count;
     }
     state->gain = gain;

@@ -91,6 +91,7 @@ class Report:
     step_stack: dict[str, StackBound]
     own_text: dict[str, int]
     only: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> TDROC image
+    only_minimal_recorded_status: list[int] = field(default_factory=list)
     emulation: EmulationResult | None = None
     comparison: Comparison | None = None
     notes: list[str] = field(default_factory=list)
@@ -161,6 +162,12 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
             paper = report.only["PAPER"]
             elf, binary = link_emulator_image(paper.objects)
             report.only["PAPER"] = replace(paper, emulation=emulate(rec, elf, binary))
+            # The minimal formulation's own closed loop, on the minimal-only build.
+            minimal = report.only["MINIMAL"]
+            elf, binary = link_emulator_image(minimal.objects)
+            rec_min = record_closed_loop(formulation="minimal")
+            report.only["MINIMAL"] = replace(minimal, emulation=emulate(rec_min, elf, binary))
+            report.only_minimal_recorded_status = rec_min.status
     return report
 
 
@@ -304,6 +311,17 @@ def render(r: Report) -> str:
                     f"{_yes(po.status == e.status)}, torques equal: {_yes(po.tau == e.tau)}) |"
                 ]
                 if (po := (r.only["PAPER"].emulation if "PAPER" in r.only else None))
+                else []
+            ),
+            *(
+                [
+                    "| minimal formulation's closed loop on the `-DWMR_FORMULATION_ONLY="
+                    "WMR_FORMULATION_MINIMAL` build: mean / min / max | "
+                    f"{np.mean(mo.instructions):.0f} / {min(mo.instructions)} / "
+                    f"{max(mo.instructions)} (statuses = host float32 closed loop: "
+                    f"{_yes(mo.status == r.only_minimal_recorded_status)}) |"
+                ]
+                if (mo := (r.only["MINIMAL"].emulation if "MINIMAL" in r.only else None))
                 else []
             ),
             f"| instructions of `wmr_tdroc_init` | {e.init_instructions} |",
