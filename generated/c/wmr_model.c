@@ -123,9 +123,9 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan((m - m) + (I - I) + (K - K) + (I_w - I_w) + (r - r) + (b - b) + (d - d)
-            + (theta - theta) + (thetadot_r - thetadot_r) + (thetadot_l - thetadot_l)
-            + (tau_r - tau_r) + (tau_l - tau_l))) {
+    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
+            + ((((d - d) + (theta - theta)) + (thetadot_r - thetadot_r))
+            + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l))))) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_SIN(theta);
@@ -175,7 +175,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t r_2 = _t23 - _t26;
     const wmr_real_t r_3 = _t21;
     const wmr_real_t r_4 = _t25;
-    if (isnan((r_0 - r_0) + (r_1 - r_1) + (r_2 - r_2) + (r_3 - r_3) + (r_4 - r_4))) {
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4)))) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -280,9 +280,9 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan((m - m) + (I - I) + (K - K) + (I_w - I_w) + (r - r) + (b - b) + (d - d)
-            + (thetadot_r - thetadot_r) + (thetadot_l - thetadot_l) + (tau_r - tau_r)
-            + (tau_l - tau_l))) {
+    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
+            + ((((d - d) + (thetadot_r - thetadot_r)) + (thetadot_l - thetadot_l))
+            + ((tau_r - tau_r) + (tau_l - tau_l))))) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = r*r;

@@ -298,8 +298,15 @@ def _any_nonfinite(names: Sequence[str]) -> str:
     x - x is 0 for a finite x and NaN for NaN or ±Inf, and a sum of zeros and NaNs is NaN
     exactly when one term is: the same answer as one ``isfinite`` per value, without a
     compare and branch per value (and without keeping every value live across them).
+    The sum is balanced, so its chain of dependent additions is log2(n) long.
     """
-    return "isnan(" + " + ".join(f"({n} - {n})" for n in names) + ")"
+    def tree(terms: list[str]) -> str:  # a balanced sum: a short dependency chain
+        if len(terms) == 1:
+            return terms[0]
+        half = (len(terms) + 1) // 2
+        return f"({tree(terms[:half])} + {tree(terms[half:])})"
+
+    return "isnan" + tree([f"({n} - {n})" for n in names])
 
 
 def _base_context(config: CConfig, source: str, template: str) -> dict[str, object]:

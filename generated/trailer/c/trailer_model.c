@@ -32,18 +32,18 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left)
-            + (J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor)
-            + (J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left) + (radius_right - radius_right)
-            + (theta_tractor - theta_tractor) + (theta_cart - theta_cart)
-            + (thetadot_right - thetadot_right) + (thetadot_left - thetadot_left)
-            + (tau_right - tau_right) + (tau_left - tau_left))) {
+    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
+            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
+            + (radius_left - radius_left)) + ((radius_right - radius_right)
+            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
+            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
+            + ((tau_right - tau_right) + (tau_left - tau_left)))))) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_SIN(theta_tractor);
@@ -1088,8 +1088,8 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             + _t135*_t366 + _t135*_t367 + _t146*_t366 + _t146*_t367 - _t17*_t360 - _t17*_t361
             - _t21*_t360 - _t21*_t361 - _t26*_t363 + _t26*_t364 + _t28*_t363 - _t28*_t364 + _t329
             + _t351 - _t362*_t39 + _t362*_t40 + _t365*_t39 - _t365*_t40)/TRAILER_LIT(171396.0);
-    if (isnan((r_0 - r_0) + (r_1 - r_1) + (r_2 - r_2) + (r_3 - r_3) + (r_4 - r_4) + (r_5 - r_5)
-            + (r_6 - r_6) + (r_7 - r_7))) {
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
+            + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7))))) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -2369,18 +2369,18 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left)
-            + (J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor)
-            + (J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left) + (radius_right - radius_right)
-            + (theta_tractor - theta_tractor) + (theta_cart - theta_cart)
-            + (thetadot_right - thetadot_right) + (thetadot_left - thetadot_left)
-            + (tau_right - tau_right) + (tau_left - tau_left))) {
+    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
+            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
+            + (radius_left - radius_left)) + ((radius_right - radius_right)
+            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
+            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
+            + ((tau_right - tau_right) + (tau_left - tau_left)))))) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
