@@ -150,7 +150,7 @@ def c_common_context() -> dict[str, object]:
 
 def c_controller_context(info: ControllerInfo) -> dict[str, object]:
     """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot."""
-    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET}
+    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET, "fnv_prime": FNV_PRIME}
 
 
 def python_context() -> dict[str, object]:

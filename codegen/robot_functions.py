@@ -292,6 +292,22 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(20)",),
         )
     )
+    dgain, dnorms, dweights = ctl.tdroc_weighted_gain(MAX_WINDOW)
+    specs.append(
+        FunctionSpec(
+            "tdroc_weighted_gain",
+            "(25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:\n"
+            "khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the\n"
+            "active window). Each dn_i is evaluated once, by <f>_omega_difference.",
+            (
+                array("minv_norm", (sp.Symbol("minv_norm", positive=True),), "from _minv_norm"),
+                array("dn", tuple(dnorms), "dn_i, newest first"),
+                array("w", tuple(dweights), "weights"),
+            ),
+            (out("gain", [dgain]),),
+            ("(25)",),
+        )
+    )
     theta_q = array("q", model.q, f"measured q ({words(model.nq)} coordinates)")
     for f in model.formulations:
         tde, ts = ctl.tde_estimate(f, model)
@@ -327,6 +343,20 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                     array("w", tuple(w), "weights"),
                 ),
                 (out("gain", [gain]),),
+                ("(25)",),
+            )
+        )
+        dnorm, newer, older = ctl.omega_difference_norm(f, model)
+        specs.append(
+            FunctionSpec(
+                f"{f}_omega_difference",
+                f"({f} formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two\n"
+                "consecutive rows of the window.",
+                (
+                    array("newer", tuple(newer), "Omega(i)"),
+                    array("older", tuple(older), "Omega(i+1)"),
+                ),
+                (out("norm", [dnorm]),),
                 ("(25)",),
             )
         )

@@ -325,3 +325,29 @@ def tdroc_gain(
 def asmc_adaptation(gain: sp.Symbol, gamma: sp.Symbol, s_norm: sp.Symbol, h: sp.Symbol) -> sp.Expr:
     """ASMC: k̂(t + h) = k̂(t) + h γ ‖s(t)‖ (explicit Euler of dk̂/dt = γ‖s‖)."""
     return gain + h * gamma * s_norm
+
+
+def omega_difference_norm(
+    formulation: Formulation, model: RobotModel
+) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
+    """One term of (25): ‖Ω(i) − Ω(i+1)‖ for two consecutive rows of the window.
+
+    Each difference is computed once, when its newer row joins the window, and then only
+    moves down the window: a step evaluates one norm instead of ``window``. Returns (norm,
+    newer row symbols, older row symbols).
+    """
+    n = control_model(formulation, model).size
+    newer, older = _vec("Om_new", n), _vec("Om_old", n)
+    return _norm(newer - older), newer, older
+
+
+def tdroc_weighted_gain(window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
+    """(25) from the window's difference norms d_i = ‖Ω(i) − Ω(i+1)‖ (``omega_difference_norm``):
+    k̂ = ‖M̂⁻¹‖_F Σ_{i=1..window} w_i d_i — ``tdroc_gain`` with its norms given.
+
+    Returns (k̂, difference-norm symbols, weight symbols); ``minv_norm`` as in ``tdroc_gain``.
+    """
+    d = _vec("dn", window)
+    w = _vec("w", window)
+    total = sum((w[i] * d[i] for i in range(window)), sp.S.Zero)
+    return sp.Symbol("minv_norm", positive=True) * total, d, w

@@ -16,6 +16,7 @@ import pytest
 from runtime.tooling.bench.c_bench import run_c
 from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
 from runtime.tooling.bench.op_counts import casadi_op_count
+from runtime.tooling.bench.step_bench import run_steps
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +31,7 @@ def test_every_function_has_every_variant(checksums: dict[str, dict[str, float]]
     for name in MODEL_FUNCTIONS:
         expected = {"ours", "ours_float32", "casadi", "sympy", "hand"}
         if name == "forward_dynamics":  # the one with validation to measure
-            expected.add("ours_unchecked")
+            expected |= {"ours_unchecked", "hand_checked"}
         assert set(checksums[name]) == expected
     for kernels in STEP_KERNELS.values():
         for k in kernels:
@@ -44,6 +45,19 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
         for variant, value in by_variant.items():
             tol = 1e-4 if variant == "ours_float32" else 1e-9
             assert abs(value - ref) <= tol * scale, (name, variant, value, ref)
+
+
+def test_full_step_benchmark_checks_before_timing() -> None:
+    """The complete ``wmr_tdroc_step`` and the hand-written step: on the recorded closed
+    loop every status is equal and the torques agree (else nothing is timed), and both
+    are timed."""
+    result = run_steps(601, 1)
+    check = result["check"]
+    assert check["steps"] > 100 and check["tau_scale"] > 0.1
+    assert check["max_abs_tau_diff"] <= 1e-9 * check["tau_scale"]
+    variants = {(r["function"], r["variant"]) for r in result["rows"]}
+    assert variants == {("tdroc_step", "ours"), ("tdroc_step", "hand")}
+    assert all(len(r["ns"]) == 1 and r["ns"][0] > 0.0 for r in result["rows"])
 
 
 def test_casadi_op_counts_are_counted() -> None:

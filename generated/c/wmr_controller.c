@@ -35,36 +35,71 @@ int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max)
     return isfinite(x) && x >= WMR_LIT(0.0) && x <= max;
 }
 
-/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1. */
+/* |x| as its bit pattern: for IEEE 754 values of one sign the order of the numbers is that of
+   their bits, and +Inf and every NaN lie above every finite value, so |x| <= bound (finite)
+   is magnitude_bits(x) <= magnitude_bits(bound), NaN and Inf included, in integer compares. */
+#ifdef WMR_FLOAT32
+typedef uint32_t wmr_bits_t;
+#define WMR_MAGNITUDE_MASK 0x7fffffffu
+#else
+typedef uint64_t wmr_bits_t;
+#define WMR_MAGNITUDE_MASK UINT64_C(0x7fffffffffffffff)
+#endif
+
+static wmr_bits_t wmr_magnitude_bits(wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        wmr_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits & WMR_MAGNITUDE_MASK;
+}
+
+/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1
+   (!(|x| <= bound) is true for NaN and for +-Inf as well: one comparison per entry). */
 static int wmr_first_unbounded(const wmr_real_t *x, int n)
 {
     int i;
     for (i = 0; i < n; ++i) {
-        if (!isfinite(x[i]) || WMR_FABS(x[i]) > WMR_LIT(1.0e6)) {
+        if (!(WMR_FABS(x[i]) <= WMR_LIT(1.0e6))) {
             return i;
         }
     }
     return -1;
 }
 
-static uint32_t wmr_hash_bytes(uint32_t hash, const unsigned char *bytes, unsigned int n)
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
 {
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
+    } rep;
     uint32_t out = hash;
     unsigned int i;
-    for (i = 0u; i < n; ++i) {
-        out = (out ^ (uint32_t)bytes[i]) * 16777619u;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = wmr_fnv_word(out, rep.words[i]);
     }
     return out;
 }
 
 uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x)
 {
-    return wmr_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+    return wmr_fnv_real(hash, x);
 }
 
 uint32_t wmr_hash_int(uint32_t hash, int x)
 {
-    return wmr_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+    return wmr_fnv_word(hash, (uint32_t)x);
 }
 
 uint32_t wmr_hash_params(uint32_t hash, const wmr_params_t *p)
@@ -85,7 +120,11 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
     wmr_error_detail_t *detail)
 {
     int i;
+#ifdef WMR_FORMULATION_ONLY
+    if (formulation != WMR_FORMULATION_ONLY) {  /* the other one is not compiled in */
+#else
     if (formulation != WMR_FORMULATION_PAPER && formulation != WMR_FORMULATION_MINIMAL) {
+#endif
         return wmr_fail(detail, WMR_ERR_BAD_FORMULATION, WMR_FIELD_FORMULATION, -1);
     }
     if (!isfinite(h) || !(h >= WMR_H_MIN) || !(h <= WMR_H_MAX)) {
@@ -193,7 +232,20 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     const wmr_real_t *const inputs[5] = {q, qdot, q_des, qdot_des, qddot_des};
     const int fields[5] = {WMR_FIELD_Q, WMR_FIELD_QDOT, WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES,
                            WMR_FIELD_QDDOT_DES};
+    const wmr_bits_t bound = wmr_magnitude_bits(WMR_LIT(1.0e6));
+    wmr_bits_t worst = 0u;
     int k;
+    int i;
+    /* One pass of integer maxima, no branch per entry; only a bad step looks for which. */
+    for (k = 0; k < 5; ++k) {
+        for (i = 0; i < 5; ++i) {
+            const wmr_bits_t m = wmr_magnitude_bits(inputs[k][i]);
+            worst = m > worst ? m : worst;
+        }
+    }
+    if (worst <= bound) {
+        return WMR_OK;
+    }
     for (k = 0; k < 5; ++k) {
         const int bad = wmr_first_unbounded(inputs[k], 5);
         if (bad >= 0) {
@@ -204,29 +256,37 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     return WMR_OK;
 }
 
+void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW])
+{
+    wmr_real_t wsum = WMR_LIT(0.0), wi = WMR_LIT(1.0);
+    int i;
+    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+        w[i] = i < active ? wi : WMR_LIT(0.0);
+        wsum += w[i];
+        wi *= a;
+    }
+    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+        w[i] /= wsum;
+    }
+}
+
 wmr_real_t wmr_cap_gain(wmr_real_t gain)
 {
     return gain <= WMR_GAIN_MAX ? gain : WMR_GAIN_MAX;
 }
 
 int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
-    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
-    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
-    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5])
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], wmr_real_t e[5],
+    wmr_real_t edot[5])
 {
-    const bool paper = formulation == WMR_FORMULATION_PAPER;
+    const bool paper = WMR_IS_PAPER(formulation);
     const int nc = paper ? 5 : 2;
     const int off = paper ? 0 : 3;
     int i;
+    (void)formulation;  /* unread when the formulation is chosen at compile time */
     for (i = 0; i < nc; ++i) {
         e[i] = q_des[off + i] - q[off + i];
         edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = k1_all[off + i];
-        k2[i] = k2_all[off + i];
-        p12[i] = p12_all[off + i];
-        p22[i] = p22_all[off + i];
     }
     return nc;
 }

@@ -31,6 +31,16 @@ extern "C" {
 /* |nominal p| <= this * max(|robot file's p|, 1) */
 #define WMR_NOMINAL_FACTOR WMR_LIT(1.0e3)
 
+/* The formulation, chosen at run time by config->formulation (default), or at compile time:
+   build with -DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER (or _MINIMAL) and the
+   controllers accept that one only (the other is WMR_ERR_BAD_FORMULATION, as an invalid value),
+   and the other formulation's kernels are not referenced, so the linker drops them. */
+#ifdef WMR_FORMULATION_ONLY
+#define WMR_IS_PAPER(formulation) (WMR_FORMULATION_ONLY == WMR_FORMULATION_PAPER)
+#else
+#define WMR_IS_PAPER(formulation) ((formulation) == WMR_FORMULATION_PAPER)
+#endif
+
 /* Which input or field an error is about: wmr_error_detail_t.field. */
 typedef enum {
     WMR_FIELD_NONE = 0, /* no error */
@@ -87,10 +97,10 @@ int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
 uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
 uint32_t wmr_hash_int(uint32_t hash, int x);
 
 /** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
@@ -125,18 +135,24 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
     wmr_error_detail_t *detail);
 
+/**
+ * The normalised weights of (25) for the `active` most recent differences: a^(i-1), then
+ * divided by their sum (0 beyond active). _init stores those of the full window (active = n).
+ */
+void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
+
 /** Cap an adaptive gain at WMR_GAIN_MAX (NaN and +Inf count as beyond it). */
 wmr_real_t wmr_cap_gain(wmr_real_t gain);
 
 /**
- * The controlled coordinates (paper: all five; minimal: the two wheels) of e = q_des - q,
- * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
+ * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
+ * minimal: the actuated ones), packed from index 0. Returns their number; they start at
+ * index 3 of q in the minimal form, 0 in the paper form (the caller passes
+ * the other per-coordinate arrays from there, without copying them).
  */
 int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
-    const wmr_real_t k1_all[5], const wmr_real_t k2_all[5], const wmr_real_t p12_all[5],
-    const wmr_real_t p22_all[5], wmr_real_t e[5], wmr_real_t edot[5], wmr_real_t qdd[5],
-    wmr_real_t k1[5], wmr_real_t k2[5], wmr_real_t p12[5], wmr_real_t p22[5]);
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], wmr_real_t e[5],
+    wmr_real_t edot[5]);
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
 void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],

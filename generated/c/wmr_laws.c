@@ -20,6 +20,31 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P)
     P[2] = _t1*(k1*q2 + q1);
 }
 
+/* wmr_tdroc_weighted_gain: documented in wmr_laws.h.
+   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
+void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn, const wmr_real_t *w,
+    wmr_real_t *gain)
+{
+    const wmr_real_t minv_norm_1 = minv_norm[0];
+    const wmr_real_t dn0 = dn[0];
+    const wmr_real_t dn1 = dn[1];
+    const wmr_real_t dn2 = dn[2];
+    const wmr_real_t dn3 = dn[3];
+    const wmr_real_t dn4 = dn[4];
+    const wmr_real_t dn5 = dn[5];
+    const wmr_real_t dn6 = dn[6];
+    const wmr_real_t dn7 = dn[7];
+    const wmr_real_t w0 = w[0];
+    const wmr_real_t w1 = w[1];
+    const wmr_real_t w2 = w[2];
+    const wmr_real_t w3 = w[3];
+    const wmr_real_t w4 = w[4];
+    const wmr_real_t w5 = w[5];
+    const wmr_real_t w6 = w[6];
+    const wmr_real_t w7 = w[7];
+    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
+}
+
 /* wmr_paper_tde: documented in wmr_laws.h.
    operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt */
 void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
@@ -283,6 +308,28 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
             + w5*WMR_SQRT(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29)
             + w6*WMR_SQRT(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34)
             + w7*WMR_SQRT(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39));
+}
+
+/* wmr_paper_omega_difference: documented in wmr_laws.h.
+   operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt */
+void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm)
+{
+    const wmr_real_t Om_new0 = newer[0];
+    const wmr_real_t Om_new1 = newer[1];
+    const wmr_real_t Om_new2 = newer[2];
+    const wmr_real_t Om_new3 = newer[3];
+    const wmr_real_t Om_new4 = newer[4];
+    const wmr_real_t Om_old0 = older[0];
+    const wmr_real_t Om_old1 = older[1];
+    const wmr_real_t Om_old2 = older[2];
+    const wmr_real_t Om_old3 = older[3];
+    const wmr_real_t Om_old4 = older[4];
+    const wmr_real_t _t0 = Om_new0 - Om_old0;
+    const wmr_real_t _t1 = Om_new1 - Om_old1;
+    const wmr_real_t _t2 = Om_new2 - Om_old2;
+    const wmr_real_t _t3 = Om_new3 - Om_old3;
+    const wmr_real_t _t4 = Om_new4 - Om_old4;
+    norm[0] = WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4);
 }
 
 /* wmr_paper_tdc_law: documented in wmr_laws.h.
@@ -844,6 +891,20 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
             + w2*WMR_SQRT(_t4*_t4 + _t5*_t5) + w3*WMR_SQRT(_t6*_t6 + _t7*_t7)
             + w4*WMR_SQRT(_t8*_t8 + _t9*_t9) + w5*WMR_SQRT(_t10*_t10 + _t11*_t11)
             + w6*WMR_SQRT(_t12*_t12 + _t13*_t13) + w7*WMR_SQRT(_t14*_t14 + _t15*_t15));
+}
+
+/* wmr_minimal_omega_difference: documented in wmr_laws.h.
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt */
+void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
+    wmr_real_t *norm)
+{
+    const wmr_real_t Om_new0 = newer[0];
+    const wmr_real_t Om_new1 = newer[1];
+    const wmr_real_t Om_old0 = older[0];
+    const wmr_real_t Om_old1 = older[1];
+    const wmr_real_t _t0 = Om_new0 - Om_old0;
+    const wmr_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = WMR_SQRT(_t0*_t0 + _t1*_t1);
 }
 
 /* wmr_minimal_tdc_law: documented in wmr_laws.h.

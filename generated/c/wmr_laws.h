@@ -28,6 +28,31 @@ extern "C" {
  */
 void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
 
+#define WMR_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE 1
+#define WMR_TDROC_WEIGHTED_GAIN_DN_SIZE 8
+#define WMR_TDROC_WEIGHTED_GAIN_W_SIZE 8
+#define WMR_TDROC_WEIGHTED_GAIN_GAIN_SIZE 1
+
+/**
+ * (25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:
+ * khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the
+ * active window). Each dn_i is evaluated once, by <f>_omega_difference.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  minv_norm [1] row-major (WMR_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE): minv_norm -- from
+ *     _minv_norm
+ * @param[in]  dn [8] row-major (WMR_TDROC_WEIGHTED_GAIN_DN_SIZE): dn0, dn1, dn2, dn3, dn4, dn5,
+ *     dn6, dn7 -- dn_i, newest first
+ * @param[in]  w [8] row-major (WMR_TDROC_WEIGHTED_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7 --
+ *     weights
+ * @param[out] gain [1] row-major (WMR_TDROC_WEIGHTED_GAIN_GAIN_SIZE)
+ *
+ * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn, const wmr_real_t *w,
+    wmr_real_t *gain);
+
 #define WMR_PAPER_TDE_Q_PREV_SIZE 5
 #define WMR_PAPER_TDE_U_PREV_SIZE 5
 #define WMR_PAPER_TDE_QDOT_NOW_SIZE 5
@@ -102,6 +127,26 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  */
 void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
     wmr_real_t *gain);
+
+#define WMR_PAPER_OMEGA_DIFFERENCE_NEWER_SIZE 5
+#define WMR_PAPER_OMEGA_DIFFERENCE_OLDER_SIZE 5
+#define WMR_PAPER_OMEGA_DIFFERENCE_NORM_SIZE 1
+
+/**
+ * (paper formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two
+ * consecutive rows of the window.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  newer [5] row-major (WMR_PAPER_OMEGA_DIFFERENCE_NEWER_SIZE): Om_new0, Om_new1,
+ *     Om_new2, Om_new3, Om_new4 -- Omega(i)
+ * @param[in]  older [5] row-major (WMR_PAPER_OMEGA_DIFFERENCE_OLDER_SIZE): Om_old0, Om_old1,
+ *     Om_old2, Om_old3, Om_old4 -- Omega(i+1)
+ * @param[out] norm [1] row-major (WMR_PAPER_OMEGA_DIFFERENCE_NORM_SIZE)
+ *
+ * operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt
+ */
+void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm);
 
 #define WMR_PAPER_TDC_LAW_Q_SIZE 5
 #define WMR_PAPER_TDC_LAW_E_SIZE 5
@@ -377,6 +422,27 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  */
 void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
     const wmr_real_t *w, wmr_real_t *gain);
+
+#define WMR_MINIMAL_OMEGA_DIFFERENCE_NEWER_SIZE 2
+#define WMR_MINIMAL_OMEGA_DIFFERENCE_OLDER_SIZE 2
+#define WMR_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE 1
+
+/**
+ * (minimal formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two
+ * consecutive rows of the window.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  newer [2] row-major (WMR_MINIMAL_OMEGA_DIFFERENCE_NEWER_SIZE): Om_new0, Om_new1 --
+ *     Omega(i)
+ * @param[in]  older [2] row-major (WMR_MINIMAL_OMEGA_DIFFERENCE_OLDER_SIZE): Om_old0, Om_old1 --
+ *     Omega(i+1)
+ * @param[out] norm [1] row-major (WMR_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
+ *
+ * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+ */
+void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
+    wmr_real_t *norm);
 
 #define WMR_MINIMAL_TDC_LAW_Q_SIZE 5
 #define WMR_MINIMAL_TDC_LAW_E_SIZE 2

@@ -123,9 +123,9 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r)
-            || !isfinite(b) || !isfinite(d) || !isfinite(theta) || !isfinite(thetadot_r)
-            || !isfinite(thetadot_l) || !isfinite(tau_r) || !isfinite(tau_l)) {
+    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
+            + ((((d - d) + (theta - theta)) + (thetadot_r - thetadot_r))
+            + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_SIN(theta);
@@ -175,7 +175,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t r_2 = _t23 - _t26;
     const wmr_real_t r_3 = _t21;
     const wmr_real_t r_4 = _t25;
-    if (!isfinite(r_0) || !isfinite(r_1) || !isfinite(r_2) || !isfinite(r_3) || !isfinite(r_4)) {
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -280,9 +280,9 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (!isfinite(m) || !isfinite(I) || !isfinite(K) || !isfinite(I_w) || !isfinite(r)
-            || !isfinite(b) || !isfinite(d) || !isfinite(thetadot_r) || !isfinite(thetadot_l)
-            || !isfinite(tau_r) || !isfinite(tau_l)) {
+    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
+            + ((((d - d) + (thetadot_r - thetadot_r)) + (thetadot_l - thetadot_l))
+            + ((tau_r - tau_r) + (tau_l - tau_l)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = r*r;
@@ -311,7 +311,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     }
     const wmr_real_t r_0 = _t8*(_t10*_t6 - _t11*_t5);
     const wmr_real_t r_1 = _t8*(-_t10*_t5 + _t11*_t6);
-    if (!isfinite(r_0) || !isfinite(r_1)) {
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;

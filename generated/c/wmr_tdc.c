@@ -42,24 +42,48 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     return wmr_tdc_check_config_detail(config, 0);
 }
 
-/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
+    } rep;
+    uint32_t out = hash;
+    unsigned int i;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = wmr_fnv_word(out, rep.words[i]);
+    }
+    return out;
+}
+
+/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
+   never hashed). */
 static uint32_t wmr_tdc_fingerprint(const wmr_tdc_config_t *config)
 {
     uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
     int i;
-    fp = wmr_hash_int(fp, config->formulation);
+    fp = wmr_fnv_word(fp, (uint32_t)config->formulation);
     for (i = 0; i < 5; ++i) {
-        fp = wmr_hash_real(fp, config->k1[i]);
+        fp = wmr_fnv_real(fp, config->k1[i]);
     }
     for (i = 0; i < 5; ++i) {
-        fp = wmr_hash_real(fp, config->k2[i]);
+        fp = wmr_fnv_real(fp, config->k2[i]);
     }
-    fp = wmr_hash_real(fp, config->q_pos);
-    fp = wmr_hash_real(fp, config->q_vel);
-    fp = wmr_hash_real(fp, config->h);
-    fp = wmr_hash_real(fp, config->tau_max);
-    fp = wmr_hash_int(fp, config->accel_estimator);
-    fp = wmr_hash_real(fp, config->rate_window);
+    fp = wmr_fnv_real(fp, config->q_pos);
+    fp = wmr_fnv_real(fp, config->q_vel);
+    fp = wmr_fnv_real(fp, config->h);
+    fp = wmr_fnv_real(fp, config->tau_max);
+    fp = wmr_fnv_word(fp, (uint32_t)config->accel_estimator);
+    fp = wmr_fnv_real(fp, config->rate_window);
     return fp;
 }
 
@@ -126,44 +150,62 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
 {
-    wmr_tdc_state_t next;
     wmr_status_t status = WMR_OK;
-    const bool paper = config != NULL && config->formulation == WMR_FORMULATION_PAPER;
-    const int off = paper ? 0 : 3;  /* where the controlled coordinates start in q */
+    bool paper;
+    int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
-    wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
+    wmr_real_t e[5], edot[5], u[5];
     wmr_real_t out_tau[2];
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {WMR_FIELD_STATE, WMR_FIELD_CONFIG, WMR_FIELD_Q, WMR_FIELD_QDOT,
-                               WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES, WMR_FIELD_QDDOT_DES,
-                               WMR_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == NULL) {
-                return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    /* This step's results, in locals: the state is written only at the end, on success. */
+    wmr_real_t H1hat[5];
+    wmr_real_t gain, s_norm, u_discarded;
+    if (state == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
+    }
+    if (config == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
+    }
+    if (q == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q, -1);
+    }
+    if (qdot == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT, -1);
+    }
+    if (q_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_TAU, -1);
     }
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
-    status = wmr_tdc_check_config_detail(config, detail);
-    if (status != WMR_OK) {
-        return status;
-    }
+    /* The configuration _init validated has this fingerprint: only a different one is
+       validated again (its error first, else CONFIG_CHANGED): the same statuses as
+       validating every step, without the cost. */
     if (wmr_tdc_fingerprint(config) != state->config_fp) {
+        status = wmr_tdc_check_config_detail(config, detail);
+        if (status != WMR_OK) {
+            return status;
+        }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
-    next = *state;  /* work on a copy: the state is committed only on success */
-    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    paper = WMR_IS_PAPER(config->formulation);
+    off = paper ? 0 : 3;
+    gain = state->gain;
+    s_norm = state->s_norm;
+    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -180,54 +222,66 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
             qdn[i] = qdot[off + i];
             qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
+        for (i = nc; i < 5; ++i) {
+            H1hat[i] = WMR_LIT(0.0);
+        }
         if (paper) {
-            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, next.H1hat);
+            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         } else {
-            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, next.H1hat);
+            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
-            next.H1hat[i] = WMR_LIT(0.0);
+            H1hat[i] = WMR_LIT(0.0);
         }
     }
     /* The law. */
     {
         if (paper) {
-            wmr_paper_tdc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat, u);
+            wmr_paper_tdc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
+                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         } else {
-            wmr_minimal_tdc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat, u);
+            wmr_minimal_tdc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
+                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
     out_tau[0] = paper ? u[3] : u[0];
     out_tau[1] = paper ? u[4] : u[1];
-    next.u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
+    u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
     /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
-       then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0])) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
-    }
-    if (!isfinite(out_tau[1])) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
-    }
-    if (!isfinite(next.gain)) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
-    }
-    if (!isfinite(next.s_norm)) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
-    }
-    if (!isfinite(next.u_discarded)) {
+       then s/||s|| in the switching term is 0, so that step is not done either. One test for
+       all (x - x is NaN exactly when x is not finite), then which one, in the status order. */
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+              + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+        if (!isfinite(out_tau[0])) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
+        }
+        if (!isfinite(out_tau[1])) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
+        }
+        if (!isfinite(gain)) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
+        }
+        if (!isfinite(s_norm)) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
+        }
         return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
     status = wmr_saturate(out_tau, config->tau_max);
-    /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
-                     qdot, out_tau);
-    next.tau[0] = out_tau[0];
-    next.tau[1] = out_tau[1];
+    /* Commit. History for (17): the input actually applied, u = B tau. */
+    for (i = 0; i < 5; ++i) {
+        state->H1hat[i] = H1hat[i];
+    }
+    state->gain = gain;
+    state->s_norm = s_norm;
+    state->u_discarded = u_discarded;
+    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+                     state->u_prev2, q, qdot, out_tau);
+    state->tau[0] = out_tau[0];
+    state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
-    next.steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
-    *state = next;
+    state->steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
     return wmr_fail(detail, status, WMR_FIELD_NONE, -1);

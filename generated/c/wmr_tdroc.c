@@ -57,29 +57,53 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
     return wmr_tdroc_check_config_detail(config, 0);
 }
 
-/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
+    } rep;
+    uint32_t out = hash;
+    unsigned int i;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = wmr_fnv_word(out, rep.words[i]);
+    }
+    return out;
+}
+
+/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
+   never hashed). */
 static uint32_t wmr_tdroc_fingerprint(const wmr_tdroc_config_t *config)
 {
     uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
     int i;
-    fp = wmr_hash_int(fp, config->formulation);
+    fp = wmr_fnv_word(fp, (uint32_t)config->formulation);
     for (i = 0; i < 5; ++i) {
-        fp = wmr_hash_real(fp, config->k1[i]);
+        fp = wmr_fnv_real(fp, config->k1[i]);
     }
     for (i = 0; i < 5; ++i) {
-        fp = wmr_hash_real(fp, config->k2[i]);
+        fp = wmr_fnv_real(fp, config->k2[i]);
     }
-    fp = wmr_hash_real(fp, config->q_pos);
-    fp = wmr_hash_real(fp, config->q_vel);
-    fp = wmr_hash_real(fp, config->h);
-    fp = wmr_hash_real(fp, config->tau_max);
-    fp = wmr_hash_int(fp, config->accel_estimator);
-    fp = wmr_hash_real(fp, config->rate_window);
-    fp = wmr_hash_real(fp, config->eps);
-    fp = wmr_hash_int(fp, config->n);
-    fp = wmr_hash_real(fp, config->a);
-    fp = wmr_hash_int(fp, config->hold_gain);
-    fp = wmr_hash_real(fp, config->held_gain);
+    fp = wmr_fnv_real(fp, config->q_pos);
+    fp = wmr_fnv_real(fp, config->q_vel);
+    fp = wmr_fnv_real(fp, config->h);
+    fp = wmr_fnv_real(fp, config->tau_max);
+    fp = wmr_fnv_word(fp, (uint32_t)config->accel_estimator);
+    fp = wmr_fnv_real(fp, config->rate_window);
+    fp = wmr_fnv_real(fp, config->eps);
+    fp = wmr_fnv_word(fp, (uint32_t)config->n);
+    fp = wmr_fnv_real(fp, config->a);
+    fp = wmr_fnv_word(fp, (uint32_t)config->hold_gain);
+    fp = wmr_fnv_real(fp, config->held_gain);
     return fp;
 }
 
@@ -103,6 +127,9 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
         }
     }
     s->omega_count = 0;
+    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+        s->omega_dnorm[i] = WMR_LIT(0.0);
+    }
     s->gain = WMR_LIT(0.0);
     s->s_norm = WMR_LIT(0.0);
     s->u_discarded = WMR_LIT(0.0);
@@ -114,6 +141,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
 {
     wmr_tdroc_state_t fresh;
     wmr_status_t status;
+    bool paper;
     if (state == NULL || config == NULL) {
         return WMR_ERR_NULL_POINTER;
     }
@@ -124,11 +152,13 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     fresh.magic = WMR_STATE_MAGIC;
     fresh.config_fp = wmr_tdroc_fingerprint(config);
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
-    if (config->formulation == WMR_FORMULATION_PAPER) {
+    paper = WMR_IS_PAPER(config->formulation);
+    if (paper) {
         wmr_paper_minv_norm(&config->nominal, &fresh.minv_norm);
     } else {
         wmr_minimal_minv_norm(&config->nominal, &fresh.minv_norm);
     }
+    wmr_window_weights(config->n, config->a, fresh.weights);
     wmr_tdroc_clear(&fresh);
     *state = fresh;
     return WMR_OK;
@@ -158,44 +188,66 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
 {
-    wmr_tdroc_state_t next;
     wmr_status_t status = WMR_OK;
-    const bool paper = config != NULL && config->formulation == WMR_FORMULATION_PAPER;
-    const int off = paper ? 0 : 3;  /* where the controlled coordinates start in q */
+    bool paper;
+    int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
-    wmr_real_t e[5], edot[5], qdd[5], k1[5], k2[5], p12[5], p22[5], u[5];
+    wmr_real_t e[5], edot[5], u[5];
     wmr_real_t out_tau[2];
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {WMR_FIELD_STATE, WMR_FIELD_CONFIG, WMR_FIELD_Q, WMR_FIELD_QDOT,
-                               WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES, WMR_FIELD_QDDOT_DES,
-                               WMR_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == NULL) {
-                return wmr_fail(detail, WMR_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    /* This step's results, in locals: the state is written only at the end, on success. */
+    wmr_real_t H1hat[5];
+    wmr_real_t gain, s_norm, u_discarded;
+    wmr_real_t omega_new[5];  /* Omega(1) of this step (pushed on commit) */
+    wmr_real_t dnorm_new = WMR_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
+    int omega_count;
+    bool pushed;
+    if (state == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
+    }
+    if (config == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_CONFIG, -1);
+    }
+    if (q == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q, -1);
+    }
+    if (qdot == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT, -1);
+    }
+    if (q_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == NULL) {
+        return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_TAU, -1);
     }
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
-    status = wmr_tdroc_check_config_detail(config, detail);
-    if (status != WMR_OK) {
-        return status;
-    }
+    /* The configuration _init validated has this fingerprint: only a different one is
+       validated again (its error first, else CONFIG_CHANGED): the same statuses as
+       validating every step, without the cost. */
     if (wmr_tdroc_fingerprint(config) != state->config_fp) {
+        status = wmr_tdroc_check_config_detail(config, detail);
+        if (status != WMR_OK) {
+            return status;
+        }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
-    next = *state;  /* work on a copy: the state is committed only on success */
-    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    paper = WMR_IS_PAPER(config->formulation);
+    off = paper ? 0 : 3;
+    gain = state->gain;
+    s_norm = state->s_norm;
+    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -212,105 +264,130 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
             qdn[i] = qdot[off + i];
             qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
+        for (i = nc; i < 5; ++i) {
+            H1hat[i] = WMR_LIT(0.0);
+        }
         if (paper) {
-            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, next.H1hat);
+            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         } else {
-            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, next.H1hat);
+            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
-            next.H1hat[i] = WMR_LIT(0.0);
+            H1hat[i] = WMR_LIT(0.0);
         }
     }
-    /* (25): push Omega(1) = H1hat, then the discounted, normalised gain. */
-    if (state->steps >= 2u) {
-        int j;
-        for (i = WMR_MAX_WINDOW; i > 0; --i) {
-            for (j = 0; j < 5; ++j) {
-                next.omega[i][j] = state->omega[i - 1][j];
-            }
+    /* (25): Omega(1) = H1hat joins the window (newest first), then the discounted,
+       normalised gain over the window as it is after this step. */
+    pushed = state->steps >= 2u;
+    omega_count = state->omega_count;
+    if (pushed) {
+        for (i = 0; i < 5; ++i) {
+            omega_new[i] = i < nc ? H1hat[i] : WMR_LIT(0.0);
         }
-        for (j = 0; j < 5; ++j) {
-            next.omega[0][j] = j < nc ? next.H1hat[j] : WMR_LIT(0.0);
+        if (paper) {
+            wmr_paper_omega_difference(omega_new, state->omega[0], &dnorm_new);
+        } else {
+            wmr_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
         }
-        if (next.omega_count <= WMR_MAX_WINDOW) {
-            next.omega_count += 1;
+        if (omega_count <= WMR_MAX_WINDOW) {
+            omega_count += 1;
         }
     }
-    next.gain = WMR_LIT(0.0);
     if (config->hold_gain != 0) {
-        next.gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
-    } else if (next.omega_count >= 2) {
-        wmr_real_t w[WMR_MAX_WINDOW];
-        wmr_real_t om[(WMR_MAX_WINDOW + 1) * 5];
-        wmr_real_t wsum = WMR_LIT(0.0), wi = WMR_LIT(1.0);
-        const int active = next.omega_count - 1 < config->n ? next.omega_count - 1 : config->n;
-        int j;
-        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            w[i] = i < active ? wi : WMR_LIT(0.0);
-            wsum += w[i];
-            wi *= config->a;
+        gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
+    } else if (omega_count >= 2) {
+        wmr_real_t w_warm[WMR_MAX_WINDOW];
+        wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
+        const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
+        const wmr_real_t *w = state->weights;  /* the full window's, from _init */
+        if (active < config->n) {  /* the window is still filling */
+            wmr_window_weights(active, config->a, w_warm);
+            w = w_warm;
         }
         for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            w[i] /= wsum;
-        }
-        for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
-            for (j = 0; j < nc; ++j) {
-                om[i * nc + j] = next.omega[i][j];
-            }
+            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
+                    : state->omega_dnorm[i];
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
-        if (paper) {
-            wmr_paper_tdroc_gain(&next.minv_norm, om, w, &next.gain);
-        } else {
-            wmr_minimal_tdroc_gain(&next.minv_norm, om, w, &next.gain);
-        }
+        wmr_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
-        next.gain = wmr_cap_gain(next.gain);
+        gain = wmr_cap_gain(gain);
     } else {
-        /* fewer than two Omega's: no estimate yet, k-hat stays 0 (MISRA C:2012 rule 15.7) */
+        gain = WMR_LIT(0.0);  /* fewer than two Omega's: no estimate yet */
     }
     /* The law. */
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_paper_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
-                    &next.gain, &config->eps, u, s, &next.s_norm);
+            wmr_paper_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
+                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
+                    &config->eps, u, s, &s_norm);
         } else {
-            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
-                    &next.gain, &config->eps, u, s, &next.s_norm);
+            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
+                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
+                    &config->eps, u, s, &s_norm);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
     out_tau[0] = paper ? u[3] : u[0];
     out_tau[1] = paper ? u[4] : u[1];
-    next.u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
+    u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
     /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
-       then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0])) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
-    }
-    if (!isfinite(out_tau[1])) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
-    }
-    if (!isfinite(next.gain)) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
-    }
-    if (!isfinite(next.s_norm)) {
-        return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
-    }
-    if (!isfinite(next.u_discarded)) {
+       then s/||s|| in the switching term is 0, so that step is not done either. One test for
+       all (x - x is NaN exactly when x is not finite), then which one, in the status order. */
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+              + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+        if (!isfinite(out_tau[0])) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
+        }
+        if (!isfinite(out_tau[1])) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
+        }
+        if (!isfinite(gain)) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
+        }
+        if (!isfinite(s_norm)) {
+            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);
+        }
         return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
     status = wmr_saturate(out_tau, config->tau_max);
-    /* History for (17): the input actually applied, u = B tau. */
-    wmr_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
-                     qdot, out_tau);
-    next.tau[0] = out_tau[0];
-    next.tau[1] = out_tau[1];
+    /* Commit. History for (17): the input actually applied, u = B tau. */
+    for (i = 0; i < 5; ++i) {
+        state->H1hat[i] = H1hat[i];
+    }
+    if (pushed) {
+        /* Each row moves down one place and the new one enters at the top, carried element by
+           element (a shift written as a copy loop becomes a call to memmove, which is byte by
+           byte in newlib-nano). */
+        int j;
+        wmr_real_t carry, next;
+        for (j = 0; j < 5; ++j) {
+            carry = omega_new[j];
+            for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
+                next = state->omega[i][j];
+                state->omega[i][j] = carry;
+                carry = next;
+            }
+        }
+        carry = dnorm_new;
+        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+            next = state->omega_dnorm[i];
+            state->omega_dnorm[i] = carry;
+            carry = next;
+        }
+        state->omega_count = omega_count;
+    }
+    state->gain = gain;
+    state->s_norm = s_norm;
+    state->u_discarded = u_discarded;
+    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+                     state->u_prev2, q, qdot, out_tau);
+    state->tau[0] = out_tau[0];
+    state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
-    next.steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
-    *state = next;
+    state->steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
     return wmr_fail(detail, status, WMR_FIELD_NONE, -1);

@@ -55,6 +55,9 @@ typedef struct {
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
     wmr_real_t omega[WMR_MAX_WINDOW + 1][5]; /* Omega(1..), newest first */
     int omega_count;        /* valid rows of omega */
+    wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first */
+    wmr_real_t weights[WMR_MAX_WINDOW]; /* normalised weights of (25) for the full window (at
+                                           _init) */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

@@ -32,8 +32,6 @@ typedef float wmr_real_t;
 #define WMR_SQRT(x) sqrtf(x)
 #define WMR_POW(x, y) powf(x, y)
 #define WMR_FABS(x) fabsf(x)
-#define WMR_FMAX(x, y) fmaxf(x, y)
-#define WMR_FMIN(x, y) fminf(x, y)
 #define WMR_INF HUGE_VALF
 #else
 typedef double wmr_real_t;
@@ -54,12 +52,15 @@ typedef double wmr_real_t;
 #define WMR_SQRT(x) sqrt(x)
 #define WMR_POW(x, y) pow(x, y)
 #define WMR_FABS(x) fabs(x)
-#define WMR_FMAX(x, y) fmax(x, y)
-#define WMR_FMIN(x, y) fmin(x, y)
 #define WMR_INF HUGE_VAL
 #endif
 /* isfinite is type-generic in C99: no promotion in either build. */
 #define WMR_ISFINITE(x) isfinite(x)
+/* C99's fmax/fmin without a library call: a NaN argument is ignored (the other one is
+   returned), as fmax/fmin do; only the sign of a zero result may differ. The arguments are
+   evaluated more than once: generated code passes names of temporaries only. */
+#define WMR_FMAX(x, y) ((((x) >= (y)) || isnan(y)) ? (x) : (y))
+#define WMR_FMIN(x, y) ((((x) <= (y)) || isnan(y)) ? (x) : (y))
 
 #ifdef __cplusplus
 extern "C" {

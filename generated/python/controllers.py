@@ -129,8 +129,9 @@ class ControllerError(ValueError):
 
 
 def _fnv(hash_: int, data: bytes) -> int:
-    for byte in data:
-        hash_ = ((hash_ ^ byte) * _FNV_PRIME) & 0xFFFFFFFF
+    """FNV-1a (32 bit) over the 32-bit words of data, as the C fingerprint."""
+    for (word,) in struct.iter_unpack("=I", data):
+        hash_ = ((hash_ ^ word) * _FNV_PRIME) & 0xFFFFFFFF
     return hash_
 
 
@@ -233,8 +234,8 @@ class _Controller:
 
     @classmethod
     def fingerprint(cls, c: Config) -> int:
-        """FNV-1a (32 bit) of the configuration's values in C struct order, as the C
-        ``config_fp`` (double build: the values' native bytes)."""
+        """FNV-1a (32 bit, over 32-bit words) of the configuration's values in C struct
+        order, as the C ``config_fp`` (double build: the values' native bytes)."""
         data = b"".join(struct.pack("=d", float(c.nominal[k])) for k in PARAM_KEYS)
         for name, kind in cls.config_fields:
             value = getattr(c, name)
@@ -332,8 +333,8 @@ class _Controller:
              qddot_des: ArrayLike, config: Config | None = None) -> NDArray[np.float64]:
         """One step; mirrors ``wmr_<ctrl>_step``. Returns tau (2,)."""
         c = self.config if config is None else config
-        self.check_config(c)
-        if self.fingerprint(c) != self.config_fp:
+        if self.fingerprint(c) != self.config_fp:  # validated by the constructor otherwise
+            self.check_config(c)
             raise ControllerError("WMR_ERR_CONFIG_CHANGED",
                                   "the configuration differs from the constructor's", "CONFIG")
         qv, qdv = _vector(q, "q"), _vector(qdot, "qdot")

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_roc_law", "paper_tdc_law", "paper_tde", "paper_tdroc_gain", "paper_tdroc_law"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tde", "paper_tdroc_gain", "paper_tdroc_law", "tdroc_weighted_gain"]
 
 
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
@@ -53,6 +53,32 @@ def lyapunov_p(gains: ArrayLike) -> NDArray[np.float64]:
         _t1*(k1*q2 + q1),
     ])
     return P
+
+
+def tdroc_weighted_gain(minv_norm: ArrayLike, dn: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+    """(25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:
+    khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the
+    active window). Each dn_i is evaluated once, by <f>_omega_difference.
+
+    Paper equations: (25).
+
+    Args:
+        minv_norm: array of 1 (shape 1x1, row-major): minv_norm. from _minv_norm
+        dn: array of 8 (shape 8x1, row-major): dn0, dn1, dn2, dn3, dn4, dn5, dn6, dn7. dn_i, newest first
+        w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
+
+    Returns:
+        gain: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
+    """
+    minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
+    dn0, dn1, dn2, dn3, dn4, dn5, dn6, dn7 = _flat(dn, 8, "dn")
+    w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
+    gain = np.array([
+        minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7),
+    ])
+    return gain
 
 
 def paper_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
@@ -287,6 +313,32 @@ def paper_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> ND
         minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4) + w1*math.sqrt(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9) + w2*math.sqrt(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14) + w3*math.sqrt(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19) + w4*math.sqrt(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + w5*math.sqrt(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29) + w6*math.sqrt(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34) + w7*math.sqrt(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39)),
     ])
     return gain
+
+
+def paper_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.float64]:
+    """(paper formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two
+    consecutive rows of the window.
+
+    Paper equations: (25).
+
+    Args:
+        newer: array of 5 (shape 5x1, row-major): Om_new0, Om_new1, Om_new2, Om_new3, Om_new4. Omega(i)
+        older: array of 5 (shape 5x1, row-major): Om_old0, Om_old1, Om_old2, Om_old3, Om_old4. Omega(i+1)
+
+    Returns:
+        norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt
+    """
+    Om_new0, Om_new1, Om_new2, Om_new3, Om_new4 = _flat(newer, 5, "newer")
+    Om_old0, Om_old1, Om_old2, Om_old3, Om_old4 = _flat(older, 5, "older")
+    _t0 = Om_new0 - Om_old0
+    _t1 = Om_new1 - Om_old1
+    _t2 = Om_new2 - Om_old2
+    _t3 = Om_new3 - Om_old3
+    _t4 = Om_new4 - Om_old4
+    norm = np.array([math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)])
+    return norm
 
 
 def paper_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
@@ -812,6 +864,29 @@ def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> 
         minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1) + w1*math.sqrt(_t2*_t2 + _t3*_t3) + w2*math.sqrt(_t4*_t4 + _t5*_t5) + w3*math.sqrt(_t6*_t6 + _t7*_t7) + w4*math.sqrt(_t8*_t8 + _t9*_t9) + w5*math.sqrt(_t10*_t10 + _t11*_t11) + w6*math.sqrt(_t12*_t12 + _t13*_t13) + w7*math.sqrt(_t14*_t14 + _t15*_t15)),
     ])
     return gain
+
+
+def minimal_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.float64]:
+    """(minimal formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two
+    consecutive rows of the window.
+
+    Paper equations: (25).
+
+    Args:
+        newer: array of 2 (shape 2x1, row-major): Om_new0, Om_new1. Omega(i)
+        older: array of 2 (shape 2x1, row-major): Om_old0, Om_old1. Omega(i+1)
+
+    Returns:
+        norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+    """
+    Om_new0, Om_new1 = _flat(newer, 2, "newer")
+    Om_old0, Om_old1 = _flat(older, 2, "older")
+    _t0 = Om_new0 - Om_old0
+    _t1 = Om_new1 - Om_old1
+    norm = np.array([math.sqrt(_t0*_t0 + _t1*_t1)])
+    return norm
 
 
 def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:

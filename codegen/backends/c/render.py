@@ -148,6 +148,11 @@ def _comment_text(text: str) -> str:
     return text.replace("*/", "* /")
 
 
+# fmax and fmin are printed as static inline functions of wmr_types.h, not library calls
+# (on a Cortex-M4, fmaxf is a call into newlib and __fpclassifyf; on x86-64 a libm call).
+INLINE_MATH = ("fmax", "fmin")
+
+
 def _size_macros(spec: FunctionSpec, config: CConfig) -> list[tuple[str, int]]:
     macros: list[tuple[str, int]] = []
     for arg in (*spec.inputs, *spec.outputs):
@@ -276,15 +281,32 @@ def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
         "stores": stores,
         "status_ok": config.status_codes[0].name if spec.returns_status else "",
         "input_check": (
-            " || ".join(f"!isfinite({n})" for n, _ in loads)
+            _any_nonfinite([n for n, _ in loads])
             if spec.returns_status and spec.nonfinite_input and loads else ""
         ),
         "nonfinite_input": spec.nonfinite_input,
         "guards": guards,
         "results": results,
-        "output_check": " || ".join(f"!isfinite({n})" for n, _ in results),
+        "output_check": _any_nonfinite([n for n, _ in results]) if results else "",
         "nonfinite_output": spec.nonfinite_output,
     }
+
+
+def _any_nonfinite(names: Sequence[str]) -> str:
+    """One branch-free test that is true when any of ``names`` is NaN or infinite.
+
+    x - x is 0 for a finite x and NaN for NaN or ±Inf, and a sum of zeros and NaNs is NaN
+    exactly when one term is: the same answer as one ``isfinite`` per value, without a
+    compare and branch per value (and without keeping every value live across them).
+    The sum is balanced, so its chain of dependent additions is log2(n) long.
+    """
+    def tree(terms: list[str]) -> str:  # a balanced sum: a short dependency chain
+        if len(terms) == 1:
+            return terms[0]
+        half = (len(terms) + 1) // 2
+        return f"({tree(terms[:half])} + {tree(terms[half:])})"
+
+    return "isnan" + tree([f"({n} - {n})" for n in names]) + " != 0"  # MISRA 14.4
 
 
 def _base_context(config: CConfig, source: str, template: str) -> dict[str, object]:
@@ -306,7 +328,9 @@ def render_types(
         template,
         **_base_context(config, source, template),
         guard=_guard(config.types_header, config),
-        macros=[(m.name.upper(), m.name, ", ".join("xyz"[: m.arity])) for m in config.math_macros],
+        macros=[(m.name.upper(), m.name, ", ".join("xyz"[: m.arity]))
+                for m in config.math_macros if m.name not in INLINE_MATH],
+        inline_math=[m.name for m in config.math_macros if m.name in INLINE_MATH],
         structs=_structs(specs, config),
         width=WIDTH,
     )

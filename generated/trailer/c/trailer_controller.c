@@ -36,36 +36,71 @@ int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max)
     return isfinite(x) && x >= TRAILER_LIT(0.0) && x <= max;
 }
 
-/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1. */
+/* |x| as its bit pattern: for IEEE 754 values of one sign the order of the numbers is that of
+   their bits, and +Inf and every NaN lie above every finite value, so |x| <= bound (finite)
+   is magnitude_bits(x) <= magnitude_bits(bound), NaN and Inf included, in integer compares. */
+#ifdef TRAILER_FLOAT32
+typedef uint32_t trailer_bits_t;
+#define TRAILER_MAGNITUDE_MASK 0x7fffffffu
+#else
+typedef uint64_t trailer_bits_t;
+#define TRAILER_MAGNITUDE_MASK UINT64_C(0x7fffffffffffffff)
+#endif
+
+static trailer_bits_t trailer_magnitude_bits(trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        trailer_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits & TRAILER_MAGNITUDE_MASK;
+}
+
+/* The first entry of x that is not finite or beyond 1.0e6 in magnitude, or -1
+   (!(|x| <= bound) is true for NaN and for +-Inf as well: one comparison per entry). */
 static int trailer_first_unbounded(const trailer_real_t *x, int n)
 {
     int i;
     for (i = 0; i < n; ++i) {
-        if (!isfinite(x[i]) || TRAILER_FABS(x[i]) > TRAILER_LIT(1.0e6)) {
+        if (!(TRAILER_FABS(x[i]) <= TRAILER_LIT(1.0e6))) {
             return i;
         }
     }
     return -1;
 }
 
-static uint32_t trailer_hash_bytes(uint32_t hash, const unsigned char *bytes, unsigned int n)
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t trailer_fnv_word(uint32_t hash, uint32_t word)
 {
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t trailer_fnv_real(uint32_t hash, trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
+    } rep;
     uint32_t out = hash;
     unsigned int i;
-    for (i = 0u; i < n; ++i) {
-        out = (out ^ (uint32_t)bytes[i]) * 16777619u;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = trailer_fnv_word(out, rep.words[i]);
     }
     return out;
 }
 
 uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x)
 {
-    return trailer_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+    return trailer_fnv_real(hash, x);
 }
 
 uint32_t trailer_hash_int(uint32_t hash, int x)
 {
-    return trailer_hash_bytes(hash, (const unsigned char *)&x, (unsigned int)sizeof(x));
+    return trailer_fnv_word(hash, (uint32_t)x);
 }
 
 uint32_t trailer_hash_params(uint32_t hash, const trailer_params_t *p)
@@ -219,7 +254,20 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
     const trailer_real_t *const inputs[5] = {q, qdot, q_des, qdot_des, qddot_des};
     const int fields[5] = {TRAILER_FIELD_Q, TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES,
                            TRAILER_FIELD_QDOT_DES, TRAILER_FIELD_QDDOT_DES};
+    const trailer_bits_t bound = trailer_magnitude_bits(TRAILER_LIT(1.0e6));
+    trailer_bits_t worst = 0u;
     int k;
+    int i;
+    /* One pass of integer maxima, no branch per entry; only a bad step looks for which. */
+    for (k = 0; k < 5; ++k) {
+        for (i = 0; i < 8; ++i) {
+            const trailer_bits_t m = trailer_magnitude_bits(inputs[k][i]);
+            worst = m > worst ? m : worst;
+        }
+    }
+    if (worst <= bound) {
+        return TRAILER_OK;
+    }
     for (k = 0; k < 5; ++k) {
         const int bad = trailer_first_unbounded(inputs[k], 8);
         if (bad >= 0) {
@@ -230,6 +278,20 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
     return TRAILER_OK;
 }
 
+void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAILER_MAX_WINDOW])
+{
+    trailer_real_t wsum = TRAILER_LIT(0.0), wi = TRAILER_LIT(1.0);
+    int i;
+    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+        w[i] = i < active ? wi : TRAILER_LIT(0.0);
+        wsum += w[i];
+        wi *= a;
+    }
+    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+        w[i] /= wsum;
+    }
+}
+
 trailer_real_t trailer_cap_gain(trailer_real_t gain)
 {
     return gain <= TRAILER_GAIN_MAX ? gain : TRAILER_GAIN_MAX;
@@ -237,11 +299,7 @@ trailer_real_t trailer_cap_gain(trailer_real_t gain)
 
 int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
-    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
-    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
-    trailer_real_t p22[8])
+    trailer_real_t e[8], trailer_real_t edot[8])
 {
     const int nc = 2;
     const int off = 4;
@@ -250,11 +308,6 @@ int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     for (i = 0; i < nc; ++i) {
         e[i] = q_des[off + i] - q[off + i];
         edot[i] = qdot_des[off + i] - qdot[off + i];
-        qdd[i] = qddot_des[off + i];
-        k1[i] = k1_all[off + i];
-        k2[i] = k2_all[off + i];
-        p12[i] = p12_all[off + i];
-        p22[i] = p22_all[off + i];
     }
     return nc;
 }

@@ -89,10 +89,10 @@ int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
 uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x);
 
-/** FNV-1a (32 bit) of hash followed by the object representation of x. */
+/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
 uint32_t trailer_hash_int(uint32_t hash, int x);
 
 /** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
@@ -126,20 +126,24 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_error_detail_t *detail);
 
+/**
+ * The normalised weights of (25) for the `active` most recent differences: a^(i-1), then
+ * divided by their sum (0 beyond active). _init stores those of the full window (active = n).
+ */
+void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAILER_MAX_WINDOW]);
+
 /** Cap an adaptive gain at TRAILER_GAIN_MAX (NaN and +Inf count as beyond it). */
 trailer_real_t trailer_cap_gain(trailer_real_t gain);
 
 /**
- * The controlled coordinates (the two wheels) of e = q_des - q,
- * edot, qddot_des, the gains and P, packed from index 0. Returns their number.
+ * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
+ * minimal: the actuated ones), packed from index 0. Returns their number; they start at
+ * index 4 of q in the minimal form, 0 in the paper form (the caller passes
+ * the other per-coordinate arrays from there, without copying them).
  */
 int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8], const trailer_real_t k1_all[8],
-    const trailer_real_t k2_all[8], const trailer_real_t p12_all[8],
-    const trailer_real_t p22_all[8], trailer_real_t e[8], trailer_real_t edot[8],
-    trailer_real_t qdd[8], trailer_real_t k1[8], trailer_real_t k2[8], trailer_real_t p12[8],
-    trailer_real_t p22[8]);
+    trailer_real_t e[8], trailer_real_t edot[8]);
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
 void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],

@@ -21,6 +21,31 @@ void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P)
     P[2] = _t1*(k1*q2 + q1);
 }
 
+/* trailer_tdroc_weighted_gain: documented in trailer_laws.h.
+   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
+void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn,
+    const trailer_real_t *w, trailer_real_t *gain)
+{
+    const trailer_real_t minv_norm_1 = minv_norm[0];
+    const trailer_real_t dn0 = dn[0];
+    const trailer_real_t dn1 = dn[1];
+    const trailer_real_t dn2 = dn[2];
+    const trailer_real_t dn3 = dn[3];
+    const trailer_real_t dn4 = dn[4];
+    const trailer_real_t dn5 = dn[5];
+    const trailer_real_t dn6 = dn[6];
+    const trailer_real_t dn7 = dn[7];
+    const trailer_real_t w0 = w[0];
+    const trailer_real_t w1 = w[1];
+    const trailer_real_t w2 = w[2];
+    const trailer_real_t w3 = w[3];
+    const trailer_real_t w4 = w[4];
+    const trailer_real_t w5 = w[5];
+    const trailer_real_t w6 = w[6];
+    const trailer_real_t w7 = w[7];
+    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
+}
+
 /* trailer_minimal_tde: documented in trailer_laws.h.
    operations after CSE: 135 add, 230 mul, 57 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
@@ -542,6 +567,20 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
             + w2*TRAILER_SQRT(_t4*_t4 + _t5*_t5) + w3*TRAILER_SQRT(_t6*_t6 + _t7*_t7)
             + w4*TRAILER_SQRT(_t8*_t8 + _t9*_t9) + w5*TRAILER_SQRT(_t10*_t10 + _t11*_t11)
             + w6*TRAILER_SQRT(_t12*_t12 + _t13*_t13) + w7*TRAILER_SQRT(_t14*_t14 + _t15*_t15));
+}
+
+/* trailer_minimal_omega_difference: documented in trailer_laws.h.
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt */
+void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
+    trailer_real_t *norm)
+{
+    const trailer_real_t Om_new0 = newer[0];
+    const trailer_real_t Om_new1 = newer[1];
+    const trailer_real_t Om_old0 = older[0];
+    const trailer_real_t Om_old1 = older[1];
+    const trailer_real_t _t0 = Om_new0 - Om_old0;
+    const trailer_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.

@@ -29,6 +29,31 @@ extern "C" {
  */
 void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P);
 
+#define TRAILER_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE 1
+#define TRAILER_TDROC_WEIGHTED_GAIN_DN_SIZE 8
+#define TRAILER_TDROC_WEIGHTED_GAIN_W_SIZE 8
+#define TRAILER_TDROC_WEIGHTED_GAIN_GAIN_SIZE 1
+
+/**
+ * (25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:
+ * khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the
+ * active window). Each dn_i is evaluated once, by <f>_omega_difference.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  minv_norm [1] row-major (TRAILER_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE): minv_norm --
+ *     from _minv_norm
+ * @param[in]  dn [8] row-major (TRAILER_TDROC_WEIGHTED_GAIN_DN_SIZE): dn0, dn1, dn2, dn3, dn4, dn5,
+ *     dn6, dn7 -- dn_i, newest first
+ * @param[in]  w [8] row-major (TRAILER_TDROC_WEIGHTED_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7
+ *     -- weights
+ * @param[out] gain [1] row-major (TRAILER_TDROC_WEIGHTED_GAIN_GAIN_SIZE)
+ *
+ * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn,
+    const trailer_real_t *w, trailer_real_t *gain);
+
 #define TRAILER_MINIMAL_TDE_Q_PREV_SIZE 8
 #define TRAILER_MINIMAL_TDE_U_PREV_SIZE 2
 #define TRAILER_MINIMAL_TDE_QDOT_NOW_SIZE 2
@@ -106,6 +131,27 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  */
 void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_real_t *omega,
     const trailer_real_t *w, trailer_real_t *gain);
+
+#define TRAILER_MINIMAL_OMEGA_DIFFERENCE_NEWER_SIZE 2
+#define TRAILER_MINIMAL_OMEGA_DIFFERENCE_OLDER_SIZE 2
+#define TRAILER_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE 1
+
+/**
+ * (minimal formulation) one term of (25): ||Omega(i) - Omega(i+1)|| of two
+ * consecutive rows of the window.
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  newer [2] row-major (TRAILER_MINIMAL_OMEGA_DIFFERENCE_NEWER_SIZE): Om_new0, Om_new1
+ *     -- Omega(i)
+ * @param[in]  older [2] row-major (TRAILER_MINIMAL_OMEGA_DIFFERENCE_OLDER_SIZE): Om_old0, Om_old1
+ *     -- Omega(i+1)
+ * @param[out] norm [1] row-major (TRAILER_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
+ *
+ * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+ */
+void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
+    trailer_real_t *norm);
 
 #define TRAILER_MINIMAL_TDC_LAW_Q_SIZE 8
 #define TRAILER_MINIMAL_TDC_LAW_E_SIZE 2

@@ -32,14 +32,18 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (!isfinite(J_theta_cart) || !isfinite(J_theta_cart_left) || !isfinite(J_theta_cart_right)
-            || !isfinite(J_theta_left) || !isfinite(J_theta_right) || !isfinite(J_theta_tractor)
-            || !isfinite(J_x_tractor) || !isfinite(K_theta_cart_x_tractor)
-            || !isfinite(K_theta_cart_x_tractor_2) || !isfinite(K_theta_tractor_x_tractor)
-            || !isfinite(K_theta_tractor_x_tractor_2) || !isfinite(radius_cart_left)
-            || !isfinite(radius_cart_right) || !isfinite(radius_left) || !isfinite(radius_right)
-            || !isfinite(theta_tractor) || !isfinite(theta_cart) || !isfinite(thetadot_right)
-            || !isfinite(thetadot_left) || !isfinite(tau_right) || !isfinite(tau_left)) {
+    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
+            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
+            + (radius_left - radius_left)) + ((radius_right - radius_right)
+            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
+            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
+            + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_SIN(theta_tractor);
@@ -1084,8 +1088,8 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             + _t135*_t366 + _t135*_t367 + _t146*_t366 + _t146*_t367 - _t17*_t360 - _t17*_t361
             - _t21*_t360 - _t21*_t361 - _t26*_t363 + _t26*_t364 + _t28*_t363 - _t28*_t364 + _t329
             + _t351 - _t362*_t39 + _t362*_t40 + _t365*_t39 - _t365*_t40)/TRAILER_LIT(171396.0);
-    if (!isfinite(r_0) || !isfinite(r_1) || !isfinite(r_2) || !isfinite(r_3) || !isfinite(r_4)
-            || !isfinite(r_5) || !isfinite(r_6) || !isfinite(r_7)) {
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
+            + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -2365,14 +2369,18 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (!isfinite(J_theta_cart) || !isfinite(J_theta_cart_left) || !isfinite(J_theta_cart_right)
-            || !isfinite(J_theta_left) || !isfinite(J_theta_right) || !isfinite(J_theta_tractor)
-            || !isfinite(J_x_tractor) || !isfinite(K_theta_cart_x_tractor)
-            || !isfinite(K_theta_cart_x_tractor_2) || !isfinite(K_theta_tractor_x_tractor)
-            || !isfinite(K_theta_tractor_x_tractor_2) || !isfinite(radius_cart_left)
-            || !isfinite(radius_cart_right) || !isfinite(radius_left) || !isfinite(radius_right)
-            || !isfinite(theta_tractor) || !isfinite(theta_cart) || !isfinite(thetadot_right)
-            || !isfinite(thetadot_left) || !isfinite(tau_right) || !isfinite(tau_left)) {
+    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
+            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
+            + (radius_left - radius_left)) + ((radius_right - radius_right)
+            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
+            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
+            + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
@@ -3343,7 +3351,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     }
     const trailer_real_t r_0 = _t105*(-_t329*_t45 + _t349*_t77);
     const trailer_real_t r_1 = _t105*(_t103*_t329 - _t349*_t45);
-    if (!isfinite(r_0) || !isfinite(r_1)) {
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;

@@ -45,25 +45,49 @@ trailer_status_t trailer_roc_check_config(const trailer_roc_config_t *config)
     return trailer_roc_check_config_detail(config, 0);
 }
 
-/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t trailer_fnv_word(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t trailer_fnv_real(uint32_t hash, trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
+    } rep;
+    uint32_t out = hash;
+    unsigned int i;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = trailer_fnv_word(out, rep.words[i]);
+    }
+    return out;
+}
+
+/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
+   never hashed). */
 static uint32_t trailer_roc_fingerprint(const trailer_roc_config_t *config)
 {
     uint32_t fp = trailer_hash_params(2166136261u, &config->nominal);
     int i;
-    fp = trailer_hash_int(fp, config->formulation);
+    fp = trailer_fnv_word(fp, (uint32_t)config->formulation);
     for (i = 0; i < 8; ++i) {
-        fp = trailer_hash_real(fp, config->k1[i]);
+        fp = trailer_fnv_real(fp, config->k1[i]);
     }
     for (i = 0; i < 8; ++i) {
-        fp = trailer_hash_real(fp, config->k2[i]);
+        fp = trailer_fnv_real(fp, config->k2[i]);
     }
-    fp = trailer_hash_real(fp, config->q_pos);
-    fp = trailer_hash_real(fp, config->q_vel);
-    fp = trailer_hash_real(fp, config->h);
-    fp = trailer_hash_real(fp, config->tau_max);
-    fp = trailer_hash_real(fp, config->eps);
-    fp = trailer_hash_real(fp, config->alpha);
-    fp = trailer_hash_real(fp, config->phi);
+    fp = trailer_fnv_real(fp, config->q_pos);
+    fp = trailer_fnv_real(fp, config->q_vel);
+    fp = trailer_fnv_real(fp, config->h);
+    fp = trailer_fnv_real(fp, config->tau_max);
+    fp = trailer_fnv_real(fp, config->eps);
+    fp = trailer_fnv_real(fp, config->alpha);
+    fp = trailer_fnv_real(fp, config->phi);
     return fp;
 }
 
@@ -131,78 +155,100 @@ trailer_status_t trailer_roc_step_detail(trailer_roc_state_t *state,
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
 {
-    trailer_roc_state_t next;
     trailer_status_t status = TRAILER_OK;
-    trailer_real_t e[8], edot[8], qdd[8], k1[8], k2[8], p12[8], p22[8], u[8];
+    int off;  /* where the controlled coordinates start in q */
+    trailer_real_t e[8], edot[8], u[8];
     trailer_real_t out_tau[2];
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {TRAILER_FIELD_STATE, TRAILER_FIELD_CONFIG, TRAILER_FIELD_Q,
-                               TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES, TRAILER_FIELD_QDOT_DES,
-                               TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == NULL) {
-                return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    /* This step's results, in locals: the state is written only at the end, on success. */
+    trailer_real_t gain, s_norm, u_discarded;
+    if (state == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
+    }
+    if (config == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
+    }
+    if (q == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q, -1);
+    }
+    if (qdot == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT, -1);
+    }
+    if (q_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_TAU, -1);
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
     }
-    status = trailer_roc_check_config_detail(config, detail);
-    if (status != TRAILER_OK) {
-        return status;
-    }
+    /* The configuration _init validated has this fingerprint: only a different one is
+       validated again (its error first, else CONFIG_CHANGED): the same statuses as
+       validating every step, without the cost. */
     if (trailer_roc_fingerprint(config) != state->config_fp) {
+        status = trailer_roc_check_config_detail(config, detail);
+        if (status != TRAILER_OK) {
+            return status;
+        }
         return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {
         return status;
     }
-    next = *state;  /* work on a copy: the state is committed only on success */
-    (void)trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    off = 4;
+    gain = state->gain;
+    s_norm = state->s_norm;
+    (void)trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* The law. */
     {
         trailer_real_t s[8];
         const trailer_real_t bounds[2] = {config->alpha, config->phi};
-        trailer_minimal_roc_law(&config->nominal, q, qdot, e, edot, qdd, k1, k2, p12, p22, bounds,
-                &config->eps, u, s, &next.s_norm, &next.gain);
+        trailer_minimal_roc_law(&config->nominal, q, qdot, e, edot, &qddot_des[off],
+                &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], bounds,
+                &config->eps, u, s, &s_norm, &gain);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
     out_tau[1] = u[1];
-    next.u_discarded = TRAILER_LIT(0.0);
+    u_discarded = TRAILER_LIT(0.0);
     /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
        finite:
-       then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0])) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 0);
-    }
-    if (!isfinite(out_tau[1])) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 1);
-    }
-    if (!isfinite(next.gain)) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_GAIN, -1);
-    }
-    if (!isfinite(next.s_norm)) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_S_NORM, -1);
-    }
-    if (!isfinite(next.u_discarded)) {
+       then s/||s|| in the switching term is 0, so that step is not done either. One test for
+       all (x - x is NaN exactly when x is not finite), then which one, in the status order. */
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+              + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+        if (!isfinite(out_tau[0])) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 0);
+        }
+        if (!isfinite(out_tau[1])) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 1);
+        }
+        if (!isfinite(gain)) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_GAIN, -1);
+        }
+        if (!isfinite(s_norm)) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_S_NORM, -1);
+        }
         return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_U_DISCARDED, -1);
     }
     status = trailer_saturate(out_tau, config->tau_max);
-    /* History for (17): the input actually applied, u = B tau. */
-    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
-                     qdot, out_tau);
-    next.tau[0] = out_tau[0];
-    next.tau[1] = out_tau[1];
+    /* Commit. History for (17): the input actually applied, u = B tau. */
+    state->gain = gain;
+    state->s_norm = s_norm;
+    state->u_discarded = u_discarded;
+    trailer_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+                     state->u_prev2, q, qdot, out_tau);
+    state->tau[0] = out_tau[0];
+    state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
-    next.steps = state->steps < TRAILER_STEPS_MAX ? state->steps + 1u : TRAILER_STEPS_MAX;
-    *state = next;
+    state->steps = state->steps < TRAILER_STEPS_MAX ? state->steps + 1u : TRAILER_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
     return trailer_fail(detail, status, TRAILER_FIELD_NONE, -1);

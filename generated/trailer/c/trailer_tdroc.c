@@ -57,29 +57,53 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
     return trailer_tdroc_check_config_detail(config, 0);
 }
 
-/* FNV-1a of every field of the configuration, value by value (padding never hashed). */
+/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
+   the same detection of a changed field for a quarter of the multiplications. */
+static uint32_t trailer_fnv_word(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* FNV-1a over the words of the object representation of x (two for a double). */
+static uint32_t trailer_fnv_real(uint32_t hash, trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
+    } rep;
+    uint32_t out = hash;
+    unsigned int i;
+    rep.value = x;
+    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
+        out = trailer_fnv_word(out, rep.words[i]);
+    }
+    return out;
+}
+
+/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
+   never hashed). */
 static uint32_t trailer_tdroc_fingerprint(const trailer_tdroc_config_t *config)
 {
     uint32_t fp = trailer_hash_params(2166136261u, &config->nominal);
     int i;
-    fp = trailer_hash_int(fp, config->formulation);
+    fp = trailer_fnv_word(fp, (uint32_t)config->formulation);
     for (i = 0; i < 8; ++i) {
-        fp = trailer_hash_real(fp, config->k1[i]);
+        fp = trailer_fnv_real(fp, config->k1[i]);
     }
     for (i = 0; i < 8; ++i) {
-        fp = trailer_hash_real(fp, config->k2[i]);
+        fp = trailer_fnv_real(fp, config->k2[i]);
     }
-    fp = trailer_hash_real(fp, config->q_pos);
-    fp = trailer_hash_real(fp, config->q_vel);
-    fp = trailer_hash_real(fp, config->h);
-    fp = trailer_hash_real(fp, config->tau_max);
-    fp = trailer_hash_int(fp, config->accel_estimator);
-    fp = trailer_hash_real(fp, config->rate_window);
-    fp = trailer_hash_real(fp, config->eps);
-    fp = trailer_hash_int(fp, config->n);
-    fp = trailer_hash_real(fp, config->a);
-    fp = trailer_hash_int(fp, config->hold_gain);
-    fp = trailer_hash_real(fp, config->held_gain);
+    fp = trailer_fnv_real(fp, config->q_pos);
+    fp = trailer_fnv_real(fp, config->q_vel);
+    fp = trailer_fnv_real(fp, config->h);
+    fp = trailer_fnv_real(fp, config->tau_max);
+    fp = trailer_fnv_word(fp, (uint32_t)config->accel_estimator);
+    fp = trailer_fnv_real(fp, config->rate_window);
+    fp = trailer_fnv_real(fp, config->eps);
+    fp = trailer_fnv_word(fp, (uint32_t)config->n);
+    fp = trailer_fnv_real(fp, config->a);
+    fp = trailer_fnv_word(fp, (uint32_t)config->hold_gain);
+    fp = trailer_fnv_real(fp, config->held_gain);
     return fp;
 }
 
@@ -103,6 +127,9 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
         }
     }
     s->omega_count = 0;
+    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+        s->omega_dnorm[i] = TRAILER_LIT(0.0);
+    }
     s->gain = TRAILER_LIT(0.0);
     s->s_norm = TRAILER_LIT(0.0);
     s->u_discarded = TRAILER_LIT(0.0);
@@ -127,6 +154,7 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
     trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
     fresh.minv_norm = TRAILER_LIT(0.0);  /* ||Mhat(q)^-1|| is evaluated at q in every step */
+    trailer_window_weights(config->n, config->a, fresh.weights);
     trailer_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;
@@ -157,43 +185,66 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
 {
-    trailer_tdroc_state_t next;
     trailer_status_t status = TRAILER_OK;
-    const int off = 4;  /* where the controlled coordinates start in q */
+    int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
-    trailer_real_t e[8], edot[8], qdd[8], k1[8], k2[8], p12[8], p22[8], u[8];
+    trailer_real_t e[8], edot[8], u[8];
     trailer_real_t out_tau[2];
-    {
-        const void *const args[8] = {state, config, q, qdot, q_des, qdot_des, qddot_des, tau};
-        const int fields[8] = {TRAILER_FIELD_STATE, TRAILER_FIELD_CONFIG, TRAILER_FIELD_Q,
-                               TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES, TRAILER_FIELD_QDOT_DES,
-                               TRAILER_FIELD_QDDOT_DES, TRAILER_FIELD_TAU};
-        int k;
-        for (k = 0; k < 8; ++k) {
-            if (args[k] == NULL) {
-                return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, fields[k], -1);
-            }
-        }
+    /* This step's results, in locals: the state is written only at the end, on success. */
+    trailer_real_t H1hat[8];
+    trailer_real_t gain, s_norm, u_discarded;
+    trailer_real_t minv_norm;
+    trailer_real_t omega_new[8];  /* Omega(1) of this step (pushed on commit) */
+    trailer_real_t dnorm_new = TRAILER_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
+    int omega_count;
+    bool pushed;
+    if (state == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
+    }
+    if (config == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_CONFIG, -1);
+    }
+    if (q == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q, -1);
+    }
+    if (qdot == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT, -1);
+    }
+    if (q_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_Q_DES, -1);
+    }
+    if (qdot_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDOT_DES, -1);
+    }
+    if (qddot_des == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_QDDOT_DES, -1);
+    }
+    if (tau == NULL) {
+        return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_TAU, -1);
     }
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
     }
-    status = trailer_tdroc_check_config_detail(config, detail);
-    if (status != TRAILER_OK) {
-        return status;
-    }
+    /* The configuration _init validated has this fingerprint: only a different one is
+       validated again (its error first, else CONFIG_CHANGED): the same statuses as
+       validating every step, without the cost. */
     if (trailer_tdroc_fingerprint(config) != state->config_fp) {
+        status = trailer_tdroc_check_config_detail(config, detail);
+        if (status != TRAILER_OK) {
+            return status;
+        }
         return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
     }
     status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {
         return status;
     }
-    next = *state;  /* work on a copy: the state is committed only on success */
-    nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, qddot_des,
-                              config->k1, config->k2, state->p12, state->p22,
-                              e, edot, qdd, k1, k2, p12, p22);
+    off = 4;
+    gain = state->gain;
+    s_norm = state->s_norm;
+    minv_norm = state->minv_norm;
+    nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -210,94 +261,119 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
             qdn[i] = qdot[off + i];
             qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
-        trailer_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, next.H1hat);
+        for (i = nc; i < 8; ++i) {
+            H1hat[i] = TRAILER_LIT(0.0);
+        }
+        trailer_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
-            next.H1hat[i] = TRAILER_LIT(0.0);
+            H1hat[i] = TRAILER_LIT(0.0);
         }
     }
-    /* (25): push Omega(1) = H1hat, then the discounted, normalised gain. */
-    if (state->steps >= 2u) {
-        int j;
-        for (i = TRAILER_MAX_WINDOW; i > 0; --i) {
-            for (j = 0; j < 8; ++j) {
-                next.omega[i][j] = state->omega[i - 1][j];
-            }
+    /* (25): Omega(1) = H1hat joins the window (newest first), then the discounted,
+       normalised gain over the window as it is after this step. */
+    pushed = state->steps >= 2u;
+    omega_count = state->omega_count;
+    if (pushed) {
+        for (i = 0; i < 8; ++i) {
+            omega_new[i] = i < nc ? H1hat[i] : TRAILER_LIT(0.0);
         }
-        for (j = 0; j < 8; ++j) {
-            next.omega[0][j] = j < nc ? next.H1hat[j] : TRAILER_LIT(0.0);
-        }
-        if (next.omega_count <= TRAILER_MAX_WINDOW) {
-            next.omega_count += 1;
+        trailer_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
+        if (omega_count <= TRAILER_MAX_WINDOW) {
+            omega_count += 1;
         }
     }
-    next.gain = TRAILER_LIT(0.0);
     if (config->hold_gain != 0) {
-        next.gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
-    } else if (next.omega_count >= 2) {
-        trailer_real_t w[TRAILER_MAX_WINDOW];
-        trailer_real_t om[(TRAILER_MAX_WINDOW + 1) * 8];
-        trailer_real_t wsum = TRAILER_LIT(0.0), wi = TRAILER_LIT(1.0);
-        const int active = next.omega_count - 1 < config->n ? next.omega_count - 1 : config->n;
-        int j;
-        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-            w[i] = i < active ? wi : TRAILER_LIT(0.0);
-            wsum += w[i];
-            wi *= config->a;
+        gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
+    } else if (omega_count >= 2) {
+        trailer_real_t w_warm[TRAILER_MAX_WINDOW];
+        trailer_real_t dn[TRAILER_MAX_WINDOW];  /* the window's difference norms after this step */
+        const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
+        const trailer_real_t *w = state->weights;  /* the full window's, from _init */
+        if (active < config->n) {  /* the window is still filling */
+            trailer_window_weights(active, config->a, w_warm);
+            w = w_warm;
         }
         for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-            w[i] /= wsum;
-        }
-        for (i = 0; i <= TRAILER_MAX_WINDOW; ++i) {
-            for (j = 0; j < nc; ++j) {
-                om[i * nc + j] = next.omega[i][j];
-            }
+            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
+                    : state->omega_dnorm[i];
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer_minimal_minv_norm(&config->nominal, q, &next.minv_norm);
-        trailer_minimal_tdroc_gain(&next.minv_norm, om, w, &next.gain);
+        trailer_minimal_minv_norm(&config->nominal, q, &minv_norm);
+        trailer_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
-        next.gain = trailer_cap_gain(next.gain);
+        gain = trailer_cap_gain(gain);
     } else {
-        /* fewer than two Omega's: no estimate yet, k-hat stays 0 (MISRA C:2012 rule 15.7) */
+        gain = TRAILER_LIT(0.0);  /* fewer than two Omega's: no estimate yet */
     }
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, qdd, k1, k2, p12, p22, next.H1hat,
-                &next.gain, &config->eps, u, s, &next.s_norm);
+        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
+                &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain, &config->eps, u,
+                s, &s_norm);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
     out_tau[1] = u[1];
-    next.u_discarded = TRAILER_LIT(0.0);
+    u_discarded = TRAILER_LIT(0.0);
     /* ||s|| and ||u rows 1, 2, 3, 4, 7, 8|| can overflow (float32, large gains) while tau is
        finite:
-       then s/||s|| in the switching term is 0, so that step is not done either. */
-    if (!isfinite(out_tau[0])) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 0);
-    }
-    if (!isfinite(out_tau[1])) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 1);
-    }
-    if (!isfinite(next.gain)) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_GAIN, -1);
-    }
-    if (!isfinite(next.s_norm)) {
-        return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_S_NORM, -1);
-    }
-    if (!isfinite(next.u_discarded)) {
+       then s/||s|| in the switching term is 0, so that step is not done either. One test for
+       all (x - x is NaN exactly when x is not finite), then which one, in the status order. */
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+              + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+        if (!isfinite(out_tau[0])) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 0);
+        }
+        if (!isfinite(out_tau[1])) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_TAU, 1);
+        }
+        if (!isfinite(gain)) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_GAIN, -1);
+        }
+        if (!isfinite(s_norm)) {
+            return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_S_NORM, -1);
+        }
         return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_U_DISCARDED, -1);
     }
     status = trailer_saturate(out_tau, config->tau_max);
-    /* History for (17): the input actually applied, u = B tau. */
-    trailer_push_history(next.q_prev, next.qdot_prev, next.qdot_prev2, next.u_prev, next.u_prev2, q,
-                     qdot, out_tau);
-    next.tau[0] = out_tau[0];
-    next.tau[1] = out_tau[1];
+    /* Commit. History for (17): the input actually applied, u = B tau. */
+    for (i = 0; i < 8; ++i) {
+        state->H1hat[i] = H1hat[i];
+    }
+    if (pushed) {
+        /* Each row moves down one place and the new one enters at the top, carried element by
+           element (a shift written as a copy loop becomes a call to memmove, which is byte by
+           byte in newlib-nano). */
+        int j;
+        trailer_real_t carry, next;
+        for (j = 0; j < 8; ++j) {
+            carry = omega_new[j];
+            for (i = 0; i <= TRAILER_MAX_WINDOW; ++i) {
+                next = state->omega[i][j];
+                state->omega[i][j] = carry;
+                carry = next;
+            }
+        }
+        carry = dnorm_new;
+        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+            next = state->omega_dnorm[i];
+            state->omega_dnorm[i] = carry;
+            carry = next;
+        }
+        state->omega_count = omega_count;
+    }
+    state->minv_norm = minv_norm;
+    state->gain = gain;
+    state->s_norm = s_norm;
+    state->u_discarded = u_discarded;
+    trailer_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+                     state->u_prev2, q, qdot, out_tau);
+    state->tau[0] = out_tau[0];
+    state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */
-    next.steps = state->steps < TRAILER_STEPS_MAX ? state->steps + 1u : TRAILER_STEPS_MAX;
-    *state = next;
+    state->steps = state->steps < TRAILER_STEPS_MAX ? state->steps + 1u : TRAILER_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
     return trailer_fail(detail, status, TRAILER_FIELD_NONE, -1);

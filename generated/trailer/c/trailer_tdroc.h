@@ -57,6 +57,9 @@ typedef struct {
     trailer_real_t u_prev2[8];  /* u(t-2h) applied */
     trailer_real_t omega[TRAILER_MAX_WINDOW + 1][8]; /* Omega(1..), newest first */
     int omega_count;        /* valid rows of omega */
+    trailer_real_t omega_dnorm[TRAILER_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first */
+    trailer_real_t weights[TRAILER_MAX_WINDOW]; /* normalised weights of (25) for the full window
+                                                   (at _init) */
     trailer_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

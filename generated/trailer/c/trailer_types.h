@@ -33,8 +33,6 @@ typedef float trailer_real_t;
 #define TRAILER_SQRT(x) sqrtf(x)
 #define TRAILER_POW(x, y) powf(x, y)
 #define TRAILER_FABS(x) fabsf(x)
-#define TRAILER_FMAX(x, y) fmaxf(x, y)
-#define TRAILER_FMIN(x, y) fminf(x, y)
 #define TRAILER_INF HUGE_VALF
 #else
 typedef double trailer_real_t;
@@ -55,12 +53,15 @@ typedef double trailer_real_t;
 #define TRAILER_SQRT(x) sqrt(x)
 #define TRAILER_POW(x, y) pow(x, y)
 #define TRAILER_FABS(x) fabs(x)
-#define TRAILER_FMAX(x, y) fmax(x, y)
-#define TRAILER_FMIN(x, y) fmin(x, y)
 #define TRAILER_INF HUGE_VAL
 #endif
 /* isfinite is type-generic in C99: no promotion in either build. */
 #define TRAILER_ISFINITE(x) isfinite(x)
+/* C99's fmax/fmin without a library call: a NaN argument is ignored (the other one is
+   returned), as fmax/fmin do; only the sign of a zero result may differ. The arguments are
+   evaluated more than once: generated code passes names of temporaries only. */
+#define TRAILER_FMAX(x, y) ((((x) >= (y)) || isnan(y)) ? (x) : (y))
+#define TRAILER_FMIN(x, y) ((((x) <= (y)) || isnan(y)) ? (x) : (y))
 
 #ifdef __cplusplus
 extern "C" {

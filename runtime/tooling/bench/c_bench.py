@@ -19,6 +19,7 @@ from codegen.backends.casadi import generate_c
 from codegen.spec import FunctionSpec
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.bench.c_variants import (
+    HAND_CHECKED,
     HAND_WRITTEN,
     HARNESS,
     MODEL_FUNCTIONS,
@@ -33,6 +34,7 @@ from runtime.tooling.bench.c_variants import (
 )
 
 CSRC = Path(__file__).resolve().parents[2] / "paper" / "csrc"  # runtime/paper/csrc
+BENCH_CSRC = Path(__file__).resolve().parent / "csrc"  # hand-written with the same checks
 CFLAGS = ["-std=c99", "-O2"]
 
 
@@ -82,13 +84,15 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
                   literal_macro="WMRN_LIT", status_codes=(StatusCode("WMRN_OK", 0, "ok"),))
     for fname, text in c_backend.render_all({"wmrn_model": unchecked}, cfg).items():
         (workdir / fname).write_text(text)
-    sources = [workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c"]
+    sources = [workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c",
+               BENCH_CSRC / "hand_tdroc.c"]
     if unchecked:
         sources.append(workdir / "wmrn_model.c")
     for src in sources:
         obj = workdir / f"x_{src.stem}.o"
         subprocess.run(
-            ["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", str(src), "-o", str(obj)],
+            ["gcc", *CFLAGS, "-c", f"-I{CSRC}", f"-I{workdir}", f"-I{GENERATED_C}",
+             f"-I{BENCH_CSRC}", str(src), "-o", str(obj)],
             check=True,
         )
         objs.append(str(obj))
@@ -98,6 +102,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         '#include "wmr_laws.h"',
         '#include "casadi_gen.h"',
         '#include "hand_model.h"',
+        "int hand_forward_dynamics_checked(const double *in, double *qdd);",
         HARNESS,
     ]
     for name in used:
@@ -139,6 +144,11 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             f"static void hand_w_{name}(const void *in, void *out) "
             f"{{ hand_{name}((const double *)in, (double *)out); }}"
         )
+    for name in HAND_CHECKED & set(used):
+        lines.append(
+            f"static void handc_w_{name}(const void *in, void *out) "
+            f"{{ (void)hand_{name}_checked((const double *)in, (double *)out); }}"
+        )
     lines.append("int main(int argc, char **argv) {")
     lines.append(
         "    long calls = argc > 1 ? atol(argv[1]) : 1000000; "
@@ -155,6 +165,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             "casadi": f"casadi_w_{name}",
             "sympy": f"sympy_w_{name}",
             "hand": f"hand_w_{name}",
+            "hand_checked": f"handc_w_{name}",
         }[variant]
         lines.append(
             f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
@@ -162,12 +173,12 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             f"lo_{name}, hi_{name}}},"
         )
     lines.append(
-        "    };\n    size_t k;\n"
-        "    for (k = 0; k < sizeof cases / sizeof cases[0]; ++k) "
-        "run(&cases[k], calls, repeats);\n    return 0;\n}"
+        "    };\n"
+        "    return run_all(cases, sizeof cases / sizeof cases[0], calls, repeats);\n}"
     )
     src = workdir / "bench_main.c"
-    src.write_text("#define _POSIX_C_SOURCE 199309L\n#include <stdlib.h>\n" + "\n".join(lines))
+    head = "#define _POSIX_C_SOURCE 199309L\n#include <stdlib.h>\n#include <string.h>\n"
+    src.write_text(head + "\n".join(lines))
     exe = workdir / "bench"
     subprocess.run(
         [
@@ -196,6 +207,8 @@ def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
             variants.append("ours_unchecked")
         if name in HAND_WRITTEN:
             variants.append("hand")
+        if name in HAND_CHECKED:
+            variants.append("hand_checked")
         cases += [{"spec": name, "variant": v} for v in variants]
     return cases
 
@@ -204,10 +217,13 @@ def run_c(calls: int, repeats: int) -> list[dict[str, Any]]:
     specs = specs_by_name()
     with tempfile.TemporaryDirectory() as tmp:
         exe = build_bench(Path(tmp), c_cases(specs), specs)
-        out = subprocess.run(
-            [str(exe), str(calls), str(repeats)], check=True, capture_output=True, text=True
-        ).stdout
-    return [json.loads(line) for line in out.splitlines() if line.startswith("{")]
+        proc = subprocess.run(
+            [str(exe), str(calls), str(repeats)], check=False, capture_output=True, text=True
+        )
+    rows = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
+    if proc.returncode != 0:  # a variant disagreed with ours: nothing is timed
+        raise RuntimeError(f"C benchmark refused to time: {rows or proc.stderr}")
+    return rows
 
 
 def summarise_c(rows: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, float]]:

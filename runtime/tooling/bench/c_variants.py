@@ -18,11 +18,13 @@ MODEL_FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics
 # One controller step = the kernels it evaluates (paper formulation).
 STEP_KERNELS = {
     "tdc": ("paper_tde", "paper_tdc_law"),
-    "tdroc": ("paper_tde", "paper_tdroc_gain", "paper_tdroc_law"),
+    "tdroc": ("paper_tde", "paper_omega_difference", "tdroc_weighted_gain", "paper_tdroc_law"),
     "roc": ("paper_roc_law",),
     "asmc": ("paper_asmc_law",),
 }
 HAND_WRITTEN = set(MODEL_FUNCTIONS)
+# Hand-written with the same checks and status codes as ours (csrc/hand_tdroc.c).
+HAND_CHECKED = {"forward_dynamics"}
 
 
 def specs_by_name() -> dict[str, FunctionSpec]:
@@ -116,6 +118,7 @@ def casadi_wrapper(spec: FunctionSpec) -> str:
 
 
 HARNESS = r"""
+#include <math.h>
 #include <stdio.h>
 #include <time.h>
 
@@ -124,6 +127,7 @@ typedef struct { const char *function; const char *variant; bench_fn fn; int n_i
                  int is_float; const double *lo; const double *hi; } bench_case;
 
 #define NSETS 256
+#define MAX_REPEATS 64
 static double now_ns(void) {
     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
     return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
@@ -135,32 +139,85 @@ static double urand(void) {
 }
 static double din[NSETS * 512], dout[512];
 static float fin[NSETS * 512], fout[512];
+static double ref_out[NSETS * 64];
 
-static void run(const bench_case *c, long calls, int repeats) {
-    int k, rep; long i; double sink = 0.0;
-    rng = 88172645463325252ULL;  /* the same inputs for every variant of a function */
+/* The same inputs for every variant of a function. */
+static void fill(const bench_case *c) {
+    int k;
+    rng = 88172645463325252ULL;
     for (k = 0; k < NSETS * c->n_in; ++k) {
         int j = k % c->n_in;
         din[k] = c->lo[j] + (c->hi[j] - c->lo[j]) * urand();
         fin[k] = (float)din[k];
     }
-    printf("{\"function\": \"%s\", \"variant\": \"%s\", \"ns\": [", c->function, c->variant);
-    for (rep = 0; rep < repeats; ++rep) {
-        double t0 = now_ns(), t1;
-        for (i = 0; i < calls; ++i) {
-            const int set = (int)(i & (NSETS - 1));
-            if (c->is_float) {
-                c->fn(fin + set * c->n_in, fout);
-                sink += (double)fout[i % c->n_out];
-            } else {
-                c->fn(din + set * c->n_in, dout);
-                sink += dout[i % c->n_out];
-            }
+}
+
+/* Before any timing: every variant's outputs on the NSETS inputs against the first
+   variant of the same function (ours, double): 1e-9 (float32: 1e-3) relative to the
+   largest output. Returns 0 when they agree. */
+static int check(const bench_case *c, int is_ref) {
+    int set, k;
+    double scale = 1.0, worst = 0.0;
+    fill(c);
+    for (set = 0; set < NSETS; ++set) {
+        for (k = 0; k < c->n_out; ++k) { dout[k] = 0.0; fout[k] = 0.0f; }
+        if (c->is_float) c->fn(fin + set * c->n_in, fout);
+        else c->fn(din + set * c->n_in, dout);
+        for (k = 0; k < c->n_out; ++k) {
+            const double x = c->is_float ? (double)fout[k] : dout[k];
+            if (is_ref) ref_out[set * c->n_out + k] = x;
+            const double ref = ref_out[set * c->n_out + k];
+            if (fabs(ref) > scale) scale = fabs(ref);
+            if (!(fabs(x - ref) <= worst)) worst = fabs(x - ref);
         }
-        t1 = now_ns();
-        printf("%s%.4f", rep ? ", " : "", (t1 - t0) / (double)calls);
     }
-    printf("], \"checksum\": %.15e}\n", sink);
+    if (!(worst <= (c->is_float ? 1e-3 : 1e-9) * scale)) {
+        printf("{\"error\": \"%s/%s differs from ours by %.3e (scale %.3e)\"}\n",
+               c->function, c->variant, worst, scale);
+        return 1;
+    }
+    return 0;
+}
+
+static double time_once(const bench_case *c, long calls, double *sink) {
+    long i;
+    double t0, t1;
+    fill(c);
+    t0 = now_ns();
+    for (i = 0; i < calls; ++i) {
+        const int set = (int)(i & (NSETS - 1));
+        if (c->is_float) {
+            c->fn(fin + set * c->n_in, fout);
+            *sink += (double)fout[i % c->n_out];
+        } else {
+            c->fn(din + set * c->n_in, dout);
+            *sink += dout[i % c->n_out];
+        }
+    }
+    t1 = now_ns();
+    return (t1 - t0) / (double)calls;
+}
+
+/* Check every case, then time them interleaved: each repetition times every case once. */
+static int run_all(const bench_case *cases, size_t n, long calls, int repeats) {
+    static double ns[256][MAX_REPEATS], sums[256];
+    size_t k;
+    int rep;
+    for (k = 0; k < n; ++k) {
+        const int is_ref = k == 0 || strcmp(cases[k].function, cases[k - 1].function) != 0;
+        if (check(&cases[k], is_ref)) return 3;
+    }
+    if (repeats > MAX_REPEATS) repeats = MAX_REPEATS;
+    for (rep = 0; rep < repeats; ++rep) {
+        for (k = 0; k < n; ++k) ns[k][rep] = time_once(&cases[k], calls, &sums[k]);
+    }
+    for (k = 0; k < n; ++k) {
+        printf("{\"function\": \"%s\", \"variant\": \"%s\", \"ns\": [", cases[k].function,
+               cases[k].variant);
+        for (rep = 0; rep < repeats; ++rep) printf("%s%.4f", rep ? ", " : "", ns[k][rep]);
+        printf("], \"checksum\": %.15e}\n", sums[k]);
+    }
     fflush(stdout);
+    return 0;
 }
 """

@@ -17,12 +17,60 @@ from runtime.tooling.bench.c_bench import run_c, summarise_c
 from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
 from runtime.tooling.bench.op_counts import casadi_op_count
 from runtime.tooling.bench.python_timings import python_bench, toolchain_times
+from runtime.tooling.bench.step_bench import run_steps, summarise_steps
 
 ROOT = default_output(".")  # BENCHMARKS.md and benchmarks.json: the repository's, else ./
 
 
+def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any]) -> list[str]:
+    """The full TDROC step (``wmr_tdroc_step``) against the hand-written step, and the
+    goals of issue 12 that the host measures (ratios of medians, one process)."""
+    st = summarise_steps(steps)
+    ours, hand = st[("tdroc_step", "ours")], st[("tdroc_step", "hand")]
+    kernels = c[("tdroc_step_kernels", "ours")]["median"]
+    fd = {v: c[("forward_dynamics", v)]["median"] for v in ("ours", "hand_checked", "casadi")}
+    chk = steps["check"]
+
+    def cell(x: dict[str, float]) -> str:
+        return f"{x['median']:.1f} ({x['min']:.1f}–{x['max']:.1f})"
+
+    return [
+        "## The complete TDROC step, ns per step (double, gcc -O2)",
+        "",
+        "`wmr_tdroc_step` (what firmware calls) and a hand-written step with the same",
+        "contract (`runtime/tooling/bench/csrc/hand_tdroc.c`: the same statuses in the same",
+        "order, (17), the window of Ω's, k̂ (25), the boundary layer, all five rows of u,",
+        "τ = Bᵀu, saturation, commit on success), on the controller inputs of the recorded",
+        f"closed loop (lawn mower, paper formulation, {chk['steps']} steps per pass, a fresh",
+        "`_init` per pass, not timed). Checked first: equal statuses at every step, torques",
+        f"within {chk['max_abs_tau_diff']:.1e} N m (largest |τ| {chk['tau_scale']:.2f} N m).",
+        "",
+        "| step | ns per step, median (min–max) | ratio to hand-written |",
+        "|---|---:|---:|",
+        f"| `wmr_tdroc_step` (ours) | {cell(ours)} | {ours['median'] / hand['median']:.2f}× |",
+        f"| hand-written step | {cell(hand)} | 1.00× |",
+        f"| ours, kernels only (TDE + gain + law, table above) | {kernels:.1f} | "
+        f"{kernels / hand['median']:.2f}× |",
+        "",
+        "Goals measured here (issue 12): forward dynamics ≤ 1.0× the hand-written C with the",
+        "same checks and ≤ 0.8× CasADi's C; the complete step ≤ 1.0× the hand-written step.",
+        "",
+        "| goal | measured | met |",
+        "|---|---:|---|",
+        f"| forward dynamics / hand-written, same checks ≤ 1.0 | "
+        f"{fd['ours'] / fd['hand_checked']:.2f}× | "
+        f"{'yes' if fd['ours'] <= fd['hand_checked'] else 'no'} |",
+        f"| forward dynamics / CasADi C ≤ 0.8 | {fd['ours'] / fd['casadi']:.2f}× | "
+        f"{'yes' if fd['ours'] <= 0.8 * fd['casadi'] else 'no'} |",
+        f"| `wmr_tdroc_step` / hand-written step ≤ 1.0 | "
+        f"{ours['median'] / hand['median']:.2f}× | "
+        f"{'yes' if ours['median'] <= hand['median'] else 'no'} |",
+    ]
+
+
 def write_report(
     c: dict[tuple[str, str], dict[str, float]],
+    steps: dict[str, Any],
     py: list[dict[str, Any]],
     ops: dict[str, dict[str, Any]],
     tool: dict[str, float],
@@ -42,13 +90,14 @@ def write_report(
         "## C, ns per call (ratio = variant / ours double)",
         "",
         "| function | ours double | ours float32 | ours, no validation | CasADi C | SymPy ccode "
-        "| hand-written |",
-        "|---|---:|---:|---:|---:|---:|---:|",
+        "| hand-written | hand-written, same checks |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for f in funcs:
         ours = c[(f, "ours")]["median"]
         cells = []
-        for v in ("ours", "ours_float32", "ours_unchecked", "casadi", "sympy", "hand"):
+        for v in ("ours", "ours_float32", "ours_unchecked", "casadi", "sympy", "hand",
+                  "hand_checked"):
             if (f, v) not in c:
                 cells.append("—")
                 continue
@@ -60,8 +109,14 @@ def write_report(
         "",
         "“No validation”: the same specs without the finite-input, parameter-guard and",
         "finite-output checks (rendered under the prefix wmrn_), i.e. what the checks cost.",
-        "A controller step here is the sum of its kernels (TDE (17), TDROC gain (25), law);",
-        "our complete `wmr_<ctrl>_step` adds validation, history and saturation on top.",
+        "“Hand-written, same checks”: the hand-written forward dynamics with our statuses",
+        "(finite inputs, the parameter guards, finite outputs; `csrc/hand_tdroc.c`).",
+        "Before any timing every variant's outputs on the 256 inputs are checked against",
+        "ours (1e-9 relative, float32 1e-3); the repetitions are interleaved (each times",
+        "every variant once). A controller step here is the sum of its kernels (TDE (17),",
+        "TDROC gain (25), law); the complete step is timed below.",
+        "",
+        *_step_section(c, steps),
         "",
         "## Python, µs per call of the forward dynamics",
         "",
@@ -102,6 +157,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print("C benchmarks ...", flush=True)
     c = summarise_c(run_c(args.calls, args.repeats))
+    print("C step benchmark ...", flush=True)
+    steps = run_steps(args.calls, args.repeats)
     print("Python benchmarks ...", flush=True)
     py = python_bench(max(1, args.calls // 100))
     specs = specs_by_name()
@@ -114,13 +171,17 @@ def main(argv: list[str] | None = None) -> int:
         }
     print("toolchain timings ...", flush=True)
     tool = toolchain_times()
-    text = write_report(c, py, ops, tool, args.calls, args.repeats)
+    text = write_report(c, steps, py, ops, tool, args.calls, args.repeats)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "BENCHMARKS.md").write_text(text)
     (args.out / "benchmarks.json").write_text(
         json.dumps(
             {
                 "c_ns": {f"{f}/{v}": s for (f, v), s in sorted(c.items())},
+                "c_step_ns": {
+                    f"{f}/{v}": s for (f, v), s in sorted(summarise_steps(steps).items())
+                },
+                "c_step_check": steps["check"],
                 "python_us": py,
                 "ops": ops,
                 "toolchain": tool,

@@ -88,13 +88,16 @@ class Objects:
     su: tuple[Path, ...]
     ci: tuple[Path, ...]
     warnings: str  # compiler output (empty: no diagnostics at all)
+    defines: tuple[str, ...] = ()  # extra -D flags the objects were compiled with
 
 
-def compile_generated(out: Path, float32: bool, callgraph: bool | None = None) -> Objects:
-    """Compile each generated .c with ARM_FLAGS (+ -DWMR_FLOAT32) into ``out``."""
+def compile_generated(out: Path, float32: bool, callgraph: bool | None = None,
+                      defines: Sequence[str] = ()) -> Objects:
+    """Compile each generated .c with ARM_FLAGS (+ -DWMR_FLOAT32, + ``defines`` such as
+    ``-DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER``) into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     callgraph = supports_callgraph_info() if callgraph is None else callgraph
-    flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}"]
+    flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}", *defines]
     if callgraph:
         flags.append("-fcallgraph-info=su")
     if float32:
@@ -115,7 +118,8 @@ def compile_generated(out: Path, float32: bool, callgraph: bool | None = None) -
         su.append(out / f"{src.stem}.su")
         if callgraph:
             ci.append(out / f"{src.stem}.ci")
-    return Objects(out, float32, tuple(objs), tuple(su), tuple(ci), "".join(diagnostics))
+    return Objects(out, float32, tuple(objs), tuple(su), tuple(ci), "".join(diagnostics),
+                   tuple(defines))
 
 
 MAIN_TEMPLATE = """\
@@ -135,7 +139,7 @@ int main(void)
     wmr_status_t status;
     int i;
     config.nominal = nominal;
-    config.formulation = WMR_FORMULATION_PAPER;
+    config.formulation = {formulation};
     for (i = 0; i < 5; ++i) {{
         config.k1[i] = WMR_LIT(4.0);
         config.k2[i] = WMR_LIT(4.0);
@@ -169,12 +173,14 @@ MAIN_EXTRA = {
 }
 
 
-def link_controller(objs: Objects, name: str) -> Path:
-    """ELF of a tiny main calling wmr_<name>_init and _step, linked with newlib-nano."""
+def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:
+    """ELF of a tiny main calling wmr_<name>_init and _step (configured for the
+    ``formulation``), linked with newlib-nano."""
     main = objs.dir / f"main_{name}.c"
-    main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name]))
+    main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name],
+                                         formulation=f"WMR_FORMULATION_{formulation}"))
     elf = objs.dir / f"{name}.elf"
-    flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}"]
+    flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}", *objs.defines]
     if objs.float32:
         flags.append("-DWMR_FLOAT32")
     run_tool(

@@ -138,6 +138,7 @@ def link_emulator_image(objs: Objects) -> tuple[Path, Path]:
             *ARM_FLAGS,
             *SECTION_FLAGS,
             "-DWMR_FLOAT32",
+            *objs.defines,
             f"-I{GENERATED_C}",
             str(harness),
             *map(str, objs.objects),

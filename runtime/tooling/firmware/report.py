@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -46,6 +46,37 @@ from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, symbols
 DOC = default_output("docs/FIRMWARE.md")  # ./FIRMWARE.md when installed
 
 
+@dataclass(frozen=True)
+class OnlyImage:
+    """The TDROC image of a build with one formulation compiled in
+    (``-DWMR_FORMULATION_ONLY=WMR_FORMULATION_<formulation>``)."""
+
+    sizes: dict[str, int]
+    own_text: int
+    doubles: list[str]
+    step_stack: StackBound
+    objects: Objects
+    emulation: EmulationResult | None = None  # the recorded run (paper) on this build
+
+
+def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
+    """Compile (float32) with one formulation only, link the TDROC image, measure it."""
+    objs = compile_generated(
+        work / f"float32_{formulation.lower()}", True,
+        defines=(f"-DWMR_FORMULATION_ONLY=WMR_FORMULATION_{formulation}",),
+    )
+    elf = link_controller(objs, "tdroc", formulation)
+    frames = parse_callgraph(objs.ci)
+    for name, (own, qual) in parse_su(objs.su).items():
+        if name in frames:
+            frames[name].own, frames[name].qualifier = own, qual
+        else:
+            frames[name] = Frame(name, own, qual)
+    own = sum(s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT")
+    return OnlyImage(elf_sizes(elf), own, double_symbols(elf),
+                     worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
+
+
 @dataclass
 class Report:
     version: str
@@ -59,6 +90,8 @@ class Report:
     functions: list[tuple[str, int, int, str, StackBound]]  # name, size, own, qual, bound
     step_stack: dict[str, StackBound]
     own_text: dict[str, int]
+    only: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> TDROC image
+    only_minimal_recorded_status: list[int] = field(default_factory=list)
     emulation: EmulationResult | None = None
     comparison: Comparison | None = None
     notes: list[str] = field(default_factory=list)
@@ -115,6 +148,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
         step_stack,
         own_text,
     )
+    report.only = {f: formulation_only_image(work, f) for f in ("PAPER", "MINIMAL")}
     if emulate_run:
         try:
             import unicorn  # noqa: F401
@@ -125,6 +159,15 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
             rec = record_closed_loop()
             report.emulation = emulate(rec, elf, binary)
             report.comparison = compare(rec, report.emulation)
+            paper = report.only["PAPER"]
+            elf, binary = link_emulator_image(paper.objects)
+            report.only["PAPER"] = replace(paper, emulation=emulate(rec, elf, binary))
+            # The minimal formulation's own closed loop, on the minimal-only build.
+            minimal = report.only["MINIMAL"]
+            elf, binary = link_emulator_image(minimal.objects)
+            rec_min = record_closed_loop(formulation="minimal")
+            report.only["MINIMAL"] = replace(minimal, emulation=emulate(rec_min, elf, binary))
+            report.only_minimal_recorded_status = rec_min.status
     return report
 
 
@@ -160,13 +203,18 @@ def render(r: Report) -> str:
         "* `wmr_<ctrl>_init(state, config)`: validates the configuration against the",
         "  plausibility bounds of `wmr_controller.h` (`WMR_H_MIN`..`WMR_H_MAX`,",
         "  `WMR_GAIN_MAX`, `WMR_TORQUE_LIMIT_MAX`, `WMR_NOMINAL_FACTOR`; docs/BAD_INPUT.md)",
-        "  and fills the caller-owned state, storing a fingerprint (FNV-1a) of the",
-        "  configuration; on error nothing is written.",
+        "  and fills the caller-owned state, storing a fingerprint (FNV-1a over 32-bit",
+        "  words) of the configuration; on error nothing is written.",
         "* `wmr_<ctrl>_step(state, config, q, qdot, q_des, qdot_des, qddot_des, tau)`:",
-        "  commit-on-success: on any error neither the state nor tau is written. A valid",
-        "  configuration that differs from `_init`'s returns `WMR_ERR_CONFIG_CHANGED` (-19);",
-        "  `_init` adopts a new one. Adaptive gains are capped at `WMR_GAIN_MAX`; the step",
-        "  counter is a saturating `uint32_t`.",
+        "  commit-on-success: on any error neither the state nor tau is written (the step",
+        "  computes into locals and writes the state last). Each step fingerprints the",
+        "  configuration; only one that differs from `_init`'s is validated again: an",
+        "  invalid one returns its field's error, a valid one `WMR_ERR_CONFIG_CHANGED`",
+        "  (-19); `_init` adopts a new one. Adaptive gains are capped at `WMR_GAIN_MAX`; the",
+        "  step counter is a saturating `uint32_t`.",
+        "* Formulation: chosen by `config->formulation` (both linked), or at compile time",
+        "  with `-DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER` (or `_MINIMAL`): then only",
+        "  that one is accepted (the other is `WMR_ERR_BAD_FORMULATION`) and linked.",
         "* `wmr_<ctrl>_step_detail(..., tau, detail)` and",
         "  `wmr_<ctrl>_check_config_detail(config, detail)`: the same, and a",
         "  `wmr_error_detail_t {status, field, index}` in the caller's `detail` (may be NULL)",
@@ -200,6 +248,25 @@ def render(r: Report) -> str:
     lines += ["", "Deepest chains:", ""]
     for name in CONTROLLERS:
         lines.append(f"* {name.upper()}: {_path(r.step_stack[name])}")
+    lines += [
+        "",
+        "## TDROC alone, one formulation chosen at compile time (float32)",
+        "",
+        "The same image built with `-DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER` (or",
+        "`_MINIMAL`): the controllers accept that formulation only (the other is",
+        "`WMR_ERR_BAD_FORMULATION`) and the other one's kernels are not linked. Without the",
+        "define (the rows above) both are linked and `config->formulation` chooses.",
+        "",
+        "| formulation | .text | .data | .bss | generated code | double helpers "
+        "| worst-case stack of step |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for form, img in r.only.items():
+        lines.append(
+            f"| {form.lower()} only | {img.sizes['text']} | {img.sizes['data']} | "
+            f"{img.sizes['bss']} | {img.own_text} | {', '.join(img.doubles) or 'none'} | "
+            f"{img.step_stack.bytes} B{'' if img.step_stack.complete else ' (incomplete)'} |"
+        )
     lines += [
         "",
         "## Per function (float32)",
@@ -236,6 +303,27 @@ def render(r: Report) -> str:
             f"| steps | {e.steps} |",
             "| instructions per step: mean / min / max | "
             f"{ins.mean():.0f} / {ins.min()} / {ins.max()} |",
+            *(
+                [
+                    "| ... built with `-DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER`: mean / "
+                    f"min / max | {np.mean(po.instructions):.0f} / {min(po.instructions)} / "
+                    f"{max(po.instructions)} (statuses equal: "
+                    f"{_yes(po.status == e.status)}, torques equal: {_yes(po.tau == e.tau)}) |"
+                ]
+                if (po := (r.only["PAPER"].emulation if "PAPER" in r.only else None))
+                else []
+            ),
+            *(
+                [
+                    "| minimal formulation's closed loop on the `-DWMR_FORMULATION_ONLY="
+                    "WMR_FORMULATION_MINIMAL` build: mean / min / max | "
+                    f"{np.mean(mo.instructions):.0f} / {min(mo.instructions)} / "
+                    f"{max(mo.instructions)} (statuses = host float32 closed loop: "
+                    f"{_yes(mo.status == r.only_minimal_recorded_status)}) |"
+                ]
+                if (mo := (r.only["MINIMAL"].emulation if "MINIMAL" in r.only else None))
+                else []
+            ),
             f"| instructions of `wmr_tdroc_init` | {e.init_instructions} |",
             f"| stack high-water mark (measured, incl. harness) | {e.stack_bytes} B |",
             f"| statuses equal (emulated, host float32, host double) | {_yes(c.same_status)} |",
