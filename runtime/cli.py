@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import sys
 from dataclasses import dataclass
 
@@ -29,6 +30,8 @@ class Command:
     module: str
     help: str
     fixed_args: tuple[str, ...] = ()
+    extra: str = ""  # the optional dependencies it needs: pip install 'wmr-toolchain[extra]'
+    needs: tuple[str, ...] = ()  # the modules of that extra
 
 
 COMMANDS: dict[str, Command] = {
@@ -54,6 +57,8 @@ COMMANDS: dict[str, Command] = {
     "campaign": Command(
         "runtime.campaign.command",
         "thousands of closed-loop runs over the uncertainty box, on Dask",
+        extra="campaign",
+        needs=("dask", "distributed", "pyarrow", "tqdm"),
     ),
     "bench": Command("runtime.tooling.bench.report", "benchmark the generated code"),
     "firmware": Command(
@@ -78,9 +83,22 @@ def parser(prog: str) -> argparse.ArgumentParser:
     return p
 
 
+def missing_extra(name: str, cmd: Command) -> str | None:
+    """The error for a command whose optional dependencies are not installed, else None."""
+    missing = [m for m in cmd.needs if importlib.util.find_spec(m) is None]
+    if not missing:
+        return None
+    return (f"wmr {name} needs the '{cmd.extra}' extra: pip install 'wmr-toolchain[{cmd.extra}]'"
+            f" (missing: {', '.join(missing)})")
+
+
 def main(argv: list[str] | None = None, prog: str = "wmr") -> int:
     args, rest = parser(prog).parse_known_args(argv)
     cmd = COMMANDS[args.command]
+    error = missing_extra(args.command, cmd)
+    if error is not None:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     module = importlib.import_module(cmd.module)
     status: int = module.main([*cmd.fixed_args, *rest])
     return status

@@ -130,3 +130,18 @@ def test_console_script_runs_from_anywhere(tmp_path: Path) -> None:
     done = subprocess.run([exe, "reproduce", "--help"], capture_output=True, text=True,
                           cwd=tmp_path, env=env, check=True)
     assert done.stdout.startswith("usage: wmr reproduce")
+
+
+def test_a_missing_extra_is_named(capsys: pytest.CaptureFixture[str],
+                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    import importlib.util
+
+    from runtime import cli
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "pyarrow" else real(name, *a))
+    assert cli.main(["campaign", "--runs", "4", "--out", "x"]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == ("error: wmr campaign needs the 'campaign' extra: pip install "
+                           "'wmr-toolchain[campaign]' (missing: pyarrow)")
