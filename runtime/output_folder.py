@@ -31,6 +31,6 @@ def writable_file(path: Path, option: str = "--out") -> Path:
     """``path`` checked to be a file this process can write: not a folder, and its folder
     (created if missing) writable. Raises ``OutputFolderError``."""
     if path.is_dir():
-        raise OutputFolderError(f"{option} {path}: is a folder; name the file to write")
+        raise OutputFolderError(f"{option} {path}: is a folder; name the report file")
     writable_folder(path.parent, option)
     return path

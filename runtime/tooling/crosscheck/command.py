@@ -17,7 +17,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from runtime.output_folder import OutputFolderError, writable_folder
+from runtime.output_folder import OutputFolderError, writable_file
 from runtime.tooling.crosscheck.deviation import IMPLS
 from runtime.tooling.crosscheck.generated_check import generated_crosscheck
 from runtime.tooling.crosscheck.handwritten_check import applies_to, handwritten_crosscheck
@@ -86,10 +86,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, help="also write the report to this file")
     args = parser.parse_args(argv)
     if args.out is not None:  # before the minute of work, not after it
-        if args.out.is_dir():
-            raise SystemExit(f"--out {args.out}: is a folder; name the report file")
         try:
-            writable_folder(args.out.parent)
+            writable_file(args.out)
         except OutputFolderError as exc:
             raise SystemExit(str(exc)) from None
     targets = [resolve(r) for r in args.robot] if args.robot else all_targets()

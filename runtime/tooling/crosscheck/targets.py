@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
+from runtime.robot_source import generated_robots
 
 
 @dataclass(frozen=True)
@@ -49,9 +50,7 @@ def _is_robot(folder: Path) -> bool:
 
 def discover() -> list[Path]:
     """Every generated robot folder: the root of generated/, then generated/<name>/."""
-    found = [GENERATED] if _is_robot(GENERATED) else []
-    found += sorted(d for d in GENERATED.iterdir() if d.is_dir() and _is_robot(d))
-    return found
+    return generated_robots(GENERATED)
 
 
 def target_of(folder: Path) -> Target:

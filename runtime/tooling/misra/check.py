@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from modeling.package_paths import PACKAGE_ROOT, SHIPPED_GENERATED
+from runtime.robot_source import generated_robots
 
 DOC = PACKAGE_ROOT / "docs" / "STATIC_CHECKS.md"
 ADDON = "misra"
@@ -97,8 +98,7 @@ def documented_rules(doc: Path = DOC) -> dict[str, Deviation]:
 
 def robot_folders() -> list[Path]:
     """The ``c/`` folders of every shipped robot."""
-    return [SHIPPED_GENERATED / "c",
-            *sorted(p for p in SHIPPED_GENERATED.glob("*/c") if p.is_dir())]
+    return [folder / "c" for folder in generated_robots(SHIPPED_GENERATED)]
 
 
 def main(argv: list[str] | None = None) -> int:
