@@ -157,6 +157,33 @@ _CHOICES = {"velocity": VELOCITY_MODELS, "accel_estimator": ACCEL_ESTIMATORS}
 _MOVED = {"plant.encoder_ppr": "sensing.encoder_ppr"}
 
 
+def check_number(where: str, label: str, value: Any, *, integer: bool = False,
+                 positive: bool = False, non_negative: bool = False,
+                 low: float | None = None, high: float | None = None,
+                 error: type[ValueError] = ExperimentFileError) -> float:
+    """``value`` as a float, checked: a number (not a bool), an integer if asked, finite,
+    then the asked bounds; otherwise ``error`` naming the file and the field (shared by the
+    experiment and campaign files)."""
+    def bad(what: str) -> ValueError:
+        return error(f"{where}: field '{label}' must be {what}, got {value!r}")
+
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise bad("a number")
+    if integer and not isinstance(value, int):
+        raise bad("an integer")
+    if not math.isfinite(value):
+        raise bad("finite")
+    if positive and value <= 0:
+        raise bad("positive")
+    if non_negative and value < 0:
+        raise bad("non-negative")
+    if low is not None and value < low:
+        raise bad(f"at least {low:g}")
+    if high is not None and value > high:
+        raise bad(f"at most {high:g}")
+    return float(value)
+
+
 def _section(where: str, name: str, data: Any, cls: type) -> Any:
     if not isinstance(data, dict):
         raise ExperimentFileError(f"{where}: [{name}] must be a table")
@@ -181,18 +208,8 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
             values[key] = value
             continue
         want_int = known[key].type in ("int", int)
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ExperimentFileError(f"{where}: field '{label}' must be a number, got {value!r}")
-        if want_int and not isinstance(value, int):
-            raise ExperimentFileError(f"{where}: field '{label}' must be an integer, got {value!r}")
-        if not math.isfinite(value):
-            raise ExperimentFileError(f"{where}: field '{label}' must be finite, got {value!r}")
-        if key in _POSITIVE and value <= 0:
-            raise ExperimentFileError(f"{where}: field '{label}' must be positive, got {value!r}")
-        if key in _NON_NEGATIVE and value < 0:
-            raise ExperimentFileError(
-                f"{where}: field '{label}' must be non-negative, got {value!r}"
-            )
+        check_number(where, label, value, integer=want_int, positive=key in _POSITIVE,
+                     non_negative=key in _NON_NEGATIVE)
         values[key] = int(value) if want_int else float(value)
     out = replace(cls(), **values)
     if cls is ControllerSettings:

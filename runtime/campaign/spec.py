@@ -46,6 +46,7 @@ from runtime.experiment import (
     PathSettings,
     PlantSettings,
     SensingSettings,
+    check_number,
     load_experiment,
     parse_experiment,
 )
@@ -177,21 +178,8 @@ def from_payload(data: dict[str, Any]) -> Campaign:
 def _number(where: str, label: str, value: Any, *, integer: bool = False,
             positive: bool = False, low: float | None = None,
             high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise CampaignSpecError(f"{where}: field '{label}' must be a number, got {value!r}")
-    if integer and not isinstance(value, int):
-        raise CampaignSpecError(f"{where}: field '{label}' must be an integer, got {value!r}")
-    if not math.isfinite(value):
-        raise CampaignSpecError(f"{where}: field '{label}' must be finite, got {value!r}")
-    if positive and value <= 0:
-        raise CampaignSpecError(f"{where}: field '{label}' must be positive, got {value!r}")
-    if low is not None and value < low:
-        raise CampaignSpecError(f"{where}: field '{label}' must be at least {low:g}, "
-                                f"got {value!r}")
-    if high is not None and value > high:
-        raise CampaignSpecError(f"{where}: field '{label}' must be at most {high:g}, "
-                                f"got {value!r}")
-    return float(value)
+    return check_number(where, label, value, integer=integer, positive=positive, low=low,
+                        high=high, error=CampaignSpecError)
 
 
 def field_type(name: str) -> str:
