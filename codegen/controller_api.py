@@ -25,9 +25,14 @@ GAIN_MAX = "1.0e6"  # K1, K2, Q, eps, phi, gamma, held_gain, gain0; and the adap
 TORQUE_LIMIT_MAX = "1.0e6"  # tau_max [N m]
 NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|, 1)
 STEPS_MAX = "4294967295"  # the saturating step counter (uint32_t)
-# FNV-1a (32 bit) of the configuration's field values, kept in the state.
+# The configuration fingerprint kept in the state: FNV-1a (32 bit) in FNV_LANES interleaved
+# lanes (value k into lane k mod FNV_LANES: independent multiply chains), then FNV-1a of the
+# lanes. A value is one 32-bit word: an int as it is, a real's words folded as
+# w = (w * FNV_MIX) ^ word (a float's one word; a double's two, the high one off the chain).
 FNV_OFFSET = "2166136261"
 FNV_PRIME = "16777619"
+FNV_MIX = "2654435761"  # odd (0x9E3779B1): multiplying by it is a bijection of the words
+FNV_LANES = 4
 
 # Which input or field an error is about (``<prefix>_error_detail_t.field``). Stable values:
 # append, never renumber.
@@ -148,9 +153,28 @@ def c_common_context() -> dict[str, object]:
     return {"real_bounds": real_bounds(), "fields": FIELDS, "fnv_prime": FNV_PRIME}
 
 
-def c_controller_context(info: ControllerInfo) -> dict[str, object]:
-    """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot."""
-    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET, "fnv_prime": FNV_PRIME}
+def c_controller_context(
+    info: ControllerInfo, param_fields: list[str], nq: int
+) -> dict[str, object]:
+    """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot (its C
+    parameter field names and coordinate count)."""
+    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET,
+            "fnv_prime": FNV_PRIME, "fnv_mix": FNV_MIX, "fnv_lanes": FNV_LANES,
+            "fingerprint_values": fingerprint_values(info, param_fields, nq)}
+
+
+def fingerprint_values(
+    info: ControllerInfo, param_fields: list[str], nq: int
+) -> list[tuple[str, str]]:
+    """The values the fingerprint hashes, in order, as (C expression on ``config``, "real"
+    or "int"): the nominal parameters, then ``config_fields`` with vectors entry by entry."""
+    out = [(f"config->nominal.{f}", "real") for f in param_fields]
+    for name, kind, count in config_fields(info):
+        if count == 0:
+            out += [(f"config->{name}[{i}]", kind) for i in range(nq)]
+        else:
+            out.append((f"config->{name}", kind))
+    return out
 
 
 def python_context() -> dict[str, object]:
@@ -161,6 +185,8 @@ def python_context() -> dict[str, object]:
         "fields": FIELDS,
         "fnv_offset": FNV_OFFSET,
         "fnv_prime": FNV_PRIME,
+        "fnv_mix": FNV_MIX,
+        "fnv_lanes": FNV_LANES,
         "config_fields": {c.name: config_fields(c) for c in CONTROLLERS},
     }
 

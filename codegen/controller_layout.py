@@ -76,6 +76,19 @@ class ControllerLayout:
     minv_needs_q: bool  # the minimal ||Mhat^-1|| depends on q: evaluated at q every step
     coordinate_names: tuple[str, ...]
     input_names: tuple[str, ...]
+    # coordinates whose sin, cos the `_trig` TDE kernels take (robot_functions.trig_angles)
+    paper_trig: tuple[int, ...] = ()
+    minimal_trig: tuple[int, ...] = ()
+
+    def trig_of(self, formulation: str) -> tuple[int, ...]:
+        """The `_trig` kernels' angles of ``formulation`` (() when it has none)."""
+        return self.paper_trig if formulation == "paper" else self.minimal_trig
+
+    @property
+    def trig_size(self) -> int:
+        """Entries of a TDE controller's trig arrays: sin and cos per angle, the larger
+        formulation's (0: no `_trig` kernels)."""
+        return 2 * max(len(self.paper_trig) if self.paper else 0, len(self.minimal_trig))
 
     def __post_init__(self) -> None:
         if not self.prefix.isidentifier() or self.prefix.endswith("_"):

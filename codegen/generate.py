@@ -21,7 +21,13 @@ from pathlib import Path
 from codegen import backends
 from codegen.backend import Module, RobotTarget, function_ir
 from codegen.controller_layout import ControllerLayout
-from codegen.robot_functions import law_specs, minv_norm_needs_q, model_specs, plant_specs
+from codegen.robot_functions import (
+    law_specs,
+    minv_norm_needs_q,
+    model_specs,
+    plant_specs,
+    trig_angles,
+)
 from codegen.template_util import generated_by
 from modeling.robot_file import Robot
 from modeling.robot_model import RobotModel
@@ -36,6 +42,7 @@ def layout_for(model: RobotModel) -> ControllerLayout:
     return ControllerLayout(
         model.prefix, model.nq, model.nu, model.actuated, model.paper,
         minv_norm_needs_q(model), model.coordinate_names, model.input_names,
+        trig_angles(model, "paper") if model.paper else (), trig_angles(model, "minimal"),
     )
 
 

@@ -277,6 +277,48 @@ def minv_norm_needs_q(model: RobotModel) -> bool:
 
 
 @cache
+def trig_angles(model: RobotModel, formulation: ctl.Formulation) -> tuple[int, ...]:
+    """Coordinates whose sin and cos the ``_trig`` kernels take instead of q: those M̂ of
+    ``formulation`` depends on (``ctl.mass_angles``). A controller step computes them once
+    for the law at q and keeps them for (17) at q(t − h) in the next step. () when M̂ does
+    not depend on q, or not through sin/cos of single coordinates only."""
+    angles = ctl.mass_angles(formulation, model)
+    if not angles:
+        return ()
+    mass = ctl.control_model(formulation, model).mass
+    syms = tuple(model.q[i] for i in angles)
+    if ctl.in_trig(mass, syms, ctl.trig_symbols("t", len(angles))) is None:
+        return ()
+    return angles
+
+
+def _trig_variant(
+    spec: FunctionSpec, coords: sp.Matrix, model: RobotModel, angles: tuple[int, ...],
+    name: str, when: str,
+) -> FunctionSpec:
+    """``spec`` with its q argument ``coords`` replaced by ``name`` = (sin, cos) of the
+    ``angles`` (the same outputs, no sin/cos evaluated)."""
+    syms = tuple(coords[i] for i in angles)
+    trig = ctl.trig_symbols(name, len(angles))
+    outputs = []
+    for o in spec.outputs:
+        rewritten = ctl.in_trig(sp.Matrix(o.exprs), syms, trig)
+        if rewritten is None:  # trig_angles checked M-hat, the only way q enters
+            raise ValueError(f"{spec.name}: q enters other than through sin/cos of {syms}")
+        outputs.append(replace(o, exprs=tuple(rewritten)))
+    listed = ", ".join(f"sin, cos of {when}[{i}]" for i in angles)
+    inputs = tuple(
+        array(name, trig, listed) if a.kind == "array" and a.symbols == tuple(coords) else a
+        for a in spec.inputs
+    )
+    return replace(
+        spec, name=f"{spec.name}_trig", inputs=inputs, outputs=tuple(outputs),
+        doc=spec.doc + f"\nThe same with {name} = ({listed}) in place of the coordinates:\n"
+        "no sin/cos evaluated (a step computes them once and keeps them for the next).",
+    )
+
+
+@cache
 def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     """``<prefix>_laws``: pure kernels of the four controllers, each formulation."""
     specs: list[FunctionSpec] = []
@@ -328,6 +370,10 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ("(17)",),
             )
         )
+        angles = trig_angles(model, f)
+        if angles:
+            specs.append(_trig_variant(specs[-1], ts.q_prev, model, angles, "trig_prev",
+                                       "q(t-h)"))
         specs.append(_minv_norm_spec(model, f))
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW, model)
         specs.append(
@@ -379,6 +425,8 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ("(16)", "(18)"),
             )
         )
+        if angles:
+            specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
         law, ls = ctl.tde_law(f, switching=True, model=model)
         specs.append(
             FunctionSpec(
@@ -398,6 +446,8 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ("(16)", "(22)", "(24)", "(25)"),
             )
         )
+        if angles:
+            specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
         qdot_c = array("qdot", model.qdot, "measured qdot")
         law, ls = ctl.model_law(f, "roc", model)
         specs.append(

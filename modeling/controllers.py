@@ -266,6 +266,35 @@ def tde_estimate(
     return ts.u_prev - mass * qdd, ts
 
 
+def mass_angles(formulation: Formulation, model: RobotModel) -> tuple[int, ...]:
+    """Indices in q of the coordinates M̂ depends on (the heading, hitch angles): the only
+    way the laws with Ĥ1 of (17) (TDC, TDROC) and (17) itself depend on q."""
+    free = control_model(formulation, model).mass.free_symbols
+    return tuple(i for i, x in enumerate(model.q) if x in free)
+
+
+def trig_symbols(name: str, count: int) -> tuple[sp.Symbol, ...]:
+    """(sin a0, cos a0, sin a1, cos a1, ...) as symbols ``<name>_s<k>``, ``<name>_c<k>``."""
+    return tuple(sp.Symbol(f"{name}_{sc}{k}", real=True) for k in range(count) for sc in "sc")
+
+
+def in_trig(
+    exprs: sp.Matrix, angles: tuple[sp.Symbol, ...], trig: tuple[sp.Symbol, ...]
+) -> sp.Matrix | None:
+    """``exprs`` with sin/cos of each angle replaced by ``trig`` (sin, cos interleaved), so a
+    caller that already has them (the previous step's law had sin/cos of what is now
+    q(t − h)) computes none; None when an angle also appears otherwise (bare, or inside a
+    sum that expand_trig does not split)."""
+    mapping: dict[sp.Expr, sp.Expr] = {}
+    for k, a in enumerate(angles):
+        mapping[sp.sin(a)] = trig[2 * k]
+        mapping[sp.cos(a)] = trig[2 * k + 1]
+    out = exprs.xreplace(mapping)
+    if out.free_symbols & set(angles):
+        out = exprs.applyfunc(sp.expand_trig).xreplace(mapping)
+    return None if out.free_symbols & set(angles) else out
+
+
 def heading_rotation(formulation: Formulation, model: RobotModel) -> sp.Matrix:
     """T(θ): rotates the root's (x, y) rows by its yaw θ in the paper form (q starts with
     them); the identity for the minimal form's wheel angles."""

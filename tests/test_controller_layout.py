@@ -73,7 +73,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
                 layout=layout,
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
-                **c_controller_context(info),
+                **c_controller_context(info, list(TOY_PARAMS), layout.nq),
             )
     texts["robot.h"] = template_util.render(
         C_TEMPLATES,
@@ -192,9 +192,12 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
         "if (!isfinite(p->radius_l) || TOY_FABS(p->radius_l) > TOY_LIT(1000.0)) {\n"
         "        return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, 5);" in body
     )
-    hashed = _function_body(c_texts["controller.c"], "toy_hash_params")
-    assert "out = toy_hash_real(out, p->J_theta);" in hashed
-    assert "out = toy_hash_real(out, p->radius_l);" in hashed
+    tdroc = c_texts["tdroc.c"]
+    start = tdroc.index("static uint32_t toy_tdroc_fingerprint(")
+    hashed = tdroc[start:tdroc.index("\n}\n", start)]
+    assert "toy_real_word(config->nominal.J_theta)" in hashed
+    assert "toy_real_word(config->nominal.radius_l)" in hashed
+    assert "toy_real_word(config->k1[7])" in hashed  # every entry of an nq-vector
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:

@@ -44,50 +44,64 @@ wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
     return wmr_asmc_check_config_detail(config, 0);
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
+   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
+static uint32_t wmr_real_word(wmr_real_t x)
 {
     union {
         wmr_real_t value;
         uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
     } rep;
-    uint32_t out = hash;
+    uint32_t word = 0u;
     unsigned int i;
     rep.value = x;
     for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = wmr_fnv_word(out, rep.words[i]);
+        word = (word * 2654435761u) ^ rep.words[i];
     }
-    return out;
+    return word;
 }
 
-/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
-   never hashed). */
+/* FNV-1a (32 bit) step. */
+static uint32_t wmr_fnv(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
+   k mod 4: independent multiply chains instead of one 25 long), then FNV-1a
+   of the lanes. Every field, value by value (padding never hashed). */
 static uint32_t wmr_asmc_fingerprint(const wmr_asmc_config_t *config)
 {
-    uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
-    int i;
-    fp = wmr_fnv_word(fp, (uint32_t)config->formulation);
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k1[i]);
-    }
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k2[i]);
-    }
-    fp = wmr_fnv_real(fp, config->q_pos);
-    fp = wmr_fnv_real(fp, config->q_vel);
-    fp = wmr_fnv_real(fp, config->h);
-    fp = wmr_fnv_real(fp, config->tau_max);
-    fp = wmr_fnv_real(fp, config->eps);
-    fp = wmr_fnv_real(fp, config->gamma);
-    fp = wmr_fnv_real(fp, config->gain0);
-    return fp;
+    uint32_t lane0 = 2166136261u;
+    uint32_t lane1 = 2166136261u;
+    uint32_t lane2 = 2166136261u;
+    uint32_t lane3 = 2166136261u;
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.m));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.Iz));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.K));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->nominal.Iw));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.r));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.b));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.d));
+    lane3 = wmr_fnv(lane3, (uint32_t)config->formulation);
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[0]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k1[1]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k1[2]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k1[3]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[4]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[0]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k2[1]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k2[2]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k2[3]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[4]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->q_pos));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->q_vel));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->h));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->tau_max));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->eps));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->gamma));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->gain0));
+    return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */

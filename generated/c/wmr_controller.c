@@ -69,52 +69,6 @@ static int wmr_first_unbounded(const wmr_real_t *x, int n)
     return -1;
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
-{
-    union {
-        wmr_real_t value;
-        uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
-    } rep;
-    uint32_t out = hash;
-    unsigned int i;
-    rep.value = x;
-    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = wmr_fnv_word(out, rep.words[i]);
-    }
-    return out;
-}
-
-uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x)
-{
-    return wmr_fnv_real(hash, x);
-}
-
-uint32_t wmr_hash_int(uint32_t hash, int x)
-{
-    return wmr_fnv_word(hash, (uint32_t)x);
-}
-
-uint32_t wmr_hash_params(uint32_t hash, const wmr_params_t *p)
-{
-    uint32_t out = hash;
-    out = wmr_hash_real(out, p->m);
-    out = wmr_hash_real(out, p->Iz);
-    out = wmr_hash_real(out, p->K);
-    out = wmr_hash_real(out, p->Iw);
-    out = wmr_hash_real(out, p->r);
-    out = wmr_hash_real(out, p->b);
-    out = wmr_hash_real(out, p->d);
-    return out;
-}
-
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],
     const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max,
     wmr_error_detail_t *detail)
@@ -233,17 +187,17 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
     const int fields[5] = {WMR_FIELD_Q, WMR_FIELD_QDOT, WMR_FIELD_Q_DES, WMR_FIELD_QDOT_DES,
                            WMR_FIELD_QDDOT_DES};
     const wmr_bits_t bound = wmr_magnitude_bits(WMR_LIT(1.0e6));
-    wmr_bits_t worst = 0u;
+    unsigned int beyond = 0u;
     int k;
     int i;
-    /* One pass of integer maxima, no branch per entry; only a bad step looks for which. */
+    /* One pass of integer compares OR-ed together (independent, no branch per entry: a
+       running maximum would chain them); only a bad step looks for which. */
     for (k = 0; k < 5; ++k) {
         for (i = 0; i < 5; ++i) {
-            const wmr_bits_t m = wmr_magnitude_bits(inputs[k][i]);
-            worst = m > worst ? m : worst;
+            beyond |= (wmr_magnitude_bits(inputs[k][i]) > bound) ? 1u : 0u;
         }
     }
-    if (worst <= bound) {
+    if (beyond == 0u) {
         return WMR_OK;
     }
     for (k = 0; k < 5; ++k) {

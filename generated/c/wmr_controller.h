@@ -97,15 +97,6 @@ int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max);
 
-/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
-uint32_t wmr_hash_real(uint32_t hash, wmr_real_t x);
-
-/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
-uint32_t wmr_hash_int(uint32_t hash, int x);
-
-/** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
-uint32_t wmr_hash_params(uint32_t hash, const wmr_params_t *p);
-
 /** 1 if x is finite and > 0. */
 int wmr_positive(wmr_real_t x);
 

@@ -113,6 +113,73 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
     H1hat[4] = -I_w*_t20 - _t19*_t27 - _t26*_t30 - _t29*_t4 + up4;
 }
 
+/* wmr_paper_tde_trig: documented in wmr_laws.h.
+   operations after CSE: 35 add, 48 mul, 2 div, 0 sin/cos, 0 sqrt */
+void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
+    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
+    const wmr_real_t *span, wmr_real_t *H1hat)
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t trig_prev_s0 = trig_prev[0];
+    const wmr_real_t trig_prev_c0 = trig_prev[1];
+    const wmr_real_t up0 = u_prev[0];
+    const wmr_real_t up1 = u_prev[1];
+    const wmr_real_t up2 = u_prev[2];
+    const wmr_real_t up3 = u_prev[3];
+    const wmr_real_t up4 = u_prev[4];
+    const wmr_real_t qd_now0 = qdot_now[0];
+    const wmr_real_t qd_now1 = qdot_now[1];
+    const wmr_real_t qd_now2 = qdot_now[2];
+    const wmr_real_t qd_now3 = qdot_now[3];
+    const wmr_real_t qd_now4 = qdot_now[4];
+    const wmr_real_t qd_then0 = qdot_then[0];
+    const wmr_real_t qd_then1 = qdot_then[1];
+    const wmr_real_t qd_then2 = qdot_then[2];
+    const wmr_real_t qd_then3 = qdot_then[3];
+    const wmr_real_t qd_then4 = qdot_then[4];
+    const wmr_real_t span_1 = span[0];
+    const wmr_real_t _t0 = qd_now0 - qd_then0;
+    const wmr_real_t _t1 = WMR_LIT(1.0)/span_1;
+    const wmr_real_t _t2 = _t1*m;
+    const wmr_real_t _t3 = qd_now2 - qd_then2;
+    const wmr_real_t _t4 = _t1*_t3;
+    const wmr_real_t _t5 = K*trig_prev_s0;
+    const wmr_real_t _t6 = m*trig_prev_c0;
+    const wmr_real_t _t7 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t8 = _t6*_t7;
+    const wmr_real_t _t9 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t10 = _t9*r;
+    const wmr_real_t _t11 = _t10*_t5;
+    const wmr_real_t _t12 = m*trig_prev_s0;
+    const wmr_real_t _t13 = _t10*d;
+    const wmr_real_t _t14 = _t12*_t13;
+    const wmr_real_t _t15 = _t11 - _t14 + _t8;
+    const wmr_real_t _t16 = _t1*(qd_now3 - qd_then3);
+    const wmr_real_t _t17 = -_t11 + _t14 + _t8;
+    const wmr_real_t _t18 = _t1*(qd_now4 - qd_then4);
+    const wmr_real_t _t19 = qd_now1 - qd_then1;
+    const wmr_real_t _t20 = _t12*_t7;
+    const wmr_real_t _t21 = K*_t10*trig_prev_c0;
+    const wmr_real_t _t22 = _t13*_t6;
+    const wmr_real_t _t23 = _t20 - _t21 + _t22;
+    const wmr_real_t _t24 = _t20 + _t21 - _t22;
+    const wmr_real_t _t25 = _t0*_t1;
+    const wmr_real_t _t26 = I*_t10 - K*_t9*d*r;
+    const wmr_real_t _t27 = -_t26;
+    const wmr_real_t _t28 = _t1*_t19;
+    H1hat[0] = -_t0*_t2 + _t15*_t16 + _t17*_t18 - _t4*_t5 + up0;
+    H1hat[1] = K*_t1*_t3*trig_prev_c0 + _t16*_t23 + _t18*_t24 - _t19*_t2 + up1;
+    H1hat[2] = -I*_t4 + K*_t1*_t19*trig_prev_c0 - _t16*_t27 - _t18*_t26 - _t25*_t5 + up2;
+    H1hat[3] = -I_w*_t16 - _t15*_t25 - _t23*_t28 - _t26*_t4 + up3;
+    H1hat[4] = -I_w*_t18 - _t17*_t25 - _t24*_t28 - _t27*_t4 + up4;
+}
+
 /* wmr_paper_minv_norm: documented in wmr_laws.h.
    operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt */
 void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
@@ -412,6 +479,85 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     u[4] = H1hat4 + I_w*_t16 + _t0*_t17 + _t18*_t24 + _t2*_t26;
 }
 
+/* wmr_paper_tdc_law_trig: documented in wmr_laws.h.
+   operations after CSE: 40 add, 46 mul, 1 div, 0 sin/cos, 0 sqrt */
+void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
+{
+    (void)p12;
+    (void)p22;
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t trig_s0 = trig[0];
+    const wmr_real_t trig_c0 = trig[1];
+    const wmr_real_t e0 = e[0];
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t e2 = e[2];
+    const wmr_real_t e3 = e[3];
+    const wmr_real_t e4 = e[4];
+    const wmr_real_t edot0 = edot[0];
+    const wmr_real_t edot1 = edot[1];
+    const wmr_real_t edot2 = edot[2];
+    const wmr_real_t edot3 = edot[3];
+    const wmr_real_t edot4 = edot[4];
+    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t qdd_des1 = qddot_des[1];
+    const wmr_real_t qdd_des2 = qddot_des[2];
+    const wmr_real_t qdd_des3 = qddot_des[3];
+    const wmr_real_t qdd_des4 = qddot_des[4];
+    const wmr_real_t k1_0 = k1[0];
+    const wmr_real_t k1_1 = k1[1];
+    const wmr_real_t k1_2 = k1[2];
+    const wmr_real_t k1_3 = k1[3];
+    const wmr_real_t k1_4 = k1[4];
+    const wmr_real_t k2_0 = k2[0];
+    const wmr_real_t k2_1 = k2[1];
+    const wmr_real_t k2_2 = k2[2];
+    const wmr_real_t k2_3 = k2[3];
+    const wmr_real_t k2_4 = k2[4];
+    const wmr_real_t H1hat0 = H1hat[0];
+    const wmr_real_t H1hat1 = H1hat[1];
+    const wmr_real_t H1hat2 = H1hat[2];
+    const wmr_real_t H1hat3 = H1hat[3];
+    const wmr_real_t H1hat4 = H1hat[4];
+    const wmr_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t _t1 = e2*k1_2 + edot2*k2_2 + qdd_des2;
+    const wmr_real_t _t2 = K*_t1;
+    const wmr_real_t _t3 = e3*k1_3 + edot3*k2_3 + qdd_des3;
+    const wmr_real_t _t4 = m*trig_c0;
+    const wmr_real_t _t5 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t6 = _t4*_t5;
+    const wmr_real_t _t7 = r/b;
+    const wmr_real_t _t8 = K*trig_s0;
+    const wmr_real_t _t9 = _t7*_t8;
+    const wmr_real_t _t10 = m*trig_s0;
+    const wmr_real_t _t11 = _t7*d;
+    const wmr_real_t _t12 = _t10*_t11;
+    const wmr_real_t _t13 = -_t12 + _t6 + _t9;
+    const wmr_real_t _t14 = e4*k1_4 + edot4*k2_4 + qdd_des4;
+    const wmr_real_t _t15 = _t12 + _t6 - _t9;
+    const wmr_real_t _t16 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t17 = _t10*_t5;
+    const wmr_real_t _t18 = K*trig_c0;
+    const wmr_real_t _t19 = _t18*_t7;
+    const wmr_real_t _t20 = _t11*_t4;
+    const wmr_real_t _t21 = _t17 - _t19 + _t20;
+    const wmr_real_t _t22 = _t17 + _t19 - _t20;
+    const wmr_real_t _t23 = I*_t7 - K*_t11;
+    const wmr_real_t _t24 = -_t23;
+    u[0] = H1hat0 + _t0*m - _t13*_t3 - _t14*_t15 + _t2*trig_s0;
+    u[1] = H1hat1 - _t14*_t22 + _t16*m - _t2*trig_c0 - _t21*_t3;
+    u[2] = H1hat2 + I*_t1 + _t0*_t8 + _t14*_t23 - _t16*_t18 + _t24*_t3;
+    u[3] = H1hat3 + I_w*_t3 + _t0*_t13 + _t1*_t23 + _t16*_t21;
+    u[4] = H1hat4 + I_w*_t14 + _t0*_t15 + _t1*_t24 + _t16*_t22;
+}
+
 /* wmr_paper_tdroc_law: documented in wmr_laws.h.
    operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
@@ -508,6 +654,109 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     u[2] = H1hat2 + I*_t9 + _t16*_t7 + _t22*_t33 + _t24*_t32 - _t25*_t27;
     u[3] = H1hat3 + I_w*_t22 + _t21*_t7 + _t25*_t31 + _t32*_t9;
     u[4] = H1hat4 + I_w*_t24 + _t23*_t7 + _t25*_t30 + _t33*_t9;
+    s[0] = _t0;
+    s[1] = _t1;
+    s[2] = _t2;
+    s[3] = _t3;
+    s[4] = _t4;
+    s_norm[0] = _t5;
+}
+
+/* wmr_paper_tdroc_law_trig: documented in wmr_laws.h.
+   operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t trig_s0 = trig[0];
+    const wmr_real_t trig_c0 = trig[1];
+    const wmr_real_t e0 = e[0];
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t e2 = e[2];
+    const wmr_real_t e3 = e[3];
+    const wmr_real_t e4 = e[4];
+    const wmr_real_t edot0 = edot[0];
+    const wmr_real_t edot1 = edot[1];
+    const wmr_real_t edot2 = edot[2];
+    const wmr_real_t edot3 = edot[3];
+    const wmr_real_t edot4 = edot[4];
+    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t qdd_des1 = qddot_des[1];
+    const wmr_real_t qdd_des2 = qddot_des[2];
+    const wmr_real_t qdd_des3 = qddot_des[3];
+    const wmr_real_t qdd_des4 = qddot_des[4];
+    const wmr_real_t k1_0 = k1[0];
+    const wmr_real_t k1_1 = k1[1];
+    const wmr_real_t k1_2 = k1[2];
+    const wmr_real_t k1_3 = k1[3];
+    const wmr_real_t k1_4 = k1[4];
+    const wmr_real_t k2_0 = k2[0];
+    const wmr_real_t k2_1 = k2[1];
+    const wmr_real_t k2_2 = k2[2];
+    const wmr_real_t k2_3 = k2[3];
+    const wmr_real_t k2_4 = k2[4];
+    const wmr_real_t p12_0 = p12[0];
+    const wmr_real_t p12_1 = p12[1];
+    const wmr_real_t p12_2 = p12[2];
+    const wmr_real_t p12_3 = p12[3];
+    const wmr_real_t p12_4 = p12[4];
+    const wmr_real_t p22_0 = p22[0];
+    const wmr_real_t p22_1 = p22[1];
+    const wmr_real_t p22_2 = p22[2];
+    const wmr_real_t p22_3 = p22[3];
+    const wmr_real_t p22_4 = p22[4];
+    const wmr_real_t H1hat0 = H1hat[0];
+    const wmr_real_t H1hat1 = H1hat[1];
+    const wmr_real_t H1hat2 = H1hat[2];
+    const wmr_real_t H1hat3 = H1hat[3];
+    const wmr_real_t H1hat4 = H1hat[4];
+    const wmr_real_t gain_1 = gain[0];
+    const wmr_real_t eps_1 = eps[0];
+    const wmr_real_t _t0 = e0*p12_0 + edot0*p22_0;
+    const wmr_real_t _t1 = e1*p12_1 + edot1*p22_1;
+    const wmr_real_t _t2 = e2*p12_2 + edot2*p22_2;
+    const wmr_real_t _t3 = e3*p12_3 + edot3*p22_3;
+    const wmr_real_t _t4 = e4*p12_4 + edot4*p22_4;
+    const wmr_real_t _t5 = WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4);
+    const wmr_real_t _t6 = gain_1/WMR_FMAX(_t5, eps_1);
+    const wmr_real_t _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t _t8 = _t2*_t6 + e2*k1_2 + edot2*k2_2 + qdd_des2;
+    const wmr_real_t _t9 = K*_t8;
+    const wmr_real_t _t10 = m*trig_c0;
+    const wmr_real_t _t11 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t12 = _t10*_t11;
+    const wmr_real_t _t13 = r/b;
+    const wmr_real_t _t14 = K*trig_s0;
+    const wmr_real_t _t15 = _t13*_t14;
+    const wmr_real_t _t16 = m*trig_s0;
+    const wmr_real_t _t17 = _t13*d;
+    const wmr_real_t _t18 = _t16*_t17;
+    const wmr_real_t _t19 = _t12 + _t15 - _t18;
+    const wmr_real_t _t20 = _t3*_t6 + e3*k1_3 + edot3*k2_3 + qdd_des3;
+    const wmr_real_t _t21 = _t12 - _t15 + _t18;
+    const wmr_real_t _t22 = _t4*_t6 + e4*k1_4 + edot4*k2_4 + qdd_des4;
+    const wmr_real_t _t23 = _t1*_t6 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t24 = _t11*_t16;
+    const wmr_real_t _t25 = K*trig_c0;
+    const wmr_real_t _t26 = _t13*_t25;
+    const wmr_real_t _t27 = _t10*_t17;
+    const wmr_real_t _t28 = _t24 + _t26 - _t27;
+    const wmr_real_t _t29 = _t24 - _t26 + _t27;
+    const wmr_real_t _t30 = I*_t13 - K*_t17;
+    const wmr_real_t _t31 = -_t30;
+    u[0] = H1hat0 - _t19*_t20 - _t21*_t22 + _t7*m + _t9*trig_s0;
+    u[1] = H1hat1 - _t20*_t29 - _t22*_t28 + _t23*m - _t9*trig_c0;
+    u[2] = H1hat2 + I*_t8 + _t14*_t7 + _t20*_t31 + _t22*_t30 - _t23*_t25;
+    u[3] = H1hat3 + I_w*_t20 + _t19*_t7 + _t23*_t29 + _t30*_t8;
+    u[4] = H1hat4 + I_w*_t22 + _t21*_t7 + _t23*_t28 + _t31*_t8;
     s[0] = _t0;
     s[1] = _t1;
     s[2] = _t2;

@@ -83,6 +83,39 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
     const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
     wmr_real_t *H1hat);
 
+#define WMR_PAPER_TDE_TRIG_TRIG_PREV_SIZE 2
+#define WMR_PAPER_TDE_TRIG_U_PREV_SIZE 5
+#define WMR_PAPER_TDE_TRIG_QDOT_NOW_SIZE 5
+#define WMR_PAPER_TDE_TRIG_QDOT_THEN_SIZE 5
+#define WMR_PAPER_TDE_TRIG_SPAN_SIZE 1
+#define WMR_PAPER_TDE_TRIG_H1HAT_SIZE 5
+
+/**
+ * (paper formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+ * qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+ * The same with trig_prev = (sin, cos of q(t-h)[2]) in place of the coordinates:
+ * no sin/cos evaluated (a step computes them once and keeps them for the next).
+ *
+ * Paper equations: (17).
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[in]  trig_prev [2] row-major (WMR_PAPER_TDE_TRIG_TRIG_PREV_SIZE): trig_prev_s0,
+ *     trig_prev_c0 -- sin, cos of q(t-h)[2]
+ * @param[in]  u_prev [5] row-major (WMR_PAPER_TDE_TRIG_U_PREV_SIZE): up0, up1, up2, up3, up4 --
+ *     u(t-h) applied
+ * @param[in]  qdot_now [5] row-major (WMR_PAPER_TDE_TRIG_QDOT_NOW_SIZE): qd_now0, qd_now1, qd_now2,
+ *     qd_now3, qd_now4 -- qdot(t)
+ * @param[in]  qdot_then [5] row-major (WMR_PAPER_TDE_TRIG_QDOT_THEN_SIZE): qd_then0, qd_then1,
+ *     qd_then2, qd_then3, qd_then4 -- qdot(t-span)
+ * @param[in]  span [1] row-major (WMR_PAPER_TDE_TRIG_SPAN_SIZE): span -- h or 2h
+ * @param[out] H1hat [5] row-major (WMR_PAPER_TDE_TRIG_H1HAT_SIZE)
+ *
+ * operations after CSE: 35 add, 48 mul, 2 div, 0 sin/cos, 0 sqrt
+ */
+void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
+    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
+    const wmr_real_t *span, wmr_real_t *H1hat);
+
 #define WMR_PAPER_MINV_NORM_NORM_SIZE 1
 
 /**
@@ -189,6 +222,50 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
 
+#define WMR_PAPER_TDC_LAW_TRIG_TRIG_SIZE 2
+#define WMR_PAPER_TDC_LAW_TRIG_E_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_EDOT_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_QDDOT_DES_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_K1_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_K2_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_P12_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_P22_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_H1HAT_SIZE 5
+#define WMR_PAPER_TDC_LAW_TRIG_U_SIZE 5
+
+/**
+ * (paper formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+ * The same with trig = (sin, cos of q[2]) in place of the coordinates:
+ * no sin/cos evaluated (a step computes them once and keeps them for the next).
+ *
+ * Paper equations: (16), (18).
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[in]  trig [2] row-major (WMR_PAPER_TDC_LAW_TRIG_TRIG_SIZE): trig_s0, trig_c0 -- sin, cos
+ *     of q[2]
+ * @param[in]  e [5] row-major (WMR_PAPER_TDC_LAW_TRIG_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
+ * @param[in]  edot [5] row-major (WMR_PAPER_TDC_LAW_TRIG_EDOT_SIZE): edot0, edot1, edot2, edot3,
+ *     edot4 -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDC_LAW_TRIG_QDDOT_DES_SIZE): qdd_des0, qdd_des1,
+ *     qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_TDC_LAW_TRIG_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_TDC_LAW_TRIG_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_TDC_LAW_TRIG_P12_SIZE): p12_0, p12_1, p12_2, p12_3,
+ *     p12_4 -- P entries per coordinate
+ * @param[in]  p22 [5] row-major (WMR_PAPER_TDC_LAW_TRIG_P22_SIZE): p22_0, p22_1, p22_2, p22_3,
+ *     p22_4
+ * @param[in]  H1hat [5] row-major (WMR_PAPER_TDC_LAW_TRIG_H1HAT_SIZE): H1hat0, H1hat1, H1hat2,
+ *     H1hat3, H1hat4 -- (17)
+ * @param[out] u [5] row-major (WMR_PAPER_TDC_LAW_TRIG_U_SIZE)
+ *
+ * operations after CSE: 40 add, 46 mul, 1 div, 0 sin/cos, 0 sqrt
+ */
+void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u);
+
 #define WMR_PAPER_TDROC_LAW_Q_SIZE 5
 #define WMR_PAPER_TDROC_LAW_E_SIZE 5
 #define WMR_PAPER_TDROC_LAW_EDOT_SIZE 5
@@ -237,6 +314,61 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax
  */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
+    const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
+    const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
+    const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);
+
+#define WMR_PAPER_TDROC_LAW_TRIG_TRIG_SIZE 2
+#define WMR_PAPER_TDROC_LAW_TRIG_E_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_EDOT_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_QDDOT_DES_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_K1_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_K2_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_P12_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_P22_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_H1HAT_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_GAIN_SIZE 1
+#define WMR_PAPER_TDROC_LAW_TRIG_EPS_SIZE 1
+#define WMR_PAPER_TDROC_LAW_TRIG_U_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_S_SIZE 5
+#define WMR_PAPER_TDROC_LAW_TRIG_S_NORM_SIZE 1
+
+/**
+ * (paper formulation) TDROC (16), (22), (25):
+ * u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+ * + H1hat, s = B^T P e.
+ * The same with trig = (sin, cos of q[2]) in place of the coordinates:
+ * no sin/cos evaluated (a step computes them once and keeps them for the next).
+ *
+ * Paper equations: (16), (22), (24), (25).
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[in]  trig [2] row-major (WMR_PAPER_TDROC_LAW_TRIG_TRIG_SIZE): trig_s0, trig_c0 -- sin, cos
+ *     of q[2]
+ * @param[in]  e [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_E_SIZE): e0, e1, e2, e3, e4 -- q_des - q
+ * @param[in]  edot [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_EDOT_SIZE): edot0, edot1, edot2, edot3,
+ *     edot4 -- qdot_des - qdot
+ * @param[in]  qddot_des [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_QDDOT_DES_SIZE): qdd_des0,
+ *     qdd_des1, qdd_des2, qdd_des3, qdd_des4 -- desired acceleration
+ * @param[in]  k1 [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_K1_SIZE): k1_0, k1_1, k1_2, k1_3, k1_4 --
+ *     diagonal of K1
+ * @param[in]  k2 [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_K2_SIZE): k2_0, k2_1, k2_2, k2_3, k2_4 --
+ *     diagonal of K2
+ * @param[in]  p12 [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_P12_SIZE): p12_0, p12_1, p12_2, p12_3,
+ *     p12_4 -- P entries per coordinate
+ * @param[in]  p22 [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_P22_SIZE): p22_0, p22_1, p22_2, p22_3,
+ *     p22_4
+ * @param[in]  H1hat [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_H1HAT_SIZE): H1hat0, H1hat1, H1hat2,
+ *     H1hat3, H1hat4 -- (17)
+ * @param[in]  gain [1] row-major (WMR_PAPER_TDROC_LAW_TRIG_GAIN_SIZE): gain -- khat of (25)
+ * @param[in]  eps [1] row-major (WMR_PAPER_TDROC_LAW_TRIG_EPS_SIZE): eps -- boundary layer
+ * @param[out] u [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_U_SIZE)
+ * @param[out] s [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_S_SIZE)
+ * @param[out] s_norm [1] row-major (WMR_PAPER_TDROC_LAW_TRIG_S_NORM_SIZE)
+ *
+ * operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+ */
+void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
     const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm);

@@ -42,49 +42,63 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     return wmr_tdc_check_config_detail(config, 0);
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
+   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
+static uint32_t wmr_real_word(wmr_real_t x)
 {
     union {
         wmr_real_t value;
         uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
     } rep;
-    uint32_t out = hash;
+    uint32_t word = 0u;
     unsigned int i;
     rep.value = x;
     for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = wmr_fnv_word(out, rep.words[i]);
+        word = (word * 2654435761u) ^ rep.words[i];
     }
-    return out;
+    return word;
 }
 
-/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
-   never hashed). */
+/* FNV-1a (32 bit) step. */
+static uint32_t wmr_fnv(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
+   k mod 4: independent multiply chains instead of one 24 long), then FNV-1a
+   of the lanes. Every field, value by value (padding never hashed). */
 static uint32_t wmr_tdc_fingerprint(const wmr_tdc_config_t *config)
 {
-    uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
-    int i;
-    fp = wmr_fnv_word(fp, (uint32_t)config->formulation);
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k1[i]);
-    }
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k2[i]);
-    }
-    fp = wmr_fnv_real(fp, config->q_pos);
-    fp = wmr_fnv_real(fp, config->q_vel);
-    fp = wmr_fnv_real(fp, config->h);
-    fp = wmr_fnv_real(fp, config->tau_max);
-    fp = wmr_fnv_word(fp, (uint32_t)config->accel_estimator);
-    fp = wmr_fnv_real(fp, config->rate_window);
-    return fp;
+    uint32_t lane0 = 2166136261u;
+    uint32_t lane1 = 2166136261u;
+    uint32_t lane2 = 2166136261u;
+    uint32_t lane3 = 2166136261u;
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.m));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.Iz));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.K));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->nominal.Iw));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.r));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.b));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.d));
+    lane3 = wmr_fnv(lane3, (uint32_t)config->formulation);
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[0]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k1[1]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k1[2]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k1[3]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[4]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[0]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k2[1]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k2[2]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k2[3]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[4]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->q_pos));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->q_vel));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->h));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->tau_max));
+    lane2 = wmr_fnv(lane2, (uint32_t)config->accel_estimator);
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->rate_window));
+    return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
@@ -99,6 +113,9 @@ static void wmr_tdc_clear(wmr_tdc_state_t *s)
         s->u_prev[i] = WMR_LIT(0.0);
         s->u_prev2[i] = WMR_LIT(0.0);
         s->H1hat[i] = WMR_LIT(0.0);
+    }
+    for (i = 0; i < 2; ++i) {
+        s->trig_prev[i] = WMR_LIT(0.0);
     }
     s->gain = WMR_LIT(0.0);
     s->s_norm = WMR_LIT(0.0);
@@ -159,6 +176,7 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     wmr_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     wmr_real_t H1hat[5];
+    wmr_real_t trig[2];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     wmr_real_t gain, s_norm, u_discarded;
     if (state == NULL) {
         return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
@@ -205,6 +223,14 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
+    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next. */
+    if (paper) {
+        trig[0] = WMR_SIN(q[2]);
+        trig[1] = WMR_COS(q[2]);
+    } else {
+        trig[0] = WMR_LIT(0.0);
+        trig[1] = WMR_LIT(0.0);
+    }
     nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -226,7 +252,7 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_paper_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
         } else {
             wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
@@ -238,8 +264,9 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     /* The law. */
     {
         if (paper) {
-            wmr_paper_tdc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
-                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+            wmr_paper_tdc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
+                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat,
+                    u);
         } else {
             wmr_minimal_tdc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
                     &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
@@ -272,6 +299,9 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 5; ++i) {
         state->H1hat[i] = H1hat[i];
+    }
+    for (i = 0; i < 2; ++i) {
+        state->trig_prev[i] = trig[i];
     }
     state->gain = gain;
     state->s_norm = s_norm;

@@ -57,61 +57,74 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
     return wmr_tdroc_check_config_detail(config, 0);
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t wmr_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t wmr_fnv_real(uint32_t hash, wmr_real_t x)
+/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
+   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
+static uint32_t wmr_real_word(wmr_real_t x)
 {
     union {
         wmr_real_t value;
         uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
     } rep;
-    uint32_t out = hash;
+    uint32_t word = 0u;
     unsigned int i;
     rep.value = x;
     for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = wmr_fnv_word(out, rep.words[i]);
+        word = (word * 2654435761u) ^ rep.words[i];
     }
-    return out;
+    return word;
 }
 
-/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
-   never hashed). */
+/* FNV-1a (32 bit) step. */
+static uint32_t wmr_fnv(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
+   k mod 4: independent multiply chains instead of one 29 long), then FNV-1a
+   of the lanes. Every field, value by value (padding never hashed). */
 static uint32_t wmr_tdroc_fingerprint(const wmr_tdroc_config_t *config)
 {
-    uint32_t fp = wmr_hash_params(2166136261u, &config->nominal);
-    int i;
-    fp = wmr_fnv_word(fp, (uint32_t)config->formulation);
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k1[i]);
-    }
-    for (i = 0; i < 5; ++i) {
-        fp = wmr_fnv_real(fp, config->k2[i]);
-    }
-    fp = wmr_fnv_real(fp, config->q_pos);
-    fp = wmr_fnv_real(fp, config->q_vel);
-    fp = wmr_fnv_real(fp, config->h);
-    fp = wmr_fnv_real(fp, config->tau_max);
-    fp = wmr_fnv_word(fp, (uint32_t)config->accel_estimator);
-    fp = wmr_fnv_real(fp, config->rate_window);
-    fp = wmr_fnv_real(fp, config->eps);
-    fp = wmr_fnv_word(fp, (uint32_t)config->n);
-    fp = wmr_fnv_real(fp, config->a);
-    fp = wmr_fnv_word(fp, (uint32_t)config->hold_gain);
-    fp = wmr_fnv_real(fp, config->held_gain);
-    return fp;
+    uint32_t lane0 = 2166136261u;
+    uint32_t lane1 = 2166136261u;
+    uint32_t lane2 = 2166136261u;
+    uint32_t lane3 = 2166136261u;
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.m));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.Iz));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.K));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->nominal.Iw));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.r));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.b));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.d));
+    lane3 = wmr_fnv(lane3, (uint32_t)config->formulation);
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[0]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k1[1]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k1[2]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k1[3]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[4]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[0]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->k2[1]));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->k2[2]));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->k2[3]));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[4]));
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->q_pos));
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->q_vel));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->h));
+    lane1 = wmr_fnv(lane1, wmr_real_word(config->tau_max));
+    lane2 = wmr_fnv(lane2, (uint32_t)config->accel_estimator);
+    lane3 = wmr_fnv(lane3, wmr_real_word(config->rate_window));
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->eps));
+    lane1 = wmr_fnv(lane1, (uint32_t)config->n);
+    lane2 = wmr_fnv(lane2, wmr_real_word(config->a));
+    lane3 = wmr_fnv(lane3, (uint32_t)config->hold_gain);
+    lane0 = wmr_fnv(lane0, wmr_real_word(config->held_gain));
+    return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
 {
     int i;
-    int j;
     s->steps = 0u;
     for (i = 0; i < 5; ++i) {
         s->q_prev[i] = WMR_LIT(0.0);
@@ -121,10 +134,8 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
         s->u_prev2[i] = WMR_LIT(0.0);
         s->H1hat[i] = WMR_LIT(0.0);
     }
-    for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
-        for (j = 0; j < 5; ++j) {
-            s->omega[i][j] = WMR_LIT(0.0);
-        }
+    for (i = 0; i < 2; ++i) {
+        s->trig_prev[i] = WMR_LIT(0.0);
     }
     s->omega_count = 0;
     for (i = 0; i < WMR_MAX_WINDOW; ++i) {
@@ -197,9 +208,9 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     wmr_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     wmr_real_t H1hat[5];
+    wmr_real_t trig[2];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     wmr_real_t gain, s_norm, u_discarded;
-    wmr_real_t omega_new[5];  /* Omega(1) of this step (pushed on commit) */
-    wmr_real_t dnorm_new = WMR_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
+    wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
     int omega_count;
     bool pushed;
     if (state == NULL) {
@@ -247,6 +258,14 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
+    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next. */
+    if (paper) {
+        trig[0] = WMR_SIN(q[2]);
+        trig[1] = WMR_COS(q[2]);
+    } else {
+        trig[0] = WMR_LIT(0.0);
+        trig[1] = WMR_LIT(0.0);
+    }
     nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -268,7 +287,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_paper_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_paper_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
         } else {
             wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
@@ -278,36 +297,38 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
     }
     /* (25): Omega(1) = H1hat joins the window (newest first), then the discounted,
-       normalised gain over the window as it is after this step. */
+       normalised gain over the window as it is after this step. (25) reads the window only
+       through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
+       the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
     if (pushed) {
-        for (i = 0; i < 5; ++i) {
-            omega_new[i] = i < nc ? H1hat[i] : WMR_LIT(0.0);
-        }
         if (paper) {
-            wmr_paper_omega_difference(omega_new, state->omega[0], &dnorm_new);
+            wmr_paper_omega_difference(H1hat, state->H1hat, &dn[0]);
         } else {
-            wmr_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
+            wmr_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
+        }
+        for (i = 1; i < WMR_MAX_WINDOW; ++i) {
+            dn[i] = state->omega_dnorm[i - 1];
         }
         if (omega_count <= WMR_MAX_WINDOW) {
             omega_count += 1;
+        }
+    } else {
+        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+            dn[i] = state->omega_dnorm[i];
         }
     }
     if (config->hold_gain != 0) {
         gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
         wmr_real_t w_warm[WMR_MAX_WINDOW];
-        wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
         const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
         if (active < config->n) {  /* the window is still filling */
             wmr_window_weights(active, config->a, w_warm);
             w = w_warm;
-        }
-        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
-                    : state->omega_dnorm[i];
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
         wmr_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
@@ -320,9 +341,9 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_paper_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
-                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
-                    &config->eps, u, s, &s_norm);
+            wmr_paper_tdroc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
+                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat,
+                    &gain, &config->eps, u, s, &s_norm);
         } else {
             wmr_minimal_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
                     &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
@@ -357,28 +378,13 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     for (i = 0; i < 5; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    if (pushed) {
-        /* Each row moves down one place and the new one enters at the top, carried element by
-           element (a shift written as a copy loop becomes a call to memmove, which is byte by
-           byte in newlib-nano). */
-        int j;
-        wmr_real_t carry, next;
-        for (j = 0; j < 5; ++j) {
-            carry = omega_new[j];
-            for (i = 0; i <= WMR_MAX_WINDOW; ++i) {
-                next = state->omega[i][j];
-                state->omega[i][j] = carry;
-                carry = next;
-            }
-        }
-        carry = dnorm_new;
-        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            next = state->omega_dnorm[i];
-            state->omega_dnorm[i] = carry;
-            carry = next;
-        }
-        state->omega_count = omega_count;
+    for (i = 0; i < 2; ++i) {
+        state->trig_prev[i] = trig[i];
     }
+    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    }
+    state->omega_count = omega_count;
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;

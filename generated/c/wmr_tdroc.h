@@ -53,9 +53,10 @@ typedef struct {
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
-    wmr_real_t omega[WMR_MAX_WINDOW + 1][5]; /* Omega(1..), newest first */
-    int omega_count;        /* valid rows of omega */
-    wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first */
+    wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
+    int omega_count;        /* Omega's seen, at most WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
+    wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first: all (25)
+                                               needs */
     wmr_real_t weights[WMR_MAX_WINDOW]; /* normalised weights of (25) for the full window (at
                                            _init) */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */

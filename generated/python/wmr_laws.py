@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tde", "paper_tdroc_gain", "paper_tdroc_law", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tdc_law_trig", "paper_tde", "paper_tde_trig", "paper_tdroc_gain", "paper_tdroc_law", "paper_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
@@ -149,6 +149,78 @@ def paper_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_th
         -I*_t4 + K*_t1*_t21*_t7 - _t18*_t29 - _t20*_t28 - _t27*_t6 + up2,
         -I_w*_t18 - _t17*_t27 - _t25*_t30 - _t28*_t4 + up3,
         -I_w*_t20 - _t19*_t27 - _t26*_t30 - _t29*_t4 + up4,
+    ])
+    return H1hat
+
+
+def paper_tde_trig(trig_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(paper formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+    qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+    The same with trig_prev = (sin, cos of q(t-h)[2]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (17).
+
+    Args:
+        trig_prev: array of 2 (shape 2x1, row-major): trig_prev_s0, trig_prev_c0. sin, cos of q(t-h)[2]
+        u_prev: array of 5 (shape 5x1, row-major): up0, up1, up2, up3, up4. u(t-h) applied
+        qdot_now: array of 5 (shape 5x1, row-major): qd_now0, qd_now1, qd_now2, qd_now3, qd_now4. qdot(t)
+        qdot_then: array of 5 (shape 5x1, row-major): qd_then0, qd_then1, qd_then2, qd_then3, qd_then4. qdot(t-span)
+        span: array of 1 (shape 1x1, row-major): span. h or 2h
+        p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
+
+    Returns:
+        H1hat: array of 5 (shape 5x1, row-major)
+
+    operations after CSE: 35 add, 48 mul, 2 div, 0 sin/cos, 0 sqrt
+    """
+    trig_prev_s0, trig_prev_c0 = _flat(trig_prev, 2, "trig_prev")
+    up0, up1, up2, up3, up4 = _flat(u_prev, 5, "u_prev")
+    qd_now0, qd_now1, qd_now2, qd_now3, qd_now4 = _flat(qdot_now, 5, "qdot_now")
+    qd_then0, qd_then1, qd_then2, qd_then3, qd_then4 = _flat(qdot_then, 5, "qdot_then")
+    span_1, = _flat(span, 1, "span")
+    m = float(_field(p, "m"))
+    I = float(_field(p, "I"))
+    K = float(_field(p, "K"))
+    I_w = float(_field(p, "Iw"))
+    r = float(_field(p, "r"))
+    b = float(_field(p, "b"))
+    d = float(_field(p, "d"))
+    _t0 = qd_now0 - qd_then0
+    _t1 = 1.0/span_1
+    _t2 = _t1*m
+    _t3 = qd_now2 - qd_then2
+    _t4 = _t1*_t3
+    _t5 = K*trig_prev_s0
+    _t6 = m*trig_prev_c0
+    _t7 = 0.5*r
+    _t8 = _t6*_t7
+    _t9 = 1.0/b
+    _t10 = _t9*r
+    _t11 = _t10*_t5
+    _t12 = m*trig_prev_s0
+    _t13 = _t10*d
+    _t14 = _t12*_t13
+    _t15 = _t11 - _t14 + _t8
+    _t16 = _t1*(qd_now3 - qd_then3)
+    _t17 = -_t11 + _t14 + _t8
+    _t18 = _t1*(qd_now4 - qd_then4)
+    _t19 = qd_now1 - qd_then1
+    _t20 = _t12*_t7
+    _t21 = K*_t10*trig_prev_c0
+    _t22 = _t13*_t6
+    _t23 = _t20 - _t21 + _t22
+    _t24 = _t20 + _t21 - _t22
+    _t25 = _t0*_t1
+    _t26 = I*_t10 - K*_t9*d*r
+    _t27 = -_t26
+    _t28 = _t1*_t19
+    H1hat = np.array([
+        -_t0*_t2 + _t15*_t16 + _t17*_t18 - _t4*_t5 + up0,
+        K*_t1*_t3*trig_prev_c0 + _t16*_t23 + _t18*_t24 - _t19*_t2 + up1,
+        -I*_t4 + K*_t1*_t19*trig_prev_c0 - _t16*_t27 - _t18*_t26 - _t25*_t5 + up2,
+        -I_w*_t16 - _t15*_t25 - _t23*_t28 - _t26*_t4 + up3,
+        -I_w*_t18 - _t17*_t25 - _t24*_t28 - _t27*_t4 + up4,
     ])
     return H1hat
 
@@ -416,6 +488,81 @@ def paper_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayL
     return u
 
 
+def paper_tdc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(paper formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+    The same with trig = (sin, cos of q[2]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (16), (18).
+
+    Args:
+        trig: array of 2 (shape 2x1, row-major): trig_s0, trig_c0. sin, cos of q[2]
+        e: array of 5 (shape 5x1, row-major): e0, e1, e2, e3, e4. q_des - q
+        edot: array of 5 (shape 5x1, row-major): edot0, edot1, edot2, edot3, edot4. qdot_des - qdot
+        qddot_des: array of 5 (shape 5x1, row-major): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4. desired acceleration
+        k1: array of 5 (shape 5x1, row-major): k1_0, k1_1, k1_2, k1_3, k1_4. diagonal of K1
+        k2: array of 5 (shape 5x1, row-major): k2_0, k2_1, k2_2, k2_3, k2_4. diagonal of K2
+        p12: array of 5 (shape 5x1, row-major): p12_0, p12_1, p12_2, p12_3, p12_4. P entries per coordinate
+        p22: array of 5 (shape 5x1, row-major): p22_0, p22_1, p22_2, p22_3, p22_4
+        H1hat: array of 5 (shape 5x1, row-major): H1hat0, H1hat1, H1hat2, H1hat3, H1hat4. (17)
+        p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
+
+    Returns:
+        u: array of 5 (shape 5x1, row-major)
+
+    operations after CSE: 40 add, 46 mul, 1 div, 0 sin/cos, 0 sqrt
+    """
+    trig_s0, trig_c0 = _flat(trig, 2, "trig")
+    e0, e1, e2, e3, e4 = _flat(e, 5, "e")
+    edot0, edot1, edot2, edot3, edot4 = _flat(edot, 5, "edot")
+    qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 = _flat(qddot_des, 5, "qddot_des")
+    k1_0, k1_1, k1_2, k1_3, k1_4 = _flat(k1, 5, "k1")
+    k2_0, k2_1, k2_2, k2_3, k2_4 = _flat(k2, 5, "k2")
+    del p12  # not used by this function
+    del p22  # not used by this function
+    H1hat0, H1hat1, H1hat2, H1hat3, H1hat4 = _flat(H1hat, 5, "H1hat")
+    m = float(_field(p, "m"))
+    I = float(_field(p, "I"))
+    K = float(_field(p, "K"))
+    I_w = float(_field(p, "Iw"))
+    r = float(_field(p, "r"))
+    b = float(_field(p, "b"))
+    d = float(_field(p, "d"))
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e2*k1_2 + edot2*k2_2 + qdd_des2
+    _t2 = K*_t1
+    _t3 = e3*k1_3 + edot3*k2_3 + qdd_des3
+    _t4 = m*trig_c0
+    _t5 = 0.5*r
+    _t6 = _t4*_t5
+    _t7 = r/b
+    _t8 = K*trig_s0
+    _t9 = _t7*_t8
+    _t10 = m*trig_s0
+    _t11 = _t7*d
+    _t12 = _t10*_t11
+    _t13 = -_t12 + _t6 + _t9
+    _t14 = e4*k1_4 + edot4*k2_4 + qdd_des4
+    _t15 = _t12 + _t6 - _t9
+    _t16 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t17 = _t10*_t5
+    _t18 = K*trig_c0
+    _t19 = _t18*_t7
+    _t20 = _t11*_t4
+    _t21 = _t17 - _t19 + _t20
+    _t22 = _t17 + _t19 - _t20
+    _t23 = I*_t7 - K*_t11
+    _t24 = -_t23
+    u = np.array([
+        H1hat0 + _t0*m - _t13*_t3 - _t14*_t15 + _t2*trig_s0,
+        H1hat1 - _t14*_t22 + _t16*m - _t2*trig_c0 - _t21*_t3,
+        H1hat2 + I*_t1 + _t0*_t8 + _t14*_t23 - _t16*_t18 + _t24*_t3,
+        H1hat3 + I_w*_t3 + _t0*_t13 + _t1*_t23 + _t16*_t21,
+        H1hat4 + I_w*_t14 + _t0*_t15 + _t1*_t24 + _t16*_t22,
+    ])
+    return u
+
+
 def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(paper formulation) TDROC (16), (22), (25):
     u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
@@ -502,6 +649,98 @@ def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
         H1hat2 + I*_t9 + _t16*_t7 + _t22*_t33 + _t24*_t32 - _t25*_t27,
         H1hat3 + I_w*_t22 + _t21*_t7 + _t25*_t31 + _t32*_t9,
         H1hat4 + I_w*_t24 + _t23*_t7 + _t25*_t30 + _t33*_t9,
+    ])
+    s = np.array([_t0, _t1, _t2, _t3, _t4])
+    s_norm = np.array([_t5])
+    return u, s, s_norm
+
+
+def paper_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(paper formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    + H1hat, s = B^T P e.
+    The same with trig = (sin, cos of q[2]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (16), (22), (24), (25).
+
+    Args:
+        trig: array of 2 (shape 2x1, row-major): trig_s0, trig_c0. sin, cos of q[2]
+        e: array of 5 (shape 5x1, row-major): e0, e1, e2, e3, e4. q_des - q
+        edot: array of 5 (shape 5x1, row-major): edot0, edot1, edot2, edot3, edot4. qdot_des - qdot
+        qddot_des: array of 5 (shape 5x1, row-major): qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4. desired acceleration
+        k1: array of 5 (shape 5x1, row-major): k1_0, k1_1, k1_2, k1_3, k1_4. diagonal of K1
+        k2: array of 5 (shape 5x1, row-major): k2_0, k2_1, k2_2, k2_3, k2_4. diagonal of K2
+        p12: array of 5 (shape 5x1, row-major): p12_0, p12_1, p12_2, p12_3, p12_4. P entries per coordinate
+        p22: array of 5 (shape 5x1, row-major): p22_0, p22_1, p22_2, p22_3, p22_4
+        H1hat: array of 5 (shape 5x1, row-major): H1hat0, H1hat1, H1hat2, H1hat3, H1hat4. (17)
+        gain: array of 1 (shape 1x1, row-major): gain. khat of (25)
+        eps: array of 1 (shape 1x1, row-major): eps. boundary layer
+        p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
+
+    Returns:
+        u: array of 5 (shape 5x1, row-major)
+        s: array of 5 (shape 5x1, row-major)
+        s_norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+    """
+    trig_s0, trig_c0 = _flat(trig, 2, "trig")
+    e0, e1, e2, e3, e4 = _flat(e, 5, "e")
+    edot0, edot1, edot2, edot3, edot4 = _flat(edot, 5, "edot")
+    qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4 = _flat(qddot_des, 5, "qddot_des")
+    k1_0, k1_1, k1_2, k1_3, k1_4 = _flat(k1, 5, "k1")
+    k2_0, k2_1, k2_2, k2_3, k2_4 = _flat(k2, 5, "k2")
+    p12_0, p12_1, p12_2, p12_3, p12_4 = _flat(p12, 5, "p12")
+    p22_0, p22_1, p22_2, p22_3, p22_4 = _flat(p22, 5, "p22")
+    H1hat0, H1hat1, H1hat2, H1hat3, H1hat4 = _flat(H1hat, 5, "H1hat")
+    gain_1, = _flat(gain, 1, "gain")
+    eps_1, = _flat(eps, 1, "eps")
+    m = float(_field(p, "m"))
+    I = float(_field(p, "I"))
+    K = float(_field(p, "K"))
+    I_w = float(_field(p, "Iw"))
+    r = float(_field(p, "r"))
+    b = float(_field(p, "b"))
+    d = float(_field(p, "d"))
+    _t0 = e0*p12_0 + edot0*p22_0
+    _t1 = e1*p12_1 + edot1*p22_1
+    _t2 = e2*p12_2 + edot2*p22_2
+    _t3 = e3*p12_3 + edot3*p22_3
+    _t4 = e4*p12_4 + edot4*p22_4
+    _t5 = math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)
+    _t6 = gain_1/max(_t5, eps_1)
+    _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t8 = _t2*_t6 + e2*k1_2 + edot2*k2_2 + qdd_des2
+    _t9 = K*_t8
+    _t10 = m*trig_c0
+    _t11 = 0.5*r
+    _t12 = _t10*_t11
+    _t13 = r/b
+    _t14 = K*trig_s0
+    _t15 = _t13*_t14
+    _t16 = m*trig_s0
+    _t17 = _t13*d
+    _t18 = _t16*_t17
+    _t19 = _t12 + _t15 - _t18
+    _t20 = _t3*_t6 + e3*k1_3 + edot3*k2_3 + qdd_des3
+    _t21 = _t12 - _t15 + _t18
+    _t22 = _t4*_t6 + e4*k1_4 + edot4*k2_4 + qdd_des4
+    _t23 = _t1*_t6 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t24 = _t11*_t16
+    _t25 = K*trig_c0
+    _t26 = _t13*_t25
+    _t27 = _t10*_t17
+    _t28 = _t24 + _t26 - _t27
+    _t29 = _t24 - _t26 + _t27
+    _t30 = I*_t13 - K*_t17
+    _t31 = -_t30
+    u = np.array([
+        H1hat0 - _t19*_t20 - _t21*_t22 + _t7*m + _t9*trig_s0,
+        H1hat1 - _t20*_t29 - _t22*_t28 + _t23*m - _t9*trig_c0,
+        H1hat2 + I*_t8 + _t14*_t7 + _t20*_t31 + _t22*_t30 - _t23*_t25,
+        H1hat3 + I_w*_t20 + _t19*_t7 + _t23*_t29 + _t30*_t8,
+        H1hat4 + I_w*_t22 + _t21*_t7 + _t23*_t28 + _t31*_t8,
     ])
     s = np.array([_t0, _t1, _t2, _t3, _t4])
     s_norm = np.array([_t5])

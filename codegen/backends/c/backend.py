@@ -122,7 +122,8 @@ class CBackend:
             for suffix in ("h", "c"):
                 files[f"{pre}_{info.name}.{suffix}"] = _template(
                     f"controller.{suffix}.jinja", law, layout=layout, c=info,
-                    max_abs_input=MAX_ABS_INPUT, **c_controller_context(info),
+                    max_abs_input=MAX_ABS_INPUT,
+                    **c_controller_context(info, param_fields, layout.nq),
                 )
         robot = target.robot
         fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]

@@ -70,60 +70,6 @@ static int trailer_first_unbounded(const trailer_real_t *x, int n)
     return -1;
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t trailer_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t trailer_fnv_real(uint32_t hash, trailer_real_t x)
-{
-    union {
-        trailer_real_t value;
-        uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
-    } rep;
-    uint32_t out = hash;
-    unsigned int i;
-    rep.value = x;
-    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = trailer_fnv_word(out, rep.words[i]);
-    }
-    return out;
-}
-
-uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x)
-{
-    return trailer_fnv_real(hash, x);
-}
-
-uint32_t trailer_hash_int(uint32_t hash, int x)
-{
-    return trailer_fnv_word(hash, (uint32_t)x);
-}
-
-uint32_t trailer_hash_params(uint32_t hash, const trailer_params_t *p)
-{
-    uint32_t out = hash;
-    out = trailer_hash_real(out, p->J_theta_cart);
-    out = trailer_hash_real(out, p->J_theta_cart_left);
-    out = trailer_hash_real(out, p->J_theta_cart_right);
-    out = trailer_hash_real(out, p->J_theta_left);
-    out = trailer_hash_real(out, p->J_theta_right);
-    out = trailer_hash_real(out, p->J_theta_tractor);
-    out = trailer_hash_real(out, p->J_x_tractor);
-    out = trailer_hash_real(out, p->K_theta_cart_x_tractor);
-    out = trailer_hash_real(out, p->K_theta_cart_x_tractor_2);
-    out = trailer_hash_real(out, p->K_theta_tractor_x_tractor);
-    out = trailer_hash_real(out, p->K_theta_tractor_x_tractor_2);
-    out = trailer_hash_real(out, p->radius_cart_left);
-    out = trailer_hash_real(out, p->radius_cart_right);
-    out = trailer_hash_real(out, p->radius_left);
-    out = trailer_hash_real(out, p->radius_right);
-    return out;
-}
-
 trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,
     trailer_real_t q_vel, trailer_real_t tau_max, trailer_error_detail_t *detail)
@@ -255,17 +201,17 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
     const int fields[5] = {TRAILER_FIELD_Q, TRAILER_FIELD_QDOT, TRAILER_FIELD_Q_DES,
                            TRAILER_FIELD_QDOT_DES, TRAILER_FIELD_QDDOT_DES};
     const trailer_bits_t bound = trailer_magnitude_bits(TRAILER_LIT(1.0e6));
-    trailer_bits_t worst = 0u;
+    unsigned int beyond = 0u;
     int k;
     int i;
-    /* One pass of integer maxima, no branch per entry; only a bad step looks for which. */
+    /* One pass of integer compares OR-ed together (independent, no branch per entry: a
+       running maximum would chain them); only a bad step looks for which. */
     for (k = 0; k < 5; ++k) {
         for (i = 0; i < 8; ++i) {
-            const trailer_bits_t m = trailer_magnitude_bits(inputs[k][i]);
-            worst = m > worst ? m : worst;
+            beyond |= (trailer_magnitude_bits(inputs[k][i]) > bound) ? 1u : 0u;
         }
     }
-    if (worst <= bound) {
+    if (beyond == 0u) {
         return TRAILER_OK;
     }
     for (k = 0; k < 5; ++k) {

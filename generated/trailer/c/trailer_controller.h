@@ -89,15 +89,6 @@ int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
 /** 1 if x is finite, >= 0 and <= max. */
 int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max);
 
-/** FNV-1a (32 bit, word by word) of hash followed by the object representation of x. */
-uint32_t trailer_hash_real(uint32_t hash, trailer_real_t x);
-
-/** FNV-1a (32 bit, one word) of hash followed by x as a 32-bit word. */
-uint32_t trailer_hash_int(uint32_t hash, int x);
-
-/** FNV-1a (32 bit) of hash followed by the parameters, field by field (no padding). */
-uint32_t trailer_hash_params(uint32_t hash, const trailer_params_t *p);
-
 /** 1 if x is finite and > 0. */
 int trailer_positive(trailer_real_t x);
 

@@ -198,6 +198,159 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
             + _t93*_t94 + _t94*_t95) + up1;
 }
 
+/* trailer_minimal_tde_trig: documented in trailer_laws.h.
+   operations after CSE: 135 add, 230 mul, 57 div, 0 sin/cos, 0 sqrt */
+void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *trig_prev,
+    const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
+    const trailer_real_t *span, trailer_real_t *H1hat)
+{
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t trig_prev_s0 = trig_prev[0];
+    const trailer_real_t trig_prev_c0 = trig_prev[1];
+    const trailer_real_t trig_prev_s1 = trig_prev[2];
+    const trailer_real_t trig_prev_c1 = trig_prev[3];
+    const trailer_real_t up0 = u_prev[0];
+    const trailer_real_t up1 = u_prev[1];
+    const trailer_real_t qd_now0 = qdot_now[0];
+    const trailer_real_t qd_now1 = qdot_now[1];
+    const trailer_real_t qd_then0 = qdot_then[0];
+    const trailer_real_t qd_then1 = qdot_then[1];
+    const trailer_real_t span_1 = span[0];
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t5 = trig_prev_c0*trig_prev_s0;
+    const trailer_real_t _t6 = _t1*_t5;
+    const trailer_real_t _t7 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t8 = trig_prev_c1*trig_prev_s1;
+    const trailer_real_t _t9 = _t1*_t8;
+    const trailer_real_t _t10 = trig_prev_c0*trig_prev_c0;
+    const trailer_real_t _t11 = _t1*_t10;
+    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t13 = trig_prev_c1*trig_prev_c1;
+    const trailer_real_t _t14 = _t1*_t13;
+    const trailer_real_t _t15 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
+    const trailer_real_t _t16 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t _t17 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t _t18 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t19 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t20 = _t6*_t8;
+    const trailer_real_t _t21 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t22 = TRAILER_LIT(14761.0)*_t15/TRAILER_LIT(28566.0);
+    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t17/TRAILER_LIT(28566.0);
+    const trailer_real_t _t24 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t25 = _t14*_t5;
+    const trailer_real_t _t26 = _t11*_t8;
+    const trailer_real_t _t27 = _t11*_t13;
+    const trailer_real_t _t28 = TRAILER_LIT(29522.0)*_t15/TRAILER_LIT(42849.0);
+    const trailer_real_t _t29 = TRAILER_LIT(29522.0)*_t17/TRAILER_LIT(42849.0);
+    const trailer_real_t _t30 = TRAILER_LIT(59044.0)*_t20/TRAILER_LIT(42849.0);
+    const trailer_real_t _t31 = TRAILER_LIT(14761.0)*_t15/TRAILER_LIT(14283.0);
+    const trailer_real_t _t32 = TRAILER_LIT(14761.0)*_t17/TRAILER_LIT(14283.0);
+    const trailer_real_t _t33 = TRAILER_LIT(59044.0)*_t27/TRAILER_LIT(42849.0);
+    const trailer_real_t _t34 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t11*_t12 - _t11*_t18
+            - _t11*_t28 - _t11*_t29 + _t12*_t14 - _t14*_t18 - _t14*_t28 - _t14*_t29 + _t15*_t16
+            + _t15*_t30 + _t15*_t33 + _t16*_t17 + _t17*_t30 + _t17*_t33 - _t19*_t20 - _t19*_t27
+            + _t20*_t21 + _t21*_t27 + _t22*_t6 - _t22*_t9 - _t23*_t6 + _t23*_t9 + _t24*_t25
+            - _t24*_t26 - _t25*_t31 + _t25*_t32 + _t26*_t31 - _t26*_t32 - _t6*_t7 + _t7*_t9;
+    const trailer_real_t _t35 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t _t36 = _t35*(qd_now1 - qd_then1);
+    const trailer_real_t _t37 = radius_right*radius_right;
+    const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t41 = _t37*_t5;
+    const trailer_real_t _t42 = _t37*_t8;
+    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t44 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t45 = _t10*_t37;
+    const trailer_real_t _t46 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t47 = _t13*_t37;
+    const trailer_real_t _t48 = _t15*_t37;
+    const trailer_real_t _t49 = _t17*_t37;
+    const trailer_real_t _t50 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t51 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t52 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t53 = _t42*_t5;
+    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t55 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t56 = _t47*_t5;
+    const trailer_real_t _t57 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t58 = _t45*_t8;
+    const trailer_real_t _t59 = TRAILER_LIT(23639.0)*_t48/TRAILER_LIT(28566.0);
+    const trailer_real_t _t60 = TRAILER_LIT(4387.0)*_t49/TRAILER_LIT(9522.0);
+    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t62 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t63 = _t13*_t45;
+    const trailer_real_t _t64 = TRAILER_LIT(10222.0)*_t15/TRAILER_LIT(42849.0);
+    const trailer_real_t _t65 = TRAILER_LIT(31178.0)*_t17/TRAILER_LIT(42849.0);
+    const trailer_real_t _t66 = _t5*_t8;
+    const trailer_real_t _t67 = TRAILER_LIT(23639.0)*_t15/TRAILER_LIT(14283.0);
+    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t17/TRAILER_LIT(4761.0);
+    const trailer_real_t _t69 = _t35*(qd_now0 - qd_then0);
+    const trailer_real_t _t70 = radius_left*radius_left;
+    const trailer_real_t _t71 = _t5*_t70;
+    const trailer_real_t _t72 = _t70*_t8;
+    const trailer_real_t _t73 = _t46*_t70;
+    const trailer_real_t _t74 = _t15*_t70;
+    const trailer_real_t _t75 = _t17*_t70;
+    const trailer_real_t _t76 = _t50*_t70;
+    const trailer_real_t _t77 = _t51*_t70;
+    const trailer_real_t _t78 = _t5*_t72;
+    const trailer_real_t _t79 = _t54*_t70;
+    const trailer_real_t _t80 = _t13*_t71;
+    const trailer_real_t _t81 = _t10*_t72;
+    const trailer_real_t _t82 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(9522.0);
+    const trailer_real_t _t83 = TRAILER_LIT(23639.0)*_t75/TRAILER_LIT(28566.0);
+    const trailer_real_t _t84 = _t10*_t13;
+    const trailer_real_t _t85 = _t70*_t84;
+    const trailer_real_t _t86 = TRAILER_LIT(31178.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t87 = TRAILER_LIT(10222.0)*_t75/TRAILER_LIT(42849.0);
+    const trailer_real_t _t88 = TRAILER_LIT(62356.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t89 = TRAILER_LIT(20444.0)*_t75/TRAILER_LIT(42849.0);
+    const trailer_real_t _t90 = _t13*_t5;
+    const trailer_real_t _t91 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
+    const trailer_real_t _t92 = _t10*_t8;
+    const trailer_real_t _t93 = TRAILER_LIT(23639.0)*_t75/TRAILER_LIT(14283.0);
+    H1hat[0] = -_t34*_t36
+            - _t69*(J_theta_right + _t0*_t37 + TRAILER_LIT(20444.0)*_t15*_t63/TRAILER_LIT(42849.0)
+            - TRAILER_LIT(62356.0)*_t17*_t63/TRAILER_LIT(42849.0) + _t2*_t37 + _t3*_t37 - _t37*_t38
+            + _t37*_t39 - _t37*_t4 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43
+            - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47
+            + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65
+            + TRAILER_LIT(20444.0)*_t48*_t66/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(94249.0)*_t48/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(62356.0)*_t49*_t66/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(11449.0)*_t49/TRAILER_LIT(171396.0) - _t5*_t59 - _t5*_t60 + _t52*_t53
+            + _t52*_t63 - _t53*_t54 - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61
+            - _t56*_t62 + _t56*_t67 + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67
+            - _t58*_t68 + _t59*_t8 + _t60*_t8) + up0;
+    H1hat[1] = -_t34*_t69 - _t36*(J_theta_left + _t0*_t70 - _t10*_t73 + _t10*_t76 - _t10*_t77
+            + _t10*_t86 - _t10*_t87 - _t13*_t73 + _t13*_t76 - _t13*_t77 + _t13*_t86 - _t13*_t87
+            + _t2*_t70 + _t3*_t70 + _t38*_t70 - _t39*_t70 - _t4*_t70 - _t40*_t71 + _t40*_t72
+            + _t43*_t71 - _t43*_t72 + _t44*_t71 - _t44*_t72 + _t5*_t82 + _t5*_t83 + _t52*_t78
+            + _t52*_t85 + _t55*_t78 + _t55*_t85 + _t57*_t80 - _t57*_t81 - _t61*_t80 + _t61*_t81
+            - _t62*_t80 + _t62*_t81 - _t66*_t79 - _t66*_t88 + _t66*_t89
+            + TRAILER_LIT(11449.0)*_t74/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(94249.0)*_t75/TRAILER_LIT(171396.0) - _t79*_t84 - _t8*_t82 - _t8*_t83
+            - _t84*_t88 + _t84*_t89 - _t90*_t91 - _t90*_t93 + _t91*_t92 + _t92*_t93) + up1;
+}
+
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
    operations after CSE: 330 add, 657 mul, 1 div, 4 sin/cos, 1 sqrt */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
@@ -742,6 +895,166 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
             + _t91*_t92 - _t91*_t93 + _t92*_t94 - _t93*_t94) + _t37*_t38;
 }
 
+/* trailer_minimal_tdc_law_trig: documented in trailer_laws.h.
+   operations after CSE: 137 add, 232 mul, 56 div, 0 sin/cos, 0 sqrt */
+void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
+    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
+    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
+    const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
+{
+    (void)p12;
+    (void)p22;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t trig_s0 = trig[0];
+    const trailer_real_t trig_c0 = trig[1];
+    const trailer_real_t trig_s1 = trig[2];
+    const trailer_real_t trig_c1 = trig[3];
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_0 = k2[0];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
+    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t2 = radius_left*radius_right;
+    const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t6 = trig_c0*trig_s0;
+    const trailer_real_t _t7 = _t2*_t6;
+    const trailer_real_t _t8 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t9 = trig_c1*trig_s1;
+    const trailer_real_t _t10 = _t2*_t9;
+    const trailer_real_t _t11 = trig_c0*trig_c0;
+    const trailer_real_t _t12 = _t11*_t2;
+    const trailer_real_t _t13 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t14 = trig_c1*trig_c1;
+    const trailer_real_t _t15 = _t14*_t2;
+    const trailer_real_t _t16 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
+    const trailer_real_t _t17 = TRAILER_LIT(32849.0)*_t2/TRAILER_LIT(171396.0);
+    const trailer_real_t _t18 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t20 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t21 = _t7*_t9;
+    const trailer_real_t _t22 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t16/TRAILER_LIT(28566.0);
+    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t18/TRAILER_LIT(28566.0);
+    const trailer_real_t _t25 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t26 = _t15*_t6;
+    const trailer_real_t _t27 = _t12*_t9;
+    const trailer_real_t _t28 = _t12*_t14;
+    const trailer_real_t _t29 = TRAILER_LIT(29522.0)*_t16/TRAILER_LIT(42849.0);
+    const trailer_real_t _t30 = TRAILER_LIT(29522.0)*_t18/TRAILER_LIT(42849.0);
+    const trailer_real_t _t31 = TRAILER_LIT(59044.0)*_t21/TRAILER_LIT(42849.0);
+    const trailer_real_t _t32 = TRAILER_LIT(14761.0)*_t16/TRAILER_LIT(14283.0);
+    const trailer_real_t _t33 = TRAILER_LIT(14761.0)*_t18/TRAILER_LIT(14283.0);
+    const trailer_real_t _t34 = TRAILER_LIT(59044.0)*_t28/TRAILER_LIT(42849.0);
+    const trailer_real_t _t35 = -_t1*_t2 - _t10*_t23 + _t10*_t24 + _t10*_t8 + _t12*_t13 - _t12*_t19
+            - _t12*_t29 - _t12*_t30 + _t13*_t15 - _t15*_t19 - _t15*_t29 - _t15*_t30 + _t16*_t17
+            + _t16*_t31 + _t16*_t34 + _t17*_t18 + _t18*_t31 + _t18*_t34 - _t2*_t3 + _t2*_t4
+            + _t2*_t5 - _t20*_t21 - _t20*_t28 + _t21*_t22 + _t22*_t28 + _t23*_t7 - _t24*_t7
+            + _t25*_t26 - _t25*_t27 - _t26*_t32 + _t26*_t33 + _t27*_t32 - _t27*_t33 - _t7*_t8;
+    const trailer_real_t _t36 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t37 = radius_right*radius_right;
+    const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t41 = _t37*_t6;
+    const trailer_real_t _t42 = _t37*_t9;
+    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t44 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t45 = _t11*_t37;
+    const trailer_real_t _t46 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t47 = _t14*_t37;
+    const trailer_real_t _t48 = _t16*_t37;
+    const trailer_real_t _t49 = _t18*_t37;
+    const trailer_real_t _t50 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t51 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t52 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t53 = _t42*_t6;
+    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t55 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t56 = _t47*_t6;
+    const trailer_real_t _t57 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t58 = _t45*_t9;
+    const trailer_real_t _t59 = TRAILER_LIT(23639.0)*_t48/TRAILER_LIT(28566.0);
+    const trailer_real_t _t60 = TRAILER_LIT(4387.0)*_t49/TRAILER_LIT(9522.0);
+    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t62 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t63 = _t14*_t45;
+    const trailer_real_t _t64 = TRAILER_LIT(10222.0)*_t16/TRAILER_LIT(42849.0);
+    const trailer_real_t _t65 = TRAILER_LIT(31178.0)*_t18/TRAILER_LIT(42849.0);
+    const trailer_real_t _t66 = _t6*_t9;
+    const trailer_real_t _t67 = TRAILER_LIT(23639.0)*_t16/TRAILER_LIT(14283.0);
+    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t18/TRAILER_LIT(4761.0);
+    const trailer_real_t _t69 = radius_left*radius_left;
+    const trailer_real_t _t70 = _t6*_t69;
+    const trailer_real_t _t71 = _t69*_t9;
+    const trailer_real_t _t72 = _t46*_t69;
+    const trailer_real_t _t73 = _t16*_t69;
+    const trailer_real_t _t74 = _t18*_t69;
+    const trailer_real_t _t75 = _t50*_t69;
+    const trailer_real_t _t76 = _t51*_t69;
+    const trailer_real_t _t77 = _t6*_t71;
+    const trailer_real_t _t78 = _t54*_t69;
+    const trailer_real_t _t79 = _t14*_t70;
+    const trailer_real_t _t80 = _t11*_t71;
+    const trailer_real_t _t81 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(9522.0);
+    const trailer_real_t _t82 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(28566.0);
+    const trailer_real_t _t83 = _t11*_t14;
+    const trailer_real_t _t84 = _t69*_t83;
+    const trailer_real_t _t85 = TRAILER_LIT(31178.0)*_t73/TRAILER_LIT(42849.0);
+    const trailer_real_t _t86 = TRAILER_LIT(10222.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t87 = TRAILER_LIT(62356.0)*_t73/TRAILER_LIT(42849.0);
+    const trailer_real_t _t88 = TRAILER_LIT(20444.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t89 = _t14*_t6;
+    const trailer_real_t _t90 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(4761.0);
+    const trailer_real_t _t91 = _t11*_t9;
+    const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(14283.0);
+    u[0] = H1hat0 + _t0*_t35
+            + _t36*(J_theta_right + _t1*_t37 + TRAILER_LIT(20444.0)*_t16*_t63/TRAILER_LIT(42849.0)
+            - TRAILER_LIT(62356.0)*_t18*_t63/TRAILER_LIT(42849.0) + _t3*_t37 - _t37*_t38 + _t37*_t39
+            + _t37*_t4 - _t37*_t5 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43
+            - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47
+            + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65
+            + TRAILER_LIT(20444.0)*_t48*_t66/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(94249.0)*_t48/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(62356.0)*_t49*_t66/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(11449.0)*_t49/TRAILER_LIT(171396.0) + _t52*_t53 + _t52*_t63 - _t53*_t54
+            - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61 - _t56*_t62 + _t56*_t67
+            + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67 - _t58*_t68 - _t59*_t6
+            + _t59*_t9 - _t6*_t60 + _t60*_t9);
+    u[1] = H1hat1 + _t0*(J_theta_left + _t1*_t69 - _t11*_t72 + _t11*_t75 - _t11*_t76 + _t11*_t85
+            - _t11*_t86 - _t14*_t72 + _t14*_t75 - _t14*_t76 + _t14*_t85 - _t14*_t86 + _t3*_t69
+            + _t38*_t69 - _t39*_t69 + _t4*_t69 - _t40*_t70 + _t40*_t71 + _t43*_t70 - _t43*_t71
+            + _t44*_t70 - _t44*_t71 - _t5*_t69 + _t52*_t77 + _t52*_t84 + _t55*_t77 + _t55*_t84
+            + _t57*_t79 - _t57*_t80 + _t6*_t81 + _t6*_t82 - _t61*_t79 + _t61*_t80 - _t62*_t79
+            + _t62*_t80 - _t66*_t78 - _t66*_t87 + _t66*_t88
+            + TRAILER_LIT(11449.0)*_t73/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(94249.0)*_t74/TRAILER_LIT(171396.0) - _t78*_t83 - _t81*_t9 - _t82*_t9
+            - _t83*_t87 + _t83*_t88 - _t89*_t90 - _t89*_t92 + _t90*_t91 + _t91*_t92) + _t35*_t36;
+}
+
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
    operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
@@ -909,6 +1222,177 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
             + TRAILER_LIT(11449.0)*_t76/TRAILER_LIT(171396.0)
             + TRAILER_LIT(94249.0)*_t77/TRAILER_LIT(171396.0) - _t87*_t89 - _t87*_t93 + _t87*_t94
             + _t95*_t96 - _t95*_t97 + _t96*_t98 - _t97*_t98) + _t41*_t42;
+    s[0] = _t1;
+    s[1] = _t0;
+    s_norm[0] = _t2;
+}
+
+/* trailer_minimal_tdroc_law_trig: documented in trailer_laws.h.
+   operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 fmax */
+void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
+    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
+    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
+    const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
+    const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
+{
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t trig_s0 = trig[0];
+    const trailer_real_t trig_c0 = trig[1];
+    const trailer_real_t trig_s1 = trig[2];
+    const trailer_real_t trig_c1 = trig[3];
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_0 = k2[0];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_0 = p22[0];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
+    const trailer_real_t gain_1 = gain[0];
+    const trailer_real_t eps_1 = eps[0];
+    const trailer_real_t _t0 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t2 = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
+    const trailer_real_t _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t5 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t6 = radius_left*radius_right;
+    const trailer_real_t _t7 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t8 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t9 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t10 = trig_c0*trig_s0;
+    const trailer_real_t _t11 = _t10*_t6;
+    const trailer_real_t _t12 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t13 = trig_c1*trig_s1;
+    const trailer_real_t _t14 = _t13*_t6;
+    const trailer_real_t _t15 = trig_c0*trig_c0;
+    const trailer_real_t _t16 = _t15*_t6;
+    const trailer_real_t _t17 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t18 = trig_c1*trig_c1;
+    const trailer_real_t _t19 = _t18*_t6;
+    const trailer_real_t _t20 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
+    const trailer_real_t _t21 = TRAILER_LIT(32849.0)*_t6/TRAILER_LIT(171396.0);
+    const trailer_real_t _t22 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t _t23 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t24 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t25 = _t11*_t13;
+    const trailer_real_t _t26 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t27 = TRAILER_LIT(14761.0)*_t20/TRAILER_LIT(28566.0);
+    const trailer_real_t _t28 = TRAILER_LIT(14761.0)*_t22/TRAILER_LIT(28566.0);
+    const trailer_real_t _t29 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t30 = _t10*_t19;
+    const trailer_real_t _t31 = _t13*_t16;
+    const trailer_real_t _t32 = _t16*_t18;
+    const trailer_real_t _t33 = TRAILER_LIT(29522.0)*_t20/TRAILER_LIT(42849.0);
+    const trailer_real_t _t34 = TRAILER_LIT(29522.0)*_t22/TRAILER_LIT(42849.0);
+    const trailer_real_t _t35 = TRAILER_LIT(59044.0)*_t25/TRAILER_LIT(42849.0);
+    const trailer_real_t _t36 = TRAILER_LIT(14761.0)*_t20/TRAILER_LIT(14283.0);
+    const trailer_real_t _t37 = TRAILER_LIT(14761.0)*_t22/TRAILER_LIT(14283.0);
+    const trailer_real_t _t38 = TRAILER_LIT(59044.0)*_t32/TRAILER_LIT(42849.0);
+    const trailer_real_t _t39 = -_t11*_t12 + _t11*_t27 - _t11*_t28 + _t12*_t14 - _t14*_t27
+            + _t14*_t28 + _t16*_t17 - _t16*_t23 - _t16*_t33 - _t16*_t34 + _t17*_t19 - _t19*_t23
+            - _t19*_t33 - _t19*_t34 + _t20*_t21 + _t20*_t35 + _t20*_t38 + _t21*_t22 + _t22*_t35
+            + _t22*_t38 - _t24*_t25 - _t24*_t32 + _t25*_t26 + _t26*_t32 + _t29*_t30 - _t29*_t31
+            - _t30*_t36 + _t30*_t37 + _t31*_t36 - _t31*_t37 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9;
+    const trailer_real_t _t40 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t41 = radius_right*radius_right;
+    const trailer_real_t _t42 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t44 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t45 = _t10*_t41;
+    const trailer_real_t _t46 = _t13*_t41;
+    const trailer_real_t _t47 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t48 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t49 = _t15*_t41;
+    const trailer_real_t _t50 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t51 = _t18*_t41;
+    const trailer_real_t _t52 = _t20*_t41;
+    const trailer_real_t _t53 = _t22*_t41;
+    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t55 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t56 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t57 = _t10*_t46;
+    const trailer_real_t _t58 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t59 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t60 = _t10*_t51;
+    const trailer_real_t _t61 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t62 = _t13*_t49;
+    const trailer_real_t _t63 = TRAILER_LIT(23639.0)*_t52/TRAILER_LIT(28566.0);
+    const trailer_real_t _t64 = TRAILER_LIT(4387.0)*_t53/TRAILER_LIT(9522.0);
+    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t67 = _t18*_t49;
+    const trailer_real_t _t68 = TRAILER_LIT(10222.0)*_t20/TRAILER_LIT(42849.0);
+    const trailer_real_t _t69 = TRAILER_LIT(31178.0)*_t22/TRAILER_LIT(42849.0);
+    const trailer_real_t _t70 = _t10*_t13;
+    const trailer_real_t _t71 = TRAILER_LIT(23639.0)*_t20/TRAILER_LIT(14283.0);
+    const trailer_real_t _t72 = TRAILER_LIT(4387.0)*_t22/TRAILER_LIT(4761.0);
+    const trailer_real_t _t73 = radius_left*radius_left;
+    const trailer_real_t _t74 = _t10*_t73;
+    const trailer_real_t _t75 = _t13*_t73;
+    const trailer_real_t _t76 = _t50*_t73;
+    const trailer_real_t _t77 = _t20*_t73;
+    const trailer_real_t _t78 = _t22*_t73;
+    const trailer_real_t _t79 = _t54*_t73;
+    const trailer_real_t _t80 = _t55*_t73;
+    const trailer_real_t _t81 = _t10*_t75;
+    const trailer_real_t _t82 = _t58*_t73;
+    const trailer_real_t _t83 = _t18*_t74;
+    const trailer_real_t _t84 = _t15*_t75;
+    const trailer_real_t _t85 = TRAILER_LIT(4387.0)*_t77/TRAILER_LIT(9522.0);
+    const trailer_real_t _t86 = TRAILER_LIT(23639.0)*_t78/TRAILER_LIT(28566.0);
+    const trailer_real_t _t87 = _t15*_t18;
+    const trailer_real_t _t88 = _t73*_t87;
+    const trailer_real_t _t89 = TRAILER_LIT(31178.0)*_t77/TRAILER_LIT(42849.0);
+    const trailer_real_t _t90 = TRAILER_LIT(10222.0)*_t78/TRAILER_LIT(42849.0);
+    const trailer_real_t _t91 = TRAILER_LIT(62356.0)*_t77/TRAILER_LIT(42849.0);
+    const trailer_real_t _t92 = TRAILER_LIT(20444.0)*_t78/TRAILER_LIT(42849.0);
+    const trailer_real_t _t93 = _t10*_t18;
+    const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t77/TRAILER_LIT(4761.0);
+    const trailer_real_t _t95 = _t13*_t15;
+    const trailer_real_t _t96 = TRAILER_LIT(23639.0)*_t78/TRAILER_LIT(14283.0);
+    u[0] = H1hat0 + _t39*_t4 + _t40*(J_theta_right - _t10*_t63 - _t10*_t64 + _t13*_t63 + _t13*_t64
+            + TRAILER_LIT(20444.0)*_t20*_t67/TRAILER_LIT(42849.0)
+            - TRAILER_LIT(62356.0)*_t22*_t67/TRAILER_LIT(42849.0) - _t41*_t42 + _t41*_t43 + _t41*_t5
+            + _t41*_t7 + _t41*_t8 - _t41*_t9 + _t44*_t45 - _t44*_t46 - _t45*_t47 + _t45*_t48
+            + _t46*_t47 - _t46*_t48 - _t49*_t50 + _t49*_t54 + _t49*_t55 - _t49*_t68 + _t49*_t69
+            - _t50*_t51 + _t51*_t54 + _t51*_t55 - _t51*_t68 + _t51*_t69
+            + TRAILER_LIT(20444.0)*_t52*_t70/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(94249.0)*_t52/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(62356.0)*_t53*_t70/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(11449.0)*_t53/TRAILER_LIT(171396.0) + _t56*_t57 + _t56*_t67 - _t57*_t58
+            - _t57*_t59 - _t58*_t67 - _t59*_t67 - _t60*_t61 + _t60*_t65 - _t60*_t66 + _t60*_t71
+            + _t60*_t72 + _t61*_t62 - _t62*_t65 + _t62*_t66 - _t62*_t71 - _t62*_t72);
+    u[1] = H1hat1 + _t39*_t40 + _t4*(J_theta_left + _t10*_t85 + _t10*_t86 - _t13*_t85 - _t13*_t86
+            - _t15*_t76 + _t15*_t79 - _t15*_t80 + _t15*_t89 - _t15*_t90 - _t18*_t76 + _t18*_t79
+            - _t18*_t80 + _t18*_t89 - _t18*_t90 + _t42*_t73 - _t43*_t73 - _t44*_t74 + _t44*_t75
+            + _t47*_t74 - _t47*_t75 + _t48*_t74 - _t48*_t75 + _t5*_t73 + _t56*_t81 + _t56*_t88
+            + _t59*_t81 + _t59*_t88 + _t61*_t83 - _t61*_t84 - _t65*_t83 + _t65*_t84 - _t66*_t83
+            + _t66*_t84 + _t7*_t73 - _t70*_t82 - _t70*_t91 + _t70*_t92 + _t73*_t8 - _t73*_t9
+            + TRAILER_LIT(11449.0)*_t77/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(94249.0)*_t78/TRAILER_LIT(171396.0) - _t82*_t87 - _t87*_t91 + _t87*_t92
+            - _t93*_t94 - _t93*_t96 + _t94*_t95 + _t95*_t96);
     s[0] = _t1;
     s[1] = _t0;
     s_norm[0] = _t2;

@@ -57,61 +57,89 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
     return trailer_tdroc_check_config_detail(config, 0);
 }
 
-/* The configuration fingerprint is FNV-1a (32 bit) over 32-bit words rather than bytes:
-   the same detection of a changed field for a quarter of the multiplications. */
-static uint32_t trailer_fnv_word(uint32_t hash, uint32_t word)
-{
-    return (hash ^ word) * 16777619u;
-}
-
-/* FNV-1a over the words of the object representation of x (two for a double). */
-static uint32_t trailer_fnv_real(uint32_t hash, trailer_real_t x)
+/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
+   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
+static uint32_t trailer_real_word(trailer_real_t x)
 {
     union {
         trailer_real_t value;
         uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
     } rep;
-    uint32_t out = hash;
+    uint32_t word = 0u;
     unsigned int i;
     rep.value = x;
     for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        out = trailer_fnv_word(out, rep.words[i]);
+        word = (word * 2654435761u) ^ rep.words[i];
     }
-    return out;
+    return word;
 }
 
-/* FNV-1a (over 32-bit words) of every field of the configuration, value by value (padding
-   never hashed). */
+/* FNV-1a (32 bit) step. */
+static uint32_t trailer_fnv(uint32_t hash, uint32_t word)
+{
+    return (hash ^ word) * 16777619u;
+}
+
+/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
+   k mod 4: independent multiply chains instead of one 43 long), then FNV-1a
+   of the lanes. Every field, value by value (padding never hashed). */
 static uint32_t trailer_tdroc_fingerprint(const trailer_tdroc_config_t *config)
 {
-    uint32_t fp = trailer_hash_params(2166136261u, &config->nominal);
-    int i;
-    fp = trailer_fnv_word(fp, (uint32_t)config->formulation);
-    for (i = 0; i < 8; ++i) {
-        fp = trailer_fnv_real(fp, config->k1[i]);
-    }
-    for (i = 0; i < 8; ++i) {
-        fp = trailer_fnv_real(fp, config->k2[i]);
-    }
-    fp = trailer_fnv_real(fp, config->q_pos);
-    fp = trailer_fnv_real(fp, config->q_vel);
-    fp = trailer_fnv_real(fp, config->h);
-    fp = trailer_fnv_real(fp, config->tau_max);
-    fp = trailer_fnv_word(fp, (uint32_t)config->accel_estimator);
-    fp = trailer_fnv_real(fp, config->rate_window);
-    fp = trailer_fnv_real(fp, config->eps);
-    fp = trailer_fnv_word(fp, (uint32_t)config->n);
-    fp = trailer_fnv_real(fp, config->a);
-    fp = trailer_fnv_word(fp, (uint32_t)config->hold_gain);
-    fp = trailer_fnv_real(fp, config->held_gain);
-    return fp;
+    uint32_t lane0 = 2166136261u;
+    uint32_t lane1 = 2166136261u;
+    uint32_t lane2 = 2166136261u;
+    uint32_t lane3 = 2166136261u;
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.J_theta_cart));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.J_theta_cart_left));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.J_theta_cart_right));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.J_theta_left));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.J_theta_right));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.J_theta_tractor));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.J_x_tractor));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.K_theta_cart_x_tractor));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.K_theta_cart_x_tractor_2));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.K_theta_tractor_x_tractor));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.K_theta_tractor_x_tractor_2));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.radius_cart_left));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.radius_cart_right));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.radius_left));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.radius_right));
+    lane3 = trailer_fnv(lane3, (uint32_t)config->formulation);
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->k1[0]));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->k1[1]));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->k1[2]));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->k1[3]));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->k1[4]));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->k1[5]));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->k1[6]));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->k1[7]));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->k2[0]));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->k2[1]));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->k2[2]));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->k2[3]));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->k2[4]));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->k2[5]));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->k2[6]));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->k2[7]));
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->q_pos));
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->q_vel));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->h));
+    lane3 = trailer_fnv(lane3, trailer_real_word(config->tau_max));
+    lane0 = trailer_fnv(lane0, (uint32_t)config->accel_estimator);
+    lane1 = trailer_fnv(lane1, trailer_real_word(config->rate_window));
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->eps));
+    lane3 = trailer_fnv(lane3, (uint32_t)config->n);
+    lane0 = trailer_fnv(lane0, trailer_real_word(config->a));
+    lane1 = trailer_fnv(lane1, (uint32_t)config->hold_gain);
+    lane2 = trailer_fnv(lane2, trailer_real_word(config->held_gain));
+    return trailer_fnv(trailer_fnv(trailer_fnv(trailer_fnv(2166136261u, lane0), lane1), lane2),
+            lane3);
 }
 
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
 {
     int i;
-    int j;
     s->steps = 0u;
     for (i = 0; i < 8; ++i) {
         s->q_prev[i] = TRAILER_LIT(0.0);
@@ -121,10 +149,8 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
         s->u_prev2[i] = TRAILER_LIT(0.0);
         s->H1hat[i] = TRAILER_LIT(0.0);
     }
-    for (i = 0; i <= TRAILER_MAX_WINDOW; ++i) {
-        for (j = 0; j < 8; ++j) {
-            s->omega[i][j] = TRAILER_LIT(0.0);
-        }
+    for (i = 0; i < 4; ++i) {
+        s->trig_prev[i] = TRAILER_LIT(0.0);
     }
     s->omega_count = 0;
     for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
@@ -193,10 +219,10 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     trailer_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer_real_t H1hat[8];
+    trailer_real_t trig[4];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     trailer_real_t gain, s_norm, u_discarded;
     trailer_real_t minv_norm;
-    trailer_real_t omega_new[8];  /* Omega(1) of this step (pushed on commit) */
-    trailer_real_t dnorm_new = TRAILER_LIT(0.0);  /* ||Omega(1) - Omega(2)|| of this step */
+    trailer_real_t dn[TRAILER_MAX_WINDOW];  /* the window's difference norms after this step */
     int omega_count;
     bool pushed;
     if (state == NULL) {
@@ -244,6 +270,11 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     gain = state->gain;
     s_norm = state->s_norm;
     minv_norm = state->minv_norm;
+    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next. */
+    trig[0] = TRAILER_SIN(q[2]);
+    trig[1] = TRAILER_COS(q[2]);
+    trig[2] = TRAILER_SIN(q[3]);
+    trig[3] = TRAILER_COS(q[3]);
     nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -264,39 +295,41 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         for (i = nc; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+        trailer_minimal_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
         }
     }
     /* (25): Omega(1) = H1hat joins the window (newest first), then the discounted,
-       normalised gain over the window as it is after this step. */
+       normalised gain over the window as it is after this step. (25) reads the window only
+       through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
+       the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
     if (pushed) {
-        for (i = 0; i < 8; ++i) {
-            omega_new[i] = i < nc ? H1hat[i] : TRAILER_LIT(0.0);
+        trailer_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
+        for (i = 1; i < TRAILER_MAX_WINDOW; ++i) {
+            dn[i] = state->omega_dnorm[i - 1];
         }
-        trailer_minimal_omega_difference(omega_new, state->omega[0], &dnorm_new);
         if (omega_count <= TRAILER_MAX_WINDOW) {
             omega_count += 1;
+        }
+    } else {
+        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+            dn[i] = state->omega_dnorm[i];
         }
     }
     if (config->hold_gain != 0) {
         gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
         trailer_real_t w_warm[TRAILER_MAX_WINDOW];
-        trailer_real_t dn[TRAILER_MAX_WINDOW];  /* the window's difference norms after this step */
         const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
         const trailer_real_t *w = state->weights;  /* the full window's, from _init */
         if (active < config->n) {  /* the window is still filling */
             trailer_window_weights(active, config->a, w_warm);
             w = w_warm;
-        }
-        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-            dn[i] = pushed ? (i == 0 ? dnorm_new : state->omega_dnorm[i - 1])
-                    : state->omega_dnorm[i];
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
         trailer_minimal_minv_norm(&config->nominal, q, &minv_norm);
@@ -309,9 +342,9 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_minimal_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
-                &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain, &config->eps, u,
-                s, &s_norm);
+        trailer_minimal_tdroc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
+                &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat,
+                &gain, &config->eps, u, s, &s_norm);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -342,28 +375,13 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     for (i = 0; i < 8; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    if (pushed) {
-        /* Each row moves down one place and the new one enters at the top, carried element by
-           element (a shift written as a copy loop becomes a call to memmove, which is byte by
-           byte in newlib-nano). */
-        int j;
-        trailer_real_t carry, next;
-        for (j = 0; j < 8; ++j) {
-            carry = omega_new[j];
-            for (i = 0; i <= TRAILER_MAX_WINDOW; ++i) {
-                next = state->omega[i][j];
-                state->omega[i][j] = carry;
-                carry = next;
-            }
-        }
-        carry = dnorm_new;
-        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-            next = state->omega_dnorm[i];
-            state->omega_dnorm[i] = carry;
-            carry = next;
-        }
-        state->omega_count = omega_count;
+    for (i = 0; i < 4; ++i) {
+        state->trig_prev[i] = trig[i];
     }
+    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    }
+    state->omega_count = omega_count;
     state->minv_norm = minv_norm;
     state->gain = gain;
     state->s_norm = s_norm;

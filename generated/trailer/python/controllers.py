@@ -58,6 +58,9 @@ ACCEL_BACKWARD = 0
 ACCEL_CENTRAL = 1
 ACCEL_MATCHED = 2
 MAX_WINDOW = 8
+# The coordinates whose sin, cos the C TDE controllers keep for (17) (``trig_prev``).
+TRIG = {FORMULATION_PAPER: (), FORMULATION_MINIMAL: (2, 3)}
+TRIG_SIZE = 4
 MAX_ABS_INPUT = 1.0e6
 # Plausibility bounds of the configuration (as <prefix>_controller.h).
 H_MIN = 1.0e-6  # smallest sample time h [s]
@@ -105,6 +108,8 @@ FIELDS: dict[str, int] = {
 }
 _FNV_OFFSET = 2166136261
 _FNV_PRIME = 16777619
+_FNV_MIX = 2654435761
+_FNV_LANES = 4
 # Python key -> C struct field where they differ (the C backend's field_renames).
 C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
 PARAM_KEYS = ("J_theta_cart", "J_theta_cart_left", "J_theta_cart_right", "J_theta_left", "J_theta_right", "J_theta_tractor", "J_x_tractor", "K_theta_cart_x_tractor", "K_theta_cart_x_tractor_2", "K_theta_tractor_x_tractor", "K_theta_tractor_x_tractor_2", "radius_cart_left", "radius_cart_right", "radius_left", "radius_right", )
@@ -128,11 +133,17 @@ class ControllerError(ValueError):
         return self.code, FIELDS[self.field], self.index
 
 
-def _fnv(hash_: int, data: bytes) -> int:
-    """FNV-1a (32 bit) over the 32-bit words of data, as the C fingerprint."""
-    for (word,) in struct.iter_unpack("=I", data):
-        hash_ = ((hash_ ^ word) * _FNV_PRIME) & 0xFFFFFFFF
-    return hash_
+def _fnv(hash_: int, word: int) -> int:
+    """One FNV-1a (32 bit) step."""
+    return ((hash_ ^ word) * _FNV_PRIME) & 0xFFFFFFFF
+
+
+def _real_word(x: float) -> int:
+    """A double's two 32-bit words folded as the C ``<prefix>_real_word``: (w0 * MIX) ^ w1."""
+    word = 0
+    for (w,) in struct.iter_unpack("=I", struct.pack("=d", float(x))):
+        word = ((word * _FNV_MIX) & 0xFFFFFFFF) ^ w
+    return word
 
 
 @dataclass
@@ -232,20 +243,45 @@ class _Controller:
         self.tau = np.zeros(2)
         self.last_status = "TRAILER_OK"
 
+    @property
+    def trig_prev(self) -> NDArray[np.float64]:
+        """sin, cos of q(t − h)'s angles, as the C state of a TDE controller keeps them for
+        (17) (``trig_prev``; C computes them in the step that measured that q; zeros before
+        the first step)."""
+        out = np.zeros(TRIG_SIZE)
+        if self.steps == 0:
+            return out
+        for k, a in enumerate(TRIG.get(self.config.formulation, ())):
+            out[2 * k], out[2 * k + 1] = math.sin(self.q_prev[a]), math.cos(self.q_prev[a])
+        return out
+
+    @property
+    def omega_dnorm(self) -> NDArray[np.float64]:
+        """‖Ω(i) − Ω(i+1)‖ of the window, newest first: all the C state keeps of it
+        (``omega_dnorm``; the C's Ω(1) is its ``H1hat``)."""
+        return np.asarray(np.linalg.norm(self.omega[:-1] - self.omega[1:], axis=1))
+
     @classmethod
     def fingerprint(cls, c: Config) -> int:
-        """FNV-1a (32 bit, over 32-bit words) of the configuration's values in C struct
-        order, as the C ``config_fp`` (double build: the values' native bytes)."""
-        data = b"".join(struct.pack("=d", float(c.nominal[k])) for k in PARAM_KEYS)
+        """The C ``config_fp`` (double build): FNV-1a in interleaved lanes (value k into lane
+        k mod _FNV_LANES) over the configuration's values in C struct order, a value one
+        word (an int as uint32, a real its folded words), then FNV-1a of the lanes."""
+        words = [_real_word(c.nominal[k]) for k in PARAM_KEYS]
         for name, kind in cls.config_fields:
             value = getattr(c, name)
             if kind == "vector":
-                data += b"".join(struct.pack("=d", float(x)) for x in np.asarray(value).reshape(-1))
+                words += [_real_word(x) for x in np.asarray(value, dtype=np.float64).reshape(-1)]
             elif kind == "int":
-                data += struct.pack("=i", int(value))
+                words.append(int(value) & 0xFFFFFFFF)
             else:
-                data += struct.pack("=d", float(value))
-        return _fnv(_FNV_OFFSET, data)
+                words.append(_real_word(value))
+        lanes = [_FNV_OFFSET] * _FNV_LANES
+        for k, word in enumerate(words):
+            lanes[k % _FNV_LANES] = _fnv(lanes[k % _FNV_LANES], word)
+        fp = _FNV_OFFSET
+        for lane in lanes:
+            fp = _fnv(fp, lane)
+        return fp
 
     @classmethod
     def check_config(cls, c: Config) -> None:
@@ -319,8 +355,15 @@ class _Controller:
             raise bad("ERR_BAD_NOMINAL", str(exc), "NOMINAL") from None
 
     def state(self) -> dict[str, Any]:
-        """A deep copy of the state (for inspection and for the C/Python cross-check)."""
-        return copy.deepcopy({k: v for k, v in vars(self).items() if k != "config"})
+        """A deep copy of the state (for inspection and for the C/Python cross-check), with
+        what the C state keeps instead of the Ω window (``omega_dnorm``) and of q(t − h)'s
+        angles (``trig_prev``)."""
+        out = copy.deepcopy({k: v for k, v in vars(self).items() if k != "config"})
+        if self.window:
+            out["omega_dnorm"] = self.omega_dnorm
+        if self.tde and TRIG_SIZE:
+            out["trig_prev"] = self.trig_prev
+        return out
 
     def step(self, q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: ArrayLike,
              qddot_des: ArrayLike, config: Config | None = None) -> NDArray[np.float64]:

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_trig", "minimal_tde", "minimal_tde_trig", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
@@ -218,6 +218,147 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     H1hat = np.array([
         -_t36*_t38 - _t71*(J_theta_right + _t0*_t39 - _t16*_t56 - _t16*_t57 + _t19*_t56 + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 - _t39*_t40 + _t39*_t41 + 20444.0*_t42*_t70/42849.0 + 94249.0*_t42/171396.0 - 62356.0*_t43*_t70/42849.0 + 11449.0*_t43/171396.0 - _t44*_t45 + _t44*_t47 + _t44*_t48 - _t44*_t54 + _t44*_t55 - _t45*_t46 + _t46*_t47 + _t46*_t48 - _t46*_t54 + _t46*_t55 + _t49*_t50 - _t49*_t51 + 20444.0*_t5*_t58/42849.0 - _t50*_t52 + _t50*_t53 + _t51*_t52 - _t51*_t53 + _t58*_t59 - _t58*_t60 - _t58*_t61 - 62356.0*_t58*_t7/42849.0 + _t59*_t67 - _t60*_t67 - _t61*_t67 - _t62*_t63 + _t62*_t65 - _t62*_t66 + _t62*_t68 + _t62*_t69 + _t63*_t64 - _t64*_t65 + _t64*_t66 - _t64*_t68 - _t64*_t69) + up0,
         -_t36*_t71 - _t38*(J_theta_left + _t0*_t72 - _t13*_t75 + _t13*_t76 - _t13*_t77 + _t13*_t80 - _t13*_t81 + _t16*_t82 + _t16*_t83 - _t19*_t82 - _t19*_t83 + _t2*_t72 + _t3*_t72 - _t4*_t72 + _t40*_t72 - _t41*_t72 - _t49*_t78 + _t49*_t79 + _t52*_t78 - _t52*_t79 + _t53*_t78 - _t53*_t79 + _t59*_t85 + _t59*_t89 + _t61*_t85 + _t61*_t89 + _t63*_t87 - _t63*_t88 - _t65*_t87 + _t65*_t88 - _t66*_t87 + _t66*_t88 - _t70*_t86 - _t70*_t90 + _t70*_t91 + 11449.0*_t73/171396.0 + 94249.0*_t74/171396.0 - _t75*_t9 + _t76*_t9 - _t77*_t9 + _t80*_t9 - _t81*_t9 - _t84*_t86 - _t84*_t90 + _t84*_t91 - _t92*_t93 - _t92*_t95 + _t93*_t94 + _t94*_t95) + up1,
+    ])
+    return H1hat
+
+
+def minimal_tde_trig(trig_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+    qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+    The same with trig_prev = (sin, cos of q(t-h)[2], sin, cos of q(t-h)[3]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (17).
+
+    Args:
+        trig_prev: array of 4 (shape 4x1, row-major): trig_prev_s0, trig_prev_c0, trig_prev_s1, trig_prev_c1. sin, cos of q(t-h)[2], sin, cos of q(t-h)[3]
+        u_prev: array of 2 (shape 2x1, row-major): up0, up1. u(t-h) applied
+        qdot_now: array of 2 (shape 2x1, row-major): qd_now0, qd_now1. qdot(t)
+        qdot_then: array of 2 (shape 2x1, row-major): qd_then0, qd_then1. qdot(t-span)
+        span: array of 1 (shape 1x1, row-major): span. h or 2h
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        H1hat: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 135 add, 230 mul, 57 div, 0 sin/cos, 0 sqrt
+    """
+    trig_prev_s0, trig_prev_c0, trig_prev_s1, trig_prev_c1 = _flat(trig_prev, 4, "trig_prev")
+    up0, up1 = _flat(u_prev, 2, "u_prev")
+    qd_now0, qd_now1 = _flat(qdot_now, 2, "qdot_now")
+    qd_then0, qd_then1 = _flat(qdot_then, 2, "qdot_then")
+    span_1, = _flat(span, 1, "span")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = 62500.0*J_theta_cart/42849.0
+    _t1 = radius_left*radius_right
+    _t2 = 250000.0*J_theta_tractor/42849.0
+    _t3 = 0.25*J_x_tractor
+    _t4 = 25000.0*K_theta_cart_x_tractor/14283.0
+    _t5 = trig_prev_c0*trig_prev_s0
+    _t6 = _t1*_t5
+    _t7 = 73805.0*K_theta_cart_x_tractor_2/28566.0
+    _t8 = trig_prev_c1*trig_prev_s1
+    _t9 = _t1*_t8
+    _t10 = trig_prev_c0*trig_prev_c0
+    _t11 = _t1*_t10
+    _t12 = 369025.0*J_theta_cart/171396.0
+    _t13 = trig_prev_c1*trig_prev_c1
+    _t14 = _t1*_t13
+    _t15 = J_theta_cart_left/(radius_cart_left*radius_cart_left)
+    _t16 = 32849.0*_t1/171396.0
+    _t17 = J_theta_cart_right/(radius_cart_right*radius_cart_right)
+    _t18 = 73805.0*K_theta_cart_x_tractor/28566.0
+    _t19 = 369025.0*J_theta_cart/85698.0
+    _t20 = _t6*_t8
+    _t21 = 73805.0*K_theta_cart_x_tractor/14283.0
+    _t22 = 14761.0*_t15/28566.0
+    _t23 = 14761.0*_t17/28566.0
+    _t24 = 73805.0*K_theta_cart_x_tractor_2/14283.0
+    _t25 = _t14*_t5
+    _t26 = _t11*_t8
+    _t27 = _t11*_t13
+    _t28 = 29522.0*_t15/42849.0
+    _t29 = 29522.0*_t17/42849.0
+    _t30 = 59044.0*_t20/42849.0
+    _t31 = 14761.0*_t15/14283.0
+    _t32 = 14761.0*_t17/14283.0
+    _t33 = 59044.0*_t27/42849.0
+    _t34 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t11*_t12 - _t11*_t18 - _t11*_t28 - _t11*_t29 + _t12*_t14 - _t14*_t18 - _t14*_t28 - _t14*_t29 + _t15*_t16 + _t15*_t30 + _t15*_t33 + _t16*_t17 + _t17*_t30 + _t17*_t33 - _t19*_t20 - _t19*_t27 + _t20*_t21 + _t21*_t27 + _t22*_t6 - _t22*_t9 - _t23*_t6 + _t23*_t9 + _t24*_t25 - _t24*_t26 - _t25*_t31 + _t25*_t32 + _t26*_t31 - _t26*_t32 - _t6*_t7 + _t7*_t9
+    _t35 = 1.0/span_1
+    _t36 = _t35*(qd_now1 - qd_then1)
+    _t37 = radius_right*radius_right
+    _t38 = 250.0*K_theta_cart_x_tractor_2/207.0
+    _t39 = 500.0*K_theta_tractor_x_tractor_2/207.0
+    _t40 = 1250.0*J_theta_cart/621.0
+    _t41 = _t37*_t5
+    _t42 = _t37*_t8
+    _t43 = 500.0*K_theta_cart_x_tractor/207.0
+    _t44 = 26195.0*K_theta_cart_x_tractor_2/28566.0
+    _t45 = _t10*_t37
+    _t46 = 130975.0*J_theta_cart/171396.0
+    _t47 = _t13*_t37
+    _t48 = _t15*_t37
+    _t49 = _t17*_t37
+    _t50 = 26195.0*K_theta_cart_x_tractor/28566.0
+    _t51 = 500.0*K_theta_cart_x_tractor_2/207.0
+    _t52 = 130975.0*J_theta_cart/85698.0
+    _t53 = _t42*_t5
+    _t54 = 26195.0*K_theta_cart_x_tractor/14283.0
+    _t55 = 1000.0*K_theta_cart_x_tractor_2/207.0
+    _t56 = _t47*_t5
+    _t57 = 2500.0*J_theta_cart/621.0
+    _t58 = _t45*_t8
+    _t59 = 23639.0*_t48/28566.0
+    _t60 = 4387.0*_t49/9522.0
+    _t61 = 1000.0*K_theta_cart_x_tractor/207.0
+    _t62 = 26195.0*K_theta_cart_x_tractor_2/14283.0
+    _t63 = _t13*_t45
+    _t64 = 10222.0*_t15/42849.0
+    _t65 = 31178.0*_t17/42849.0
+    _t66 = _t5*_t8
+    _t67 = 23639.0*_t15/14283.0
+    _t68 = 4387.0*_t17/4761.0
+    _t69 = _t35*(qd_now0 - qd_then0)
+    _t70 = radius_left*radius_left
+    _t71 = _t5*_t70
+    _t72 = _t70*_t8
+    _t73 = _t46*_t70
+    _t74 = _t15*_t70
+    _t75 = _t17*_t70
+    _t76 = _t50*_t70
+    _t77 = _t51*_t70
+    _t78 = _t5*_t72
+    _t79 = _t54*_t70
+    _t80 = _t13*_t71
+    _t81 = _t10*_t72
+    _t82 = 4387.0*_t74/9522.0
+    _t83 = 23639.0*_t75/28566.0
+    _t84 = _t10*_t13
+    _t85 = _t70*_t84
+    _t86 = 31178.0*_t74/42849.0
+    _t87 = 10222.0*_t75/42849.0
+    _t88 = 62356.0*_t74/42849.0
+    _t89 = 20444.0*_t75/42849.0
+    _t90 = _t13*_t5
+    _t91 = 4387.0*_t74/4761.0
+    _t92 = _t10*_t8
+    _t93 = 23639.0*_t75/14283.0
+    H1hat = np.array([
+        -_t34*_t36 - _t69*(J_theta_right + _t0*_t37 + 20444.0*_t15*_t63/42849.0 - 62356.0*_t17*_t63/42849.0 + _t2*_t37 + _t3*_t37 - _t37*_t38 + _t37*_t39 - _t37*_t4 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43 - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47 + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65 + 20444.0*_t48*_t66/42849.0 + 94249.0*_t48/171396.0 - 62356.0*_t49*_t66/42849.0 + 11449.0*_t49/171396.0 - _t5*_t59 - _t5*_t60 + _t52*_t53 + _t52*_t63 - _t53*_t54 - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61 - _t56*_t62 + _t56*_t67 + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67 - _t58*_t68 + _t59*_t8 + _t60*_t8) + up0,
+        -_t34*_t69 - _t36*(J_theta_left + _t0*_t70 - _t10*_t73 + _t10*_t76 - _t10*_t77 + _t10*_t86 - _t10*_t87 - _t13*_t73 + _t13*_t76 - _t13*_t77 + _t13*_t86 - _t13*_t87 + _t2*_t70 + _t3*_t70 + _t38*_t70 - _t39*_t70 - _t4*_t70 - _t40*_t71 + _t40*_t72 + _t43*_t71 - _t43*_t72 + _t44*_t71 - _t44*_t72 + _t5*_t82 + _t5*_t83 + _t52*_t78 + _t52*_t85 + _t55*_t78 + _t55*_t85 + _t57*_t80 - _t57*_t81 - _t61*_t80 + _t61*_t81 - _t62*_t80 + _t62*_t81 - _t66*_t79 - _t66*_t88 + _t66*_t89 + 11449.0*_t74/171396.0 + 94249.0*_t75/171396.0 - _t79*_t84 - _t8*_t82 - _t8*_t83 - _t84*_t88 + _t84*_t89 - _t90*_t91 - _t90*_t93 + _t91*_t92 + _t92*_t93) + up1,
     ])
     return H1hat
 
@@ -676,6 +817,153 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     return u
 
 
+def minimal_tdc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+    The same with trig = (sin, cos of q[2], sin, cos of q[3]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (16), (18).
+
+    Args:
+        trig: array of 4 (shape 4x1, row-major): trig_s0, trig_c0, trig_s1, trig_c1. sin, cos of q[2], sin, cos of q[3]
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 137 add, 232 mul, 56 div, 0 sin/cos, 0 sqrt
+    """
+    trig_s0, trig_c0, trig_s1, trig_c1 = _flat(trig, 4, "trig")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    del p12  # not used by this function
+    del p22  # not used by this function
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t1 = 62500.0*J_theta_cart/42849.0
+    _t2 = radius_left*radius_right
+    _t3 = 250000.0*J_theta_tractor/42849.0
+    _t4 = 0.25*J_x_tractor
+    _t5 = 25000.0*K_theta_cart_x_tractor/14283.0
+    _t6 = trig_c0*trig_s0
+    _t7 = _t2*_t6
+    _t8 = 73805.0*K_theta_cart_x_tractor_2/28566.0
+    _t9 = trig_c1*trig_s1
+    _t10 = _t2*_t9
+    _t11 = trig_c0*trig_c0
+    _t12 = _t11*_t2
+    _t13 = 369025.0*J_theta_cart/171396.0
+    _t14 = trig_c1*trig_c1
+    _t15 = _t14*_t2
+    _t16 = J_theta_cart_left/(radius_cart_left*radius_cart_left)
+    _t17 = 32849.0*_t2/171396.0
+    _t18 = J_theta_cart_right/(radius_cart_right*radius_cart_right)
+    _t19 = 73805.0*K_theta_cart_x_tractor/28566.0
+    _t20 = 369025.0*J_theta_cart/85698.0
+    _t21 = _t7*_t9
+    _t22 = 73805.0*K_theta_cart_x_tractor/14283.0
+    _t23 = 14761.0*_t16/28566.0
+    _t24 = 14761.0*_t18/28566.0
+    _t25 = 73805.0*K_theta_cart_x_tractor_2/14283.0
+    _t26 = _t15*_t6
+    _t27 = _t12*_t9
+    _t28 = _t12*_t14
+    _t29 = 29522.0*_t16/42849.0
+    _t30 = 29522.0*_t18/42849.0
+    _t31 = 59044.0*_t21/42849.0
+    _t32 = 14761.0*_t16/14283.0
+    _t33 = 14761.0*_t18/14283.0
+    _t34 = 59044.0*_t28/42849.0
+    _t35 = -_t1*_t2 - _t10*_t23 + _t10*_t24 + _t10*_t8 + _t12*_t13 - _t12*_t19 - _t12*_t29 - _t12*_t30 + _t13*_t15 - _t15*_t19 - _t15*_t29 - _t15*_t30 + _t16*_t17 + _t16*_t31 + _t16*_t34 + _t17*_t18 + _t18*_t31 + _t18*_t34 - _t2*_t3 + _t2*_t4 + _t2*_t5 - _t20*_t21 - _t20*_t28 + _t21*_t22 + _t22*_t28 + _t23*_t7 - _t24*_t7 + _t25*_t26 - _t25*_t27 - _t26*_t32 + _t26*_t33 + _t27*_t32 - _t27*_t33 - _t7*_t8
+    _t36 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t37 = radius_right*radius_right
+    _t38 = 250.0*K_theta_cart_x_tractor_2/207.0
+    _t39 = 500.0*K_theta_tractor_x_tractor_2/207.0
+    _t40 = 1250.0*J_theta_cart/621.0
+    _t41 = _t37*_t6
+    _t42 = _t37*_t9
+    _t43 = 500.0*K_theta_cart_x_tractor/207.0
+    _t44 = 26195.0*K_theta_cart_x_tractor_2/28566.0
+    _t45 = _t11*_t37
+    _t46 = 130975.0*J_theta_cart/171396.0
+    _t47 = _t14*_t37
+    _t48 = _t16*_t37
+    _t49 = _t18*_t37
+    _t50 = 26195.0*K_theta_cart_x_tractor/28566.0
+    _t51 = 500.0*K_theta_cart_x_tractor_2/207.0
+    _t52 = 130975.0*J_theta_cart/85698.0
+    _t53 = _t42*_t6
+    _t54 = 26195.0*K_theta_cart_x_tractor/14283.0
+    _t55 = 1000.0*K_theta_cart_x_tractor_2/207.0
+    _t56 = _t47*_t6
+    _t57 = 2500.0*J_theta_cart/621.0
+    _t58 = _t45*_t9
+    _t59 = 23639.0*_t48/28566.0
+    _t60 = 4387.0*_t49/9522.0
+    _t61 = 1000.0*K_theta_cart_x_tractor/207.0
+    _t62 = 26195.0*K_theta_cart_x_tractor_2/14283.0
+    _t63 = _t14*_t45
+    _t64 = 10222.0*_t16/42849.0
+    _t65 = 31178.0*_t18/42849.0
+    _t66 = _t6*_t9
+    _t67 = 23639.0*_t16/14283.0
+    _t68 = 4387.0*_t18/4761.0
+    _t69 = radius_left*radius_left
+    _t70 = _t6*_t69
+    _t71 = _t69*_t9
+    _t72 = _t46*_t69
+    _t73 = _t16*_t69
+    _t74 = _t18*_t69
+    _t75 = _t50*_t69
+    _t76 = _t51*_t69
+    _t77 = _t6*_t71
+    _t78 = _t54*_t69
+    _t79 = _t14*_t70
+    _t80 = _t11*_t71
+    _t81 = 4387.0*_t73/9522.0
+    _t82 = 23639.0*_t74/28566.0
+    _t83 = _t11*_t14
+    _t84 = _t69*_t83
+    _t85 = 31178.0*_t73/42849.0
+    _t86 = 10222.0*_t74/42849.0
+    _t87 = 62356.0*_t73/42849.0
+    _t88 = 20444.0*_t74/42849.0
+    _t89 = _t14*_t6
+    _t90 = 4387.0*_t73/4761.0
+    _t91 = _t11*_t9
+    _t92 = 23639.0*_t74/14283.0
+    u = np.array([
+        H1hat0 + _t0*_t35 + _t36*(J_theta_right + _t1*_t37 + 20444.0*_t16*_t63/42849.0 - 62356.0*_t18*_t63/42849.0 + _t3*_t37 - _t37*_t38 + _t37*_t39 + _t37*_t4 - _t37*_t5 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43 - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47 + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65 + 20444.0*_t48*_t66/42849.0 + 94249.0*_t48/171396.0 - 62356.0*_t49*_t66/42849.0 + 11449.0*_t49/171396.0 + _t52*_t53 + _t52*_t63 - _t53*_t54 - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61 - _t56*_t62 + _t56*_t67 + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67 - _t58*_t68 - _t59*_t6 + _t59*_t9 - _t6*_t60 + _t60*_t9),
+        H1hat1 + _t0*(J_theta_left + _t1*_t69 - _t11*_t72 + _t11*_t75 - _t11*_t76 + _t11*_t85 - _t11*_t86 - _t14*_t72 + _t14*_t75 - _t14*_t76 + _t14*_t85 - _t14*_t86 + _t3*_t69 + _t38*_t69 - _t39*_t69 + _t4*_t69 - _t40*_t70 + _t40*_t71 + _t43*_t70 - _t43*_t71 + _t44*_t70 - _t44*_t71 - _t5*_t69 + _t52*_t77 + _t52*_t84 + _t55*_t77 + _t55*_t84 + _t57*_t79 - _t57*_t80 + _t6*_t81 + _t6*_t82 - _t61*_t79 + _t61*_t80 - _t62*_t79 + _t62*_t80 - _t66*_t78 - _t66*_t87 + _t66*_t88 + 11449.0*_t73/171396.0 + 94249.0*_t74/171396.0 - _t78*_t83 - _t81*_t9 - _t82*_t9 - _t83*_t87 + _t83*_t88 - _t89*_t90 - _t89*_t92 + _t90*_t91 + _t91*_t92) + _t35*_t36,
+    ])
+    return u
+
+
 def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(minimal formulation) TDROC (16), (22), (25):
     u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
@@ -831,6 +1119,167 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     u = np.array([
         H1hat0 + _t4*_t41 + _t42*(J_theta_right + 20444.0*_t10*_t62/42849.0 - 62356.0*_t12*_t62/42849.0 + _t22*_t60 + _t22*_t61 - _t24*_t60 - _t24*_t61 - _t43*_t44 + _t43*_t45 + _t43*_t5 + _t43*_t7 + _t43*_t8 - _t43*_t9 + 20444.0*_t46*_t74/42849.0 + 94249.0*_t46/171396.0 - 62356.0*_t47*_t74/42849.0 + 11449.0*_t47/171396.0 - _t48*_t49 + _t48*_t51 + _t48*_t52 - _t48*_t58 + _t48*_t59 - _t49*_t50 + _t50*_t51 + _t50*_t52 - _t50*_t58 + _t50*_t59 - _t53*_t54 + _t53*_t56 - _t53*_t57 + _t54*_t55 - _t55*_t56 + _t55*_t57 + _t62*_t63 - _t62*_t64 - _t62*_t65 + _t63*_t71 - _t64*_t71 - _t65*_t71 + _t66*_t67 - _t66*_t68 - _t67*_t69 + _t67*_t70 - _t67*_t72 - _t67*_t73 + _t68*_t69 - _t68*_t70 + _t68*_t72 + _t68*_t73),
         H1hat1 + _t4*(J_theta_left - _t14*_t78 + _t14*_t79 - _t14*_t80 + _t14*_t83 - _t14*_t84 - _t18*_t78 + _t18*_t79 - _t18*_t80 + _t18*_t83 - _t18*_t84 - _t22*_t85 - _t22*_t86 + _t24*_t85 + _t24*_t86 + _t44*_t75 - _t45*_t75 + _t5*_t75 + _t54*_t81 - _t54*_t82 - _t56*_t81 + _t56*_t82 - _t57*_t81 + _t57*_t82 + _t63*_t88 + _t63*_t92 + _t65*_t88 + _t65*_t92 - _t66*_t90 + _t66*_t91 + _t69*_t90 - _t69*_t91 + _t7*_t75 + _t70*_t90 - _t70*_t91 - _t74*_t89 - _t74*_t93 + _t74*_t94 + _t75*_t8 - _t75*_t9 + 11449.0*_t76/171396.0 + 94249.0*_t77/171396.0 - _t87*_t89 - _t87*_t93 + _t87*_t94 + _t95*_t96 - _t95*_t97 + _t96*_t98 - _t97*_t98) + _t41*_t42,
+    ])
+    s = np.array([_t1, _t0])
+    s_norm = np.array([_t2])
+    return u, s, s_norm
+
+
+def minimal_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    + H1hat, s = B^T P e.
+    The same with trig = (sin, cos of q[2], sin, cos of q[3]) in place of the coordinates:
+    no sin/cos evaluated (a step computes them once and keeps them for the next).
+
+    Paper equations: (16), (22), (24), (25).
+
+    Args:
+        trig: array of 4 (shape 4x1, row-major): trig_s0, trig_c0, trig_s1, trig_c1. sin, cos of q[2], sin, cos of q[3]
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        gain: array of 1 (shape 1x1, row-major): gain. khat of (25)
+        eps: array of 1 (shape 1x1, row-major): eps. boundary layer
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        s: array of 2 (shape 2x1, row-major)
+        s_norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 fmax
+    """
+    trig_s0, trig_c0, trig_s1, trig_c1 = _flat(trig, 4, "trig")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    p12_0, p12_1 = _flat(p12, 2, "p12")
+    p22_0, p22_1 = _flat(p22, 2, "p22")
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    gain_1, = _flat(gain, 1, "gain")
+    eps_1, = _flat(eps, 1, "eps")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = e1*p12_1 + edot1*p22_1
+    _t1 = e0*p12_0 + edot0*p22_0
+    _t2 = math.sqrt(_t0*_t0 + _t1*_t1)
+    _t3 = gain_1/max(_t2, eps_1)
+    _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t5 = 62500.0*J_theta_cart/42849.0
+    _t6 = radius_left*radius_right
+    _t7 = 250000.0*J_theta_tractor/42849.0
+    _t8 = 0.25*J_x_tractor
+    _t9 = 25000.0*K_theta_cart_x_tractor/14283.0
+    _t10 = trig_c0*trig_s0
+    _t11 = _t10*_t6
+    _t12 = 73805.0*K_theta_cart_x_tractor_2/28566.0
+    _t13 = trig_c1*trig_s1
+    _t14 = _t13*_t6
+    _t15 = trig_c0*trig_c0
+    _t16 = _t15*_t6
+    _t17 = 369025.0*J_theta_cart/171396.0
+    _t18 = trig_c1*trig_c1
+    _t19 = _t18*_t6
+    _t20 = J_theta_cart_left/(radius_cart_left*radius_cart_left)
+    _t21 = 32849.0*_t6/171396.0
+    _t22 = J_theta_cart_right/(radius_cart_right*radius_cart_right)
+    _t23 = 73805.0*K_theta_cart_x_tractor/28566.0
+    _t24 = 369025.0*J_theta_cart/85698.0
+    _t25 = _t11*_t13
+    _t26 = 73805.0*K_theta_cart_x_tractor/14283.0
+    _t27 = 14761.0*_t20/28566.0
+    _t28 = 14761.0*_t22/28566.0
+    _t29 = 73805.0*K_theta_cart_x_tractor_2/14283.0
+    _t30 = _t10*_t19
+    _t31 = _t13*_t16
+    _t32 = _t16*_t18
+    _t33 = 29522.0*_t20/42849.0
+    _t34 = 29522.0*_t22/42849.0
+    _t35 = 59044.0*_t25/42849.0
+    _t36 = 14761.0*_t20/14283.0
+    _t37 = 14761.0*_t22/14283.0
+    _t38 = 59044.0*_t32/42849.0
+    _t39 = -_t11*_t12 + _t11*_t27 - _t11*_t28 + _t12*_t14 - _t14*_t27 + _t14*_t28 + _t16*_t17 - _t16*_t23 - _t16*_t33 - _t16*_t34 + _t17*_t19 - _t19*_t23 - _t19*_t33 - _t19*_t34 + _t20*_t21 + _t20*_t35 + _t20*_t38 + _t21*_t22 + _t22*_t35 + _t22*_t38 - _t24*_t25 - _t24*_t32 + _t25*_t26 + _t26*_t32 + _t29*_t30 - _t29*_t31 - _t30*_t36 + _t30*_t37 + _t31*_t36 - _t31*_t37 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9
+    _t40 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t41 = radius_right*radius_right
+    _t42 = 250.0*K_theta_cart_x_tractor_2/207.0
+    _t43 = 500.0*K_theta_tractor_x_tractor_2/207.0
+    _t44 = 1250.0*J_theta_cart/621.0
+    _t45 = _t10*_t41
+    _t46 = _t13*_t41
+    _t47 = 500.0*K_theta_cart_x_tractor/207.0
+    _t48 = 26195.0*K_theta_cart_x_tractor_2/28566.0
+    _t49 = _t15*_t41
+    _t50 = 130975.0*J_theta_cart/171396.0
+    _t51 = _t18*_t41
+    _t52 = _t20*_t41
+    _t53 = _t22*_t41
+    _t54 = 26195.0*K_theta_cart_x_tractor/28566.0
+    _t55 = 500.0*K_theta_cart_x_tractor_2/207.0
+    _t56 = 130975.0*J_theta_cart/85698.0
+    _t57 = _t10*_t46
+    _t58 = 26195.0*K_theta_cart_x_tractor/14283.0
+    _t59 = 1000.0*K_theta_cart_x_tractor_2/207.0
+    _t60 = _t10*_t51
+    _t61 = 2500.0*J_theta_cart/621.0
+    _t62 = _t13*_t49
+    _t63 = 23639.0*_t52/28566.0
+    _t64 = 4387.0*_t53/9522.0
+    _t65 = 1000.0*K_theta_cart_x_tractor/207.0
+    _t66 = 26195.0*K_theta_cart_x_tractor_2/14283.0
+    _t67 = _t18*_t49
+    _t68 = 10222.0*_t20/42849.0
+    _t69 = 31178.0*_t22/42849.0
+    _t70 = _t10*_t13
+    _t71 = 23639.0*_t20/14283.0
+    _t72 = 4387.0*_t22/4761.0
+    _t73 = radius_left*radius_left
+    _t74 = _t10*_t73
+    _t75 = _t13*_t73
+    _t76 = _t50*_t73
+    _t77 = _t20*_t73
+    _t78 = _t22*_t73
+    _t79 = _t54*_t73
+    _t80 = _t55*_t73
+    _t81 = _t10*_t75
+    _t82 = _t58*_t73
+    _t83 = _t18*_t74
+    _t84 = _t15*_t75
+    _t85 = 4387.0*_t77/9522.0
+    _t86 = 23639.0*_t78/28566.0
+    _t87 = _t15*_t18
+    _t88 = _t73*_t87
+    _t89 = 31178.0*_t77/42849.0
+    _t90 = 10222.0*_t78/42849.0
+    _t91 = 62356.0*_t77/42849.0
+    _t92 = 20444.0*_t78/42849.0
+    _t93 = _t10*_t18
+    _t94 = 4387.0*_t77/4761.0
+    _t95 = _t13*_t15
+    _t96 = 23639.0*_t78/14283.0
+    u = np.array([
+        H1hat0 + _t39*_t4 + _t40*(J_theta_right - _t10*_t63 - _t10*_t64 + _t13*_t63 + _t13*_t64 + 20444.0*_t20*_t67/42849.0 - 62356.0*_t22*_t67/42849.0 - _t41*_t42 + _t41*_t43 + _t41*_t5 + _t41*_t7 + _t41*_t8 - _t41*_t9 + _t44*_t45 - _t44*_t46 - _t45*_t47 + _t45*_t48 + _t46*_t47 - _t46*_t48 - _t49*_t50 + _t49*_t54 + _t49*_t55 - _t49*_t68 + _t49*_t69 - _t50*_t51 + _t51*_t54 + _t51*_t55 - _t51*_t68 + _t51*_t69 + 20444.0*_t52*_t70/42849.0 + 94249.0*_t52/171396.0 - 62356.0*_t53*_t70/42849.0 + 11449.0*_t53/171396.0 + _t56*_t57 + _t56*_t67 - _t57*_t58 - _t57*_t59 - _t58*_t67 - _t59*_t67 - _t60*_t61 + _t60*_t65 - _t60*_t66 + _t60*_t71 + _t60*_t72 + _t61*_t62 - _t62*_t65 + _t62*_t66 - _t62*_t71 - _t62*_t72),
+        H1hat1 + _t39*_t40 + _t4*(J_theta_left + _t10*_t85 + _t10*_t86 - _t13*_t85 - _t13*_t86 - _t15*_t76 + _t15*_t79 - _t15*_t80 + _t15*_t89 - _t15*_t90 - _t18*_t76 + _t18*_t79 - _t18*_t80 + _t18*_t89 - _t18*_t90 + _t42*_t73 - _t43*_t73 - _t44*_t74 + _t44*_t75 + _t47*_t74 - _t47*_t75 + _t48*_t74 - _t48*_t75 + _t5*_t73 + _t56*_t81 + _t56*_t88 + _t59*_t81 + _t59*_t88 + _t61*_t83 - _t61*_t84 - _t65*_t83 + _t65*_t84 - _t66*_t83 + _t66*_t84 + _t7*_t73 - _t70*_t82 - _t70*_t91 + _t70*_t92 + _t73*_t8 - _t73*_t9 + 11449.0*_t77/171396.0 + 94249.0*_t78/171396.0 - _t82*_t87 - _t87*_t91 + _t87*_t92 - _t93*_t94 - _t93*_t96 + _t94*_t95 + _t95*_t96),
     ])
     s = np.array([_t1, _t0])
     s_norm = np.array([_t2])

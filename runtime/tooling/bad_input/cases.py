@@ -80,9 +80,9 @@ def _nominal(**changes: float) -> Callable[[Any], None]:
 
 
 def max_window(lib: cbuild.CLibrary) -> int:
-    """WMR_MAX_WINDOW, read from the C state (omega has WMR_MAX_WINDOW + 1 rows)."""
+    """WMR_MAX_WINDOW, read from the C state (omega_dnorm has WMR_MAX_WINDOW entries)."""
     fields = dict(lib.ffi.typeof("wmr_tdroc_state_t").fields)
-    return int(fields["omega"].type.length) - 1
+    return int(fields["omega_dnorm"].type.length)
 
 
 def cases(max_win: int) -> list[Case]:

@@ -129,10 +129,10 @@ class CController:
             st.qdot_prev2[i], st.u_prev[i] = float(hist.qdot_prev2[i]), float(hist.u_prev[i])
             st.u_prev2[i] = float(hist.u_prev2[i])
             st.H1hat[i] = float(hist.H1hat[i])
-        if "omega" in self.state_fields:
-            for i in range(hc.MAX_WINDOW + 1):
-                for j in range(5):
-                    st.omega[i][j] = float(hist.omega[i, j])
+        if "omega_dnorm" in self.state_fields:  # C keeps the window's difference norms
+            dnorm = np.linalg.norm(hist.omega[:-1] - hist.omega[1:], axis=1)
+            for i in range(hc.MAX_WINDOW):
+                st.omega_dnorm[i] = float(dnorm[i])
             st.omega_count = hist.omega_count
         st.gain, st.s_norm, st.u_discarded = hist.gain, hist.s_norm, hist.u_discarded
         st.tau[0], st.tau[1] = float(hist.tau[0]), float(hist.tau[1])
