@@ -70,7 +70,7 @@ def out(
     return Argument(name, "array", shape=shape, exprs=values, doc=doc)
 
 
-def _leading_minors(mbar: sp.Matrix) -> list[sp.Expr]:
+def leading_minors(mbar: sp.Matrix) -> list[sp.Expr]:
     def minor(k: int) -> sp.Expr:
         if k == 2:  # written out: the form CSE already shares with the 2x2 solve
             return mbar[0, 0] * mbar[1, 1] - mbar[0, 1] * mbar[1, 0]
@@ -79,7 +79,7 @@ def _leading_minors(mbar: sp.Matrix) -> list[sp.Expr]:
     return [minor(k) for k in range(1, mbar.rows + 1)]
 
 
-def _minor_doc(k: int, n: int) -> str:
+def minor_doc(k: int, n: int) -> str:
     if k == 1:
         return "(S^T M S)[0][0] > 0"
     if k == n:
@@ -95,10 +95,10 @@ def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
     bad = status(model, "ERR_BAD_PARAMS")
     positive = [Guard(bad, by_key[k], f"{k} > 0") for k in model.positive]
     # Sylvester: all leading minors of S^T M S positive <=> positive definite.
-    minors = _leading_minors(mbar)
+    minors = leading_minors(mbar)
     return (
         *positive,
-        *(Guard(bad, m, _minor_doc(k + 1, len(minors)))
+        *(Guard(bad, m, minor_doc(k + 1, len(minors)))
           for k, m in enumerate(minors)),
     )
 

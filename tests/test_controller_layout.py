@@ -49,6 +49,15 @@ TOY_PARAMS = ("J_theta", "J_phi", "K_x", "K_y", "radius_r", "radius_l")
 TOY_CONDITION = ("p->J_theta * p->J_phi - p->K_x * p->K_x", "J_theta J_phi - K_x^2 > 0")
 DRISHTI_LAYOUT = layout_for(robot_model())
 PREAMBLE = ("Generated for tests/test_controller_layout.py",)
+# The forward dynamics' guards as the C backend writes them (codegen.backends.c.backend
+# .nominal_guards): a 2x2 S^T M S of the toy's parameters.
+TOY_GUARDS = {
+    "positive": [("p->radius_l", "radius_l > 0")],
+    "temps": [("t0", "p->J_theta*p->radius_l")],
+    "mbar": [("t0", ""), ("TOY_LIT(0.0)", ""), ("TOY_LIT(0.0)", ""), ("t0", "")],
+    "minors": [("mbar[0]", "(S^T M S)[0][0] > 0"),
+               ("mbar[0]*mbar[3] - mbar[1]*mbar[2]", "det(S^T M S) > 0: a positive-definite model")],
+}
 
 
 def _c_texts(layout: ControllerLayout) -> dict[str, str]:
@@ -62,6 +71,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
             param_fields=list(TOY_PARAMS),
             max_abs_input=MAX_ABS_INPUT,
             nominal_conditions=[TOY_CONDITION],
+            nominal_guards=TOY_GUARDS,
             nominal_bounds=[(k, "1000.0") for k in TOY_PARAMS],
             **c_common_context(),
         )
@@ -184,9 +194,11 @@ def test_minv_norm_is_evaluated_at_q_in_the_step(c_texts: dict[str, str]) -> Non
 
 def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     body = _function_body(c_texts["controller.c"], "toy_check_nominal")
-    assert "toy_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TOY_OK" in body
-    assert "p->m" not in body and "mbar" not in body
-    assert "TOY_LIT(0.0), " * 7 + "TOY_LIT(0.0)}" in body
+    # The forward dynamics' guards written out (no call): S^T M S's minors over its entries.
+    assert "toy_minimal_forward_dynamics" not in body
+    assert "p->m" not in body
+    assert "if (!(mbar[0] > TOY_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */" in body
+    assert "if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > TOY_LIT(0.0))) {" in body
     # Each parameter bounded, its index in the error detail; no robot name in the code.
     assert (
         "if (!isfinite(p->radius_l) || TOY_FABS(p->radius_l) > TOY_LIT(1000.0)) {\n"

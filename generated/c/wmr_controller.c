@@ -115,10 +115,6 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
 
 wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail)
 {
-    const wmr_real_t q0[5] = {WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0), WMR_LIT(0.0)};
-    const wmr_real_t rates0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
-    const wmr_real_t tau0[2] = {WMR_LIT(0.0), WMR_LIT(0.0)};
-    wmr_real_t acc[2];
     /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
     if (!isfinite(p->m) || WMR_FABS(p->m) > WMR_LIT(36000.0)) {
         return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 0);
@@ -141,10 +137,34 @@ wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail
     if (!isfinite(p->d) || WMR_FABS(p->d) > WMR_LIT(1000.0)) {
         return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 6);
     }
-    /* The generated guards of S^T M S (finite parameters, the positive ones positive,
-       positive definite). */
-    if (wmr_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != WMR_OK) {
+    /* The forward dynamics' guards, written out: the positive parameters positive and
+       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester). */
+    if (!(p->r > WMR_LIT(0.0))) { /* r > 0 */
         return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
+    }
+    if (!(p->b > WMR_LIT(0.0))) { /* b > 0 */
+        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
+    }
+    {
+        const wmr_real_t t0 = p->r*p->r;
+        const wmr_real_t t1 = WMR_LIT(0.25)*p->m*t0;
+        const wmr_real_t t2 = p->Iz - WMR_LIT(2.0)*p->K*p->d + p->d*p->d*p->m;
+        const wmr_real_t t3 = t0/(p->b*p->b);
+        const wmr_real_t t4 = p->Iw + t1 + t2*t3;
+        const wmr_real_t t5 = t1 - t2*t3;
+        const wmr_real_t mbar[4] = {
+            t4,
+            t5,
+            t5,
+            t4
+        };
+        if (!(mbar[0] > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+            return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
+        }
+        /* det(S^T M S) > 0: a positive-definite model */
+        if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > WMR_LIT(0.0))) {
+            return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
+        }
     }
     /* m > 0 */
     if (!(p->m > WMR_LIT(0.0))) {

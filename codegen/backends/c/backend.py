@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from functools import cache
 
+import sympy as sp
+
 from codegen import template_util
 from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
@@ -25,6 +27,7 @@ from codegen.controller_api import (
     status_codes,
 )
 from codegen.controller_layout import ControllerLayout
+from codegen.robot_functions import leading_minors, minor_doc
 
 
 @cache
@@ -49,10 +52,40 @@ def default_config() -> CConfig:
 
 
 def nominal_conditions(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
-    """The robot's conditions on nominal parameters as (C expression over ``p->``, doc)."""
+    """The robot's own conditions on nominal parameters as (C expression over ``p->``, doc)."""
     names = {p.symbol: f"p->{config.c_field(p.key)}" for p in target.model.params}
     printer = CPrinter(config, names)
     return [(printer.expr_code(c.expr), c.doc) for c in target.model.nominal_conditions]
+
+
+def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple[str, str]]]:
+    """The forward dynamics' guards on the parameters, written out for the controllers'
+    nominal check (so validating a configuration does not link the forward dynamics):
+    ``positive`` (C condition, doc) per positive parameter; ``mbar`` the entries of SᵀMS at
+    q = 0 (row-major C expressions, doc empty); ``minors`` its leading minors over those
+    entries (``mbar[k]``), positive exactly when SᵀMS is positive definite (Sylvester)."""
+    model = target.model
+    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in model.params}
+    printer = CPrinter(config, names)
+    by_key = {p.key: p.symbol for p in model.params}
+    at_zero = {q: 0 for q in model.q}
+    mbar = model.system.minimal_mass_matrix.applyfunc(model.evaluation_form).subs(at_zero)
+    n = mbar.rows
+    entry = sp.Matrix(n, n, lambda i, j: sp.Symbol(f"mbar_{i * n + j}", real=True))
+    on_entries = CPrinter(config, {e: f"mbar[{k}]" for k, e in enumerate(entry)})
+    minors = [(on_entries.expr_code(m), minor_doc(k + 1, n))
+              for k, m in enumerate(leading_minors(entry))]
+    temps, (shared,) = sp.cse([mbar], symbols=sp.numbered_symbols("mbar_t"))
+    t_names = dict(names)
+    for k, (t, _) in enumerate(temps):
+        t_names[t] = f"t{k}"
+    on_temps = CPrinter(config, t_names)
+    return {
+        "positive": [(printer.expr_code(by_key[k]), f"{k} > 0") for k in model.positive],
+        "temps": [(f"t{k}", on_temps.expr_code(e)) for k, (_, e) in enumerate(temps)],
+        "mbar": [(on_temps.expr_code(e), "") for e in shared],
+        "minors": minors,
+    }
 
 
 def nominal_bounds(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
@@ -116,6 +149,7 @@ class CBackend:
                 f"controller_common.{suffix}.jinja", law, layout=layout,
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
                 nominal_conditions=nominal_conditions(target, config),
+                nominal_guards=nominal_guards(target, config),
                 nominal_bounds=nominal_bounds(target, config), **c_common_context(),
             )
         for info in CONTROLLERS:

@@ -112,12 +112,6 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
 
 trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_detail_t *detail)
 {
-    const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
-            TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
-            TRAILER_LIT(0.0)};
-    const trailer_real_t rates0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
-    const trailer_real_t tau0[2] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0)};
-    trailer_real_t acc[2];
     /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
     if (!isfinite(p->J_theta_cart) || TRAILER_FABS(p->J_theta_cart)
             > TRAILER_LIT(5141.500000000001)) {
@@ -172,10 +166,74 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_
     if (!isfinite(p->radius_right) || TRAILER_FABS(p->radius_right) > TRAILER_LIT(1000.0)) {
         return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 14);
     }
-    /* The generated guards of S^T M S (finite parameters, the positive ones positive,
-       positive definite). */
-    if (trailer_minimal_forward_dynamics(p, q0, rates0, tau0, acc) != TRAILER_OK) {
+    /* The forward dynamics' guards, written out: the positive parameters positive and
+       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester). */
+    if (!(p->radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->radius_cart_right > TRAILER_LIT(0.0))) { /* radius_cart_right > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->radius_left > TRAILER_LIT(0.0))) { /* radius_left > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->radius_right > TRAILER_LIT(0.0))) { /* radius_right > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_cart > TRAILER_LIT(0.0))) { /* J_theta_cart > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_cart_left > TRAILER_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_cart_right > TRAILER_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_left > TRAILER_LIT(0.0))) { /* J_theta_left > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_right > TRAILER_LIT(0.0))) { /* J_theta_right > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_theta_tractor > TRAILER_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    if (!(p->J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+    }
+    {
+        const trailer_real_t t0 = p->radius_right*p->radius_right;
+        const trailer_real_t t1 = TRAILER_LIT(62500.0)*p->J_theta_cart/TRAILER_LIT(42849.0);
+        const trailer_real_t t2 = TRAILER_LIT(250000.0)*p->J_theta_tractor/TRAILER_LIT(42849.0);
+        const trailer_real_t t3 = TRAILER_LIT(0.25)*p->J_x_tractor;
+        const trailer_real_t t4 =
+                TRAILER_LIT(25000.0)*p->K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+        const trailer_real_t t5 = TRAILER_LIT(250.0)*p->K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+        const trailer_real_t t6 =
+                TRAILER_LIT(500.0)*p->K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+        const trailer_real_t t7 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
+        const trailer_real_t t8 = p->J_theta_cart_right/(p->radius_cart_right*p->radius_cart_right);
+        const trailer_real_t t9 = p->radius_left*p->radius_right;
+        const trailer_real_t t10 = TRAILER_LIT(32849.0)*t9/TRAILER_LIT(171396.0);
+        const trailer_real_t t11 = -t1*t9 + t10*t7 + t10*t8 - t2*t9 + t3*t9 + t4*t9;
+        const trailer_real_t t12 = p->radius_left*p->radius_left;
+        const trailer_real_t mbar[4] = {
+            p->J_theta_right + t0*t1 + t0*t2 + t0*t3 - t0*t4 - t0*t5 + t0*t6
+                    + TRAILER_LIT(94249.0)*t0*t7/TRAILER_LIT(171396.0)
+                    + TRAILER_LIT(11449.0)*t0*t8/TRAILER_LIT(171396.0),
+            t11,
+            t11,
+            p->J_theta_left + t1*t12 + t12*t2 + t12*t3 - t12*t4 + t12*t5 - t12*t6
+                    + TRAILER_LIT(11449.0)*t12*t7/TRAILER_LIT(171396.0)
+                    + TRAILER_LIT(94249.0)*t12*t8/TRAILER_LIT(171396.0)
+        };
+        if (!(mbar[0] > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+            return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+        }
+        /* det(S^T M S) > 0: a positive-definite model */
+        if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > TRAILER_LIT(0.0))) {
+            return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
+        }
     }
     return TRAILER_OK;
 }

@@ -43,13 +43,18 @@ static wmr_tdroc_config_t cfg;
 static wmr_tdroc_state_t ours;
 static hand_tdroc_state_t hand;
 
-/* One pass of the recording through variant v; statuses and torques into st, tq. */
-static double pass(int v, int *st, double *tq) {
-    int k, s;
-    double tau[2], sink = 0.0;
+/* A fresh state for variant v (not timed). */
+static void fresh(int v) {
     if ((v == 0 ? wmr_tdroc_init(&ours, &cfg) : hand_tdroc_init(&hand, &cfg)) != WMR_OK) {
         fprintf(stderr, "init failed\n"); exit(2);
     }
+}
+
+/* One pass of the recording through variant v from its current state; statuses and
+   torques into st, tq. */
+static double pass(int v, int *st, double *tq) {
+    int k, s;
+    double tau[2], sink = 0.0;
     for (k = 0; k < NSTEPS; ++k) {
         const double *in = IN[k];
         if (v == 0) {
@@ -74,7 +79,7 @@ int main(int argc, char **argv) {
     int v, k, rep;
     long i;
     CONFIG
-    for (v = 0; v < 2; ++v) pass(v, st[v], tq[v]);
+    for (v = 0; v < 2; ++v) { fresh(v); pass(v, st[v], tq[v]); }
     for (k = 0; k < 2 * NSTEPS; ++k) {
         if (fabs(tq[0][k]) > scale) scale = fabs(tq[0][k]);
         if (!(fabs(tq[1][k] - tq[0][k]) <= worst)) worst = fabs(tq[1][k] - tq[0][k]);
@@ -93,7 +98,9 @@ int main(int argc, char **argv) {
         for (v = 0; v < 2; ++v) {
             double t = 0.0;
             for (i = 0; i < passes; ++i) {
-                double t0 = now_ns();
+                double t0;
+                fresh(v);
+                t0 = now_ns();
                 sink += pass(v, 0, 0);
                 t += now_ns() - t0;
             }
