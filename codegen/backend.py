@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from codegen import cse
 from codegen.cse import CseResult, OpCount
+from codegen.prepare import PreparedForm, prepared_form
 from codegen.spec import FunctionSpec
 
 if TYPE_CHECKING:
@@ -39,12 +40,15 @@ class FunctionIR:
     ``plain``: the CSE of the spec's outputs alone, for a backend that has no guards
     (CasADi); the same object as ``cse`` when the spec has none.
     ``ops``: ``count_ops(cse)``, the "operations after CSE" every function documents.
+    ``prepared``: for a spec with ``prepared``, ``cse`` split at the parameters (what a
+    prepare-parameters API evaluates once, and the per-call rest); else None.
     """
 
     spec: FunctionSpec
     cse: CseResult
     plain: CseResult
     ops: OpCount
+    prepared: PreparedForm | None = None
 
     @property
     def name(self) -> str:
@@ -56,7 +60,8 @@ def function_ir(spec: FunctionSpec) -> FunctionIR:
     outputs alone if it has guards)."""
     checked = cse.cse_function(spec.checked_spec())
     plain = cse.cse_function(spec) if spec.guards else checked
-    return FunctionIR(spec, checked, plain, cse.count_ops(checked))
+    split = prepared_form(checked, spec) if spec.prepared else None
+    return FunctionIR(spec, checked, plain, cse.count_ops(checked), split)
 
 
 @dataclass(frozen=True)

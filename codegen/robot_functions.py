@@ -6,7 +6,9 @@ Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi function
 ``<prefix>`` is the robot's, ``wmr`` for the paper's robot):
 
 * ``<prefix>_model``: M and H of (14), forward dynamics, kinematics (31), the minimal form
-  and the linearisation of the state equation x = (q, η), η the driven wheels' rates.
+  and the linearisation of the state equation x = (q, η), η the driven wheels' rates; in
+  C also the forward dynamics' prepare-parameters API (``<prefix>_model_prepare``,
+  ``<prefix>_forward_dynamics_prepared``).
 * ``<prefix>_laws``: the controllers' pure kernels — the time-delay estimate (17), the
   TDROC gain (25), the four laws, P of the Lyapunov equation — for each formulation.
   The controller step functions (``wmr_tdroc_step`` …) are templates around these that
@@ -172,7 +174,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     ) if model.paper else ()
     return (
         *paper_specs,
-        checked(
+        replace(checked(
             FunctionSpec(
                 "forward_dynamics",
                 "qddot solving (14) with u = B tau, by structured elimination:\n"
@@ -184,7 +186,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 (out("qddot", qdd),),
                 ("(9)", "(14)", "(31)"),
             )
-        ),
+        ), prepared=True),  # <prefix>_model_prepare + <prefix>_forward_dynamics_prepared
         FunctionSpec(
             "kinematics",
             f"(31): pose rates ({dep_names}) from the wheel rates, xi_dot = S_d(q) eta.",

@@ -88,6 +88,10 @@ class FunctionSpec:
     guards: tuple[Guard, ...] = ()
     nonfinite_input: str = ""
     nonfinite_output: str = ""
+    # With ``returns_status``: the C backend also generates the prepare-parameters API,
+    # ``<module>_prepare`` (parameter checks and parameter-only subexpressions, once) and
+    # ``<name>_prepared`` (the per-call rest); see :mod:`codegen.prepare`.
+    prepared: bool = False
 
     def checked_spec(self) -> FunctionSpec:
         """This spec with the guard conditions as a trailing output ``guard_`` (for CSE)."""

@@ -2,8 +2,9 @@
 
 Timing is not tested (that is `make bench`); what is tested is that the harness builds and
 that every variant computes the same thing on the same inputs, so the comparison is fair:
-the checksums (sum of outputs over 2000 varied calls) of our double C, CasADi's C, plain
-SymPy C and the hand-written C agree to 1e-9 relative, our float32 build to 1e-4.
+the checksums (sum of outputs over 2000 varied calls) of our double C (also through the
+prepare-parameters API), CasADi's C, plain SymPy C and the hand-written C agree to 1e-9
+relative, our float32 build to 1e-4.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ def checksums() -> dict[str, dict[str, float]]:
 def test_every_function_has_every_variant(checksums: dict[str, dict[str, float]]) -> None:
     for name in MODEL_FUNCTIONS:
         expected = {"ours", "ours_float32", "casadi", "sympy", "hand"}
-        if name == "forward_dynamics":  # the one with validation to measure
-            expected |= {"ours_unchecked", "hand_checked"}
+        if name == "forward_dynamics":  # the one with validation and a prepare API
+            expected |= {"ours_unchecked", "hand_checked", "ours_prepared"}
         assert set(checksums[name]) == expected
     for kernels in STEP_KERNELS.values():
         for k in kernels:

@@ -99,13 +99,15 @@ def test_trailer_checks_every_generated_function_and_controller(
     all_robots: CrosscheckReport,
 ) -> None:
     """No hand-written reference: every function of the generated model, laws and plant
-    (enumerated from the generated modules) in C double, float32 and CasADi at ≥ 100
-    random states, and the four C controllers in both precisions, every branch taken."""
+    (enumerated from the generated modules; the C prepared forward dynamics against the
+    NumPy one) in C double, float32 and CasADi at ≥ 100 random states, and the four C
+    controllers in both precisions, every branch taken."""
     robot = all_robots.robot("trailer")
     assert robot.handwritten is None
     report = robot.generated
     code = resolve("trailer").code
     expected = {n for m in (code.model, code.laws, code.plant) for n in m.__all__}
+    expected.add("forward_dynamics_prepared")
     assert {r.name for r in report.function_rows} == expected
     assert len(expected) >= 15 and report.n_samples >= 100
     for row in report.function_rows:
@@ -130,6 +132,23 @@ def test_trailer_header_sizes_match_the_robot() -> None:
         ("q", target.code.nq), ("qdot", target.code.nq), ("tau", target.code.nu)]
     assert fd.returns_status and [a.name for a in fd.outputs] == ["qddot"]
     assert fns["plant_state_derivative"].outputs[0].size == target.code.nq + target.code.nu
+
+
+@needs_trailer
+def test_prepared_functions_are_compared_with_their_numpy_function() -> None:
+    """``<prefix>_forward_dynamics_prepared`` is a row of its own, against the NumPy and
+    CasADi ``forward_dynamics``, its struct filled by ``<prefix>_model_prepare`` from the
+    sample's parameters; the prepare function itself is not a row."""
+    for name in ("drishti", "trailer"):
+        target = resolve(name)
+        fns = {f.name: f for f in generated_functions.functions(target)}
+        assert "model_prepare" not in fns
+        fd = fns["forward_dynamics_prepared"]
+        assert fd.reference == "forward_dynamics"
+        assert fd.python is target.code.model.forward_dynamics
+        assert [a.name for a in fd.inputs] == ["prepared", "q", "qdot", "tau"]
+        assert [a.name for a in fd.value_inputs()] == ["p", "q", "qdot", "tau"]
+        assert [p.name for _, p in fd.prepares] == ["model_prepare"]
 
 
 @needs_trailer

@@ -107,7 +107,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
 }
 
 /* wmr_forward_dynamics: documented in wmr_model.h.
-   operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 27 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
@@ -128,53 +128,170 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
             + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_SIN(theta);
-    const wmr_real_t _t1 = _t0*b;
-    const wmr_real_t _t2 = WMR_COS(theta);
-    const wmr_real_t _t3 = WMR_LIT(2.0)*d;
-    const wmr_real_t _t4 = _t2*_t3;
-    const wmr_real_t _t5 = thetadot_l - thetadot_r;
-    const wmr_real_t _t6 = r*r;
-    const wmr_real_t _t7 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t8 = _t6*_t7;
-    const wmr_real_t _t9 = WMR_LIT(0.5)*_t5*_t8;
-    const wmr_real_t _t10 = _t2*b;
-    const wmr_real_t _t11 = _t0*_t3;
-    const wmr_real_t _t12 = WMR_LIT(0.25)*_t6*m;
-    const wmr_real_t _t13 = I - K*_t3 + d*d*m;
-    const wmr_real_t _t14 = _t12 - _t13*_t8;
-    const wmr_real_t _t15 = I_w + _t12 + _t13*_t8;
-    const wmr_real_t _t16 = -_t14*_t14 + _t15*_t15;
-    const wmr_real_t _t17 = WMR_LIT(1.0)/_t16;
-    const wmr_real_t _t18 = _t5*_t7*r*r*r*(-K + d*m);
-    const wmr_real_t _t19 = _t18*thetadot_l + tau_r;
-    const wmr_real_t _t20 = -_t18*thetadot_r + tau_l;
-    const wmr_real_t _t21 = _t17*(-_t14*_t20 + _t15*_t19);
-    const wmr_real_t _t22 = r/b;
-    const wmr_real_t _t23 = _t21*_t22;
-    const wmr_real_t _t24 = WMR_LIT(0.5)*_t23;
-    const wmr_real_t _t25 = _t17*(-_t14*_t19 + _t15*_t20);
-    const wmr_real_t _t26 = _t22*_t25;
-    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
+    const wmr_real_t _t0 = WMR_LIT(2.0)*d;
+    const wmr_real_t _t1 = r*r;
+    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
+    const wmr_real_t _t5 = WMR_LIT(0.25)*_t1*m;
+    const wmr_real_t _t6 = I - K*_t0 + d*d*m;
+    const wmr_real_t _t7 = -_t3*_t6 + _t5;
+    const wmr_real_t _t8 = I_w + _t3*_t6 + _t5;
+    const wmr_real_t _t9 = -_t7*_t7 + _t8*_t8;
+    const wmr_real_t _t10 = WMR_LIT(1.0)/_t9;
+    const wmr_real_t _t11 = _t2*r*r*r*(-K + d*m);
+    const wmr_real_t _t12 = r/b;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t15 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t8 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t16 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t9 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t24*(_t10 - _t11) + _t27*(_t10 + _t11)
-            + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r);
-    const wmr_real_t r_1 = _t24*(_t1 + _t4) + _t27*(_t1 - _t4)
-            - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r);
-    const wmr_real_t r_2 = _t23 - _t26;
-    const wmr_real_t r_3 = _t21;
-    const wmr_real_t r_4 = _t25;
+    const wmr_real_t _t13 = WMR_SIN(theta);
+    const wmr_real_t _t14 = _t13*b;
+    const wmr_real_t _t15 = WMR_COS(theta);
+    const wmr_real_t _t16 = _t0*_t15;
+    const wmr_real_t _t17 = thetadot_l - thetadot_r;
+    const wmr_real_t _t18 = _t17*_t4;
+    const wmr_real_t _t19 = _t15*b;
+    const wmr_real_t _t20 = _t0*_t13;
+    const wmr_real_t _t21 = _t11*_t17;
+    const wmr_real_t _t22 = _t21*thetadot_l + tau_r;
+    const wmr_real_t _t23 = -_t21*thetadot_r + tau_l;
+    const wmr_real_t _t24 = _t10*(_t22*_t8 - _t23*_t7);
+    const wmr_real_t _t25 = _t12*_t24;
+    const wmr_real_t _t26 = WMR_LIT(0.5)*_t25;
+    const wmr_real_t _t27 = _t10*(-_t22*_t7 + _t23*_t8);
+    const wmr_real_t _t28 = _t12*_t27;
+    const wmr_real_t _t29 = WMR_LIT(0.5)*_t28;
+    const wmr_real_t r_0 = _t18*(_t14*(thetadot_l + thetadot_r) + _t16*(-thetadot_l + thetadot_r))
+            + _t26*(_t19 - _t20) + _t29*(_t19 + _t20);
+    const wmr_real_t r_1 = -_t18*(_t19*(thetadot_l + thetadot_r) + _t20*(thetadot_l - thetadot_r))
+            + _t26*(_t14 + _t16) + _t29*(_t14 - _t16);
+    const wmr_real_t r_2 = _t25 - _t28;
+    const wmr_real_t r_3 = _t24;
+    const wmr_real_t r_4 = _t27;
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
+        return WMR_ERR_NONFINITE_OUTPUT;
+    }
+    qddot[0] = r_0;
+    qddot[1] = r_1;
+    qddot[2] = r_2;
+    qddot[3] = r_3;
+    qddot[4] = r_4;
+    return WMR_OK;
+}
+
+/* wmr_model_prepare: documented in wmr_model.h.
+   operations after CSE: 7 add, 19 mul, 3 div, 0 sin/cos, 0 sqrt */
+wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared)
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    if (isnan((((m - m) + (I - I)) + ((K - K) + (I_w - I_w))) + (((r - r) + (b - b)) + (d - d)))
+            != 0) {
+        return WMR_ERR_NONFINITE_INPUT;
+    }
+    const wmr_real_t _t0 = WMR_LIT(2.0)*d;
+    const wmr_real_t _t1 = r*r;
+    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
+    const wmr_real_t _t5 = WMR_LIT(0.25)*_t1*m;
+    const wmr_real_t _t6 = I - K*_t0 + d*d*m;
+    const wmr_real_t _t7 = -_t3*_t6 + _t5;
+    const wmr_real_t _t8 = I_w + _t3*_t6 + _t5;
+    const wmr_real_t _t9 = -_t7*_t7 + _t8*_t8;
+    const wmr_real_t _t10 = WMR_LIT(1.0)/_t9;
+    const wmr_real_t _t11 = _t2*r*r*r*(-K + d*m);
+    const wmr_real_t _t12 = r/b;
+    if (!(r > WMR_LIT(0.0))) { /* r > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(b > WMR_LIT(0.0))) { /* b > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(_t8 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(_t9 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    prepared->magic = WMR_MODEL_PREPARED_MAGIC;
+    prepared->forward_dynamics[0] = b;
+    prepared->forward_dynamics[1] = _t0;
+    prepared->forward_dynamics[2] = _t4;
+    prepared->forward_dynamics[3] = _t7;
+    prepared->forward_dynamics[4] = _t8;
+    prepared->forward_dynamics[5] = _t10;
+    prepared->forward_dynamics[6] = _t11;
+    prepared->forward_dynamics[7] = _t12;
+    return WMR_OK;
+}
+
+/* wmr_forward_dynamics_prepared: documented in wmr_model.h.
+   operations after CSE: 20 add, 28 mul, 0 div, 2 sin/cos, 0 sqrt */
+wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
+    const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
+{
+    if (prepared->magic != WMR_MODEL_PREPARED_MAGIC) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
+    const wmr_real_t theta = q[2];
+    if (isnan(theta - theta) != 0) {
+        return WMR_ERR_NONFINITE_INPUT;
+    }
+    const wmr_real_t _t13 = WMR_SIN(theta);
+    const wmr_real_t _t15 = WMR_COS(theta);
+    const wmr_real_t thetadot_r = qdot[3];
+    const wmr_real_t thetadot_l = qdot[4];
+    const wmr_real_t tau_r = tau[0];
+    const wmr_real_t tau_l = tau[1];
+    if (isnan(((thetadot_r - thetadot_r) + (thetadot_l - thetadot_l))
+            + ((tau_r - tau_r) + (tau_l - tau_l))) != 0) {
+        return WMR_ERR_NONFINITE_INPUT;
+    }
+    const wmr_real_t b = prepared->forward_dynamics[0];
+    const wmr_real_t _t14 = _t13*b;
+    const wmr_real_t _t0 = prepared->forward_dynamics[1];
+    const wmr_real_t _t16 = _t0*_t15;
+    const wmr_real_t _t17 = thetadot_l - thetadot_r;
+    const wmr_real_t _t4 = prepared->forward_dynamics[2];
+    const wmr_real_t _t18 = _t17*_t4;
+    const wmr_real_t _t19 = _t15*b;
+    const wmr_real_t _t20 = _t0*_t13;
+    const wmr_real_t _t11 = prepared->forward_dynamics[6];
+    const wmr_real_t _t21 = _t11*_t17;
+    const wmr_real_t _t22 = _t21*thetadot_l + tau_r;
+    const wmr_real_t _t23 = -_t21*thetadot_r + tau_l;
+    const wmr_real_t _t7 = prepared->forward_dynamics[3];
+    const wmr_real_t _t8 = prepared->forward_dynamics[4];
+    const wmr_real_t _t10 = prepared->forward_dynamics[5];
+    const wmr_real_t _t24 = _t10*(_t22*_t8 - _t23*_t7);
+    const wmr_real_t _t12 = prepared->forward_dynamics[7];
+    const wmr_real_t _t25 = _t12*_t24;
+    const wmr_real_t _t26 = WMR_LIT(0.5)*_t25;
+    const wmr_real_t _t27 = _t10*(-_t22*_t7 + _t23*_t8);
+    const wmr_real_t _t28 = _t12*_t27;
+    const wmr_real_t _t29 = WMR_LIT(0.5)*_t28;
+    const wmr_real_t r_0 = _t18*(_t14*(thetadot_l + thetadot_r) + _t16*(-thetadot_l + thetadot_r))
+            + _t26*(_t19 - _t20) + _t29*(_t19 + _t20);
+    const wmr_real_t r_1 = -_t18*(_t19*(thetadot_l + thetadot_r) + _t20*(thetadot_l - thetadot_r))
+            + _t26*(_t14 + _t16) + _t29*(_t14 - _t16);
+    const wmr_real_t r_2 = _t25 - _t28;
+    const wmr_real_t r_3 = _t24;
+    const wmr_real_t r_4 = _t27;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }

@@ -12,6 +12,17 @@
 extern "C" {
 #endif
 
+/* Marks a wmr_model_prepared_t filled by wmr_model_prepare. */
+#define WMR_MODEL_PREPARED_MAGIC 0x574d5250
+
+/* wmr_model_prepared_t: the parameters of wmr_forward_dynamics, checked and evaluated
+   once by wmr_model_prepare; caller-owned, fixed size. Fill it with wmr_model_prepare only. */
+typedef struct {
+    long magic; /* WMR_MODEL_PREPARED_MAGIC once prepared */
+    wmr_real_t forward_dynamics[8]; /* b, 7 parameter-only subexpressions, for
+                                       wmr_forward_dynamics_prepared */
+} wmr_model_prepared_t;
+
 #define WMR_MASS_MATRIX_Q_SIZE 5
 #define WMR_MASS_MATRIX_M_SIZE 25
 #define WMR_MASS_MATRIX_M_ROWS 5
@@ -84,10 +95,61 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt
+ * With fixed parameters, wmr_model_prepare once and wmr_forward_dynamics_prepared
+ * per call give the same results, bit for bit.
+ *
+ * operations after CSE: 27 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
+
+/**
+ * Checks the parameters of wmr_forward_dynamics and evaluates, once, every
+ * subexpression that depends on the parameters only; wmr_forward_dynamics_prepared then does
+ * only the per-call rest. Call it again whenever the parameters change (a prepared
+ * struct keeps the values of the call that filled it).
+ *
+ * @param[in]  p wmr_params_t -- lumped robot parameters
+ * @param[out] prepared wmr_model_prepared_t -- written only on success
+ * @return WMR_OK on success; on error *prepared is not written:
+ *         WMR_ERR_NONFINITE_INPUT if a parameter it reads is NaN or infinite,
+ *         WMR_ERR_BAD_PARAMS if not (r > 0),
+ *         WMR_ERR_BAD_PARAMS if not (b > 0),
+ *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
+ *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model).
+ *
+ * operations after CSE: 7 add, 19 mul, 3 div, 0 sin/cos, 0 sqrt
+ */
+wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared);
+
+#define WMR_FORWARD_DYNAMICS_PREPARED_Q_SIZE 5
+#define WMR_FORWARD_DYNAMICS_PREPARED_QDOT_SIZE 5
+#define WMR_FORWARD_DYNAMICS_PREPARED_TAU_SIZE 2
+#define WMR_FORWARD_DYNAMICS_PREPARED_QDDOT_SIZE 5
+
+/**
+ * wmr_forward_dynamics with the parameters prepared by wmr_model_prepare: the same
+ * results, bit for bit, and the same statuses, except that the checks of the
+ * parameters alone were made by the prepare call.
+ *
+ * @param[in]  prepared wmr_model_prepared_t -- filled by wmr_model_prepare
+ * @param[in]  q [5] row-major (WMR_FORWARD_DYNAMICS_PREPARED_Q_SIZE): x_c, y_c, theta, theta_r,
+ *     theta_l -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  qdot [5] row-major (WMR_FORWARD_DYNAMICS_PREPARED_QDOT_SIZE): xdot_c, ydot_c,
+ *     thetadot, thetadot_r, thetadot_l -- generalised velocities
+ * @param[in]  tau [2] row-major (WMR_FORWARD_DYNAMICS_PREPARED_TAU_SIZE): tau_r, tau_l -- wheel
+ *     torques tau_r, tau_l
+ * @param[out] qddot [5] row-major (WMR_FORWARD_DYNAMICS_PREPARED_QDDOT_SIZE)
+ * @return WMR_OK on success; on error no output is written:
+ *         WMR_ERR_NOT_INITIALISED if prepared was not filled by wmr_model_prepare,
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[3], q[4], qdot[0], qdot[1], qdot[2]),
+ *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
+ *
+ * operations after CSE: 20 add, 28 mul, 0 div, 2 sin/cos, 0 sqrt
+ */
+wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
+    const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
 
 #define WMR_KINEMATICS_Q_SIZE 5
 #define WMR_KINEMATICS_WHEEL_RATES_SIZE 2

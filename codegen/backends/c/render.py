@@ -21,8 +21,10 @@ from __future__ import annotations
 
 import keyword
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+
+import sympy as sp
 
 from codegen import template_util
 from codegen.backend import FunctionIR, function_ir
@@ -31,6 +33,7 @@ from codegen.backends.c.format import WIDTH, format_c
 from codegen.backends.c.printer import CPrinter
 from codegen.cse import op_count_from
 from codegen.layout import (
+    InputSlot,
     argument_size,
     input_slots,
     is_scalar,
@@ -38,6 +41,7 @@ from codegen.layout import (
     local_names,
     split_fields,
 )
+from codegen.printer_base import FUNCTIONS
 from codegen.spec import Argument, Field, FunctionSpec
 
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
@@ -201,30 +205,59 @@ def _access(arg: Argument, f: Field | None, index: int, config: CConfig) -> str:
     return f"{base}[{index // f.shape[1]}][{index % f.shape[1]}]"
 
 
-def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
-    spec, result = ir.spec, ir.cse
-    slots = input_slots(spec)
-    reserved = {a.name for a in (*spec.inputs, *spec.outputs)}
-    names = local_names(slots, reserved, _usable_c_name)
-    used = result.used_symbols()
-    printer_names = dict(names)
-    printer_names.update({s: str(s) for s, _ in result.temps})
-    printer = CPrinter(config, printer_names)
+Temp = tuple[sp.Symbol, sp.Expr]
+PREPARED_ARG = "prepared"  # the prepared struct's argument name in _prepare and _prepared
 
-    loads = [
-        (names[s.symbol], _access(s.arg, s.field, s.index, config))
-        for s in slots
-        if s.symbol in used
+
+@dataclass(frozen=True)
+class _Line:
+    """One statement of a generated function's body (``module.c.jinja`` spells it)."""
+
+    kind: str  # "void" (an unused argument), "decl" (a const local), "check", "store"
+    target: str = ""  # void: the argument; decl: the local; store: the lvalue
+    value: str = ""  # decl, store: the value; check: the condition that fails
+    status: str = ""  # check: what it returns
+    doc: str = ""  # check: its comment
+
+
+def _decl(name: str, value: str) -> _Line:
+    return _Line("decl", name, value)
+
+
+def _nonfinite_check(names: Sequence[str], status: str) -> list[_Line]:
+    return [_Line("check", value=_any_nonfinite(names), status=status)] if names and status else []
+
+
+def _local_names(spec: FunctionSpec, slots: Sequence[InputSlot]) -> dict[sp.Symbol, str]:
+    reserved = {a.name for a in (*spec.inputs, *spec.outputs)}
+    if spec.prepared:
+        reserved.add(PREPARED_ARG)
+    return local_names(slots, reserved, _usable_c_name)
+
+
+def _printer(names: Mapping[sp.Symbol, str], temps: Sequence[Temp], config: CConfig) -> CPrinter:
+    printer_names = dict(names)
+    printer_names.update({s: str(s) for s, _ in temps})
+    return CPrinter(config, printer_names)
+
+
+def _guard_lines(
+    spec: FunctionSpec, guards: Sequence[tuple[int, sp.Expr]], printer: CPrinter,
+    config: CConfig,
+) -> list[_Line]:
+    """``if (!(condition > 0)) return status;`` per guard (index into spec.guards)."""
+    return [
+        _Line("check", value=f"!({printer.expr_code(e)} > {config.literal_macro}(0.0))",
+              status=spec.guards[k].status, doc=_comment_text(spec.guards[k].doc))
+        for k, e in guards
     ]
-    unused = [a.name for a in spec.inputs if not any(s in used for s in a.all_symbols())]
-    temps = [(str(s), printer.expr_code(e)) for s, e in result.temps]
+
+
+def _output_stores(
+    spec: FunctionSpec, outputs: Sequence[Sequence[sp.Expr]], printer: CPrinter, config: CConfig
+) -> list[tuple[str, str]]:
     stores: list[tuple[str, str]] = []
-    guard_values = result.outputs[len(spec.outputs):]
-    guards = [
-        (printer.expr_code(e), g.status, _comment_text(g.doc))
-        for g, e in zip(spec.guards, guard_values[0] if guard_values else (), strict=True)
-    ]
-    for arg, exprs in zip(spec.outputs, result.outputs[: len(spec.outputs)], strict=True):
+    for arg, exprs in zip(spec.outputs, outputs, strict=True):
         if arg.kind == "array":
             stores += [
                 (_access(arg, None, i, config), printer.expr_code(e)) for i, e in enumerate(exprs)
@@ -235,16 +268,76 @@ def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
                     (_access(arg, f, i, config), printer.expr_code(e))
                     for i, e in enumerate(chunk)
                 ]
+    return stores
+
+
+def _commit(spec: FunctionSpec, stores: list[tuple[str, str]]) -> list[_Line]:
+    """The stores; for a checked function, into locals first, the finite-output check,
+    then the stores: no output written on error."""
+    if not (spec.returns_status and spec.nonfinite_output):
+        return [_Line("store", target, value) for target, value in stores]
+    results = [f"r_{k}" for k in range(len(stores))]
+    return [
+        *(_decl(r, value) for r, (_, value) in zip(results, stores, strict=True)),
+        *_nonfinite_check(results, spec.nonfinite_output),
+        *(_Line("store", target, r) for r, (target, _) in zip(results, stores, strict=True)),
+    ]
+
+
+def _unread_doc(
+    slots: Sequence[InputSlot], used: frozenset[sp.Symbol], config: CConfig, what: str
+) -> list[str]:
+    """The ``@return`` lines of the non-finite input check over ``slots``."""
+    line = f"if {what} it reads is NaN or infinite"
+    unread = [_access(s.arg, s.field, s.index, config).replace("->", ".")
+              for s in slots if s.symbol not in used]
+    if unread:
+        return [line, f"(it does not read, and ignores: {', '.join(unread)}),"]
+    return [line + (" (it reads every input)," if what == "an input" else ",")]
+
+
+def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, object]:
+    spec = ir.spec
+    slots = input_slots(spec)
+    names = _local_names(spec, slots)
+    form = ir.prepared
+    n_out = len(spec.outputs)
+    late_temps: Sequence[Temp] = ()
+    late_guards: Sequence[tuple[int, sp.Expr]] = ()
+    if form is None:
+        used = ir.cse.used_symbols()
+        temps: Sequence[Temp] = ir.cse.temps
+        guard_values = ir.cse.outputs[n_out:]
+        guards = list(enumerate(guard_values[0] if guard_values else ()))
+        outputs = ir.cse.outputs[:n_out]
+    else:  # the same evaluation as prepare + prepared: bit-identical results
+        used = form.used_params() | form.used_state()
+        temps, guards = form.param_temps, list(form.param_guards)
+        late_temps, late_guards = form.state_temps, form.state_guards
+        outputs = form.outputs
+    if len(guards) + len(late_guards) != len(spec.guards):
+        raise ValueError(f"{spec.name}: {len(spec.guards)} guards, conditions for "
+                         f"{len(guards) + len(late_guards)}")
+    printer = _printer(names, (*temps, *late_temps), config)
+
+    loads = [
+        (names[s.symbol], _access(s.arg, s.field, s.index, config))
+        for s in slots
+        if s.symbol in used
+    ]
+    body = [_Line("void", a.name) for a in spec.inputs
+            if not any(s in used for s in a.all_symbols())]
+    body += [_decl(n, v) for n, v in loads]
+    if spec.returns_status:
+        body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+    body += [_decl(str(s), printer.expr_code(e)) for s, e in temps]
+    body += _guard_lines(spec, guards, printer, config)
+    body += [_decl(str(s), printer.expr_code(e)) for s, e in late_temps]
+    body += _guard_lines(spec, late_guards, printer, config)
+    body += _commit(spec, _output_stores(spec, outputs, printer, config))
     ops = op_count_from(printer.ops)
-    checked = spec.returns_status and bool(spec.nonfinite_output)
-    if checked:  # compute into locals, check, then store: no output written on error
-        results = [(f"r_{k}", value) for k, (_, value) in enumerate(stores)]
-        stores = [(target, f"r_{k}") for k, (target, _) in enumerate(stores)]
-    else:
-        results = []
 
     name = f"{config.prefix}{spec.name}"
-    ret = config.status_type if spec.returns_status else "void"
     params = [_param_decl(a, True, config) for a in spec.inputs]
     params += [_param_decl(a, False, config) for a in spec.outputs]
     doc = [_comment_text(line.rstrip()) for line in spec.doc.strip().splitlines()] or [name]
@@ -257,38 +350,218 @@ def _function_context(ir: FunctionIR, config: CConfig) -> dict[str, object]:
         ok = config.status_codes[0].name
         doc.append(f"@return {ok} on success; on error no output is written:")
         if spec.nonfinite_input:
-            doc.append(f"        {spec.nonfinite_input} if an input it reads is NaN or infinite")
-            unread = [_access(s.arg, s.field, s.index, config).replace("->", ".")
-                      for s in slots if s.symbol not in used]
-            if unread:
-                doc.append(f"        (it does not read, and ignores: {', '.join(unread)}),")
-            else:
-                doc[-1] += " (it reads every input),"
-        doc += [f"        {g.status} if not ({_comment_text(g.doc)})," for g in spec.guards]
+            first, *rest = _unread_doc(slots, used, config, "an input")
+            doc.append(f"        {spec.nonfinite_input} {first}")
+            doc += [f"        {line}" for line in rest]
+        doc += [f"        {spec.guards[k].status} if not ({_comment_text(spec.guards[k].doc)}),"
+                for k, _ in (*guards, *late_guards)]
         if spec.nonfinite_output:
             doc.append(f"        {spec.nonfinite_output} if a result is not finite.")
+    if form is not None:
+        doc += ["", f"With fixed parameters, {module}_prepare once and {name}_prepared",
+                "per call give the same results, bit for bit."]
     doc += ["", ops.comment()]
     return {
         "name": name,
-        "return_type": ret,
+        "return_type": config.status_type if spec.returns_status else "void",
         "params": params,
         "doc_lines": doc,
         "size_macros": _size_macros(spec, config),
         "ops": ops.comment(),
-        "unused": unused,
-        "loads": loads,
-        "temps": temps,
-        "stores": stores,
+        "body": body,
         "status_ok": config.status_codes[0].name if spec.returns_status else "",
-        "input_check": (
-            _any_nonfinite([n for n, _ in loads])
-            if spec.returns_status and spec.nonfinite_input and loads else ""
-        ),
-        "nonfinite_input": spec.nonfinite_input,
-        "guards": guards,
-        "results": results,
-        "output_check": _any_nonfinite([n for n, _ in results]) if results else "",
-        "nonfinite_output": spec.nonfinite_output,
+    }
+
+
+# ------------------------------------------------------------ prepare-parameters API
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """The prepare-parameters API of a module with a ``prepared`` function."""
+
+    ctype: str  # <module>_prepared_t
+    magic_macro: str  # <MODULE>_PREPARED_MAGIC
+    magic: str
+    field: str  # the struct's array of prepared values: the function's name
+    size: int
+    doc: str  # what the array holds
+    prepare: str  # <module>_prepare
+    function: str  # <prefix><name>
+
+
+def prepared_magic(config: CConfig) -> str:
+    """The prepared struct's magic word: the prefix's first three letters and ``P`` in
+    ASCII (``0x574d5250``, "WMRP"); positive in a 32-bit ``long``."""
+    return "0x" + (config.prefix.rstrip("_").upper()[:3] + "P").encode().hex()
+
+
+def _prepared_api(ir: FunctionIR, module: str, config: CConfig) -> _Prepared:
+    form = ir.prepared
+    assert form is not None
+    not_init = f"{config.macro_prefix}ERR_NOT_INITIALISED"
+    if not_init not in {c.name for c in config.status_codes}:
+        raise ValueError(f"{module}: a prepared function needs the status {not_init}")
+    params = [str(s) for s in form.kept if s in form.params]
+    n_temps = len(form.kept) - len(params)
+    listed = ", ".join([*params, f"{n_temps} parameter-only subexpressions"] if n_temps
+                       else params)
+    return _Prepared(
+        ctype=f"{module}_prepared_t",
+        magic_macro=f"{module.upper()}_PREPARED_MAGIC",
+        magic=prepared_magic(config),
+        field=ir.spec.name,
+        size=len(form.kept),
+        doc=f"{listed}, for {config.prefix}{ir.spec.name}_prepared",
+        prepare=f"{module}_prepare",
+        function=f"{config.prefix}{ir.spec.name}",
+    )
+
+
+def _prepare_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[str, object]:
+    """``<module>_prepare(p, prepared)``: the parameter checks and parameter-only
+    temporaries of the prepared function, stored with the magic word on success."""
+    spec, form = ir.spec, ir.prepared
+    assert form is not None
+    slots = input_slots(spec)
+    names = _local_names(spec, slots)
+    used = form.used_params()
+    printer = _printer(names, form.param_temps, config)
+    param_args = [a for a in spec.inputs if a.kind == "params"]
+    param_slots = [s for s in slots if s.symbol in form.params]
+    loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config))
+             for s in param_slots if s.symbol in used]
+    body = [_decl(n, v) for n, v in loads]
+    body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+    body += [_decl(str(s), printer.expr_code(e)) for s, e in form.param_temps]
+    guards = _guard_lines(spec, form.param_guards, printer, config)
+    body += guards
+    body.append(_Line("store", f"{PREPARED_ARG}->magic", api.magic_macro))
+    body += [_Line("store", f"{PREPARED_ARG}->{api.field}[{k}]", names.get(s, str(s)))
+             for k, s in enumerate(form.kept)]
+    ops = op_count_from(printer.ops)
+    ok = config.status_codes[0].name
+    doc = [
+        f"Checks the parameters of {api.function} and evaluates, once, every",
+        "subexpression that depends on the parameters only; "
+        f"{api.function}_prepared then does",
+        "only the per-call rest. Call it again whenever the parameters change (a prepared",
+        "struct keeps the values of the call that filled it).",
+        "",
+        *[_param_doc(a, True, config, spec) for a in param_args],
+        f"@param[out] {PREPARED_ARG} {api.ctype} -- written only on success",
+        f"@return {ok} on success; on error *{PREPARED_ARG} is not written:",
+    ]
+    if spec.nonfinite_input:
+        first, *rest = _unread_doc(param_slots, used, config, "a parameter")
+        doc.append(f"        {spec.nonfinite_input} {first}")
+        doc += [f"        {line}" for line in rest]
+    doc += [f"        {line.status} if not ({line.doc})," for line in guards]
+    doc[-1] = doc[-1].removesuffix(",") + "."
+    doc += ["", ops.comment()]
+    return {
+        "name": api.prepare,
+        "return_type": config.status_type,
+        "params": [*(_param_decl(a, True, config) for a in param_args),
+                   f"{api.ctype} *{PREPARED_ARG}"],
+        "doc_lines": doc,
+        "size_macros": [],
+        "ops": ops.comment(),
+        "body": body,
+        "status_ok": ok,
+    }
+
+
+def _is_call(e: sp.Expr, inputs: frozenset[sp.Symbol]) -> bool:
+    """A math-library function of inputs only (``sin(theta)``; not fabs, printed inline)."""
+    return (type(e) in FUNCTIONS and type(e) is not sp.Abs and bool(e.free_symbols)
+            and e.free_symbols <= inputs)
+
+
+def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[str, object]:
+    """``<name>_prepared(prepared, inputs..., outputs...)``: the per-call part, reading
+    the prepared values instead of the parameters.
+
+    Ordered for the call: the magic word; the inputs of the math-library calls of inputs
+    (``sin(theta)``), their check and the calls; the other inputs and their check; then
+    the rest, each prepared value read just before its first use (nothing is held across
+    a library call that the call does not need)."""
+    spec, form = ir.spec, ir.prepared
+    assert form is not None
+    slots = input_slots(spec)
+    names = _local_names(spec, slots)
+    used = form.used_state()
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    state_args = [a for a in spec.inputs if a.kind != "params"]
+    state_slots = [s for s in slots if s.symbol not in form.params]
+    not_init = f"{config.macro_prefix}ERR_NOT_INITIALISED"
+
+    calls = [(s, e) for s, e in form.state_temps if _is_call(e, used)]
+    early = frozenset().union(*(e.free_symbols for _, e in calls)) if calls else used
+    body = [_Line("void", a.name) for a in state_args
+            if not any(s in used for s in a.all_symbols())]
+    body.append(_Line("check", value=f"{PREPARED_ARG}->magic != {api.magic_macro}",
+                      status=not_init))
+    for part in (early, used - early):
+        loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config))
+                 for s in state_slots if s.symbol in part]
+        body += [_decl(n, v) for n, v in loads]
+        body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+        if part is early:
+            body += [_decl(str(s), printer.expr_code(e)) for s, e in calls]
+    slot_of = {s: k for k, s in enumerate(form.kept)}
+    loaded: set[sp.Symbol] = set()
+
+    def load_for(exprs: Sequence[sp.Basic]) -> list[_Line]:
+        need = {s for e in exprs for s in e.free_symbols if s in slot_of} - loaded
+        loaded.update(need)
+        return [_decl(names.get(s, str(s)), f"{PREPARED_ARG}->{api.field}[{k}]")
+                for s, k in slot_of.items() if s in need]
+
+    for s, e in form.state_temps:
+        if (s, e) not in calls:
+            body += load_for([e])
+            body.append(_decl(str(s), printer.expr_code(e)))
+    body += load_for([g for _, g in form.state_guards])
+    guards = _guard_lines(spec, form.state_guards, printer, config)
+    body += guards
+    body += load_for([e for exprs in form.outputs for e in exprs])
+    body += _commit(spec, _output_stores(spec, form.outputs, printer, config))
+    ops = op_count_from(printer.ops)
+
+    name = f"{api.function}_prepared"
+    own = replace(spec, name=f"{spec.name}_prepared", inputs=tuple(state_args))
+    ok = config.status_codes[0].name
+    doc = [
+        f"{api.function} with the parameters prepared by {api.prepare}: the same",
+        "results, bit for bit, and the same statuses, except that the checks of the",
+        "parameters alone were made by the prepare call.",
+        "",
+        f"@param[in]  {PREPARED_ARG} {api.ctype} -- filled by {api.prepare}",
+        *[_param_doc(a, True, config, own) for a in state_args],
+        *[_param_doc(a, False, config, own) for a in spec.outputs],
+        f"@return {ok} on success; on error no output is written:",
+        f"        {not_init} if {PREPARED_ARG} was not filled by {api.prepare},",
+    ]
+    if spec.nonfinite_input:
+        first, *rest = _unread_doc(state_slots, used, config, "an input")
+        doc.append(f"        {spec.nonfinite_input} {first}")
+        doc += [f"        {line}" for line in rest]
+    doc += [f"        {line.status} if not ({line.doc})," for line in guards]
+    if spec.nonfinite_output:
+        doc.append(f"        {spec.nonfinite_output} if a result is not finite.")
+    doc += ["", ops.comment()]
+    return {
+        "name": name,
+        "return_type": config.status_type,
+        "params": [f"const {api.ctype} *{PREPARED_ARG}",
+                   *(_param_decl(a, True, config) for a in state_args),
+                   *(_param_decl(a, False, config) for a in spec.outputs)],
+        "doc_lines": doc,
+        "size_macros": _size_macros(own, config),
+        "ops": ops.comment(),
+        "body": body,
+        "status_ok": ok,
     }
 
 
@@ -367,7 +640,26 @@ def render_module(
     names = [f.name for f in functions]
     if len(set(names)) != len(names):
         raise ValueError(f"{module}: duplicate function names {names}")
-    contexts = [_function_context(f, config) for f in functions]
+    prepared = [f for f in functions if f.prepared is not None]
+    api = None
+    if prepared:
+        if len(prepared) > 1:
+            raise ValueError(f"{module}: one prepared function per module, not "
+                             f"{[f.name for f in prepared]}")
+        if not module.startswith(config.prefix):
+            raise ValueError(f"{module}: a module with a prepared function must start with "
+                             f"{config.prefix}")
+        api = _prepared_api(prepared[0], module, config)
+        taken = {f"{config.prefix}{n}" for n in names}
+        clash = taken & {api.prepare, f"{api.function}_prepared"}
+        if clash:
+            raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
+    contexts = []
+    for f in functions:
+        contexts.append(_function_context(f, config, module))
+        if f.prepared is not None:
+            assert api is not None
+            contexts += [_prepare_context(f, api, config), _prepared_context(f, api, config)]
     files: dict[str, str] = {}
     for suffix, template in ((".h", "module.h.jinja"), (".c", "module.c.jinja")):
         files[module + suffix] = format_c(
@@ -379,6 +671,7 @@ def render_module(
                 guard=_guard(module + "_H", config),
                 header=module + ".h",
                 functions=contexts,
+                prepared=api,
             )
         )
     return files

@@ -7,7 +7,7 @@
 #include "trailer_model.h"
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 936 add, 3282 mul, 98 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 921 add, 1435 mul, 96 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -46,960 +46,159 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t1 = radius_left*thetadot_left;
-    const trailer_real_t _t2 = radius_right*thetadot_right;
-    const trailer_real_t _t3 = TRAILER_LIT(250.0)*(_t1 - _t2)*(_t1 + _t2)/TRAILER_LIT(207.0);
-    const trailer_real_t _t4 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t5 = radius_left*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t7 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t8 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t9 = radius_cart_left*radius_cart_left;
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t5 = radius_cart_left*radius_cart_left;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
+    const trailer_real_t _t7 = J_theta_cart_left*_t6;
+    const trailer_real_t _t8 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t _t9 = radius_cart_right*radius_cart_right;
     const trailer_real_t _t10 = TRAILER_LIT(1.0)/_t9;
-    const trailer_real_t _t11 = J_theta_cart_left*_t10;
-    const trailer_real_t _t12 = TRAILER_LIT(32849.0)*_t5/TRAILER_LIT(171396.0);
-    const trailer_real_t _t13 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t14 = TRAILER_LIT(1.0)/_t13;
-    const trailer_real_t _t15 = J_theta_cart_right*_t14;
-    const trailer_real_t _t16 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t17 = _t16*_t16;
-    const trailer_real_t _t18 = _t17*_t5;
-    const trailer_real_t _t19 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t20 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t21 = _t20*_t20;
-    const trailer_real_t _t22 = _t21*_t5;
-    const trailer_real_t _t23 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(73805.0)*_t5/TRAILER_LIT(28566.0);
-    const trailer_real_t _t25 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t26 = _t16*_t25;
-    const trailer_real_t _t27 = K_theta_cart_x_tractor_2*_t26;
-    const trailer_real_t _t28 = _t0*_t20;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t28;
-    const trailer_real_t _t30 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t31 = TRAILER_LIT(29522.0)*_t15/TRAILER_LIT(42849.0);
-    const trailer_real_t _t32 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(28566.0);
-    const trailer_real_t _t33 = _t11*_t26;
-    const trailer_real_t _t34 = _t28*_t32;
-    const trailer_real_t _t35 = _t15*_t26;
-    const trailer_real_t _t36 = _t18*_t21;
-    const trailer_real_t _t37 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t38 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t39 = _t0*_t16;
-    const trailer_real_t _t40 = _t20*_t25;
-    const trailer_real_t _t41 = _t39*_t40;
-    const trailer_real_t _t42 = _t41*_t5;
-    const trailer_real_t _t43 = TRAILER_LIT(59044.0)*_t36/TRAILER_LIT(42849.0);
-    const trailer_real_t _t44 = TRAILER_LIT(14761.0)*_t22/TRAILER_LIT(14283.0);
-    const trailer_real_t _t45 = TRAILER_LIT(14761.0)*_t18*_t28/TRAILER_LIT(14283.0);
-    const trailer_real_t _t46 = TRAILER_LIT(59044.0)*_t42/TRAILER_LIT(42849.0);
-    const trailer_real_t _t47 = _t11*_t12 + _t11*_t34 + _t11*_t43 - _t11*_t45 + _t11*_t46
-            + _t12*_t15 - _t15*_t34 + _t15*_t43 + _t15*_t45 + _t15*_t46 + _t18*_t19 - _t18*_t23
-            + TRAILER_LIT(73805.0)*_t18*_t29/TRAILER_LIT(14283.0) - _t18*_t30 - _t18*_t31
-            + _t19*_t22 - _t22*_t23 - TRAILER_LIT(73805.0)*_t22*_t27/TRAILER_LIT(14283.0)
-            - _t22*_t30 - _t22*_t31 + _t24*_t27 - _t24*_t29 - _t32*_t33 + _t32*_t35 + _t33*_t44
-            - _t35*_t44 - _t36*_t37 + _t36*_t38 - _t37*_t42 + _t38*_t42 - _t4*_t5 - _t5*_t6
-            + _t5*_t7 + _t5*_t8;
-    const trailer_real_t _t48 = radius_left*radius_left;
-    const trailer_real_t _t49 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t50 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t51 = _t11*_t48;
-    const trailer_real_t _t52 = _t15*_t48;
-    const trailer_real_t _t53 = _t17*_t48;
-    const trailer_real_t _t54 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t55 = _t21*_t48;
-    const trailer_real_t _t56 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t57 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t58 = _t26*_t48;
-    const trailer_real_t _t59 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t60 = _t28*_t48;
-    const trailer_real_t _t61 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t63 = TRAILER_LIT(31178.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t64 = TRAILER_LIT(10222.0)*_t15/TRAILER_LIT(42849.0);
-    const trailer_real_t _t65 = TRAILER_LIT(4387.0)*_t51/TRAILER_LIT(9522.0);
-    const trailer_real_t _t66 = TRAILER_LIT(23639.0)*_t52/TRAILER_LIT(28566.0);
-    const trailer_real_t _t67 = _t21*_t53;
-    const trailer_real_t _t68 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t69 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t70 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t71 = _t26*_t55;
-    const trailer_real_t _t72 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t73 = _t28*_t53;
-    const trailer_real_t _t74 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t75 = _t41*_t48;
-    const trailer_real_t _t76 = TRAILER_LIT(4387.0)*_t11/TRAILER_LIT(4761.0);
-    const trailer_real_t _t77 = TRAILER_LIT(23639.0)*_t15/TRAILER_LIT(14283.0);
-    const trailer_real_t _t78 = J_theta_left - TRAILER_LIT(62356.0)*_t11*_t67/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t15*_t67/TRAILER_LIT(42849.0) - _t26*_t65 - _t26*_t66
-            + TRAILER_LIT(26195.0)*_t27*_t55/TRAILER_LIT(14283.0) + _t28*_t65 + _t28*_t66
-            - TRAILER_LIT(26195.0)*_t29*_t53/TRAILER_LIT(14283.0) + _t4*_t48
-            - TRAILER_LIT(62356.0)*_t41*_t51/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t41*_t52/TRAILER_LIT(42849.0) + _t48*_t49 - _t48*_t50 + _t48*_t6
-            + _t48*_t7 - _t48*_t8 + TRAILER_LIT(11449.0)*_t51/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t52/TRAILER_LIT(171396.0) - _t53*_t54 + _t53*_t56 - _t53*_t57
-            + _t53*_t63 - _t53*_t64 - _t54*_t55 + _t55*_t56 - _t55*_t57 + _t55*_t63 - _t55*_t64
-            + _t58*_t59 - _t58*_t61 - _t58*_t62 - _t59*_t60 + _t60*_t61 + _t60*_t62 + _t67*_t68
-            - _t67*_t69 + _t67*_t70 + _t68*_t75 - _t69*_t75 + _t70*_t75 - _t71*_t72 + _t71*_t74
-            + _t71*_t76 + _t71*_t77 + _t72*_t73 - _t73*_t74 - _t73*_t76 - _t73*_t77;
-    const trailer_real_t _t79 = radius_right*radius_right;
-    const trailer_real_t _t80 = _t11*_t79;
-    const trailer_real_t _t81 = _t15*_t79;
-    const trailer_real_t _t82 = _t54*_t79;
-    const trailer_real_t _t83 = _t56*_t79;
-    const trailer_real_t _t84 = _t57*_t79;
-    const trailer_real_t _t85 = _t26*_t79;
-    const trailer_real_t _t86 = _t28*_t79;
-    const trailer_real_t _t87 = TRAILER_LIT(10222.0)*_t80/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(31178.0)*_t81/TRAILER_LIT(42849.0);
-    const trailer_real_t _t89 = TRAILER_LIT(23639.0)*_t80/TRAILER_LIT(28566.0);
-    const trailer_real_t _t90 = TRAILER_LIT(4387.0)*_t81/TRAILER_LIT(9522.0);
-    const trailer_real_t _t91 = _t17*_t21;
-    const trailer_real_t _t92 = _t79*_t91;
-    const trailer_real_t _t93 = _t69*_t79;
-    const trailer_real_t _t94 = _t21*_t85;
-    const trailer_real_t _t95 = _t17*_t86;
-    const trailer_real_t _t96 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t97 = _t41*_t79;
-    const trailer_real_t _t98 = TRAILER_LIT(20444.0)*_t80/TRAILER_LIT(42849.0);
-    const trailer_real_t _t99 = TRAILER_LIT(62356.0)*_t81/TRAILER_LIT(42849.0);
-    const trailer_real_t _t100 = _t21*_t26;
-    const trailer_real_t _t101 = TRAILER_LIT(23639.0)*_t80/TRAILER_LIT(14283.0);
-    const trailer_real_t _t102 = _t17*_t28;
-    const trailer_real_t _t103 = TRAILER_LIT(4387.0)*_t81/TRAILER_LIT(4761.0);
-    const trailer_real_t _t104 = J_theta_right - _t100*_t101 - _t100*_t103 + _t101*_t102
-            + _t102*_t103 - _t17*_t82 + _t17*_t83 + _t17*_t84 - _t17*_t87 + _t17*_t88 - _t21*_t82
-            + _t21*_t83 + _t21*_t84 - _t21*_t87 + _t21*_t88 + _t26*_t89 + _t26*_t90 - _t28*_t89
-            - _t28*_t90 + _t4*_t79 - _t41*_t93 + _t41*_t98 - _t41*_t99 - _t49*_t79 + _t50*_t79
-            - _t59*_t85 + _t59*_t86 + _t6*_t79 + _t61*_t85 - _t61*_t86 - _t62*_t85 + _t62*_t86
-            + _t68*_t92 + _t68*_t97 + _t7*_t79 - _t70*_t92 - _t70*_t97 + _t72*_t94 - _t72*_t95
-            - _t74*_t94 + _t74*_t95 - _t79*_t8 + TRAILER_LIT(94249.0)*_t80/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t81/TRAILER_LIT(171396.0) - _t91*_t93 + _t91*_t98 - _t91*_t99
-            + _t94*_t96 - _t95*_t96;
-    const trailer_real_t _t105 = _t104*_t78 - _t47*_t47;
-    const trailer_real_t _t106 = TRAILER_LIT(1.0)/_t105;
-    const trailer_real_t _t107 = thetadot_left*thetadot_left;
-    const trailer_real_t _t108 = thetadot_right*thetadot_right;
-    const trailer_real_t _t109 = _t108*_t79;
-    const trailer_real_t _t110 = _t13*_t9;
-    const trailer_real_t _t111 = _t109*_t110;
-    const trailer_real_t _t112 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t113 = J_theta_cart_right*_t9;
-    const trailer_real_t _t114 = _t109*_t113;
-    const trailer_real_t _t115 = TRAILER_LIT(15793200.0)*_t114;
-    const trailer_real_t _t116 = _t107*_t48;
-    const trailer_real_t _t117 = J_theta_cart_left*_t13;
-    const trailer_real_t _t118 = _t116*_t117;
-    const trailer_real_t _t119 = TRAILER_LIT(17713200.0)*_t118;
-    const trailer_real_t _t120 = _t109*_t117;
-    const trailer_real_t _t121 = TRAILER_LIT(28366800.0)*_t120;
-    const trailer_real_t _t122 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t123 = _t110*_t116;
-    const trailer_real_t _t124 = _t16*_t16*_t16;
-    const trailer_real_t _t125 = _t20*_t20*_t20;
-    const trailer_real_t _t126 = _t124*_t20;
-    const trailer_real_t _t127 = TRAILER_LIT(2125584.0)*_t118;
-    const trailer_real_t _t128 = _t125*_t16;
-    const trailer_real_t _t129 = _t0*_t124;
-    const trailer_real_t _t130 = _t113*_t116;
-    const trailer_real_t _t131 = _t1*_t2;
-    const trailer_real_t _t132 = _t113*_t131;
-    const trailer_real_t _t133 = _t125*_t25;
-    const trailer_real_t _t134 = TRAILER_LIT(23617600.0)*_t28;
-    const trailer_real_t _t135 = _t16*_t20;
-    const trailer_real_t _t136 = _t130*_t135;
-    const trailer_real_t _t137 = TRAILER_LIT(34086384.0)*_t120;
-    const trailer_real_t _t138 = _t130*_t91;
-    const trailer_real_t _t139 = _t117*_t131;
-    const trailer_real_t _t140 = TRAILER_LIT(49505184.0)*_t114;
-    const trailer_real_t _t141 = _t124*_t125;
-    const trailer_real_t _t142 = _t130*_t141;
-    const trailer_real_t _t143 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t144 = _t111*_t17;
-    const trailer_real_t _t145 = _t111*_t21;
-    const trailer_real_t _t146 = _t0*_t25;
-    const trailer_real_t _t147 = _t118*_t146;
-    const trailer_real_t _t148 = TRAILER_LIT(708528.0)*_t147;
-    const trailer_real_t _t149 = J_theta_cart*_t111;
-    const trailer_real_t _t150 = K_theta_cart_x_tractor*_t111;
-    const trailer_real_t _t151 = TRAILER_LIT(1920000.0)*_t132;
-    const trailer_real_t _t152 = K_theta_cart_x_tractor_2*_t111;
-    const trailer_real_t _t153 = TRAILER_LIT(7858500.0)*_t146;
-    const trailer_real_t _t154 = _t120*_t146;
-    const trailer_real_t _t155 = TRAILER_LIT(11362128.0)*_t154;
-    const trailer_real_t _t156 = K_theta_cart_x_tractor_2*_t123;
-    const trailer_real_t _t157 = _t114*_t146;
-    const trailer_real_t _t158 = TRAILER_LIT(16501728.0)*_t157;
-    const trailer_real_t _t159 = _t21*_t39;
-    const trailer_real_t _t160 = TRAILER_LIT(22141500.0)*_t146;
-    const trailer_real_t _t161 = _t133*_t17;
-    const trailer_real_t _t162 = J_theta_cart*_t123;
-    const trailer_real_t _t163 = TRAILER_LIT(26195000.0)*_t26;
-    const trailer_real_t _t164 = TRAILER_LIT(38547000.0)*_t152;
-    const trailer_real_t _t165 = _t17*_t40;
-    const trailer_real_t _t166 = K_theta_cart_x_tractor*_t123;
-    const trailer_real_t _t167 = TRAILER_LIT(44283000.0)*_t166;
-    const trailer_real_t _t168 = TRAILER_LIT(47235200.0)*_t100;
-    const trailer_real_t _t169 = _t129*_t21;
-    const trailer_real_t _t170 = _t135*_t166;
-    const trailer_real_t _t171 = TRAILER_LIT(62868000.0)*_t91;
-    const trailer_real_t _t172 = _t123*_t126;
-    const trailer_real_t _t173 = TRAILER_LIT(76388175.0)*J_theta_cart;
-    const trailer_real_t _t174 = _t123*_t128;
-    const trailer_real_t _t175 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t176 = _t110*_t131;
-    const trailer_real_t _t177 = _t175*_t176;
-    const trailer_real_t _t178 = _t135*_t149;
-    const trailer_real_t _t179 = TRAILER_LIT(110707500.0)*_t135;
-    const trailer_real_t _t180 = _t141*_t166;
-    const trailer_real_t _t181 = TRAILER_LIT(138000000.0)*_t91;
-    const trailer_real_t _t182 = _t128*_t150;
-    const trailer_real_t _t183 = _t141*_t149;
-    const trailer_real_t _t184 = TRAILER_LIT(177132000.0)*_t156*_t91;
-    const trailer_real_t _t185 = _t143*_t176;
-    const trailer_real_t _t186 = _t17*_t185;
-    const trailer_real_t _t187 = _t185*_t21;
-    const trailer_real_t _t188 = TRAILER_LIT(4251168.0)*_t132;
-    const trailer_real_t _t189 = _t132*_t146;
-    const trailer_real_t _t190 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2*_t146;
-    const trailer_real_t _t191 = _t123*_t17;
-    const trailer_real_t _t192 = J_theta_cart*_t191;
-    const trailer_real_t _t193 = TRAILER_LIT(25462725.0)*_t146;
-    const trailer_real_t _t194 = _t123*_t21;
-    const trailer_real_t _t195 = J_theta_cart*_t194;
-    const trailer_real_t _t196 = J_theta_cart*_t145;
-    const trailer_real_t _t197 = TRAILER_LIT(32122500.0)*_t39;
-    const trailer_real_t _t198 = _t130*_t41;
-    const trailer_real_t _t199 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t200 = _t133*_t144;
-    const trailer_real_t _t201 = TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t202 = K_theta_cart_x_tractor*_t146;
-    const trailer_real_t _t203 = TRAILER_LIT(52244730.0)*_t202;
-    const trailer_real_t _t204 = _t138*_t146;
-    const trailer_real_t _t205 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t206 = _t176*_t205;
-    const trailer_real_t _t207 = _t17*_t206;
-    const trailer_real_t _t208 = _t206*_t21;
-    const trailer_real_t _t209 = _t191*_t40;
-    const trailer_real_t _t210 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t211 = _t139*_t91;
-    const trailer_real_t _t212 = _t129*_t194;
-    const trailer_real_t _t213 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t214 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t215 = _t139*_t141;
-    const trailer_real_t _t216 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t217 = _t145*_t39;
-    const trailer_real_t _t218 = TRAILER_LIT(165600000.0)*_t27;
-    const trailer_real_t _t219 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t220 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t221 = J_theta_cart*_t176;
-    const trailer_real_t _t222 = TRAILER_LIT(203701800.0)*_t221;
-    const trailer_real_t _t223 = _t141*_t222;
-    const trailer_real_t _t224 = K_theta_cart_x_tractor*_t176;
-    const trailer_real_t _t225 = TRAILER_LIT(183331620.0)*_t224;
-    const trailer_real_t _t226 = _t126*_t225;
-    const trailer_real_t _t227 = _t128*_t225;
-    const trailer_real_t _t228 = _t181*_t221;
-    const trailer_real_t _t229 = TRAILER_LIT(101850900.0)*_t135*_t221;
-    const trailer_real_t _t230 = TRAILER_LIT(82800000.0)*_t176;
-    const trailer_real_t _t231 = _t230*_t29;
-    const trailer_real_t _t232 = K_theta_cart_x_tractor_2*_t176;
-    const trailer_real_t _t233 = TRAILER_LIT(61110540.0)*_t232;
-    const trailer_real_t _t234 = _t129*_t233;
-    const trailer_real_t _t235 = TRAILER_LIT(51255270.0)*_t232;
-    const trailer_real_t _t236 = _t235*_t40;
-    const trailer_real_t _t237 = TRAILER_LIT(1417056.0)*_t189;
-    const trailer_real_t _t238 = TRAILER_LIT(20700000.0)*_t146;
-    const trailer_real_t _t239 = _t224*_t238;
-    const trailer_real_t _t240 = _t235*_t39;
-    const trailer_real_t _t241 = _t133*_t233;
-    const trailer_real_t _t242 = _t230*_t27;
-    const trailer_real_t _t243 = _t146*_t91;
-    const trailer_real_t _t244 = _t166*_t243;
-    const trailer_real_t _t245 = TRAILER_LIT(138000000.0)*_t41;
-    const trailer_real_t _t246 = TRAILER_LIT(142921080.0)*_t135*_t224;
-    const trailer_real_t _t247 = TRAILER_LIT(152776350.0)*_t221;
-    const trailer_real_t _t248 = _t126*_t247;
-    const trailer_real_t _t249 = _t128*_t247;
-    const trailer_real_t _t250 = TRAILER_LIT(165600000.0)*_t91;
-    const trailer_real_t _t251 = _t224*_t250;
-    const trailer_real_t _t252 = _t149*_t243;
-    const trailer_real_t _t253 = _t156*_t41;
-    const trailer_real_t _t254 = TRAILER_LIT(244442160.0)*_t224;
-    const trailer_real_t _t255 = _t141*_t254;
-    const trailer_real_t _t256 = TRAILER_LIT(244442160.0)*_t232;
-    const trailer_real_t _t257 = _t161*_t256;
-    const trailer_real_t _t258 = TRAILER_LIT(183331620.0)*_t232;
-    const trailer_real_t _t259 = _t159*_t258;
-    const trailer_real_t _t260 = _t176*_t21;
-    const trailer_real_t _t261 = _t218*_t260;
-    const trailer_real_t _t262 = _t17*_t176;
-    const trailer_real_t _t263 = TRAILER_LIT(61110540.0)*_t202;
-    const trailer_real_t _t264 = _t262*_t263;
-    const trailer_real_t _t265 = _t260*_t263;
-    const trailer_real_t _t266 = TRAILER_LIT(50925450.0)*_t146*_t221;
-    const trailer_real_t _t267 = _t17*_t266;
-    const trailer_real_t _t268 = _t21*_t266;
-    const trailer_real_t _t269 = _t139*_t41;
-    const trailer_real_t _t270 = _t139*_t243;
-    const trailer_real_t _t271 = TRAILER_LIT(165600000.0)*_t29;
-    const trailer_real_t _t272 = _t262*_t271;
-    const trailer_real_t _t273 = _t165*_t258;
-    const trailer_real_t _t274 = _t169*_t256;
-    const trailer_real_t _t275 = _t222*_t243;
-    const trailer_real_t _t276 = _t221*_t245;
-    const trailer_real_t _t277 = TRAILER_LIT(165600000.0)*_t41;
-    const trailer_real_t _t278 = _t224*_t277;
-    const trailer_real_t _t279 = _t243*_t254;
-    const trailer_real_t _t280 = TRAILER_LIT(120000000.0)*_t232;
-    const trailer_real_t _t281 = TRAILER_LIT(73805000.0)*_t221;
-    const trailer_real_t _t282 = TRAILER_LIT(265698000.0)*_t232;
-    const trailer_real_t _t283 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t146;
-    const trailer_real_t _t284 = -TRAILER_LIT(17250000.0)*J_theta_cart*_t0*_t107*_t13*_t25*_t48*_t9
-            -
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t0*_t124*_t13*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t13*_t16*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t0*_t13*_t17*_t20*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right - TRAILER_LIT(34500000.0)*J_theta_cart*_t107*_t13*_t48*_t9
-            + TRAILER_LIT(34500000.0)*J_theta_cart*_t111
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t125*_t13*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t13*_t16*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t13*_t17*_t20*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t0*_t124*_t13*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t0*_t13*_t16*_t21*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t0*_t13*_t20*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            - TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t108*_t13*_t79*_t9
-            + TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t123
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t125*_t13*_t17*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t13*_t16*_t21*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t13*_t20*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t13*_t16*_t20*_t25*_t9
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t13*_t17*_t21*_t25*_t9
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t0*_t13*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t124*_t125*_t13*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t13*_t16*_t20*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t13*_t17*_t21*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t13*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right + TRAILER_LIT(200000000.0)*_t100*_t221
-            + TRAILER_LIT(240000000.0)*_t102*_t224 + _t126*_t282 + _t128*_t282 + _t129*_t281
-            + TRAILER_LIT(88566000.0)*_t133*_t224 + TRAILER_LIT(17250000.0)*_t146*_t149
-            + TRAILER_LIT(221415000.0)*_t159*_t221 + TRAILER_LIT(295220000.0)*_t161*_t221
-            + TRAILER_LIT(265698000.0)*_t165*_t224 + TRAILER_LIT(354264000.0)*_t169*_t224
-            + _t17*_t280 + _t21*_t280 + TRAILER_LIT(100000000.0)*_t221*_t28
-            + TRAILER_LIT(120000000.0)*_t224*_t26 + TRAILER_LIT(74283000.0)*_t224*_t39 + _t260*_t283
-            + _t262*_t283 + _t281*_t40;
-    const trailer_real_t _t285 = TRAILER_LIT(5.0)*_t10*_t14/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t286 =
-            -_t285*radius_right*(TRAILER_LIT(36902500.0)*J_theta_cart*_t0*_t107*_t124*_t13*_t48*_t9
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t0*_t107*_t13*_t16*_t21*_t48*_t9
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t0*_t107*_t13*_t17*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t107*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t0*_t108*_t124*_t13*_t21*_t79*_t9
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t108*_t13*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t0*_t108*_t13*_t20*_t79*_t9
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t108*_t13*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t107*_t124*_t125*_t13*_t48*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t107*_t125*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(68175450.0)*J_theta_cart*_t107*_t13*_t16*_t20*_t48*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t107*_t13*_t16*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t107*_t13*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t108*_t124*_t13*_t20*_t79*_t9
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t108*_t125*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t108*_t125*_t13*_t25*_t79*_t9
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t108*_t13*_t16*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t108*_t13*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t108*_t13*_t17*_t79*_t9
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t108*_t13*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t108*_t13*_t21*_t79*_t9
-            - TRAILER_LIT(42830000.0)*J_theta_cart*_t200
-            - TRAILER_LIT(110707500.0)*J_theta_cart*_t209
-            - TRAILER_LIT(147610000.0)*J_theta_cart*_t212
-            + TRAILER_LIT(71679416.0)*J_theta_cart_left*_t0*_t107*_t124*_t13*_t21*_t48
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t107*_t13*_t16*_t20*_t25*_t48
-            + TRAILER_LIT(19625327.0)*J_theta_cart_left*_t0*_t107*_t13*_t16*_t48
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t0*_t107*_t13*_t17*_t20*_t48
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t0*_t107*_t13*_t17*_t21*_t25*_t48
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t0*_t107*_t13*_t25*_t48
-            + TRAILER_LIT(13875346.0)*J_theta_cart_left*_t0*_t108*_t124*_t13*_t79
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t0*_t108*_t13*_t16*_t20*_t25*_t79
-            + TRAILER_LIT(41626038.0)*J_theta_cart_left*_t0*_t108*_t13*_t16*_t21*_t79
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t0*_t108*_t13*_t17*_t21*_t25*_t79
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t0*_t108*_t13*_t20*_t79
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t0*_t108*_t13*_t25*_t79
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t0*_t124*_t13*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t0*_t13*_t16*_t21*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t13*_t17*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t0*_t13*_t20*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t13*_t21*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t107*_t124*_t125*_t13*_t48
-            + TRAILER_LIT(17919854.0)*J_theta_cart_left*_t107*_t125*_t13*_t25*_t48
-            + TRAILER_LIT(12745356.0)*J_theta_cart_left*_t107*_t13*_t16*_t20*_t48
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t107*_t13*_t16*_t25*_t48
-            + TRAILER_LIT(53759562.0)*J_theta_cart_left*_t107*_t13*_t17*_t20*_t25*_t48
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t107*_t13*_t17*_t21*_t48
-            + TRAILER_LIT(22656600.0)*J_theta_cart_left*_t107*_t13*_t48
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t108*_t124*_t125*_t13*_t79
-            + TRAILER_LIT(55501384.0)*J_theta_cart_left*_t108*_t125*_t13*_t17*_t25*_t79
-            + TRAILER_LIT(29815956.0)*J_theta_cart_left*_t108*_t13*_t16*_t20*_t79
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t108*_t13*_t16*_t21*_t25*_t79
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t108*_t13*_t17*_t21*_t79
-            + TRAILER_LIT(8982073.0)*J_theta_cart_left*_t108*_t13*_t20*_t25*_t79
-            + TRAILER_LIT(14183400.0)*J_theta_cart_left*_t108*_t13*_t79
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t124*_t13*_t20*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t125*_t13*_t16*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t125*_t13*_t17*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t13*_t16*_t21*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t13*_t17*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t13*_t20*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t13*_t21*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(22790984.0)*J_theta_cart_right*_t0*_t107*_t124*_t21*_t48*_t9
-            + TRAILER_LIT(13514273.0)*J_theta_cart_right*_t0*_t107*_t16*_t48*_t9
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t0*_t107*_t17*_t20*_t48*_t9
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t107*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t107*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t0*_t107*_t25*_t48*_t9
-            + TRAILER_LIT(28090184.0)*J_theta_cart_right*_t0*_t108*_t124*_t21*_t79*_t9
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t0*_t108*_t16*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(9746873.0)*J_theta_cart_right*_t0*_t108*_t16*_t79*_t9
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t0*_t108*_t17*_t20*_t79*_t9
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t0*_t108*_t17*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t0*_t108*_t25*_t79*_t9
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t0*_t124*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t16*_t20*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t0*_t16*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t17*_t21*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t0*_t20*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t107*_t124*_t20*_t48*_t9
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t107*_t125*_t16*_t48*_t9
-            + TRAILER_LIT(5697746.0)*J_theta_cart_right*_t107*_t125*_t25*_t48*_t9
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t107*_t16*_t25*_t48*_t9
-            + TRAILER_LIT(17093238.0)*J_theta_cart_right*_t107*_t17*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t107*_t17*_t48*_t9
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t107*_t21*_t48*_t9
-            + TRAILER_LIT(4943400.0)*J_theta_cart_right*_t107*_t48*_t9
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t108*_t124*_t125*_t79*_t9
-            + TRAILER_LIT(7022546.0)*J_theta_cart_right*_t108*_t125*_t25*_t79*_t9
-            + TRAILER_LIT(36951756.0)*J_theta_cart_right*_t108*_t16*_t20*_t79*_t9
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t108*_t16*_t25*_t79*_t9
-            + TRAILER_LIT(21067638.0)*J_theta_cart_right*_t108*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t108*_t17*_t21*_t79*_t9
-            + TRAILER_LIT(7896600.0)*J_theta_cart_right*_t108*_t79*_t9
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t124*_t125*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t125*_t17*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t16*_t21*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t17*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t20*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t107*_t124*_t13*_t21*_t48*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t16*_t48*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t17*_t20*_t48*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t0*_t108*_t124*_t13*_t79*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t16*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t16*_t21*_t79*_t9
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t17*_t20*_t79*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t17*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t25*_t79*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t107*_t124*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t107*_t125*_t13*_t16*_t48*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t107*_t125*_t13*_t25*_t48*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t107*_t13*_t16*_t25*_t48*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t107*_t13*_t17*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t108*_t124*_t125*_t13*_t79*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t108*_t125*_t13*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t108*_t13*_t16*_t20*_t79*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t108*_t13*_t16*_t25*_t79*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t108*_t13*_t17*_t21*_t79*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t124*_t13*_t48*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t16*_t21*_t48*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t124*_t13*_t21*_t79*_t9
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t17*_t20*_t79*_t9
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t17*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t107*_t124*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t107*_t125*_t13*_t16*_t48*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t107*_t125*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t17*_t48*_t9
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t21*_t48*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t108*_t124*_t125*_t13*_t79*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t108*_t125*_t13*_t25*_t79*_t9
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t16*_t20*_t79*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t16*_t25*_t79*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t17*_t79*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t21*_t79*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor*_t107*_t13*_t48*_t9
-            - TRAILER_LIT(49884800.0)*_t100*_t114 - TRAILER_LIT(62868000.0)*_t100*_t150
-            - TRAILER_LIT(177132000.0)*_t100*_t166 - TRAILER_LIT(16355200.0)*_t102*_t120
-            - TRAILER_LIT(97120000.0)*_t102*_t132 - TRAILER_LIT(30880000.0)*_t102*_t139
-            - TRAILER_LIT(52390000.0)*_t102*_t149 - TRAILER_LIT(147610000.0)*_t102*_t162
-            - _t111*_t112 - TRAILER_LIT(82800000.0)*_t111*_t29 - TRAILER_LIT(7022546.0)*_t114*_t129
-            - TRAILER_LIT(21067638.0)*_t114*_t159 - TRAILER_LIT(28090184.0)*_t114*_t161
-            - TRAILER_LIT(24942400.0)*_t114*_t28 - TRAILER_LIT(9746873.0)*_t114*_t40 - _t115*_t17
-            - _t115*_t21 - TRAILER_LIT(17919854.0)*_t118*_t129 - _t118*_t134
-            - TRAILER_LIT(53759562.0)*_t118*_t159 - TRAILER_LIT(71679416.0)*_t118*_t161
-            - _t118*_t168 - TRAILER_LIT(19625327.0)*_t118*_t40 - _t119*_t17 - _t119*_t21
-            - TRAILER_LIT(13875346.0)*_t120*_t133 - TRAILER_LIT(41626038.0)*_t120*_t165
-            - TRAILER_LIT(55501384.0)*_t120*_t169 - TRAILER_LIT(8177600.0)*_t120*_t26
-            - TRAILER_LIT(8982073.0)*_t120*_t39 - _t121*_t17 - _t121*_t21 - _t122*_t123
-            - _t126*_t127 - _t126*_t137 - _t126*_t140 - TRAILER_LIT(156734190.0)*_t126*_t150
-            - _t126*_t164 - _t126*_t188 - _t127*_t128 - _t128*_t137 - _t128*_t140 - _t128*_t164
-            - _t128*_t188 - TRAILER_LIT(5697746.0)*_t129*_t130 - _t129*_t145*_t201
-            - TRAILER_LIT(10707500.0)*_t129*_t149 - TRAILER_LIT(52244730.0)*_t129*_t152
-            - _t129*_t167 - _t130*_t134 - TRAILER_LIT(17093238.0)*_t130*_t159
-            - TRAILER_LIT(22790984.0)*_t130*_t161 - _t130*_t168 - TRAILER_LIT(13514273.0)*_t130*_t40
-            - TRAILER_LIT(35839708.0)*_t132*_t133 - TRAILER_LIT(3585888.0)*_t132*_t135
-            - TRAILER_LIT(107519124.0)*_t132*_t165 - TRAILER_LIT(143358832.0)*_t132*_t169
-            - TRAILER_LIT(48560000.0)*_t132*_t26 - TRAILER_LIT(25298854.0)*_t132*_t39
-            - TRAILER_LIT(12840000.0)*_t132 - TRAILER_LIT(11395492.0)*_t133*_t139
-            - TRAILER_LIT(12849000.0)*_t133*_t150 - TRAILER_LIT(30555270.0)*_t133*_t156
-            - TRAILER_LIT(36902500.0)*_t133*_t162 - _t133*_t191*_t219
-            - TRAILER_LIT(86438688.0)*_t135*_t139 - TRAILER_LIT(31537644.0)*_t136
-            - TRAILER_LIT(35426400.0)*_t138 - TRAILER_LIT(18420000.0)*_t139*_t146
-            - TRAILER_LIT(34186476.0)*_t139*_t165 - TRAILER_LIT(45581968.0)*_t139*_t169
-            - TRAILER_LIT(15440000.0)*_t139*_t26 - TRAILER_LIT(4796746.0)*_t139*_t39
-            - TRAILER_LIT(36840000.0)*_t139 - TRAILER_LIT(177132000.0)*_t141*_t156
-            - TRAILER_LIT(68018688.0)*_t142 - _t143*_t144 - _t143*_t145 - _t144*_t190
-            - _t144*_t199*_t40 - _t144*_t203 - _t145*_t190 - _t145*_t203 - _t145*_t218 - _t146*_t184
-            - _t148*_t17 - _t148*_t21 - _t149*_t163 - _t149*_t181 - _t149*_t245
-            - TRAILER_LIT(1195000.0)*_t149*_t39 - TRAILER_LIT(31434000.0)*_t150*_t28
-            - TRAILER_LIT(1434000.0)*_t150*_t40 - _t151*_t17 - _t151*_t21 - _t152*_t153
-            - _t152*_t171 - TRAILER_LIT(46822365.0)*_t152*_t40 - TRAILER_LIT(62868000.0)*_t152*_t41
-            - _t155*_t17 - _t155*_t21 - _t156*_t160 - _t156*_t179
-            - TRAILER_LIT(15277635.0)*_t156*_t39 - _t158*_t17 - _t158*_t21
-            - TRAILER_LIT(73805000.0)*_t162*_t26 - TRAILER_LIT(25000000.0)*_t162*_t39
-            - TRAILER_LIT(88566000.0)*_t166*_t28 - _t167*_t40 - _t17*_t237
-            - TRAILER_LIT(61110540.0)*_t170 - _t172*_t173 - _t173*_t174 - _t177
-            - TRAILER_LIT(104324550.0)*_t178 - TRAILER_LIT(122221080.0)*_t180
-            - TRAILER_LIT(156734190.0)*_t182 - TRAILER_LIT(174149100.0)*_t183 - _t184 + _t186
-            + _t187 - TRAILER_LIT(6420000.0)*_t189 - _t192*_t193 - _t193*_t195 - _t194*_t214*_t39
-            - _t196*_t197 - TRAILER_LIT(35426400.0)*_t198 - _t200*_t220
-            - TRAILER_LIT(68018688.0)*_t204 - _t207 - _t208 - _t209*_t210 - _t21*_t237
-            - TRAILER_LIT(92160000.0)*_t211 - _t212*_t213 - TRAILER_LIT(136037376.0)*_t215
-            - _t216*_t217 + _t223 + _t226 + _t227 + _t228 + _t229 + _t231 + _t234 + _t236 - _t239
-            - _t240 - _t241 - _t242 - TRAILER_LIT(122221080.0)*_t244 - _t246 - _t248 - _t249 - _t251
-            - TRAILER_LIT(174149100.0)*_t252 - TRAILER_LIT(177132000.0)*_t253 - _t255 + _t257
-            + _t259 + _t261 + _t264 + _t265 - _t267 - _t268 - TRAILER_LIT(92160000.0)*_t269
-            - TRAILER_LIT(136037376.0)*_t270 - _t272 - _t273 - _t274 + _t275 + _t276 - _t278 - _t279
-            - _t284) + tau_right;
-    const trailer_real_t _t287 = TRAILER_LIT(17713200.0)*_t120;
-    const trailer_real_t _t288 = TRAILER_LIT(51014016.0)*_t120;
-    const trailer_real_t _t289 = TRAILER_LIT(66006912.0)*_t118;
-    const trailer_real_t _t290 = TRAILER_LIT(17004672.0)*_t154;
-    const trailer_real_t _t291 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t292 = TRAILER_LIT(44283000.0)*_t150;
-    const trailer_real_t _t293 = TRAILER_LIT(46080000.0)*_t132;
-    const trailer_real_t _t294 = TRAILER_LIT(130611825.0)*J_theta_cart;
-    const trailer_real_t _t295 = TRAILER_LIT(177132000.0)*_t152;
-    const trailer_real_t _t296 = _t295*_t91;
-    const trailer_real_t _t297 = TRAILER_LIT(30555270.0)*_t202;
-    const trailer_real_t _t298 = TRAILER_LIT(43537275.0)*_t146;
-    const trailer_real_t _t299 = TRAILER_LIT(102028032.0)*_t132;
-    const trailer_real_t _t300 = TRAILER_LIT(34009344.0)*_t189;
-    const trailer_real_t _t301 =
-            _t285*radius_left*(TRAILER_LIT(42830000.0)*J_theta_cart*_t0*_t107*_t124*_t13*_t21*_t48
-            *_t9 + TRAILER_LIT(138000000.0)*J_theta_cart*_t0*_t107*_t13*_t16*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t0*_t107*_t13*_t17*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t0*_t107*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t0*_t108*_t124*_t13*_t79*_t9
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t0*_t108*_t13*_t16*_t21*_t79*_t9
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t108*_t13*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t108*_t13*_t20*_t79*_t9
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t108*_t13*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t107*_t124*_t125*_t13*_t48*_t9
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t107*_t125*_t13*_t25*_t48*_t9
-            + TRAILER_LIT(104324550.0)*J_theta_cart*_t107*_t13*_t16*_t20*_t48*_t9
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t107*_t13*_t16*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t107*_t13*_t17*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t107*_t13*_t17*_t21*_t48*_t9
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t107*_t13*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t108*_t124*_t13*_t20*_t79*_t9
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t108*_t125*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t108*_t125*_t13*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t108*_t13*_t16*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t108*_t13*_t20*_t25*_t79*_t9
-            - TRAILER_LIT(110707500.0)*J_theta_cart*_t144*_t40
-            + TRAILER_LIT(28090184.0)*J_theta_cart_left*_t0*_t107*_t124*_t13*_t21*_t48
-            + TRAILER_LIT(9746873.0)*J_theta_cart_left*_t0*_t107*_t13*_t16*_t48
-            + TRAILER_LIT(49884800.0)*J_theta_cart_left*_t0*_t107*_t13*_t17*_t20*_t48
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t107*_t13*_t17*_t25*_t48
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t107*_t13*_t21*_t25*_t48
-            + TRAILER_LIT(22790984.0)*J_theta_cart_left*_t0*_t108*_t124*_t13*_t21*_t79
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t108*_t13*_t16*_t20*_t25*_t79
-            + TRAILER_LIT(13514273.0)*J_theta_cart_left*_t0*_t108*_t13*_t16*_t79
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t0*_t108*_t13*_t17*_t20*_t79
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t0*_t108*_t13*_t17*_t21*_t25*_t79
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_left*_t0*_t124*_t13*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_left*_t0*_t13*_t16*_t21*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t13*_t17*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t0*_t13*_t20*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t13*_t21*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t0*_t13*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t107*_t124*_t13*_t20*_t48
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t107*_t125*_t13*_t16*_t48
-            + TRAILER_LIT(7022546.0)*J_theta_cart_left*_t107*_t125*_t13*_t25*_t48
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t107*_t13*_t16*_t25*_t48
-            + TRAILER_LIT(21067638.0)*J_theta_cart_left*_t107*_t13*_t17*_t20*_t25*_t48
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t107*_t13*_t17*_t48
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t107*_t13*_t21*_t48
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t108*_t124*_t125*_t13*_t79
-            + TRAILER_LIT(5697746.0)*J_theta_cart_left*_t108*_t125*_t13*_t25*_t79
-            + TRAILER_LIT(31537644.0)*J_theta_cart_left*_t108*_t13*_t16*_t20*_t79
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t108*_t13*_t16*_t25*_t79
-            + TRAILER_LIT(17093238.0)*J_theta_cart_left*_t108*_t13*_t17*_t20*_t25*_t79
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t108*_t13*_t17*_t21*_t79
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t124*_t13*_t20*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t125*_t13*_t16*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_left*_t125*_t13*_t17*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_left*_t13*_t16*_t20*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_left*_t13*_t16*_t21*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t13*_t17*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_left*_t13*_t20*_t25*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t13*_t21*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(12840000.0)*J_theta_cart_left*_t13*radius_left*radius_right*thetadot_left
-            *thetadot_right + TRAILER_LIT(13875346.0)*J_theta_cart_right*_t0*_t107*_t124*_t48*_t9
-            + TRAILER_LIT(41626038.0)*J_theta_cart_right*_t0*_t107*_t16*_t21*_t48*_t9
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t107*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t0*_t107*_t20*_t48*_t9
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t107*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(71679416.0)*J_theta_cart_right*_t0*_t108*_t124*_t21*_t79*_t9
-            + TRAILER_LIT(19625327.0)*J_theta_cart_right*_t0*_t108*_t16*_t79*_t9
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t0*_t108*_t17*_t20*_t79*_t9
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t108*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t108*_t21*_t25*_t79*_t9
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_right*_t0*_t124*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t0*_t16*_t20*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_right*_t0*_t16*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t0*_t17*_t21*_t25*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t0*_t20*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t0*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t107*_t124*_t20*_t48*_t9
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t107*_t125*_t16*_t48*_t9
-            + TRAILER_LIT(55501384.0)*J_theta_cart_right*_t107*_t125*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(16355200.0)*J_theta_cart_right*_t107*_t16*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t107*_t17*_t48*_t9
-            + TRAILER_LIT(8982073.0)*J_theta_cart_right*_t107*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t107*_t21*_t48*_t9
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t108*_t124*_t20*_t79*_t9
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t108*_t125*_t16*_t79*_t9
-            + TRAILER_LIT(17919854.0)*J_theta_cart_right*_t108*_t125*_t25*_t79*_t9
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t108*_t16*_t25*_t79*_t9
-            + TRAILER_LIT(53759562.0)*J_theta_cart_right*_t108*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t108*_t17*_t79*_t9
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t108*_t21*_t79*_t9
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t124*_t125*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_right*_t125*_t17*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_right*_t16*_t20*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_right*_t16*_t21*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t17*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_right*_t20*_t25*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(36840000.0)*J_theta_cart_right*_t9*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t0*_t107*_t124*_t13*_t48*_t9
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t16*_t21*_t48*_t9
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t16*_t48*_t9
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t17*_t20*_t48*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t107*_t13*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t108*_t124*_t13*_t21*_t79*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t17*_t20*_t79*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t0*_t108*_t13*_t17*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t107*_t124*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t107*_t125*_t13*_t16*_t48*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t107*_t125*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t107*_t13*_t16*_t25*_t48*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t107*_t13*_t17*_t48*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t107*_t13*_t21*_t48*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t108*_t124*_t125*_t13*_t79*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t108*_t125*_t13*_t25*_t79*_t9
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t108*_t13*_t16*_t20*_t79*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t108*_t13*_t16*_t25*_t79*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t108*_t13*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t124*_t13*_t48*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t16*_t21*_t48*_t9
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t17*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t13*_t20*_t48*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t124*_t13*_t21*_t79*_t9
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t17*_t25*_t79*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t108*_t13*_t21*_t25*_t79*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t107*_t124*_t125*_t13*_t48*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t107*_t125*_t13*_t17*_t25*_t48*_t9
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t16*_t20*_t48*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t16*_t21*_t25*_t48*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t17*_t48*_t9
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t20*_t25*_t48*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t107*_t13*_t21*_t48*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t108*_t124*_t13*_t20*_t79*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t108*_t125*_t13*_t16*_t79*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t108*_t125*_t13*_t25*_t79*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t17*_t20*_t25*_t79*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t17*_t79*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t108*_t13*_t21*_t79*_t9
-            - TRAILER_LIT(49884800.0)*_t100*_t118 - TRAILER_LIT(177132000.0)*_t100*_t150
-            - TRAILER_LIT(62868000.0)*_t100*_t166 - TRAILER_LIT(16355200.0)*_t102*_t130
-            - TRAILER_LIT(30880000.0)*_t102*_t132 - TRAILER_LIT(97120000.0)*_t102*_t139
-            - TRAILER_LIT(147610000.0)*_t102*_t149 - TRAILER_LIT(52390000.0)*_t102*_t162
-            - _t111*_t122 - _t111*_t175 - _t112*_t123 - TRAILER_LIT(17919854.0)*_t114*_t129
-            - _t114*_t134 - TRAILER_LIT(12745356.0)*_t114*_t135 - TRAILER_LIT(2834112.0)*_t114*_t141
-            - TRAILER_LIT(53759562.0)*_t114*_t159 - TRAILER_LIT(71679416.0)*_t114*_t161
-            - _t114*_t168 - TRAILER_LIT(19625327.0)*_t114*_t40 - TRAILER_LIT(35426400.0)*_t114*_t41
-            - TRAILER_LIT(35426400.0)*_t114*_t91 - TRAILER_LIT(22656600.0)*_t114
-            - TRAILER_LIT(7022546.0)*_t118*_t129 - TRAILER_LIT(36951756.0)*_t118*_t135
-            - TRAILER_LIT(21067638.0)*_t118*_t159 - TRAILER_LIT(28090184.0)*_t118*_t161
-            - TRAILER_LIT(24942400.0)*_t118*_t28 - TRAILER_LIT(9746873.0)*_t118*_t40
-            - TRAILER_LIT(31586400.0)*_t118*_t41 - TRAILER_LIT(31586400.0)*_t118*_t91
-            - TRAILER_LIT(7896600.0)*_t118 - TRAILER_LIT(5697746.0)*_t120*_t129 - _t120*_t134
-            - TRAILER_LIT(17093238.0)*_t120*_t159 - TRAILER_LIT(22790984.0)*_t120*_t161
-            - _t120*_t168 - TRAILER_LIT(13514273.0)*_t120*_t40 - TRAILER_LIT(4943400.0)*_t120
-            - TRAILER_LIT(82800000.0)*_t123*_t27 - TRAILER_LIT(91665810.0)*_t126*_t150 - _t126*_t288
-            - _t126*_t299 - _t128*_t288 - _t128*_t299 - TRAILER_LIT(30555270.0)*_t129*_t152
-            - TRAILER_LIT(10707500.0)*_t129*_t162 - TRAILER_LIT(147610000.0)*_t129*_t196
-            - _t129*_t292 - TRAILER_LIT(13875346.0)*_t130*_t133 - TRAILER_LIT(7091700.0)*_t130*_t146
-            - TRAILER_LIT(41626038.0)*_t130*_t165 - TRAILER_LIT(55501384.0)*_t130*_t169
-            - TRAILER_LIT(8177600.0)*_t130*_t26 - TRAILER_LIT(8982073.0)*_t130*_t39
-            - TRAILER_LIT(14183400.0)*_t130 - TRAILER_LIT(11395492.0)*_t132*_t133
-            - TRAILER_LIT(34186476.0)*_t132*_t165 - TRAILER_LIT(45581968.0)*_t132*_t169
-            - TRAILER_LIT(15440000.0)*_t132*_t26 - TRAILER_LIT(4796746.0)*_t132*_t39
-            - TRAILER_LIT(35839708.0)*_t133*_t139 - TRAILER_LIT(36902500.0)*_t133*_t149
-            - TRAILER_LIT(52244730.0)*_t133*_t156 - TRAILER_LIT(12849000.0)*_t133*_t166
-            - TRAILER_LIT(42830000.0)*_t133*_t192 - TRAILER_LIT(29815956.0)*_t136
-            - TRAILER_LIT(56733600.0)*_t138 - TRAILER_LIT(107519124.0)*_t139*_t165
-            - TRAILER_LIT(143358832.0)*_t139*_t169 - TRAILER_LIT(48560000.0)*_t139*_t26
-            - TRAILER_LIT(25298854.0)*_t139*_t39 - _t141*_t289 - _t141*_t295
-            - TRAILER_LIT(45448512.0)*_t142 - _t144*_t297 - _t145*_t297 - _t146*_t296
-            - TRAILER_LIT(3948300.0)*_t147 - TRAILER_LIT(73805000.0)*_t149*_t26
-            - TRAILER_LIT(25000000.0)*_t149*_t39 - TRAILER_LIT(88566000.0)*_t150*_t28 - _t152*_t160
-            - _t152*_t179 - TRAILER_LIT(15277635.0)*_t152*_t40 - _t153*_t156
-            - TRAILER_LIT(2471700.0)*_t154 - _t156*_t171 - TRAILER_LIT(46822365.0)*_t156*_t39
-            - TRAILER_LIT(2834112.0)*_t157*_t91 - TRAILER_LIT(11328300.0)*_t157 - _t162*_t163
-            - TRAILER_LIT(1195000.0)*_t162*_t39 - _t166*_t238 - _t166*_t250 - _t166*_t277
-            - TRAILER_LIT(31434000.0)*_t166*_t28 - TRAILER_LIT(1434000.0)*_t166*_t40 - _t17*_t287
-            - _t17*_t290 - _t17*_t293 - _t17*_t300 - TRAILER_LIT(125189460.0)*_t170 - _t172*_t291
-            - _t172*_t294 - _t174*_t291 - _t174*_t294 + _t177 - TRAILER_LIT(68175450.0)*_t178
-            - TRAILER_LIT(208978920.0)*_t180 - TRAILER_LIT(91665810.0)*_t182
-            - TRAILER_LIT(101850900.0)*_t183 - _t186 - _t187 - _t190*_t191 - _t190*_t194
-            - _t191*_t205 - _t191*_t271 - _t192*_t298 - _t194*_t205 - _t195*_t197 - _t195*_t298
-            - TRAILER_LIT(56733600.0)*_t198 - _t199*_t209 - _t200*_t213 - _t200*_t219 - _t201*_t212
-            - TRAILER_LIT(45448512.0)*_t204 + _t207 + _t208 - _t209*_t216 - _t21*_t287 - _t21*_t290
-            - _t21*_t293 - _t21*_t300 - _t210*_t217 - TRAILER_LIT(3840000.0)*_t211 - _t212*_t220
-            - _t214*_t217 - TRAILER_LIT(5668224.0)*_t215 - _t223 - _t226 - _t227 - _t228 - _t229
-            - _t231 - _t234 - _t236 + _t239 + _t240 + _t241 + _t242 - _t243*_t289
-            - TRAILER_LIT(208978920.0)*_t244 + _t246 + _t248 + _t249 + _t251
-            - TRAILER_LIT(101850900.0)*_t252 - TRAILER_LIT(62868000.0)*_t253 + _t255 - _t257 - _t259
-            - _t261 - _t264 - _t265 + _t267 + _t268 - TRAILER_LIT(3840000.0)*_t269
-            - TRAILER_LIT(5668224.0)*_t270 + _t272 + _t273 + _t274 - _t275 - _t276 + _t278 + _t279
-            - _t284 - _t292*_t40 - _t295*_t41 - _t296) + tau_left;
-    const trailer_real_t _t302 = _t104*_t301 - _t286*_t47;
-    const trailer_real_t _t303 = _t106*_t302;
-    const trailer_real_t _t304 = _t303*radius_left;
-    const trailer_real_t _t305 = TRAILER_LIT(0.5)*_t20;
-    const trailer_real_t _t306 = _t286*_t78 - _t301*_t47;
-    const trailer_real_t _t307 = _t106*_t306;
-    const trailer_real_t _t308 = _t307*radius_right;
-    const trailer_real_t _t309 = TRAILER_LIT(0.5)*_t0;
-    const trailer_real_t _t310 = TRAILER_LIT(13800.0)*_t116;
-    const trailer_real_t _t311 = TRAILER_LIT(13800.0)*_t109;
-    const trailer_real_t _t312 = TRAILER_LIT(27600.0)*_t91;
-    const trailer_real_t _t313 = TRAILER_LIT(20000.0)*_t39;
-    const trailer_real_t _t314 = TRAILER_LIT(5239.0)*_t26;
-    const trailer_real_t _t315 = TRAILER_LIT(5239.0)*_t28;
-    const trailer_real_t _t316 = TRAILER_LIT(20000.0)*_t40;
-    const trailer_real_t _t317 = TRAILER_LIT(10478.0)*_t116;
-    const trailer_real_t _t318 = TRAILER_LIT(10478.0)*_t109;
-    const trailer_real_t _t319 = TRAILER_LIT(27600.0)*_t41;
-    const trailer_real_t _t320 = TRAILER_LIT(40000.0)*_t131;
-    const trailer_real_t _t321 = _t320*_t40;
-    const trailer_real_t _t322 = TRAILER_LIT(29522.0)*_t131;
-    const trailer_real_t _t323 = _t28*_t322;
-    const trailer_real_t _t324 = _t26*_t322;
-    const trailer_real_t _t325 = _t320*_t39;
-    const trailer_real_t _t326 = TRAILER_LIT(59044.0)*_t131;
-    const trailer_real_t _t327 = _t100*_t326;
-    const trailer_real_t _t328 = _t102*_t326;
-    const trailer_real_t _t329 = -_t321 - _t323 + _t324 + _t325 - _t327 + _t328;
-    const trailer_real_t _t330 = TRAILER_LIT(69.0)*_t40;
-    const trailer_real_t _t331 = TRAILER_LIT(69.0)*_t39;
-    const trailer_real_t _t332 = TRAILER_LIT(100.0)*_t135 + TRAILER_LIT(100.0)*_t146;
-    const trailer_real_t _t333 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t334 = TRAILER_LIT(29517.0)*_t109;
-    const trailer_real_t _t335 = TRAILER_LIT(1917.0)*_t116;
-    const trailer_real_t _t336 = TRAILER_LIT(61400.0)*_t116;
-    const trailer_real_t _t337 = TRAILER_LIT(46639.0)*_t116;
-    const trailer_real_t _t338 = TRAILER_LIT(36161.0)*_t109;
-    const trailer_real_t _t339 = TRAILER_LIT(21400.0)*_t109;
-    const trailer_real_t _t340 = TRAILER_LIT(3834.0)*_t91;
-    const trailer_real_t _t341 = TRAILER_LIT(46200.0)*_t116;
-    const trailer_real_t _t342 = TRAILER_LIT(59034.0)*_t91;
-    const trailer_real_t _t343 = TRAILER_LIT(73800.0)*_t109;
-    const trailer_real_t _t344 = TRAILER_LIT(93278.0)*_t116;
-    const trailer_real_t _t345 = TRAILER_LIT(72322.0)*_t109;
-    const trailer_real_t _t346 = TRAILER_LIT(3834.0)*_t41;
-    const trailer_real_t _t347 = TRAILER_LIT(59034.0)*_t41;
-    const trailer_real_t _t348 = TRAILER_LIT(88566.0)*_t131;
-    const trailer_real_t _t349 = TRAILER_LIT(177132.0)*_t131;
-    const trailer_real_t _t350 = TRAILER_LIT(120000.0)*_t131;
-    const trailer_real_t _t351 = -TRAILER_LIT(60000.0)*_t131 - _t135*_t350 - _t146*_t350
-            + _t17*_t348 + _t21*_t348 - _t349*_t41 - _t349*_t91;
-    const trailer_real_t _t352 = TRAILER_LIT(231.0)*_t39;
-    const trailer_real_t _t353 = TRAILER_LIT(231.0)*_t40;
-    const trailer_real_t _t354 = TRAILER_LIT(307.0)*_t135 + TRAILER_LIT(307.0)*_t146;
-    const trailer_real_t _t355 = _t333/TRAILER_LIT(414.0);
-    const trailer_real_t _t356 = TRAILER_LIT(369.0)*_t40;
-    const trailer_real_t _t357 = TRAILER_LIT(369.0)*_t39;
-    const trailer_real_t _t358 = TRAILER_LIT(107.0)*_t135 + TRAILER_LIT(107.0)*_t146;
-    const trailer_real_t _t359 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t360 = TRAILER_LIT(29517.0)*_t116;
-    const trailer_real_t _t361 = TRAILER_LIT(1917.0)*_t109;
-    const trailer_real_t _t362 = TRAILER_LIT(61400.0)*_t109;
-    const trailer_real_t _t363 = TRAILER_LIT(46639.0)*_t109;
-    const trailer_real_t _t364 = TRAILER_LIT(36161.0)*_t116;
-    const trailer_real_t _t365 = TRAILER_LIT(21400.0)*_t116;
-    const trailer_real_t _t366 = TRAILER_LIT(46200.0)*_t109;
-    const trailer_real_t _t367 = TRAILER_LIT(73800.0)*_t116;
-    const trailer_real_t _t368 = TRAILER_LIT(93278.0)*_t109;
-    const trailer_real_t _t369 = TRAILER_LIT(72322.0)*_t116;
-    const trailer_real_t _t370 = _t359/TRAILER_LIT(414.0);
+    const trailer_real_t _t11 = J_theta_cart_right*_t10;
+    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t13 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t14 = TRAILER_LIT(73805.0)*_t1/TRAILER_LIT(28566.0);
+    const trailer_real_t _t15 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t16 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
+    const trailer_real_t _t17 = TRAILER_LIT(14761.0)*_t1/TRAILER_LIT(28566.0);
+    const trailer_real_t _t18 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t20 = _t12 - _t13 - _t15 - _t16;
+    const trailer_real_t _t21 = -_t18 + _t19;
+    const trailer_real_t _t22 = _t1*(-_t0 - _t2 + _t3 + _t4);
+    const trailer_real_t _t23 = radius_left*radius_left;
+    const trailer_real_t _t24 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t25 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t26 = _t23*_t7;
+    const trailer_real_t _t27 = _t11*_t23;
+    const trailer_real_t _t28 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t29 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t30 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t31 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t32 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t33 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t34 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t35 = TRAILER_LIT(10222.0)*_t11/TRAILER_LIT(42849.0);
+    const trailer_real_t _t36 = TRAILER_LIT(4387.0)*_t26/TRAILER_LIT(9522.0);
+    const trailer_real_t _t37 = TRAILER_LIT(23639.0)*_t27/TRAILER_LIT(28566.0);
+    const trailer_real_t _t38 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t39 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t40 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t41 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t42 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t43 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
+    const trailer_real_t _t44 = TRAILER_LIT(23639.0)*_t11/TRAILER_LIT(14283.0);
+    const trailer_real_t _t45 = -_t36 - _t37;
+    const trailer_real_t _t46 = _t36 + _t37;
+    const trailer_real_t _t47 = -TRAILER_LIT(62356.0)*_t26/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(20444.0)*_t27/TRAILER_LIT(42849.0);
+    const trailer_real_t _t48 = -_t28 + _t29 - _t30 + _t34 - _t35;
+    const trailer_real_t _t49 = _t31 - _t32 - _t33;
+    const trailer_real_t _t50 = -_t31 + _t32 + _t33;
+    const trailer_real_t _t51 = TRAILER_LIT(20444.0)*_t11/TRAILER_LIT(42849.0) + _t38 - _t39 + _t40
+            - TRAILER_LIT(62356.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t52 = -_t41 + _t42 + _t43 + _t44;
+    const trailer_real_t _t53 = _t41 - _t42 - _t43 - _t44;
+    const trailer_real_t _t54 = _t38 - _t39 + _t40;
+    const trailer_real_t _t55 = J_theta_left + _t23*(_t0 + _t2 + _t24 - _t25 + _t3 - _t4)
+            + TRAILER_LIT(11449.0)*_t26/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(94249.0)*_t27/TRAILER_LIT(171396.0);
+    const trailer_real_t _t56 = radius_right*radius_right;
+    const trailer_real_t _t57 = _t56*_t7;
+    const trailer_real_t _t58 = _t11*_t56;
+    const trailer_real_t _t59 = _t28*_t56;
+    const trailer_real_t _t60 = _t29*_t56;
+    const trailer_real_t _t61 = _t30*_t56;
+    const trailer_real_t _t62 = TRAILER_LIT(10222.0)*_t57/TRAILER_LIT(42849.0);
+    const trailer_real_t _t63 = TRAILER_LIT(31178.0)*_t58/TRAILER_LIT(42849.0);
+    const trailer_real_t _t64 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(28566.0);
+    const trailer_real_t _t65 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(9522.0);
+    const trailer_real_t _t66 = _t39*_t56;
+    const trailer_real_t _t67 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t68 = TRAILER_LIT(20444.0)*_t57/TRAILER_LIT(42849.0);
+    const trailer_real_t _t69 = TRAILER_LIT(62356.0)*_t58/TRAILER_LIT(42849.0);
+    const trailer_real_t _t70 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(14283.0);
+    const trailer_real_t _t71 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(4761.0);
+    const trailer_real_t _t72 = -_t70 - _t71;
+    const trailer_real_t _t73 = _t70 + _t71;
+    const trailer_real_t _t74 = -_t59 + _t60 + _t61 - _t62 + _t63;
+    const trailer_real_t _t75 = _t64 + _t65;
+    const trailer_real_t _t76 = -_t64 - _t65;
+    const trailer_real_t _t77 = -_t66 + _t68 - _t69;
+    const trailer_real_t _t78 = -_t31 + _t32 - _t33;
+    const trailer_real_t _t79 = _t31 - _t32 + _t33;
+    const trailer_real_t _t80 = _t41 - _t42 + _t67;
+    const trailer_real_t _t81 = -_t41 + _t42 - _t67;
+    const trailer_real_t _t82 = J_theta_right + _t56*(_t0 + _t2 - _t24 + _t25 + _t3 - _t4)
+            + TRAILER_LIT(94249.0)*_t57/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(11449.0)*_t58/TRAILER_LIT(171396.0);
+    const trailer_real_t _t83 = _t5*_t9;
+    const trailer_real_t _t84 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t85 = J_theta_cart_right*_t5;
+    const trailer_real_t _t86 = J_theta_cart_left*_t9;
+    const trailer_real_t _t87 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t88 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t89 = TRAILER_LIT(76388175.0)*J_theta_cart;
+    const trailer_real_t _t90 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
+    const trailer_real_t _t91 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t92 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t93 = TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t94 = TRAILER_LIT(69000000.0)*J_theta_cart;
+    const trailer_real_t _t95 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t96 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t97 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t98 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t99 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t100 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t101 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t102 = -TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t56;
+    const trailer_real_t _t103 = TRAILER_LIT(34500000.0)*J_theta_cart;
+    const trailer_real_t _t104 = TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t105 = TRAILER_LIT(5.0)*_t10*_t6/TRAILER_LIT(70957944.0);
+    const trailer_real_t _t106 = -_t84;
+    const trailer_real_t _t107 = TRAILER_LIT(110707500.0)*J_theta_cart
+            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t108 = TRAILER_LIT(101850900.0)*J_theta_cart;
+    const trailer_real_t _t109 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor
+            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t110 = -_t88;
+    const trailer_real_t _t111 = _t105*radius_right;
+    const trailer_real_t _t112 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t113 = TRAILER_LIT(130611825.0)*J_theta_cart;
+    const trailer_real_t _t114 = -_t87 - _t90;
+    const trailer_real_t _t115 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor
+            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t116 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t117 = TRAILER_LIT(25462725.0)*J_theta_cart
+            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t118 = TRAILER_LIT(110707500.0)*J_theta_cart;
+    const trailer_real_t _t119 = TRAILER_LIT(16501728.0)*_t23;
+    const trailer_real_t _t120 = TRAILER_LIT(68018688.0)*_t56;
+    const trailer_real_t _t121 = TRAILER_LIT(1417056.0)*radius_left*radius_right;
+    const trailer_real_t _t122 = TRAILER_LIT(6420000.0)*radius_left*radius_right;
+    const trailer_real_t _t123 = TRAILER_LIT(35426400.0)*_t56;
+    const trailer_real_t _t124 = -TRAILER_LIT(110707500.0)*J_theta_cart;
+    const trailer_real_t _t125 = -_t112 - _t113;
+    const trailer_real_t _t126 = -_t94;
+    const trailer_real_t _t127 = -_t96 - _t99;
+    const trailer_real_t _t128 = -_t92 - _t98;
+    const trailer_real_t _t129 = -_t100 - _t93;
+    const trailer_real_t _t130 = -_t95 - _t97;
+    const trailer_real_t _t131 = TRAILER_LIT(708528.0)*_t56;
+    const trailer_real_t _t132 = TRAILER_LIT(11362128.0)*_t23;
+    const trailer_real_t _t133 = TRAILER_LIT(136037376.0)*radius_left*radius_right;
+    const trailer_real_t _t134 = _t105*radius_left;
+    const trailer_real_t _t135 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t136 = _t135/TRAILER_LIT(414.0);
+    const trailer_real_t _t137 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t138 = _t137/TRAILER_LIT(414.0);
+    const trailer_real_t _t139 = TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t140 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(414.0);
+    const trailer_real_t _t141 = TRAILER_LIT(5.0)*_t135/TRAILER_LIT(171396.0);
+    const trailer_real_t _t142 = TRAILER_LIT(5.0)*_t137/TRAILER_LIT(171396.0);
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1033,61 +232,1800 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t143 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t144 = radius_left*thetadot_left;
+    const trailer_real_t _t145 = radius_right*thetadot_right;
+    const trailer_real_t _t146 = TRAILER_LIT(250.0)*(_t144 - _t145)*(_t144
+            + _t145)/TRAILER_LIT(207.0);
+    const trailer_real_t _t147 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t148 = _t147*_t147;
+    const trailer_real_t _t149 = _t1*_t148;
+    const trailer_real_t _t150 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t151 = _t150*_t150;
+    const trailer_real_t _t152 = _t1*_t151;
+    const trailer_real_t _t153 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t154 = _t147*_t153;
+    const trailer_real_t _t155 = K_theta_cart_x_tractor_2*_t154;
+    const trailer_real_t _t156 = _t143*_t150;
+    const trailer_real_t _t157 = K_theta_cart_x_tractor_2*_t156;
+    const trailer_real_t _t158 = _t154*_t7;
+    const trailer_real_t _t159 = _t156*_t17;
+    const trailer_real_t _t160 = _t11*_t154;
+    const trailer_real_t _t161 = _t149*_t151;
+    const trailer_real_t _t162 = _t143*_t147;
+    const trailer_real_t _t163 = _t150*_t153;
+    const trailer_real_t _t164 = _t162*_t163;
+    const trailer_real_t _t165 = _t1*_t164;
+    const trailer_real_t _t166 = TRAILER_LIT(59044.0)*_t161/TRAILER_LIT(42849.0);
+    const trailer_real_t _t167 = TRAILER_LIT(14761.0)*_t152/TRAILER_LIT(14283.0);
+    const trailer_real_t _t168 = TRAILER_LIT(14761.0)*_t149*_t156/TRAILER_LIT(14283.0);
+    const trailer_real_t _t169 = TRAILER_LIT(59044.0)*_t165/TRAILER_LIT(42849.0);
+    const trailer_real_t _t170 = _t11*(-_t159 + _t166 + _t168 + _t169 + _t8) + _t14*(_t155 - _t157)
+            + _t149*(TRAILER_LIT(73805.0)*_t157/TRAILER_LIT(14283.0) + _t20)
+            + _t152*(-TRAILER_LIT(73805.0)*_t155/TRAILER_LIT(14283.0) + _t20) + _t161*_t21
+            + _t165*_t21 + _t167*(_t158 - _t160) + _t17*(-_t158 + _t160) + _t22
+            + _t7*(_t159 + _t166 - _t168 + _t169 + _t8);
+    const trailer_real_t _t171 = _t148*_t23;
+    const trailer_real_t _t172 = _t151*_t23;
+    const trailer_real_t _t173 = _t154*_t23;
+    const trailer_real_t _t174 = _t156*_t23;
+    const trailer_real_t _t175 = _t151*_t171;
+    const trailer_real_t _t176 = _t154*_t172;
+    const trailer_real_t _t177 = _t156*_t171;
+    const trailer_real_t _t178 = _t164*_t23;
+    const trailer_real_t _t179 = _t154*_t45 + _t156*_t46 + _t164*_t47
+            + _t171*(-TRAILER_LIT(26195.0)*_t157/TRAILER_LIT(14283.0) + _t48)
+            + _t172*(TRAILER_LIT(26195.0)*_t155/TRAILER_LIT(14283.0) + _t48) + _t173*_t49
+            + _t174*_t50 + _t175*_t51 + _t176*_t52 + _t177*_t53 + _t178*_t54 + _t55;
+    const trailer_real_t _t180 = _t154*_t56;
+    const trailer_real_t _t181 = _t156*_t56;
+    const trailer_real_t _t182 = _t148*_t151;
+    const trailer_real_t _t183 = _t182*_t56;
+    const trailer_real_t _t184 = _t151*_t180;
+    const trailer_real_t _t185 = _t148*_t181;
+    const trailer_real_t _t186 = _t164*_t56;
+    const trailer_real_t _t187 = _t151*_t154;
+    const trailer_real_t _t188 = _t148*_t156;
+    const trailer_real_t _t189 = _t148*_t74 + _t151*_t74 + _t154*_t75 + _t156*_t76 + _t164*_t77
+            + _t180*_t78 + _t181*_t79 + _t182*_t77 + _t184*_t80 + _t185*_t81 + _t187*_t72
+            + _t188*_t73 + _t38*(_t183 + _t186) + _t40*(-_t183 - _t186) + _t82;
+    const trailer_real_t _t190 = -_t170*_t170 + _t179*_t189;
+    const trailer_real_t _t191 = TRAILER_LIT(1.0)/_t190;
+    const trailer_real_t _t192 = thetadot_left*thetadot_left;
+    const trailer_real_t _t193 = thetadot_right*thetadot_right;
+    const trailer_real_t _t194 = _t193*_t56;
+    const trailer_real_t _t195 = _t194*_t83;
+    const trailer_real_t _t196 = _t194*_t85;
+    const trailer_real_t _t197 = TRAILER_LIT(15793200.0)*_t196;
+    const trailer_real_t _t198 = _t192*_t23;
+    const trailer_real_t _t199 = _t198*_t86;
+    const trailer_real_t _t200 = TRAILER_LIT(17713200.0)*_t199;
+    const trailer_real_t _t201 = _t194*_t86;
+    const trailer_real_t _t202 = TRAILER_LIT(28366800.0)*_t201;
+    const trailer_real_t _t203 = _t198*_t83;
+    const trailer_real_t _t204 = _t147*_t147*_t147;
+    const trailer_real_t _t205 = _t150*_t150*_t150;
+    const trailer_real_t _t206 = _t150*_t204;
+    const trailer_real_t _t207 = TRAILER_LIT(2125584.0)*_t199;
+    const trailer_real_t _t208 = _t147*_t205;
+    const trailer_real_t _t209 = _t143*_t204;
+    const trailer_real_t _t210 = _t198*_t85;
+    const trailer_real_t _t211 = _t144*_t145;
+    const trailer_real_t _t212 = _t211*_t85;
+    const trailer_real_t _t213 = _t153*_t205;
+    const trailer_real_t _t214 = TRAILER_LIT(23617600.0)*_t156;
+    const trailer_real_t _t215 = _t147*_t150;
+    const trailer_real_t _t216 = _t210*_t215;
+    const trailer_real_t _t217 = TRAILER_LIT(34086384.0)*_t201;
+    const trailer_real_t _t218 = _t182*_t210;
+    const trailer_real_t _t219 = _t211*_t86;
+    const trailer_real_t _t220 = TRAILER_LIT(49505184.0)*_t196;
+    const trailer_real_t _t221 = _t204*_t205;
+    const trailer_real_t _t222 = _t210*_t221;
+    const trailer_real_t _t223 = _t148*_t195;
+    const trailer_real_t _t224 = _t151*_t195;
+    const trailer_real_t _t225 = _t143*_t153;
+    const trailer_real_t _t226 = _t199*_t225;
+    const trailer_real_t _t227 = TRAILER_LIT(708528.0)*_t226;
+    const trailer_real_t _t228 = J_theta_cart*_t195;
+    const trailer_real_t _t229 = K_theta_cart_x_tractor*_t195;
+    const trailer_real_t _t230 = TRAILER_LIT(1920000.0)*_t212;
+    const trailer_real_t _t231 = K_theta_cart_x_tractor_2*_t195;
+    const trailer_real_t _t232 = TRAILER_LIT(7858500.0)*_t225;
+    const trailer_real_t _t233 = _t201*_t225;
+    const trailer_real_t _t234 = TRAILER_LIT(11362128.0)*_t233;
+    const trailer_real_t _t235 = K_theta_cart_x_tractor_2*_t203;
+    const trailer_real_t _t236 = _t196*_t225;
+    const trailer_real_t _t237 = TRAILER_LIT(16501728.0)*_t236;
+    const trailer_real_t _t238 = _t151*_t162;
+    const trailer_real_t _t239 = TRAILER_LIT(22141500.0)*_t225;
+    const trailer_real_t _t240 = _t148*_t213;
+    const trailer_real_t _t241 = J_theta_cart*_t203;
+    const trailer_real_t _t242 = TRAILER_LIT(26195000.0)*_t154;
+    const trailer_real_t _t243 = TRAILER_LIT(38547000.0)*_t231;
+    const trailer_real_t _t244 = _t148*_t163;
+    const trailer_real_t _t245 = K_theta_cart_x_tractor*_t203;
+    const trailer_real_t _t246 = TRAILER_LIT(44283000.0)*_t245;
+    const trailer_real_t _t247 = TRAILER_LIT(47235200.0)*_t187;
+    const trailer_real_t _t248 = _t151*_t209;
+    const trailer_real_t _t249 = _t215*_t245;
+    const trailer_real_t _t250 = TRAILER_LIT(62868000.0)*_t182;
+    const trailer_real_t _t251 = _t203*_t206;
+    const trailer_real_t _t252 = _t203*_t208;
+    const trailer_real_t _t253 = _t211*_t83;
+    const trailer_real_t _t254 = _t253*_t90;
+    const trailer_real_t _t255 = _t215*_t228;
+    const trailer_real_t _t256 = TRAILER_LIT(110707500.0)*_t215;
+    const trailer_real_t _t257 = _t221*_t245;
+    const trailer_real_t _t258 = TRAILER_LIT(138000000.0)*_t182;
+    const trailer_real_t _t259 = _t208*_t229;
+    const trailer_real_t _t260 = _t221*_t228;
+    const trailer_real_t _t261 = TRAILER_LIT(177132000.0)*_t182*_t235;
+    const trailer_real_t _t262 = _t253*_t88;
+    const trailer_real_t _t263 = _t148*_t262;
+    const trailer_real_t _t264 = _t151*_t262;
+    const trailer_real_t _t265 = TRAILER_LIT(4251168.0)*_t212;
+    const trailer_real_t _t266 = _t212*_t225;
+    const trailer_real_t _t267 = _t225*_t91;
+    const trailer_real_t _t268 = _t148*_t203;
+    const trailer_real_t _t269 = J_theta_cart*_t268;
+    const trailer_real_t _t270 = TRAILER_LIT(25462725.0)*_t225;
+    const trailer_real_t _t271 = _t151*_t203;
+    const trailer_real_t _t272 = J_theta_cart*_t271;
+    const trailer_real_t _t273 = J_theta_cart*_t224;
+    const trailer_real_t _t274 = TRAILER_LIT(32122500.0)*_t162;
+    const trailer_real_t _t275 = _t164*_t210;
+    const trailer_real_t _t276 = _t213*_t223;
+    const trailer_real_t _t277 = K_theta_cart_x_tractor*_t225;
+    const trailer_real_t _t278 = TRAILER_LIT(52244730.0)*_t277;
+    const trailer_real_t _t279 = _t218*_t225;
+    const trailer_real_t _t280 = _t253*_t94;
+    const trailer_real_t _t281 = _t148*_t280;
+    const trailer_real_t _t282 = _t151*_t280;
+    const trailer_real_t _t283 = _t163*_t268;
+    const trailer_real_t _t284 = _t182*_t219;
+    const trailer_real_t _t285 = _t209*_t271;
+    const trailer_real_t _t286 = _t219*_t221;
+    const trailer_real_t _t287 = _t162*_t224;
+    const trailer_real_t _t288 = TRAILER_LIT(165600000.0)*_t155;
+    const trailer_real_t _t289 = J_theta_cart*_t253;
+    const trailer_real_t _t290 = TRAILER_LIT(203701800.0)*_t289;
+    const trailer_real_t _t291 = _t221*_t290;
+    const trailer_real_t _t292 = K_theta_cart_x_tractor*_t253;
+    const trailer_real_t _t293 = TRAILER_LIT(183331620.0)*_t292;
+    const trailer_real_t _t294 = _t206*_t293;
+    const trailer_real_t _t295 = _t208*_t293;
+    const trailer_real_t _t296 = _t258*_t289;
+    const trailer_real_t _t297 = TRAILER_LIT(101850900.0)*_t215*_t289;
+    const trailer_real_t _t298 = TRAILER_LIT(82800000.0)*_t253;
+    const trailer_real_t _t299 = _t157*_t298;
+    const trailer_real_t _t300 = K_theta_cart_x_tractor_2*_t253;
+    const trailer_real_t _t301 = TRAILER_LIT(61110540.0)*_t300;
+    const trailer_real_t _t302 = _t209*_t301;
+    const trailer_real_t _t303 = TRAILER_LIT(51255270.0)*_t300;
+    const trailer_real_t _t304 = _t163*_t303;
+    const trailer_real_t _t305 = TRAILER_LIT(1417056.0)*_t266;
+    const trailer_real_t _t306 = TRAILER_LIT(20700000.0)*_t225;
+    const trailer_real_t _t307 = _t292*_t306;
+    const trailer_real_t _t308 = _t162*_t303;
+    const trailer_real_t _t309 = _t213*_t301;
+    const trailer_real_t _t310 = _t155*_t298;
+    const trailer_real_t _t311 = _t182*_t225;
+    const trailer_real_t _t312 = _t245*_t311;
+    const trailer_real_t _t313 = TRAILER_LIT(138000000.0)*_t164;
+    const trailer_real_t _t314 = TRAILER_LIT(142921080.0)*_t215*_t292;
+    const trailer_real_t _t315 = TRAILER_LIT(152776350.0)*_t289;
+    const trailer_real_t _t316 = _t206*_t315;
+    const trailer_real_t _t317 = _t208*_t315;
+    const trailer_real_t _t318 = TRAILER_LIT(165600000.0)*_t182;
+    const trailer_real_t _t319 = _t292*_t318;
+    const trailer_real_t _t320 = _t228*_t311;
+    const trailer_real_t _t321 = _t164*_t235;
+    const trailer_real_t _t322 = TRAILER_LIT(244442160.0)*_t292;
+    const trailer_real_t _t323 = _t221*_t322;
+    const trailer_real_t _t324 = TRAILER_LIT(244442160.0)*_t300;
+    const trailer_real_t _t325 = _t240*_t324;
+    const trailer_real_t _t326 = TRAILER_LIT(183331620.0)*_t300;
+    const trailer_real_t _t327 = _t238*_t326;
+    const trailer_real_t _t328 = _t151*_t253;
+    const trailer_real_t _t329 = _t288*_t328;
+    const trailer_real_t _t330 = _t148*_t253;
+    const trailer_real_t _t331 = TRAILER_LIT(61110540.0)*_t277;
+    const trailer_real_t _t332 = _t330*_t331;
+    const trailer_real_t _t333 = _t328*_t331;
+    const trailer_real_t _t334 = TRAILER_LIT(50925450.0)*_t225*_t289;
+    const trailer_real_t _t335 = _t148*_t334;
+    const trailer_real_t _t336 = _t151*_t334;
+    const trailer_real_t _t337 = _t164*_t219;
+    const trailer_real_t _t338 = _t219*_t311;
+    const trailer_real_t _t339 = TRAILER_LIT(165600000.0)*_t157;
+    const trailer_real_t _t340 = _t330*_t339;
+    const trailer_real_t _t341 = _t244*_t326;
+    const trailer_real_t _t342 = _t248*_t324;
+    const trailer_real_t _t343 = _t290*_t311;
+    const trailer_real_t _t344 = _t289*_t313;
+    const trailer_real_t _t345 = TRAILER_LIT(165600000.0)*_t164;
+    const trailer_real_t _t346 = _t292*_t345;
+    const trailer_real_t _t347 = _t311*_t322;
+    const trailer_real_t _t348 = TRAILER_LIT(120000000.0)*_t300;
+    const trailer_real_t _t349 = TRAILER_LIT(73805000.0)*_t289;
+    const trailer_real_t _t350 = TRAILER_LIT(265698000.0)*_t300;
+    const trailer_real_t _t351 = _t101*_t225;
+    const trailer_real_t _t352 = _t103*_t195 + _t104*_t203 + TRAILER_LIT(17250000.0)*_t225*_t228
+            + _t289*(TRAILER_LIT(100000000.0)*_t156 + TRAILER_LIT(200000000.0)*_t187
+            + TRAILER_LIT(221415000.0)*_t238 + TRAILER_LIT(295220000.0)*_t240)
+            + _t292*(TRAILER_LIT(120000000.0)*_t154 + TRAILER_LIT(74283000.0)*_t162
+            + TRAILER_LIT(240000000.0)*_t188 + TRAILER_LIT(88566000.0)*_t213
+            + TRAILER_LIT(265698000.0)*_t244 + TRAILER_LIT(354264000.0)*_t248)
+            + _t348*(_t148 + _t151) + _t349*(_t163 + _t209) + _t350*(_t206 + _t208)
+            + _t351*(_t328 + _t330)
+            + _t5*_t9*(J_theta_cart*_t192*_t23*(-TRAILER_LIT(17250000.0)*_t143*_t153
+            - TRAILER_LIT(34500000.0)) + _t102*_t193
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(K_theta_cart_x_tractor_2*(-TRAILER_LIT(207132000.0)*_t147*_t150
+            - TRAILER_LIT(240000000.0)*_t148*_t151 - TRAILER_LIT(354264000.0)*_t204*_t205
+            - TRAILER_LIT(60000000.0)) + _t143*(J_theta_cart*(-TRAILER_LIT(73805000.0)*_t147
+            - TRAILER_LIT(200000000.0)*_t148*_t150 - TRAILER_LIT(295220000.0)*_t151*_t204)
+            + K_theta_cart_x_tractor*(-TRAILER_LIT(265698000.0)*_t147*_t151
+            - TRAILER_LIT(120000000.0)*_t150 - TRAILER_LIT(88566000.0)*_t204)
+            + K_theta_cart_x_tractor_2*_t153*(-TRAILER_LIT(240000000.0)*_t147*_t150
+            - TRAILER_LIT(354264000.0)*_t148*_t151 - TRAILER_LIT(30000000.0)))
+            + _t153*(J_theta_cart*(-TRAILER_LIT(100000000.0)*_t147
+            - TRAILER_LIT(221415000.0)*_t148*_t150 - TRAILER_LIT(73805000.0)*_t205)
+            + K_theta_cart_x_tractor*(-TRAILER_LIT(240000000.0)*_t147*_t151
+            - TRAILER_LIT(354264000.0)*_t148*_t205 - TRAILER_LIT(74283000.0)*_t150))));
+    const trailer_real_t _t353 = -_t111*(J_theta_cart*(-TRAILER_LIT(42830000.0)*_t276
+            - TRAILER_LIT(110707500.0)*_t283 - TRAILER_LIT(147610000.0)*_t285)
+            + J_theta_cart_right*_t5*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(17004672.0)*_t148
+            + TRAILER_LIT(17004672.0)*_t151 + TRAILER_LIT(2471700.0))
+            + _t193*_t56*(TRAILER_LIT(31586400.0)*_t147*_t150 + TRAILER_LIT(66006912.0)*_t148*_t151
+            + TRAILER_LIT(3948300.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(3840000.0)*_t147*_t150 + TRAILER_LIT(5668224.0)*_t148*_t151))
+            + _t192*_t23*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
+            + TRAILER_LIT(22790984.0)*_t151*_t204) + _t193*_t56*(TRAILER_LIT(9746873.0)*_t147
+            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
+            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
+            + TRAILER_LIT(17093238.0)*_t148*_t150 + TRAILER_LIT(5697746.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(24942400.0)*_t147 + TRAILER_LIT(21067638.0)*_t148*_t150
+            + TRAILER_LIT(7022546.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
+            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(51014016.0)*_t147*_t205
+            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(51014016.0)*_t150*_t204
+            + TRAILER_LIT(17713200.0)*_t151 + TRAILER_LIT(4943400.0))
+            + _t193*_t56*(TRAILER_LIT(36951756.0)*_t147*_t150 + TRAILER_LIT(31586400.0)*_t148*_t151
+            + TRAILER_LIT(66006912.0)*_t204*_t205 + TRAILER_LIT(7896600.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(3840000.0)*_t148*_t151 + TRAILER_LIT(5668224.0)*_t204*_t205))
+            - _t100*_t276 + _t148*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
+            + _t151*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
+            - _t162*_t271*_t97 + _t163*(-TRAILER_LIT(9746873.0)*_t196
+            - TRAILER_LIT(19625327.0)*_t199 - TRAILER_LIT(13514273.0)*_t210 - _t223*_t92
+            - TRAILER_LIT(1434000.0)*_t229 - TRAILER_LIT(46822365.0)*_t231 - _t246)
+            + _t195*(_t106 - TRAILER_LIT(82800000.0)*_t157) + _t196*(-TRAILER_LIT(24942400.0)*_t156
+            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(21067638.0)*_t238
+            - TRAILER_LIT(28090184.0)*_t240) + _t199*(-_t214 - TRAILER_LIT(53759562.0)*_t238
+            - TRAILER_LIT(71679416.0)*_t240 - _t247) + _t201*(-TRAILER_LIT(8177600.0)*_t154
+            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
+            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(41626038.0)*_t244
+            - TRAILER_LIT(55501384.0)*_t248) - _t203*_t87 + _t206*(-_t207 - _t217 - _t220
+            - TRAILER_LIT(156734190.0)*_t229 - _t243 - _t265) + _t208*(-_t207 - _t217 - _t220
+            - _t243 - _t265) + _t209*(-TRAILER_LIT(7022546.0)*_t196 - TRAILER_LIT(17919854.0)*_t199
+            - TRAILER_LIT(5697746.0)*_t210 - _t224*_t93 - TRAILER_LIT(10707500.0)*_t228
+            - TRAILER_LIT(52244730.0)*_t231 - _t246) + _t210*(-_t214 - TRAILER_LIT(17093238.0)*_t238
+            - TRAILER_LIT(22790984.0)*_t240 - _t247) + _t212*(-TRAILER_LIT(48560000.0)*_t154
+            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
+            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(3585888.0)*_t215
+            - TRAILER_LIT(107519124.0)*_t244 - TRAILER_LIT(143358832.0)*_t248
+            - TRAILER_LIT(12840000.0)) - _t213*_t268*_t99 - TRAILER_LIT(31537644.0)*_t216
+            - TRAILER_LIT(35426400.0)*_t218 + _t219*(-TRAILER_LIT(15440000.0)*_t154
+            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
+            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(86438688.0)*_t215
+            - TRAILER_LIT(18420000.0)*_t225 - TRAILER_LIT(34186476.0)*_t244
+            - TRAILER_LIT(45581968.0)*_t248 - TRAILER_LIT(36840000.0))
+            - TRAILER_LIT(68018688.0)*_t222 + _t223*(_t110 - _t267 - _t278)
+            + _t224*(_t110 - _t267 - _t278 - _t288) + _t228*(-TRAILER_LIT(1195000.0)*_t162
+            - TRAILER_LIT(52390000.0)*_t188 - _t242 - _t258 - _t313)
+            + _t229*(-TRAILER_LIT(31434000.0)*_t156 - TRAILER_LIT(62868000.0)*_t187
+            - TRAILER_LIT(12849000.0)*_t213) + _t231*(-TRAILER_LIT(62868000.0)*_t164 - _t232
+            - _t250) + _t235*(-TRAILER_LIT(15277635.0)*_t162 - TRAILER_LIT(30555270.0)*_t213
+            - TRAILER_LIT(177132000.0)*_t221 - _t239 - _t256)
+            + _t241*(-TRAILER_LIT(73805000.0)*_t154 - TRAILER_LIT(25000000.0)*_t162
+            - TRAILER_LIT(147610000.0)*_t188 - TRAILER_LIT(36902500.0)*_t213)
+            + _t245*(-TRAILER_LIT(88566000.0)*_t156 - TRAILER_LIT(177132000.0)*_t187)
+            - TRAILER_LIT(61110540.0)*_t249 - _t254 - TRAILER_LIT(104324550.0)*_t255
+            - TRAILER_LIT(122221080.0)*_t257 - TRAILER_LIT(156734190.0)*_t259
+            - TRAILER_LIT(174149100.0)*_t260 + _t261*(-_t225 - TRAILER_LIT(1.0)) + _t263 + _t264
+            - TRAILER_LIT(6420000.0)*_t266 + _t270*(-_t269 - _t272) - _t273*_t274
+            - TRAILER_LIT(35426400.0)*_t275 - TRAILER_LIT(68018688.0)*_t279 - _t281 - _t282
+            - _t283*_t95 - TRAILER_LIT(92160000.0)*_t284 - _t285*_t96
+            - TRAILER_LIT(136037376.0)*_t286 - _t287*_t98 + _t291 + _t294 + _t295 + _t296 + _t297
+            + _t299 + _t302 + _t304 - _t307 - _t308 - _t309 - _t310 - TRAILER_LIT(122221080.0)*_t312
+            - _t314 - _t316 - _t317 - _t319 - TRAILER_LIT(174149100.0)*_t320
+            - TRAILER_LIT(177132000.0)*_t321 - _t323 + _t325 + _t327 + _t329 + _t332 + _t333 - _t335
+            - _t336 - TRAILER_LIT(92160000.0)*_t337 - TRAILER_LIT(136037376.0)*_t338 - _t340 - _t341
+            - _t342 + _t343 + _t344 - _t346 - _t347 - _t352 + _t89*(-_t251 - _t252)
+            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(35426400.0)*_t147*_t150
+            + TRAILER_LIT(2834112.0)*_t148*_t151 + TRAILER_LIT(11328300.0))
+            + _t193*_t56*(TRAILER_LIT(56733600.0)*_t147*_t150 + TRAILER_LIT(45448512.0)*_t148*_t151
+            + TRAILER_LIT(7091700.0))
+            + radius_left*radius_right*thetadot_left*thetadot_right*(TRAILER_LIT(34009344.0)*_t148
+            + TRAILER_LIT(34009344.0)*_t151)) + _t192*_t23*(TRAILER_LIT(19625327.0)*_t147
+            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
+            + _t193*_t56*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
+            + TRAILER_LIT(13875346.0)*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
+            + TRAILER_LIT(11395492.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
+            + TRAILER_LIT(53759562.0)*_t148*_t150 + TRAILER_LIT(17919854.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(16355200.0)*_t147*_t151 + TRAILER_LIT(55501384.0)*_t148*_t205
+            + TRAILER_LIT(8982073.0)*_t150)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
+            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(12745356.0)*_t147*_t150
+            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(2834112.0)*_t204*_t205
+            + TRAILER_LIT(22656600.0)) + _t193*_t56*(TRAILER_LIT(29815956.0)*_t147*_t150
+            + TRAILER_LIT(56733600.0)*_t148*_t151 + TRAILER_LIT(45448512.0)*_t204*_t205
+            + TRAILER_LIT(14183400.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(102028032.0)*_t147*_t205 + TRAILER_LIT(46080000.0)*_t148
+            + TRAILER_LIT(102028032.0)*_t150*_t204 + TRAILER_LIT(46080000.0)*_t151))
+            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(68175450.0)*_t147*_t150
+            + TRAILER_LIT(101850900.0)*_t204*_t205)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(91665810.0)*_t147*_t205
+            + TRAILER_LIT(91665810.0)*_t150*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
+            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
+            + TRAILER_LIT(88566000.0)*_t151) + _t143*(J_theta_cart*(TRAILER_LIT(73805000.0)*_t150
+            + TRAILER_LIT(36902500.0)*_t204) + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
+            + _t148*(TRAILER_LIT(177132000.0)*_t150 + TRAILER_LIT(30555270.0)*_t153))
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(44283000.0)*_t148*_t153
+            + TRAILER_LIT(30555270.0)*_t204) + _t151*(_t107*_t147 + _t153*(_t108*_t148 + _t109)
+            + _t204*_t99)) + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
+            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
+            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(122221080.0)*_t148*_t205
+            + TRAILER_LIT(15277635.0)*_t150)) + _t90)
+            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(130611825.0)*_t147*_t205
+            + TRAILER_LIT(69000000.0)*_t148 + TRAILER_LIT(130611825.0)*_t150*_t204
+            + TRAILER_LIT(69000000.0)*_t151)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(125189460.0)*_t147*_t150
+            + TRAILER_LIT(165600000.0)*_t148*_t151 + TRAILER_LIT(208978920.0)*_t204*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
+            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
+            + TRAILER_LIT(51396000.0)*_t204*_t205)
+            + _t143*(J_theta_cart*(TRAILER_LIT(43537275.0)*_t148*_t153
+            + TRAILER_LIT(26195000.0)*_t150 + _t151*(TRAILER_LIT(43537275.0)*_t153
+            + TRAILER_LIT(42830000.0)*_t204))
+            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(165600000.0)*_t150*_t153
+            + TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
+            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(208978920.0)*_t151*_t153)
+            + TRAILER_LIT(20700000.0)*_t153 + TRAILER_LIT(12849000.0)*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(46822365.0)*_t147
+            + _t148*(TRAILER_LIT(165600000.0)*_t150 + TRAILER_LIT(51396000.0)*_t151*_t153)
+            + TRAILER_LIT(208978920.0)*_t151*_t204))
+            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
+            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
+            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
+            + TRAILER_LIT(51396000.0)*_t148*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t147
+            + TRAILER_LIT(156734190.0)*_t148*_t150 + TRAILER_LIT(52244730.0)*_t205))))))
+            + tau_right;
+    const trailer_real_t _t354 = TRAILER_LIT(17713200.0)*_t201;
+    const trailer_real_t _t355 = TRAILER_LIT(51014016.0)*_t201;
+    const trailer_real_t _t356 = TRAILER_LIT(66006912.0)*_t199;
+    const trailer_real_t _t357 = TRAILER_LIT(17004672.0)*_t233;
+    const trailer_real_t _t358 = TRAILER_LIT(44283000.0)*_t229;
+    const trailer_real_t _t359 = TRAILER_LIT(46080000.0)*_t212;
+    const trailer_real_t _t360 = TRAILER_LIT(177132000.0)*_t231;
+    const trailer_real_t _t361 = _t182*_t360;
+    const trailer_real_t _t362 = TRAILER_LIT(30555270.0)*_t277;
+    const trailer_real_t _t363 = TRAILER_LIT(43537275.0)*_t225;
+    const trailer_real_t _t364 = TRAILER_LIT(102028032.0)*_t212;
+    const trailer_real_t _t365 = TRAILER_LIT(34009344.0)*_t266;
+    const trailer_real_t _t366 = _t134*(J_theta_cart_right*_t5*(_t143*(_t153*(_t148*(_t131*_t193
+            + _t132*_t192 + _t133*_t151*thetadot_left*thetadot_right)
+            + _t151*(_t131*_t193 + _t132*_t192)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(92160000.0)*_t147*_t150 + TRAILER_LIT(18420000.0)))
+            + _t192*_t23*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
+            + TRAILER_LIT(13875346.0)*_t204) + _t193*_t56*(TRAILER_LIT(19625327.0)*_t147
+            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
+            + TRAILER_LIT(11395492.0)*_t204))
+            + _t153*(_t192*_t23*(TRAILER_LIT(16355200.0)*_t147*_t151
+            + TRAILER_LIT(55501384.0)*_t148*_t205 + TRAILER_LIT(8982073.0)*_t150)
+            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(53759562.0)*_t148*_t150
+            + TRAILER_LIT(17919854.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
+            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(34086384.0)*_t147*_t205
+            + TRAILER_LIT(28366800.0)*_t148 + TRAILER_LIT(34086384.0)*_t150*_t204
+            + TRAILER_LIT(28366800.0)*_t151) + _t193*_t56*(TRAILER_LIT(2125584.0)*_t147*_t205
+            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(2125584.0)*_t150*_t204
+            + TRAILER_LIT(17713200.0)*_t151)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(86438688.0)*_t147*_t150 + TRAILER_LIT(92160000.0)*_t148*_t151
+            + TRAILER_LIT(136037376.0)*_t204*_t205 + TRAILER_LIT(36840000.0))) + _t114*_t195
+            + _t125*_t251 + _t125*_t252 + _t127*_t276 + _t128*_t283 + _t129*_t285 + _t130*_t287
+            + _t148*(-_t354 - _t357 - _t359 - _t365) + _t151*(-_t354 - _t357 - _t359 - _t365)
+            - _t163*_t358 - _t164*_t360 + _t196*(-TRAILER_LIT(19625327.0)*_t163
+            - TRAILER_LIT(35426400.0)*_t164 - TRAILER_LIT(35426400.0)*_t182
+            - TRAILER_LIT(17919854.0)*_t209 - _t214 - TRAILER_LIT(12745356.0)*_t215
+            - TRAILER_LIT(2834112.0)*_t221 - TRAILER_LIT(53759562.0)*_t238
+            - TRAILER_LIT(71679416.0)*_t240 - _t247 - TRAILER_LIT(22656600.0))
+            + _t199*(-TRAILER_LIT(24942400.0)*_t156 - TRAILER_LIT(9746873.0)*_t163
+            - TRAILER_LIT(31586400.0)*_t164 - TRAILER_LIT(31586400.0)*_t182
+            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(7022546.0)*_t209
+            - TRAILER_LIT(36951756.0)*_t215 - TRAILER_LIT(21067638.0)*_t238
+            - TRAILER_LIT(28090184.0)*_t240 - TRAILER_LIT(7896600.0))
+            + _t201*(-TRAILER_LIT(13514273.0)*_t163 - TRAILER_LIT(5697746.0)*_t209 - _t214
+            - TRAILER_LIT(17093238.0)*_t238 - TRAILER_LIT(22790984.0)*_t240 - _t247
+            - TRAILER_LIT(4943400.0)) + _t203*(_t106 - TRAILER_LIT(82800000.0)*_t155)
+            + _t206*(-TRAILER_LIT(91665810.0)*_t229 - _t355 - _t364) + _t208*(-_t355 - _t364)
+            + _t209*(-TRAILER_LIT(30555270.0)*_t231 - TRAILER_LIT(10707500.0)*_t241
+            - TRAILER_LIT(147610000.0)*_t273 - _t358) + _t210*(-TRAILER_LIT(8177600.0)*_t154
+            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
+            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(7091700.0)*_t225
+            - TRAILER_LIT(41626038.0)*_t244 - TRAILER_LIT(55501384.0)*_t248
+            - TRAILER_LIT(14183400.0)) + _t212*(-TRAILER_LIT(15440000.0)*_t154
+            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
+            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(34186476.0)*_t244
+            - TRAILER_LIT(45581968.0)*_t248) - TRAILER_LIT(29815956.0)*_t216
+            - TRAILER_LIT(56733600.0)*_t218 + _t219*(-TRAILER_LIT(48560000.0)*_t154
+            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
+            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(107519124.0)*_t244
+            - TRAILER_LIT(143358832.0)*_t248) + _t221*(-_t356 - _t360)
+            - TRAILER_LIT(45448512.0)*_t222 + _t223*(_t124*_t163 - _t362) - _t224*_t362
+            - TRAILER_LIT(3948300.0)*_t226 + _t228*(-TRAILER_LIT(73805000.0)*_t154
+            - TRAILER_LIT(25000000.0)*_t162 - TRAILER_LIT(147610000.0)*_t188
+            - TRAILER_LIT(36902500.0)*_t213) + _t229*(-TRAILER_LIT(88566000.0)*_t156
+            - TRAILER_LIT(177132000.0)*_t187) + _t231*(-TRAILER_LIT(15277635.0)*_t163 - _t239
+            - _t256) - TRAILER_LIT(2471700.0)*_t233 + _t235*(-TRAILER_LIT(46822365.0)*_t162
+            - TRAILER_LIT(52244730.0)*_t213 - _t232 - _t250) + _t236*(-TRAILER_LIT(2834112.0)*_t182
+            - TRAILER_LIT(11328300.0)) + _t241*(-TRAILER_LIT(1195000.0)*_t162
+            - TRAILER_LIT(52390000.0)*_t188 - _t242) + _t245*(-TRAILER_LIT(31434000.0)*_t156
+            - TRAILER_LIT(1434000.0)*_t163 - TRAILER_LIT(62868000.0)*_t187
+            - TRAILER_LIT(12849000.0)*_t213 - _t306 - _t318 - _t345)
+            - TRAILER_LIT(125189460.0)*_t249 + _t254 - TRAILER_LIT(68175450.0)*_t255
+            - TRAILER_LIT(208978920.0)*_t257 - TRAILER_LIT(91665810.0)*_t259
+            - TRAILER_LIT(101850900.0)*_t260 - _t263 - _t264 + _t268*(_t126 - _t267 - _t339)
+            + _t269*(-TRAILER_LIT(42830000.0)*_t213 - _t363) + _t271*(_t126 - _t267)
+            + _t272*(-_t274 - _t363) - TRAILER_LIT(56733600.0)*_t275 - TRAILER_LIT(45448512.0)*_t279
+            + _t281 + _t282 - TRAILER_LIT(3840000.0)*_t284 - TRAILER_LIT(5668224.0)*_t286 - _t291
+            - _t294 - _t295 - _t296 - _t297 - _t299 - _t302 - _t304 + _t307 + _t308 + _t309 + _t310
+            - _t311*_t356 - TRAILER_LIT(208978920.0)*_t312 + _t314 + _t316 + _t317 + _t319
+            - TRAILER_LIT(101850900.0)*_t320 - TRAILER_LIT(62868000.0)*_t321 + _t323 - _t325 - _t327
+            - _t329 - _t332 - _t333 + _t335 + _t336 - TRAILER_LIT(3840000.0)*_t337
+            - TRAILER_LIT(5668224.0)*_t338 + _t340 + _t341 + _t342 - _t343 - _t344 + _t346 + _t347
+            - _t352 + _t361*(-_t225 - TRAILER_LIT(1.0))
+            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t122*thetadot_left*thetadot_right
+            + _t123*_t147*_t150*_t193 + _t148*(_t119*_t192 + _t120*_t151*_t193
+            + _t121*thetadot_left*thetadot_right) + _t151*(_t119*_t192
+            + _t121*thetadot_left*thetadot_right)) + _t192*_t23*(TRAILER_LIT(9746873.0)*_t147
+            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
+            + _t193*_t56*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
+            + TRAILER_LIT(22790984.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
+            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(24942400.0)*_t147
+            + TRAILER_LIT(21067638.0)*_t148*_t150 + TRAILER_LIT(7022546.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(17093238.0)*_t148*_t150
+            + TRAILER_LIT(5697746.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
+            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(49505184.0)*_t147*_t205
+            + TRAILER_LIT(15793200.0)*_t148 + TRAILER_LIT(49505184.0)*_t150*_t204
+            + TRAILER_LIT(15793200.0)*_t151) + _t193*_t56*(TRAILER_LIT(31537644.0)*_t147*_t150
+            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(68018688.0)*_t204*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(_t147*(TRAILER_LIT(3585888.0)*_t150 + TRAILER_LIT(4251168.0)*_t205)
+            + TRAILER_LIT(1920000.0)*_t148 + TRAILER_LIT(4251168.0)*_t150*_t204
+            + TRAILER_LIT(1920000.0)*_t151 + TRAILER_LIT(12840000.0)))
+            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(104324550.0)*_t147*_t150
+            + TRAILER_LIT(138000000.0)*_t148*_t151 + TRAILER_LIT(174149100.0)*_t204*_t205)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(156734190.0)*_t147*_t205
+            + TRAILER_LIT(82800000.0)*_t148 + TRAILER_LIT(156734190.0)*_t150*_t204
+            + TRAILER_LIT(82800000.0)*_t151)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
+            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
+            + TRAILER_LIT(51396000.0)*_t204*_t205)
+            + _t143*(J_theta_cart*(_t150*(TRAILER_LIT(138000000.0)*_t147*_t153
+            + TRAILER_LIT(26195000.0)) + _t151*(TRAILER_LIT(174149100.0)*_t148*_t153
+            + TRAILER_LIT(42830000.0)*_t204))
+            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
+            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(52244730.0)*_t153)
+            + TRAILER_LIT(52244730.0)*_t151*_t153 + TRAILER_LIT(12849000.0)*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t150
+            + _t151*(TRAILER_LIT(156734190.0)*_t147 + TRAILER_LIT(51396000.0)*_t148*_t153)
+            + TRAILER_LIT(52244730.0)*_t204))
+            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
+            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
+            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
+            + TRAILER_LIT(51396000.0)*_t148*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(165600000.0)*_t147*_t151
+            + TRAILER_LIT(208978920.0)*_t148*_t205 + TRAILER_LIT(46822365.0)*_t150)))
+            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(76388175.0)*_t147*_t205
+            + TRAILER_LIT(76388175.0)*_t150*_t204)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(61110540.0)*_t147*_t150
+            + TRAILER_LIT(122221080.0)*_t204*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
+            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
+            + TRAILER_LIT(88566000.0)*_t151)
+            + _t143*(J_theta_cart*(TRAILER_LIT(25462725.0)*_t148*_t153
+            + TRAILER_LIT(73805000.0)*_t150 + TRAILER_LIT(36902500.0)*_t204)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
+            + TRAILER_LIT(177132000.0)*_t148*_t150)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(15277635.0)*_t147
+            + TRAILER_LIT(44283000.0)*_t148*_t153) + _t151*(_t115*_t204 + _t118*_t147
+            + _t153*(_t116*_t148 + _t117)))
+            + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
+            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
+            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(91665810.0)*_t148*_t150
+            + TRAILER_LIT(30555270.0)*_t205)))))) + tau_left;
+    const trailer_real_t _t367 = -_t170*_t353 + _t189*_t366;
+    const trailer_real_t _t368 = _t191*_t367;
+    const trailer_real_t _t369 = _t368*radius_left;
+    const trailer_real_t _t370 = TRAILER_LIT(0.5)*_t150;
+    const trailer_real_t _t371 = -_t170*_t366 + _t179*_t353;
+    const trailer_real_t _t372 = _t191*_t371;
+    const trailer_real_t _t373 = _t372*radius_right;
+    const trailer_real_t _t374 = TRAILER_LIT(0.5)*_t143;
+    const trailer_real_t _t375 = TRAILER_LIT(13800.0)*_t198;
+    const trailer_real_t _t376 = TRAILER_LIT(13800.0)*_t194;
+    const trailer_real_t _t377 = TRAILER_LIT(27600.0)*_t182;
+    const trailer_real_t _t378 = TRAILER_LIT(20000.0)*_t162;
+    const trailer_real_t _t379 = TRAILER_LIT(5239.0)*_t154;
+    const trailer_real_t _t380 = TRAILER_LIT(5239.0)*_t156;
+    const trailer_real_t _t381 = TRAILER_LIT(20000.0)*_t163;
+    const trailer_real_t _t382 = TRAILER_LIT(10478.0)*_t198;
+    const trailer_real_t _t383 = TRAILER_LIT(10478.0)*_t194;
+    const trailer_real_t _t384 = TRAILER_LIT(27600.0)*_t164;
+    const trailer_real_t _t385 = TRAILER_LIT(40000.0)*_t211;
+    const trailer_real_t _t386 = _t163*_t385;
+    const trailer_real_t _t387 = TRAILER_LIT(29522.0)*_t211;
+    const trailer_real_t _t388 = _t156*_t387;
+    const trailer_real_t _t389 = _t154*_t387;
+    const trailer_real_t _t390 = _t162*_t385;
+    const trailer_real_t _t391 = TRAILER_LIT(59044.0)*_t211;
+    const trailer_real_t _t392 = _t187*_t391;
+    const trailer_real_t _t393 = _t188*_t391;
+    const trailer_real_t _t394 = -_t386 - _t388 + _t389 + _t390 - _t392 + _t393;
+    const trailer_real_t _t395 = TRAILER_LIT(69.0)*_t163;
+    const trailer_real_t _t396 = TRAILER_LIT(69.0)*_t162;
+    const trailer_real_t _t397 = TRAILER_LIT(100.0)*_t215 + TRAILER_LIT(100.0)*_t225;
+    const trailer_real_t _t398 = TRAILER_LIT(29517.0)*_t194;
+    const trailer_real_t _t399 = TRAILER_LIT(1917.0)*_t198;
+    const trailer_real_t _t400 = TRAILER_LIT(61400.0)*_t198;
+    const trailer_real_t _t401 = TRAILER_LIT(46639.0)*_t198;
+    const trailer_real_t _t402 = TRAILER_LIT(36161.0)*_t194;
+    const trailer_real_t _t403 = TRAILER_LIT(21400.0)*_t194;
+    const trailer_real_t _t404 = TRAILER_LIT(3834.0)*_t182;
+    const trailer_real_t _t405 = TRAILER_LIT(46200.0)*_t198;
+    const trailer_real_t _t406 = TRAILER_LIT(59034.0)*_t182;
+    const trailer_real_t _t407 = TRAILER_LIT(73800.0)*_t194;
+    const trailer_real_t _t408 = TRAILER_LIT(93278.0)*_t198;
+    const trailer_real_t _t409 = TRAILER_LIT(72322.0)*_t194;
+    const trailer_real_t _t410 = TRAILER_LIT(3834.0)*_t164;
+    const trailer_real_t _t411 = TRAILER_LIT(59034.0)*_t164;
+    const trailer_real_t _t412 = TRAILER_LIT(88566.0)*_t211;
+    const trailer_real_t _t413 = TRAILER_LIT(177132.0)*_t211;
+    const trailer_real_t _t414 = TRAILER_LIT(120000.0)*_t211;
+    const trailer_real_t _t415 = -TRAILER_LIT(60000.0)*_t211 + _t412*(_t148 + _t151)
+            + _t413*(-_t164 - _t182) + _t414*(-_t215 - _t225);
+    const trailer_real_t _t416 = TRAILER_LIT(231.0)*_t162;
+    const trailer_real_t _t417 = TRAILER_LIT(231.0)*_t163;
+    const trailer_real_t _t418 = TRAILER_LIT(307.0)*_t215 + TRAILER_LIT(307.0)*_t225;
+    const trailer_real_t _t419 = TRAILER_LIT(369.0)*_t163;
+    const trailer_real_t _t420 = TRAILER_LIT(369.0)*_t162;
+    const trailer_real_t _t421 = TRAILER_LIT(107.0)*_t215 + TRAILER_LIT(107.0)*_t225;
+    const trailer_real_t _t422 = TRAILER_LIT(29517.0)*_t198;
+    const trailer_real_t _t423 = TRAILER_LIT(1917.0)*_t194;
+    const trailer_real_t _t424 = TRAILER_LIT(61400.0)*_t194;
+    const trailer_real_t _t425 = TRAILER_LIT(46639.0)*_t194;
+    const trailer_real_t _t426 = TRAILER_LIT(36161.0)*_t198;
+    const trailer_real_t _t427 = TRAILER_LIT(21400.0)*_t198;
+    const trailer_real_t _t428 = TRAILER_LIT(46200.0)*_t194;
+    const trailer_real_t _t429 = TRAILER_LIT(73800.0)*_t198;
+    const trailer_real_t _t430 = TRAILER_LIT(93278.0)*_t194;
+    const trailer_real_t _t431 = TRAILER_LIT(72322.0)*_t198;
+    if (!(_t189 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t105 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t190 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t0*_t3 + _t304*_t305 + _t305*_t308;
-    const trailer_real_t r_1 = -_t20*_t3 + _t304*_t309 + _t308*_t309;
-    const trailer_real_t r_2 = TRAILER_LIT(500.0)*_t106*_t306*radius_right/TRAILER_LIT(207.0)
-            - TRAILER_LIT(500.0)*_t304/TRAILER_LIT(207.0);
-    const trailer_real_t r_3 = -TRAILER_LIT(25.0)*_t100*_t317/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t100*_t318/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t102*_t317/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t102*_t318/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(5.0)*_t106*_t302*radius_left*(-_t330 + _t331 + _t332)/TRAILER_LIT(414.0)
-            + TRAILER_LIT(25.0)*_t109*_t312/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t109*_t313/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t109*_t314/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t109*_t315/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t109*_t316/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t109*_t319/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(625.0)*_t109/TRAILER_LIT(621.0)
-            - TRAILER_LIT(25.0)*_t116*_t312/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t116*_t313/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t116*_t314/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t116*_t315/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t116*_t316/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t116*_t319/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(625.0)*_t116/TRAILER_LIT(621.0)
-            - TRAILER_LIT(25.0)*_t135*_t310/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t135*_t311/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t146*_t310/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t146*_t311/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t17*_t310/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t17*_t311/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t21*_t310/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t21*_t311/TRAILER_LIT(171396.0) - TRAILER_LIT(5.0)*_t308*(_t330
-            - _t331 + _t332)/TRAILER_LIT(414.0) - TRAILER_LIT(25.0)*_t329/TRAILER_LIT(171396.0);
-    const trailer_real_t r_4 = _t307;
-    const trailer_real_t r_5 = _t303;
-    const trailer_real_t r_6 = _t304*_t355*(-_t352 + _t353 + _t354)
-            + _t308*_t355*(-_t356 + _t357 + _t358) + TRAILER_LIT(5.0)*_t333*(-_t100*_t344
-            + _t100*_t345 + _t102*_t344 - _t102*_t345 + _t109*_t342 + _t109*_t347
-            + TRAILER_LIT(36900.0)*_t109 + _t116*_t340 + _t116*_t346 + TRAILER_LIT(23100.0)*_t116
-            + _t135*_t341 + _t135*_t343 + _t146*_t341 + _t146*_t343 - _t17*_t334 - _t17*_t335
-            - _t21*_t334 - _t21*_t335 + _t26*_t337 - _t26*_t338 - _t28*_t337 + _t28*_t338 + _t321
-            + _t323 - _t324 - _t325 + _t327 - _t328 + _t336*_t39 - _t336*_t40 - _t339*_t39
-            + _t339*_t40 + _t351)/TRAILER_LIT(171396.0);
-    const trailer_real_t r_7 = _t304*_t370*(_t356 - _t357 + _t358)
-            + _t308*_t370*(_t352 - _t353 + _t354) + TRAILER_LIT(5.0)*_t359*(_t100*_t368
-            - _t100*_t369 - _t102*_t368 + _t102*_t369 + _t109*_t340 + _t109*_t346
-            + TRAILER_LIT(23100.0)*_t109 + _t116*_t342 + _t116*_t347 + TRAILER_LIT(36900.0)*_t116
-            + _t135*_t366 + _t135*_t367 + _t146*_t366 + _t146*_t367 - _t17*_t360 - _t17*_t361
-            - _t21*_t360 - _t21*_t361 - _t26*_t363 + _t26*_t364 + _t28*_t363 - _t28*_t364 + _t329
-            + _t351 - _t362*_t39 + _t362*_t40 + _t365*_t39 - _t365*_t40)/TRAILER_LIT(171396.0);
+    const trailer_real_t r_0 = _t143*_t146 + _t370*(_t369 + _t373);
+    const trailer_real_t r_1 = -_t146*_t150 + _t374*(_t369 + _t373);
+    const trailer_real_t r_2 = _t139*_t191*_t371 - TRAILER_LIT(500.0)*_t369/TRAILER_LIT(207.0);
+    const trailer_real_t r_3 = _t140*_t191*_t367*(-_t395 + _t396 + _t397)
+            + _t187*(-TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
+            + _t188*(TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
+            + _t194*(TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) + TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
+            + _t198*(-TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) - TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
+            - TRAILER_LIT(5.0)*_t373*(_t395 - _t396 + _t397)/TRAILER_LIT(414.0)
+            + _t375*(TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
+            + _t376*(-TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
+            - TRAILER_LIT(25.0)*_t394/TRAILER_LIT(171396.0);
+    const trailer_real_t r_4 = _t372;
+    const trailer_real_t r_5 = _t368;
+    const trailer_real_t r_6 = _t136*(_t369*(-_t416 + _t417 + _t418)
+            + _t373*(-_t419 + _t420 + _t421)) + _t141*(_t148*(-_t398 - _t399)
+            + _t151*(-_t398 - _t399) + _t154*(_t401 - _t402) + _t156*(-_t401 + _t402)
+            + _t187*(-_t408 + _t409) + _t188*(_t408 - _t409) + _t194*(_t406 + _t411
+            + TRAILER_LIT(36900.0)) + _t198*(_t404 + _t410 + TRAILER_LIT(23100.0))
+            + _t215*(_t405 + _t407) + _t225*(_t405 + _t407) + _t386 + _t388 - _t389 - _t390 + _t392
+            - _t393 + _t400*(_t162 - _t163) + _t403*(-_t162 + _t163) + _t415);
+    const trailer_real_t r_7 = _t138*(_t369*(_t419 - _t420 + _t421) + _t373*(_t416 - _t417 + _t418))
+            + _t142*(_t148*(-_t422 - _t423) + _t151*(-_t422 - _t423) + _t154*(-_t425 + _t426)
+            + _t156*(_t425 - _t426) + _t187*(_t430 - _t431) + _t188*(-_t430 + _t431)
+            + _t194*(_t404 + _t410 + TRAILER_LIT(23100.0)) + _t198*(_t406 + _t411
+            + TRAILER_LIT(36900.0)) + _t215*(_t428 + _t429) + _t225*(_t428 + _t429) + _t394 + _t415
+            + _t424*(-_t162 + _t163) + _t427*(_t162 - _t163));
+    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
+            + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
+        return TRAILER_ERR_NONFINITE_OUTPUT;
+    }
+    qddot[0] = r_0;
+    qddot[1] = r_1;
+    qddot[2] = r_2;
+    qddot[3] = r_3;
+    qddot[4] = r_4;
+    qddot[5] = r_5;
+    qddot[6] = r_6;
+    qddot[7] = r_7;
+    return TRAILER_OK;
+}
+
+/* trailer_model_prepare: documented in trailer_model.h.
+   operations after CSE: 74 add, 123 mul, 59 div, 0 sin/cos, 0 sqrt */
+trailer_status_t trailer_model_prepare(const trailer_params_t *p,
+    trailer_model_prepared_t *prepared)
+{
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    if (isnan(((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
+            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)))
+            + (((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
+            + ((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))))
+            + ((((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
+            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
+            + ((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
+            + (radius_cart_left - radius_cart_left))) + (((radius_cart_right - radius_cart_right)
+            + (radius_left - radius_left)) + (radius_right - radius_right)))) != 0) {
+        return TRAILER_ERR_NONFINITE_INPUT;
+    }
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t5 = radius_cart_left*radius_cart_left;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
+    const trailer_real_t _t7 = J_theta_cart_left*_t6;
+    const trailer_real_t _t8 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t _t9 = radius_cart_right*radius_cart_right;
+    const trailer_real_t _t10 = TRAILER_LIT(1.0)/_t9;
+    const trailer_real_t _t11 = J_theta_cart_right*_t10;
+    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t13 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t14 = TRAILER_LIT(73805.0)*_t1/TRAILER_LIT(28566.0);
+    const trailer_real_t _t15 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t16 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
+    const trailer_real_t _t17 = TRAILER_LIT(14761.0)*_t1/TRAILER_LIT(28566.0);
+    const trailer_real_t _t18 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t20 = _t12 - _t13 - _t15 - _t16;
+    const trailer_real_t _t21 = -_t18 + _t19;
+    const trailer_real_t _t22 = _t1*(-_t0 - _t2 + _t3 + _t4);
+    const trailer_real_t _t23 = radius_left*radius_left;
+    const trailer_real_t _t24 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t25 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t26 = _t23*_t7;
+    const trailer_real_t _t27 = _t11*_t23;
+    const trailer_real_t _t28 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t29 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t30 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t31 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t32 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t33 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t34 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t35 = TRAILER_LIT(10222.0)*_t11/TRAILER_LIT(42849.0);
+    const trailer_real_t _t36 = TRAILER_LIT(4387.0)*_t26/TRAILER_LIT(9522.0);
+    const trailer_real_t _t37 = TRAILER_LIT(23639.0)*_t27/TRAILER_LIT(28566.0);
+    const trailer_real_t _t38 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t39 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t40 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t41 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t42 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t43 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
+    const trailer_real_t _t44 = TRAILER_LIT(23639.0)*_t11/TRAILER_LIT(14283.0);
+    const trailer_real_t _t45 = -_t36 - _t37;
+    const trailer_real_t _t46 = _t36 + _t37;
+    const trailer_real_t _t47 = -TRAILER_LIT(62356.0)*_t26/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(20444.0)*_t27/TRAILER_LIT(42849.0);
+    const trailer_real_t _t48 = -_t28 + _t29 - _t30 + _t34 - _t35;
+    const trailer_real_t _t49 = _t31 - _t32 - _t33;
+    const trailer_real_t _t50 = -_t31 + _t32 + _t33;
+    const trailer_real_t _t51 = TRAILER_LIT(20444.0)*_t11/TRAILER_LIT(42849.0) + _t38 - _t39 + _t40
+            - TRAILER_LIT(62356.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t52 = -_t41 + _t42 + _t43 + _t44;
+    const trailer_real_t _t53 = _t41 - _t42 - _t43 - _t44;
+    const trailer_real_t _t54 = _t38 - _t39 + _t40;
+    const trailer_real_t _t55 = J_theta_left + _t23*(_t0 + _t2 + _t24 - _t25 + _t3 - _t4)
+            + TRAILER_LIT(11449.0)*_t26/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(94249.0)*_t27/TRAILER_LIT(171396.0);
+    const trailer_real_t _t56 = radius_right*radius_right;
+    const trailer_real_t _t57 = _t56*_t7;
+    const trailer_real_t _t58 = _t11*_t56;
+    const trailer_real_t _t59 = _t28*_t56;
+    const trailer_real_t _t60 = _t29*_t56;
+    const trailer_real_t _t61 = _t30*_t56;
+    const trailer_real_t _t62 = TRAILER_LIT(10222.0)*_t57/TRAILER_LIT(42849.0);
+    const trailer_real_t _t63 = TRAILER_LIT(31178.0)*_t58/TRAILER_LIT(42849.0);
+    const trailer_real_t _t64 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(28566.0);
+    const trailer_real_t _t65 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(9522.0);
+    const trailer_real_t _t66 = _t39*_t56;
+    const trailer_real_t _t67 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t68 = TRAILER_LIT(20444.0)*_t57/TRAILER_LIT(42849.0);
+    const trailer_real_t _t69 = TRAILER_LIT(62356.0)*_t58/TRAILER_LIT(42849.0);
+    const trailer_real_t _t70 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(14283.0);
+    const trailer_real_t _t71 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(4761.0);
+    const trailer_real_t _t72 = -_t70 - _t71;
+    const trailer_real_t _t73 = _t70 + _t71;
+    const trailer_real_t _t74 = -_t59 + _t60 + _t61 - _t62 + _t63;
+    const trailer_real_t _t75 = _t64 + _t65;
+    const trailer_real_t _t76 = -_t64 - _t65;
+    const trailer_real_t _t77 = -_t66 + _t68 - _t69;
+    const trailer_real_t _t78 = -_t31 + _t32 - _t33;
+    const trailer_real_t _t79 = _t31 - _t32 + _t33;
+    const trailer_real_t _t80 = _t41 - _t42 + _t67;
+    const trailer_real_t _t81 = -_t41 + _t42 - _t67;
+    const trailer_real_t _t82 = J_theta_right + _t56*(_t0 + _t2 - _t24 + _t25 + _t3 - _t4)
+            + TRAILER_LIT(94249.0)*_t57/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(11449.0)*_t58/TRAILER_LIT(171396.0);
+    const trailer_real_t _t83 = _t5*_t9;
+    const trailer_real_t _t84 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t85 = J_theta_cart_right*_t5;
+    const trailer_real_t _t86 = J_theta_cart_left*_t9;
+    const trailer_real_t _t87 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t88 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t89 = TRAILER_LIT(76388175.0)*J_theta_cart;
+    const trailer_real_t _t90 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
+    const trailer_real_t _t91 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t92 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t93 = TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t94 = TRAILER_LIT(69000000.0)*J_theta_cart;
+    const trailer_real_t _t95 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t96 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t97 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t98 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t99 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t100 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t101 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t102 = -TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t56;
+    const trailer_real_t _t103 = TRAILER_LIT(34500000.0)*J_theta_cart;
+    const trailer_real_t _t104 = TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t105 = TRAILER_LIT(5.0)*_t10*_t6/TRAILER_LIT(70957944.0);
+    const trailer_real_t _t106 = -_t84;
+    const trailer_real_t _t107 = TRAILER_LIT(110707500.0)*J_theta_cart
+            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t108 = TRAILER_LIT(101850900.0)*J_theta_cart;
+    const trailer_real_t _t109 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor
+            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t110 = -_t88;
+    const trailer_real_t _t111 = _t105*radius_right;
+    const trailer_real_t _t112 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t113 = TRAILER_LIT(130611825.0)*J_theta_cart;
+    const trailer_real_t _t114 = -_t87 - _t90;
+    const trailer_real_t _t115 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor
+            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t116 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor;
+    const trailer_real_t _t117 = TRAILER_LIT(25462725.0)*J_theta_cart
+            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
+    const trailer_real_t _t118 = TRAILER_LIT(110707500.0)*J_theta_cart;
+    const trailer_real_t _t119 = TRAILER_LIT(16501728.0)*_t23;
+    const trailer_real_t _t120 = TRAILER_LIT(68018688.0)*_t56;
+    const trailer_real_t _t121 = TRAILER_LIT(1417056.0)*radius_left*radius_right;
+    const trailer_real_t _t122 = TRAILER_LIT(6420000.0)*radius_left*radius_right;
+    const trailer_real_t _t123 = TRAILER_LIT(35426400.0)*_t56;
+    const trailer_real_t _t124 = -TRAILER_LIT(110707500.0)*J_theta_cart;
+    const trailer_real_t _t125 = -_t112 - _t113;
+    const trailer_real_t _t126 = -_t94;
+    const trailer_real_t _t127 = -_t96 - _t99;
+    const trailer_real_t _t128 = -_t92 - _t98;
+    const trailer_real_t _t129 = -_t100 - _t93;
+    const trailer_real_t _t130 = -_t95 - _t97;
+    const trailer_real_t _t131 = TRAILER_LIT(708528.0)*_t56;
+    const trailer_real_t _t132 = TRAILER_LIT(11362128.0)*_t23;
+    const trailer_real_t _t133 = TRAILER_LIT(136037376.0)*radius_left*radius_right;
+    const trailer_real_t _t134 = _t105*radius_left;
+    const trailer_real_t _t135 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t136 = _t135/TRAILER_LIT(414.0);
+    const trailer_real_t _t137 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t138 = _t137/TRAILER_LIT(414.0);
+    const trailer_real_t _t139 = TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t140 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(414.0);
+    const trailer_real_t _t141 = TRAILER_LIT(5.0)*_t135/TRAILER_LIT(171396.0);
+    const trailer_real_t _t142 = TRAILER_LIT(5.0)*_t137/TRAILER_LIT(171396.0);
+    if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_right > TRAILER_LIT(0.0))) { /* radius_cart_right > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(radius_left > TRAILER_LIT(0.0))) { /* radius_left > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(radius_right > TRAILER_LIT(0.0))) { /* radius_right > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart > TRAILER_LIT(0.0))) { /* J_theta_cart > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_left > TRAILER_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_right > TRAILER_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_left > TRAILER_LIT(0.0))) { /* J_theta_left > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_right > TRAILER_LIT(0.0))) { /* J_theta_right > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_tractor > TRAILER_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    prepared->magic = TRAILER_MODEL_PREPARED_MAGIC;
+    prepared->forward_dynamics[0] = J_theta_cart;
+    prepared->forward_dynamics[1] = J_theta_cart_left;
+    prepared->forward_dynamics[2] = J_theta_cart_right;
+    prepared->forward_dynamics[3] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[4] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[5] = radius_left;
+    prepared->forward_dynamics[6] = radius_right;
+    prepared->forward_dynamics[7] = _t1;
+    prepared->forward_dynamics[8] = _t5;
+    prepared->forward_dynamics[9] = _t7;
+    prepared->forward_dynamics[10] = _t8;
+    prepared->forward_dynamics[11] = _t9;
+    prepared->forward_dynamics[12] = _t11;
+    prepared->forward_dynamics[13] = _t14;
+    prepared->forward_dynamics[14] = _t17;
+    prepared->forward_dynamics[15] = _t20;
+    prepared->forward_dynamics[16] = _t21;
+    prepared->forward_dynamics[17] = _t22;
+    prepared->forward_dynamics[18] = _t23;
+    prepared->forward_dynamics[19] = _t38;
+    prepared->forward_dynamics[20] = _t40;
+    prepared->forward_dynamics[21] = _t45;
+    prepared->forward_dynamics[22] = _t46;
+    prepared->forward_dynamics[23] = _t47;
+    prepared->forward_dynamics[24] = _t48;
+    prepared->forward_dynamics[25] = _t49;
+    prepared->forward_dynamics[26] = _t50;
+    prepared->forward_dynamics[27] = _t51;
+    prepared->forward_dynamics[28] = _t52;
+    prepared->forward_dynamics[29] = _t53;
+    prepared->forward_dynamics[30] = _t54;
+    prepared->forward_dynamics[31] = _t55;
+    prepared->forward_dynamics[32] = _t56;
+    prepared->forward_dynamics[33] = _t72;
+    prepared->forward_dynamics[34] = _t73;
+    prepared->forward_dynamics[35] = _t74;
+    prepared->forward_dynamics[36] = _t75;
+    prepared->forward_dynamics[37] = _t76;
+    prepared->forward_dynamics[38] = _t77;
+    prepared->forward_dynamics[39] = _t78;
+    prepared->forward_dynamics[40] = _t79;
+    prepared->forward_dynamics[41] = _t80;
+    prepared->forward_dynamics[42] = _t81;
+    prepared->forward_dynamics[43] = _t82;
+    prepared->forward_dynamics[44] = _t83;
+    prepared->forward_dynamics[45] = _t85;
+    prepared->forward_dynamics[46] = _t86;
+    prepared->forward_dynamics[47] = _t87;
+    prepared->forward_dynamics[48] = _t88;
+    prepared->forward_dynamics[49] = _t89;
+    prepared->forward_dynamics[50] = _t90;
+    prepared->forward_dynamics[51] = _t91;
+    prepared->forward_dynamics[52] = _t92;
+    prepared->forward_dynamics[53] = _t93;
+    prepared->forward_dynamics[54] = _t94;
+    prepared->forward_dynamics[55] = _t95;
+    prepared->forward_dynamics[56] = _t96;
+    prepared->forward_dynamics[57] = _t97;
+    prepared->forward_dynamics[58] = _t98;
+    prepared->forward_dynamics[59] = _t99;
+    prepared->forward_dynamics[60] = _t100;
+    prepared->forward_dynamics[61] = _t101;
+    prepared->forward_dynamics[62] = _t102;
+    prepared->forward_dynamics[63] = _t103;
+    prepared->forward_dynamics[64] = _t104;
+    prepared->forward_dynamics[65] = _t106;
+    prepared->forward_dynamics[66] = _t107;
+    prepared->forward_dynamics[67] = _t108;
+    prepared->forward_dynamics[68] = _t109;
+    prepared->forward_dynamics[69] = _t110;
+    prepared->forward_dynamics[70] = _t111;
+    prepared->forward_dynamics[71] = _t114;
+    prepared->forward_dynamics[72] = _t115;
+    prepared->forward_dynamics[73] = _t116;
+    prepared->forward_dynamics[74] = _t117;
+    prepared->forward_dynamics[75] = _t118;
+    prepared->forward_dynamics[76] = _t119;
+    prepared->forward_dynamics[77] = _t120;
+    prepared->forward_dynamics[78] = _t121;
+    prepared->forward_dynamics[79] = _t122;
+    prepared->forward_dynamics[80] = _t123;
+    prepared->forward_dynamics[81] = _t124;
+    prepared->forward_dynamics[82] = _t125;
+    prepared->forward_dynamics[83] = _t126;
+    prepared->forward_dynamics[84] = _t127;
+    prepared->forward_dynamics[85] = _t128;
+    prepared->forward_dynamics[86] = _t129;
+    prepared->forward_dynamics[87] = _t130;
+    prepared->forward_dynamics[88] = _t131;
+    prepared->forward_dynamics[89] = _t132;
+    prepared->forward_dynamics[90] = _t133;
+    prepared->forward_dynamics[91] = _t134;
+    prepared->forward_dynamics[92] = _t136;
+    prepared->forward_dynamics[93] = _t138;
+    prepared->forward_dynamics[94] = _t139;
+    prepared->forward_dynamics[95] = _t140;
+    prepared->forward_dynamics[96] = _t141;
+    prepared->forward_dynamics[97] = _t142;
+    return TRAILER_OK;
+}
+
+/* trailer_forward_dynamics_prepared: documented in trailer_model.h.
+   operations after CSE: 847 add, 1312 mul, 37 div, 4 sin/cos, 0 sqrt */
+trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
+    trailer_real_t *qddot)
+{
+    if (prepared->magic != TRAILER_MODEL_PREPARED_MAGIC) {
+        return TRAILER_ERR_NOT_INITIALISED;
+    }
+    const trailer_real_t theta_tractor = q[2];
+    const trailer_real_t theta_cart = q[3];
+    if (isnan((theta_tractor - theta_tractor) + (theta_cart - theta_cart)) != 0) {
+        return TRAILER_ERR_NONFINITE_INPUT;
+    }
+    const trailer_real_t _t143 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t147 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t150 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t153 = TRAILER_SIN(theta_cart);
+    const trailer_real_t thetadot_right = qdot[4];
+    const trailer_real_t thetadot_left = qdot[5];
+    const trailer_real_t tau_right = tau[0];
+    const trailer_real_t tau_left = tau[1];
+    if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
+            + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        return TRAILER_ERR_NONFINITE_INPUT;
+    }
+    const trailer_real_t radius_left = prepared->forward_dynamics[5];
+    const trailer_real_t _t144 = radius_left*thetadot_left;
+    const trailer_real_t radius_right = prepared->forward_dynamics[6];
+    const trailer_real_t _t145 = radius_right*thetadot_right;
+    const trailer_real_t _t146 = TRAILER_LIT(250.0)*(_t144 - _t145)*(_t144
+            + _t145)/TRAILER_LIT(207.0);
+    const trailer_real_t _t148 = _t147*_t147;
+    const trailer_real_t _t1 = prepared->forward_dynamics[7];
+    const trailer_real_t _t149 = _t1*_t148;
+    const trailer_real_t _t151 = _t150*_t150;
+    const trailer_real_t _t152 = _t1*_t151;
+    const trailer_real_t _t154 = _t147*_t153;
+    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[4];
+    const trailer_real_t _t155 = K_theta_cart_x_tractor_2*_t154;
+    const trailer_real_t _t156 = _t143*_t150;
+    const trailer_real_t _t157 = K_theta_cart_x_tractor_2*_t156;
+    const trailer_real_t _t7 = prepared->forward_dynamics[9];
+    const trailer_real_t _t158 = _t154*_t7;
+    const trailer_real_t _t17 = prepared->forward_dynamics[14];
+    const trailer_real_t _t159 = _t156*_t17;
+    const trailer_real_t _t11 = prepared->forward_dynamics[12];
+    const trailer_real_t _t160 = _t11*_t154;
+    const trailer_real_t _t161 = _t149*_t151;
+    const trailer_real_t _t162 = _t143*_t147;
+    const trailer_real_t _t163 = _t150*_t153;
+    const trailer_real_t _t164 = _t162*_t163;
+    const trailer_real_t _t165 = _t1*_t164;
+    const trailer_real_t _t166 = TRAILER_LIT(59044.0)*_t161/TRAILER_LIT(42849.0);
+    const trailer_real_t _t167 = TRAILER_LIT(14761.0)*_t152/TRAILER_LIT(14283.0);
+    const trailer_real_t _t168 = TRAILER_LIT(14761.0)*_t149*_t156/TRAILER_LIT(14283.0);
+    const trailer_real_t _t169 = TRAILER_LIT(59044.0)*_t165/TRAILER_LIT(42849.0);
+    const trailer_real_t _t8 = prepared->forward_dynamics[10];
+    const trailer_real_t _t14 = prepared->forward_dynamics[13];
+    const trailer_real_t _t20 = prepared->forward_dynamics[15];
+    const trailer_real_t _t21 = prepared->forward_dynamics[16];
+    const trailer_real_t _t22 = prepared->forward_dynamics[17];
+    const trailer_real_t _t170 = _t11*(-_t159 + _t166 + _t168 + _t169 + _t8) + _t14*(_t155 - _t157)
+            + _t149*(TRAILER_LIT(73805.0)*_t157/TRAILER_LIT(14283.0) + _t20)
+            + _t152*(-TRAILER_LIT(73805.0)*_t155/TRAILER_LIT(14283.0) + _t20) + _t161*_t21
+            + _t165*_t21 + _t167*(_t158 - _t160) + _t17*(-_t158 + _t160) + _t22
+            + _t7*(_t159 + _t166 - _t168 + _t169 + _t8);
+    const trailer_real_t _t23 = prepared->forward_dynamics[18];
+    const trailer_real_t _t171 = _t148*_t23;
+    const trailer_real_t _t172 = _t151*_t23;
+    const trailer_real_t _t173 = _t154*_t23;
+    const trailer_real_t _t174 = _t156*_t23;
+    const trailer_real_t _t175 = _t151*_t171;
+    const trailer_real_t _t176 = _t154*_t172;
+    const trailer_real_t _t177 = _t156*_t171;
+    const trailer_real_t _t178 = _t164*_t23;
+    const trailer_real_t _t45 = prepared->forward_dynamics[21];
+    const trailer_real_t _t46 = prepared->forward_dynamics[22];
+    const trailer_real_t _t47 = prepared->forward_dynamics[23];
+    const trailer_real_t _t48 = prepared->forward_dynamics[24];
+    const trailer_real_t _t49 = prepared->forward_dynamics[25];
+    const trailer_real_t _t50 = prepared->forward_dynamics[26];
+    const trailer_real_t _t51 = prepared->forward_dynamics[27];
+    const trailer_real_t _t52 = prepared->forward_dynamics[28];
+    const trailer_real_t _t53 = prepared->forward_dynamics[29];
+    const trailer_real_t _t54 = prepared->forward_dynamics[30];
+    const trailer_real_t _t55 = prepared->forward_dynamics[31];
+    const trailer_real_t _t179 = _t154*_t45 + _t156*_t46 + _t164*_t47
+            + _t171*(-TRAILER_LIT(26195.0)*_t157/TRAILER_LIT(14283.0) + _t48)
+            + _t172*(TRAILER_LIT(26195.0)*_t155/TRAILER_LIT(14283.0) + _t48) + _t173*_t49
+            + _t174*_t50 + _t175*_t51 + _t176*_t52 + _t177*_t53 + _t178*_t54 + _t55;
+    const trailer_real_t _t56 = prepared->forward_dynamics[32];
+    const trailer_real_t _t180 = _t154*_t56;
+    const trailer_real_t _t181 = _t156*_t56;
+    const trailer_real_t _t182 = _t148*_t151;
+    const trailer_real_t _t183 = _t182*_t56;
+    const trailer_real_t _t184 = _t151*_t180;
+    const trailer_real_t _t185 = _t148*_t181;
+    const trailer_real_t _t186 = _t164*_t56;
+    const trailer_real_t _t187 = _t151*_t154;
+    const trailer_real_t _t188 = _t148*_t156;
+    const trailer_real_t _t38 = prepared->forward_dynamics[19];
+    const trailer_real_t _t40 = prepared->forward_dynamics[20];
+    const trailer_real_t _t72 = prepared->forward_dynamics[33];
+    const trailer_real_t _t73 = prepared->forward_dynamics[34];
+    const trailer_real_t _t74 = prepared->forward_dynamics[35];
+    const trailer_real_t _t75 = prepared->forward_dynamics[36];
+    const trailer_real_t _t76 = prepared->forward_dynamics[37];
+    const trailer_real_t _t77 = prepared->forward_dynamics[38];
+    const trailer_real_t _t78 = prepared->forward_dynamics[39];
+    const trailer_real_t _t79 = prepared->forward_dynamics[40];
+    const trailer_real_t _t80 = prepared->forward_dynamics[41];
+    const trailer_real_t _t81 = prepared->forward_dynamics[42];
+    const trailer_real_t _t82 = prepared->forward_dynamics[43];
+    const trailer_real_t _t189 = _t148*_t74 + _t151*_t74 + _t154*_t75 + _t156*_t76 + _t164*_t77
+            + _t180*_t78 + _t181*_t79 + _t182*_t77 + _t184*_t80 + _t185*_t81 + _t187*_t72
+            + _t188*_t73 + _t38*(_t183 + _t186) + _t40*(-_t183 - _t186) + _t82;
+    const trailer_real_t _t190 = -_t170*_t170 + _t179*_t189;
+    const trailer_real_t _t191 = TRAILER_LIT(1.0)/_t190;
+    const trailer_real_t _t192 = thetadot_left*thetadot_left;
+    const trailer_real_t _t193 = thetadot_right*thetadot_right;
+    const trailer_real_t _t194 = _t193*_t56;
+    const trailer_real_t _t83 = prepared->forward_dynamics[44];
+    const trailer_real_t _t195 = _t194*_t83;
+    const trailer_real_t _t85 = prepared->forward_dynamics[45];
+    const trailer_real_t _t196 = _t194*_t85;
+    const trailer_real_t _t197 = TRAILER_LIT(15793200.0)*_t196;
+    const trailer_real_t _t198 = _t192*_t23;
+    const trailer_real_t _t86 = prepared->forward_dynamics[46];
+    const trailer_real_t _t199 = _t198*_t86;
+    const trailer_real_t _t200 = TRAILER_LIT(17713200.0)*_t199;
+    const trailer_real_t _t201 = _t194*_t86;
+    const trailer_real_t _t202 = TRAILER_LIT(28366800.0)*_t201;
+    const trailer_real_t _t203 = _t198*_t83;
+    const trailer_real_t _t204 = _t147*_t147*_t147;
+    const trailer_real_t _t205 = _t150*_t150*_t150;
+    const trailer_real_t _t206 = _t150*_t204;
+    const trailer_real_t _t207 = TRAILER_LIT(2125584.0)*_t199;
+    const trailer_real_t _t208 = _t147*_t205;
+    const trailer_real_t _t209 = _t143*_t204;
+    const trailer_real_t _t210 = _t198*_t85;
+    const trailer_real_t _t211 = _t144*_t145;
+    const trailer_real_t _t212 = _t211*_t85;
+    const trailer_real_t _t213 = _t153*_t205;
+    const trailer_real_t _t214 = TRAILER_LIT(23617600.0)*_t156;
+    const trailer_real_t _t215 = _t147*_t150;
+    const trailer_real_t _t216 = _t210*_t215;
+    const trailer_real_t _t217 = TRAILER_LIT(34086384.0)*_t201;
+    const trailer_real_t _t218 = _t182*_t210;
+    const trailer_real_t _t219 = _t211*_t86;
+    const trailer_real_t _t220 = TRAILER_LIT(49505184.0)*_t196;
+    const trailer_real_t _t221 = _t204*_t205;
+    const trailer_real_t _t222 = _t210*_t221;
+    const trailer_real_t _t223 = _t148*_t195;
+    const trailer_real_t _t224 = _t151*_t195;
+    const trailer_real_t _t225 = _t143*_t153;
+    const trailer_real_t _t226 = _t199*_t225;
+    const trailer_real_t _t227 = TRAILER_LIT(708528.0)*_t226;
+    const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
+    const trailer_real_t _t228 = J_theta_cart*_t195;
+    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[3];
+    const trailer_real_t _t229 = K_theta_cart_x_tractor*_t195;
+    const trailer_real_t _t230 = TRAILER_LIT(1920000.0)*_t212;
+    const trailer_real_t _t231 = K_theta_cart_x_tractor_2*_t195;
+    const trailer_real_t _t232 = TRAILER_LIT(7858500.0)*_t225;
+    const trailer_real_t _t233 = _t201*_t225;
+    const trailer_real_t _t234 = TRAILER_LIT(11362128.0)*_t233;
+    const trailer_real_t _t235 = K_theta_cart_x_tractor_2*_t203;
+    const trailer_real_t _t236 = _t196*_t225;
+    const trailer_real_t _t237 = TRAILER_LIT(16501728.0)*_t236;
+    const trailer_real_t _t238 = _t151*_t162;
+    const trailer_real_t _t239 = TRAILER_LIT(22141500.0)*_t225;
+    const trailer_real_t _t240 = _t148*_t213;
+    const trailer_real_t _t241 = J_theta_cart*_t203;
+    const trailer_real_t _t242 = TRAILER_LIT(26195000.0)*_t154;
+    const trailer_real_t _t243 = TRAILER_LIT(38547000.0)*_t231;
+    const trailer_real_t _t244 = _t148*_t163;
+    const trailer_real_t _t245 = K_theta_cart_x_tractor*_t203;
+    const trailer_real_t _t246 = TRAILER_LIT(44283000.0)*_t245;
+    const trailer_real_t _t247 = TRAILER_LIT(47235200.0)*_t187;
+    const trailer_real_t _t248 = _t151*_t209;
+    const trailer_real_t _t249 = _t215*_t245;
+    const trailer_real_t _t250 = TRAILER_LIT(62868000.0)*_t182;
+    const trailer_real_t _t251 = _t203*_t206;
+    const trailer_real_t _t252 = _t203*_t208;
+    const trailer_real_t _t253 = _t211*_t83;
+    const trailer_real_t _t90 = prepared->forward_dynamics[50];
+    const trailer_real_t _t254 = _t253*_t90;
+    const trailer_real_t _t255 = _t215*_t228;
+    const trailer_real_t _t256 = TRAILER_LIT(110707500.0)*_t215;
+    const trailer_real_t _t257 = _t221*_t245;
+    const trailer_real_t _t258 = TRAILER_LIT(138000000.0)*_t182;
+    const trailer_real_t _t259 = _t208*_t229;
+    const trailer_real_t _t260 = _t221*_t228;
+    const trailer_real_t _t261 = TRAILER_LIT(177132000.0)*_t182*_t235;
+    const trailer_real_t _t88 = prepared->forward_dynamics[48];
+    const trailer_real_t _t262 = _t253*_t88;
+    const trailer_real_t _t263 = _t148*_t262;
+    const trailer_real_t _t264 = _t151*_t262;
+    const trailer_real_t _t265 = TRAILER_LIT(4251168.0)*_t212;
+    const trailer_real_t _t266 = _t212*_t225;
+    const trailer_real_t _t91 = prepared->forward_dynamics[51];
+    const trailer_real_t _t267 = _t225*_t91;
+    const trailer_real_t _t268 = _t148*_t203;
+    const trailer_real_t _t269 = J_theta_cart*_t268;
+    const trailer_real_t _t270 = TRAILER_LIT(25462725.0)*_t225;
+    const trailer_real_t _t271 = _t151*_t203;
+    const trailer_real_t _t272 = J_theta_cart*_t271;
+    const trailer_real_t _t273 = J_theta_cart*_t224;
+    const trailer_real_t _t274 = TRAILER_LIT(32122500.0)*_t162;
+    const trailer_real_t _t275 = _t164*_t210;
+    const trailer_real_t _t276 = _t213*_t223;
+    const trailer_real_t _t277 = K_theta_cart_x_tractor*_t225;
+    const trailer_real_t _t278 = TRAILER_LIT(52244730.0)*_t277;
+    const trailer_real_t _t279 = _t218*_t225;
+    const trailer_real_t _t94 = prepared->forward_dynamics[54];
+    const trailer_real_t _t280 = _t253*_t94;
+    const trailer_real_t _t281 = _t148*_t280;
+    const trailer_real_t _t282 = _t151*_t280;
+    const trailer_real_t _t283 = _t163*_t268;
+    const trailer_real_t _t284 = _t182*_t219;
+    const trailer_real_t _t285 = _t209*_t271;
+    const trailer_real_t _t286 = _t219*_t221;
+    const trailer_real_t _t287 = _t162*_t224;
+    const trailer_real_t _t288 = TRAILER_LIT(165600000.0)*_t155;
+    const trailer_real_t _t289 = J_theta_cart*_t253;
+    const trailer_real_t _t290 = TRAILER_LIT(203701800.0)*_t289;
+    const trailer_real_t _t291 = _t221*_t290;
+    const trailer_real_t _t292 = K_theta_cart_x_tractor*_t253;
+    const trailer_real_t _t293 = TRAILER_LIT(183331620.0)*_t292;
+    const trailer_real_t _t294 = _t206*_t293;
+    const trailer_real_t _t295 = _t208*_t293;
+    const trailer_real_t _t296 = _t258*_t289;
+    const trailer_real_t _t297 = TRAILER_LIT(101850900.0)*_t215*_t289;
+    const trailer_real_t _t298 = TRAILER_LIT(82800000.0)*_t253;
+    const trailer_real_t _t299 = _t157*_t298;
+    const trailer_real_t _t300 = K_theta_cart_x_tractor_2*_t253;
+    const trailer_real_t _t301 = TRAILER_LIT(61110540.0)*_t300;
+    const trailer_real_t _t302 = _t209*_t301;
+    const trailer_real_t _t303 = TRAILER_LIT(51255270.0)*_t300;
+    const trailer_real_t _t304 = _t163*_t303;
+    const trailer_real_t _t305 = TRAILER_LIT(1417056.0)*_t266;
+    const trailer_real_t _t306 = TRAILER_LIT(20700000.0)*_t225;
+    const trailer_real_t _t307 = _t292*_t306;
+    const trailer_real_t _t308 = _t162*_t303;
+    const trailer_real_t _t309 = _t213*_t301;
+    const trailer_real_t _t310 = _t155*_t298;
+    const trailer_real_t _t311 = _t182*_t225;
+    const trailer_real_t _t312 = _t245*_t311;
+    const trailer_real_t _t313 = TRAILER_LIT(138000000.0)*_t164;
+    const trailer_real_t _t314 = TRAILER_LIT(142921080.0)*_t215*_t292;
+    const trailer_real_t _t315 = TRAILER_LIT(152776350.0)*_t289;
+    const trailer_real_t _t316 = _t206*_t315;
+    const trailer_real_t _t317 = _t208*_t315;
+    const trailer_real_t _t318 = TRAILER_LIT(165600000.0)*_t182;
+    const trailer_real_t _t319 = _t292*_t318;
+    const trailer_real_t _t320 = _t228*_t311;
+    const trailer_real_t _t321 = _t164*_t235;
+    const trailer_real_t _t322 = TRAILER_LIT(244442160.0)*_t292;
+    const trailer_real_t _t323 = _t221*_t322;
+    const trailer_real_t _t324 = TRAILER_LIT(244442160.0)*_t300;
+    const trailer_real_t _t325 = _t240*_t324;
+    const trailer_real_t _t326 = TRAILER_LIT(183331620.0)*_t300;
+    const trailer_real_t _t327 = _t238*_t326;
+    const trailer_real_t _t328 = _t151*_t253;
+    const trailer_real_t _t329 = _t288*_t328;
+    const trailer_real_t _t330 = _t148*_t253;
+    const trailer_real_t _t331 = TRAILER_LIT(61110540.0)*_t277;
+    const trailer_real_t _t332 = _t330*_t331;
+    const trailer_real_t _t333 = _t328*_t331;
+    const trailer_real_t _t334 = TRAILER_LIT(50925450.0)*_t225*_t289;
+    const trailer_real_t _t335 = _t148*_t334;
+    const trailer_real_t _t336 = _t151*_t334;
+    const trailer_real_t _t337 = _t164*_t219;
+    const trailer_real_t _t338 = _t219*_t311;
+    const trailer_real_t _t339 = TRAILER_LIT(165600000.0)*_t157;
+    const trailer_real_t _t340 = _t330*_t339;
+    const trailer_real_t _t341 = _t244*_t326;
+    const trailer_real_t _t342 = _t248*_t324;
+    const trailer_real_t _t343 = _t290*_t311;
+    const trailer_real_t _t344 = _t289*_t313;
+    const trailer_real_t _t345 = TRAILER_LIT(165600000.0)*_t164;
+    const trailer_real_t _t346 = _t292*_t345;
+    const trailer_real_t _t347 = _t311*_t322;
+    const trailer_real_t _t348 = TRAILER_LIT(120000000.0)*_t300;
+    const trailer_real_t _t349 = TRAILER_LIT(73805000.0)*_t289;
+    const trailer_real_t _t350 = TRAILER_LIT(265698000.0)*_t300;
+    const trailer_real_t _t101 = prepared->forward_dynamics[61];
+    const trailer_real_t _t351 = _t101*_t225;
+    const trailer_real_t _t5 = prepared->forward_dynamics[8];
+    const trailer_real_t _t9 = prepared->forward_dynamics[11];
+    const trailer_real_t _t102 = prepared->forward_dynamics[62];
+    const trailer_real_t _t103 = prepared->forward_dynamics[63];
+    const trailer_real_t _t104 = prepared->forward_dynamics[64];
+    const trailer_real_t _t352 = _t103*_t195 + _t104*_t203 + TRAILER_LIT(17250000.0)*_t225*_t228
+            + _t289*(TRAILER_LIT(100000000.0)*_t156 + TRAILER_LIT(200000000.0)*_t187
+            + TRAILER_LIT(221415000.0)*_t238 + TRAILER_LIT(295220000.0)*_t240)
+            + _t292*(TRAILER_LIT(120000000.0)*_t154 + TRAILER_LIT(74283000.0)*_t162
+            + TRAILER_LIT(240000000.0)*_t188 + TRAILER_LIT(88566000.0)*_t213
+            + TRAILER_LIT(265698000.0)*_t244 + TRAILER_LIT(354264000.0)*_t248)
+            + _t348*(_t148 + _t151) + _t349*(_t163 + _t209) + _t350*(_t206 + _t208)
+            + _t351*(_t328 + _t330)
+            + _t5*_t9*(J_theta_cart*_t192*_t23*(-TRAILER_LIT(17250000.0)*_t143*_t153
+            - TRAILER_LIT(34500000.0)) + _t102*_t193
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(K_theta_cart_x_tractor_2*(-TRAILER_LIT(207132000.0)*_t147*_t150
+            - TRAILER_LIT(240000000.0)*_t148*_t151 - TRAILER_LIT(354264000.0)*_t204*_t205
+            - TRAILER_LIT(60000000.0)) + _t143*(J_theta_cart*(-TRAILER_LIT(73805000.0)*_t147
+            - TRAILER_LIT(200000000.0)*_t148*_t150 - TRAILER_LIT(295220000.0)*_t151*_t204)
+            + K_theta_cart_x_tractor*(-TRAILER_LIT(265698000.0)*_t147*_t151
+            - TRAILER_LIT(120000000.0)*_t150 - TRAILER_LIT(88566000.0)*_t204)
+            + K_theta_cart_x_tractor_2*_t153*(-TRAILER_LIT(240000000.0)*_t147*_t150
+            - TRAILER_LIT(354264000.0)*_t148*_t151 - TRAILER_LIT(30000000.0)))
+            + _t153*(J_theta_cart*(-TRAILER_LIT(100000000.0)*_t147
+            - TRAILER_LIT(221415000.0)*_t148*_t150 - TRAILER_LIT(73805000.0)*_t205)
+            + K_theta_cart_x_tractor*(-TRAILER_LIT(240000000.0)*_t147*_t151
+            - TRAILER_LIT(354264000.0)*_t148*_t205 - TRAILER_LIT(74283000.0)*_t150))));
+    const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
+    const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
+    const trailer_real_t _t87 = prepared->forward_dynamics[47];
+    const trailer_real_t _t89 = prepared->forward_dynamics[49];
+    const trailer_real_t _t92 = prepared->forward_dynamics[52];
+    const trailer_real_t _t93 = prepared->forward_dynamics[53];
+    const trailer_real_t _t95 = prepared->forward_dynamics[55];
+    const trailer_real_t _t96 = prepared->forward_dynamics[56];
+    const trailer_real_t _t97 = prepared->forward_dynamics[57];
+    const trailer_real_t _t98 = prepared->forward_dynamics[58];
+    const trailer_real_t _t99 = prepared->forward_dynamics[59];
+    const trailer_real_t _t100 = prepared->forward_dynamics[60];
+    const trailer_real_t _t106 = prepared->forward_dynamics[65];
+    const trailer_real_t _t107 = prepared->forward_dynamics[66];
+    const trailer_real_t _t108 = prepared->forward_dynamics[67];
+    const trailer_real_t _t109 = prepared->forward_dynamics[68];
+    const trailer_real_t _t110 = prepared->forward_dynamics[69];
+    const trailer_real_t _t111 = prepared->forward_dynamics[70];
+    const trailer_real_t _t353 = -_t111*(J_theta_cart*(-TRAILER_LIT(42830000.0)*_t276
+            - TRAILER_LIT(110707500.0)*_t283 - TRAILER_LIT(147610000.0)*_t285)
+            + J_theta_cart_right*_t5*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(17004672.0)*_t148
+            + TRAILER_LIT(17004672.0)*_t151 + TRAILER_LIT(2471700.0))
+            + _t193*_t56*(TRAILER_LIT(31586400.0)*_t147*_t150 + TRAILER_LIT(66006912.0)*_t148*_t151
+            + TRAILER_LIT(3948300.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(3840000.0)*_t147*_t150 + TRAILER_LIT(5668224.0)*_t148*_t151))
+            + _t192*_t23*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
+            + TRAILER_LIT(22790984.0)*_t151*_t204) + _t193*_t56*(TRAILER_LIT(9746873.0)*_t147
+            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
+            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
+            + TRAILER_LIT(17093238.0)*_t148*_t150 + TRAILER_LIT(5697746.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(24942400.0)*_t147 + TRAILER_LIT(21067638.0)*_t148*_t150
+            + TRAILER_LIT(7022546.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
+            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(51014016.0)*_t147*_t205
+            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(51014016.0)*_t150*_t204
+            + TRAILER_LIT(17713200.0)*_t151 + TRAILER_LIT(4943400.0))
+            + _t193*_t56*(TRAILER_LIT(36951756.0)*_t147*_t150 + TRAILER_LIT(31586400.0)*_t148*_t151
+            + TRAILER_LIT(66006912.0)*_t204*_t205 + TRAILER_LIT(7896600.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(3840000.0)*_t148*_t151 + TRAILER_LIT(5668224.0)*_t204*_t205))
+            - _t100*_t276 + _t148*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
+            + _t151*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
+            - _t162*_t271*_t97 + _t163*(-TRAILER_LIT(9746873.0)*_t196
+            - TRAILER_LIT(19625327.0)*_t199 - TRAILER_LIT(13514273.0)*_t210 - _t223*_t92
+            - TRAILER_LIT(1434000.0)*_t229 - TRAILER_LIT(46822365.0)*_t231 - _t246)
+            + _t195*(_t106 - TRAILER_LIT(82800000.0)*_t157) + _t196*(-TRAILER_LIT(24942400.0)*_t156
+            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(21067638.0)*_t238
+            - TRAILER_LIT(28090184.0)*_t240) + _t199*(-_t214 - TRAILER_LIT(53759562.0)*_t238
+            - TRAILER_LIT(71679416.0)*_t240 - _t247) + _t201*(-TRAILER_LIT(8177600.0)*_t154
+            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
+            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(41626038.0)*_t244
+            - TRAILER_LIT(55501384.0)*_t248) - _t203*_t87 + _t206*(-_t207 - _t217 - _t220
+            - TRAILER_LIT(156734190.0)*_t229 - _t243 - _t265) + _t208*(-_t207 - _t217 - _t220
+            - _t243 - _t265) + _t209*(-TRAILER_LIT(7022546.0)*_t196 - TRAILER_LIT(17919854.0)*_t199
+            - TRAILER_LIT(5697746.0)*_t210 - _t224*_t93 - TRAILER_LIT(10707500.0)*_t228
+            - TRAILER_LIT(52244730.0)*_t231 - _t246) + _t210*(-_t214 - TRAILER_LIT(17093238.0)*_t238
+            - TRAILER_LIT(22790984.0)*_t240 - _t247) + _t212*(-TRAILER_LIT(48560000.0)*_t154
+            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
+            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(3585888.0)*_t215
+            - TRAILER_LIT(107519124.0)*_t244 - TRAILER_LIT(143358832.0)*_t248
+            - TRAILER_LIT(12840000.0)) - _t213*_t268*_t99 - TRAILER_LIT(31537644.0)*_t216
+            - TRAILER_LIT(35426400.0)*_t218 + _t219*(-TRAILER_LIT(15440000.0)*_t154
+            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
+            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(86438688.0)*_t215
+            - TRAILER_LIT(18420000.0)*_t225 - TRAILER_LIT(34186476.0)*_t244
+            - TRAILER_LIT(45581968.0)*_t248 - TRAILER_LIT(36840000.0))
+            - TRAILER_LIT(68018688.0)*_t222 + _t223*(_t110 - _t267 - _t278)
+            + _t224*(_t110 - _t267 - _t278 - _t288) + _t228*(-TRAILER_LIT(1195000.0)*_t162
+            - TRAILER_LIT(52390000.0)*_t188 - _t242 - _t258 - _t313)
+            + _t229*(-TRAILER_LIT(31434000.0)*_t156 - TRAILER_LIT(62868000.0)*_t187
+            - TRAILER_LIT(12849000.0)*_t213) + _t231*(-TRAILER_LIT(62868000.0)*_t164 - _t232
+            - _t250) + _t235*(-TRAILER_LIT(15277635.0)*_t162 - TRAILER_LIT(30555270.0)*_t213
+            - TRAILER_LIT(177132000.0)*_t221 - _t239 - _t256)
+            + _t241*(-TRAILER_LIT(73805000.0)*_t154 - TRAILER_LIT(25000000.0)*_t162
+            - TRAILER_LIT(147610000.0)*_t188 - TRAILER_LIT(36902500.0)*_t213)
+            + _t245*(-TRAILER_LIT(88566000.0)*_t156 - TRAILER_LIT(177132000.0)*_t187)
+            - TRAILER_LIT(61110540.0)*_t249 - _t254 - TRAILER_LIT(104324550.0)*_t255
+            - TRAILER_LIT(122221080.0)*_t257 - TRAILER_LIT(156734190.0)*_t259
+            - TRAILER_LIT(174149100.0)*_t260 + _t261*(-_t225 - TRAILER_LIT(1.0)) + _t263 + _t264
+            - TRAILER_LIT(6420000.0)*_t266 + _t270*(-_t269 - _t272) - _t273*_t274
+            - TRAILER_LIT(35426400.0)*_t275 - TRAILER_LIT(68018688.0)*_t279 - _t281 - _t282
+            - _t283*_t95 - TRAILER_LIT(92160000.0)*_t284 - _t285*_t96
+            - TRAILER_LIT(136037376.0)*_t286 - _t287*_t98 + _t291 + _t294 + _t295 + _t296 + _t297
+            + _t299 + _t302 + _t304 - _t307 - _t308 - _t309 - _t310 - TRAILER_LIT(122221080.0)*_t312
+            - _t314 - _t316 - _t317 - _t319 - TRAILER_LIT(174149100.0)*_t320
+            - TRAILER_LIT(177132000.0)*_t321 - _t323 + _t325 + _t327 + _t329 + _t332 + _t333 - _t335
+            - _t336 - TRAILER_LIT(92160000.0)*_t337 - TRAILER_LIT(136037376.0)*_t338 - _t340 - _t341
+            - _t342 + _t343 + _t344 - _t346 - _t347 - _t352 + _t89*(-_t251 - _t252)
+            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(35426400.0)*_t147*_t150
+            + TRAILER_LIT(2834112.0)*_t148*_t151 + TRAILER_LIT(11328300.0))
+            + _t193*_t56*(TRAILER_LIT(56733600.0)*_t147*_t150 + TRAILER_LIT(45448512.0)*_t148*_t151
+            + TRAILER_LIT(7091700.0))
+            + radius_left*radius_right*thetadot_left*thetadot_right*(TRAILER_LIT(34009344.0)*_t148
+            + TRAILER_LIT(34009344.0)*_t151)) + _t192*_t23*(TRAILER_LIT(19625327.0)*_t147
+            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
+            + _t193*_t56*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
+            + TRAILER_LIT(13875346.0)*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
+            + TRAILER_LIT(11395492.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
+            + TRAILER_LIT(53759562.0)*_t148*_t150 + TRAILER_LIT(17919854.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(16355200.0)*_t147*_t151 + TRAILER_LIT(55501384.0)*_t148*_t205
+            + TRAILER_LIT(8982073.0)*_t150)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
+            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(12745356.0)*_t147*_t150
+            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(2834112.0)*_t204*_t205
+            + TRAILER_LIT(22656600.0)) + _t193*_t56*(TRAILER_LIT(29815956.0)*_t147*_t150
+            + TRAILER_LIT(56733600.0)*_t148*_t151 + TRAILER_LIT(45448512.0)*_t204*_t205
+            + TRAILER_LIT(14183400.0))
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(102028032.0)*_t147*_t205 + TRAILER_LIT(46080000.0)*_t148
+            + TRAILER_LIT(102028032.0)*_t150*_t204 + TRAILER_LIT(46080000.0)*_t151))
+            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(68175450.0)*_t147*_t150
+            + TRAILER_LIT(101850900.0)*_t204*_t205)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(91665810.0)*_t147*_t205
+            + TRAILER_LIT(91665810.0)*_t150*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
+            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
+            + TRAILER_LIT(88566000.0)*_t151) + _t143*(J_theta_cart*(TRAILER_LIT(73805000.0)*_t150
+            + TRAILER_LIT(36902500.0)*_t204) + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
+            + _t148*(TRAILER_LIT(177132000.0)*_t150 + TRAILER_LIT(30555270.0)*_t153))
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(44283000.0)*_t148*_t153
+            + TRAILER_LIT(30555270.0)*_t204) + _t151*(_t107*_t147 + _t153*(_t108*_t148 + _t109)
+            + _t204*_t99)) + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
+            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
+            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(122221080.0)*_t148*_t205
+            + TRAILER_LIT(15277635.0)*_t150)) + _t90)
+            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(130611825.0)*_t147*_t205
+            + TRAILER_LIT(69000000.0)*_t148 + TRAILER_LIT(130611825.0)*_t150*_t204
+            + TRAILER_LIT(69000000.0)*_t151)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(125189460.0)*_t147*_t150
+            + TRAILER_LIT(165600000.0)*_t148*_t151 + TRAILER_LIT(208978920.0)*_t204*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
+            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
+            + TRAILER_LIT(51396000.0)*_t204*_t205)
+            + _t143*(J_theta_cart*(TRAILER_LIT(43537275.0)*_t148*_t153
+            + TRAILER_LIT(26195000.0)*_t150 + _t151*(TRAILER_LIT(43537275.0)*_t153
+            + TRAILER_LIT(42830000.0)*_t204))
+            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(165600000.0)*_t150*_t153
+            + TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
+            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(208978920.0)*_t151*_t153)
+            + TRAILER_LIT(20700000.0)*_t153 + TRAILER_LIT(12849000.0)*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(46822365.0)*_t147
+            + _t148*(TRAILER_LIT(165600000.0)*_t150 + TRAILER_LIT(51396000.0)*_t151*_t153)
+            + TRAILER_LIT(208978920.0)*_t151*_t204))
+            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
+            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
+            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
+            + TRAILER_LIT(51396000.0)*_t148*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t147
+            + TRAILER_LIT(156734190.0)*_t148*_t150 + TRAILER_LIT(52244730.0)*_t205))))))
+            + tau_right;
+    const trailer_real_t _t354 = TRAILER_LIT(17713200.0)*_t201;
+    const trailer_real_t _t355 = TRAILER_LIT(51014016.0)*_t201;
+    const trailer_real_t _t356 = TRAILER_LIT(66006912.0)*_t199;
+    const trailer_real_t _t357 = TRAILER_LIT(17004672.0)*_t233;
+    const trailer_real_t _t358 = TRAILER_LIT(44283000.0)*_t229;
+    const trailer_real_t _t359 = TRAILER_LIT(46080000.0)*_t212;
+    const trailer_real_t _t360 = TRAILER_LIT(177132000.0)*_t231;
+    const trailer_real_t _t361 = _t182*_t360;
+    const trailer_real_t _t362 = TRAILER_LIT(30555270.0)*_t277;
+    const trailer_real_t _t363 = TRAILER_LIT(43537275.0)*_t225;
+    const trailer_real_t _t364 = TRAILER_LIT(102028032.0)*_t212;
+    const trailer_real_t _t365 = TRAILER_LIT(34009344.0)*_t266;
+    const trailer_real_t _t114 = prepared->forward_dynamics[71];
+    const trailer_real_t _t115 = prepared->forward_dynamics[72];
+    const trailer_real_t _t116 = prepared->forward_dynamics[73];
+    const trailer_real_t _t117 = prepared->forward_dynamics[74];
+    const trailer_real_t _t118 = prepared->forward_dynamics[75];
+    const trailer_real_t _t119 = prepared->forward_dynamics[76];
+    const trailer_real_t _t120 = prepared->forward_dynamics[77];
+    const trailer_real_t _t121 = prepared->forward_dynamics[78];
+    const trailer_real_t _t122 = prepared->forward_dynamics[79];
+    const trailer_real_t _t123 = prepared->forward_dynamics[80];
+    const trailer_real_t _t124 = prepared->forward_dynamics[81];
+    const trailer_real_t _t125 = prepared->forward_dynamics[82];
+    const trailer_real_t _t126 = prepared->forward_dynamics[83];
+    const trailer_real_t _t127 = prepared->forward_dynamics[84];
+    const trailer_real_t _t128 = prepared->forward_dynamics[85];
+    const trailer_real_t _t129 = prepared->forward_dynamics[86];
+    const trailer_real_t _t130 = prepared->forward_dynamics[87];
+    const trailer_real_t _t131 = prepared->forward_dynamics[88];
+    const trailer_real_t _t132 = prepared->forward_dynamics[89];
+    const trailer_real_t _t133 = prepared->forward_dynamics[90];
+    const trailer_real_t _t134 = prepared->forward_dynamics[91];
+    const trailer_real_t _t366 = _t134*(J_theta_cart_right*_t5*(_t143*(_t153*(_t148*(_t131*_t193
+            + _t132*_t192 + _t133*_t151*thetadot_left*thetadot_right)
+            + _t151*(_t131*_t193 + _t132*_t192)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(92160000.0)*_t147*_t150 + TRAILER_LIT(18420000.0)))
+            + _t192*_t23*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
+            + TRAILER_LIT(13875346.0)*_t204) + _t193*_t56*(TRAILER_LIT(19625327.0)*_t147
+            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
+            + TRAILER_LIT(11395492.0)*_t204))
+            + _t153*(_t192*_t23*(TRAILER_LIT(16355200.0)*_t147*_t151
+            + TRAILER_LIT(55501384.0)*_t148*_t205 + TRAILER_LIT(8982073.0)*_t150)
+            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(53759562.0)*_t148*_t150
+            + TRAILER_LIT(17919854.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
+            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(34086384.0)*_t147*_t205
+            + TRAILER_LIT(28366800.0)*_t148 + TRAILER_LIT(34086384.0)*_t150*_t204
+            + TRAILER_LIT(28366800.0)*_t151) + _t193*_t56*(TRAILER_LIT(2125584.0)*_t147*_t205
+            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(2125584.0)*_t150*_t204
+            + TRAILER_LIT(17713200.0)*_t151)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(86438688.0)*_t147*_t150 + TRAILER_LIT(92160000.0)*_t148*_t151
+            + TRAILER_LIT(136037376.0)*_t204*_t205 + TRAILER_LIT(36840000.0))) + _t114*_t195
+            + _t125*_t251 + _t125*_t252 + _t127*_t276 + _t128*_t283 + _t129*_t285 + _t130*_t287
+            + _t148*(-_t354 - _t357 - _t359 - _t365) + _t151*(-_t354 - _t357 - _t359 - _t365)
+            - _t163*_t358 - _t164*_t360 + _t196*(-TRAILER_LIT(19625327.0)*_t163
+            - TRAILER_LIT(35426400.0)*_t164 - TRAILER_LIT(35426400.0)*_t182
+            - TRAILER_LIT(17919854.0)*_t209 - _t214 - TRAILER_LIT(12745356.0)*_t215
+            - TRAILER_LIT(2834112.0)*_t221 - TRAILER_LIT(53759562.0)*_t238
+            - TRAILER_LIT(71679416.0)*_t240 - _t247 - TRAILER_LIT(22656600.0))
+            + _t199*(-TRAILER_LIT(24942400.0)*_t156 - TRAILER_LIT(9746873.0)*_t163
+            - TRAILER_LIT(31586400.0)*_t164 - TRAILER_LIT(31586400.0)*_t182
+            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(7022546.0)*_t209
+            - TRAILER_LIT(36951756.0)*_t215 - TRAILER_LIT(21067638.0)*_t238
+            - TRAILER_LIT(28090184.0)*_t240 - TRAILER_LIT(7896600.0))
+            + _t201*(-TRAILER_LIT(13514273.0)*_t163 - TRAILER_LIT(5697746.0)*_t209 - _t214
+            - TRAILER_LIT(17093238.0)*_t238 - TRAILER_LIT(22790984.0)*_t240 - _t247
+            - TRAILER_LIT(4943400.0)) + _t203*(_t106 - TRAILER_LIT(82800000.0)*_t155)
+            + _t206*(-TRAILER_LIT(91665810.0)*_t229 - _t355 - _t364) + _t208*(-_t355 - _t364)
+            + _t209*(-TRAILER_LIT(30555270.0)*_t231 - TRAILER_LIT(10707500.0)*_t241
+            - TRAILER_LIT(147610000.0)*_t273 - _t358) + _t210*(-TRAILER_LIT(8177600.0)*_t154
+            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
+            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(7091700.0)*_t225
+            - TRAILER_LIT(41626038.0)*_t244 - TRAILER_LIT(55501384.0)*_t248
+            - TRAILER_LIT(14183400.0)) + _t212*(-TRAILER_LIT(15440000.0)*_t154
+            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
+            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(34186476.0)*_t244
+            - TRAILER_LIT(45581968.0)*_t248) - TRAILER_LIT(29815956.0)*_t216
+            - TRAILER_LIT(56733600.0)*_t218 + _t219*(-TRAILER_LIT(48560000.0)*_t154
+            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
+            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(107519124.0)*_t244
+            - TRAILER_LIT(143358832.0)*_t248) + _t221*(-_t356 - _t360)
+            - TRAILER_LIT(45448512.0)*_t222 + _t223*(_t124*_t163 - _t362) - _t224*_t362
+            - TRAILER_LIT(3948300.0)*_t226 + _t228*(-TRAILER_LIT(73805000.0)*_t154
+            - TRAILER_LIT(25000000.0)*_t162 - TRAILER_LIT(147610000.0)*_t188
+            - TRAILER_LIT(36902500.0)*_t213) + _t229*(-TRAILER_LIT(88566000.0)*_t156
+            - TRAILER_LIT(177132000.0)*_t187) + _t231*(-TRAILER_LIT(15277635.0)*_t163 - _t239
+            - _t256) - TRAILER_LIT(2471700.0)*_t233 + _t235*(-TRAILER_LIT(46822365.0)*_t162
+            - TRAILER_LIT(52244730.0)*_t213 - _t232 - _t250) + _t236*(-TRAILER_LIT(2834112.0)*_t182
+            - TRAILER_LIT(11328300.0)) + _t241*(-TRAILER_LIT(1195000.0)*_t162
+            - TRAILER_LIT(52390000.0)*_t188 - _t242) + _t245*(-TRAILER_LIT(31434000.0)*_t156
+            - TRAILER_LIT(1434000.0)*_t163 - TRAILER_LIT(62868000.0)*_t187
+            - TRAILER_LIT(12849000.0)*_t213 - _t306 - _t318 - _t345)
+            - TRAILER_LIT(125189460.0)*_t249 + _t254 - TRAILER_LIT(68175450.0)*_t255
+            - TRAILER_LIT(208978920.0)*_t257 - TRAILER_LIT(91665810.0)*_t259
+            - TRAILER_LIT(101850900.0)*_t260 - _t263 - _t264 + _t268*(_t126 - _t267 - _t339)
+            + _t269*(-TRAILER_LIT(42830000.0)*_t213 - _t363) + _t271*(_t126 - _t267)
+            + _t272*(-_t274 - _t363) - TRAILER_LIT(56733600.0)*_t275 - TRAILER_LIT(45448512.0)*_t279
+            + _t281 + _t282 - TRAILER_LIT(3840000.0)*_t284 - TRAILER_LIT(5668224.0)*_t286 - _t291
+            - _t294 - _t295 - _t296 - _t297 - _t299 - _t302 - _t304 + _t307 + _t308 + _t309 + _t310
+            - _t311*_t356 - TRAILER_LIT(208978920.0)*_t312 + _t314 + _t316 + _t317 + _t319
+            - TRAILER_LIT(101850900.0)*_t320 - TRAILER_LIT(62868000.0)*_t321 + _t323 - _t325 - _t327
+            - _t329 - _t332 - _t333 + _t335 + _t336 - TRAILER_LIT(3840000.0)*_t337
+            - TRAILER_LIT(5668224.0)*_t338 + _t340 + _t341 + _t342 - _t343 - _t344 + _t346 + _t347
+            - _t352 + _t361*(-_t225 - TRAILER_LIT(1.0))
+            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t122*thetadot_left*thetadot_right
+            + _t123*_t147*_t150*_t193 + _t148*(_t119*_t192 + _t120*_t151*_t193
+            + _t121*thetadot_left*thetadot_right) + _t151*(_t119*_t192
+            + _t121*thetadot_left*thetadot_right)) + _t192*_t23*(TRAILER_LIT(9746873.0)*_t147
+            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
+            + _t193*_t56*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
+            + TRAILER_LIT(22790984.0)*_t151*_t204)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
+            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(24942400.0)*_t147
+            + TRAILER_LIT(21067638.0)*_t148*_t150 + TRAILER_LIT(7022546.0)*_t205)
+            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(17093238.0)*_t148*_t150
+            + TRAILER_LIT(5697746.0)*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
+            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(49505184.0)*_t147*_t205
+            + TRAILER_LIT(15793200.0)*_t148 + TRAILER_LIT(49505184.0)*_t150*_t204
+            + TRAILER_LIT(15793200.0)*_t151) + _t193*_t56*(TRAILER_LIT(31537644.0)*_t147*_t150
+            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(68018688.0)*_t204*_t205)
+            +
+            radius_left*radius_right*thetadot_left*thetadot_right
+            *(_t147*(TRAILER_LIT(3585888.0)*_t150 + TRAILER_LIT(4251168.0)*_t205)
+            + TRAILER_LIT(1920000.0)*_t148 + TRAILER_LIT(4251168.0)*_t150*_t204
+            + TRAILER_LIT(1920000.0)*_t151 + TRAILER_LIT(12840000.0)))
+            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(104324550.0)*_t147*_t150
+            + TRAILER_LIT(138000000.0)*_t148*_t151 + TRAILER_LIT(174149100.0)*_t204*_t205)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(156734190.0)*_t147*_t205
+            + TRAILER_LIT(82800000.0)*_t148 + TRAILER_LIT(156734190.0)*_t150*_t204
+            + TRAILER_LIT(82800000.0)*_t151)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
+            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
+            + TRAILER_LIT(51396000.0)*_t204*_t205)
+            + _t143*(J_theta_cart*(_t150*(TRAILER_LIT(138000000.0)*_t147*_t153
+            + TRAILER_LIT(26195000.0)) + _t151*(TRAILER_LIT(174149100.0)*_t148*_t153
+            + TRAILER_LIT(42830000.0)*_t204))
+            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
+            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(52244730.0)*_t153)
+            + TRAILER_LIT(52244730.0)*_t151*_t153 + TRAILER_LIT(12849000.0)*_t204)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t150
+            + _t151*(TRAILER_LIT(156734190.0)*_t147 + TRAILER_LIT(51396000.0)*_t148*_t153)
+            + TRAILER_LIT(52244730.0)*_t204))
+            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
+            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
+            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
+            + TRAILER_LIT(51396000.0)*_t148*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(165600000.0)*_t147*_t151
+            + TRAILER_LIT(208978920.0)*_t148*_t205 + TRAILER_LIT(46822365.0)*_t150)))
+            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(76388175.0)*_t147*_t205
+            + TRAILER_LIT(76388175.0)*_t150*_t204)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(61110540.0)*_t147*_t150
+            + TRAILER_LIT(122221080.0)*_t204*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
+            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
+            + TRAILER_LIT(88566000.0)*_t151)
+            + _t143*(J_theta_cart*(TRAILER_LIT(25462725.0)*_t148*_t153
+            + TRAILER_LIT(73805000.0)*_t150 + TRAILER_LIT(36902500.0)*_t204)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
+            + TRAILER_LIT(177132000.0)*_t148*_t150)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(15277635.0)*_t147
+            + TRAILER_LIT(44283000.0)*_t148*_t153) + _t151*(_t115*_t204 + _t118*_t147
+            + _t153*(_t116*_t148 + _t117)))
+            + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
+            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
+            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
+            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
+            + K_theta_cart_x_tractor_2*(TRAILER_LIT(91665810.0)*_t148*_t150
+            + TRAILER_LIT(30555270.0)*_t205)))))) + tau_left;
+    const trailer_real_t _t367 = -_t170*_t353 + _t189*_t366;
+    const trailer_real_t _t368 = _t191*_t367;
+    const trailer_real_t _t369 = _t368*radius_left;
+    const trailer_real_t _t370 = TRAILER_LIT(0.5)*_t150;
+    const trailer_real_t _t371 = -_t170*_t366 + _t179*_t353;
+    const trailer_real_t _t372 = _t191*_t371;
+    const trailer_real_t _t373 = _t372*radius_right;
+    const trailer_real_t _t374 = TRAILER_LIT(0.5)*_t143;
+    const trailer_real_t _t375 = TRAILER_LIT(13800.0)*_t198;
+    const trailer_real_t _t376 = TRAILER_LIT(13800.0)*_t194;
+    const trailer_real_t _t377 = TRAILER_LIT(27600.0)*_t182;
+    const trailer_real_t _t378 = TRAILER_LIT(20000.0)*_t162;
+    const trailer_real_t _t379 = TRAILER_LIT(5239.0)*_t154;
+    const trailer_real_t _t380 = TRAILER_LIT(5239.0)*_t156;
+    const trailer_real_t _t381 = TRAILER_LIT(20000.0)*_t163;
+    const trailer_real_t _t382 = TRAILER_LIT(10478.0)*_t198;
+    const trailer_real_t _t383 = TRAILER_LIT(10478.0)*_t194;
+    const trailer_real_t _t384 = TRAILER_LIT(27600.0)*_t164;
+    const trailer_real_t _t385 = TRAILER_LIT(40000.0)*_t211;
+    const trailer_real_t _t386 = _t163*_t385;
+    const trailer_real_t _t387 = TRAILER_LIT(29522.0)*_t211;
+    const trailer_real_t _t388 = _t156*_t387;
+    const trailer_real_t _t389 = _t154*_t387;
+    const trailer_real_t _t390 = _t162*_t385;
+    const trailer_real_t _t391 = TRAILER_LIT(59044.0)*_t211;
+    const trailer_real_t _t392 = _t187*_t391;
+    const trailer_real_t _t393 = _t188*_t391;
+    const trailer_real_t _t394 = -_t386 - _t388 + _t389 + _t390 - _t392 + _t393;
+    const trailer_real_t _t395 = TRAILER_LIT(69.0)*_t163;
+    const trailer_real_t _t396 = TRAILER_LIT(69.0)*_t162;
+    const trailer_real_t _t397 = TRAILER_LIT(100.0)*_t215 + TRAILER_LIT(100.0)*_t225;
+    const trailer_real_t _t398 = TRAILER_LIT(29517.0)*_t194;
+    const trailer_real_t _t399 = TRAILER_LIT(1917.0)*_t198;
+    const trailer_real_t _t400 = TRAILER_LIT(61400.0)*_t198;
+    const trailer_real_t _t401 = TRAILER_LIT(46639.0)*_t198;
+    const trailer_real_t _t402 = TRAILER_LIT(36161.0)*_t194;
+    const trailer_real_t _t403 = TRAILER_LIT(21400.0)*_t194;
+    const trailer_real_t _t404 = TRAILER_LIT(3834.0)*_t182;
+    const trailer_real_t _t405 = TRAILER_LIT(46200.0)*_t198;
+    const trailer_real_t _t406 = TRAILER_LIT(59034.0)*_t182;
+    const trailer_real_t _t407 = TRAILER_LIT(73800.0)*_t194;
+    const trailer_real_t _t408 = TRAILER_LIT(93278.0)*_t198;
+    const trailer_real_t _t409 = TRAILER_LIT(72322.0)*_t194;
+    const trailer_real_t _t410 = TRAILER_LIT(3834.0)*_t164;
+    const trailer_real_t _t411 = TRAILER_LIT(59034.0)*_t164;
+    const trailer_real_t _t412 = TRAILER_LIT(88566.0)*_t211;
+    const trailer_real_t _t413 = TRAILER_LIT(177132.0)*_t211;
+    const trailer_real_t _t414 = TRAILER_LIT(120000.0)*_t211;
+    const trailer_real_t _t415 = -TRAILER_LIT(60000.0)*_t211 + _t412*(_t148 + _t151)
+            + _t413*(-_t164 - _t182) + _t414*(-_t215 - _t225);
+    const trailer_real_t _t416 = TRAILER_LIT(231.0)*_t162;
+    const trailer_real_t _t417 = TRAILER_LIT(231.0)*_t163;
+    const trailer_real_t _t418 = TRAILER_LIT(307.0)*_t215 + TRAILER_LIT(307.0)*_t225;
+    const trailer_real_t _t419 = TRAILER_LIT(369.0)*_t163;
+    const trailer_real_t _t420 = TRAILER_LIT(369.0)*_t162;
+    const trailer_real_t _t421 = TRAILER_LIT(107.0)*_t215 + TRAILER_LIT(107.0)*_t225;
+    const trailer_real_t _t422 = TRAILER_LIT(29517.0)*_t198;
+    const trailer_real_t _t423 = TRAILER_LIT(1917.0)*_t194;
+    const trailer_real_t _t424 = TRAILER_LIT(61400.0)*_t194;
+    const trailer_real_t _t425 = TRAILER_LIT(46639.0)*_t194;
+    const trailer_real_t _t426 = TRAILER_LIT(36161.0)*_t198;
+    const trailer_real_t _t427 = TRAILER_LIT(21400.0)*_t198;
+    const trailer_real_t _t428 = TRAILER_LIT(46200.0)*_t194;
+    const trailer_real_t _t429 = TRAILER_LIT(73800.0)*_t198;
+    const trailer_real_t _t430 = TRAILER_LIT(93278.0)*_t194;
+    const trailer_real_t _t431 = TRAILER_LIT(72322.0)*_t198;
+    if (!(_t189 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    if (!(_t190 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+        return TRAILER_ERR_BAD_PARAMS;
+    }
+    const trailer_real_t _t136 = prepared->forward_dynamics[92];
+    const trailer_real_t _t138 = prepared->forward_dynamics[93];
+    const trailer_real_t _t139 = prepared->forward_dynamics[94];
+    const trailer_real_t _t140 = prepared->forward_dynamics[95];
+    const trailer_real_t _t141 = prepared->forward_dynamics[96];
+    const trailer_real_t _t142 = prepared->forward_dynamics[97];
+    const trailer_real_t r_0 = _t143*_t146 + _t370*(_t369 + _t373);
+    const trailer_real_t r_1 = -_t146*_t150 + _t374*(_t369 + _t373);
+    const trailer_real_t r_2 = _t139*_t191*_t371 - TRAILER_LIT(500.0)*_t369/TRAILER_LIT(207.0);
+    const trailer_real_t r_3 = _t140*_t191*_t367*(-_t395 + _t396 + _t397)
+            + _t187*(-TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
+            + _t188*(TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
+            + _t194*(TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) + TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
+            + _t198*(-TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) - TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
+            - TRAILER_LIT(5.0)*_t373*(_t395 - _t396 + _t397)/TRAILER_LIT(414.0)
+            + _t375*(TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
+            + _t376*(-TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
+            - TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
+            - TRAILER_LIT(25.0)*_t394/TRAILER_LIT(171396.0);
+    const trailer_real_t r_4 = _t372;
+    const trailer_real_t r_5 = _t368;
+    const trailer_real_t r_6 = _t136*(_t369*(-_t416 + _t417 + _t418)
+            + _t373*(-_t419 + _t420 + _t421)) + _t141*(_t148*(-_t398 - _t399)
+            + _t151*(-_t398 - _t399) + _t154*(_t401 - _t402) + _t156*(-_t401 + _t402)
+            + _t187*(-_t408 + _t409) + _t188*(_t408 - _t409) + _t194*(_t406 + _t411
+            + TRAILER_LIT(36900.0)) + _t198*(_t404 + _t410 + TRAILER_LIT(23100.0))
+            + _t215*(_t405 + _t407) + _t225*(_t405 + _t407) + _t386 + _t388 - _t389 - _t390 + _t392
+            - _t393 + _t400*(_t162 - _t163) + _t403*(-_t162 + _t163) + _t415);
+    const trailer_real_t r_7 = _t138*(_t369*(_t419 - _t420 + _t421) + _t373*(_t416 - _t417 + _t418))
+            + _t142*(_t148*(-_t422 - _t423) + _t151*(-_t422 - _t423) + _t154*(-_t425 + _t426)
+            + _t156*(_t425 - _t426) + _t187*(_t430 - _t431) + _t188*(-_t430 + _t431)
+            + _t194*(_t404 + _t410 + TRAILER_LIT(23100.0)) + _t198*(_t406 + _t411
+            + TRAILER_LIT(36900.0)) + _t215*(_t428 + _t429) + _t225*(_t428 + _t429) + _t394 + _t415
+            + _t424*(-_t162 + _t163) + _t427*(_t162 - _t163));
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
             + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;

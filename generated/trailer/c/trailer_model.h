@@ -13,6 +13,20 @@
 extern "C" {
 #endif
 
+/* Marks a trailer_model_prepared_t filled by trailer_model_prepare. */
+#define TRAILER_MODEL_PREPARED_MAGIC 0x54524150
+
+/* trailer_model_prepared_t: the parameters of trailer_forward_dynamics, checked and evaluated
+   once by trailer_model_prepare; caller-owned, fixed size. Fill it with trailer_model_prepare
+   only. */
+typedef struct {
+    long magic; /* TRAILER_MODEL_PREPARED_MAGIC once prepared */
+    trailer_real_t forward_dynamics[98]; /* J_theta_cart, J_theta_cart_left, J_theta_cart_right,
+                                            K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
+                                            radius_left, radius_right, 91 parameter-only
+                                            subexpressions, for trailer_forward_dynamics_prepared */
+} trailer_model_prepared_t;
+
 #define TRAILER_FORWARD_DYNAMICS_Q_SIZE 8
 #define TRAILER_FORWARD_DYNAMICS_QDOT_SIZE 8
 #define TRAILER_FORWARD_DYNAMICS_TAU_SIZE 2
@@ -57,10 +71,76 @@ extern "C" {
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 936 add, 3282 mul, 98 div, 4 sin/cos, 0 sqrt
+ * With fixed parameters, trailer_model_prepare once and trailer_forward_dynamics_prepared
+ * per call give the same results, bit for bit.
+ *
+ * operations after CSE: 921 add, 1435 mul, 96 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot);
+
+/**
+ * Checks the parameters of trailer_forward_dynamics and evaluates, once, every
+ * subexpression that depends on the parameters only; trailer_forward_dynamics_prepared then does
+ * only the per-call rest. Call it again whenever the parameters change (a prepared
+ * struct keeps the values of the call that filled it).
+ *
+ * @param[in]  p trailer_params_t -- lumped robot parameters
+ * @param[out] prepared trailer_model_prepared_t -- written only on success
+ * @return TRAILER_OK on success; on error *prepared is not written:
+ *         TRAILER_ERR_NONFINITE_INPUT if a parameter it reads is NaN or infinite,
+ *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_left > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_right > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (radius_left > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (radius_right > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_left > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_right > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0).
+ *
+ * operations after CSE: 74 add, 123 mul, 59 div, 0 sin/cos, 0 sqrt
+ */
+trailer_status_t trailer_model_prepare(const trailer_params_t *p,
+    trailer_model_prepared_t *prepared);
+
+#define TRAILER_FORWARD_DYNAMICS_PREPARED_Q_SIZE 8
+#define TRAILER_FORWARD_DYNAMICS_PREPARED_QDOT_SIZE 8
+#define TRAILER_FORWARD_DYNAMICS_PREPARED_TAU_SIZE 2
+#define TRAILER_FORWARD_DYNAMICS_PREPARED_QDDOT_SIZE 8
+
+/**
+ * trailer_forward_dynamics with the parameters prepared by trailer_model_prepare: the same
+ * results, bit for bit, and the same statuses, except that the checks of the
+ * parameters alone were made by the prepare call.
+ *
+ * @param[in]  prepared trailer_model_prepared_t -- filled by trailer_model_prepare
+ * @param[in]  q [8] row-major (TRAILER_FORWARD_DYNAMICS_PREPARED_Q_SIZE): x_tractor, y_tractor,
+ *     theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left --
+ *     x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right,
+ *     theta_cart_left
+ * @param[in]  qdot [8] row-major (TRAILER_FORWARD_DYNAMICS_PREPARED_QDOT_SIZE): xdot_tractor,
+ *     ydot_tractor, thetadot_tractor, thetadot_cart, thetadot_right, thetadot_left,
+ *     thetadot_cart_right, thetadot_cart_left -- generalised velocities
+ * @param[in]  tau [2] row-major (TRAILER_FORWARD_DYNAMICS_PREPARED_TAU_SIZE): tau_right, tau_left
+ *     -- wheel torques tau_right, tau_left
+ * @param[out] qddot [8] row-major (TRAILER_FORWARD_DYNAMICS_PREPARED_QDDOT_SIZE)
+ * @return TRAILER_OK on success; on error no output is written:
+ *         TRAILER_ERR_NOT_INITIALISED if prepared was not filled by trailer_model_prepare,
+ *         TRAILER_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[4], q[5], q[6], q[7], qdot[0], qdot[1],
+ *         qdot[2], qdot[3], qdot[6], qdot[7]),
+ *         TRAILER_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
+ *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
+ *
+ * operations after CSE: 847 add, 1312 mul, 37 div, 4 sin/cos, 0 sqrt
+ */
+trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
+    trailer_real_t *qddot);
 
 #define TRAILER_KINEMATICS_Q_SIZE 8
 #define TRAILER_KINEMATICS_WHEEL_RATES_SIZE 2

@@ -5,7 +5,8 @@
  * Template: codegen/backends/c/templates/types.h.jinja
  *
  * Shared types of the generated code: the scalar type, literal and math macros, the
- * status codes and every struct that generated functions take or fill. Build with
+ * status codes and every struct that generated functions take or fill (except a module's
+ * prepared parameters, <module>_prepared_t, in that module's header). Build with
  * -DTRAILER_FLOAT32 for single precision: then no double literal or double
  * math function is used anywhere.
  */

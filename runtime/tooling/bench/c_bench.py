@@ -29,6 +29,7 @@ from runtime.tooling.bench.c_variants import (
     input_size,
     ours_wrapper,
     output_sizes,
+    prepared_wrapper,
     specs_by_name,
     sympy_c,
 )
@@ -76,7 +77,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
     # same specs rendered by the same backend under another prefix (wmrn_).
     unchecked = [
         replace(specs[n], returns_status=False, guards=(), nonfinite_input="",
-                nonfinite_output="")
+                nonfinite_output="", prepared=False)
         for n in used if specs[n].returns_status
     ]
     cfg = CConfig(prefix="wmrn_", types_header="wmrn_types.h", real_type="wmrn_real_t",
@@ -144,6 +145,9 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             f"static void hand_w_{name}(const void *in, void *out) "
             f"{{ hand_{name}((const double *)in, (double *)out); }}"
         )
+    for name in used:
+        if specs[name].prepared:
+            lines.append(prepared_wrapper(specs[name]))
     for name in HAND_CHECKED & set(used):
         lines.append(
             f"static void handc_w_{name}(const void *in, void *out) "
@@ -162,6 +166,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             "ours": f"ours_{name}",
             "ours_float32": f"ours32_{name}",
             "ours_unchecked": f"oursn_{name}",
+            "ours_prepared": f"oursp_{name}",
             "casadi": f"casadi_w_{name}",
             "sympy": f"sympy_w_{name}",
             "hand": f"hand_w_{name}",
@@ -170,7 +175,8 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         lines.append(
             f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
             f"{sum(output_sizes(spec))}, {int(variant == 'ours_float32')}, "
-            f"lo_{name}, hi_{name}}},"
+            f"lo_{name}, hi_{name}, "
+            f"{f'prepare_{name}' if variant == 'ours_prepared' else '0'}}},"
         )
     lines.append(
         "    };\n"
@@ -205,6 +211,8 @@ def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
         variants = ["ours", "ours_float32", "casadi", "sympy"]
         if specs[name].returns_status:
             variants.append("ours_unchecked")
+        if specs[name].prepared:
+            variants.append("ours_prepared")
         if name in HAND_WRITTEN:
             variants.append("hand")
         if name in HAND_CHECKED:

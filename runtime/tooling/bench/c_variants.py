@@ -102,6 +102,49 @@ def ours_wrapper(spec: FunctionSpec, prefix: str, real: str) -> str:
     )
 
 
+def prepared_wrapper(spec: FunctionSpec, prefix: str = "oursp") -> str:
+    """For a spec with ``prepared``: ``prepare_<name>``, which prepares the parameters of
+    every input set once (``wmr_model_prepare``, before any timing) into a table of
+    records (the prepared struct, then the other inputs), and ``<prefix>_<name>(record,
+    out)`` calling ``wmr_<name>_prepared`` on one record: the timed call."""
+    params = spec.inputs[0]
+    if params.kind != "params" or any(a.kind == "params" for a in spec.inputs[1:]):
+        raise ValueError(f"{spec.name}: the parameters must be the only params input, first")
+    n_p = len(params.all_symbols())
+    n_rest = input_size(spec) - n_p
+    fields = ", ".join(f"x[{k}]" for k in range(n_p))
+    args, off = [], 0
+    for a in spec.inputs[1:]:
+        args.append(f"r->x + {off}")
+        off += len(a.all_symbols())
+    outs, o = [], 0
+    for size in output_sizes(spec):
+        outs.append(f"out + {o}")
+        o += size
+    name = spec.name
+    return (
+        f"typedef struct {{ wmr_model_prepared_t prepared; double x[{n_rest}]; }} "
+        f"prep_{name}_t;\n"
+        f"static prep_{name}_t prep_{name}_table[NSETS];\n"
+        f"static const void *prepare_{name}(const double *in, int nsets, int n_in, "
+        f"size_t *stride)\n{{\n"
+        f"    int set, k;\n"
+        f"    for (set = 0; set < nsets; ++set) {{\n"
+        f"        const double *x = in + set * n_in;\n"
+        f"        const wmr_params_t p = {{{fields}}};\n"
+        f"        prep_{name}_t *r = &prep_{name}_table[set];\n"
+        f"        if (wmr_model_prepare(&p, &r->prepared) != WMR_OK) r->prepared.magic = 0;\n"
+        f"        for (k = 0; k < {n_rest}; ++k) r->x[k] = x[{n_p} + k];\n"
+        f"    }}\n"
+        f"    *stride = sizeof prep_{name}_table[0];\n"
+        f"    return prep_{name}_table;\n}}\n"
+        f"static void {prefix}_{name}(const void *in_, void *out_)\n{{\n"
+        f"    const prep_{name}_t *r = (const prep_{name}_t *)in_;\n"
+        f"    double *out = (double *)out_;\n"
+        f"    wmr_{name}_prepared(&r->prepared, {', '.join(args + outs)});\n}}\n"
+    )
+
+
 def casadi_wrapper(spec: FunctionSpec) -> str:
     sizes = [len(a.all_symbols()) for a in spec.inputs]
     offs = np.cumsum([0, *sizes])[:-1]
@@ -122,11 +165,14 @@ HARNESS = r"""
 #include <stdio.h>
 #include <time.h>
 
-typedef void (*bench_fn)(const void *in, void *out);
-typedef struct { const char *function; const char *variant; bench_fn fn; int n_in; int n_out;
-                 int is_float; const double *lo; const double *hi; } bench_case;
-
 #define NSETS 256
+typedef void (*bench_fn)(const void *in, void *out);
+/* A variant whose inputs are records of its own (the prepared parameters and the other
+   inputs), built from the input sets once, before it is checked or timed. */
+typedef const void *(*bench_prep)(const double *in, int nsets, int n_in, size_t *stride);
+typedef struct { const char *function; const char *variant; bench_fn fn; int n_in; int n_out;
+                 int is_float; const double *lo; const double *hi; bench_prep prep; } bench_case;
+
 #define MAX_REPEATS 64
 static double now_ns(void) {
     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -141,8 +187,9 @@ static double din[NSETS * 512], dout[512];
 static float fin[NSETS * 512], fout[512];
 static double ref_out[NSETS * 64];
 
-/* The same inputs for every variant of a function. */
-static void fill(const bench_case *c) {
+/* The same inputs for every variant of a function; a variant with records of its own
+   gets them here (built from the same input sets, outside any timing). */
+static const char *fill(const bench_case *c, size_t *stride) {
     int k;
     rng = 88172645463325252ULL;
     for (k = 0; k < NSETS * c->n_in; ++k) {
@@ -150,6 +197,8 @@ static void fill(const bench_case *c) {
         din[k] = c->lo[j] + (c->hi[j] - c->lo[j]) * urand();
         fin[k] = (float)din[k];
     }
+    *stride = 0;
+    return c->prep ? (const char *)c->prep(din, NSETS, c->n_in, stride) : 0;
 }
 
 /* Before any timing: every variant's outputs on the NSETS inputs against the first
@@ -158,10 +207,12 @@ static void fill(const bench_case *c) {
 static int check(const bench_case *c, int is_ref) {
     int set, k;
     double scale = 1.0, worst = 0.0;
-    fill(c);
+    size_t stride;
+    const char *records = fill(c, &stride);
     for (set = 0; set < NSETS; ++set) {
         for (k = 0; k < c->n_out; ++k) { dout[k] = 0.0; fout[k] = 0.0f; }
-        if (c->is_float) c->fn(fin + set * c->n_in, fout);
+        if (records) c->fn(records + (size_t)set * stride, dout);
+        else if (c->is_float) c->fn(fin + set * c->n_in, fout);
         else c->fn(din + set * c->n_in, dout);
         for (k = 0; k < c->n_out; ++k) {
             const double x = c->is_float ? (double)fout[k] : dout[k];
@@ -182,11 +233,15 @@ static int check(const bench_case *c, int is_ref) {
 static double time_once(const bench_case *c, long calls, double *sink) {
     long i;
     double t0, t1;
-    fill(c);
+    size_t stride;
+    const char *records = fill(c, &stride);
     t0 = now_ns();
     for (i = 0; i < calls; ++i) {
         const int set = (int)(i & (NSETS - 1));
-        if (c->is_float) {
+        if (records) {
+            c->fn(records + (size_t)set * stride, dout);
+            *sink += dout[i % c->n_out];
+        } else if (c->is_float) {
             c->fn(fin + set * c->n_in, fout);
             *sink += (double)fout[i % c->n_out];
         } else {

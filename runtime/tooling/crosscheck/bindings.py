@@ -82,10 +82,20 @@ class CModel:
     def read(self, buf: Any, n: int) -> Arr:
         return np.array([buf[i] for i in range(n)], dtype=np.float64)
 
+    def prepared(self, p: Mapping[str, float]) -> Any:
+        """``<prefix>_model_prepared_t`` filled by ``<prefix>_model_prepare`` from ``p``."""
+        out = self.ffi.new(f"{self.prefix}_model_prepared_t *")
+        status = getattr(self.c, f"{self.prefix}_model_prepare")(self.params(p), out)
+        if status != 0:
+            raise RuntimeError(f"{self.prefix}_model_prepare returned {status}")
+        return out
+
     def call(self, fn: str, p: Mapping[str, float], args: Sequence[Any], n_out: int) -> Arr:
-        """``<prefix>_<fn>(params, args..., out)`` with one output of ``n_out`` values."""
+        """``<prefix>_<fn>(params, args..., out)`` with one output of ``n_out`` values; a
+        ``<name>_prepared`` function gets the parameters prepared instead."""
         out = self.out(n_out)
-        status = getattr(self.c, f"{self.prefix}_{fn}")(self.params(p), *map(self.arr, args), out)
+        first = self.prepared(p) if fn.endswith("_prepared") else self.params(p)
+        status = getattr(self.c, f"{self.prefix}_{fn}")(first, *map(self.arr, args), out)
         if status not in (None, 0):
             raise RuntimeError(f"{self.prefix}_{fn} returned {status}")
         return self.read(out, n_out)

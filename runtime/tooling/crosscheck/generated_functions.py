@@ -9,6 +9,11 @@ and with ``casadi/<name>.casadi`` (inputs by name; a parameter struct is one vec
 fields in the order of the CasADi manifest ``casadi/*.casadi.txt``). A function missing on
 one side is a failing row.
 
+The C prepare-parameters API is checked the same way: ``<prefix>_<name>_prepared`` (C only)
+is a row of its own against the NumPy and CasADi ``<name>``, its prepared struct filled from
+the same parameters by the module's ``<prefix>_<module>_prepare`` (a function whose only
+output is a ``*_prepared_t`` struct; not a row itself).
+
 Inputs, by argument name (sizes from the header):
 
 * a parameter struct: ``<prefix>_params_t`` → the robot's parameters, each scaled by a
@@ -80,8 +85,21 @@ class CArg:
 
 
 @dataclass(frozen=True)
+class Prepare:
+    """A C prepare function: ``<prefix>_<name>(inputs..., <ctype> *out)``."""
+
+    name: str
+    inputs: tuple[CArg, ...]
+    ctype: str  # the prepared struct it fills
+
+
+@dataclass(frozen=True)
 class Function:
-    """One generated function: its NumPy callable and argument names, its C prototype."""
+    """One generated function: its NumPy callable and argument names, its C prototype.
+
+    ``reference``: the NumPy and CasADi function it is compared with (its own name, or
+    ``<name>`` for a C ``<name>_prepared``); ``prepares``: the prepare function of each
+    prepared struct it takes, by ctype."""
 
     module: str
     name: str
@@ -89,10 +107,21 @@ class Function:
     python_args: tuple[str, ...]
     c_args: tuple[CArg, ...] | None
     returns_status: bool
+    reference: str = ""
+    prepares: tuple[tuple[str, Prepare], ...] = ()
 
     @property
     def inputs(self) -> tuple[CArg, ...]:
         return tuple(a for a in self.c_args or () if not a.output)
+
+    def value_inputs(self) -> tuple[CArg, ...]:
+        """The inputs values are drawn for: a prepared struct stands for its prepare
+        function's inputs."""
+        prepares = dict(self.prepares)
+        out: list[CArg] = []
+        for a in self.inputs:
+            out += prepares[a.ctype].inputs if a.ctype in prepares else [a]
+        return tuple(out)
 
     @property
     def outputs(self) -> tuple[CArg, ...]:
@@ -135,20 +164,38 @@ def _manifest_fields(casadi_dir: Path) -> dict[tuple[str, str], tuple[str, ...]]
     return fields
 
 
+def _prepare_functions(protos: Mapping[str, tuple[tuple[CArg, ...], bool]]) -> dict[str, Prepare]:
+    """The prepare functions among ``protos``, by the ctype of the struct each fills."""
+    out: dict[str, Prepare] = {}
+    for name, (args, _) in protos.items():
+        outputs = [a for a in args if a.output]
+        if (name.endswith("_prepare") and len(outputs) == 1 and outputs[0].struct
+                and outputs[0].ctype.endswith("_prepared_t")):
+            out[outputs[0].ctype] = Prepare(name, tuple(a for a in args if not a.output),
+                                            outputs[0].ctype)
+    return out
+
+
 def functions(target: Target) -> list[Function]:
     """Every generated function of the target's model, laws and plant modules (NumPy
-    ``__all__`` ∪ C prototypes)."""
+    ``__all__`` ∪ C prototypes; a C ``<name>_prepared`` compared with ``<name>``)."""
     out = []
     for module in MODULES:
         py = getattr(target.code, module)
         header = target.c_dir / f"{target.prefix}_{module}.h"
         protos = parse_header(header, target.prefix) if header.is_file() else {}
-        names = sorted(set(getattr(py, "__all__", ())) | set(protos))
+        prepares = _prepare_functions(protos)
+        setup = {p.name for p in prepares.values()}
+        exported = set(getattr(py, "__all__", ()))
+        names = sorted((exported | set(protos)) - setup)
         for name in names:
-            fn = getattr(py, name, None) if name in getattr(py, "__all__", ()) else None
-            args = tuple(inspect.signature(fn).parameters) if fn is not None else ()
             c_args, status = protos.get(name, (None, False))
-            out.append(Function(module, name, fn, args, c_args, status))
+            used = tuple((a.ctype, prepares[a.ctype]) for a in c_args or ()
+                         if not a.output and a.ctype in prepares)
+            reference = name.removesuffix("_prepared") if used else name
+            fn = getattr(py, reference, None) if reference in exported else None
+            args = tuple(inspect.signature(fn).parameters) if fn is not None else ()
+            out.append(Function(module, name, fn, args, c_args, status, reference, used))
     return out
 
 
@@ -215,7 +262,7 @@ def _inputs(
 ) -> dict[str, Any]:
     """Input name -> value (a parameter mapping or a flat array) for ``impl``."""
     values: dict[str, Any] = {}
-    for arg in fn.inputs:
+    for arg in fn.value_inputs():
         if arg.struct:
             v: Any = perturbed(_struct_values(target, arg, sample), impl, perturb)
             values[arg.name] = {k: f32(x) for k, x in v.items()} if float32 else v
@@ -233,10 +280,22 @@ def _python(fn: Function, values: Mapping[str, Any]) -> list[Arr]:
 
 
 def _c(cm: CModel, fn: Function, values: Mapping[str, Any]) -> list[Arr]:
+    def value(arg: CArg) -> Any:
+        return cm.struct(arg.ctype, values[arg.name]) if arg.struct else cm.arr(values[arg.name])
+
+    prepares = dict(fn.prepares)
     args = []
     for arg in fn.inputs:
-        args.append(cm.struct(arg.ctype, values[arg.name]) if arg.struct
-                    else cm.arr(values[arg.name]))
+        if arg.ctype in prepares:  # filled by its prepare function from the same values
+            prep = prepares[arg.ctype]
+            prepared = cm.ffi.new(f"{arg.ctype} *")
+            status = getattr(cm.c, f"{cm.prefix}_{prep.name}")(*map(value, prep.inputs),
+                                                               prepared)
+            if status != 0:
+                raise RuntimeError(f"{cm.prefix}_{prep.name} returned {status}")
+            args.append(prepared)
+        else:
+            args.append(value(arg))
     outs = [cm.out(arg.size) for arg in fn.outputs]
     status = getattr(cm.c, f"{cm.prefix}_{fn.name}")(*args, *outs)
     if fn.returns_status and status != 0:
@@ -247,16 +306,17 @@ def _c(cm: CModel, fn: Function, values: Mapping[str, Any]) -> list[Arr]:
 def _casadi(target: Target, fn: Function, values: Mapping[str, Any]) -> list[Arr]:
     from runtime.tooling.crosscheck.bindings import casadi_function
 
-    f = casadi_function(target, fn.name)
+    name = fn.reference or fn.name
+    f = casadi_function(target, name)
     fields = _manifest_fields(target.casadi_dir)
     args = []
     for i in range(f.n_in()):
-        name = f.name_in(i)
-        v = values[name]
+        arg = f.name_in(i)
+        v = values[arg]
         if isinstance(v, Mapping):
-            v = [v[k] for k in fields[(fn.name, name)]]
+            v = [v[k] for k in fields[(name, arg)]]
         args.append(v)
-    return casadi_call(target, fn.name, *args)
+    return casadi_call(target, name, *args)
 
 
 def _missing(fn: Function, target: Target) -> str:
@@ -264,9 +324,9 @@ def _missing(fn: Function, target: Target) -> str:
         return "no NumPy function"
     if fn.c_args is None:
         return "no C prototype"
-    if not (target.casadi_dir / f"{fn.name}.casadi").is_file():
+    if not (target.casadi_dir / f"{fn.reference or fn.name}.casadi").is_file():
         return "no CasADi function"
-    if set(fn.python_args) != {a.name for a in fn.inputs}:
+    if set(fn.python_args) != {a.name for a in fn.value_inputs()}:
         return "arguments differ"
     return ""
 

@@ -28,15 +28,20 @@ from runtime.tooling.crosscheck.inputs import model_args
 from runtime.tooling.crosscheck.targets import Target
 
 ModelFn = Callable[[str, Params, tuple[Arr, ...]], Arr]
-# name, hand-written function, argument layout, generated python name, C name, output size
-MODEL_FUNCTIONS: tuple[tuple[str, Callable[..., Arr], str, int], ...] = (
-    ("M (14)", hw.mass_matrix_14, "mass_matrix", 25),
-    ("H (14)", hw.bias_14, "bias_forces", 5),
-    ("forward dynamics (14)", hw.forward_dynamics_14, "forward_dynamics", 5),
-    ("kinematics (31)", hw.kinematics_31, "kinematics", 3),
-    ("Mbar = S'MS", hw.minimal_mass_matrix, "minimal_mass_matrix", 4),
-    ("Hbar = S'(M Sdot eta + H)", hw.minimal_bias, "minimal_bias_forces", 2),
-    ("minimal forward dynamics", hw.minimal_forward_dynamics, "minimal_forward_dynamics", 2),
+# name, hand-written function, generated function (argument layout, NumPy and CasADi name),
+# output size, C name (the generated name unless given)
+MODEL_FUNCTIONS: tuple[tuple[str, Callable[..., Arr], str, int, str], ...] = (
+    ("M (14)", hw.mass_matrix_14, "mass_matrix", 25, ""),
+    ("H (14)", hw.bias_14, "bias_forces", 5, ""),
+    ("forward dynamics (14)", hw.forward_dynamics_14, "forward_dynamics", 5, ""),
+    # C: wmr_model_prepare once per sample, then wmr_forward_dynamics_prepared
+    ("forward dynamics, prepared", hw.forward_dynamics_14, "forward_dynamics", 5,
+     "forward_dynamics_prepared"),
+    ("kinematics (31)", hw.kinematics_31, "kinematics", 3, ""),
+    ("Mbar = S'MS", hw.minimal_mass_matrix, "minimal_mass_matrix", 4, ""),
+    ("Hbar = S'(M Sdot eta + H)", hw.minimal_bias, "minimal_bias_forces", 2, ""),
+    ("minimal forward dynamics", hw.minimal_forward_dynamics, "minimal_forward_dynamics", 2,
+     ""),
 )
 
 
@@ -48,7 +53,8 @@ def check_models(
     model = target.code.model
     cm = {"c64": CModel(target, False), "c32": CModel(target, True)}
     rows = []
-    for title, ref_fn, gen, n_out in MODEL_FUNCTIONS:
+    for title, ref_fn, gen, n_out, c_name in MODEL_FUNCTIONS:
+        c_fn = c_name or gen
         row = Row(title)
         results: dict[str, list[Arr]] = {k: [] for k in (*IMPLS, "ref", "ref32")}
         for p, q, eta, tau in samples:
@@ -57,7 +63,7 @@ def check_models(
             results["python"].append(
                 np.ravel(getattr(model, gen)(*args, perturbed(p, "python", perturb)))
             )
-            results["c64"].append(cm["c64"].call(gen, perturbed(p, "c64", perturb), args, n_out))
+            results["c64"].append(cm["c64"].call(c_fn, perturbed(p, "c64", perturb), args, n_out))
             results["casadi"].append(
                 casadi_call(target, gen, pvec(target, perturbed(p, "casadi", perturb)), *args)[0]
             )
@@ -66,7 +72,7 @@ def check_models(
             args32 = tuple(f32(a) for a in model_args(gen, f32(q), f32(eta), f32(tau), p32))
             results["ref32"].append(np.ravel(ref_fn(*args32, p32)))
             results["c32"].append(
-                cm["c32"].call(gen, perturbed(p32, "c32", perturb), args32, n_out)
+                cm["c32"].call(c_fn, perturbed(p32, "c32", perturb), args32, n_out)
             )
         for impl in IMPLS:
             dev = Deviation()
