@@ -56,7 +56,8 @@ TOY_GUARDS = {
     "temps": [("t0", "p->J_theta*p->radius_l")],
     "mbar": [("t0", ""), ("TOY_LIT(0.0)", ""), ("TOY_LIT(0.0)", ""), ("t0", "")],
     "minors": [("mbar[0]", "(S^T M S)[0][0] > 0"),
-               ("mbar[0]*mbar[3] - mbar[1]*mbar[2]", "det(S^T M S) > 0: a positive-definite model")],
+               ("mbar[0]*mbar[3] - mbar[1]*mbar[2]",
+                "det(S^T M S) > 0: a positive-definite model")],
 }
 
 

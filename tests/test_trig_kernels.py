@@ -13,8 +13,7 @@ import numpy as np
 import pytest
 
 from codegen.robot_functions import law_specs, trig_angles
-from modeling.robot_file import load_robot_model
-from modeling.robot_file import shipped_robot_files
+from modeling.robot_file import load_robot_model, shipped_robot_files
 
 ROBOTS = {p.stem: p for p in shipped_robot_files()}
 
