@@ -21,6 +21,7 @@ shared/cases/small_robot.toml (tests/robots/small_robot.toml):
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -307,18 +308,24 @@ TOY_STATUS = (StatusCode("WMR_OK", 0, "ok"), StatusCode("WMR_ERR_NONFINITE_INPUT
               StatusCode("WMR_ERR_NOT_INITIALISED", -15, ""))
 
 
-def _toy_spec() -> Any:
+def _toy_spec(variant: str = "state guard") -> Any:
+    """A toy with a parameter guard and sin(t) (a library call: t is checked first); by
+    ``variant``: a guard on the state ("state guard"), none ("lazy"): x reaches the results
+    through +, -, * only, so it is checked only when a guard or the results fail; a
+    division by x ("division"): x is checked right away."""
     from codegen.spec import Argument, Field, FunctionSpec, Guard
 
     params = Argument("p", "params", fields=(Field("a", (a,)), Field("c", (c,))))
     state = Argument("s", "array", (2, 1), (x, t))
+    last = 1 / (x**2 + 1) if variant == "division" else (c + 2) * (x - 1) / a
     outputs = (Argument("y", "array", (3, 1), exprs=(
         a * c * x + a * c + sp.sin(t) * c / a,
-        x**2 * c / (a**2 + 1) + sp.cos(t) * x,
-        (c + 2) * (x - 1) / a,
+        x**2 * c / (a**2 + 1) + sp.cos(t) * x + sp.sin(t) * t,
+        last,
     )),)
-    guards = (Guard("WMR_ERR_BAD_PARAMS", a, "a > 0"),
-              Guard("WMR_ERR_BAD_PARAMS", c - x, "x < c"))
+    guards = (Guard("WMR_ERR_BAD_PARAMS", a, "a > 0"),)
+    if variant == "state guard":
+        guards += (Guard("WMR_ERR_BAD_PARAMS", c - x, "x < c"),)
     return FunctionSpec("toy", "a toy", (params, state), outputs, returns_status=True,
                         guards=guards, nonfinite_input="WMR_ERR_NONFINITE_INPUT",
                         nonfinite_output="WMR_ERR_NONFINITE_OUTPUT", prepared=True)
@@ -343,15 +350,24 @@ def test_split_of_a_toy_function() -> None:
         function_ir(replace(spec, returns_status=False))
 
 
-def test_toy_renders_and_agrees_bit_for_bit(tmp_path: Path) -> None:
+@pytest.mark.parametrize("variant", ["state guard", "lazy", "division"])
+def test_toy_renders_and_agrees_bit_for_bit(tmp_path: Path, variant: str) -> None:
+    """The toy's C in both precisions: prepared = unprepared (status and bits), with the
+    x check where the variant says; no division per call (but the one by x)."""
+    spec = _toy_spec(variant)
     config = CConfig(status_codes=TOY_STATUS)
-    files = c_backend.render([_toy_spec()], "wmr_toy", config)
-    files.update(c_backend.render_types([_toy_spec()], config))
+    files = c_backend.render([spec], "wmr_toy", config)
+    files.update(c_backend.render_types([spec], config))
     for name, text in files.items():
         (tmp_path / name).write_text(text)
     assert "WMR_ERR_NOT_INITIALISED" in files["wmr_toy.c"]
-    prepared_c = files["wmr_toy.c"].split("wmr_toy_prepared(", 1)[1]
-    assert "/" not in prepared_c.split("{", 1)[1].replace("/*", "").replace("*/", "")
+    prepared_c = files["wmr_toy.c"].split("wmr_toy_prepared(", 1)[1].split("\n}\n", 1)[0]
+    code = re.sub(r"/\*.*?\*/", "", prepared_c, flags=re.S)
+    assert code.count("/") == (1 if variant == "division" else 0), code
+    # x is checked when a later check fails only if nothing but +, -, * leads it to the
+    # results; else right after it is loaded
+    with_results = "an input not checked yet" in prepared_c
+    assert with_results == (variant != "division")
     libs = {}
     for float32 in (False, True):
         flags = [*STRICT, "-O2", *(["-DWMR_FLOAT32"] if float32 else [])]
@@ -361,13 +377,15 @@ def test_toy_renders_and_agrees_bit_for_bit(tmp_path: Path) -> None:
             float32=float32, flags=flags, include_dirs=[tmp_path])
     rng = np.random.default_rng(29)
     seen = set()
-    for lib in libs.values():
+    for float32, lib in libs.items():
         ffi, c_lib = lib.ffi, lib.lib
-        for _ in range(300):
+        for _ in range(400):
             pa, pc = rng.uniform(-1, 3), rng.uniform(-2, 2)
             s = [rng.uniform(-3, 3), rng.uniform(-4, 4)]
-            if rng.uniform() < 0.1:
-                s[rng.integers(2)] = math.nan
+            if rng.uniform() < 0.15:
+                s[rng.integers(2)] = [math.nan, math.inf, -math.inf][rng.integers(3)]
+            elif rng.uniform() < 0.1:  # x*x overflows
+                s[0] = (1e30 if float32 else 1e200) * (1 if rng.uniform() < 0.5 else -1)
             p = ffi.new("wmr_params_t *", {"a": pa, "c": pc})
             prepared = ffi.new("wmr_toy_prepared_t *")
             out1, out2 = ffi.new("wmr_real_t[3]", [7.0] * 3), ffi.new("wmr_real_t[3]", [7.0] * 3)
@@ -377,10 +395,12 @@ def test_toy_renders_and_agrees_bit_for_bit(tmp_path: Path) -> None:
                 got = c_lib.wmr_toy_prepared(prepared, ffi.new("wmr_real_t[]", s), out2)
                 assert (got, list(out2)) == (want, list(out1))
             else:  # the unprepared function reports a NaN state before bad parameters
-                assert want == (-2 if math.isnan(sum(s)) else status), (want, status, s)
+                finite = all(math.isfinite(v) for v in s)
+                assert want == (status if finite else -2), (want, status, s)
                 assert list(out1) == [7.0] * 3
             seen.add(int(want))
-    assert seen == {0, -2, -3}  # OK, a NaN state, a > 0 or x < c violated
+    # OK, a non-finite state, a > 0 (or x < c) violated, an overflow
+    assert seen == {0, -2, -3, -4}
 
 
 def test_collect_factors_shares_a_factor_per_sum() -> None:

@@ -258,10 +258,6 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan(((thetadot_r - thetadot_r) + (thetadot_l - thetadot_l))
-            + ((tau_r - tau_r) + (tau_l - tau_l))) != 0) {
-        return WMR_ERR_NONFINITE_INPUT;
-    }
     const wmr_real_t b = prepared->forward_dynamics[0];
     const wmr_real_t _t14 = _t13*b;
     const wmr_real_t _t0 = prepared->forward_dynamics[1];
@@ -293,6 +289,11 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
     const wmr_real_t r_3 = _t24;
     const wmr_real_t r_4 = _t27;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
+        /* an input not checked yet, reaching the results through +, -, * only */
+        if (isnan(((thetadot_r - thetadot_r) + (thetadot_l - thetadot_l))
+                + ((tau_r - tau_r) + (tau_l - tau_l))) != 0) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;

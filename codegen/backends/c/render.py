@@ -41,6 +41,7 @@ from codegen.layout import (
     local_names,
     split_fields,
 )
+from codegen.prepare import PreparedForm
 from codegen.printer_base import FUNCTIONS
 from codegen.spec import Argument, Field, FunctionSpec
 
@@ -218,6 +219,9 @@ class _Line:
     value: str = ""  # decl, store: the value; check: the condition that fails
     status: str = ""  # check: what it returns
     doc: str = ""  # check: its comment
+    inner: str = ""  # check: a condition that, when the check fails, returns inner_status
+    inner_status: str = ""
+    inner_doc: str = ""
 
 
 def _decl(name: str, value: str) -> _Line:
@@ -271,15 +275,21 @@ def _output_stores(
     return stores
 
 
-def _commit(spec: FunctionSpec, stores: list[tuple[str, str]]) -> list[_Line]:
+def _commit(
+    spec: FunctionSpec, stores: list[tuple[str, str]], late_inputs: Sequence[str] = ()
+) -> list[_Line]:
     """The stores; for a checked function, into locals first, the finite-output check,
-    then the stores: no output written on error."""
+    then the stores: no output written on error. ``late_inputs`` are inputs not checked
+    yet, whose non-finite values are known to make a result non-finite: checked only when
+    a result is not finite, for the input status."""
     if not (spec.returns_status and spec.nonfinite_output):
         return [_Line("store", target, value) for target, value in stores]
     results = [f"r_{k}" for k in range(len(stores))]
+    check = _with_late_check(_nonfinite_check(results, spec.nonfinite_output), late_inputs,
+                             spec.nonfinite_input)
     return [
         *(_decl(r, value) for r, (_, value) in zip(results, stores, strict=True)),
-        *_nonfinite_check(results, spec.nonfinite_output),
+        *check,
         *(_Line("store", target, r) for r, (target, _) in zip(results, stores, strict=True)),
     ]
 
@@ -478,6 +488,73 @@ def _is_call(e: sp.Expr, inputs: frozenset[sp.Symbol]) -> bool:
             and e.free_symbols <= inputs)
 
 
+def _keeps_nonfinite(e: sp.Basic, tainted: set[sp.Basic]) -> bool:
+    """True if every path from a ``tainted`` symbol to the value of ``e`` is +, -, * and
+    positive integer powers: then a NaN or infinite tainted value makes ``e`` NaN or
+    infinite (IEEE 754: inf - inf and 0 * inf are NaN), and no library function or
+    divisor sees it. Subexpressions without a tainted symbol are leaves."""
+    if not (e.free_symbols & tainted) or e.is_Symbol:
+        return True
+    if isinstance(e, (sp.Add, sp.Mul)):
+        return all(_keeps_nonfinite(a, tainted) for a in e.args)
+    if isinstance(e, sp.Pow):
+        return (bool(e.exp.is_Integer and e.exp > 0)
+                and _keeps_nonfinite(e.base, tainted))
+    return False
+
+
+@dataclass(frozen=True)
+class _StateInputs:
+    """How a prepared form's state inputs are checked (both C functions do the same).
+
+    ``calls``: the math-library calls of inputs (``sin(theta)``), evaluated first;
+    ``early``: the inputs they read, checked before them; ``late``: the other inputs read.
+    ``lazy``: every late input reaches a result, and only through +, -, * and positive
+    integer powers, so a non-finite one makes a result non-finite; the prepared function
+    then checks them only when a later check fails (a per-call guard, the finite-output
+    check), before that check's status: the same statuses, one check fewer when all is
+    well. (Not in the function without prepare: its parameter guards come first, and
+    checking the late inputs on their failure paths would load them before the library
+    calls, to be held across them.)
+    """
+
+    calls: tuple[Temp, ...]
+    early: frozenset[sp.Symbol]
+    late: frozenset[sp.Symbol]
+    lazy: bool
+
+
+def _state_inputs(form: PreparedForm) -> _StateInputs:
+    used = form.used_state()
+    calls = tuple((s, e) for s, e in form.state_temps if _is_call(e, used))
+    early = frozenset().union(*(e.free_symbols for _, e in calls)) if calls else used
+    late = used - early
+    tainted: set[sp.Basic] = set(late)  # the late inputs and what is computed from them
+    for t, e in form.state_temps:
+        if e.free_symbols & tainted:
+            tainted.add(t)
+    results = [e for exprs in form.outputs for e in exprs]
+    reach: set[sp.Basic] = {v for e in results for v in e.free_symbols}
+    for t, e in reversed(form.state_temps):  # what the results depend on
+        if t in reach:
+            reach |= e.free_symbols
+    lazy = (bool(late) and bool(form.spec.nonfinite_output) and late <= reach
+            and all(_keeps_nonfinite(e, tainted)
+                    for e in [*(e for _, e in form.state_temps), *results]))
+    return _StateInputs(calls, frozenset(early), frozenset(late), lazy)
+
+
+def _with_late_check(lines: list[_Line], late: Sequence[str], status: str) -> list[_Line]:
+    """``lines`` (checks) that, failing, first return ``status`` if a late input is not
+    finite."""
+    if not late:
+        return lines
+    return [replace(line, inner=_any_nonfinite(late), inner_status=status,
+                    inner_doc="an input not checked yet, reaching the results through "
+                    "+, -, * only")
+            for line in lines]
+
+
 def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[str, object]:
     """``<name>_prepared(prepared, inputs..., outputs...)``: the per-call part, reading
     the prepared values instead of the parameters.
@@ -485,7 +562,9 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
     Ordered for the call: the magic word; the inputs of the math-library calls of inputs
     (``sin(theta)``), their check and the calls; the other inputs and their check; then
     the rest, each prepared value read just before its first use (nothing is held across
-    a library call that the call does not need)."""
+    a library call that the call does not need). When the other inputs reach the results
+    through +, -, * only, their check moves into the finite-output check's failure branch
+    (see ``lazy``): the same statuses, one check fewer on the path that succeeds."""
     spec, form = ir.spec, ir.prepared
     assert form is not None
     slots = input_slots(spec)
@@ -496,18 +575,22 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
     state_slots = [s for s in slots if s.symbol not in form.params]
     not_init = f"{config.macro_prefix}ERR_NOT_INITIALISED"
 
-    calls = [(s, e) for s, e in form.state_temps if _is_call(e, used)]
-    early = frozenset().union(*(e.free_symbols for _, e in calls)) if calls else used
+    inputs = _state_inputs(form)
+    calls = inputs.calls
     body = [_Line("void", a.name) for a in state_args
             if not any(s in used for s in a.all_symbols())]
     body.append(_Line("check", value=f"{PREPARED_ARG}->magic != {api.magic_macro}",
                       status=not_init))
-    for part in (early, used - early):
+    late_names: list[str] = []
+    for part in (inputs.early, inputs.late):
         loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config))
                  for s in state_slots if s.symbol in part]
         body += [_decl(n, v) for n, v in loads]
-        body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
-        if part is early:
+        if part is inputs.early or not inputs.lazy:
+            body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+        else:
+            late_names = [n for n, _ in loads]
+        if part is inputs.early:
             body += [_decl(str(s), printer.expr_code(e)) for s, e in calls]
     slot_of = {s: k for k, s in enumerate(form.kept)}
     loaded: set[sp.Symbol] = set()
@@ -524,9 +607,9 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
             body.append(_decl(str(s), printer.expr_code(e)))
     body += load_for([g for _, g in form.state_guards])
     guards = _guard_lines(spec, form.state_guards, printer, config)
-    body += guards
+    body += _with_late_check(guards, late_names, spec.nonfinite_input)
     body += load_for([e for exprs in form.outputs for e in exprs])
-    body += _commit(spec, _output_stores(spec, form.outputs, printer, config))
+    body += _commit(spec, _output_stores(spec, form.outputs, printer, config), late_names)
     ops = op_count_from(printer.ops)
 
     name = f"{api.function}_prepared"

@@ -1258,10 +1258,6 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-            + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
-        return TRAILER_ERR_NONFINITE_INPUT;
-    }
     const trailer_real_t radius_left = prepared->forward_dynamics[5];
     const trailer_real_t _t144 = radius_left*thetadot_left;
     const trailer_real_t radius_right = prepared->forward_dynamics[6];
@@ -1970,9 +1966,19 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t _t430 = TRAILER_LIT(93278.0)*_t194;
     const trailer_real_t _t431 = TRAILER_LIT(72322.0)*_t198;
     if (!(_t189 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        /* an input not checked yet, reaching the results through +, -, * only */
+        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
+                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+            return TRAILER_ERR_NONFINITE_INPUT;
+        }
         return TRAILER_ERR_BAD_PARAMS;
     }
     if (!(_t190 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+        /* an input not checked yet, reaching the results through +, -, * only */
+        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
+                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+            return TRAILER_ERR_NONFINITE_INPUT;
+        }
         return TRAILER_ERR_BAD_PARAMS;
     }
     const trailer_real_t _t136 = prepared->forward_dynamics[92];
@@ -2028,6 +2034,11 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
             + _t424*(-_t162 + _t163) + _t427*(_t162 - _t163));
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
             + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
+        /* an input not checked yet, reaching the results through +, -, * only */
+        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
+                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+            return TRAILER_ERR_NONFINITE_INPUT;
+        }
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
