@@ -89,15 +89,24 @@ def minor_doc(k: int, n: int) -> str:
     return f"leading {k}x{k} minor of S^T M S > 0"
 
 
+def guard_mass_matrix(model: RobotModel) -> sp.Matrix:
+    """SᵀMS as the parameter guards read it: the same grouped entries as the forward
+    dynamics, so CSE shares them. Its leading minors must be positive (Sylvester)."""
+    return model.system.minimal_mass_matrix.applyfunc(model.evaluation_form)
+
+
+def positive_parameters(model: RobotModel) -> list[tuple[sp.Symbol, str]]:
+    """(symbol, doc) of each parameter the guards require positive."""
+    by_key = {p.key: p.symbol for p in model.params}
+    return [(by_key[k], f"{k} > 0") for k in model.positive]
+
+
 @cache
 def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
-    # The same grouped entries as the forward dynamics, so CSE shares them.
-    mbar = model.system.minimal_mass_matrix.applyfunc(model.evaluation_form)
-    by_key = {p.key: p.symbol for p in model.params}
     bad = status(model, "ERR_BAD_PARAMS")
-    positive = [Guard(bad, by_key[k], f"{k} > 0") for k in model.positive]
+    positive = [Guard(bad, symbol, doc) for symbol, doc in positive_parameters(model)]
     # Sylvester: all leading minors of S^T M S positive <=> positive definite.
-    minors = leading_minors(mbar)
+    minors = leading_minors(guard_mass_matrix(model))
     return (
         *positive,
         *(Guard(bad, m, minor_doc(k + 1, len(minors)))

@@ -27,7 +27,12 @@ from codegen.controller_api import (
     status_codes,
 )
 from codegen.controller_layout import ControllerLayout
-from codegen.robot_functions import leading_minors, minor_doc
+from codegen.robot_functions import (
+    guard_mass_matrix,
+    leading_minors,
+    minor_doc,
+    positive_parameters,
+)
 
 
 @cache
@@ -65,25 +70,20 @@ def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple
     q = 0 (row-major C expressions, doc empty); ``minors`` its leading minors over those
     entries (``mbar[k]``), positive exactly when SᵀMS is positive definite (Sylvester)."""
     model = target.model
-    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in model.params}
-    printer = CPrinter(config, names)
-    by_key = {p.key: p.symbol for p in model.params}
-    at_zero = {q: 0 for q in model.q}
-    mbar = model.system.minimal_mass_matrix.applyfunc(model.evaluation_form).subs(at_zero)
+    mbar = guard_mass_matrix(model).subs({q: 0 for q in model.q})
     n = mbar.rows
     entry = sp.Matrix(n, n, lambda i, j: sp.Symbol(f"mbar_{i * n + j}", real=True))
     on_entries = CPrinter(config, {e: f"mbar[{k}]" for k, e in enumerate(entry)})
     minors = [(on_entries.expr_code(m), minor_doc(k + 1, n))
               for k, m in enumerate(leading_minors(entry))]
     temps, (shared,) = sp.cse([mbar], symbols=sp.numbered_symbols("mbar_t"))
-    t_names = dict(names)
-    for k, (t, _) in enumerate(temps):
-        t_names[t] = f"t{k}"
-    on_temps = CPrinter(config, t_names)
+    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in model.params}
+    names.update({t: f"t{k}" for k, (t, _) in enumerate(temps)})
+    printer = CPrinter(config, names)
     return {
-        "positive": [(printer.expr_code(by_key[k]), f"{k} > 0") for k in model.positive],
-        "temps": [(f"t{k}", on_temps.expr_code(e)) for k, (_, e) in enumerate(temps)],
-        "mbar": [(on_temps.expr_code(e), "") for e in shared],
+        "positive": [(printer.expr_code(s), doc) for s, doc in positive_parameters(model)],
+        "temps": [(names[t], printer.expr_code(e)) for t, e in temps],
+        "mbar": [(printer.expr_code(e), "") for e in shared],
         "minors": minors,
     }
 
