@@ -6,10 +6,12 @@ reference's (rounded) state.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
 
+from runtime.generated_modules import controllers as pyctl
 from runtime.paper.handwritten import controllers as hc
 from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel
@@ -134,6 +136,11 @@ class CController:
             for i in range(hc.MAX_WINDOW):
                 st.omega_dnorm[i] = float(dnorm[i])
             st.omega_count = hist.omega_count
+        if "trig_prev" in self.state_fields:  # sin, cos of q(t-h)'s angles, as the step keeps
+            angles = pyctl.TRIG[int(self.cfg.formulation)] if hist.steps else ()
+            trig = [f(float(hist.q_prev[a])) for a in angles for f in (math.sin, math.cos)]
+            for i in range(len(st.trig_prev)):
+                st.trig_prev[i] = trig[i] if i < len(trig) else 0.0
         st.gain, st.s_norm, st.u_discarded = hist.gain, hist.s_norm, hist.u_discarded
         st.tau[0], st.tau[1] = float(hist.tau[0]), float(hist.tau[1])
 
