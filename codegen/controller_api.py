@@ -26,8 +26,9 @@ TORQUE_LIMIT_MAX = "1.0e6"  # tau_max [N m]
 NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|, 1)
 STEPS_MAX = "4294967295"  # the saturating step counter (uint32_t)
 # The configuration fingerprint kept in the state: FNV-1a (32 bit) in FNV_LANES interleaved
-# lanes (value k into lane k mod FNV_LANES: independent multiply chains), then FNV-1a of the
-# lanes. A value is one 32-bit word: an int as it is, a real's words folded as
+# lanes (value k into lane k mod FNV_LANES: independent multiply chains; the reals in struct
+# order, then the ints, so that the C hashes the reals in one loop), then FNV-1a of the lanes.
+# A value is one 32-bit word: an int as it is, a real's words folded as
 # w = (w * FNV_MIX) ^ word (a float's one word; a double's two, the high one off the chain).
 FNV_OFFSET = "2166136261"
 FNV_PRIME = "16777619"
@@ -166,8 +167,9 @@ def c_controller_context(
 def fingerprint_values(
     info: ControllerInfo, param_fields: list[str], nq: int
 ) -> list[tuple[str, str]]:
-    """The values the fingerprint hashes, in order, as (C expression on ``config``, "real"
-    or "int"): the nominal parameters, then ``config_fields`` with vectors entry by entry."""
+    """The values the fingerprint hashes, in struct order, as (C expression on ``config``,
+    "real" or "int"): the nominal parameters, then ``config_fields`` with vectors entry by
+    entry. The hash takes the reals in this order, then the ints."""
     out = [(f"config->nominal.{f}", "real") for f in param_fields]
     for name, kind, count in config_fields(info):
         if count == 0:

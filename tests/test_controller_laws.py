@@ -73,3 +73,29 @@ def test_tde_is_exact_for_a_constant_h1_under_zero_order_hold() -> None:
            **dict(zip(ts.qdot_then, [1.0, 2.0], strict=True))}
     est = h1.subs(sub)
     assert float((est - sp.Matrix([0.3, 0.4])).norm()) < 1e-12
+
+
+@pytest.mark.parametrize("robot", [None, "modeling/robots/trailer/trailer.toml"])
+def test_minimal_mass_inverse_norm_through_the_adjugate_matches_numpy(robot: str | None) -> None:
+    """The minimal form's ‖M̂⁻¹‖_F, built from M̂'s entries (adj M̂ / det M̂), equals the
+    norm of NumPy's inverse of the same M̂, at random parameters and (trailer) hitch angles,
+    and needs fewer operations than the expanded inverse."""
+    from modeling.robot_file import load_robot_model
+
+    model = load_robot_model(robot)[0]
+    cm = ctl.control_model("minimal", model)
+    assert cm.size <= ctl.ADJUGATE_NORM_MAX_SIZE
+    norm = ctl.mass_inverse_norm("minimal", model)
+    symbols = sorted(cm.mass.free_symbols | norm.free_symbols, key=str)
+    assert norm.free_symbols <= cm.mass.free_symbols
+    f_norm = sp.lambdify(symbols, norm, "numpy")
+    f_mass = sp.lambdify(symbols, cm.mass, "numpy")
+    rng = np.random.default_rng(3)
+    defaults = {p.symbol: float(model.values[p.key]) for p in model.params}
+    for _ in range(20):
+        values = [defaults[s] * rng.uniform(0.5, 2.0) if s in defaults else rng.uniform(-1.2, 1.2)
+                  for s in symbols]
+        expected = np.linalg.norm(np.linalg.inv(np.asarray(f_mass(*values), dtype=float)))
+        assert abs(float(f_norm(*values)) - expected) < 1e-11 * expected
+    expanded = sp.sqrt(sum((x**2 for x in cm.mass_inverse), sp.S.Zero))
+    assert sp.count_ops(sp.cse([norm])) < sp.count_ops(sp.cse([expanded]))

@@ -198,19 +198,26 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     # The forward dynamics' guards written out (no call): S^T M S's minors over its entries.
     assert "toy_minimal_forward_dynamics" not in body
     assert "p->m" not in body
-    assert "if (!(mbar[0] > TOY_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */" in body
-    assert "if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > TOY_LIT(0.0))) {" in body
-    # Each parameter bounded, its index in the error detail; no robot name in the code.
+    assert "ok = ok && (mbar[0] > TOY_LIT(0.0));  /* (S^T M S)[0][0] > 0 */" in body
+    assert "ok = ok && (mbar[0]*mbar[3] - mbar[1]*mbar[2] > TOY_LIT(0.0));" in body
+    # Each parameter bounded, its index (struct order) in the error detail; no robot name in
+    # the code: the values and their bounds in two arrays of struct order, one loop.
+    values = body[body.index("const toy_real_t value["):body.index("};", body.index("value["))]
+    assert [v.strip(" ,") for v in values.splitlines()[1:]].index("p->radius_l") == 5
+    bounds = body[body.index("bound["):body.index("};")].splitlines()[1:]
+    assert bounds[5].strip().startswith("TOY_LIT(") and bounds[5].endswith("/* radius_l */")
     assert (
-        "if (!isfinite(p->radius_l) || TOY_FABS(p->radius_l) > TOY_LIT(1000.0)) {\n"
-        "        return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, 5);" in body
+        "if (!(TOY_FABS(value[i]) <= bound[i])) {\n"
+        "            return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, i);" in body
     )
     tdroc = c_texts["tdroc.c"]
     start = tdroc.index("static uint32_t toy_tdroc_fingerprint(")
     hashed = tdroc[start:tdroc.index("\n}\n", start)]
-    assert "toy_real_word(config->nominal.J_theta)" in hashed
-    assert "toy_real_word(config->nominal.radius_l)" in hashed
-    assert "toy_real_word(config->k1[7])" in hashed  # every entry of an nq-vector
+    reals = hashed[hashed.index("const toy_real_t reals["):hashed.index("};")]
+    for value in ("config->nominal.J_theta", "config->nominal.radius_l",
+                  "config->k1[7]"):  # every entry of an nq-vector
+        assert f"        {value}," in reals, value
+    assert "(uint32_t)config->formulation);" in hashed  # the ints after the reals
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:

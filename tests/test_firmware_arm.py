@@ -55,6 +55,22 @@ def test_float_image_has_no_double_arithmetic(report: fr.Report, name: str) -> N
     assert report.own_text[name] < GENERATED_BUDGET
 
 
+def test_generated_constants_are_the_kept_tables(report: fr.Report) -> None:
+    """The link map's count of the generated read-only data: at least the nominal check's
+    bound table (one float per nominal parameter, always linked by _init), at most every
+    .rodata section of the generated objects (some are dropped by --gc-sections)."""
+    types = build.GENERATED_C.joinpath("wmr_types.h").read_text()
+    params = types[types.index("typedef struct {"):types.index("} wmr_params_t;")]
+    n_params = params.count("wmr_real_t ")
+    in_objects = 0
+    for obj in report.float_objs.objects:
+        out = build.run_tool([str(build.tool("size")), "-A", str(obj)])
+        in_objects += sum(int(line.split()[1]) for line in out.splitlines()
+                          if line.startswith(".rodata"))
+    for name in build.CONTROLLERS:
+        assert 4 * n_params <= report.own_rodata[name] <= in_objects, name
+
+
 def test_the_double_check_catches_double_arithmetic(tmp_path: Path) -> None:
     """The symbol check is not vacuous: a float build that uses a double does link one."""
     src = tmp_path / "d.c"

@@ -25,14 +25,15 @@ int wmr_positive(wmr_real_t x)
     return isfinite(x) && x > WMR_LIT(0.0);
 }
 
+/* With max finite, the two compares reject NaN (every compare false) and +-Inf as well. */
 int wmr_positive_at_most(wmr_real_t x, wmr_real_t max)
 {
-    return isfinite(x) && x > WMR_LIT(0.0) && x <= max;
+    return (x > WMR_LIT(0.0)) && (x <= max);
 }
 
 int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max)
 {
-    return isfinite(x) && x >= WMR_LIT(0.0) && x <= max;
+    return (x >= WMR_LIT(0.0)) && (x <= max);
 }
 
 /* |x| as its bit pattern: for IEEE 754 values of one sign the order of the numbers is that of
@@ -81,7 +82,7 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
 #endif
         return wmr_fail(detail, WMR_ERR_BAD_FORMULATION, WMR_FIELD_FORMULATION, -1);
     }
-    if (!isfinite(h) || !(h >= WMR_H_MIN) || !(h <= WMR_H_MAX)) {
+    if (!((h >= WMR_H_MIN) && (h <= WMR_H_MAX))) {  /* NaN fails both */
         return wmr_fail(detail, WMR_ERR_BAD_SAMPLE_TIME, WMR_FIELD_H, -1);
     }
     for (i = 0; i < 5; ++i) {
@@ -115,37 +116,39 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
 
 wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail)
 {
-    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
-    if (!isfinite(p->m) || WMR_FABS(p->m) > WMR_LIT(36000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 0);
-    }
-    if (!isfinite(p->Iz) || WMR_FABS(p->Iz) > WMR_LIT(5720.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 1);
-    }
-    if (!isfinite(p->K) || WMR_FABS(p->K) > WMR_LIT(1000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 2);
-    }
-    if (!isfinite(p->Iw) || WMR_FABS(p->Iw) > WMR_LIT(1000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 3);
-    }
-    if (!isfinite(p->r) || WMR_FABS(p->r) > WMR_LIT(1000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 4);
-    }
-    if (!isfinite(p->b) || WMR_FABS(p->b) > WMR_LIT(1000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 5);
-    }
-    if (!isfinite(p->d) || WMR_FABS(p->d) > WMR_LIT(1000.0)) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, 6);
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1):
+       !(|p| <= bound) holds for NaN and +-Inf as well. */
+    static const wmr_real_t bound[7] = {
+        WMR_LIT(36000.0),  /* m */
+        WMR_LIT(5720.0),  /* Iz */
+        WMR_LIT(1000.0),  /* K */
+        WMR_LIT(1000.0),  /* Iw */
+        WMR_LIT(1000.0),  /* r */
+        WMR_LIT(1000.0),  /* b */
+        WMR_LIT(1000.0)  /* d */
+    };
+    const wmr_real_t value[7] = {
+        p->m,
+        p->Iz,
+        p->K,
+        p->Iw,
+        p->r,
+        p->b,
+        p->d
+    };
+    bool ok = true;
+    int i;
+    for (i = 0; i < 7; ++i) {
+        if (!(WMR_FABS(value[i]) <= bound[i])) {
+            return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, i);
+        }
     }
     /* The forward dynamics' guards, written out: the positive parameters positive and
-       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester). */
-    if (!(p->r > WMR_LIT(0.0))) { /* r > 0 */
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-    }
-    if (!(p->b > WMR_LIT(0.0))) { /* b > 0 */
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-    }
-    {
+       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester); then the
+       robot's own conditions. One status for all (index -1), so one test of them all. */
+    ok = ok && (p->r > WMR_LIT(0.0));  /* r > 0 */
+    ok = ok && (p->b > WMR_LIT(0.0));  /* b > 0 */
+    if (ok) {  /* S^T M S may divide by the positive parameters */
         const wmr_real_t t0 = p->r*p->r;
         const wmr_real_t t1 = WMR_LIT(0.25)*p->m*t0;
         const wmr_real_t t2 = p->Iz - WMR_LIT(2.0)*p->K*p->d + p->d*p->d*p->m;
@@ -158,29 +161,20 @@ wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail
             t5,
             t4
         };
-        if (!(mbar[0] > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-            return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-        }
+        ok = ok && (mbar[0] > WMR_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */
-        if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > WMR_LIT(0.0))) {
-            return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-        }
+        ok = ok && (mbar[0]*mbar[3] - mbar[1]*mbar[2] > WMR_LIT(0.0));
     }
     /* m > 0 */
-    if (!(p->m > WMR_LIT(0.0))) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-    }
+    ok = ok && (p->m > WMR_LIT(0.0));
     /* I > 0 */
-    if (!(p->Iz > WMR_LIT(0.0))) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-    }
+    ok = ok && (p->Iz > WMR_LIT(0.0));
     /* Iw > 0 */
-    if (!(p->Iw > WMR_LIT(0.0))) {
-        return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
-    }
+    ok = ok && (p->Iw > WMR_LIT(0.0));
     /* m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det
        M-tilde, so the paper form's M-hat is singular without it */
-    if (!(p->Iz*p->m - p->K*p->K > WMR_LIT(0.0))) {
+    ok = ok && (p->Iz*p->m - p->K*p->K > WMR_LIT(0.0));
+    if (!ok) {
         return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, -1);
     }
     return WMR_OK;

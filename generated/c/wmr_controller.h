@@ -91,10 +91,10 @@ typedef struct {
 /** Write {status, field, index} to detail (when not NULL) and return status. */
 wmr_status_t wmr_fail(wmr_error_detail_t *detail, wmr_status_t status, int field, int index);
 
-/** 1 if x is finite, > 0 and <= max. */
+/** 1 if x is finite, > 0 and <= max (max finite). */
 int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
 
-/** 1 if x is finite, >= 0 and <= max. */
+/** 1 if x is finite, >= 0 and <= max (max finite). */
 int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max);
 
 /** 1 if x is finite and > 0. */

@@ -1049,7 +1049,7 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
 }
 
 /* wmr_minimal_minv_norm: documented in wmr_laws.h.
-   operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt */
+   operations after CSE: 7 add, 19 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs */
 void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 {
     const wmr_real_t m = p->m;
@@ -1060,32 +1060,14 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     const wmr_real_t b = p->b;
     const wmr_real_t d = p->d;
     const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = I_w*_t0;
-    const wmr_real_t _t2 = I*_t1;
-    const wmr_real_t _t3 = I*m;
-    const wmr_real_t _t4 = r*r*r*r;
-    const wmr_real_t _t5 = WMR_LIT(4.0)*_t4;
-    const wmr_real_t _t6 = b*b;
-    const wmr_real_t _t7 = I_w*I_w*_t6;
-    const wmr_real_t _t8 = K*d;
-    const wmr_real_t _t9 = _t8*m;
-    const wmr_real_t _t10 = _t6*m;
-    const wmr_real_t _t11 = _t1*_t10;
-    const wmr_real_t _t12 = WMR_LIT(8.0)*_t1;
-    const wmr_real_t _t13 = d*d;
-    const wmr_real_t _t14 = _t13*m;
-    const wmr_real_t _t15 = _t13*m*m;
-    const wmr_real_t _t16 = _t0*_t10/(-WMR_LIT(16.0)*_t1*_t8 + WMR_LIT(2.0)*_t11 + _t12*_t14
-            + _t15*_t5 + WMR_LIT(8.0)*_t2 + _t3*_t5 - WMR_LIT(8.0)*_t4*_t9 + WMR_LIT(4.0)*_t7);
-    const wmr_real_t _t17 = WMR_LIT(2.0)*_t4;
-    const wmr_real_t _t18 = WMR_LIT(1.0)/(WMR_LIT(4.0)*_t1*_t14 + _t11 - _t12*_t8 + _t15*_t17
-            + _t17*_t3 + WMR_LIT(4.0)*_t2 - _t5*_t9 + WMR_LIT(2.0)*_t7);
-    const wmr_real_t _t19 = WMR_LIT(2.0)*_t18;
-    const wmr_real_t _t20 = _t0*_t19;
-    const wmr_real_t _t21 = I*_t20 - WMR_LIT(4.0)*_t0*_t18*_t8 + _t14*_t20;
-    const wmr_real_t _t22 = -_t16 + _t21;
-    const wmr_real_t _t23 = I_w*_t19*_t6 + _t16 + _t21;
-    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t22*_t22 + WMR_LIT(2.0)*_t23*_t23);
+    const wmr_real_t _t1 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t2 = _t0*_t1;
+    const wmr_real_t _t3 = _t0*m;
+    const wmr_real_t _t4 = I*_t2 - WMR_LIT(2.0)*K*_t2*d + _t1*_t3*d*d;
+    const wmr_real_t _t5 = -WMR_LIT(0.25)*_t0*m + _t4;
+    const wmr_real_t _t6 = I_w + WMR_LIT(0.25)*_t3 + _t4;
+    const wmr_real_t _t7 = _t6*_t6;
+    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t5*_t5 + WMR_LIT(2.0)*_t7)/WMR_FABS(_t5*_t5 - _t7);
 }
 
 /* wmr_minimal_tdroc_gain: documented in wmr_laws.h.

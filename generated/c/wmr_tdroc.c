@@ -82,42 +82,53 @@ static uint32_t wmr_fnv(uint32_t hash, uint32_t word)
 
 /* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
    k mod 4: independent multiply chains instead of one 29 long), then FNV-1a
-   of the lanes. Every field, value by value (padding never hashed). */
+   of the lanes. Every field, value by value (padding never hashed): the reals in struct order,
+   then the ints; the reals gathered into one array so that one loop hashes them. */
 static uint32_t wmr_tdroc_fingerprint(const wmr_tdroc_config_t *config)
 {
+    const wmr_real_t reals[25] = {
+        config->nominal.m,
+        config->nominal.Iz,
+        config->nominal.K,
+        config->nominal.Iw,
+        config->nominal.r,
+        config->nominal.b,
+        config->nominal.d,
+        config->k1[0],
+        config->k1[1],
+        config->k1[2],
+        config->k1[3],
+        config->k1[4],
+        config->k2[0],
+        config->k2[1],
+        config->k2[2],
+        config->k2[3],
+        config->k2[4],
+        config->q_pos,
+        config->q_vel,
+        config->h,
+        config->tau_max,
+        config->rate_window,
+        config->eps,
+        config->a,
+        config->held_gain
+    };
     uint32_t lane0 = 2166136261u;
     uint32_t lane1 = 2166136261u;
     uint32_t lane2 = 2166136261u;
     uint32_t lane3 = 2166136261u;
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.m));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.Iz));
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.K));
-    lane3 = wmr_fnv(lane3, wmr_real_word(config->nominal.Iw));
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->nominal.r));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->nominal.b));
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->nominal.d));
-    lane3 = wmr_fnv(lane3, (uint32_t)config->formulation);
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[0]));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->k1[1]));
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->k1[2]));
-    lane3 = wmr_fnv(lane3, wmr_real_word(config->k1[3]));
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->k1[4]));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[0]));
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->k2[1]));
-    lane3 = wmr_fnv(lane3, wmr_real_word(config->k2[2]));
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->k2[3]));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->k2[4]));
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->q_pos));
-    lane3 = wmr_fnv(lane3, wmr_real_word(config->q_vel));
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->h));
-    lane1 = wmr_fnv(lane1, wmr_real_word(config->tau_max));
+    int k;
+    for (k = 0; k < 24; k += 4) {
+        lane0 = wmr_fnv(lane0, wmr_real_word(reals[k]));
+        lane1 = wmr_fnv(lane1, wmr_real_word(reals[k + 1]));
+        lane2 = wmr_fnv(lane2, wmr_real_word(reals[k + 2]));
+        lane3 = wmr_fnv(lane3, wmr_real_word(reals[k + 3]));
+    }
+    lane0 = wmr_fnv(lane0, wmr_real_word(reals[24]));
+    lane1 = wmr_fnv(lane1, (uint32_t)config->formulation);
     lane2 = wmr_fnv(lane2, (uint32_t)config->accel_estimator);
-    lane3 = wmr_fnv(lane3, wmr_real_word(config->rate_window));
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->eps));
-    lane1 = wmr_fnv(lane1, (uint32_t)config->n);
-    lane2 = wmr_fnv(lane2, wmr_real_word(config->a));
-    lane3 = wmr_fnv(lane3, (uint32_t)config->hold_gain);
-    lane0 = wmr_fnv(lane0, wmr_real_word(config->held_gain));
+    lane3 = wmr_fnv(lane3, (uint32_t)config->n);
+    lane0 = wmr_fnv(lane0, (uint32_t)config->hold_gain);
     return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 

@@ -1026,7 +1026,7 @@ def minimal_minv_norm(p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 20 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt
+    operations after CSE: 7 add, 19 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
     """
     m = float(_field(p, "m"))
     I = float(_field(p, "I"))
@@ -1036,30 +1036,14 @@ def minimal_minv_norm(p: Any) -> NDArray[np.float64]:
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
     _t0 = r*r
-    _t1 = I_w*_t0
-    _t2 = I*_t1
-    _t3 = I*m
-    _t4 = r*r*r*r
-    _t5 = 4.0*_t4
-    _t6 = b*b
-    _t7 = I_w*I_w*_t6
-    _t8 = K*d
-    _t9 = _t8*m
-    _t10 = _t6*m
-    _t11 = _t1*_t10
-    _t12 = 8.0*_t1
-    _t13 = d*d
-    _t14 = _t13*m
-    _t15 = _t13*m*m
-    _t16 = _t0*_t10/(-16.0*_t1*_t8 + 2.0*_t11 + _t12*_t14 + _t15*_t5 + 8.0*_t2 + _t3*_t5 - 8.0*_t4*_t9 + 4.0*_t7)
-    _t17 = 2.0*_t4
-    _t18 = 1.0/(4.0*_t1*_t14 + _t11 - _t12*_t8 + _t15*_t17 + _t17*_t3 + 4.0*_t2 - _t5*_t9 + 2.0*_t7)
-    _t19 = 2.0*_t18
-    _t20 = _t0*_t19
-    _t21 = I*_t20 - 4.0*_t0*_t18*_t8 + _t14*_t20
-    _t22 = -_t16 + _t21
-    _t23 = I_w*_t19*_t6 + _t16 + _t21
-    norm = np.array([math.sqrt(2.0*_t22*_t22 + 2.0*_t23*_t23)])
+    _t1 = 1.0/(b*b)
+    _t2 = _t0*_t1
+    _t3 = _t0*m
+    _t4 = I*_t2 - 2.0*K*_t2*d + _t1*_t3*d*d
+    _t5 = -0.25*_t0*m + _t4
+    _t6 = I_w + 0.25*_t3 + _t4
+    _t7 = _t6*_t6
+    norm = np.array([math.sqrt(2.0*_t5*_t5 + 2.0*_t7)/abs(_t5*_t5 - _t7)])
     return norm
 
 

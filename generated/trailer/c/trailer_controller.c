@@ -26,14 +26,15 @@ int trailer_positive(trailer_real_t x)
     return isfinite(x) && x > TRAILER_LIT(0.0);
 }
 
+/* With max finite, the two compares reject NaN (every compare false) and +-Inf as well. */
 int trailer_positive_at_most(trailer_real_t x, trailer_real_t max)
 {
-    return isfinite(x) && x > TRAILER_LIT(0.0) && x <= max;
+    return (x > TRAILER_LIT(0.0)) && (x <= max);
 }
 
 int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max)
 {
-    return isfinite(x) && x >= TRAILER_LIT(0.0) && x <= max;
+    return (x >= TRAILER_LIT(0.0)) && (x <= max);
 }
 
 /* |x| as its bit pattern: for IEEE 754 values of one sign the order of the numbers is that of
@@ -78,7 +79,7 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     if (formulation != TRAILER_FORMULATION_MINIMAL) {  /* the paper formulation is not generated */
         return trailer_fail(detail, TRAILER_ERR_BAD_FORMULATION, TRAILER_FIELD_FORMULATION, -1);
     }
-    if (!isfinite(h) || !(h >= TRAILER_H_MIN) || !(h <= TRAILER_H_MAX)) {
+    if (!((h >= TRAILER_H_MIN) && (h <= TRAILER_H_MAX))) {  /* NaN fails both */
         return trailer_fail(detail, TRAILER_ERR_BAD_SAMPLE_TIME, TRAILER_FIELD_H, -1);
     }
     for (i = 0; i < 8; ++i) {
@@ -112,96 +113,64 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
 
 trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_detail_t *detail)
 {
-    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1). */
-    if (!isfinite(p->J_theta_cart) || TRAILER_FABS(p->J_theta_cart)
-            > TRAILER_LIT(5141.500000000001)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 0);
-    }
-    if (!isfinite(p->J_theta_cart_left) || TRAILER_FABS(p->J_theta_cart_left)
-            > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 1);
-    }
-    if (!isfinite(p->J_theta_cart_right) || TRAILER_FABS(p->J_theta_cart_right)
-            > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 2);
-    }
-    if (!isfinite(p->J_theta_left) || TRAILER_FABS(p->J_theta_left) > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 3);
-    }
-    if (!isfinite(p->J_theta_right) || TRAILER_FABS(p->J_theta_right) > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 4);
-    }
-    if (!isfinite(p->J_theta_tractor) || TRAILER_FABS(p->J_theta_tractor) > TRAILER_LIT(3421.094)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 5);
-    }
-    if (!isfinite(p->J_x_tractor) || TRAILER_FABS(p->J_x_tractor) > TRAILER_LIT(53500.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 6);
-    }
-    if (!isfinite(p->K_theta_cart_x_tractor) || TRAILER_FABS(p->K_theta_cart_x_tractor)
-            > TRAILER_LIT(8250.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 7);
-    }
-    if (!isfinite(p->K_theta_cart_x_tractor_2) || TRAILER_FABS(p->K_theta_cart_x_tractor_2)
-            > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 8);
-    }
-    if (!isfinite(p->K_theta_tractor_x_tractor) || TRAILER_FABS(p->K_theta_tractor_x_tractor)
-            > TRAILER_LIT(3750.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 9);
-    }
-    if (!isfinite(p->K_theta_tractor_x_tractor_2) || TRAILER_FABS(p->K_theta_tractor_x_tractor_2)
-            > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 10);
-    }
-    if (!isfinite(p->radius_cart_left) || TRAILER_FABS(p->radius_cart_left) > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 11);
-    }
-    if (!isfinite(p->radius_cart_right) || TRAILER_FABS(p->radius_cart_right)
-            > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 12);
-    }
-    if (!isfinite(p->radius_left) || TRAILER_FABS(p->radius_left) > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 13);
-    }
-    if (!isfinite(p->radius_right) || TRAILER_FABS(p->radius_right) > TRAILER_LIT(1000.0)) {
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, 14);
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1):
+       !(|p| <= bound) holds for NaN and +-Inf as well. */
+    static const trailer_real_t bound[15] = {
+        TRAILER_LIT(5141.500000000001),  /* J_theta_cart */
+        TRAILER_LIT(1000.0),  /* J_theta_cart_left */
+        TRAILER_LIT(1000.0),  /* J_theta_cart_right */
+        TRAILER_LIT(1000.0),  /* J_theta_left */
+        TRAILER_LIT(1000.0),  /* J_theta_right */
+        TRAILER_LIT(3421.094),  /* J_theta_tractor */
+        TRAILER_LIT(53500.0),  /* J_x_tractor */
+        TRAILER_LIT(8250.0),  /* K_theta_cart_x_tractor */
+        TRAILER_LIT(1000.0),  /* K_theta_cart_x_tractor_2 */
+        TRAILER_LIT(3750.0),  /* K_theta_tractor_x_tractor */
+        TRAILER_LIT(1000.0),  /* K_theta_tractor_x_tractor_2 */
+        TRAILER_LIT(1000.0),  /* radius_cart_left */
+        TRAILER_LIT(1000.0),  /* radius_cart_right */
+        TRAILER_LIT(1000.0),  /* radius_left */
+        TRAILER_LIT(1000.0)  /* radius_right */
+    };
+    const trailer_real_t value[15] = {
+        p->J_theta_cart,
+        p->J_theta_cart_left,
+        p->J_theta_cart_right,
+        p->J_theta_left,
+        p->J_theta_right,
+        p->J_theta_tractor,
+        p->J_x_tractor,
+        p->K_theta_cart_x_tractor,
+        p->K_theta_cart_x_tractor_2,
+        p->K_theta_tractor_x_tractor,
+        p->K_theta_tractor_x_tractor_2,
+        p->radius_cart_left,
+        p->radius_cart_right,
+        p->radius_left,
+        p->radius_right
+    };
+    bool ok = true;
+    int i;
+    for (i = 0; i < 15; ++i) {
+        if (!(TRAILER_FABS(value[i]) <= bound[i])) {
+            return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, i);
+        }
     }
     /* The forward dynamics' guards, written out: the positive parameters positive and
-       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester). */
-    if (!(p->radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->radius_cart_right > TRAILER_LIT(0.0))) { /* radius_cart_right > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->radius_left > TRAILER_LIT(0.0))) { /* radius_left > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->radius_right > TRAILER_LIT(0.0))) { /* radius_right > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_cart > TRAILER_LIT(0.0))) { /* J_theta_cart > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_cart_left > TRAILER_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_cart_right > TRAILER_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_left > TRAILER_LIT(0.0))) { /* J_theta_left > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_right > TRAILER_LIT(0.0))) { /* J_theta_right > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_theta_tractor > TRAILER_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    if (!(p->J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
-        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-    }
-    {
+       S^T M S (at q = 0) positive definite, by its leading minors (Sylvester); then the
+       robot's own conditions. One status for all (index -1), so one test of them all. */
+    ok = ok && (p->radius_cart_left > TRAILER_LIT(0.0));  /* radius_cart_left > 0 */
+    ok = ok && (p->radius_cart_right > TRAILER_LIT(0.0));  /* radius_cart_right > 0 */
+    ok = ok && (p->radius_left > TRAILER_LIT(0.0));  /* radius_left > 0 */
+    ok = ok && (p->radius_right > TRAILER_LIT(0.0));  /* radius_right > 0 */
+    ok = ok && (p->J_theta_cart > TRAILER_LIT(0.0));  /* J_theta_cart > 0 */
+    ok = ok && (p->J_theta_cart_left > TRAILER_LIT(0.0));  /* J_theta_cart_left > 0 */
+    ok = ok && (p->J_theta_cart_right > TRAILER_LIT(0.0));  /* J_theta_cart_right > 0 */
+    ok = ok && (p->J_theta_left > TRAILER_LIT(0.0));  /* J_theta_left > 0 */
+    ok = ok && (p->J_theta_right > TRAILER_LIT(0.0));  /* J_theta_right > 0 */
+    ok = ok && (p->J_theta_tractor > TRAILER_LIT(0.0));  /* J_theta_tractor > 0 */
+    ok = ok && (p->J_x_tractor > TRAILER_LIT(0.0));  /* J_x_tractor > 0 */
+    if (ok) {  /* S^T M S may divide by the positive parameters */
         const trailer_real_t t0 = p->radius_right*p->radius_right;
         const trailer_real_t t1 = TRAILER_LIT(62500.0)*p->J_theta_cart/TRAILER_LIT(42849.0);
         const trailer_real_t t2 = TRAILER_LIT(250000.0)*p->J_theta_tractor/TRAILER_LIT(42849.0);
@@ -227,13 +196,12 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_
                     + TRAILER_LIT(11449.0)*t12*t7/TRAILER_LIT(171396.0)
                     + TRAILER_LIT(94249.0)*t12*t8/TRAILER_LIT(171396.0)
         };
-        if (!(mbar[0] > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-            return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-        }
+        ok = ok && (mbar[0] > TRAILER_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */
-        if (!(mbar[0]*mbar[3] - mbar[1]*mbar[2] > TRAILER_LIT(0.0))) {
-            return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
-        }
+        ok = ok && (mbar[0]*mbar[3] - mbar[1]*mbar[2] > TRAILER_LIT(0.0));
+    }
+    if (!ok) {
+        return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
     }
     return TRAILER_OK;
 }

@@ -83,10 +83,10 @@ typedef struct {
 trailer_status_t trailer_fail(trailer_error_detail_t *detail, trailer_status_t status, int field,
     int index);
 
-/** 1 if x is finite, > 0 and <= max. */
+/** 1 if x is finite, > 0 and <= max (max finite). */
 int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
 
-/** 1 if x is finite, >= 0 and <= max. */
+/** 1 if x is finite, >= 0 and <= max (max finite). */
 int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max);
 
 /** 1 if x is finite and > 0. */

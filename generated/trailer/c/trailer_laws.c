@@ -352,7 +352,7 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 330 add, 657 mul, 1 div, 4 sin/cos, 1 sqrt */
+   operations after CSE: 132 add, 229 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
@@ -372,300 +372,127 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = radius_left*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(295641.0)*_t0;
-    const trailer_real_t _t2 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t3 = radius_left*radius_left;
-    const trailer_real_t _t4 = J_theta_cart_left*_t3;
-    const trailer_real_t _t5 = radius_right*radius_right;
-    const trailer_real_t _t6 = J_theta_cart_right*_t5;
-    const trailer_real_t _t7 = _t2*_t5;
-    const trailer_real_t _t8 = J_theta_cart_left*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(848241.0)*_t8;
-    const trailer_real_t _t10 = J_theta_right*_t2;
-    const trailer_real_t _t11 = TRAILER_LIT(103041.0)*_t4;
-    const trailer_real_t _t12 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t13 = J_theta_left*_t12;
-    const trailer_real_t _t14 = TRAILER_LIT(103041.0)*_t6;
-    const trailer_real_t _t15 = _t12*_t3;
-    const trailer_real_t _t16 = J_theta_cart_right*_t15;
-    const trailer_real_t _t17 = TRAILER_LIT(848241.0)*_t16;
-    const trailer_real_t _t18 = TRAILER_LIT(1542564.0)*_t13;
-    const trailer_real_t _t19 = _t4*_t7;
-    const trailer_real_t _t20 = TRAILER_LIT(2250000.0)*J_theta_cart;
-    const trailer_real_t _t21 = _t15*_t6;
-    const trailer_real_t _t22 = _t13*_t7;
-    const trailer_real_t _t23 = _t10*_t15;
-    const trailer_real_t _t24 = TRAILER_LIT(9000000.0)*J_theta_tractor;
-    const trailer_real_t _t25 = TRAILER_LIT(90000.0)*J_x_tractor;
-    const trailer_real_t _t26 = TRAILER_LIT(2700000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t27 = TRAILER_LIT(900000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t28 = TRAILER_LIT(1800000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = TRAILER_LIT(385641.0)*J_x_tractor;
-    const trailer_real_t _t30 = TRAILER_LIT(1863000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t31 = TRAILER_LIT(3726000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t32 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t33 = _t32*_t32;
-    const trailer_real_t _t34 = TRAILER_LIT(367992.0)*_t33;
-    const trailer_real_t _t35 = J_theta_left*_t8;
-    const trailer_real_t _t36 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t37 = _t36*_t36;
-    const trailer_real_t _t38 = TRAILER_LIT(367992.0)*_t37;
-    const trailer_real_t _t39 = TRAILER_LIT(1122408.0)*_t33;
-    const trailer_real_t _t40 = _t10*_t4;
-    const trailer_real_t _t41 = TRAILER_LIT(1122408.0)*_t37;
-    const trailer_real_t _t42 = _t13*_t6;
-    const trailer_real_t _t43 = J_theta_right*_t16;
-    const trailer_real_t _t44 = TRAILER_LIT(1276506.0)*_t35;
-    const trailer_real_t _t45 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t46 = _t32*_t45;
-    const trailer_real_t _t47 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t48 = _t36*_t47;
-    const trailer_real_t _t49 = TRAILER_LIT(710694.0)*_t40;
-    const trailer_real_t _t50 = TRAILER_LIT(710694.0)*_t42;
-    const trailer_real_t _t51 = TRAILER_LIT(1276506.0)*_t43;
-    const trailer_real_t _t52 = _t15*_t7;
-    const trailer_real_t _t53 = TRAILER_LIT(2250000.0)*_t52;
-    const trailer_real_t _t54 = J_theta_cart*J_x_tractor*_t53;
-    const trailer_real_t _t55 = TRAILER_LIT(9000000.0)*_t52;
-    const trailer_real_t _t56 = J_x_tractor*_t52;
-    const trailer_real_t _t57 = _t26*_t56;
-    const trailer_real_t _t58 = K_theta_cart_x_tractor_2*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t59 = TRAILER_LIT(1178775.0)*J_theta_cart;
-    const trailer_real_t _t60 = _t22*_t33;
-    const trailer_real_t _t61 = _t22*_t37;
-    const trailer_real_t _t62 = _t23*_t33;
-    const trailer_real_t _t63 = _t23*_t37;
-    const trailer_real_t _t64 = TRAILER_LIT(8000000.0)*J_theta_tractor;
-    const trailer_real_t _t65 = _t19*_t33;
-    const trailer_real_t _t66 = _t37*_t64;
-    const trailer_real_t _t67 = TRAILER_LIT(720000.0)*J_x_tractor;
-    const trailer_real_t _t68 = _t19*_t37;
-    const trailer_real_t _t69 = TRAILER_LIT(3600000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t70 = _t21*_t33;
-    const trailer_real_t _t71 = _t21*_t37;
-    const trailer_real_t _t72 = TRAILER_LIT(1414530.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t73 = TRAILER_LIT(3726000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t74 = TRAILER_LIT(3105000.0)*J_theta_cart;
-    const trailer_real_t _t75 = _t22*_t46;
-    const trailer_real_t _t76 = _t22*_t48;
-    const trailer_real_t _t77 = _t23*_t46;
-    const trailer_real_t _t78 = _t23*_t48;
-    const trailer_real_t _t79 = TRAILER_LIT(6000000.0)*J_theta_tractor;
-    const trailer_real_t _t80 = _t19*_t46;
-    const trailer_real_t _t81 = _t19*_t48;
-    const trailer_real_t _t82 = TRAILER_LIT(540000.0)*J_x_tractor;
-    const trailer_real_t _t83 = TRAILER_LIT(4800000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t84 = _t21*_t46;
-    const trailer_real_t _t85 = _t21*_t48;
-    const trailer_real_t _t86 = TRAILER_LIT(3726000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t87 = TRAILER_LIT(1414530.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t88 = _t33*_t37;
-    const trailer_real_t _t89 = TRAILER_LIT(735984.0)*_t88;
-    const trailer_real_t _t90 = TRAILER_LIT(2244816.0)*_t40;
-    const trailer_real_t _t91 = TRAILER_LIT(2244816.0)*_t88;
-    const trailer_real_t _t92 = _t37*_t46;
-    const trailer_real_t _t93 = TRAILER_LIT(2553012.0)*_t35;
-    const trailer_real_t _t94 = _t33*_t48;
-    const trailer_real_t _t95 = TRAILER_LIT(1421388.0)*_t40;
-    const trailer_real_t _t96 = TRAILER_LIT(1421388.0)*_t42;
-    const trailer_real_t _t97 = TRAILER_LIT(2553012.0)*_t43;
-    const trailer_real_t _t98 = _t46*_t48;
-    const trailer_real_t _t99 = TRAILER_LIT(735984.0)*_t98;
-    const trailer_real_t _t100 = TRAILER_LIT(2244816.0)*_t98;
-    const trailer_real_t _t101 = _t33*_t52;
-    const trailer_real_t _t102 = J_theta_tractor*_t101;
-    const trailer_real_t _t103 = TRAILER_LIT(25000000.0)*J_theta_cart;
-    const trailer_real_t _t104 = _t37*_t52;
-    const trailer_real_t _t105 = J_theta_tractor*_t104;
-    const trailer_real_t _t106 = TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t107 = TRAILER_LIT(18000000.0)*_t58;
-    const trailer_real_t _t108 = K_theta_tractor_x_tractor_2*_t52;
-    const trailer_real_t _t109 = TRAILER_LIT(15000000.0)*_t108;
-    const trailer_real_t _t110 = J_theta_cart*_t46;
-    const trailer_real_t _t111 = J_theta_cart*_t48;
-    const trailer_real_t _t112 = J_theta_tractor*_t52;
-    const trailer_real_t _t113 = TRAILER_LIT(30000000.0)*_t112;
-    const trailer_real_t _t114 = K_theta_cart_x_tractor_2*_t46;
-    const trailer_real_t _t115 = K_theta_cart_x_tractor_2*_t48;
-    const trailer_real_t _t116 = TRAILER_LIT(2700000.0)*_t56;
-    const trailer_real_t _t117 = K_theta_cart_x_tractor*_t46;
-    const trailer_real_t _t118 = TRAILER_LIT(18000000.0)*_t108;
-    const trailer_real_t _t119 = K_theta_cart_x_tractor*_t48;
-    const trailer_real_t _t120 = _t22*_t88;
-    const trailer_real_t _t121 = TRAILER_LIT(2357550.0)*J_theta_cart;
-    const trailer_real_t _t122 = _t37*_t62;
-    const trailer_real_t _t123 = _t37*_t65;
-    const trailer_real_t _t124 = TRAILER_LIT(16000000.0)*J_theta_tractor;
-    const trailer_real_t _t125 = TRAILER_LIT(1440000.0)*J_x_tractor;
-    const trailer_real_t _t126 = TRAILER_LIT(7200000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t127 = _t37*_t70;
-    const trailer_real_t _t128 = TRAILER_LIT(2829060.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t129 = TRAILER_LIT(7452000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t130 = TRAILER_LIT(6210000.0)*J_theta_cart;
-    const trailer_real_t _t131 = TRAILER_LIT(6210000.0)*_t111;
-    const trailer_real_t _t132 = _t46*_t63;
-    const trailer_real_t _t133 = TRAILER_LIT(12000000.0)*J_theta_tractor;
-    const trailer_real_t _t134 = _t46*_t68;
-    const trailer_real_t _t135 = _t48*_t65;
-    const trailer_real_t _t136 = TRAILER_LIT(1080000.0)*J_x_tractor;
-    const trailer_real_t _t137 = TRAILER_LIT(9600000.0)*K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t138 = _t46*_t71;
-    const trailer_real_t _t139 = _t48*_t70;
-    const trailer_real_t _t140 = TRAILER_LIT(7452000.0)*_t117;
-    const trailer_real_t _t141 = TRAILER_LIT(7452000.0)*_t119;
-    const trailer_real_t _t142 = TRAILER_LIT(2829060.0)*_t115;
-    const trailer_real_t _t143 = TRAILER_LIT(2829060.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t144 = _t46*_t76;
-    const trailer_real_t _t145 = _t48*_t77;
-    const trailer_real_t _t146 = _t48*_t80;
-    const trailer_real_t _t147 = _t46*_t85;
-    const trailer_real_t _t148 = J_theta_cart*_t88;
-    const trailer_real_t _t149 = TRAILER_LIT(50000000.0)*_t112;
-    const trailer_real_t _t150 = TRAILER_LIT(4500000.0)*_t56;
-    const trailer_real_t _t151 = K_theta_cart_x_tractor*_t88;
-    const trailer_real_t _t152 = TRAILER_LIT(60000000.0)*_t112;
-    const trailer_real_t _t153 = TRAILER_LIT(5400000.0)*_t56;
-    const trailer_real_t _t154 = TRAILER_LIT(36000000.0)*_t52*_t58;
-    const trailer_real_t _t155 = K_theta_tractor_x_tractor_2*_t104;
-    const trailer_real_t _t156 = K_theta_tractor_x_tractor_2*_t101;
-    const trailer_real_t _t157 = K_theta_cart_x_tractor_2*_t153;
-    const trailer_real_t _t158 = _t111*_t46;
-    const trailer_real_t _t159 = _t117*_t48;
-    const trailer_real_t _t160 = TRAILER_LIT(1.0)/(J_theta_left*_t9 + J_theta_right*_t17
-            + J_theta_tractor*J_x_tractor*_t55
-            - K_theta_cart_x_tractor_2*K_theta_cart_x_tractor_2*_t53
-            - K_theta_tractor_x_tractor_2*K_theta_tractor_x_tractor_2*_t55 + _t10*_t11 + _t10*_t18
-            - _t100*_t42 - _t101*_t107 + _t102*_t103 - _t102*_t106
-            + TRAILER_LIT(60000000.0)*_t102*_t115 + _t103*_t105 - _t104*_t107 - _t105*_t106
-            - TRAILER_LIT(60000000.0)*_t105*_t114 + _t109*_t110 - _t109*_t111
-            - TRAILER_LIT(30000000.0)*_t110*_t155 + TRAILER_LIT(30000000.0)*_t111*_t156
-            + _t113*_t114 - _t113*_t115 - _t114*_t116 + TRAILER_LIT(2829060.0)*_t114*_t61
-            + _t115*_t116 - _t117*_t118 + TRAILER_LIT(36000000.0)*_t117*_t155 + _t118*_t119
-            - TRAILER_LIT(36000000.0)*_t119*_t156 + _t120*_t121 - _t120*_t128 - _t120*_t129
-            + _t121*_t122 + _t121*_t144 + _t121*_t145 - _t122*_t128 + _t122*_t129 + _t123*_t124
-            - _t123*_t125 - _t123*_t126 + _t124*_t127 + _t124*_t146 + _t124*_t147 - _t125*_t127
-            - _t125*_t146 - _t125*_t147 + _t126*_t127 - _t126*_t146 + _t126*_t147 - _t128*_t144
-            - _t128*_t145 - _t129*_t144 + _t129*_t145 + _t13*_t14 - _t130*_t132 + _t130*_t46*_t61
-            - _t131*_t60 + _t131*_t62 + _t132*_t143 + _t133*_t134 - _t133*_t135 - _t133*_t138
-            + _t133*_t139 - _t134*_t136 + _t134*_t137 + _t135*_t136 - _t135*_t137 + _t136*_t138
-            - _t136*_t139 + _t137*_t138 - _t137*_t139 - _t140*_t61 + _t140*_t63 + _t141*_t60
-            - _t141*_t62 - _t142*_t60 - _t142*_t62 - _t148*_t149 + _t148*_t150 - _t149*_t158
-            + _t150*_t158 + _t151*_t152 - _t151*_t153 + _t152*_t159 - _t153*_t159 + _t154*_t88
-            + _t154*_t98 + _t157*_t92 - _t157*_t94 + _t19*_t20 + _t19*_t24 + _t19*_t25 - _t19*_t26
-            + _t19*_t27 - _t19*_t28 - _t19*_t66 + _t20*_t21 + _t20*_t22 + _t20*_t23 + _t21*_t24
-            + _t21*_t25 - _t21*_t26 - _t21*_t27 + _t21*_t28 - _t21*_t66 + _t22*_t24 - _t22*_t26
-            + _t22*_t29 - _t22*_t30 + _t22*_t31 + _t23*_t24 - _t23*_t26 + _t23*_t29 + _t23*_t30
-            - _t23*_t31 - _t33*_t54 + _t33*_t57 - _t34*_t35 - _t34*_t43 - _t35*_t38 + _t35*_t89
-            + _t35*_t99 - _t37*_t54 + _t37*_t57 - _t38*_t43 + _t39*_t40 + _t39*_t42
-            + TRAILER_LIT(360000.0)*_t4*_t6 + _t40*_t41 + _t41*_t42 - _t42*_t91 + _t43*_t89
-            + _t43*_t99 + _t44*_t46 - _t44*_t48 - _t46*_t49 + _t46*_t50 - _t46*_t51 + _t48*_t49
-            - _t48*_t50 + _t48*_t51 + _t54 + _t55*_t58 - _t57 - _t59*_t60 - _t59*_t61 - _t59*_t62
-            - _t59*_t63 + _t60*_t72 + _t60*_t73 + _t61*_t72 + _t61*_t73 + _t62*_t72 - _t62*_t73
-            + _t63*_t72 - _t63*_t73 - _t64*_t65 - _t64*_t70 + _t65*_t67 + _t65*_t69 + _t67*_t68
-            + _t67*_t70 + _t67*_t71 + _t68*_t69 - _t69*_t70 - _t69*_t71 - _t74*_t75 + _t74*_t76
-            + _t74*_t77 - _t74*_t78 + _t75*_t86 - _t75*_t87 - _t76*_t86 + _t76*_t87 - _t77*_t86
-            - _t77*_t87 + _t78*_t86 + _t78*_t87 - _t79*_t80 + _t79*_t81 + _t79*_t84 - _t79*_t85
-            + _t80*_t82 - _t80*_t83 - _t81*_t82 + _t81*_t83 - _t82*_t84 + _t82*_t85 - _t83*_t84
-            + _t83*_t85 - _t88*_t90 - _t90*_t98 - _t92*_t93 + _t92*_t95 - _t92*_t96 + _t92*_t97
-            + _t93*_t94 - _t94*_t95 + _t94*_t96 - _t94*_t97);
-    const trailer_real_t _t161 = _t160*_t2;
-    const trailer_real_t _t162 = J_theta_cart_left*_t161;
-    const trailer_real_t _t163 = _t12*_t160;
-    const trailer_real_t _t164 = J_theta_cart_right*_t163;
-    const trailer_real_t _t165 = _t0*_t12*_t161;
-    const trailer_real_t _t166 = _t0*_t162;
-    const trailer_real_t _t167 = _t0*_t164;
-    const trailer_real_t _t168 = TRAILER_LIT(3321225.0)*J_theta_cart;
-    const trailer_real_t _t169 = TRAILER_LIT(2125584.0)*_t88;
-    const trailer_real_t _t170 = TRAILER_LIT(2125584.0)*_t98;
-    const trailer_real_t _t171 = TRAILER_LIT(7970940.0)*_t165;
-    const trailer_real_t _t172 = _t15*_t161;
-    const trailer_real_t _t173 = _t161*_t4;
-    const trailer_real_t _t174 = _t16*_t160;
-    const trailer_real_t _t175 = TRAILER_LIT(710694.0)*_t173;
-    const trailer_real_t _t176 = TRAILER_LIT(1276506.0)*_t174;
-    const trailer_real_t _t177 = _t172*_t59;
-    const trailer_real_t _t178 = _t172*_t72;
-    const trailer_real_t _t179 = _t172*_t73;
-    const trailer_real_t _t180 = _t172*_t46;
-    const trailer_real_t _t181 = _t172*_t48;
-    const trailer_real_t _t182 = TRAILER_LIT(1421388.0)*_t173;
-    const trailer_real_t _t183 = TRAILER_LIT(2553012.0)*_t174;
-    const trailer_real_t _t184 = _t172*_t88;
-    const trailer_real_t _t185 = _t172*_t92;
-    const trailer_real_t _t186 = _t172*_t94;
-    const trailer_real_t _t187 = TRAILER_LIT(7452000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t188 = _t180*_t48;
-    const trailer_real_t _t189 = _t163*_t7;
-    const trailer_real_t _t190 = _t160*_t8;
-    const trailer_real_t _t191 = _t163*_t6;
-    const trailer_real_t _t192 = TRAILER_LIT(1276506.0)*_t190;
-    const trailer_real_t _t193 = TRAILER_LIT(710694.0)*_t191;
-    const trailer_real_t _t194 = _t189*_t59;
-    const trailer_real_t _t195 = _t189*_t72;
-    const trailer_real_t _t196 = _t189*_t73;
-    const trailer_real_t _t197 = _t189*_t46;
-    const trailer_real_t _t198 = _t189*_t48;
-    const trailer_real_t _t199 = TRAILER_LIT(2553012.0)*_t190;
-    const trailer_real_t _t200 = TRAILER_LIT(1421388.0)*_t191;
-    const trailer_real_t _t201 = _t189*_t88;
-    const trailer_real_t _t202 = _t189*_t92;
-    const trailer_real_t _t203 = _t189*_t94;
-    const trailer_real_t _t204 = _t198*_t46;
-    const trailer_real_t _t205 = -_t100*_t173 + _t11*_t161 + _t121*_t184 + _t121*_t188 - _t128*_t184
-            - _t128*_t188 + _t129*_t184 + _t129*_t188 - _t130*_t185 + _t130*_t186 + _t143*_t185
-            - _t143*_t186 + _t160*_t17 + _t161*_t18 + _t172*_t20 + _t172*_t24 - _t172*_t26
-            + _t172*_t29 + _t172*_t30 - _t172*_t31 + _t173*_t39 + _t173*_t41 - _t173*_t91
-            - _t174*_t34 - _t174*_t38 + _t174*_t89 + _t174*_t99 - _t175*_t46 + _t175*_t48
-            - _t176*_t46 + _t176*_t48 - _t177*_t33 - _t177*_t37 + _t178*_t33 + _t178*_t37
-            - _t179*_t33 - _t179*_t37 + _t180*_t74 - _t180*_t86 - _t180*_t87 - _t181*_t74
-            + _t181*_t86 + _t181*_t87 + _t182*_t92 - _t182*_t94 + _t183*_t92 - _t183*_t94
-            + _t185*_t187 - _t186*_t187;
-    const trailer_real_t _t206 = TRAILER_LIT(1542564.0)*_t10*_t163 - _t100*_t191 + _t121*_t201
-            + _t121*_t204 - _t128*_t201 - _t128*_t204 - _t129*_t201 - _t129*_t204 + _t130*_t202
-            - _t130*_t203 + _t14*_t163 + _t143*_t202 - _t143*_t203 + _t160*_t9 - _t187*_t202
-            + _t187*_t203 + _t189*_t20 + _t189*_t24 - _t189*_t26 + _t189*_t29 - _t189*_t30
-            + _t189*_t31 - _t190*_t34 - _t190*_t38 + _t190*_t89 + _t190*_t99 + _t191*_t39
-            + _t191*_t41 - _t191*_t91 + _t192*_t46 - _t192*_t48 + _t193*_t46 - _t193*_t48
-            - _t194*_t33 - _t194*_t37 + _t195*_t33 + _t195*_t37 + _t196*_t33 + _t196*_t37
-            - _t197*_t74 + _t197*_t86 - _t197*_t87 + _t198*_t74 - _t198*_t86 + _t198*_t87
-            - _t199*_t92 + _t199*_t94 - _t200*_t92 + _t200*_t94;
-    const trailer_real_t _t207 =
-            TRAILER_LIT(6642450.0)*J_theta_cart*_t12*_t160*_t2*_t32*_t36*_t45*_t47*radius_left
-            *radius_right
-            + TRAILER_LIT(6642450.0)*J_theta_cart*_t12*_t160*_t2*_t33*_t37*radius_left*radius_right
-            + TRAILER_LIT(2250000.0)*J_theta_cart*_t12*_t160*_t2*radius_left*radius_right
-            + TRAILER_LIT(797094.0)*J_theta_cart_left*_t160*_t2*_t32*_t45*radius_left*radius_right
-            +
-            TRAILER_LIT(1594188.0)*J_theta_cart_left*_t160*_t2*_t33*_t36*_t47*radius_left
-            *radius_right
-            + TRAILER_LIT(1062792.0)*J_theta_cart_left*_t160*_t2*_t33*radius_left*radius_right
-            + TRAILER_LIT(1062792.0)*J_theta_cart_left*_t160*_t2*_t37*radius_left*radius_right
-            +
-            TRAILER_LIT(1594188.0)*J_theta_cart_right*_t12*_t160*_t32*_t37*_t45*radius_left
-            *radius_right
-            + TRAILER_LIT(1062792.0)*J_theta_cart_right*_t12*_t160*_t33*radius_left*radius_right
-            + TRAILER_LIT(797094.0)*J_theta_cart_right*_t12*_t160*_t36*_t47*radius_left*radius_right
-            + TRAILER_LIT(1062792.0)*J_theta_cart_right*_t12*_t160*_t37*radius_left*radius_right
-            + TRAILER_LIT(9000000.0)*J_theta_tractor*_t12*_t160*_t2*radius_left*radius_right
-            +
-            TRAILER_LIT(3985470.0)*K_theta_cart_x_tractor*_t12*_t160*_t2*_t33*radius_left
-            *radius_right
-            +
-            TRAILER_LIT(3985470.0)*K_theta_cart_x_tractor*_t12*_t160*_t2*_t37*radius_left
-            *radius_right
-            +
-            TRAILER_LIT(7970940.0)*K_theta_cart_x_tractor_2*_t12*_t160*_t2*_t32*_t37*_t45
-            *radius_left*radius_right
-            +
-            TRAILER_LIT(3985470.0)*K_theta_cart_x_tractor_2*_t12*_t160*_t2*_t36*_t47*radius_left
-            *radius_right - K_theta_cart_x_tractor_2*_t171*_t94 - _t1*_t162 - _t1*_t164
-            - TRAILER_LIT(3985470.0)*_t114*_t165 - _t151*_t171 - _t159*_t171 - _t165*_t168*_t33
-            - _t165*_t168*_t37 - _t165*_t26 - _t165*_t29 - _t166*_t169 - _t166*_t170
-            - TRAILER_LIT(797094.0)*_t166*_t48 - TRAILER_LIT(1594188.0)*_t166*_t92 - _t167*_t169
-            - _t167*_t170 - TRAILER_LIT(797094.0)*_t167*_t46 - TRAILER_LIT(1594188.0)*_t167*_t94;
-    norm[0] = TRAILER_SQRT(_t205*_t205 + _t206*_t206 + TRAILER_LIT(2.0)*_t207*_t207);
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t5 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
+    const trailer_real_t _t6 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t _t7 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t9 = _t8*_t8;
+    const trailer_real_t _t10 = _t1*_t9;
+    const trailer_real_t _t11 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t12 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t13 = _t12*_t12;
+    const trailer_real_t _t14 = _t1*_t13;
+    const trailer_real_t _t15 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t16 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t17 = _t8*TRAILER_SIN(theta_cart);
+    const trailer_real_t _t18 = _t1*_t17;
+    const trailer_real_t _t19 = _t12*TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t20 = _t1*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(29522.0)*_t5/TRAILER_LIT(42849.0);
+    const trailer_real_t _t22 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(28566.0);
+    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(28566.0);
+    const trailer_real_t _t25 = _t13*_t9;
+    const trailer_real_t _t26 = _t1*_t25;
+    const trailer_real_t _t27 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t28 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t29 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t30 = _t14*_t17;
+    const trailer_real_t _t31 = _t10*_t19;
+    const trailer_real_t _t32 = _t17*_t20;
+    const trailer_real_t _t33 = TRAILER_LIT(59044.0)*_t26/TRAILER_LIT(42849.0);
+    const trailer_real_t _t34 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(14283.0);
+    const trailer_real_t _t35 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(14283.0);
+    const trailer_real_t _t36 = TRAILER_LIT(59044.0)*_t32/TRAILER_LIT(42849.0);
+    const trailer_real_t _t37 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t10*_t11 - _t10*_t15
+            - _t10*_t21 - _t10*_t22 + _t11*_t14 - _t14*_t15 - _t14*_t21 - _t14*_t22 + _t16*_t18
+            - _t16*_t20 - _t18*_t23 + _t18*_t24 + _t20*_t23 - _t20*_t24 - _t26*_t27 + _t26*_t28
+            - _t27*_t32 + _t28*_t32 - _t29*_t30 + _t29*_t31 + _t30*_t34 - _t30*_t35 - _t31*_t34
+            + _t31*_t35 + _t33*_t5 + _t33*_t7 + _t36*_t5 + _t36*_t7 + _t5*_t6 + _t6*_t7;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = radius_left*radius_left;
+    const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t42 = _t39*_t5;
+    const trailer_real_t _t43 = _t39*_t7;
+    const trailer_real_t _t44 = _t39*_t9;
+    const trailer_real_t _t45 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t46 = _t13*_t39;
+    const trailer_real_t _t47 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t48 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t49 = _t17*_t39;
+    const trailer_real_t _t50 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t51 = _t19*_t39;
+    const trailer_real_t _t52 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t53 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t _t54 = TRAILER_LIT(31178.0)*_t5/TRAILER_LIT(42849.0);
+    const trailer_real_t _t55 = TRAILER_LIT(10222.0)*_t7/TRAILER_LIT(42849.0);
+    const trailer_real_t _t56 = TRAILER_LIT(4387.0)*_t42/TRAILER_LIT(9522.0);
+    const trailer_real_t _t57 = TRAILER_LIT(23639.0)*_t43/TRAILER_LIT(28566.0);
+    const trailer_real_t _t58 = _t13*_t44;
+    const trailer_real_t _t59 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
+    const trailer_real_t _t60 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t62 = _t17*_t46;
+    const trailer_real_t _t63 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
+    const trailer_real_t _t64 = _t19*_t44;
+    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
+    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
+    const trailer_real_t _t67 = _t19*_t49;
+    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t5/TRAILER_LIT(4761.0);
+    const trailer_real_t _t69 = TRAILER_LIT(23639.0)*_t7/TRAILER_LIT(14283.0);
+    const trailer_real_t _t70 = _t17*_t19;
+    const trailer_real_t _t71 = J_theta_left + _t0*_t39 - _t17*_t56 - _t17*_t57 + _t19*_t56
+            + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 + _t39*_t40 - _t39*_t41
+            - TRAILER_LIT(62356.0)*_t42*_t70/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(11449.0)*_t42/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(20444.0)*_t43*_t70/TRAILER_LIT(42849.0)
+            + TRAILER_LIT(94249.0)*_t43/TRAILER_LIT(171396.0) - _t44*_t45 + _t44*_t47 - _t44*_t48
+            + _t44*_t54 - _t44*_t55 - _t45*_t46 + _t46*_t47 - _t46*_t48 + _t46*_t54 - _t46*_t55
+            + _t49*_t50 - _t49*_t52 - _t49*_t53 - TRAILER_LIT(62356.0)*_t5*_t58/TRAILER_LIT(42849.0)
+            - _t50*_t51 + _t51*_t52 + _t51*_t53 + _t58*_t59 - _t58*_t60 + _t58*_t61
+            + TRAILER_LIT(20444.0)*_t58*_t7/TRAILER_LIT(42849.0) + _t59*_t67 - _t60*_t67 + _t61*_t67
+            - _t62*_t63 + _t62*_t65 + _t62*_t66 + _t62*_t68 + _t62*_t69 + _t63*_t64 - _t64*_t65
+            - _t64*_t66 - _t64*_t68 - _t64*_t69;
+    const trailer_real_t _t72 = radius_right*radius_right;
+    const trailer_real_t _t73 = _t5*_t72;
+    const trailer_real_t _t74 = _t7*_t72;
+    const trailer_real_t _t75 = _t45*_t72;
+    const trailer_real_t _t76 = _t47*_t72;
+    const trailer_real_t _t77 = _t48*_t72;
+    const trailer_real_t _t78 = _t17*_t72;
+    const trailer_real_t _t79 = _t19*_t72;
+    const trailer_real_t _t80 = TRAILER_LIT(10222.0)*_t73/TRAILER_LIT(42849.0);
+    const trailer_real_t _t81 = TRAILER_LIT(31178.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t82 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(28566.0);
+    const trailer_real_t _t83 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(9522.0);
+    const trailer_real_t _t84 = _t25*_t72;
+    const trailer_real_t _t85 = _t60*_t72;
+    const trailer_real_t _t86 = _t13*_t78;
+    const trailer_real_t _t87 = _t79*_t9;
+    const trailer_real_t _t88 = _t19*_t78;
+    const trailer_real_t _t89 = TRAILER_LIT(20444.0)*_t73/TRAILER_LIT(42849.0);
+    const trailer_real_t _t90 = TRAILER_LIT(62356.0)*_t74/TRAILER_LIT(42849.0);
+    const trailer_real_t _t91 = _t13*_t17;
+    const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(14283.0);
+    const trailer_real_t _t93 = _t19*_t9;
+    const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
+    const trailer_real_t _t95 = J_theta_right + _t0*_t72 - _t13*_t75 + _t13*_t76 + _t13*_t77
+            - _t13*_t80 + _t13*_t81 + _t17*_t82 + _t17*_t83 - _t19*_t82 - _t19*_t83 + _t2*_t72
+            - _t25*_t85 + _t25*_t89 - _t25*_t90 + _t3*_t72 - _t4*_t72 - _t40*_t72 + _t41*_t72
+            - _t50*_t78 + _t50*_t79 + _t52*_t78 - _t52*_t79 - _t53*_t78 + _t53*_t79 + _t59*_t84
+            + _t59*_t88 - _t61*_t84 - _t61*_t88 + _t63*_t86 - _t63*_t87 - _t65*_t86 + _t65*_t87
+            + _t66*_t86 - _t66*_t87 - _t70*_t85 + _t70*_t89 - _t70*_t90
+            + TRAILER_LIT(94249.0)*_t73/TRAILER_LIT(171396.0)
+            + TRAILER_LIT(11449.0)*_t74/TRAILER_LIT(171396.0) - _t75*_t9 + _t76*_t9 + _t77*_t9
+            - _t80*_t9 + _t81*_t9 - _t91*_t92 - _t91*_t94 + _t92*_t93 + _t93*_t94;
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t38 + _t71*_t71 + _t95*_t95)/TRAILER_FABS(_t38
+            - _t71*_t95);
 }
 
 /* trailer_minimal_tdroc_gain: documented in trailer_laws.h.

@@ -133,7 +133,7 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
  *     measured q
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 330 add, 657 mul, 1 div, 4 sin/cos, 1 sqrt
+ * operations after CSE: 132 add, 229 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm);

@@ -70,52 +70,64 @@ static uint32_t trailer_fnv(uint32_t hash, uint32_t word)
 
 /* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
    k mod 4: independent multiply chains instead of one 39 long), then FNV-1a
-   of the lanes. Every field, value by value (padding never hashed). */
+   of the lanes. Every field, value by value (padding never hashed): the reals in struct order,
+   then the ints; the reals gathered into one array so that one loop hashes them. */
 static uint32_t trailer_roc_fingerprint(const trailer_roc_config_t *config)
 {
+    const trailer_real_t reals[38] = {
+        config->nominal.J_theta_cart,
+        config->nominal.J_theta_cart_left,
+        config->nominal.J_theta_cart_right,
+        config->nominal.J_theta_left,
+        config->nominal.J_theta_right,
+        config->nominal.J_theta_tractor,
+        config->nominal.J_x_tractor,
+        config->nominal.K_theta_cart_x_tractor,
+        config->nominal.K_theta_cart_x_tractor_2,
+        config->nominal.K_theta_tractor_x_tractor,
+        config->nominal.K_theta_tractor_x_tractor_2,
+        config->nominal.radius_cart_left,
+        config->nominal.radius_cart_right,
+        config->nominal.radius_left,
+        config->nominal.radius_right,
+        config->k1[0],
+        config->k1[1],
+        config->k1[2],
+        config->k1[3],
+        config->k1[4],
+        config->k1[5],
+        config->k1[6],
+        config->k1[7],
+        config->k2[0],
+        config->k2[1],
+        config->k2[2],
+        config->k2[3],
+        config->k2[4],
+        config->k2[5],
+        config->k2[6],
+        config->k2[7],
+        config->q_pos,
+        config->q_vel,
+        config->h,
+        config->tau_max,
+        config->eps,
+        config->alpha,
+        config->phi
+    };
     uint32_t lane0 = 2166136261u;
     uint32_t lane1 = 2166136261u;
     uint32_t lane2 = 2166136261u;
     uint32_t lane3 = 2166136261u;
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.J_theta_cart));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.J_theta_cart_left));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.J_theta_cart_right));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.J_theta_left));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.J_theta_right));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.J_theta_tractor));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.J_x_tractor));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.K_theta_cart_x_tractor));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.K_theta_cart_x_tractor_2));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.K_theta_tractor_x_tractor));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.K_theta_tractor_x_tractor_2));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->nominal.radius_cart_left));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->nominal.radius_cart_right));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->nominal.radius_left));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->nominal.radius_right));
-    lane3 = trailer_fnv(lane3, (uint32_t)config->formulation);
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->k1[0]));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->k1[1]));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->k1[2]));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->k1[3]));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->k1[4]));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->k1[5]));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->k1[6]));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->k1[7]));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->k2[0]));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->k2[1]));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->k2[2]));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->k2[3]));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->k2[4]));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->k2[5]));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->k2[6]));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->k2[7]));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->q_pos));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->q_vel));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->h));
-    lane3 = trailer_fnv(lane3, trailer_real_word(config->tau_max));
-    lane0 = trailer_fnv(lane0, trailer_real_word(config->eps));
-    lane1 = trailer_fnv(lane1, trailer_real_word(config->alpha));
-    lane2 = trailer_fnv(lane2, trailer_real_word(config->phi));
+    int k;
+    for (k = 0; k < 36; k += 4) {
+        lane0 = trailer_fnv(lane0, trailer_real_word(reals[k]));
+        lane1 = trailer_fnv(lane1, trailer_real_word(reals[k + 1]));
+        lane2 = trailer_fnv(lane2, trailer_real_word(reals[k + 2]));
+        lane3 = trailer_fnv(lane3, trailer_real_word(reals[k + 3]));
+    }
+    lane0 = trailer_fnv(lane0, trailer_real_word(reals[36]));
+    lane1 = trailer_fnv(lane1, trailer_real_word(reals[37]));
+    lane2 = trailer_fnv(lane2, (uint32_t)config->formulation);
     return trailer_fnv(trailer_fnv(trailer_fnv(trailer_fnv(2166136261u, lane0), lane1), lane2),
             lane3);
 }

@@ -264,17 +264,19 @@ class _Controller:
     @classmethod
     def fingerprint(cls, c: Config) -> int:
         """The C ``config_fp`` (double build): FNV-1a in interleaved lanes (value k into lane
-        k mod _FNV_LANES) over the configuration's values in C struct order, a value one
-        word (an int as uint32, a real its folded words), then FNV-1a of the lanes."""
+        k mod _FNV_LANES) over the configuration's reals in C struct order, then its ints, a
+        value one word (an int as uint32, a real its folded words), then FNV-1a of the lanes."""
         words = [_real_word(c.nominal[k]) for k in PARAM_KEYS]
+        ints = []
         for name, kind in cls.config_fields:
             value = getattr(c, name)
             if kind == "vector":
                 words += [_real_word(x) for x in np.asarray(value, dtype=np.float64).reshape(-1)]
             elif kind == "int":
-                words.append(int(value) & 0xFFFFFFFF)
+                ints.append(int(value) & 0xFFFFFFFF)
             else:
                 words.append(_real_word(value))
+        words += ints
         lanes = [_FNV_OFFSET] * _FNV_LANES
         for k, word in enumerate(words):
             lanes[k % _FNV_LANES] = _fnv(lanes[k % _FNV_LANES], word)

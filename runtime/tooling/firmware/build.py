@@ -175,7 +175,7 @@ MAIN_EXTRA = {
 
 def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:
     """ELF of a tiny main calling wmr_<name>_init and _step (configured for the
-    ``formulation``), linked with newlib-nano."""
+    ``formulation``), linked with newlib-nano; its link map beside it (``.map``)."""
     main = objs.dir / f"main_{name}.c"
     main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name],
                                          formulation=f"WMR_FORMULATION_{formulation}"))
@@ -192,6 +192,7 @@ def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Pat
             "--specs=nano.specs",
             "--specs=nosys.specs",
             "-Wl,--gc-sections",
+            f"-Wl,-Map={elf.with_suffix('.map')}",
             "-lm",
             "-o",
             str(elf),

@@ -41,7 +41,7 @@ from runtime.tooling.firmware.stack import (
     parse_su,
     worst_stack,
 )
-from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, symbols
+from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, generated_rodata, symbols
 
 DOC = default_output("docs/FIRMWARE.md")  # ./FIRMWARE.md when installed
 
@@ -53,6 +53,7 @@ class OnlyImage:
 
     sizes: dict[str, int]
     own_text: int
+    own_rodata: int  # the generated objects' constant tables
     doubles: list[str]
     step_stack: StackBound
     objects: Objects
@@ -73,7 +74,7 @@ def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
         else:
             frames[name] = Frame(name, own, qual)
     own = sum(s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT")
-    return OnlyImage(elf_sizes(elf), own, double_symbols(elf),
+    return OnlyImage(elf_sizes(elf), own, generated_rodata(elf), double_symbols(elf),
                      worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
 
 
@@ -90,6 +91,7 @@ class Report:
     functions: list[tuple[str, int, int, str, StackBound]]  # name, size, own, qual, bound
     step_stack: dict[str, StackBound]
     own_text: dict[str, int]
+    own_rodata: dict[str, int]
     only: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> TDROC image
     only_minimal_recorded_status: list[int] = field(default_factory=list)
     emulation: EmulationResult | None = None
@@ -147,6 +149,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
         functions,
         step_stack,
         own_text,
+        {name: generated_rodata(elf) for name, elf in elves.items()},
     )
     report.only = {f: formulation_only_image(work, f) for f in ("PAPER", "MINIMAL")}
     if emulate_run:
@@ -232,19 +235,20 @@ def render(r: Report) -> str:
         "A `main` that fills a configuration, calls `wmr_<ctrl>_init` and one",
         "`wmr_<ctrl>_step`, linked with newlib-nano (`--specs=nano.specs --specs=nosys.specs",
         "-Wl,--gc-sections -lm`). `.text` includes the C start-up code and the libm functions",
-        "used (sinf, cosf, sqrtf); *generated code* is the sum of the `wmr_*` functions.",
+        "used (sinf, cosf, sqrtf); *generated code* is the sum of the `wmr_*` functions,",
+        "*generated constants* the read-only data (tables) of the generated objects linked in.",
         "The worst-case stack is that of `wmr_<ctrl>_step` through all its callees.",
         "",
-        "| controller | .text | .data | .bss | generated code | double helpers (`__aeabi_d*`, ...) "
-        "| worst-case stack of step |",
-        "|---|---|---|---|---|---|---|",
+        "| controller | .text | .data | .bss | generated code | generated constants "
+        "| double helpers (`__aeabi_d*`, ...) | worst-case stack of step |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name in CONTROLLERS:
         s, b = r.sizes[name], r.step_stack[name]
         dbl = ", ".join(r.doubles[name]) or "none"
         lines.append(
             f"| {name.upper()} | {s['text']} | {s['data']} | {s['bss']} | {r.own_text[name]} "
-            f"| {dbl} | {b.bytes} B{'' if b.complete else ' (incomplete)'} |"
+            f"| {r.own_rodata[name]} | {dbl} | {b.bytes} B{'' if b.complete else ' (incomplete)'} |"
         )
     lines += ["", "Deepest chains:", ""]
     for name in CONTROLLERS:
@@ -258,14 +262,15 @@ def render(r: Report) -> str:
         "`WMR_ERR_BAD_FORMULATION`) and the other one's kernels are not linked. Without the",
         "define (the rows above) both are linked and `config->formulation` chooses.",
         "",
-        "| formulation | .text | .data | .bss | generated code | double helpers "
-        "| worst-case stack of step |",
-        "|---|---|---|---|---|---|---|",
+        "| formulation | .text | .data | .bss | generated code | generated constants "
+        "| double helpers | worst-case stack of step |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for form, img in r.only.items():
         lines.append(
             f"| {form.lower()} only | {img.sizes['text']} | {img.sizes['data']} | "
-            f"{img.sizes['bss']} | {img.own_text} | {', '.join(img.doubles) or 'none'} | "
+            f"{img.sizes['bss']} | {img.own_text} | {img.own_rodata} | "
+            f"{', '.join(img.doubles) or 'none'} | "
             f"{img.step_stack.bytes} B{'' if img.step_stack.complete else ' (incomplete)'} |"
         )
     lines += [

@@ -39,3 +39,18 @@ def elf_sizes(elf: Path) -> dict[str, int]:
     """text, data, bss of ``arm-none-eabi-size`` (Berkeley format)."""
     line = run_tool([str(tool("size")), str(elf)]).splitlines()[1].split()
     return {"text": int(line[0]), "data": int(line[1]), "bss": int(line[2])}
+
+
+# An input section of the link map: " .rodata.name  0xADDR  0xSIZE  path/file.o" (the name
+# on a line of its own when it is long).
+_MAP_SECTION = re.compile(r"^ (\.\w+)(?:\.\S*)?\s+0x[0-9a-f]+\s+0x([0-9a-f]+)\s+(\S+)$", re.M)
+
+
+def generated_rodata(elf: Path) -> int:
+    """Bytes of read-only data (constant tables) the generated objects (``wmr_*.o``)
+    contribute to the linked ``elf``, from its link map (``elf`` with suffix ``.map``):
+    kept input sections only, so what ``--gc-sections`` dropped is not counted."""
+    text = elf.with_suffix(".map").read_text()
+    kept = text[text.index("Linker script and memory map"):]
+    return sum(int(m.group(2), 16) for m in _MAP_SECTION.finditer(kept)
+               if m.group(1) == ".rodata" and re.search(r"(^|/)wmr_\w+\.o$", m.group(3)))
