@@ -143,7 +143,9 @@ def declarations(
     prefix: str = "wmr",
 ) -> str:
     """The generated headers, preprocessed for ``cffi.FFI.cdef`` (with empty ``<math.h>``
-    and ``<stdint.h>``: cffi declares the fixed-width integer types itself)."""
+    and ``<stdint.h>``: cffi declares the fixed-width integer types itself), without the
+    ``static inline`` functions a header defines (the double build's sin and cos): a cdef
+    only declares."""
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
         (fake / "math.h").write_text("")
@@ -156,7 +158,24 @@ def declarations(
         if float32:
             cmd.insert(3, f"-D{prefix.upper()}_FLOAT32")
         text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    return text
+    return without_inline_definitions(text)
+
+
+def without_inline_definitions(text: str) -> str:
+    """``text`` without its ``static inline`` function definitions (each up to the brace
+    that closes its body)."""
+    out, pos = [], 0
+    while (start := text.find("static inline", pos)) >= 0:
+        depth, i = 0, text.index("{", start)
+        while True:
+            depth += {"{": 1, "}": -1}.get(text[i], 0)
+            if depth == 0:
+                break
+            i += 1
+        out.append(text[pos:start])
+        pos = i + 1
+    out.append(text[pos:])
+    return "".join(out)
 
 
 def build(

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.tooling.bench.c_bench import run_c
+from runtime.tooling.bench.c_bench import run_c, uses_trig
 from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
 from runtime.tooling.bench.op_counts import casadi_op_count
 from runtime.tooling.bench.step_bench import run_steps
@@ -29,14 +29,17 @@ def checksums() -> dict[str, dict[str, float]]:
 
 
 def test_every_function_has_every_variant(checksums: dict[str, dict[str, float]]) -> None:
-    for name in MODEL_FUNCTIONS:
-        expected = {"ours", "ours_float32", "casadi", "sympy", "hand"}
+    specs = specs_by_name()
+    for name in MODEL_FUNCTIONS:  # all of them evaluate sin and cos of the heading
+        expected = {"ours", "ours_float32", "casadi", "sympy", "hand", "ours_libm"}
         if name == "forward_dynamics":  # the one with validation and a prepare API
             expected |= {"ours_unchecked", "hand_checked", "ours_prepared"}
         assert set(checksums[name]) == expected
     for kernels in STEP_KERNELS.values():
         for k in kernels:
-            assert set(checksums[k]) == {"ours", "ours_float32", "casadi", "sympy"}
+            libm = {"ours_libm"} if uses_trig(specs[k]) else set()
+            assert set(checksums[k]) == {"ours", "ours_float32", "casadi", "sympy"} | libm
+    assert uses_trig(specs["paper_tde"]) and not uses_trig(specs["paper_tde_trig"])
 
 
 def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
@@ -49,15 +52,16 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
 
 
 def test_full_step_benchmark_checks_before_timing() -> None:
-    """The complete ``wmr_tdroc_step`` and the hand-written step: on the recorded closed
-    loop every status is equal and the torques agree (else nothing is timed), and both
-    are timed."""
+    """The complete ``wmr_tdroc_step``, the hand-written step and ours with libm's sin/cos:
+    on the recorded closed loop every status is equal and the torques agree (else nothing
+    is timed), and all are timed."""
     result = run_steps(601, 1)
     check = result["check"]
     assert check["steps"] > 100 and check["tau_scale"] > 0.1
     assert check["max_abs_tau_diff"] <= 1e-9 * check["tau_scale"]
     variants = {(r["function"], r["variant"]) for r in result["rows"]}
-    assert variants == {("tdroc_step", "ours"), ("tdroc_step", "hand")}
+    assert variants == {("tdroc_step", "ours"), ("tdroc_step", "hand"),
+                        ("tdroc_step", "ours_libm")}
     assert all(len(r["ns"]) == 1 and r["ns"][0] > 0.0 for r in result["rows"])
 
 

@@ -156,6 +156,10 @@ def _comment_text(text: str) -> str:
 # fmax and fmin are printed as static inline functions of wmr_types.h, not library calls
 # (on a Cortex-M4, fmaxf is a call into newlib and __fpclassifyf; on x86-64 a libm call).
 INLINE_MATH = ("fmax", "fmin")
+# sin and cos in double are static inline functions of wmr_types.h (one argument reduction
+# and two polynomials, shared by a sin and a cos of one angle), unless -DWMR_LIBM_TRIG:
+# glibc's sincos is most of the forward dynamics' time. float32 keeps libm's sinf/cosf.
+GENERATED_TRIG = ("sin", "cos")
 
 
 def _size_macros(spec: FunctionSpec, config: CConfig) -> list[tuple[str, int]]:
@@ -687,6 +691,7 @@ def render_types(
         macros=[(m.name.upper(), m.name, ", ".join("xyz"[: m.arity]))
                 for m in config.math_macros if m.name not in INLINE_MATH],
         inline_math=[m.name for m in config.math_macros if m.name in INLINE_MATH],
+        generated_trig=[m.name for m in config.math_macros if m.name in GENERATED_TRIG],
         structs=_structs(specs, config),
         width=WIDTH,
     )

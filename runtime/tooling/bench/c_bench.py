@@ -13,6 +13,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import sympy as sp
+
 from codegen.backends import c as c_backend
 from codegen.backends.c.config import CConfig, StatusCode
 from codegen.backends.casadi import generate_c
@@ -39,6 +41,32 @@ BENCH_CSRC = Path(__file__).resolve().parent / "csrc"  # hand-written with the s
 CFLAGS = ["-std=c99", "-O2"]
 
 
+def uses_trig(spec: FunctionSpec) -> bool:
+    """Whether the function evaluates sin or cos (generated in double, libm's with
+    ``-DWMR_LIBM_TRIG``): then the benchmark times both."""
+    return any(expr.has(sp.sin, sp.cos) for out in spec.outputs for expr in out.exprs)
+
+
+def renamed_objects(workdir: Path, sources: list[Path], defines: tuple[str, ...],
+                    tag: str) -> list[str]:
+    """``sources`` compiled with ``defines``, every ``wmr_`` symbol (defined or referenced)
+    renamed to ``<tag>wmr_`` so that the objects link beside the default build."""
+    objs = []
+    for src in sources:
+        obj = workdir / f"{tag}{src.stem}.o"
+        subprocess.run(["gcc", *CFLAGS, *defines, "-c", f"-I{GENERATED_C}", str(src), "-o",
+                        str(obj)], check=True)
+        names = [*subprocess.run(["nm", "--defined-only", "-g", str(obj)], check=True,
+                                 capture_output=True, text=True).stdout.split(),
+                 *subprocess.run(["nm", "-u", str(obj)], check=True, capture_output=True,
+                                 text=True).stdout.split()]
+        mapping = workdir / f"{tag}{src.stem}.redefine"
+        mapping.write_text("".join(f"{n} {tag}{n}\n" for n in names if n.startswith("wmr_")))
+        subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
+        objs.append(str(obj))
+    return objs
+
+
 def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, FunctionSpec]) -> Path:
     """Compile every variant into one executable; returns its path."""
     used = sorted({c["spec"] for c in cases})
@@ -54,25 +82,9 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             ["gcc", *CFLAGS, "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)], check=True
         )
         objs.append(str(obj))
-    for src in gen_sources:  # ours, float32, symbols renamed wmr_ -> f32_wmr_
-        obj = workdir / f"f_{src.stem}.o"
-        subprocess.run(
-            ["gcc", *CFLAGS, "-DWMR_FLOAT32", "-c", f"-I{GENERATED_C}", str(src), "-o", str(obj)],
-            check=True,
-        )
-        names = subprocess.run(
-            ["nm", "--defined-only", "-g", str(obj)], check=True, capture_output=True, text=True
-        ).stdout.split()
-        mapping = workdir / f"{src.stem}.redefine"
-        mapping.write_text("".join(f"{n} f32_{n}\n" for n in names if n.startswith("wmr_")))
-        # Undefined references to other wmr_ objects must be renamed too.
-        undefined = subprocess.run(
-            ["nm", "-u", str(obj)], check=True, capture_output=True, text=True
-        ).stdout.split()
-        extra = "".join(f"{n} f32_{n}\n" for n in undefined if n.startswith("wmr_"))
-        mapping.write_text(mapping.read_text() + extra)
-        subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
-        objs.append(str(obj))
+    # ours, float32; and ours with libm's sin/cos: each with its symbols renamed
+    objs += renamed_objects(workdir, gen_sources, ("-DWMR_FLOAT32",), "f32_")
+    objs += renamed_objects(workdir, gen_sources, ("-DWMR_LIBM_TRIG",), "lm_")
     # Ours without input/guard/output validation, to measure what the checks cost: the
     # same specs rendered by the same backend under another prefix (wmrn_).
     unchecked = [
@@ -134,6 +146,15 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
                 "const wmr_params_t", "const wmr_params_f32_t"
             )
         )
+    # libm sin/cos prototypes: our signatures under the renamed symbols.
+    for name in (n for n in used if uses_trig(specs[n])):
+        spec = specs[name]
+        params = ["const wmr_params_t *" if a.kind == "params" else "const double *"
+                  for a in spec.inputs] + ["double *"] * len(spec.outputs)
+        ret = "wmr_status_t" if spec.returns_status else "void"
+        lines.append(f"{ret} lm_wmr_{name}({', '.join(params)});")
+        lines.append(ours_wrapper(spec, "ourslm", "double").replace(
+            f"    wmr_{name}(", f"    lm_wmr_{name}("))
     if unchecked:
         lines.insert(0, '#include "wmrn_model.h"')
     for spec in unchecked:
@@ -167,6 +188,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             "ours_float32": f"ours32_{name}",
             "ours_unchecked": f"oursn_{name}",
             "ours_prepared": f"oursp_{name}",
+            "ours_libm": f"ourslm_{name}",
             "casadi": f"casadi_w_{name}",
             "sympy": f"sympy_w_{name}",
             "hand": f"hand_w_{name}",
@@ -213,6 +235,8 @@ def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
             variants.append("ours_unchecked")
         if specs[name].prepared:
             variants.append("ours_prepared")
+        if uses_trig(specs[name]):
+            variants.append("ours_libm")
         if name in HAND_WRITTEN:
             variants.append("hand")
         if name in HAND_CHECKED:

@@ -30,7 +30,7 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
     ours, hand = st[("tdroc_step", "ours")], st[("tdroc_step", "hand")]
     kernels = c[("tdroc_step_kernels", "ours")]["median"]
     fd = {v: c[("forward_dynamics", v)]["median"]
-          for v in ("ours", "ours_prepared", "hand_checked", "casadi")}
+          for v in ("ours", "ours_prepared", "ours_libm", "hand_checked", "casadi")}
     chk = steps["check"]
 
     def cell(x: dict[str, float]) -> str:
@@ -69,6 +69,7 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
             f"{fd[v] / fd['casadi']:.2f}× |"
             for v, label in (("ours", "`wmr_forward_dynamics`"),
                              ("ours_prepared", "`wmr_forward_dynamics_prepared`"),
+                             ("ours_libm", "`wmr_forward_dynamics`, `-DWMR_LIBM_TRIG`"),
                              ("hand_checked", "hand-written, same checks"),
                              ("casadi", "CasADi C"))
         ],
@@ -114,14 +115,15 @@ def write_report(
         "## C, ns per call (ratio = variant / ours double)",
         "",
         "| function | ours double | ours float32 | ours, no validation | ours, prepared "
-        "| CasADi C | SymPy ccode | hand-written | hand-written, same checks |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| ours, libm sin/cos | CasADi C | SymPy ccode | hand-written "
+        "| hand-written, same checks |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for f in funcs:
         ours = c[(f, "ours")]["median"]
         cells = []
-        for v in ("ours", "ours_float32", "ours_unchecked", "ours_prepared", "casadi", "sympy",
-                  "hand", "hand_checked"):
+        for v in ("ours", "ours_float32", "ours_unchecked", "ours_prepared", "ours_libm",
+                  "casadi", "sympy", "hand", "hand_checked"):
             if (f, v) not in c:
                 cells.append("—")
                 continue
@@ -138,6 +140,9 @@ def write_report(
         "“Ours, prepared”: `wmr_forward_dynamics_prepared` (the same results bit for bit, the",
         "state's checks and the finite-output check), each input set's parameters prepared",
         "once by `wmr_model_prepare` before anything is checked or timed.",
+        "“Ours, libm sin/cos”: the same generated code built with `-DWMR_LIBM_TRIG` (libm's",
+        "sin and cos instead of the generated ones of `wmr_types.h`, which the double build",
+        "uses by default); CasADi's C and the hand-written C call libm's.",
         "Before any timing every variant's outputs on the 256 inputs are checked against",
         "ours (1e-9 relative, float32 1e-3); the repetitions are interleaved (each times",
         "every variant once). A controller step here is the sum of its kernels (TDE (17),",

@@ -22,7 +22,9 @@ from runtime.cbuild import GENERATED_C
 
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
 CFLAGS = ["-std=c99", "-O2"]
-VARIANTS = ("ours", "hand")  # ours = wmr_tdroc_step; hand = hand_tdroc_step
+# ours = wmr_tdroc_step; hand = hand_tdroc_step; ours_libm = wmr_tdroc_step built with
+# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses, instead of the generated).
+VARIANTS = ("ours", "hand", "ours_libm")
 TORQUE_TOLERANCE = 1e-9  # relative to the run's largest |tau|
 
 HARNESS = r"""
@@ -35,17 +37,26 @@ HARNESS = r"""
 #include "hand_tdroc.h"
 #include "wmr_tdroc.h"
 
+#define NV 3
+wmr_status_t lm_wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
+wmr_status_t lm_wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
+    const double q[5], const double qdot[5], const double q_des[5], const double qdot_des[5],
+    const double qddot_des[5], double tau[2]);
+static const char *const NAMES[NV] = {"ours", "hand", "ours_libm"};
+
 static double now_ns(void) {
     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
     return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
 }
 static wmr_tdroc_config_t cfg;
-static wmr_tdroc_state_t ours;
+static wmr_tdroc_state_t ours, ours_lm;
 static hand_tdroc_state_t hand;
 
 /* A fresh state for variant v (not timed). */
 static void fresh(int v) {
-    if ((v == 0 ? wmr_tdroc_init(&ours, &cfg) : hand_tdroc_init(&hand, &cfg)) != WMR_OK) {
+    const int s = v == 0 ? wmr_tdroc_init(&ours, &cfg)
+                : v == 1 ? hand_tdroc_init(&hand, &cfg) : lm_wmr_tdroc_init(&ours_lm, &cfg);
+    if (s != WMR_OK) {
         fprintf(stderr, "init failed\n"); exit(2);
     }
 }
@@ -59,8 +70,10 @@ static double pass(int v, int *st, double *tq) {
         const double *in = IN[k];
         if (v == 0) {
             s = wmr_tdroc_step(&ours, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
-        } else {
+        } else if (v == 1) {
             s = hand_tdroc_step(&hand, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
+        } else {
+            s = lm_wmr_tdroc_step(&ours_lm, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
         }
         if (st != 0) { st[k] = s; tq[2 * k] = tau[0]; tq[2 * k + 1] = tau[1]; }
         sink += tau[0] + (double)s;
@@ -72,22 +85,24 @@ int main(int argc, char **argv) {
     long calls = argc > 1 ? atol(argv[1]) : 1000000;
     int repeats = argc > 2 ? atoi(argv[2]) : 5;
     long passes = calls / NSTEPS > 0 ? calls / NSTEPS : 1;
-    static int st[2][NSTEPS];
-    static double tq[2][2 * NSTEPS];
-    static double ns[2][64];
+    static int st[NV][NSTEPS];
+    static double tq[NV][2 * NSTEPS];
+    static double ns[NV][64];
     double scale = 0.0, worst = 0.0, sink = 0.0;
     int v, k, rep;
     long i;
     CONFIG
-    for (v = 0; v < 2; ++v) { fresh(v); pass(v, st[v], tq[v]); }
-    for (k = 0; k < 2 * NSTEPS; ++k) {
-        if (fabs(tq[0][k]) > scale) scale = fabs(tq[0][k]);
-        if (!(fabs(tq[1][k] - tq[0][k]) <= worst)) worst = fabs(tq[1][k] - tq[0][k]);
-    }
-    for (k = 0; k < NSTEPS; ++k) {
-        if (st[0][k] != st[1][k]) {
-            printf("{\"error\": \"status differs at step %d\"}\n", k);
-            return 3;
+    for (v = 0; v < NV; ++v) { fresh(v); pass(v, st[v], tq[v]); }
+    for (v = 1; v < NV; ++v) {
+        for (k = 0; k < 2 * NSTEPS; ++k) {
+            if (fabs(tq[0][k]) > scale) scale = fabs(tq[0][k]);
+            if (!(fabs(tq[v][k] - tq[0][k]) <= worst)) worst = fabs(tq[v][k] - tq[0][k]);
+        }
+        for (k = 0; k < NSTEPS; ++k) {
+            if (st[0][k] != st[v][k]) {
+                printf("{\"error\": \"%s: status differs at step %d\"}\n", NAMES[v], k);
+                return 3;
+            }
         }
     }
     printf("{\"check\": {\"steps\": %d, \"max_abs_tau_diff\": %.6e, "
@@ -95,7 +110,7 @@ int main(int argc, char **argv) {
     if (!(worst <= TOL * (scale > 1.0 ? scale : 1.0))) return 3;
     if (repeats > 64) repeats = 64;
     for (rep = 0; rep < repeats; ++rep) {
-        for (v = 0; v < 2; ++v) {
+        for (v = 0; v < NV; ++v) {
             double t = 0.0;
             for (i = 0; i < passes; ++i) {
                 double t0;
@@ -107,9 +122,9 @@ int main(int argc, char **argv) {
             ns[v][rep] = t / (double)(passes * NSTEPS);
         }
     }
-    for (v = 0; v < 2; ++v) {
+    for (v = 0; v < NV; ++v) {
         printf("{\"function\": \"tdroc_step\", \"variant\": \"%s\", \"ns\": [",
-               v == 0 ? "ours" : "hand");
+               NAMES[v]);
         for (rep = 0; rep < repeats; ++rep) printf("%s%.4f", rep ? ", " : "", ns[v][rep]);
         printf("], \"checksum\": %.15e}\n", sink);
     }
@@ -135,8 +150,9 @@ def _config_lines(config: dict[str, Any]) -> str:
 
 def build_step_bench(workdir: Path, config: dict[str, Any],
                      inputs: list[list[list[float]]]) -> Path:
-    """Compile the generated controller C (double), the hand-written step and the harness
-    with the recorded inputs into one executable; returns its path."""
+    """Compile the generated controller C (double; again with ``-DWMR_LIBM_TRIG``, renamed
+    ``lm_wmr_*``), the hand-written step and the harness with the recorded inputs into one
+    executable; returns its path."""
     rows = ",\n".join("{" + ", ".join(repr(x) for v in step for x in v) + "}" for step in inputs)
     head = (f"#define NSTEPS {len(inputs)}\n#define TOL {TORQUE_TOLERANCE!r}\n"
             f"static const double IN[NSTEPS][25] = {{\n{rows}\n}};\n")
@@ -144,11 +160,14 @@ def build_step_bench(workdir: Path, config: dict[str, Any],
     first, rest = body.split('#include "hand_tdroc.h"', 1)
     src = workdir / "step_main.c"
     src.write_text(first + '#include "hand_tdroc.h"\n' + head + rest)
+    from runtime.tooling.bench.c_bench import renamed_objects
+
     sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
+    libm = renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
     exe = workdir / "step_bench"
     subprocess.run(
         ["gcc", *CFLAGS, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),
-         str(BENCH_CSRC / "hand_tdroc.c"), *map(str, sources), "-lm", "-o", str(exe)],
+         str(BENCH_CSRC / "hand_tdroc.c"), *map(str, sources), *libm, "-lm", "-o", str(exe)],
         check=True,
     )
     return exe
