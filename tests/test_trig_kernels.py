@@ -64,6 +64,9 @@ def test_tde_step_calls_the_trig_kernels() -> None:
     for ctrl in ("tdc", "tdroc"):
         text = (GENERATED_DIR / "c" / f"wmr_{ctrl}.c").read_text()
         step = text[text.index(f"wmr_status_t wmr_{ctrl}_step_detail("):]
-        assert step.count("WMR_SIN(") == 1 and step.count("WMR_COS(") == 1, ctrl
+        # once, through the bounded sincos (q is checked against its bound before)
+        assert step.count("wmr_sincos_bounded(q[2], &trig[0], &trig[1]);") == 1, ctrl
+        assert "WMR_SIN(" not in step and "WMR_COS(" not in step, ctrl
+        assert step.index("wmr_check_step_inputs(") < step.index("wmr_sincos_bounded("), ctrl
         assert f"wmr_paper_{ctrl}_law_trig(&config->nominal, trig," in step
         assert "wmr_paper_tde_trig(&config->nominal, state->trig_prev," in step

@@ -235,10 +235,10 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
-    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next. */
+    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next.
+       q is within MAX_ABS_INPUT (checked above), where sincos_bounded's reduction is exact. */
     if (paper) {
-        trig[0] = WMR_SIN(q[2]);
-        trig[1] = WMR_COS(q[2]);
+        wmr_sincos_bounded(q[2], &trig[0], &trig[1]);
     } else {
         trig[0] = WMR_LIT(0.0);
         trig[1] = WMR_LIT(0.0);
@@ -253,12 +253,13 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
         const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
         const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
             ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
-        wmr_real_t up[5], qdn[5], qdthen[5];
+        /* the rates now and then, the controlled slice read in place */
+        const wmr_real_t *const qdn = &qdot[off];
+        const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];
+        wmr_real_t up[5];
         for (i = 0; i < nc; ++i) {
             const int row = paper ? i : 3 + i;
             up[i] = (WMR_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
-            qdn[i] = qdot[off + i];
-            qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
         for (i = nc; i < 5; ++i) {
             H1hat[i] = WMR_LIT(0.0);

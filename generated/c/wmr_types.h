@@ -56,8 +56,16 @@ typedef double wmr_real_t;
 #define WMR_INF HUGE_VAL
 #endif
 
-#ifndef WMR_FLOAT32
+/* sin and cos. wmr_sincos_bounded(x, &s, &c): both, for |x| <= 1.0e6 (the controller steps'
+   input bound; NaN beyond, and for Inf and NaN), from one argument reduction and without a
+   library call: the steps use it. Double: wmr_sin / wmr_cos are the same within that bound and
+   libm's beyond, and WMR_SIN / WMR_COS call them; float32's call sinf / cosf. -DWMR_LIBM_TRIG:
+   libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then Taylor polynomials
+   in r^2 by Estrin's scheme (the terms left out are below half an ulp for |r| <= pi/4):
+   within 2 ulp of the correctly rounded values (tests). Relies on round-to-nearest and no
+   -ffast-math (k = round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23). */
 #ifdef WMR_LIBM_TRIG
+#ifndef WMR_FLOAT32
 static inline double wmr_sin(double x)
 {
     return sin(x);
@@ -67,38 +75,66 @@ static inline double wmr_cos(double x)
 {
     return cos(x);
 }
-#else
-/* sin and cos in double without a library call for |x| <= 1e6 (libm's beyond, and for Inf
-   and NaN). x = k pi/2 + r with |r| <= pi/4 (Cody and Waite: pi/2 in two
-   parts of 33 bits and a tail, so k * part is exact for |k| < 2^20, x - k * part1 is
-   exact by Sterbenz's lemma, and the next subtraction's rounding error is kept), then
-   Taylor polynomials of sin r to r^17 and cos r to r^16 (the terms left out are below
-   1e-17 for |r| <= pi/4): within 2 ulp of glibc's (tests). Both functions evaluate both
-   polynomials from one reduction, so a sin and a cos of one angle share it once inlined.
-   Relies on round-to-nearest and no -ffast-math (k = round(2x/pi) by adding and
-   subtracting 1.5 * 2^52). -DWMR_LIBM_TRIG: libm's sin and cos instead. */
+#endif
 
-/* 1 where the reduction below is exact: |x| <= 1e6 (|k| < 2^20); 0 for Inf and NaN. */
-static inline int wmr_trig_in_range(double x)
+static inline void wmr_sincos_bounded(wmr_real_t x, wmr_real_t *s, wmr_real_t *c)
 {
-    return fabs(x) <= 1.0e6;
+    *s = WMR_SIN(x);
+    *c = WMR_COS(x);
+}
+#else
+/* 1 where the reductions below are exact: |x| <= 1.0e6; 0 for Inf and NaN. */
+static inline int wmr_trig_in_range(wmr_real_t x)
+{
+    return WMR_FABS(x) <= WMR_LIT(1.0e6);
 }
 
-static inline void wmr_sincos_reduced(double x, double *s, double *c)
+#ifdef WMR_FLOAT32
+static inline void wmr_sincos_bounded(float x, float *s, float *c)
+{
+    const float shift = 12582912.0f;
+    const float k = ((x * 0.636619772f) + shift) - shift;
+    /* pi/2 in three floats: each product is exact inside fmaf, and x - k part1 is exact (a
+       multiple of 2^-23 below 2 in magnitude for |k| < 2^22). */
+    const float r1 = fmaf(-k, 1.57079637f, x);
+    const float r2 = fmaf(-k, -4.37113883e-08f, r1);
+    /* below 0.78, k = 0 and r = x: taken as it is, which also keeps -0's sign */
+    const float r = (fabsf(x) < 0.78f) ? x : fmaf(-k, -1.71512451e-15f, r2);
+    const float z = r * r;
+    const float z2 = z * z;
+    const float ps = ((-1.0f / 6.0f) + (z * (1.0f / 120.0f)))
+                     + (z2 * ((-1.0f / 5040.0f) + (z * (1.0f / 362880.0f))));
+    const float pc = ((-0.5f + (z * (1.0f / 24.0f)))
+                      + (z2 * ((-1.0f / 720.0f) + (z * (1.0f / 40320.0f)))))
+                     + ((z2 * z2) * (-1.0f / 3628800.0f));
+    /* sin r = r below 2^-12 (the correction is under half an ulp). */
+    const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
+    const float cr = 1.0f + (z * pc);
+    const int in_range = wmr_trig_in_range(x);
+    /* The quadrant k mod 4 (k is only converted where it is in range). */
+    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0f)) & 3u;
+    const float sq = ((q & 1u) != 0u) ? cr : sr;
+    const float cq = ((q & 1u) != 0u) ? sr : cr;
+    *s = (in_range == 0) ? (float)NAN : (((q & 2u) != 0u) ? -sq : sq);
+    *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+}
+#else
+static inline void wmr_sincos_bounded(double x, double *s, double *c)
 {
     const double shift = 6755399441055744.0;
     const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
-    const double r1 = x - (k * 1.57079632673412561417e+00);  /* exact */
-    const double w = k * 6.07710050630396597660e-11;  /* exact */
+    /* pi/2 in two parts of 33 bits and a tail: k * part is exact for |k| < 2^20, x - k part1
+       is exact (Sterbenz's lemma), and the next subtraction's rounding error is kept. */
+    const double r1 = x - (k * 1.57079632673412561417e+00);
+    const double w = k * 6.07710050630396597660e-11;
     const double r2 = r1 - w;
-    const double r3 = r2 - (k * 2.02226624879595063154e-21);  /* pi/2's tail */
+    const double r3 = r2 - (k * 2.02226624879595063154e-21);
     /* r2's rounding error, exact (Fast2Sum), corrects r. r^2 is taken from r3, so that the
        polynomials need not wait for it: it is below half an ulp of r. */
     const double r = r3 - (w - (r1 - r2));  /* this order keeps the sign of -0 */
     const double z = r3 * r3;
     const double z2 = z * z;
     const double z4 = z2 * z2;
-    /* Estrin's scheme in z: shorter dependency chains than Horner's. */
     const double ps = (((-1.0 / 6.0) + (z * (1.0 / 120.0)))
                        + (z2 * ((-1.0 / 5040.0) + (z * (1.0 / 362880.0)))))
                       + (z4 * (((-1.0 / 39916800.0) + (z * (1.0 / 6227020800.0)))
@@ -112,19 +148,20 @@ static inline void wmr_sincos_reduced(double x, double *s, double *c)
     /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
+    const int in_range = wmr_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((wmr_trig_in_range(x) != 0) ? k : 0.0)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0)) & 3u;
     const double sq = ((q & 1u) != 0u) ? cr : sr;
     const double cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = ((q & 2u) != 0u) ? -sq : sq;
-    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+    *s = (in_range == 0) ? (double)NAN : (((q & 2u) != 0u) ? -sq : sq);
+    *c = (in_range == 0) ? (double)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
 }
 
 static inline double wmr_sin(double x)
 {
     double s;
     double c;
-    wmr_sincos_reduced(x, &s, &c);
+    wmr_sincos_bounded(x, &s, &c);
     return (wmr_trig_in_range(x) != 0) ? s : sin(x);
 }
 
@@ -132,7 +169,7 @@ static inline double wmr_cos(double x)
 {
     double s;
     double c;
-    wmr_sincos_reduced(x, &s, &c);
+    wmr_sincos_bounded(x, &s, &c);
     return (wmr_trig_in_range(x) != 0) ? c : cos(x);
 }
 #endif

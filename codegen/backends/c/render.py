@@ -160,6 +160,10 @@ INLINE_MATH = ("fmax", "fmin")
 # and two polynomials, shared by a sin and a cos of one angle), unless -DWMR_LIBM_TRIG:
 # glibc's sincos is most of the forward dynamics' time. float32 keeps libm's sinf/cosf.
 GENERATED_TRIG = ("sin", "cos")
+# Where the generated reductions are exact (|k| < 2^20 in double, < 2^22 in float); at least
+# the controller steps' input bound (controller_api.MAX_ABS_INPUT), so that a step's
+# sincos_bounded never sees an argument beyond it.
+TRIG_BOUND = "1.0e6"
 
 
 def _size_macros(spec: FunctionSpec, config: CConfig) -> list[tuple[str, int]]:
@@ -692,6 +696,7 @@ def render_types(
                 for m in config.math_macros if m.name not in INLINE_MATH],
         inline_math=[m.name for m in config.math_macros if m.name in INLINE_MATH],
         generated_trig=[m.name for m in config.math_macros if m.name in GENERATED_TRIG],
+        trig_bound=TRIG_BOUND,
         structs=_structs(specs, config),
         width=WIDTH,
     )

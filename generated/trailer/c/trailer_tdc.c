@@ -247,11 +247,10 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     off = 4;
     gain = state->gain;
     s_norm = state->s_norm;
-    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next. */
-    trig[0] = TRAILER_SIN(q[2]);
-    trig[1] = TRAILER_COS(q[2]);
-    trig[2] = TRAILER_SIN(q[3]);
-    trig[3] = TRAILER_COS(q[3]);
+    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next.
+       q is within MAX_ABS_INPUT (checked above), where sincos_bounded's reduction is exact. */
+    trailer_sincos_bounded(q[2], &trig[0], &trig[1]);
+    trailer_sincos_bounded(q[3], &trig[2], &trig[3]);
     nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -262,12 +261,14 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
         const trailer_real_t span = central ? TRAILER_LIT(2.0) * config->h : config->h;
         const trailer_real_t c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
             ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
-        trailer_real_t up[8], qdn[8], qdthen[8];
+        /* the rates now and then, the controlled slice read in place */
+        const trailer_real_t *const qdn = &qdot[off];
+        const trailer_real_t *const qdthen = central ? &state->qdot_prev2[off]
+                : &state->qdot_prev[off];
+        trailer_real_t up[8];
         for (i = 0; i < nc; ++i) {
             const int row = 4 + i;
             up[i] = (TRAILER_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
-            qdn[i] = qdot[off + i];
-            qdthen[i] = central ? state->qdot_prev2[off + i] : state->qdot_prev[off + i];
         }
         for (i = nc; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);

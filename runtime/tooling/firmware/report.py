@@ -343,11 +343,22 @@ def render(r: Report) -> str:
             f"| torque vs host double: max abs difference | {c.max_abs_vs_double:.3g} N m |",
             f"| ... relative to the run's largest torque | {c.max_rel_vs_double:.3g} |",
             "",
-            "The largest distance in ulps is at a torque near zero, where an ulp is tiny. In",
-            "absolute terms the ARM and host float32 torques agree to "
-            f"{c.scale_ulps_vs_float:.2g} ulp of the run's",
-            f"largest torque ({c.torque_scale:.3g} N m); the libm functions differ (newlib-nano",
-            "vs glibc) and the differences carry over from step to step through u(t - h).",
+            *(
+                [
+                    "The ARM and host float32 torques are bit for bit the same: the step's sin and",
+                    "cos are the generated `wmr_sincos_bounded` (no libm call), and every other",
+                    "operation is IEEE single precision on both.",
+                ]
+                if c.max_ulps == 0 else [
+                    "The largest distance in ulps is at a torque near zero, where an ulp is tiny. "
+                    "In",
+                    "absolute terms the ARM and host float32 torques agree to "
+                    f"{c.scale_ulps_vs_float:.2g} ulp of the run's",
+                    f"largest torque ({c.torque_scale:.3g} N m); libm functions differ "
+                    "(newlib-nano",
+                    "vs glibc) and the differences carry over from step to step through u(t - h).",
+                ]
+            ),
             "",
             "Instructions are counted per executed basic block (Thumb-2 widths decoded), so an",
             "instruction skipped by an IT block still counts; at one instruction per cycle this",
