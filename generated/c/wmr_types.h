@@ -119,7 +119,8 @@ static inline void wmr_sincos_bounded(float x, float *s, float *c)
     *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
 }
 #else
-static inline void wmr_sincos_bounded(double x, double *s, double *c)
+/* sin and cos of x within the bound (anything finite beyond it). */
+static inline void wmr_sincos_kernel(double x, double *s, double *c)
 {
     const double shift = 6755399441055744.0;
     const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
@@ -148,20 +149,30 @@ static inline void wmr_sincos_bounded(double x, double *s, double *c)
     /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
-    const int in_range = wmr_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((wmr_trig_in_range(x) != 0) ? k : 0.0)) & 3u;
     const double sq = ((q & 1u) != 0u) ? cr : sr;
     const double cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = (in_range == 0) ? (double)NAN : (((q & 2u) != 0u) ? -sq : sq);
-    *c = (in_range == 0) ? (double)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+    *s = ((q & 2u) != 0u) ? -sq : sq;
+    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
 }
 
+static inline void wmr_sincos_bounded(double x, double *s, double *c)
+{
+    double sk;
+    double ck;
+    wmr_sincos_kernel(x, &sk, &ck);
+    *s = (wmr_trig_in_range(x) != 0) ? sk : (double)NAN;
+    *c = (wmr_trig_in_range(x) != 0) ? ck : (double)NAN;
+}
+
+/* The kernel's reduction and polynomials are the same code in both: once inlined, a sin
+   and a cos of one angle share them. */
 static inline double wmr_sin(double x)
 {
     double s;
     double c;
-    wmr_sincos_bounded(x, &s, &c);
+    wmr_sincos_kernel(x, &s, &c);
     return (wmr_trig_in_range(x) != 0) ? s : sin(x);
 }
 
@@ -169,7 +180,7 @@ static inline double wmr_cos(double x)
 {
     double s;
     double c;
-    wmr_sincos_bounded(x, &s, &c);
+    wmr_sincos_kernel(x, &s, &c);
     return (wmr_trig_in_range(x) != 0) ? c : cos(x);
 }
 #endif

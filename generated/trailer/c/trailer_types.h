@@ -122,7 +122,8 @@ static inline void trailer_sincos_bounded(float x, float *s, float *c)
     *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
 }
 #else
-static inline void trailer_sincos_bounded(double x, double *s, double *c)
+/* sin and cos of x within the bound (anything finite beyond it). */
+static inline void trailer_sincos_kernel(double x, double *s, double *c)
 {
     const double shift = 6755399441055744.0;
     const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
@@ -151,20 +152,30 @@ static inline void trailer_sincos_bounded(double x, double *s, double *c)
     /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
-    const int in_range = trailer_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((trailer_trig_in_range(x) != 0) ? k : 0.0)) & 3u;
     const double sq = ((q & 1u) != 0u) ? cr : sr;
     const double cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = (in_range == 0) ? (double)NAN : (((q & 2u) != 0u) ? -sq : sq);
-    *c = (in_range == 0) ? (double)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+    *s = ((q & 2u) != 0u) ? -sq : sq;
+    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
 }
 
+static inline void trailer_sincos_bounded(double x, double *s, double *c)
+{
+    double sk;
+    double ck;
+    trailer_sincos_kernel(x, &sk, &ck);
+    *s = (trailer_trig_in_range(x) != 0) ? sk : (double)NAN;
+    *c = (trailer_trig_in_range(x) != 0) ? ck : (double)NAN;
+}
+
+/* The kernel's reduction and polynomials are the same code in both: once inlined, a sin
+   and a cos of one angle share them. */
 static inline double trailer_sin(double x)
 {
     double s;
     double c;
-    trailer_sincos_bounded(x, &s, &c);
+    trailer_sincos_kernel(x, &s, &c);
     return (trailer_trig_in_range(x) != 0) ? s : sin(x);
 }
 
@@ -172,7 +183,7 @@ static inline double trailer_cos(double x)
 {
     double s;
     double c;
-    trailer_sincos_bounded(x, &s, &c);
+    trailer_sincos_kernel(x, &s, &c);
     return (trailer_trig_in_range(x) != 0) ? c : cos(x);
 }
 #endif
