@@ -149,6 +149,7 @@ def declarations(
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
         (fake / "math.h").write_text("")
+        (fake / "float.h").write_text("")
         (fake / "stdint.h").write_text("")  # cffi knows uint32_t and friends itself
         src = fake / "all.h"
         includes = [f'#include "{c_dir / h}"' for h in headers]

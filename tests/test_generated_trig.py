@@ -2,8 +2,8 @@
 within 2 ulp of glibc's over the reduced range (a dense grid, the neighbours of multiples of
 π/2 up to the bound, random arguments up to it), libm's own results beyond it and for ±Inf
 and NaN, the sign of a zero kept; ``wmr_sincos_bounded`` (what the controller steps call) in
-double and in float32 within 2 ulp of the correctly rounded values, NaN beyond the bound;
-``-DWMR_LIBM_TRIG`` gives libm's functions."""
+float32 within 2 ulp of the exact values, NaN beyond the bound; ``-DWMR_LIBM_TRIG`` gives
+libm's functions, and a build whose evaluation would break the reduction is refused."""
 
 from __future__ import annotations
 
@@ -153,6 +153,22 @@ def test_generated_sin_cos_are_within_two_ulp_and_libm_beyond(tmp_path: Path) ->
     assert result["worst_ulp"] <= 2.0, result
     assert result["exact_failures"] == 0
     assert result["neg_zero"] == 1
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+def test_fast_math_and_x87_builds_are_refused(tmp_path: Path) -> None:
+    """-ffast-math folds (a + 1.5 * 2^52) - 1.5 * 2^52 to a, and x87 evaluation
+    (FLT_EVAL_METHOD 2) keeps the excess precision that rounding relies on: both would give
+    wrong sin/cos silently, so the header stops them (the x87 case needs a 32-bit compiler
+    and is not exercised here); -DWMR_LIBM_TRIG builds either way."""
+    src = tmp_path / "t.c"
+    src.write_text('#include "wmr_types.h"\nint main(void) { return wmr_sin(0.5) > 1.0; }\n')
+    base = ["gcc", "-std=c99", "-O2", f"-I{cbuild.GENERATED_C}", "-c", str(src), "-o",
+            str(tmp_path / "t.o")]
+    fast = subprocess.run([*base, "-ffast-math"], capture_output=True, text=True)
+    assert fast.returncode != 0 and "IEEE evaluation" in fast.stderr
+    subprocess.run([*base, "-ffast-math", "-DWMR_LIBM_TRIG"], check=True)
+    subprocess.run(base, check=True)
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")

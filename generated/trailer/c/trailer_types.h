@@ -13,6 +13,7 @@
 #ifndef TRAILER_TYPES_H
 #define TRAILER_TYPES_H
 
+#include <float.h>
 #include <math.h>
 
 #ifdef TRAILER_FLOAT32
@@ -65,8 +66,10 @@ typedef double trailer_real_t;
    -DTRAILER_LIBM_TRIG:
    libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then Taylor polynomials
    in r^2 by Estrin's scheme (the terms left out are below half an ulp for |r| <= pi/4):
-   within 2 ulp of the correctly rounded values (tests). Relies on round-to-nearest and no
-   -ffast-math (k = round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23). */
+   within 2.5 ulp of the exact values in double (2 ulp of glibc's) and 2 ulp in float32
+   (tests). Needs IEEE evaluation: round-to-nearest, no -ffast-math, FLT_EVAL_METHOD 0 (k =
+   round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23; an x87 build is refused
+   below); FMA contraction (-ffp-contract=fast) costs double up to about 3.4 ulp. */
 #ifdef TRAILER_LIBM_TRIG
 #ifndef TRAILER_FLOAT32
 static inline double trailer_sin(double x)
@@ -86,6 +89,9 @@ static inline void trailer_sincos_bounded(trailer_real_t x, trailer_real_t *s, t
     *c = TRAILER_COS(x);
 }
 #else
+#if defined(__FAST_MATH__) || (defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD != 0))
+#error "the generated sin/cos need IEEE evaluation: define TRAILER_LIBM_TRIG"
+#endif
 /* 1 where the reductions below are exact: |x| <= 1.0e6; 0 for Inf and NaN. */
 static inline int trailer_trig_in_range(trailer_real_t x)
 {

@@ -231,7 +231,7 @@ def render(r: Report) -> str:
         "  the others, as its header lists.",
         "* sin and cos: the TDC and TDROC steps take both of an angle from",
         "  `wmr_sincos_bounded` (`wmr_types.h`: one argument reduction, exact to the steps'",
-        "  input bound 1e6, within 2 ulp; float32 through `fmaf`, one `vfms` here), so they",
+        "  input bound 1e6, within 2 ulp in float32; through `fmaf`, one `vfms` here), so they",
         "  link no libm trigonometry; the ROC and ASMC laws and the float32 model functions",
         "  call `sinf`/`cosf`. `-DWMR_LIBM_TRIG` makes every one call libm.",
         "",
