@@ -99,3 +99,39 @@ def test_minimal_mass_inverse_norm_through_the_adjugate_matches_numpy(robot: str
         assert abs(float(f_norm(*values)) - expected) < 1e-11 * expected
     expanded = sp.sqrt(sum((x**2 for x in cm.mass_inverse), sp.S.Zero))
     assert sp.count_ops(sp.cse([norm])) < sp.count_ops(sp.cse([expanded]))
+
+
+def test_generated_law_reads_every_input_before_writing_an_output() -> None:
+    """A function without input checks reads each input just before its first use
+    (codegen/backends/c/render.py, _LazyLoads), yet every read before the first store: the
+    TDROC law writing u one entry ahead over H1hat (u[k] is H1hat[k + 1]) and s over e gives
+    what it gives into fresh arrays (a read of H1hat[1] after the store of u[0] would not)."""
+    from runtime import cbuild
+
+    lib = cbuild.build(False)
+    ffi = lib.ffi
+    rng = np.random.default_rng(5)
+    p = ffi.new("wmr_params_t *")
+    p.m, p.Iz, p.K, p.Iw, p.r, p.b, p.d = 36.0, 5.72, 0.34, 0.07, 0.096, 0.414, 0.12
+
+    def vec(n: int, lo: float = -1.0, hi: float = 1.0) -> list[float]:
+        return [float(v) for v in rng.uniform(lo, hi, n)]
+
+    args = {"trig": [0.6, 0.8], "e": vec(5), "edot": vec(5), "qdd": vec(5),
+            "k1": vec(5, 1, 5), "k2": vec(5, 1, 5), "p12": vec(5, 0.1, 1),
+            "p22": vec(5, 0.1, 1), "H1hat": vec(5, -3, 3)}
+
+    def call(alias: bool) -> tuple[list[float], list[float], float]:
+        a = {k: ffi.new("wmr_real_t[6]", v) for k, v in args.items()}
+        gain, eps, s_norm = (ffi.new("wmr_real_t *", 2.0), ffi.new("wmr_real_t *", 0.05),
+                             ffi.new("wmr_real_t *"))
+        u = a["H1hat"] + 1 if alias else ffi.new("wmr_real_t[5]")
+        s = a["e"] + 1 if alias else ffi.new("wmr_real_t[5]")
+        lib.lib.wmr_paper_tdroc_law_trig(p, a["trig"], a["e"], a["edot"], a["qdd"], a["k1"],
+                                         a["k2"], a["p12"], a["p22"], a["H1hat"], gain, eps,
+                                         u, s, s_norm)
+        return [u[k] for k in range(5)], [s[k] for k in range(5)], s_norm[0]
+
+    fresh, aliased = call(False), call(True)
+    assert fresh == aliased
+    assert fresh[0][1:] != args["H1hat"][2:]  # u was written where H1hat was

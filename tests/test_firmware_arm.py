@@ -15,6 +15,7 @@ import pytest
 
 from runtime.tooling.firmware import build
 from runtime.tooling.firmware import report as fr
+from runtime.tooling.firmware.code_budget import UNCLASSIFIED, budget, part_of
 from runtime.tooling.firmware.stack import parse_su
 from runtime.tooling.firmware.symbols import all_symbol_names, double_symbols
 
@@ -70,6 +71,27 @@ def test_generated_constants_are_the_kept_tables(report: fr.Report) -> None:
     for name in build.CONTROLLERS:
         assert 4 * n_params <= report.own_rodata[name] <= in_objects, name
 
+
+
+def test_every_generated_function_has_a_part_of_the_budget(report: fr.Report) -> None:
+    """docs/FIRMWARE.md's code budget: each generated function of every image (the four
+    controllers, the formulation-only TDROC images) in exactly the part its name says, the
+    parts summing to the image's generated code."""
+    images = {**report.own_functions,
+              **{f"tdroc/{form}": img.own_functions for form, img in report.only.items()}}
+    for image, functions in images.items():
+        unclassified = [f for f in functions if part_of(f) == UNCLASSIFIED]
+        assert not unclassified, (image, unclassified)
+        assert sum(budget(functions).values()) == sum(functions.values()), image
+    # The parts are what they say: the law and the estimator are control math, the
+    # per-parameter checks configuration checks, whatever the controller.
+    assert part_of("wmr_minimal_tdroc_law") == part_of("wmr_paper_tde_trig") == \
+        "control law and estimators (from SymPy)"
+    assert part_of("wmr_asmc_check_config_detail") == part_of("wmr_check_nominal") == \
+        "configuration checks"
+    assert part_of("wmr_tdroc_fingerprint") == "configuration fingerprint"
+    assert part_of("wmr_paper_minv_norm") == "configuration-derived data, init, reset"
+    assert part_of("wmr_something_new") == UNCLASSIFIED
 
 def test_the_double_check_catches_double_arithmetic(tmp_path: Path) -> None:
     """The symbol check is not vacuous: a float build that uses a double does link one."""

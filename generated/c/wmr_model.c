@@ -9,24 +9,22 @@
    operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt */
 void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 {
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
     const wmr_real_t theta = q[2];
     const wmr_real_t _t0 = WMR_SIN(theta);
+    const wmr_real_t K = p->K;
     const wmr_real_t _t1 = K*_t0;
     const wmr_real_t _t2 = WMR_COS(theta);
+    const wmr_real_t m = p->m;
     const wmr_real_t _t3 = _t2*m;
+    const wmr_real_t r = p->r;
     const wmr_real_t _t4 = WMR_LIT(0.5)*r;
     const wmr_real_t _t5 = _t3*_t4;
+    const wmr_real_t b = p->b;
     const wmr_real_t _t6 = WMR_LIT(1.0)/b;
     const wmr_real_t _t7 = _t6*r;
     const wmr_real_t _t8 = _t1*_t7;
     const wmr_real_t _t9 = _t0*m;
+    const wmr_real_t d = p->d;
     const wmr_real_t _t10 = _t7*d;
     const wmr_real_t _t11 = _t10*_t9;
     const wmr_real_t _t12 = -_t11 + _t5 + _t8;
@@ -38,8 +36,10 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
     const wmr_real_t _t18 = _t10*_t3;
     const wmr_real_t _t19 = _t16 - _t17 + _t18;
     const wmr_real_t _t20 = _t16 + _t17 - _t18;
+    const wmr_real_t I = p->Iz;
     const wmr_real_t _t21 = I*_t7 - K*_t6*d*r;
     const wmr_real_t _t22 = -_t21;
+    const wmr_real_t I_w = p->Iw;
     M[0] = m;
     M[1] = WMR_LIT(0.0);
     M[2] = _t1;
@@ -72,32 +72,32 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     wmr_real_t *H)
 {
-    const wmr_real_t m = p->m;
-    const wmr_real_t K = p->K;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
     const wmr_real_t theta = q[2];
-    const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t _t0 = WMR_SIN(theta);
+    const wmr_real_t b = p->b;
     const wmr_real_t _t1 = WMR_LIT(1.0)/b;
+    const wmr_real_t r = p->r;
     const wmr_real_t _t2 = r*r;
     const wmr_real_t _t3 = _t1*_t2;
     const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
+    const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t _t5 = thetadot_l*thetadot_l;
+    const wmr_real_t m = p->m;
     const wmr_real_t _t6 = _t5*m;
     const wmr_real_t _t7 = _t4*_t6;
+    const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t _t8 = thetadot_r*thetadot_r;
     const wmr_real_t _t9 = _t8*m;
     const wmr_real_t _t10 = _t0*_t9;
     const wmr_real_t _t11 = WMR_COS(theta);
+    const wmr_real_t d = p->d;
     const wmr_real_t _t12 = _t2*d/(b*b);
     const wmr_real_t _t13 = _t11*_t12;
     const wmr_real_t _t14 = WMR_LIT(2.0)*m*thetadot_l*thetadot_r;
     const wmr_real_t _t15 = _t0*_t12;
+    const wmr_real_t K = p->K;
     const wmr_real_t _t16 = WMR_LIT(0.5)*K;
+    const wmr_real_t thetadot = qdot[2];
     const wmr_real_t _t17 = _t16*r*thetadot*thetadot;
     H[0] = -_t0*_t7 + _t10*_t4 - _t13*_t14 + _t13*_t6 + _t13*_t9;
     H[1] = _t10*_t12 - _t11*_t4*_t9 + _t11*_t7 - _t14*_t15 + _t15*_t6;
@@ -309,22 +309,22 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
 void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     wmr_real_t *pose_rates)
 {
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
     const wmr_real_t theta = q[2];
-    const wmr_real_t thetadot_r = wheel_rates[0];
-    const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t _t0 = WMR_COS(theta);
+    const wmr_real_t r = p->r;
     const wmr_real_t _t1 = WMR_LIT(0.5)*r;
     const wmr_real_t _t2 = _t0*_t1;
     const wmr_real_t _t3 = WMR_SIN(theta);
+    const wmr_real_t b = p->b;
     const wmr_real_t _t4 = WMR_LIT(1.0)/b;
     const wmr_real_t _t5 = _t4*r;
+    const wmr_real_t d = p->d;
     const wmr_real_t _t6 = _t5*d;
     const wmr_real_t _t7 = _t3*_t6;
     const wmr_real_t _t8 = _t1*_t3;
     const wmr_real_t _t9 = _t0*_t6;
+    const wmr_real_t thetadot_r = wheel_rates[0];
+    const wmr_real_t thetadot_l = wheel_rates[1];
     pose_rates[0] = thetadot_l*(_t2 + _t7) + thetadot_r*(_t2 - _t7);
     pose_rates[1] = thetadot_l*(_t8 - _t9) + thetadot_r*(_t8 + _t9);
     pose_rates[2] = _t4*r*thetadot_r - _t5*thetadot_l;
@@ -335,18 +335,18 @@ void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t
 void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 {
     (void)q;
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
     const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
     const wmr_real_t _t0 = r*r;
+    const wmr_real_t m = p->m;
     const wmr_real_t _t1 = _t0*m;
+    const wmr_real_t b = p->b;
     const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
     const wmr_real_t _t3 = _t0*_t2;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t d = p->d;
     const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
+    const wmr_real_t I_w = p->Iw;
     const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
     const wmr_real_t _t6 = WMR_LIT(0.25)*_t0*m - _t4;
     M[0] = _t5;
@@ -361,20 +361,20 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, wmr_real_t *H)
 {
     (void)q;
-    const wmr_real_t m = p->m;
-    const wmr_real_t K = p->K;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t thetadot_r = wheel_rates[0];
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t _t0 = thetadot_l*thetadot_l;
+    const wmr_real_t b = p->b;
     const wmr_real_t _t1 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t r = p->r;
     const wmr_real_t _t2 = r*r*r;
     const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t K = p->K;
     const wmr_real_t _t4 = K*_t3;
+    const wmr_real_t thetadot_r = wheel_rates[0];
     const wmr_real_t _t5 = thetadot_l*thetadot_r;
     const wmr_real_t _t6 = _t4*_t5;
+    const wmr_real_t m = p->m;
+    const wmr_real_t d = p->d;
     const wmr_real_t _t7 = _t3*d*m;
     const wmr_real_t _t8 = thetadot_r*thetadot_r;
     H[0] = _t0*_t4 - _t0*_t7 + _t5*_t7 - _t6;
@@ -443,21 +443,15 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B)
 {
     (void)tau;
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
     const wmr_real_t theta = q[2];
-    const wmr_real_t thetadot_r = wheel_rates[0];
-    const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t _t0 = WMR_SIN(theta);
+    const wmr_real_t r = p->r;
     const wmr_real_t _t1 = WMR_LIT(0.5)*r;
     const wmr_real_t _t2 = _t0*_t1;
     const wmr_real_t _t3 = WMR_COS(theta);
+    const wmr_real_t b = p->b;
     const wmr_real_t _t4 = r/b;
+    const wmr_real_t d = p->d;
     const wmr_real_t _t5 = _t4*d;
     const wmr_real_t _t6 = _t3*_t5;
     const wmr_real_t _t7 = _t2 - _t6;
@@ -467,15 +461,21 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t _t11 = -_t10 + _t9;
     const wmr_real_t _t12 = _t10 + _t9;
     const wmr_real_t _t13 = r*r;
+    const wmr_real_t m = p->m;
     const wmr_real_t _t14 = WMR_LIT(0.25)*_t13*m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
     const wmr_real_t _t15 = I - WMR_LIT(2.0)*K*d + d*d*m;
     const wmr_real_t _t16 = WMR_LIT(1.0)/(b*b);
     const wmr_real_t _t17 = _t13*_t16;
     const wmr_real_t _t18 = _t14 - _t15*_t17;
+    const wmr_real_t I_w = p->Iw;
     const wmr_real_t _t19 = I_w + _t14 + _t15*_t17;
     const wmr_real_t _t20 = WMR_LIT(1.0)/(-_t18*_t18 + _t19*_t19);
     const wmr_real_t _t21 = _t16*r*r*r*(-K + d*m);
+    const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t _t22 = _t21*thetadot_l;
+    const wmr_real_t thetadot_r = wheel_rates[0];
     const wmr_real_t _t23 = _t21*thetadot_r;
     const wmr_real_t _t24 = _t21*(thetadot_l - thetadot_r);
     const wmr_real_t _t25 = _t23 - _t24;

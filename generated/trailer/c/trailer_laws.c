@@ -11,11 +11,11 @@
 void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P)
 {
     const trailer_real_t k1 = gains[0];
+    const trailer_real_t _t0 = TRAILER_LIT(0.5)/k1;
     const trailer_real_t k2 = gains[1];
+    const trailer_real_t _t1 = _t0/k2;
     const trailer_real_t q1 = gains[2];
     const trailer_real_t q2 = gains[3];
-    const trailer_real_t _t0 = TRAILER_LIT(0.5)/k1;
-    const trailer_real_t _t1 = _t0/k2;
     P[0] = _t1*(k1*k1*q2 + k1*q1 + k2*k2*q1);
     P[1] = _t0*q1;
     P[2] = _t1*(k1*q2 + q1);
@@ -53,46 +53,36 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t5 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t6 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t7 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t qp2 = q_prev[2];
     const trailer_real_t _t8 = TRAILER_COS(qp2);
     const trailer_real_t _t9 = _t8*_t8;
     const trailer_real_t _t10 = _t1*_t9;
     const trailer_real_t _t11 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t qp3 = q_prev[3];
     const trailer_real_t _t12 = TRAILER_COS(qp3);
     const trailer_real_t _t13 = _t12*_t12;
     const trailer_real_t _t14 = _t1*_t13;
     const trailer_real_t _t15 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
     const trailer_real_t _t16 = _t8*TRAILER_SIN(qp2);
     const trailer_real_t _t17 = _t1*_t16;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t18 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
     const trailer_real_t _t19 = _t12*TRAILER_SIN(qp3);
     const trailer_real_t _t20 = _t1*_t19;
@@ -116,10 +106,14 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
             + _t17*_t23 - _t17*_t24 + _t18*_t20 - _t20*_t23 + _t20*_t24 - _t25*_t26 + _t25*_t27
             - _t26*_t31 + _t27*_t31 + _t28*_t29 - _t28*_t30 - _t29*_t33 + _t29*_t34 + _t30*_t33
             - _t30*_t34 + _t32*_t5 + _t32*_t7 + _t35*_t5 + _t35*_t7 + _t5*_t6 + _t6*_t7;
+    const trailer_real_t span_1 = span[0];
     const trailer_real_t _t37 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t qd_now1 = qdot_now[1];
+    const trailer_real_t qd_then1 = qdot_then[1];
     const trailer_real_t _t38 = _t37*(qd_now1 - qd_then1);
     const trailer_real_t _t39 = radius_right*radius_right;
     const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t42 = _t39*_t5;
     const trailer_real_t _t43 = _t39*_t7;
@@ -150,6 +144,8 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
     const trailer_real_t _t68 = TRAILER_LIT(23639.0)*_t5/TRAILER_LIT(14283.0);
     const trailer_real_t _t69 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
     const trailer_real_t _t70 = _t16*_t19;
+    const trailer_real_t qd_now0 = qdot_now[0];
+    const trailer_real_t qd_then0 = qdot_then[0];
     const trailer_real_t _t71 = _t37*(qd_now0 - qd_then0);
     const trailer_real_t _t72 = radius_left*radius_left;
     const trailer_real_t _t73 = _t5*_t72;
@@ -175,6 +171,10 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
     const trailer_real_t _t93 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(4761.0);
     const trailer_real_t _t94 = _t19*_t9;
     const trailer_real_t _t95 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t up0 = u_prev[0];
+    const trailer_real_t up1 = u_prev[1];
     H1hat[0] = -_t36*_t38 - _t71*(J_theta_right + _t0*_t39 - _t16*_t56 - _t16*_t57 + _t19*_t56
             + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 - _t39*_t40 + _t39*_t41
             + TRAILER_LIT(20444.0)*_t42*_t70/TRAILER_LIT(42849.0)
@@ -205,38 +205,24 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t trig_prev_s0 = trig_prev[0];
     const trailer_real_t trig_prev_c0 = trig_prev[1];
-    const trailer_real_t trig_prev_s1 = trig_prev[2];
-    const trailer_real_t trig_prev_c1 = trig_prev[3];
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t5 = trig_prev_c0*trig_prev_s0;
     const trailer_real_t _t6 = _t1*_t5;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t7 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t trig_prev_s1 = trig_prev[2];
+    const trailer_real_t trig_prev_c1 = trig_prev[3];
     const trailer_real_t _t8 = trig_prev_c1*trig_prev_s1;
     const trailer_real_t _t9 = _t1*_t8;
     const trailer_real_t _t10 = trig_prev_c0*trig_prev_c0;
@@ -244,8 +230,12 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
     const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
     const trailer_real_t _t13 = trig_prev_c1*trig_prev_c1;
     const trailer_real_t _t14 = _t1*_t13;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t15 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t16 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t17 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t _t18 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
     const trailer_real_t _t19 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
@@ -268,10 +258,14 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
             + _t15*_t30 + _t15*_t33 + _t16*_t17 + _t17*_t30 + _t17*_t33 - _t19*_t20 - _t19*_t27
             + _t20*_t21 + _t21*_t27 + _t22*_t6 - _t22*_t9 - _t23*_t6 + _t23*_t9 + _t24*_t25
             - _t24*_t26 - _t25*_t31 + _t25*_t32 + _t26*_t31 - _t26*_t32 - _t6*_t7 + _t7*_t9;
+    const trailer_real_t span_1 = span[0];
     const trailer_real_t _t35 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t qd_now1 = qdot_now[1];
+    const trailer_real_t qd_then1 = qdot_then[1];
     const trailer_real_t _t36 = _t35*(qd_now1 - qd_then1);
     const trailer_real_t _t37 = radius_right*radius_right;
     const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
     const trailer_real_t _t41 = _t37*_t5;
@@ -302,6 +296,8 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
     const trailer_real_t _t66 = _t5*_t8;
     const trailer_real_t _t67 = TRAILER_LIT(23639.0)*_t15/TRAILER_LIT(14283.0);
     const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t17/TRAILER_LIT(4761.0);
+    const trailer_real_t qd_now0 = qdot_now[0];
+    const trailer_real_t qd_then0 = qdot_then[0];
     const trailer_real_t _t69 = _t35*(qd_now0 - qd_then0);
     const trailer_real_t _t70 = radius_left*radius_left;
     const trailer_real_t _t71 = _t5*_t70;
@@ -327,6 +323,10 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
     const trailer_real_t _t91 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
     const trailer_real_t _t92 = _t10*_t8;
     const trailer_real_t _t93 = TRAILER_LIT(23639.0)*_t75/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t up0 = u_prev[0];
+    const trailer_real_t up1 = u_prev[1];
     H1hat[0] = -_t34*_t36
             - _t69*(J_theta_right + _t0*_t37 + TRAILER_LIT(20444.0)*_t15*_t63/TRAILER_LIT(42849.0)
             - TRAILER_LIT(62356.0)*_t17*_t63/TRAILER_LIT(42849.0) + _t2*_t37 + _t3*_t37 - _t37*_t38
@@ -357,37 +357,34 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     trailer_real_t *norm)
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t1 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t5 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t6 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t7 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t8 = TRAILER_COS(theta_cart);
     const trailer_real_t _t9 = _t8*_t8;
     const trailer_real_t _t10 = _t1*_t9;
     const trailer_real_t _t11 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t12 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t13 = _t12*_t12;
     const trailer_real_t _t14 = _t1*_t13;
     const trailer_real_t _t15 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t16 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
     const trailer_real_t _t17 = _t8*TRAILER_SIN(theta_cart);
     const trailer_real_t _t18 = _t1*_t17;
@@ -417,6 +414,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t38 = _t37*_t37;
     const trailer_real_t _t39 = radius_left*radius_left;
     const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t42 = _t39*_t5;
     const trailer_real_t _t43 = _t39*_t7;
@@ -447,6 +445,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t5/TRAILER_LIT(4761.0);
     const trailer_real_t _t69 = TRAILER_LIT(23639.0)*_t7/TRAILER_LIT(14283.0);
     const trailer_real_t _t70 = _t17*_t19;
+    const trailer_real_t J_theta_left = p->J_theta_left;
     const trailer_real_t _t71 = J_theta_left + _t0*_t39 - _t17*_t56 - _t17*_t57 + _t19*_t56
             + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 + _t39*_t40 - _t39*_t41
             - TRAILER_LIT(62356.0)*_t42*_t70/TRAILER_LIT(42849.0)
@@ -482,6 +481,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(14283.0);
     const trailer_real_t _t93 = _t19*_t9;
     const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
+    const trailer_real_t J_theta_right = p->J_theta_right;
     const trailer_real_t _t95 = J_theta_right + _t0*_t72 - _t13*_t75 + _t13*_t76 + _t13*_t77
             - _t13*_t80 + _t13*_t81 + _t17*_t82 + _t17*_t83 - _t19*_t82 - _t19*_t83 + _t2*_t72
             - _t25*_t85 + _t25*_t89 - _t25*_t90 + _t3*_t72 - _t4*_t72 - _t40*_t72 + _t41*_t72
@@ -500,25 +500,41 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
 void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_real_t *omega,
     const trailer_real_t *w, trailer_real_t *gain)
 {
-    const trailer_real_t minv_norm_1 = minv_norm[0];
     const trailer_real_t Om0_0 = omega[0];
-    const trailer_real_t Om0_1 = omega[1];
     const trailer_real_t Om1_0 = omega[2];
+    const trailer_real_t _t0 = Om0_0 - Om1_0;
+    const trailer_real_t Om0_1 = omega[1];
     const trailer_real_t Om1_1 = omega[3];
+    const trailer_real_t _t1 = Om0_1 - Om1_1;
     const trailer_real_t Om2_0 = omega[4];
+    const trailer_real_t _t2 = Om1_0 - Om2_0;
     const trailer_real_t Om2_1 = omega[5];
+    const trailer_real_t _t3 = Om1_1 - Om2_1;
     const trailer_real_t Om3_0 = omega[6];
+    const trailer_real_t _t4 = Om2_0 - Om3_0;
     const trailer_real_t Om3_1 = omega[7];
+    const trailer_real_t _t5 = Om2_1 - Om3_1;
     const trailer_real_t Om4_0 = omega[8];
+    const trailer_real_t _t6 = Om3_0 - Om4_0;
     const trailer_real_t Om4_1 = omega[9];
+    const trailer_real_t _t7 = Om3_1 - Om4_1;
     const trailer_real_t Om5_0 = omega[10];
+    const trailer_real_t _t8 = Om4_0 - Om5_0;
     const trailer_real_t Om5_1 = omega[11];
+    const trailer_real_t _t9 = Om4_1 - Om5_1;
     const trailer_real_t Om6_0 = omega[12];
+    const trailer_real_t _t10 = Om5_0 - Om6_0;
     const trailer_real_t Om6_1 = omega[13];
+    const trailer_real_t _t11 = Om5_1 - Om6_1;
     const trailer_real_t Om7_0 = omega[14];
+    const trailer_real_t _t12 = Om6_0 - Om7_0;
     const trailer_real_t Om7_1 = omega[15];
+    const trailer_real_t _t13 = Om6_1 - Om7_1;
     const trailer_real_t Om8_0 = omega[16];
+    const trailer_real_t _t14 = Om7_0 - Om8_0;
     const trailer_real_t Om8_1 = omega[17];
+    const trailer_real_t _t15 = Om7_1 - Om8_1;
+    const trailer_real_t minv_norm_1 = minv_norm[0];
     const trailer_real_t w0 = w[0];
     const trailer_real_t w1 = w[1];
     const trailer_real_t w2 = w[2];
@@ -527,22 +543,6 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
     const trailer_real_t w5 = w[5];
     const trailer_real_t w6 = w[6];
     const trailer_real_t w7 = w[7];
-    const trailer_real_t _t0 = Om0_0 - Om1_0;
-    const trailer_real_t _t1 = Om0_1 - Om1_1;
-    const trailer_real_t _t2 = Om1_0 - Om2_0;
-    const trailer_real_t _t3 = Om1_1 - Om2_1;
-    const trailer_real_t _t4 = Om2_0 - Om3_0;
-    const trailer_real_t _t5 = Om2_1 - Om3_1;
-    const trailer_real_t _t6 = Om3_0 - Om4_0;
-    const trailer_real_t _t7 = Om3_1 - Om4_1;
-    const trailer_real_t _t8 = Om4_0 - Om5_0;
-    const trailer_real_t _t9 = Om4_1 - Om5_1;
-    const trailer_real_t _t10 = Om5_0 - Om6_0;
-    const trailer_real_t _t11 = Om5_1 - Om6_1;
-    const trailer_real_t _t12 = Om6_0 - Om7_0;
-    const trailer_real_t _t13 = Om6_1 - Om7_1;
-    const trailer_real_t _t14 = Om7_0 - Om8_0;
-    const trailer_real_t _t15 = Om7_1 - Om8_1;
     gain[0] = minv_norm_1*(w0*TRAILER_SQRT(_t0*_t0 + _t1*_t1) + w1*TRAILER_SQRT(_t2*_t2 + _t3*_t3)
             + w2*TRAILER_SQRT(_t4*_t4 + _t5*_t5) + w3*TRAILER_SQRT(_t6*_t6 + _t7*_t7)
             + w4*TRAILER_SQRT(_t8*_t8 + _t9*_t9) + w5*TRAILER_SQRT(_t10*_t10 + _t11*_t11)
@@ -555,10 +555,10 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
     trailer_real_t *norm)
 {
     const trailer_real_t Om_new0 = newer[0];
-    const trailer_real_t Om_new1 = newer[1];
     const trailer_real_t Om_old0 = older[0];
-    const trailer_real_t Om_old1 = older[1];
     const trailer_real_t _t0 = Om_new0 - Om_old0;
+    const trailer_real_t Om_new1 = newer[1];
+    const trailer_real_t Om_old1 = older[1];
     const trailer_real_t _t1 = Om_new1 - Om_old1;
     norm[0] = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
 }
@@ -572,51 +572,41 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
 {
     (void)p12;
     (void)p22;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t2 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t6 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t7 = TRAILER_LIT(32849.0)*_t2/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t8 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t9 = TRAILER_COS(theta_cart);
     const trailer_real_t _t10 = _t9*_t9;
     const trailer_real_t _t11 = _t10*_t2;
     const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t13 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t14 = _t13*_t13;
     const trailer_real_t _t15 = _t14*_t2;
     const trailer_real_t _t16 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t17 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
     const trailer_real_t _t18 = _t9*TRAILER_SIN(theta_cart);
     const trailer_real_t _t19 = _t18*_t2;
@@ -642,9 +632,15 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
             - _t2*_t3 + _t2*_t4 + _t2*_t5 + _t21*_t24 - _t21*_t25 - _t26*_t27 + _t26*_t28
             - _t27*_t32 + _t28*_t32 - _t29*_t30 + _t29*_t31 + _t30*_t34 - _t30*_t35 - _t31*_t34
             + _t31*_t35 + _t33*_t6 + _t33*_t8 + _t36*_t6 + _t36*_t8 + _t6*_t7 + _t7*_t8;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t38 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t _t39 = radius_right*radius_right;
     const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t42 = _t39*_t6;
     const trailer_real_t _t43 = _t39*_t8;
@@ -699,6 +695,10 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t92 = _t14*_t18;
     const trailer_real_t _t93 = _t10*_t20;
     const trailer_real_t _t94 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
     u[0] = H1hat0 + _t0*_t37 + _t38*(J_theta_right + _t1*_t39 + _t18*_t56 + _t18*_t57 - _t20*_t56
             - _t20*_t57 + _t3*_t39 + _t39*_t4 - _t39*_t40 + _t39*_t41 - _t39*_t5
             + TRAILER_LIT(20444.0)*_t42*_t70/TRAILER_LIT(42849.0)
@@ -731,45 +731,31 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
 {
     (void)p12;
     (void)p22;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t2 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t trig_s0 = trig[0];
     const trailer_real_t trig_c0 = trig[1];
-    const trailer_real_t trig_s1 = trig[2];
-    const trailer_real_t trig_c1 = trig[3];
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t2 = radius_left*radius_right;
-    const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t6 = trig_c0*trig_s0;
     const trailer_real_t _t7 = _t2*_t6;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t8 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t trig_s1 = trig[2];
+    const trailer_real_t trig_c1 = trig[3];
     const trailer_real_t _t9 = trig_c1*trig_s1;
     const trailer_real_t _t10 = _t2*_t9;
     const trailer_real_t _t11 = trig_c0*trig_c0;
@@ -777,8 +763,12 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
     const trailer_real_t _t13 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
     const trailer_real_t _t14 = trig_c1*trig_c1;
     const trailer_real_t _t15 = _t14*_t2;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t16 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t17 = TRAILER_LIT(32849.0)*_t2/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t18 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
     const trailer_real_t _t20 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
@@ -801,9 +791,15 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
             + _t16*_t31 + _t16*_t34 + _t17*_t18 + _t18*_t31 + _t18*_t34 - _t2*_t3 + _t2*_t4
             + _t2*_t5 - _t20*_t21 - _t20*_t28 + _t21*_t22 + _t22*_t28 + _t23*_t7 - _t24*_t7
             + _t25*_t26 - _t25*_t27 - _t26*_t32 + _t26*_t33 + _t27*_t32 - _t27*_t33 - _t7*_t8;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t36 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t _t37 = radius_right*radius_right;
     const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
     const trailer_real_t _t41 = _t37*_t6;
@@ -858,6 +854,10 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
     const trailer_real_t _t90 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(4761.0);
     const trailer_real_t _t91 = _t11*_t9;
     const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
     u[0] = H1hat0 + _t0*_t35
             + _t36*(J_theta_right + _t1*_t37 + TRAILER_LIT(20444.0)*_t16*_t63/TRAILER_LIT(42849.0)
             - TRAILER_LIT(62356.0)*_t18*_t63/TRAILER_LIT(42849.0) + _t3*_t37 - _t37*_t38 + _t37*_t39
@@ -890,61 +890,53 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t e0 = e[0];
     const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
     const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t0 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t _t2 = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    const trailer_real_t gain_1 = gain[0];
+    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
     const trailer_real_t _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t5 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t6 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t7 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t8 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t9 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t10 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t11 = TRAILER_LIT(32849.0)*_t6/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t12 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t13 = TRAILER_COS(theta_cart);
     const trailer_real_t _t14 = _t13*_t13;
     const trailer_real_t _t15 = _t14*_t6;
     const trailer_real_t _t16 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t17 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t18 = _t17*_t17;
     const trailer_real_t _t19 = _t18*_t6;
     const trailer_real_t _t20 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t21 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
     const trailer_real_t _t22 = _t13*TRAILER_SIN(theta_cart);
     const trailer_real_t _t23 = _t22*_t6;
@@ -970,9 +962,13 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
             - _t19*_t26 - _t19*_t27 + _t21*_t23 - _t21*_t25 - _t23*_t28 + _t23*_t29 + _t25*_t28
             - _t25*_t29 - _t30*_t31 + _t30*_t32 - _t31*_t36 + _t32*_t36 - _t33*_t34 + _t33*_t35
             + _t34*_t38 - _t34*_t39 - _t35*_t38 + _t35*_t39 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9;
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t42 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t _t43 = radius_right*radius_right;
     const trailer_real_t _t44 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t45 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t46 = _t10*_t43;
     const trailer_real_t _t47 = _t12*_t43;
@@ -1027,6 +1023,10 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t96 = _t18*_t22;
     const trailer_real_t _t97 = _t14*_t24;
     const trailer_real_t _t98 = TRAILER_LIT(23639.0)*_t77/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
     u[0] = H1hat0 + _t4*_t41
             + _t42*(J_theta_right + TRAILER_LIT(20444.0)*_t10*_t62/TRAILER_LIT(42849.0)
             - TRAILER_LIT(62356.0)*_t12*_t62/TRAILER_LIT(42849.0) + _t22*_t60 + _t22*_t61
@@ -1062,55 +1062,43 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t trig_s0 = trig[0];
-    const trailer_real_t trig_c0 = trig[1];
-    const trailer_real_t trig_s1 = trig[2];
-    const trailer_real_t trig_c1 = trig[3];
-    const trailer_real_t e0 = e[0];
     const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
     const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t0 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t _t2 = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    const trailer_real_t gain_1 = gain[0];
+    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
     const trailer_real_t _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t5 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t6 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t7 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t8 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t9 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t trig_s0 = trig[0];
+    const trailer_real_t trig_c0 = trig[1];
     const trailer_real_t _t10 = trig_c0*trig_s0;
     const trailer_real_t _t11 = _t10*_t6;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t12 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
+    const trailer_real_t trig_s1 = trig[2];
+    const trailer_real_t trig_c1 = trig[3];
     const trailer_real_t _t13 = trig_c1*trig_s1;
     const trailer_real_t _t14 = _t13*_t6;
     const trailer_real_t _t15 = trig_c0*trig_c0;
@@ -1118,8 +1106,12 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
     const trailer_real_t _t17 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
     const trailer_real_t _t18 = trig_c1*trig_c1;
     const trailer_real_t _t19 = _t18*_t6;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t20 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t21 = TRAILER_LIT(32849.0)*_t6/TRAILER_LIT(171396.0);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t22 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t _t23 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
     const trailer_real_t _t24 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
@@ -1142,9 +1134,13 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
             - _t19*_t33 - _t19*_t34 + _t20*_t21 + _t20*_t35 + _t20*_t38 + _t21*_t22 + _t22*_t35
             + _t22*_t38 - _t24*_t25 - _t24*_t32 + _t25*_t26 + _t26*_t32 + _t29*_t30 - _t29*_t31
             - _t30*_t36 + _t30*_t37 + _t31*_t36 - _t31*_t37 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9;
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t40 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t _t41 = radius_right*radius_right;
     const trailer_real_t _t42 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t44 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
     const trailer_real_t _t45 = _t10*_t41;
@@ -1199,6 +1195,10 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
     const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t77/TRAILER_LIT(4761.0);
     const trailer_real_t _t95 = _t13*_t15;
     const trailer_real_t _t96 = TRAILER_LIT(23639.0)*_t78/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t H1hat0 = H1hat[0];
+    const trailer_real_t H1hat1 = H1hat[1];
     u[0] = H1hat0 + _t39*_t4 + _t40*(J_theta_right - _t10*_t63 - _t10*_t64 + _t13*_t63 + _t13*_t64
             + TRAILER_LIT(20444.0)*_t20*_t67/TRAILER_LIT(42849.0)
             - TRAILER_LIT(62356.0)*_t22*_t67/TRAILER_LIT(42849.0) - _t41*_t42 + _t41*_t43 + _t41*_t5
@@ -1234,71 +1234,49 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t alpha = bounds[0];
-    const trailer_real_t phi = bounds[1];
-    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t0 = radius_right*radius_right*radius_right;
+    const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t _t1 = thetadot_right*thetadot_right;
     const trailer_real_t _t2 = _t0*_t1;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t4 =
             TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
     const trailer_real_t _t5 = radius_right*radius_right;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t7 = _t5*radius_left;
+    const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t _t8 = thetadot_left*thetadot_right;
     const trailer_real_t _t9 = _t7*_t8;
     const trailer_real_t _t10 = radius_left*radius_left;
     const trailer_real_t _t11 = thetadot_left*thetadot_left;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
     const trailer_real_t _t13 = _t11*radius_right;
     const trailer_real_t _t14 = _t10*_t13;
     const trailer_real_t _t15 =
             TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
     const trailer_real_t _t18 = J_theta_cart_left*_t16;
     const trailer_real_t _t19 = _t18*_t5;
     const trailer_real_t _t20 = _t8*radius_left;
     const trailer_real_t _t21 = _t19*_t20;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
     const trailer_real_t _t22 = J_theta_cart_right*_t17;
     const trailer_real_t _t23 = _t22*_t5;
     const trailer_real_t _t24 = _t20*_t23;
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t25 = TRAILER_COS(theta_cart);
     const trailer_real_t _t26 = _t25*_t25;
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t27 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t28 = _t27*_t27;
     const trailer_real_t _t29 = _t2*_t26;
@@ -1484,19 +1462,38 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t199 = TRAILER_LIT(17556365.0)*_t93/TRAILER_LIT(8869743.0);
     const trailer_real_t _t200 = _t155*_t35;
     const trailer_real_t _t201 = _t26*_t93;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
     const trailer_real_t _t202 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t _t204 = TRAILER_SQRT(_t202*_t202 + _t203*_t203);
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t205 = e0*k1_0 + edot0*k2_0;
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
     const trailer_real_t _t206 = e1*k1_1 + edot1*k2_1;
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t alpha = bounds[0];
+    const trailer_real_t phi = bounds[1];
     const trailer_real_t _t207 = (alpha*(TRAILER_SQRT(_t205*_t205 + _t206*_t206)
             + TRAILER_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(TRAILER_LIT(1.0)
             - alpha);
+    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t208 = _t207/TRAILER_FMAX(_t204, eps_1);
     const trailer_real_t _t209 = _t202*_t208 + _t206 + qdd_des1;
     const trailer_real_t _t210 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t211 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t212 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t213 = TRAILER_LIT(0.25)*J_x_tractor;
     const trailer_real_t _t214 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t215 = TRAILER_LIT(32849.0)*_t211/TRAILER_LIT(171396.0);
@@ -1528,6 +1525,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
             + _t228*_t229;
     const trailer_real_t _t235 = _t203*_t208 + _t205 + qdd_des0;
     const trailer_real_t _t236 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t237 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t238 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
     const trailer_real_t _t239 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
@@ -1738,6 +1736,8 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t440 = TRAILER_LIT(20444.0)*_t127/TRAILER_LIT(42849.0);
     const trailer_real_t _t441 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(4761.0);
     const trailer_real_t _t442 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
     u[0] = TRAILER_LIT(32743750.0)*J_theta_cart*_t0*_t1*_t25*_t28*_t33/TRAILER_LIT(8869743.0)
             + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t25*_t78/TRAILER_LIT(114264.0)
             + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t26*_t27*_t33/TRAILER_LIT(5913162.0)
@@ -2426,72 +2426,49 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t adapt_0 = adapt[0];
-    const trailer_real_t h = adapt[1];
     const trailer_real_t _t0 = radius_right*radius_right*radius_right;
+    const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t _t1 = thetadot_right*thetadot_right;
     const trailer_real_t _t2 = _t0*_t1;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t4 =
             TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
     const trailer_real_t _t5 = radius_right*radius_right;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t7 = _t5*radius_left;
+    const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t _t8 = thetadot_left*thetadot_right;
     const trailer_real_t _t9 = _t7*_t8;
     const trailer_real_t _t10 = radius_left*radius_left;
     const trailer_real_t _t11 = thetadot_left*thetadot_left;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
     const trailer_real_t _t13 = _t11*radius_right;
     const trailer_real_t _t14 = _t10*_t13;
     const trailer_real_t _t15 =
             TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
     const trailer_real_t _t18 = J_theta_cart_left*_t16;
     const trailer_real_t _t19 = _t18*_t5;
     const trailer_real_t _t20 = _t8*radius_left;
     const trailer_real_t _t21 = _t19*_t20;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
     const trailer_real_t _t22 = J_theta_cart_right*_t17;
     const trailer_real_t _t23 = _t22*_t5;
     const trailer_real_t _t24 = _t20*_t23;
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t25 = TRAILER_COS(theta_cart);
     const trailer_real_t _t26 = _t25*_t25;
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t27 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t28 = _t27*_t27;
     const trailer_real_t _t29 = _t2*_t26;
@@ -2677,14 +2654,29 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t _t199 = TRAILER_LIT(17556365.0)*_t93/TRAILER_LIT(8869743.0);
     const trailer_real_t _t200 = _t155*_t35;
     const trailer_real_t _t201 = _t26*_t93;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
     const trailer_real_t _t202 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t e0 = e[0];
+    const trailer_real_t edot0 = edot[0];
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t _t204 = TRAILER_SQRT(_t202*_t202 + _t203*_t203);
+    const trailer_real_t gain_1 = gain[0];
+    const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t205 = gain_1/TRAILER_FMAX(_t204, eps_1);
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
     const trailer_real_t _t206 = _t202*_t205 + e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t _t207 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t208 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t209 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t210 = TRAILER_LIT(0.25)*J_x_tractor;
     const trailer_real_t _t211 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t212 = TRAILER_LIT(32849.0)*_t208/TRAILER_LIT(171396.0);
@@ -2714,8 +2706,12 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
             - _t215*_t218 - _t215*_t219 - _t217*_t48 - _t22*_t222 + _t22*_t227 + _t22*_t229*_t44
             - _t220*_t221 + _t221*_t228 + _t221*_t230 - _t223*_t224 + _t223*_t225 - _t224*_t226
             + _t225*_t226;
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t k1_0 = k1[0];
+    const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t232 = _t203*_t205 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t _t233 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t234 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t235 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
     const trailer_real_t _t236 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
@@ -2926,6 +2922,10 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t _t437 = TRAILER_LIT(20444.0)*_t127/TRAILER_LIT(42849.0);
     const trailer_real_t _t438 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(4761.0);
     const trailer_real_t _t439 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t adapt_0 = adapt[0];
+    const trailer_real_t h = adapt[1];
     u[0] = TRAILER_LIT(32743750.0)*J_theta_cart*_t0*_t1*_t25*_t28*_t33/TRAILER_LIT(8869743.0)
             + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t25*_t78/TRAILER_LIT(114264.0)
             + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t26*_t27*_t33/TRAILER_LIT(5913162.0)

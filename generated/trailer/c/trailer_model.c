@@ -2057,21 +2057,19 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t _t0 = radius_left*thetadot_left;
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t1 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t2 = TRAILER_LIT(0.5)*_t1;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t _t3 = radius_right*thetadot_right;
     const trailer_real_t _t4 = TRAILER_SIN(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
     const trailer_real_t _t6 = TRAILER_LIT(250.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
     const trailer_real_t _t8 = _t4*_t7;
     const trailer_real_t _t9 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(6.0);
@@ -2080,6 +2078,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t12 = _t11*_t4;
     const trailer_real_t _t13 = _t1*_t11;
     const trailer_real_t _t14 = TRAILER_LIT(250.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t16 = _t15*radius_left;
     const trailer_real_t _t17 = TRAILER_LIT(307.0)*_t16/TRAILER_LIT(414.0);
@@ -2089,6 +2088,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t21 = TRAILER_LIT(107.0)*_t20/TRAILER_LIT(414.0);
     const trailer_real_t _t22 = TRAILER_LIT(41.0)*_t10/TRAILER_LIT(46.0);
     const trailer_real_t _t23 = TRAILER_LIT(41.0)*_t12/TRAILER_LIT(46.0);
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t24 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t25 = _t24*radius_left;
     const trailer_real_t _t26 = TRAILER_LIT(107.0)*_t25/TRAILER_LIT(414.0);
@@ -2112,37 +2112,34 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t0 = radius_right*radius_right;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t5 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t6 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t7 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
     const trailer_real_t _t8 = _t0*_t7;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t9 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t _t10 = _t0*_t9;
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t11 = TRAILER_COS(theta_cart);
     const trailer_real_t _t12 = _t11*_t11;
     const trailer_real_t _t13 = _t0*_t12;
     const trailer_real_t _t14 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t15 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t16 = _t15*_t15;
     const trailer_real_t _t17 = _t0*_t16;
@@ -2172,6 +2169,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t41 = TRAILER_LIT(23639.0)*_t7/TRAILER_LIT(14283.0);
     const trailer_real_t _t42 = TRAILER_LIT(4387.0)*_t9/TRAILER_LIT(4761.0);
     const trailer_real_t _t43 = _t20*_t23;
+    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t44 = radius_left*radius_right;
     const trailer_real_t _t45 = TRAILER_LIT(32849.0)*_t44/TRAILER_LIT(171396.0);
     const trailer_real_t _t46 = _t12*_t44;
@@ -2225,6 +2223,8 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t90 = _t16*_t20;
     const trailer_real_t _t91 = _t12*_t23;
     const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t71/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
     M[0] = J_theta_right + _t0*_t1 + _t0*_t2 + _t0*_t3 - _t0*_t4 - _t0*_t5 + _t0*_t6
             - TRAILER_LIT(62356.0)*_t10*_t43/TRAILER_LIT(42849.0)
             + TRAILER_LIT(11449.0)*_t10/TRAILER_LIT(171396.0) - _t13*_t14 + _t13*_t18 + _t13*_t19
@@ -2254,46 +2254,46 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t _t0 = radius_right*radius_right*radius_right;
+    const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t _t1 = thetadot_right*thetadot_right;
     const trailer_real_t _t2 = _t0*_t1;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t4 =
             TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
     const trailer_real_t _t5 = radius_right*radius_right;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t7 = _t5*radius_left;
+    const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t _t8 = thetadot_left*thetadot_right;
     const trailer_real_t _t9 = _t7*_t8;
     const trailer_real_t _t10 = radius_left*radius_left;
     const trailer_real_t _t11 = thetadot_left*thetadot_left;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
     const trailer_real_t _t13 = _t10*radius_right;
     const trailer_real_t _t14 = _t11*_t13;
     const trailer_real_t _t15 =
             TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
     const trailer_real_t _t18 = J_theta_cart_left*_t16;
     const trailer_real_t _t19 = _t18*_t9;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
     const trailer_real_t _t20 = J_theta_cart_right*_t17;
     const trailer_real_t _t21 = _t20*_t9;
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t22 = TRAILER_COS(theta_cart);
     const trailer_real_t _t23 = _t22*_t22;
+    const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t24 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t25 = _t24*_t24;
     const trailer_real_t _t26 = _t2*_t23;
@@ -4314,35 +4314,18 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t tau_right = tau[0];
-    const trailer_real_t tau_left = tau[1];
     const trailer_real_t _t0 = TRAILER_SIN(theta_tractor);
     const trailer_real_t _t1 = TRAILER_LIT(0.5)*_t0;
+    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t2 = _t1*radius_left;
+    const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t3 = _t1*radius_right;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
     const trailer_real_t _t6 = _t5*radius_right;
     const trailer_real_t _t7 = _t5*radius_left;
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t8 = TRAILER_SIN(theta_cart);
     const trailer_real_t _t9 = _t8*radius_left;
     const trailer_real_t _t10 = TRAILER_LIT(5.0)*_t0/TRAILER_LIT(6.0);
@@ -4355,6 +4338,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t17 = _t8*radius_right;
     const trailer_real_t _t18 = _t12*radius_right;
     const trailer_real_t _t19 = _t10*_t17 - _t11*_t17 + _t14*_t18 + _t15*_t18;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t _t20 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t21 = _t20*_t9;
     const trailer_real_t _t22 = TRAILER_LIT(77.0)*_t0/TRAILER_LIT(138.0);
@@ -4371,6 +4355,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t32 = TRAILER_LIT(41.0)*_t4/TRAILER_LIT(46.0);
     const trailer_real_t _t33 = _t27*_t28 + _t27*_t29 - _t30*_t31 + _t30*_t32;
     const trailer_real_t _t34 = TRAILER_LIT(307.0)*_t4/TRAILER_LIT(414.0);
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t35 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t36 = _t35*_t9;
     const trailer_real_t _t37 = _t13*_t35;
@@ -4380,17 +4365,23 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t40 = _t18*_t35;
     const trailer_real_t _t41 = TRAILER_LIT(77.0)*_t4/TRAILER_LIT(138.0);
     const trailer_real_t _t42 = _t22*_t39 - _t24*_t40 + _t34*_t39 + _t40*_t41;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t _t43 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t44 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
     const trailer_real_t _t45 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t _t46 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t47 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t48 = radius_cart_left*radius_cart_left;
     const trailer_real_t _t49 = TRAILER_LIT(1.0)/_t48;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
     const trailer_real_t _t50 = J_theta_cart_left*_t49;
     const trailer_real_t _t51 = TRAILER_LIT(32849.0)*_t44/TRAILER_LIT(171396.0);
     const trailer_real_t _t52 = radius_cart_right*radius_cart_right;
     const trailer_real_t _t53 = TRAILER_LIT(1.0)/_t52;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
     const trailer_real_t _t54 = J_theta_cart_right*_t53;
     const trailer_real_t _t55 = _t12*_t12;
     const trailer_real_t _t56 = _t44*_t55;
@@ -4398,6 +4389,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t58 = _t4*_t4;
     const trailer_real_t _t59 = _t44*_t58;
     const trailer_real_t _t60 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t61 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
     const trailer_real_t _t62 = _t13*_t17;
     const trailer_real_t _t63 = _t0*_t4;
@@ -4452,6 +4444,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
             + _t105*_t54 + _t69*_t88 + _t69*_t95 - _t69*_t96;
     const trailer_real_t _t107 = radius_right*radius_right;
     const trailer_real_t _t108 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t109 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t110 = _t107*_t50;
     const trailer_real_t _t111 = _t107*_t54;
@@ -4493,6 +4486,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t147 = TRAILER_LIT(4387.0)*_t111/TRAILER_LIT(4761.0);
     const trailer_real_t _t148 = _t142*_t63;
     const trailer_real_t _t149 = _t143*_t63;
+    const trailer_real_t J_theta_right = p->J_theta_right;
     const trailer_real_t _t150 = J_theta_right - _t107*_t108 + _t107*_t109 + _t107*_t43 + _t107*_t45
             + _t107*_t46 - _t107*_t47 + TRAILER_LIT(94249.0)*_t110/TRAILER_LIT(171396.0)
             + TRAILER_LIT(11449.0)*_t111/TRAILER_LIT(171396.0) - _t113*_t55 - _t113*_t58
@@ -4572,6 +4566,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t192 = TRAILER_LIT(4387.0)*_t50/TRAILER_LIT(4761.0);
     const trailer_real_t _t193 = TRAILER_LIT(23639.0)*_t54/TRAILER_LIT(14283.0);
     const trailer_real_t _t194 = _t169*_t63;
+    const trailer_real_t J_theta_left = p->J_theta_left;
     const trailer_real_t _t195 = J_theta_left + _t108*_t151 - _t109*_t151 - _t112*_t153
             - _t112*_t154 + _t114*_t153 + _t114*_t154 - _t116*_t153 - _t116*_t154
             + _t119*_t128*_t160 + _t119*_t132*_t160 - _t119*_t161 - _t119*_t167 + _t119*_t185
@@ -4610,10 +4605,12 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
             - _t85*_t94 + _t85*_t98 - _t88*_t89 - _t89*_t95 + _t89*_t96 + _t90 - _t92*_t93);
     const trailer_real_t _t208 = _t150*_t195 - _t84*_t84;
     const trailer_real_t _t209 = TRAILER_LIT(1.0)/(_t208*_t208);
+    const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t _t210 = thetadot_right*thetadot_right;
     const trailer_real_t _t211 = _t107*_t210;
     const trailer_real_t _t212 = J_theta_cart_left*_t52;
     const trailer_real_t _t213 = _t211*_t212;
+    const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t _t214 = thetadot_left*thetadot_left;
     const trailer_real_t _t215 = _t151*_t214;
     const trailer_real_t _t216 = _t212*_t215;
@@ -4628,6 +4625,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t225 = _t129*_t210;
     const trailer_real_t _t226 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
     const trailer_real_t _t227 = _t211*_t220;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t _t228 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
     const trailer_real_t _t229 = _t12*_t12*_t12;
     const trailer_real_t _t230 = _t4*_t4*_t4;
@@ -5041,6 +5039,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
             + _t559*thetadot_right + _t564*thetadot_right + _t569*_t92 + _t573*_t574;
     const trailer_real_t _t576 = TRAILER_LIT(5.0)*_t49*_t53/TRAILER_LIT(70957944.0);
     const trailer_real_t _t577 = _t576*radius_left;
+    const trailer_real_t tau_left = tau[1];
     const trailer_real_t _t578 =
             _t577*(TRAILER_LIT(110707500.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52*_t58
             + TRAILER_LIT(36902500.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52
@@ -5343,6 +5342,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t640 = _t360*thetadot_left;
     const trailer_real_t _t641 = TRAILER_LIT(92160000.0)*_t103;
     const trailer_real_t _t642 = _t576*radius_right;
+    const trailer_real_t tau_right = tau[0];
     const trailer_real_t _t643 =
             -_t642*(TRAILER_LIT(42830000.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52*_t58
             + TRAILER_LIT(26195000.0)*J_theta_cart*_t0*_t107*_t210*_t4*_t48*_t52

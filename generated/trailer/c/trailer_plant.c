@@ -11,34 +11,19 @@
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot)
 {
-    const trailer_real_t J_theta_cart = pp->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = pp->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = pp->J_theta_cart_right;
-    const trailer_real_t J_theta_left = pp->J_theta_left;
-    const trailer_real_t J_theta_right = pp->J_theta_right;
-    const trailer_real_t J_theta_tractor = pp->J_theta_tractor;
-    const trailer_real_t J_x_tractor = pp->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = pp->radius_cart_left;
-    const trailer_real_t radius_cart_right = pp->radius_cart_right;
     const trailer_real_t radius_left = pp->radius_left;
-    const trailer_real_t radius_right = pp->radius_right;
-    const trailer_real_t theta_tractor = x[2];
-    const trailer_real_t theta_cart = x[3];
-    const trailer_real_t thetadot_right = x[8];
     const trailer_real_t thetadot_left = x[9];
-    const trailer_real_t tau_right = tau[0];
-    const trailer_real_t tau_left = tau[1];
     const trailer_real_t _t0 = radius_left*thetadot_left;
+    const trailer_real_t theta_tractor = x[2];
     const trailer_real_t _t1 = TRAILER_COS(theta_tractor);
     const trailer_real_t _t2 = TRAILER_LIT(0.5)*_t1;
+    const trailer_real_t radius_right = pp->radius_right;
+    const trailer_real_t thetadot_right = x[8];
     const trailer_real_t _t3 = radius_right*thetadot_right;
     const trailer_real_t _t4 = TRAILER_SIN(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
     const trailer_real_t _t6 = TRAILER_LIT(250.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t theta_cart = x[3];
     const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
     const trailer_real_t _t8 = _t4*_t7;
     const trailer_real_t _t9 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(6.0);
@@ -47,6 +32,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t12 = _t11*_t4;
     const trailer_real_t _t13 = _t1*_t11;
     const trailer_real_t _t14 = TRAILER_LIT(250.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_cart_right = pp->radius_cart_right;
     const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t16 = _t15*radius_left;
     const trailer_real_t _t17 = TRAILER_LIT(307.0)*_t16/TRAILER_LIT(414.0);
@@ -56,22 +42,29 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t21 = TRAILER_LIT(107.0)*_t20/TRAILER_LIT(414.0);
     const trailer_real_t _t22 = TRAILER_LIT(41.0)*_t10/TRAILER_LIT(46.0);
     const trailer_real_t _t23 = TRAILER_LIT(41.0)*_t12/TRAILER_LIT(46.0);
+    const trailer_real_t radius_cart_left = pp->radius_cart_left;
     const trailer_real_t _t24 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t25 = _t24*radius_left;
     const trailer_real_t _t26 = TRAILER_LIT(107.0)*_t25/TRAILER_LIT(414.0);
     const trailer_real_t _t27 = _t24*radius_right;
     const trailer_real_t _t28 = TRAILER_LIT(307.0)*_t27/TRAILER_LIT(414.0);
+    const trailer_real_t J_theta_cart = pp->J_theta_cart;
     const trailer_real_t _t29 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
     const trailer_real_t _t30 = radius_left*radius_right;
+    const trailer_real_t J_theta_tractor = pp->J_theta_tractor;
     const trailer_real_t _t31 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
+    const trailer_real_t J_x_tractor = pp->J_x_tractor;
     const trailer_real_t _t32 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
     const trailer_real_t _t33 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
     const trailer_real_t _t34 = radius_cart_left*radius_cart_left;
     const trailer_real_t _t35 = TRAILER_LIT(1.0)/_t34;
+    const trailer_real_t J_theta_cart_left = pp->J_theta_cart_left;
     const trailer_real_t _t36 = J_theta_cart_left*_t35;
     const trailer_real_t _t37 = TRAILER_LIT(32849.0)*_t30/TRAILER_LIT(171396.0);
     const trailer_real_t _t38 = radius_cart_right*radius_cart_right;
     const trailer_real_t _t39 = TRAILER_LIT(1.0)/_t38;
+    const trailer_real_t J_theta_cart_right = pp->J_theta_cart_right;
     const trailer_real_t _t40 = J_theta_cart_right*_t39;
     const trailer_real_t _t41 = _t11*_t11;
     const trailer_real_t _t42 = _t30*_t41;
@@ -81,6 +74,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t46 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
     const trailer_real_t _t47 = TRAILER_LIT(73805.0)*_t30/TRAILER_LIT(28566.0);
     const trailer_real_t _t48 = _t11*_t7;
+    const trailer_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
     const trailer_real_t _t49 = K_theta_cart_x_tractor_2*_t48;
     const trailer_real_t _t50 = _t1*_t4;
     const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t50;
@@ -108,6 +102,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
             - _t57*_t64 - _t58*_t59 + _t58*_t60 - _t59*_t62 + _t60*_t62;
     const trailer_real_t _t68 = radius_left*radius_left;
     const trailer_real_t _t69 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t70 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
     const trailer_real_t _t71 = _t36*_t68;
     const trailer_real_t _t72 = _t40*_t68;
@@ -137,6 +132,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t96 = _t61*_t68;
     const trailer_real_t _t97 = TRAILER_LIT(4387.0)*_t36/TRAILER_LIT(4761.0);
     const trailer_real_t _t98 = TRAILER_LIT(23639.0)*_t40/TRAILER_LIT(14283.0);
+    const trailer_real_t J_theta_left = pp->J_theta_left;
     const trailer_real_t _t99 = J_theta_left + _t29*_t68 + _t31*_t68 + _t32*_t68 - _t33*_t68
             - TRAILER_LIT(62356.0)*_t36*_t87/TRAILER_LIT(42849.0)
             + TRAILER_LIT(20444.0)*_t40*_t87/TRAILER_LIT(42849.0) - _t48*_t85 - _t48*_t86
@@ -175,6 +171,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t122 = TRAILER_LIT(23639.0)*_t101/TRAILER_LIT(14283.0);
     const trailer_real_t _t123 = _t41*_t50;
     const trailer_real_t _t124 = TRAILER_LIT(4387.0)*_t102/TRAILER_LIT(4761.0);
+    const trailer_real_t J_theta_right = pp->J_theta_right;
     const trailer_real_t _t125 = J_theta_right + _t100*_t29 + _t100*_t31 + _t100*_t32 - _t100*_t33
             - _t100*_t69 + _t100*_t70 + TRAILER_LIT(94249.0)*_t101/TRAILER_LIT(171396.0)
             + TRAILER_LIT(11449.0)*_t102/TRAILER_LIT(171396.0) - _t103*_t41 - _t103*_t44
@@ -202,6 +199,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t140 = TRAILER_LIT(17713200.0)*_t130;
     const trailer_real_t _t141 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
     const trailer_real_t _t142 = _t128*_t137;
+    const trailer_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
     const trailer_real_t _t143 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
     const trailer_real_t _t144 = _t11*_t11*_t11;
     const trailer_real_t _t145 = _t1*_t1*_t1;
@@ -461,6 +459,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
             + TRAILER_LIT(100000000.0)*_t273*_t50 + _t307*_t331 + _t319*_t331 + _t328*_t41
             + _t328*_t44;
     const trailer_real_t _t333 = TRAILER_LIT(5.0)*_t35*_t39/TRAILER_LIT(70957944.0);
+    const trailer_real_t tau_left = tau[1];
     const trailer_real_t _t334 =
             _t333*radius_left*(TRAILER_LIT(76388175.0)*J_theta_cart*_t1*_t100*_t127*_t144*_t34*_t38
             + TRAILER_LIT(73805000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t4
@@ -733,6 +732,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t351 = TRAILER_LIT(25462725.0)*J_theta_cart;
     const trailer_real_t _t352 = TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor;
     const trailer_real_t _t353 = TRAILER_LIT(1417056.0)*_t286;
+    const trailer_real_t tau_right = tau[0];
     const trailer_real_t _t354 =
             -_t333*radius_right*(TRAILER_LIT(130611825.0)*J_theta_cart*_t1*_t100*_t127*_t144*_t34
             *_t38 + TRAILER_LIT(26195000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t4

@@ -25,6 +25,7 @@ from runtime.tooling.firmware.build import (
     link_controller,
     toolchain_version,
 )
+from runtime.tooling.firmware.code_budget import PARTS, budget
 from runtime.tooling.firmware.emulated_run import (
     Comparison,
     EmulationResult,
@@ -52,12 +53,21 @@ class OnlyImage:
     (``-DWMR_FORMULATION_ONLY=WMR_FORMULATION_<formulation>``)."""
 
     sizes: dict[str, int]
-    own_text: int
+    own_functions: dict[str, int]  # generated function -> code bytes
     own_rodata: int  # the generated objects' constant tables
     doubles: list[str]
     step_stack: StackBound
     objects: Objects
     emulation: EmulationResult | None = None  # the recorded run (paper) on this build
+
+    @property
+    def own_text(self) -> int:
+        return sum(self.own_functions.values())
+
+
+def generated_functions(elf: Path) -> dict[str, int]:
+    """The generated functions (``wmr_*``) linked into ``elf`` and their code bytes."""
+    return {n: s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT"}
 
 
 def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
@@ -73,8 +83,8 @@ def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
             frames[name].own, frames[name].qualifier = own, qual
         else:
             frames[name] = Frame(name, own, qual)
-    own = sum(s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT")
-    return OnlyImage(elf_sizes(elf), own, generated_rodata(elf), double_symbols(elf),
+    return OnlyImage(elf_sizes(elf), generated_functions(elf), generated_rodata(elf),
+                     double_symbols(elf),
                      worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
 
 
@@ -90,13 +100,17 @@ class Report:
     library: dict[str, Frame]
     functions: list[tuple[str, int, int, str, StackBound]]  # name, size, own, qual, bound
     step_stack: dict[str, StackBound]
-    own_text: dict[str, int]
+    own_functions: dict[str, dict[str, int]]  # controller -> its image's generated functions
     own_rodata: dict[str, int]
     only: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> TDROC image
     only_minimal_recorded_status: list[int] = field(default_factory=list)
     emulation: EmulationResult | None = None
     comparison: Comparison | None = None
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def own_text(self) -> dict[str, int]:
+        return {name: sum(f.values()) for name, f in self.own_functions.items()}
 
 
 def build_report(work: Path, emulate_run: bool = True) -> Report:
@@ -131,12 +145,6 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
             (name, code_sizes[name], fr.own, fr.qualifier, worst_stack(name, frames, library))
         )
     step_stack = {c: worst_stack(f"wmr_{c}_step", frames, library) for c in CONTROLLERS}
-    own_text = {}
-    for name, elf in elves.items():
-        syms = symbols(elf)
-        own_text[name] = sum(
-            s for n, (_, s, k) in syms.items() if n.startswith("wmr_") and k in "tT"
-        )
     report = Report(
         toolchain_version(),
         f32,
@@ -148,7 +156,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
         library,
         functions,
         step_stack,
-        own_text,
+        {name: generated_functions(elf) for name, elf in elves.items()},
         {name: generated_rodata(elf) for name, elf in elves.items()},
     )
     report.only = {f: formulation_only_image(work, f) for f in ("PAPER", "MINIMAL")}
@@ -180,6 +188,33 @@ def _yes(flag: bool) -> str:
 
 def _path(bound: StackBound) -> str:
     return " → ".join(bound.path)
+
+
+def _budget_lines(r: Report) -> list[str]:
+    """The TDROC images' generated code per part of the contract (code_budget)."""
+    images = {"both formulations": r.own_functions["tdroc"]}
+    images.update({f"{form.lower()} only": img.own_functions for form, img in r.only.items()})
+    budgets = {name: budget(functions) for name, functions in images.items()}
+    parts = list(next(iter(budgets.values())))
+    for b in budgets.values():
+        parts += [p for p in b if p not in parts]
+    when = {p.name: p.when for p in PARTS}
+    lines = [
+        "",
+        "### Where the TDROC image's generated code goes",
+        "",
+        "The generated functions of each TDROC image above, by the part of the contract they",
+        "implement (`runtime/tooling/firmware/code_budget.py`; bytes of code).",
+        "",
+        "| part | runs | " + " | ".join(budgets) + " |",
+        "|---|---|" + "---|" * len(budgets),
+    ]
+    for part in parts:
+        lines.append(f"| {part} | {when.get(part, '?')} | "
+                     + " | ".join(str(b.get(part, 0)) for b in budgets.values()) + " |")
+    lines.append("| **total** | | "
+                 + " | ".join(f"**{sum(b.values())}**" for b in budgets.values()) + " |")
+    return lines
 
 
 def render(r: Report) -> str:
@@ -278,6 +313,7 @@ def render(r: Report) -> str:
             f"{', '.join(img.doubles) or 'none'} | "
             f"{img.step_stack.bytes} B{'' if img.step_stack.complete else ' (incomplete)'} |"
         )
+    lines += _budget_lines(r)
     lines += [
         "",
         "## Per function (float32)",

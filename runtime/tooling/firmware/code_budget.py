@@ -1,0 +1,56 @@
+"""Where an image's generated code goes: each ``wmr_*`` function of a linked image in one
+part of the controller's contract (configuration checks, fingerprint, input checks, the
+step's bookkeeping, the control math), so that a size goal can be weighed against what
+the code does. Classified by name; a function no part claims is ``unclassified`` (a test
+keeps that empty, so a new generated function has to be placed).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Part:
+    name: str
+    when: str  # when the part runs
+    pattern: re.Pattern[str]  # matches a function name without its prefix
+
+
+PARTS: tuple[Part, ...] = (
+    Part("configuration checks", "at _init; in a step only when the configuration changed",
+         re.compile(r"(\w+_)?check_config(_detail)?|check_base_config|check_nominal"
+                    r"|positive(_at_most)?|nonnegative_at_most|lyapunov_p")),
+    Part("configuration fingerprint", "every step (detects a changed configuration)",
+         re.compile(r"\w+_fingerprint")),
+    Part("configuration-derived data, init, reset", "at _init and _reset",
+         re.compile(r"\w+_(init|reset|clear)|controller_p|\w+_minv_norm|window_weights")),
+    Part("input checks, error detail", "every step",
+         re.compile(r"check_step_inputs|fail")),
+    Part("step: history, commit, saturation", "every step",
+         re.compile(r"\w+_step(_detail)?|saturate|cap_gain|push_history|controlled_slice")),
+    Part("control law and estimators (from SymPy)", "every step",
+         re.compile(r"(paper|minimal)_\w+|\w+_weighted_gain")),
+)
+UNCLASSIFIED = "unclassified"
+
+
+def part_of(function: str, prefix: str = "wmr_") -> str:
+    """The name of the part a generated function (``wmr_...``) belongs to."""
+    bare = function.removeprefix(prefix)
+    for part in PARTS:
+        if part.pattern.fullmatch(bare):
+            return part.name
+    return UNCLASSIFIED
+
+
+def budget(functions: Mapping[str, int], prefix: str = "wmr_") -> dict[str, int]:
+    """Bytes of code per part (every part listed, in :data:`PARTS` order; ``unclassified``
+    only when some function is)."""
+    out = {part.name: 0 for part in PARTS}
+    for name, size in functions.items():
+        key = part_of(name, prefix)
+        out[key] = out.get(key, 0) + size
+    return out
