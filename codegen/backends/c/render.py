@@ -155,7 +155,7 @@ def _comment_text(text: str) -> str:
     return text.replace("*/", "* /")
 
 
-# fmax and fmin are printed as static inline functions of wmr_types.h, not library calls
+# fmax and fmin are printed as the WMR_FMAX/WMR_FMIN macros of wmr_types.h, not library calls
 # (on a Cortex-M4, fmaxf is a call into newlib and __fpclassifyf; on x86-64 a libm call).
 INLINE_MATH = ("fmax", "fmin")
 # sin and cos in double are static inline functions of wmr_types.h (one argument reduction
