@@ -338,6 +338,15 @@ class _LazyLoads:
         return lines
 
 
+def _temp_lines(temps: Sequence[Temp], load_for: _LazyLoads, printer: CPrinter) -> list[_Line]:
+    """Each temporary's declaration, after the reads of the inputs it is the first to use."""
+    lines: list[_Line] = []
+    for s, e in temps:
+        lines += load_for([e])
+        lines.append(_decl(str(s), printer.expr_code(e)))
+    return lines
+
+
 def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, object]:
     spec = ir.spec
     slots = input_slots(spec)
@@ -371,14 +380,10 @@ def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str,
     if checked:  # the check reads every input: all loaded first
         body += loads.values()
         body += _nonfinite_check([line.target for line in loads.values()], spec.nonfinite_input)
-    for s, e in temps:
-        body += load_for([e])
-        body.append(_decl(str(s), printer.expr_code(e)))
+    body += _temp_lines(temps, load_for, printer)
     body += load_for([e for _, e in guards])
     body += _guard_lines(spec, guards, printer, config)
-    for s, e in late_temps:
-        body += load_for([e])
-        body.append(_decl(str(s), printer.expr_code(e)))
+    body += _temp_lines(late_temps, load_for, printer)
     body += load_for([e for _, e in late_guards])
     body += _guard_lines(spec, late_guards, printer, config)
     body += load_for.rest()  # every read before the first store: outputs may alias inputs
@@ -632,10 +637,8 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
             body += [_decl(str(s), printer.expr_code(e)) for s, e in calls]
     load_for = _LazyLoads({s: _decl(names.get(s, str(s)), f"{PREPARED_ARG}->{api.field}[{k}]")
                            for k, s in enumerate(form.kept)})
-    for s, e in form.state_temps:
-        if (s, e) not in calls:
-            body += load_for([e])
-            body.append(_decl(str(s), printer.expr_code(e)))
+    body += _temp_lines([(s, e) for s, e in form.state_temps if (s, e) not in calls],
+                        load_for, printer)
     body += load_for([g for _, g in form.state_guards])
     guards = _guard_lines(spec, form.state_guards, printer, config)
     body += _with_late_check(guards, late_names, spec.nonfinite_input)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime.cbuild import GENERATED_C
+from runtime.tooling.bench.c_bench import renamed_objects
 
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
 CFLAGS = ["-std=c99", "-O2"]
@@ -160,8 +161,6 @@ def build_step_bench(workdir: Path, config: dict[str, Any],
     first, rest = body.split('#include "hand_tdroc.h"', 1)
     src = workdir / "step_main.c"
     src.write_text(first + '#include "hand_tdroc.h"\n' + head + rest)
-    from runtime.tooling.bench.c_bench import renamed_objects
-
     sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
     libm = renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
     exe = workdir / "step_bench"

@@ -11,6 +11,8 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from modeling.controllers import FORMULATIONS
+
 
 @dataclass(frozen=True)
 class Part:
@@ -32,7 +34,7 @@ PARTS: tuple[Part, ...] = (
     Part("step: history, commit, saturation", "every step",
          re.compile(r"\w+_step(_detail)?|saturate|cap_gain|push_history|controlled_slice")),
     Part("control law and estimators (from SymPy)", "every step",
-         re.compile(r"(paper|minimal)_\w+|\w+_weighted_gain")),
+         re.compile(rf"({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain")),
 )
 UNCLASSIFIED = "unclassified"
 

@@ -25,7 +25,7 @@ from runtime.tooling.firmware.build import (
     link_controller,
     toolchain_version,
 )
-from runtime.tooling.firmware.code_budget import PARTS, budget
+from runtime.tooling.firmware.code_budget import PARTS, UNCLASSIFIED, budget
 from runtime.tooling.firmware.emulated_run import (
     Comparison,
     EmulationResult,
@@ -70,6 +70,18 @@ def generated_functions(elf: Path) -> dict[str, int]:
     return {n: s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT"}
 
 
+def compiled_frames(objs: Objects) -> dict[str, Frame]:
+    """The compiled functions' frames: the call graph, each frame's size from ``.su``
+    (authoritative for the frame)."""
+    frames = parse_callgraph(objs.ci)
+    for name, (own, qual) in parse_su(objs.su).items():
+        if name in frames:
+            frames[name].own, frames[name].qualifier = own, qual
+        else:
+            frames[name] = Frame(name, own, qual)
+    return frames
+
+
 def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
     """Compile (float32) with one formulation only, link the TDROC image, measure it."""
     objs = compile_generated(
@@ -77,12 +89,7 @@ def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
         defines=(f"-DWMR_FORMULATION_ONLY=WMR_FORMULATION_{formulation}",),
     )
     elf = link_controller(objs, "tdroc", formulation)
-    frames = parse_callgraph(objs.ci)
-    for name, (own, qual) in parse_su(objs.su).items():
-        if name in frames:
-            frames[name].own, frames[name].qualifier = own, qual
-        else:
-            frames[name] = Frame(name, own, qual)
+    frames = compiled_frames(objs)
     return OnlyImage(elf_sizes(elf), generated_functions(elf), generated_rodata(elf),
                      double_symbols(elf),
                      worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
@@ -120,13 +127,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
     elves = {name: link_controller(f32, name) for name in CONTROLLERS}
     sizes = {name: elf_sizes(elf) for name, elf in elves.items()}
     doubles = {name: double_symbols(elf) for name, elf in elves.items()}
-    frames = parse_callgraph(f32.ci)
-    su = parse_su(f32.su)
-    for name, (own, qual) in su.items():  # .su is authoritative for the frame
-        if name in frames:
-            frames[name].own, frames[name].qualifier = own, qual
-        else:
-            frames[name] = Frame(name, own, qual)
+    frames = compiled_frames(f32)
     library: dict[str, Frame] = {}
     for elf in elves.values():
         for name, frame in elf_frames(elf).items():
@@ -195,10 +196,9 @@ def _budget_lines(r: Report) -> list[str]:
     images = {"both formulations": r.own_functions["tdroc"]}
     images.update({f"{form.lower()} only": img.own_functions for form, img in r.only.items()})
     budgets = {name: budget(functions) for name, functions in images.items()}
-    parts = list(next(iter(budgets.values())))
-    for b in budgets.values():
-        parts += [p for p in b if p not in parts]
     when = {p.name: p.when for p in PARTS}
+    parts = [*when, *([UNCLASSIFIED] if any(UNCLASSIFIED in b for b in budgets.values())
+                      else [])]
     lines = [
         "",
         "### Where the TDROC image's generated code goes",
