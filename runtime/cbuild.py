@@ -141,11 +141,13 @@ def declarations(
     extra_headers: tuple[Path, ...] = (),
     c_dir: Path = GENERATED_C,
     prefix: str = "wmr",
+    defines: tuple[str, ...] = (),
 ) -> str:
     """The generated headers, preprocessed for ``cffi.FFI.cdef`` (with empty ``<math.h>``
     and ``<stdint.h>``: cffi declares the fixed-width integer types itself), without the
     ``static inline`` functions a header defines (the double build's sin and cos): a cdef
-    only declares."""
+    only declares. ``defines`` (``-D...``) are those the library was compiled with, so that
+    what they declare (a frozen build's configuration) is declared."""
     with tempfile.TemporaryDirectory() as tmp:
         fake = Path(tmp)
         (fake / "math.h").write_text("")
@@ -158,8 +160,11 @@ def declarations(
         cmd = [compiler(), "-E", "-P", "-nostdinc", f"-I{fake}", f"-I{c_dir}", str(src)]
         if float32:
             cmd.insert(3, f"-D{prefix.upper()}_FLOAT32")
+        cmd[3:3] = defines
         text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    return without_inline_definitions(text)
+    # cffi takes an `extern const` object for a compile-time constant, which a dlopen()ed
+    # library cannot give: declared without const, it is read (never written) from memory.
+    return without_inline_definitions(text).replace("extern const ", "extern ")
 
 
 def without_inline_definitions(text: str) -> str:
@@ -223,7 +228,8 @@ def build(
         tmp = so.with_suffix(f".{uuid.uuid4().hex[:8]}.tmp.so")
         run_compiler([gcc_command(objects, tmp, kind="shared", libs=("-lm",))])
         tmp.replace(so)
-    return load(so, declarations(float32, headers, extra_headers, c_dir, prefix),
+    defines = tuple(f for f in flags if f.startswith("-D"))
+    return load(so, declarations(float32, headers, extra_headers, c_dir, prefix, defines),
                 float32=float32)
 
 

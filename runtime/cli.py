@@ -9,6 +9,7 @@
     wmr campaign [--spec FILE] [--runs N] [--scheduler ADDR] --out DIR  robustness campaigns
     wmr bench                                 benchmarks of the generated code
     wmr firmware                              Cortex-M4 size, stack and instruction counts
+    wmr freeze --controller NAME --out DIR    a validated configuration compiled into firmware
 
 Each subcommand has its own ``--help``. A command's module is imported only when it runs, so
 ``wmr reproduce`` never imports SymPy or the code generator.
@@ -64,6 +65,10 @@ COMMANDS: dict[str, Command] = {
     "firmware": Command(
         "runtime.tooling.firmware.report",
         "Cortex-M4 code size, stack and emulated instructions of the generated C",
+    ),
+    "freeze": Command(
+        "runtime.freeze_command",
+        "validate a controller configuration and write it as a header firmware compiles in",
     ),
 }
 

@@ -183,7 +183,7 @@ def test_formulation_paper_is_rejected(c_texts: dict[str, str]) -> None:
 def test_minv_norm_is_evaluated_at_q_in_the_step(c_texts: dict[str, str]) -> None:
     tdroc = c_texts["tdroc.c"]
     step = _function_body(tdroc, "toy_tdroc_step_detail")
-    assert "toy_minimal_minv_norm(&config->nominal, q, &minv_norm);" in step
+    assert "toy_minimal_minv_norm(&cfg->nominal, q, &minv_norm);" in step
     assert "state->minv_norm = minv_norm;" in step  # committed with the rest
     assert "same_params" not in step
     init = _function_body(tdroc, "toy_tdroc_init")

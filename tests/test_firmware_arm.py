@@ -78,7 +78,9 @@ def test_every_generated_function_has_a_part_of_the_budget(report: fr.Report) ->
     controllers, the formulation-only TDROC images) in exactly the part its name says, the
     parts summing to the image's generated code."""
     images = {**report.own_functions,
-              **{f"tdroc/{form}": img.own_functions for form, img in report.only.items()}}
+              **{f"tdroc/{form}": img.own_functions for form, img in report.only.items()},
+              **{f"tdroc/frozen/{form}": img.own_functions
+                 for form, img in report.frozen.items()}}
     for image, functions in images.items():
         unclassified = [f for f in functions if part_of(f) == UNCLASSIFIED]
         assert not unclassified, (image, unclassified)
@@ -154,6 +156,40 @@ def test_emulated_tdroc_matches_the_host_builds(report: fr.Report) -> None:
     # The measured stack (harness included) stays under the static bound of the step
     # plus the harness's own frame.
     assert 0 < emu.stack_bytes <= report.step_stack["tdroc"].bytes + 64
+
+
+def test_frozen_image_meets_the_firmware_goals(report: fr.Report) -> None:
+    """Issue 12's Cortex-M4 goals for a TDROC-only image, met by the build with the
+    configuration compiled in (`wmr freeze`) and the minimal formulation: <= 3 KB of
+    generated code, <= 512 B of step stack through every callee, no double helpers; and
+    that build has none of the configuration checks, fingerprint or derivation."""
+    minimal = report.frozen["MINIMAL"]
+    assert minimal.own_text <= 3 * 1024, minimal.own_functions
+    assert minimal.step_stack.complete and minimal.step_stack.bytes <= 512
+    assert not minimal.doubles
+    for img in report.frozen.values():
+        parts = budget(img.own_functions)
+        assert parts["configuration checks"] == parts["configuration fingerprint"] == 0
+        assert not any(name.endswith(("_minv_norm", "controller_p", "check_config_detail"))
+                       for name in img.own_functions)
+    # Freezing removes code and adds only the configuration and state as constants.
+    for form, img in report.frozen.items():
+        assert img.own_text < report.only[form].own_text
+        assert img.own_rodata - report.only[form].own_rodata <= 512
+
+
+@pytest.mark.skipif(not HAVE_UNICORN, reason="unicorn (PyPI) not installed")
+def test_emulated_frozen_images_match_the_run_time_builds(report: fr.Report) -> None:
+    """The frozen images run the recorded closed loops to the same statuses and the same
+    torques, bit for bit, as the run-time builds, within 1,500 instructions per step."""
+    paper, minimal = report.frozen["PAPER"].emulation, report.frozen["MINIMAL"].emulation
+    run_time_minimal = report.only["MINIMAL"].emulation
+    assert paper is not None and minimal is not None and run_time_minimal is not None
+    assert report.emulation is not None
+    assert paper.status == report.emulation.status and paper.tau == report.emulation.tau
+    assert minimal.status == report.only_minimal_recorded_status
+    assert minimal.tau == run_time_minimal.tau
+    assert max(minimal.instructions) <= 1500 and max(paper.instructions) <= 1500
 
 
 def test_report_renders(report: fr.Report) -> None:

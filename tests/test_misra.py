@@ -7,11 +7,13 @@ from __future__ import annotations
 import re
 import shutil
 from collections import Counter
+from pathlib import Path
 
 import pytest
 from test_controller_contract import CLANG_EXCLUSIONS
 
 from runtime import cbuild
+from runtime.freeze_command import main as freeze_main
 from runtime.tooling.misra.check import DOC, documented_rules, run_cppcheck
 
 
@@ -24,6 +26,19 @@ def test_misra_findings_are_the_documented_deviations(float32: bool) -> None:
         f"undocumented: {sorted(set(found) - set(documented))}, "
         f"no longer found: {sorted(set(documented) - set(found))}")
     assert {r: found[r] for r in found} == {r: d.findings for r, d in documented.items()}
+
+
+@pytest.mark.skipif(shutil.which("cppcheck") is None, reason="needs cppcheck (apt-get)")
+def test_frozen_build_adds_no_deviation(tmp_path: Path) -> None:
+    """The TDROC build with its configuration compiled in (`wmr freeze`, float32): only
+    documented rules, and no more findings of any than the run-time build has."""
+    assert freeze_main(["--controller", "tdroc", "--float32", "--out", str(tmp_path)]) == 0
+    found = Counter(f.rule for f in run_cppcheck(cbuild.GENERATED_C, True,
+                                                 tmp_path / "wmr_tdroc_frozen.h"))
+    documented = documented_rules()
+    assert set(found) <= set(documented), sorted(set(found) - set(documented))
+    assert all(found[r] <= documented[r].findings for r in found), found
+    assert found["15.5"] < documented["15.5"].findings  # the checks are not in this build
 
 
 def test_no_mandatory_rule_is_deviated() -> None:

@@ -68,5 +68,5 @@ def test_tde_step_calls_the_trig_kernels() -> None:
         assert step.count("wmr_sincos_bounded(q[2], &trig[0], &trig[1]);") == 1, ctrl
         assert "WMR_SIN(" not in step and "WMR_COS(" not in step, ctrl
         assert step.index("wmr_check_step_inputs(") < step.index("wmr_sincos_bounded("), ctrl
-        assert f"wmr_paper_{ctrl}_law_trig(&config->nominal, trig," in step
-        assert "wmr_paper_tde_trig(&config->nominal, state->trig_prev," in step
+        assert f"wmr_paper_{ctrl}_law_trig(&cfg->nominal, trig," in step
+        assert "wmr_paper_tde_trig(&cfg->nominal, state->trig_prev," in step

@@ -11,6 +11,13 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
+#ifdef WMR_ASMC_FROZEN
+/* The configuration the `freeze` command validated on the host with this code, and the state
+   wmr_asmc_init left there: the image needs neither the checks nor the derivation. */
+#include "wmr_asmc_frozen.h"
+const wmr_asmc_config_t wmr_asmc_frozen_config = WMR_ASMC_FROZEN_CONFIG;
+#endif
+
 wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
     wmr_error_detail_t *detail)
 {
@@ -44,6 +51,7 @@ wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
     return wmr_asmc_check_config_detail(config, 0);
 }
 
+#ifndef WMR_ASMC_FROZEN
 /* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
    (a float's one word; a double's two, the multiply of the first off the FNV chain). */
 static uint32_t wmr_real_word(wmr_real_t x)
@@ -114,6 +122,8 @@ static uint32_t wmr_asmc_fingerprint(const wmr_asmc_config_t *config)
     return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
+#endif
+
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void wmr_asmc_clear(wmr_asmc_state_t *s)
 {
@@ -134,6 +144,21 @@ static void wmr_asmc_clear(wmr_asmc_state_t *s)
     s->tau[1] = WMR_LIT(0.0);
 }
 
+#ifdef WMR_ASMC_FROZEN
+wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *config)
+{
+    /* as _init left it on the host */
+    static const wmr_asmc_state_t frozen_state = WMR_ASMC_FROZEN_STATE;
+    if (state == NULL || config == NULL) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (config != &wmr_asmc_frozen_config) {
+        return WMR_ERR_CONFIG_CHANGED;  /* this build takes the compiled-in configuration only */
+    }
+    *state = frozen_state;
+    return WMR_OK;
+}
+#else
 wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *config)
 {
     wmr_asmc_state_t fresh;
@@ -153,6 +178,7 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     *state = fresh;
     return WMR_OK;
 }
+#endif /* WMR_ASMC_FROZEN */
 
 wmr_status_t wmr_asmc_reset(wmr_asmc_state_t *state)
 {
@@ -179,6 +205,7 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
     wmr_error_detail_t *detail)
 {
     wmr_status_t status = WMR_OK;
+    const wmr_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
     bool paper;
     int off;  /* where the controlled coordinates start in q */
     wmr_real_t e[5], edot[5], u[5];
@@ -212,6 +239,13 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
+#ifdef WMR_ASMC_FROZEN
+    /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
+    if (config != &wmr_asmc_frozen_config) {
+        return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
+    }
+    cfg = &wmr_asmc_frozen_config;
+#else
     /* The configuration _init validated has this fingerprint: only a different one is
        validated again (its error first, else CONFIG_CHANGED): the same statuses as
        validating every step, without the cost. */
@@ -222,28 +256,30 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
         }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
+    cfg = config;
+#endif
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
-    paper = WMR_IS_PAPER(config->formulation);
+    paper = WMR_IS_PAPER(cfg->formulation);
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
-    (void)wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
+    (void)wmr_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* The law. */
     {
         wmr_real_t s[5];
         if (paper) {
-            const wmr_real_t adapt[2] = {config->gamma, config->h};
-            wmr_paper_asmc_law(&config->nominal, q, qdot, e, edot, &qddot_des[off],
-                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off],
-                    &state->gain, &config->eps, adapt, u, s, &s_norm, &gain);
+            const wmr_real_t adapt[2] = {cfg->gamma, cfg->h};
+            wmr_paper_asmc_law(&cfg->nominal, q, qdot, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain, &cfg->eps,
+                    adapt, u, s, &s_norm, &gain);
         } else {
-            const wmr_real_t adapt[2] = {config->gamma, config->h};
-            wmr_minimal_asmc_law(&config->nominal, q, qdot, e, edot, &qddot_des[off],
-                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off],
-                    &state->gain, &config->eps, adapt, u, s, &s_norm, &gain);
+            const wmr_real_t adapt[2] = {cfg->gamma, cfg->h};
+            wmr_minimal_asmc_law(&cfg->nominal, q, qdot, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain, &cfg->eps,
+                    adapt, u, s, &s_norm, &gain);
         }
     }
     gain = wmr_cap_gain(gain);  /* the adapted gain never exceeds WMR_GAIN_MAX */
@@ -270,7 +306,7 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
         }
         return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
-    status = wmr_saturate(out_tau, config->tau_max);
+    status = wmr_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
     state->gain = gain;
     state->s_norm = s_norm;

@@ -11,6 +11,13 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
+#ifdef WMR_TDC_FROZEN
+/* The configuration the `freeze` command validated on the host with this code, and the state
+   wmr_tdc_init left there: the image needs neither the checks nor the derivation. */
+#include "wmr_tdc_frozen.h"
+const wmr_tdc_config_t wmr_tdc_frozen_config = WMR_TDC_FROZEN_CONFIG;
+#endif
+
 wmr_status_t wmr_tdc_check_config_detail(const wmr_tdc_config_t *config,
     wmr_error_detail_t *detail)
 {
@@ -42,6 +49,7 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     return wmr_tdc_check_config_detail(config, 0);
 }
 
+#ifndef WMR_TDC_FROZEN
 /* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
    (a float's one word; a double's two, the multiply of the first off the FNV chain). */
 static uint32_t wmr_real_word(wmr_real_t x)
@@ -113,6 +121,8 @@ static uint32_t wmr_tdc_fingerprint(const wmr_tdc_config_t *config)
     return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
+#endif
+
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void wmr_tdc_clear(wmr_tdc_state_t *s)
 {
@@ -136,6 +146,21 @@ static void wmr_tdc_clear(wmr_tdc_state_t *s)
     s->tau[1] = WMR_LIT(0.0);
 }
 
+#ifdef WMR_TDC_FROZEN
+wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config)
+{
+    /* as _init left it on the host */
+    static const wmr_tdc_state_t frozen_state = WMR_TDC_FROZEN_STATE;
+    if (state == NULL || config == NULL) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (config != &wmr_tdc_frozen_config) {
+        return WMR_ERR_CONFIG_CHANGED;  /* this build takes the compiled-in configuration only */
+    }
+    *state = frozen_state;
+    return WMR_OK;
+}
+#else
 wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config)
 {
     wmr_tdc_state_t fresh;
@@ -154,6 +179,7 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     *state = fresh;
     return WMR_OK;
 }
+#endif /* WMR_TDC_FROZEN */
 
 wmr_status_t wmr_tdc_reset(wmr_tdc_state_t *state)
 {
@@ -180,6 +206,7 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     wmr_error_detail_t *detail)
 {
     wmr_status_t status = WMR_OK;
+    const wmr_tdc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
     bool paper;
     int off;  /* where the controlled coordinates start in q */
     int nc;
@@ -217,6 +244,13 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
+#ifdef WMR_TDC_FROZEN
+    /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
+    if (config != &wmr_tdc_frozen_config) {
+        return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
+    }
+    cfg = &wmr_tdc_frozen_config;
+#else
     /* The configuration _init validated has this fingerprint: only a different one is
        validated again (its error first, else CONFIG_CHANGED): the same statuses as
        validating every step, without the cost. */
@@ -227,11 +261,13 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
         }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
+    cfg = config;
+#endif
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
-    paper = WMR_IS_PAPER(config->formulation);
+    paper = WMR_IS_PAPER(cfg->formulation);
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
@@ -243,16 +279,16 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
         trig[0] = WMR_LIT(0.0);
         trig[1] = WMR_LIT(0.0);
     }
-    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
+    nc = wmr_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const bool central = config->accel_estimator == WMR_ACCEL_CENTRAL;
-        const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
-        const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
-            ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
+        const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
+        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
+        const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
+            ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];
@@ -265,9 +301,9 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_paper_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_paper_tde_trig(&cfg->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
         } else {
-            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -277,12 +313,11 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     /* The law. */
     {
         if (paper) {
-            wmr_paper_tdc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
-                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat,
-                    u);
+            wmr_paper_tdc_law_trig(&cfg->nominal, trig, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         } else {
-            wmr_minimal_tdc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
-                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+            wmr_minimal_tdc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -308,7 +343,7 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
         }
         return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
-    status = wmr_saturate(out_tau, config->tau_max);
+    status = wmr_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 5; ++i) {
         state->H1hat[i] = H1hat[i];

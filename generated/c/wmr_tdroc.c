@@ -11,6 +11,13 @@
 #include "wmr_laws.h"
 #include "wmr_model.h"
 
+#ifdef WMR_TDROC_FROZEN
+/* The configuration the `freeze` command validated on the host with this code, and the state
+   wmr_tdroc_init left there: the image needs neither the checks nor the derivation. */
+#include "wmr_tdroc_frozen.h"
+const wmr_tdroc_config_t wmr_tdroc_frozen_config = WMR_TDROC_FROZEN_CONFIG;
+#endif
+
 wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
     wmr_error_detail_t *detail)
 {
@@ -57,6 +64,7 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
     return wmr_tdroc_check_config_detail(config, 0);
 }
 
+#ifndef WMR_TDROC_FROZEN
 /* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
    (a float's one word; a double's two, the multiply of the first off the FNV chain). */
 static uint32_t wmr_real_word(wmr_real_t x)
@@ -132,6 +140,8 @@ static uint32_t wmr_tdroc_fingerprint(const wmr_tdroc_config_t *config)
     return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
 }
 
+#endif
+
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
 {
@@ -159,6 +169,21 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
     s->tau[1] = WMR_LIT(0.0);
 }
 
+#ifdef WMR_TDROC_FROZEN
+wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config)
+{
+    /* as _init left it on the host */
+    static const wmr_tdroc_state_t frozen_state = WMR_TDROC_FROZEN_STATE;
+    if (state == NULL || config == NULL) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (config != &wmr_tdroc_frozen_config) {
+        return WMR_ERR_CONFIG_CHANGED;  /* this build takes the compiled-in configuration only */
+    }
+    *state = frozen_state;
+    return WMR_OK;
+}
+#else
 wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config)
 {
     wmr_tdroc_state_t fresh;
@@ -185,6 +210,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     *state = fresh;
     return WMR_OK;
 }
+#endif /* WMR_TDROC_FROZEN */
 
 wmr_status_t wmr_tdroc_reset(wmr_tdroc_state_t *state)
 {
@@ -211,6 +237,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     wmr_error_detail_t *detail)
 {
     wmr_status_t status = WMR_OK;
+    const wmr_tdroc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
     bool paper;
     int off;  /* where the controlled coordinates start in q */
     int nc;
@@ -251,6 +278,13 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     if (state->magic != WMR_STATE_MAGIC) {
         return wmr_fail(detail, WMR_ERR_NOT_INITIALISED, WMR_FIELD_STATE, -1);
     }
+#ifdef WMR_TDROC_FROZEN
+    /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
+    if (config != &wmr_tdroc_frozen_config) {
+        return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
+    }
+    cfg = &wmr_tdroc_frozen_config;
+#else
     /* The configuration _init validated has this fingerprint: only a different one is
        validated again (its error first, else CONFIG_CHANGED): the same statuses as
        validating every step, without the cost. */
@@ -261,11 +295,13 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
+    cfg = config;
+#endif
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
         return status;
     }
-    paper = WMR_IS_PAPER(config->formulation);
+    paper = WMR_IS_PAPER(cfg->formulation);
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
@@ -277,16 +313,16 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         trig[0] = WMR_LIT(0.0);
         trig[1] = WMR_LIT(0.0);
     }
-    nc = wmr_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
+    nc = wmr_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const bool central = config->accel_estimator == WMR_ACCEL_CENTRAL;
-        const wmr_real_t span = central ? WMR_LIT(2.0) * config->h : config->h;
-        const wmr_real_t c2 = config->accel_estimator == WMR_ACCEL_MATCHED
-            ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
+        const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
+        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
+        const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
+            ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];
@@ -299,9 +335,9 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_paper_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_paper_tde_trig(&cfg->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
         } else {
-            wmr_minimal_tde(&config->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -332,14 +368,14 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
             dn[i] = state->omega_dnorm[i];
         }
     }
-    if (config->hold_gain != 0) {
-        gain = config->held_gain;  /* commissioning / stability analysis: k-hat held */
+    if (cfg->hold_gain != 0) {
+        gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
         wmr_real_t w_warm[WMR_MAX_WINDOW];
-        const int active = omega_count - 1 < config->n ? omega_count - 1 : config->n;
+        const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
-        if (active < config->n) {  /* the window is still filling */
-            wmr_window_weights(active, config->a, w_warm);
+        if (active < cfg->n) {  /* the window is still filling */
+            wmr_window_weights(active, cfg->a, w_warm);
             w = w_warm;
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
@@ -353,13 +389,13 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_paper_tdroc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
-                    &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat,
-                    &gain, &config->eps, u, s, &s_norm);
+            wmr_paper_tdroc_law_trig(&cfg->nominal, trig, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain, &cfg->eps, u,
+                    s, &s_norm);
         } else {
-            wmr_minimal_tdroc_law(&config->nominal, q, e, edot, &qddot_des[off], &config->k1[off],
-                    &config->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
-                    &config->eps, u, s, &s_norm);
+            wmr_minimal_tdroc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain, &cfg->eps, u,
+                    s, &s_norm);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -385,7 +421,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
         return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_U_DISCARDED, -1);
     }
-    status = wmr_saturate(out_tau, config->tau_max);
+    status = wmr_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 5; ++i) {
         state->H1hat[i] = H1hat[i];

@@ -108,6 +108,18 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config);
 wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
     wmr_error_detail_t *detail);
 
+#ifdef WMR_TDROC_FROZEN
+/* A build with the configuration compiled in (-DWMR_TDROC_FROZEN): the toolchain's
+   `freeze` command validated it on the host with this code, ran _init there and wrote
+   wmr_tdroc_frozen.h (that configuration, and the state _init left). _init and every
+   step then take &wmr_tdroc_frozen_config only (another pointer:
+   WMR_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
+   image carries no configuration checks or derivation. _check_config still validates any
+   configuration. The header is tied to the code it was made with: freeze again after
+   regenerating. */
+extern const wmr_tdroc_config_t wmr_tdroc_frozen_config;
+#endif
+
 #ifdef __cplusplus
 }
 #endif

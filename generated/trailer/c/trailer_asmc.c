@@ -11,6 +11,13 @@
 #include "trailer_laws.h"
 #include "trailer_model.h"
 
+#ifdef TRAILER_ASMC_FROZEN
+/* The configuration the `freeze` command validated on the host with this code, and the state
+   trailer_asmc_init left there: the image needs neither the checks nor the derivation. */
+#include "trailer_asmc_frozen.h"
+const trailer_asmc_config_t trailer_asmc_frozen_config = TRAILER_ASMC_FROZEN_CONFIG;
+#endif
+
 trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *config,
     trailer_error_detail_t *detail)
 {
@@ -44,6 +51,7 @@ trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config)
     return trailer_asmc_check_config_detail(config, 0);
 }
 
+#ifndef TRAILER_ASMC_FROZEN
 /* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
    (a float's one word; a double's two, the multiply of the first off the FNV chain). */
 static uint32_t trailer_real_word(trailer_real_t x)
@@ -131,6 +139,8 @@ static uint32_t trailer_asmc_fingerprint(const trailer_asmc_config_t *config)
             lane3);
 }
 
+#endif
+
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void trailer_asmc_clear(trailer_asmc_state_t *s)
 {
@@ -151,6 +161,22 @@ static void trailer_asmc_clear(trailer_asmc_state_t *s)
     s->tau[1] = TRAILER_LIT(0.0);
 }
 
+#ifdef TRAILER_ASMC_FROZEN
+trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_asmc_config_t *config)
+{
+    /* as _init left it on the host */
+    static const trailer_asmc_state_t frozen_state = TRAILER_ASMC_FROZEN_STATE;
+    if (state == NULL || config == NULL) {
+        return TRAILER_ERR_NULL_POINTER;
+    }
+    if (config != &trailer_asmc_frozen_config) {
+        return TRAILER_ERR_CONFIG_CHANGED;  /* this build takes the compiled-in configuration
+                                               only */
+    }
+    *state = frozen_state;
+    return TRAILER_OK;
+}
+#else
 trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_asmc_config_t *config)
 {
     trailer_asmc_state_t fresh;
@@ -171,6 +197,7 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
     *state = fresh;
     return TRAILER_OK;
 }
+#endif /* TRAILER_ASMC_FROZEN */
 
 trailer_status_t trailer_asmc_reset(trailer_asmc_state_t *state)
 {
@@ -197,6 +224,7 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
 {
     trailer_status_t status = TRAILER_OK;
+    const trailer_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
     int off;  /* where the controlled coordinates start in q */
     trailer_real_t e[8], edot[8], u[8];
     trailer_real_t out_tau[2];
@@ -229,6 +257,13 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
     }
+#ifdef TRAILER_ASMC_FROZEN
+    /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
+    if (config != &trailer_asmc_frozen_config) {
+        return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
+    }
+    cfg = &trailer_asmc_frozen_config;
+#else
     /* The configuration _init validated has this fingerprint: only a different one is
        validated again (its error first, else CONFIG_CHANGED): the same statuses as
        validating every step, without the cost. */
@@ -239,6 +274,8 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
         }
         return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
     }
+    cfg = config;
+#endif
     status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {
         return status;
@@ -246,14 +283,14 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     off = 4;
     gain = state->gain;
     s_norm = state->s_norm;
-    (void)trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
+    (void)trailer_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* The law. */
     {
         trailer_real_t s[8];
-        const trailer_real_t adapt[2] = {config->gamma, config->h};
-        trailer_minimal_asmc_law(&config->nominal, q, qdot, e, edot, &qddot_des[off],
-                &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off],
-                &state->gain, &config->eps, adapt, u, s, &s_norm, &gain);
+        const trailer_real_t adapt[2] = {cfg->gamma, cfg->h};
+        trailer_minimal_asmc_law(&cfg->nominal, q, qdot, e, edot, &qddot_des[off], &cfg->k1[off],
+                &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain, &cfg->eps, adapt,
+                u, s, &s_norm, &gain);
     }
     gain = trailer_cap_gain(gain);  /* the adapted gain never exceeds TRAILER_GAIN_MAX */
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
@@ -280,7 +317,7 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
         }
         return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_U_DISCARDED, -1);
     }
-    status = trailer_saturate(out_tau, config->tau_max);
+    status = trailer_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
     state->gain = gain;
     state->s_norm = s_norm;

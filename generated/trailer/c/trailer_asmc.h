@@ -103,6 +103,18 @@ trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config);
 trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *config,
     trailer_error_detail_t *detail);
 
+#ifdef TRAILER_ASMC_FROZEN
+/* A build with the configuration compiled in (-DTRAILER_ASMC_FROZEN): the toolchain's
+   `freeze` command validated it on the host with this code, ran _init there and wrote
+   trailer_asmc_frozen.h (that configuration, and the state _init left). _init and every
+   step then take &trailer_asmc_frozen_config only (another pointer:
+   TRAILER_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
+   image carries no configuration checks or derivation. _check_config still validates any
+   configuration. The header is tied to the code it was made with: freeze again after
+   regenerating. */
+extern const trailer_asmc_config_t trailer_asmc_frozen_config;
+#endif
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,6 +11,13 @@
 #include "trailer_laws.h"
 #include "trailer_model.h"
 
+#ifdef TRAILER_TDC_FROZEN
+/* The configuration the `freeze` command validated on the host with this code, and the state
+   trailer_tdc_init left there: the image needs neither the checks nor the derivation. */
+#include "trailer_tdc_frozen.h"
+const trailer_tdc_config_t trailer_tdc_frozen_config = TRAILER_TDC_FROZEN_CONFIG;
+#endif
+
 trailer_status_t trailer_tdc_check_config_detail(const trailer_tdc_config_t *config,
     trailer_error_detail_t *detail)
 {
@@ -42,6 +49,7 @@ trailer_status_t trailer_tdc_check_config(const trailer_tdc_config_t *config)
     return trailer_tdc_check_config_detail(config, 0);
 }
 
+#ifndef TRAILER_TDC_FROZEN
 /* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
    (a float's one word; a double's two, the multiply of the first off the FNV chain). */
 static uint32_t trailer_real_word(trailer_real_t x)
@@ -126,6 +134,8 @@ static uint32_t trailer_tdc_fingerprint(const trailer_tdc_config_t *config)
             lane3);
 }
 
+#endif
+
 /* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
 static void trailer_tdc_clear(trailer_tdc_state_t *s)
 {
@@ -149,6 +159,22 @@ static void trailer_tdc_clear(trailer_tdc_state_t *s)
     s->tau[1] = TRAILER_LIT(0.0);
 }
 
+#ifdef TRAILER_TDC_FROZEN
+trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_config_t *config)
+{
+    /* as _init left it on the host */
+    static const trailer_tdc_state_t frozen_state = TRAILER_TDC_FROZEN_STATE;
+    if (state == NULL || config == NULL) {
+        return TRAILER_ERR_NULL_POINTER;
+    }
+    if (config != &trailer_tdc_frozen_config) {
+        return TRAILER_ERR_CONFIG_CHANGED;  /* this build takes the compiled-in configuration
+                                               only */
+    }
+    *state = frozen_state;
+    return TRAILER_OK;
+}
+#else
 trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_config_t *config)
 {
     trailer_tdc_state_t fresh;
@@ -168,6 +194,7 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
     *state = fresh;
     return TRAILER_OK;
 }
+#endif /* TRAILER_TDC_FROZEN */
 
 trailer_status_t trailer_tdc_reset(trailer_tdc_state_t *state)
 {
@@ -194,6 +221,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
 {
     trailer_status_t status = TRAILER_OK;
+    const trailer_tdc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
     int off;  /* where the controlled coordinates start in q */
     int nc;
     int i;
@@ -230,6 +258,13 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     if (state->magic != TRAILER_STATE_MAGIC) {
         return trailer_fail(detail, TRAILER_ERR_NOT_INITIALISED, TRAILER_FIELD_STATE, -1);
     }
+#ifdef TRAILER_TDC_FROZEN
+    /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
+    if (config != &trailer_tdc_frozen_config) {
+        return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
+    }
+    cfg = &trailer_tdc_frozen_config;
+#else
     /* The configuration _init validated has this fingerprint: only a different one is
        validated again (its error first, else CONFIG_CHANGED): the same statuses as
        validating every step, without the cost. */
@@ -240,6 +275,8 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
         }
         return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
     }
+    cfg = config;
+#endif
     status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {
         return status;
@@ -251,16 +288,16 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
        q is within MAX_ABS_INPUT (checked above), where sincos_bounded's reduction is exact. */
     trailer_sincos_bounded(q[2], &trig[0], &trig[1]);
     trailer_sincos_bounded(q[3], &trig[2], &trig[3]);
-    nc = trailer_controlled_slice(config->formulation, q, qdot, q_des, qdot_des, e, edot);
+    nc = trailer_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
-        const bool central = config->accel_estimator == TRAILER_ACCEL_CENTRAL;
-        const trailer_real_t span = central ? TRAILER_LIT(2.0) * config->h : config->h;
-        const trailer_real_t c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
-            ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
+        const bool central = cfg->accel_estimator == TRAILER_ACCEL_CENTRAL;
+        const trailer_real_t span = central ? TRAILER_LIT(2.0) * cfg->h : cfg->h;
+        const trailer_real_t c2 = cfg->accel_estimator == TRAILER_ACCEL_MATCHED
+            ? cfg->rate_window / (TRAILER_LIT(2.0) * cfg->h) : TRAILER_LIT(0.0);
         /* the rates now and then, the controlled slice read in place */
         const trailer_real_t *const qdn = &qdot[off];
         const trailer_real_t *const qdthen = central ? &state->qdot_prev2[off]
@@ -273,7 +310,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
         for (i = nc; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_minimal_tde_trig(&config->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
+        trailer_minimal_tde_trig(&cfg->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
@@ -281,8 +318,8 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer_minimal_tdc_law_trig(&config->nominal, trig, e, edot, &qddot_des[off],
-                &config->k1[off], &config->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+        trailer_minimal_tdc_law_trig(&cfg->nominal, trig, e, edot, &qddot_des[off], &cfg->k1[off],
+                &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -308,7 +345,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
         }
         return trailer_fail(detail, TRAILER_ERR_NONFINITE_OUTPUT, TRAILER_FIELD_U_DISCARDED, -1);
     }
-    status = trailer_saturate(out_tau, config->tau_max);
+    status = trailer_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 8; ++i) {
         state->H1hat[i] = H1hat[i];

@@ -114,6 +114,18 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
 trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t *config,
     trailer_error_detail_t *detail);
 
+#ifdef TRAILER_TDROC_FROZEN
+/* A build with the configuration compiled in (-DTRAILER_TDROC_FROZEN): the toolchain's
+   `freeze` command validated it on the host with this code, ran _init there and wrote
+   trailer_tdroc_frozen.h (that configuration, and the state _init left). _init and every
+   step then take &trailer_tdroc_frozen_config only (another pointer:
+   TRAILER_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
+   image carries no configuration checks or derivation. _check_config still validates any
+   configuration. The header is tied to the code it was made with: freeze again after
+   regenerating. */
+extern const trailer_tdroc_config_t trailer_tdroc_frozen_config;
+#endif
+
 #ifdef __cplusplus
 }
 #endif

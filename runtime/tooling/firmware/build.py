@@ -162,6 +162,35 @@ int main(void)
     return status < 0;
 }}
 """
+FROZEN_MAIN_TEMPLATE = """\
+#include "wmr_{name}.h"
+
+/* A minimal firmware image with the configuration compiled in: initialised, stepped once. */
+static wmr_{name}_state_t state;
+volatile wmr_real_t sink;
+volatile wmr_real_t sensor = WMR_LIT(0.1);
+
+int main(void)
+{{
+    wmr_real_t q[5], qdot[5], q_des[5], qdot_des[5], qddot_des[5], tau[2];
+    wmr_status_t status;
+    int i;
+    for (i = 0; i < 5; ++i) {{
+        q[i] = sensor;
+        qdot[i] = sensor;
+        q_des[i] = sensor;
+        qdot_des[i] = sensor;
+        qddot_des[i] = sensor;
+    }}
+    if (wmr_{name}_init(&state, &wmr_{name}_frozen_config) != WMR_OK) {{
+        return 1;
+    }}
+    status = wmr_{name}_step(&state, &wmr_{name}_frozen_config, q, qdot, q_des, qdot_des,
+                            qddot_des, tau);
+    sink = tau[0] + tau[1];
+    return status < 0;
+}}
+"""
 MAIN_EXTRA = {
     "tdc": "    config.accel_estimator = WMR_ACCEL_BACKWARD;",
     "tdroc": "    config.accel_estimator = WMR_ACCEL_BACKWARD;\n    config.eps = WMR_LIT(0.5);\n"
@@ -173,12 +202,21 @@ MAIN_EXTRA = {
 }
 
 
+def frozen_define(name: str) -> str:
+    """The define of a build with ``name``'s configuration compiled in (``wmr freeze``)."""
+    return f"-DWMR_{name.upper()}_FROZEN"
+
+
 def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:
     """ELF of a tiny main calling wmr_<name>_init and _step (configured for the
-    ``formulation``), linked with newlib-nano; its link map beside it (``.map``)."""
+    ``formulation``; in a frozen build, objs compiled with :func:`frozen_define`, with the
+    compiled-in configuration), linked with newlib-nano; its link map beside it (``.map``)."""
     main = objs.dir / f"main_{name}.c"
-    main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name],
-                                         formulation=f"WMR_FORMULATION_{formulation}"))
+    if frozen_define(name) in objs.defines:
+        main.write_text(FROZEN_MAIN_TEMPLATE.format(name=name))
+    else:
+        main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name],
+                                             formulation=f"WMR_FORMULATION_{formulation}"))
     elf = objs.dir / f"{name}.elf"
     flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}", *objs.defines]
     if objs.float32:

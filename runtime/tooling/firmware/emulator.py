@@ -17,6 +17,7 @@ from runtime.tooling.firmware.build import (
     ARM_GCC,
     SECTION_FLAGS,
     Objects,
+    frozen_define,
     run_tool,
     tool,
 )
@@ -57,7 +58,9 @@ def io_offsets() -> dict[str, tuple[int, int, str]]:
     return out
 
 
-def harness_source() -> str:
+def harness_source(frozen: bool = False) -> str:
+    """The harness; ``frozen``: for a build with the configuration compiled in, which
+    harness_init and harness_step pass instead of the one filled from ``wmr_io``."""
     decl = "\n".join(
         f"    {'float' if c == 'f' else 'int'} {n}{f'[{k}]' if k > 1 else ''};"
         for n, k, c in IO_FIELDS
@@ -65,6 +68,7 @@ def harness_source() -> str:
     params = "\n".join(
         f"    cfg.nominal.{p} = wmr_io.params[{i}];" for i, p in enumerate(PARAM_FIELDS)
     )
+    config = "&wmr_tdroc_frozen_config" if frozen else "&cfg"
     return f"""\
 #include "wmr_tdroc.h"
 
@@ -100,12 +104,12 @@ void harness_init(void)
     cfg.formulation = wmr_io.formulation;
     cfg.accel_estimator = wmr_io.accel_estimator;
     cfg.n = wmr_io.n;
-    wmr_io.status = wmr_tdroc_init(&state, &cfg);
+    wmr_io.status = wmr_tdroc_init(&state, {config});
 }}
 
 void harness_step(void)
 {{
-    wmr_io.status = wmr_tdroc_step(&state, &cfg, wmr_io.in, wmr_io.in + 5, wmr_io.in + 10,
+    wmr_io.status = wmr_tdroc_step(&state, {config}, wmr_io.in, wmr_io.in + 5, wmr_io.in + 10,
                                    wmr_io.in + 15, wmr_io.in + 20, wmr_io.tau);
     wmr_io.gain = state.gain;
     wmr_io.s_norm = state.s_norm;
@@ -128,7 +132,7 @@ def link_emulator_image(objs: Objects) -> tuple[Path, Path]:
     """(ELF, flat binary at EMU_BASE) of the TDROC harness, float32, newlib-nano libm."""
     assert objs.float32
     harness = objs.dir / "harness.c"
-    harness.write_text(harness_source())
+    harness.write_text(harness_source(frozen_define("tdroc") in objs.defines))
     script = objs.dir / "emu.ld"
     script.write_text(LINKER_SCRIPT)
     elf, binary = objs.dir / "emu.elf", objs.dir / "emu.bin"

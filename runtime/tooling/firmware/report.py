@@ -21,6 +21,7 @@ from runtime.tooling.firmware.build import (
     SECTION_FLAGS,
     Objects,
     compile_generated,
+    frozen_define,
     have_toolchain,
     link_controller,
     toolchain_version,
@@ -45,12 +46,14 @@ from runtime.tooling.firmware.stack import (
 from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, generated_rodata, symbols
 
 DOC = default_output("docs/FIRMWARE.md")  # ./FIRMWARE.md when installed
+EMULATED_EPS = 0.5  # the boundary layer of the emulated run (record_closed_loop's default)
 
 
 @dataclass(frozen=True)
 class OnlyImage:
     """The TDROC image of a build with one formulation compiled in
-    (``-DWMR_FORMULATION_ONLY=WMR_FORMULATION_<formulation>``)."""
+    (``-DWMR_FORMULATION_ONLY=WMR_FORMULATION_<formulation>``), or with its whole
+    configuration compiled in (``wmr freeze``, -DWMR_TDROC_FROZEN)."""
 
     sizes: dict[str, int]
     own_functions: dict[str, int]  # generated function -> code bytes
@@ -82,17 +85,53 @@ def compiled_frames(objs: Objects) -> dict[str, Frame]:
     return frames
 
 
+def _measured_image(objs: Objects, formulation: str) -> OnlyImage:
+    elf = link_controller(objs, "tdroc", formulation)
+    frames = compiled_frames(objs)
+    return OnlyImage(elf_sizes(elf), generated_functions(elf), generated_rodata(elf),
+                     double_symbols(elf),
+                     worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
+
+
 def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
     """Compile (float32) with one formulation only, link the TDROC image, measure it."""
     objs = compile_generated(
         work / f"float32_{formulation.lower()}", True,
         defines=(f"-DWMR_FORMULATION_ONLY=WMR_FORMULATION_{formulation}",),
     )
-    elf = link_controller(objs, "tdroc", formulation)
-    frames = compiled_frames(objs)
-    return OnlyImage(elf_sizes(elf), generated_functions(elf), generated_rodata(elf),
-                     double_symbols(elf),
-                     worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
+    return _measured_image(objs, formulation)
+
+
+def frozen_config_header(folder: Path, formulation: str) -> Path:
+    """``wmr freeze`` of the emulated run's TDROC configuration (:data:`EMULATED_EPS`, the
+    experiment's other defaults) for float32, into ``folder``."""
+    from runtime import cbuild
+    from runtime.experiment import Experiment
+    from runtime.frozen_config import freeze
+    from runtime.generated_modules import load_robot_code
+    from runtime.robot_simulation import controller_config
+
+    code = load_robot_code("")
+    lib = cbuild.build(True)
+    exp = Experiment()
+    exp = replace(exp, controller=replace(exp.controller, eps=EMULATED_EPS))
+    config = controller_config(lib, code, "tdroc", formulation.lower(), code.params, exp)
+    frozen = freeze(lib, code, "tdroc", config,
+                    [f"Made by: runtime.tooling.firmware.report ({formulation.lower()}, "
+                     f"eps = {EMULATED_EPS})"])
+    folder.mkdir(parents=True, exist_ok=True)
+    header = folder / frozen.filename
+    header.write_text(frozen.text)
+    return header
+
+
+def frozen_image(work: Path, formulation: str) -> OnlyImage:
+    """Compile (float32) with the TDROC configuration compiled in, link, measure."""
+    folder = work / f"float32_frozen_{formulation.lower()}"
+    header = frozen_config_header(folder, formulation)
+    objs = compile_generated(folder, True,
+                             defines=(frozen_define("tdroc"), f"-I{header.parent}"))
+    return _measured_image(objs, formulation)
 
 
 @dataclass
@@ -110,6 +149,7 @@ class Report:
     own_functions: dict[str, dict[str, int]]  # controller -> its image's generated functions
     own_rodata: dict[str, int]
     only: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> TDROC image
+    frozen: dict[str, OnlyImage] = field(default_factory=dict)  # formulation -> frozen image
     only_minimal_recorded_status: list[int] = field(default_factory=list)
     emulation: EmulationResult | None = None
     comparison: Comparison | None = None
@@ -161,6 +201,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
         {name: generated_rodata(elf) for name, elf in elves.items()},
     )
     report.only = {f: formulation_only_image(work, f) for f in ("PAPER", "MINIMAL")}
+    report.frozen = {f: frozen_image(work, f) for f in ("PAPER", "MINIMAL")}
     if emulate_run:
         try:
             import unicorn  # noqa: F401
@@ -168,7 +209,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
             report.notes.append("Emulated run skipped: the `unicorn` package is not installed.")
         else:
             elf, binary = link_emulator_image(f32)
-            rec = record_closed_loop()
+            rec = record_closed_loop(eps=EMULATED_EPS)
             report.emulation = emulate(rec, elf, binary)
             report.comparison = compare(rec, report.emulation)
             paper = report.only["PAPER"]
@@ -177,9 +218,13 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
             # The minimal formulation's own closed loop, on the minimal-only build.
             minimal = report.only["MINIMAL"]
             elf, binary = link_emulator_image(minimal.objects)
-            rec_min = record_closed_loop(formulation="minimal")
+            rec_min = record_closed_loop(formulation="minimal", eps=EMULATED_EPS)
             report.only["MINIMAL"] = replace(minimal, emulation=emulate(rec_min, elf, binary))
             report.only_minimal_recorded_status = rec_min.status
+            for form, recording in (("PAPER", rec), ("MINIMAL", rec_min)):
+                img = report.frozen[form]
+                elf, binary = link_emulator_image(img.objects)
+                report.frozen[form] = replace(img, emulation=emulate(recording, elf, binary))
     return report
 
 
@@ -195,6 +240,8 @@ def _budget_lines(r: Report) -> list[str]:
     """The TDROC images' generated code per part of the contract (code_budget)."""
     images = {"both formulations": r.own_functions["tdroc"]}
     images.update({f"{form.lower()} only": img.own_functions for form, img in r.only.items()})
+    images.update({f"{form.lower()}, frozen": img.own_functions
+                   for form, img in r.frozen.items()})
     budgets = {name: budget(functions) for name, functions in images.items()}
     when = {p.name: p.when for p in PARTS}
     parts = [*when, *([UNCLASSIFIED] if any(UNCLASSIFIED in b for b in budgets.values())
@@ -215,6 +262,35 @@ def _budget_lines(r: Report) -> list[str]:
     lines.append("| **total** | | "
                  + " | ".join(f"**{sum(b.values())}**" for b in budgets.values()) + " |")
     return lines
+
+
+def _image_row(label: str, img: OnlyImage) -> str:
+    return (f"| {label} | {img.sizes['text']} | {img.sizes['data']} | {img.sizes['bss']} | "
+            f"{img.own_text} | {img.own_rodata} | {', '.join(img.doubles) or 'none'} | "
+            f"{img.step_stack.bytes} B{'' if img.step_stack.complete else ' (incomplete)'} |")
+
+
+def _frozen_emulation_rows(r: Report, e: EmulationResult) -> list[str]:
+    """The frozen images' emulated runs: paper against the run-time image's, minimal
+    against the host float32 closed loop and the minimal-only image's torques."""
+    rows = []
+    mo = r.only["MINIMAL"].emulation if "MINIMAL" in r.only else None
+    for form, img in r.frozen.items():
+        fe = img.emulation
+        if fe is None:
+            continue
+        ins = f"{np.mean(fe.instructions):.0f} / {min(fe.instructions)} / {max(fe.instructions)}"
+        if form == "PAPER":
+            same = (f"statuses equal: {_yes(fe.status == e.status)}, torques equal: "
+                    f"{_yes(fe.tau == e.tau)}")
+        else:
+            same = (f"statuses = host float32 closed loop: "
+                    f"{_yes(fe.status == r.only_minimal_recorded_status)}, torques = the "
+                    f"minimal-only build's: {_yes(mo is not None and fe.tau == mo.tau)}")
+        rows.append(f"| {form.lower()} formulation, configuration frozen (`wmr freeze`): "
+                    f"mean / min / max | {ins} ({same}) |")
+        rows.append(f"| ... instructions of its `wmr_tdroc_init` | {fe.init_instructions} |")
+    return rows
 
 
 def render(r: Report) -> str:
@@ -254,6 +330,13 @@ def render(r: Report) -> str:
         "* Formulation: chosen by `config->formulation` (both linked), or at compile time",
         "  with `-DWMR_FORMULATION_ONLY=WMR_FORMULATION_PAPER` (or `_MINIMAL`): then only",
         "  that one is accepted (the other is `WMR_ERR_BAD_FORMULATION`) and linked.",
+        "* Configuration compiled in: `wmr freeze` writes `wmr_<ctrl>_frozen.h` (a",
+        "  configuration `_check_config` accepted and the state `_init` left, both run on the",
+        "  host in the firmware's precision); built with `-DWMR_<CTRL>_FROZEN`, `_init` and",
+        "  the step take `&wmr_<ctrl>_frozen_config` only (another pointer:",
+        "  `WMR_ERR_CONFIG_CHANGED`, nothing written) and neither validate nor fingerprint",
+        "  it. The statuses for inputs, the outputs and the state are those of the run-time",
+        "  build given that configuration.",
         "* `wmr_<ctrl>_step_detail(..., tau, detail)` and",
         "  `wmr_<ctrl>_check_config_detail(config, detail)`: the same, and a",
         "  `wmr_error_detail_t {status, field, index}` in the caller's `detail` (may be NULL)",
@@ -306,13 +389,26 @@ def render(r: Report) -> str:
         "| double helpers | worst-case stack of step |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    for form, img in r.only.items():
-        lines.append(
-            f"| {form.lower()} only | {img.sizes['text']} | {img.sizes['data']} | "
-            f"{img.sizes['bss']} | {img.own_text} | {img.own_rodata} | "
-            f"{', '.join(img.doubles) or 'none'} | "
-            f"{img.step_stack.bytes} B{'' if img.step_stack.complete else ' (incomplete)'} |"
-        )
+    lines += [_image_row(f"{form.lower()} only", img) for form, img in r.only.items()]
+    lines += [
+        "",
+        "## TDROC with its configuration compiled in (`wmr freeze`, float32)",
+        "",
+        "`wmr freeze` validates a configuration with `wmr_tdroc_check_config` and runs",
+        "`wmr_tdroc_init` on the host, in the firmware's precision, and writes both as",
+        "`wmr_tdroc_frozen.h`. Built with `-DWMR_TDROC_FROZEN`, `_init` copies that state and",
+        "a step only checks that it was given `&wmr_tdroc_frozen_config` (any other pointer:",
+        "`WMR_ERR_CONFIG_CHANGED`), reading the configuration as constants: no configuration",
+        "checks, fingerprint or derivation (P, weights, ‖M̂⁻¹‖) in the image, and the other",
+        "formulation folded away. The configuration is the emulated run's "
+        f"(ε = {EMULATED_EPS}).",
+        "The constants column includes the frozen configuration and state.",
+        "",
+        "| formulation | .text | .data | .bss | generated code | generated constants "
+        "| double helpers | worst-case stack of step |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [_image_row(f"{form.lower()}, frozen", img) for form, img in r.frozen.items()]
     lines += _budget_lines(r)
     lines += [
         "",
@@ -371,6 +467,7 @@ def render(r: Report) -> str:
                 if (mo := (r.only["MINIMAL"].emulation if "MINIMAL" in r.only else None))
                 else []
             ),
+            *_frozen_emulation_rows(r, e),
             f"| instructions of `wmr_tdroc_init` | {e.init_instructions} |",
             f"| stack high-water mark (measured, incl. harness) | {e.stack_bytes} B |",
             f"| statuses equal (emulated, host float32, host double) | {_yes(c.same_status)} |",

@@ -56,17 +56,27 @@ def robot_sources(folder: Path) -> tuple[str, list[Path]]:
     return prefix, sources
 
 
-def run_cppcheck(folder: Path, float32: bool) -> list[Finding]:
-    """Every finding of cppcheck (MISRA addon, style and warning checks) on ``folder``."""
+def run_cppcheck(folder: Path, float32: bool, frozen: Path | None = None) -> list[Finding]:
+    """Every finding of cppcheck (MISRA addon, style and warning checks) on ``folder``;
+    with ``frozen`` (a ``<prefix>_<ctrl>_frozen.h`` written by ``wmr freeze``), in the build
+    that compiles that configuration in."""
     if shutil.which("cppcheck") is None:
         raise MisraUnavailable("cppcheck not found (apt-get install cppcheck)")
     prefix, sources = robot_sources(folder)
     macro = f"{prefix.upper()}_FLOAT32"
+    # The run-time configuration: builds with a configuration compiled in (wmr freeze) need
+    # a header of the user's, so cppcheck must not guess them.
+    frozen_undefs = [f"-U{prefix.upper()}_{c.upper()}_FROZEN"
+                     for c in ("tdc", "tdroc", "roc", "asmc")]
+    if frozen is not None:  # that controller's frozen build, its header on the include path
+        define = "-D" + frozen.name.removesuffix(".h").upper()
+        frozen_undefs = [define if u[2:] == define[2:] else u for u in frozen_undefs]
+        frozen_undefs.append(f"-I{frozen.parent}")
     with tempfile.TemporaryDirectory() as build:
         done = subprocess.run(
             ["cppcheck", f"--addon={ADDON}", "--std=c99", "--platform=unix32",
              "--enable=style,warning,portability", "--quiet", "--inline-suppr",
-             f"-D{macro}" if float32 else f"-U{macro}", f"-I{folder}",
+             f"-D{macro}" if float32 else f"-U{macro}", *frozen_undefs, f"-I{folder}",
              f"--cppcheck-build-dir={build}", "--template={file}:{line}:{id}:{message}",
              *map(str, sources)],
             capture_output=True, text=True, check=False,
