@@ -52,16 +52,15 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
 
 
 def test_full_step_benchmark_checks_before_timing() -> None:
-    """The complete ``wmr_tdroc_step``, the hand-written step and ours with libm's sin/cos:
-    on the recorded closed loop every status is equal and the torques agree (else nothing
-    is timed), and all are timed."""
+    """The complete ``wmr_tdroc_step``, the hand-written step, ours with libm's sin/cos and
+    ours with the configuration compiled in: on the recorded closed loop every status is
+    equal and the torques agree (else nothing is timed), and all are timed."""
     result = run_steps(601, 1)
     check = result["check"]
     assert check["steps"] > 100 and check["tau_scale"] > 0.1
     assert check["max_abs_tau_diff"] <= 1e-9 * check["tau_scale"]
     variants = {(r["function"], r["variant"]) for r in result["rows"]}
-    assert variants == {("tdroc_step", "ours"), ("tdroc_step", "hand"),
-                        ("tdroc_step", "ours_libm")}
+    assert variants == {("tdroc_step", v) for v in ("ours", "hand", "ours_libm", "ours_frozen")}
     assert all(len(r["ns"]) == 1 and r["ns"][0] > 0.0 for r in result["rows"])
 
 

@@ -29,6 +29,7 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
     st = summarise_steps(steps)
     ours, hand = st[("tdroc_step", "ours")], st[("tdroc_step", "hand")]
     libm = st[("tdroc_step", "ours_libm")]
+    frozen = st[("tdroc_step", "ours_frozen")]
     kernels = c[("tdroc_step_kernels", "ours")]["median"]
     fd = {v: c[("forward_dynamics", v)]["median"]
           for v in ("ours", "ours_prepared", "ours_libm", "hand_checked", "casadi")}
@@ -53,6 +54,8 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         f"| `wmr_tdroc_step` (ours) | {cell(ours)} | {ours['median'] / hand['median']:.2f}× |",
         f"| `wmr_tdroc_step`, `-DWMR_LIBM_TRIG` (libm's sin/cos, as the hand-written step) "
         f"| {cell(libm)} | {libm['median'] / hand['median']:.2f}× |",
+        f"| `wmr_tdroc_step`, `-DWMR_TDROC_FROZEN` (configuration compiled in, `wmr freeze`) "
+        f"| {cell(frozen)} | {frozen['median'] / hand['median']:.2f}× |",
         f"| hand-written step | {cell(hand)} | 1.00× |",
         f"| ours, kernels only (TDE + gain + law, table above) | {kernels:.1f} | "
         f"{kernels / hand['median']:.2f}× |",

@@ -24,8 +24,9 @@ from runtime.tooling.bench.c_bench import renamed_objects
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
 CFLAGS = ["-std=c99", "-O2"]
 # ours = wmr_tdroc_step; hand = hand_tdroc_step; ours_libm = wmr_tdroc_step built with
-# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses, instead of the generated).
-VARIANTS = ("ours", "hand", "ours_libm")
+# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses, instead of the generated);
+# ours_frozen = wmr_tdroc_step built with the configuration compiled in (wmr freeze).
+VARIANTS = ("ours", "hand", "ours_libm", "ours_frozen")
 TORQUE_TOLERANCE = 1e-9  # relative to the run's largest |tau|
 
 HARNESS = r"""
@@ -38,25 +39,32 @@ HARNESS = r"""
 #include "hand_tdroc.h"
 #include "wmr_tdroc.h"
 
-#define NV 3
+#define NV 4
 wmr_status_t lm_wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
 wmr_status_t lm_wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
     const double q[5], const double qdot[5], const double q_des[5], const double qdot_des[5],
     const double qddot_des[5], double tau[2]);
-static const char *const NAMES[NV] = {"ours", "hand", "ours_libm"};
+wmr_status_t fz_wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
+wmr_status_t fz_wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
+    const double q[5], const double qdot[5], const double q_des[5], const double qdot_des[5],
+    const double qddot_des[5], double tau[2]);
+extern const wmr_tdroc_config_t fz_wmr_tdroc_frozen_config;
+static const char *const NAMES[NV] = {"ours", "hand", "ours_libm", "ours_frozen"};
 
 static double now_ns(void) {
     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
     return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
 }
 static wmr_tdroc_config_t cfg;
-static wmr_tdroc_state_t ours, ours_lm;
+static wmr_tdroc_state_t ours, ours_lm, ours_fz;
 static hand_tdroc_state_t hand;
 
 /* A fresh state for variant v (not timed). */
 static void fresh(int v) {
     const int s = v == 0 ? wmr_tdroc_init(&ours, &cfg)
-                : v == 1 ? hand_tdroc_init(&hand, &cfg) : lm_wmr_tdroc_init(&ours_lm, &cfg);
+                : v == 1 ? hand_tdroc_init(&hand, &cfg)
+                : v == 2 ? lm_wmr_tdroc_init(&ours_lm, &cfg)
+                : fz_wmr_tdroc_init(&ours_fz, &fz_wmr_tdroc_frozen_config);
     if (s != WMR_OK) {
         fprintf(stderr, "init failed\n"); exit(2);
     }
@@ -73,8 +81,11 @@ static double pass(int v, int *st, double *tq) {
             s = wmr_tdroc_step(&ours, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
         } else if (v == 1) {
             s = hand_tdroc_step(&hand, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
-        } else {
+        } else if (v == 2) {
             s = lm_wmr_tdroc_step(&ours_lm, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
+        } else {
+            s = fz_wmr_tdroc_step(&ours_fz, &fz_wmr_tdroc_frozen_config, in, in + 5, in + 10,
+                                  in + 15, in + 20, tau);
         }
         if (st != 0) { st[k] = s; tq[2 * k] = tau[0]; tq[2 * k + 1] = tau[1]; }
         sink += tau[0] + (double)s;
@@ -149,11 +160,26 @@ def _config_lines(config: dict[str, Any]) -> str:
     return "\n    ".join(lines)
 
 
+def frozen_header(workdir: Path, config: dict[str, Any]) -> Path:
+    """``wmr freeze`` of the recorded configuration (double) into ``workdir``."""
+    from runtime import cbuild
+    from runtime.frozen_config import freeze
+    from runtime.generated_modules import load_robot_code
+    from runtime.tooling.firmware.emulated_run import tdroc_config
+
+    lib = cbuild.build(False)
+    frozen = freeze(lib, load_robot_code(""), "tdroc", tdroc_config(lib.ffi, config))
+    path = workdir / frozen.filename
+    path.write_text(frozen.text)
+    return path
+
+
 def build_step_bench(workdir: Path, config: dict[str, Any],
                      inputs: list[list[list[float]]]) -> Path:
     """Compile the generated controller C (double; again with ``-DWMR_LIBM_TRIG``, renamed
-    ``lm_wmr_*``), the hand-written step and the harness with the recorded inputs into one
-    executable; returns its path."""
+    ``lm_wmr_*``, and with the configuration frozen, renamed ``fz_wmr_*``), the
+    hand-written step and the harness with the recorded inputs into one executable;
+    returns its path."""
     rows = ",\n".join("{" + ", ".join(repr(x) for v in step for x in v) + "}" for step in inputs)
     head = (f"#define NSTEPS {len(inputs)}\n#define TOL {TORQUE_TOLERANCE!r}\n"
             f"static const double IN[NSTEPS][25] = {{\n{rows}\n}};\n")
@@ -163,10 +189,13 @@ def build_step_bench(workdir: Path, config: dict[str, Any],
     src.write_text(first + '#include "hand_tdroc.h"\n' + head + rest)
     sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
     libm = renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
+    frozen_header(workdir, config)
+    frozen = renamed_objects(workdir, sources, ("-DWMR_TDROC_FROZEN", f"-I{workdir}"), "fz_")
     exe = workdir / "step_bench"
     subprocess.run(
         ["gcc", *CFLAGS, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),
-         str(BENCH_CSRC / "hand_tdroc.c"), *map(str, sources), *libm, "-lm", "-o", str(exe)],
+         str(BENCH_CSRC / "hand_tdroc.c"), *map(str, sources), *libm, *frozen, "-lm", "-o",
+         str(exe)],
         check=True,
     )
     return exe

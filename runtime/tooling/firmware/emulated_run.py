@@ -85,18 +85,24 @@ def config_values(ffi: Any, cfg: Any) -> dict[str, Any]:
     return out
 
 
+def tdroc_config(ffi: Any, values: dict[str, Any]) -> Any:
+    """A ``wmr_tdroc_config_t *`` of ``ffi`` holding :func:`config_values`' ``values``."""
+    cfg = ffi.new("wmr_tdroc_config_t *")
+    for i, p in enumerate(PARAM_FIELDS):
+        setattr(cfg.nominal, p, values["params"][i])
+    for name, value in values.items():
+        if name != "params":
+            setattr(cfg, name, value)
+    return cfg
+
+
 def replay_host(rec: Recording, float32: bool) -> tuple[list[int], list[list[float]], list[float]]:
     """The recorded inputs through the host build (cffi), TDROC: (status, tau, gain)."""
     from runtime import cbuild
 
     lib = cbuild.build(float32)
     ffi = lib.ffi
-    cfg = ffi.new("wmr_tdroc_config_t *")
-    for i, p in enumerate(PARAM_FIELDS):
-        setattr(cfg.nominal, p, rec.config["params"][i])
-    for name, value in rec.config.items():
-        if name != "params":
-            setattr(cfg, name, value)
+    cfg = tdroc_config(ffi, rec.config)
     state = ffi.new("wmr_tdroc_state_t *")
     if lib.lib.wmr_tdroc_init(state, cfg) != 0:
         raise RuntimeError("host init failed")
