@@ -1,16 +1,21 @@
 """``wmr freeze``: compile a controller's configuration into the firmware.
 
     wmr freeze --controller tdroc [--formulation minimal] [--experiment FILE]
-               [--robot NAME_OR_DIR] [--nominal KEY=VALUE ...] [--float32] --out DIR [--check]
+               [--robot NAME_OR_DIR] [--nominal KEY=VALUE ...] [--set FIELD=VALUE ...]
+               [--float32] --out DIR [--check]
 
 Fills the controller's configuration from the experiment file's ``[controller]`` and
-``[sensing]`` tables (default: the paper's setting) and the robot's nominal parameters,
-validates it and runs ``_init`` with the generated C on this machine (see
-:mod:`runtime.frozen_config`), and writes ``DIR/<prefix>_<controller>_frozen.h``. Build the
-firmware with ``-D<PREFIX>_<CONTROLLER>_FROZEN`` and ``DIR`` on the include path.
-``--check`` writes nothing and exits 1 if that file is missing or differs (stale after
-``wmr model`` or a changed experiment). Exit status 2 for a configuration the C refuses or
-bad arguments, naming the field.
+``[sensing]`` tables (default: the paper's setting), the robot's nominal parameters
+(``--nominal`` overrides them) and ``--set`` for any field of the configuration struct
+(``k1=4,4,4,2,2``, ``gain0=0.5``, ``hold_gain=1`` ...); validates it and runs ``_init``
+with the generated C on this machine (see :mod:`runtime.frozen_config`), and writes
+``DIR/<prefix>_<controller>_frozen.h``. Build the firmware with
+``-D<PREFIX>_<CONTROLLER>_FROZEN`` and ``DIR`` on the include path.
+
+``--check`` writes nothing and exits 1 if that file is missing or its configuration,
+state or code identity differ (the provenance comment is not compared). Exit status 2,
+with a sentence naming the field, for a configuration the C refuses and for bad
+arguments; nothing is written then.
 """
 
 from __future__ import annotations
@@ -18,15 +23,17 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 from runtime import cbuild
 from runtime.experiment import ExperimentFileError, load_experiment
-from runtime.frozen_config import FreezeError, freeze
+from runtime.frozen_config import FreezeError, describe_error, freeze
+from runtime.generated_modules import RobotCode
 from runtime.output_folder import OutputFolderError, writable_folder
-from runtime.robot_simulation import controller_config
 
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 
@@ -36,6 +43,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         prog="wmr freeze",
         description="Validate a controller configuration with the generated C and write it, "
         "with the state _init derives from it, as a header the firmware compiles in.",
+        epilog="Then build the firmware with -D<PREFIX>_<CONTROLLER>_FROZEN and -IDIR, and "
+        "pass &<prefix>_<controller>_frozen_config to _init and _step. Exit status: 0 "
+        "written (or up to date), 1 stale or missing (--check), 2 refused or bad arguments.",
     )
     p.add_argument("--controller", required=True, choices=CONTROLLERS)
     p.add_argument("--formulation", default="paper", choices=("paper", "minimal"))
@@ -45,6 +55,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                    help="a generated robot's name or folder (default: the paper's robot)")
     p.add_argument("--nominal", action="append", default=[], metavar="KEY=VALUE",
                    help="a nominal parameter of M-hat (default: the robot file's value)")
+    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                   help="a configuration field, after the experiment's (arrays: "
+                   "comma-separated, or one value for every entry)")
     p.add_argument("--float32", action="store_true",
                    help="for builds with -D<PREFIX>_FLOAT32 (the values are rounded to float "
                    "and _init runs in float)")
@@ -55,34 +68,122 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     return p.parse_args(argv)
 
 
+def _number(option: str, key: str, value: str) -> float:
+    try:
+        number = float(value)
+    except ValueError:
+        raise FreezeError(f"{option} {key}={value!r}: not a number") from None
+    if not math.isfinite(number):
+        raise FreezeError(f"{option} {key}={value}: not finite")
+    return number
+
+
+def _pair(option: str, item: str) -> tuple[str, str]:
+    key, sep, value = item.partition("=")
+    if not sep or not key:
+        raise FreezeError(f"{option} {item!r}: expected KEY=VALUE")
+    return key, value
+
+
 def nominal_params(defaults: dict[str, float], overrides: list[str]) -> dict[str, float]:
     """The robot's parameters with ``KEY=VALUE`` overrides; unknown keys, non-numbers and
     non-finite values are errors naming them."""
     params = dict(defaults)
     for item in overrides:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise FreezeError(f"--nominal {item!r}: expected KEY=VALUE")
+        key, value = _pair("--nominal", item)
         if key not in params:
             raise FreezeError(f"--nominal {key}: not a parameter of this robot "
                               f"({', '.join(params)})")
-        try:
-            number = float(value)
-        except ValueError:
-            raise FreezeError(f"--nominal {key}={value!r}: not a number") from None
-        if not math.isfinite(number):
-            raise FreezeError(f"--nominal {key}={value}: not finite")
-        params[key] = number
+        params[key] = _number("--nominal", key, value)
     return params
 
 
-def write_atomically(path: Path, text: str) -> None:
+def set_fields(ffi: Any, config: Any, items: list[str]) -> None:
+    """``--set FIELD=VALUE``: a scalar, or an array's entries (comma-separated, or one
+    value for all); integers where the field is an int. The C validates the result."""
+    fields = {name: f.type for name, f in ffi.typeof(config[0]).fields if name != "nominal"}
+    for item in items:
+        key, value = _pair("--set", item)
+        if key not in fields:
+            raise FreezeError(f"--set {key}: not a field of this configuration "
+                              f"({', '.join(fields)}; nominal parameters: --nominal)")
+        ctype = fields[key]
+        if ctype.kind == "array":
+            values = [_number("--set", key, v) for v in value.split(",")]
+            if len(values) == 1:
+                values *= ctype.length
+            if len(values) != ctype.length:
+                raise FreezeError(f"--set {key}: {len(values)} values for {ctype.length} "
+                                  "entries")
+            setattr(config, key, values)
+        elif ctype.cname == "int":
+            number = _number("--set", key, value)
+            if number != int(number) or abs(number) > 2**31 - 1:
+                raise FreezeError(f"--set {key}={value}: an integer field")
+            setattr(config, key, int(number))
+        else:
+            setattr(config, key, _number("--set", key, value))
+
+
+def _robot_code(name_or_dir: str | None) -> RobotCode:
+    from runtime.generated_modules import load_robot_code
+    from runtime.tooling.crosscheck.targets import resolve
+
+    if name_or_dir is None:
+        return load_robot_code("")
+    try:
+        return resolve(name_or_dir).code
+    except SystemExit as exc:  # resolve() exits with a sentence for a command line
+        raise FreezeError(str(exc)) from None
+
+
+def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
+            nominal: dict[str, float]) -> Any:
+    from runtime.robot_simulation import controller_config
+
+    exp = load_experiment(args.experiment)
+    if args.controller == "roc":
+        # ROC's α, φ come from sampling the model over the uncertainty box: a nominal
+        # model the C refuses is named by the C before that sampling can fail on it.
+        params = cbuild.params_struct(lib, nominal, f"{code.prefix}_params_t",
+                                      code.controllers.C_FIELD_NAMES)
+        detail = lib.ffi.new(f"{code.prefix}_error_detail_t *")
+        if getattr(lib.lib, f"{code.prefix}_check_nominal")(params, detail) != 0:
+            raise FreezeError(f"the roc configuration is refused: "
+                              f"{describe_error(code, detail)}")
+    try:
+        config = controller_config(lib, code, args.controller, args.formulation, nominal, exp)
+    except (ArithmeticError, ValueError) as exc:
+        raise FreezeError(f"the {args.controller} configuration cannot be filled for this "
+                          f"nominal model: {exc}") from None
+    set_fields(lib.ffi, config, args.set)
+    return config
+
+
+def header_body(text: str) -> str:
+    """What ``--check`` compares: the header from its include guard on (the configuration,
+    the state and the code identity), not the provenance comment above it."""
+    start = text.find("#ifndef ")
+    return text[start:] if start >= 0 else text
+
+
+def write_header(path: Path, text: str) -> None:
     """``text`` into ``path`` through a temporary file in the same folder: a reader never
-    sees half a header, and a failure leaves the previous one."""
+    sees half a header, and a failure leaves the previous one. The file keeps the previous
+    one's permissions, else the umask's (mkstemp's 0600 would lock other users out)."""
+    if path.is_dir():
+        raise OutputFolderError(f"--out: {path} is a folder")
+    if path.exists():
+        mode = path.stat().st_mode & 0o777
+    else:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -91,41 +192,41 @@ def write_atomically(path: Path, text: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
-    from runtime.generated_modules import load_robot_code
-    from runtime.tooling.crosscheck.targets import resolve
-
     try:
-        code = resolve(args.robot).code if args.robot else load_robot_code("")
+        if shutil.which("gcc") is None:
+            raise FreezeError("wmr freeze validates with the generated C: it needs gcc on "
+                              "the PATH")
+        code = _robot_code(args.robot)
         if args.formulation == "paper" and not hasattr(code.controllers,
                                                       "FORMULATION_PAPER"):
             raise FreezeError(f"robot {code.name} has no paper formulation generated: "
                               "use --formulation minimal")
-        exp = load_experiment(args.experiment)
         nominal = nominal_params(code.params, args.nominal)
-        if not args.check:
-            writable_folder(args.out)
         lib = cbuild.build(args.float32, c_dir=code.c_dir, prefix=code.prefix)
-        config = controller_config(lib, code, args.controller, args.formulation, nominal, exp)
+        config = _config(lib, code, args, nominal)
         made_from = (
             f"Made by: wmr freeze --controller {args.controller} --formulation "
             f"{args.formulation}{' --float32' if args.float32 else ''}",
             f"Experiment: {args.experiment or 'the paper setting (no --experiment)'}",
-            "Nominal parameters: " + ", ".join(f"{k} = {v:g}" for k, v in nominal.items()),
+            "Nominal parameters: " + ", ".join(f"{k} = {v!r}" for k, v in nominal.items()),
+            *([f"Set: {' '.join(args.set)}"] if args.set else []),
         )
         frozen = freeze(lib, code, args.controller, config, made_from)
-    except (FreezeError, ExperimentFileError, OutputFolderError, FileNotFoundError) as exc:
+        target = args.out / frozen.filename
+        if args.check:
+            current = target.read_text(encoding="utf-8") if target.is_file() else None
+            if current is not None and header_body(current) == header_body(frozen.text):
+                print(f"{target}: up to date")
+                return 0
+            print(f"{target}: {'missing' if current is None else 'stale'}; rerun without "
+                  "--check", file=sys.stderr)
+            return 1
+        writable_folder(args.out)
+        write_header(target, frozen.text)
+    except (FreezeError, ExperimentFileError, OutputFolderError, cbuild.BuildError,
+            OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    target = args.out / frozen.filename
-    if args.check:
-        current = target.read_text(encoding="utf-8") if target.is_file() else None
-        if current == frozen.text:
-            print(f"{target}: up to date")
-            return 0
-        print(f"{target}: {'missing' if current is None else 'stale'}; rerun without --check",
-              file=sys.stderr)
-        return 1
-    write_atomically(target, frozen.text)
     print(f"wrote {target}")
     return 0
 

@@ -8,6 +8,8 @@ configuration names its field and writes nothing; ``--check`` tells a stale head
 
 from __future__ import annotations
 
+import os
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -16,6 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from codegen.backends.c.render import CODE_ID_UNSET, stamp_code_id
 from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.freeze_command import main as freeze_main
@@ -28,11 +31,15 @@ STRICT = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wdouble-pr
           "-Wfloat-equal", "-Wconversion", "-Werror")
 
 
-def _frozen_pair(tmp: Path, code: RobotCode, name: str, formulation: str,
-                 float32: bool) -> tuple[cbuild.CLibrary, Any, cbuild.CLibrary, Any]:
-    """(run-time build, its config, frozen build, its compiled-in config)."""
+def _frozen_pair(tmp: Path, code: RobotCode, name: str, formulation: str, float32: bool,
+                 changes: dict[str, Any] | None = None,
+                 ) -> tuple[cbuild.CLibrary, Any, cbuild.CLibrary, Any]:
+    """(run-time build, its config, frozen build, its compiled-in config); ``changes`` set
+    configuration fields after the experiment's defaults."""
     lib = cbuild.build(float32, c_dir=code.c_dir, prefix=code.prefix)
     config = controller_config(lib, code, name, formulation, code.params, Experiment())
+    for key, value in (changes or {}).items():
+        setattr(config, key, value)
     frozen = freeze(lib, code, name, config, ["test"])
     header = tmp / frozen.filename
     header.write_text(frozen.text)
@@ -67,6 +74,8 @@ def _state_fields(lib: cbuild.CLibrary, state: Any) -> list[str]:
 
 def _run(lib: cbuild.CLibrary, pre: str, name: str, cfg: Any, nq: int, nu: int,
          inputs: list[list[np.ndarray]]) -> list[tuple[int, int, int, list[float], list[str]]]:
+    """Status, detail, torques and every state field after _init and after each step (a
+    _reset two thirds of the way through)."""
     ffi = lib.ffi
     state = ffi.new(f"{pre}_{name}_state_t *")
     assert getattr(lib.lib, f"{pre}_{name}_init")(state, cfg) == 0
@@ -74,7 +83,9 @@ def _run(lib: cbuild.CLibrary, pre: str, name: str, cfg: Any, nq: int, nu: int,
     detail = ffi.new(f"{pre}_error_detail_t *")
     tau = ffi.new(f"{pre}_real_t[{nu}]")
     rows = [(0, 0, 0, [0.0] * nu, _state_fields(lib, state))]
-    for args in inputs:
+    for k, args in enumerate(inputs):
+        if k == 2 * len(inputs) // 3:
+            assert getattr(lib.lib, f"{pre}_{name}_reset")(state) == 0
         arrays = [ffi.new(f"{pre}_real_t[{nq}]", [float(x) for x in a]) for a in args]
         status = int(step(state, cfg, *arrays, tau, detail))
         rows.append((status, int(detail.field), int(detail.index), list(tau),
@@ -82,15 +93,24 @@ def _run(lib: cbuild.CLibrary, pre: str, name: str, cfg: Any, nq: int, nu: int,
     return rows
 
 
-@pytest.mark.parametrize(("name", "formulation", "float32"), [
-    ("tdc", "paper", False), ("tdroc", "paper", False), ("roc", "paper", False),
-    ("asmc", "paper", False), ("tdroc", "minimal", False), ("tdroc", "paper", True),
-    ("tdroc", "minimal", True), ("asmc", "minimal", True),
+CENTRAL = {"accel_estimator": 1}  # WMR_ACCEL_CENTRAL
+
+
+@pytest.mark.parametrize(("name", "formulation", "float32", "changes"), [
+    ("tdc", "paper", False, None), ("tdroc", "paper", False, None),
+    ("roc", "paper", False, None), ("asmc", "paper", False, None),
+    ("tdroc", "minimal", False, None), ("tdroc", "paper", True, None),
+    ("tdroc", "minimal", True, None), ("asmc", "minimal", True, None),
+    ("tdc", "minimal", True, CENTRAL), ("roc", "minimal", True, None),
+    ("asmc", "paper", False, {"gain0": 0.5, "gamma": 7.0}),
+    ("tdroc", "paper", True, {"hold_gain": 1, "held_gain": 3.0, **CENTRAL}),
+    ("tdroc", "minimal", False, {"accel_estimator": 0, "n": 8, "a": 0.6}),
 ])
 def test_frozen_build_equals_run_time_build(tmp_path: Path, name: str, formulation: str,
-                                            float32: bool) -> None:
+                                            float32: bool, changes: dict[str, Any] | None
+                                            ) -> None:
     code = load_robot_code("")
-    lib, cfg, flib, fcfg = _frozen_pair(tmp_path, code, name, formulation, float32)
+    lib, cfg, flib, fcfg = _frozen_pair(tmp_path, code, name, formulation, float32, changes)
     inputs = _inputs(code.nq, STEPS, seed=len(name) + 7 * float32)
     run = _run(lib, code.prefix, name, cfg, code.nq, code.nu, inputs)
     frozen = _run(flib, code.prefix, name, fcfg, code.nq, code.nu, inputs)
@@ -193,6 +213,48 @@ def test_header_refuses_the_other_precision_and_formulation(tmp_path: Path) -> N
     assert other.returncode != 0 and "other formulation" in other.stderr
 
 
+def test_header_refuses_other_generated_code(tmp_path: Path) -> None:
+    """A header made for this code does not compile beside regenerated code (another
+    WMR_CODE_ID), even a copy of the generated C in a firmware tree."""
+    assert freeze_main(["--controller", "tdroc", "--out", str(tmp_path / "fw")]) == 0
+    copy = tmp_path / "c"
+    shutil.copytree(cbuild.GENERATED_C, copy)
+    gcc = shutil.which("gcc")
+    assert gcc is not None
+
+    def compile_copy() -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [gcc, *STRICT, "-c", "-DWMR_TDROC_FROZEN", f"-I{copy}", f"-I{tmp_path / 'fw'}",
+             str(copy / "wmr_tdroc.c"), "-o", str(tmp_path / "t.o")],
+            capture_output=True, text=True)
+
+    assert compile_copy().returncode == 0
+    types = copy / "wmr_types.h"
+    text = types.read_text()
+    code_id = re.search(r"#define WMR_CODE_ID (0x[0-9a-f]{8}u)", text)
+    assert code_id is not None
+    types.write_text(text.replace(code_id.group(1), "0x12345678u"))
+    stale = compile_copy()
+    assert stale.returncode != 0 and "made for other generated code" in stale.stderr
+
+
+def test_code_id_is_the_generated_code_s(tmp_path: Path) -> None:
+    """WMR_CODE_ID hashes every generated C file but the example, with the value unset:
+    recomputed here from the files on disk."""
+    files = {p.name: p.read_text() for p in cbuild.GENERATED_C.iterdir()
+             if p.suffix in (".c", ".h") and not p.name.endswith("_frozen.h")}
+    stamped = files["wmr_types.h"]
+    code_id = re.search(r"#define WMR_CODE_ID (0x[0-9a-f]{8}u)", stamped)
+    assert code_id is not None
+    files["wmr_types.h"] = stamped.replace(code_id.group(1), CODE_ID_UNSET)
+    assert stamp_code_id(files, "wmr_types.h", "WMR_CODE_ID",
+                         exclude=("example_main.c",)) == code_id.group(1)
+    files["wmr_types.h"] = stamped.replace(code_id.group(1), CODE_ID_UNSET)
+    files["wmr_laws.c"] += "\n"  # any change to the code changes the identity
+    assert stamp_code_id(files, "wmr_types.h", "WMR_CODE_ID",
+                         exclude=("example_main.c",)) != code_id.group(1)
+
+
 def test_command_check_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "fw"
     args = ["--controller", "roc", "--out", str(out)]
@@ -216,6 +278,60 @@ def test_command_check_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert "bogus" in capsys.readouterr().err
     assert header.read_text() == good
     assert [p.name for p in out.iterdir()] == ["wmr_roc_frozen.h"]  # no temporary left
+    # ROC's bounds sample the model: a nominal model the C refuses is named, not a crash.
+    for bad_value in ("m=0", "b=0", "d=1e300"):
+        assert freeze_main([*args, "--nominal", bad_value]) == 2
+        assert "WMR_ERR_BAD_NOMINAL" in capsys.readouterr().err
+    assert freeze_main(["--controller", "roc", "--robot", "nosuch", "--out",
+                        str(tmp_path / "never")]) == 2
+    assert "nosuch" in capsys.readouterr().err and not (tmp_path / "never").exists()
+    assert header.read_text() == good
+
+
+def test_command_sets_fields_and_checks_them(tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "fw"
+    base = ["--controller", "asmc", "--out", str(out)]
+    assert freeze_main([*base, "--set", "gain0=0.5", "--set", "k1=4,4,4,2,2"]) == 0
+    text = (out / "wmr_asmc_frozen.h").read_text()
+    assert ".gain0 = 0x1p-1," in text and ".k1 = {0x1p+2, 0x1p+2, 0x1p+2, 0x1p+1, 0x1p+1}" in text
+    assert ".gain0 = 0x1p-1," in text.split("_STATE")[-1]  # _init copied it into the state
+    for item, message in (("bogus=1", "not a field"), ("k1=1,2", "2 values for 5"),
+                          ("gain0=x", "not a number"), ("gamma=inf", "not finite"),
+                          ("gain0=-1", "WMR_ERR_BAD_BOUNDS (field gain0)"),
+                          ("nominal=1", "not a field")):
+        assert freeze_main([*base, "--set", item]) == 2, item
+        assert message in capsys.readouterr().err, item
+    assert freeze_main(["--controller", "tdroc", "--set", "n=2.5", "--out", str(out)]) == 2
+    assert "an integer field" in capsys.readouterr().err
+
+
+def test_command_writes_a_readable_header_and_checks_only_what_matters(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The header gets the umask's permissions (not mkstemp's 0600) and keeps an existing
+    one's; --check compares the configuration, state and code identity, not the provenance
+    comment (the experiment's path as typed); a path with */ cannot end that comment."""
+    exp_dir = tmp_path / "exp*"
+    exp_dir.mkdir()
+    (exp_dir / "x*.toml").write_text("[controller]\nh = 0.05\n")
+    out = tmp_path / "fw"
+    monkeypatch.chdir(tmp_path)
+    old = os.umask(0o022)
+    try:
+        assert freeze_main(["--controller", "tdroc", "--experiment", "exp*/x*.toml",
+                            "--out", str(out)]) == 0
+        header = out / "wmr_tdroc_frozen.h"
+        assert header.stat().st_mode & 0o777 == 0o644
+        header.chmod(0o664)
+        assert freeze_main(["--controller", "tdroc", "--experiment",
+                            str(exp_dir / "x*.toml"), "--out", str(out)]) == 0
+        assert header.stat().st_mode & 0o777 == 0o664
+    finally:
+        os.umask(old)
+    assert freeze_main(["--controller", "tdroc", "--experiment", "./exp*/x*.toml",
+                        "--out", str(out), "--check"]) == 0
+    assert freeze_main(["--controller", "tdroc", "--out", str(out), "--check"]) == 1  # h
+    assert _compile(tmp_path, out, []).returncode == 0
 
 
 @pytest.mark.parametrize("name", ["tdc", "tdroc", "roc", "asmc"])

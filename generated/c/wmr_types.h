@@ -15,6 +15,11 @@
 #include <float.h>
 #include <math.h>
 
+/* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
+   of the robot but the example, with this value as 0. A header the toolchain's `freeze`
+   command made for this code refuses to compile with any other. */
+#define WMR_CODE_ID 0x40061102u
+
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
 /* Floating literal in the working precision: WMR_LIT(0.5) is 0.5f. */

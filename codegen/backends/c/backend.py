@@ -16,7 +16,7 @@ from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import format_c
 from codegen.backends.c.printer import CPrinter
-from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir
+from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir, stamp_code_id
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
@@ -170,6 +170,8 @@ class CBackend:
             "example_main.c.jinja", "codegen/generate.py", layout=layout,
             param_fields=param_fields, heavier=payload_dependent(target, config),
         )
+        stamp_code_id(files, config.types_header, f"{config.macro_prefix}CODE_ID",
+                      exclude=("example_main.c",))
         return files
 
 

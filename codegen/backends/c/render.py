@@ -21,6 +21,7 @@ inputs reads them all first; the others read each just before its first use
 
 from __future__ import annotations
 
+import hashlib
 import keyword
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -699,6 +700,25 @@ def _any_nonfinite(names: Sequence[str]) -> str:
     return "isnan" + tree([f"({n} - {n})" for n in names]) + " != 0"  # MISRA 14.4
 
 
+CODE_ID_UNSET = "0x00000000u"  # <PREFIX>_CODE_ID until the backend has every file (stamp_code_id)
+
+
+def stamp_code_id(files: dict[str, str], types_header: str, macro: str,
+                  exclude: Sequence[str] = ()) -> str:
+    """Set ``macro`` in ``types_header`` to the first 32 bits of a SHA-256 of ``files``
+    (names and texts, the value still unset; ``exclude`` left out); returns the value."""
+    digest = hashlib.sha256()
+    for name in sorted(files):
+        if name not in exclude:
+            digest.update(name.encode() + b"\0" + files[name].encode() + b"\0")
+    value = f"0x{digest.hexdigest()[:8]}u"
+    unset = f"#define {macro} {CODE_ID_UNSET}"
+    if files[types_header].count(unset) != 1:
+        raise RuntimeError(f"{types_header}: expected one '{unset}' line to stamp")
+    files[types_header] = files[types_header].replace(unset, f"#define {macro} {value}")
+    return value
+
+
 def _base_context(config: CConfig, source: str, template: str) -> dict[str, object]:
     return {
         "preamble": template_util.preamble_lines(source, TEMPLATE_DIR, template),
@@ -725,6 +745,7 @@ def render_types(
         trig_bound=TRIG_BOUND,
         structs=_structs(specs, config),
         width=WIDTH,
+        CODE_ID_UNSET=CODE_ID_UNSET,
     )
     return {config.types_header: format_c(text)}
 
