@@ -34,8 +34,7 @@ from runtime.experiment import ExperimentFileError, load_experiment
 from runtime.frozen_config import FreezeError, describe_error, freeze
 from runtime.generated_modules import RobotCode
 from runtime.output_folder import OutputFolderError, writable_folder
-
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+from runtime.tooling.firmware.build import CONTROLLERS
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:

@@ -39,6 +39,16 @@ class Frozen:
     text: str
 
 
+def frozen_macro(prefix: str, controller: str) -> str:
+    """The macro a build defines to compile ``controller``'s configuration in."""
+    return f"{prefix.upper()}_{controller.upper()}_FROZEN"
+
+
+def header_name(prefix: str, controller: str) -> str:
+    """The header ``wmr freeze`` writes for ``controller`` (what its C source includes)."""
+    return f"{prefix}_{controller}_frozen.h"
+
+
 def real_literal(x: float, float32: bool) -> str:
     """``x`` as an exact C literal (hexadecimal; ``f`` suffix for float32 builds)."""
     if not math.isfinite(x):
@@ -122,12 +132,13 @@ def freeze(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any,
     if status != 0:  # check_config accepted it: init cannot refuse it
         raise FreezeError(f"{pre}_{name}_init refused a configuration check_config accepted "
                           f"(status {status})")
-    filename = f"{pre}_{name}_frozen.h"
+    filename = header_name(pre, name)
     text = render(
         C_TEMPLATES, TEMPLATE,
-        preamble=(f"{generated_by().replace('`wmr model`', '`wmr freeze`')} DO NOT EDIT: "
+        preamble=(f"{generated_by('wmr freeze')} DO NOT EDIT: "
                   "rerun `wmr freeze`.", f"Template: {template_label(C_TEMPLATES, TEMPLATE)}"),
-        pre=pre, PRE=pre.upper(), controller=name, robot=comment_safe(code.name),
+        pre=pre, PRE=pre.upper(), controller=name, FROZEN=frozen_macro(pre, name),
+        header=filename, robot=comment_safe(code.name),
         made_from=[comment_safe(line) for line in made_from],
         real=lib.real, float32=lib.float32, code_id=code_id(code.c_dir, pre),
         formulation=int(config.formulation),

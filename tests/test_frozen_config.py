@@ -22,7 +22,13 @@ from codegen.backends.c.render import CODE_ID_UNSET, stamp_code_id
 from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.freeze_command import main as freeze_main
-from runtime.frozen_config import FreezeError, freeze, initializer_lines, real_literal
+from runtime.frozen_config import (
+    FreezeError,
+    freeze,
+    frozen_macro,
+    initializer_lines,
+    real_literal,
+)
 from runtime.generated_modules import RobotCode, load_robot_code
 from runtime.robot_simulation import controller_config
 
@@ -44,7 +50,7 @@ def _frozen_pair(tmp: Path, code: RobotCode, name: str, formulation: str, float3
     header = tmp / frozen.filename
     header.write_text(frozen.text)
     flib = cbuild.build(float32, c_dir=code.c_dir, prefix=code.prefix,
-                        flags=(f"-D{code.prefix.upper()}_{name.upper()}_FROZEN",),
+                        flags=(f"-D{frozen_macro(code.prefix, name)}",),
                         extra_headers=(header,))
     fcfg = flib.ffi.addressof(flib.lib, f"{code.prefix}_{name}_frozen_config")
     return lib, config, flib, fcfg

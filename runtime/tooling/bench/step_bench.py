@@ -20,6 +20,7 @@ from typing import Any
 
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.bench.c_bench import renamed_objects
+from runtime.tooling.firmware.build import frozen_define
 
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
 CFLAGS = ["-std=c99", "-O2"]
@@ -190,7 +191,7 @@ def build_step_bench(workdir: Path, config: dict[str, Any],
     sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
     libm = renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
     frozen_header(workdir, config)
-    frozen = renamed_objects(workdir, sources, ("-DWMR_TDROC_FROZEN", f"-I{workdir}"), "fz_")
+    frozen = renamed_objects(workdir, sources, (frozen_define("tdroc"), f"-I{workdir}"), "fz_")
     exe = workdir / "step_bench"
     subprocess.run(
         ["gcc", *CFLAGS, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),

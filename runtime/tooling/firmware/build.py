@@ -204,7 +204,9 @@ MAIN_EXTRA = {
 
 def frozen_define(name: str) -> str:
     """The define of a build with ``name``'s configuration compiled in (``wmr freeze``)."""
-    return f"-DWMR_{name.upper()}_FROZEN"
+    from runtime.frozen_config import frozen_macro
+
+    return f"-D{frozen_macro('wmr', name)}"
 
 
 def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:

@@ -27,7 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from modeling.package_paths import PACKAGE_ROOT, SHIPPED_GENERATED
+from runtime.frozen_config import frozen_macro, header_name
 from runtime.robot_source import generated_robots
+from runtime.tooling.firmware.build import CONTROLLERS
 
 DOC = PACKAGE_ROOT / "docs" / "STATIC_CHECKS.md"
 ADDON = "misra"
@@ -66,12 +68,12 @@ def run_cppcheck(folder: Path, float32: bool, frozen: Path | None = None) -> lis
     macro = f"{prefix.upper()}_FLOAT32"
     # The run-time configuration: builds with a configuration compiled in (wmr freeze) need
     # a header of the user's, so cppcheck must not guess them.
-    frozen_undefs = [f"-U{prefix.upper()}_{c.upper()}_FROZEN"
-                     for c in ("tdc", "tdroc", "roc", "asmc")]
-    if frozen is not None:  # that controller's frozen build, its header on the include path
-        define = "-D" + frozen.name.removesuffix(".h").upper()
-        frozen_undefs = [define if u[2:] == define[2:] else u for u in frozen_undefs]
-        frozen_undefs.append(f"-I{frozen.parent}")
+    frozen_undefs = [
+        f"-D{frozen_macro(prefix, c)}"  # that controller's frozen build
+        if frozen is not None and frozen.name == header_name(prefix, c)
+        else f"-U{frozen_macro(prefix, c)}"
+        for c in CONTROLLERS
+    ] + ([f"-I{frozen.parent}"] if frozen is not None else [])
     with tempfile.TemporaryDirectory() as build:
         done = subprocess.run(
             ["cppcheck", f"--addon={ADDON}", "--std=c99", "--platform=unix32",
