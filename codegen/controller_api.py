@@ -22,18 +22,15 @@ MAX_ABS_INPUT = "1.0e6"
 H_MIN = "1.0e-6"  # sample time [s]: a 1 MHz loop at most ...
 H_MAX = "1.0"  # ... and a 1 Hz loop at least
 GAIN_MAX = "1.0e6"  # K1, K2, Q, eps, phi, gamma, held_gain, gain0; and the adaptive gains' cap
+# K1, K2, Q and eps from below (issue 25): gain / eps, P of (20) and every ratio of them stay
+# finite in float32, so no accepted value can form inf * 0 (an eps of 2^-1074 made a step
+# with exactly zero error return NaN: (k / eps) * 0).
+GAIN_MIN = "1.0e-6"
 TORQUE_LIMIT_MAX = "1.0e6"  # tau_max [N m]
-NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|, 1)
+NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|, 1), and a
+# parameter the model needs positive >= its robot file's value / NOMINAL_FACTOR (issue 25: a
+# wheel radius of 1e-30 m was accepted and overflowed M-hat in float32)
 STEPS_MAX = "4294967295"  # the saturating step counter (uint32_t)
-# The configuration fingerprint kept in the state: FNV-1a (32 bit) in FNV_LANES interleaved
-# lanes (value k into lane k mod FNV_LANES: independent multiply chains; the reals in struct
-# order, then the ints, so that the C hashes the reals in one loop), then FNV-1a of the lanes.
-# A value is one 32-bit word: an int as it is, a real's words folded as
-# w = (w * FNV_MIX) ^ word (a float's one word; a double's two, the high one off the chain).
-FNV_OFFSET = "2166136261"
-FNV_PRIME = "16777619"
-FNV_MIX = "2654435761"  # odd (0x9E3779B1): multiplying by it is a bijection of the words
-FNV_LANES = 4
 
 # Which input or field an error is about (``<prefix>_error_detail_t.field``). Stable values:
 # append, never renumber.
@@ -87,11 +84,16 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
         StatusCode(f"{P}_ERR_NONFINITE_OUTPUT", -4, "a result is not finite"),
         StatusCode(f"{P}_ERR_BAD_MEASUREMENT", -5, "q or qdot is NaN, infinite or absurdly large"),
         StatusCode(f"{P}_ERR_BAD_REFERENCE", -6, "a reference is NaN, infinite or absurdly large"),
-        StatusCode(f"{P}_ERR_BAD_EPS", -7, "boundary layer eps <= 0 or not finite"),
+        StatusCode(
+            f"{P}_ERR_BAD_EPS", -7, f"boundary layer eps outside [{P}_GAIN_MIN, {P}_GAIN_MAX]"
+        ),
         StatusCode(f"{P}_ERR_BAD_WINDOW", -8, f"window n outside 2..{P}_MAX_WINDOW"),
         StatusCode(f"{P}_ERR_BAD_DISCOUNT", -9, "discount a outside (0, 1]"),
         StatusCode(f"{P}_ERR_BAD_SAMPLE_TIME", -10, "h <= 0 or not finite"),
-        StatusCode(f"{P}_ERR_BAD_GAINS", -11, "K1, K2 or Q not positive definite"),
+        StatusCode(
+            f"{P}_ERR_BAD_GAINS", -11,
+            f"a K1, K2 or Q entry outside [{P}_GAIN_MIN, {P}_GAIN_MAX], or P of (20) not finite",
+        ),
         StatusCode(f"{P}_ERR_BAD_NOMINAL", -12, "nominal parameters give a singular M-hat"),
         StatusCode(f"{P}_ERR_BAD_TORQUE_LIMIT", -13, "torque limit <= 0 or NaN"),
         StatusCode(f"{P}_ERR_BAD_FORMULATION", -14, f"formulation is not {formulations}"),
@@ -110,7 +112,7 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
         StatusCode(
             f"{P}_ERR_CONFIG_CHANGED",
             -19,
-            "the configuration differs from the one given to _init (fingerprint)",
+            "the configuration differs from the one given to _init (any bit of any value)",
         ),
     )
 
@@ -143,6 +145,7 @@ def real_bounds() -> tuple[tuple[str, str, str], ...]:
     return (
         ("H_MIN", H_MIN, "smallest sample time h [s]"),
         ("H_MAX", H_MAX, "largest sample time h [s]"),
+        ("GAIN_MIN", GAIN_MIN, "smallest K1, K2 and Q entry and eps: their ratios stay finite"),
         ("GAIN_MAX", GAIN_MAX, "largest gain, eps, phi, gamma; cap of the adaptive gains"),
         ("TORQUE_LIMIT_MAX", TORQUE_LIMIT_MAX, "largest tau_max [N m]"),
         ("NOMINAL_FACTOR", NOMINAL_FACTOR, "|nominal p| <= this * max(|robot file's p|, 1)"),
@@ -150,8 +153,8 @@ def real_bounds() -> tuple[tuple[str, str, str], ...]:
 
 
 def c_common_context() -> dict[str, object]:
-    """What ``controller_common.{h,c}.jinja`` needs besides the robot: bounds, fields, hash."""
-    return {"real_bounds": real_bounds(), "fields": FIELDS, "fnv_prime": FNV_PRIME}
+    """What ``controller_common.{h,c}.jinja`` needs besides the robot: bounds and fields."""
+    return {"real_bounds": real_bounds(), "fields": FIELDS}
 
 
 def c_controller_context(
@@ -159,24 +162,16 @@ def c_controller_context(
 ) -> dict[str, object]:
     """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot (its C
     parameter field names and coordinate count)."""
-    return {"config_fields": config_fields(info), "fnv_offset": FNV_OFFSET,
-            "fnv_prime": FNV_PRIME, "fnv_mix": FNV_MIX, "fnv_lanes": FNV_LANES,
-            "fingerprint_values": fingerprint_values(info, param_fields, nq)}
+    return {"config_fields": config_fields(info),
+            "config_values": config_values(info, param_fields)}
 
 
-def fingerprint_values(
-    info: ControllerInfo, param_fields: list[str], nq: int
-) -> list[tuple[str, str]]:
-    """The values the fingerprint hashes, in struct order, as (C expression on ``config``,
-    "real" or "int"): the nominal parameters, then ``config_fields`` with vectors entry by
-    entry. The hash takes the reals in this order, then the ints."""
-    out = [(f"config->nominal.{f}", "real") for f in param_fields]
-    for name, kind, count in config_fields(info):
-        if count == 0:
-            out += [(f"config->{name}[{i}]", kind) for i in range(nq)]
-        else:
-            out.append((f"config->{name}", kind))
-    return out
+def config_values(info: ControllerInfo, param_fields: list[str]) -> list[tuple[str, str, int]]:
+    """Every value of ``<prefix>_<ctrl>_config_t`` in struct order, as (member path, "real" or
+    "int", count: 0 for a vector of nq entries): the nominal parameters, then
+    ``config_fields``. A step compares the caller's configuration with the copy _init kept
+    value by value (C and Python alike), never padding."""
+    return [(f"nominal.{f}", "real", 1) for f in param_fields] + list(config_fields(info))
 
 
 def python_context() -> dict[str, object]:
@@ -185,10 +180,6 @@ def python_context() -> dict[str, object]:
         "real_bounds": real_bounds(),
         "steps_max": STEPS_MAX,
         "fields": FIELDS,
-        "fnv_offset": FNV_OFFSET,
-        "fnv_prime": FNV_PRIME,
-        "fnv_mix": FNV_MIX,
-        "fnv_lanes": FNV_LANES,
         "config_fields": {c.name: config_fields(c) for c in CONTROLLERS},
     }
 
@@ -198,10 +189,17 @@ def nominal_bound(default: float) -> float:
     return float(NOMINAL_FACTOR) * max(abs(float(default)), 1.0)
 
 
+def nominal_range(default: float, positive: bool) -> tuple[float, float]:
+    """(lowest, highest) accepted nominal value of a parameter whose robot file's value is
+    ``default``: ±``nominal_bound``, from ``default / NOMINAL_FACTOR`` up for a parameter the
+    model needs positive."""
+    high = nominal_bound(default)
+    return (float(default) / float(NOMINAL_FACTOR) if positive else -high), high
+
+
 def config_fields(info: ControllerInfo) -> tuple[tuple[str, str, int], ...]:
     """The fields of ``<prefix>_<ctrl>_config_t`` after ``nominal``, in struct order:
-    (name, "real" or "int", count). The fingerprint hashes the nominal parameters, then
-    these, in this order (C and Python alike)."""
+    (name, "real" or "int", count; 0: nq entries)."""
     out: list[tuple[str, str, int]] = [("formulation", "int", 1)]
     out += [("k1", "real", 0), ("k2", "real", 0)]  # count 0: nq
     out += [(f, "real", 1) for f in ("q_pos", "q_vel", "h", "tau_max")]

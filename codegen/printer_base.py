@@ -58,6 +58,18 @@ def float_text(value: float) -> str:
     return text
 
 
+def norm_terms(base: sp.Expr) -> tuple[sp.Expr, ...] | None:
+    """The x_i of a base x0**2 + x1**2 + ... (two or more plain squares, in printed order):
+    its square root is a 2-norm, printed through the backend's overflow-safe norm (an
+    entry beyond ~1.8e19 overflows a float32 sum of squares while the norm is finite)."""
+    if not isinstance(base, sp.Add):
+        return None
+    terms = base.as_ordered_terms()
+    if not all(isinstance(t, sp.Pow) and t.exp == 2 for t in terms):
+        return None
+    return tuple(t.base for t in terms)
+
+
 def _is_exact_binary(r: sp.Rational) -> bool:
     """True if p/q is exactly a double (q a power of two, p small): print as one literal."""
     q = int(r.q)
@@ -89,6 +101,11 @@ class ExpressionPrinterMixin:
 
     def infinity(self) -> str:
         """Positive infinity."""
+        raise NotImplementedError
+
+    def norm_call(self, args: Sequence[str]) -> str:
+        """sqrt(args[0]**2 + args[1]**2 + ...), the sum as written out while it is finite,
+        never overflowing when the norm itself is finite."""
         raise NotImplementedError
 
     logic_and = " && "
@@ -245,6 +262,12 @@ class ExpressionPrinterMixin:
         if not expr.free_symbols:
             return self._constant(expr), True
         base, exponent = expr.base, expr.exp
+        if exponent in (sp.S.Half, -sp.S.Half) and (terms := norm_terms(base)) is not None:
+            text = self._norm(terms)
+            if exponent.is_negative:
+                self.ops["div"] += 1
+                return f"{self.lit(1.0)}/{text}", False
+            return text, True
         if isinstance(exponent, sp.Rational) and exponent.q in (1, 2):
             whole = abs(int(exponent.p)) // int(exponent.q)
             parts: list[str] = []
@@ -262,6 +285,14 @@ class ExpressionPrinterMixin:
             return text, single
         self.ops["pow"] += 1
         return self.call("pow", [self._print(base), self._print(exponent)]), True
+
+    def _norm(self, terms: Sequence[sp.Expr]) -> str:
+        """A 2-norm: the squares and their sum, the test that the sum is finite, the root."""
+        self.ops["mul"] += len(terms)
+        self.ops["add"] += len(terms) - 1
+        self.ops["cmp"] += 1
+        self.ops["sqrt"] += 1
+        return self.norm_call([self._print(t) for t in terms])
 
     # ----- functions and branches -----
     def _function(self, expr: sp.Function) -> str:
@@ -314,3 +345,6 @@ class CountingPrinter(ExpressionPrinterMixin):
 
     def infinity(self) -> str:
         return "inf"
+
+    def norm_call(self, args: Sequence[str]) -> str:
+        return f"norm({', '.join(args)})"

@@ -2,7 +2,7 @@
 
     wmr freeze --controller tdroc [--formulation minimal] [--experiment FILE]
                [--robot NAME_OR_DIR] [--nominal KEY=VALUE ...] [--set FIELD=VALUE ...]
-               [--float32] --out DIR [--check]
+               [--float32] [--force] --out DIR [--check]
 
 Fills the controller's configuration from the experiment file's ``[controller]`` and
 ``[sensing]`` tables (default: the paper's setting), the robot's nominal parameters
@@ -11,6 +11,13 @@ Fills the controller's configuration from the experiment file's ``[controller]``
 with the generated C on this machine (see :mod:`runtime.frozen_config`), and writes
 ``DIR/<prefix>_<controller>_frozen.h``. Build the firmware with
 ``-D<PREFIX>_<CONTROLLER>_FROZEN`` and ``DIR`` on the include path.
+
+Before writing, the configuration's sampled closed loop is analysed as ``wmr stability``
+does (:func:`runtime.paper.stability.configuration_verdict`: its robot, h, gains, estimator
+and switching gain, the experiment's sensing): one predicted unstable is refused (exit 2,
+naming the verdict and a formulation predicted stable) unless ``--force``. Without
+``--formulation`` the paper formulation is frozen if it is predicted stable, else the
+minimal one. The verdict is written into the header's comment.
 
 ``--check`` writes nothing and exits 1 if that file is missing or its configuration,
 state or code identity differ (the provenance comment is not compared). Exit status 2,
@@ -30,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from runtime import cbuild
-from runtime.experiment import ExperimentFileError, load_experiment
+from runtime.experiment import Experiment, ExperimentFileError, load_experiment
 from runtime.frozen_config import FreezeError, describe_error, freeze
 from runtime.generated_modules import RobotCode
 from runtime.output_folder import OutputFolderError, writable_folder
@@ -47,7 +54,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "written (or up to date), 1 stale or missing (--check), 2 refused or bad arguments.",
     )
     p.add_argument("--controller", required=True, choices=CONTROLLERS)
-    p.add_argument("--formulation", default="paper", choices=("paper", "minimal"))
+    p.add_argument("--formulation", default=None, choices=("paper", "minimal"),
+                   help="default: paper if predicted stable on this robot, else minimal")
     p.add_argument("--experiment", metavar="FILE",
                    help="experiment file ([controller], [sensing]; default: the paper's)")
     p.add_argument("--robot", metavar="NAME_OR_DIR",
@@ -60,6 +68,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--float32", action="store_true",
                    help="for builds with -D<PREFIX>_FLOAT32 (the values are rounded to float "
                    "and _init runs in float)")
+    p.add_argument("--force", action="store_true",
+                   help="freeze a configuration the sampled-data analysis predicts unstable")
     p.add_argument("--out", required=True, type=Path, metavar="DIR",
                    help="folder of the header")
     p.add_argument("--check", action="store_true",
@@ -137,10 +147,10 @@ def _robot_code(name_or_dir: str | None) -> RobotCode:
 
 
 def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
-            nominal: dict[str, float]) -> Any:
+            formulation: str, nominal: dict[str, float]) -> Any:
     from runtime.robot_simulation import controller_config
 
-    exp = load_experiment(args.experiment)
+    exp = experiment_for(code, args.experiment)
     if args.controller == "roc":
         # ROC's α, φ come from sampling the model over the uncertainty box: a nominal
         # model the C refuses is named by the C before that sampling can fail on it.
@@ -151,12 +161,84 @@ def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
             raise FreezeError(f"the roc configuration is refused: "
                               f"{describe_error(code, detail)}")
     try:
-        config = controller_config(lib, code, args.controller, args.formulation, nominal, exp)
+        config = controller_config(lib, code, args.controller, formulation, nominal, exp)
     except (ArithmeticError, ValueError) as exc:
         raise FreezeError(f"the {args.controller} configuration cannot be filled for this "
                           f"nominal model: {exc}") from None
     set_fields(lib.ffi, config, args.set)
     return config
+
+
+def experiment_for(code: RobotCode, path: str | None) -> Experiment:
+    """The experiment file (default: the paper's setting) scaled to the robot as ``wmr
+    stability --robot`` and ``wmr reproduce --robot`` scale it (sizes, torque limit,
+    payloads; fields the file sets are kept): identity for Drishti."""
+    exp = load_experiment(path)
+    if not _has_verdict(code):
+        return exp  # a bodies-and-wheels robot: its scaling belongs to `wmr reproduce`
+    from runtime.paper.stability import scaled_for
+
+    return scaled_for(dict(code.params), exp)[0]
+
+
+def _has_verdict(code: RobotCode) -> bool:
+    """Whether the sampled-data analysis covers this robot's code (the paper's differential
+    drive: any [lumped] or [physical] robot file; not yet a bodies-and-wheels robot)."""
+    return code.prefix == "wmr" and "paper" in code.robot.FORMULATIONS
+
+
+def choose_formulation(
+    lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace, nominal: dict[str, float],
+) -> tuple[str, Any, list[str]]:
+    """(formulation, its filled configuration, the verdict lines for the header). The one
+    asked for, or paper if predicted stable, else minimal. Raises FreezeError for a
+    configuration predicted unstable, unless --force."""
+    from runtime.paper.stability import configuration_verdict
+
+    available = tuple(code.robot.FORMULATIONS)  # paper first where it is generated
+    if args.formulation is not None and args.formulation not in available:
+        raise FreezeError(f"robot {code.name} has no {args.formulation} formulation generated: "
+                          "use --formulation minimal")
+    candidates = (args.formulation,) if args.formulation else available
+    if not _has_verdict(code):
+        form = candidates[0]
+        note = (f"no sampled-data verdict for robot {code.name}: `wmr stability` covers the "
+                "paper's differential drive only")
+        print(f"note: {note}", file=sys.stderr)
+        return form, _config(lib, code, args, form, nominal), [f"Sampled-data verdict: {note}"]
+    exp = experiment_for(code, args.experiment)
+    verdicts = []
+    for form in available:
+        config = _config(lib, code, args, form, nominal)
+        _validated(lib, code, args.controller, config)
+        verdicts.append((form, config, configuration_verdict(
+            args.controller, form, nominal, exp, config)))
+    chosen = next((v for v in verdicts if v[0] in candidates and v[2].stable), None)
+    if chosen is None:
+        asked = next(v for v in verdicts if v[0] == candidates[0])
+        stable = [v for v in verdicts if v[2].stable]
+        hint = (f"; {stable[0][2].controller}/{stable[0][0]} is predicted stable (spectral "
+                f"radius {stable[0][2].spectral_radius:.3f}): use --formulation {stable[0][0]}"
+                if stable else "; no formulation is predicted stable")
+        if not args.force:
+            where = f"robot {code.name}" + (" with the --nominal parameters" if args.nominal
+                                            else "")
+            raise FreezeError(f"{asked[2].describe()} on {where}{hint}, or --force to freeze "
+                              "it anyway (see `wmr stability`)")
+        print(f"warning: {asked[2].describe()}; frozen anyway (--force)", file=sys.stderr)
+        return asked[0], asked[1], [f"Sampled-data verdict: {asked[2].describe()} (frozen "
+                                    "with --force)"]
+    if args.formulation is None and chosen[0] != available[0]:
+        print(f"note: {verdicts[0][2].describe()}; freezing the {chosen[0]} formulation",
+              file=sys.stderr)
+    return chosen[0], chosen[1], [f"Sampled-data verdict: {chosen[2].describe()}"]
+
+
+def _validated(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any) -> None:
+    """The C's check of ``config``, so that only a valid configuration is analysed."""
+    detail = lib.ffi.new(f"{code.prefix}_error_detail_t *")
+    if getattr(lib.lib, f"{code.prefix}_{name}_check_config_detail")(config, detail) != 0:
+        raise FreezeError(f"the {name} configuration is refused: {describe_error(code, detail)}")
 
 
 def header_body(text: str) -> str:
@@ -196,19 +278,17 @@ def main(argv: list[str] | None = None) -> int:
             raise FreezeError("wmr freeze validates with the generated C: it needs gcc on "
                               "the PATH")
         code = _robot_code(args.robot)
-        if args.formulation == "paper" and not hasattr(code.controllers,
-                                                      "FORMULATION_PAPER"):
-            raise FreezeError(f"robot {code.name} has no paper formulation generated: "
-                              "use --formulation minimal")
         nominal = nominal_params(code.params, args.nominal)
         lib = cbuild.build(args.float32, c_dir=code.c_dir, prefix=code.prefix)
-        config = _config(lib, code, args, nominal)
+        formulation, config, verdict = choose_formulation(lib, code, args, nominal)
         made_from = (
             f"Made by: wmr freeze --controller {args.controller} --formulation "
-            f"{args.formulation}{' --float32' if args.float32 else ''}",
+            f"{formulation}{' --float32' if args.float32 else ''}"
+            f"{' --force' if args.force else ''}",
             f"Experiment: {args.experiment or 'the paper setting (no --experiment)'}",
             "Nominal parameters: " + ", ".join(f"{k} = {v!r}" for k, v in nominal.items()),
             *([f"Set: {' '.join(args.set)}"] if args.set else []),
+            *verdict,
         )
         frozen = freeze(lib, code, args.controller, config, made_from)
         target = args.out / frozen.filename

@@ -3,7 +3,7 @@
 A build of ``<prefix>_<name>.c`` with ``-D<PREFIX>_<NAME>_FROZEN`` takes its configuration
 from that header: ``_init`` copies the state the header holds, and a step checks only that
 it was handed ``&<prefix>_<name>_frozen_config``. The image then carries no configuration
-checks, fingerprint or derivation (P of (20), the weights and ‖M̂⁻¹‖ of (25)). What makes
+checks, comparison or derivation (P of (20), the weights and ‖M̂⁻¹‖ of (25)). What makes
 that safe is done here, on the host, with the generated C itself (through cffi, in the
 precision of the firmware): ``_check_config_detail`` validates the configuration and
 ``_init`` derives the state, so the frozen build starts from the very bytes a run-time
@@ -25,6 +25,10 @@ from runtime.generated_modules import RobotCode
 
 C_TEMPLATES = CODEGEN_DIR / "backends" / "c" / "templates"  # the C backend's (no SymPy import)
 TEMPLATE = "frozen.h.jinja"
+
+
+# State fields a frozen build does not have: the run-time build's copy of the configuration.
+FROZEN_STATE_OMITS = ("config",)
 
 
 class FreezeError(ValueError):
@@ -79,12 +83,13 @@ def _value(ffi: Any, ctype: Any, value: Any, float32: bool) -> str:
     raise FreezeError(f"cannot write a C value of type {name}")
 
 
-def initializer_lines(ffi: Any, struct: Any, float32: bool) -> list[str]:
+def initializer_lines(ffi: Any, struct: Any, float32: bool,
+                      omit: tuple[str, ...] = ()) -> list[str]:
     """A C99 designated initializer of the struct behind the pointer ``struct``: one line per
-    field, every entry exact."""
+    field but those in ``omit``, every entry exact."""
     ctype = ffi.typeof(struct[0])
     fields = [f".{name} = {_value(ffi, f.type, getattr(struct, name), float32)}"
-              for name, f in ctype.fields]
+              for name, f in ctype.fields if name not in omit]
     return ["{", *[f"    {line}," for line in fields[:-1]], f"    {fields[-1]}", "}"]
 
 
@@ -143,6 +148,7 @@ def freeze(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any,
         real=lib.real, float32=lib.float32, code_id=code_id(code.c_dir, pre),
         formulation=int(config.formulation),
         config_lines=initializer_lines(ffi, config, lib.float32),
-        state_lines=initializer_lines(ffi, state, lib.float32),
+        # A frozen build's state keeps no copy of the configuration (it is a constant).
+        state_lines=initializer_lines(ffi, state, lib.float32, omit=FROZEN_STATE_OMITS),
     )
     return Frozen(filename, text)

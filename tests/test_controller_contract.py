@@ -117,9 +117,9 @@ def _recovers(lib: cbuild.CLibrary, name: str, form: str, state_bytes: bytes) ->
     the valid configuration and count the steps until one succeeds (at most 10)."""
     valid = Controller(lib, name, base_config(lib, name, form))
     ffi = lib.ffi
-    # Keep the valid configuration's fingerprint, P and ||Mhat^-1||; take the rest.
+    # Keep the valid configuration (the copy _init kept), P and ||Mhat^-1||; take the rest.
     keep = {f: ffi.buffer(ffi.addressof(valid.state[0], f))[:]
-            for f in ("magic", "config_fp", "p12", "p22", "minv_norm", "gain0")
+            for f in ("magic", "config", "p12", "p22", "minv_norm", "gain0")
             if f in dict(ffi.typeof(valid.state[0]).fields)}
     ffi.memmove(valid.state, state_bytes, len(state_bytes))
     for f, raw in keep.items():
@@ -288,9 +288,10 @@ def test_config_change_is_refused(lib: cbuild.CLibrary, name: str, label: str,
     assert ctl.raw() == before and out == [7.0, -7.0]
     assert ctl.step(seq[1])[0] >= 0  # the original configuration still works
     assert Controller(lib, name, changed).step(seq[1])[0] >= 0  # _init adopts the change
-    if not lib.float32:  # the mirror: same status, same fingerprint as C
+    if not lib.float32:  # the mirror: same status; it keeps what the C's copy holds
         py = pyctl.__dict__[name.upper()](_py_config(cfg))
-        assert py.config_fp == int(Controller(lib, name, cfg).state.config_fp)
+        kept = Controller(lib, name, cfg).state.config
+        assert py.config_bits == py.value_bits(_py_config(kept))
         with pytest.raises(pyctl.ControllerError) as err:
             py.step(*seq[1], config=_py_config(changed))
         assert err.value.status == "WMR_ERR_CONFIG_CHANGED" and err.value.field == "CONFIG"
@@ -336,7 +337,8 @@ DETAIL_CASES: tuple[tuple[str, Any, str, int], ...] = (
     ("h=2", lambda c: setattr(c, "h", 2.0), "H", -1),
     ("tau_max=nan", lambda c: setattr(c, "tau_max", math.nan), "TAU_MAX", -1),
     ("Iw=1e25", lambda c: setattr(c.nominal, "Iw", 1e25), "NOMINAL", 3),
-    ("b=0", lambda c: setattr(c.nominal, "b", 0.0), "NOMINAL", -1),
+    ("b=0", lambda c: setattr(c.nominal, "b", 0.0), "NOMINAL", 5),  # below b / 1000
+    ("I=K^2/m", lambda c: setattr(c.nominal, "Iz", 0.34**2 / 36.0), "NOMINAL", -1),  # guards
     ("eps=0", lambda c: setattr(c, "eps", 0.0), "EPS", -1),
 )
 
@@ -403,3 +405,245 @@ def test_clang_weverything(float32: bool) -> None:
            *map(str, sorted(cbuild.GENERATED_C.glob("wmr_*.c")))]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr[-3000:]
+
+
+# ----- issue 25: a changed configuration is caught whatever bits change -----
+
+BITFLIP_DRIVER = r"""
+#include <string.h>
+#include "wmr_NAME.h"
+#include "bitflip_NAME.h"
+
+/* Flip bit b of the configuration's value bytes (value k spans offsets[k], sizes[k]). */
+static void flip(unsigned char *cfg, const int *offsets, const int *sizes, int nvalues, long b)
+{
+    int k;
+    for (k = 0; k < nvalues; ++k) {
+        if (b < 8L * sizes[k]) {
+            cfg[offsets[k] + b / 8] ^= (unsigned char)(1u << (b % 8));
+            return;
+        }
+        b -= 8L * sizes[k];
+    }
+}
+
+/* Every one-bit and every two-bit change of *config's values, each given to a step of a
+   copy of *state: returns how many the step accepted or that changed the state or tau. */
+long bitflip_NAME(const wmr_NAME_state_t *state, const wmr_NAME_config_t *config,
+                  const int *offsets, const int *sizes, int nvalues, const wmr_real_t *inputs,
+                  long *tried)
+{
+    long bits = 0, i, j, missed = 0;
+    int k;
+    for (k = 0; k < nvalues; ++k) {
+        bits += 8L * sizes[k];
+    }
+    *tried = 0;
+    for (i = 0; i < bits; ++i) {
+        for (j = i; j < bits; ++j) {  /* j == i: the one-bit change */
+            wmr_NAME_config_t cfg = *config;
+            wmr_NAME_state_t s = *state;
+            wmr_real_t tau[2] = {7.0, -7.0};
+            wmr_status_t status;
+            flip((unsigned char *)&cfg, offsets, sizes, nvalues, i);
+            if (j != i) {
+                flip((unsigned char *)&cfg, offsets, sizes, nvalues, j);
+            }
+            status = wmr_NAME_step(&s, &cfg, inputs, inputs + 5, inputs + 10, inputs + 15,
+                                   inputs + 20, tau);
+            ++*tried;
+            if (status >= 0 || memcmp(&s, state, sizeof s) != 0 || tau[0] != 7.0
+                || tau[1] != -7.0) {
+                ++missed;
+            }
+        }
+    }
+    return missed;
+}
+"""
+
+
+def _value_layout(lib: cbuild.CLibrary, name: str) -> tuple[list[int], list[int]]:
+    """(offset, size) of every value of the configuration struct (never its padding)."""
+    ffi = lib.ffi
+    offsets, sizes = [], []
+
+    def walk(ctype: Any, base: int) -> None:
+        if ctype.kind == "struct":
+            for _, f in ctype.fields:
+                walk(f.type, base + f.offset)
+        elif ctype.kind == "array":
+            for i in range(ctype.length):
+                walk(ctype.item, base + i * ffi.sizeof(ctype.item))
+        else:
+            offsets.append(base)
+            sizes.append(ffi.sizeof(ctype))
+
+    walk(ffi.typeof(f"wmr_{name}_config_t"), 0)
+    return offsets, sizes
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc not found")
+@pytest.mark.parametrize("float32", [False, True], ids=["double", "float32"])
+@pytest.mark.parametrize("name", CONTROLLERS)
+def test_every_one_and_two_bit_change_is_refused(tmp_path: Path, name: str,
+                                                 float32: bool) -> None:
+    """Every one-bit and every two-bit change of every value of an initialised controller's
+    configuration (sign flips included: any two of them cancelled in the old 32-bit
+    fingerprint) is refused by the next step (the field's error or CONFIG_CHANGED), state
+    and tau untouched. Both formulations; millions of steps, so in C."""
+    src, hdr = tmp_path / f"bitflip_{name}.c", tmp_path / f"bitflip_{name}.h"
+    src.write_text(BITFLIP_DRIVER.replace("NAME", name))
+    hdr.write_text(
+        f"long bitflip_{name}(const wmr_{name}_state_t *state, const wmr_{name}_config_t *"
+        "config, const int *offsets, const int *sizes, int nvalues, const wmr_real_t *inputs,"
+        " long *tried);\n")
+    lib = cbuild.build(float32, extra_sources=(src,), extra_headers=(hdr,))
+    offsets, sizes = _value_layout(lib, name)
+    seq = smooth_sequence(4, float(BASE["h"]))
+    for form in FORMULATIONS:
+        ctl = Controller(lib, name, base_config(lib, name, form))
+        for inputs in seq[:3]:
+            assert ctl.step(inputs)[0] >= 0
+        flat = lib.ffi.new("wmr_real_t[25]", [x for v in seq[3] for x in v])
+        tried = lib.ffi.new("long *")
+        missed = getattr(lib.lib, f"bitflip_{name}")(
+            ctl.state, ctl.cfg, lib.ffi.new("int[]", offsets), lib.ffi.new("int[]", sizes),
+            len(offsets), flat, tried)
+        bits = 8 * sum(sizes)
+        assert tried[0] == bits * (bits + 1) // 2  # every pair and every single bit
+        assert missed == 0, f"{form}: {missed} of {tried[0]} changes not refused"
+        assert ctl.step(seq[3])[0] >= 0  # the unchanged configuration still steps
+
+
+@pytest.mark.parametrize("name", CONTROLLERS)
+def test_mirror_refuses_every_one_bit_change(name: str) -> None:
+    """The Python mirror keeps the configuration's values (as C keeps its copy) and refuses
+    a step given a configuration with any one bit of any value changed."""
+    lib = cbuild.build(False)
+    cfg = base_config(lib, name, "paper")
+    py = pyctl.__dict__[name.upper()](_py_config(cfg))
+    seq = smooth_sequence(2, float(BASE["h"]))
+    py.step(*seq[0])
+    flips = 0
+    for k in range(len(py.config_bits)):
+        for bit in range(64):
+            changed = list(py.config_bits)
+            changed[k] ^= 1 << bit
+            if tuple(changed) == py.config_bits:
+                continue
+            mutated = _config_from_bits(py, tuple(changed))
+            if mutated is None:  # an int field's bit beyond its range: not a value
+                continue
+            with pytest.raises(pyctl.ControllerError):
+                py.step(*seq[1], config=mutated)
+            flips += 1
+    assert flips >= 64 * (len(py.config_bits) - 4)
+    py.step(*seq[1])  # the original still steps
+
+
+def _config_from_bits(py: Any, bits: tuple[int, ...]) -> Any:
+    """A mirror Config whose values are ``bits`` (``value_bits`` order), or None when an int
+    does not fit a C int."""
+    import struct as _struct
+    from dataclasses import replace
+
+    def real(b: int) -> float:
+        return float(_struct.unpack("=d", _struct.pack("=Q", b))[0])
+
+    it = iter(bits)
+    c = py.config
+    nominal = {k: real(next(it)) for k in pyctl.PARAM_KEYS}
+    changes: dict[str, Any] = {"nominal": nominal}
+    for fname, kind in py.config_fields:
+        if kind == "vector":
+            changes[fname] = [real(next(it)) for _ in range(len(getattr(c, fname)))]
+        elif kind == "int":
+            value = next(it)
+            if not -(2**31) <= value < 2**31:
+                return None
+            changes[fname] = value
+        else:
+            changes[fname] = real(next(it))
+    return replace(c, **changes)
+
+
+# ----- issue 25: accepted configurations and inputs never give a non-finite output -----
+
+def _log_between(low: float, high: float) -> st.SearchStrategy[float]:
+    """The bounds themselves, or log-uniform between them."""
+    return st.one_of(st.sampled_from([low, high]),
+                     st.floats(math.log(low), math.log(high)).map(math.exp)
+                     .map(lambda x: min(max(x, low), high)))
+
+
+@st.composite
+def accepted_config(draw: st.DrawFn) -> dict[str, Any]:
+    """Any configuration inside the plausibility bounds (the model's guards then refuse
+    some nominal models; the test goes on with the accepted ones)."""
+    gain = _log_between(pyctl.GAIN_MIN, GAIN_MAX)
+    nominal = {}
+    for k, v in DRISHTI.items():
+        low, high = pyctl.NOMINAL_RANGES[k]
+        nominal[k] = draw(st.one_of(st.just(v), _log_between(max(low, abs(v) / 1e3), high)))
+    return {
+        "k1": tuple(draw(gain) for _ in range(5)),
+        "k2": tuple(draw(gain) for _ in range(5)),
+        "q_pos": draw(gain), "q_vel": draw(gain), "eps": draw(gain),
+        "h": draw(_log_between(pyctl.H_MIN, pyctl.H_MAX)),
+        "tau_max": draw(_log_between(1e-30, pyctl.TORQUE_LIMIT_MAX)),
+        "phi": draw(st.one_of(st.just(0.0), gain)),
+        "alpha": draw(st.sampled_from([0.0, 0.3, 0.999999, 0.9999999])),
+        "gamma": draw(st.one_of(st.just(0.0), gain)),
+        "gain0": draw(st.one_of(st.just(0.0), gain)),
+        "held_gain": draw(st.one_of(st.just(0.0), gain)),
+        "hold_gain": draw(st.sampled_from([0, 1])),
+        "a": draw(_log_between(1e-30, 1.0)),
+        "n": draw(st.integers(2, 8)),
+        "accel_estimator": draw(st.sampled_from([0, 1, 2])),
+        "nominal": nominal,
+    }
+
+
+finite_input = st.one_of(st.sampled_from([0.0, 1e6, -1e6, 1e-30]),
+                         st.floats(-1e6, 1e6, allow_nan=False))
+
+
+@st.composite
+def input_run(draw: st.DrawFn) -> list[tuple[list[float], ...]]:
+    """Steps of finite inputs within the input bound, ending with a streak of exactly zero
+    tracking error (q = q_des, qdot = qdot_des) of 30 steps."""
+    scale = draw(st.sampled_from([1e-3, 1.0, 1e3, 1e6]))
+    vec = st.lists(finite_input.map(lambda x: x * scale / 1e6), min_size=5, max_size=5)
+    steps = [tuple(draw(vec) for _ in range(5)) for _ in range(draw(st.integers(0, 5)))]
+    q, qdot, qddot = draw(vec), draw(vec), draw(vec)
+    drift = draw(vec)
+    for k in range(30):
+        qk = [min(max(a + k * 1e-3 * b, -1e6), 1e6) for a, b in zip(q, drift, strict=True)]
+        steps.append((qk, qdot, qk, qdot, qddot))
+    return steps
+
+
+@pytest.mark.parametrize("name", CONTROLLERS)
+@pytest.mark.parametrize("form", FORMULATIONS)
+def test_accepted_inputs_never_give_a_nonfinite_output(lib: cbuild.CLibrary, name: str,
+                                                       form: str) -> None:
+    """Issue 25: with any accepted configuration and finite inputs within the bound, every
+    step returns OK or SATURATED with a finite tau, through streaks of exactly zero error
+    (an accepted eps of 2^-1074 made those NaN: (k / eps) * 0)."""
+    ok = {_status(lib, "WMR_OK"), _status(lib, "WMR_WARN_SATURATED")}
+
+    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+    @given(values=accepted_config(), steps=input_run())
+    def prop(values: dict[str, Any], steps: list[tuple[list[float], ...]]) -> None:
+        cfg = _config(lib, name, form, dict(values))
+        if int(getattr(lib.lib, f"wmr_{name}_check_config")(cfg)) != 0:
+            return  # the model's guards refused the nominal model
+        ctl = Controller(lib, name, cfg)
+        for k, inputs in enumerate(steps):
+            status, tau = ctl.step(inputs)
+            assert status in ok and all(math.isfinite(x) for x in tau), (
+                f"step {k}: status {status}, tau {tau}")
+
+    prop()

@@ -73,7 +73,7 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
             max_abs_input=MAX_ABS_INPUT,
             nominal_conditions=[TOY_CONDITION],
             nominal_guards=TOY_GUARDS,
-            nominal_bounds=[(k, "1000.0") for k in TOY_PARAMS],
+            nominal_bounds=[(k, "-1000.0", "1000.0") for k in TOY_PARAMS],
             **c_common_context(),
         )
         for info in CONTROLLERS:
@@ -121,7 +121,7 @@ def _python_text(layout: ControllerLayout) -> str:
         c_field_names={},
         param_keys=list(TOY_PARAMS),
         nominal_conditions=[('values["J_theta"] * values["J_phi"]', "'J_theta J_phi > 0'")],
-        nominal_bounds={k: 1000.0 for k in TOY_PARAMS},
+        nominal_ranges={k: (-1000.0, 1000.0) for k in TOY_PARAMS},
         **python_context(),
     )
 
@@ -166,8 +166,8 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
     assert "u_prev[4] = tau[0];" in history and "u_prev[5] = tau[1];" in history
     assert "for (i = 0; i < 8; ++i)" in history
     assert (
-        "toy_real_t k1[8];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses "
-        "k1[4], k1[5] */"
+        "toy_real_t k1[8];       /* diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form "
+        "uses k1[4], k1[5] */"
         in (c_texts["tdc.h"])
     )
     assert "writes tau[2] = (tau_r, tau_l)" in c_texts["roc.h"]
@@ -204,20 +204,22 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     # the code: the values and their bounds in two arrays of struct order, one loop.
     values = body[body.index("const toy_real_t value["):body.index("};", body.index("value["))]
     assert [v.strip(" ,") for v in values.splitlines()[1:]].index("p->radius_l") == 5
-    bounds = body[body.index("bound["):body.index("};")].splitlines()[1:]
-    assert bounds[5].strip().startswith("TOY_LIT(") and bounds[5].endswith("/* radius_l */")
+    for table in ("lowest[", "highest["):
+        bounds = body[body.index(table):body.index("};", body.index(table))].splitlines()[1:]
+        assert "TOY_LIT(" in bounds[5] and bounds[5].endswith("/* radius_l */"), table
     assert (
-        "if (!(TOY_FABS(value[i]) <= bound[i])) {\n"
+        "if (!((value[i] >= lowest[i]) && (value[i] <= highest[i]))) {\n"
         "            return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, i);" in body
     )
     tdroc = c_texts["tdroc.c"]
-    start = tdroc.index("static uint32_t toy_tdroc_fingerprint(")
-    hashed = tdroc[start:tdroc.index("\n}\n", start)]
-    reals = hashed[hashed.index("const toy_real_t reals["):hashed.index("};")]
-    for value in ("config->nominal.J_theta", "config->nominal.radius_l",
-                  "config->k1[7]"):  # every entry of an nq-vector
-        assert f"        {value}," in reals, value
-    assert "(uint32_t)config->formulation);" in hashed  # the ints after the reals
+    start = tdroc.index("static bool toy_tdroc_config_unchanged(")
+    compared = tdroc[start:tdroc.index("\n}\n", start)]
+    for value in ("nominal.J_theta", "nominal.radius_l", "q_vel", "held_gain"):
+        assert (f"diff |= toy_real_bits(config->{value}) ^ toy_real_bits(kept->{value});"
+                in compared), value
+    assert "for (i = 0; i < 8; ++i) {" in compared  # every entry of an nq-vector
+    assert "diff |= toy_real_bits(config->k1[i]) ^ toy_real_bits(kept->k1[i]);" in compared
+    assert "(config->formulation == kept->formulation)" in compared  # the ints as they are
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:
@@ -383,8 +385,9 @@ def test_python_controllers_run_on_the_layout(toy_controllers: tuple[Any, _Stubs
         assert ctrl.last_status == "TOY_OK"
         assert list(ctrl.u_prev) == [0.0] * 4 + [1.0, -1.0, 0.0, 0.0]
         assert ctrl.u_discarded == 0.0
-    # TDROC evaluated ||Mhat(q)^-1|| at the measured q of each step once the gain was due.
-    assert [float(q[0]) for q in stubs.minv_q] == pytest.approx([0.03, 0.04])
+    # TDROC evaluated ||Mhat(q)^-1|| at q = 0 when its configuration was checked, then at the
+    # measured q of each step once the gain was due.
+    assert [float(q[0]) for q in stubs.minv_q] == pytest.approx([0.0, 0.03, 0.04])
 
 
 def test_any_robot_name_gives_a_valid_c_string(tmp_path: Any) -> None:

@@ -91,7 +91,9 @@ def test_every_generated_function_has_a_part_of_the_budget(report: fr.Report) ->
         "control law and estimators (from SymPy)"
     assert part_of("wmr_asmc_check_config_detail") == part_of("wmr_check_nominal") == \
         "configuration checks"
-    assert part_of("wmr_tdroc_fingerprint") == "configuration fingerprint"
+    assert part_of("wmr_tdroc_config_unchanged") == "configuration comparison"
+    assert part_of("wmr_norm5") == part_of("wmr_norm_scaled") == \
+        "control law and estimators (from SymPy)"
     assert part_of("wmr_paper_minv_norm") == "configuration-derived data, init, reset"
     assert part_of("wmr_something_new") == UNCLASSIFIED
 
@@ -162,14 +164,14 @@ def test_frozen_image_meets_the_firmware_goals(report: fr.Report) -> None:
     """Issue 12's Cortex-M4 goals for a TDROC-only image, met by the build with the
     configuration compiled in (`wmr freeze`) and the minimal formulation: <= 3 KB of
     generated code, <= 512 B of step stack through every callee, no double helpers; and
-    that build has none of the configuration checks, fingerprint or derivation."""
+    that build has none of the configuration checks, comparison or derivation."""
     minimal = report.frozen["MINIMAL"]
     assert minimal.own_text <= 3 * 1024, minimal.own_functions
     assert minimal.step_stack.complete and minimal.step_stack.bytes <= 512
     assert not minimal.doubles
     for img in report.frozen.values():
         parts = budget(img.own_functions)
-        assert parts["configuration checks"] == parts["configuration fingerprint"] == 0
+        assert parts["configuration checks"] == parts["configuration comparison"] == 0
         assert not any(name.endswith(("_minv_norm", "controller_p", "check_config_detail"))
                        for name in img.own_functions)
     # Freezing removes code and adds only the configuration and state as constants.

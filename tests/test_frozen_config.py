@@ -23,6 +23,7 @@ from runtime import cbuild
 from runtime.experiment import Experiment
 from runtime.freeze_command import main as freeze_main
 from runtime.frozen_config import (
+    FROZEN_STATE_OMITS,
     FreezeError,
     freeze,
     frozen_macro,
@@ -74,8 +75,9 @@ def _inputs(nq: int, steps: int, seed: int) -> list[list[np.ndarray]]:
 
 
 def _state_fields(lib: cbuild.CLibrary, state: Any) -> list[str]:
-    """Every field's exact value (padding bytes differ: _init copies a local)."""
-    return initializer_lines(lib.ffi, state, lib.float32)
+    """Every field's exact value (padding bytes differ: _init copies a local) but the run-time
+    build's copy of the configuration, which a frozen build's state does not have."""
+    return initializer_lines(lib.ffi, state, lib.float32, omit=FROZEN_STATE_OMITS)
 
 
 def _run(lib: cbuild.CLibrary, pre: str, name: str, cfg: Any, nq: int, nu: int,
@@ -165,7 +167,8 @@ def test_frozen_build_takes_its_configuration_only(tmp_path: Path) -> None:
 
 
 def test_frozen_state_is_what_init_leaves() -> None:
-    """The header's state is the bytes _init writes (P, weights, ‖M̂⁻¹‖, fingerprint)."""
+    """The header's state is the bytes _init writes (P, weights, ‖M̂⁻¹‖) without the copy of
+    the configuration a run-time state keeps (the frozen build's is a constant)."""
     code = load_robot_code("")
     lib = cbuild.build(False)
     cfg = controller_config(lib, code, "tdroc", "paper", code.params, Experiment())
@@ -173,7 +176,8 @@ def test_frozen_state_is_what_init_leaves() -> None:
     state = lib.ffi.new("wmr_tdroc_state_t *")
     assert lib.lib.wmr_tdroc_init(state, cfg) == 0
     assert f".minv_norm = {real_literal(state.minv_norm, False)}" in text
-    assert f".config_fp = {state.config_fp}u" in text
+    assert ".config = " not in text and ".config = {" in "\n".join(
+        initializer_lines(lib.ffi, state, False))
     assert ".p12 = {" + ", ".join(real_literal(x, False) for x in state.p12) + "}" in text
 
 
@@ -361,3 +365,59 @@ def test_frozen_builds_pass_the_strict_compilers(tmp_path: Path, name: str) -> N
                  f"-I{out}", str(cbuild.GENERATED_C / f"wmr_{name}.c")],
                 capture_output=True, text=True)
             assert proc.returncode == 0 and not proc.stderr.strip(), (compiler, proc.stderr)
+
+
+SMALL_ROBOT = Path(__file__).resolve().parent / "robots" / "small_robot.toml"
+
+
+@pytest.fixture(scope="module")
+def small_robot_code(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The generated code of tests/robots/small_robot.toml (a TurtleBot-sized robot whose
+    paper formulation `wmr stability` predicts unstable)."""
+    from codegen.__main__ import main as model_main
+
+    out = tmp_path_factory.mktemp("small_robot_code")
+    assert model_main(["--robot", str(SMALL_ROBOT), "--out", str(out)]) == 0
+    return out
+
+
+def test_freeze_refuses_what_stability_calls_unstable(
+        tmp_path: Path, small_robot_code: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 25: the small robot's paper formulation is predicted unstable (spectral radius
+    1.166 > 1, as `wmr stability --robot` says): asked for, it is refused in one line that
+    names the verdict and the stable formulation, and nothing is written; without
+    --formulation the minimal one is frozen, with its verdict in the header; --force
+    freezes the unstable one and says so."""
+    out = tmp_path / "fw"
+    base = ["--controller", "tdroc", "--robot", str(small_robot_code), "--out", str(out)]
+    capsys.readouterr()
+    assert freeze_main([*base, "--formulation", "paper"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "tdroc/paper UNSTABLE: spectral radius 1.166" in err
+    assert "tdroc/minimal is predicted stable (spectral radius 0.872)" in err
+    assert "--formulation minimal" in err and "--force" in err
+    assert not out.exists()
+    assert freeze_main(base) == 0
+    assert "freezing the minimal formulation" in capsys.readouterr().err
+    text = (out / "wmr_tdroc_frozen.h").read_text()
+    assert "--formulation minimal" in text and ".formulation = 1," in text
+    assert "Sampled-data verdict: tdroc/minimal stable: spectral radius 0.872" in text
+    assert freeze_main([*base, "--formulation", "paper", "--force"]) == 0
+    assert "frozen anyway (--force)" in capsys.readouterr().err
+    text = (out / "wmr_tdroc_frozen.h").read_text()
+    assert ".formulation = 0," in text and "UNSTABLE" in text and "(frozen with --force)" in text
+
+
+def test_freeze_keeps_drishti_s_paper_formulation(tmp_path: Path) -> None:
+    """Drishti's paper formulation is predicted stable: the default stays paper, with the
+    verdict (spectral radius below 1) in the header; a robot without a verdict (the
+    trailer) is frozen with a note saying so."""
+    assert freeze_main(["--controller", "tdc", "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "wmr_tdc_frozen.h").read_text()
+    assert ".formulation = 0," in text
+    found = re.search(r"Sampled-data verdict: tdc/paper stable: spectral radius (\S+) ", text)
+    assert found is not None and float(found.group(1)) < 1.0
+    assert freeze_main(["--controller", "tdc", "--robot", "trailer", "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "trailer_tdc_frozen.h").read_text()
+    assert "Sampled-data verdict: no sampled-data verdict for robot trailer" in text

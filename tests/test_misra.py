@@ -38,7 +38,7 @@ def test_frozen_build_adds_no_deviation(tmp_path: Path) -> None:
     documented = documented_rules()
     assert set(found) <= set(documented), sorted(set(found) - set(documented))
     assert all(found[r] <= documented[r].findings for r in found), found
-    # the step's fingerprint re-validation is not in this build (so cppcheck analysed it)
+    # the step's comparison and re-validation are not in this build (so cppcheck analysed it)
     assert found["15.5"] < documented["15.5"].findings
 
 

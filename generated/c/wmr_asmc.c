@@ -30,7 +30,7 @@ wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
     if (status != WMR_OK) {
         return status;
     }
-    if (!wmr_positive_at_most(config->eps, WMR_GAIN_MAX)) {
+    if (!wmr_within(config->eps, WMR_GAIN_MIN, WMR_GAIN_MAX)) {
         return wmr_fail(detail, WMR_ERR_BAD_EPS, WMR_FIELD_EPS, -1);
     }
     if (!wmr_nonnegative_at_most(config->gamma, WMR_GAIN_MAX)) {
@@ -52,79 +52,47 @@ wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
 }
 
 #ifndef WMR_ASMC_FROZEN
-/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
-   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
-static uint32_t wmr_real_word(wmr_real_t x)
+/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
+static wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
-        uint32_t words[sizeof(wmr_real_t) / sizeof(uint32_t)];
+        wmr_bits_t bits;
     } rep;
-    uint32_t word = 0u;
-    unsigned int i;
     rep.value = x;
-    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        word = (word * 2654435761u) ^ rep.words[i];
-    }
-    return word;
+    return rep.bits;
 }
 
-/* FNV-1a (32 bit) step. */
-static uint32_t wmr_fnv(uint32_t hash, uint32_t word)
+/* Whether *config is, value by value and bit for bit, the configuration _init validated and
+   kept in the state (padding is never compared): exact, so no change goes unnoticed. */
+static bool wmr_asmc_config_unchanged(const wmr_asmc_config_t *config,
+    const wmr_asmc_config_t *kept)
 {
-    return (hash ^ word) * 16777619u;
-}
-
-/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
-   k mod 4: independent multiply chains instead of one 25 long), then FNV-1a
-   of the lanes. Every field, value by value (padding never hashed): the reals in struct order,
-   then the ints; the reals gathered into one array so that one loop hashes them. */
-static uint32_t wmr_asmc_fingerprint(const wmr_asmc_config_t *config)
-{
-    const wmr_real_t reals[24] = {
-        config->nominal.m,
-        config->nominal.Iz,
-        config->nominal.K,
-        config->nominal.Iw,
-        config->nominal.r,
-        config->nominal.b,
-        config->nominal.d,
-        config->k1[0],
-        config->k1[1],
-        config->k1[2],
-        config->k1[3],
-        config->k1[4],
-        config->k2[0],
-        config->k2[1],
-        config->k2[2],
-        config->k2[3],
-        config->k2[4],
-        config->q_pos,
-        config->q_vel,
-        config->h,
-        config->tau_max,
-        config->eps,
-        config->gamma,
-        config->gain0
-    };
-    uint32_t lane0 = 2166136261u;
-    uint32_t lane1 = 2166136261u;
-    uint32_t lane2 = 2166136261u;
-    uint32_t lane3 = 2166136261u;
-    int k;
-    for (k = 0; k < 24; k += 4) {
-        lane0 = wmr_fnv(lane0, wmr_real_word(reals[k]));
-        lane1 = wmr_fnv(lane1, wmr_real_word(reals[k + 1]));
-        lane2 = wmr_fnv(lane2, wmr_real_word(reals[k + 2]));
-        lane3 = wmr_fnv(lane3, wmr_real_word(reals[k + 3]));
+    wmr_bits_t diff = 0u;
+    int i;
+    for (i = 0; i < 5; ++i) {
+        diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
+        diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
     }
-    lane0 = wmr_fnv(lane0, (uint32_t)config->formulation);
-    return wmr_fnv(wmr_fnv(wmr_fnv(wmr_fnv(2166136261u, lane0), lane1), lane2), lane3);
+    diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
+    diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
+    diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
+    diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
+    diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
+    diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
+    diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
+    diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
+    diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
+    diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);
+    diff |= wmr_real_bits(config->tau_max) ^ wmr_real_bits(kept->tau_max);
+    diff |= wmr_real_bits(config->eps) ^ wmr_real_bits(kept->eps);
+    diff |= wmr_real_bits(config->gamma) ^ wmr_real_bits(kept->gamma);
+    diff |= wmr_real_bits(config->gain0) ^ wmr_real_bits(kept->gain0);
+    return (diff == 0u) && (config->formulation == kept->formulation);
 }
-
 #endif
 
-/* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
+/* The history, estimates and outputs as _init leaves them (P and the configuration kept). */
 static void wmr_asmc_clear(wmr_asmc_state_t *s)
 {
     int i;
@@ -171,7 +139,7 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
         return status;
     }
     fresh.magic = WMR_STATE_MAGIC;
-    fresh.config_fp = wmr_asmc_fingerprint(config);
+    fresh.config = *config;
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
     fresh.gain0 = config->gain0;
     wmr_asmc_clear(&fresh);
@@ -246,17 +214,17 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
     }
     cfg = &wmr_asmc_frozen_config;
 #else
-    /* The configuration _init validated has this fingerprint: only a different one is
-       validated again (its error first, else CONFIG_CHANGED): the same statuses as
-       validating every step, without the cost. */
-    if (wmr_asmc_fingerprint(config) != state->config_fp) {
+    /* Only a configuration that differs from the one _init validated and kept is validated
+       again (its error first, else CONFIG_CHANGED): the statuses of validating every step,
+       without the cost. The step then reads the kept copy, equal to *config bit for bit. */
+    if (!wmr_asmc_config_unchanged(config, &state->config)) {
         status = wmr_asmc_check_config_detail(config, detail);
         if (status != WMR_OK) {
             return status;
         }
         return wmr_fail(detail, WMR_ERR_CONFIG_CHANGED, WMR_FIELD_CONFIG, -1);
     }
-    cfg = config;
+    cfg = &state->config;
 #endif
     status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != WMR_OK) {
@@ -286,7 +254,7 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
     out_tau[0] = paper ? u[3] : u[0];
     out_tau[1] = paper ? u[4] : u[1];
-    u_discarded = paper ? WMR_SQRT(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) : WMR_LIT(0.0);
+    u_discarded = paper ? wmr_norm3(u[0], u[1], u[2]) : WMR_LIT(0.0);  /* cannot overflow */
     /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
        then s/||s|| in the switching term is 0, so that step is not done either. One test for
        all (x - x is NaN exactly when x is not finite), then which one, in the status order. */

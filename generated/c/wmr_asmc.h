@@ -16,21 +16,23 @@
 extern "C" {
 #endif
 
-/* Configuration of ASMC; validated by wmr_asmc_init and by every step, against
-   the bounds of wmr_controller.h. A step refuses a configuration that differs from the one
-   given to _init (WMR_ERR_CONFIG_CHANGED): call _init to change it. */
+/* Configuration of ASMC; validated by wmr_asmc_init against the bounds
+   of wmr_controller.h and kept in the state; a step refuses a configuration that differs
+   from it in any bit of any value (WMR_ERR_CONFIG_CHANGED, or the field's error if it is
+   invalid): call _init to change it. */
 typedef struct {
     wmr_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* WMR_FORMULATION_PAPER or WMR_FORMULATION_MINIMAL */
-    wmr_real_t k1[5];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[3],
-                               k1[4] */
-    wmr_real_t k2[5];       /* diagonal of K2 (18), (0, GAIN_MAX] */
-    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0, GAIN_MAX] */
+    wmr_real_t k1[5];       /* diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form uses
+                               k1[3], k1[4] */
+    wmr_real_t k2[5];       /* diagonal of K2 (18), [GAIN_MIN, GAIN_MAX] */
+    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, [GAIN_MIN,
+                               GAIN_MAX] */
     wmr_real_t q_vel;
     wmr_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
     wmr_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
                                clipped */
-    wmr_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
+    wmr_real_t eps;         /* boundary layer of (24)/(25), [GAIN_MIN, GAIN_MAX] */
     wmr_real_t gamma;       /* adaptation rate of the switching gain, [0, GAIN_MAX] */
     wmr_real_t gain0;       /* initial switching gain, [0, GAIN_MAX]; the gain is capped at
                                GAIN_MAX */
@@ -41,7 +43,9 @@ typedef struct {
     long magic;             /* WMR_STATE_MAGIC once initialised */
     uint32_t steps;         /* completed steps, saturating at WMR_STEPS_MAX (only steps >= 2
                                matters) */
-    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
+#ifndef WMR_ASMC_FROZEN
+    wmr_asmc_config_t config; /* the configuration _init validated; a step compares with it */
+#endif
     wmr_real_t p12[5];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     wmr_real_t p22[5];
     wmr_real_t q_prev[5];   /* q(t-h) */
@@ -66,7 +70,7 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
 
 /**
  * Back to the state _init left (same configuration): history, step count, estimates and
- * the adapted gain (to gain0) cleared; P and the configuration fingerprint kept.
+ * the adapted gain (to gain0) cleared; P and the configuration kept.
  * @return WMR_OK, WMR_ERR_NULL_POINTER or WMR_ERR_NOT_INITIALISED (state then untouched).
  */
 wmr_status_t wmr_asmc_reset(wmr_asmc_state_t *state);
@@ -103,8 +107,9 @@ wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
    `freeze` command validated it on the host with this code, ran _init there and wrote
    wmr_asmc_frozen.h (that configuration, and the state _init left). _init and every
    step then take &wmr_asmc_frozen_config only (another pointer:
-   WMR_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
-   image carries no configuration checks or derivation. _check_config still validates any
+   WMR_ERR_CONFIG_CHANGED, nothing written) and neither validate nor compare it, so the
+   image carries no configuration checks or derivation, and the state no copy of it. _check_config
+   still validates any
    configuration. The header is tied to the code it was made with: freeze again after
    regenerating. */
 extern const wmr_asmc_config_t wmr_asmc_frozen_config;

@@ -25,6 +25,12 @@ int wmr_positive(wmr_real_t x)
     return isfinite(x) && x > WMR_LIT(0.0);
 }
 
+/* With min, max finite, the two compares reject NaN (every compare false) and +-Inf. */
+int wmr_within(wmr_real_t x, wmr_real_t min, wmr_real_t max)
+{
+    return (x >= min) && (x <= max);
+}
+
 /* With max finite, the two compares reject NaN (every compare false) and +-Inf as well. */
 int wmr_positive_at_most(wmr_real_t x, wmr_real_t max)
 {
@@ -40,10 +46,8 @@ int wmr_nonnegative_at_most(wmr_real_t x, wmr_real_t max)
    their bits, and +Inf and every NaN lie above every finite value, so |x| <= bound (finite)
    is magnitude_bits(x) <= magnitude_bits(bound), NaN and Inf included, in integer compares. */
 #ifdef WMR_FLOAT32
-typedef uint32_t wmr_bits_t;
 #define WMR_MAGNITUDE_MASK 0x7fffffffu
 #else
-typedef uint64_t wmr_bits_t;
 #define WMR_MAGNITUDE_MASK UINT64_C(0x7fffffffffffffff)
 #endif
 
@@ -86,17 +90,17 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
         return wmr_fail(detail, WMR_ERR_BAD_SAMPLE_TIME, WMR_FIELD_H, -1);
     }
     for (i = 0; i < 5; ++i) {
-        if (!wmr_positive_at_most(k1[i], WMR_GAIN_MAX)) {
+        if (!wmr_within(k1[i], WMR_GAIN_MIN, WMR_GAIN_MAX)) {
             return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_K1, i);
         }
-        if (!wmr_positive_at_most(k2[i], WMR_GAIN_MAX)) {
+        if (!wmr_within(k2[i], WMR_GAIN_MIN, WMR_GAIN_MAX)) {
             return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_K2, i);
         }
     }
-    if (!wmr_positive_at_most(q_pos, WMR_GAIN_MAX)) {
+    if (!wmr_within(q_pos, WMR_GAIN_MIN, WMR_GAIN_MAX)) {
         return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_Q_POS, -1);
     }
-    if (!wmr_positive_at_most(q_vel, WMR_GAIN_MAX)) {
+    if (!wmr_within(q_vel, WMR_GAIN_MIN, WMR_GAIN_MAX)) {
         return wmr_fail(detail, WMR_ERR_BAD_GAINS, WMR_FIELD_Q_VEL, -1);
     }
     for (i = 0; i < 5; ++i) {
@@ -116,9 +120,19 @@ wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real
 
 wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail)
 {
-    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1):
-       !(|p| <= bound) holds for NaN and +-Inf as well. */
-    static const wmr_real_t bound[7] = {
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1),
+       and a positive one at least its robot file's value / NOMINAL_FACTOR: the two compares
+       fail for NaN as well. */
+    static const wmr_real_t lowest[7] = {
+        -WMR_LIT(36000.0),  /* m */
+        -WMR_LIT(5720.0),  /* Iz */
+        -WMR_LIT(1000.0),  /* K */
+        -WMR_LIT(1000.0),  /* Iw */
+        WMR_LIT(9.6e-05),  /* r */
+        WMR_LIT(0.000414),  /* b */
+        -WMR_LIT(1000.0)  /* d */
+    };
+    static const wmr_real_t highest[7] = {
         WMR_LIT(36000.0),  /* m */
         WMR_LIT(5720.0),  /* Iz */
         WMR_LIT(1000.0),  /* K */
@@ -139,7 +153,7 @@ wmr_status_t wmr_check_nominal(const wmr_params_t *p, wmr_error_detail_t *detail
     bool ok = true;
     int i;
     for (i = 0; i < 7; ++i) {
-        if (!(WMR_FABS(value[i]) <= bound[i])) {
+        if (!((value[i] >= lowest[i]) && (value[i] <= highest[i]))) {
             return wmr_fail(detail, WMR_ERR_BAD_NOMINAL, WMR_FIELD_NOMINAL, i);
         }
     }

@@ -24,6 +24,8 @@ extern "C" {
 #define WMR_H_MIN WMR_LIT(1.0e-6)
 /* largest sample time h [s] */
 #define WMR_H_MAX WMR_LIT(1.0)
+/* smallest K1, K2 and Q entry and eps: their ratios stay finite */
+#define WMR_GAIN_MIN WMR_LIT(1.0e-6)
 /* largest gain, eps, phi, gamma; cap of the adaptive gains */
 #define WMR_GAIN_MAX WMR_LIT(1.0e6)
 /* largest tau_max [N m] */
@@ -39,6 +41,13 @@ extern "C" {
 #define WMR_IS_PAPER(formulation) (WMR_FORMULATION_ONLY == WMR_FORMULATION_PAPER)
 #else
 #define WMR_IS_PAPER(formulation) ((formulation) == WMR_FORMULATION_PAPER)
+#endif
+
+/* A real's bits, as one unsigned integer of its width. */
+#ifdef WMR_FLOAT32
+typedef uint32_t wmr_bits_t;
+#else
+typedef uint64_t wmr_bits_t;
 #endif
 
 /* Which input or field an error is about: wmr_error_detail_t.field. */
@@ -91,6 +100,9 @@ typedef struct {
 /** Write {status, field, index} to detail (when not NULL) and return status. */
 wmr_status_t wmr_fail(wmr_error_detail_t *detail, wmr_status_t status, int field, int index);
 
+/** 1 if x is finite and min <= x <= max (min, max finite). */
+int wmr_within(wmr_real_t x, wmr_real_t min, wmr_real_t max);
+
 /** 1 if x is finite, > 0 and <= max (max finite). */
 int wmr_positive_at_most(wmr_real_t x, wmr_real_t max);
 
@@ -102,7 +114,8 @@ int wmr_positive(wmr_real_t x);
 
 /**
  * The configuration fields every controller has, in the order the status codes are
- * checked: formulation, h, K1 and K2, Q, torque limit.
+ * checked: formulation, h, K1 and K2 and Q (each in [GAIN_MIN, GAIN_MAX], then P of (20)
+ * finite), torque limit.
  */
 wmr_status_t wmr_check_base_config(int formulation, wmr_real_t h, const wmr_real_t k1[5],
     const wmr_real_t k2[5], wmr_real_t q_pos, wmr_real_t q_vel, wmr_real_t tau_max,

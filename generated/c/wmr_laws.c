@@ -269,7 +269,7 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 }
 
 /* wmr_paper_tdroc_gain: documented in wmr_laws.h.
-   operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt */
+   operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp */
 void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
     wmr_real_t *gain)
 {
@@ -367,18 +367,15 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
     const wmr_real_t w5 = w[5];
     const wmr_real_t w6 = w[6];
     const wmr_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)
-            + w1*WMR_SQRT(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9)
-            + w2*WMR_SQRT(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14)
-            + w3*WMR_SQRT(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19)
-            + w4*WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24)
-            + w5*WMR_SQRT(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29)
-            + w6*WMR_SQRT(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34)
-            + w7*WMR_SQRT(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39));
+    gain[0] = minv_norm_1*(w0*wmr_norm5(_t0, _t1, _t2, _t3, _t4)
+            + w1*wmr_norm5(_t5, _t6, _t7, _t8, _t9) + w2*wmr_norm5(_t10, _t11, _t12, _t13, _t14)
+            + w3*wmr_norm5(_t15, _t16, _t17, _t18, _t19) + w4*wmr_norm5(_t20, _t21, _t22, _t23,
+            _t24) + w5*wmr_norm5(_t25, _t26, _t27, _t28, _t29) + w6*wmr_norm5(_t30, _t31, _t32,
+            _t33, _t34) + w7*wmr_norm5(_t35, _t36, _t37, _t38, _t39));
 }
 
 /* wmr_paper_omega_difference: documented in wmr_laws.h.
-   operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt */
+   operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
 void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
@@ -396,7 +393,7 @@ void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older
     const wmr_real_t Om_new4 = newer[4];
     const wmr_real_t Om_old4 = older[4];
     const wmr_real_t _t4 = Om_new4 - Om_old4;
-    norm[0] = WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4);
+    norm[0] = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
 }
 
 /* wmr_paper_tdc_law: documented in wmr_laws.h.
@@ -559,7 +556,7 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
 }
 
 /* wmr_paper_tdroc_law: documented in wmr_laws.h.
-   operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
@@ -590,7 +587,7 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t p12_4 = p12[4];
     const wmr_real_t p22_4 = p22[4];
     const wmr_real_t _t4 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t5 = WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4);
+    const wmr_real_t _t5 = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t6 = gain_1/WMR_FMAX(_t5, eps_1);
@@ -663,7 +660,7 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 }
 
 /* wmr_paper_tdroc_law_trig: documented in wmr_laws.h.
-   operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
@@ -694,7 +691,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
     const wmr_real_t p12_4 = p12[4];
     const wmr_real_t p22_4 = p22[4];
     const wmr_real_t _t4 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t5 = WMR_SQRT(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4);
+    const wmr_real_t _t5 = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t6 = gain_1/WMR_FMAX(_t5, eps_1);
@@ -766,7 +763,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
 }
 
 /* wmr_paper_roc_law: documented in wmr_laws.h.
-   operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax */
+   operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
@@ -818,7 +815,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t p12_4 = p12[4];
     const wmr_real_t p22_4 = p22[4];
     const wmr_real_t _t18 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t19 = WMR_SQRT(_t14*_t14 + _t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18);
+    const wmr_real_t _t19 = wmr_norm5(_t14, _t15, _t16, _t17, _t18);
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
     const wmr_real_t _t20 = e0*k1_0 + edot0*k2_0;
@@ -841,9 +838,9 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t qdd_des4 = qddot_des[4];
     const wmr_real_t alpha = bounds[0];
     const wmr_real_t phi = bounds[1];
-    const wmr_real_t _t25 = (alpha*(WMR_SQRT(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23
-            + _t24*_t24) + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1 + qdd_des2*qdd_des2
-            + qdd_des3*qdd_des3 + qdd_des4*qdd_des4)) + phi)/(WMR_LIT(1.0) - alpha);
+    const wmr_real_t _t25 = (alpha*(wmr_norm5(_t20, _t21, _t22, _t23, _t24)
+            + wmr_norm5(qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4)) + phi)/(WMR_LIT(1.0)
+            - alpha);
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t26 = _t25/WMR_FMAX(_t19, eps_1);
     const wmr_real_t _t27 = _t14*_t26 + _t20 + qdd_des0;
@@ -893,7 +890,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
 }
 
 /* wmr_paper_asmc_law: documented in wmr_laws.h.
-   operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
@@ -946,7 +943,7 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t p12_4 = p12[4];
     const wmr_real_t p22_4 = p22[4];
     const wmr_real_t _t18 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t19 = WMR_SQRT(_t14*_t14 + _t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18);
+    const wmr_real_t _t19 = wmr_norm5(_t14, _t15, _t16, _t17, _t18);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t20 = gain_1/WMR_FMAX(_t19, eps_1);
@@ -1071,7 +1068,7 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 }
 
 /* wmr_minimal_tdroc_gain: documented in wmr_laws.h.
-   operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt */
+   operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp */
 void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
     const wmr_real_t *w, wmr_real_t *gain)
 {
@@ -1118,14 +1115,13 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
     const wmr_real_t w5 = w[5];
     const wmr_real_t w6 = w[6];
     const wmr_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(w0*WMR_SQRT(_t0*_t0 + _t1*_t1) + w1*WMR_SQRT(_t2*_t2 + _t3*_t3)
-            + w2*WMR_SQRT(_t4*_t4 + _t5*_t5) + w3*WMR_SQRT(_t6*_t6 + _t7*_t7)
-            + w4*WMR_SQRT(_t8*_t8 + _t9*_t9) + w5*WMR_SQRT(_t10*_t10 + _t11*_t11)
-            + w6*WMR_SQRT(_t12*_t12 + _t13*_t13) + w7*WMR_SQRT(_t14*_t14 + _t15*_t15));
+    gain[0] = minv_norm_1*(w0*wmr_norm2(_t0, _t1) + w1*wmr_norm2(_t2, _t3) + w2*wmr_norm2(_t4, _t5)
+            + w3*wmr_norm2(_t6, _t7) + w4*wmr_norm2(_t8, _t9) + w5*wmr_norm2(_t10, _t11)
+            + w6*wmr_norm2(_t12, _t13) + w7*wmr_norm2(_t14, _t15));
 }
 
 /* wmr_minimal_omega_difference: documented in wmr_laws.h.
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt */
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
 void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
     wmr_real_t *norm)
 {
@@ -1135,7 +1131,7 @@ void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *old
     const wmr_real_t Om_new1 = newer[1];
     const wmr_real_t Om_old1 = older[1];
     const wmr_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = WMR_SQRT(_t0*_t0 + _t1*_t1);
+    norm[0] = wmr_norm2(_t0, _t1);
 }
 
 /* wmr_minimal_tdc_law: documented in wmr_laws.h.
@@ -1180,7 +1176,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 }
 
 /* wmr_minimal_tdroc_law: documented in wmr_laws.h.
-   operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
@@ -1210,7 +1206,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
     const wmr_real_t p12_1 = p12[1];
     const wmr_real_t p22_1 = p22[1];
     const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = WMR_SQRT(_t6*_t6 + _t7*_t7);
+    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t9 = gain_1/WMR_FMAX(_t8, eps_1);
@@ -1233,7 +1229,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
 }
 
 /* wmr_minimal_roc_law: documented in wmr_laws.h.
-   operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax */
+   operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
@@ -1263,7 +1259,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t p12_1 = p12[1];
     const wmr_real_t p22_1 = p22[1];
     const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = WMR_SQRT(_t6*_t6 + _t7*_t7);
+    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
     const wmr_real_t _t9 = e0*k1_0 + edot0*k2_0;
@@ -1274,8 +1270,8 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t qdd_des1 = qddot_des[1];
     const wmr_real_t alpha = bounds[0];
     const wmr_real_t phi = bounds[1];
-    const wmr_real_t _t11 = (alpha*(WMR_SQRT(_t10*_t10 + _t9*_t9)
-            + WMR_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(WMR_LIT(1.0) - alpha);
+    const wmr_real_t _t11 = (alpha*(wmr_norm2(_t10, _t9) + wmr_norm2(qdd_des0, qdd_des1))
+            + phi)/(WMR_LIT(1.0) - alpha);
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t12 = _t11/WMR_FMAX(_t8, eps_1);
     const wmr_real_t _t13 = _t12*_t6 + _t9 + qdd_des0;
@@ -1299,7 +1295,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 }
 
 /* wmr_minimal_asmc_law: documented in wmr_laws.h.
-   operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,
@@ -1330,7 +1326,7 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
     const wmr_real_t p12_1 = p12[1];
     const wmr_real_t p22_1 = p22[1];
     const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = WMR_SQRT(_t6*_t6 + _t7*_t7);
+    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
     const wmr_real_t _t9 = gain_1/WMR_FMAX(_t8, eps_1);

@@ -156,7 +156,7 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *     weights
  * @param[out] gain [1] row-major (WMR_PAPER_TDROC_GAIN_GAIN_SIZE)
  *
- * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt
+ * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  */
 void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
     wmr_real_t *gain);
@@ -177,7 +177,7 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
  *     Om_old2, Om_old3, Om_old4 -- Omega(i+1)
  * @param[out] norm [1] row-major (WMR_PAPER_OMEGA_DIFFERENCE_NORM_SIZE)
  *
- * operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt
+ * operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  */
 void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm);
 
@@ -311,7 +311,7 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
  * @param[out] s [5] row-major (WMR_PAPER_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (WMR_PAPER_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -366,7 +366,7 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s [5] row-major (WMR_PAPER_TDROC_LAW_TRIG_S_SIZE)
  * @param[out] s_norm [1] row-major (WMR_PAPER_TDROC_LAW_TRIG_S_NORM_SIZE)
  *
- * operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -420,7 +420,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
  * @param[out] s_norm [1] row-major (WMR_PAPER_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (WMR_PAPER_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax
+ * operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -476,7 +476,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * @param[out] s_norm [1] row-major (WMR_PAPER_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (WMR_PAPER_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -550,7 +550,7 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *     weights
  * @param[out] gain [1] row-major (WMR_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
- * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
+ * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  */
 void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
     const wmr_real_t *w, wmr_real_t *gain);
@@ -571,7 +571,7 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
  *     Omega(i+1)
  * @param[out] norm [1] row-major (WMR_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
  *
- * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+ * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  */
 void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
     wmr_real_t *norm);
@@ -654,7 +654,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s [2] row-major (WMR_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -705,7 +705,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (WMR_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax
+ * operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -758,7 +758,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (WMR_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,

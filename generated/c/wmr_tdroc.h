@@ -16,16 +16,18 @@
 extern "C" {
 #endif
 
-/* Configuration of TDROC; validated by wmr_tdroc_init and by every step, against
-   the bounds of wmr_controller.h. A step refuses a configuration that differs from the one
-   given to _init (WMR_ERR_CONFIG_CHANGED): call _init to change it. */
+/* Configuration of TDROC; validated by wmr_tdroc_init against the bounds
+   of wmr_controller.h and kept in the state; a step refuses a configuration that differs
+   from it in any bit of any value (WMR_ERR_CONFIG_CHANGED, or the field's error if it is
+   invalid): call _init to change it. */
 typedef struct {
     wmr_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* WMR_FORMULATION_PAPER or WMR_FORMULATION_MINIMAL */
-    wmr_real_t k1[5];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[3],
-                               k1[4] */
-    wmr_real_t k2[5];       /* diagonal of K2 (18), (0, GAIN_MAX] */
-    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0, GAIN_MAX] */
+    wmr_real_t k1[5];       /* diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form uses
+                               k1[3], k1[4] */
+    wmr_real_t k2[5];       /* diagonal of K2 (18), [GAIN_MIN, GAIN_MAX] */
+    wmr_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, [GAIN_MIN,
+                               GAIN_MAX] */
     wmr_real_t q_vel;
     wmr_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
     wmr_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
@@ -33,7 +35,7 @@ typedef struct {
     int accel_estimator;    /* qddot(t-h) for (17): WMR_ACCEL_BACKWARD, _CENTRAL or _MATCHED */
     wmr_real_t rate_window; /* span [s] over which qdot is measured, 0..h (MATCHED): 0 for a
                                rate at the sample instant, h for encoder counts over h */
-    wmr_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
+    wmr_real_t eps;         /* boundary layer of (24)/(25), [GAIN_MIN, GAIN_MAX] */
     int n;                  /* window of past instants, 2..WMR_MAX_WINDOW */
     wmr_real_t a;           /* discount, 0 < a <= 1; weights a^(i-1), normalised */
     int hold_gain;          /* 0: k-hat from (25); 1: k-hat held at held_gain */
@@ -45,7 +47,9 @@ typedef struct {
     long magic;             /* WMR_STATE_MAGIC once initialised */
     uint32_t steps;         /* completed steps, saturating at WMR_STEPS_MAX (only steps >= 2
                                matters) */
-    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
+#ifndef WMR_TDROC_FROZEN
+    wmr_tdroc_config_t config; /* the configuration _init validated; a step compares with it */
+#endif
     wmr_real_t p12[5];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     wmr_real_t p22[5];
     wmr_real_t q_prev[5];   /* q(t-h) */
@@ -76,7 +80,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
 
 /**
  * Back to the state _init left (same configuration): history, step count, estimates and
- * the last outputs cleared; P, ||Mhat^-1|| and the configuration fingerprint kept.
+ * the last outputs cleared; P, ||Mhat^-1|| and the configuration kept.
  * @return WMR_OK, WMR_ERR_NULL_POINTER or WMR_ERR_NOT_INITIALISED (state then untouched).
  */
 wmr_status_t wmr_tdroc_reset(wmr_tdroc_state_t *state);
@@ -113,8 +117,9 @@ wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
    `freeze` command validated it on the host with this code, ran _init there and wrote
    wmr_tdroc_frozen.h (that configuration, and the state _init left). _init and every
    step then take &wmr_tdroc_frozen_config only (another pointer:
-   WMR_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
-   image carries no configuration checks or derivation. _check_config still validates any
+   WMR_ERR_CONFIG_CHANGED, nothing written) and neither validate nor compare it, so the
+   image carries no configuration checks or derivation, and the state no copy of it. _check_config
+   still validates any
    configuration. The header is tied to the code it was made with: freeze again after
    regenerating. */
 extern const wmr_tdroc_config_t wmr_tdroc_frozen_config;

@@ -18,7 +18,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x40061102u
+#define WMR_CODE_ID 0x244a87b2u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -204,6 +204,73 @@ static inline double wmr_cos(double x)
 #define WMR_FMAX(x, y) ((((x) >= (y)) || isnan(y)) ? (x) : (y))
 #define WMR_FMIN(x, y) ((((x) <= (y)) || isnan(y)) ? (x) : (y))
 
+#ifdef WMR_FLOAT32
+#define WMR_REAL_MAX FLT_MAX
+#else
+#define WMR_REAL_MAX DBL_MAX
+#endif
+
+/* 2-norms that cannot overflow while the norm is finite. wmr_norm<n>(x0, ..., x<n-1>) is
+   sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written, bit for bit, while that sum is
+   finite; beyond it (an entry above about 1.8e19 in float32, 1.3e154 in double) the entries
+   are scaled by the largest magnitude first (wmr_norm_scaled), so a finite vector never
+   gets an infinite norm. A NaN entry gives NaN. */
+static inline wmr_real_t wmr_norm_scaled(const wmr_real_t *x, int n)
+{
+    wmr_real_t top = WMR_LIT(0.0);
+    wmr_real_t sum = WMR_LIT(0.0);
+    int i;
+    for (i = 0; i < n; ++i) {
+        const wmr_real_t a = WMR_FABS(x[i]);
+        top = ((a > top) || isnan(a)) ? a : top;  /* a NaN stays */
+    }
+    if (!(top <= WMR_REAL_MAX) || !(top > WMR_LIT(0.0))) {
+        return top;  /* NaN, +Inf or 0: the norm itself */
+    }
+    for (i = 0; i < n; ++i) {
+        const wmr_real_t y = x[i] / top;
+        sum += y * y;
+    }
+    return top * WMR_SQRT(sum);
+}
+
+static inline wmr_real_t wmr_norm2(wmr_real_t x0, wmr_real_t x1)
+{
+    const wmr_real_t sum = x0 * x0 + x1 * x1;
+    if (sum <= WMR_REAL_MAX) {
+        return WMR_SQRT(sum);
+    }
+    {
+        const wmr_real_t x[2] = {x0, x1};
+        return wmr_norm_scaled(x, 2);
+    }
+}
+
+static inline wmr_real_t wmr_norm3(wmr_real_t x0, wmr_real_t x1, wmr_real_t x2)
+{
+    const wmr_real_t sum = x0 * x0 + x1 * x1 + x2 * x2;
+    if (sum <= WMR_REAL_MAX) {
+        return WMR_SQRT(sum);
+    }
+    {
+        const wmr_real_t x[3] = {x0, x1, x2};
+        return wmr_norm_scaled(x, 3);
+    }
+}
+
+static inline wmr_real_t wmr_norm5(wmr_real_t x0, wmr_real_t x1, wmr_real_t x2, wmr_real_t x3,
+    wmr_real_t x4)
+{
+    const wmr_real_t sum = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3 + x4 * x4;
+    if (sum <= WMR_REAL_MAX) {
+        return WMR_SQRT(sum);
+    }
+    {
+        const wmr_real_t x[5] = {x0, x1, x2, x3, x4};
+        return wmr_norm_scaled(x, 5);
+    }
+}
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -218,11 +285,12 @@ typedef enum {
     WMR_ERR_NONFINITE_OUTPUT = -4, /* a result is not finite */
     WMR_ERR_BAD_MEASUREMENT = -5, /* q or qdot is NaN, infinite or absurdly large */
     WMR_ERR_BAD_REFERENCE = -6, /* a reference is NaN, infinite or absurdly large */
-    WMR_ERR_BAD_EPS = -7, /* boundary layer eps <= 0 or not finite */
+    WMR_ERR_BAD_EPS = -7, /* boundary layer eps outside [WMR_GAIN_MIN, WMR_GAIN_MAX] */
     WMR_ERR_BAD_WINDOW = -8, /* window n outside 2..WMR_MAX_WINDOW */
     WMR_ERR_BAD_DISCOUNT = -9, /* discount a outside (0, 1] */
     WMR_ERR_BAD_SAMPLE_TIME = -10, /* h <= 0 or not finite */
-    WMR_ERR_BAD_GAINS = -11, /* K1, K2 or Q not positive definite */
+    WMR_ERR_BAD_GAINS = -11, /* a K1, K2 or Q entry outside [WMR_GAIN_MIN, WMR_GAIN_MAX], or P of
+                                (20) not finite */
     WMR_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     WMR_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     WMR_ERR_BAD_FORMULATION = -14, /* formulation is not PAPER or MINIMAL */
@@ -231,8 +299,8 @@ typedef enum {
     WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                     rate_window is outside [0, h] */
     WMR_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
-    WMR_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init
-                                    (fingerprint) */
+    WMR_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init (any bit
+                                    of any value) */
 } wmr_status_t;
 
 #define WMR_FORMULATION_PAPER 0 /* the five coordinates of (14), tau = B^T u */

@@ -38,11 +38,11 @@ STATUS: dict[str, int] = {
     "WMR_ERR_NONFINITE_OUTPUT": -4,  # a result is not finite
     "WMR_ERR_BAD_MEASUREMENT": -5,  # q or qdot is NaN, infinite or absurdly large
     "WMR_ERR_BAD_REFERENCE": -6,  # a reference is NaN, infinite or absurdly large
-    "WMR_ERR_BAD_EPS": -7,  # boundary layer eps <= 0 or not finite
+    "WMR_ERR_BAD_EPS": -7,  # boundary layer eps outside [WMR_GAIN_MIN, WMR_GAIN_MAX]
     "WMR_ERR_BAD_WINDOW": -8,  # window n outside 2..WMR_MAX_WINDOW
     "WMR_ERR_BAD_DISCOUNT": -9,  # discount a outside (0, 1]
     "WMR_ERR_BAD_SAMPLE_TIME": -10,  # h <= 0 or not finite
-    "WMR_ERR_BAD_GAINS": -11,  # K1, K2 or Q not positive definite
+    "WMR_ERR_BAD_GAINS": -11,  # a K1, K2 or Q entry outside [WMR_GAIN_MIN, WMR_GAIN_MAX], or P of (20) not finite
     "WMR_ERR_BAD_NOMINAL": -12,  # nominal parameters give a singular M-hat
     "WMR_ERR_BAD_TORQUE_LIMIT": -13,  # torque limit <= 0 or NaN
     "WMR_ERR_BAD_FORMULATION": -14,  # formulation is not PAPER or MINIMAL
@@ -50,7 +50,7 @@ STATUS: dict[str, int] = {
     "WMR_ERR_BAD_BOUNDS": -16,  # ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0
     "WMR_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "WMR_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
-    "WMR_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (fingerprint)
+    "WMR_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (any bit of any value)
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1
@@ -65,12 +65,15 @@ MAX_ABS_INPUT = 1.0e6
 # Plausibility bounds of the configuration (as <prefix>_controller.h).
 H_MIN = 1.0e-6  # smallest sample time h [s]
 H_MAX = 1.0  # largest sample time h [s]
+GAIN_MIN = 1.0e-6  # smallest K1, K2 and Q entry and eps: their ratios stay finite
 GAIN_MAX = 1.0e6  # largest gain, eps, phi, gamma; cap of the adaptive gains
 TORQUE_LIMIT_MAX = 1.0e6  # largest tau_max [N m]
 NOMINAL_FACTOR = 1.0e3  # |nominal p| <= this * max(|robot file's p|, 1)
 STEPS_MAX = 4294967295  # the step counter saturates here (uint32_t in C)
-# |nominal p| <= NOMINAL_BOUNDS[key] (NOMINAL_FACTOR times the robot file's |p|, or 1)
-NOMINAL_BOUNDS: dict[str, float] = {'m': 36000.0, 'I': 5720.0, 'K': 1000.0, 'Iw': 1000.0, 'r': 1000.0, 'b': 1000.0, 'd': 1000.0}
+# (lowest, highest) nominal p: |p| <= NOMINAL_FACTOR times the robot file's |p| (or 1), and a
+# parameter the model needs positive >= the robot file's p / NOMINAL_FACTOR
+NOMINAL_RANGES: dict[str, tuple[float, float]] = {'m': (-36000.0, 36000.0), 'I': (-5720.0, 5720.0), 'K': (-1000.0, 1000.0), 'Iw': (-1000.0, 1000.0), 'r': (9.6e-05, 1000.0), 'b': (0.000414, 1000.0), 'd': (-1000.0, 1000.0)}
+NOMINAL_BOUNDS: dict[str, float] = {k: high for k, (_, high) in NOMINAL_RANGES.items()}
 # <prefix>_field_t: which input or field an error is about.
 FIELDS: dict[str, int] = {
     "NONE": 0,  # no error
@@ -106,10 +109,6 @@ FIELDS: dict[str, int] = {
     "U_DISCARDED": 30,  # ||u rows dropped by tau = B^T u|| computed
     "P": 31,  # P of (20) from k1[index], k2[index], q_pos, q_vel is not finite
 }
-_FNV_OFFSET = 2166136261
-_FNV_PRIME = 16777619
-_FNV_MIX = 2654435761
-_FNV_LANES = 4
 # Python key -> C struct field where they differ (the C backend's field_renames).
 C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
 PARAM_KEYS = ("m", "I", "K", "Iw", "r", "b", "d", )
@@ -133,17 +132,9 @@ class ControllerError(ValueError):
         return self.code, FIELDS[self.field], self.index
 
 
-def _fnv(hash_: int, word: int) -> int:
-    """One FNV-1a (32 bit) step."""
-    return ((hash_ ^ word) * _FNV_PRIME) & 0xFFFFFFFF
-
-
-def _real_word(x: float) -> int:
-    """A double's two 32-bit words folded as the C ``<prefix>_real_word``: (w0 * MIX) ^ w1."""
-    word = 0
-    for (w,) in struct.iter_unpack("=I", struct.pack("=d", float(x))):
-        word = ((word * _FNV_MIX) & 0xFFFFFFFF) ^ w
-    return word
+def _real_bits(x: float) -> int:
+    """A double's bits, as the C ``<prefix>_real_bits`` (double build)."""
+    return int(struct.unpack("=Q", struct.pack("=d", float(x)))[0])
 
 
 @dataclass
@@ -177,6 +168,13 @@ def _positive(x: float) -> bool:
 
 def _positive_at_most(x: float, top: float) -> bool:
     return math.isfinite(x) and 0.0 < x <= top
+
+
+_GAINS = f"[{GAIN_MIN}, {GAIN_MAX}]"  # K1, K2, Q entries and eps
+
+
+def _within(x: float, low: float, top: float) -> bool:
+    return math.isfinite(x) and low <= x <= top
 
 
 def _nonnegative_at_most(x: float, top: float) -> bool:
@@ -215,7 +213,7 @@ class _Controller:
     def __init__(self, config: Config) -> None:
         self.check_config(config)
         self.config = config
-        self.config_fp = self.fingerprint(config)
+        self.config_bits = self.value_bits(config)
         self.p12 = np.zeros(5)
         self.p22 = np.zeros(5)
         for i in range(5):
@@ -262,28 +260,20 @@ class _Controller:
         return np.asarray(np.linalg.norm(self.omega[:-1] - self.omega[1:], axis=1))
 
     @classmethod
-    def fingerprint(cls, c: Config) -> int:
-        """The C ``config_fp`` (double build): FNV-1a in interleaved lanes (value k into lane
-        k mod _FNV_LANES) over the configuration's reals in C struct order, then its ints, a
-        value one word (an int as uint32, a real its folded words), then FNV-1a of the lanes."""
-        words = [_real_word(c.nominal[k]) for k in PARAM_KEYS]
-        ints = []
+    def value_bits(cls, c: Config) -> tuple[int, ...]:
+        """Every value of the configuration in C struct order, a real as its bits and an int
+        as it is: the constructor keeps them and a step compares, as the C compares the
+        caller's configuration with the copy ``_init`` kept (any bit of any value)."""
+        out = [_real_bits(c.nominal[k]) for k in PARAM_KEYS]
         for name, kind in cls.config_fields:
             value = getattr(c, name)
             if kind == "vector":
-                words += [_real_word(x) for x in np.asarray(value, dtype=np.float64).reshape(-1)]
+                out += [_real_bits(x) for x in np.asarray(value, dtype=np.float64).reshape(-1)]
             elif kind == "int":
-                ints.append(int(value) & 0xFFFFFFFF)
+                out.append(int(value))
             else:
-                words.append(_real_word(value))
-        words += ints
-        lanes = [_FNV_OFFSET] * _FNV_LANES
-        for k, word in enumerate(words):
-            lanes[k % _FNV_LANES] = _fnv(lanes[k % _FNV_LANES], word)
-        fp = _FNV_OFFSET
-        for lane in lanes:
-            fp = _fnv(fp, lane)
-        return fp
+                out.append(_real_bits(value))
+        return tuple(out)
 
     @classmethod
     def check_config(cls, c: Config) -> None:
@@ -300,22 +290,22 @@ class _Controller:
         if k1.size != 5 or k2.size != 5:
             raise bad("ERR_BAD_GAINS", "k1 and k2 need 5 entries each", "K1")
         for i in range(5):
-            if not _positive_at_most(float(k1[i]), GAIN_MAX):
-                raise bad("ERR_BAD_GAINS", f"k1[{i}] = {k1[i]!r} outside (0, {GAIN_MAX}]", "K1", i)
-            if not _positive_at_most(float(k2[i]), GAIN_MAX):
-                raise bad("ERR_BAD_GAINS", f"k2[{i}] = {k2[i]!r} outside (0, {GAIN_MAX}]", "K2", i)
-        if not _positive_at_most(c.q_pos, GAIN_MAX):
-            raise bad("ERR_BAD_GAINS", f"q_pos = {c.q_pos!r} outside (0, {GAIN_MAX}]", "Q_POS")
-        if not _positive_at_most(c.q_vel, GAIN_MAX):
-            raise bad("ERR_BAD_GAINS", f"q_vel = {c.q_vel!r} outside (0, {GAIN_MAX}]", "Q_VEL")
+            if not _within(float(k1[i]), GAIN_MIN, GAIN_MAX):
+                raise bad("ERR_BAD_GAINS", f"k1[{i}] = {k1[i]!r} outside {_GAINS}", "K1", i)
+            if not _within(float(k2[i]), GAIN_MIN, GAIN_MAX):
+                raise bad("ERR_BAD_GAINS", f"k2[{i}] = {k2[i]!r} outside {_GAINS}", "K2", i)
+        if not _within(c.q_pos, GAIN_MIN, GAIN_MAX):
+            raise bad("ERR_BAD_GAINS", f"q_pos = {c.q_pos!r} outside {_GAINS}", "Q_POS")
+        if not _within(c.q_vel, GAIN_MIN, GAIN_MAX):
+            raise bad("ERR_BAD_GAINS", f"q_vel = {c.q_vel!r} outside {_GAINS}", "Q_VEL")
         for i, (a, b) in enumerate(zip(k1, k2, strict=True)):
             pm = laws.lyapunov_p([float(a), float(b), float(c.q_pos), float(c.q_vel)])
             if not np.all(np.isfinite(pm)):
                 raise bad("ERR_BAD_GAINS", "P of (20) is not finite for these gains", "P", i)
         if not _positive_at_most(c.tau_max, TORQUE_LIMIT_MAX):
             raise bad("ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}", "TAU_MAX")
-        if cls.switching and not _positive_at_most(c.eps, GAIN_MAX):
-            raise bad("ERR_BAD_EPS", f"eps = {c.eps!r} outside (0, {GAIN_MAX}]", "EPS")
+        if cls.switching and not _within(c.eps, GAIN_MIN, GAIN_MAX):
+            raise bad("ERR_BAD_EPS", f"eps = {c.eps!r} outside {_GAINS}", "EPS")
         if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED):
             raise bad("ERR_BAD_ESTIMATOR", f"accel_estimator = {c.accel_estimator!r}",
                       "ACCEL_ESTIMATOR")
@@ -347,9 +337,10 @@ class _Controller:
         except (KeyError, TypeError, ValueError) as exc:
             raise bad("ERR_BAD_NOMINAL", f"nominal parameters: {exc}", "NOMINAL") from None
         for i, k in enumerate(PARAM_KEYS):
-            if not (math.isfinite(values[k]) and abs(values[k]) <= NOMINAL_BOUNDS[k]):
-                raise bad("ERR_BAD_NOMINAL", f"nominal {k} = {values[k]!r} beyond "
-                          f"{NOMINAL_BOUNDS[k]!r} in magnitude", "NOMINAL", i)
+            low, high = NOMINAL_RANGES[k]
+            if not low <= values[k] <= high:  # False for NaN
+                raise bad("ERR_BAD_NOMINAL", f"nominal {k} = {values[k]!r} outside "
+                          f"[{low!r}, {high!r}]", "NOMINAL", i)
         try:  # the generated guards of S^T M S (positive parameters, positive definite)
             model.minimal_forward_dynamics(np.zeros(5), np.zeros(2), np.zeros(2), values)
         except ValueError as exc:
@@ -362,6 +353,11 @@ class _Controller:
             raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + 'Iw > 0', "NOMINAL")
         if not values["I"]*values["m"] - values["K"]*values["K"] > 0.0:
             raise bad("ERR_BAD_NOMINAL", "nominal parameters violate " + "m I - K^2 > 0 (I - K^2/m is the yaw inertia about the centre of mass): a factor of det M-tilde, so the paper form's M-hat is singular without it", "NOMINAL")
+        if cls.window:  # ||Mhat^-1|| of (25) finite (else k-hat = Inf * 0 for an unchanging H1)
+            paper = c.formulation == FORMULATION_PAPER
+            minv_norm = float((laws.paper_minv_norm if paper else laws.minimal_minv_norm)(values)[0])
+            if not math.isfinite(minv_norm):
+                raise bad("ERR_BAD_NOMINAL", "||Mhat^-1|| of (25) is not finite", "NOMINAL")
 
     def state(self) -> dict[str, Any]:
         """A deep copy of the state (for inspection and for the C/Python cross-check), with
@@ -378,7 +374,7 @@ class _Controller:
              qddot_des: ArrayLike, config: Config | None = None) -> NDArray[np.float64]:
         """One step; mirrors ``wmr_<ctrl>_step``. Returns tau (2,)."""
         c = self.config if config is None else config
-        if self.fingerprint(c) != self.config_fp:  # validated by the constructor otherwise
+        if self.value_bits(c) != self.config_bits:  # validated by the constructor otherwise
             self.check_config(c)
             raise ControllerError("WMR_ERR_CONFIG_CHANGED",
                                   "the configuration differs from the constructor's", "CONFIG")
@@ -449,8 +445,9 @@ class _Controller:
             asmc_fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
             u, _, sn, g = asmc_fn(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
             s_norm, gain = float(sn[0]), cap_gain(float(g[0]))
+
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
-        u_discarded = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) if paper else 0.0
+        u_discarded = laws._norm(float(u[0]), float(u[1]), float(u[2])) if paper else 0.0
         # As in C: an overflowed ||s|| or ||u rows 1-3|| voids the step (see wmr_<ctrl>.c).
         for k in range(2):
             if not math.isfinite(float(tau[k])):
@@ -485,7 +482,7 @@ class TDC(_Controller):
     window = False
     bounds = False
     adaptive = False
-    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), )
 
 
@@ -498,7 +495,7 @@ class TDROC(_Controller):
     window = True
     bounds = False
     adaptive = False
-    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), ("eps", "real"), ("n", "int"), ("a", "real"), ("hold_gain", "int"), ("held_gain", "real"), )
 
 
@@ -511,7 +508,7 @@ class ROC(_Controller):
     window = False
     bounds = True
     adaptive = False
-    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("alpha", "real"), ("phi", "real"), )
 
 
@@ -524,5 +521,5 @@ class ASMC(_Controller):
     window = False
     bounds = False
     adaptive = True
-    # the configuration's fields after ``nominal`` in C struct order, for the fingerprint
+    # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )

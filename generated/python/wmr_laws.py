@@ -17,6 +17,23 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tdc_law_trig", "paper_tde", "paper_tde_trig", "paper_tdroc_gain", "paper_tdroc_law", "paper_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
+_REAL_MAX = 1.7976931348623157e308
+
+
+def _norm(*xs: float) -> float:
+    """sqrt(x0*x0 + x1*x1 + ...) as the C ``<prefix>_norm<n>`` (double): the sum as written
+    while it is finite, else the entries scaled by the largest magnitude first."""
+    total = 0.0
+    for x in xs:
+        total += x * x
+    if total <= _REAL_MAX:
+        return math.sqrt(total)
+    top = max((abs(x) for x in xs), key=lambda a: (a != a, a))  # a NaN stays
+    if not 0.0 < top <= _REAL_MAX:
+        return top
+    return top * math.sqrt(sum((x / top) * (x / top) for x in xs))
+
+
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
     """Row-major elements of ``value`` as Python floats; checks the count."""
     array = np.asarray(value, dtype=np.float64).reshape(-1)
@@ -336,7 +353,7 @@ def paper_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> ND
     Returns:
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt
+    operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
     """
     minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
     Om0_0, Om0_1, Om0_2, Om0_3, Om0_4, Om1_0, Om1_1, Om1_2, Om1_3, Om1_4, Om2_0, Om2_1, Om2_2, Om2_3, Om2_4, Om3_0, Om3_1, Om3_2, Om3_3, Om3_4, Om4_0, Om4_1, Om4_2, Om4_3, Om4_4, Om5_0, Om5_1, Om5_2, Om5_3, Om5_4, Om6_0, Om6_1, Om6_2, Om6_3, Om6_4, Om7_0, Om7_1, Om7_2, Om7_3, Om7_4, Om8_0, Om8_1, Om8_2, Om8_3, Om8_4 = _flat(omega, 45, "omega")
@@ -382,7 +399,7 @@ def paper_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> ND
     _t38 = Om7_3 - Om8_3
     _t39 = Om7_4 - Om8_4
     gain = np.array([
-        minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4) + w1*math.sqrt(_t5*_t5 + _t6*_t6 + _t7*_t7 + _t8*_t8 + _t9*_t9) + w2*math.sqrt(_t10*_t10 + _t11*_t11 + _t12*_t12 + _t13*_t13 + _t14*_t14) + w3*math.sqrt(_t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18 + _t19*_t19) + w4*math.sqrt(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + w5*math.sqrt(_t25*_t25 + _t26*_t26 + _t27*_t27 + _t28*_t28 + _t29*_t29) + w6*math.sqrt(_t30*_t30 + _t31*_t31 + _t32*_t32 + _t33*_t33 + _t34*_t34) + w7*math.sqrt(_t35*_t35 + _t36*_t36 + _t37*_t37 + _t38*_t38 + _t39*_t39)),
+        minv_norm_1*(w0*_norm(_t0, _t1, _t2, _t3, _t4) + w1*_norm(_t5, _t6, _t7, _t8, _t9) + w2*_norm(_t10, _t11, _t12, _t13, _t14) + w3*_norm(_t15, _t16, _t17, _t18, _t19) + w4*_norm(_t20, _t21, _t22, _t23, _t24) + w5*_norm(_t25, _t26, _t27, _t28, _t29) + w6*_norm(_t30, _t31, _t32, _t33, _t34) + w7*_norm(_t35, _t36, _t37, _t38, _t39)),
     ])
     return gain
 
@@ -400,7 +417,7 @@ def paper_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.flo
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt
+    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
     """
     Om_new0, Om_new1, Om_new2, Om_new3, Om_new4 = _flat(newer, 5, "newer")
     Om_old0, Om_old1, Om_old2, Om_old3, Om_old4 = _flat(older, 5, "older")
@@ -409,7 +426,7 @@ def paper_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.flo
     _t2 = Om_new2 - Om_old2
     _t3 = Om_new3 - Om_old3
     _t4 = Om_new4 - Om_old4
-    norm = np.array([math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)])
+    norm = np.array([_norm(_t0, _t1, _t2, _t3, _t4)])
     return norm
 
 
@@ -589,7 +606,7 @@ def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
         s: array of 5 (shape 5x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     e0, e1, e2, e3, e4 = _flat(e, 5, "e")
@@ -614,7 +631,7 @@ def paper_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     _t2 = e2*p12_2 + edot2*p22_2
     _t3 = e3*p12_3 + edot3*p22_3
     _t4 = e4*p12_4 + edot4*p22_4
-    _t5 = math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)
+    _t5 = _norm(_t0, _t1, _t2, _t3, _t4)
     _t6 = gain_1/max(_t5, eps_1)
     _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0
     _t8 = math.sin(theta)
@@ -683,7 +700,7 @@ def paper_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_d
         s: array of 5 (shape 5x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     trig_s0, trig_c0 = _flat(trig, 2, "trig")
     e0, e1, e2, e3, e4 = _flat(e, 5, "e")
@@ -708,7 +725,7 @@ def paper_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_d
     _t2 = e2*p12_2 + edot2*p22_2
     _t3 = e3*p12_3 + edot3*p22_3
     _t4 = e4*p12_4 + edot4*p22_4
-    _t5 = math.sqrt(_t0*_t0 + _t1*_t1 + _t2*_t2 + _t3*_t3 + _t4*_t4)
+    _t5 = _norm(_t0, _t1, _t2, _t3, _t4)
     _t6 = gain_1/max(_t5, eps_1)
     _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0
     _t8 = _t2*_t6 + e2*k1_2 + edot2*k2_2 + qdd_des2
@@ -774,7 +791,7 @@ def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, 
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 1 fmax
+    operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, thetadot, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -813,13 +830,13 @@ def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, 
     _t16 = e2*p12_2 + edot2*p22_2
     _t17 = e3*p12_3 + edot3*p22_3
     _t18 = e4*p12_4 + edot4*p22_4
-    _t19 = math.sqrt(_t14*_t14 + _t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18)
+    _t19 = _norm(_t14, _t15, _t16, _t17, _t18)
     _t20 = e0*k1_0 + edot0*k2_0
     _t21 = e1*k1_1 + edot1*k2_1
     _t22 = e2*k1_2 + edot2*k2_2
     _t23 = e3*k1_3 + edot3*k2_3
     _t24 = e4*k1_4 + edot4*k2_4
-    _t25 = (alpha*(math.sqrt(_t20*_t20 + _t21*_t21 + _t22*_t22 + _t23*_t23 + _t24*_t24) + math.sqrt(qdd_des0*qdd_des0 + qdd_des1*qdd_des1 + qdd_des2*qdd_des2 + qdd_des3*qdd_des3 + qdd_des4*qdd_des4)) + phi)/(1.0 - alpha)
+    _t25 = (alpha*(_norm(_t20, _t21, _t22, _t23, _t24) + _norm(qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4)) + phi)/(1.0 - alpha)
     _t26 = _t25/max(_t19, eps_1)
     _t27 = _t14*_t26 + _t20 + qdd_des0
     _t28 = _t16*_t26 + _t22 + qdd_des2
@@ -888,7 +905,7 @@ def paper_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike,
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, thetadot, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -928,7 +945,7 @@ def paper_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike,
     _t16 = e2*p12_2 + edot2*p22_2
     _t17 = e3*p12_3 + edot3*p22_3
     _t18 = e4*p12_4 + edot4*p22_4
-    _t19 = math.sqrt(_t14*_t14 + _t15*_t15 + _t16*_t16 + _t17*_t17 + _t18*_t18)
+    _t19 = _norm(_t14, _t15, _t16, _t17, _t18)
     _t20 = gain_1/max(_t19, eps_1)
     _t21 = _t14*_t20 + e0*k1_0 + edot0*k2_0 + qdd_des0
     _t22 = _t16*_t20 + e2*k1_2 + edot2*k2_2 + qdd_des2
@@ -1062,7 +1079,7 @@ def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> 
     Returns:
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
+    operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
     """
     minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
     Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 = _flat(omega, 18, "omega")
@@ -1084,7 +1101,7 @@ def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> 
     _t14 = Om7_0 - Om8_0
     _t15 = Om7_1 - Om8_1
     gain = np.array([
-        minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1) + w1*math.sqrt(_t2*_t2 + _t3*_t3) + w2*math.sqrt(_t4*_t4 + _t5*_t5) + w3*math.sqrt(_t6*_t6 + _t7*_t7) + w4*math.sqrt(_t8*_t8 + _t9*_t9) + w5*math.sqrt(_t10*_t10 + _t11*_t11) + w6*math.sqrt(_t12*_t12 + _t13*_t13) + w7*math.sqrt(_t14*_t14 + _t15*_t15)),
+        minv_norm_1*(w0*_norm(_t0, _t1) + w1*_norm(_t2, _t3) + w2*_norm(_t4, _t5) + w3*_norm(_t6, _t7) + w4*_norm(_t8, _t9) + w5*_norm(_t10, _t11) + w6*_norm(_t12, _t13) + w7*_norm(_t14, _t15)),
     ])
     return gain
 
@@ -1102,13 +1119,13 @@ def minimal_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.f
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
     """
     Om_new0, Om_new1 = _flat(newer, 2, "newer")
     Om_old0, Om_old1 = _flat(older, 2, "older")
     _t0 = Om_new0 - Om_old0
     _t1 = Om_new1 - Om_old1
-    norm = np.array([math.sqrt(_t0*_t0 + _t1*_t1)])
+    norm = np.array([_norm(_t0, _t1)])
     return norm
 
 
@@ -1189,7 +1206,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     del q  # not used by this function
     e0, e1 = _flat(e, 2, "e")
@@ -1217,7 +1234,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t5 = I_w + 0.25*_t1 + _t4
     _t6 = e0*p12_0 + edot0*p22_0
     _t7 = e1*p12_1 + edot1*p22_1
-    _t8 = math.sqrt(_t6*_t6 + _t7*_t7)
+    _t8 = _norm(_t6, _t7)
     _t9 = gain_1/max(_t8, eps_1)
     _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0
     _t11 = 0.25*_t0*m - _t4
@@ -1258,7 +1275,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 1 fmax
+    operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     del q  # not used by this function
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -1286,10 +1303,10 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t5 = I_w + 0.25*_t1 + _t4
     _t6 = e0*p12_0 + edot0*p22_0
     _t7 = e1*p12_1 + edot1*p22_1
-    _t8 = math.sqrt(_t6*_t6 + _t7*_t7)
+    _t8 = _norm(_t6, _t7)
     _t9 = e0*k1_0 + edot0*k2_0
     _t10 = e1*k1_1 + edot1*k2_1
-    _t11 = (alpha*(math.sqrt(_t10*_t10 + _t9*_t9) + math.sqrt(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(1.0 - alpha)
+    _t11 = (alpha*(_norm(_t10, _t9) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
     _t12 = _t11/max(_t8, eps_1)
     _t13 = _t12*_t6 + _t9 + qdd_des0
     _t14 = 0.25*_t0*m - _t4
@@ -1339,7 +1356,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     del q  # not used by this function
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -1368,7 +1385,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t5 = I_w + 0.25*_t1 + _t4
     _t6 = e0*p12_0 + edot0*p22_0
     _t7 = e1*p12_1 + edot1*p22_1
-    _t8 = math.sqrt(_t6*_t6 + _t7*_t7)
+    _t8 = _norm(_t6, _t7)
     _t9 = gain_1/max(_t8, eps_1)
     _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0
     _t11 = 0.25*_t0*m - _t4

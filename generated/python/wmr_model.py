@@ -17,6 +17,23 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = ["bias_forces", "forward_dynamics", "kinematics", "linearization", "mass_matrix", "minimal_bias_forces", "minimal_forward_dynamics", "minimal_mass_matrix"]
 
 
+_REAL_MAX = 1.7976931348623157e308
+
+
+def _norm(*xs: float) -> float:
+    """sqrt(x0*x0 + x1*x1 + ...) as the C ``<prefix>_norm<n>`` (double): the sum as written
+    while it is finite, else the entries scaled by the largest magnitude first."""
+    total = 0.0
+    for x in xs:
+        total += x * x
+    if total <= _REAL_MAX:
+        return math.sqrt(total)
+    top = max((abs(x) for x in xs), key=lambda a: (a != a, a))  # a NaN stays
+    if not 0.0 < top <= _REAL_MAX:
+        return top
+    return top * math.sqrt(sum((x / top) * (x / top) for x in xs))
+
+
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
     """Row-major elements of ``value`` as Python floats; checks the count."""
     array = np.asarray(value, dtype=np.float64).reshape(-1)

@@ -110,8 +110,8 @@ class LoopSetting:
     plant: tuple[tuple[str, float], ...]  # the simulated robot (with K_lat)
     h: float
     substeps: int
-    k1: float
-    k2: float
+    k1: tuple[float, ...]  # diagonal of K1 over the five coordinates of (14)
+    k2: tuple[float, ...]
     q_pos: float
     q_vel: float
     velocity: str
@@ -142,7 +142,8 @@ class ClosedLoop:
         self.friction = ffi.new("sim_friction_t *", [0.0, 0.0, 0.05])
         self.x = ffi.new("wmr_real_t[7]")
         self.tau = ffi.new("wmr_real_t[2]")
-        pm = [wmr_laws.lyapunov_p([s.k1, s.k2, s.q_pos, s.q_vel]) for _ in range(5)]
+        pm = [wmr_laws.lyapunov_p([a, b, s.q_pos, s.q_vel]) for a, b in zip(s.k1, s.k2,
+                                                                           strict=True)]
         self.p12 = np.array([p[1] for p in pm])
         self.p22 = np.array([p[2] for p in pm])
         self.ref = references.circle(dict(self.nom), s.h, ANALYSIS_TIME + 20 * s.h)
@@ -188,10 +189,9 @@ class ClosedLoop:
         (ε = 1 ≫ ‖s‖ of a linearisation), which is every controller's law there."""
         sl, ref = self.sl, self.ref
         e, edot = ref.q[k, sl] - q[sl], ref.qdot[k, sl] - qdot[sl]
-        nc = 5 if self.paper else 2
         fn = wmr_laws.paper_tdroc_law if self.paper else wmr_laws.minimal_tdroc_law
         u, _, s_norm = fn(
-            q, e, edot, ref.qddot[k, sl], [self.s.k1] * nc, [self.s.k2] * nc,
+            q, e, edot, ref.qddot[k, sl], list(self.s.k1[sl]), list(self.s.k2[sl]),
             self.p12[sl], self.p22[sl], h1, [gain], [1.0], self.nom,
         )  # fmt: skip
         if not s_norm[0] < 1.0:
@@ -375,8 +375,8 @@ def setting(
         plant=tuple(sorted(plant_parameters(robot, exp, plant).items())),
         h=c.h,
         substeps=exp.plant.substeps,
-        k1=c.k1,
-        k2=c.k2,
+        k1=(float(c.k1),) * 5,
+        k2=(float(c.k2),) * 5,
         q_pos=c.q_pos,
         q_vel=c.q_vel,
         velocity=sen.velocity,

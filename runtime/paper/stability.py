@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from runtime.experiment import (
+    ACCEL_CODES,
     VELOCITY_MODELS,
     Experiment,
     ExperimentFileError,
@@ -141,6 +142,77 @@ def analyse(
         eps_min=eps_min,
         measured_khat=khat,
     )
+
+
+@dataclass(frozen=True)
+class ConfigurationVerdict:
+    """The sampled-data verdict for one filled controller configuration (``wmr freeze``):
+    the pencil of its robot, sampling, sensing and estimator at its own gains."""
+
+    controller: str
+    formulation: str
+    stable: bool
+    spectral_radius: float
+    gain: float  # boundary-layer gain g = k/ε at the configuration
+    gain_source: str
+    h: float
+    sensing: str
+    estimator: str
+
+    def describe(self) -> str:
+        return (f"{self.controller}/{self.formulation} "
+                f"{'stable' if self.stable else 'UNSTABLE'}: spectral radius "
+                f"{self.spectral_radius:.3f} at k/ε = {self.gain:.3g} ({self.gain_source}); "
+                f"h = {self.h:g} s, {self.sensing} rates, {self.estimator} estimator")
+
+
+ESTIMATOR_NAMES = {code: name for name, code in ACCEL_CODES.items()}
+
+
+def configuration_verdict(
+    controller: str, formulation: str, nominal: dict[str, float], exp: Experiment,
+    config: Any,
+) -> ConfigurationVerdict:
+    """Stability of ``config`` (a filled ``wmr_<controller>_config_t``) on the robot whose
+    parameters are ``nominal`` (plant = model, as ``wmr stability`` with the nominal plant),
+    with the experiment's sensing and the configuration's h, gains, estimator and switching
+    gain: 0 (TDC), held_gain/ε (TDROC with k̂ held), φ/(1 − α)/ε (ROC at zero error, from
+    the configuration's bounds), else k̂ measured on the closed-loop circle / ε."""
+    k1 = tuple(float(x) for x in config.k1)
+    k2 = tuple(float(x) for x in config.k2)
+    uniform = len(set(k1)) == 1 and len(set(k2)) == 1
+    changes: dict[str, Any] = {"h": float(config.h), "q_pos": float(config.q_pos),
+                               "q_vel": float(config.q_vel), "tau_max": float(config.tau_max)}
+    for name in ("eps", "n", "a", "gamma"):
+        if hasattr(config, name):
+            changes[name] = type(getattr(exp.controller, name))(getattr(config, name))
+    if uniform:
+        changes.update(k1=k1[0], k2=k2[0])
+    exp = replace(exp, controller=replace(exp.controller, **changes))
+    loop_setting = replace(setting(controller, formulation, nominal, exp), k1=k1, k2=k2)
+    if hasattr(config, "accel_estimator"):
+        loop_setting = replace(loop_setting,
+                               estimator=ESTIMATOR_NAMES[int(config.accel_estimator)],
+                               rate_window=float(config.rate_window))
+    pen = pencil(loop_setting)
+    eps = float(getattr(config, "eps", 1.0))
+    if controller == "tdc":
+        g, source = 0.0, "TDC has no switching term"
+    elif controller == "roc":
+        g = float(config.phi) / (1.0 - float(config.alpha)) / eps
+        source = "ROC's ρ at zero error / ε"
+    elif controller == "tdroc" and int(config.hold_gain):
+        g, source = float(config.held_gain) / eps, "k̂ held / ε"
+    elif pen.radius(0.0) >= 1.0:
+        g, source = 0.0, "not measured: unstable without switching"
+    else:
+        g = measured_gain(controller, formulation, nominal, exp) / eps
+        source = "median k̂ of the closed-loop circle / ε" + (
+            "" if uniform else " (measured with K1, K2 of the experiment)")
+    return ConfigurationVerdict(
+        controller=controller, formulation=formulation, stable=pen.radius(g) < 1.0,
+        spectral_radius=pen.radius(g), gain=g, gain_source=source, h=float(config.h),
+        sensing=exp.sensing.velocity, estimator=loop_setting.estimator)
 
 
 def analyse_all(

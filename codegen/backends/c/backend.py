@@ -16,14 +16,20 @@ from codegen.backend import RobotTarget
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import format_c
 from codegen.backends.c.printer import CPrinter
-from codegen.backends.c.render import TEMPLATE_DIR, render_all_ir, stamp_code_id
+from codegen.backends.c.render import (
+    TEMPLATE_DIR,
+    norm_arities,
+    render_all_ir,
+    render_types,
+    stamp_code_id,
+)
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
     c_common_context,
     c_controller_context,
     defines,
-    nominal_bound,
+    nominal_range,
     status_codes,
 )
 from codegen.controller_layout import ControllerLayout
@@ -88,11 +94,15 @@ def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple
     }
 
 
-def nominal_bounds(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
-    """(C field, bound on |p|) per nominal parameter: ``NOMINAL_FACTOR`` times the robot
-    file's value, or times 1 when that is smaller than 1 in magnitude."""
-    return [(config.c_field(p.key), repr(nominal_bound(target.robot.lumped[p.key])))
-            for p in target.model.params]
+def nominal_bounds(target: RobotTarget, config: CConfig) -> list[tuple[str, str, str]]:
+    """(C field, lowest, highest) accepted value per nominal parameter
+    (``controller_api.nominal_range``)."""
+    model = target.model
+    out = []
+    for p in model.params:
+        low, high = nominal_range(target.robot.lumped[p.key], p.key in model.positive)
+        out.append((config.c_field(p.key), repr(low), repr(high)))
+    return out
 
 
 def payload_dependent(target: RobotTarget, config: CConfig) -> list[str]:
@@ -138,11 +148,9 @@ class CBackend:
         config = config_for(layout)
         pre = layout.prefix
         law = target.law_source
-        files = render_all_ir(
-            {m.name: m.functions for m in target.modules},
-            config,
-            source=f"{target.model_source}, {law}",
-        )
+        source = f"{target.model_source}, {law}"
+        files = render_all_ir({m.name: m.functions for m in target.modules}, config,
+                              source=source)
         param_fields = [config.c_field(p.key) for p in target.model.params]
         for suffix in ("h", "c"):
             files[f"{pre}_controller.{suffix}"] = _template(
@@ -170,6 +178,9 @@ class CBackend:
             "example_main.c.jinja", "codegen/generate.py", layout=layout,
             param_fields=param_fields, heavier=payload_dependent(target, config),
         )
+        # Again, with the norms the controllers call as well (u_discarded).
+        files.update(render_types([f.spec for m in target.modules for f in m.functions], config,
+                                  source=source, norms=norm_arities(files.values(), config)))
         stamp_code_id(files, config.types_header, f"{config.macro_prefix}CODE_ID",
                       exclude=("example_main.c",))
         return files

@@ -2,7 +2,8 @@
 
 Every floating literal goes through the literal macro (``WMR_LIT(0.5)`` is ``0.5f`` in the
 float build), every math function through a ``WMR_`` macro (``sinf`` in the float build),
-integer powers are products, ``x**(1/2)`` is ``WMR_SQRT``, ``Piecewise`` is a ternary and
+integer powers are products, ``x**(1/2)`` is ``WMR_SQRT`` (``wmr_norm<n>(x0, ...)`` for a sum of
+squares, which cannot overflow), ``Piecewise`` is a ternary and
 ``Max``/``Min``/``Abs`` are ``WMR_FMAX``/``WMR_FMIN``/``WMR_FABS``. Structure is shared
 with the Python printer and the op counter (:mod:`codegen.printer_base`).
 """
@@ -42,3 +43,7 @@ class CPrinter(ExpressionPrinterMixin, C99CodePrinter):
 
     def infinity(self) -> str:
         return f"{self.config.macro_prefix}INF"
+
+    def norm_call(self, args: Sequence[str]) -> str:
+        # <prefix>_norm<n>, a static inline function of the types header (render_types)
+        return f"{self.config.prefix}norm{len(args)}({', '.join(args)})"

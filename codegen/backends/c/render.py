@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import hashlib
 import keyword
-from collections.abc import Mapping, Sequence
+import re
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -726,11 +727,20 @@ def _base_context(config: CConfig, source: str, template: str) -> dict[str, obje
     }
 
 
+def norm_arities(texts: Iterable[str], config: CConfig) -> list[int]:
+    """The sizes n of the ``<prefix>_norm<n>`` calls in ``texts`` (the printers write one
+    for every square root of a sum of squares; ``render_types`` defines them)."""
+    call = re.compile(rf"\b{re.escape(config.prefix)}norm(\d+)\(")
+    return sorted({int(m.group(1)) for text in texts for m in call.finditer(text)})
+
+
 def render_types(
-    specs: Sequence[FunctionSpec], config: CConfig | None = None, *, source: str = ""
+    specs: Sequence[FunctionSpec], config: CConfig | None = None, *, source: str = "",
+    norms: Sequence[int] = (),
 ) -> dict[str, str]:
-    """``wmr_types.h``: scalar type, literal and math macros, status enum, and every struct
-    type used by ``specs`` (pass the specs of *all* modules so each struct is defined once)."""
+    """``wmr_types.h``: scalar type, literal and math macros, status enum, every struct
+    type used by ``specs`` (pass the specs of *all* modules so each struct is defined once)
+    and the overflow-safe norms of the sizes ``norms``."""
     config = config or CConfig()
     template = "types.h.jinja"
     text = template_util.render(
@@ -743,6 +753,7 @@ def render_types(
         inline_math=[m.name for m in config.math_macros if m.name in INLINE_MATH],
         generated_trig=[m.name for m in config.math_macros if m.name in GENERATED_TRIG],
         trig_bound=TRIG_BOUND,
+        norms=sorted(set(norms)),
         structs=_structs(specs, config),
         width=WIDTH,
         CODE_ID_UNSET=CODE_ID_UNSET,
@@ -837,12 +848,15 @@ def render_all_ir(
     *,
     source: str = "",
 ) -> dict[str, str]:
-    """:func:`render_all` from the functions' shared form (no CSE here)."""
+    """:func:`render_all` from the functions' shared form (no CSE here). The types header
+    is rendered last: it defines the norms the modules call."""
     config = config or CConfig()
     all_specs = [f.spec for functions in modules.values() for f in functions]
-    files = render_types(all_specs, config, source=source)
+    files: dict[str, str] = {}
     for module in sorted(modules):
         files.update(render_module(modules[module], module, config, source=source))
+    files.update(render_types(all_specs, config, source=source,
+                              norms=norm_arities(files.values(), config)))
     return files
 
 

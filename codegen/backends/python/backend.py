@@ -18,7 +18,7 @@ from codegen.backends.python.render import TEMPLATE_DIR, render_module
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
-    nominal_bound,
+    nominal_range,
     python_context,
     status_codes,
 )
@@ -90,7 +90,8 @@ class PythonBackend:
             c_field_names=dict(CConfig().field_renames),
             param_keys=[p.key for p in target.model.params],
             nominal_conditions=nominal_conditions(target),
-            nominal_bounds={p.key: nominal_bound(target.robot.lumped[p.key])
+            nominal_ranges={p.key: nominal_range(target.robot.lumped[p.key],
+                                                 p.key in target.model.positive)
                             for p in target.model.params},
             **python_context(),
         )

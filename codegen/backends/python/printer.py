@@ -48,3 +48,6 @@ class PyPrinter(ExpressionPrinterMixin, PythonCodePrinter):
 
     def infinity(self) -> str:
         return "math.inf"
+
+    def norm_call(self, args: Sequence[str]) -> str:
+        return f"_norm({', '.join(args)})"  # the module's helper, as the C <prefix>_norm<n>

@@ -30,7 +30,7 @@ trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *c
     if (status != TRAILER_OK) {
         return status;
     }
-    if (!trailer_positive_at_most(config->eps, TRAILER_GAIN_MAX)) {
+    if (!trailer_within(config->eps, TRAILER_GAIN_MIN, TRAILER_GAIN_MAX)) {
         return trailer_fail(detail, TRAILER_ERR_BAD_EPS, TRAILER_FIELD_EPS, -1);
     }
     if (!trailer_nonnegative_at_most(config->gamma, TRAILER_GAIN_MAX)) {
@@ -52,96 +52,70 @@ trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config)
 }
 
 #ifndef TRAILER_ASMC_FROZEN
-/* One 32-bit word of a real for the fingerprint: its words folded as w = (w * MIX) ^ word
-   (a float's one word; a double's two, the multiply of the first off the FNV chain). */
-static uint32_t trailer_real_word(trailer_real_t x)
+/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
+static trailer_bits_t trailer_real_bits(trailer_real_t x)
 {
     union {
         trailer_real_t value;
-        uint32_t words[sizeof(trailer_real_t) / sizeof(uint32_t)];
+        trailer_bits_t bits;
     } rep;
-    uint32_t word = 0u;
-    unsigned int i;
     rep.value = x;
-    for (i = 0u; i < (unsigned int)(sizeof rep.words / sizeof rep.words[0]); ++i) {
-        word = (word * 2654435761u) ^ rep.words[i];
-    }
-    return word;
+    return rep.bits;
 }
 
-/* FNV-1a (32 bit) step. */
-static uint32_t trailer_fnv(uint32_t hash, uint32_t word)
+/* Whether *config is, value by value and bit for bit, the configuration _init validated and
+   kept in the state (padding is never compared): exact, so no change goes unnoticed. */
+static bool trailer_asmc_config_unchanged(const trailer_asmc_config_t *config,
+    const trailer_asmc_config_t *kept)
 {
-    return (hash ^ word) * 16777619u;
-}
-
-/* The configuration's fingerprint: FNV-1a in 4 interleaved lanes (value k into lane
-   k mod 4: independent multiply chains instead of one 39 long), then FNV-1a
-   of the lanes. Every field, value by value (padding never hashed): the reals in struct order,
-   then the ints; the reals gathered into one array so that one loop hashes them. */
-static uint32_t trailer_asmc_fingerprint(const trailer_asmc_config_t *config)
-{
-    const trailer_real_t reals[38] = {
-        config->nominal.J_theta_cart,
-        config->nominal.J_theta_cart_left,
-        config->nominal.J_theta_cart_right,
-        config->nominal.J_theta_left,
-        config->nominal.J_theta_right,
-        config->nominal.J_theta_tractor,
-        config->nominal.J_x_tractor,
-        config->nominal.K_theta_cart_x_tractor,
-        config->nominal.K_theta_cart_x_tractor_2,
-        config->nominal.K_theta_tractor_x_tractor,
-        config->nominal.K_theta_tractor_x_tractor_2,
-        config->nominal.radius_cart_left,
-        config->nominal.radius_cart_right,
-        config->nominal.radius_left,
-        config->nominal.radius_right,
-        config->k1[0],
-        config->k1[1],
-        config->k1[2],
-        config->k1[3],
-        config->k1[4],
-        config->k1[5],
-        config->k1[6],
-        config->k1[7],
-        config->k2[0],
-        config->k2[1],
-        config->k2[2],
-        config->k2[3],
-        config->k2[4],
-        config->k2[5],
-        config->k2[6],
-        config->k2[7],
-        config->q_pos,
-        config->q_vel,
-        config->h,
-        config->tau_max,
-        config->eps,
-        config->gamma,
-        config->gain0
-    };
-    uint32_t lane0 = 2166136261u;
-    uint32_t lane1 = 2166136261u;
-    uint32_t lane2 = 2166136261u;
-    uint32_t lane3 = 2166136261u;
-    int k;
-    for (k = 0; k < 36; k += 4) {
-        lane0 = trailer_fnv(lane0, trailer_real_word(reals[k]));
-        lane1 = trailer_fnv(lane1, trailer_real_word(reals[k + 1]));
-        lane2 = trailer_fnv(lane2, trailer_real_word(reals[k + 2]));
-        lane3 = trailer_fnv(lane3, trailer_real_word(reals[k + 3]));
+    trailer_bits_t diff = 0u;
+    int i;
+    for (i = 0; i < 8; ++i) {
+        diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
+        diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
     }
-    lane0 = trailer_fnv(lane0, trailer_real_word(reals[36]));
-    lane1 = trailer_fnv(lane1, trailer_real_word(reals[37]));
-    lane2 = trailer_fnv(lane2, (uint32_t)config->formulation);
-    return trailer_fnv(trailer_fnv(trailer_fnv(trailer_fnv(2166136261u, lane0), lane1), lane2),
-            lane3);
+    diff |= trailer_real_bits(config->nominal.J_theta_cart)
+            ^ trailer_real_bits(kept->nominal.J_theta_cart);
+    diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
+            ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
+    diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
+            ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
+    diff |= trailer_real_bits(config->nominal.J_theta_left)
+            ^ trailer_real_bits(kept->nominal.J_theta_left);
+    diff |= trailer_real_bits(config->nominal.J_theta_right)
+            ^ trailer_real_bits(kept->nominal.J_theta_right);
+    diff |= trailer_real_bits(config->nominal.J_theta_tractor)
+            ^ trailer_real_bits(kept->nominal.J_theta_tractor);
+    diff |= trailer_real_bits(config->nominal.J_x_tractor)
+            ^ trailer_real_bits(kept->nominal.J_x_tractor);
+    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
+            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
+    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
+            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+    diff |= trailer_real_bits(config->nominal.radius_cart_left)
+            ^ trailer_real_bits(kept->nominal.radius_cart_left);
+    diff |= trailer_real_bits(config->nominal.radius_cart_right)
+            ^ trailer_real_bits(kept->nominal.radius_cart_right);
+    diff |= trailer_real_bits(config->nominal.radius_left)
+            ^ trailer_real_bits(kept->nominal.radius_left);
+    diff |= trailer_real_bits(config->nominal.radius_right)
+            ^ trailer_real_bits(kept->nominal.radius_right);
+    diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
+    diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
+    diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);
+    diff |= trailer_real_bits(config->tau_max) ^ trailer_real_bits(kept->tau_max);
+    diff |= trailer_real_bits(config->eps) ^ trailer_real_bits(kept->eps);
+    diff |= trailer_real_bits(config->gamma) ^ trailer_real_bits(kept->gamma);
+    diff |= trailer_real_bits(config->gain0) ^ trailer_real_bits(kept->gain0);
+    return (diff == 0u) && (config->formulation == kept->formulation);
 }
-
 #endif
 
-/* The history, estimates and outputs as _init leaves them (P, fingerprint kept). */
+/* The history, estimates and outputs as _init leaves them (P and the configuration kept). */
 static void trailer_asmc_clear(trailer_asmc_state_t *s)
 {
     int i;
@@ -189,7 +163,7 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
         return status;
     }
     fresh.magic = TRAILER_STATE_MAGIC;
-    fresh.config_fp = trailer_asmc_fingerprint(config);
+    fresh.config = *config;
     trailer_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
     fresh.gain0 = config->gain0;
@@ -264,17 +238,17 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     }
     cfg = &trailer_asmc_frozen_config;
 #else
-    /* The configuration _init validated has this fingerprint: only a different one is
-       validated again (its error first, else CONFIG_CHANGED): the same statuses as
-       validating every step, without the cost. */
-    if (trailer_asmc_fingerprint(config) != state->config_fp) {
+    /* Only a configuration that differs from the one _init validated and kept is validated
+       again (its error first, else CONFIG_CHANGED): the statuses of validating every step,
+       without the cost. The step then reads the kept copy, equal to *config bit for bit. */
+    if (!trailer_asmc_config_unchanged(config, &state->config)) {
         status = trailer_asmc_check_config_detail(config, detail);
         if (status != TRAILER_OK) {
             return status;
         }
         return trailer_fail(detail, TRAILER_ERR_CONFIG_CHANGED, TRAILER_FIELD_CONFIG, -1);
     }
-    cfg = config;
+    cfg = &state->config;
 #endif
     status = trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     if (status != TRAILER_OK) {

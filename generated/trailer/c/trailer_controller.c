@@ -26,6 +26,12 @@ int trailer_positive(trailer_real_t x)
     return isfinite(x) && x > TRAILER_LIT(0.0);
 }
 
+/* With min, max finite, the two compares reject NaN (every compare false) and +-Inf. */
+int trailer_within(trailer_real_t x, trailer_real_t min, trailer_real_t max)
+{
+    return (x >= min) && (x <= max);
+}
+
 /* With max finite, the two compares reject NaN (every compare false) and +-Inf as well. */
 int trailer_positive_at_most(trailer_real_t x, trailer_real_t max)
 {
@@ -41,10 +47,8 @@ int trailer_nonnegative_at_most(trailer_real_t x, trailer_real_t max)
    their bits, and +Inf and every NaN lie above every finite value, so |x| <= bound (finite)
    is magnitude_bits(x) <= magnitude_bits(bound), NaN and Inf included, in integer compares. */
 #ifdef TRAILER_FLOAT32
-typedef uint32_t trailer_bits_t;
 #define TRAILER_MAGNITUDE_MASK 0x7fffffffu
 #else
-typedef uint64_t trailer_bits_t;
 #define TRAILER_MAGNITUDE_MASK UINT64_C(0x7fffffffffffffff)
 #endif
 
@@ -83,17 +87,17 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
         return trailer_fail(detail, TRAILER_ERR_BAD_SAMPLE_TIME, TRAILER_FIELD_H, -1);
     }
     for (i = 0; i < 8; ++i) {
-        if (!trailer_positive_at_most(k1[i], TRAILER_GAIN_MAX)) {
+        if (!trailer_within(k1[i], TRAILER_GAIN_MIN, TRAILER_GAIN_MAX)) {
             return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_K1, i);
         }
-        if (!trailer_positive_at_most(k2[i], TRAILER_GAIN_MAX)) {
+        if (!trailer_within(k2[i], TRAILER_GAIN_MIN, TRAILER_GAIN_MAX)) {
             return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_K2, i);
         }
     }
-    if (!trailer_positive_at_most(q_pos, TRAILER_GAIN_MAX)) {
+    if (!trailer_within(q_pos, TRAILER_GAIN_MIN, TRAILER_GAIN_MAX)) {
         return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_Q_POS, -1);
     }
-    if (!trailer_positive_at_most(q_vel, TRAILER_GAIN_MAX)) {
+    if (!trailer_within(q_vel, TRAILER_GAIN_MIN, TRAILER_GAIN_MAX)) {
         return trailer_fail(detail, TRAILER_ERR_BAD_GAINS, TRAILER_FIELD_Q_VEL, -1);
     }
     for (i = 0; i < 8; ++i) {
@@ -113,9 +117,27 @@ trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
 
 trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_detail_t *detail)
 {
-    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1):
-       !(|p| <= bound) holds for NaN and +-Inf as well. */
-    static const trailer_real_t bound[15] = {
+    /* Each parameter finite and within NOMINAL_FACTOR of the robot file's value (or of 1),
+       and a positive one at least its robot file's value / NOMINAL_FACTOR: the two compares
+       fail for NaN as well. */
+    static const trailer_real_t lowest[15] = {
+        TRAILER_LIT(0.0051415),  /* J_theta_cart */
+        TRAILER_LIT(4e-06),  /* J_theta_cart_left */
+        TRAILER_LIT(4e-06),  /* J_theta_cart_right */
+        TRAILER_LIT(7.000000000000001e-05),  /* J_theta_left */
+        TRAILER_LIT(7.000000000000001e-05),  /* J_theta_right */
+        TRAILER_LIT(0.003421094),  /* J_theta_tractor */
+        TRAILER_LIT(0.0535),  /* J_x_tractor */
+        -TRAILER_LIT(8250.0),  /* K_theta_cart_x_tractor */
+        -TRAILER_LIT(1000.0),  /* K_theta_cart_x_tractor_2 */
+        -TRAILER_LIT(3750.0),  /* K_theta_tractor_x_tractor */
+        -TRAILER_LIT(1000.0),  /* K_theta_tractor_x_tractor_2 */
+        TRAILER_LIT(8e-05),  /* radius_cart_left */
+        TRAILER_LIT(8e-05),  /* radius_cart_right */
+        TRAILER_LIT(9.6e-05),  /* radius_left */
+        TRAILER_LIT(9.6e-05)  /* radius_right */
+    };
+    static const trailer_real_t highest[15] = {
         TRAILER_LIT(5141.500000000001),  /* J_theta_cart */
         TRAILER_LIT(1000.0),  /* J_theta_cart_left */
         TRAILER_LIT(1000.0),  /* J_theta_cart_right */
@@ -152,7 +174,7 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_
     bool ok = true;
     int i;
     for (i = 0; i < 15; ++i) {
-        if (!(TRAILER_FABS(value[i]) <= bound[i])) {
+        if (!((value[i] >= lowest[i]) && (value[i] <= highest[i]))) {
             return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, i);
         }
     }

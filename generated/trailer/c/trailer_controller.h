@@ -24,12 +24,21 @@ extern "C" {
 #define TRAILER_H_MIN TRAILER_LIT(1.0e-6)
 /* largest sample time h [s] */
 #define TRAILER_H_MAX TRAILER_LIT(1.0)
+/* smallest K1, K2 and Q entry and eps: their ratios stay finite */
+#define TRAILER_GAIN_MIN TRAILER_LIT(1.0e-6)
 /* largest gain, eps, phi, gamma; cap of the adaptive gains */
 #define TRAILER_GAIN_MAX TRAILER_LIT(1.0e6)
 /* largest tau_max [N m] */
 #define TRAILER_TORQUE_LIMIT_MAX TRAILER_LIT(1.0e6)
 /* |nominal p| <= this * max(|robot file's p|, 1) */
 #define TRAILER_NOMINAL_FACTOR TRAILER_LIT(1.0e3)
+
+/* A real's bits, as one unsigned integer of its width. */
+#ifdef TRAILER_FLOAT32
+typedef uint32_t trailer_bits_t;
+#else
+typedef uint64_t trailer_bits_t;
+#endif
 
 /* Which input or field an error is about: trailer_error_detail_t.field. */
 typedef enum {
@@ -83,6 +92,9 @@ typedef struct {
 trailer_status_t trailer_fail(trailer_error_detail_t *detail, trailer_status_t status, int field,
     int index);
 
+/** 1 if x is finite and min <= x <= max (min, max finite). */
+int trailer_within(trailer_real_t x, trailer_real_t min, trailer_real_t max);
+
 /** 1 if x is finite, > 0 and <= max (max finite). */
 int trailer_positive_at_most(trailer_real_t x, trailer_real_t max);
 
@@ -94,7 +106,8 @@ int trailer_positive(trailer_real_t x);
 
 /**
  * The configuration fields every controller has, in the order the status codes are
- * checked: formulation, h, K1 and K2, Q, torque limit.
+ * checked: formulation, h, K1 and K2 and Q (each in [GAIN_MIN, GAIN_MAX], then P of (20)
+ * finite), torque limit.
  */
 trailer_status_t trailer_check_base_config(int formulation, trailer_real_t h,
     const trailer_real_t k1[8], const trailer_real_t k2[8], trailer_real_t q_pos,

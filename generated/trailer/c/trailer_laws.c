@@ -496,7 +496,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
 }
 
 /* trailer_minimal_tdroc_gain: documented in trailer_laws.h.
-   operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt */
+   operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp */
 void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_real_t *omega,
     const trailer_real_t *w, trailer_real_t *gain)
 {
@@ -543,14 +543,14 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
     const trailer_real_t w5 = w[5];
     const trailer_real_t w6 = w[6];
     const trailer_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(w0*TRAILER_SQRT(_t0*_t0 + _t1*_t1) + w1*TRAILER_SQRT(_t2*_t2 + _t3*_t3)
-            + w2*TRAILER_SQRT(_t4*_t4 + _t5*_t5) + w3*TRAILER_SQRT(_t6*_t6 + _t7*_t7)
-            + w4*TRAILER_SQRT(_t8*_t8 + _t9*_t9) + w5*TRAILER_SQRT(_t10*_t10 + _t11*_t11)
-            + w6*TRAILER_SQRT(_t12*_t12 + _t13*_t13) + w7*TRAILER_SQRT(_t14*_t14 + _t15*_t15));
+    gain[0] = minv_norm_1*(w0*trailer_norm2(_t0, _t1) + w1*trailer_norm2(_t2, _t3)
+            + w2*trailer_norm2(_t4, _t5) + w3*trailer_norm2(_t6, _t7) + w4*trailer_norm2(_t8, _t9)
+            + w5*trailer_norm2(_t10, _t11) + w6*trailer_norm2(_t12, _t13)
+            + w7*trailer_norm2(_t14, _t15));
 }
 
 /* trailer_minimal_omega_difference: documented in trailer_laws.h.
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt */
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
 void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
     trailer_real_t *norm)
 {
@@ -560,7 +560,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
     const trailer_real_t Om_new1 = newer[1];
     const trailer_real_t Om_old1 = older[1];
     const trailer_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    norm[0] = trailer_norm2(_t0, _t1);
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
@@ -883,7 +883,7 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -900,7 +900,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t2 = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
@@ -1055,7 +1055,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
 }
 
 /* trailer_minimal_tdroc_law_trig: documented in trailer_laws.h.
-   operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -1072,7 +1072,7 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t2 = TRAILER_SQRT(_t0*_t0 + _t1*_t1);
+    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
@@ -1226,7 +1226,7 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 1 fmax */
+   operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -1472,7 +1472,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t204 = TRAILER_SQRT(_t202*_t202 + _t203*_t203);
+    const trailer_real_t _t204 = trailer_norm2(_t202, _t203);
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
     const trailer_real_t _t205 = e0*k1_0 + edot0*k2_0;
@@ -1483,9 +1483,8 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t alpha = bounds[0];
     const trailer_real_t phi = bounds[1];
-    const trailer_real_t _t207 = (alpha*(TRAILER_SQRT(_t205*_t205 + _t206*_t206)
-            + TRAILER_SQRT(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(TRAILER_LIT(1.0)
-            - alpha);
+    const trailer_real_t _t207 = (alpha*(trailer_norm2(_t205, _t206)
+            + trailer_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER_LIT(1.0) - alpha);
     const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t208 = _t207/TRAILER_FMAX(_t204, eps_1);
     const trailer_real_t _t209 = _t202*_t208 + _t206 + qdd_des1;
@@ -2418,7 +2417,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 fmax */
+   operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -2664,7 +2663,7 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
     const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t204 = TRAILER_SQRT(_t202*_t202 + _t203*_t203);
+    const trailer_real_t _t204 = trailer_norm2(_t202, _t203);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
     const trailer_real_t _t205 = gain_1/TRAILER_FMAX(_t204, eps_1);

@@ -161,7 +161,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  *     -- weights
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
- * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
+ * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  */
 void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_real_t *omega,
     const trailer_real_t *w, trailer_real_t *gain);
@@ -182,7 +182,7 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
  *     -- Omega(i+1)
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
  *
- * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+ * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  */
 void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
     trailer_real_t *norm);
@@ -311,7 +311,7 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -366,7 +366,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_S_NORM_SIZE)
  *
- * operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -421,7 +421,7 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 1 fmax
+ * operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -479,7 +479,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 fmax
+ * operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,

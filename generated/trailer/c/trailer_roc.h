@@ -16,23 +16,24 @@
 extern "C" {
 #endif
 
-/* Configuration of ROC; validated by trailer_roc_init and by every step, against
-   the bounds of trailer_controller.h. A step refuses a configuration that differs from the one
-   given to _init (TRAILER_ERR_CONFIG_CHANGED): call _init to change it. */
+/* Configuration of ROC; validated by trailer_roc_init against the bounds
+   of trailer_controller.h and kept in the state; a step refuses a configuration that differs
+   from it in any bit of any value (TRAILER_ERR_CONFIG_CHANGED, or the field's error if it is
+   invalid): call _init to change it. */
 typedef struct {
     trailer_params_t nominal;   /* nominal parameters of M-hat (and H-hat) */
     int formulation;        /* TRAILER_FORMULATION_MINIMAL (the paper formulation is not
                                generated) */
-    trailer_real_t k1[8];       /* diagonal of K1 (18), (0, GAIN_MAX]; the minimal form uses k1[4],
-                                   k1[5] */
-    trailer_real_t k2[8];       /* diagonal of K2 (18), (0, GAIN_MAX] */
-    trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, (0,
+    trailer_real_t k1[8];       /* diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form uses
+                                   k1[4], k1[5] */
+    trailer_real_t k2[8];       /* diagonal of K2 (18), [GAIN_MIN, GAIN_MAX] */
+    trailer_real_t q_pos;       /* Q = diag(q_pos I, q_vel I) of the Lyapunov equation, [GAIN_MIN,
                                    GAIN_MAX] */
     trailer_real_t q_vel;
     trailer_real_t h;           /* sample time [s], [H_MIN, H_MAX] */
     trailer_real_t tau_max;     /* torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are
                                    clipped */
-    trailer_real_t eps;         /* boundary layer of (24)/(25), (0, GAIN_MAX] */
+    trailer_real_t eps;         /* boundary layer of (24)/(25), [GAIN_MIN, GAIN_MAX] */
     trailer_real_t alpha;       /* bound on ||M^-1 Mhat - I|| over the uncertainty box, [0, 1) */
     trailer_real_t phi;         /* bound on ||M^-1 (H - Hhat)||, [0, GAIN_MAX] */
 } trailer_roc_config_t;
@@ -42,7 +43,9 @@ typedef struct {
     long magic;             /* TRAILER_STATE_MAGIC once initialised */
     uint32_t steps;         /* completed steps, saturating at TRAILER_STEPS_MAX (only steps >= 2
                                matters) */
-    uint32_t config_fp;     /* FNV-1a of the configuration given to _init */
+#ifndef TRAILER_ROC_FROZEN
+    trailer_roc_config_t config; /* the configuration _init validated; a step compares with it */
+#endif
     trailer_real_t p12[8];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer_real_t p22[8];
     trailer_real_t q_prev[8];   /* q(t-h) */
@@ -67,7 +70,7 @@ trailer_status_t trailer_roc_init(trailer_roc_state_t *state, const trailer_roc_
 
 /**
  * Back to the state _init left (same configuration): history, step count, estimates and
- * the last outputs cleared; P and the configuration fingerprint kept.
+ * the last outputs cleared; P and the configuration kept.
  * @return TRAILER_OK, TRAILER_ERR_NULL_POINTER or TRAILER_ERR_NOT_INITIALISED (state then
  *     untouched).
  */
@@ -105,8 +108,9 @@ trailer_status_t trailer_roc_check_config_detail(const trailer_roc_config_t *con
    `freeze` command validated it on the host with this code, ran _init there and wrote
    trailer_roc_frozen.h (that configuration, and the state _init left). _init and every
    step then take &trailer_roc_frozen_config only (another pointer:
-   TRAILER_ERR_CONFIG_CHANGED, nothing written) and neither validate nor fingerprint it, so the
-   image carries no configuration checks or derivation. _check_config still validates any
+   TRAILER_ERR_CONFIG_CHANGED, nothing written) and neither validate nor compare it, so the
+   image carries no configuration checks or derivation, and the state no copy of it. _check_config
+   still validates any
    configuration. The header is tied to the code it was made with: freeze again after
    regenerating. */
 extern const trailer_roc_config_t trailer_roc_frozen_config;

@@ -19,7 +19,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0xdcd0f486u
+#define TRAILER_CODE_ID 0x3b5993a0u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -207,6 +207,48 @@ static inline double trailer_cos(double x)
 #define TRAILER_FMAX(x, y) ((((x) >= (y)) || isnan(y)) ? (x) : (y))
 #define TRAILER_FMIN(x, y) ((((x) <= (y)) || isnan(y)) ? (x) : (y))
 
+#ifdef TRAILER_FLOAT32
+#define TRAILER_REAL_MAX FLT_MAX
+#else
+#define TRAILER_REAL_MAX DBL_MAX
+#endif
+
+/* 2-norms that cannot overflow while the norm is finite. trailer_norm<n>(x0, ..., x<n-1>) is
+   sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written, bit for bit, while that sum is
+   finite; beyond it (an entry above about 1.8e19 in float32, 1.3e154 in double) the entries
+   are scaled by the largest magnitude first (trailer_norm_scaled), so a finite vector never
+   gets an infinite norm. A NaN entry gives NaN. */
+static inline trailer_real_t trailer_norm_scaled(const trailer_real_t *x, int n)
+{
+    trailer_real_t top = TRAILER_LIT(0.0);
+    trailer_real_t sum = TRAILER_LIT(0.0);
+    int i;
+    for (i = 0; i < n; ++i) {
+        const trailer_real_t a = TRAILER_FABS(x[i]);
+        top = ((a > top) || isnan(a)) ? a : top;  /* a NaN stays */
+    }
+    if (!(top <= TRAILER_REAL_MAX) || !(top > TRAILER_LIT(0.0))) {
+        return top;  /* NaN, +Inf or 0: the norm itself */
+    }
+    for (i = 0; i < n; ++i) {
+        const trailer_real_t y = x[i] / top;
+        sum += y * y;
+    }
+    return top * TRAILER_SQRT(sum);
+}
+
+static inline trailer_real_t trailer_norm2(trailer_real_t x0, trailer_real_t x1)
+{
+    const trailer_real_t sum = x0 * x0 + x1 * x1;
+    if (sum <= TRAILER_REAL_MAX) {
+        return TRAILER_SQRT(sum);
+    }
+    {
+        const trailer_real_t x[2] = {x0, x1};
+        return trailer_norm_scaled(x, 2);
+    }
+}
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -221,11 +263,12 @@ typedef enum {
     TRAILER_ERR_NONFINITE_OUTPUT = -4, /* a result is not finite */
     TRAILER_ERR_BAD_MEASUREMENT = -5, /* q or qdot is NaN, infinite or absurdly large */
     TRAILER_ERR_BAD_REFERENCE = -6, /* a reference is NaN, infinite or absurdly large */
-    TRAILER_ERR_BAD_EPS = -7, /* boundary layer eps <= 0 or not finite */
+    TRAILER_ERR_BAD_EPS = -7, /* boundary layer eps outside [TRAILER_GAIN_MIN, TRAILER_GAIN_MAX] */
     TRAILER_ERR_BAD_WINDOW = -8, /* window n outside 2..TRAILER_MAX_WINDOW */
     TRAILER_ERR_BAD_DISCOUNT = -9, /* discount a outside (0, 1] */
     TRAILER_ERR_BAD_SAMPLE_TIME = -10, /* h <= 0 or not finite */
-    TRAILER_ERR_BAD_GAINS = -11, /* K1, K2 or Q not positive definite */
+    TRAILER_ERR_BAD_GAINS = -11, /* a K1, K2 or Q entry outside [TRAILER_GAIN_MIN,
+                                    TRAILER_GAIN_MAX], or P of (20) not finite */
     TRAILER_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     TRAILER_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     TRAILER_ERR_BAD_FORMULATION = -14, /* formulation is not MINIMAL (the only one generated) */
@@ -234,8 +277,8 @@ typedef enum {
     TRAILER_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                         rate_window is outside [0, h] */
     TRAILER_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
-    TRAILER_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init
-                                        (fingerprint) */
+    TRAILER_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init (any
+                                        bit of any value) */
 } trailer_status_t;
 
 /* the eight coordinates of (14), tau = B^T u: not generated for this robot

@@ -17,6 +17,23 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_trig", "minimal_tde", "minimal_tde_trig", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
+_REAL_MAX = 1.7976931348623157e308
+
+
+def _norm(*xs: float) -> float:
+    """sqrt(x0*x0 + x1*x1 + ...) as the C ``<prefix>_norm<n>`` (double): the sum as written
+    while it is finite, else the entries scaled by the largest magnitude first."""
+    total = 0.0
+    for x in xs:
+        total += x * x
+    if total <= _REAL_MAX:
+        return math.sqrt(total)
+    top = max((abs(x) for x in xs), key=lambda a: (a != a, a))  # a NaN stays
+    if not 0.0 < top <= _REAL_MAX:
+        return top
+    return top * math.sqrt(sum((x / top) * (x / top) for x in xs))
+
+
 def _flat(value: ArrayLike, size: int, label: str) -> list[float]:
     """Row-major elements of ``value`` as Python floats; checks the count."""
     array = np.asarray(value, dtype=np.float64).reshape(-1)
@@ -510,7 +527,7 @@ def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> 
     Returns:
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt
+    operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
     """
     minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
     Om0_0, Om0_1, Om1_0, Om1_1, Om2_0, Om2_1, Om3_0, Om3_1, Om4_0, Om4_1, Om5_0, Om5_1, Om6_0, Om6_1, Om7_0, Om7_1, Om8_0, Om8_1 = _flat(omega, 18, "omega")
@@ -532,7 +549,7 @@ def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> 
     _t14 = Om7_0 - Om8_0
     _t15 = Om7_1 - Om8_1
     gain = np.array([
-        minv_norm_1*(w0*math.sqrt(_t0*_t0 + _t1*_t1) + w1*math.sqrt(_t2*_t2 + _t3*_t3) + w2*math.sqrt(_t4*_t4 + _t5*_t5) + w3*math.sqrt(_t6*_t6 + _t7*_t7) + w4*math.sqrt(_t8*_t8 + _t9*_t9) + w5*math.sqrt(_t10*_t10 + _t11*_t11) + w6*math.sqrt(_t12*_t12 + _t13*_t13) + w7*math.sqrt(_t14*_t14 + _t15*_t15)),
+        minv_norm_1*(w0*_norm(_t0, _t1) + w1*_norm(_t2, _t3) + w2*_norm(_t4, _t5) + w3*_norm(_t6, _t7) + w4*_norm(_t8, _t9) + w5*_norm(_t10, _t11) + w6*_norm(_t12, _t13) + w7*_norm(_t14, _t15)),
     ])
     return gain
 
@@ -550,13 +567,13 @@ def minimal_omega_difference(newer: ArrayLike, older: ArrayLike) -> NDArray[np.f
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt
+    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
     """
     Om_new0, Om_new1 = _flat(newer, 2, "newer")
     Om_old0, Om_old1 = _flat(older, 2, "older")
     _t0 = Om_new0 - Om_old0
     _t1 = Om_new1 - Om_old1
-    norm = np.array([math.sqrt(_t0*_t0 + _t1*_t1)])
+    norm = np.array([_norm(_t0, _t1)])
     return norm
 
 
@@ -880,7 +897,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -909,7 +926,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     radius_right = float(_field(p, "radius_right"))
     _t0 = e1*p12_1 + edot1*p22_1
     _t1 = e0*p12_0 + edot0*p22_0
-    _t2 = math.sqrt(_t0*_t0 + _t1*_t1)
+    _t2 = _norm(_t0, _t1)
     _t3 = gain_1/max(_t2, eps_1)
     _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
     _t5 = 62500.0*J_theta_cart/42849.0
@@ -1043,7 +1060,7 @@ def minimal_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     trig_s0, trig_c0, trig_s1, trig_c1 = _flat(trig, 4, "trig")
     e0, e1 = _flat(e, 2, "e")
@@ -1072,7 +1089,7 @@ def minimal_tdroc_law_trig(trig: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
     radius_right = float(_field(p, "radius_right"))
     _t0 = e1*p12_1 + edot1*p22_1
     _t1 = e0*p12_0 + edot0*p22_0
-    _t2 = math.sqrt(_t0*_t0 + _t1*_t1)
+    _t2 = _norm(_t0, _t1)
     _t3 = gain_1/max(_t2, eps_1)
     _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
     _t5 = 62500.0*J_theta_cart/42849.0
@@ -1203,7 +1220,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 1 fmax
+    operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -1435,10 +1452,10 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t201 = _t26*_t93
     _t202 = e1*p12_1 + edot1*p22_1
     _t203 = e0*p12_0 + edot0*p22_0
-    _t204 = math.sqrt(_t202*_t202 + _t203*_t203)
+    _t204 = _norm(_t202, _t203)
     _t205 = e0*k1_0 + edot0*k2_0
     _t206 = e1*k1_1 + edot1*k2_1
-    _t207 = (alpha*(math.sqrt(_t205*_t205 + _t206*_t206) + math.sqrt(qdd_des0*qdd_des0 + qdd_des1*qdd_des1)) + phi)/(1.0 - alpha)
+    _t207 = (alpha*(_norm(_t205, _t206) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
     _t208 = _t207/max(_t204, eps_1)
     _t209 = _t202*_t208 + _t206 + qdd_des1
     _t210 = 62500.0*J_theta_cart/42849.0
@@ -1712,7 +1729,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 fmax
+    operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -1945,7 +1962,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t201 = _t26*_t93
     _t202 = e1*p12_1 + edot1*p22_1
     _t203 = e0*p12_0 + edot0*p22_0
-    _t204 = math.sqrt(_t202*_t202 + _t203*_t203)
+    _t204 = _norm(_t202, _t203)
     _t205 = gain_1/max(_t204, eps_1)
     _t206 = _t202*_t205 + e1*k1_1 + edot1*k2_1 + qdd_des1
     _t207 = 62500.0*J_theta_cart/42849.0

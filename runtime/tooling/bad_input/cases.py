@@ -41,6 +41,7 @@ BASE: dict[str, Any] = {
     "gain0": 0.5,
 }
 SATURATION_LIMIT = 0.5
+ZERO_ERROR_STEPS = 30  # a zero-error streak at the smallest eps (issue 25's latch took 25+)
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class Case:
     """One bad input. ``row`` groups cases into one line of the table."""
 
     row: str
-    kind: str  # input | config | changed | state | null | init-null | reset | saturate
+    kind: str  # input | config | changed | state | null | init-null | reset | saturate | zero-error
     expected: str
     applies: tuple[str, ...] = CONTROLLERS
     inputs: tuple[int, int, float] | None = None  # (which input, index, value)
@@ -68,6 +69,18 @@ def _set(name: str, value: Any) -> Callable[[Any], None]:
 def _set_item(name: str, index: int, value: float) -> Callable[[Any], None]:
     def mutate(cfg: Any) -> None:
         getattr(cfg, name)[index] = value
+
+    return mutate
+
+
+def _negate(*where: tuple[str, int | None]) -> Callable[[Any], None]:
+    """Negate fields (name, None) or vector entries (name, index): sign flips only."""
+    def mutate(cfg: Any) -> None:
+        for name, index in where:
+            if index is None:
+                setattr(cfg, name, -getattr(cfg, name))
+            else:
+                getattr(cfg, name)[index] = -getattr(cfg, name)[index]
 
     return mutate
 
@@ -199,6 +212,22 @@ def cases(max_win: int) -> list[Case]:
         ("nominal `Iw` = 1e25 (> 1000 × max(0.07, 1))", "WMR_ERR_BAD_NOMINAL",
          _nominal(Iw=1e25), CONTROLLERS),
         ("nominal `m` = 1e6 (> 1000 × 36)", "WMR_ERR_BAD_NOMINAL", _nominal(m=1e6), CONTROLLERS),
+        # Lower bounds (issue 25): an accepted eps of 2^-1074 made a step with exactly zero
+        # error NaN ((k / eps) * 0); a wheel radius of 1e-30 m overflowed M-hat in float32.
+        ("`eps` = 2^-1074 (< `WMR_GAIN_MIN` = 1e-6)", "WMR_ERR_BAD_EPS", _set("eps", 5e-324),
+         SWITCHING),
+        ("`k1[0]` = 1e-9 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set_item("k1", 0, 1e-9),
+         CONTROLLERS),
+        ("Q: `q_pos` = 1e-300 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set("q_pos", 1e-300),
+         CONTROLLERS),
+        ("nominal `r` = 1e-30 (< r / 1000)", "WMR_ERR_BAD_NOMINAL", _nominal(r=1e-30),
+         CONTROLLERS),
+        # Two sign flips after _init (issue 25): they cancelled in the old 32-bit fingerprint
+        # (its bit 31 is the XOR of the words' bit 31), so the step used them unchecked.
+        ("`k1[0]` and `k2[0]` negated after `_init` (two sign flips)", "WMR_ERR_BAD_GAINS",
+         _negate(("k1", 0), ("k2", 0)), CONTROLLERS),
+        ("`tau_max` and `eps` negated after `_init` (two sign flips)",
+         "WMR_ERR_BAD_TORQUE_LIMIT", _negate(("tau_max", None), ("eps", None)), SWITCHING),
     ]
     for row, status, mutate, applies in config:
         out.append(Case(row, "config", status, applies, mutate=mutate, id=row))
@@ -241,6 +270,15 @@ def cases(max_win: int) -> list[Case]:
     out.append(Case("`_reset` after 5 steps", "reset", "WMR_OK", id="reset"))
     out.append(Case("`state` = NULL in `_reset`", "init-null", "WMR_ERR_NULL_POINTER",
                     null_arg=2, id="reset:state=NULL"))
+    out.append(
+        Case(
+            f"exactly zero tracking error for {ZERO_ERROR_STEPS} steps, `eps` = `WMR_GAIN_MIN` "
+            "(TDROC: k-hat held at 1; ASMC: gain0 = 0.5)",
+            "zero-error",
+            "WMR_OK",
+            id="zero-error",
+        )
+    )
     out.append(
         Case(
             f"torque beyond `tau_max` = {SATURATION_LIMIT}",

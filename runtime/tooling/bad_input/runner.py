@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from runtime import cbuild
+from runtime.generated_modules import controllers as mirror
 from runtime.tooling.bad_input.cases import (
     BASE,
     CONTROLLERS,
@@ -20,6 +21,7 @@ from runtime.tooling.bad_input.cases import (
     SATURATION_LIMIT,
     SENTINEL,
     WARMUP,
+    ZERO_ERROR_STEPS,
     Case,
     cases,
     max_window,
@@ -191,6 +193,9 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
             status, state_unchanged=False, tau_unchanged=False, extra={"clipped_correctly": ok}
         )
 
+    if case.kind == "zero-error":
+        return _zero_error(lib, name, formulation, case)
+
     bad, twin = Controller(lib, name, cfg), Controller(lib, name, cfg)
     for inputs in seq[:WARMUP]:
         bad.step(inputs)
@@ -288,6 +293,25 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
     )
 
 
+GAIN_MIN = float(mirror.GAIN_MIN)  # WMR_GAIN_MIN (a real macro: cffi does not read it)
+
+
+def _zero_error(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> Outcome:
+    """A measured motion equal to its reference (e = 0, edot = 0 exactly) for
+    ZERO_ERROR_STEPS steps at the smallest eps, a switching gain > 0 throughout: every step
+    must succeed (with k / eps * 0 it returned NONFINITE_OUTPUT, and kept doing so)."""
+    changes: dict[str, Any] = {"eps": GAIN_MIN, "hold_gain": 1, "held_gain": 1.0}
+    ctl = Controller(lib, name, base_config(lib, name, formulation, **changes))
+    statuses = []
+    for q, qdot, _, _, qddot in smooth_sequence(ZERO_ERROR_STEPS, float(BASE["h"])):
+        status, tau = ctl.step((q, qdot, q, qdot, qddot))
+        statuses.append(status if all(x == x for x in tau) else -99)
+    worst = min(statuses, key=lambda s: (s >= 0, s))
+    return Outcome(case, name, formulation, worst, state_unchanged=False, tau_unchanged=False,
+                   extra={"steps_ok": sum(s >= 0 for s in statuses),
+                          "gain": float(ctl.state.gain)})
+
+
 def _twin_equal(bad: Controller, twin: Controller, good: tuple[list[float], ...]) -> bool:
     s_bad, tau_bad = bad.step(good)
     s_twin, tau_twin = twin.step(good)
@@ -318,6 +342,11 @@ def failures(outcomes: list[Outcome], lib: cbuild.CLibrary) -> list[str]:
         if c.kind == "saturate":
             if not o.extra.get("clipped_correctly"):
                 bad.append(f"{where}: torque not clipped to the limit")
+            continue
+        if c.kind == "zero-error":
+            if o.extra.get("steps_ok") != ZERO_ERROR_STEPS:
+                bad.append(f"{where}: {o.extra.get('steps_ok')} of {ZERO_ERROR_STEPS} "
+                           "zero-error steps succeeded")
             continue
         if c.kind == "reset":
             if not o.extra.get("reset_equals_init") or not o.twin_equal:

@@ -11,7 +11,13 @@ from pathlib import Path
 
 from modeling.package_paths import default_output
 from runtime import cbuild
-from runtime.tooling.bad_input.cases import CONTROLLERS, DRISHTI, FORMULATIONS, WARMUP
+from runtime.tooling.bad_input.cases import (
+    CONTROLLERS,
+    DRISHTI,
+    FORMULATIONS,
+    WARMUP,
+    ZERO_ERROR_STEPS,
+)
 from runtime.tooling.bad_input.runner import Outcome, failures, run_all, status_names
 
 DOC = default_output("docs/BAD_INPUT.md")  # ./BAD_INPUT.md when installed
@@ -86,6 +92,10 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         if kind == "saturate":
             untouched = "clipped to ±tau_max, step committed"
             twin = "n/a"
+        elif kind == "zero-error":
+            untouched = "every step succeeded: " + _yes(
+                [o.extra.get("steps_ok") == ZERO_ERROR_STEPS for o in group])
+            twin = "n/a"
         elif kind == "reset":
             untouched = "state = a fresh `_init`'s: " + _yes(
                 [o.extra.get("reset_equals_init") for o in group]
@@ -117,20 +127,33 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "Inputs are checked before anything is computed: a measurement (q, qdot) or a",
         "reference (q_des, qdot_des, qddot_des) that is NaN, infinite or larger than 1e6 in",
         "magnitude is rejected (`WMR_ERR_BAD_MEASUREMENT` / `WMR_ERR_BAD_REFERENCE`); every",
-        "step fingerprints the configuration and validates it again when the fingerprint",
-        "differs from `_init`'s, so a configuration corrupted after `_init` is caught too",
-        "(its field's error if invalid, else `WMR_ERR_CONFIG_CHANGED`). A step computes",
-        "into locals and writes the state only on success.",
+        "step compares the configuration with the copy `_init` validated and kept, and",
+        "validates it again when any bit of any value differs, so a configuration changed or",
+        "corrupted after `_init` is caught too (its field's error if invalid, else",
+        "`WMR_ERR_CONFIG_CHANGED`). A step computes into locals and writes the state only on",
+        "success.",
         "",
         "## Plausibility bounds, no latching, counters, configuration changes",
         "",
         "* **Bounds** (`wmr_controller.h`; `WMR_FIELD_*` says which one failed):",
         "  h in [`WMR_H_MIN`, `WMR_H_MAX`] = [1e-6, 1] s; K1, K2 entries, q_pos, q_vel and",
-        "  eps in (0, `WMR_GAIN_MAX` = 1e6]; phi, gamma, gain0, held_gain in [0, 1e6];",
-        "  tau_max in (0, `WMR_TORQUE_LIMIT_MAX` = 1e6] N m; alpha in [0, 1); a in (0, 1];",
-        "  n in 2..`WMR_MAX_WINDOW`; rate_window in [0, h]; every nominal parameter finite",
-        "  with |p| <= `WMR_NOMINAL_FACTOR` (1000) × max(|the robot file's p|, 1), then the",
-        "  model's guards (index -1).",
+        "  eps in [`WMR_GAIN_MIN`, `WMR_GAIN_MAX`] = [1e-6, 1e6], and P of (20) finite;",
+        "  phi, gamma, gain0, held_gain in [0, 1e6]; tau_max in (0, `WMR_TORQUE_LIMIT_MAX` =",
+        "  1e6] N m; alpha in [0, 1); a in (0, 1]; n in 2..`WMR_MAX_WINDOW`; rate_window in",
+        "  [0, h]; every nominal parameter finite with |p| <= `WMR_NOMINAL_FACTOR` (1000) ×",
+        "  max(|the robot file's p|, 1), a parameter the model needs positive (r, b; a",
+        "  described robot's radii and generalised inertias) at least the robot file's value /",
+        "  1000, then the model's guards (index -1) and, for TDROC, ||Mhat^-1|| of (25) finite.",
+        "* **Finite in, finite out** (issue 25): the lower bounds keep every ratio finite (an",
+        "  eps of 2^-1074 made a step with exactly zero error return NaN: (k / eps) * 0), and",
+        "  every 2-norm the steps take (||s||, ||Omega(i) - Omega(i+1)||, ROC's norms,",
+        "  ||u rows dropped||) is `wmr_norm<n>`: the sum of squares as before, bit for bit,",
+        "  while it is finite, else the entries scaled by the largest first, so a float32",
+        "  vector with entries above 1.8e19 no longer has an infinite norm. With accepted",
+        "  configurations and inputs, a step returns `WMR_OK` or `WMR_WARN_SATURATED` and",
+        "  never `WMR_ERR_NONFINITE_OUTPUT`: `tests/test_controller_contract.py` draws",
+        "  configurations over the whole accepted box and inputs up to the 1e6 bound, with",
+        "  streaks of exactly zero error, every controller and formulation, double and float32.",
         "* **Adaptive gains capped**: ASMC's adapted gain and TDROC's k-hat never exceed",
         "  `WMR_GAIN_MAX` (a NaN or overflowed estimate counts as beyond it). Together with",
         "  the bounds, no state reached by accepted inputs keeps a valid step from succeeding:",
@@ -143,16 +166,23 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "  1 kHz); only `steps >= 2` is ever asked, so there is no undefined behaviour and no",
         "  change of behaviour for the robot's life (tested from `WMR_STEPS_MAX - 1`, also",
         "  under UBSan).",
-        "* **Configuration changes**: `_init` stores an FNV-1a fingerprint (over 32-bit",
-        "  words) of every field of the configuration (values, not padding). A step given a",
-        "  valid configuration that",
-        "  differs from it returns `WMR_ERR_CONFIG_CHANGED` (-19), state untouched: P, ||Mhat^-1||",
-        "  and the initial gain were derived from the configuration at `_init`, so a change",
-        "  is adopted only by calling `_init` again (a collision, 2^-32, would go unnoticed,",
-        "  and an invalid configuration colliding with the valid one would not be re-checked).",
+        "* **Configuration changes**: `_init` keeps a copy of the configuration it validated",
+        "  in the state, and every step compares the one it is given with it, value by value",
+        "  and bit for bit (padding is never compared), then computes from the copy. A step",
+        "  given a valid configuration that differs in any bit returns",
+        "  `WMR_ERR_CONFIG_CHANGED` (-19), an invalid one its field's error, state untouched:",
+        "  P, ||Mhat^-1|| and the initial gain were derived from the configuration at `_init`,",
+        "  so a change is adopted only by calling `_init` again. The comparison is exact: no",
+        "  change of a configuration value goes unnoticed, whatever bits change (tested: every",
+        "  one-bit and every two-bit change of every value, all four controllers, both",
+        "  formulations and precisions). It replaces a 32-bit FNV-1a fingerprint in which any",
+        "  two sign flips cancelled (`k1[0] = k2[0] = -4` after `_init` was used unchecked).",
+        "  What it cannot see: a change that the caller makes to the state itself, which the",
+        "  step trusts once `magic` is set. The state is larger by one configuration",
+        "  (`sizeof(wmr_<ctrl>_config_t)`); a frozen build's state keeps no copy.",
         "* **`wmr_<ctrl>_reset(state)`** clears history, estimates, step count and the adapted",
         "  gain (back to gain0) of an initialised state and keeps P, ||Mhat^-1|| and the",
-        "  fingerprint: every field of the state is what `_init` left.",
+        "  configuration: every field of the state is what `_init` left.",
         "* **Inputs a function does not read**: the step functions validate every entry of",
         "  every input. A generated model or law function (e.g. `wmr_forward_dynamics`) checks",
         "  exactly the entries it reads and ignores the others, NaN or not; its header lists",

@@ -311,10 +311,10 @@ class CController:
 
     def load(self, ctl: Any) -> None:
         """Overwrite the C state with the Python controller's (same field names; the
-        validity mark, the configuration fingerprint and the cached ‖M̂⁻¹‖ stay the C's
-        own: C hashes the float32 values it holds)."""
+        validity mark, the configuration copy and the cached ‖M̂⁻¹‖ stay the C's own: C
+        keeps and compares the float32 values it holds)."""
         for name in self.state_fields:
-            if name in ("magic", "config_fp", "minv_norm") or not hasattr(ctl, name):
+            if name in ("magic", "config", "minv_norm") or not hasattr(ctl, name):
                 continue
             value = getattr(ctl, name)
             if isinstance(value, np.ndarray):

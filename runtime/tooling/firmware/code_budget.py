@@ -1,6 +1,6 @@
 """Where an image's generated code goes: each ``wmr_*`` function of a linked image in one
-part of the controller's contract (configuration checks, fingerprint, input checks, the
-step's bookkeeping, the control math), so that a size goal can be weighed against what
+part of the controller's contract (configuration checks, the configuration comparison, input
+checks, the step's bookkeeping, the control math), so that a size goal can be weighed against what
 the code does. Classified by name; a function no part claims is ``unclassified`` (a test
 keeps that empty, so a new generated function has to be placed).
 """
@@ -24,9 +24,9 @@ class Part:
 PARTS: tuple[Part, ...] = (
     Part("configuration checks", "at _init; in a step only when the configuration changed",
          re.compile(r"(\w+_)?check_config(_detail)?|check_base_config|check_nominal"
-                    r"|positive(_at_most)?|nonnegative_at_most|lyapunov_p")),
-    Part("configuration fingerprint", "every step (detects a changed configuration)",
-         re.compile(r"\w+_fingerprint")),
+                    r"|positive(_at_most)?|nonnegative_at_most|within|lyapunov_p")),
+    Part("configuration comparison", "every step (detects a changed configuration)",
+         re.compile(r"\w+_config_unchanged|real_bits")),
     Part("configuration-derived data, init, reset", "at _init and _reset",
          re.compile(r"\w+_(init|reset|clear)|controller_p|\w+_minv_norm|window_weights")),
     Part("input checks, error detail", "every step",
@@ -34,7 +34,7 @@ PARTS: tuple[Part, ...] = (
     Part("step: history, commit, saturation", "every step",
          re.compile(r"\w+_step(_detail)?|saturate|cap_gain|push_history|controlled_slice")),
     Part("control law and estimators (from SymPy)", "every step",
-         re.compile(rf"({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain")),
+         re.compile(rf"({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain|norm(\d+|_scaled)")),
 )
 UNCLASSIFIED = "unclassified"
 
