@@ -3,6 +3,7 @@ and worker on loopback, and the command's argument checks."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -12,12 +13,14 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import campaign_reference as reference
 import pyarrow.parquet as pq
 import pytest
 
 from runtime.campaign import store
 from runtime.campaign.command import main, report, resolve_campaign
 from runtime.campaign.execution import Cluster, connect, execute, project_root
+from runtime.campaign.prediction import predict
 
 # Short runs, two controllers, a drawn ε wide enough to cross ROC's predicted boundary.
 SPEC = """
@@ -100,7 +103,15 @@ def test_small_campaign_on_two_local_workers(spec: Path, cluster: Cluster,
     text = report(reference_run, campaign, tgt, cluster.where)
     assert "| TDC | 5 |" in text and "| ROC | 5 |" in text
     assert "Agreement:" in text and (reference_run / "stability_map.png").stat().st_size > 10_000
-    assert (reference_run / "summary.json").exists()
+    # The summary against the records, recomputed apart (tests/test_campaign_summary.py has
+    # a campaign with every outcome).
+    stored = reference.records(reference_run)
+    boundaries = {k: (b.y, b.eps_min) for k, b in predict(campaign, tgt).boundaries.items()}
+    base = {"sensing.velocity": campaign.experiment.sensing.velocity}
+    want = reference.expected_summary(
+        stored, campaign.controllers, reference.verdicts(stored, boundaries, campaign.map_y, base))
+    reference.check_json(json.loads((reference_run / "summary.json").read_text()), want)
+    reference.check_markdown(text, want)
 
 
 def test_resumed_campaign_equals_uninterrupted(spec: Path, cluster: Cluster,
@@ -192,8 +203,6 @@ def test_campaign_on_separately_started_scheduler_and_worker(
         cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         _wait_for(sched_file, 30)
-        import json
-
         address = json.loads(sched_file.read_text())["address"]
         procs.append(subprocess.Popen(
             [str(dask), "worker", address, "--nworkers", "1", "--nthreads", "1",
