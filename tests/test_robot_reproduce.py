@@ -32,7 +32,7 @@ from runtime.robot_simulation import Odometry
 from runtime.robot_source import RobotSourceError, resolve
 
 ROOT = Path(__file__).resolve().parent.parent
-SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # shared/cases/small_robot.toml
+SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # a case users tried
 TRAILER = next((ROOT / "modeling" / "robots").rglob("trailer.toml"))
 SHORT = "[paths]\ncircle_duration = 6.0\nlawnmower_duration = 8.0\n"
 
@@ -240,12 +240,16 @@ def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
     assert result.stdout.strip() == "[]"
 
 
-def test_small_robot_copy_matches_the_shared_case() -> None:
-    shared = ROOT.parent / "shared" / "cases" / "small_robot.toml"
-    if not shared.is_file():
-        pytest.skip("shared/cases is not beside this clone")
-    ours = SMALL.read_text().split("\n", 2)[2]  # without the two lines naming the origin
-    assert ours == shared.read_text()
+# SHA-256 of small_robot.toml below its two header lines: the file exactly as users tried it.
+SMALL_AS_TRIED = "66fcb9b236fd2a48512f25974d52f5950573d6035e699580809349e8c5b26d66"
+
+
+def test_small_robot_is_the_case_users_tried() -> None:
+    """The case must keep working as given: a change to its numbers would test another robot."""
+    import hashlib
+
+    as_tried = SMALL.read_text(encoding="utf-8").split("\n", 2)[2]
+    assert hashlib.sha256(as_tried.encode("utf-8")).hexdigest() == SMALL_AS_TRIED
 
 
 def test_output_folder_is_checked_before_any_run(tmp_path: Path,
