@@ -5,7 +5,8 @@ Every law acts on a model  M(q) q̈ + H(q, q̇) = u  in one of two formulations:
 * ``paper``: the five coordinates of (14), M = M̃(q) (not symmetric), u = B τ. The law
   computes a 5-vector u, but only τ = (τ_r, τ_l) can be applied: we take τ = Bᵀ u (rows
   4–5 of u, the least-squares solution of B τ = u since BᵀB = I). Rows 1–3 of u are
-  discarded; the controllers report their norm (the cost of this choice).
+  discarded; the controllers report their norm (the cost of this choice; docs/PAPER.md
+  item 7).
 * ``minimal``: the two wheel angles, M = M̄ = Sᵀ M S (constant), H = H̄, u = τ exactly.
   The law then tracks the wheel angles of a kinematically consistent reference; the pose
   is not fed back (drift of the pose is not corrected).
@@ -24,8 +25,10 @@ TDROC (16), (17), (22), (25): u = M̂(q) u_a + Ĥ1 with the gain
         Weights w_i = a^(i−1) (i = 1 is the most recent difference), normalised: the
         printed (25) is unreadable here; Remark 3 asks that recent data weigh most, which
         a^(i−1) does for 0 < a < 1 (a = 1: equal weights). ‖·‖_F bounds the spectral
-        norm from above, so the robustness argument of (23) still holds.
-ROC   (Ryu & Agarwal's robust control in its standard Lyapunov-redesign form):
+        norm from above, so the robustness argument of (23) still holds (docs/PAPER.md
+        item 10).
+ROC   (Ryu & Agarwal's robust control in its standard Lyapunov-redesign form; ROC and
+      ASMC are only cited by the paper, docs/PAPER.md item 11):
         u = M̂(q) u_a + Ĥ(q, q̇) (full nominal model), gain
         ρ = (α (‖q̈_d‖ + ‖K1 e + K2 ė‖) + φ) / (1 − α),
         α ≥ ‖M⁻¹ M̂ − I‖ and φ ≥ ‖M⁻¹ (H − Ĥ)‖ over the predefined uncertainty box
@@ -35,7 +38,7 @@ ASMC  (Chen et al.'s adaptive sliding mode): u = M̂(q) u_a + Ĥ(q, q̇), gain a
 
 q̈(t − h) in (17) is estimated from the measured rates by a difference quotient
         q̈(t − h) ≈ (q̇(t) − q̇(t − Δ)) / Δ,
-a configuration choice (READING.md item 6):
+a configuration choice (docs/PAPER.md item 9):
   * backward (default), Δ = h: the mean acceleration over [t − h, t], exactly the period
     during which u(t − h) was held (zero-order hold), so Ĥ1 pairs each input with the
     acceleration it produced; exact for a constant H1.

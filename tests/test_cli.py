@@ -109,7 +109,7 @@ def test_model_into_a_users_folder_keeps_their_files(tmp_path: Path) -> None:
 def test_stability_on_a_small_robot_is_scaled_and_says_what_it_could_not_measure(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """shared/cases/small_robot.toml: once a traceback (the unscaled paper setting put a
+    """tests/robots/small_robot.toml: once a traceback (the unscaled paper setting put a
     6 kg payload on a 2 kg robot, and measuring k̂ tripped the TDE check over the box)."""
     assert wmr(["stability", "--robot", str(SMALL)]) == 0
     out = capsys.readouterr().out

@@ -1,6 +1,6 @@
 """The prepare-parameters API of the generated forward dynamics, for every shipped robot in
 double and float32, and for the paper's robot with the numbers of
-shared/cases/small_robot.toml (tests/robots/small_robot.toml):
+tests/robots/small_robot.toml (a robot file users tried):
 
 * ``<prefix>_forward_dynamics_prepared`` after ``<prefix>_model_prepare`` gives the results
   of ``<prefix>_forward_dynamics`` bit for bit, with the same status, at random states and
@@ -40,7 +40,7 @@ from runtime.closed_loop import velocities
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
 
 ROOT = Path(__file__).resolve().parent.parent
-SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # shared/cases/small_robot.toml
+SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # a case users tried
 ROBOT_FILES = {p.stem: p for p in shipped_robot_files()}
 STRICT = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wdouble-promotion",
           "-Wfloat-equal", "-Wconversion", "-Werror")
@@ -153,7 +153,7 @@ def test_prepared_equals_unprepared_bit_for_bit(api: Api) -> None:
 
 
 def test_small_robot_numbers_prepare_and_match() -> None:
-    """shared/cases/small_robot.toml: the paper's robot with a 2 kg robot's numbers (the
+    """tests/robots/small_robot.toml: the paper's robot with a 2 kg robot's numbers (the
     same generated code, its parameters at run time), double and float32."""
     small = load_robot(SMALL).lumped
     code = load_robot_code("")

@@ -23,7 +23,7 @@ from runtime.paper.sampled_loop import UnstableConfiguration
 from runtime.paper.simulate import run
 
 DRISHTI = dict(robot.PARAMS)
-SMALL_ROBOT = Path(__file__).resolve().parent / "robots" / "small_robot.toml"  # shared/cases/
+SMALL_ROBOT = Path(__file__).resolve().parent / "robots" / "small_robot.toml"  # users' case
 SMALL = {"m": 2.0, "I": 0.016654, "K": 0.136, "Iw": 5.4e-5, "r": 0.033, "b": 0.16, "d": 0.05}
 
 

@@ -1,6 +1,8 @@
 """The paper's robot's payload over an experiment: the fixed payload always, the extra one
 on for half of every period (``[plant]`` of the experiment), as plant parameters
-(:func:`runtime.robot_simulation.plant_params_at` on the paper robot's generated code)."""
+(:func:`runtime.robot_simulation.plant_params_at` on the paper robot's generated code).
+The paper places its payload "rather randomly"; the schedule is our choice (docs/PAPER.md
+item 13)."""
 
 from __future__ import annotations
 

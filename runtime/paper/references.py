@@ -1,4 +1,4 @@
-"""Reference trajectories that satisfy the constraints (6)–(8) exactly (READING.md item 9).
+"""Reference trajectories that satisfy the constraints (6)–(8) exactly (docs/PAPER.md item 12).
 
 A reference is defined by smooth wheel-rate profiles η_d(t); the pose follows from
 integrating the kinematics (31) (DOP853, rtol 1e-11), and the accelerations from the chain rule

@@ -75,7 +75,7 @@ def section_figures(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
 
 
 def section_references(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
-    """The printed references (Section 5) and how ours differ (READING.md item 9)."""
+    """The printed references (Section 5) and how ours differ (docs/PAPER.md item 12)."""
     p = rep.robot
     r, b, d = p["r"], p["b"], p["d"]
     th = references.THETA_DOT

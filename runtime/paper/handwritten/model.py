@@ -3,9 +3,10 @@
 Independent of ``modeling/``, ``codegen/`` and ``generated/`` on purpose: nothing is
 imported from them and no expression is copied from them. Every function is typed from
 the paper's printed equations, with the minus signs that the text extraction lost put
-back (READING.md) and with the corrections listed below, each of which I re-derived by
-hand before typing it (the derivation is in the docstrings; ``runtime.tooling.crosscheck``
-also checks it numerically, e.g. that A(q) S(q) = 0 and that (14) is (9) on the manifold).
+back (docs/PAPER.md item 1) and with the corrections listed below, each of which I
+re-derived by hand before typing it (the derivation is in the docstrings;
+``runtime.tooling.crosscheck`` also checks it numerically, e.g. that A(q) S(q) = 0 and that
+(14) is (9) on the manifold).
 
 Coordinates q = (x_c, y_c, θ, θ_r, θ_l), wheel rates η = (θ̇_r, θ̇_l), parameters a dict
 with keys m, I, K, Iw, r, b, d (the paper's lumped parameters; K is the first moment of

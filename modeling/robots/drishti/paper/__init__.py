@@ -1,8 +1,8 @@
 """The paper's printed equations, transcribed, and a verdict on each against the derivation.
 
 The specification (Roy et al. 2017) reaches us as a text extraction that lost almost every
-minus sign and flattened sub- and superscripts (see ``/work/shared/paper/READING.md``). A
-printed equation is therefore never evidence by itself: this package transcribes each of
+minus sign and flattened sub- and superscripts (docs/PAPER.md items 1 and 2). A printed
+equation is therefore never evidence by itself: this package transcribes each of
 (1)–(14), (31) and the lumped relations for m, I and K *as best read*, and lets the
 derivation of :mod:`modeling.robots.drishti.model` decide. One module per job, each using
 only the ones above it:
