@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from codegen.backends.c.config import StatusCode
 from codegen.controller_layout import ControllerLayout, words
 from codegen.robot_functions import MAX_WINDOW
+from modeling.controllers import BASE_CHECKS, REGISTRY, ControllerSpec, KernelArg, kernel
+from modeling.robot_model import RobotModel
 
 # Input magnitudes beyond this are rejected as absurd (a lying sensor), not clipped.
 MAX_ABS_INPUT = "1.0e6"
@@ -157,21 +159,59 @@ def c_common_context() -> dict[str, object]:
     return {"real_bounds": real_bounds(), "fields": FIELDS}
 
 
+@dataclass(frozen=True)
+class StepArg:
+    """A law kernel's argument as a step passes it: name, source (``STEP_SOURCES``) and,
+    for a ``config`` source, the configuration fields it packs."""
+
+    name: str
+    source: str
+    fields: tuple[str, ...] = ()
+
+
+# What a step passes for each source of a kernel argument (modeling.controllers.KernelArg):
+# the measured and desired quantities of this step, the configuration (``config``: the
+# fields the argument's symbols name, a pointer to one or an array packed from several),
+# the state's P, the TDE estimate, and the gains: k-hat computed this step (``khat``) or the
+# state's adapted one (``adapted_gain``). Outputs: u, s, ||s|| and the gain used or adapted.
+STEP_SOURCES = ("q", "qdot", "e", "edot", "qddot_des", "k1", "k2", "p12", "p22", "H1hat",
+                "khat", "adapted_gain", "config", "u", "s", "s_norm", "gain")
+
+
+def law_signature(spec: ControllerSpec, model: RobotModel) -> tuple[list[StepArg], list[StepArg]]:
+    """(inputs after the nominal parameters, outputs) of ``spec``'s kernel as a step fills
+    them (the same for every formulation)."""
+    k = kernel(spec, model.formulations[-1], model)
+
+    def arg(a: KernelArg) -> StepArg:
+        if a.source not in STEP_SOURCES:
+            raise ValueError(f"controller {spec.name}: kernel argument {a.name} has an unknown "
+                             f"source {a.source!r} (known: {', '.join(STEP_SOURCES)})")
+        return StepArg(a.name, a.source, tuple(str(v) for v in a.values)
+                       if a.source == "config" else ())
+
+    return [arg(a) for a in k.inputs], [arg(a) for a in k.outputs]
+
+
 def c_controller_context(
-    info: ControllerInfo, param_fields: list[str], nq: int
+    spec: ControllerSpec, param_fields: list[str], layout: ControllerLayout, model: RobotModel
 ) -> dict[str, object]:
-    """What ``controller.{h,c}.jinja`` needs for ``info`` besides the robot (its C
-    parameter field names and coordinate count)."""
-    return {"config_fields": config_fields(info),
-            "config_values": config_values(info, param_fields)}
+    """What ``controller.{h,c}.jinja`` needs for ``spec`` besides the robot (its C
+    parameter field names, layout and model)."""
+    inputs, outputs = law_signature(spec, model)
+    return {"law_inputs": inputs, "law_outputs": outputs,
+            "config_fields": config_fields(spec),
+            "config_values": config_values(spec, param_fields),
+            "config_lines": config_struct_lines(spec, layout),
+            "base_checks": BASE_CHECKS}
 
 
-def config_values(info: ControllerInfo, param_fields: list[str]) -> list[tuple[str, str, int]]:
+def config_values(spec: ControllerSpec, param_fields: list[str]) -> list[tuple[str, str, int]]:
     """Every value of ``<prefix>_<ctrl>_config_t`` in struct order, as (member path, "real" or
     "int", count: 0 for a vector of nq entries): the nominal parameters, then
     ``config_fields``. A step compares the caller's configuration with the copy _init kept
     value by value (C and Python alike), never padding."""
-    return [(f"nominal.{f}", "real", 1) for f in param_fields] + list(config_fields(info))
+    return [(f"nominal.{f}", "real", 1) for f in param_fields] + list(config_fields(spec))
 
 
 def python_context() -> dict[str, object]:
@@ -197,64 +237,47 @@ def nominal_range(default: float, positive: bool) -> tuple[float, float]:
     return (float(default) / float(NOMINAL_FACTOR) if positive else -high), high
 
 
-def config_fields(info: ControllerInfo) -> tuple[tuple[str, str, int], ...]:
+def config_fields(spec: ControllerSpec) -> tuple[tuple[str, str, int], ...]:
     """The fields of ``<prefix>_<ctrl>_config_t`` after ``nominal``, in struct order:
-    (name, "real" or "int", count; 0: nq entries)."""
-    out: list[tuple[str, str, int]] = [("formulation", "int", 1)]
-    out += [("k1", "real", 0), ("k2", "real", 0)]  # count 0: nq
-    out += [(f, "real", 1) for f in ("q_pos", "q_vel", "h", "tau_max")]
-    if info.tde:
-        out += [("accel_estimator", "int", 1), ("rate_window", "real", 1)]
-    if info.switching:
-        out.append(("eps", "real", 1))
-    if info.window:
-        out += [("n", "int", 1), ("a", "real", 1), ("hold_gain", "int", 1),
-                ("held_gain", "real", 1)]
-    if info.bounds:
-        out += [("alpha", "real", 1), ("phi", "real", 1)]
-    if info.adaptive:
-        out += [("gamma", "real", 1), ("gain0", "real", 1)]
-    return tuple(out)
+    (name, "real" or "int", count; 0: nq entries), from the registry."""
+    return tuple((f.name, "real" if f.kind == "vector" else f.kind, 0 if f.kind == "vector"
+                  else 1) for f in spec.fields)
 
 
-# The paper's robot (importers written before robots were generic).
+# The comment column of the config struct (after "    "), as for a three-letter prefix.
+_COMMENT_COLUMN = 24
 
 
-@dataclass(frozen=True)
-class ControllerInfo:
-    name: str
-    title: str
-    equations: str
-    tde: bool  # H1hat from the time-delay estimate (17) (else the nominal model H-hat)
-    switching: bool  # has a switching term and eps
-    window: bool  # TDROC's history window n, a
-    bounds: bool  # ROC's alpha, phi
-    adaptive: bool  # ASMC's gamma, initial gain
+def config_struct_lines(spec: ControllerSpec, layout: ControllerLayout) -> list[str]:
+    """The member lines of ``<prefix>_<ctrl>_config_t`` after ``nominal``: declaration and
+    the field's doc as a comment aligned at one column (a continuation line under its
+    text)."""
+    pre = layout.prefix
+    formulations = (f"{layout.PREFIX}_FORMULATION_PAPER or {layout.PREFIX}_FORMULATION_MINIMAL"
+                    if layout.paper else f"{layout.PREFIX}_FORMULATION_MINIMAL (the paper "
+                    "formulation is not generated)")
+    actuated_k1 = ", ".join(f"k1[{a}]" for a in layout.actuated)
+    lines = []
+    for f in spec.fields:
+        ctype = "int" if f.kind == "int" else f"{pre}_real_t"
+        dims = f"[{layout.nq}]" if f.kind == "vector" else ""
+        decl = f"{ctype} {f.name}{dims};"
+        doc = f.doc.format(PRE=layout.PREFIX, actuated_k1=actuated_k1,
+                           formulations=formulations)
+        if not doc:
+            lines.append(f"    {decl}")
+            continue
+        width = len(("int" if f.kind == "int" else "wmr_real_t") + f" {f.name}"
+                    + ("[5]" if f.kind == "vector" else "") + ";")
+        first, *rest = doc.split("\n")
+        pad = " " * max(1, _COMMENT_COLUMN - width)
+        text = [f"    {decl}{pad}/* {first}"]
+        indent = " " * (4 + width + len(pad) + 3)  # as the first line for a "wmr" prefix
+        text += [f"{indent}{line}" for line in rest]
+        text[-1] += " */"
+        lines += text
+    return lines
 
 
-CONTROLLERS: tuple[ControllerInfo, ...] = (
-    ControllerInfo("tdc", "time-delay control", "(16)-(18)", True, False, False, False, False),
-    ControllerInfo(
-        "tdroc",
-        "time-delayed robust optimal control",
-        "(16)-(18), (22)-(25)",
-        True,
-        True,
-        True,
-        False,
-        False,
-    ),
-    ControllerInfo(
-        "roc",
-        "robust control with predefined bounds",
-        "(22), (24)",
-        False,
-        True,
-        False,
-        True,
-        False,
-    ),
-    ControllerInfo(
-        "asmc", "adaptive sliding-mode control", "(22), (24)", False, True, False, False, True
-    ),
-)
+# The controllers, as codegen sees them: the registry's entries (modeling.controllers).
+CONTROLLERS: tuple[ControllerSpec, ...] = REGISTRY

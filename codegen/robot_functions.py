@@ -10,7 +10,8 @@ Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi function
   C also the forward dynamics' prepare-parameters API (``<prefix>_model_prepare``,
   ``<prefix>_forward_dynamics_prepared``).
 * ``<prefix>_laws``: the controllers' pure kernels — the time-delay estimate (17), the
-  TDROC gain (25), the four laws, P of the Lyapunov equation — for each formulation.
+  TDROC gain (25), each registered controller's law (``modeling.controllers.REGISTRY``),
+  P of the Lyapunov equation — for each formulation.
   The controller step functions (``wmr_tdroc_step`` …) are templates around these that
   own validation, history and status; they do no arithmetic of their own beyond copying.
 * ``<prefix>_plant``: the simulated robot's state derivative and the payload relations.
@@ -329,6 +330,26 @@ def _trig_variant(
     )
 
 
+# What a law kernel's common inputs are, for its header (an input may bring its own doc).
+KERNEL_INPUT_DOCS = {
+    "qdot": "measured qdot",
+    "e": "q_des - q",
+    "edot": "qdot_des - qdot",
+    "qddot_des": "desired acceleration",
+    "k1": "diagonal of K1",
+    "k2": "diagonal of K2",
+    "p12": "P entries per coordinate",
+    "H1hat": "(17)",
+}
+
+
+def _kernel_input(arg: ctl.KernelArg, model: RobotModel) -> Argument:
+    """A law kernel's input argument, documented (q: the measured coordinates)."""
+    doc = arg.doc or (f"measured q ({words(model.nq)} coordinates)" if arg.name == "q"
+                      else KERNEL_INPUT_DOCS.get(arg.name, ""))
+    return array(arg.name, arg.values, doc)
+
+
 @cache
 def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     """``<prefix>_laws``: pure kernels of the four controllers, each formulation."""
@@ -361,7 +382,6 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(25)",),
         )
     )
-    theta_q = array("q", model.q, f"measured q ({words(model.nq)} coordinates)")
     for f in model.formulations:
         tde, ts = ctl.tde_estimate(f, model)
         specs.append(
@@ -417,99 +437,19 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ("(25)",),
             )
         )
-        common = lambda ls: (  # noqa: E731 - the argument list every law shares
-            array("e", ls.e, "q_des - q"),
-            array("edot", ls.edot, "qdot_des - qdot"),
-            array("qddot_des", ls.qddot_des, "desired acceleration"),
-            array("k1", ls.k1, "diagonal of K1"),
-            array("k2", ls.k2, "diagonal of K2"),
-            array("p12", ls.p12, "P entries per coordinate"),
-            array("p22", ls.p22, ""),
-        )
-        law, ls = ctl.tde_law(f, switching=False, model=model)
-        specs.append(
-            FunctionSpec(
-                f"{f}_tdc_law",
-                f"({f} formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.",
-                (_nominal(model), theta_q, *common(ls), array("H1hat", ls.h1, "(17)")),
-                (out("u", law.u),),
-                ("(16)", "(18)"),
+        for c in ctl.REGISTRY:
+            kernel = ctl.kernel(c, f, model)
+            specs.append(
+                FunctionSpec(
+                    f"{f}_{c.name}_law",
+                    f"({f} formulation) {kernel.doc}",
+                    (_nominal(model), *(_kernel_input(a, model) for a in kernel.inputs)),
+                    tuple(out(a.name, list(a.values), a.doc) for a in kernel.outputs),
+                    kernel.equations,
+                )
             )
-        )
-        if angles:
-            specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
-        law, ls = ctl.tde_law(f, switching=True, model=model)
-        specs.append(
-            FunctionSpec(
-                f"{f}_tdroc_law",
-                f"({f} formulation) TDROC (16), (22), (25):\n"
-                "u = Mhat(q)(ua_hat + gain s/max(|s|, eps))\n"
-                "+ H1hat, s = B^T P e.",
-                (
-                    _nominal(model),
-                    theta_q,
-                    *common(ls),
-                    array("H1hat", ls.h1, "(17)"),
-                    array("gain", (ls.gain,), "khat of (25)"),
-                    array("eps", (ls.eps,), "boundary layer"),
-                ),
-                (out("u", law.u), out("s", law.s), out("s_norm", [law.s_norm])),
-                ("(16)", "(22)", "(24)", "(25)"),
-            )
-        )
-        if angles:
-            specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
-        qdot_c = array("qdot", model.qdot, "measured qdot")
-        law, ls = ctl.model_law(f, "roc", model)
-        specs.append(
-            FunctionSpec(
-                f"{f}_roc_law",
-                f"({f} formulation) ROC:\n"
-                "u = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),\n"
-                "rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).",
-                (
-                    _nominal(model),
-                    theta_q,
-                    qdot_c,
-                    *common(ls),
-                    array("bounds", (ls.alpha, ls.phi), "alpha, phi"),
-                    array("eps", (ls.eps,), ""),
-                ),
-                (
-                    out("u", law.u),
-                    out("s", law.s),
-                    out("s_norm", [law.s_norm]),
-                    out("gain", [law.gain]),
-                ),
-                ("(22)", "(24)"),
-            )
-        )
-        law, ls = ctl.model_law(f, "asmc", model)
-        gamma, h = sp.symbols("gamma h", positive=True)
-        specs.append(
-            FunctionSpec(
-                f"{f}_asmc_law",
-                f"({f} formulation) ASMC:\n"
-                "u = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);\n"
-                "gain_next = khat + h gamma |s|.",
-                (
-                    _nominal(model),
-                    theta_q,
-                    qdot_c,
-                    *common(ls),
-                    array("gain", (ls.gain,), "khat"),
-                    array("eps", (ls.eps,), ""),
-                    array("adapt", (gamma, h), "gamma, h"),
-                ),
-                (
-                    out("u", law.u),
-                    out("s", law.s),
-                    out("s_norm", [law.s_norm]),
-                    out("gain_next", [ctl.asmc_adaptation(ls.gain, gamma, law.s_norm, h)]),
-                ),
-                ("(22)", "(24)"),
-            )
-        )
+            if c.trig and angles:
+                specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
     return tuple(specs)
 
 

@@ -19,10 +19,16 @@ from modeling.version import VERSION
 CODEGEN_DIR = Path(__file__).resolve().parent
 
 
+def template_error(message: str) -> None:
+    """``{{ template_error("...") }}`` in a template: stop rendering with ``message`` (a
+    case the template does not know, e.g. a registry entry with an unknown check)."""
+    raise jinja2.TemplateError(message)
+
+
 @functools.cache
 def environment(template_dir: Path) -> jinja2.Environment:
     """The strict Jinja2 environment for templates in ``template_dir``."""
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_dir)),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
@@ -30,6 +36,8 @@ def environment(template_dir: Path) -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    env.globals["template_error"] = template_error
+    return env
 
 
 def template_label(template_dir: Path, name: str) -> str:

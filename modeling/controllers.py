@@ -48,6 +48,7 @@ a configuration choice (docs/PAPER.md item 9):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -58,7 +59,6 @@ from modeling.robot_model import RobotModel
 
 Formulation = Literal["paper", "minimal"]
 FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 
 
 def _vec(name: str, n: int) -> sp.Matrix:
@@ -398,3 +398,264 @@ def tdroc_weighted_gain(window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
     w = _vec("w", window)
     total = sum((w[i] * d[i] for i in range(window)), sp.S.Zero)
     return sp.Symbol("minv_norm", positive=True) * total, d, w
+
+
+# --------------------------------------------------------------------------- the registry
+#
+# Every controller is declared once, below: its law (the kernel a step calls, with the
+# argument list the step fills), its configuration fields (with the check, the status a bad
+# value gets, the unit and where the runtime takes the value), the features its step needs
+# and its labels. codegen builds the kernels and the C and Python step functions from these
+# entries, the generated robot.py exports them, and the runtime and the reports iterate them.
+
+
+@dataclass(frozen=True)
+class ConfigField:
+    """One field of ``<prefix>_<ctrl>_config_t`` (after ``nominal``).
+
+    ``kind``: ``real``, ``int``, or ``vector`` (one real per coordinate of q). ``check``: how
+    the C and the Python mirror validate it (``codegen.controller_api.FIELD_CHECKS``),
+    failing with status ``ERR_<status>``. ``doc``: the struct comment, a format string over
+    ``PRE`` (the C prefix in capitals), ``actuated_k1`` and ``formulations`` (the robot's).
+    ``source``: where the runtime's configuration builder takes the value
+    (``runtime`` knows each source; ``experiment.<section>.<field>`` reads an experiment
+    field)."""
+
+    name: str
+    kind: Literal["real", "int", "vector"]
+    check: str
+    status: str
+    unit: str
+    doc: str
+    source: str
+
+
+@dataclass(frozen=True)
+class KernelArg:
+    """One argument of a law kernel: its name (the kernel's parameter), what the step passes
+    (``source``: ``codegen.controller_api.STEP_SOURCES``) and the symbols or expressions."""
+
+    name: str
+    source: str
+    values: tuple[sp.Expr, ...]
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """A controller's law as one generated function of ``<prefix>_laws``: ``doc`` (after
+    "(<formulation> formulation) "), the paper's equations, inputs after the nominal
+    parameters, outputs."""
+
+    doc: str
+    equations: tuple[str, ...]
+    inputs: tuple[KernelArg, ...]
+    outputs: tuple[KernelArg, ...]
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """A controller: identity, labels, step features, configuration and law.
+
+    Features the step functions are built from (none names a controller):
+    ``tde``: Ĥ1 from the time-delay estimate (17), with its history and estimator fields;
+    ``window``: TDROC's k̂ of (25) over a window of past Ω's (history in the state);
+    ``switching``: a switching term with a boundary layer ε (the law returns s and ‖s‖);
+    ``adaptive``: a gain the law adapts, kept in the state and capped;
+    ``bounds``: uncertainty bounds α, φ in the configuration;
+    ``trig``: the law has a ``_trig`` variant taking sin/cos of q's angles (the TDE laws).
+    ``checks``: the fields in the order a configuration is validated (the order of the
+    statuses when several fields are bad), ``fields`` in struct order.
+    """
+
+    name: str
+    label: str
+    title: str
+    equations: str
+    tde: bool
+    switching: bool
+    window: bool
+    bounds: bool
+    adaptive: bool
+    trig: bool
+    fields: tuple[ConfigField, ...]
+    checks: tuple[str, ...]
+    kernel: Callable[[Formulation, RobotModel], Kernel]
+
+    def field(self, name: str) -> ConfigField:
+        return next(f for f in self.fields if f.name == name)
+
+
+# The fields, each declared once; a controller lists the ones it has.
+FORMULATION_FIELD = ConfigField(
+    "formulation", "int", "formulation", "BAD_FORMULATION", "",
+    "{formulations}", "formulation")
+K1_FIELD = ConfigField(
+    "k1", "vector", "gain", "BAD_GAINS", "1/s^2",
+    "diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form uses {actuated_k1}",
+    "experiment.controller.k1")
+K2_FIELD = ConfigField(
+    "k2", "vector", "gain", "BAD_GAINS", "1/s",
+    "diagonal of K2 (18), [GAIN_MIN, GAIN_MAX]", "experiment.controller.k2")
+Q_POS_FIELD = ConfigField(
+    "q_pos", "real", "gain", "BAD_GAINS", "",
+    "Q = diag(q_pos I, q_vel I) of the Lyapunov equation, [GAIN_MIN, GAIN_MAX]",
+    "experiment.controller.q_pos")
+Q_VEL_FIELD = ConfigField("q_vel", "real", "gain", "BAD_GAINS", "", "",
+                          "experiment.controller.q_vel")
+H_FIELD = ConfigField("h", "real", "sample_time", "BAD_SAMPLE_TIME", "s",
+                      "sample time [s], [H_MIN, H_MAX]", "experiment.controller.h")
+TAU_MAX_FIELD = ConfigField(
+    "tau_max", "real", "torque_limit", "BAD_TORQUE_LIMIT", "N m",
+    "torque limit [N m], (0, TORQUE_LIMIT_MAX]; larger torques are clipped",
+    "experiment.controller.tau_max")
+ESTIMATOR_FIELD = ConfigField(
+    "accel_estimator", "int", "estimator", "BAD_ESTIMATOR", "",
+    "qddot(t-h) for (17): {PRE}_ACCEL_BACKWARD, _CENTRAL or _MATCHED", "accel_estimator")
+RATE_WINDOW_FIELD = ConfigField(
+    "rate_window", "real", "rate_window", "BAD_ESTIMATOR", "s",
+    "span [s] over which qdot is measured, 0..h (MATCHED): 0 for a\n"
+    "rate at the sample instant, h for encoder counts over h", "rate_window")
+EPS_FIELD = ConfigField("eps", "real", "gain", "BAD_EPS", "",
+                        "boundary layer of (24)/(25), [GAIN_MIN, GAIN_MAX]",
+                        "experiment.controller.eps")
+N_FIELD = ConfigField("n", "int", "window", "BAD_WINDOW", "",
+                      "window of past instants, 2..{PRE}_MAX_WINDOW", "experiment.controller.n")
+A_FIELD = ConfigField("a", "real", "discount", "BAD_DISCOUNT", "",
+                      "discount, 0 < a <= 1; weights a^(i-1), normalised",
+                      "experiment.controller.a")
+HOLD_GAIN_FIELD = ConfigField("hold_gain", "int", "flag", "BAD_HELD_GAIN", "",
+                              "0: k-hat from (25); 1: k-hat held at held_gain", "hold_gain")
+HELD_GAIN_FIELD = ConfigField("held_gain", "real", "nonnegative_gain", "BAD_HELD_GAIN", "",
+                              "[0, GAIN_MAX], used when hold_gain = 1", "held_gain")
+ALPHA_FIELD = ConfigField("alpha", "real", "alpha", "BAD_BOUNDS", "",
+                          "bound on ||M^-1 Mhat - I|| over the uncertainty box, [0, 1)",
+                          "roc_bounds.alpha")
+PHI_FIELD = ConfigField("phi", "real", "nonnegative_gain", "BAD_BOUNDS", "",
+                        "bound on ||M^-1 (H - Hhat)||, [0, GAIN_MAX]", "roc_bounds.phi")
+GAMMA_FIELD = ConfigField("gamma", "real", "nonnegative_gain", "BAD_BOUNDS", "",
+                          "adaptation rate of the switching gain, [0, GAIN_MAX]",
+                          "experiment.controller.gamma")
+GAIN0_FIELD = ConfigField(
+    "gain0", "real", "nonnegative_gain", "BAD_BOUNDS", "",
+    "initial switching gain, [0, GAIN_MAX]; the gain is capped at GAIN_MAX", "zero")
+
+# The fields every controller of the paper has, in struct and check order.
+_LYAPUNOV_BASE = (FORMULATION_FIELD, K1_FIELD, K2_FIELD, Q_POS_FIELD, Q_VEL_FIELD, H_FIELD,
+                  TAU_MAX_FIELD)
+# What <prefix>_check_base_config checks (shared by every controller that has these fields).
+BASE_CHECKS = ("formulation", "h", "k1", "k2", "q_pos", "q_vel", "tau_max")
+
+
+def _args(ls: LawSymbols, *names: str) -> tuple[KernelArg, ...]:
+    """Kernel inputs that are law symbols, by name (the step's source has the same name)."""
+    return tuple(KernelArg(n, n, tuple(getattr(ls, {"qddot_des": "qddot_des",
+                                                    "H1hat": "h1"}.get(n, n))))
+                 for n in names)
+
+
+_COMMON = ("e", "edot", "qddot_des", "k1", "k2", "p12", "p22")
+
+
+def _tdc_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
+    law, ls = tde_law(formulation, switching=False, model=model)
+    return Kernel(
+        "TDC (16), (18): u = Mhat(q) ua_hat + H1hat.", ("(16)", "(18)"),
+        (KernelArg("q", "q", tuple(model.q)), *_args(ls, *_COMMON, "H1hat")),
+        (KernelArg("u", "u", tuple(law.u)),),
+    )
+
+
+def _tdroc_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
+    law, ls = tde_law(formulation, switching=True, model=model)
+    return Kernel(
+        "TDROC (16), (22), (25):\nu = Mhat(q)(ua_hat + gain s/max(|s|, eps))\n"
+        "+ H1hat, s = B^T P e.", ("(16)", "(22)", "(24)", "(25)"),
+        (KernelArg("q", "q", tuple(model.q)), *_args(ls, *_COMMON, "H1hat"),
+         KernelArg("gain", "khat", (ls.gain,), "khat of (25)"),
+         KernelArg("eps", "config", (ls.eps,), "boundary layer")),
+        (KernelArg("u", "u", tuple(law.u)), KernelArg("s", "s", tuple(law.s)),
+         KernelArg("s_norm", "s_norm", (law.s_norm,))),
+    )
+
+
+def _roc_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
+    law, ls = model_law(formulation, "roc", model)
+    return Kernel(
+        "ROC:\nu = Mhat(q)(ua_hat + rho s/max(|s|, eps)) + Hhat(q, qdot),\n"
+        "rho = (alpha(|qddot_des| + |K1 e + K2 edot|) + phi)/(1 - alpha).", ("(22)", "(24)"),
+        (KernelArg("q", "q", tuple(model.q)), KernelArg("qdot", "qdot", tuple(model.qdot)),
+         *_args(ls, *_COMMON),
+         KernelArg("bounds", "config", (ls.alpha, ls.phi), "alpha, phi"),
+         KernelArg("eps", "config", (ls.eps,))),
+        (KernelArg("u", "u", tuple(law.u)), KernelArg("s", "s", tuple(law.s)),
+         KernelArg("s_norm", "s_norm", (law.s_norm,)),
+         KernelArg("gain", "gain", (law.gain,))),
+    )
+
+
+def _asmc_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
+    law, ls = model_law(formulation, "asmc", model)
+    gamma, h = sp.symbols("gamma h", positive=True)
+    return Kernel(
+        "ASMC:\nu = Mhat(q)(ua_hat + khat s/max(|s|, eps)) + Hhat(q, qdot);\n"
+        "gain_next = khat + h gamma |s|.", ("(22)", "(24)"),
+        (KernelArg("q", "q", tuple(model.q)), KernelArg("qdot", "qdot", tuple(model.qdot)),
+         *_args(ls, *_COMMON),
+         KernelArg("gain", "adapted_gain", (ls.gain,), "khat"),
+         KernelArg("eps", "config", (ls.eps,)),
+         KernelArg("adapt", "config", (gamma, h), "gamma, h")),
+        (KernelArg("u", "u", tuple(law.u)), KernelArg("s", "s", tuple(law.s)),
+         KernelArg("s_norm", "s_norm", (law.s_norm,)),
+         KernelArg("gain_next", "gain",
+                   (asmc_adaptation(ls.gain, gamma, law.s_norm, h),))),
+    )
+
+
+REGISTRY: tuple[ControllerSpec, ...] = (
+    ControllerSpec(
+        "tdc", "TDC", "time-delay control", "(16)-(18)",
+        tde=True, switching=False, window=False, bounds=False, adaptive=False, trig=True,
+        fields=(*_LYAPUNOV_BASE, ESTIMATOR_FIELD, RATE_WINDOW_FIELD),
+        checks=(*BASE_CHECKS, "accel_estimator", "rate_window"),
+        kernel=_tdc_kernel,
+    ),
+    ControllerSpec(
+        "tdroc", "TDROC", "time-delayed robust optimal control", "(16)-(18), (22)-(25)",
+        tde=True, switching=True, window=True, bounds=False, adaptive=False, trig=True,
+        fields=(*_LYAPUNOV_BASE, ESTIMATOR_FIELD, RATE_WINDOW_FIELD, EPS_FIELD, N_FIELD,
+                A_FIELD, HOLD_GAIN_FIELD, HELD_GAIN_FIELD),
+        checks=(*BASE_CHECKS, "eps", "accel_estimator", "rate_window", "hold_gain",
+                "held_gain", "n", "a"),
+        kernel=_tdroc_kernel,
+    ),
+    ControllerSpec(
+        "roc", "ROC", "robust control with predefined bounds", "(22), (24)",
+        tde=False, switching=True, window=False, bounds=True, adaptive=False, trig=False,
+        fields=(*_LYAPUNOV_BASE, EPS_FIELD, ALPHA_FIELD, PHI_FIELD),
+        checks=(*BASE_CHECKS, "eps", "alpha", "phi"),
+        kernel=_roc_kernel,
+    ),
+    ControllerSpec(
+        "asmc", "ASMC", "adaptive sliding-mode control", "(22), (24)",
+        tde=False, switching=True, window=False, bounds=False, adaptive=True, trig=False,
+        fields=(*_LYAPUNOV_BASE, EPS_FIELD, GAMMA_FIELD, GAIN0_FIELD),
+        checks=(*BASE_CHECKS, "eps", "gamma", "gain0"),
+        kernel=_asmc_kernel,
+    ),
+)
+CONTROLLERS = tuple(c.name for c in REGISTRY)
+
+
+@cache
+def kernel(spec: ControllerSpec, formulation: Formulation, model: RobotModel) -> Kernel:
+    """``spec``'s law kernel for one formulation of ``model`` (derived once)."""
+    return spec.kernel(formulation, model)
+
+
+def controller(name: str) -> ControllerSpec:
+    """The registry entry of ``name``."""
+    for c in REGISTRY:
+        if c.name == name:
+            return c
+    raise ValueError(f"no controller {name!r} (known: {', '.join(CONTROLLERS)})")

@@ -27,12 +27,14 @@ from codegen.controller_api import (
     c_common_context,
     c_controller_context,
     defines,
+    law_signature,
     python_context,
     status_codes,
 )
 from codegen.controller_layout import ControllerLayout, row_span, wrap_terms
 from codegen.generate import layout_for
 from codegen.robot_functions import MAX_WINDOW
+from modeling.controllers import BASE_CHECKS
 from modeling.robots.drishti.model import robot_model
 
 TOY = ControllerLayout(
@@ -84,7 +86,8 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
                 layout=layout,
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
-                **c_controller_context(info, list(TOY_PARAMS), layout.nq),
+                # the kernels' argument lists are the same for every robot: Drishti's
+                **c_controller_context(info, list(TOY_PARAMS), layout, robot_model()),
             )
     texts["robot.h"] = template_util.render(
         C_TEMPLATES,
@@ -114,6 +117,8 @@ def _python_text(layout: ControllerLayout) -> str:
         layout=layout,
         status_codes=status_codes(layout),
         controllers=CONTROLLERS,
+        law_signatures={c.name: law_signature(c, robot_model()) for c in CONTROLLERS},
+        base_checks=BASE_CHECKS,
         formulation_paper=0,
         formulation_minimal=1,
         max_window=MAX_WINDOW,

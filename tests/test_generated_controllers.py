@@ -29,9 +29,9 @@ from generated_code_support import (
     _smooth_sequence,
 )
 
-from codegen.controller_api import ControllerInfo
 from codegen.robot_functions import MAX_WINDOW
 from modeling import controllers as ctl
+from modeling.controllers import ControllerSpec
 from modeling.robots.drishti import model as wmr
 from modeling.robots.drishti.model import PARAM_KEYS
 from runtime.generated_modules import controllers as pyctl
@@ -42,7 +42,7 @@ RTOL_SYMPY_LAW = 1e-9  # steps vs the SymPy laws evaluated directly (other round
 
 
 def _compare_states(
-    c_fields: dict[str, Any], py_state: dict[str, Any], info: ControllerInfo
+    c_fields: dict[str, Any], py_state: dict[str, Any], info: ControllerSpec
 ) -> None:
     required = {"steps", "gain", "s_norm", "H1hat", "tau"}
     required |= ({"omega_dnorm"} if info.window else set()) | ({"trig_prev"} if info.tde else set())

@@ -34,9 +34,9 @@ from generated_code_support import (
     _smooth_sequence,
 )
 
-from codegen.controller_api import ControllerInfo
 from codegen.layout import argument_size
 from codegen.robot_functions import MAX_WINDOW, model_specs
+from modeling.controllers import ControllerSpec
 from modeling.robots.drishti.model import PARAM_KEYS, robot_model
 from runtime.generated_modules import controllers as pyctl
 from runtime.generated_modules import wmr_model as py_model
@@ -50,7 +50,7 @@ class BadCase:
     status: str
     inputs: tuple[int, int, float] | None = None  # (which input, index, value)
     config: dict[str, Any] | None = None
-    applies: Callable[[ControllerInfo], bool] = lambda info: True
+    applies: Callable[[ControllerSpec], bool] = lambda info: True
 
 
 def _bad_cases() -> list[BadCase]:

@@ -171,6 +171,21 @@ def _positive_at_most(x: float, top: float) -> bool:
 
 
 _GAINS = f"[{GAIN_MIN}, {GAIN_MAX}]"  # K1, K2, Q entries and eps
+# How a configuration field is validated (the registry's ConfigField.check), as the C does.
+_FIELD_CHECKS: dict[str, Any] = {
+    "gain": lambda x, c: _within(x, GAIN_MIN, GAIN_MAX),
+    "nonnegative_gain": lambda x, c: _nonnegative_at_most(x, GAIN_MAX),
+    "estimator": lambda x, c: x in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED),
+    "rate_window": lambda x, c: _nonnegative_at_most(x, c.h),
+    "flag": lambda x, c: x in (0, 1),
+    "window": lambda x, c: not isinstance(x, bool) and isinstance(x, int) and 2 <= x <= MAX_WINDOW,
+    "discount": lambda x, c: _positive_at_most(x, 1.0),
+    "alpha": lambda x, c: math.isfinite(x) and 0.0 <= x < 1.0,
+}
+_FIELD_RANGES = {"gain": _GAINS, "nonnegative_gain": f"[0, {GAIN_MAX}]",
+                 "estimator": "BACKWARD, CENTRAL, MATCHED", "rate_window": "[0, h]",
+                 "flag": "0, 1", "window": f"2..{MAX_WINDOW}", "discount": "(0, 1]",
+                 "alpha": "[0, 1)"}
 
 
 def _within(x: float, low: float, top: float) -> bool:
@@ -204,6 +219,7 @@ def _vector(x: ArrayLike, label: str, size: int = 5) -> NDArray[np.float64]:
 class _Controller:
     name = ""
     config_fields: tuple[tuple[str, str], ...] = ()
+    field_checks: tuple[tuple[str, str, str], ...] = ()
     tde = False
     switching = False
     window = False
@@ -304,33 +320,11 @@ class _Controller:
                 raise bad("ERR_BAD_GAINS", "P of (20) is not finite for these gains", "P", i)
         if not _positive_at_most(c.tau_max, TORQUE_LIMIT_MAX):
             raise bad("ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}", "TAU_MAX")
-        if cls.switching and not _within(c.eps, GAIN_MIN, GAIN_MAX):
-            raise bad("ERR_BAD_EPS", f"eps = {c.eps!r} outside {_GAINS}", "EPS")
-        if cls.tde and c.accel_estimator not in (ACCEL_BACKWARD, ACCEL_CENTRAL, ACCEL_MATCHED):
-            raise bad("ERR_BAD_ESTIMATOR", f"accel_estimator = {c.accel_estimator!r}",
-                      "ACCEL_ESTIMATOR")
-        if cls.tde and not _nonnegative_at_most(c.rate_window, c.h):
-            raise bad("ERR_BAD_ESTIMATOR", f"rate_window = {c.rate_window!r} outside [0, h]",
-                      "RATE_WINDOW")
-        if cls.window:
-            if c.hold_gain not in (0, 1):
-                raise bad("ERR_BAD_HELD_GAIN", f"hold_gain = {c.hold_gain!r}", "HOLD_GAIN")
-            if not _nonnegative_at_most(c.held_gain, GAIN_MAX):
-                raise bad("ERR_BAD_HELD_GAIN", f"held_gain = {c.held_gain!r}", "HELD_GAIN")
-            if isinstance(c.n, bool) or not isinstance(c.n, int) or not 2 <= c.n <= MAX_WINDOW:
-                raise bad("ERR_BAD_WINDOW", f"n = {c.n!r} outside 2..{MAX_WINDOW}", "N")
-            if not _positive_at_most(c.a, 1.0):
-                raise bad("ERR_BAD_DISCOUNT", f"a = {c.a!r} outside (0, 1]", "A")
-        if cls.bounds:
-            if not (math.isfinite(c.alpha) and 0.0 <= c.alpha < 1.0):
-                raise bad("ERR_BAD_BOUNDS", f"alpha = {c.alpha!r} outside [0, 1)", "ALPHA")
-            if not _nonnegative_at_most(c.phi, GAIN_MAX):
-                raise bad("ERR_BAD_BOUNDS", f"phi = {c.phi!r} outside [0, {GAIN_MAX}]", "PHI")
-        if cls.adaptive:
-            if not _nonnegative_at_most(c.gamma, GAIN_MAX):
-                raise bad("ERR_BAD_BOUNDS", f"gamma = {c.gamma!r} outside [0, {GAIN_MAX}]", "GAMMA")
-            if not _nonnegative_at_most(c.gain0, GAIN_MAX):
-                raise bad("ERR_BAD_BOUNDS", f"gain0 = {c.gain0!r} outside [0, {GAIN_MAX}]", "GAIN0")
+        for name, check, status in cls.field_checks:  # the registry's, in its order
+            value = getattr(c, name)
+            if not _FIELD_CHECKS[check](value, c):
+                raise bad("ERR_" + status, f"{name} = {value!r} outside {_FIELD_RANGES[check]}",
+                          name.upper())
         p = c.nominal
         try:
             values = {k: float(p[k]) for k in PARAM_KEYS}
@@ -430,21 +424,11 @@ class _Controller:
                 minv_norm = float(norm_fn(p)[0])  # parameters only (see wmr_laws)
                 gain_fn = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
                 gain = cap_gain(float(gain_fn([minv_norm], omega[:, :nc], w)[0]))
-        common = (e, edot, qdd, k1, k2, p12, p22)
-        if self.name == "tdc":
-            u = (laws.paper_tdc_law if paper else laws.minimal_tdc_law)(qv, *common, H1hat[:nc], p)
-        elif self.name == "tdroc":
-            tdroc_fn = laws.paper_tdroc_law if paper else laws.minimal_tdroc_law
-            u, _, sn = tdroc_fn(qv, *common, H1hat[:nc], [gain], [c.eps], p)
-            s_norm = float(sn[0])
-        elif self.name == "roc":
-            roc_fn = laws.paper_roc_law if paper else laws.minimal_roc_law
-            u, _, sn, g = roc_fn(qv, qdv, *common, [c.alpha, c.phi], [c.eps], p)
-            s_norm, gain = float(sn[0]), float(g[0])
-        else:
-            asmc_fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
-            u, _, sn, g = asmc_fn(qv, qdv, *common, [self.gain], [c.eps], [c.gamma, c.h], p)
-            s_norm, gain = float(sn[0]), cap_gain(float(g[0]))
+        # The law's inputs as the step has them, by source (codegen.controller_api.STEP_SOURCES).
+        x = {"q": qv, "qdot": qdv, "e": e, "edot": edot, "qddot_des": qdd, "k1": k1, "k2": k2,
+             "p12": p12, "p22": p22, "H1hat": H1hat[:nc], "khat": [gain],
+             "adapted_gain": [self.gain]}
+        u, s_norm, gain = self._law(c, paper, x, p, s_norm, gain)
 
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
         u_discarded = laws._norm(float(u[0]), float(u[1]), float(u[2])) if paper else 0.0
@@ -484,6 +468,16 @@ class TDC(_Controller):
     adaptive = False
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), )
+    # the fields validated after the ones every controller has, in the C's order
+    field_checks = (("accel_estimator", "estimator", "BAD_ESTIMATOR"), ("rate_window", "rate_window", "BAD_ESTIMATOR"), )
+
+    def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
+             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
+        ||s|| and the gain pass through where the law has none."""
+        fn = laws.paper_tdc_law if paper else laws.minimal_tdc_law
+        u = fn(x["q"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["H1hat"], p)
+        return u, s_norm, gain
 
 
 class TDROC(_Controller):
@@ -497,6 +491,17 @@ class TDROC(_Controller):
     adaptive = False
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), ("eps", "real"), ("n", "int"), ("a", "real"), ("hold_gain", "int"), ("held_gain", "real"), )
+    # the fields validated after the ones every controller has, in the C's order
+    field_checks = (("eps", "gain", "BAD_EPS"), ("accel_estimator", "estimator", "BAD_ESTIMATOR"), ("rate_window", "rate_window", "BAD_ESTIMATOR"), ("hold_gain", "flag", "BAD_HELD_GAIN"), ("held_gain", "nonnegative_gain", "BAD_HELD_GAIN"), ("n", "window", "BAD_WINDOW"), ("a", "discount", "BAD_DISCOUNT"), )
+
+    def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
+             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
+        ||s|| and the gain pass through where the law has none."""
+        fn = laws.paper_tdroc_law if paper else laws.minimal_tdroc_law
+        u, _, sn = fn(x["q"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["H1hat"], x["khat"], [c.eps], p)
+        s_norm = float(sn[0])
+        return u, s_norm, gain
 
 
 class ROC(_Controller):
@@ -510,6 +515,18 @@ class ROC(_Controller):
     adaptive = False
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("alpha", "real"), ("phi", "real"), )
+    # the fields validated after the ones every controller has, in the C's order
+    field_checks = (("eps", "gain", "BAD_EPS"), ("alpha", "alpha", "BAD_BOUNDS"), ("phi", "nonnegative_gain", "BAD_BOUNDS"), )
+
+    def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
+             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
+        ||s|| and the gain pass through where the law has none."""
+        fn = laws.paper_roc_law if paper else laws.minimal_roc_law
+        u, _, sn, g = fn(x["q"], x["qdot"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], [c.alpha, c.phi], [c.eps], p)
+        s_norm = float(sn[0])
+        gain = float(g[0])
+        return u, s_norm, gain
 
 
 class ASMC(_Controller):
@@ -523,3 +540,15 @@ class ASMC(_Controller):
     adaptive = True
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )
+    # the fields validated after the ones every controller has, in the C's order
+    field_checks = (("eps", "gain", "BAD_EPS"), ("gamma", "nonnegative_gain", "BAD_BOUNDS"), ("gain0", "nonnegative_gain", "BAD_BOUNDS"), )
+
+    def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
+             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
+        ||s|| and the gain pass through where the law has none."""
+        fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
+        u, _, sn, g = fn(x["q"], x["qdot"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["adapted_gain"], [c.eps], [c.gamma, c.h], p)
+        s_norm = float(sn[0])
+        gain = cap_gain(float(g[0]))
+        return u, s_norm, gain

@@ -165,7 +165,7 @@ class CBackend:
                 files[f"{pre}_{info.name}.{suffix}"] = _template(
                     f"controller.{suffix}.jinja", law, layout=layout, c=info,
                     max_abs_input=MAX_ABS_INPUT,
-                    **c_controller_context(info, param_fields, layout.nq),
+                    **c_controller_context(info, param_fields, layout, target.model),
                 )
         robot = target.robot
         fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]

@@ -18,12 +18,14 @@ from codegen.backends.python.render import TEMPLATE_DIR, render_module
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
+    law_signature,
     nominal_range,
     python_context,
     status_codes,
 )
 from codegen.robot_functions import MAX_WINDOW
 from codegen.template_util import generated_by
+from modeling.controllers import BASE_CHECKS
 from modeling.version import VERSION
 
 
@@ -35,6 +37,7 @@ def robot_py(target: RobotTarget) -> str:
     text = (
         f'"""Default parameters of robot {name} (from {robot.source}).\n\n'
         f'{generated_by()} DO NOT EDIT.\n"""\n\n'
+        "from typing import Any\n\n"
         f"NAME = {name}\n"
         f'TOOLCHAIN_VERSION = "{VERSION}"  # the wmr-toolchain that generated this code\n'
         f'SOURCE_SHA256 = "{robot.digest}"  # of the robot file\'s text\n'
@@ -52,7 +55,32 @@ def robot_py(target: RobotTarget) -> str:
         f"COORDINATES = ({names},)\n"
         f"INPUTS = ({inputs},)\n"
         f"FORMULATIONS = {tuple(model.formulations)!r}\n"
+        + controllers_py()
     )
+
+
+def controllers_py() -> str:
+    """``CONTROLLERS`` of robot.py: the registry (``modeling.controllers.REGISTRY``) as data,
+    so that the runtime iterates the controllers without importing SymPy or retyping them:
+    name, label, title, equations, step features and configuration fields (name, kind,
+    unit, where the runtime takes the value)."""
+    lines = ["# The controllers generated for this robot (modeling.controllers.REGISTRY): name,",
+             "# labels, step features, configuration fields (name, kind, unit, value source).",
+             "CONTROLLERS: tuple[dict[str, Any], ...] = ("]
+    for c in CONTROLLERS:
+        fields = ", ".join(f"({f.name!r}, {f.kind!r}, {f.unit!r}, {f.source!r})"
+                           for f in c.fields)
+        lines += [
+            "    {",
+            f"        \"name\": {c.name!r}, \"label\": {c.label!r}, \"title\": {c.title!r},",
+            f"        \"equations\": {c.equations!r}, \"tde\": {c.tde}, "
+            f"\"switching\": {c.switching},",
+            f"        \"window\": {c.window}, \"bounds\": {c.bounds}, "
+            f"\"adaptive\": {c.adaptive},",
+            f"        \"fields\": ({fields},),",
+            "    },",
+        ]
+    return "\n".join([*lines, ")", ""])
 
 
 def nominal_conditions(target: RobotTarget) -> list[tuple[str, str]]:
@@ -82,6 +110,8 @@ class PythonBackend:
             layout=layout,
             status_codes=status_codes(layout),
             controllers=CONTROLLERS,
+            law_signatures={c.name: law_signature(c, target.model) for c in CONTROLLERS},
+            base_checks=BASE_CHECKS,
             formulation_paper=0,
             formulation_minimal=1,
             max_window=MAX_WINDOW,
