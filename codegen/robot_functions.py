@@ -42,7 +42,7 @@ def status(model: RobotModel, name: str) -> str:
 
 
 def _fields(params: tuple[Parameter, ...]) -> tuple[Field, ...]:
-    return tuple(Field(p.key, (p.symbol,), doc=p.doc) for p in params)
+    return tuple(Field(p.key, (p.symbol,), doc=p.comment, c_name=p.c_name) for p in params)
 
 
 def params_arg(

@@ -48,7 +48,7 @@ def render(model: RobotModel, robot: Robot, op_counts: dict[str, str]) -> str:
         "constraints": [_cell(x) for x in labels],
         "dropped": [_cell(x) for x in dropped],
         "parameters": [
-            {"key": p.key, "value": repr(values[p.key]), "doc": _cell(p.doc)}
+            {"key": p.key, "value": repr(values[p.key]), "doc": _cell(p.comment)}
             for p in model.params
         ],
         "formulations": list(model.formulations),

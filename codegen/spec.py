@@ -24,6 +24,12 @@ class Field:
     symbols: tuple[sp.Symbol, ...]  # row-major
     shape: tuple[int, int] = (1, 1)
     doc: str = ""
+    c_name: str = ""  # the C struct member where ``name`` cannot be one ("" = ``name``)
+
+    @property
+    def c_field(self) -> str:
+        """The member's name in C: ``c_name``, else ``name`` (Python's key)."""
+        return self.c_name or self.name
 
 
 @dataclass(frozen=True)

@@ -23,17 +23,23 @@ from typing import Literal
 
 import sympy as sp
 
+from modeling import parameter_table
 from modeling.base_parameters import reduce_to_base, split_terms
 from modeling.lagrange import ConstrainedSystem
+from modeling.parameter_table import ParameterInfo
 
 
 @dataclass(frozen=True)
-class Parameter:
-    """One run-time parameter: Python key / C field ``key``, its symbol, a doc string."""
+class Parameter(ParameterInfo):
+    """One run-time parameter: what every layer calls it (key, meaning, unit, C spelling:
+    the robot's table of :class:`ParameterInfo`) and the model's ``symbol`` for it."""
 
-    key: str
-    symbol: sp.Symbol
-    doc: str
+    symbol: sp.Symbol = field(kw_only=True)
+
+    @classmethod
+    def of(cls, info: ParameterInfo, symbol: sp.Symbol) -> Parameter:
+        """The parameter ``info`` declares, as ``symbol`` in the model."""
+        return cls(info.key, info.doc, info.unit, info.c_name, info.remark, symbol=symbol)
 
 
 @dataclass(frozen=True)
@@ -120,6 +126,11 @@ class RobotModel:
         """Defaults of the controllers' parameters (keys of ``params``)."""
         return {p.key: self.values[p.key] for p in self.params}
 
+    def c_field_names(self) -> dict[str, str]:
+        """Key → C struct field of the controllers' and the plant's parameters, where the
+        two spellings differ (the generated Python's ``C_FIELD_NAMES``)."""
+        return parameter_table.c_field_names((*self.params, *self.plant_params))
+
 
 def c_identifier(name: str) -> str:
     """A C/Python identifier prefix from a robot name: ``my-robot`` → ``my_robot``."""
@@ -179,12 +190,15 @@ def described_model(path: str, label: str = "") -> RobotModel:
             "its base parameters cannot carry"
         )
 
+    # The table of a described robot: a base parameter's unit follows from its monomial's
+    # coordinates (not stated yet); its meaning is the combination it stands for.
     params = tuple(
-        Parameter(str(b.symbol), b.symbol, f"{b.expression} (multiplies {b.monomial} in T)")
+        Parameter(str(b.symbol), f"{b.expression} (multiplies {b.monomial} in T)",
+                  symbol=b.symbol)
         for b in reduction.parameters
     )
     radii = tuple(
-        Parameter(str(s), s, "wheel radius [m]")
+        Parameter(str(s), "wheel radius", "m", symbol=s)
         for s in system.parameters
         if str(s).startswith("radius_")
     )

@@ -237,8 +237,8 @@ def fill_params(
     obj: Any, params: Mapping[str, float], field_names: Mapping[str, str] | None = None
 ) -> Any:
     """Set a C parameter struct's fields from a mapping with the Python keys, spelled as
-    the C backend spells them (``I`` → ``Iz``): ``field_names`` is the robot's generated
-    ``C_FIELD_NAMES`` (default: the default robot's)."""
+    the robot's parameter table spells them in C (Drishti's ``I`` → ``Iz``): ``field_names``
+    is the robot's generated ``C_FIELD_NAMES`` (default: the default robot's)."""
     if field_names is None:
         from runtime.generated_modules import controllers
 

@@ -39,9 +39,8 @@ from typing import Any
 from runtime import cbuild
 from runtime.experiment import Experiment, ExperimentFileError, load_experiment
 from runtime.frozen_config import FreezeError, describe_error, freeze
-from runtime.generated_modules import RobotCode
+from runtime.generated_modules import CONTROLLER_CLASSES, RobotCode
 from runtime.output_folder import OutputFolderError, writable_folder
-from runtime.tooling.firmware.build import CONTROLLERS
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -53,7 +52,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "pass &<prefix>_<controller>_frozen_config to _init and _step. Exit status: 0 "
         "written (or up to date), 1 stale or missing (--check), 2 refused or bad arguments.",
     )
-    p.add_argument("--controller", required=True, choices=CONTROLLERS)
+    p.add_argument("--controller", required=True, choices=tuple(CONTROLLER_CLASSES))
     p.add_argument("--formulation", default=None, choices=("paper", "minimal"),
                    help="default: paper if predicted stable on this robot, else minimal")
     p.add_argument("--experiment", metavar="FILE",
@@ -136,13 +135,13 @@ def set_fields(ffi: Any, config: Any, items: list[str]) -> None:
 
 def _robot_code(name_or_dir: str | None) -> RobotCode:
     from runtime.generated_modules import load_robot_code
-    from runtime.tooling.crosscheck.targets import resolve
+    from runtime.robot_source import RobotSourceError, code_in, generated_folder
 
     if name_or_dir is None:
         return load_robot_code("")
     try:
-        return resolve(name_or_dir).code
-    except SystemExit as exc:  # resolve() exits with a sentence for a command line
+        return code_in(generated_folder(name_or_dir))
+    except RobotSourceError as exc:
         raise FreezeError(str(exc)) from None
 
 

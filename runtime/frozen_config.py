@@ -19,11 +19,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from codegen.template_util import CODEGEN_DIR, generated_by, render, template_label
+from modeling.package_paths import PACKAGE_ROOT
+from modeling.rendering import generated_by, render, template_label
 from runtime import cbuild
 from runtime.generated_modules import RobotCode
 
-C_TEMPLATES = CODEGEN_DIR / "backends" / "c" / "templates"  # the C backend's (no SymPy import)
+# The header is laid out by a template of the C backend, beside the code it completes; read
+# as a file (the runtime does not import codegen/).
+C_TEMPLATES = PACKAGE_ROOT / "codegen" / "backends" / "c" / "templates"
 TEMPLATE = "frozen.h.jinja"
 
 

@@ -30,6 +30,11 @@ if str(ROOT) not in sys.path:  # so that `generated` imports from that same fold
 # ImportError deep in an unrelated command.
 _DEFAULT_MODULES = ("controllers", "robot", "wmr_laws", "wmr_model", "wmr_plant")
 
+# Each controller's class in a generated ``controllers.py`` (the names ``wmr freeze`` and the
+# other commands accept).
+CONTROLLER_CLASSES: dict[str, str] = {"tdc": "TDC", "tdroc": "TDROC", "roc": "ROC",
+                                      "asmc": "ASMC"}
+
 if TYPE_CHECKING:  # the names __getattr__ provides, for the type checker and linters
     from generated.python import controllers, robot, wmr_laws, wmr_model, wmr_plant
 
@@ -99,10 +104,10 @@ class RobotCode:
         return dict(self.robot.PLANT_PARAMS)
 
     def controller_class(self, name: str) -> Any:
-        classes = {"tdc": "TDC", "tdroc": "TDROC", "roc": "ROC", "asmc": "ASMC"}
-        if name not in classes:
-            raise ValueError(f"unknown controller {name!r} (expected one of {', '.join(classes)})")
-        return getattr(self.controllers, classes[name])
+        if name not in CONTROLLER_CLASSES:
+            raise ValueError(f"unknown controller {name!r} (expected one of "
+                             f"{', '.join(CONTROLLER_CLASSES)})")
+        return getattr(self.controllers, CONTROLLER_CLASSES[name])
 
 
 @cache

@@ -8,8 +8,8 @@
   of the file (``SOURCE_SHA256``) — its parameters are then the file's.
 
 No SymPy for described robots: their numbers are read from the generated ``robot.py``.
-(Physical parameters of a ``[physical]`` file go through the lumped relations, which is
-``modeling.robot_file``.)
+(Physical parameters of a ``[physical]`` file go through the lumped relations:
+``modeling.robot_file.load_robot``, which imports SymPy for that file only.)
 """
 
 from __future__ import annotations
@@ -19,13 +19,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from modeling.robot_file import (
-    RobotFileError,
-    describes_bodies,
-    load_robot,
-    read_robot_text,
-    text_digest,
-)
+from modeling.robot_file import load_robot
+from modeling.robot_io import RobotFileError, describes_bodies, read_robot_text, text_digest
 from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
 
 
@@ -62,6 +57,39 @@ def generated_robots(root: Path) -> list[Path]:
     if root.is_dir():
         found += sorted(p.parent.parent for p in root.glob("*/python/robot.py"))
     return found
+
+
+def code_in(folder: Path) -> RobotCode:
+    """The generated code in a robot folder (``python/``, ``c/``, ``casadi/`` inside):
+    ``generated/`` itself is the default robot, ``generated/<name>/`` a shipped one, any
+    other folder is imported as a package of its own. ``FileNotFoundError`` if none."""
+    folder = folder.resolve()
+    if not (folder / "python" / "robot.py").is_file():
+        raise FileNotFoundError(f"{folder}: no generated robot here (python/robot.py missing)")
+    if folder == GENERATED.resolve():
+        return load_robot_code("")
+    if folder.parent == GENERATED.resolve():
+        return load_robot_code(folder.name)
+    return load_robot_code(folder)
+
+
+def generated_folder(name_or_dir: str) -> Path:
+    """``--robot`` of a command that reads generated code: a folder, or the name of a robot
+    generated under ``generated/`` (its ``robot.py`` NAME, or its folder's name).
+    ``RobotSourceError`` naming the robots found otherwise."""
+    path = Path(name_or_dir)
+    if path.is_dir():
+        return path
+    names: dict[str, Path] = {}
+    for folder in generated_robots(GENERATED):
+        names.setdefault(folder.name, folder)
+        names[code_in(folder).name] = folder
+    if name_or_dir in names:
+        return names[name_or_dir]
+    raise RobotSourceError(
+        f"--robot {name_or_dir!r}: not a folder and not a generated robot "
+        f"(found: {', '.join(sorted(n for n in names if n != GENERATED.name))})"
+    )
 
 
 def resolve(path: Path, generated: Path | None = None) -> RobotSetup:

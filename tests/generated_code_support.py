@@ -19,11 +19,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from codegen.backends.c.backend import default_config as default_c_config
 from codegen.controller_api import CONTROLLERS, status_codes
 from codegen.generate import layout_for
 from modeling.robot_file import load_robot
-from modeling.robots.drishti.model import PARAM_FIELDS, PARAM_KEYS, robot_model
+from modeling.robots.drishti.model import PARAM_KEYS, PARAMETERS, robot_model
 from runtime import cbuild
 from runtime.generated_modules import controllers as pyctl
 
@@ -44,7 +43,8 @@ C_FLAGS = [
 STATUS_CODES = status_codes(layout_for(robot_model()))
 STATUS = {s.name: s.value for s in STATUS_CODES}
 DRISHTI = load_robot().lumped
-PARAM_SYMBOLS = tuple(sym for _, sym, _ in PARAM_FIELDS)
+PARAM_SYMBOLS = tuple(p.symbol for p in PARAMETERS)
+C_FIELD = robot_model().c_field_names()  # key -> C member, where they differ
 INFO = {c.name: c for c in CONTROLLERS}
 PY_CLASSES = {"tdc": pyctl.TDC, "tdroc": pyctl.TDROC, "roc": pyctl.ROC, "asmc": pyctl.ASMC}
 FORMULATIONS = {"paper": 0, "minimal": 1}
@@ -121,7 +121,7 @@ def _c_params(ffi: Any, values: Sequence[float] | dict[str, float]) -> Any:
     obj = ffi.new("wmr_params_t *")
     items = values.items() if isinstance(values, dict) else zip(PARAM_KEYS, values, strict=True)
     for key, value in items:
-        setattr(obj, default_c_config().c_field(key), float(value))
+        setattr(obj, C_FIELD.get(key, key), float(value))
     return obj
 
 

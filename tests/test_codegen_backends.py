@@ -31,7 +31,6 @@ import sympy as sp
 from codegen.backends import c as c_backend
 from codegen.backends import casadi as casadi_backend
 from codegen.backends import python as py_backend
-from codegen.backends.c.config import CConfig
 from codegen.cse import count_ops, cse_function
 from codegen.layout import argument_size, split_fields
 from codegen.spec import Argument, Field, FunctionSpec
@@ -69,7 +68,7 @@ PARAMS = Argument(
     "params",
     fields=(
         Field("m", (m,), doc="mass"),
-        Field("I", (I,), doc="inertia"),
+        Field("I", (I,), doc="inertia", c_name="Iz"),  # I is a <complex.h> macro
         Field("r", (r,)),
         Field("b", (b,)),
         Field("d", (d,)),
@@ -310,7 +309,7 @@ def _call_c(ffi: Any, lib: Any, spec: FunctionSpec, values: dict[sp.Symbol, floa
         obj = ffi.new(f"{ctype} *")
         for f in arg.fields:
             vals = [values[s] for s in f.symbols]
-            cname = CConfig().c_field(f.name)
+            cname = f.c_field
             if f.shape == (1, 1):
                 setattr(obj, cname, vals[0])
             elif 1 in f.shape:

@@ -18,7 +18,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x244a87b2u
+#define WMR_CODE_ID 0x7e167568u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -322,7 +322,7 @@ typedef struct {
     wmr_real_t Iw; /* wheel spin inertia [kg m^2] */
     wmr_real_t r; /* wheel radius [m] */
     wmr_real_t b; /* track width [m] */
-    wmr_real_t d; /* C ahead of the axle midpoint [m] */
+    wmr_real_t d; /* distance of C ahead of the axle midpoint [m] */
 } wmr_params_t;
 
 /* wmr_plant_params_t: true parameters of the simulated robot, including K_lat */
@@ -334,7 +334,7 @@ typedef struct {
     wmr_real_t Iw; /* wheel spin inertia [kg m^2] */
     wmr_real_t r; /* wheel radius [m] */
     wmr_real_t b; /* track width [m] */
-    wmr_real_t d; /* C ahead of the axle midpoint [m] */
+    wmr_real_t d; /* distance of C ahead of the axle midpoint [m] */
 } wmr_plant_params_t;
 
 #ifdef __cplusplus

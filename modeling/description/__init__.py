@@ -46,7 +46,7 @@ Lengths in m, masses in kg, inertias in kg m², body frames with x forward and y
 
 All fields are required except ``joint.kind``. Names are unique across bodies and wheels
 (they name the coordinates). Numbers must be finite. Errors are ``DescriptionError`` (a
-``modeling.robot_file.RobotFileError``, so a ``ValueError``) naming the file and the field,
+``modeling.robot_io.RobotFileError``, so a ``ValueError``) naming the file and the field,
 e.g. ``trailer.toml: field 'wheel[2].radius' must be positive, got 0.0``.
 """
 

@@ -24,7 +24,7 @@ from modeling.description.schema import (
     fail,
     validate,
 )
-from modeling.robot_file import shipped_robot_file
+from modeling.robot_io import shipped_robot_file
 
 
 def _entry(where: str, section: str, index: int, data: Any) -> dict[str, Any]:

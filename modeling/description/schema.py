@@ -31,7 +31,7 @@ from typing import Any, TypeAlias
 
 import sympy as sp
 
-from modeling.robot_file import RobotFileError
+from modeling.robot_io import RobotFileError
 
 Value: TypeAlias = float | sp.Expr
 Point: TypeAlias = tuple[Value, Value]

@@ -10,7 +10,7 @@ whatever else belongs to that robot alone sits beside it.
 
 The generic machinery (``modeling.lagrange``, ``modeling.description``,
 ``modeling.robot_model``, ``codegen``) does not import a robot from here. The exceptions
-name the default robot, Drishti: ``modeling.robot_file`` (a ``[lumped]``/``[physical]``
-file is Drishti's structure with other numbers) and the transitional default of
-``modeling.controllers``.
+name the default robot, Drishti: ``modeling.robot_file``, the dispatcher between robot-file
+formats (a ``[lumped]``/``[physical]`` file is Drishti's structure with other numbers, read
+by ``drishti/robot_file.py``), and the transitional default of ``modeling.controllers``.
 """

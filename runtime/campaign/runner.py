@@ -65,7 +65,7 @@ def target(robot_file: str | None) -> Target:
         params = {k: float(v) for k, v in robot.PARAMS.items()}
         return Target(robot.NAME, "paper", params, params, ("m", "I", "K", "Iw"), params["b"],
                       None, None)
-    from modeling.robot_file import is_description, read_robot_text, text_digest
+    from modeling.robot_io import is_description, read_robot_text, text_digest
     from runtime.robot_scale import inertial_keys, robot_scale
     from runtime.robot_source import resolve
 

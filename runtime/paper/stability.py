@@ -336,7 +336,8 @@ def robot_from(path: Path | None) -> tuple[dict[str, float], str]:
     """The lumped parameters and name of a robot file (default: the generated robot)."""
     if path is None:
         return dict(default_robot.PARAMS), default_robot.NAME
-    from modeling.robot_file import is_description, load_robot  # SymPy: physical → lumped
+    from modeling.robot_file import load_robot  # SymPy: physical → lumped
+    from modeling.robot_io import is_description
 
     if is_description(path):
         raise ValueError(

@@ -64,7 +64,7 @@ def default_config() -> CConfig:
 
 def nominal_conditions(target: RobotTarget, config: CConfig) -> list[tuple[str, str]]:
     """The robot's own conditions on nominal parameters as (C expression over ``p->``, doc)."""
-    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in target.model.params}
+    names = {p.symbol: f"p->{p.c_field}" for p in target.model.params}
     printer = CPrinter(config, names)
     return [(printer.expr_code(c.expr), c.doc) for c in target.model.nominal_conditions]
 
@@ -83,7 +83,7 @@ def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple
     minors = [(on_entries.expr_code(m), minor_doc(k + 1, n))
               for k, m in enumerate(leading_minors(entry))]
     temps, (shared,) = sp.cse([mbar], symbols=sp.numbered_symbols("mbar_t"))
-    names = {p.symbol: f"p->{config.c_field(p.key)}" for p in model.params}
+    names = {p.symbol: f"p->{p.c_field}" for p in model.params}
     names.update({t: f"t{k}" for k, (t, _) in enumerate(temps)})
     printer = CPrinter(config, names)
     return {
@@ -94,21 +94,21 @@ def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple
     }
 
 
-def nominal_bounds(target: RobotTarget, config: CConfig) -> list[tuple[str, str, str]]:
+def nominal_bounds(target: RobotTarget) -> list[tuple[str, str, str]]:
     """(C field, lowest, highest) accepted value per nominal parameter
     (``controller_api.nominal_range``)."""
     model = target.model
     out = []
     for p in model.params:
         low, high = nominal_range(target.robot.lumped[p.key], p.key in model.positive)
-        out.append((config.c_field(p.key), repr(low), repr(high)))
+        out.append((p.c_field, repr(low), repr(high)))
     return out
 
 
-def payload_dependent(target: RobotTarget, config: CConfig) -> list[str]:
+def payload_dependent(target: RobotTarget) -> list[str]:
     """C fields of the parameters a payload changes (the example's heavier plant)."""
     model = target.model
-    return [config.c_field(p.key) for p in model.params
+    return [p.c_field for p in model.params
             if model.payload_relations.get(p.symbol, p.symbol) != p.symbol]
 
 
@@ -151,14 +151,14 @@ class CBackend:
         source = f"{target.model_source}, {law}"
         files = render_all_ir({m.name: m.functions for m in target.modules}, config,
                               source=source)
-        param_fields = [config.c_field(p.key) for p in target.model.params]
+        param_fields = [p.c_field for p in target.model.params]
         for suffix in ("h", "c"):
             files[f"{pre}_controller.{suffix}"] = _template(
                 f"controller_common.{suffix}.jinja", law, layout=layout,
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
                 nominal_conditions=nominal_conditions(target, config),
                 nominal_guards=nominal_guards(target, config),
-                nominal_bounds=nominal_bounds(target, config), **c_common_context(),
+                nominal_bounds=nominal_bounds(target), **c_common_context(),
             )
         for info in CONTROLLERS:
             for suffix in ("h", "c"):
@@ -168,7 +168,7 @@ class CBackend:
                     **c_controller_context(info, param_fields, layout, target.model),
                 )
         robot = target.robot
-        fields = [(config.c_field(p.key), repr(robot.lumped[p.key])) for p in target.model.params]
+        fields = [(p.c_field, repr(robot.lumped[p.key])) for p in target.model.params]
         files[f"{pre}_robot.h"] = _template(
             "robot.h.jinja", robot.source, layout=layout, fields=fields,
             robot_name=robot.name.replace("*/", "* /"), robot_name_literal=c_string(robot.name),
@@ -176,7 +176,7 @@ class CBackend:
         # (the example's preamble has always named the driver as its source)
         files["example_main.c"] = _template(
             "example_main.c.jinja", "codegen/generate.py", layout=layout,
-            param_fields=param_fields, heavier=payload_dependent(target, config),
+            param_fields=param_fields, heavier=payload_dependent(target),
         )
         # Again, with the norms the controllers call as well (u_discarded).
         files.update(render_types([f.spec for m in target.modules for f in m.functions], config,

@@ -66,12 +66,6 @@ class CConfig:
 
     # Integer constants for wmr_types.h: (name, value, doc).
     defines: tuple[tuple[str, str, str], ...] = ()
-    # Struct field renames for C: the paper's ``I`` would clash with ``I`` of <complex.h>.
-    field_renames: tuple[tuple[str, str], ...] = (("I", "Iz"),)
-
-    def c_field(self, name: str) -> str:
-        """The C spelling of a struct field (see ``field_renames``)."""
-        return dict(self.field_renames).get(name, name)
 
     @property
     def macro_prefix(self) -> str:

@@ -81,8 +81,14 @@ def _usable_c_name(name: str) -> bool:
     )
 
 
+# Macros of C99's <complex.h>: a firmware that includes it beside our headers would see a
+# field spelled so replaced (a parameter declares another C spelling, ParameterInfo.c_name).
+_COMPLEX_H_NAMES = frozenset({"I", "complex", "imaginary"})
+
+
 def _usable_field(name: str) -> bool:
-    return name.isidentifier() and name.isascii() and name not in _C_KEYWORDS
+    return (name.isidentifier() and name.isascii() and name not in _C_KEYWORDS
+            and name not in _COMPLEX_H_NAMES)
 
 
 @dataclass(frozen=True)
@@ -126,14 +132,14 @@ def _structs(specs: Sequence[FunctionSpec], config: CConfig) -> list[_Struct]:
     args = [a for a in args if a.kind == "params"] + [a for a in args if a.kind == "struct"]
     for arg in args:
         ctype = _ctype(arg, config)
-        bad = [f.name for f in arg.fields if not _usable_field(config.c_field(f.name))]
+        bad = [f.name for f in arg.fields if not _usable_field(f.c_field)]
         if bad:
             raise ValueError(f"{ctype}: field names {bad} are not usable in C")
         struct = _Struct(
             ctype=ctype,
             doc=arg.doc,
             fields=tuple(
-                _StructField(config.c_field(f.name), _dims(f.shape), _field_doc(f))
+                _StructField(f.c_field, _dims(f.shape), _field_doc(f))
                 for f in arg.fields
             ),
         )
@@ -206,11 +212,11 @@ def _param_doc(arg: Argument, is_input: bool, config: CConfig, spec: FunctionSpe
     return _comment_text(f"@param{direction} {arg.name} {what}{doc}")
 
 
-def _access(arg: Argument, f: Field | None, index: int, config: CConfig) -> str:
+def _access(arg: Argument, f: Field | None, index: int) -> str:
     """C lvalue/rvalue of element ``index`` (row-major) of an array or struct field."""
     if f is None:
         return f"{arg.name}[{index}]"
-    base = f"{arg.name}->{config.c_field(f.name)}"
+    base = f"{arg.name}->{f.c_field}"
     if is_scalar(f.shape):
         return base
     if is_vector(f.shape):
@@ -276,12 +282,12 @@ def _output_stores(
     for arg, exprs in zip(spec.outputs, outputs, strict=True):
         if arg.kind == "array":
             stores += [
-                (_access(arg, None, i, config), printer.expr_code(e)) for i, e in enumerate(exprs)
+                (_access(arg, None, i), printer.expr_code(e)) for i, e in enumerate(exprs)
             ]
         else:
             for f, chunk in split_fields(arg, exprs):
                 stores += [
-                    (_access(arg, f, i, config), printer.expr_code(e))
+                    (_access(arg, f, i), printer.expr_code(e))
                     for i, e in enumerate(chunk)
                 ]
     return stores
@@ -311,7 +317,7 @@ def _unread_doc(
 ) -> list[str]:
     """The ``@return`` lines of the non-finite input check over ``slots``."""
     line = f"if {what} it reads is NaN or infinite"
-    unread = [_access(s.arg, s.field, s.index, config).replace("->", ".")
+    unread = [_access(s.arg, s.field, s.index).replace("->", ".")
               for s in slots if s.symbol not in used]
     if unread:
         return [line, f"(it does not read, and ignores: {', '.join(unread)}),"]
@@ -373,7 +379,7 @@ def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str,
                          f"{len(guards) + len(late_guards)}")
     printer = _printer(names, (*temps, *late_temps), config)
 
-    loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index, config))
+    loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index))
              for s in slots if s.symbol in used}
     body = [_Line("void", a.name) for a in spec.inputs
             if not any(s in used for s in a.all_symbols())]
@@ -484,7 +490,7 @@ def _prepare_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[st
     printer = _printer(names, form.param_temps, config)
     param_args = [a for a in spec.inputs if a.kind == "params"]
     param_slots = [s for s in slots if s.symbol in form.params]
-    loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config))
+    loads = [(names[s.symbol], _access(s.arg, s.field, s.index))
              for s in param_slots if s.symbol in used]
     body = [_decl(n, v) for n, v in loads]
     body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
@@ -628,7 +634,7 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
                       status=not_init))
     late_names: list[str] = []
     for part in (inputs.early, inputs.late):
-        loads = [(names[s.symbol], _access(s.arg, s.field, s.index, config))
+        loads = [(names[s.symbol], _access(s.arg, s.field, s.index))
                  for s in state_slots if s.symbol in part]
         body += [_decl(n, v) for n, v in loads]
         if part is inputs.early or not inputs.lazy:

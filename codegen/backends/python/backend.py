@@ -11,7 +11,6 @@ import json
 
 from codegen import template_util
 from codegen.backend import RobotTarget
-from codegen.backends.c.config import CConfig
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
@@ -117,7 +116,7 @@ class PythonBackend:
             max_window=MAX_WINDOW,
             max_abs_input=MAX_ABS_INPUT,
             # the controllers accept C structs (cffi) as parameters: C's field spellings
-            c_field_names=dict(CConfig().field_renames),
+            c_field_names=target.model.c_field_names(),
             param_keys=[p.key for p in target.model.params],
             nominal_conditions=nominal_conditions(target),
             nominal_ranges={p.key: nominal_range(target.robot.lumped[p.key],

@@ -110,7 +110,7 @@ FIELDS: dict[str, int] = {
     "P": 31,  # P of (20) from k1[index], k2[index], q_pos, q_vel is not finite
 }
 # Python key -> C struct field where they differ (the C backend's field_renames).
-C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
+C_FIELD_NAMES: dict[str, str] = {}
 PARAM_KEYS = ("J_theta_cart", "J_theta_cart_left", "J_theta_cart_right", "J_theta_left", "J_theta_right", "J_theta_tractor", "J_x_tractor", "K_theta_cart_x_tractor", "K_theta_cart_x_tractor_2", "K_theta_tractor_x_tractor", "K_theta_tractor_x_tractor_2", "radius_cart_left", "radius_cart_right", "radius_left", "radius_right", )
 
 

@@ -36,6 +36,7 @@ import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
 from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
+from modeling.robots.drishti import parameters
 
 SOURCE = "modeling/robots/drishti/model.py"  # this file, as generated preambles name it
 
@@ -216,18 +217,24 @@ def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
 # ---------------------------------------------------------------------------------------
 # The robot as the generic layers see it
 # ---------------------------------------------------------------------------------------
-# (key, symbol, doc) of each controller parameter, in the order of the generated structs.
-PARAM_FIELDS: tuple[tuple[str, sp.Symbol, str], ...] = (
-    ("m", m, "total mass [kg]"),
-    ("I", I_z, "yaw inertia about C [kg m^2] (C field Iz)"),
-    ("K", K, "first moment of mass behind C [kg m]"),
-    ("Iw", I_w, "wheel spin inertia [kg m^2]"),
-    ("r", r, "wheel radius [m]"),
-    ("b", b, "track width [m]"),
-    ("d", d, "C ahead of the axle midpoint [m]"),
+# The controllers' parameters in the order of the generated structs, and the plant's extra
+# one: key, meaning, unit and C spelling come from the table in ``parameters``.
+PARAMETERS: tuple[Parameter, ...] = tuple(
+    Parameter.of(info, symbol)
+    for info, symbol in zip(parameters.LUMPED, LUMPED_SYMBOLS, strict=True)
 )
-PARAM_KEYS: tuple[str, ...] = tuple(key for key, _, _ in PARAM_FIELDS)
-K_LAT_DOC = ("K_lat", K_lat, "first moment of mass left of C [kg m] (off-axis payload)")
+PARAM_KEYS: tuple[str, ...] = tuple(p.key for p in PARAMETERS)
+K_LAT_PARAMETER = Parameter.of(parameters.K_LAT, K_lat)
+
+
+def default_values() -> dict[str, float]:
+    """The plant parameters of ``drishti.toml`` (beside this file): its ``[lumped]`` table
+    and K_lat = 0 (read through ``parameters``, which needs no model)."""
+    text, where = parameters.packaged_text()
+    lumped = parameters.read_tables(text, where).lumped
+    if lumped is None:
+        raise ValueError(f"{where}: Drishti's own robot file must give [lumped] parameters")
+    return {**lumped, K_LAT_PARAMETER.key: 0.0}
 
 
 @cache
@@ -235,12 +242,10 @@ def robot_model() -> RobotModel:
     """The paper's robot in its lumped parameters: prefix ``wmr``, output at the root of
     ``generated/``, the plant with the lateral first moment K_lat the controllers lack,
     the payload ``payload_relations``, and the paper formulation."""
-    params = tuple(Parameter(k, s, doc) for k, s, doc in PARAM_FIELDS)
-    plant = (*params[:3], Parameter(*K_LAT_DOC), *params[3:])
+    params = PARAMETERS
+    plant = (*params[:3], K_LAT_PARAMETER, *params[3:])
     rel = payload_relations()
-    from modeling.robot_file import load_robot
-
-    defaults = load_robot().plant_values()  # drishti.toml beside this file
+    defaults = default_values()
     return RobotModel(
         name="drishti",
         prefix="wmr",

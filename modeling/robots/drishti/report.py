@@ -21,18 +21,16 @@ from typing import Any
 
 import sympy as sp
 
-from codegen import template_util
-from modeling.robot_file import LUMPED_FIELDS
+from modeling import rendering
 from modeling.robots.drishti import model as wmr
 from modeling.robots.drishti.paper import display, symbols
 from modeling.robots.drishti.paper.transcriptions import PRINTED_PARAMETERS
 from modeling.robots.drishti.paper.verdicts import judgements
+from modeling.robots.drishti.parameters import LUMPED
 
 TEMPLATE_DIR = Path(__file__).resolve().parent
 TEMPLATE = "model_report.md.jinja"
 SOURCE = f"{wmr.SOURCE}, modeling/lagrange.py, modeling/robots/drishti/paper/"
-
-_UNITS = {"m": "kg", "I": "kg m²", "K": "kg m", "Iw": "kg m²", "r": "m", "b": "m", "d": "m"}
 
 
 def _latex(expr: sp.Basic) -> str:
@@ -203,18 +201,28 @@ def _lumped_section() -> dict[str, Any]:
     }
 
 
+_SUPERSCRIPTS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _unit(unit: str) -> str:
+    """A unit of the parameter table as Markdown shows it: ``kg m^2`` → ``kg m²``."""
+    return re.sub(r"\^(-?\d+)", lambda g: g.group(1).translate(_SUPERSCRIPTS), unit)
+
+
 def _robot_rows(robot_lumped: dict[str, float]) -> tuple[list[dict[str, str]],
                                                          list[dict[str, str]]]:
+    table = {p.key: p for p in LUMPED}
     rows = []
-    for key in list(LUMPED_FIELDS) + sorted(set(robot_lumped) - set(LUMPED_FIELDS)):
+    for key in list(table) + sorted(set(robot_lumped) - set(table)):
         if key not in robot_lumped:
             continue
         printed = PRINTED_PARAMETERS.get(key)
+        info = table.get(key)
         rows.append({
             "name": key,
             "value": f"{robot_lumped[key]:g}",
-            "unit": _UNITS.get(key, ""),
-            "description": re.sub(r"\s*\[[^]]*\]$", "", LUMPED_FIELDS.get(key, "")),
+            "unit": _unit(info.unit) if info else "",
+            "description": info.doc if info else "",
             "paper": "" if printed is None else f"{printed:g}",
         })
     derived: list[dict[str, str]] = []
@@ -267,7 +275,7 @@ def model_report_context(
     negated = [j.transcription.equation for j in judged if j.negated]
     parameters, derived_numbers = _robot_rows(robot_lumped)
     return {
-        "preamble": list(template_util.preamble_lines(SOURCE, TEMPLATE_DIR, TEMPLATE)),
+        "preamble": list(rendering.preamble_lines(SOURCE, TEMPLATE_DIR, TEMPLATE)),
         "robot_name": robot_name,
         "derivation_seconds": (
             None if derivation_seconds is None else f"{derivation_seconds:.1f}"
@@ -287,7 +295,7 @@ def model_report_context(
 
 def render_model_report(context: dict[str, Any]) -> str:
     """Lay out a context from :func:`model_report_context` as Markdown."""
-    return template_util.render(TEMPLATE_DIR, TEMPLATE, **context)
+    return rendering.render(TEMPLATE_DIR, TEMPLATE, **context)
 
 
 def render(model: Any, robot: Any, op_counts: dict[str, str]) -> str:

@@ -19,6 +19,7 @@ from codegen.backends import c as c_backend
 from codegen.backends.c.config import CConfig, StatusCode
 from codegen.backends.casadi import generate_c
 from codegen.spec import FunctionSpec
+from modeling.robots.drishti.parameters import LUMPED
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.bench.c_variants import (
     HAND_CHECKED,
@@ -139,7 +140,8 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             params.append("const wmr_params_f32_t *" if a.kind == "params" else "const float *")
         params += ["float *"] * len(spec.outputs)
         lines.append(f"void f32_wmr_{name}({', '.join(params)});")
-    lines.insert(0, "typedef struct { float m, Iz, K, Iw, r, b, d; } wmr_params_f32_t;")
+    members = ", ".join(p.c_field for p in LUMPED)  # wmr_params_t's, in order
+    lines.insert(0, f"typedef struct {{ float {members}; }} wmr_params_f32_t;")
     for name in used:
         lines.append(
             ours_wrapper(specs[name], "ours32", "float").replace(

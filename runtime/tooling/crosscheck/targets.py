@@ -13,8 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
-from runtime.robot_source import generated_robots
+from runtime.generated_modules import GENERATED, RobotCode
+from runtime.robot_source import RobotSourceError, code_in, generated_folder, generated_robots
 
 
 @dataclass(frozen=True)
@@ -44,10 +44,6 @@ class Target:
         return f"{self.name} ({where}/, C prefix {self.prefix}_)"
 
 
-def _is_robot(folder: Path) -> bool:
-    return (folder / "python" / "robot.py").is_file()
-
-
 def discover() -> list[Path]:
     """Every generated robot folder: the root of generated/, then generated/<name>/."""
     return generated_robots(GENERATED)
@@ -55,33 +51,18 @@ def discover() -> list[Path]:
 
 def target_of(folder: Path) -> Target:
     """The target of a robot folder (``python/``, ``c/``, ``casadi/`` inside)."""
+    code = code_in(folder)
     folder = folder.resolve()
-    if not _is_robot(folder):
-        raise FileNotFoundError(f"{folder}: no generated robot here (python/robot.py missing)")
-    if folder == GENERATED.resolve():
-        code = load_robot_code("")
-    elif folder.parent == GENERATED.resolve():
-        code = load_robot_code(folder.name)
-    else:
-        code = load_robot_code(folder)  # a package of its own
     return Target(code, folder, folder / "c", folder / "casadi")
 
 
 def resolve(name_or_dir: str) -> Target:
-    """``--robot``: a folder path, or the name of a robot found under generated/."""
-    path = Path(name_or_dir)
-    if path.is_dir():
-        return target_of(path)
-    names: dict[str, Path] = {}
-    for folder in discover():
-        names.setdefault(folder.name, folder)
-        names[target_of(folder).name] = folder
-    if name_or_dir in names:
-        return target_of(names[name_or_dir])
-    raise SystemExit(
-        f"--robot {name_or_dir!r}: not a folder and not a generated robot "
-        f"(found: {', '.join(sorted(n for n in names if n != GENERATED.name))})"
-    )
+    """``--robot``: a folder path, or the name of a robot found under generated/
+    (``runtime.robot_source.generated_folder``); exits with its sentence otherwise."""
+    try:
+        return target_of(generated_folder(name_or_dir))
+    except RobotSourceError as exc:
+        raise SystemExit(str(exc)) from None
 
 
 def all_targets() -> list[Target]:

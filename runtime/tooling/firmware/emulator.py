@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from modeling.robots.drishti.parameters import LUMPED
 from runtime.cbuild import GENERATED_C
 from runtime.tooling.firmware.build import (
     ARM_FLAGS,
@@ -46,7 +47,7 @@ IO_FIELDS: tuple[tuple[str, int, str], ...] = (
     ("gain", 1, "f"),
     ("s_norm", 1, "f"),
 )
-PARAM_FIELDS = ("m", "Iz", "K", "Iw", "r", "b", "d")
+PARAM_FIELDS = tuple(p.c_field for p in LUMPED)  # wmr_params_t's members, in order
 
 
 def io_offsets() -> dict[str, tuple[int, int, str]]:
