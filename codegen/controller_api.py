@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from codegen.backends.c.config import StatusCode
 from codegen.controller_layout import ControllerLayout, words
 from codegen.robot_functions import MAX_WINDOW
+from codegen.spec import StatusCode
 from modeling.controllers import BASE_CHECKS, REGISTRY, ControllerSpec, KernelArg, kernel
 from modeling.robot_model import RobotModel
 
@@ -69,6 +69,11 @@ FIELDS: tuple[tuple[str, str], ...] = (
     ("S_NORM", "||s|| computed"),
     ("U_DISCARDED", "||u rows dropped by tau = B^T u|| computed"),
     ("P", "P of (20) from k1[index], k2[index], q_pos, q_vel is not finite"),
+    ("KX", "kx (the path tracker's along-track gain)"),
+    ("KY", "ky (the path tracker's cross-track gain)"),
+    ("KTHETA", "ktheta (the path tracker's heading gain)"),
+    ("KP", "kp (the wheel-velocity PI's proportional gain)"),
+    ("KI", "ki (the wheel-velocity PI's integral gain)"),
 )
 FIELD_IDS: dict[str, int] = {name: i for i, (name, _) in enumerate(FIELDS)}
 
@@ -173,9 +178,11 @@ class StepArg:
 # the measured and desired quantities of this step, the configuration (``config``: the
 # fields the argument's symbols name, a pointer to one or an array packed from several),
 # the state's P, the TDE estimate, and the gains: k-hat computed this step (``khat``) or the
-# state's adapted one (``adapted_gain``). Outputs: u, s, ||s|| and the gain used or adapted.
-STEP_SOURCES = ("q", "qdot", "e", "edot", "qddot_des", "k1", "k2", "p12", "p22", "H1hat",
-                "khat", "adapted_gain", "config", "u", "s", "s_norm", "gain")
+# state's adapted one (``adapted_gain``), and the state's integral (``integral``). Outputs:
+# u, s, ||s||, the gain used or adapted, and the integral after this step.
+STEP_SOURCES = ("q", "qdot", "q_des", "qdot_des", "e", "edot", "qddot_des", "k1", "k2", "p12",
+                "p22", "H1hat", "khat", "adapted_gain", "integral", "config", "u", "s",
+                "s_norm", "gain")
 
 
 def law_signature(spec: ControllerSpec, model: RobotModel) -> tuple[list[StepArg], list[StepArg]]:

@@ -438,6 +438,8 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             )
         )
         for c in ctl.REGISTRY:
+            if f not in c.formulations:
+                continue
             kernel = ctl.kernel(c, f, model)
             specs.append(
                 FunctionSpec(

@@ -17,6 +17,15 @@ ArgKind = Literal["params", "struct", "array"]
 
 
 @dataclass(frozen=True)
+class StatusCode:
+    """One value of the ``<prefix>_status_t`` enum (the Python mirror names the same)."""
+
+    name: str
+    value: int
+    doc: str
+
+
+@dataclass(frozen=True)
 class Field:
     """One named member of a struct argument: a scalar (shape (1, 1)) or a fixed array."""
 

@@ -400,6 +400,59 @@ def tdroc_weighted_gain(window: int) -> tuple[sp.Expr, sp.Matrix, sp.Matrix]:
     return sp.Symbol("minv_norm", positive=True) * total, d, w
 
 
+def wheel_pi_law(
+    model: RobotModel,
+) -> tuple[sp.Matrix, sp.Matrix, dict[str, tuple[sp.Symbol, ...]]]:
+    """The baseline a mobile-robot user deploys: ros2_control's ``diff_drive_controller``
+    structure (a wheel-velocity PI loop per driven wheel) under a pose-correcting path
+    tracker (Kanayama et al. 1990), generic over robots whose root body carries two driven
+    wheels. With the root's pose (x, y, θ) = q[0], q[1], q[heading] and its reference:
+
+      e_x = cos θ Δx + sin θ Δy,  e_y = −sin θ Δx + cos θ Δy,  e_θ = θ_d − θ
+      v_d = cos θ_d ẋ_d + sin θ_d ẏ_d,  ω_d = θ̇_d                (the reference's feed-forward)
+      v_c = v_d cos e_θ + k_x e_x,  ω_c = ω_d + v_d (k_y e_y + k_θ sin e_θ)
+      η_c = A(q)⁻¹ (v_c, ω_c),  A = [[cos θ, sin θ, 0], [0, 0, 1]] S_root(q)
+
+    (A maps the driven-wheel rates η to the root's forward speed and yaw rate, from the
+    derived kinematics q̇ = S(q) η; for a differential drive [[r/2, r/2], [r/b, −r/b]]), and
+    the wheel-velocity PI with the integral kept in torque units and clamped to ±τ_max (anti
+    wind-up):  I⁺ = clamp(I + k_i h (η_c − η), ±τ_max),  τ = k_p (η_c − η) + I⁺.
+
+    Returns (τ, I⁺, input symbols). No model of the dynamics is used: only the kinematics
+    (wheel radius and track through the nominal parameters)."""
+    if model.nu != 2:
+        raise ValueError(f"robot '{model.name}': the wheel-velocity PI controller needs two "
+                         f"driven wheels on the root body; it has {model.nu}")
+    n = model.nq
+    q, qdot = sp.Matrix(model.q), sp.Matrix(model.qdot)
+    q_des, qdot_des = _vec("qd_", n), _vec("qdd_", n)
+    integral = _vec("I_", model.nu)
+    kx, ky, kth, kp, ki = sp.symbols("kx ky ktheta kp ki", real=True)
+    h, tau_max = sp.symbols("h tau_max", positive=True)
+    th_i = list(model.q).index(model.heading)
+    th, thd = q[th_i], q_des[th_i]
+    dx, dy = q_des[0] - q[0], q_des[1] - q[1]
+    ex = sp.cos(th) * dx + sp.sin(th) * dy
+    ey = -sp.sin(th) * dx + sp.cos(th) * dy
+    eth = thd - th
+    vd = sp.cos(thd) * qdot_des[0] + sp.sin(thd) * qdot_des[1]
+    wd = qdot_des[th_i]
+    vc = vd * sp.cos(eth) + kx * ex
+    wc = wd + vd * (ky * ey + kth * sp.sin(eth))
+    s_root = model.system.null_space.extract([0, 1, th_i], list(range(model.nu)))
+    rows = sp.Matrix([[sp.cos(th), sp.sin(th), 0], [0, 0, 1]])
+    a = (rows * s_root).applyfunc(model.system.simplify)
+    eta_c = (a.adjugate() / a.det()).applyfunc(model.system.simplify) * sp.Matrix([vc, wc])
+    eta = sp.Matrix([qdot[i] for i in model.actuated])
+    err = eta_c - eta
+    i_next = sp.Matrix([sp.Min(sp.Max(integral[j] + ki * h * err[j], -tau_max), tau_max)
+                        for j in range(model.nu)])
+    tau = sp.Matrix([kp * err[j] + i_next[j] for j in range(model.nu)])
+    symbols = {"q_des": tuple(q_des), "qdot_des": tuple(qdot_des), "integral": tuple(integral),
+               "gains": (kx, ky, kth, kp, ki), "limits": (h, tau_max)}
+    return tau, i_next, symbols
+
+
 # --------------------------------------------------------------------------- the registry
 #
 # Every controller is declared once, below: its law (the kernel a step calls, with the
@@ -463,7 +516,9 @@ class ControllerSpec:
     ``switching``: a switching term with a boundary layer ε (the law returns s and ‖s‖);
     ``adaptive``: a gain the law adapts, kept in the state and capped;
     ``bounds``: uncertainty bounds α, φ in the configuration;
-    ``trig``: the law has a ``_trig`` variant taking sin/cos of q's angles (the TDE laws).
+    ``trig``: the law has a ``_trig`` variant taking sin/cos of q's angles (the TDE laws);
+    ``error_dynamics``: K1, K2, Q and P of (18)-(20) (the four of the paper);
+    ``integrator``: an integral per driven wheel the law updates (the wheel PI).
     ``checks``: the fields in the order a configuration is validated (the order of the
     statuses when several fields are bad), ``fields`` in struct order.
     """
@@ -481,6 +536,13 @@ class ControllerSpec:
     fields: tuple[ConfigField, ...]
     checks: tuple[str, ...]
     kernel: Callable[[Formulation, RobotModel], Kernel]
+    error_dynamics: bool = True  # K1, K2, Q, P of (18)-(20): the error e, ė of a formulation
+    integrator: bool = False  # an integral per driven wheel in the state, from the law
+    formulations: tuple[Formulation, ...] = FORMULATIONS  # those it has where the robot does
+
+    def formulations_of(self, model: RobotModel) -> tuple[Formulation, ...]:
+        """The formulations generated for ``model``."""
+        return tuple(f for f in model.formulations if f in self.formulations)
 
     def field(self, name: str) -> ConfigField:
         return next(f for f in self.fields if f.name == name)
@@ -539,6 +601,21 @@ GAMMA_FIELD = ConfigField("gamma", "real", "nonnegative_gain", "BAD_BOUNDS", "",
 GAIN0_FIELD = ConfigField(
     "gain0", "real", "nonnegative_gain", "BAD_BOUNDS", "",
     "initial switching gain, [0, GAIN_MAX]; the gain is capped at GAIN_MAX", "zero")
+
+KX_FIELD = ConfigField("kx", "real", "nonnegative_gain", "BAD_GAINS", "1/s",
+                       "path tracker: along-track gain k_x [1/s], [0, GAIN_MAX]",
+                       "experiment.controller.pi_kx")
+KY_FIELD = ConfigField("ky", "real", "nonnegative_gain", "BAD_GAINS", "1/m^2",
+                       "path tracker: cross-track gain k_y [1/m^2], [0, GAIN_MAX]",
+                       "experiment.controller.pi_ky")
+KTHETA_FIELD = ConfigField("ktheta", "real", "nonnegative_gain", "BAD_GAINS", "1/m",
+                           "path tracker: heading gain k_theta [1/m], [0, GAIN_MAX]",
+                           "experiment.controller.pi_ktheta")
+KP_FIELD = ConfigField("kp", "real", "gain", "BAD_GAINS", "N m s/rad",
+                       "wheel-velocity PI: proportional gain [N m s/rad], [GAIN_MIN, GAIN_MAX]",
+                       "pi_kp")
+KI_FIELD = ConfigField("ki", "real", "nonnegative_gain", "BAD_GAINS", "N m/rad",
+                       "wheel-velocity PI: integral gain [N m/rad], [0, GAIN_MAX]", "pi_ki")
 
 # The fields every controller of the paper has, in struct and check order.
 _LYAPUNOV_BASE = (FORMULATION_FIELD, K1_FIELD, K2_FIELD, Q_POS_FIELD, Q_VEL_FIELD, H_FIELD,
@@ -612,6 +689,23 @@ def _asmc_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
     )
 
 
+def _pi_kernel(formulation: Formulation, model: RobotModel) -> Kernel:
+    tau, i_next, sym = wheel_pi_law(model)
+    return Kernel(
+        "wheel-velocity PI under a pose-correcting path tracker (the ros2_control\n"
+        "diff_drive_controller structure): eta_c = A(q)^-1 (v_c, w_c) from the root's pose\n"
+        "error (Kanayama), I+ = clamp(I + ki h (eta_c - eta), +-tau_max),\n"
+        "tau = kp (eta_c - eta) + I+.", (),
+        (KernelArg("q", "q", tuple(model.q)), KernelArg("qdot", "qdot", tuple(model.qdot)),
+         KernelArg("q_des", "q_des", sym["q_des"], "reference q"),
+         KernelArg("qdot_des", "qdot_des", sym["qdot_des"], "reference qdot"),
+         KernelArg("integral", "integral", sym["integral"], "the integral term [N m]"),
+         KernelArg("gains", "config", sym["gains"], "kx, ky, ktheta, kp, ki"),
+         KernelArg("limits", "config", sym["limits"], "h, tau_max")),
+        (KernelArg("u", "u", tuple(tau)), KernelArg("integral_next", "integral", tuple(i_next))),
+    )
+
+
 REGISTRY: tuple[ControllerSpec, ...] = (
     ControllerSpec(
         "tdc", "TDC", "time-delay control", "(16)-(18)",
@@ -642,6 +736,16 @@ REGISTRY: tuple[ControllerSpec, ...] = (
         fields=(*_LYAPUNOV_BASE, EPS_FIELD, GAMMA_FIELD, GAIN0_FIELD),
         checks=(*BASE_CHECKS, "eps", "gamma", "gain0"),
         kernel=_asmc_kernel,
+    ),
+    ControllerSpec(
+        "pi", "PI", "wheel-velocity PI with a pose-correcting path tracker",
+        "none (the ros2_control diff_drive_controller structure; Kanayama et al. 1990)",
+        tde=False, switching=False, window=False, bounds=False, adaptive=False, trig=False,
+        fields=(FORMULATION_FIELD, H_FIELD, TAU_MAX_FIELD, KX_FIELD, KY_FIELD, KTHETA_FIELD,
+                KP_FIELD, KI_FIELD),
+        checks=("formulation", "h", "tau_max", "kx", "ky", "ktheta", "kp", "ki"),
+        kernel=_pi_kernel,
+        error_dynamics=False, integrator=True, formulations=("minimal",),
     ),
 )
 CONTROLLERS = tuple(c.name for c in REGISTRY)

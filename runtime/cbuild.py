@@ -33,12 +33,18 @@ BUILD_DIR = cache_dir() / "cffi"
 OBJECT_DIR = BUILD_DIR / "objects"  # one object per source, flags and headers: a regenerated
 # module recompiles alone
 CFLAGS = ("-std=c99", "-O2")  # and -fPIC -shared (gcc_command, kind="shared")
-MODULES = ("types", "model", "laws", "plant", "controller", "tdc", "tdroc", "roc", "asmc")
+MODULES = ("types", "model", "laws", "plant", "controller")  # then one per controller
 
 
-def headers_for(prefix: str) -> tuple[str, ...]:
-    """The generated headers of a robot whose C prefix is ``prefix``."""
-    return tuple(f"{prefix}_{m}.h" for m in MODULES)
+def headers_for(prefix: str, c_dir: Path = GENERATED_C) -> tuple[str, ...]:
+    """The generated headers of a robot whose C prefix is ``prefix``: the modules, then
+    each controller's (every other ``<prefix>_<name>.h`` in ``c_dir`` but the robot's
+    numbers, ``<prefix>_robot.h``), in name order."""
+    fixed = tuple(f"{prefix}_{m}.h" for m in MODULES)
+    others = sorted(p.name for p in c_dir.glob(f"{prefix}_*.h")
+                    if p.name not in fixed and p.name != f"{prefix}_robot.h"
+                    and not p.name.endswith("_frozen.h"))
+    return fixed + tuple(others)
 
 
 HEADERS = headers_for("wmr")
@@ -198,7 +204,7 @@ def build(
     (with its flags and every header it may include), so a modified or regenerated module
     recompiles alone; the library is cached by its objects."""
     sources = _sources(extra_sources, c_dir, prefix)
-    headers = headers_for(prefix)
+    headers = headers_for(prefix, c_dir)
     all_flags = (*CFLAGS, *flags, *((f"-D{prefix.upper()}_FLOAT32",) if float32 else ()))
     # Every header a source may include: any change recompiles every object. An extra
     # source finds its own headers (and an extra header's folder is searched too).

@@ -43,6 +43,13 @@ class ControllerSettings:
     uncertainty: float = 0.3  # ROC: bounds 30 % above nominal
     gamma: float = 2.0  # ASMC adaptation rate
     tau_max: float = 40.0  # N m per wheel
+    # The wheel-velocity PI baseline (modeling.controllers.wheel_pi_law): the path tracker's
+    # gains and the wheel loop's bandwidth, from which kp = J bandwidth and
+    # ki = kp bandwidth / 4 (J: the wheel inertia of the nominal model's S^T M S).
+    pi_kx: float = 1.0  # 1/s
+    pi_ky: float = 8.0  # 1/m^2
+    pi_ktheta: float = 4.0  # 1/m
+    pi_bandwidth: float = 6.0  # rad/s
 
 
 @dataclass(frozen=True)
@@ -125,6 +132,7 @@ class Experiment:
 
 
 _POSITIVE = {
+    "pi_bandwidth",
     "k1",
     "k2",
     "q_pos",
@@ -143,6 +151,9 @@ _POSITIVE = {
     "extra_period",
 }
 _NON_NEGATIVE = {
+    "pi_kx",
+    "pi_ky",
+    "pi_ktheta",
     "uncertainty",
     "gamma",
     "viscous",

@@ -39,7 +39,8 @@ from typing import Any
 from runtime import cbuild
 from runtime.experiment import Experiment, ExperimentFileError, load_experiment
 from runtime.frozen_config import FreezeError, describe_error, freeze
-from runtime.generated_modules import CONTROLLER_CLASSES, RobotCode
+from runtime.generated_modules import RobotCode
+from runtime.generated_modules import robot as default_robot
 from runtime.output_folder import OutputFolderError, writable_folder
 
 
@@ -52,7 +53,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "pass &<prefix>_<controller>_frozen_config to _init and _step. Exit status: 0 "
         "written (or up to date), 1 stale or missing (--check), 2 refused or bad arguments.",
     )
-    p.add_argument("--controller", required=True, choices=tuple(CONTROLLER_CLASSES))
+    p.add_argument("--controller", required=True,
+                   choices=tuple(str(c["name"]) for c in default_robot.CONTROLLERS))
     p.add_argument("--formulation", default=None, choices=("paper", "minimal"),
                    help="default: paper if predicted stable on this robot, else minimal")
     p.add_argument("--experiment", metavar="FILE",

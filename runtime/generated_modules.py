@@ -32,8 +32,6 @@ _DEFAULT_MODULES = ("controllers", "robot", "wmr_laws", "wmr_model", "wmr_plant"
 
 # Each controller's class in a generated ``controllers.py`` (the names ``wmr freeze`` and the
 # other commands accept).
-CONTROLLER_CLASSES: dict[str, str] = {"tdc": "TDC", "tdroc": "TDROC", "roc": "ROC",
-                                      "asmc": "ASMC"}
 
 if TYPE_CHECKING:  # the names __getattr__ provides, for the type checker and linters
     from generated.python import controllers, robot, wmr_laws, wmr_model, wmr_plant
@@ -103,11 +101,17 @@ class RobotCode:
     def plant_defaults(self) -> dict[str, float]:
         return dict(self.robot.PLANT_PARAMS)
 
+    @property
+    def controller_names(self) -> tuple[str, ...]:
+        """The robot's controllers, in registry order (robot.py's ``CONTROLLERS``)."""
+        return tuple(str(c["name"]) for c in self.robot.CONTROLLERS)
+
     def controller_class(self, name: str) -> Any:
-        if name not in CONTROLLER_CLASSES:
+        """The Python mirror class of controller ``name`` (its name in capitals)."""
+        if name not in self.controller_names:
             raise ValueError(f"unknown controller {name!r} (expected one of "
-                             f"{', '.join(CONTROLLER_CLASSES)})")
-        return getattr(self.controllers, CONTROLLER_CLASSES[name])
+                             f"{', '.join(self.controller_names)})")
+        return getattr(self.controllers, name.upper())
 
 
 @cache

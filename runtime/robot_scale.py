@@ -47,6 +47,16 @@ class RobotScale:
         return self.mass / DRISHTI_MASS
 
     @property
+    def inverse_size(self) -> float:
+        """1 / size: a gain per metre of path (the PI tracker's k_theta)."""
+        return 1.0 / self.size
+
+    @property
+    def inverse_area(self) -> float:
+        """1 / size²: a gain per square metre of path (the PI tracker's k_y)."""
+        return 1.0 / self.size**2
+
+    @property
     def torque(self) -> float:
         """Torque ratio to Drishti for the same path scaled by ``size``."""
         return self.heft * self.size * self.wheel_radius / DRISHTI_RADIUS
@@ -87,6 +97,8 @@ def inertial_keys(code: RobotCode, params: dict[str, float]) -> tuple[str, ...]:
 
 
 _SCALED = {
+    "pi_ky": "inverse_area",
+    "pi_ktheta": "inverse_size",
     "tau_max": "torque",
     "viscous": "torque",
     "coulomb": "torque",

@@ -46,7 +46,7 @@ DRISHTI = load_robot().lumped
 PARAM_SYMBOLS = tuple(p.symbol for p in PARAMETERS)
 C_FIELD = robot_model().c_field_names()  # key -> C member, where they differ
 INFO = {c.name: c for c in CONTROLLERS}
-PY_CLASSES = {"tdc": pyctl.TDC, "tdroc": pyctl.TDROC, "roc": pyctl.ROC, "asmc": pyctl.ASMC}
+PY_CLASSES = {c.name: getattr(pyctl, c.name.upper()) for c in CONTROLLERS}
 FORMULATIONS = {"paper": 0, "minimal": 1}
 
 
@@ -233,5 +233,5 @@ def _close(a: Any, b: Any, rtol: float) -> bool:
     return bool(np.linalg.norm(a - b) <= rtol * max(float(np.linalg.norm(b)), FLOOR))
 
 
-CONTROLLER_CASES = [(c, f) for c in INFO for f in FORMULATIONS]
+CONTROLLER_CASES = [(c, f) for c in INFO for f in FORMULATIONS if f in INFO[c].formulations]
 CONTROLLER_IDS = [f"{c}-{f}" for c, f in CONTROLLER_CASES]

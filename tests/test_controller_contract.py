@@ -13,6 +13,7 @@ step (the bad-input table's configuration and a smooth motion) must succeed:
 from __future__ import annotations
 
 import math
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -24,7 +25,14 @@ from hypothesis import strategies as st
 
 from runtime import cbuild
 from runtime.generated_modules import controllers as pyctl
-from runtime.tooling.bad_input.cases import BASE, CONTROLLERS, DRISHTI, FORMULATIONS
+from runtime.tooling.bad_input.cases import (
+    BASE,
+    CONTROLLER_FIELDS,
+    CONTROLLER_FORMULATIONS,
+    CONTROLLERS,
+    DRISHTI,
+    FORMULATIONS,
+)
 from runtime.tooling.bad_input.runner import (
     Controller,
     base_config,
@@ -35,6 +43,13 @@ from runtime.tooling.bad_input.runner import (
 )
 
 RECOVERY_STEPS = 1  # a valid step succeeds within this many steps of any accepted history
+# Every (controller, formulation) the registry generates.
+FORMS = [(n, f) for n in CONTROLLERS for f in FORMULATIONS if f in CONTROLLER_FORMULATIONS[n]]
+
+
+def own_form(name: str) -> str:
+    """The paper formulation where ``name`` has it, else its own."""
+    return "paper" if "paper" in CONTROLLER_FORMULATIONS[name] else CONTROLLER_FORMULATIONS[name][0]
 GAIN_MAX = pyctl.GAIN_MAX
 EXAMPLES = 60 if shutil.which("gcc") else 0
 
@@ -132,8 +147,7 @@ def _recovers(lib: cbuild.CLibrary, name: str, form: str, state_bytes: bytes) ->
     return 11
 
 
-@pytest.mark.parametrize("name", CONTROLLERS)
-@pytest.mark.parametrize("form", FORMULATIONS)
+@pytest.mark.parametrize(("name", "form"), FORMS)
 def test_no_accepted_input_latches(lib: cbuild.CLibrary, name: str, form: str) -> None:
     """From any state reached by accepted inputs (extreme configurations and inputs), a
     valid step succeeds within RECOVERY_STEPS; the adaptive gains stay <= GAIN_MAX."""
@@ -164,7 +178,7 @@ def test_issue_examples_are_refused_and_do_not_latch() -> None:
     ):
         lib = cbuild.build(float32)
         seq = smooth_sequence(8, float(BASE["h"]))
-        cfg = base_config(lib, name, "paper")
+        cfg = base_config(lib, name, own_form(name))
         bad, twin = Controller(lib, name, cfg), Controller(lib, name, cfg)
         for inputs in seq[:2]:
             bad.step(inputs)
@@ -196,7 +210,7 @@ def test_adaptive_gain_is_capped(lib: cbuild.CLibrary) -> None:
 def test_step_counter_saturates(lib: cbuild.CLibrary, name: str) -> None:
     """From STEPS_MAX - 1 the counter reaches STEPS_MAX and stays; the steps equal those
     of a twin whose counter is small (behaviour depends on steps >= 2 only)."""
-    cfg = base_config(lib, name, "paper")
+    cfg = base_config(lib, name, own_form(name))
     seq = smooth_sequence(8, float(BASE["h"]))
     old, young = Controller(lib, name, cfg), Controller(lib, name, cfg)
     for inputs in seq[:3]:
@@ -257,6 +271,7 @@ def test_step_counter_under_ubsan(tmp_path: Path) -> None:
 
 
 CHANGES: tuple[tuple[str, Any], ...] = (
+    ("kp", lambda c: setattr(c, "kp", 3.0)),
     ("k1[0]", lambda c: c.k1.__setitem__(0, 4.5)),
     ("q_pos", lambda c: setattr(c, "q_pos", 1.6)),
     ("h", lambda c: setattr(c, "h", 0.02)),
@@ -266,13 +281,21 @@ CHANGES: tuple[tuple[str, Any], ...] = (
 )
 
 
-@pytest.mark.parametrize("name", CONTROLLERS)
-@pytest.mark.parametrize(("label", "change"), CHANGES, ids=[c[0] for c in CHANGES])
+CHANGE_CASES = [
+    pytest.param(name, label, change, id=f"{name}-{label}")
+    for name in CONTROLLERS for label, change in CHANGES
+    # the field changed exists, and a valid other formulation does
+    if re.split(r"[\[.]", label)[0] in {*CONTROLLER_FIELDS[name], "nominal"}
+    and (label != "formulation" or len(CONTROLLER_FORMULATIONS[name]) > 1)
+]
+
+
+@pytest.mark.parametrize(("name", "label", "change"), CHANGE_CASES)
 def test_config_change_is_refused(lib: cbuild.CLibrary, name: str, label: str,
                                   change: Any) -> None:
     """A valid configuration that differs from _init's: WMR_ERR_CONFIG_CHANGED with the
     CONFIG field, state and tau untouched; the same in the Python mirror; _init adopts it."""
-    cfg = base_config(lib, name, "paper")
+    cfg = base_config(lib, name, own_form(name))
     ctl = Controller(lib, name, cfg)
     seq = smooth_sequence(3, float(BASE["h"]))
     ctl.step(seq[0])
@@ -312,7 +335,7 @@ def _py_config(cfg: Any) -> Any:
 
 @pytest.mark.parametrize("name", CONTROLLERS)
 def test_reset_restores_the_init_state(lib: cbuild.CLibrary, name: str) -> None:
-    cfg = base_config(lib, name, "paper")
+    cfg = base_config(lib, name, own_form(name))
     ctl, fresh = Controller(lib, name, cfg), Controller(lib, name, cfg)
     seq = smooth_sequence(6, float(BASE["h"]))
     for inputs in seq:
@@ -501,7 +524,7 @@ def test_every_one_and_two_bit_change_is_refused(tmp_path: Path, name: str,
     lib = cbuild.build(float32, extra_sources=(src,), extra_headers=(hdr,))
     offsets, sizes = _value_layout(lib, name)
     seq = smooth_sequence(4, float(BASE["h"]))
-    for form in FORMULATIONS:
+    for form in CONTROLLER_FORMULATIONS[name]:
         ctl = Controller(lib, name, base_config(lib, name, form))
         for inputs in seq[:3]:
             assert ctl.step(inputs)[0] >= 0
@@ -521,7 +544,7 @@ def test_mirror_refuses_every_one_bit_change(name: str) -> None:
     """The Python mirror keeps the configuration's values (as C keeps its copy) and refuses
     a step given a configuration with any one bit of any value changed."""
     lib = cbuild.build(False)
-    cfg = base_config(lib, name, "paper")
+    cfg = base_config(lib, name, own_form(name))
     py = pyctl.__dict__[name.upper()](_py_config(cfg))
     seq = smooth_sequence(2, float(BASE["h"]))
     py.step(*seq[0])
@@ -601,6 +624,9 @@ def accepted_config(draw: st.DrawFn) -> dict[str, Any]:
         "a": draw(_log_between(1e-30, 1.0)),
         "n": draw(st.integers(2, 8)),
         "accel_estimator": draw(st.sampled_from([0, 1, 2])),
+        "kx": draw(st.one_of(st.just(0.0), gain)), "ky": draw(st.one_of(st.just(0.0), gain)),
+        "ktheta": draw(st.one_of(st.just(0.0), gain)), "kp": draw(gain),
+        "ki": draw(st.one_of(st.just(0.0), gain)),
         "nominal": nominal,
     }
 
@@ -624,8 +650,7 @@ def input_run(draw: st.DrawFn) -> list[tuple[list[float], ...]]:
     return steps
 
 
-@pytest.mark.parametrize("name", CONTROLLERS)
-@pytest.mark.parametrize("form", FORMULATIONS)
+@pytest.mark.parametrize(("name", "form"), FORMS)
 def test_accepted_inputs_never_give_a_nonfinite_output(lib: cbuild.CLibrary, name: str,
                                                        form: str) -> None:
     """Issue 25: with any accepted configuration and finite inputs within the bound, every

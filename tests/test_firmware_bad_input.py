@@ -54,7 +54,7 @@ def test_bad_input_case(lib: cbuild.CLibrary, case: bad_cases.Case) -> None:
         runner.run_case(lib, name, form, case)
         for name in bad_cases.CONTROLLERS
         if name in case.applies
-        for form in bad_cases.FORMULATIONS
+        for form in bad_cases.CONTROLLER_FORMULATIONS[name]
     ]
     assert runs
     for o in runs:

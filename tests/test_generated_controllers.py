@@ -173,7 +173,11 @@ class SympyController:
         return tau, (self.gain if self.info.adaptive else gain)
 
 
-@pytest.mark.parametrize(("name", "form"), CONTROLLER_CASES, ids=CONTROLLER_IDS)
+PAPER_LAW_CASES = [(c, f) for c, f in CONTROLLER_CASES if INFO[c].error_dynamics]
+
+
+@pytest.mark.parametrize(("name", "form"), PAPER_LAW_CASES,
+                         ids=[f"{c}-{f}" for c, f in PAPER_LAW_CASES])
 def test_controller_steps_match_sympy_laws(
     c_builds: dict[str, CBuild], name: str, form: str
 ) -> None:
@@ -190,3 +194,28 @@ def test_controller_steps_match_sympy_laws(
         assert _close(py_ctl.gain, gain_ref, RTOL_SYMPY_LAW), (k, py_ctl.gain, gain_ref)
     if INFO[name].window:
         assert ref.omegas and ref.steps == 8 and py_ctl.gain > 0.0
+
+
+def test_wheel_pi_matches_the_hand_written_witness(c_builds: dict[str, CBuild]) -> None:
+    """The generated wheel-velocity PI (C and Python) against the one typed by hand for the
+    differential drive (runtime.paper.handwritten.wheel_pi): the same torques and integral
+    along a smooth tracking sequence, saturation included (a tight torque limit)."""
+    from runtime.paper.handwritten.wheel_pi import WheelPI, WheelPIGains
+
+    for tau_max in (200.0, 0.5):
+        config = _config("pi", FORMULATIONS["minimal"], kx=1.5, ky=6.0, ktheta=3.0, kp=2.5,
+                         ki=4.0, tau_max=tau_max)
+        c_ctl = CController(c_builds["double"], "pi", config)
+        py_ctl = PY_CLASSES["pi"](config)
+        ref = WheelPI(WheelPIGains(1.5, 6.0, 3.0, 2.5, 4.0), config.nominal["r"],
+                      config.nominal["b"], config.h, tau_max)
+        saturated = 0
+        for k, (q, qdot, qd, qdd, _) in enumerate(_smooth_sequence(5, 40, config.h)):
+            tau_ref = ref.step(q, qdot, qd, qdd)
+            status, tau_c = c_ctl.step(q, qdot, qd, qdd, np.zeros(5))
+            tau_py = py_ctl.step(q, qdot, qd, qdd, np.zeros(5))
+            saturated += status == STATUS["WMR_WARN_SATURATED"]
+            assert _close(list(tau_c), tau_ref, RTOL_SYMPY_LAW), (k, list(tau_c), tau_ref)
+            assert _close(tau_py, tau_ref, RTOL_SYMPY_LAW), (k, tau_py, tau_ref)
+            assert _close(list(c_ctl.fields()["integral"]), ref.integral, RTOL_SYMPY_LAW)
+        assert (saturated > 0) == (tau_max < 1.0)

@@ -71,9 +71,16 @@ def _bad_cases() -> list[BadCase]:
         ("a=1.5", "WMR_ERR_BAD_DISCOUNT", {"a": 1.5}, lambda i: i.window),
         ("h=0", "WMR_ERR_BAD_SAMPLE_TIME", {"h": 0.0}, None),
         ("h<0", "WMR_ERR_BAD_SAMPLE_TIME", {"h": -0.01}, None),
-        ("k1=0", "WMR_ERR_BAD_GAINS", {"k1": [4.0, 0.0, 6.0, 7.0, 8.0]}, None),
-        ("k2<0", "WMR_ERR_BAD_GAINS", {"k2": [3.0, 3.5, 4.0, 4.5, -5.0]}, None),
-        ("q_pos=0", "WMR_ERR_BAD_GAINS", {"q_pos": 0.0}, None),
+        ("k1=0", "WMR_ERR_BAD_GAINS", {"k1": [4.0, 0.0, 6.0, 7.0, 8.0]},
+         lambda i: i.error_dynamics),
+        ("k2<0", "WMR_ERR_BAD_GAINS", {"k2": [3.0, 3.5, 4.0, 4.5, -5.0]},
+         lambda i: i.error_dynamics),
+        ("q_pos=0", "WMR_ERR_BAD_GAINS", {"q_pos": 0.0}, lambda i: i.error_dynamics),
+        ("kp=0", "WMR_ERR_BAD_GAINS", {"kp": 0.0}, lambda i: i.integrator),
+        ("ki<0", "WMR_ERR_BAD_GAINS", {"ki": -1.0}, lambda i: i.integrator),
+        ("ky=nan", "WMR_ERR_BAD_GAINS", {"ky": math.nan}, lambda i: i.integrator),
+        ("formulation=paper", "WMR_ERR_BAD_FORMULATION", {"formulation": 0},
+         lambda i: "paper" not in i.formulations),
         ("m=0", "WMR_ERR_BAD_NOMINAL", nominal(m=0.0), None),
         ("I=K2/m", "WMR_ERR_BAD_NOMINAL", nominal(I=K2_OVER_M), None),
         ("I<K2/m", "WMR_ERR_BAD_NOMINAL", nominal(I=0.5 * K2_OVER_M), None),
@@ -100,7 +107,7 @@ BAD_PARAMS = [
     for name in INFO
     for form in FORMULATIONS
     for case in BAD_CASES
-    if case.applies(INFO[name])
+    if case.applies(INFO[name]) and form in INFO[name].formulations
 ]
 WARMUP = 4
 
@@ -190,7 +197,7 @@ def test_bad_input_is_rejected_without_side_effects(
 def test_c_uninitialised_state_and_null_pointers(c_builds: dict[str, CBuild], name: str) -> None:
     build = c_builds["double"]
     ffi, lib = build.ffi, build.lib
-    config = _config(name, 0)
+    config = _config(name, FORMULATIONS[INFO[name].formulations[0]])
     inputs = _smooth_sequence(5, 1, config.h)[0]
     step = getattr(lib, f"wmr_{name}_step")
     init = getattr(lib, f"wmr_{name}_init")

@@ -83,7 +83,12 @@ typedef enum {
     WMR_FIELD_GAIN = 28, /* the switching gain computed */
     WMR_FIELD_S_NORM = 29, /* ||s|| computed */
     WMR_FIELD_U_DISCARDED = 30, /* ||u rows dropped by tau = B^T u|| computed */
-    WMR_FIELD_P = 31 /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+    WMR_FIELD_P = 31, /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+    WMR_FIELD_KX = 32, /* kx (the path tracker's along-track gain) */
+    WMR_FIELD_KY = 33, /* ky (the path tracker's cross-track gain) */
+    WMR_FIELD_KTHETA = 34, /* ktheta (the path tracker's heading gain) */
+    WMR_FIELD_KP = 35, /* kp (the wheel-velocity PI's proportional gain) */
+    WMR_FIELD_KI = 36 /* ki (the wheel-velocity PI's integral gain) */
 } wmr_field_t;
 
 /**

@@ -1357,3 +1357,53 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
     s_norm[0] = _t8;
     gain_next[0] = _t8*adapt_0*h + gain_1;
 }
+
+/* wmr_minimal_pi_law: documented in wmr_laws.h.
+   operations after CSE: 17 add, 21 mul, 1 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+void wmr_minimal_pi_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *q_des, const wmr_real_t *qdot_des, const wmr_real_t *integral,
+    const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u, wmr_real_t *integral_next)
+{
+    const wmr_real_t r = p->r;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/r;
+    const wmr_real_t theta = q[2];
+    const wmr_real_t qd_2 = q_des[2];
+    const wmr_real_t _t1 = qd_2 - theta;
+    const wmr_real_t qdd_0 = qdot_des[0];
+    const wmr_real_t qdd_1 = qdot_des[1];
+    const wmr_real_t _t2 = qdd_0*WMR_COS(qd_2) + qdd_1*WMR_SIN(qd_2);
+    const wmr_real_t _t3 = WMR_COS(theta);
+    const wmr_real_t x_c = q[0];
+    const wmr_real_t qd_0 = q_des[0];
+    const wmr_real_t _t4 = qd_0 - x_c;
+    const wmr_real_t _t5 = WMR_SIN(theta);
+    const wmr_real_t y_c = q[1];
+    const wmr_real_t qd_1 = q_des[1];
+    const wmr_real_t _t6 = qd_1 - y_c;
+    const wmr_real_t kx = gains[0];
+    const wmr_real_t _t7 = _t2*WMR_COS(_t1) + kx*(_t3*_t4 + _t5*_t6);
+    const wmr_real_t b = p->b;
+    const wmr_real_t qdd_2 = qdot_des[2];
+    const wmr_real_t ky = gains[1];
+    const wmr_real_t ktheta = gains[2];
+    const wmr_real_t _t8 = WMR_LIT(0.5)*_t0*b*(_t2*(ktheta*WMR_SIN(_t1) + ky*(_t3*_t6 - _t4*_t5))
+            + qdd_2);
+    const wmr_real_t thetadot_r = qdot[3];
+    const wmr_real_t _t9 = _t0*_t7 + _t8 - thetadot_r;
+    const wmr_real_t tau_max = limits[1];
+    const wmr_real_t _t10 = -tau_max;
+    const wmr_real_t ki = gains[4];
+    const wmr_real_t h = limits[0];
+    const wmr_real_t _t11 = h*ki;
+    const wmr_real_t I_0 = integral[0];
+    const wmr_real_t _t12 = WMR_FMIN(tau_max, WMR_FMAX(_t10, I_0 + _t11*_t9));
+    const wmr_real_t thetadot_l = qdot[4];
+    const wmr_real_t _t13 = _t0*_t7 - _t8 - thetadot_l;
+    const wmr_real_t I_1 = integral[1];
+    const wmr_real_t _t14 = WMR_FMIN(tau_max, WMR_FMAX(_t10, I_1 + _t11*_t13));
+    const wmr_real_t kp = gains[3];
+    u[0] = _t12 + _t9*kp;
+    u[1] = _t13*kp + _t14;
+    integral_next[0] = _t12;
+    integral_next[1] = _t14;
+}

@@ -766,6 +766,45 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
     const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
     wmr_real_t *s_norm, wmr_real_t *gain_next);
 
+#define WMR_MINIMAL_PI_LAW_Q_SIZE 5
+#define WMR_MINIMAL_PI_LAW_QDOT_SIZE 5
+#define WMR_MINIMAL_PI_LAW_Q_DES_SIZE 5
+#define WMR_MINIMAL_PI_LAW_QDOT_DES_SIZE 5
+#define WMR_MINIMAL_PI_LAW_INTEGRAL_SIZE 2
+#define WMR_MINIMAL_PI_LAW_GAINS_SIZE 5
+#define WMR_MINIMAL_PI_LAW_LIMITS_SIZE 2
+#define WMR_MINIMAL_PI_LAW_U_SIZE 2
+#define WMR_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE 2
+
+/**
+ * (minimal formulation) wheel-velocity PI under a pose-correcting path tracker (the ros2_control
+ * diff_drive_controller structure): eta_c = A(q)^-1 (v_c, w_c) from the root's pose
+ * error (Kanayama), I+ = clamp(I + ki h (eta_c - eta), +-tau_max),
+ * tau = kp (eta_c - eta) + I+.
+ *
+ * @param[in]  p wmr_params_t -- nominal parameters of M-hat
+ * @param[in]  q [5] row-major (WMR_MINIMAL_PI_LAW_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
+ *     measured q (five coordinates)
+ * @param[in]  qdot [5] row-major (WMR_MINIMAL_PI_LAW_QDOT_SIZE): xdot_c, ydot_c, thetadot,
+ *     thetadot_r, thetadot_l -- measured qdot
+ * @param[in]  q_des [5] row-major (WMR_MINIMAL_PI_LAW_Q_DES_SIZE): qd_0, qd_1, qd_2, qd_3, qd_4 --
+ *     reference q
+ * @param[in]  qdot_des [5] row-major (WMR_MINIMAL_PI_LAW_QDOT_DES_SIZE): qdd_0, qdd_1, qdd_2,
+ *     qdd_3, qdd_4 -- reference qdot
+ * @param[in]  integral [2] row-major (WMR_MINIMAL_PI_LAW_INTEGRAL_SIZE): I_0, I_1 -- the integral
+ *     term [N m]
+ * @param[in]  gains [5] row-major (WMR_MINIMAL_PI_LAW_GAINS_SIZE): kx, ky, ktheta, kp, ki -- kx,
+ *     ky, ktheta, kp, ki
+ * @param[in]  limits [2] row-major (WMR_MINIMAL_PI_LAW_LIMITS_SIZE): h, tau_max -- h, tau_max
+ * @param[out] u [2] row-major (WMR_MINIMAL_PI_LAW_U_SIZE)
+ * @param[out] integral_next [2] row-major (WMR_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE)
+ *
+ * operations after CSE: 17 add, 21 mul, 1 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+ */
+void wmr_minimal_pi_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
+    const wmr_real_t *q_des, const wmr_real_t *qdot_des, const wmr_real_t *integral,
+    const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u, wmr_real_t *integral_next);
+
 #ifdef __cplusplus
 }
 #endif

@@ -108,6 +108,11 @@ FIELDS: dict[str, int] = {
     "S_NORM": 29,  # ||s|| computed
     "U_DISCARDED": 30,  # ||u rows dropped by tau = B^T u|| computed
     "P": 31,  # P of (20) from k1[index], k2[index], q_pos, q_vel is not finite
+    "KX": 32,  # kx (the path tracker's along-track gain)
+    "KY": 33,  # ky (the path tracker's cross-track gain)
+    "KTHETA": 34,  # ktheta (the path tracker's heading gain)
+    "KP": 35,  # kp (the wheel-velocity PI's proportional gain)
+    "KI": 36,  # ki (the wheel-velocity PI's integral gain)
 }
 # Python key -> C struct field where they differ (the C backend's field_renames).
 C_FIELD_NAMES: dict[str, str] = {'I': 'Iz'}
@@ -160,6 +165,11 @@ class Config:
     phi: float = 1.0
     gamma: float = 1.0
     gain0: float = 0.0
+    kx: float = 1.0
+    ky: float = 8.0
+    ktheta: float = 4.0
+    kp: float = 2.0
+    ki: float = 2.0
 
 
 def _positive(x: float) -> bool:
@@ -225,17 +235,21 @@ class _Controller:
     window = False
     bounds = False
     adaptive = False
+    error_dynamics = True
+    integrator = False
+    formulations: tuple[str, ...] = ()
 
     def __init__(self, config: Config) -> None:
         self.check_config(config)
         self.config = config
         self.config_bits = self.value_bits(config)
-        self.p12 = np.zeros(5)
-        self.p22 = np.zeros(5)
-        for i in range(5):
-            pm = laws.lyapunov_p([float(np.asarray(config.k1)[i]), float(np.asarray(config.k2)[i]),
-                                  config.q_pos, config.q_vel])
-            self.p12[i], self.p22[i] = pm[1], pm[2]
+        if self.error_dynamics:
+            self.p12 = np.zeros(5)
+            self.p22 = np.zeros(5)
+            for i in range(5):
+                pm = laws.lyapunov_p([float(np.asarray(config.k1)[i]),
+                                      float(np.asarray(config.k2)[i]), config.q_pos, config.q_vel])
+                self.p12[i], self.p22[i] = pm[1], pm[2]
         if self.adaptive:
             self.gain0 = float(config.gain0)
         self.reset()
@@ -255,6 +269,8 @@ class _Controller:
         self.s_norm = 0.0
         self.u_discarded = 0.0
         self.tau = np.zeros(2)
+        if self.integrator:
+            self.integral = np.zeros(2)
         self.last_status = "WMR_OK"
 
     @property
@@ -297,10 +313,27 @@ class _Controller:
         def bad(status: str, message: str, field: str, index: int = -1) -> ControllerError:
             return ControllerError("WMR_" + status, message, field, index)
 
+        if "paper" not in cls.formulations and c.formulation != FORMULATION_MINIMAL:
+            raise bad("ERR_BAD_FORMULATION",
+                      f"formulation = {c.formulation!r} ({cls.name} has MINIMAL only)", "FORMULATION")
         if c.formulation not in (FORMULATION_PAPER, FORMULATION_MINIMAL):
             raise bad("ERR_BAD_FORMULATION", f"formulation = {c.formulation!r}", "FORMULATION")
         if not (math.isfinite(c.h) and H_MIN <= c.h <= H_MAX):
             raise bad("ERR_BAD_SAMPLE_TIME", f"h = {c.h!r} outside [{H_MIN}, {H_MAX}] s", "H")
+        if cls.error_dynamics:
+            cls._check_error_dynamics(c, bad)
+        if not _positive_at_most(c.tau_max, TORQUE_LIMIT_MAX):
+            raise bad("ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}", "TAU_MAX")
+        for name, check, status in cls.field_checks:  # the registry's, in its order
+            value = getattr(c, name)
+            if not _FIELD_CHECKS[check](value, c):
+                raise bad("ERR_" + status, f"{name} = {value!r} outside {_FIELD_RANGES[check]}",
+                          name.upper())
+        cls._check_nominal(c, bad)
+
+    @staticmethod
+    def _check_error_dynamics(c: Config, bad: Any) -> None:
+        """K1, K2 and Q in their bounds and P of (20) finite (as <prefix>_check_base_config)."""
         k1 = np.asarray(c.k1, dtype=np.float64).reshape(-1)
         k2 = np.asarray(c.k2, dtype=np.float64).reshape(-1)
         if k1.size != 5 or k2.size != 5:
@@ -318,13 +351,10 @@ class _Controller:
             pm = laws.lyapunov_p([float(a), float(b), float(c.q_pos), float(c.q_vel)])
             if not np.all(np.isfinite(pm)):
                 raise bad("ERR_BAD_GAINS", "P of (20) is not finite for these gains", "P", i)
-        if not _positive_at_most(c.tau_max, TORQUE_LIMIT_MAX):
-            raise bad("ERR_BAD_TORQUE_LIMIT", f"tau_max = {c.tau_max!r}", "TAU_MAX")
-        for name, check, status in cls.field_checks:  # the registry's, in its order
-            value = getattr(c, name)
-            if not _FIELD_CHECKS[check](value, c):
-                raise bad("ERR_" + status, f"{name} = {value!r} outside {_FIELD_RANGES[check]}",
-                          name.upper())
+
+    @classmethod
+    def _check_nominal(cls, c: Config, bad: Any) -> None:
+        """The nominal model (as <prefix>_check_nominal, and TDROC's ||Mhat^-1||)."""
         p = c.nominal
         try:
             values = {k: float(p[k]) for k in PARAM_KEYS}
@@ -386,9 +416,12 @@ class _Controller:
         nc, off = (5, 0) if paper else (2, 3)
         sl = slice(off, off + nc)
         e, edot, qdd = qd[sl] - qv[sl], qdd_des[sl] - qdv[sl], qddd[sl]
-        k1 = np.asarray(c.k1, dtype=np.float64)[sl]
-        k2 = np.asarray(c.k2, dtype=np.float64)[sl]
-        p12, p22 = self.p12[sl], self.p22[sl]
+        if self.error_dynamics:
+            k1 = np.asarray(c.k1, dtype=np.float64)[sl]
+            k2 = np.asarray(c.k2, dtype=np.float64)[sl]
+            p12, p22 = self.p12[sl], self.p22[sl]
+        else:
+            k1 = k2 = p12 = p22 = np.zeros(0)
         H1hat = self.H1hat.copy()
         omega, omega_count, gain, s_norm = self.omega.copy(), self.omega_count, self.gain, self.s_norm
         if self.tde:
@@ -425,10 +458,11 @@ class _Controller:
                 gain_fn = laws.paper_tdroc_gain if paper else laws.minimal_tdroc_gain
                 gain = cap_gain(float(gain_fn([minv_norm], omega[:, :nc], w)[0]))
         # The law's inputs as the step has them, by source (codegen.controller_api.STEP_SOURCES).
-        x = {"q": qv, "qdot": qdv, "e": e, "edot": edot, "qddot_des": qdd, "k1": k1, "k2": k2,
-             "p12": p12, "p22": p22, "H1hat": H1hat[:nc], "khat": [gain],
-             "adapted_gain": [self.gain]}
-        u, s_norm, gain = self._law(c, paper, x, p, s_norm, gain)
+        x = {"q": qv, "qdot": qdv, "q_des": qd, "qdot_des": qdd_des, "e": e, "edot": edot,
+             "qddot_des": qdd, "k1": k1, "k2": k2, "p12": p12, "p22": p22, "H1hat": H1hat[:nc],
+             "khat": [gain], "adapted_gain": [self.gain],
+             "integral": getattr(self, "integral", None)}
+        u, s_norm, gain, updates = self._law(c, paper, x, p, s_norm, gain)
 
         tau = np.array([u[3], u[4]]) if paper else np.array([u[0], u[1]])
         u_discarded = laws._norm(float(u[0]), float(u[1]), float(u[2])) if paper else 0.0
@@ -452,6 +486,8 @@ class _Controller:
         self.u_prev2 = self.u_prev
         self.u_prev = np.array([0.0, 0.0, 0.0, tau[0], tau[1]])
         self.tau = tau.copy()
+        for name, value in updates.items():  # the law's own state (an integral)
+            setattr(self, name, value)
         self.steps = min(self.steps + 1, STEPS_MAX)  # saturating, as the C uint32_t
         self.last_status = status
         return tau
@@ -466,18 +502,22 @@ class TDC(_Controller):
     window = False
     bounds = False
     adaptive = False
+    error_dynamics = True
+    integrator = False
+    formulations = ("paper", "minimal",)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), )
     # the fields validated after the ones every controller has, in the C's order
     field_checks = (("accel_estimator", "estimator", "BAD_ESTIMATOR"), ("rate_window", "rate_window", "BAD_ESTIMATOR"), )
 
     def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
-             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
-        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
-        ||s|| and the gain pass through where the law has none."""
+             s_norm: float, gain: float
+             ) -> tuple[NDArray[np.float64], float, float, dict[str, NDArray[np.float64]]]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted, the
+        state it updates); ||s|| and the gain pass through where the law has none."""
         fn = laws.paper_tdc_law if paper else laws.minimal_tdc_law
         u = fn(x["q"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["H1hat"], p)
-        return u, s_norm, gain
+        return u, s_norm, gain, {}
 
 
 class TDROC(_Controller):
@@ -489,19 +529,23 @@ class TDROC(_Controller):
     window = True
     bounds = False
     adaptive = False
+    error_dynamics = True
+    integrator = False
+    formulations = ("paper", "minimal",)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), ("eps", "real"), ("n", "int"), ("a", "real"), ("hold_gain", "int"), ("held_gain", "real"), )
     # the fields validated after the ones every controller has, in the C's order
     field_checks = (("eps", "gain", "BAD_EPS"), ("accel_estimator", "estimator", "BAD_ESTIMATOR"), ("rate_window", "rate_window", "BAD_ESTIMATOR"), ("hold_gain", "flag", "BAD_HELD_GAIN"), ("held_gain", "nonnegative_gain", "BAD_HELD_GAIN"), ("n", "window", "BAD_WINDOW"), ("a", "discount", "BAD_DISCOUNT"), )
 
     def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
-             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
-        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
-        ||s|| and the gain pass through where the law has none."""
+             s_norm: float, gain: float
+             ) -> tuple[NDArray[np.float64], float, float, dict[str, NDArray[np.float64]]]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted, the
+        state it updates); ||s|| and the gain pass through where the law has none."""
         fn = laws.paper_tdroc_law if paper else laws.minimal_tdroc_law
         u, _, sn = fn(x["q"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["H1hat"], x["khat"], [c.eps], p)
         s_norm = float(sn[0])
-        return u, s_norm, gain
+        return u, s_norm, gain, {}
 
 
 class ROC(_Controller):
@@ -513,20 +557,24 @@ class ROC(_Controller):
     window = False
     bounds = True
     adaptive = False
+    error_dynamics = True
+    integrator = False
+    formulations = ("paper", "minimal",)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("alpha", "real"), ("phi", "real"), )
     # the fields validated after the ones every controller has, in the C's order
     field_checks = (("eps", "gain", "BAD_EPS"), ("alpha", "alpha", "BAD_BOUNDS"), ("phi", "nonnegative_gain", "BAD_BOUNDS"), )
 
     def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
-             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
-        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
-        ||s|| and the gain pass through where the law has none."""
+             s_norm: float, gain: float
+             ) -> tuple[NDArray[np.float64], float, float, dict[str, NDArray[np.float64]]]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted, the
+        state it updates); ||s|| and the gain pass through where the law has none."""
         fn = laws.paper_roc_law if paper else laws.minimal_roc_law
         u, _, sn, g = fn(x["q"], x["qdot"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], [c.alpha, c.phi], [c.eps], p)
         s_norm = float(sn[0])
         gain = float(g[0])
-        return u, s_norm, gain
+        return u, s_norm, gain, {}
 
 
 class ASMC(_Controller):
@@ -538,17 +586,48 @@ class ASMC(_Controller):
     window = False
     bounds = False
     adaptive = True
+    error_dynamics = True
+    integrator = False
+    formulations = ("paper", "minimal",)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )
     # the fields validated after the ones every controller has, in the C's order
     field_checks = (("eps", "gain", "BAD_EPS"), ("gamma", "nonnegative_gain", "BAD_BOUNDS"), ("gain0", "nonnegative_gain", "BAD_BOUNDS"), )
 
     def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
-             s_norm: float, gain: float) -> tuple[NDArray[np.float64], float, float]:
-        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted);
-        ||s|| and the gain pass through where the law has none."""
+             s_norm: float, gain: float
+             ) -> tuple[NDArray[np.float64], float, float, dict[str, NDArray[np.float64]]]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted, the
+        state it updates); ||s|| and the gain pass through where the law has none."""
         fn = laws.paper_asmc_law if paper else laws.minimal_asmc_law
         u, _, sn, g = fn(x["q"], x["qdot"], x["e"], x["edot"], x["qddot_des"], x["k1"], x["k2"], x["p12"], x["p22"], x["adapted_gain"], [c.eps], [c.gamma, c.h], p)
         s_norm = float(sn[0])
         gain = cap_gain(float(g[0]))
-        return u, s_norm, gain
+        return u, s_norm, gain, {}
+
+
+class PI(_Controller):
+    """wheel-velocity PI with a pose-correcting path tracker, paper equations none (the ros2_control diff_drive_controller structure; Kanayama et al. 1990) (mirrors wmr_pi.h)."""
+
+    name = "pi"
+    tde = False
+    switching = False
+    window = False
+    bounds = False
+    adaptive = False
+    error_dynamics = False
+    integrator = True
+    formulations = ("minimal",)
+    # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
+    config_fields = (("formulation", "int"), ("h", "real"), ("tau_max", "real"), ("kx", "real"), ("ky", "real"), ("ktheta", "real"), ("kp", "real"), ("ki", "real"), )
+    # the fields validated after the ones every controller has, in the C's order
+    field_checks = (("kx", "nonnegative_gain", "BAD_GAINS"), ("ky", "nonnegative_gain", "BAD_GAINS"), ("ktheta", "nonnegative_gain", "BAD_GAINS"), ("kp", "gain", "BAD_GAINS"), ("ki", "nonnegative_gain", "BAD_GAINS"), )
+
+    def _law(self, c: Config, paper: bool, x: dict[str, Any], p: dict[str, float],
+             s_norm: float, gain: float
+             ) -> tuple[NDArray[np.float64], float, float, dict[str, NDArray[np.float64]]]:
+        """The law kernel as the C step calls it: (u, ||s||, the gain used or adapted, the
+        state it updates); ||s|| and the gain pass through where the law has none."""
+        fn = laws.paper_pi_law if paper else laws.minimal_pi_law
+        u, integral = fn(x["q"], x["qdot"], x["q_des"], x["qdot_des"], x["integral"], [c.kx, c.ky, c.ktheta, c.kp, c.ki], [c.h, c.tau_max], p)
+        return u, s_norm, gain, {"integral": integral}

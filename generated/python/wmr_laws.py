@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tdc_law_trig", "paper_tde", "paper_tde_trig", "paper_tdroc_gain", "paper_tdroc_law", "paper_tdroc_law_trig", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "paper_asmc_law", "paper_minv_norm", "paper_omega_difference", "paper_roc_law", "paper_tdc_law", "paper_tdc_law_trig", "paper_tde", "paper_tde_trig", "paper_tdroc_gain", "paper_tdroc_law", "paper_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -1405,3 +1405,54 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     s_norm = np.array([_t8])
     gain_next = np.array([_t8*gamma*h + gain_1])
     return u, s, s_norm, gain_next
+
+
+def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: ArrayLike, integral: ArrayLike, gains: ArrayLike, limits: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) wheel-velocity PI under a pose-correcting path tracker (the ros2_control
+    diff_drive_controller structure): eta_c = A(q)^-1 (v_c, w_c) from the root's pose
+    error (Kanayama), I+ = clamp(I + ki h (eta_c - eta), +-tau_max),
+    tau = kp (eta_c - eta) + I+.
+
+    Args:
+        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. measured q (five coordinates)
+        qdot: array of 5 (shape 5x1, row-major): xdot_c, ydot_c, thetadot, thetadot_r, thetadot_l. measured qdot
+        q_des: array of 5 (shape 5x1, row-major): qd_0, qd_1, qd_2, qd_3, qd_4. reference q
+        qdot_des: array of 5 (shape 5x1, row-major): qdd_0, qdd_1, qdd_2, qdd_3, qdd_4. reference qdot
+        integral: array of 2 (shape 2x1, row-major): I_0, I_1. the integral term [N m]
+        gains: array of 5 (shape 5x1, row-major): kx, ky, ktheta, kp, ki. kx, ky, ktheta, kp, ki
+        limits: array of 2 (shape 2x1, row-major): h, tau_max. h, tau_max
+        p: params with fields m, I, K, Iw, r, b, d. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        integral_next: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 17 add, 21 mul, 1 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+    """
+    x_c, y_c, theta, _, _ = _flat(q, 5, "q")
+    _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
+    qd_0, qd_1, qd_2, _, _ = _flat(q_des, 5, "q_des")
+    qdd_0, qdd_1, qdd_2, _, _ = _flat(qdot_des, 5, "qdot_des")
+    I_0, I_1 = _flat(integral, 2, "integral")
+    kx, ky, ktheta, kp, ki = _flat(gains, 5, "gains")
+    h, tau_max = _flat(limits, 2, "limits")
+    r = float(_field(p, "r"))
+    b = float(_field(p, "b"))
+    _t0 = 1.0/r
+    _t1 = qd_2 - theta
+    _t2 = qdd_0*math.cos(qd_2) + qdd_1*math.sin(qd_2)
+    _t3 = math.cos(theta)
+    _t4 = qd_0 - x_c
+    _t5 = math.sin(theta)
+    _t6 = qd_1 - y_c
+    _t7 = _t2*math.cos(_t1) + kx*(_t3*_t4 + _t5*_t6)
+    _t8 = 0.5*_t0*b*(_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5)) + qdd_2)
+    _t9 = _t0*_t7 + _t8 - thetadot_r
+    _t10 = -tau_max
+    _t11 = h*ki
+    _t12 = min(tau_max, max(_t10, I_0 + _t11*_t9))
+    _t13 = _t0*_t7 - _t8 - thetadot_l
+    _t14 = min(tau_max, max(_t10, I_1 + _t11*_t13))
+    u = np.array([_t12 + _t9*kp, _t13*kp + _t14])
+    integral_next = np.array([_t12, _t14])
+    return u, integral_next

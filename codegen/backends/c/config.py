@@ -4,14 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from codegen.spec import StatusCode  # the statuses are every backend's; re-exported here
 
-@dataclass(frozen=True)
-class StatusCode:
-    """One value of the ``wmr_status_t`` enum."""
-
-    name: str
-    value: int
-    doc: str
+__all__ = ["CConfig", "MathMacro", "StatusCode"]
 
 
 @dataclass(frozen=True)

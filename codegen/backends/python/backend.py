@@ -76,6 +76,8 @@ def controllers_py() -> str:
             f"\"switching\": {c.switching},",
             f"        \"window\": {c.window}, \"bounds\": {c.bounds}, "
             f"\"adaptive\": {c.adaptive},",
+            f"        \"error_dynamics\": {c.error_dynamics}, \"integrator\": {c.integrator}, "
+            f"\"formulations\": {c.formulations!r},",
             f"        \"fields\": ({fields},),",
             "    },",
         ]

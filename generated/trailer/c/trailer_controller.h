@@ -74,7 +74,12 @@ typedef enum {
     TRAILER_FIELD_GAIN = 28, /* the switching gain computed */
     TRAILER_FIELD_S_NORM = 29, /* ||s|| computed */
     TRAILER_FIELD_U_DISCARDED = 30, /* ||u rows dropped by tau = B^T u|| computed */
-    TRAILER_FIELD_P = 31 /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+    TRAILER_FIELD_P = 31, /* P of (20) from k1[index], k2[index], q_pos, q_vel is not finite */
+    TRAILER_FIELD_KX = 32, /* kx (the path tracker's along-track gain) */
+    TRAILER_FIELD_KY = 33, /* ky (the path tracker's cross-track gain) */
+    TRAILER_FIELD_KTHETA = 34, /* ktheta (the path tracker's heading gain) */
+    TRAILER_FIELD_KP = 35, /* kp (the wheel-velocity PI's proportional gain) */
+    TRAILER_FIELD_KI = 36 /* ki (the wheel-velocity PI's integral gain) */
 } trailer_field_t;
 
 /**

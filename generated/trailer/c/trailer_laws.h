@@ -488,6 +488,48 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next);
 
+#define TRAILER_MINIMAL_PI_LAW_Q_SIZE 8
+#define TRAILER_MINIMAL_PI_LAW_QDOT_SIZE 8
+#define TRAILER_MINIMAL_PI_LAW_Q_DES_SIZE 8
+#define TRAILER_MINIMAL_PI_LAW_QDOT_DES_SIZE 8
+#define TRAILER_MINIMAL_PI_LAW_INTEGRAL_SIZE 2
+#define TRAILER_MINIMAL_PI_LAW_GAINS_SIZE 5
+#define TRAILER_MINIMAL_PI_LAW_LIMITS_SIZE 2
+#define TRAILER_MINIMAL_PI_LAW_U_SIZE 2
+#define TRAILER_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE 2
+
+/**
+ * (minimal formulation) wheel-velocity PI under a pose-correcting path tracker (the ros2_control
+ * diff_drive_controller structure): eta_c = A(q)^-1 (v_c, w_c) from the root's pose
+ * error (Kanayama), I+ = clamp(I + ki h (eta_c - eta), +-tau_max),
+ * tau = kp (eta_c - eta) + I+.
+ *
+ * @param[in]  p trailer_params_t -- nominal parameters of M-hat
+ * @param[in]  q [8] row-major (TRAILER_MINIMAL_PI_LAW_Q_SIZE): x_tractor, y_tractor, theta_tractor,
+ *     theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left -- measured q (eight
+ *     coordinates)
+ * @param[in]  qdot [8] row-major (TRAILER_MINIMAL_PI_LAW_QDOT_SIZE): xdot_tractor, ydot_tractor,
+ *     thetadot_tractor, thetadot_cart, thetadot_right, thetadot_left, thetadot_cart_right,
+ *     thetadot_cart_left -- measured qdot
+ * @param[in]  q_des [8] row-major (TRAILER_MINIMAL_PI_LAW_Q_DES_SIZE): qd_0, qd_1, qd_2, qd_3,
+ *     qd_4, qd_5, qd_6, qd_7 -- reference q
+ * @param[in]  qdot_des [8] row-major (TRAILER_MINIMAL_PI_LAW_QDOT_DES_SIZE): qdd_0, qdd_1, qdd_2,
+ *     qdd_3, qdd_4, qdd_5, qdd_6, qdd_7 -- reference qdot
+ * @param[in]  integral [2] row-major (TRAILER_MINIMAL_PI_LAW_INTEGRAL_SIZE): I_0, I_1 -- the
+ *     integral term [N m]
+ * @param[in]  gains [5] row-major (TRAILER_MINIMAL_PI_LAW_GAINS_SIZE): kx, ky, ktheta, kp, ki --
+ *     kx, ky, ktheta, kp, ki
+ * @param[in]  limits [2] row-major (TRAILER_MINIMAL_PI_LAW_LIMITS_SIZE): h, tau_max -- h, tau_max
+ * @param[out] u [2] row-major (TRAILER_MINIMAL_PI_LAW_U_SIZE)
+ * @param[out] integral_next [2] row-major (TRAILER_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE)
+ *
+ * operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+ */
+void trailer_minimal_pi_law(const trailer_params_t *p, const trailer_real_t *q,
+    const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,
+    const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,
+    trailer_real_t *u, trailer_real_t *integral_next);
+
 #ifdef __cplusplus
 }
 #endif

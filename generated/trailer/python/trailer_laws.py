@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_trig", "minimal_tde", "minimal_tde_trig", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_trig", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_trig", "minimal_tde", "minimal_tde_trig", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_trig", "tdroc_weighted_gain"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -2206,3 +2206,55 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     s_norm = np.array([_t204])
     gain_next = np.array([_t204*gamma*h + gain_1])
     return u, s, s_norm, gain_next
+
+
+def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: ArrayLike, integral: ArrayLike, gains: ArrayLike, limits: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) wheel-velocity PI under a pose-correcting path tracker (the ros2_control
+    diff_drive_controller structure): eta_c = A(q)^-1 (v_c, w_c) from the root's pose
+    error (Kanayama), I+ = clamp(I + ki h (eta_c - eta), +-tau_max),
+    tau = kp (eta_c - eta) + I+.
+
+    Args:
+        q: array of 8 (shape 8x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left. measured q (eight coordinates)
+        qdot: array of 8 (shape 8x1, row-major): xdot_tractor, ydot_tractor, thetadot_tractor, thetadot_cart, thetadot_right, thetadot_left, thetadot_cart_right, thetadot_cart_left. measured qdot
+        q_des: array of 8 (shape 8x1, row-major): qd_0, qd_1, qd_2, qd_3, qd_4, qd_5, qd_6, qd_7. reference q
+        qdot_des: array of 8 (shape 8x1, row-major): qdd_0, qdd_1, qdd_2, qdd_3, qdd_4, qdd_5, qdd_6, qdd_7. reference qdot
+        integral: array of 2 (shape 2x1, row-major): I_0, I_1. the integral term [N m]
+        gains: array of 5 (shape 5x1, row-major): kx, ky, ktheta, kp, ki. kx, ky, ktheta, kp, ki
+        limits: array of 2 (shape 2x1, row-major): h, tau_max. h, tau_max
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        integral_next: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+    """
+    x_tractor, y_tractor, theta_tractor, _, _, _, _, _ = _flat(q, 8, "q")
+    _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
+    qd_0, qd_1, qd_2, _, _, _, _, _ = _flat(q_des, 8, "q_des")
+    qdd_0, qdd_1, qdd_2, _, _, _, _, _ = _flat(qdot_des, 8, "qdot_des")
+    I_0, I_1 = _flat(integral, 2, "integral")
+    kx, ky, ktheta, kp, ki = _flat(gains, 5, "gains")
+    h, tau_max = _flat(limits, 2, "limits")
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = 1.0/radius_right
+    _t1 = qd_2 - theta_tractor
+    _t2 = qdd_0*math.cos(qd_2) + qdd_1*math.sin(qd_2)
+    _t3 = math.cos(theta_tractor)
+    _t4 = qd_0 - x_tractor
+    _t5 = math.sin(theta_tractor)
+    _t6 = qd_1 - y_tractor
+    _t7 = _t2*math.cos(_t1) + kx*(_t3*_t4 + _t5*_t6)
+    _t8 = 207.0*_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5))/1000.0 + 207.0*qdd_2/1000.0
+    _t9 = _t0*_t7 + _t0*_t8 - thetadot_right
+    _t10 = -tau_max
+    _t11 = h*ki
+    _t12 = min(tau_max, max(_t10, I_0 + _t11*_t9))
+    _t13 = 1.0/radius_left
+    _t14 = _t13*_t7 - _t13*_t8 - thetadot_left
+    _t15 = min(tau_max, max(_t10, I_1 + _t11*_t14))
+    u = np.array([_t12 + _t9*kp, _t14*kp + _t15])
+    integral_next = np.array([_t12, _t15])
+    return u, integral_next

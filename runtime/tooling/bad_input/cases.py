@@ -11,15 +11,26 @@ from dataclasses import dataclass
 from typing import Any
 
 from runtime import cbuild
+from runtime.generated_modules import robot as generated_robot
 
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+# The paper robot's controllers, their formulations and fields (the registry, exported).
+CONTROLLERS = tuple(str(c["name"]) for c in generated_robot.CONTROLLERS)
+CONTROLLER_FORMULATIONS = {str(c["name"]): tuple(c["formulations"])
+                           for c in generated_robot.CONTROLLERS}
+CONTROLLER_FIELDS = {str(c["name"]): frozenset(f[0] for f in c["fields"])
+                     for c in generated_robot.CONTROLLERS}
 FORMULATIONS = {"paper": 0, "minimal": 1}
 INPUT_NAMES = ("q", "qdot", "q_des", "qdot_des", "qddot_des")
 WARMUP = 5
 SENTINEL = (111.0, -222.0)
-# Which controllers have which configuration fields.
-SWITCHING = ("tdroc", "roc", "asmc")
-TDE = ("tdc", "tdroc")
+
+
+def having(*fields: str) -> tuple[str, ...]:
+    """The controllers whose configuration has every one of ``fields`` (a case that sets a
+    field applies to those)."""
+    return tuple(c for c in CONTROLLERS if set(fields) <= CONTROLLER_FIELDS[c])
+
+
 DRISHTI = {"m": 36.0, "I": 5.72, "K": 0.34, "Iw": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
 BASE: dict[str, Any] = {
     "k1": (4.0, 5.0, 6.0, 7.0, 8.0),
@@ -39,6 +50,11 @@ BASE: dict[str, Any] = {
     "phi": 2.0,
     "gamma": 2.0,
     "gain0": 0.5,
+    "kx": 1.0,
+    "ky": 8.0,
+    "ktheta": 4.0,
+    "kp": 2.0,
+    "ki": 2.0,
 }
 SATURATION_LIMIT = 0.5
 ZERO_ERROR_STEPS = 30  # a zero-error streak at the smallest eps (issue 25's latch took 25+)
@@ -53,27 +69,32 @@ class Case:
     expected: str
     applies: tuple[str, ...] = CONTROLLERS
     inputs: tuple[int, int, float] | None = None  # (which input, index, value)
-    mutate: Callable[[Any], None] | None = None  # changes a copy of the configuration
+    mutate: Mutation | None = None  # changes a copy of the configuration
     fill: bytes | None = None  # state cases: bytes the state is filled with (None: magic only)
     null_arg: int | None = None  # null cases: which argument of step is NULL
     id: str = ""
 
 
-def _set(name: str, value: Any) -> Callable[[Any], None]:
-    def mutate(cfg: Any) -> None:
-        setattr(cfg, name, value)
+class Mutation:
+    """A change of a copy of the configuration, and the fields it touches (a case applies to
+    the controllers that have them; "nominal": every controller)."""
 
-    return mutate
+    def __init__(self, fields: tuple[str, ...], change: Callable[[Any], None]) -> None:
+        self.fields, self.change = fields, change
 
-
-def _set_item(name: str, index: int, value: float) -> Callable[[Any], None]:
-    def mutate(cfg: Any) -> None:
-        getattr(cfg, name)[index] = value
-
-    return mutate
+    def __call__(self, cfg: Any) -> None:
+        self.change(cfg)
 
 
-def _negate(*where: tuple[str, int | None]) -> Callable[[Any], None]:
+def _set(name: str, value: Any) -> Mutation:
+    return Mutation((name,), lambda cfg: setattr(cfg, name, value))
+
+
+def _set_item(name: str, index: int, value: float) -> Mutation:
+    return Mutation((name,), lambda cfg: getattr(cfg, name).__setitem__(index, value))
+
+
+def _negate(*where: tuple[str, int | None]) -> Mutation:
     """Negate fields (name, None) or vector entries (name, index): sign flips only."""
     def mutate(cfg: Any) -> None:
         for name, index in where:
@@ -82,20 +103,22 @@ def _negate(*where: tuple[str, int | None]) -> Callable[[Any], None]:
             else:
                 getattr(cfg, name)[index] = -getattr(cfg, name)[index]
 
-    return mutate
+    return Mutation(tuple(name for name, _ in where), mutate)
 
 
-def _nominal(**changes: float) -> Callable[[Any], None]:
-    def mutate(cfg: Any) -> None:
-        cbuild.fill_params(cfg.nominal, changes)
-
-    return mutate
+def _nominal(**changes: float) -> Mutation:
+    return Mutation(("nominal",), lambda cfg: cbuild.fill_params(cfg.nominal, changes))
 
 
 def max_window(lib: cbuild.CLibrary) -> int:
     """WMR_MAX_WINDOW, read from the C state (omega_dnorm has WMR_MAX_WINDOW entries)."""
     fields = dict(lib.ffi.typeof("wmr_tdroc_state_t").fields)
     return int(fields["omega_dnorm"].type.length)
+
+
+def applies_to(mutate: Mutation) -> tuple[str, ...]:
+    """The controllers a configuration case applies to: those with every field it sets."""
+    return having(*(f for f in mutate.fields if f != "nominal"))
 
 
 def cases(max_win: int) -> list[Case]:
@@ -122,121 +145,115 @@ def cases(max_win: int) -> list[Case]:
                     )
                 )
     k2m = DRISHTI["K"] ** 2 / DRISHTI["m"]
-    config: list[tuple[str, str, Callable[[Any], None], tuple[str, ...]]] = [
-        ("`eps` = 0", "WMR_ERR_BAD_EPS", _set("eps", 0.0), SWITCHING),
-        ("`eps` = -0.1", "WMR_ERR_BAD_EPS", _set("eps", -0.1), SWITCHING),
-        ("`eps` = NaN", "WMR_ERR_BAD_EPS", _set("eps", math.nan), SWITCHING),
-        ("`n` = 1", "WMR_ERR_BAD_WINDOW", _set("n", 1), ("tdroc",)),
+    config: list[tuple[str, str, Mutation]] = [
+        ("`eps` = 0", "WMR_ERR_BAD_EPS", _set("eps", 0.0)),
+        ("`eps` = -0.1", "WMR_ERR_BAD_EPS", _set("eps", -0.1)),
+        ("`eps` = NaN", "WMR_ERR_BAD_EPS", _set("eps", math.nan)),
+        ("`n` = 1", "WMR_ERR_BAD_WINDOW", _set("n", 1)),
         (
             f"`n` = WMR_MAX_WINDOW + 1 = {max_win + 1}",
             "WMR_ERR_BAD_WINDOW",
             _set("n", max_win + 1),
-            ("tdroc",),
         ),
-        ("`a` = 0", "WMR_ERR_BAD_DISCOUNT", _set("a", 0.0), ("tdroc",)),
-        ("`a` = 1.5", "WMR_ERR_BAD_DISCOUNT", _set("a", 1.5), ("tdroc",)),
-        ("`a` = NaN", "WMR_ERR_BAD_DISCOUNT", _set("a", math.nan), ("tdroc",)),
-        ("`h` = 0", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 0.0), CONTROLLERS),
-        ("`h` = -0.01", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", -0.01), CONTROLLERS),
-        ("`h` = NaN", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.nan), CONTROLLERS),
-        ("`h` = +Inf", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.inf), CONTROLLERS),
-        ("`k1[1]` = 0", "WMR_ERR_BAD_GAINS", _set_item("k1", 1, 0.0), CONTROLLERS),
-        ("`k1[3]` = -4", "WMR_ERR_BAD_GAINS", _set_item("k1", 3, -4.0), CONTROLLERS),
-        ("`k2[4]` = -5", "WMR_ERR_BAD_GAINS", _set_item("k2", 4, -5.0), CONTROLLERS),
-        ("`k2[0]` = NaN", "WMR_ERR_BAD_GAINS", _set_item("k2", 0, math.nan), CONTROLLERS),
-        ("Q: `q_pos` = 0", "WMR_ERR_BAD_GAINS", _set("q_pos", 0.0), CONTROLLERS),
-        ("Q: `q_vel` = -1", "WMR_ERR_BAD_GAINS", _set("q_vel", -1.0), CONTROLLERS),
-        ("nominal `m` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(m=0.0), CONTROLLERS),
-        ("nominal `m` = -36", "WMR_ERR_BAD_NOMINAL", _nominal(m=-36.0), CONTROLLERS),
-        ("nominal `K` = NaN", "WMR_ERR_BAD_NOMINAL", _nominal(K=math.nan), CONTROLLERS),
+        ("`a` = 0", "WMR_ERR_BAD_DISCOUNT", _set("a", 0.0)),
+        ("`a` = 1.5", "WMR_ERR_BAD_DISCOUNT", _set("a", 1.5)),
+        ("`a` = NaN", "WMR_ERR_BAD_DISCOUNT", _set("a", math.nan)),
+        ("`h` = 0", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 0.0)),
+        ("`h` = -0.01", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", -0.01)),
+        ("`h` = NaN", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.nan)),
+        ("`h` = +Inf", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", math.inf)),
+        ("`k1[1]` = 0", "WMR_ERR_BAD_GAINS", _set_item("k1", 1, 0.0)),
+        ("`k1[3]` = -4", "WMR_ERR_BAD_GAINS", _set_item("k1", 3, -4.0)),
+        ("`k2[4]` = -5", "WMR_ERR_BAD_GAINS", _set_item("k2", 4, -5.0)),
+        ("`k2[0]` = NaN", "WMR_ERR_BAD_GAINS", _set_item("k2", 0, math.nan)),
+        ("Q: `q_pos` = 0", "WMR_ERR_BAD_GAINS", _set("q_pos", 0.0)),
+        ("Q: `q_vel` = -1", "WMR_ERR_BAD_GAINS", _set("q_vel", -1.0)),
+        ("nominal `m` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(m=0.0)),
+        ("nominal `m` = -36", "WMR_ERR_BAD_NOMINAL", _nominal(m=-36.0)),
+        ("nominal `K` = NaN", "WMR_ERR_BAD_NOMINAL", _nominal(K=math.nan)),
         (
             "nominal `I` = K²/m (M-hat singular)",
             "WMR_ERR_BAD_NOMINAL",
             _nominal(I=k2m),
-            CONTROLLERS,
         ),
         (
             "nominal `I` = K²/(2m) (M-hat not positive definite)",
             "WMR_ERR_BAD_NOMINAL",
             _nominal(I=0.5 * k2m),
-            CONTROLLERS,
         ),
-        ("nominal `Iw` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(Iw=0.0), CONTROLLERS),
-        ("nominal `b` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(b=0.0), CONTROLLERS),
-        ("nominal `r` = +Inf", "WMR_ERR_BAD_NOMINAL", _nominal(r=math.inf), CONTROLLERS),
-        ("`tau_max` = 0", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", 0.0), CONTROLLERS),
-        ("`tau_max` = -5", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", -5.0), CONTROLLERS),
-        ("`tau_max` = NaN", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.nan), CONTROLLERS),
-        ("`tau_max` = +Inf", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.inf), CONTROLLERS),
-        ("`formulation` = 2", "WMR_ERR_BAD_FORMULATION", _set("formulation", 2), CONTROLLERS),
-        ("`formulation` = -1", "WMR_ERR_BAD_FORMULATION", _set("formulation", -1), CONTROLLERS),
-        ("`accel_estimator` = -1", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", -1), TDE),
-        ("`accel_estimator` = 3", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", 3), TDE),
-        ("`rate_window` = -0.001", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", -0.001), TDE),
-        ("`rate_window` > h", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", 0.02), TDE),
-        ("`rate_window` = NaN", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", math.nan), TDE),
-        ("TDROC `hold_gain` = 2", "WMR_ERR_BAD_HELD_GAIN", _set("hold_gain", 2), ("tdroc",)),
-        ("TDROC `held_gain` = -1", "WMR_ERR_BAD_HELD_GAIN", _set("held_gain", -1.0), ("tdroc",)),
+        ("nominal `Iw` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(Iw=0.0)),
+        ("nominal `b` = 0", "WMR_ERR_BAD_NOMINAL", _nominal(b=0.0)),
+        ("nominal `r` = +Inf", "WMR_ERR_BAD_NOMINAL", _nominal(r=math.inf)),
+        ("`tau_max` = 0", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", 0.0)),
+        ("`tau_max` = -5", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", -5.0)),
+        ("`tau_max` = NaN", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.nan)),
+        ("`tau_max` = +Inf", "WMR_ERR_BAD_TORQUE_LIMIT", _set("tau_max", math.inf)),
+        ("`formulation` = 2", "WMR_ERR_BAD_FORMULATION", _set("formulation", 2)),
+        ("`formulation` = -1", "WMR_ERR_BAD_FORMULATION", _set("formulation", -1)),
+        ("`accel_estimator` = -1", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", -1)),
+        ("`accel_estimator` = 3", "WMR_ERR_BAD_ESTIMATOR", _set("accel_estimator", 3)),
+        ("`rate_window` = -0.001", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", -0.001)),
+        ("`rate_window` > h", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", 0.02)),
+        ("`rate_window` = NaN", "WMR_ERR_BAD_ESTIMATOR", _set("rate_window", math.nan)),
+        ("TDROC `hold_gain` = 2", "WMR_ERR_BAD_HELD_GAIN", _set("hold_gain", 2)),
+        ("TDROC `held_gain` = -1", "WMR_ERR_BAD_HELD_GAIN", _set("held_gain", -1.0)),
         (
             "TDROC `held_gain` = NaN",
             "WMR_ERR_BAD_HELD_GAIN",
             _set("held_gain", math.nan),
-            ("tdroc",),
         ),
-        ("ROC `alpha` = 1", "WMR_ERR_BAD_BOUNDS", _set("alpha", 1.0), ("roc",)),
-        ("ROC `alpha` = -0.1", "WMR_ERR_BAD_BOUNDS", _set("alpha", -0.1), ("roc",)),
-        ("ROC `phi` = -1", "WMR_ERR_BAD_BOUNDS", _set("phi", -1.0), ("roc",)),
-        ("ROC `phi` = NaN", "WMR_ERR_BAD_BOUNDS", _set("phi", math.nan), ("roc",)),
-        ("ASMC `gamma` = -1", "WMR_ERR_BAD_BOUNDS", _set("gamma", -1.0), ("asmc",)),
-        ("ASMC `gain0` = -1", "WMR_ERR_BAD_BOUNDS", _set("gain0", -1.0), ("asmc",)),
+        ("ROC `alpha` = 1", "WMR_ERR_BAD_BOUNDS", _set("alpha", 1.0)),
+        ("ROC `alpha` = -0.1", "WMR_ERR_BAD_BOUNDS", _set("alpha", -0.1)),
+        ("ROC `phi` = -1", "WMR_ERR_BAD_BOUNDS", _set("phi", -1.0)),
+        ("ROC `phi` = NaN", "WMR_ERR_BAD_BOUNDS", _set("phi", math.nan)),
+        ("ASMC `gamma` = -1", "WMR_ERR_BAD_BOUNDS", _set("gamma", -1.0)),
+        ("ASMC `gain0` = -1", "WMR_ERR_BAD_BOUNDS", _set("gain0", -1.0)),
         # Plausibility bounds (issue 13): accepted absurd values used to latch failure.
-        ("`h` = 1.8e306 (> `WMR_H_MAX` = 1 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1.8e306),
-         CONTROLLERS),
-        ("`h` = 2 (> `WMR_H_MAX`)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 2.0), CONTROLLERS),
-        ("`h` = 1e-7 (< `WMR_H_MIN` = 1e-6 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1e-7),
-         CONTROLLERS),
-        ("`k1[2]` = 2e6 (> `WMR_GAIN_MAX` = 1e6)", "WMR_ERR_BAD_GAINS", _set_item("k1", 2, 2e6),
-         CONTROLLERS),
-        ("Q: `q_vel` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_GAINS", _set("q_vel", 1e7),
-         CONTROLLERS),
+        ("`h` = 1.8e306 (> `WMR_H_MAX` = 1 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1.8e306)),
+        ("`h` = 2 (> `WMR_H_MAX`)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 2.0)),
+        ("`h` = 1e-7 (< `WMR_H_MIN` = 1e-6 s)", "WMR_ERR_BAD_SAMPLE_TIME", _set("h", 1e-7)),
+        ("`k1[2]` = 2e6 (> `WMR_GAIN_MAX` = 1e6)", "WMR_ERR_BAD_GAINS", _set_item("k1", 2, 2e6)),
+        ("Q: `q_vel` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_GAINS", _set("q_vel", 1e7)),
         ("`tau_max` = 1e7 (> `WMR_TORQUE_LIMIT_MAX` = 1e6)", "WMR_ERR_BAD_TORQUE_LIMIT",
-         _set("tau_max", 1e7), CONTROLLERS),
-        ("`eps` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_EPS", _set("eps", 1e7), SWITCHING),
+         _set("tau_max", 1e7)),
+        ("`eps` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_EPS", _set("eps", 1e7)),
         ("TDROC `held_gain` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_HELD_GAIN",
-         _set("held_gain", 1e7), ("tdroc",)),
-        ("ROC `phi` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("phi", 1e7), ("roc",)),
-        ("ASMC `gamma` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gamma", 1e7),
-         ("asmc",)),
-        ("ASMC `gain0` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gain0", 1e7),
-         ("asmc",)),
+         _set("held_gain", 1e7)),
+        ("ROC `phi` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("phi", 1e7)),
+        ("ASMC `gamma` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gamma", 1e7)),
+        ("ASMC `gain0` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_BOUNDS", _set("gain0", 1e7)),
         ("nominal `Iw` = 1e25 (> 1000 × max(0.07, 1))", "WMR_ERR_BAD_NOMINAL",
-         _nominal(Iw=1e25), CONTROLLERS),
-        ("nominal `m` = 1e6 (> 1000 × 36)", "WMR_ERR_BAD_NOMINAL", _nominal(m=1e6), CONTROLLERS),
+         _nominal(Iw=1e25)),
+        ("nominal `m` = 1e6 (> 1000 × 36)", "WMR_ERR_BAD_NOMINAL", _nominal(m=1e6)),
         # Lower bounds (issue 25): an accepted eps of 2^-1074 made a step with exactly zero
         # error NaN ((k / eps) * 0); a wheel radius of 1e-30 m overflowed M-hat in float32.
-        ("`eps` = 2^-1074 (< `WMR_GAIN_MIN` = 1e-6)", "WMR_ERR_BAD_EPS", _set("eps", 5e-324),
-         SWITCHING),
-        ("`k1[0]` = 1e-9 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set_item("k1", 0, 1e-9),
-         CONTROLLERS),
-        ("Q: `q_pos` = 1e-300 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set("q_pos", 1e-300),
-         CONTROLLERS),
-        ("nominal `r` = 1e-30 (< r / 1000)", "WMR_ERR_BAD_NOMINAL", _nominal(r=1e-30),
-         CONTROLLERS),
+        ("`eps` = 2^-1074 (< `WMR_GAIN_MIN` = 1e-6)", "WMR_ERR_BAD_EPS", _set("eps", 5e-324)),
+        ("`k1[0]` = 1e-9 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set_item("k1", 0, 1e-9)),
+        ("Q: `q_pos` = 1e-300 (< `WMR_GAIN_MIN`)", "WMR_ERR_BAD_GAINS", _set("q_pos", 1e-300)),
+        ("nominal `r` = 1e-30 (< r / 1000)", "WMR_ERR_BAD_NOMINAL", _nominal(r=1e-30)),
         # Two sign flips after _init (issue 25): they cancelled in the old 32-bit fingerprint
         # (its bit 31 is the XOR of the words' bit 31), so the step used them unchecked.
         ("`k1[0]` and `k2[0]` negated after `_init` (two sign flips)", "WMR_ERR_BAD_GAINS",
-         _negate(("k1", 0), ("k2", 0)), CONTROLLERS),
+         _negate(("k1", 0), ("k2", 0))),
         ("`tau_max` and `eps` negated after `_init` (two sign flips)",
-         "WMR_ERR_BAD_TORQUE_LIMIT", _negate(("tau_max", None), ("eps", None)), SWITCHING),
+         "WMR_ERR_BAD_TORQUE_LIMIT", _negate(("tau_max", None), ("eps", None))),
+        # The wheel-velocity PI's gains.
+        ("PI `kp` = 0", "WMR_ERR_BAD_GAINS", _set("kp", 0.0)),
+        ("PI `ki` = -1", "WMR_ERR_BAD_GAINS", _set("ki", -1.0)),
+        ("PI `kx` = NaN", "WMR_ERR_BAD_GAINS", _set("kx", math.nan)),
+        ("PI `ky` = 1e7 (> `WMR_GAIN_MAX`)", "WMR_ERR_BAD_GAINS", _set("ky", 1e7)),
+        ("PI `ktheta` = -Inf", "WMR_ERR_BAD_GAINS", _set("ktheta", -math.inf)),
     ]
-    for row, status, mutate, applies in config:
-        out.append(Case(row, "config", status, applies, mutate=mutate, id=row))
+    for row, status, mutate in config:
+        out.append(Case(row, "config", status, applies_to(mutate), mutate=mutate, id=row))
     for row, mutate in (
         ("valid `k1[0]` = 4.5 after `_init`", _set_item("k1", 0, 4.5)),
         ("valid nominal `m` = 40 after `_init`", _nominal(m=40.0)),
         ("valid `tau_max` = 100 after `_init`", _set("tau_max", 100.0)),
+        ("valid PI `kp` = 3 after `_init`", _set("kp", 3.0)),
     ):
-        out.append(Case(row, "changed", "WMR_ERR_CONFIG_CHANGED", mutate=mutate, id=row))
+        out.append(Case(row, "changed", "WMR_ERR_CONFIG_CHANGED", applies_to(mutate),
+                        mutate=mutate, id=row))
     for row, fill in (
         ("state never initialised (zero-filled)", b"\x00"),
         ("state never initialised (filled with 0x5a)", b"\x5a"),

@@ -15,6 +15,7 @@ from runtime import cbuild
 from runtime.generated_modules import controllers as mirror
 from runtime.tooling.bad_input.cases import (
     BASE,
+    CONTROLLER_FORMULATIONS,
     CONTROLLERS,
     DRISHTI,
     FORMULATIONS,
@@ -326,6 +327,7 @@ def run_all(lib: cbuild.CLibrary | None = None) -> list[Outcome]:
         for name in CONTROLLERS
         if name in case.applies
         for form in FORMULATIONS
+        if form in CONTROLLER_FORMULATIONS[name]
     ]
 
 

@@ -21,11 +21,14 @@ from runtime.tooling.bad_input.cases import (
 from runtime.tooling.bad_input.runner import Outcome, failures, run_all, status_names
 
 DOC = default_output("docs/BAD_INPUT.md")  # ./BAD_INPUT.md when installed
+NUMBER_WORDS = {2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight"}
 
 
 def _controllers_label(names: Iterable[str]) -> str:
     names = list(dict.fromkeys(names))
-    return "all four" if len(names) == len(CONTROLLERS) else ", ".join(n.upper() for n in names)
+    if len(names) == len(CONTROLLERS):
+        return f"all {NUMBER_WORDS.get(len(names), str(len(names)))}"
+    return ", ".join(n.upper() for n in names)
 
 
 def _yes(flags: list[bool | None]) -> str:
@@ -65,7 +68,8 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "`generated/c` (do not edit: `tests/test_firmware_bad_input.py` fails if this file",
         "differs from the script's output).",
         "",
-        "Each row ran on the listed controllers in both formulations (paper, minimal); input",
+        "Each row ran on the listed controllers in each formulation they have (paper, minimal;",
+        "the wheel-velocity PI: minimal); input",
         "rows also on each of the 5 entries of the vector. Before the bad call, the controller",
         f"took {WARMUP} valid steps (Drishti's nominal model, K1 = diag(4..8),",
         "K2 = diag(3..5), Q = diag(1.5, 0.8), h = 0.01 s, tau_max = 200 N m, eps = 0.05,",

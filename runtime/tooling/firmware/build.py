@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from runtime.cbuild import GENERATED_C
+from runtime.generated_modules import robot as generated_robot
 
 ARM_GCC = "arm-none-eabi-gcc"
 ARM_FLAGS = (
@@ -28,7 +29,8 @@ ARM_FLAGS = (
 )
 # Per-function sections so that the links below keep only what is called.
 SECTION_FLAGS = ("-ffunction-sections", "-fdata-sections")
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+# The paper robot's generated controllers (the registry, as its robot.py exports it).
+CONTROLLERS = tuple(str(c["name"]) for c in generated_robot.CONTROLLERS)
 
 
 def tool(name: str) -> str | None:
@@ -141,19 +143,14 @@ int main(void)
     config.nominal = nominal;
     config.formulation = {formulation};
     for (i = 0; i < 5; ++i) {{
-        config.k1[i] = WMR_LIT(4.0);
-        config.k2[i] = WMR_LIT(4.0);
+{vectors}
         q[i] = sensor;
         qdot[i] = sensor;
         q_des[i] = sensor;
         qdot_des[i] = sensor;
         qddot_des[i] = sensor;
     }}
-    config.q_pos = WMR_LIT(1.0);
-    config.q_vel = WMR_LIT(1.0);
-    config.h = WMR_LIT(0.1);
-    config.tau_max = WMR_LIT(40.0);
-{extra}
+{scalars}
     if (wmr_{name}_init(&state, &config) != WMR_OK) {{
         return 1;
     }}
@@ -162,6 +159,33 @@ int main(void)
     return status < 0;
 }}
 """
+# The values a size image's configuration gets, by field (any controller's; the registry,
+# as robot.py exports it, says which fields a controller has). Valid, not tuned: the image
+# is measured, not flown.
+IMAGE_FIELD_VALUES = {
+    "k1": "WMR_LIT(4.0)", "k2": "WMR_LIT(4.0)", "q_pos": "WMR_LIT(1.0)",
+    "q_vel": "WMR_LIT(1.0)", "h": "WMR_LIT(0.1)", "tau_max": "WMR_LIT(40.0)",
+    "accel_estimator": "WMR_ACCEL_BACKWARD", "eps": "WMR_LIT(0.5)", "n": "4",
+    "a": "WMR_LIT(0.9)", "alpha": "WMR_LIT(0.3)", "phi": "WMR_LIT(4.0)",
+    "gamma": "WMR_LIT(2.0)", "kx": "WMR_LIT(1.0)", "ky": "WMR_LIT(8.0)",
+    "ktheta": "WMR_LIT(4.0)", "kp": "WMR_LIT(2.0)", "ki": "WMR_LIT(2.0)",
+}  # fields left out stay 0 (rate_window, hold_gain, held_gain, gain0)
+
+
+def image_config_lines(name: str) -> tuple[str, str]:
+    """(lines setting the vector fields inside the loop over i, lines setting the scalar
+    fields) of ``name``'s size-image configuration."""
+    fields = next(c["fields"] for c in generated_robot.CONTROLLERS if c["name"] == name)
+    vectors, scalars = [], []
+    for fname, kind, _, _ in fields:
+        if fname in IMAGE_FIELD_VALUES:
+            if kind == "vector":
+                vectors.append(f"        config.{fname}[i] = {IMAGE_FIELD_VALUES[fname]};")
+            else:
+                scalars.append(f"    config.{fname} = {IMAGE_FIELD_VALUES[fname]};")
+    return "\n".join(vectors), "\n".join(scalars)
+
+
 FROZEN_MAIN_TEMPLATE = """\
 #include "wmr_{name}.h"
 
@@ -191,15 +215,6 @@ int main(void)
     return status < 0;
 }}
 """
-MAIN_EXTRA = {
-    "tdc": "    config.accel_estimator = WMR_ACCEL_BACKWARD;",
-    "tdroc": "    config.accel_estimator = WMR_ACCEL_BACKWARD;\n    config.eps = WMR_LIT(0.5);\n"
-    "    config.n = 4;\n    config.a = WMR_LIT(0.9);",
-    "roc": "    config.eps = WMR_LIT(0.1);\n    config.alpha = WMR_LIT(0.3);\n"
-    "    config.phi = WMR_LIT(4.0);",
-    "asmc": "    config.eps = WMR_LIT(0.1);\n    config.gamma = WMR_LIT(2.0);\n"
-    "    config.gain0 = WMR_LIT(0.0);",
-}
 
 
 def frozen_define(name: str) -> str:
@@ -211,13 +226,18 @@ def frozen_define(name: str) -> str:
 
 def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:
     """ELF of a tiny main calling wmr_<name>_init and _step (configured for the
-    ``formulation``; in a frozen build, objs compiled with :func:`frozen_define`, with the
-    compiled-in configuration), linked with newlib-nano; its link map beside it (``.map``)."""
+    ``formulation``, or the controller's own where it has only one; in a frozen build, objs
+    compiled with :func:`frozen_define`, with the compiled-in configuration), linked with
+    newlib-nano; its link map beside it (``.map``)."""
     main = objs.dir / f"main_{name}.c"
     if frozen_define(name) in objs.defines:
         main.write_text(FROZEN_MAIN_TEMPLATE.format(name=name))
     else:
-        main.write_text(MAIN_TEMPLATE.format(name=name, extra=MAIN_EXTRA[name],
+        vectors, scalars = image_config_lines(name)
+        own = next(c["formulations"] for c in generated_robot.CONTROLLERS if c["name"] == name)
+        if formulation.lower() not in own:
+            formulation = own[0].upper()
+        main.write_text(MAIN_TEMPLATE.format(name=name, vectors=vectors, scalars=scalars,
                                              formulation=f"WMR_FORMULATION_{formulation}"))
     elf = objs.dir / f"{name}.elf"
     flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", f"-I{GENERATED_C}", *objs.defines]

@@ -314,7 +314,7 @@ def render(r: Report) -> str:
         "",
         "## The API contract",
         "",
-        "Per controller (`<ctrl>` = tdc, tdroc, roc, asmc), all in `wmr_<ctrl>.h`:",
+        f"Per controller (`<ctrl>` = {', '.join(CONTROLLERS)}), all in `wmr_<ctrl>.h`:",
         "",
         "* `wmr_<ctrl>_init(state, config)`: validates the configuration against the",
         "  plausibility bounds of `wmr_controller.h` (`WMR_H_MIN`..`WMR_H_MAX`,",
