@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 from codegen.generate import generate_files
+from codegen.progress import to_stderr
 from modeling.package_paths import SHIPPED_GENERATED, inside, source_checkout
 from modeling.robot_file import RobotFileError, load_robot_model, shipped_robot_files
 
@@ -120,12 +121,14 @@ def main(argv: list[str] | None = None) -> int:
     summary: list[str] = []
     for path in paths:
         start = time.perf_counter()
+        progress = to_stderr(path.stem if path is not None else "drishti")
         try:
-            model, robot = load_robot_model(path)
+            with progress.step("reading the robot file (kinetic energy, constraints)"):
+                model, robot = load_robot_model(path)
         except RobotFileError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-        produced = generate_files(robot, model)
+        produced = generate_files(robot, model, progress=progress)
         files.update(produced)
         where = args.out / model.output_dir if model.output_dir else args.out
         summary.append(f"{robot.name}: {len(produced)} files for {where} "

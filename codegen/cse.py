@@ -97,7 +97,8 @@ def cse_function(spec: FunctionSpec) -> CseResult:
     Memoised on the spec's name, inputs and output expressions: every backend and the
     report ask for the same CSE, and it is the expensive step of generation.
     """
-    key = (spec.name, spec.input_symbols(), tuple((a.name, a.exprs) for a in spec.outputs))
+    key = (spec.name, spec.input_symbols(), tuple((a.name, a.exprs) for a in spec.outputs),
+           spec.definitions)
     hit = _CACHE.get(key)
     if hit is not None and hit.spec == spec:
         return hit
@@ -108,11 +109,19 @@ def cse_function(spec: FunctionSpec) -> CseResult:
 
 def _cse_function(spec: FunctionSpec) -> CseResult:
     check_spec(spec)
-    flat = [e for arg in spec.outputs for e in arg.exprs]
-    taken = {str(s) for e in flat for s in e.free_symbols}
+    defined = [sym for sym, _ in spec.definitions]
+    flat = [e for _, e in spec.definitions] + [e for arg in spec.outputs for e in arg.exprs]
+    taken = {str(s) for e in flat for s in e.free_symbols if s not in set(defined)}
     # Placeholder names first; final names are given in definition order below.
     raw = sp.numbered_symbols("_cse_tmp", start=0)
     pairs, reduced = sp.cse(flat, symbols=raw, optimizations=None, order="canonical")
+    # The definitions are temporaries too, each after what it reads (CSE's temporaries
+    # may read definitions: one order for both, stable, by dependency).
+    pairs = _dependency_order(list(pairs) + list(zip(defined, reduced[: len(defined)],
+                                                     strict=True)))
+    reduced = reduced[len(defined):]
+    if defined:
+        pairs, reduced = _inline_trivial(pairs, reduced, set(defined))
 
     # Hoist compound bases of repeated-product powers into temporaries.
     hoisted: list[tuple[sp.Symbol, sp.Expr]] = []
@@ -164,6 +173,51 @@ def _cse_function(spec: FunctionSpec) -> CseResult:
         outputs.append(tuple(outputs_flat[offset : offset + n]))
         offset += n
     return CseResult(spec=spec, temps=temps, outputs=tuple(outputs))
+
+
+def _inline_trivial(
+    pairs: list[tuple[sp.Symbol, sp.Expr]], reduced: list[sp.Expr], defined: set[sp.Symbol]
+) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    """Definitions that CSE reduced to another temporary, a number or its negation,
+    substituted where they are read instead of copied (a copy is a line and, negated, an
+    operation; negation is exact, so the values are the same bits)."""
+    subs: dict[sp.Basic, sp.Expr] = {}
+    kept: list[tuple[sp.Symbol, sp.Expr]] = []
+    for sym, e in pairs:
+        e = e.xreplace(subs) if subs else e
+        if sym in defined and (e.is_Atom or (e.is_Mul and len(e.args) == 2
+                                             and e.args[0] == -1 and e.args[1].is_Atom)):
+            subs[sym] = e
+        else:
+            kept.append((sym, e))
+    return kept, [e.xreplace(subs) for e in reduced] if subs else reduced
+
+
+def _dependency_order(pairs: list[tuple[sp.Symbol, sp.Expr]]) -> list[tuple[sp.Symbol, sp.Expr]]:
+    """``pairs`` (temporaries) reordered so that each comes after every temporary it reads,
+    otherwise in their given order (a stable topological sort)."""
+    index = {sym: k for k, (sym, _) in enumerate(pairs)}
+    needs = [{index[s] for s in e.free_symbols if s in index} for _, e in pairs]
+    done: set[int] = set()
+    out: list[tuple[sp.Symbol, sp.Expr]] = []
+    for start in range(len(pairs)):  # depth-first, iterative: chains can be long
+        stack = [(start, iter(sorted(needs[start])))]
+        on_stack = {start}
+        while stack:
+            k, pending = stack[-1]
+            j = next((j for j in pending if j not in done), None)
+            if j is None:
+                stack.pop()
+                on_stack.discard(k)
+                if k not in done:
+                    done.add(k)
+                    out.append(pairs[k])
+            elif j in on_stack:
+                raise ValueError(f"circular definitions through {pairs[j][0]}")
+            else:
+                stack.append((j, iter(sorted(needs[j]))))
+                on_stack.add(j)
+    return out
 
 
 def count_ops(result: CseResult) -> OpCount:

@@ -21,6 +21,7 @@ from pathlib import Path
 from codegen import backends
 from codegen.backend import Module, RobotTarget, function_ir
 from codegen.controller_layout import ControllerLayout
+from codegen.progress import Progress, quiet
 from codegen.robot_functions import (
     law_specs,
     minv_norm_needs_q,
@@ -51,21 +52,33 @@ def model_source(model: RobotModel) -> str:
                           "modeling/lagrange.py")
 
 
-def robot_target(model: RobotModel, robot: Robot) -> RobotTarget:
+# The steps of one robot's generation as progress names them: what is derived (lazily: a
+# step includes the derivation it is the first to need) and what is generated.
+MODULE_STEPS = {
+    "model": "deriving the model (S, M, H; minimal form, forward dynamics, linearization)",
+    "laws": "deriving the control laws",
+    "plant": "deriving the plant",
+}
+
+
+def robot_target(model: RobotModel, robot: Robot, progress: Progress | None = None
+                 ) -> RobotTarget:
     """What every backend is given for ``robot``: its functions (CSE'd once each here),
     grouped in modules ``<prefix>_model``, ``<prefix>_laws``, ``<prefix>_plant``."""
+    progress = progress or quiet(robot.name)
     p = model.prefix
     src = model_source(model)
     groups = (
-        (f"{p}_model", model_specs(model), src),
-        (f"{p}_laws", law_specs(model), LAW_SOURCE),
-        (f"{p}_plant", plant_specs(model), src),
+        ("model", model_specs, src),
+        ("laws", law_specs, LAW_SOURCE),
+        ("plant", plant_specs, src),
     )
-    modules = tuple(
-        Module(name, tuple(function_ir(s) for s in specs), source)
-        for name, specs, source in groups
-    )
-    return RobotTarget(model, robot, layout_for(model), modules, src, LAW_SOURCE)
+    modules = []
+    for name, specs_of, source in groups:
+        with progress.step(MODULE_STEPS[name]):
+            functions = tuple(function_ir(s) for s in specs_of(model))
+        modules.append(Module(f"{p}_{name}", functions, source))
+    return RobotTarget(model, robot, layout_for(model), tuple(modules), src, LAW_SOURCE)
 
 
 def op_counts(target: RobotTarget) -> dict[str, str]:
@@ -74,24 +87,30 @@ def op_counts(target: RobotTarget) -> dict[str, str]:
 
 
 def generate_files(
-    robot: Robot, model: RobotModel | None = None, *, report: bool = True
+    robot: Robot, model: RobotModel | None = None, *, report: bool = True,
+    progress: Progress | None = None,
 ) -> dict[str, bytes]:
     """All generated files for ``robot`` (paths relative to ``generated/``). ``model``
-    defaults to the paper's robot (a ``[lumped]``/``[physical]`` robot file)."""
+    defaults to the paper's robot (a ``[lumped]``/``[physical]`` robot file); ``progress``
+    announces and times each step (derivations, then one step per backend)."""
     if model is None:
         from modeling.robot_file import load_robot_model
 
         model = load_robot_model(None)[0]
+    progress = progress or quiet(robot.name)
     root = f"{model.output_dir}/" if model.output_dir else ""
-    target = robot_target(model, robot)
+    target = robot_target(model, robot, progress)
     out: dict[str, bytes] = {}
     for backend in backends.registered():
-        for name, data in backend.render(target).items():
-            out[f"{root}{backend.folder}/{name}"] = (
-                data.encode() if isinstance(data, str) else data
-            )
+        with progress.step(f"generating {backend.folder}/"):
+            for name, data in backend.render(target).items():
+                out[f"{root}{backend.folder}/{name}"] = (
+                    data.encode() if isinstance(data, str) else data
+                )
     out[f"{root}__init__.py"] = f'"""{generated_by()} DO NOT EDIT."""\n'.encode()
     if report:
-        renderer = importlib.import_module(model.docs.get("report", "codegen.robot_report"))
-        out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(target)).encode()
+        with progress.step("writing the report (MODEL.md)"):
+            renderer = importlib.import_module(model.docs.get("report",
+                                                              "codegen.robot_report"))
+            out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(target)).encode()
     return out

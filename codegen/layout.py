@@ -95,6 +95,14 @@ def check_spec(spec: FunctionSpec) -> None:
     if len(set(inputs)) != len(inputs):
         raise ValueError(f"{spec.name}: an input symbol appears twice")
     known = set(inputs)
+    for sym, e in spec.definitions:  # each from the inputs and earlier definitions
+        if sym in known:
+            raise ValueError(f"{spec.name}: definition {sym} shadows an input or definition")
+        unknown = e.free_symbols - known
+        if unknown:
+            missing = ", ".join(sorted(str(s) for s in unknown))
+            raise ValueError(f"{spec.name}: definition {sym} reads unknown symbols {missing}")
+        known.add(sym)
     for arg in spec.outputs:
         if arg.kind == "params":
             raise ValueError(f"{spec.name}.{arg.name}: params cannot be an output")

@@ -19,7 +19,7 @@ Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi function
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import cache
 
 import sympy as sp
@@ -30,6 +30,7 @@ from modeling import controllers as ctl
 from modeling.description.derive import cofactor_determinant
 from modeling.lagrange import ConstrainedSystem
 from modeling.robot_model import Parameter, RobotModel
+from modeling.staged import Stage
 
 MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
 
@@ -107,7 +108,9 @@ def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
     bad = status(model, "ERR_BAD_PARAMS")
     positive = [Guard(bad, symbol, doc) for symbol, doc in positive_parameters(model)]
     # Sylvester: all leading minors of S^T M S positive <=> positive definite.
-    minors = leading_minors(guard_mass_matrix(model))
+    mbar = (staged_forms(model).mbar if model.staged
+            else guard_mass_matrix(model))
+    minors = leading_minors(mbar)
     return (
         *positive,
         *(Guard(bad, m, minor_doc(k + 1, len(minors)))
@@ -128,6 +131,49 @@ def forward_dynamics_forms(
     return eta_dot, s.null_space * eta_dot + s.null_space_rate
 
 
+@dataclass(frozen=True)
+class StagedForms:
+    """A staged robot's model functions (``RobotModel.staged``): the minimal form, the
+    forward dynamics and the state equation's Jacobians as quantities of one stage."""
+
+    stage: Stage
+    mbar: sp.Matrix
+    hbar: sp.Matrix
+    eta_dot: sp.Matrix
+    qdd: sp.Matrix
+    xdot: sp.Matrix
+    jac_x: sp.Matrix
+    jac_u: sp.Matrix
+
+    def with_definitions(self, spec: FunctionSpec) -> FunctionSpec:
+        """``spec`` with the quantities its outputs and guards read."""
+        exprs = [e for a in spec.outputs for e in a.exprs] + [g.condition for g in spec.guards]
+        return replace(spec, definitions=self.stage.definitions_for(exprs))
+
+    def depends_on(self, exprs: sp.Matrix, symbols: tuple[sp.Symbol, ...]) -> bool:
+        """Whether ``exprs`` depend on ``symbols``, through the quantities they read."""
+        wanted = set(symbols)
+        defs = self.stage.definitions_for(list(exprs))
+        return any(e.free_symbols & wanted for e in [*exprs, *(d for _, d in defs)])
+
+
+@cache
+def staged_forms(model: RobotModel, plant: bool = False) -> StagedForms:
+    """The model functions (the plant's with ``plant``) staged: M̄, H̄ and Sᵀ B from S, M
+    and H entry by entry, η̇ from a solve in the stage, the Jacobians by differentiating
+    through the quantities (``modeling.staged``)."""
+    system = model.plant_system if plant else model.system
+    stage = Stage("_ps" if plant else "_ms")
+    sm = system.staged_minimal(stage)
+    eta_dot, qdd = sm.forward_dynamics(model.tau)
+    x = [*model.q, *system.eta]
+    xdot = sp.Matrix([*sm.velocities, *eta_dot])
+    jac_x = sp.Matrix(len(xdot), len(x), lambda i, j: stage.derivative(xdot[i], x[j]))
+    jac_u = sp.Matrix(len(xdot), model.nu, lambda i, j: stage.derivative(xdot[i],
+                                                                          model.tau[j]))
+    return StagedForms(stage, sm.mass_matrix, sm.bias, eta_dot, qdd, xdot, jac_x, jac_u)
+
+
 @cache
 def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     """``<prefix>_model``: the functions the C API of issue 3 names."""
@@ -142,13 +188,23 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     )
     tau = array("tau", model.tau, "wheel torques " + ", ".join(model.input_names))
     p = params_arg(model)
-    # Evaluation forms (equal to reduced_/minimal_forward_dynamics; tests check it).
-    eta_dot, qdd = forward_dynamics_forms(model)
-    # State x = (q, η): ẋ = (S(q) η, η̇(q, η, τ)); its Jacobians linearise the robot.
-    x = sp.Matrix([*model.q, *eta])
-    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
-    jac_x = xdot.jacobian(x)
-    jac_u = xdot.jacobian(model.tau)
+    staged = staged_forms(model) if model.staged else None
+    if staged is not None:
+        eta_dot, qdd, mbar, hbar = staged.eta_dot, staged.qdd, staged.mbar, staged.hbar
+        jac_x, jac_u = staged.jac_x, staged.jac_u
+        mbar_on_q = staged.depends_on(mbar, model.q)
+        pose_rates = staged.xdot[:n, 0]
+    else:
+        # Evaluation forms (equal to reduced_/minimal_forward_dynamics; tests check it).
+        eta_dot, qdd = forward_dynamics_forms(model)
+        # State x = (q, η): ẋ = (S(q) η, η̇(q, η, τ)); its Jacobians linearise the robot.
+        x = sp.Matrix([*model.q, *eta])
+        xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
+        jac_x = xdot.jacobian(x)
+        jac_u = xdot.jacobian(model.tau)
+        mbar, hbar = s.minimal_mass_matrix, s.minimal_bias
+        mbar_on_q = _depends_on_q(mbar, model)
+        pose_rates = s.null_space * sp.Matrix(eta)
     guards = _param_guards(model)
     dependent = [i for i in range(n) if i not in model.actuated]
     dep_names = ", ".join(names[i] for i in dependent)
@@ -182,7 +238,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(14)",),
         ),
     ) if model.paper else ()
-    return (
+    specs = (
         *paper_specs,
         replace(checked(
             FunctionSpec(
@@ -201,24 +257,22 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             "kinematics",
             f"(31): pose rates ({dep_names}) from the wheel rates, xi_dot = S_d(q) eta.",
             (p, q, wheel_rates),
-            (out("pose_rates", s.null_space.extract(dependent, list(range(m)))
-                 * sp.Matrix(eta)),),
+            (out("pose_rates", sp.Matrix([pose_rates[i] for i in dependent])),),
             ("(31)", "(13)"),
         ),
         FunctionSpec(
             "minimal_mass_matrix",
             f"Mbar = S^T M S of the minimal {words(m)}-coordinate model"
-            + (" (constant for K_lat = 0)." if not _depends_on_q(s.minimal_mass_matrix, model)
-               else " (depends on q)."),
+            + (" (constant for K_lat = 0)." if not mbar_on_q else " (depends on q)."),
             (p, q),
-            (out("M", s.minimal_mass_matrix, f"{m}x{m} row-major"),),
+            (out("M", mbar, f"{m}x{m} row-major"),),
             ("(9)",),
         ),
         FunctionSpec(
             "minimal_bias_forces",
             "Hbar = S^T (M Sdot eta + H) of the minimal model.",
             (p, q, wheel_rates),
-            (out("H", s.minimal_bias),),
+            (out("H", hbar),),
             ("(9)",),
         ),
         checked(
@@ -241,6 +295,7 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(9)", "(31)"),
         ),
     )
+    return specs if staged is None else tuple(staged.with_definitions(f) for f in specs)
 
 
 def _wrap(text: str, width: int = 79) -> str:
@@ -264,7 +319,8 @@ def _nominal(model: RobotModel, doc: str = "nominal parameters of M-hat") -> Arg
 
 def _minv_norm_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
     norm = ctl.mass_inverse_norm(f, model)
-    if _depends_on_q(sp.Matrix([norm]), model):
+    cm = ctl.control_model(f, model)
+    if cm.depends_on([norm], model.q):
         return FunctionSpec(
             f"{f}_minv_norm",
             f"({f} formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,\n"
@@ -272,6 +328,7 @@ def _minv_norm_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
             (_nominal(model), array("q", model.q, "measured q")),
             (out("norm", [norm]),),
             ("(25)",),
+            definitions=cm.definitions([norm]),
         )
     return FunctionSpec(
         f"{f}_minv_norm",
@@ -399,6 +456,7 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ),
                 (out("H1hat", tde),),
                 ("(17)",),
+                definitions=ctl.control_model(f, model).definitions(list(tde)),
             )
         )
         angles = trig_angles(model, f)
@@ -448,6 +506,7 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                     (_nominal(model), *(_kernel_input(a, model) for a in kernel.inputs)),
                     tuple(out(a.name, list(a.values), a.doc) for a in kernel.outputs),
                     kernel.equations,
+                    definitions=kernel.definitions,
                 )
             )
             if c.trig and angles:
@@ -474,8 +533,12 @@ def plant_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
     eta = tuple(model.qdot[i] for i in model.actuated)
     x = array("x", (*model.q, *eta), f"q ({n}), then the wheel rates ({m})")
     tau = array("tau", model.tau, "wheel torques after friction")
-    eta_dot, _ = forward_dynamics_forms(model, s)
-    xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
+    staged = staged_forms(model, plant=True) if model.staged else None
+    if staged is not None:
+        xdot = staged.xdot
+    else:
+        eta_dot, _ = forward_dynamics_forms(model, s)
+        xdot = sp.Matrix([*(s.null_space * sp.Matrix(eta)), *eta_dot])
     payload = array(
         "payload",
         model.payload,
@@ -493,6 +556,7 @@ def plant_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             (plant_params_arg(model), x, tau),
             (out("xdot", xdot),),
             ("(9)", "(31)"),
+            definitions=staged.stage.definitions_for(list(xdot)) if staged else (),
         ),
         FunctionSpec(
             "plant_params_with_payload",

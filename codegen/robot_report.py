@@ -16,8 +16,10 @@ from typing import Any
 import sympy as sp
 
 from codegen import template_util
+from codegen.robot_functions import staged_forms
 from modeling.robot_file import Robot
 from modeling.robot_model import RobotModel
+from modeling.staged import CLOSED_FORM_MAX
 
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
 TEMPLATE = "robot_report.md.jinja"
@@ -33,7 +35,11 @@ def render(model: RobotModel, robot: Robot, op_counts: dict[str, str]) -> str:
     s = model.system
     labels = getattr(s, "constraint_labels", ())
     dropped = getattr(s, "dropped_constraints", ())
-    mbar_q = sorted(str(v) for v in s.minimal_mass_matrix.free_symbols & set(model.q))
+    if model.staged:  # the closed form is what a staged robot never builds
+        mbar = staged_forms(model)
+        mbar_q = sorted(str(v) for v in model.q if mbar.depends_on(mbar.mbar, (v,)))
+    else:
+        mbar_q = sorted(str(v) for v in s.minimal_mass_matrix.free_symbols & set(model.q))
     context: dict[str, Any] = {
         "preamble": list(template_util.preamble_lines(model.source, TEMPLATE_DIR, TEMPLATE)),
         "robot_name": model.name,
@@ -52,6 +58,8 @@ def render(model: RobotModel, robot: Robot, op_counts: dict[str, str]) -> str:
             for p in model.params
         ],
         "formulations": list(model.formulations),
+        "staged": model.staged,
+        "closed_form_max": CLOSED_FORM_MAX,
         "mbar_depends_on": mbar_q,
         "kinetic_energy": sp.latex(s.kinetic_energy),
         "op_counts": [{"function": k, "count": _cell(v)} for k, v in op_counts.items()],

@@ -84,7 +84,8 @@ class Guard:
 
 @dataclass(frozen=True)
 class FunctionSpec:
-    """A pure function: outputs are expressions in the inputs' symbols only.
+    """A pure function: outputs are expressions in the inputs' symbols and the
+    ``definitions`` (intermediate quantities evaluated in order).
 
     ``name`` is the C name without the ``wmr_`` prefix (e.g. ``mass_matrix``) and the
     Python name. ``equations`` cites the paper, e.g. ``("(14)",)``.
@@ -107,6 +108,9 @@ class FunctionSpec:
     # ``<module>_prepare`` (parameter checks and parameter-only subexpressions, once) and
     # ``<name>_prepared`` (the per-call rest); see :mod:`codegen.prepare`.
     prepared: bool = False
+    # Intermediate quantities (``modeling.staged``): each symbol defined by an expression of
+    # the inputs and of earlier ones, evaluated in order; outputs and guards may read them.
+    definitions: tuple[tuple[sp.Symbol, sp.Expr], ...] = ()
 
     def checked_spec(self) -> FunctionSpec:
         """This spec with the guard conditions as a trailing output ``guard_`` (for CSE)."""

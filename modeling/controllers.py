@@ -49,13 +49,15 @@ a configuration choice (docs/PAPER.md item 9):
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from typing import Literal
 
 import sympy as sp
 
+from modeling.lagrange import ConstrainedSystem
 from modeling.robot_model import RobotModel
+from modeling.staged import Stage
 
 Formulation = Literal["paper", "minimal"]
 FORMULATIONS: tuple[Formulation, ...] = ("paper", "minimal")
@@ -71,6 +73,8 @@ class ControlModel:
 
     ``size`` is the number of controlled coordinates and ``rows`` their indices in q
     (all of q for the paper form; the actuated wheel angles for the minimal form).
+    ``stage``: for a staged robot (``RobotModel.staged``), the quantities M̂ and Ĥ are
+    written in (``modeling.staged``); a law's kernel evaluates the ones it reads.
     """
 
     formulation: Formulation
@@ -78,8 +82,29 @@ class ControlModel:
     rows: tuple[int, ...]
     mass: sp.Matrix
     bias: sp.Matrix
-    mass_inverse: sp.Matrix
     velocities: tuple[sp.Symbol, ...]
+    system: ConstrainedSystem
+    stage: Stage | None = None
+
+    @property
+    def mass_inverse(self) -> sp.Matrix:
+        """M̂⁻¹ in closed form (by cofactors; derived on first use: only the paper
+        formulation's ‖M̂⁻¹‖ reads it)."""
+        if self.stage is not None:
+            raise ValueError("a staged model has no closed-form M-hat inverse")
+        if self.formulation == "paper":
+            return self.system.reduced_mass_matrix_inverse
+        return self.system.minimal_mass_matrix_inverse
+
+    def definitions(self, exprs: list[sp.Expr]) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
+        """The staged quantities ``exprs`` read (none for a closed-form model)."""
+        return () if self.stage is None else self.stage.definitions_for(exprs)
+
+    def depends_on(self, exprs: list[sp.Expr], symbols: tuple[sp.Symbol, ...]) -> bool:
+        """Whether ``exprs`` depend on ``symbols``, through the staged quantities too."""
+        wanted = set(symbols)
+        return any(e.free_symbols & wanted
+                   for e in [*exprs, *(d for _, d in self.definitions(exprs))])
 
 
 def control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
@@ -98,9 +123,14 @@ def _control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
             tuple(range(model.nq)),
             s.reduced_mass_matrix,
             s.reduced_bias,
-            s.reduced_mass_matrix_inverse,
             rates,
+            s,
         )
+    if formulation == "minimal" and model.staged:
+        stage = Stage("_c")
+        staged = s.staged_minimal(stage)
+        return ControlModel(formulation, model.nu, model.actuated, staged.mass_matrix,
+                            staged.bias, rates, s, stage)
     if formulation == "minimal":
         return ControlModel(
             formulation,
@@ -108,8 +138,8 @@ def _control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
             model.actuated,
             s.minimal_mass_matrix,
             s.minimal_bias,
-            s.minimal_mass_matrix_inverse,
             rates,
+            s,
         )
     raise ValueError(
         f"formulation {formulation!r} is not available for robot '{model.name}' "
@@ -265,14 +295,19 @@ def tde_estimate(
         span=sp.Symbol("span", positive=True),
     )
     qdd = (ts.qdot_now - ts.qdot_then) / ts.span
-    mass = cm.mass.subs(dict(zip(rm.q, ts.q_prev, strict=True)))
+    at_prev = dict(zip(rm.q, ts.q_prev, strict=True))
+    mass = (cm.mass.subs(at_prev) if cm.stage is None
+            else sp.Matrix(n, n, cm.stage.substituted(list(cm.mass), at_prev)))
     return ts.u_prev - mass * qdd, ts
 
 
 def mass_angles(formulation: Formulation, model: RobotModel) -> tuple[int, ...]:
     """Indices in q of the coordinates M̂ depends on (the heading, hitch angles): the only
     way the laws with Ĥ1 of (17) (TDC, TDROC) and (17) itself depend on q."""
-    free = control_model(formulation, model).mass.free_symbols
+    cm = control_model(formulation, model)
+    if cm.stage is not None:  # its M-hat is evaluated in the kernel: no _trig variants
+        return ()
+    free = cm.mass.free_symbols
     return tuple(i for i, x in enumerate(model.q) if x in free)
 
 
@@ -337,6 +372,11 @@ def mass_inverse_norm(formulation: Formulation, model: RobotModel) -> sp.Expr:
     over entry symbols, the entries substituted after (the same value, fewer operations)."""
     rm = model
     cm = control_model(formulation, rm)
+    if cm.stage is not None:  # M-hat's entries are quantities of the stage
+        n = cm.mass.rows
+        if n > ADJUGATE_NORM_MAX_SIZE:
+            return _norm(sp.Matrix(list(cm.stage.solve(cm.mass, sp.eye(n)))))
+        return _norm(sp.Matrix(list(cm.mass.adjugate()))) / sp.Abs(cm.mass.det())
     if formulation == "paper":
         mass, inverse = cm.mass.subs(rm.heading, 0), cm.mass_inverse.subs(rm.heading, 0)
     else:
@@ -504,6 +544,7 @@ class Kernel:
     equations: tuple[str, ...]
     inputs: tuple[KernelArg, ...]
     outputs: tuple[KernelArg, ...]
+    definitions: tuple[tuple[sp.Symbol, sp.Expr], ...] = ()  # staged quantities it reads
 
 
 @dataclass(frozen=True)
@@ -753,8 +794,13 @@ CONTROLLERS = tuple(c.name for c in REGISTRY)
 
 @cache
 def kernel(spec: ControllerSpec, formulation: Formulation, model: RobotModel) -> Kernel:
-    """``spec``'s law kernel for one formulation of ``model`` (derived once)."""
-    return spec.kernel(formulation, model)
+    """``spec``'s law kernel for one formulation of ``model`` (derived once), with the
+    staged quantities its outputs read (a staged robot's)."""
+    k = spec.kernel(formulation, model)
+    if formulation not in model.formulations or not model.staged:
+        return k
+    exprs = [e for a in k.outputs for e in a.values]
+    return replace(k, definitions=control_model(formulation, model).definitions(exprs))
 
 
 def controller(name: str) -> ControllerSpec:

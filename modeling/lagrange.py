@@ -24,6 +24,7 @@ from functools import cached_property
 
 import sympy as sp
 
+from modeling.staged import Stage
 from modeling.symbolic_linalg import (
     Simplifier,
     adjugate_and_determinant,
@@ -55,6 +56,27 @@ def trig_canonical(expr: sp.Expr) -> sp.Expr:
             continue
         expr = sp.expand(rem.as_expr()).subs({s_: sp.sin(angle), c_: sp.cos(angle)})
     return expr
+
+
+@dataclass(frozen=True)
+class StagedMinimal:
+    """The minimal form through named quantities of a :class:`~modeling.staged.Stage`:
+    S(q), v = S η (q̇ on the constraint manifold), M, H on the manifold, Ṡ η, then
+    M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B, entry by entry; never multiplied out."""
+
+    stage: Stage
+    null_space: sp.Matrix  # S, n × k
+    velocities: sp.Matrix  # S η, n × 1
+    null_space_rate: sp.Matrix  # Ṡ η, n × 1
+    mass_matrix: sp.Matrix  # M̄ = Sᵀ M S, k × k
+    bias: sp.Matrix  # H̄, k × 1
+    input_matrix: sp.Matrix  # Sᵀ B, k × m
+
+    def forward_dynamics(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
+        """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ solved in the stage, q̈ = S η̇ + Ṡ η."""
+        eta_dot = self.stage.solve(self.mass_matrix, self.input_matrix * tau - self.bias)
+        qdd = self.stage.matrix(self.null_space * eta_dot + self.null_space_rate)
+        return eta_dot, qdd
 
 
 @dataclass(frozen=True)
@@ -189,6 +211,37 @@ class ConstrainedSystem:
     def minimal_input_matrix(self) -> sp.Matrix:
         """Sᵀ B: the Lagrange multipliers do no work along S, so only Sᵀ B τ drives η."""
         return (self.null_space.T * self.input_matrix).applyfunc(self.simplify)
+
+    def staged_minimal(self, stage: Stage) -> StagedMinimal:
+        """The minimal form through ``stage``'s quantities (see :class:`StagedMinimal`):
+        the cost of S, M and H, which are small, plus one product per entry, where
+        ``minimal_mass_matrix`` and ``minimal_bias`` multiply out (tens of thousands of
+        operations for a tractor with two trailers)."""
+        n, k = len(self.q), len(self.independent)
+        s = self.staged_null_space(stage)
+        eta = sp.Matrix(self.eta)
+        v = stage.matrix(s * eta)  # q̇ on the manifold (independent rows: η itself)
+        on_manifold = {self.qdot[i]: v[i] for i in self.dependent}
+        m = stage.matrix(self.mass_matrix)
+        h = stage.matrix(self.bias.xreplace(on_manifold))
+        # Ṡ η = Σ_j ∂S/∂q_j η (S η)_j; S's own entries differentiated (each a quantity).
+        rate = sp.zeros(n, 1)
+        for i in self.dependent:
+            total = sp.S.Zero
+            for j in range(n):
+                for a in range(k):
+                    d = stage.derivative(s[i, a], self.q[j])
+                    if d != 0:
+                        total += d * eta[a] * v[j]
+            rate[i] = stage.define(total)
+        mbar = stage.matrix(s.T * m * s)
+        hbar = stage.matrix(s.T * (m * rate + h))
+        return StagedMinimal(stage, s, v, rate, mbar, hbar, stage.matrix(s.T * self.input_matrix))
+
+    def staged_null_space(self, stage: Stage) -> sp.Matrix:
+        """S(q) with its entries quantities of ``stage`` (here the closed form's entries;
+        a described robot solves its constraint block in the stage instead)."""
+        return stage.matrix(self.null_space)
 
     # --- multipliers ------------------------------------------------------------------
     def multipliers_given_accelerations(self, tau: sp.Matrix) -> sp.Matrix:

@@ -28,6 +28,10 @@ from modeling.base_parameters import reduce_to_base, split_terms
 from modeling.lagrange import ConstrainedSystem
 from modeling.parameter_table import ParameterInfo
 
+# A described robot with at least this many bodies is generated through staged quantities
+# (modeling.staged); below, closed forms (measured: see codegen.robot_functions).
+STAGED_FROM_BODIES = 2
+
 
 @dataclass(frozen=True)
 class Parameter(ParameterInfo):
@@ -91,6 +95,10 @@ class RobotModel:
     paper: bool
     evaluation_form: Callable[[sp.Expr], sp.Expr] = field(default=_identity)
     nominal_conditions: tuple[NominalCondition, ...] = ()
+    # Generated through named intermediate quantities (modeling.staged): products and solves
+    # evaluated step by step at the robot's numbers, not multiplied out (a robot of several
+    # bodies; the closed forms of a single body are smaller).
+    staged: bool = False
     docs: dict[str, str] = field(default_factory=dict)  # doc strings a robot words itself
 
     @property
@@ -228,4 +236,5 @@ def described_model(path: str, label: str = "") -> RobotModel:
         payload_relations=relations,
         heading=base_system.q[2],
         paper=len(desc.bodies) == 1,
+        staged=len(desc.bodies) > STAGED_FROM_BODIES - 1,
     )

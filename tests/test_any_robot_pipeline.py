@@ -1,7 +1,8 @@
 """Every shipped robot through the whole pipeline, from its generated code only.
 
 For each robot in ``modeling/robots/`` (the paper's Drishti at the root of ``generated/``,
-the tractor with a trailer in ``generated/trailer/``):
+the tractor with one, two and three trailers in ``generated/trailer*/``; the last two
+generated through staged quantities, ``modeling.staged``):
 
 * the generated C compiles under strict flags in double and float32 (and for the
   Cortex-M4 when the cross-compiler is installed);

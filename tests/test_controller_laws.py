@@ -75,16 +75,15 @@ def test_tde_is_exact_for_a_constant_h1_under_zero_order_hold() -> None:
     assert float((est - sp.Matrix([0.3, 0.4])).norm()) < 1e-12
 
 
-@pytest.mark.parametrize("robot", [None, "modeling/robots/trailer/trailer.toml"])
-def test_minimal_mass_inverse_norm_through_the_adjugate_matches_numpy(robot: str | None) -> None:
+def test_minimal_mass_inverse_norm_through_the_adjugate_matches_numpy() -> None:
     """The minimal form's ‖M̂⁻¹‖_F, built from M̂'s entries (adj M̂ / det M̂), equals the
-    norm of NumPy's inverse of the same M̂, at random parameters and (trailer) hitch angles,
-    and needs fewer operations than the expanded inverse."""
+    norm of NumPy's inverse of the same M̂ at random parameters, and needs fewer
+    operations than the expanded inverse (Drishti: closed forms)."""
     from modeling.robot_file import load_robot_model
 
-    model = load_robot_model(robot)[0]
+    model = load_robot_model(None)[0]
     cm = ctl.control_model("minimal", model)
-    assert cm.size <= ctl.ADJUGATE_NORM_MAX_SIZE
+    assert cm.size <= ctl.ADJUGATE_NORM_MAX_SIZE and cm.stage is None
     norm = ctl.mass_inverse_norm("minimal", model)
     symbols = sorted(cm.mass.free_symbols | norm.free_symbols, key=str)
     assert norm.free_symbols <= cm.mass.free_symbols
@@ -99,6 +98,31 @@ def test_minimal_mass_inverse_norm_through_the_adjugate_matches_numpy(robot: str
         assert abs(float(f_norm(*values)) - expected) < 1e-11 * expected
     expanded = sp.sqrt(sum((x**2 for x in cm.mass_inverse), sp.S.Zero))
     assert sp.count_ops(sp.cse([norm])) < sp.count_ops(sp.cse([expanded]))
+
+
+def test_staged_mass_and_its_inverse_norm_match_the_closed_form() -> None:
+    """The trailer's staged M̂ (modeling.staged: S solved block by block, Sᵀ M S entry by
+    entry) equals the closed-form Sᵀ M S of ConstrainedSystem at random parameters and
+    hitch angles, and its ‖M̂⁻¹‖_F equals NumPy's norm of that closed form's inverse."""
+    from modeling.robot_file import load_robot_model
+    from modeling.staged import evaluate
+
+    model = load_robot_model("modeling/robots/trailer/trailer.toml")[0]
+    cm = ctl.control_model("minimal", model)
+    assert cm.stage is not None
+    norm = ctl.mass_inverse_norm("minimal", model)
+    closed = model.system.minimal_mass_matrix
+    exprs = [*cm.mass, norm]
+    definitions = cm.definitions(exprs)
+    rng = np.random.default_rng(3)
+    defaults = {p.symbol: float(model.values[p.key]) for p in model.params}
+    for _ in range(10):
+        values = {s: v * rng.uniform(0.5, 2.0) for s, v in defaults.items()}
+        values.update({q: rng.uniform(-1.2, 1.2) for q in model.q})
+        *mass, got_norm = evaluate(definitions, exprs, values)
+        want = np.array(closed.evalf(17, subs=values), dtype=float)
+        np.testing.assert_allclose(np.reshape(mass, want.shape), want, rtol=1e-12)
+        assert abs(got_norm - np.linalg.norm(np.linalg.inv(want))) < 1e-11 * got_norm
 
 
 def test_generated_law_reads_every_input_before_writing_an_output() -> None:

@@ -175,8 +175,8 @@ def test_trailer_crosscheck_detects_a_deviating_implementation(
 
 @needs_trailer
 def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> None:
-    """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law_trig`` (the
-    kernel the TDC step calls: sin/cos of q computed once a step) scales u[0] by 1 + 1e-6:
+    """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law`` (the
+    kernel the TDC step calls; it evaluates the staged M-hat at q) scales u[0] by 1 + 1e-6:
     the crosscheck of that folder fails for C double, in that function's row and in the TDC
     controller that calls it, and nowhere else."""
     copy = tmp_path / "trailer"
@@ -185,7 +185,7 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     (copy / "casadi").symlink_to(TRAILER / "casadi", target_is_directory=True)
     laws = copy / "c" / "trailer_laws.c"
     text = laws.read_text()
-    end = text.index("\n}\n", text.index("void trailer_minimal_tdc_law_trig("))  # void: no return
+    end = text.index("\n}\n", text.index("void trailer_minimal_tdc_law("))  # void: no return
     laws.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     out_file = tmp_path / "report.txt"
     status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])
@@ -193,9 +193,9 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     assert status == 1, out
     assert "Robot trailer (" in out and "FAILED" in out
     failing = [ln.split()[0] for ln in out.splitlines() if re.search(r"\bFAIL\b", ln)]
-    assert failing == ["minimal_tdc_law_trig", "tdc/minimal"], out
+    assert failing == ["minimal_tdc_law", "tdc/minimal"], out
     for ln in out.splitlines():
-        if ln.startswith(("minimal_tdc_law_trig", "tdc/minimal")):
+        if ln.startswith(("minimal_tdc_law ", "tdc/minimal")):
             assert ln.count("FAIL") == 1, ln  # C double only: 1e-6 is float32 rounding
     # The unmodified folder passes (the failure is the modification, not the copy).
     assert not crosscheck.generated_crosscheck(target_of(TRAILER), quick=True).failing()

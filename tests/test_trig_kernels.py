@@ -29,6 +29,9 @@ def test_trig_kernels_equal_the_q_kernels(robot: str) -> None:
     laws = _laws(model.prefix, robot)
     specs = {s.name: s for s in law_specs(model)}
     variants = [s for s in specs if s.endswith("_trig")]
+    if model.staged:  # M-hat is evaluated through the stage's quantities: no trig inputs
+        assert not variants and not trig_angles(model, "minimal"), robot
+        return
     assert variants, f"{robot}: no _trig kernels"
     rng = np.random.default_rng(7)
     params = dict(spec_robot.lumped)

@@ -29,6 +29,7 @@ import sympy as sp
 from modeling.description.canonical import trig_reduce
 from modeling.description.elimination import (
     block_triangular_inverse,
+    block_triangular_solve,
     evaluate_exactly,
     rational_point,
 )
@@ -48,6 +49,7 @@ from modeling.description.schema import (
     validate,
 )
 from modeling.lagrange import ConstrainedSystem
+from modeling.staged import Stage
 
 HALF = sp.Rational(1, 2)
 N_GENERIC_POINTS = 2  # rank decisions: full rank at any of these ⇒ generically full rank
@@ -90,6 +92,22 @@ class DescribedSystem(ConstrainedSystem):
         """A_d⁻¹ by block-triangular elimination (the trailer's A_d is 6×6)."""
         a_d = self._cols(self.constraint_matrix, self.dependent)
         return block_triangular_inverse(a_d, self.simplify)
+
+    def staged_null_space(self, stage: Stage) -> sp.Matrix:
+        """S(q) through ``stage``: A_d S_d = −A_i solved block by block in the stage
+        (``block_triangular_solve``), so that each trailer's rates read its parent's as
+        quantities; the closed form multiplies the chain out (its operations grow about
+        threefold a trailer)."""
+        a = stage.matrix(self.constraint_matrix)
+        a_d, a_i = self._cols(a, self.dependent), self._cols(a, self.independent)
+        s_dep = block_triangular_solve(stage, a_d, -a_i, self.simplify)
+        n, k = len(self.q), len(self.independent)
+        s = sp.zeros(n, k)
+        for row, i in enumerate(self.dependent):
+            s[i, :] = s_dep[row, :]
+        for col, i in enumerate(self.independent):
+            s[i, col] = sp.S.One
+        return s
 
     def minimal_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
         """η̇ = adj(M̄)(Sᵀ B τ − H̄)/det(M̄) as in ``ConstrainedSystem``, but with det(M̄)

@@ -22,6 +22,7 @@ from collections.abc import Mapping
 import sympy as sp
 from sympy.utilities.iterables import strongly_connected_components
 
+from modeling.staged import Stage
 from modeling.symbolic_linalg import Simplifier, inverse_by_cofactors
 
 
@@ -93,6 +94,38 @@ def block_triangular_inverse(matrix: sp.Matrix, simplify: Simplifier = _identity
             inverse[c, :] = solved[r, :]
         done += cols
     return inverse
+
+
+def block_triangular_solve(stage: Stage, matrix: sp.Matrix, rhs: sp.Matrix,
+                           simplify: Simplifier = _identity) -> sp.Matrix:
+    """x with A x = rhs through ``stage``'s quantities, by block forward substitution on
+    A's block-triangular form (as ``block_triangular_inverse``): each diagonal block
+    solved in the stage (``Stage.solve_general``), each solved unknown a quantity the
+    later blocks read. The cost grows with the number of blocks, not combinatorially as
+    the closed-form inverse does along a chain of trailers."""
+    n = matrix.rows
+    if matrix.cols != n:
+        raise ValueError(f"square matrix expected, got {matrix.shape}")
+    nonzero = [[matrix[i, j] != 0 for j in range(n)] for i in range(n)]
+    column = _perfect_matching(nonzero)
+    if column is None:
+        raise ZeroDivisionError("the block is structurally singular (no perfect matching)")
+    row_solving = {column[i]: i for i in range(n)}
+    edges = [(i, row_solving[j]) for i in range(n) for j in range(n)
+             if nonzero[i][j] and row_solving[j] != i]
+    x = sp.zeros(n, rhs.cols)
+    done: list[int] = []
+    for rows in strongly_connected_components((list(range(n)), edges)):
+        rows = sorted(rows)
+        cols = [column[i] for i in rows]
+        b = rhs.extract(rows, list(range(rhs.cols)))
+        if done:
+            b -= matrix.extract(rows, done) * x.extract(done, list(range(rhs.cols)))
+        solved = stage.solve_general(matrix.extract(rows, cols), b, simplify)
+        for r, c in enumerate(cols):
+            x[c, :] = solved[r, :]
+        done += cols
+    return x
 
 
 # ---------------------------------------------------------------------------------------

@@ -38,6 +38,7 @@ from codegen.robot_functions import (
     leading_minors,
     minor_doc,
     positive_parameters,
+    staged_forms,
 )
 
 
@@ -76,7 +77,12 @@ def nominal_guards(target: RobotTarget, config: CConfig) -> dict[str, list[tuple
     q = 0 (row-major C expressions, doc empty); ``minors`` its leading minors over those
     entries (``mbar[k]``), positive exactly when SᵀMS is positive definite (Sylvester)."""
     model = target.model
-    mbar = guard_mass_matrix(model).subs({q: 0 for q in model.q})
+    at_zero = {q: sp.S.Zero for q in model.q}
+    if model.staged:  # the closed form at q = 0 only (small: sin 0, cos 0 fold away)
+        stage = staged_forms(model)
+        mbar = stage.mbar.applyfunc(lambda e: stage.stage.expand(e, at_zero))
+    else:
+        mbar = guard_mass_matrix(model).subs(at_zero)
     n = mbar.rows
     entry = sp.Matrix(n, n, lambda i, j: sp.Symbol(f"mbar_{i * n + j}", real=True))
     on_entries = CPrinter(config, {e: f"mbar[{k}]" for k, e in enumerate(entry)})

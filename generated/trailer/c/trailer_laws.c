@@ -47,452 +47,184 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
-   operations after CSE: 135 add, 230 mul, 57 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 68 add, 110 mul, 16 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t5 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t6 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t8 = TRAILER_COS(qp2);
-    const trailer_real_t _t9 = _t8*_t8;
-    const trailer_real_t _t10 = _t1*_t9;
-    const trailer_real_t _t11 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
     const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t12 = TRAILER_COS(qp3);
-    const trailer_real_t _t13 = _t12*_t12;
-    const trailer_real_t _t14 = _t1*_t13;
-    const trailer_real_t _t15 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t16 = _t8*TRAILER_SIN(qp2);
-    const trailer_real_t _t17 = _t1*_t16;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t18 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t19 = _t12*TRAILER_SIN(qp3);
-    const trailer_real_t _t20 = _t1*_t19;
-    const trailer_real_t _t21 = TRAILER_LIT(29522.0)*_t5/TRAILER_LIT(42849.0);
-    const trailer_real_t _t22 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(28566.0);
-    const trailer_real_t _t25 = _t10*_t13;
-    const trailer_real_t _t26 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t27 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t28 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t29 = _t14*_t16;
-    const trailer_real_t _t30 = _t10*_t19;
-    const trailer_real_t _t31 = _t17*_t19;
-    const trailer_real_t _t32 = TRAILER_LIT(59044.0)*_t25/TRAILER_LIT(42849.0);
-    const trailer_real_t _t33 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(14283.0);
-    const trailer_real_t _t34 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(14283.0);
-    const trailer_real_t _t35 = TRAILER_LIT(59044.0)*_t31/TRAILER_LIT(42849.0);
-    const trailer_real_t _t36 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t10*_t11 - _t10*_t15
-            - _t10*_t21 - _t10*_t22 + _t11*_t14 - _t14*_t15 - _t14*_t21 - _t14*_t22 - _t17*_t18
-            + _t17*_t23 - _t17*_t24 + _t18*_t20 - _t20*_t23 + _t20*_t24 - _t25*_t26 + _t25*_t27
-            - _t26*_t31 + _t27*_t31 + _t28*_t29 - _t28*_t30 - _t29*_t33 + _t29*_t34 + _t30*_t33
-            - _t30*_t34 + _t32*_t5 + _t32*_t7 + _t35*_t5 + _t35*_t7 + _t5*_t6 + _t6*_t7;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t37 = TRAILER_LIT(1.0)/span_1;
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t38 = _t37*(qd_now1 - qd_then1);
-    const trailer_real_t _t39 = radius_right*radius_right;
-    const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t42 = _t39*_t5;
-    const trailer_real_t _t43 = _t39*_t7;
-    const trailer_real_t _t44 = _t39*_t9;
-    const trailer_real_t _t45 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t46 = _t13*_t39;
-    const trailer_real_t _t47 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t48 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t49 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t50 = _t16*_t39;
-    const trailer_real_t _t51 = _t19*_t39;
-    const trailer_real_t _t52 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t53 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t54 = TRAILER_LIT(10222.0)*_t5/TRAILER_LIT(42849.0);
-    const trailer_real_t _t55 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t56 = TRAILER_LIT(23639.0)*_t42/TRAILER_LIT(28566.0);
-    const trailer_real_t _t57 = TRAILER_LIT(4387.0)*_t43/TRAILER_LIT(9522.0);
-    const trailer_real_t _t58 = _t13*_t44;
-    const trailer_real_t _t59 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t60 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = _t16*_t46;
-    const trailer_real_t _t63 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t64 = _t19*_t44;
-    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t67 = _t16*_t51;
-    const trailer_real_t _t68 = TRAILER_LIT(23639.0)*_t5/TRAILER_LIT(14283.0);
-    const trailer_real_t _t69 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
-    const trailer_real_t _t70 = _t16*_t19;
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t71 = _t37*(qd_now0 - qd_then0);
-    const trailer_real_t _t72 = radius_left*radius_left;
-    const trailer_real_t _t73 = _t5*_t72;
-    const trailer_real_t _t74 = _t7*_t72;
-    const trailer_real_t _t75 = _t45*_t72;
-    const trailer_real_t _t76 = _t47*_t72;
-    const trailer_real_t _t77 = _t48*_t72;
-    const trailer_real_t _t78 = _t16*_t72;
-    const trailer_real_t _t79 = _t19*_t72;
-    const trailer_real_t _t80 = TRAILER_LIT(31178.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t81 = TRAILER_LIT(10222.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t82 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(9522.0);
-    const trailer_real_t _t83 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(28566.0);
-    const trailer_real_t _t84 = _t13*_t9;
-    const trailer_real_t _t85 = _t72*_t84;
-    const trailer_real_t _t86 = _t60*_t72;
-    const trailer_real_t _t87 = _t13*_t78;
-    const trailer_real_t _t88 = _t79*_t9;
-    const trailer_real_t _t89 = _t16*_t79;
-    const trailer_real_t _t90 = TRAILER_LIT(62356.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t91 = TRAILER_LIT(20444.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t92 = _t13*_t16;
-    const trailer_real_t _t93 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(4761.0);
-    const trailer_real_t _t94 = _t19*_t9;
-    const trailer_real_t _t95 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t36*_t38 - _t71*(J_theta_right + _t0*_t39 - _t16*_t56 - _t16*_t57 + _t19*_t56
-            + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 - _t39*_t40 + _t39*_t41
-            + TRAILER_LIT(20444.0)*_t42*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t42/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t43*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t43/TRAILER_LIT(171396.0) - _t44*_t45 + _t44*_t47 + _t44*_t48
-            - _t44*_t54 + _t44*_t55 - _t45*_t46 + _t46*_t47 + _t46*_t48 - _t46*_t54 + _t46*_t55
-            + _t49*_t50 - _t49*_t51 + TRAILER_LIT(20444.0)*_t5*_t58/TRAILER_LIT(42849.0) - _t50*_t52
-            + _t50*_t53 + _t51*_t52 - _t51*_t53 + _t58*_t59 - _t58*_t60 - _t58*_t61
-            - TRAILER_LIT(62356.0)*_t58*_t7/TRAILER_LIT(42849.0) + _t59*_t67 - _t60*_t67 - _t61*_t67
-            - _t62*_t63 + _t62*_t65 - _t62*_t66 + _t62*_t68 + _t62*_t69 + _t63*_t64 - _t64*_t65
-            + _t64*_t66 - _t64*_t68 - _t64*_t69) + up0;
-    H1hat[1] = -_t36*_t71 - _t38*(J_theta_left + _t0*_t72 - _t13*_t75 + _t13*_t76 - _t13*_t77
-            + _t13*_t80 - _t13*_t81 + _t16*_t82 + _t16*_t83 - _t19*_t82 - _t19*_t83 + _t2*_t72
-            + _t3*_t72 - _t4*_t72 + _t40*_t72 - _t41*_t72 - _t49*_t78 + _t49*_t79 + _t52*_t78
-            - _t52*_t79 + _t53*_t78 - _t53*_t79 + _t59*_t85 + _t59*_t89 + _t61*_t85 + _t61*_t89
-            + _t63*_t87 - _t63*_t88 - _t65*_t87 + _t65*_t88 - _t66*_t87 + _t66*_t88 - _t70*_t86
-            - _t70*_t90 + _t70*_t91 + TRAILER_LIT(11449.0)*_t73/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t74/TRAILER_LIT(171396.0) - _t75*_t9 + _t76*_t9 - _t77*_t9
-            + _t80*_t9 - _t81*_t9 - _t84*_t86 - _t84*_t90 + _t84*_t91 - _t92*_t93 - _t92*_t95
-            + _t93*_t94 + _t94*_t95) + up1;
-}
-
-/* trailer_minimal_tde_trig: documented in trailer_laws.h.
-   operations after CSE: 135 add, 230 mul, 57 div, 0 sin/cos, 0 sqrt */
-void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *trig_prev,
-    const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
-    const trailer_real_t *span, trailer_real_t *H1hat)
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
+    const trailer_real_t _t2 = TRAILER_SIN(qp3);
+    const trailer_real_t _t3 = TRAILER_COS(qp3);
+    const trailer_real_t qp2 = q_prev[2];
+    const trailer_real_t _t4 = TRAILER_SIN(qp2);
+    const trailer_real_t _t5 = TRAILER_COS(qp2);
+    const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
+    const trailer_real_t _t7 = -TRAILER_LIT(3.0)*_t2*_t4/TRAILER_LIT(10.0) - _t5*_t6;
+    const trailer_real_t _t8 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = _t0*_t8;
+    const trailer_real_t _t10 = -TRAILER_LIT(207.0)*_t5/TRAILER_LIT(1000.0);
+    const trailer_real_t _t11 = _t0*_t10;
+    const trailer_real_t _t12 = _t0*_t7 + _t11*_t2 - _t3*_t9;
+    const trailer_real_t _t13 = -TRAILER_LIT(5.0)*_t12/TRAILER_LIT(3.0);
+    const trailer_real_t _t14 = _t13/TRAILER_LIT(5.0);
+    const trailer_real_t _t15 = TRAILER_LIT(3.0)*_t2*_t5/TRAILER_LIT(10.0) - _t4*_t6;
+    const trailer_real_t _t16 = -_t0*_t15 - _t11*_t3 - _t2*_t9;
+    const trailer_real_t _t17 = _t1*_t8;
+    const trailer_real_t _t18 = _t1*_t10;
+    const trailer_real_t _t19 = -_t1*_t7 - _t17*_t3 + _t18*_t2;
+    const trailer_real_t _t20 = -TRAILER_LIT(5.0)*_t19/TRAILER_LIT(3.0);
+    const trailer_real_t _t21 = _t20/TRAILER_LIT(5.0);
+    const trailer_real_t _t22 = _t1*_t15 - _t17*_t2 - _t18*_t3;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t trig_prev_s0 = trig_prev[0];
-    const trailer_real_t trig_prev_c0 = trig_prev[1];
-    const trailer_real_t _t5 = trig_prev_c0*trig_prev_s0;
-    const trailer_real_t _t6 = _t1*_t5;
+    const trailer_real_t _t23 = K_theta_cart_x_tractor*_t2;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t7 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t trig_prev_s1 = trig_prev[2];
-    const trailer_real_t trig_prev_c1 = trig_prev[3];
-    const trailer_real_t _t8 = trig_prev_c1*trig_prev_s1;
-    const trailer_real_t _t9 = _t1*_t8;
-    const trailer_real_t _t10 = trig_prev_c0*trig_prev_c0;
-    const trailer_real_t _t11 = _t1*_t10;
-    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t13 = trig_prev_c1*trig_prev_c1;
-    const trailer_real_t _t14 = _t1*_t13;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t15 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t16 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
-    const trailer_real_t _t18 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t19 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t20 = _t6*_t8;
-    const trailer_real_t _t21 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t22 = TRAILER_LIT(14761.0)*_t15/TRAILER_LIT(28566.0);
-    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t17/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t25 = _t14*_t5;
-    const trailer_real_t _t26 = _t11*_t8;
-    const trailer_real_t _t27 = _t11*_t13;
-    const trailer_real_t _t28 = TRAILER_LIT(29522.0)*_t15/TRAILER_LIT(42849.0);
-    const trailer_real_t _t29 = TRAILER_LIT(29522.0)*_t17/TRAILER_LIT(42849.0);
-    const trailer_real_t _t30 = TRAILER_LIT(59044.0)*_t20/TRAILER_LIT(42849.0);
-    const trailer_real_t _t31 = TRAILER_LIT(14761.0)*_t15/TRAILER_LIT(14283.0);
-    const trailer_real_t _t32 = TRAILER_LIT(14761.0)*_t17/TRAILER_LIT(14283.0);
-    const trailer_real_t _t33 = TRAILER_LIT(59044.0)*_t27/TRAILER_LIT(42849.0);
-    const trailer_real_t _t34 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t11*_t12 - _t11*_t18
-            - _t11*_t28 - _t11*_t29 + _t12*_t14 - _t14*_t18 - _t14*_t28 - _t14*_t29 + _t15*_t16
-            + _t15*_t30 + _t15*_t33 + _t16*_t17 + _t17*_t30 + _t17*_t33 - _t19*_t20 - _t19*_t27
-            + _t20*_t21 + _t21*_t27 + _t22*_t6 - _t22*_t9 - _t23*_t6 + _t23*_t9 + _t24*_t25
-            - _t24*_t26 - _t25*_t31 + _t25*_t32 + _t26*_t31 - _t26*_t32 - _t6*_t7 + _t7*_t9;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t35 = TRAILER_LIT(1.0)/span_1;
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t36 = _t35*(qd_now1 - qd_then1);
-    const trailer_real_t _t37 = radius_right*radius_right;
-    const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t24 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t3;
+    const trailer_real_t _t26 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t5/TRAILER_LIT(10.0);
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t41 = _t37*_t5;
-    const trailer_real_t _t42 = _t37*_t8;
-    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t44 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t45 = _t10*_t37;
-    const trailer_real_t _t46 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t47 = _t13*_t37;
-    const trailer_real_t _t48 = _t15*_t37;
-    const trailer_real_t _t49 = _t17*_t37;
-    const trailer_real_t _t50 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t51 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t52 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t53 = _t42*_t5;
-    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t55 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t56 = _t47*_t5;
-    const trailer_real_t _t57 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t58 = _t45*_t8;
-    const trailer_real_t _t59 = TRAILER_LIT(23639.0)*_t48/TRAILER_LIT(28566.0);
-    const trailer_real_t _t60 = TRAILER_LIT(4387.0)*_t49/TRAILER_LIT(9522.0);
-    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t63 = _t13*_t45;
-    const trailer_real_t _t64 = TRAILER_LIT(10222.0)*_t15/TRAILER_LIT(42849.0);
-    const trailer_real_t _t65 = TRAILER_LIT(31178.0)*_t17/TRAILER_LIT(42849.0);
-    const trailer_real_t _t66 = _t5*_t8;
-    const trailer_real_t _t67 = TRAILER_LIT(23639.0)*_t15/TRAILER_LIT(14283.0);
-    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t17/TRAILER_LIT(4761.0);
+    const trailer_real_t _t28 = -K_theta_tractor_x_tractor*_t5 + K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t2 - _t25;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t30 = J_x_tractor*_t9 - _t0*_t28 + _t13*_t29;
+    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t5;
+    const trailer_real_t _t32 = _t23 + _t24;
+    const trailer_real_t _t33 = J_x_tractor*_t11 - _t0*_t31 + _t13*_t32;
+    const trailer_real_t _t34 = -K_theta_cart_x_tractor_2*_t2*_t27 + _t23*_t26 + _t24*_t26
+            + _t25*_t27;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t35 = J_theta_cart*_t13 - _t0*_t34 + _t11*_t32 + _t29*_t9;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t36 = -J_theta_tractor*_t0 + _t11*_t31 + _t13*_t34 + _t28*_t9;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t37 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t38 = _t14 - _t16;
+    const trailer_real_t _t39 = _t37*_t38;
+    const trailer_real_t _t40 = _t21 - _t22;
+    const trailer_real_t _t41 = _t37*_t40;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t42 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t43 = -_t14 - _t16;
+    const trailer_real_t _t44 = _t42*_t43;
+    const trailer_real_t _t45 = -_t21 - _t22;
+    const trailer_real_t _t46 = _t42*_t45;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t47 = J_theta_cart_left*_t44*_t46 + J_theta_cart_right*_t39*_t41;
+    const trailer_real_t _t48 = J_x_tractor*_t17 + _t1*_t28 + _t20*_t29;
+    const trailer_real_t _t49 = J_x_tractor*_t18 + _t1*_t31 + _t20*_t32;
+    const trailer_real_t _t50 = J_theta_cart*_t20 + _t1*_t34 + _t17*_t29 + _t18*_t32;
+    const trailer_real_t _t51 = J_theta_tractor*_t1 + _t17*_t28 + _t18*_t31 + _t20*_t34;
+    const trailer_real_t span_1 = span[0];
+    const trailer_real_t _t52 = TRAILER_LIT(1.0)/span_1;
     const trailer_real_t qd_now0 = qdot_now[0];
     const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t69 = _t35*(qd_now0 - qd_then0);
-    const trailer_real_t _t70 = radius_left*radius_left;
-    const trailer_real_t _t71 = _t5*_t70;
-    const trailer_real_t _t72 = _t70*_t8;
-    const trailer_real_t _t73 = _t46*_t70;
-    const trailer_real_t _t74 = _t15*_t70;
-    const trailer_real_t _t75 = _t17*_t70;
-    const trailer_real_t _t76 = _t50*_t70;
-    const trailer_real_t _t77 = _t51*_t70;
-    const trailer_real_t _t78 = _t5*_t72;
-    const trailer_real_t _t79 = _t54*_t70;
-    const trailer_real_t _t80 = _t13*_t71;
-    const trailer_real_t _t81 = _t10*_t72;
-    const trailer_real_t _t82 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(9522.0);
-    const trailer_real_t _t83 = TRAILER_LIT(23639.0)*_t75/TRAILER_LIT(28566.0);
-    const trailer_real_t _t84 = _t10*_t13;
-    const trailer_real_t _t85 = _t70*_t84;
-    const trailer_real_t _t86 = TRAILER_LIT(31178.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t87 = TRAILER_LIT(10222.0)*_t75/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(62356.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t89 = TRAILER_LIT(20444.0)*_t75/TRAILER_LIT(42849.0);
-    const trailer_real_t _t90 = _t13*_t5;
-    const trailer_real_t _t91 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
-    const trailer_real_t _t92 = _t10*_t8;
-    const trailer_real_t _t93 = TRAILER_LIT(23639.0)*_t75/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t53 = _t52*(qd_now0 - qd_then0);
+    const trailer_real_t qd_now1 = qdot_now[1];
+    const trailer_real_t qd_then1 = qdot_then[1];
+    const trailer_real_t _t54 = _t52*(qd_now1 - qd_then1);
     const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t55 = J_theta_cart_left*_t44*_t44 + J_theta_cart_right*_t39*_t39
+            + J_theta_right - _t0*_t36 + _t11*_t33 + _t13*_t35 + _t30*_t9;
+    const trailer_real_t _t56 = _t1*_t36 + _t17*_t30 + _t18*_t33 + _t20*_t35 + _t47;
+    const trailer_real_t _t57 = -_t0*_t51 + _t11*_t49 + _t13*_t50 + _t47 + _t48*_t9;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t58 = J_theta_cart_left*_t46*_t46 + J_theta_cart_right*_t41*_t41
+            + J_theta_left + _t1*_t51 + _t17*_t48 + _t18*_t49 + _t20*_t50;
     const trailer_real_t up0 = u_prev[0];
     const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t34*_t36
-            - _t69*(J_theta_right + _t0*_t37 + TRAILER_LIT(20444.0)*_t15*_t63/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t17*_t63/TRAILER_LIT(42849.0) + _t2*_t37 + _t3*_t37 - _t37*_t38
-            + _t37*_t39 - _t37*_t4 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43
-            - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47
-            + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65
-            + TRAILER_LIT(20444.0)*_t48*_t66/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t48/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t49*_t66/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t49/TRAILER_LIT(171396.0) - _t5*_t59 - _t5*_t60 + _t52*_t53
-            + _t52*_t63 - _t53*_t54 - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61
-            - _t56*_t62 + _t56*_t67 + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67
-            - _t58*_t68 + _t59*_t8 + _t60*_t8) + up0;
-    H1hat[1] = -_t34*_t69 - _t36*(J_theta_left + _t0*_t70 - _t10*_t73 + _t10*_t76 - _t10*_t77
-            + _t10*_t86 - _t10*_t87 - _t13*_t73 + _t13*_t76 - _t13*_t77 + _t13*_t86 - _t13*_t87
-            + _t2*_t70 + _t3*_t70 + _t38*_t70 - _t39*_t70 - _t4*_t70 - _t40*_t71 + _t40*_t72
-            + _t43*_t71 - _t43*_t72 + _t44*_t71 - _t44*_t72 + _t5*_t82 + _t5*_t83 + _t52*_t78
-            + _t52*_t85 + _t55*_t78 + _t55*_t85 + _t57*_t80 - _t57*_t81 - _t61*_t80 + _t61*_t81
-            - _t62*_t80 + _t62*_t81 - _t66*_t79 - _t66*_t88 + _t66*_t89
-            + TRAILER_LIT(11449.0)*_t74/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t75/TRAILER_LIT(171396.0) - _t79*_t84 - _t8*_t82 - _t8*_t83
-            - _t84*_t88 + _t84*_t89 - _t90*_t91 - _t90*_t93 + _t91*_t92 + _t92*_t93) + up1;
+    H1hat[0] = -_t53*_t55 - _t54*_t56 + up0;
+    H1hat[1] = -_t53*_t57 - _t54*_t58 + up1;
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 132 add, 229 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 66 add, 109 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t5 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t6 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t9 = _t8*_t8;
-    const trailer_real_t _t10 = _t1*_t9;
-    const trailer_real_t _t11 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t12 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t13 = _t12*_t12;
-    const trailer_real_t _t14 = _t1*_t13;
-    const trailer_real_t _t15 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
+    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = _t6*_t9;
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t6;
+    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
+    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
+    const trailer_real_t _t18 = _t7*_t9;
+    const trailer_real_t _t19 = _t11*_t7;
+    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
+    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t16 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t17 = _t8*TRAILER_SIN(theta_cart);
-    const trailer_real_t _t18 = _t1*_t17;
-    const trailer_real_t _t19 = _t12*TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t20 = _t1*_t19;
-    const trailer_real_t _t21 = TRAILER_LIT(29522.0)*_t5/TRAILER_LIT(42849.0);
-    const trailer_real_t _t22 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(28566.0);
-    const trailer_real_t _t25 = _t13*_t9;
-    const trailer_real_t _t26 = _t1*_t25;
-    const trailer_real_t _t27 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t28 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t29 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t30 = _t14*_t17;
-    const trailer_real_t _t31 = _t10*_t19;
-    const trailer_real_t _t32 = _t17*_t20;
-    const trailer_real_t _t33 = TRAILER_LIT(59044.0)*_t26/TRAILER_LIT(42849.0);
-    const trailer_real_t _t34 = TRAILER_LIT(14761.0)*_t5/TRAILER_LIT(14283.0);
-    const trailer_real_t _t35 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(14283.0);
-    const trailer_real_t _t36 = TRAILER_LIT(59044.0)*_t32/TRAILER_LIT(42849.0);
-    const trailer_real_t _t37 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 + _t10*_t11 - _t10*_t15
-            - _t10*_t21 - _t10*_t22 + _t11*_t14 - _t14*_t15 - _t14*_t21 - _t14*_t22 + _t16*_t18
-            - _t16*_t20 - _t18*_t23 + _t18*_t24 + _t20*_t23 - _t20*_t24 - _t26*_t27 + _t26*_t28
-            - _t27*_t32 + _t28*_t32 - _t29*_t30 + _t29*_t31 + _t30*_t34 - _t30*_t35 - _t31*_t34
-            + _t31*_t35 + _t33*_t5 + _t33*_t7 + _t36*_t5 + _t36*_t7 + _t5*_t6 + _t6*_t7;
-    const trailer_real_t _t38 = _t37*_t37;
-    const trailer_real_t _t39 = radius_left*radius_left;
-    const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t42 = _t39*_t5;
-    const trailer_real_t _t43 = _t39*_t7;
-    const trailer_real_t _t44 = _t39*_t9;
-    const trailer_real_t _t45 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t46 = _t13*_t39;
-    const trailer_real_t _t47 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t48 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t49 = _t17*_t39;
-    const trailer_real_t _t50 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t51 = _t19*_t39;
-    const trailer_real_t _t52 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t53 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t54 = TRAILER_LIT(31178.0)*_t5/TRAILER_LIT(42849.0);
-    const trailer_real_t _t55 = TRAILER_LIT(10222.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t56 = TRAILER_LIT(4387.0)*_t42/TRAILER_LIT(9522.0);
-    const trailer_real_t _t57 = TRAILER_LIT(23639.0)*_t43/TRAILER_LIT(28566.0);
-    const trailer_real_t _t58 = _t13*_t44;
-    const trailer_real_t _t59 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t60 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = _t17*_t46;
-    const trailer_real_t _t63 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t64 = _t19*_t44;
-    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t67 = _t19*_t49;
-    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t5/TRAILER_LIT(4761.0);
-    const trailer_real_t _t69 = TRAILER_LIT(23639.0)*_t7/TRAILER_LIT(14283.0);
-    const trailer_real_t _t70 = _t17*_t19;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t71 = J_theta_left + _t0*_t39 - _t17*_t56 - _t17*_t57 + _t19*_t56
-            + _t19*_t57 + _t2*_t39 + _t3*_t39 - _t39*_t4 + _t39*_t40 - _t39*_t41
-            - TRAILER_LIT(62356.0)*_t42*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t42/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(20444.0)*_t43*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t43/TRAILER_LIT(171396.0) - _t44*_t45 + _t44*_t47 - _t44*_t48
-            + _t44*_t54 - _t44*_t55 - _t45*_t46 + _t46*_t47 - _t46*_t48 + _t46*_t54 - _t46*_t55
-            + _t49*_t50 - _t49*_t52 - _t49*_t53 - TRAILER_LIT(62356.0)*_t5*_t58/TRAILER_LIT(42849.0)
-            - _t50*_t51 + _t51*_t52 + _t51*_t53 + _t58*_t59 - _t58*_t60 + _t58*_t61
-            + TRAILER_LIT(20444.0)*_t58*_t7/TRAILER_LIT(42849.0) + _t59*_t67 - _t60*_t67 + _t61*_t67
-            - _t62*_t63 + _t62*_t65 + _t62*_t66 + _t62*_t68 + _t62*_t69 + _t63*_t64 - _t64*_t65
-            - _t64*_t66 - _t64*_t68 - _t64*_t69;
-    const trailer_real_t _t72 = radius_right*radius_right;
-    const trailer_real_t _t73 = _t5*_t72;
-    const trailer_real_t _t74 = _t7*_t72;
-    const trailer_real_t _t75 = _t45*_t72;
-    const trailer_real_t _t76 = _t47*_t72;
-    const trailer_real_t _t77 = _t48*_t72;
-    const trailer_real_t _t78 = _t17*_t72;
-    const trailer_real_t _t79 = _t19*_t72;
-    const trailer_real_t _t80 = TRAILER_LIT(10222.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t81 = TRAILER_LIT(31178.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t82 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(28566.0);
-    const trailer_real_t _t83 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(9522.0);
-    const trailer_real_t _t84 = _t25*_t72;
-    const trailer_real_t _t85 = _t60*_t72;
-    const trailer_real_t _t86 = _t13*_t78;
-    const trailer_real_t _t87 = _t79*_t9;
-    const trailer_real_t _t88 = _t19*_t78;
-    const trailer_real_t _t89 = TRAILER_LIT(20444.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t90 = TRAILER_LIT(62356.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t91 = _t13*_t17;
-    const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(14283.0);
-    const trailer_real_t _t93 = _t19*_t9;
-    const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t74/TRAILER_LIT(4761.0);
+    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t33 = _t24 + _t25;
+    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
+    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
+            + _t26*_t28;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
+    const trailer_real_t _t38 = _t15 - _t17;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t40 = _t38*_t39;
+    const trailer_real_t _t41 = _t22 - _t23;
+    const trailer_real_t _t42 = _t39*_t41;
+    const trailer_real_t _t43 = -_t15 - _t17;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t45 = _t43*_t44;
+    const trailer_real_t _t46 = -_t22 - _t23;
+    const trailer_real_t _t47 = _t44*_t46;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
+    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
+    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
+    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
+    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t95 = J_theta_right + _t0*_t72 - _t13*_t75 + _t13*_t76 + _t13*_t77
-            - _t13*_t80 + _t13*_t81 + _t17*_t82 + _t17*_t83 - _t19*_t82 - _t19*_t83 + _t2*_t72
-            - _t25*_t85 + _t25*_t89 - _t25*_t90 + _t3*_t72 - _t4*_t72 - _t40*_t72 + _t41*_t72
-            - _t50*_t78 + _t50*_t79 + _t52*_t78 - _t52*_t79 - _t53*_t78 + _t53*_t79 + _t59*_t84
-            + _t59*_t88 - _t61*_t84 - _t61*_t88 + _t63*_t86 - _t63*_t87 - _t65*_t86 + _t65*_t87
-            + _t66*_t86 - _t66*_t87 - _t70*_t85 + _t70*_t89 - _t70*_t90
-            + TRAILER_LIT(94249.0)*_t73/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t74/TRAILER_LIT(171396.0) - _t75*_t9 + _t76*_t9 + _t77*_t9
-            - _t80*_t9 + _t81*_t9 - _t91*_t92 - _t91*_t94 + _t92*_t93 + _t93*_t94;
-    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t38 + _t71*_t71 + _t95*_t95)/TRAILER_FABS(_t38
-            - _t71*_t95);
+    const trailer_real_t _t53 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
+            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
+    const trailer_real_t _t54 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
+    const trailer_real_t _t55 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t56 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
+            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
+    norm[0] = trailer_norm4(_t53, _t54, _t55, _t56)/TRAILER_FABS(_t53*_t56 - _t54*_t55);
 }
 
 /* trailer_minimal_tdroc_gain: documented in trailer_laws.h.
@@ -564,7 +296,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
-   operations after CSE: 137 add, 232 mul, 56 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 70 add, 111 mul, 14 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -572,661 +304,219 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
 {
     (void)p12;
     (void)p22;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t2 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t6 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t7 = TRAILER_LIT(32849.0)*_t2/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t8 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t9 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t10 = _t9*_t9;
-    const trailer_real_t _t11 = _t10*_t2;
-    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t13 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t14 = _t13*_t13;
-    const trailer_real_t _t15 = _t14*_t2;
-    const trailer_real_t _t16 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
+    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = _t6*_t9;
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t6;
+    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
+    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
+    const trailer_real_t _t18 = _t7*_t9;
+    const trailer_real_t _t19 = _t11*_t7;
+    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
+    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t17 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t18 = _t9*TRAILER_SIN(theta_cart);
-    const trailer_real_t _t19 = _t18*_t2;
-    const trailer_real_t _t20 = _t13*TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t21 = _t2*_t20;
-    const trailer_real_t _t22 = TRAILER_LIT(29522.0)*_t6/TRAILER_LIT(42849.0);
-    const trailer_real_t _t23 = TRAILER_LIT(29522.0)*_t8/TRAILER_LIT(42849.0);
-    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t6/TRAILER_LIT(28566.0);
-    const trailer_real_t _t25 = TRAILER_LIT(14761.0)*_t8/TRAILER_LIT(28566.0);
-    const trailer_real_t _t26 = _t11*_t14;
-    const trailer_real_t _t27 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t28 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t29 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t30 = _t15*_t18;
-    const trailer_real_t _t31 = _t11*_t20;
-    const trailer_real_t _t32 = _t18*_t21;
-    const trailer_real_t _t33 = TRAILER_LIT(59044.0)*_t26/TRAILER_LIT(42849.0);
-    const trailer_real_t _t34 = TRAILER_LIT(14761.0)*_t6/TRAILER_LIT(14283.0);
-    const trailer_real_t _t35 = TRAILER_LIT(14761.0)*_t8/TRAILER_LIT(14283.0);
-    const trailer_real_t _t36 = TRAILER_LIT(59044.0)*_t32/TRAILER_LIT(42849.0);
-    const trailer_real_t _t37 = -_t1*_t2 + _t11*_t12 - _t11*_t16 - _t11*_t22 - _t11*_t23 + _t12*_t15
-            - _t15*_t16 - _t15*_t22 - _t15*_t23 + _t17*_t19 - _t17*_t21 - _t19*_t24 + _t19*_t25
-            - _t2*_t3 + _t2*_t4 + _t2*_t5 + _t21*_t24 - _t21*_t25 - _t26*_t27 + _t26*_t28
-            - _t27*_t32 + _t28*_t32 - _t29*_t30 + _t29*_t31 + _t30*_t34 - _t30*_t35 - _t31*_t34
-            + _t31*_t35 + _t33*_t6 + _t33*_t8 + _t36*_t6 + _t36*_t8 + _t6*_t7 + _t7*_t8;
+    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t33 = _t24 + _t25;
+    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
+    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
+            + _t26*_t28;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
+    const trailer_real_t _t38 = _t15 - _t17;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t40 = _t38*_t39;
+    const trailer_real_t _t41 = _t22 - _t23;
+    const trailer_real_t _t42 = _t39*_t41;
+    const trailer_real_t _t43 = -_t15 - _t17;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t45 = _t43*_t44;
+    const trailer_real_t _t46 = -_t22 - _t23;
+    const trailer_real_t _t47 = _t44*_t46;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
+    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
+    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
+    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
+    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t38 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t _t39 = radius_right*radius_right;
-    const trailer_real_t _t40 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t41 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t42 = _t39*_t6;
-    const trailer_real_t _t43 = _t39*_t8;
-    const trailer_real_t _t44 = _t10*_t39;
-    const trailer_real_t _t45 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t46 = _t14*_t39;
-    const trailer_real_t _t47 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t48 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t49 = _t18*_t39;
-    const trailer_real_t _t50 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t51 = _t20*_t39;
-    const trailer_real_t _t52 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t53 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t54 = TRAILER_LIT(10222.0)*_t6/TRAILER_LIT(42849.0);
-    const trailer_real_t _t55 = TRAILER_LIT(31178.0)*_t8/TRAILER_LIT(42849.0);
-    const trailer_real_t _t56 = TRAILER_LIT(23639.0)*_t42/TRAILER_LIT(28566.0);
-    const trailer_real_t _t57 = TRAILER_LIT(4387.0)*_t43/TRAILER_LIT(9522.0);
-    const trailer_real_t _t58 = _t14*_t44;
-    const trailer_real_t _t59 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t60 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t63 = _t18*_t46;
-    const trailer_real_t _t64 = _t20*_t44;
-    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t67 = _t20*_t49;
-    const trailer_real_t _t68 = TRAILER_LIT(23639.0)*_t6/TRAILER_LIT(14283.0);
-    const trailer_real_t _t69 = TRAILER_LIT(4387.0)*_t8/TRAILER_LIT(4761.0);
-    const trailer_real_t _t70 = _t18*_t20;
-    const trailer_real_t _t71 = radius_left*radius_left;
-    const trailer_real_t _t72 = _t6*_t71;
-    const trailer_real_t _t73 = _t71*_t8;
-    const trailer_real_t _t74 = _t45*_t71;
-    const trailer_real_t _t75 = _t47*_t71;
-    const trailer_real_t _t76 = _t48*_t71;
-    const trailer_real_t _t77 = _t18*_t71;
-    const trailer_real_t _t78 = _t20*_t71;
-    const trailer_real_t _t79 = TRAILER_LIT(31178.0)*_t72/TRAILER_LIT(42849.0);
-    const trailer_real_t _t80 = TRAILER_LIT(10222.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t81 = TRAILER_LIT(4387.0)*_t72/TRAILER_LIT(9522.0);
-    const trailer_real_t _t82 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(28566.0);
-    const trailer_real_t _t83 = _t10*_t14;
-    const trailer_real_t _t84 = _t71*_t83;
-    const trailer_real_t _t85 = _t60*_t71;
-    const trailer_real_t _t86 = _t14*_t77;
-    const trailer_real_t _t87 = _t10*_t78;
-    const trailer_real_t _t88 = _t20*_t77;
-    const trailer_real_t _t89 = TRAILER_LIT(62356.0)*_t72/TRAILER_LIT(42849.0);
-    const trailer_real_t _t90 = TRAILER_LIT(20444.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t91 = TRAILER_LIT(4387.0)*_t72/TRAILER_LIT(4761.0);
-    const trailer_real_t _t92 = _t14*_t18;
-    const trailer_real_t _t93 = _t10*_t20;
-    const trailer_real_t _t94 = TRAILER_LIT(23639.0)*_t73/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t0*_t37 + _t38*(J_theta_right + _t1*_t39 + _t18*_t56 + _t18*_t57 - _t20*_t56
-            - _t20*_t57 + _t3*_t39 + _t39*_t4 - _t39*_t40 + _t39*_t41 - _t39*_t5
-            + TRAILER_LIT(20444.0)*_t42*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t42/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t43*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t43/TRAILER_LIT(171396.0) - _t44*_t45 + _t44*_t47 + _t44*_t48
-            - _t44*_t54 + _t44*_t55 - _t45*_t46 + _t46*_t47 + _t46*_t48 - _t46*_t54 + _t46*_t55
-            - _t49*_t50 + _t49*_t52 - _t49*_t53 + _t50*_t51 - _t51*_t52 + _t51*_t53 + _t58*_t59
-            + TRAILER_LIT(20444.0)*_t58*_t6/TRAILER_LIT(42849.0) - _t58*_t60 - _t58*_t61
-            - TRAILER_LIT(62356.0)*_t58*_t8/TRAILER_LIT(42849.0) + _t59*_t67 - _t60*_t67 - _t61*_t67
-            + _t62*_t63 - _t62*_t64 - _t63*_t65 + _t63*_t66 - _t63*_t68 - _t63*_t69 + _t64*_t65
-            - _t64*_t66 + _t64*_t68 + _t64*_t69);
-    u[1] = H1hat1 + _t0*(J_theta_left + _t1*_t71 - _t10*_t74 + _t10*_t75 - _t10*_t76 + _t10*_t79
-            - _t10*_t80 - _t14*_t74 + _t14*_t75 - _t14*_t76 + _t14*_t79 - _t14*_t80 - _t18*_t81
-            - _t18*_t82 + _t20*_t81 + _t20*_t82 + _t3*_t71 + _t4*_t71 + _t40*_t71 - _t41*_t71
-            - _t5*_t71 + _t50*_t77 - _t50*_t78 - _t52*_t77 + _t52*_t78 - _t53*_t77 + _t53*_t78
-            + _t59*_t84 + _t59*_t88 + _t61*_t84 + _t61*_t88 - _t62*_t86 + _t62*_t87 + _t65*_t86
-            - _t65*_t87 + _t66*_t86 - _t66*_t87 - _t70*_t85 - _t70*_t89 + _t70*_t90
-            + TRAILER_LIT(11449.0)*_t72/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t73/TRAILER_LIT(171396.0) - _t83*_t85 - _t83*_t89 + _t83*_t90
-            + _t91*_t92 - _t91*_t93 + _t92*_t94 - _t93*_t94) + _t37*_t38;
-}
-
-/* trailer_minimal_tdc_law_trig: documented in trailer_laws.h.
-   operations after CSE: 137 add, 232 mul, 56 div, 0 sin/cos, 0 sqrt */
-void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
-{
-    (void)p12;
-    (void)p22;
+    const trailer_real_t _t53 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t0 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t2 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t5 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t trig_s0 = trig[0];
-    const trailer_real_t trig_c0 = trig[1];
-    const trailer_real_t _t6 = trig_c0*trig_s0;
-    const trailer_real_t _t7 = _t2*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t8 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t trig_s1 = trig[2];
-    const trailer_real_t trig_c1 = trig[3];
-    const trailer_real_t _t9 = trig_c1*trig_s1;
-    const trailer_real_t _t10 = _t2*_t9;
-    const trailer_real_t _t11 = trig_c0*trig_c0;
-    const trailer_real_t _t12 = _t11*_t2;
-    const trailer_real_t _t13 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t14 = trig_c1*trig_c1;
-    const trailer_real_t _t15 = _t14*_t2;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t16 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t17 = TRAILER_LIT(32849.0)*_t2/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t18 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
-    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t20 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t21 = _t7*_t9;
-    const trailer_real_t _t22 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t23 = TRAILER_LIT(14761.0)*_t16/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(14761.0)*_t18/TRAILER_LIT(28566.0);
-    const trailer_real_t _t25 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t26 = _t15*_t6;
-    const trailer_real_t _t27 = _t12*_t9;
-    const trailer_real_t _t28 = _t12*_t14;
-    const trailer_real_t _t29 = TRAILER_LIT(29522.0)*_t16/TRAILER_LIT(42849.0);
-    const trailer_real_t _t30 = TRAILER_LIT(29522.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t31 = TRAILER_LIT(59044.0)*_t21/TRAILER_LIT(42849.0);
-    const trailer_real_t _t32 = TRAILER_LIT(14761.0)*_t16/TRAILER_LIT(14283.0);
-    const trailer_real_t _t33 = TRAILER_LIT(14761.0)*_t18/TRAILER_LIT(14283.0);
-    const trailer_real_t _t34 = TRAILER_LIT(59044.0)*_t28/TRAILER_LIT(42849.0);
-    const trailer_real_t _t35 = -_t1*_t2 - _t10*_t23 + _t10*_t24 + _t10*_t8 + _t12*_t13 - _t12*_t19
-            - _t12*_t29 - _t12*_t30 + _t13*_t15 - _t15*_t19 - _t15*_t29 - _t15*_t30 + _t16*_t17
-            + _t16*_t31 + _t16*_t34 + _t17*_t18 + _t18*_t31 + _t18*_t34 - _t2*_t3 + _t2*_t4
-            + _t2*_t5 - _t20*_t21 - _t20*_t28 + _t21*_t22 + _t22*_t28 + _t23*_t7 - _t24*_t7
-            + _t25*_t26 - _t25*_t27 - _t26*_t32 + _t26*_t33 + _t27*_t32 - _t27*_t33 - _t7*_t8;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t36 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t _t37 = radius_right*radius_right;
-    const trailer_real_t _t38 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t39 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t40 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t41 = _t37*_t6;
-    const trailer_real_t _t42 = _t37*_t9;
-    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t44 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t45 = _t11*_t37;
-    const trailer_real_t _t46 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t47 = _t14*_t37;
-    const trailer_real_t _t48 = _t16*_t37;
-    const trailer_real_t _t49 = _t18*_t37;
-    const trailer_real_t _t50 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t51 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t52 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t53 = _t42*_t6;
-    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t55 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t56 = _t47*_t6;
-    const trailer_real_t _t57 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t58 = _t45*_t9;
-    const trailer_real_t _t59 = TRAILER_LIT(23639.0)*_t48/TRAILER_LIT(28566.0);
-    const trailer_real_t _t60 = TRAILER_LIT(4387.0)*_t49/TRAILER_LIT(9522.0);
-    const trailer_real_t _t61 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t62 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t63 = _t14*_t45;
-    const trailer_real_t _t64 = TRAILER_LIT(10222.0)*_t16/TRAILER_LIT(42849.0);
-    const trailer_real_t _t65 = TRAILER_LIT(31178.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t66 = _t6*_t9;
-    const trailer_real_t _t67 = TRAILER_LIT(23639.0)*_t16/TRAILER_LIT(14283.0);
-    const trailer_real_t _t68 = TRAILER_LIT(4387.0)*_t18/TRAILER_LIT(4761.0);
-    const trailer_real_t _t69 = radius_left*radius_left;
-    const trailer_real_t _t70 = _t6*_t69;
-    const trailer_real_t _t71 = _t69*_t9;
-    const trailer_real_t _t72 = _t46*_t69;
-    const trailer_real_t _t73 = _t16*_t69;
-    const trailer_real_t _t74 = _t18*_t69;
-    const trailer_real_t _t75 = _t50*_t69;
-    const trailer_real_t _t76 = _t51*_t69;
-    const trailer_real_t _t77 = _t6*_t71;
-    const trailer_real_t _t78 = _t54*_t69;
-    const trailer_real_t _t79 = _t14*_t70;
-    const trailer_real_t _t80 = _t11*_t71;
-    const trailer_real_t _t81 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(9522.0);
-    const trailer_real_t _t82 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(28566.0);
-    const trailer_real_t _t83 = _t11*_t14;
-    const trailer_real_t _t84 = _t69*_t83;
-    const trailer_real_t _t85 = TRAILER_LIT(31178.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t86 = TRAILER_LIT(10222.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t87 = TRAILER_LIT(62356.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(20444.0)*_t74/TRAILER_LIT(42849.0);
-    const trailer_real_t _t89 = _t14*_t6;
-    const trailer_real_t _t90 = TRAILER_LIT(4387.0)*_t73/TRAILER_LIT(4761.0);
-    const trailer_real_t _t91 = _t11*_t9;
-    const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t74/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t54 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t55 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
+            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
+    const trailer_real_t _t56 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
+    const trailer_real_t _t57 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t58 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
+            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t0*_t35
-            + _t36*(J_theta_right + _t1*_t37 + TRAILER_LIT(20444.0)*_t16*_t63/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t18*_t63/TRAILER_LIT(42849.0) + _t3*_t37 - _t37*_t38 + _t37*_t39
-            + _t37*_t4 - _t37*_t5 + _t40*_t41 - _t40*_t42 - _t41*_t43 + _t41*_t44 + _t42*_t43
-            - _t42*_t44 - _t45*_t46 + _t45*_t50 + _t45*_t51 - _t45*_t64 + _t45*_t65 - _t46*_t47
-            + _t47*_t50 + _t47*_t51 - _t47*_t64 + _t47*_t65
-            + TRAILER_LIT(20444.0)*_t48*_t66/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t48/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t49*_t66/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t49/TRAILER_LIT(171396.0) + _t52*_t53 + _t52*_t63 - _t53*_t54
-            - _t53*_t55 - _t54*_t63 - _t55*_t63 - _t56*_t57 + _t56*_t61 - _t56*_t62 + _t56*_t67
-            + _t56*_t68 + _t57*_t58 - _t58*_t61 + _t58*_t62 - _t58*_t67 - _t58*_t68 - _t59*_t6
-            + _t59*_t9 - _t6*_t60 + _t60*_t9);
-    u[1] = H1hat1 + _t0*(J_theta_left + _t1*_t69 - _t11*_t72 + _t11*_t75 - _t11*_t76 + _t11*_t85
-            - _t11*_t86 - _t14*_t72 + _t14*_t75 - _t14*_t76 + _t14*_t85 - _t14*_t86 + _t3*_t69
-            + _t38*_t69 - _t39*_t69 + _t4*_t69 - _t40*_t70 + _t40*_t71 + _t43*_t70 - _t43*_t71
-            + _t44*_t70 - _t44*_t71 - _t5*_t69 + _t52*_t77 + _t52*_t84 + _t55*_t77 + _t55*_t84
-            + _t57*_t79 - _t57*_t80 + _t6*_t81 + _t6*_t82 - _t61*_t79 + _t61*_t80 - _t62*_t79
-            + _t62*_t80 - _t66*_t78 - _t66*_t87 + _t66*_t88
-            + TRAILER_LIT(11449.0)*_t73/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t74/TRAILER_LIT(171396.0) - _t78*_t83 - _t81*_t9 - _t82*_t9
-            - _t83*_t87 + _t83*_t88 - _t89*_t90 - _t89*_t92 + _t90*_t91 + _t91*_t92) + _t35*_t36;
+    u[0] = H1hat0 + _t53*_t55 + _t54*_t56;
+    u[1] = H1hat1 + _t53*_t57 + _t54*_t58;
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 75 add, 119 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t0 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t5 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t7 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t8 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t9 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t10 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t11 = TRAILER_LIT(32849.0)*_t6/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t12 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t13 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t14 = _t13*_t13;
-    const trailer_real_t _t15 = _t14*_t6;
-    const trailer_real_t _t16 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t17 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t18 = _t17*_t17;
-    const trailer_real_t _t19 = _t18*_t6;
-    const trailer_real_t _t20 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
+    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = _t6*_t9;
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t6;
+    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
+    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
+    const trailer_real_t _t18 = _t7*_t9;
+    const trailer_real_t _t19 = _t11*_t7;
+    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
+    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t21 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t22 = _t13*TRAILER_SIN(theta_cart);
-    const trailer_real_t _t23 = _t22*_t6;
-    const trailer_real_t _t24 = _t17*TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t25 = _t24*_t6;
-    const trailer_real_t _t26 = TRAILER_LIT(29522.0)*_t10/TRAILER_LIT(42849.0);
-    const trailer_real_t _t27 = TRAILER_LIT(29522.0)*_t12/TRAILER_LIT(42849.0);
-    const trailer_real_t _t28 = TRAILER_LIT(14761.0)*_t10/TRAILER_LIT(28566.0);
-    const trailer_real_t _t29 = TRAILER_LIT(14761.0)*_t12/TRAILER_LIT(28566.0);
-    const trailer_real_t _t30 = _t15*_t18;
-    const trailer_real_t _t31 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t32 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t33 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t34 = _t19*_t22;
-    const trailer_real_t _t35 = _t15*_t24;
-    const trailer_real_t _t36 = _t22*_t25;
-    const trailer_real_t _t37 = TRAILER_LIT(59044.0)*_t30/TRAILER_LIT(42849.0);
-    const trailer_real_t _t38 = TRAILER_LIT(14761.0)*_t10/TRAILER_LIT(14283.0);
-    const trailer_real_t _t39 = TRAILER_LIT(14761.0)*_t12/TRAILER_LIT(14283.0);
-    const trailer_real_t _t40 = TRAILER_LIT(59044.0)*_t36/TRAILER_LIT(42849.0);
-    const trailer_real_t _t41 = _t10*_t11 + _t10*_t37 + _t10*_t40 + _t11*_t12 + _t12*_t37
-            + _t12*_t40 + _t15*_t16 - _t15*_t20 - _t15*_t26 - _t15*_t27 + _t16*_t19 - _t19*_t20
-            - _t19*_t26 - _t19*_t27 + _t21*_t23 - _t21*_t25 - _t23*_t28 + _t23*_t29 + _t25*_t28
-            - _t25*_t29 - _t30*_t31 + _t30*_t32 - _t31*_t36 + _t32*_t36 - _t33*_t34 + _t33*_t35
-            + _t34*_t38 - _t34*_t39 - _t35*_t38 + _t35*_t39 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9;
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t42 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t _t43 = radius_right*radius_right;
-    const trailer_real_t _t44 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
+    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t45 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t46 = _t10*_t43;
-    const trailer_real_t _t47 = _t12*_t43;
-    const trailer_real_t _t48 = _t14*_t43;
-    const trailer_real_t _t49 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t50 = _t18*_t43;
-    const trailer_real_t _t51 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t52 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t53 = _t22*_t43;
-    const trailer_real_t _t54 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t55 = _t24*_t43;
-    const trailer_real_t _t56 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t57 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t58 = TRAILER_LIT(10222.0)*_t10/TRAILER_LIT(42849.0);
-    const trailer_real_t _t59 = TRAILER_LIT(31178.0)*_t12/TRAILER_LIT(42849.0);
-    const trailer_real_t _t60 = TRAILER_LIT(23639.0)*_t46/TRAILER_LIT(28566.0);
-    const trailer_real_t _t61 = TRAILER_LIT(4387.0)*_t47/TRAILER_LIT(9522.0);
-    const trailer_real_t _t62 = _t18*_t48;
-    const trailer_real_t _t63 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t64 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t66 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t67 = _t22*_t50;
-    const trailer_real_t _t68 = _t24*_t48;
-    const trailer_real_t _t69 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t70 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t71 = _t24*_t53;
-    const trailer_real_t _t72 = TRAILER_LIT(23639.0)*_t10/TRAILER_LIT(14283.0);
-    const trailer_real_t _t73 = TRAILER_LIT(4387.0)*_t12/TRAILER_LIT(4761.0);
-    const trailer_real_t _t74 = _t22*_t24;
-    const trailer_real_t _t75 = radius_left*radius_left;
-    const trailer_real_t _t76 = _t10*_t75;
-    const trailer_real_t _t77 = _t12*_t75;
-    const trailer_real_t _t78 = _t49*_t75;
-    const trailer_real_t _t79 = _t51*_t75;
-    const trailer_real_t _t80 = _t52*_t75;
-    const trailer_real_t _t81 = _t22*_t75;
-    const trailer_real_t _t82 = _t24*_t75;
-    const trailer_real_t _t83 = TRAILER_LIT(31178.0)*_t76/TRAILER_LIT(42849.0);
-    const trailer_real_t _t84 = TRAILER_LIT(10222.0)*_t77/TRAILER_LIT(42849.0);
-    const trailer_real_t _t85 = TRAILER_LIT(4387.0)*_t76/TRAILER_LIT(9522.0);
-    const trailer_real_t _t86 = TRAILER_LIT(23639.0)*_t77/TRAILER_LIT(28566.0);
-    const trailer_real_t _t87 = _t14*_t18;
-    const trailer_real_t _t88 = _t75*_t87;
-    const trailer_real_t _t89 = _t64*_t75;
-    const trailer_real_t _t90 = _t18*_t81;
-    const trailer_real_t _t91 = _t14*_t82;
-    const trailer_real_t _t92 = _t24*_t81;
-    const trailer_real_t _t93 = TRAILER_LIT(62356.0)*_t76/TRAILER_LIT(42849.0);
-    const trailer_real_t _t94 = TRAILER_LIT(20444.0)*_t77/TRAILER_LIT(42849.0);
-    const trailer_real_t _t95 = TRAILER_LIT(4387.0)*_t76/TRAILER_LIT(4761.0);
-    const trailer_real_t _t96 = _t18*_t22;
-    const trailer_real_t _t97 = _t14*_t24;
-    const trailer_real_t _t98 = TRAILER_LIT(23639.0)*_t77/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t4*_t41
-            + _t42*(J_theta_right + TRAILER_LIT(20444.0)*_t10*_t62/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t12*_t62/TRAILER_LIT(42849.0) + _t22*_t60 + _t22*_t61
-            - _t24*_t60 - _t24*_t61 - _t43*_t44 + _t43*_t45 + _t43*_t5 + _t43*_t7 + _t43*_t8
-            - _t43*_t9 + TRAILER_LIT(20444.0)*_t46*_t74/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t46/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t47*_t74/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t47/TRAILER_LIT(171396.0) - _t48*_t49 + _t48*_t51 + _t48*_t52
-            - _t48*_t58 + _t48*_t59 - _t49*_t50 + _t50*_t51 + _t50*_t52 - _t50*_t58 + _t50*_t59
-            - _t53*_t54 + _t53*_t56 - _t53*_t57 + _t54*_t55 - _t55*_t56 + _t55*_t57 + _t62*_t63
-            - _t62*_t64 - _t62*_t65 + _t63*_t71 - _t64*_t71 - _t65*_t71 + _t66*_t67 - _t66*_t68
-            - _t67*_t69 + _t67*_t70 - _t67*_t72 - _t67*_t73 + _t68*_t69 - _t68*_t70 + _t68*_t72
-            + _t68*_t73);
-    u[1] = H1hat1 + _t4*(J_theta_left - _t14*_t78 + _t14*_t79 - _t14*_t80 + _t14*_t83 - _t14*_t84
-            - _t18*_t78 + _t18*_t79 - _t18*_t80 + _t18*_t83 - _t18*_t84 - _t22*_t85 - _t22*_t86
-            + _t24*_t85 + _t24*_t86 + _t44*_t75 - _t45*_t75 + _t5*_t75 + _t54*_t81 - _t54*_t82
-            - _t56*_t81 + _t56*_t82 - _t57*_t81 + _t57*_t82 + _t63*_t88 + _t63*_t92 + _t65*_t88
-            + _t65*_t92 - _t66*_t90 + _t66*_t91 + _t69*_t90 - _t69*_t91 + _t7*_t75 + _t70*_t90
-            - _t70*_t91 - _t74*_t89 - _t74*_t93 + _t74*_t94 + _t75*_t8 - _t75*_t9
-            + TRAILER_LIT(11449.0)*_t76/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t77/TRAILER_LIT(171396.0) - _t87*_t89 - _t87*_t93 + _t87*_t94
-            + _t95*_t96 - _t95*_t97 + _t96*_t98 - _t97*_t98) + _t41*_t42;
-    s[0] = _t1;
-    s[1] = _t0;
-    s_norm[0] = _t2;
-}
-
-/* trailer_minimal_tdroc_law_trig: documented in trailer_laws.h.
-   operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
-    const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
-{
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t0 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t33 = _t24 + _t25;
+    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
+    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
+            + _t26*_t28;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
+    const trailer_real_t _t38 = _t15 - _t17;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t40 = _t38*_t39;
+    const trailer_real_t _t41 = _t22 - _t23;
+    const trailer_real_t _t42 = _t39*_t41;
+    const trailer_real_t _t43 = -_t15 - _t17;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t45 = _t43*_t44;
+    const trailer_real_t _t46 = -_t22 - _t23;
+    const trailer_real_t _t47 = _t44*_t46;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
+    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
+    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
+    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
+    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t1 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
+    const trailer_real_t _t53 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t54 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t55 = trailer_norm2(_t53, _t54);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t4 = _t0*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t5 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t7 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t8 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t9 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t trig_s0 = trig[0];
-    const trailer_real_t trig_c0 = trig[1];
-    const trailer_real_t _t10 = trig_c0*trig_s0;
-    const trailer_real_t _t11 = _t10*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t12 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t trig_s1 = trig[2];
-    const trailer_real_t trig_c1 = trig[3];
-    const trailer_real_t _t13 = trig_c1*trig_s1;
-    const trailer_real_t _t14 = _t13*_t6;
-    const trailer_real_t _t15 = trig_c0*trig_c0;
-    const trailer_real_t _t16 = _t15*_t6;
-    const trailer_real_t _t17 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t18 = trig_c1*trig_c1;
-    const trailer_real_t _t19 = _t18*_t6;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t20 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t21 = TRAILER_LIT(32849.0)*_t6/TRAILER_LIT(171396.0);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t22 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
-    const trailer_real_t _t23 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t24 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t25 = _t11*_t13;
-    const trailer_real_t _t26 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t27 = TRAILER_LIT(14761.0)*_t20/TRAILER_LIT(28566.0);
-    const trailer_real_t _t28 = TRAILER_LIT(14761.0)*_t22/TRAILER_LIT(28566.0);
-    const trailer_real_t _t29 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t30 = _t10*_t19;
-    const trailer_real_t _t31 = _t13*_t16;
-    const trailer_real_t _t32 = _t16*_t18;
-    const trailer_real_t _t33 = TRAILER_LIT(29522.0)*_t20/TRAILER_LIT(42849.0);
-    const trailer_real_t _t34 = TRAILER_LIT(29522.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t35 = TRAILER_LIT(59044.0)*_t25/TRAILER_LIT(42849.0);
-    const trailer_real_t _t36 = TRAILER_LIT(14761.0)*_t20/TRAILER_LIT(14283.0);
-    const trailer_real_t _t37 = TRAILER_LIT(14761.0)*_t22/TRAILER_LIT(14283.0);
-    const trailer_real_t _t38 = TRAILER_LIT(59044.0)*_t32/TRAILER_LIT(42849.0);
-    const trailer_real_t _t39 = -_t11*_t12 + _t11*_t27 - _t11*_t28 + _t12*_t14 - _t14*_t27
-            + _t14*_t28 + _t16*_t17 - _t16*_t23 - _t16*_t33 - _t16*_t34 + _t17*_t19 - _t19*_t23
-            - _t19*_t33 - _t19*_t34 + _t20*_t21 + _t20*_t35 + _t20*_t38 + _t21*_t22 + _t22*_t35
-            + _t22*_t38 - _t24*_t25 - _t24*_t32 + _t25*_t26 + _t26*_t32 + _t29*_t30 - _t29*_t31
-            - _t30*_t36 + _t30*_t37 + _t31*_t36 - _t31*_t37 - _t5*_t6 - _t6*_t7 + _t6*_t8 + _t6*_t9;
+    const trailer_real_t _t56 = gain_1/TRAILER_FMAX(_t55, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t40 = _t1*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t _t41 = radius_right*radius_right;
-    const trailer_real_t _t42 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t43 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t44 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t45 = _t10*_t41;
-    const trailer_real_t _t46 = _t13*_t41;
-    const trailer_real_t _t47 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t48 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t49 = _t15*_t41;
-    const trailer_real_t _t50 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t51 = _t18*_t41;
-    const trailer_real_t _t52 = _t20*_t41;
-    const trailer_real_t _t53 = _t22*_t41;
-    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t55 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t56 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t57 = _t10*_t46;
-    const trailer_real_t _t58 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t59 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t60 = _t10*_t51;
-    const trailer_real_t _t61 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t62 = _t13*_t49;
-    const trailer_real_t _t63 = TRAILER_LIT(23639.0)*_t52/TRAILER_LIT(28566.0);
-    const trailer_real_t _t64 = TRAILER_LIT(4387.0)*_t53/TRAILER_LIT(9522.0);
-    const trailer_real_t _t65 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t66 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t67 = _t18*_t49;
-    const trailer_real_t _t68 = TRAILER_LIT(10222.0)*_t20/TRAILER_LIT(42849.0);
-    const trailer_real_t _t69 = TRAILER_LIT(31178.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t70 = _t10*_t13;
-    const trailer_real_t _t71 = TRAILER_LIT(23639.0)*_t20/TRAILER_LIT(14283.0);
-    const trailer_real_t _t72 = TRAILER_LIT(4387.0)*_t22/TRAILER_LIT(4761.0);
-    const trailer_real_t _t73 = radius_left*radius_left;
-    const trailer_real_t _t74 = _t10*_t73;
-    const trailer_real_t _t75 = _t13*_t73;
-    const trailer_real_t _t76 = _t50*_t73;
-    const trailer_real_t _t77 = _t20*_t73;
-    const trailer_real_t _t78 = _t22*_t73;
-    const trailer_real_t _t79 = _t54*_t73;
-    const trailer_real_t _t80 = _t55*_t73;
-    const trailer_real_t _t81 = _t10*_t75;
-    const trailer_real_t _t82 = _t58*_t73;
-    const trailer_real_t _t83 = _t18*_t74;
-    const trailer_real_t _t84 = _t15*_t75;
-    const trailer_real_t _t85 = TRAILER_LIT(4387.0)*_t77/TRAILER_LIT(9522.0);
-    const trailer_real_t _t86 = TRAILER_LIT(23639.0)*_t78/TRAILER_LIT(28566.0);
-    const trailer_real_t _t87 = _t15*_t18;
-    const trailer_real_t _t88 = _t73*_t87;
-    const trailer_real_t _t89 = TRAILER_LIT(31178.0)*_t77/TRAILER_LIT(42849.0);
-    const trailer_real_t _t90 = TRAILER_LIT(10222.0)*_t78/TRAILER_LIT(42849.0);
-    const trailer_real_t _t91 = TRAILER_LIT(62356.0)*_t77/TRAILER_LIT(42849.0);
-    const trailer_real_t _t92 = TRAILER_LIT(20444.0)*_t78/TRAILER_LIT(42849.0);
-    const trailer_real_t _t93 = _t10*_t18;
-    const trailer_real_t _t94 = TRAILER_LIT(4387.0)*_t77/TRAILER_LIT(4761.0);
-    const trailer_real_t _t95 = _t13*_t15;
-    const trailer_real_t _t96 = TRAILER_LIT(23639.0)*_t78/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t57 = _t53*_t56 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t _t58 = _t54*_t56 + e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t59 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
+            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
+    const trailer_real_t _t60 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
+    const trailer_real_t _t61 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t62 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
+            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t39*_t4 + _t40*(J_theta_right - _t10*_t63 - _t10*_t64 + _t13*_t63 + _t13*_t64
-            + TRAILER_LIT(20444.0)*_t20*_t67/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t22*_t67/TRAILER_LIT(42849.0) - _t41*_t42 + _t41*_t43 + _t41*_t5
-            + _t41*_t7 + _t41*_t8 - _t41*_t9 + _t44*_t45 - _t44*_t46 - _t45*_t47 + _t45*_t48
-            + _t46*_t47 - _t46*_t48 - _t49*_t50 + _t49*_t54 + _t49*_t55 - _t49*_t68 + _t49*_t69
-            - _t50*_t51 + _t51*_t54 + _t51*_t55 - _t51*_t68 + _t51*_t69
-            + TRAILER_LIT(20444.0)*_t52*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t52/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(62356.0)*_t53*_t70/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t53/TRAILER_LIT(171396.0) + _t56*_t57 + _t56*_t67 - _t57*_t58
-            - _t57*_t59 - _t58*_t67 - _t59*_t67 - _t60*_t61 + _t60*_t65 - _t60*_t66 + _t60*_t71
-            + _t60*_t72 + _t61*_t62 - _t62*_t65 + _t62*_t66 - _t62*_t71 - _t62*_t72);
-    u[1] = H1hat1 + _t39*_t40 + _t4*(J_theta_left + _t10*_t85 + _t10*_t86 - _t13*_t85 - _t13*_t86
-            - _t15*_t76 + _t15*_t79 - _t15*_t80 + _t15*_t89 - _t15*_t90 - _t18*_t76 + _t18*_t79
-            - _t18*_t80 + _t18*_t89 - _t18*_t90 + _t42*_t73 - _t43*_t73 - _t44*_t74 + _t44*_t75
-            + _t47*_t74 - _t47*_t75 + _t48*_t74 - _t48*_t75 + _t5*_t73 + _t56*_t81 + _t56*_t88
-            + _t59*_t81 + _t59*_t88 + _t61*_t83 - _t61*_t84 - _t65*_t83 + _t65*_t84 - _t66*_t83
-            + _t66*_t84 + _t7*_t73 - _t70*_t82 - _t70*_t91 + _t70*_t92 + _t73*_t8 - _t73*_t9
-            + TRAILER_LIT(11449.0)*_t77/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t78/TRAILER_LIT(171396.0) - _t82*_t87 - _t87*_t91 + _t87*_t92
-            - _t93*_t94 - _t93*_t96 + _t94*_t95 + _t95*_t96);
-    s[0] = _t1;
-    s[1] = _t0;
-    s_norm[0] = _t2;
+    u[0] = H1hat0 + _t57*_t59 + _t58*_t60;
+    u[1] = H1hat1 + _t57*_t61 + _t58*_t62;
+    s[0] = _t53;
+    s[1] = _t54;
+    s_norm[0] = _t55;
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 143 add, 224 mul, 25 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -1234,1190 +524,194 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = radius_right*radius_right*radius_right;
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t _t1 = thetadot_right*thetadot_right;
-    const trailer_real_t _t2 = _t0*_t1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t4 =
-            TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t5 = radius_right*radius_right;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = _t5*radius_left;
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t8 = thetadot_left*thetadot_right;
-    const trailer_real_t _t9 = _t7*_t8;
-    const trailer_real_t _t10 = radius_left*radius_left;
-    const trailer_real_t _t11 = thetadot_left*thetadot_left;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t13 = _t11*radius_right;
-    const trailer_real_t _t14 = _t10*_t13;
-    const trailer_real_t _t15 =
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t18 = J_theta_cart_left*_t16;
-    const trailer_real_t _t19 = _t18*_t5;
-    const trailer_real_t _t20 = _t8*radius_left;
-    const trailer_real_t _t21 = _t19*_t20;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t22 = J_theta_cart_right*_t17;
-    const trailer_real_t _t23 = _t22*_t5;
-    const trailer_real_t _t24 = _t20*_t23;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t25 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t26 = _t25*_t25;
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t27 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t28 = _t27*_t27;
-    const trailer_real_t _t29 = _t2*_t26;
-    const trailer_real_t _t30 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t31 = _t2*_t28;
-    const trailer_real_t _t32 = J_theta_cart*_t2;
-    const trailer_real_t _t33 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t34 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t35 = _t33*_t34;
-    const trailer_real_t _t36 = TRAILER_LIT(156250.0)*_t35/TRAILER_LIT(128547.0);
-    const trailer_real_t _t37 = _t25*_t33;
-    const trailer_real_t _t38 = _t25*_t32;
-    const trailer_real_t _t39 = TRAILER_LIT(746875.0)*_t34/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t40 = TRAILER_LIT(3779875.0)*_t27/TRAILER_LIT(514188.0);
-    const trailer_real_t _t41 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t42 = _t33*_t41;
-    const trailer_real_t _t43 = TRAILER_LIT(298750.0)*_t27/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t44 = _t27*_t34;
-    const trailer_real_t _t45 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t46 = TRAILER_LIT(3274375.0)*_t35/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t47 = TRAILER_LIT(1130975.0)*_t27/TRAILER_LIT(342792.0);
-    const trailer_real_t _t48 = K_theta_cart_x_tractor_2*_t44;
-    const trailer_real_t _t49 = TRAILER_LIT(625000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t50 = _t26*_t5;
-    const trailer_real_t _t51 = _t20*_t50;
-    const trailer_real_t _t52 = _t28*_t5;
-    const trailer_real_t _t53 = _t20*_t52;
-    const trailer_real_t _t54 =
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t55 = _t27*_t33;
-    const trailer_real_t _t56 = TRAILER_LIT(46128125.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t57 = _t56*_t9;
-    const trailer_real_t _t58 = _t44*_t5;
-    const trailer_real_t _t59 = TRAILER_LIT(62500000.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t60 = TRAILER_LIT(62500.0)*_t35/TRAILER_LIT(42849.0);
-    const trailer_real_t _t61 = K_theta_cart_x_tractor*_t9;
-    const trailer_real_t _t62 = _t37*_t5;
-    const trailer_real_t _t63 = _t20*_t62;
-    const trailer_real_t _t64 =
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t65 = _t25*_t34;
-    const trailer_real_t _t66 = K_theta_cart_x_tractor*_t65;
-    const trailer_real_t _t67 = _t25*_t27;
-    const trailer_real_t _t68 = TRAILER_LIT(431525.0)*_t67/TRAILER_LIT(42849.0);
-    const trailer_real_t _t69 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t65;
-    const trailer_real_t _t71 = J_theta_cart*_t14;
-    const trailer_real_t _t72 = K_theta_cart_x_tractor*_t14;
-    const trailer_real_t _t73 = TRAILER_LIT(9225625.0)*_t72/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t74 = TRAILER_LIT(369025.0)*_t67/TRAILER_LIT(85698.0);
-    const trailer_real_t _t75 = K_theta_cart_x_tractor_2*_t14;
-    const trailer_real_t _t76 = TRAILER_LIT(9225625.0)*_t35/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t77 = TRAILER_LIT(46128125.0)*_t67/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t78 = _t27*_t27*_t27;
-    const trailer_real_t _t79 = _t25*_t25*_t25;
-    const trailer_real_t _t80 = _t32*_t79;
-    const trailer_real_t _t81 = TRAILER_LIT(13384375.0)*_t34/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t82 = TRAILER_LIT(2676875.0)*_t78/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t83 = _t25*_t78;
-    const trailer_real_t _t84 = TRAILER_LIT(210325.0)*_t41/TRAILER_LIT(19044.0);
-    const trailer_real_t _t85 = _t27*_t79;
-    const trailer_real_t _t86 = TRAILER_LIT(210325.0)*_t79/TRAILER_LIT(57132.0);
-    const trailer_real_t _t87 = TRAILER_LIT(2676875.0)*_t45/TRAILER_LIT(985527.0);
-    const trailer_real_t _t88 = _t34*_t79;
-    const trailer_real_t _t89 = _t83*_t9;
-    const trailer_real_t _t90 = TRAILER_LIT(1845125.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t91 = _t85*_t9;
-    const trailer_real_t _t92 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t93 = _t33*_t78;
-    const trailer_real_t _t94 = _t9*_t93;
-    const trailer_real_t _t95 = TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(85698.0);
-    const trailer_real_t _t96 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(985527.0);
-    const trailer_real_t _t97 = TRAILER_LIT(5909750.0)*_t18/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t98 = TRAILER_LIT(1096750.0)*_t22/TRAILER_LIT(985527.0);
-    const trailer_real_t _t99 = TRAILER_LIT(1845125.0)*_t71/TRAILER_LIT(342792.0);
-    const trailer_real_t _t100 = _t18*_t2;
-    const trailer_real_t _t101 = _t2*_t22;
-    const trailer_real_t _t102 = TRAILER_LIT(400000.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t103 = TRAILER_LIT(3837500.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t104 = TRAILER_LIT(18008060.0)*_t67/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t105 = TRAILER_LIT(1337500.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t106 = TRAILER_LIT(249020.0)*_t67/TRAILER_LIT(985527.0);
-    const trailer_real_t _t107 = _t28*_t29;
-    const trailer_real_t _t108 = TRAILER_LIT(1250000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t109 = TRAILER_LIT(1051625.0)*_t78/TRAILER_LIT(85698.0);
-    const trailer_real_t _t110 =
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t111 = _t31*_t65;
-    const trailer_real_t _t112 = J_theta_cart*_t29;
-    const trailer_real_t _t113 = TRAILER_LIT(32743750.0)*_t44/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t114 = _t10*_t18;
-    const trailer_real_t _t115 = _t114*_t13;
-    const trailer_real_t _t116 = TRAILER_LIT(3690250.0)*_t115/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t117 = K_theta_cart_x_tractor*_t29;
-    const trailer_real_t _t118 = TRAILER_LIT(210325.0)*_t35/TRAILER_LIT(57132.0);
-    const trailer_real_t _t119 = K_theta_cart_x_tractor*_t31;
-    const trailer_real_t _t120 = TRAILER_LIT(13097500.0)*_t37/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t121 = K_theta_cart_x_tractor_2*_t29;
-    const trailer_real_t _t122 = TRAILER_LIT(2676875.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t123 = K_theta_cart_x_tractor_2*_t37;
-    const trailer_real_t _t124 = TRAILER_LIT(500000.0)*_t123/TRAILER_LIT(42849.0);
-    const trailer_real_t _t125 = _t37*_t44;
-    const trailer_real_t _t126 = TRAILER_LIT(14761000.0)*_t44/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t127 = _t10*_t22;
-    const trailer_real_t _t128 = _t127*_t13;
-    const trailer_real_t _t129 = TRAILER_LIT(13140685.0)*_t67/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t130 = TRAILER_LIT(500000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t131 = _t28*_t50;
-    const trailer_real_t _t132 = _t131*_t20;
-    const trailer_real_t _t133 = _t78*_t79;
-    const trailer_real_t _t134 = TRAILER_LIT(738050.0)*_t133/TRAILER_LIT(42849.0);
-    const trailer_real_t _t135 = _t120*_t48;
-    const trailer_real_t _t136 = J_theta_cart*_t51;
-    const trailer_real_t _t137 = TRAILER_LIT(1845125.0)*_t35/TRAILER_LIT(514188.0);
-    const trailer_real_t _t138 = J_theta_cart*_t53;
-    const trailer_real_t _t139 = _t37*_t52;
-    const trailer_real_t _t140 = TRAILER_LIT(125000000.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t141 = TRAILER_LIT(46128125.0)*_t65/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t142 = K_theta_cart_x_tractor*_t55;
-    const trailer_real_t _t143 = TRAILER_LIT(18451250.0)*_t142/TRAILER_LIT(985527.0);
-    const trailer_real_t _t144 = _t44*_t50;
-    const trailer_real_t _t145 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t146 = _t145*_t35;
-    const trailer_real_t _t147 = K_theta_cart_x_tractor_2*_t55;
-    const trailer_real_t _t148 = TRAILER_LIT(369025.0)*_t147/TRAILER_LIT(28566.0);
-    const trailer_real_t _t149 =
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t150 = _t144*_t20;
-    const trailer_real_t _t151 = _t44*_t62;
-    const trailer_real_t _t152 = TRAILER_LIT(2367110.0)*_t100/TRAILER_LIT(985527.0);
-    const trailer_real_t _t153 = TRAILER_LIT(3437860.0)*_t101/TRAILER_LIT(985527.0);
-    const trailer_real_t _t154 = TRAILER_LIT(369025.0)*_t133/TRAILER_LIT(42849.0);
-    const trailer_real_t _t155 = _t26*_t28;
-    const trailer_real_t _t156 = TRAILER_LIT(36902500.0)*_t75/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t157 = _t155*_t156;
-    const trailer_real_t _t158 = _t14*_t26;
-    const trailer_real_t _t159 = J_theta_cart*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(1845125.0)*_t35/TRAILER_LIT(1028376.0);
-    const trailer_real_t _t161 = _t14*_t28;
-    const trailer_real_t _t162 = TRAILER_LIT(46128125.0)*_t55/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t163 = TRAILER_LIT(92256250.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t164 =
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t165 = TRAILER_LIT(9225625.0)*_t66/TRAILER_LIT(985527.0);
-    const trailer_real_t _t166 = TRAILER_LIT(369025.0)*_t147/TRAILER_LIT(57132.0);
-    const trailer_real_t _t167 = TRAILER_LIT(295220.0)*_t24/TRAILER_LIT(985527.0);
-    const trailer_real_t _t168 = TRAILER_LIT(36902500.0)*_t48/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t169 = TRAILER_LIT(210325.0)*_t78/TRAILER_LIT(14283.0);
-    const trailer_real_t _t170 = TRAILER_LIT(147610.0)*_t115/TRAILER_LIT(985527.0);
-    const trailer_real_t _t171 = _t53*_t88;
-    const trailer_real_t _t172 =
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t173 = _t161*_t88;
-    const trailer_real_t _t174 = _t18*_t29;
-    const trailer_real_t _t175 = TRAILER_LIT(2367110.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t176 = _t18*_t31;
-    const trailer_real_t _t177 = TRAILER_LIT(34688365.0)*_t55/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t178 = _t18*_t44;
-    const trailer_real_t _t179 = _t22*_t29;
-    const trailer_real_t _t180 = TRAILER_LIT(3437860.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t181 = _t22*_t37;
-    const trailer_real_t _t182 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t183 = _t131*_t18;
-    const trailer_real_t _t184 = _t183*_t20;
-    const trailer_real_t _t185 = TRAILER_LIT(9447040.0)*_t133/TRAILER_LIT(985527.0);
-    const trailer_real_t _t186 = _t51*_t55;
-    const trailer_real_t _t187 = TRAILER_LIT(295220.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t188 = TRAILER_LIT(4723520.0)*_t133/TRAILER_LIT(985527.0);
-    const trailer_real_t _t189 = _t26*_t35;
-    const trailer_real_t _t190 = TRAILER_LIT(147610.0)*_t115/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t191 = _t28*_t35;
-    const trailer_real_t _t192 = _t28*_t37;
-    const trailer_real_t _t193 = TRAILER_LIT(29522000.0)*_t192/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t194 = _t28*_t65;
-    const trailer_real_t _t195 = TRAILER_LIT(7380500.0)*_t125/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t196 = K_theta_cart_x_tractor*_t35;
-    const trailer_real_t _t197 = TRAILER_LIT(738050.0)*_t196/TRAILER_LIT(42849.0);
-    const trailer_real_t _t198 = TRAILER_LIT(34688365.0)*_t88/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t199 = TRAILER_LIT(17556365.0)*_t93/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t200 = _t155*_t35;
-    const trailer_real_t _t201 = _t26*_t93;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t202 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
+    const trailer_real_t _t14 = _t10*_t11;
+    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
+    const trailer_real_t _t16 = -_t8*_t9;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t21 = -_t10*_t8;
+    const trailer_real_t _t22 = -_t1*_t21 - _t15;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t thetadot_right = qdot[4];
+    const trailer_real_t thetadot_left = qdot[5];
+    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t36 = _t35*_t35;
+    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = _t34*_t36;
+    const trailer_real_t _t40 = _t28*_t36;
+    const trailer_real_t _t41 = _t29*_t36;
+    const trailer_real_t _t42 = _t33*_t38;
+    const trailer_real_t _t43 = _t32*_t38;
+    const trailer_real_t _t44 = _t37*thetadot_right;
+    const trailer_real_t _t45 = _t37*thetadot_left;
+    const trailer_real_t _t46 = _t35*thetadot_right;
+    const trailer_real_t _t47 = _t35*thetadot_left;
+    const trailer_real_t _t48 = _t8*_t9;
+    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
+    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t52 = -_t1*_t48 + _t13;
+    const trailer_real_t _t53 = _t10*_t8;
+    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = -_t1*_t53 + _t15;
+    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
+    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
+    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
+    const trailer_real_t _t67 = _t26 + _t27;
+    const trailer_real_t _t68 = _t28 + _t29;
+    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
+    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
+    const trailer_real_t _t73 = -_t19 - _t20;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t75 = _t73*_t74;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t76 = J_theta_cart_left*_t75;
+    const trailer_real_t _t77 = _t19 - _t20;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t79 = _t77*_t78;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t80 = J_theta_cart_right*_t79;
+    const trailer_real_t _t81 = _t24 - _t25;
+    const trailer_real_t _t82 = _t78*_t81;
+    const trailer_real_t _t83 = -_t24 - _t25;
+    const trailer_real_t _t84 = _t74*_t83;
+    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
+    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
+    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
+    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
+    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
+    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
+    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
+    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
+    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
+    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
+            - _t39;
+    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
+    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
+    const trailer_real_t _t97 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+            - _t33*_t40 - _t33*_t41;
+    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
+    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
+    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t204 = trailer_norm2(_t202, _t203);
+    const trailer_real_t _t101 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t102 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t103 = trailer_norm2(_t101, _t102);
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t205 = e0*k1_0 + edot0*k2_0;
+    const trailer_real_t _t104 = e0*k1_0 + edot0*k2_0;
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t206 = e1*k1_1 + edot1*k2_1;
+    const trailer_real_t _t105 = e1*k1_1 + edot1*k2_1;
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t alpha = bounds[0];
     const trailer_real_t phi = bounds[1];
-    const trailer_real_t _t207 = (alpha*(trailer_norm2(_t205, _t206)
+    const trailer_real_t _t106 = (alpha*(trailer_norm2(_t104, _t105)
             + trailer_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER_LIT(1.0) - alpha);
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t208 = _t207/TRAILER_FMAX(_t204, eps_1);
-    const trailer_real_t _t209 = _t202*_t208 + _t206 + qdd_des1;
-    const trailer_real_t _t210 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t211 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t212 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t213 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t214 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t215 = TRAILER_LIT(32849.0)*_t211/TRAILER_LIT(171396.0);
-    const trailer_real_t _t216 = _t211*_t26;
-    const trailer_real_t _t217 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t218 = _t211*_t28;
-    const trailer_real_t _t219 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t220 = TRAILER_LIT(73805.0)*_t211/TRAILER_LIT(28566.0);
-    const trailer_real_t _t221 = TRAILER_LIT(29522.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t222 = TRAILER_LIT(29522.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t223 = TRAILER_LIT(14761.0)*_t211/TRAILER_LIT(28566.0);
-    const trailer_real_t _t224 = _t18*_t37;
-    const trailer_real_t _t225 = _t223*_t44;
-    const trailer_real_t _t226 = _t216*_t28;
-    const trailer_real_t _t227 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t228 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t229 = _t125*_t211;
-    const trailer_real_t _t230 = TRAILER_LIT(59044.0)*_t226/TRAILER_LIT(42849.0);
-    const trailer_real_t _t231 = TRAILER_LIT(14761.0)*_t218/TRAILER_LIT(14283.0);
-    const trailer_real_t _t232 = TRAILER_LIT(14761.0)*_t216/TRAILER_LIT(14283.0);
-    const trailer_real_t _t233 = TRAILER_LIT(59044.0)*_t211*_t44/TRAILER_LIT(42849.0);
-    const trailer_real_t _t234 = -TRAILER_LIT(73805.0)*_t123*_t218/TRAILER_LIT(14283.0)
-            + _t123*_t220 - _t178*_t232 + _t18*_t215 + _t18*_t225 + _t18*_t230 + _t181*_t223
-            - _t181*_t231 + _t181*_t233 - _t210*_t211 - _t211*_t212 + _t211*_t213 + _t211*_t214
-            + _t215*_t22 + _t216*_t217 - _t216*_t219 - _t216*_t221 - _t216*_t222
-            + TRAILER_LIT(73805.0)*_t216*_t48/TRAILER_LIT(14283.0) + _t217*_t218 - _t218*_t219
-            - _t218*_t221 - _t218*_t222 - _t22*_t225 + _t22*_t230 + _t22*_t232*_t44 - _t220*_t48
-            - _t223*_t224 + _t224*_t231 + _t224*_t233 - _t226*_t227 + _t226*_t228 - _t227*_t229
-            + _t228*_t229;
-    const trailer_real_t _t235 = _t203*_t208 + _t205 + qdd_des0;
-    const trailer_real_t _t236 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t237 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t238 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t239 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t240 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t241 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t242 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t243 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t244 = TRAILER_LIT(10222.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t245 = TRAILER_LIT(31178.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t246 = TRAILER_LIT(23639.0)*_t19/TRAILER_LIT(28566.0);
-    const trailer_real_t _t247 = TRAILER_LIT(4387.0)*_t23/TRAILER_LIT(9522.0);
-    const trailer_real_t _t248 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t249 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t250 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t251 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t252 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t253 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t254 = _t131*_t22;
-    const trailer_real_t _t255 = TRAILER_LIT(23639.0)*_t18/TRAILER_LIT(14283.0);
-    const trailer_real_t _t256 = TRAILER_LIT(4387.0)*_t22/TRAILER_LIT(4761.0);
-    const trailer_real_t _t257 = _t11*radius_left*radius_left*radius_left;
-    const trailer_real_t _t258 = _t8*radius_right;
-    const trailer_real_t _t259 = _t10*_t258;
-    const trailer_real_t _t260 = _t1*_t7;
-    const trailer_real_t _t261 = _t18*_t257;
-    const trailer_real_t _t262 = _t22*_t257;
-    const trailer_real_t _t263 = _t114*_t258;
-    const trailer_real_t _t264 = _t127*_t258;
-    const trailer_real_t _t265 = _t257*_t49;
-    const trailer_real_t _t266 = _t257*_t30;
-    const trailer_real_t _t267 =
-            TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t257/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t268 = J_theta_cart*_t257;
-    const trailer_real_t _t269 = TRAILER_LIT(16371875.0)*_t268/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t270 = _t268*_t33;
-    const trailer_real_t _t271 = _t25*_t268;
-    const trailer_real_t _t272 = _t1*radius_left;
-    const trailer_real_t _t273 = _t19*_t272;
-    const trailer_real_t _t274 = _t23*_t272;
-    const trailer_real_t _t275 = K_theta_cart_x_tractor*_t257;
-    const trailer_real_t _t276 = TRAILER_LIT(6548750.0)*_t275/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t277 = _t275*_t33;
-    const trailer_real_t _t278 = _t25*_t275;
-    const trailer_real_t _t279 = K_theta_cart_x_tractor_2*_t257;
-    const trailer_real_t _t280 = TRAILER_LIT(250000.0)*_t257/TRAILER_LIT(42849.0);
-    const trailer_real_t _t281 = _t279*_t33;
-    const trailer_real_t _t282 = _t279*_t34;
-    const trailer_real_t _t283 = _t259*_t49;
-    const trailer_real_t _t284 = _t259*_t30;
-    const trailer_real_t _t285 = _t259*_t54;
-    const trailer_real_t _t286 = _t10*_t37;
-    const trailer_real_t _t287 = _t258*_t286;
-    const trailer_real_t _t288 = _t259*_t56;
-    const trailer_real_t _t289 = _t10*_t44;
-    const trailer_real_t _t290 = _t258*_t289;
-    const trailer_real_t _t291 = J_theta_cart*_t259;
-    const trailer_real_t _t292 = K_theta_cart_x_tractor*_t259;
-    const trailer_real_t _t293 = TRAILER_LIT(15475625.0)*_t259/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t294 = K_theta_cart_x_tractor_2*_t259;
-    const trailer_real_t _t295 = TRAILER_LIT(619025.0)*_t259/TRAILER_LIT(171396.0);
-    const trailer_real_t _t296 = _t145*_t272;
-    const trailer_real_t _t297 = J_theta_cart*_t260;
-    const trailer_real_t _t298 = _t272*_t62;
-    const trailer_real_t _t299 = TRAILER_LIT(15625000.0)*_t297/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t300 = _t272*_t58;
-    const trailer_real_t _t301 = K_theta_cart_x_tractor*_t260;
-    const trailer_real_t _t302 = TRAILER_LIT(9225625.0)*_t301/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t303 = K_theta_cart_x_tractor_2*_t260;
-    const trailer_real_t _t304 = TRAILER_LIT(369025.0)*_t303/TRAILER_LIT(342792.0);
-    const trailer_real_t _t305 = _t268*_t79;
-    const trailer_real_t _t306 = TRAILER_LIT(1051625.0)*_t268/TRAILER_LIT(114264.0);
-    const trailer_real_t _t307 = _t275*_t79;
-    const trailer_real_t _t308 = TRAILER_LIT(210325.0)*_t275/TRAILER_LIT(19044.0);
-    const trailer_real_t _t309 = TRAILER_LIT(2676875.0)*_t279/TRAILER_LIT(985527.0);
-    const trailer_real_t _t310 = _t259*_t90;
-    const trailer_real_t _t311 = _t259*_t93;
-    const trailer_real_t _t312 = _t259*_t88;
-    const trailer_real_t _t313 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t259/TRAILER_LIT(28566.0);
-    const trailer_real_t _t314 = _t259*_t96;
-    const trailer_real_t _t315 = TRAILER_LIT(1096750.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t316 = TRAILER_LIT(5909750.0)*_t262/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t317 = TRAILER_LIT(46128125.0)*_t297/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t318 = TRAILER_LIT(1845125.0)*_t297/TRAILER_LIT(342792.0);
-    const trailer_real_t _t319 = TRAILER_LIT(15589000.0)*_t261/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t320 = TRAILER_LIT(48734365.0)*_t261/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t321 = TRAILER_LIT(5111000.0)*_t262/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t322 = TRAILER_LIT(44910365.0)*_t262/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t323 = TRAILER_LIT(369025.0)*_t301/TRAILER_LIT(57132.0);
-    const trailer_real_t _t324 = TRAILER_LIT(369025.0)*_t303/TRAILER_LIT(171396.0);
-    const trailer_real_t _t325 = TRAILER_LIT(9225625.0)*_t303/TRAILER_LIT(985527.0);
-    const trailer_real_t _t326 = TRAILER_LIT(400000.0)*_t263/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t327 = TRAILER_LIT(3200000.0)*_t264/TRAILER_LIT(985527.0);
-    const trailer_real_t _t328 = TRAILER_LIT(30350000.0)*_t263/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t329 = TRAILER_LIT(63247135.0)*_t263/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t330 = TRAILER_LIT(9650000.0)*_t264/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t331 = TRAILER_LIT(11991865.0)*_t264/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t332 = _t155*_t257;
-    const trailer_real_t _t333 = TRAILER_LIT(1051625.0)*_t35/TRAILER_LIT(342792.0);
-    const trailer_real_t _t334 = _t26*_t268;
-    const trailer_real_t _t335 = _t268*_t28;
-    const trailer_real_t _t336 = _t26*_t27;
-    const trailer_real_t _t337 = _t28*_t34;
-    const trailer_real_t _t338 = TRAILER_LIT(3690250.0)*_t272/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t339 = _t18*_t338;
-    const trailer_real_t _t340 = _t22*_t338;
-    const trailer_real_t _t341 = _t26*_t275;
-    const trailer_real_t _t342 = _t275*_t28;
-    const trailer_real_t _t343 = _t122*_t279;
-    const trailer_real_t _t344 = _t28*_t282;
-    const trailer_real_t _t345 = _t10*_t155;
-    const trailer_real_t _t346 = _t258*_t345;
-    const trailer_real_t _t347 = _t125*_t257;
-    const trailer_real_t _t348 = TRAILER_LIT(14761000.0)*_t37/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t349 = TRAILER_LIT(67571365.0)*_t273/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t350 = TRAILER_LIT(98126635.0)*_t274/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t351 = K_theta_cart_x_tractor_2*_t346;
-    const trailer_real_t _t352 = _t137*_t291;
-    const trailer_real_t _t353 = _t28*_t286;
-    const trailer_real_t _t354 = _t258*_t353;
-    const trailer_real_t _t355 = _t26*_t55;
-    const trailer_real_t _t356 = _t26*_t289;
-    const trailer_real_t _t357 = _t258*_t356;
-    const trailer_real_t _t358 = TRAILER_LIT(369025.0)*_t292/TRAILER_LIT(85698.0);
-    const trailer_real_t _t359 =
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t360 = _t259*_t26;
-    const trailer_real_t _t361 = _t259*_t28;
-    const trailer_real_t _t362 = _t286*_t44;
-    const trailer_real_t _t363 = _t258*_t362;
-    const trailer_real_t _t364 = TRAILER_LIT(17556365.0)*_t261/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t365 = TRAILER_LIT(3437860.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t366 = TRAILER_LIT(34688365.0)*_t262/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t367 = TRAILER_LIT(2367110.0)*_t262/TRAILER_LIT(985527.0);
-    const trailer_real_t _t368 = TRAILER_LIT(36902500.0)*_t272/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t369 = K_theta_cart_x_tractor_2*_t131*_t368;
-    const trailer_real_t _t370 = _t272*_t50;
-    const trailer_real_t _t371 = J_theta_cart*_t370;
-    const trailer_real_t _t372 = _t272*_t52;
-    const trailer_real_t _t373 = J_theta_cart*_t372;
-    const trailer_real_t _t374 = _t163*_t272;
-    const trailer_real_t _t375 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t35/TRAILER_LIT(171396.0);
-    const trailer_real_t _t376 = K_theta_cart_x_tractor*_t368;
-    const trailer_real_t _t377 = _t15*_t35;
-    const trailer_real_t _t378 = TRAILER_LIT(44799635.0)*_t263/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t379 = TRAILER_LIT(295220.0)*_t263/TRAILER_LIT(985527.0);
-    const trailer_real_t _t380 = TRAILER_LIT(14244365.0)*_t264/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t381 = TRAILER_LIT(2361760.0)*_t264/TRAILER_LIT(328509.0);
-    const trailer_real_t _t382 = _t26*_t78;
-    const trailer_real_t _t383 = TRAILER_LIT(14244365.0)*_t273/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t384 = TRAILER_LIT(1180880.0)*_t273/TRAILER_LIT(328509.0);
-    const trailer_real_t _t385 = TRAILER_LIT(44799635.0)*_t274/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t386 = TRAILER_LIT(147610.0)*_t274/TRAILER_LIT(985527.0);
-    const trailer_real_t _t387 = TRAILER_LIT(184512500.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t388 = _t28*_t312;
-    const trailer_real_t _t389 = TRAILER_LIT(738050.0)*_t294/TRAILER_LIT(42849.0);
-    const trailer_real_t _t390 = _t28*_t88;
-    const trailer_real_t _t391 = TRAILER_LIT(2193500.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t392 = _t155*_t262;
-    const trailer_real_t _t393 = _t50*_t93;
-    const trailer_real_t _t394 = _t52*_t88;
-    const trailer_real_t _t395 = _t26*_t261;
-    const trailer_real_t _t396 = _t261*_t28;
-    const trailer_real_t _t397 = TRAILER_LIT(31178000.0)*_t261/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t398 = _t26*_t44;
-    const trailer_real_t _t399 = _t26*_t262;
-    const trailer_real_t _t400 = _t262*_t28;
-    const trailer_real_t _t401 = TRAILER_LIT(10222000.0)*_t262/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t402 = _t272*_t393;
-    const trailer_real_t _t403 = _t372*_t88;
-    const trailer_real_t _t404 = TRAILER_LIT(800000.0)*_t263/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t405 = TRAILER_LIT(6400000.0)*_t264/TRAILER_LIT(985527.0);
-    const trailer_real_t _t406 = TRAILER_LIT(295220.0)*_t263/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t407 = TRAILER_LIT(60700000.0)*_t263/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t408 = TRAILER_LIT(44799635.0)*_t263/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t409 = TRAILER_LIT(2361760.0)*_t264/TRAILER_LIT(985527.0);
-    const trailer_real_t _t410 = TRAILER_LIT(19300000.0)*_t264/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t411 = TRAILER_LIT(14244365.0)*_t264/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t412 = TRAILER_LIT(7380500.0)*_t272/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t413 = _t35*_t370;
-    const trailer_real_t _t414 = TRAILER_LIT(1180880.0)*_t18/TRAILER_LIT(985527.0);
-    const trailer_real_t _t415 = _t35*_t372;
-    const trailer_real_t _t416 = TRAILER_LIT(29522000.0)*_t272/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t417 = _t139*_t416;
-    const trailer_real_t _t418 = _t370*_t55;
-    const trailer_real_t _t419 = TRAILER_LIT(14244365.0)*_t18/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t420 = _t372*_t65;
-    const trailer_real_t _t421 = _t144*_t416;
-    const trailer_real_t _t422 = TRAILER_LIT(147610.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t423 = TRAILER_LIT(44799635.0)*_t22/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t424 = J_theta_cart*_t35;
-    const trailer_real_t _t425 = _t131*_t272;
-    const trailer_real_t _t426 = TRAILER_LIT(89599270.0)*_t263/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t427 = TRAILER_LIT(28488730.0)*_t264/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t428 = TRAILER_LIT(14244365.0)*_t18/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t429 = TRAILER_LIT(44799635.0)*_t22/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t430 = _t272*_t35;
-    const trailer_real_t _t431 = _t10*_t238;
-    const trailer_real_t _t432 = _t10*_t239;
-    const trailer_real_t _t433 = _t10*_t240;
-    const trailer_real_t _t434 = TRAILER_LIT(31178.0)*_t114/TRAILER_LIT(42849.0);
-    const trailer_real_t _t435 = TRAILER_LIT(10222.0)*_t127/TRAILER_LIT(42849.0);
-    const trailer_real_t _t436 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(9522.0);
-    const trailer_real_t _t437 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(28566.0);
-    const trailer_real_t _t438 = _t10*_t249;
-    const trailer_real_t _t439 = TRAILER_LIT(62356.0)*_t114/TRAILER_LIT(42849.0);
-    const trailer_real_t _t440 = TRAILER_LIT(20444.0)*_t127/TRAILER_LIT(42849.0);
-    const trailer_real_t _t441 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(4761.0);
-    const trailer_real_t _t442 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t107 = _t106/TRAILER_FMAX(_t103, eps_1);
+    const trailer_real_t _t108 = _t101*_t107 + _t104 + qdd_des0;
+    const trailer_real_t _t109 = _t102*_t107 + _t105 + qdd_des1;
+    const trailer_real_t _t110 = _t51 - _t52;
+    const trailer_real_t _t111 = _t110*_t78;
+    const trailer_real_t _t112 = _t56 - _t57;
+    const trailer_real_t _t113 = _t112*_t78;
+    const trailer_real_t _t114 = _t59 - _t60;
+    const trailer_real_t _t115 = _t114*_t78;
+    const trailer_real_t _t116 = _t62 - _t63;
+    const trailer_real_t _t117 = _t116*_t78;
+    const trailer_real_t _t118 = _t111*_t44 + _t113*_t45 + _t115*_t46 + _t117*_t47;
+    const trailer_real_t _t119 = -_t51 - _t52;
+    const trailer_real_t _t120 = _t119*_t74;
+    const trailer_real_t _t121 = -_t56 - _t57;
+    const trailer_real_t _t122 = _t121*_t74;
+    const trailer_real_t _t123 = -_t59 - _t60;
+    const trailer_real_t _t124 = _t123*_t74;
+    const trailer_real_t _t125 = -_t62 - _t63;
+    const trailer_real_t _t126 = _t125*_t74;
+    const trailer_real_t _t127 = _t120*_t44 + _t122*_t45 + _t124*_t46 + _t126*_t47;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    u[0] = TRAILER_LIT(32743750.0)*J_theta_cart*_t0*_t1*_t25*_t28*_t33/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t25*_t78/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t26*_t27*_t33/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t26*_t33*_t34/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t26/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(746875.0)*J_theta_cart*_t0*_t1*_t27*_t33/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(16371875.0)*J_theta_cart*_t0*_t1*_t27*_t34/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t27*_t79/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t28*_t33*_t34/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(26768750.0)*J_theta_cart*_t0*_t1*_t28*_t34*_t79/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t28/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t33*_t78/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(823375.0)*J_theta_cart*_t10*_t11*_t25*_t27*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t25*_t28*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t25*_t28*_t34*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t26*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t26*_t33*_t78*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(15625000.0)*J_theta_cart*_t10*_t11*_t27*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(156250.0)*J_theta_cart*_t10*_t11*_t33*_t34*radius_right
-            /TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t34*_t79*radius_right
-            /TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t78*_t79*radius_right
-            /TRAILER_LIT(257094.0)
-            + TRAILER_LIT(312500.0)*J_theta_cart*_t10*_t11*radius_right/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(1051625.0)*J_theta_cart*_t107*_t35/TRAILER_LIT(85698.0)
-            - TRAILER_LIT(13384375.0)*J_theta_cart*_t111/TRAILER_LIT(5913162.0)
-            - J_theta_cart*_t160*_t161
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t25*_t27*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t25*_t27*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(62500000.0)*J_theta_cart*_t25*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t25*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t26*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(125000000.0)*J_theta_cart*_t26*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t26*_t28*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(184512500.0)*J_theta_cart*_t28*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t33*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(4141105.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t27/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(10222000.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t28*_t33
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t28*_t34
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t28/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t33*_t78
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44910365.0)*J_theta_cart_left*_t0*_t1*_t16*_t27*_t33/TRAILER_LIT(70957944.0)
-            + TRAILER_LIT(5111000.0)*J_theta_cart_left*_t0*_t1*_t16*_t27*_t34/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16*_t33*_t34/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t34*_t79/TRAILER_LIT(35478972.0)
-            + TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t78*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t27*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(5310565.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t27*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(98126635.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t34*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*_t33*_t34*radius_right
-            /TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t33*_t78*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t78*_t79*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(19300000.0)*J_theta_cart_left*_t16*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t25*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t26*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(28488730.0)*J_theta_cart_left*_t16*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t26*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(11991865.0)*J_theta_cart_left*_t16*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(9650000.0)*J_theta_cart_left*_t16*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t27*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(15396565.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t27/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(15589000.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t33/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(48734365.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t34
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t27*_t33
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(31178000.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t27*_t34
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t28/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t28*_t34*_t79
-            /TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17*_t33*_t34/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t33*_t78
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t78*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(67571365.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t34*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t78*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t27*_t79*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*_t33*_t34*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t33*_t78*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t25*_t27*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(60700000.0)*J_theta_cart_right*_t17*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t26*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(89599270.0)*J_theta_cart_right*_t17*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(63247135.0)*J_theta_cart_right*_t17*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(30350000.0)*J_theta_cart_right*_t17*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(42849.0)
-            + TRAILER_LIT(755975.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t27/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t28*_t34
-            /TRAILER_LIT(985527.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t33/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(298750.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t34/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t27*_t34
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t28/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t33*_t78
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(62500.0)*K_theta_cart_x_tractor*_t0*_t1*_t33*_t34/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t34*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t78*_t79/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(125000.0)*K_theta_cart_x_tractor*_t0*_t1/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t33*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t78*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t27*_t79*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t33*_t78*radius_right
-            /TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor*_t144*_t20/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t25*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t26*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t26*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(15475625.0)*K_theta_cart_x_tractor*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t27*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7433125.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t27/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t33/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(1130975.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t34/TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t27*_t33
-            /TRAILER_LIT(19044.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t27*_t34
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t28*_t34*_t79
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t28/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t33*_t78/TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t78*_t79
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*_t28*_t34*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*_t78*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*_t33*_t78*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t27*_t33*radius_right
-            /TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t27*_t79*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t34*_t79*radius_right
-            /TRAILER_LIT(171396.0)
-            - TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t111/TRAILER_LIT(19044.0)
-            - K_theta_cart_x_tractor_2*_t122*_t31
-            - TRAILER_LIT(738050.0)*K_theta_cart_x_tractor_2*_t171/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t25*_t27*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(43152500.0)*K_theta_cart_x_tractor_2*_t25*_t27*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t26*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(738050.0)*K_theta_cart_x_tractor_2*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(619025.0)*K_theta_cart_x_tractor_2*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(6250000.0)*K_theta_cart_x_tractor_2*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor*_t10*_t11*radius_right
-            /TRAILER_LIT(42849.0) - TRAILER_LIT(5111000.0)*_t100*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(44910365.0)*_t100*_t65/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(34688365.0)*_t100*_t93/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(15589000.0)*_t101*_t44/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(48734365.0)*_t101*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(17556365.0)*_t101*_t88/TRAILER_LIT(35478972.0) - _t102*_t51 - _t102*_t53
-            - _t103*_t21 - _t104*_t21 - _t105*_t24 - _t106*_t24 - _t107*_t108 - _t107*_t110
-            - _t109*_t80 - TRAILER_LIT(17556365.0)*_t111*_t22/TRAILER_LIT(11826324.0) - _t112*_t113
-            - TRAILER_LIT(26768750.0)*_t112*_t93/TRAILER_LIT(8869743.0) - _t115*_t126 - _t115*_t193
-            - TRAILER_LIT(44799635.0)*_t115*_t194/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(44799635.0)*_t115*_t201/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(98126635.0)*_t115*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(44799635.0)*_t115*_t88/TRAILER_LIT(35478972.0) - _t116*_t26 - _t116*_t28
-            - _t117*_t118 - TRAILER_LIT(2676875.0)*_t117*_t55/TRAILER_LIT(985527.0) - _t118*_t119
-            - _t119*_t120 - TRAILER_LIT(10707500.0)*_t119*_t88/TRAILER_LIT(2956581.0) - _t12*_t14
-            - _t121*_t122 - _t121*_t169*_t33 - _t124*_t31
-            - TRAILER_LIT(6400000.0)*_t125*_t21/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(1250000.0)*_t125*_t32/TRAILER_LIT(128547.0) - _t126*_t128 - _t128*_t129
-            - TRAILER_LIT(7380500.0)*_t128*_t155/TRAILER_LIT(2956581.0) - _t128*_t188 - _t128*_t193
-            - TRAILER_LIT(14244365.0)*_t128*_t194/TRAILER_LIT(11826324.0) - _t128*_t195
-            - TRAILER_LIT(4723520.0)*_t128*_t200/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(14244365.0)*_t128*_t201/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(67571365.0)*_t128*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(14244365.0)*_t128*_t88/TRAILER_LIT(35478972.0) - _t130*_t132
-            - _t130*_t151*_t20 - _t132*_t197 - _t133*_t156 - _t134*_t61 - _t135*_t2 - _t136*_t137
-            - TRAILER_LIT(184512500.0)*_t136*_t93/TRAILER_LIT(8869743.0) - _t137*_t138 - _t138*_t141
-            - _t139*_t140*_t20 - _t14*_t15 - _t14*_t168*_t37 - _t143*_t51 - _t146*_t51 - _t146*_t53
-            - _t148*_t51 - _t149*_t150 - TRAILER_LIT(19300000.0)*_t150*_t18/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(60700000.0)*_t150*_t22/TRAILER_LIT(8869743.0) - _t152*_t83 - _t152*_t85
-            - _t153*_t83 - _t153*_t85 - _t154*_t72 - _t157*_t35 - _t157 - _t158*_t163*_t44
-            - _t158*_t164*_t93 - _t158*_t166 - _t159*_t160 - _t159*_t162 - _t161*_t164*_t37
-            - _t161*_t165 - _t163*_t173 - _t167*_t83 - _t167*_t85 - _t170*_t83 - _t170*_t85
-            - _t171*_t172 - TRAILER_LIT(28488730.0)*_t171*_t18/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(89599270.0)*_t171*_t22/TRAILER_LIT(8869743.0) - _t173*_t182 - _t174*_t175
-            - _t174*_t177 - _t175*_t176 - _t176*_t198
-            - TRAILER_LIT(10222000.0)*_t178*_t29/TRAILER_LIT(8869743.0) - _t179*_t180 - _t179*_t199
-            - TRAILER_LIT(14244365.0)*_t18*_t186/TRAILER_LIT(5913162.0) - _t180*_t22*_t31
-            - TRAILER_LIT(31178000.0)*_t181*_t31/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(9447040.0)*_t184*_t35/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(6400000.0)*_t184/TRAILER_LIT(985527.0) - _t185*_t21
-            - TRAILER_LIT(44799635.0)*_t186*_t22/TRAILER_LIT(5913162.0) - _t187*_t35*_t51
-            - _t187*_t35*_t53 - _t189*_t190 - _t190*_t191 - _t2*_t3 - _t2*_t4
-            - TRAILER_LIT(250000.0)*_t2*_t48/TRAILER_LIT(42849.0) - _t20*_t58*_t59
-            - TRAILER_LIT(369025.0)*_t200*_t72/TRAILER_LIT(42849.0) + _t209*_t234
-            - TRAILER_LIT(9650000.0)*_t21*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(11991865.0)*_t21*_t65/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(14244365.0)*_t21*_t93/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(7675000.0)*_t21/TRAILER_LIT(2956581.0) + _t235*(J_theta_right
-            + TRAILER_LIT(20444.0)*_t125*_t19/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t125*_t23/TRAILER_LIT(42849.0) + _t131*_t248 - _t131*_t249
-            - _t131*_t250 + _t139*_t251 - _t139*_t252 + _t139*_t253 - _t139*_t255 - _t139*_t256
-            - _t144*_t251 + _t144*_t252 - _t144*_t253 + _t144*_t255 + _t144*_t256 + _t151*_t248
-            - _t151*_t249 - _t151*_t250 + TRAILER_LIT(20444.0)*_t183/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t19/TRAILER_LIT(171396.0) + _t210*_t5 + _t212*_t5 + _t213*_t5
-            - _t214*_t5 + TRAILER_LIT(11449.0)*_t23/TRAILER_LIT(171396.0) - _t236*_t5 + _t237*_t5
-            - _t238*_t50 - _t238*_t52 + _t239*_t50 + _t239*_t52 + _t240*_t50 + _t240*_t52
-            + _t241*_t58 - _t241*_t62 - _t242*_t58 + _t242*_t62 + _t243*_t58 - _t243*_t62
-            - _t244*_t50 - _t244*_t52 + _t245*_t50 + _t245*_t52 + _t246*_t37 - _t246*_t44
-            + _t247*_t37 - _t247*_t44 - TRAILER_LIT(62356.0)*_t254/TRAILER_LIT(42849.0))
-            - TRAILER_LIT(30350000.0)*_t24*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(63247135.0)*_t24*_t65/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(44799635.0)*_t24*_t93/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(2675000.0)*_t24/TRAILER_LIT(2956581.0) - _t29*_t30 - _t29*_t97 - _t29*_t98
-            - _t30*_t31 - _t31*_t97 - _t31*_t98 - _t32*_t36
-            - TRAILER_LIT(16371875.0)*_t32*_t37/TRAILER_LIT(8869743.0) - _t33*_t45*_t47
-            - _t34*_t45*_t86 - TRAILER_LIT(46128125.0)*_t37*_t71/TRAILER_LIT(8869743.0) - _t38*_t39
-            - _t38*_t40 - TRAILER_LIT(6548750.0)*_t41*_t44/TRAILER_LIT(2956581.0) - _t42*_t43
-            - _t42*_t82 - TRAILER_LIT(18451250.0)*_t44*_t72/TRAILER_LIT(2956581.0) - _t45*_t46
-            - _t49*_t51 - _t49*_t53 - _t51*_t54 - _t53*_t54 - _t55*_t57 - _t55*_t73 - _t57*_t88
-            - _t6*_t9 - _t60*_t61 - _t61*_t68 - _t63*_t64 - _t63*_t69
-            - TRAILER_LIT(15625000.0)*_t65*_t71/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(369025.0)*_t65*_t75/TRAILER_LIT(342792.0)
-            - TRAILER_LIT(15475625.0)*_t66*_t9/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(619025.0)*_t70*_t9/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(46128125.0)*_t71*_t93/TRAILER_LIT(17739486.0) - _t72*_t74 - _t73*_t88
-            - _t75*_t76 - _t75*_t77 - TRAILER_LIT(369025.0)*_t75*_t93/TRAILER_LIT(171396.0)
-            - _t80*_t81 - _t83*_t84 - _t83*_t87 - _t83*_t99 - _t84*_t85 - _t85*_t87 - _t85*_t99
-            - _t89*_t90 - _t89*_t96 - _t90*_t91 - _t91*_t96 - _t92*_t94 - _t94*_t95;
-    u[1] = -TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t370*_t55/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t259/TRAILER_LIT(2956581.0)
-            - _t103*_t264 - _t104*_t264 - _t105*_t263 - _t106*_t263 - _t108*_t332 + _t108*_t346
-            - _t108*_t347 + _t108*_t363 - _t109*_t305 + _t110*_t332 + _t113*_t334 - _t118*_t341
-            - _t118*_t342 + _t12*_t257 - _t12*_t260 + _t120*_t342 + _t123*_t280 - _t124*_t257*_t28
-            + TRAILER_LIT(11819500.0)*_t125*_t262/TRAILER_LIT(2956581.0) + _t125*_t391 + _t125*_t404
-            - _t125*_t405 + _t126*_t273 + _t126*_t274 - _t129*_t273 + _t130*_t332 - _t130*_t346
-            + _t130*_t347 - _t130*_t363 + TRAILER_LIT(13751440.0)*_t133*_t261/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(9468440.0)*_t133*_t262/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1180880.0)*_t133*_t263/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(590440.0)*_t133*_t274/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(10707500.0)*_t133*_t279/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t133*_t291/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(73805000.0)*_t133*_t294/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t133*_t297/TRAILER_LIT(257094.0)
-            + TRAILER_LIT(36902500.0)*_t133*_t303/TRAILER_LIT(2956581.0) - _t134*_t292 + _t135*_t257
-            - _t139*_t374 + _t139*_t376 + _t140*_t354 - _t140*_t357 + _t141*_t28*_t291 - _t142*_t293
-            + _t143*_t360 + _t144*_t374 - _t144*_t376 + _t146*_t360 + _t146*_t361 + _t147*_t295
-            - _t148*_t360 + _t149*_t354 - _t149*_t357 + _t15*_t260 - _t154*_t301 + _t155*_t391
-            + _t155*_t404 - _t155*_t405 - _t160*_t371 - _t160*_t373 + _t162*_t371 + _t165*_t372
-            - _t166*_t370 + _t168*_t298 - _t169*_t26*_t281 + _t169*_t307 + _t172*_t388 - _t175*_t399
-            - _t175*_t400 + _t177*_t399 + _t18*_t417 - _t18*_t421 - _t180*_t395 - _t180*_t396
-            + _t182*_t402 - _t182*_t403 - _t183*_t412
-            - TRAILER_LIT(4723520.0)*_t183*_t430/TRAILER_LIT(985527.0) - _t185*_t264 - _t188*_t273
-            + _t189*_t358 - _t189*_t406 + _t189*_t409 + _t191*_t358 - _t191*_t406 + _t191*_t409
-            + _t192*_t397 - _t192*_t401 - _t192*_t407 - _t192*_t410 - _t194*_t408 - _t194*_t411
-            - _t195*_t273 + _t195*_t274 - TRAILER_LIT(369025.0)*_t196*_t425/TRAILER_LIT(42849.0)
-            - _t197*_t346 + _t198*_t400 + _t199*_t395
-            + TRAILER_LIT(13751440.0)*_t200*_t261/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1180880.0)*_t200*_t263/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(9447040.0)*_t200*_t264/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(1051625.0)*_t200*_t268/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(210325.0)*_t200*_t275/TRAILER_LIT(14283.0)
-            - TRAILER_LIT(10707500.0)*_t200*_t279/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(73805000.0)*_t201*_t292/TRAILER_LIT(2956581.0) + _t201*_t389 - _t201*_t426
-            - _t201*_t427 + _t209*(J_theta_left + _t10*_t210 + _t10*_t212 + _t10*_t213 - _t10*_t214
-            + _t10*_t236 - _t10*_t237 + TRAILER_LIT(11449.0)*_t114/TRAILER_LIT(171396.0)
-            - _t125*_t438 - _t125*_t439 + _t125*_t440
-            + TRAILER_LIT(94249.0)*_t127/TRAILER_LIT(171396.0) - _t155*_t438 - _t155*_t439
-            + _t155*_t440 + _t192*_t441 + _t192*_t442 + _t241*_t286 - _t241*_t289 - _t242*_t286
-            + _t242*_t289 - _t243*_t286 + _t243*_t289 + _t248*_t345 + _t248*_t362 + _t250*_t345
-            + _t250*_t362 - _t251*_t353 + _t251*_t356 + _t252*_t353 - _t252*_t356 + _t253*_t353
-            - _t253*_t356 - _t26*_t431 + _t26*_t432 - _t26*_t433 + _t26*_t434 - _t26*_t435
-            - _t28*_t431 + _t28*_t432 - _t28*_t433 + _t28*_t434 - _t28*_t435 - _t37*_t436
-            - _t37*_t437 - _t398*_t441 - _t398*_t442 + _t436*_t44 + _t437*_t44) + _t22*_t417
-            - _t22*_t421 + _t234*_t235 + TRAILER_LIT(1130975.0)*_t25*_t282/TRAILER_LIT(342792.0)
-            - TRAILER_LIT(210325.0)*_t25*_t344/TRAILER_LIT(19044.0) + _t254*_t412
-            + TRAILER_LIT(590440.0)*_t254*_t430/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(500000.0)*_t257*_t26*_t48/TRAILER_LIT(42849.0) - _t257*_t3 + _t257*_t4
-            - _t259*_t6 + _t26*_t265 - _t26*_t266 - _t26*_t267 - _t26*_t283 + _t26*_t284
-            + _t26*_t285 + _t26*_t311*_t387 - _t26*_t315 - _t26*_t316 - _t26*_t326 + _t26*_t327
-            + _t26*_t343 - _t26*_t352 + _t260*_t3 + _t260*_t6
-            + TRAILER_LIT(548375.0)*_t261*_t35/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(15396565.0)*_t261*_t67/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(548375.0)*_t261/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(2954875.0)*_t262*_t35/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(4141105.0)*_t262*_t67/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(2954875.0)*_t262/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(2675000.0)*_t263/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(7675000.0)*_t264/TRAILER_LIT(2956581.0) + _t265*_t28 - _t266*_t28
-            - _t267*_t28 - _t268*_t36 + _t269*_t37 - _t269*_t44
-            - TRAILER_LIT(746875.0)*_t27*_t270/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(755975.0)*_t27*_t278/TRAILER_LIT(85698.0)
-            - TRAILER_LIT(13384375.0)*_t270*_t336/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(26768750.0)*_t270*_t382/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(13384375.0)*_t270*_t78/TRAILER_LIT(17739486.0)
-            + TRAILER_LIT(13384375.0)*_t271*_t337/TRAILER_LIT(5913162.0) + _t271*_t39 - _t271*_t40
-            - _t273*_t348 + TRAILER_LIT(1029875.0)*_t273*_t35/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1029875.0)*_t273/TRAILER_LIT(2956581.0) - _t274*_t348
-            + TRAILER_LIT(1573375.0)*_t274*_t35/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(5310565.0)*_t274*_t67/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1573375.0)*_t274/TRAILER_LIT(985527.0) + _t275*_t60 - _t276*_t37
-            + _t276*_t44 + TRAILER_LIT(2676875.0)*_t277*_t336/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(10707500.0)*_t277*_t382/TRAILER_LIT(2956581.0) + _t277*_t43 + _t277*_t82
-            - TRAILER_LIT(2676875.0)*_t278*_t337/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(298750.0)*_t278*_t34/TRAILER_LIT(2956581.0) + _t279*_t46
-            - TRAILER_LIT(7433125.0)*_t279*_t67/TRAILER_LIT(5913162.0) - _t28*_t283 + _t28*_t284
-            + _t28*_t285 - _t28*_t315 - _t28*_t316 - _t28*_t326 + _t28*_t327 + _t28*_t343
-            - _t28*_t352 - _t280*_t48 + TRAILER_LIT(210325.0)*_t281*_t336/TRAILER_LIT(19044.0)
-            - _t281*_t47 + TRAILER_LIT(210325.0)*_t281*_t78/TRAILER_LIT(57132.0) - _t282*_t86
-            - TRAILER_LIT(50000000.0)*_t287*_t48/TRAILER_LIT(2956581.0) - _t287*_t59 + _t287*_t64
-            - _t287*_t69 + _t288*_t55 - _t288*_t65 + _t288*_t88 - _t288*_t93 + _t290*_t59
-            - _t290*_t64 + _t290*_t69 - TRAILER_LIT(46128125.0)*_t291*_t355/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t291*_t67/TRAILER_LIT(257094.0) - _t292*_t60 - _t292*_t68
-            + _t293*_t66 - TRAILER_LIT(6250000.0)*_t294*_t35/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(43152500.0)*_t294*_t67/TRAILER_LIT(2956581.0) - _t295*_t70 - _t296*_t50
-            - _t296*_t52 + _t297*_t36 + TRAILER_LIT(823375.0)*_t297*_t67/TRAILER_LIT(171396.0)
-            + _t298*_t56 - _t298*_t92 - _t299*_t55 + _t299*_t65 - _t300*_t56 + _t300*_t92
-            - _t301*_t74 + _t302*_t55 - _t302*_t65 + _t302*_t88 - _t302*_t93 + _t303*_t76
-            + _t303*_t77 + _t304*_t55 - _t304*_t65
-            - TRAILER_LIT(26768750.0)*_t305*_t337/TRAILER_LIT(8869743.0) + _t305*_t81 + _t306*_t83
-            + _t306*_t85 + TRAILER_LIT(10707500.0)*_t307*_t337/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(2676875.0)*_t307*_t34/TRAILER_LIT(2956581.0) - _t308*_t83 - _t308*_t85
-            + _t309*_t83 + _t309*_t85 - _t310*_t83 - _t310*_t85 + _t311*_t92 - _t311*_t95
-            - _t312*_t92 + _t312*_t95 + _t313*_t83 + _t313*_t85 + _t314*_t83 + _t314*_t85
-            - _t317*_t88 + _t317*_t93 - _t318*_t83 - _t318*_t85 - _t319*_t37 + _t319*_t44
-            + _t320*_t55 - _t320*_t65 + _t321*_t37 - _t321*_t44 - _t322*_t55 + _t322*_t65
-            + _t323*_t83 + _t323*_t85 + _t324*_t88 - _t324*_t93 - _t325*_t83 - _t325*_t85
-            + _t328*_t37 - _t328*_t44 - _t329*_t55 + _t329*_t65 + _t330*_t37 - _t330*_t44
-            - _t331*_t55 + _t331*_t65 + _t333*_t334 + _t333*_t335
-            - TRAILER_LIT(32743750.0)*_t335*_t37/TRAILER_LIT(8869743.0) + _t339*_t50 + _t339*_t52
-            - _t340*_t50 - _t340*_t52 - TRAILER_LIT(13097500.0)*_t341*_t44/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*_t344*_t79/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(1845125.0)*_t346*_t424/TRAILER_LIT(128547.0) + _t349*_t55 - _t349*_t65
-            - TRAILER_LIT(73805000.0)*_t35*_t351/TRAILER_LIT(2956581.0) + _t35*_t369
-            + TRAILER_LIT(9468440.0)*_t35*_t392/TRAILER_LIT(2956581.0) + _t350*_t55 - _t350*_t65
-            - TRAILER_LIT(50000000.0)*_t351/TRAILER_LIT(2956581.0) - _t354*_t359 + _t355*_t408
-            + _t355*_t411 + _t357*_t359 - TRAILER_LIT(18451250.0)*_t361*_t66/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(369025.0)*_t361*_t70/TRAILER_LIT(28566.0) + _t364*_t88 - _t364*_t93
-            - _t365*_t83 - _t365*_t85 - _t366*_t88 + _t366*_t93 - _t367*_t83 - _t367*_t85 + _t369
-            + _t370*_t375 - _t370*_t377 + _t372*_t375 - _t372*_t377
-            + TRAILER_LIT(369025.0)*_t372*_t70/TRAILER_LIT(57132.0)
-            - TRAILER_LIT(46128125.0)*_t373*_t65/TRAILER_LIT(5913162.0) - _t374*_t393 + _t374*_t394
-            + _t376*_t393 - _t376*_t394 - _t378*_t88 + _t378*_t93 - _t379*_t83 - _t379*_t85
-            - _t380*_t88 + _t380*_t93 + _t381*_t83 + _t381*_t85 + _t383*_t88 - _t383*_t93
-            + _t384*_t83 + _t384*_t85 + _t385*_t88 - _t385*_t93 - _t386*_t83 - _t386*_t85
-            - _t387*_t388 - _t389*_t390 + _t390*_t426 + _t390*_t427
-            + TRAILER_LIT(11819500.0)*_t392/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(17556365.0)*_t395*_t55/TRAILER_LIT(11826324.0)
-            + TRAILER_LIT(17556365.0)*_t396*_t65/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(17556365.0)*_t396*_t88/TRAILER_LIT(8869743.0) - _t397*_t398 + _t398*_t401
-            + _t398*_t407 + _t398*_t410 - TRAILER_LIT(34688365.0)*_t399*_t93/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(34688365.0)*_t400*_t65/TRAILER_LIT(11826324.0) + _t402*_t428 + _t402*_t429
-            - _t403*_t428 - _t403*_t429 + _t413*_t414 - _t413*_t422 + _t414*_t415 - _t415*_t422
-            - _t418*_t419 - _t418*_t423 + _t419*_t420 + _t420*_t423
-            + TRAILER_LIT(1845125.0)*_t424*_t425/TRAILER_LIT(257094.0);
-    s[0] = _t203;
-    s[1] = _t202;
-    s_norm[0] = _t204;
-    gain[0] = _t207;
+    const trailer_real_t _t128 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
+            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
+    const trailer_real_t _t129 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
+    const trailer_real_t _t130 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t131 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
+            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
+    const trailer_real_t _t132 = _t100*_t18 + _t118*_t80 + _t12*_t96 + _t127*_t76 + _t16*_t93
+            - _t9*_t98;
+    const trailer_real_t _t133 = J_theta_cart_left*_t127*_t84 + J_theta_cart_right*_t118*_t82
+            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
+    u[0] = _t108*_t128 + _t109*_t129 + _t132;
+    u[1] = _t108*_t130 + _t109*_t131 + _t133;
+    s[0] = _t101;
+    s[1] = _t102;
+    s_norm[0] = _t103;
+    gain[0] = _t106;
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 139 add, 221 mul, 24 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -2425,1184 +719,187 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = radius_right*radius_right*radius_right;
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t _t1 = thetadot_right*thetadot_right;
-    const trailer_real_t _t2 = _t0*_t1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t4 =
-            TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t5 = radius_right*radius_right;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = _t5*radius_left;
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t8 = thetadot_left*thetadot_right;
-    const trailer_real_t _t9 = _t7*_t8;
-    const trailer_real_t _t10 = radius_left*radius_left;
-    const trailer_real_t _t11 = thetadot_left*thetadot_left;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t13 = _t11*radius_right;
-    const trailer_real_t _t14 = _t10*_t13;
-    const trailer_real_t _t15 =
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t18 = J_theta_cart_left*_t16;
-    const trailer_real_t _t19 = _t18*_t5;
-    const trailer_real_t _t20 = _t8*radius_left;
-    const trailer_real_t _t21 = _t19*_t20;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t22 = J_theta_cart_right*_t17;
-    const trailer_real_t _t23 = _t22*_t5;
-    const trailer_real_t _t24 = _t20*_t23;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t25 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t26 = _t25*_t25;
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t27 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t28 = _t27*_t27;
-    const trailer_real_t _t29 = _t2*_t26;
-    const trailer_real_t _t30 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t31 = _t2*_t28;
-    const trailer_real_t _t32 = J_theta_cart*_t2;
-    const trailer_real_t _t33 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t34 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t35 = _t33*_t34;
-    const trailer_real_t _t36 = TRAILER_LIT(156250.0)*_t35/TRAILER_LIT(128547.0);
-    const trailer_real_t _t37 = _t25*_t33;
-    const trailer_real_t _t38 = _t25*_t32;
-    const trailer_real_t _t39 = TRAILER_LIT(746875.0)*_t34/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t40 = TRAILER_LIT(3779875.0)*_t27/TRAILER_LIT(514188.0);
-    const trailer_real_t _t41 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t42 = _t33*_t41;
-    const trailer_real_t _t43 = TRAILER_LIT(298750.0)*_t27/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t44 = _t27*_t34;
-    const trailer_real_t _t45 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t46 = TRAILER_LIT(3274375.0)*_t35/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t47 = TRAILER_LIT(1130975.0)*_t27/TRAILER_LIT(342792.0);
-    const trailer_real_t _t48 = K_theta_cart_x_tractor_2*_t44;
-    const trailer_real_t _t49 = TRAILER_LIT(625000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t50 = _t26*_t5;
-    const trailer_real_t _t51 = _t20*_t50;
-    const trailer_real_t _t52 = _t28*_t5;
-    const trailer_real_t _t53 = _t20*_t52;
-    const trailer_real_t _t54 =
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t55 = _t27*_t33;
-    const trailer_real_t _t56 = TRAILER_LIT(46128125.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t57 = _t56*_t9;
-    const trailer_real_t _t58 = _t44*_t5;
-    const trailer_real_t _t59 = TRAILER_LIT(62500000.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t60 = TRAILER_LIT(62500.0)*_t35/TRAILER_LIT(42849.0);
-    const trailer_real_t _t61 = K_theta_cart_x_tractor*_t9;
-    const trailer_real_t _t62 = _t37*_t5;
-    const trailer_real_t _t63 = _t20*_t62;
-    const trailer_real_t _t64 =
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t65 = _t25*_t34;
-    const trailer_real_t _t66 = K_theta_cart_x_tractor*_t65;
-    const trailer_real_t _t67 = _t25*_t27;
-    const trailer_real_t _t68 = TRAILER_LIT(431525.0)*_t67/TRAILER_LIT(42849.0);
-    const trailer_real_t _t69 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t65;
-    const trailer_real_t _t71 = J_theta_cart*_t14;
-    const trailer_real_t _t72 = K_theta_cart_x_tractor*_t14;
-    const trailer_real_t _t73 = TRAILER_LIT(9225625.0)*_t72/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t74 = TRAILER_LIT(369025.0)*_t67/TRAILER_LIT(85698.0);
-    const trailer_real_t _t75 = K_theta_cart_x_tractor_2*_t14;
-    const trailer_real_t _t76 = TRAILER_LIT(9225625.0)*_t35/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t77 = TRAILER_LIT(46128125.0)*_t67/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t78 = _t27*_t27*_t27;
-    const trailer_real_t _t79 = _t25*_t25*_t25;
-    const trailer_real_t _t80 = _t32*_t79;
-    const trailer_real_t _t81 = TRAILER_LIT(13384375.0)*_t34/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t82 = TRAILER_LIT(2676875.0)*_t78/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t83 = _t25*_t78;
-    const trailer_real_t _t84 = TRAILER_LIT(210325.0)*_t41/TRAILER_LIT(19044.0);
-    const trailer_real_t _t85 = _t27*_t79;
-    const trailer_real_t _t86 = TRAILER_LIT(210325.0)*_t79/TRAILER_LIT(57132.0);
-    const trailer_real_t _t87 = TRAILER_LIT(2676875.0)*_t45/TRAILER_LIT(985527.0);
-    const trailer_real_t _t88 = _t34*_t79;
-    const trailer_real_t _t89 = _t83*_t9;
-    const trailer_real_t _t90 = TRAILER_LIT(1845125.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t91 = _t85*_t9;
-    const trailer_real_t _t92 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t93 = _t33*_t78;
-    const trailer_real_t _t94 = _t9*_t93;
-    const trailer_real_t _t95 = TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(85698.0);
-    const trailer_real_t _t96 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(985527.0);
-    const trailer_real_t _t97 = TRAILER_LIT(5909750.0)*_t18/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t98 = TRAILER_LIT(1096750.0)*_t22/TRAILER_LIT(985527.0);
-    const trailer_real_t _t99 = TRAILER_LIT(1845125.0)*_t71/TRAILER_LIT(342792.0);
-    const trailer_real_t _t100 = _t18*_t2;
-    const trailer_real_t _t101 = _t2*_t22;
-    const trailer_real_t _t102 = TRAILER_LIT(400000.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t103 = TRAILER_LIT(3837500.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t104 = TRAILER_LIT(18008060.0)*_t67/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t105 = TRAILER_LIT(1337500.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t106 = TRAILER_LIT(249020.0)*_t67/TRAILER_LIT(985527.0);
-    const trailer_real_t _t107 = _t28*_t29;
-    const trailer_real_t _t108 = TRAILER_LIT(1250000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t109 = TRAILER_LIT(1051625.0)*_t78/TRAILER_LIT(85698.0);
-    const trailer_real_t _t110 =
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t111 = _t31*_t65;
-    const trailer_real_t _t112 = J_theta_cart*_t29;
-    const trailer_real_t _t113 = TRAILER_LIT(32743750.0)*_t44/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t114 = _t10*_t18;
-    const trailer_real_t _t115 = _t114*_t13;
-    const trailer_real_t _t116 = TRAILER_LIT(3690250.0)*_t115/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t117 = K_theta_cart_x_tractor*_t29;
-    const trailer_real_t _t118 = TRAILER_LIT(210325.0)*_t35/TRAILER_LIT(57132.0);
-    const trailer_real_t _t119 = K_theta_cart_x_tractor*_t31;
-    const trailer_real_t _t120 = TRAILER_LIT(13097500.0)*_t37/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t121 = K_theta_cart_x_tractor_2*_t29;
-    const trailer_real_t _t122 = TRAILER_LIT(2676875.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t123 = K_theta_cart_x_tractor_2*_t37;
-    const trailer_real_t _t124 = TRAILER_LIT(500000.0)*_t123/TRAILER_LIT(42849.0);
-    const trailer_real_t _t125 = _t37*_t44;
-    const trailer_real_t _t126 = TRAILER_LIT(14761000.0)*_t44/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t127 = _t10*_t22;
-    const trailer_real_t _t128 = _t127*_t13;
-    const trailer_real_t _t129 = TRAILER_LIT(13140685.0)*_t67/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t130 = TRAILER_LIT(500000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t131 = _t28*_t50;
-    const trailer_real_t _t132 = _t131*_t20;
-    const trailer_real_t _t133 = _t78*_t79;
-    const trailer_real_t _t134 = TRAILER_LIT(738050.0)*_t133/TRAILER_LIT(42849.0);
-    const trailer_real_t _t135 = _t120*_t48;
-    const trailer_real_t _t136 = J_theta_cart*_t51;
-    const trailer_real_t _t137 = TRAILER_LIT(1845125.0)*_t35/TRAILER_LIT(514188.0);
-    const trailer_real_t _t138 = J_theta_cart*_t53;
-    const trailer_real_t _t139 = _t37*_t52;
-    const trailer_real_t _t140 = TRAILER_LIT(125000000.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t141 = TRAILER_LIT(46128125.0)*_t65/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t142 = K_theta_cart_x_tractor*_t55;
-    const trailer_real_t _t143 = TRAILER_LIT(18451250.0)*_t142/TRAILER_LIT(985527.0);
-    const trailer_real_t _t144 = _t44*_t50;
-    const trailer_real_t _t145 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t146 = _t145*_t35;
-    const trailer_real_t _t147 = K_theta_cart_x_tractor_2*_t55;
-    const trailer_real_t _t148 = TRAILER_LIT(369025.0)*_t147/TRAILER_LIT(28566.0);
-    const trailer_real_t _t149 =
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t150 = _t144*_t20;
-    const trailer_real_t _t151 = _t44*_t62;
-    const trailer_real_t _t152 = TRAILER_LIT(2367110.0)*_t100/TRAILER_LIT(985527.0);
-    const trailer_real_t _t153 = TRAILER_LIT(3437860.0)*_t101/TRAILER_LIT(985527.0);
-    const trailer_real_t _t154 = TRAILER_LIT(369025.0)*_t133/TRAILER_LIT(42849.0);
-    const trailer_real_t _t155 = _t26*_t28;
-    const trailer_real_t _t156 = TRAILER_LIT(36902500.0)*_t75/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t157 = _t155*_t156;
-    const trailer_real_t _t158 = _t14*_t26;
-    const trailer_real_t _t159 = J_theta_cart*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(1845125.0)*_t35/TRAILER_LIT(1028376.0);
-    const trailer_real_t _t161 = _t14*_t28;
-    const trailer_real_t _t162 = TRAILER_LIT(46128125.0)*_t55/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t163 = TRAILER_LIT(92256250.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t164 =
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t165 = TRAILER_LIT(9225625.0)*_t66/TRAILER_LIT(985527.0);
-    const trailer_real_t _t166 = TRAILER_LIT(369025.0)*_t147/TRAILER_LIT(57132.0);
-    const trailer_real_t _t167 = TRAILER_LIT(295220.0)*_t24/TRAILER_LIT(985527.0);
-    const trailer_real_t _t168 = TRAILER_LIT(36902500.0)*_t48/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t169 = TRAILER_LIT(210325.0)*_t78/TRAILER_LIT(14283.0);
-    const trailer_real_t _t170 = TRAILER_LIT(147610.0)*_t115/TRAILER_LIT(985527.0);
-    const trailer_real_t _t171 = _t53*_t88;
-    const trailer_real_t _t172 =
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t173 = _t161*_t88;
-    const trailer_real_t _t174 = _t18*_t29;
-    const trailer_real_t _t175 = TRAILER_LIT(2367110.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t176 = _t18*_t31;
-    const trailer_real_t _t177 = TRAILER_LIT(34688365.0)*_t55/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t178 = _t18*_t44;
-    const trailer_real_t _t179 = _t22*_t29;
-    const trailer_real_t _t180 = TRAILER_LIT(3437860.0)*_t35/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t181 = _t22*_t37;
-    const trailer_real_t _t182 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t183 = _t131*_t18;
-    const trailer_real_t _t184 = _t183*_t20;
-    const trailer_real_t _t185 = TRAILER_LIT(9447040.0)*_t133/TRAILER_LIT(985527.0);
-    const trailer_real_t _t186 = _t51*_t55;
-    const trailer_real_t _t187 = TRAILER_LIT(295220.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t188 = TRAILER_LIT(4723520.0)*_t133/TRAILER_LIT(985527.0);
-    const trailer_real_t _t189 = _t26*_t35;
-    const trailer_real_t _t190 = TRAILER_LIT(147610.0)*_t115/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t191 = _t28*_t35;
-    const trailer_real_t _t192 = _t28*_t37;
-    const trailer_real_t _t193 = TRAILER_LIT(29522000.0)*_t192/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t194 = _t28*_t65;
-    const trailer_real_t _t195 = TRAILER_LIT(7380500.0)*_t125/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t196 = K_theta_cart_x_tractor*_t35;
-    const trailer_real_t _t197 = TRAILER_LIT(738050.0)*_t196/TRAILER_LIT(42849.0);
-    const trailer_real_t _t198 = TRAILER_LIT(34688365.0)*_t88/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t199 = TRAILER_LIT(17556365.0)*_t93/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t200 = _t155*_t35;
-    const trailer_real_t _t201 = _t26*_t93;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t202 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
+    const trailer_real_t _t14 = _t10*_t11;
+    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
+    const trailer_real_t _t16 = -_t8*_t9;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t21 = -_t10*_t8;
+    const trailer_real_t _t22 = -_t1*_t21 - _t15;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t thetadot_right = qdot[4];
+    const trailer_real_t thetadot_left = qdot[5];
+    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t36 = _t35*_t35;
+    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = _t34*_t36;
+    const trailer_real_t _t40 = _t28*_t36;
+    const trailer_real_t _t41 = _t29*_t36;
+    const trailer_real_t _t42 = _t33*_t38;
+    const trailer_real_t _t43 = _t32*_t38;
+    const trailer_real_t _t44 = _t37*thetadot_right;
+    const trailer_real_t _t45 = _t37*thetadot_left;
+    const trailer_real_t _t46 = _t35*thetadot_right;
+    const trailer_real_t _t47 = _t35*thetadot_left;
+    const trailer_real_t _t48 = _t8*_t9;
+    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
+    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t52 = -_t1*_t48 + _t13;
+    const trailer_real_t _t53 = _t10*_t8;
+    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = -_t1*_t53 + _t15;
+    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
+    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
+    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
+    const trailer_real_t _t67 = _t26 + _t27;
+    const trailer_real_t _t68 = _t28 + _t29;
+    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
+    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
+    const trailer_real_t _t73 = -_t19 - _t20;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t75 = _t73*_t74;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t76 = J_theta_cart_left*_t75;
+    const trailer_real_t _t77 = _t19 - _t20;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t79 = _t77*_t78;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t80 = J_theta_cart_right*_t79;
+    const trailer_real_t _t81 = _t24 - _t25;
+    const trailer_real_t _t82 = _t78*_t81;
+    const trailer_real_t _t83 = -_t24 - _t25;
+    const trailer_real_t _t84 = _t74*_t83;
+    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
+    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
+    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
+    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
+    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
+    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
+    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
+    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
+    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
+    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
+            - _t39;
+    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
+    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
+    const trailer_real_t _t97 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+            - _t33*_t40 - _t33*_t41;
+    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
+    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
+    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t203 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t _t204 = trailer_norm2(_t202, _t203);
+    const trailer_real_t _t101 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t102 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t103 = trailer_norm2(_t101, _t102);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t205 = gain_1/TRAILER_FMAX(_t204, eps_1);
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t206 = _t202*_t205 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t207 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t208 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t209 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t210 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t211 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t212 = TRAILER_LIT(32849.0)*_t208/TRAILER_LIT(171396.0);
-    const trailer_real_t _t213 = _t208*_t26;
-    const trailer_real_t _t214 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t215 = _t208*_t28;
-    const trailer_real_t _t216 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t217 = TRAILER_LIT(73805.0)*_t208/TRAILER_LIT(28566.0);
-    const trailer_real_t _t218 = TRAILER_LIT(29522.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t219 = TRAILER_LIT(29522.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t220 = TRAILER_LIT(14761.0)*_t208/TRAILER_LIT(28566.0);
-    const trailer_real_t _t221 = _t18*_t37;
-    const trailer_real_t _t222 = _t220*_t44;
-    const trailer_real_t _t223 = _t213*_t28;
-    const trailer_real_t _t224 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t225 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t226 = _t125*_t208;
-    const trailer_real_t _t227 = TRAILER_LIT(59044.0)*_t223/TRAILER_LIT(42849.0);
-    const trailer_real_t _t228 = TRAILER_LIT(14761.0)*_t215/TRAILER_LIT(14283.0);
-    const trailer_real_t _t229 = TRAILER_LIT(14761.0)*_t213/TRAILER_LIT(14283.0);
-    const trailer_real_t _t230 = TRAILER_LIT(59044.0)*_t208*_t44/TRAILER_LIT(42849.0);
-    const trailer_real_t _t231 = -TRAILER_LIT(73805.0)*_t123*_t215/TRAILER_LIT(14283.0)
-            + _t123*_t217 - _t178*_t229 + _t18*_t212 + _t18*_t222 + _t18*_t227 + _t181*_t220
-            - _t181*_t228 + _t181*_t230 - _t207*_t208 - _t208*_t209 + _t208*_t210 + _t208*_t211
-            + _t212*_t22 + _t213*_t214 - _t213*_t216 - _t213*_t218 - _t213*_t219
-            + TRAILER_LIT(73805.0)*_t213*_t48/TRAILER_LIT(14283.0) + _t214*_t215 - _t215*_t216
-            - _t215*_t218 - _t215*_t219 - _t217*_t48 - _t22*_t222 + _t22*_t227 + _t22*_t229*_t44
-            - _t220*_t221 + _t221*_t228 + _t221*_t230 - _t223*_t224 + _t223*_t225 - _t224*_t226
-            + _t225*_t226;
+    const trailer_real_t _t104 = gain_1/TRAILER_FMAX(_t103, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t232 = _t203*_t205 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t _t233 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t234 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t235 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t236 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t237 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t238 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t239 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t240 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t241 = TRAILER_LIT(10222.0)*_t18/TRAILER_LIT(42849.0);
-    const trailer_real_t _t242 = TRAILER_LIT(31178.0)*_t22/TRAILER_LIT(42849.0);
-    const trailer_real_t _t243 = TRAILER_LIT(23639.0)*_t19/TRAILER_LIT(28566.0);
-    const trailer_real_t _t244 = TRAILER_LIT(4387.0)*_t23/TRAILER_LIT(9522.0);
-    const trailer_real_t _t245 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t246 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t247 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t248 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t249 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t250 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t251 = _t131*_t22;
-    const trailer_real_t _t252 = TRAILER_LIT(23639.0)*_t18/TRAILER_LIT(14283.0);
-    const trailer_real_t _t253 = TRAILER_LIT(4387.0)*_t22/TRAILER_LIT(4761.0);
-    const trailer_real_t _t254 = _t11*radius_left*radius_left*radius_left;
-    const trailer_real_t _t255 = _t8*radius_right;
-    const trailer_real_t _t256 = _t10*_t255;
-    const trailer_real_t _t257 = _t1*_t7;
-    const trailer_real_t _t258 = _t18*_t254;
-    const trailer_real_t _t259 = _t22*_t254;
-    const trailer_real_t _t260 = _t114*_t255;
-    const trailer_real_t _t261 = _t127*_t255;
-    const trailer_real_t _t262 = _t254*_t49;
-    const trailer_real_t _t263 = _t254*_t30;
-    const trailer_real_t _t264 =
-            TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t254/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t265 = J_theta_cart*_t254;
-    const trailer_real_t _t266 = TRAILER_LIT(16371875.0)*_t265/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t267 = _t265*_t33;
-    const trailer_real_t _t268 = _t25*_t265;
-    const trailer_real_t _t269 = _t1*radius_left;
-    const trailer_real_t _t270 = _t19*_t269;
-    const trailer_real_t _t271 = _t23*_t269;
-    const trailer_real_t _t272 = K_theta_cart_x_tractor*_t254;
-    const trailer_real_t _t273 = TRAILER_LIT(6548750.0)*_t272/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t274 = _t272*_t33;
-    const trailer_real_t _t275 = _t25*_t272;
-    const trailer_real_t _t276 = K_theta_cart_x_tractor_2*_t254;
-    const trailer_real_t _t277 = TRAILER_LIT(250000.0)*_t254/TRAILER_LIT(42849.0);
-    const trailer_real_t _t278 = _t276*_t33;
-    const trailer_real_t _t279 = _t276*_t34;
-    const trailer_real_t _t280 = _t256*_t49;
-    const trailer_real_t _t281 = _t256*_t30;
-    const trailer_real_t _t282 = _t256*_t54;
-    const trailer_real_t _t283 = _t10*_t37;
-    const trailer_real_t _t284 = _t255*_t283;
-    const trailer_real_t _t285 = _t256*_t56;
-    const trailer_real_t _t286 = _t10*_t44;
-    const trailer_real_t _t287 = _t255*_t286;
-    const trailer_real_t _t288 = J_theta_cart*_t256;
-    const trailer_real_t _t289 = K_theta_cart_x_tractor*_t256;
-    const trailer_real_t _t290 = TRAILER_LIT(15475625.0)*_t256/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t291 = K_theta_cart_x_tractor_2*_t256;
-    const trailer_real_t _t292 = TRAILER_LIT(619025.0)*_t256/TRAILER_LIT(171396.0);
-    const trailer_real_t _t293 = _t145*_t269;
-    const trailer_real_t _t294 = J_theta_cart*_t257;
-    const trailer_real_t _t295 = _t269*_t62;
-    const trailer_real_t _t296 = TRAILER_LIT(15625000.0)*_t294/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t297 = _t269*_t58;
-    const trailer_real_t _t298 = K_theta_cart_x_tractor*_t257;
-    const trailer_real_t _t299 = TRAILER_LIT(9225625.0)*_t298/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t300 = K_theta_cart_x_tractor_2*_t257;
-    const trailer_real_t _t301 = TRAILER_LIT(369025.0)*_t300/TRAILER_LIT(342792.0);
-    const trailer_real_t _t302 = _t265*_t79;
-    const trailer_real_t _t303 = TRAILER_LIT(1051625.0)*_t265/TRAILER_LIT(114264.0);
-    const trailer_real_t _t304 = _t272*_t79;
-    const trailer_real_t _t305 = TRAILER_LIT(210325.0)*_t272/TRAILER_LIT(19044.0);
-    const trailer_real_t _t306 = TRAILER_LIT(2676875.0)*_t276/TRAILER_LIT(985527.0);
-    const trailer_real_t _t307 = _t256*_t90;
-    const trailer_real_t _t308 = _t256*_t93;
-    const trailer_real_t _t309 = _t256*_t88;
-    const trailer_real_t _t310 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t256/TRAILER_LIT(28566.0);
-    const trailer_real_t _t311 = _t256*_t96;
-    const trailer_real_t _t312 = TRAILER_LIT(1096750.0)*_t258/TRAILER_LIT(985527.0);
-    const trailer_real_t _t313 = TRAILER_LIT(5909750.0)*_t259/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t314 = TRAILER_LIT(46128125.0)*_t294/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t315 = TRAILER_LIT(1845125.0)*_t294/TRAILER_LIT(342792.0);
-    const trailer_real_t _t316 = TRAILER_LIT(15589000.0)*_t258/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t317 = TRAILER_LIT(48734365.0)*_t258/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t318 = TRAILER_LIT(5111000.0)*_t259/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t319 = TRAILER_LIT(44910365.0)*_t259/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t320 = TRAILER_LIT(369025.0)*_t298/TRAILER_LIT(57132.0);
-    const trailer_real_t _t321 = TRAILER_LIT(369025.0)*_t300/TRAILER_LIT(171396.0);
-    const trailer_real_t _t322 = TRAILER_LIT(9225625.0)*_t300/TRAILER_LIT(985527.0);
-    const trailer_real_t _t323 = TRAILER_LIT(400000.0)*_t260/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t324 = TRAILER_LIT(3200000.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t325 = TRAILER_LIT(30350000.0)*_t260/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t326 = TRAILER_LIT(63247135.0)*_t260/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t327 = TRAILER_LIT(9650000.0)*_t261/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t328 = TRAILER_LIT(11991865.0)*_t261/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t329 = _t155*_t254;
-    const trailer_real_t _t330 = TRAILER_LIT(1051625.0)*_t35/TRAILER_LIT(342792.0);
-    const trailer_real_t _t331 = _t26*_t265;
-    const trailer_real_t _t332 = _t265*_t28;
-    const trailer_real_t _t333 = _t26*_t27;
-    const trailer_real_t _t334 = _t28*_t34;
-    const trailer_real_t _t335 = TRAILER_LIT(3690250.0)*_t269/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t336 = _t18*_t335;
-    const trailer_real_t _t337 = _t22*_t335;
-    const trailer_real_t _t338 = _t26*_t272;
-    const trailer_real_t _t339 = _t272*_t28;
-    const trailer_real_t _t340 = _t122*_t276;
-    const trailer_real_t _t341 = _t279*_t28;
-    const trailer_real_t _t342 = _t10*_t155;
-    const trailer_real_t _t343 = _t255*_t342;
-    const trailer_real_t _t344 = _t125*_t254;
-    const trailer_real_t _t345 = TRAILER_LIT(14761000.0)*_t37/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t346 = TRAILER_LIT(67571365.0)*_t270/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t347 = TRAILER_LIT(98126635.0)*_t271/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t348 = K_theta_cart_x_tractor_2*_t343;
-    const trailer_real_t _t349 = _t137*_t288;
-    const trailer_real_t _t350 = _t28*_t283;
-    const trailer_real_t _t351 = _t255*_t350;
-    const trailer_real_t _t352 = _t26*_t55;
-    const trailer_real_t _t353 = _t26*_t286;
-    const trailer_real_t _t354 = _t255*_t353;
-    const trailer_real_t _t355 = TRAILER_LIT(369025.0)*_t289/TRAILER_LIT(85698.0);
-    const trailer_real_t _t356 =
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t357 = _t256*_t26;
-    const trailer_real_t _t358 = _t256*_t28;
-    const trailer_real_t _t359 = _t283*_t44;
-    const trailer_real_t _t360 = _t255*_t359;
-    const trailer_real_t _t361 = TRAILER_LIT(17556365.0)*_t258/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t362 = TRAILER_LIT(3437860.0)*_t258/TRAILER_LIT(985527.0);
-    const trailer_real_t _t363 = TRAILER_LIT(34688365.0)*_t259/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t364 = TRAILER_LIT(2367110.0)*_t259/TRAILER_LIT(985527.0);
-    const trailer_real_t _t365 = TRAILER_LIT(36902500.0)*_t269/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t366 = K_theta_cart_x_tractor_2*_t131*_t365;
-    const trailer_real_t _t367 = _t269*_t50;
-    const trailer_real_t _t368 = J_theta_cart*_t367;
-    const trailer_real_t _t369 = _t269*_t52;
-    const trailer_real_t _t370 = J_theta_cart*_t369;
-    const trailer_real_t _t371 = _t163*_t269;
-    const trailer_real_t _t372 =
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t35/TRAILER_LIT(171396.0);
-    const trailer_real_t _t373 = K_theta_cart_x_tractor*_t365;
-    const trailer_real_t _t374 = _t15*_t35;
-    const trailer_real_t _t375 = TRAILER_LIT(44799635.0)*_t260/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t376 = TRAILER_LIT(295220.0)*_t260/TRAILER_LIT(985527.0);
-    const trailer_real_t _t377 = TRAILER_LIT(14244365.0)*_t261/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t378 = TRAILER_LIT(2361760.0)*_t261/TRAILER_LIT(328509.0);
-    const trailer_real_t _t379 = _t26*_t78;
-    const trailer_real_t _t380 = TRAILER_LIT(14244365.0)*_t270/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t381 = TRAILER_LIT(1180880.0)*_t270/TRAILER_LIT(328509.0);
-    const trailer_real_t _t382 = TRAILER_LIT(44799635.0)*_t271/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t383 = TRAILER_LIT(147610.0)*_t271/TRAILER_LIT(985527.0);
-    const trailer_real_t _t384 = TRAILER_LIT(184512500.0)*J_theta_cart/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t385 = _t28*_t309;
-    const trailer_real_t _t386 = TRAILER_LIT(738050.0)*_t291/TRAILER_LIT(42849.0);
-    const trailer_real_t _t387 = _t28*_t88;
-    const trailer_real_t _t388 = TRAILER_LIT(2193500.0)*_t258/TRAILER_LIT(985527.0);
-    const trailer_real_t _t389 = _t155*_t259;
-    const trailer_real_t _t390 = _t50*_t93;
-    const trailer_real_t _t391 = _t52*_t88;
-    const trailer_real_t _t392 = _t258*_t26;
-    const trailer_real_t _t393 = _t258*_t28;
-    const trailer_real_t _t394 = TRAILER_LIT(31178000.0)*_t258/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t395 = _t26*_t44;
-    const trailer_real_t _t396 = _t259*_t26;
-    const trailer_real_t _t397 = _t259*_t28;
-    const trailer_real_t _t398 = TRAILER_LIT(10222000.0)*_t259/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t399 = _t269*_t390;
-    const trailer_real_t _t400 = _t369*_t88;
-    const trailer_real_t _t401 = TRAILER_LIT(800000.0)*_t260/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t402 = TRAILER_LIT(6400000.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t403 = TRAILER_LIT(295220.0)*_t260/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t404 = TRAILER_LIT(60700000.0)*_t260/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t405 = TRAILER_LIT(44799635.0)*_t260/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t406 = TRAILER_LIT(2361760.0)*_t261/TRAILER_LIT(985527.0);
-    const trailer_real_t _t407 = TRAILER_LIT(19300000.0)*_t261/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t408 = TRAILER_LIT(14244365.0)*_t261/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t409 = TRAILER_LIT(7380500.0)*_t269/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t410 = _t35*_t367;
-    const trailer_real_t _t411 = TRAILER_LIT(1180880.0)*_t18/TRAILER_LIT(985527.0);
-    const trailer_real_t _t412 = _t35*_t369;
-    const trailer_real_t _t413 = TRAILER_LIT(29522000.0)*_t269/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t414 = _t139*_t413;
-    const trailer_real_t _t415 = _t367*_t55;
-    const trailer_real_t _t416 = TRAILER_LIT(14244365.0)*_t18/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t417 = _t369*_t65;
-    const trailer_real_t _t418 = _t144*_t413;
-    const trailer_real_t _t419 = TRAILER_LIT(147610.0)*_t22/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t420 = TRAILER_LIT(44799635.0)*_t22/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t421 = J_theta_cart*_t35;
-    const trailer_real_t _t422 = _t131*_t269;
-    const trailer_real_t _t423 = TRAILER_LIT(89599270.0)*_t260/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t424 = TRAILER_LIT(28488730.0)*_t261/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t425 = TRAILER_LIT(14244365.0)*_t18/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t426 = TRAILER_LIT(44799635.0)*_t22/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t427 = _t269*_t35;
-    const trailer_real_t _t428 = _t10*_t235;
-    const trailer_real_t _t429 = _t10*_t236;
-    const trailer_real_t _t430 = _t10*_t237;
-    const trailer_real_t _t431 = TRAILER_LIT(31178.0)*_t114/TRAILER_LIT(42849.0);
-    const trailer_real_t _t432 = TRAILER_LIT(10222.0)*_t127/TRAILER_LIT(42849.0);
-    const trailer_real_t _t433 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(9522.0);
-    const trailer_real_t _t434 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(28566.0);
-    const trailer_real_t _t435 = _t10*_t246;
-    const trailer_real_t _t436 = TRAILER_LIT(62356.0)*_t114/TRAILER_LIT(42849.0);
-    const trailer_real_t _t437 = TRAILER_LIT(20444.0)*_t127/TRAILER_LIT(42849.0);
-    const trailer_real_t _t438 = TRAILER_LIT(4387.0)*_t114/TRAILER_LIT(4761.0);
-    const trailer_real_t _t439 = TRAILER_LIT(23639.0)*_t127/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t105 = _t101*_t104 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t k1_1 = k1[1];
+    const trailer_real_t k2_1 = k2[1];
+    const trailer_real_t _t106 = _t102*_t104 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t107 = _t51 - _t52;
+    const trailer_real_t _t108 = _t107*_t78;
+    const trailer_real_t _t109 = _t56 - _t57;
+    const trailer_real_t _t110 = _t109*_t78;
+    const trailer_real_t _t111 = _t59 - _t60;
+    const trailer_real_t _t112 = _t111*_t78;
+    const trailer_real_t _t113 = _t62 - _t63;
+    const trailer_real_t _t114 = _t113*_t78;
+    const trailer_real_t _t115 = _t108*_t44 + _t110*_t45 + _t112*_t46 + _t114*_t47;
+    const trailer_real_t _t116 = -_t51 - _t52;
+    const trailer_real_t _t117 = _t116*_t74;
+    const trailer_real_t _t118 = -_t56 - _t57;
+    const trailer_real_t _t119 = _t118*_t74;
+    const trailer_real_t _t120 = -_t59 - _t60;
+    const trailer_real_t _t121 = _t120*_t74;
+    const trailer_real_t _t122 = -_t62 - _t63;
+    const trailer_real_t _t123 = _t122*_t74;
+    const trailer_real_t _t124 = _t117*_t44 + _t119*_t45 + _t121*_t46 + _t123*_t47;
     const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t125 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
+            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
+    const trailer_real_t _t126 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
+    const trailer_real_t _t127 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t128 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
+            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
+    const trailer_real_t _t129 = _t100*_t18 + _t115*_t80 + _t12*_t96 + _t124*_t76 + _t16*_t93
+            - _t9*_t98;
+    const trailer_real_t _t130 = J_theta_cart_left*_t124*_t84 + J_theta_cart_right*_t115*_t82
+            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
     const trailer_real_t adapt_0 = adapt[0];
     const trailer_real_t h = adapt[1];
-    u[0] = TRAILER_LIT(32743750.0)*J_theta_cart*_t0*_t1*_t25*_t28*_t33/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t25*_t78/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t26*_t27*_t33/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t26*_t33*_t34/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t26/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(746875.0)*J_theta_cart*_t0*_t1*_t27*_t33/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(16371875.0)*J_theta_cart*_t0*_t1*_t27*_t34/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t27*_t79/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t28*_t33*_t34/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(26768750.0)*J_theta_cart*_t0*_t1*_t28*_t34*_t79/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t28/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t33*_t78/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(823375.0)*J_theta_cart*_t10*_t11*_t25*_t27*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t25*_t28*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t25*_t28*_t34*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t26*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t26*_t33*_t78*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(15625000.0)*J_theta_cart*_t10*_t11*_t27*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(156250.0)*J_theta_cart*_t10*_t11*_t33*_t34*radius_right
-            /TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t34*_t79*radius_right
-            /TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t78*_t79*radius_right
-            /TRAILER_LIT(257094.0)
-            + TRAILER_LIT(312500.0)*J_theta_cart*_t10*_t11*radius_right/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(1051625.0)*J_theta_cart*_t107*_t35/TRAILER_LIT(85698.0)
-            - TRAILER_LIT(13384375.0)*J_theta_cart*_t111/TRAILER_LIT(5913162.0)
-            - J_theta_cart*_t160*_t161
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t25*_t27*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t25*_t27*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(62500000.0)*J_theta_cart*_t25*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t25*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t26*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(125000000.0)*J_theta_cart*_t26*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t26*_t28*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(184512500.0)*J_theta_cart*_t28*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t33*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(4141105.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t27/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(10222000.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t28*_t33
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t25*_t28*_t34
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t28/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t26*_t33*_t78
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44910365.0)*J_theta_cart_left*_t0*_t1*_t16*_t27*_t33/TRAILER_LIT(70957944.0)
-            + TRAILER_LIT(5111000.0)*J_theta_cart_left*_t0*_t1*_t16*_t27*_t34/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16*_t33*_t34/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t34*_t79/TRAILER_LIT(35478972.0)
-            + TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t78*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t27*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(5310565.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t27*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(98126635.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t34*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t26*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*_t33*_t34*radius_right
-            /TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t33*_t78*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t78*_t79*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(19300000.0)*J_theta_cart_left*_t16*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t25*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t26*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(28488730.0)*J_theta_cart_left*_t16*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t26*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(11991865.0)*J_theta_cart_left*_t16*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(9650000.0)*J_theta_cart_left*_t16*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t27*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(15396565.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t27/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(15589000.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t33/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(48734365.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t34
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t27*_t33
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(31178000.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t27*_t34
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t26*_t28/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t28*_t34*_t79
-            /TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17*_t33*_t34/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t33*_t78
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t78*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t33*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(67571365.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t34*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t78*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t26*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t27*_t79*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*_t33*_t34*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t33*_t78*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t25*_t27*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(60700000.0)*J_theta_cart_right*_t17*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t26*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(89599270.0)*J_theta_cart_right*_t17*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(63247135.0)*J_theta_cart_right*_t17*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(30350000.0)*J_theta_cart_right*_t17*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t27*_t33*_t34
-            /TRAILER_LIT(42849.0)
-            + TRAILER_LIT(755975.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t27/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t28*_t34
-            /TRAILER_LIT(985527.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t33/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(298750.0)*K_theta_cart_x_tractor*_t0*_t1*_t25*_t34/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t27*_t34
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t28/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor*_t0*_t1*_t26*_t33*_t78
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(62500.0)*K_theta_cart_x_tractor*_t0*_t1*_t33*_t34/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t34*_t79/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t78*_t79/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(125000.0)*K_theta_cart_x_tractor*_t0*_t1/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t33*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t78*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t27*_t33*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t27*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t27*_t79*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t28*_t34*_t79*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t33*_t78*radius_right
-            /TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor*_t144*_t20/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t25*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t26*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t26*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(15475625.0)*K_theta_cart_x_tractor*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t27*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7433125.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t27/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t33/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(1130975.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t34/TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t27*_t33
-            /TRAILER_LIT(19044.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t27*_t34
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26*_t28*_t33*_t34
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t26/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t28*_t34*_t79
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t28/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t33*_t78/TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t78*_t79
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*_t28*_t34*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*_t78*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*_t33*_t78*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t26*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t27*_t33*radius_right
-            /TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t27*_t79*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t28*_t33*_t34*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t28*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t34*_t79*radius_right
-            /TRAILER_LIT(171396.0)
-            - TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t111/TRAILER_LIT(19044.0)
-            - K_theta_cart_x_tractor_2*_t122*_t31
-            - TRAILER_LIT(738050.0)*K_theta_cart_x_tractor_2*_t171/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t25*_t27*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(43152500.0)*K_theta_cart_x_tractor_2*_t25*_t27*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t25*_t28*_t33*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t25*_t28*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t26*_t28*_t33*_t34*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t26*_t28*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(738050.0)*K_theta_cart_x_tractor_2*_t26*_t33*_t5*_t78*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(619025.0)*K_theta_cart_x_tractor_2*_t27*_t33*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t27*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(6250000.0)*K_theta_cart_x_tractor_2*_t33*_t34*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t34*_t5*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t5*_t78*_t79*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor*_t10*_t11*radius_right
-            /TRAILER_LIT(42849.0) - TRAILER_LIT(5111000.0)*_t100*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(44910365.0)*_t100*_t65/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(34688365.0)*_t100*_t93/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(15589000.0)*_t101*_t44/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(48734365.0)*_t101*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(17556365.0)*_t101*_t88/TRAILER_LIT(35478972.0) - _t102*_t51 - _t102*_t53
-            - _t103*_t21 - _t104*_t21 - _t105*_t24 - _t106*_t24 - _t107*_t108 - _t107*_t110
-            - _t109*_t80 - TRAILER_LIT(17556365.0)*_t111*_t22/TRAILER_LIT(11826324.0) - _t112*_t113
-            - TRAILER_LIT(26768750.0)*_t112*_t93/TRAILER_LIT(8869743.0) - _t115*_t126 - _t115*_t193
-            - TRAILER_LIT(44799635.0)*_t115*_t194/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(44799635.0)*_t115*_t201/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(98126635.0)*_t115*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(44799635.0)*_t115*_t88/TRAILER_LIT(35478972.0) - _t116*_t26 - _t116*_t28
-            - _t117*_t118 - TRAILER_LIT(2676875.0)*_t117*_t55/TRAILER_LIT(985527.0) - _t118*_t119
-            - _t119*_t120 - TRAILER_LIT(10707500.0)*_t119*_t88/TRAILER_LIT(2956581.0) - _t12*_t14
-            - _t121*_t122 - _t121*_t169*_t33 - _t124*_t31
-            - TRAILER_LIT(6400000.0)*_t125*_t21/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(1250000.0)*_t125*_t32/TRAILER_LIT(128547.0) - _t126*_t128 - _t128*_t129
-            - TRAILER_LIT(7380500.0)*_t128*_t155/TRAILER_LIT(2956581.0) - _t128*_t188 - _t128*_t193
-            - TRAILER_LIT(14244365.0)*_t128*_t194/TRAILER_LIT(11826324.0) - _t128*_t195
-            - TRAILER_LIT(4723520.0)*_t128*_t200/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(14244365.0)*_t128*_t201/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(67571365.0)*_t128*_t55/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(14244365.0)*_t128*_t88/TRAILER_LIT(35478972.0) - _t130*_t132
-            - _t130*_t151*_t20 - _t132*_t197 - _t133*_t156 - _t134*_t61 - _t135*_t2 - _t136*_t137
-            - TRAILER_LIT(184512500.0)*_t136*_t93/TRAILER_LIT(8869743.0) - _t137*_t138 - _t138*_t141
-            - _t139*_t140*_t20 - _t14*_t15 - _t14*_t168*_t37 - _t143*_t51 - _t146*_t51 - _t146*_t53
-            - _t148*_t51 - _t149*_t150 - TRAILER_LIT(19300000.0)*_t150*_t18/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(60700000.0)*_t150*_t22/TRAILER_LIT(8869743.0) - _t152*_t83 - _t152*_t85
-            - _t153*_t83 - _t153*_t85 - _t154*_t72 - _t157*_t35 - _t157 - _t158*_t163*_t44
-            - _t158*_t164*_t93 - _t158*_t166 - _t159*_t160 - _t159*_t162 - _t161*_t164*_t37
-            - _t161*_t165 - _t163*_t173 - _t167*_t83 - _t167*_t85 - _t170*_t83 - _t170*_t85
-            - _t171*_t172 - TRAILER_LIT(28488730.0)*_t171*_t18/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(89599270.0)*_t171*_t22/TRAILER_LIT(8869743.0) - _t173*_t182 - _t174*_t175
-            - _t174*_t177 - _t175*_t176 - _t176*_t198
-            - TRAILER_LIT(10222000.0)*_t178*_t29/TRAILER_LIT(8869743.0) - _t179*_t180 - _t179*_t199
-            - TRAILER_LIT(14244365.0)*_t18*_t186/TRAILER_LIT(5913162.0) - _t180*_t22*_t31
-            - TRAILER_LIT(31178000.0)*_t181*_t31/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(9447040.0)*_t184*_t35/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(6400000.0)*_t184/TRAILER_LIT(985527.0) - _t185*_t21
-            - TRAILER_LIT(44799635.0)*_t186*_t22/TRAILER_LIT(5913162.0) - _t187*_t35*_t51
-            - _t187*_t35*_t53 - _t189*_t190 - _t190*_t191 - _t2*_t3 - _t2*_t4
-            - TRAILER_LIT(250000.0)*_t2*_t48/TRAILER_LIT(42849.0) - _t20*_t58*_t59
-            - TRAILER_LIT(369025.0)*_t200*_t72/TRAILER_LIT(42849.0) + _t206*_t231
-            - TRAILER_LIT(9650000.0)*_t21*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(11991865.0)*_t21*_t65/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(14244365.0)*_t21*_t93/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(7675000.0)*_t21/TRAILER_LIT(2956581.0) + _t232*(J_theta_right
-            + TRAILER_LIT(20444.0)*_t125*_t19/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t125*_t23/TRAILER_LIT(42849.0) + _t131*_t245 - _t131*_t246
-            - _t131*_t247 + _t139*_t248 - _t139*_t249 + _t139*_t250 - _t139*_t252 - _t139*_t253
-            - _t144*_t248 + _t144*_t249 - _t144*_t250 + _t144*_t252 + _t144*_t253 + _t151*_t245
-            - _t151*_t246 - _t151*_t247 + TRAILER_LIT(20444.0)*_t183/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t19/TRAILER_LIT(171396.0) + _t207*_t5 + _t209*_t5 + _t210*_t5
-            - _t211*_t5 + TRAILER_LIT(11449.0)*_t23/TRAILER_LIT(171396.0) - _t233*_t5 + _t234*_t5
-            - _t235*_t50 - _t235*_t52 + _t236*_t50 + _t236*_t52 + _t237*_t50 + _t237*_t52
-            + _t238*_t58 - _t238*_t62 - _t239*_t58 + _t239*_t62 + _t240*_t58 - _t240*_t62
-            - _t241*_t50 - _t241*_t52 + _t242*_t50 + _t242*_t52 + _t243*_t37 - _t243*_t44
-            + _t244*_t37 - _t244*_t44 - TRAILER_LIT(62356.0)*_t251/TRAILER_LIT(42849.0))
-            - TRAILER_LIT(30350000.0)*_t24*_t37/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(63247135.0)*_t24*_t65/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(44799635.0)*_t24*_t93/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(2675000.0)*_t24/TRAILER_LIT(2956581.0) - _t29*_t30 - _t29*_t97 - _t29*_t98
-            - _t30*_t31 - _t31*_t97 - _t31*_t98 - _t32*_t36
-            - TRAILER_LIT(16371875.0)*_t32*_t37/TRAILER_LIT(8869743.0) - _t33*_t45*_t47
-            - _t34*_t45*_t86 - TRAILER_LIT(46128125.0)*_t37*_t71/TRAILER_LIT(8869743.0) - _t38*_t39
-            - _t38*_t40 - TRAILER_LIT(6548750.0)*_t41*_t44/TRAILER_LIT(2956581.0) - _t42*_t43
-            - _t42*_t82 - TRAILER_LIT(18451250.0)*_t44*_t72/TRAILER_LIT(2956581.0) - _t45*_t46
-            - _t49*_t51 - _t49*_t53 - _t51*_t54 - _t53*_t54 - _t55*_t57 - _t55*_t73 - _t57*_t88
-            - _t6*_t9 - _t60*_t61 - _t61*_t68 - _t63*_t64 - _t63*_t69
-            - TRAILER_LIT(15625000.0)*_t65*_t71/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(369025.0)*_t65*_t75/TRAILER_LIT(342792.0)
-            - TRAILER_LIT(15475625.0)*_t66*_t9/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(619025.0)*_t70*_t9/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(46128125.0)*_t71*_t93/TRAILER_LIT(17739486.0) - _t72*_t74 - _t73*_t88
-            - _t75*_t76 - _t75*_t77 - TRAILER_LIT(369025.0)*_t75*_t93/TRAILER_LIT(171396.0)
-            - _t80*_t81 - _t83*_t84 - _t83*_t87 - _t83*_t99 - _t84*_t85 - _t85*_t87 - _t85*_t99
-            - _t89*_t90 - _t89*_t96 - _t90*_t91 - _t91*_t96 - _t92*_t94 - _t94*_t95;
-    u[1] = -TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t367*_t55/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t256/TRAILER_LIT(2956581.0)
-            - _t103*_t261 - _t104*_t261 - _t105*_t260 - _t106*_t260 - _t108*_t329 + _t108*_t343
-            - _t108*_t344 + _t108*_t360 - _t109*_t302 + _t110*_t329 + _t113*_t331 - _t118*_t338
-            - _t118*_t339 + _t12*_t254 - _t12*_t257 + _t120*_t339 + _t123*_t277 - _t124*_t254*_t28
-            + TRAILER_LIT(11819500.0)*_t125*_t259/TRAILER_LIT(2956581.0) + _t125*_t388 + _t125*_t401
-            - _t125*_t402 + _t126*_t270 + _t126*_t271 - _t129*_t270 + _t130*_t329 - _t130*_t343
-            + _t130*_t344 - _t130*_t360 + TRAILER_LIT(13751440.0)*_t133*_t258/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(9468440.0)*_t133*_t259/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1180880.0)*_t133*_t260/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(590440.0)*_t133*_t271/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(10707500.0)*_t133*_t276/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t133*_t288/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(73805000.0)*_t133*_t291/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t133*_t294/TRAILER_LIT(257094.0)
-            + TRAILER_LIT(36902500.0)*_t133*_t300/TRAILER_LIT(2956581.0) - _t134*_t289 + _t135*_t254
-            - _t139*_t371 + _t139*_t373 + _t140*_t351 - _t140*_t354 + _t141*_t28*_t288 - _t142*_t290
-            + _t143*_t357 + _t144*_t371 - _t144*_t373 + _t146*_t357 + _t146*_t358 + _t147*_t292
-            - _t148*_t357 + _t149*_t351 - _t149*_t354 + _t15*_t257 - _t154*_t298 + _t155*_t388
-            + _t155*_t401 - _t155*_t402 - _t160*_t368 - _t160*_t370 + _t162*_t368 + _t165*_t369
-            - _t166*_t367 + _t168*_t295 - _t169*_t26*_t278 + _t169*_t304 + _t172*_t385 - _t175*_t396
-            - _t175*_t397 + _t177*_t396 + _t18*_t414 - _t18*_t418 - _t180*_t392 - _t180*_t393
-            + _t182*_t399 - _t182*_t400 - _t183*_t409
-            - TRAILER_LIT(4723520.0)*_t183*_t427/TRAILER_LIT(985527.0) - _t185*_t261 - _t188*_t270
-            + _t189*_t355 - _t189*_t403 + _t189*_t406 + _t191*_t355 - _t191*_t403 + _t191*_t406
-            + _t192*_t394 - _t192*_t398 - _t192*_t404 - _t192*_t407 - _t194*_t405 - _t194*_t408
-            - _t195*_t270 + _t195*_t271 - TRAILER_LIT(369025.0)*_t196*_t422/TRAILER_LIT(42849.0)
-            - _t197*_t343 + _t198*_t397 + _t199*_t392
-            + TRAILER_LIT(13751440.0)*_t200*_t258/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1180880.0)*_t200*_t260/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(9447040.0)*_t200*_t261/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(1051625.0)*_t200*_t265/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(210325.0)*_t200*_t272/TRAILER_LIT(14283.0)
-            - TRAILER_LIT(10707500.0)*_t200*_t276/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(73805000.0)*_t201*_t289/TRAILER_LIT(2956581.0) + _t201*_t386 - _t201*_t423
-            - _t201*_t424 + _t206*(J_theta_left + _t10*_t207 + _t10*_t209 + _t10*_t210 - _t10*_t211
-            + _t10*_t233 - _t10*_t234 + TRAILER_LIT(11449.0)*_t114/TRAILER_LIT(171396.0)
-            - _t125*_t435 - _t125*_t436 + _t125*_t437
-            + TRAILER_LIT(94249.0)*_t127/TRAILER_LIT(171396.0) - _t155*_t435 - _t155*_t436
-            + _t155*_t437 + _t192*_t438 + _t192*_t439 + _t238*_t283 - _t238*_t286 - _t239*_t283
-            + _t239*_t286 - _t240*_t283 + _t240*_t286 + _t245*_t342 + _t245*_t359 + _t247*_t342
-            + _t247*_t359 - _t248*_t350 + _t248*_t353 + _t249*_t350 - _t249*_t353 + _t250*_t350
-            - _t250*_t353 - _t26*_t428 + _t26*_t429 - _t26*_t430 + _t26*_t431 - _t26*_t432
-            - _t28*_t428 + _t28*_t429 - _t28*_t430 + _t28*_t431 - _t28*_t432 - _t37*_t433
-            - _t37*_t434 - _t395*_t438 - _t395*_t439 + _t433*_t44 + _t434*_t44) + _t22*_t414
-            - _t22*_t418 + _t231*_t232 + TRAILER_LIT(1130975.0)*_t25*_t279/TRAILER_LIT(342792.0)
-            - TRAILER_LIT(210325.0)*_t25*_t341/TRAILER_LIT(19044.0) + _t251*_t409
-            + TRAILER_LIT(590440.0)*_t251*_t427/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(500000.0)*_t254*_t26*_t48/TRAILER_LIT(42849.0) - _t254*_t3 + _t254*_t4
-            - _t256*_t6 + _t257*_t3 + _t257*_t6
-            + TRAILER_LIT(548375.0)*_t258*_t35/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(15396565.0)*_t258*_t67/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(548375.0)*_t258/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(2954875.0)*_t259*_t35/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(4141105.0)*_t259*_t67/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(2954875.0)*_t259/TRAILER_LIT(2956581.0) + _t26*_t262 - _t26*_t263
-            - _t26*_t264 - _t26*_t280 + _t26*_t281 + _t26*_t282 + _t26*_t308*_t384 - _t26*_t312
-            - _t26*_t313 - _t26*_t323 + _t26*_t324 + _t26*_t340 - _t26*_t349
-            - TRAILER_LIT(2675000.0)*_t260/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(7675000.0)*_t261/TRAILER_LIT(2956581.0) + _t262*_t28 - _t263*_t28
-            - _t264*_t28 - _t265*_t36 + _t266*_t37 - _t266*_t44
-            - TRAILER_LIT(746875.0)*_t267*_t27/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(13384375.0)*_t267*_t333/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(26768750.0)*_t267*_t379/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(13384375.0)*_t267*_t78/TRAILER_LIT(17739486.0)
-            + TRAILER_LIT(13384375.0)*_t268*_t334/TRAILER_LIT(5913162.0) + _t268*_t39 - _t268*_t40
-            + TRAILER_LIT(755975.0)*_t27*_t275/TRAILER_LIT(85698.0) - _t270*_t345
-            + TRAILER_LIT(1029875.0)*_t270*_t35/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1029875.0)*_t270/TRAILER_LIT(2956581.0) - _t271*_t345
-            + TRAILER_LIT(1573375.0)*_t271*_t35/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(5310565.0)*_t271*_t67/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1573375.0)*_t271/TRAILER_LIT(985527.0) + _t272*_t60 - _t273*_t37
-            + _t273*_t44 + TRAILER_LIT(2676875.0)*_t274*_t333/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(10707500.0)*_t274*_t379/TRAILER_LIT(2956581.0) + _t274*_t43 + _t274*_t82
-            - TRAILER_LIT(2676875.0)*_t275*_t334/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(298750.0)*_t275*_t34/TRAILER_LIT(2956581.0) + _t276*_t46
-            - TRAILER_LIT(7433125.0)*_t276*_t67/TRAILER_LIT(5913162.0) - _t277*_t48
-            + TRAILER_LIT(210325.0)*_t278*_t333/TRAILER_LIT(19044.0) - _t278*_t47
-            + TRAILER_LIT(210325.0)*_t278*_t78/TRAILER_LIT(57132.0) - _t279*_t86 - _t28*_t280
-            + _t28*_t281 + _t28*_t282 - _t28*_t312 - _t28*_t313 - _t28*_t323 + _t28*_t324
-            + _t28*_t340 - _t28*_t349 - TRAILER_LIT(50000000.0)*_t284*_t48/TRAILER_LIT(2956581.0)
-            - _t284*_t59 + _t284*_t64 - _t284*_t69 + _t285*_t55 - _t285*_t65 + _t285*_t88
-            - _t285*_t93 + _t287*_t59 - _t287*_t64 + _t287*_t69
-            - TRAILER_LIT(46128125.0)*_t288*_t352/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t288*_t67/TRAILER_LIT(257094.0) - _t289*_t60 - _t289*_t68
-            + _t290*_t66 - TRAILER_LIT(6250000.0)*_t291*_t35/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(43152500.0)*_t291*_t67/TRAILER_LIT(2956581.0) - _t292*_t70 - _t293*_t50
-            - _t293*_t52 + _t294*_t36 + TRAILER_LIT(823375.0)*_t294*_t67/TRAILER_LIT(171396.0)
-            + _t295*_t56 - _t295*_t92 - _t296*_t55 + _t296*_t65 - _t297*_t56 + _t297*_t92
-            - _t298*_t74 + _t299*_t55 - _t299*_t65 + _t299*_t88 - _t299*_t93 + _t300*_t76
-            + _t300*_t77 + _t301*_t55 - _t301*_t65
-            - TRAILER_LIT(26768750.0)*_t302*_t334/TRAILER_LIT(8869743.0) + _t302*_t81 + _t303*_t83
-            + _t303*_t85 + TRAILER_LIT(10707500.0)*_t304*_t334/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(2676875.0)*_t304*_t34/TRAILER_LIT(2956581.0) - _t305*_t83 - _t305*_t85
-            + _t306*_t83 + _t306*_t85 - _t307*_t83 - _t307*_t85 + _t308*_t92 - _t308*_t95
-            - _t309*_t92 + _t309*_t95 + _t310*_t83 + _t310*_t85 + _t311*_t83 + _t311*_t85
-            - _t314*_t88 + _t314*_t93 - _t315*_t83 - _t315*_t85 - _t316*_t37 + _t316*_t44
-            + _t317*_t55 - _t317*_t65 + _t318*_t37 - _t318*_t44 - _t319*_t55 + _t319*_t65
-            + _t320*_t83 + _t320*_t85 + _t321*_t88 - _t321*_t93 - _t322*_t83 - _t322*_t85
-            + _t325*_t37 - _t325*_t44 - _t326*_t55 + _t326*_t65 + _t327*_t37 - _t327*_t44
-            - _t328*_t55 + _t328*_t65 + _t330*_t331 + _t330*_t332
-            - TRAILER_LIT(32743750.0)*_t332*_t37/TRAILER_LIT(8869743.0) + _t336*_t50 + _t336*_t52
-            - _t337*_t50 - _t337*_t52 - TRAILER_LIT(13097500.0)*_t338*_t44/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*_t341*_t79/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(1845125.0)*_t343*_t421/TRAILER_LIT(128547.0) + _t346*_t55 - _t346*_t65
-            + _t347*_t55 - _t347*_t65 - TRAILER_LIT(73805000.0)*_t348*_t35/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(50000000.0)*_t348/TRAILER_LIT(2956581.0) + _t35*_t366
-            + TRAILER_LIT(9468440.0)*_t35*_t389/TRAILER_LIT(2956581.0) - _t351*_t356 + _t352*_t405
-            + _t352*_t408 + _t354*_t356 - TRAILER_LIT(18451250.0)*_t358*_t66/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(369025.0)*_t358*_t70/TRAILER_LIT(28566.0) + _t361*_t88 - _t361*_t93
-            - _t362*_t83 - _t362*_t85 - _t363*_t88 + _t363*_t93 - _t364*_t83 - _t364*_t85 + _t366
-            + _t367*_t372 - _t367*_t374 + _t369*_t372 - _t369*_t374
-            + TRAILER_LIT(369025.0)*_t369*_t70/TRAILER_LIT(57132.0)
-            - TRAILER_LIT(46128125.0)*_t370*_t65/TRAILER_LIT(5913162.0) - _t371*_t390 + _t371*_t391
-            + _t373*_t390 - _t373*_t391 - _t375*_t88 + _t375*_t93 - _t376*_t83 - _t376*_t85
-            - _t377*_t88 + _t377*_t93 + _t378*_t83 + _t378*_t85 + _t380*_t88 - _t380*_t93
-            + _t381*_t83 + _t381*_t85 + _t382*_t88 - _t382*_t93 - _t383*_t83 - _t383*_t85
-            - _t384*_t385 - _t386*_t387 + _t387*_t423 + _t387*_t424
-            + TRAILER_LIT(11819500.0)*_t389/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(17556365.0)*_t392*_t55/TRAILER_LIT(11826324.0)
-            + TRAILER_LIT(17556365.0)*_t393*_t65/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(17556365.0)*_t393*_t88/TRAILER_LIT(8869743.0) - _t394*_t395 + _t395*_t398
-            + _t395*_t404 + _t395*_t407 - TRAILER_LIT(34688365.0)*_t396*_t93/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(34688365.0)*_t397*_t65/TRAILER_LIT(11826324.0) + _t399*_t425 + _t399*_t426
-            - _t400*_t425 - _t400*_t426 + _t410*_t411 - _t410*_t419 + _t411*_t412 - _t412*_t419
-            - _t415*_t416 - _t415*_t420 + _t416*_t417 + _t417*_t420
-            + TRAILER_LIT(1845125.0)*_t421*_t422/TRAILER_LIT(257094.0);
-    s[0] = _t203;
-    s[1] = _t202;
-    s_norm[0] = _t204;
-    gain_next[0] = _t204*adapt_0*h + gain_1;
+    u[0] = _t105*_t125 + _t106*_t126 + _t129;
+    u[1] = _t105*_t127 + _t106*_t128 + _t130;
+    s[0] = _t101;
+    s[1] = _t102;
+    s_norm[0] = _t103;
+    gain_next[0] = _t103*adapt_0*h + gain_1;
 }
 
 /* trailer_minimal_pi_law: documented in trailer_laws.h.

@@ -78,43 +78,9 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
  * @param[in]  span [1] row-major (TRAILER_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 135 add, 230 mul, 57 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 68 add, 110 mul, 16 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
-    const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
-    const trailer_real_t *span, trailer_real_t *H1hat);
-
-#define TRAILER_MINIMAL_TDE_TRIG_TRIG_PREV_SIZE 4
-#define TRAILER_MINIMAL_TDE_TRIG_U_PREV_SIZE 2
-#define TRAILER_MINIMAL_TDE_TRIG_QDOT_NOW_SIZE 2
-#define TRAILER_MINIMAL_TDE_TRIG_QDOT_THEN_SIZE 2
-#define TRAILER_MINIMAL_TDE_TRIG_SPAN_SIZE 1
-#define TRAILER_MINIMAL_TDE_TRIG_H1HAT_SIZE 2
-
-/**
- * (minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
- * qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
- * The same with trig_prev = (sin, cos of q(t-h)[2], sin, cos of q(t-h)[3]) in place of the
- * coordinates:
- * no sin/cos evaluated (a step computes them once and keeps them for the next).
- *
- * Paper equations: (17).
- *
- * @param[in]  p trailer_params_t -- nominal parameters of M-hat
- * @param[in]  trig_prev [4] row-major (TRAILER_MINIMAL_TDE_TRIG_TRIG_PREV_SIZE): trig_prev_s0,
- *     trig_prev_c0, trig_prev_s1, trig_prev_c1 -- sin, cos of q(t-h)[2], sin, cos of q(t-h)[3]
- * @param[in]  u_prev [2] row-major (TRAILER_MINIMAL_TDE_TRIG_U_PREV_SIZE): up0, up1 -- u(t-h)
- *     applied
- * @param[in]  qdot_now [2] row-major (TRAILER_MINIMAL_TDE_TRIG_QDOT_NOW_SIZE): qd_now0, qd_now1 --
- *     qdot(t)
- * @param[in]  qdot_then [2] row-major (TRAILER_MINIMAL_TDE_TRIG_QDOT_THEN_SIZE): qd_then0, qd_then1
- *     -- qdot(t-span)
- * @param[in]  span [1] row-major (TRAILER_MINIMAL_TDE_TRIG_SPAN_SIZE): span -- h or 2h
- * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_TRIG_H1HAT_SIZE)
- *
- * operations after CSE: 135 add, 230 mul, 57 div, 0 sin/cos, 0 sqrt
- */
-void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *trig_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat);
 
@@ -133,7 +99,7 @@ void trailer_minimal_tde_trig(const trailer_params_t *p, const trailer_real_t *t
  *     measured q
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 132 add, 229 mul, 57 div, 4 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 66 add, 109 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs
  */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm);
@@ -220,50 +186,9 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
  * @param[in]  H1hat [2] row-major (TRAILER_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 137 add, 232 mul, 56 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 70 add, 111 mul, 14 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u);
-
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_TRIG_SIZE 4
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_E_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_EDOT_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_QDDOT_DES_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_K1_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_K2_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_P12_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_P22_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_H1HAT_SIZE 2
-#define TRAILER_MINIMAL_TDC_LAW_TRIG_U_SIZE 2
-
-/**
- * (minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
- * The same with trig = (sin, cos of q[2], sin, cos of q[3]) in place of the coordinates:
- * no sin/cos evaluated (a step computes them once and keeps them for the next).
- *
- * Paper equations: (16), (18).
- *
- * @param[in]  p trailer_params_t -- nominal parameters of M-hat
- * @param[in]  trig [4] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_TRIG_SIZE): trig_s0, trig_c0,
- *     trig_s1, trig_c1 -- sin, cos of q[2], sin, cos of q[3]
- * @param[in]  e [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_E_SIZE): e0, e1 -- q_des - q
- * @param[in]  edot [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_EDOT_SIZE): edot0, edot1 -- qdot_des
- *     - qdot
- * @param[in]  qddot_des [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_QDDOT_DES_SIZE): qdd_des0,
- *     qdd_des1 -- desired acceleration
- * @param[in]  k1 [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_K1_SIZE): k1_0, k1_1 -- diagonal of K1
- * @param[in]  k2 [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_K2_SIZE): k2_0, k2_1 -- diagonal of K2
- * @param[in]  p12 [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_P12_SIZE): p12_0, p12_1 -- P entries
- *     per coordinate
- * @param[in]  p22 [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_P22_SIZE): p22_0, p22_1
- * @param[in]  H1hat [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
- * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_TRIG_U_SIZE)
- *
- * operations after CSE: 137 add, 232 mul, 56 div, 0 sin/cos, 0 sqrt
- */
-void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u);
@@ -311,64 +236,9 @@ void trailer_minimal_tdc_law_trig(const trailer_params_t *p, const trailer_real_
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 142 add, 240 mul, 57 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 75 add, 119 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
-    const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm);
-
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_TRIG_SIZE 4
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_E_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_EDOT_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_QDDOT_DES_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_K1_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_K2_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_P12_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_P22_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_H1HAT_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_GAIN_SIZE 1
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_EPS_SIZE 1
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_U_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_S_SIZE 2
-#define TRAILER_MINIMAL_TDROC_LAW_TRIG_S_NORM_SIZE 1
-
-/**
- * (minimal formulation) TDROC (16), (22), (25):
- * u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
- * + H1hat, s = B^T P e.
- * The same with trig = (sin, cos of q[2], sin, cos of q[3]) in place of the coordinates:
- * no sin/cos evaluated (a step computes them once and keeps them for the next).
- *
- * Paper equations: (16), (22), (24), (25).
- *
- * @param[in]  p trailer_params_t -- nominal parameters of M-hat
- * @param[in]  trig [4] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_TRIG_SIZE): trig_s0, trig_c0,
- *     trig_s1, trig_c1 -- sin, cos of q[2], sin, cos of q[3]
- * @param[in]  e [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_E_SIZE): e0, e1 -- q_des - q
- * @param[in]  edot [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_EDOT_SIZE): edot0, edot1 --
- *     qdot_des - qdot
- * @param[in]  qddot_des [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_QDDOT_DES_SIZE): qdd_des0,
- *     qdd_des1 -- desired acceleration
- * @param[in]  k1 [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_K1_SIZE): k1_0, k1_1 -- diagonal of
- *     K1
- * @param[in]  k2 [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_K2_SIZE): k2_0, k2_1 -- diagonal of
- *     K2
- * @param[in]  p12 [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_P12_SIZE): p12_0, p12_1 -- P
- *     entries per coordinate
- * @param[in]  p22 [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_P22_SIZE): p22_0, p22_1
- * @param[in]  H1hat [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_H1HAT_SIZE): H1hat0, H1hat1 --
- *     (17)
- * @param[in]  gain [1] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_GAIN_SIZE): gain -- khat of (25)
- * @param[in]  eps [1] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_EPS_SIZE): eps -- boundary layer
- * @param[out] u [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_U_SIZE)
- * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_S_SIZE)
- * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_TRIG_S_NORM_SIZE)
- *
- * operations after CSE: 142 add, 240 mul, 57 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
- */
-void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_real_t *trig,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
@@ -421,7 +291,7 @@ void trailer_minimal_tdroc_law_trig(const trailer_params_t *p, const trailer_rea
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 867 add, 2489 mul, 536 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 143 add, 224 mul, 25 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -479,7 +349,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 863 add, 2486 mul, 535 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 139 add, 221 mul, 24 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,

@@ -7,7 +7,7 @@
 #include "trailer_model.h"
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 921 add, 1435 mul, 96 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 141 add, 216 mul, 24 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -46,159 +46,13 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t5 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
-    const trailer_real_t _t7 = J_theta_cart_left*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t _t9 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t10 = TRAILER_LIT(1.0)/_t9;
-    const trailer_real_t _t11 = J_theta_cart_right*_t10;
-    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t13 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t14 = TRAILER_LIT(73805.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t15 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t16 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t17 = TRAILER_LIT(14761.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t18 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t20 = _t12 - _t13 - _t15 - _t16;
-    const trailer_real_t _t21 = -_t18 + _t19;
-    const trailer_real_t _t22 = _t1*(-_t0 - _t2 + _t3 + _t4);
-    const trailer_real_t _t23 = radius_left*radius_left;
-    const trailer_real_t _t24 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t25 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t26 = _t23*_t7;
-    const trailer_real_t _t27 = _t11*_t23;
-    const trailer_real_t _t28 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t29 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t30 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t31 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t32 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t33 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t34 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t35 = TRAILER_LIT(10222.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t36 = TRAILER_LIT(4387.0)*_t26/TRAILER_LIT(9522.0);
-    const trailer_real_t _t37 = TRAILER_LIT(23639.0)*_t27/TRAILER_LIT(28566.0);
-    const trailer_real_t _t38 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t39 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t40 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t41 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t42 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t43 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
-    const trailer_real_t _t44 = TRAILER_LIT(23639.0)*_t11/TRAILER_LIT(14283.0);
-    const trailer_real_t _t45 = -_t36 - _t37;
-    const trailer_real_t _t46 = _t36 + _t37;
-    const trailer_real_t _t47 = -TRAILER_LIT(62356.0)*_t26/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t27/TRAILER_LIT(42849.0);
-    const trailer_real_t _t48 = -_t28 + _t29 - _t30 + _t34 - _t35;
-    const trailer_real_t _t49 = _t31 - _t32 - _t33;
-    const trailer_real_t _t50 = -_t31 + _t32 + _t33;
-    const trailer_real_t _t51 = TRAILER_LIT(20444.0)*_t11/TRAILER_LIT(42849.0) + _t38 - _t39 + _t40
-            - TRAILER_LIT(62356.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t52 = -_t41 + _t42 + _t43 + _t44;
-    const trailer_real_t _t53 = _t41 - _t42 - _t43 - _t44;
-    const trailer_real_t _t54 = _t38 - _t39 + _t40;
-    const trailer_real_t _t55 = J_theta_left + _t23*(_t0 + _t2 + _t24 - _t25 + _t3 - _t4)
-            + TRAILER_LIT(11449.0)*_t26/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t27/TRAILER_LIT(171396.0);
-    const trailer_real_t _t56 = radius_right*radius_right;
-    const trailer_real_t _t57 = _t56*_t7;
-    const trailer_real_t _t58 = _t11*_t56;
-    const trailer_real_t _t59 = _t28*_t56;
-    const trailer_real_t _t60 = _t29*_t56;
-    const trailer_real_t _t61 = _t30*_t56;
-    const trailer_real_t _t62 = TRAILER_LIT(10222.0)*_t57/TRAILER_LIT(42849.0);
-    const trailer_real_t _t63 = TRAILER_LIT(31178.0)*_t58/TRAILER_LIT(42849.0);
-    const trailer_real_t _t64 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(28566.0);
-    const trailer_real_t _t65 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(9522.0);
-    const trailer_real_t _t66 = _t39*_t56;
-    const trailer_real_t _t67 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t68 = TRAILER_LIT(20444.0)*_t57/TRAILER_LIT(42849.0);
-    const trailer_real_t _t69 = TRAILER_LIT(62356.0)*_t58/TRAILER_LIT(42849.0);
-    const trailer_real_t _t70 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(14283.0);
-    const trailer_real_t _t71 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(4761.0);
-    const trailer_real_t _t72 = -_t70 - _t71;
-    const trailer_real_t _t73 = _t70 + _t71;
-    const trailer_real_t _t74 = -_t59 + _t60 + _t61 - _t62 + _t63;
-    const trailer_real_t _t75 = _t64 + _t65;
-    const trailer_real_t _t76 = -_t64 - _t65;
-    const trailer_real_t _t77 = -_t66 + _t68 - _t69;
-    const trailer_real_t _t78 = -_t31 + _t32 - _t33;
-    const trailer_real_t _t79 = _t31 - _t32 + _t33;
-    const trailer_real_t _t80 = _t41 - _t42 + _t67;
-    const trailer_real_t _t81 = -_t41 + _t42 - _t67;
-    const trailer_real_t _t82 = J_theta_right + _t56*(_t0 + _t2 - _t24 + _t25 + _t3 - _t4)
-            + TRAILER_LIT(94249.0)*_t57/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t58/TRAILER_LIT(171396.0);
-    const trailer_real_t _t83 = _t5*_t9;
-    const trailer_real_t _t84 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t85 = J_theta_cart_right*_t5;
-    const trailer_real_t _t86 = J_theta_cart_left*_t9;
-    const trailer_real_t _t87 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t88 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t89 = TRAILER_LIT(76388175.0)*J_theta_cart;
-    const trailer_real_t _t90 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t91 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t92 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t93 = TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t94 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t95 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t96 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t97 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t98 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t99 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t100 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t101 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t102 = -TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t56;
-    const trailer_real_t _t103 = TRAILER_LIT(34500000.0)*J_theta_cart;
-    const trailer_real_t _t104 = TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t105 = TRAILER_LIT(5.0)*_t10*_t6/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t106 = -_t84;
-    const trailer_real_t _t107 = TRAILER_LIT(110707500.0)*J_theta_cart
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t108 = TRAILER_LIT(101850900.0)*J_theta_cart;
-    const trailer_real_t _t109 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t110 = -_t88;
-    const trailer_real_t _t111 = _t105*radius_right;
-    const trailer_real_t _t112 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t113 = TRAILER_LIT(130611825.0)*J_theta_cart;
-    const trailer_real_t _t114 = -_t87 - _t90;
-    const trailer_real_t _t115 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t116 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t117 = TRAILER_LIT(25462725.0)*J_theta_cart
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t118 = TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t119 = TRAILER_LIT(16501728.0)*_t23;
-    const trailer_real_t _t120 = TRAILER_LIT(68018688.0)*_t56;
-    const trailer_real_t _t121 = TRAILER_LIT(1417056.0)*radius_left*radius_right;
-    const trailer_real_t _t122 = TRAILER_LIT(6420000.0)*radius_left*radius_right;
-    const trailer_real_t _t123 = TRAILER_LIT(35426400.0)*_t56;
-    const trailer_real_t _t124 = -TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t125 = -_t112 - _t113;
-    const trailer_real_t _t126 = -_t94;
-    const trailer_real_t _t127 = -_t96 - _t99;
-    const trailer_real_t _t128 = -_t92 - _t98;
-    const trailer_real_t _t129 = -_t100 - _t93;
-    const trailer_real_t _t130 = -_t95 - _t97;
-    const trailer_real_t _t131 = TRAILER_LIT(708528.0)*_t56;
-    const trailer_real_t _t132 = TRAILER_LIT(11362128.0)*_t23;
-    const trailer_real_t _t133 = TRAILER_LIT(136037376.0)*radius_left*radius_right;
-    const trailer_real_t _t134 = _t105*radius_left;
-    const trailer_real_t _t135 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t136 = _t135/TRAILER_LIT(414.0);
-    const trailer_real_t _t137 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t138 = _t137/TRAILER_LIT(414.0);
-    const trailer_real_t _t139 = TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t140 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(414.0);
-    const trailer_real_t _t141 = TRAILER_LIT(5.0)*_t135/TRAILER_LIT(171396.0);
-    const trailer_real_t _t142 = TRAILER_LIT(5.0)*_t137/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t5 = J_theta_tractor*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -232,676 +86,157 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t _t143 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t144 = radius_left*thetadot_left;
-    const trailer_real_t _t145 = radius_right*thetadot_right;
-    const trailer_real_t _t146 = TRAILER_LIT(250.0)*(_t144 - _t145)*(_t144
-            + _t145)/TRAILER_LIT(207.0);
-    const trailer_real_t _t147 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t148 = _t147*_t147;
-    const trailer_real_t _t149 = _t1*_t148;
-    const trailer_real_t _t150 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t151 = _t150*_t150;
-    const trailer_real_t _t152 = _t1*_t151;
-    const trailer_real_t _t153 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t154 = _t147*_t153;
-    const trailer_real_t _t155 = K_theta_cart_x_tractor_2*_t154;
-    const trailer_real_t _t156 = _t143*_t150;
-    const trailer_real_t _t157 = K_theta_cart_x_tractor_2*_t156;
-    const trailer_real_t _t158 = _t154*_t7;
-    const trailer_real_t _t159 = _t156*_t17;
-    const trailer_real_t _t160 = _t11*_t154;
-    const trailer_real_t _t161 = _t149*_t151;
-    const trailer_real_t _t162 = _t143*_t147;
-    const trailer_real_t _t163 = _t150*_t153;
-    const trailer_real_t _t164 = _t162*_t163;
-    const trailer_real_t _t165 = _t1*_t164;
-    const trailer_real_t _t166 = TRAILER_LIT(59044.0)*_t161/TRAILER_LIT(42849.0);
-    const trailer_real_t _t167 = TRAILER_LIT(14761.0)*_t152/TRAILER_LIT(14283.0);
-    const trailer_real_t _t168 = TRAILER_LIT(14761.0)*_t149*_t156/TRAILER_LIT(14283.0);
-    const trailer_real_t _t169 = TRAILER_LIT(59044.0)*_t165/TRAILER_LIT(42849.0);
-    const trailer_real_t _t170 = _t11*(-_t159 + _t166 + _t168 + _t169 + _t8) + _t14*(_t155 - _t157)
-            + _t149*(TRAILER_LIT(73805.0)*_t157/TRAILER_LIT(14283.0) + _t20)
-            + _t152*(-TRAILER_LIT(73805.0)*_t155/TRAILER_LIT(14283.0) + _t20) + _t161*_t21
-            + _t165*_t21 + _t167*(_t158 - _t160) + _t17*(-_t158 + _t160) + _t22
-            + _t7*(_t159 + _t166 - _t168 + _t169 + _t8);
-    const trailer_real_t _t171 = _t148*_t23;
-    const trailer_real_t _t172 = _t151*_t23;
-    const trailer_real_t _t173 = _t154*_t23;
-    const trailer_real_t _t174 = _t156*_t23;
-    const trailer_real_t _t175 = _t151*_t171;
-    const trailer_real_t _t176 = _t154*_t172;
-    const trailer_real_t _t177 = _t156*_t171;
-    const trailer_real_t _t178 = _t164*_t23;
-    const trailer_real_t _t179 = _t154*_t45 + _t156*_t46 + _t164*_t47
-            + _t171*(-TRAILER_LIT(26195.0)*_t157/TRAILER_LIT(14283.0) + _t48)
-            + _t172*(TRAILER_LIT(26195.0)*_t155/TRAILER_LIT(14283.0) + _t48) + _t173*_t49
-            + _t174*_t50 + _t175*_t51 + _t176*_t52 + _t177*_t53 + _t178*_t54 + _t55;
-    const trailer_real_t _t180 = _t154*_t56;
-    const trailer_real_t _t181 = _t156*_t56;
-    const trailer_real_t _t182 = _t148*_t151;
-    const trailer_real_t _t183 = _t182*_t56;
-    const trailer_real_t _t184 = _t151*_t180;
-    const trailer_real_t _t185 = _t148*_t181;
-    const trailer_real_t _t186 = _t164*_t56;
-    const trailer_real_t _t187 = _t151*_t154;
-    const trailer_real_t _t188 = _t148*_t156;
-    const trailer_real_t _t189 = _t148*_t74 + _t151*_t74 + _t154*_t75 + _t156*_t76 + _t164*_t77
-            + _t180*_t78 + _t181*_t79 + _t182*_t77 + _t184*_t80 + _t185*_t81 + _t187*_t72
-            + _t188*_t73 + _t38*(_t183 + _t186) + _t40*(-_t183 - _t186) + _t82;
-    const trailer_real_t _t190 = -_t170*_t170 + _t179*_t189;
-    const trailer_real_t _t191 = TRAILER_LIT(1.0)/_t190;
-    const trailer_real_t _t192 = thetadot_left*thetadot_left;
-    const trailer_real_t _t193 = thetadot_right*thetadot_right;
-    const trailer_real_t _t194 = _t193*_t56;
-    const trailer_real_t _t195 = _t194*_t83;
-    const trailer_real_t _t196 = _t194*_t85;
-    const trailer_real_t _t197 = TRAILER_LIT(15793200.0)*_t196;
-    const trailer_real_t _t198 = _t192*_t23;
-    const trailer_real_t _t199 = _t198*_t86;
-    const trailer_real_t _t200 = TRAILER_LIT(17713200.0)*_t199;
-    const trailer_real_t _t201 = _t194*_t86;
-    const trailer_real_t _t202 = TRAILER_LIT(28366800.0)*_t201;
-    const trailer_real_t _t203 = _t198*_t83;
-    const trailer_real_t _t204 = _t147*_t147*_t147;
-    const trailer_real_t _t205 = _t150*_t150*_t150;
-    const trailer_real_t _t206 = _t150*_t204;
-    const trailer_real_t _t207 = TRAILER_LIT(2125584.0)*_t199;
-    const trailer_real_t _t208 = _t147*_t205;
-    const trailer_real_t _t209 = _t143*_t204;
-    const trailer_real_t _t210 = _t198*_t85;
-    const trailer_real_t _t211 = _t144*_t145;
-    const trailer_real_t _t212 = _t211*_t85;
-    const trailer_real_t _t213 = _t153*_t205;
-    const trailer_real_t _t214 = TRAILER_LIT(23617600.0)*_t156;
-    const trailer_real_t _t215 = _t147*_t150;
-    const trailer_real_t _t216 = _t210*_t215;
-    const trailer_real_t _t217 = TRAILER_LIT(34086384.0)*_t201;
-    const trailer_real_t _t218 = _t182*_t210;
-    const trailer_real_t _t219 = _t211*_t86;
-    const trailer_real_t _t220 = TRAILER_LIT(49505184.0)*_t196;
-    const trailer_real_t _t221 = _t204*_t205;
-    const trailer_real_t _t222 = _t210*_t221;
-    const trailer_real_t _t223 = _t148*_t195;
-    const trailer_real_t _t224 = _t151*_t195;
-    const trailer_real_t _t225 = _t143*_t153;
-    const trailer_real_t _t226 = _t199*_t225;
-    const trailer_real_t _t227 = TRAILER_LIT(708528.0)*_t226;
-    const trailer_real_t _t228 = J_theta_cart*_t195;
-    const trailer_real_t _t229 = K_theta_cart_x_tractor*_t195;
-    const trailer_real_t _t230 = TRAILER_LIT(1920000.0)*_t212;
-    const trailer_real_t _t231 = K_theta_cart_x_tractor_2*_t195;
-    const trailer_real_t _t232 = TRAILER_LIT(7858500.0)*_t225;
-    const trailer_real_t _t233 = _t201*_t225;
-    const trailer_real_t _t234 = TRAILER_LIT(11362128.0)*_t233;
-    const trailer_real_t _t235 = K_theta_cart_x_tractor_2*_t203;
-    const trailer_real_t _t236 = _t196*_t225;
-    const trailer_real_t _t237 = TRAILER_LIT(16501728.0)*_t236;
-    const trailer_real_t _t238 = _t151*_t162;
-    const trailer_real_t _t239 = TRAILER_LIT(22141500.0)*_t225;
-    const trailer_real_t _t240 = _t148*_t213;
-    const trailer_real_t _t241 = J_theta_cart*_t203;
-    const trailer_real_t _t242 = TRAILER_LIT(26195000.0)*_t154;
-    const trailer_real_t _t243 = TRAILER_LIT(38547000.0)*_t231;
-    const trailer_real_t _t244 = _t148*_t163;
-    const trailer_real_t _t245 = K_theta_cart_x_tractor*_t203;
-    const trailer_real_t _t246 = TRAILER_LIT(44283000.0)*_t245;
-    const trailer_real_t _t247 = TRAILER_LIT(47235200.0)*_t187;
-    const trailer_real_t _t248 = _t151*_t209;
-    const trailer_real_t _t249 = _t215*_t245;
-    const trailer_real_t _t250 = TRAILER_LIT(62868000.0)*_t182;
-    const trailer_real_t _t251 = _t203*_t206;
-    const trailer_real_t _t252 = _t203*_t208;
-    const trailer_real_t _t253 = _t211*_t83;
-    const trailer_real_t _t254 = _t253*_t90;
-    const trailer_real_t _t255 = _t215*_t228;
-    const trailer_real_t _t256 = TRAILER_LIT(110707500.0)*_t215;
-    const trailer_real_t _t257 = _t221*_t245;
-    const trailer_real_t _t258 = TRAILER_LIT(138000000.0)*_t182;
-    const trailer_real_t _t259 = _t208*_t229;
-    const trailer_real_t _t260 = _t221*_t228;
-    const trailer_real_t _t261 = TRAILER_LIT(177132000.0)*_t182*_t235;
-    const trailer_real_t _t262 = _t253*_t88;
-    const trailer_real_t _t263 = _t148*_t262;
-    const trailer_real_t _t264 = _t151*_t262;
-    const trailer_real_t _t265 = TRAILER_LIT(4251168.0)*_t212;
-    const trailer_real_t _t266 = _t212*_t225;
-    const trailer_real_t _t267 = _t225*_t91;
-    const trailer_real_t _t268 = _t148*_t203;
-    const trailer_real_t _t269 = J_theta_cart*_t268;
-    const trailer_real_t _t270 = TRAILER_LIT(25462725.0)*_t225;
-    const trailer_real_t _t271 = _t151*_t203;
-    const trailer_real_t _t272 = J_theta_cart*_t271;
-    const trailer_real_t _t273 = J_theta_cart*_t224;
-    const trailer_real_t _t274 = TRAILER_LIT(32122500.0)*_t162;
-    const trailer_real_t _t275 = _t164*_t210;
-    const trailer_real_t _t276 = _t213*_t223;
-    const trailer_real_t _t277 = K_theta_cart_x_tractor*_t225;
-    const trailer_real_t _t278 = TRAILER_LIT(52244730.0)*_t277;
-    const trailer_real_t _t279 = _t218*_t225;
-    const trailer_real_t _t280 = _t253*_t94;
-    const trailer_real_t _t281 = _t148*_t280;
-    const trailer_real_t _t282 = _t151*_t280;
-    const trailer_real_t _t283 = _t163*_t268;
-    const trailer_real_t _t284 = _t182*_t219;
-    const trailer_real_t _t285 = _t209*_t271;
-    const trailer_real_t _t286 = _t219*_t221;
-    const trailer_real_t _t287 = _t162*_t224;
-    const trailer_real_t _t288 = TRAILER_LIT(165600000.0)*_t155;
-    const trailer_real_t _t289 = J_theta_cart*_t253;
-    const trailer_real_t _t290 = TRAILER_LIT(203701800.0)*_t289;
-    const trailer_real_t _t291 = _t221*_t290;
-    const trailer_real_t _t292 = K_theta_cart_x_tractor*_t253;
-    const trailer_real_t _t293 = TRAILER_LIT(183331620.0)*_t292;
-    const trailer_real_t _t294 = _t206*_t293;
-    const trailer_real_t _t295 = _t208*_t293;
-    const trailer_real_t _t296 = _t258*_t289;
-    const trailer_real_t _t297 = TRAILER_LIT(101850900.0)*_t215*_t289;
-    const trailer_real_t _t298 = TRAILER_LIT(82800000.0)*_t253;
-    const trailer_real_t _t299 = _t157*_t298;
-    const trailer_real_t _t300 = K_theta_cart_x_tractor_2*_t253;
-    const trailer_real_t _t301 = TRAILER_LIT(61110540.0)*_t300;
-    const trailer_real_t _t302 = _t209*_t301;
-    const trailer_real_t _t303 = TRAILER_LIT(51255270.0)*_t300;
-    const trailer_real_t _t304 = _t163*_t303;
-    const trailer_real_t _t305 = TRAILER_LIT(1417056.0)*_t266;
-    const trailer_real_t _t306 = TRAILER_LIT(20700000.0)*_t225;
-    const trailer_real_t _t307 = _t292*_t306;
-    const trailer_real_t _t308 = _t162*_t303;
-    const trailer_real_t _t309 = _t213*_t301;
-    const trailer_real_t _t310 = _t155*_t298;
-    const trailer_real_t _t311 = _t182*_t225;
-    const trailer_real_t _t312 = _t245*_t311;
-    const trailer_real_t _t313 = TRAILER_LIT(138000000.0)*_t164;
-    const trailer_real_t _t314 = TRAILER_LIT(142921080.0)*_t215*_t292;
-    const trailer_real_t _t315 = TRAILER_LIT(152776350.0)*_t289;
-    const trailer_real_t _t316 = _t206*_t315;
-    const trailer_real_t _t317 = _t208*_t315;
-    const trailer_real_t _t318 = TRAILER_LIT(165600000.0)*_t182;
-    const trailer_real_t _t319 = _t292*_t318;
-    const trailer_real_t _t320 = _t228*_t311;
-    const trailer_real_t _t321 = _t164*_t235;
-    const trailer_real_t _t322 = TRAILER_LIT(244442160.0)*_t292;
-    const trailer_real_t _t323 = _t221*_t322;
-    const trailer_real_t _t324 = TRAILER_LIT(244442160.0)*_t300;
-    const trailer_real_t _t325 = _t240*_t324;
-    const trailer_real_t _t326 = TRAILER_LIT(183331620.0)*_t300;
-    const trailer_real_t _t327 = _t238*_t326;
-    const trailer_real_t _t328 = _t151*_t253;
-    const trailer_real_t _t329 = _t288*_t328;
-    const trailer_real_t _t330 = _t148*_t253;
-    const trailer_real_t _t331 = TRAILER_LIT(61110540.0)*_t277;
-    const trailer_real_t _t332 = _t330*_t331;
-    const trailer_real_t _t333 = _t328*_t331;
-    const trailer_real_t _t334 = TRAILER_LIT(50925450.0)*_t225*_t289;
-    const trailer_real_t _t335 = _t148*_t334;
-    const trailer_real_t _t336 = _t151*_t334;
-    const trailer_real_t _t337 = _t164*_t219;
-    const trailer_real_t _t338 = _t219*_t311;
-    const trailer_real_t _t339 = TRAILER_LIT(165600000.0)*_t157;
-    const trailer_real_t _t340 = _t330*_t339;
-    const trailer_real_t _t341 = _t244*_t326;
-    const trailer_real_t _t342 = _t248*_t324;
-    const trailer_real_t _t343 = _t290*_t311;
-    const trailer_real_t _t344 = _t289*_t313;
-    const trailer_real_t _t345 = TRAILER_LIT(165600000.0)*_t164;
-    const trailer_real_t _t346 = _t292*_t345;
-    const trailer_real_t _t347 = _t311*_t322;
-    const trailer_real_t _t348 = TRAILER_LIT(120000000.0)*_t300;
-    const trailer_real_t _t349 = TRAILER_LIT(73805000.0)*_t289;
-    const trailer_real_t _t350 = TRAILER_LIT(265698000.0)*_t300;
-    const trailer_real_t _t351 = _t101*_t225;
-    const trailer_real_t _t352 = _t103*_t195 + _t104*_t203 + TRAILER_LIT(17250000.0)*_t225*_t228
-            + _t289*(TRAILER_LIT(100000000.0)*_t156 + TRAILER_LIT(200000000.0)*_t187
-            + TRAILER_LIT(221415000.0)*_t238 + TRAILER_LIT(295220000.0)*_t240)
-            + _t292*(TRAILER_LIT(120000000.0)*_t154 + TRAILER_LIT(74283000.0)*_t162
-            + TRAILER_LIT(240000000.0)*_t188 + TRAILER_LIT(88566000.0)*_t213
-            + TRAILER_LIT(265698000.0)*_t244 + TRAILER_LIT(354264000.0)*_t248)
-            + _t348*(_t148 + _t151) + _t349*(_t163 + _t209) + _t350*(_t206 + _t208)
-            + _t351*(_t328 + _t330)
-            + _t5*_t9*(J_theta_cart*_t192*_t23*(-TRAILER_LIT(17250000.0)*_t143*_t153
-            - TRAILER_LIT(34500000.0)) + _t102*_t193
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(K_theta_cart_x_tractor_2*(-TRAILER_LIT(207132000.0)*_t147*_t150
-            - TRAILER_LIT(240000000.0)*_t148*_t151 - TRAILER_LIT(354264000.0)*_t204*_t205
-            - TRAILER_LIT(60000000.0)) + _t143*(J_theta_cart*(-TRAILER_LIT(73805000.0)*_t147
-            - TRAILER_LIT(200000000.0)*_t148*_t150 - TRAILER_LIT(295220000.0)*_t151*_t204)
-            + K_theta_cart_x_tractor*(-TRAILER_LIT(265698000.0)*_t147*_t151
-            - TRAILER_LIT(120000000.0)*_t150 - TRAILER_LIT(88566000.0)*_t204)
-            + K_theta_cart_x_tractor_2*_t153*(-TRAILER_LIT(240000000.0)*_t147*_t150
-            - TRAILER_LIT(354264000.0)*_t148*_t151 - TRAILER_LIT(30000000.0)))
-            + _t153*(J_theta_cart*(-TRAILER_LIT(100000000.0)*_t147
-            - TRAILER_LIT(221415000.0)*_t148*_t150 - TRAILER_LIT(73805000.0)*_t205)
-            + K_theta_cart_x_tractor*(-TRAILER_LIT(240000000.0)*_t147*_t151
-            - TRAILER_LIT(354264000.0)*_t148*_t205 - TRAILER_LIT(74283000.0)*_t150))));
-    const trailer_real_t _t353 = -_t111*(J_theta_cart*(-TRAILER_LIT(42830000.0)*_t276
-            - TRAILER_LIT(110707500.0)*_t283 - TRAILER_LIT(147610000.0)*_t285)
-            + J_theta_cart_right*_t5*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(17004672.0)*_t148
-            + TRAILER_LIT(17004672.0)*_t151 + TRAILER_LIT(2471700.0))
-            + _t193*_t56*(TRAILER_LIT(31586400.0)*_t147*_t150 + TRAILER_LIT(66006912.0)*_t148*_t151
-            + TRAILER_LIT(3948300.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(3840000.0)*_t147*_t150 + TRAILER_LIT(5668224.0)*_t148*_t151))
-            + _t192*_t23*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
-            + TRAILER_LIT(22790984.0)*_t151*_t204) + _t193*_t56*(TRAILER_LIT(9746873.0)*_t147
-            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
-            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
-            + TRAILER_LIT(17093238.0)*_t148*_t150 + TRAILER_LIT(5697746.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(24942400.0)*_t147 + TRAILER_LIT(21067638.0)*_t148*_t150
-            + TRAILER_LIT(7022546.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
-            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(51014016.0)*_t147*_t205
-            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(51014016.0)*_t150*_t204
-            + TRAILER_LIT(17713200.0)*_t151 + TRAILER_LIT(4943400.0))
-            + _t193*_t56*(TRAILER_LIT(36951756.0)*_t147*_t150 + TRAILER_LIT(31586400.0)*_t148*_t151
-            + TRAILER_LIT(66006912.0)*_t204*_t205 + TRAILER_LIT(7896600.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(3840000.0)*_t148*_t151 + TRAILER_LIT(5668224.0)*_t204*_t205))
-            - _t100*_t276 + _t148*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
-            + _t151*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
-            - _t162*_t271*_t97 + _t163*(-TRAILER_LIT(9746873.0)*_t196
-            - TRAILER_LIT(19625327.0)*_t199 - TRAILER_LIT(13514273.0)*_t210 - _t223*_t92
-            - TRAILER_LIT(1434000.0)*_t229 - TRAILER_LIT(46822365.0)*_t231 - _t246)
-            + _t195*(_t106 - TRAILER_LIT(82800000.0)*_t157) + _t196*(-TRAILER_LIT(24942400.0)*_t156
-            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(21067638.0)*_t238
-            - TRAILER_LIT(28090184.0)*_t240) + _t199*(-_t214 - TRAILER_LIT(53759562.0)*_t238
-            - TRAILER_LIT(71679416.0)*_t240 - _t247) + _t201*(-TRAILER_LIT(8177600.0)*_t154
-            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
-            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(41626038.0)*_t244
-            - TRAILER_LIT(55501384.0)*_t248) - _t203*_t87 + _t206*(-_t207 - _t217 - _t220
-            - TRAILER_LIT(156734190.0)*_t229 - _t243 - _t265) + _t208*(-_t207 - _t217 - _t220
-            - _t243 - _t265) + _t209*(-TRAILER_LIT(7022546.0)*_t196 - TRAILER_LIT(17919854.0)*_t199
-            - TRAILER_LIT(5697746.0)*_t210 - _t224*_t93 - TRAILER_LIT(10707500.0)*_t228
-            - TRAILER_LIT(52244730.0)*_t231 - _t246) + _t210*(-_t214 - TRAILER_LIT(17093238.0)*_t238
-            - TRAILER_LIT(22790984.0)*_t240 - _t247) + _t212*(-TRAILER_LIT(48560000.0)*_t154
-            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
-            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(3585888.0)*_t215
-            - TRAILER_LIT(107519124.0)*_t244 - TRAILER_LIT(143358832.0)*_t248
-            - TRAILER_LIT(12840000.0)) - _t213*_t268*_t99 - TRAILER_LIT(31537644.0)*_t216
-            - TRAILER_LIT(35426400.0)*_t218 + _t219*(-TRAILER_LIT(15440000.0)*_t154
-            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
-            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(86438688.0)*_t215
-            - TRAILER_LIT(18420000.0)*_t225 - TRAILER_LIT(34186476.0)*_t244
-            - TRAILER_LIT(45581968.0)*_t248 - TRAILER_LIT(36840000.0))
-            - TRAILER_LIT(68018688.0)*_t222 + _t223*(_t110 - _t267 - _t278)
-            + _t224*(_t110 - _t267 - _t278 - _t288) + _t228*(-TRAILER_LIT(1195000.0)*_t162
-            - TRAILER_LIT(52390000.0)*_t188 - _t242 - _t258 - _t313)
-            + _t229*(-TRAILER_LIT(31434000.0)*_t156 - TRAILER_LIT(62868000.0)*_t187
-            - TRAILER_LIT(12849000.0)*_t213) + _t231*(-TRAILER_LIT(62868000.0)*_t164 - _t232
-            - _t250) + _t235*(-TRAILER_LIT(15277635.0)*_t162 - TRAILER_LIT(30555270.0)*_t213
-            - TRAILER_LIT(177132000.0)*_t221 - _t239 - _t256)
-            + _t241*(-TRAILER_LIT(73805000.0)*_t154 - TRAILER_LIT(25000000.0)*_t162
-            - TRAILER_LIT(147610000.0)*_t188 - TRAILER_LIT(36902500.0)*_t213)
-            + _t245*(-TRAILER_LIT(88566000.0)*_t156 - TRAILER_LIT(177132000.0)*_t187)
-            - TRAILER_LIT(61110540.0)*_t249 - _t254 - TRAILER_LIT(104324550.0)*_t255
-            - TRAILER_LIT(122221080.0)*_t257 - TRAILER_LIT(156734190.0)*_t259
-            - TRAILER_LIT(174149100.0)*_t260 + _t261*(-_t225 - TRAILER_LIT(1.0)) + _t263 + _t264
-            - TRAILER_LIT(6420000.0)*_t266 + _t270*(-_t269 - _t272) - _t273*_t274
-            - TRAILER_LIT(35426400.0)*_t275 - TRAILER_LIT(68018688.0)*_t279 - _t281 - _t282
-            - _t283*_t95 - TRAILER_LIT(92160000.0)*_t284 - _t285*_t96
-            - TRAILER_LIT(136037376.0)*_t286 - _t287*_t98 + _t291 + _t294 + _t295 + _t296 + _t297
-            + _t299 + _t302 + _t304 - _t307 - _t308 - _t309 - _t310 - TRAILER_LIT(122221080.0)*_t312
-            - _t314 - _t316 - _t317 - _t319 - TRAILER_LIT(174149100.0)*_t320
-            - TRAILER_LIT(177132000.0)*_t321 - _t323 + _t325 + _t327 + _t329 + _t332 + _t333 - _t335
-            - _t336 - TRAILER_LIT(92160000.0)*_t337 - TRAILER_LIT(136037376.0)*_t338 - _t340 - _t341
-            - _t342 + _t343 + _t344 - _t346 - _t347 - _t352 + _t89*(-_t251 - _t252)
-            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(35426400.0)*_t147*_t150
-            + TRAILER_LIT(2834112.0)*_t148*_t151 + TRAILER_LIT(11328300.0))
-            + _t193*_t56*(TRAILER_LIT(56733600.0)*_t147*_t150 + TRAILER_LIT(45448512.0)*_t148*_t151
-            + TRAILER_LIT(7091700.0))
-            + radius_left*radius_right*thetadot_left*thetadot_right*(TRAILER_LIT(34009344.0)*_t148
-            + TRAILER_LIT(34009344.0)*_t151)) + _t192*_t23*(TRAILER_LIT(19625327.0)*_t147
-            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
-            + _t193*_t56*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
-            + TRAILER_LIT(13875346.0)*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
-            + TRAILER_LIT(11395492.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
-            + TRAILER_LIT(53759562.0)*_t148*_t150 + TRAILER_LIT(17919854.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(16355200.0)*_t147*_t151 + TRAILER_LIT(55501384.0)*_t148*_t205
-            + TRAILER_LIT(8982073.0)*_t150)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
-            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(12745356.0)*_t147*_t150
-            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(2834112.0)*_t204*_t205
-            + TRAILER_LIT(22656600.0)) + _t193*_t56*(TRAILER_LIT(29815956.0)*_t147*_t150
-            + TRAILER_LIT(56733600.0)*_t148*_t151 + TRAILER_LIT(45448512.0)*_t204*_t205
-            + TRAILER_LIT(14183400.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(102028032.0)*_t147*_t205 + TRAILER_LIT(46080000.0)*_t148
-            + TRAILER_LIT(102028032.0)*_t150*_t204 + TRAILER_LIT(46080000.0)*_t151))
-            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(68175450.0)*_t147*_t150
-            + TRAILER_LIT(101850900.0)*_t204*_t205)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(91665810.0)*_t147*_t205
-            + TRAILER_LIT(91665810.0)*_t150*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
-            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
-            + TRAILER_LIT(88566000.0)*_t151) + _t143*(J_theta_cart*(TRAILER_LIT(73805000.0)*_t150
-            + TRAILER_LIT(36902500.0)*_t204) + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
-            + _t148*(TRAILER_LIT(177132000.0)*_t150 + TRAILER_LIT(30555270.0)*_t153))
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(44283000.0)*_t148*_t153
-            + TRAILER_LIT(30555270.0)*_t204) + _t151*(_t107*_t147 + _t153*(_t108*_t148 + _t109)
-            + _t204*_t99)) + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
-            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
-            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(122221080.0)*_t148*_t205
-            + TRAILER_LIT(15277635.0)*_t150)) + _t90)
-            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(130611825.0)*_t147*_t205
-            + TRAILER_LIT(69000000.0)*_t148 + TRAILER_LIT(130611825.0)*_t150*_t204
-            + TRAILER_LIT(69000000.0)*_t151)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(125189460.0)*_t147*_t150
-            + TRAILER_LIT(165600000.0)*_t148*_t151 + TRAILER_LIT(208978920.0)*_t204*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
-            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
-            + TRAILER_LIT(51396000.0)*_t204*_t205)
-            + _t143*(J_theta_cart*(TRAILER_LIT(43537275.0)*_t148*_t153
-            + TRAILER_LIT(26195000.0)*_t150 + _t151*(TRAILER_LIT(43537275.0)*_t153
-            + TRAILER_LIT(42830000.0)*_t204))
-            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(165600000.0)*_t150*_t153
-            + TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
-            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(208978920.0)*_t151*_t153)
-            + TRAILER_LIT(20700000.0)*_t153 + TRAILER_LIT(12849000.0)*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(46822365.0)*_t147
-            + _t148*(TRAILER_LIT(165600000.0)*_t150 + TRAILER_LIT(51396000.0)*_t151*_t153)
-            + TRAILER_LIT(208978920.0)*_t151*_t204))
-            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
-            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
-            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
-            + TRAILER_LIT(51396000.0)*_t148*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t147
-            + TRAILER_LIT(156734190.0)*_t148*_t150 + TRAILER_LIT(52244730.0)*_t205))))))
-            + tau_right;
-    const trailer_real_t _t354 = TRAILER_LIT(17713200.0)*_t201;
-    const trailer_real_t _t355 = TRAILER_LIT(51014016.0)*_t201;
-    const trailer_real_t _t356 = TRAILER_LIT(66006912.0)*_t199;
-    const trailer_real_t _t357 = TRAILER_LIT(17004672.0)*_t233;
-    const trailer_real_t _t358 = TRAILER_LIT(44283000.0)*_t229;
-    const trailer_real_t _t359 = TRAILER_LIT(46080000.0)*_t212;
-    const trailer_real_t _t360 = TRAILER_LIT(177132000.0)*_t231;
-    const trailer_real_t _t361 = _t182*_t360;
-    const trailer_real_t _t362 = TRAILER_LIT(30555270.0)*_t277;
-    const trailer_real_t _t363 = TRAILER_LIT(43537275.0)*_t225;
-    const trailer_real_t _t364 = TRAILER_LIT(102028032.0)*_t212;
-    const trailer_real_t _t365 = TRAILER_LIT(34009344.0)*_t266;
-    const trailer_real_t _t366 = _t134*(J_theta_cart_right*_t5*(_t143*(_t153*(_t148*(_t131*_t193
-            + _t132*_t192 + _t133*_t151*thetadot_left*thetadot_right)
-            + _t151*(_t131*_t193 + _t132*_t192)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(92160000.0)*_t147*_t150 + TRAILER_LIT(18420000.0)))
-            + _t192*_t23*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
-            + TRAILER_LIT(13875346.0)*_t204) + _t193*_t56*(TRAILER_LIT(19625327.0)*_t147
-            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
-            + TRAILER_LIT(11395492.0)*_t204))
-            + _t153*(_t192*_t23*(TRAILER_LIT(16355200.0)*_t147*_t151
-            + TRAILER_LIT(55501384.0)*_t148*_t205 + TRAILER_LIT(8982073.0)*_t150)
-            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(53759562.0)*_t148*_t150
-            + TRAILER_LIT(17919854.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
-            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(34086384.0)*_t147*_t205
-            + TRAILER_LIT(28366800.0)*_t148 + TRAILER_LIT(34086384.0)*_t150*_t204
-            + TRAILER_LIT(28366800.0)*_t151) + _t193*_t56*(TRAILER_LIT(2125584.0)*_t147*_t205
-            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(2125584.0)*_t150*_t204
-            + TRAILER_LIT(17713200.0)*_t151)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(86438688.0)*_t147*_t150 + TRAILER_LIT(92160000.0)*_t148*_t151
-            + TRAILER_LIT(136037376.0)*_t204*_t205 + TRAILER_LIT(36840000.0))) + _t114*_t195
-            + _t125*_t251 + _t125*_t252 + _t127*_t276 + _t128*_t283 + _t129*_t285 + _t130*_t287
-            + _t148*(-_t354 - _t357 - _t359 - _t365) + _t151*(-_t354 - _t357 - _t359 - _t365)
-            - _t163*_t358 - _t164*_t360 + _t196*(-TRAILER_LIT(19625327.0)*_t163
-            - TRAILER_LIT(35426400.0)*_t164 - TRAILER_LIT(35426400.0)*_t182
-            - TRAILER_LIT(17919854.0)*_t209 - _t214 - TRAILER_LIT(12745356.0)*_t215
-            - TRAILER_LIT(2834112.0)*_t221 - TRAILER_LIT(53759562.0)*_t238
-            - TRAILER_LIT(71679416.0)*_t240 - _t247 - TRAILER_LIT(22656600.0))
-            + _t199*(-TRAILER_LIT(24942400.0)*_t156 - TRAILER_LIT(9746873.0)*_t163
-            - TRAILER_LIT(31586400.0)*_t164 - TRAILER_LIT(31586400.0)*_t182
-            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(7022546.0)*_t209
-            - TRAILER_LIT(36951756.0)*_t215 - TRAILER_LIT(21067638.0)*_t238
-            - TRAILER_LIT(28090184.0)*_t240 - TRAILER_LIT(7896600.0))
-            + _t201*(-TRAILER_LIT(13514273.0)*_t163 - TRAILER_LIT(5697746.0)*_t209 - _t214
-            - TRAILER_LIT(17093238.0)*_t238 - TRAILER_LIT(22790984.0)*_t240 - _t247
-            - TRAILER_LIT(4943400.0)) + _t203*(_t106 - TRAILER_LIT(82800000.0)*_t155)
-            + _t206*(-TRAILER_LIT(91665810.0)*_t229 - _t355 - _t364) + _t208*(-_t355 - _t364)
-            + _t209*(-TRAILER_LIT(30555270.0)*_t231 - TRAILER_LIT(10707500.0)*_t241
-            - TRAILER_LIT(147610000.0)*_t273 - _t358) + _t210*(-TRAILER_LIT(8177600.0)*_t154
-            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
-            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(7091700.0)*_t225
-            - TRAILER_LIT(41626038.0)*_t244 - TRAILER_LIT(55501384.0)*_t248
-            - TRAILER_LIT(14183400.0)) + _t212*(-TRAILER_LIT(15440000.0)*_t154
-            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
-            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(34186476.0)*_t244
-            - TRAILER_LIT(45581968.0)*_t248) - TRAILER_LIT(29815956.0)*_t216
-            - TRAILER_LIT(56733600.0)*_t218 + _t219*(-TRAILER_LIT(48560000.0)*_t154
-            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
-            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(107519124.0)*_t244
-            - TRAILER_LIT(143358832.0)*_t248) + _t221*(-_t356 - _t360)
-            - TRAILER_LIT(45448512.0)*_t222 + _t223*(_t124*_t163 - _t362) - _t224*_t362
-            - TRAILER_LIT(3948300.0)*_t226 + _t228*(-TRAILER_LIT(73805000.0)*_t154
-            - TRAILER_LIT(25000000.0)*_t162 - TRAILER_LIT(147610000.0)*_t188
-            - TRAILER_LIT(36902500.0)*_t213) + _t229*(-TRAILER_LIT(88566000.0)*_t156
-            - TRAILER_LIT(177132000.0)*_t187) + _t231*(-TRAILER_LIT(15277635.0)*_t163 - _t239
-            - _t256) - TRAILER_LIT(2471700.0)*_t233 + _t235*(-TRAILER_LIT(46822365.0)*_t162
-            - TRAILER_LIT(52244730.0)*_t213 - _t232 - _t250) + _t236*(-TRAILER_LIT(2834112.0)*_t182
-            - TRAILER_LIT(11328300.0)) + _t241*(-TRAILER_LIT(1195000.0)*_t162
-            - TRAILER_LIT(52390000.0)*_t188 - _t242) + _t245*(-TRAILER_LIT(31434000.0)*_t156
-            - TRAILER_LIT(1434000.0)*_t163 - TRAILER_LIT(62868000.0)*_t187
-            - TRAILER_LIT(12849000.0)*_t213 - _t306 - _t318 - _t345)
-            - TRAILER_LIT(125189460.0)*_t249 + _t254 - TRAILER_LIT(68175450.0)*_t255
-            - TRAILER_LIT(208978920.0)*_t257 - TRAILER_LIT(91665810.0)*_t259
-            - TRAILER_LIT(101850900.0)*_t260 - _t263 - _t264 + _t268*(_t126 - _t267 - _t339)
-            + _t269*(-TRAILER_LIT(42830000.0)*_t213 - _t363) + _t271*(_t126 - _t267)
-            + _t272*(-_t274 - _t363) - TRAILER_LIT(56733600.0)*_t275 - TRAILER_LIT(45448512.0)*_t279
-            + _t281 + _t282 - TRAILER_LIT(3840000.0)*_t284 - TRAILER_LIT(5668224.0)*_t286 - _t291
-            - _t294 - _t295 - _t296 - _t297 - _t299 - _t302 - _t304 + _t307 + _t308 + _t309 + _t310
-            - _t311*_t356 - TRAILER_LIT(208978920.0)*_t312 + _t314 + _t316 + _t317 + _t319
-            - TRAILER_LIT(101850900.0)*_t320 - TRAILER_LIT(62868000.0)*_t321 + _t323 - _t325 - _t327
-            - _t329 - _t332 - _t333 + _t335 + _t336 - TRAILER_LIT(3840000.0)*_t337
-            - TRAILER_LIT(5668224.0)*_t338 + _t340 + _t341 + _t342 - _t343 - _t344 + _t346 + _t347
-            - _t352 + _t361*(-_t225 - TRAILER_LIT(1.0))
-            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t122*thetadot_left*thetadot_right
-            + _t123*_t147*_t150*_t193 + _t148*(_t119*_t192 + _t120*_t151*_t193
-            + _t121*thetadot_left*thetadot_right) + _t151*(_t119*_t192
-            + _t121*thetadot_left*thetadot_right)) + _t192*_t23*(TRAILER_LIT(9746873.0)*_t147
-            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
-            + _t193*_t56*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
-            + TRAILER_LIT(22790984.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
-            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(24942400.0)*_t147
-            + TRAILER_LIT(21067638.0)*_t148*_t150 + TRAILER_LIT(7022546.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(17093238.0)*_t148*_t150
-            + TRAILER_LIT(5697746.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
-            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(49505184.0)*_t147*_t205
-            + TRAILER_LIT(15793200.0)*_t148 + TRAILER_LIT(49505184.0)*_t150*_t204
-            + TRAILER_LIT(15793200.0)*_t151) + _t193*_t56*(TRAILER_LIT(31537644.0)*_t147*_t150
-            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(68018688.0)*_t204*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(_t147*(TRAILER_LIT(3585888.0)*_t150 + TRAILER_LIT(4251168.0)*_t205)
-            + TRAILER_LIT(1920000.0)*_t148 + TRAILER_LIT(4251168.0)*_t150*_t204
-            + TRAILER_LIT(1920000.0)*_t151 + TRAILER_LIT(12840000.0)))
-            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(104324550.0)*_t147*_t150
-            + TRAILER_LIT(138000000.0)*_t148*_t151 + TRAILER_LIT(174149100.0)*_t204*_t205)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(156734190.0)*_t147*_t205
-            + TRAILER_LIT(82800000.0)*_t148 + TRAILER_LIT(156734190.0)*_t150*_t204
-            + TRAILER_LIT(82800000.0)*_t151)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
-            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
-            + TRAILER_LIT(51396000.0)*_t204*_t205)
-            + _t143*(J_theta_cart*(_t150*(TRAILER_LIT(138000000.0)*_t147*_t153
-            + TRAILER_LIT(26195000.0)) + _t151*(TRAILER_LIT(174149100.0)*_t148*_t153
-            + TRAILER_LIT(42830000.0)*_t204))
-            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
-            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(52244730.0)*_t153)
-            + TRAILER_LIT(52244730.0)*_t151*_t153 + TRAILER_LIT(12849000.0)*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t150
-            + _t151*(TRAILER_LIT(156734190.0)*_t147 + TRAILER_LIT(51396000.0)*_t148*_t153)
-            + TRAILER_LIT(52244730.0)*_t204))
-            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
-            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
-            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
-            + TRAILER_LIT(51396000.0)*_t148*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(165600000.0)*_t147*_t151
-            + TRAILER_LIT(208978920.0)*_t148*_t205 + TRAILER_LIT(46822365.0)*_t150)))
-            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(76388175.0)*_t147*_t205
-            + TRAILER_LIT(76388175.0)*_t150*_t204)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(61110540.0)*_t147*_t150
-            + TRAILER_LIT(122221080.0)*_t204*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
-            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
-            + TRAILER_LIT(88566000.0)*_t151)
-            + _t143*(J_theta_cart*(TRAILER_LIT(25462725.0)*_t148*_t153
-            + TRAILER_LIT(73805000.0)*_t150 + TRAILER_LIT(36902500.0)*_t204)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
-            + TRAILER_LIT(177132000.0)*_t148*_t150)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(15277635.0)*_t147
-            + TRAILER_LIT(44283000.0)*_t148*_t153) + _t151*(_t115*_t204 + _t118*_t147
-            + _t153*(_t116*_t148 + _t117)))
-            + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
-            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
-            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(91665810.0)*_t148*_t150
-            + TRAILER_LIT(30555270.0)*_t205)))))) + tau_left;
-    const trailer_real_t _t367 = -_t170*_t353 + _t189*_t366;
-    const trailer_real_t _t368 = _t191*_t367;
-    const trailer_real_t _t369 = _t368*radius_left;
-    const trailer_real_t _t370 = TRAILER_LIT(0.5)*_t150;
-    const trailer_real_t _t371 = -_t170*_t366 + _t179*_t353;
-    const trailer_real_t _t372 = _t191*_t371;
-    const trailer_real_t _t373 = _t372*radius_right;
-    const trailer_real_t _t374 = TRAILER_LIT(0.5)*_t143;
-    const trailer_real_t _t375 = TRAILER_LIT(13800.0)*_t198;
-    const trailer_real_t _t376 = TRAILER_LIT(13800.0)*_t194;
-    const trailer_real_t _t377 = TRAILER_LIT(27600.0)*_t182;
-    const trailer_real_t _t378 = TRAILER_LIT(20000.0)*_t162;
-    const trailer_real_t _t379 = TRAILER_LIT(5239.0)*_t154;
-    const trailer_real_t _t380 = TRAILER_LIT(5239.0)*_t156;
-    const trailer_real_t _t381 = TRAILER_LIT(20000.0)*_t163;
-    const trailer_real_t _t382 = TRAILER_LIT(10478.0)*_t198;
-    const trailer_real_t _t383 = TRAILER_LIT(10478.0)*_t194;
-    const trailer_real_t _t384 = TRAILER_LIT(27600.0)*_t164;
-    const trailer_real_t _t385 = TRAILER_LIT(40000.0)*_t211;
-    const trailer_real_t _t386 = _t163*_t385;
-    const trailer_real_t _t387 = TRAILER_LIT(29522.0)*_t211;
-    const trailer_real_t _t388 = _t156*_t387;
-    const trailer_real_t _t389 = _t154*_t387;
-    const trailer_real_t _t390 = _t162*_t385;
-    const trailer_real_t _t391 = TRAILER_LIT(59044.0)*_t211;
-    const trailer_real_t _t392 = _t187*_t391;
-    const trailer_real_t _t393 = _t188*_t391;
-    const trailer_real_t _t394 = -_t386 - _t388 + _t389 + _t390 - _t392 + _t393;
-    const trailer_real_t _t395 = TRAILER_LIT(69.0)*_t163;
-    const trailer_real_t _t396 = TRAILER_LIT(69.0)*_t162;
-    const trailer_real_t _t397 = TRAILER_LIT(100.0)*_t215 + TRAILER_LIT(100.0)*_t225;
-    const trailer_real_t _t398 = TRAILER_LIT(29517.0)*_t194;
-    const trailer_real_t _t399 = TRAILER_LIT(1917.0)*_t198;
-    const trailer_real_t _t400 = TRAILER_LIT(61400.0)*_t198;
-    const trailer_real_t _t401 = TRAILER_LIT(46639.0)*_t198;
-    const trailer_real_t _t402 = TRAILER_LIT(36161.0)*_t194;
-    const trailer_real_t _t403 = TRAILER_LIT(21400.0)*_t194;
-    const trailer_real_t _t404 = TRAILER_LIT(3834.0)*_t182;
-    const trailer_real_t _t405 = TRAILER_LIT(46200.0)*_t198;
-    const trailer_real_t _t406 = TRAILER_LIT(59034.0)*_t182;
-    const trailer_real_t _t407 = TRAILER_LIT(73800.0)*_t194;
-    const trailer_real_t _t408 = TRAILER_LIT(93278.0)*_t198;
-    const trailer_real_t _t409 = TRAILER_LIT(72322.0)*_t194;
-    const trailer_real_t _t410 = TRAILER_LIT(3834.0)*_t164;
-    const trailer_real_t _t411 = TRAILER_LIT(59034.0)*_t164;
-    const trailer_real_t _t412 = TRAILER_LIT(88566.0)*_t211;
-    const trailer_real_t _t413 = TRAILER_LIT(177132.0)*_t211;
-    const trailer_real_t _t414 = TRAILER_LIT(120000.0)*_t211;
-    const trailer_real_t _t415 = -TRAILER_LIT(60000.0)*_t211 + _t412*(_t148 + _t151)
-            + _t413*(-_t164 - _t182) + _t414*(-_t215 - _t225);
-    const trailer_real_t _t416 = TRAILER_LIT(231.0)*_t162;
-    const trailer_real_t _t417 = TRAILER_LIT(231.0)*_t163;
-    const trailer_real_t _t418 = TRAILER_LIT(307.0)*_t215 + TRAILER_LIT(307.0)*_t225;
-    const trailer_real_t _t419 = TRAILER_LIT(369.0)*_t163;
-    const trailer_real_t _t420 = TRAILER_LIT(369.0)*_t162;
-    const trailer_real_t _t421 = TRAILER_LIT(107.0)*_t215 + TRAILER_LIT(107.0)*_t225;
-    const trailer_real_t _t422 = TRAILER_LIT(29517.0)*_t198;
-    const trailer_real_t _t423 = TRAILER_LIT(1917.0)*_t194;
-    const trailer_real_t _t424 = TRAILER_LIT(61400.0)*_t194;
-    const trailer_real_t _t425 = TRAILER_LIT(46639.0)*_t194;
-    const trailer_real_t _t426 = TRAILER_LIT(36161.0)*_t198;
-    const trailer_real_t _t427 = TRAILER_LIT(21400.0)*_t198;
-    const trailer_real_t _t428 = TRAILER_LIT(46200.0)*_t194;
-    const trailer_real_t _t429 = TRAILER_LIT(73800.0)*_t198;
-    const trailer_real_t _t430 = TRAILER_LIT(93278.0)*_t194;
-    const trailer_real_t _t431 = TRAILER_LIT(72322.0)*_t198;
-    if (!(_t189 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
+    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
+    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
+    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t17 = _t0*_t16;
+    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
+    const trailer_real_t _t19 = _t1*_t16;
+    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
+    const trailer_real_t _t21 = -_t0*_t15;
+    const trailer_real_t _t22 = -_t18 - _t21*_t8;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
+    const trailer_real_t _t26 = -_t1*_t15;
+    const trailer_real_t _t27 = -_t20 - _t26*_t8;
+    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
+    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
+    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
+    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
+    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
+    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
+    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
+    const trailer_real_t _t41 = _t40*_t40;
+    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
+    const trailer_real_t _t43 = _t42*_t42;
+    const trailer_real_t _t44 = _t39*_t41;
+    const trailer_real_t _t45 = _t33*_t41;
+    const trailer_real_t _t46 = _t34*_t41;
+    const trailer_real_t _t47 = _t38*_t43;
+    const trailer_real_t _t48 = _t37*_t43;
+    const trailer_real_t _t49 = _t42*thetadot_right;
+    const trailer_real_t _t50 = _t42*thetadot_left;
+    const trailer_real_t _t51 = _t40*thetadot_right;
+    const trailer_real_t _t52 = _t40*thetadot_left;
+    const trailer_real_t _t53 = _t0*_t15;
+    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = _t18 - _t53*_t8;
+    const trailer_real_t _t58 = _t1*_t15;
+    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
+    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
+    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t62 = _t20 - _t58*_t8;
+    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
+    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
+    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
+    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
+    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
+    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
+    const trailer_real_t _t72 = _t31 + _t32;
+    const trailer_real_t _t73 = _t33 + _t34;
+    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
+    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
+    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
+    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
+    const trailer_real_t _t78 = -_t24 - _t25;
+    const trailer_real_t _t79 = _t3*_t78;
+    const trailer_real_t _t80 = J_theta_cart_left*_t79;
+    const trailer_real_t _t81 = _t24 - _t25;
+    const trailer_real_t _t82 = _t4*_t81;
+    const trailer_real_t _t83 = J_theta_cart_right*_t82;
+    const trailer_real_t _t84 = _t29 - _t30;
+    const trailer_real_t _t85 = _t4*_t84;
+    const trailer_real_t _t86 = -_t29 - _t30;
+    const trailer_real_t _t87 = _t3*_t86;
+    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
+    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
+    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
+    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
+    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
+    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
+    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
+    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
+    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
+    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
+    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
+    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
+    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
+    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
+    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
+    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
+    const trailer_real_t _t104 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
+            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
+    const trailer_real_t _t105 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
+    const trailer_real_t _t106 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
+    const trailer_real_t _t107 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
+            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
+    const trailer_real_t _t108 = _t104*_t107 - _t105*_t106;
+    const trailer_real_t _t109 = _t56 - _t57;
+    const trailer_real_t _t110 = _t109*_t4;
+    const trailer_real_t _t111 = _t61 - _t62;
+    const trailer_real_t _t112 = _t111*_t4;
+    const trailer_real_t _t113 = _t64 - _t65;
+    const trailer_real_t _t114 = _t113*_t4;
+    const trailer_real_t _t115 = _t67 - _t68;
+    const trailer_real_t _t116 = _t115*_t4;
+    const trailer_real_t _t117 = _t110*_t49 + _t112*_t50 + _t114*_t51 + _t116*_t52;
+    const trailer_real_t _t118 = -_t56 - _t57;
+    const trailer_real_t _t119 = _t118*_t3;
+    const trailer_real_t _t120 = -_t61 - _t62;
+    const trailer_real_t _t121 = _t120*_t3;
+    const trailer_real_t _t122 = -_t64 - _t65;
+    const trailer_real_t _t123 = _t122*_t3;
+    const trailer_real_t _t124 = -_t67 - _t68;
+    const trailer_real_t _t125 = _t124*_t3;
+    const trailer_real_t _t126 = _t119*_t49 + _t121*_t50 + _t123*_t51 + _t125*_t52;
+    const trailer_real_t _t127 = -_t0*_t101 + _t103*_t23 + _t117*_t83 + _t126*_t80 + _t17*_t99
+            + _t21*_t96;
+    const trailer_real_t _t128 = J_theta_cart_left*_t126*_t87 + J_theta_cart_right*_t117*_t85
+            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
+    const trailer_real_t _t129 = -_t127 + tau_right;
+    const trailer_real_t _t130 = -_t128 + tau_left;
+    const trailer_real_t _t131 = TRAILER_LIT(1.0)/_t108;
+    const trailer_real_t _t132 = _t131*(-_t105*_t130 + _t107*_t129);
+    const trailer_real_t _t133 = _t131*(_t104*_t130 - _t106*_t129);
+    const trailer_real_t _t134 = _t132*_t17 + _t133*_t19 + _t98;
+    const trailer_real_t _t135 = _t132*_t21 + _t133*_t26 + _t94;
+    const trailer_real_t _t136 = -_t0*_t132 + _t1*_t133;
+    const trailer_real_t _t137 = _t132*_t23 + _t133*_t28 + _t95;
+    const trailer_real_t _t138 = _t117 + _t132*_t82 + _t133*_t85;
+    const trailer_real_t _t139 = _t126 + _t132*_t79 + _t133*_t87;
+    if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t190 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t108 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t143*_t146 + _t370*(_t369 + _t373);
-    const trailer_real_t r_1 = -_t146*_t150 + _t374*(_t369 + _t373);
-    const trailer_real_t r_2 = _t139*_t191*_t371 - TRAILER_LIT(500.0)*_t369/TRAILER_LIT(207.0);
-    const trailer_real_t r_3 = _t140*_t191*_t367*(-_t395 + _t396 + _t397)
-            + _t187*(-TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
-            + _t188*(TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
-            + _t194*(TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) + TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
-            + _t198*(-TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) - TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
-            - TRAILER_LIT(5.0)*_t373*(_t395 - _t396 + _t397)/TRAILER_LIT(414.0)
-            + _t375*(TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
-            + _t376*(-TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
-            - TRAILER_LIT(25.0)*_t394/TRAILER_LIT(171396.0);
-    const trailer_real_t r_4 = _t372;
-    const trailer_real_t r_5 = _t368;
-    const trailer_real_t r_6 = _t136*(_t369*(-_t416 + _t417 + _t418)
-            + _t373*(-_t419 + _t420 + _t421)) + _t141*(_t148*(-_t398 - _t399)
-            + _t151*(-_t398 - _t399) + _t154*(_t401 - _t402) + _t156*(-_t401 + _t402)
-            + _t187*(-_t408 + _t409) + _t188*(_t408 - _t409) + _t194*(_t406 + _t411
-            + TRAILER_LIT(36900.0)) + _t198*(_t404 + _t410 + TRAILER_LIT(23100.0))
-            + _t215*(_t405 + _t407) + _t225*(_t405 + _t407) + _t386 + _t388 - _t389 - _t390 + _t392
-            - _t393 + _t400*(_t162 - _t163) + _t403*(-_t162 + _t163) + _t415);
-    const trailer_real_t r_7 = _t138*(_t369*(_t419 - _t420 + _t421) + _t373*(_t416 - _t417 + _t418))
-            + _t142*(_t148*(-_t422 - _t423) + _t151*(-_t422 - _t423) + _t154*(-_t425 + _t426)
-            + _t156*(_t425 - _t426) + _t187*(_t430 - _t431) + _t188*(-_t430 + _t431)
-            + _t194*(_t404 + _t410 + TRAILER_LIT(23100.0)) + _t198*(_t406 + _t411
-            + TRAILER_LIT(36900.0)) + _t215*(_t428 + _t429) + _t225*(_t428 + _t429) + _t394 + _t415
-            + _t424*(-_t162 + _t163) + _t427*(_t162 - _t163));
+    const trailer_real_t r_0 = _t134;
+    const trailer_real_t r_1 = _t135;
+    const trailer_real_t r_2 = _t136;
+    const trailer_real_t r_3 = _t137;
+    const trailer_real_t r_4 = _t132;
+    const trailer_real_t r_5 = _t133;
+    const trailer_real_t r_6 = _t138;
+    const trailer_real_t r_7 = _t139;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
             + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
@@ -918,7 +253,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 74 add, 123 mul, 59 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -948,159 +283,13 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
             + (radius_left - radius_left)) + (radius_right - radius_right)))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t5 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
-    const trailer_real_t _t7 = J_theta_cart_left*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t _t9 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t10 = TRAILER_LIT(1.0)/_t9;
-    const trailer_real_t _t11 = J_theta_cart_right*_t10;
-    const trailer_real_t _t12 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t13 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t14 = TRAILER_LIT(73805.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t15 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t16 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t17 = TRAILER_LIT(14761.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t18 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t20 = _t12 - _t13 - _t15 - _t16;
-    const trailer_real_t _t21 = -_t18 + _t19;
-    const trailer_real_t _t22 = _t1*(-_t0 - _t2 + _t3 + _t4);
-    const trailer_real_t _t23 = radius_left*radius_left;
-    const trailer_real_t _t24 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t25 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t26 = _t23*_t7;
-    const trailer_real_t _t27 = _t11*_t23;
-    const trailer_real_t _t28 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t29 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t30 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t31 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t32 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t33 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t34 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t35 = TRAILER_LIT(10222.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t36 = TRAILER_LIT(4387.0)*_t26/TRAILER_LIT(9522.0);
-    const trailer_real_t _t37 = TRAILER_LIT(23639.0)*_t27/TRAILER_LIT(28566.0);
-    const trailer_real_t _t38 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t39 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t40 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t41 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t42 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t43 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
-    const trailer_real_t _t44 = TRAILER_LIT(23639.0)*_t11/TRAILER_LIT(14283.0);
-    const trailer_real_t _t45 = -_t36 - _t37;
-    const trailer_real_t _t46 = _t36 + _t37;
-    const trailer_real_t _t47 = -TRAILER_LIT(62356.0)*_t26/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t27/TRAILER_LIT(42849.0);
-    const trailer_real_t _t48 = -_t28 + _t29 - _t30 + _t34 - _t35;
-    const trailer_real_t _t49 = _t31 - _t32 - _t33;
-    const trailer_real_t _t50 = -_t31 + _t32 + _t33;
-    const trailer_real_t _t51 = TRAILER_LIT(20444.0)*_t11/TRAILER_LIT(42849.0) + _t38 - _t39 + _t40
-            - TRAILER_LIT(62356.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t52 = -_t41 + _t42 + _t43 + _t44;
-    const trailer_real_t _t53 = _t41 - _t42 - _t43 - _t44;
-    const trailer_real_t _t54 = _t38 - _t39 + _t40;
-    const trailer_real_t _t55 = J_theta_left + _t23*(_t0 + _t2 + _t24 - _t25 + _t3 - _t4)
-            + TRAILER_LIT(11449.0)*_t26/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t27/TRAILER_LIT(171396.0);
-    const trailer_real_t _t56 = radius_right*radius_right;
-    const trailer_real_t _t57 = _t56*_t7;
-    const trailer_real_t _t58 = _t11*_t56;
-    const trailer_real_t _t59 = _t28*_t56;
-    const trailer_real_t _t60 = _t29*_t56;
-    const trailer_real_t _t61 = _t30*_t56;
-    const trailer_real_t _t62 = TRAILER_LIT(10222.0)*_t57/TRAILER_LIT(42849.0);
-    const trailer_real_t _t63 = TRAILER_LIT(31178.0)*_t58/TRAILER_LIT(42849.0);
-    const trailer_real_t _t64 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(28566.0);
-    const trailer_real_t _t65 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(9522.0);
-    const trailer_real_t _t66 = _t39*_t56;
-    const trailer_real_t _t67 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t68 = TRAILER_LIT(20444.0)*_t57/TRAILER_LIT(42849.0);
-    const trailer_real_t _t69 = TRAILER_LIT(62356.0)*_t58/TRAILER_LIT(42849.0);
-    const trailer_real_t _t70 = TRAILER_LIT(23639.0)*_t57/TRAILER_LIT(14283.0);
-    const trailer_real_t _t71 = TRAILER_LIT(4387.0)*_t58/TRAILER_LIT(4761.0);
-    const trailer_real_t _t72 = -_t70 - _t71;
-    const trailer_real_t _t73 = _t70 + _t71;
-    const trailer_real_t _t74 = -_t59 + _t60 + _t61 - _t62 + _t63;
-    const trailer_real_t _t75 = _t64 + _t65;
-    const trailer_real_t _t76 = -_t64 - _t65;
-    const trailer_real_t _t77 = -_t66 + _t68 - _t69;
-    const trailer_real_t _t78 = -_t31 + _t32 - _t33;
-    const trailer_real_t _t79 = _t31 - _t32 + _t33;
-    const trailer_real_t _t80 = _t41 - _t42 + _t67;
-    const trailer_real_t _t81 = -_t41 + _t42 - _t67;
-    const trailer_real_t _t82 = J_theta_right + _t56*(_t0 + _t2 - _t24 + _t25 + _t3 - _t4)
-            + TRAILER_LIT(94249.0)*_t57/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t58/TRAILER_LIT(171396.0);
-    const trailer_real_t _t83 = _t5*_t9;
-    const trailer_real_t _t84 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t85 = J_theta_cart_right*_t5;
-    const trailer_real_t _t86 = J_theta_cart_left*_t9;
-    const trailer_real_t _t87 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t88 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t89 = TRAILER_LIT(76388175.0)*J_theta_cart;
-    const trailer_real_t _t90 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t91 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t92 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t93 = TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t94 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t95 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t96 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t97 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t98 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t99 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t100 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t101 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t102 = -TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t56;
-    const trailer_real_t _t103 = TRAILER_LIT(34500000.0)*J_theta_cart;
-    const trailer_real_t _t104 = TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t105 = TRAILER_LIT(5.0)*_t10*_t6/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t106 = -_t84;
-    const trailer_real_t _t107 = TRAILER_LIT(110707500.0)*J_theta_cart
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t108 = TRAILER_LIT(101850900.0)*J_theta_cart;
-    const trailer_real_t _t109 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t110 = -_t88;
-    const trailer_real_t _t111 = _t105*radius_right;
-    const trailer_real_t _t112 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t113 = TRAILER_LIT(130611825.0)*J_theta_cart;
-    const trailer_real_t _t114 = -_t87 - _t90;
-    const trailer_real_t _t115 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t116 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t117 = TRAILER_LIT(25462725.0)*J_theta_cart
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t118 = TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t119 = TRAILER_LIT(16501728.0)*_t23;
-    const trailer_real_t _t120 = TRAILER_LIT(68018688.0)*_t56;
-    const trailer_real_t _t121 = TRAILER_LIT(1417056.0)*radius_left*radius_right;
-    const trailer_real_t _t122 = TRAILER_LIT(6420000.0)*radius_left*radius_right;
-    const trailer_real_t _t123 = TRAILER_LIT(35426400.0)*_t56;
-    const trailer_real_t _t124 = -TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t125 = -_t112 - _t113;
-    const trailer_real_t _t126 = -_t94;
-    const trailer_real_t _t127 = -_t96 - _t99;
-    const trailer_real_t _t128 = -_t92 - _t98;
-    const trailer_real_t _t129 = -_t100 - _t93;
-    const trailer_real_t _t130 = -_t95 - _t97;
-    const trailer_real_t _t131 = TRAILER_LIT(708528.0)*_t56;
-    const trailer_real_t _t132 = TRAILER_LIT(11362128.0)*_t23;
-    const trailer_real_t _t133 = TRAILER_LIT(136037376.0)*radius_left*radius_right;
-    const trailer_real_t _t134 = _t105*radius_left;
-    const trailer_real_t _t135 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t136 = _t135/TRAILER_LIT(414.0);
-    const trailer_real_t _t137 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t138 = _t137/TRAILER_LIT(414.0);
-    const trailer_real_t _t139 = TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t140 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(414.0);
-    const trailer_real_t _t141 = TRAILER_LIT(5.0)*_t135/TRAILER_LIT(171396.0);
-    const trailer_real_t _t142 = TRAILER_LIT(5.0)*_t137/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t5 = J_theta_tractor*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1138,106 +327,25 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     prepared->forward_dynamics[0] = J_theta_cart;
     prepared->forward_dynamics[1] = J_theta_cart_left;
     prepared->forward_dynamics[2] = J_theta_cart_right;
-    prepared->forward_dynamics[3] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[4] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[5] = radius_left;
-    prepared->forward_dynamics[6] = radius_right;
-    prepared->forward_dynamics[7] = _t1;
-    prepared->forward_dynamics[8] = _t5;
-    prepared->forward_dynamics[9] = _t7;
-    prepared->forward_dynamics[10] = _t8;
-    prepared->forward_dynamics[11] = _t9;
-    prepared->forward_dynamics[12] = _t11;
-    prepared->forward_dynamics[13] = _t14;
-    prepared->forward_dynamics[14] = _t17;
-    prepared->forward_dynamics[15] = _t20;
-    prepared->forward_dynamics[16] = _t21;
-    prepared->forward_dynamics[17] = _t22;
-    prepared->forward_dynamics[18] = _t23;
-    prepared->forward_dynamics[19] = _t38;
-    prepared->forward_dynamics[20] = _t40;
-    prepared->forward_dynamics[21] = _t45;
-    prepared->forward_dynamics[22] = _t46;
-    prepared->forward_dynamics[23] = _t47;
-    prepared->forward_dynamics[24] = _t48;
-    prepared->forward_dynamics[25] = _t49;
-    prepared->forward_dynamics[26] = _t50;
-    prepared->forward_dynamics[27] = _t51;
-    prepared->forward_dynamics[28] = _t52;
-    prepared->forward_dynamics[29] = _t53;
-    prepared->forward_dynamics[30] = _t54;
-    prepared->forward_dynamics[31] = _t55;
-    prepared->forward_dynamics[32] = _t56;
-    prepared->forward_dynamics[33] = _t72;
-    prepared->forward_dynamics[34] = _t73;
-    prepared->forward_dynamics[35] = _t74;
-    prepared->forward_dynamics[36] = _t75;
-    prepared->forward_dynamics[37] = _t76;
-    prepared->forward_dynamics[38] = _t77;
-    prepared->forward_dynamics[39] = _t78;
-    prepared->forward_dynamics[40] = _t79;
-    prepared->forward_dynamics[41] = _t80;
-    prepared->forward_dynamics[42] = _t81;
-    prepared->forward_dynamics[43] = _t82;
-    prepared->forward_dynamics[44] = _t83;
-    prepared->forward_dynamics[45] = _t85;
-    prepared->forward_dynamics[46] = _t86;
-    prepared->forward_dynamics[47] = _t87;
-    prepared->forward_dynamics[48] = _t88;
-    prepared->forward_dynamics[49] = _t89;
-    prepared->forward_dynamics[50] = _t90;
-    prepared->forward_dynamics[51] = _t91;
-    prepared->forward_dynamics[52] = _t92;
-    prepared->forward_dynamics[53] = _t93;
-    prepared->forward_dynamics[54] = _t94;
-    prepared->forward_dynamics[55] = _t95;
-    prepared->forward_dynamics[56] = _t96;
-    prepared->forward_dynamics[57] = _t97;
-    prepared->forward_dynamics[58] = _t98;
-    prepared->forward_dynamics[59] = _t99;
-    prepared->forward_dynamics[60] = _t100;
-    prepared->forward_dynamics[61] = _t101;
-    prepared->forward_dynamics[62] = _t102;
-    prepared->forward_dynamics[63] = _t103;
-    prepared->forward_dynamics[64] = _t104;
-    prepared->forward_dynamics[65] = _t106;
-    prepared->forward_dynamics[66] = _t107;
-    prepared->forward_dynamics[67] = _t108;
-    prepared->forward_dynamics[68] = _t109;
-    prepared->forward_dynamics[69] = _t110;
-    prepared->forward_dynamics[70] = _t111;
-    prepared->forward_dynamics[71] = _t114;
-    prepared->forward_dynamics[72] = _t115;
-    prepared->forward_dynamics[73] = _t116;
-    prepared->forward_dynamics[74] = _t117;
-    prepared->forward_dynamics[75] = _t118;
-    prepared->forward_dynamics[76] = _t119;
-    prepared->forward_dynamics[77] = _t120;
-    prepared->forward_dynamics[78] = _t121;
-    prepared->forward_dynamics[79] = _t122;
-    prepared->forward_dynamics[80] = _t123;
-    prepared->forward_dynamics[81] = _t124;
-    prepared->forward_dynamics[82] = _t125;
-    prepared->forward_dynamics[83] = _t126;
-    prepared->forward_dynamics[84] = _t127;
-    prepared->forward_dynamics[85] = _t128;
-    prepared->forward_dynamics[86] = _t129;
-    prepared->forward_dynamics[87] = _t130;
-    prepared->forward_dynamics[88] = _t131;
-    prepared->forward_dynamics[89] = _t132;
-    prepared->forward_dynamics[90] = _t133;
-    prepared->forward_dynamics[91] = _t134;
-    prepared->forward_dynamics[92] = _t136;
-    prepared->forward_dynamics[93] = _t138;
-    prepared->forward_dynamics[94] = _t139;
-    prepared->forward_dynamics[95] = _t140;
-    prepared->forward_dynamics[96] = _t141;
-    prepared->forward_dynamics[97] = _t142;
+    prepared->forward_dynamics[3] = J_theta_left;
+    prepared->forward_dynamics[4] = J_theta_right;
+    prepared->forward_dynamics[5] = J_x_tractor;
+    prepared->forward_dynamics[6] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[7] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[8] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[9] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[10] = _t0;
+    prepared->forward_dynamics[11] = _t1;
+    prepared->forward_dynamics[12] = _t2;
+    prepared->forward_dynamics[13] = _t3;
+    prepared->forward_dynamics[14] = _t4;
+    prepared->forward_dynamics[15] = _t5;
+    prepared->forward_dynamics[16] = _t6;
     return TRAILER_OK;
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 847 add, 1312 mul, 37 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 141 add, 211 mul, 19 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -1250,722 +358,165 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     if (isnan((theta_tractor - theta_tractor) + (theta_cart - theta_cart)) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t143 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t147 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t150 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t153 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t radius_left = prepared->forward_dynamics[5];
-    const trailer_real_t _t144 = radius_left*thetadot_left;
-    const trailer_real_t radius_right = prepared->forward_dynamics[6];
-    const trailer_real_t _t145 = radius_right*thetadot_right;
-    const trailer_real_t _t146 = TRAILER_LIT(250.0)*(_t144 - _t145)*(_t144
-            + _t145)/TRAILER_LIT(207.0);
-    const trailer_real_t _t148 = _t147*_t147;
-    const trailer_real_t _t1 = prepared->forward_dynamics[7];
-    const trailer_real_t _t149 = _t1*_t148;
-    const trailer_real_t _t151 = _t150*_t150;
-    const trailer_real_t _t152 = _t1*_t151;
-    const trailer_real_t _t154 = _t147*_t153;
-    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[4];
-    const trailer_real_t _t155 = K_theta_cart_x_tractor_2*_t154;
-    const trailer_real_t _t156 = _t143*_t150;
-    const trailer_real_t _t157 = K_theta_cart_x_tractor_2*_t156;
-    const trailer_real_t _t7 = prepared->forward_dynamics[9];
-    const trailer_real_t _t158 = _t154*_t7;
-    const trailer_real_t _t17 = prepared->forward_dynamics[14];
-    const trailer_real_t _t159 = _t156*_t17;
-    const trailer_real_t _t11 = prepared->forward_dynamics[12];
-    const trailer_real_t _t160 = _t11*_t154;
-    const trailer_real_t _t161 = _t149*_t151;
-    const trailer_real_t _t162 = _t143*_t147;
-    const trailer_real_t _t163 = _t150*_t153;
-    const trailer_real_t _t164 = _t162*_t163;
-    const trailer_real_t _t165 = _t1*_t164;
-    const trailer_real_t _t166 = TRAILER_LIT(59044.0)*_t161/TRAILER_LIT(42849.0);
-    const trailer_real_t _t167 = TRAILER_LIT(14761.0)*_t152/TRAILER_LIT(14283.0);
-    const trailer_real_t _t168 = TRAILER_LIT(14761.0)*_t149*_t156/TRAILER_LIT(14283.0);
-    const trailer_real_t _t169 = TRAILER_LIT(59044.0)*_t165/TRAILER_LIT(42849.0);
-    const trailer_real_t _t8 = prepared->forward_dynamics[10];
-    const trailer_real_t _t14 = prepared->forward_dynamics[13];
-    const trailer_real_t _t20 = prepared->forward_dynamics[15];
-    const trailer_real_t _t21 = prepared->forward_dynamics[16];
-    const trailer_real_t _t22 = prepared->forward_dynamics[17];
-    const trailer_real_t _t170 = _t11*(-_t159 + _t166 + _t168 + _t169 + _t8) + _t14*(_t155 - _t157)
-            + _t149*(TRAILER_LIT(73805.0)*_t157/TRAILER_LIT(14283.0) + _t20)
-            + _t152*(-TRAILER_LIT(73805.0)*_t155/TRAILER_LIT(14283.0) + _t20) + _t161*_t21
-            + _t165*_t21 + _t167*(_t158 - _t160) + _t17*(-_t158 + _t160) + _t22
-            + _t7*(_t159 + _t166 - _t168 + _t169 + _t8);
-    const trailer_real_t _t23 = prepared->forward_dynamics[18];
-    const trailer_real_t _t171 = _t148*_t23;
-    const trailer_real_t _t172 = _t151*_t23;
-    const trailer_real_t _t173 = _t154*_t23;
-    const trailer_real_t _t174 = _t156*_t23;
-    const trailer_real_t _t175 = _t151*_t171;
-    const trailer_real_t _t176 = _t154*_t172;
-    const trailer_real_t _t177 = _t156*_t171;
-    const trailer_real_t _t178 = _t164*_t23;
-    const trailer_real_t _t45 = prepared->forward_dynamics[21];
-    const trailer_real_t _t46 = prepared->forward_dynamics[22];
-    const trailer_real_t _t47 = prepared->forward_dynamics[23];
-    const trailer_real_t _t48 = prepared->forward_dynamics[24];
-    const trailer_real_t _t49 = prepared->forward_dynamics[25];
-    const trailer_real_t _t50 = prepared->forward_dynamics[26];
-    const trailer_real_t _t51 = prepared->forward_dynamics[27];
-    const trailer_real_t _t52 = prepared->forward_dynamics[28];
-    const trailer_real_t _t53 = prepared->forward_dynamics[29];
-    const trailer_real_t _t54 = prepared->forward_dynamics[30];
-    const trailer_real_t _t55 = prepared->forward_dynamics[31];
-    const trailer_real_t _t179 = _t154*_t45 + _t156*_t46 + _t164*_t47
-            + _t171*(-TRAILER_LIT(26195.0)*_t157/TRAILER_LIT(14283.0) + _t48)
-            + _t172*(TRAILER_LIT(26195.0)*_t155/TRAILER_LIT(14283.0) + _t48) + _t173*_t49
-            + _t174*_t50 + _t175*_t51 + _t176*_t52 + _t177*_t53 + _t178*_t54 + _t55;
-    const trailer_real_t _t56 = prepared->forward_dynamics[32];
-    const trailer_real_t _t180 = _t154*_t56;
-    const trailer_real_t _t181 = _t156*_t56;
-    const trailer_real_t _t182 = _t148*_t151;
-    const trailer_real_t _t183 = _t182*_t56;
-    const trailer_real_t _t184 = _t151*_t180;
-    const trailer_real_t _t185 = _t148*_t181;
-    const trailer_real_t _t186 = _t164*_t56;
-    const trailer_real_t _t187 = _t151*_t154;
-    const trailer_real_t _t188 = _t148*_t156;
-    const trailer_real_t _t38 = prepared->forward_dynamics[19];
-    const trailer_real_t _t40 = prepared->forward_dynamics[20];
-    const trailer_real_t _t72 = prepared->forward_dynamics[33];
-    const trailer_real_t _t73 = prepared->forward_dynamics[34];
-    const trailer_real_t _t74 = prepared->forward_dynamics[35];
-    const trailer_real_t _t75 = prepared->forward_dynamics[36];
-    const trailer_real_t _t76 = prepared->forward_dynamics[37];
-    const trailer_real_t _t77 = prepared->forward_dynamics[38];
-    const trailer_real_t _t78 = prepared->forward_dynamics[39];
-    const trailer_real_t _t79 = prepared->forward_dynamics[40];
-    const trailer_real_t _t80 = prepared->forward_dynamics[41];
-    const trailer_real_t _t81 = prepared->forward_dynamics[42];
-    const trailer_real_t _t82 = prepared->forward_dynamics[43];
-    const trailer_real_t _t189 = _t148*_t74 + _t151*_t74 + _t154*_t75 + _t156*_t76 + _t164*_t77
-            + _t180*_t78 + _t181*_t79 + _t182*_t77 + _t184*_t80 + _t185*_t81 + _t187*_t72
-            + _t188*_t73 + _t38*(_t183 + _t186) + _t40*(-_t183 - _t186) + _t82;
-    const trailer_real_t _t190 = -_t170*_t170 + _t179*_t189;
-    const trailer_real_t _t191 = TRAILER_LIT(1.0)/_t190;
-    const trailer_real_t _t192 = thetadot_left*thetadot_left;
-    const trailer_real_t _t193 = thetadot_right*thetadot_right;
-    const trailer_real_t _t194 = _t193*_t56;
-    const trailer_real_t _t83 = prepared->forward_dynamics[44];
-    const trailer_real_t _t195 = _t194*_t83;
-    const trailer_real_t _t85 = prepared->forward_dynamics[45];
-    const trailer_real_t _t196 = _t194*_t85;
-    const trailer_real_t _t197 = TRAILER_LIT(15793200.0)*_t196;
-    const trailer_real_t _t198 = _t192*_t23;
-    const trailer_real_t _t86 = prepared->forward_dynamics[46];
-    const trailer_real_t _t199 = _t198*_t86;
-    const trailer_real_t _t200 = TRAILER_LIT(17713200.0)*_t199;
-    const trailer_real_t _t201 = _t194*_t86;
-    const trailer_real_t _t202 = TRAILER_LIT(28366800.0)*_t201;
-    const trailer_real_t _t203 = _t198*_t83;
-    const trailer_real_t _t204 = _t147*_t147*_t147;
-    const trailer_real_t _t205 = _t150*_t150*_t150;
-    const trailer_real_t _t206 = _t150*_t204;
-    const trailer_real_t _t207 = TRAILER_LIT(2125584.0)*_t199;
-    const trailer_real_t _t208 = _t147*_t205;
-    const trailer_real_t _t209 = _t143*_t204;
-    const trailer_real_t _t210 = _t198*_t85;
-    const trailer_real_t _t211 = _t144*_t145;
-    const trailer_real_t _t212 = _t211*_t85;
-    const trailer_real_t _t213 = _t153*_t205;
-    const trailer_real_t _t214 = TRAILER_LIT(23617600.0)*_t156;
-    const trailer_real_t _t215 = _t147*_t150;
-    const trailer_real_t _t216 = _t210*_t215;
-    const trailer_real_t _t217 = TRAILER_LIT(34086384.0)*_t201;
-    const trailer_real_t _t218 = _t182*_t210;
-    const trailer_real_t _t219 = _t211*_t86;
-    const trailer_real_t _t220 = TRAILER_LIT(49505184.0)*_t196;
-    const trailer_real_t _t221 = _t204*_t205;
-    const trailer_real_t _t222 = _t210*_t221;
-    const trailer_real_t _t223 = _t148*_t195;
-    const trailer_real_t _t224 = _t151*_t195;
-    const trailer_real_t _t225 = _t143*_t153;
-    const trailer_real_t _t226 = _t199*_t225;
-    const trailer_real_t _t227 = TRAILER_LIT(708528.0)*_t226;
+    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
+    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
+    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
+    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t0 = prepared->forward_dynamics[10];
+    const trailer_real_t _t17 = _t0*_t16;
+    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
+    const trailer_real_t _t1 = prepared->forward_dynamics[11];
+    const trailer_real_t _t19 = _t1*_t16;
+    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
+    const trailer_real_t _t21 = -_t0*_t15;
+    const trailer_real_t _t22 = -_t18 - _t21*_t8;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
+    const trailer_real_t _t26 = -_t1*_t15;
+    const trailer_real_t _t27 = -_t20 - _t26*_t8;
+    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
+    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
+    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[8];
+    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[9];
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
+    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[6];
+    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
+    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[7];
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
+    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
+    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
+    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
+    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
+    const trailer_real_t _t41 = _t40*_t40;
+    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
+    const trailer_real_t _t43 = _t42*_t42;
+    const trailer_real_t _t44 = _t39*_t41;
+    const trailer_real_t _t45 = _t33*_t41;
+    const trailer_real_t _t46 = _t34*_t41;
+    const trailer_real_t _t47 = _t38*_t43;
+    const trailer_real_t _t48 = _t37*_t43;
+    const trailer_real_t _t49 = _t42*thetadot_right;
+    const trailer_real_t _t50 = _t42*thetadot_left;
+    const trailer_real_t _t51 = _t40*thetadot_right;
+    const trailer_real_t _t52 = _t40*thetadot_left;
+    const trailer_real_t _t53 = _t0*_t15;
+    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = _t18 - _t53*_t8;
+    const trailer_real_t _t58 = _t1*_t15;
+    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
+    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
+    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t62 = _t20 - _t58*_t8;
+    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
+    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
+    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
+    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
+    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
+    const trailer_real_t J_x_tractor = prepared->forward_dynamics[5];
+    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
+    const trailer_real_t _t72 = _t31 + _t32;
+    const trailer_real_t _t73 = _t33 + _t34;
+    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
+    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
+    const trailer_real_t _t2 = prepared->forward_dynamics[12];
+    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
     const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer_real_t _t228 = J_theta_cart*_t195;
-    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[3];
-    const trailer_real_t _t229 = K_theta_cart_x_tractor*_t195;
-    const trailer_real_t _t230 = TRAILER_LIT(1920000.0)*_t212;
-    const trailer_real_t _t231 = K_theta_cart_x_tractor_2*_t195;
-    const trailer_real_t _t232 = TRAILER_LIT(7858500.0)*_t225;
-    const trailer_real_t _t233 = _t201*_t225;
-    const trailer_real_t _t234 = TRAILER_LIT(11362128.0)*_t233;
-    const trailer_real_t _t235 = K_theta_cart_x_tractor_2*_t203;
-    const trailer_real_t _t236 = _t196*_t225;
-    const trailer_real_t _t237 = TRAILER_LIT(16501728.0)*_t236;
-    const trailer_real_t _t238 = _t151*_t162;
-    const trailer_real_t _t239 = TRAILER_LIT(22141500.0)*_t225;
-    const trailer_real_t _t240 = _t148*_t213;
-    const trailer_real_t _t241 = J_theta_cart*_t203;
-    const trailer_real_t _t242 = TRAILER_LIT(26195000.0)*_t154;
-    const trailer_real_t _t243 = TRAILER_LIT(38547000.0)*_t231;
-    const trailer_real_t _t244 = _t148*_t163;
-    const trailer_real_t _t245 = K_theta_cart_x_tractor*_t203;
-    const trailer_real_t _t246 = TRAILER_LIT(44283000.0)*_t245;
-    const trailer_real_t _t247 = TRAILER_LIT(47235200.0)*_t187;
-    const trailer_real_t _t248 = _t151*_t209;
-    const trailer_real_t _t249 = _t215*_t245;
-    const trailer_real_t _t250 = TRAILER_LIT(62868000.0)*_t182;
-    const trailer_real_t _t251 = _t203*_t206;
-    const trailer_real_t _t252 = _t203*_t208;
-    const trailer_real_t _t253 = _t211*_t83;
-    const trailer_real_t _t90 = prepared->forward_dynamics[50];
-    const trailer_real_t _t254 = _t253*_t90;
-    const trailer_real_t _t255 = _t215*_t228;
-    const trailer_real_t _t256 = TRAILER_LIT(110707500.0)*_t215;
-    const trailer_real_t _t257 = _t221*_t245;
-    const trailer_real_t _t258 = TRAILER_LIT(138000000.0)*_t182;
-    const trailer_real_t _t259 = _t208*_t229;
-    const trailer_real_t _t260 = _t221*_t228;
-    const trailer_real_t _t261 = TRAILER_LIT(177132000.0)*_t182*_t235;
-    const trailer_real_t _t88 = prepared->forward_dynamics[48];
-    const trailer_real_t _t262 = _t253*_t88;
-    const trailer_real_t _t263 = _t148*_t262;
-    const trailer_real_t _t264 = _t151*_t262;
-    const trailer_real_t _t265 = TRAILER_LIT(4251168.0)*_t212;
-    const trailer_real_t _t266 = _t212*_t225;
-    const trailer_real_t _t91 = prepared->forward_dynamics[51];
-    const trailer_real_t _t267 = _t225*_t91;
-    const trailer_real_t _t268 = _t148*_t203;
-    const trailer_real_t _t269 = J_theta_cart*_t268;
-    const trailer_real_t _t270 = TRAILER_LIT(25462725.0)*_t225;
-    const trailer_real_t _t271 = _t151*_t203;
-    const trailer_real_t _t272 = J_theta_cart*_t271;
-    const trailer_real_t _t273 = J_theta_cart*_t224;
-    const trailer_real_t _t274 = TRAILER_LIT(32122500.0)*_t162;
-    const trailer_real_t _t275 = _t164*_t210;
-    const trailer_real_t _t276 = _t213*_t223;
-    const trailer_real_t _t277 = K_theta_cart_x_tractor*_t225;
-    const trailer_real_t _t278 = TRAILER_LIT(52244730.0)*_t277;
-    const trailer_real_t _t279 = _t218*_t225;
-    const trailer_real_t _t94 = prepared->forward_dynamics[54];
-    const trailer_real_t _t280 = _t253*_t94;
-    const trailer_real_t _t281 = _t148*_t280;
-    const trailer_real_t _t282 = _t151*_t280;
-    const trailer_real_t _t283 = _t163*_t268;
-    const trailer_real_t _t284 = _t182*_t219;
-    const trailer_real_t _t285 = _t209*_t271;
-    const trailer_real_t _t286 = _t219*_t221;
-    const trailer_real_t _t287 = _t162*_t224;
-    const trailer_real_t _t288 = TRAILER_LIT(165600000.0)*_t155;
-    const trailer_real_t _t289 = J_theta_cart*_t253;
-    const trailer_real_t _t290 = TRAILER_LIT(203701800.0)*_t289;
-    const trailer_real_t _t291 = _t221*_t290;
-    const trailer_real_t _t292 = K_theta_cart_x_tractor*_t253;
-    const trailer_real_t _t293 = TRAILER_LIT(183331620.0)*_t292;
-    const trailer_real_t _t294 = _t206*_t293;
-    const trailer_real_t _t295 = _t208*_t293;
-    const trailer_real_t _t296 = _t258*_t289;
-    const trailer_real_t _t297 = TRAILER_LIT(101850900.0)*_t215*_t289;
-    const trailer_real_t _t298 = TRAILER_LIT(82800000.0)*_t253;
-    const trailer_real_t _t299 = _t157*_t298;
-    const trailer_real_t _t300 = K_theta_cart_x_tractor_2*_t253;
-    const trailer_real_t _t301 = TRAILER_LIT(61110540.0)*_t300;
-    const trailer_real_t _t302 = _t209*_t301;
-    const trailer_real_t _t303 = TRAILER_LIT(51255270.0)*_t300;
-    const trailer_real_t _t304 = _t163*_t303;
-    const trailer_real_t _t305 = TRAILER_LIT(1417056.0)*_t266;
-    const trailer_real_t _t306 = TRAILER_LIT(20700000.0)*_t225;
-    const trailer_real_t _t307 = _t292*_t306;
-    const trailer_real_t _t308 = _t162*_t303;
-    const trailer_real_t _t309 = _t213*_t301;
-    const trailer_real_t _t310 = _t155*_t298;
-    const trailer_real_t _t311 = _t182*_t225;
-    const trailer_real_t _t312 = _t245*_t311;
-    const trailer_real_t _t313 = TRAILER_LIT(138000000.0)*_t164;
-    const trailer_real_t _t314 = TRAILER_LIT(142921080.0)*_t215*_t292;
-    const trailer_real_t _t315 = TRAILER_LIT(152776350.0)*_t289;
-    const trailer_real_t _t316 = _t206*_t315;
-    const trailer_real_t _t317 = _t208*_t315;
-    const trailer_real_t _t318 = TRAILER_LIT(165600000.0)*_t182;
-    const trailer_real_t _t319 = _t292*_t318;
-    const trailer_real_t _t320 = _t228*_t311;
-    const trailer_real_t _t321 = _t164*_t235;
-    const trailer_real_t _t322 = TRAILER_LIT(244442160.0)*_t292;
-    const trailer_real_t _t323 = _t221*_t322;
-    const trailer_real_t _t324 = TRAILER_LIT(244442160.0)*_t300;
-    const trailer_real_t _t325 = _t240*_t324;
-    const trailer_real_t _t326 = TRAILER_LIT(183331620.0)*_t300;
-    const trailer_real_t _t327 = _t238*_t326;
-    const trailer_real_t _t328 = _t151*_t253;
-    const trailer_real_t _t329 = _t288*_t328;
-    const trailer_real_t _t330 = _t148*_t253;
-    const trailer_real_t _t331 = TRAILER_LIT(61110540.0)*_t277;
-    const trailer_real_t _t332 = _t330*_t331;
-    const trailer_real_t _t333 = _t328*_t331;
-    const trailer_real_t _t334 = TRAILER_LIT(50925450.0)*_t225*_t289;
-    const trailer_real_t _t335 = _t148*_t334;
-    const trailer_real_t _t336 = _t151*_t334;
-    const trailer_real_t _t337 = _t164*_t219;
-    const trailer_real_t _t338 = _t219*_t311;
-    const trailer_real_t _t339 = TRAILER_LIT(165600000.0)*_t157;
-    const trailer_real_t _t340 = _t330*_t339;
-    const trailer_real_t _t341 = _t244*_t326;
-    const trailer_real_t _t342 = _t248*_t324;
-    const trailer_real_t _t343 = _t290*_t311;
-    const trailer_real_t _t344 = _t289*_t313;
-    const trailer_real_t _t345 = TRAILER_LIT(165600000.0)*_t164;
-    const trailer_real_t _t346 = _t292*_t345;
-    const trailer_real_t _t347 = _t311*_t322;
-    const trailer_real_t _t348 = TRAILER_LIT(120000000.0)*_t300;
-    const trailer_real_t _t349 = TRAILER_LIT(73805000.0)*_t289;
-    const trailer_real_t _t350 = TRAILER_LIT(265698000.0)*_t300;
-    const trailer_real_t _t101 = prepared->forward_dynamics[61];
-    const trailer_real_t _t351 = _t101*_t225;
-    const trailer_real_t _t5 = prepared->forward_dynamics[8];
-    const trailer_real_t _t9 = prepared->forward_dynamics[11];
-    const trailer_real_t _t102 = prepared->forward_dynamics[62];
-    const trailer_real_t _t103 = prepared->forward_dynamics[63];
-    const trailer_real_t _t104 = prepared->forward_dynamics[64];
-    const trailer_real_t _t352 = _t103*_t195 + _t104*_t203 + TRAILER_LIT(17250000.0)*_t225*_t228
-            + _t289*(TRAILER_LIT(100000000.0)*_t156 + TRAILER_LIT(200000000.0)*_t187
-            + TRAILER_LIT(221415000.0)*_t238 + TRAILER_LIT(295220000.0)*_t240)
-            + _t292*(TRAILER_LIT(120000000.0)*_t154 + TRAILER_LIT(74283000.0)*_t162
-            + TRAILER_LIT(240000000.0)*_t188 + TRAILER_LIT(88566000.0)*_t213
-            + TRAILER_LIT(265698000.0)*_t244 + TRAILER_LIT(354264000.0)*_t248)
-            + _t348*(_t148 + _t151) + _t349*(_t163 + _t209) + _t350*(_t206 + _t208)
-            + _t351*(_t328 + _t330)
-            + _t5*_t9*(J_theta_cart*_t192*_t23*(-TRAILER_LIT(17250000.0)*_t143*_t153
-            - TRAILER_LIT(34500000.0)) + _t102*_t193
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(K_theta_cart_x_tractor_2*(-TRAILER_LIT(207132000.0)*_t147*_t150
-            - TRAILER_LIT(240000000.0)*_t148*_t151 - TRAILER_LIT(354264000.0)*_t204*_t205
-            - TRAILER_LIT(60000000.0)) + _t143*(J_theta_cart*(-TRAILER_LIT(73805000.0)*_t147
-            - TRAILER_LIT(200000000.0)*_t148*_t150 - TRAILER_LIT(295220000.0)*_t151*_t204)
-            + K_theta_cart_x_tractor*(-TRAILER_LIT(265698000.0)*_t147*_t151
-            - TRAILER_LIT(120000000.0)*_t150 - TRAILER_LIT(88566000.0)*_t204)
-            + K_theta_cart_x_tractor_2*_t153*(-TRAILER_LIT(240000000.0)*_t147*_t150
-            - TRAILER_LIT(354264000.0)*_t148*_t151 - TRAILER_LIT(30000000.0)))
-            + _t153*(J_theta_cart*(-TRAILER_LIT(100000000.0)*_t147
-            - TRAILER_LIT(221415000.0)*_t148*_t150 - TRAILER_LIT(73805000.0)*_t205)
-            + K_theta_cart_x_tractor*(-TRAILER_LIT(240000000.0)*_t147*_t151
-            - TRAILER_LIT(354264000.0)*_t148*_t205 - TRAILER_LIT(74283000.0)*_t150))));
+    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
+    const trailer_real_t _t78 = -_t24 - _t25;
+    const trailer_real_t _t3 = prepared->forward_dynamics[13];
+    const trailer_real_t _t79 = _t3*_t78;
     const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
+    const trailer_real_t _t80 = J_theta_cart_left*_t79;
+    const trailer_real_t _t81 = _t24 - _t25;
+    const trailer_real_t _t4 = prepared->forward_dynamics[14];
+    const trailer_real_t _t82 = _t4*_t81;
     const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
-    const trailer_real_t _t87 = prepared->forward_dynamics[47];
-    const trailer_real_t _t89 = prepared->forward_dynamics[49];
-    const trailer_real_t _t92 = prepared->forward_dynamics[52];
-    const trailer_real_t _t93 = prepared->forward_dynamics[53];
-    const trailer_real_t _t95 = prepared->forward_dynamics[55];
-    const trailer_real_t _t96 = prepared->forward_dynamics[56];
-    const trailer_real_t _t97 = prepared->forward_dynamics[57];
-    const trailer_real_t _t98 = prepared->forward_dynamics[58];
-    const trailer_real_t _t99 = prepared->forward_dynamics[59];
-    const trailer_real_t _t100 = prepared->forward_dynamics[60];
-    const trailer_real_t _t106 = prepared->forward_dynamics[65];
-    const trailer_real_t _t107 = prepared->forward_dynamics[66];
-    const trailer_real_t _t108 = prepared->forward_dynamics[67];
-    const trailer_real_t _t109 = prepared->forward_dynamics[68];
-    const trailer_real_t _t110 = prepared->forward_dynamics[69];
-    const trailer_real_t _t111 = prepared->forward_dynamics[70];
-    const trailer_real_t _t353 = -_t111*(J_theta_cart*(-TRAILER_LIT(42830000.0)*_t276
-            - TRAILER_LIT(110707500.0)*_t283 - TRAILER_LIT(147610000.0)*_t285)
-            + J_theta_cart_right*_t5*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(17004672.0)*_t148
-            + TRAILER_LIT(17004672.0)*_t151 + TRAILER_LIT(2471700.0))
-            + _t193*_t56*(TRAILER_LIT(31586400.0)*_t147*_t150 + TRAILER_LIT(66006912.0)*_t148*_t151
-            + TRAILER_LIT(3948300.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(3840000.0)*_t147*_t150 + TRAILER_LIT(5668224.0)*_t148*_t151))
-            + _t192*_t23*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
-            + TRAILER_LIT(22790984.0)*_t151*_t204) + _t193*_t56*(TRAILER_LIT(9746873.0)*_t147
-            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
-            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
-            + TRAILER_LIT(17093238.0)*_t148*_t150 + TRAILER_LIT(5697746.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(24942400.0)*_t147 + TRAILER_LIT(21067638.0)*_t148*_t150
-            + TRAILER_LIT(7022546.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
-            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(51014016.0)*_t147*_t205
-            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(51014016.0)*_t150*_t204
-            + TRAILER_LIT(17713200.0)*_t151 + TRAILER_LIT(4943400.0))
-            + _t193*_t56*(TRAILER_LIT(36951756.0)*_t147*_t150 + TRAILER_LIT(31586400.0)*_t148*_t151
-            + TRAILER_LIT(66006912.0)*_t204*_t205 + TRAILER_LIT(7896600.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(3840000.0)*_t148*_t151 + TRAILER_LIT(5668224.0)*_t204*_t205))
-            - _t100*_t276 + _t148*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
-            + _t151*(-_t197 - _t200 - _t202 - _t227 - _t230 - _t234 - _t237 - _t305)
-            - _t162*_t271*_t97 + _t163*(-TRAILER_LIT(9746873.0)*_t196
-            - TRAILER_LIT(19625327.0)*_t199 - TRAILER_LIT(13514273.0)*_t210 - _t223*_t92
-            - TRAILER_LIT(1434000.0)*_t229 - TRAILER_LIT(46822365.0)*_t231 - _t246)
-            + _t195*(_t106 - TRAILER_LIT(82800000.0)*_t157) + _t196*(-TRAILER_LIT(24942400.0)*_t156
-            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(21067638.0)*_t238
-            - TRAILER_LIT(28090184.0)*_t240) + _t199*(-_t214 - TRAILER_LIT(53759562.0)*_t238
-            - TRAILER_LIT(71679416.0)*_t240 - _t247) + _t201*(-TRAILER_LIT(8177600.0)*_t154
-            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
-            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(41626038.0)*_t244
-            - TRAILER_LIT(55501384.0)*_t248) - _t203*_t87 + _t206*(-_t207 - _t217 - _t220
-            - TRAILER_LIT(156734190.0)*_t229 - _t243 - _t265) + _t208*(-_t207 - _t217 - _t220
-            - _t243 - _t265) + _t209*(-TRAILER_LIT(7022546.0)*_t196 - TRAILER_LIT(17919854.0)*_t199
-            - TRAILER_LIT(5697746.0)*_t210 - _t224*_t93 - TRAILER_LIT(10707500.0)*_t228
-            - TRAILER_LIT(52244730.0)*_t231 - _t246) + _t210*(-_t214 - TRAILER_LIT(17093238.0)*_t238
-            - TRAILER_LIT(22790984.0)*_t240 - _t247) + _t212*(-TRAILER_LIT(48560000.0)*_t154
-            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
-            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(3585888.0)*_t215
-            - TRAILER_LIT(107519124.0)*_t244 - TRAILER_LIT(143358832.0)*_t248
-            - TRAILER_LIT(12840000.0)) - _t213*_t268*_t99 - TRAILER_LIT(31537644.0)*_t216
-            - TRAILER_LIT(35426400.0)*_t218 + _t219*(-TRAILER_LIT(15440000.0)*_t154
-            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
-            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(86438688.0)*_t215
-            - TRAILER_LIT(18420000.0)*_t225 - TRAILER_LIT(34186476.0)*_t244
-            - TRAILER_LIT(45581968.0)*_t248 - TRAILER_LIT(36840000.0))
-            - TRAILER_LIT(68018688.0)*_t222 + _t223*(_t110 - _t267 - _t278)
-            + _t224*(_t110 - _t267 - _t278 - _t288) + _t228*(-TRAILER_LIT(1195000.0)*_t162
-            - TRAILER_LIT(52390000.0)*_t188 - _t242 - _t258 - _t313)
-            + _t229*(-TRAILER_LIT(31434000.0)*_t156 - TRAILER_LIT(62868000.0)*_t187
-            - TRAILER_LIT(12849000.0)*_t213) + _t231*(-TRAILER_LIT(62868000.0)*_t164 - _t232
-            - _t250) + _t235*(-TRAILER_LIT(15277635.0)*_t162 - TRAILER_LIT(30555270.0)*_t213
-            - TRAILER_LIT(177132000.0)*_t221 - _t239 - _t256)
-            + _t241*(-TRAILER_LIT(73805000.0)*_t154 - TRAILER_LIT(25000000.0)*_t162
-            - TRAILER_LIT(147610000.0)*_t188 - TRAILER_LIT(36902500.0)*_t213)
-            + _t245*(-TRAILER_LIT(88566000.0)*_t156 - TRAILER_LIT(177132000.0)*_t187)
-            - TRAILER_LIT(61110540.0)*_t249 - _t254 - TRAILER_LIT(104324550.0)*_t255
-            - TRAILER_LIT(122221080.0)*_t257 - TRAILER_LIT(156734190.0)*_t259
-            - TRAILER_LIT(174149100.0)*_t260 + _t261*(-_t225 - TRAILER_LIT(1.0)) + _t263 + _t264
-            - TRAILER_LIT(6420000.0)*_t266 + _t270*(-_t269 - _t272) - _t273*_t274
-            - TRAILER_LIT(35426400.0)*_t275 - TRAILER_LIT(68018688.0)*_t279 - _t281 - _t282
-            - _t283*_t95 - TRAILER_LIT(92160000.0)*_t284 - _t285*_t96
-            - TRAILER_LIT(136037376.0)*_t286 - _t287*_t98 + _t291 + _t294 + _t295 + _t296 + _t297
-            + _t299 + _t302 + _t304 - _t307 - _t308 - _t309 - _t310 - TRAILER_LIT(122221080.0)*_t312
-            - _t314 - _t316 - _t317 - _t319 - TRAILER_LIT(174149100.0)*_t320
-            - TRAILER_LIT(177132000.0)*_t321 - _t323 + _t325 + _t327 + _t329 + _t332 + _t333 - _t335
-            - _t336 - TRAILER_LIT(92160000.0)*_t337 - TRAILER_LIT(136037376.0)*_t338 - _t340 - _t341
-            - _t342 + _t343 + _t344 - _t346 - _t347 - _t352 + _t89*(-_t251 - _t252)
-            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t192*_t23*(TRAILER_LIT(35426400.0)*_t147*_t150
-            + TRAILER_LIT(2834112.0)*_t148*_t151 + TRAILER_LIT(11328300.0))
-            + _t193*_t56*(TRAILER_LIT(56733600.0)*_t147*_t150 + TRAILER_LIT(45448512.0)*_t148*_t151
-            + TRAILER_LIT(7091700.0))
-            + radius_left*radius_right*thetadot_left*thetadot_right*(TRAILER_LIT(34009344.0)*_t148
-            + TRAILER_LIT(34009344.0)*_t151)) + _t192*_t23*(TRAILER_LIT(19625327.0)*_t147
-            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
-            + _t193*_t56*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
-            + TRAILER_LIT(13875346.0)*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
-            + TRAILER_LIT(11395492.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(23617600.0)*_t147
-            + TRAILER_LIT(53759562.0)*_t148*_t150 + TRAILER_LIT(17919854.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(16355200.0)*_t147*_t151 + TRAILER_LIT(55501384.0)*_t148*_t205
-            + TRAILER_LIT(8982073.0)*_t150)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
-            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(12745356.0)*_t147*_t150
-            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(2834112.0)*_t204*_t205
-            + TRAILER_LIT(22656600.0)) + _t193*_t56*(TRAILER_LIT(29815956.0)*_t147*_t150
-            + TRAILER_LIT(56733600.0)*_t148*_t151 + TRAILER_LIT(45448512.0)*_t204*_t205
-            + TRAILER_LIT(14183400.0))
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(102028032.0)*_t147*_t205 + TRAILER_LIT(46080000.0)*_t148
-            + TRAILER_LIT(102028032.0)*_t150*_t204 + TRAILER_LIT(46080000.0)*_t151))
-            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(68175450.0)*_t147*_t150
-            + TRAILER_LIT(101850900.0)*_t204*_t205)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(91665810.0)*_t147*_t205
-            + TRAILER_LIT(91665810.0)*_t150*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
-            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
-            + TRAILER_LIT(88566000.0)*_t151) + _t143*(J_theta_cart*(TRAILER_LIT(73805000.0)*_t150
-            + TRAILER_LIT(36902500.0)*_t204) + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
-            + _t148*(TRAILER_LIT(177132000.0)*_t150 + TRAILER_LIT(30555270.0)*_t153))
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(44283000.0)*_t148*_t153
-            + TRAILER_LIT(30555270.0)*_t204) + _t151*(_t107*_t147 + _t153*(_t108*_t148 + _t109)
-            + _t204*_t99)) + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
-            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
-            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(122221080.0)*_t148*_t205
-            + TRAILER_LIT(15277635.0)*_t150)) + _t90)
-            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(130611825.0)*_t147*_t205
-            + TRAILER_LIT(69000000.0)*_t148 + TRAILER_LIT(130611825.0)*_t150*_t204
-            + TRAILER_LIT(69000000.0)*_t151)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(125189460.0)*_t147*_t150
-            + TRAILER_LIT(165600000.0)*_t148*_t151 + TRAILER_LIT(208978920.0)*_t204*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
-            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
-            + TRAILER_LIT(51396000.0)*_t204*_t205)
-            + _t143*(J_theta_cart*(TRAILER_LIT(43537275.0)*_t148*_t153
-            + TRAILER_LIT(26195000.0)*_t150 + _t151*(TRAILER_LIT(43537275.0)*_t153
-            + TRAILER_LIT(42830000.0)*_t204))
-            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(165600000.0)*_t150*_t153
-            + TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
-            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(208978920.0)*_t151*_t153)
-            + TRAILER_LIT(20700000.0)*_t153 + TRAILER_LIT(12849000.0)*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(46822365.0)*_t147
-            + _t148*(TRAILER_LIT(165600000.0)*_t150 + TRAILER_LIT(51396000.0)*_t151*_t153)
-            + TRAILER_LIT(208978920.0)*_t151*_t204))
-            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
-            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
-            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
-            + TRAILER_LIT(51396000.0)*_t148*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t147
-            + TRAILER_LIT(156734190.0)*_t148*_t150 + TRAILER_LIT(52244730.0)*_t205))))))
-            + tau_right;
-    const trailer_real_t _t354 = TRAILER_LIT(17713200.0)*_t201;
-    const trailer_real_t _t355 = TRAILER_LIT(51014016.0)*_t201;
-    const trailer_real_t _t356 = TRAILER_LIT(66006912.0)*_t199;
-    const trailer_real_t _t357 = TRAILER_LIT(17004672.0)*_t233;
-    const trailer_real_t _t358 = TRAILER_LIT(44283000.0)*_t229;
-    const trailer_real_t _t359 = TRAILER_LIT(46080000.0)*_t212;
-    const trailer_real_t _t360 = TRAILER_LIT(177132000.0)*_t231;
-    const trailer_real_t _t361 = _t182*_t360;
-    const trailer_real_t _t362 = TRAILER_LIT(30555270.0)*_t277;
-    const trailer_real_t _t363 = TRAILER_LIT(43537275.0)*_t225;
-    const trailer_real_t _t364 = TRAILER_LIT(102028032.0)*_t212;
-    const trailer_real_t _t365 = TRAILER_LIT(34009344.0)*_t266;
-    const trailer_real_t _t114 = prepared->forward_dynamics[71];
-    const trailer_real_t _t115 = prepared->forward_dynamics[72];
-    const trailer_real_t _t116 = prepared->forward_dynamics[73];
-    const trailer_real_t _t117 = prepared->forward_dynamics[74];
-    const trailer_real_t _t118 = prepared->forward_dynamics[75];
-    const trailer_real_t _t119 = prepared->forward_dynamics[76];
-    const trailer_real_t _t120 = prepared->forward_dynamics[77];
-    const trailer_real_t _t121 = prepared->forward_dynamics[78];
-    const trailer_real_t _t122 = prepared->forward_dynamics[79];
-    const trailer_real_t _t123 = prepared->forward_dynamics[80];
-    const trailer_real_t _t124 = prepared->forward_dynamics[81];
-    const trailer_real_t _t125 = prepared->forward_dynamics[82];
-    const trailer_real_t _t126 = prepared->forward_dynamics[83];
-    const trailer_real_t _t127 = prepared->forward_dynamics[84];
-    const trailer_real_t _t128 = prepared->forward_dynamics[85];
-    const trailer_real_t _t129 = prepared->forward_dynamics[86];
-    const trailer_real_t _t130 = prepared->forward_dynamics[87];
-    const trailer_real_t _t131 = prepared->forward_dynamics[88];
-    const trailer_real_t _t132 = prepared->forward_dynamics[89];
-    const trailer_real_t _t133 = prepared->forward_dynamics[90];
-    const trailer_real_t _t134 = prepared->forward_dynamics[91];
-    const trailer_real_t _t366 = _t134*(J_theta_cart_right*_t5*(_t143*(_t153*(_t148*(_t131*_t193
-            + _t132*_t192 + _t133*_t151*thetadot_left*thetadot_right)
-            + _t151*(_t131*_t193 + _t132*_t192)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(92160000.0)*_t147*_t150 + TRAILER_LIT(18420000.0)))
-            + _t192*_t23*(TRAILER_LIT(41626038.0)*_t147*_t151 + TRAILER_LIT(8177600.0)*_t150
-            + TRAILER_LIT(13875346.0)*_t204) + _t193*_t56*(TRAILER_LIT(19625327.0)*_t147
-            + TRAILER_LIT(47235200.0)*_t148*_t150 + TRAILER_LIT(71679416.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(34186476.0)*_t147*_t151 + TRAILER_LIT(15440000.0)*_t150
-            + TRAILER_LIT(11395492.0)*_t204))
-            + _t153*(_t192*_t23*(TRAILER_LIT(16355200.0)*_t147*_t151
-            + TRAILER_LIT(55501384.0)*_t148*_t205 + TRAILER_LIT(8982073.0)*_t150)
-            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(53759562.0)*_t148*_t150
-            + TRAILER_LIT(17919854.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(30880000.0)*_t147*_t151 + TRAILER_LIT(45581968.0)*_t148*_t205
-            + TRAILER_LIT(4796746.0)*_t150)) + _t192*_t23*(TRAILER_LIT(34086384.0)*_t147*_t205
-            + TRAILER_LIT(28366800.0)*_t148 + TRAILER_LIT(34086384.0)*_t150*_t204
-            + TRAILER_LIT(28366800.0)*_t151) + _t193*_t56*(TRAILER_LIT(2125584.0)*_t147*_t205
-            + TRAILER_LIT(17713200.0)*_t148 + TRAILER_LIT(2125584.0)*_t150*_t204
-            + TRAILER_LIT(17713200.0)*_t151)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(86438688.0)*_t147*_t150 + TRAILER_LIT(92160000.0)*_t148*_t151
-            + TRAILER_LIT(136037376.0)*_t204*_t205 + TRAILER_LIT(36840000.0))) + _t114*_t195
-            + _t125*_t251 + _t125*_t252 + _t127*_t276 + _t128*_t283 + _t129*_t285 + _t130*_t287
-            + _t148*(-_t354 - _t357 - _t359 - _t365) + _t151*(-_t354 - _t357 - _t359 - _t365)
-            - _t163*_t358 - _t164*_t360 + _t196*(-TRAILER_LIT(19625327.0)*_t163
-            - TRAILER_LIT(35426400.0)*_t164 - TRAILER_LIT(35426400.0)*_t182
-            - TRAILER_LIT(17919854.0)*_t209 - _t214 - TRAILER_LIT(12745356.0)*_t215
-            - TRAILER_LIT(2834112.0)*_t221 - TRAILER_LIT(53759562.0)*_t238
-            - TRAILER_LIT(71679416.0)*_t240 - _t247 - TRAILER_LIT(22656600.0))
-            + _t199*(-TRAILER_LIT(24942400.0)*_t156 - TRAILER_LIT(9746873.0)*_t163
-            - TRAILER_LIT(31586400.0)*_t164 - TRAILER_LIT(31586400.0)*_t182
-            - TRAILER_LIT(49884800.0)*_t187 - TRAILER_LIT(7022546.0)*_t209
-            - TRAILER_LIT(36951756.0)*_t215 - TRAILER_LIT(21067638.0)*_t238
-            - TRAILER_LIT(28090184.0)*_t240 - TRAILER_LIT(7896600.0))
-            + _t201*(-TRAILER_LIT(13514273.0)*_t163 - TRAILER_LIT(5697746.0)*_t209 - _t214
-            - TRAILER_LIT(17093238.0)*_t238 - TRAILER_LIT(22790984.0)*_t240 - _t247
-            - TRAILER_LIT(4943400.0)) + _t203*(_t106 - TRAILER_LIT(82800000.0)*_t155)
-            + _t206*(-TRAILER_LIT(91665810.0)*_t229 - _t355 - _t364) + _t208*(-_t355 - _t364)
-            + _t209*(-TRAILER_LIT(30555270.0)*_t231 - TRAILER_LIT(10707500.0)*_t241
-            - TRAILER_LIT(147610000.0)*_t273 - _t358) + _t210*(-TRAILER_LIT(8177600.0)*_t154
-            - TRAILER_LIT(8982073.0)*_t162 - TRAILER_LIT(16355200.0)*_t188
-            - TRAILER_LIT(13875346.0)*_t213 - TRAILER_LIT(7091700.0)*_t225
-            - TRAILER_LIT(41626038.0)*_t244 - TRAILER_LIT(55501384.0)*_t248
-            - TRAILER_LIT(14183400.0)) + _t212*(-TRAILER_LIT(15440000.0)*_t154
-            - TRAILER_LIT(4796746.0)*_t162 - TRAILER_LIT(30880000.0)*_t188
-            - TRAILER_LIT(11395492.0)*_t213 - TRAILER_LIT(34186476.0)*_t244
-            - TRAILER_LIT(45581968.0)*_t248) - TRAILER_LIT(29815956.0)*_t216
-            - TRAILER_LIT(56733600.0)*_t218 + _t219*(-TRAILER_LIT(48560000.0)*_t154
-            - TRAILER_LIT(25298854.0)*_t162 - TRAILER_LIT(97120000.0)*_t188
-            - TRAILER_LIT(35839708.0)*_t213 - TRAILER_LIT(107519124.0)*_t244
-            - TRAILER_LIT(143358832.0)*_t248) + _t221*(-_t356 - _t360)
-            - TRAILER_LIT(45448512.0)*_t222 + _t223*(_t124*_t163 - _t362) - _t224*_t362
-            - TRAILER_LIT(3948300.0)*_t226 + _t228*(-TRAILER_LIT(73805000.0)*_t154
-            - TRAILER_LIT(25000000.0)*_t162 - TRAILER_LIT(147610000.0)*_t188
-            - TRAILER_LIT(36902500.0)*_t213) + _t229*(-TRAILER_LIT(88566000.0)*_t156
-            - TRAILER_LIT(177132000.0)*_t187) + _t231*(-TRAILER_LIT(15277635.0)*_t163 - _t239
-            - _t256) - TRAILER_LIT(2471700.0)*_t233 + _t235*(-TRAILER_LIT(46822365.0)*_t162
-            - TRAILER_LIT(52244730.0)*_t213 - _t232 - _t250) + _t236*(-TRAILER_LIT(2834112.0)*_t182
-            - TRAILER_LIT(11328300.0)) + _t241*(-TRAILER_LIT(1195000.0)*_t162
-            - TRAILER_LIT(52390000.0)*_t188 - _t242) + _t245*(-TRAILER_LIT(31434000.0)*_t156
-            - TRAILER_LIT(1434000.0)*_t163 - TRAILER_LIT(62868000.0)*_t187
-            - TRAILER_LIT(12849000.0)*_t213 - _t306 - _t318 - _t345)
-            - TRAILER_LIT(125189460.0)*_t249 + _t254 - TRAILER_LIT(68175450.0)*_t255
-            - TRAILER_LIT(208978920.0)*_t257 - TRAILER_LIT(91665810.0)*_t259
-            - TRAILER_LIT(101850900.0)*_t260 - _t263 - _t264 + _t268*(_t126 - _t267 - _t339)
-            + _t269*(-TRAILER_LIT(42830000.0)*_t213 - _t363) + _t271*(_t126 - _t267)
-            + _t272*(-_t274 - _t363) - TRAILER_LIT(56733600.0)*_t275 - TRAILER_LIT(45448512.0)*_t279
-            + _t281 + _t282 - TRAILER_LIT(3840000.0)*_t284 - TRAILER_LIT(5668224.0)*_t286 - _t291
-            - _t294 - _t295 - _t296 - _t297 - _t299 - _t302 - _t304 + _t307 + _t308 + _t309 + _t310
-            - _t311*_t356 - TRAILER_LIT(208978920.0)*_t312 + _t314 + _t316 + _t317 + _t319
-            - TRAILER_LIT(101850900.0)*_t320 - TRAILER_LIT(62868000.0)*_t321 + _t323 - _t325 - _t327
-            - _t329 - _t332 - _t333 + _t335 + _t336 - TRAILER_LIT(3840000.0)*_t337
-            - TRAILER_LIT(5668224.0)*_t338 + _t340 + _t341 + _t342 - _t343 - _t344 + _t346 + _t347
-            - _t352 + _t361*(-_t225 - TRAILER_LIT(1.0))
-            + _t9*(J_theta_cart_left*(_t143*(_t153*(_t122*thetadot_left*thetadot_right
-            + _t123*_t147*_t150*_t193 + _t148*(_t119*_t192 + _t120*_t151*_t193
-            + _t121*thetadot_left*thetadot_right) + _t151*(_t119*_t192
-            + _t121*thetadot_left*thetadot_right)) + _t192*_t23*(TRAILER_LIT(9746873.0)*_t147
-            + TRAILER_LIT(49884800.0)*_t148*_t150 + TRAILER_LIT(28090184.0)*_t151*_t204)
-            + _t193*_t56*(TRAILER_LIT(13514273.0)*_t147 + TRAILER_LIT(47235200.0)*_t148*_t150
-            + TRAILER_LIT(22790984.0)*_t151*_t204)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(107519124.0)*_t147*_t151 + TRAILER_LIT(48560000.0)*_t150
-            + TRAILER_LIT(35839708.0)*_t204)) + _t153*(_t192*_t23*(TRAILER_LIT(24942400.0)*_t147
-            + TRAILER_LIT(21067638.0)*_t148*_t150 + TRAILER_LIT(7022546.0)*_t205)
-            + _t193*_t56*(TRAILER_LIT(23617600.0)*_t147 + TRAILER_LIT(17093238.0)*_t148*_t150
-            + TRAILER_LIT(5697746.0)*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(TRAILER_LIT(97120000.0)*_t147*_t151 + TRAILER_LIT(143358832.0)*_t148*_t205
-            + TRAILER_LIT(25298854.0)*_t150)) + _t192*_t23*(TRAILER_LIT(49505184.0)*_t147*_t205
-            + TRAILER_LIT(15793200.0)*_t148 + TRAILER_LIT(49505184.0)*_t150*_t204
-            + TRAILER_LIT(15793200.0)*_t151) + _t193*_t56*(TRAILER_LIT(31537644.0)*_t147*_t150
-            + TRAILER_LIT(35426400.0)*_t148*_t151 + TRAILER_LIT(68018688.0)*_t204*_t205)
-            +
-            radius_left*radius_right*thetadot_left*thetadot_right
-            *(_t147*(TRAILER_LIT(3585888.0)*_t150 + TRAILER_LIT(4251168.0)*_t205)
-            + TRAILER_LIT(1920000.0)*_t148 + TRAILER_LIT(4251168.0)*_t150*_t204
-            + TRAILER_LIT(1920000.0)*_t151 + TRAILER_LIT(12840000.0)))
-            + _t5*(_t192*_t23*(J_theta_cart*(TRAILER_LIT(104324550.0)*_t147*_t150
-            + TRAILER_LIT(138000000.0)*_t148*_t151 + TRAILER_LIT(174149100.0)*_t204*_t205)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(156734190.0)*_t147*_t205
-            + TRAILER_LIT(82800000.0)*_t148 + TRAILER_LIT(156734190.0)*_t150*_t204
-            + TRAILER_LIT(82800000.0)*_t151)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(17839500.0)*_t147*_t150
-            + TRAILER_LIT(31434000.0)*_t148 + TRAILER_LIT(31434000.0)*_t151
-            + TRAILER_LIT(51396000.0)*_t204*_t205)
-            + _t143*(J_theta_cart*(_t150*(TRAILER_LIT(138000000.0)*_t147*_t153
-            + TRAILER_LIT(26195000.0)) + _t151*(TRAILER_LIT(174149100.0)*_t148*_t153
-            + TRAILER_LIT(42830000.0)*_t204))
-            + K_theta_cart_x_tractor*(_t147*(TRAILER_LIT(38547000.0)*_t151 + TRAILER_LIT(1434000.0))
-            + _t148*(TRAILER_LIT(62868000.0)*_t150 + TRAILER_LIT(52244730.0)*_t153)
-            + TRAILER_LIT(52244730.0)*_t151*_t153 + TRAILER_LIT(12849000.0)*_t204)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(82800000.0)*_t150
-            + _t151*(TRAILER_LIT(156734190.0)*_t147 + TRAILER_LIT(51396000.0)*_t148*_t153)
-            + TRAILER_LIT(52244730.0)*_t204))
-            + _t153*(J_theta_cart*(TRAILER_LIT(52390000.0)*_t147*_t151
-            + _t150*(TRAILER_LIT(32122500.0)*_t148 + TRAILER_LIT(1195000.0))
-            + TRAILER_LIT(10707500.0)*_t205) + K_theta_cart_x_tractor*(TRAILER_LIT(31434000.0)*_t147
-            + TRAILER_LIT(51396000.0)*_t148*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(165600000.0)*_t147*_t151
-            + TRAILER_LIT(208978920.0)*_t148*_t205 + TRAILER_LIT(46822365.0)*_t150)))
-            + _t193*_t56*(J_theta_cart*(TRAILER_LIT(76388175.0)*_t147*_t205
-            + TRAILER_LIT(76388175.0)*_t150*_t204)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(61110540.0)*_t147*_t150
-            + TRAILER_LIT(122221080.0)*_t204*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(132849000.0)*_t147*_t205
-            + TRAILER_LIT(88566000.0)*_t148 + TRAILER_LIT(132849000.0)*_t150*_t204
-            + TRAILER_LIT(88566000.0)*_t151)
-            + _t143*(J_theta_cart*(TRAILER_LIT(25462725.0)*_t148*_t153
-            + TRAILER_LIT(73805000.0)*_t150 + TRAILER_LIT(36902500.0)*_t204)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(44283000.0)*_t147
-            + TRAILER_LIT(177132000.0)*_t148*_t150)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(15277635.0)*_t147
-            + TRAILER_LIT(44283000.0)*_t148*_t153) + _t151*(_t115*_t204 + _t118*_t147
-            + _t153*(_t116*_t148 + _t117)))
-            + _t153*(J_theta_cart*(TRAILER_LIT(147610000.0)*_t147*_t151
-            + TRAILER_LIT(147610000.0)*_t148*_t205 + TRAILER_LIT(25000000.0)*_t150)
-            + K_theta_cart_x_tractor*(TRAILER_LIT(88566000.0)*_t147
-            + TRAILER_LIT(132849000.0)*_t148*_t150 + TRAILER_LIT(44283000.0)*_t205)
-            + K_theta_cart_x_tractor_2*(TRAILER_LIT(91665810.0)*_t148*_t150
-            + TRAILER_LIT(30555270.0)*_t205)))))) + tau_left;
-    const trailer_real_t _t367 = -_t170*_t353 + _t189*_t366;
-    const trailer_real_t _t368 = _t191*_t367;
-    const trailer_real_t _t369 = _t368*radius_left;
-    const trailer_real_t _t370 = TRAILER_LIT(0.5)*_t150;
-    const trailer_real_t _t371 = -_t170*_t366 + _t179*_t353;
-    const trailer_real_t _t372 = _t191*_t371;
-    const trailer_real_t _t373 = _t372*radius_right;
-    const trailer_real_t _t374 = TRAILER_LIT(0.5)*_t143;
-    const trailer_real_t _t375 = TRAILER_LIT(13800.0)*_t198;
-    const trailer_real_t _t376 = TRAILER_LIT(13800.0)*_t194;
-    const trailer_real_t _t377 = TRAILER_LIT(27600.0)*_t182;
-    const trailer_real_t _t378 = TRAILER_LIT(20000.0)*_t162;
-    const trailer_real_t _t379 = TRAILER_LIT(5239.0)*_t154;
-    const trailer_real_t _t380 = TRAILER_LIT(5239.0)*_t156;
-    const trailer_real_t _t381 = TRAILER_LIT(20000.0)*_t163;
-    const trailer_real_t _t382 = TRAILER_LIT(10478.0)*_t198;
-    const trailer_real_t _t383 = TRAILER_LIT(10478.0)*_t194;
-    const trailer_real_t _t384 = TRAILER_LIT(27600.0)*_t164;
-    const trailer_real_t _t385 = TRAILER_LIT(40000.0)*_t211;
-    const trailer_real_t _t386 = _t163*_t385;
-    const trailer_real_t _t387 = TRAILER_LIT(29522.0)*_t211;
-    const trailer_real_t _t388 = _t156*_t387;
-    const trailer_real_t _t389 = _t154*_t387;
-    const trailer_real_t _t390 = _t162*_t385;
-    const trailer_real_t _t391 = TRAILER_LIT(59044.0)*_t211;
-    const trailer_real_t _t392 = _t187*_t391;
-    const trailer_real_t _t393 = _t188*_t391;
-    const trailer_real_t _t394 = -_t386 - _t388 + _t389 + _t390 - _t392 + _t393;
-    const trailer_real_t _t395 = TRAILER_LIT(69.0)*_t163;
-    const trailer_real_t _t396 = TRAILER_LIT(69.0)*_t162;
-    const trailer_real_t _t397 = TRAILER_LIT(100.0)*_t215 + TRAILER_LIT(100.0)*_t225;
-    const trailer_real_t _t398 = TRAILER_LIT(29517.0)*_t194;
-    const trailer_real_t _t399 = TRAILER_LIT(1917.0)*_t198;
-    const trailer_real_t _t400 = TRAILER_LIT(61400.0)*_t198;
-    const trailer_real_t _t401 = TRAILER_LIT(46639.0)*_t198;
-    const trailer_real_t _t402 = TRAILER_LIT(36161.0)*_t194;
-    const trailer_real_t _t403 = TRAILER_LIT(21400.0)*_t194;
-    const trailer_real_t _t404 = TRAILER_LIT(3834.0)*_t182;
-    const trailer_real_t _t405 = TRAILER_LIT(46200.0)*_t198;
-    const trailer_real_t _t406 = TRAILER_LIT(59034.0)*_t182;
-    const trailer_real_t _t407 = TRAILER_LIT(73800.0)*_t194;
-    const trailer_real_t _t408 = TRAILER_LIT(93278.0)*_t198;
-    const trailer_real_t _t409 = TRAILER_LIT(72322.0)*_t194;
-    const trailer_real_t _t410 = TRAILER_LIT(3834.0)*_t164;
-    const trailer_real_t _t411 = TRAILER_LIT(59034.0)*_t164;
-    const trailer_real_t _t412 = TRAILER_LIT(88566.0)*_t211;
-    const trailer_real_t _t413 = TRAILER_LIT(177132.0)*_t211;
-    const trailer_real_t _t414 = TRAILER_LIT(120000.0)*_t211;
-    const trailer_real_t _t415 = -TRAILER_LIT(60000.0)*_t211 + _t412*(_t148 + _t151)
-            + _t413*(-_t164 - _t182) + _t414*(-_t215 - _t225);
-    const trailer_real_t _t416 = TRAILER_LIT(231.0)*_t162;
-    const trailer_real_t _t417 = TRAILER_LIT(231.0)*_t163;
-    const trailer_real_t _t418 = TRAILER_LIT(307.0)*_t215 + TRAILER_LIT(307.0)*_t225;
-    const trailer_real_t _t419 = TRAILER_LIT(369.0)*_t163;
-    const trailer_real_t _t420 = TRAILER_LIT(369.0)*_t162;
-    const trailer_real_t _t421 = TRAILER_LIT(107.0)*_t215 + TRAILER_LIT(107.0)*_t225;
-    const trailer_real_t _t422 = TRAILER_LIT(29517.0)*_t198;
-    const trailer_real_t _t423 = TRAILER_LIT(1917.0)*_t194;
-    const trailer_real_t _t424 = TRAILER_LIT(61400.0)*_t194;
-    const trailer_real_t _t425 = TRAILER_LIT(46639.0)*_t194;
-    const trailer_real_t _t426 = TRAILER_LIT(36161.0)*_t198;
-    const trailer_real_t _t427 = TRAILER_LIT(21400.0)*_t198;
-    const trailer_real_t _t428 = TRAILER_LIT(46200.0)*_t194;
-    const trailer_real_t _t429 = TRAILER_LIT(73800.0)*_t198;
-    const trailer_real_t _t430 = TRAILER_LIT(93278.0)*_t194;
-    const trailer_real_t _t431 = TRAILER_LIT(72322.0)*_t198;
-    if (!(_t189 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t83 = J_theta_cart_right*_t82;
+    const trailer_real_t _t84 = _t29 - _t30;
+    const trailer_real_t _t85 = _t4*_t84;
+    const trailer_real_t _t86 = -_t29 - _t30;
+    const trailer_real_t _t87 = _t3*_t86;
+    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
+    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
+    const trailer_real_t _t5 = prepared->forward_dynamics[15];
+    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
+    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
+    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
+    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
+    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
+    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
+    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
+    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
+    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
+    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
+    const trailer_real_t _t6 = prepared->forward_dynamics[16];
+    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
+    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
+    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
+    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
+    const trailer_real_t J_theta_right = prepared->forward_dynamics[4];
+    const trailer_real_t _t104 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
+            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
+    const trailer_real_t _t105 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
+    const trailer_real_t _t106 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
+    const trailer_real_t J_theta_left = prepared->forward_dynamics[3];
+    const trailer_real_t _t107 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
+            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
+    const trailer_real_t _t108 = _t104*_t107 - _t105*_t106;
+    const trailer_real_t _t109 = _t56 - _t57;
+    const trailer_real_t _t110 = _t109*_t4;
+    const trailer_real_t _t111 = _t61 - _t62;
+    const trailer_real_t _t112 = _t111*_t4;
+    const trailer_real_t _t113 = _t64 - _t65;
+    const trailer_real_t _t114 = _t113*_t4;
+    const trailer_real_t _t115 = _t67 - _t68;
+    const trailer_real_t _t116 = _t115*_t4;
+    const trailer_real_t _t117 = _t110*_t49 + _t112*_t50 + _t114*_t51 + _t116*_t52;
+    const trailer_real_t _t118 = -_t56 - _t57;
+    const trailer_real_t _t119 = _t118*_t3;
+    const trailer_real_t _t120 = -_t61 - _t62;
+    const trailer_real_t _t121 = _t120*_t3;
+    const trailer_real_t _t122 = -_t64 - _t65;
+    const trailer_real_t _t123 = _t122*_t3;
+    const trailer_real_t _t124 = -_t67 - _t68;
+    const trailer_real_t _t125 = _t124*_t3;
+    const trailer_real_t _t126 = _t119*_t49 + _t121*_t50 + _t123*_t51 + _t125*_t52;
+    const trailer_real_t _t127 = -_t0*_t101 + _t103*_t23 + _t117*_t83 + _t126*_t80 + _t17*_t99
+            + _t21*_t96;
+    const trailer_real_t _t128 = J_theta_cart_left*_t126*_t87 + J_theta_cart_right*_t117*_t85
+            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
+    const trailer_real_t _t129 = -_t127 + tau_right;
+    const trailer_real_t _t130 = -_t128 + tau_left;
+    const trailer_real_t _t131 = TRAILER_LIT(1.0)/_t108;
+    const trailer_real_t _t132 = _t131*(-_t105*_t130 + _t107*_t129);
+    const trailer_real_t _t133 = _t131*(_t104*_t130 - _t106*_t129);
+    const trailer_real_t _t134 = _t132*_t17 + _t133*_t19 + _t98;
+    const trailer_real_t _t135 = _t132*_t21 + _t133*_t26 + _t94;
+    const trailer_real_t _t136 = -_t0*_t132 + _t1*_t133;
+    const trailer_real_t _t137 = _t132*_t23 + _t133*_t28 + _t95;
+    const trailer_real_t _t138 = _t117 + _t132*_t82 + _t133*_t85;
+    const trailer_real_t _t139 = _t126 + _t132*_t79 + _t133*_t87;
+    if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         /* an input not checked yet, reaching the results through +, -, * only */
         if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
                 + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
@@ -1973,7 +524,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
         }
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t190 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t108 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         /* an input not checked yet, reaching the results through +, -, * only */
         if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
                 + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
@@ -1981,57 +532,14 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
         }
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t _t136 = prepared->forward_dynamics[92];
-    const trailer_real_t _t138 = prepared->forward_dynamics[93];
-    const trailer_real_t _t139 = prepared->forward_dynamics[94];
-    const trailer_real_t _t140 = prepared->forward_dynamics[95];
-    const trailer_real_t _t141 = prepared->forward_dynamics[96];
-    const trailer_real_t _t142 = prepared->forward_dynamics[97];
-    const trailer_real_t r_0 = _t143*_t146 + _t370*(_t369 + _t373);
-    const trailer_real_t r_1 = -_t146*_t150 + _t374*(_t369 + _t373);
-    const trailer_real_t r_2 = _t139*_t191*_t371 - TRAILER_LIT(500.0)*_t369/TRAILER_LIT(207.0);
-    const trailer_real_t r_3 = _t140*_t191*_t367*(-_t395 + _t396 + _t397)
-            + _t187*(-TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
-            + _t188*(TRAILER_LIT(25.0)*_t382/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t383/TRAILER_LIT(171396.0))
-            + _t194*(TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) + TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
-            + _t198*(-TRAILER_LIT(25.0)*_t377/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t378/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t379/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t380/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t381/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t384/TRAILER_LIT(171396.0) - TRAILER_LIT(625.0)/TRAILER_LIT(621.0))
-            - TRAILER_LIT(5.0)*_t373*(_t395 - _t396 + _t397)/TRAILER_LIT(414.0)
-            + _t375*(TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
-            + _t376*(-TRAILER_LIT(25.0)*_t148/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(25.0)*_t151/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t215/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(25.0)*_t225/TRAILER_LIT(171396.0))
-            - TRAILER_LIT(25.0)*_t394/TRAILER_LIT(171396.0);
-    const trailer_real_t r_4 = _t372;
-    const trailer_real_t r_5 = _t368;
-    const trailer_real_t r_6 = _t136*(_t369*(-_t416 + _t417 + _t418)
-            + _t373*(-_t419 + _t420 + _t421)) + _t141*(_t148*(-_t398 - _t399)
-            + _t151*(-_t398 - _t399) + _t154*(_t401 - _t402) + _t156*(-_t401 + _t402)
-            + _t187*(-_t408 + _t409) + _t188*(_t408 - _t409) + _t194*(_t406 + _t411
-            + TRAILER_LIT(36900.0)) + _t198*(_t404 + _t410 + TRAILER_LIT(23100.0))
-            + _t215*(_t405 + _t407) + _t225*(_t405 + _t407) + _t386 + _t388 - _t389 - _t390 + _t392
-            - _t393 + _t400*(_t162 - _t163) + _t403*(-_t162 + _t163) + _t415);
-    const trailer_real_t r_7 = _t138*(_t369*(_t419 - _t420 + _t421) + _t373*(_t416 - _t417 + _t418))
-            + _t142*(_t148*(-_t422 - _t423) + _t151*(-_t422 - _t423) + _t154*(-_t425 + _t426)
-            + _t156*(_t425 - _t426) + _t187*(_t430 - _t431) + _t188*(-_t430 + _t431)
-            + _t194*(_t404 + _t410 + TRAILER_LIT(23100.0)) + _t198*(_t406 + _t411
-            + TRAILER_LIT(36900.0)) + _t215*(_t428 + _t429) + _t225*(_t428 + _t429) + _t394 + _t415
-            + _t424*(-_t162 + _t163) + _t427*(_t162 - _t163));
+    const trailer_real_t r_0 = _t134;
+    const trailer_real_t r_1 = _t135;
+    const trailer_real_t r_2 = _t136;
+    const trailer_real_t r_3 = _t137;
+    const trailer_real_t r_4 = _t132;
+    const trailer_real_t r_5 = _t133;
+    const trailer_real_t r_6 = _t138;
+    const trailer_real_t r_7 = _t139;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
             + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
         /* an input not checked yet, reaching the results through +, -, * only */
@@ -2053,1246 +561,298 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 }
 
 /* trailer_kinematics: documented in trailer_model.h.
-   operations after CSE: 24 add, 63 mul, 17 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 20 add, 44 mul, 12 div, 4 sin/cos, 0 sqrt */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t0 = radius_left*thetadot_left;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t1 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t2 = TRAILER_LIT(0.5)*_t1;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t _t3 = radius_right*thetadot_right;
-    const trailer_real_t _t4 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
-    const trailer_real_t _t6 = TRAILER_LIT(250.0)*radius_left/TRAILER_LIT(207.0);
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t8 = _t4*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(6.0);
-    const trailer_real_t _t10 = _t1*_t7;
-    const trailer_real_t _t11 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t12 = _t11*_t4;
-    const trailer_real_t _t13 = _t1*_t11;
-    const trailer_real_t _t14 = TRAILER_LIT(250.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t theta_tractor = q[2];
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
+    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = _t6*_t9;
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t6;
+    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
+    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
+    const trailer_real_t _t18 = _t7*_t9;
+    const trailer_real_t _t19 = _t11*_t7;
+    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
+    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
+    const trailer_real_t _t24 = _t15 - _t17;
+    const trailer_real_t _t25 = _t22 - _t23;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t16 = _t15*radius_left;
-    const trailer_real_t _t17 = TRAILER_LIT(307.0)*_t16/TRAILER_LIT(414.0);
-    const trailer_real_t _t18 = TRAILER_LIT(77.0)*_t10/TRAILER_LIT(138.0);
-    const trailer_real_t _t19 = TRAILER_LIT(77.0)*_t12/TRAILER_LIT(138.0);
-    const trailer_real_t _t20 = _t15*radius_right;
-    const trailer_real_t _t21 = TRAILER_LIT(107.0)*_t20/TRAILER_LIT(414.0);
-    const trailer_real_t _t22 = TRAILER_LIT(41.0)*_t10/TRAILER_LIT(46.0);
-    const trailer_real_t _t23 = TRAILER_LIT(41.0)*_t12/TRAILER_LIT(46.0);
+    const trailer_real_t _t26 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t27 = _t24*_t26;
+    const trailer_real_t _t28 = _t25*_t26;
+    const trailer_real_t _t29 = -_t15 - _t17;
+    const trailer_real_t _t30 = -_t22 - _t23;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t24 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t25 = _t24*radius_left;
-    const trailer_real_t _t26 = TRAILER_LIT(107.0)*_t25/TRAILER_LIT(414.0);
-    const trailer_real_t _t27 = _t24*radius_right;
-    const trailer_real_t _t28 = TRAILER_LIT(307.0)*_t27/TRAILER_LIT(414.0);
-    pose_rates[0] = _t0*_t2 + _t2*_t3;
-    pose_rates[1] = _t0*_t5 + _t3*_t5;
-    pose_rates[2] = -TRAILER_LIT(500.0)*_t0/TRAILER_LIT(207.0)
-            + TRAILER_LIT(500.0)*radius_right*thetadot_right/TRAILER_LIT(207.0);
-    pose_rates[3] = thetadot_left*(-_t10*_t9 + _t12*_t9 + _t13*_t6 + _t6*_t8)
-            + thetadot_right*(-TRAILER_LIT(5.0)*_t10*radius_right/TRAILER_LIT(6.0)
-            + TRAILER_LIT(5.0)*_t11*_t4*radius_right/TRAILER_LIT(6.0) - _t13*_t14 - _t14*_t8);
-    pose_rates[4] = thetadot_left*(_t13*_t17 + _t16*_t18 - _t16*_t19 + _t17*_t8)
-            + thetadot_right*(_t13*_t21 - _t20*_t22 + _t20*_t23 + _t21*_t8);
-    pose_rates[5] = thetadot_left*(_t13*_t26 + _t22*_t25 - _t23*_t25 + _t26*_t8)
-            + thetadot_right*(_t13*_t28 - _t18*_t27 + _t19*_t27 + _t28*_t8);
+    const trailer_real_t _t31 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t32 = _t29*_t31;
+    const trailer_real_t _t33 = _t30*_t31;
+    const trailer_real_t thetadot_right = wheel_rates[0];
+    const trailer_real_t thetadot_left = wheel_rates[1];
+    const trailer_real_t _t34 = _t12*thetadot_right + _t19*thetadot_left;
+    const trailer_real_t _t35 = _t10*thetadot_right + _t18*thetadot_left;
+    const trailer_real_t _t36 = -_t6*thetadot_right + _t7*thetadot_left;
+    const trailer_real_t _t37 = _t14*thetadot_right + _t21*thetadot_left;
+    const trailer_real_t _t38 = _t27*thetadot_right + _t28*thetadot_left;
+    const trailer_real_t _t39 = _t32*thetadot_right + _t33*thetadot_left;
+    pose_rates[0] = _t34;
+    pose_rates[1] = _t35;
+    pose_rates[2] = _t36;
+    pose_rates[3] = _t37;
+    pose_rates[4] = _t38;
+    pose_rates[5] = _t39;
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 129 add, 224 mul, 56 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 62 add, 103 mul, 14 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = radius_right*radius_right;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t1 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t5 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t6 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t7 = J_theta_cart_left/(radius_cart_left*radius_cart_left);
-    const trailer_real_t _t8 = _t0*_t7;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t9 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
-    const trailer_real_t _t10 = _t0*_t9;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t11 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t12 = _t11*_t11;
-    const trailer_real_t _t13 = _t0*_t12;
-    const trailer_real_t _t14 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t15 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t16 = _t15*_t15;
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t19 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t20 = _t11*TRAILER_SIN(theta_cart);
-    const trailer_real_t _t21 = _t0*_t20;
-    const trailer_real_t _t22 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t23 = _t15*TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t24 = _t0*_t23;
-    const trailer_real_t _t25 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t26 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t27 = TRAILER_LIT(10222.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t28 = TRAILER_LIT(31178.0)*_t9/TRAILER_LIT(42849.0);
-    const trailer_real_t _t29 = TRAILER_LIT(23639.0)*_t8/TRAILER_LIT(28566.0);
-    const trailer_real_t _t30 = TRAILER_LIT(4387.0)*_t10/TRAILER_LIT(9522.0);
-    const trailer_real_t _t31 = _t13*_t16;
-    const trailer_real_t _t32 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t33 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t34 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t35 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t36 = _t17*_t20;
-    const trailer_real_t _t37 = _t13*_t23;
-    const trailer_real_t _t38 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t39 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t40 = _t21*_t23;
-    const trailer_real_t _t41 = TRAILER_LIT(23639.0)*_t7/TRAILER_LIT(14283.0);
-    const trailer_real_t _t42 = TRAILER_LIT(4387.0)*_t9/TRAILER_LIT(4761.0);
-    const trailer_real_t _t43 = _t20*_t23;
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t44 = radius_left*radius_right;
-    const trailer_real_t _t45 = TRAILER_LIT(32849.0)*_t44/TRAILER_LIT(171396.0);
-    const trailer_real_t _t46 = _t12*_t44;
-    const trailer_real_t _t47 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t48 = _t16*_t44;
-    const trailer_real_t _t49 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t50 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t51 = _t20*_t44;
-    const trailer_real_t _t52 = _t23*_t44;
-    const trailer_real_t _t53 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t54 = TRAILER_LIT(29522.0)*_t9/TRAILER_LIT(42849.0);
-    const trailer_real_t _t55 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(28566.0);
-    const trailer_real_t _t56 = TRAILER_LIT(14761.0)*_t9/TRAILER_LIT(28566.0);
-    const trailer_real_t _t57 = _t16*_t46;
-    const trailer_real_t _t58 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t59 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t60 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t61 = _t20*_t48;
-    const trailer_real_t _t62 = _t23*_t46;
-    const trailer_real_t _t63 = _t20*_t52;
-    const trailer_real_t _t64 = TRAILER_LIT(59044.0)*_t57/TRAILER_LIT(42849.0);
-    const trailer_real_t _t65 = TRAILER_LIT(14761.0)*_t7/TRAILER_LIT(14283.0);
-    const trailer_real_t _t66 = TRAILER_LIT(14761.0)*_t9/TRAILER_LIT(14283.0);
-    const trailer_real_t _t67 = TRAILER_LIT(59044.0)*_t63/TRAILER_LIT(42849.0);
-    const trailer_real_t _t68 = -_t1*_t44 - _t2*_t44 + _t3*_t44 + _t4*_t44 + _t45*_t7 + _t45*_t9
-            + _t46*_t47 - _t46*_t49 - _t46*_t53 - _t46*_t54 + _t47*_t48 - _t48*_t49 - _t48*_t53
-            - _t48*_t54 + _t50*_t51 - _t50*_t52 - _t51*_t55 + _t51*_t56 + _t52*_t55 - _t52*_t56
-            - _t57*_t58 + _t57*_t59 - _t58*_t63 + _t59*_t63 - _t60*_t61 + _t60*_t62 + _t61*_t65
-            - _t61*_t66 - _t62*_t65 + _t62*_t66 + _t64*_t7 + _t64*_t9 + _t67*_t7 + _t67*_t9;
-    const trailer_real_t _t69 = radius_left*radius_left;
-    const trailer_real_t _t70 = _t69*_t7;
-    const trailer_real_t _t71 = _t69*_t9;
-    const trailer_real_t _t72 = _t14*_t69;
-    const trailer_real_t _t73 = _t18*_t69;
-    const trailer_real_t _t74 = _t19*_t69;
-    const trailer_real_t _t75 = _t20*_t69;
-    const trailer_real_t _t76 = _t23*_t69;
-    const trailer_real_t _t77 = TRAILER_LIT(31178.0)*_t70/TRAILER_LIT(42849.0);
-    const trailer_real_t _t78 = TRAILER_LIT(10222.0)*_t71/TRAILER_LIT(42849.0);
-    const trailer_real_t _t79 = TRAILER_LIT(4387.0)*_t70/TRAILER_LIT(9522.0);
-    const trailer_real_t _t80 = TRAILER_LIT(23639.0)*_t71/TRAILER_LIT(28566.0);
-    const trailer_real_t _t81 = _t12*_t16;
-    const trailer_real_t _t82 = _t69*_t81;
-    const trailer_real_t _t83 = _t33*_t69;
-    const trailer_real_t _t84 = _t16*_t75;
-    const trailer_real_t _t85 = _t12*_t76;
-    const trailer_real_t _t86 = _t23*_t75;
-    const trailer_real_t _t87 = TRAILER_LIT(62356.0)*_t70/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(20444.0)*_t71/TRAILER_LIT(42849.0);
-    const trailer_real_t _t89 = TRAILER_LIT(4387.0)*_t70/TRAILER_LIT(4761.0);
-    const trailer_real_t _t90 = _t16*_t20;
-    const trailer_real_t _t91 = _t12*_t23;
-    const trailer_real_t _t92 = TRAILER_LIT(23639.0)*_t71/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
+    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = _t6*_t9;
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t6;
+    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
+    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
+    const trailer_real_t _t18 = _t7*_t9;
+    const trailer_real_t _t19 = _t11*_t7;
+    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
+    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t33 = _t24 + _t25;
+    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
+    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
+            + _t26*_t28;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
+    const trailer_real_t _t38 = _t15 - _t17;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t40 = _t38*_t39;
+    const trailer_real_t _t41 = _t22 - _t23;
+    const trailer_real_t _t42 = _t39*_t41;
+    const trailer_real_t _t43 = -_t15 - _t17;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t45 = _t43*_t44;
+    const trailer_real_t _t46 = -_t22 - _t23;
+    const trailer_real_t _t47 = _t44*_t46;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
+    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
+    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
+    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
+    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    M[0] = J_theta_right + _t0*_t1 + _t0*_t2 + _t0*_t3 - _t0*_t4 - _t0*_t5 + _t0*_t6
-            - TRAILER_LIT(62356.0)*_t10*_t43/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(11449.0)*_t10/TRAILER_LIT(171396.0) - _t13*_t14 + _t13*_t18 + _t13*_t19
-            - _t13*_t27 + _t13*_t28 - _t14*_t17 + _t17*_t18 + _t17*_t19 - _t17*_t27 + _t17*_t28
-            + _t20*_t29 + _t20*_t30 - _t21*_t22 + _t21*_t25 - _t21*_t26 + _t22*_t24 - _t23*_t29
-            - _t23*_t30 - _t24*_t25 + _t24*_t26 + _t31*_t32 - _t31*_t33 - _t31*_t34
-            + TRAILER_LIT(20444.0)*_t31*_t7/TRAILER_LIT(42849.0)
-            - TRAILER_LIT(62356.0)*_t31*_t9/TRAILER_LIT(42849.0) + _t32*_t40 - _t33*_t40 - _t34*_t40
-            + _t35*_t36 - _t35*_t37 - _t36*_t38 + _t36*_t39 - _t36*_t41 - _t36*_t42 + _t37*_t38
-            - _t37*_t39 + _t37*_t41 + _t37*_t42 + TRAILER_LIT(20444.0)*_t43*_t8/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(94249.0)*_t8/TRAILER_LIT(171396.0);
-    M[1] = _t68;
-    M[2] = _t68;
-    M[3] = J_theta_left + _t1*_t69 - _t12*_t72 + _t12*_t73 - _t12*_t74 + _t12*_t77 - _t12*_t78
-            - _t16*_t72 + _t16*_t73 - _t16*_t74 + _t16*_t77 - _t16*_t78 + _t2*_t69 - _t20*_t79
-            - _t20*_t80 + _t22*_t75 - _t22*_t76 + _t23*_t79 + _t23*_t80 - _t25*_t75 + _t25*_t76
-            - _t26*_t75 + _t26*_t76 + _t3*_t69 + _t32*_t82 + _t32*_t86 + _t34*_t82 + _t34*_t86
-            - _t35*_t84 + _t35*_t85 + _t38*_t84 - _t38*_t85 + _t39*_t84 - _t39*_t85 - _t4*_t69
-            - _t43*_t83 - _t43*_t87 + _t43*_t88 + _t5*_t69 - _t6*_t69
-            + TRAILER_LIT(11449.0)*_t70/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t71/TRAILER_LIT(171396.0) - _t81*_t83 - _t81*_t87 + _t81*_t88
-            + _t89*_t90 - _t89*_t91 + _t90*_t92 - _t91*_t92;
+    const trailer_real_t _t53 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
+            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
+    const trailer_real_t _t54 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
+    const trailer_real_t _t55 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t56 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
+            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
+    M[0] = _t53;
+    M[1] = _t54;
+    M[2] = _t55;
+    M[3] = _t56;
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 720 add, 2274 mul, 506 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 84 add, 147 mul, 23 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = radius_right*radius_right*radius_right;
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t _t1 = thetadot_right*thetadot_right;
-    const trailer_real_t _t2 = _t0*_t1;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t3 = TRAILER_LIT(312500.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t4 =
-            TRAILER_LIT(3274375.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t5 = radius_right*radius_right;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t6 = TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = _t5*radius_left;
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t8 = thetadot_left*thetadot_right;
-    const trailer_real_t _t9 = _t7*_t8;
-    const trailer_real_t _t10 = radius_left*radius_left;
-    const trailer_real_t _t11 = thetadot_left*thetadot_left;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t12 = TRAILER_LIT(125000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t13 = _t10*radius_right;
-    const trailer_real_t _t14 = _t11*_t13;
-    const trailer_real_t _t15 =
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t16 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/(radius_cart_right*radius_cart_right);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t18 = J_theta_cart_left*_t16;
-    const trailer_real_t _t19 = _t18*_t9;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t20 = J_theta_cart_right*_t17;
-    const trailer_real_t _t21 = _t20*_t9;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t22 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t23 = _t22*_t22;
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t24 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t25 = _t24*_t24;
-    const trailer_real_t _t26 = _t2*_t23;
-    const trailer_real_t _t27 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t28 = _t2*_t25;
-    const trailer_real_t _t29 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t30 = J_theta_cart*_t2;
-    const trailer_real_t _t31 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t32 = TRAILER_LIT(156250.0)*_t31/TRAILER_LIT(128547.0);
-    const trailer_real_t _t33 = _t22*_t29;
-    const trailer_real_t _t34 = _t22*_t30;
-    const trailer_real_t _t35 = TRAILER_LIT(746875.0)*_t31/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t36 = TRAILER_LIT(3779875.0)*_t24/TRAILER_LIT(514188.0);
-    const trailer_real_t _t37 = _t2*_t24;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor*_t29;
-    const trailer_real_t _t39 = TRAILER_LIT(298750.0)*_t38/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t40 =
-            TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t41 = _t2*_t31;
-    const trailer_real_t _t42 = _t24*_t41;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t29;
-    const trailer_real_t _t44 = TRAILER_LIT(3274375.0)*_t43/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t45 = TRAILER_LIT(1130975.0)*_t43/TRAILER_LIT(342792.0);
-    const trailer_real_t _t46 = TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t47 = TRAILER_LIT(625000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t48 = _t47*_t9;
-    const trailer_real_t _t49 = TRAILER_LIT(25000000.0)*_t9/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t50 = K_theta_cart_x_tractor_2*_t23;
-    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t25;
-    const trailer_real_t _t52 = _t24*_t29;
-    const trailer_real_t _t53 = J_theta_cart*_t52;
-    const trailer_real_t _t54 = TRAILER_LIT(46128125.0)*_t9/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t55 = _t24*_t31;
-    const trailer_real_t _t56 = J_theta_cart*_t55;
-    const trailer_real_t _t57 = TRAILER_LIT(62500.0)*_t38/TRAILER_LIT(42849.0);
-    const trailer_real_t _t58 = _t31*_t57;
-    const trailer_real_t _t59 = K_theta_cart_x_tractor*_t33;
-    const trailer_real_t _t60 = K_theta_cart_x_tractor*_t22;
-    const trailer_real_t _t61 = _t31*_t60;
-    const trailer_real_t _t62 = _t24*_t9;
-    const trailer_real_t _t63 = TRAILER_LIT(431525.0)*_t60/TRAILER_LIT(42849.0);
-    const trailer_real_t _t64 = K_theta_cart_x_tractor_2*_t22;
-    const trailer_real_t _t65 = _t31*_t64;
-    const trailer_real_t _t66 = J_theta_cart*_t14;
-    const trailer_real_t _t67 = _t22*_t31;
-    const trailer_real_t _t68 = TRAILER_LIT(15625000.0)*_t67/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t69 = _t14*_t24;
-    const trailer_real_t _t70 = TRAILER_LIT(9225625.0)*_t38/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t71 = K_theta_cart_x_tractor*_t55;
-    const trailer_real_t _t72 = TRAILER_LIT(369025.0)*_t60/TRAILER_LIT(85698.0);
-    const trailer_real_t _t73 = _t31*_t43;
-    const trailer_real_t _t74 = TRAILER_LIT(9225625.0)*_t73/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t75 = TRAILER_LIT(369025.0)*_t65/TRAILER_LIT(342792.0);
-    const trailer_real_t _t76 = TRAILER_LIT(46128125.0)*_t64/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t77 = _t24*_t24*_t24;
-    const trailer_real_t _t78 = _t22*_t22*_t22;
-    const trailer_real_t _t79 = _t30*_t78;
-    const trailer_real_t _t80 = TRAILER_LIT(13384375.0)*_t31/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t81 = _t2*_t77;
-    const trailer_real_t _t82 = TRAILER_LIT(2676875.0)*_t38/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t83 = TRAILER_LIT(210325.0)*K_theta_cart_x_tractor/TRAILER_LIT(19044.0);
-    const trailer_real_t _t84 = _t22*_t83;
-    const trailer_real_t _t85 = _t78*_t83;
-    const trailer_real_t _t86 = K_theta_cart_x_tractor_2*_t78;
-    const trailer_real_t _t87 = TRAILER_LIT(210325.0)*_t86/TRAILER_LIT(57132.0);
-    const trailer_real_t _t88 = TRAILER_LIT(2676875.0)*_t64/TRAILER_LIT(985527.0);
-    const trailer_real_t _t89 = TRAILER_LIT(2676875.0)*_t86/TRAILER_LIT(985527.0);
-    const trailer_real_t _t90 = _t31*_t78;
-    const trailer_real_t _t91 = J_theta_cart*_t90;
-    const trailer_real_t _t92 = _t22*_t77;
-    const trailer_real_t _t93 = J_theta_cart*_t9;
-    const trailer_real_t _t94 = TRAILER_LIT(1845125.0)*_t93/TRAILER_LIT(171396.0);
-    const trailer_real_t _t95 = _t24*_t78;
-    const trailer_real_t _t96 = _t38*_t77;
-    const trailer_real_t _t97 = TRAILER_LIT(18451250.0)*_t9/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t98 = _t77*_t9;
-    const trailer_real_t _t99 = TRAILER_LIT(369025.0)*_t43/TRAILER_LIT(85698.0);
-    const trailer_real_t _t100 = TRAILER_LIT(18451250.0)*_t9/TRAILER_LIT(985527.0);
-    const trailer_real_t _t101 = _t64*_t77;
-    const trailer_real_t _t102 = _t24*_t86;
-    const trailer_real_t _t103 = TRAILER_LIT(5909750.0)*_t18/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t104 = TRAILER_LIT(1096750.0)*_t20/TRAILER_LIT(985527.0);
-    const trailer_real_t _t105 = _t29*_t77;
-    const trailer_real_t _t106 = TRAILER_LIT(1845125.0)*_t92/TRAILER_LIT(342792.0);
-    const trailer_real_t _t107 = _t18*_t2;
-    const trailer_real_t _t108 = _t2*_t20;
-    const trailer_real_t _t109 = _t108*_t24;
-    const trailer_real_t _t110 = TRAILER_LIT(48734365.0)*_t29/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t111 = K_theta_cart_x_tractor*_t78;
-    const trailer_real_t _t112 = _t111*_t31;
-    const trailer_real_t _t113 = _t14*_t77;
-    const trailer_real_t _t114 = TRAILER_LIT(369025.0)*_t43/TRAILER_LIT(171396.0);
-    const trailer_real_t _t115 = TRAILER_LIT(400000.0)*_t21/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t116 = _t29*_t31;
-    const trailer_real_t _t117 = TRAILER_LIT(3837500.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t118 = _t22*_t24;
-    const trailer_real_t _t119 = TRAILER_LIT(18008060.0)*_t118/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t120 = TRAILER_LIT(1337500.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t121 = TRAILER_LIT(249020.0)*_t118/TRAILER_LIT(985527.0);
-    const trailer_real_t _t122 = _t25*_t26;
-    const trailer_real_t _t123 = TRAILER_LIT(1250000.0)*J_theta_cart/TRAILER_LIT(128547.0);
-    const trailer_real_t _t124 = TRAILER_LIT(1051625.0)*_t77/TRAILER_LIT(85698.0);
-    const trailer_real_t _t125 =
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t126 = J_theta_cart*_t26;
-    const trailer_real_t _t127 = TRAILER_LIT(32743750.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t128 = _t14*_t18;
-    const trailer_real_t _t129 = TRAILER_LIT(3690250.0)*_t128/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t130 = _t26*_t38;
-    const trailer_real_t _t131 = TRAILER_LIT(210325.0)*_t31/TRAILER_LIT(57132.0);
-    const trailer_real_t _t132 = _t28*_t33;
-    const trailer_real_t _t133 =
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t134 = TRAILER_LIT(2676875.0)*_t73/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t135 =
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(42849.0);
-    const trailer_real_t _t136 = _t33*_t55;
-    const trailer_real_t _t137 = TRAILER_LIT(14761000.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t138 = _t14*_t20;
-    const trailer_real_t _t139 = TRAILER_LIT(13140685.0)*_t118/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t140 = TRAILER_LIT(500000.0)*K_theta_cart_x_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t141 = _t23*_t25;
-    const trailer_real_t _t142 = TRAILER_LIT(738050.0)*_t111/TRAILER_LIT(42849.0);
-    const trailer_real_t _t143 = TRAILER_LIT(1845125.0)*_t116/TRAILER_LIT(514188.0);
-    const trailer_real_t _t144 = _t25*_t93;
-    const trailer_real_t _t145 = _t24*_t38;
-    const trailer_real_t _t146 = _t23*_t9;
-    const trailer_real_t _t147 = TRAILER_LIT(50000000.0)*_t71/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t148 = _t25*_t73;
-    const trailer_real_t _t149 = _t23*_t43;
-    const trailer_real_t _t150 = TRAILER_LIT(500000.0)*_t50*_t55/TRAILER_LIT(42849.0);
-    const trailer_real_t _t151 = TRAILER_LIT(2367110.0)*_t107/TRAILER_LIT(985527.0);
-    const trailer_real_t _t152 = TRAILER_LIT(17556365.0)*_t78/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t153 = TRAILER_LIT(3437860.0)*_t92/TRAILER_LIT(985527.0);
-    const trailer_real_t _t154 = TRAILER_LIT(3437860.0)*_t78/TRAILER_LIT(985527.0);
-    const trailer_real_t _t155 = TRAILER_LIT(369025.0)*_t111/TRAILER_LIT(42849.0);
-    const trailer_real_t _t156 = _t14*_t23;
-    const trailer_real_t _t157 = TRAILER_LIT(36902500.0)*_t156/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t158 = TRAILER_LIT(36902500.0)*_t86/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t159 = TRAILER_LIT(1845125.0)*_t116/TRAILER_LIT(1028376.0);
-    const trailer_real_t _t160 = J_theta_cart*_t159;
-    const trailer_real_t _t161 = _t25*_t66;
-    const trailer_real_t _t162 = TRAILER_LIT(46128125.0)*_t53/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t163 = _t14*_t25;
-    const trailer_real_t _t164 = TRAILER_LIT(9225625.0)*_t61/TRAILER_LIT(985527.0);
-    const trailer_real_t _t165 = TRAILER_LIT(369025.0)*_t24/TRAILER_LIT(57132.0);
-    const trailer_real_t _t166 = TRAILER_LIT(295220.0)*_t21/TRAILER_LIT(985527.0);
-    const trailer_real_t _t167 = K_theta_cart_x_tractor_2*_t136;
-    const trailer_real_t _t168 = TRAILER_LIT(36902500.0)*_t167/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t169 = TRAILER_LIT(147610.0)*_t128/TRAILER_LIT(985527.0);
-    const trailer_real_t _t170 = _t105*_t23;
-    const trailer_real_t _t171 = _t25*_t9;
-    const trailer_real_t _t172 = TRAILER_LIT(73805000.0)*_t112/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t173 = _t31*_t86;
-    const trailer_real_t _t174 = TRAILER_LIT(738050.0)*_t173/TRAILER_LIT(42849.0);
-    const trailer_real_t _t175 = _t18*_t26;
-    const trailer_real_t _t176 = TRAILER_LIT(2367110.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t177 = _t18*_t28;
-    const trailer_real_t _t178 = TRAILER_LIT(34688365.0)*_t52/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t179 = TRAILER_LIT(10222000.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t180 = _t20*_t26;
-    const trailer_real_t _t181 = TRAILER_LIT(3437860.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t182 = _t20*_t28;
-    const trailer_real_t _t183 = TRAILER_LIT(17556365.0)*_t67/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t184 = TRAILER_LIT(369025.0)*_t173/TRAILER_LIT(42849.0);
-    const trailer_real_t _t185 = TRAILER_LIT(6400000.0)*_t141/TRAILER_LIT(985527.0);
-    const trailer_real_t _t186 = _t77*_t78;
-    const trailer_real_t _t187 = TRAILER_LIT(9447040.0)*_t186/TRAILER_LIT(985527.0);
-    const trailer_real_t _t188 = _t19*_t23;
-    const trailer_real_t _t189 = TRAILER_LIT(14244365.0)*_t52/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t190 = TRAILER_LIT(19300000.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t191 = _t21*_t23;
-    const trailer_real_t _t192 = TRAILER_LIT(295220.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t193 = TRAILER_LIT(44799635.0)*_t52/TRAILER_LIT(5913162.0);
-    const trailer_real_t _t194 = TRAILER_LIT(60700000.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t195 = TRAILER_LIT(6400000.0)*_t136/TRAILER_LIT(985527.0);
-    const trailer_real_t _t196 = J_theta_cart*_t116;
-    const trailer_real_t _t197 = TRAILER_LIT(4723520.0)*_t186/TRAILER_LIT(985527.0);
-    const trailer_real_t _t198 = TRAILER_LIT(147610.0)*_t116/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t199 = _t128*_t25;
-    const trailer_real_t _t200 = TRAILER_LIT(29522000.0)*_t33/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t201 = TRAILER_LIT(44799635.0)*_t67/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t202 = _t138*_t25;
-    const trailer_real_t _t203 = TRAILER_LIT(14244365.0)*_t67/TRAILER_LIT(11826324.0);
-    const trailer_real_t _t204 = TRAILER_LIT(7380500.0)*_t136/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t205 = _t25*_t31;
-    const trailer_real_t _t206 = _t205*_t38;
-    const trailer_real_t _t207 = TRAILER_LIT(738050.0)*_t206/TRAILER_LIT(42849.0);
-    const trailer_real_t _t208 = TRAILER_LIT(34688365.0)*_t90/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t209 = TRAILER_LIT(17556365.0)*_t105/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t210 = TRAILER_LIT(369025.0)*_t206/TRAILER_LIT(42849.0);
-    const trailer_real_t _t211 = _t25*_t90;
-    const trailer_real_t _t212 = _t116*_t141;
-    const trailer_real_t _t213 = TRAILER_LIT(9447040.0)*_t212/TRAILER_LIT(985527.0);
-    const trailer_real_t _t214 = _t11*radius_left*radius_left*radius_left;
-    const trailer_real_t _t215 = _t13*_t8;
-    const trailer_real_t _t216 = _t1*_t7;
-    const trailer_real_t _t217 = _t15*_t216;
-    const trailer_real_t _t218 = _t18*_t214;
-    const trailer_real_t _t219 = _t20*_t214;
-    const trailer_real_t _t220 = _t18*_t215;
-    const trailer_real_t _t221 = _t20*_t215;
-    const trailer_real_t _t222 = _t214*_t47;
-    const trailer_real_t _t223 = _t214*_t27;
-    const trailer_real_t _t224 =
-            TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t214/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t225 = J_theta_cart*_t214;
-    const trailer_real_t _t226 = _t225*_t29;
-    const trailer_real_t _t227 = TRAILER_LIT(16371875.0)*_t225/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t228 = _t22*_t225;
-    const trailer_real_t _t229 = _t18*_t216;
-    const trailer_real_t _t230 = _t20*_t216;
-    const trailer_real_t _t231 = _t214*_t31;
-    const trailer_real_t _t232 = _t214*_t33;
-    const trailer_real_t _t233 = _t214*_t24;
-    const trailer_real_t _t234 = _t214*_t55;
-    const trailer_real_t _t235 = _t215*_t47;
-    const trailer_real_t _t236 = _t215*_t27;
-    const trailer_real_t _t237 = TRAILER_LIT(25000000.0)*_t215/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t238 = J_theta_cart*_t33;
-    const trailer_real_t _t239 = TRAILER_LIT(62500000.0)*_t215/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t240 = TRAILER_LIT(46128125.0)*_t215/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t241 = J_theta_cart*_t67;
-    const trailer_real_t _t242 = J_theta_cart*_t215;
-    const trailer_real_t _t243 = TRAILER_LIT(15475625.0)*_t215/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t244 = _t215*_t24;
-    const trailer_real_t _t245 = _t215*_t46;
-    const trailer_real_t _t246 = _t24*_t43;
-    const trailer_real_t _t247 = TRAILER_LIT(619025.0)*_t215/TRAILER_LIT(171396.0);
-    const trailer_real_t _t248 =
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t249 = _t216*_t23;
-    const trailer_real_t _t250 = J_theta_cart*_t216;
-    const trailer_real_t _t251 = TRAILER_LIT(46128125.0)*_t250/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t252 = TRAILER_LIT(18451250.0)*_t216/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t253 = _t216*_t24;
-    const trailer_real_t _t254 = TRAILER_LIT(9225625.0)*_t216/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t255 = _t225*_t78;
-    const trailer_real_t _t256 = _t214*_t77;
-    const trailer_real_t _t257 = J_theta_cart*_t105;
-    const trailer_real_t _t258 = TRAILER_LIT(1845125.0)*_t242/TRAILER_LIT(171396.0);
-    const trailer_real_t _t259 = TRAILER_LIT(18451250.0)*_t215/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t260 = _t215*_t77;
-    const trailer_real_t _t261 = TRAILER_LIT(18451250.0)*_t215/TRAILER_LIT(985527.0);
-    const trailer_real_t _t262 = TRAILER_LIT(1096750.0)*_t218/TRAILER_LIT(985527.0);
-    const trailer_real_t _t263 = TRAILER_LIT(5909750.0)*_t219/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t264 = TRAILER_LIT(46128125.0)*_t250/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t265 = _t218*_t31;
-    const trailer_real_t _t266 = TRAILER_LIT(15589000.0)*_t218/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t267 = _t218*_t24;
-    const trailer_real_t _t268 = TRAILER_LIT(5111000.0)*_t219/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t269 = TRAILER_LIT(44910365.0)*_t219/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t270 = _t216*_t77;
-    const trailer_real_t _t271 = TRAILER_LIT(400000.0)*_t220/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t272 = TRAILER_LIT(3200000.0)*_t221/TRAILER_LIT(985527.0);
-    const trailer_real_t _t273 = TRAILER_LIT(30350000.0)*_t220/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t274 = TRAILER_LIT(63247135.0)*_t220/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t275 = TRAILER_LIT(9650000.0)*_t221/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t276 = TRAILER_LIT(11991865.0)*_t221/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t277 = _t214*_t23;
-    const trailer_real_t _t278 = _t25*_t277;
-    const trailer_real_t _t279 = _t226*_t23;
-    const trailer_real_t _t280 = TRAILER_LIT(3690250.0)*_t249/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t281 = TRAILER_LIT(3690250.0)*_t25/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t282 = TRAILER_LIT(210325.0)*_t38/TRAILER_LIT(57132.0);
-    const trailer_real_t _t283 = _t23*_t231;
-    const trailer_real_t _t284 = _t231*_t25;
-    const trailer_real_t _t285 = _t23*_t233;
-    const trailer_real_t _t286 = TRAILER_LIT(2676875.0)*_t43/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t287 = TRAILER_LIT(500000.0)*_t51/TRAILER_LIT(42849.0);
-    const trailer_real_t _t288 = _t141*_t215;
-    const trailer_real_t _t289 = _t232*_t55;
-    const trailer_real_t _t290 = TRAILER_LIT(14761000.0)*_t33/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t291 = TRAILER_LIT(67571365.0)*_t229/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t292 = TRAILER_LIT(98126635.0)*_t230/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t293 = _t215*_t23;
-    const trailer_real_t _t294 = _t196*_t25;
-    const trailer_real_t _t295 = _t215*_t25;
-    const trailer_real_t _t296 = _t31*_t38;
-    const trailer_real_t _t297 = _t136*_t215;
-    const trailer_real_t _t298 = TRAILER_LIT(34688365.0)*_t219/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t299 = TRAILER_LIT(2367110.0)*_t219/TRAILER_LIT(985527.0);
-    const trailer_real_t _t300 = TRAILER_LIT(36902500.0)*_t249/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t301 = _t25*_t250;
-    const trailer_real_t _t302 = TRAILER_LIT(92256250.0)*_t301/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t303 = TRAILER_LIT(92256250.0)*_t249/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t304 = _t216*_t25;
-    const trailer_real_t _t305 = TRAILER_LIT(36902500.0)*_t304/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t306 = _t116*_t217;
-    const trailer_real_t _t307 = _t249*_t43;
-    const trailer_real_t _t308 = TRAILER_LIT(44799635.0)*_t220/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t309 = TRAILER_LIT(295220.0)*_t220/TRAILER_LIT(985527.0);
-    const trailer_real_t _t310 = TRAILER_LIT(14244365.0)*_t221/TRAILER_LIT(17739486.0);
-    const trailer_real_t _t311 = TRAILER_LIT(2361760.0)*_t221/TRAILER_LIT(328509.0);
-    const trailer_real_t _t312 = _t23*_t256;
-    const trailer_real_t _t313 = TRAILER_LIT(10707500.0)*_t284/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t314 = TRAILER_LIT(210325.0)*_t284/TRAILER_LIT(14283.0);
-    const trailer_real_t _t315 = TRAILER_LIT(14244365.0)*_t229/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t316 = TRAILER_LIT(1180880.0)*_t229/TRAILER_LIT(328509.0);
-    const trailer_real_t _t317 = TRAILER_LIT(44799635.0)*_t230/TRAILER_LIT(35478972.0);
-    const trailer_real_t _t318 = TRAILER_LIT(147610.0)*_t230/TRAILER_LIT(985527.0);
-    const trailer_real_t _t319 = TRAILER_LIT(2193500.0)*_t218/TRAILER_LIT(985527.0);
-    const trailer_real_t _t320 = _t141*_t219;
-    const trailer_real_t _t321 = _t218*_t23;
-    const trailer_real_t _t322 = _t218*_t25;
-    const trailer_real_t _t323 = _t219*_t23;
-    const trailer_real_t _t324 = _t219*_t25;
-    const trailer_real_t _t325 = _t220*_t23;
-    const trailer_real_t _t326 = _t220*_t25;
-    const trailer_real_t _t327 = TRAILER_LIT(2361760.0)*_t116/TRAILER_LIT(985527.0);
-    const trailer_real_t _t328 = _t221*_t23;
-    const trailer_real_t _t329 = _t221*_t25;
-    const trailer_real_t _t330 = _t18*_t249;
-    const trailer_real_t _t331 = TRAILER_LIT(7380500.0)*_t25/TRAILER_LIT(2956581.0);
-    const trailer_real_t _t332 = _t20*_t249;
-    const trailer_real_t _t333 = TRAILER_LIT(1180880.0)*_t116/TRAILER_LIT(985527.0);
-    const trailer_real_t _t334 = _t229*_t25;
-    const trailer_real_t _t335 = TRAILER_LIT(29522000.0)*_t55/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t336 = _t230*_t25;
-    const trailer_real_t _t337 = TRAILER_LIT(89599270.0)*_t220/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t338 = TRAILER_LIT(28488730.0)*_t221/TRAILER_LIT(8869743.0);
-    const trailer_real_t _t339 = _t116*_t25;
-    H[0] = TRAILER_LIT(32743750.0)*J_theta_cart*_t0*_t1*_t22*_t25*_t29/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t22*_t77/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t23*_t24*_t29/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t23*_t29*_t31/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t23/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(746875.0)*J_theta_cart*_t0*_t1*_t24*_t29/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(16371875.0)*J_theta_cart*_t0*_t1*_t24*_t31/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t24*_t78/TRAILER_LIT(114264.0)
-            + TRAILER_LIT(1051625.0)*J_theta_cart*_t0*_t1*_t25*_t29*_t31/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(26768750.0)*J_theta_cart*_t0*_t1*_t25*_t31*_t78/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(625000.0)*J_theta_cart*_t0*_t1*_t25/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(13384375.0)*J_theta_cart*_t0*_t1*_t29*_t77/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(823375.0)*J_theta_cart*_t10*_t11*_t22*_t24*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t22*_t25*_t29*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t22*_t25*_t31*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t23*_t25*_t29*_t31*radius_right
-            /TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(92256250.0)*J_theta_cart*_t10*_t11*_t23*_t29*_t77*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(15625000.0)*J_theta_cart*_t10*_t11*_t24*_t29*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t24*_t31*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(156250.0)*J_theta_cart*_t10*_t11*_t29*_t31*radius_right
-            /TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t10*_t11*_t31*_t78*radius_right
-            /TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t10*_t11*_t77*_t78*radius_right
-            /TRAILER_LIT(257094.0)
-            + TRAILER_LIT(312500.0)*J_theta_cart*_t10*_t11*radius_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t22*_t24*_t29*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t22*_t24*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(257094.0)
-            +
-            TRAILER_LIT(62500000.0)*J_theta_cart*_t22*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t22*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t23*_t24*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(125000000.0)*J_theta_cart*_t23*_t24*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t23*_t25*_t29*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(1250000.0)*J_theta_cart*_t23*_t25*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            +
-            TRAILER_LIT(184512500.0)*J_theta_cart*_t25*_t31*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(13384375.0)*J_theta_cart*_t28*_t67/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(46128125.0)*J_theta_cart*_t29*_t5*_t77*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1845125.0)*J_theta_cart*_t5*_t77*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(1845125.0)*J_theta_cart*_t69*_t78/TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t22*_t24*_t29*_t31
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(4141105.0)*J_theta_cart_left*_t0*_t1*_t16*_t22*_t24/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(10222000.0)*J_theta_cart_left*_t0*_t1*_t16*_t22*_t25*_t29
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t22*_t25*_t31
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t23*_t25*_t29*_t31
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(11819500.0)*J_theta_cart_left*_t0*_t1*_t16*_t23*_t25/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t23*_t29*_t77
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44910365.0)*J_theta_cart_left*_t0*_t1*_t16*_t24*_t29/TRAILER_LIT(70957944.0)
-            + TRAILER_LIT(5111000.0)*J_theta_cart_left*_t0*_t1*_t16*_t24*_t31/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16*_t29*_t31/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(34688365.0)*J_theta_cart_left*_t0*_t1*_t16*_t31*_t78/TRAILER_LIT(35478972.0)
-            + TRAILER_LIT(9468440.0)*J_theta_cart_left*_t0*_t1*_t16*_t77*_t78/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2954875.0)*J_theta_cart_left*_t0*_t1*_t16/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t22*_t24*_t29*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(5310565.0)*J_theta_cart_left*_t10*_t11*_t16*_t22*_t24*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_left*_t10*_t11*_t16*_t22*_t29*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(98126635.0)*J_theta_cart_left*_t10*_t11*_t16*_t22*_t31*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t23*_t24*_t29*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_left*_t10*_t11*_t16*_t23*_t24*_t31*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t23*_t25*_t29*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7380500.0)*J_theta_cart_left*_t10*_t11*_t16*_t23*_t25*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t25*_t31*_t78*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*_t29*_t31*radius_right
-            /TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_left*_t10*_t11*_t16*_t29*_t77*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(590440.0)*J_theta_cart_left*_t10*_t11*_t16*_t77*_t78*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1573375.0)*J_theta_cart_left*_t10*_t11*_t16*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(19300000.0)*J_theta_cart_left*_t16*_t22*_t25*_t29*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t22*_t25*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t22*_t5*_t77*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t23*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(28488730.0)*J_theta_cart_left*_t16*_t23*_t29*_t5*_t77*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t23*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(11991865.0)*J_theta_cart_left*_t16*_t24*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(9650000.0)*J_theta_cart_left*_t16*_t24*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t24*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(2361760.0)*J_theta_cart_left*_t16*_t25*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3200000.0)*J_theta_cart_left*_t16*_t25*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_left*_t16*_t31*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t22*_t24*_t29*_t31
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(15396565.0)*J_theta_cart_right*_t0*_t1*_t17*_t22*_t24/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(15589000.0)*J_theta_cart_right*_t0*_t1*_t17*_t22*_t29/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(48734365.0)*J_theta_cart_right*_t0*_t1*_t17*_t22*_t31
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t23*_t24*_t29
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(31178000.0)*J_theta_cart_right*_t0*_t1*_t17*_t23*_t24*_t31
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t23*_t25*_t29*_t31
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2193500.0)*J_theta_cart_right*_t0*_t1*_t17*_t23*_t25/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t25*_t31*_t78
-            /TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17*_t29*_t31/TRAILER_LIT(1971054.0)
-            +
-            TRAILER_LIT(17556365.0)*J_theta_cart_right*_t0*_t1*_t17*_t29*_t77
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(13751440.0)*J_theta_cart_right*_t0*_t1*_t17*_t77*_t78/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(548375.0)*J_theta_cart_right*_t0*_t1*_t17/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14761000.0)*J_theta_cart_right*_t10*_t11*_t17*_t22*_t29*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(67571365.0)*J_theta_cart_right*_t10*_t11*_t17*_t22*_t31*radius_right
-            /TRAILER_LIT(70957944.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t22*_t77*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t23*_t24*_t29*radius_right
-            /TRAILER_LIT(11826324.0)
-            +
-            TRAILER_LIT(29522000.0)*J_theta_cart_right*_t10*_t11*_t17*_t23*_t24*_t31*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t23*_t29*_t31*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t23*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t24*_t78*radius_right
-            /TRAILER_LIT(328509.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t29*_t31*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*_t31*_t78*radius_right
-            /TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(3690250.0)*J_theta_cart_right*_t10*_t11*_t17*_t25*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*_t29*_t31*radius_right
-            /TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(14244365.0)*J_theta_cart_right*_t10*_t11*_t17*_t29*_t77*radius_right
-            /TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(1029875.0)*J_theta_cart_right*_t10*_t11*_t17*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t22*_t24*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(60700000.0)*J_theta_cart_right*_t17*_t22*_t25*_t29*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t22*_t25*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(5913162.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t23*_t25*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(800000.0)*J_theta_cart_right*_t17*_t23*_t25*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(89599270.0)*J_theta_cart_right*_t17*_t23*_t29*_t5*_t77*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(63247135.0)*J_theta_cart_right*_t17*_t24*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(35478972.0)
-            +
-            TRAILER_LIT(30350000.0)*J_theta_cart_right*_t17*_t24*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(8869743.0)
-            +
-            TRAILER_LIT(44799635.0)*J_theta_cart_right*_t17*_t31*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(17739486.0)
-            +
-            TRAILER_LIT(1180880.0)*J_theta_cart_right*_t17*_t5*_t77*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t22*_t24*_t29*_t31
-            /TRAILER_LIT(42849.0)
-            + TRAILER_LIT(755975.0)*K_theta_cart_x_tractor*_t0*_t1*_t22*_t24/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t22*_t25*_t31
-            /TRAILER_LIT(985527.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor*_t0*_t1*_t22*_t29/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(298750.0)*K_theta_cart_x_tractor*_t0*_t1*_t22*_t31/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(13097500.0)*K_theta_cart_x_tractor*_t0*_t1*_t23*_t24*_t31
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t23*_t25*_t29*_t31
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(500000.0)*K_theta_cart_x_tractor*_t0*_t1*_t23*_t25/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor*_t0*_t1*_t23*_t29*_t77
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(62500.0)*K_theta_cart_x_tractor*_t0*_t1*_t29*_t31/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(2676875.0)*K_theta_cart_x_tractor*_t0*_t1*_t31*_t78/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor*_t0*_t1*_t77*_t78/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(125000.0)*K_theta_cart_x_tractor*_t0*_t1/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t10*_t11*_t22*_t29*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t22*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t22*_t77*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t23*_t24*_t29*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t23*_t24*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t23*_t29*_t31*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t24*_t78*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t29*_t31*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(36902500.0)*K_theta_cart_x_tractor*_t10*_t11*_t25*_t31*_t78*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor*_t10*_t11*_t29*_t77*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor*_t22*_t25*_t29*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t22*_t25*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t22*_t5*_t77*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t23*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor*_t23*_t29*_t5*_t77*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t23*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(15475625.0)*K_theta_cart_x_tractor*_t24*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(25000000.0)*K_theta_cart_x_tractor*_t24*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t24*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor*_t25*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor*_t25*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor*_t31*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(7433125.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t22*_t24/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t22*_t29/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(1130975.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t22*_t31/TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t23*_t24*_t29
-            /TRAILER_LIT(19044.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t23*_t24*_t31
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t23*_t25*_t29*_t31
-            /TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t23/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25*_t31*_t78
-            /TRAILER_LIT(14283.0)
-            + TRAILER_LIT(6548750.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t25/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(210325.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t29*_t77/TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(10707500.0)*K_theta_cart_x_tractor_2*_t0*_t1*_t77*_t78
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t22*_t25*_t31*radius_right
-            /TRAILER_LIT(57132.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t22*_t77*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t23*_t29*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t23*_t29*_t77*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t23*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t24*_t29*radius_right
-            /TRAILER_LIT(342792.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t24*_t78*radius_right
-            /TRAILER_LIT(985527.0)
-            +
-            TRAILER_LIT(9225625.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*_t29*_t31*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(18451250.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t25*radius_right
-            /TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t10*_t11*_t31*_t78*radius_right
-            /TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t22*_t24*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(43152500.0)*K_theta_cart_x_tractor_2*_t22*_t24*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(500000.0)*K_theta_cart_x_tractor_2*_t22*_t25*_t29*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t22*_t25*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t23*_t25*_t29*_t31*_t5*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(50000000.0)*K_theta_cart_x_tractor_2*_t23*_t25*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(738050.0)*K_theta_cart_x_tractor_2*_t23*_t29*_t5*_t77*radius_left
-            *thetadot_left*thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(619025.0)*K_theta_cart_x_tractor_2*_t24*_t29*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(171396.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_cart_x_tractor_2*_t24*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(6250000.0)*K_theta_cart_x_tractor_2*_t29*_t31*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(369025.0)*K_theta_cart_x_tractor_2*_t31*_t5*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(73805000.0)*K_theta_cart_x_tractor_2*_t5*_t77*_t78*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t5*radius_left*thetadot_left
-            *thetadot_right/TRAILER_LIT(2956581.0)
-            +
-            TRAILER_LIT(250000.0)*K_theta_tractor_x_tractor*_t10*_t11*radius_right
-            /TRAILER_LIT(42849.0) - _t100*_t101 - _t100*_t102 - _t100*_t145*_t23 - _t103*_t26
-            - _t103*_t28 - _t104*_t26 - _t104*_t28
-            - TRAILER_LIT(34688365.0)*_t105*_t107/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(26768750.0)*_t105*_t126/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(14244365.0)*_t105*_t19/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(44799635.0)*_t105*_t21/TRAILER_LIT(17739486.0)
-            - TRAILER_LIT(46128125.0)*_t105*_t66/TRAILER_LIT(17739486.0) - _t106*_t66
-            - TRAILER_LIT(5111000.0)*_t107*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(44910365.0)*_t107*_t67/TRAILER_LIT(70957944.0) - _t108*_t152*_t31
-            - _t108*_t153 - TRAILER_LIT(15589000.0)*_t108*_t55/TRAILER_LIT(8869743.0) - _t109*_t110
-            - _t109*_t154 - TRAILER_LIT(9225625.0)*_t112*_t14/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(10707500.0)*_t112*_t28/TRAILER_LIT(2956581.0) - _t113*_t114 - _t113*_t155
-            - _t113*_t158 - _t115*_t23 - _t115*_t25 - _t117*_t19 - _t119*_t19 - _t12*_t14
-            - _t120*_t21 - _t121*_t21 - _t122*_t123 - _t122*_t125
-            - TRAILER_LIT(1051625.0)*_t122*_t196/TRAILER_LIT(85698.0) - _t124*_t79 - _t125*_t33*_t42
-            - _t126*_t127 - _t128*_t137 - TRAILER_LIT(44799635.0)*_t128*_t170/TRAILER_LIT(8869743.0)
-            - _t128*_t198*_t23 - TRAILER_LIT(98126635.0)*_t128*_t52/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(44799635.0)*_t128*_t90/TRAILER_LIT(35478972.0) - _t129*_t23 - _t129*_t25
-            - _t130*_t131 - TRAILER_LIT(2676875.0)*_t130*_t24/TRAILER_LIT(985527.0)
-            - _t131*_t28*_t38 - _t132*_t133 - _t132*_t135
-            - TRAILER_LIT(31178000.0)*_t132*_t20/TRAILER_LIT(8869743.0) - _t134*_t26 - _t134*_t28
-            - _t136*_t140*_t9 - TRAILER_LIT(1250000.0)*_t136*_t30/TRAILER_LIT(128547.0)
-            - _t137*_t138 - _t138*_t139 - TRAILER_LIT(7380500.0)*_t138*_t141/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(14244365.0)*_t138*_t170/TRAILER_LIT(8869743.0) - _t138*_t197 - _t138*_t204
-            - TRAILER_LIT(4723520.0)*_t138*_t212/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(67571365.0)*_t138*_t52/TRAILER_LIT(70957944.0)
-            - TRAILER_LIT(14244365.0)*_t138*_t90/TRAILER_LIT(35478972.0) - _t14*_t15 - _t14*_t168
-            - TRAILER_LIT(18451250.0)*_t14*_t71/TRAILER_LIT(2956581.0) - _t14*_t74 - _t14*_t75
-            - _t140*_t141*_t9 - _t142*_t98 - _t143*_t144 - _t143*_t23*_t93
-            - TRAILER_LIT(125000000.0)*_t144*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(46128125.0)*_t144*_t67/TRAILER_LIT(2956581.0) - _t146*_t147 - _t146*_t207
-            - _t148*_t157 - _t148*_t97 - TRAILER_LIT(369025.0)*_t149*_t62/TRAILER_LIT(28566.0)
-            - _t150*_t9 - _t151*_t92 - _t151*_t95 - _t156*_t160 - _t156*_t162 - _t156*_t165*_t43
-            - _t156*_t210 - TRAILER_LIT(92256250.0)*_t156*_t56/TRAILER_LIT(8869743.0) - _t157*_t51
-            - _t157*_t96 - _t159*_t161 - TRAILER_LIT(92256250.0)*_t161*_t90/TRAILER_LIT(8869743.0)
-            - _t163*_t164 - _t163*_t184 - TRAILER_LIT(36902500.0)*_t163*_t59/TRAILER_LIT(2956581.0)
-            - _t166*_t92 - _t166*_t95 - _t169*_t92 - _t169*_t95
-            - TRAILER_LIT(184512500.0)*_t170*_t93/TRAILER_LIT(8869743.0) - _t171*_t172 - _t171*_t174
-            - _t175*_t176 - _t175*_t178 - _t175*_t179 - _t176*_t177 - _t177*_t208 - _t180*_t181
-            - _t180*_t209 - _t181*_t182 - _t182*_t183 - _t185*_t19 - _t187*_t19 - _t188*_t189
-            - _t188*_t190 - _t19*_t195 - TRAILER_LIT(28488730.0)*_t19*_t211/TRAILER_LIT(8869743.0)
-            - _t19*_t213 - TRAILER_LIT(9650000.0)*_t19*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(11991865.0)*_t19*_t67/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(7675000.0)*_t19/TRAILER_LIT(2956581.0) - _t191*_t192 - _t191*_t193
-            - _t191*_t194 - _t192*_t21*_t25 - _t198*_t199 - _t199*_t200 - _t199*_t201 - _t2*_t3
-            - _t2*_t4 - _t200*_t202 - _t202*_t203
-            - TRAILER_LIT(89599270.0)*_t21*_t211/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(30350000.0)*_t21*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(63247135.0)*_t21*_t67/TRAILER_LIT(35478972.0)
-            - TRAILER_LIT(2675000.0)*_t21/TRAILER_LIT(2956581.0) - _t23*_t48 - _t23*_t73*_t97
-            - _t25*_t48 - _t26*_t27 - TRAILER_LIT(210325.0)*_t26*_t43*_t77/TRAILER_LIT(14283.0)
-            - _t27*_t28 - TRAILER_LIT(210325.0)*_t28*_t65/TRAILER_LIT(19044.0) - _t29*_t30*_t32
-            - TRAILER_LIT(16371875.0)*_t30*_t33/TRAILER_LIT(8869743.0) - _t33*_t46*_t9
-            - TRAILER_LIT(46128125.0)*_t33*_t66/TRAILER_LIT(8869743.0) - _t34*_t35 - _t34*_t36
-            - _t37*_t39 - _t37*_t45 - _t37*_t85 - _t37*_t89 - _t40*_t42 - _t41*_t44 - _t41*_t87
-            - _t42*_t46 - _t49*_t50 - _t49*_t51 - _t49*_t59 - _t53*_t54 - _t54*_t91
-            - TRAILER_LIT(62500000.0)*_t56*_t9/TRAILER_LIT(8869743.0) - _t58*_t9 - _t6*_t9
-            - TRAILER_LIT(15475625.0)*_t61*_t9/TRAILER_LIT(2956581.0) - _t62*_t63
-            - TRAILER_LIT(619025.0)*_t65*_t9/TRAILER_LIT(171396.0) - _t66*_t68 - _t69*_t70
-            - _t69*_t72 - _t69*_t76 - _t79*_t80 - _t81*_t82 - _t81*_t84 - _t81*_t88 - _t92*_t94
-            - _t94*_t95 - _t96*_t97 - _t98*_t99;
-    H[1] = -TRAILER_LIT(12500000.0)*K_theta_cart_x_tractor_2*_t215/TRAILER_LIT(2956581.0)
-            + _t101*_t261 + _t102*_t261
-            - TRAILER_LIT(17556365.0)*_t105*_t218/TRAILER_LIT(35478972.0) + _t105*_t264
-            + _t105*_t298 + _t105*_t308 + _t105*_t310 - _t105*_t315 - _t105*_t317
-            - TRAILER_LIT(34688365.0)*_t105*_t323/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(14244365.0)*_t105*_t330/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(44799635.0)*_t105*_t332/TRAILER_LIT(8869743.0) - _t106*_t250 + _t110*_t267
-            - TRAILER_LIT(2676875.0)*_t111*_t231/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(369025.0)*_t111*_t244/TRAILER_LIT(28566.0)
-            + TRAILER_LIT(369025.0)*_t111*_t253/TRAILER_LIT(57132.0)
-            + TRAILER_LIT(210325.0)*_t111*_t256/TRAILER_LIT(14283.0) + _t111*_t313 + _t112*_t254
-            - _t112*_t259 - _t112*_t305 - _t114*_t270
-            + TRAILER_LIT(13751440.0)*_t116*_t141*_t218/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(2954875.0)*_t116*_t219/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1029875.0)*_t116*_t229/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1573375.0)*_t116*_t230/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(9468440.0)*_t116*_t320/TRAILER_LIT(2956581.0) - _t117*_t221
-            + TRAILER_LIT(15396565.0)*_t118*_t218/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(4141105.0)*_t118*_t219/TRAILER_LIT(1971054.0)
-            + TRAILER_LIT(5310565.0)*_t118*_t230/TRAILER_LIT(5913162.0)
-            + TRAILER_LIT(1845125.0)*_t118*_t242/TRAILER_LIT(257094.0) - _t119*_t221 + _t12*_t214
-            - _t12*_t216 - _t120*_t220 - _t121*_t220 - _t123*_t278 + _t123*_t288 - _t123*_t289
-            + _t123*_t297 - _t124*_t255 + _t125*_t278 + _t125*_t289 + _t127*_t225*_t23
-            + _t133*_t232*_t25 + _t135*_t277*_t55
-            + TRAILER_LIT(11819500.0)*_t136*_t219/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(800000.0)*_t136*_t220/TRAILER_LIT(2956581.0) + _t136*_t319 + _t137*_t229
-            + _t137*_t230 - _t139*_t229 + _t140*_t278 - _t140*_t288 + _t140*_t289 - _t140*_t297
-            + TRAILER_LIT(800000.0)*_t141*_t220/TRAILER_LIT(2956581.0) + _t141*_t319 - _t142*_t260
-            - _t145*_t243 - TRAILER_LIT(9225625.0)*_t145*_t249/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(18451250.0)*_t145*_t293/TRAILER_LIT(985527.0) + _t147*_t293 + _t148*_t259
-            + _t148*_t300 + TRAILER_LIT(738050.0)*_t149*_t260/TRAILER_LIT(42849.0) - _t149*_t313
-            - _t150*_t215 + _t152*_t265 - _t153*_t218 - _t154*_t267 - _t155*_t270 + _t158*_t270
-            - _t159*_t301 - _t160*_t249 + _t162*_t249 + _t164*_t304 - _t165*_t307
-            - TRAILER_LIT(50000000.0)*_t167*_t215/TRAILER_LIT(2956581.0) + _t168*_t216 - _t170*_t337
-            - _t170*_t338 + _t172*_t295 + TRAILER_LIT(369025.0)*_t173*_t215/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(369025.0)*_t173*_t216/TRAILER_LIT(171396.0) - _t174*_t295 - _t176*_t323
-            - _t176*_t324 + _t178*_t323 + _t179*_t323 + _t18*_t280 - _t181*_t321 - _t181*_t322
-            + _t183*_t322 - _t184*_t304 - _t185*_t221
-            + TRAILER_LIT(13751440.0)*_t186*_t218/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(9468440.0)*_t186*_t219/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1180880.0)*_t186*_t220/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(590440.0)*_t186*_t230/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1845125.0)*_t186*_t242/TRAILER_LIT(128547.0)
-            + TRAILER_LIT(1845125.0)*_t186*_t250/TRAILER_LIT(257094.0) - _t187*_t221 + _t189*_t328
-            + _t190*_t328 - _t192*_t325 - _t192*_t326 + _t193*_t325 + _t194*_t325 - _t195*_t221
-            + TRAILER_LIT(1845125.0)*_t196*_t288/TRAILER_LIT(128547.0)
-            - TRAILER_LIT(1845125.0)*_t196*_t293/TRAILER_LIT(514188.0) - _t197*_t229 - _t198*_t332
-            - _t198*_t336 - _t20*_t280 + _t200*_t334 + _t200*_t336 + _t201*_t336 + _t203*_t334
-            - _t204*_t229 + _t204*_t230 + TRAILER_LIT(1051625.0)*_t205*_t226/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(13384375.0)*_t205*_t228/TRAILER_LIT(5913162.0)
-            - TRAILER_LIT(26768750.0)*_t205*_t255/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(1051625.0)*_t205*_t279/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(369025.0)*_t206*_t215/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(369025.0)*_t206*_t216/TRAILER_LIT(171396.0) - _t207*_t293 + _t208*_t324
-            + _t209*_t321 - _t210*_t249 - TRAILER_LIT(44799635.0)*_t211*_t230/TRAILER_LIT(8869743.0)
-            + _t211*_t337 + _t211*_t338 + TRAILER_LIT(1180880.0)*_t212*_t220/TRAILER_LIT(2956581.0)
-            - _t213*_t221 - _t214*_t3 + _t214*_t4 + _t215*_t287*_t33
-            - TRAILER_LIT(1845125.0)*_t215*_t294/TRAILER_LIT(514188.0) - _t215*_t58 - _t215*_t6
-            - TRAILER_LIT(6250000.0)*_t215*_t73/TRAILER_LIT(2956581.0) - _t216*_t248*_t25
-            + _t216*_t3 + _t216*_t6 + _t216*_t74 - _t216*_t75 + _t217
-            - TRAILER_LIT(48734365.0)*_t218*_t67/TRAILER_LIT(70957944.0)
-            + TRAILER_LIT(548375.0)*_t218/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(2954875.0)*_t219/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(823375.0)*_t22*_t24*_t250/TRAILER_LIT(171396.0)
-            - TRAILER_LIT(2675000.0)*_t220/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(7675000.0)*_t221/TRAILER_LIT(2956581.0) + _t222*_t23 + _t222*_t25
-            - _t223*_t23 - _t223*_t25 - _t224*_t23 - _t224*_t25
-            - TRAILER_LIT(32743750.0)*_t225*_t25*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(746875.0)*_t226*_t24/TRAILER_LIT(8869743.0) - _t226*_t32
-            - TRAILER_LIT(13384375.0)*_t226*_t77/TRAILER_LIT(17739486.0) + _t227*_t33 - _t227*_t55
-            + _t228*_t35 - _t228*_t36 + TRAILER_LIT(1051625.0)*_t228*_t77/TRAILER_LIT(114264.0)
-            + _t229*_t281 - _t229*_t290 + TRAILER_LIT(1029875.0)*_t229/TRAILER_LIT(2956581.0)
-            - _t23*_t235 + _t23*_t236 - _t23*_t262 - _t23*_t263 - _t23*_t271 + _t23*_t272
-            - _t23*_t306 + _t23*_t314*_t38 - _t230*_t281 - _t230*_t290
-            + TRAILER_LIT(1573375.0)*_t230/TRAILER_LIT(985527.0) + _t231*_t44 + _t231*_t57
-            - TRAILER_LIT(298750.0)*_t231*_t60/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1130975.0)*_t231*_t64/TRAILER_LIT(342792.0) - _t231*_t87 - _t232*_t287
-            - _t232*_t40 + _t232*_t46 + _t233*_t39 - _t233*_t45
-            + TRAILER_LIT(755975.0)*_t233*_t60/TRAILER_LIT(85698.0)
-            - TRAILER_LIT(7433125.0)*_t233*_t64/TRAILER_LIT(5913162.0) - _t233*_t85 + _t233*_t89
-            + _t234*_t40 - _t234*_t46 - _t235*_t25 + _t236*_t25 + _t237*_t50 + _t237*_t51
-            + _t237*_t59 - _t237*_t71 - _t238*_t239
-            + TRAILER_LIT(125000000.0)*_t238*_t295/TRAILER_LIT(8869743.0) + _t239*_t56
-            + TRAILER_LIT(1051625.0)*_t24*_t255/TRAILER_LIT(114264.0)
-            - TRAILER_LIT(13384375.0)*_t24*_t279/TRAILER_LIT(5913162.0) - _t240*_t241 - _t240*_t257
-            + _t240*_t53 + _t240*_t91 + TRAILER_LIT(46128125.0)*_t241*_t295/TRAILER_LIT(2956581.0)
-            + _t243*_t61 - _t244*_t63 - TRAILER_LIT(43152500.0)*_t244*_t64/TRAILER_LIT(2956581.0)
-            - _t245*_t33 + _t245*_t55 + _t246*_t247
-            - TRAILER_LIT(369025.0)*_t246*_t293/TRAILER_LIT(28566.0) - _t247*_t65 - _t248*_t249
-            + TRAILER_LIT(1845125.0)*_t249*_t294/TRAILER_LIT(257094.0)
-            + TRAILER_LIT(369025.0)*_t249*_t296/TRAILER_LIT(171396.0) - _t25*_t261*_t61 - _t25*_t262
-            - _t25*_t263 - _t25*_t271 + _t25*_t272 - _t25*_t306 + _t250*_t29*_t32
-            - TRAILER_LIT(15625000.0)*_t250*_t52/TRAILER_LIT(8869743.0) + _t250*_t68
-            - TRAILER_LIT(1845125.0)*_t250*_t95/TRAILER_LIT(342792.0) + _t251*_t33 - _t251*_t55
-            - _t252*_t59 + _t252*_t71 + TRAILER_LIT(369025.0)*_t253*_t43/TRAILER_LIT(342792.0)
-            + _t253*_t70 - _t253*_t72 + _t253*_t76
-            - TRAILER_LIT(9225625.0)*_t253*_t86/TRAILER_LIT(985527.0) - _t254*_t61 + _t255*_t80
-            + TRAILER_LIT(210325.0)*_t256*_t43/TRAILER_LIT(57132.0) + _t256*_t82 - _t256*_t84
-            - TRAILER_LIT(10707500.0)*_t256*_t86/TRAILER_LIT(2956581.0) + _t256*_t88
-            + TRAILER_LIT(184512500.0)*_t257*_t293/TRAILER_LIT(8869743.0) - _t257*_t303 - _t258*_t92
-            - _t258*_t95 + _t259*_t96 + TRAILER_LIT(369025.0)*_t260*_t60/TRAILER_LIT(28566.0)
-            - TRAILER_LIT(73805000.0)*_t260*_t86/TRAILER_LIT(2956581.0) - _t260*_t99 - _t264*_t90
-            + TRAILER_LIT(548375.0)*_t265*_t29/TRAILER_LIT(1971054.0) - _t266*_t33 + _t266*_t55
-            + _t268*_t33 - _t268*_t55 - _t269*_t52 + _t269*_t67
-            + TRAILER_LIT(369025.0)*_t270*_t60/TRAILER_LIT(57132.0)
-            - TRAILER_LIT(9225625.0)*_t270*_t64/TRAILER_LIT(985527.0) - _t270*_t70 + _t273*_t33
-            - _t273*_t55 - _t274*_t52 + _t274*_t67 + _t275*_t33 - _t275*_t55 - _t276*_t52
-            + _t276*_t67 - TRAILER_LIT(13097500.0)*_t277*_t71/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(1051625.0)*_t279*_t31/TRAILER_LIT(342792.0)
-            + TRAILER_LIT(26768750.0)*_t279*_t77/TRAILER_LIT(8869743.0) - _t282*_t283 - _t282*_t284
-            + _t283*_t286 + _t284*_t286 - TRAILER_LIT(2676875.0)*_t284*_t60/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(210325.0)*_t284*_t64/TRAILER_LIT(19044.0)
-            + TRAILER_LIT(2676875.0)*_t285*_t38/TRAILER_LIT(985527.0)
-            + TRAILER_LIT(210325.0)*_t285*_t43/TRAILER_LIT(19044.0)
-            - TRAILER_LIT(73805000.0)*_t288*_t73/TRAILER_LIT(2956581.0) + _t291*_t52 - _t291*_t67
-            + _t292*_t52 - _t292*_t67 + TRAILER_LIT(369025.0)*_t293*_t296/TRAILER_LIT(85698.0)
-            - TRAILER_LIT(50000000.0)*_t293*_t51/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(46128125.0)*_t293*_t53/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(125000000.0)*_t293*_t56/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(18451250.0)*_t293*_t73/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(73805000.0)*_t293*_t96/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(50000000.0)*_t295*_t59/TRAILER_LIT(2956581.0)
-            + TRAILER_LIT(369025.0)*_t295*_t65/TRAILER_LIT(28566.0)
-            - TRAILER_LIT(184512500.0)*_t295*_t91/TRAILER_LIT(8869743.0) - _t298*_t90 - _t299*_t92
-            - _t299*_t95 + _t300*_t51 - _t300*_t71 + _t300*_t96
-            - TRAILER_LIT(46128125.0)*_t301*_t67/TRAILER_LIT(5913162.0) - _t302*_t33 + _t302*_t90
-            + _t303*_t56 + TRAILER_LIT(369025.0)*_t304*_t65/TRAILER_LIT(57132.0) + _t305*_t59
-            + TRAILER_LIT(369025.0)*_t307*_t77/TRAILER_LIT(42849.0) - _t308*_t90 - _t309*_t92
-            - _t309*_t95 - _t310*_t90 + _t311*_t92 + _t311*_t95
-            - TRAILER_LIT(10707500.0)*_t312*_t38/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(210325.0)*_t312*_t43/TRAILER_LIT(14283.0) + _t314*_t86 + _t315*_t90
-            + _t316*_t92 + _t316*_t95 + _t317*_t90 - _t318*_t92 - _t318*_t95
-            + TRAILER_LIT(11819500.0)*_t320/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(17556365.0)*_t321*_t52/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(31178000.0)*_t321*_t55/TRAILER_LIT(8869743.0)
-            + TRAILER_LIT(31178000.0)*_t322*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(17556365.0)*_t322*_t90/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(10222000.0)*_t324*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(34688365.0)*_t324*_t67/TRAILER_LIT(11826324.0)
-            - TRAILER_LIT(60700000.0)*_t326*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(44799635.0)*_t326*_t67/TRAILER_LIT(5913162.0) + _t327*_t328 + _t327*_t329
-            - TRAILER_LIT(19300000.0)*_t329*_t33/TRAILER_LIT(8869743.0)
-            - TRAILER_LIT(14244365.0)*_t329*_t67/TRAILER_LIT(5913162.0) - _t330*_t331 + _t330*_t333
-            - _t330*_t335 - TRAILER_LIT(4723520.0)*_t330*_t339/TRAILER_LIT(985527.0)
-            - TRAILER_LIT(14244365.0)*_t330*_t52/TRAILER_LIT(11826324.0) + _t331*_t332 - _t332*_t335
-            + TRAILER_LIT(590440.0)*_t332*_t339/TRAILER_LIT(2956581.0)
-            - TRAILER_LIT(44799635.0)*_t332*_t52/TRAILER_LIT(11826324.0) + _t333*_t334
-            - TRAILER_LIT(14244365.0)*_t334*_t90/TRAILER_LIT(8869743.0);
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
+    const trailer_real_t _t14 = _t10*_t11;
+    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
+    const trailer_real_t _t16 = -_t8*_t9;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t21 = -_t10*_t8;
+    const trailer_real_t _t22 = -_t1*_t21 - _t15;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t thetadot_right = wheel_rates[0];
+    const trailer_real_t thetadot_left = wheel_rates[1];
+    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t36 = _t35*_t35;
+    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = _t34*_t36;
+    const trailer_real_t _t40 = _t28*_t36;
+    const trailer_real_t _t41 = _t29*_t36;
+    const trailer_real_t _t42 = _t33*_t38;
+    const trailer_real_t _t43 = _t32*_t38;
+    const trailer_real_t _t44 = _t37*thetadot_right;
+    const trailer_real_t _t45 = _t37*thetadot_left;
+    const trailer_real_t _t46 = _t35*thetadot_right;
+    const trailer_real_t _t47 = _t35*thetadot_left;
+    const trailer_real_t _t48 = _t8*_t9;
+    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
+    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t52 = -_t1*_t48 + _t13;
+    const trailer_real_t _t53 = _t10*_t8;
+    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = -_t1*_t53 + _t15;
+    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
+    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t64 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t65 = -_t51 - _t52;
+    const trailer_real_t _t66 = _t64*_t65;
+    const trailer_real_t _t67 = -_t56 - _t57;
+    const trailer_real_t _t68 = _t64*_t67;
+    const trailer_real_t _t69 = -_t59 - _t60;
+    const trailer_real_t _t70 = _t64*_t69;
+    const trailer_real_t _t71 = -_t62 - _t63;
+    const trailer_real_t _t72 = _t64*_t71;
+    const trailer_real_t _t73 = _t44*_t66 + _t45*_t68 + _t46*_t70 + _t47*_t72;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t74 = J_theta_cart_left*_t73;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t75 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t76 = _t51 - _t52;
+    const trailer_real_t _t77 = _t75*_t76;
+    const trailer_real_t _t78 = _t56 - _t57;
+    const trailer_real_t _t79 = _t75*_t78;
+    const trailer_real_t _t80 = _t59 - _t60;
+    const trailer_real_t _t81 = _t75*_t80;
+    const trailer_real_t _t82 = _t62 - _t63;
+    const trailer_real_t _t83 = _t75*_t82;
+    const trailer_real_t _t84 = _t44*_t77 + _t45*_t79 + _t46*_t81 + _t47*_t83;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t85 = J_theta_cart_right*_t84;
+    const trailer_real_t _t86 = K_theta_cart_x_tractor_2*_t0 - _t31;
+    const trailer_real_t _t87 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
+    const trailer_real_t _t88 = _t12*_t44 + _t14*_t45;
+    const trailer_real_t _t89 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t90 = J_x_tractor*_t88 + _t86*_t89 + _t87;
+    const trailer_real_t _t91 = _t28 + _t29;
+    const trailer_real_t _t92 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
+            - _t39;
+    const trailer_real_t _t93 = _t44*_t48 + _t45*_t53;
+    const trailer_real_t _t94 = J_x_tractor*_t93 + _t89*_t91 + _t92;
+    const trailer_real_t _t95 = _t26 + _t27;
+    const trailer_real_t _t96 = K_theta_tractor_x_tractor_2*_t2 - _t30;
+    const trailer_real_t _t97 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
+    const trailer_real_t _t98 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+            - _t33*_t40 - _t33*_t41;
+    const trailer_real_t _t99 = _t88*_t96 + _t89*_t97 + _t93*_t95 + _t98;
+    const trailer_real_t _t100 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t101 = J_theta_cart*_t89 + _t100 + _t86*_t88 + _t91*_t93;
+    const trailer_real_t _t102 = _t19 - _t20;
+    const trailer_real_t _t103 = _t24 - _t25;
+    const trailer_real_t _t104 = _t102*_t75;
+    const trailer_real_t _t105 = _t103*_t75;
+    const trailer_real_t _t106 = -_t19 - _t20;
+    const trailer_real_t _t107 = -_t24 - _t25;
+    const trailer_real_t _t108 = _t106*_t64;
+    const trailer_real_t _t109 = _t107*_t64;
+    const trailer_real_t _t110 = _t101*_t18 + _t104*_t85 + _t108*_t74 + _t12*_t94 + _t16*_t90
+            - _t9*_t99;
+    const trailer_real_t _t111 = _t10*_t99 + _t101*_t23 + _t105*_t85 + _t109*_t74 + _t14*_t94
+            + _t21*_t90;
+    H[0] = _t110;
+    H[1] = _t111;
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 812 add, 3129 mul, 60 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 130 add, 211 mul, 24 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -3332,933 +892,144 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
             + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1 = radius_left*radius_right;
-    const trailer_real_t _t2 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t _t3 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t _t4 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t5 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
-    const trailer_real_t _t7 = J_theta_cart_left*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(32849.0)*_t1/TRAILER_LIT(171396.0);
-    const trailer_real_t _t9 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t10 = TRAILER_LIT(1.0)/_t9;
-    const trailer_real_t _t11 = J_theta_cart_right*_t10;
-    const trailer_real_t _t12 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t13 = _t12*_t12;
-    const trailer_real_t _t14 = _t1*_t13;
-    const trailer_real_t _t15 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t16 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t17 = _t16*_t16;
-    const trailer_real_t _t18 = _t1*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t20 = TRAILER_LIT(73805.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t21 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t22 = _t12*_t21;
-    const trailer_real_t _t23 = K_theta_cart_x_tractor_2*_t22;
-    const trailer_real_t _t24 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t25 = _t16*_t24;
-    const trailer_real_t _t26 = K_theta_cart_x_tractor_2*_t25;
-    const trailer_real_t _t27 = TRAILER_LIT(29522.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t28 = TRAILER_LIT(29522.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t29 = TRAILER_LIT(14761.0)*_t1/TRAILER_LIT(28566.0);
-    const trailer_real_t _t30 = _t22*_t7;
-    const trailer_real_t _t31 = _t25*_t29;
-    const trailer_real_t _t32 = _t11*_t22;
-    const trailer_real_t _t33 = _t14*_t17;
-    const trailer_real_t _t34 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t35 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t36 = _t18*_t23;
-    const trailer_real_t _t37 = _t14*_t26;
-    const trailer_real_t _t38 = _t22*_t25;
-    const trailer_real_t _t39 = _t1*_t38;
-    const trailer_real_t _t40 = TRAILER_LIT(59044.0)*_t33/TRAILER_LIT(42849.0);
-    const trailer_real_t _t41 = TRAILER_LIT(14761.0)*_t18/TRAILER_LIT(14283.0);
-    const trailer_real_t _t42 = _t14*_t25;
-    const trailer_real_t _t43 = TRAILER_LIT(14761.0)*_t42/TRAILER_LIT(14283.0);
-    const trailer_real_t _t44 = TRAILER_LIT(59044.0)*_t1*_t25/TRAILER_LIT(42849.0);
-    const trailer_real_t _t45 = -_t0*_t1 - _t1*_t2 + _t1*_t3 + _t1*_t4 - _t11*_t31 + _t11*_t40
-            + _t11*_t43 + _t11*_t8 + _t14*_t15 - _t14*_t19 - _t14*_t27 - _t14*_t28 + _t15*_t18
-            - _t18*_t19 - _t18*_t27 - _t18*_t28 + _t20*_t23 - _t20*_t26 - _t29*_t30 + _t29*_t32
-            + _t30*_t41 + _t30*_t44 + _t31*_t7 - _t32*_t41 + _t32*_t44 - _t33*_t34 + _t33*_t35
-            - _t34*_t39 + _t35*_t39 - TRAILER_LIT(73805.0)*_t36/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(73805.0)*_t37/TRAILER_LIT(14283.0) + _t40*_t7 - _t43*_t7 + _t7*_t8;
-    const trailer_real_t _t46 = radius_left*radius_left;
-    const trailer_real_t _t47 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t48 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t49 = _t46*_t7;
-    const trailer_real_t _t50 = _t11*_t46;
-    const trailer_real_t _t51 = _t13*_t46;
-    const trailer_real_t _t52 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t53 = _t17*_t46;
-    const trailer_real_t _t54 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t55 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t56 = _t22*_t46;
-    const trailer_real_t _t57 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t58 = _t25*_t46;
-    const trailer_real_t _t59 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t60 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t61 = TRAILER_LIT(31178.0)*_t7/TRAILER_LIT(42849.0);
-    const trailer_real_t _t62 = TRAILER_LIT(10222.0)*_t11/TRAILER_LIT(42849.0);
-    const trailer_real_t _t63 = TRAILER_LIT(4387.0)*_t49/TRAILER_LIT(9522.0);
-    const trailer_real_t _t64 = TRAILER_LIT(23639.0)*_t50/TRAILER_LIT(28566.0);
-    const trailer_real_t _t65 = _t17*_t51;
-    const trailer_real_t _t66 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t67 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t68 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t69 = _t22*_t53;
-    const trailer_real_t _t70 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t71 = _t25*_t51;
-    const trailer_real_t _t72 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t73 = _t26*_t51;
-    const trailer_real_t _t74 = _t25*_t56;
-    const trailer_real_t _t75 = TRAILER_LIT(4387.0)*_t7/TRAILER_LIT(4761.0);
-    const trailer_real_t _t76 = TRAILER_LIT(23639.0)*_t11/TRAILER_LIT(14283.0);
-    const trailer_real_t _t77 = J_theta_left + _t0*_t46
-            + TRAILER_LIT(20444.0)*_t11*_t65/TRAILER_LIT(42849.0) + _t2*_t46 - _t22*_t63 - _t22*_t64
-            + TRAILER_LIT(26195.0)*_t23*_t53/TRAILER_LIT(14283.0) + _t25*_t63 + _t25*_t64 + _t3*_t46
-            - TRAILER_LIT(62356.0)*_t38*_t49/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t38*_t50/TRAILER_LIT(42849.0) - _t4*_t46 + _t46*_t47 - _t46*_t48
-            + TRAILER_LIT(11449.0)*_t49/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t50/TRAILER_LIT(171396.0) - _t51*_t52 + _t51*_t54 - _t51*_t55
-            + _t51*_t61 - _t51*_t62 - _t52*_t53 + _t53*_t54 - _t53*_t55 + _t53*_t61 - _t53*_t62
-            + _t56*_t57 - _t56*_t59 - _t56*_t60 - _t57*_t58 + _t58*_t59 + _t58*_t60 + _t65*_t66
-            - _t65*_t67 + _t65*_t68 - TRAILER_LIT(62356.0)*_t65*_t7/TRAILER_LIT(42849.0) + _t66*_t74
-            - _t67*_t74 + _t68*_t74 - _t69*_t70 + _t69*_t72 + _t69*_t75 + _t69*_t76 + _t70*_t71
-            - _t71*_t72 - _t71*_t75 - _t71*_t76 - TRAILER_LIT(26195.0)*_t73/TRAILER_LIT(14283.0);
-    const trailer_real_t _t78 = radius_right*radius_right;
-    const trailer_real_t _t79 = _t7*_t78;
-    const trailer_real_t _t80 = _t11*_t78;
-    const trailer_real_t _t81 = _t52*_t78;
-    const trailer_real_t _t82 = _t54*_t78;
-    const trailer_real_t _t83 = _t55*_t78;
-    const trailer_real_t _t84 = _t22*_t78;
-    const trailer_real_t _t85 = _t25*_t78;
-    const trailer_real_t _t86 = TRAILER_LIT(10222.0)*_t79/TRAILER_LIT(42849.0);
-    const trailer_real_t _t87 = TRAILER_LIT(31178.0)*_t80/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(23639.0)*_t79/TRAILER_LIT(28566.0);
-    const trailer_real_t _t89 = TRAILER_LIT(4387.0)*_t80/TRAILER_LIT(9522.0);
-    const trailer_real_t _t90 = _t13*_t17;
-    const trailer_real_t _t91 = _t78*_t90;
-    const trailer_real_t _t92 = _t67*_t78;
-    const trailer_real_t _t93 = _t17*_t84;
-    const trailer_real_t _t94 = _t13*_t85;
-    const trailer_real_t _t95 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t96 = _t25*_t84;
-    const trailer_real_t _t97 = TRAILER_LIT(20444.0)*_t79/TRAILER_LIT(42849.0);
-    const trailer_real_t _t98 = TRAILER_LIT(62356.0)*_t80/TRAILER_LIT(42849.0);
-    const trailer_real_t _t99 = _t17*_t22;
-    const trailer_real_t _t100 = TRAILER_LIT(23639.0)*_t79/TRAILER_LIT(14283.0);
-    const trailer_real_t _t101 = _t13*_t25;
-    const trailer_real_t _t102 = TRAILER_LIT(4387.0)*_t80/TRAILER_LIT(4761.0);
-    const trailer_real_t _t103 = J_theta_right + _t0*_t78 + _t100*_t101 - _t100*_t99 + _t101*_t102
-            - _t102*_t99 - _t13*_t81 + _t13*_t82 + _t13*_t83 - _t13*_t86 + _t13*_t87 - _t17*_t81
-            + _t17*_t82 + _t17*_t83 - _t17*_t86 + _t17*_t87 + _t2*_t78 + _t22*_t88 + _t22*_t89
-            - _t25*_t88 - _t25*_t89 + _t3*_t78 - _t38*_t92 + _t38*_t97 - _t38*_t98 - _t4*_t78
-            - _t47*_t78 + _t48*_t78 - _t57*_t84 + _t57*_t85 + _t59*_t84 - _t59*_t85 - _t60*_t84
-            + _t60*_t85 + _t66*_t91 + _t66*_t96 - _t68*_t91 - _t68*_t96 + _t70*_t93 - _t70*_t94
-            - _t72*_t93 + _t72*_t94 + TRAILER_LIT(94249.0)*_t79/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t80/TRAILER_LIT(171396.0) - _t90*_t92 + _t90*_t97 - _t90*_t98
-            + _t93*_t95 - _t94*_t95;
-    const trailer_real_t _t104 = _t103*_t77 - _t45*_t45;
-    const trailer_real_t _t105 = TRAILER_LIT(1.0)/_t104;
-    const trailer_real_t _t106 = thetadot_right*thetadot_right;
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
+    const trailer_real_t _t14 = _t10*_t11;
+    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
+    const trailer_real_t _t16 = -_t8*_t9;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t21 = -_t10*_t8;
+    const trailer_real_t _t22 = -_t1*_t21 - _t15;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t36 = _t35*_t35;
+    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = _t34*_t36;
+    const trailer_real_t _t40 = _t28*_t36;
+    const trailer_real_t _t41 = _t29*_t36;
+    const trailer_real_t _t42 = _t33*_t38;
+    const trailer_real_t _t43 = _t32*_t38;
+    const trailer_real_t _t44 = _t37*thetadot_right;
+    const trailer_real_t _t45 = _t37*thetadot_left;
+    const trailer_real_t _t46 = _t35*thetadot_right;
+    const trailer_real_t _t47 = _t35*thetadot_left;
+    const trailer_real_t _t48 = _t8*_t9;
+    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
+    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t52 = -_t1*_t48 + _t13;
+    const trailer_real_t _t53 = _t10*_t8;
+    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
+    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = -_t1*_t53 + _t15;
+    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
+    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
+    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
+    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
+    const trailer_real_t _t67 = _t26 + _t27;
+    const trailer_real_t _t68 = _t28 + _t29;
+    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
+    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
+    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
+    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
+    const trailer_real_t _t73 = -_t19 - _t20;
+    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t75 = _t73*_t74;
+    const trailer_real_t _t76 = J_theta_cart_left*_t75;
+    const trailer_real_t _t77 = _t19 - _t20;
+    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t79 = _t77*_t78;
+    const trailer_real_t _t80 = J_theta_cart_right*_t79;
+    const trailer_real_t _t81 = _t24 - _t25;
+    const trailer_real_t _t82 = _t78*_t81;
+    const trailer_real_t _t83 = -_t24 - _t25;
+    const trailer_real_t _t84 = _t74*_t83;
+    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
+    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
+    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
+    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
+    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
+    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
+    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
+    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
+    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
+    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
+            - _t39;
+    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
+    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
+    const trailer_real_t _t97 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+            - _t33*_t40 - _t33*_t41;
+    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
+    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
+    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
+    const trailer_real_t _t101 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
+            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
+    const trailer_real_t _t102 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
+    const trailer_real_t _t103 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
+    const trailer_real_t _t104 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
+            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
+    const trailer_real_t _t105 = _t101*_t104 - _t102*_t103;
+    const trailer_real_t _t106 = _t51 - _t52;
     const trailer_real_t _t107 = _t106*_t78;
-    const trailer_real_t _t108 = J_theta_cart_left*_t9;
-    const trailer_real_t _t109 = _t107*_t108;
-    const trailer_real_t _t110 = thetadot_left*thetadot_left;
-    const trailer_real_t _t111 = _t110*_t46;
-    const trailer_real_t _t112 = _t108*_t111;
-    const trailer_real_t _t113 = J_theta_cart_right*_t5;
-    const trailer_real_t _t114 = _t111*_t113;
-    const trailer_real_t _t115 = _t107*_t113;
-    const trailer_real_t _t116 = _t5*_t9;
-    const trailer_real_t _t117 = _t111*_t116;
-    const trailer_real_t _t118 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t119 = TRAILER_LIT(17713200.0)*_t109;
-    const trailer_real_t _t120 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t121 = _t107*_t116;
-    const trailer_real_t _t122 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t123 = _t12*_t12*_t12;
-    const trailer_real_t _t124 = _t16*_t16*_t16;
-    const trailer_real_t _t125 = _t109*_t24;
-    const trailer_real_t _t126 = _t125*_t21;
-    const trailer_real_t _t127 = _t123*_t124;
-    const trailer_real_t _t128 = _t21*_t24;
-    const trailer_real_t _t129 = _t123*_t24;
-    const trailer_real_t _t130 = _t110*_t113;
-    const trailer_real_t _t131 = TRAILER_LIT(8982073.0)*_t12;
-    const trailer_real_t _t132 = _t16*_t21;
-    const trailer_real_t _t133 = _t115*_t128;
-    const trailer_real_t _t134 = _t12*_t16;
-    const trailer_real_t _t135 = _t109*_t132;
-    const trailer_real_t _t136 = _t124*_t21;
-    const trailer_real_t _t137 = _t106*_t85;
-    const trailer_real_t _t138 = TRAILER_LIT(23617600.0)*_t137;
-    const trailer_real_t _t139 = _t108*_t110;
-    const trailer_real_t _t140 = _t114*_t16;
-    const trailer_real_t _t141 = _t12*_t140;
-    const trailer_real_t _t142 = _t139*_t65;
-    const trailer_real_t _t143 = _t106*_t91;
-    const trailer_real_t _t144 = _t113*_t143;
-    const trailer_real_t _t145 = _t114*_t123;
-    const trailer_real_t _t146 = _t124*_t145;
-    const trailer_real_t _t147 = _t123*_t16;
-    const trailer_real_t _t148 = _t12*_t124;
-    const trailer_real_t _t149 = _t130*_t65;
-    const trailer_real_t _t150 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t151 = _t110*_t51;
-    const trailer_real_t _t152 = _t116*_t151;
-    const trailer_real_t _t153 = _t110*_t53;
-    const trailer_real_t _t154 = _t116*_t153;
-    const trailer_real_t _t155 = thetadot_left*thetadot_right;
-    const trailer_real_t _t156 = _t1*_t155;
-    const trailer_real_t _t157 = _t116*_t156;
-    const trailer_real_t _t158 = _t122*_t157;
-    const trailer_real_t _t159 = _t12*_t24;
-    const trailer_real_t _t160 = J_theta_cart*_t117;
-    const trailer_real_t _t161 = K_theta_cart_x_tractor*_t132;
-    const trailer_real_t _t162 = K_theta_cart_x_tractor_2*_t117;
-    const trailer_real_t _t163 = TRAILER_LIT(7858500.0)*_t128;
-    const trailer_real_t _t164 = TRAILER_LIT(12849000.0)*_t136;
-    const trailer_real_t _t165 = K_theta_cart_x_tractor*_t117;
-    const trailer_real_t _t166 = K_theta_cart_x_tractor_2*_t121;
-    const trailer_real_t _t167 = TRAILER_LIT(17004672.0)*_t126;
-    const trailer_real_t _t168 = TRAILER_LIT(20700000.0)*_t128;
-    const trailer_real_t _t169 = _t153*_t159;
-    const trailer_real_t _t170 = TRAILER_LIT(22141500.0)*_t128;
-    const trailer_real_t _t171 = J_theta_cart*_t121;
-    const trailer_real_t _t172 = _t110*_t116;
-    const trailer_real_t _t173 = _t172*_t56;
-    const trailer_real_t _t174 = TRAILER_LIT(26195000.0)*J_theta_cart;
-    const trailer_real_t _t175 = _t136*_t151;
-    const trailer_real_t _t176 = _t172*_t58;
-    const trailer_real_t _t177 = TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t178 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t179 = K_theta_cart_x_tractor*_t129;
-    const trailer_real_t _t180 = _t121*_t161;
-    const trailer_real_t _t181 = _t14*_t155;
-    const trailer_real_t _t182 = TRAILER_LIT(46080000.0)*_t113;
-    const trailer_real_t _t183 = _t155*_t18;
-    const trailer_real_t _t184 = _t106*_t93;
-    const trailer_real_t _t185 = TRAILER_LIT(47235200.0)*_t184;
-    const trailer_real_t _t186 = _t115*_t159*_t17;
-    const trailer_real_t _t187 = _t172*_t65;
-    const trailer_real_t _t188 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t189 = _t134*_t171;
-    const trailer_real_t _t190 = _t115*_t13*_t136;
-    const trailer_real_t _t191 = TRAILER_LIT(73805000.0)*J_theta_cart;
-    const trailer_real_t _t192 = _t106*_t84;
-    const trailer_real_t _t193 = _t116*_t192;
-    const trailer_real_t _t194 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t195 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t196 = _t116*_t137;
-    const trailer_real_t _t197 = _t121*_t147;
-    const trailer_real_t _t198 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t199 = _t121*_t148;
-    const trailer_real_t _t200 = _t127*_t171;
-    const trailer_real_t _t201 = TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t202 = _t117*_t134;
-    const trailer_real_t _t203 = K_theta_cart_x_tractor*_t202;
-    const trailer_real_t _t204 = _t148*_t160;
-    const trailer_real_t _t205 = TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t206 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t207 = _t116*_t143;
-    const trailer_real_t _t208 = _t206*_t207;
-    const trailer_real_t _t209 = _t117*_t127;
-    const trailer_real_t _t210 = K_theta_cart_x_tractor*_t209;
-    const trailer_real_t _t211 = _t116*_t150;
-    const trailer_real_t _t212 = _t181*_t211;
-    const trailer_real_t _t213 = _t183*_t211;
-    const trailer_real_t _t214 = _t155*_t33;
-    const trailer_real_t _t215 = _t108*_t214;
-    const trailer_real_t _t216 = _t113*_t156;
-    const trailer_real_t _t217 = _t108*_t156;
-    const trailer_real_t _t218 = _t127*_t217;
-    const trailer_real_t _t219 = _t128*_t152;
-    const trailer_real_t _t220 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t221 = _t128*_t154;
-    const trailer_real_t _t222 = _t121*_t13;
-    const trailer_real_t _t223 = _t128*_t222;
-    const trailer_real_t _t224 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t225 = _t121*_t17;
-    const trailer_real_t _t226 = _t128*_t225;
-    const trailer_real_t _t227 = TRAILER_LIT(32122500.0)*J_theta_cart;
-    const trailer_real_t _t228 = _t106*_t96;
-    const trailer_real_t _t229 = TRAILER_LIT(38547000.0)*_t161;
-    const trailer_real_t _t230 = _t136*_t152;
-    const trailer_real_t _t231 = TRAILER_LIT(42830000.0)*J_theta_cart;
-    const trailer_real_t _t232 = TRAILER_LIT(43537275.0)*J_theta_cart;
-    const trailer_real_t _t233 = _t128*_t149;
-    const trailer_real_t _t234 = TRAILER_LIT(51396000.0)*_t179;
-    const trailer_real_t _t235 = _t172*_t71;
-    const trailer_real_t _t236 = TRAILER_LIT(52390000.0)*J_theta_cart;
-    const trailer_real_t _t237 = _t172*_t69;
-    const trailer_real_t _t238 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t239 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t240 = _t116*_t239;
-    const trailer_real_t _t241 = _t181*_t240;
-    const trailer_real_t _t242 = _t183*_t240;
-    const trailer_real_t _t243 = _t159*_t225;
-    const trailer_real_t _t244 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t245 = TRAILER_LIT(102028032.0)*_t216;
-    const trailer_real_t _t246 = TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t247 = _t136*_t222;
-    const trailer_real_t _t248 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t249 = TRAILER_LIT(147610000.0)*J_theta_cart;
-    const trailer_real_t _t250 = _t106*_t94;
-    const trailer_real_t _t251 = _t116*_t250;
-    const trailer_real_t _t252 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t253 = _t132*_t152;
-    const trailer_real_t _t254 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t255 = _t116*_t184;
-    const trailer_real_t _t256 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t257 = _t129*_t154;
-    const trailer_real_t _t258 = K_theta_cart_x_tractor*_t157;
-    const trailer_real_t _t259 = TRAILER_LIT(244442160.0)*_t127*_t258;
-    const trailer_real_t _t260 = _t116*_t214;
-    const trailer_real_t _t261 = _t205*_t260;
-    const trailer_real_t _t262 = J_theta_cart*_t157;
-    const trailer_real_t _t263 = TRAILER_LIT(152776350.0)*_t262;
-    const trailer_real_t _t264 = _t147*_t263;
-    const trailer_real_t _t265 = _t148*_t263;
-    const trailer_real_t _t266 = TRAILER_LIT(142921080.0)*_t134*_t258;
-    const trailer_real_t _t267 = TRAILER_LIT(82800000.0)*_t157;
-    const trailer_real_t _t268 = _t23*_t267;
-    const trailer_real_t _t269 = K_theta_cart_x_tractor_2*_t157;
-    const trailer_real_t _t270 = TRAILER_LIT(61110540.0)*_t269;
-    const trailer_real_t _t271 = _t136*_t270;
-    const trailer_real_t _t272 = TRAILER_LIT(51255270.0)*_t269;
-    const trailer_real_t _t273 = _t159*_t272;
-    const trailer_real_t _t274 = _t168*_t258;
-    const trailer_real_t _t275 = _t155*_t42;
-    const trailer_real_t _t276 = _t128*_t181;
-    const trailer_real_t _t277 = TRAILER_LIT(34009344.0)*_t113;
-    const trailer_real_t _t278 = _t128*_t183;
-    const trailer_real_t _t279 = _t132*_t181;
-    const trailer_real_t _t280 = _t129*_t183;
-    const trailer_real_t _t281 = _t132*_t272;
-    const trailer_real_t _t282 = _t129*_t270;
-    const trailer_real_t _t283 = TRAILER_LIT(62868000.0)*_t26;
-    const trailer_real_t _t284 = _t26*_t267;
-    const trailer_real_t _t285 = TRAILER_LIT(101850900.0)*_t134*_t262;
-    const trailer_real_t _t286 = J_theta_cart*_t128*_t207;
-    const trailer_real_t _t287 = TRAILER_LIT(138000000.0)*J_theta_cart;
-    const trailer_real_t _t288 = _t260*_t287;
-    const trailer_real_t _t289 = TRAILER_LIT(177132000.0)*_t26;
-    const trailer_real_t _t290 = TRAILER_LIT(183331620.0)*_t258;
-    const trailer_real_t _t291 = _t147*_t290;
-    const trailer_real_t _t292 = _t148*_t290;
-    const trailer_real_t _t293 = TRAILER_LIT(203701800.0)*_t127*_t262;
-    const trailer_real_t _t294 = _t128*_t187;
-    const trailer_real_t _t295 = K_theta_cart_x_tractor_2*_t116;
-    const trailer_real_t _t296 = TRAILER_LIT(244442160.0)*_t295;
-    const trailer_real_t _t297 = _t280*_t296;
-    const trailer_real_t _t298 = TRAILER_LIT(183331620.0)*_t295;
-    const trailer_real_t _t299 = _t279*_t298;
-    const trailer_real_t _t300 = TRAILER_LIT(165600000.0)*_t116*_t155;
-    const trailer_real_t _t301 = _t300*_t37;
-    const trailer_real_t _t302 = J_theta_cart*_t116;
-    const trailer_real_t _t303 = TRAILER_LIT(50925450.0)*_t302;
-    const trailer_real_t _t304 = _t276*_t303;
-    const trailer_real_t _t305 = _t278*_t303;
-    const trailer_real_t _t306 = _t217*_t38;
-    const trailer_real_t _t307 = _t128*_t215;
-    const trailer_real_t _t308 = K_theta_cart_x_tractor*_t116;
-    const trailer_real_t _t309 = TRAILER_LIT(61110540.0)*_t308;
-    const trailer_real_t _t310 = _t276*_t309;
-    const trailer_real_t _t311 = _t278*_t309;
-    const trailer_real_t _t312 = _t300*_t36;
-    const trailer_real_t _t313 = _t159*_t183;
-    const trailer_real_t _t314 = _t298*_t313;
-    const trailer_real_t _t315 = _t136*_t181;
-    const trailer_real_t _t316 = _t296*_t315;
-    const trailer_real_t _t317 = _t128*_t260;
-    const trailer_real_t _t318 = TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor*_t317;
-    const trailer_real_t _t319 = _t157*_t38;
-    const trailer_real_t _t320 = _t205*_t319;
-    const trailer_real_t _t321 = _t287*_t319;
-    const trailer_real_t _t322 = TRAILER_LIT(203701800.0)*J_theta_cart*_t317;
-    const trailer_real_t _t323 = TRAILER_LIT(120000000.0)*_t295;
-    const trailer_real_t _t324 = _t157*_t191;
-    const trailer_real_t _t325 = TRAILER_LIT(265698000.0)*_t269;
-    const trailer_real_t _t326 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t116;
-    const trailer_real_t _t327 = -TRAILER_LIT(17250000.0)*J_theta_cart*_t110*_t21*_t24*_t46*_t5*_t9
-            - TRAILER_LIT(34500000.0)*J_theta_cart*_t110*_t46*_t5*_t9
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t12*_t21*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t12*_t24*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right + TRAILER_LIT(34500000.0)*J_theta_cart*_t121
-            -
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t123*_t17*_t24*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t124*_t21*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t13*_t16*_t21*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t13*_t16*_t24*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            - TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t106*_t5*_t78*_t9
-            + TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t117
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t12*_t17*_t21*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t12*_t17*_t24*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t123*_t24*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t124*_t13*_t21*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t16*_t21*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t16*_t24*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t12*_t16*_t21*_t24*_t5*_t9
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t12*_t16*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t123*_t124*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t13*_t17*_t21*_t24*_t5*_t9
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t13*_t17*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t21*_t24*_t5*_t9*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t5*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right + TRAILER_LIT(265698000.0)*_t116*_t161*_t181
-            + TRAILER_LIT(354264000.0)*_t116*_t179*_t183 + TRAILER_LIT(17250000.0)*_t128*_t171
-            + _t129*_t324 + _t132*_t324 + _t136*_t157*_t195 + _t147*_t325 + _t148*_t325
-            + TRAILER_LIT(74283000.0)*_t159*_t258 + _t181*_t323
-            + TRAILER_LIT(200000000.0)*_t183*_t22*_t302 + _t183*_t323
-            + TRAILER_LIT(120000000.0)*_t22*_t258 + TRAILER_LIT(100000000.0)*_t25*_t262
-            + TRAILER_LIT(240000000.0)*_t275*_t308 + _t276*_t326 + _t278*_t326
-            + TRAILER_LIT(221415000.0)*_t302*_t313 + TRAILER_LIT(295220000.0)*_t302*_t315;
-    const trailer_real_t _t328 = TRAILER_LIT(5.0)*_t10*_t6/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t329 =
-            _t328*radius_left*(TRAILER_LIT(76388175.0)*J_theta_cart*_t106*_t12*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t106*_t12*_t17*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t106*_t12*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t106*_t123*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t106*_t123*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t106*_t124*_t13*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t106*_t13*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t106*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t106*_t16*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t106*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t110*_t12*_t16*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(104324550.0)*J_theta_cart*_t110*_t12*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t110*_t12*_t17*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t110*_t123*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t110*_t123*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t110*_t124*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t110*_t13*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t110*_t13*_t17*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t110*_t13*_t17*_t46*_t5*_t9
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t110*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t110*_t16*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t106*_t12*_t16*_t21*_t24*_t78*_t9
-            + TRAILER_LIT(31537644.0)*J_theta_cart_left*_t106*_t12*_t16*_t78*_t9
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t106*_t12*_t21*_t78*_t9
-            + TRAILER_LIT(13514273.0)*J_theta_cart_left*_t106*_t12*_t24*_t78*_t9
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t106*_t123*_t124*_t78*_t9
-            + TRAILER_LIT(22790984.0)*J_theta_cart_left*_t106*_t123*_t17*_t24*_t78*_t9
-            + TRAILER_LIT(5697746.0)*J_theta_cart_left*_t106*_t124*_t21*_t78*_t9
-            + TRAILER_LIT(17093238.0)*J_theta_cart_left*_t106*_t13*_t16*_t21*_t78*_t9
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t106*_t13*_t16*_t24*_t78*_t9
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t106*_t13*_t17*_t21*_t24*_t78*_t9
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t106*_t13*_t17*_t78*_t9
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t110*_t12*_t124*_t46*_t9
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t110*_t12*_t21*_t46*_t9
-            + TRAILER_LIT(9746873.0)*J_theta_cart_left*_t110*_t12*_t24*_t46*_t9
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t110*_t123*_t16*_t46*_t9
-            + TRAILER_LIT(28090184.0)*J_theta_cart_left*_t110*_t123*_t17*_t24*_t46*_t9
-            + TRAILER_LIT(7022546.0)*J_theta_cart_left*_t110*_t124*_t21*_t46*_t9
-            + TRAILER_LIT(21067638.0)*J_theta_cart_left*_t110*_t13*_t16*_t21*_t46*_t9
-            + TRAILER_LIT(49884800.0)*J_theta_cart_left*_t110*_t13*_t16*_t24*_t46*_t9
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t110*_t13*_t21*_t24*_t46*_t9
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t110*_t13*_t46*_t9
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t110*_t17*_t21*_t24*_t46*_t9
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t110*_t17*_t46*_t9
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t12*_t124*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_left*_t12*_t16*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_left*_t12*_t17*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_left*_t12*_t17*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t123*_t16*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_left*_t123*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_left*_t124*_t13*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t13*_t21*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t13*_t9*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_left*_t16*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t16*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t17*_t21*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t17*_t9*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t21*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(12840000.0)*J_theta_cart_left*_t9*radius_left*radius_right*thetadot_left
-            *thetadot_right + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t106*_t12*_t124*_t5*_t78
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t106*_t12*_t21*_t5*_t78
-            + TRAILER_LIT(19625327.0)*J_theta_cart_right*_t106*_t12*_t24*_t5*_t78
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t106*_t123*_t16*_t5*_t78
-            + TRAILER_LIT(71679416.0)*J_theta_cart_right*_t106*_t123*_t17*_t24*_t5*_t78
-            + TRAILER_LIT(17919854.0)*J_theta_cart_right*_t106*_t124*_t21*_t5*_t78
-            + TRAILER_LIT(53759562.0)*J_theta_cart_right*_t106*_t13*_t16*_t21*_t5*_t78
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t106*_t13*_t16*_t24*_t5*_t78
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t106*_t13*_t21*_t24*_t5*_t78
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t106*_t13*_t5*_t78
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t106*_t17*_t21*_t24*_t5*_t78
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t106*_t17*_t5*_t78
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t110*_t12*_t124*_t46*_t5
-            + TRAILER_LIT(16355200.0)*J_theta_cart_right*_t110*_t12*_t17*_t21*_t46*_t5
-            + TRAILER_LIT(41626038.0)*J_theta_cart_right*_t110*_t12*_t17*_t24*_t46*_t5
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t110*_t123*_t16*_t46*_t5
-            + TRAILER_LIT(13875346.0)*J_theta_cart_right*_t110*_t123*_t24*_t46*_t5
-            + TRAILER_LIT(55501384.0)*J_theta_cart_right*_t110*_t124*_t13*_t21*_t46*_t5
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t110*_t13*_t21*_t24*_t46*_t5
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t110*_t13*_t46*_t5
-            + TRAILER_LIT(8982073.0)*J_theta_cart_right*_t110*_t16*_t21*_t46*_t5
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t110*_t16*_t24*_t46*_t5
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t110*_t17*_t21*_t24*_t46*_t5
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t110*_t17*_t46*_t5
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t12*_t16*_t21*_t24*_t5*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_right*_t12*_t16*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_right*_t12*_t17*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_right*_t12*_t17*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t123*_t124*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_right*_t123*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_right*_t124*_t13*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t13*_t17*_t21*_t24*_t5*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t13*_t17*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_right*_t16*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t16*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t21*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(36840000.0)*J_theta_cart_right*_t5*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t106*_t12*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t106*_t12*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t106*_t12*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t106*_t123*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t106*_t123*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t106*_t124*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t106*_t13*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t106*_t13*_t16*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t106*_t13*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t110*_t12*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t110*_t12*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t110*_t12*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t110*_t12*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t110*_t123*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t110*_t123*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t110*_t124*_t13*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t110*_t13*_t16*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t110*_t13*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t110*_t13*_t46*_t5*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t110*_t17*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t110*_t17*_t46*_t5*_t9
-            - TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t243
-            - TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t294
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t106*_t12*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t106*_t12*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t106*_t123*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t106*_t123*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t106*_t124*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t5*_t78*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t106*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t106*_t17*_t5*_t78*_t9
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t110*_t12*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t110*_t12*_t17*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t110*_t12*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t110*_t123*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t110*_t123*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t110*_t124*_t13*_t21*_t46*_t5*_t9
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t110*_t13*_t17*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t110*_t13*_t46*_t5*_t9
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t110*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t110*_t16*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t110*_t17*_t46*_t5*_t9 - _t108*_t138
-            - TRAILER_LIT(21067638.0)*_t108*_t169 - TRAILER_LIT(28090184.0)*_t108*_t175
-            - _t108*_t185 - TRAILER_LIT(97120000.0)*_t108*_t275
-            - TRAILER_LIT(107519124.0)*_t108*_t279 - TRAILER_LIT(143358832.0)*_t108*_t280
-            - TRAILER_LIT(5697746.0)*_t109*_t129 - TRAILER_LIT(22790984.0)*_t109*_t13*_t136
-            - TRAILER_LIT(51014016.0)*_t109*_t147 - TRAILER_LIT(51014016.0)*_t109*_t148
-            - TRAILER_LIT(4943400.0)*_t109 - TRAILER_LIT(66006912.0)*_t112*_t127
-            - TRAILER_LIT(3948300.0)*_t112*_t128 - TRAILER_LIT(7022546.0)*_t112*_t129
-            - TRAILER_LIT(9746873.0)*_t112*_t132 - TRAILER_LIT(36951756.0)*_t112*_t134
-            - TRAILER_LIT(7896600.0)*_t112 - TRAILER_LIT(55501384.0)*_t113*_t129*_t153
-            - TRAILER_LIT(41626038.0)*_t113*_t132*_t151 - _t113*_t138 - _t113*_t185
-            - TRAILER_LIT(35426400.0)*_t113*_t228 - TRAILER_LIT(30880000.0)*_t113*_t275
-            - TRAILER_LIT(34186476.0)*_t113*_t279 - TRAILER_LIT(45581968.0)*_t113*_t280
-            - TRAILER_LIT(7091700.0)*_t114*_t128 - _t114*_t131*_t24
-            - TRAILER_LIT(13875346.0)*_t114*_t136 - TRAILER_LIT(14183400.0)*_t114
-            - TRAILER_LIT(2834112.0)*_t115*_t127 - TRAILER_LIT(17919854.0)*_t115*_t129
-            - TRAILER_LIT(19625327.0)*_t115*_t132 - TRAILER_LIT(12745356.0)*_t115*_t134
-            - TRAILER_LIT(22656600.0)*_t115 - _t117*_t118 - _t117*_t147*_t178 - _t117*_t148*_t178
-            - TRAILER_LIT(1434000.0)*_t117*_t161 - _t119*_t13 - _t119*_t17
-            - TRAILER_LIT(17093238.0)*_t12*_t125*_t17 - _t120*_t121 - _t121*_t122
-            - _t121*_t127*_t206 - _t121*_t134*_t201 - TRAILER_LIT(44283000.0)*_t121*_t179
-            - TRAILER_LIT(2471700.0)*_t126 - TRAILER_LIT(66006912.0)*_t128*_t142
-            - TRAILER_LIT(2834112.0)*_t128*_t144 - _t128*_t208 - TRAILER_LIT(10707500.0)*_t129*_t160
-            - TRAILER_LIT(30555270.0)*_t129*_t166 - _t129*_t225*_t249 - _t13*_t167
-            - TRAILER_LIT(8177600.0)*_t130*_t56 - TRAILER_LIT(16355200.0)*_t130*_t71
-            - TRAILER_LIT(56733600.0)*_t130*_t74 - TRAILER_LIT(15277635.0)*_t132*_t166
-            - _t132*_t222*_t246 - TRAILER_LIT(11328300.0)*_t133 - TRAILER_LIT(13514273.0)*_t135
-            - TRAILER_LIT(52244730.0)*_t136*_t162 - TRAILER_LIT(36902500.0)*_t136*_t171
-            - TRAILER_LIT(11395492.0)*_t136*_t216 - TRAILER_LIT(35839708.0)*_t136*_t217
-            - TRAILER_LIT(24942400.0)*_t139*_t58 - TRAILER_LIT(49884800.0)*_t139*_t69
-            - TRAILER_LIT(31586400.0)*_t139*_t74 - TRAILER_LIT(29815956.0)*_t141
-            - TRAILER_LIT(31586400.0)*_t142 - TRAILER_LIT(35426400.0)*_t144
-            - TRAILER_LIT(45448512.0)*_t146 - TRAILER_LIT(130611825.0)*_t147*_t160 - _t147*_t245
-            - _t148*_t245 - TRAILER_LIT(56733600.0)*_t149 - _t150*_t152 - _t150*_t154 - _t152*_t229
-            - _t154*_t159*_t227 - _t154*_t234 + _t158 - TRAILER_LIT(1195000.0)*_t159*_t160
-            - TRAILER_LIT(46822365.0)*_t159*_t162 - TRAILER_LIT(25000000.0)*_t159*_t171
-            - TRAILER_LIT(4796746.0)*_t159*_t216 - TRAILER_LIT(25298854.0)*_t159*_t217 - _t162*_t163
-            - _t164*_t165 - _t165*_t168 - _t166*_t170 - _t167*_t17 - _t172*_t205*_t74
-            - TRAILER_LIT(165600000.0)*_t172*_t73 - _t173*_t174 - _t173*_t194 - _t173*_t283
-            - _t176*_t177 - TRAILER_LIT(44283000.0)*_t180 - _t181*_t182 - _t182*_t183
-            - TRAILER_LIT(53759562.0)*_t186 - _t187*_t188 - _t187*_t205
-            - TRAILER_LIT(68175450.0)*_t189 - TRAILER_LIT(71679416.0)*_t190 - _t191*_t193
-            - _t193*_t289 - _t195*_t196 - _t197*_t198 - _t198*_t199 - TRAILER_LIT(101850900.0)*_t200
-            - TRAILER_LIT(125189460.0)*_t203 - TRAILER_LIT(130611825.0)*_t204 - _t208
-            - TRAILER_LIT(208978920.0)*_t210 + _t212 + _t213 - TRAILER_LIT(3840000.0)*_t215
-            - TRAILER_LIT(15440000.0)*_t216*_t22 - TRAILER_LIT(48560000.0)*_t217*_t22
-            - TRAILER_LIT(5668224.0)*_t218 - _t219*_t220 - _t219*_t232 - _t220*_t221 - _t221*_t232
-            - _t223*_t224 - _t224*_t226 - _t230*_t231 - TRAILER_LIT(45448512.0)*_t233 - _t235*_t236
-            - _t237*_t238 - _t241 - _t242 - _t243*_t244 - _t247*_t248 - _t247*_t254 - _t249*_t251
-            - _t252*_t253 - _t254*_t255 - _t256*_t257 + _t259 + _t261 + _t264 + _t265 + _t266
-            + _t268 + _t271 + _t273 + _t274 - _t276*_t277 - _t277*_t278 - _t281 - _t282 - _t284
-            - _t285 - TRAILER_LIT(101850900.0)*_t286 - _t288 - _t291 - _t292 - _t293 + _t297 + _t299
-            + _t301 + _t304 + _t305 - TRAILER_LIT(3840000.0)*_t306 - TRAILER_LIT(5668224.0)*_t307
-            - _t310 - _t311 - _t312 - _t314 - _t316 + _t318 + _t320 - _t321 - _t322 - _t327)
-            + tau_left;
-    const trailer_real_t _t330 = TRAILER_LIT(15793200.0)*_t115;
-    const trailer_real_t _t331 = TRAILER_LIT(17713200.0)*_t108*_t110;
-    const trailer_real_t _t332 = TRAILER_LIT(28366800.0)*_t109;
-    const trailer_real_t _t333 = TRAILER_LIT(2125584.0)*_t112;
-    const trailer_real_t _t334 = TRAILER_LIT(23617600.0)*_t58;
-    const trailer_real_t _t335 = TRAILER_LIT(34086384.0)*_t109;
-    const trailer_real_t _t336 = TRAILER_LIT(49505184.0)*_t115;
-    const trailer_real_t _t337 = TRAILER_LIT(708528.0)*_t108;
-    const trailer_real_t _t338 = TRAILER_LIT(1920000.0)*_t113;
-    const trailer_real_t _t339 = TRAILER_LIT(11362128.0)*_t126;
-    const trailer_real_t _t340 = TRAILER_LIT(16501728.0)*_t133;
-    const trailer_real_t _t341 = TRAILER_LIT(44283000.0)*_t117;
-    const trailer_real_t _t342 = TRAILER_LIT(47235200.0)*_t69;
-    const trailer_real_t _t343 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t344 = _t187*_t206;
-    const trailer_real_t _t345 = TRAILER_LIT(4251168.0)*_t216;
-    const trailer_real_t _t346 = TRAILER_LIT(25462725.0)*J_theta_cart;
-    const trailer_real_t _t347 = TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t348 = TRAILER_LIT(1417056.0)*_t113;
-    const trailer_real_t _t349 =
-            -_t328*radius_right*(TRAILER_LIT(130611825.0)*J_theta_cart*_t106*_t12*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t106*_t12*_t17*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t106*_t123*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t106*_t123*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t106*_t124*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t106*_t13*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t106*_t13*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t106*_t13*_t5*_t78*_t9
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t106*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t106*_t16*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t106*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t106*_t17*_t5*_t78*_t9
-            + TRAILER_LIT(68175450.0)*J_theta_cart*_t110*_t12*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t110*_t12*_t17*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t110*_t12*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t110*_t123*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t110*_t123*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t110*_t124*_t13*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t110*_t13*_t17*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t110*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t110*_t16*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t106*_t12*_t16*_t21*_t24*_t78*_t9
-            + TRAILER_LIT(29815956.0)*J_theta_cart_left*_t106*_t12*_t16*_t78*_t9
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t106*_t12*_t17*_t21*_t78*_t9
-            + TRAILER_LIT(41626038.0)*J_theta_cart_left*_t106*_t12*_t17*_t24*_t78*_t9
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t106*_t123*_t124*_t78*_t9
-            + TRAILER_LIT(13875346.0)*J_theta_cart_left*_t106*_t123*_t24*_t78*_t9
-            + TRAILER_LIT(55501384.0)*J_theta_cart_left*_t106*_t124*_t13*_t21*_t78*_t9
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t106*_t13*_t17*_t21*_t24*_t78*_t9
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t106*_t13*_t17*_t78*_t9
-            + TRAILER_LIT(8982073.0)*J_theta_cart_left*_t106*_t16*_t21*_t78*_t9
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t106*_t16*_t24*_t78*_t9
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t106*_t21*_t24*_t78*_t9
-            + TRAILER_LIT(14183400.0)*J_theta_cart_left*_t106*_t78*_t9
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t110*_t12*_t16*_t21*_t24*_t46*_t9
-            + TRAILER_LIT(12745356.0)*J_theta_cart_left*_t110*_t12*_t16*_t46*_t9
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t110*_t12*_t21*_t46*_t9
-            + TRAILER_LIT(19625327.0)*J_theta_cart_left*_t110*_t12*_t24*_t46*_t9
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t110*_t123*_t124*_t46*_t9
-            + TRAILER_LIT(71679416.0)*J_theta_cart_left*_t110*_t123*_t17*_t24*_t46*_t9
-            + TRAILER_LIT(17919854.0)*J_theta_cart_left*_t110*_t124*_t21*_t46*_t9
-            + TRAILER_LIT(53759562.0)*J_theta_cart_left*_t110*_t13*_t16*_t21*_t46*_t9
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t110*_t13*_t16*_t24*_t46*_t9
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t110*_t13*_t17*_t21*_t24*_t46*_t9
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t110*_t13*_t17*_t46*_t9
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t110*_t21*_t24*_t46*_t9
-            + TRAILER_LIT(22656600.0)*J_theta_cart_left*_t110*_t46*_t9
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t12*_t124*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t12*_t17*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t12*_t17*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t123*_t16*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t123*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t124*_t13*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t13*_t21*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t13*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t16*_t21*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t16*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t17*_t21*_t24*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t17*_t9*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t106*_t12*_t16*_t21*_t24*_t5*_t78
-            + TRAILER_LIT(36951756.0)*J_theta_cart_right*_t106*_t12*_t16*_t5*_t78
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t106*_t12*_t21*_t5*_t78
-            + TRAILER_LIT(9746873.0)*J_theta_cart_right*_t106*_t12*_t24*_t5*_t78
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t106*_t123*_t124*_t5*_t78
-            + TRAILER_LIT(28090184.0)*J_theta_cart_right*_t106*_t123*_t17*_t24*_t5*_t78
-            + TRAILER_LIT(7022546.0)*J_theta_cart_right*_t106*_t124*_t21*_t5*_t78
-            + TRAILER_LIT(21067638.0)*J_theta_cart_right*_t106*_t13*_t16*_t21*_t5*_t78
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t106*_t13*_t16*_t24*_t5*_t78
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t106*_t13*_t17*_t21*_t24*_t5*_t78
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t106*_t13*_t17*_t5*_t78
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t106*_t21*_t24*_t5*_t78
-            + TRAILER_LIT(7896600.0)*J_theta_cart_right*_t106*_t5*_t78
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t110*_t12*_t124*_t46*_t5
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t110*_t12*_t21*_t46*_t5
-            + TRAILER_LIT(13514273.0)*J_theta_cart_right*_t110*_t12*_t24*_t46*_t5
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t110*_t123*_t16*_t46*_t5
-            + TRAILER_LIT(22790984.0)*J_theta_cart_right*_t110*_t123*_t17*_t24*_t46*_t5
-            + TRAILER_LIT(5697746.0)*J_theta_cart_right*_t110*_t124*_t21*_t46*_t5
-            + TRAILER_LIT(17093238.0)*J_theta_cart_right*_t110*_t13*_t16*_t21*_t46*_t5
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t110*_t13*_t16*_t24*_t46*_t5
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t110*_t13*_t21*_t24*_t46*_t5
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t110*_t13*_t46*_t5
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t110*_t17*_t21*_t24*_t46*_t5
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t110*_t17*_t46*_t5
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t110*_t21*_t24*_t46*_t5
-            + TRAILER_LIT(4943400.0)*J_theta_cart_right*_t110*_t46*_t5
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t12*_t16*_t21*_t24*_t5*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t12*_t17*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t12*_t17*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t123*_t124*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t123*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t124*_t13*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t13*_t17*_t21*_t24*_t5*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t13*_t17*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t16*_t21*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t16*_t24*_t5*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t106*_t12*_t16*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t106*_t12*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t106*_t12*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t106*_t12*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t106*_t12*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t106*_t123*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t106*_t123*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t106*_t124*_t13*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t106*_t13*_t16*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t106*_t13*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t106*_t13*_t17*_t5*_t78*_t9
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t106*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t110*_t12*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t110*_t12*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t110*_t12*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t110*_t123*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t110*_t123*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t110*_t124*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t110*_t13*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t110*_t13*_t16*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t110*_t13*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t110*_t17*_t21*_t24*_t46*_t5*_t9
-            - K_theta_cart_x_tractor*_t121*_t164
-            - TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t154*_t159
-            - TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t294
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t106*_t12*_t16*_t5*_t78*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t106*_t12*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t106*_t12*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t106*_t123*_t124*_t5*_t78*_t9
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t106*_t123*_t17*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t106*_t124*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t16*_t21*_t5*_t78*_t9
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t16*_t24*_t5*_t78*_t9
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t17*_t21*_t24*_t5*_t78*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t106*_t13*_t5*_t78*_t9
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t106*_t17*_t5*_t78*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t110*_t12*_t124*_t46*_t5*_t9
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t110*_t12*_t17*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t110*_t123*_t16*_t46*_t5*_t9
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t110*_t123*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t110*_t124*_t13*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t110*_t13*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t110*_t13*_t46*_t5*_t9
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t110*_t16*_t21*_t46*_t5*_t9
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t110*_t17*_t21*_t24*_t46*_t5*_t9
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t110*_t17*_t46*_t5*_t9
-            + TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor*_t110*_t46*_t5*_t9
-            - TRAILER_LIT(53759562.0)*_t108*_t169 - TRAILER_LIT(71679416.0)*_t108*_t175
-            - TRAILER_LIT(8177600.0)*_t108*_t192 - TRAILER_LIT(16355200.0)*_t108*_t250
-            - TRAILER_LIT(30880000.0)*_t108*_t275 - TRAILER_LIT(34186476.0)*_t108*_t279
-            - TRAILER_LIT(45581968.0)*_t108*_t280 - TRAILER_LIT(55501384.0)*_t109*_t129*_t17
-            - TRAILER_LIT(13875346.0)*_t109*_t136 - TRAILER_LIT(17919854.0)*_t112*_t129
-            - TRAILER_LIT(19625327.0)*_t112*_t132 - TRAILER_LIT(24942400.0)*_t113*_t137
-            - TRAILER_LIT(17093238.0)*_t113*_t169 - TRAILER_LIT(22790984.0)*_t113*_t175
-            - TRAILER_LIT(49884800.0)*_t113*_t184 - TRAILER_LIT(97120000.0)*_t113*_t275
-            - TRAILER_LIT(107519124.0)*_t113*_t279 - TRAILER_LIT(143358832.0)*_t113*_t280
-            - TRAILER_LIT(7022546.0)*_t115*_t129 - TRAILER_LIT(9746873.0)*_t115*_t132
-            - _t116*_t228*_t287 - _t117*_t120 - _t118*_t121 - _t125*_t131 - _t128*_t151*_t337
-            - _t128*_t153*_t337 - TRAILER_LIT(6420000.0)*_t128*_t216
-            - TRAILER_LIT(18420000.0)*_t128*_t217 - _t128*_t344
-            - TRAILER_LIT(52244730.0)*_t129*_t166 - TRAILER_LIT(10707500.0)*_t129*_t171
-            - TRAILER_LIT(41626038.0)*_t13*_t135 - _t13*_t330 - _t13*_t332 - _t13*_t339 - _t13*_t340
-            - _t130*_t334 - _t130*_t342 - TRAILER_LIT(35426400.0)*_t130*_t65
-            - TRAILER_LIT(35426400.0)*_t130*_t74 - TRAILER_LIT(46822365.0)*_t132*_t166
-            - TRAILER_LIT(3585888.0)*_t134*_t216 - TRAILER_LIT(86438688.0)*_t134*_t217
-            - TRAILER_LIT(36902500.0)*_t136*_t160 - TRAILER_LIT(30555270.0)*_t136*_t162
-            - TRAILER_LIT(35839708.0)*_t136*_t216 - TRAILER_LIT(11395492.0)*_t136*_t217
-            - _t139*_t334 - _t139*_t342 - TRAILER_LIT(13514273.0)*_t140*_t21
-            - TRAILER_LIT(31537644.0)*_t141 - TRAILER_LIT(5697746.0)*_t145*_t24
-            - TRAILER_LIT(68018688.0)*_t146 - TRAILER_LIT(76388175.0)*_t147*_t160 - _t147*_t333
-            - _t147*_t335 - _t147*_t336 - _t147*_t345 - _t148*_t333 - _t148*_t335 - _t148*_t336
-            - _t148*_t345 - _t158 - TRAILER_LIT(25000000.0)*_t159*_t160
-            - TRAILER_LIT(15277635.0)*_t159*_t162 - TRAILER_LIT(1195000.0)*_t159*_t171
-            - TRAILER_LIT(25298854.0)*_t159*_t216 - TRAILER_LIT(4796746.0)*_t159*_t217 - _t161*_t341
-            - _t162*_t170 - _t163*_t166 - _t17*_t330 - _t17*_t332 - _t17*_t339 - _t17*_t340
-            - _t173*_t191 - _t173*_t289 - _t174*_t193 - _t176*_t195 - _t177*_t196 - _t178*_t197
-            - _t178*_t199 - _t179*_t341 - TRAILER_LIT(1434000.0)*_t180 - _t181*_t338 - _t183*_t338
-            - TRAILER_LIT(165600000.0)*_t184*_t295 - TRAILER_LIT(21067638.0)*_t186 - _t188*_t207
-            - TRAILER_LIT(104324550.0)*_t189 - TRAILER_LIT(28090184.0)*_t190 - _t193*_t283
-            - _t194*_t196 - _t197*_t343 - _t199*_t343 - TRAILER_LIT(174149100.0)*_t200 - _t201*_t202
-            - TRAILER_LIT(61110540.0)*_t203 - TRAILER_LIT(76388175.0)*_t204 - _t206*_t209
-            - _t207*_t287 - TRAILER_LIT(122221080.0)*_t210 - _t212 - _t213
-            - TRAILER_LIT(92160000.0)*_t215 - TRAILER_LIT(48560000.0)*_t216*_t22
-            - TRAILER_LIT(12840000.0)*_t216 - TRAILER_LIT(15440000.0)*_t217*_t22
-            - TRAILER_LIT(36840000.0)*_t217 - TRAILER_LIT(136037376.0)*_t218 - _t219*_t346
-            - _t220*_t223 - _t220*_t226 - _t221*_t346 - _t222*_t229 - _t222*_t239 - _t223*_t347
-            - _t225*_t234 - _t225*_t239 - _t226*_t347 - _t227*_t243 - _t230*_t254 - _t231*_t247
-            - TRAILER_LIT(68018688.0)*_t233 - _t235*_t249 - _t236*_t251 - _t237*_t254 - _t238*_t255
-            + _t241 + _t242 - _t243*_t252 - _t244*_t253 - _t246*_t253 - _t247*_t256 - _t248*_t257
-            - _t249*_t257 - _t259 - _t261 - _t264 - _t265 - _t266 - _t268 - _t271 - _t273 - _t274
-            - _t276*_t348 - _t278*_t348 + _t281 + _t282 + _t284 + _t285
-            - TRAILER_LIT(174149100.0)*_t286 + _t288 + _t291 + _t292 + _t293 - _t297 - _t299 - _t301
-            - _t304 - _t305 - TRAILER_LIT(92160000.0)*_t306 - TRAILER_LIT(136037376.0)*_t307 + _t310
-            + _t311 + _t312 + _t314 + _t316 - _t318 - _t320 + _t321 + _t322 - _t327 - _t331*_t51
-            - _t331*_t53 - _t344) + tau_right;
+    const trailer_real_t _t108 = _t56 - _t57;
+    const trailer_real_t _t109 = _t108*_t78;
+    const trailer_real_t _t110 = _t59 - _t60;
+    const trailer_real_t _t111 = _t110*_t78;
+    const trailer_real_t _t112 = _t62 - _t63;
+    const trailer_real_t _t113 = _t112*_t78;
+    const trailer_real_t _t114 = _t107*_t44 + _t109*_t45 + _t111*_t46 + _t113*_t47;
+    const trailer_real_t _t115 = -_t51 - _t52;
+    const trailer_real_t _t116 = _t115*_t74;
+    const trailer_real_t _t117 = -_t56 - _t57;
+    const trailer_real_t _t118 = _t117*_t74;
+    const trailer_real_t _t119 = -_t59 - _t60;
+    const trailer_real_t _t120 = _t119*_t74;
+    const trailer_real_t _t121 = -_t62 - _t63;
+    const trailer_real_t _t122 = _t121*_t74;
+    const trailer_real_t _t123 = _t116*_t44 + _t118*_t45 + _t120*_t46 + _t122*_t47;
+    const trailer_real_t _t124 = _t100*_t18 + _t114*_t80 + _t12*_t96 + _t123*_t76 + _t16*_t93
+            - _t9*_t98;
+    const trailer_real_t _t125 = J_theta_cart_left*_t123*_t84 + J_theta_cart_right*_t114*_t82
+            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
+    const trailer_real_t _t126 = -_t124 + tau_right;
+    const trailer_real_t _t127 = -_t125 + tau_left;
+    const trailer_real_t _t128 = TRAILER_LIT(1.0)/_t105;
+    const trailer_real_t _t129 = _t128*(-_t102*_t127 + _t104*_t126);
+    const trailer_real_t _t130 = _t128*(_t101*_t127 - _t103*_t126);
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -4292,14 +1063,14 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t103 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t101 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t104 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t105 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t105*(-_t329*_t45 + _t349*_t77);
-    const trailer_real_t r_1 = _t105*(_t103*_t329 - _t349*_t45);
+    const trailer_real_t r_0 = _t129;
+    const trailer_real_t r_1 = _t130;
     if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -4309,3822 +1080,443 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 3608 add, 11250 mul, 178 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 419 add, 626 mul, 41 div, 4 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
 {
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t1 = TRAILER_LIT(0.5)*_t0;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t2 = _t1*radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t3 = _t1*radius_right;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
-    const trailer_real_t _t6 = _t5*radius_right;
-    const trailer_real_t _t7 = _t5*radius_left;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t8 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t9 = _t8*radius_left;
-    const trailer_real_t _t10 = TRAILER_LIT(5.0)*_t0/TRAILER_LIT(6.0);
-    const trailer_real_t _t11 = TRAILER_LIT(250.0)*_t4/TRAILER_LIT(207.0);
-    const trailer_real_t _t12 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t13 = _t12*radius_left;
-    const trailer_real_t _t14 = TRAILER_LIT(250.0)*_t0/TRAILER_LIT(207.0);
-    const trailer_real_t _t15 = TRAILER_LIT(5.0)*_t4/TRAILER_LIT(6.0);
-    const trailer_real_t _t16 = _t10*_t9 + _t11*_t9 - _t13*_t14 + _t13*_t15;
-    const trailer_real_t _t17 = _t8*radius_right;
-    const trailer_real_t _t18 = _t12*radius_right;
-    const trailer_real_t _t19 = _t10*_t17 - _t11*_t17 + _t14*_t18 + _t15*_t18;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t20 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t21 = _t20*_t9;
-    const trailer_real_t _t22 = TRAILER_LIT(77.0)*_t0/TRAILER_LIT(138.0);
-    const trailer_real_t _t23 = _t13*_t20;
-    const trailer_real_t _t24 = TRAILER_LIT(307.0)*_t0/TRAILER_LIT(414.0);
-    const trailer_real_t _t25 = TRAILER_LIT(77.0)*_t23/TRAILER_LIT(138.0);
-    const trailer_real_t _t26 = -TRAILER_LIT(307.0)*_t20*_t4*_t8*radius_left/TRAILER_LIT(414.0)
-            + _t21*_t22 + _t23*_t24 + _t25*_t4;
-    const trailer_real_t _t27 = _t17*_t20;
-    const trailer_real_t _t28 = TRAILER_LIT(41.0)*_t0/TRAILER_LIT(46.0);
-    const trailer_real_t _t29 = TRAILER_LIT(107.0)*_t4/TRAILER_LIT(414.0);
-    const trailer_real_t _t30 = _t18*_t20;
-    const trailer_real_t _t31 = TRAILER_LIT(107.0)*_t0/TRAILER_LIT(414.0);
-    const trailer_real_t _t32 = TRAILER_LIT(41.0)*_t4/TRAILER_LIT(46.0);
-    const trailer_real_t _t33 = _t27*_t28 + _t27*_t29 - _t30*_t31 + _t30*_t32;
-    const trailer_real_t _t34 = TRAILER_LIT(307.0)*_t4/TRAILER_LIT(414.0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t35 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t36 = _t35*_t9;
-    const trailer_real_t _t37 = _t13*_t35;
-    const trailer_real_t _t38 = _t28*_t36 + _t31*_t37 + _t32*_t37
-            - TRAILER_LIT(107.0)*_t35*_t4*_t8*radius_left/TRAILER_LIT(414.0);
-    const trailer_real_t _t39 = _t17*_t35;
-    const trailer_real_t _t40 = _t18*_t35;
-    const trailer_real_t _t41 = TRAILER_LIT(77.0)*_t4/TRAILER_LIT(138.0);
-    const trailer_real_t _t42 = _t22*_t39 - _t24*_t40 + _t34*_t39 + _t40*_t41;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t43 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t44 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t45 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t46 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t47 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t48 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t49 = TRAILER_LIT(1.0)/_t48;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t50 = J_theta_cart_left*_t49;
-    const trailer_real_t _t51 = TRAILER_LIT(32849.0)*_t44/TRAILER_LIT(171396.0);
-    const trailer_real_t _t52 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t53 = TRAILER_LIT(1.0)/_t52;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t54 = J_theta_cart_right*_t53;
-    const trailer_real_t _t55 = _t12*_t12;
-    const trailer_real_t _t56 = _t44*_t55;
-    const trailer_real_t _t57 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t58 = _t4*_t4;
-    const trailer_real_t _t59 = _t44*_t58;
-    const trailer_real_t _t60 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t61 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t62 = _t13*_t17;
-    const trailer_real_t _t63 = _t0*_t4;
-    const trailer_real_t _t64 = _t44*_t63;
-    const trailer_real_t _t65 = TRAILER_LIT(29522.0)*_t50/TRAILER_LIT(42849.0);
-    const trailer_real_t _t66 = TRAILER_LIT(29522.0)*_t54/TRAILER_LIT(42849.0);
-    const trailer_real_t _t67 = TRAILER_LIT(14761.0)*_t50/TRAILER_LIT(28566.0);
-    const trailer_real_t _t68 = TRAILER_LIT(14761.0)*_t54/TRAILER_LIT(28566.0);
-    const trailer_real_t _t69 = _t56*_t58;
-    const trailer_real_t _t70 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t71 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t72 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t73 = _t58*_t62;
-    const trailer_real_t _t74 = _t56*_t72;
-    const trailer_real_t _t75 = _t62*_t70;
-    const trailer_real_t _t76 = _t62*_t71;
-    const trailer_real_t _t77 = TRAILER_LIT(59044.0)*_t69/TRAILER_LIT(42849.0);
-    const trailer_real_t _t78 = TRAILER_LIT(14761.0)*_t50/TRAILER_LIT(14283.0);
-    const trailer_real_t _t79 = _t56*_t78;
-    const trailer_real_t _t80 = TRAILER_LIT(14761.0)*_t54/TRAILER_LIT(14283.0);
-    const trailer_real_t _t81 = TRAILER_LIT(59044.0)*_t62/TRAILER_LIT(42849.0);
-    const trailer_real_t _t82 = _t50*_t81;
-    const trailer_real_t _t83 = _t54*_t81;
-    const trailer_real_t _t84 = -_t43*_t44 - _t44*_t45 + _t44*_t46 + _t44*_t47 + _t50*_t51
-            + _t50*_t77 + _t51*_t54 + _t54*_t77 + _t56*_t57 - _t56*_t60 + _t56*_t63*_t80 - _t56*_t65
-            - _t56*_t66 + _t57*_t59 - _t59*_t60 - _t59*_t65 - _t59*_t66 + _t61*_t62 - _t61*_t64
-            - _t62*_t67 + _t62*_t68 + _t63*_t74 - _t63*_t75 + _t63*_t76 - _t63*_t79 + _t63*_t82
-            + _t63*_t83 + _t64*_t67 - _t64*_t68 - _t69*_t70 + _t69*_t71 - _t72*_t73 + _t73*_t78
-            - _t73*_t80;
-    const trailer_real_t _t85 = _t0*_t0;
-    const trailer_real_t _t86 = _t44*_t85;
-    const trailer_real_t _t87 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t88 = TRAILER_LIT(147610.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t89 = _t56*_t85;
-    const trailer_real_t _t90 = _t59*_t78;
-    const trailer_real_t _t91 = TRAILER_LIT(147610.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t92 = _t56*_t63;
-    const trailer_real_t _t93 = TRAILER_LIT(295220.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t94 = _t62*_t91;
-    const trailer_real_t _t95 = TRAILER_LIT(29522.0)*_t54/TRAILER_LIT(14283.0);
-    const trailer_real_t _t96 = TRAILER_LIT(29522.0)*_t50/TRAILER_LIT(14283.0);
-    const trailer_real_t _t97 = TRAILER_LIT(118088.0)*_t64/TRAILER_LIT(42849.0);
-    const trailer_real_t _t98 = _t62*_t87;
-    const trailer_real_t _t99 = TRAILER_LIT(236176.0)*_t92/TRAILER_LIT(42849.0);
-    const trailer_real_t _t100 = TRAILER_LIT(118088.0)*_t62/TRAILER_LIT(42849.0);
-    const trailer_real_t _t101 = TRAILER_LIT(118088.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t102 = _t101*_t50 + _t101*_t54 + _t58*_t94 - _t58*_t98;
-    const trailer_real_t _t103 = _t62*_t63;
-    const trailer_real_t _t104 = K_theta_cart_x_tractor_2*_t103;
-    const trailer_real_t _t105 = TRAILER_LIT(59044.0)*_t103/TRAILER_LIT(14283.0);
-    const trailer_real_t _t106 = TRAILER_LIT(295220.0)*_t104/TRAILER_LIT(14283.0) - _t105*_t50
-            + _t105*_t54 + _t69*_t88 + _t69*_t95 - _t69*_t96;
-    const trailer_real_t _t107 = radius_right*radius_right;
-    const trailer_real_t _t108 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t109 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t110 = _t107*_t50;
-    const trailer_real_t _t111 = _t107*_t54;
-    const trailer_real_t _t112 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t113 = _t107*_t112;
-    const trailer_real_t _t114 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t115 = _t107*_t114;
-    const trailer_real_t _t116 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t117 = _t107*_t116;
-    const trailer_real_t _t118 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t119 = _t12*_t8;
-    const trailer_real_t _t120 = _t107*_t119;
-    const trailer_real_t _t121 = _t107*_t63;
-    const trailer_real_t _t122 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t123 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t124 = TRAILER_LIT(10222.0)*_t110/TRAILER_LIT(42849.0);
-    const trailer_real_t _t125 = TRAILER_LIT(31178.0)*_t111/TRAILER_LIT(42849.0);
-    const trailer_real_t _t126 = TRAILER_LIT(23639.0)*_t110/TRAILER_LIT(28566.0);
-    const trailer_real_t _t127 = TRAILER_LIT(4387.0)*_t111/TRAILER_LIT(9522.0);
-    const trailer_real_t _t128 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t129 = _t107*_t58;
-    const trailer_real_t _t130 = _t129*_t55;
-    const trailer_real_t _t131 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t132 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t133 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t134 = _t119*_t129;
-    const trailer_real_t _t135 = _t107*_t55;
-    const trailer_real_t _t136 = _t135*_t63;
-    const trailer_real_t _t137 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t138 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t139 = _t120*_t131;
-    const trailer_real_t _t140 = _t120*_t132;
-    const trailer_real_t _t141 = _t55*_t58;
-    const trailer_real_t _t142 = TRAILER_LIT(20444.0)*_t110/TRAILER_LIT(42849.0);
-    const trailer_real_t _t143 = TRAILER_LIT(62356.0)*_t111/TRAILER_LIT(42849.0);
-    const trailer_real_t _t144 = TRAILER_LIT(23639.0)*_t110/TRAILER_LIT(14283.0);
-    const trailer_real_t _t145 = _t119*_t58;
-    const trailer_real_t _t146 = _t55*_t63;
-    const trailer_real_t _t147 = TRAILER_LIT(4387.0)*_t111/TRAILER_LIT(4761.0);
-    const trailer_real_t _t148 = _t142*_t63;
-    const trailer_real_t _t149 = _t143*_t63;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t150 = J_theta_right - _t107*_t108 + _t107*_t109 + _t107*_t43 + _t107*_t45
-            + _t107*_t46 - _t107*_t47 + TRAILER_LIT(94249.0)*_t110/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t111/TRAILER_LIT(171396.0) - _t113*_t55 - _t113*_t58
-            + _t115*_t55 + _t115*_t58 + _t117*_t55 + _t117*_t58 - _t118*_t120 + _t118*_t121
-            + _t119*_t126 + _t119*_t127 + _t119*_t148 - _t119*_t149 + _t120*_t122 - _t120*_t123
-            + _t120*_t128*_t63 - _t121*_t122 + _t121*_t123 - _t124*_t55 - _t124*_t58 + _t125*_t55
-            + _t125*_t58 - _t126*_t63 - _t127*_t63 + _t128*_t130 - _t130*_t131 - _t130*_t132
-            + _t133*_t134 - _t133*_t136 - _t134*_t137 + _t134*_t138 + _t136*_t137 - _t136*_t138
-            - _t139*_t63 - _t140*_t63 + _t141*_t142 - _t141*_t143 - _t144*_t145 + _t144*_t146
-            - _t145*_t147 + _t146*_t147;
-    const trailer_real_t _t151 = radius_left*radius_left;
-    const trailer_real_t _t152 = _t151*_t85;
-    const trailer_real_t _t153 = _t151*_t58;
-    const trailer_real_t _t154 = _t151*_t55;
-    const trailer_real_t _t155 = _t154*_t85;
-    const trailer_real_t _t156 = _t151*_t50;
-    const trailer_real_t _t157 = TRAILER_LIT(4387.0)*_t85/TRAILER_LIT(9522.0);
-    const trailer_real_t _t158 = _t151*_t54;
-    const trailer_real_t _t159 = TRAILER_LIT(23639.0)*_t85/TRAILER_LIT(28566.0);
-    const trailer_real_t _t160 = _t151*_t63;
-    const trailer_real_t _t161 = _t131*_t160;
-    const trailer_real_t _t162 = _t119*_t152;
-    const trailer_real_t _t163 = _t154*_t63;
-    const trailer_real_t _t164 = TRAILER_LIT(2000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t165 = _t119*_t153;
-    const trailer_real_t _t166 = TRAILER_LIT(62356.0)*_t156/TRAILER_LIT(42849.0);
-    const trailer_real_t _t167 = _t166*_t63;
-    const trailer_real_t _t168 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t169 = TRAILER_LIT(20444.0)*_t158/TRAILER_LIT(42849.0);
-    const trailer_real_t _t170 = _t119*_t169;
-    const trailer_real_t _t171 = TRAILER_LIT(40888.0)*_t54/TRAILER_LIT(42849.0);
-    const trailer_real_t _t172 = TRAILER_LIT(62356.0)*_t50/TRAILER_LIT(42849.0);
-    const trailer_real_t _t173 = _t154*_t58;
-    const trailer_real_t _t174 = _t173*_t50;
-    const trailer_real_t _t175 = _t173*_t54;
-    const trailer_real_t _t176 = _t119*_t160;
-    const trailer_real_t _t177 = TRAILER_LIT(5000.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t178 = TRAILER_LIT(2000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t179 = TRAILER_LIT(52390.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t180 = _t119*_t63;
-    const trailer_real_t _t181 = TRAILER_LIT(8774.0)*_t180/TRAILER_LIT(4761.0);
-    const trailer_real_t _t182 = TRAILER_LIT(47278.0)*_t180/TRAILER_LIT(14283.0);
-    const trailer_real_t _t183 = -_t133*_t173 + _t137*_t173 + _t138*_t173 + _t156*_t181
-            + _t158*_t182 + TRAILER_LIT(4387.0)*_t174/TRAILER_LIT(4761.0)
-            + TRAILER_LIT(23639.0)*_t175/TRAILER_LIT(14283.0) - _t176*_t177 + _t176*_t178
-            + _t176*_t179;
-    const trailer_real_t _t184 =
-            TRAILER_LIT(130975.0)*J_theta_cart*_t0*_t151*_t4/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(130975.0)*J_theta_cart*_t12*_t151*_t58*_t8/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(1250.0)*J_theta_cart*_t151*_t85/TRAILER_LIT(621.0)
-            + TRAILER_LIT(124712.0)*J_theta_cart_left*_t0*_t151*_t4*_t49*_t55/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(62356.0)*J_theta_cart_left*_t12*_t151*_t49*_t8*_t85/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(4387.0)*J_theta_cart_left*_t151*_t49*_t55*_t85/TRAILER_LIT(4761.0)
-            + TRAILER_LIT(4387.0)*J_theta_cart_left*_t151*_t49*_t58/TRAILER_LIT(9522.0)
-            + TRAILER_LIT(20444.0)*J_theta_cart_right*_t0*_t151*_t4*_t53/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*J_theta_cart_right*_t12*_t151*_t53*_t58*_t8/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(23639.0)*J_theta_cart_right*_t151*_t53*_t55*_t85/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(23639.0)*J_theta_cart_right*_t151*_t53*_t58/TRAILER_LIT(28566.0)
-            + TRAILER_LIT(52390.0)*K_theta_cart_x_tractor*_t0*_t151*_t4*_t55/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(26195.0)*K_theta_cart_x_tractor*_t12*_t151*_t8*_t85/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(1000.0)*K_theta_cart_x_tractor*_t151*_t55*_t85/TRAILER_LIT(207.0)
-            + TRAILER_LIT(500.0)*K_theta_cart_x_tractor*_t151*_t58/TRAILER_LIT(207.0)
-            + TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t4/TRAILER_LIT(207.0)
-            + TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t58*_t8/TRAILER_LIT(207.0)
-            + TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2*_t151*_t55*_t85/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2*_t151*_t58/TRAILER_LIT(28566.0)
-            - _t118*_t153 - _t122*_t152 - _t123*_t152 - _t128*_t162 - _t131*_t165 - _t132*_t162
-            - _t133*_t155 - _t156*_t157 - _t158*_t159 - _t161 - _t163*_t164 - _t163*_t168
-            - _t163*_t171 - _t165*_t172 - _t167 - _t170*_t85 - _t183;
-    const trailer_real_t _t185 = _t118*_t151;
-    const trailer_real_t _t186 = _t122*_t151;
-    const trailer_real_t _t187 = _t123*_t151;
-    const trailer_real_t _t188 = TRAILER_LIT(31178.0)*_t50/TRAILER_LIT(42849.0);
-    const trailer_real_t _t189 = TRAILER_LIT(10222.0)*_t54/TRAILER_LIT(42849.0);
-    const trailer_real_t _t190 = TRAILER_LIT(4387.0)*_t156/TRAILER_LIT(9522.0);
-    const trailer_real_t _t191 = TRAILER_LIT(23639.0)*_t158/TRAILER_LIT(28566.0);
-    const trailer_real_t _t192 = TRAILER_LIT(4387.0)*_t50/TRAILER_LIT(4761.0);
-    const trailer_real_t _t193 = TRAILER_LIT(23639.0)*_t54/TRAILER_LIT(14283.0);
-    const trailer_real_t _t194 = _t169*_t63;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t195 = J_theta_left + _t108*_t151 - _t109*_t151 - _t112*_t153
-            - _t112*_t154 + _t114*_t153 + _t114*_t154 - _t116*_t153 - _t116*_t154
-            + _t119*_t128*_t160 + _t119*_t132*_t160 - _t119*_t161 - _t119*_t167 + _t119*_t185
-            - _t119*_t186 - _t119*_t187 - _t119*_t190 - _t119*_t191 + _t119*_t194 + _t128*_t173
-            - _t131*_t173 + _t132*_t173 + _t133*_t163 - _t133*_t165 - _t137*_t163 + _t137*_t165
-            - _t138*_t163 + _t138*_t165 + _t151*_t43 + _t151*_t45 + _t151*_t46 - _t151*_t47
-            + _t153*_t188 - _t153*_t189 + _t154*_t188 - _t154*_t189
-            + TRAILER_LIT(11449.0)*_t156/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t158/TRAILER_LIT(171396.0) - _t163*_t192 - _t163*_t193
-            + _t165*_t192 + _t165*_t193 - TRAILER_LIT(62356.0)*_t174/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t175/TRAILER_LIT(42849.0) - _t185*_t63 + _t186*_t63 + _t187*_t63
-            + _t190*_t63 + _t191*_t63;
-    const trailer_real_t _t196 = _t107*_t85;
-    const trailer_real_t _t197 = _t196*_t55;
-    const trailer_real_t _t198 = _t119*_t196;
-    const trailer_real_t _t199 = _t55*_t85;
-    const trailer_real_t _t200 = TRAILER_LIT(52390.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t201 = _t119*_t143;
-    const trailer_real_t _t202 = TRAILER_LIT(40888.0)*_t110/TRAILER_LIT(42849.0);
-    const trailer_real_t _t203 = _t119*_t142;
-    const trailer_real_t _t204 = _t120*_t63;
-    const trailer_real_t _t205 = _t110*_t182 + _t111*_t181 - _t130*_t133 + _t130*_t137 - _t130*_t138
-            + _t141*_t144 + _t141*_t147 - _t177*_t204 + _t178*_t204 - _t179*_t204;
-    const trailer_real_t _t206 = _t110*_t159
-            + TRAILER_LIT(124712.0)*_t111*_t146/TRAILER_LIT(42849.0) + _t111*_t157 + _t118*_t129
-            - _t118*_t196 + _t121*_t128 - _t121*_t131 - _t121*_t132 - _t122*_t129 + _t122*_t196
-            + _t123*_t129 - _t123*_t196 - _t126*_t58 - _t127*_t58 + _t128*_t134 - _t128*_t198
-            - _t131*_t134 + _t131*_t198 - _t132*_t134 + _t132*_t198 + _t133*_t197 + _t136*_t164
-            - _t136*_t168 + _t136*_t200 - _t137*_t197 + _t138*_t197 - _t144*_t199 - _t146*_t202
-            - _t147*_t199 + _t148 - _t149 - _t201*_t58 + _t201*_t85 + _t203*_t58 - _t203*_t85
-            + _t205;
-    const trailer_real_t _t207 = -_t150*_t184 - _t195*_t206
-            + _t84*(TRAILER_LIT(738050.0)*J_theta_cart*_t92/TRAILER_LIT(42849.0) - _t100*_t50*_t85
-            - _t100*_t54*_t85 + _t102 + _t106 + _t50*_t97 - _t50*_t99 + _t54*_t97 - _t54*_t99
-            - _t59*_t72 - _t59*_t80 - _t64*_t87 + _t64*_t91 + _t72*_t86 - _t78*_t86 + _t80*_t86
-            - _t85*_t94 + _t85*_t98 - _t88*_t89 - _t89*_t95 + _t89*_t96 + _t90 - _t92*_t93);
-    const trailer_real_t _t208 = _t150*_t195 - _t84*_t84;
-    const trailer_real_t _t209 = TRAILER_LIT(1.0)/(_t208*_t208);
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t theta_tractor = q[2];
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t12 = -_t10*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t10*_t6;
+    const trailer_real_t _t14 = -_t11*_t9;
+    const trailer_real_t _t15 = -_t0*_t14 - _t11*_t6;
+    const trailer_real_t _t16 = -_t10*_t8;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t1*_t12 - _t10*_t7;
+    const trailer_real_t _t21 = -_t0*_t16 + _t20;
+    const trailer_real_t _t22 = -_t11*_t8;
+    const trailer_real_t _t23 = -_t1*_t22 - _t15;
+    const trailer_real_t _t24 = -TRAILER_LIT(5.0)*_t23/TRAILER_LIT(3.0);
+    const trailer_real_t _t25 = _t24/TRAILER_LIT(5.0);
+    const trailer_real_t _t26 = -_t1*_t14 + _t11*_t7;
+    const trailer_real_t _t27 = -_t0*_t22 + _t26;
     const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t _t210 = thetadot_right*thetadot_right;
-    const trailer_real_t _t211 = _t107*_t210;
-    const trailer_real_t _t212 = J_theta_cart_left*_t52;
-    const trailer_real_t _t213 = _t211*_t212;
+    const trailer_real_t _t28 = _t12*thetadot_right;
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t214 = thetadot_left*thetadot_left;
-    const trailer_real_t _t215 = _t151*_t214;
-    const trailer_real_t _t216 = _t212*_t215;
-    const trailer_real_t _t217 = J_theta_cart_right*_t48;
-    const trailer_real_t _t218 = _t215*_t217;
-    const trailer_real_t _t219 = _t211*_t217;
-    const trailer_real_t _t220 = _t48*_t52;
-    const trailer_real_t _t221 = _t215*_t220;
-    const trailer_real_t _t222 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t223 = _t135*_t210;
-    const trailer_real_t _t224 = TRAILER_LIT(17713200.0)*_t212;
-    const trailer_real_t _t225 = _t129*_t210;
-    const trailer_real_t _t226 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t227 = _t211*_t220;
+    const trailer_real_t _t29 = _t14*thetadot_left;
+    const trailer_real_t _t30 = _t28 + _t29;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t228 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t229 = _t12*_t12*_t12;
-    const trailer_real_t _t230 = _t4*_t4*_t4;
-    const trailer_real_t _t231 = _t0*_t213;
-    const trailer_real_t _t232 = _t231*_t8;
-    const trailer_real_t _t233 = _t229*_t230;
-    const trailer_real_t _t234 = _t219*_t233;
-    const trailer_real_t _t235 = _t0*_t8;
-    const trailer_real_t _t236 = _t216*_t235;
-    const trailer_real_t _t237 = _t0*_t229;
-    const trailer_real_t _t238 = TRAILER_LIT(7022546.0)*_t216;
-    const trailer_real_t _t239 = _t218*_t235;
-    const trailer_real_t _t240 = TRAILER_LIT(8982073.0)*_t12;
-    const trailer_real_t _t241 = _t4*_t8;
-    const trailer_real_t _t242 = TRAILER_LIT(9746873.0)*_t216;
-    const trailer_real_t _t243 = _t219*_t235;
-    const trailer_real_t _t244 = _t12*_t4;
-    const trailer_real_t _t245 = _t213*_t241;
-    const trailer_real_t _t246 = _t230*_t8;
-    const trailer_real_t _t247 = _t218*_t246;
-    const trailer_real_t _t248 = TRAILER_LIT(17919854.0)*_t219;
-    const trailer_real_t _t249 = TRAILER_LIT(19625327.0)*_t219;
-    const trailer_real_t _t250 = TRAILER_LIT(23617600.0)*_t212;
-    const trailer_real_t _t251 = _t121*_t210;
-    const trailer_real_t _t252 = TRAILER_LIT(23617600.0)*_t217;
-    const trailer_real_t _t253 = _t218*_t4;
-    const trailer_real_t _t254 = TRAILER_LIT(29815956.0)*_t12;
-    const trailer_real_t _t255 = _t212*_t214;
-    const trailer_real_t _t256 = _t173*_t255;
-    const trailer_real_t _t257 = _t130*_t210;
-    const trailer_real_t _t258 = _t218*_t229;
-    const trailer_real_t _t259 = _t230*_t258;
-    const trailer_real_t _t260 = _t229*_t4;
-    const trailer_real_t _t261 = _t213*_t260;
-    const trailer_real_t _t262 = _t12*_t230;
-    const trailer_real_t _t263 = _t214*_t217;
-    const trailer_real_t _t264 = _t173*_t263;
-    const trailer_real_t _t265 = _t216*_t233;
-    const trailer_real_t _t266 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t267 = _t214*_t220;
-    const trailer_real_t _t268 = _t154*_t267;
-    const trailer_real_t _t269 = _t153*_t267;
-    const trailer_real_t _t270 = _t44*thetadot_left;
-    const trailer_real_t _t271 = _t220*_t270;
-    const trailer_real_t _t272 = _t228*_t271;
-    const trailer_real_t _t273 = _t272*thetadot_right;
-    const trailer_real_t _t274 = _t0*_t12;
-    const trailer_real_t _t275 = J_theta_cart*_t221;
-    const trailer_real_t _t276 = TRAILER_LIT(1195000.0)*_t275;
-    const trailer_real_t _t277 = K_theta_cart_x_tractor*_t241;
-    const trailer_real_t _t278 = _t221*_t277;
-    const trailer_real_t _t279 = K_theta_cart_x_tractor_2*_t221;
-    const trailer_real_t _t280 = TRAILER_LIT(7858500.0)*_t235;
-    const trailer_real_t _t281 = TRAILER_LIT(12849000.0)*_t246;
-    const trailer_real_t _t282 = K_theta_cart_x_tractor*_t221;
-    const trailer_real_t _t283 = K_theta_cart_x_tractor_2*_t227;
-    const trailer_real_t _t284 = TRAILER_LIT(15277635.0)*_t283;
-    const trailer_real_t _t285 = _t212*_t223;
-    const trailer_real_t _t286 = TRAILER_LIT(17004672.0)*_t235;
-    const trailer_real_t _t287 = _t212*_t225;
-    const trailer_real_t _t288 = TRAILER_LIT(17093238.0)*_t274;
-    const trailer_real_t _t289 = _t153*_t212;
-    const trailer_real_t _t290 = _t214*_t289;
-    const trailer_real_t _t291 = TRAILER_LIT(21067638.0)*_t274;
-    const trailer_real_t _t292 = TRAILER_LIT(22141500.0)*_t235;
-    const trailer_real_t _t293 = TRAILER_LIT(22790984.0)*_t246;
-    const trailer_real_t _t294 = J_theta_cart*_t227;
-    const trailer_real_t _t295 = TRAILER_LIT(25000000.0)*_t294;
-    const trailer_real_t _t296 = TRAILER_LIT(26195000.0)*J_theta_cart;
-    const trailer_real_t _t297 = _t119*_t221;
-    const trailer_real_t _t298 = _t154*_t212;
-    const trailer_real_t _t299 = _t214*_t298;
-    const trailer_real_t _t300 = TRAILER_LIT(28090184.0)*_t246;
-    const trailer_real_t _t301 = TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t302 = _t221*_t63;
-    const trailer_real_t _t303 = TRAILER_LIT(36902500.0)*_t294;
-    const trailer_real_t _t304 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t305 = _t221*_t260;
-    const trailer_real_t _t306 = _t221*_t262;
-    const trailer_real_t _t307 = _t154*_t217;
-    const trailer_real_t _t308 = _t214*_t307;
-    const trailer_real_t _t309 = TRAILER_LIT(41626038.0)*_t241;
-    const trailer_real_t _t310 = K_theta_cart_x_tractor*_t237;
-    const trailer_real_t _t311 = _t227*_t310;
-    const trailer_real_t _t312 = _t227*_t277;
-    const trailer_real_t _t313 = _t56*thetadot_left;
-    const trailer_real_t _t314 = TRAILER_LIT(46080000.0)*_t217;
-    const trailer_real_t _t315 = _t313*_t314;
-    const trailer_real_t _t316 = _t59*thetadot_left;
-    const trailer_real_t _t317 = _t314*_t316;
-    const trailer_real_t _t318 = TRAILER_LIT(46822365.0)*_t279;
-    const trailer_real_t _t319 = TRAILER_LIT(47235200.0)*_t212;
-    const trailer_real_t _t320 = _t134*_t210;
-    const trailer_real_t _t321 = TRAILER_LIT(47235200.0)*_t217;
-    const trailer_real_t _t322 = TRAILER_LIT(52244730.0)*_t246;
-    const trailer_real_t _t323 = TRAILER_LIT(53759562.0)*_t274;
-    const trailer_real_t _t324 = _t217*_t225;
-    const trailer_real_t _t325 = TRAILER_LIT(55501384.0)*_t237;
-    const trailer_real_t _t326 = _t153*_t263;
-    const trailer_real_t _t327 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t328 = _t173*_t267;
-    const trailer_real_t _t329 = _t244*_t294;
-    const trailer_real_t _t330 = TRAILER_LIT(71679416.0)*_t246;
-    const trailer_real_t _t331 = _t217*_t223;
-    const trailer_real_t _t332 = TRAILER_LIT(73805000.0)*J_theta_cart;
-    const trailer_real_t _t333 = _t120*_t210;
-    const trailer_real_t _t334 = _t220*_t333;
-    const trailer_real_t _t335 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t336 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t337 = _t220*_t251;
-    const trailer_real_t _t338 = _t227*_t260;
-    const trailer_real_t _t339 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t340 = _t227*_t262;
-    const trailer_real_t _t341 = _t233*_t294;
-    const trailer_real_t _t342 = TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t343 = _t221*_t244;
-    const trailer_real_t _t344 = K_theta_cart_x_tractor*_t343;
-    const trailer_real_t _t345 = _t260*_t275;
-    const trailer_real_t _t346 = _t262*_t275;
-    const trailer_real_t _t347 = TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t348 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t349 = _t220*_t257;
-    const trailer_real_t _t350 = _t348*_t349;
-    const trailer_real_t _t351 = _t221*_t233;
-    const trailer_real_t _t352 = K_theta_cart_x_tractor*_t351;
-    const trailer_real_t _t353 = _t220*_t266;
-    const trailer_real_t _t354 = _t313*_t353;
-    const trailer_real_t _t355 = _t354*thetadot_right;
-    const trailer_real_t _t356 = _t316*_t353;
-    const trailer_real_t _t357 = _t356*thetadot_right;
-    const trailer_real_t _t358 = _t235*_t257;
-    const trailer_real_t _t359 = _t217*_t358;
-    const trailer_real_t _t360 = _t212*thetadot_right;
-    const trailer_real_t _t361 = _t69*thetadot_left;
-    const trailer_real_t _t362 = _t360*_t361;
-    const trailer_real_t _t363 = radius_right*thetadot_left;
-    const trailer_real_t _t364 = _t0*_t363;
-    const trailer_real_t _t365 = _t13*_t364;
-    const trailer_real_t _t366 = _t217*thetadot_right;
-    const trailer_real_t _t367 = TRAILER_LIT(4796746.0)*_t366;
-    const trailer_real_t _t368 = _t212*_t270;
-    const trailer_real_t _t369 = _t233*_t368;
-    const trailer_real_t _t370 = TRAILER_LIT(5668224.0)*_t369;
-    const trailer_real_t _t371 = TRAILER_LIT(11395492.0)*_t9;
-    const trailer_real_t _t372 = _t230*_t363;
-    const trailer_real_t _t373 = _t366*_t372;
-    const trailer_real_t _t374 = _t235*_t268;
-    const trailer_real_t _t375 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t376 = _t235*_t269;
-    const trailer_real_t _t377 = TRAILER_LIT(15440000.0)*thetadot_left;
-    const trailer_real_t _t378 = TRAILER_LIT(25298854.0)*_t360;
-    const trailer_real_t _t379 = _t220*_t223;
-    const trailer_real_t _t380 = _t235*_t379;
-    const trailer_real_t _t381 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t382 = _t220*_t225;
-    const trailer_real_t _t383 = _t235*_t382;
-    const trailer_real_t _t384 = _t216*_t63;
-    const trailer_real_t _t385 = TRAILER_LIT(31586400.0)*_t384;
-    const trailer_real_t _t386 = _t269*_t274;
-    const trailer_real_t _t387 = TRAILER_LIT(32122500.0)*J_theta_cart;
-    const trailer_real_t _t388 = TRAILER_LIT(35426400.0)*_t217*_t333;
-    const trailer_real_t _t389 = TRAILER_LIT(35839708.0)*_t9;
-    const trailer_real_t _t390 = _t360*_t372;
-    const trailer_real_t _t391 = TRAILER_LIT(38547000.0)*_t277;
-    const trailer_real_t _t392 = _t246*_t268;
-    const trailer_real_t _t393 = TRAILER_LIT(42830000.0)*J_theta_cart;
-    const trailer_real_t _t394 = TRAILER_LIT(43537275.0)*J_theta_cart;
-    const trailer_real_t _t395 = _t235*_t264;
-    const trailer_real_t _t396 = TRAILER_LIT(48560000.0)*thetadot_left;
-    const trailer_real_t _t397 = TRAILER_LIT(51396000.0)*_t310;
-    const trailer_real_t _t398 = TRAILER_LIT(52390000.0)*J_theta_cart;
-    const trailer_real_t _t399 = _t163*_t267;
-    const trailer_real_t _t400 = _t218*_t63;
-    const trailer_real_t _t401 = TRAILER_LIT(56733600.0)*_t400;
-    const trailer_real_t _t402 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t403 = _t165*_t267;
-    const trailer_real_t _t404 = _t235*_t256;
-    const trailer_real_t _t405 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t406 = _t220*_t405;
-    const trailer_real_t _t407 = _t313*_t406;
-    const trailer_real_t _t408 = _t407*thetadot_right;
-    const trailer_real_t _t409 = _t316*_t406;
-    const trailer_real_t _t410 = _t409*thetadot_right;
-    const trailer_real_t _t411 = _t274*_t382;
-    const trailer_real_t _t412 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t413 = _t217*_t270;
-    const trailer_real_t _t414 = _t260*_t413;
-    const trailer_real_t _t415 = TRAILER_LIT(102028032.0)*_t414;
-    const trailer_real_t _t416 = TRAILER_LIT(102028032.0)*_t13;
-    const trailer_real_t _t417 = _t366*_t416;
-    const trailer_real_t _t418 = TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t419 = _t241*_t379;
-    const trailer_real_t _t420 = _t246*_t379;
-    const trailer_real_t _t421 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t422 = TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t423 = TRAILER_LIT(147610000.0)*J_theta_cart;
-    const trailer_real_t _t424 = _t136*_t210;
-    const trailer_real_t _t425 = _t220*_t424;
-    const trailer_real_t _t426 = _t237*_t382;
-    const trailer_real_t _t427 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t428 = _t241*_t268;
-    const trailer_real_t _t429 = TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t430 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t431 = _t220*_t320;
-    const trailer_real_t _t432 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t433 = _t237*_t269;
-    const trailer_real_t _t434 = _t233*_t271;
-    const trailer_real_t _t435 = TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t436 = _t434*_t435;
-    const trailer_real_t _t437 = _t436*thetadot_right;
-    const trailer_real_t _t438 = _t220*thetadot_left;
-    const trailer_real_t _t439 = _t347*_t438;
-    const trailer_real_t _t440 = _t439*_t69;
-    const trailer_real_t _t441 = _t440*thetadot_right;
-    const trailer_real_t _t442 = _t260*_t271;
-    const trailer_real_t _t443 = TRAILER_LIT(152776350.0)*J_theta_cart;
-    const trailer_real_t _t444 = _t442*_t443;
-    const trailer_real_t _t445 = _t444*thetadot_right;
-    const trailer_real_t _t446 = _t438*thetadot_right;
-    const trailer_real_t _t447 = _t230*radius_right;
-    const trailer_real_t _t448 = _t13*_t447;
-    const trailer_real_t _t449 = _t446*_t448;
-    const trailer_real_t _t450 = _t443*_t449;
-    const trailer_real_t _t451 = TRAILER_LIT(142921080.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t452 = _t4*radius_right;
-    const trailer_real_t _t453 = _t13*_t452;
-    const trailer_real_t _t454 = _t446*_t453;
-    const trailer_real_t _t455 = _t451*_t454;
-    const trailer_real_t _t456 = _t446*_t62;
-    const trailer_real_t _t457 = _t335*_t456;
-    const trailer_real_t _t458 = TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t459 = _t447*_t9;
-    const trailer_real_t _t460 = _t446*_t459;
-    const trailer_real_t _t461 = _t458*_t460;
-    const trailer_real_t _t462 = TRAILER_LIT(51255270.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t463 = _t0*radius_right;
-    const trailer_real_t _t464 = _t13*_t463;
-    const trailer_real_t _t465 = _t446*_t464;
-    const trailer_real_t _t466 = _t462*_t465;
-    const trailer_real_t _t467 = _t463*_t9;
-    const trailer_real_t _t468 = TRAILER_LIT(20700000.0)*_t467;
-    const trailer_real_t _t469 = K_theta_cart_x_tractor*_t446;
-    const trailer_real_t _t470 = _t468*_t469;
-    const trailer_real_t _t471 = TRAILER_LIT(30880000.0)*_t366;
-    const trailer_real_t _t472 = _t92*thetadot_left;
-    const trailer_real_t _t473 = _t364*_t9;
-    const trailer_real_t _t474 = TRAILER_LIT(34009344.0)*_t366;
-    const trailer_real_t _t475 = _t473*_t474;
-    const trailer_real_t _t476 = _t363*_t4;
-    const trailer_real_t _t477 = _t476*_t9;
-    const trailer_real_t _t478 = _t477*_t55;
-    const trailer_real_t _t479 = TRAILER_LIT(34186476.0)*_t366;
-    const trailer_real_t _t480 = _t237*_t316;
-    const trailer_real_t _t481 = TRAILER_LIT(45581968.0)*_t480;
-    const trailer_real_t _t482 = _t452*_t9;
-    const trailer_real_t _t483 = _t446*_t482;
-    const trailer_real_t _t484 = _t462*_t483;
-    const trailer_real_t _t485 = _t237*thetadot_right;
-    const trailer_real_t _t486 = _t271*_t485;
-    const trailer_real_t _t487 = _t458*_t486;
-    const trailer_real_t _t488 = _t302*_t327;
-    const trailer_real_t _t489 = _t446*_t64;
-    const trailer_real_t _t490 = _t335*_t489;
-    const trailer_real_t _t491 = TRAILER_LIT(97120000.0)*_t360;
-    const trailer_real_t _t492 = TRAILER_LIT(101850900.0)*J_theta_cart;
-    const trailer_real_t _t493 = _t454*_t492;
-    const trailer_real_t _t494 = _t235*_t349;
-    const trailer_real_t _t495 = TRAILER_LIT(107519124.0)*_t360;
-    const trailer_real_t _t496 = TRAILER_LIT(138000000.0)*J_theta_cart;
-    const trailer_real_t _t497 = _t438*_t496;
-    const trailer_real_t _t498 = _t497*_t69;
-    const trailer_real_t _t499 = _t498*thetadot_right;
-    const trailer_real_t _t500 = TRAILER_LIT(143358832.0)*_t480;
-    const trailer_real_t _t501 = _t302*_t347;
-    const trailer_real_t _t502 = _t334*_t348;
-    const trailer_real_t _t503 = TRAILER_LIT(183331620.0)*_t260;
-    const trailer_real_t _t504 = K_theta_cart_x_tractor*_t503;
-    const trailer_real_t _t505 = _t271*_t504;
-    const trailer_real_t _t506 = _t505*thetadot_right;
-    const trailer_real_t _t507 = TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t508 = _t449*_t507;
-    const trailer_real_t _t509 = TRAILER_LIT(203701800.0)*J_theta_cart;
-    const trailer_real_t _t510 = _t434*_t509;
-    const trailer_real_t _t511 = _t510*thetadot_right;
-    const trailer_real_t _t512 = _t235*_t328;
-    const trailer_real_t _t513 = K_theta_cart_x_tractor_2*_t220;
-    const trailer_real_t _t514 = TRAILER_LIT(244442160.0)*_t513;
-    const trailer_real_t _t515 = _t485*_t514;
-    const trailer_real_t _t516 = _t316*_t515;
-    const trailer_real_t _t517 = TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t518 = _t482*_t55;
-    const trailer_real_t _t519 = _t446*_t518;
-    const trailer_real_t _t520 = _t517*_t519;
-    const trailer_real_t _t521 = _t446*_t92;
-    const trailer_real_t _t522 = _t429*_t521;
-    const trailer_real_t _t523 = _t467*_t55;
-    const trailer_real_t _t524 = TRAILER_LIT(50925450.0)*J_theta_cart;
-    const trailer_real_t _t525 = _t446*_t524;
-    const trailer_real_t _t526 = _t523*_t525;
-    const trailer_real_t _t527 = _t467*_t58;
-    const trailer_real_t _t528 = _t525*_t527;
-    const trailer_real_t _t529 = TRAILER_LIT(3840000.0)*_t360;
-    const trailer_real_t _t530 = _t103*thetadot_left;
-    const trailer_real_t _t531 = _t141*_t473;
-    const trailer_real_t _t532 = _t360*_t531;
-    const trailer_real_t _t533 = TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t534 = _t446*_t533;
-    const trailer_real_t _t535 = _t523*_t534;
-    const trailer_real_t _t536 = _t527*_t534;
-    const trailer_real_t _t537 = _t446*_t73;
-    const trailer_real_t _t538 = _t429*_t537;
-    const trailer_real_t _t539 = _t464*_t58;
-    const trailer_real_t _t540 = _t446*_t539;
-    const trailer_real_t _t541 = _t517*_t540;
-    const trailer_real_t _t542 = TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t543 = _t55*_t9;
-    const trailer_real_t _t544 = _t447*_t543;
-    const trailer_real_t _t545 = _t446*_t544;
-    const trailer_real_t _t546 = _t542*_t545;
-    const trailer_real_t _t547 = _t446*_t467;
-    const trailer_real_t _t548 = _t141*_t547;
-    const trailer_real_t _t549 = _t435*_t548;
-    const trailer_real_t _t550 = _t103*_t439;
-    const trailer_real_t _t551 = _t550*thetadot_right;
-    const trailer_real_t _t552 = _t103*_t497;
-    const trailer_real_t _t553 = _t552*thetadot_right;
-    const trailer_real_t _t554 = _t509*_t548;
-    const trailer_real_t _t555 = TRAILER_LIT(34500000.0)*J_theta_cart;
-    const trailer_real_t _t556 = TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t557 = TRAILER_LIT(120000000.0)*_t513;
-    const trailer_real_t _t558 = _t313*_t557;
-    const trailer_real_t _t559 = _t316*_t557;
-    const trailer_real_t _t560 = TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t561 = TRAILER_LIT(100000000.0)*J_theta_cart;
-    const trailer_real_t _t562 = TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t563 = TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t564 = _t442*_t563;
-    const trailer_real_t _t565 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t566 = _t446*_t565;
-    const trailer_real_t _t567 = TRAILER_LIT(200000000.0)*J_theta_cart;
-    const trailer_real_t _t568 = TRAILER_LIT(221415000.0)*J_theta_cart;
-    const trailer_real_t _t569 = TRAILER_LIT(240000000.0)*_t469;
-    const trailer_real_t _t570 = TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t571 = TRAILER_LIT(295220000.0)*J_theta_cart;
-    const trailer_real_t _t572 = _t220*thetadot_right;
-    const trailer_real_t _t573 = _t316*_t572;
-    const trailer_real_t _t574 = TRAILER_LIT(354264000.0)*_t310;
-    const trailer_real_t _t575 =
-            -TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t12*_t48*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            - TRAILER_LIT(17250000.0)*J_theta_cart*_t0*_t151*_t214*_t48*_t52*_t8
-            -
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t0*_t229*_t48*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t0*_t4*_t48*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t12*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            - TRAILER_LIT(34500000.0)*J_theta_cart*_t151*_t214*_t48*_t52
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t230*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t4*_t48*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t0*_t12*_t48*_t52*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t0*_t229*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t0*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            - TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t12*_t48*_t52*_t58*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t230*_t48*_t52*_t55*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t55*_t58*_t8
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t12*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t229*_t230*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*_t55*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right + _t221*_t556 + _t227*_t555
-            + TRAILER_LIT(17250000.0)*_t235*_t294 + _t332*_t483 + _t332*_t486 + _t336*_t460
-            + _t449*_t563 + _t456*_t562 + _t465*_t560 + _t489*_t561 + _t519*_t570 + _t523*_t566
-            + _t527*_t566 + _t537*_t567 + _t540*_t568 + _t545*_t571 + _t558*thetadot_right
-            + _t559*thetadot_right + _t564*thetadot_right + _t569*_t92 + _t573*_t574;
-    const trailer_real_t _t576 = TRAILER_LIT(5.0)*_t49*_t53/TRAILER_LIT(70957944.0);
-    const trailer_real_t _t577 = _t576*radius_left;
-    const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t578 =
-            _t577*(TRAILER_LIT(110707500.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t107*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t107*_t210*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t107*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t0*_t12*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t0*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t0*_t151*_t214*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(104324550.0)*J_theta_cart*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t151*_t214*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t151*_t214*_t48*_t52*_t55*_t58
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t4*_t52*_t8
-            + TRAILER_LIT(13514273.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t52
-            + TRAILER_LIT(22790984.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52*_t58
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52*_t55
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t0*_t107*_t210*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(9746873.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(28090184.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52*_t58
-            + TRAILER_LIT(49884800.0)*J_theta_cart_left*_t0*_t151*_t214*_t4*_t52*_t55
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t151*_t214*_t52*_t55*_t8
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t151*_t214*_t52*_t58*_t8
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t0*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t0*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(31537644.0)*J_theta_cart_left*_t107*_t12*_t210*_t4*_t52
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t8
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t107*_t210*_t229*_t230*_t52
-            + TRAILER_LIT(5697746.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t8
-            + TRAILER_LIT(17093238.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t107*_t210*_t52*_t55*_t58
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t12*_t151*_t214*_t230*_t52
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t8
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_left*_t12*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t151*_t214*_t229*_t4*_t52
-            + TRAILER_LIT(7022546.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t8
-            + TRAILER_LIT(21067638.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t151*_t214*_t52*_t55
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(12840000.0)*J_theta_cart_left*_t52*radius_left*radius_right*thetadot_left
-            *thetadot_right + TRAILER_LIT(19625327.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48
-            + TRAILER_LIT(71679416.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48*_t58
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t0*_t107*_t210*_t4*_t48*_t55
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t107*_t210*_t48*_t55*_t8
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t107*_t210*_t48*_t58*_t8
-            + TRAILER_LIT(41626038.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t0*_t12*_t4*_t48*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(13875346.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t0*_t151*_t214*_t4*_t48
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t151*_t214*_t48*_t55*_t8
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t151*_t214*_t48*_t58*_t8
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t0*_t48*_t55*_t58*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t0*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t107*_t12*_t210*_t230*_t48
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t8
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t107*_t210*_t229*_t4*_t48
-            + TRAILER_LIT(17919854.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t8
-            + TRAILER_LIT(53759562.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t107*_t210*_t48*_t55
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t107*_t210*_t48*_t58
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t12*_t151*_t214*_t230*_t48
-            + TRAILER_LIT(16355200.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t58*_t8
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_right*_t12*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t151*_t214*_t229*_t4*_t48
-            + TRAILER_LIT(55501384.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t55*_t8
-            + TRAILER_LIT(8982073.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t8
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t151*_t214*_t48*_t55
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t229*_t230*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t48*_t55*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(36840000.0)*J_theta_cart_right*_t48*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            +
-            TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t48*_t52*_t8
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t107*_t210*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t48*_t52*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t55
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t58
-            - TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t512
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t4*_t48*_t52
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t55
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t55
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t58
-            - _t0*_t218*_t240 - TRAILER_LIT(8177600.0)*_t119*_t218 - _t119*_t385 - _t119*_t401
-            - _t119*_t488 - _t119*_t501 - TRAILER_LIT(16355200.0)*_t163*_t263
-            - TRAILER_LIT(49884800.0)*_t165*_t255 - TRAILER_LIT(5697746.0)*_t213*_t237
-            - TRAILER_LIT(51014016.0)*_t213*_t262 - TRAILER_LIT(4943400.0)*_t213
-            - TRAILER_LIT(36951756.0)*_t216*_t244 - TRAILER_LIT(24942400.0)*_t216*_t63
-            - TRAILER_LIT(7896600.0)*_t216 - TRAILER_LIT(35426400.0)*_t217*_t257
-            - TRAILER_LIT(14183400.0)*_t218 - TRAILER_LIT(12745356.0)*_t219*_t244
-            - TRAILER_LIT(22656600.0)*_t219 - _t221*_t222 - _t223*_t224 - _t224*_t225 - _t226*_t227
-            - _t227*_t228 - _t227*_t233*_t348 - _t227*_t244*_t342 - TRAILER_LIT(2471700.0)*_t232
-            - TRAILER_LIT(2834112.0)*_t234 - TRAILER_LIT(20700000.0)*_t235*_t282 - _t235*_t350
-            - TRAILER_LIT(3948300.0)*_t236 - _t237*_t238 - _t237*_t248
-            - TRAILER_LIT(10707500.0)*_t237*_t275 - TRAILER_LIT(30555270.0)*_t237*_t283
-            - TRAILER_LIT(7091700.0)*_t239 - _t241*_t242 - _t241*_t249 - _t241*_t284
-            - TRAILER_LIT(11328300.0)*_t243 - TRAILER_LIT(13514273.0)*_t245 - _t246*_t303
-            - TRAILER_LIT(13875346.0)*_t247 - _t250*_t251 - _t251*_t252 - _t253*_t254
-            - TRAILER_LIT(31586400.0)*_t256 - TRAILER_LIT(45448512.0)*_t259
-            - TRAILER_LIT(51014016.0)*_t261 - TRAILER_LIT(56733600.0)*_t264
-            - TRAILER_LIT(66006912.0)*_t265 - _t266*_t268 - _t266*_t269 - _t268*_t391 - _t269*_t397
-            + _t273 - _t274*_t276 - _t274*_t295 - _t274*_t318 - TRAILER_LIT(1434000.0)*_t278
-            - _t279*_t280 - _t279*_t322 - _t281*_t282 - _t283*_t292 - _t285*_t286 - _t285*_t293
-            - _t286*_t287 - _t287*_t288 - _t290*_t291 - _t296*_t297 - _t297*_t335 - _t299*_t300
-            - _t301*_t302 - _t304*_t305 - _t304*_t306 - _t308*_t309 - TRAILER_LIT(44283000.0)*_t311
-            - TRAILER_LIT(44283000.0)*_t312 - _t315*thetadot_right - _t317*thetadot_right
-            - _t319*_t320 - _t320*_t321 - _t323*_t324 - _t325*_t326 - _t327*_t328 - _t328*_t347
-            - TRAILER_LIT(68175450.0)*_t329 - _t330*_t331 - _t332*_t334 - _t336*_t337 - _t338*_t339
-            - _t339*_t340 - TRAILER_LIT(101850900.0)*_t341 - TRAILER_LIT(125189460.0)*_t344
-            - TRAILER_LIT(130611825.0)*_t345 - TRAILER_LIT(130611825.0)*_t346 - _t350
-            - TRAILER_LIT(208978920.0)*_t352 + _t355 + _t357 - TRAILER_LIT(2834112.0)*_t359
-            - _t360*_t396*_t62 - _t360*_t500 - TRAILER_LIT(3840000.0)*_t362 - _t365*_t367
-            - _t365*_t378 - _t366*_t377*_t62 - _t366*_t481 - _t370*thetadot_right - _t371*_t373
-            - _t372*_t417 - _t374*_t375 - _t374*_t394 - _t375*_t376 - _t376*_t394 - _t380*_t381
-            - _t381*_t383 - _t386*_t387 - _t388*_t63 - _t389*_t390 - _t392*_t393
-            - TRAILER_LIT(45448512.0)*_t395 - _t398*_t399 - _t399*_t429 - _t402*_t403
-            - TRAILER_LIT(66006912.0)*_t404 - _t408 - _t410 - _t411*_t412 - _t411*_t422
-            - _t415*thetadot_right - _t418*_t419 - _t420*_t421 - _t420*_t430 - _t423*_t425
-            - _t423*_t426 - _t427*_t428 - _t430*_t431 - _t432*_t433 + _t437 + _t441 + _t445 + _t450
-            + _t455 + _t457 + _t461 + _t466 + _t470 - _t471*_t472 - _t472*_t491 - _t475*_t55
-            - _t475*_t58 - _t478*_t479 - _t478*_t495 - _t484 - _t487 - _t490 - _t492*_t494 - _t493
-            - _t499 - _t502*_t63 - _t506 - _t508 - _t511 + _t516 + _t520 + _t522 + _t526 + _t528
-            - _t529*_t530 - TRAILER_LIT(5668224.0)*_t532 - _t535 - _t536 - _t538 - _t541 - _t546
-            + _t549 + _t551 - _t553 - _t554 - _t575) + tau_left;
-    const trailer_real_t _t579 = TRAILER_LIT(15793200.0)*_t217;
-    const trailer_real_t _t580 = TRAILER_LIT(17713200.0)*_t214;
-    const trailer_real_t _t581 = TRAILER_LIT(28366800.0)*_t212;
-    const trailer_real_t _t582 = TRAILER_LIT(2125584.0)*_t216;
-    const trailer_real_t _t583 = _t0*_t258;
-    const trailer_real_t _t584 = TRAILER_LIT(7022546.0)*_t219;
-    const trailer_real_t _t585 = TRAILER_LIT(8177600.0)*_t212;
-    const trailer_real_t _t586 = TRAILER_LIT(9746873.0)*_t219;
-    const trailer_real_t _t587 = TRAILER_LIT(12840000.0)*_t413;
-    const trailer_real_t _t588 = _t253*_t8;
-    const trailer_real_t _t589 = TRAILER_LIT(13875346.0)*_t213;
-    const trailer_real_t _t590 = TRAILER_LIT(17919854.0)*_t216;
-    const trailer_real_t _t591 = TRAILER_LIT(19625327.0)*_t216;
-    const trailer_real_t _t592 = TRAILER_LIT(23617600.0)*_t63;
-    const trailer_real_t _t593 = TRAILER_LIT(24942400.0)*_t217;
-    const trailer_real_t _t594 = TRAILER_LIT(31537644.0)*_t12;
-    const trailer_real_t _t595 = TRAILER_LIT(34086384.0)*_t213;
-    const trailer_real_t _t596 = TRAILER_LIT(36840000.0)*_t368;
-    const trailer_real_t _t597 = TRAILER_LIT(49505184.0)*_t219;
-    const trailer_real_t _t598 = TRAILER_LIT(68018688.0)*_t230;
-    const trailer_real_t _t599 = TRAILER_LIT(708528.0)*_t235;
-    const trailer_real_t _t600 = TRAILER_LIT(1195000.0)*_t294;
-    const trailer_real_t _t601 = TRAILER_LIT(1920000.0)*_t217;
-    const trailer_real_t _t602 = _t313*_t601;
-    const trailer_real_t _t603 = _t316*_t601;
-    const trailer_real_t _t604 = TRAILER_LIT(10707500.0)*_t294;
-    const trailer_real_t _t605 = TRAILER_LIT(11362128.0)*_t235;
-    const trailer_real_t _t606 = K_theta_cart_x_tractor*_t227;
-    const trailer_real_t _t607 = TRAILER_LIT(15277635.0)*_t279;
-    const trailer_real_t _t608 = TRAILER_LIT(16355200.0)*_t212;
-    const trailer_real_t _t609 = TRAILER_LIT(16501728.0)*_t235;
-    const trailer_real_t _t610 = TRAILER_LIT(25000000.0)*_t275;
-    const trailer_real_t _t611 = TRAILER_LIT(30555270.0)*_t246;
-    const trailer_real_t _t612 = TRAILER_LIT(44283000.0)*_t221;
-    const trailer_real_t _t613 = TRAILER_LIT(46822365.0)*_t283;
-    const trailer_real_t _t614 = TRAILER_LIT(47235200.0)*_t165;
-    const trailer_real_t _t615 = TRAILER_LIT(49884800.0)*_t217;
-    const trailer_real_t _t616 = TRAILER_LIT(52244730.0)*_t237;
-    const trailer_real_t _t617 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t618 = _t328*_t348;
-    const trailer_real_t _t619 = _t13*_t476;
-    const trailer_real_t _t620 = TRAILER_LIT(3585888.0)*_t366;
-    const trailer_real_t _t621 = TRAILER_LIT(4251168.0)*_t414;
-    const trailer_real_t _t622 = TRAILER_LIT(4251168.0)*_t13;
-    const trailer_real_t _t623 = TRAILER_LIT(4796746.0)*_t360;
-    const trailer_real_t _t624 = TRAILER_LIT(6420000.0)*_t366;
-    const trailer_real_t _t625 = TRAILER_LIT(25298854.0)*_t366;
-    const trailer_real_t _t626 = TRAILER_LIT(25462725.0)*J_theta_cart;
-    const trailer_real_t _t627 = TRAILER_LIT(35426400.0)*_t400;
-    const trailer_real_t _t628 = TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t629 = TRAILER_LIT(136037376.0)*_t369;
-    const trailer_real_t _t630 = TRAILER_LIT(1417056.0)*_t366;
-    const trailer_real_t _t631 = _t473*_t630;
-    const trailer_real_t _t632 = TRAILER_LIT(30880000.0)*_t360;
-    const trailer_real_t _t633 = TRAILER_LIT(34186476.0)*_t360;
-    const trailer_real_t _t634 = _t327*_t334;
-    const trailer_real_t _t635 = TRAILER_LIT(97120000.0)*_t366;
-    const trailer_real_t _t636 = TRAILER_LIT(107519124.0)*_t366;
-    const trailer_real_t _t637 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t638 = _t334*_t496;
-    const trailer_real_t _t639 = _t302*_t348;
-    const trailer_real_t _t640 = _t360*thetadot_left;
-    const trailer_real_t _t641 = TRAILER_LIT(92160000.0)*_t103;
-    const trailer_real_t _t642 = _t576*radius_right;
+    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t36 = -K_theta_tractor_x_tractor_2*_t2 + _t35;
+    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t38 = -K_theta_cart_x_tractor_2*_t0 + _t37;
+    const trailer_real_t _t39 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t40 = _t33*_t39;
+    const trailer_real_t _t41 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t42 = _t37*_t41;
+    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t _t44 = _t34*_t39;
+    const trailer_real_t _t45 = -_t10*thetadot_right + _t11*thetadot_left;
+    const trailer_real_t _t46 = _t45*_t45;
+    const trailer_real_t _t47 = K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t48 = _t35*_t46 - _t46*_t47;
+    const trailer_real_t _t49 = _t18*thetadot_right + _t24*thetadot_left;
+    const trailer_real_t _t50 = _t49*_t49;
+    const trailer_real_t _t51 = _t37*_t50;
+    const trailer_real_t _t52 = _t43*_t50;
+    const trailer_real_t _t53 = _t51 - _t52;
+    const trailer_real_t _t54 = _t31*_t46 + _t32*_t46;
+    const trailer_real_t _t55 = _t33*_t50;
+    const trailer_real_t _t56 = _t34*_t50;
+    const trailer_real_t _t57 = _t55 + _t56;
+    const trailer_real_t _t58 = _t33*_t41;
+    const trailer_real_t _t59 = _t37*_t39;
+    const trailer_real_t _t60 = _t39*_t43;
+    const trailer_real_t _t61 = _t34*_t41;
+    const trailer_real_t _t62 = _t10*_t8;
+    const trailer_real_t _t63 = _t62*thetadot_right;
+    const trailer_real_t _t64 = _t11*_t8;
+    const trailer_real_t _t65 = _t64*thetadot_left;
+    const trailer_real_t _t66 = _t1*_t12;
+    const trailer_real_t _t67 = _t10*_t7;
+    const trailer_real_t _t68 = -_t0*_t62 + _t67;
+    const trailer_real_t _t69 = _t1*_t14;
+    const trailer_real_t _t70 = -_t11*_t7;
+    const trailer_real_t _t71 = -_t0*_t64 + _t70;
+    const trailer_real_t _t72 = -_t66 - _t68;
+    const trailer_real_t _t73 = -TRAILER_LIT(5.0)*_t72/TRAILER_LIT(3.0);
+    const trailer_real_t _t74 = _t73*thetadot_right;
+    const trailer_real_t _t75 = -_t69 - _t71;
+    const trailer_real_t _t76 = -TRAILER_LIT(5.0)*_t75/TRAILER_LIT(3.0);
+    const trailer_real_t _t77 = _t76*thetadot_left;
+    const trailer_real_t _t78 = TRAILER_LIT(5.0)*_t21/TRAILER_LIT(3.0);
+    const trailer_real_t _t79 = _t78*thetadot_right;
+    const trailer_real_t _t80 = TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
+    const trailer_real_t _t81 = _t80*thetadot_left;
+    const trailer_real_t _t82 = _t73/TRAILER_LIT(5.0);
+    const trailer_real_t _t83 = -_t1*_t62 + _t13;
+    const trailer_real_t _t84 = _t76/TRAILER_LIT(5.0);
+    const trailer_real_t _t85 = -_t1*_t64 + _t15;
+    const trailer_real_t _t86 = _t78/TRAILER_LIT(5.0);
+    const trailer_real_t _t87 = -_t10*_t6;
+    const trailer_real_t _t88 = _t0*_t12 - _t1*_t16 + _t87;
+    const trailer_real_t _t89 = _t80/TRAILER_LIT(5.0);
+    const trailer_real_t _t90 = _t11*_t6;
+    const trailer_real_t _t91 = _t0*_t14 - _t1*_t22 + _t90;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t92 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t93 = _t82 - _t83;
+    const trailer_real_t _t94 = _t92*_t93;
+    const trailer_real_t _t95 = _t94*thetadot_right;
+    const trailer_real_t _t96 = _t84 - _t85;
+    const trailer_real_t _t97 = _t92*_t96;
+    const trailer_real_t _t98 = _t97*thetadot_left;
+    const trailer_real_t _t99 = _t86 - _t88;
+    const trailer_real_t _t100 = _t92*_t99;
+    const trailer_real_t _t101 = _t100*thetadot_right;
+    const trailer_real_t _t102 = _t89 - _t91;
+    const trailer_real_t _t103 = _t102*_t92;
+    const trailer_real_t _t104 = _t103*thetadot_left;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t105 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t106 = -_t82 - _t83;
+    const trailer_real_t _t107 = _t105*_t106;
+    const trailer_real_t _t108 = _t107*thetadot_right;
+    const trailer_real_t _t109 = -_t84 - _t85;
+    const trailer_real_t _t110 = _t105*_t109;
+    const trailer_real_t _t111 = _t110*thetadot_left;
+    const trailer_real_t _t112 = -_t86 - _t88;
+    const trailer_real_t _t113 = _t105*_t112;
+    const trailer_real_t _t114 = _t113*thetadot_right;
+    const trailer_real_t _t115 = -_t89 - _t91;
+    const trailer_real_t _t116 = _t105*_t115;
+    const trailer_real_t _t117 = _t116*thetadot_left;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t118 = J_x_tractor*_t16;
+    const trailer_real_t _t119 = _t10*_t36;
+    const trailer_real_t _t120 = -_t18*_t38;
+    const trailer_real_t _t121 = _t118 + _t119 + _t120;
+    const trailer_real_t _t122 = J_x_tractor*_t12;
+    const trailer_real_t _t123 = _t31 + _t32;
+    const trailer_real_t _t124 = -_t10*_t123;
+    const trailer_real_t _t125 = _t33 + _t34;
+    const trailer_real_t _t126 = _t125*_t18;
+    const trailer_real_t _t127 = _t122 + _t124 + _t126;
+    const trailer_real_t _t128 = _t40 - _t41*_t43 + _t42 + _t44;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t129 = -J_theta_tractor*_t10 + _t12*_t123 + _t128*_t18 - _t16*_t36;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t130 = J_theta_cart*_t18;
+    const trailer_real_t _t131 = -_t16*_t38;
+    const trailer_real_t _t132 = -_t10*_t128;
+    const trailer_real_t _t133 = _t12*_t125;
+    const trailer_real_t _t134 = _t130 + _t131 + _t132 + _t133;
+    const trailer_real_t _t135 = -_t19 - _t21;
+    const trailer_real_t _t136 = _t105*_t135;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t137 = J_theta_cart_left*_t136;
+    const trailer_real_t _t138 = _t19 - _t21;
+    const trailer_real_t _t139 = _t138*_t92;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t140 = J_theta_cart_right*_t139;
+    const trailer_real_t _t141 = _t25 - _t27;
+    const trailer_real_t _t142 = _t141*_t92;
+    const trailer_real_t _t143 = -_t25 - _t27;
+    const trailer_real_t _t144 = _t105*_t143;
+    const trailer_real_t _t145 = _t137*_t144 + _t140*_t142;
+    const trailer_real_t _t146 = J_x_tractor*_t22;
+    const trailer_real_t _t147 = -_t11*_t36;
+    const trailer_real_t _t148 = -_t24*_t38;
+    const trailer_real_t _t149 = _t146 + _t147 + _t148;
+    const trailer_real_t _t150 = J_theta_tractor*_t11 + _t123*_t14 + _t128*_t24 - _t22*_t36;
+    const trailer_real_t _t151 = J_x_tractor*_t14;
+    const trailer_real_t _t152 = _t11*_t123;
+    const trailer_real_t _t153 = _t125*_t24;
+    const trailer_real_t _t154 = _t151 + _t152 + _t153;
+    const trailer_real_t _t155 = J_theta_cart*_t24;
+    const trailer_real_t _t156 = -_t22*_t38;
+    const trailer_real_t _t157 = _t11*_t128;
+    const trailer_real_t _t158 = _t125*_t14;
+    const trailer_real_t _t159 = _t155 + _t156 + _t157 + _t158;
+    const trailer_real_t _t160 = _t54 + _t57;
+    const trailer_real_t _t161 = _t28*_t45 + _t29*_t45;
+    const trailer_real_t _t162 = _t45*_t74 + _t45*_t77 + _t49*_t79 + _t49*_t81;
+    const trailer_real_t _t163 = J_x_tractor*_t161 + _t160 - _t162*_t38;
+    const trailer_real_t _t164 = _t48 + _t53;
+    const trailer_real_t _t165 = _t45*_t63 + _t45*_t65;
+    const trailer_real_t _t166 = J_x_tractor*_t165 + _t125*_t162 + _t164;
+    const trailer_real_t _t167 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t50/TRAILER_LIT(10.0) - _t39*_t52
+            - _t41*_t55 - _t41*_t56;
+    const trailer_real_t _t168 = _t123*_t165 + _t128*_t162 - _t161*_t36 + _t167;
+    const trailer_real_t _t169 = _t46*_t58 - _t46*_t59 + _t46*_t60 + _t46*_t61;
+    const trailer_real_t _t170 = J_theta_cart*_t162 + _t125*_t165 - _t161*_t38 + _t169;
+    const trailer_real_t _t171 = J_theta_cart_left*_t144;
+    const trailer_real_t _t172 = J_theta_cart_right*_t142;
+    const trailer_real_t _t173 = _t63 + _t65;
+    const trailer_real_t _t174 = _t74 + _t77;
+    const trailer_real_t _t175 = _t79 + _t81;
+    const trailer_real_t _t176 = _t95 + _t98;
+    const trailer_real_t _t177 = _t101 + _t104;
+    const trailer_real_t _t178 = _t108 + _t111;
+    const trailer_real_t _t179 = _t114 + _t117;
+    const trailer_real_t _t180 = _t58 - _t59 + _t60 + _t61;
+    const trailer_real_t _t181 = -_t10*_t24 + _t11*_t18;
+    const trailer_real_t _t182 = TRAILER_LIT(2.0)*_t171;
+    const trailer_real_t _t183 = TRAILER_LIT(2.0)*_t172;
+    const trailer_real_t _t184 = TRAILER_LIT(2.0)*_t11;
+    const trailer_real_t _t185 = _t184*_t24;
+    const trailer_real_t _t186 = TRAILER_LIT(2.0)*_t152;
+    const trailer_real_t _t187 = TRAILER_LIT(2.0)*_t153;
+    const trailer_real_t _t188 = TRAILER_LIT(2.0)*_t155 + TRAILER_LIT(2.0)*_t156
+            + TRAILER_LIT(2.0)*_t157 + TRAILER_LIT(2.0)*_t158;
+    const trailer_real_t _t189 = TRAILER_LIT(2.0)*_t49;
+    const trailer_real_t _t190 = _t189*_t37 - _t189*_t43;
+    const trailer_real_t _t191 = _t189*_t33 + _t189*_t34;
+    const trailer_real_t _t192 = TRAILER_LIT(3.0)*_t49/TRAILER_LIT(5.0);
+    const trailer_real_t _t193 = _t192*_t4;
+    const trailer_real_t _t194 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t49/TRAILER_LIT(5.0) - _t192*_t2*_t43
+            - _t193*_t33 - _t193*_t34;
+    const trailer_real_t _t195 = _t39*_t55 + _t39*_t56 + _t41*_t51 - _t41*_t52;
+    const trailer_real_t _t196 =
+            -TRAILER_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t4*_t46/TRAILER_LIT(10.0) + _t40*_t46
+            + _t42*_t46 + _t44*_t46;
+    const trailer_real_t _t197 = _t45*thetadot_right;
+    const trailer_real_t _t198 = _t45*thetadot_left;
+    const trailer_real_t _t199 = _t49*thetadot_right;
+    const trailer_real_t _t200 = _t49*thetadot_left;
+    const trailer_real_t _t201 = _t10*_t9;
+    const trailer_real_t _t202 = _t0*_t201 - _t1*_t62 - _t87;
+    const trailer_real_t _t203 = -TRAILER_LIT(5.0)*_t202/TRAILER_LIT(3.0);
+    const trailer_real_t _t204 = _t203/TRAILER_LIT(5.0);
+    const trailer_real_t _t205 = -_t1*_t201 + _t68;
+    const trailer_real_t _t206 = _t11*_t9;
+    const trailer_real_t _t207 = _t0*_t206 - _t1*_t64 - _t90;
+    const trailer_real_t _t208 = -TRAILER_LIT(5.0)*_t207/TRAILER_LIT(3.0);
+    const trailer_real_t _t209 = _t208/TRAILER_LIT(5.0);
+    const trailer_real_t _t210 = -_t1*_t206 + _t71;
+    const trailer_real_t _t211 = TRAILER_LIT(5.0)*_t83/TRAILER_LIT(3.0);
+    const trailer_real_t _t212 = _t211/TRAILER_LIT(5.0);
+    const trailer_real_t _t213 = _t0*_t62 + _t20;
+    const trailer_real_t _t214 = TRAILER_LIT(5.0)*_t85/TRAILER_LIT(3.0);
+    const trailer_real_t _t215 = _t214/TRAILER_LIT(5.0);
+    const trailer_real_t _t216 = _t0*_t64 + _t26;
+    const trailer_real_t _t217 = _t108*_t45 + _t111*_t45 + _t114*_t49 + _t117*_t49;
+    const trailer_real_t _t218 = J_theta_cart_left*_t217;
+    const trailer_real_t _t219 = _t101*_t49 + _t104*_t49 + _t45*_t95 + _t45*_t98;
+    const trailer_real_t _t220 = J_theta_cart_right*_t219;
+    const trailer_real_t _t221 = _t165*_t36;
+    const trailer_real_t _t222 = _t162*_t180;
+    const trailer_real_t _t223 = TRAILER_LIT(2.0)*_t137;
+    const trailer_real_t _t224 = TRAILER_LIT(2.0)*_t140;
+    const trailer_real_t _t225 = -TRAILER_LIT(2.0)*_t10;
+    const trailer_real_t _t226 = _t18*_t225;
+    const trailer_real_t _t227 = TRAILER_LIT(2.0)*_t124;
+    const trailer_real_t _t228 = TRAILER_LIT(2.0)*_t126;
+    const trailer_real_t _t229 = TRAILER_LIT(2.0)*_t130 + TRAILER_LIT(2.0)*_t131
+            + TRAILER_LIT(2.0)*_t132 + TRAILER_LIT(2.0)*_t133;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t230 = J_theta_cart_left*_t136*_t136 + J_theta_cart_right*_t139*_t139
+            + J_theta_right - _t10*_t129 + _t12*_t127 + _t121*_t16 + _t134*_t18;
+    const trailer_real_t _t231 = _t11*_t129 + _t121*_t22 + _t127*_t14 + _t134*_t24 + _t145;
+    const trailer_real_t _t232 = -_t10*_t150 + _t12*_t154 + _t145 + _t149*_t16 + _t159*_t18;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t233 = J_theta_cart_left*_t144*_t144 + J_theta_cart_right*_t142*_t142
+            + J_theta_left + _t11*_t150 + _t14*_t154 + _t149*_t22 + _t159*_t24;
+    const trailer_real_t _t234 = _t230*_t233 - _t231*_t232;
+    const trailer_real_t _t235 = TRAILER_LIT(1.0)/(_t234*_t234);
+    const trailer_real_t _t236 = -_t10*_t168 + _t12*_t166 + _t137*_t217 + _t140*_t219 + _t16*_t163
+            + _t170*_t18;
     const trailer_real_t tau_right = tau[0];
-    const trailer_real_t _t643 =
-            -_t642*(TRAILER_LIT(42830000.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t0*_t107*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t107*_t210*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t107*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t0*_t151*_t214*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t55
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(68175450.0)*J_theta_cart*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t151*_t214*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t8
-            - TRAILER_LIT(174149100.0)*J_theta_cart*_t494
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t4*_t52*_t8
-            + TRAILER_LIT(41626038.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t52*_t58
-            + TRAILER_LIT(13875346.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t0*_t107*_t210*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t0*_t107*_t210*_t52*_t8
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t4*_t52*_t8
-            + TRAILER_LIT(19625327.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(71679416.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52*_t58
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t0*_t151*_t214*_t4*_t52*_t55
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t0*_t151*_t214*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t0*_t151*_t214*_t52*_t8
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t0*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(29815956.0)*J_theta_cart_left*_t107*_t12*_t210*_t4*_t52
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t58*_t8
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t107*_t210*_t229*_t230*_t52
-            + TRAILER_LIT(55501384.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t55*_t8
-            + TRAILER_LIT(8982073.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t8
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t107*_t210*_t52*_t55*_t58
-            + TRAILER_LIT(14183400.0)*J_theta_cart_left*_t107*_t210*_t52
-            + TRAILER_LIT(12745356.0)*J_theta_cart_left*_t12*_t151*_t214*_t4*_t52
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t8
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t151*_t214*_t229*_t230*_t52
-            + TRAILER_LIT(17919854.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t8
-            + TRAILER_LIT(53759562.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t151*_t214*_t52*_t55*_t58
-            + TRAILER_LIT(22656600.0)*J_theta_cart_left*_t151*_t214*_t52
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t4*_t48*_t8
-            + TRAILER_LIT(9746873.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48
-            + TRAILER_LIT(28090184.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48*_t58
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t0*_t107*_t210*_t4*_t48*_t55
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t0*_t107*_t210*_t48*_t55*_t58*_t8
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t0*_t107*_t210*_t48*_t8
-            + TRAILER_LIT(13514273.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t12*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(22790984.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48*_t58
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t0*_t151*_t214*_t4*_t48*_t55
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t151*_t214*_t48*_t55*_t8
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t151*_t214*_t48*_t58*_t8
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t0*_t151*_t214*_t48*_t8
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t48*_t55*_t58*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(36951756.0)*J_theta_cart_right*_t107*_t12*_t210*_t4*_t48
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t8
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t107*_t210*_t229*_t230*_t48
-            + TRAILER_LIT(7022546.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t8
-            + TRAILER_LIT(21067638.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t107*_t210*_t48*_t55*_t58
-            + TRAILER_LIT(7896600.0)*J_theta_cart_right*_t107*_t210*_t48
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t12*_t151*_t214*_t230*_t48
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t8
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t151*_t214*_t229*_t4*_t48
-            + TRAILER_LIT(5697746.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t8
-            + TRAILER_LIT(17093238.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t151*_t214*_t48*_t55
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t151*_t214*_t48*_t58
-            + TRAILER_LIT(4943400.0)*J_theta_cart_right*_t151*_t214*_t48
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t229*_t230*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t48*_t55*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            +
-            TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t48*_t52*_t8
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t48*_t52*_t8
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t107*_t210*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52*_t55*_t58
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t48*_t52*_t8
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t48*_t52*_t55*_t58*_t8
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t48*_t52*_t8
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t229*_t230*_t48*_t52
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t55
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t55
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor*_t151*_t214*_t48*_t52 - _t119*_t627
-            - _t119*_t639 - _t153*_t212*_t580 - TRAILER_LIT(35426400.0)*_t173*_t263 - _t216*_t592
-            - _t218*_t592 - _t221*_t226 - _t222*_t227 - _t223*_t406 - _t223*_t579 - _t223*_t581
-            - _t225*_t406 - _t225*_t579 - _t225*_t581 - _t231*_t240 - _t235*_t618 - _t237*_t584
-            - _t237*_t590 - _t237*_t604 - _t241*_t586 - _t241*_t591 - _t241*_t613
-            - TRAILER_LIT(36902500.0)*_t246*_t275 - _t246*_t589 - _t251*_t593 - _t253*_t594
-            - _t255*_t614 - _t258*_t598 - TRAILER_LIT(76388175.0)*_t260*_t275 - _t260*_t582
-            - _t260*_t595 - _t260*_t597 - _t262*_t582 - _t262*_t595 - _t262*_t597 - _t263*_t614
-            - _t273 - _t274*_t600 - _t274*_t607 - _t274*_t610 - _t277*_t612 - _t279*_t292
-            - _t279*_t611 - _t280*_t283 - _t281*_t606 - _t283*_t616 - _t285*_t309 - _t285*_t605
-            - _t287*_t325 - _t287*_t605 - _t288*_t326 - _t290*_t323 - _t290*_t599 - _t291*_t324
-            - _t293*_t308 - _t296*_t334 - _t297*_t332 - _t298*_t580 - _t299*_t330 - _t299*_t599
-            - _t300*_t331 - _t301*_t337 - _t302*_t336 - _t304*_t338 - _t304*_t340 - _t310*_t612
-            - TRAILER_LIT(1434000.0)*_t312 - _t320*_t615 - _t324*_t609 - _t327*_t349
-            - TRAILER_LIT(104324550.0)*_t329 - _t331*_t609 - _t333*_t585 - _t335*_t337 - _t338*_t617
-            - _t340*_t617 - TRAILER_LIT(174149100.0)*_t341 - _t342*_t343
-            - TRAILER_LIT(61110540.0)*_t344 - TRAILER_LIT(76388175.0)*_t346 - _t348*_t351
-            - _t349*_t496 - TRAILER_LIT(122221080.0)*_t352 - _t355 - _t357 - _t360*_t377*_t62
-            - TRAILER_LIT(18420000.0)*_t360*_t473 - _t360*_t481
-            - TRAILER_LIT(86438688.0)*_t360*_t619 - TRAILER_LIT(92160000.0)*_t362 - _t365*_t623
-            - _t365*_t625 - _t366*_t396*_t62 - _t366*_t500 - _t371*_t390 - _t373*_t389 - _t373*_t622
-            - _t374*_t626 - _t375*_t380 - _t375*_t383 - _t376*_t626 - _t379*_t391 - _t380*_t628
-            - _t382*_t397 - _t383*_t628 - _t386*_t422 - _t387*_t411 - _t392*_t430 - _t393*_t420
-            - TRAILER_LIT(68018688.0)*_t395 - _t398*_t425 - _t399*_t423 - _t402*_t431 - _t403*_t430
-            + _t408 + _t410 - _t411*_t427 - _t412*_t428 - _t418*_t428 - _t420*_t432 - _t421*_t433
-            - _t423*_t433 - _t424*_t608 - _t429*_t431 - _t437 - _t441 - _t445 - _t450 - _t455
-            - _t457 - _t461 - _t466 - _t470 - _t472*_t632 - _t472*_t635 - _t473*_t624 - _t478*_t633
-            - _t478*_t636 + _t484 + _t487 + _t490 + _t493 + _t499 + _t506 + _t508 + _t511
-            - _t512*_t637 - _t516 - _t520 - _t522 - _t526 - _t528 - TRAILER_LIT(136037376.0)*_t532
-            + _t535 + _t536 + _t538 + _t541 + _t546 - _t549 - _t55*_t631 - _t551 + _t553 + _t554
-            - _t575 - _t58*_t631 - TRAILER_LIT(5697746.0)*_t583 - _t587*thetadot_right
-            - TRAILER_LIT(13514273.0)*_t588 - _t596*thetadot_right - _t602*thetadot_right
-            - _t603*thetadot_right - _t618 - _t619*_t620 - _t621*thetadot_right
-            - _t629*thetadot_right - _t63*_t634 - _t63*_t638 - _t640*_t641) + tau_right;
-    const trailer_real_t _t644 = _t209*(_t195*_t643 - _t578*_t84);
-    const trailer_real_t _t645 = TRAILER_LIT(1.0)/_t208;
-    const trailer_real_t _t646 = TRAILER_LIT(59044.0)*_t64/TRAILER_LIT(42849.0);
-    const trailer_real_t _t647 = TRAILER_LIT(59044.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t648 = TRAILER_LIT(118088.0)*_t92/TRAILER_LIT(42849.0);
-    const trailer_real_t _t649 = -_t50*_t648 - _t54*_t648 + _t87*_t92 - _t91*_t92;
-    const trailer_real_t _t650 = _t103*_t88 + _t103*_t95 - _t103*_t96 + _t58*_t74 - _t69*_t78
-            + _t69*_t80;
-    const trailer_real_t _t651 = _t50*_t646 + _t50*_t647 + _t54*_t646 + _t54*_t647 - _t58*_t75
-            + _t58*_t76 - _t59*_t61 + _t59*_t67 - _t59*_t68 + _t61*_t86 - _t64*_t70 + _t64*_t71
-            + _t649 + _t650 - _t67*_t86 + _t68*_t86 - _t74*_t85 + _t75*_t85 - _t76*_t85 + _t78*_t89
-            - _t80*_t89 - _t82*_t85 - _t83*_t85;
-    const trailer_real_t _t652 = TRAILER_LIT(23617600.0)*_t225;
-    const trailer_real_t _t653 = TRAILER_LIT(24942400.0)*_t214;
-    const trailer_real_t _t654 = TRAILER_LIT(71679416.0)*_t234;
-    const trailer_real_t _t655 = TRAILER_LIT(49884800.0)*_t256;
-    const trailer_real_t _t656 = _t257*_t319;
-    const trailer_real_t _t657 = _t257*_t321;
-    const trailer_real_t _t658 = TRAILER_LIT(28090184.0)*_t265;
-    const trailer_real_t _t659 = _t213*_t233;
-    const trailer_real_t _t660 = TRAILER_LIT(22790984.0)*_t659;
-    const trailer_real_t _t661 = _t244*_t249;
-    const trailer_real_t _t662 = TRAILER_LIT(19625327.0)*_t243;
-    const trailer_real_t _t663 = TRAILER_LIT(13514273.0)*_t213*_t244;
-    const trailer_real_t _t664 = TRAILER_LIT(13514273.0)*_t232;
-    const trailer_real_t _t665 = _t242*_t244;
-    const trailer_real_t _t666 = TRAILER_LIT(9746873.0)*_t236;
-    const trailer_real_t _t667 = TRAILER_LIT(2125584.0)*_t219;
-    const trailer_real_t _t668 = _t240*_t253;
-    const trailer_real_t _t669 = TRAILER_LIT(8982073.0)*_t239;
-    const trailer_real_t _t670 = _t219*_t241;
-    const trailer_real_t _t671 = TRAILER_LIT(16355200.0)*_t264;
-    const trailer_real_t _t672 = _t213*_t246;
-    const trailer_real_t _t673 = TRAILER_LIT(21067638.0)*_t262;
-    const trailer_real_t _t674 = _t152*_t267;
-    const trailer_real_t _t675 = _t197*_t210;
-    const trailer_real_t _t676 = TRAILER_LIT(49505184.0)*_t216;
-    const trailer_real_t _t677 = _t155*_t255;
-    const trailer_real_t _t678 = TRAILER_LIT(53759562.0)*_t262;
-    const trailer_real_t _t679 = TRAILER_LIT(55501384.0)*_t259;
-    const trailer_real_t _t680 = _t196*_t210;
-    const trailer_real_t _t681 = _t220*_t680;
-    const trailer_real_t _t682 = _t349*_t430;
-    const trailer_real_t _t683 = _t233*_t606;
-    const trailer_real_t _t684 = TRAILER_LIT(177132000.0)*_t683;
-    const trailer_real_t _t685 = _t233*_t283;
-    const trailer_real_t _t686 = TRAILER_LIT(122221080.0)*_t685;
-    const trailer_real_t _t687 = _t328*_t402;
-    const trailer_real_t _t688 = _t244*_t606;
-    const trailer_real_t _t689 = TRAILER_LIT(44283000.0)*_t688;
-    const trailer_real_t _t690 = TRAILER_LIT(44283000.0)*_t235*_t606;
-    const trailer_real_t _t691 = J_theta_cart*_t351;
-    const trailer_real_t _t692 = TRAILER_LIT(42830000.0)*_t691;
-    const trailer_real_t _t693 = TRAILER_LIT(41626038.0)*_t235;
-    const trailer_real_t _t694 = _t308*_t693;
-    const trailer_real_t _t695 = _t326*_t693;
-    const trailer_real_t _t696 = TRAILER_LIT(15277635.0)*_t244*_t283;
-    const trailer_real_t _t697 = _t235*_t284;
-    const trailer_real_t _t698 = TRAILER_LIT(1434000.0)*_t344;
-    const trailer_real_t _t699 = TRAILER_LIT(1434000.0)*_t235;
-    const trailer_real_t _t700 = _t282*_t699;
-    const trailer_real_t _t701 = J_theta_cart*_t343;
-    const trailer_real_t _t702 = TRAILER_LIT(1195000.0)*_t701;
-    const trailer_real_t _t703 = _t235*_t276;
-    const trailer_real_t _t704 = _t217*_t680;
-    const trailer_real_t _t705 = _t246*_t331;
-    const trailer_real_t _t706 = _t274*_t324;
-    const trailer_real_t _t707 = TRAILER_LIT(7858500.0)*_t241;
-    const trailer_real_t _t708 = _t377*_t86;
-    const trailer_real_t _t709 = _t241*_t285;
-    const trailer_real_t _t710 = TRAILER_LIT(17093238.0)*_t235;
-    const trailer_real_t _t711 = _t285*_t710;
-    const trailer_real_t _t712 = _t287*_t710;
-    const trailer_real_t _t713 = TRAILER_LIT(17839500.0)*_t274;
-    const trailer_real_t _t714 = TRAILER_LIT(21067638.0)*_t235;
-    const trailer_real_t _t715 = _t299*_t714;
-    const trailer_real_t _t716 = _t290*_t714;
-    const trailer_real_t _t717 = TRAILER_LIT(22141500.0)*_t241;
-    const trailer_real_t _t718 = _t152*_t263;
-    const trailer_real_t _t719 = _t241*_t718;
-    const trailer_real_t _t720 = TRAILER_LIT(25000000.0)*_t329;
-    const trailer_real_t _t721 = _t235*_t295;
-    const trailer_real_t _t722 = K_theta_cart_x_tractor_2*_t338;
-    const trailer_real_t _t723 = TRAILER_LIT(31586400.0)*_t255;
-    const trailer_real_t _t724 = _t152*_t255;
-    const trailer_real_t _t725 = _t212*_t680;
-    const trailer_real_t _t726 = _t246*_t275;
-    const trailer_real_t _t727 = K_theta_cart_x_tractor*_t338;
-    const trailer_real_t _t728 = TRAILER_LIT(45581968.0)*_t260;
-    const trailer_real_t _t729 = K_theta_cart_x_tractor_2*_t343;
-    const trailer_real_t _t730 = TRAILER_LIT(46822365.0)*_t729;
-    const trailer_real_t _t731 = _t235*_t318;
-    const trailer_real_t _t732 = _t396*_t86;
-    const trailer_real_t _t733 = TRAILER_LIT(51396000.0)*_t352;
-    const trailer_real_t _t734 = _t328*_t398;
-    const trailer_real_t _t735 = TRAILER_LIT(53759562.0)*_t235;
-    const trailer_real_t _t736 = _t331*_t735;
-    const trailer_real_t _t737 = _t324*_t735;
-    const trailer_real_t _t738 = TRAILER_LIT(56180368.0)*_t260;
-    const trailer_real_t _t739 = TRAILER_LIT(56733600.0)*_t263;
-    const trailer_real_t _t740 = _t274*_t606;
-    const trailer_real_t _t741 = _t155*_t267;
-    const trailer_real_t _t742 = _t246*_t299;
-    const trailer_real_t _t743 = _t212*_t424;
-    const trailer_real_t _t744 = TRAILER_LIT(76388175.0)*_t294;
-    const trailer_real_t _t745 = TRAILER_LIT(83252076.0)*_t244;
-    const trailer_real_t _t746 = K_theta_cart_x_tractor_2*_t340;
-    const trailer_real_t _t747 = _t274*_t326;
-    const trailer_real_t _t748 = _t274*_t275;
-    const trailer_real_t _t749 = _t237*_t283;
-    const trailer_real_t _t750 = TRAILER_LIT(143358832.0)*_t260;
-    const trailer_real_t _t751 = _t349*_t423;
-    const trailer_real_t _t752 = TRAILER_LIT(147610000.0)*_t341;
-    const trailer_real_t _t753 = _t274*_t290;
-    const trailer_real_t _t754 = _t328*_t429;
-    const trailer_real_t _t755 = _t220*_t675;
-    const trailer_real_t _t756 = _t237*_t287;
-    const trailer_real_t _t757 = K_theta_cart_x_tractor_2*_t351;
-    const trailer_real_t _t758 = TRAILER_LIT(208978920.0)*_t757;
-    const trailer_real_t _t759 = TRAILER_LIT(215038248.0)*_t359;
-    const trailer_real_t _t760 = _t374*_t427;
-    const trailer_real_t _t761 = _t376*_t427;
-    const trailer_real_t _t762 = _t380*_t418;
-    const trailer_real_t _t763 = _t383*_t418;
-    const trailer_real_t _t764 = _t119*_t384;
-    const trailer_real_t _t765 = TRAILER_LIT(99769600.0)*_t764;
-    const trailer_real_t _t766 = _t333*_t63;
-    const trailer_real_t _t767 = TRAILER_LIT(94470400.0)*_t766;
-    const trailer_real_t _t768 = _t212*_t767;
-    const trailer_real_t _t769 = _t217*_t767;
-    const trailer_real_t _t770 = TRAILER_LIT(84270552.0)*_t404;
-    const trailer_real_t _t771 = _t446*_t86;
-    const trailer_real_t _t772 = _t335*_t771;
-    const trailer_real_t _t773 = _t212*_t358;
-    const trailer_real_t _t774 = TRAILER_LIT(68372952.0)*_t773;
-    const trailer_real_t _t775 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t776 = _t374*_t775;
-    const trailer_real_t _t777 = _t376*_t775;
-    const trailer_real_t _t778 = TRAILER_LIT(3585888.0)*_t360;
-    const trailer_real_t _t779 = _t64*thetadot_left;
-    const trailer_real_t _t780 = _t368*_t485;
-    const trailer_real_t _t781 = _t367*_t619;
-    const trailer_real_t _t782 = _t367*_t473;
-    const trailer_real_t _t783 = _t378*_t619;
-    const trailer_real_t _t784 = _t378*_t473;
-    const trailer_real_t _t785 = _t277*_t379;
-    const trailer_real_t _t786 = _t361*_t366;
-    const trailer_real_t _t787 = TRAILER_LIT(30880000.0)*_t786;
-    const trailer_real_t _t788 = _t374*_t387;
-    const trailer_real_t _t789 = _t376*_t387;
-    const trailer_real_t _t790 = _t119*_t400;
-    const trailer_real_t _t791 = TRAILER_LIT(32710400.0)*_t790;
-    const trailer_real_t _t792 = _t373*_t9;
-    const trailer_real_t _t793 = _t233*_t413;
-    const trailer_real_t _t794 = TRAILER_LIT(45581968.0)*thetadot_right;
-    const trailer_real_t _t795 = _t793*_t794;
-    const trailer_real_t _t796 = J_theta_cart*_t681;
-    const trailer_real_t _t797 = _t241*_t796;
-    const trailer_real_t _t798 = _t244*_t674;
-    const trailer_real_t _t799 = TRAILER_LIT(77094000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t800 = _t335*_t573;
-    const trailer_real_t _t801 = _t241*_t565;
-    const trailer_real_t _t802 = _t380*_t412;
-    const trailer_real_t _t803 = _t383*_t412;
-    const trailer_real_t _t804 = TRAILER_LIT(97120000.0)*_t362;
-    const trailer_real_t _t805 = J_theta_cart*_t420;
-    const trailer_real_t _t806 = _t277*_t674;
-    const trailer_real_t _t807 = _t380*_t422;
-    const trailer_real_t _t808 = _t383*_t422;
-    const trailer_real_t _t809 = _t241*_t675;
-    const trailer_real_t _t810 = TRAILER_LIT(136037376.0)*_t212;
-    const trailer_real_t _t811 = TRAILER_LIT(143358832.0)*thetadot_right;
-    const trailer_real_t _t812 = _t369*_t811;
-    const trailer_real_t _t813 = TRAILER_LIT(154188000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t814 = TRAILER_LIT(166504152.0)*_t395;
-    const trailer_real_t _t815 = K_theta_cart_x_tractor*_t392;
-    const trailer_real_t _t816 = J_theta_cart*_t411;
-    const trailer_real_t _t817 = _t260*_t681;
-    const trailer_real_t _t818 = K_theta_cart_x_tractor_2*_t817;
-    const trailer_real_t _t819 = TRAILER_LIT(276000000.0)*J_theta_cart;
-    const trailer_real_t _t820 = TRAILER_LIT(313468380.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t821 = TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t822 = _t310*_t382;
-    const trailer_real_t _t823 = TRAILER_LIT(398547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t824 = K_theta_cart_x_tractor*_t386;
-    const trailer_real_t _t825 = J_theta_cart*_t433;
-    const trailer_real_t _t826 = TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t827 = _t494*_t826;
-    const trailer_real_t _t828 = K_theta_cart_x_tractor_2*_t494;
-    const trailer_real_t _t829 = TRAILER_LIT(366663240.0)*_t828;
-    const trailer_real_t _t830 = _t334*_t63;
-    const trailer_real_t _t831 = _t821*_t830;
-    const trailer_real_t _t832 = _t271*thetadot_right;
-    const trailer_real_t _t833 = _t310*_t832;
-    const trailer_real_t _t834 = TRAILER_LIT(183331620.0)*_t833;
-    const trailer_real_t _t835 = _t64*thetadot_right;
-    const trailer_real_t _t836 = _t439*_t835;
-    const trailer_real_t _t837 = TRAILER_LIT(128490000.0)*J_theta_cart;
-    const trailer_real_t _t838 = _t512*_t837;
-    const trailer_real_t _t839 = TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t840 = _t119*_t302;
-    const trailer_real_t _t841 = _t839*_t840;
-    const trailer_real_t _t842 = _t473*_t495;
-    const trailer_real_t _t843 = _t55*_t842;
-    const trailer_real_t _t844 = _t58*_t842;
-    const trailer_real_t _t845 = _t465*_t492;
-    const trailer_real_t _t846 = _t460*_t524;
-    const trailer_real_t _t847 = _t473*_t479;
-    const trailer_real_t _t848 = _t55*_t847;
-    const trailer_real_t _t849 = _t58*_t847;
-    const trailer_real_t _t850 = TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t851 = _t483*_t850;
-    const trailer_real_t _t852 = _t477*_t85;
-    const trailer_real_t _t853 = TRAILER_LIT(2834112.0)*_t360;
-    const trailer_real_t _t854 = _t73*thetadot_left;
-    const trailer_real_t _t855 = _t390*_t9;
-    const trailer_real_t _t856 = _t55*_t855;
-    const trailer_real_t _t857 = _t365*_t58;
-    const trailer_real_t _t858 = _t360*_t857;
-    const trailer_real_t _t859 = _t460*_t533;
-    const trailer_real_t _t860 = _t442*thetadot_right;
-    const trailer_real_t _t861 = _t458*_t860;
-    const trailer_real_t _t862 = _t619*_t85;
-    const trailer_real_t _t863 = TRAILER_LIT(68372952.0)*_t862;
-    const trailer_real_t _t864 = _t62*thetadot_left;
-    const trailer_real_t _t865 = TRAILER_LIT(92160000.0)*_t864;
-    const trailer_real_t _t866 = _t241*_t741;
-    const trailer_real_t _t867 = TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t868 = TRAILER_LIT(104780000.0)*J_theta_cart;
-    const trailer_real_t _t869 = _t840*_t868;
-    const trailer_real_t _t870 = _t497*_t835;
-    const trailer_real_t _t871 = _t451*_t465;
-    const trailer_real_t _t872 = _t443*_t486;
-    const trailer_real_t _t873 = TRAILER_LIT(154188000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t874 = _t512*_t873;
-    const trailer_real_t _t875 = _t446*_t89;
-    const trailer_real_t _t876 = _t429*_t875;
-    const trailer_real_t _t877 = _t449*_t517;
-    const trailer_real_t _t878 = _t366*_t472;
-    const trailer_real_t _t879 = TRAILER_LIT(215038248.0)*_t862;
-    const trailer_real_t _t880 = _t277*_t755;
-    const trailer_real_t _t881 = _t571*_t830;
-    const trailer_real_t _t882 = TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t883 = _t840*_t882;
-    const trailer_real_t _t884 = TRAILER_LIT(348298200.0)*J_theta_cart;
-    const trailer_real_t _t885 = _t366*_t480;
-    const trailer_real_t _t886 = TRAILER_LIT(442830000.0)*J_theta_cart;
-    const trailer_real_t _t887 = _t494*_t886;
-    const trailer_real_t _t888 = K_theta_cart_x_tractor_2*_t512;
-    const trailer_real_t _t889 = TRAILER_LIT(626936760.0)*_t888;
-    const trailer_real_t _t890 = _t237*_t573;
-    const trailer_real_t _t891 = TRAILER_LIT(611105400.0)*J_theta_cart;
-    const trailer_real_t _t892 = _t890*_t891;
-    const trailer_real_t _t893 = TRAILER_LIT(549994860.0)*_t469;
-    const trailer_real_t _t894 = _t539*_t893;
-    const trailer_real_t _t895 = _t454*_t85;
-    const trailer_real_t _t896 = TRAILER_LIT(366663240.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t897 = _t895*_t896;
-    const trailer_real_t _t898 = _t521*_t819;
-    const trailer_real_t _t899 = _t435*_t545;
-    const trailer_real_t _t900 = _t73*thetadot_right;
-    const trailer_real_t _t901 = _t439*_t900;
-    const trailer_real_t _t902 = _t62*thetadot_right;
-    const trailer_real_t _t903 = _t497*_t902;
-    const trailer_real_t _t904 = _t85*_t903;
-    const trailer_real_t _t905 = _t483*_t637*_t85;
-    const trailer_real_t _t906 = _t519*_t524;
-    const trailer_real_t _t907 = _t519*_t533;
-    const trailer_real_t _t908 = _t366*thetadot_left;
-    const trailer_real_t _t909 = TRAILER_LIT(61760000.0)*_t103;
-    const trailer_real_t _t910 = _t908*_t909;
-    const trailer_real_t _t911 = _t483*_t492;
-    const trailer_real_t _t912 = _t85*_t911;
-    const trailer_real_t _t913 = _t366*_t531;
-    const trailer_real_t _t914 = TRAILER_LIT(136745904.0)*_t913;
-    const trailer_real_t _t915 = _t497*_t900;
-    const trailer_real_t _t916 = _t439*_t902;
-    const trailer_real_t _t917 = _t85*_t916;
-    const trailer_real_t _t918 = TRAILER_LIT(194240000.0)*_t103;
-    const trailer_real_t _t919 = _t640*_t918;
-    const trailer_real_t _t920 = _t509*_t545;
-    const trailer_real_t _t921 = _t199*_t477;
-    const trailer_real_t _t922 = TRAILER_LIT(272074752.0)*_t366;
-    const trailer_real_t _t923 = TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t924 = _t521*_t923;
-    const trailer_real_t _t925 = TRAILER_LIT(430076496.0)*_t532;
-    const trailer_real_t _t926 = TRAILER_LIT(458329050.0)*J_theta_cart;
-    const trailer_real_t _t927 = _t540*_t926;
-    const trailer_real_t _t928 = _t260*_t771;
-    const trailer_real_t _t929 = TRAILER_LIT(488884320.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t930 = _t928*_t929;
-    const trailer_real_t _t931 = _t310*_t573;
-    const trailer_real_t _t932 = TRAILER_LIT(733326480.0)*_t931;
-    const trailer_real_t _t933 = _t199*_t483;
-    const trailer_real_t _t934 = TRAILER_LIT(407403600.0)*J_theta_cart;
-    const trailer_real_t _t935 = _t933*_t934;
-    const trailer_real_t _t936 = TRAILER_LIT(488884320.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t937 = _t933*_t936;
-    const trailer_real_t _t938 = _t434*thetadot_right;
-    const trailer_real_t _t939 = _t542*_t938;
-    const trailer_real_t _t940 = _t446*_t69;
-    const trailer_real_t _t941 = _t429*_t940;
-    const trailer_real_t _t942 = _t454*_t462;
-    const trailer_real_t _t943 = _t462*_t547;
-    const trailer_real_t _t944 = _t446*_t517;
-    const trailer_real_t _t945 = _t523*_t944;
-    const trailer_real_t _t946 = _t527*_t944;
-    const trailer_real_t _t947 = K_theta_cart_x_tractor_2*_t446;
-    const trailer_real_t _t948 = _t141*_t467;
-    const trailer_real_t _t949 = TRAILER_LIT(733326480.0)*_t947*_t948;
-    const trailer_real_t _t950 = TRAILER_LIT(331200000.0)*_t104*_t446;
-    const trailer_real_t _t951 = -_t939 - _t941 - _t942 - _t943 + _t945 + _t946 - _t949 - _t950;
-    const trailer_real_t _t952 = _t571*_t938;
-    const trailer_real_t _t953 = _t567*_t940;
-    const trailer_real_t _t954 = _t332*_t454;
-    const trailer_real_t _t955 = _t332*_t547;
-    const trailer_real_t _t956 = _t454*_t560;
-    const trailer_real_t _t957 = _t547*_t560;
-    const trailer_real_t _t958 = TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t959 = TRAILER_LIT(240000000.0)*_t69;
-    const trailer_real_t _t960 = _t469*_t959;
-    const trailer_real_t _t961 = _t821*_t938;
-    const trailer_real_t _t962 = _t446*_t570;
-    const trailer_real_t _t963 = _t523*_t962;
-    const trailer_real_t _t964 = _t527*_t962;
-    const trailer_real_t _t965 = _t446*_t568;
-    const trailer_real_t _t966 = _t523*_t965;
-    const trailer_real_t _t967 = _t527*_t965;
-    const trailer_real_t _t968 = TRAILER_LIT(480000000.0)*_t947;
-    const trailer_real_t _t969 = TRAILER_LIT(885660000.0)*J_theta_cart*_t548;
-    const trailer_real_t _t970 = TRAILER_LIT(400000000.0)*J_theta_cart*_t103*_t446;
-    const trailer_real_t _t971 = TRAILER_LIT(480000000.0)*_t103*_t469;
-    const trailer_real_t _t972 = TRAILER_LIT(708528000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t973 = TRAILER_LIT(1062792000.0)*_t469*_t948;
-    const trailer_real_t _t974 =
-            -TRAILER_LIT(442830000.0)*J_theta_cart*_t12*_t4*_t48*_t52*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            - TRAILER_LIT(17250000.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t8
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t48*_t52*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right + TRAILER_LIT(590440000.0)*J_theta_cart*_t928
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t12*_t230*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(708528000.0)*K_theta_cart_x_tractor*_t229*_t4*_t48*_t52*_t85*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t229*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t48*_t52*_t55*_t85*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t48*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(797094000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t48*_t52*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor_2*_t0*_t229*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t12*_t48*_t52*_t58*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t230*_t48*_t52*_t55*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t4*_t48*_t52*_t8*_t85*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t456*_t85
-            + TRAILER_LIT(17250000.0)*_t241*_t294 + TRAILER_LIT(1062792000.0)*_t316*_t485*_t513
-            + _t332*_t860 + _t449*_t568 + _t460*_t565 + _t465*_t958 + _t519*_t565 + _t561*_t573
-            + _t562*_t771 + _t567*_t875 + _t826*_t895 + _t92*_t968 + _t933*_t972 - _t952 - _t953
-            - _t954 - _t955 + _t956 + _t957 + _t960 + _t961 - _t963 - _t964 + _t966 + _t967 - _t969
-            - _t970 + _t971 + _t973;
-    const trailer_real_t _t975 = TRAILER_LIT(68175450.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(305552700.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(391835475.0)*J_theta_cart*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t0*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(295220000.0)*J_theta_cart*_t107*_t210*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(203701800.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t55*_t8*_t85
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t55*_t85
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(64245000.0)*J_theta_cart*_t12*_t151*_t214*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(87074550.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t151*_t214*_t48*_t52*_t55*_t85
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t151*_t214*_t48*_t52*_t58
-            - TRAILER_LIT(85660000.0)*J_theta_cart*_t260*_t674
-            + TRAILER_LIT(153042048.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t52*_t58
-            + TRAILER_LIT(51014016.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52
-            + TRAILER_LIT(36951756.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52
-            + TRAILER_LIT(198020736.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52*_t58
-            + TRAILER_LIT(63172800.0)*J_theta_cart_left*_t0*_t151*_t214*_t4*_t52*_t55
-            +
-            TRAILER_LIT(17004672.0)*J_theta_cart_left*_t0*_t229*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(7680000.0)*J_theta_cart_left*_t0*_t4*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(34186476.0)*J_theta_cart_left*_t107*_t12*_t210*_t4*_t52*_t85
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t58*_t8
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t55*_t8
-            + TRAILER_LIT(34009344.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t8*_t85
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t107*_t210*_t52*_t85
-            + TRAILER_LIT(42135276.0)*J_theta_cart_left*_t12*_t151*_t214*_t4*_t52*_t85
-            + TRAILER_LIT(31586400.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t8*_t85
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_left*_t12*_t52*_t8*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t8
-            + TRAILER_LIT(132013824.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t55*_t8*_t85
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t151*_t214*_t52*_t85
-            +
-            TRAILER_LIT(286717664.0)*J_theta_cart_left*_t229*_t4*_t52*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t230*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11336448.0)*J_theta_cart_left*_t4*_t52*_t55*_t8*_t85*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t4*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_left*_t52*_t55*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(12745356.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48
-            + TRAILER_LIT(8502336.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48*_t58
-            + TRAILER_LIT(70852800.0)*J_theta_cart_right*_t0*_t107*_t210*_t4*_t48*_t55
-            + TRAILER_LIT(29815956.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48
-            +
-            TRAILER_LIT(306084096.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(136345536.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48*_t58
-            + TRAILER_LIT(113467200.0)*J_theta_cart_right*_t0*_t151*_t214*_t4*_t48*_t55
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(107519124.0)*J_theta_cart_right*_t107*_t12*_t210*_t4*_t48*_t85
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t8*_t85
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t8
-            + TRAILER_LIT(5668224.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t55*_t8*_t85
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t107*_t210*_t48*_t85
-            + TRAILER_LIT(41626038.0)*J_theta_cart_right*_t12*_t151*_t214*_t230*_t48
-            + TRAILER_LIT(56733600.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t8*_t85
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_right*_t12*_t230*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(111002768.0)*J_theta_cart_right*_t151*_t214*_t229*_t4*_t48*_t85
-            + TRAILER_LIT(13875346.0)*J_theta_cart_right*_t151*_t214*_t229*_t4*_t48
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t8
-            + TRAILER_LIT(90897024.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t55*_t8*_t85
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(16355200.0)*J_theta_cart_right*_t151*_t214*_t48*_t55*_t85
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(91163936.0)*J_theta_cart_right*_t229*_t4*_t48*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_right*_t229*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(68018688.0)*J_theta_cart_right*_t4*_t48*_t8*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_right*_t48*_t55*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(274997430.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(626936760.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52*_t85
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor*_t151*_t214*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t8
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t55*_t8*_t85
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t85
-            + TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(115641000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t8
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            *_t85
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t55*_t85
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t48*_t52*_t58
-            - TRAILER_LIT(35426400.0)*_t119*_t725 - TRAILER_LIT(8177600.0)*_t152*_t263
-            - _t162*_t267*_t496 - _t165*_t723 - _t165*_t739 - _t212*_t652
-            - TRAILER_LIT(17093238.0)*_t213*_t262 - TRAILER_LIT(3948300.0)*_t216*_t241 - _t216*_t673
-            - TRAILER_LIT(35426400.0)*_t217*_t251 - TRAILER_LIT(35426400.0)*_t217*_t320
-            - _t217*_t652 - _t219*_t678 - _t221*_t237*_t617 - _t231*_t594 - _t237*_t667
-            - _t237*_t676 - _t237*_t744 - _t238*_t260 - TRAILER_LIT(1417056.0)*_t241*_t704
-            - TRAILER_LIT(33003456.0)*_t241*_t724 - TRAILER_LIT(221415000.0)*_t244*_t796
-            - TRAILER_LIT(2471700.0)*_t245 - TRAILER_LIT(45448512.0)*_t246*_t308 - _t248*_t260
-            - TRAILER_LIT(5697746.0)*_t261 - _t269*_t301 - TRAILER_LIT(20700000.0)*_t278
-            - _t279*_t281 - _t279*_t707 - _t279*_t713 - _t283*_t717 - _t289*_t653 - _t296*_t674
-            - _t319*_t675 - _t321*_t675 - _t327*_t403 - _t332*_t681 - _t335*_t674 - _t336*_t382
-            - _t337*_t348 - _t340*_t422 - TRAILER_LIT(10707500.0)*_t345
-            - TRAILER_LIT(32122500.0)*_t346 - _t347*_t403 - _t348*_t420 - _t348*_t431 - _t360*_t732
-            - _t360*_t879 - TRAILER_LIT(86438688.0)*_t365*_t366 - _t365*_t778 - _t366*_t708
-            - _t366*_t85*_t865 - _t366*_t863 - _t375*_t428 - _t385 - _t394*_t428 - _t399*_t819
-            - _t401 - _t402*_t741 - _t411*_t823 - _t430*_t755 - _t433*_t813 - _t474*_t478 - _t488
-            - _t501 - _t529*_t779 - _t529*_t854 - TRAILER_LIT(34086384.0)*_t583
-            - TRAILER_LIT(7091700.0)*_t588 - _t606*_t611 + _t654 + _t655 + _t656 + _t657 + _t658
-            + _t660 + _t661 + _t662 + _t663 + _t664 + _t665 + _t666 - _t668 - _t669
-            - TRAILER_LIT(11328300.0)*_t670 - _t671 - TRAILER_LIT(17004672.0)*_t672
-            - TRAILER_LIT(49884800.0)*_t677 - _t679 - _t681*_t801 + _t682 + _t684 + _t686 + _t687
-            + _t689 + _t690 + _t692 + _t694 + _t695 + _t696 + _t697 + _t698 + _t700 - _t702 - _t703
-            - _t704*_t750 - TRAILER_LIT(2834112.0)*_t705 - TRAILER_LIT(6376752.0)*_t706
-            - TRAILER_LIT(17004672.0)*_t709 - _t711 - _t712 - _t715 - _t716 - _t718*_t745
-            - TRAILER_LIT(22724256.0)*_t719 - _t720 - _t721 - TRAILER_LIT(30555270.0)*_t722
-            - _t724*_t738 - _t725*_t728 - TRAILER_LIT(43537275.0)*_t726
-            - TRAILER_LIT(44283000.0)*_t727 - _t730 - _t731 - _t733 - _t734 - _t736 - _t737
-            - TRAILER_LIT(61110540.0)*_t740 - TRAILER_LIT(66006912.0)*_t742
-            - TRAILER_LIT(70852800.0)*_t743 - TRAILER_LIT(91665810.0)*_t746
-            - TRAILER_LIT(102259152.0)*_t747 - TRAILER_LIT(104324550.0)*_t748
-            - TRAILER_LIT(132849000.0)*_t749 - _t751 - _t752 - TRAILER_LIT(148515552.0)*_t753
-            - _t754 - TRAILER_LIT(204056064.0)*_t756 - _t758 + _t759 + _t760 + _t761 + _t762 + _t763
-            + _t765 + _t768 + _t769 + _t770 + _t772 + _t774 + _t776 + _t777
-            - TRAILER_LIT(4251168.0)*_t780 - _t781 - _t782 - _t783 - _t784
-            - TRAILER_LIT(30555270.0)*_t785 - _t787 - _t788 - _t789 - _t791
-            - TRAILER_LIT(34009344.0)*_t792 - _t795 - TRAILER_LIT(50925450.0)*_t797 - _t798*_t799
-            - _t798*_t820 - _t800 - _t802 - _t803 - _t804 - TRAILER_LIT(101850900.0)*_t805
-            - TRAILER_LIT(104489460.0)*_t806 - _t807 - _t808 - _t809*_t810 - _t812 - _t814
-            - TRAILER_LIT(208978920.0)*_t815 - TRAILER_LIT(229164525.0)*_t816 - _t817*_t821
-            - TRAILER_LIT(244442160.0)*_t818 - TRAILER_LIT(366663240.0)*_t822
-            - TRAILER_LIT(470202570.0)*_t824 - TRAILER_LIT(522447300.0)*_t825 + _t827 + _t829
-            + _t831 + _t834 + _t836 + _t838 + _t841 + _t843 + _t844 + _t845 + _t846 + _t848 + _t849
-            + _t851 - _t852*_t853 - TRAILER_LIT(5668224.0)*_t856 - TRAILER_LIT(12753504.0)*_t858
-            - _t859 - _t861 - _t866*_t867 - _t866*_t884 - _t869 - _t870 - _t871 - _t872 - _t874
-            - _t876 - _t877 - TRAILER_LIT(184320000.0)*_t878 - TRAILER_LIT(244442160.0)*_t880
-            - _t881 - _t883 - TRAILER_LIT(408112128.0)*_t885 - _t887 - _t889 + _t892 + _t894 + _t897
-            + _t898 + _t899 + _t901 + _t904 + _t905 + _t906 - _t907 - _t910 - _t912 - _t914 - _t915
-            - _t917 - _t919 - _t920 - _t921*_t922 - _t924 - _t925 - _t927 - _t930 - _t932 + _t935
-            - _t937 - _t951 - _t974;
-    const trailer_real_t _t976 = _t577*_t84;
-    const trailer_real_t _t977 = TRAILER_LIT(23617600.0)*_t263;
-    const trailer_real_t _t978 = TRAILER_LIT(71679416.0)*_t265;
-    const trailer_real_t _t979 = _t257*_t615;
-    const trailer_real_t _t980 = TRAILER_LIT(47235200.0)*_t256;
-    const trailer_real_t _t981 = TRAILER_LIT(47235200.0)*_t264;
-    const trailer_real_t _t982 = TRAILER_LIT(28090184.0)*_t234;
-    const trailer_real_t _t983 = TRAILER_LIT(22790984.0)*_t259;
-    const trailer_real_t _t984 = _t244*_t591;
-    const trailer_real_t _t985 = _t235*_t591;
-    const trailer_real_t _t986 = TRAILER_LIT(13514273.0)*_t12*_t253;
-    const trailer_real_t _t987 = TRAILER_LIT(13514273.0)*_t239;
-    const trailer_real_t _t988 = _t244*_t586;
-    const trailer_real_t _t989 = _t235*_t586;
-    const trailer_real_t _t990 = _t258*_t4;
-    const trailer_real_t _t991 = _t213*_t240*_t4;
-    const trailer_real_t _t992 = TRAILER_LIT(8982073.0)*_t232;
-    const trailer_real_t _t993 = TRAILER_LIT(12745356.0)*_t216;
-    const trailer_real_t _t994 = _t257*_t608;
-    const trailer_real_t _t995 = _t218*_t262;
-    const trailer_real_t _t996 = TRAILER_LIT(55501384.0)*_t659;
-    const trailer_real_t _t997 = TRAILER_LIT(208978920.0)*_t685;
-    const trailer_real_t _t998 = _t328*_t430;
-    const trailer_real_t _t999 = TRAILER_LIT(177132000.0)*_t352;
-    const trailer_real_t _t1000 = _t349*_t429;
-    const trailer_real_t _t1001 = _t349*_t402;
-    const trailer_real_t _t1002 = _t244*_t613;
-    const trailer_real_t _t1003 = _t235*_t613;
-    const trailer_real_t _t1004 = TRAILER_LIT(44283000.0)*_t344;
-    const trailer_real_t _t1005 = K_theta_cart_x_tractor*_t612;
-    const trailer_real_t _t1006 = _t1005*_t235;
-    const trailer_real_t _t1007 = TRAILER_LIT(42830000.0)*_t341;
-    const trailer_real_t _t1008 = _t285*_t693;
-    const trailer_real_t _t1009 = _t287*_t693;
-    const trailer_real_t _t1010 = TRAILER_LIT(1434000.0)*_t688;
-    const trailer_real_t _t1011 = _t606*_t699;
-    const trailer_real_t _t1012 = _t241*_t299;
-    const trailer_real_t _t1013 = TRAILER_LIT(1195000.0)*_t329;
-    const trailer_real_t _t1014 = _t235*_t600;
-    const trailer_real_t _t1015 = _t237*_t290;
-    const trailer_real_t _t1016 = TRAILER_LIT(15277635.0)*_t729;
-    const trailer_real_t _t1017 = _t235*_t607;
-    const trailer_real_t _t1018 = _t241*_t331;
-    const trailer_real_t _t1019 = _t308*_t710;
-    const trailer_real_t _t1020 = _t326*_t710;
-    const trailer_real_t _t1021 = _t331*_t714;
-    const trailer_real_t _t1022 = _t324*_t714;
-    const trailer_real_t _t1023 = TRAILER_LIT(25000000.0)*_t701;
-    const trailer_real_t _t1024 = _t235*_t610;
-    const trailer_real_t _t1025 = TRAILER_LIT(35426400.0)*_t255;
-    const trailer_real_t _t1026 = TRAILER_LIT(51396000.0)*_t683;
-    const trailer_real_t _t1027 = _t349*_t398;
-    const trailer_real_t _t1028 = _t299*_t735;
-    const trailer_real_t _t1029 = _t290*_t735;
-    const trailer_real_t _t1030 = TRAILER_LIT(56733600.0)*_t212;
-    const trailer_real_t _t1031 = TRAILER_LIT(63172800.0)*_t217;
-    const trailer_real_t _t1032 = TRAILER_LIT(122221080.0)*_t757;
-    const trailer_real_t _t1033 = TRAILER_LIT(130611825.0)*_t294;
-    const trailer_real_t _t1034 = TRAILER_LIT(132849000.0)*_t279;
-    const trailer_real_t _t1035 = _t328*_t423;
-    const trailer_real_t _t1036 = TRAILER_LIT(147610000.0)*_t691;
-    const trailer_real_t _t1037 = _t237*_t324;
-    const trailer_real_t _t1038 = TRAILER_LIT(215038248.0)*_t404;
-    const trailer_real_t _t1039 = _t374*_t418;
-    const trailer_real_t _t1040 = _t376*_t418;
-    const trailer_real_t _t1041 = TRAILER_LIT(99769600.0)*_t217*_t766;
-    const trailer_real_t _t1042 = TRAILER_LIT(94470400.0)*_t764;
-    const trailer_real_t _t1043 = TRAILER_LIT(94470400.0)*_t790;
-    const trailer_real_t _t1044 = _t374*_t412;
-    const trailer_real_t _t1045 = _t376*_t412;
-    const trailer_real_t _t1046 = TRAILER_LIT(84270552.0)*_t359;
-    const trailer_real_t _t1047 = TRAILER_LIT(68372952.0)*_t395;
-    const trailer_real_t _t1048 = _t380*_t775;
-    const trailer_real_t _t1049 = _t383*_t775;
-    const trailer_real_t _t1050 = _t619*_t623;
-    const trailer_real_t _t1051 = _t473*_t623;
-    const trailer_real_t _t1052 = _t619*_t625;
-    const trailer_real_t _t1053 = _t473*_t625;
-    const trailer_real_t _t1054 = TRAILER_LIT(30880000.0)*_t362;
-    const trailer_real_t _t1055 = _t380*_t387;
-    const trailer_real_t _t1056 = _t383*_t387;
-    const trailer_real_t _t1057 = TRAILER_LIT(32710400.0)*_t212*_t766;
-    const trailer_real_t _t1058 = _t369*_t794;
-    const trailer_real_t _t1059 = TRAILER_LIT(90897024.0)*_t212;
-    const trailer_real_t _t1060 = TRAILER_LIT(97120000.0)*_t786;
-    const trailer_real_t _t1061 = _t374*_t422;
-    const trailer_real_t _t1062 = _t376*_t422;
-    const trailer_real_t _t1063 = _t793*_t811;
-    const trailer_real_t _t1064 = _t380*_t427;
-    const trailer_real_t _t1065 = _t383*_t427;
-    const trailer_real_t _t1066 = TRAILER_LIT(166504152.0)*_t773;
-    const trailer_real_t _t1067 = TRAILER_LIT(626936760.0)*_t828;
-    const trailer_real_t _t1068 = _t512*_t826;
-    const trailer_real_t _t1069 = _t821*_t840;
-    const trailer_real_t _t1070 = _t830*_t882;
-    const trailer_real_t _t1071 = _t494*_t837;
-    const trailer_real_t _t1072 = _t830*_t839;
-    const trailer_real_t _t1073 = _t473*_t636;
-    const trailer_real_t _t1074 = _t1073*_t55;
-    const trailer_real_t _t1075 = _t1073*_t58;
-    const trailer_real_t _t1076 = _t473*_t633;
-    const trailer_real_t _t1077 = _t1076*_t55;
-    const trailer_real_t _t1078 = _t1076*_t58;
-    const trailer_real_t _t1079 = TRAILER_LIT(3840000.0)*_t366;
-    const trailer_real_t _t1080 = _t830*_t868;
-    const trailer_real_t _t1081 = _t494*_t873;
-    const trailer_real_t _t1082 = _t571*_t840;
-    const trailer_real_t _t1083 = TRAILER_LIT(366663240.0)*_t888;
-    const trailer_real_t _t1084 = _t512*_t886;
-    const trailer_real_t _t1085 = _t640*_t909;
-    const trailer_real_t _t1086 = TRAILER_LIT(136745904.0)*_t532;
-    const trailer_real_t _t1087 = _t908*_t918;
-    const trailer_real_t _t1088 = TRAILER_LIT(430076496.0)*_t913;
-    const trailer_real_t _t1089 = _t939 + _t941 + _t942 + _t943 - _t945 - _t946 + _t949 + _t950;
-    const trailer_real_t _t1090 =
-            TRAILER_LIT(104324550.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(522447300.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(276000000.0)*J_theta_cart*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(229164525.0)*J_theta_cart*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(64245000.0)*J_theta_cart*_t107*_t12*_t210*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t107*_t12*_t210*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(348298200.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t55*_t8*_t85
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t55*_t85
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t107*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(295220000.0)*J_theta_cart*_t151*_t214*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(50925450.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t151*_t214*_t48*_t52*_t55*_t85
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t151*_t214*_t48*_t52*_t58
-            - TRAILER_LIT(221415000.0)*J_theta_cart*_t798
-            - TRAILER_LIT(85660000.0)*J_theta_cart*_t817
-            + TRAILER_LIT(102259152.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t52*_t58
-            + TRAILER_LIT(34086384.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52
-            + TRAILER_LIT(6376752.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_left*_t0*_t12*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2125584.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t151*_t214*_t4*_t52
-            +
-            TRAILER_LIT(408112128.0)*J_theta_cart_left*_t0*_t229*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(184320000.0)*J_theta_cart_left*_t0*_t4*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(41626038.0)*J_theta_cart_left*_t107*_t12*_t210*_t230*_t52
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t58*_t8
-            + TRAILER_LIT(111002768.0)*J_theta_cart_left*_t107*_t210*_t229*_t4*_t52*_t85
-            + TRAILER_LIT(13875346.0)*J_theta_cart_left*_t107*_t210*_t229*_t4*_t52
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t55*_t8
-            + TRAILER_LIT(22724256.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t8*_t85
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t8
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t107*_t210*_t52*_t55*_t85
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t107*_t210*_t52*_t58
-            + TRAILER_LIT(107519124.0)*J_theta_cart_left*_t12*_t151*_t214*_t4*_t52*_t85
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t58*_t8
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_left*_t12*_t52*_t8*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t55*_t8
-            + TRAILER_LIT(1417056.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t8*_t85
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t151*_t214*_t52*_t85
-            +
-            TRAILER_LIT(91163936.0)*J_theta_cart_left*_t229*_t4*_t52*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t230*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(272074752.0)*J_theta_cart_left*_t4*_t52*_t55*_t8*_t85*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t4*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t52*_t55*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(148515552.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48*_t58
-            + TRAILER_LIT(49505184.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t0*_t107*_t210*_t4*_t48
-            + TRAILER_LIT(31537644.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48
-            +
-            TRAILER_LIT(12753504.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_right*_t0*_t12*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(204056064.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48*_t58
-            + TRAILER_LIT(70852800.0)*J_theta_cart_right*_t0*_t151*_t214*_t4*_t48*_t55
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(42135276.0)*J_theta_cart_right*_t107*_t12*_t210*_t4*_t48*_t85
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t58*_t8
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t55*_t8
-            + TRAILER_LIT(33003456.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t8*_t85
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t8
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t107*_t210*_t48*_t85
-            + TRAILER_LIT(34186476.0)*J_theta_cart_right*_t12*_t151*_t214*_t4*_t48*_t85
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t8*_t85
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t12*_t230*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t8
-            + TRAILER_LIT(136037376.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t55*_t8*_t85
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t151*_t214*_t48*_t85
-            +
-            TRAILER_LIT(286717664.0)*J_theta_cart_right*_t229*_t4*_t48*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t229*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(2834112.0)*J_theta_cart_right*_t4*_t48*_t8*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t48*_t55*_t85*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(470202570.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(366663240.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor*_t107*_t210*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(104489460.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52*_t85
-            + TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t8
-            +
-            TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t55*_t8*_t85
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t85
-            + TRAILER_LIT(115641000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(313468380.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t85
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t48*_t52*_t8*_t85
-            + TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t4*_t48*_t52*_t85
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t8
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            *_t85
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + _t1000 + _t1001 + _t1002 + _t1003 + _t1004 - _t1005*_t260 + _t1006 + _t1007 + _t1008
-            + _t1009 + _t1010 + _t1011 - TRAILER_LIT(708528.0)*_t1012 - _t1013 - _t1014
-            - TRAILER_LIT(8502336.0)*_t1015 - _t1016 - _t1017 - TRAILER_LIT(16501728.0)*_t1018
-            - _t1019 - _t1020 - _t1021 - _t1022 - _t1023 - _t1024 - _t1025*_t162 - _t1026 - _t1027
-            - _t1028 - _t1029 - _t1030*_t119*_t680 - _t1031*_t424 - _t1032 - _t1033*_t237
-            - _t1034*_t237 - _t1035 - _t1036 - TRAILER_LIT(198020736.0)*_t1037 + _t1038 + _t1039
-            + _t1040 + _t1041 + _t1042 + _t1043 + _t1044 + _t1045 + _t1046 + _t1047 + _t1048
-            + _t1049 - _t1050 - _t1051 - _t1052 - _t1053 - _t1054 - _t1055 - _t1056 - _t1057
-            - _t1058 - _t1059*_t809 - _t1060 - _t1061 - _t1062 - _t1063 - _t1064 - _t1065 - _t1066
-            + _t1067 + _t1068 + _t1069 + _t1070 + _t1071 + _t1072 + _t1074 + _t1075 + _t1077
-            + _t1078 - _t1079*_t85*_t864 - _t1080 - _t1081 - _t1082 - _t1083 - _t1084 - _t1085
-            - _t1086 - _t1087 - _t1088 - _t1089 - _t119*_t347*_t681
-            - TRAILER_LIT(31586400.0)*_t119*_t704 - _t153*_t977
-            - TRAILER_LIT(47235200.0)*_t155*_t263 - TRAILER_LIT(70852800.0)*_t163*_t255
-            - TRAILER_LIT(35426400.0)*_t165*_t263 - TRAILER_LIT(23617600.0)*_t214*_t289
-            - TRAILER_LIT(708528.0)*_t216*_t246 - _t216*_t678 - TRAILER_LIT(132013824.0)*_t217*_t809
-            - TRAILER_LIT(16501728.0)*_t219*_t246 - TRAILER_LIT(36951756.0)*_t219*_t274
-            - _t219*_t673 - TRAILER_LIT(91665810.0)*_t221*_t310 - _t225*_t593 - _t231*_t254
-            - TRAILER_LIT(5668224.0)*_t241*_t677 - _t241*_t755*_t867 - _t244*_t681*_t799
-            - _t260*_t584 - _t260*_t590 - _t260*_t604 - _t260*_t674*_t821
-            - TRAILER_LIT(32122500.0)*_t262*_t294 - _t269*_t336 - _t274*_t993 - _t279*_t717
-            - _t281*_t283 - _t283*_t707 - _t283*_t713 - _t296*_t681 - _t301*_t382 - _t306*_t422
-            - _t308*_t598*_t8 - _t322*_t606 - _t327*_t337 - _t327*_t431 - _t332*_t674 - _t335*_t382
-            - _t337*_t496 - _t348*_t392 - _t348*_t403 - TRAILER_LIT(18420000.0)*_t360*_t477
-            - _t360*_t708 - TRAILER_LIT(92160000.0)*_t360*_t779
-            - TRAILER_LIT(68018688.0)*_t360*_t852 - TRAILER_LIT(92160000.0)*_t360*_t854
-            - _t360*_t863 - _t366*_t732 - _t366*_t879 - TRAILER_LIT(11336448.0)*_t366*_t921
-            - _t375*_t419 - _t386*_t823 - _t402*_t755 - _t425*_t923 - _t426*_t813 - _t428*_t626
-            - _t429*_t755 - _t430*_t741 - _t431*_t496 - _t477*_t624 - _t478*_t630 - _t509*_t866
-            - _t517*_t798 - TRAILER_LIT(51014016.0)*_t583 - _t585*_t680 - _t615*_t675 - _t627
-            - _t639 - TRAILER_LIT(11362128.0)*_t672 - _t674*_t801 - TRAILER_LIT(47235200.0)*_t677
-            - _t704*_t738 - TRAILER_LIT(11362128.0)*_t709 - _t718*_t728
-            - TRAILER_LIT(34009344.0)*_t719 - TRAILER_LIT(52244730.0)*_t722 - _t724*_t750
-            - _t725*_t745 - TRAILER_LIT(25462725.0)*_t726 - TRAILER_LIT(125189460.0)*_t740
-            - TRAILER_LIT(113467200.0)*_t743 - TRAILER_LIT(156734190.0)*_t746
-            - TRAILER_LIT(153042048.0)*_t747 - TRAILER_LIT(68175450.0)*_t748
-            - TRAILER_LIT(136345536.0)*_t756 - _t772 - TRAILER_LIT(102028032.0)*_t780
-            - TRAILER_LIT(52244730.0)*_t785 - TRAILER_LIT(1417056.0)*_t792
-            - TRAILER_LIT(87074550.0)*_t797 + _t800 - TRAILER_LIT(174149100.0)*_t805
-            - TRAILER_LIT(61110540.0)*_t806 - TRAILER_LIT(122221080.0)*_t815
-            - TRAILER_LIT(391835475.0)*_t816 - TRAILER_LIT(417957840.0)*_t818
-            - TRAILER_LIT(626936760.0)*_t822 - TRAILER_LIT(274997430.0)*_t824
-            - TRAILER_LIT(305552700.0)*_t825 - _t834 - _t836 - _t845 - _t846 - _t851
-            - TRAILER_LIT(136037376.0)*_t856 - TRAILER_LIT(306084096.0)*_t858 + _t859 + _t861
-            + _t870 + _t871 + _t872 + _t876 + _t877 - TRAILER_LIT(7680000.0)*_t878
-            - TRAILER_LIT(417957840.0)*_t880 - TRAILER_LIT(17004672.0)*_t885 - _t892 - _t894 - _t897
-            - _t898 - _t899 - _t901 - _t904 - _t905 - _t906 + _t907 + _t912 + _t915 + _t917 + _t920
-            + _t924 + _t927 + _t930 + _t932 - _t935 + _t937 - _t974 + _t978 + _t979 + _t980 + _t981
-            + _t982 + _t983 + _t984 + _t985 + _t986 + _t987 + _t988 + _t989
-            - TRAILER_LIT(5697746.0)*_t990 - _t991 - _t992 - _t994 - TRAILER_LIT(17093238.0)*_t995
-            - _t996 + _t997 + _t998 + _t999;
-    const trailer_real_t _t1091 = _t195*_t642;
-    const trailer_real_t _t1092 = _t8*_t8;
-    const trailer_real_t _t1093 = _t1092*_t44;
-    const trailer_real_t _t1094 = _t1092*_t59;
-    const trailer_real_t _t1095 = _t1093*_t63;
-    const trailer_real_t _t1096 = TRAILER_LIT(118088.0)*_t1095/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1097 = TRAILER_LIT(236176.0)*_t73/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1098 = _t1092*_t151;
-    const trailer_real_t _t1099 = _t119*_t151;
-    const trailer_real_t _t1100 = _t1092*_t153;
-    const trailer_real_t _t1101 = _t1098*_t63;
-    const trailer_real_t _t1102 = _t1092*_t167 + _t1092*_t190 + _t1092*_t191 - _t1092*_t194
-            - _t1098*_t118 + _t1098*_t122 + _t1098*_t123 + _t1099*_t128 - _t1099*_t131
-            + _t1099*_t132 + _t1100*_t133 - _t1100*_t137 - _t1100*_t138 - _t1100*_t192
-            - _t1100*_t193 - _t1101*_t128 + _t1101*_t131 - _t1101*_t132 + _t118*_t154 - _t119*_t166
-            - _t122*_t154 - _t123*_t154 + _t128*_t163 - _t131*_t163 + _t132*_t163
-            - TRAILER_LIT(4387.0)*_t154*_t50/TRAILER_LIT(9522.0)
-            - TRAILER_LIT(23639.0)*_t154*_t54/TRAILER_LIT(28566.0) - _t163*_t172
-            + TRAILER_LIT(20444.0)*_t163*_t54/TRAILER_LIT(42849.0) - _t164*_t165 - _t165*_t168
-            - _t165*_t171 + _t165*_t200 + TRAILER_LIT(124712.0)*_t165*_t50/TRAILER_LIT(42849.0)
-            + _t170 + _t183;
-    const trailer_real_t _t1103 = _t107*_t1092;
-    const trailer_real_t _t1104 = _t1092*_t129;
-    const trailer_real_t _t1105 =
-            TRAILER_LIT(130975.0)*J_theta_cart*_t0*_t107*_t4*_t55/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(1250.0)*J_theta_cart*_t107*_t1092/TRAILER_LIT(621.0)
-            + TRAILER_LIT(130975.0)*J_theta_cart*_t107*_t12*_t8/TRAILER_LIT(85698.0)
-            + TRAILER_LIT(20444.0)*J_theta_cart_left*_t0*_t107*_t4*_t49*_t55/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(23639.0)*J_theta_cart_left*_t107*_t1092*_t49*_t58/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(20444.0)*J_theta_cart_left*_t107*_t12*_t49*_t8/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(23639.0)*J_theta_cart_left*_t107*_t49*_t55/TRAILER_LIT(28566.0)
-            + TRAILER_LIT(62356.0)*J_theta_cart_right*_t0*_t107*_t1092*_t4*_t53/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(4387.0)*J_theta_cart_right*_t107*_t1092*_t53*_t58/TRAILER_LIT(4761.0)
-            + TRAILER_LIT(124712.0)*J_theta_cart_right*_t107*_t12*_t53*_t58*_t8/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(4387.0)*J_theta_cart_right*_t107*_t53*_t55/TRAILER_LIT(9522.0)
-            + TRAILER_LIT(26195.0)*K_theta_cart_x_tractor*_t0*_t107*_t1092*_t4/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(1000.0)*K_theta_cart_x_tractor*_t107*_t1092*_t58/TRAILER_LIT(207.0)
-            + TRAILER_LIT(52390.0)*K_theta_cart_x_tractor*_t107*_t12*_t58*_t8/TRAILER_LIT(14283.0)
-            + TRAILER_LIT(500.0)*K_theta_cart_x_tractor*_t107*_t55/TRAILER_LIT(207.0)
-            + TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t1092*_t4/TRAILER_LIT(207.0)
-            + TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2*_t107*_t1092/TRAILER_LIT(28566.0)
-            + TRAILER_LIT(2000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t58*_t8/TRAILER_LIT(207.0)
-            - _t1092*_t126 - _t1092*_t127 - _t1092*_t148 - _t1103*_t122 - _t1103*_t128*_t63
-            - _t1104*_t133 - _t1104*_t138 - _t118*_t135 - _t123*_t135 - _t131*_t136 - _t132*_t136
-            - _t134*_t168 - _t139 - _t140 - _t145*_t202 - _t149*_t55 - _t201 - _t205;
-    const trailer_real_t _t1106 = -_t1102*_t150 - _t1105*_t195
-            +
-            _t84*(TRAILER_LIT(369025.0)*J_theta_cart*_t0*_t1092*_t4*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(738050.0)*J_theta_cart*_t12*_t58*_t8*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(14761.0)*J_theta_cart_left*_t1092*_t49*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(118088.0)*J_theta_cart_left*_t12*_t49*_t8*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(29522.0)*J_theta_cart_right*_t1092*_t53*_t58*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(118088.0)*J_theta_cart_right*_t12*_t53*_t8*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(14761.0)*J_theta_cart_right*_t53*_t55*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(147610.0)*K_theta_cart_x_tractor*_t12*_t8*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(147610.0)*K_theta_cart_x_tractor_2*_t1092*_t58*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2*_t55*radius_left*radius_right
-            /TRAILER_LIT(14283.0) - _t106 - _t1093*_t72 - _t1093*_t80 - _t1094*_t96 - _t1095*_t91
-            - _t1096*_t50 - _t1096*_t54 - _t1097*_t50 - _t1097*_t54 - _t649 - _t73*_t93 - _t79
-            - _t98);
-    const trailer_real_t _t1107 = TRAILER_LIT(59044.0)*_t1095/TRAILER_LIT(42849.0);
-    const trailer_real_t _t1108 =
-            TRAILER_LIT(369025.0)*J_theta_cart*_t0*_t1092*_t4*radius_left*radius_right
-            /TRAILER_LIT(85698.0)
-            +
-            TRAILER_LIT(59044.0)*J_theta_cart_left*_t0*_t4*_t49*_t55*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(14761.0)*J_theta_cart_left*_t1092*_t49*radius_left*radius_right
-            /TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(59044.0)*J_theta_cart_left*_t12*_t49*_t8*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(59044.0)*J_theta_cart_right*_t0*_t4*_t53*_t55*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(14761.0)*J_theta_cart_right*_t1092*_t53*_t58*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(59044.0)*J_theta_cart_right*_t12*_t53*_t8*radius_left*radius_right
-            /TRAILER_LIT(42849.0)
-            +
-            TRAILER_LIT(14761.0)*J_theta_cart_right*_t53*_t55*radius_left*radius_right
-            /TRAILER_LIT(28566.0)
-            +
-            TRAILER_LIT(73805.0)*K_theta_cart_x_tractor*_t0*_t4*_t55*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(73805.0)*K_theta_cart_x_tractor*_t12*_t8*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2*_t1092*_t58*radius_left*radius_right
-            /TRAILER_LIT(14283.0)
-            +
-            TRAILER_LIT(73805.0)*K_theta_cart_x_tractor_2*_t55*radius_left*radius_right
-            /TRAILER_LIT(28566.0) - _t102 - _t1092*_t90 - _t1093*_t61 - _t1093*_t68 - _t1095*_t71
-            - _t1107*_t50 - _t1107*_t54 - _t56*_t67 - _t650 - _t70*_t92 - _t75;
-    const trailer_real_t _t1109 = _t1103*_t210;
-    const trailer_real_t _t1110 = _t213*_t237;
-    const trailer_real_t _t1111 = _t1098*_t267;
-    const trailer_real_t _t1112 = _t119*_t218;
-    const trailer_real_t _t1113 = _t1109*_t220;
-    const trailer_real_t _t1114 = _t1109*_t217;
-    const trailer_real_t _t1115 = TRAILER_LIT(7858500.0)*_t274;
-    const trailer_real_t _t1116 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t1117 = TRAILER_LIT(15440000.0)*_t313;
-    const trailer_real_t _t1118 = _t274*_t287;
-    const trailer_real_t _t1119 = TRAILER_LIT(17839500.0)*_t241;
-    const trailer_real_t _t1120 = TRAILER_LIT(22141500.0)*_t274;
-    const trailer_real_t _t1121 = _t1098*_t263;
-    const trailer_real_t _t1122 = _t1121*_t274;
-    const trailer_real_t _t1123 = _t1098*_t255;
-    const trailer_real_t _t1124 = TRAILER_LIT(34186476.0)*_t244;
-    const trailer_real_t _t1125 = _t1109*_t212;
-    const trailer_real_t _t1126 = TRAILER_LIT(42135276.0)*_t244;
-    const trailer_real_t _t1127 = _t237*_t275;
-    const trailer_real_t _t1128 = _t237*_t326;
-    const trailer_real_t _t1129 = TRAILER_LIT(48560000.0)*_t313;
-    const trailer_real_t _t1130 = _t262*_t279;
-    const trailer_real_t _t1131 = _t1100*_t267;
-    const trailer_real_t _t1132 = _t212*_t320;
-    const trailer_real_t _t1133 = _t241*_t308;
-    const trailer_real_t _t1134 = _t241*_t275;
-    const trailer_real_t _t1135 = TRAILER_LIT(107519124.0)*_t244;
-    const trailer_real_t _t1136 = TRAILER_LIT(111002768.0)*_t262;
-    const trailer_real_t _t1137 = _t1104*_t210;
-    const trailer_real_t _t1138 = _t1137*_t220;
-    const trailer_real_t _t1139 = _t221*_t246;
-    const trailer_real_t _t1140 = _t260*_t279;
-    const trailer_real_t _t1141 = _t246*_t285;
-    const trailer_real_t _t1142 = _t313*_t572;
-    const trailer_real_t _t1143 = _t1142*_t335;
-    const trailer_real_t _t1144 = TRAILER_LIT(11395492.0)*_t13;
-    const trailer_real_t _t1145 = _t1094*thetadot_left;
-    const trailer_real_t _t1146 = _t413*_t485;
-    const trailer_real_t _t1147 = TRAILER_LIT(34186476.0)*thetadot_right;
-    const trailer_real_t _t1148 = TRAILER_LIT(35839708.0)*_t13;
-    const trailer_real_t _t1149 = J_theta_cart*_t1113;
-    const trailer_real_t _t1150 = _t1149*_t274;
-    const trailer_real_t _t1151 = _t1111*_t244;
-    const trailer_real_t _t1152 = TRAILER_LIT(64245000.0)*J_theta_cart;
-    const trailer_real_t _t1153 = _t1093*_t446;
-    const trailer_real_t _t1154 = _t1153*_t335;
-    const trailer_real_t _t1155 = J_theta_cart*_t426;
-    const trailer_real_t _t1156 = TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t1157 = _t1111*_t262;
-    const trailer_real_t _t1158 = _t1111*_t274;
-    const trailer_real_t _t1159 = TRAILER_LIT(104489460.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t1160 = _t260*_t368;
-    const trailer_real_t _t1161 = TRAILER_LIT(107519124.0)*thetadot_right;
-    const trailer_real_t _t1162 = _t1137*_t274;
-    const trailer_real_t _t1163 = _t1113*_t244;
-    const trailer_real_t _t1164 = _t269*_t310;
-    const trailer_real_t _t1165 = J_theta_cart*_t419;
-    const trailer_real_t _t1166 = K_theta_cart_x_tractor*_t420;
-    const trailer_real_t _t1167 = TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t1168 = _t268*_t277;
-    const trailer_real_t _t1169 = J_theta_cart*_t392;
-    const trailer_real_t _t1170 = _t460*_t507;
-    const trailer_real_t _t1171 = K_theta_cart_x_tractor_2*_t503*_t832;
-    const trailer_real_t _t1172 = _t1094*_t429*_t446;
-    const trailer_real_t _t1173 = _t449*_t458;
-    const trailer_real_t _t1174 = _t486*_t524;
-    const trailer_real_t _t1175 = _t465*_t850;
-    const trailer_real_t _t1176 = _t1092*_t365;
-    const trailer_real_t _t1177 = _t360*_t480;
-    const trailer_real_t _t1178 = _t360*_t478;
-    const trailer_real_t _t1179 = TRAILER_LIT(61110540.0)*_t833;
-    const trailer_real_t _t1180 = _t1092*_t13;
-    const trailer_real_t _t1181 = TRAILER_LIT(91163936.0)*_t1180;
-    const trailer_real_t _t1182 = _t1131*_t274;
-    const trailer_real_t _t1183 = _t451*_t483;
-    const trailer_real_t _t1184 = _t443*_t460;
-    const trailer_real_t _t1185 = _t366*_t854;
-    const trailer_real_t _t1186 = _t1138*_t274;
-    const trailer_real_t _t1187 = TRAILER_LIT(286717664.0)*_t1180;
-    const trailer_real_t _t1188 = _t55*_t792;
-    const trailer_real_t _t1189 = _t545*_t891;
-    const trailer_real_t _t1190 = _t518*_t893;
-    const trailer_real_t _t1191 = _t1092*_t449;
-    const trailer_real_t _t1192 = _t1191*_t929;
-    const trailer_real_t _t1193 = _t537*_t819;
-    const trailer_real_t _t1194 = TRAILER_LIT(244442160.0)*_t931;
-    const trailer_real_t _t1195 = _t92*thetadot_right;
-    const trailer_real_t _t1196 = _t1195*_t439;
-    const trailer_real_t _t1197 = _t1095*thetadot_right;
-    const trailer_real_t _t1198 = _t1197*_t497;
-    const trailer_real_t _t1199 = _t1092*_t465*_t637;
-    const trailer_real_t _t1200 = _t524*_t540;
-    const trailer_real_t _t1201 = _t533*_t540;
-    const trailer_real_t _t1202 = _t1092*_t845;
-    const trailer_real_t _t1203 = _t1195*_t497;
-    const trailer_real_t _t1204 = _t1197*_t439;
-    const trailer_real_t _t1205 = _t509*_t890;
-    const trailer_real_t _t1206 = _t1092*_t58;
-    const trailer_real_t _t1207 = _t1206*_t365;
-    const trailer_real_t _t1208 = _t537*_t923;
-    const trailer_real_t _t1209 = _t1092*_t454;
-    const trailer_real_t _t1210 = _t1209*_t896;
-    const trailer_real_t _t1211 = _t519*_t926;
-    const trailer_real_t _t1212 = TRAILER_LIT(733326480.0)*_t469*_t544;
-    const trailer_real_t _t1213 = _t1206*_t465;
-    const trailer_real_t _t1214 = _t1213*_t934;
-    const trailer_real_t _t1215 = _t1213*_t936;
-    const trailer_real_t _t1216 =
-            -TRAILER_LIT(17250000.0)*J_theta_cart*_t0*_t12*_t151*_t214*_t48*_t52
-            -
-            TRAILER_LIT(590440000.0)*J_theta_cart*_t1092*_t12*_t230*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t1092*_t48*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t12*_t230*_t48*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t229*_t4*_t48*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t48*_t52*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor*_t1092*_t12*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t1092*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(708528000.0)*K_theta_cart_x_tractor*_t1191
-            -
-            TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t0*_t1092*_t12*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t48*_t52*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t229*_t48*_t52*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t4*_t48*_t52*_t55*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t12*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor_2*_t230*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(797094000.0)*K_theta_cart_x_tractor_2*_t4*_t48*_t52*_t55*_t8*radius_left
-            *radius_right*thetadot_left*thetadot_right + _t1094*_t569
-            + TRAILER_LIT(240000000.0)*_t1095*_t947 + _t1142*_t562 + _t1153*_t561 + _t1209*_t886
-            + _t1213*_t972 + TRAILER_LIT(17250000.0)*_t274*_t294 + _t336*_t449 + _t483*_t958
-            + _t486*_t565 + _t540*_t565 + TRAILER_LIT(1062792000.0)*_t544*_t947 + _t570*_t860
-            + _t73*_t968 + _t952 + _t953 + _t954 + _t955 - _t956 - _t957 - _t960 - _t961 + _t963
-            + _t964 - _t966 - _t967 + _t969 + _t970 - _t971 - _t973;
-    const trailer_real_t _t1217 =
-            TRAILER_LIT(203701800.0)*J_theta_cart*_t0*_t107*_t1092*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(87074550.0)*J_theta_cart*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t0*_t151*_t214*_t4*_t48*_t52*_t55
-            + TRAILER_LIT(221415000.0)*J_theta_cart*_t107*_t1092*_t12*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t107*_t1092*_t210*_t48*_t52
-            + TRAILER_LIT(305552700.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(68175450.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(85660000.0)*J_theta_cart*_t1092*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t1092*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t12*_t151*_t214*_t48*_t52*_t8
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(391835475.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t107*_t1092*_t12*_t210*_t52
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52*_t58
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52*_t55
-            + TRAILER_LIT(132013824.0)*J_theta_cart_left*_t0*_t1092*_t12*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(11336448.0)*J_theta_cart_left*_t0*_t1092*_t12*_t52*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(31586400.0)*J_theta_cart_left*_t0*_t1092*_t151*_t214*_t4*_t52
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_left*_t0*_t1092*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t0*_t12*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(45581968.0)*J_theta_cart_left*_t107*_t1092*_t12*_t210*_t230*_t52
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t107*_t1092*_t210*_t52*_t58
-            + TRAILER_LIT(5697746.0)*J_theta_cart_left*_t107*_t12*_t210*_t230*_t52
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t8
-            + TRAILER_LIT(17093238.0)*J_theta_cart_left*_t107*_t210*_t229*_t4*_t52
-            + TRAILER_LIT(51014016.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t8
-            + TRAILER_LIT(153042048.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t107*_t210*_t52*_t55
-            + TRAILER_LIT(56180368.0)*J_theta_cart_left*_t1092*_t12*_t151*_t214*_t230*_t52
-            +
-            TRAILER_LIT(215038248.0)*J_theta_cart_left*_t1092*_t12*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(49884800.0)*J_theta_cart_left*_t1092*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t1092*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(7022546.0)*J_theta_cart_left*_t12*_t151*_t214*_t230*_t52
-            + TRAILER_LIT(63172800.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t58*_t8
-            +
-            TRAILER_LIT(7680000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(21067638.0)*J_theta_cart_left*_t151*_t214*_t229*_t4*_t52
-            + TRAILER_LIT(198020736.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t55*_t8
-            + TRAILER_LIT(36951756.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t8
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t151*_t214*_t52*_t55
-            +
-            TRAILER_LIT(17004672.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t107*_t1092*_t12*_t210*_t48*_t58
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t0*_t107*_t1092*_t210*_t4*_t48
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48*_t58
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48
-            + TRAILER_LIT(90897024.0)*J_theta_cart_right*_t0*_t1092*_t12*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(68018688.0)*J_theta_cart_right*_t0*_t1092*_t12*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(56733600.0)*J_theta_cart_right*_t0*_t1092*_t151*_t214*_t4*_t48
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t0*_t12*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t0*_t229*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t0*_t4*_t48*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(143358832.0)*J_theta_cart_right*_t107*_t1092*_t12*_t210*_t230*_t48
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t107*_t1092*_t210*_t48*_t58
-            + TRAILER_LIT(17919854.0)*J_theta_cart_right*_t107*_t12*_t210*_t230*_t48
-            + TRAILER_LIT(70852800.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t58*_t8
-            + TRAILER_LIT(53759562.0)*J_theta_cart_right*_t107*_t210*_t229*_t4*_t48
-            + TRAILER_LIT(8502336.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t55*_t8
-            + TRAILER_LIT(12745356.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t107*_t210*_t48*_t55
-            + TRAILER_LIT(83252076.0)*J_theta_cart_right*_t1092*_t12*_t151*_t214*_t4*_t48
-            +
-            TRAILER_LIT(68372952.0)*J_theta_cart_right*_t1092*_t12*_t4*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t1092*_t151*_t214*_t48
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t1092*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(113467200.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t58*_t8
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t12*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(136345536.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t55*_t8
-            + TRAILER_LIT(29815956.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t8
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_right*_t230*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(306084096.0)*J_theta_cart_right*_t4*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t0*_t107*_t1092*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            *_t58
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t0*_t1092*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t107*_t1092*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t107*_t1092*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(274997430.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52*_t55
-            + TRAILER_LIT(77094000.0)*K_theta_cart_x_tractor*_t1092*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t1092*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(626936760.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t55
-            - TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t305
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t1092*_t12*_t210*_t48*_t52
-            *_t58
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t1092*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor_2*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t0*_t1092*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            +
-            TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor_2*_t107*_t1092*_t12*_t210*_t230*_t48
-            *_t52
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t8
-            +
-            TRAILER_LIT(313468380.0)*K_theta_cart_x_tractor_2*_t1092*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t1092*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(115641000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            - TRAILER_LIT(148515552.0)*_t1012 - TRAILER_LIT(66006912.0)*_t1015
-            - TRAILER_LIT(6376752.0)*_t1018 - TRAILER_LIT(2834112.0)*_t1037 - _t1089
-            - TRAILER_LIT(92160000.0)*_t1095*_t908 - _t1098*_t212*_t653
-            - TRAILER_LIT(16355200.0)*_t1100*_t263 - _t1101*_t267*_t496 - _t1109*_t250
-            - _t1109*_t252 - TRAILER_LIT(17004672.0)*_t1110 - _t1111*_t301
-            - TRAILER_LIT(56733600.0)*_t1112 - _t1113*_t274*_t565 - _t1113*_t336 - _t1114*_t1135
-            - TRAILER_LIT(1417056.0)*_t1114*_t274 - _t1115*_t279 - _t1116*_t306 - _t1117*_t366
-            - TRAILER_LIT(17004672.0)*_t1118 - _t1119*_t279 - _t1120*_t283 - _t1121*_t1136
-            - TRAILER_LIT(22724256.0)*_t1122 - _t1123*_t1126 - TRAILER_LIT(33003456.0)*_t1123*_t274
-            - _t1124*_t1125 - TRAILER_LIT(35426400.0)*_t1125*_t63 - TRAILER_LIT(43537275.0)*_t1127
-            - TRAILER_LIT(45448512.0)*_t1128 - _t1129*_t360 - TRAILER_LIT(52244730.0)*_t1130
-            - _t1131*_t398 - _t1131*_t429 - TRAILER_LIT(70852800.0)*_t1132
-            - TRAILER_LIT(102259152.0)*_t1133 - TRAILER_LIT(104324550.0)*_t1134 - _t1138*_t423
-            - _t1139*_t617 - TRAILER_LIT(156734190.0)*_t1140 - TRAILER_LIT(204056064.0)*_t1141
-            + _t1143 - _t1144*_t373 - _t1145*_t471 - _t1145*_t491 - TRAILER_LIT(34009344.0)*_t1146
-            - _t1147*_t414 - _t1148*_t390 - TRAILER_LIT(295220000.0)*_t1149*_t262
-            - TRAILER_LIT(50925450.0)*_t1150 - _t1151*_t1152 - _t1154
-            - TRAILER_LIT(101850900.0)*_t1155 - _t1156*_t1157 - _t1157*_t1167 - _t1158*_t1159
-            - _t1160*_t1161 - _t1162*_t810 - _t1163*_t517 - _t1163*_t570
-            - TRAILER_LIT(208978920.0)*_t1164 - TRAILER_LIT(229164525.0)*_t1165
-            - TRAILER_LIT(366663240.0)*_t1166 - TRAILER_LIT(470202570.0)*_t1168
-            - TRAILER_LIT(522447300.0)*_t1169 + _t1170 + _t1171 + _t1172 + _t1173 + _t1174 + _t1175
-            - _t1176*_t853 - TRAILER_LIT(5668224.0)*_t1177 - TRAILER_LIT(12753504.0)*_t1178 - _t1179
-            - _t1181*_t373 - _t1182*_t867 - _t1182*_t884 - _t1183 - _t1184
-            - TRAILER_LIT(184320000.0)*_t1185 - _t1186*_t435 - _t1187*_t390
-            - TRAILER_LIT(408112128.0)*_t1188 + _t1189 - TRAILER_LIT(31586400.0)*_t119*_t216
-            + _t1190 + _t1192 + _t1193 + _t1194 + _t1196 + _t1198 + _t1199
-            - TRAILER_LIT(2471700.0)*_t12*_t231 + _t1200 - _t1201 - _t1202 - _t1203 - _t1204
-            - _t1205 - _t1207*_t922 - _t1208 - _t1210 - _t1211 - _t1212 + _t1214 - _t1215 - _t1216
-            - _t163*_t723 - _t163*_t739 - TRAILER_LIT(3948300.0)*_t216*_t274
-            - TRAILER_LIT(35426400.0)*_t217*_t424 - TRAILER_LIT(7091700.0)*_t218*_t274
-            - TRAILER_LIT(11328300.0)*_t219*_t274 - TRAILER_LIT(12849000.0)*_t237*_t279
-            - TRAILER_LIT(31537644.0)*_t245 - TRAILER_LIT(132849000.0)*_t246*_t283 - _t246*_t667
-            - _t246*_t676 - _t246*_t744 - TRAILER_LIT(34086384.0)*_t247
-            - TRAILER_LIT(110707500.0)*_t260*_t294 - _t262*_t303 - _t268*_t296 - _t268*_t335
-            - TRAILER_LIT(20700000.0)*_t274*_t282 - _t297*_t327 - _t297*_t347
-            - TRAILER_LIT(8177600.0)*_t308 - TRAILER_LIT(30555270.0)*_t311
-            - TRAILER_LIT(61110540.0)*_t312 - _t327*_t399 - _t332*_t379 - _t347*_t399 - _t348*_t425
-            - _t348*_t426 - TRAILER_LIT(86438688.0)*_t366*_t477 - _t375*_t386 - _t381*_t411
-            - _t386*_t394 - _t388 - _t392*_t813 - _t403*_t819 - _t419*_t823 - _t472*_t529
-            - _t474*_t857 - _t477*_t778 - _t502 - _t529*_t864 - _t654 - _t655 - _t656 - _t657
-            - _t658 - _t660 - _t661 - _t662 - _t663 - _t664 - _t665 - _t666 + _t668 + _t669 + _t671
-            + _t679 - _t682 - _t684 - _t686 - _t687 - _t689 - _t690 - _t692 - _t694 - _t695 - _t696
-            - _t697 - _t698 - _t700 + _t702 + _t703 + _t711 + _t712 + _t715 + _t716 + _t720 + _t721
-            + _t730 + _t731 + _t733 + _t734 + _t736 + _t737 + _t751 + _t752 + _t754 + _t758 - _t759
-            - _t760 - _t761 - _t762 - _t763 - _t765 - _t768 - _t769 - _t770 - _t774 - _t776 - _t777
-            + _t781 + _t782 + _t783 + _t784 + _t787 + _t788 + _t789 + _t791 + _t795 + _t802 + _t803
-            + _t804 + _t807 + _t808 + _t812 + _t814 - _t827 - _t829 - _t831 - _t838 - _t841 - _t843
-            - _t844 - _t848 - _t849 - TRAILER_LIT(4251168.0)*_t855 + _t869 + _t874 + _t881 + _t883
-            + _t887 + _t889 - _t903 + _t910 + _t911 + _t914 + _t916 + _t919 + _t925
-            - TRAILER_LIT(41626038.0)*_t990 - TRAILER_LIT(13875346.0)*_t995;
-    const trailer_real_t _t1218 = TRAILER_LIT(31586400.0)*_t217;
-    const trailer_real_t _t1219 = _t1109*_t63;
-    const trailer_real_t _t1220 = TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t1221 =
-            TRAILER_LIT(348298200.0)*J_theta_cart*_t0*_t107*_t1092*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t0*_t107*_t1092*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t107*_t12*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t0*_t107*_t210*_t229*_t48*_t52
-            + TRAILER_LIT(50925450.0)*J_theta_cart*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t0*_t151*_t214*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(85660000.0)*J_theta_cart*_t107*_t1092*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t107*_t1092*_t210*_t48*_t52
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(276000000.0)*J_theta_cart*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(522447300.0)*J_theta_cart*_t107*_t210*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(104324550.0)*J_theta_cart*_t107*_t210*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(221415000.0)*J_theta_cart*_t1092*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t1092*_t151*_t214*_t48*_t52
-            - TRAILER_LIT(295220000.0)*J_theta_cart*_t1157
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t151*_t214*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(229164525.0)*J_theta_cart*_t151*_t214*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(22724256.0)*J_theta_cart_left*_t0*_t107*_t1092*_t12*_t210*_t52
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t0*_t107*_t12*_t210*_t52
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t0*_t107*_t210*_t229*_t52*_t58
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t0*_t107*_t210*_t4*_t52*_t55
-            + TRAILER_LIT(1417056.0)*J_theta_cart_left*_t0*_t1092*_t12*_t151*_t214*_t52
-            +
-            TRAILER_LIT(272074752.0)*J_theta_cart_left*_t0*_t1092*_t12*_t52*_t58*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_left*_t0*_t1092*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t0*_t12*_t151*_t214*_t52
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t0*_t151*_t214*_t229*_t52*_t58
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t0*_t151*_t214*_t4*_t52*_t55
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(83252076.0)*J_theta_cart_left*_t107*_t1092*_t12*_t210*_t4*_t52
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t107*_t1092*_t210*_t52
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t107*_t12*_t210*_t52*_t8
-            + TRAILER_LIT(34086384.0)*J_theta_cart_left*_t107*_t210*_t230*_t52*_t8
-            + TRAILER_LIT(102259152.0)*J_theta_cart_left*_t107*_t210*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(143358832.0)*J_theta_cart_left*_t1092*_t12*_t151*_t214*_t230*_t52
-            +
-            TRAILER_LIT(68372952.0)*J_theta_cart_left*_t1092*_t12*_t4*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t1092*_t151*_t214*_t52*_t58
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t1092*_t52*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(17919854.0)*J_theta_cart_left*_t12*_t151*_t214*_t230*_t52
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t12*_t151*_t214*_t52*_t8
-            +
-            TRAILER_LIT(184320000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(53759562.0)*J_theta_cart_left*_t151*_t214*_t229*_t4*_t52
-            + TRAILER_LIT(2125584.0)*J_theta_cart_left*_t151*_t214*_t230*_t52*_t8
-            + TRAILER_LIT(6376752.0)*J_theta_cart_left*_t151*_t214*_t4*_t52*_t55*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t151*_t214*_t52*_t55
-            +
-            TRAILER_LIT(408112128.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(33003456.0)*J_theta_cart_right*_t0*_t107*_t1092*_t12*_t210*_t48
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t0*_t107*_t12*_t210*_t48
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t0*_t107*_t210*_t229*_t48*_t58
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t0*_t107*_t210*_t4*_t48*_t55
-            + TRAILER_LIT(136037376.0)*J_theta_cart_right*_t0*_t1092*_t12*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(2834112.0)*J_theta_cart_right*_t0*_t1092*_t12*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t0*_t1092*_t151*_t214*_t4*_t48
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48*_t58
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t0*_t12*_t151*_t214*_t48
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t0*_t151*_t214*_t229*_t48
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t229*_t48*_t58*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t4*_t48*_t55*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(56180368.0)*J_theta_cart_right*_t107*_t1092*_t12*_t210*_t230*_t48
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t107*_t1092*_t210*_t48*_t58
-            + TRAILER_LIT(7022546.0)*J_theta_cart_right*_t107*_t12*_t210*_t230*_t48
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t107*_t12*_t210*_t48*_t8
-            + TRAILER_LIT(21067638.0)*J_theta_cart_right*_t107*_t210*_t229*_t4*_t48
-            + TRAILER_LIT(49505184.0)*J_theta_cart_right*_t107*_t210*_t230*_t48*_t8
-            + TRAILER_LIT(148515552.0)*J_theta_cart_right*_t107*_t210*_t4*_t48*_t55*_t8
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t107*_t210*_t48*_t55
-            + TRAILER_LIT(45581968.0)*J_theta_cart_right*_t1092*_t12*_t151*_t214*_t230*_t48
-            +
-            TRAILER_LIT(215038248.0)*J_theta_cart_right*_t1092*_t12*_t4*_t48*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t1092*_t151*_t214*_t48*_t58
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t1092*_t48*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(5697746.0)*J_theta_cart_right*_t12*_t151*_t214*_t230*_t48
-            + TRAILER_LIT(70852800.0)*J_theta_cart_right*_t12*_t151*_t214*_t48*_t58*_t8
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t12*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(17093238.0)*J_theta_cart_right*_t151*_t214*_t229*_t4*_t48
-            + TRAILER_LIT(204056064.0)*J_theta_cart_right*_t151*_t214*_t230*_t48*_t55*_t8
-            + TRAILER_LIT(31537644.0)*J_theta_cart_right*_t151*_t214*_t4*_t48*_t8
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t151*_t214*_t48*_t55
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_right*_t230*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(12753504.0)*J_theta_cart_right*_t4*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(104489460.0)*K_theta_cart_x_tractor*_t0*_t107*_t1092*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t0*_t107*_t210*_t4*_t48*_t52*_t55
-            +
-            TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            *_t58
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t0*_t151*_t214*_t229*_t48*_t52
-            + TRAILER_LIT(77094000.0)*K_theta_cart_x_tractor*_t107*_t1092*_t12*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t107*_t1092*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t107*_t12*_t210*_t48*_t52*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(470202570.0)*K_theta_cart_x_tractor*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t107*_t210*_t48*_t52*_t55
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t1092*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t1092*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t12*_t151*_t214*_t230*_t48*_t52
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t151*_t214*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(366663240.0)*K_theta_cart_x_tractor*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t151*_t214*_t4*_t48*_t52*_t8
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t151*_t214*_t48*_t52*_t55
-            + TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t1092*_t12*_t210*_t48*_t52
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t1092*_t210*_t4*_t48*_t52
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t210*_t229*_t48*_t52*_t58
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t1092*_t12*_t151*_t214*_t48*_t52
-            *_t58
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t0*_t1092*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t214*_t48*_t52*_t58
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t214*_t229*_t48*_t52
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor_2*_t107*_t1092*_t12*_t210*_t230*_t48
-            *_t52
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t107*_t1092*_t210*_t48*_t52*_t58
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t230*_t48*_t52
-            + TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t210*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t229*_t4*_t48*_t52
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t230*_t48*_t52*_t8
-            + TRAILER_LIT(115641000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t4*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t107*_t210*_t48*_t52*_t55
-            +
-            TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor_2*_t1092*_t12*_t151*_t214*_t4*_t48*_t52
-            + TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t214*_t48*_t52*_t58*_t8
-            + TRAILER_LIT(531396000.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t230*_t48*_t52*_t55*_t8
-            + TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2*_t151*_t214*_t4*_t48*_t52*_t8
-            - _t1000 - _t1001 - _t1002 - _t1003 - _t1004 - _t1006 - _t1007 - _t1008 - _t1009
-            - _t1010 - _t1011 + _t1013 + _t1014 + _t1016 + _t1017 + _t1019 + _t1020 + _t1021
-            + _t1022 + _t1023 + _t1024 - _t1025*_t1101 + _t1026 + _t1027 + _t1028 + _t1029
-            - _t1030*_t1219 - _t1031*_t320 + _t1032 - _t1033*_t246 - _t1034*_t246 + _t1035 + _t1036
-            - _t1038 - _t1039 - _t1040 - _t1041 - _t1042 - _t1043 - _t1044 - _t1045 - _t1046
-            - _t1047 - _t1048 - _t1049 + _t1050 + _t1051 + _t1052 + _t1053 + _t1054 + _t1055
-            + _t1056 + _t1057 + _t1058 - _t1059*_t1162 + _t1060 + _t1061 + _t1062 + _t1063 + _t1064
-            + _t1065 + _t1066 - _t1067 - _t1068 - _t1069 - _t1070 - _t1071 - _t1072 - _t1074
-            - _t1075 - _t1077 - _t1078 - _t1079*_t1095*thetadot_left + _t1080 + _t1081 + _t1082
-            + _t1083 + _t1084 + _t1085 + _t1086 + _t1087 + _t1088 - _t1098*_t214*_t250
-            - _t1098*_t977 - TRAILER_LIT(5668224.0)*_t1100*_t255*_t274 - _t1109*_t593
-            - TRAILER_LIT(11362128.0)*_t1110 - _t1111*_t336 - TRAILER_LIT(35426400.0)*_t1112
-            - _t1113*_t1156*_t262 - _t1113*_t301 - _t1113*_t335 - _t1113*_t347*_t63 - _t1114*_t1126
-            - _t1115*_t283 - _t1116*_t340 - _t1117*_t360 - TRAILER_LIT(11362128.0)*_t1118
-            - _t1119*_t283 - _t1120*_t279 - _t1121*_t1124 - TRAILER_LIT(34009344.0)*_t1122
-            - _t1123*_t1135 - _t1125*_t1136 - TRAILER_LIT(25462725.0)*_t1127
-            - TRAILER_LIT(68018688.0)*_t1128 - _t1129*_t366 - TRAILER_LIT(30555270.0)*_t1130
-            - _t1131*_t423 - TRAILER_LIT(113467200.0)*_t1132 - TRAILER_LIT(153042048.0)*_t1133
-            - TRAILER_LIT(68175450.0)*_t1134 - _t1137*_t608 - _t1138*_t398 - _t1139*_t339
-            - TRAILER_LIT(91665810.0)*_t1140 - TRAILER_LIT(136345536.0)*_t1141 - _t1143
-            - _t1144*_t390 - _t1145*_t632 - _t1145*_t635 - TRAILER_LIT(1417056.0)*_t1146
-            - _t1147*_t1160 - _t1148*_t373 - TRAILER_LIT(64245000.0)*_t1149*_t244
-            - TRAILER_LIT(87074550.0)*_t1150 - _t1151*_t570 + _t1154
-            - TRAILER_LIT(174149100.0)*_t1155 - _t1157*_t542 - _t1158*_t533 - _t1158*_t565
-            - _t1161*_t414 - TRAILER_LIT(132013824.0)*_t1162*_t217 - _t1163*_t820
-            - TRAILER_LIT(122221080.0)*_t1164 - TRAILER_LIT(391835475.0)*_t1165
-            - TRAILER_LIT(626936760.0)*_t1166 - TRAILER_LIT(274997430.0)*_t1168
-            - TRAILER_LIT(305552700.0)*_t1169 - _t1170 - _t1171 - _t1172 - _t1173 - _t1174 - _t1175
-            - TRAILER_LIT(68018688.0)*_t1176*_t360 - TRAILER_LIT(136037376.0)*_t1177
-            - TRAILER_LIT(306084096.0)*_t1178 + _t1179 - _t1181*_t390 - _t1182*_t509 + _t1183
-            + _t1184 - TRAILER_LIT(7680000.0)*_t1185 - _t1186*_t1220 - _t1186*_t867 - _t1187*_t373
-            - TRAILER_LIT(17004672.0)*_t1188 - _t1189 - _t1190 - _t1192 - _t1193 - _t1194 - _t1196
-            - _t1198 - _t1199 - _t1200 + _t1201 + _t1202 + _t1203 + _t1204 + _t1205
-            - TRAILER_LIT(11336448.0)*_t1207*_t366 + _t1208 + _t1210 + _t1211 + _t1212 - _t1214
-            + _t1215 - _t1216 - _t1218*_t1219 - TRAILER_LIT(35426400.0)*_t163*_t263
-            - TRAILER_LIT(70852800.0)*_t165*_t255 - TRAILER_LIT(708528.0)*_t216*_t237
-            - TRAILER_LIT(16501728.0)*_t219*_t237 - _t223*_t585 - _t241*_t993
-            - TRAILER_LIT(29815956.0)*_t245 - TRAILER_LIT(51014016.0)*_t247
-            - TRAILER_LIT(41626038.0)*_t261 - _t262*_t589 - _t268*_t332 - _t296*_t379 - _t297*_t348
-            - TRAILER_LIT(125189460.0)*_t312 - _t327*_t425 - TRAILER_LIT(110707500.0)*_t345
-            - TRAILER_LIT(36902500.0)*_t346 - _t348*_t399 - _t348*_t433
-            - TRAILER_LIT(18420000.0)*_t360*_t365 - TRAILER_LIT(92160000.0)*_t360*_t472
-            - _t360*_t865 - _t365*_t624 - _t375*_t411 - _t386*_t626 - _t411*_t628 - _t420*_t813
-            - _t425*_t496 - _t428*_t823 - _t431*_t923 - _t606*_t616 - _t630*_t857 - _t634 - _t638
-            - TRAILER_LIT(36951756.0)*_t670 - TRAILER_LIT(198020736.0)*_t705
-            - TRAILER_LIT(16501728.0)*_t706 - TRAILER_LIT(38547000.0)*_t727
-            - TRAILER_LIT(8502336.0)*_t742 - TRAILER_LIT(12849000.0)*_t749
-            - TRAILER_LIT(708528.0)*_t753 - TRAILER_LIT(102028032.0)*_t855 + _t903 - _t911 - _t916
-            - _t951 - _t978 - _t979 - _t980 - _t981 - _t982 - _t983 - _t984 - _t985 - _t986 - _t987
-            - _t988 - _t989 + _t991 + _t992 + _t994 + _t996 - _t997 - _t998 - _t999;
-    const trailer_real_t _t1222 = _t107*thetadot_right;
-    const trailer_real_t _t1223 = _t1222*_t217;
-    const trailer_real_t _t1224 = _t1222*_t212;
-    const trailer_real_t _t1225 = _t1222*_t220;
-    const trailer_real_t _t1226 = K_theta_cart_x_tractor_2*_t1225;
-    const trailer_real_t _t1227 = _t1225*_t266;
-    const trailer_real_t _t1228 = TRAILER_LIT(35426400.0)*thetadot_right;
-    const trailer_real_t _t1229 = _t1228*_t212;
-    const trailer_real_t _t1230 = _t1228*_t217;
-    const trailer_real_t _t1231 = TRAILER_LIT(102028032.0)*_t1224;
-    const trailer_real_t _t1232 = _t130*thetadot_right;
-    const trailer_real_t _t1233 = TRAILER_LIT(70852800.0)*_t217;
-    const trailer_real_t _t1234 = _t121*thetadot_right;
-    const trailer_real_t _t1235 = TRAILER_LIT(39250654.0)*_t1223;
-    const trailer_real_t _t1236 = TRAILER_LIT(35839708.0)*_t1223;
-    const trailer_real_t _t1237 = TRAILER_LIT(27028546.0)*_t1224;
-    const trailer_real_t _t1238 = TRAILER_LIT(11395492.0)*_t1224;
-    const trailer_real_t _t1239 = TRAILER_LIT(1920000.0)*_t212;
-    const trailer_real_t _t1240 = TRAILER_LIT(4251168.0)*_t1223;
-    const trailer_real_t _t1241 = _t120*thetadot_right;
-    const trailer_real_t _t1242 = TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t1243 = _t1232*_t212;
-    const trailer_real_t _t1244 = _t135*thetadot_right;
-    const trailer_real_t _t1245 = _t1244*_t220;
-    const trailer_real_t _t1246 = _t129*thetadot_right;
-    const trailer_real_t _t1247 = _t1246*_t220;
-    const trailer_real_t _t1248 = _t1232*_t513;
-    const trailer_real_t _t1249 = TRAILER_LIT(354264000.0)*_t1248;
-    const trailer_real_t _t1250 = J_theta_cart*_t1225;
-    const trailer_real_t _t1251 = _t1250*_t233;
-    const trailer_real_t _t1252 = K_theta_cart_x_tractor*_t1225;
-    const trailer_real_t _t1253 = _t1252*_t262;
-    const trailer_real_t _t1254 = _t1234*_t220;
-    const trailer_real_t _t1255 = _t1241*_t220;
-    const trailer_real_t _t1256 = _t1244*_t246;
-    const trailer_real_t _t1257 = TRAILER_LIT(143358832.0)*_t217;
-    const trailer_real_t _t1258 = _t1250*_t244;
-    const trailer_real_t _t1259 = _t1246*_t274;
-    const trailer_real_t _t1260 = TRAILER_LIT(107519124.0)*_t217;
-    const trailer_real_t _t1261 = _t217*_t372;
-    const trailer_real_t _t1262 = TRAILER_LIT(94470400.0)*_t134;
-    const trailer_real_t _t1263 = _t1225*_t336;
-    const trailer_real_t _t1264 = _t1225*_t332;
-    const trailer_real_t _t1265 = TRAILER_LIT(61110540.0)*_t1226;
-    const trailer_real_t _t1266 = TRAILER_LIT(50000000.0)*_t1250;
-    const trailer_real_t _t1267 = _t212*_t396;
-    const trailer_real_t _t1268 = TRAILER_LIT(45581968.0)*_t212;
-    const trailer_real_t _t1269 = _t1225*_t235;
-    const trailer_real_t _t1270 = _t212*_t372;
-    const trailer_real_t _t1271 = _t1269*_t555;
-    const trailer_real_t _t1272 = TRAILER_LIT(34186476.0)*_t212;
-    const trailer_real_t _t1273 = _t1244*_t235;
-    const trailer_real_t _t1274 = TRAILER_LIT(34009344.0)*_t212;
-    const trailer_real_t _t1275 = _t1246*_t235;
-    const trailer_real_t _t1276 = TRAILER_LIT(30555270.0)*_t1226;
-    const trailer_real_t _t1277 = TRAILER_LIT(25298854.0)*_t212;
-    const trailer_real_t _t1278 = _t217*_t377;
-    const trailer_real_t _t1279 = TRAILER_LIT(4796746.0)*_t217;
-    const trailer_real_t _t1280 = _t212*_t361;
-    const trailer_real_t _t1281 = TRAILER_LIT(1417056.0)*_t217;
-    const trailer_real_t _t1282 = _t212*_t619;
-    const trailer_real_t _t1283 = _t212*_t473;
-    const trailer_real_t _t1284 = TRAILER_LIT(11395492.0)*_t237;
-    const trailer_real_t _t1285 = _t217*_t473;
-    const trailer_real_t _t1286 = _t1244*_t241;
-    const trailer_real_t _t1287 = TRAILER_LIT(35839708.0)*_t237;
-    const trailer_real_t _t1288 = _t1246*_t237;
-    const trailer_real_t _t1289 = _t217*_t619;
-    const trailer_real_t _t1290 = TRAILER_LIT(94470400.0)*_t136;
-    const trailer_real_t _t1291 = TRAILER_LIT(152776350.0)*_t1250;
-    const trailer_real_t _t1292 = TRAILER_LIT(265698000.0)*_t1226;
-    const trailer_real_t _t1293 = _t1245*_t246;
-    const trailer_real_t _t1294 = _t134*_t572;
-    const trailer_real_t _t1295 = _t136*_t572;
-    const trailer_real_t _t1296 = _t1247*_t237;
-    const trailer_real_t _t1297 = _t1247*_t274;
-    const trailer_real_t _t1298 = _t438*_t447;
-    const trailer_real_t _t1299 = _t1298*_t13;
-    const trailer_real_t _t1300 = _t1299*_t563;
-    const trailer_real_t _t1301 = _t1245*_t241;
-    const trailer_real_t _t1302 = _t438*_t62;
-    const trailer_real_t _t1303 = _t1302*_t562;
-    const trailer_real_t _t1304 = TRAILER_LIT(107519124.0)*_t212;
-    const trailer_real_t _t1305 = _t438*_t64;
-    const trailer_real_t _t1306 = _t1305*_t561;
-    const trailer_real_t _t1307 = TRAILER_LIT(97120000.0)*_t212;
-    const trailer_real_t _t1308 = _t1298*_t9;
-    const trailer_real_t _t1309 = _t1308*_t336;
-    const trailer_real_t _t1310 = K_theta_cart_x_tractor*_t438;
-    const trailer_real_t _t1311 = TRAILER_LIT(74283000.0)*_t1310;
-    const trailer_real_t _t1312 = _t1311*_t464;
-    const trailer_real_t _t1313 = _t237*_t271;
-    const trailer_real_t _t1314 = _t1313*_t332;
-    const trailer_real_t _t1315 = _t438*_t482;
-    const trailer_real_t _t1316 = _t1315*_t332;
-    const trailer_real_t _t1317 = _t204*thetadot_right;
-    const trailer_real_t _t1318 = _t235*_t533;
-    const trailer_real_t _t1319 = TRAILER_LIT(34186476.0)*_t217;
-    const trailer_real_t _t1320 = TRAILER_LIT(34009344.0)*_t1285;
-    const trailer_real_t _t1321 = TRAILER_LIT(30880000.0)*_t217;
-    const trailer_real_t _t1322 = _t217*_t235;
-    const trailer_real_t _t1323 = TRAILER_LIT(1417056.0)*_t1283;
-    const trailer_real_t _t1324 = K_theta_cart_x_tractor_2*_t438;
-    const trailer_real_t _t1325 = TRAILER_LIT(30000000.0)*_t467;
-    const trailer_real_t _t1326 = TRAILER_LIT(45581968.0)*_t543;
-    const trailer_real_t _t1327 = _t1245*_t235;
-    const trailer_real_t _t1328 = _t1247*_t235;
-    const trailer_real_t _t1329 = _t438*_t464;
-    const trailer_real_t _t1330 = TRAILER_LIT(143358832.0)*_t543;
-    const trailer_real_t _t1331 = _t438*_t453;
-    const trailer_real_t _t1332 = _t1245*_t277;
-    const trailer_real_t _t1333 = _t1247*_t310;
-    const trailer_real_t _t1334 = TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t1335 = _t220*_t316*_t574;
-    const trailer_real_t _t1336 = _t1317*_t513;
-    const trailer_real_t _t1337 = _t1308*_t55;
-    const trailer_real_t _t1338 = _t1337*_t571;
-    const trailer_real_t _t1339 = _t1315*_t55;
-    const trailer_real_t _t1340 = _t1339*_t570;
-    const trailer_real_t _t1341 = TRAILER_LIT(240000000.0)*_t1310;
-    const trailer_real_t _t1342 = _t1341*_t92;
-    const trailer_real_t _t1343 = _t1329*_t58;
-    const trailer_real_t _t1344 = _t1343*_t568;
-    const trailer_real_t _t1345 = _t1232*_t220;
-    const trailer_real_t _t1346 = _t1345*_t235;
-    const trailer_real_t _t1347 = _t438*_t73;
-    const trailer_real_t _t1348 = _t1347*_t567;
-    const trailer_real_t _t1349 = _t438*_t565;
-    const trailer_real_t _t1350 = _t1349*_t523;
-    const trailer_real_t _t1351 = _t1349*_t527;
-    const trailer_real_t _t1352 = _t1283*_t141;
-    const trailer_real_t _t1353 = _t212*_t530;
-    const trailer_real_t _t1354 = _t438*_t92;
-    const trailer_real_t _t1355 = TRAILER_LIT(240000000.0)*_t104;
-    const trailer_real_t _t1356 = TRAILER_LIT(354264000.0)*_t948;
-    const trailer_real_t _t1357 = _t438*_t533;
-    const trailer_real_t _t1358 = _t438*_t524;
-    const trailer_real_t _t1359 = _t509*_t948;
-    const trailer_real_t _t1360 = _t1299*_t443 - _t1299*_t507 + _t1302*_t335 - _t1305*_t335
-            + _t1308*_t458 + _t1310*_t468 + TRAILER_LIT(244442160.0)*_t1310*_t948 - _t1313*_t458
-            - _t1315*_t462 + _t1329*_t462 + _t1331*_t451 - _t1331*_t492 - _t1337*_t542
-            + _t1339*_t517 - _t1343*_t517 - _t1347*_t429 + _t1354*_t429 - _t1357*_t523
-            - _t1357*_t527 + _t1358*_t523 + _t1358*_t527 - _t1359*_t438 + _t272 + _t354 + _t356
-            - _t407 - _t409 + _t436 + _t440 + _t444 + _t480*_t514 - _t498 - _t505 - _t510 + _t550
-            - _t552;
-    const trailer_real_t _t1361 = -TRAILER_LIT(165600000.0)*K_theta_tractor_x_tractor*_t1225
-            + TRAILER_LIT(4251168.0)*_t1160 - TRAILER_LIT(5668224.0)*_t1223*_t233
-            - TRAILER_LIT(22656600.0)*_t1223*_t235 - TRAILER_LIT(25490712.0)*_t1223*_t244
-            - TRAILER_LIT(45313200.0)*_t1223 + TRAILER_LIT(136037376.0)*_t1224*_t233
-            - TRAILER_LIT(4943400.0)*_t1224*_t235 + TRAILER_LIT(63075288.0)*_t1224*_t244
-            - TRAILER_LIT(9886800.0)*_t1224 + _t1225*_t405 - TRAILER_LIT(354264000.0)*_t1226*_t233
-            - TRAILER_LIT(221415000.0)*_t1226*_t244 - TRAILER_LIT(88566000.0)*_t1226 - _t1227
-            - _t1229*_t129 - _t1229*_t135 + _t1230*_t129 + _t1230*_t135 - _t1231*_t260
-            - _t1231*_t262 - _t1232*_t1233 - TRAILER_LIT(5668224.0)*_t1232*_t1322 - _t1233*_t1317
-            - _t1234*_t319 - _t1234*_t321 - _t1235*_t241 + _t1235*_t274 - _t1236*_t237
-            + _t1236*_t246 - _t1237*_t241 + _t1237*_t274 - _t1238*_t237 + _t1238*_t246
-            + _t1239*_t313 + _t1239*_t316 + _t1240*_t260 + _t1240*_t262 + _t1241*_t319
-            + _t1241*_t321 + _t1242*_t271 + TRAILER_LIT(136037376.0)*_t1243*_t235
-            + TRAILER_LIT(70852800.0)*_t1243 - _t1245*_t1318 + _t1245*_t348 - _t1247*_t1318
-            + _t1247*_t348 - _t1249*_t235 - _t1249 - TRAILER_LIT(203701800.0)*_t1251
-            + TRAILER_LIT(244442160.0)*_t1252*_t233 + TRAILER_LIT(122221080.0)*_t1252*_t244
-            - _t1252*_t503 - TRAILER_LIT(183331620.0)*_t1253 + _t1254*_t423 - _t1254*_t430
-            - _t1255*_t423 + _t1255*_t430 - _t1256*_t1257 - _t1256*_t1268 + _t1257*_t1288
-            - TRAILER_LIT(136350900.0)*_t1258 - _t1259*_t1260 - _t1259*_t1272 + _t1260*_t1286
-            + _t1261*_t1326 - _t1261*_t371 - _t1261*_t416 - _t1262*_t360 - _t1262*_t366
-            - _t1263*_t237 - _t1263*_t241 + _t1263*_t246 + _t1263*_t274 + _t1264*_t237
-            - _t1264*_t246 - _t1265*_t237 + _t1265*_t246 + _t1266*_t241 - _t1266*_t274 - _t1267*_t62
-            + _t1267*_t64 + _t1268*_t1288 - _t1269*_t226 + _t1270*_t1330 - _t1270*_t389
-            + _t1270*_t622 - _t1271 + _t1272*_t1286 - _t1273*_t1274 + _t1273*_t1281 - _t1274*_t1275
-            + _t1275*_t1281 - _t1276*_t241 + _t1276*_t274 - _t1277*_t365 + _t1277*_t477
-            - _t1278*_t62 + _t1278*_t64 - _t1279*_t365 + _t1279*_t477
-            - TRAILER_LIT(3840000.0)*_t1280 + TRAILER_LIT(3585888.0)*_t1282
-            + TRAILER_LIT(6420000.0)*_t1283 + _t1284*_t413 + TRAILER_LIT(136037376.0)*_t1285*_t141
-            + TRAILER_LIT(18420000.0)*_t1285 + _t1287*_t368 + TRAILER_LIT(86438688.0)*_t1289
-            + _t1290*_t360 + _t1290*_t366 + _t1291*_t260 + _t1291*_t262 + _t1292*_t260
-            + _t1292*_t262 - _t1293*_t542 + _t1293*_t571 - _t1293*_t821 + _t1294*_t571
-            - _t1294*_t821 - _t1295*_t571 + _t1295*_t821 + _t1296*_t542 - _t1296*_t571
-            - _t1297*_t517 + _t1297*_t568 - _t1297*_t570 - _t1300 + _t1301*_t517 - _t1301*_t568
-            + _t1302*_t561 - _t1303 - _t1304*_t478 + _t1304*_t857 + _t1305*_t562 - _t1306
-            - _t1307*_t472 + _t1307*_t854 + _t1308*_t332 - _t1309 + _t1311*_t482 - _t1312
-            + _t1313*_t336 - _t1314 - _t1316 - _t1319*_t478 + _t1319*_t857 - _t1320*_t55
-            - _t1320*_t58 - _t1321*_t472 + _t1321*_t854 + _t1323*_t55 + _t1323*_t58 + _t1324*_t1325
-            + _t1324*_t1356 + _t1324*_t959 + _t1327*_t524 + _t1327*_t565 + _t1328*_t524
-            + _t1328*_t565 + _t1329*_t332 + _t1331*_t958 + TRAILER_LIT(265698000.0)*_t1332
-            + TRAILER_LIT(354264000.0)*_t1333 + _t1334*_t434 - _t1335
-            - TRAILER_LIT(354264000.0)*_t1336 + _t1337*_t821 - _t1338 + _t1339*_t568 - _t1340
-            + _t1341*_t73 - _t1342 + _t1343*_t570 - _t1344 + _t1346*_t435 - _t1346*_t509 - _t1348
-            - _t1350 - _t1351 - TRAILER_LIT(5668224.0)*_t1352 - TRAILER_LIT(3840000.0)*_t1353
-            + _t1354*_t567 + _t1355*_t438 + _t1360 + TRAILER_LIT(70852800.0)*_t204*_t360
-            - _t212*_t500 + TRAILER_LIT(92160000.0)*_t217*_t361 - _t217*_t481
-            + TRAILER_LIT(92160000.0)*_t217*_t530 + _t220*_t480*_t571 - _t315 - _t317
-            + TRAILER_LIT(12840000.0)*_t368 - _t370 + TRAILER_LIT(36840000.0)*_t413 - _t415 - _t558
-            - _t559 - _t564 + TRAILER_LIT(136037376.0)*_t793;
-    const trailer_real_t _t1362 = TRAILER_LIT(68172768.0)*_t1224;
-    const trailer_real_t _t1363 = TRAILER_LIT(99010368.0)*_t1223;
-    const trailer_real_t _t1364 = TRAILER_LIT(2868000.0)*_t277;
-    const trailer_real_t _t1365 = TRAILER_LIT(22724256.0)*_t212;
-    const trailer_real_t _t1366 = TRAILER_LIT(25698000.0)*_t246;
-    const trailer_real_t _t1367 = TRAILER_LIT(33003456.0)*_t217;
-    const trailer_real_t _t1368 = TRAILER_LIT(77094000.0)*_t1226;
-    const trailer_real_t _t1369 = TRAILER_LIT(313468380.0)*_t260;
-    const trailer_real_t _t1370 = _t1281*_t473;
-    const trailer_real_t _t1371 = TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t1372 = TRAILER_LIT(85660000.0)*J_theta_cart;
-    const trailer_real_t _t1373 = _t513*thetadot_right;
-    const trailer_real_t _t1374 =
-            TRAILER_LIT(85660000.0)*J_theta_cart*_t0*_t107*_t229*_t48*_t52*_t58*thetadot_right
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t0*_t107*_t4*_t48*_t52*thetadot_right
-            + TRAILER_LIT(87074550.0)*J_theta_cart*_t0*_t107*_t48*_t52*_t55*_t8*thetadot_right
-            + TRAILER_LIT(87074550.0)*J_theta_cart*_t0*_t107*_t48*_t52*_t58*_t8*thetadot_right
-            +
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t12*_t48*_t52*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t0*_t229*_t48*_t52*_t58*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t0*_t4*_t48*_t52*_t55*radius_left*radius_right
-            *thetadot_left
-            + TRAILER_LIT(261223650.0)*J_theta_cart*_t107*_t12*_t230*_t48*_t52*thetadot_right
-            + TRAILER_LIT(104780000.0)*J_theta_cart*_t107*_t12*_t48*_t52*_t58*_t8*thetadot_right
-            + TRAILER_LIT(261223650.0)*J_theta_cart*_t107*_t229*_t4*_t48*_t52*thetadot_right
-            + TRAILER_LIT(21415000.0)*J_theta_cart*_t107*_t230*_t48*_t52*_t8*thetadot_right
-            + TRAILER_LIT(64245000.0)*J_theta_cart*_t107*_t4*_t48*_t52*_t55*_t8*thetadot_right
-            + TRAILER_LIT(2390000.0)*J_theta_cart*_t107*_t4*_t48*_t52*_t8*thetadot_right
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t107*_t48*_t52*_t55*thetadot_right
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t107*_t48*_t52*_t58*thetadot_right
-            +
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t12*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t230*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t4*_t48*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left
-            + TRAILER_LIT(113467200.0)*J_theta_cart_left*_t0*_t107*_t12*_t4*_t52*_t8*thetadot_right
-            + TRAILER_LIT(83252076.0)*J_theta_cart_left*_t0*_t107*_t12*_t52*_t58*thetadot_right
-            + TRAILER_LIT(27750692.0)*J_theta_cart_left*_t0*_t107*_t229*_t52*thetadot_right
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t0*_t107*_t4*_t52*thetadot_right
-            + TRAILER_LIT(90897024.0)*J_theta_cart_left*_t0*_t107*_t52*_t55*_t58*_t8*thetadot_right
-            + TRAILER_LIT(14183400.0)*J_theta_cart_left*_t0*_t107*_t52*_t8*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t0*_t4*_t52*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left
-            + TRAILER_LIT(59631912.0)*J_theta_cart_left*_t107*_t12*_t4*_t52*thetadot_right
-            + TRAILER_LIT(32710400.0)*J_theta_cart_left*_t107*_t12*_t52*_t58*_t8*thetadot_right
-            + TRAILER_LIT(90897024.0)*J_theta_cart_left*_t107*_t229*_t230*_t52*thetadot_right
-            + TRAILER_LIT(111002768.0)*J_theta_cart_left*_t107*_t230*_t52*_t55*_t8*thetadot_right
-            + TRAILER_LIT(17964146.0)*J_theta_cart_left*_t107*_t4*_t52*_t8*thetadot_right
-            + TRAILER_LIT(113467200.0)*J_theta_cart_left*_t107*_t52*_t55*_t58*thetadot_right
-            + TRAILER_LIT(28366800.0)*J_theta_cart_left*_t107*_t52*thetadot_right
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t55*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_left
-            + TRAILER_LIT(63172800.0)*J_theta_cart_right*_t0*_t107*_t12*_t4*_t48*_t8*thetadot_right
-            + TRAILER_LIT(19493746.0)*J_theta_cart_right*_t0*_t107*_t12*_t48*thetadot_right
-            + TRAILER_LIT(56180368.0)*J_theta_cart_right*_t0*_t107*_t229*_t48*_t58*thetadot_right
-            + TRAILER_LIT(99769600.0)*J_theta_cart_right*_t0*_t107*_t4*_t48*_t55*thetadot_right
-            +
-            TRAILER_LIT(132013824.0)*J_theta_cart_right*_t0*_t107*_t48*_t55*_t58*_t8*thetadot_right
-            + TRAILER_LIT(7896600.0)*J_theta_cart_right*_t0*_t107*_t48*_t8*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t12*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t48*_t55*_t58*_t8*radius_left
-            *radius_right*thetadot_left
-            + TRAILER_LIT(73903512.0)*J_theta_cart_right*_t107*_t12*_t4*_t48*thetadot_right
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t107*_t12*_t48*_t8*thetadot_right
-            + TRAILER_LIT(132013824.0)*J_theta_cart_right*_t107*_t229*_t230*_t48*thetadot_right
-            + TRAILER_LIT(14045092.0)*J_theta_cart_right*_t107*_t230*_t48*_t8*thetadot_right
-            + TRAILER_LIT(42135276.0)*J_theta_cart_right*_t107*_t4*_t48*_t55*_t8*thetadot_right
-            + TRAILER_LIT(63172800.0)*J_theta_cart_right*_t107*_t48*_t55*_t58*thetadot_right
-            + TRAILER_LIT(15793200.0)*J_theta_cart_right*_t107*_t48*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t229*_t230*_t48*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t48*_t55*_t58*radius_left*radius_right
-            *thetadot_left
-            +
-            TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t4*_t48*_t52*_t8
-            *thetadot_right
-            +
-            TRAILER_LIT(77094000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t48*_t52*_t58
-            *thetadot_right
-            + TRAILER_LIT(2868000.0)*K_theta_cart_x_tractor*_t0*_t107*_t12*_t48*_t52*thetadot_right
-            +
-            TRAILER_LIT(25698000.0)*K_theta_cart_x_tractor*_t0*_t107*_t229*_t48*_t52*thetadot_right
-            +
-            TRAILER_LIT(125736000.0)*K_theta_cart_x_tractor*_t0*_t107*_t4*_t48*_t52*_t55
-            *thetadot_right
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor*_t0*_t107*_t48*_t52*_t55*_t58*_t8
-            *thetadot_right
-            + TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t0*_t107*_t48*_t52*_t8*thetadot_right
-            +
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t0*_t12*_t48*_t52*_t58*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t0*_t229*_t48*_t52*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t0*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(250378920.0)*K_theta_cart_x_tractor*_t107*_t12*_t4*_t48*_t52*thetadot_right
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t107*_t12*_t48*_t52*_t8*thetadot_right
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor*_t107*_t229*_t230*_t48*_t52
-            *thetadot_right
-            +
-            TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor*_t107*_t230*_t48*_t52*_t55*_t8
-            *thetadot_right
-            +
-            TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor*_t107*_t48*_t52*_t55*_t58*thetadot_right
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t107*_t48*_t52*thetadot_right
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t12*_t48*_t52*_t58*_t8*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t230*_t48*_t52*_t55*_t8*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(93644730.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t12*_t48*_t52*thetadot_right
-            +
-            TRAILER_LIT(417957840.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t229*_t48*_t52*_t58
-            *thetadot_right
-            +
-            TRAILER_LIT(331200000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t4*_t48*_t52*_t55
-            *thetadot_right
-            +
-            TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor_2*_t0*_t107*_t48*_t52*_t55*_t58*_t8
-            *thetadot_right
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t55*_t58*_t8
-            *radius_left*radius_right*thetadot_left
-            +
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(35679000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t4*_t48*_t52*thetadot_right
-            +
-            TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t107*_t12*_t48*_t52*_t8
-            *thetadot_right
-            +
-            TRAILER_LIT(102792000.0)*K_theta_cart_x_tractor_2*_t107*_t229*_t230*_t48*_t52
-            *thetadot_right
-            +
-            TRAILER_LIT(104489460.0)*K_theta_cart_x_tractor_2*_t107*_t230*_t48*_t52*_t8
-            *thetadot_right
-            +
-            TRAILER_LIT(313468380.0)*K_theta_cart_x_tractor_2*_t107*_t4*_t48*_t52*_t55*_t8
-            *thetadot_right
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t107*_t48*_t52*_t55*thetadot_right
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2*_t107*_t48*_t52*_t58*thetadot_right
-            +
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t12*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t229*_t230*_t48*_t52*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*_t55*_t58*radius_left
-            *radius_right*thetadot_left
-            +
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*radius_left*radius_right
-            *thetadot_left - _t1030*_t1244 - _t1030*_t1246 - _t1152*_t1297 - _t1159*_t1327
-            - _t1159*_t1328 - _t1167*_t1293 - _t1218*_t1244 - _t1218*_t1246
-            - TRAILER_LIT(14045092.0)*_t1223*_t237 - TRAILER_LIT(19493746.0)*_t1223*_t241
-            - TRAILER_LIT(27750692.0)*_t1224*_t246 - TRAILER_LIT(17964146.0)*_t1224*_t274
-            - _t1225*_t1364 - TRAILER_LIT(104489460.0)*_t1226*_t237
-            - TRAILER_LIT(93644730.0)*_t1226*_t241 - TRAILER_LIT(31434000.0)*_t1226 - _t1227
-            - _t1234*_t615 - _t1241*_t608 - _t1245*_t347 - _t1247*_t347
-            - TRAILER_LIT(125736000.0)*_t1248 - TRAILER_LIT(21415000.0)*_t1250*_t237
-            - TRAILER_LIT(2390000.0)*_t1250*_t274 - TRAILER_LIT(348298200.0)*_t1251 - _t1252*_t1366
-            - _t1252*_t1369 - TRAILER_LIT(313468380.0)*_t1253 - _t1254*_t402 - _t1254*_t429
-            - _t1255*_t398 - TRAILER_LIT(56180368.0)*_t1256*_t217 - _t1257*_t480
-            - TRAILER_LIT(208649100.0)*_t1258 - TRAILER_LIT(42135276.0)*_t1259*_t217 - _t1260*_t478
-            - _t1261*_t389 - _t1261*_t622 - _t1268*_t480 - _t1269*_t222 - _t1270*_t371 - _t1271
-            - _t1272*_t478 - _t1273*_t1365 - _t1273*_t1367 - _t1275*_t1365 - _t1275*_t1367
-            - TRAILER_LIT(92160000.0)*_t1280 - TRAILER_LIT(86438688.0)*_t1282
-            - TRAILER_LIT(18420000.0)*_t1283 - TRAILER_LIT(6420000.0)*_t1285
-            - TRAILER_LIT(83252076.0)*_t1286*_t212 - TRAILER_LIT(111002768.0)*_t1288*_t212
-            - TRAILER_LIT(3585888.0)*_t1289 - _t1293*_t1372 - _t1294*_t839 - _t1295*_t868
-            - _t1297*_t820 - _t1300 - _t1303 - _t1306 - _t1309 - _t1312 - _t1314 - _t1316
-            - _t1327*_t1371 - _t1328*_t1371 - TRAILER_LIT(77094000.0)*_t1332
-            - TRAILER_LIT(102792000.0)*_t1333 - _t1335 - TRAILER_LIT(125736000.0)*_t1336 - _t1338
-            - TRAILER_LIT(331200000.0)*_t134*_t1373 - TRAILER_LIT(99769600.0)*_t134*_t366 - _t1340
-            - _t1342 - _t1344 - _t1345*_t819 - _t1346*_t884 - _t1348 - _t1350 - _t1351
-            - TRAILER_LIT(136037376.0)*_t1352 - TRAILER_LIT(92160000.0)*_t1353
-            - TRAILER_LIT(32710400.0)*_t136*_t360 - _t1360 - _t1362*_t260 - _t1362*_t262
-            - _t1363*_t260 - _t1363*_t262 - _t1368*_t260 - _t1368*_t262 - _t1370*_t55 - _t1370*_t58
-            - _t204*_t572*_t819 - TRAILER_LIT(4796746.0)*_t212*_t365 - _t212*_t377*_t62
-            - TRAILER_LIT(30880000.0)*_t212*_t472 - TRAILER_LIT(25298854.0)*_t217*_t365
-            - _t217*_t396*_t62 - TRAILER_LIT(97120000.0)*_t217*_t472 - _t558 - _t559 - _t564 - _t587
-            - _t596 - _t602 - _t603 - _t621 - _t629;
-    const trailer_real_t _t1375 = _t44*thetadot_right;
-    const trailer_real_t _t1376 = _t1375*_t217;
-    const trailer_real_t _t1377 = TRAILER_LIT(35426400.0)*thetadot_left;
-    const trailer_real_t _t1378 = _t1375*_t212;
-    const trailer_real_t _t1379 = _t151*thetadot_left;
-    const trailer_real_t _t1380 = _t1379*_t220;
-    const trailer_real_t _t1381 = _t1380*_t405;
-    const trailer_real_t _t1382 = K_theta_cart_x_tractor_2*_t1380;
-    const trailer_real_t _t1383 = _t601*thetadot_right;
-    const trailer_real_t _t1384 = _t1379*_t212;
-    const trailer_real_t _t1385 = TRAILER_LIT(4251168.0)*_t1384;
-    const trailer_real_t _t1386 = _t1379*_t217;
-    const trailer_real_t _t1387 = _t160*thetadot_left;
-    const trailer_real_t _t1388 = _t1386*_t244;
-    const trailer_real_t _t1389 = _t173*thetadot_left;
-    const trailer_real_t _t1390 = _t1386*_t233;
-    const trailer_real_t _t1391 = _t298*thetadot_left;
-    const trailer_real_t _t1392 = TRAILER_LIT(1417056.0)*_t235;
-    const trailer_real_t _t1393 = _t289*thetadot_left;
-    const trailer_real_t _t1394 = _t1376*_t260;
-    const trailer_real_t _t1395 = _t366*_t447;
-    const trailer_real_t _t1396 = _t360*_t447;
-    const trailer_real_t _t1397 = TRAILER_LIT(18420000.0)*_t467;
-    const trailer_real_t _t1398 = _t153*_t217;
-    const trailer_real_t _t1399 = _t1398*thetadot_left;
-    const trailer_real_t _t1400 = _t1399*_t274;
-    const trailer_real_t _t1401 = _t1380*_t235;
-    const trailer_real_t _t1402 = _t307*thetadot_left;
-    const trailer_real_t _t1403 = _t1402*_t246;
-    const trailer_real_t _t1404 = J_theta_cart*_t1380;
-    const trailer_real_t _t1405 = TRAILER_LIT(86438688.0)*_t453;
-    const trailer_real_t _t1406 = _t1380*_t336;
-    const trailer_real_t _t1407 = _t360*_t69;
-    const trailer_real_t _t1408 = _t165*thetadot_left;
-    const trailer_real_t _t1409 = TRAILER_LIT(94470400.0)*_t1408;
-    const trailer_real_t _t1410 = _t1393*_t274;
-    const trailer_real_t _t1411 = _t557*thetadot_right;
-    const trailer_real_t _t1412 = _t1411*_t56;
-    const trailer_real_t _t1413 = _t1411*_t59;
-    const trailer_real_t _t1414 = K_theta_cart_x_tractor*_t1380;
-    const trailer_real_t _t1415 = _t1414*_t244;
-    const trailer_real_t _t1416 = _t1378*_t233;
-    const trailer_real_t _t1417 = _t1391*_t246;
-    const trailer_real_t _t1418 = _t1099*_t438;
-    const trailer_real_t _t1419 = TRAILER_LIT(152776350.0)*_t1404;
-    const trailer_real_t _t1420 = _t160*_t438;
-    const trailer_real_t _t1421 = _t1382*_t244;
-    const trailer_real_t _t1422 = _t1414*_t233;
-    const trailer_real_t _t1423 = _t173*_t438;
-    const trailer_real_t _t1424 = K_theta_cart_x_tractor_2*_t1423;
-    const trailer_real_t _t1425 = TRAILER_LIT(354264000.0)*_t1424;
-    const trailer_real_t _t1426 = _t1382*_t233;
-    const trailer_real_t _t1427 = _t237*_t59;
-    const trailer_real_t _t1428 = TRAILER_LIT(45581968.0)*_t1427;
-    const trailer_real_t _t1429 = _t154*_t438;
-    const trailer_real_t _t1430 = _t235*_t524;
-    const trailer_real_t _t1431 = _t153*_t438;
-    const trailer_real_t _t1432 = _t176*thetadot_left;
-    const trailer_real_t _t1433 = _t1375*_t220;
-    const trailer_real_t _t1434 = _t1433*_t237;
-    const trailer_real_t _t1435 = _t1434*_t332;
-    const trailer_real_t _t1436 = _t332*_t572;
-    const trailer_real_t _t1437 = _t1436*_t482;
-    const trailer_real_t _t1438 = K_theta_cart_x_tractor*_t572;
-    const trailer_real_t _t1439 = TRAILER_LIT(74283000.0)*_t1438;
-    const trailer_real_t _t1440 = _t1439*_t464;
-    const trailer_real_t _t1441 = _t459*_t572;
-    const trailer_real_t _t1442 = _t1441*_t336;
-    const trailer_real_t _t1443 = _t572*_t64;
-    const trailer_real_t _t1444 = _t1443*_t561;
-    const trailer_real_t _t1445 = _t572*_t62;
-    const trailer_real_t _t1446 = _t1445*_t562;
-    const trailer_real_t _t1447 = _t1322*_t1389;
-    const trailer_real_t _t1448 = TRAILER_LIT(143358832.0)*_t1427;
-    const trailer_real_t _t1449 = _t1429*_t241;
-    const trailer_real_t _t1450 = _t1431*_t237;
-    const trailer_real_t _t1451 = _t1431*_t274;
-    const trailer_real_t _t1452 = _t1433*_t260;
-    const trailer_real_t _t1453 = _t1452*_t563;
-    const trailer_real_t _t1454 = TRAILER_LIT(265698000.0)*_t1373*_t448;
-    const trailer_real_t _t1455 = _t1429*_t246;
-    const trailer_real_t _t1456 = _t565*_t572;
-    const trailer_real_t _t1457 = _t1456*_t523;
-    const trailer_real_t _t1458 = _t1456*_t527;
-    const trailer_real_t _t1459 = _t360*_t948;
-    const trailer_real_t _t1460 = _t572*_t73;
-    const trailer_real_t _t1461 = _t1460*_t567;
-    const trailer_real_t _t1462 = _t539*_t572;
-    const trailer_real_t _t1463 = _t1462*_t568;
-    const trailer_real_t _t1464 = TRAILER_LIT(240000000.0)*_t1438;
-    const trailer_real_t _t1465 = _t1464*_t92;
-    const trailer_real_t _t1466 = _t1423*_t235;
-    const trailer_real_t _t1467 = _t518*_t572;
-    const trailer_real_t _t1468 = _t1467*_t570;
-    const trailer_real_t _t1469 = _t571*_t572;
-    const trailer_real_t _t1470 = _t1469*_t544;
-    const trailer_real_t _t1471 = _t572*_t574*_t59;
-    const trailer_real_t _t1472 = _t1324*_t176;
-    const trailer_real_t _t1473 = _t406*thetadot_right;
-    const trailer_real_t _t1474 = _t353*thetadot_right;
-    const trailer_real_t _t1475 = _t1433*_t233;
-    const trailer_real_t _t1476 = _t448*_t572;
-    const trailer_real_t _t1477 = _t572*_t69;
-    const trailer_real_t _t1478 = _t453*_t572;
-    const trailer_real_t _t1479 = TRAILER_LIT(51255270.0)*_t1373;
-    const trailer_real_t _t1480 = TRAILER_LIT(183331620.0)*_t1373;
-    const trailer_real_t _t1481 = _t533*_t572;
-    const trailer_real_t _t1482 = _t524*_t572;
-    const trailer_real_t _t1483 = _t572*_t92;
-    const trailer_real_t _t1484 = _t103*_t572;
-    const trailer_real_t _t1485 = -_t1359*_t572 + TRAILER_LIT(61110540.0)*_t1373*_t459
-            - TRAILER_LIT(244442160.0)*_t1373*_t544 + _t1433*_t228 - _t1433*_t504 - _t1434*_t458
-            + _t1438*_t468 - _t1443*_t335 + _t1445*_t335 + _t1452*_t443 - _t1460*_t429 - _t1473*_t56
-            - _t1473*_t59 + _t1474*_t56 + _t1474*_t59 + _t1475*_t435 - _t1475*_t509 + _t1476*_t443
-            - _t1476*_t507 + _t1477*_t347 - _t1477*_t496 + _t1478*_t451 - _t1478*_t492
-            + _t1479*_t464 - _t1479*_t482 + _t1480*_t518 - _t1480*_t539 - _t1481*_t523
-            - _t1481*_t527 + _t1482*_t523 + _t1482*_t527 + _t1483*_t429 + _t1484*_t347
-            - _t1484*_t496 + _t435*_t572*_t948 + _t515*_t59;
-    const trailer_real_t _t1486 =
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t0*_t12*_t151*_t48*_t52*_t58*thetadot_left
-            +
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t12*_t48*_t52*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t0*_t151*_t229*_t48*_t52*thetadot_left
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t0*_t151*_t4*_t48*_t52*thetadot_left
-            + TRAILER_LIT(203701800.0)*J_theta_cart*_t0*_t151*_t48*_t52*_t55*_t58*_t8*thetadot_left
-            + TRAILER_LIT(34500000.0)*J_theta_cart*_t0*_t151*_t48*_t52*_t8*thetadot_left
-            +
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t0*_t229*_t48*_t52*_t58*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(200000000.0)*J_theta_cart*_t0*_t4*_t48*_t52*_t55*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(136350900.0)*J_theta_cart*_t12*_t151*_t4*_t48*_t52*thetadot_left
-            + TRAILER_LIT(295220000.0)*J_theta_cart*_t12*_t151*_t48*_t52*_t58*_t8*thetadot_left
-            +
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t12*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(203701800.0)*J_theta_cart*_t151*_t229*_t230*_t48*_t52*thetadot_left
-            + TRAILER_LIT(295220000.0)*J_theta_cart*_t151*_t230*_t48*_t52*_t55*_t8*thetadot_left
-            + TRAILER_LIT(50000000.0)*J_theta_cart*_t151*_t4*_t48*_t52*_t8*thetadot_left
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t151*_t48*_t52*thetadot_left
-            +
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t230*_t48*_t52*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t4*_t48*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(70852800.0)*J_theta_cart_left*_t0*_t12*_t151*_t4*_t52*_t8*thetadot_left
-            + TRAILER_LIT(39250654.0)*J_theta_cart_left*_t0*_t12*_t151*_t52*thetadot_left
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t0*_t12*_t52*_t58*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(143358832.0)*J_theta_cart_left*_t0*_t151*_t229*_t52*_t58*thetadot_left
-            + TRAILER_LIT(94470400.0)*J_theta_cart_left*_t0*_t151*_t4*_t52*_t55*thetadot_left
-            + TRAILER_LIT(5668224.0)*J_theta_cart_left*_t0*_t151*_t52*_t55*_t58*_t8*thetadot_left
-            + TRAILER_LIT(22656600.0)*J_theta_cart_left*_t0*_t151*_t52*_t8*thetadot_left
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t0*_t229*_t52*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t0*_t4*_t52*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t0*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(25490712.0)*J_theta_cart_left*_t12*_t151*_t4*_t52*thetadot_left
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t12*_t151*_t52*_t8*thetadot_left
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t12*_t230*_t52*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t12*_t52*_t58*_t8*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(5668224.0)*J_theta_cart_left*_t151*_t229*_t230*_t52*thetadot_left
-            + TRAILER_LIT(35839708.0)*J_theta_cart_left*_t151*_t230*_t52*_t8*thetadot_left
-            + TRAILER_LIT(107519124.0)*J_theta_cart_left*_t151*_t4*_t52*_t55*_t8*thetadot_left
-            + TRAILER_LIT(70852800.0)*J_theta_cart_left*_t151*_t52*_t55*_t58*thetadot_left
-            + TRAILER_LIT(45313200.0)*J_theta_cart_left*_t151*_t52*thetadot_left
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t229*_t4*_t52*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t230*_t52*_t55*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t4*_t52*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t55*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t52*_t58*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(27028546.0)*J_theta_cart_right*_t0*_t12*_t151*_t48*thetadot_left
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t0*_t12*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t0*_t12*_t48*_t58*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(45581968.0)*J_theta_cart_right*_t0*_t151*_t229*_t48*_t58*thetadot_left
-            + TRAILER_LIT(94470400.0)*J_theta_cart_right*_t0*_t151*_t4*_t48*_t55*thetadot_left
-            + TRAILER_LIT(34009344.0)*J_theta_cart_right*_t0*_t151*_t48*_t55*_t8*thetadot_left
-            + TRAILER_LIT(34009344.0)*J_theta_cart_right*_t0*_t151*_t48*_t58*_t8*thetadot_left
-            + TRAILER_LIT(4943400.0)*J_theta_cart_right*_t0*_t151*_t48*_t8*thetadot_left
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t0*_t229*_t48*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t0*_t4*_t48*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t0*_t48*_t55*_t58*_t8*radius_left
-            *radius_right*thetadot_right
-            + TRAILER_LIT(102028032.0)*J_theta_cart_right*_t12*_t151*_t230*_t48*thetadot_left
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t12*_t151*_t48*_t8*thetadot_left
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t12*_t48*_t58*_t8*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(102028032.0)*J_theta_cart_right*_t151*_t229*_t4*_t48*thetadot_left
-            + TRAILER_LIT(11395492.0)*J_theta_cart_right*_t151*_t230*_t48*_t8*thetadot_left
-            + TRAILER_LIT(34186476.0)*J_theta_cart_right*_t151*_t4*_t48*_t55*_t8*thetadot_left
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t151*_t48*_t55*thetadot_left
-            + TRAILER_LIT(35426400.0)*J_theta_cart_right*_t151*_t48*_t58*thetadot_left
-            + TRAILER_LIT(9886800.0)*J_theta_cart_right*_t151*_t48*thetadot_left
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t229*_t230*_t48*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t230*_t48*_t55*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t4*_t48*_t8*radius_left*radius_right
-            *thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t48*_t55*_t58*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t0*_t12*_t151*_t48*_t52*thetadot_left
-            +
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t0*_t12*_t48*_t52*_t58*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t0*_t151*_t229*_t48*_t52*_t58
-            *thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t0*_t151*_t4*_t48*_t52*_t55
-            *thetadot_left
-            +
-            TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t0*_t151*_t48*_t52*_t55*_t8
-            *thetadot_left
-            +
-            TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t0*_t151*_t48*_t52*_t58*_t8
-            *thetadot_left
-            +
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t0*_t229*_t48*_t52*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t0*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor*_t12*_t151*_t230*_t48*_t52*thetadot_left
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t12*_t151*_t48*_t52*_t8*thetadot_left
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t12*_t48*_t52*_t58*_t8*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor*_t151*_t229*_t4*_t48*_t52*thetadot_left
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t151*_t230*_t48*_t52*_t8*thetadot_left
-            +
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t151*_t4*_t48*_t52*_t55*_t8
-            *thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t230*_t48*_t52*_t55*_t8*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(183331620.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t151*_t48*_t52*_t58
-            *thetadot_left
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t0*_t12*_t4*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t229*_t48*_t52*thetadot_left
-            +
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t48*_t52*_t55*_t8
-            *thetadot_left
-            +
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t0*_t151*_t48*_t52*_t58*_t8
-            *thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t55*_t58*_t8
-            *radius_left*radius_right*thetadot_right
-            +
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t0*_t48*_t52*_t8*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor_2*_t12*_t151*_t230*_t48*_t52
-            *thetadot_left
-            +
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t12*_t4*_t48*_t52*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor_2*_t151*_t229*_t4*_t48*_t52
-            *thetadot_left
-            +
-            TRAILER_LIT(244442160.0)*K_theta_cart_x_tractor_2*_t151*_t230*_t48*_t52*_t55*_t8
-            *thetadot_left
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t151*_t4*_t48*_t52*_t8*thetadot_left
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t151*_t48*_t52*_t55*thetadot_left
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2*_t151*_t48*_t52*_t58*thetadot_left
-            +
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t229*_t230*_t48*_t52*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*_t55*_t58*radius_left
-            *radius_right*thetadot_right
-            +
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t48*_t52*radius_left*radius_right
-            *thetadot_right
-            + TRAILER_LIT(165600000.0)*K_theta_tractor_x_tractor*_t151*_t48*_t52*thetadot_left
-            - _t1233*_t1389 - _t1233*_t1432 - TRAILER_LIT(12840000.0)*_t1376 - _t1377*_t289
-            - _t1377*_t298 - TRAILER_LIT(36840000.0)*_t1378 - _t1380*_t246*_t332 - _t1381
-            - TRAILER_LIT(61110540.0)*_t1382*_t246 - TRAILER_LIT(30555270.0)*_t1382*_t274
-            - TRAILER_LIT(88566000.0)*_t1382 - _t1383*_t56 - _t1383*_t59
-            - TRAILER_LIT(35839708.0)*_t1384*_t237 - TRAILER_LIT(39250654.0)*_t1384*_t241
-            - _t1385*_t260 - _t1385*_t262 - TRAILER_LIT(11395492.0)*_t1386*_t237
-            - TRAILER_LIT(27028546.0)*_t1386*_t241 - _t1387*_t319 - _t1387*_t321
-            - TRAILER_LIT(63075288.0)*_t1388 - TRAILER_LIT(136037376.0)*_t1390 - _t1391*_t1392
-            - _t1392*_t1393 - TRAILER_LIT(4251168.0)*_t1394 - _t1395*_t389 - _t1395*_t622
-            - _t1396*_t371 - _t1397*_t360 - TRAILER_LIT(34186476.0)*_t1400 - _t1401*_t226
-            - TRAILER_LIT(45581968.0)*_t1403 - TRAILER_LIT(50000000.0)*_t1404*_t274 - _t1405*_t360
-            - _t1406*_t237 - _t1406*_t241 - TRAILER_LIT(92160000.0)*_t1407 - _t1409*_t212
-            - _t1409*_t217 - TRAILER_LIT(107519124.0)*_t1410 - _t1412 - _t1413
-            - TRAILER_LIT(122221080.0)*_t1415 - TRAILER_LIT(136037376.0)*_t1416
-            - TRAILER_LIT(143358832.0)*_t1417 - _t1418*_t423 - _t1419*_t260 - _t1419*_t262
-            - _t1420*_t430 - TRAILER_LIT(221415000.0)*_t1421 - TRAILER_LIT(244442160.0)*_t1422
-            - _t1425*_t235 - _t1425 - TRAILER_LIT(354264000.0)*_t1426 - _t1428*_t360 - _t1429*_t1430
-            - _t1430*_t1431 - _t1435 - _t1437 - _t1440 - _t1442 - _t1444 - _t1446
-            - TRAILER_LIT(136037376.0)*_t1447 - _t1448*_t366 - _t1449*_t517 - _t1449*_t568
-            - _t1450*_t542 - _t1450*_t571 - _t1451*_t570 - _t1453 - _t1454 - _t1455*_t821 - _t1457
-            - _t1458 - TRAILER_LIT(136037376.0)*_t1459 - _t1461 - _t1463 - _t1465 - _t1466*_t435
-            - _t1468 - _t1470 - _t1471 - TRAILER_LIT(354264000.0)*_t1472 - _t1485
-            - _t163*_t438*_t571 - _t165*_t438*_t821 - TRAILER_LIT(15440000.0)*_t360*_t62
-            - _t360*_t641 - TRAILER_LIT(48560000.0)*_t366*_t62 - _t453*_t620 - _t464*_t623
-            - _t464*_t625 - _t467*_t624 - _t518*_t633 - _t518*_t636 - _t523*_t630 - _t527*_t630
-            - _t632*_t92 - _t635*_t92;
-    const trailer_real_t _t1487 = TRAILER_LIT(31586400.0)*thetadot_left;
-    const trailer_real_t _t1488 = TRAILER_LIT(56733600.0)*thetadot_left;
-    const trailer_real_t _t1489 = TRAILER_LIT(113467200.0)*_t217;
-    const trailer_real_t _t1490 = _t1389*_t212;
-    const trailer_real_t _t1491 = TRAILER_LIT(49884800.0)*_t212;
-    const trailer_real_t _t1492 = _t314*thetadot_right;
-    const trailer_real_t _t1493 = TRAILER_LIT(27750692.0)*_t1386;
-    const trailer_real_t _t1494 = TRAILER_LIT(19493746.0)*_t1384;
-    const trailer_real_t _t1495 = TRAILER_LIT(17964146.0)*_t1386;
-    const trailer_real_t _t1496 = TRAILER_LIT(16355200.0)*_t217;
-    const trailer_real_t _t1497 = _t1099*thetadot_left;
-    const trailer_real_t _t1498 = TRAILER_LIT(14045092.0)*_t1384;
-    const trailer_real_t _t1499 = _t1239*thetadot_right;
-    const trailer_real_t _t1500 = _t327*_t438;
-    const trailer_real_t _t1501 = TRAILER_LIT(68172768.0)*_t1386;
-    const trailer_real_t _t1502 = TRAILER_LIT(99010368.0)*_t1384;
-    const trailer_real_t _t1503 = TRAILER_LIT(261223650.0)*_t1404;
-    const trailer_real_t _t1504 = TRAILER_LIT(104489460.0)*_t1382;
-    const trailer_real_t _t1505 = TRAILER_LIT(99769600.0)*_t212;
-    const trailer_real_t _t1506 = TRAILER_LIT(93644730.0)*_t1382;
-    const trailer_real_t _t1507 = TRAILER_LIT(77094000.0)*_t1382;
-    const trailer_real_t _t1508 = TRAILER_LIT(48560000.0)*_t360;
-    const trailer_real_t _t1509 = TRAILER_LIT(32710400.0)*_t217;
-    const trailer_real_t _t1510 = _t163*thetadot_left;
-    const trailer_real_t _t1511 = TRAILER_LIT(21415000.0)*_t1404;
-    const trailer_real_t _t1512 = TRAILER_LIT(15440000.0)*_t366;
-    const trailer_real_t _t1513 = TRAILER_LIT(2390000.0)*_t1404;
-    const trailer_real_t _t1514 = TRAILER_LIT(22724256.0)*_t235;
-    const trailer_real_t _t1515 = TRAILER_LIT(33003456.0)*_t235;
-    const trailer_real_t _t1516 = TRAILER_LIT(331200000.0)*_t1324;
-    const trailer_real_t _t1517 = TRAILER_LIT(125736000.0)*_t1310;
-    const trailer_real_t _t1518 = _t438*_t868;
-    const trailer_real_t _t1519 = TRAILER_LIT(87074550.0)*J_theta_cart*_t235;
-    const trailer_real_t _t1520 = _t1371*_t235;
-    const trailer_real_t _t1521 = TRAILER_LIT(1417056.0)*_t360;
-    const trailer_real_t _t1522 = _t1159*_t235;
-    const trailer_real_t _t1523 = _t176*_t438;
-    const trailer_real_t _t1524 = -_t103*_t529 + _t1152*_t1449 - _t1152*_t1451 + _t1156*_t1455
-            - _t1167*_t1450 + _t1167*_t1455 - _t1220*_t1466 + _t1242*_t1433 + _t1284*_t1376
-            + _t1287*_t1378 + _t1325*_t1373 + _t1326*_t1395 + _t1330*_t1396 + _t1334*_t1475
-            + _t1355*_t572 + _t1356*_t1373 - _t1364*_t1380 - _t1366*_t1414 + _t1369*_t1414
-            + _t1372*_t1450 - _t1372*_t1455 + TRAILER_LIT(207132000.0)*_t1373*_t453 + _t1373*_t959
-            + TRAILER_LIT(136037376.0)*_t1376*_t233 + TRAILER_LIT(36840000.0)*_t1376
-            + TRAILER_LIT(4251168.0)*_t1378*_t260 + TRAILER_LIT(12840000.0)*_t1378
-            - TRAILER_LIT(28366800.0)*_t1379*_t217 + _t1380*_t266
-            + TRAILER_LIT(25698000.0)*_t1380*_t310 - _t1381 - TRAILER_LIT(31434000.0)*_t1382
-            - TRAILER_LIT(132013824.0)*_t1384*_t233 - TRAILER_LIT(7896600.0)*_t1384*_t235
-            - TRAILER_LIT(73903512.0)*_t1384*_t244 - TRAILER_LIT(15793200.0)*_t1384
-            - TRAILER_LIT(14183400.0)*_t1386*_t235 - _t1387*_t1491 + _t1387*_t1496
-            - TRAILER_LIT(59631912.0)*_t1388 - _t1389*_t1489 - TRAILER_LIT(90897024.0)*_t1390
-            + _t1391*_t1515 + TRAILER_LIT(42135276.0)*_t1391*_t241 + _t1393*_t1515
-            + TRAILER_LIT(56180368.0)*_t1393*_t237 - TRAILER_LIT(102028032.0)*_t1394 - _t1395*_t371
-            - _t1396*_t389 + _t1396*_t622 + _t1397*_t366 + _t1398*_t1488 + _t1399*_t1514
-            - TRAILER_LIT(111002768.0)*_t1399*_t237 + TRAILER_LIT(83252076.0)*_t1400 - _t1401*_t222
-            + _t1401*_t555 - _t1401*_t556 + _t1402*_t1514 - TRAILER_LIT(83252076.0)*_t1402*_t241
-            + TRAILER_LIT(111002768.0)*_t1403 + TRAILER_LIT(348298200.0)*_t1404*_t233
-            + TRAILER_LIT(208649100.0)*_t1404*_t244 + _t1405*_t366 - TRAILER_LIT(3840000.0)*_t1407
-            - _t1408*_t1505 + _t1408*_t1509 - TRAILER_LIT(42135276.0)*_t1410 - _t1412 - _t1413
-            + TRAILER_LIT(313468380.0)*_t1414*_t262 + TRAILER_LIT(2868000.0)*_t1414*_t274
-            - TRAILER_LIT(250378920.0)*_t1415 - TRAILER_LIT(5668224.0)*_t1416
-            - TRAILER_LIT(56180368.0)*_t1417 - _t1418*_t398 + _t1418*_t402 - _t1418*_t429
-            + _t1420*_t398 - _t1420*_t402 + _t1420*_t429 + TRAILER_LIT(35679000.0)*_t1421
-            - TRAILER_LIT(417957840.0)*_t1422 + _t1423*_t819 - _t1423*_t923
-            + TRAILER_LIT(102792000.0)*_t1424*_t235 - TRAILER_LIT(125736000.0)*_t1424
-            + TRAILER_LIT(102792000.0)*_t1426 + _t1427*_t1469 - _t1428*_t366 - _t1429*_t1519
-            - _t1429*_t1520 + _t1429*_t1522 - TRAILER_LIT(77094000.0)*_t1429*_t277 - _t1431*_t1519
-            - _t1431*_t1520 + _t1431*_t1522 - TRAILER_LIT(102792000.0)*_t1431*_t310 - _t1432*_t1489
-            - TRAILER_LIT(63172800.0)*_t1432*_t212 + _t1434*_t336 - _t1435 + _t1436*_t464 - _t1437
-            + _t1439*_t482 - _t1440 + _t1441*_t332 - _t1442 + _t1443*_t562 - _t1444 + _t1445*_t561
-            - _t1446 - TRAILER_LIT(90897024.0)*_t1447 - _t1448*_t360 - _t1449*_t820 + _t1451*_t799
-            + _t1451*_t820 - _t1453 - _t1454 - _t1457 - _t1458 - TRAILER_LIT(5668224.0)*_t1459
-            - _t1461 + _t1462*_t570 - _t1463 + _t1464*_t73 - _t1465 + _t1466*_t884 + _t1467*_t568
-            - _t1468 - _t1470 - _t1471 - TRAILER_LIT(125736000.0)*_t1472 + _t1483*_t567 + _t1485
-            + _t1487*_t289 + _t1487*_t298 + _t1488*_t307 - TRAILER_LIT(132013824.0)*_t1490*_t235
-            - TRAILER_LIT(63172800.0)*_t1490 + _t1491*_t1497 - _t1492*_t56 - _t1492*_t59
-            + _t1493*_t237 - _t1493*_t246 - _t1494*_t241 + _t1494*_t274 + _t1495*_t241
-            - _t1495*_t274 - _t1496*_t1497 - _t1498*_t237 + _t1498*_t246 + _t1499*_t56 + _t1499*_t59
-            + _t1500*_t153 + _t1500*_t154 + _t1501*_t260 + _t1501*_t262 + _t1502*_t260
-            + _t1502*_t262 - _t1503*_t260 - _t1503*_t262 + _t1504*_t237 - _t1504*_t246
-            + _t1505*_t1510 + _t1506*_t241 - _t1506*_t274 - _t1507*_t260 - _t1507*_t262
-            - _t1508*_t62 + _t1508*_t64 - _t1509*_t1510 - _t1511*_t237 + _t1511*_t246 - _t1512*_t62
-            + _t1512*_t64 + _t1513*_t241 - _t1513*_t274 - _t1516*_t163 + _t1516*_t165 + _t1517*_t163
-            - _t1517*_t165 - _t1518*_t163 + _t1518*_t165 + _t1521*_t523 + _t1521*_t527
-            + _t1523*_t819 - _t1523*_t923 + _t153*_t439 - _t153*_t497 + _t154*_t439 - _t154*_t497
-            + TRAILER_LIT(6420000.0)*_t360*_t467 + _t366*_t641 + TRAILER_LIT(92160000.0)*_t366*_t69
-            + TRAILER_LIT(136037376.0)*_t366*_t948 - _t367*_t464 + _t367*_t482 - _t378*_t464
-            + _t378*_t482 - _t417*_t447 + _t453*_t778 + _t471*_t73 - _t471*_t92 - _t474*_t523
-            - _t474*_t527 - _t479*_t518 + _t479*_t539 + _t491*_t73 - _t491*_t92 - _t495*_t518
-            + _t495*_t539 + _t544*_t572*_t821;
-    const trailer_real_t _t1525 = _t209*(_t150*_t578 - _t643*_t84);
-    const trailer_real_t _t1526 = _t642*_t84;
-    const trailer_real_t _t1527 = _t150*_t577;
-    const trailer_real_t _t1528 = -_t645*_t84;
+    const trailer_real_t _t237 = -_t236 + tau_right;
+    const trailer_real_t _t238 = TRAILER_LIT(1.0)/_t234;
+    const trailer_real_t _t239 = _t237*_t238;
+    const trailer_real_t _t240 = _t233*_t238;
+    const trailer_real_t _t241 = _t11*_t168 + _t14*_t166 + _t163*_t22 + _t170*_t24 + _t171*_t217
+            + _t172*_t219;
+    const trailer_real_t tau_left = tau[1];
+    const trailer_real_t _t242 = -_t241 + tau_left;
+    const trailer_real_t _t243 = _t238*_t242;
+    const trailer_real_t _t244 = _t231*_t238;
+    const trailer_real_t _t245 = -_t231*_t242 + _t233*_t237;
+    const trailer_real_t _t246 = TRAILER_LIT(2.0)*_t38;
+    const trailer_real_t _t247 = TRAILER_LIT(5.0)*_t88/TRAILER_LIT(3.0);
+    const trailer_real_t _t248 = _t247/TRAILER_LIT(5.0);
+    const trailer_real_t _t249 = _t0*_t16 + _t66 + _t67;
+    const trailer_real_t _t250 = TRAILER_LIT(5.0)*_t91/TRAILER_LIT(3.0);
+    const trailer_real_t _t251 = _t250/TRAILER_LIT(5.0);
+    const trailer_real_t _t252 = _t0*_t22 + _t69 + _t70;
+    const trailer_real_t _t253 = -_t162*_t180;
+    const trailer_real_t _t254 = TRAILER_LIT(2.0)*_t45;
+    const trailer_real_t _t255 = _t254*_t35 - _t254*_t47;
+    const trailer_real_t _t256 = _t254*_t31 + _t254*_t32;
+    const trailer_real_t _t257 = TRAILER_LIT(3.0)*_t45/TRAILER_LIT(5.0);
+    const trailer_real_t _t258 = _t257*_t4;
+    const trailer_real_t _t259 = _t2*_t257;
+    const trailer_real_t _t260 = _t258*_t33 + _t258*_t34 - _t259*_t37 + _t259*_t43;
+    const trailer_real_t _t261 = _t230*_t238;
+    const trailer_real_t _t262 = _t232*_t238;
+    const trailer_real_t _t263 = _t230*_t242 - _t232*_t237;
+    const trailer_real_t _t264 = _t107*_t171 + _t110*_t137 + _t12*_t149 + _t121*_t14
+            + _t123*(-_t10*_t22 + _t11*_t16) + _t127*_t64 + _t134*_t76 + _t140*_t97 + _t154*_t62
+            + _t159*_t73 + _t172*_t94 + _t180*_t181 + _t36*(-_t10*_t14 + _t11*_t12);
+    const trailer_real_t _t265 = _t110*_t182 + _t14*_t184*_t36
+            + _t14*(TRAILER_LIT(2.0)*_t146 + TRAILER_LIT(2.0)*_t147 + TRAILER_LIT(2.0)*_t148)
+            + _t180*_t185 + _t183*_t97 + _t186*_t22 + _t188*_t76 + _t64*(TRAILER_LIT(2.0)*_t151
+            + _t186 + _t187);
+    const trailer_real_t _t266 = _t174*_t190 - _t54;
+    const trailer_real_t _t267 = _t174*_t191 + _t48;
+    const trailer_real_t _t268 = _t174*_t194 + _t195;
+    const trailer_real_t _t269 = _t197*_t201 + _t198*_t206;
+    const trailer_real_t _t270 = _t174*_t175 + _t197*_t203 + _t198*_t208 + _t199*_t211
+            + _t200*_t214;
+    const trailer_real_t _t271 = _t204 - _t205;
+    const trailer_real_t _t272 = _t271*_t92;
+    const trailer_real_t _t273 = _t209 - _t210;
+    const trailer_real_t _t274 = _t273*_t92;
+    const trailer_real_t _t275 = _t212 - _t213;
+    const trailer_real_t _t276 = _t275*_t92;
+    const trailer_real_t _t277 = _t215 - _t216;
+    const trailer_real_t _t278 = _t277*_t92;
+    const trailer_real_t _t279 = _t174*_t177 + _t197*_t272 + _t198*_t274 + _t199*_t276
+            + _t200*_t278;
+    const trailer_real_t _t280 = -_t204 - _t205;
+    const trailer_real_t _t281 = _t105*_t280;
+    const trailer_real_t _t282 = -_t209 - _t210;
+    const trailer_real_t _t283 = _t105*_t282;
+    const trailer_real_t _t284 = -_t212 - _t213;
+    const trailer_real_t _t285 = _t105*_t284;
+    const trailer_real_t _t286 = -_t215 - _t216;
+    const trailer_real_t _t287 = _t105*_t286;
+    const trailer_real_t _t288 = _t174*_t179 + _t197*_t281 + _t198*_t283 + _t199*_t285
+            + _t200*_t287;
+    const trailer_real_t _t289 = -_t10*_t221 - _t10*_t222 - _t10*_t268 + _t107*_t218 + _t12*_t163
+            + _t12*_t266 + _t121*_t165 + _t124*_t161 + _t127*_t269 + _t134*_t270 + _t137*_t288
+            + _t140*_t279 + _t16*_t267 + _t166*_t62 + _t170*_t73 - _t18*_t196 + _t220*_t94;
+    const trailer_real_t _t290 = _t11*_t221 + _t11*_t222 + _t11*_t268 + _t110*_t218 + _t14*_t163
+            + _t14*_t266 + _t149*_t165 + _t152*_t161 + _t154*_t269 + _t159*_t270 + _t166*_t64
+            + _t170*_t76 + _t171*_t288 + _t172*_t279 - _t196*_t24 + _t22*_t267 + _t220*_t97;
+    const trailer_real_t _t291 = _t107*_t223 + _t12*_t225*_t36
+            + _t12*(TRAILER_LIT(2.0)*_t118 + TRAILER_LIT(2.0)*_t119 + TRAILER_LIT(2.0)*_t120)
+            + _t16*_t227 + _t180*_t226 + _t224*_t94 + _t229*_t73 + _t62*(TRAILER_LIT(2.0)*_t122
+            + _t227 + _t228);
+    const trailer_real_t _t292 = _t230*_t265 - _t231*_t264 - _t232*_t264 + _t233*_t291;
+    const trailer_real_t _t293 = -_t235*_t292;
+    const trailer_real_t _t294 = _t239*_t265 - _t240*_t289 - _t243*_t264 + _t244*_t290
+            + _t245*_t293;
+    const trailer_real_t _t295 = _t100*_t172 + _t103*_t140 + _t113*_t171 + _t116*_t137
+            + _t125*(_t16*_t24 + _t18*_t22) + _t134*_t80 + _t159*_t78 - _t180*_t181
+            + _t38*(_t12*_t24 + _t14*_t18);
+    const trailer_real_t _t296 = _t103*_t183 + _t116*_t182 + _t14*_t24*_t246 - _t180*_t185
+            + _t187*_t22 + _t188*_t80;
+    const trailer_real_t _t297 = _t175*_t190 - _t57;
+    const trailer_real_t _t298 = _t175*_t191 + _t53;
+    const trailer_real_t _t299 = _t175*_t194 - _t195;
+    const trailer_real_t _t300 = _t175*_t175 + _t197*_t211 + _t198*_t214 + _t199*_t247
+            + _t200*_t250;
+    const trailer_real_t _t301 = _t248 - _t249;
+    const trailer_real_t _t302 = _t301*_t92;
+    const trailer_real_t _t303 = _t251 - _t252;
+    const trailer_real_t _t304 = _t303*_t92;
+    const trailer_real_t _t305 = _t175*_t177 + _t197*_t276 + _t198*_t278 + _t199*_t302
+            + _t200*_t304;
+    const trailer_real_t _t306 = -_t248 - _t249;
+    const trailer_real_t _t307 = _t105*_t306;
+    const trailer_real_t _t308 = -_t251 - _t252;
+    const trailer_real_t _t309 = _t105*_t308;
+    const trailer_real_t _t310 = _t175*_t179 + _t197*_t285 + _t198*_t287 + _t199*_t307
+            + _t200*_t309;
+    const trailer_real_t _t311 = -_t10*_t253 - _t10*_t299 + _t100*_t220 + _t113*_t218 + _t12*_t297
+            + _t125*(_t16*_t162 + _t161*_t18) + _t134*_t300 + _t137*_t310 + _t140*_t305 + _t16*_t298
+            + _t170*_t78 + _t18*_t196 + _t38*(_t12*_t162 + _t165*_t18);
+    const trailer_real_t _t312 = _t103*_t220 + _t11*_t253 + _t11*_t299 + _t116*_t218
+            + _t125*(_t161*_t24 + _t162*_t22) + _t14*_t297 + _t159*_t300 + _t170*_t80 + _t171*_t310
+            + _t172*_t305 + _t196*_t24 + _t22*_t298 + _t38*(_t14*_t162 + _t165*_t24);
+    const trailer_real_t _t313 = _t100*_t224 + _t113*_t223 + _t12*_t18*_t246 + _t16*_t228
+            - _t180*_t226 + _t229*_t78;
+    const trailer_real_t _t314 = _t230*_t296 - _t231*_t295 - _t232*_t295 + _t233*_t313;
+    const trailer_real_t _t315 = -_t235*_t314;
+    const trailer_real_t _t316 = _t239*_t296 - _t240*_t311 - _t243*_t295 + _t244*_t312
+            + _t245*_t315;
+    const trailer_real_t _t317 = -_t10*_t255 + _t18*_t190;
+    const trailer_real_t _t318 = -_t10*_t256 + _t18*_t191;
+    const trailer_real_t _t319 = _t18*_t194;
+    const trailer_real_t _t320 = -_t10*_t260;
+    const trailer_real_t _t321 = -_t10*_t173 + _t45*_t62;
+    const trailer_real_t _t322 = -_t10*_t30 + _t12*_t45;
+    const trailer_real_t _t323 = -_t10*_t174 + _t175*_t18 + _t45*_t73 + _t49*_t78;
+    const trailer_real_t _t324 = -_t10*_t176 + _t100*_t49 + _t177*_t18 + _t45*_t94;
+    const trailer_real_t _t325 = -_t10*_t178 + _t107*_t45 + _t113*_t49 + _t179*_t18;
+    const trailer_real_t _t326 = -_t10*_t319 + _t12*_t317 + _t121*_t322 + _t127*_t321 + _t134*_t323
+            + _t137*_t325 + _t140*_t324 + _t16*_t318 + _t18*_t320;
+    const trailer_real_t _t327 = _t11*_t319 + _t14*_t317 + _t149*_t322 + _t154*_t321 + _t159*_t323
+            + _t171*_t325 + _t172*_t324 + _t22*_t318 + _t24*_t320;
+    const trailer_real_t _t328 = -_t240*_t326 + _t244*_t327;
+    const trailer_real_t _t329 = _t11*_t255 + _t190*_t24;
+    const trailer_real_t _t330 = _t11*_t256 + _t191*_t24;
+    const trailer_real_t _t331 = _t194*_t24;
+    const trailer_real_t _t332 = _t11*_t260;
+    const trailer_real_t _t333 = _t11*_t173 + _t45*_t64;
+    const trailer_real_t _t334 = _t11*_t30 + _t14*_t45;
+    const trailer_real_t _t335 = _t11*_t174 + _t175*_t24 + _t45*_t76 + _t49*_t80;
+    const trailer_real_t _t336 = _t103*_t49 + _t11*_t176 + _t177*_t24 + _t45*_t97;
+    const trailer_real_t _t337 = _t11*_t178 + _t110*_t45 + _t116*_t49 + _t179*_t24;
+    const trailer_real_t _t338 = -_t10*_t331 + _t12*_t329 + _t121*_t334 + _t127*_t333 + _t134*_t335
+            + _t137*_t337 + _t140*_t336 + _t16*_t330 + _t18*_t332;
+    const trailer_real_t _t339 = _t11*_t331 + _t14*_t329 + _t149*_t334 + _t154*_t333 + _t159*_t335
+            + _t171*_t337 + _t172*_t336 + _t22*_t330 + _t24*_t332;
+    const trailer_real_t _t340 = -_t240*_t338 + _t244*_t339;
+    const trailer_real_t _t341 = -_t239*_t264 + _t243*_t291 - _t261*_t290 + _t262*_t289
+            + _t263*_t293;
+    const trailer_real_t _t342 = -_t239*_t295 + _t243*_t313 - _t261*_t312 + _t262*_t311
+            + _t263*_t315;
+    const trailer_real_t _t343 = -_t230*_t238*_t327 + _t262*_t326;
+    const trailer_real_t _t344 = -_t230*_t238*_t339 + _t262*_t338;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
-    A[2] = -_t2*thetadot_left - _t3*thetadot_right;
+    A[2] = _t173;
     A[3] = TRAILER_LIT(0.0);
     A[4] = TRAILER_LIT(0.0);
     A[5] = TRAILER_LIT(0.0);
     A[6] = TRAILER_LIT(0.0);
     A[7] = TRAILER_LIT(0.0);
-    A[8] = _t6;
-    A[9] = _t7;
+    A[8] = _t12;
+    A[9] = _t14;
     A[10] = TRAILER_LIT(0.0);
     A[11] = TRAILER_LIT(0.0);
-    A[12] = _t6*thetadot_right + _t7*thetadot_left;
+    A[12] = _t30;
     A[13] = TRAILER_LIT(0.0);
     A[14] = TRAILER_LIT(0.0);
     A[15] = TRAILER_LIT(0.0);
     A[16] = TRAILER_LIT(0.0);
     A[17] = TRAILER_LIT(0.0);
-    A[18] = _t3;
-    A[19] = _t2;
+    A[18] = _t16;
+    A[19] = _t22;
     A[20] = TRAILER_LIT(0.0);
     A[21] = TRAILER_LIT(0.0);
     A[22] = TRAILER_LIT(0.0);
@@ -8133,19 +1525,18 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[25] = TRAILER_LIT(0.0);
     A[26] = TRAILER_LIT(0.0);
     A[27] = TRAILER_LIT(0.0);
-    A[28] = TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    A[29] = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    A[28] = -_t10;
+    A[29] = _t11;
     A[30] = TRAILER_LIT(0.0);
     A[31] = TRAILER_LIT(0.0);
-    A[32] = _t16*thetadot_left + _t19*thetadot_right;
-    A[33] = -_t16*thetadot_left - _t19*thetadot_right;
+    A[32] = _t174;
+    A[33] = _t175;
     A[34] = TRAILER_LIT(0.0);
     A[35] = TRAILER_LIT(0.0);
     A[36] = TRAILER_LIT(0.0);
     A[37] = TRAILER_LIT(0.0);
-    A[38] = TRAILER_LIT(5.0)*_t0*_t12*radius_right/TRAILER_LIT(6.0) - _t11*_t18 - _t14*_t17
-            - _t15*_t17;
-    A[39] = _t10*_t13 + _t11*_t13 + _t14*_t9 - _t15*_t9;
+    A[38] = _t18;
+    A[39] = _t24;
     A[40] = TRAILER_LIT(0.0);
     A[41] = TRAILER_LIT(0.0);
     A[42] = TRAILER_LIT(0.0);
@@ -8168,44 +1559,44 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[59] = TRAILER_LIT(1.0);
     A[60] = TRAILER_LIT(0.0);
     A[61] = TRAILER_LIT(0.0);
-    A[62] = -_t26*thetadot_left + _t33*thetadot_right;
-    A[63] = _t26*thetadot_left - _t33*thetadot_right;
+    A[62] = _t176;
+    A[63] = _t177;
     A[64] = TRAILER_LIT(0.0);
     A[65] = TRAILER_LIT(0.0);
     A[66] = TRAILER_LIT(0.0);
     A[67] = TRAILER_LIT(0.0);
-    A[68] = _t27*_t31 - _t27*_t32 + _t28*_t30 + _t29*_t30;
-    A[69] = -_t0*_t25 + _t21*_t24 + TRAILER_LIT(77.0)*_t21*_t4/TRAILER_LIT(138.0) + _t23*_t34;
+    A[68] = _t139;
+    A[69] = _t142;
     A[70] = TRAILER_LIT(0.0);
     A[71] = TRAILER_LIT(0.0);
-    A[72] = -_t38*thetadot_left + _t42*thetadot_right;
-    A[73] = _t38*thetadot_left - _t42*thetadot_right;
+    A[72] = _t178;
+    A[73] = _t179;
     A[74] = TRAILER_LIT(0.0);
     A[75] = TRAILER_LIT(0.0);
     A[76] = TRAILER_LIT(0.0);
     A[77] = TRAILER_LIT(0.0);
-    A[78] = _t22*_t40 + _t24*_t39 + _t34*_t40 - _t39*_t41;
-    A[79] = -_t28*_t37 + _t29*_t37 + _t31*_t36 + _t32*_t36;
+    A[78] = _t136;
+    A[79] = _t144;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t207*_t644 + _t645*(-_t1090*_t1091 + _t184*_t643 - _t578*_t651 - _t975*_t976);
-    A[83] = _t1106*_t644 + _t645*(-_t1091*_t1221 + _t1102*_t643 - _t1108*_t578 - _t1217*_t976);
+    A[82] = _t294;
+    A[83] = _t316;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t645*(-_t1091*_t1374 - _t1361*_t976);
-    A[89] = _t645*(-_t1091*_t1486 - _t1524*_t976);
+    A[88] = _t328;
+    A[89] = _t340;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t1525*_t207 + _t645*(_t1090*_t1526 + _t1527*_t975 + _t206*_t578 - _t643*_t651);
-    A[93] = _t1106*_t1525 + _t645*(_t1105*_t578 - _t1108*_t643 + _t1217*_t1527 + _t1221*_t1526);
+    A[92] = _t341;
+    A[93] = _t342;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t645*(_t1361*_t1527 + _t1374*_t1526);
-    A[99] = _t645*(_t1486*_t1526 + _t1524*_t1527);
+    A[98] = _t343;
+    A[99] = _t344;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -8222,8 +1613,8 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t195*_t645;
-    B[17] = _t1528;
-    B[18] = _t1528;
-    B[19] = _t150*_t645;
+    B[16] = _t240;
+    B[17] = -_t244;
+    B[18] = -_t262;
+    B[19] = _t261;
 }

@@ -21,10 +21,12 @@ extern "C" {
    only. */
 typedef struct {
     long magic; /* TRAILER_MODEL_PREPARED_MAGIC once prepared */
-    trailer_real_t forward_dynamics[98]; /* J_theta_cart, J_theta_cart_left, J_theta_cart_right,
+    trailer_real_t forward_dynamics[17]; /* J_theta_cart, J_theta_cart_left, J_theta_cart_right,
+                                            J_theta_left, J_theta_right, J_x_tractor,
                                             K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
-                                            radius_left, radius_right, 91 parameter-only
-                                            subexpressions, for trailer_forward_dynamics_prepared */
+                                            K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2,
+                                            7 parameter-only subexpressions, for
+                                            trailer_forward_dynamics_prepared */
 } trailer_model_prepared_t;
 
 #define TRAILER_FORWARD_DYNAMICS_Q_SIZE 8
@@ -74,7 +76,7 @@ typedef struct {
  * With fixed parameters, trailer_model_prepare once and trailer_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 921 add, 1435 mul, 96 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 141 add, 216 mul, 24 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot);
@@ -101,7 +103,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
  *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 74 add, 123 mul, 59 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared);
@@ -136,7 +138,7 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 847 add, 1312 mul, 37 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 141 add, 211 mul, 19 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
@@ -161,7 +163,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [6] row-major (TRAILER_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 24 add, 63 mul, 17 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 20 add, 44 mul, 12 div, 4 sin/cos, 0 sqrt
  */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates);
@@ -183,7 +185,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
  *     theta_cart_left
  * @param[out] M [2x2] row-major (TRAILER_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 129 add, 224 mul, 56 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 62 add, 103 mul, 14 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M);
@@ -206,7 +208,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAILER_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 720 add, 2274 mul, 506 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 84 add, 147 mul, 23 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H);
@@ -249,7 +251,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 812 add, 3129 mul, 60 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 130 add, 211 mul, 24 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
@@ -284,7 +286,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] A [10x10] row-major (TRAILER_LINEARIZATION_A_SIZE) -- 10x10 row-major
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
- * operations after CSE: 3608 add, 11250 mul, 178 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 419 add, 626 mul, 41 div, 4 sin/cos, 0 sqrt
  */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,

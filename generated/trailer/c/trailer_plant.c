@@ -7,985 +7,185 @@
 #include "trailer_plant.h"
 
 /* trailer_plant_state_derivative: documented in trailer_plant.h.
-   operations after CSE: 836 add, 3171 mul, 77 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 134 add, 219 mul, 24 div, 4 sin/cos, 0 sqrt */
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot)
 {
-    const trailer_real_t radius_left = pp->radius_left;
-    const trailer_real_t thetadot_left = x[9];
-    const trailer_real_t _t0 = radius_left*thetadot_left;
-    const trailer_real_t theta_tractor = x[2];
-    const trailer_real_t _t1 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t2 = TRAILER_LIT(0.5)*_t1;
-    const trailer_real_t radius_right = pp->radius_right;
-    const trailer_real_t thetadot_right = x[8];
-    const trailer_real_t _t3 = radius_right*thetadot_right;
-    const trailer_real_t _t4 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*_t4;
-    const trailer_real_t _t6 = TRAILER_LIT(250.0)*radius_left/TRAILER_LIT(207.0);
     const trailer_real_t theta_cart = x[3];
-    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t8 = _t4*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(5.0)*radius_left/TRAILER_LIT(6.0);
-    const trailer_real_t _t10 = _t1*_t7;
-    const trailer_real_t _t11 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t12 = _t11*_t4;
-    const trailer_real_t _t13 = _t1*_t11;
-    const trailer_real_t _t14 = TRAILER_LIT(250.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_cart_right = pp->radius_cart_right;
-    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t16 = _t15*radius_left;
-    const trailer_real_t _t17 = TRAILER_LIT(307.0)*_t16/TRAILER_LIT(414.0);
-    const trailer_real_t _t18 = TRAILER_LIT(77.0)*_t10/TRAILER_LIT(138.0);
-    const trailer_real_t _t19 = TRAILER_LIT(77.0)*_t12/TRAILER_LIT(138.0);
-    const trailer_real_t _t20 = _t15*radius_right;
-    const trailer_real_t _t21 = TRAILER_LIT(107.0)*_t20/TRAILER_LIT(414.0);
-    const trailer_real_t _t22 = TRAILER_LIT(41.0)*_t10/TRAILER_LIT(46.0);
-    const trailer_real_t _t23 = TRAILER_LIT(41.0)*_t12/TRAILER_LIT(46.0);
-    const trailer_real_t radius_cart_left = pp->radius_cart_left;
-    const trailer_real_t _t24 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t25 = _t24*radius_left;
-    const trailer_real_t _t26 = TRAILER_LIT(107.0)*_t25/TRAILER_LIT(414.0);
-    const trailer_real_t _t27 = _t24*radius_right;
-    const trailer_real_t _t28 = TRAILER_LIT(307.0)*_t27/TRAILER_LIT(414.0);
-    const trailer_real_t J_theta_cart = pp->J_theta_cart;
-    const trailer_real_t _t29 = TRAILER_LIT(62500.0)*J_theta_cart/TRAILER_LIT(42849.0);
-    const trailer_real_t _t30 = radius_left*radius_right;
-    const trailer_real_t J_theta_tractor = pp->J_theta_tractor;
-    const trailer_real_t _t31 = TRAILER_LIT(250000.0)*J_theta_tractor/TRAILER_LIT(42849.0);
-    const trailer_real_t J_x_tractor = pp->J_x_tractor;
-    const trailer_real_t _t32 = TRAILER_LIT(0.25)*J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
-    const trailer_real_t _t33 = TRAILER_LIT(25000.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t34 = radius_cart_left*radius_cart_left;
-    const trailer_real_t _t35 = TRAILER_LIT(1.0)/_t34;
-    const trailer_real_t J_theta_cart_left = pp->J_theta_cart_left;
-    const trailer_real_t _t36 = J_theta_cart_left*_t35;
-    const trailer_real_t _t37 = TRAILER_LIT(32849.0)*_t30/TRAILER_LIT(171396.0);
-    const trailer_real_t _t38 = radius_cart_right*radius_cart_right;
-    const trailer_real_t _t39 = TRAILER_LIT(1.0)/_t38;
-    const trailer_real_t J_theta_cart_right = pp->J_theta_cart_right;
-    const trailer_real_t _t40 = J_theta_cart_right*_t39;
-    const trailer_real_t _t41 = _t11*_t11;
-    const trailer_real_t _t42 = _t30*_t41;
-    const trailer_real_t _t43 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t44 = _t1*_t1;
-    const trailer_real_t _t45 = _t30*_t44;
-    const trailer_real_t _t46 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t47 = TRAILER_LIT(73805.0)*_t30/TRAILER_LIT(28566.0);
-    const trailer_real_t _t48 = _t11*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t49 = K_theta_cart_x_tractor_2*_t48;
-    const trailer_real_t _t50 = _t1*_t4;
-    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t50;
-    const trailer_real_t _t52 = TRAILER_LIT(29522.0)*_t36/TRAILER_LIT(42849.0);
-    const trailer_real_t _t53 = TRAILER_LIT(29522.0)*_t40/TRAILER_LIT(42849.0);
-    const trailer_real_t _t54 = TRAILER_LIT(14761.0)*_t30/TRAILER_LIT(28566.0);
-    const trailer_real_t _t55 = _t36*_t48;
-    const trailer_real_t _t56 = _t50*_t54;
-    const trailer_real_t _t57 = _t40*_t48;
-    const trailer_real_t _t58 = _t42*_t44;
-    const trailer_real_t _t59 = TRAILER_LIT(369025.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t60 = TRAILER_LIT(73805.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t61 = _t10*_t12;
-    const trailer_real_t _t62 = _t30*_t61;
-    const trailer_real_t _t63 = TRAILER_LIT(59044.0)*_t58/TRAILER_LIT(42849.0);
-    const trailer_real_t _t64 = TRAILER_LIT(14761.0)*_t45/TRAILER_LIT(14283.0);
-    const trailer_real_t _t65 = TRAILER_LIT(14761.0)*_t42*_t50/TRAILER_LIT(14283.0);
-    const trailer_real_t _t66 = TRAILER_LIT(59044.0)*_t62/TRAILER_LIT(42849.0);
-    const trailer_real_t _t67 = -_t29*_t30 - _t30*_t31 + _t30*_t32 + _t30*_t33 + _t36*_t37
-            + _t36*_t56 + _t36*_t63 - _t36*_t65 + _t36*_t66 + _t37*_t40 - _t40*_t56 + _t40*_t63
-            + _t40*_t65 + _t40*_t66 + _t42*_t43 - _t42*_t46
-            + TRAILER_LIT(73805.0)*_t42*_t51/TRAILER_LIT(14283.0) - _t42*_t52 - _t42*_t53
-            + _t43*_t45 - _t45*_t46 - TRAILER_LIT(73805.0)*_t45*_t49/TRAILER_LIT(14283.0)
-            - _t45*_t52 - _t45*_t53 + _t47*_t49 - _t47*_t51 - _t54*_t55 + _t54*_t57 + _t55*_t64
-            - _t57*_t64 - _t58*_t59 + _t58*_t60 - _t59*_t62 + _t60*_t62;
-    const trailer_real_t _t68 = radius_left*radius_left;
-    const trailer_real_t _t69 = TRAILER_LIT(250.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t70 = TRAILER_LIT(500.0)*K_theta_tractor_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t71 = _t36*_t68;
-    const trailer_real_t _t72 = _t40*_t68;
-    const trailer_real_t _t73 = _t41*_t68;
-    const trailer_real_t _t74 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(171396.0);
-    const trailer_real_t _t75 = _t44*_t68;
-    const trailer_real_t _t76 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(28566.0);
-    const trailer_real_t _t77 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t78 = _t48*_t68;
-    const trailer_real_t _t79 = TRAILER_LIT(1250.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t80 = _t50*_t68;
-    const trailer_real_t _t81 = TRAILER_LIT(500.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t82 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(28566.0);
-    const trailer_real_t _t83 = TRAILER_LIT(31178.0)*_t36/TRAILER_LIT(42849.0);
-    const trailer_real_t _t84 = TRAILER_LIT(10222.0)*_t40/TRAILER_LIT(42849.0);
-    const trailer_real_t _t85 = TRAILER_LIT(4387.0)*_t71/TRAILER_LIT(9522.0);
-    const trailer_real_t _t86 = TRAILER_LIT(23639.0)*_t72/TRAILER_LIT(28566.0);
-    const trailer_real_t _t87 = _t44*_t73;
-    const trailer_real_t _t88 = TRAILER_LIT(130975.0)*J_theta_cart/TRAILER_LIT(85698.0);
-    const trailer_real_t _t89 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor/TRAILER_LIT(14283.0);
-    const trailer_real_t _t90 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(207.0);
-    const trailer_real_t _t91 = _t48*_t75;
-    const trailer_real_t _t92 = TRAILER_LIT(2500.0)*J_theta_cart/TRAILER_LIT(621.0);
-    const trailer_real_t _t93 = _t50*_t73;
-    const trailer_real_t _t94 = TRAILER_LIT(1000.0)*K_theta_cart_x_tractor/TRAILER_LIT(207.0);
-    const trailer_real_t _t95 = _t51*_t73;
-    const trailer_real_t _t96 = _t61*_t68;
-    const trailer_real_t _t97 = TRAILER_LIT(4387.0)*_t36/TRAILER_LIT(4761.0);
-    const trailer_real_t _t98 = TRAILER_LIT(23639.0)*_t40/TRAILER_LIT(14283.0);
-    const trailer_real_t J_theta_left = pp->J_theta_left;
-    const trailer_real_t _t99 = J_theta_left + _t29*_t68 + _t31*_t68 + _t32*_t68 - _t33*_t68
-            - TRAILER_LIT(62356.0)*_t36*_t87/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t40*_t87/TRAILER_LIT(42849.0) - _t48*_t85 - _t48*_t86
-            + TRAILER_LIT(26195.0)*_t49*_t75/TRAILER_LIT(14283.0) + _t50*_t85 + _t50*_t86
-            - TRAILER_LIT(62356.0)*_t61*_t71/TRAILER_LIT(42849.0)
-            + TRAILER_LIT(20444.0)*_t61*_t72/TRAILER_LIT(42849.0) + _t68*_t69 - _t68*_t70
-            + TRAILER_LIT(11449.0)*_t71/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(94249.0)*_t72/TRAILER_LIT(171396.0) - _t73*_t74 + _t73*_t76 - _t73*_t77
-            + _t73*_t83 - _t73*_t84 - _t74*_t75 + _t75*_t76 - _t75*_t77 + _t75*_t83 - _t75*_t84
-            + _t78*_t79 - _t78*_t81 - _t78*_t82 - _t79*_t80 + _t80*_t81 + _t80*_t82 + _t87*_t88
-            - _t87*_t89 + _t87*_t90 + _t88*_t96 - _t89*_t96 + _t90*_t96 - _t91*_t92 + _t91*_t94
-            + _t91*_t97 + _t91*_t98 + _t92*_t93 - _t93*_t94 - _t93*_t97 - _t93*_t98
-            - TRAILER_LIT(26195.0)*_t95/TRAILER_LIT(14283.0);
-    const trailer_real_t _t100 = radius_right*radius_right;
-    const trailer_real_t _t101 = _t100*_t36;
-    const trailer_real_t _t102 = _t100*_t40;
-    const trailer_real_t _t103 = _t100*_t74;
-    const trailer_real_t _t104 = _t100*_t76;
-    const trailer_real_t _t105 = _t100*_t77;
-    const trailer_real_t _t106 = _t100*_t48;
-    const trailer_real_t _t107 = _t100*_t50;
-    const trailer_real_t _t108 = TRAILER_LIT(10222.0)*_t101/TRAILER_LIT(42849.0);
-    const trailer_real_t _t109 = TRAILER_LIT(31178.0)*_t102/TRAILER_LIT(42849.0);
-    const trailer_real_t _t110 = TRAILER_LIT(23639.0)*_t101/TRAILER_LIT(28566.0);
-    const trailer_real_t _t111 = TRAILER_LIT(4387.0)*_t102/TRAILER_LIT(9522.0);
-    const trailer_real_t _t112 = _t41*_t44;
-    const trailer_real_t _t113 = _t100*_t112;
-    const trailer_real_t _t114 = _t100*_t89;
-    const trailer_real_t _t115 = _t106*_t44;
-    const trailer_real_t _t116 = _t107*_t41;
-    const trailer_real_t _t117 = TRAILER_LIT(26195.0)*K_theta_cart_x_tractor_2/TRAILER_LIT(14283.0);
-    const trailer_real_t _t118 = _t100*_t61;
-    const trailer_real_t _t119 = TRAILER_LIT(20444.0)*_t101/TRAILER_LIT(42849.0);
-    const trailer_real_t _t120 = TRAILER_LIT(62356.0)*_t102/TRAILER_LIT(42849.0);
-    const trailer_real_t _t121 = _t44*_t48;
-    const trailer_real_t _t122 = TRAILER_LIT(23639.0)*_t101/TRAILER_LIT(14283.0);
-    const trailer_real_t _t123 = _t41*_t50;
-    const trailer_real_t _t124 = TRAILER_LIT(4387.0)*_t102/TRAILER_LIT(4761.0);
-    const trailer_real_t J_theta_right = pp->J_theta_right;
-    const trailer_real_t _t125 = J_theta_right + _t100*_t29 + _t100*_t31 + _t100*_t32 - _t100*_t33
-            - _t100*_t69 + _t100*_t70 + TRAILER_LIT(94249.0)*_t101/TRAILER_LIT(171396.0)
-            + TRAILER_LIT(11449.0)*_t102/TRAILER_LIT(171396.0) - _t103*_t41 - _t103*_t44
-            + _t104*_t41 + _t104*_t44 + _t105*_t41 + _t105*_t44 - _t106*_t79 + _t106*_t81
-            - _t106*_t82 + _t107*_t79 - _t107*_t81 + _t107*_t82 - _t108*_t41 - _t108*_t44
-            + _t109*_t41 + _t109*_t44 + _t110*_t48 - _t110*_t50 + _t111*_t48 - _t111*_t50
-            - _t112*_t114 + _t112*_t119 - _t112*_t120 + _t113*_t88 - _t113*_t90 - _t114*_t61
-            + _t115*_t117 + _t115*_t92 - _t115*_t94 - _t116*_t117 - _t116*_t92 + _t116*_t94
-            + _t118*_t88 - _t118*_t90 + _t119*_t61 - _t120*_t61 - _t121*_t122 - _t121*_t124
-            + _t122*_t123 + _t123*_t124;
-    const trailer_real_t _t126 = TRAILER_LIT(1.0)/(_t125*_t99 - _t67*_t67);
-    const trailer_real_t _t127 = thetadot_right*thetadot_right;
-    const trailer_real_t _t128 = _t100*_t127;
-    const trailer_real_t _t129 = J_theta_cart_left*_t38;
-    const trailer_real_t _t130 = _t128*_t129;
-    const trailer_real_t _t131 = thetadot_left*thetadot_left;
-    const trailer_real_t _t132 = _t131*_t68;
-    const trailer_real_t _t133 = _t129*_t132;
-    const trailer_real_t _t134 = J_theta_cart_right*_t34;
-    const trailer_real_t _t135 = _t132*_t134;
-    const trailer_real_t _t136 = _t128*_t134;
-    const trailer_real_t _t137 = _t34*_t38;
-    const trailer_real_t _t138 = _t132*_t137;
-    const trailer_real_t _t139 = TRAILER_LIT(15717000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t140 = TRAILER_LIT(17713200.0)*_t130;
-    const trailer_real_t _t141 = TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t142 = _t128*_t137;
+    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t theta_tractor = x[2];
+    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
+    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t radius_right = pp->radius_right;
+    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t radius_left = pp->radius_left;
+    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t12 = _t11*_t9;
+    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
+    const trailer_real_t _t14 = _t10*_t11;
+    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
+    const trailer_real_t _t16 = -_t8*_t9;
+    const trailer_real_t _t17 = -_t1*_t16 - _t13;
+    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
+    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t21 = -_t10*_t8;
+    const trailer_real_t _t22 = -_t1*_t21 - _t15;
+    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
+    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t thetadot_right = x[8];
+    const trailer_real_t _t26 = _t12*thetadot_right;
+    const trailer_real_t thetadot_left = x[9];
+    const trailer_real_t _t27 = _t14*thetadot_left;
     const trailer_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
-    const trailer_real_t _t143 = TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor;
-    const trailer_real_t _t144 = _t11*_t11*_t11;
-    const trailer_real_t _t145 = _t1*_t1*_t1;
-    const trailer_real_t _t146 = _t130*_t8;
-    const trailer_real_t _t147 = _t144*_t145;
-    const trailer_real_t _t148 = _t144*_t4;
-    const trailer_real_t _t149 = _t131*_t134;
-    const trailer_real_t _t150 = _t136*_t8;
-    const trailer_real_t _t151 = _t145*_t7;
-    const trailer_real_t _t152 = _t107*_t127;
-    const trailer_real_t _t153 = TRAILER_LIT(23617600.0)*_t152;
-    const trailer_real_t _t154 = _t129*_t131;
-    const trailer_real_t _t155 = _t13*_t135;
-    const trailer_real_t _t156 = _t154*_t87;
-    const trailer_real_t _t157 = _t113*_t127;
-    const trailer_real_t _t158 = _t134*_t157;
-    const trailer_real_t _t159 = _t135*_t144;
-    const trailer_real_t _t160 = _t145*_t159;
-    const trailer_real_t _t161 = _t1*_t144;
-    const trailer_real_t _t162 = _t11*_t145;
-    const trailer_real_t _t163 = _t149*_t87;
-    const trailer_real_t _t164 = TRAILER_LIT(69000000.0)*J_theta_cart;
-    const trailer_real_t _t165 = _t131*_t73;
-    const trailer_real_t _t166 = _t137*_t165;
-    const trailer_real_t _t167 = _t131*_t75;
-    const trailer_real_t _t168 = _t137*_t167;
-    const trailer_real_t _t169 = _t0*_t3;
-    const trailer_real_t _t170 = _t137*_t169;
-    const trailer_real_t _t171 = _t143*_t170;
-    const trailer_real_t _t172 = J_theta_cart*_t138;
-    const trailer_real_t _t173 = K_theta_cart_x_tractor*_t10;
-    const trailer_real_t _t174 = K_theta_cart_x_tractor_2*_t138;
-    const trailer_real_t _t175 = TRAILER_LIT(7858500.0)*_t8;
-    const trailer_real_t _t176 = TRAILER_LIT(12849000.0)*_t151;
-    const trailer_real_t _t177 = K_theta_cart_x_tractor*_t138;
-    const trailer_real_t _t178 = K_theta_cart_x_tractor_2*_t142;
-    const trailer_real_t _t179 = TRAILER_LIT(17004672.0)*_t146;
-    const trailer_real_t _t180 = _t12*_t44;
-    const trailer_real_t _t181 = TRAILER_LIT(20700000.0)*_t8;
-    const trailer_real_t _t182 = _t12*_t167;
-    const trailer_real_t _t183 = TRAILER_LIT(22141500.0)*_t8;
-    const trailer_real_t _t184 = _t151*_t41;
-    const trailer_real_t _t185 = J_theta_cart*_t142;
-    const trailer_real_t _t186 = _t131*_t137;
-    const trailer_real_t _t187 = _t186*_t78;
-    const trailer_real_t _t188 = TRAILER_LIT(26195000.0)*J_theta_cart;
-    const trailer_real_t _t189 = _t151*_t165;
-    const trailer_real_t _t190 = _t186*_t80;
-    const trailer_real_t _t191 = TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t192 = TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t193 = K_theta_cart_x_tractor*_t148;
-    const trailer_real_t _t194 = _t142*_t173;
-    const trailer_real_t _t195 = _t134*_t169;
-    const trailer_real_t _t196 = TRAILER_LIT(46080000.0)*_t195;
-    const trailer_real_t _t197 = _t115*_t127;
-    const trailer_real_t _t198 = TRAILER_LIT(47235200.0)*_t197;
-    const trailer_real_t _t199 = _t186*_t87;
-    const trailer_real_t _t200 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t201 = _t13*_t185;
-    const trailer_real_t _t202 = TRAILER_LIT(73805000.0)*J_theta_cart;
-    const trailer_real_t _t203 = _t106*_t127;
-    const trailer_real_t _t204 = _t137*_t203;
-    const trailer_real_t _t205 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t206 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t207 = _t137*_t152;
-    const trailer_real_t _t208 = _t142*_t161;
-    const trailer_real_t _t209 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t210 = _t142*_t162;
-    const trailer_real_t _t211 = _t147*_t185;
-    const trailer_real_t _t212 = TRAILER_LIT(110707500.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t213 = _t13*_t138;
-    const trailer_real_t _t214 = K_theta_cart_x_tractor*_t213;
-    const trailer_real_t _t215 = _t162*_t172;
-    const trailer_real_t _t216 = TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t217 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t218 = _t137*_t157;
-    const trailer_real_t _t219 = _t217*_t218;
-    const trailer_real_t _t220 = _t142*_t217;
-    const trailer_real_t _t221 = _t138*_t147;
-    const trailer_real_t _t222 = K_theta_cart_x_tractor*_t221;
-    const trailer_real_t _t223 = _t164*_t170;
-    const trailer_real_t _t224 = _t223*_t41;
-    const trailer_real_t _t225 = _t223*_t44;
-    const trailer_real_t _t226 = _t129*_t169;
-    const trailer_real_t _t227 = _t112*_t226;
-    const trailer_real_t _t228 = _t147*_t226;
-    const trailer_real_t _t229 = _t166*_t8;
-    const trailer_real_t _t230 = TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t231 = _t168*_t8;
-    const trailer_real_t _t232 = _t142*_t41;
-    const trailer_real_t _t233 = _t232*_t8;
-    const trailer_real_t _t234 = TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t235 = _t142*_t44;
-    const trailer_real_t _t236 = _t235*_t8;
-    const trailer_real_t _t237 = TRAILER_LIT(32122500.0)*J_theta_cart;
-    const trailer_real_t _t238 = TRAILER_LIT(35426400.0)*_t61;
-    const trailer_real_t _t239 = TRAILER_LIT(38547000.0)*_t173;
-    const trailer_real_t _t240 = _t151*_t166;
-    const trailer_real_t _t241 = TRAILER_LIT(42830000.0)*J_theta_cart;
-    const trailer_real_t _t242 = TRAILER_LIT(43537275.0)*J_theta_cart;
-    const trailer_real_t _t243 = _t163*_t8;
-    const trailer_real_t _t244 = TRAILER_LIT(51396000.0)*_t193;
-    const trailer_real_t _t245 = _t186*_t93;
-    const trailer_real_t _t246 = TRAILER_LIT(52390000.0)*J_theta_cart;
-    const trailer_real_t _t247 = _t186*_t91;
-    const trailer_real_t _t248 = TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t249 = TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t250 = _t170*_t249;
-    const trailer_real_t _t251 = _t250*_t41;
-    const trailer_real_t _t252 = _t250*_t44;
-    const trailer_real_t _t253 = _t12*_t235;
-    const trailer_real_t _t254 = TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t255 = TRAILER_LIT(102028032.0)*_t195;
-    const trailer_real_t _t256 = TRAILER_LIT(110707500.0)*J_theta_cart;
-    const trailer_real_t _t257 = _t151*_t232;
-    const trailer_real_t _t258 = TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t259 = TRAILER_LIT(147610000.0)*J_theta_cart;
-    const trailer_real_t _t260 = _t116*_t127;
-    const trailer_real_t _t261 = _t137*_t260;
-    const trailer_real_t _t262 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t263 = _t10*_t166;
-    const trailer_real_t _t264 = TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t265 = _t137*_t197;
-    const trailer_real_t _t266 = TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2;
-    const trailer_real_t _t267 = _t148*_t168;
-    const trailer_real_t _t268 = K_theta_cart_x_tractor*_t170;
-    const trailer_real_t _t269 = TRAILER_LIT(244442160.0)*_t268;
-    const trailer_real_t _t270 = _t147*_t269;
-    const trailer_real_t _t271 = _t112*_t170;
-    const trailer_real_t _t272 = _t216*_t271;
-    const trailer_real_t _t273 = J_theta_cart*_t170;
-    const trailer_real_t _t274 = TRAILER_LIT(152776350.0)*_t273;
-    const trailer_real_t _t275 = _t161*_t274;
-    const trailer_real_t _t276 = _t162*_t274;
-    const trailer_real_t _t277 = TRAILER_LIT(142921080.0)*_t13*_t268;
-    const trailer_real_t _t278 = TRAILER_LIT(82800000.0)*_t170;
-    const trailer_real_t _t279 = _t278*_t49;
-    const trailer_real_t _t280 = K_theta_cart_x_tractor_2*_t170;
-    const trailer_real_t _t281 = TRAILER_LIT(61110540.0)*_t280;
-    const trailer_real_t _t282 = _t151*_t281;
-    const trailer_real_t _t283 = TRAILER_LIT(51255270.0)*_t280;
-    const trailer_real_t _t284 = _t12*_t283;
-    const trailer_real_t _t285 = _t181*_t268;
-    const trailer_real_t _t286 = _t195*_t8;
-    const trailer_real_t _t287 = TRAILER_LIT(34009344.0)*_t286;
-    const trailer_real_t _t288 = _t10*_t41;
-    const trailer_real_t _t289 = _t148*_t44;
-    const trailer_real_t _t290 = _t10*_t283;
-    const trailer_real_t _t291 = _t148*_t281;
-    const trailer_real_t _t292 = _t138*_t61;
-    const trailer_real_t _t293 = _t278*_t51;
-    const trailer_real_t _t294 = TRAILER_LIT(101850900.0)*_t13*_t273;
-    const trailer_real_t _t295 = J_theta_cart*_t218*_t8;
-    const trailer_real_t _t296 = TRAILER_LIT(138000000.0)*J_theta_cart;
-    const trailer_real_t _t297 = _t271*_t296;
-    const trailer_real_t _t298 = TRAILER_LIT(183331620.0)*_t268;
-    const trailer_real_t _t299 = _t161*_t298;
-    const trailer_real_t _t300 = _t162*_t298;
-    const trailer_real_t _t301 = TRAILER_LIT(203701800.0)*_t147*_t273;
-    const trailer_real_t _t302 = _t199*_t8;
-    const trailer_real_t _t303 = TRAILER_LIT(244442160.0)*_t280;
-    const trailer_real_t _t304 = _t289*_t303;
-    const trailer_real_t _t305 = TRAILER_LIT(183331620.0)*_t280;
-    const trailer_real_t _t306 = _t288*_t305;
-    const trailer_real_t _t307 = _t170*_t41;
-    const trailer_real_t _t308 = TRAILER_LIT(165600000.0)*_t307*_t51;
-    const trailer_real_t _t309 = _t41*_t8;
-    const trailer_real_t _t310 = TRAILER_LIT(50925450.0)*_t273;
-    const trailer_real_t _t311 = _t309*_t310;
-    const trailer_real_t _t312 = _t44*_t8;
-    const trailer_real_t _t313 = _t310*_t312;
-    const trailer_real_t _t314 = _t226*_t61;
-    const trailer_real_t _t315 = _t227*_t8;
-    const trailer_real_t _t316 = TRAILER_LIT(61110540.0)*_t268;
-    const trailer_real_t _t317 = _t309*_t316;
-    const trailer_real_t _t318 = _t312*_t316;
-    const trailer_real_t _t319 = _t170*_t44;
-    const trailer_real_t _t320 = TRAILER_LIT(165600000.0)*_t319*_t49;
-    const trailer_real_t _t321 = _t180*_t305;
-    const trailer_real_t _t322 = _t184*_t303;
-    const trailer_real_t _t323 = _t112*_t269*_t8;
-    const trailer_real_t _t324 = _t170*_t61;
-    const trailer_real_t _t325 = _t216*_t324;
-    const trailer_real_t _t326 = _t296*_t324;
-    const trailer_real_t _t327 = TRAILER_LIT(203701800.0)*J_theta_cart*_t271*_t8;
-    const trailer_real_t _t328 = TRAILER_LIT(120000000.0)*_t280;
-    const trailer_real_t _t329 = _t170*_t202;
-    const trailer_real_t _t330 = TRAILER_LIT(265698000.0)*_t280;
-    const trailer_real_t _t331 = TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t332 =
-            -TRAILER_LIT(200000000.0)*J_theta_cart*_t1*_t34*_t38*_t4*_t41*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(221415000.0)*J_theta_cart*_t1*_t34*_t38*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t11*_t34*_t38*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(100000000.0)*J_theta_cart*_t11*_t34*_t38*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            - TRAILER_LIT(17250000.0)*J_theta_cart*_t131*_t34*_t38*_t4*_t68*_t7
-            - TRAILER_LIT(34500000.0)*J_theta_cart*_t131*_t34*_t38*_t68
-            + TRAILER_LIT(34500000.0)*J_theta_cart*_t142
-            -
-            TRAILER_LIT(295220000.0)*J_theta_cart*_t144*_t34*_t38*_t4*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(73805000.0)*J_theta_cart*_t145*_t34*_t38*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(120000000.0)*K_theta_cart_x_tractor*_t1*_t34*_t38*_t4*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(74283000.0)*K_theta_cart_x_tractor*_t1*_t34*_t38*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            - TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t100*_t127*_t34*_t38
-            -
-            TRAILER_LIT(265698000.0)*K_theta_cart_x_tractor*_t11*_t34*_t38*_t4*_t44*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor*_t11*_t34*_t38*_t44*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            + TRAILER_LIT(41400000.0)*K_theta_cart_x_tractor*_t138
-            -
-            TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t144*_t34*_t38*_t4*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor*_t145*_t34*_t38*_t41*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t1*_t11*_t34*_t38*_t4*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(207132000.0)*K_theta_cart_x_tractor_2*_t1*_t11*_t34*_t38*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t144*_t145*_t34*_t38*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(354264000.0)*K_theta_cart_x_tractor_2*_t34*_t38*_t4*_t41*_t44*_t7
-            *radius_left*radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(30000000.0)*K_theta_cart_x_tractor_2*_t34*_t38*_t4*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(240000000.0)*K_theta_cart_x_tractor_2*_t34*_t38*_t41*_t44*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            -
-            TRAILER_LIT(60000000.0)*K_theta_cart_x_tractor_2*_t34*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right + _t10*_t329 + TRAILER_LIT(74283000.0)*_t12*_t268
-            + TRAILER_LIT(200000000.0)*_t121*_t273 + TRAILER_LIT(240000000.0)*_t123*_t268
-            + _t148*_t329 + _t151*_t170*_t206 + _t161*_t330 + _t162*_t330
-            + TRAILER_LIT(265698000.0)*_t170*_t173*_t41 + TRAILER_LIT(221415000.0)*_t180*_t273
-            + TRAILER_LIT(295220000.0)*_t184*_t273 + TRAILER_LIT(17250000.0)*_t185*_t8
-            + TRAILER_LIT(354264000.0)*_t268*_t289 + TRAILER_LIT(120000000.0)*_t268*_t48
-            + TRAILER_LIT(100000000.0)*_t273*_t50 + _t307*_t331 + _t319*_t331 + _t328*_t41
-            + _t328*_t44;
-    const trailer_real_t _t333 = TRAILER_LIT(5.0)*_t35*_t39/TRAILER_LIT(70957944.0);
-    const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t334 =
-            _t333*radius_left*(TRAILER_LIT(76388175.0)*J_theta_cart*_t1*_t100*_t127*_t144*_t34*_t38
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t7
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t1*_t11*_t131*_t34*_t38*_t4*_t68*_t7
-            + TRAILER_LIT(104324550.0)*J_theta_cart*_t1*_t11*_t131*_t34*_t38*_t68
-            + TRAILER_LIT(26195000.0)*J_theta_cart*_t1*_t131*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t1*_t131*_t34*_t38*_t41*_t68*_t7
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t1*_t131*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(76388175.0)*J_theta_cart*_t100*_t11*_t127*_t145*_t34*_t38
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t100*_t11*_t127*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t100*_t11*_t127*_t34*_t38*_t44*_t7
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t100*_t127*_t144*_t34*_t38*_t4
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t100*_t127*_t145*_t34*_t38*_t41*_t7
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t4*_t41*_t7
-            + TRAILER_LIT(25462725.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t4*_t44*_t7
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t11*_t131*_t34*_t38*_t44*_t68*_t7
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t131*_t144*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t131*_t144*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t131*_t145*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(174149100.0)*J_theta_cart*_t131*_t34*_t38*_t4*_t41*_t44*_t68*_t7
-            + TRAILER_LIT(138000000.0)*J_theta_cart*_t131*_t34*_t38*_t41*_t44*_t68
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t1*_t100*_t11*_t127*_t38*_t4*_t7
-            + TRAILER_LIT(31537644.0)*J_theta_cart_left*_t1*_t100*_t11*_t127*_t38
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t1*_t100*_t127*_t38*_t4*_t41
-            + TRAILER_LIT(17093238.0)*J_theta_cart_left*_t1*_t100*_t127*_t38*_t41*_t7
-            +
-            TRAILER_LIT(3585888.0)*J_theta_cart_left*_t1*_t11*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t1*_t131*_t144*_t38*_t68
-            + TRAILER_LIT(49884800.0)*J_theta_cart_left*_t1*_t131*_t38*_t4*_t41*_t68
-            + TRAILER_LIT(21067638.0)*J_theta_cart_left*_t1*_t131*_t38*_t41*_t68*_t7
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t1*_t144*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_left*_t1*_t38*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_left*_t1*_t38*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(13514273.0)*J_theta_cart_left*_t100*_t11*_t127*_t38*_t4
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t100*_t11*_t127*_t38*_t7
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t100*_t127*_t144*_t145*_t38
-            + TRAILER_LIT(22790984.0)*J_theta_cart_left*_t100*_t127*_t144*_t38*_t4*_t44
-            + TRAILER_LIT(5697746.0)*J_theta_cart_left*_t100*_t127*_t145*_t38*_t7
-            + TRAILER_LIT(68018688.0)*J_theta_cart_left*_t100*_t127*_t38*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t100*_t127*_t38*_t41*_t44
-            + TRAILER_LIT(49505184.0)*J_theta_cart_left*_t11*_t131*_t145*_t38*_t68
-            + TRAILER_LIT(9746873.0)*J_theta_cart_left*_t11*_t131*_t38*_t4*_t68
-            + TRAILER_LIT(24942400.0)*J_theta_cart_left*_t11*_t131*_t38*_t68*_t7
-            +
-            TRAILER_LIT(4251168.0)*J_theta_cart_left*_t11*_t145*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_left*_t11*_t38*_t4*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_left*_t11*_t38*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(28090184.0)*J_theta_cart_left*_t131*_t144*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(7022546.0)*J_theta_cart_left*_t131*_t145*_t38*_t68*_t7
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t131*_t38*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(16501728.0)*J_theta_cart_left*_t131*_t38*_t4*_t44*_t68*_t7
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t131*_t38*_t41*_t68
-            + TRAILER_LIT(15793200.0)*J_theta_cart_left*_t131*_t38*_t44*_t68
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_left*_t144*_t38*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_left*_t145*_t38*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t38*_t4*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1417056.0)*J_theta_cart_left*_t38*_t4*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(6420000.0)*J_theta_cart_left*_t38*_t4*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t38*_t41*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(1920000.0)*J_theta_cart_left*_t38*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(12840000.0)*J_theta_cart_left*_t38*radius_left*radius_right*thetadot_left
-            *thetadot_right + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t1*_t100*_t127*_t144*_t34
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t1*_t100*_t127*_t34*_t4*_t41
-            + TRAILER_LIT(53759562.0)*J_theta_cart_right*_t1*_t100*_t127*_t34*_t41*_t7
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t1*_t11*_t34*_t4*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(86438688.0)*J_theta_cart_right*_t1*_t11*_t34*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t1*_t131*_t144*_t34*_t68
-            + TRAILER_LIT(8177600.0)*J_theta_cart_right*_t1*_t131*_t34*_t4*_t68
-            + TRAILER_LIT(8982073.0)*J_theta_cart_right*_t1*_t131*_t34*_t68*_t7
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_right*_t1*_t34*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_right*_t1*_t34*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2125584.0)*J_theta_cart_right*_t100*_t11*_t127*_t145*_t34
-            + TRAILER_LIT(19625327.0)*J_theta_cart_right*_t100*_t11*_t127*_t34*_t4
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t100*_t11*_t127*_t34*_t7
-            + TRAILER_LIT(71679416.0)*J_theta_cart_right*_t100*_t127*_t144*_t34*_t4*_t44
-            + TRAILER_LIT(17919854.0)*J_theta_cart_right*_t100*_t127*_t145*_t34*_t7
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t100*_t127*_t34*_t4*_t41*_t7
-            + TRAILER_LIT(708528.0)*J_theta_cart_right*_t100*_t127*_t34*_t4*_t44*_t7
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t100*_t127*_t34*_t41
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t100*_t127*_t34*_t44
-            + TRAILER_LIT(34086384.0)*J_theta_cart_right*_t11*_t131*_t145*_t34*_t68
-            + TRAILER_LIT(41626038.0)*J_theta_cart_right*_t11*_t131*_t34*_t4*_t44*_t68
-            + TRAILER_LIT(16355200.0)*J_theta_cart_right*_t11*_t131*_t34*_t44*_t68*_t7
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_right*_t11*_t34*_t4*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_right*_t11*_t34*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(13875346.0)*J_theta_cart_right*_t131*_t144*_t34*_t4*_t68
-            + TRAILER_LIT(55501384.0)*J_theta_cart_right*_t131*_t145*_t34*_t41*_t68*_t7
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t131*_t34*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(11362128.0)*J_theta_cart_right*_t131*_t34*_t4*_t44*_t68*_t7
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t131*_t34*_t41*_t68
-            + TRAILER_LIT(28366800.0)*J_theta_cart_right*_t131*_t34*_t44*_t68
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t144*_t145*_t34*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_right*_t144*_t34*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_right*_t145*_t34*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(136037376.0)*J_theta_cart_right*_t34*_t4*_t41*_t44*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(18420000.0)*J_theta_cart_right*_t34*_t4*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(92160000.0)*J_theta_cart_right*_t34*_t41*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(36840000.0)*J_theta_cart_right*_t34*radius_left*radius_right*thetadot_left
-            *thetadot_right
-            + TRAILER_LIT(61110540.0)*K_theta_cart_x_tractor*_t1*_t100*_t11*_t127*_t34*_t38
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t1*_t100*_t127*_t34*_t38*_t4*_t41
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t1*_t100*_t127*_t34*_t38*_t41*_t7
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t1*_t131*_t144*_t34*_t38*_t68
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t1*_t131*_t34*_t38*_t4*_t41*_t68
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t100*_t11*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t100*_t11*_t127*_t34*_t38*_t7
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t100*_t127*_t144*_t145*_t34*_t38
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t100*_t127*_t144*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t100*_t127*_t145*_t34*_t38*_t7
-            +
-            TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t100*_t127*_t34*_t38*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor*_t11*_t131*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t11*_t131*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t11*_t131*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t11*_t131*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t131*_t144*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t131*_t145*_t34*_t38*_t41*_t68*_t7
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t4*_t44*_t68*_t7
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t41*_t68
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t44*_t68
-            - TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t253
-            - TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t302
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t1*_t100*_t127*_t144*_t34*_t38
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t1*_t100*_t127*_t34*_t38*_t41*_t7
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t1*_t11*_t131*_t34*_t38*_t68
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t1*_t131*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t1*_t131*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t100*_t11*_t127*_t145*_t34*_t38
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t100*_t11*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t144*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t145*_t34*_t38*_t7
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t4*_t41*_t7
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t4*_t44*_t7
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t41
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t44
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t11*_t131*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t11*_t131*_t34*_t38*_t44*_t68*_t7
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t131*_t144*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t131*_t144*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t131*_t145*_t34*_t38*_t41*_t68*_t7
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t4*_t41*_t44*_t68*_t7
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t41*_t68
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t44*_t68
-            - TRAILER_LIT(13514273.0)*_t10*_t130 - TRAILER_LIT(9746873.0)*_t10*_t133
-            - TRAILER_LIT(41626038.0)*_t10*_t134*_t165 - TRAILER_LIT(19625327.0)*_t10*_t136
-            - TRAILER_LIT(15277635.0)*_t10*_t178 - _t10*_t232*_t256
-            - TRAILER_LIT(8982073.0)*_t12*_t135 - _t12*_t168*_t237
-            - TRAILER_LIT(1195000.0)*_t12*_t172 - TRAILER_LIT(46822365.0)*_t12*_t174
-            - TRAILER_LIT(25000000.0)*_t12*_t185 - TRAILER_LIT(4796746.0)*_t12*_t195
-            - TRAILER_LIT(25298854.0)*_t12*_t226 - TRAILER_LIT(30880000.0)*_t123*_t195
-            - TRAILER_LIT(97120000.0)*_t123*_t226 - _t129*_t153
-            - TRAILER_LIT(21067638.0)*_t129*_t182 - TRAILER_LIT(28090184.0)*_t129*_t189
-            - _t129*_t198 - TRAILER_LIT(36951756.0)*_t13*_t133 - TRAILER_LIT(12745356.0)*_t13*_t136
-            - _t13*_t142*_t212 - TRAILER_LIT(5697746.0)*_t130*_t148
-            - TRAILER_LIT(51014016.0)*_t130*_t161 - TRAILER_LIT(51014016.0)*_t130*_t162
-            - TRAILER_LIT(17093238.0)*_t130*_t180 - TRAILER_LIT(22790984.0)*_t130*_t184
-            - TRAILER_LIT(4943400.0)*_t130 - TRAILER_LIT(66006912.0)*_t133*_t147
-            - TRAILER_LIT(7022546.0)*_t133*_t148 - TRAILER_LIT(31586400.0)*_t133*_t61
-            - TRAILER_LIT(3948300.0)*_t133*_t8 - TRAILER_LIT(7896600.0)*_t133
-            - TRAILER_LIT(55501384.0)*_t134*_t148*_t167 - _t134*_t153 - _t134*_t198
-            - TRAILER_LIT(13875346.0)*_t135*_t151 - TRAILER_LIT(56733600.0)*_t135*_t61
-            - TRAILER_LIT(7091700.0)*_t135*_t8 - TRAILER_LIT(14183400.0)*_t135
-            - TRAILER_LIT(2834112.0)*_t136*_t147 - TRAILER_LIT(17919854.0)*_t136*_t148
-            - TRAILER_LIT(53759562.0)*_t136*_t180 - TRAILER_LIT(71679416.0)*_t136*_t184
-            - _t136*_t238 - TRAILER_LIT(22656600.0)*_t136 - _t138*_t139 - _t138*_t161*_t192
-            - _t138*_t162*_t192 - TRAILER_LIT(1434000.0)*_t138*_t173 - _t140*_t41 - _t140*_t44
-            - _t141*_t142 - _t142*_t143 - TRAILER_LIT(44283000.0)*_t142*_t193
-            - TRAILER_LIT(2471700.0)*_t146 - _t147*_t220 - TRAILER_LIT(10707500.0)*_t148*_t172
-            - TRAILER_LIT(30555270.0)*_t148*_t178 - _t148*_t235*_t259
-            - TRAILER_LIT(8177600.0)*_t149*_t78 - TRAILER_LIT(16355200.0)*_t149*_t93
-            - TRAILER_LIT(11328300.0)*_t150 - TRAILER_LIT(52244730.0)*_t151*_t174
-            - TRAILER_LIT(36902500.0)*_t151*_t185 - TRAILER_LIT(11395492.0)*_t151*_t195
-            - TRAILER_LIT(35839708.0)*_t151*_t226 - TRAILER_LIT(24942400.0)*_t154*_t80
-            - TRAILER_LIT(49884800.0)*_t154*_t91 - TRAILER_LIT(29815956.0)*_t155
-            - TRAILER_LIT(66006912.0)*_t156*_t8 - TRAILER_LIT(31586400.0)*_t156
-            - TRAILER_LIT(2834112.0)*_t158*_t8 - TRAILER_LIT(35426400.0)*_t158
-            - TRAILER_LIT(45448512.0)*_t160 - TRAILER_LIT(130611825.0)*_t161*_t172 - _t161*_t255
-            - _t162*_t255 - TRAILER_LIT(56733600.0)*_t163 - _t164*_t166 - _t164*_t168 - _t166*_t239
-            - _t168*_t244 + _t171 - _t174*_t175 - _t176*_t177 - _t177*_t181 - _t178*_t183
-            - _t179*_t41 - _t179*_t44 - TRAILER_LIT(165600000.0)*_t186*_t95 - _t187*_t188
-            - _t187*_t205 - _t190*_t191 - TRAILER_LIT(44283000.0)*_t194
-            - TRAILER_LIT(34186476.0)*_t195*_t288 - TRAILER_LIT(45581968.0)*_t195*_t289
-            - TRAILER_LIT(15440000.0)*_t195*_t48 - _t196*_t41 - _t196*_t44 - _t199*_t200
-            - _t199*_t216 - _t200*_t292 - TRAILER_LIT(68175450.0)*_t201 - _t202*_t204 - _t206*_t207
-            - _t208*_t209 - _t209*_t210 - TRAILER_LIT(101850900.0)*_t211
-            - TRAILER_LIT(125189460.0)*_t214 - TRAILER_LIT(130611825.0)*_t215 - _t216*_t292
-            - _t219*_t8 - _t219 - _t220*_t61 - TRAILER_LIT(208978920.0)*_t222 + _t224 + _t225
-            - TRAILER_LIT(107519124.0)*_t226*_t288 - TRAILER_LIT(143358832.0)*_t226*_t289
-            - TRAILER_LIT(48560000.0)*_t226*_t48 - TRAILER_LIT(3840000.0)*_t227
-            - TRAILER_LIT(5668224.0)*_t228 - _t229*_t230 - _t229*_t242 - _t230*_t231 - _t231*_t242
-            - _t233*_t234 - _t234*_t236 - _t240*_t241 - TRAILER_LIT(45448512.0)*_t243 - _t245*_t246
-            - _t247*_t248 - _t251 - _t252 - _t253*_t254 - _t257*_t258 - _t257*_t264 - _t259*_t261
-            - _t262*_t263 - _t264*_t265 - _t266*_t267 + _t270 + _t272 + _t275 + _t276 + _t277
-            + _t279 + _t282 + _t284 + _t285 - _t287*_t41 - _t287*_t44 - _t290 - _t291 - _t293
-            - _t294 - TRAILER_LIT(101850900.0)*_t295 - _t297 - _t299 - _t300 - _t301 + _t304 + _t306
-            + _t308 + _t311 + _t313 - TRAILER_LIT(3840000.0)*_t314 - TRAILER_LIT(5668224.0)*_t315
-            - _t317 - _t318 - _t320 - _t321 - _t322 + _t323 + _t325 - _t326 - _t327 - _t332)
-            + tau_left;
-    const trailer_real_t _t335 = TRAILER_LIT(15793200.0)*_t136;
-    const trailer_real_t _t336 = TRAILER_LIT(17713200.0)*_t129*_t131;
-    const trailer_real_t _t337 = TRAILER_LIT(28366800.0)*_t130;
-    const trailer_real_t _t338 = TRAILER_LIT(2125584.0)*_t133;
-    const trailer_real_t _t339 = TRAILER_LIT(23617600.0)*_t80;
-    const trailer_real_t _t340 = TRAILER_LIT(34086384.0)*_t130;
-    const trailer_real_t _t341 = TRAILER_LIT(49505184.0)*_t136;
-    const trailer_real_t _t342 = TRAILER_LIT(708528.0)*_t129;
-    const trailer_real_t _t343 = TRAILER_LIT(1920000.0)*_t195;
-    const trailer_real_t _t344 = TRAILER_LIT(11362128.0)*_t146;
-    const trailer_real_t _t345 = TRAILER_LIT(16501728.0)*_t150;
-    const trailer_real_t _t346 = TRAILER_LIT(44283000.0)*_t138;
-    const trailer_real_t _t347 = TRAILER_LIT(47235200.0)*_t91;
-    const trailer_real_t _t348 = TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t349 = _t199*_t217;
-    const trailer_real_t _t350 = TRAILER_LIT(4251168.0)*_t195;
-    const trailer_real_t _t351 = TRAILER_LIT(25462725.0)*J_theta_cart;
-    const trailer_real_t _t352 = TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor;
-    const trailer_real_t _t353 = TRAILER_LIT(1417056.0)*_t286;
+    const trailer_real_t _t28 = K_theta_tractor_x_tractor*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t29 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t4;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t34 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t35 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t36 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t _t37 = _t18*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t38 = _t37*_t37;
+    const trailer_real_t _t39 = _t10*thetadot_left - _t9*thetadot_right;
+    const trailer_real_t _t40 = _t39*_t39;
+    const trailer_real_t _t41 = _t36*_t38;
+    const trailer_real_t _t42 = _t30*_t38;
+    const trailer_real_t _t43 = _t31*_t38;
+    const trailer_real_t _t44 = _t35*_t40;
+    const trailer_real_t _t45 = _t34*_t40;
+    const trailer_real_t _t46 = _t39*thetadot_right;
+    const trailer_real_t _t47 = _t39*thetadot_left;
+    const trailer_real_t _t48 = _t37*thetadot_right;
+    const trailer_real_t _t49 = _t37*thetadot_left;
+    const trailer_real_t _t50 = _t8*_t9;
+    const trailer_real_t _t51 = _t0*_t50 - _t1*_t12 - _t7*_t9;
+    const trailer_real_t _t52 = -TRAILER_LIT(5.0)*_t51/TRAILER_LIT(3.0);
+    const trailer_real_t _t53 = _t52/TRAILER_LIT(5.0);
+    const trailer_real_t _t54 = -_t1*_t50 + _t13;
+    const trailer_real_t _t55 = _t10*_t8;
+    const trailer_real_t _t56 = _t0*_t55 - _t1*_t14 + _t10*_t7;
+    const trailer_real_t _t57 = -TRAILER_LIT(5.0)*_t56/TRAILER_LIT(3.0);
+    const trailer_real_t _t58 = _t57/TRAILER_LIT(5.0);
+    const trailer_real_t _t59 = -_t1*_t55 + _t15;
+    const trailer_real_t _t60 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
+    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t62 = _t0*_t12 - _t1*_t16 - _t6*_t9;
+    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
+    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t65 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t _t66 = K_theta_tractor_x_tractor_2*_t2 - _t32;
+    const trailer_real_t _t67 = K_theta_cart_x_tractor_2*_t0 - _t33;
+    const trailer_real_t J_x_tractor = pp->J_x_tractor;
+    const trailer_real_t _t68 = J_x_tractor*_t16 + _t18*_t67 - _t66*_t9;
+    const trailer_real_t _t69 = _t28 + _t29;
+    const trailer_real_t _t70 = _t30 + _t31;
+    const trailer_real_t _t71 = J_x_tractor*_t12 + _t18*_t70 - _t69*_t9;
+    const trailer_real_t _t72 = _t30*_t34 + _t31*_t34 + _t33*_t35 - _t35*_t36;
+    const trailer_real_t J_theta_tractor = pp->J_theta_tractor;
+    const trailer_real_t _t73 = -J_theta_tractor*_t9 + _t12*_t69 + _t16*_t66 + _t18*_t72;
+    const trailer_real_t J_theta_cart = pp->J_theta_cart;
+    const trailer_real_t _t74 = J_theta_cart*_t18 + _t12*_t70 + _t16*_t67 - _t72*_t9;
+    const trailer_real_t _t75 = -_t19 - _t20;
+    const trailer_real_t radius_cart_left = pp->radius_cart_left;
+    const trailer_real_t _t76 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t77 = _t75*_t76;
+    const trailer_real_t J_theta_cart_left = pp->J_theta_cart_left;
+    const trailer_real_t _t78 = J_theta_cart_left*_t77;
+    const trailer_real_t _t79 = _t19 - _t20;
+    const trailer_real_t radius_cart_right = pp->radius_cart_right;
+    const trailer_real_t _t80 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t81 = _t79*_t80;
+    const trailer_real_t J_theta_cart_right = pp->J_theta_cart_right;
+    const trailer_real_t _t82 = J_theta_cart_right*_t81;
+    const trailer_real_t _t83 = _t24 - _t25;
+    const trailer_real_t _t84 = _t80*_t83;
+    const trailer_real_t _t85 = -_t24 - _t25;
+    const trailer_real_t _t86 = _t76*_t85;
+    const trailer_real_t _t87 = _t78*_t86 + _t82*_t84;
+    const trailer_real_t _t88 = J_x_tractor*_t21 + _t10*_t66 + _t23*_t67;
+    const trailer_real_t _t89 = J_theta_tractor*_t10 + _t14*_t69 + _t21*_t66 + _t23*_t72;
+    const trailer_real_t _t90 = J_x_tractor*_t14 + _t10*_t69 + _t23*_t70;
+    const trailer_real_t _t91 = J_theta_cart*_t23 + _t10*_t72 + _t14*_t70 + _t21*_t67;
+    const trailer_real_t _t92 = _t28*_t40 + _t29*_t40 + _t42 + _t43;
+    const trailer_real_t _t93 = _t26*_t39 + _t27*_t39;
+    const trailer_real_t _t94 = _t46*_t52 + _t47*_t57 + _t48*_t60 + _t49*_t63;
+    const trailer_real_t _t95 = J_x_tractor*_t93 + _t67*_t94 + _t92;
+    const trailer_real_t _t96 = -K_theta_tractor_x_tractor_2*_t2*_t40 + _t32*_t40 + _t33*_t38
+            - _t41;
+    const trailer_real_t _t97 = _t46*_t50 + _t47*_t55;
+    const trailer_real_t _t98 = J_x_tractor*_t97 + _t70*_t94 + _t96;
+    const trailer_real_t _t99 =
+            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t38/TRAILER_LIT(10.0) - _t34*_t41
+            - _t35*_t42 - _t35*_t43;
+    const trailer_real_t _t100 = _t66*_t93 + _t69*_t97 + _t72*_t94 + _t99;
+    const trailer_real_t _t101 = _t30*_t44 + _t31*_t44 - _t33*_t45 + _t36*_t45;
+    const trailer_real_t _t102 = J_theta_cart*_t94 + _t101 + _t67*_t93 + _t70*_t97;
+    const trailer_real_t _t103 = _t26 + _t27;
+    const trailer_real_t _t104 = _t16*thetadot_right + _t21*thetadot_left;
+    const trailer_real_t _t105 = _t81*thetadot_right + _t84*thetadot_left;
+    const trailer_real_t _t106 = _t77*thetadot_right + _t86*thetadot_left;
+    const trailer_real_t _t107 = _t53 - _t54;
+    const trailer_real_t _t108 = _t107*_t80;
+    const trailer_real_t _t109 = _t58 - _t59;
+    const trailer_real_t _t110 = _t109*_t80;
+    const trailer_real_t _t111 = _t61 - _t62;
+    const trailer_real_t _t112 = _t111*_t80;
+    const trailer_real_t _t113 = _t64 - _t65;
+    const trailer_real_t _t114 = _t113*_t80;
+    const trailer_real_t _t115 = _t108*_t46 + _t110*_t47 + _t112*_t48 + _t114*_t49;
+    const trailer_real_t _t116 = -_t53 - _t54;
+    const trailer_real_t _t117 = _t116*_t76;
+    const trailer_real_t _t118 = -_t58 - _t59;
+    const trailer_real_t _t119 = _t118*_t76;
+    const trailer_real_t _t120 = -_t61 - _t62;
+    const trailer_real_t _t121 = _t120*_t76;
+    const trailer_real_t _t122 = -_t64 - _t65;
+    const trailer_real_t _t123 = _t122*_t76;
+    const trailer_real_t _t124 = _t117*_t46 + _t119*_t47 + _t121*_t48 + _t123*_t49;
+    const trailer_real_t J_theta_right = pp->J_theta_right;
+    const trailer_real_t _t125 = J_theta_cart_left*_t77*_t77 + J_theta_cart_right*_t81*_t81
+            + J_theta_right + _t12*_t71 + _t16*_t68 + _t18*_t74 - _t73*_t9;
+    const trailer_real_t _t126 = _t10*_t73 + _t14*_t71 + _t21*_t68 + _t23*_t74 + _t87;
+    const trailer_real_t _t127 = _t12*_t90 + _t16*_t88 + _t18*_t91 + _t87 - _t89*_t9;
+    const trailer_real_t J_theta_left = pp->J_theta_left;
+    const trailer_real_t _t128 = J_theta_cart_left*_t86*_t86 + J_theta_cart_right*_t84*_t84
+            + J_theta_left + _t10*_t89 + _t14*_t90 + _t21*_t88 + _t23*_t91;
+    const trailer_real_t _t129 = -_t100*_t9 + _t102*_t18 + _t115*_t82 + _t12*_t98 + _t124*_t78
+            + _t16*_t95;
+    const trailer_real_t _t130 = J_theta_cart_left*_t124*_t86 + J_theta_cart_right*_t115*_t84
+            + _t10*_t100 + _t102*_t23 + _t14*_t98 + _t21*_t95;
     const trailer_real_t tau_right = tau[0];
-    const trailer_real_t _t354 =
-            -_t333*radius_right*(TRAILER_LIT(130611825.0)*J_theta_cart*_t1*_t100*_t127*_t144*_t34
-            *_t38 + TRAILER_LIT(26195000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(32122500.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t41*_t7
-            + TRAILER_LIT(1195000.0)*J_theta_cart*_t1*_t100*_t127*_t34*_t38*_t7
-            + TRAILER_LIT(68175450.0)*J_theta_cart*_t1*_t11*_t131*_t34*_t38*_t68
-            + TRAILER_LIT(73805000.0)*J_theta_cart*_t1*_t131*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(25000000.0)*J_theta_cart*_t1*_t131*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(130611825.0)*J_theta_cart*_t100*_t11*_t127*_t145*_t34*_t38
-            + TRAILER_LIT(52390000.0)*J_theta_cart*_t100*_t11*_t127*_t34*_t38*_t44*_t7
-            + TRAILER_LIT(42830000.0)*J_theta_cart*_t100*_t127*_t144*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(10707500.0)*J_theta_cart*_t100*_t127*_t145*_t34*_t38*_t7
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t4*_t41*_t7
-            + TRAILER_LIT(43537275.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t4*_t44*_t7
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t41
-            + TRAILER_LIT(69000000.0)*J_theta_cart*_t100*_t127*_t34*_t38*_t44
-            + TRAILER_LIT(110707500.0)*J_theta_cart*_t11*_t131*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t11*_t131*_t34*_t38*_t44*_t68*_t7
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t131*_t144*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(36902500.0)*J_theta_cart*_t131*_t144*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(147610000.0)*J_theta_cart*_t131*_t145*_t34*_t38*_t41*_t68*_t7
-            + TRAILER_LIT(101850900.0)*J_theta_cart*_t131*_t34*_t38*_t4*_t41*_t44*_t68*_t7
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t1*_t100*_t11*_t127*_t38*_t4*_t7
-            + TRAILER_LIT(29815956.0)*J_theta_cart_left*_t1*_t100*_t11*_t127*_t38
-            + TRAILER_LIT(8177600.0)*J_theta_cart_left*_t1*_t100*_t127*_t38*_t4
-            + TRAILER_LIT(8982073.0)*J_theta_cart_left*_t1*_t100*_t127*_t38*_t7
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t1*_t11*_t131*_t38*_t4*_t68*_t7
-            + TRAILER_LIT(12745356.0)*J_theta_cart_left*_t1*_t11*_t131*_t38*_t68
-            + TRAILER_LIT(47235200.0)*J_theta_cart_left*_t1*_t131*_t38*_t4*_t41*_t68
-            + TRAILER_LIT(53759562.0)*J_theta_cart_left*_t1*_t131*_t38*_t41*_t68*_t7
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t1*_t144*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(15440000.0)*J_theta_cart_left*_t1*_t38*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(4796746.0)*J_theta_cart_left*_t1*_t38*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(41626038.0)*J_theta_cart_left*_t100*_t11*_t127*_t38*_t4*_t44
-            + TRAILER_LIT(16355200.0)*J_theta_cart_left*_t100*_t11*_t127*_t38*_t44*_t7
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t100*_t127*_t144*_t145*_t38
-            + TRAILER_LIT(13875346.0)*J_theta_cart_left*_t100*_t127*_t144*_t38*_t4
-            + TRAILER_LIT(55501384.0)*J_theta_cart_left*_t100*_t127*_t145*_t38*_t41*_t7
-            + TRAILER_LIT(45448512.0)*J_theta_cart_left*_t100*_t127*_t38*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(7091700.0)*J_theta_cart_left*_t100*_t127*_t38*_t4*_t7
-            + TRAILER_LIT(56733600.0)*J_theta_cart_left*_t100*_t127*_t38*_t41*_t44
-            + TRAILER_LIT(14183400.0)*J_theta_cart_left*_t100*_t127*_t38
-            + TRAILER_LIT(19625327.0)*J_theta_cart_left*_t11*_t131*_t38*_t4*_t68
-            + TRAILER_LIT(23617600.0)*J_theta_cart_left*_t11*_t131*_t38*_t68*_t7
-            +
-            TRAILER_LIT(102028032.0)*J_theta_cart_left*_t11*_t145*_t38*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34186476.0)*J_theta_cart_left*_t11*_t38*_t4*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(30880000.0)*J_theta_cart_left*_t11*_t38*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t131*_t144*_t145*_t38*_t68
-            + TRAILER_LIT(71679416.0)*J_theta_cart_left*_t131*_t144*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(17919854.0)*J_theta_cart_left*_t131*_t145*_t38*_t68*_t7
-            + TRAILER_LIT(2834112.0)*J_theta_cart_left*_t131*_t38*_t4*_t41*_t44*_t68*_t7
-            + TRAILER_LIT(11328300.0)*J_theta_cart_left*_t131*_t38*_t4*_t68*_t7
-            + TRAILER_LIT(35426400.0)*J_theta_cart_left*_t131*_t38*_t41*_t44*_t68
-            + TRAILER_LIT(22656600.0)*J_theta_cart_left*_t131*_t38*_t68
-            +
-            TRAILER_LIT(11395492.0)*J_theta_cart_left*_t144*_t38*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(45581968.0)*J_theta_cart_left*_t145*_t38*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t38*_t4*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(34009344.0)*J_theta_cart_left*_t38*_t4*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t38*_t41*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(46080000.0)*J_theta_cart_left*_t38*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t1*_t100*_t11*_t127*_t34*_t4*_t7
-            + TRAILER_LIT(36951756.0)*J_theta_cart_right*_t1*_t100*_t11*_t127*_t34
-            + TRAILER_LIT(49884800.0)*J_theta_cart_right*_t1*_t100*_t127*_t34*_t4*_t41
-            + TRAILER_LIT(21067638.0)*J_theta_cart_right*_t1*_t100*_t127*_t34*_t41*_t7
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t1*_t11*_t34*_t4*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t1*_t131*_t144*_t34*_t68
-            + TRAILER_LIT(47235200.0)*J_theta_cart_right*_t1*_t131*_t34*_t4*_t41*_t68
-            + TRAILER_LIT(17093238.0)*J_theta_cart_right*_t1*_t131*_t34*_t41*_t68*_t7
-            +
-            TRAILER_LIT(48560000.0)*J_theta_cart_right*_t1*_t34*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(25298854.0)*J_theta_cart_right*_t1*_t34*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(9746873.0)*J_theta_cart_right*_t100*_t11*_t127*_t34*_t4
-            + TRAILER_LIT(24942400.0)*J_theta_cart_right*_t100*_t11*_t127*_t34*_t7
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t100*_t127*_t144*_t145*_t34
-            + TRAILER_LIT(28090184.0)*J_theta_cart_right*_t100*_t127*_t144*_t34*_t4*_t44
-            + TRAILER_LIT(7022546.0)*J_theta_cart_right*_t100*_t127*_t145*_t34*_t7
-            + TRAILER_LIT(66006912.0)*J_theta_cart_right*_t100*_t127*_t34*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(3948300.0)*J_theta_cart_right*_t100*_t127*_t34*_t4*_t7
-            + TRAILER_LIT(31586400.0)*J_theta_cart_right*_t100*_t127*_t34*_t41*_t44
-            + TRAILER_LIT(7896600.0)*J_theta_cart_right*_t100*_t127*_t34
-            + TRAILER_LIT(51014016.0)*J_theta_cart_right*_t11*_t131*_t145*_t34*_t68
-            + TRAILER_LIT(13514273.0)*J_theta_cart_right*_t11*_t131*_t34*_t4*_t68
-            + TRAILER_LIT(23617600.0)*J_theta_cart_right*_t11*_t131*_t34*_t68*_t7
-            +
-            TRAILER_LIT(107519124.0)*J_theta_cart_right*_t11*_t34*_t4*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(97120000.0)*J_theta_cart_right*_t11*_t34*_t44*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(22790984.0)*J_theta_cart_right*_t131*_t144*_t34*_t4*_t44*_t68
-            + TRAILER_LIT(5697746.0)*J_theta_cart_right*_t131*_t145*_t34*_t68*_t7
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t131*_t34*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(17004672.0)*J_theta_cart_right*_t131*_t34*_t4*_t44*_t68*_t7
-            + TRAILER_LIT(2471700.0)*J_theta_cart_right*_t131*_t34*_t4*_t68*_t7
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t131*_t34*_t41*_t68
-            + TRAILER_LIT(17713200.0)*J_theta_cart_right*_t131*_t34*_t44*_t68
-            + TRAILER_LIT(4943400.0)*J_theta_cart_right*_t131*_t34*_t68
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t144*_t145*_t34*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(35839708.0)*J_theta_cart_right*_t144*_t34*_t4*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(143358832.0)*J_theta_cart_right*_t145*_t34*_t41*_t7*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(5668224.0)*J_theta_cart_right*_t34*_t4*_t41*_t44*_t7*radius_left
-            *radius_right*thetadot_left*thetadot_right
-            +
-            TRAILER_LIT(3840000.0)*J_theta_cart_right*_t34*_t41*_t44*radius_left*radius_right
-            *thetadot_left*thetadot_right
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t1*_t100*_t11*_t127*_t34*_t38*_t4*_t7
-            + TRAILER_LIT(125189460.0)*K_theta_cart_x_tractor*_t1*_t100*_t11*_t127*_t34*_t38
-            + TRAILER_LIT(62868000.0)*K_theta_cart_x_tractor*_t1*_t100*_t127*_t34*_t38*_t4*_t41
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t1*_t131*_t144*_t34*_t38*_t68
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t1*_t131*_t34*_t38*_t4*_t41*_t68
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t1*_t131*_t34*_t38*_t41*_t68*_t7
-            + TRAILER_LIT(38547000.0)*K_theta_cart_x_tractor*_t100*_t11*_t127*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(1434000.0)*K_theta_cart_x_tractor*_t100*_t11*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor*_t100*_t11*_t127*_t34*_t38*_t7
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t100*_t127*_t144*_t145*_t34*_t38
-            + TRAILER_LIT(12849000.0)*K_theta_cart_x_tractor*_t100*_t127*_t144*_t34*_t38*_t4
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor*_t100*_t127*_t145*_t34*_t38*_t41*_t7
-            +
-            TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor*_t100*_t127*_t34*_t38*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(20700000.0)*K_theta_cart_x_tractor*_t100*_t127*_t34*_t38*_t4*_t7
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor*_t100*_t127*_t34*_t38*_t41*_t44
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor*_t11*_t131*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t11*_t131*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor*_t11*_t131*_t34*_t38*_t68*_t7
-            - TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor*_t12*_t168
-            + TRAILER_LIT(177132000.0)*K_theta_cart_x_tractor*_t131*_t144*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor*_t131*_t145*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor*_t131*_t34*_t38*_t4*_t44*_t68*_t7
-            - K_theta_cart_x_tractor*_t142*_t176
-            - TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor*_t302
-            + TRAILER_LIT(17839500.0)*K_theta_cart_x_tractor_2*_t1*_t100*_t11*_t127*_t34*_t38
-            + TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t1*_t100*_t127*_t34*_t38*_t4*_t41
-            + TRAILER_LIT(156734190.0)*K_theta_cart_x_tractor_2*_t1*_t100*_t127*_t34*_t38*_t41*_t7
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t1*_t131*_t144*_t34*_t38*_t68
-            + TRAILER_LIT(15277635.0)*K_theta_cart_x_tractor_2*_t1*_t131*_t34*_t38*_t68*_t7
-            + TRAILER_LIT(46822365.0)*K_theta_cart_x_tractor_2*_t100*_t11*_t127*_t34*_t38*_t4
-            + TRAILER_LIT(82800000.0)*K_theta_cart_x_tractor_2*_t100*_t11*_t127*_t34*_t38*_t7
-            + TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t144*_t145*_t34*_t38
-            + TRAILER_LIT(208978920.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t144*_t34*_t38*_t4*_t44
-            + TRAILER_LIT(52244730.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t145*_t34*_t38*_t7
-            +
-            TRAILER_LIT(51396000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t4*_t41*_t44*_t7
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t41
-            + TRAILER_LIT(31434000.0)*K_theta_cart_x_tractor_2*_t100*_t127*_t34*_t38*_t44
-            + TRAILER_LIT(132849000.0)*K_theta_cart_x_tractor_2*_t11*_t131*_t145*_t34*_t38*_t68
-            + TRAILER_LIT(91665810.0)*K_theta_cart_x_tractor_2*_t11*_t131*_t34*_t38*_t4*_t44*_t68
-            + TRAILER_LIT(30555270.0)*K_theta_cart_x_tractor_2*_t131*_t144*_t34*_t38*_t4*_t68
-            + TRAILER_LIT(122221080.0)*K_theta_cart_x_tractor_2*_t131*_t145*_t34*_t38*_t41*_t68*_t7
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t4*_t41*_t68*_t7
-            + TRAILER_LIT(44283000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t4*_t44*_t68*_t7
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t41*_t68
-            + TRAILER_LIT(88566000.0)*K_theta_cart_x_tractor_2*_t131*_t34*_t38*_t44*_t68
-            - TRAILER_LIT(165600000.0)*K_theta_cart_x_tractor_2*_t265
-            + TRAILER_LIT(82800000.0)*K_theta_tractor_x_tractor*_t131*_t34*_t38*_t68
-            - TRAILER_LIT(19625327.0)*_t10*_t133 - TRAILER_LIT(13514273.0)*_t10*_t135
-            - TRAILER_LIT(9746873.0)*_t10*_t136 - TRAILER_LIT(46822365.0)*_t10*_t178
-            - TRAILER_LIT(8982073.0)*_t12*_t130 - TRAILER_LIT(25000000.0)*_t12*_t172
-            - TRAILER_LIT(15277635.0)*_t12*_t174 - TRAILER_LIT(1195000.0)*_t12*_t185
-            - TRAILER_LIT(25298854.0)*_t12*_t195 - TRAILER_LIT(4796746.0)*_t12*_t226
-            - TRAILER_LIT(97120000.0)*_t123*_t195 - TRAILER_LIT(30880000.0)*_t123*_t226
-            - TRAILER_LIT(53759562.0)*_t129*_t182 - TRAILER_LIT(71679416.0)*_t129*_t189
-            - TRAILER_LIT(8177600.0)*_t129*_t203 - TRAILER_LIT(16355200.0)*_t129*_t260
-            - TRAILER_LIT(3585888.0)*_t13*_t195 - TRAILER_LIT(86438688.0)*_t13*_t226
-            - TRAILER_LIT(13875346.0)*_t130*_t151 - TRAILER_LIT(41626038.0)*_t130*_t288
-            - TRAILER_LIT(55501384.0)*_t130*_t289 - TRAILER_LIT(17919854.0)*_t133*_t148
-            - TRAILER_LIT(24942400.0)*_t134*_t152 - TRAILER_LIT(17093238.0)*_t134*_t182
-            - TRAILER_LIT(22790984.0)*_t134*_t189 - TRAILER_LIT(49884800.0)*_t134*_t197
-            - _t135*_t238 - TRAILER_LIT(7022546.0)*_t136*_t148 - TRAILER_LIT(21067638.0)*_t136*_t180
-            - TRAILER_LIT(28090184.0)*_t136*_t184 - _t138*_t141 - _t139*_t142 - _t142*_t200*_t61
-            - TRAILER_LIT(52244730.0)*_t148*_t178 - TRAILER_LIT(10707500.0)*_t148*_t185
-            - _t149*_t339 - _t149*_t347 - TRAILER_LIT(35426400.0)*_t149*_t87
-            - TRAILER_LIT(36902500.0)*_t151*_t172 - TRAILER_LIT(30555270.0)*_t151*_t174
-            - TRAILER_LIT(35839708.0)*_t151*_t195 - TRAILER_LIT(11395492.0)*_t151*_t226
-            - _t154*_t339 - _t154*_t347 - TRAILER_LIT(31537644.0)*_t155
-            - TRAILER_LIT(5697746.0)*_t159*_t4 - TRAILER_LIT(68018688.0)*_t160
-            - TRAILER_LIT(76388175.0)*_t161*_t172 - _t161*_t338 - _t161*_t340 - _t161*_t341
-            - _t161*_t350 - _t162*_t338 - _t162*_t340 - _t162*_t341 - _t162*_t350 - _t165*_t342*_t8
-            - _t167*_t342*_t8 - _t171 - _t173*_t346 - _t174*_t183 - _t175*_t178
-            - TRAILER_LIT(138000000.0)*_t185*_t61 - _t187*_t202 - _t188*_t204 - _t190*_t206
-            - _t191*_t207 - _t192*_t208 - _t192*_t210 - _t193*_t346 - TRAILER_LIT(1434000.0)*_t194
-            - TRAILER_LIT(107519124.0)*_t195*_t288 - TRAILER_LIT(143358832.0)*_t195*_t289
-            - TRAILER_LIT(48560000.0)*_t195*_t48 - TRAILER_LIT(12840000.0)*_t195 - _t200*_t218
-            - TRAILER_LIT(104324550.0)*_t201 - _t205*_t207 - _t208*_t348 - _t210*_t348
-            - TRAILER_LIT(174149100.0)*_t211 - _t212*_t213 - TRAILER_LIT(61110540.0)*_t214
-            - TRAILER_LIT(76388175.0)*_t215 - _t217*_t221 - _t217*_t292 - _t218*_t296
-            - TRAILER_LIT(122221080.0)*_t222 - _t224 - _t225 - TRAILER_LIT(34186476.0)*_t226*_t288
-            - TRAILER_LIT(45581968.0)*_t226*_t289 - TRAILER_LIT(15440000.0)*_t226*_t48
-            - TRAILER_LIT(18420000.0)*_t226*_t8 - TRAILER_LIT(36840000.0)*_t226
-            - TRAILER_LIT(92160000.0)*_t227 - TRAILER_LIT(136037376.0)*_t228 - _t229*_t351
-            - _t230*_t233 - _t230*_t236 - _t231*_t351 - _t232*_t239 - _t232*_t249 - _t233*_t352
-            - _t235*_t244 - _t235*_t249 - _t236*_t352 - _t237*_t253 - _t240*_t264 - _t241*_t257
-            - TRAILER_LIT(68018688.0)*_t243 - _t245*_t259 - _t246*_t261 - _t247*_t264 - _t248*_t265
-            + _t251 + _t252 - _t253*_t262 - _t254*_t263 - _t256*_t263 - _t257*_t266 - _t258*_t267
-            - _t259*_t267 - _t270 - _t272 - _t275 - _t276 - _t277 - _t279 - _t282 - _t284 - _t285
-            - TRAILER_LIT(6420000.0)*_t286 + _t290 + _t291 + _t293 + _t294
-            - TRAILER_LIT(174149100.0)*_t295 + _t297 + _t299 + _t300 + _t301 - _t304 - _t306 - _t308
-            - _t311 - _t313 - TRAILER_LIT(92160000.0)*_t314 - TRAILER_LIT(136037376.0)*_t315 + _t317
-            + _t318 + _t320 + _t321 + _t322 - _t323 - _t325 + _t326 + _t327 - _t332 - _t335*_t41
-            - _t335*_t44 - _t336*_t73 - _t336*_t75 - _t337*_t41 - _t337*_t44 - _t343*_t41
-            - _t343*_t44 - _t344*_t41 - _t344*_t44 - _t345*_t41 - _t345*_t44 - _t349*_t8 - _t349
-            - _t353*_t41 - _t353*_t44) + tau_right;
-    xdot[0] = _t0*_t2 + _t2*_t3;
-    xdot[1] = _t0*_t5 + _t3*_t5;
-    xdot[2] = -TRAILER_LIT(500.0)*_t0/TRAILER_LIT(207.0)
-            + TRAILER_LIT(500.0)*radius_right*thetadot_right/TRAILER_LIT(207.0);
-    xdot[3] = thetadot_left*(-_t10*_t9 + _t12*_t9 + _t13*_t6 + _t6*_t8)
-            + thetadot_right*(-TRAILER_LIT(5.0)*_t10*radius_right/TRAILER_LIT(6.0)
-            + TRAILER_LIT(5.0)*_t11*_t4*radius_right/TRAILER_LIT(6.0) - _t13*_t14 - _t14*_t8);
+    const trailer_real_t _t131 = -_t129 + tau_right;
+    const trailer_real_t tau_left = tau[1];
+    const trailer_real_t _t132 = -_t130 + tau_left;
+    const trailer_real_t _t133 = _t125*_t128 - _t126*_t127;
+    const trailer_real_t _t134 = TRAILER_LIT(1.0)/_t133;
+    const trailer_real_t _t135 = _t134*(-_t126*_t132 + _t128*_t131);
+    const trailer_real_t _t136 = _t134*(_t125*_t132 - _t127*_t131);
+    xdot[0] = _t103;
+    xdot[1] = _t104;
+    xdot[2] = _t39;
+    xdot[3] = _t37;
     xdot[4] = thetadot_right;
     xdot[5] = thetadot_left;
-    xdot[6] = thetadot_left*(_t13*_t17 + _t16*_t18 - _t16*_t19 + _t17*_t8)
-            + thetadot_right*(_t13*_t21 - _t20*_t22 + _t20*_t23 + _t21*_t8);
-    xdot[7] = thetadot_left*(_t13*_t26 + _t22*_t25 - _t23*_t25 + _t26*_t8)
-            + thetadot_right*(_t13*_t28 - _t18*_t27 + _t19*_t27 + _t28*_t8);
-    xdot[8] = _t126*(-_t334*_t67 + _t354*_t99);
-    xdot[9] = _t126*(_t125*_t334 - _t354*_t67);
+    xdot[6] = _t105;
+    xdot[7] = _t106;
+    xdot[8] = _t135;
+    xdot[9] = _t136;
 }
 
 /* trailer_plant_params_with_payload: documented in trailer_plant.h.

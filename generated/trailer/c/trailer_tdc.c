@@ -125,9 +125,6 @@ static void trailer_tdc_clear(trailer_tdc_state_t *s)
         s->u_prev2[i] = TRAILER_LIT(0.0);
         s->H1hat[i] = TRAILER_LIT(0.0);
     }
-    for (i = 0; i < 4; ++i) {
-        s->trig_prev[i] = TRAILER_LIT(0.0);
-    }
     s->gain = TRAILER_LIT(0.0);
     s->s_norm = TRAILER_LIT(0.0);
     s->u_discarded = TRAILER_LIT(0.0);
@@ -205,7 +202,6 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     trailer_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer_real_t H1hat[8];
-    trailer_real_t trig[4];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     trailer_real_t gain, s_norm, u_discarded;
     if (state == NULL) {
         return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
@@ -260,10 +256,6 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     off = 4;
     gain = state->gain;
     s_norm = state->s_norm;
-    /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next.
-       q is within MAX_ABS_INPUT (checked above), where sincos_bounded's reduction is exact. */
-    trailer_sincos_bounded(q[2], &trig[0], &trig[1]);
-    trailer_sincos_bounded(q[3], &trig[2], &trig[3]);
     nc = trailer_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -286,7 +278,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
         for (i = nc; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_minimal_tde_trig(&cfg->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
+        trailer_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
@@ -294,7 +286,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer_minimal_tdc_law_trig(&cfg->nominal, trig, e, edot, &qddot_des[off], &cfg->k1[off],
+        trailer_minimal_tdc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
                 &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
@@ -325,9 +317,6 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 8; ++i) {
         state->H1hat[i] = H1hat[i];
-    }
-    for (i = 0; i < 4; ++i) {
-        state->trig_prev[i] = trig[i];
     }
     state->gain = gain;
     state->s_norm = s_norm;

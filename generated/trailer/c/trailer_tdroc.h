@@ -58,7 +58,6 @@ typedef struct {
     trailer_real_t qdot_prev2[8]; /* qdot(t-2h) */
     trailer_real_t u_prev[8];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer_real_t u_prev2[8];  /* u(t-2h) applied */
-    trailer_real_t trig_prev[4]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
     int omega_count;        /* Omega's seen, at most TRAILER_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     trailer_real_t omega_dnorm[TRAILER_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first: all
                                                        (25) needs */

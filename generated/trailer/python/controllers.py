@@ -59,8 +59,8 @@ ACCEL_CENTRAL = 1
 ACCEL_MATCHED = 2
 MAX_WINDOW = 8
 # The coordinates whose sin, cos the C TDE controllers keep for (17) (``trig_prev``).
-TRIG = {FORMULATION_PAPER: (), FORMULATION_MINIMAL: (2, 3)}
-TRIG_SIZE = 4
+TRIG = {FORMULATION_PAPER: (), FORMULATION_MINIMAL: ()}
+TRIG_SIZE = 0
 MAX_ABS_INPUT = 1.0e6
 # Plausibility bounds of the configuration (as <prefix>_controller.h).
 H_MIN = 1.0e-6  # smallest sample time h [s]

@@ -44,6 +44,7 @@ from runtime.tooling.crosscheck.deviation import (
     generated_deviation,
     perturbed,
 )
+from runtime.tooling.crosscheck.generated_functions import physical
 from runtime.tooling.crosscheck.targets import Target
 
 KINDS = ("tdc", "tdroc", "roc", "asmc")
@@ -183,8 +184,12 @@ def random_config(code: RobotCode, rng: np.random.Generator, kind: str, formulat
                   accel: int) -> Any:
     c = code.controllers
     h = float(rng.uniform(0.05, 0.15))
+    while True:  # nominal parameters the model accepts (see generated_functions.physical)
+        nominal = {k: v * rng.uniform(0.8, 1.2) for k, v in code.params.items()}
+        if physical(code, nominal, rng):
+            break
     return c.Config(
-        nominal={k: v * rng.uniform(0.8, 1.2) for k, v in code.params.items()},
+        nominal=nominal,
         formulation=formulation_code(code, formulation),
         k1=rng.uniform(1.0, 8.0, code.nq).tolist(), k2=rng.uniform(1.0, 8.0, code.nq).tolist(),
         q_pos=float(rng.uniform(0.5, 2.0)), q_vel=float(rng.uniform(0.5, 2.0)), h=h,

@@ -17,7 +17,8 @@ output is a ``*_prepared_t`` struct; not a row itself).
 Inputs, by argument name (sizes from the header):
 
 * a parameter struct: ``<prefix>_params_t`` → the robot's parameters, each scaled by a
-  random factor in [0.7, 1.3] per sample; ``<prefix>_plant_params_t`` → its plant
+  random factor in [0.7, 1.3] per sample, drawn again until SᵀMS is positive definite at
+  random configurations (:func:`physical`); ``<prefix>_plant_params_t`` → its plant
   parameters, scaled the same way;
 * ``q``, ``q_prev``: random configurations (every coordinate uniform in ±5);
 * ``wheel_rates``: random driven-wheel rates η (uniform in ±10 rad/s); ``qdot``:
@@ -56,6 +57,7 @@ from runtime.tooling.crosscheck.targets import Target
 
 MODULES = ("model", "laws", "plant")
 PARAM_SPREAD = 0.3  # parameters scaled by a factor in [1 - spread, 1 + spread]
+PHYSICAL_CHECKS = 16  # configurations at which drawn parameters must give S^T M S > 0
 RANGES: dict[str, tuple[float, float]] = {
     "tau": (-30.0, 30.0), "u_prev": (-30.0, 30.0), "qdot_now": (-10.0, 10.0),
     "qdot_then": (-10.0, 10.0), "span": (0.05, 0.3), "e": (-1.0, 1.0), "edot": (-3.0, 3.0),
@@ -234,13 +236,28 @@ class Sample:
         return self.drawn[key]
 
 
+def physical(code: Any, p: Params, rng: np.random.Generator) -> bool:
+    """Whether the parameters ``p`` give a positive-definite minimal mass matrix S^T M S
+    at :data:`PHYSICAL_CHECKS` random configurations: scaled one by one, the lumped
+    parameters of a robot of several bodies can leave the physical set (the generated
+    guards then refuse them, rightly), and a comparison needs inputs the code accepts."""
+    for _ in range(PHYSICAL_CHECKS):
+        mass = np.asarray(code.model.minimal_mass_matrix(rng.uniform(-5.0, 5.0, code.nq), p))
+        if not np.all(np.linalg.eigvalsh(mass.reshape(code.nu, code.nu)) > 0):
+            return False
+    return True
+
+
 def random_samples(target: Target, rng: np.random.Generator, n: int) -> list[Sample]:
     code = target.code
     out = []
     for _ in range(n):
-        factor = {k: rng.uniform(1 - PARAM_SPREAD, 1 + PARAM_SPREAD)
-                  for k in {*code.params, *code.plant_defaults}}
-        p = {k: v * factor[k] for k, v in code.params.items()}
+        while True:  # until the drawn parameters are physical (mostly the first draw)
+            factor = {k: rng.uniform(1 - PARAM_SPREAD, 1 + PARAM_SPREAD)  # sorted: the
+                      for k in sorted({*code.params, *code.plant_defaults})}  # same draws
+            p = {k: v * factor[k] for k, v in code.params.items()}
+            if physical(code, p, rng):
+                break
         pp = {k: v * factor[k] for k, v in code.plant_defaults.items()}
         q = rng.uniform(-5.0, 5.0, code.nq)
         eta = rng.uniform(-10.0, 10.0, code.nu)

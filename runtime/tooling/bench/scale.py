@@ -1,0 +1,389 @@
+"""How the toolchain's cost grows with the robot (issue 30): the shipped ladder Drishti, a
+tractor with one, two and three trailers, measured the way a user meets each cost.
+
+* ``wmr model --robot`` (a fresh process per robot): wall time, peak memory, the time of
+  each step it reports, and the bytes it writes (C, Python, CasADi; the longest Python line);
+* operations per forward-dynamics call and per TDROC step (minimal formulation: the kernels
+  the step calls, each once), from the operation counts of the robot's ``MODEL.md``;
+* ``gcc -O2 -c`` of every generated C file: the slowest file's time and the largest peak
+  memory;
+* a Cortex-M4 float32 image with TDROC alone (``arm-none-eabi-gcc -Os``, newlib-nano,
+  --gc-sections): the generated code's bytes and the step's worst-case stack;
+* x86 ``<prefix>_tdroc_step`` (gcc -O2, double): ns a step, best of interleaved passes.
+
+Everything reads a generated folder (the shipped ``generated/`` by default), so that the
+same measurement can be run on another checkout (``--root``): the before/after of a change.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[3]
+LADDER = ("drishti", "trailer", "trailer2", "trailer3")  # 0, 1, 2, 3 trailers
+STEP_LINE = re.compile(r"^\S+: (.+?) \.\.\. ([0-9.]+) s$", re.M)
+OP_ROW = re.compile(r"^\| `?(\w+)`? \| operations after CSE: ([^|]+)\|", re.M)
+# The values of the TDROC configuration a measured image and step use (valid, not tuned).
+TDROC_FIELDS = {"k1": "4.0", "k2": "4.0", "q_pos": "1.0", "q_vel": "1.0", "h": "0.01",
+                "tau_max": "40.0", "eps": "0.5", "a": "0.9"}
+
+
+@dataclass
+class Rung:
+    """One robot's measurements (``None``: not measured, e.g. no cross-compiler)."""
+
+    robot: str
+    trailers: int
+    coordinates: int
+    model_s: float = 0.0
+    model_peak_mb: float = 0.0
+    model_steps: dict[str, float] = field(default_factory=dict)
+    c_bytes: int = 0
+    python_bytes: int = 0
+    casadi_bytes: int = 0
+    longest_python_line: int = 0
+    forward_dynamics_ops: int = 0
+    tdroc_step_ops: int = 0
+    gcc_slowest_s: float = 0.0
+    gcc_slowest_file: str = ""
+    gcc_peak_mb: float = 0.0
+    m4_tdroc_code: int | None = None
+    m4_tdroc_stack: int | None = None
+    x86_step_ns: float | None = None
+
+
+def run_with_peak(cmd: list[str], cwd: Path) -> tuple[float, float, str, str]:
+    """(wall seconds, peak resident MB, stdout, stderr) of ``cmd``, its own peak memory
+    from ``os.wait4`` (the rusage of that child alone)."""
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        start = time.perf_counter()
+        proc = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=err, text=True)
+        _, status, usage = os.wait4(proc.pid, 0)
+        seconds = time.perf_counter() - start
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read(), err.read()
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{stderr[-2000:]}")
+    return seconds, usage.ru_maxrss / 1024, stdout, stderr
+
+
+def robot_file(root: Path, robot: str) -> Path:
+    return root / "modeling" / "robots" / robot / f"{robot}.toml"
+
+
+def generated_folder(root: Path, robot: str) -> Path:
+    """Where ``make model`` puts ``robot`` (Drishti at the root of generated/)."""
+    return root / "generated" if robot == "drishti" else root / "generated" / robot
+
+
+def prefix_of(folder: Path) -> str:
+    header = next((folder / "c").glob("*_robot.h"))
+    return header.name.removesuffix("_robot.h")
+
+
+def folder_bytes(folder: Path) -> int:
+    return sum(p.stat().st_size for p in folder.rglob("*") if p.is_file()
+               and "__pycache__" not in p.parts)
+
+
+def measure_generation(root: Path, robot: str, rung: Rung) -> None:
+    """``wmr model --robot`` into a fresh folder: time, memory, steps, output sizes."""
+    with tempfile.TemporaryDirectory() as tmp:
+        seconds, peak, _, err = run_with_peak(
+            [sys.executable, "-m", "codegen", "--robot", str(robot_file(root, robot)),
+             "--out", tmp], root)
+        rung.model_s, rung.model_peak_mb = seconds, peak
+        rung.model_steps = {what: float(s) for what, s in STEP_LINE.findall(err)}
+        out = next(p.parent for p in Path(tmp).rglob("c") if p.is_dir())
+        rung.c_bytes = folder_bytes(out / "c")
+        rung.python_bytes = folder_bytes(out / "python")
+        rung.casadi_bytes = folder_bytes(out / "casadi")
+        rung.longest_python_line = max(len(line) for p in (out / "python").glob("*.py")
+                                       for line in p.read_text().splitlines())
+
+
+def operations(summary: str) -> int:
+    """Total operations of a ``"145 add, 251 mul, 27 div, 4 sin/cos, 1 sqrt"`` count."""
+    return sum(int(n) for n in re.findall(r"(\d+) [a-z/]+", summary))
+
+
+def tdroc_step_kernels(folder: Path, prefix: str, table: dict[str, str]) -> list[str]:
+    """The kernels (functions of the op table) ``<prefix>_tdroc_step_detail`` calls for the
+    minimal formulation: what a step evaluates (those _init calls once are not counted)."""
+    text = (folder / "c" / f"{prefix}_tdroc.c").read_text()
+    body = text[text.index(f"{prefix}_status_t {prefix}_tdroc_step_detail("):]
+    called = set(re.findall(rf"\b{prefix}_(\w+)\(", body))
+    return sorted(k for k in table if k in called and not k.startswith("paper_"))
+
+
+def measure_operations(folder: Path, rung: Rung) -> None:
+    table = dict(OP_ROW.findall((folder / "MODEL.md").read_text()))
+    rung.forward_dynamics_ops = operations(table["forward_dynamics"])
+    prefix = prefix_of(folder)
+    rung.tdroc_step_ops = sum(operations(table[k])
+                              for k in tdroc_step_kernels(folder, prefix, table))
+
+
+def measure_gcc(folder: Path, rung: Rung) -> None:
+    """``gcc -O2 -std=c99 -c`` of each generated C file (double), one at a time."""
+    with tempfile.TemporaryDirectory() as tmp:
+        for src in sorted((folder / "c").glob("*.c")):
+            seconds, peak, _, _ = run_with_peak(
+                ["gcc", "-O2", "-std=c99", f"-I{folder / 'c'}", "-c", str(src), "-o",
+                 f"{tmp}/{src.stem}.o"], folder)
+            if seconds > rung.gcc_slowest_s:
+                rung.gcc_slowest_s, rung.gcc_slowest_file = seconds, src.name
+            rung.gcc_peak_mb = max(rung.gcc_peak_mb, peak)
+
+
+def tdroc_config_lines(prefix: str, nq: int) -> str:
+    """C statements filling ``c`` (a TDROC configuration, minimal formulation)."""
+    up = prefix.upper()
+    lines = ["c.nominal = nominal;", f"c.formulation = {up}_FORMULATION_MINIMAL;",
+             f"for (i = 0; i < {nq}; ++i) {{ c.k1[i] = {up}_LIT(4.0); "
+             f"c.k2[i] = {up}_LIT(4.0); }}",
+             f"c.accel_estimator = {up}_ACCEL_BACKWARD;", "c.n = 4;"]
+    lines += [f"c.{name} = {up}_LIT({value});" for name, value in TDROC_FIELDS.items()
+              if name not in ("k1", "k2")]
+    return "\n    ".join(lines)
+
+
+IMAGE_MAIN = """\
+#include "{p}_tdroc.h"
+#include "{p}_robot.h"
+
+/* A minimal firmware image: TDROC initialised and stepped once (minimal formulation). */
+static {p}_tdroc_state_t state;
+volatile {p}_real_t sink;
+volatile {p}_real_t sensor = {P}_LIT(0.1);
+
+int main(void)
+{{
+    {p}_tdroc_config_t c = {{0}};
+    const {p}_params_t nominal = {P}_ROBOT_PARAMS_INIT;
+    {p}_real_t q[{n}], qdot[{n}], q_des[{n}], qdot_des[{n}], qddot_des[{n}], tau[{m}];
+    int i;
+    {config}
+    for (i = 0; i < {n}; ++i) {{
+        q[i] = sensor; qdot[i] = sensor; q_des[i] = sensor; qdot_des[i] = sensor;
+        qddot_des[i] = sensor;
+    }}
+    if ({p}_tdroc_init(&state, &c) != {P}_OK) {{
+        return 1;
+    }}
+    if ({p}_tdroc_step(&state, &c, q, qdot, q_des, qdot_des, qddot_des, tau) < 0) {{
+        return 2;
+    }}
+    sink = tau[0];
+    return 0;
+}}
+"""
+
+
+def coordinates(folder: Path, prefix: str) -> tuple[int, int]:
+    """(nq, nu) from ``<prefix>_robot.h``'s NQ/NU defines or the step's signature."""
+    text = (folder / "c" / f"{prefix}_tdroc.h").read_text()
+    match = re.search(rf"const {prefix}_real_t q\[(\d+)\].*?{prefix}_real_t tau\[(\d+)\]",
+                      text, re.S)
+    assert match, f"{prefix}_tdroc.h: no step signature"
+    return int(match.group(1)), int(match.group(2))
+
+
+def measure_m4(folder: Path, rung: Rung) -> None:
+    """The TDROC image's generated code bytes and the step's worst-case stack (float32)."""
+    from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, SECTION_FLAGS, run_tool
+    from runtime.tooling.firmware.stack import (
+        Frame,
+        elf_frames,
+        parse_callgraph,
+        parse_su,
+        worst_stack,
+    )
+    from runtime.tooling.firmware.symbols import symbols
+
+    if shutil.which(ARM_GCC) is None:
+        return
+    prefix = prefix_of(folder)
+    nq, nu = coordinates(folder, prefix)
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        (work / "main.c").write_text(IMAGE_MAIN.format(
+            p=prefix, P=prefix.upper(), n=nq, m=nu,
+            config=tdroc_config_lines(prefix, nq)))
+        flags = [*ARM_FLAGS, *SECTION_FLAGS, "-fstack-usage", "-fcallgraph-info=su",
+                 f"-I{folder / 'c'}", f"-D{prefix.upper()}_FLOAT32"]
+        sources = [p for p in sorted((folder / "c").glob(f"{prefix}_*.c"))]
+        objs = []
+        for src in [*sources, work / "main.c"]:
+            obj = work / f"{src.stem}.o"
+            run_tool([ARM_GCC, *flags, "-c", str(src), "-o", str(obj)], cwd=work)
+            objs.append(obj)
+        elf = work / "tdroc.elf"
+        run_tool([ARM_GCC, *ARM_FLAGS, *SECTION_FLAGS, *map(str, objs),
+                  "--specs=nano.specs", "--specs=nosys.specs", "-Wl,--gc-sections", "-lm",
+                  "-o", str(elf)], cwd=work)
+        own = {n: s for n, (_, s, k) in symbols(elf).items()
+               if n.startswith(f"{prefix}_") and k in "tT"}
+        frames = parse_callgraph(sorted(work.glob("*.ci")))
+        for name, (size, qual) in parse_su(sorted(work.glob("*.su"))).items():
+            frames.setdefault(name, Frame(name, size, qual))
+            frames[name].own, frames[name].qualifier = size, qual
+        bound = worst_stack(f"{prefix}_tdroc_step", frames, elf_frames(elf))
+        rung.m4_tdroc_code = sum(own.values())
+        rung.m4_tdroc_stack = bound.bytes if bound.complete else None
+
+
+STEP_HARNESS = """\
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdio.h>
+#include <time.h>
+#include "{p}_tdroc.h"
+#include "{p}_robot.h"
+
+static double now_ns(void) {{
+    struct timespec t; clock_gettime(CLOCK_MONOTONIC, &t);
+    return 1e9 * (double)t.tv_sec + (double)t.tv_nsec;
+}}
+
+/* Steps along a smooth trajectory with a small tracking error; prints ns a step (best of
+   the passes) and a checksum of the torques. */
+int main(int argc, char **argv) {{
+    static {p}_tdroc_state_t state;
+    {p}_tdroc_config_t c = {{0}};
+    const {p}_params_t nominal = {P}_ROBOT_PARAMS_INIT;
+    double q[{n}], qdot[{n}], q_des[{n}], qdot_des[{n}], qddot_des[{n}], tau[{m}];
+    double best = 1e300, sum = 0.0;
+    int i, k, pass, steps = argc > 1 ? atoi(argv[1]) : 20000;
+    {config}
+    if ({p}_tdroc_init(&state, &c) != {P}_OK) {{ puts("init failed"); return 1; }}
+    for (pass = 0; pass < 7; ++pass) {{
+        double start;
+        {p}_tdroc_reset(&state);
+        start = now_ns();
+        for (k = 0; k < steps; ++k) {{
+            double t = 0.01 * k;
+            for (i = 0; i < {n}; ++i) {{
+                q[i] = 0.1 * sin(t + i); qdot[i] = 0.1 * cos(t + i);
+                q_des[i] = q[i] + 0.01; qdot_des[i] = qdot[i] + 0.01; qddot_des[i] = 0.0;
+            }}
+            if ({p}_tdroc_step(&state, &c, q, qdot, q_des, qdot_des, qddot_des, tau) < 0) {{
+                printf("step %d failed\\n", k); return 1;
+            }}
+            sum += tau[0];
+        }}
+        start = (now_ns() - start) / steps;
+        if (start < best) best = start;
+    }}
+    printf("%.3f %.17g\\n", best, sum);
+    return 0;
+}}
+"""
+
+
+def build_step(folder: Path, work: Path) -> Path:
+    prefix = prefix_of(folder)
+    nq, nu = coordinates(folder, prefix)
+    src = work / f"{prefix}_step_bench.c"
+    src.write_text(STEP_HARNESS.replace("#include <time.h>",
+                                        "#include <stdlib.h>\n#include <time.h>").format(
+        p=prefix, P=prefix.upper(), n=nq, m=nu, config=tdroc_config_lines(prefix, nq)))
+    exe = work / f"{prefix}_{abs(hash(str(folder)))}"
+    sources = [str(p) for p in sorted((folder / "c").glob(f"{prefix}_*.c"))
+               if not p.name.endswith("_plant.c")]
+    subprocess.run(["gcc", "-O2", "-std=c99", f"-I{folder / 'c'}", str(src), *sources, "-lm",
+                    "-o", str(exe)], check=True, capture_output=True)
+    return exe
+
+
+def step_times(executables: list[Path], rounds: int = 3) -> list[tuple[float, str]]:
+    """(ns a step, torque checksum) per executable: the best over ``rounds`` interleaved
+    runs (each round runs every executable once)."""
+    best = [float("inf")] * len(executables)
+    checks = [""] * len(executables)
+    for _ in range(rounds):
+        for i, exe in enumerate(executables):
+            out = subprocess.run([str(exe)], check=True, capture_output=True,
+                                 text=True).stdout.split()
+            best[i] = min(best[i], float(out[0]))
+            checks[i] = out[1]
+    return list(zip(best, checks, strict=True))
+
+
+def measure(root: Path = ROOT, robots: tuple[str, ...] = LADDER,
+            generation: bool = True) -> list[Rung]:
+    """The ladder's measurements (progress on stdout: the whole takes a minute or two)."""
+    rungs = []
+    for trailers, robot in enumerate(robots):
+        folder = generated_folder(root, robot)
+        prefix = prefix_of(folder)
+        rung = Rung(robot, trailers, coordinates(folder, prefix)[0])
+        print(f"scaling: {robot} ...", flush=True)
+        if generation:
+            measure_generation(root, robot, rung)
+        measure_operations(folder, rung)
+        measure_gcc(folder, rung)
+        measure_m4(folder, rung)
+        rungs.append(rung)
+    with tempfile.TemporaryDirectory() as tmp:
+        exes = [build_step(generated_folder(root, r.robot), Path(tmp)) for r in rungs]
+        for rung, (ns, _) in zip(rungs, step_times(exes), strict=True):
+            rung.x86_step_ns = ns
+    return rungs
+
+
+def _kb(n: int | None) -> str:
+    return "—" if n is None else f"{n / 1000:,.1f}"
+
+
+def section(rungs: list[Rung]) -> list[str]:
+    """The BENCHMARKS.md section (and README table) of the measurements."""
+    lines = [
+        "| robot (trailers, coordinates) | `wmr model` s (peak MB) | C / Python / CasADi kB "
+        "| ops: forward dynamics / TDROC step | gcc -O2 slowest file s (peak MB) "
+        "| M4 TDROC code B / stack B | x86 TDROC step ns |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in rungs:
+        lines.append(
+            f"| {r.robot} ({r.trailers}, {r.coordinates}) | {r.model_s:.1f} "
+            f"({r.model_peak_mb:.0f}) | {_kb(r.c_bytes)} / {_kb(r.python_bytes)} / "
+            f"{_kb(r.casadi_bytes)} | {r.forward_dynamics_ops:,} / {r.tdroc_step_ops:,} "
+            f"| {r.gcc_slowest_s:.2f} ({r.gcc_peak_mb:.0f}) "
+            f"| {'—' if r.m4_tdroc_code is None else f'{r.m4_tdroc_code:,}'} / "
+            f"{'—' if r.m4_tdroc_stack is None else r.m4_tdroc_stack} "
+            f"| {'—' if r.x86_step_ns is None else f'{r.x86_step_ns:.0f}'} |")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m runtime.tooling.bench.scale",
+        description="Measure how generation, code size, compile time and step cost grow "
+        "with the robot (Drishti, one, two, three trailers).")
+    parser.add_argument("--root", type=Path, default=ROOT,
+                        help="checkout to measure (its modeling/robots and generated/)")
+    parser.add_argument("--robots", nargs="+", default=list(LADDER), choices=LADDER)
+    parser.add_argument("--json", type=Path, default=None, help="write the rows here")
+    args = parser.parse_args(argv)
+    rungs = measure(args.root.resolve(), tuple(args.robots))
+    print("\n".join(section(rungs)))
+    if args.json is not None:
+        args.json.write_text(json.dumps([asdict(r) for r in rungs], indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
