@@ -8,7 +8,9 @@ the field and its value (a ``RobotFileError``: the commands exit 2); a *warning*
 once per process (``warning: FILE: ...`` on stderr when nothing configured logging),
 returned to the caller (``Robot.warnings``, ``RobotDescription.warnings``) and written
 into the generated MODEL.md. Standard library only: the runtime reads ``[lumped]`` files
-through this module without SymPy or NumPy.
+through this module without SymPy or NumPy. (The runtime runs a bodies-and-wheels file only
+on code generated from it, which records the file's digest: the audit ran when that code
+was generated.)
 
 The checks and their thresholds (the constants below):
 
@@ -299,6 +301,11 @@ def audit_description(
     def num(x: object) -> float:
         return float(x)  # type: ignore[arg-type]  # numbers here: read from a file
 
+    for i, w in enumerate(desc.wheels):  # the radius first: the plainest sign of a unit
+        _radius(where, f"wheel[{i}].radius", num(w.radius), warnings)
+    for i, w in enumerate(desc.wheels):
+        for axis, v in zip("xy", w.position, strict=True):
+            _length(where, f"wheel[{i}].position.{axis}", num(v))
     for i, b in enumerate(desc.bodies):
         for axis, v in zip("xy", b.com, strict=True):
             _length(where, f"body[{i}].com.{axis}", num(v))
@@ -306,10 +313,6 @@ def audit_description(
         for key in ("parent_point", "child_point"):
             for axis, v in zip("xy", getattr(j, key), strict=True):
                 _length(where, f"joint[{i}].{key}.{axis}", num(v))
-    for i, w in enumerate(desc.wheels):
-        for axis, v in zip("xy", w.position, strict=True):
-            _length(where, f"wheel[{i}].position.{axis}", num(v))
-        _radius(where, f"wheel[{i}].radius", num(w.radius), warnings)
 
     # Over-constrained layouts, before anything else is judged.
     for b in desc.bodies:

@@ -20,7 +20,7 @@ from modeling.description import RobotDescription, parse_description
 from modeling.importers.mechanism import ImportFileError, Mechanism
 from modeling.importers.planar import Options, PlanarRobot, build
 from modeling.importers.writer import robot_file_text
-from modeling.robot_io import read_robot_text
+from modeling.robot_io import RobotFileError, read_robot_text
 
 __all__ = ["ImportFileError", "Imported", "Options", "import_robot", "read_mechanism"]
 
@@ -58,5 +58,12 @@ def import_robot(path: Path, options: Options | None = None, where: str = "") ->
     audit's messages. Raises ``RobotFileError`` (one line) on anything it refuses."""
     robot = build(read_mechanism(Path(path)), options)
     text = robot_file_text(robot)
-    description = parse_description(text, where or f"{Path(path).stem}.toml")
+    where = where or f"{Path(path).stem}.toml"
+    try:
+        description = parse_description(text, where)
+    except RobotFileError as exc:
+        # The audit names the robot file's fields (body[0], wheel[1]: the imported bodies
+        # and wheels, named after their links); the file to fix is the imported one.
+        message = str(exc).removeprefix(f"{where}: ")
+        raise ImportFileError(f"{path}: {message}") from None
     return Imported(robot, text, description)

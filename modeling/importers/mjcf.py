@@ -334,6 +334,8 @@ def _body(reader: _Reader, mech: Mechanism, el: ET.Element, parent: str | None,
             j, a = joints[0]
             jname = j.get("name") or f"{name}_joint"
             found = JOINT_TYPES.get(a.get("type", "hinge"))
+            if found == "revolute" and "range" not in a and a.get("limited") != "true":
+                found = "continuous"  # a hinge without limits turns freely, as a wheel does
             if found is None:
                 raise reader.fail(f"joint '{jname}' of {label}: unknown type=\"{a.get('type')}\"")
             axis = np.array(reader.floats(f"joint '{jname}'", a, "axis", 3, (0.0, 0.0, 1.0)))

@@ -383,7 +383,8 @@ def _frames(plan: _Plan) -> None:
             axles = [b.axis_world(j) for j in own if j is not None]
             first = axles[0] / np.linalg.norm(axles[0][:2])
             for joint, a in zip(own, axles, strict=True):
-                skew = abs(float(np.cross(first[:2], a[:2]))) / float(np.linalg.norm(a[:2]))
+                skew = abs(float(first[0] * a[1] - first[1] * a[0])) / float(
+                    np.linalg.norm(a[:2]))
                 if skew > math.sin(math.radians(2.0)):
                     label = joint.label if joint is not None else ""
                     raise b.fail(
