@@ -195,12 +195,10 @@ def test_the_paper_robot_report_lists_the_warnings() -> None:
     from modeling.robots.drishti.report import model_report_context, render_model_report
 
     robot = load_robot(None)
-    text = render_model_report(model_report_context(robot.lumped, "x", None, {},
-                                                    ("field 'lumped.I': a finding",)))
-    section = text.split("## Physics audit of the robot file", 1)[1]
+    context = model_report_context(robot.lumped, "x", None, {}, ("field 'lumped.I': a finding",))
+    section = render_model_report(context).split("## Physics audit of the robot file", 1)[1]
     assert "- field 'lumped.I': a finding" in section
-    assert "## Physics audit" not in render_model_report(
-        model_report_context(robot.lumped, "x", None, {}))
+    assert "## Physics audit" not in render_model_report({**context, "warnings": []})
 
 
 # --------------------------------------------------------------------------- described files

@@ -119,7 +119,7 @@ def test_tractor_trailer_composes_to_the_shipped_trailer(tmp_path: Path) -> None
     assert imported.description.warnings == ()
     text = imported.text
     assert "gear_ratio = 20.0" in text and "rotor_inertia = 0.0001405" in text
-    assert "rigid bodies merged over fixed joints: tractor: tractor_link, battery_link" in text
+    assert "joint): tractor: tractor_link, battery_link" in text
     assert "massless frames dropped: base_footprint, imu_link, lidar_link" in text
     assert 'gazebo <sensor name="lidar" type="ray"> on link' in text
     assert "positive joint rotation rolls backward: θ = −(joint angle)" in text  # the right
@@ -437,6 +437,10 @@ def simple(wheel_z: float = 0.033, tensor: str = diag(1.1e-5, 1.1e-5, 2.1e-5),
             "suspension", "prismatic", "base_link", "susp") + "</robot>"),
      "r.urdf: joint 'suspension' (prismatic, axis (0, 0, 1) in the world) carries wheels: "
      "only revolute joints about the vertical (hitches, caster swivels) may"),
+    ("r.urdf", simple().replace('<cylinder radius="0.033" length="0.018"/>',
+                                '<mesh filename="wheel.stl"/>', 1),
+     "r.urdf: joint 'left_joint' (continuous, horizontal axis, driven): its child link "
+     "'left_link' has no collision cylinder, so the wheel's radius is unknown"),
     ("r.xml", "<mujoco><include file='x.xml'/></mujoco>",
      "r.xml: <include file=\"x.xml\"> is not supported by this importer"),
     ("r.xml", "<mujoco><worldbody><body name='b'><freejoint/><geom type='mesh' mesh='m'/>"

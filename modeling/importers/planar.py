@@ -214,11 +214,17 @@ class _Builder:
                   and abs(float(self.axis_world(j) @ UP)) < LEVEL):
                 if self.wheel_cylinder(j) is not None:
                     kinds[j.name] = "wheel"
-                elif j.kind == "continuous":
+                elif j.kind == "continuous" and j.name in self.mech.driven:
                     raise self.fail(
-                        f"{j.label} (continuous, horizontal axis): its child link "
-                        f"'{j.child}' has no collision cylinder, so the wheel's radius is "
-                        "unknown; give it a <collision> cylinder along the joint axis")
+                        f"{j.label} (continuous, horizontal axis, driven): its child "
+                        f"{self.mech.links[j.child].label} has no collision cylinder, so the "
+                        "wheel's radius is unknown; give it a collision cylinder along the "
+                        "joint axis")
+                elif j.kind == "continuous":
+                    self.findings.append(
+                        f"{j.label} (continuous, horizontal axis) has no collision cylinder "
+                        "on its child: not taken as a wheel (frozen at zero); if it is one, "
+                        "give it a collision cylinder along the joint axis")
         wheel_links = {j.child for j in self.mech.joints if kinds.get(j.name) == "wheel"}
         for j in self.mech.joints:
             if j.name in kinds:
@@ -662,7 +668,8 @@ def build(mech: Mechanism, options: Options | None = None) -> PlanarRobot:
     merged = [f"{plan.names[g.top]}: {', '.join(n for n in g.links if n not in plan.massless)}"
               for g in plan.bodies if len(g.links) > 1]
     if merged:
-        header.append("rigid bodies merged over fixed joints: " + "; ".join(merged))
+        header.append("rigid bodies merged over fixed joints (MJCF: bodies welded without a "
+                      "joint): " + "; ".join(merged))
     if plan.massless:
         header.append("massless frames dropped: " + ", ".join(sorted(set(plan.massless))))
     if mech.dropped:
