@@ -117,7 +117,7 @@ def test_tractor_trailer_composes_to_the_shipped_trailer(tmp_path: Path) -> None
     assert_same(got, want)
     assert [w.name for w in imported.description.wheels] == list(rename)[2:]
     assert imported.description.warnings == ()
-    text = imported.text
+    text = flat(imported.text)
     assert "gear_ratio = 20.0" in text and "rotor_inertia = 0.0001405" in text
     assert "joint): tractor: tractor_link, battery_link" in text
     assert "massless frames dropped: base_footprint, imu_link, lidar_link" in text
