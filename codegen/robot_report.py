@@ -63,5 +63,6 @@ def render(model: RobotModel, robot: Robot, op_counts: dict[str, str]) -> str:
         "mbar_depends_on": mbar_q,
         "kinetic_energy": sp.latex(s.kinetic_energy),
         "op_counts": [{"function": k, "count": _cell(v)} for k, v in op_counts.items()],
+        "warnings": [" ".join(w.split()) for w in robot.warnings],
     }
     return template_util.render(TEMPLATE_DIR, TEMPLATE, **context)

@@ -61,17 +61,21 @@ def load_robot_model(path: str | Path | None = None) -> tuple[RobotModel, Robot]
     A file with ``[[body]]`` tables is derived by ``modeling.description`` (run-time
     parameters: base inertial parameters and wheel radii); a ``[lumped]``/``[physical]``
     file is the paper's differential drive with those numbers. ``Robot.lumped`` holds the
-    values of the model's ``params``. Raises ``RobotFileError`` naming the problem.
+    values of the model's ``params``; ``Robot.warnings`` the physics audit's findings. Raises
+    ``RobotFileError`` naming the problem; the audit (``modeling.audit``) refuses an
+    implausible file before any derivation.
     """
+    from modeling.description import load_description
     from modeling.robot_model import described_model
 
     if path is not None and Path(path).resolve() == shipped_robot_file(DEFAULT_ROBOT):
         path = None  # the packaged default: its source reads modeling/robots/drishti/...
     if path is not None and is_description(path):
+        audited = load_description(path)  # read and audited before the (slow) derivation
         model = described_model(str(Path(path).resolve()), source_label(path))
         digest = text_digest(Path(path).read_text(encoding="utf-8"))
         return model, Robot(model.name, model.param_values(), source=model.source,
-                            digest=digest)
+                            digest=digest, warnings=audited.warnings)
     from modeling.robots.drishti import model as wmr
 
     robot = load_robot(path)

@@ -27,7 +27,9 @@ class RobotFileError(ValueError):
 @dataclass(frozen=True)
 class Robot:
     """A robot's lumped parameters (keys m, I, K, Iw, r, b, d) and, when the file gave
-    them, its physical parameters and the lateral first moment K_lat they imply."""
+    them, its physical parameters and the lateral first moment K_lat they imply.
+    ``warnings``: the physics audit's findings on the file (``modeling.audit``), which the
+    generated MODEL.md lists."""
 
     name: str
     lumped: dict[str, float]
@@ -35,6 +37,7 @@ class Robot:
     K_lat: float = 0.0
     source: str = "<built-in>"
     digest: str = ""  # text_digest of the file it was read from ("" if none)
+    warnings: tuple[str, ...] = ()
 
     def plant_values(self) -> dict[str, float]:
         """The numbers the file gives the simulated robot: the lumped parameters and the

@@ -37,6 +37,7 @@ class Command:
 
 COMMANDS: dict[str, Command] = {
     "model": Command("codegen.__main__", "derive robots and generate their code"),
+    "import": Command("modeling.importers.command", "URDF/MJCF in, an audited robot file out"),
     "check": Command(
         "codegen.__main__", "exit 1 with a diff if generated code is stale", ("--check",)
     ),

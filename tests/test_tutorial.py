@@ -4,7 +4,8 @@ outside the repository, and what the tutorial says about the results checked.
 
 The tutorial's files are its code blocks preceded by ``<!-- file: NAME -->``; its commands
 are the ``$ `` lines of its ``console`` blocks. About two minutes (most of it pip installing
-the dependencies into the new environment, and the simulation of step 6)."""
+the dependencies into the new environment, and the simulation of step 6; step 7, the URDF,
+adds about 15 s)."""
 
 from __future__ import annotations
 
@@ -37,7 +38,8 @@ def tutorial_commands(text: str) -> list[str]:
 
 def test_the_tutorial_parses() -> None:
     text = TUTORIAL.read_text()
-    assert set(tutorial_files(text)) == {"my_robot.toml", "my_firmware.toml", "firmware_loop.c"}
+    assert set(tutorial_files(text)) == {"my_robot.toml", "my_firmware.toml", "firmware_loop.c",
+                                         "my_robot.urdf", "quick.toml"}
     commands = tutorial_commands(text)
     assert commands[0] == "python3 -m venv venv"
     wheel = f"wmr_toolchain-{VERSION}-py3-none-any.whl"
@@ -134,3 +136,15 @@ def test_tutorial_runs_from_an_installed_wheel(tmp_path: Path) -> None:
     assert len(circle_minimal) == 4
     assert all(r["status"] == "ok" for r in circle_minimal), circle_minimal
     assert all(float(r["rms_error_m"]) < 0.02 for r in circle_minimal), circle_minimal
+
+    # Step 7: the URDF, imported twice (the second time with the motors), modelled and run.
+    imported = (work / "my_urdf_robot.toml").read_text()
+    assert imported.count("rotor_inertia = 1.2e-06") == 2
+    assert imported.count("gear_ratio = 30.0") == 2
+    assert "link 'laser': ixx = iyy = izz = 0.001 kg m^2" in imported
+    report = (work / "my_urdf_code" / "my_urdf_robot" / "MODEL.md").read_text()
+    assert "## Physics audit of the robot file" in report
+    assert "contributes 8 % of the yaw inertia of body 'base'" in report
+    with (work / "urdf_results" / "metrics.csv").open() as f:
+        urdf_runs = list(csv.DictReader(f))
+    assert len(urdf_runs) == 16 and all(r["status"] == "ok" for r in urdf_runs), urdf_runs

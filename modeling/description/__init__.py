@@ -43,11 +43,20 @@ Lengths in m, masses in kg, inertias in kg m², body frames with x forward and y
     diameter_inertia = 0.035         # ≥ 0, about the vertical axis
     mass = 1.5                       # ≥ 0, at the centre
     driven = true                    # a motor torque acts on this wheel's angle
+    rotor_inertia = 1.2e-6           # optional, driven wheels, with gear_ratio: the motor's
+    gear_ratio = 30.0                # J_r (kg m²) and N; J_r N² is added to spin_inertia
 
-All fields are required except ``joint.kind``. Names are unique across bodies and wheels
-(they name the coordinates). Numbers must be finite. Errors are ``DescriptionError`` (a
-``modeling.robot_io.RobotFileError``, so a ``ValueError``) naming the file and the field,
-e.g. ``trailer.toml: field 'wheel[2].radius' must be positive, got 0.0``.
+    [import]                         # optional: written by `wmr import` (the source file and
+    source = "robot.urdf"            # the importer's findings, which become warnings)
+    findings = []
+
+All fields are required except ``joint.kind``, the motor pair and ``[import]``. Names are
+unique across bodies and wheels (they name the coordinates). Numbers must be finite.
+Errors are ``DescriptionError`` (a ``modeling.robot_io.RobotFileError``, so a
+``ValueError``) naming the file and the field,
+e.g. ``trailer.toml: field 'wheel[2].radius' must be positive, got 0.0``. A file read
+from disk then goes through the physics audit (``modeling.audit``): an implausible one is
+refused the same way, and the warnings are the description's ``warnings``.
 """
 
 from modeling.description.derive import (

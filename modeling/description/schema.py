@@ -84,13 +84,16 @@ class WheelSpec:
 @dataclass(frozen=True)
 class RobotDescription:
     """Bodies (the first is the root), joints and wheels; ``values`` holds the numbers of
-    the parameter symbols (empty for a purely symbolic description)."""
+    the parameter symbols (empty for a purely symbolic description). ``warnings``: the
+    physics audit's findings on the file it was read from (``modeling.audit``; not part of
+    the robot: ignored by equality and hashing, dropped by ``symbolize``)."""
 
     name: str
     bodies: tuple[BodySpec, ...]
     joints: tuple[JointSpec, ...] = ()
     wheels: tuple[WheelSpec, ...] = ()
     values: Mapping[sp.Symbol, float] = field(default_factory=dict, hash=False)
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def root(self) -> BodySpec:

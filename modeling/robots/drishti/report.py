@@ -245,8 +245,10 @@ def model_report_context(
     robot_name: str,
     derivation_seconds: float | None,
     op_counts: dict[str, str],
+    warnings: tuple[str, ...] = (),
 ) -> dict[str, Any]:
-    """Everything the report shows, as strings ready for layout."""
+    """Everything the report shows, as strings ready for layout; ``warnings``: the physics
+    audit's findings on the robot file (``modeling.audit``)."""
     judged = judgements()
     verdict_rows = [
         {"equation": j.transcription.equation, "verdict": j.verdict,
@@ -290,6 +292,7 @@ def model_report_context(
         "parameters": parameters,
         "derived_numbers": derived_numbers,
         "op_counts": [{"function": k, "count": _cell(v)} for k, v in op_counts.items()],
+        "warnings": [" ".join(w.split()) for w in warnings],
     }
 
 
@@ -300,4 +303,5 @@ def render_model_report(context: dict[str, Any]) -> str:
 
 def render(model: Any, robot: Any, op_counts: dict[str, str]) -> str:
     """The paper robot's MODEL.md (the generator's report hook, ``RobotModel.docs``)."""
-    return render_model_report(model_report_context(robot.lumped, robot.name, None, op_counts))
+    return render_model_report(model_report_context(robot.lumped, robot.name, None, op_counts,
+                                                    getattr(robot, "warnings", ())))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from modeling.audit import audit_lumped, audit_physical
 from modeling.robot_io import Robot, read_robot_text, text_digest
 from modeling.robots.drishti.parameters import check_lumped, packaged_text, read_tables
 
@@ -48,15 +49,19 @@ def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], floa
 
 def parse_robot(text: str, where: str = "<string>") -> Robot:
     """The robot of a ``[lumped]`` or ``[physical]`` file's text; ``RobotFileError`` names
-    ``where`` and the field."""
+    ``where`` and the field. The physics audit (``modeling.audit``) runs first: an
+    implausible file is refused before any work, its warnings go into ``Robot.warnings``."""
     tables = read_tables(text, where)
     if tables.lumped is not None:
-        return Robot(tables.name, tables.lumped, source=where, digest=text_digest(text))
+        warnings = audit_lumped(where, tables.lumped)
+        return Robot(tables.name, tables.lumped, source=where, digest=text_digest(text),
+                     warnings=warnings)
     assert tables.physical is not None  # read_tables gives exactly one table
+    warnings = audit_physical(where, tables.physical)
     lumped, k_lat = lumped_from_physical(tables.physical)
     check_lumped(where, lumped, k_lat)
     return Robot(tables.name, lumped, tables.physical, k_lat, source=where,
-                 digest=text_digest(text))
+                 digest=text_digest(text), warnings=warnings)
 
 
 def load_robot(path: str | Path | None = None) -> Robot:
