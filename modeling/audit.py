@@ -18,11 +18,12 @@ The checks and their thresholds (the constants below):
   20 m is a length in millimetres; a radius below 1 mm is implausible too. A total mass
   above 5,000 kg is a mass in grams, below 1 g a mass in tonnes. The robot's mean density,
   its mass over the cube of its size (the largest distance between wheel centres, at least
-  a wheel's diameter), must lie between air's (1.2 kg/m³) and osmium's (22,600 kg/m³): a
-  robot fills less than that cube, so a larger value cannot be a robot (a 2 kg robot with
-  a 0.16 m track typed in grams reads 488,000 kg/m³). Softer bounds (radius above 1.5 m or
-  below 5 mm, size above 5 m, mass above 1,000 kg or below 50 g, density above steel's
-  8,000 kg/m³ or below 10 kg/m³) are warnings.
+  a wheel's diameter; for several bodies, over the sum of each body's cubed size, since a
+  train fills its length only one body wide), must lie between air's (1.2 kg/m³) and
+  osmium's (22,600 kg/m³): a robot fills less than that cube, so a larger value cannot be
+  a robot (a 2 kg robot with a 0.16 m track typed in grams reads 488,000 kg/m³). Softer
+  bounds (radius above 1.5 m or below 5 mm, size above 5 m, mass above 1,000 kg or below
+  50 g, density above steel's 8,000 kg/m³ or below 10 kg/m³) are warnings.
 * **Inertias.** A body's yaw inertia about its centre of mass against m L², L its size (the
   largest distance between its centre of mass, wheel centres and hitch points, at least a
   wheel's diameter): a uniform plate has m L²/12, a ring m L²/4; outside [0.01, 100] m L²
@@ -139,8 +140,10 @@ def _length(where: str, label: str, x: float) -> None:
 
 
 def _mass_and_size(where: str, label: str, mass: float, size: float,
-                   warnings: list[str]) -> None:
-    """Total mass, size and the mean density they imply (see the module docstring)."""
+                   warnings: list[str], volume: float | None = None) -> None:
+    """Total mass, size and the mean density they imply (see the module docstring).
+    ``volume``: what the mass fills when it is not the cube of ``size`` (a train of
+    bodies: the sum of each body's cube; a long train is not a cube of its length)."""
     if mass > MASS_MAX:
         raise refuse(where, f"{label} = {mass!r} kg: a total mass above {MASS_MAX:,.0f} kg "
                      "is implausible for a wheeled robot; masses in grams? Give masses in kg")
@@ -151,15 +154,16 @@ def _mass_and_size(where: str, label: str, mass: float, size: float,
         raise refuse(where, f"the robot's size (largest distance between wheel centres) = "
                      f"{size!r} m is implausible for a wheeled robot (> {LENGTH_MAX:g} m); "
                      "lengths in millimetres? Give lengths in metres")
-    density = mass / size**3
+    over = "the cube of its size" if volume is None else "its bodies' cubed sizes"
+    density = mass / (size**3 if volume is None else volume)
     if density > DENSITY_MAX:
         raise refuse(where, f"{label} = {mass!r} kg in a robot of size {_g(size)} m is "
-                     f"{density:,.0f} kg/m^3 over the cube of its size, denser than osmium "
+                     f"{density:,.0f} kg/m^3 over {over}, denser than osmium "
                      f"({DENSITY_MAX:,.0f} kg/m^3): masses in grams, or lengths in another "
                      "unit? Give masses in kg and lengths in m")
     if density < DENSITY_MIN:
         raise refuse(where, f"{label} = {mass!r} kg in a robot of size {_g(size)} m is "
-                     f"{density:.3g} kg/m^3 over the cube of its size, lighter than air: "
+                     f"{density:.3g} kg/m^3 over {over}, lighter than air: "
                      "masses in tonnes, or lengths in millimetres? Give masses in kg and "
                      "lengths in m")
     if mass > MASS_WARN_MAX or mass < MASS_WARN_MIN:
@@ -170,12 +174,12 @@ def _mass_and_size(where: str, label: str, mass: float, size: float,
         warnings.append(f"the robot's size (largest distance between wheel centres) = "
                         f"{_g(size)} m is unusual (> {LENGTH_WARN_MAX:g} m); check its unit")
     if density > DENSITY_WARN_MAX:
-        warnings.append(f"{label} = {_g(mass)} kg is {density:,.0f} kg/m^3 over the cube of "
-                        f"the robot's size ({_g(size)} m), denser than solid steel: a "
+        warnings.append(f"{label} = {_g(mass)} kg is {density:,.0f} kg/m^3 over {over} "
+                        f"(size {_g(size)} m), denser than solid steel: a "
                         "ballast set to suit a simulator, or masses in another unit?")
     elif density < DENSITY_WARN_MIN:
-        warnings.append(f"{label} = {_g(mass)} kg is {density:.3g} kg/m^3 over the cube of "
-                        f"the robot's size ({_g(size)} m), lighter than a foam block: check "
+        warnings.append(f"{label} = {_g(mass)} kg is {density:.3g} kg/m^3 over {over} "
+                        f"(size {_g(size)} m), lighter than a foam block: check "
                         "the masses' unit")
 
 
@@ -361,10 +365,8 @@ def audit_description(
     largest_wheel = max((2 * num(w.radius) for w in desc.wheels), default=0.0)
     size = max(_spread(centres), largest_wheel)
     total = sum(num(b.mass) for b in desc.bodies) + sum(num(w.mass) for w in desc.wheels)
-    if size > 0:
-        _mass_and_size(where, "the total mass (bodies and wheels)", total, size, warnings)
-
-    for i, b in enumerate(desc.bodies):
+    body_sizes = []
+    for b in desc.bodies:
         points = [(num(b.com[0]), num(b.com[1]))]
         points += [(num(w.position[0]), num(w.position[1]))
                    for w in desc.wheels if w.body == b.name]
@@ -372,8 +374,14 @@ def audit_description(
                    for j in desc.joints if j.parent == b.name]
         points += [(num(j.child_point[0]), num(j.child_point[1]))
                    for j in desc.joints if j.child == b.name]
-        body_size = max(_spread(points), max((2 * num(w.radius) for w in desc.wheels
-                                              if w.body == b.name), default=0.0))
+        body_sizes.append(max(_spread(points), max((2 * num(w.radius) for w in desc.wheels
+                                                    if w.body == b.name), default=0.0)))
+    if size > 0:
+        volume = sum(x**3 for x in body_sizes) if len(desc.bodies) > 1 else None
+        _mass_and_size(where, "the total mass (bodies and wheels)", total, size, warnings,
+                       volume if volume else None)
+
+    for i, (b, body_size) in enumerate(zip(desc.bodies, body_sizes, strict=True)):
         _yaw_ratio(f"field 'body[{i}].yaw_inertia' (body '{b.name}')", num(b.yaw_inertia),
                    num(b.mass), body_size, warnings)
     for w in desc.wheels:

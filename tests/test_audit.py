@@ -18,7 +18,13 @@ import pytest
 
 from modeling import audit
 from modeling.description import load_description, parse_description
-from modeling.robot_file import RobotFileError, load_robot, load_robot_model, shipped_robot_files
+from modeling.robot_file import (
+    RobotFileError,
+    load_robot,
+    load_robot_model,
+    shipped_robot_file,
+    shipped_robot_files,
+)
 from modeling.robots.drishti.robot_file import parse_robot
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -215,6 +221,26 @@ def test_description_in_grams_is_refused() -> None:
     with pytest.raises(RobotFileError, match=r"the total mass \(bodies and wheels\) = 1060.0 "
                        r"kg in a robot of size 0.16 m .* denser than osmium"):
         parse_description(diff_drive(mass="1000.0", wheel_mass="30.0"), "dd.toml")
+
+
+def test_a_train_is_judged_by_its_bodies_not_by_the_cube_of_its_length() -> None:
+    """The tractor with three trailers is 2.6 m long and 88.5 kg: over the cube of its
+    length it would be lighter than foam (4.9 kg/m³); over its bodies' cubes it is not.
+    The same train with its lengths a tenth (decimetres read as metres) is denser than
+    osmium over its bodies' cubes."""
+    path = shipped_robot_file("trailer3")
+    assert load_description(path).warnings == ()
+
+    def tenth(m: re.Match[str]) -> str:
+        return f"{float(m.group(0)) / 10!r}"
+
+    lengths = r"^((?:position|com|parent_point|child_point|radius) = )(.*?)(#|$)"
+    shrunk = re.sub(lengths, lambda m: m.group(1) + re.sub(r"-?[0-9]+\.[0-9]+", tenth,
+                                                            m.group(2)) + m.group(3),
+                    path.read_text(), flags=re.M)
+    with pytest.raises(RobotFileError, match=r"over its bodies' cubed sizes, denser than "
+                       r"osmium"):
+        parse_description(shrunk, "train.toml")
 
 
 def test_yaw_inertia_placeholder_is_a_warning() -> None:
