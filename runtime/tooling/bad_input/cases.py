@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from runtime import cbuild
+from runtime.bindings import cbuild
 
 CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 FORMULATIONS = {"paper": 0, "minimal": 1}

@@ -11,7 +11,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from runtime.generated_modules import controllers as pyctl
+from runtime.bindings.generated import controllers as pyctl
 from runtime.paper.handwritten import controllers as hc
 from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel
@@ -80,7 +80,7 @@ class CController:
         self.kind = kind
         self.cfg = ffi.new(f"{pre}_{kind}_config_t *")
         fields = {name for name, _ in ffi.typeof(f"{pre}_{kind}_config_t").fields}
-        from runtime import cbuild
+        from runtime.bindings import cbuild
 
         cbuild.fill_params(
             self.cfg.nominal, {k: nominal[k] for k in hw.PARAM_KEYS}, self.m.field_names

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 
 ARM_GCC = "arm-none-eabi-gcc"
 ARM_FLAGS = (
@@ -204,7 +204,7 @@ MAIN_EXTRA = {
 
 def frozen_define(name: str) -> str:
     """The define of a build with ``name``'s configuration compiled in (``wmr freeze``)."""
-    from runtime.frozen_config import frozen_macro
+    from runtime.freeze.header import frozen_macro
 
     return f"-D{frozen_macro('wmr', name)}"
 
