@@ -203,7 +203,7 @@ class _Simulator:
     def __call__(
         self, sensing: str, estimator: str, eps: float, ctrl: str, form: str, path: str
     ) -> Run:
-        if ctrl == "tdc":  # ε does not enter TDC
+        if not self.code.controller(ctrl).switching:  # ε enters only a switching term
             eps = self.exp.controller.eps
         key = (sensing, estimator, eps, ctrl, form, path)
         if key not in self.cache:

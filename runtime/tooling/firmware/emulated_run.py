@@ -80,22 +80,20 @@ def tdroc_config(ffi: Any, values: dict[str, Any]) -> Any:
 
 
 def replay_host(rec: Recording, float32: bool) -> tuple[list[int], list[list[float]], list[float]]:
-    """The recorded inputs through the host build (cffi), TDROC: (status, tau, gain)."""
+    """The recorded inputs through the host build (cffi, the bindings' controller wrapper),
+    TDROC: (status, tau, gain)."""
     from runtime.bindings import cbuild
+    from runtime.bindings.controller import Controller
 
     lib = cbuild.build(float32)
-    ffi = lib.ffi
-    cfg = tdroc_config(ffi, rec.config)
-    state = ffi.new("wmr_tdroc_state_t *")
-    if lib.lib.wmr_tdroc_init(state, cfg) != 0:
+    ctl = Controller(lib, "wmr", "tdroc", tdroc_config(lib.ffi, rec.config), 5, 2)
+    if ctl.init() != 0:
         raise RuntimeError("host init failed")
-    tau = ffi.new("wmr_real_t[2]")
     statuses, taus, gains = [], [], []
     for inputs in rec.inputs:
-        arrays = [ffi.new("wmr_real_t[5]", v) for v in inputs]
-        statuses.append(int(lib.lib.wmr_tdroc_step(state, cfg, *arrays, tau)))
-        taus.append([float(tau[0]), float(tau[1])])
-        gains.append(float(state.gain))
+        statuses.append(ctl.step(inputs))
+        taus.append([float(ctl.tau[0]), float(ctl.tau[1])])
+        gains.append(float(ctl.state.gain))
     return statuses, taus, gains
 
 
