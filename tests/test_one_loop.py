@@ -168,3 +168,10 @@ def test_code_carries_its_controllers() -> None:
     assert code.controller_names == tuple(c["name"] for c in code.robot.CONTROLLERS)
     for form, info in code.runs():
         assert form in info.formulations and form in code.formulations
+
+
+def test_every_plant_model_has_a_factory() -> None:
+    from runtime.experiment.settings import PLANT_MODELS
+    from runtime.sim.plant import PLANTS
+
+    assert tuple(PLANTS) == PLANT_MODELS

@@ -2,7 +2,7 @@
 
     [controller]   gains and TDROC/ROC/ASMC/PI parameters (paper: K1 = K2 = 4 I, Q = I,
                    a = 0.9, n = 4, eps = 0.1, h = 0.1 s, ROC bounds 30 %)
-    [plant]        integration rate, friction, payload schedule
+    [plant]        which plant, integration rate, friction, payload schedule
     [sensing]      how wheel angles and rates are measured, and the estimator of q̈(t − h)
                    that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        the circle and the lawn mower: sizes, wheel rates, durations
@@ -62,6 +62,7 @@ class ControllerSettings:
 
 @dataclass(frozen=True)
 class PlantSettings:
+    model: str = "generated"  # which Plant simulates the robot (runtime.sim.plant.PLANTS)
     substeps: int = 100  # RK4 steps per control sample (1 kHz at h = 0.1 s)
     viscous: float = 0.05  # N m s/rad per wheel, unknown to the controllers
     coulomb: float = 0.3  # N m per wheel
@@ -81,6 +82,8 @@ class PlantSettings:
         return ((t - self.extra_on_at) % self.extra_period) < self.extra_period / 2
 
 
+# The plants a closed loop can run on (runtime.sim.plant.PLANTS has one factory each).
+PLANT_MODELS = ("generated",)
 VELOCITY_MODELS = ("sample-instant", "encoder-average", "motor-encoder")
 ACCEL_ESTIMATORS = ("matched", "backward", "central")
 # accel_estimator of the experiment file -> <PREFIX>_ACCEL_* of the generated configs.
@@ -190,7 +193,8 @@ _NON_NEGATIVE = {
 }
 
 
-_CHOICES = {"velocity": VELOCITY_MODELS, "accel_estimator": ACCEL_ESTIMATORS}
+_CHOICES = {"velocity": VELOCITY_MODELS, "accel_estimator": ACCEL_ESTIMATORS,
+            "model": PLANT_MODELS}
 _MOVED = {"plant.encoder_ppr": "sensing.encoder_ppr"}
 
 

@@ -9,11 +9,11 @@ Each sample k (t = k h), in this order:
 2. the controller's ``_step`` (:class:`runtime.bindings.controller.Controller`, configured
    by :func:`runtime.bindings.config.controller_config`) turns them and the reference into
    τ; a status < 0 stops the run there; a dropped sample keeps the last τ (zero-order hold);
-3. the plant (:class:`runtime.sim.plant.Plant`; default: the generated model in C,
-   :class:`runtime.sim.plant.GeneratedPlant`) gets its true parameters (payload schedule,
-   :mod:`runtime.sim.payload`) when they change, the actuators deliver τ (a torque limit
-   fault clips it), and the robot moves for h under it (``substeps`` RK4 steps; the
-   motor-encoder's window start is read on the way).
+3. the plant (:class:`runtime.sim.plant.Plant`, the one ``[plant] model`` names; default
+   the generated model in C, :class:`runtime.sim.plant.GeneratedPlant`) gets its true
+   parameters (payload schedule, :mod:`runtime.sim.payload`) when they change, the
+   actuators deliver τ (a torque limit fault clips it), and the robot moves for h under it
+   (``substeps`` RK4 steps; the motor-encoder's window start is read on the way).
 
 Nothing here knows the robot or the controller: sizes, actuated coordinates, controller
 features and state fields come from the generated code.
@@ -34,7 +34,7 @@ from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim.faults import Fault, schedule
 from runtime.sim.payload import payload_mass, plant_params_at
-from runtime.sim.plant import GeneratedPlant, Plant, library_for
+from runtime.sim.plant import Plant, library_for, make_plant
 from runtime.sim.reference import Reference
 from runtime.sim.sensors import Sensors
 
@@ -96,12 +96,13 @@ def run(
     """Simulate controller ``name`` in ``formulation`` on ``ref`` with the nominal model
     ``nominal``. ``plant_params``: the simulated robot before payload (default: the nominal
     model with the plant-only parameters at the robot's defaults, e.g. K_lat = 0); ``plant``:
-    another :class:`Plant` (default: the generated model in C, with the experiment's
-    friction); ``float32``: the single-precision build of controllers and plant;
-    ``held_gain``: k̂ held at that value (the stability analysis' verification); ``check``:
-    refuse a configuration the toolchain's checks refuse (``ValueError``: the TDE condition
-    over the uncertainty box, the sampled loop's predicted stability); ``faults``: injected
-    as ``runtime.sim.faults`` describes; ``bounds``: ROC's (α, φ) if not sampled."""
+    a :class:`Plant` instance (default: the one the experiment's ``[plant] model`` names,
+    :func:`runtime.sim.plant.make_plant`); ``float32``: the single-precision build of the
+    controllers and the plant; ``held_gain``: k̂ held at that value (the stability
+    analysis' verification); ``check``: refuse a configuration the toolchain's checks refuse
+    (``ValueError``: the TDE condition over the uncertainty box, the sampled loop's
+    predicted stability); ``faults``: injected as ``runtime.sim.faults`` describes;
+    ``bounds``: ROC's (α, φ) if not sampled."""
     if check:
         from runtime.stability.checks import check_configuration
 
@@ -115,7 +116,7 @@ def run(
     if status != 0:  # the configuration is refused (e.g. ROC's bounds): nothing runs
         return _refused(code, name, formulation, ref, status, ctl.status_name(status))
     if plant is None:
-        plant = GeneratedPlant(code, lib, exp.plant.viscous, exp.plant.coulomb)
+        plant = make_plant(code, lib, exp)
     base = dict({**code.plant_defaults, **nominal} if plant_params is None else plant_params)
     h, nsub = exp.controller.h, exp.plant.substeps
     plant.start(ref.q[0])

@@ -15,6 +15,11 @@ small on purpose (a physics engine such as MuJoCo implements the same six calls)
 * :attr:`Plant.q` and :meth:`Plant.wheels`: the true configuration, and the driven wheels'
   angles and rates as encoders on them see them (rolling plus slip).
 
+Which plant a loop runs is the experiment's ``[plant] model``: :data:`PLANTS` maps each
+name of ``runtime.experiment.settings.PLANT_MODELS`` to the function that builds it for a
+robot (its generated code, the library of its generated C, the experiment). A new plant is
+a module with its class, one entry here and its name there; the loop does not change.
+
 :class:`GeneratedPlant` integrates the robot's generated ``<prefix>_plant_state_derivative``
 (x = (q, driven-wheel rates), the constrained dynamics in the minimal form) with fixed-step
 RK4 in C (``csrc/plant_rk4.c``, compiled for the robot's prefix beside its generated code:
@@ -25,7 +30,7 @@ unknown to the controllers, and the slip proxy of a traction loss (see
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import cache
 from pathlib import Path
 from typing import Protocol
@@ -35,6 +40,7 @@ from numpy.typing import NDArray
 
 from runtime.bindings import cbuild
 from runtime.bindings.generated import RobotCode
+from runtime.experiment.settings import Experiment
 
 Array = NDArray[np.float64]
 CSRC = Path(__file__).resolve().parent / "csrc"
@@ -180,3 +186,16 @@ class GeneratedPlant:
         angles = np.array([x[i] for i in self.act]) + np.array(slip[:self.nu])
         rates = np.array(x[self.nq:]) + np.array(slip[self.nu:])
         return angles, rates
+
+
+PlantFactory = Callable[[RobotCode, cbuild.CLibrary, Experiment], Plant]
+# [plant] model -> the plant a closed loop runs (the keys are PLANT_MODELS).
+PLANTS: dict[str, PlantFactory] = {
+    "generated": lambda code, lib, exp: GeneratedPlant(code, lib, exp.plant.viscous,
+                                                       exp.plant.coulomb),
+}
+
+
+def make_plant(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment) -> Plant:
+    """The plant the experiment names (``[plant] model``) for this robot."""
+    return PLANTS[exp.plant.model](code, lib, exp)
