@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from runtime.bindings.cbuild import GENERATED_C
+from runtime.bindings.generated import load_robot_code
 
 ARM_GCC = "arm-none-eabi-gcc"
 ARM_FLAGS = (
@@ -28,7 +29,8 @@ ARM_FLAGS = (
 )
 # Per-function sections so that the links below keep only what is called.
 SECTION_FLAGS = ("-ffunction-sections", "-fdata-sections")
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
+# The controllers generated for the default robot, as its robot.py exports the registry.
+CONTROLLERS = load_robot_code("").controller_names
 
 
 def tool(name: str) -> str | None:
