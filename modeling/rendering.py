@@ -5,7 +5,7 @@ Templates do layout only, so the environment is strict: an undefined variable is
 block tags do not leave blank lines in generated code. Each user loads templates from its
 own folder: the code generator's backends (through ``codegen.template_util``), a robot's
 own report (``modeling.robots.drishti.report``) and ``wmr freeze``'s header
-(``runtime.frozen_config``). It lives here, at the top of the one-way flow of DESIGN.md,
+(``runtime.freeze.header``). It lives here, at the top of the one-way flow of DESIGN.md,
 so that all three may import it; it imports Jinja2 and no SymPy.
 """
 

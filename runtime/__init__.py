@@ -1,9 +1,15 @@
-"""The simulation runtime: runs generated robot code (cffi, NumPy) in closed loop.
+"""The runtime: what a user runs, on the generated code of any robot (NumPy, cffi, Dask).
 
-Top level, generic (any generated robot): ``cbuild`` (C build and binding),
-``generated_modules`` and ``robot_source`` (which generated code and robot file),
-``experiment`` (experiment files), ``robot_*`` and ``closed_loop`` (the experiment scaled
-to a robot), ``reproduce_command`` (``python -m runtime reproduce``). ``paper``: the
-paper's experiments and analyses on its differential drive. ``tooling``: measuring and
-documenting the generated code.
+Split by job, never by robot (DESIGN.md):
+
+* ``bindings``: the one way to build, load and call a robot's generated code (cffi build,
+  the controller wrapper, the configuration builder, ``--robot`` resolved);
+* ``experiment``: experiment files, an experiment scaled to a robot, its reproduction on any
+  robot;
+* ``sim``: the one closed loop (plants, sensors, references and paths, faults, outcomes);
+* ``stability``: the sampled-data verdicts and the configuration checks; ``campaign``;
+  ``freeze``; ``fault_table`` (``wmr faults``); ``reproduce_command`` (``wmr reproduce``);
+* ``paper``: the paper's reproduction only (an experiment of the Drishti robot), and the
+  hand-written witness;
+* ``tooling``: measuring and documenting the generated code.
 """

@@ -1,18 +1,23 @@
 """``wmr``: the toolchain's command line (also ``python -m runtime``).
 
-    wmr model [--robot FILE] [--out DIR]      derive robots, generate C, NumPy and CasADi
-    wmr check [--robot FILE] [--out DIR]      exit 1 if generated code is stale
-    wmr reproduce [--robot FILE] [--out DIR]  the paper's experiments, or scaled to a robot
-    wmr crosscheck [--robot NAME_OR_DIR]      every implementation against the hand-written
-    wmr stability [--robot FILE]              sampled-data stability of each controller
-    wmr faults [--experiment FILE] [--out DIR]  encoder, sample, traction, torque faults
-    wmr campaign [--spec FILE] [--runs N] [--scheduler ADDR] --out DIR  robustness campaigns
-    wmr bench                                 benchmarks of the generated code
-    wmr firmware                              Cortex-M4 size, stack and instruction counts
-    wmr freeze --controller NAME --out DIR    a validated configuration compiled into firmware
+    wmr model [--robot FILE] [--out DIR]       derive robots, generate C, NumPy and CasADi
+    wmr check [--robot FILE] [--out DIR]       exit 1 if generated code is stale
+    wmr reproduce [--robot ROBOT] [--out DIR]  the paper's experiments, or scaled to a robot
+    wmr crosscheck [--robot ROBOT]             every implementation against the hand-written
+    wmr stability [--robot ROBOT]              sampled-data stability of each controller
+    wmr faults [--robot ROBOT] [--out DIR]     encoder, sample, traction, torque faults
+    wmr campaign [--robot ROBOT] [--spec FILE] [--runs N] --out DIR  robustness campaigns
+    wmr bench                                  benchmarks of the generated code
+    wmr firmware                               Cortex-M4 size, stack and instruction counts
+    wmr freeze --controller NAME [--robot ROBOT] --out DIR  a configuration for firmware
 
-Each subcommand has its own ``--help``. A command's module is imported only when it runs, so
-``wmr reproduce`` never imports SymPy or the code generator.
+ROBOT, for every command that runs one: a robot file (lumped, physical, or bodies and
+wheels), a generated folder (``wmr model --out DIR``), or the name of a robot generated
+under ``generated/``; ``--generated DIR`` says where a robot file's code is, and
+``--experiment FILE`` the experiment, scaled to the robot the same way by every command
+(``runtime.experiment.arguments``). Each subcommand has its own ``--help``. A command's
+module is imported only when it runs, so ``wmr reproduce`` never imports SymPy or the code
+generator.
 """
 
 from __future__ import annotations
@@ -49,11 +54,11 @@ COMMANDS: dict[str, Command] = {
         "compare every implementation with the hand-written one",
     ),
     "stability": Command(
-        "runtime.paper.stability",
+        "runtime.stability.analysis",
         "predict each controller's sampled-data stability on a robot",
     ),
     "faults": Command(
-        "runtime.paper.fault_table",
+        "runtime.fault_table",
         "sensor and actuator faults in the closed loop: what each controller reports",
     ),
     "campaign": Command(
@@ -68,7 +73,7 @@ COMMANDS: dict[str, Command] = {
         "Cortex-M4 code size, stack and emulated instructions of the generated C",
     ),
     "freeze": Command(
-        "runtime.freeze_command",
+        "runtime.freeze.command",
         "validate a controller configuration and write it as a header firmware compiles in",
     ),
 }

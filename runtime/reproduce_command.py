@@ -1,8 +1,9 @@
-"""``python -m runtime reproduce``: the command line of :mod:`runtime.paper.reproduce` (the paper's
-experiments on Drishti) and of :mod:`runtime.robot_reproduce` (``--robot FILE``: the
-experiment scaled to any robot). Checks every argument before any simulation runs, then
-writes the figures, the tables of :mod:`runtime.paper.reproduction_tables` and the report
-of :mod:`runtime.paper.reproduction_report`, and prints the verdicts of
+"""``wmr reproduce``: the command line of :mod:`runtime.paper.reproduce` (the paper's
+experiments on its robot, Drishti) and of :mod:`runtime.experiment.reproduction` (``--robot``
+another robot: the experiment scaled to it). Checks every argument before any simulation
+runs; for the paper's robot it writes the figures, the tables of
+:mod:`runtime.paper.reproduction_tables` and the report of
+:mod:`runtime.paper.reproduction_report`, and prints the verdicts of
 :mod:`runtime.paper.reproduction_verdicts`.
 """
 
@@ -13,12 +14,17 @@ import sys
 import time
 from pathlib import Path
 
-from runtime.experiment import (
+from runtime.experiment.arguments import (
+    Setting,
+    add_experiment_option,
+    add_robot_options,
+    load_setting,
+    output_folder,
+)
+from runtime.experiment.settings import (
     VELOCITY_MODELS,
-    Experiment,
     ExperimentFileError,
     check_sensing,
-    load_experiment,
 )
 from runtime.output_folder import OutputFolderError, writable_folder
 from runtime.paper.reproduce import (
@@ -83,14 +89,10 @@ def print_summary(rep: Reproduction) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="wmr reproduce", description="Reproduce the paper's experiments."
+        prog="wmr reproduce", description="Reproduce the paper's experiments, on its robot or "
+        "scaled to another."
     )
-    parser.add_argument(
-        "--experiment",
-        type=Path,
-        default=None,
-        help="experiment TOML (default: the paper's setting)",
-    )
+    add_experiment_option(parser)
     parser.add_argument(
         "--sensing",
         default=",".join(DEFAULT_SENSINGS),
@@ -98,94 +100,62 @@ def main(argv: list[str] | None = None) -> int:
         help=f"velocity models to run, of {', '.join(VELOCITY_MODELS)} "
         f"(default: {','.join(DEFAULT_SENSINGS)})",
     )
-    parser.add_argument(
-        "--robot",
-        type=Path,
-        default=None,
-        metavar="FILE",
-        help="run the experiment, scaled to it, on this robot file (lumped, physical or "
-        "bodies and wheels; default: the experiment's robot, else the paper's Drishti)",
-    )
-    parser.add_argument(
-        "--generated",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="where the robot's generated code is (default: the repository's generated/)",
-    )
+    add_robot_options(parser)
     parser.add_argument(
         "--out", type=Path, default=None,
         help="output folder (default: docs/reproduction of a source checkout, ./reproduction "
-        "when installed; ./reproduction/<robot> with --robot)",
+        "when installed, for the paper's robot; ./reproduction/<robot> for another)",
     )  # fmt: skip
     parser.add_argument("--no-plots", action="store_true", help="skip the figures")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     try:
-        exp = load_experiment(args.experiment)
+        setting = load_setting(args)
+        exp = setting.experiment
         sensings = parse_sensings(args.sensing)
         for s in sensings:
             check_sensing(with_sensing(exp, s), str(args.experiment or "--sensing"))
-    except ExperimentFileError as exc:
+        out = writable_folder(output_folder(setting, args.out, DEFAULT_OUT, "reproduction"))
+    except (ExperimentFileError, OutputFolderError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     if exp.faults:
         print(
             f"note: {exp.source}: {len(exp.faults)} [[fault]] table(s) not used here; "
-            "`python -m runtime faults` runs them",
+            "`wmr faults` runs them",
             file=sys.stderr,
         )
-    robot_file = args.robot or (Path(exp.robot) if exp.robot else None)
-    if robot_file is not None or args.generated is not None:
-        return _main_robot(robot_file, args, exp, sensings, start)
-    try:
-        args.out = writable_folder(args.out or DEFAULT_OUT)
-    except OutputFolderError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+    if not setting.is_paper_robot:
+        return _main_robot(setting, sensings, out, not args.no_plots, start)
     rep = reproduce(exp, progress=True, sensings=sensings)
     t_plot = time.perf_counter()
-    write_outputs(rep, args.out, plots=not args.no_plots)
+    write_outputs(rep, out, plots=not args.no_plots)
     end = time.perf_counter()
     print_summary(rep)
     print(
-        f"wrote {args.out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
+        f"wrote {out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
         f"figures and files {end - t_plot:.1f} s)"
     )
     return 0
 
 
-def _main_robot(
-    robot_file: Path | None,
-    args: argparse.Namespace,
-    exp: Experiment,
-    sensings: tuple[str, ...],
-    start: float,
-) -> int:
-    """``--robot FILE``: the experiment scaled to that robot (:mod:`runtime.robot_reproduce`)."""
-    from runtime.robot_reproduce import reproduce_robot, write_outputs
-    from runtime.robot_source import RobotSourceError, resolve
+def _main_robot(setting: Setting, sensings: tuple[str, ...], out: Path, plots: bool,
+                start: float) -> int:
+    """Another robot: the experiment scaled to it (:mod:`runtime.experiment.reproduction`)."""
+    from runtime.experiment.reproduction import reproduce_robot, write_outputs
 
-    if robot_file is None:
-        print("error: --generated needs --robot FILE (the robot to run)", file=sys.stderr)
-        return 2
+    setup = setting.robot
+    print(f"robot '{setup.name}' from {setup.source}:", *setting.scaling, sep="\n  ",
+          flush=True)
     try:
-        setup = resolve(robot_file, args.generated)
-    except RobotSourceError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        out = writable_folder(args.out or Path("reproduction") / setup.name)
-    except OutputFolderError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    try:
-        rep = reproduce_robot(setup, exp, sensings, progress=True)
+        rep = reproduce_robot(setting, sensings, progress=True)
     except ValueError as exc:  # a robot the scaled experiment does not apply to
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    write_outputs(rep, out, plots=not args.no_plots)
+    write_outputs(rep, out, plots=plots)
+    bad = [r for r in rep.rows if r.status != "ok"]
+    print(f"{len(rep.rows) - len(bad)} of {len(rep.rows)} runs ok"
+          + (f"; not ok: {', '.join(sorted({r.status for r in bad}))}" if bad else ""))
     print(f"wrote {out}: wall time {time.perf_counter() - start:.1f} s "
           f"(simulation {rep.seconds:.1f} s)")
     return 0
-

@@ -4,7 +4,7 @@
 controller configurations, a cffi controller wrapper and smooth input sequences.
 
 The C is compiled from a snapshot of generated/c into pytest tmp directories, and bound,
-through ``runtime.cbuild`` (the one cffi layer).
+through ``runtime.bindings.cbuild`` (the one cffi layer).
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from codegen.controller_api import CONTROLLERS, status_codes
 from codegen.generate import layout_for
 from modeling.robot_file import load_robot
 from modeling.robots.drishti.model import PARAM_KEYS, PARAMETERS, robot_model
-from runtime import cbuild
-from runtime.generated_modules import controllers as pyctl
+from runtime.bindings import cbuild
+from runtime.bindings.generated import controllers as pyctl
 
 ROOT = Path(__file__).resolve().parent.parent
 GENERATED = ROOT / "generated"
@@ -75,7 +75,7 @@ def _headers(src: Path) -> tuple[str, ...]:
 def build_generated_c(tmp_path_factory: pytest.TempPathFactory) -> dict[str, CBuild]:
     """Every generated .c compiled with the strict flags in both precisions (objects, a
     shared library of the wmr_*.c for cffi, and the example executable), through
-    ``runtime.cbuild``; every compiler run must succeed silently."""
+    ``runtime.bindings.cbuild``; every compiler run must succeed silently."""
     _gcc()
     root = tmp_path_factory.mktemp("generated_c")
     src = root / "src"

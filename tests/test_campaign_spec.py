@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from runtime.bindings.generated import robot
 from runtime.campaign.sampling import base_values, draw, run_seed
 from runtime.campaign.spec import (
     Campaign,
@@ -15,7 +16,6 @@ from runtime.campaign.spec import (
     from_payload,
     parse_campaign,
 )
-from runtime.generated_modules import robot
 
 ROBOT = {k: float(v) for k, v in robot.PARAMS.items()}
 SPEC = """
@@ -142,7 +142,7 @@ def test_robot_of_bodies_runs_without_a_predicted_boundary(tmp_path: Path) -> No
     spec.write_text('duration = 1.5\ncontrollers = ["tdroc"]\n'
                     '[vary."robot.J_theta_tractor"]\nspread = 0.3\n')
     c, tgt = resolve_campaign(spec, trailer, 1)
-    assert tgt.kind == "described" and c.robot_sha256
+    assert tgt.setup.code.name == "trailer" and c.robot_sha256
     rec = run_one(c, 0, tgt, base_values(c, tgt.plant))
     assert rec["status"] == "ok", rec["error"]
     assert 0 < rec["rms_error"] < 0.1

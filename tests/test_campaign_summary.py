@@ -71,7 +71,7 @@ REFUSE_BELOW = -0.1  # m: drawn plant.extra_payload_x below this gets a refused 
 def campaign_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         tuple[Path, Campaign, Any]]:
     """The campaign's folder after its runs and report, its campaign and robot target."""
-    import runtime.robot_simulation as robot_simulation
+    import runtime.sim.loop as sim_loop
 
     folder = tmp_path_factory.mktemp("campaign")
     spec = folder / "campaign.toml"
@@ -80,7 +80,7 @@ def campaign_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[
     out = folder / "out"
     out.mkdir()
     store.prepare(out, campaign)
-    real_config = robot_simulation.controller_config
+    real_config = sim_loop.controller_config
 
     def refused_for_some(*args: Any, **kwargs: Any) -> Any:
         cfg = real_config(*args, **kwargs)
@@ -91,7 +91,7 @@ def campaign_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[
 
     payload = json.dumps(campaign.to_payload(), sort_keys=True)
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(robot_simulation, "controller_config", refused_for_some)
+        mp.setattr(sim_loop, "controller_config", refused_for_some)
         for chunk in chunks(range(RUNS), campaign.chunk):
             store.write_part(out, run_chunk(payload, chunk), store.schema(campaign))
     report(out, campaign, tgt, "this process", plots=False)

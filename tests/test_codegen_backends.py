@@ -34,7 +34,7 @@ from codegen.backends import python as py_backend
 from codegen.cse import count_ops, cse_function
 from codegen.layout import argument_size, split_fields
 from codegen.spec import Argument, Field, FunctionSpec
-from runtime import cbuild
+from runtime.bindings import cbuild
 
 MODULE = "wmr_toy"
 SOURCE = "tests/test_codegen_backends.py (toy specs)"
@@ -276,7 +276,7 @@ def _render_c(directory: Path) -> dict[str, str]:
 @pytest.fixture(scope="module")
 def c_build(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """Render the C files and compile them in both precisions with the strict flags
-    (``runtime.cbuild`` compiles and binds)."""
+    (``runtime.bindings.cbuild`` compiles and binds)."""
     _gcc()
     directory = tmp_path_factory.mktemp("c")
     _render_c(directory)

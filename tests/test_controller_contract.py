@@ -23,8 +23,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from runtime import cbuild
-from runtime.generated_modules import controllers as pyctl
+from runtime.bindings import cbuild
+from runtime.bindings.generated import controllers as pyctl
 from runtime.tooling.bad_input.cases import (
     BASE,
     CONTROLLER_FIELDS,

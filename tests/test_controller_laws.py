@@ -130,7 +130,7 @@ def test_generated_law_reads_every_input_before_writing_an_output() -> None:
     (codegen/backends/c/render.py, _LazyLoads), yet every read before the first store: the
     TDROC law writing u one entry ahead over H1hat (u[k] is H1hat[k + 1]) and s over e gives
     what it gives into fresh arrays (a read of H1hat[1] after the store of u[0] would not)."""
-    from runtime import cbuild
+    from runtime.bindings import cbuild
 
     lib = cbuild.build(False)
     ffi = lib.ffi

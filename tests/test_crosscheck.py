@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime.generated_modules import GENERATED
+from runtime.bindings.generated import GENERATED
 from runtime.paper.handwritten import controllers as hc
 from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck import command as crosscheck

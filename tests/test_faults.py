@@ -1,5 +1,5 @@
-"""Fault injection in the closed loop (runtime.faults, runtime.paper.simulate) and the fault
-table (runtime.paper.fault_table, docs/FAULTS.md)."""
+"""Fault injection in the closed loop (runtime.sim.faults, runtime.sim.loop) and the fault
+table (runtime.fault_table, docs/FAULTS.md)."""
 
 from __future__ import annotations
 
@@ -10,32 +10,40 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from runtime.experiment import Experiment, ExperimentFileError, parse_experiment
-from runtime.faults import Fault, FaultSpecError, schedule
-from runtime.generated_modules import robot as default_robot
-from runtime.paper import fault_table as ft
-from runtime.paper import references
-from runtime.paper.simulate import NOT_CALLED, Run, run
+from runtime import fault_table as ft
+from runtime.bindings.generated import load_robot_code
+from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
+from runtime.sim import loop, paths
+from runtime.sim.faults import Fault, FaultSpecError, schedule
+from runtime.sim.loop import NOT_CALLED, Run
+from runtime.sim.reference import Reference
 
 ROOT = Path(__file__).resolve().parent.parent
 EXP = Experiment()
-ROBOT = dict(default_robot.PARAMS)
+CODE = load_robot_code("")  # the paper's robot
+ROBOT = dict(CODE.params)
 H = EXP.controller.h
 START = 3.0
 K0 = round(START / H)
 
 
-@pytest.fixture(scope="module")
-def ref() -> references.Reference:
-    return references.circle(ROBOT, H, 8.0)
+def run(ctrl: str, form: str, ref: Reference, robot: dict[str, float], exp: Experiment,
+        faults: list[Fault] | None = None) -> Run:
+    """The checked closed loop on the paper's robot."""
+    return loop.run(CODE, ctrl, form, ref, robot, exp, check=True, faults=faults or ())
 
 
 @pytest.fixture(scope="module")
-def base(ref: references.Reference) -> Run:
+def ref() -> Reference:
+    return paths.circle(CODE, ROBOT, replace(EXP, paths=replace(EXP.paths, circle_duration=8.0)))
+
+
+@pytest.fixture(scope="module")
+def base(ref: Reference) -> Run:
     return run("tdc", "paper", ref, ROBOT, EXP)
 
 
-def faulted(ref: references.Reference, fault: Fault) -> Run:
+def faulted(ref: Reference, fault: Fault) -> Run:
     return run("tdc", "paper", ref, ROBOT, EXP, faults=[fault])
 
 
@@ -49,14 +57,14 @@ def counts_off(r: Run) -> np.ndarray:
     return np.asarray(np.round(r.q_meas[:, 3:5] * cpr() - rolling))
 
 
-def test_no_fault_changes_nothing(ref: references.Reference, base: Run) -> None:
+def test_no_fault_changes_nothing(ref: Reference, base: Run) -> None:
     again = run("tdc", "paper", ref, ROBOT, EXP, faults=[])
     assert np.array_equal(again.q, base.q) and np.array_equal(again.tau, base.tau)
     assert np.array_equal(base.tau, base.tau_applied)
     assert not np.any(base.status == NOT_CALLED)
 
 
-def test_encoder_miscount_persists(ref: references.Reference, base: Run) -> None:
+def test_encoder_miscount_persists(ref: Reference, base: Run) -> None:
     r = faulted(ref, Fault("encoder-glitch", START, 0.0, 50, "right"))
     off = counts_off(r)
     assert np.all(off[:K0] == 0)
@@ -65,14 +73,14 @@ def test_encoder_miscount_persists(ref: references.Reference, base: Run) -> None
     assert not np.allclose(r.q[-1], base.q[-1])
 
 
-def test_encoder_read_error_is_transient(ref: references.Reference) -> None:
+def test_encoder_read_error_is_transient(ref: Reference) -> None:
     r = faulted(ref, Fault("encoder-glitch", START, 2 * H, -7, "left"))
     off = counts_off(r)
     assert list(off[K0 - 1 : K0 + 3, 1]) == [0, -7, -7, 0]
     assert np.all(off[:, 0] == 0)
 
 
-def test_dropped_samples_hold_the_torque(ref: references.Reference, base: Run) -> None:
+def test_dropped_samples_hold_the_torque(ref: Reference, base: Run) -> None:
     r = faulted(ref, Fault("dropped-sample", START, 3 * H))
     assert list(np.nonzero(r.status == NOT_CALLED)[0]) == [K0, K0 + 1, K0 + 2]
     for k in (K0, K0 + 1, K0 + 2):
@@ -81,7 +89,7 @@ def test_dropped_samples_hold_the_torque(ref: references.Reference, base: Run) -
 
 
 def test_repeated_sample_delivers_the_previous_measurement(
-    ref: references.Reference, base: Run
+    ref: Reference, base: Run
 ) -> None:
     r = faulted(ref, Fault("repeated-sample", START))
     assert np.array_equal(r.q_meas[K0], r.q_meas[K0 - 1])
@@ -90,7 +98,7 @@ def test_repeated_sample_delivers_the_previous_measurement(
     assert not np.array_equal(r.tau[K0], base.tau[K0])
 
 
-def test_traction_loss_spins_the_wheel(ref: references.Reference, base: Run) -> None:
+def test_traction_loss_spins_the_wheel(ref: Reference, base: Run) -> None:
     r = faulted(ref, Fault("traction-loss", START, 0.3, 1.0, "right"))
     off = counts_off(r)
     assert np.all(off[: K0 + 1] == 0)
@@ -104,7 +112,7 @@ def test_traction_loss_spins_the_wheel(ref: references.Reference, base: Run) -> 
 
 
 def test_torque_saturation_limits_the_delivered_torque(
-    ref: references.Reference, base: Run
+    ref: Reference, base: Run
 ) -> None:
     limit = 0.3
     r = faulted(ref, Fault("torque-saturation", START, 1.0, limit, "both"))
@@ -245,7 +253,7 @@ def test_committed_fault_table_is_the_commands_output(table: ft.FaultTable) -> N
 
 
 def test_nothing_diverges_and_nothing_is_silent(table: ft.FaultTable) -> None:
-    assert len(table.rows) == len(ft.DEFAULT_FAULTS) * 8
+    assert len(table.rows) == len(ft.DEFAULT_FAULTS) * len(CODE.runs())
     for r in table.rows:
         assert not r.diverged, r
         assert math.isfinite(r.peak_error) and r.peak_torque <= EXP.controller.tau_max
@@ -276,7 +284,7 @@ def test_command_runs_the_experiments_faults(tmp_path: Path) -> None:
     assert ft.main(["--experiment", str(exp_file), "--out", str(tmp_path / "out")]) == 0
     text = (tmp_path / "out" / "FAULTS.md").read_text(encoding="utf-8")
     rows = [line for line in text.splitlines() if line.startswith("| repeated-sample")]
-    assert len(rows) == 8
+    assert len(rows) == len(CODE.runs())
     assert "encoder-glitch" not in text.split("## Faults")[1].split("## How")[0]
 
 

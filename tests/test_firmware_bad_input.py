@@ -3,7 +3,8 @@
 bytes and tau unchanged, and the next valid step equals that of a twin that never saw
 the bad input; saturation is clipped and reported. ``docs/BAD_INPUT.md`` is the table
 the same code produces. Also the TDE condition ‖M⁻¹M̂ − I‖ < 1 over a parameter box
-(``runtime.paper.nominal_check``)."""
+(``runtime.bindings.uncertainty``) and the checks of a configuration run with ``check=True``
+(``runtime.stability.checks``)."""
 
 from __future__ import annotations
 
@@ -14,14 +15,17 @@ import pytest
 from codegen.controller_api import status_codes
 from codegen.generate import layout_for
 from modeling.robots.drishti.model import robot_model
-from runtime import cbuild
-from runtime.experiment import Experiment
-from runtime.paper.controller_config import checked_controller_config
-from runtime.paper.nominal_check import check_nominal, tde_alpha
+from runtime.bindings import cbuild
+from runtime.bindings.config import controller_config
+from runtime.bindings.generated import load_robot_code
+from runtime.bindings.uncertainty import check_tde, tde_alpha
+from runtime.experiment.settings import Experiment
+from runtime.stability.checks import check_configuration
 from runtime.tooling.bad_input import cases as bad_cases
 from runtime.tooling.bad_input import runner, table
 
 STATUS_CODES = status_codes(layout_for(robot_model()))
+CODE = load_robot_code("")  # Drishti's generated code
 DRISHTI = bad_cases.DRISHTI
 CASES = bad_cases.cases(8)
 
@@ -91,30 +95,31 @@ def test_doc_equals_the_scripts_output(
 # ------------------------------------------------------------------ the TDE condition
 def test_check_nominal_accepts_the_robot() -> None:
     for form in ("paper", "minimal"):
-        alpha = check_nominal(DRISHTI, 0.3, formulation=form)
+        alpha = check_tde(CODE, DRISHTI, 0.3, formulation=form)
         assert 0.3 < alpha < 0.6, alpha  # ±30 % around an exact model
-        assert check_nominal(DRISHTI, 0.0, formulation=form) == pytest.approx(0.0, abs=1e-12)
+        assert check_tde(CODE, DRISHTI, 0.0, formulation=form) == pytest.approx(0.0, abs=1e-12)
 
 
 def test_check_nominal_rejects_a_nominal_three_times_too_heavy() -> None:
     heavy = {**DRISHTI, "m": 3 * DRISHTI["m"], "I": 3 * DRISHTI["I"], "K": 3 * DRISHTI["K"]}
     for form in ("paper", "minimal"):
         with pytest.raises(ValueError, match=r"TDE condition \|\|M\^-1 Mhat - I\|\| < 1"):
-            check_nominal(heavy, 0.3, true_params=DRISHTI, formulation=form)
-        assert tde_alpha(heavy, 0.3, true_params=DRISHTI, formulation=form)[0] > 2.0
+            check_tde(CODE, heavy, 0.3, true_params=DRISHTI, formulation=form)
+        assert tde_alpha(CODE, heavy, 0.3, true_params=DRISHTI, formulation=form)[0] > 2.0
 
 
 def test_check_nominal_alpha_grows_with_the_box() -> None:
-    alphas = [check_nominal(DRISHTI, box) for box in (0.05, 0.1, 0.2, 0.3)]
+    alphas = [check_tde(CODE, DRISHTI, box, formulation="paper")
+              for box in (0.05, 0.1, 0.2, 0.3)]
     assert alphas == sorted(alphas)
     with pytest.raises(ValueError, match="TDE condition"):
-        check_nominal(DRISHTI, 0.6)  # true robots down to 40 % of the model
+        check_tde(CODE, DRISHTI, 0.6, formulation="paper")  # true robots down to 40 %
 
 
 @pytest.mark.parametrize(
     ("nominal", "box", "match"),
     [
-        ({**DRISHTI, "m": 0.0}, 0.3, "'m' must be positive"),
+        ({**DRISHTI, "m": 0.0}, 0.3, "violate m > 0"),
         ({**DRISHTI, "K": math.nan}, 0.3, "'K' must be finite"),
         ({**DRISHTI, "I": 0.001}, 0.3, "m I - K\\^2"),
         ({k: v for k, v in DRISHTI.items() if k != "d"}, 0.3, "missing parameter"),
@@ -126,16 +131,17 @@ def test_check_nominal_rejects_invalid_arguments(
     nominal: dict[str, float], box: float, match: str
 ) -> None:
     with pytest.raises(ValueError, match=match):
-        check_nominal(nominal, box)
+        check_tde(CODE, nominal, box, formulation="paper")
 
 
 def test_checked_controller_config(lib: cbuild.CLibrary) -> None:
     exp = Experiment()
-    cfg = checked_controller_config(lib, "tdroc", "paper", dict(DRISHTI), exp, DRISHTI)
+    check_configuration(CODE, "tdroc", "paper", dict(DRISHTI), exp, DRISHTI)
+    cfg = controller_config(lib, CODE, "tdroc", "paper", dict(DRISHTI), exp)
     state = lib.ffi.new("wmr_tdroc_state_t *")
     assert lib.lib.wmr_tdroc_init(state, cfg) == 0
     heavy = {**DRISHTI, "m": 108.0, "I": 17.16, "K": 1.02}
     with pytest.raises(ValueError, match="TDE condition"):
-        checked_controller_config(lib, "tdc", "minimal", heavy, exp, DRISHTI)
+        check_configuration(CODE, "tdc", "minimal", heavy, exp, DRISHTI)
     # ROC/ASMC do not use the time-delay estimate: no check.
-    checked_controller_config(lib, "asmc", "paper", heavy, exp, DRISHTI)
+    check_configuration(CODE, "asmc", "paper", heavy, exp, DRISHTI)

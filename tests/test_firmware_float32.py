@@ -1,7 +1,7 @@
 """Float32 in the loop: the lawn-mower experiment (paper formulation) with the float32
 build against the double build, TDROC (ε = 0.5) and TDC.
 
-``runtime.paper.simulate.run(float32=True)`` switches the whole C library to float32: the
+``runtime.sim.loop.run(float32=True)`` switches the whole C library to float32: the
 controller *and* the simulated plant (RK4 at 1 kHz). Measured largest deviation of the
 robot's path (point C) between the float32 and double runs:
 
@@ -24,11 +24,15 @@ import numpy as np
 import pytest
 
 from modeling.robot_file import load_robot
-from runtime.cbuild import CLibrary
-from runtime.experiment import Experiment, SensingSettings
-from runtime.paper import references, simulate
-from runtime.paper.references import Reference
+from runtime.bindings.cbuild import CLibrary
+from runtime.bindings.generated import RobotCode, load_robot_code
+from runtime.experiment.settings import Experiment, SensingSettings
+from runtime.sim import loop, paths
+from runtime.sim.plant import library_for
+from runtime.sim.reference import Reference
 from runtime.tooling.bad_input.runner import to_python
+
+CODE = load_robot_code("")
 
 # m: float32 controller and float32 plant. Measured 2.56 mm for TDROC with the generated
 # sincosf of the step, 1.29 mm with newlib's/glibc's sinf/cosf, and 1.26 mm when the generated
@@ -49,7 +53,7 @@ def setting() -> tuple[dict[str, float], Experiment, Reference]:
     exp = Experiment(
         sensing=SensingSettings(velocity="encoder-average", accel_estimator="backward")
     )
-    ref = references.lawnmower(robot, exp.controller.h, exp.paths.lawnmower_duration)
+    ref = paths.lawnmower(CODE, robot, exp)
     return robot, exp, ref
 
 
@@ -83,7 +87,7 @@ def float_controller_library(name: str) -> CLibrary:
     """The double simulation library with the controller's init/step replaced by the
     float32 build's (inputs rounded to float32, torques widened back): a float32
     controller in the loop of the double plant."""
-    dbl, flt = simulate.sim_library(False), simulate.sim_library(True)
+    dbl, flt = library_for(CODE, False), library_for(CODE, True)
     store: dict[str, Any] = {}
 
     class Lib:
@@ -112,7 +116,7 @@ def float_controller_library(name: str) -> CLibrary:
     return CLibrary(dbl.ffi, Lib(), False, dbl.path)
 
 
-def _path_deviation(a: simulate.Run, b: simulate.Run) -> float:
+def _path_deviation(a: loop.Run, b: loop.Run) -> float:
     assert a.failed_at is None and b.failed_at is None
     assert len(a.t) == len(b.t)
     return float(np.max(np.linalg.norm(a.q[:, :2] - b.q[:, :2], axis=1)))
@@ -126,13 +130,17 @@ def test_float32_in_the_loop(
 ) -> None:
     robot, exp, ref = setting
     exp = _experiment(exp, CASES[name])
-    double = simulate.run(name, "paper", ref, robot, exp, float32=False)
-    full = simulate.run(name, "paper", ref, robot, exp, float32=True)
+    double = loop.run(CODE, name, "paper", ref, robot, exp, float32=False, check=True)
+    full = loop.run(CODE, name, "paper", ref, robot, exp, float32=True, check=True)
     deviation_full = _path_deviation(full, double)
 
     hybrid_lib = float_controller_library(name)
-    monkeypatch.setattr(simulate, "sim_library", lambda float32=False: hybrid_lib)
-    hybrid = simulate.run(name, "paper", ref, robot, exp, float32=False)
+
+    def hybrid_library(code: RobotCode, float32: bool = False) -> CLibrary:
+        return hybrid_lib
+
+    monkeypatch.setattr(loop, "library_for", hybrid_library)
+    hybrid = loop.run(CODE, name, "paper", ref, robot, exp, float32=False, check=True)
     monkeypatch.undo()
     deviation_controller = _path_deviation(hybrid, double)
 

@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from runtime import cbuild
+from runtime.bindings import cbuild
 from runtime.tooling.bad_input.cases import DRISHTI
 from runtime.tooling.bad_input.runner import base_config, status_names
 

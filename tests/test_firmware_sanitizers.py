@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 
 CSRC = Path(__file__).resolve().parent.parent / "runtime" / "paper" / "csrc"
 DRIVER = CSRC / "fuzz_driver.c"

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 
 HARNESS = r"""
 #include <stdio.h>

@@ -19,10 +19,12 @@ import numpy as np
 import pytest
 
 from codegen.backends.c.render import CODE_ID_UNSET, stamp_code_id
-from runtime import cbuild
-from runtime.experiment import Experiment
-from runtime.freeze_command import main as freeze_main
-from runtime.frozen_config import (
+from runtime.bindings import cbuild
+from runtime.bindings.config import controller_config
+from runtime.bindings.generated import RobotCode, load_robot_code
+from runtime.experiment.settings import Experiment
+from runtime.freeze.command import main as freeze_main
+from runtime.freeze.header import (
     FROZEN_STATE_OMITS,
     FreezeError,
     freeze,
@@ -30,8 +32,6 @@ from runtime.frozen_config import (
     initializer_lines,
     real_literal,
 )
-from runtime.generated_modules import RobotCode, load_robot_code
-from runtime.robot_simulation import controller_config
 
 STEPS = 60
 STRICT = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wdouble-promotion",

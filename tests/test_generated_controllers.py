@@ -34,7 +34,7 @@ from modeling import controllers as ctl
 from modeling.controllers import ControllerSpec
 from modeling.robots.drishti import model as wmr
 from modeling.robots.drishti.model import PARAM_KEYS
-from runtime.generated_modules import controllers as pyctl
+from runtime.bindings.generated import controllers as pyctl
 
 DRISHTI = wmr.robot_model()
 

@@ -38,8 +38,8 @@ from codegen.layout import argument_size
 from codegen.robot_functions import MAX_WINDOW, model_specs
 from modeling.controllers import ControllerSpec
 from modeling.robots.drishti.model import PARAM_KEYS, robot_model
-from runtime.generated_modules import controllers as pyctl
-from runtime.generated_modules import wmr_model as py_model
+from runtime.bindings.generated import controllers as pyctl
+from runtime.bindings.generated import wmr_model as py_model
 
 K2_OVER_M = DRISHTI["K"] ** 2 / DRISHTI["m"]
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime import cbuild
+from runtime.bindings import cbuild
 
 PROGRAM = r"""
 #include <math.h>

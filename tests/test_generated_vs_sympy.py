@@ -27,8 +27,8 @@ from codegen.layout import argument_size
 from codegen.robot_functions import law_specs, model_specs
 from codegen.spec import Argument, FunctionSpec
 from modeling.robots.drishti.model import PARAM_KEYS, robot_model
-from runtime.generated_modules import controllers as pyctl
-from runtime.generated_modules import wmr_model as py_model
+from runtime.bindings.generated import controllers as pyctl
+from runtime.bindings.generated import wmr_model as py_model
 
 N_SAMPLES = 100
 RTOL_DOUBLE = 1e-12

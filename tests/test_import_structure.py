@@ -329,9 +329,9 @@ def test_the_scan_sees_every_package_and_both_kinds_of_import() -> None:
     # generated/python/controllers.py: `from . import wmr_laws as laws`
     assert any(i.source == "generated.python.controllers"
                and i.target == "generated.python.wmr_laws" for i in found)
-    # runtime/generated_modules.py imports generated.python only under TYPE_CHECKING
+    # runtime/bindings/generated.py imports generated.python only under TYPE_CHECKING
     # (and by importlib with a computed name): no edge at import time.
-    assert not any(i.source == "runtime.generated_modules" and i.target.startswith(
+    assert not any(i.source == "runtime.bindings.generated" and i.target.startswith(
         "generated.python.") and not i.local for i in found)
 
 
@@ -343,8 +343,8 @@ def test_the_checker_finds_a_planted_cycle_and_a_planted_violation() -> None:
     assert cycles({"a": {"b"}, "b": set()}) == []
     planted = Import("modeling.lagrange", "codegen.template_util", (), 1, True)
     assert rule_broken(planted) == "modeling/ imports codegen/"
-    assert rule_broken(Import("runtime.cbuild", "sympy", (), 1, True)) is not None
-    assert rule_broken(Import("runtime.cbuild", "modeling.robot_file",
+    assert rule_broken(Import("runtime.bindings.cbuild", "sympy", (), 1, True)) is not None
+    assert rule_broken(Import("runtime.bindings.cbuild", "modeling.robot_file",
                               ("load_robot_model",), 1, True)) is not None
     assert rule_broken(Import("runtime.tooling.bench.report", "sympy", (), 1, False)) is None
 

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 from test_controller_contract import CLANG_EXCLUSIONS
 
-from runtime import cbuild
-from runtime.freeze_command import main as freeze_main
+from runtime.bindings import cbuild
+from runtime.freeze.command import main as freeze_main
 from runtime.tooling.misra.check import DOC, documented_rules, run_cppcheck
 
 

@@ -17,8 +17,8 @@ from codegen.spec import Argument, Field, FunctionSpec
 from modeling.parameter_table import ParameterInfo, c_field_names
 from modeling.robot_file import RobotFileError, parse_robot
 from modeling.robots.drishti.parameters import K_LAT, LUMPED, PHYSICAL
-from runtime.generated_modules import GENERATED
-from runtime.robot_source import code_in, generated_robots
+from runtime.bindings.generated import GENERATED
+from runtime.bindings.robots import code_in, generated_robots
 
 PLANT = (*LUMPED[:3], K_LAT, *LUMPED[3:])  # wmr_plant_params_t's order
 

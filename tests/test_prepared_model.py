@@ -35,9 +35,8 @@ from codegen.backend import function_ir
 from codegen.backends import c as c_backend
 from codegen.backends.c.config import CConfig, StatusCode
 from modeling.robot_file import load_robot, load_robot_model, shipped_robot_files
-from runtime import cbuild
-from runtime.closed_loop import velocities
-from runtime.generated_modules import GENERATED, RobotCode, load_robot_code
+from runtime.bindings import cbuild
+from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # a case users tried
@@ -124,7 +123,7 @@ def _states(api: Api, rng: np.random.Generator, p: Mapping[str, float], n: int =
         q = np.r_[rng.uniform(-5, 5, 2), rng.uniform(-np.pi, np.pi, code.nq - 2)]
         eta = rng.uniform(-15, 15, code.nu)
         tau = rng.uniform(-10, 10, code.nu)
-        qdot = velocities(code, q, eta, p)
+        qdot = code.velocities(q, eta, p)
         yield q, qdot, tau
 
 

@@ -14,21 +14,24 @@ from __future__ import annotations
 import csv
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from runtime.experiment import Experiment, ExperimentFileError, parse_experiment
-from runtime.generated_modules import robot
-from runtime.paper import references
+from runtime.bindings.generated import load_robot_code
+from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
 from runtime.paper.reproduce import CONTRAST, Reproduction, SweepRow, reproduce
 from runtime.paper.reproduction_report import report_markdown
-from runtime.paper.reproduction_tables import CSV_COLUMNS
+from runtime.paper.reproduction_tables import CSV_COLUMNS, metrics_markdown, write_csv
 from runtime.paper.reproduction_verdicts import claims, stability
+from runtime.sim import paths
 
 ROOT = Path(__file__).resolve().parent.parent
-PARAMS = dict(robot.PARAMS)
+CODE = load_robot_code("")  # the paper's robot
+PARAMS = dict(CODE.params)
+RUNS_PER_SENSING = 2 * len(CODE.runs(("paper", "minimal")))  # 2 paths × (formulation, ctrl)
 SENSINGS = ("sample-instant", "encoder-average")
 PATHS = ("circle", "lawnmower")
 OLD_CSV_COLUMNS = [
@@ -73,7 +76,9 @@ def sweep_row(rep: Reproduction, sensing: str, estimator: str, eps: float, path:
 
 @pytest.mark.parametrize("path", PATHS)
 def test_references_satisfy_the_constraints(path: str) -> None:
-    ref = (references.circle if path == "circle" else references.lawnmower)(PARAMS, 0.1, 30.0)
+    exp = Experiment()
+    exp = replace(exp, paths=replace(exp.paths, circle_duration=30.0, lawnmower_duration=30.0))
+    ref = paths.reference(CODE, PARAMS, exp, path)
     th = ref.q[:, 2]
     xd, yd, thd, wr, wl = ref.qdot.T
     r, b, d = PARAMS["r"], PARAMS["b"], PARAMS["d"]
@@ -92,21 +97,24 @@ def test_references_satisfy_the_constraints(path: str) -> None:
 def test_circle_reference_puts_c_on_radius_r1() -> None:
     from runtime.paper.reproduction_report import circle_centre
 
-    ref = references.circle(PARAMS, 0.1, 40.0)
+    exp = Experiment()
+    ref = paths.circle(CODE, PARAMS, replace(exp, paths=replace(exp.paths, circle_duration=40.0)))
     centre = circle_centre(ref)
     radii = np.linalg.norm(ref.q[ref.t > 5.0, :2] - centre, axis=1)
-    assert np.abs(radii - references.R1).max() < 1e-6
+    assert np.abs(radii - exp.paths.circle_radius).max() < 1e-6
+    assert ref.scale == exp.paths.circle_radius
 
 
 # --------------------------------------------------------------------------- runs
 
 
 def test_runs_are_keyed_by_sensing(paper: Reproduction) -> None:
-    """2 sensing models × 4 controllers × 2 formulations × 2 paths; Metrics name the
-    sensing; metrics.csv rows in the order of the table."""
-    assert len(paper.runs) == 32
+    """2 sensing models × (controller, formulation) pairs × 2 paths (4 × 2 × 2 for the
+    paper's four); Metrics name the sensing; metrics.csv rows in the order of the table."""
+    assert len(paper.runs) == 2 * RUNS_PER_SENSING
     assert {k[0] for k in paper.runs} == set(SENSINGS)
-    assert [m.sensing for m in paper.table] == [s for s in SENSINGS for _ in range(16)]
+    assert [m.sensing for m in paper.table] == [
+        s for s in SENSINGS for _ in range(RUNS_PER_SENSING)]
 
 
 @pytest.mark.parametrize("sensing", SENSINGS)
@@ -194,8 +202,15 @@ def test_tdroc_gain_is_lowest_and_tdroc_beats_roc_asmc(paper: Reproduction, sens
 
 
 def test_payload_changes_the_true_mass(paper: Reproduction) -> None:
-    mass = paper.runs[("sample-instant", "tdc", "paper", "lawnmower")].payload
-    assert set(np.round(np.unique(mass), 6)) == {PARAMS["m"] + 6.0, PARAMS["m"] + 9.0}
+    r = paper.runs[("sample-instant", "tdc", "paper", "lawnmower")]
+    assert set(np.round(np.unique(r.payload), 6)) == {6.0, 9.0}  # kg on board
+    # ... as true masses of the plant: the robot's m plus the payload on board
+    from runtime.sim.payload import plant_params_at
+
+    exp = paper.experiment_for("sample-instant")
+    base = {**CODE.plant_defaults, **PARAMS}
+    masses = {round(plant_params_at(CODE, exp, float(t), base)["m"], 6) for t in r.t}
+    assert masses == {PARAMS["m"] + 6.0, PARAMS["m"] + 9.0}
 
 
 def test_reproduction_is_fast(paper: Reproduction) -> None:
@@ -226,6 +241,15 @@ def test_wheel_switching_terms_are_bounded_by_the_gain(paper: Reproduction) -> N
 
 
 # --------------------------------------------------------------------------- outputs
+
+
+def test_committed_metrics_are_the_reproductions(paper: Reproduction, tmp_path: Path) -> None:
+    """The regression guard of the one closed loop: the paper's runs on it give, byte for
+    byte, the committed docs/reproduction/metrics.md and metrics.csv (`make reproduce`)."""
+    docs = ROOT / "docs" / "reproduction"
+    assert metrics_markdown(paper) == (docs / "metrics.md").read_text(encoding="utf-8")
+    write_csv(paper, tmp_path / "metrics.csv")
+    assert (tmp_path / "metrics.csv").read_bytes() == (docs / "metrics.csv").read_bytes()
 
 
 def test_report_sections_can_be_appended(paper: Reproduction) -> None:
@@ -281,7 +305,8 @@ def test_reproduce_cli_is_deterministic_and_keeps_the_csv_columns(
     short_experiment: Path, tmp_path: Path
 ) -> None:
     """Two --no-plots runs write byte-identical files; metrics.csv has the old columns in
-    their old order with ``sensing`` appended last, 32 rows (2 sensing models × 16)."""
+    their old order with ``sensing`` appended last, 2 sensing models × 16 rows (each
+    controller in each formulation it is generated in, on both paths)."""
     outs = [tmp_path / "a", tmp_path / "b"]
     for out in outs:
         proc = run_cli("--experiment", str(short_experiment), "--out", str(out), "--no-plots")
@@ -294,8 +319,8 @@ def test_reproduce_cli_is_deterministic_and_keeps_the_csv_columns(
     with (outs[0] / "metrics.csv").open() as fh:
         rows = list(csv.reader(fh))
     assert rows[0] == [*OLD_CSV_COLUMNS, "sensing"] == list(CSV_COLUMNS)
-    assert len(rows) == 1 + 32
-    assert [r[-1] for r in rows[1:]] == [s for s in SENSINGS for _ in range(16)]
+    assert len(rows) == 1 + 2 * RUNS_PER_SENSING
+    assert [r[-1] for r in rows[1:]] == [s for s in SENSINGS for _ in range(RUNS_PER_SENSING)]
 
 
 def test_reproduce_cli_sensing_option(short_experiment: Path, tmp_path: Path) -> None:
@@ -311,7 +336,8 @@ def test_reproduce_cli_sensing_option(short_experiment: Path, tmp_path: Path) ->
     )
     assert proc.returncode == 0, proc.stderr
     rows = (tmp_path / "o" / "metrics.csv").read_text().splitlines()
-    assert len(rows) == 1 + 16 and all(r.endswith(",encoder-average") for r in rows[1:])
+    assert len(rows) == 1 + RUNS_PER_SENSING
+    assert all(r.endswith(",encoder-average") for r in rows[1:])
     bad = run_cli("--out", str(tmp_path / "bad"), "--sensing", "telepathy")
     assert bad.returncode == 2 and "--sensing" in bad.stderr
     assert not (tmp_path / "bad").exists()

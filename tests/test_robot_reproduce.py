@@ -1,9 +1,9 @@
-"""``reproduce --robot FILE``: the paper's experiment scaled to any robot.
+"""``reproduce --robot ROBOT``: the paper's experiment scaled to any robot.
 
 What is checked: the robot's sizes measured on its generated code equal the file's
 numbers; the scaling rules; the scaled references are motions the robot can make (q̇ and
 q̈ agree with finite differences of q and q̇, the root drives the circle it was asked to);
-odometry from the encoders follows the true motion; the four controllers close the loop
+odometry from the encoders follows the true motion; every controller closes the loop
 through the robot's generated C; the command runs end to end for a lumped robot file and
 for a described one (the trailer) and names every problem with a file before any work.
 """
@@ -13,29 +13,35 @@ from __future__ import annotations
 import hashlib
 import re
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from runtime.experiment import Experiment, parse_experiment
-from runtime.generated_modules import GENERATED, load_robot_code
-from runtime.paper.paths import DRISHTI_MASS
+from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
+from runtime.bindings.robots import RobotSourceError, resolve
+from runtime.bindings.uncertainty import body_yaws, inertial_keys
+from runtime.experiment.scale import RobotScale, paper_scale, robot_scale, scaled_experiment
+from runtime.experiment.settings import Experiment, parse_experiment
 from runtime.reproduce_command import main
-from runtime.robot_paths import body_yaws, circle, lawnmower
-from runtime.robot_scale import (
-    RobotScale,
-    inertial_keys,
-    robot_scale,
-    scaled_experiment,
-)
-from runtime.robot_simulation import Odometry
-from runtime.robot_source import RobotSourceError, resolve
+from runtime.sim.paths import circle, lawnmower
+from runtime.sim.sensors import Sensors
 
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ROOT / "tests" / "robots" / "small_robot.toml"  # a case users tried
 TRAILER = next((ROOT / "modeling" / "robots").rglob("trailer.toml"))
 SHORT = "[paths]\ncircle_duration = 6.0\nlawnmower_duration = 8.0\n"
+DRISHTI = load_robot_code("").params
+DRISHTI_MASS = DRISHTI["m"] + 2 * DRISHTI["Iw"] / DRISHTI["r"] ** 2  # m + 2 I_w / r²
+
+
+def scaled(code: RobotCode, h: float, circle_s: float, lawn_s: float) -> Experiment:
+    """The paper's setting scaled to the robot, at ``h`` with these path durations."""
+    exp = scaled_experiment(Experiment(), robot_scale(code, code.params))[0]
+    return replace(exp, controller=replace(exp.controller, h=h),
+                   paths=replace(exp.paths, circle_duration=circle_s,
+                                 lawnmower_duration=lawn_s))
 
 
 def test_scale_measured_on_generated_code_equals_the_files_numbers() -> None:
@@ -44,6 +50,8 @@ def test_scale_measured_on_generated_code_equals_the_files_numbers() -> None:
     assert s.wheel_radius == pytest.approx(0.096, rel=1e-12)
     assert s.track == pytest.approx(0.414, rel=1e-12)
     assert s.mass == pytest.approx(DRISHTI_MASS, rel=1e-12)
+    assert s.offset == pytest.approx(0.12, rel=1e-12)  # d: C ahead of the axle
+    assert paper_scale() == s  # the paper's setting is written for Drishti
     trailer = load_robot_code("trailer")
     t = robot_scale(trailer, trailer.params)
     # 30 + 15 + 4 wheels (3, 3, 1.25, 1.25) kg, plus spin inertias over r²
@@ -61,7 +69,7 @@ def test_inertial_keys_are_what_the_kinematics_ignores() -> None:
 
 
 def test_scaling_keeps_what_an_experiment_sets_and_scales_the_rest() -> None:
-    half = RobotScale(0.048, 0.207, DRISHTI_MASS / 4)  # half the size, a quarter the heft
+    half = RobotScale(0.048, 0.207, 0.06, DRISHTI_MASS / 4)  # half the size, 1/4 the heft
     exp = parse_experiment("[controller]\ntau_max = 7.0\n")
     out, lines = scaled_experiment(exp, half)
     assert out.controller.tau_max == 7.0  # set by the file
@@ -70,33 +78,39 @@ def test_scaling_keeps_what_an_experiment_sets_and_scales_the_rest() -> None:
     assert out.plant.coulomb == pytest.approx(0.3 * torque)
     assert out.plant.fixed_payload == pytest.approx(6.0 / 4)
     assert out.plant.extra_payload_x == pytest.approx(0.10 / 2)
-    same, _ = scaled_experiment(Experiment(), RobotScale(0.096, 0.414, DRISHTI_MASS))
-    assert same == Experiment()  # Drishti's own size changes nothing
+    assert out.paths.circle_radius == pytest.approx(1.5 / 2)
+    # wheel rates for Drishti's speeds times the size: the same rates on half-size wheels
+    assert out.paths.lawnmower_fast == pytest.approx(3.0)
+    assert out.controller.roc_max_rate == pytest.approx(8.0)
+    assert out.controller.pi_ky == pytest.approx(8.0 * 4)  # 1/m²
+    same, _ = scaled_experiment(Experiment(), paper_scale())
+    assert same == Experiment()  # Drishti's own size changes nothing, bit for bit
 
 
 @pytest.mark.parametrize("folder", ["", "trailer"])
 def test_scaled_references_are_consistent_motions(folder: str) -> None:
     code = load_robot_code(folder)
-    s = robot_scale(code, code.params)
     h = 0.01
-    for path in (circle(code, s, code.params, h, 12.0), lawnmower(code, s, code.params, h, 30.0)):
-        ref = path.ref
+    exp = scaled(code, h, 12.0, 30.0)
+    for ref in (circle(code, code.params, exp), lawnmower(code, code.params, exp)):
         dq = (ref.q[2:] - ref.q[:-2]) / (2 * h)
         ddq = (ref.qdot[2:] - ref.qdot[:-2]) / (2 * h)
         assert np.max(np.abs(dq - ref.qdot[1:-1])) < 1e-3 * max(1.0, np.abs(ref.qdot).max())
         assert np.max(np.abs(ddq - ref.qddot[1:-1])) < 2e-2 * max(1.0, np.abs(ref.qddot).max())
-    ref = circle(code, s, code.params, 0.05, 40.0).ref
+    ref = circle(code, code.params, scaled(code, 0.05, 40.0, 1.0))
     late = ref.t > 15.0  # after the start-up ramp: on the circle of radius R1 · size
     centre = np.array([np.mean(ref.q[late, 0]), np.mean(ref.q[late, 1])])
     radius = np.linalg.norm(ref.q[late, :2] - centre, axis=1)
     assert np.ptp(radius) < 0.02 * radius.mean()
-    assert radius.mean() == pytest.approx(1.5 * s.size, rel=0.05)
+    size = robot_scale(code, code.params).track / paper_scale().track
+    assert radius.mean() == pytest.approx(1.5 * size, rel=0.05)
+    assert ref.scale == pytest.approx(1.5 * size, rel=1e-12)
 
 
 def test_trailer_starts_with_a_straight_hitch() -> None:
     code = load_robot_code("trailer")
     assert body_yaws(code) == (code.robot.COORDINATES.index("theta_cart"),)
-    ref = circle(code, robot_scale(code, code.params), code.params, 0.1, 1.0).ref
+    ref = circle(code, code.params, scaled(code, 0.1, 1.0, 1.0))
     assert ref.q[0, 3] == ref.q[0, 2]
 
 
@@ -105,12 +119,11 @@ def test_odometry_follows_the_true_motion(velocity: str) -> None:
     """Fed the reference's own wheel angles, odometry reproduces the whole configuration
     (pose, hitch, passive wheels) to within the encoder resolution's effect."""
     code = load_robot_code("trailer")
-    s = robot_scale(code, code.params)
     h = 0.02
-    ref = lawnmower(code, s, code.params, h, 20.0).ref
+    ref = lawnmower(code, code.params, scaled(code, h, 1.0, 20.0))
     exp = parse_experiment(f'[sensing]\nvelocity = "{velocity}"\nencoder_ppr = 100000\n'
                            f"[controller]\nh = {h}\n")
-    odo = Odometry(code, ref.q[0], exp, code.params)
+    odo = Sensors(code, ref.q[0], exp, code.params)
     act = list(code.actuated)
     worst_q, worst_rate = 0.0, 0.0
     for k in range(1, len(ref.t)):
@@ -140,7 +153,7 @@ def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[s
     report = (out / "REPORT.md").read_text()
     assert "robot 'small_robot'" in report and "τ_max = 0.2179 N m" in report
     rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
-    assert len(rows) == 2 * 2 * 4  # paths × formulations × controllers
+    assert len(rows) == 2 * len(load_robot_code("").runs())  # paths × (formulation, ctrl)
     minimal_tdc = [r for r in rows if r[2] == "minimal" and r[3] == "tdc"]
     assert all(float(r[4]) < 0.01 for r in minimal_tdc)  # metres
 
@@ -149,8 +162,10 @@ def test_trailer_end_to_end_with_plot(tmp_path: Path) -> None:
     code, out = _run_cli(tmp_path, "--robot", str(TRAILER))
     assert code == 0
     rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
-    assert len(rows) == 2 * 4 and all(r[2] == "minimal" for r in rows)
+    assert len(rows) == 2 * len(load_robot_code("trailer").runs())
+    assert all(r[2] == "minimal" for r in rows)
     assert all(r[11] == "" for r in rows)  # no run failed
+    assert all(r[12] == "ok" for r in rows)  # and none left its path
     tdroc = [float(r[4]) for r in rows if r[3] == "tdroc"]
     assert max(tdroc) < 0.01
     assert (out / "tracking.png").stat().st_size > 10_000
@@ -176,7 +191,8 @@ def test_bad_robot_files_are_named(tmp_path: Path, capsys: pytest.CaptureFixture
     other.write_text(TRAILER.read_text().replace('name = "trailer"', 'name = "other"'))
     assert _run_cli(tmp_path, "--robot", str(other))[0] == 2
     err = capsys.readouterr().err
-    assert "no generated code for robot 'other'" in err and "python -m codegen --robot" in err
+    assert "no generated code for robot 'other'" in err and "wmr model --robot" in err
+    assert "python -m codegen" not in err
     edited = tmp_path / "trailer.toml"
     edited.write_text(TRAILER.read_text().replace("mass = 15.0", "mass = 16.0"))
     assert _run_cli(tmp_path, "--robot", str(edited))[0] == 2
@@ -195,7 +211,7 @@ def test_generated_folder_outside_the_repository(tmp_path: Path) -> None:
 
 
 def test_stability_names_what_it_cannot_analyse(capsys: pytest.CaptureFixture[str]) -> None:
-    from runtime.paper import stability
+    from runtime.stability import analysis as stability
 
     assert stability.main(["--robot", str(TRAILER), "--no-measure"]) == 2
     assert "reproduce --robot" in capsys.readouterr().err
@@ -213,10 +229,11 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
     (tmp_path / "generated" / "__init__.py").write_text("")
     shutil.copytree(GENERATED / "trailer" / "python", tmp_path / "generated" / "python",
                     ignore=shutil.ignore_patterns("__pycache__"))
-    probe = ("import runtime.generated_modules as g\n"
+    probe = ("import runtime.bindings.generated as g\n"
              "assert g.load_robot_code('').name == 'trailer'\n"
-             "import runtime.robot_reproduce  # the generic runtime needs no paper robot\n"
-             "from runtime.generated_modules import wmr_model\n")
+             "import runtime.experiment.reproduction  # the generic runtime needs no paper "
+             "robot\n"
+             "from runtime.bindings.generated import wmr_model\n")
     result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
                             text=True, check=False)
     assert result.returncode == 1
@@ -231,8 +248,8 @@ def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
 
     probe = (
         "import sys\nfrom pathlib import Path\n"
-        "import runtime.reproduce_command, runtime.robot_reproduce\n"
-        "from runtime.robot_source import resolve\n"
+        "import runtime.reproduce_command, runtime.experiment.reproduction\n"
+        "from runtime.bindings.robots import resolve\n"
         f"resolve(Path({str(SMALL)!r})); resolve(Path({str(TRAILER)!r}))\n"
         "print(sorted(m for m in ('sympy', 'codegen', 'casadi') if m in sys.modules))\n"
     )
@@ -267,7 +284,7 @@ def test_output_folder_is_checked_before_any_run(tmp_path: Path,
 
 
 def test_a_tiny_sampling_time_is_refused_with_its_field() -> None:
-    from runtime.experiment import ExperimentFileError
+    from runtime.experiment.settings import ExperimentFileError
 
     with pytest.raises(ExperimentFileError, match=re.escape("'controller.h' = 1e-09 s gives 3e")):
         parse_experiment("[controller]\nh = 1e-9\n")
@@ -276,7 +293,7 @@ def test_a_tiny_sampling_time_is_refused_with_its_field() -> None:
 def test_wheel_profile_derivative_over_a_long_path() -> None:
     """The tanh steps' derivative once overflowed (math.cosh) 710 ramps after a switch, so a
     circle of 150 s crashed the reproduction; it is the rates' derivative everywhere."""
-    from runtime.paper.paths import RAMP, WheelProfile
+    from runtime.sim.reference import RAMP, WheelProfile
 
     profile = WheelProfile((1.0, 4.0), ((2.0, 1.0), (-1.0, 0.5)))
     for t in (0.0, 1.0, 1.0 + RAMP, 3.9, 5.0, 300.0, 1e6):

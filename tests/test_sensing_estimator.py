@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from runtime.generated_modules import controllers as gc
-from runtime.generated_modules import robot, wmr_model
+from runtime.bindings.generated import controllers as gc
+from runtime.bindings.generated import robot, wmr_model
 
 H = 0.1
 H1_TRUE = np.array([0.7, -0.3])

@@ -1,4 +1,4 @@
-"""The sampled-loop spectrum (``runtime.paper.sampled_loop``, ``wmr stability``) checked by
+"""The sampled-loop spectrum (``runtime.stability.sampled_loop``, ``wmr stability``) checked by
 another route, for Drishti and tests/robots/small_robot.toml.
 
 What the analysis leaves out of the spectrum, and why (its docstrings):
@@ -33,11 +33,13 @@ import pytest
 import scipy.linalg as sla
 from numpy.typing import NDArray
 
-from runtime.experiment import Experiment
-from runtime.generated_modules import robot
-from runtime.paper import stability
-from runtime.paper.sampled_loop import DIM, GAIN_CEILING, LAYOUT, SLICES
+from runtime.bindings.generated import load_robot_code
+from runtime.experiment.arguments import robot_setting
+from runtime.experiment.settings import Experiment
+from runtime.stability import analysis as stability
+from runtime.stability.sampled_loop import DIM, GAIN_CEILING, LAYOUT, SLICES
 
+CODE = load_robot_code("")  # Drishti's, and the [lumped] small robot's, generated code
 SMALL_ROBOT = Path(__file__).resolve().parent / "robots" / "small_robot.toml"
 NAMES = [f"{name}[{i}]" for name, size, _ in LAYOUT for i in range(size)]
 TORQUE = (SLICES["u_prev"].start + 3, SLICES["u_prev"].start + 4)  # τ the law last applied
@@ -51,9 +53,9 @@ Matrix = NDArray[np.float64]
 def robot_and_experiment(name: str) -> tuple[dict[str, float], Experiment]:
     """The robot and the experiment ``wmr stability`` analyses it with."""
     if name == "drishti":
-        return dict(robot.PARAMS), Experiment()
-    params = stability.robot_from(SMALL_ROBOT)[0]
-    return params, stability.scaled_for(params, Experiment())[0]
+        return dict(CODE.params), Experiment()
+    setting = robot_setting(SMALL_ROBOT, None, Experiment())
+    return setting.robot.nominal, setting.experiment
 
 
 SENSING = [("sample-instant", "matched"), ("encoder-average", "matched"),
@@ -69,7 +71,8 @@ def loop_setting(name: str, controller: str, formulation: str, velocity: str,
     params, exp = robot_and_experiment(name)
     sensing = replace(exp.sensing, velocity=velocity,
                       accel_estimator=estimator or exp.sensing.accel_estimator)
-    return stability.setting(controller, formulation, params, replace(exp, sensing=sensing))
+    return stability.setting(CODE, controller, formulation, params,
+                             replace(exp, sensing=sensing))
 
 
 def reaches_torque(jac: Matrix) -> list[int]:

@@ -22,7 +22,7 @@ from description_numeric import rel
 from test_description_kane import KaneRobot, inertial_values
 
 from modeling.description import description_system, packaged_description
-from runtime.generated_modules import load_robot_code
+from runtime.bindings.generated import load_robot_code
 
 ROBOTS = ("trailer2", "trailer3")
 N_STATES = 30

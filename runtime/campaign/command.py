@@ -1,7 +1,7 @@
 """``python -m runtime campaign``: a robustness campaign on Dask, resumable, summarised.
 
-    python -m runtime campaign [--spec FILE.toml] [--robot FILE] [--runs N]
-                               [--scheduler tcp://HOST:PORT] [--workers N] --out DIR
+    wmr campaign [--spec FILE.toml] [--robot ROBOT] [--generated DIR] [--runs N]
+                 [--scheduler tcp://HOST:PORT] [--workers N] --out DIR
 
 Every argument is checked before any run (one-line error, exit status 2); then the runs not
 yet in DIR run on a LocalCluster (``--workers``, default: the CPU count) or on the cluster of
@@ -23,6 +23,7 @@ from typing import Any
 
 from runtime.campaign import store
 from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
+from runtime.experiment.arguments import add_robot_options
 from runtime.output_folder import OutputFolderError, writable_folder
 
 
@@ -48,8 +49,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--spec", type=Path, default=None, metavar="FILE.toml",
                    help="campaign file (default: the paper's setting, every parameter ±30 %%, "
                    "payload positions random)")
-    p.add_argument("--robot", type=Path, default=None, metavar="FILE",
-                   help="robot file (default: the paper's Drishti)")
+    add_robot_options(p)
     p.add_argument("--runs", type=_positive_int("--runs"), default=None,
                    help="number of runs (default: the spec's runs, 1000)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -63,29 +63,37 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def resolve_campaign(spec: Path | None, robot: Path | None, runs: int | None) -> tuple[
-        Campaign, Any]:
+def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | None,
+                     generated: Path | None = None) -> tuple[Campaign, Any]:
     """The checked campaign and its robot target (raises ``CampaignSpecError`` or
-    ``ValueError`` with a one-line message)."""
+    ``ValueError`` with a one-line message). The campaign's experiment is scaled to the
+    robot as every command scales it (identity for the paper's robot)."""
     from runtime.campaign.runner import target
+    from runtime.experiment.scale import robot_scale, scaled_experiment
 
-    robot_file = str(robot.resolve()) if robot is not None else None
-    if robot is not None and not robot.is_file():
-        raise CampaignSpecError(f"--robot {robot}: robot file not found")
-    tgt = target(robot_file)
+    # an absolute path for the workers (a robot's name stays a name)
+    named = str(robot) if robot is not None else None
+    if named is not None and Path(named).exists():
+        named = str(Path(named).resolve())
+    folder = str(generated.resolve()) if generated is not None else None
+    tgt = target(named, folder)
+    code = tgt.setup.code
+
+    def available(formulation: str) -> tuple[str, ...]:
+        if formulation not in code.formulations:
+            raise CampaignSpecError(f"field 'formulation': robot '{tgt.name}' has no "
+                                    f"{formulation} formulation generated (it has "
+                                    f"{', '.join(code.formulations)})")
+        return tuple(c.name for _, c in code.runs((formulation,)))
+
     if spec is None:
-        campaign = default_campaign(tgt.plant, tgt.inertial, tgt.track)
+        campaign = default_campaign(tgt.plant, tgt.inertial, tgt.track,
+                                    controllers=available(Campaign().formulation))
     else:
-        campaign = load_campaign(spec, tgt.plant)
-    if tgt.kind == "described":  # the experiment scaled to the robot, as reproduce --robot
-        from runtime.robot_scale import robot_scale, scaled_experiment
-        from runtime.robot_source import resolve
-
-        code = resolve(Path(robot_file or "")).code
-        exp, _ = scaled_experiment(campaign.experiment, robot_scale(code, tgt.nominal))
-        campaign = replace(campaign, experiment=exp)
-    return replace(campaign, runs=runs or campaign.runs, robot=robot_file,
-                   robot_sha256=tgt.sha256,
+        campaign = load_campaign(spec, tgt.plant, available)
+    exp, _ = scaled_experiment(campaign.experiment, robot_scale(code, tgt.nominal))
+    return replace(campaign, experiment=exp, runs=runs or campaign.runs, robot=named,
+                   generated=folder, robot_sha256=tgt.sha256,
                    source=str(spec) if spec else campaign.source), tgt
 
 
@@ -97,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
               "workers run the campaign", file=sys.stderr)
         return 2
     try:
-        campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs)
+        campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs, args.generated)
         out = writable_folder(args.out)
         store.check_folder(out, campaign)
     except (CampaignSpecError, OutputFolderError, store.CampaignFolderError, ValueError) as exc:
@@ -107,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
 
     workers = args.workers or os.cpu_count() or 1
     try:
-        cluster = connect(args.scheduler, workers, campaign.robot)
+        cluster = connect(args.scheduler, workers, campaign.robot, campaign.generated)
     except CampaignExecutionError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

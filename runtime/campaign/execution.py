@@ -50,8 +50,8 @@ def project_root() -> Path:
     return Path(runtime.__file__).resolve().parent.parent
 
 
-def connect(scheduler: str | None, workers: int, robot_file: str | None,
-            timeout: float = 10.0) -> Cluster:
+def connect(scheduler: str | None, workers: int, robot: str | None,
+            generated: str | None = None, timeout: float = 10.0) -> Cluster:
     """A client on a new LocalCluster of ``workers`` single-threaded processes, or on the
     scheduler at ``scheduler``; every worker has loaded the robot's compiled C."""
     from dask.distributed import Client, LocalCluster
@@ -80,7 +80,7 @@ def connect(scheduler: str | None, workers: int, robot_file: str | None,
     cluster = Cluster(client, local, workers, where)
     try:
         client.wait_for_workers(1, timeout=3 * timeout)
-        answers = client.run(warm_up, robot_file)
+        answers = client.run(warm_up, robot, generated)
     except TimeoutError:
         cluster.close()
         raise CampaignExecutionError(f"{where}: no worker joined within {3 * timeout:g} s "

@@ -1,14 +1,15 @@
 """The stability boundary the sampled-data analysis predicts on a campaign's map.
 
-:func:`runtime.paper.stability.analyse` gives, for a controller at a setting, the largest
+:func:`runtime.stability.analysis.analyse` gives, for a controller at a setting, the largest
 stable boundary-layer gain g_max and the gain the setting gives, g = N/ε with N = 0 (TDC),
 k̂ measured in closed loop (TDROC, ASMC) or ρ (ROC). So the loop is predicted stable for
 ε > ε_min = N / g_max (no ε if it is unstable without switching: ε_min = ∞). ε_min is
 computed at ``map.grid`` points of the map's y parameter over its drawn range, for each
 controller and each sensing model the campaign draws, every other parameter at its base
 value (nominal robot, no payload, no friction: the analysis' conditions), and interpolated
-in between. Only the paper's differential drive has the analysis: for a robot file of
-bodies and wheels the boundary is reported as not available.
+in between. Only the paper's differential drive has the analysis, and only for the laws of
+(18): for a robot of bodies and wheels the boundary is reported as not available, and a
+controller the analysis does not model gets none.
 """
 
 from __future__ import annotations
@@ -70,11 +71,14 @@ def velocities(campaign: Campaign) -> list[str]:
 
 def predict(campaign: Campaign, tgt: Target) -> Prediction:
     """ε_min on the map for every controller and sensing model of the campaign."""
-    if tgt.kind != "paper":
+    from runtime.stability.analysis import analyse
+    from runtime.stability.sampled_loop import analysed, covers
+
+    code = tgt.setup.code
+    if not covers(code):
         return Prediction({}, unavailable=(
-            f"robot '{tgt.name}' is described as bodies and wheels; the sampled-data analysis "
-            "is written for the paper's differential drive, so no boundary is predicted"))
-    from runtime.paper.stability import analyse
+            f"robot '{tgt.name}' is not a plain differential drive; the sampled-data analysis "
+            "is written for the paper's, so no boundary is predicted"))
 
     section, _, key = campaign.map_y.partition(".")
     base_y = float(getattr(getattr(campaign.experiment, section), key))
@@ -84,10 +88,12 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
         campaign.experiment.paths, circle_duration=campaign.duration))
     for velocity in velocities(campaign):
         for ctrl in campaign.controllers:
+            if not analysed(code.controller(ctrl)):
+                continue
             eps_min = []
             for y in ys:
                 exp = with_values(exp0, {campaign.map_y: y, "sensing.velocity": velocity})
-                a = analyse(ctrl, campaign.formulation, tgt.nominal, exp)
+                a = analyse(code, ctrl, campaign.formulation, tgt.nominal, exp)
                 numerator = a.gain_at_setting * a.eps
                 if a.radius_without_switching >= 1.0:
                     eps_min.append(math.inf)

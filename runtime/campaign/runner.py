@@ -1,32 +1,32 @@
 """One campaign run through the generated C: what a Dask worker executes.
 
 A run draws its parameters (:mod:`runtime.campaign.sampling`), applies them to the base
-experiment (``section.field``) and to the simulated robot (``robot.KEY``; the controllers
-keep the nominal model), and simulates its controller on the campaign's path:
-
-* the paper's differential drive (Drishti, or a ``[lumped]``/``[physical]`` robot file):
-  :func:`runtime.paper.simulate.run`, the RK4 plant in C, without the configuration checks
-  (a campaign records what happens, the prediction is compared afterwards);
-* a robot file of bodies and wheels: :func:`runtime.robot_simulation.run` on its generated
-  code, with the experiment scaled to it as ``reproduce --robot`` does.
+experiment (``section.field``; the experiment is already scaled to the robot, as every
+command scales it) and to the simulated robot (``robot.KEY``; the controllers keep the
+nominal model), and simulates its controller on the campaign's path with the one closed
+loop, :func:`runtime.sim.loop.run`, without the configuration checks (a campaign records
+what happens, the prediction is compared afterwards). Any robot: Drishti, a
+``[lumped]``/``[physical]`` or bodies-and-wheels robot file, a generated folder
+(:func:`runtime.bindings.robots.resolve`).
 
 The compiled library, the references and ROC's bounds are cached per worker process
 (module level): a worker compiles or loads the C once, not per run.
 
 Outcome of a run (``status``): ``ok``; ``init_refused`` (the C init's status code in
-``status_code``); ``diverged`` (a step failed, the plant became non-finite, or the position
-error exceeded ``diverged_error``); ``error`` (any exception, its text in ``error``).
-``stable`` is the simulated verdict the stability map compares with the prediction: ``ok``
-and no sampled-data limit cycle, i.e. ``chatter`` = RMS(Δτ)/RMS(τ) over the second half of
-the run below ``chatter_limit`` (an oscillating switching term alternates τ sample to
-sample: chatter ≈ 2; a stable loop's torque varies slowly: chatter ≪ 1).
+``status_code``); ``diverged`` (a step failed, the plant became non-finite, the position
+error exceeded ``diverged_error``, or the run left its path: final or RMS error beyond
+:data:`runtime.sim.outcome.OFF_PATH_FRACTION` of the path's scale); ``error`` (any
+exception, its text in ``error``). ``stable`` is the simulated verdict the stability map
+compares with the prediction: ``ok`` and no sampled-data limit cycle, i.e. ``chatter`` =
+RMS(Δτ)/RMS(τ) over the second half of the run below ``chatter_limit`` (an oscillating
+switching term alternates τ sample to sample: chatter ≈ 2; a stable loop's torque varies
+slowly: chatter ≪ 1).
 """
 
 from __future__ import annotations
 
 import json
 import math
-import re
 from dataclasses import dataclass, replace
 from functools import cache, lru_cache
 from pathlib import Path
@@ -35,9 +35,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from runtime.bindings.robots import RobotSetup, resolve
 from runtime.campaign.sampling import base_values, controller_of, draw, run_seed
 from runtime.campaign.spec import Campaign, Value, from_payload, with_values
-from runtime.experiment import Experiment, check_sample_count, check_sensing
+from runtime.experiment.settings import (
+    ControllerSettings,
+    Experiment,
+    PathSettings,
+    check_sample_count,
+    check_sensing,
+)
 
 Array = NDArray[np.float64]
 
@@ -46,38 +53,38 @@ Array = NDArray[np.float64]
 class Target:
     """The robot a campaign runs: its nominal model and simulated robot before drawing."""
 
-    name: str
-    kind: str  # "paper": the wmr_ code through runtime.paper.simulate; "described"
-    nominal: dict[str, float]
-    plant: dict[str, float]  # the simulated robot's parameters (robot.KEY may be drawn)
+    setup: RobotSetup
     inertial: tuple[str, ...]
     track: float
-    robot_file: str | None
-    sha256: str | None
+
+    @property
+    def name(self) -> str:
+        return self.setup.name
+
+    @property
+    def nominal(self) -> dict[str, float]:
+        return self.setup.nominal
+
+    @property
+    def plant(self) -> dict[str, float]:
+        """The simulated robot's parameters (``robot.KEY`` may be drawn)."""
+        return self.setup.plant
+
+    @property
+    def sha256(self) -> str | None:
+        return self.setup.sha256
 
 
 @cache
-def target(robot_file: str | None) -> Target:
-    """Drishti (``None``) or the robot of a robot file (cached per process)."""
-    if robot_file is None:
-        from runtime.generated_modules import robot
+def target(robot: str | None, generated: str | None = None) -> Target:
+    """The robot ``--robot`` names (None: Drishti), its code under ``generated`` (cached
+    per process)."""
+    from runtime.bindings.uncertainty import inertial_keys
+    from runtime.experiment.scale import robot_scale
 
-        params = {k: float(v) for k, v in robot.PARAMS.items()}
-        return Target(robot.NAME, "paper", params, params, ("m", "I", "K", "Iw"), params["b"],
-                      None, None)
-    from modeling.robot_io import is_description, read_robot_text, text_digest
-    from runtime.robot_scale import inertial_keys, robot_scale
-    from runtime.robot_source import resolve
-
-    path = Path(robot_file)
-    setup = resolve(path)
-    digest = text_digest(read_robot_text(path))
-    if is_description(path):
-        scale = robot_scale(setup.code, setup.nominal)
-        return Target(setup.name, "described", setup.nominal, setup.plant,
-                      inertial_keys(setup.code, setup.nominal), scale.track, robot_file, digest)
-    return Target(setup.name, "paper", setup.nominal, setup.nominal, ("m", "I", "K", "Iw"),
-                  setup.nominal["b"], robot_file, digest)
+    setup = resolve(robot, Path(generated) if generated is not None else None)
+    scale = robot_scale(setup.code, setup.nominal)
+    return Target(setup, inertial_keys(setup.code, setup.nominal), scale.track)
 
 
 @lru_cache(maxsize=8)
@@ -85,78 +92,28 @@ def _campaign(text: str) -> Campaign:
     return from_payload(json.loads(text))
 
 
-# ----------------------------------------------------------------------------- references
+def reference(c: Campaign, tgt: Target, exp: Experiment) -> Any:
+    """The campaign's path for the experiment (cached on what it depends on: h, [paths])."""
+    return _reference(c.robot, c.generated, c.path, tuple(sorted(tgt.nominal.items())),
+                      exp.controller.h, exp.paths)
 
 
 @lru_cache(maxsize=256)
-def _paper_reference(path: str, nominal: tuple[tuple[str, float], ...], h: float,
-                     duration: float) -> Any:
-    from runtime.paper import references
+def _reference(robot: str | None, generated: str | None, path: str,
+               nominal: tuple[tuple[str, float], ...], h: float, settings: PathSettings) -> Any:
+    from runtime.sim import paths
 
-    make = references.circle if path == "circle" else references.lawnmower
-    return make(dict(nominal), h, duration)
-
-
-@lru_cache(maxsize=256)
-def _described_reference(robot_file: str, path: str, h: float, duration: float) -> Any:
-    from runtime import robot_paths
-    from runtime.robot_scale import robot_scale
-
-    tgt = target(robot_file)
-    code = _described_code(robot_file)
-    scale = robot_scale(code, tgt.nominal)
-    make = robot_paths.circle if path == "circle" else robot_paths.lawnmower
-    return make(code, scale, tgt.nominal, h, duration).ref
+    exp = replace(Experiment(), controller=replace(ControllerSettings(), h=h), paths=settings)
+    return paths.reference(target(robot, generated).setup.code, dict(nominal), exp, path)
 
 
-@cache
-def _described_code(robot_file: str) -> Any:
-    from runtime.robot_source import resolve
-
-    return resolve(Path(robot_file)).code
-
-
-@cache
-def _described_library(robot_file: str) -> Any:
-    from runtime import cbuild
-
-    code = _described_code(robot_file)
-    return cbuild.build(c_dir=code.c_dir, prefix=code.prefix)
-
-
-@lru_cache(maxsize=64)
-def _roc_bounds(nominal: tuple[tuple[str, float], ...], uncertainty: float,
-                formulation: str) -> tuple[float, float]:
-    from runtime.paper.nominal_check import roc_bounds
-
-    return roc_bounds(dict(nominal), uncertainty, formulation)
-
-
-@lru_cache(maxsize=64)
-def _model_bounds(robot_file: str, uncertainty: float, formulation: str) -> Any:
-    from runtime.paper.paths import DRISHTI_RADIUS, ROC_MAX_RATE
-    from runtime.robot_model_checks import model_bounds
-    from runtime.robot_scale import robot_scale
-
-    code, tgt = _described_code(robot_file), target(robot_file)
-    scale = robot_scale(code, tgt.nominal)
-    max_rate = ROC_MAX_RATE * scale.size * DRISHTI_RADIUS / scale.wheel_radius
-    return model_bounds(code, tgt.nominal, uncertainty, formulation, max_rate)
-
-
-def warm_up(robot_file: str | None) -> str:
+def warm_up(robot: str | None, generated: str | None = None) -> str:
     """Load the robot and its compiled library in this process; the project's location (a
     worker's answer proves it imports the project and can build the C)."""
     import runtime
+    from runtime.sim.plant import library_for
 
-    tgt = target(robot_file)
-    if tgt.kind == "paper":
-        from runtime.paper.simulate import sim_library
-
-        sim_library(False)
-    else:
-        assert robot_file is not None
-        _described_library(robot_file)
+    library_for(target(robot, generated).setup.code)
     return str(Path(runtime.__file__).parent)
 
 
@@ -188,14 +145,17 @@ def metrics(t: Array, position_error: Array, tau: Array, gain: Array) -> dict[st
     }
 
 
-def _outcome(rec: dict[str, Any], failed_at: float | None, failure: str,
+def _outcome(rec: dict[str, Any], result: Any, failed_at: float | None,
              campaign: Campaign) -> None:
-    """Status and simulated stability of a run that ran."""
-    diverged = failed_at is not None or not (rec["max_error"] <= campaign.diverged_error)
+    """Status and simulated stability of a run that ran (``result``: its
+    :class:`runtime.sim.outcome.Outcome`)."""
+    too_far = not (rec["max_error"] <= campaign.diverged_error)
+    diverged = not result.ok or too_far
     if failed_at is not None:
         rec["failed_at"] = float(failed_at)
-        rec["error"] = failure
-    elif diverged:
+    if not result.ok:
+        rec["error"] = result.describe()
+    elif too_far:
         rec["error"] = (f"position error {rec['max_error']:.3g} m > diverged_error "
                         f"{campaign.diverged_error:g} m")
     rec["status"] = "diverged" if diverged else "ok"
@@ -205,50 +165,22 @@ def _outcome(rec: dict[str, Any], failed_at: float | None, failure: str,
 # ----------------------------------------------------------------------------- one run
 
 
-def _run_paper(rec: dict[str, Any], c: Campaign, tgt: Target, exp: Experiment,
-               plant: dict[str, float]) -> None:
-    from runtime.generated_modules import load_robot_code
-    from runtime.paper.simulate import run, sim_library
-    from runtime.robot_simulation import controller_config
+def _run(rec: dict[str, Any], c: Campaign, tgt: Target, exp: Experiment,
+         plant: dict[str, float]) -> None:
+    """One run of controller ``rec["controller"]`` on the campaign's path."""
+    from runtime.sim import loop
+    from runtime.sim.outcome import outcome
 
-    name, form = rec["controller"], c.formulation
-    lib = sim_library(False)
-    nominal = tgt.nominal
-    items = tuple(sorted(nominal.items()))
-    bounds = _roc_bounds(items, exp.controller.uncertainty, form) if name == "roc" else None
-    cfg = controller_config(lib, load_robot_code(""), name, form, nominal, exp, bounds)
-    state = lib.ffi.new(f"wmr_{name}_state_t *")
-    status = int(getattr(lib.lib, f"wmr_{name}_init")(state, cfg))
-    if status != 0:
-        rec.update(status="init_refused", status_code=status,
-                   error=f"wmr_{name}_init returned {status}")
-        return
-    ref = _paper_reference(c.path, items, exp.controller.h, c.duration)
-    r = run(name, form, ref, nominal, exp, check=False, plant=plant)
-    rec.update(metrics(r.t, r.position_error, r.tau, r.gain))
-    rec["saturated_steps"] = int(r.saturated)
-    _outcome(rec, r.failed_at, "a controller step failed or the plant became non-finite", c)
-
-
-def _run_described(rec: dict[str, Any], c: Campaign, tgt: Target, exp: Experiment,
-                   plant: dict[str, float]) -> None:
-    from runtime.robot_simulation import run
-
-    assert tgt.robot_file is not None
-    name, form = rec["controller"], c.formulation
-    lib = _described_library(tgt.robot_file)
-    code = _described_code(tgt.robot_file)
-    ref = _described_reference(tgt.robot_file, c.path, exp.controller.h, c.duration)
-    bounds = _model_bounds(tgt.robot_file, exp.controller.uncertainty, form)
-    r = run(lib, code, name, form, c.path, ref, tgt.nominal, exp, bounds, plant_base=plant)
-    if r.status.startswith("init refused"):
-        match = re.search(r"\((-?\d+)\)$", r.status)
-        rec.update(status="init_refused", status_code=int(match.group(1)) if match else -1,
-                   error=r.status)
+    setup = tgt.setup
+    ref = reference(c, tgt, exp)
+    r = loop.run(setup.code, rec["controller"], c.formulation, ref, tgt.nominal, exp,
+                 plant_params=plant)
+    if r.init_status != 0:
+        rec.update(status="init_refused", status_code=r.init_status, error=r.stop_reason)
         return
     rec.update(metrics(r.t, r.position_error, r.tau, r.gain))
     rec["saturated_steps"] = int(r.saturated)
-    _outcome(rec, r.failed_at, r.status, c)
+    _outcome(rec, outcome(r, ref.scale), r.failed_at, c)
 
 
 def empty_record(c: Campaign, index: int) -> dict[str, Any]:
@@ -274,10 +206,7 @@ def run_one(c: Campaign, index: int, tgt: Target, base: dict[str, Value]) -> dic
         check_sample_count(exp, "drawn setting")
         plant = {**tgt.plant, **{k.removeprefix("robot."): float(v) for k, v in values.items()
                                  if k.startswith("robot.")}}
-        if tgt.kind == "paper":
-            _run_paper(rec, c, tgt, exp, plant)
-        else:
-            _run_described(rec, c, tgt, exp, plant)
+        _run(rec, c, tgt, exp, plant)
     except Exception as exc:  # recorded, not dropped: the campaign goes on
         rec.update(status="error", error=f"{type(exc).__name__}: {exc}", stable=False)
     for k in METRICS:
@@ -288,6 +217,6 @@ def run_one(c: Campaign, index: int, tgt: Target, base: dict[str, Value]) -> dic
 def run_chunk(payload: str, indices: list[int]) -> list[dict[str, Any]]:
     """The Dask task: the runs ``indices`` of the campaign ``payload`` (its JSON)."""
     c = _campaign(payload)
-    tgt = target(c.robot)
+    tgt = target(c.robot, c.generated)
     base = base_values(c, tgt.plant)
     return [run_one(c, i, tgt, base) for i in indices]

@@ -2,13 +2,15 @@
 
     seed = 0                       campaign seed (run i draws from SeedSequence(seed, (i,)))
     runs = 1000                    number of runs (``--runs`` overrides)
-    controllers = ["tdc", ...]     run i uses controllers[i % len(controllers)]
-    formulation = "minimal"        "paper" or "minimal"
+    controllers = ["tdc", ...]     run i uses controllers[i % len(controllers)] (default:
+                                   every controller generated for the robot in the
+                                   formulation, from its generated robot.py)
+    formulation = "minimal"        "paper" or "minimal" (one the robot has)
     path = "circle"                "circle" or "lawnmower"
     duration = 30.0                s of path per run
     chunk = 25                     runs per Dask task
     experiment = "FILE.toml"       base experiment (relative to the campaign file; default:
-                                   the paper's setting)
+                                   the paper's setting), scaled to the robot
     diverged_error = 0.5           m: a run whose position error exceeds it has diverged
     chatter_limit = 0.8            RMS(Δτ)/RMS(τ) over the second half above which a run is
                                    a sampled-data limit cycle (unstable), see runner
@@ -26,7 +28,7 @@
     grid = 7
 
 Unknown keys, wrong types and out-of-range values are rejected with one line naming the field,
-as :mod:`runtime.experiment` does for experiment files.
+as :mod:`runtime.experiment.settings` does for experiment files.
 """
 
 from __future__ import annotations
@@ -35,11 +37,12 @@ import hashlib
 import json
 import math
 import tomllib
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-from runtime.experiment import (
+from runtime.experiment.settings import (
     ControllerSettings,
     Experiment,
     ExperimentFileError,
@@ -51,7 +54,6 @@ from runtime.experiment import (
     parse_experiment,
 )
 
-CONTROLLERS = ("tdc", "tdroc", "roc", "asmc")
 FORMULATIONS = ("paper", "minimal")
 PATHS = ("circle", "lawnmower")
 SECTIONS: dict[str, type] = {
@@ -101,7 +103,7 @@ class Campaign:
 
     seed: int = 0
     runs: int = 1000
-    controllers: tuple[str, ...] = CONTROLLERS
+    controllers: tuple[str, ...] = ()  # () until resolved for a robot: all in the formulation
     formulation: str = "minimal"
     path: str = "circle"
     duration: float = 30.0
@@ -113,8 +115,9 @@ class Campaign:
     map_y: str = "controller.h"
     map_grid: int = 7
     experiment: Experiment = field(default_factory=Experiment)
-    robot: str | None = None  # robot file (absolute path), None: the paper's Drishti
+    robot: str | None = None  # --robot (a file or folder, absolute path), None: Drishti
     robot_sha256: str | None = None
+    generated: str | None = None  # --generated (absolute path)
     source: str = "<default campaign>"
 
     def identity(self) -> dict[str, Any]:
@@ -145,7 +148,8 @@ class Campaign:
         sent to the workers and recorded in the output folder)."""
         data = self.identity()
         data.update(runs=self.runs, chunk=self.chunk, map_x=self.map_x, map_y=self.map_y,
-                    map_grid=self.map_grid, robot=self.robot, source=self.source)
+                    map_grid=self.map_grid, robot=self.robot, generated=self.generated,
+                    source=self.source)
         return data
 
 
@@ -168,7 +172,8 @@ def from_payload(data: dict[str, Any]) -> Campaign:
         chunk=data["chunk"], diverged_error=data["diverged_error"],
         chatter_limit=data["chatter_limit"], vary=vary, map_x=data["map_x"],
         map_y=data["map_y"], map_grid=data["map_grid"], experiment=exp, robot=data["robot"],
-        robot_sha256=data["robot_sha256"], source=data["source"],
+        robot_sha256=data["robot_sha256"], generated=data.get("generated"),
+        source=data["source"],
     )  # fmt: skip
 
 
@@ -278,7 +283,7 @@ def with_values(exp: Experiment, values: dict[str, Value]) -> Experiment:
 def check_ranges(where: str, vary: tuple[tuple[str, Distribution], ...], exp: Experiment,
                  robot: dict[str, float]) -> None:
     """Each drawn parameter's extreme values must make a valid experiment (the rules of
-    :mod:`runtime.experiment`) or a positive robot parameter."""
+    :mod:`runtime.experiment.settings`) or a positive robot parameter."""
     for name, dist in vary:
         section, _, key = name.partition(".")
         label = f'vary."{name}"'
@@ -310,10 +315,21 @@ _TOP = {"seed", "runs", "controllers", "formulation", "path", "duration", "chunk
         "diverged_error", "chatter_limit", "vary", "map"}
 
 
+def generated_controllers(formulation: str) -> tuple[str, ...]:
+    """The default robot's controllers generated in ``formulation`` (its robot.py)."""
+    from runtime.bindings.generated import load_robot_code
+
+    return tuple(c.name for _, c in load_robot_code("").runs((formulation,)))
+
+
 def parse_campaign(text: str, where: str, robot: dict[str, float],
-                   base_dir: Path | None = None) -> Campaign:
+                   base_dir: Path | None = None,
+                   available: Callable[[str], Sequence[str]] = generated_controllers,
+                   ) -> Campaign:
     """A campaign from TOML text; ``robot`` is the nominal robot (its keys are the
-    ``robot.*`` parameters one may draw). The robot file itself is attached by the caller."""
+    ``robot.*`` parameters one may draw), ``available(formulation)`` the controllers
+    generated for it in a formulation (default: the paper robot's). The robot itself is
+    attached by the caller."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -333,17 +349,20 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
                        positive=True)
     chatter = _number(where, "chatter_limit", data.get("chatter_limit", c.chatter_limit),
                       positive=True)
-    controllers = data.get("controllers", list(c.controllers))
-    if (not isinstance(controllers, list) or not controllers
-            or any(x not in CONTROLLERS for x in controllers)
-            or len(set(controllers)) != len(controllers)):
-        raise CampaignSpecError(f"{where}: field 'controllers' must be a list of distinct names "
-                                f"of {', '.join(CONTROLLERS)}, got {controllers!r}")
     for key, allowed in (("formulation", FORMULATIONS), ("path", PATHS)):
         value = data.get(key, getattr(c, key))
         if value not in allowed:
             raise CampaignSpecError(f"{where}: field '{key}' must be one of "
                                     f"{', '.join(allowed)}, got {value!r}")
+    names = tuple(available(data.get("formulation", c.formulation)))
+    controllers = data.get("controllers", list(names))
+    if (not isinstance(controllers, list) or not controllers
+            or any(x not in names for x in controllers)
+            or len(set(controllers)) != len(controllers)):
+        raise CampaignSpecError(f"{where}: field 'controllers' must be a list of distinct names "
+                                f"of {', '.join(names)} (the controllers generated in the "
+                                f"{data.get('formulation', c.formulation)} formulation), got "
+                                f"{controllers!r}")
     exp = Experiment()
     if "experiment" in data:
         if not isinstance(data["experiment"], str) or not data["experiment"].strip():
@@ -383,18 +402,21 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
                     map_y=map_y, map_grid=grid, experiment=exp, source=where)
 
 
-def load_campaign(path: Path, robot: dict[str, float]) -> Campaign:
+def load_campaign(path: Path, robot: dict[str, float],
+                  available: Callable[[str], Sequence[str]] = generated_controllers
+                  ) -> Campaign:
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CampaignSpecError(f"{path}: campaign file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CampaignSpecError(f"{path}: cannot read campaign file: {exc}") from None
-    return parse_campaign(text, str(path), robot, path.parent)
+    return parse_campaign(text, str(path), robot, path.parent, available)
 
 
 def default_campaign(robot: dict[str, float], inertial: tuple[str, ...], track: float,
-                     exp: Experiment | None = None) -> Campaign:
+                     exp: Experiment | None = None,
+                     controllers: Sequence[str] | None = None) -> Campaign:
     """The paper's setting with every parameter drawn within ±30 %: the simulated robot's
     inertial parameters, payload masses, friction, gains, h (in steps of 5 ms) and ε; the
     payloads anywhere in a square of ±0.36 track (Drishti: ±0.15 m) about C; wheel rates
@@ -413,4 +435,6 @@ def default_campaign(robot: dict[str, float], inertial: tuple[str, ...], track: 
     base = exp or Experiment()
     items = tuple(sorted(vary.items()))
     check_ranges("<default campaign>", items, base, robot)
-    return Campaign(vary=items, experiment=base)
+    names = tuple(controllers) if controllers is not None else generated_controllers(
+        Campaign().formulation)
+    return Campaign(vary=items, experiment=base, controllers=names)

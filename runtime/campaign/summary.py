@@ -13,6 +13,7 @@ import pyarrow as pa
 
 from runtime.campaign.prediction import Prediction
 from runtime.campaign.spec import Campaign
+from runtime.sim.outcome import OFF_PATH_FRACTION
 
 PERCENTILES = (50, 90, 99)
 
@@ -117,7 +118,7 @@ def summarise(table: pa.Table, campaign: Campaign, pred: Prediction) -> dict[str
         "agreement": None if pred.unavailable else {
             "runs": total.runs, "agree": total.agree, "fraction": total.fraction},
         "prediction": pred.unavailable or (
-            f"ε_min(y) from runtime.paper.stability over {campaign.map_y}, nominal robot, no "
+            f"ε_min(y) from runtime.stability.analysis over {campaign.map_y}, nominal robot, no "
             "payload or friction, other parameters at their base values"),
     }  # fmt: skip
 
@@ -136,8 +137,10 @@ def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: lis
         f"seed {campaign.seed}; run on {where}.",
         f"Drawn: {', '.join(name for name, _ in campaign.vary) or 'nothing'}.",
         "",
-        "Outcome: ok; diverged (a step failed, the plant became non-finite, or position error "
-        f"> {campaign.diverged_error:g} m); init refused (the C init's status); error. Simulated "
+        "Outcome: ok; diverged (a step failed, the plant became non-finite, the position error "
+        f"exceeded {campaign.diverged_error:g} m, or the final or RMS error exceeded "
+        f"{100 * OFF_PATH_FRACTION:g} % of the path's size); init refused (the C init's "
+        "status); error. Simulated "
         f"unstable: not ok, or chatter RMS(Δτ)/RMS(τ) ≥ {campaign.chatter_limit:g} in the "
         "second half (a sampled-data limit cycle of the switching term, or encoder "
         "quantisation amplified into the torque as strongly, which the prediction leaves out).",

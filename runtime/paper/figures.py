@@ -37,9 +37,11 @@ from matplotlib.figure import Figure as MplFigure
 from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
-from runtime.paper import references
+from runtime.paper import printed_paths
 from runtime.paper.reproduce import COLORS, LABELS, Figure, Reproduction
-from runtime.paper.simulate import CONTROLLERS, Run, plant_params
+from runtime.sim.loop import Run
+from runtime.sim.payload import plant_params_at
+from runtime.sim.reference import Reference
 
 DPI = 100
 Bounds = tuple[float, float, float, float]  # inset (x0, y0, width, height), axes fraction
@@ -57,7 +59,6 @@ GAIN_UNIT = {
     "paper": "mixed: m/s² on the x_c, y_c rows, rad/s² on the θ, θ_r, θ_l rows",
     "minimal": "rad/s² (wheel rows only)",
 }
-SWITCHING = ("tdroc", "roc", "asmc")
 LINTHRESH = 1e-3  # rad/s²: TDROC's switching term stays near 1e-3 inside its boundary layer
 PRINTED_STYLE: dict[str, Any] = {"color": "0.6", "ls": ":", "lw": 1.4}
 REF_STYLE: dict[str, Any] = {"color": "k", "ls": "--", "lw": 1.2}
@@ -100,7 +101,7 @@ def zoom_window(
     k = int(np.argmin(np.abs(ref.t - t_zoom)))
     centre = ref.q[k, :2]
     spread = 0.0
-    for c in CONTROLLERS:
+    for c in rep.controllers():
         q = main_run(rep, c, path, sensing).q
         spread = max(spread, float(np.linalg.norm(q[min(k, len(q) - 1), :2] - centre)))
     return centre, float(np.clip(1.6 * spread, 0.006, 0.3))
@@ -164,17 +165,7 @@ def percent_axis(ax: Axes, scale_m: float, label: str) -> None:
     sec.set_ylabel(label)
 
 
-def printed_wheel_rates(t: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The printed lawn-mower wheel rates (Section 5, Figure 10): the Fourier series
-    θ̇r = (a + b)/2 + 2(a − b)/π Σ_{p odd} sin(pπ/2)/p cos(2pπt/T), θ̇l the same half a
-    period later (the odd harmonics change sign), summed to its limit: square waves between
-    a = 3 and b = 1.6 rad/s, T = 25 s. Drawn beside ours only; never fed to a controller."""
-    a, b, period = references.LAWN_A, references.LAWN_B, references.LAWN_T
-    sq = np.sign(np.cos(2 * np.pi * t / period))
-    return np.stack([(a + b) / 2 + (a - b) / 2 * sq, (a + b) / 2 - (a - b) / 2 * sq], axis=1)
-
-
-def lawnmower_paper_scale(ref: references.Reference) -> float:
+def lawnmower_paper_scale(ref: Reference) -> float:
     """The paper's scale of Figure 12's percentages, "the maximum path ... that comprises
     the individual maximum position information in x_dc and y_dc", read as
     ‖(max |x_dc|, max |y_dc|)‖ of our reference."""
@@ -189,7 +180,9 @@ def fig_mass(rep: Reproduction, out: Path, sensing: str) -> Figure:
     and K)."""
     r = main_run(rep, "tdc", "lawnmower", sensing)
     exp = rep.experiment_for(sensing)
-    params = np.array([plant_params(rep.robot, exp, float(t)) for t in r.t])
+    base = {**rep.code.plant_defaults, **rep.robot}
+    true = [plant_params_at(rep.code, exp, float(t), base) for t in r.t]
+    params = np.array([[p[k] for k in ("m", "I", "K", "K_lat")] for p in true])
     title = "Paper Figure 3 (System mass variation): true mass, inertia and first moments"
     fig = new_figure(title, (9, 5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
@@ -231,11 +224,12 @@ def fig_mass(rep: Reproduction, out: Path, sensing: str) -> Figure:
 def draw_tracking(ax: Axes, rep: Reproduction, path: str, sensing: str, printed: bool) -> None:
     ref = rep.refs[path]
     if printed:
-        fn = references.printed_circle if path == "circle" else references.printed_lawnmower
+        fn = (printed_paths.printed_circle if path == "circle"
+              else printed_paths.printed_lawnmower)
         pts = fn(ref.t)
         ax.plot(pts[:, 0], pts[:, 1], **PRINTED_STYLE, label="printed reference (inconsistent)")
     ax.plot(ref.q[:, 0], ref.q[:, 1], **REF_STYLE, label="reference (ours, consistent)")
-    for c in CONTROLLERS:
+    for c in rep.controllers():
         r = main_run(rep, c, path, sensing)
         ax.plot(r.q[:, 0], r.q[:, 1], color=COLORS[c], lw=1.0, label=LABELS[c])
 
@@ -282,10 +276,10 @@ def fig_circle_xy(rep: Reproduction, out: Path, sensing: str) -> Figure:
     fig = new_figure(title, (10, 6.5))
     axes = fig.subplots(2, 1, sharex=True)
     ref = rep.refs["circle"]
-    diameter = 2 * references.R1
+    diameter = 2 * rep.refs["circle"].scale
     for row, (ax, name) in enumerate(zip(axes, ("x_c", "y_c"), strict=True)):
         series = []
-        for c in CONTROLLERS:
+        for c in rep.controllers():
             r = main_run(rep, c, "circle", sensing)
             e = 1000 * (ref.q[: len(r.t), row] - r.q[:, row])
             ax.plot(r.t, e, color=COLORS[c], label=LABELS[c])
@@ -310,7 +304,7 @@ def fig_circle_xy(rep: Reproduction, out: Path, sensing: str) -> Figure:
 
 
 def draw_switching(ax: Axes, rep: Reproduction, path: str, sensing: str, wheel: int) -> None:
-    for c in SWITCHING:
+    for c in rep.switching():
         r = main_run(rep, c, path, sensing)
         ax.plot(
             r.t, r.wheel_switching[:, wheel], color=COLORS[c], lw=0.8, label=f"{LABELS[c]}: Δu_a"
@@ -352,7 +346,7 @@ def fig_switching(rep: Reproduction, out: Path, sensing: str, path: str) -> Figu
         f"**Paper Figures {nums[0]} and {nums[1]} (right and left wheel switching gain "
         f"comparison, {'circular' if path == 'circle' else 'lawn mower'} path).** Solid: the "
         "wheel rows of the switching term Δu_a = k̂ s / max(‖s‖, ε) of (24)/(25) "
-        "(`runtime/paper/simulate.py`, `Run.wheel_switching`; ASMC with the gain before each "
+        "(`runtime/sim/loop.py`, `Run.wheel_switching`; ASMC with the gain before each "
         "step's adaptation), in rad/s². Dashed: the gain k̂ itself, which bounds |Δu_a| on "
         f"every row; its unit is the switching term's ({GAIN_UNIT['paper']} in the paper "
         f"formulation; {GAIN_UNIT['minimal']} in the minimal one). Symmetric-log scale, "
@@ -368,7 +362,7 @@ def fig_lawnmower_reference(rep: Reproduction, out: Path, sensing: str) -> Figur
     title = "Paper Figure 9 (Desired lawn mower path) and Figure 10 (Desired wheel velocities)"
     fig = new_figure(title, (12, 5))
     ax1, ax2 = fig.subplots(1, 2, width_ratios=(1, 1.3))
-    pts = references.printed_lawnmower(ref.t)
+    pts = printed_paths.printed_lawnmower(ref.t)
     ax1.plot(pts[:, 0], pts[:, 1], **PRINTED_STYLE, label="printed x_dc, y_dc")
     ax1.plot(ref.q[:, 0], ref.q[:, 1], **REF_STYLE, label="ours (from the wheel rates)")
     ax1.plot(*ref.q[0, :2], "ko", ms=4)
@@ -377,7 +371,7 @@ def fig_lawnmower_reference(rep: Reproduction, out: Path, sensing: str) -> Figur
     ax1.set_ylabel("y [m]")
     ax1.set_aspect("equal", adjustable="datalim")
     ax1.legend(loc="upper right")
-    printed = printed_wheel_rates(ref.t)
+    printed = printed_paths.printed_wheel_rates(ref.t)
     for i, (wheel, color) in enumerate((("right", "tab:red"), ("left", "tab:blue"))):
         ax2.plot(
             ref.t,
@@ -398,8 +392,8 @@ def fig_lawnmower_reference(rep: Reproduction, out: Path, sensing: str) -> Figur
         "**Paper Figure 9 (Desired lawn mower path) and Figure 10 (Desired wheel "
         "velocities).** Dotted: the printed x_dc = 0.1t + 0.3 sin(0.4t), "
         "y_dc = 1.2 + 1.2 cos(0.2t − T) and the printed square-wave wheel rates (their "
-        f"Fourier series summed to the limit; a = {references.LAWN_A:g}, "
-        f"b = {references.LAWN_B:g} rad/s, T = {references.LAWN_T:g} s), which describe two "
+        f"Fourier series summed to the limit; a = {printed_paths.LAWN_A:g}, "
+        f"b = {printed_paths.LAWN_B:g} rad/s, T = {printed_paths.LAWN_T:g} s), which describe two "
         "different motions. Solid/dashed: ours, straight legs with both wheels at a and "
         "U-turns with one wheel at b, integrated through (31), so path and rates agree. "
         "Starts at the origin (dot)."
@@ -416,7 +410,7 @@ def fig_path_error(rep: Reproduction, out: Path, sensing: str) -> Figure:
     fig = new_figure(title, (10, 4.5))
     ax = fig.subplots()
     series = []
-    for c in CONTROLLERS:
+    for c in rep.controllers():
         r = main_run(rep, c, "lawnmower", sensing)
         e = 1000 * r.position_error
         ax.plot(r.t, e, color=COLORS[c], label=LABELS[c])
@@ -444,9 +438,10 @@ def fig_torques(rep: Reproduction, out: Path, sensing: str) -> Figure:
     """τ_r and τ_l per controller and path (no counterpart in the paper)."""
     title = "Wheel torques τ_r, τ_l per controller (no counterpart in the paper)"
     fig = new_figure(title, (12, 8.5))
-    axes = fig.subplots(len(CONTROLLERS), len(rep.refs), sharex="col", sharey="row")
+    controllers = rep.controllers()
+    axes = fig.subplots(len(controllers), len(rep.refs), sharex="col", sharey="row")
     for col, path in enumerate(rep.refs):
-        for row, c in enumerate(CONTROLLERS):
+        for row, c in enumerate(controllers):
             ax = axes[row, col]
             r = main_run(rep, c, path, sensing)
             ax.plot(r.t, r.tau[:, 0], color="tab:red", lw=0.8, label="τ_r (right)")

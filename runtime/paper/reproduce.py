@@ -36,10 +36,12 @@ from pathlib import Path
 import numpy as np
 
 from modeling.package_paths import default_output
-from runtime.experiment import Experiment
-from runtime.generated_modules import robot as default_robot
-from runtime.paper import references
-from runtime.paper.simulate import CONTROLLERS, Run, run
+from runtime.bindings.generated import RobotCode, load_robot_code
+from runtime.experiment.reproduction import PALETTE
+from runtime.experiment.settings import Experiment
+from runtime.sim import loop, paths
+from runtime.sim.loop import Run
+from runtime.sim.reference import Reference
 
 
 @dataclass(frozen=True)
@@ -60,8 +62,11 @@ CONTRAST = ("encoder-average", "backward")
 # A TDROC run is called unstable when its RMS error exceeds this multiple of TDC's under
 # the same sensing, estimator and path (the measured unstable runs are ≥ 50× TDC's).
 UNSTABLE_FACTOR = 10.0
-LABELS = {"tdc": "TDC", "tdroc": "TDROC", "roc": "ROC", "asmc": "ASMC"}
-COLORS = {"tdc": "tab:blue", "tdroc": "tab:red", "roc": "tab:green", "asmc": "tab:purple"}
+PAPER_CODE = load_robot_code("")  # the paper's robot: the default generated code
+LABELS = {c.name: c.label for c in PAPER_CODE.controller_infos}
+# One colour per controller, in the registry's order (TDC blue, TDROC red, ROC green, ASMC
+# purple).
+COLORS = {name: PALETTE[i % len(PALETTE)] for i, name in enumerate(LABELS)}
 
 RunKey = tuple[str, str, str, str]  # (sensing, controller, formulation, path)
 SweepKey = tuple[str, str, float, str]  # (sensing, estimator, ε, path)
@@ -77,7 +82,7 @@ class Metrics:
     path: str
     rms_error: float  # m
     max_error: float  # m
-    rms_percent: float  # RMS error in % of the path's scale (R1, or the lawn-mower leg)
+    rms_percent: float  # RMS error in % of the path's scale (R1, or the lawn-mower legs)
     rms_torque: float  # N m
     torque_variation: float  # N m, total variation of tau (chattering)
     median_gain: float  # k̂: units of the switching term Δu_a (see figures.GAIN_UNIT)
@@ -87,20 +92,14 @@ class Metrics:
     failed_at: float | None
 
 
-def path_scale(path: str, params: dict[str, float]) -> float:
-    """The length ``rms_percent`` refers to: R1 for the circle, the U-turn diameter (the
-    spacing of the legs) for the lawn mower. (The figures use the paper's own scales.)"""
-    if path == "circle":
-        return references.R1
-    return references.lawnmower_leg_spacing(params)
-
-
 def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x**2)))
 
 
-def metrics(r: Run, params: dict[str, float], sensing: str) -> Metrics:
-    """The metrics of one run: position error ‖(x_c, y_c) − (x_dc, y_dc)‖, torque, k̂."""
+def metrics(r: Run, ref: Reference, sensing: str) -> Metrics:
+    """The metrics of one run on ``ref``: position error ‖(x_c, y_c) − (x_dc, y_dc)‖ (in %
+    of the reference's scale: R1 for the circle, the spacing of the lawn mower's legs; the
+    figures use the paper's own scales), torque, k̂."""
     e = r.position_error
     return Metrics(
         sensing=sensing,
@@ -109,7 +108,7 @@ def metrics(r: Run, params: dict[str, float], sensing: str) -> Metrics:
         path=r.path,
         rms_error=rms(e),
         max_error=float(e.max()),
-        rms_percent=100.0 * rms(e) / path_scale(r.path, params),
+        rms_percent=100.0 * rms(e) / ref.scale,
         rms_torque=rms(r.tau),
         torque_variation=float(np.abs(np.diff(r.tau, axis=0)).sum()),
         median_gain=float(np.median(r.gain)),
@@ -145,13 +144,22 @@ class SweepRow:
 class Reproduction:
     experiment: Experiment  # as loaded; per-sensing copies from :meth:`experiment_for`
     sensings: tuple[str, ...]
-    refs: dict[str, references.Reference]
+    refs: dict[str, Reference]
     runs: dict[RunKey, Run]
     table: list[Metrics]
     sweep: list[SweepRow]
     sweep_runs: dict[SweepKey, Run]  # TDROC, paper formulation
     seconds: float  # simulation wall time (printed, never written to a file)
     robot: dict[str, float] = field(default_factory=dict)
+    code: RobotCode = PAPER_CODE
+
+    def controllers(self, formulation: str = "paper") -> tuple[str, ...]:
+        """The controllers run in ``formulation``, in the registry's order."""
+        return tuple(c.name for f, c in self.code.runs((formulation,)))
+
+    def switching(self, formulation: str = "paper") -> tuple[str, ...]:
+        """Those with a switching term (24)/(25)."""
+        return tuple(c.name for f, c in self.code.runs((formulation,)) if c.switching)
 
     def experiment_for(self, sensing: str, estimator: str | None = None) -> Experiment:
         return with_sensing(self.experiment, sensing, estimator)
@@ -186,20 +194,22 @@ class _Simulator:
     """Runs each distinct (sensing, estimator, ε, controller, formulation, path) once."""
 
     def __init__(
-        self, exp: Experiment, robot: dict[str, float], refs: dict[str, references.Reference]
+        self, code: RobotCode, exp: Experiment, robot: dict[str, float],
+        refs: dict[str, Reference]
     ):
-        self.exp, self.robot, self.refs = exp, robot, refs
+        self.code, self.exp, self.robot, self.refs = code, exp, robot, refs
         self.cache: dict[tuple[str, str, float, str, str, str], Run] = {}
 
     def __call__(
         self, sensing: str, estimator: str, eps: float, ctrl: str, form: str, path: str
     ) -> Run:
-        if ctrl == "tdc":  # ε does not enter TDC
+        if not self.code.controller(ctrl).switching:  # ε enters only a switching term
             eps = self.exp.controller.eps
         key = (sensing, estimator, eps, ctrl, form, path)
         if key not in self.cache:
             e = with_eps(with_sensing(self.exp, sensing, estimator), eps)
-            self.cache[key] = run(ctrl, form, self.refs[path], self.robot, e)
+            self.cache[key] = loop.run(self.code, ctrl, form, self.refs[path], self.robot, e,
+                                       check=True)
         return self.cache[key]
 
 
@@ -223,33 +233,32 @@ def reproduce(
     robot: dict[str, float] | None = None,
     progress: bool = False,
     sensings: Sequence[str] = DEFAULT_SENSINGS,
+    code: RobotCode = PAPER_CODE,
 ) -> Reproduction:
-    """Run every experiment (no files written)."""
+    """Run every experiment (no files written) on the robot ``code`` with the nominal and
+    simulated parameters ``robot`` (default: the paper's robot's own)."""
     start = time.perf_counter()
-    robot = dict(robot or default_robot.PARAMS)
-    h, est, eps0 = exp.controller.h, exp.sensing.accel_estimator, exp.controller.eps
-    refs = {
-        "circle": references.circle(robot, h, exp.paths.circle_duration),
-        "lawnmower": references.lawnmower(robot, h, exp.paths.lawnmower_duration),
-    }
-    sim = _Simulator(exp, robot, refs)
+    robot = dict(robot or code.params)
+    est, eps0 = exp.sensing.accel_estimator, exp.controller.eps
+    refs = {name: paths.reference(code, robot, exp, name) for name in paths.PATHS}
+    sim = _Simulator(code, exp, robot, refs)
     runs: dict[RunKey, Run] = {}
     table: list[Metrics] = []
-    total = len(sensings) * len(refs) * len(CONTROLLERS) * len(FORMULATIONS)
+    pairs = code.runs(FORMULATIONS)
+    total = len(sensings) * len(refs) * len(pairs)
     for sensing in sensings:
         for path in refs:
-            for form in FORMULATIONS:
-                for ctrl in CONTROLLERS:
-                    r = sim(sensing, est, eps0, ctrl, form, path)
-                    runs[(sensing, ctrl, form, path)] = r
-                    table.append(metrics(r, robot, sensing))
-                    if progress:
-                        m = table[-1]
-                        print(
-                            f"[{len(table):2d}/{total}] {sensing:15s} {path:9s} {form:7s} "
-                            f"{LABELS[ctrl]:5s} RMS {m.rms_error * 1000:8.2f} mm",
-                            flush=True,
-                        )
+            for form, info in pairs:
+                r = sim(sensing, est, eps0, info.name, form, path)
+                runs[(sensing, info.name, form, path)] = r
+                table.append(metrics(r, refs[path], sensing))
+                if progress:
+                    m = table[-1]
+                    print(
+                        f"[{len(table):2d}/{total}] {sensing:15s} {path:9s} {form:7s} "
+                        f"{info.label:5s} RMS {m.rms_error * 1000:8.2f} mm",
+                        flush=True,
+                    )
     sweep: list[SweepRow] = []
     sweep_runs: dict[SweepKey, Run] = {}
     for sensing, estimator in sweep_sets(exp, sensings):
@@ -259,9 +268,9 @@ def reproduce(
                 tdc = sim(sensing, estimator, eps0, "tdc", "paper", path)
                 sweep_runs[(sensing, estimator, eps, path)] = r
                 sweep.append(
-                    SweepRow(
-                        sensing, estimator, eps, metrics(r, robot, sensing), rms(tdc.position_error)
-                    )
+                    SweepRow(sensing, estimator, eps, metrics(r, refs[path], sensing),
+                             rms(tdc.position_error))
                 )
     seconds = time.perf_counter() - start
-    return Reproduction(exp, tuple(sensings), refs, runs, table, sweep, sweep_runs, seconds, robot)
+    return Reproduction(exp, tuple(sensings), refs, runs, table, sweep, sweep_runs, seconds, robot,
+                        code)

@@ -14,10 +14,11 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from runtime.paper import references
+from runtime.paper import printed_paths
 from runtime.paper.reproduce import CONTRAST, LABELS, UNSTABLE_FACTOR, Figure, Reproduction
 from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, sensing_label
 from runtime.paper.reproduction_verdicts import best, claims, stability, stable_on_all_paths
+from runtime.sim.reference import RAMP, Reference
 
 Section = Callable[[Reproduction, Sequence[Figure]], list[str]]
 
@@ -47,7 +48,8 @@ def section_setting(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
         f"{c.uncertainty:.0%} above nominal, ASMC γ = {c.gamma}, |τ| ≤ {c.tau_max} N m.",
         "",
         f"Sensing models run: {sens} (`[sensing]` of the experiment file, "
-        "`runtime/experiment.py::SensingSettings`), each with the estimator of q̈(t − h) in",
+        "`runtime/experiment/settings.py::SensingSettings`), each with the estimator of "
+        "q̈(t − h) in",
         f"(17) `accel_estimator = {se.accel_estimator}` and {se.encoder_ppr}-ppr wheel "
         "encoders (angles and odometry pose always from the quantised counts):",
         "",
@@ -78,25 +80,26 @@ def section_references(rep: Reproduction, figures: Sequence[Figure]) -> list[str
     """The printed references (Section 5) and how ours differ (docs/PAPER.md item 12)."""
     p = rep.robot
     r, b, d = p["r"], p["b"], p["d"]
-    th = references.THETA_DOT
-    printed_r = th * (references.R1 + b / 2) / r
-    printed_l = th * (references.R1 - b / 2) / r
-    v = th * float(np.sqrt(references.R1**2 - d**2))
+    r1, th = printed_paths.R1, printed_paths.THETA_DOT
+    lawn_a, lawn_b = printed_paths.LAWN_A, printed_paths.LAWN_B
+    printed_r = th * (r1 + b / 2) / r
+    printed_l = th * (r1 - b / 2) / r
+    v = th * float(np.sqrt(r1**2 - d**2))
     ours_r, ours_l = (v + th * b / 2) / r, (v - th * b / 2) / r
     centre = circle_centre(rep.refs["circle"])
-    spacing = references.lawnmower_leg_spacing(p)
-    turn = np.pi / (r * (references.LAWN_A - references.LAWN_B) / b)
+    spacing = rep.refs["lawnmower"].scale
+    turn = np.pi / (r * (lawn_a - lawn_b) / b)
     return [
         "## The reference paths: printed and ours",
         "",
         "The paper's printed definitions are not kinematically consistent: no robot obeying",
         "the constraints (6)–(8) can follow them exactly. The controllers are fed references",
         "built from wheel-rate profiles and integrated through (31)",
-        "(`runtime/paper/references.py`), so every reference is a motion the robot can make;",
+        "(`runtime/sim/paths.py`), so every reference is a motion the robot can make;",
         "the printed ones are drawn beside ours in Figures 4, 9, 10 and 11 (`printed_circle`,",
         "`printed_lawnmower`).",
         "",
-        f"* **Circle** (R1 = {references.R1} m, θ̇d = {th} rad/s, start (1.5, 1.5, 0)). Printed:",
+        f"* **Circle** (R1 = {r1} m, θ̇d = {th} rad/s, start (1.5, 1.5, 0)). Printed:",
         "  x_dc = R1 cos(θ̇d t + θ0), y_dc = R1 + R1 sin(θ̇d t + θ0), θd = θ0 + θ̇d t,",
         f"  θ̇dr,l = θ̇d (R1 ± b/2)/r = {printed_r:.3f}, {printed_l:.3f} rad/s. At t = 0 the "
         "printed point",
@@ -109,22 +112,22 @@ def section_references(rep: Reproduction, figures: Sequence[Figure]) -> list[str
         f"circle's centre is ({centre[0]:.3f}, {centre[1]:.3f});",
         "  the printed one's is (0, 1.5).",
         "* **Lawn mower.** Printed: x_dc = 0.1t + 0.3 sin(0.4t), y_dc = 1.2 + 1.2 cos(0.2t − T),",
-        f"  and square-wave wheel rates (Fourier series) between a = {references.LAWN_A:g} and "
-        f"b = {references.LAWN_B:g} rad/s,",
-        f"  period T = {references.LAWN_T:g} s, the left wheel half a period behind the right; "
+        f"  and square-wave wheel rates (Fourier series) between a = {lawn_a:g} and "
+        f"b = {lawn_b:g} rad/s,",
+        f"  period T = {printed_paths.LAWN_T:g} s, the left wheel half a period behind the right; "
         "θd = c∫(θ̇r − θ̇l)dt with c",
         "  unclear. These wheel rates never drive straight (one wheel is always at a, the other",
         "  at b), so they describe a chain of alternating arcs, not the printed (x_dc, y_dc).",
         f"  Ours: straight legs with both wheels at a, U-turns of {turn:.2f} s with one wheel at b",
         f"  (alternately left and right), legs parallel and {spacing:.3f} m apart, one cycle "
         "per T on",
-        f"  average, every switch smoothed by tanh over {references.RAMP} s; start at the "
+        f"  average, every switch smoothed by tanh over {RAMP} s; start at the "
         "origin from rest.",
         "",
     ]
 
 
-def circle_centre(ref: references.Reference) -> np.ndarray:
+def circle_centre(ref: Reference) -> np.ndarray:
     """Centre of the circle through three points of the steady part of the reference."""
     pts = ref.q[ref.t > 0.5 * ref.t[-1], :2]
     (x1, y1), (x2, y2), (x3, y3) = pts[0], pts[len(pts) // 3], pts[2 * len(pts) // 3]

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.generated_modules import robot as default_robot
 from runtime.paper.reproduce import FORMULATIONS, LABELS, Reproduction
 from runtime.paper.reproduction_tables import fmt_mm
 
@@ -111,16 +110,15 @@ def stability(
     ϖ2 = 2 (k̄ − k̂)‖BᵀP‖ / λmin(Q), zero when k̂ ≥ k̄; (30): ϖ3 = √(ε k̄² / (2 k̂ λmin(Q)))
     with k̂ the median switching gain; each ultimate bound is √(λmax(P)/λmin(P)) ϖ.
     """
-    from runtime.generated_modules import wmr_laws
-
-    robot = dict(robot or rep.robot or default_robot.PARAMS)
+    laws = rep.code.laws
+    robot = dict(robot or rep.robot or rep.code.params)
     c = rep.experiment.controller
-    p11, p12, p22 = wmr_laws.lyapunov_p([c.k1, c.k2, c.q_pos, c.q_vel])
+    p11, p12, p22 = laws.lyapunov_p([c.k1, c.k2, c.q_pos, c.q_vel])
     eig = np.linalg.eigvalsh(np.array([[p11, p12], [p12, p22]]))
     cond = float(np.sqrt(eig.max() / eig.min()))
     pb = float(np.hypot(p12, p22))
     lam_q = min(c.q_pos, c.q_vel)
-    minv = float(wmr_laws.paper_minv_norm(robot)[0])
+    minv = float(laws.paper_minv_norm(robot)[0])
     rows = []
     for path in rep.refs:
         for ctrl in ("tdc", "tdroc"):

@@ -10,8 +10,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from runtime import cbuild
-from runtime.generated_modules import robot as generated_robot
+from runtime.bindings import cbuild
+from runtime.bindings.generated import robot as generated_robot
 
 # The paper robot's controllers, their formulations and fields (the registry, exported).
 CONTROLLERS = tuple(str(c["name"]) for c in generated_robot.CONTROLLERS)

@@ -11,8 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from runtime import cbuild
-from runtime.generated_modules import controllers as mirror
+from runtime.bindings import cbuild
+from runtime.bindings.controller import Controller as CController
+from runtime.bindings.generated import controllers as mirror
 from runtime.tooling.bad_input.cases import (
     BASE,
     CONTROLLER_FORMULATIONS,
@@ -102,12 +103,15 @@ def smooth_sequence(steps: int, h: float, seed: int = 3) -> list[tuple[list[floa
 
 
 class Controller:
-    """A controller instance through cffi: caller-owned state, init, step."""
+    """A controller instance of the bad-input cases (Drishti's ``wmr_`` code): the bindings'
+    wrapper (:class:`runtime.bindings.controller.Controller`), initialised at once, whose
+    step takes the five inputs, returns (status, τ) and may write τ elsewhere."""
 
     def __init__(self, lib: cbuild.CLibrary, name: str, cfg: Any) -> None:
         self.lib, self.name, self.cfg = lib, name, cfg
-        self.state = lib.ffi.new(f"wmr_{name}_state_t *")
-        status = getattr(lib.lib, f"wmr_{name}_init")(self.state, cfg)
+        self.c = CController(lib, "wmr", name, cfg, 5, 2)
+        self.state = self.c.state
+        status = self.c.init()
         if status != 0:
             raise RuntimeError(f"{name}: init failed with {status}")
 
@@ -116,20 +120,12 @@ class Controller:
         detail: Any = None,
     ) -> tuple[int, list[float]]:
         """One step; with ``detail`` (a ``wmr_error_detail_t *``) through ``_step_detail``."""
-        ffi = self.lib.ffi
-        tau = ffi.new("wmr_real_t[2]") if tau is None else tau
-        arrays = [ffi.new("wmr_real_t[5]", list(v)) for v in inputs]
-        config = self.cfg if cfg is None else cfg
-        if detail is None:
-            fn = getattr(self.lib.lib, f"wmr_{self.name}_step")
-            status = fn(self.state, config, *arrays, tau)
-        else:
-            fn = getattr(self.lib.lib, f"wmr_{self.name}_step_detail")
-            status = fn(self.state, config, *arrays, tau, detail)
-        return int(status), [float(tau[0]), float(tau[1])]
+        out = self.c.tau if tau is None else tau
+        status = self.c.step([list(v) for v in inputs], cfg, detail, out)
+        return status, [float(out[0]), float(out[1])]
 
     def raw(self) -> bytes:
-        return bytes(self.lib.ffi.buffer(self.state))
+        return self.c.raw()
 
     def fields(self) -> Any:
         return to_python(self.lib.ffi, self.state[0])

@@ -10,7 +10,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from modeling.package_paths import default_output
-from runtime import cbuild
+from runtime.bindings import cbuild
 from runtime.tooling.bad_input.cases import (
     CONTROLLERS,
     DRISHTI,
@@ -194,14 +194,15 @@ def render(outcomes: list[Outcome], names: dict[int, str], alpha_rows: list[list
         "",
         "## The time-delay estimation condition over a parameter box",
         "",
-        "`runtime.paper.nominal_check.check_nominal(nominal, box)` computes",
+        "`runtime.bindings.uncertainty.check_tde(code, nominal, box)` computes",
         "alpha = max ||M^-1 M-hat - I||_2 over true robots whose m, I, K and Iw are each within",
         "±box of Drishti's (a 3-level grid of the box × 9 headings) and raises `ValueError` when",
-        "alpha >= 1, the condition (17) needs. `checked_controller_config` applies it when a",
-        "TDC/TDROC configuration is built. A nominal model that is too light keeps alpha",
-        "below 1 (the estimate still converges, more slowly); one that is too heavy fails.",
+        "alpha >= 1, the condition (17) needs. A run with `check=True` applies it",
+        "(`runtime.stability.checks`) to TDC and TDROC. A nominal model that is too light",
+        "keeps alpha below 1 (the estimate still converges, more slowly); one that is too",
+        "heavy fails.",
         "",
-        "| nominal model | box | alpha (paper) | alpha (minimal) | check_nominal |",
+        "| nominal model | box | alpha (paper) | alpha (minimal) | check_tde |",
         "|---|---|---|---|---|",
         *("| " + " | ".join(r) + " |" for r in alpha_rows),
         "",
@@ -266,17 +267,20 @@ NOMINAL_VARIANTS: tuple[tuple[str, dict[str, float]], ...] = (
 
 def alpha_rows(box: float = 0.3) -> list[list[str]]:
     """The TDE-condition table: α for scaled nominal models against Drishti ± box."""
-    from runtime.paper.nominal_check import check_nominal, tde_alpha
+    from runtime.bindings.generated import load_robot_code
+    from runtime.bindings.uncertainty import check_tde, tde_alpha
 
+    code = load_robot_code("")
     rows = []
     for label, scale in NOMINAL_VARIANTS:
         nominal = {k: v * scale.get(k, 1.0) for k, v in DRISHTI.items()}
         alphas = [
-            tde_alpha(nominal, box, true_params=DRISHTI, formulation=f)[0] for f in FORMULATIONS
+            tde_alpha(code, nominal, box, true_params=DRISHTI, formulation=f)[0]
+            for f in FORMULATIONS
         ]
         try:
             for f in FORMULATIONS:
-                check_nominal(nominal, box, true_params=DRISHTI, formulation=f)
+                check_tde(code, nominal, box, true_params=DRISHTI, formulation=f)
             verdict = "accepted"
         except ValueError:
             verdict = "`ValueError`"

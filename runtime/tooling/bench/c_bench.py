@@ -20,7 +20,7 @@ from codegen.backends.c.config import CConfig, StatusCode
 from codegen.backends.casadi import generate_c
 from codegen.spec import FunctionSpec
 from modeling.robots.drishti.parameters import LUMPED
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 from runtime.tooling.bench.c_variants import (
     HAND_CHECKED,
     HAND_WRITTEN,

@@ -28,7 +28,7 @@ def python_bench(number: int) -> list[dict[str, Any]]:
     import casadi as ca
     import sympy as sp
 
-    from runtime.generated_modules import robot, wmr_model
+    from runtime.bindings.generated import robot, wmr_model
 
     p = dict(robot.PARAMS)
     rng = np.random.default_rng(0)

@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 from runtime.tooling.bench.c_bench import renamed_objects
 from runtime.tooling.firmware.build import frozen_define
 
@@ -163,9 +163,9 @@ def _config_lines(config: dict[str, Any]) -> str:
 
 def frozen_header(workdir: Path, config: dict[str, Any]) -> Path:
     """``wmr freeze`` of the recorded configuration (double) into ``workdir``."""
-    from runtime import cbuild
-    from runtime.frozen_config import freeze
-    from runtime.generated_modules import load_robot_code
+    from runtime.bindings import cbuild
+    from runtime.bindings.generated import load_robot_code
+    from runtime.freeze.header import freeze
     from runtime.tooling.firmware.emulated_run import tdroc_config
 
     lib = cbuild.build(False)

@@ -9,7 +9,8 @@ Reference: ``runtime/paper/handwritten`` (the paper's equations typed by hand in
 independent of modeling/ and codegen/). Compared with it, on identical inputs:
 
 * ``gen-python`` — the robot's generated Python (model functions, ``controllers`` classes);
-* ``C double``  — its generated C compiled with cffi (``runtime.cbuild``, cached under build/);
+* ``C double``  — its generated C compiled with cffi (``runtime.bindings.cbuild``, cached
+  under build/);
 * ``CasADi``    — its generated ``*.casadi`` (model functions, and the law kernels — TDE,
   TDROC gain, the four laws — fed the inputs the reference computed in each step);
 * ``C float32`` — the generated C built with ``-D<PREFIX>_FLOAT32``.
@@ -26,8 +27,8 @@ step (τ, switching gain, ‖s‖, Ĥ1, ‖u₁₋₃‖).
 the generated model, laws and plant modules, enumerated from the NumPy modules and the C
 headers (:mod:`.generated_functions`), in C double, C float32 and CasADi at random
 consistent states (q random, wheel rates random, the dependent velocities through the
-generated kinematics); and the four C controllers (double, float32) against the generated
-Python controller classes step by step along a closed loop (``runtime.closed_loop``) and
+generated kinematics); and every C controller (double, float32) against the generated
+Python controller classes step by step along a closed loop (``runtime.sim.loop``) and
 random near/far sequences (:mod:`.generated_controllers`).
 
 Deviation of a quantity: max over samples of ‖x − x_ref‖∞ / max(‖x_ref‖∞, f·S), S the

@@ -1,5 +1,5 @@
 """How the crosscheck calls the generated code that is not Python: a robot's C library
-through cffi (double or float32, built by ``runtime.cbuild``, cached) and its CasADi
+through cffi (double or float32, built by ``runtime.bindings.cbuild``, cached) and its CasADi
 functions (``<target>/casadi/*.casadi``).
 """
 
@@ -18,7 +18,7 @@ from runtime.tooling.crosscheck.targets import Target
 
 @cache
 def _c_library(c_dir: Path, prefix: str, float32: bool) -> Any:
-    from runtime import cbuild
+    from runtime.bindings import cbuild
 
     return cbuild.build(float32, c_dir=c_dir, prefix=prefix)
 
@@ -71,7 +71,7 @@ class CModel:
 
     def struct(self, ctype: str, values: Mapping[str, float]) -> Any:
         """A new C struct ``ctype`` (a parameter struct) from a mapping with Python keys."""
-        from runtime import cbuild
+        from runtime.bindings import cbuild
 
         return cbuild.fill_params(self.ffi.new(f"{ctype} *"), values, self.field_names)
 

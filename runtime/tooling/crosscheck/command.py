@@ -1,8 +1,10 @@
 """``python -m runtime crosscheck``: run every comparison for every robot and print the
 report (``--out FILE`` also writes it).
 
-``--robot NAME_OR_DIR`` (repeatable; default: every robot found under generated/) selects
-the robots. Exit status 1 if any deviation exceeds its tolerance. ``--perturb
+``--robot ROBOT`` (repeatable; default: every robot found under generated/) selects the
+robots, resolved as every command resolves ``--robot`` (a robot file, a generated folder or
+a generated robot's name; ``--generated DIR`` where a robot file's code is). Exit status 1
+if any deviation exceeds its tolerance. ``--perturb
 IMPL:KEY=FACTOR`` multiplies parameter KEY of the (nominal and plant) parameters passed to
 IMPL (python, c64, c32, casadi) by FACTOR, in every selected robot that has KEY: the check
 must then fail (used by the tests). ``python`` is compared only with the hand-written
@@ -74,9 +76,12 @@ def main(argv: list[str] | None = None) -> int:
         "and C and CasADi with the generated NumPy for every robot.",
     )
     parser.add_argument(
-        "--robot", action="append", default=[], metavar="NAME_OR_DIR",
-        help="a generated robot's name or folder (repeatable; default: all under generated/)",
+        "--robot", action="append", default=[], metavar="ROBOT",
+        help="a robot file, a generated folder or a generated robot's name (repeatable; "
+        "default: all under generated/)",
     )  # fmt: skip
+    parser.add_argument("--generated", type=Path, default=None, metavar="DIR",
+                        help="where a robot file's generated code is")
     parser.add_argument("--seed", type=int, default=20170316)
     parser.add_argument("--quick", action="store_true", help="fewer samples and shorter runs")
     parser.add_argument(
@@ -90,7 +95,8 @@ def main(argv: list[str] | None = None) -> int:
             writable_file(args.out)
         except OutputFolderError as exc:
             raise SystemExit(str(exc)) from None
-    targets = [resolve(r) for r in args.robot] if args.robot else all_targets()
+    targets = ([resolve(r, args.generated) for r in args.robot] if args.robot
+               else all_targets())
     report = crosscheck(targets, args.seed, args.quick, parse_perturb(args.perturb, targets))
     text = report.render()
     print(text)

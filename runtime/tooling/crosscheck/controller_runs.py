@@ -11,7 +11,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from runtime.generated_modules import controllers as pyctl
+from runtime.bindings.controller import Controller
+from runtime.bindings.generated import controllers as pyctl
 from runtime.paper.handwritten import controllers as hc
 from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel
@@ -70,7 +71,9 @@ def python_run(target: Target, seq: Sequence_, kind: hc.Kind, nominal: Params) -
 
 
 class CController:
-    """A generated C controller (config + state structs) through cffi."""
+    """A generated C controller through the bindings' wrapper
+    (:class:`runtime.bindings.controller.Controller`), configured from the hand-written
+    equations' settings (the crosscheck's own test configurations)."""
 
     def __init__(
         self, target: Target, float32: bool, kind: hc.Kind, s: hc.Settings, nominal: Params
@@ -80,7 +83,7 @@ class CController:
         self.kind = kind
         self.cfg = ffi.new(f"{pre}_{kind}_config_t *")
         fields = {name for name, _ in ffi.typeof(f"{pre}_{kind}_config_t").fields}
-        from runtime import cbuild
+        from runtime.bindings import cbuild
 
         cbuild.fill_params(
             self.cfg.nominal, {k: nominal[k] for k in hw.PARAM_KEYS}, self.m.field_names
@@ -98,21 +101,17 @@ class CController:
         for key, value in values.items():
             if key in fields:
                 setattr(self.cfg, key, value)
-        self.state = ffi.new(f"{pre}_{kind}_state_t *")
-        self.state_fields = {name for name, _ in ffi.typeof(f"{pre}_{kind}_state_t").fields}
-        status = getattr(self.m.c, f"{pre}_{kind}_init")(self.state, self.cfg)
+        self.ctl = Controller(self.m.lib, pre, kind, self.cfg, 5, 2)
+        self.state, self.state_fields = self.ctl.state, self.ctl.state_fields
+        status = self.ctl.init()
         if status != 0:
             raise RuntimeError(f"{pre}_{kind}_init returned {status}")
-        self.tau = ffi.new(f"{pre}_real_t[2]")
+        self.tau = self.ctl.tau
 
     def step(self, q: Arr, qdot: Arr, qd: Arr, qdd: Arr, qddd: Arr) -> int:
-        a = self.m.arr
-        name = f"{self.m.prefix}_{self.kind}_step"
-        status: int = getattr(self.m.c, name)(
-            self.state, self.cfg, a(q), a(qdot), a(qd), a(qdd), a(qddd), self.tau
-        )
+        status = self.ctl.step([q, qdot, qd, qdd, qddd])
         if status < 0:
-            raise RuntimeError(f"{name} returned {status}")
+            raise RuntimeError(f"{self.m.prefix}_{self.kind}_step returned {status}")
         return status
 
     def record(self, trace: Trace, status: int) -> None:

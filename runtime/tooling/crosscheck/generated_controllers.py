@@ -3,10 +3,10 @@ Python controller classes, step by step along measurement sequences.
 
 Sequences, for each controller and each formulation the robot generates:
 
-* ``loop``: a closed loop (``runtime.closed_loop``: the generated plant, RK4 under
-  zero-order hold, the Python controller at the sample instants) tracking constant
-  driven-wheel rates from rest, the plant carrying a payload the nominal model does not
-  know (``plant_params_with_payload``), h = 0.1 s;
+* ``loop``: what the controller measured in the closed loop (``runtime.sim.loop``: the
+  generated plant, RK4 under zero-order hold, encoders and odometry, the C controller at
+  the sample instants) tracking constant driven-wheel rates from rest, the plant carrying a
+  payload the nominal model does not know (``plant_params_with_payload``), h = 0.1 s;
 * ``near`` / ``far``: a random smooth motion (modulated wheel rates integrated through the
   generated kinematics q̇ = S(q) η; q̈ from the generated linearisation) measured, against
   a reference that is the motion plus a small smooth offset (near: ‖s‖ < ε occurs) or an
@@ -30,8 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from runtime.closed_loop import plant_step, velocities, wheel_rate_reference
-from runtime.generated_modules import RobotCode
+from runtime.bindings.controller import Controller
+from runtime.bindings.generated import RobotCode
+from runtime.experiment.settings import Experiment, PlantSettings
+from runtime.sim import loop
+from runtime.sim.reference import wheel_rate_reference
 from runtime.tooling.crosscheck.bindings import CModel
 from runtime.tooling.crosscheck.deviation import (
     CONTROLLER_IMPLS,
@@ -47,7 +50,6 @@ from runtime.tooling.crosscheck.deviation import (
 from runtime.tooling.crosscheck.generated_functions import physical
 from runtime.tooling.crosscheck.targets import Target
 
-KINDS = ("tdc", "tdroc", "roc", "asmc")
 COVER_KEYS = (
     "steps", "saturated", "inside boundary layer", "outside boundary layer", "TDE active",
     "central estimator", "matched estimator", "window full (n Ω differences)",
@@ -105,31 +107,22 @@ def wheel_rates(code: RobotCode) -> Arr:
 
 
 def closed_loop(code: RobotCode, kind: str, formulation: str, seconds: float) -> Run:
-    """The Python controller closing the loop on the generated plant (as in
-    ``runtime.closed_loop.run``), recording the true q and q̇ at the sample instants."""
+    """What controller ``kind`` measured closing the loop (:func:`runtime.sim.loop.run`, the
+    paper's setting at h = ``LOOP_H``, no friction, the payload of :func:`loaded_plant`),
+    replayed with the base configuration."""
     h = LOOP_H
     ref = wheel_rate_reference(code, np.zeros(code.nq), wheel_rates(code), h, seconds,
                                code.params)
-    config = _base_config(code, formulation, h)
-    ctl = code.controller_class(kind)(config)
-    pp = loaded_plant(code)
-    x = np.concatenate([ref.q[0], np.zeros(code.nu)])
-    qs, qds = [], []
-    for k in range(len(ref.t)):
-        q = x[: code.nq].copy()
-        qdot = velocities(code, q, x[code.nq :], pp)
-        try:
-            tau = ctl.step(q, qdot, ref.q[k], ref.qdot[k], ref.qddot[k])
-        except ValueError:
-            break
-        qs.append(q)
-        qds.append(qdot)
-        x = plant_step(code, x, np.asarray(tau, dtype=float), pp, h / 10, 10)
-        if not np.all(np.isfinite(x)):
-            break
-    n = len(qs)
-    return Run(f"loop {kind}/{formulation}", kind, formulation, config, np.array(qs),
-               np.array(qds), ref.q[:n], ref.qdot[:n], ref.qddot[:n])
+    exp = Experiment()
+    exp = Experiment(controller=dataclasses.replace(exp.controller, h=h, tau_max=50.0),
+                     plant=PlantSettings(substeps=10, viscous=0.0, coulomb=0.0,
+                                         fixed_payload=0.0, extra_payload=0.0))
+    r = loop.run(code, kind, formulation, ref, code.params, exp,
+                 plant_params=loaded_plant(code))
+    n = len(r.t)
+    return Run(f"loop {kind}/{formulation}", kind, formulation,
+               _base_config(code, formulation, h), r.q_meas, r.qdot_meas, ref.q[:n],
+               ref.qdot[:n], ref.qddot[:n])
 
 
 def _smooth(rng: np.random.Generator, amp: float, terms: int = 3
@@ -161,16 +154,16 @@ def motion(code: RobotCode, rng: np.random.Generator, h: float, steps: int, p: P
     for k in range(steps):
         t = k * h
         eta, etad = rates(t)
-        qdot = velocities(code, q, eta, p)
+        qdot = code.velocities(q, eta, p)
         jac, _ = code.model.linearization(q, eta, zero_tau, p)
         qs.append(q.copy())
         qds.append(qdot)
-        qdds.append(jac[: code.nq, : code.nq] @ qdot + velocities(code, q, etad, p))
+        qdds.append(jac[: code.nq, : code.nq] @ qdot + code.velocities(q, etad, p))
         for j in range(sub):
             tj = t + j * dt
 
             def f(tt: float, x: Arr) -> Arr:
-                return velocities(code, x, rates(tt)[0], p)
+                return code.velocities(x, rates(tt)[0], p)
 
             k1 = f(tj, q)
             k2 = f(tj + dt / 2, q + dt / 2 * k1)
@@ -224,8 +217,8 @@ def sequences(target: Target, rng: np.random.Generator, quick: bool) -> list[Run
     # Each estimator in each time-delay controller's random runs (the loops use backward).
     estimators = (c.ACCEL_CENTRAL, c.ACCEL_MATCHED, c.ACCEL_BACKWARD)
     runs = []
-    for i, kind in enumerate(KINDS):
-        for form in code.robot.FORMULATIONS:
+    for i, kind in enumerate(code.controller_names):
+        for form in code.controller(kind).formulations:
             runs.append(closed_loop(code, kind, form, loop_seconds))
             for near in (True, False):
                 accel = estimators[(2 * i + (not near)) % 3]
@@ -267,7 +260,9 @@ def python_run(code: RobotCode, run: Run, cover: dict[str, int]) -> tuple[Run, T
 
 
 class CController:
-    """A generated C controller (config and caller-owned state) through cffi."""
+    """A generated C controller through the bindings' wrapper
+    (:class:`runtime.bindings.controller.Controller`), configured from a Python ``Config``
+    (the crosscheck's own test configurations)."""
 
     def __init__(self, target: Target, float32: bool, kind: str, config: Any) -> None:
         self.m = CModel(target, float32)
@@ -286,27 +281,25 @@ class CController:
                 setattr(self.cfg, name, int(value))
             else:
                 setattr(self.cfg, name, float(value))
-        self.state = ffi.new(f"{pre}_{kind}_state_t *")
-        self.state_fields = [n for n, _ in ffi.typeof(f"{pre}_{kind}_state_t").fields]
-        status = getattr(self.m.c, f"{pre}_{kind}_init")(self.state, self.cfg)
+        self.ctl = Controller(self.m.lib, pre, kind, self.cfg, self.code.nq, self.code.nu)
+        self.state = self.ctl.state
+        self.state_fields = [n for n, _ in ffi.typeof(self.state[0]).fields]
+        status = self.ctl.init()
         if status != 0:
             raise RuntimeError(f"{pre}_{kind}_init returned {status}")
-        self.tau = ffi.new(f"{pre}_real_t[{self.code.nu}]")
         self.saturated = next(v for k, v in self.code.controllers.STATUS.items()
                               if k.endswith("_WARN_SATURATED"))
 
     def m_fill(self, obj: Any, values: Mapping[str, float]) -> None:
-        from runtime import cbuild
+        from runtime.bindings import cbuild
 
         keys = self.code.controllers.PARAM_KEYS
         cbuild.fill_params(obj, {k: values[k] for k in keys}, self.m.field_names)
 
     def step(self, *inputs: Arr) -> int:
-        name = f"{self.m.prefix}_{self.kind}_step"
-        status: int = getattr(self.m.c, name)(self.state, self.cfg, *map(self.m.arr, inputs),
-                                              self.tau)
+        status = self.ctl.step([np.asarray(v, dtype=float).tolist() for v in inputs])
         if status < 0:
-            raise RuntimeError(f"{name} returned {status}")
+            raise RuntimeError(f"{self.m.prefix}_{self.kind}_step returned {status}")
         return status
 
     def record(self, trace: Trace, status: int) -> None:

@@ -42,7 +42,6 @@ from typing import Any
 
 import numpy as np
 
-from runtime.closed_loop import velocities
 from runtime.tooling.crosscheck.bindings import CModel, casadi_call
 from runtime.tooling.crosscheck.deviation import (
     FUNCTION_IMPLS,
@@ -261,7 +260,7 @@ def random_samples(target: Target, rng: np.random.Generator, n: int) -> list[Sam
         pp = {k: v * factor[k] for k, v in code.plant_defaults.items()}
         q = rng.uniform(-5.0, 5.0, code.nq)
         eta = rng.uniform(-10.0, 10.0, code.nu)
-        out.append(Sample(rng, p, pp, q, eta, velocities(code, q, eta, p), {}))
+        out.append(Sample(rng, p, pp, q, eta, code.velocities(q, eta, p), {}))
     return out
 
 

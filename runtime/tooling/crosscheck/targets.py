@@ -3,9 +3,10 @@
 ``c/`` and ``casadi/``.
 
 Robots found under ``generated/``: the root (the default robot) and every
-``generated/<name>/`` with a ``python/robot.py``. ``--robot`` takes a robot's name (its
-``robot.py`` NAME, or the folder name) or a folder path; a folder outside ``generated/``
-(e.g. a modified copy) is imported as a package of its own (``load_robot_code(Path)``).
+``generated/<name>/`` with a ``python/robot.py``. ``--robot`` is resolved as every command
+resolves it (:func:`runtime.bindings.robots.resolve`): a robot's name (its ``robot.py``
+NAME, or the folder name), a generated folder, or a robot file (its generated code); a
+folder outside ``generated/`` (e.g. a modified copy) is imported as a package of its own.
 """
 
 from __future__ import annotations
@@ -13,8 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.generated_modules import GENERATED, RobotCode
-from runtime.robot_source import RobotSourceError, code_in, generated_folder, generated_robots
+from runtime.bindings.generated import GENERATED, RobotCode
+from runtime.bindings.robots import RobotSourceError, code_in, generated_robots
+from runtime.bindings.robots import resolve as resolve_robot
 
 
 @dataclass(frozen=True)
@@ -56,11 +58,11 @@ def target_of(folder: Path) -> Target:
     return Target(code, folder, folder / "c", folder / "casadi")
 
 
-def resolve(name_or_dir: str) -> Target:
-    """``--robot``: a folder path, or the name of a robot found under generated/
-    (``runtime.robot_source.generated_folder``); exits with its sentence otherwise."""
+def resolve(robot: str, generated: Path | None = None) -> Target:
+    """``--robot`` (and ``--generated``) as every command resolves them; exits with its
+    sentence otherwise."""
     try:
-        return target_of(generated_folder(name_or_dir))
+        return target_of(resolve_robot(robot, generated).code.folder)
     except RobotSourceError as exc:
         raise SystemExit(str(exc)) from None
 

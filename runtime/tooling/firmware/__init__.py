@@ -16,7 +16,7 @@
    and ``bl`` targets read from the linked ELF's disassembly (push/vpush/sub sp);
 4. runs the float32 TDROC step (paper formulation) in the Unicorn emulator (Cortex-M4,
    FPU) on a recorded closed-loop sequence (the lawn-mower path through
-   ``runtime.paper.simulate.run(float32=True)``, ε = 0.5), and compares its torques with the
+   ``runtime.sim.loop.run(float32=True)``, ε = 0.5), and compares its torques with the
    host float32 build (in ulps) and the host double build; counts the instructions
    executed per step and measures the stack's high-water mark.
 

@@ -12,8 +12,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.cbuild import GENERATED_C
-from runtime.generated_modules import robot as generated_robot
+from runtime.bindings.cbuild import GENERATED_C
+from runtime.bindings.generated import load_robot_code
+from runtime.bindings.generated import robot as generated_robot
 
 ARM_GCC = "arm-none-eabi-gcc"
 ARM_FLAGS = (
@@ -29,8 +30,8 @@ ARM_FLAGS = (
 )
 # Per-function sections so that the links below keep only what is called.
 SECTION_FLAGS = ("-ffunction-sections", "-fdata-sections")
-# The paper robot's generated controllers (the registry, as its robot.py exports it).
-CONTROLLERS = tuple(str(c["name"]) for c in generated_robot.CONTROLLERS)
+# The controllers generated for the default robot, as its robot.py exports the registry.
+CONTROLLERS = load_robot_code("").controller_names
 
 
 def tool(name: str) -> str | None:
@@ -219,7 +220,7 @@ int main(void)
 
 def frozen_define(name: str) -> str:
     """The define of a build with ``name``'s configuration compiled in (``wmr freeze``)."""
-    from runtime.frozen_config import frozen_macro
+    from runtime.freeze.header import frozen_macro
 
     return f"-D{frozen_macro('wmr', name)}"
 

@@ -26,7 +26,7 @@ from codegen.backends.casadi import generate_c
 from codegen.robot_functions import law_specs, model_specs
 from modeling.package_paths import default_output
 from modeling.robots.drishti.model import robot_model
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, have_toolchain
 from runtime.tooling.firmware.symbols import DOUBLE_SYMBOL
 

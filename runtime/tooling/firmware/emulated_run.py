@@ -1,5 +1,5 @@
 """The emulated run: the controller calls of a closed loop (lawn-mower path through
-``runtime.paper.simulate.run(float32=True)``) recorded, replayed on the emulated Cortex-M4 and on
+``runtime.sim.loop.run(float32=True)``) recorded, replayed on the emulated Cortex-M4 and on
 the host builds (float32 and double), and the torques compared (in ulps and absolute).
 """
 
@@ -30,49 +30,32 @@ class Recording:
 def record_closed_loop(
     controller: str = "tdroc", formulation: str = "paper", eps: float = 0.5, float32: bool = True
 ) -> Recording:
-    """Run ``simulate.run`` on the lawn-mower path and record every controller call."""
+    """Run the closed loop (:func:`runtime.sim.loop.run`) on the lawn-mower path and record
+    every controller call: its configuration, and per step the inputs as the C received
+    them (rounded to float for a float32 build), the status, τ and the gain."""
     from modeling.robot_file import load_robot
-    from runtime.cbuild import CLibrary
-    from runtime.experiment import Experiment
-    from runtime.paper import references, simulate
+    from runtime.bindings.config import controller_config
+    from runtime.bindings.generated import load_robot_code
+    from runtime.experiment.settings import Experiment
+    from runtime.sim import loop, paths
+    from runtime.sim.plant import library_for
 
+    code = load_robot_code("")
     robot = dict(load_robot().lumped)
     exp = Experiment()
     exp = replace(exp, controller=replace(exp.controller, eps=eps))
-    ref = references.lawnmower(robot, exp.controller.h, exp.paths.lawnmower_duration)
-    real = simulate.sim_library(float32)
-    rec: dict[str, list[Any]] = {"inputs": [], "status": [], "tau": [], "gain": [], "cfg": []}
-    step_name = f"wmr_{controller}_step"
+    ref = paths.lawnmower(code, robot, exp)
+    r = loop.run(code, controller, formulation, ref, robot, exp, float32=float32, check=True)
+    lib = library_for(code, float32)
+    cfg = controller_config(lib, code, controller, formulation, robot, exp)
 
-    class Recorder:
-        def __getattr__(self, attr: str) -> Any:
-            fn = getattr(real.lib, attr)
-            if attr != step_name:
-                return fn
+    def as_c(v: Any) -> list[float]:
+        return [float(np.float32(x)) if float32 else float(x) for x in v]
 
-            def step(state: Any, cfg: Any, *args: Any) -> int:
-                status = int(fn(state, cfg, *args))
-                if not rec["cfg"]:
-                    rec["cfg"].append(config_values(real.ffi, cfg))
-                rec["inputs"].append([[float(x) for x in a] for a in args[:5]])
-                rec["status"].append(status)
-                rec["tau"].append([float(args[5][0]), float(args[5][1])])
-                rec["gain"].append(float(state.gain))
-                return status
-
-            return step
-
-    original = simulate.sim_library
-
-    def recording_library(float32: bool = False) -> CLibrary:
-        return CLibrary(real.ffi, Recorder(), real.float32, real.path)
-
-    simulate.sim_library = recording_library  # type: ignore[assignment]
-    try:
-        simulate.run(controller, formulation, ref, robot, exp, float32=float32)
-    finally:
-        simulate.sim_library = original
-    return Recording(rec["cfg"][0], rec["inputs"], rec["status"], rec["tau"], rec["gain"])
+    inputs = [[as_c(v) for v in (r.q_meas[k], r.qdot_meas[k], ref.q[k], ref.qdot[k],
+                                 ref.qddot[k])] for k in range(len(r.t))]
+    return Recording(config_values(lib.ffi, cfg), inputs, [int(s) for s in r.status],
+                     [[float(x) for x in t] for t in r.tau], [float(g) for g in r.gain])
 
 
 def config_values(ffi: Any, cfg: Any) -> dict[str, Any]:
@@ -97,22 +80,20 @@ def tdroc_config(ffi: Any, values: dict[str, Any]) -> Any:
 
 
 def replay_host(rec: Recording, float32: bool) -> tuple[list[int], list[list[float]], list[float]]:
-    """The recorded inputs through the host build (cffi), TDROC: (status, tau, gain)."""
-    from runtime import cbuild
+    """The recorded inputs through the host build (cffi, the bindings' controller wrapper),
+    TDROC: (status, tau, gain)."""
+    from runtime.bindings import cbuild
+    from runtime.bindings.controller import Controller
 
     lib = cbuild.build(float32)
-    ffi = lib.ffi
-    cfg = tdroc_config(ffi, rec.config)
-    state = ffi.new("wmr_tdroc_state_t *")
-    if lib.lib.wmr_tdroc_init(state, cfg) != 0:
+    ctl = Controller(lib, "wmr", "tdroc", tdroc_config(lib.ffi, rec.config), 5, 2)
+    if ctl.init() != 0:
         raise RuntimeError("host init failed")
-    tau = ffi.new("wmr_real_t[2]")
     statuses, taus, gains = [], [], []
     for inputs in rec.inputs:
-        arrays = [ffi.new("wmr_real_t[5]", v) for v in inputs]
-        statuses.append(int(lib.lib.wmr_tdroc_step(state, cfg, *arrays, tau)))
-        taus.append([float(tau[0]), float(tau[1])])
-        gains.append(float(state.gain))
+        statuses.append(ctl.step(inputs))
+        taus.append([float(ctl.tau[0]), float(ctl.tau[1])])
+        gains.append(float(ctl.state.gain))
     return statuses, taus, gains
 
 

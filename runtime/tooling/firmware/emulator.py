@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from modeling.robots.drishti.parameters import LUMPED
-from runtime.cbuild import GENERATED_C
+from runtime.bindings.cbuild import GENERATED_C
 from runtime.tooling.firmware.build import (
     ARM_FLAGS,
     ARM_GCC,

@@ -105,11 +105,11 @@ def formulation_only_image(work: Path, formulation: str) -> OnlyImage:
 def frozen_config_header(folder: Path, formulation: str) -> Path:
     """``wmr freeze`` of the emulated run's TDROC configuration (:data:`EMULATED_EPS`, the
     experiment's other defaults) for float32, into ``folder``."""
-    from runtime import cbuild
-    from runtime.experiment import Experiment
-    from runtime.frozen_config import freeze
-    from runtime.generated_modules import load_robot_code
-    from runtime.robot_simulation import controller_config
+    from runtime.bindings import cbuild
+    from runtime.bindings.config import controller_config
+    from runtime.bindings.generated import load_robot_code
+    from runtime.experiment.settings import Experiment
+    from runtime.freeze.header import freeze
 
     code = load_robot_code("")
     lib = cbuild.build(True)
@@ -440,7 +440,7 @@ def render(r: Report) -> str:
             "The float32 TDROC step (paper formulation, ε = 0.5, the experiment's other",
             "defaults), linked with newlib-nano's libm into a flat image and run in Unicorn",
             "(`UC_CPU_ARM_CORTEX_M4`), on the controller inputs recorded from",
-            "`runtime.paper.simulate.run('tdroc', 'paper', lawn mower, float32=True)`. The host",
+            "`runtime.sim.loop.run(drishti, 'tdroc', 'paper', lawn mower, float32=True)`. The host",
             "builds replay the same inputs (x86-64 gcc, cffi).",
             "",
             "| quantity | value |",

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from modeling.package_paths import PACKAGE_ROOT, SHIPPED_GENERATED
-from runtime.frozen_config import frozen_macro, header_name
-from runtime.robot_source import generated_robots
+from runtime.bindings.robots import generated_robots
+from runtime.freeze.header import frozen_macro, header_name
 from runtime.tooling.firmware.build import CONTROLLERS
 
 DOC = PACKAGE_ROOT / "docs" / "STATIC_CHECKS.md"

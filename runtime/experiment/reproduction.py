@@ -1,0 +1,296 @@
+"""``wmr reproduce --robot ROBOT``: the paper's experiment on any robot.
+
+The experiment of :mod:`runtime.paper.reproduce` — circle and lawn mower, every controller
+generated for the robot in every formulation it has, each ``--sensing`` model, payload put
+on and taken off, friction the controllers do not know — scaled to the robot
+(:mod:`runtime.experiment.scale`; the scaled settings are printed and written), on the one
+closed loop (:mod:`runtime.sim.loop`). Each run's outcome is classified
+(:mod:`runtime.sim.outcome`: a run off its path is not ``ok``). Writes ``REPORT.md``,
+``metrics.md``, ``metrics.csv`` and ``tracking.png`` to the output folder; nothing written
+depends on the clock.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from runtime.bindings.robots import RobotSetup
+from runtime.bindings.uncertainty import inertial_keys, roc_bounds, schedule_tde, tde_alpha
+from runtime.experiment.arguments import Setting
+from runtime.experiment.settings import Experiment
+from runtime.sim import loop, paths
+from runtime.sim.loop import Run
+from runtime.sim.outcome import OFF_PATH_FRACTION, outcome
+from runtime.sim.payload import plant_params_at
+from runtime.sim.reference import Reference
+
+# One colour per controller, in the registry's order (as the paper's figures).
+PALETTE = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown",
+           "tab:pink", "tab:olive", "tab:cyan")
+
+
+@dataclass(frozen=True)
+class ModelChecks:
+    """Over the uncertainty box, per formulation: the TDE condition's max ‖M⁻¹ M̂ − I‖₂
+    (symmetric box, must be < 1 for TDC/TDROC; NaN where the box holds a robot the
+    controllers would not accept) and ROC's (α, φ) (box above nominal)."""
+
+    tde: float
+    alpha: float
+    phi: float
+
+
+@dataclass(frozen=True)
+class Row:
+    """One run's numbers."""
+
+    sensing: str
+    path: str
+    formulation: str
+    controller: str
+    rms_error: float  # m, root frame origin
+    max_error: float
+    final_error: float
+    rms_percent: float  # of the path's scale
+    rms_torque: float
+    max_torque: float
+    saturated_steps: int
+    failed_at: float | None
+    status: str  # the outcome: ok, off path, failed, init refused (runtime.sim.outcome)
+    detail: str  # why it is not ok
+
+
+@dataclass(frozen=True)
+class RobotReproduction:
+    setup: RobotSetup
+    experiment: Experiment  # scaled
+    settings: tuple[str, ...]  # what scaling did, one line per field
+    sensings: tuple[str, ...]
+    refs: dict[str, Reference]
+    checks: dict[str, ModelChecks]  # per formulation, over the uncertainty box
+    schedule_tde: dict[str, float]  # per formulation: ‖M⁻¹M̂ − I‖ with the payloads on
+    runs: dict[tuple[str, str, str, str], Run]  # (sensing, path, form, controller)
+    rows: list[Row]
+    seconds: float
+
+    @property
+    def labels(self) -> dict[str, str]:
+        return {c.name: c.label for c in self.setup.code.controller_infos}
+
+
+def _row(r: Run, sensing: str, scale: float) -> Row:
+    e = r.position_error
+    result = outcome(r, scale)
+    if not len(e):  # refused at init
+        nan = float("nan")
+        return Row(sensing, r.path, r.formulation, r.controller, nan, nan, nan, nan, nan, nan,
+                   0, r.failed_at, result.status, result.detail)
+    rms = float(np.sqrt(np.mean(e**2)))
+    return Row(sensing, r.path, r.formulation, r.controller, rms, float(e.max()), float(e[-1]),
+               100 * rms / scale, float(np.sqrt(np.mean(r.tau**2))), float(np.abs(r.tau).max()),
+               r.saturated, r.failed_at, result.status, result.detail)
+
+
+def model_checks(setup: RobotSetup, exp: Experiment, formulation: str) -> ModelChecks:
+    """The TDE condition and ROC's bounds of the robot's nominal model over the box."""
+    c = exp.controller
+    try:
+        tde = tde_alpha(setup.code, setup.nominal, c.uncertainty, formulation=formulation)[0]
+    except ValueError:  # the box holds robots the controllers would not accept as models
+        tde = float("nan")
+    alpha, phi = roc_bounds(setup.code, setup.nominal, c.uncertainty, formulation,
+                            c.roc_max_rate)
+    return ModelChecks(tde, alpha, phi)
+
+
+def reproduce_robot(setting: Setting, sensings: Sequence[str],
+                    progress: bool = False) -> RobotReproduction:
+    """Run the experiment, already scaled to the robot (no files written)."""
+    start = time.perf_counter()
+    setup, exp = setting.robot, setting.experiment
+    code = setup.code
+    refs = {name: paths.reference(code, setup.nominal, exp, name) for name in paths.PATHS}
+    forms = code.formulations
+    checks = {f: model_checks(setup, exp, f) for f in forms}
+    loaded = [plant_params_at(code, exp, 0.0, setup.plant),
+              plant_params_at(code, exp, exp.plant.extra_on_at, setup.plant)]
+    tde = {f: schedule_tde(code, setup.nominal, loaded, f) for f in forms}
+    runs: dict[tuple[str, str, str, str], Run] = {}
+    rows: list[Row] = []
+    pairs = code.runs()
+    total = len(sensings) * len(refs) * len(pairs)
+    for sensing in sensings:
+        e = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
+        for name, ref in refs.items():
+            for form, info in pairs:
+                # the simulated robot: the file's numbers, with the experiment's payloads
+                r = loop.run(code, info.name, form, ref, setup.nominal, e,
+                             plant_params=setup.plant)
+                runs[(sensing, name, form, info.name)] = r
+                rows.append(_row(r, sensing, ref.scale))
+                if progress:
+                    print(f"[{len(rows):2d}/{total}] {sensing:15s} {name:9s} {form:7s} "
+                          f"{info.label:5s} RMS {rows[-1].rms_error * 1000:9.2f} mm "
+                          f"{rows[-1].status}", flush=True)
+    return RobotReproduction(setup, exp, setting.scaling, tuple(sensings), refs, checks, tde,
+                             runs, rows, time.perf_counter() - start)
+
+
+# --------------------------------------------------------------------------- outputs
+
+
+def _fmt(x: float) -> str:
+    return f"{x * 1000:.2f}"
+
+
+def metrics_lines(rep: RobotReproduction) -> list[str]:
+    lines = [
+        "| sensing | path | form | controller | RMS error [mm] | max [mm] | final [mm] "
+        "| RMS [% of scale] | RMS τ [N m] | max |τ| [N m] | saturated steps | outcome |",
+        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    labels = rep.labels
+    for r in rep.rows:
+        result = r.status if r.status == "ok" else f"{r.status}: {r.detail}"
+        lines.append(
+            f"| {r.sensing} | {r.path} | {r.formulation} | {labels[r.controller]} "
+            f"| {_fmt(r.rms_error)} | {_fmt(r.max_error)} | {_fmt(r.final_error)} "
+            f"| {r.rms_percent:.2f} | {r.rms_torque:.3g} | {r.max_torque:.3g} "
+            f"| {r.saturated_steps} | {result} |"
+        )
+    return lines
+
+
+def report_lines(rep: RobotReproduction) -> list[str]:
+    s, exp = rep.setup, rep.experiment
+    c, pl, se = exp.controller, exp.plant, exp.sensing
+    inertial = inertial_keys(s.code, s.nominal)
+    out = [
+        f"# The paper's experiment on robot '{s.name}'",
+        "",
+        f"Robot `{Path(s.source).as_posix()}`; generated code `{s.code.prefix}_` "
+        f"({s.code.nq} coordinates, {s.code.nu} driven wheels; formulations "
+        f"{', '.join(s.code.formulations)}; controllers "
+        f"{', '.join(c.label for c in s.code.controller_infos)}). Written by `wmr reproduce "
+        "--robot`.",
+        "",
+        "## Conditions",
+        "",
+        f"- Sampling h = {c.h:g} s; plant: the generated model, RK4 in C with {pl.substeps} "
+        "steps per sample; zero-order hold.",
+        f"- Gains K1 = {c.k1:g} I, K2 = {c.k2:g} I, Q = diag({c.q_pos:g} I, {c.q_vel:g} I); "
+        f"ε = {c.eps:g}; TDROC n = {c.n}, a = {c.a:g}; ASMC γ = {c.gamma:g}; "
+        f"τ_max = {c.tau_max:.4g} N m.",
+        f"- Sensing: {', '.join(rep.sensings)} (wheel encoders {se.encoder_ppr} ppr, "
+        f"quadrature; every other coordinate by odometry); q̈(t − h) estimator "
+        f"{se.accel_estimator}.",
+        f"- Nominal model: the robot's numbers. Simulated robot: the same plus a payload "
+        f"of {pl.fixed_payload:.4g} kg at ({pl.fixed_payload_x:.3g}, {pl.fixed_payload_y:.3g}) "
+        f"m on the root body, and {pl.extra_payload:.4g} kg at ({pl.extra_payload_x:.3g}, "
+        f"{pl.extra_payload_y:.3g}) m on for half of every {pl.extra_period:g} s from "
+        f"t = {pl.extra_on_at:g} s; wheel friction {pl.viscous:.3g} N m s/rad + "
+        f"{pl.coulomb:.3g} N m (unknown to the controllers).",
+        "",
+        "Scaled from the paper's setting (fields an experiment file sets are kept):",
+        "",
+        *[f"- {line}" for line in rep.settings],
+        "",
+        "## Model checks",
+        "",
+        f"Inertial parameters (those the kinematics does not depend on): {', '.join(inertial)}.",
+        "",
+        "| formulation | TDE ‖M⁻¹M̂ − I‖ with the payloads | over a ±"
+        f"{100 * c.uncertainty:g} % box | ROC α | ROC φ |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for f, b in rep.checks.items():
+        box = "—" if math.isnan(b.tde) else f"{b.tde:.3g}"
+        out.append(f"| {f} | {rep.schedule_tde[f]:.3g} | {box} | {b.alpha:.3g} "
+                   f"| {b.phi:.3g} |")
+    out += [
+        "",
+        "TDC and TDROC need the TDE value below 1 (condition of (17)). The box perturbs every "
+        "inertial parameter independently, combinations no physical robot has when the "
+        "parameters are base parameters, so it is a conservative bound; the payload column "
+        "is this experiment's."
+        + (" —: the box holds robots the controllers would not accept as a model (a mass "
+           "matrix that is not positive definite, e.g. m I ≤ K²), so the condition is not "
+           "defined over it." if any(math.isnan(b.tde) for b in rep.checks.values()) else ""),
+        "",
+        "## Results",
+        "",
+        "Error: distance of the root body's frame origin from its reference, at the sample "
+        "instants. Scale: the circle's radius, the lawn mower's leg spacing. Outcome: `ok` "
+        "only if the configuration was accepted, no step failed and the final and RMS errors "
+        f"are both within {100 * OFF_PATH_FRACTION:g} % of the path's scale "
+        "(`runtime/sim/outcome.py`); `off path` otherwise.",
+        "",
+        *metrics_lines(rep),
+        "",
+        "![tracking](tracking.png)",
+        "",
+    ]
+    return out
+
+
+def write_csv(rep: RobotReproduction, path: Path) -> None:
+    with path.open("w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["sensing", "path", "formulation", "controller", "rms_error_m",
+                    "max_error_m", "final_error_m", "rms_percent", "rms_torque_Nm",
+                    "max_torque_Nm", "saturated_steps", "failed_at_s", "status"])
+        for r in rep.rows:
+            w.writerow([r.sensing, r.path, r.formulation, r.controller, f"{r.rms_error:.6g}",
+                        f"{r.max_error:.6g}", f"{r.final_error:.6g}", f"{r.rms_percent:.4g}",
+                        f"{r.rms_torque:.6g}", f"{r.max_torque:.6g}", r.saturated_steps,
+                        "" if r.failed_at is None else f"{r.failed_at:g}", r.status])
+
+
+def plot(rep: RobotReproduction, path: Path) -> None:
+    """Paths in the plane (reference and each controller) and the error over time, for the
+    first sensing model and the minimal formulation."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    sensing, form = rep.sensings[0], "minimal"
+    fig = Figure(figsize=(11, 7.5), dpi=110, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 2)
+    infos = rep.setup.code.controller_infos
+    colors = {c.name: PALETTE[i % len(PALETTE)] for i, c in enumerate(infos)}
+    for col, name in enumerate(rep.refs):
+        ref = rep.refs[name]
+        ax = axes[0, col]
+        ax.plot(ref.q[:, 0], ref.q[:, 1], color="black", lw=2.5, alpha=0.35, label="reference")
+        for info in infos:
+            if form not in info.formulations:
+                continue
+            r = rep.runs[(sensing, name, form, info.name)]
+            ax.plot(r.q[:, 0], r.q[:, 1], color=colors[info.name], lw=1, label=info.label)
+            axes[1, col].semilogy(r.t, np.maximum(r.position_error, 1e-7) * 1000,
+                                  color=colors[info.name], lw=1, label=info.label)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(f"{name}: root frame origin (x, y) [m]")
+        ax.legend(fontsize=8)
+        axes[1, col].set_title(f"{name}: position error [mm]")
+        axes[1, col].set_xlabel("t [s]")
+    fig.suptitle(f"robot '{rep.setup.name}', {sensing}, {form} formulation, h = "
+                 f"{rep.experiment.controller.h:g} s, payload schedule and friction as in "
+                 "REPORT.md")
+    fig.savefig(path, metadata={"Software": None})
+
+
+def write_outputs(rep: RobotReproduction, out: Path, plots: bool = True) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "metrics.md").write_text("\n".join(metrics_lines(rep)) + "\n", encoding="utf-8")
+    write_csv(rep, out / "metrics.csv")
+    (out / "REPORT.md").write_text("\n".join(report_lines(rep)), encoding="utf-8")
+    if plots:
+        plot(rep, out / "tracking.png")

@@ -1,0 +1,361 @@
+"""Sampled-data stability of the generated controllers on a given robot, sampling and sensing.
+
+:mod:`runtime.stability.sampled_loop` builds the sampled closed loop's one-sample map and its
+pencil J(g) = J₀ + g J₁ in the boundary-layer gain g (the model, the frame and the
+conditions a verdict holds for are stated there). This module turns it into verdicts: the
+largest stable g per controller and formulation, the spectral radius at the experiment's
+setting (k̂ measured in closed loop, :mod:`runtime.sim.loop`, for the adaptive and
+windowed gains of TDROC and ASMC, ρ/ε for ROC), TDROC's predicted stable range
+ε > k̂ / g_max, and the ``wmr stability`` command. The controllers, their labels and which
+gain each has come from the robot's generated code (``CONTROLLERS``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from runtime.bindings.generated import RobotCode
+from runtime.bindings.robots import RobotSourceError
+from runtime.bindings.uncertainty import tde_alpha
+from runtime.experiment.arguments import add_experiment_option, add_robot_options, robot_setting
+from runtime.experiment.settings import (
+    ACCEL_CODES,
+    VELOCITY_MODELS,
+    Experiment,
+    ExperimentFileError,
+    check_sensing,
+    load_experiment,
+)
+from runtime.sim import loop, paths
+from runtime.stability.sampled_loop import (
+    FORMULATIONS,
+    ClosedLoop,
+    LoopSetting,
+    Pencil,
+    analysed,
+    covers,
+    on_operating_circle,
+    pencil,
+    roc_gain,
+    setting,
+)
+
+__all__ = ["FORMULATIONS", "Analysis", "ClosedLoop", "LoopSetting", "Pencil", "analyse",
+           "analyse_all", "main", "pencil", "setting"]
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """One row of the report (the JSON keys controller … stable are fixed)."""
+
+    controller: str
+    formulation: str
+    sensing: str
+    max_stable_gain: float  # largest stable boundary-layer gain g = k/ε
+    spectral_radius: float  # at the experiment's setting (g_setting)
+    stable: bool
+    estimator: str
+    h: float
+    plant: str
+    gain_at_setting: float  # g the setting gives: 0 (TDC), k̂/ε measured, ρ/ε (ROC)
+    gain_source: str
+    radius_without_switching: float  # g = 0
+    eps: float
+    eps_min: float | None  # TDROC: ε > k̂ / g_max predicted stable (k̂ measured)
+    measured_khat: float | None
+
+
+def measured_gain(
+    code: RobotCode, controller: str, formulation: str, robot: dict[str, float],
+    exp: Experiment
+) -> float:
+    """Median switching gain over a closed-loop circle (the analysis' operating point) at the
+    experiment's setting. The configuration checks are skipped: the loop's stability is what
+    is analysed here, and the TDE condition over the uncertainty box is reported apart
+    (:func:`tde_notes`)."""
+    exp = on_operating_circle(exp)
+    ref = paths.circle(code, robot, exp)
+    r = loop.run(code, controller, formulation, ref, robot, exp)
+    if r.init_status != 0:
+        raise ValueError(r.stop_reason)
+    late = r.t >= min(5.0, 0.5 * r.t[-1])
+    return float(np.median(r.gain[late]))
+
+
+def setting_gain(
+    code: RobotCode,
+    controller: str,
+    formulation: str,
+    robot: dict[str, float],
+    exp: Experiment,
+    measure: bool,
+) -> tuple[float, str, float | None]:
+    """(g at the experiment's setting, where it comes from, the measured k̂ or None)."""
+    eps = exp.controller.eps
+    info = code.controller(controller)
+    if not info.switching:
+        return 0.0, f"{info.label} has no switching term", None
+    if info.bounds:
+        try:
+            return (roc_gain(code, formulation, robot, exp),
+                    f"{info.label}'s ρ at zero error / ε", None)
+        except ValueError as exc:  # ROC's bounds do not exist over the uncertainty box
+            return math.nan, f"no {info.label} gain: {exc}", None
+    if not measure:
+        return 0.0, "not measured", None
+    try:
+        khat = measured_gain(code, controller, formulation, robot, exp)
+    except ValueError as exc:  # the toolchain refuses to configure it: nothing to measure
+        return 0.0, f"not measured: the configuration is refused ({exc})", None
+    return khat / eps, "median k̂ of the closed-loop circle / ε", khat
+
+
+def analyse(
+    code: RobotCode,
+    controller: str,
+    formulation: str,
+    robot: dict[str, float],
+    exp: Experiment,
+    plant: str = "nominal",
+    measure: bool = True,
+) -> Analysis:
+    """Stability of one controller and formulation at the experiment's setting."""
+    loop_setting = setting(code, controller, formulation, robot, exp, plant)
+    pen = pencil(loop_setting)
+    g_max = pen.max_stable_gain()
+    # Nothing to measure where the loop diverges before any switching gain (and the
+    # toolchain refuses to build that configuration).
+    g, source, khat = setting_gain(
+        code, controller, formulation, robot, exp, measure and pen.radius(0.0) < 1.0
+    )
+    radius = pen.radius(g) if math.isfinite(g) else math.inf  # nan: no configuration exists
+    eps_min = khat / g_max if khat is not None and g_max > 0 else None
+    return Analysis(
+        controller=controller,
+        formulation=formulation,
+        sensing=exp.sensing.velocity,
+        max_stable_gain=g_max,
+        spectral_radius=radius,
+        stable=radius < 1.0,
+        estimator=loop_setting.estimator,
+        h=exp.controller.h,
+        plant=plant,
+        gain_at_setting=g,
+        gain_source=source,
+        radius_without_switching=pen.radius(0.0),
+        eps=exp.controller.eps,
+        eps_min=eps_min,
+        measured_khat=khat,
+    )
+
+
+@dataclass(frozen=True)
+class ConfigurationVerdict:
+    """The sampled-data verdict for one filled controller configuration (``wmr freeze``):
+    the pencil of its robot, sampling, sensing and estimator at its own gains."""
+
+    controller: str
+    formulation: str
+    stable: bool
+    spectral_radius: float
+    gain: float  # boundary-layer gain g = k/ε at the configuration
+    gain_source: str
+    h: float
+    sensing: str
+    estimator: str
+
+    def describe(self) -> str:
+        return (f"{self.controller}/{self.formulation} "
+                f"{'stable' if self.stable else 'UNSTABLE'}: spectral radius "
+                f"{self.spectral_radius:.3f} at k/ε = {self.gain:.3g} ({self.gain_source}); "
+                f"h = {self.h:g} s, {self.sensing} rates, {self.estimator} estimator")
+
+
+ESTIMATOR_NAMES = {code: name for name, code in ACCEL_CODES.items()}
+
+
+def configuration_verdict(
+    code: RobotCode, controller: str, formulation: str, nominal: dict[str, float],
+    exp: Experiment, config: Any,
+) -> ConfigurationVerdict:
+    """Stability of ``config`` (a filled ``wmr_<controller>_config_t``) on the robot whose
+    parameters are ``nominal`` (plant = model, as ``wmr stability`` with the nominal plant),
+    with the experiment's sensing and the configuration's h, gains, estimator and switching
+    gain: 0 (TDC), held_gain/ε (TDROC with k̂ held), φ/(1 − α)/ε (ROC at zero error, from
+    the configuration's bounds), else k̂ measured on the closed-loop circle / ε."""
+    k1 = tuple(float(x) for x in config.k1)
+    k2 = tuple(float(x) for x in config.k2)
+    uniform = len(set(k1)) == 1 and len(set(k2)) == 1
+    changes: dict[str, Any] = {"h": float(config.h), "q_pos": float(config.q_pos),
+                               "q_vel": float(config.q_vel), "tau_max": float(config.tau_max)}
+    for name in ("eps", "n", "a", "gamma"):
+        if hasattr(config, name):
+            changes[name] = type(getattr(exp.controller, name))(getattr(config, name))
+    if uniform:
+        changes.update(k1=k1[0], k2=k2[0])
+    exp = replace(exp, controller=replace(exp.controller, **changes))
+    loop_setting = replace(setting(code, controller, formulation, nominal, exp), k1=k1, k2=k2)
+    if hasattr(config, "accel_estimator"):
+        loop_setting = replace(loop_setting,
+                               estimator=ESTIMATOR_NAMES[int(config.accel_estimator)],
+                               rate_window=float(config.rate_window))
+    pen = pencil(loop_setting)
+    eps = float(getattr(config, "eps", 1.0))
+    info = code.controller(controller)
+    if not info.switching:
+        g, source = 0.0, f"{info.label} has no switching term"
+    elif info.bounds:
+        g = float(config.phi) / (1.0 - float(config.alpha)) / eps
+        source = f"{info.label}'s ρ at zero error / ε"
+    elif "hold_gain" in info.field_names() and int(config.hold_gain):
+        g, source = float(config.held_gain) / eps, "k̂ held / ε"
+    elif pen.radius(0.0) >= 1.0:
+        g, source = 0.0, "not measured: unstable without switching"
+    else:
+        g = measured_gain(code, controller, formulation, nominal, exp) / eps
+        source = "median k̂ of the closed-loop circle / ε" + (
+            "" if uniform else " (measured with K1, K2 of the experiment)")
+    return ConfigurationVerdict(
+        controller=controller, formulation=formulation, stable=pen.radius(g) < 1.0,
+        spectral_radius=pen.radius(g), gain=g, gain_source=source, h=float(config.h),
+        sensing=exp.sensing.velocity, estimator=loop_setting.estimator)
+
+
+def analyse_all(
+    code: RobotCode, robot: dict[str, float], exp: Experiment, plant: str = "nominal",
+    measure: bool = True
+) -> list[Analysis]:
+    """Every controller the analysis models (:func:`~runtime.stability.sampled_loop.analysed`)
+    in every formulation it is generated in."""
+    return [analyse(code, c.name, f, robot, exp, plant, measure)
+            for c in code.controller_infos if analysed(c)
+            for f in c.formulations if f in FORMULATIONS]
+
+
+def not_analysed(code: RobotCode) -> list[str]:
+    """A note for each controller the analysis does not model."""
+    return [f"* {c.label} ({c.title}): no sampled-data verdict; the analysis models the laws "
+            "of (18) (controllers with K1, K2)" for c in code.controller_infos
+            if not analysed(c)]
+
+
+def tde_notes(code: RobotCode, robot: dict[str, float], exp: Experiment) -> list[str]:
+    """The TDE condition ‖M⁻¹ M̂ − I‖ < 1 of (17) over the experiment's uncertainty box, per
+    formulation, where it fails (TDC and TDROC assume it; the toolchain refuses to configure
+    them there, and a robot at the box's failing corner may diverge)."""
+    box = exp.controller.uncertainty
+    notes = []
+    for form in code.formulations:
+        try:
+            alpha = tde_alpha(code, robot, box, formulation=form)[0]
+        except ValueError as exc:  # the box holds robots with no positive-definite M
+            notes.append(f"* TDE condition, {form} formulation: {exc}")
+            continue
+        if not alpha < 1.0:
+            notes.append(
+                f"* TDE condition, {form} formulation: ‖M⁻¹M̂ − I‖ reaches {alpha:.3g} ≥ 1 over "
+                f"the ±{box:.0%} box, so TDC and TDROC are refused there; the rows above are "
+                "the nominal robot's"
+            )
+    return notes
+
+
+def _json_number(x: float | None) -> float | str | None:
+    if x is None or math.isfinite(x):
+        return x
+    return "nan" if math.isnan(x) else "inf"
+
+
+def as_json(rows: Sequence[Analysis], robot_name: str) -> dict[str, Any]:
+    return {
+        "robot": robot_name,
+        "controllers": [
+            {k: _json_number(v) if isinstance(v, float) else v for k, v in asdict(r).items()}
+            for r in rows
+        ],
+    }
+
+
+def table(rows: Sequence[Analysis], code: RobotCode) -> str:
+    """The Markdown table of :func:`analyse_all`'s rows (labels from the robot's code)."""
+    label = {c.name: c.label for c in code.controller_infos}
+    lines = [
+        "| controller | form | sensing | estimator | max stable k/ε | g at setting "
+        "| spectral radius | stable | ε > (predicted) |",
+        "|---|---|---|---|---:|---:|---:|---|---:|",
+    ]
+    for r in rows:
+        eps_min = "" if r.eps_min is None else f"{r.eps_min:.3g}"
+        lines.append(
+            f"| {label[r.controller]} | {r.formulation} | {r.sensing} | {r.estimator} "
+            f"| {r.max_stable_gain:.4g} | {r.gain_at_setting:.4g} | {r.spectral_radius:.4f} "
+            f"| {'yes' if r.stable else '**no**'} | {eps_min} |"
+        )
+    notes = [f"* {label[r.controller]} {r.formulation}: {r.gain_source}" for r in rows
+             if r.gain_source.startswith(("not measured:", "no ROC gain"))]
+    return "\n".join(lines + (["", *notes] if notes else [])) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="wmr stability",
+        description="Predict whether each generated controller is stable on a robot with the "
+        "experiment's sampling, sensing and estimator (linearised sampled-data loop).",
+    )
+    add_experiment_option(parser)
+    add_robot_options(parser)
+    parser.add_argument(
+        "--sensing", default=None, choices=VELOCITY_MODELS,
+        help="override the experiment's [sensing] velocity",
+    )  # fmt: skip
+    parser.add_argument(
+        "--plant", choices=("nominal", "payload"), default="nominal",
+        help="analysed robot: as the controllers model it, or with the experiment's payload",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-measure", action="store_true",
+        help="do not simulate to measure TDROC/ASMC's k̂ (faster; their setting gain is 0)",
+    )  # fmt: skip
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    args = parser.parse_args(argv)
+    try:
+        exp = load_experiment(args.experiment)
+        if args.sensing is not None:
+            exp = replace(exp, sensing=replace(exp.sensing, velocity=args.sensing))
+            check_sensing(exp, "--sensing")
+        setting_ = robot_setting(args.robot, args.generated, exp)
+        setup = setting_.robot
+        if not covers(setup.code):
+            raise RobotSourceError(
+                f"{setup.source}: robot '{setup.name}' is not a plain differential drive; the "
+                "sampled-loop analysis is written for the paper's (a [lumped] or [physical] "
+                f"robot file). Simulate this robot with `wmr reproduce --robot {setup.source}`"
+            )
+    except (ExperimentFileError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    exp, code, robot = setting_.experiment, setup.code, setup.nominal
+    if (args.robot or exp.robot) is not None and not args.json:
+        print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
+    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure)
+    if args.json:
+        print(json.dumps(as_json(rows, setup.name), indent=2))
+    else:
+        print(
+            f"robot {setup.name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
+            f"plant {args.plant}, ε = {exp.controller.eps}"
+        )
+        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), sep="\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
