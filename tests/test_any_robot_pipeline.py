@@ -30,6 +30,7 @@ import pytest
 from modeling.robot_file import load_robot_model, shipped_robot_files
 from runtime.bindings import cbuild
 from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
+from runtime.bindings.uncertainty import roc_bounds
 from runtime.experiment.settings import Experiment, PlantSettings
 from runtime.sim import loop as sim_loop
 from runtime.sim.reference import wheel_rate_reference
@@ -169,17 +170,39 @@ def test_closed_loop_tracks_circle(robot: tuple[str, RobotCode], name: str) -> N
     the plant 20 % heavier and more inertial than the nominal model: the driven wheel angles
     converge and the whole configuration (pose and hitch) follows the reference."""
     _, code = robot
-    if "minimal" not in code.controller(name).formulations:
+    info = code.controller(name)
+    if "minimal" not in info.formulations:
         pytest.skip(f"{name} has no minimal formulation")
     ref = wheel_rate_reference(code, np.zeros(code.nq), np.array([2.0, 1.5]), 0.01, 8.0,
                                code.params)
-    result = sim_loop.run(code, name, "minimal", ref, code.params, _experiment(0.01),
+    exp = _experiment(0.01)
+    if info.bounds:
+        alpha = roc_bounds(code, code.params, exp.controller.uncertainty, "minimal",
+                           exp.controller.roc_max_rate)[0]
+        if alpha >= 1.0:
+            # A chain of bodies whose lumped inertia coefficients each move ±30 % on their
+            # own holds robots far from the nominal one (trailer2: alpha 1.9): ROC has no
+            # guarantee there and its C init must refuse the bounds, before any sample.
+            result = sim_loop.run(code, name, "minimal", ref, code.params, exp,
+                                  plant_params=_heavier(code))
+            assert result.failed_at == 0.0 and "BAD_BOUNDS" in str(result.stop_reason)
+            assert len(result.t) == 0
+            return
+    result = sim_loop.run(code, name, "minimal", ref, code.params, exp,
                           plant_params=_heavier(code))
     assert result.failed_at is None
     act = list(code.actuated)
     err = np.linalg.norm(result.q_des[:, act] - result.q[:, act], axis=1)
     assert err[0] == 0.0 and err.max() > 0.1  # it starts at rest behind a moving reference
-    assert err[-1] < 5e-3, err[-1]
+    # The laws of (24)-(27) servo every coordinate (error dynamics K1, K2): the wheel angles
+    # converge. A path tracker (pi) servoes the pose and the wheel rates, not the angles: its
+    # wheel angles keep the offset of the start-up (measured 2-6 mrad), its pose converges.
+    pose = np.abs(result.q_des[-1, :2] - result.q[-1, :2])
+    assert pose.max() < 1e-3, pose
+    if "k1" in info.field_names():
+        assert err[-1] < 5e-3, err[-1]
+    else:
+        assert err[-1] < 2e-2, err[-1]
     assert np.max(np.abs(result.q[-1] - ref.q[-1])) < 0.05
     assert abs(ref.q[-1, 2]) > 0.5  # the reference turned: not a vacuous straight line
 
