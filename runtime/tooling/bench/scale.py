@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -62,21 +61,34 @@ class Rung:
     x86_step_ns: float | None = None
 
 
+# Runs a command and prints its own peak resident set (KB). The kernel records a child's
+# peak including the memory it had between fork and exec, the parent's pages: measured from
+# a large process (a pytest worker, 300 MB), every child read 300 MB. This launcher is small,
+# so its own children's figures are theirs.
+_PEAK_LAUNCHER = """
+import os, subprocess, sys
+proc = subprocess.Popen(sys.argv[1:])
+_, status, usage = os.wait4(proc.pid, 0)
+sys.stderr.write(f"\\n@peak-kb {usage.ru_maxrss}\\n")
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+
+
 def run_with_peak(cmd: list[str], cwd: Path) -> tuple[float, float, str, str]:
     """(wall seconds, peak resident MB, stdout, stderr) of ``cmd``, its own peak memory
-    from ``os.wait4`` (the rusage of that child alone)."""
+    from ``os.wait4`` in a small launcher process (the rusage of that child alone)."""
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         start = time.perf_counter()
-        proc = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=err, text=True)
-        _, status, usage = os.wait4(proc.pid, 0)
+        code = subprocess.call([sys.executable, "-c", _PEAK_LAUNCHER, *cmd], cwd=cwd,
+                               stdout=out, stderr=err, text=True)
         seconds = time.perf_counter() - start
-        proc.returncode = os.waitstatus_to_exitcode(status)
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read(), err.read()
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{stderr[-2000:]}")
-    return seconds, usage.ru_maxrss / 1024, stdout, stderr
+    stderr, _, peak = stderr.rpartition("\n@peak-kb ")
+    if code != 0 or not peak:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({code}):\n{stderr[-2000:]}")
+    return seconds, float(peak) / 1024, stdout, stderr
 
 
 def robot_file(root: Path, robot: str) -> Path:
