@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cache
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import sympy as sp
 
@@ -27,6 +27,7 @@ from modeling import parameter_table
 from modeling.base_parameters import reduce_to_base, split_terms
 from modeling.lagrange import ConstrainedSystem
 from modeling.parameter_table import ParameterInfo
+from modeling.planar_robot import from_description
 
 # A described robot with at least this many bodies is generated through staged quantities
 # (modeling.staged); below, closed forms (measured: see codegen.robot_functions).
@@ -100,6 +101,10 @@ class RobotModel:
     # bodies; the closed forms of a single body are smaller).
     staged: bool = False
     docs: dict[str, str] = field(default_factory=dict)  # doc strings a robot words itself
+    # The robot's bodies, hitches and wheels in numbers (modeling.planar_robot.PlanarRobot
+    # .to_data()), written into robot.py as LAYOUT for an engine's model of it (None: a
+    # [lumped]/[physical] robot, whose layout follows from its parameters).
+    layout: dict[str, Any] | None = None
 
     @property
     def q(self) -> tuple[sp.Symbol, ...]:
@@ -237,4 +242,5 @@ def described_model(path: str, label: str = "") -> RobotModel:
         heading=base_system.q[2],
         paper=len(desc.bodies) == 1,
         staged=len(desc.bodies) > STAGED_FROM_BODIES - 1,
+        layout=from_description(desc).to_data(),
     )

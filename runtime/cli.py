@@ -2,6 +2,7 @@
 
     wmr model [--robot FILE] [--out DIR]       derive robots, generate C, NumPy and CasADi
     wmr check [--robot FILE] [--out DIR]       exit 1 if generated code is stale
+    wmr mjcf [--robot FILE] --out FILE.xml     the robot as a MuJoCo model (MJCF)
     wmr reproduce [--robot ROBOT] [--out DIR]  the paper's experiments, or scaled to a robot
     wmr crosscheck [--robot ROBOT]             every implementation against the hand-written
     wmr stability [--robot ROBOT]              sampled-data stability of each controller
@@ -43,6 +44,7 @@ class Command:
 COMMANDS: dict[str, Command] = {
     "model": Command("codegen.__main__", "derive robots and generate their code"),
     "import": Command("modeling.importers.command", "URDF/MJCF in, an audited robot file out"),
+    "mjcf": Command("modeling.mjcf_command", "a robot file as a MuJoCo model (MJCF)"),
     "check": Command(
         "codegen.__main__", "exit 1 with a diff if generated code is stale", ("--check",)
     ),

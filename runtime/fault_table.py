@@ -42,6 +42,7 @@ from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode, load_robot_code
 from runtime.experiment.arguments import (
     add_experiment_option,
+    add_plant_option,
     add_robot_options,
     load_setting,
     output_folder,
@@ -587,6 +588,7 @@ def main(argv: list[str] | None = None) -> int:
         description="Inject sensor and actuator faults; write FAULTS.md and faults.csv.",
     )
     add_experiment_option(parser)
+    add_plant_option(parser)
     add_robot_options(parser)
     parser.add_argument(
         "--out", type=Path, default=None,

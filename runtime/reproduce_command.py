@@ -17,6 +17,7 @@ from pathlib import Path
 from runtime.experiment.arguments import (
     Setting,
     add_experiment_option,
+    add_plant_option,
     add_robot_options,
     load_setting,
     output_folder,
@@ -93,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
         "scaled to another."
     )
     add_experiment_option(parser)
+    add_plant_option(parser)
     parser.add_argument(
         "--sensing",
         default=",".join(DEFAULT_SENSINGS),

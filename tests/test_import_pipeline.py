@@ -13,8 +13,8 @@
 
 What today's commands cannot do yet is written as strict expected failures, which turn into
 failures the day they pass: ``wmr stability`` analyses ``[lumped]``/``[physical]`` robots
-only (until the one-runtime rewrite), there is no ``wmr mjcf`` (the MuJoCo exporter of issue
-27) and so no MJCF round trip, and ``wmr reproduce`` has no ``--plant mujoco``.
+only (until the one-runtime rewrite). ``wmr mjcf`` of an imported robot compiles in MuJoCo to
+its masses and spin inertias.
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from pathlib import Path
 
 import pytest
 
-from runtime.cli import COMMANDS
 from runtime.cli import main as wmr
 
 IMPORTS = Path(__file__).resolve().parent / "robots" / "imports"
@@ -92,17 +91,27 @@ def test_stability_of_an_imported_robot(tmp_path: Path) -> None:
     assert wmr(["stability", "--robot", str(robot), "--no-measure"]) == 0
 
 
-@pytest.mark.xfail(strict=True, reason="no `wmr mjcf` yet: the MuJoCo exporter is issue 27")
 def test_mjcf_round_trip_of_an_imported_robot(tmp_path: Path) -> None:
     """`wmr mjcf` of an imported robot, compiled by MuJoCo, has the imported masses and
-    inertias (and, imported again, gives the same robot file)."""
-    assert "mjcf" in COMMANDS
+    wheel spin inertias (hinge armature plus the wheel body's own)."""
+    import mujoco
+
+    from modeling.mjcf_command import planar_robot
+    from modeling.mjcf_export import PAYLOAD_PLACEHOLDER_MASS
+
     robot = imported(tmp_path, "kobuki_like.urdf")
-    assert wmr(["mjcf", "--robot", str(robot), "--out", str(tmp_path / "k.xml")]) == 0
+    out = tmp_path / "k.xml"
+    assert wmr(["mjcf", "--robot", str(robot), "--out", str(out)]) == 0
+    model = mujoco.MjModel.from_xml_path(str(out))
+    layout = planar_robot(robot)
+    assert abs(float(sum(model.body_mass)) - layout.total_mass()) < 1e-12 + \
+        PAYLOAD_PLACEHOLDER_MASS
+    for w in layout.wheels:
+        joint = model.joint(f"wheel_{w.name}")
+        spin = float(joint.armature[0] + model.body_inertia[model.body(f"wheel_{w.name}").id][1])
+        assert abs(spin - w.spin_inertia) < 1e-12 * max(1.0, w.spin_inertia)
 
 
-@pytest.mark.xfail(strict=True, reason="no --plant mujoco yet (issue 27 and the one-runtime "
-                   "rewrite: plants as plug-ins)")
 def test_reproduce_on_the_mujoco_plant(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         wmr(["reproduce", "--help"])

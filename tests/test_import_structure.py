@@ -58,6 +58,8 @@ RUNTIME_MODELING: dict[str, frozenset[str] | None] = {
     "modeling.package_paths": None,  # where generated/ and the build cache are
     "modeling.robot_io": None,  # robot files as files: errors, text, digest, which format
     "modeling.rendering": None,  # the strict Jinja2 environment (wmr freeze's header)
+    "modeling.planar_robot": None,  # a robot's layout in numbers (the MuJoCo plant)
+    "modeling.mjcf_export": None,  # its MJCF (the MuJoCo plant)
     # A robot file's numbers; [physical] → lumped is the one run-time use of SymPy here.
     # Not load_robot_model: that derives a model (SymPy), which is codegen's job.
     "modeling.robot_file": frozenset({"load_robot"}),

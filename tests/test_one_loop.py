@@ -78,6 +78,9 @@ class CountingPlant:
         self._count("set_parameters")
         self.inner.set_parameters(params)
 
+    def set_payload(self, masses: np.ndarray) -> None:
+        self.inner.set_payload(masses)
+
     def set_faults(self, traction_loss: np.ndarray, torque_limit: np.ndarray) -> None:
         self.inner.set_faults(traction_loss, torque_limit)
 

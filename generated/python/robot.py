@@ -17,6 +17,10 @@ ACTUATED = (3, 4)  # index in q of each input's wheel angle
 COORDINATES = ("x_c", "y_c", "theta", "theta_r", "theta_l",)
 INPUTS = ("tau_r", "tau_l",)
 FORMULATIONS = ('paper', 'minimal')
+# The robot's bodies, hitches and wheels in numbers (modeling.planar_robot), for an
+# engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose
+# layout follows from its parameters.
+LAYOUT: dict[str, Any] | None = None
 # The controllers generated for this robot (modeling.controllers.REGISTRY): name,
 # labels, step features, configuration fields (name, kind, unit, value source).
 CONTROLLERS: tuple[dict[str, Any], ...] = (

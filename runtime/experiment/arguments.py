@@ -12,12 +12,19 @@ default: its folder for the paper's robot, ``./<command>/<robot name>`` for anot
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from runtime.bindings.robots import RobotSetup, RobotSourceError, resolve
 from runtime.experiment.scale import robot_scale, scaled_experiment
-from runtime.experiment.settings import PAPER_ROBOT, Experiment, load_experiment
+from runtime.experiment.settings import (
+    PAPER_ROBOT,
+    PLANT_MODELS,
+    Experiment,
+    ExperimentFileError,
+    check_contact,
+    load_experiment,
+)
 
 ROBOT_HELP = ("a robot file (lumped, physical, or bodies and wheels), a generated folder, or "
               "the name of a robot generated under generated/ (default: the experiment's "
@@ -37,6 +44,16 @@ def add_experiment_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--experiment", type=Path, default=None, metavar="FILE",
                         help="experiment TOML (default: the paper's setting, scaled to the "
                         "robot)")
+
+
+def add_plant_option(parser: argparse.ArgumentParser) -> None:
+    """``--plant MODEL``: the experiment's ``[plant] model`` for this run (the generated
+    model, or the MuJoCo engine on the robot's MJCF)."""
+    parser.add_argument("--plant", dest="plant_model", default=None,
+                        metavar="|".join(PLANT_MODELS),
+                        help="the plant the robot runs on (default: the experiment's [plant] "
+                        "model, else generated; mujoco: the MuJoCo engine on the MJCF `wmr "
+                        "mjcf` writes, with the experiment's contact settings)")
 
 
 @dataclass(frozen=True)
@@ -71,16 +88,28 @@ def load_setting(args: argparse.Namespace) -> Setting:
     """:func:`robot_setting` of a command's parsed ``--robot``, ``--generated`` and
     ``--experiment`` (``ExperimentFileError`` or ``RobotSourceError``, both ``ValueError``)."""
     exp = load_experiment(getattr(args, "experiment", None))
+    model = getattr(args, "plant_model", None)
+    if model is not None:
+        if model not in PLANT_MODELS:
+            raise ExperimentFileError(f"--plant {model!r}: expected one of "
+                                      f"{', '.join(PLANT_MODELS)}")
+        exp = replace(exp, plant=replace(exp.plant, model=model))
+        check_contact(exp, "--plant")
     return robot_setting(args.robot, args.generated, exp)
 
 
 def output_folder(setting: Setting, out: Path | None, paper_default: Path,
                   command: str) -> Path:
-    """``--out``, else ``paper_default`` for the paper's robot, else ``./<command>/<name>``."""
+    """``--out``, else ``paper_default`` for the paper's robot, else ``./<command>/<name>``;
+    a plant other than the generated model writes into a subfolder named after it (the
+    committed results stay the generated model's)."""
     if out is not None:
         return out
-    return paper_default if setting.is_paper_robot else Path(command) / setting.robot.name
+    folder = paper_default if setting.is_paper_robot else Path(command) / setting.robot.name
+    model = setting.experiment.plant.model
+    return folder if model == "generated" else folder / model
 
 
-__all__ = ["RobotSourceError", "Setting", "add_experiment_option", "add_robot_options",
+__all__ = ["RobotSourceError", "Setting", "add_experiment_option", "add_plant_option",
+           "add_robot_options",
            "load_setting", "output_folder", "robot_setting"]

@@ -2,7 +2,9 @@
 
     [controller]   gains and TDROC/ROC/ASMC/PI parameters (paper: K1 = K2 = 4 I, Q = I,
                    a = 0.9, n = 4, eps = 0.1, h = 0.1 s, ROC bounds 30 %)
-    [plant]        which plant, integration rate, friction, payload schedule
+    [plant]        which plant (``model``: the generated model or the MuJoCo engine),
+                   integration rate, wheel friction, payload schedule, and the engine's
+                   wheel-ground contact (``friction``, ``tyre_width``, ``contact_timeconst``)
     [sensing]      how wheel angles and rates are measured, and the estimator of q̈(t − h)
                    that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        the circle and the lawn mower: sizes, wheel rates, durations
@@ -65,6 +67,25 @@ class ControllerSettings:
 
 @dataclass(frozen=True)
 class PlantSettings:
+    """The simulated robot. ``model`` names the plant (``runtime.sim.plant.PLANTS``):
+    ``generated``, the derived model integrated by RK4 in C (ideal rolling: the wheels never
+    slip), or ``mujoco``, the MuJoCo engine on the MJCF the toolchain writes from the
+    robot's description (``modeling.mjcf_export``; the same inertias, wheels that roll only
+    as far as friction lets them). The three contact fields act on ``mujoco`` only:
+
+    * ``friction``: μ, the wheel-ground sliding friction coefficient; a wheel slips when its
+      contact force would leave the cone |f_t| ≤ μ N (1: dry rubber on concrete; 0.1: wet
+      ice-like floor);
+    * ``tyre_width``: 0 (default) gives each wheel one contact point under its centre (a
+      sphere), as the derived rolling constraints assume; a width gives two contact points
+      ± width/2 from the wheel's mid-plane (a capsule), whose scrub resists turning and
+      moves the effective track;
+    * ``contact_timeconst``: the contact's softness, MuJoCo's ``solref`` time constant (s):
+      larger is softer (deeper sinkage, more creep under traction); at least two
+      integration steps (h / substeps) or MuJoCo stiffens it silently.
+    ``viscous`` and ``coulomb`` are wheel-bearing friction on both plants (MuJoCo: joint
+    damping and frictionloss)."""
+
     model: str = "generated"  # which Plant simulates the robot (runtime.sim.plant.PLANTS)
     substeps: int = 100  # RK4 steps per control sample (1 kHz at h = 0.1 s)
     viscous: float = 0.05  # N m s/rad per wheel, unknown to the controllers
@@ -77,6 +98,9 @@ class PlantSettings:
     extra_payload_y: float = 0.12  # ... to the left: K_lat the model does not have
     extra_on_at: float = 5.0  # s: first time the extra payload is put on
     extra_period: float = 20.0  # s: on for half a period, off for the other half
+    friction: float = 1.0  # mujoco: wheel-ground friction coefficient μ
+    tyre_width: float = 0.0  # m, mujoco: 0 = point contact, else two points ± width/2
+    contact_timeconst: float = 0.005  # s, mujoco: contact softness (solref time constant)
 
     def extra_on(self, t: float) -> bool:
         """Whether the extra payload is on board at time t."""
@@ -86,7 +110,7 @@ class PlantSettings:
 
 
 # The plants a closed loop can run on (runtime.sim.plant.PLANTS has one factory each).
-PLANT_MODELS = ("generated",)
+PLANT_MODELS = ("generated", "mujoco")
 VELOCITY_MODELS = ("sample-instant", "encoder-average", "motor-encoder")
 ACCEL_ESTIMATORS = ("matched", "backward", "central")
 # accel_estimator of the experiment file -> <PREFIX>_ACCEL_* of the generated configs.
@@ -180,6 +204,7 @@ _POSITIVE = {
     "circle_rate",
     "lawnmower_fast",
     "lawnmower_period",
+    "contact_timeconst",
 }
 _NON_NEGATIVE = {
     "pi_kx",
@@ -193,6 +218,8 @@ _NON_NEGATIVE = {
     "extra_payload",
     "extra_on_at",
     "lawnmower_slow",
+    "friction",
+    "tyre_width",
 }
 
 
@@ -238,6 +265,11 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
         if label in _MOVED:
             raise ExperimentFileError(
                 f"{where}: field '{label}' has moved to '{_MOVED[label]}' ([sensing] section)"
+            )
+        if label == "plant.engine":
+            raise ExperimentFileError(
+                f"{where}: field 'plant.engine' is spelled 'plant.model' (one field names "
+                f"the plant: {', '.join(repr(m) for m in PLANT_MODELS)})"
             )
         if key not in known:
             raise ExperimentFileError(
@@ -302,7 +334,20 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     exp = Experiment(**parts, source=where, robot=robot, faults=faults)
     check_sensing(exp, where)
     check_sample_count(exp, where)
+    check_contact(exp, where)
     return exp
+
+
+def check_contact(exp: Experiment, where: str = "<experiment>") -> None:
+    """On the MuJoCo plant the contact's time constant must span two integration steps
+    (MuJoCo would stiffen a shorter one silently)."""
+    pl = exp.plant
+    dt = exp.controller.h / pl.substeps
+    if pl.model == "mujoco" and pl.contact_timeconst < 2 * dt:
+        raise ExperimentFileError(
+            f"{where}: field 'plant.contact_timeconst' = {pl.contact_timeconst!r} s must be at "
+            f"least two integration steps, 2 controller.h / plant.substeps = {2 * dt:.6g} s"
+        )
 
 
 def parse_faults(data: Any, where: str) -> tuple[Fault, ...]:

@@ -11,7 +11,7 @@ Each sample k (t = k h), in this order:
    τ; a status < 0 stops the run there; a dropped sample keeps the last τ (zero-order hold);
 3. the plant (:class:`runtime.sim.plant.Plant`, the one ``[plant] model`` names; default
    the generated model in C, :class:`runtime.sim.plant.GeneratedPlant`) gets its true
-   parameters (payload schedule, :mod:`runtime.sim.payload`) when they change, the
+   parameters and payload (payload schedule, :mod:`runtime.sim.payload`) when they change, the
    actuators deliver τ (a torque limit fault clips it), and the robot moves for h under it
    (``substeps`` RK4 steps; the motor-encoder's window start is read on the way).
 
@@ -33,7 +33,7 @@ from runtime.bindings.controller import Controller
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim.faults import Fault, schedule
-from runtime.sim.payload import payload_mass, plant_params_at
+from runtime.sim.payload import payload_mass, payload_masses, plant_params_at
 from runtime.sim.plant import Plant, library_for, make_plant
 from runtime.sim.reference import Reference
 from runtime.sim.sensors import Sensors
@@ -115,9 +115,9 @@ def run(
     status = ctl.init()
     if status != 0:  # the configuration is refused (e.g. ROC's bounds): nothing runs
         return _refused(code, name, formulation, ref, status, ctl.status_name(status))
-    if plant is None:
-        plant = make_plant(code, lib, exp)
     base = dict({**code.plant_defaults, **nominal} if plant_params is None else plant_params)
+    if plant is None:
+        plant = make_plant(code, lib, exp, base)
     h, nsub = exp.controller.h, exp.plant.substeps
     plant.start(ref.q[0])
     sensors = Sensors(code, np.array(ref.q[0]), exp, dict(nominal))
@@ -164,6 +164,7 @@ def run(
         if exp.plant.extra_on(t) != payload_on:  # the payload changes at its switches
             payload_on = exp.plant.extra_on(t)
             plant.set_parameters(plant_params_at(code, exp, t, base))
+            plant.set_payload(payload_masses(exp, t))
         tau = [ctl.tau[i] for i in range(code.nu)]
         gain = ctl.read("gain")
         s_norm = ctl.read("s_norm")

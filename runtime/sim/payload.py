@@ -8,6 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+from numpy.typing import NDArray
+
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 
@@ -16,6 +19,13 @@ def payload_mass(exp: Experiment, t: float) -> float:
     """The payload on board at time t (kg)."""
     pl = exp.plant
     return pl.fixed_payload + (pl.extra_payload if pl.extra_on(t) else 0.0)
+
+
+def payload_masses(exp: Experiment, t: float) -> NDArray[np.float64]:
+    """The masses on board at time t at the experiment's two payload points (fixed,
+    extra), as a plant that places them itself takes them (kg)."""
+    pl = exp.plant
+    return np.array([pl.fixed_payload, pl.extra_payload if pl.extra_on(t) else 0.0])
 
 
 def plant_params_at(code: RobotCode, exp: Experiment, t: float,

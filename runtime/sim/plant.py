@@ -2,11 +2,14 @@
 
 A plant is anything that advances the true robot under zero-order hold and says what its
 sensors would read; the loop (``runtime.sim.loop``) never knows which. The protocol is
-small on purpose (a physics engine such as MuJoCo implements the same six calls):
+small on purpose (a physics engine, MuJoCo in ``runtime.mujoco.plant``, implements the same
+calls):
 
 * :meth:`Plant.start`: the robot at rest at a configuration q0, no slip;
 * :meth:`Plant.set_parameters`: the true parameters (the robot's, its payload included,
   keyed as the generated ``PLANT_PARAMS``), called again whenever the payload changes;
+* :meth:`Plant.set_payload`: the masses of the experiment's payloads (fixed, extra) at
+  their stated points; a plant whose parameters already carry them ignores it;
 * :meth:`Plant.set_faults`: the actuator and contact faults of the coming sample: the
   fraction of each driven wheel's traction lost and each actuator's torque limit;
 * :meth:`Plant.actuate`: the torque the actuators deliver for a commanded one (the limit);
@@ -17,7 +20,8 @@ small on purpose (a physics engine such as MuJoCo implements the same six calls)
 
 Which plant a loop runs is the experiment's ``[plant] model``: :data:`PLANTS` maps each
 name of ``runtime.experiment.settings.PLANT_MODELS`` to the function that builds it for a
-robot (its generated code, the library of its generated C, the experiment). A new plant is
+robot (its generated code, the library of its generated C, the experiment, the robot's
+plant parameters before payload). A new plant is
 a module with its class, one entry here and its name there; the loop does not change.
 
 :class:`GeneratedPlant` integrates the robot's generated ``<prefix>_plant_state_derivative``
@@ -56,6 +60,8 @@ class Plant(Protocol):
     def start(self, q0: Array) -> None: ...
 
     def set_parameters(self, params: Mapping[str, float]) -> None: ...
+
+    def set_payload(self, masses: Array) -> None: ...
 
     def set_faults(self, traction_loss: Array, torque_limit: Array) -> None: ...
 
@@ -145,6 +151,9 @@ class GeneratedPlant:
         if self.spin_keys is not None:
             self.spin[0:self.nu] = [float(params[k]) for k in self.spin_keys]
 
+    def set_payload(self, masses: Array) -> None:
+        """Nothing: the payload is in the parameters (``plant_params_with_payload``)."""
+
     def set_faults(self, traction_loss: Array, torque_limit: Array) -> None:
         """Traction lost per wheel (0: none) and torque limits (inf: none) for the coming
         sample. A wheel whose traction is back stops spinning at once (the contact
@@ -188,14 +197,26 @@ class GeneratedPlant:
         return angles, rates
 
 
-PlantFactory = Callable[[RobotCode, cbuild.CLibrary, Experiment], Plant]
+PlantFactory = Callable[[RobotCode, cbuild.CLibrary, Experiment, Mapping[str, float]], Plant]
+
+
+def _mujoco(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment,
+            base: Mapping[str, float]) -> Plant:
+    from runtime.mujoco.plant import mujoco_plant  # MuJoCo is imported only when it runs
+
+    return mujoco_plant(code, exp, base)
+
+
 # [plant] model -> the plant a closed loop runs (the keys are PLANT_MODELS).
 PLANTS: dict[str, PlantFactory] = {
-    "generated": lambda code, lib, exp: GeneratedPlant(code, lib, exp.plant.viscous,
-                                                       exp.plant.coulomb),
+    "generated": lambda code, lib, exp, base: GeneratedPlant(code, lib, exp.plant.viscous,
+                                                             exp.plant.coulomb),
+    "mujoco": _mujoco,
 }
 
 
-def make_plant(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment) -> Plant:
-    """The plant the experiment names (``[plant] model``) for this robot."""
-    return PLANTS[exp.plant.model](code, lib, exp)
+def make_plant(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment,
+               base: Mapping[str, float]) -> Plant:
+    """The plant the experiment names (``[plant] model``) for this robot, whose plant
+    parameters before payload are ``base``."""
+    return PLANTS[exp.plant.model](code, lib, exp, base)

@@ -54,6 +54,10 @@ def robot_py(target: RobotTarget) -> str:
         f"COORDINATES = ({names},)\n"
         f"INPUTS = ({inputs},)\n"
         f"FORMULATIONS = {tuple(model.formulations)!r}\n"
+        "# The robot's bodies, hitches and wheels in numbers (modeling.planar_robot), for an\n"
+        "# engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose\n"
+        "# layout follows from its parameters.\n"
+        f"LAYOUT: dict[str, Any] | None = {model.layout!r}\n"
         + controllers_py()
     )
 

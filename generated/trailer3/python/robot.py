@@ -17,6 +17,10 @@ ACTUATED = (6, 7)  # index in q of each input's wheel angle
 COORDINATES = ("x_tractor", "y_tractor", "theta_tractor", "theta_cart", "theta_cart2", "theta_cart3", "theta_right", "theta_left", "theta_cart_right", "theta_cart_left", "theta_cart2_right", "theta_cart2_left", "theta_cart3_right", "theta_cart3_left",)
 INPUTS = ("tau_right", "tau_left",)
 FORMULATIONS = ('minimal',)
+# The robot's bodies, hitches and wheels in numbers (modeling.planar_robot), for an
+# engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose
+# layout follows from its parameters.
+LAYOUT: dict[str, Any] | None = {'name': 'trailer3', 'bodies': [['tractor', 30.0, 1.5, [0.05, 0.0]], ['cart', 15.0, 1.1, [-0.45, 0.0]], ['cart2', 15.0, 1.1, [-0.45, 0.0]], ['cart3', 15.0, 1.1, [-0.45, 0.0]]], 'joints': [['tractor', 'cart', [-0.3, 0.0], [0.0, 0.0]], ['cart', 'cart2', [-0.85, 0.0], [0.0, 0.0]], ['cart2', 'cart3', [-0.85, 0.0], [0.0, 0.0]]], 'wheels': [['right', 'tractor', [0.0, -0.207], 0.096, 0.07, 0.007, 3.0, True], ['left', 'tractor', [0.0, 0.207], 0.096, 0.07, 0.007, 3.0, True], ['cart_right', 'cart', [-0.6, -0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart_left', 'cart', [-0.6, 0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart2_right', 'cart2', [-0.6, -0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart2_left', 'cart2', [-0.6, 0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart3_right', 'cart3', [-0.6, -0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart3_left', 'cart3', [-0.6, 0.2], 0.08, 0.004, 0.002, 1.25, False]]}
 # The controllers generated for this robot (modeling.controllers.REGISTRY): name,
 # labels, step features, configuration fields (name, kind, unit, value source).
 CONTROLLERS: tuple[dict[str, Any], ...] = (

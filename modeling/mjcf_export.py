@@ -1,0 +1,261 @@
+"""A MuJoCo model (MJCF) of any planar wheeled robot, with the derived model's planar dynamics.
+
+``mjcf(robot, contact)`` writes the MJCF of a :class:`modeling.planar_robot.PlanarRobot`
+(``wmr mjcf``, and the MuJoCo plant of ``runtime.mujoco``). The inertias are chosen so that
+MuJoCo's mass matrix, restricted to the planar motions (root x, y, yaw; each hitch's yaw;
+each wheel's spin) and mapped to the derived model's coordinates, is the derived M(q) of
+(9) (``tests/test_mujoco.py`` checks it with ``mj_fullM`` at random states):
+
+* the root is a free body (``root``: its frame origin is the robot's (x, y), e.g.
+  Drishti's C); every further body hangs from its parent on a vertical hinge at the hitch
+  (``hitch_<body>``, the hinge angle is the relative yaw θ_body − θ_parent); body frames
+  are at ground level, centres of mass at the axle height (the mean wheel radius: out of
+  the plane, it only sets the load transfer under acceleration);
+* each wheel is a body on a hinge about its body's y axis (``wheel_<name>``: positive when
+  it rolls forward), centre at its wheel radius above the ground. MuJoCo needs a positive
+  mass and inertia for every moving body: a wheel gets at least ``MIN_WHEEL_MASS_FRACTION``
+  of the robot's mass, a diameter inertia at least that mass's m r²/4 and a small spin
+  inertia of its own; what a wheel receives beyond the description is taken off its body
+  (mass, centre of mass and yaw inertia, by the parallel-axis theorem), so the assembly's
+  planar inertia is unchanged, and the spin inertia beyond the wheel body's own is the
+  hinge's ``armature`` (MuJoCo adds it to the wheel's diagonal of M);
+* a robot whose wheels all stand on one line (a differential drive) would pitch over: two
+  frictionless spheres on the root body (``support_front``/``support_rear``, normal force
+  only: ``condim`` 1) stand in for its casters, across the axle at
+  max(half the axle's span, twice the centre of mass's distance from the axle);
+* payload bodies (``payload_<i>``) are welded to the root body at the stated points with
+  a negligible mass; the plant sets their mass at run time (the payload schedule).
+
+Contact (:class:`ContactSettings`, the experiment's ``[plant]`` for ``model = "mujoco"``):
+wheel–ground friction μ (``friction``: the slip threshold, |f_t| ≤ μ N per contact), the
+tyre (``tyre_width`` 0: a sphere, one point contact under the wheel centre, as the derived
+model's rolling constraints assume; > 0: a capsule across the tyre, two contact points
+± width/2 from the wheel's mid-plane, which scrub when the robot turns), and the contact's
+softness (``contact_timeconst``, MuJoCo's ``solref`` time constant: the larger, the softer
+the contact, the deeper the tyres sink and the more they creep under traction). The wheel
+geoms take precedence over the ground's (``priority``), so their friction is the contact's.
+Each driven wheel has a torque motor (``motor_<name>``, gear 1, limited to ± ``tau_max``),
+bearing friction as joint ``damping`` (viscous, N m s/rad) and ``frictionloss`` (Coulomb,
+N m). Everything here is numbers: no SymPy.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+from modeling.planar_robot import PlanarBody, PlanarRobot, PlanarWheel, Point
+
+MIN_WHEEL_MASS_FRACTION = 1e-4  # of the robot's mass: the lightest wheel body MuJoCo gets
+PAYLOAD_PLACEHOLDER_MASS = 1e-9  # kg: a payload body before the plant sets its mass
+GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """What the engine adds to the robot's description (see the module docstring)."""
+
+    friction: float = 1.0  # μ, wheel-ground sliding friction
+    tyre_width: float = 0.0  # m; 0: a sphere (point contact)
+    contact_timeconst: float = 0.005  # s, solref[0]: the contact's softness
+    contact_dampratio: float = 1.0  # solref[1]
+    timestep: float = 0.001  # s
+    tau_max: float = math.inf  # N m per driven wheel (inf: no limit)
+    viscous: float = 0.0  # N m s/rad per driven wheel
+    coulomb: float = 0.0  # N m per driven wheel
+    payloads: tuple[Point, ...] = ()  # payload points on the root body (m, root frame)
+
+
+@dataclass(frozen=True)
+class EngineBody:
+    """A body as the engine gets it: the description's, less what its wheels took."""
+
+    mass: float
+    com: Point
+    yaw_inertia: float
+
+
+def body_origins(robot: PlanarRobot) -> dict[str, Point]:
+    """Each body frame's origin in the root frame with every hitch straight."""
+    out: dict[str, Point] = {robot.root.name: (0.0, 0.0)}
+    pending = list(robot.joints)
+    while pending:
+        for j in list(pending):
+            if j.parent in out:
+                px, py = out[j.parent]
+                out[j.child] = (px + j.parent_point[0] - j.child_point[0],
+                                py + j.parent_point[1] - j.child_point[1])
+                pending.remove(j)
+    return out
+
+
+def wheel_body_inertia(robot: PlanarRobot, w: PlanarWheel) -> tuple[float, float, float]:
+    """(mass, diameter inertia, own spin inertia) of a wheel's engine body."""
+    mass = max(w.mass, MIN_WHEEL_MASS_FRACTION * robot.total_mass())
+    floor = mass * w.radius**2 / 4
+    diameter = max(w.diameter_inertia, floor)
+    spin = min(floor, w.spin_inertia / 2) if w.spin_inertia > 0 else floor
+    return mass, diameter, spin
+
+
+def engine_body(robot: PlanarRobot, body: PlanarBody) -> EngineBody:
+    """``body`` less the mass and yaw inertia its wheels' engine bodies add beyond the
+    description (parallel-axis theorem about the body frame's origin)."""
+    mass, (cx, cy) = body.mass, body.com
+    j_origin = body.yaw_inertia + mass * (cx**2 + cy**2)
+    mx, my = mass * cx, mass * cy
+    for w in robot.wheels:
+        if w.body != body.name:
+            continue
+        wm, wd, _ = wheel_body_inertia(robot, w)
+        dm, dj = wm - w.mass, wd - w.diameter_inertia
+        px, py = w.position
+        mass -= dm
+        mx -= dm * px
+        my -= dm * py
+        j_origin -= dm * (px**2 + py**2) + dj
+    if mass <= 0:
+        raise ValueError(f"robot '{robot.name}': body '{body.name}' is too light for its "
+                         "wheels' engine bodies")
+    com = (mx / mass, my / mass)
+    yaw = j_origin - mass * (com[0] ** 2 + com[1] ** 2)
+    if yaw <= 0:
+        raise ValueError(f"robot '{robot.name}': body '{body.name}' has too little yaw "
+                         "inertia for its wheels' engine bodies")
+    return EngineBody(mass, com, yaw)
+
+
+def supports(robot: PlanarRobot) -> tuple[tuple[Point, float], ...]:
+    """Frictionless supports (centre in the root frame, radius) the robot needs to stand:
+    none unless every wheel contact is on one line (see the module docstring)."""
+    origins = body_origins(robot)
+    pts = [(origins[w.body][0] + w.position[0], origins[w.body][1] + w.position[1])
+           for w in robot.wheels]
+    a, b = max(((p, q) for p in pts for q in pts),
+               key=lambda pq: math.dist(pq[0], pq[1]))
+    span = math.dist(a, b)
+    if span == 0:
+        raise ValueError(f"robot '{robot.name}': all its wheels touch the ground at one point")
+    ux, uy = (b[0] - a[0]) / span, (b[1] - a[1]) / span
+    nx, ny = -uy, ux
+    off_line = max(abs((p[0] - a[0]) * nx + (p[1] - a[1]) * ny) for p in pts)
+    if off_line > 1e-6 * span:
+        return ()
+    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+    total, mx, my = 0.0, 0.0, 0.0
+    for body in robot.bodies:
+        ox, oy = origins[body.name]
+        total += body.mass
+        mx += body.mass * (ox + body.com[0])
+        my += body.mass * (oy + body.com[1])
+    com_off = abs((mx / total - mid[0]) * nx + (my / total - mid[1]) * ny)
+    reach = max(span / 2, 2 * com_off)
+    radius = min(w.radius for w in robot.wheels) / 2
+    return tuple(((mid[0] + s * reach * nx, mid[1] + s * reach * ny), radius)
+                 for s in (1.0, -1.0))
+
+
+def _f(x: float) -> str:
+    return repr(float(x))
+
+
+def _v(*xs: float) -> str:
+    return " ".join(_f(x) for x in xs)
+
+
+def mjcf(robot: PlanarRobot, contact: ContactSettings = ContactSettings()) -> str:
+    """The MJCF text of ``robot`` (see the module docstring)."""
+    if contact.friction < 0 or contact.tyre_width < 0 or contact.contact_timeconst <= 0:
+        raise ValueError("contact settings: friction and tyre_width must be >= 0 and "
+                         "contact_timeconst > 0")
+    height = sum(w.radius for w in robot.wheels) / len(robot.wheels)
+    root = ET.Element("mujoco", model=robot.name)
+    ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false",
+                  autolimits="true")
+    ET.SubElement(root, "option", timestep=_f(contact.timestep), gravity=_v(0, 0, -GRAVITY),
+                  integrator="implicitfast", cone="elliptic", impratio="10")
+    default = ET.SubElement(root, "default")
+    ET.SubElement(default, "geom", contype="0", conaffinity="0", group="1",
+                  rgba="0.6 0.6 0.7 0.5")
+    world = ET.SubElement(root, "worldbody")
+    solref = _v(contact.contact_timeconst, contact.contact_dampratio)
+    mu = _v(contact.friction, 0.0, 0.0)
+    ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", contype="1",
+                  conaffinity="1", condim="3", friction=mu, solref=solref, group="0",
+                  rgba="0.8 0.8 0.8 1")
+    elements: dict[str, ET.Element] = {}
+    for body in robot.bodies:
+        if body is robot.root:
+            parent, pos = world, (0.0, 0.0)
+        else:
+            j = robot.joint_of(body.name)
+            parent = elements[j.parent]
+            pos = (j.parent_point[0] - j.child_point[0], j.parent_point[1] - j.child_point[1])
+        el = ET.SubElement(parent, "body", name=body.name, pos=_v(*pos, 0.0))
+        elements[body.name] = el
+        if body is robot.root:
+            ET.SubElement(el, "freejoint", name="root")
+        else:
+            j = robot.joint_of(body.name)
+            ET.SubElement(el, "joint", name=f"hitch_{body.name}", type="hinge", axis="0 0 1",
+                          pos=_v(*j.child_point, 0.0))
+        eb = engine_body(robot, body)
+        side = 0.6 * eb.yaw_inertia  # out of plane: roll and pitch inertia, not planar
+        ET.SubElement(el, "inertial", pos=_v(*eb.com, height), mass=_f(eb.mass),
+                      diaginertia=_v(side, side, eb.yaw_inertia))
+        own = [w for w in robot.wheels if w.body == body.name]
+        xs = [w.position[0] for w in own] + [body.com[0]]
+        ys = [w.position[1] for w in own] + [body.com[1]]
+        ET.SubElement(el, "geom", name=f"{body.name}_shape", type="box",
+                      pos=_v((max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2, height),
+                      size=_v(max((max(xs) - min(xs)) / 2, 0.02),
+                              max((max(ys) - min(ys)) / 2, 0.02), 0.02), mass="0")
+        if body is robot.root:
+            for (sx, sy), radius in supports(robot):
+                ET.SubElement(el, "geom", name="support_front" if sx > 0 or (sx == 0 and sy > 0)
+                              else "support_rear", type="sphere", size=_f(radius),
+                              pos=_v(sx, sy, radius), contype="1", conaffinity="1",
+                              condim="1", priority="1", solref=solref, mass="0")
+            for i, (px, py) in enumerate(contact.payloads):
+                pl = ET.SubElement(el, "body", name=f"payload_{i}", pos=_v(px, py, height))
+                tiny = PAYLOAD_PLACEHOLDER_MASS
+                ET.SubElement(pl, "inertial", pos="0 0 0", mass=_f(tiny),
+                              diaginertia=_v(tiny, tiny, tiny))
+        for w in own:
+            _wheel(el, robot, w, contact, solref)
+    actuators = ET.SubElement(root, "actuator")
+    for w in robot.ordered_wheels():
+        if not w.driven:
+            continue
+        attrs = {"name": f"motor_{w.name}", "joint": f"wheel_{w.name}", "gear": "1"}
+        if math.isfinite(contact.tau_max):
+            attrs["ctrlrange"] = _v(-contact.tau_max, contact.tau_max)
+        ET.SubElement(actuators, "motor", attrs)
+    ET.indent(root)
+    header = (f"<!-- {robot.name}: generated by wmr-toolchain (wmr mjcf) from the robot's "
+              "description; planar inertias equal to the derived model's M(q). -->\n")
+    return header + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _wheel(parent: ET.Element, robot: PlanarRobot, w: PlanarWheel, contact: ContactSettings,
+           solref: str) -> None:
+    mass, diameter, spin = wheel_body_inertia(robot, w)
+    el = ET.SubElement(parent, "body", name=f"wheel_{w.name}", pos=_v(*w.position, w.radius))
+    joint = {"name": f"wheel_{w.name}", "type": "hinge", "axis": "0 1 0",
+             "armature": _f(max(w.spin_inertia - spin, 0.0))}
+    if w.driven:
+        joint["damping"] = _f(contact.viscous)
+        joint["frictionloss"] = _f(contact.coulomb)
+    ET.SubElement(el, "joint", joint)
+    ET.SubElement(el, "inertial", pos="0 0 0", mass=_f(mass),
+                  diaginertia=_v(diameter, spin, diameter))
+    tyre = {"name": f"tyre_{w.name}", "contype": "1", "conaffinity": "1", "condim": "3",
+            "priority": "1", "friction": _v(contact.friction, 0.0, 0.0), "solref": solref,
+            "group": "0", "rgba": "0.1 0.1 0.1 1", "mass": "0"}
+    if contact.tyre_width > 0:
+        half = contact.tyre_width / 2
+        shape = {"type": "capsule", "fromto": _v(0, -half, 0, 0, half, 0)}
+    else:
+        shape = {"type": "sphere"}
+    ET.SubElement(el, "geom", {**shape, "size": _f(w.radius), **tyre})

@@ -1,0 +1,159 @@
+"""MuJoCo as a plant of the one closed loop (``[plant] model = "mujoco"``).
+
+The engine runs the MJCF that ``modeling.mjcf_export`` writes from the robot's layout: a
+bodies-and-wheels robot's ``LAYOUT`` from its generated ``robot.py``, a ``[lumped]`` or
+``[physical]`` robot's from its parameters (``modeling.planar_robot.from_lumped``). Its
+planar inertias are the derived model's; what differs is physics the derivation assumed
+away: wheels that roll only as far as friction lets them (μ, ``[plant] friction``), soft
+contacts, a tyre's width, a body that may pitch and roll on its supports, and exact
+(non-smoothed) Coulomb bearing friction.
+
+The :class:`runtime.sim.plant.Plant` calls:
+
+* ``start(q0)``: the robot flat at q0, let settle on its contacts for ``SETTLE`` s with no
+  torque, then put back at q0's planar pose, at rest;
+* ``set_parameters``: nothing (the engine's robot is its MJCF; a bodies-and-wheels robot
+  with other parameters than its description's is refused when the plant is built);
+* ``set_payload``: the payload bodies' masses (welded to the root body at the
+  experiment's points), the schedule applied in the engine;
+* ``set_faults``: a traction loss scales the wheel's friction coefficient by (1 − loss);
+  a torque limit clips what ``actuate`` delivers;
+* ``advance``: ``nsub`` engine steps of ``dt`` under the held torque (MuJoCo's
+  ``implicitfast`` integrator); False if the state is non-finite or MuJoCo flagged a
+  diverging acceleration;
+* ``q`` and ``wheels``: q read off the engine (:mod:`runtime.mujoco.coordinates`), the
+  driven wheels' hinge angles and rates (what their encoders see: rolling and slip).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from modeling.mjcf_export import PAYLOAD_PLACEHOLDER_MASS, ContactSettings, mjcf
+from modeling.planar_robot import PlanarRobot, from_lumped
+from runtime.bindings.generated import RobotCode
+from runtime.experiment.settings import Experiment
+from runtime.mujoco.coordinates import CoordinateMap
+
+Array = NDArray[np.float64]
+SETTLE = 0.3  # s the robot settles on its contacts before a run
+
+
+def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
+    """The robot the engine simulates: the generated ``LAYOUT`` of a bodies-and-wheels
+    robot, else the lumped robot of the plant parameters ``base``. ``ValueError`` if a
+    bodies-and-wheels robot is asked with other parameters than its own (the engine takes
+    masses and inertias, not the derived model's base parameters)."""
+    layout = getattr(code.robot, "LAYOUT", None)
+    if layout is None:
+        if code.prefix != "wmr":
+            raise ValueError(f"robot '{code.name}': its generated robot.py has no LAYOUT "
+                             "(generated before the MuJoCo plant); regenerate it with "
+                             "`wmr model`")
+        return from_lumped(code.name, base)
+    own = code.plant_defaults
+    moved = [k for k in own if not math.isclose(float(base.get(k, own[k])), own[k],
+                                                rel_tol=1e-12, abs_tol=1e-15)]
+    if moved:
+        raise ValueError(f"robot '{code.name}': the MuJoCo plant simulates the robot's own "
+                         f"bodies and wheels; plant parameter '{moved[0]}' = "
+                         f"{base[moved[0]]!r} differs from the robot's {own[moved[0]]!r} "
+                         "(perturbed parameters run on the generated plant)")
+    return PlanarRobot.from_data(layout)
+
+
+def contact_settings(exp: Experiment) -> ContactSettings:
+    """The MJCF's contact, actuator and payload settings of an experiment."""
+    pl = exp.plant
+    return ContactSettings(
+        friction=pl.friction, tyre_width=pl.tyre_width,
+        contact_timeconst=pl.contact_timeconst, timestep=exp.controller.h / pl.substeps,
+        tau_max=exp.controller.tau_max, viscous=pl.viscous, coulomb=pl.coulomb,
+        payloads=((pl.fixed_payload_x, pl.fixed_payload_y),
+                  (pl.extra_payload_x, pl.extra_payload_y)),
+    )
+
+
+class MujocoPlant:
+    """The robot in MuJoCo (see the module docstring)."""
+
+    def __init__(self, code: RobotCode, exp: Experiment, robot: PlanarRobot) -> None:
+        self.robot = robot
+        self.contact = contact_settings(exp)
+        self.xml = mjcf(robot, self.contact)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        self.map = CoordinateMap(self.model, robot)
+        if self.map.nq != code.nq or len(self.map.driven) != code.nu:
+            raise ValueError(f"robot '{code.name}': its layout has {self.map.nq} coordinates "
+                             f"and {len(self.map.driven)} driven wheels, its generated code "
+                             f"{code.nq} and {code.nu}")
+        self.nq, self.nu = code.nq, code.nu
+        self.payload_ids = [int(self.model.body(f"payload_{i}").id) for i in range(2)]
+        driven = [w for w in robot.ordered_wheels() if w.driven]
+        self.tyres = [int(self.model.geom(f"tyre_{w.name}").id) for w in driven]
+        self.limit = np.full(self.nu, np.inf)
+        self.yaw = 0.0
+
+    def start(self, q0: Array) -> None:
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        self.map.set_pose(d, q0)
+        d.ctrl[:] = 0.0
+        mujoco.mj_step(m, d, nstep=max(1, round(SETTLE / m.opt.timestep)))
+        self.map.set_pose(d, q0)
+        d.qvel[:] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        mujoco.mj_forward(m, d)
+        self.yaw = float(q0[self.map.yaw_index[self.robot.root.name]])
+
+    def set_parameters(self, params: Mapping[str, float]) -> None:
+        """Nothing: the engine's robot is its MJCF (see :func:`robot_layout`)."""
+
+    def set_payload(self, masses: Array) -> None:
+        """The masses (kg) of the experiment's fixed and extra payloads, point masses at
+        their stated points on the root body."""
+        for body, mass in zip(self.payload_ids, masses, strict=True):
+            self.model.body_mass[body] = max(float(mass), PAYLOAD_PLACEHOLDER_MASS)
+
+    def set_faults(self, traction_loss: Array, torque_limit: Array) -> None:
+        for geom, loss in zip(self.tyres, traction_loss, strict=True):
+            self.model.geom_friction[geom, 0] = self.contact.friction * (1.0 - float(loss))
+        self.limit = torque_limit
+
+    def actuate(self, tau: Array) -> list[float]:
+        lim = self.limit
+        return [float(np.clip(tau[i], -lim[i], lim[i])) for i in range(self.nu)]
+
+    def advance(self, tau: list[float], dt: float, nsub: int) -> bool:
+        if nsub == 0:
+            return True
+        m, d = self.model, self.data
+        m.opt.timestep = dt
+        d.ctrl[:] = tau
+        before = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+        mujoco.mj_step(m, d, nstep=nsub)
+        bad = int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) > before
+        return not bad and bool(np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel)))
+
+    @property
+    def q(self) -> Array:
+        q = self.map.q(self.data, self.yaw)
+        self.yaw = float(q[self.map.yaw_index[self.robot.root.name]])
+        return q
+
+    def wheels(self) -> tuple[Array, Array]:
+        d = self.data
+        angles = np.array([d.qpos[qadr] for _, qadr, _ in self.map.driven])
+        rates = np.array([d.qvel[dadr] for _, _, dadr in self.map.driven])
+        return angles, rates
+
+
+def mujoco_plant(code: RobotCode, exp: Experiment, base: Mapping[str, float]) -> MujocoPlant:
+    """The MuJoCo plant of a robot with plant parameters ``base`` (before payload)."""
+    return MujocoPlant(code, exp, robot_layout(code, base))
