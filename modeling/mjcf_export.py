@@ -156,6 +156,49 @@ def supports(robot: PlanarRobot) -> tuple[tuple[Point, float], ...]:
                  for s in (1.0, -1.0))
 
 
+def static_loads(robot: PlanarRobot, payloads: tuple[tuple[float, float, float], ...] = ()
+                 ) -> dict[str, float]:
+    """The normal load (N) on each wheel and support of the robot at rest, hitches straight,
+    carrying point ``payloads`` (m, x, y on the root body): the stated static load split.
+    The whole robot is one rigid assembly on its contacts (hitches are vertical hinges);
+    with three contacts or more the split is statically indeterminate, and this takes the
+    one of equal contact springs (MuJoCo's contacts share one ``solref``): the loads are
+    a plane a + b x + c y over the contact points that balances the weight and its two
+    moments. Keys: wheel names and ``support_front``/``support_rear``."""
+    origins = body_origins(robot)
+    points = {w.name: (origins[w.body][0] + w.position[0], origins[w.body][1] + w.position[1])
+              for w in robot.wheels}
+    for (sx, sy), _ in supports(robot):
+        points["support_front" if sx > 0 or (sx == 0 and sy > 0) else "support_rear"] = (sx, sy)
+    masses = [(b.mass, origins[b.name][0] + b.com[0], origins[b.name][1] + b.com[1])
+              for b in robot.bodies]
+    masses += [(w.mass, *points[w.name]) for w in robot.wheels]
+    masses += list(payloads)
+    weight = GRAVITY * sum(m for m, _, _ in masses)
+    mx = GRAVITY * sum(m * x for m, x, _ in masses)
+    my = GRAVITY * sum(m * y for m, _, y in masses)
+    rows = [(1.0, x, y) for x, y in points.values()]
+    normal = [[sum(r[i] * r[j] for r in rows) for j in range(3)] for i in range(3)]
+    coef = _solve3(normal, [weight, mx, my])
+    return {name: coef[0] + coef[1] * x + coef[2] * y for name, (x, y) in points.items()}
+
+
+def _solve3(a: list[list[float]], b: list[float]) -> list[float]:
+    """x of a x = b (3 × 3, Cramer's rule; a line of contacts leaves it singular: the
+    supports of :func:`supports` prevent that)."""
+    def det(m: list[list[float]]) -> float:
+        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+    d = det(a)
+    out = []
+    for k in range(3):
+        mk = [[b[i] if j == k else a[i][j] for j in range(3)] for i in range(3)]
+        out.append(det(mk) / d)
+    return out
+
+
 def _f(x: float) -> str:
     return repr(float(x))
 

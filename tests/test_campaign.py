@@ -218,3 +218,18 @@ def test_campaign_on_separately_started_scheduler_and_worker(
             p.terminate()
         for p in procs:
             p.wait(timeout=30)
+
+
+def test_campaign_on_the_mujoco_plant(spec: Path, tmp_path: Path,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """`--plant mujoco`: each run's drawn lumped parameters build the engine's robot; the
+    stored campaign says which plant ran; a plant that does not exist is refused."""
+    out = tmp_path / "mj"
+    assert run_main(["--spec", str(spec), "--runs", "2", "--workers", "1", "--plant", "mujoco",
+                     "--out", str(out), "--no-plots", "--quiet"]) == 0
+    assert len(rows(out)) == 2
+    assert '"model": "mujoco"' in (out / store.SPEC_FILE).read_text()
+    capsys.readouterr()
+    assert run_main(["--spec", str(spec), "--plant", "bullet", "--out",
+                     str(tmp_path / "x")]) == 2
+    assert "--plant 'bullet': expected one of generated, mujoco" in capsys.readouterr().err

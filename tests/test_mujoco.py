@@ -135,3 +135,100 @@ def test_wmr_mjcf_writes_a_model_mujoco_compiles(tmp_path: Path,
     ):
         assert wmr(["mjcf", *args]) == 2
         assert message in capsys.readouterr().err
+
+
+def test_static_loads_are_the_engines_where_the_split_is_determinate() -> None:
+    """The trailer stands on its four wheels (hitch rigid in pitch and roll): the stated
+    split and MuJoCo's at rest agree; Drishti's two supports make its split depend on the
+    contacts' stiffness (stated, and printed in docs/MUJOCO.md, not asserted)."""
+    from modeling.mjcf_export import static_loads
+    from runtime.mujoco.comparison import engine_loads
+
+    setup = resolve(ROBOTS["trailer"])
+    exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model="mujoco"))
+    robot = planar_robot(ROBOTS["trailer"])
+    pl = exp.plant
+    stated = static_loads(robot, ((pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y),))
+    measured = engine_loads(setup.code, exp, setup.plant)
+    for wheel, load in stated.items():
+        assert abs(measured[wheel] - load) < 1e-3 * load, (wheel, load, measured)
+
+
+def test_the_slip_monitor_predicts_the_engines_contact_forces() -> None:
+    """The traction the monitor says each driven wheel needs (from the rolling rows'
+    multipliers) is the friction force MuJoCo's contacts deliver, at a start-up torque
+    (measured 63.16 / 16.10 N against 63.13 / 16.07 N)."""
+    from runtime.mujoco.layout import robot_layout
+    from runtime.mujoco.plant import MujocoPlant
+    from runtime.sim.payload import plant_params_at
+    from runtime.sim.slip_monitor import SlipMonitor
+
+    setup = resolve(None)
+    code = setup.code
+    exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model="mujoco"))
+    layout = robot_layout(code, setup.plant)
+    plant = MujocoPlant(code, exp, layout)
+    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0]))
+    plant.start(np.zeros(code.nq))
+    tau = np.array([8.0, 3.0])
+    plant.set_faults(np.zeros(2), np.full(2, np.inf))
+    plant.advance(list(tau), 0.001, 20)
+    m, d = plant.model, plant.data
+    heading = np.array([np.cos(plant.q[2]), np.sin(plant.q[2]), 0.0])
+    engine = {}
+    force = np.zeros(6)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, force)
+        name = m.geom(c.geom[1]).name or m.geom(c.geom[0]).name
+        engine[name] = abs(float((c.frame.reshape(3, 3).T @ force[:3]) @ heading))
+    monitor = SlipMonitor(code, layout, exp)
+    predicted = monitor.forces(plant.q, plant.wheels()[1], tau,
+                               plant_params_at(code, exp, 0.0, setup.plant))
+    measured = np.array([engine["tyre_right"], engine["tyre_left"]])
+    assert np.allclose(np.abs(predicted), measured, rtol=0.01), (predicted, measured)
+    # Margin: negative where the floor cannot give it.
+    masses = np.array([exp.plant.fixed_payload, 0.0])
+    assert monitor.margin(predicted, 1.0, masses).min() > 0
+    assert monitor.margin(predicted, 0.1, masses)[0] < 0
+
+
+def test_traction_mu_lowers_the_torque_limit() -> None:
+    from runtime.experiment.arguments import robot_setting
+
+    exp = parse_experiment("[controller]\ntraction_mu = 0.1\n", "exp.toml")
+    setting = robot_setting(None, None, exp)
+    # 0.1 x Drishti's lightest driven wheel's static load (103 N) x r (0.096 m)
+    assert abs(setting.experiment.controller.tau_max - 0.989) < 1e-3
+    assert any("traction limit" in line for line in setting.scaling)
+
+
+def test_the_comparison_document_runs_both_plants() -> None:
+    """A shortened comparison (one sensing, one floor, one μ of the onset check)."""
+    from runtime.experiment.arguments import robot_setting
+    from runtime.mujoco.comparison import compare, markdown
+
+    exp = parse_experiment("[paths]\ncircle_duration = 2.0\nlawnmower_duration = 2.0\n")
+    setting = robot_setting(ROBOTS["small_robot"], None, exp)
+    comp = compare(setting, ("sample-instant",), (("μ = 0.05", 0.05, 0.0),),
+                   onset_frictions=(0.05,))
+    assert len(comp.rows) == 2 * len(setting.robot.code.runs())
+    text = markdown(comp)
+    for heading in ("## Where they differ, and why", "## Every run",
+                    "## The slip monitor against the engine", "## Run time"):
+        assert heading in text
+
+
+def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
+    import csv
+
+    experiment = tmp_path / "short.toml"
+    experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n")
+    out = tmp_path / "out"
+    assert wmr(["reproduce", "--robot", str(ROBOTS["trailer"]), "--plant", "mujoco",
+                "--experiment", str(experiment), "--sensing", "sample-instant", "--no-plots",
+                "--out", str(out)]) == 0
+    with (out / "metrics.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 2 * 5 and all(r["status"] == "ok" for r in rows), rows
+    assert max(float(r["rms_error_m"]) for r in rows) < 0.05  # m (measured 35 mm: PI start-up)

@@ -23,7 +23,8 @@ from typing import Any
 
 from runtime.campaign import store
 from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
-from runtime.experiment.arguments import add_robot_options
+from runtime.experiment.arguments import add_plant_option, add_robot_options
+from runtime.experiment.settings import PLANT_MODELS, check_contact
 from runtime.output_folder import OutputFolderError, writable_folder
 
 
@@ -50,6 +51,7 @@ def parser() -> argparse.ArgumentParser:
                    help="campaign file (default: the paper's setting, every parameter ±30 %%, "
                    "payload positions random)")
     add_robot_options(p)
+    add_plant_option(p)
     p.add_argument("--runs", type=_positive_int("--runs"), default=None,
                    help="number of runs (default: the spec's runs, 1000)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -61,6 +63,18 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--no-plots", action="store_true", help="skip stability_map.png")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
+
+
+def with_plant(campaign: Campaign, model: str) -> Campaign:
+    """``campaign`` run on the plant ``model`` (``--plant``): MuJoCo builds a lumped
+    robot from each run's drawn parameters; a bodies-and-wheels robot's engine has its
+    description's numbers, so its parameters must not be drawn (refused)."""
+    if model not in PLANT_MODELS:
+        raise CampaignSpecError(f"--plant {model!r}: expected one of {', '.join(PLANT_MODELS)}")
+    exp = campaign.experiment
+    exp = replace(exp, plant=replace(exp.plant, model=model))
+    check_contact(exp, "--plant")
+    return replace(campaign, experiment=exp)
 
 
 def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | None,
@@ -106,6 +120,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs, args.generated)
+        if args.plant_model is not None:
+            campaign = with_plant(campaign, args.plant_model)
         out = writable_folder(args.out)
         store.check_folder(out, campaign)
     except (CampaignSpecError, OutputFolderError, store.CampaignFolderError, ValueError) as exc:

@@ -81,6 +81,15 @@ def robot_setting(robot: str | Path | None, generated: Path | None,
     named = robot if robot is not None else exp.robot
     setup = resolve(named, generated)
     scaled, lines = scaled_experiment(exp, robot_scale(setup.code, setup.nominal))
+    mu = scaled.controller.traction_mu
+    if mu > 0:  # the traction-aware torque limit
+        from runtime.mujoco.layout import traction_torque_limit
+
+        limit = traction_torque_limit(setup.code, setup.plant, scaled, mu)
+        if limit < scaled.controller.tau_max:
+            scaled = replace(scaled, controller=replace(scaled.controller, tau_max=limit))
+            lines.append(f"controller.tau_max = {limit:.4g} (traction limit: traction_mu "
+                         f"{mu:g} x the lightest driven wheel's static load x its radius)")
     return Setting(setup, scaled, tuple(lines))
 
 

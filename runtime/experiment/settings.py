@@ -56,6 +56,10 @@ class ControllerSettings:
     roc_max_rate: float = 8.0  # rad/s: ROC's bounds are sampled over wheel rates up to this
     gamma: float = 2.0  # ASMC adaptation rate
     tau_max: float = 40.0  # N m per wheel
+    # Traction-aware torque limit (runtime.mujoco.layout.traction_torque_limit): the floor's
+    # friction coefficient to stay under; tau_max becomes min(tau_max, traction_mu N r) with
+    # N the driven wheel's static load (fixed payload only). 0: off.
+    traction_mu: float = 0.0
     # The wheel-velocity PI baseline (modeling.controllers.wheel_pi_law): the path tracker's
     # gains and the wheel loop's bandwidth, from which kp = J bandwidth and
     # ki = kp bandwidth / 4 (J: the wheel inertia of the nominal model's S^T M S).
@@ -220,6 +224,7 @@ _NON_NEGATIVE = {
     "lawnmower_slow",
     "friction",
     "tyre_width",
+    "traction_mu",
 }
 
 

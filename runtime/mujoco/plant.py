@@ -27,7 +27,6 @@ The :class:`runtime.sim.plant.Plant` calls:
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import mujoco
@@ -35,36 +34,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from modeling.mjcf_export import PAYLOAD_PLACEHOLDER_MASS, ContactSettings, mjcf
-from modeling.planar_robot import PlanarRobot, from_lumped
+from modeling.planar_robot import PlanarRobot
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.mujoco.coordinates import CoordinateMap
+from runtime.mujoco.layout import robot_layout
 
 Array = NDArray[np.float64]
 SETTLE = 0.3  # s the robot settles on its contacts before a run
-
-
-def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
-    """The robot the engine simulates: the generated ``LAYOUT`` of a bodies-and-wheels
-    robot, else the lumped robot of the plant parameters ``base``. ``ValueError`` if a
-    bodies-and-wheels robot is asked with other parameters than its own (the engine takes
-    masses and inertias, not the derived model's base parameters)."""
-    layout = getattr(code.robot, "LAYOUT", None)
-    if layout is None:
-        if code.prefix != "wmr":
-            raise ValueError(f"robot '{code.name}': its generated robot.py has no LAYOUT "
-                             "(generated before the MuJoCo plant); regenerate it with "
-                             "`wmr model`")
-        return from_lumped(code.name, base)
-    own = code.plant_defaults
-    moved = [k for k in own if not math.isclose(float(base.get(k, own[k])), own[k],
-                                                rel_tol=1e-12, abs_tol=1e-15)]
-    if moved:
-        raise ValueError(f"robot '{code.name}': the MuJoCo plant simulates the robot's own "
-                         f"bodies and wheels; plant parameter '{moved[0]}' = "
-                         f"{base[moved[0]]!r} differs from the robot's {own[moved[0]]!r} "
-                         "(perturbed parameters run on the generated plant)")
-    return PlanarRobot.from_data(layout)
 
 
 def contact_settings(exp: Experiment) -> ContactSettings:
@@ -99,6 +76,8 @@ class MujocoPlant:
         self.tyres = [int(self.model.geom(f"tyre_{w.name}").id) for w in driven]
         self.limit = np.full(self.nu, np.inf)
         self.yaw = 0.0
+        self.driven_bodies = [(int(self.model.body(f"wheel_{w.name}").id),
+                               int(self.model.body(w.body).id), w.radius) for w in driven]
 
     def start(self, q0: Array) -> None:
         m, d = self.model, self.data
@@ -146,6 +125,20 @@ class MujocoPlant:
         q = self.map.q(self.data, self.yaw)
         self.yaw = float(q[self.map.yaw_index[self.robot.root.name]])
         return q
+
+    def slip(self) -> Array:
+        """Each driven wheel's longitudinal slip speed (m/s): its rim speed r ω less its
+        centre's speed along its body's heading (0 while it rolls; > 0 when it spins
+        forward on the floor)."""
+        m, d = self.model, self.data
+        out = np.empty(self.nu)
+        vel = np.empty(6)
+        for i, ((wheel, body, radius), (_, _, dadr)) in enumerate(
+                zip(self.driven_bodies, self.map.driven, strict=True)):
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, wheel, vel, 0)
+            heading = d.xmat[body].reshape(3, 3)[:, 0]
+            out[i] = radius * d.qvel[dadr] - float(vel[3:6] @ heading)
+        return out
 
     def wheels(self) -> tuple[Array, Array]:
         d = self.data

@@ -1,0 +1,412 @@
+"""The generated-model plant and MuJoCo side by side: ``docs/MUJOCO.md``.
+
+    python -m runtime.mujoco.comparison [--robot ROBOT] [--experiment FILE] [--out FILE]
+
+Every controller and formulation of the robot, on both paths, under each sensing model, is
+run on the generated plant (ideal rolling) and on MuJoCo (``runtime.mujoco.plant``) at the
+floors of :data:`CASES`: μ = 1, 0.2, 0.1, and μ = 0.1 with the traction-aware torque limit
+(``[controller] traction_mu``). Per run: RMS and max position error, outcome
+(``runtime.sim.outcome``), samples whose torque was clipped, and in MuJoCo the driven
+wheels' measured slip (rim speed less the centre's speed along the heading): its largest
+value and the first instant it exceeds :data:`SLIP_THRESHOLD`. The document also states the
+wheels' static loads (``modeling.mjcf_export.static_loads``) against the engine's at rest,
+and the run time of a run on each plant. Not a test: ``tests/test_mujoco.py`` runs a
+shortened experiment through :func:`compare` and :func:`markdown`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from modeling.mjcf_export import static_loads
+from modeling.package_paths import default_output
+from runtime.bindings.generated import RobotCode
+from runtime.experiment.arguments import (
+    Setting,
+    add_experiment_option,
+    add_robot_options,
+    load_setting,
+)
+from runtime.experiment.settings import Experiment
+from runtime.mujoco.layout import robot_layout, traction_torque_limit
+from runtime.mujoco.plant import MujocoPlant
+from runtime.sim import loop, paths
+from runtime.sim.outcome import outcome
+from runtime.sim.plant import GeneratedPlant, library_for
+from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
+
+Array = NDArray[np.float64]
+# (label, floor's μ, traction_mu of the controllers' torque limit; 0: the experiment's)
+CASES: tuple[tuple[str, float, float], ...] = (
+    ("μ = 1", 1.0, 0.0),
+    ("μ = 0.2", 0.2, 0.0),
+    ("μ = 0.1", 0.1, 0.0),
+    ("μ = 0.1, traction limit", 0.1, 0.1),
+)
+SENSINGS = ("sample-instant", "encoder-average")
+ONSET_FRICTIONS = (0.05, 0.1, 0.15, 0.2, 0.3)  # μ of the slip monitor's verification
+SLIP_THRESHOLD = 0.02  # m/s: a wheel slips (μ = 1 creep stays below 1 mm/s on Drishti)
+
+
+class SlipRecordingPlant(MujocoPlant):
+    """The MuJoCo plant, recording the driven wheels' slip after every sample."""
+
+    def __init__(self, code: RobotCode, exp: Experiment, base: dict[str, float]) -> None:
+        super().__init__(code, exp, robot_layout(code, base))
+        self.slips: list[Array] = []
+
+    def advance(self, tau: list[float], dt: float, nsub: int) -> bool:
+        ok = super().advance(tau, dt, nsub)
+        self.slips.append(self.slip())
+        return ok
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One run: errors (m), outcome, clipped samples, slip (m/s; nan on the model plant),
+    slip onset (s; None: never above the threshold), wall time (s)."""
+
+    rms: float
+    max: float
+    status: str
+    saturated: int
+    slip_max: float
+    slip_onset: float | None
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Row:
+    sensing: str
+    path: str
+    formulation: str
+    controller: str
+    model: Cell
+    engine: tuple[Cell, ...]  # one per case
+
+
+@dataclass(frozen=True)
+class Onset:
+    """The slip monitor on a model-plant run (the largest friction coefficient it needs,
+    and when it first needs more than each μ of :data:`ONSET_FRICTIONS`) against the slip
+    MuJoCo measures at that μ (first instant above :data:`SLIP_THRESHOLD`)."""
+
+    path: str
+    formulation: str
+    controller: str
+    needed_max: float
+    predicted: tuple[float | None, ...]
+    measured: tuple[float | None, ...]
+
+
+@dataclass(frozen=True)
+class Comparison:
+    setting: Setting
+    cases: tuple[tuple[str, float, float], ...]
+    rows: tuple[Row, ...]
+    limits: tuple[float, ...]  # the torque limit of each case (N m)
+    loads: dict[str, tuple[float, float]]  # contact -> (stated static load, engine at rest)
+    onsets: tuple[Onset, ...] = ()  # the slip monitor against the engine
+
+
+def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
+          h: float) -> Cell:
+    o = outcome(r, scale)
+    e = r.position_error
+    rms = float(np.sqrt(np.mean(e**2))) if len(e) else math.nan
+    peak = float(e.max()) if len(e) else math.nan
+    slip_max, onset = math.nan, None
+    if slips:
+        s = np.max(np.abs(np.array(slips)), axis=1)
+        slip_max = float(s.max())
+        above = np.nonzero(s > SLIP_THRESHOLD)[0]
+        onset = float((above[0] + 1) * h) if len(above) else None
+    return Cell(rms, peak, o.status, r.saturated, slip_max, onset, seconds)
+
+
+def engine_loads(code: RobotCode, exp: Experiment, base: dict[str, float]) -> dict[str, float]:
+    """The normal force on each contact of the MuJoCo robot at rest (fixed payload on)."""
+    plant = MujocoPlant(code, exp, robot_layout(code, base))
+    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0]))
+    plant.start(np.zeros(code.nq))
+    m, d = plant.model, plant.data
+    mujoco.mj_step(m, d, nstep=round(0.5 / m.opt.timestep))
+    out: dict[str, float] = {}
+    force = np.zeros(6)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, force)
+        name = m.geom(c.geom[1]).name or m.geom(c.geom[0]).name
+        name = name.removeprefix("tyre_")
+        out[name] = out.get(name, 0.0) + float(force[0])
+    return out
+
+
+def _one(setting: Setting, exp: Experiment, run: tuple[str, str, str, str],
+         engine: bool) -> Cell:
+    """One run (sensing, path, formulation, controller) on the plant ``exp`` names."""
+    sensing, name, form, controller = run
+    setup, code = setting.robot, setting.robot.code
+    e = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
+    ref = paths.reference(code, setup.nominal, e, name)
+    plant = SlipRecordingPlant(code, e, setup.plant) if engine else None
+    t0 = time.perf_counter()
+    r = loop.run(code, controller, form, ref, setup.nominal, e, plant_params=setup.plant,
+                 plant=plant)
+    return _cell(r, ref.scale, time.perf_counter() - t0, plant.slips if plant else None,
+                 e.controller.h)
+
+
+def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
+            cases: Sequence[tuple[str, float, float]] = CASES,
+            progress: bool = False,
+            onset_frictions: Sequence[float] = ONSET_FRICTIONS) -> Comparison:
+    """Run every setting on both plants (see the module docstring)."""
+    setup, exp = setting.robot, setting.experiment
+    code = setup.code
+    exps = []
+    for _, mu, traction in cases:
+        c = exp.controller
+        limit = (min(c.tau_max, traction_torque_limit(code, setup.plant, exp, traction))
+                 if traction > 0 else c.tau_max)
+        exps.append(replace(exp, plant=replace(exp.plant, model="mujoco", friction=mu),
+                            controller=replace(c, tau_max=limit)))
+    rows: list[Row] = []
+    for sensing in sensings:
+        for name in paths.PATHS:
+            for form, info in code.runs():
+                run = (sensing, name, form, info.name)
+                model = _one(setting, replace(exp, plant=replace(exp.plant, model="generated")),
+                             run, engine=False)
+                engine = tuple(_one(setting, e, run, engine=True) for e in exps)
+                rows.append(Row(sensing, name, form, info.name, model, engine))
+                if progress:
+                    print(f"[{len(rows)}] {sensing} {name} {form} {info.label}: model "
+                          f"{model.rms * 1e3:.2f} mm, MuJoCo "
+                          + ", ".join(f"{c.rms * 1e3:.1f}" for c in engine) + " mm",
+                          flush=True)
+    stated = static_loads(robot_layout(code, setup.plant),
+                          ((exp.plant.fixed_payload, exp.plant.fixed_payload_x,
+                            exp.plant.fixed_payload_y),))
+    measured = engine_loads(code, exps[0], setup.plant)
+    loads = {k: (v, measured.get(k, math.nan)) for k, v in stated.items()}
+    return Comparison(setting, tuple(cases), tuple(rows),
+                      tuple(e.controller.tau_max for e in exps), loads,
+                      onsets(setting, onset_frictions, sensings[0]) if onset_frictions else ())
+
+
+def onsets(setting: Setting, frictions: Sequence[float], sensing: str) -> tuple[Onset, ...]:
+    """The slip monitor's predicted onset of slip against MuJoCo's, every controller and
+    path, under ``sensing``."""
+    setup, code = setting.robot, setting.robot.code
+    exp = setting.experiment
+    exp = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
+    monitor = SlipMonitor(code, robot_layout(code, setup.plant), exp)
+    h = exp.controller.h
+    out = []
+    for name in paths.PATHS:
+        ref = paths.reference(code, setup.nominal, exp, name)
+        for form, info in code.runs():
+            model_exp = replace(exp, plant=replace(exp.plant, model="generated"))
+            plant = MonitoredPlant(GeneratedPlant(code, library_for(code), exp.plant.viscous,
+                                                  exp.plant.coulomb), monitor)
+            loop.run(code, info.name, form, ref, setup.nominal, model_exp,
+                     plant_params=setup.plant, plant=plant)
+            needed = np.array(plant.needed)
+            predicted: list[float | None] = []
+            measured: list[float | None] = []
+            for mu in frictions:
+                above = np.nonzero(needed > mu)[0]
+                predicted.append(float(above[0] * h) if len(above) else None)
+                e = replace(exp, plant=replace(exp.plant, model="mujoco", friction=mu))
+                measured.append(_one(setting, e, (sensing, name, form, info.name),
+                                     engine=True).slip_onset)
+            out.append(Onset(name, form, info.name,
+                             float(needed.max()) if len(needed) else math.nan,
+                             tuple(predicted), tuple(measured)))
+    return tuple(out)
+
+
+def _mm(x: float) -> str:
+    return "—" if math.isnan(x) else f"{x * 1e3:.2f}" if x < 0.1 else f"{x * 1e3:.0f}"
+
+
+def _t(t: float | None) -> str:
+    return "—" if t is None else f"{t:.1f}"
+
+
+def _status(c: Cell) -> str:
+    return "ok" if c.status == "ok" else f"**{c.status}**"
+
+
+def _slip(c: Cell) -> str:
+    if math.isnan(c.slip_max):
+        return "—"
+    onset = "no" if c.slip_onset is None else f"from {c.slip_onset:g} s"
+    return f"{c.slip_max * 1e3:.0f} ({onset})"
+
+
+def markdown(comp: Comparison) -> str:
+    """The document (see the module docstring)."""
+    s, exp = comp.setting.robot, comp.setting.experiment
+    labels = {i.name: i.label for _, i in s.code.runs()}
+    pl = exp.plant
+    lines = [
+        f"# The generated-model plant against MuJoCo: robot '{s.name}'",
+        "",
+        "Generated by `python -m runtime.mujoco.comparison` (`runtime/mujoco/comparison.py`); "
+        "do not edit.",
+        "",
+        "Every controller runs the same closed loop (`runtime/sim/loop.py`: the generated C "
+        "controller, encoders and odometry, the payload schedule) on two plants: the "
+        "derived model integrated by RK4 (ideal rolling: a wheel never slips) and MuJoCo on "
+        "the MJCF `wmr mjcf` writes from the robot's description (the same planar inertias, "
+        "checked to 1e-6 by `tests/test_mujoco.py`; point-contact wheels, contact time "
+        f"constant {pl.contact_timeconst:g} s, frictionless supports for a single axle). "
+        "Errors in mm (RMS / max of the reference point's distance from the reference); "
+        "outcome as `wmr reproduce` classifies it; slip: the driven wheels' largest rim "
+        "speed less ground speed (mm/s), and when it first exceeds "
+        f"{SLIP_THRESHOLD * 1e3:.0f} mm/s; sat: samples whose torque was clipped.",
+        "",
+        "Torque limits: " + ", ".join(f"{label}: {lim:.3g} N m" for (label, _, _), lim
+                                      in zip(comp.cases, comp.limits, strict=True))
+        + " (the traction limit is `[controller] traction_mu` = 0.1: μ N r of the lightest "
+        "driven wheel at rest, fixed payload on).",
+        "",
+    ]
+    lines += _summary(comp)
+    lines += ["", "## Every run", ""]
+    head = "| sensing | path | formulation | controller | model plant |"
+    rule = "|---|---|---|---|---|"
+    for label, _, _ in comp.cases:
+        head += f" MuJoCo {label} | slip, sat |"
+        rule += "---|---|"
+    lines += [head, rule]
+    for r in comp.rows:
+        m = r.model
+        line = (f"| {r.sensing} | {r.path} | {r.formulation} | {labels[r.controller]} | "
+                f"{_mm(m.rms)} / {_mm(m.max)} {_status(m)} |")
+        for c in r.engine:
+            line += f" {_mm(c.rms)} / {_mm(c.max)} {_status(c)} | {_slip(c)}, {c.saturated} |"
+        lines.append(line)
+    lines += ["", "## Wheel loads at rest (N)", "",
+              "The slip monitor and the traction limit take each wheel's normal load from a "
+              "stated static split (`modeling.mjcf_export.static_loads`: the robot as one "
+              "rigid assembly on equal contact springs); MuJoCo's soft contacts are not equal "
+              "springs (their stiffness scales with each contact's effective mass), so the "
+              "engine at rest splits the load differently where the split is statically "
+              "indeterminate (three contacts or more off one plane's worth of equations):", "",
+              "| contact | stated | MuJoCo at rest |", "|---|---|---|"]
+    for k, (stated, measured) in comp.loads.items():
+        lines.append(f"| {k} | {stated:.1f} | {measured:.1f} |")
+    if comp.onsets:
+        mus = ONSET_FRICTIONS
+        lines += ["", "## The slip monitor against the engine", "",
+                  "`runtime/sim/slip_monitor.py` computes, from the rolling rows' multipliers "
+                  "of (9), the longitudinal force each driven wheel must transmit, F = (τ − "
+                  "τ_f − J θ̈)/r, and compares it with μ N (N: the stated static load with "
+                  "the payload on board). Run on the model plant (which cannot slip), it "
+                  "gives the friction coefficient each run needs (its largest |F|/N) and the "
+                  "first instant it needs more than μ: the predicted onset of slip. MuJoCo "
+                  "at that μ measures when a wheel's slip first exceeds "
+                  f"{SLIP_THRESHOLD * 1e3:.0f} mm/s. Predicted / measured onset (s; — : "
+                  f"none), sensing {comp.rows[0].sensing if comp.rows else ''}:", "",
+                  "| path | formulation | controller | μ needed | "
+                  + " | ".join(f"μ = {m:g}" for m in mus) + " |",
+                  "|---|---|---|---|" + "---|" * len(mus)]
+        for o in comp.onsets:
+            cells = " | ".join(f"{_t(p)} / {_t(m)}" for p, m
+                               in zip(o.predicted, o.measured, strict=True))
+            lines.append(f"| {o.path} | {o.formulation} | {labels[o.controller]} | "
+                         f"{o.needed_max:.3f} | {cells} |")
+        agree = sum((p is None) == (m is None) for o in comp.onsets
+                    for p, m in zip(o.predicted, o.measured, strict=True))
+        total = sum(len(o.predicted) for o in comp.onsets)
+        lines += ["", f"Slip predicted and measured agree (both or neither) in {agree} of "
+                  f"{total} runs."]
+    model_t = [r.model.seconds for r in comp.rows]
+    engine_t = [c.seconds for r in comp.rows for c in r.engine]
+    lines += ["", "## Run time", "",
+              f"A run on the model plant takes {np.mean(model_t):.2f} s on average "
+              f"(longest {max(model_t):.2f} s), on MuJoCo {np.mean(engine_t):.2f} s "
+              f"(longest {max(engine_t):.2f} s): {np.mean(engine_t) / np.mean(model_t):.1f} "
+              f"× (h = {exp.controller.h:g} s, {pl.substeps} engine steps a sample).", ""]
+    return "\n".join(lines)
+
+
+def _summary(comp: Comparison) -> list[str]:
+    """Where and why the plants differ, with the numbers of this run."""
+    out = ["## Where they differ, and why", ""]
+    for i, (label, _, _) in enumerate(comp.cases):
+        diffs = [r.engine[i].rms - r.model.rms for r in comp.rows
+                 if r.model.status == "ok" and not math.isnan(r.engine[i].rms)]
+        ok = sum(r.engine[i].status == "ok" for r in comp.rows)
+        model_ok = sum(r.model.status == "ok" for r in comp.rows)
+        slipping = sum(r.engine[i].slip_onset is not None for r in comp.rows)
+        text = (f"* **{label}**: {ok} of {len(comp.rows)} runs ok on MuJoCo ({model_ok} on "
+                f"the model plant); a wheel slipped in {slipping}.")
+        if diffs:
+            text += (f" RMS MuJoCo − model over the runs ok on the model: "
+                     f"{min(diffs) * 1e3:+.2f} … {max(diffs) * 1e3:+.2f} mm.")
+        out.append(text)
+    out += [
+        "",
+        "With grip (μ = 1) the engine confirms the model: the rolling constraints hold to "
+        "within the contacts' creep, and what is left is physics the derivation assumed "
+        "away: soft contacts (the tyres sink, the rolling radius shrinks by the sinkage, "
+        "and the odometry, which uses the nominal radius, drifts: with MuJoCo's default "
+        "time constant 0.02 s Drishti sinks 0.2 mm and the tracking error grows by about "
+        "6 mm RMS), creep under traction, exact rather than smoothed Coulomb friction, and "
+        "a body that pitches on its supports under acceleration. Once a wheel slips the "
+        "model plant has nothing to say: it cannot slip. On a floor of μ = 0.1 the "
+        "start-up torque exceeds μ N r, the wheels spin, the encoders report motion the "
+        "robot does not make, every controller drives its error into the torque limit and "
+        "grip never comes back. A torque limit under μ N r (`traction_mu`) keeps the "
+        "start-up from spinning the wheels (counts above): slips that still occur are "
+        "brief, at the lawn mower's turns, and grip comes back; the limit is also all the "
+        "authority the controllers have, so the runs converge slowly and some stay more "
+        "than a tenth of the path's size off it (the outcome column). A torque that "
+        "cannot spin a wheel cannot correct a large error quickly either: on such a floor "
+        "the path must be slower, not the controller stronger.",
+    ]
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m runtime.mujoco.comparison",
+                                description="The generated-model plant against MuJoCo: "
+                                "every controller, path and sensing, at several floors.")
+    add_experiment_option(p)
+    add_robot_options(p)
+    p.add_argument("--sensing", default=",".join(SENSINGS), metavar="MODEL[,MODEL]")
+    p.add_argument("--out", type=Path, default=None,
+                   help="the document (default: docs/MUJOCO.md for the paper's robot, "
+                   "./mujoco/<robot>/MUJOCO.md for another)")
+    args = p.parse_args(argv)
+    try:
+        setting = load_setting(args)
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    out = args.out or (default_output("docs/MUJOCO.md") if setting.is_paper_robot
+                       else Path("mujoco") / setting.robot.name / "MUJOCO.md")
+    start = time.perf_counter()
+    comp = compare(setting, tuple(args.sensing.split(",")), progress=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(markdown(comp), encoding="utf-8")
+    print(f"wrote {out}: wall time {time.perf_counter() - start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
