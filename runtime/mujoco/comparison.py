@@ -117,6 +117,7 @@ class Comparison:
     limits: tuple[float, ...]  # the torque limit of each case (N m)
     loads: dict[str, tuple[float, float]]  # contact -> (stated static load, engine at rest)
     onsets: tuple[Onset, ...] = ()  # the slip monitor against the engine
+    onset_frictions: tuple[float, ...] = ()  # the μ of each onset column
 
 
 def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
@@ -202,7 +203,8 @@ def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
     loads = {k: (v, measured.get(k, math.nan)) for k, v in stated.items()}
     return Comparison(setting, tuple(cases), tuple(rows),
                       tuple(e.controller.tau_max for e in exps), loads,
-                      onsets(setting, onset_frictions, sensings[0]) if onset_frictions else ())
+                      onsets(setting, onset_frictions, sensings[0]) if onset_frictions else (),
+                      tuple(onset_frictions))
 
 
 def onsets(setting: Setting, frictions: Sequence[float], sensing: str) -> tuple[Onset, ...]:
@@ -310,7 +312,7 @@ def markdown(comp: Comparison) -> str:
     for k, (stated, measured) in comp.loads.items():
         lines.append(f"| {k} | {stated:.1f} | {measured:.1f} |")
     if comp.onsets:
-        mus = ONSET_FRICTIONS
+        mus = comp.onset_frictions
         lines += ["", "## The slip monitor against the engine", "",
                   "`runtime/sim/slip_monitor.py` computes, from the rolling rows' multipliers "
                   "of (9), the longitudinal force each driven wheel must transmit, F = (τ − "
@@ -329,11 +331,35 @@ def markdown(comp: Comparison) -> str:
                                in zip(o.predicted, o.measured, strict=True))
             lines.append(f"| {o.path} | {o.formulation} | {labels[o.controller]} | "
                          f"{o.needed_max:.3f} | {cells} |")
-        agree = sum((p is None) == (m is None) for o in comp.onsets
-                    for p, m in zip(o.predicted, o.measured, strict=True))
-        total = sum(len(o.predicted) for o in comp.onsets)
+        pairs = [(p, m, mu, o.needed_max) for o in comp.onsets
+                 for p, m, mu in zip(o.predicted, o.measured, mus, strict=True)]
+        agree = sum((p is None) == (m is None) for p, m, _, _ in pairs)
+        lags = [m - p for p, m, _, _ in pairs if p is not None and m is not None]
+        missed = [(mu, need) for p, m, mu, need in pairs if p is not None and m is None]
+        unseen = [(mu, need) for p, m, mu, need in pairs if p is None and m is not None]
+        late = [(need / mu - 1, m - p) for p, m, mu, need in pairs
+                if p is not None and m is not None and m - p > 2.0]
         lines += ["", f"Slip predicted and measured agree (both or neither) in {agree} of "
-                  f"{total} runs."]
+                  f"{len(pairs)} runs."]
+        if lags:
+            lines[-1] += (f" Where both slip, the engine's onset comes "
+                          f"{float(np.median(lags)):.1f} s after the predicted one (median; "
+                          "the slip speed takes a sample or two to build up to the "
+                          "threshold)")
+            lines[-1] += (f", except in {len(late)} runs where it comes "
+                          f"{min(d for _, d in late):.0f}–{max(d for _, d in late):.0f} s "
+                          "later: their largest need exceeds the floor's μ by at most "
+                          f"{max(x for x, _ in late) * 100:.0f} %, the engine's wheels creep "
+                          "under the threshold at the start and slip at a later turn."
+                          if late else ".")
+        if missed:
+            lines[-1] += (f" Predicted but not measured in {len(missed)} runs, each one "
+                          "whose largest need is within "
+                          f"{max(abs(need / mu - 1) for mu, need in missed) * 100:.0f} % "
+                          "of the floor's μ (the engine's wheels creep there without "
+                          "reaching the threshold).")
+        if unseen:
+            lines[-1] += f" Measured but not predicted in {len(unseen)} runs."
     model_t = [r.model.seconds for r in comp.rows]
     engine_t = [c.seconds for r in comp.rows for c in r.engine]
     lines += ["", "## Run time", "",
