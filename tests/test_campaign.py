@@ -182,12 +182,18 @@ def test_out_file_and_bad_spec_and_unreachable_scheduler(
     assert time.perf_counter() - t0 < 30
 
 
-def _wait_for(path: Path, seconds: float) -> None:
+def _wait_for(path: Path, seconds: float) -> dict[str, Any]:
+    """The JSON file ``path`` once it is complete (the scheduler creates it before it has
+    written it: a read in between got an empty file on a loaded machine)."""
     end = time.time() + seconds
-    while not path.exists():
-        if time.time() > end:
-            raise TimeoutError(f"{path} did not appear")
-        time.sleep(0.2)
+    while True:
+        try:
+            data: dict[str, Any] = json.loads(path.read_text())
+            return data
+        except (FileNotFoundError, json.JSONDecodeError):
+            if time.time() > end:
+                raise TimeoutError(f"{path} did not appear complete") from None
+            time.sleep(0.2)
 
 
 def test_campaign_on_separately_started_scheduler_and_worker(
@@ -202,8 +208,7 @@ def test_campaign_on_separately_started_scheduler_and_worker(
          "--no-dashboard", "--scheduler-file", str(sched_file)],
         cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        _wait_for(sched_file, 30)
-        address = json.loads(sched_file.read_text())["address"]
+        address = _wait_for(sched_file, 30)["address"]
         procs.append(subprocess.Popen(
             [str(dask), "worker", address, "--nworkers", "1", "--nthreads", "1",
              "--no-dashboard"],
