@@ -390,20 +390,19 @@ def _summary(comp: Comparison) -> list[str]:
         "With grip (μ = 1) the engine confirms the model: the rolling constraints hold to "
         "within the contacts' creep, and what is left is physics the derivation assumed "
         "away: soft contacts (the tyres sink, the rolling radius shrinks by the sinkage, "
-        "and the odometry, which uses the nominal radius, drifts: with MuJoCo's default "
-        "time constant 0.02 s Drishti sinks 0.2 mm and the tracking error grows by about "
-        "6 mm RMS), creep under traction, exact rather than smoothed Coulomb friction, and "
-        "a body that pitches on its supports under acceleration. Once a wheel slips the "
-        "model plant has nothing to say: it cannot slip. On a floor of μ = 0.1 the "
-        "start-up torque exceeds μ N r, the wheels spin, the encoders report motion the "
-        "robot does not make, every controller drives its error into the torque limit and "
-        "grip never comes back. A torque limit under μ N r (`traction_mu`) keeps the "
-        "start-up from spinning the wheels (counts above): slips that still occur are "
-        "brief, at the lawn mower's turns, and grip comes back; the limit is also all the "
-        "authority the controllers have, so the runs converge slowly and some stay more "
-        "than a tenth of the path's size off it (the outcome column). A torque that "
-        "cannot spin a wheel cannot correct a large error quickly either: on such a floor "
-        "the path must be slower, not the controller stronger.",
+        "and the odometry, which uses the nominal radius, drifts; measured on Drishti: with "
+        "MuJoCo's default time constant 0.02 s it sinks 0.2 mm and its tracking error grows "
+        "by about 6 mm RMS), creep under traction, exact rather than smoothed Coulomb "
+        "friction, and a body that pitches on its supports under acceleration. Once a wheel "
+        "slips the model plant has nothing to say: it cannot slip. Where the start-up "
+        "torque exceeds μ N r (the low floors' counts above) the wheel spins, the encoders "
+        "report motion the robot does not make, and a controller that answers with more "
+        "torque spins it further into the torque limit: grip does not come back (Drishti "
+        "at μ = 0.1: every controller). A torque limit under μ N r (`traction_mu`) keeps "
+        "the start-up from spinning the wheels (counts above); the limit is also all the "
+        "authority the controllers have, so runs converge slowly and some may stay more "
+        "than a tenth of the path's size off it (the outcome column): on such a floor the "
+        "path must be slower, not the controller stronger.",
     ]
     return out
 
