@@ -46,7 +46,6 @@ from runtime.stability.sampled_loop import (
     delay_radius,
     is_pi,
     max_delay,
-    on_operating_circle,
     operating_rates,
     pencil,
     roc_gain,
@@ -90,11 +89,10 @@ def measured_gain(
     code: RobotCode, controller: str, formulation: str, robot: dict[str, float],
     exp: Experiment
 ) -> float:
-    """Median switching gain over a closed-loop circle (the analysis' operating point) at the
-    experiment's setting. The configuration checks are skipped: the loop's stability is what
-    is analysed here, and the TDE condition over the uncertainty box is reported apart
-    (:func:`tde_notes`)."""
-    exp = on_operating_circle(exp)
+    """Median switching gain over the experiment's closed-loop circle (the analysis'
+    operating point) at the experiment's setting. The configuration checks are skipped: the
+    loop's stability is what is analysed here, and the TDE condition over the uncertainty
+    box is reported apart (:func:`tde_notes`)."""
     ref = paths.circle(code, robot, exp)
     r = loop.run(code, controller, formulation, ref, robot, exp)
     if r.init_status != 0:

@@ -632,12 +632,6 @@ def max_delay(s: LoopSetting, gain: float, rel_tol: float = 0.02) -> float:
     return math.inf
 
 
-def on_operating_circle(exp: Experiment) -> Experiment:
-    """``exp`` as the analysis' operating point sees it: the experiment's own circle (kept
-    for the callers that measured k̂ on the paper's unscaled circle before)."""
-    return exp
-
-
 def roc_gain(code: RobotCode, formulation: str, robot: dict[str, float],
              exp: Experiment) -> float:
     """ROC's boundary-layer gain at zero error, ρ/ε, with ρ = φ/(1 − α) (q̈_d = 0 on the

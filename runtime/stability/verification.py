@@ -19,7 +19,6 @@ import numpy as np
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim import loop, paths
-from runtime.stability.sampled_loop import on_operating_circle
 
 GROWTH = 3.0
 DIVERGED = 1.0  # ‖(e, ė)‖ [rad, rad/s, m, m/s]: far beyond any tracking of these runs
@@ -28,9 +27,8 @@ DURATION = 40.0  # s of circle
 
 
 def linear_experiment(exp: Experiment) -> Experiment:
-    """The experiment as the analysis sees it: no payload, no friction, no saturation, its
-    operating circle."""
-    exp = on_operating_circle(exp)
+    """The experiment as the analysis sees it: no payload, no friction, no saturation, on
+    its circle."""
     return replace(
         exp,
         controller=replace(exp.controller, eps=EPS, tau_max=1.0e4),
