@@ -639,9 +639,9 @@ def roc_gain(code: RobotCode, formulation: str, robot: dict[str, float],
     alpha, phi = roc_bounds(code, robot, exp.controller.uncertainty, formulation,
                             exp.controller.roc_max_rate)
     if not alpha < 1.0:  # ρ = φ/(1 − α) exists only for α < 1; ROC's init refuses the rest
-        raise ValueError(f"BAD_BOUNDS: ROC needs alpha < 1 over the ±"
-                         f"{exp.controller.uncertainty:.0%} box of the nominal parameters, "
-                         f"got {alpha:.3g}")
+        raise ValueError(f"ROC needs alpha < 1 over the ±{exp.controller.uncertainty:.0%} "
+                         f"box of the nominal parameters, got {alpha:.3g} (its init refuses "
+                         "the bounds: BAD_BOUNDS)")
     return phi / (1 - alpha) / exp.controller.eps
 
 
