@@ -28,7 +28,13 @@ from runtime.experiment.arguments import robot_setting
 from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
 from runtime.stability import analysis as stability
 from runtime.stability import verification
-from runtime.stability.sampled_loop import ClosedLoop, max_delay, pencil, setting
+from runtime.stability.sampled_loop import (
+    ClosedLoop,
+    max_delay,
+    operating_rates,
+    pencil,
+    setting,
+)
 from runtime.stability.saturation import saturation_verdict
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -209,3 +215,15 @@ def test_one_verdict_in_every_command(tmp_path: Path, capsys: pytest.CaptureFixt
     header = next(out.glob("*_tdc_frozen.h")).read_text()
     assert f"spectral radius {rows['tdc']['spectral_radius']:.3f}" in header
     assert "tdc/minimal stable" in header
+
+
+def test_lawnmower_is_analysed_at_its_leg_and_turns() -> None:
+    """--path lawnmower: the straight leg and both U-turns, each a steady motion; the worst
+    decides and is named."""
+    code, nominal = DRISHTI, dict(DRISHTI.params)
+    a = stability.analyse(code, "tdc", "minimal", nominal, Experiment(), measure=False,
+                          path="lawnmower")
+    assert a.operating_point in ("leg", "left turn", "right turn")
+    radii = [pencil(setting(code, "tdc", "minimal", nominal, Experiment(), rates=r)).radius(0)
+             for _, r in operating_rates(code, nominal, Experiment(), "lawnmower")]
+    assert len(radii) == 3 and a.spectral_radius == max(radii)

@@ -606,7 +606,10 @@ def with_delay(s: LoopSetting, delay: float) -> LoopSetting:
 
 def delay_radius(s: LoopSetting, gain: float, jitter: float) -> float:
     """The largest spectral radius over the delays D − J, D, D + J (J: the jitter bound;
-    D − J clipped at 0): the loop at every constant delay the jitter allows."""
+    D − J clipped at 0): the loop at the extreme constant delays the jitter allows. A
+    necessary condition: a delay that varies from sample to sample within the bound is a
+    switched system, which a spectral radius below 1 at each constant delay does not
+    guarantee (the closed loop simulates it)."""
     delays = sorted({max(0.0, s.delay - jitter), s.delay, s.delay + jitter})
     return max(pencil(with_delay(s, d)).radius(gain) for d in delays)
 

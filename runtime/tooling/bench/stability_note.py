@@ -11,7 +11,9 @@ and each sensing model, with the paper's experiment scaled to the robot:
 * TDROC in its first formulation: the predicted boundary against the simulated one (k̂ held,
   bisection, :mod:`runtime.stability.verification`);
 * TDC in the minimal formulation, sample-instant rates: the predicted largest delay against
-  the simulated one (TDROC with k̂ held at 0 is TDC; bisection on the delay of the loop).
+  the simulated one (TDROC with k̂ held at 0 is TDC; bisection on the delay of the loop);
+* the saturation and wind-up verdict of every controller (sample-instant rates), predicted
+  and simulated (:mod:`runtime.stability.saturation`).
 
 Run: ``python -m runtime.tooling.bench.stability_note [--out FILE] [--robots a,b]``
 (about ten minutes on one core; the tests check the same things on cheaper cases).
@@ -32,6 +34,7 @@ from runtime.experiment.settings import VELOCITY_MODELS, Experiment
 from runtime.stability import verification
 from runtime.stability.analysis import analyse_all
 from runtime.stability.sampled_loop import max_delay, pencil, setting
+from runtime.stability.saturation import saturation_verdict
 
 ROOT = Path(__file__).resolve().parents[3]
 ROBOTS = {
@@ -80,6 +83,7 @@ def robot_section(name: str, robot: str | None, generated: Path | None) -> list[
     head = ("| sensing | controller | form | max stable k/ε | g at setting | stable | "
             "ε > | max delay | reason |")
     rows = [head, "|---|---|---|---:|---:|---|---:|---:|---|"]
+    sat: list[str] = []
     checks = ["", "| sensing | TDROC k̂/ε predicted | simulated | difference | TDC delay "
               "predicted | simulated |", "|---|---:|---:|---:|---:|---:|"]
     for velocity in VELOCITY_MODELS:
@@ -109,7 +113,12 @@ def robot_section(name: str, robot: str | None, generated: Path | None) -> list[
                       f"| {100 * diff:.1f} % | {delay_cell[0]} | {delay_cell[1]} |")
         lines.append(f"- {velocity}: `analyse_all` with the largest delays took {took:.1f} s "
                      f"({len(result)} rows, {code.nq} coordinates).")
-    return [*lines, "", *rows, *checks, ""]
+        if velocity == "sample-instant":
+            sat = ["", "| controller | form | saturation (predicted; simulated) |", "|---|---|---|"]
+            for form, info in code.runs():
+                v = saturation_verdict(code, info.name, form, nominal, exp, simulate=True)
+                sat.append(f"| {info.name} | {form} | {v.verdict}: {v.reason} |")
+    return [*lines, "", *rows, *checks, *sat, ""]
 
 
 def main(argv: list[str] | None = None) -> int:
