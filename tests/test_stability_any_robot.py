@@ -227,3 +227,14 @@ def test_lawnmower_is_analysed_at_its_leg_and_turns() -> None:
     radii = [pencil(setting(code, "tdc", "minimal", nominal, Experiment(), rates=r)).radius(0)
              for _, r in operating_rates(code, nominal, Experiment(), "lawnmower")]
     assert len(radii) == 3 and a.spectral_radius == max(radii)
+
+
+def test_saturation_the_prediction_misses_is_reported_from_simulation() -> None:
+    """The small robot's ROC (minimal): predicted ok along the tracked path, but its loop is
+    linearly unstable (k/ε = 800 > 99), leaves the path and clips its torque: the run
+    decides the verdict, and the reason says why the prediction missed it."""
+    small = ROOT / "tests" / "robots" / "small_robot.toml"
+    code, nominal, exp = scaled(str(small), None, "sample-instant")
+    v = saturation_verdict(code, "roc", "minimal", nominal, exp, simulate=True)
+    assert v.simulated_saturated is not None and v.simulated_saturated > 0
+    assert v.verdict == "saturates (simulated)" and "see the linear verdict" in v.reason

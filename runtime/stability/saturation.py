@@ -20,7 +20,10 @@ Verdict: ``saturates`` if the demand alone exceeds τ_max (no controller follows
 into the limit; the error it leaves grows the adaptive gains further), else ``ok``. With
 ``simulate``, the closed loop of :mod:`runtime.sim.loop` on the circle (the experiment's
 plant: payload, friction, encoders) gives the simulated counterpart: the peak torque, the
-samples clipped to τ_max and the peak switching gain, in the reason beside the prediction.
+samples clipped to τ_max and the peak switching gain, in the reason beside the prediction;
+a run that saturates where ``ok`` was predicted turns the verdict into ``saturates
+(simulated)`` (a loop the linear verdict calls unstable leaves the tracked path that the
+prediction assumes: the small robot's ROC).
 """
 
 from __future__ import annotations
@@ -173,5 +176,9 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
            f"τ_max, switching gain up to {sim_gain:.3g} in the first {START_UP:g} s"
            + (f", stopped at t = {r.failed_at:g} s ({r.stop_reason})" if r.failed_at is not None
               else ""))
+    if r.saturated and verdict == "ok":  # the prediction missed it: say so, the run decides
+        verdict = "saturates (simulated)"
+        sim += (" — not predicted from the tracked path: the loop left it (see the linear "
+                "verdict)")
     return SaturationVerdict(verdict, why + sim, demand, switching, tau_max, gain_peak,
                              sim_peak, r.saturated, sim_gain)

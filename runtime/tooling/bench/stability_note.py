@@ -99,10 +99,14 @@ def robot_section(name: str, robot: str | None, generated: Path | None) -> list[
                         f"| {_fmt(r.max_stable_gain)} | {_fmt(r.gain_at_setting)} "
                         f"| {'yes' if r.stable else '**no**'} | {_fmt(r.eps_min)} "
                         f"| {_fmt(r.max_delay, ' ms', 1e3)} | {r.reason} |")
-        form = code.controller("tdroc").formulations[0]
-        predicted = pencil(setting(code, "tdroc", form, nominal, exp)).max_stable_gain()
+        # TDROC in the first formulation with a stable loop (the small robot's paper one is
+        # unstable before any switching gain: nothing to bisect)
+        gains = {f: pencil(setting(code, "tdroc", f, nominal, exp)).max_stable_gain()
+                 for f in code.controller("tdroc").formulations}
+        form = next((f for f, g in gains.items() if 0 < g < math.inf), "minimal")
+        predicted = gains[form]
         sim = verification.simulated_boundary(code, form, nominal, exp, predicted)
-        diff = abs(sim.estimate - predicted) / sim.estimate
+        diff = abs(sim.estimate - predicted) / sim.estimate if sim.estimate > 0 else math.nan
         delay_cell = ["", ""]
         if velocity == "sample-instant":
             d_pred = max_delay(setting(code, "tdc", "minimal", nominal, exp), 0.0)
