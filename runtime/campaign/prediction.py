@@ -78,8 +78,8 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
     code = tgt.setup.code
     if not covers(code):
         return Prediction({}, unavailable=(
-            f"robot '{tgt.name}' is not a plain differential drive; the sampled-data analysis "
-            "is written for the paper's, so no boundary is predicted"))
+            f"robot '{tgt.name}': the sampled-data analysis needs the root's pose as the "
+            "first coordinates, so no boundary is predicted"))
 
     section, _, key = campaign.map_y.partition(".")
     base_y = float(getattr(getattr(campaign.experiment, section), key))
