@@ -130,7 +130,7 @@ def test_a_failing_run_is_recorded_with_its_error() -> None:
     assert math.isnan(rec["rms_error"])
 
 
-def test_robot_of_bodies_runs_without_a_predicted_boundary(tmp_path: Path) -> None:
+def test_robot_of_bodies_runs_and_draws_its_predicted_boundary(tmp_path: Path) -> None:
     from runtime.campaign.command import resolve_campaign
     from runtime.campaign.prediction import predict
     from runtime.campaign.runner import run_one
@@ -146,4 +146,7 @@ def test_robot_of_bodies_runs_without_a_predicted_boundary(tmp_path: Path) -> No
     rec = run_one(c, 0, tgt, base_values(c, tgt.plant))
     assert rec["status"] == "ok", rec["error"]
     assert 0 < rec["rms_error"] < 0.1
-    assert "no boundary is predicted" in (predict(c, tgt).unavailable or "")
+    prediction = predict(c, tgt)
+    assert prediction.unavailable is None
+    (boundary,) = prediction.boundaries.values()
+    assert all(0 < e < math.inf for e in boundary.eps_min)  # TDROC: ε > k̂ / g_max

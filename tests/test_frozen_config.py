@@ -384,25 +384,25 @@ def small_robot_code(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_freeze_refuses_what_stability_calls_unstable(
         tmp_path: Path, small_robot_code: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """Issue 25: the small robot's paper formulation is predicted unstable (spectral radius
-    1.166 > 1, as `wmr stability --robot` says): asked for, it is refused in one line that
-    names the verdict and the stable formulation, and nothing is written; without
-    --formulation the minimal one is frozen, with its verdict in the header; --force
-    freezes the unstable one and says so."""
+    1.057 > 1 on its scaled circle, as `wmr stability --robot` says): asked for, it is
+    refused in one line that names the verdict and the stable formulation, and nothing is
+    written; without --formulation the minimal one is frozen, with its verdict in the
+    header; --force freezes the unstable one and says so."""
     out = tmp_path / "fw"
     base = ["--controller", "tdroc", "--robot", str(small_robot_code), "--out", str(out)]
     capsys.readouterr()
     assert freeze_main([*base, "--formulation", "paper"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1, err
-    assert "tdroc/paper UNSTABLE: spectral radius 1.166" in err
-    assert "tdroc/minimal is predicted stable (spectral radius 0.872)" in err
+    assert "tdroc/paper UNSTABLE: spectral radius 1.057" in err
+    assert "tdroc/minimal is predicted stable (spectral radius 0.863)" in err
     assert "--formulation minimal" in err and "--force" in err
     assert not out.exists()
     assert freeze_main(base) == 0
     assert "freezing the minimal formulation" in capsys.readouterr().err
     text = (out / "wmr_tdroc_frozen.h").read_text()
     assert "--formulation minimal" in text and ".formulation = 1," in text
-    assert "Sampled-data verdict: tdroc/minimal stable: spectral radius 0.872" in text
+    assert "Sampled-data verdict: tdroc/minimal stable: spectral radius 0.863" in text
     assert freeze_main([*base, "--formulation", "paper", "--force"]) == 0
     assert "frozen anyway (--force)" in capsys.readouterr().err
     text = (out / "wmr_tdroc_frozen.h").read_text()
@@ -411,8 +411,8 @@ def test_freeze_refuses_what_stability_calls_unstable(
 
 def test_freeze_keeps_drishti_s_paper_formulation(tmp_path: Path) -> None:
     """Drishti's paper formulation is predicted stable: the default stays paper, with the
-    verdict (spectral radius below 1) in the header; a robot without a verdict (the
-    trailer) is frozen with a note saying so."""
+    verdict (spectral radius below 1) in the header; a robot of bodies and wheels (the
+    trailer, its one formulation) gets its verdict the same way (issue 29)."""
     assert freeze_main(["--controller", "tdc", "--out", str(tmp_path)]) == 0
     text = (tmp_path / "wmr_tdc_frozen.h").read_text()
     assert ".formulation = 0," in text
@@ -420,4 +420,5 @@ def test_freeze_keeps_drishti_s_paper_formulation(tmp_path: Path) -> None:
     assert found is not None and float(found.group(1)) < 1.0
     assert freeze_main(["--controller", "tdc", "--robot", "trailer", "--out", str(tmp_path)]) == 0
     text = (tmp_path / "trailer_tdc_frozen.h").read_text()
-    assert "Sampled-data verdict: no sampled-data verdict for robot trailer" in text
+    found = re.search(r"Sampled-data verdict: tdc/minimal stable: spectral radius (\S+) ", text)
+    assert found is not None and float(found.group(1)) < 1.0

@@ -12,9 +12,9 @@
 * The skid-steer is refused at import (tests/test_import.py), so it never reaches a model.
 
 What today's commands cannot do yet is written as strict expected failures, which turn into
-failures the day they pass: ``wmr stability`` analyses ``[lumped]``/``[physical]`` robots
-only (until the one-runtime rewrite). ``wmr mjcf`` of an imported robot compiles in MuJoCo to
-its masses and spin inertias.
+failures the day they pass; none is left: ``wmr stability`` analyses any generated robot
+(issue 29), ``wmr mjcf`` of an imported robot compiles in MuJoCo to its masses and spin
+inertias, and ``wmr reproduce --plant mujoco`` runs it on the engine (issue 27).
 """
 
 from __future__ import annotations
@@ -84,11 +84,16 @@ def test_turtlebot3_like_with_its_caster_derives(tmp_path: Path,
     assert audit.count("without its motor") == 2
 
 
-@pytest.mark.xfail(strict=True, reason="wmr stability analyses [lumped]/[physical] robots "
-                   "only: bodies-and-wheels robots come with the one-runtime rewrite")
-def test_stability_of_an_imported_robot(tmp_path: Path) -> None:
+def test_stability_of_an_imported_robot(tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
     robot = imported(tmp_path, "kobuki_like.urdf")
-    assert wmr(["stability", "--robot", str(robot), "--no-measure"]) == 0
+    code = tmp_path / "code"
+    assert wmr(["model", "--robot", str(robot), "--out", str(code)]) == 0
+    capsys.readouterr()
+    assert wmr(["stability", "--robot", str(robot), "--generated", str(code), "--no-measure",
+                "--no-delay", "--no-saturation"]) == 0
+    out = capsys.readouterr().out
+    assert "| TDROC | minimal |" in out and "| PI | minimal |" in out
 
 
 def test_mjcf_round_trip_of_an_imported_robot(tmp_path: Path) -> None:

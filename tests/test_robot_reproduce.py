@@ -210,11 +210,16 @@ def test_generated_folder_outside_the_repository(tmp_path: Path) -> None:
         resolve(SMALL, copy / "trailer")  # a lumped file needs the paper robot's code
 
 
-def test_stability_names_what_it_cannot_analyse(capsys: pytest.CaptureFixture[str]) -> None:
+def test_stability_analyses_a_robot_of_bodies(capsys: pytest.CaptureFixture[str]) -> None:
+    """The trailer (issue 29): every controller in its one formulation, with the scaling
+    printed as `reproduce` prints it."""
     from runtime.stability import analysis as stability
 
-    assert stability.main(["--robot", str(TRAILER), "--no-measure"]) == 2
-    assert "reproduce --robot" in capsys.readouterr().err
+    assert stability.main(["--robot", str(TRAILER), "--no-measure", "--no-delay",
+                           "--no-saturation"]) == 0
+    out = capsys.readouterr().out
+    assert "robot 'trailer' from" in out and "robot scale:" in out
+    assert all(f"| {c} | minimal |" in out for c in ("TDC", "TDROC", "ROC", "ASMC", "PI"))
 
 
 def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> None:

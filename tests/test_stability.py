@@ -91,7 +91,7 @@ def test_jacobian_is_the_same_along_the_circle() -> None:
 
 
 def test_json_output_has_the_fixed_keys(capsys: pytest.CaptureFixture[str]) -> None:
-    assert stability.main(["--json", "--no-measure"]) == 0
+    assert stability.main(["--json", "--no-measure", "--no-delay"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = data["controllers"]
     assert {(r["controller"], r["formulation"]) for r in rows} == {

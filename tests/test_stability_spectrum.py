@@ -37,12 +37,14 @@ from runtime.bindings.generated import load_robot_code
 from runtime.experiment.arguments import robot_setting
 from runtime.experiment.settings import Experiment
 from runtime.stability import analysis as stability
-from runtime.stability.sampled_loop import DIM, GAIN_CEILING, LAYOUT, SLICES
+from runtime.stability.sampled_loop import GAIN_CEILING, layout
 
 CODE = load_robot_code("")  # Drishti's, and the [lumped] small robot's, generated code
 SMALL_ROBOT = Path(__file__).resolve().parent / "robots" / "small_robot.toml"
-NAMES = [f"{name}[{i}]" for name, size, _ in LAYOUT for i in range(size)]
-TORQUE = (SLICES["u_prev"].start + 3, SLICES["u_prev"].start + 4)  # τ the law last applied
+LAYOUT = layout(5, 2)  # the loop state of a five-coordinate differential drive
+NAMES = LAYOUT.names()
+DIM = LAYOUT.dim
+TORQUE = (LAYOUT.slices["u_prev"].start + 3, LAYOUT.slices["u_prev"].start + 4)  # τ last applied
 TRUE_POSE = ("plant_q[0]", "plant_q[1]", "plant_q[2]")
 PLANT_MOTION = ("plant_q[3]", "plant_q[4]", "plant_eta[0]", "plant_eta[1]")
 COMPARED = 0.5  # eigenvalues compared by modulus down to this (small ones are ill-posed)
@@ -78,11 +80,12 @@ def loop_setting(name: str, controller: str, formulation: str, velocity: str,
 def reaches_torque(jac: Matrix) -> list[int]:
     """States a change of which shows in the torque some samples later: columns of the
     torque rows of J, J², … (sparsity only: numbers a row ignores are exactly zero)."""
+    dim = len(jac)  # DIM, and the PI's integral after it
     acts = (np.abs(jac) > 1e-9 * np.abs(jac).max()).astype(int)
-    seen = np.zeros(DIM, dtype=bool)
-    rows = np.zeros((len(TORQUE), DIM), dtype=int)
+    seen = np.zeros(dim, dtype=bool)
+    rows = np.zeros((len(TORQUE), dim), dtype=int)
     rows[np.arange(len(TORQUE)), TORQUE] = 1
-    for _ in range(DIM):
+    for _ in range(dim):
         seen |= rows.any(axis=0)
         rows = np.minimum(rows @ acts, 1)
     return [int(i) for i in np.flatnonzero(seen)]
@@ -90,9 +93,9 @@ def reaches_torque(jac: Matrix) -> list[int]:
 
 def odometry_invariant(states: list[int], params: dict[str, float]) -> NDArray[np.float64]:
     """ℓ over ``states``: θ_odo − (r/b)(φR_odo − φL_odo)."""
-    coeff = {"odo_pose[2]": 1.0, "odo_angles[0]": -params["r"] / params["b"],
+    coeff = {"odo_dependent[2]": 1.0, "odo_angles[0]": -params["r"] / params["b"],
              "odo_angles[1]": params["r"] / params["b"]}
-    return np.array([coeff.get(NAMES[i], 0.0) for i in states])
+    return np.array([coeff.get(NAMES[i] if i < DIM else "", 0.0) for i in states])
 
 
 def remaining_eigenvalues(jac: Matrix, states: list[int], ell: Matrix | None
@@ -110,7 +113,9 @@ def independent_radius(loop: stability.ClosedLoop, params: dict[str, float], gai
     """The spectral radius by this module's route, at ``gain``."""
     jac = loop.jacobian(gain)
     states = reaches_torque(jac)
-    ell = odometry_invariant(states, params) if loop.s.formulation == "paper" else None
+    # The paper formulation and the PI read the odometry pose: ℓ is conserved there.
+    reads_pose = loop.s.formulation == "paper" or loop.pi
+    ell = odometry_invariant(states, params) if reads_pose else None
     return float(np.abs(remaining_eigenvalues(jac, states, ell)).max())
 
 
@@ -140,7 +145,7 @@ def test_spectral_radius_by_another_route(name: str, controller: str, formulatio
         assert np.all((left_out < 1e-3) | (np.abs(left_out - 1) < 1e-8)), left_out
         ell = odometry_invariant(states, params) if formulation == "paper" else None
         if ell is None:
-            assert "odo_pose[2]" not in names  # minimal: the pose is not fed back
+            assert "odo_dependent[2]" not in names  # minimal: the pose is not fed back
         else:
             a = jac[np.ix_(states, states)]
             assert np.abs(ell @ a - ell).max() < 1e-8, g  # ℓ is conserved at every gain
@@ -201,13 +206,18 @@ def test_wmr_stability_report_by_another_route(name: str,
                                                capsys: pytest.CaptureFixture[str]) -> None:
     """Each row of ``wmr stability --json --no-measure``: the spectral radius at the
     setting's gain, and the largest stable gain where the radius computed here crosses 1."""
-    argv = ["--json", "--no-measure"] + (["--robot", str(SMALL_ROBOT)] if name == "small"
-                                         else [])
+    argv = ["--json", "--no-measure", "--no-delay"] + (
+        ["--robot", str(SMALL_ROBOT)] if name == "small" else [])
     assert stability.main(argv) == 0
     rows = json.loads(capsys.readouterr().out)["controllers"]
     params, _ = robot_and_experiment(name)
-    assert len(rows) == 8
+    assert len(rows) == 9  # four laws of (18) in two formulations, the PI in one
     for row in rows:
+        if row["controller"] == "pi":
+            # The PI never reads the wheel angles: a shift of each wheel's true and odometric
+            # angle together is neutral too, beyond ℓ; its radius is checked in
+            # tests/test_stability_any_robot.py against the neutral count instead.
+            continue
         loop = stability.ClosedLoop(loop_setting(name, row["controller"], row["formulation"],
                                                  row["sensing"]))
         where = (row["controller"], row["formulation"])

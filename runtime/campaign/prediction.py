@@ -7,9 +7,10 @@ k̂ measured in closed loop (TDROC, ASMC) or ρ (ROC). So the loop is predicted 
 computed at ``map.grid`` points of the map's y parameter over its drawn range, for each
 controller and each sensing model the campaign draws, every other parameter at its base
 value (nominal robot, no payload, no friction: the analysis' conditions), and interpolated
-in between. Only the paper's differential drive has the analysis, and only for the laws of
-(18): for a robot of bodies and wheels the boundary is reported as not available, and a
-controller the analysis does not model gets none.
+in between. Every robot whose first coordinates are its pose (Drishti, [lumped] and
+[physical] robots, bodies and wheels: trailers, casters) has the analysis, for the laws of
+(18): a controller without a switching term (the PI) or one the analysis does not model
+gets no boundary.
 """
 
 from __future__ import annotations
@@ -77,8 +78,8 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
     code = tgt.setup.code
     if not covers(code):
         return Prediction({}, unavailable=(
-            f"robot '{tgt.name}' is not a plain differential drive; the sampled-data analysis "
-            "is written for the paper's, so no boundary is predicted"))
+            f"robot '{tgt.name}': the sampled-data analysis needs the root's pose as the "
+            "first coordinates, so no boundary is predicted"))
 
     section, _, key = campaign.map_y.partition(".")
     base_y = float(getattr(getattr(campaign.experiment, section), key))

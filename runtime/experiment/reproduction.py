@@ -16,7 +16,7 @@ import csv
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +79,7 @@ class RobotReproduction:
     runs: dict[tuple[str, str, str, str], Run]  # (sensing, path, form, controller)
     rows: list[Row]
     seconds: float
+    verdicts: dict[str, str] = field(default_factory=dict)  # sensing -> `wmr stability` table
 
     @property
     def labels(self) -> dict[str, str]:
@@ -139,8 +140,23 @@ def reproduce_robot(setting: Setting, sensings: Sequence[str],
                     print(f"[{len(rows):2d}/{total}] {sensing:15s} {name:9s} {form:7s} "
                           f"{info.label:5s} RMS {rows[-1].rms_error * 1000:9.2f} mm "
                           f"{rows[-1].status}", flush=True)
+    verdicts = {s: sampled_data_table(setting, s) for s in sensings}
     return RobotReproduction(setup, exp, setting.scaling, tuple(sensings), refs, checks, tde,
-                             runs, rows, time.perf_counter() - start)
+                             runs, rows, time.perf_counter() - start, verdicts)
+
+
+def sampled_data_table(setting: Setting, sensing: str) -> str:
+    """The sampled-data verdict of every controller and formulation with this sensing model:
+    ``wmr stability``'s table for the same robot, scaled experiment and code
+    (:func:`runtime.stability.analysis.analyse_all`, k̂ measured as it measures it)."""
+    from runtime.stability.analysis import analyse_all, table
+    from runtime.stability.sampled_loop import covers
+
+    code, exp = setting.robot.code, setting.experiment
+    if not covers(code):
+        return "No sampled-data verdict: the root's pose is not the first coordinates.\n"
+    e = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
+    return table(analyse_all(code, setting.robot.nominal, e), code)
 
 
 # --------------------------------------------------------------------------- outputs
@@ -237,6 +253,13 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         "![tracking](tracking.png)",
         "",
     ]
+    if rep.verdicts:
+        out += ["## Sampled-data verdict", "",
+                "Predicted as `wmr stability` predicts it for this robot and scaled experiment "
+                "(nominal robot, no friction, linearised about the circle's steady motion; "
+                "`runtime/stability/`):", ""]
+        for sensing, text in rep.verdicts.items():
+            out += [f"{sensing}:", "", *text.rstrip("\n").split("\n"), ""]
     return out
 
 

@@ -67,6 +67,23 @@ class ControllerSettings:
     pi_ky: float = 8.0  # 1/m^2
     pi_ktheta: float = 4.0  # 1/m
     pi_bandwidth: float = 6.0  # rad/s
+    # Latency: the torque computed at a sample reaches the wheels delay·h + delay_time
+    # later (computation and the link to the drives), each sample's delay within
+    # ± (jitter·h + jitter_time) of it (never below 0). The analysis
+    # (runtime.stability.sampled_loop) includes the delay in the loop's state, the loop
+    # (runtime.sim.loop) applies it.
+    delay: float = 0.0  # fraction of h
+    delay_time: float = 0.0  # s
+    jitter: float = 0.0  # fraction of h
+    jitter_time: float = 0.0  # s
+
+    def delay_seconds(self) -> float:
+        """The nominal delay from a sample to its torque at the wheels (s)."""
+        return self.delay * self.h + self.delay_time
+
+    def jitter_seconds(self) -> float:
+        """The bound on each sample's deviation from :meth:`delay_seconds` (s)."""
+        return self.jitter * self.h + self.jitter_time
 
 
 @dataclass(frozen=True)
@@ -225,7 +242,12 @@ _NON_NEGATIVE = {
     "friction",
     "tyre_width",
     "traction_mu",
+    "delay",
+    "delay_time",
+    "jitter",
+    "jitter_time",
 }
+MAX_DELAY = 4.0  # samples: the largest delay plus jitter an experiment may state
 
 
 _CHOICES = {"velocity": VELOCITY_MODELS, "accel_estimator": ACCEL_ESTIMATORS,
@@ -299,6 +321,13 @@ def _section(where: str, name: str, data: Any, cls: type) -> Any:
         if out.a > 1:
             raise ExperimentFileError(
                 f"{where}: field 'controller.a' must be in (0, 1], got {out.a}"
+            )
+        late = (out.delay_seconds() + out.jitter_seconds()) / out.h
+        if late > MAX_DELAY:
+            raise ExperimentFileError(
+                f"{where}: fields 'controller.delay', 'delay_time', 'jitter' and "
+                f"'jitter_time' give {late:.3g} samples of delay plus jitter; at most "
+                f"{MAX_DELAY:g} samples of controller.h = {out.h!r} s"
             )
         if out.uncertainty >= 1:
             raise ExperimentFileError(

@@ -175,9 +175,8 @@ def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
 
 
 def _has_verdict(code: RobotCode, controller: str) -> bool:
-    """Whether the sampled-data analysis covers this robot's code (the paper's differential
-    drive: any [lumped] or [physical] robot file; not yet a bodies-and-wheels robot) and
-    this controller's law."""
+    """Whether the sampled-data analysis covers this robot's code (any robot whose first
+    coordinates are the root's pose) and this controller's law."""
     return covers(code) and analysed(code.controller(controller))
 
 
@@ -198,10 +197,10 @@ def choose_formulation(
     candidates = (args.formulation,) if args.formulation else available
     if not _has_verdict(code, args.controller):
         form = candidates[0]
-        note = (f"no sampled-data verdict for robot {code.name}: `wmr stability` covers the "
-                "paper's differential drive only" if not covers(code) else
+        note = (f"no sampled-data verdict for robot {code.name}: `wmr stability` needs the "
+                "root's pose as its first coordinates" if not covers(code) else
                 f"no sampled-data verdict for {args.controller}: `wmr stability` models the "
-                "laws of (18) (controllers with K1, K2) only")
+                "laws of (18) (controllers with K1, K2) and the wheel PI only")
         print(f"note: {note}", file=sys.stderr)
         return (form, _config(lib, code, args, form, nominal, exp),
                 [f"Sampled-data verdict: {note}"])

@@ -13,7 +13,11 @@ Each sample k (t = k h), in this order:
    the generated model in C, :class:`runtime.sim.plant.GeneratedPlant`) gets its true
    parameters and payload (payload schedule, :mod:`runtime.sim.payload`) when they change, the
    actuators deliver τ (a torque limit fault clips it), and the robot moves for h under it
-   (``substeps`` RK4 steps; the motor-encoder's window start is read on the way).
+   (``substeps`` RK4 steps; the motor-encoder's window start is read on the way). With a
+   delay (``controller.delay``/``delay_time``, each sample's within ± the jitter bound,
+   drawn by a seeded generator), the torque computed at t_k reaches the actuators at
+   t_k + D_k: until then the plant gets the latest command that has arrived
+   (:class:`Latency`).
 
 Nothing here knows the robot or the controller: sizes, actuated coordinates, controller
 features and state fields come from the generated code.
@@ -21,6 +25,8 @@ features and state fields come from the generated code.
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -41,6 +47,42 @@ from runtime.sim.sensors import Sensors
 Array = NDArray[np.float64]
 NOT_CALLED = -(2**31)  # Run.status of a sample whose step was not called (dropped)
 NON_FINITE = "non-finite plant state"  # Run.stop_reason when the plant's state blew up
+JITTER_SEED = 29  # the jitter's draws: the same run every time
+
+
+class Latency:
+    """The commands in flight between the controller and the actuators: each command is
+    delivered ``delay`` s after its sample, ± a uniform draw within ``jitter`` (never
+    before its sample); a command overtaken by a later one that arrived first is dropped."""
+
+    def __init__(self, delay: float, jitter: float, initial: Array) -> None:
+        self.delay, self.jitter = delay, jitter
+        self.rng = np.random.default_rng(JITTER_SEED)
+        self.active = np.array(initial, dtype=np.float64)
+        self.sent = -1  # index of the command now active
+        self.pending: list[tuple[float, int, Array]] = []  # (arrival, index, τ)
+
+    def send(self, t: float, k: int, tau: Array) -> None:
+        """The command of sample k (at time t) leaves the controller."""
+        d = self.delay
+        if self.jitter > 0:
+            d += float(self.rng.uniform(-self.jitter, self.jitter))
+        self.pending.append((t + max(0.0, d), k, np.array(tau, dtype=np.float64)))
+        self.pending.sort(key=lambda p: (p[0], p[1]))
+
+    def pieces(self, t0: float, t1: float) -> list[tuple[float, Array]]:
+        """The torque the actuators get over [t0, t1): (start, τ) pieces."""
+        out = [(t0, self.active.copy())]
+        while self.pending and self.pending[0][0] < t1 - 1e-12:
+            arrival, k, tau = self.pending.pop(0)
+            if k < self.sent:
+                continue  # a later command is already acting
+            self.sent, self.active = k, tau
+            if arrival <= out[-1][0] + 1e-12:
+                out[-1] = (out[-1][0], tau.copy())
+            else:
+                out.append((arrival, tau.copy()))
+        return out
 
 
 @dataclass(frozen=True)
@@ -132,6 +174,8 @@ def run(
                          f"it has {code.nu}")
     act = list(code.actuated)
     rows = list(range(code.nq)) if formulation == "paper" else act
+    delay, jitter = exp.controller.delay_seconds(), exp.controller.jitter_seconds()
+    latency = Latency(delay, jitter, np.zeros(code.nu)) if delay or jitter else None
     rec: dict[str, list[Any]] = {k: [] for k in (
         "q", "qm", "qdm", "tau", "ta", "gain", "s", "ud", "h1", "en", "sw", "load", "st")}
     delivered = (ref.q[0].copy(), np.zeros(code.nq))
@@ -185,15 +229,26 @@ def run(
                                     s_norm, eps, ref, k, q_meas, qdot_meas, act))
         prev_gain = gain
         plant.set_faults(sched.traction_loss[k], sched.torque_limit[k])
-        applied = plant.actuate(np.asarray(tau))
-        rec["st"].append(status)
-        rec["ta"].append(applied)
-        if k == n - 1:
-            break
-        ok = plant.advance(applied, h / nsub, nsub - n_window)
-        if ok and n_window:  # the motor encoder's window opens n_window substeps before t + h
-            window_start = plant.wheels()[0]
-            ok = plant.advance(applied, h / nsub, n_window)
+        if latency is None:
+            applied = plant.actuate(np.asarray(tau))
+            rec["st"].append(status)
+            rec["ta"].append(applied)
+            if k == n - 1:
+                break
+            ok = plant.advance(applied, h / nsub, nsub - n_window)
+            if ok and n_window:  # the motor encoder's window opens n_window substeps before t + h
+                window_start = plant.wheels()[0]
+                ok = plant.advance(applied, h / nsub, n_window)
+        else:
+            if not sched.dropped[k]:
+                latency.send(t, k, np.asarray(tau))
+            pieces = [(a - t, plant.actuate(cmd)) for a, cmd in latency.pieces(t, t + h)]
+            rec["st"].append(status)
+            rec["ta"].append(pieces[-1][1])
+            if k == n - 1:
+                break
+            ok, start = advance_pieces(plant, pieces, h, nsub, sensors.window if motor else 0.0)
+            window_start = start if motor else None
         if not ok:
             failed_at, stop_reason = t, NON_FINITE
             break
@@ -212,6 +267,24 @@ def run(
         np.array(rec["st"], dtype=np.int64), int(saturated), failed_at, stop_status,
         stop_reason,
     )
+
+
+def advance_pieces(plant: Plant, pieces: list[tuple[float, list[float]]], h: float,
+                   nsub: int, window: float) -> tuple[bool, Array | None]:
+    """The plant over one sample under piecewise-constant torques ((start within the sample,
+    τ) pieces), each piece in RK4 steps no longer than h / nsub; (finite, the driven wheels'
+    angles at the window's start h − ``window`` if ``window``)."""
+    marks = sorted({0.0, h, *(a for a, _ in pieces if 0 < a < h),
+                    *([h - window] if window > 0 else [])})
+    start: Array | None = None
+    for a, b in itertools.pairwise(marks):
+        if window > 0 and abs(a - (h - window)) < 1e-12:
+            start = plant.wheels()[0]
+        tau = [cmd for t0, cmd in pieces if t0 <= a + 1e-12][-1]
+        steps = max(1, math.ceil((b - a) / (h / nsub) - 1e-9))
+        if not plant.advance(tau, (b - a) / steps, steps):
+            return False, start
+    return True, start
 
 
 def _switching(ctl: Controller, switching: bool, gain: float, s_norm: float, eps: float,

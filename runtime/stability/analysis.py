@@ -37,12 +37,16 @@ from runtime.experiment.settings import (
 from runtime.sim import loop, paths
 from runtime.stability.sampled_loop import (
     FORMULATIONS,
+    OPERATING_POINTS,
     ClosedLoop,
     LoopSetting,
     Pencil,
     analysed,
     covers,
-    on_operating_circle,
+    delay_radius,
+    is_pi,
+    max_delay,
+    operating_rates,
     pencil,
     roc_gain,
     setting,
@@ -54,7 +58,8 @@ __all__ = ["FORMULATIONS", "Analysis", "ClosedLoop", "LoopSetting", "Pencil", "a
 
 @dataclass(frozen=True)
 class Analysis:
-    """One row of the report (the JSON keys controller … stable are fixed)."""
+    """One row of the report (the JSON keys controller … stable are fixed; the same keys
+    for every robot)."""
 
     controller: str
     formulation: str
@@ -71,17 +76,23 @@ class Analysis:
     eps: float
     eps_min: float | None  # TDROC: ε > k̂ / g_max predicted stable (k̂ measured)
     measured_khat: float | None
+    reason: str = ""  # why the verdict is "not stable" (empty when stable)
+    operating_point: str = "circle"  # the steady motion that decided the verdict
+    delay: float = 0.0  # s: the experiment's delay from a sample to its torque
+    jitter: float = 0.0  # s: the bound on each sample's deviation from it
+    max_delay: float | None = None  # s: largest constant delay stable at the setting's gain
+    saturation: str = "not checked"  # the torque and wind-up verdict (saturation.py)
+    saturation_reason: str = ""
 
 
 def measured_gain(
     code: RobotCode, controller: str, formulation: str, robot: dict[str, float],
     exp: Experiment
 ) -> float:
-    """Median switching gain over a closed-loop circle (the analysis' operating point) at the
-    experiment's setting. The configuration checks are skipped: the loop's stability is what
-    is analysed here, and the TDE condition over the uncertainty box is reported apart
-    (:func:`tde_notes`)."""
-    exp = on_operating_circle(exp)
+    """Median switching gain over the experiment's closed-loop circle (the analysis'
+    operating point) at the experiment's setting. The configuration checks are skipped: the
+    loop's stability is what is analysed here, and the TDE condition over the uncertainty
+    box is reported apart (:func:`tde_notes`)."""
     ref = paths.circle(code, robot, exp)
     r = loop.run(code, controller, formulation, ref, robot, exp)
     if r.init_status != 0:
@@ -126,18 +137,40 @@ def analyse(
     exp: Experiment,
     plant: str = "nominal",
     measure: bool = True,
+    path: str = "circle",
+    delays: bool = False,
+    saturation: bool = False,
 ) -> Analysis:
-    """Stability of one controller and formulation at the experiment's setting."""
-    loop_setting = setting(code, controller, formulation, robot, exp, plant)
-    pen = pencil(loop_setting)
-    g_max = pen.max_stable_gain()
+    """Stability of one controller and formulation at the experiment's setting, about each
+    steady motion of ``path`` (the worst decides); ``delays``: also the largest tolerated
+    delay; ``saturation``: also the torque and wind-up verdict
+    (:mod:`runtime.stability.saturation`)."""
+    points = [(label, setting(code, controller, formulation, robot, exp, plant, rates))
+              for label, rates in operating_rates(code, robot, exp, path)]
+    pens = [(label, s, pencil(s)) for label, s in points]
+    g_max = min(p.max_stable_gain() for _, _, p in pens)
+    r0 = max(p.radius(0.0) for _, _, p in pens)
     # Nothing to measure where the loop diverges before any switching gain (and the
     # toolchain refuses to build that configuration).
-    g, source, khat = setting_gain(
-        code, controller, formulation, robot, exp, measure and pen.radius(0.0) < 1.0
-    )
-    radius = pen.radius(g) if math.isfinite(g) else math.inf  # nan: no configuration exists
+    g, source, khat = setting_gain(code, controller, formulation, robot, exp,
+                                   measure and r0 < 1.0)
+    jitter = exp.controller.jitter_seconds()
+    if math.isfinite(g):
+        radii = [(delay_radius(s, g, jitter), label) for label, s, _ in pens]
+        radius, worst = max(radii)
+        radius0 = max(delay_radius(s, 0.0, jitter) for _, s, _ in pens)
+    else:  # nan: no configuration exists
+        radius, worst, radius0 = math.inf, pens[0][0], max(p.radius(0.0) for _, _, p in pens)
     eps_min = khat / g_max if khat is not None and g_max > 0 else None
+    tolerated = (min(max_delay(s, g) for _, s, _ in pens) if delays and math.isfinite(g)
+                 else None)
+    verdict = ("", "")
+    if saturation:
+        from runtime.stability.saturation import saturation_verdict
+
+        sat = saturation_verdict(code, controller, formulation, robot, exp, "payload",
+                                 simulate=measure)
+        verdict = (sat.verdict, sat.reason)
     return Analysis(
         controller=controller,
         formulation=formulation,
@@ -145,16 +178,41 @@ def analyse(
         max_stable_gain=g_max,
         spectral_radius=radius,
         stable=radius < 1.0,
-        estimator=loop_setting.estimator,
+        estimator=points[0][1].estimator,
         h=exp.controller.h,
         plant=plant,
         gain_at_setting=g,
         gain_source=source,
-        radius_without_switching=pen.radius(0.0),
+        radius_without_switching=radius0,
         eps=exp.controller.eps,
         eps_min=eps_min,
         measured_khat=khat,
+        reason=reason(radius, radius0, g, g_max, source, exp),
+        operating_point=worst,
+        delay=exp.controller.delay_seconds(),
+        jitter=jitter,
+        max_delay=tolerated,
+        saturation=verdict[0] or "not checked",
+        saturation_reason=verdict[1],
     )
+
+
+def reason(radius: float, radius0: float, g: float, g_max: float, source: str,
+           exp: Experiment) -> str:
+    """Why a row is not stable, in one line (empty if it is)."""
+    if radius < 1.0:
+        return ""
+    if math.isnan(g):
+        return f"refused: {source.removeprefix('no ROC gain: ')}"
+    c = exp.controller
+    late = (f", delay {c.delay_seconds():g} s ± {c.jitter_seconds():g} s"
+            if c.delay_seconds() or c.jitter_seconds() else "")
+    where = f"h = {c.h:g} s, {exp.sensing.velocity} rates{late}"
+    if radius0 >= 1.0:
+        return (f"unstable before any switching gain (spectral radius {radius0:.3f} per "
+                f"sample; {where})")
+    return (f"switching gain k/ε = {g:.3g} beyond the largest stable {g_max:.3g} "
+            f"(spectral radius {radius:.3f}; {where}): raise ε")
 
 
 @dataclass(frozen=True)
@@ -191,6 +249,20 @@ def configuration_verdict(
     with the experiment's sensing and the configuration's h, gains, estimator and switching
     gain: 0 (TDC), held_gain/ε (TDROC with k̂ held), φ/(1 − α)/ε (ROC at zero error, from
     the configuration's bounds), else k̂ measured on the closed-loop circle / ε."""
+    info = code.controller(controller)
+    if is_pi(info):  # its gains, h and limit from the configuration; no switching term
+        pi_exp = replace(exp, controller=replace(
+            exp.controller, h=float(config.h), tau_max=float(config.tau_max),
+            pi_kx=float(config.kx), pi_ky=float(config.ky), pi_ktheta=float(config.ktheta)))
+        pi_setting = replace(
+            setting(code, controller, formulation, nominal, pi_exp),
+            pi_gains=(float(config.kx), float(config.ky), float(config.ktheta),
+                      float(config.kp), float(config.ki)))
+        radius = delay_radius(pi_setting, 0.0, exp.controller.jitter_seconds())
+        return ConfigurationVerdict(
+            controller=controller, formulation=formulation, stable=radius < 1.0,
+            spectral_radius=radius, gain=0.0, gain_source=f"{info.label} has no switching term",
+            h=float(config.h), sensing=exp.sensing.velocity, estimator="model")
     k1 = tuple(float(x) for x in config.k1)
     k2 = tuple(float(x) for x in config.k2)
     uniform = len(set(k1)) == 1 and len(set(k2)) == 1
@@ -209,7 +281,6 @@ def configuration_verdict(
                                rate_window=float(config.rate_window))
     pen = pencil(loop_setting)
     eps = float(getattr(config, "eps", 1.0))
-    info = code.controller(controller)
     if not info.switching:
         g, source = 0.0, f"{info.label} has no switching term"
     elif info.bounds:
@@ -223,19 +294,21 @@ def configuration_verdict(
         g = measured_gain(code, controller, formulation, nominal, exp) / eps
         source = "median k̂ of the closed-loop circle / ε" + (
             "" if uniform else " (measured with K1, K2 of the experiment)")
+    radius = delay_radius(loop_setting, g, exp.controller.jitter_seconds())
     return ConfigurationVerdict(
-        controller=controller, formulation=formulation, stable=pen.radius(g) < 1.0,
-        spectral_radius=pen.radius(g), gain=g, gain_source=source, h=float(config.h),
+        controller=controller, formulation=formulation, stable=radius < 1.0,
+        spectral_radius=radius, gain=g, gain_source=source, h=float(config.h),
         sensing=exp.sensing.velocity, estimator=loop_setting.estimator)
 
 
 def analyse_all(
     code: RobotCode, robot: dict[str, float], exp: Experiment, plant: str = "nominal",
-    measure: bool = True
+    measure: bool = True, path: str = "circle", delays: bool = False,
+    saturation: bool = False,
 ) -> list[Analysis]:
     """Every controller the analysis models (:func:`~runtime.stability.sampled_loop.analysed`)
     in every formulation it is generated in."""
-    return [analyse(code, c.name, f, robot, exp, plant, measure)
+    return [analyse(code, c.name, f, robot, exp, plant, measure, path, delays, saturation)
             for c in code.controller_infos if analysed(c)
             for f in c.formulations if f in FORMULATIONS]
 
@@ -243,7 +316,7 @@ def analyse_all(
 def not_analysed(code: RobotCode) -> list[str]:
     """A note for each controller the analysis does not model."""
     return [f"* {c.label} ({c.title}): no sampled-data verdict; the analysis models the laws "
-            "of (18) (controllers with K1, K2)" for c in code.controller_infos
+            "of (18) (controllers with K1, K2) and the wheel PI" for c in code.controller_infos
             if not analysed(c)]
 
 
@@ -284,23 +357,35 @@ def as_json(rows: Sequence[Analysis], robot_name: str) -> dict[str, Any]:
     }
 
 
+def _delay_text(x: float | None) -> str:
+    if x is None:
+        return ""
+    return "≥ 2 h" if math.isinf(x) else f"{x * 1e3:.3g} ms"
+
+
 def table(rows: Sequence[Analysis], code: RobotCode) -> str:
-    """The Markdown table of :func:`analyse_all`'s rows (labels from the robot's code)."""
+    """The Markdown table of :func:`analyse_all`'s rows (labels from the robot's code), the
+    reason of every row not stable and every saturation verdict below it."""
     label = {c.name: c.label for c in code.controller_infos}
     lines = [
         "| controller | form | sensing | estimator | max stable k/ε | g at setting "
-        "| spectral radius | stable | ε > (predicted) |",
-        "|---|---|---|---|---:|---:|---:|---|---:|",
+        "| spectral radius | stable | ε > (predicted) | max delay | saturation |",
+        "|---|---|---|---|---:|---:|---:|---|---:|---:|---|",
     ]
     for r in rows:
         eps_min = "" if r.eps_min is None else f"{r.eps_min:.3g}"
         lines.append(
             f"| {label[r.controller]} | {r.formulation} | {r.sensing} | {r.estimator} "
             f"| {r.max_stable_gain:.4g} | {r.gain_at_setting:.4g} | {r.spectral_radius:.4f} "
-            f"| {'yes' if r.stable else '**no**'} | {eps_min} |"
+            f"| {'yes' if r.stable else '**no**'} | {eps_min} | {_delay_text(r.max_delay)} "
+            f"| {r.saturation} |"
         )
     notes = [f"* {label[r.controller]} {r.formulation}: {r.gain_source}" for r in rows
              if r.gain_source.startswith(("not measured:", "no ROC gain"))]
+    notes += [f"* {label[r.controller]} {r.formulation} not stable: {r.reason}" for r in rows
+              if r.reason]
+    notes += [f"* {label[r.controller]} {r.formulation} {r.saturation}: {r.saturation_reason}"
+              for r in rows if r.saturation_reason]
     return "\n".join(lines + (["", *notes] if notes else [])) + "\n"
 
 
@@ -324,6 +409,19 @@ def main(argv: list[str] | None = None) -> int:
         "--no-measure", action="store_true",
         help="do not simulate to measure TDROC/ASMC's k̂ (faster; their setting gain is 0)",
     )  # fmt: skip
+    parser.add_argument(
+        "--path", choices=OPERATING_POINTS, default="circle",
+        help="linearise about the circle's steady motion, or the lawn mower's leg and turns "
+        "(the worst decides)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-delay", action="store_true",
+        help="do not search the largest tolerated delay (faster)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--no-saturation", action="store_true",
+        help="do not check the torque demand and the adaptive gain's start-up (faster)",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
     try:
@@ -335,9 +433,9 @@ def main(argv: list[str] | None = None) -> int:
         setup = setting_.robot
         if not covers(setup.code):
             raise RobotSourceError(
-                f"{setup.source}: robot '{setup.name}' is not a plain differential drive; the "
-                "sampled-loop analysis is written for the paper's (a [lumped] or [physical] "
-                f"robot file). Simulate this robot with `wmr reproduce --robot {setup.source}`"
+                f"{setup.source}: robot '{setup.name}': the sampled-loop analysis needs the "
+                "root's pose (x, y, θ) as the first coordinates and driven wheels. Simulate "
+                f"this robot with `wmr reproduce --robot {setup.source}`"
             )
     except (ExperimentFileError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -345,7 +443,9 @@ def main(argv: list[str] | None = None) -> int:
     exp, code, robot = setting_.experiment, setup.code, setup.nominal
     if (args.robot or exp.robot) is not None and not args.json:
         print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
-    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure)
+    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
+                       path=args.path, delays=not args.no_delay,
+                       saturation=not args.no_saturation)
     if args.json:
         print(json.dumps(as_json(rows, setup.name), indent=2))
     else:

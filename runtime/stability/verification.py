@@ -3,7 +3,8 @@
 TDROC is simulated with its switching gain held (``hold_gain``) at k̂ = g ε, with ε so
 large that ‖s‖ never leaves the boundary layer: the switching term is then exactly g s,
 the boundary-layer gain of :mod:`runtime.stability.analysis`. The plant is the analysed one (the
-nominal robot, no friction, no payload), the torque limit out of reach, the encoders as
+nominal robot, no friction, no payload, any robot the analysis covers), the torque limit out
+of reach, the encoders as
 configured (their quantisation keeps exciting the loop). A run is unstable when it fails,
 when a torque reaches the (far) limit, when ‖(e, ė)‖ exceeds ``DIVERGED`` anywhere, or when
 its error in the last third is more than ``GROWTH`` times that of the middle third.
@@ -18,7 +19,6 @@ import numpy as np
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim import loop, paths
-from runtime.stability.sampled_loop import on_operating_circle
 
 GROWTH = 3.0
 DIVERGED = 1.0  # ‖(e, ė)‖ [rad, rad/s, m, m/s]: far beyond any tracking of these runs
@@ -27,9 +27,8 @@ DURATION = 40.0  # s of circle
 
 
 def linear_experiment(exp: Experiment) -> Experiment:
-    """The experiment as the analysis sees it: no payload, no friction, no saturation, its
-    operating circle."""
-    exp = on_operating_circle(exp)
+    """The experiment as the analysis sees it: no payload, no friction, no saturation, on
+    its circle."""
     return replace(
         exp,
         controller=replace(exp.controller, eps=EPS, tau_max=1.0e4),
@@ -46,8 +45,9 @@ def simulated_unstable(
     ``gain`` diverges on the circle."""
     lin = linear_experiment(exp)
     ref = paths.circle(code, robot, lin)
-    r = loop.run(code, controller, formulation, ref, robot, lin, held_gain=gain * EPS,
-                 check=True)
+    # The configuration checks are not run: the TDE condition over the uncertainty box
+    # (which a trailer's lumped coefficients fail) is not what is bisected here.
+    r = loop.run(code, controller, formulation, ref, robot, lin, held_gain=gain * EPS)
     if r.failed_at is not None or r.saturated > 0 or float(r.error_norm.max()) > DIVERGED:
         return True
     n = len(r.error_norm)
