@@ -4,8 +4,9 @@
   formulations): import, model (about 4 s), the audit's warnings in MODEL.md, ``wmr check``,
   and the paper's experiment scaled to it, shortened (about 7 s).
 * The TurtleBot3-like robot with a swivel caster (a second body on a revolute joint, 7
-  coordinates): import and model, about 40 s on one core, marked ``slow`` (still run by
-  ``make test``; ``-m "not slow"`` leaves it out while iterating).
+  coordinates): import, model, stability and a shortened reproduction on our plant and on
+  MuJoCo, about 9 s (staged derivation), marked ``slow`` (still run by ``make test``;
+  ``-m "not slow"`` leaves it out while iterating).
 * The tractor-trailer's import composes to the numbers of the shipped trailer.toml
   (tests/test_import.py), whose derivation (about 60 s) tests/test_codegen_cli.py already
   regenerates and compares: it is not derived a second time here.
@@ -82,6 +83,25 @@ def test_turtlebot3_like_with_its_caster_derives(tmp_path: Path,
             "m^2 with no products of inertia") in audit
     assert "contributes 35 % of the yaw inertia of body 'base'" in audit
     assert audit.count("without its motor") == 2
+
+    # ... and on through the sampled-data verdict and a shortened reproduction, on our plant
+    # and on MuJoCo (the swivel caster a free body in both).
+    assert wmr(["stability", "--robot", str(robot), "--generated", str(code), "--no-measure",
+                "--no-delay", "--no-saturation"]) == 0
+    out = capsys.readouterr().out
+    assert "| TDROC | minimal |" in out and "| PI | minimal |" in out
+    experiment = tmp_path / "short.toml"
+    experiment.write_text(SHORT)
+    for plant in ("generated", "mujoco"):
+        results = tmp_path / plant
+        assert wmr(["reproduce", "--robot", str(robot), "--generated", str(code),
+                    "--experiment", str(experiment), "--sensing", "sample-instant",
+                    "--plant", plant, "--no-plots", "--out", str(results)]) == 0
+        with (results / "metrics.csv").open() as f:
+            rows = list(csv.DictReader(f))
+        assert len(rows) == 2 * 5, rows  # paths × the five controllers (minimal only)
+        tdroc = [r for r in rows if r["controller"] == "tdroc"]
+        assert all(r["status"] == "ok" for r in tdroc), (plant, tdroc)
 
 
 def test_stability_of_an_imported_robot(tmp_path: Path,
