@@ -32,7 +32,7 @@ import math
 import sys
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -294,6 +294,10 @@ class FaultTable:
     samples: int
     thresholds: dict[tuple[str, str], dict[str, float]]  # (controller, formulation)
     code: RobotCode
+    # (controller, formulation) -> why its fault-free run did not reach the settling time
+    # (its init refused the configuration, or it stopped or diverged): no fault is injected
+    # into a controller that does not run without one.
+    not_run: dict[tuple[str, str], str] = field(default_factory=dict)
 
     @property
     def labels(self) -> dict[str, str]:
@@ -322,10 +326,18 @@ def fault_table(
     n = len(ref.t)
     rows: list[Row] = []
     thresholds: dict[tuple[str, str], dict[str, float]] = {}
+    not_run: dict[tuple[str, str], str] = {}
     pairs = [(f, c.name) for f, c in code.runs(tuple(formulations or code.formulations))
              if controllers is None or c.name in controllers]
     for i, (form, ctrl) in enumerate(pairs, 1):
         base = loop.run(code, ctrl, form, ref, robot, exp, plant_params=plant)
+        if base.failed_at is not None and base.failed_at < SETTLE:
+            not_run[(ctrl, form)] = (f"the fault-free run stopped at {base.failed_at:g} s: "
+                                     f"{base.stop_reason}")
+            if progress:
+                print(f"[{i}/{len(pairs)}] {ctrl}/{form}: not run ({not_run[(ctrl, form)]})",
+                      flush=True)
+            continue
         thresholds[(ctrl, form)] = Monitors.calibrate(base, exp, code.actuated).thresholds
         for fault in chosen:
             faulted = loop.run(code, ctrl, form, ref, robot, exp, plant_params=plant,
@@ -335,7 +347,7 @@ def fault_table(
             print(f"[{i}/{len(pairs)}] {ctrl}/{form}: {len(chosen)} faults", flush=True)
     order = {f: i for i, f in enumerate(chosen)}
     rows.sort(key=lambda r: order[r.fault])
-    return FaultTable(exp, robot, chosen, rows, n, thresholds, code)
+    return FaultTable(exp, robot, chosen, rows, n, thresholds, code, not_run)
 
 
 def _statuses(r: Row, prefix: str) -> str:
@@ -510,6 +522,11 @@ def markdown(table: FaultTable) -> str:
             f"| {labels[ctrl]} | {form} | {th['encoder']:.3g} | {th['tracking']:.3g} | "
             f"{alarms.get((ctrl, form), 0)} |"
         )
+    if table.not_run:
+        lines += ["", "Not run (no fault is injected into a controller that does not run "
+                  "without one):", ""]
+        lines += [f"* {labels[ctrl]} / {form}: {why}."
+                  for (ctrl, form), why in table.not_run.items()]
     lines += ["", *summary(table), ""]
     return "\n".join(lines)
 

@@ -42,9 +42,23 @@ def test_peak_memory_is_the_childs_own() -> None:
     """A child that touches 150 MB reports at least that; a small one after it does not
     inherit the figure (os.wait4's rusage is per child)."""
     big = "b = bytearray(150 * 1024 * 1024); b[::4096] = b'x' * len(b[::4096])"
-    _, peak, _, _ = scale.run_with_peak([sys.executable, "-c", big], ROOT)
-    _, small, _, _ = scale.run_with_peak([sys.executable, "-c", "pass"], ROOT)
+    peak = scale.run_with_peak([sys.executable, "-c", big], ROOT).peak_mb
+    # The measuring process itself is large (a pytest worker can be 300 MB): a child forked
+    # from it must not report the parent's pages as its own.
+    ballast = bytearray(200 * 1024 * 1024)
+    ballast[::4096] = b"x" * len(ballast[::4096])
+    small = scale.run_with_peak([sys.executable, "-c", "pass"], ROOT).peak_mb
+    del ballast
     assert peak > 150 and small < 100, (peak, small)
+
+
+def test_cpu_time_is_the_childs() -> None:
+    """A child that spins for 0.3 s of CPU reports about that, sleeping does not count."""
+    spin = "import time\nt = time.process_time()\nwhile time.process_time() - t < 0.3: pass"
+    busy = scale.run_with_peak([sys.executable, "-c", spin], ROOT)
+    idle = scale.run_with_peak([sys.executable, "-c", "import time; time.sleep(0.3)"], ROOT)
+    assert 0.3 <= busy.cpu_s < 1.5 and idle.cpu_s < 0.2, (busy, idle)
+    assert idle.seconds >= 0.3
 
 
 def test_a_failing_command_is_reported() -> None:

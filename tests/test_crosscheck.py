@@ -100,7 +100,7 @@ def test_trailer_checks_every_generated_function_and_controller(
 ) -> None:
     """No hand-written reference: every function of the generated model, laws and plant
     (enumerated from the generated modules; the C prepared forward dynamics against the
-    NumPy one) in C double, float32 and CasADi at ≥ 100 random states, and the four C
+    NumPy one) in C double, float32 and CasADi at ≥ 100 random states, and the five C
     controllers in both precisions, every branch taken."""
     robot = all_robots.robot("trailer")
     assert robot.handwritten is None
@@ -113,7 +113,7 @@ def test_trailer_checks_every_generated_function_and_controller(
     for row in report.function_rows:
         assert set(row.cells) == set(FUNCTION_IMPLS)
     assert [r.name for r in report.ctrl_rows] == [
-        f"{k}/minimal" for k in ("tdc", "tdroc", "roc", "asmc")]
+        f"{k}/minimal" for k in ("tdc", "tdroc", "roc", "asmc", "pi")]
     for row in report.ctrl_rows:
         assert set(row.cells) == set(CONTROLLER_IMPLS)
     assert report.n_steps >= 200

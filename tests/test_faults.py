@@ -299,3 +299,22 @@ def test_command_rejects_a_bad_experiment(
 
 def test_experiment_default_has_no_faults() -> None:
     assert replace(EXP).faults == ()
+
+
+def test_a_controller_that_cannot_run_is_reported_not_crashed(tmp_path: Path) -> None:
+    """The small robot users tried: ROC's bounds over its box refuse its paper-form
+    configuration (init, before any sample). ``wmr faults`` said "zero-size array to
+    reduction operation maximum" and wrote nothing; the table now names the controller, its
+    formulation and the reason, injects no fault into it and runs the others."""
+    from runtime.cli import main as wmr
+
+    small = ROOT / "tests" / "robots" / "small_robot.toml"
+    out = tmp_path / "faults"
+    assert wmr(["faults", "--robot", str(small), "--out", str(out)]) == 0
+    text = (out / "FAULTS.md").read_text(encoding="utf-8")
+    not_run = text.split("Not run (", 1)[1].split("## Findings", 1)[0]
+    assert "ROC / paper: the fault-free run stopped at 0 s: init refused the configuration: " \
+        "WMR_ERR_BAD_BOUNDS" in not_run
+    rows = (out / "faults.csv").read_text(encoding="utf-8").splitlines()[1:]
+    assert rows and not any(",roc,paper," in r for r in rows)
+    assert any(",tdroc,paper," in r for r in rows) and any(",roc,minimal," in r for r in rows)

@@ -61,7 +61,8 @@ def test_kobuki_like_from_urdf_to_simulated_runs(tmp_path: Path,
                 str(results)]) == 0
     with (results / "metrics.csv").open() as f:
         rows = list(csv.DictReader(f))
-    assert len(rows) == 2 * 2 * 4  # paths × formulations × controllers
+    # paths × (formulations × the four laws of the paper + the PI, minimal only)
+    assert len(rows) == 2 * (2 * 4 + 1)
     assert all(r["status"] == "ok" for r in rows), rows
     tdroc = [float(r["rms_error_m"]) for r in rows if r["controller"] == "tdroc"]
     assert max(tdroc) < 0.01  # m: the paper's experiment, scaled to a 2.4 kg base

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -28,6 +27,7 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parents[3]
 LADDER = ("drishti", "trailer", "trailer2", "trailer3")  # 0, 1, 2, 3 trailers
@@ -45,7 +45,8 @@ class Rung:
     robot: str
     trailers: int
     coordinates: int
-    model_s: float = 0.0
+    model_s: float = 0.0  # wall
+    model_cpu_s: float = 0.0  # user + system
     model_peak_mb: float = 0.0
     model_steps: dict[str, float] = field(default_factory=dict)
     c_bytes: int = 0
@@ -54,7 +55,7 @@ class Rung:
     longest_python_line: int = 0
     forward_dynamics_ops: int = 0
     tdroc_step_ops: int = 0
-    gcc_slowest_s: float = 0.0
+    gcc_slowest_s: float = 0.0  # CPU seconds of the slowest file
     gcc_slowest_file: str = ""
     gcc_peak_mb: float = 0.0
     m4_tdroc_code: int | None = None
@@ -62,21 +63,46 @@ class Rung:
     x86_step_ns: float | None = None
 
 
-def run_with_peak(cmd: list[str], cwd: Path) -> tuple[float, float, str, str]:
-    """(wall seconds, peak resident MB, stdout, stderr) of ``cmd``, its own peak memory
-    from ``os.wait4`` (the rusage of that child alone)."""
+# Runs a command and prints its own peak resident set (KB). The kernel records a child's
+# peak including the memory it had between fork and exec, the parent's pages: measured from
+# a large process (a pytest worker, 300 MB), every child read 300 MB. This launcher is small,
+# so its own children's figures are theirs.
+_PEAK_LAUNCHER = """
+import os, subprocess, sys
+proc = subprocess.Popen(sys.argv[1:])
+_, status, usage = os.wait4(proc.pid, 0)
+sys.stderr.write(f"\\n@peak-kb {usage.ru_maxrss} {usage.ru_utime + usage.ru_stime}\\n")
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+
+
+class Measured(NamedTuple):
+    """A command's wall and CPU (user + system) seconds, peak resident MB and output."""
+
+    seconds: float
+    peak_mb: float
+    stdout: str
+    stderr: str
+    cpu_s: float
+
+
+def run_with_peak(cmd: list[str], cwd: Path) -> Measured:
+    """``cmd`` run to completion: its wall time, and its own peak memory and CPU time from
+    ``os.wait4`` in a small launcher process (the rusage of that child alone; CPU time is
+    what a shared machine disturbs least)."""
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         start = time.perf_counter()
-        proc = subprocess.Popen(cmd, cwd=cwd, stdout=out, stderr=err, text=True)
-        _, status, usage = os.wait4(proc.pid, 0)
+        code = subprocess.call([sys.executable, "-c", _PEAK_LAUNCHER, *cmd], cwd=cwd,
+                               stdout=out, stderr=err, text=True)
         seconds = time.perf_counter() - start
-        proc.returncode = os.waitstatus_to_exitcode(status)
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read(), err.read()
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{stderr[-2000:]}")
-    return seconds, usage.ru_maxrss / 1024, stdout, stderr
+    stderr, _, usage = stderr.rpartition("\n@peak-kb ")
+    if code != 0 or not usage:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({code}):\n{stderr[-2000:]}")
+    peak_kb, cpu = usage.split()
+    return Measured(seconds, float(peak_kb) / 1024, stdout, stderr, float(cpu))
 
 
 def robot_file(root: Path, robot: str) -> Path:
@@ -101,11 +127,11 @@ def folder_bytes(folder: Path) -> int:
 def measure_generation(root: Path, robot: str, rung: Rung) -> None:
     """``wmr model --robot`` into a fresh folder: time, memory, steps, output sizes."""
     with tempfile.TemporaryDirectory() as tmp:
-        seconds, peak, _, err = run_with_peak(
+        run = run_with_peak(
             [sys.executable, "-m", "codegen", "--robot", str(robot_file(root, robot)),
              "--out", tmp], root)
-        rung.model_s, rung.model_peak_mb = seconds, peak
-        rung.model_steps = {what: float(s) for what, s in STEP_LINE.findall(err)}
+        rung.model_s, rung.model_cpu_s, rung.model_peak_mb = run.seconds, run.cpu_s, run.peak_mb
+        rung.model_steps = {what: float(s) for what, s in STEP_LINE.findall(run.stderr)}
         out = next(p.parent for p in Path(tmp).rglob("c") if p.is_dir())
         rung.c_bytes = folder_bytes(out / "c")
         rung.python_bytes = folder_bytes(out / "python")
@@ -140,12 +166,12 @@ def measure_gcc(folder: Path, rung: Rung) -> None:
     """``gcc -O2 -std=c99 -c`` of each generated C file (double), one at a time."""
     with tempfile.TemporaryDirectory() as tmp:
         for src in sorted((folder / "c").glob("*.c")):
-            seconds, peak, _, _ = run_with_peak(
+            run = run_with_peak(
                 ["gcc", "-O2", "-std=c99", f"-I{folder / 'c'}", "-c", str(src), "-o",
                  f"{tmp}/{src.stem}.o"], folder)
-            if seconds > rung.gcc_slowest_s:
-                rung.gcc_slowest_s, rung.gcc_slowest_file = seconds, src.name
-            rung.gcc_peak_mb = max(rung.gcc_peak_mb, peak)
+            if run.cpu_s > rung.gcc_slowest_s:
+                rung.gcc_slowest_s, rung.gcc_slowest_file = run.cpu_s, src.name
+            rung.gcc_peak_mb = max(rung.gcc_peak_mb, run.peak_mb)
 
 
 def tdroc_config_lines(prefix: str, nq: int) -> str:
@@ -351,15 +377,17 @@ def _kb(n: int | None) -> str:
 def section(rungs: list[Rung]) -> list[str]:
     """The BENCHMARKS.md section (and README table) of the measurements."""
     lines = [
-        "| robot (trailers, coordinates) | `wmr model` s (peak MB) | C / Python / CasADi kB "
-        "| ops: forward dynamics / TDROC step | gcc -O2 slowest file s (peak MB) "
+        "| robot (trailers, coordinates) | `wmr model` wall s / CPU s (peak MB) "
+        "| C / Python / CasADi kB "
+        "| ops: forward dynamics / TDROC step | gcc -O2 slowest file CPU s (peak MB) "
         "| M4 TDROC code B / stack B | x86 TDROC step ns |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rungs:
         lines.append(
-            f"| {r.robot} ({r.trailers}, {r.coordinates}) | {r.model_s:.1f} "
-            f"({r.model_peak_mb:.0f}) | {_kb(r.c_bytes)} / {_kb(r.python_bytes)} / "
+            f"| {r.robot} ({r.trailers}, {r.coordinates}) | {r.model_s:.1f} / "
+            f"{r.model_cpu_s:.1f} ({r.model_peak_mb:.0f}) | {_kb(r.c_bytes)} / "
+            f"{_kb(r.python_bytes)} / "
             f"{_kb(r.casadi_bytes)} | {r.forward_dynamics_ops:,} / {r.tdroc_step_ops:,} "
             f"| {r.gcc_slowest_s:.2f} ({r.gcc_peak_mb:.0f}) "
             f"| {'—' if r.m4_tdroc_code is None else f'{r.m4_tdroc_code:,}'} / "
