@@ -467,6 +467,10 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     fresh.magic = WMR_STATE_MAGIC;
     fresh.config = *config;
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
+    fresh.tde_span = config->accel_estimator == WMR_ACCEL_CENTRAL
+        ? WMR_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
+        ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
         wmr_tdc_k_paper_tde_trig_keep(&config->nominal, fresh.k_paper_tde_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
@@ -624,9 +628,8 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
-        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
-        const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
-            ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
+        const wmr_real_t span = state->tde_span;  /* from _init */
+        const wmr_real_t c2 = state->tde_c2;
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];

@@ -615,6 +615,10 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         wmr_minimal_minv_norm(&config->nominal, &fresh.minv_norm);
     }
     wmr_window_weights(config->n, config->a, fresh.weights);
+    fresh.tde_span = config->accel_estimator == WMR_ACCEL_CENTRAL
+        ? WMR_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
+        ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
         wmr_tdroc_k_paper_tde_trig_keep(&config->nominal, fresh.k_paper_tde_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
@@ -775,9 +779,8 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
-        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
-        const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
-            ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
+        const wmr_real_t span = state->tde_span;  /* from _init */
+        const wmr_real_t c2 = state->tde_c2;
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];

@@ -57,6 +57,9 @@ typedef struct {
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
+    wmr_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at _init) */
+    wmr_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
+                               _init) */
     wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
     int omega_count;        /* Omega's seen, at most WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first: all (25)

@@ -616,6 +616,10 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
             fresh.p22);
     fresh.minv_norm = TRAILER_LIT(0.0);  /* ||Mhat(q)^-1|| is evaluated at q in every step */
     trailer_window_weights(config->n, config->a, fresh.weights);
+    fresh.tde_span = config->accel_estimator == TRAILER_ACCEL_CENTRAL
+        ? TRAILER_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
+        ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
     /* the values the step's minimal_tde keeps */
     trailer_tdroc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
     /* the values the step's minimal_minv_norm keeps */
@@ -734,9 +738,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER_ACCEL_CENTRAL;
-        const trailer_real_t span = central ? TRAILER_LIT(2.0) * cfg->h : cfg->h;
-        const trailer_real_t c2 = cfg->accel_estimator == TRAILER_ACCEL_MATCHED
-            ? cfg->rate_window / (TRAILER_LIT(2.0) * cfg->h) : TRAILER_LIT(0.0);
+        const trailer_real_t span = state->tde_span;  /* from _init */
+        const trailer_real_t c2 = state->tde_c2;
         /* the rates now and then, the controlled slice read in place */
         const trailer_real_t *const qdn = &qdot[off];
         const trailer_real_t *const qdthen = central ? &state->qdot_prev2[off]

@@ -558,6 +558,10 @@ trailer2_status_t trailer2_tdc_init(trailer2_tdc_state_t *state,
     fresh.config = *config;
     trailer2_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
+    fresh.tde_span = config->accel_estimator == TRAILER2_ACCEL_CENTRAL
+        ? TRAILER2_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == TRAILER2_ACCEL_MATCHED
+        ? config->rate_window / (TRAILER2_LIT(2.0) * config->h) : TRAILER2_LIT(0.0);
     /* the values the step's minimal_tde keeps */
     trailer2_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
     /* the values the step's minimal_tdc_law keeps */
@@ -669,9 +673,8 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER2_ACCEL_CENTRAL;
-        const trailer2_real_t span = central ? TRAILER2_LIT(2.0) * cfg->h : cfg->h;
-        const trailer2_real_t c2 = cfg->accel_estimator == TRAILER2_ACCEL_MATCHED
-            ? cfg->rate_window / (TRAILER2_LIT(2.0) * cfg->h) : TRAILER2_LIT(0.0);
+        const trailer2_real_t span = state->tde_span;  /* from _init */
+        const trailer2_real_t c2 = state->tde_c2;
         /* the rates now and then, the controlled slice read in place */
         const trailer2_real_t *const qdn = &qdot[off];
         const trailer2_real_t *const qdthen = central ? &state->qdot_prev2[off]

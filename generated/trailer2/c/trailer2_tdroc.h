@@ -58,6 +58,10 @@ typedef struct {
     trailer2_real_t qdot_prev2[11]; /* qdot(t-2h) */
     trailer2_real_t u_prev[11];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer2_real_t u_prev2[11];  /* u(t-2h) applied */
+    trailer2_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at
+                                    _init) */
+    trailer2_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
+                                    _init) */
     int omega_count;        /* Omega's seen, at most TRAILER2_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     trailer2_real_t omega_dnorm[TRAILER2_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first:
                                                          all (25) needs */

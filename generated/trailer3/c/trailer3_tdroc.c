@@ -980,6 +980,10 @@ trailer3_status_t trailer3_tdroc_init(trailer3_tdroc_state_t *state,
             fresh.p22);
     fresh.minv_norm = TRAILER3_LIT(0.0);  /* ||Mhat(q)^-1|| is evaluated at q in every step */
     trailer3_window_weights(config->n, config->a, fresh.weights);
+    fresh.tde_span = config->accel_estimator == TRAILER3_ACCEL_CENTRAL
+        ? TRAILER3_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == TRAILER3_ACCEL_MATCHED
+        ? config->rate_window / (TRAILER3_LIT(2.0) * config->h) : TRAILER3_LIT(0.0);
     /* the values the step's minimal_tde keeps */
     trailer3_tdroc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
     /* the values the step's minimal_minv_norm keeps */
@@ -1099,9 +1103,8 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER3_ACCEL_CENTRAL;
-        const trailer3_real_t span = central ? TRAILER3_LIT(2.0) * cfg->h : cfg->h;
-        const trailer3_real_t c2 = cfg->accel_estimator == TRAILER3_ACCEL_MATCHED
-            ? cfg->rate_window / (TRAILER3_LIT(2.0) * cfg->h) : TRAILER3_LIT(0.0);
+        const trailer3_real_t span = state->tde_span;  /* from _init */
+        const trailer3_real_t c2 = state->tde_c2;
         /* the rates now and then, the controlled slice read in place */
         const trailer3_real_t *const qdn = &qdot[off];
         const trailer3_real_t *const qdthen = central ? &state->qdot_prev2[off]
