@@ -779,8 +779,15 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
-        const wmr_real_t span = state->tde_span;  /* from _init */
+#ifdef WMR_TDROC_FROZEN
+        /* the same values as _init keeps, of the compiled-in configuration: folded */
+        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
+        const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
+            ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
+#else
+        const wmr_real_t span = state->tde_span;  /* kept by _init */
         const wmr_real_t c2 = state->tde_c2;
+#endif
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];

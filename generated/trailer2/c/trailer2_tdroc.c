@@ -904,8 +904,15 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER2_ACCEL_CENTRAL;
-        const trailer2_real_t span = state->tde_span;  /* from _init */
+#ifdef TRAILER2_TDROC_FROZEN
+        /* the same values as _init keeps, of the compiled-in configuration: folded */
+        const trailer2_real_t span = central ? TRAILER2_LIT(2.0) * cfg->h : cfg->h;
+        const trailer2_real_t c2 = cfg->accel_estimator == TRAILER2_ACCEL_MATCHED
+            ? cfg->rate_window / (TRAILER2_LIT(2.0) * cfg->h) : TRAILER2_LIT(0.0);
+#else
+        const trailer2_real_t span = state->tde_span;  /* kept by _init */
         const trailer2_real_t c2 = state->tde_c2;
+#endif
         /* the rates now and then, the controlled slice read in place */
         const trailer2_real_t *const qdn = &qdot[off];
         const trailer2_real_t *const qdthen = central ? &state->qdot_prev2[off]
