@@ -33,7 +33,8 @@ def test_every_function_has_every_variant(checksums: dict[str, dict[str, float]]
     for name in MODEL_FUNCTIONS:  # all of them evaluate sin and cos of the heading
         expected = {"ours", "ours_float32", "casadi", "sympy", "hand", "ours_libm"}
         if name == "forward_dynamics":  # the one with validation and a prepare API
-            expected |= {"ours_unchecked", "hand_checked", "ours_prepared"}
+            expected |= {"ours_unchecked", "hand_checked", "hand_checked_float32",
+                         "ours_prepared"}
         assert set(checksums[name]) == expected
     for kernels in STEP_KERNELS.values():
         for k in kernels:
@@ -47,21 +48,61 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
         ref = by_variant["ours"]
         scale = max(abs(ref), 1.0)
         for variant, value in by_variant.items():
-            tol = 1e-4 if variant == "ours_float32" else 1e-9
+            tol = 1e-4 if variant.endswith("float32") else 1e-9
             assert abs(value - ref) <= tol * scale, (name, variant, value, ref)
 
 
 def test_full_step_benchmark_checks_before_timing() -> None:
-    """The complete ``wmr_tdroc_step``, the hand-written step, ours with libm's sin/cos and
-    ours with the configuration compiled in: on the recorded closed loop every status is
-    equal and the torques agree (else nothing is timed), and all are timed."""
-    result = run_steps(601, 1)
-    check = result["check"]
-    assert check["steps"] > 100 and check["tau_scale"] > 0.1
-    assert check["max_abs_tau_diff"] <= 1e-9 * check["tau_scale"]
-    variants = {(r["function"], r["variant"]) for r in result["rows"]}
-    assert variants == {("tdroc_step", v) for v in ("ours", "hand", "ours_libm", "ours_frozen")}
-    assert all(len(r["ns"]) == 1 and r["ns"][0] > 0.0 for r in result["rows"])
+    """The complete ``wmr_tdroc_step`` and the hand-written step, each also with the
+    configuration compiled in (and ours with libm's sin/cos in double), in both
+    formulations and precisions: the bad-input statuses are equal, on the recorded closed
+    loop every status is equal and the torques agree (else nothing is timed), and all are
+    timed; the ratios are per repetition."""
+    from runtime.tooling.bench.step_bench import summarise_steps
+
+    result = run_steps(601, 2)
+    assert set(result["checks"]) == {f"{f}/{p}" for f in ("paper", "minimal")
+                                     for p in ("double", "float32")}
+    for case, check in result["checks"].items():
+        assert check["steps"] > 100 and check["tau_scale"] > 0.1
+        assert check["bad_input_cases"] > 100
+        tol = 1e-4 if case.endswith("float32") else 1e-9
+        assert check["max_abs_tau_diff"] <= tol * check["tau_scale"], case
+    for r in result["rows"]:
+        assert len(r["ns"]) == 2 and min(r["ns"]) > 0.0
+    variants = {(r["formulation"], r["precision"], r["variant"]) for r in result["rows"]}
+    assert ("paper", "double", "ours_libm") in variants
+    assert ("minimal", "float32", "hand_frozen") in variants
+    st = summarise_steps(result)
+    assert st[("paper/double", "ratio:ours/hand")]["median"] > 0.0
+
+
+def test_step_benchmark_refuses_a_competitor_with_another_status(tmp_path: Path) -> None:
+    """A hand-written step that returns another status on one bad-input case is caught
+    before any timing: the comparison cannot be flattered by a step that skips a check."""
+    import shutil
+    import subprocess
+
+    from runtime.tooling.bench import step_bench
+    from runtime.tooling.firmware.emulated_run import record_closed_loop
+
+    csrc = tmp_path / "csrc"
+    shutil.copytree(step_bench.BENCH_CSRC, csrc)
+    src = csrc / "hand_tdroc.c"
+    text = src.read_text()
+    check = "    if (c->n < 2 || c->n > WMR_MAX_WINDOW) {"
+    assert check in text
+    src.write_text(text.replace(check, "    if (c->n < 1 || c->n > WMR_MAX_WINDOW) {"))
+    rec = record_closed_loop("tdroc", "paper", eps=0.5, float32=False)
+    original = step_bench.BENCH_CSRC
+    step_bench.BENCH_CSRC = csrc
+    try:
+        exe = step_bench.build_step_bench(tmp_path, rec.config, rec.inputs[:60])
+    finally:
+        step_bench.BENCH_CSRC = original
+    proc = subprocess.run([str(exe), "600", "1"], capture_output=True, text=True, check=False)
+    assert proc.returncode == 3
+    assert "bad-input case" in proc.stdout and '"ns"' not in proc.stdout
 
 
 def test_casadi_op_counts_are_counted() -> None:

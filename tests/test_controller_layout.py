@@ -86,6 +86,9 @@ def _c_texts(layout: ControllerLayout) -> dict[str, str]:
                 layout=layout,
                 c=info,
                 max_abs_input=MAX_ABS_INPUT,
+                # the step calls the laws module's kernels themselves (no private copies,
+                # nothing kept: the backend adds those for a robot's real kernels)
+                step_kernel_prefix=f"{layout.prefix}_", step_kernels="", kept_kernels=[],
                 # the kernels' argument lists are the same for every robot: Drishti's
                 **c_controller_context(info, list(TOY_PARAMS), layout, robot_model()),
             )

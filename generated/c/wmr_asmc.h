@@ -53,6 +53,8 @@ typedef struct {
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
+    wmr_real_t k_paper_asmc_law[15]; /* paper_asmc_law's parameter-only values (at _init) */
+    wmr_real_t k_minimal_asmc_law[4]; /* minimal_asmc_law's parameter-only values (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                GAIN_MAX */

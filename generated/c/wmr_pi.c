@@ -18,6 +18,75 @@
 const wmr_pi_config_t wmr_pi_frozen_config = WMR_PI_FROZEN_CONFIG;
 #endif
 
+#ifndef WMR_PI_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* wmr_pi_k_minimal_pi_law_keep: the parameter-only part of wmr_minimal_pi_law of wmr_laws.c
+   (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 2 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_pi_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+{
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/r;
+    const wmr_real_t _t1 = WMR_LIT(0.5)*_t0*b;
+    kept[0] = _t0;
+    kept[1] = _t1;
+}
+#endif
+
+/* wmr_pi_k_minimal_pi_law: the per-step part of wmr_minimal_pi_law of wmr_laws.c (documented in
+   wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 17 add, 19 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+static void wmr_pi_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
+    const wmr_real_t *qdot, const wmr_real_t *q_des, const wmr_real_t *qdot_des,
+    const wmr_real_t *integral, const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u,
+    wmr_real_t *integral_next)
+{
+    const wmr_real_t theta = q[2];
+    const wmr_real_t qd_2 = q_des[2];
+    const wmr_real_t _t2 = qd_2 - theta;
+    const wmr_real_t qdd_0 = qdot_des[0];
+    const wmr_real_t qdd_1 = qdot_des[1];
+    const wmr_real_t _t3 = qdd_0*WMR_COS(qd_2) + qdd_1*WMR_SIN(qd_2);
+    const wmr_real_t _t4 = WMR_COS(theta);
+    const wmr_real_t x_c = q[0];
+    const wmr_real_t qd_0 = q_des[0];
+    const wmr_real_t _t5 = qd_0 - x_c;
+    const wmr_real_t _t6 = WMR_SIN(theta);
+    const wmr_real_t y_c = q[1];
+    const wmr_real_t qd_1 = q_des[1];
+    const wmr_real_t _t7 = qd_1 - y_c;
+    const wmr_real_t kx = gains[0];
+    const wmr_real_t _t8 = _t3*WMR_COS(_t2) + kx*(_t4*_t5 + _t6*_t7);
+    const wmr_real_t qdd_2 = qdot_des[2];
+    const wmr_real_t ky = gains[1];
+    const wmr_real_t ktheta = gains[2];
+    const wmr_real_t _t1 = kept[1];
+    const wmr_real_t _t9 = _t1*(_t3*(ktheta*WMR_SIN(_t2) + ky*(_t4*_t7 - _t5*_t6)) + qdd_2);
+    const wmr_real_t thetadot_r = qdot[3];
+    const wmr_real_t _t0 = kept[0];
+    const wmr_real_t _t10 = _t0*_t8 + _t9 - thetadot_r;
+    const wmr_real_t tau_max = limits[1];
+    const wmr_real_t _t11 = -tau_max;
+    const wmr_real_t ki = gains[4];
+    const wmr_real_t h = limits[0];
+    const wmr_real_t _t12 = h*ki;
+    const wmr_real_t I_0 = integral[0];
+    const wmr_real_t _t13 = WMR_FMIN(tau_max, WMR_FMAX(_t11, I_0 + _t10*_t12));
+    const wmr_real_t thetadot_l = qdot[4];
+    const wmr_real_t _t14 = _t0*_t8 - _t9 - thetadot_l;
+    const wmr_real_t I_1 = integral[1];
+    const wmr_real_t _t15 = WMR_FMIN(tau_max, WMR_FMAX(_t11, I_1 + _t12*_t14));
+    const wmr_real_t kp = gains[3];
+    u[0] = _t10*kp + _t13;
+    u[1] = _t14*kp + _t15;
+    integral_next[0] = _t13;
+    integral_next[1] = _t15;
+}
+
 wmr_status_t wmr_pi_check_config_detail(const wmr_pi_config_t *config,
     wmr_error_detail_t *detail)
 {
@@ -61,7 +130,6 @@ wmr_status_t wmr_pi_check_config(const wmr_pi_config_t *config)
     return wmr_pi_check_config_detail(config, 0);
 }
 
-#ifndef WMR_PI_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
@@ -73,6 +141,33 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
+static bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
+{
+#ifdef WMR_FLOAT32
+    const wmr_bits_t mask = 0x7fffffffu;
+#else
+    const wmr_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const wmr_bits_t bound = wmr_real_bits(WMR_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 5; ++i) {
+        beyond |= ((wmr_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef WMR_PI_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool wmr_pi_config_unchanged(const wmr_pi_config_t *config,
@@ -147,6 +242,8 @@ wmr_status_t wmr_pi_init(wmr_pi_state_t *state, const wmr_pi_config_t *config)
     }
     fresh.magic = WMR_STATE_MAGIC;
     fresh.config = *config;
+    /* the values the step's minimal_pi_law keeps */
+    wmr_pi_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
     wmr_pi_clear(&fresh);
     *state = fresh;
     return WMR_OK;
@@ -230,9 +327,13 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     }
     cfg = &state->config;
 #endif
-    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != WMR_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const wmr_real_t *const kept_minimal_pi_law = state->k_minimal_pi_law;
+    if (!wmr_pi_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     gain = state->gain;
     s_norm = state->s_norm;
@@ -240,8 +341,8 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     {
         const wmr_real_t gains[5] = {cfg->kx, cfg->ky, cfg->ktheta, cfg->kp, cfg->ki};
         const wmr_real_t limits[2] = {cfg->h, cfg->tau_max};
-        wmr_minimal_pi_law(&cfg->nominal, q, qdot, q_des, qdot_des, state->integral, gains, limits,
-                u, integral);
+        wmr_pi_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
+                gains, limits, u, integral);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated for pi). */
     out_tau[0] = u[0];
@@ -281,5 +382,11 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     state->steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return wmr_fail(detail, status, WMR_FIELD_NONE, -1);
+    if (detail != NULL) {  /* wmr_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = WMR_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

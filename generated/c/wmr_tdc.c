@@ -18,6 +18,306 @@
 const wmr_tdc_config_t wmr_tdc_frozen_config = WMR_TDC_FROZEN_CONFIG;
 #endif
 
+#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* wmr_tdc_k_paper_tde_trig_keep: the parameter-only part of wmr_paper_tde_trig of wmr_laws.c
+   (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 1 add, 8 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_paper_tde_trig_keep(const wmr_params_t *p, wmr_real_t kept[10])
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t _t0 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t1 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t2 = _t1*r;
+    const wmr_real_t _t3 = _t2*d;
+    const wmr_real_t _t4 = K*_t2;
+    const wmr_real_t _t5 = I*_t2 - K*_t1*d*r;
+    const wmr_real_t _t6 = -_t5;
+    kept[0] = m;
+    kept[1] = I;
+    kept[2] = K;
+    kept[3] = I_w;
+    kept[4] = _t0;
+    kept[5] = _t2;
+    kept[6] = _t3;
+    kept[7] = _t4;
+    kept[8] = _t5;
+    kept[9] = _t6;
+}
+#endif
+
+/* wmr_tdc_k_paper_tde_trig: the per-step part of wmr_paper_tde_trig of wmr_laws.c (documented in
+   wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 34 add, 40 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_paper_tde_trig(const wmr_real_t kept[10], const wmr_real_t *trig_prev,
+    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
+    const wmr_real_t *span, wmr_real_t *H1hat)
+{
+    const wmr_real_t qd_now0 = qdot_now[0];
+    const wmr_real_t qd_then0 = qdot_then[0];
+    const wmr_real_t _t7 = qd_now0 - qd_then0;
+    const wmr_real_t span_1 = span[0];
+    const wmr_real_t _t8 = WMR_LIT(1.0)/span_1;
+    const wmr_real_t m = kept[0];
+    const wmr_real_t _t9 = _t8*m;
+    const wmr_real_t qd_now2 = qdot_now[2];
+    const wmr_real_t qd_then2 = qdot_then[2];
+    const wmr_real_t _t10 = qd_now2 - qd_then2;
+    const wmr_real_t _t11 = _t10*_t8;
+    const wmr_real_t trig_prev_s0 = trig_prev[0];
+    const wmr_real_t K = kept[2];
+    const wmr_real_t _t12 = K*trig_prev_s0;
+    const wmr_real_t trig_prev_c0 = trig_prev[1];
+    const wmr_real_t _t13 = m*trig_prev_c0;
+    const wmr_real_t _t0 = kept[4];
+    const wmr_real_t _t14 = _t0*_t13;
+    const wmr_real_t _t2 = kept[5];
+    const wmr_real_t _t15 = _t12*_t2;
+    const wmr_real_t _t16 = m*trig_prev_s0;
+    const wmr_real_t _t3 = kept[6];
+    const wmr_real_t _t17 = _t16*_t3;
+    const wmr_real_t _t18 = _t14 + _t15 - _t17;
+    const wmr_real_t qd_now3 = qdot_now[3];
+    const wmr_real_t qd_then3 = qdot_then[3];
+    const wmr_real_t _t19 = _t8*(qd_now3 - qd_then3);
+    const wmr_real_t _t20 = _t14 - _t15 + _t17;
+    const wmr_real_t qd_now4 = qdot_now[4];
+    const wmr_real_t qd_then4 = qdot_then[4];
+    const wmr_real_t _t21 = _t8*(qd_now4 - qd_then4);
+    const wmr_real_t qd_now1 = qdot_now[1];
+    const wmr_real_t qd_then1 = qdot_then[1];
+    const wmr_real_t _t22 = qd_now1 - qd_then1;
+    const wmr_real_t _t23 = _t0*_t16;
+    const wmr_real_t _t4 = kept[7];
+    const wmr_real_t _t24 = _t4*trig_prev_c0;
+    const wmr_real_t _t25 = _t13*_t3;
+    const wmr_real_t _t26 = _t23 - _t24 + _t25;
+    const wmr_real_t _t27 = _t23 + _t24 - _t25;
+    const wmr_real_t _t28 = _t7*_t8;
+    const wmr_real_t _t29 = _t22*_t8;
+    const wmr_real_t up0 = u_prev[0];
+    const wmr_real_t up1 = u_prev[1];
+    const wmr_real_t up2 = u_prev[2];
+    const wmr_real_t up3 = u_prev[3];
+    const wmr_real_t up4 = u_prev[4];
+    const wmr_real_t I = kept[1];
+    const wmr_real_t I_w = kept[3];
+    const wmr_real_t _t5 = kept[8];
+    const wmr_real_t _t6 = kept[9];
+    H1hat[0] = -_t11*_t12 + _t18*_t19 + _t20*_t21 - _t7*_t9 + up0;
+    H1hat[1] = K*_t10*_t8*trig_prev_c0 + _t19*_t26 + _t21*_t27 - _t22*_t9 + up1;
+    H1hat[2] = -I*_t11 + K*_t22*_t8*trig_prev_c0 - _t12*_t28 - _t19*_t6 - _t21*_t5 + up2;
+    H1hat[3] = -I_w*_t19 - _t11*_t5 - _t18*_t28 - _t26*_t29 + up3;
+    H1hat[4] = -I_w*_t21 - _t11*_t6 - _t20*_t28 - _t27*_t29 + up4;
+}
+
+#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* wmr_tdc_k_paper_tdc_law_trig_keep: the parameter-only part of wmr_paper_tdc_law_trig of
+   wmr_laws.c (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t _t0 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t1 = r/b;
+    const wmr_real_t _t2 = _t1*d;
+    const wmr_real_t _t3 = I*_t1 - K*_t2;
+    const wmr_real_t _t4 = -_t3;
+    kept[0] = m;
+    kept[1] = I;
+    kept[2] = K;
+    kept[3] = I_w;
+    kept[4] = _t0;
+    kept[5] = _t1;
+    kept[6] = _t2;
+    kept[7] = _t3;
+    kept[8] = _t4;
+}
+#endif
+
+/* wmr_tdc_k_paper_tdc_law_trig: the per-step part of wmr_paper_tdc_law_trig of wmr_laws.c
+   (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 39 add, 42 mul, 0 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
+    wmr_real_t *u)
+{
+    (void)p12;
+    (void)p22;
+    const wmr_real_t e0 = e[0];
+    const wmr_real_t edot0 = edot[0];
+    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t k1_0 = k1[0];
+    const wmr_real_t k2_0 = k2[0];
+    const wmr_real_t _t5 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t e2 = e[2];
+    const wmr_real_t edot2 = edot[2];
+    const wmr_real_t qdd_des2 = qddot_des[2];
+    const wmr_real_t k1_2 = k1[2];
+    const wmr_real_t k2_2 = k2[2];
+    const wmr_real_t _t6 = e2*k1_2 + edot2*k2_2 + qdd_des2;
+    const wmr_real_t K = kept[2];
+    const wmr_real_t _t7 = K*_t6;
+    const wmr_real_t e3 = e[3];
+    const wmr_real_t edot3 = edot[3];
+    const wmr_real_t qdd_des3 = qddot_des[3];
+    const wmr_real_t k1_3 = k1[3];
+    const wmr_real_t k2_3 = k2[3];
+    const wmr_real_t _t8 = e3*k1_3 + edot3*k2_3 + qdd_des3;
+    const wmr_real_t trig_c0 = trig[1];
+    const wmr_real_t m = kept[0];
+    const wmr_real_t _t9 = m*trig_c0;
+    const wmr_real_t _t0 = kept[4];
+    const wmr_real_t _t10 = _t0*_t9;
+    const wmr_real_t trig_s0 = trig[0];
+    const wmr_real_t _t11 = K*trig_s0;
+    const wmr_real_t _t1 = kept[5];
+    const wmr_real_t _t12 = _t1*_t11;
+    const wmr_real_t _t13 = m*trig_s0;
+    const wmr_real_t _t2 = kept[6];
+    const wmr_real_t _t14 = _t13*_t2;
+    const wmr_real_t _t15 = _t10 + _t12 - _t14;
+    const wmr_real_t e4 = e[4];
+    const wmr_real_t edot4 = edot[4];
+    const wmr_real_t qdd_des4 = qddot_des[4];
+    const wmr_real_t k1_4 = k1[4];
+    const wmr_real_t k2_4 = k2[4];
+    const wmr_real_t _t16 = e4*k1_4 + edot4*k2_4 + qdd_des4;
+    const wmr_real_t _t17 = _t10 - _t12 + _t14;
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t edot1 = edot[1];
+    const wmr_real_t qdd_des1 = qddot_des[1];
+    const wmr_real_t k1_1 = k1[1];
+    const wmr_real_t k2_1 = k2[1];
+    const wmr_real_t _t18 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t19 = _t0*_t13;
+    const wmr_real_t _t20 = K*trig_c0;
+    const wmr_real_t _t21 = _t1*_t20;
+    const wmr_real_t _t22 = _t2*_t9;
+    const wmr_real_t _t23 = _t19 - _t21 + _t22;
+    const wmr_real_t _t24 = _t19 + _t21 - _t22;
+    const wmr_real_t H1hat0 = H1hat[0];
+    const wmr_real_t H1hat1 = H1hat[1];
+    const wmr_real_t H1hat2 = H1hat[2];
+    const wmr_real_t H1hat3 = H1hat[3];
+    const wmr_real_t H1hat4 = H1hat[4];
+    const wmr_real_t I = kept[1];
+    const wmr_real_t I_w = kept[3];
+    const wmr_real_t _t3 = kept[7];
+    const wmr_real_t _t4 = kept[8];
+    u[0] = H1hat0 - _t15*_t8 - _t16*_t17 + _t5*m + _t7*trig_s0;
+    u[1] = H1hat1 - _t16*_t24 + _t18*m - _t23*_t8 - _t7*trig_c0;
+    u[2] = H1hat2 + I*_t6 + _t11*_t5 + _t16*_t3 - _t18*_t20 + _t4*_t8;
+    u[3] = H1hat3 + I_w*_t8 + _t15*_t5 + _t18*_t23 + _t3*_t6;
+    u[4] = H1hat4 + I_w*_t16 + _t17*_t5 + _t18*_t24 + _t4*_t6;
+}
+
+#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* wmr_tdc_k_minimal_tde_keep: the parameter-only part of wmr_minimal_tde of wmr_laws.c (documented
+   in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_minimal_tde_keep(const wmr_params_t *p, wmr_real_t kept[2])
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t _t0 = r*r;
+    const wmr_real_t _t1 = _t0*m;
+    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t3 = _t0*_t2;
+    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
+    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
+    const wmr_real_t _t6 = WMR_LIT(0.25)*_t0*m - _t4;
+    kept[0] = _t5;
+    kept[1] = _t6;
+}
+#endif
+
+/* wmr_tdc_k_minimal_tde: the per-step part of wmr_minimal_tde of wmr_laws.c (documented in
+   wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_minimal_tde(const wmr_real_t kept[2], const wmr_real_t *q_prev,
+    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
+    const wmr_real_t *span, wmr_real_t *H1hat)
+{
+    (void)q_prev;
+    const wmr_real_t span_1 = span[0];
+    const wmr_real_t _t7 = WMR_LIT(1.0)/span_1;
+    const wmr_real_t qd_now0 = qdot_now[0];
+    const wmr_real_t qd_then0 = qdot_then[0];
+    const wmr_real_t _t8 = _t7*(qd_now0 - qd_then0);
+    const wmr_real_t qd_now1 = qdot_now[1];
+    const wmr_real_t qd_then1 = qdot_then[1];
+    const wmr_real_t _t9 = _t7*(qd_now1 - qd_then1);
+    const wmr_real_t up0 = u_prev[0];
+    const wmr_real_t up1 = u_prev[1];
+    const wmr_real_t _t5 = kept[0];
+    const wmr_real_t _t6 = kept[1];
+    H1hat[0] = -_t5*_t8 - _t6*_t9 + up0;
+    H1hat[1] = -_t5*_t9 - _t6*_t8 + up1;
+}
+
+/* wmr_tdc_k_minimal_tdc_law: the per-step part of wmr_minimal_tdc_law of wmr_laws.c (documented in
+   wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
+static void wmr_tdc_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
+    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
+    wmr_real_t *u)
+{
+    (void)q;
+    (void)p12;
+    (void)p22;
+    const wmr_real_t e0 = e[0];
+    const wmr_real_t edot0 = edot[0];
+    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t k1_0 = k1[0];
+    const wmr_real_t k2_0 = k2[0];
+    const wmr_real_t _t7 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t edot1 = edot[1];
+    const wmr_real_t qdd_des1 = qddot_des[1];
+    const wmr_real_t k1_1 = k1[1];
+    const wmr_real_t k2_1 = k2[1];
+    const wmr_real_t _t8 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t H1hat0 = H1hat[0];
+    const wmr_real_t H1hat1 = H1hat[1];
+    const wmr_real_t _t5 = kept[0];
+    const wmr_real_t _t6 = kept[1];
+    u[0] = H1hat0 + _t5*_t7 + _t6*_t8;
+    u[1] = H1hat1 + _t5*_t8 + _t6*_t7;
+}
+
 wmr_status_t wmr_tdc_check_config_detail(const wmr_tdc_config_t *config,
     wmr_error_detail_t *detail)
 {
@@ -49,7 +349,6 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     return wmr_tdc_check_config_detail(config, 0);
 }
 
-#ifndef WMR_TDC_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
@@ -61,6 +360,33 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
+static bool wmr_tdc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
+{
+#ifdef WMR_FLOAT32
+    const wmr_bits_t mask = 0x7fffffffu;
+#else
+    const wmr_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const wmr_bits_t bound = wmr_real_bits(WMR_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 5; ++i) {
+        beyond |= ((wmr_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((wmr_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef WMR_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
@@ -141,6 +467,49 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     fresh.magic = WMR_STATE_MAGIC;
     fresh.config = *config;
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
+    fresh.tde_span = config->accel_estimator == WMR_ACCEL_CENTRAL
+        ? WMR_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
+        ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
+    if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
+        wmr_tdc_k_paper_tde_trig_keep(&config->nominal, fresh.k_paper_tde_trig);
+    } else {  /* not read: zero, so that the state is the same whatever was in memory */
+        fresh.k_paper_tde_trig[0] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[1] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[2] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[3] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[4] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[5] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[6] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[7] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[8] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[9] = WMR_LIT(0.0);
+    }
+    if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tdc_law_trig keeps */
+        wmr_tdc_k_paper_tdc_law_trig_keep(&config->nominal, fresh.k_paper_tdc_law_trig);
+    } else {  /* not read: zero, so that the state is the same whatever was in memory */
+        fresh.k_paper_tdc_law_trig[0] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[1] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[2] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[3] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[4] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[5] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[6] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[7] = WMR_LIT(0.0);
+        fresh.k_paper_tdc_law_trig[8] = WMR_LIT(0.0);
+    }
+    if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tde keeps */
+        wmr_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
+    } else {  /* not read: zero, so that the state is the same whatever was in memory */
+        fresh.k_minimal_tde[0] = WMR_LIT(0.0);
+        fresh.k_minimal_tde[1] = WMR_LIT(0.0);
+    }
+    if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tdc_law keeps */
+        wmr_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    } else {  /* not read: zero, so that the state is the same whatever was in memory */
+        fresh.k_minimal_tdc_law[0] = WMR_LIT(0.0);
+        fresh.k_minimal_tdc_law[1] = WMR_LIT(0.0);
+    }
     wmr_tdc_clear(&fresh);
     *state = fresh;
     return WMR_OK;
@@ -229,9 +598,16 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     }
     cfg = &state->config;
 #endif
-    status = wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != WMR_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const wmr_real_t *const kept_paper_tde_trig = state->k_paper_tde_trig;
+        const wmr_real_t *const kept_paper_tdc_law_trig = state->k_paper_tdc_law_trig;
+        const wmr_real_t *const kept_minimal_tde = state->k_minimal_tde;
+        const wmr_real_t *const kept_minimal_tdc_law = state->k_minimal_tdc_law;
+    if (!wmr_tdc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     paper = WMR_IS_PAPER(cfg->formulation);
     off = paper ? 0 : 3;
@@ -252,9 +628,15 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
+#ifdef WMR_TDC_FROZEN
+        /* the same values as _init keeps, of the compiled-in configuration: folded */
         const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
         const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
             ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
+#else
+        const wmr_real_t span = state->tde_span;  /* kept by _init */
+        const wmr_real_t c2 = state->tde_c2;
+#endif
         /* the rates now and then, the controlled slice read in place */
         const wmr_real_t *const qdn = &qdot[off];
         const wmr_real_t *const qdthen = central ? &state->qdot_prev2[off] : &state->qdot_prev[off];
@@ -264,12 +646,14 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
             up[i] = (WMR_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
         }
         for (i = nc; i < 5; ++i) {
+            up[i] = WMR_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_paper_tde_trig(&cfg->nominal, state->trig_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_tdc_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen, &span,
+                    H1hat);
         } else {
-            wmr_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_tdc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, &span, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -279,11 +663,11 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     /* The law. */
     {
         if (paper) {
-            wmr_paper_tdc_law_trig(&cfg->nominal, trig, e, edot, &qddot_des[off], &cfg->k1[off],
-                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+            wmr_tdc_k_paper_tdc_law_trig(kept_paper_tdc_law_trig, trig, e, edot, &qddot_des[off],
+                    &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         } else {
-            wmr_minimal_tdc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
-                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+            wmr_tdc_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off],
+                    &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */
@@ -328,5 +712,11 @@ wmr_status_t wmr_tdc_step_detail(wmr_tdc_state_t *state, const wmr_tdc_config_t 
     state->steps = state->steps < WMR_STEPS_MAX ? state->steps + 1u : WMR_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return wmr_fail(detail, status, WMR_FIELD_NONE, -1);
+    if (detail != NULL) {  /* wmr_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = WMR_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

@@ -57,6 +57,9 @@ typedef struct {
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     wmr_real_t u_prev2[5];  /* u(t-2h) applied */
+    wmr_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at _init) */
+    wmr_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
+                               _init) */
     wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
     int omega_count;        /* Omega's seen, at most WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first: all (25)
@@ -64,6 +67,11 @@ typedef struct {
     wmr_real_t weights[WMR_MAX_WINDOW]; /* normalised weights of (25) for the full window (at
                                            _init) */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */
+    wmr_real_t k_paper_tde_trig[10]; /* paper_tde_trig's parameter-only values (at _init) */
+    wmr_real_t k_paper_tdroc_law_trig[9]; /* paper_tdroc_law_trig's parameter-only values (at
+                                             _init) */
+    wmr_real_t k_minimal_tde[2]; /* minimal_tde's parameter-only values (at _init) */
+    wmr_real_t k_minimal_tdroc_law[2]; /* minimal_tdroc_law's parameter-only values (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                GAIN_MAX */

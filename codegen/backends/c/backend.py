@@ -7,17 +7,23 @@
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
+from dataclasses import replace
 from functools import cache
 
 import sympy as sp
 
 from codegen import template_util
-from codegen.backend import RobotTarget
+from codegen.backend import FunctionIR, RobotTarget
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import format_c
 from codegen.backends.c.printer import CPrinter
 from codegen.backends.c.render import (
     TEMPLATE_DIR,
+    KeptKernel,
+    _function_context,
+    kept_kernel,
     norm_arities,
     render_all_ir,
     render_types,
@@ -143,6 +149,64 @@ def _template(name: str, source: str, **context: object) -> str:
     return format_c(text)
 
 
+def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: str,
+                 config: CConfig, frozen: str) -> tuple[str, list[KeptKernel]]:
+    """Static copies, named ``<kp><kernel>``, of the kernels of ``module`` that ``text``
+    (a controller's C) calls under those names, in the module's order: the step then calls
+    functions of its own file, which the compiler inlines and schedules with the step.
+
+    A kernel with parameter-only subexpressions is split at its parameters
+    (:func:`~codegen.backends.c.render.kept_kernel`): ``<kp><kernel>_keep``, which the
+    controller's ``_init`` calls to keep those values in the state, and ``<kp><kernel>``,
+    the per-step rest reading them (``_keep`` is compiled only without ``frozen``, the
+    define of a build whose state, kept values included, is compiled in). Returns the C and
+    the kept kernels."""
+    called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", text))
+    by_name = {f.spec.name: f for f in functions}
+    unknown = called - set(by_name)
+    if unknown:
+        raise ValueError(f"{module}: the step calls {sorted(unknown)}, not kernels of it")
+    contexts: list[dict[str, object]] = []
+    kept: list[KeptKernel] = []
+    keeps: dict[tuple[object, ...], str] = {}  # a _keep's parameters and body -> its name
+    for f in functions:
+        if f.spec.name not in called:
+            continue
+        if f.spec.returns_status:
+            raise ValueError(f"{module}: step kernel {f.spec.name} returns a status")
+        split = kept_kernel(f, config, f"{kp}{f.spec.name}")
+        if split is not None:
+            # Two kernels that keep the same values (the minimal form's M-bar in the TDE
+            # and in the law) share one _keep: else the compiler merges the copies into an
+            # alias that the stack analysis cannot see.
+            same = keeps.get(_keep_key(split.keep))
+            if same is None:
+                keeps[_keep_key(split.keep)] = str(split.keep["name"])
+                contexts.append({**split.keep, "unless": frozen})
+            else:
+                split = replace(split, keep={**split.keep, "name": same})
+            kept.append(split)
+            contexts.append({**split.call, "unless": ""})
+            continue
+        ctx = _function_context(f, config, module)
+        ctx["origin"] = f"a copy of {ctx['name']}"
+        ctx["name"] = f"{kp}{f.spec.name}"
+        ctx["unless"] = ""
+        contexts.append(ctx)
+    if not contexts:
+        return "", kept
+    return template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja", functions=contexts,
+                                laws=module, config=config), kept
+
+
+def _keep_key(ctx: dict[str, object]) -> tuple[object, ...]:
+    """What a ``_keep`` function computes (its parameters and statements), not its name."""
+    params = ctx["params"]
+    body = ctx["body"]
+    assert isinstance(params, list) and isinstance(body, list)
+    return (*params, *body)
+
+
 class CBackend:
     """C99 over ``<prefix>_real_t`` (double, or float with ``-D<PREFIX>_FLOAT32``)."""
 
@@ -166,13 +230,23 @@ class CBackend:
                 nominal_guards=nominal_guards(target, config),
                 nominal_bounds=nominal_bounds(target), **c_common_context(),
             )
+        laws = next(m for m in target.modules if m.name == f"{pre}_laws")
         for info in CONTROLLERS:
-            for suffix in ("h", "c"):
-                files[f"{pre}_{info.name}.{suffix}"] = _template(
-                    f"controller.{suffix}.jinja", law, layout=layout, c=info,
-                    max_abs_input=MAX_ABS_INPUT,
-                    **c_controller_context(info, param_fields, layout, target.model),
-                )
+            kp = f"{pre}_{info.name}_k_"  # the step's private copies of its kernels
+            context = dict(layout=layout, c=info, max_abs_input=MAX_ABS_INPUT,
+                           step_kernel_prefix=kp,
+                           **c_controller_context(info, param_fields, layout, target.model))
+            # Rendered once to see which kernels the step calls, then with their copies
+            # (and the state with the values the split ones keep).
+            first = _template("controller.c.jinja", law, step_kernels="", kept_kernels=[],
+                              **context)
+            text, kept = step_kernels(first, kp, laws.functions, laws.name, config,
+                                      f"{pre.upper()}_{info.name.upper()}_FROZEN")
+            kept_ctx = [{"name": k.name, "size": k.size, "keep": k.keep["name"]} for k in kept]
+            files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law,
+                                                      kept_kernels=kept_ctx, **context)
+            files[f"{pre}_{info.name}.c"] = _template(
+                "controller.c.jinja", law, step_kernels=text, kept_kernels=kept_ctx, **context)
         robot = target.robot
         fields = [(p.c_field, repr(robot.lumped[p.key])) for p in target.model.params]
         files[f"{pre}_robot.h"] = _template(

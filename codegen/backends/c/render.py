@@ -45,7 +45,7 @@ from codegen.layout import (
     local_names,
     split_fields,
 )
-from codegen.prepare import PreparedForm
+from codegen.prepare import PreparedForm, prepared_form
 from codegen.printer_base import FUNCTIONS
 from codegen.spec import Argument, Field, FunctionSpec
 
@@ -891,3 +891,74 @@ def cdef(
         structs=_structs(specs, config),
         functions=functions,
     )
+
+
+# ------------------------------------------------------------ a step's kept kernels
+
+
+@dataclass(frozen=True)
+class KeptKernel:
+    """A kernel a controller step calls, split at its parameters (:mod:`codegen.prepare`):
+    ``keep`` evaluates its parameter-only subexpressions once (the controller's ``_init``
+    stores them in the state, ``size`` values), ``call`` the per-step rest reading them."""
+
+    name: str  # the spec's name
+    size: int
+    keep: dict[str, object]  # function contexts, as _function_context's
+    call: dict[str, object]
+
+
+def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kept"
+                ) -> KeptKernel | None:
+    """``ir`` (a kernel without status or guards, with a ``"params"`` input) as
+    ``<name>_keep(p, kept)`` and ``<name>(kept, other inputs..., outputs...)``, or None if
+    nothing but parameters would be kept (then there is nothing to evaluate once)."""
+    spec = ir.spec
+    if spec.returns_status or spec.guards or not any(a.kind == "params" for a in spec.inputs):
+        return None
+    form = prepared_form(ir.cse, replace(spec, returns_status=True))
+    if not form.param_temps:
+        return None
+    slots = input_slots(spec)
+    names = _local_names(spec, slots)
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    # keep: the parameters read, the parameter-only temporaries, the kept values stored
+    param_args = [a for a in spec.inputs if a.kind == "params"]
+    used_params = form.used_params()
+    body = [_decl(names[s.symbol], _access(s.arg, s.field, s.index))
+            for s in slots if s.symbol in used_params]
+    body += [_decl(str(s), printer.expr_code(e)) for s, e in form.param_temps]
+    body += [_Line("store", f"{kept_arg}[{k}]", names.get(s, str(s)))
+             for k, s in enumerate(form.kept)]
+    keep_ops = op_count_from(printer.ops)
+    keep: dict[str, object] = {
+        "name": f"{name}_keep", "origin": f"the parameter-only part of {config.prefix}{spec.name}",
+        "return_type": "void",
+        "params": [*(_param_decl(a, True, config) for a in param_args),
+                   f"{config.real_type} {kept_arg}[{len(form.kept)}]"],
+        "ops": keep_ops.comment(), "body": body,
+    }
+    # call: the per-step rest, each input and kept value read before its first use
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    state_args = [a for a in spec.inputs if a.kind != "params"]
+    used = form.used_state()
+    loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index))
+             for s in slots if s.symbol in used}
+    loads.update({s: _decl(names.get(s, str(s)), f"{kept_arg}[{k}]")
+                  for k, s in enumerate(form.kept)})
+    body = [_Line("void", a.name) for a in state_args
+            if not any(s in used for s in a.all_symbols())]
+    load_for = _LazyLoads(loads)
+    body += _temp_lines(form.state_temps, load_for, printer)
+    body += load_for([e for exprs in form.outputs for e in exprs])
+    body += load_for.rest()
+    body += _commit(spec, _output_stores(spec, form.outputs, printer, config))
+    call: dict[str, object] = {
+        "name": name, "origin": f"the per-step part of {config.prefix}{spec.name}",
+        "return_type": "void",
+        "params": [f"const {config.real_type} {kept_arg}[{len(form.kept)}]",
+                   *(_param_decl(a, True, config) for a in state_args),
+                   *(_param_decl(a, False, config) for a in spec.outputs)],
+        "ops": op_count_from(printer.ops).comment(), "body": body,
+    }
+    return KeptKernel(spec.name, len(form.kept), keep, call)

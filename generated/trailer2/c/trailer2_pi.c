@@ -18,6 +18,77 @@
 const trailer2_pi_config_t trailer2_pi_frozen_config = TRAILER2_PI_FROZEN_CONFIG;
 #endif
 
+#ifndef TRAILER2_PI_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* trailer2_pi_k_minimal_pi_law_keep: the parameter-only part of trailer2_minimal_pi_law of
+   trailer2_laws.c (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
+static void trailer2_pi_k_minimal_pi_law_keep(const trailer2_params_t *p, trailer2_real_t kept[2])
+{
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t0 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t1 = TRAILER2_LIT(1.0)/radius_left;
+    kept[0] = _t0;
+    kept[1] = _t1;
+}
+#endif
+
+/* trailer2_pi_k_minimal_pi_law: the per-step part of trailer2_minimal_pi_law of trailer2_laws.c
+   (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+static void trailer2_pi_k_minimal_pi_law(const trailer2_real_t kept[2], const trailer2_real_t *q,
+    const trailer2_real_t *qdot, const trailer2_real_t *q_des, const trailer2_real_t *qdot_des,
+    const trailer2_real_t *integral, const trailer2_real_t *gains, const trailer2_real_t *limits,
+    trailer2_real_t *u, trailer2_real_t *integral_next)
+{
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t qd_2 = q_des[2];
+    const trailer2_real_t _t2 = qd_2 - theta_tractor;
+    const trailer2_real_t qdd_0 = qdot_des[0];
+    const trailer2_real_t qdd_1 = qdot_des[1];
+    const trailer2_real_t _t3 = qdd_0*TRAILER2_COS(qd_2) + qdd_1*TRAILER2_SIN(qd_2);
+    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t x_tractor = q[0];
+    const trailer2_real_t qd_0 = q_des[0];
+    const trailer2_real_t _t5 = qd_0 - x_tractor;
+    const trailer2_real_t _t6 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t y_tractor = q[1];
+    const trailer2_real_t qd_1 = q_des[1];
+    const trailer2_real_t _t7 = qd_1 - y_tractor;
+    const trailer2_real_t kx = gains[0];
+    const trailer2_real_t _t8 = _t3*TRAILER2_COS(_t2) + kx*(_t4*_t5 + _t6*_t7);
+    const trailer2_real_t qdd_2 = qdot_des[2];
+    const trailer2_real_t ky = gains[1];
+    const trailer2_real_t ktheta = gains[2];
+    const trailer2_real_t _t9 = TRAILER2_LIT(207.0)*_t3*(ktheta*TRAILER2_SIN(_t2)
+            + ky*(_t4*_t7 - _t5*_t6))/TRAILER2_LIT(1000.0)
+            + TRAILER2_LIT(207.0)*qdd_2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t thetadot_right = qdot[5];
+    const trailer2_real_t _t0 = kept[0];
+    const trailer2_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;
+    const trailer2_real_t tau_max = limits[1];
+    const trailer2_real_t _t11 = -tau_max;
+    const trailer2_real_t ki = gains[4];
+    const trailer2_real_t h = limits[0];
+    const trailer2_real_t _t12 = h*ki;
+    const trailer2_real_t I_0 = integral[0];
+    const trailer2_real_t _t13 = TRAILER2_FMIN(tau_max, TRAILER2_FMAX(_t11, I_0 + _t10*_t12));
+    const trailer2_real_t thetadot_left = qdot[6];
+    const trailer2_real_t _t1 = kept[1];
+    const trailer2_real_t _t14 = _t1*(_t8 - _t9) - thetadot_left;
+    const trailer2_real_t I_1 = integral[1];
+    const trailer2_real_t _t15 = TRAILER2_FMIN(tau_max, TRAILER2_FMAX(_t11, I_1 + _t12*_t14));
+    const trailer2_real_t kp = gains[3];
+    u[0] = _t10*kp + _t13;
+    u[1] = _t14*kp + _t15;
+    integral_next[0] = _t13;
+    integral_next[1] = _t15;
+}
+
 trailer2_status_t trailer2_pi_check_config_detail(const trailer2_pi_config_t *config,
     trailer2_error_detail_t *detail)
 {
@@ -62,7 +133,6 @@ trailer2_status_t trailer2_pi_check_config(const trailer2_pi_config_t *config)
     return trailer2_pi_check_config_detail(config, 0);
 }
 
-#ifndef TRAILER2_PI_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
@@ -74,6 +144,34 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
+static bool trailer2_pi_inputs_bounded(const trailer2_real_t q[11], const trailer2_real_t qdot[11],
+    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
+    const trailer2_real_t qddot_des[11])
+{
+#ifdef TRAILER2_FLOAT32
+    const trailer2_bits_t mask = 0x7fffffffu;
+#else
+    const trailer2_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const trailer2_bits_t bound = trailer2_real_bits(TRAILER2_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 11; ++i) {
+        beyond |= ((trailer2_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef TRAILER2_PI_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool trailer2_pi_config_unchanged(const trailer2_pi_config_t *config,
@@ -186,6 +284,8 @@ trailer2_status_t trailer2_pi_init(trailer2_pi_state_t *state, const trailer2_pi
     }
     fresh.magic = TRAILER2_STATE_MAGIC;
     fresh.config = *config;
+    /* the values the step's minimal_pi_law keeps */
+    trailer2_pi_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
     trailer2_pi_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -269,9 +369,13 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     }
     cfg = &state->config;
 #endif
-    status = trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != TRAILER2_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const trailer2_real_t *const kept_minimal_pi_law = state->k_minimal_pi_law;
+    if (!trailer2_pi_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     gain = state->gain;
     s_norm = state->s_norm;
@@ -279,8 +383,8 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     {
         const trailer2_real_t gains[5] = {cfg->kx, cfg->ky, cfg->ktheta, cfg->kp, cfg->ki};
         const trailer2_real_t limits[2] = {cfg->h, cfg->tau_max};
-        trailer2_minimal_pi_law(&cfg->nominal, q, qdot, q_des, qdot_des, state->integral, gains,
-                limits, u, integral);
+        trailer2_pi_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
+                gains, limits, u, integral);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -321,5 +425,11 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     state->steps = state->steps < TRAILER2_STEPS_MAX ? state->steps + 1u : TRAILER2_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return trailer2_fail(detail, status, TRAILER2_FIELD_NONE, -1);
+    if (detail != NULL) {  /* trailer2_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = TRAILER2_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

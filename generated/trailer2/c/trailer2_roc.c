@@ -18,6 +18,395 @@
 const trailer2_roc_config_t trailer2_roc_frozen_config = TRAILER2_ROC_FROZEN_CONFIG;
 #endif
 
+#ifndef TRAILER2_ROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* trailer2_roc_k_minimal_roc_law_keep: the parameter-only part of trailer2_minimal_roc_law of
+   trailer2_laws.c (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 6 mul, 8 div, 0 sin/cos, 0 sqrt */
+static void trailer2_roc_k_minimal_roc_law_keep(const trailer2_params_t *p,
+    trailer2_real_t kept[25])
+{
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t7 = J_theta_tractor*_t1;
+    const trailer2_real_t _t8 = TRAILER2_LIT(3.0)*K_theta_cart_x_tractor/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t9 = TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER2_LIT(10.0);
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart2;
+    kept[2] = J_theta_cart2_left;
+    kept[3] = J_theta_cart2_right;
+    kept[4] = J_theta_cart_left;
+    kept[5] = J_theta_cart_right;
+    kept[6] = J_theta_left;
+    kept[7] = J_theta_right;
+    kept[8] = J_x_tractor;
+    kept[9] = K_theta_cart_x_tractor;
+    kept[10] = K_theta_cart_x_tractor_2;
+    kept[11] = K_theta_cart2_x_tractor;
+    kept[12] = K_theta_cart2_x_tractor_2;
+    kept[13] = K_theta_tractor_x_tractor;
+    kept[14] = K_theta_tractor_x_tractor_2;
+    kept[15] = _t0;
+    kept[16] = _t1;
+    kept[17] = _t2;
+    kept[18] = _t3;
+    kept[19] = _t4;
+    kept[20] = _t5;
+    kept[21] = _t6;
+    kept[22] = _t7;
+    kept[23] = _t8;
+    kept[24] = _t9;
+}
+#endif
+
+/* trailer2_roc_k_minimal_roc_law: the per-step part of trailer2_minimal_roc_law of trailer2_laws.c
+   (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 278 add, 385 mul, 39 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+static void trailer2_roc_k_minimal_roc_law(const trailer2_real_t kept[25], const trailer2_real_t *q,
+    const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
+    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
+    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *bounds,
+    const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm,
+    trailer2_real_t *gain)
+{
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
+    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t12 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t14 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t17 = TRAILER2_SIN(theta_cart2);
+    const trailer2_real_t _t18 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
+    const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;
+    const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
+    const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
+    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(17.0)*_t11*_t17/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t26 = -TRAILER2_LIT(207.0)*_t14/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t0 = kept[15];
+    const trailer2_real_t _t27 = _t0*_t26;
+    const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
+    const trailer2_real_t _t1 = kept[16];
+    const trailer2_real_t _t29 = _t1*_t26;
+    const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
+    const trailer2_real_t _t31 = -_t0*_t25;
+    const trailer2_real_t _t32 = -_t11*_t31 - _t28;
+    const trailer2_real_t _t33 = -TRAILER2_LIT(5.0)*_t32/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t34 = -_t21*_t33;
+    const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
+    const trailer2_real_t _t36 = -_t1*_t25;
+    const trailer2_real_t _t37 = -_t11*_t36 - _t30;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t39 = -_t21*_t38;
+    const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
+    const trailer2_real_t _t41 = _t33/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
+    const trailer2_real_t _t43 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
+    const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
+    const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(5.0)*_t49/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t51 = _t50/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
+    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
+    const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
+    const trailer2_real_t _t54 = K_theta_tractor_x_tractor_2*_t14;
+    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
+    const trailer2_real_t _t55 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
+    const trailer2_real_t _t56 = K_theta_cart_x_tractor_2*_t11;
+    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
+    const trailer2_real_t _t57 = K_theta_cart2_x_tractor*_t17;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
+    const trailer2_real_t _t58 = K_theta_cart2_x_tractor_2*_t18;
+    const trailer2_real_t _t59 = K_theta_tractor_x_tractor*_t14;
+    const trailer2_real_t _t60 = K_theta_cart_x_tractor*_t11;
+    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
+    const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer2_real_t _t64 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t65 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t thetadot_right = qdot[5];
+    const trailer2_real_t thetadot_left = qdot[6];
+    const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
+    const trailer2_real_t _t67 = _t66*_t66;
+    const trailer2_real_t _t68 = _t61*_t67;
+    const trailer2_real_t _t69 = _t33*thetadot_right + _t38*thetadot_left;
+    const trailer2_real_t _t70 = _t69*_t69;
+    const trailer2_real_t _t71 = -_t0*thetadot_right + _t1*thetadot_left;
+    const trailer2_real_t _t72 = _t71*_t71;
+    const trailer2_real_t _t73 = _t63*_t67;
+    const trailer2_real_t _t74 = _t62*_t70;
+    const trailer2_real_t _t75 = _t57*_t67;
+    const trailer2_real_t _t76 = _t58*_t67;
+    const trailer2_real_t _t77 = _t55*_t70;
+    const trailer2_real_t _t78 = _t56*_t70;
+    const trailer2_real_t _t79 = _t15*_t72;
+    const trailer2_real_t _t80 = _t13*_t72;
+    const trailer2_real_t _t81 = _t64*_t70;
+    const trailer2_real_t _t82 = _t65*_t70;
+    const trailer2_real_t _t83 = _t71*thetadot_right;
+    const trailer2_real_t _t84 = _t71*thetadot_left;
+    const trailer2_real_t _t85 = _t69*thetadot_right;
+    const trailer2_real_t _t86 = _t69*thetadot_left;
+    const trailer2_real_t _t87 = _t66*thetadot_right;
+    const trailer2_real_t _t88 = _t66*thetadot_left;
+    const trailer2_real_t _t89 = _t0*_t25;
+    const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
+    const trailer2_real_t _t91 = -TRAILER2_LIT(5.0)*_t90/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t93 = -_t11*_t89 + _t28;
+    const trailer2_real_t _t94 = _t1*_t25;
+    const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
+    const trailer2_real_t _t96 = -TRAILER2_LIT(5.0)*_t95/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t98 = -_t11*_t94 + _t30;
+    const trailer2_real_t _t99 = TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t100 = _t99/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
+    const trailer2_real_t _t102 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
+    const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
+    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
+    const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
+    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
+    const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
+    const trailer2_real_t _t114 = -TRAILER2_LIT(5.0)*_t113/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t115 = _t114/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t116 = -_t24*_t99 + _t34;
+    const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
+    const trailer2_real_t _t118 = -TRAILER2_LIT(5.0)*_t117/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t120 = -_t102*_t24 + _t39;
+    const trailer2_real_t _t121 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t122 = _t121/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
+    const trailer2_real_t _t124 = TRAILER2_LIT(5.0)*_t52/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t125 = _t124/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
+    const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
+    const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
+    const trailer2_real_t _t129 = K_theta_cart2_x_tractor_2*_t17 - _t61;
+    const trailer2_real_t J_x_tractor = kept[8];
+    const trailer2_real_t _t130 = J_x_tractor*_t31 - _t0*_t127 + _t128*_t33 + _t129*_t46;
+    const trailer2_real_t _t131 = _t53 + _t54;
+    const trailer2_real_t _t132 = _t55 + _t56;
+    const trailer2_real_t _t133 = _t57 + _t58;
+    const trailer2_real_t _t134 = J_x_tractor*_t27 - _t0*_t131 + _t132*_t33 + _t133*_t46;
+    const trailer2_real_t _t135 = _t13*(_t55 + _t56) + _t15*(_t60 - _t62);
+    const trailer2_real_t _t136 = _t13*(_t57 + _t58) + _t15*(_t61 - _t63);
+    const trailer2_real_t _t2 = kept[17];
+    const trailer2_real_t _t137 = _t127*_t31 + _t131*_t27 + _t135*_t33 + _t136*_t46 + _t2;
+    const trailer2_real_t _t138 = _t64*(_t57 + _t58) + _t65*(_t61 - _t63);
+    const trailer2_real_t J_theta_cart = kept[0];
+    const trailer2_real_t _t139 = J_theta_cart*_t33 - _t0*_t135 + _t128*_t31 + _t132*_t27
+            + _t138*_t46;
+    const trailer2_real_t J_theta_cart2 = kept[1];
+    const trailer2_real_t _t140 = J_theta_cart2*_t46 - _t0*_t136 + _t129*_t31 + _t133*_t27
+            + _t138*_t33;
+    const trailer2_real_t _t141 = -_t47 - _t48;
+    const trailer2_real_t _t3 = kept[18];
+    const trailer2_real_t _t142 = _t141*_t3;
+    const trailer2_real_t J_theta_cart2_left = kept[2];
+    const trailer2_real_t _t143 = J_theta_cart2_left*_t142;
+    const trailer2_real_t _t144 = _t47 - _t48;
+    const trailer2_real_t _t4 = kept[19];
+    const trailer2_real_t _t145 = _t144*_t4;
+    const trailer2_real_t J_theta_cart2_right = kept[3];
+    const trailer2_real_t _t146 = J_theta_cart2_right*_t145;
+    const trailer2_real_t _t147 = -_t41 - _t42;
+    const trailer2_real_t _t5 = kept[20];
+    const trailer2_real_t _t148 = _t147*_t5;
+    const trailer2_real_t J_theta_cart_left = kept[4];
+    const trailer2_real_t _t149 = J_theta_cart_left*_t148;
+    const trailer2_real_t _t150 = _t41 - _t42;
+    const trailer2_real_t _t6 = kept[21];
+    const trailer2_real_t _t151 = _t150*_t6;
+    const trailer2_real_t J_theta_cart_right = kept[5];
+    const trailer2_real_t _t152 = J_theta_cart_right*_t151;
+    const trailer2_real_t _t153 = _t43 - _t44;
+    const trailer2_real_t _t154 = _t153*_t6;
+    const trailer2_real_t _t155 = -_t43 - _t44;
+    const trailer2_real_t _t156 = _t155*_t5;
+    const trailer2_real_t _t157 = _t51 - _t52;
+    const trailer2_real_t _t158 = _t157*_t4;
+    const trailer2_real_t _t159 = -_t51 - _t52;
+    const trailer2_real_t _t160 = _t159*_t3;
+    const trailer2_real_t _t161 = _t143*_t160 + _t146*_t158 + _t149*_t156 + _t152*_t154;
+    const trailer2_real_t _t162 = J_x_tractor*_t36 + _t1*_t127 + _t128*_t38 + _t129*_t50;
+    const trailer2_real_t _t7 = kept[22];
+    const trailer2_real_t _t163 = _t127*_t36 + _t131*_t29 + _t135*_t38 + _t136*_t50 + _t7;
+    const trailer2_real_t _t164 = J_x_tractor*_t29 + _t1*_t131 + _t132*_t38 + _t133*_t50;
+    const trailer2_real_t _t165 = J_theta_cart*_t38 + _t1*_t135 + _t128*_t36 + _t132*_t29
+            + _t138*_t50;
+    const trailer2_real_t _t166 = J_theta_cart2*_t50 + _t1*_t136 + _t129*_t36 + _t133*_t29
+            + _t138*_t38;
+    const trailer2_real_t _t167 = _t72*(_t53 + _t54) + _t75 + _t76 + _t77 + _t78;
+    const trailer2_real_t _t168 = _t27*_t83 + _t29*_t84;
+    const trailer2_real_t _t169 = _t102*_t86 + _t83*_t91 + _t84*_t96 + _t85*_t99;
+    const trailer2_real_t _t170 = _t106*_t83 + _t110*_t84 + _t114*_t85 + _t118*_t86 + _t121*_t87
+            + _t124*_t88;
+    const trailer2_real_t _t171 = J_x_tractor*_t168 + _t128*_t169 + _t129*_t170 + _t167;
+    const trailer2_real_t _t172 = _t60*_t70 + _t68 + _t72*(-K_theta_tractor_x_tractor_2*_t12 + _t59)
+            - _t73 - _t74;
+    const trailer2_real_t _t173 = _t83*_t89 + _t84*_t94;
+    const trailer2_real_t _t174 = J_x_tractor*_t173 + _t132*_t169 + _t133*_t170 + _t172;
+    const trailer2_real_t _t8 = kept[23];
+    const trailer2_real_t _t9 = kept[24];
+    const trailer2_real_t _t175 = _t12*(_t11*_t70*_t8 + _t18*_t67*_t9) + _t13*(-_t73 - _t74)
+            + _t15*(-_t75 - _t76 - _t77 - _t78);
+    const trailer2_real_t _t176 = _t127*_t168 + _t131*_t173 + _t135*_t169 + _t136*_t170 + _t175;
+    const trailer2_real_t _t177 = _t64*(_t68 - _t73) + _t65*(-_t75 - _t76) + _t79*(_t55 + _t56)
+            + _t80*(-_t60 + _t62);
+    const trailer2_real_t _t178 = J_theta_cart*_t169 + _t128*_t168 + _t132*_t173 + _t138*_t170
+            + _t177;
+    const trailer2_real_t _t179 = _t57*(_t79 + _t82) + _t58*(_t79 + _t82) + _t61*(-_t80 - _t81)
+            + _t63*(_t80 + _t81);
+    const trailer2_real_t _t180 = J_theta_cart2*_t170 + _t129*_t168 + _t133*_t173 + _t138*_t169
+            + _t179;
+    const trailer2_real_t e0 = e[0];
+    const trailer2_real_t edot0 = edot[0];
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t181 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t182 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t183 = trailer2_norm2(_t181, _t182);
+    const trailer2_real_t k1_0 = k1[0];
+    const trailer2_real_t k2_0 = k2[0];
+    const trailer2_real_t _t184 = e0*k1_0 + edot0*k2_0;
+    const trailer2_real_t k1_1 = k1[1];
+    const trailer2_real_t k2_1 = k2[1];
+    const trailer2_real_t _t185 = e1*k1_1 + edot1*k2_1;
+    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t qdd_des1 = qddot_des[1];
+    const trailer2_real_t alpha = bounds[0];
+    const trailer2_real_t phi = bounds[1];
+    const trailer2_real_t _t186 = (alpha*(trailer2_norm2(_t184, _t185)
+            + trailer2_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER2_LIT(1.0) - alpha);
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t187 = _t186/TRAILER2_FMAX(_t183, eps_1);
+    const trailer2_real_t _t188 = _t181*_t187 + _t184 + qdd_des0;
+    const trailer2_real_t _t189 = _t182*_t187 + _t185 + qdd_des1;
+    const trailer2_real_t _t190 = _t92 - _t93;
+    const trailer2_real_t _t191 = _t190*_t6;
+    const trailer2_real_t _t192 = _t97 - _t98;
+    const trailer2_real_t _t193 = _t192*_t6;
+    const trailer2_real_t _t194 = _t100 - _t101;
+    const trailer2_real_t _t195 = _t194*_t6;
+    const trailer2_real_t _t196 = _t103 - _t104;
+    const trailer2_real_t _t197 = _t196*_t6;
+    const trailer2_real_t _t198 = _t191*_t83 + _t193*_t84 + _t195*_t85 + _t197*_t86;
+    const trailer2_real_t _t199 = -_t92 - _t93;
+    const trailer2_real_t _t200 = _t199*_t5;
+    const trailer2_real_t _t201 = -_t97 - _t98;
+    const trailer2_real_t _t202 = _t201*_t5;
+    const trailer2_real_t _t203 = -_t100 - _t101;
+    const trailer2_real_t _t204 = _t203*_t5;
+    const trailer2_real_t _t205 = -_t103 - _t104;
+    const trailer2_real_t _t206 = _t205*_t5;
+    const trailer2_real_t _t207 = _t200*_t83 + _t202*_t84 + _t204*_t85 + _t206*_t86;
+    const trailer2_real_t _t208 = _t107 - _t108;
+    const trailer2_real_t _t209 = _t208*_t4;
+    const trailer2_real_t _t210 = _t111 - _t112;
+    const trailer2_real_t _t211 = _t210*_t4;
+    const trailer2_real_t _t212 = _t115 - _t116;
+    const trailer2_real_t _t213 = _t212*_t4;
+    const trailer2_real_t _t214 = _t119 - _t120;
+    const trailer2_real_t _t215 = _t214*_t4;
+    const trailer2_real_t _t216 = _t122 - _t123;
+    const trailer2_real_t _t217 = _t216*_t4;
+    const trailer2_real_t _t218 = _t125 - _t126;
+    const trailer2_real_t _t219 = _t218*_t4;
+    const trailer2_real_t _t220 = _t209*_t83 + _t211*_t84 + _t213*_t85 + _t215*_t86 + _t217*_t87
+            + _t219*_t88;
+    const trailer2_real_t _t221 = -_t107 - _t108;
+    const trailer2_real_t _t222 = _t221*_t3;
+    const trailer2_real_t _t223 = -_t111 - _t112;
+    const trailer2_real_t _t224 = _t223*_t3;
+    const trailer2_real_t _t225 = -_t115 - _t116;
+    const trailer2_real_t _t226 = _t225*_t3;
+    const trailer2_real_t _t227 = -_t119 - _t120;
+    const trailer2_real_t _t228 = _t227*_t3;
+    const trailer2_real_t _t229 = -_t122 - _t123;
+    const trailer2_real_t _t230 = _t229*_t3;
+    const trailer2_real_t _t231 = -_t125 - _t126;
+    const trailer2_real_t _t232 = _t231*_t3;
+    const trailer2_real_t _t233 = _t222*_t83 + _t224*_t84 + _t226*_t85 + _t228*_t86 + _t230*_t87
+            + _t232*_t88;
+    const trailer2_real_t J_theta_right = kept[7];
+    const trailer2_real_t _t234 = J_theta_cart2_left*_t142*_t142 + J_theta_cart2_right*_t145*_t145
+            + J_theta_cart_left*_t148*_t148 + J_theta_cart_right*_t151*_t151 + J_theta_right
+            - _t0*_t137 + _t130*_t31 + _t134*_t27 + _t139*_t33 + _t140*_t46;
+    const trailer2_real_t _t235 = _t1*_t137 + _t130*_t36 + _t134*_t29 + _t139*_t38 + _t140*_t50
+            + _t161;
+    const trailer2_real_t _t236 = -_t0*_t163 + _t161 + _t162*_t31 + _t164*_t27 + _t165*_t33
+            + _t166*_t46;
+    const trailer2_real_t J_theta_left = kept[6];
+    const trailer2_real_t _t237 = J_theta_cart2_left*_t160*_t160 + J_theta_cart2_right*_t158*_t158
+            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t154*_t154 + J_theta_left
+            + _t1*_t163 + _t162*_t36 + _t164*_t29 + _t165*_t38 + _t166*_t50;
+    const trailer2_real_t _t238 = -_t0*_t176 + _t143*_t233 + _t146*_t220 + _t149*_t207 + _t152*_t198
+            + _t171*_t31 + _t174*_t27 + _t178*_t33 + _t180*_t46;
+    const trailer2_real_t _t239 = J_theta_cart2_left*_t160*_t233 + J_theta_cart2_right*_t158*_t220
+            + J_theta_cart_left*_t156*_t207 + J_theta_cart_right*_t154*_t198 + _t1*_t176
+            + _t171*_t36 + _t174*_t29 + _t178*_t38 + _t180*_t50;
+    u[0] = _t188*_t234 + _t189*_t235 + _t238;
+    u[1] = _t188*_t236 + _t189*_t237 + _t239;
+    s[0] = _t181;
+    s[1] = _t182;
+    s_norm[0] = _t183;
+    gain[0] = _t186;
+}
+
 trailer2_status_t trailer2_roc_check_config_detail(const trailer2_roc_config_t *config,
     trailer2_error_detail_t *detail)
 {
@@ -52,7 +441,6 @@ trailer2_status_t trailer2_roc_check_config(const trailer2_roc_config_t *config)
     return trailer2_roc_check_config_detail(config, 0);
 }
 
-#ifndef TRAILER2_ROC_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
@@ -64,6 +452,34 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
+static bool trailer2_roc_inputs_bounded(const trailer2_real_t q[11], const trailer2_real_t qdot[11],
+    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
+    const trailer2_real_t qddot_des[11])
+{
+#ifdef TRAILER2_FLOAT32
+    const trailer2_bits_t mask = 0x7fffffffu;
+#else
+    const trailer2_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const trailer2_bits_t bound = trailer2_real_bits(TRAILER2_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 11; ++i) {
+        beyond |= ((trailer2_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef TRAILER2_ROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool trailer2_roc_config_unchanged(const trailer2_roc_config_t *config,
@@ -183,6 +599,8 @@ trailer2_status_t trailer2_roc_init(trailer2_roc_state_t *state,
     fresh.config = *config;
     trailer2_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
+    /* the values the step's minimal_roc_law keeps */
+    trailer2_roc_k_minimal_roc_law_keep(&config->nominal, fresh.k_minimal_roc_law);
     trailer2_roc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -268,9 +686,13 @@ trailer2_status_t trailer2_roc_step_detail(trailer2_roc_state_t *state,
     }
     cfg = &state->config;
 #endif
-    status = trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != TRAILER2_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const trailer2_real_t *const kept_minimal_roc_law = state->k_minimal_roc_law;
+    if (!trailer2_roc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     off = 5;
     gain = state->gain;
@@ -280,9 +702,9 @@ trailer2_status_t trailer2_roc_step_detail(trailer2_roc_state_t *state,
     {
         trailer2_real_t s[11];
         const trailer2_real_t bounds[2] = {cfg->alpha, cfg->phi};
-        trailer2_minimal_roc_law(&cfg->nominal, q, qdot, e, edot, &qddot_des[off], &cfg->k1[off],
-                &cfg->k2[off], &state->p12[off], &state->p22[off], bounds, &cfg->eps, u, s, &s_norm,
-                &gain);
+        trailer2_roc_k_minimal_roc_law(kept_minimal_roc_law, q, qdot, e, edot, &qddot_des[off],
+                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], bounds, &cfg->eps,
+                u, s, &s_norm, &gain);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -321,5 +743,11 @@ trailer2_status_t trailer2_roc_step_detail(trailer2_roc_state_t *state,
     state->steps = state->steps < TRAILER2_STEPS_MAX ? state->steps + 1u : TRAILER2_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return trailer2_fail(detail, status, TRAILER2_FIELD_NONE, -1);
+    if (detail != NULL) {  /* trailer2_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = TRAILER2_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

@@ -18,6 +18,357 @@
 const trailer2_tdc_config_t trailer2_tdc_frozen_config = TRAILER2_TDC_FROZEN_CONFIG;
 #endif
 
+#ifndef TRAILER2_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* trailer2_tdc_k_minimal_tde_keep: the parameter-only part of trailer2_minimal_tde of
+   trailer2_laws.c (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
+static void trailer2_tdc_k_minimal_tde_keep(const trailer2_params_t *p, trailer2_real_t kept[23])
+{
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t7 = J_theta_tractor*_t1;
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart2;
+    kept[2] = J_theta_cart2_left;
+    kept[3] = J_theta_cart2_right;
+    kept[4] = J_theta_cart_left;
+    kept[5] = J_theta_cart_right;
+    kept[6] = J_theta_left;
+    kept[7] = J_theta_right;
+    kept[8] = J_x_tractor;
+    kept[9] = K_theta_cart_x_tractor;
+    kept[10] = K_theta_cart_x_tractor_2;
+    kept[11] = K_theta_cart2_x_tractor;
+    kept[12] = K_theta_cart2_x_tractor_2;
+    kept[13] = K_theta_tractor_x_tractor;
+    kept[14] = K_theta_tractor_x_tractor_2;
+    kept[15] = _t0;
+    kept[16] = _t1;
+    kept[17] = _t2;
+    kept[18] = _t3;
+    kept[19] = _t4;
+    kept[20] = _t5;
+    kept[21] = _t6;
+    kept[22] = _t7;
+}
+#endif
+
+/* trailer2_tdc_k_minimal_tde: the per-step part of trailer2_minimal_tde of trailer2_laws.c
+   (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 122 add, 181 mul, 20 div, 6 sin/cos, 0 sqrt */
+static void trailer2_tdc_k_minimal_tde(const trailer2_real_t kept[23],
+    const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
+    const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
+{
+    const trailer2_real_t qp3 = q_prev[3];
+    const trailer2_real_t _t8 = TRAILER2_SIN(qp3);
+    const trailer2_real_t _t9 = TRAILER2_COS(qp3);
+    const trailer2_real_t qp2 = q_prev[2];
+    const trailer2_real_t _t10 = TRAILER2_SIN(qp2);
+    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t12 = TRAILER2_COS(qp2);
+    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t qp4 = q_prev[4];
+    const trailer2_real_t _t14 = TRAILER2_SIN(qp4);
+    const trailer2_real_t _t15 = TRAILER2_COS(qp4);
+    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t0 = kept[15];
+    const trailer2_real_t _t19 = _t0*_t18;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t21 = _t0*_t20;
+    const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
+    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t25 = -_t11*_t9 + TRAILER2_LIT(3.0)*_t12*_t8/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
+    const trailer2_real_t _t1 = kept[16];
+    const trailer2_real_t _t27 = _t1*_t18;
+    const trailer2_real_t _t28 = _t1*_t20;
+    const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
+    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
+    const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
+    const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
+    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t38 = -_t11*_t15 + TRAILER2_LIT(3.0)*_t12*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
+    const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
+    const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
+    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
+    const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
+    const trailer2_real_t _t46 = K_theta_cart_x_tractor_2*_t9;
+    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
+    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t14;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
+    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
+    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
+    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
+    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
+    const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
+    const trailer2_real_t _t55 = K_theta_cart_x_tractor_2*_t8 - _t49;
+    const trailer2_real_t _t56 = K_theta_cart2_x_tractor_2*_t14 - _t50;
+    const trailer2_real_t J_x_tractor = kept[8];
+    const trailer2_real_t _t57 = J_x_tractor*_t19 - _t0*_t54 + _t23*_t55 + _t36*_t56;
+    const trailer2_real_t _t58 = K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t12;
+    const trailer2_real_t _t59 = _t45 + _t46;
+    const trailer2_real_t _t60 = _t47 + _t48;
+    const trailer2_real_t _t61 = J_x_tractor*_t21 - _t0*_t58 + _t23*_t59 + _t36*_t60;
+    const trailer2_real_t _t62 = _t11*(_t45 + _t46) + _t13*(-K_theta_cart_x_tractor_2*_t8 + _t49);
+    const trailer2_real_t _t63 = _t52*(_t47 + _t48) + _t53*(_t50 - _t51);
+    const trailer2_real_t J_theta_cart = kept[0];
+    const trailer2_real_t _t64 = J_theta_cart*_t23 - _t0*_t62 + _t19*_t55 + _t21*_t59 + _t36*_t63;
+    const trailer2_real_t _t65 = _t11*(_t47 + _t48) + _t13*(_t50 - _t51);
+    const trailer2_real_t J_theta_cart2 = kept[1];
+    const trailer2_real_t _t66 = J_theta_cart2*_t36 - _t0*_t65 + _t19*_t56 + _t21*_t60 + _t23*_t63;
+    const trailer2_real_t _t2 = kept[17];
+    const trailer2_real_t _t67 = _t19*_t54 + _t2 + _t21*_t58 + _t23*_t62 + _t36*_t65;
+    const trailer2_real_t _t68 = _t24 - _t26;
+    const trailer2_real_t _t3 = kept[18];
+    const trailer2_real_t _t69 = _t3*_t68;
+    const trailer2_real_t _t70 = _t31 - _t32;
+    const trailer2_real_t _t71 = _t3*_t70;
+    const trailer2_real_t _t72 = -_t24 - _t26;
+    const trailer2_real_t _t4 = kept[19];
+    const trailer2_real_t _t73 = _t4*_t72;
+    const trailer2_real_t _t74 = -_t31 - _t32;
+    const trailer2_real_t _t75 = _t4*_t74;
+    const trailer2_real_t _t76 = _t37 - _t40;
+    const trailer2_real_t _t5 = kept[20];
+    const trailer2_real_t _t77 = _t5*_t76;
+    const trailer2_real_t _t78 = _t43 - _t44;
+    const trailer2_real_t _t79 = _t5*_t78;
+    const trailer2_real_t _t80 = -_t37 - _t40;
+    const trailer2_real_t _t6 = kept[21];
+    const trailer2_real_t _t81 = _t6*_t80;
+    const trailer2_real_t _t82 = -_t43 - _t44;
+    const trailer2_real_t _t83 = _t6*_t82;
+    const trailer2_real_t J_theta_cart2_left = kept[2];
+    const trailer2_real_t J_theta_cart2_right = kept[3];
+    const trailer2_real_t J_theta_cart_left = kept[4];
+    const trailer2_real_t J_theta_cart_right = kept[5];
+    const trailer2_real_t _t84 = J_theta_cart2_left*_t81*_t83 + J_theta_cart2_right*_t77*_t79
+            + J_theta_cart_left*_t73*_t75 + J_theta_cart_right*_t69*_t71;
+    const trailer2_real_t _t85 = J_x_tractor*_t27 + _t1*_t54 + _t30*_t55 + _t42*_t56;
+    const trailer2_real_t _t86 = J_x_tractor*_t28 + _t1*_t58 + _t30*_t59 + _t42*_t60;
+    const trailer2_real_t _t87 = J_theta_cart*_t30 + _t1*_t62 + _t27*_t55 + _t28*_t59 + _t42*_t63;
+    const trailer2_real_t _t88 = J_theta_cart2*_t42 + _t1*_t65 + _t27*_t56 + _t28*_t60 + _t30*_t63;
+    const trailer2_real_t _t7 = kept[22];
+    const trailer2_real_t _t89 = _t27*_t54 + _t28*_t58 + _t30*_t62 + _t42*_t65 + _t7;
+    const trailer2_real_t span_1 = span[0];
+    const trailer2_real_t _t90 = TRAILER2_LIT(1.0)/span_1;
+    const trailer2_real_t qd_now0 = qdot_now[0];
+    const trailer2_real_t qd_then0 = qdot_then[0];
+    const trailer2_real_t _t91 = _t90*(qd_now0 - qd_then0);
+    const trailer2_real_t qd_now1 = qdot_now[1];
+    const trailer2_real_t qd_then1 = qdot_then[1];
+    const trailer2_real_t _t92 = _t90*(qd_now1 - qd_then1);
+    const trailer2_real_t J_theta_right = kept[7];
+    const trailer2_real_t _t93 = J_theta_cart2_left*_t81*_t81 + J_theta_cart2_right*_t77*_t77
+            + J_theta_cart_left*_t73*_t73 + J_theta_cart_right*_t69*_t69 + J_theta_right - _t0*_t67
+            + _t19*_t57 + _t21*_t61 + _t23*_t64 + _t36*_t66;
+    const trailer2_real_t _t94 = _t1*_t67 + _t27*_t57 + _t28*_t61 + _t30*_t64 + _t42*_t66 + _t84;
+    const trailer2_real_t _t95 = -_t0*_t89 + _t19*_t85 + _t21*_t86 + _t23*_t87 + _t36*_t88 + _t84;
+    const trailer2_real_t J_theta_left = kept[6];
+    const trailer2_real_t _t96 = J_theta_cart2_left*_t83*_t83 + J_theta_cart2_right*_t79*_t79
+            + J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t71*_t71 + J_theta_left + _t1*_t89
+            + _t27*_t85 + _t28*_t86 + _t30*_t87 + _t42*_t88;
+    const trailer2_real_t up0 = u_prev[0];
+    const trailer2_real_t up1 = u_prev[1];
+    H1hat[0] = -_t91*_t93 - _t92*_t94 + up0;
+    H1hat[1] = -_t91*_t95 - _t92*_t96 + up1;
+}
+
+/* trailer2_tdc_k_minimal_tdc_law: the per-step part of trailer2_minimal_tdc_law of trailer2_laws.c
+   (documented in trailer2_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 124 add, 181 mul, 17 div, 6 sin/cos, 0 sqrt */
+static void trailer2_tdc_k_minimal_tdc_law(const trailer2_real_t kept[23], const trailer2_real_t *q,
+    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
+    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
+    const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u)
+{
+    (void)p12;
+    (void)p22;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t8 = TRAILER2_SIN(theta_cart);
+    const trailer2_real_t _t9 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t10 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t12 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t14 = TRAILER2_SIN(theta_cart2);
+    const trailer2_real_t _t15 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t0 = kept[15];
+    const trailer2_real_t _t19 = _t0*_t18;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t21 = _t0*_t20;
+    const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
+    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
+    const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
+    const trailer2_real_t _t1 = kept[16];
+    const trailer2_real_t _t27 = _t1*_t18;
+    const trailer2_real_t _t28 = _t1*_t20;
+    const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
+    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
+    const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
+    const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
+    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
+    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
+    const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
+    const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
+    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
+    const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
+    const trailer2_real_t _t46 = K_theta_cart_x_tractor_2*_t9;
+    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
+    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t14;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
+    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
+    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
+    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
+    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
+    const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
+    const trailer2_real_t _t55 = K_theta_cart_x_tractor_2*_t8 - _t49;
+    const trailer2_real_t _t56 = K_theta_cart2_x_tractor_2*_t14 - _t50;
+    const trailer2_real_t J_x_tractor = kept[8];
+    const trailer2_real_t _t57 = J_x_tractor*_t19 - _t0*_t54 + _t23*_t55 + _t36*_t56;
+    const trailer2_real_t _t58 = K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t12;
+    const trailer2_real_t _t59 = _t45 + _t46;
+    const trailer2_real_t _t60 = _t47 + _t48;
+    const trailer2_real_t _t61 = J_x_tractor*_t21 - _t0*_t58 + _t23*_t59 + _t36*_t60;
+    const trailer2_real_t _t62 = _t11*(_t45 + _t46) + _t13*(-K_theta_cart_x_tractor_2*_t8 + _t49);
+    const trailer2_real_t _t63 = _t11*(_t47 + _t48) + _t13*(_t50 - _t51);
+    const trailer2_real_t _t2 = kept[17];
+    const trailer2_real_t _t64 = _t19*_t54 + _t2 + _t21*_t58 + _t23*_t62 + _t36*_t63;
+    const trailer2_real_t _t65 = _t52*(_t47 + _t48) + _t53*(_t50 - _t51);
+    const trailer2_real_t J_theta_cart = kept[0];
+    const trailer2_real_t _t66 = J_theta_cart*_t23 - _t0*_t62 + _t19*_t55 + _t21*_t59 + _t36*_t65;
+    const trailer2_real_t J_theta_cart2 = kept[1];
+    const trailer2_real_t _t67 = J_theta_cart2*_t36 - _t0*_t63 + _t19*_t56 + _t21*_t60 + _t23*_t65;
+    const trailer2_real_t _t68 = _t24 - _t26;
+    const trailer2_real_t _t3 = kept[18];
+    const trailer2_real_t _t69 = _t3*_t68;
+    const trailer2_real_t _t70 = _t31 - _t32;
+    const trailer2_real_t _t71 = _t3*_t70;
+    const trailer2_real_t _t72 = -_t24 - _t26;
+    const trailer2_real_t _t4 = kept[19];
+    const trailer2_real_t _t73 = _t4*_t72;
+    const trailer2_real_t _t74 = -_t31 - _t32;
+    const trailer2_real_t _t75 = _t4*_t74;
+    const trailer2_real_t _t76 = _t37 - _t40;
+    const trailer2_real_t _t5 = kept[20];
+    const trailer2_real_t _t77 = _t5*_t76;
+    const trailer2_real_t _t78 = _t43 - _t44;
+    const trailer2_real_t _t79 = _t5*_t78;
+    const trailer2_real_t _t80 = -_t37 - _t40;
+    const trailer2_real_t _t6 = kept[21];
+    const trailer2_real_t _t81 = _t6*_t80;
+    const trailer2_real_t _t82 = -_t43 - _t44;
+    const trailer2_real_t _t83 = _t6*_t82;
+    const trailer2_real_t J_theta_cart2_left = kept[2];
+    const trailer2_real_t J_theta_cart2_right = kept[3];
+    const trailer2_real_t J_theta_cart_left = kept[4];
+    const trailer2_real_t J_theta_cart_right = kept[5];
+    const trailer2_real_t _t84 = J_theta_cart2_left*_t81*_t83 + J_theta_cart2_right*_t77*_t79
+            + J_theta_cart_left*_t73*_t75 + J_theta_cart_right*_t69*_t71;
+    const trailer2_real_t _t85 = J_x_tractor*_t27 + _t1*_t54 + _t30*_t55 + _t42*_t56;
+    const trailer2_real_t _t7 = kept[22];
+    const trailer2_real_t _t86 = _t27*_t54 + _t28*_t58 + _t30*_t62 + _t42*_t63 + _t7;
+    const trailer2_real_t _t87 = J_x_tractor*_t28 + _t1*_t58 + _t30*_t59 + _t42*_t60;
+    const trailer2_real_t _t88 = J_theta_cart*_t30 + _t1*_t62 + _t27*_t55 + _t28*_t59 + _t42*_t65;
+    const trailer2_real_t _t89 = J_theta_cart2*_t42 + _t1*_t63 + _t27*_t56 + _t28*_t60 + _t30*_t65;
+    const trailer2_real_t e0 = e[0];
+    const trailer2_real_t edot0 = edot[0];
+    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t k1_0 = k1[0];
+    const trailer2_real_t k2_0 = k2[0];
+    const trailer2_real_t _t90 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
+    const trailer2_real_t qdd_des1 = qddot_des[1];
+    const trailer2_real_t k1_1 = k1[1];
+    const trailer2_real_t k2_1 = k2[1];
+    const trailer2_real_t _t91 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t J_theta_right = kept[7];
+    const trailer2_real_t _t92 = J_theta_cart2_left*_t81*_t81 + J_theta_cart2_right*_t77*_t77
+            + J_theta_cart_left*_t73*_t73 + J_theta_cart_right*_t69*_t69 + J_theta_right - _t0*_t64
+            + _t19*_t57 + _t21*_t61 + _t23*_t66 + _t36*_t67;
+    const trailer2_real_t _t93 = _t1*_t64 + _t27*_t57 + _t28*_t61 + _t30*_t66 + _t42*_t67 + _t84;
+    const trailer2_real_t _t94 = -_t0*_t86 + _t19*_t85 + _t21*_t87 + _t23*_t88 + _t36*_t89 + _t84;
+    const trailer2_real_t J_theta_left = kept[6];
+    const trailer2_real_t _t95 = J_theta_cart2_left*_t83*_t83 + J_theta_cart2_right*_t79*_t79
+            + J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t71*_t71 + J_theta_left + _t1*_t86
+            + _t27*_t85 + _t28*_t87 + _t30*_t88 + _t42*_t89;
+    const trailer2_real_t H1hat0 = H1hat[0];
+    const trailer2_real_t H1hat1 = H1hat[1];
+    u[0] = H1hat0 + _t90*_t92 + _t91*_t93;
+    u[1] = H1hat1 + _t90*_t94 + _t91*_t95;
+}
+
 trailer2_status_t trailer2_tdc_check_config_detail(const trailer2_tdc_config_t *config,
     trailer2_error_detail_t *detail)
 {
@@ -50,7 +401,6 @@ trailer2_status_t trailer2_tdc_check_config(const trailer2_tdc_config_t *config)
     return trailer2_tdc_check_config_detail(config, 0);
 }
 
-#ifndef TRAILER2_TDC_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
@@ -62,6 +412,34 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
+static bool trailer2_tdc_inputs_bounded(const trailer2_real_t q[11], const trailer2_real_t qdot[11],
+    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
+    const trailer2_real_t qddot_des[11])
+{
+#ifdef TRAILER2_FLOAT32
+    const trailer2_bits_t mask = 0x7fffffffu;
+#else
+    const trailer2_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const trailer2_bits_t bound = trailer2_real_bits(TRAILER2_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 11; ++i) {
+        beyond |= ((trailer2_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer2_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef TRAILER2_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool trailer2_tdc_config_unchanged(const trailer2_tdc_config_t *config,
@@ -180,6 +558,14 @@ trailer2_status_t trailer2_tdc_init(trailer2_tdc_state_t *state,
     fresh.config = *config;
     trailer2_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
+    fresh.tde_span = config->accel_estimator == TRAILER2_ACCEL_CENTRAL
+        ? TRAILER2_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == TRAILER2_ACCEL_MATCHED
+        ? config->rate_window / (TRAILER2_LIT(2.0) * config->h) : TRAILER2_LIT(0.0);
+    /* the values the step's minimal_tde keeps */
+    trailer2_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
+    /* the values the step's minimal_tdc_law keeps */
+    trailer2_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer2_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -268,9 +654,14 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     }
     cfg = &state->config;
 #endif
-    status = trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != TRAILER2_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const trailer2_real_t *const kept_minimal_tde = state->k_minimal_tde;
+        const trailer2_real_t *const kept_minimal_tdc_law = state->k_minimal_tdc_law;
+    if (!trailer2_tdc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     off = 5;
     gain = state->gain;
@@ -282,9 +673,15 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER2_ACCEL_CENTRAL;
+#ifdef TRAILER2_TDC_FROZEN
+        /* the same values as _init keeps, of the compiled-in configuration: folded */
         const trailer2_real_t span = central ? TRAILER2_LIT(2.0) * cfg->h : cfg->h;
         const trailer2_real_t c2 = cfg->accel_estimator == TRAILER2_ACCEL_MATCHED
             ? cfg->rate_window / (TRAILER2_LIT(2.0) * cfg->h) : TRAILER2_LIT(0.0);
+#else
+        const trailer2_real_t span = state->tde_span;  /* kept by _init */
+        const trailer2_real_t c2 = state->tde_c2;
+#endif
         /* the rates now and then, the controlled slice read in place */
         const trailer2_real_t *const qdn = &qdot[off];
         const trailer2_real_t *const qdthen = central ? &state->qdot_prev2[off]
@@ -295,9 +692,10 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
             up[i] = (TRAILER2_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
         }
         for (i = nc; i < 11; ++i) {
+            up[i] = TRAILER2_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER2_LIT(0.0);
         }
-        trailer2_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+        trailer2_tdc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 11; ++i) {
             H1hat[i] = TRAILER2_LIT(0.0);
@@ -305,8 +703,8 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer2_minimal_tdc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
-                &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+        trailer2_tdc_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off],
+                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -348,5 +746,11 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     state->steps = state->steps < TRAILER2_STEPS_MAX ? state->steps + 1u : TRAILER2_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return trailer2_fail(detail, status, TRAILER2_FIELD_NONE, -1);
+    if (detail != NULL) {  /* trailer2_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = TRAILER2_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

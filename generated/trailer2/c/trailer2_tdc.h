@@ -53,6 +53,12 @@ typedef struct {
     trailer2_real_t qdot_prev2[11]; /* qdot(t-2h) */
     trailer2_real_t u_prev[11];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer2_real_t u_prev2[11];  /* u(t-2h) applied */
+    trailer2_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at
+                                    _init) */
+    trailer2_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
+                                    _init) */
+    trailer2_real_t k_minimal_tde[23]; /* minimal_tde's parameter-only values (at _init) */
+    trailer2_real_t k_minimal_tdc_law[23]; /* minimal_tdc_law's parameter-only values (at _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer2_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

@@ -58,12 +58,21 @@ typedef struct {
     trailer2_real_t qdot_prev2[11]; /* qdot(t-2h) */
     trailer2_real_t u_prev[11];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer2_real_t u_prev2[11];  /* u(t-2h) applied */
+    trailer2_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at
+                                    _init) */
+    trailer2_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
+                                    _init) */
     int omega_count;        /* Omega's seen, at most TRAILER2_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     trailer2_real_t omega_dnorm[TRAILER2_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first:
                                                          all (25) needs */
     trailer2_real_t weights[TRAILER2_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                      (at _init) */
     trailer2_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
+    trailer2_real_t k_minimal_tde[23]; /* minimal_tde's parameter-only values (at _init) */
+    trailer2_real_t k_minimal_minv_norm[23]; /* minimal_minv_norm's parameter-only values (at
+                                                _init) */
+    trailer2_real_t k_minimal_tdroc_law[23]; /* minimal_tdroc_law's parameter-only values (at
+                                                _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer2_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

@@ -18,6 +18,572 @@
 const trailer3_asmc_config_t trailer3_asmc_frozen_config = TRAILER3_ASMC_FROZEN_CONFIG;
 #endif
 
+#ifndef TRAILER3_ASMC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* trailer3_asmc_k_minimal_asmc_law_keep: the parameter-only part of trailer3_minimal_asmc_law of
+   trailer3_laws.c (documented in trailer3_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 10 mul, 14 div, 0 sin/cos, 0 sqrt */
+static void trailer3_asmc_k_minimal_asmc_law_keep(const trailer3_params_t *p,
+    trailer3_real_t kept[36])
+{
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    const trailer3_real_t _t10 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t11 = TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t12 = TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(20.0);
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart2;
+    kept[2] = J_theta_cart2_left;
+    kept[3] = J_theta_cart2_right;
+    kept[4] = J_theta_cart3;
+    kept[5] = J_theta_cart3_left;
+    kept[6] = J_theta_cart3_right;
+    kept[7] = J_theta_cart_left;
+    kept[8] = J_theta_cart_right;
+    kept[9] = J_theta_left;
+    kept[10] = J_theta_right;
+    kept[11] = J_x_tractor;
+    kept[12] = K_theta_cart_x_tractor;
+    kept[13] = K_theta_cart_x_tractor_2;
+    kept[14] = K_theta_cart2_x_tractor;
+    kept[15] = K_theta_cart2_x_tractor_2;
+    kept[16] = K_theta_cart3_x_tractor;
+    kept[17] = K_theta_cart3_x_tractor_2;
+    kept[18] = K_theta_tractor_x_tractor;
+    kept[19] = K_theta_tractor_x_tractor_2;
+    kept[20] = _t0;
+    kept[21] = _t1;
+    kept[22] = _t2;
+    kept[23] = _t3;
+    kept[24] = _t4;
+    kept[25] = _t5;
+    kept[26] = _t6;
+    kept[27] = _t7;
+    kept[28] = _t8;
+    kept[29] = _t9;
+    kept[30] = _t10;
+    kept[31] = _t11;
+    kept[32] = _t12;
+    kept[33] = _t13;
+    kept[34] = _t14;
+    kept[35] = _t15;
+}
+#endif
+
+/* trailer3_asmc_k_minimal_asmc_law: the per-step part of trailer3_minimal_asmc_law of
+   trailer3_laws.c (documented in trailer3_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 456 add, 610 mul, 62 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static void trailer3_asmc_k_minimal_asmc_law(const trailer3_real_t kept[36],
+    const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
+    const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
+    const trailer3_real_t *k2, const trailer3_real_t *p12, const trailer3_real_t *p22,
+    const trailer3_real_t *gain, const trailer3_real_t *eps, const trailer3_real_t *adapt,
+    trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain_next)
+{
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
+    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t _t18 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t20 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t _t23 = TRAILER3_SIN(theta_cart2);
+    const trailer3_real_t _t24 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
+    const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t _t29 = TRAILER3_SIN(theta_cart3);
+    const trailer3_real_t _t30 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
+    const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
+    const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t34 = TRAILER3_LIT(17.0)*_t23*_t29/TRAILER3_LIT(20.0) + _t24*_t33;
+    const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
+    const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(17.0)*_t17*_t23/TRAILER3_LIT(20.0) + _t24*_t26;
+    const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
+    const trailer3_real_t _t39 = -TRAILER3_LIT(17.0)*_t17*_t29/TRAILER3_LIT(20.0) + _t26*_t30;
+    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(17.0)*_t24*_t29/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t41 = TRAILER3_LIT(207.0)*_t18/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t42 = -TRAILER3_LIT(207.0)*_t20/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t0 = kept[20];
+    const trailer3_real_t _t43 = _t0*_t42;
+    const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
+    const trailer3_real_t _t1 = kept[21];
+    const trailer3_real_t _t45 = _t1*_t42;
+    const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
+    const trailer3_real_t _t47 = -_t0*_t41;
+    const trailer3_real_t _t48 = -_t17*_t47 - _t44;
+    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t50 = -_t28*_t49;
+    const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
+    const trailer3_real_t _t52 = -_t1*_t41;
+    const trailer3_real_t _t53 = -_t17*_t52 - _t46;
+    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t55 = -_t28*_t54;
+    const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
+    const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
+    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t59 = -_t34*_t58;
+    const trailer3_real_t _t60 = -_t32*_t49;
+    const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
+    const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
+    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t64 = -_t34*_t63;
+    const trailer3_real_t _t65 = -_t32*_t54;
+    const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
+    const trailer3_real_t _t67 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
+    const trailer3_real_t _t69 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
+    const trailer3_real_t _t71 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
+    const trailer3_real_t _t73 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
+    const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
+    const trailer3_real_t _t76 = -TRAILER3_LIT(5.0)*_t75/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t77 = _t76/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
+    const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
+    const trailer3_real_t _t80 = -TRAILER3_LIT(5.0)*_t79/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t81 = _t80/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
+    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
+    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
+    const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
+    const trailer3_real_t _t85 = K_theta_cart_x_tractor*_t16;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
+    const trailer3_real_t _t86 = K_theta_cart_x_tractor_2*_t17;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
+    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t23;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
+    const trailer3_real_t _t88 = K_theta_cart2_x_tractor_2*_t24;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
+    const trailer3_real_t _t89 = K_theta_cart3_x_tractor*_t29;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
+    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t91 = K_theta_tractor_x_tractor*_t20;
+    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t17;
+    const trailer3_real_t _t93 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
+    const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
+    const trailer3_real_t _t98 = TRAILER3_LIT(17.0)*_t23/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t99 = TRAILER3_LIT(17.0)*_t24/TRAILER3_LIT(20.0);
+    const trailer3_real_t thetadot_right = qdot[6];
+    const trailer3_real_t thetadot_left = qdot[7];
+    const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
+    const trailer3_real_t _t101 = _t100*_t100;
+    const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
+    const trailer3_real_t _t103 = _t102*_t102;
+    const trailer3_real_t _t104 = _t103*_t94;
+    const trailer3_real_t _t105 = _t49*thetadot_right + _t54*thetadot_left;
+    const trailer3_real_t _t106 = _t105*_t105;
+    const trailer3_real_t _t107 = -_t0*thetadot_right + _t1*thetadot_left;
+    const trailer3_real_t _t108 = _t107*_t107;
+    const trailer3_real_t _t109 = _t101*_t96;
+    const trailer3_real_t _t110 = _t103*_t97;
+    const trailer3_real_t _t111 = _t106*_t95;
+    const trailer3_real_t _t112 = _t101*_t87;
+    const trailer3_real_t _t113 = _t101*_t88;
+    const trailer3_real_t _t114 = _t103*_t89;
+    const trailer3_real_t _t115 = _t103*_t90;
+    const trailer3_real_t _t116 = _t106*_t85;
+    const trailer3_real_t _t117 = _t106*_t86;
+    const trailer3_real_t _t118 = _t108*_t19;
+    const trailer3_real_t _t119 = _t108*_t21;
+    const trailer3_real_t _t120 = _t106*_t26;
+    const trailer3_real_t _t121 = _t106*_t27;
+    const trailer3_real_t _t122 = _t101*_t98;
+    const trailer3_real_t _t123 = _t101*_t99;
+    const trailer3_real_t _t124 = _t107*thetadot_right;
+    const trailer3_real_t _t125 = _t107*thetadot_left;
+    const trailer3_real_t _t126 = _t105*thetadot_right;
+    const trailer3_real_t _t127 = _t105*thetadot_left;
+    const trailer3_real_t _t128 = _t100*thetadot_right;
+    const trailer3_real_t _t129 = _t100*thetadot_left;
+    const trailer3_real_t _t130 = _t102*thetadot_right;
+    const trailer3_real_t _t131 = _t102*thetadot_left;
+    const trailer3_real_t _t132 = _t0*_t41;
+    const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(5.0)*_t133/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t135 = _t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t136 = -_t132*_t17 + _t44;
+    const trailer3_real_t _t137 = _t1*_t41;
+    const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
+    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t141 = -_t137*_t17 + _t46;
+    const trailer3_real_t _t142 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t143 = _t142/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
+    const trailer3_real_t _t145 = TRAILER3_LIT(5.0)*_t70/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
+    const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
+    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
+    const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
+    const trailer3_real_t _t153 = -TRAILER3_LIT(5.0)*_t152/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
+    const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
+    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t159 = -_t142*_t37 + _t50;
+    const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
+    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t163 = -_t145*_t37 + _t55;
+    const trailer3_real_t _t164 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t165 = _t164/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
+    const trailer3_real_t _t167 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
+    const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
+    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
+    const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
+    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
+    const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
+    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
+    const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
+    const trailer3_real_t _t183 = -TRAILER3_LIT(5.0)*_t182/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
+    const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
+    const trailer3_real_t _t187 = -TRAILER3_LIT(5.0)*_t186/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t188 = _t187/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t189 = -_t164*_t40 + _t59;
+    const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
+    const trailer3_real_t _t191 = -TRAILER3_LIT(5.0)*_t190/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t193 = -_t167*_t40 + _t64;
+    const trailer3_real_t _t194 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t195 = _t194/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
+    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t82/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t198 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
+    const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
+    const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
+    const trailer3_real_t _t202 = K_theta_cart2_x_tractor_2*_t23 - _t93;
+    const trailer3_real_t _t203 = K_theta_cart3_x_tractor_2*_t29 - _t94;
+    const trailer3_real_t J_x_tractor = kept[11];
+    const trailer3_real_t _t204 = J_x_tractor*_t47 - _t0*_t200 + _t201*_t49 + _t202*_t58
+            + _t203*_t76;
+    const trailer3_real_t _t205 = _t83 + _t84;
+    const trailer3_real_t _t206 = _t85 + _t86;
+    const trailer3_real_t _t207 = _t87 + _t88;
+    const trailer3_real_t _t208 = _t89 + _t90;
+    const trailer3_real_t _t209 = J_x_tractor*_t43 - _t0*_t205 + _t206*_t49 + _t207*_t58
+            + _t208*_t76;
+    const trailer3_real_t _t210 = _t19*(_t85 + _t86) + _t21*(_t92 - _t95);
+    const trailer3_real_t _t211 = _t19*(_t87 + _t88) + _t21*(_t93 - _t96);
+    const trailer3_real_t _t212 = _t19*(_t89 + _t90) + _t21*(_t94 - _t97);
+    const trailer3_real_t _t2 = kept[22];
+    const trailer3_real_t _t213 = _t2 + _t200*_t47 + _t205*_t43 + _t210*_t49 + _t211*_t58
+            + _t212*_t76;
+    const trailer3_real_t _t214 = _t26*(_t87 + _t88) + _t27*(_t93 - _t96);
+    const trailer3_real_t _t215 = _t26*(_t89 + _t90) + _t27*(_t94 - _t97);
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t216 = J_theta_cart*_t49 - _t0*_t210 + _t201*_t47 + _t206*_t43
+            + _t214*_t58 + _t215*_t76;
+    const trailer3_real_t _t217 = _t98*(_t89 + _t90) + _t99*(_t94 - _t97);
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t218 = J_theta_cart2*_t58 - _t0*_t211 + _t202*_t47 + _t207*_t43
+            + _t214*_t49 + _t217*_t76;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t219 = J_theta_cart3*_t76 - _t0*_t212 + _t203*_t47 + _t208*_t43
+            + _t215*_t49 + _t217*_t58;
+    const trailer3_real_t _t220 = -_t71 - _t72;
+    const trailer3_real_t _t3 = kept[23];
+    const trailer3_real_t _t221 = _t220*_t3;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t222 = J_theta_cart2_left*_t221;
+    const trailer3_real_t _t223 = _t71 - _t72;
+    const trailer3_real_t _t4 = kept[24];
+    const trailer3_real_t _t224 = _t223*_t4;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t225 = J_theta_cart2_right*_t224;
+    const trailer3_real_t _t226 = -_t77 - _t78;
+    const trailer3_real_t _t5 = kept[25];
+    const trailer3_real_t _t227 = _t226*_t5;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t228 = J_theta_cart3_left*_t227;
+    const trailer3_real_t _t229 = _t77 - _t78;
+    const trailer3_real_t _t6 = kept[26];
+    const trailer3_real_t _t230 = _t229*_t6;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t231 = J_theta_cart3_right*_t230;
+    const trailer3_real_t _t232 = -_t67 - _t68;
+    const trailer3_real_t _t7 = kept[27];
+    const trailer3_real_t _t233 = _t232*_t7;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t234 = J_theta_cart_left*_t233;
+    const trailer3_real_t _t235 = _t67 - _t68;
+    const trailer3_real_t _t8 = kept[28];
+    const trailer3_real_t _t236 = _t235*_t8;
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t237 = J_theta_cart_right*_t236;
+    const trailer3_real_t _t238 = _t69 - _t70;
+    const trailer3_real_t _t239 = _t238*_t8;
+    const trailer3_real_t _t240 = -_t69 - _t70;
+    const trailer3_real_t _t241 = _t240*_t7;
+    const trailer3_real_t _t242 = _t73 - _t74;
+    const trailer3_real_t _t243 = _t242*_t4;
+    const trailer3_real_t _t244 = -_t73 - _t74;
+    const trailer3_real_t _t245 = _t244*_t3;
+    const trailer3_real_t _t246 = _t81 - _t82;
+    const trailer3_real_t _t247 = _t246*_t6;
+    const trailer3_real_t _t248 = -_t81 - _t82;
+    const trailer3_real_t _t249 = _t248*_t5;
+    const trailer3_real_t _t250 = _t222*_t245 + _t225*_t243 + _t228*_t249 + _t231*_t247
+            + _t234*_t241 + _t237*_t239;
+    const trailer3_real_t _t251 = J_x_tractor*_t52 + _t1*_t200 + _t201*_t54 + _t202*_t63
+            + _t203*_t80;
+    const trailer3_real_t _t9 = kept[29];
+    const trailer3_real_t _t252 = _t200*_t52 + _t205*_t45 + _t210*_t54 + _t211*_t63 + _t212*_t80
+            + _t9;
+    const trailer3_real_t _t253 = J_x_tractor*_t45 + _t1*_t205 + _t206*_t54 + _t207*_t63
+            + _t208*_t80;
+    const trailer3_real_t _t254 = J_theta_cart*_t54 + _t1*_t210 + _t201*_t52 + _t206*_t45
+            + _t214*_t63 + _t215*_t80;
+    const trailer3_real_t _t255 = J_theta_cart2*_t63 + _t1*_t211 + _t202*_t52 + _t207*_t45
+            + _t214*_t54 + _t217*_t80;
+    const trailer3_real_t _t256 = J_theta_cart3*_t80 + _t1*_t212 + _t203*_t52 + _t208*_t45
+            + _t215*_t54 + _t217*_t63;
+    const trailer3_real_t _t257 = _t108*(_t83 + _t84) + _t112 + _t113 + _t114 + _t115 + _t116
+            + _t117;
+    const trailer3_real_t _t258 = _t124*_t43 + _t125*_t45;
+    const trailer3_real_t _t259 = _t124*_t134 + _t125*_t139 + _t126*_t142 + _t127*_t145;
+    const trailer3_real_t _t260 = _t124*_t149 + _t125*_t153 + _t126*_t157 + _t127*_t161
+            + _t128*_t164 + _t129*_t167;
+    const trailer3_real_t _t261 = _t124*_t171 + _t125*_t175 + _t126*_t179 + _t127*_t183
+            + _t128*_t187 + _t129*_t191 + _t130*_t194 + _t131*_t197;
+    const trailer3_real_t _t262 = J_x_tractor*_t258 + _t201*_t259 + _t202*_t260 + _t203*_t261
+            + _t257;
+    const trailer3_real_t _t263 = _t101*_t93 + _t104 + _t106*_t92
+            + _t108*(-K_theta_tractor_x_tractor_2*_t18 + _t91) - _t109 - _t110 - _t111;
+    const trailer3_real_t _t264 = _t124*_t132 + _t125*_t137;
+    const trailer3_real_t _t265 = J_x_tractor*_t264 + _t206*_t259 + _t207*_t260 + _t208*_t261
+            + _t263;
+    const trailer3_real_t _t10 = kept[30];
+    const trailer3_real_t _t11 = kept[31];
+    const trailer3_real_t _t12 = kept[32];
+    const trailer3_real_t _t266 = _t18*(_t10*_t106*_t17 + _t101*_t12*_t24 + _t103*_t11*_t30)
+            + _t19*(-_t109 - _t110 - _t111) + _t21*(-_t112 - _t113 - _t114 - _t115 - _t116 - _t117);
+    const trailer3_real_t _t267 = _t200*_t258 + _t205*_t264 + _t210*_t259 + _t211*_t260
+            + _t212*_t261 + _t266;
+    const trailer3_real_t _t13 = kept[33];
+    const trailer3_real_t _t14 = kept[34];
+    const trailer3_real_t _t15 = kept[35];
+    const trailer3_real_t _t268 = _t108*_t13*_t17*_t20 - _t118*_t92
+            + _t16*(_t101*_t15*_t24 + _t103*_t14*_t30 + _t108*(_t10*_t20 + _t13*_t18))
+            + _t26*(-_t109 - _t110) + _t27*(-_t112 - _t113 - _t114 - _t115);
+    const trailer3_real_t _t269 = J_theta_cart*_t259 + _t201*_t258 + _t206*_t264 + _t214*_t260
+            + _t215*_t261 + _t268;
+    const trailer3_real_t _t270 = _t118*(-_t93 + _t96) + _t119*(_t87 + _t88) + _t120*(-_t93 + _t96)
+            + _t121*(_t87 + _t88) + _t98*(_t104 - _t110) + _t99*(-_t114 - _t115);
+    const trailer3_real_t _t271 = J_theta_cart2*_t260 + _t202*_t258 + _t207*_t264 + _t214*_t259
+            + _t217*_t261 + _t270;
+    const trailer3_real_t _t272 = _t89*(_t119 + _t121 + _t123) + _t90*(_t119 + _t121 + _t123)
+            + _t94*(-_t118 - _t120 - _t122) + _t97*(_t118 + _t120 + _t122);
+    const trailer3_real_t _t273 = J_theta_cart3*_t261 + _t203*_t258 + _t208*_t264 + _t215*_t259
+            + _t217*_t260 + _t272;
+    const trailer3_real_t e0 = e[0];
+    const trailer3_real_t edot0 = edot[0];
+    const trailer3_real_t p12_0 = p12[0];
+    const trailer3_real_t p22_0 = p22[0];
+    const trailer3_real_t _t274 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
+    const trailer3_real_t p12_1 = p12[1];
+    const trailer3_real_t p22_1 = p22[1];
+    const trailer3_real_t _t275 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t276 = trailer3_norm2(_t274, _t275);
+    const trailer3_real_t gain_1 = gain[0];
+    const trailer3_real_t eps_1 = eps[0];
+    const trailer3_real_t _t277 = gain_1/TRAILER3_FMAX(_t276, eps_1);
+    const trailer3_real_t qdd_des0 = qddot_des[0];
+    const trailer3_real_t k1_0 = k1[0];
+    const trailer3_real_t k2_0 = k2[0];
+    const trailer3_real_t _t278 = _t274*_t277 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t qdd_des1 = qddot_des[1];
+    const trailer3_real_t k1_1 = k1[1];
+    const trailer3_real_t k2_1 = k2[1];
+    const trailer3_real_t _t279 = _t275*_t277 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t280 = _t135 - _t136;
+    const trailer3_real_t _t281 = _t280*_t8;
+    const trailer3_real_t _t282 = _t140 - _t141;
+    const trailer3_real_t _t283 = _t282*_t8;
+    const trailer3_real_t _t284 = _t143 - _t144;
+    const trailer3_real_t _t285 = _t284*_t8;
+    const trailer3_real_t _t286 = _t146 - _t147;
+    const trailer3_real_t _t287 = _t286*_t8;
+    const trailer3_real_t _t288 = _t124*_t281 + _t125*_t283 + _t126*_t285 + _t127*_t287;
+    const trailer3_real_t _t289 = -_t135 - _t136;
+    const trailer3_real_t _t290 = _t289*_t7;
+    const trailer3_real_t _t291 = -_t140 - _t141;
+    const trailer3_real_t _t292 = _t291*_t7;
+    const trailer3_real_t _t293 = -_t143 - _t144;
+    const trailer3_real_t _t294 = _t293*_t7;
+    const trailer3_real_t _t295 = -_t146 - _t147;
+    const trailer3_real_t _t296 = _t295*_t7;
+    const trailer3_real_t _t297 = _t124*_t290 + _t125*_t292 + _t126*_t294 + _t127*_t296;
+    const trailer3_real_t _t298 = _t150 - _t151;
+    const trailer3_real_t _t299 = _t298*_t4;
+    const trailer3_real_t _t300 = _t154 - _t155;
+    const trailer3_real_t _t301 = _t300*_t4;
+    const trailer3_real_t _t302 = _t158 - _t159;
+    const trailer3_real_t _t303 = _t302*_t4;
+    const trailer3_real_t _t304 = _t162 - _t163;
+    const trailer3_real_t _t305 = _t304*_t4;
+    const trailer3_real_t _t306 = _t165 - _t166;
+    const trailer3_real_t _t307 = _t306*_t4;
+    const trailer3_real_t _t308 = _t168 - _t169;
+    const trailer3_real_t _t309 = _t308*_t4;
+    const trailer3_real_t _t310 = _t124*_t299 + _t125*_t301 + _t126*_t303 + _t127*_t305
+            + _t128*_t307 + _t129*_t309;
+    const trailer3_real_t _t311 = -_t150 - _t151;
+    const trailer3_real_t _t312 = _t3*_t311;
+    const trailer3_real_t _t313 = -_t154 - _t155;
+    const trailer3_real_t _t314 = _t3*_t313;
+    const trailer3_real_t _t315 = -_t158 - _t159;
+    const trailer3_real_t _t316 = _t3*_t315;
+    const trailer3_real_t _t317 = -_t162 - _t163;
+    const trailer3_real_t _t318 = _t3*_t317;
+    const trailer3_real_t _t319 = -_t165 - _t166;
+    const trailer3_real_t _t320 = _t3*_t319;
+    const trailer3_real_t _t321 = -_t168 - _t169;
+    const trailer3_real_t _t322 = _t3*_t321;
+    const trailer3_real_t _t323 = _t124*_t312 + _t125*_t314 + _t126*_t316 + _t127*_t318
+            + _t128*_t320 + _t129*_t322;
+    const trailer3_real_t _t324 = _t172 - _t173;
+    const trailer3_real_t _t325 = _t324*_t6;
+    const trailer3_real_t _t326 = _t176 - _t177;
+    const trailer3_real_t _t327 = _t326*_t6;
+    const trailer3_real_t _t328 = _t180 - _t181;
+    const trailer3_real_t _t329 = _t328*_t6;
+    const trailer3_real_t _t330 = _t184 - _t185;
+    const trailer3_real_t _t331 = _t330*_t6;
+    const trailer3_real_t _t332 = _t188 - _t189;
+    const trailer3_real_t _t333 = _t332*_t6;
+    const trailer3_real_t _t334 = _t192 - _t193;
+    const trailer3_real_t _t335 = _t334*_t6;
+    const trailer3_real_t _t336 = _t195 - _t196;
+    const trailer3_real_t _t337 = _t336*_t6;
+    const trailer3_real_t _t338 = _t198 - _t199;
+    const trailer3_real_t _t339 = _t338*_t6;
+    const trailer3_real_t _t340 = _t124*_t325 + _t125*_t327 + _t126*_t329 + _t127*_t331
+            + _t128*_t333 + _t129*_t335 + _t130*_t337 + _t131*_t339;
+    const trailer3_real_t _t341 = -_t172 - _t173;
+    const trailer3_real_t _t342 = _t341*_t5;
+    const trailer3_real_t _t343 = -_t176 - _t177;
+    const trailer3_real_t _t344 = _t343*_t5;
+    const trailer3_real_t _t345 = -_t180 - _t181;
+    const trailer3_real_t _t346 = _t345*_t5;
+    const trailer3_real_t _t347 = -_t184 - _t185;
+    const trailer3_real_t _t348 = _t347*_t5;
+    const trailer3_real_t _t349 = -_t188 - _t189;
+    const trailer3_real_t _t350 = _t349*_t5;
+    const trailer3_real_t _t351 = -_t192 - _t193;
+    const trailer3_real_t _t352 = _t351*_t5;
+    const trailer3_real_t _t353 = -_t195 - _t196;
+    const trailer3_real_t _t354 = _t353*_t5;
+    const trailer3_real_t _t355 = -_t198 - _t199;
+    const trailer3_real_t _t356 = _t355*_t5;
+    const trailer3_real_t _t357 = _t124*_t342 + _t125*_t344 + _t126*_t346 + _t127*_t348
+            + _t128*_t350 + _t129*_t352 + _t130*_t354 + _t131*_t356;
+    const trailer3_real_t J_theta_right = kept[10];
+    const trailer3_real_t _t358 = J_theta_cart2_left*_t221*_t221 + J_theta_cart2_right*_t224*_t224
+            + J_theta_cart3_left*_t227*_t227 + J_theta_cart3_right*_t230*_t230
+            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t236*_t236 + J_theta_right
+            - _t0*_t213 + _t204*_t47 + _t209*_t43 + _t216*_t49 + _t218*_t58 + _t219*_t76;
+    const trailer3_real_t _t359 = _t1*_t213 + _t204*_t52 + _t209*_t45 + _t216*_t54 + _t218*_t63
+            + _t219*_t80 + _t250;
+    const trailer3_real_t _t360 = -_t0*_t252 + _t250 + _t251*_t47 + _t253*_t43 + _t254*_t49
+            + _t255*_t58 + _t256*_t76;
+    const trailer3_real_t J_theta_left = kept[9];
+    const trailer3_real_t _t361 = J_theta_cart2_left*_t245*_t245 + J_theta_cart2_right*_t243*_t243
+            + J_theta_cart3_left*_t249*_t249 + J_theta_cart3_right*_t247*_t247
+            + J_theta_cart_left*_t241*_t241 + J_theta_cart_right*_t239*_t239 + J_theta_left
+            + _t1*_t252 + _t251*_t52 + _t253*_t45 + _t254*_t54 + _t255*_t63 + _t256*_t80;
+    const trailer3_real_t _t362 = -_t0*_t267 + _t222*_t323 + _t225*_t310 + _t228*_t357 + _t231*_t340
+            + _t234*_t297 + _t237*_t288 + _t262*_t47 + _t265*_t43 + _t269*_t49 + _t271*_t58
+            + _t273*_t76;
+    const trailer3_real_t _t363 = J_theta_cart2_left*_t245*_t323 + J_theta_cart2_right*_t243*_t310
+            + J_theta_cart3_left*_t249*_t357 + J_theta_cart3_right*_t247*_t340
+            + J_theta_cart_left*_t241*_t297 + J_theta_cart_right*_t239*_t288 + _t1*_t267
+            + _t262*_t52 + _t265*_t45 + _t269*_t54 + _t271*_t63 + _t273*_t80;
+    const trailer3_real_t adapt_0 = adapt[0];
+    const trailer3_real_t h = adapt[1];
+    u[0] = _t278*_t358 + _t279*_t359 + _t362;
+    u[1] = _t278*_t360 + _t279*_t361 + _t363;
+    s[0] = _t274;
+    s[1] = _t275;
+    s_norm[0] = _t276;
+    gain_next[0] = _t276*adapt_0*h + gain_1;
+}
+
 trailer3_status_t trailer3_asmc_check_config_detail(const trailer3_asmc_config_t *config,
     trailer3_error_detail_t *detail)
 {
@@ -51,7 +617,6 @@ trailer3_status_t trailer3_asmc_check_config(const trailer3_asmc_config_t *confi
     return trailer3_asmc_check_config_detail(config, 0);
 }
 
-#ifndef TRAILER3_ASMC_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
@@ -63,6 +628,34 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
+static bool trailer3_asmc_inputs_bounded(const trailer3_real_t q[14],
+    const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14])
+{
+#ifdef TRAILER3_FLOAT32
+    const trailer3_bits_t mask = 0x7fffffffu;
+#else
+    const trailer3_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const trailer3_bits_t bound = trailer3_real_bits(TRAILER3_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 14; ++i) {
+        beyond |= ((trailer3_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef TRAILER3_ASMC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool trailer3_asmc_config_unchanged(const trailer3_asmc_config_t *config,
@@ -197,6 +790,8 @@ trailer3_status_t trailer3_asmc_init(trailer3_asmc_state_t *state,
     trailer3_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
     fresh.gain0 = config->gain0;
+    /* the values the step's minimal_asmc_law keeps */
+    trailer3_asmc_k_minimal_asmc_law_keep(&config->nominal, fresh.k_minimal_asmc_law);
     trailer3_asmc_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;
@@ -282,9 +877,13 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     }
     cfg = &state->config;
 #endif
-    status = trailer3_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != TRAILER3_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const trailer3_real_t *const kept_minimal_asmc_law = state->k_minimal_asmc_law;
+    if (!trailer3_asmc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return trailer3_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     off = 6;
     gain = state->gain;
@@ -294,9 +893,9 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     {
         trailer3_real_t s[14];
         const trailer3_real_t adapt[2] = {cfg->gamma, cfg->h};
-        trailer3_minimal_asmc_law(&cfg->nominal, q, qdot, e, edot, &qddot_des[off], &cfg->k1[off],
-                &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain, &cfg->eps, adapt,
-                u, s, &s_norm, &gain);
+        trailer3_asmc_k_minimal_asmc_law(kept_minimal_asmc_law, q, qdot, e, edot, &qddot_des[off],
+                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain,
+                &cfg->eps, adapt, u, s, &s_norm, &gain);
     }
     gain = trailer3_cap_gain(gain);  /* the adapted gain never exceeds TRAILER3_GAIN_MAX */
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
@@ -336,5 +935,11 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     state->steps = state->steps < TRAILER3_STEPS_MAX ? state->steps + 1u : TRAILER3_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return trailer3_fail(detail, status, TRAILER3_FIELD_NONE, -1);
+    if (detail != NULL) {  /* trailer3_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = TRAILER3_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

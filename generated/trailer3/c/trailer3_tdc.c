@@ -18,6 +18,485 @@
 const trailer3_tdc_config_t trailer3_tdc_frozen_config = TRAILER3_TDC_FROZEN_CONFIG;
 #endif
 
+#ifndef TRAILER3_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* trailer3_tdc_k_minimal_tde_keep: the parameter-only part of trailer3_minimal_tde of
+   trailer3_laws.c (documented in trailer3_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 0 add, 4 mul, 8 div, 0 sin/cos, 0 sqrt */
+static void trailer3_tdc_k_minimal_tde_keep(const trailer3_params_t *p, trailer3_real_t kept[30])
+{
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
+    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart2;
+    kept[2] = J_theta_cart2_left;
+    kept[3] = J_theta_cart2_right;
+    kept[4] = J_theta_cart3;
+    kept[5] = J_theta_cart3_left;
+    kept[6] = J_theta_cart3_right;
+    kept[7] = J_theta_cart_left;
+    kept[8] = J_theta_cart_right;
+    kept[9] = J_theta_left;
+    kept[10] = J_theta_right;
+    kept[11] = J_x_tractor;
+    kept[12] = K_theta_cart_x_tractor;
+    kept[13] = K_theta_cart_x_tractor_2;
+    kept[14] = K_theta_cart2_x_tractor;
+    kept[15] = K_theta_cart2_x_tractor_2;
+    kept[16] = K_theta_cart3_x_tractor;
+    kept[17] = K_theta_cart3_x_tractor_2;
+    kept[18] = K_theta_tractor_x_tractor;
+    kept[19] = K_theta_tractor_x_tractor_2;
+    kept[20] = _t0;
+    kept[21] = _t1;
+    kept[22] = _t2;
+    kept[23] = _t3;
+    kept[24] = _t4;
+    kept[25] = _t5;
+    kept[26] = _t6;
+    kept[27] = _t7;
+    kept[28] = _t8;
+    kept[29] = _t9;
+}
+#endif
+
+/* trailer3_tdc_k_minimal_tde: the per-step part of trailer3_minimal_tde of trailer3_laws.c
+   (documented in trailer3_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 189 add, 273 mul, 29 div, 8 sin/cos, 0 sqrt */
+static void trailer3_tdc_k_minimal_tde(const trailer3_real_t kept[30],
+    const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
+    const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
+{
+    const trailer3_real_t qp3 = q_prev[3];
+    const trailer3_real_t _t10 = TRAILER3_SIN(qp3);
+    const trailer3_real_t _t11 = TRAILER3_COS(qp3);
+    const trailer3_real_t qp2 = q_prev[2];
+    const trailer3_real_t _t12 = TRAILER3_SIN(qp2);
+    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t14 = TRAILER3_COS(qp2);
+    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
+    const trailer3_real_t qp4 = q_prev[4];
+    const trailer3_real_t _t16 = TRAILER3_SIN(qp4);
+    const trailer3_real_t _t17 = TRAILER3_COS(qp4);
+    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t qp5 = q_prev[5];
+    const trailer3_real_t _t20 = TRAILER3_SIN(qp5);
+    const trailer3_real_t _t21 = TRAILER3_COS(qp5);
+    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t0 = kept[20];
+    const trailer3_real_t _t25 = _t0*_t24;
+    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t27 = _t0*_t26;
+    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
+    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t31 = TRAILER3_LIT(3.0)*_t10*_t14/TRAILER3_LIT(10.0) - _t11*_t13;
+    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
+    const trailer3_real_t _t1 = kept[21];
+    const trailer3_real_t _t33 = _t1*_t24;
+    const trailer3_real_t _t34 = _t1*_t26;
+    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
+    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
+    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
+    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
+    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t44 = -_t13*_t17 + TRAILER3_LIT(3.0)*_t14*_t16/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
+    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
+    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
+    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
+    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
+    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
+    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t57 = -_t13*_t21 + TRAILER3_LIT(3.0)*_t14*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
+    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
+    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
+    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
+    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
+    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
+    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
+    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
+    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
+    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
+    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
+    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
+    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
+    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
+    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
+    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
+    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
+    const trailer3_real_t J_x_tractor = kept[11];
+    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
+    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
+    const trailer3_real_t _t84 = _t65 + _t66;
+    const trailer3_real_t _t85 = _t67 + _t68;
+    const trailer3_real_t _t86 = _t69 + _t70;
+    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
+    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
+    const trailer3_real_t _t89 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
+    const trailer3_real_t _t90 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t91 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t89
+            + _t55*_t90;
+    const trailer3_real_t _t92 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
+    const trailer3_real_t _t93 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t94 = J_theta_cart2*_t42 - _t0*_t92 + _t25*_t80 + _t27*_t85 + _t29*_t89
+            + _t55*_t93;
+    const trailer3_real_t _t95 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t96 = J_theta_cart3*_t55 - _t0*_t95 + _t25*_t81 + _t27*_t86 + _t29*_t90
+            + _t42*_t93;
+    const trailer3_real_t _t2 = kept[22];
+    const trailer3_real_t _t97 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t92 + _t55*_t95;
+    const trailer3_real_t _t98 = _t30 - _t32;
+    const trailer3_real_t _t3 = kept[23];
+    const trailer3_real_t _t99 = _t3*_t98;
+    const trailer3_real_t _t100 = _t37 - _t38;
+    const trailer3_real_t _t101 = _t100*_t3;
+    const trailer3_real_t _t102 = -_t30 - _t32;
+    const trailer3_real_t _t4 = kept[24];
+    const trailer3_real_t _t103 = _t102*_t4;
+    const trailer3_real_t _t104 = -_t37 - _t38;
+    const trailer3_real_t _t105 = _t104*_t4;
+    const trailer3_real_t _t106 = _t43 - _t46;
+    const trailer3_real_t _t5 = kept[25];
+    const trailer3_real_t _t107 = _t106*_t5;
+    const trailer3_real_t _t108 = _t49 - _t50;
+    const trailer3_real_t _t109 = _t108*_t5;
+    const trailer3_real_t _t110 = -_t43 - _t46;
+    const trailer3_real_t _t6 = kept[26];
+    const trailer3_real_t _t111 = _t110*_t6;
+    const trailer3_real_t _t112 = -_t49 - _t50;
+    const trailer3_real_t _t113 = _t112*_t6;
+    const trailer3_real_t _t114 = _t56 - _t60;
+    const trailer3_real_t _t7 = kept[27];
+    const trailer3_real_t _t115 = _t114*_t7;
+    const trailer3_real_t _t116 = _t63 - _t64;
+    const trailer3_real_t _t117 = _t116*_t7;
+    const trailer3_real_t _t118 = -_t56 - _t60;
+    const trailer3_real_t _t8 = kept[28];
+    const trailer3_real_t _t119 = _t118*_t8;
+    const trailer3_real_t _t120 = -_t63 - _t64;
+    const trailer3_real_t _t121 = _t120*_t8;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
+            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
+            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
+    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
+    const trailer3_real_t _t124 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
+    const trailer3_real_t _t125 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t89
+            + _t62*_t90;
+    const trailer3_real_t _t126 = J_theta_cart2*_t48 + _t1*_t92 + _t33*_t80 + _t34*_t85 + _t36*_t89
+            + _t62*_t93;
+    const trailer3_real_t _t127 = J_theta_cart3*_t62 + _t1*_t95 + _t33*_t81 + _t34*_t86 + _t36*_t90
+            + _t48*_t93;
+    const trailer3_real_t _t9 = kept[29];
+    const trailer3_real_t _t128 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t92 + _t62*_t95 + _t9;
+    const trailer3_real_t span_1 = span[0];
+    const trailer3_real_t _t129 = TRAILER3_LIT(1.0)/span_1;
+    const trailer3_real_t qd_now0 = qdot_now[0];
+    const trailer3_real_t qd_then0 = qdot_then[0];
+    const trailer3_real_t _t130 = _t129*(qd_now0 - qd_then0);
+    const trailer3_real_t qd_now1 = qdot_now[1];
+    const trailer3_real_t qd_then1 = qdot_then[1];
+    const trailer3_real_t _t131 = _t129*(qd_now1 - qd_then1);
+    const trailer3_real_t J_theta_right = kept[10];
+    const trailer3_real_t _t132 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
+            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
+            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
+            - _t0*_t97 + _t25*_t82 + _t27*_t87 + _t29*_t91 + _t42*_t94 + _t55*_t96;
+    const trailer3_real_t _t133 = _t1*_t97 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t91 + _t48*_t94
+            + _t62*_t96;
+    const trailer3_real_t _t134 = -_t0*_t128 + _t122 + _t123*_t25 + _t124*_t27 + _t125*_t29
+            + _t126*_t42 + _t127*_t55;
+    const trailer3_real_t J_theta_left = kept[9];
+    const trailer3_real_t _t135 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
+            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
+            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
+            + _t1*_t128 + _t123*_t33 + _t124*_t34 + _t125*_t36 + _t126*_t48 + _t127*_t62;
+    const trailer3_real_t up0 = u_prev[0];
+    const trailer3_real_t up1 = u_prev[1];
+    H1hat[0] = -_t130*_t132 - _t131*_t133 + up0;
+    H1hat[1] = -_t130*_t134 - _t131*_t135 + up1;
+}
+
+/* trailer3_tdc_k_minimal_tdc_law: the per-step part of trailer3_minimal_tdc_law of trailer3_laws.c
+   (documented in trailer3_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 191 add, 272 mul, 25 div, 8 sin/cos, 0 sqrt */
+static void trailer3_tdc_k_minimal_tdc_law(const trailer3_real_t kept[30], const trailer3_real_t *q,
+    const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
+    const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
+    const trailer3_real_t *p22, const trailer3_real_t *H1hat, trailer3_real_t *u)
+{
+    (void)p12;
+    (void)p22;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart);
+    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t _t12 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t14 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart2);
+    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t _t20 = TRAILER3_SIN(theta_cart3);
+    const trailer3_real_t _t21 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t0 = kept[20];
+    const trailer3_real_t _t25 = _t0*_t24;
+    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t27 = _t0*_t26;
+    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
+    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
+    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
+    const trailer3_real_t _t1 = kept[21];
+    const trailer3_real_t _t33 = _t1*_t24;
+    const trailer3_real_t _t34 = _t1*_t26;
+    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
+    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
+    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
+    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
+    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
+    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
+    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
+    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
+    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
+    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
+    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
+    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
+    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
+    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
+    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
+    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
+    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
+    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
+    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
+    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
+    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
+    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
+    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
+    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
+    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
+    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
+    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
+    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
+    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
+    const trailer3_real_t J_x_tractor = kept[11];
+    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
+    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
+    const trailer3_real_t _t84 = _t65 + _t66;
+    const trailer3_real_t _t85 = _t67 + _t68;
+    const trailer3_real_t _t86 = _t69 + _t70;
+    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
+    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
+    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
+    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
+    const trailer3_real_t _t2 = kept[22];
+    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
+    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
+    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
+            + _t55*_t93;
+    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
+            + _t55*_t95;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
+            + _t42*_t95;
+    const trailer3_real_t _t98 = _t30 - _t32;
+    const trailer3_real_t _t3 = kept[23];
+    const trailer3_real_t _t99 = _t3*_t98;
+    const trailer3_real_t _t100 = _t37 - _t38;
+    const trailer3_real_t _t101 = _t100*_t3;
+    const trailer3_real_t _t102 = -_t30 - _t32;
+    const trailer3_real_t _t4 = kept[24];
+    const trailer3_real_t _t103 = _t102*_t4;
+    const trailer3_real_t _t104 = -_t37 - _t38;
+    const trailer3_real_t _t105 = _t104*_t4;
+    const trailer3_real_t _t106 = _t43 - _t46;
+    const trailer3_real_t _t5 = kept[25];
+    const trailer3_real_t _t107 = _t106*_t5;
+    const trailer3_real_t _t108 = _t49 - _t50;
+    const trailer3_real_t _t109 = _t108*_t5;
+    const trailer3_real_t _t110 = -_t43 - _t46;
+    const trailer3_real_t _t6 = kept[26];
+    const trailer3_real_t _t111 = _t110*_t6;
+    const trailer3_real_t _t112 = -_t49 - _t50;
+    const trailer3_real_t _t113 = _t112*_t6;
+    const trailer3_real_t _t114 = _t56 - _t60;
+    const trailer3_real_t _t7 = kept[27];
+    const trailer3_real_t _t115 = _t114*_t7;
+    const trailer3_real_t _t116 = _t63 - _t64;
+    const trailer3_real_t _t117 = _t116*_t7;
+    const trailer3_real_t _t118 = -_t56 - _t60;
+    const trailer3_real_t _t8 = kept[28];
+    const trailer3_real_t _t119 = _t118*_t8;
+    const trailer3_real_t _t120 = -_t63 - _t64;
+    const trailer3_real_t _t121 = _t120*_t8;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
+            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
+            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
+    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
+    const trailer3_real_t _t9 = kept[29];
+    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
+    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
+    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
+            + _t62*_t93;
+    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
+            + _t62*_t95;
+    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
+            + _t48*_t95;
+    const trailer3_real_t e0 = e[0];
+    const trailer3_real_t edot0 = edot[0];
+    const trailer3_real_t qdd_des0 = qddot_des[0];
+    const trailer3_real_t k1_0 = k1[0];
+    const trailer3_real_t k2_0 = k2[0];
+    const trailer3_real_t _t129 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
+    const trailer3_real_t qdd_des1 = qddot_des[1];
+    const trailer3_real_t k1_1 = k1[1];
+    const trailer3_real_t k2_1 = k2[1];
+    const trailer3_real_t _t130 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t J_theta_right = kept[10];
+    const trailer3_real_t _t131 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
+            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
+            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
+            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
+    const trailer3_real_t _t132 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
+            + _t62*_t97;
+    const trailer3_real_t _t133 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
+            + _t127*_t42 + _t128*_t55;
+    const trailer3_real_t J_theta_left = kept[9];
+    const trailer3_real_t _t134 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
+            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
+            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
+            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
+    const trailer3_real_t H1hat0 = H1hat[0];
+    const trailer3_real_t H1hat1 = H1hat[1];
+    u[0] = H1hat0 + _t129*_t131 + _t130*_t132;
+    u[1] = H1hat1 + _t129*_t133 + _t130*_t134;
+}
+
 trailer3_status_t trailer3_tdc_check_config_detail(const trailer3_tdc_config_t *config,
     trailer3_error_detail_t *detail)
 {
@@ -50,7 +529,6 @@ trailer3_status_t trailer3_tdc_check_config(const trailer3_tdc_config_t *config)
     return trailer3_tdc_check_config_detail(config, 0);
 }
 
-#ifndef TRAILER3_TDC_FROZEN
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
 static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
@@ -62,6 +540,34 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
     return rep.bits;
 }
 
+/* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
+   +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
+   numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
+   pass of independent integer compares OR-ed together, in this file so that the step inlines
+   it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
+static bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14], const trailer3_real_t qdot[14],
+    const trailer3_real_t q_des[14], const trailer3_real_t qdot_des[14],
+    const trailer3_real_t qddot_des[14])
+{
+#ifdef TRAILER3_FLOAT32
+    const trailer3_bits_t mask = 0x7fffffffu;
+#else
+    const trailer3_bits_t mask = UINT64_C(0x7fffffffffffffff);
+#endif
+    const trailer3_bits_t bound = trailer3_real_bits(TRAILER3_LIT(1.0e6)) & mask;
+    unsigned int beyond = 0u;
+    int i;
+    for (i = 0; i < 14; ++i) {
+        beyond |= ((trailer3_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= ((trailer3_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+    }
+    return beyond == 0u;
+}
+
+#ifndef TRAILER3_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static bool trailer3_tdc_config_unchanged(const trailer3_tdc_config_t *config,
@@ -194,6 +700,14 @@ trailer3_status_t trailer3_tdc_init(trailer3_tdc_state_t *state,
     fresh.config = *config;
     trailer3_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12,
             fresh.p22);
+    fresh.tde_span = config->accel_estimator == TRAILER3_ACCEL_CENTRAL
+        ? TRAILER3_LIT(2.0) * config->h : config->h;
+    fresh.tde_c2 = config->accel_estimator == TRAILER3_ACCEL_MATCHED
+        ? config->rate_window / (TRAILER3_LIT(2.0) * config->h) : TRAILER3_LIT(0.0);
+    /* the values the step's minimal_tde keeps */
+    trailer3_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
+    /* the values the step's minimal_tdc_law keeps */
+    trailer3_tdc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer3_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;
@@ -282,9 +796,14 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
     }
     cfg = &state->config;
 #endif
-    status = trailer3_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
-    if (status != TRAILER3_OK) {
-        return status;
+    {
+        /* the kernels' parameter-only values, kept by _init for the configuration compared
+           above (a frozen build: by _init on the host, in the compiled-in state) */
+        const trailer3_real_t *const kept_minimal_tde = state->k_minimal_tde;
+        const trailer3_real_t *const kept_minimal_tdc_law = state->k_minimal_tdc_law;
+    if (!trailer3_tdc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
+        /* which input, and its status */
+        return trailer3_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
     off = 6;
     gain = state->gain;
@@ -296,9 +815,15 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
        u(t-2h) (weight c = rate_window/(2h)), so the same blend of inputs is paired with it. */
     if (state->steps >= 2u) {
         const bool central = cfg->accel_estimator == TRAILER3_ACCEL_CENTRAL;
+#ifdef TRAILER3_TDC_FROZEN
+        /* the same values as _init keeps, of the compiled-in configuration: folded */
         const trailer3_real_t span = central ? TRAILER3_LIT(2.0) * cfg->h : cfg->h;
         const trailer3_real_t c2 = cfg->accel_estimator == TRAILER3_ACCEL_MATCHED
             ? cfg->rate_window / (TRAILER3_LIT(2.0) * cfg->h) : TRAILER3_LIT(0.0);
+#else
+        const trailer3_real_t span = state->tde_span;  /* kept by _init */
+        const trailer3_real_t c2 = state->tde_c2;
+#endif
         /* the rates now and then, the controlled slice read in place */
         const trailer3_real_t *const qdn = &qdot[off];
         const trailer3_real_t *const qdthen = central ? &state->qdot_prev2[off]
@@ -309,9 +834,10 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
             up[i] = (TRAILER3_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
         }
         for (i = nc; i < 14; ++i) {
+            up[i] = TRAILER3_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER3_LIT(0.0);
         }
-        trailer3_minimal_tde(&cfg->nominal, state->q_prev, up, qdn, qdthen, &span, H1hat);
+        trailer3_tdc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, &span, H1hat);
     } else {
         for (i = 0; i < 14; ++i) {
             H1hat[i] = TRAILER3_LIT(0.0);
@@ -319,8 +845,8 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer3_minimal_tdc_law(&cfg->nominal, q, e, edot, &qddot_des[off], &cfg->k1[off],
-                &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+        trailer3_tdc_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off],
+                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -362,5 +888,11 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
     state->steps = state->steps < TRAILER3_STEPS_MAX ? state->steps + 1u : TRAILER3_STEPS_MAX;
     tau[0] = out_tau[0];
     tau[1] = out_tau[1];
-    return trailer3_fail(detail, status, TRAILER3_FIELD_NONE, -1);
+    if (detail != NULL) {  /* trailer3_fail's, written out: the step that succeeds calls nothing */
+        detail->status = status;
+        detail->field = TRAILER3_FIELD_NONE;
+        detail->index = -1;
+    }
+    return status;
+    }
 }

@@ -40,6 +40,14 @@ from runtime.tooling.bench.c_variants import (
 CSRC = Path(__file__).resolve().parents[2] / "paper" / "csrc"  # runtime/paper/csrc
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"  # hand-written with the same checks
 CFLAGS = ["-std=c99", "-O2"]
+# (function, numerator, denominator): the ratios reported per repetition (goals of issue 31).
+RATIO_PAIRS = (
+    ("forward_dynamics", "ours", "hand_checked"),
+    ("forward_dynamics", "ours_float32", "hand_checked_float32"),
+    ("forward_dynamics", "ours", "casadi"),
+    ("forward_dynamics", "ours_prepared", "hand_checked"),
+    ("forward_dynamics", "ours_prepared", "casadi"),
+)
 
 
 def uses_trig(spec: FunctionSpec) -> bool:
@@ -100,6 +108,16 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         (workdir / fname).write_text(text)
     sources = [workdir / "casadi_gen.c", workdir / "sympy_gen.c", CSRC / "hand_model.c",
                BENCH_CSRC / "hand_tdroc.c"]
+    # the hand-written forward dynamics with the same checks, float32 (renamed handf32_*)
+    hand32 = workdir / "x_hand_tdroc_f32.o"
+    subprocess.run(
+        ["gcc", *CFLAGS, "-DWMR_FLOAT32", "-c", f"-I{GENERATED_C}", f"-I{BENCH_CSRC}",
+         *(f"-Dhand_{n}=handf32_{n}" for n in ("tdroc_init", "tdroc_step",
+                                               "forward_dynamics_checked")),
+         str(BENCH_CSRC / "hand_tdroc.c"), "-o", str(hand32)],
+        check=True,
+    )
+    objs.append(str(hand32))
     if unchecked:
         sources.append(workdir / "wmrn_model.c")
     for src in sources:
@@ -117,6 +135,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         '#include "casadi_gen.h"',
         '#include "hand_model.h"',
         "int hand_forward_dynamics_checked(const double *in, double *qdd);",
+        "int handf32_forward_dynamics_checked(const float *in, float *qdd);",
         HARNESS,
     ]
     for name in used:
@@ -176,6 +195,10 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             f"static void handc_w_{name}(const void *in, void *out) "
             f"{{ (void)hand_{name}_checked((const double *)in, (double *)out); }}"
         )
+        lines.append(
+            f"static void handc32_w_{name}(const void *in, void *out) "
+            f"{{ (void)handf32_{name}_checked((const float *)in, (float *)out); }}"
+        )
     lines.append("int main(int argc, char **argv) {")
     lines.append(
         "    long calls = argc > 1 ? atol(argv[1]) : 1000000; "
@@ -195,10 +218,11 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
             "sympy": f"sympy_w_{name}",
             "hand": f"hand_w_{name}",
             "hand_checked": f"handc_w_{name}",
+            "hand_checked_float32": f"handc32_w_{name}",
         }[variant]
         lines.append(
             f'        {{"{name}", "{variant}", {fn}, {input_size(spec)}, '
-            f"{sum(output_sizes(spec))}, {int(variant == 'ours_float32')}, "
+            f"{sum(output_sizes(spec))}, {int(variant.endswith('float32'))}, "
             f"lo_{name}, hi_{name}, "
             f"{f'prepare_{name}' if variant == 'ours_prepared' else '0'}}},"
         )
@@ -242,7 +266,7 @@ def c_cases(specs: dict[str, FunctionSpec]) -> list[dict[str, Any]]:
         if name in HAND_WRITTEN:
             variants.append("hand")
         if name in HAND_CHECKED:
-            variants.append("hand_checked")
+            variants += ["hand_checked", "hand_checked_float32"]
         cases += [{"spec": name, "variant": v} for v in variants]
     return cases
 
@@ -269,6 +293,13 @@ def summarise_c(rows: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, f
             "min": min(ns),
             "max": max(ns),
         }
+    # Ratios per repetition (both timed in the same repetition): median, min, max.
+    ns_of = {(r["function"], r["variant"]): r["ns"] for r in rows}
+    for f, num, den in RATIO_PAIRS:
+        if (f, num) in ns_of and (f, den) in ns_of:
+            ratios = [a / b for a, b in zip(ns_of[(f, num)], ns_of[(f, den)], strict=True)]
+            out[(f"{f}_ratio", f"{num}/{den}")] = {
+                "median": statistics.median(ratios), "min": min(ratios), "max": max(ratios)}
     # Controller steps: sum of their kernels' medians (and of mins and maxes).
     for ctrl, kernels in STEP_KERNELS.items():
         for variant in ("ours", "ours_float32", "casadi", "sympy"):

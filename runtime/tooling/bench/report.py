@@ -27,83 +27,91 @@ from runtime.tooling.bench.step_bench import run_steps, summarise_steps
 ROOT = default_output(".")  # BENCHMARKS.md and benchmarks.json: the repository's, else ./
 
 
-def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any]) -> list[str]:
-    """The full TDROC step (``wmr_tdroc_step``) against the hand-written step, and the
-    goals of issue 12 that the host measures (ratios of medians, one process)."""
+STEP_LABELS = {
+    "ours": "`wmr_tdroc_step` (ours)",
+    "hand": "hand-written step",
+    "ours_frozen": "`wmr_tdroc_step`, `-DWMR_TDROC_FROZEN` (`wmr freeze`)",
+    "hand_frozen": "hand-written step, configuration compiled in",
+    "ours_libm": "`wmr_tdroc_step`, `-DWMR_LIBM_TRIG` (libm's sin/cos, as the hand-written step)",
+}
+RATIO_LABELS = {
+    "ratio:ours/hand": "`wmr_tdroc_step` / hand-written step",
+    "ratio:ours_frozen/hand_frozen": "frozen `wmr_tdroc_step` / frozen hand-written step",
+    "ratio:ours_libm/hand": "`wmr_tdroc_step` with libm's sin/cos / hand-written step",
+}
+
+
+def _cell(x: dict[str, float], digits: int = 1, unit: str = "") -> str:
+    return (f"{x['median']:.{digits}f}{unit} ({x['min']:.{digits}f}–{x['max']:.{digits}f})")
+
+
+def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any],
+                  runs: int) -> list[str]:
+    """The full TDROC step (``wmr_tdroc_step``) against the hand-written step, per
+    formulation and precision, and the goals of issue 31 that the host measures (ratios
+    per repetition: median and range)."""
     st = summarise_steps(steps)
-    ours, hand = st[("tdroc_step", "ours")], st[("tdroc_step", "hand")]
-    libm = st[("tdroc_step", "ours_libm")]
-    frozen = st[("tdroc_step", "ours_frozen")]
-    kernels = c[("tdroc_step_kernels", "ours")]["median"]
-    fd = {v: c[("forward_dynamics", v)]["median"]
-          for v in ("ours", "ours_prepared", "ours_libm", "hand_checked", "casadi")}
-    chk = steps["check"]
-
-    def cell(x: dict[str, float]) -> str:
-        return f"{x['median']:.1f} ({x['min']:.1f}–{x['max']:.1f})"
-
-    return [
-        "## The complete TDROC step, ns per step (double, gcc -O2)",
+    cases = sorted({case for case, _ in st}, key=lambda c: (c.split("/")[0] != "paper", c))
+    fd = {v: c[("forward_dynamics", v)]
+          for v in ("ours", "ours_float32", "ours_prepared", "ours_libm", "hand_checked",
+                    "hand_checked_float32", "casadi") if ("forward_dynamics", v) in c}
+    fd_ratio = {k[1]: v for k, v in c.items() if k[0] == "forward_dynamics_ratio"}
+    lines = [
+        "## The complete TDROC step, ns per step (gcc -O2)",
         "",
-        "`wmr_tdroc_step` (what firmware calls) and a hand-written step with the same",
-        "contract (`runtime/tooling/bench/csrc/hand_tdroc.c`: the same statuses in the same",
-        "order, (17), the window of Ω's, k̂ (25), the boundary layer, all five rows of u,",
-        "τ = Bᵀu, saturation, commit on success), on the controller inputs of the recorded",
-        f"closed loop (lawn mower, paper formulation, {chk['steps']} steps per pass, a fresh",
-        "`_init` per pass, not timed). Checked first: equal statuses at every step, torques",
-        f"within {chk['max_abs_tau_diff']:.1e} N m (largest |τ| {chk['tau_scale']:.2f} N m).",
+        "`wmr_tdroc_step` (what firmware calls) against a hand-written step written to be",
+        "fast under the same contract (`runtime/tooling/bench/csrc/hand_tdroc.c`: the same",
+        "statuses in the same order, the configuration compared bit for bit with the copy",
+        "`_init` kept, commit on success; M-tilde's structure, everything that depends on",
+        "the configuration only kept by `_init`, the window's norms in a contiguous ring),",
+        "on the controller inputs of the recorded closed loop (lawn mower), per formulation",
+        "and precision; each also built with the configuration compiled in. Checked first,",
+        "against ours: the statuses of every bad-input case (configuration fields, sign",
+        "flips, NaN/Inf/out-of-bound inputs, NULL pointers, a state never initialised),",
+        "the statuses and torques over the recording, and again with a bad input every",
+        "seventh step (commit on success). Times: median (min–max) over "
+        f"{runs} run(s) × the repetitions; ratios per repetition.",
         "",
-        "| step | ns per step, median (min–max) | ratio to hand-written |",
-        "|---|---:|---:|",
-        f"| `wmr_tdroc_step` (ours) | {cell(ours)} | {ours['median'] / hand['median']:.2f}× |",
-        f"| `wmr_tdroc_step`, `-DWMR_LIBM_TRIG` (libm's sin/cos, as the hand-written step) "
-        f"| {cell(libm)} | {libm['median'] / hand['median']:.2f}× |",
-        f"| `wmr_tdroc_step`, `-DWMR_TDROC_FROZEN` (configuration compiled in, `wmr freeze`) "
-        f"| {cell(frozen)} | {frozen['median'] / hand['median']:.2f}× |",
-        f"| hand-written step | {cell(hand)} | 1.00× |",
-        f"| ours, kernels only (TDE + gain + law, table above) | {kernels:.1f} | "
-        f"{kernels / hand['median']:.2f}× |",
-        "",
-        "Goals measured here (issue 12): forward dynamics ≤ 1.0× the hand-written C with the",
-        "same checks and ≤ 0.8× CasADi's C (the prepare-parameters API allowed: "
-        "`wmr_model_prepare`",
-        "once, `wmr_forward_dynamics_prepared` per call, as the firmware example's plant "
-        "does); the",
-        "complete step ≤ 1.0× the hand-written step.",
-        "",
-        "| forward dynamics (double) | ns per call, median | ratio to hand-written, same checks "
-        "| ratio to CasADi C |",
-        "|---|---:|---:|---:|",
-        *[
-            f"| {label} | {fd[v]:.1f} | {fd[v] / fd['hand_checked']:.2f}× | "
-            f"{fd[v] / fd['casadi']:.2f}× |"
-            for v, label in (("ours", "`wmr_forward_dynamics`"),
-                             ("ours_prepared", "`wmr_forward_dynamics_prepared`"),
-                             ("ours_libm", "`wmr_forward_dynamics`, `-DWMR_LIBM_TRIG`"),
-                             ("hand_checked", "hand-written, same checks"),
-                             ("casadi", "CasADi C"))
-        ],
-        "",
-        "| goal | measured | met |",
-        "|---|---:|---|",
-        *[
-            f"| forward dynamics{label} / hand-written, same checks ≤ 1.0 | "
-            f"{fd[v] / fd['hand_checked']:.2f}× | "
-            f"{'yes' if fd[v] <= fd['hand_checked'] else 'no'} |"
-            for v, label in (("ours", ""), ("ours_prepared", ", prepared"))
-        ],
-        *[
-            f"| forward dynamics{label} / CasADi C ≤ 0.8 | {fd[v] / fd['casadi']:.2f}× | "
-            f"{'yes' if fd[v] <= 0.8 * fd['casadi'] else 'no'} |"
-            for v, label in (("ours", ""), ("ours_prepared", ", prepared"))
-        ],
-        *[
-            f"| `wmr_tdroc_step`{label} / hand-written step ≤ 1.0 | "
-            f"{x['median'] / hand['median']:.2f}× | "
-            f"{'yes' if x['median'] <= hand['median'] else 'no'} |"
-            for x, label in ((ours, ""), (libm, ", libm sin/cos"))
-        ],
+        "| case | checks | " + " | ".join(STEP_LABELS[v] for v in STEP_LABELS) + " |",
+        "|---|---|" + "---:|" * len(STEP_LABELS),
     ]
+    for case in cases:
+        chk = steps["checks"][case]
+        cells = [_cell(st[(case, v)]) if (case, v) in st else "—" for v in STEP_LABELS]
+        lines.append(f"| {case} | {chk['bad_input_cases']} bad-input cases, {chk['steps']} "
+                     f"steps, |Δτ| ≤ {chk['max_abs_tau_diff']:.1e} N m | "
+                     + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "Goals (issue 31), each ratio ≤ 1.0: median (min–max) of the per-repetition ratios.",
+        "",
+        "| ratio | " + " | ".join(cases) + " |",
+        "|---|" + "---:|" * len(cases),
+    ]
+    for key, label in RATIO_LABELS.items():
+        cells = [_cell(st[(case, key)], 2, "×") if (case, key) in st else "—" for case in cases]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "| forward dynamics | ns per call, median (min–max) |",
+        "|---|---:|",
+        *[f"| {v} | {_cell(x)} |" for v, x in fd.items()],
+        "",
+        "| forward dynamics ratio (per repetition) | median (min–max) | goal |",
+        "|---|---:|---|",
+        *[f"| {k} | {_cell(v, 2, '×')} | {FD_GOALS.get(k, '')} |"
+          for k, v in sorted(fd_ratio.items())],
+    ]
+    return lines
+
+
+FD_GOALS = {
+    "ours/hand_checked": "≤ 1.0",
+    "ours_float32/hand_checked_float32": "≤ 1.0",
+    "ours/casadi": "≤ 0.8",
+    "ours_prepared/hand_checked": "≤ 1.0",
+    "ours_prepared/casadi": "≤ 0.8",
+}
 
 
 def write_report(
@@ -115,6 +123,7 @@ def write_report(
     calls: int,
     repeats: int,
     scaling: list[Rung],
+    runs: int = 1,
 ) -> str:
     funcs = [*MODEL_FUNCTIONS, *(f"{k}_step_kernels" for k in STEP_KERNELS)]
     lines = [
@@ -162,7 +171,7 @@ def write_report(
         "every variant once). A controller step here is the sum of its kernels (TDE (17),",
         "TDROC gain (25), law); the complete step is timed below.",
         "",
-        *_step_section(c, steps),
+        *_step_section(c, steps, runs),
         "",
         "## Python, µs per call of the forward dynamics",
         "",
@@ -210,6 +219,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="wmr bench")
     parser.add_argument("--calls", type=int, default=1_000_000, help="calls per repetition")
     parser.add_argument("--repeats", type=int, default=5, help="repetitions (≥ 5)")
+    parser.add_argument("--runs", type=int, default=3,
+                        help="separate processes of the step benchmark (ratios pooled)")
     parser.add_argument("--out", type=Path, default=ROOT, help="folder for the reports")
     args = parser.parse_args(argv)
     if args.calls < 1 or args.repeats < 1:
@@ -218,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
     print("C benchmarks ...", flush=True)
     c = summarise_c(run_c(args.calls, args.repeats))
     print("C step benchmark ...", flush=True)
-    steps = run_steps(args.calls, args.repeats)
+    steps = run_steps(args.calls, args.repeats, args.runs)
     print("Python benchmarks ...", flush=True)
     py = python_bench(max(1, args.calls // 100))
     specs = specs_by_name()
@@ -240,7 +251,7 @@ def main(argv: list[str] | None = None) -> int:
     tool = toolchain_times()
     print("scaling with the robot ...", flush=True)
     scaling = measure_scaling()
-    text = write_report(c, steps, py, ops, tool, args.calls, args.repeats, scaling)
+    text = write_report(c, steps, py, ops, tool, args.calls, args.repeats, scaling, args.runs)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "BENCHMARKS.md").write_text(text)
     (args.out / "benchmarks.json").write_text(
@@ -248,9 +259,9 @@ def main(argv: list[str] | None = None) -> int:
             {
                 "c_ns": {f"{f}/{v}": s for (f, v), s in sorted(c.items())},
                 "c_step_ns": {
-                    f"{f}/{v}": s for (f, v), s in sorted(summarise_steps(steps).items())
+                    f"{case}/{v}": s for (case, v), s in sorted(summarise_steps(steps).items())
                 },
-                "c_step_check": steps["check"],
+                "c_step_checks": steps["checks"],
                 "python_us": py,
                 "ops": ops,
                 "toolchain": tool,

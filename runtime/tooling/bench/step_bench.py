@@ -1,12 +1,26 @@
 """The full controller step benchmark: ``wmr_tdroc_step`` (what firmware calls) against a
-hand-written step with the same contract (``csrc/hand_tdroc.c``), on the controller inputs
-of a recorded closed loop (consistent states, lawn-mower path, paper formulation).
+hand-written step written to be fast under the same contract (``csrc/hand_tdroc.c``), on
+the controller inputs of a recorded closed loop (consistent states, lawn-mower path), for
+each formulation (paper, minimal) and precision (double, float32).
 
-One executable (gcc -O2) runs both: first every step of the recording through each
-variant, checking that the statuses are equal and the torques agree (1e-9 relative to the
-run's largest torque) — the timing is refused otherwise — then the timing, interleaved:
-each repetition times every variant once, over whole passes of the recording (a fresh
-``_init`` before each pass, not timed).
+One executable per formulation and precision (gcc -O2) holds every variant: ours
+(run-time configuration), the hand-written step, both again built with the configuration
+compiled in (ours: ``wmr freeze``'s header and ``-DWMR_TDROC_FROZEN``; hand: the same
+configuration as a constant, ``-DHAND_FROZEN``) and, in double, ours with libm's sin/cos.
+Before any timing it checks, against ours:
+
+* the statuses of the bad-input cases: every configuration field made invalid (at
+  ``_init`` and at a step), valid changes and sign flips of the configuration, NaN, ±Inf
+  and out-of-bound values in each of the 25 inputs, each NULL pointer, a state never
+  initialised (frozen variants: the configuration refused at another address);
+* the statuses and torques over the recording, and again with a bad input every seventh
+  step (what an error step leaves behind: commit on success);
+
+and refuses to time otherwise. Then the timing, interleaved: each repetition times every
+variant once (in an order rotated per repetition) over whole passes of the recording (a
+fresh ``_init`` before each pass, not timed). Ratios are taken per repetition (the two
+variants timed moments apart) and reported as median and range over the repetitions of
+every run.
 """
 
 from __future__ import annotations
@@ -24,121 +38,245 @@ from runtime.tooling.firmware.build import frozen_define
 
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
 CFLAGS = ["-std=c99", "-O2"]
-# ours = wmr_tdroc_step; hand = hand_tdroc_step; ours_libm = wmr_tdroc_step built with
-# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses, instead of the generated);
-# ours_frozen = wmr_tdroc_step built with the configuration compiled in (wmr freeze).
-VARIANTS = ("ours", "hand", "ours_libm", "ours_frozen")
-TORQUE_TOLERANCE = 1e-9  # relative to the run's largest |tau|
+FORMULATIONS = ("paper", "minimal")
+PRECISIONS = ("double", "float32")
+# ours = wmr_tdroc_step; hand = hand_tdroc_step; ours_frozen / hand_frozen = each with the
+# configuration compiled in; ours_libm (double only) = wmr_tdroc_step built with
+# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses).
+VARIANTS = ("ours", "hand", "ours_frozen", "hand_frozen", "ours_libm")
+# The torques of every variant against ours over the recording, relative to the largest
+# |tau|: double agrees to rounding; float32 to float rounding amplified by (17)'s 1/h.
+TORQUE_TOLERANCE = {"double": 1e-9, "float32": 1e-4}
+# (numerator, denominator) of each ratio the benchmark reports; the goals are <= 1.0.
+RATIOS = (("ours", "hand"), ("ours_frozen", "hand_frozen"), ("ours_libm", "hand"))
 
 HARNESS = r"""
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "hand_tdroc.h"
 #include "wmr_tdroc.h"
 
-#define NV 4
-wmr_status_t lm_wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
-wmr_status_t lm_wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
-    const double q[5], const double qdot[5], const double q_des[5], const double qdot_des[5],
-    const double qddot_des[5], double tau[2]);
-wmr_status_t fz_wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config);
-wmr_status_t fz_wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
-    const double q[5], const double qdot[5], const double q_des[5], const double qdot_des[5],
-    const double qddot_des[5], double tau[2]);
-extern const wmr_tdroc_config_t fz_wmr_tdroc_frozen_config;
-static const char *const NAMES[NV] = {"ours", "hand", "ours_libm", "ours_frozen"};
+typedef wmr_real_t real;
+typedef wmr_status_t (*init_fn)(void *state, const wmr_tdroc_config_t *config);
+typedef wmr_status_t (*step_fn)(void *state, const wmr_tdroc_config_t *config,
+    const real q[5], const real qdot[5], const real q_des[5], const real qdot_des[5],
+    const real qddot_des[5], real tau[2]);
+
+PROTOTYPES
+
+typedef union { wmr_tdroc_state_t ours; hand_tdroc_state_t hand; } any_state;
+typedef struct {
+    const char *name; init_fn init; step_fn step; int frozen;
+} variant;
 
 static double now_ns(void) {
     struct timespec ts; clock_gettime(CLOCK_MONOTONIC, &ts);
     return 1e9 * (double)ts.tv_sec + (double)ts.tv_nsec;
 }
 static wmr_tdroc_config_t cfg;
-static wmr_tdroc_state_t ours, ours_lm, ours_fz;
-static hand_tdroc_state_t hand;
+static any_state states[NV];
 
-/* A fresh state for variant v (not timed). */
-static void fresh(int v) {
-    const int s = v == 0 ? wmr_tdroc_init(&ours, &cfg)
-                : v == 1 ? hand_tdroc_init(&hand, &cfg)
-                : v == 2 ? lm_wmr_tdroc_init(&ours_lm, &cfg)
-                : fz_wmr_tdroc_init(&ours_fz, &fz_wmr_tdroc_frozen_config);
-    if (s != WMR_OK) {
-        fprintf(stderr, "init failed\n"); exit(2);
+static const wmr_tdroc_config_t *config_of(const variant *v) {
+    return v->frozen == 1 ? &fz_wmr_tdroc_frozen_config
+         : v->frozen == 2 ? &handfz_frozen_config : &cfg;
+}
+
+/* A fresh state for variant k (not timed). */
+static void fresh(int k) {
+    if (VARIANTS[k].init(&states[k], config_of(&VARIANTS[k])) != WMR_OK) {
+        fprintf(stderr, "init failed: %s\n", VARIANTS[k].name); exit(2);
     }
 }
 
-/* One pass of the recording through variant v from its current state; statuses and
-   torques into st, tq. */
-static double pass(int v, int *st, double *tq) {
-    int k, s;
-    double tau[2], sink = 0.0;
-    for (k = 0; k < NSTEPS; ++k) {
-        const double *in = IN[k];
-        if (v == 0) {
-            s = wmr_tdroc_step(&ours, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
-        } else if (v == 1) {
-            s = hand_tdroc_step(&hand, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
-        } else if (v == 2) {
-            s = lm_wmr_tdroc_step(&ours_lm, &cfg, in, in + 5, in + 10, in + 15, in + 20, tau);
-        } else {
-            s = fz_wmr_tdroc_step(&ours_fz, &fz_wmr_tdroc_frozen_config, in, in + 5, in + 10,
-                                  in + 15, in + 20, tau);
+/* One pass of the recording through variant k from its current state; statuses and
+   torques into st, tq when given; with bad != 0, every seventh step gets a NaN rate. */
+static double pass(int k, int *st, real *tq, int bad) {
+    const variant *v = &VARIANTS[k];
+    const wmr_tdroc_config_t *c = config_of(v);
+    int i, s;
+    real tau[2] = {0, 0}, sink = 0;
+    for (i = 0; i < NSTEPS; ++i) {
+        const real *in = IN[i];
+        real spoiled[25];
+        if (bad && i % 7 == 3) {
+            memcpy(spoiled, in, sizeof spoiled);
+            spoiled[5 + i % 5] = (real)NAN;
+            in = spoiled;
         }
-        if (st != 0) { st[k] = s; tq[2 * k] = tau[0]; tq[2 * k + 1] = tau[1]; }
-        sink += tau[0] + (double)s;
+        s = v->step(&states[k], c, in, in + 5, in + 10, in + 15, in + 20, tau);
+        if (st != 0) { st[i] = s; tq[2 * i] = tau[0]; tq[2 * i + 1] = tau[1]; }
+        sink += tau[0] + (real)s;
     }
-    return sink;
+    return (double)sink;
+}
+
+/* The bad-input cases: the status each variant returns. */
+#define NCFG 28
+static void spoil_config(wmr_tdroc_config_t *c, int j) {
+    switch (j) {
+    case 0: c->formulation = 7; break;
+    case 1: c->h = 0; break;
+    case 2: c->h = (real)NAN; break;
+    case 3: c->k1[2] = -1; break;
+    case 4: c->k2[0] = 0; break;
+    case 5: c->q_pos = (real)INFINITY; break;
+    case 6: c->q_vel = (real)1e7; break;
+    case 7: c->tau_max = 0; break;
+    case 8: c->eps = 0; break;
+    case 9: c->eps = (real)1e-30; break;
+    case 10: c->accel_estimator = 9; break;
+    case 11: c->rate_window = 2 * c->h; break;
+    case 12: c->hold_gain = 2; break;
+    case 13: c->held_gain = -1; break;
+    case 14: c->n = 1; break;
+    case 15: c->n = WMR_MAX_WINDOW + 1; break;
+    case 16: c->a = 0; break;
+    case 17: c->a = (real)1.5; break;
+    case 18: c->nominal.m = (real)NAN; break;
+    case 19: c->nominal.r = 0; break;
+    case 20: c->nominal.b = (real)1e-9; break;
+    case 21: c->nominal.K = 100; break;        /* m I - K^2 < 0 */
+    case 22: c->nominal.Iw = 0; break;
+    case 23: c->k1[0] = -4; c->k2[0] = -4; break;  /* two sign flips */
+    case 24: c->tau_max = -c->tau_max; c->eps = -c->eps; break;
+    case 25: c->k1[0] *= (real)1.01; break;   /* valid, but changed */
+    case 26: c->hold_gain = 1 - c->hold_gain; break;
+    default: c->nominal.d = -c->nominal.d; break;  /* valid, but changed */
+    }
+}
+
+/* A state stepped over the first steps of the recording (not timed). */
+static void warm(int k) {
+    int i; real tau[2];
+    fresh(k);
+    for (i = 0; i < 12 && i < NSTEPS; ++i) {
+        const real *in = IN[i];
+        (void)VARIANTS[k].step(&states[k], config_of(&VARIANTS[k]), in, in + 5, in + 10,
+                               in + 15, in + 20, tau);
+    }
+}
+
+/* Statuses of every bad-input case for variant k, into out; returns how many. */
+static int bad_cases(int k, int *out) {
+    const variant *v = &VARIANTS[k];
+    const real vals[3] = {(real)NAN, (real)INFINITY, (real)2e6};
+    real in[25], tau[2];
+    int n = 0, j, i, p;
+    if (!v->frozen) {
+        for (j = 0; j < NCFG; ++j) {
+            wmr_tdroc_config_t c = cfg;
+            any_state s;
+            spoil_config(&c, j);
+            out[n++] = v->init(&s, &c);
+            warm(k);
+            memcpy(in, IN[12 % NSTEPS], sizeof in);
+            out[n++] = v->step(&states[k], &c, in, in + 5, in + 10, in + 15, in + 20, tau);
+        }
+    } else {  /* the compiled-in configuration only: the same values elsewhere are refused */
+        wmr_tdroc_config_t c = *config_of(v);
+        any_state s;
+        out[n++] = v->init(&s, &c);
+        warm(k);
+        memcpy(in, IN[12 % NSTEPS], sizeof in);
+        out[n++] = v->step(&states[k], &c, in, in + 5, in + 10, in + 15, in + 20, tau);
+    }
+    for (i = 0; i < 25; ++i) {
+        for (j = 0; j < 3; ++j) {
+            warm(k);
+            memcpy(in, IN[12 % NSTEPS], sizeof in);
+            in[i] = (i % 2 ? -1 : 1) * vals[j];
+            out[n++] = v->step(&states[k], config_of(v), in, in + 5, in + 10, in + 15, in + 20,
+                               tau);
+        }
+    }
+    warm(k);
+    memcpy(in, IN[12 % NSTEPS], sizeof in);
+    for (p = 0; p < 8; ++p) {
+        const real *ptr[5] = {in, in + 5, in + 10, in + 15, in + 20};
+        void *st = p == 0 ? 0 : (void *)&states[k];
+        const wmr_tdroc_config_t *c = p == 1 ? 0 : config_of(v);
+        if (p >= 2 && p < 7) ptr[p - 2] = 0;
+        out[n++] = v->step(st, c, ptr[0], ptr[1], ptr[2], ptr[3], ptr[4], p == 7 ? 0 : tau);
+    }
+    {
+        any_state s;
+        memset(&s, 0, sizeof s);
+        out[n++] = v->step(&s, config_of(v), in, in + 5, in + 10, in + 15, in + 20, tau);
+    }
+    return n;
 }
 
 int main(int argc, char **argv) {
     long calls = argc > 1 ? atol(argv[1]) : 1000000;
     int repeats = argc > 2 ? atoi(argv[2]) : 5;
     long passes = calls / NSTEPS > 0 ? calls / NSTEPS : 1;
-    static int st[NV][NSTEPS];
-    static double tq[NV][2 * NSTEPS];
+    static int st[NV][NSTEPS], bad[NV][512];
+    static real tq[NV][2 * NSTEPS];
     static double ns[NV][64];
     double scale = 0.0, worst = 0.0, sink = 0.0;
-    int v, k, rep;
-    long i;
+    int k, i, rep, nbad = 0, spoiled;
+    long p;
     CONFIG
-    for (v = 0; v < NV; ++v) { fresh(v); pass(v, st[v], tq[v]); }
-    for (v = 1; v < NV; ++v) {
-        for (k = 0; k < 2 * NSTEPS; ++k) {
-            if (fabs(tq[0][k]) > scale) scale = fabs(tq[0][k]);
-            if (!(fabs(tq[v][k] - tq[0][k]) <= worst)) worst = fabs(tq[v][k] - tq[0][k]);
-        }
-        for (k = 0; k < NSTEPS; ++k) {
-            if (st[0][k] != st[v][k]) {
-                printf("{\"error\": \"%s: status differs at step %d\"}\n", NAMES[v], k);
+    /* The bad-input cases against ours (the first run-time and the first frozen variant). */
+    for (k = 0; k < NV; ++k) {
+        const int ref = VARIANTS[k].frozen ? FIRST_FROZEN : 0;
+        const int n = bad_cases(k, bad[k]);
+        if (k == ref) { nbad += n; continue; }
+        for (i = 0; i < n; ++i) {
+            if (bad[k][i] != bad[ref][i]) {
+                printf("{\"error\": \"%s: bad-input case %d returns %d, ours %d\"}\n",
+                       VARIANTS[k].name, i, bad[k][i], bad[ref][i]);
                 return 3;
             }
         }
     }
-    printf("{\"check\": {\"steps\": %d, \"max_abs_tau_diff\": %.6e, "
-           "\"tau_scale\": %.6e}}\n", NSTEPS, worst, scale);
+    /* The recording, and the recording with a bad input every seventh step. */
+    for (spoiled = 0; spoiled < 2; ++spoiled) {
+        for (k = 0; k < NV; ++k) { fresh(k); pass(k, st[k], tq[k], spoiled); }
+        for (k = 1; k < NV; ++k) {
+            for (i = 0; i < NSTEPS; ++i) {
+                if (st[0][i] != st[k][i]) {
+                    printf("{\"error\": \"%s: status %d at step %d, ours %d%s\"}\n",
+                           VARIANTS[k].name, st[k][i], i, st[0][i],
+                           spoiled ? " (bad input every 7th step)" : "");
+                    return 3;
+                }
+            }
+            for (i = 0; i < 2 * NSTEPS; ++i) {
+                const double d = fabs((double)tq[k][i] - (double)tq[0][i]);
+                if (fabs((double)tq[0][i]) > scale) scale = fabs((double)tq[0][i]);
+                if (!(d <= worst)) worst = d;
+            }
+        }
+    }
+    printf("{\"check\": {\"steps\": %d, \"bad_input_cases\": %d, \"max_abs_tau_diff\": %.6e, "
+           "\"tau_scale\": %.6e}}\n", NSTEPS, nbad, worst, scale);
     if (!(worst <= TOL * (scale > 1.0 ? scale : 1.0))) return 3;
     if (repeats > 64) repeats = 64;
     for (rep = 0; rep < repeats; ++rep) {
-        for (v = 0; v < NV; ++v) {
+        int j;
+        for (j = 0; j < NV; ++j) {
             double t = 0.0;
-            for (i = 0; i < passes; ++i) {
+            k = (j + rep) % NV;
+            for (p = 0; p < passes; ++p) {
                 double t0;
-                fresh(v);
+                fresh(k);
                 t0 = now_ns();
-                sink += pass(v, 0, 0);
+                sink += pass(k, 0, 0, 0);
                 t += now_ns() - t0;
             }
-            ns[v][rep] = t / (double)(passes * NSTEPS);
+            ns[k][rep] = t / (double)(passes * NSTEPS);
         }
     }
-    for (v = 0; v < NV; ++v) {
+    for (k = 0; k < NV; ++k) {
         printf("{\"function\": \"tdroc_step\", \"variant\": \"%s\", \"ns\": [",
-               NAMES[v]);
-        for (rep = 0; rep < repeats; ++rep) printf("%s%.4f", rep ? ", " : "", ns[v][rep]);
+               VARIANTS[k].name);
+        for (rep = 0; rep < repeats; ++rep) printf("%s%.4f", rep ? ", " : "", ns[k][rep]);
         printf("], \"checksum\": %.15e}\n", sink);
     }
     return 0;
@@ -161,72 +299,146 @@ def _config_lines(config: dict[str, Any]) -> str:
     return "\n    ".join(lines)
 
 
-def frozen_header(workdir: Path, config: dict[str, Any]) -> Path:
-    """``wmr freeze`` of the recorded configuration (double) into ``workdir``."""
+def frozen_header(workdir: Path, config: dict[str, Any], float32: bool = False) -> Path:
+    """``wmr freeze`` of the recorded configuration into ``workdir``."""
     from runtime.bindings import cbuild
     from runtime.bindings.generated import load_robot_code
     from runtime.freeze.header import freeze
     from runtime.tooling.firmware.emulated_run import tdroc_config
 
-    lib = cbuild.build(False)
+    lib = cbuild.build(float32)
     frozen = freeze(lib, load_robot_code(""), "tdroc", tdroc_config(lib.ffi, config))
     path = workdir / frozen.filename
     path.write_text(frozen.text)
     return path
 
 
-def build_step_bench(workdir: Path, config: dict[str, Any],
-                     inputs: list[list[list[float]]]) -> Path:
-    """Compile the generated controller C (double; again with ``-DWMR_LIBM_TRIG``, renamed
-    ``lm_wmr_*``, and with the configuration frozen, renamed ``fz_wmr_*``), the
-    hand-written step and the harness with the recorded inputs into one executable;
-    returns its path."""
+def _variants(float32: bool) -> list[tuple[str, str, str, int]]:
+    """(name, init symbol, step symbol, frozen: 0 run-time, 1 ours, 2 hand) in check order:
+    ours first (the reference of the run-time variants), then the first frozen one."""
+    rows = [("ours", "wmr", 0), ("hand", "hand", 0), ("ours_frozen", "fz_wmr", 1),
+            ("hand_frozen", "handfz", 2)]
+    if not float32:
+        rows.append(("ours_libm", "lm_wmr", 0))
+    return [(name, f"{pre}_tdroc_init", f"{pre}_tdroc_step", frozen) for name, pre, frozen in rows]
+
+
+def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[list[float]]],
+                     float32: bool = False) -> Path:
+    """Compile the generated controller C (ours; with the configuration frozen, renamed
+    ``fz_wmr_*``; in double with ``-DWMR_LIBM_TRIG``, renamed ``lm_wmr_*``), the hand-written
+    step (run-time and ``-DHAND_FROZEN``) and the harness with the recorded inputs into one
+    executable of that precision; returns its path."""
+    real = "float" if float32 else "double"
+    prec = ("-DWMR_FLOAT32",) if float32 else ()
+    variants = _variants(float32)
     rows = ",\n".join("{" + ", ".join(repr(x) for v in step for x in v) + "}" for step in inputs)
-    head = (f"#define NSTEPS {len(inputs)}\n#define TOL {TORQUE_TOLERANCE!r}\n"
-            f"static const double IN[NSTEPS][25] = {{\n{rows}\n}};\n")
-    body = HARNESS.replace("CONFIG", _config_lines(config))
-    first, rest = body.split('#include "hand_tdroc.h"', 1)
+    protos = []
+    for _, init, step, _ in variants:
+        if init.startswith(("fz_", "lm_")):
+            protos.append(f"wmr_status_t {init}(wmr_tdroc_state_t *, const wmr_tdroc_config_t *);")
+            protos.append(
+                f"wmr_status_t {step}(wmr_tdroc_state_t *, const wmr_tdroc_config_t *, "
+                "const real *, const real *, const real *, const real *, const real *, real *);")
+    protos.append("extern const wmr_tdroc_config_t fz_wmr_tdroc_frozen_config;")
+    protos.append("wmr_status_t handfz_tdroc_init(hand_tdroc_state_t *, "
+                  "const wmr_tdroc_config_t *);")
+    protos.append("wmr_status_t handfz_tdroc_step(hand_tdroc_state_t *, "
+                  "const wmr_tdroc_config_t *, const real *, const real *, const real *, "
+                  "const real *, const real *, real *);")
+    protos.append("extern const wmr_tdroc_config_t handfz_frozen_config;")
+    table = ",\n    ".join(f'{{"{n}", (init_fn){i}, (step_fn){s}, {f}}}'
+                           for n, i, s, f in variants)
+    protos.append(f"#define NV {len(variants)}")
+    protos.append(f"#define NSTEPS {len(inputs)}")
+    protos.append(f"#define TOL {TORQUE_TOLERANCE['float32' if float32 else 'double']!r}")
+    protos.append(f"#define FIRST_FROZEN {next(k for k, v in enumerate(variants) if v[3])}")
+    protos.append(f"static const {real} IN[NSTEPS][25] = {{\n{rows}\n}};")
+    protos.append("struct variant_s;")
+    body = HARNESS.replace("PROTOTYPES", "\n".join(protos)).replace(
+        "CONFIG", _config_lines(config))
+    body = body.replace("static wmr_tdroc_config_t cfg;",
+                        "static wmr_tdroc_config_t cfg;\nstatic const variant VARIANTS[NV] = {\n"
+                        f"    {table}\n}};")
     src = workdir / "step_main.c"
-    src.write_text(first + '#include "hand_tdroc.h"\n' + head + rest)
+    src.write_text(body)
     sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
-    libm = renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
-    frozen_header(workdir, config)
-    frozen = renamed_objects(workdir, sources, (frozen_define("tdroc"), f"-I{workdir}"), "fz_")
+    objs: list[str] = []
+    for s in sources:  # ours
+        obj = workdir / f"d_{s.stem}.o"
+        subprocess.run(["gcc", *CFLAGS, *prec, "-c", f"-I{GENERATED_C}", str(s), "-o", str(obj)],
+                       check=True)
+        objs.append(str(obj))
+    if not float32:
+        objs += renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
+    frozen_header(workdir, config, float32)
+    objs += renamed_objects(workdir, sources, (*prec, frozen_define("tdroc"), f"-I{workdir}"),
+                            "fz_")
+    for tag, defines in (("hand", ()), ("handfz", ("-DHAND_FROZEN",))):
+        obj = workdir / f"{tag}.o"
+        subprocess.run(["gcc", *CFLAGS, *prec, *defines, "-c", f"-I{GENERATED_C}",
+                        f"-I{workdir}", f"-I{BENCH_CSRC}", str(BENCH_CSRC / "hand_tdroc.c"),
+                        "-o", str(obj)], check=True)
+        objs.append(str(obj))
     exe = workdir / "step_bench"
-    subprocess.run(
-        ["gcc", *CFLAGS, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),
-         str(BENCH_CSRC / "hand_tdroc.c"), *map(str, sources), *libm, *frozen, "-lm", "-o",
-         str(exe)],
-        check=True,
-    )
+    subprocess.run(["gcc", *CFLAGS, *prec, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),
+                    *objs, "-lm", "-o", str(exe)], check=True)
     return exe
 
 
-def run_steps(calls: int, repeats: int) -> dict[str, Any]:
-    """Record the closed loop (double), check the variants agree, time them interleaved.
+def run_steps(calls: int, repeats: int, runs: int = 1,
+              cases: tuple[tuple[str, str], ...] | None = None) -> dict[str, Any]:
+    """For each (formulation, precision): record the closed loop, check the variants
+    agree, time them interleaved, ``runs`` times (separate processes).
 
-    Returns {"check": {...}, "rows": [{"function", "variant", "ns": [...]}, ...]}; raises
-    RuntimeError when statuses or torques differ (no timing is reported then).
+    Returns {"checks": {case: {...}}, "rows": [{"function", "variant", "formulation",
+    "precision", "ns": [...]}, ...]} (``ns`` pooled over the runs, ``run_of`` saying which
+    run each entry is from); raises RuntimeError when statuses or torques differ (nothing
+    is timed then).
     """
     from runtime.tooling.firmware.emulated_run import record_closed_loop
 
-    rec = record_closed_loop("tdroc", "paper", eps=0.5, float32=False)
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = build_step_bench(Path(tmp), rec.config, rec.inputs)
-        proc = subprocess.run([str(exe), str(calls), str(repeats)], capture_output=True,
-                              text=True, check=False)
-    lines = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
-    if proc.returncode != 0:
-        raise RuntimeError(f"step benchmark refused to time: {lines or proc.stderr}")
-    check = next(x["check"] for x in lines if "check" in x)
-    return {"check": check, "rows": [x for x in lines if "function" in x]}
+    checks: dict[str, Any] = {}
+    rows: list[dict[str, Any]] = []
+    for formulation, precision in cases or [(f, p) for f in FORMULATIONS for p in PRECISIONS]:
+        float32 = precision == "float32"
+        rec = record_closed_loop("tdroc", formulation, eps=0.5, float32=float32)
+        pooled: dict[str, list[float]] = {}
+        with tempfile.TemporaryDirectory() as tmp:
+            exe = build_step_bench(Path(tmp), rec.config, rec.inputs, float32)
+            for _ in range(runs):
+                proc = subprocess.run([str(exe), str(calls), str(repeats)], capture_output=True,
+                                      text=True, check=False)
+                lines = [json.loads(x) for x in proc.stdout.splitlines() if x.startswith("{")]
+                if proc.returncode != 0:
+                    raise RuntimeError(f"step benchmark ({formulation}, {precision}) refused "
+                                       f"to time: {lines or proc.stderr}")
+                checks[f"{formulation}/{precision}"] = next(x["check"] for x in lines
+                                                            if "check" in x)
+                for x in lines:
+                    if "function" in x:
+                        pooled.setdefault(x["variant"], []).extend(x["ns"])
+        rows += [{"function": "tdroc_step", "variant": v, "formulation": formulation,
+                  "precision": precision, "ns": ns} for v, ns in pooled.items()]
+    return {"checks": checks, "rows": rows}
+
+
+def _stats(xs: list[float]) -> dict[str, float]:
+    return {"median": statistics.median(xs), "min": min(xs), "max": max(xs)}
 
 
 def summarise_steps(result: dict[str, Any]) -> dict[tuple[str, str], dict[str, float]]:
-    """(function, variant) -> median, min, max ns per step."""
-    return {
-        (r["function"], r["variant"]): {
-            "median": statistics.median(r["ns"]), "min": min(r["ns"]), "max": max(r["ns"])
-        }
-        for r in result["rows"]
-    }
+    """(case "formulation/precision", variant) -> median, min, max ns per step; and
+    (case, "ratio:num/den") -> median, min, max of the per-repetition ratios."""
+    out: dict[tuple[str, str], dict[str, float]] = {}
+    by_case: dict[str, dict[str, list[float]]] = {}
+    for r in result["rows"]:
+        case = f"{r['formulation']}/{r['precision']}"
+        out[(case, r["variant"])] = _stats(r["ns"])
+        by_case.setdefault(case, {})[r["variant"]] = r["ns"]
+    for case, ns in by_case.items():
+        for num, den in RATIOS:
+            if num in ns and den in ns:
+                out[(case, f"ratio:{num}/{den}")] = _stats(
+                    [a / b for a, b in zip(ns[num], ns[den], strict=True)])
+    return out

@@ -28,13 +28,15 @@ PARTS: tuple[Part, ...] = (
     Part("configuration comparison", "every step (detects a changed configuration)",
          re.compile(r"\w+_config_unchanged|real_bits")),
     Part("configuration-derived data, init, reset", "at _init and _reset",
-         re.compile(r"\w+_(init|reset|clear)|controller_p|\w+_minv_norm|window_weights")),
+         re.compile(r"\w+_(init|reset|clear)|controller_p|\w+_minv_norm|window_weights"
+                    r"|\w+_k_\w+_keep")),
     Part("input checks, error detail", "every step",
-         re.compile(r"check_step_inputs|fail")),
+         re.compile(r"check_step_inputs|fail|\w+_inputs_bounded")),
     Part("step: history, commit, saturation", "every step",
          re.compile(r"\w+_step(_detail)?|saturate|cap_gain|push_history|controlled_slice")),
     Part("control law and estimators (from SymPy)", "every step",
-         re.compile(rf"({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain|norm(\d+|_scaled)")),
+         re.compile(rf"(\w+_k_)?(({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain)"
+                    r"|norm(\d+|_scaled)")),
 )
 UNCLASSIFIED = "unclassified"
 
