@@ -511,7 +511,18 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             )
             if c.trig and angles:
                 specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
-    return tuple(specs)
+    return tuple(replace(s, bounded_trig=_trig_of_inputs_only(s)) for s in specs)
+
+
+def _trig_of_inputs_only(spec: FunctionSpec) -> bool:
+    """Whether every sin and cos of ``spec`` takes one input coordinate as it is: then its
+    argument is a value a step has validated (|x| <= the steps' input bound) and the
+    bounded reduction serves (``FunctionSpec.bounded_trig``). An angle formed inside the
+    kernel (the PI's heading error θ_des − θ reaches twice the bound) keeps libm's."""
+    exprs = [e for a in spec.outputs for e in a.exprs] + [e for _, e in spec.definitions]
+    inputs = set(spec.input_symbols())
+    trig = {f for e in exprs for f in sp.sympify(e).atoms(sp.sin, sp.cos)}
+    return all(f.args[0] in inputs for f in trig)
 
 
 def plant_params_arg(model: RobotModel, name: str = "pp") -> Argument:

@@ -111,6 +111,11 @@ class FunctionSpec:
     # Intermediate quantities (``modeling.staged``): each symbol defined by an expression of
     # the inputs and of earlier ones, evaluated in order; outputs and guards may read them.
     definitions: tuple[tuple[sp.Symbol, sp.Expr], ...] = ()
+    # A controller kernel: its angles are a step's validated inputs (|x| <= the steps' input
+    # bound), so C evaluates sin and cos with the generated reduction alone
+    # (``<P>_SIN_BOUNDED``), never libm's: no sinf/cosf and their argument reduction (about
+    # 0.5 KB of stack) linked into a firmware image. NaN beyond the bound.
+    bounded_trig: bool = False
 
     def checked_spec(self) -> FunctionSpec:
         """This spec with the guard conditions as a trailing output ``guard_`` (for CSE)."""

@@ -215,3 +215,37 @@ def test_sin_and_cos_of_one_angle_share_one_inlined_reduction(tmp_path: Path) ->
         calls = [line.split()[-1] for line in body.splitlines() if "\tcall\t" in line]
         assert calls and all(c.startswith(("sincos", "sin@", "cos@")) for c in calls), (name, calls)
         assert "mulsd" in body
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+@pytest.mark.parametrize("robot", ["", "trailer", "trailer2"])
+def test_controllers_link_no_libm_trig(tmp_path: Path, robot: str) -> None:
+    """A controller's kernels (its laws and the step's own copies) whose sin and cos take the
+    step's validated angles as they are use the bounded reduction: neither precision links a libm
+    sin/cos (on a Cortex-M4, newlib's cosf argument reduction was 480 B of the two-trailer
+    TDROC step's stack); the model functions keep libm's beyond the bound."""
+    folder = cbuild.GENERATED_C.parent / robot / "c" if robot else cbuild.GENERATED_C
+    prefix = next(folder.glob("*_robot.h")).name.removesuffix("_robot.h")
+    libm = {"sin", "cos", "sincos", "sinf", "cosf", "sincosf"}
+    for float32 in (False, True):
+        linked: dict[str, set[str]] = {}
+        for stem in ("laws", "tdroc", "tdc", "asmc", "roc", "pi", "model"):
+            obj = tmp_path / f"{stem}{float32:d}.o"
+            subprocess.run(["gcc", "-std=c99", "-O2", "-c", f"-I{folder}",
+                            *([f"-D{prefix.upper()}_FLOAT32"] if float32 else []),
+                            str(folder / f"{prefix}_{stem}.c"), "-o", str(obj)], check=True)
+            nm = subprocess.run(["nm", "-u", str(obj)], capture_output=True, text=True,
+                                check=True).stdout
+            linked[stem] = {line.split()[-1] for line in nm.splitlines() if line.strip()}
+        for stem in ("tdroc", "tdc", "asmc", "roc"):
+            assert not linked[stem] & libm, (robot, float32, stem, linked[stem] & libm)
+        # Not vacuous: the model functions link them, and so does the PI (its step and its
+        # law in <prefix>_laws.c), whose heading error θ_des − θ is formed in the kernel (up
+        # to twice the steps' input bound).
+        assert linked["model"] & libm and linked["pi"] & libm, (robot, float32)
+    laws = (folder / f"{prefix}_laws.c").read_text()
+    law = laws[laws.index(f"void {prefix}_minimal_tdc_law("):]
+    law = law[:law.index("\n}\n")]
+    assert f"{prefix.upper()}_SIN(" not in law and f"{prefix.upper()}_COS(" not in law
+    if robot:  # a trailer's M-hat depends on its hitch angles: the bounded macros are used
+        assert f"{prefix.upper()}_SIN_BOUNDED(" in law or f"{prefix.upper()}_COS_BOUNDED(" in law

@@ -63,10 +63,10 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
     const wmr_real_t _t3 = qd_now2 - qd_then2;
     const wmr_real_t _t4 = _t1*_t3;
     const wmr_real_t qp2 = q_prev[2];
-    const wmr_real_t _t5 = WMR_SIN(qp2);
+    const wmr_real_t _t5 = WMR_SIN_BOUNDED(qp2);
     const wmr_real_t K = p->K;
     const wmr_real_t _t6 = K*_t5;
-    const wmr_real_t _t7 = WMR_COS(qp2);
+    const wmr_real_t _t7 = WMR_COS_BOUNDED(qp2);
     const wmr_real_t _t8 = _t7*m;
     const wmr_real_t r = p->r;
     const wmr_real_t _t9 = WMR_LIT(0.5)*r;
@@ -411,7 +411,7 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t k2_0 = k2[0];
     const wmr_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t1 = WMR_SIN(theta);
+    const wmr_real_t _t1 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t e2 = e[2];
     const wmr_real_t edot2 = edot[2];
     const wmr_real_t qdd_des2 = qddot_des[2];
@@ -426,7 +426,7 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t k1_3 = k1[3];
     const wmr_real_t k2_3 = k2[3];
     const wmr_real_t _t4 = e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t5 = WMR_COS(theta);
+    const wmr_real_t _t5 = WMR_COS_BOUNDED(theta);
     const wmr_real_t m = p->m;
     const wmr_real_t _t6 = _t5*m;
     const wmr_real_t r = p->r;
@@ -596,14 +596,14 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t k2_0 = k2[0];
     const wmr_real_t _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t8 = WMR_SIN(theta);
+    const wmr_real_t _t8 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t qdd_des2 = qddot_des[2];
     const wmr_real_t k1_2 = k1[2];
     const wmr_real_t k2_2 = k2[2];
     const wmr_real_t _t9 = _t2*_t6 + e2*k1_2 + edot2*k2_2 + qdd_des2;
     const wmr_real_t K = p->K;
     const wmr_real_t _t10 = K*_t9;
-    const wmr_real_t _t11 = WMR_COS(theta);
+    const wmr_real_t _t11 = WMR_COS_BOUNDED(theta);
     const wmr_real_t m = p->m;
     const wmr_real_t _t12 = _t11*m;
     const wmr_real_t r = p->r;
@@ -774,7 +774,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t _t1 = _t0*thetadot_l*thetadot_l;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t2 = WMR_SIN(theta);
+    const wmr_real_t _t2 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t m = p->m;
     const wmr_real_t _t3 = _t2*m;
     const wmr_real_t b = p->b;
@@ -783,7 +783,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t _t6 = _t3*_t5;
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t _t7 = _t0*thetadot_r*thetadot_r;
-    const wmr_real_t _t8 = WMR_COS(theta);
+    const wmr_real_t _t8 = WMR_COS_BOUNDED(theta);
     const wmr_real_t _t9 = _t8*m;
     const wmr_real_t _t10 = _t1*_t9;
     const wmr_real_t d = p->d;
@@ -902,7 +902,7 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t _t1 = _t0*thetadot_l*thetadot_l;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t2 = WMR_SIN(theta);
+    const wmr_real_t _t2 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t m = p->m;
     const wmr_real_t _t3 = _t2*m;
     const wmr_real_t b = p->b;
@@ -911,7 +911,7 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t _t6 = _t3*_t5;
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t _t7 = _t0*thetadot_r*thetadot_r;
-    const wmr_real_t _t8 = WMR_COS(theta);
+    const wmr_real_t _t8 = WMR_COS_BOUNDED(theta);
     const wmr_real_t _t9 = _t8*m;
     const wmr_real_t _t10 = _t1*_t9;
     const wmr_real_t d = p->d;

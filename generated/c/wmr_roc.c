@@ -78,14 +78,14 @@ static void wmr_roc_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t 
     const wmr_real_t _t0 = kept[4];
     const wmr_real_t _t12 = _t0*thetadot_l*thetadot_l;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t13 = WMR_SIN(theta);
+    const wmr_real_t _t13 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t m = kept[0];
     const wmr_real_t _t14 = _t13*m;
     const wmr_real_t _t2 = kept[5];
     const wmr_real_t _t15 = _t14*_t2;
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t _t16 = _t0*thetadot_r*thetadot_r;
-    const wmr_real_t _t17 = WMR_COS(theta);
+    const wmr_real_t _t17 = WMR_COS_BOUNDED(theta);
     const wmr_real_t _t18 = _t17*m;
     const wmr_real_t _t19 = _t12*_t18;
     const wmr_real_t _t20 = _t16*_t18;

@@ -18,7 +18,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x2cb419f7u
+#define WMR_CODE_ID 0x16afcfc9u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -196,6 +196,28 @@ static inline double wmr_cos(double x)
 }
 #endif
 #endif
+
+/* sin and cos in the controller kernels (wmr_laws and the steps' own copies): their angles
+   are a step's validated inputs (|x| <= 1.0e6), so the bounded reduction above alone,
+   in both precisions (NaN beyond the bound, as wmr_sincos_bounded): no libm sinf/cosf
+   and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
+static inline wmr_real_t wmr_sin_bounded(wmr_real_t x)
+{
+    wmr_real_t s;
+    wmr_real_t c;
+    wmr_sincos_bounded(x, &s, &c);
+    return s;
+}
+
+static inline wmr_real_t wmr_cos_bounded(wmr_real_t x)
+{
+    wmr_real_t s;
+    wmr_real_t c;
+    wmr_sincos_bounded(x, &s, &c);
+    return c;
+}
+#define WMR_SIN_BOUNDED(x) wmr_sin_bounded(x)
+#define WMR_COS_BOUNDED(x) wmr_cos_bounded(x)
 /* isfinite is type-generic in C99: no promotion in either build. */
 #define WMR_ISFINITE(x) isfinite(x)
 /* C99's fmax/fmin without a library call: a NaN argument is ignored (the other one is

@@ -23,12 +23,14 @@ from codegen.printer_base import ExpressionPrinterMixin, float_text
 class CPrinter(ExpressionPrinterMixin, C99CodePrinter):
     """C99 printer over ``wmr_real_t``; symbols print as the names in ``symbol_names``."""
 
-    def __init__(self, config: CConfig, symbol_names: Mapping[sp.Symbol, str]) -> None:
+    def __init__(self, config: CConfig, symbol_names: Mapping[sp.Symbol, str],
+                 bounded_trig: bool = False) -> None:
         super().__init__()
         self.config = config
         self.symbol_names = symbol_names
         self.ops = Counter()
         self._macros = {m.name: m.arity for m in config.math_macros}
+        self.bounded_trig = bounded_trig  # FunctionSpec.bounded_trig
 
     def lit(self, value: float) -> str:
         return f"{self.config.literal_macro}({float_text(value)})"
@@ -36,7 +38,8 @@ class CPrinter(ExpressionPrinterMixin, C99CodePrinter):
     def call(self, name: str, args: Sequence[str]) -> str:
         if self._macros.get(name) != len(args):
             raise ValueError(f"no {len(args)}-argument math macro for {name!r} in CConfig")
-        return f"{self.config.macro_prefix}{name.upper()}({', '.join(args)})"
+        bounded = "_BOUNDED" if self.bounded_trig and name in ("sin", "cos") else ""
+        return f"{self.config.macro_prefix}{name.upper()}{bounded}({', '.join(args)})"
 
     def ternary(self, cond: str, if_true: str, if_false: str) -> str:
         return f"({cond} ? {if_true} : {if_false})"

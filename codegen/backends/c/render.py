@@ -257,10 +257,11 @@ def _local_names(spec: FunctionSpec, slots: Sequence[InputSlot]) -> dict[sp.Symb
     return local_names(slots, reserved, _usable_c_name)
 
 
-def _printer(names: Mapping[sp.Symbol, str], temps: Sequence[Temp], config: CConfig) -> CPrinter:
+def _printer(names: Mapping[sp.Symbol, str], temps: Sequence[Temp], config: CConfig,
+             spec: FunctionSpec) -> CPrinter:
     printer_names = dict(names)
     printer_names.update({s: str(s) for s, _ in temps})
-    return CPrinter(config, printer_names)
+    return CPrinter(config, printer_names, spec.bounded_trig)
 
 
 def _guard_lines(
@@ -377,7 +378,7 @@ def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str,
     if len(guards) + len(late_guards) != len(spec.guards):
         raise ValueError(f"{spec.name}: {len(spec.guards)} guards, conditions for "
                          f"{len(guards) + len(late_guards)}")
-    printer = _printer(names, (*temps, *late_temps), config)
+    printer = _printer(names, (*temps, *late_temps), config, spec)
 
     loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index))
              for s in slots if s.symbol in used}
@@ -487,7 +488,7 @@ def _prepare_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[st
     slots = input_slots(spec)
     names = _local_names(spec, slots)
     used = form.used_params()
-    printer = _printer(names, form.param_temps, config)
+    printer = _printer(names, form.param_temps, config, spec)
     param_args = [a for a in spec.inputs if a.kind == "params"]
     param_slots = [s for s in slots if s.symbol in form.params]
     loads = [(names[s.symbol], _access(s.arg, s.field, s.index))
@@ -621,7 +622,7 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
     slots = input_slots(spec)
     names = _local_names(spec, slots)
     used = form.used_state()
-    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config, spec)
     state_args = [a for a in spec.inputs if a.kind != "params"]
     state_slots = [s for s in slots if s.symbol not in form.params]
     not_init = f"{config.macro_prefix}ERR_NOT_INITIALISED"
@@ -921,7 +922,7 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
         return None
     slots = input_slots(spec)
     names = _local_names(spec, slots)
-    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config, spec)
     # keep: the parameters read, the parameter-only temporaries, the kept values stored
     param_args = [a for a in spec.inputs if a.kind == "params"]
     used_params = form.used_params()
@@ -939,7 +940,7 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
         "ops": keep_ops.comment(), "body": body,
     }
     # call: the per-step rest, each input and kept value read before its first use
-    printer = _printer(names, (*form.param_temps, *form.state_temps), config)
+    printer = _printer(names, (*form.param_temps, *form.state_temps), config, spec)
     state_args = [a for a in spec.inputs if a.kind != "params"]
     used = form.used_state()
     loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index))

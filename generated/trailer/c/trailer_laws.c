@@ -57,11 +57,11 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
     const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t2 = TRAILER_SIN(qp3);
-    const trailer_real_t _t3 = TRAILER_COS(qp3);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(qp3);
+    const trailer_real_t _t3 = TRAILER_COS_BOUNDED(qp3);
     const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t4 = TRAILER_SIN(qp2);
-    const trailer_real_t _t5 = TRAILER_COS(qp2);
+    const trailer_real_t _t4 = TRAILER_SIN_BOUNDED(qp2);
+    const trailer_real_t _t5 = TRAILER_COS_BOUNDED(qp2);
     const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
     const trailer_real_t _t7 = -TRAILER_LIT(3.0)*_t2*_t4/TRAILER_LIT(10.0) - _t5*_t6;
     const trailer_real_t _t8 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
@@ -148,12 +148,12 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     trailer_real_t *norm)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
@@ -305,12 +305,12 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     (void)p12;
     (void)p22;
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
@@ -408,12 +408,12 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
@@ -525,12 +525,12 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *gain)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
@@ -720,12 +720,12 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;

@@ -81,12 +81,12 @@ static void trailer_roc_k_minimal_roc_law(const trailer_real_t kept[17], const t
     trailer_real_t *gain)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
     const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
     const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;

@@ -104,11 +104,11 @@ static void trailer_tdroc_k_minimal_tde(const trailer_real_t kept[16], const tra
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
     const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t6 = TRAILER_SIN(qp3);
-    const trailer_real_t _t7 = TRAILER_COS(qp3);
+    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(qp3);
+    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(qp3);
     const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t8 = TRAILER_SIN(qp2);
-    const trailer_real_t _t9 = TRAILER_COS(qp2);
+    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(qp2);
+    const trailer_real_t _t9 = TRAILER_COS_BOUNDED(qp2);
     const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
     const trailer_real_t _t11 = -_t10*_t9 - TRAILER_LIT(3.0)*_t6*_t8/TRAILER_LIT(10.0);
     const trailer_real_t _t12 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
@@ -198,12 +198,12 @@ static void trailer_tdroc_k_minimal_minv_norm(const trailer_real_t kept[16],
     const trailer_real_t *q, trailer_real_t *norm)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
-    const trailer_real_t _t10 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
     const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
     const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
@@ -303,12 +303,12 @@ static void trailer_tdroc_k_minimal_tdroc_law(const trailer_real_t kept[16],
     trailer_real_t *s_norm)
 {
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS(theta_cart);
+    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
+    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
     const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
-    const trailer_real_t _t10 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
     const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
     const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
     const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);

@@ -19,7 +19,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0xce041801u
+#define TRAILER_CODE_ID 0x949b2a91u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -199,6 +199,28 @@ static inline double trailer_cos(double x)
 }
 #endif
 #endif
+
+/* sin and cos in the controller kernels (trailer_laws and the steps' own copies): their angles
+   are a step's validated inputs (|x| <= 1.0e6), so the bounded reduction above alone,
+   in both precisions (NaN beyond the bound, as trailer_sincos_bounded): no libm sinf/cosf
+   and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
+static inline trailer_real_t trailer_sin_bounded(trailer_real_t x)
+{
+    trailer_real_t s;
+    trailer_real_t c;
+    trailer_sincos_bounded(x, &s, &c);
+    return s;
+}
+
+static inline trailer_real_t trailer_cos_bounded(trailer_real_t x)
+{
+    trailer_real_t s;
+    trailer_real_t c;
+    trailer_sincos_bounded(x, &s, &c);
+    return c;
+}
+#define TRAILER_SIN_BOUNDED(x) trailer_sin_bounded(x)
+#define TRAILER_COS_BOUNDED(x) trailer_cos_bounded(x)
 /* isfinite is type-generic in C99: no promotion in either build. */
 #define TRAILER_ISFINITE(x) isfinite(x)
 /* C99's fmax/fmin without a library call: a NaN argument is ignored (the other one is

@@ -100,17 +100,17 @@ static void trailer2_asmc_k_minimal_asmc_law(const trailer2_real_t kept[25],
     trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm, trailer2_real_t *gain_next)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t11 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t12 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t12 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t14 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t14 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
     const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t17 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t18 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t17 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t18 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
     const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
     const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;

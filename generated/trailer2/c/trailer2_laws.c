@@ -57,16 +57,16 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
     const trailer2_real_t radius_left = p->radius_left;
     const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
     const trailer2_real_t qp3 = q_prev[3];
-    const trailer2_real_t _t2 = TRAILER2_SIN(qp3);
-    const trailer2_real_t _t3 = TRAILER2_COS(qp3);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(qp3);
+    const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(qp3);
     const trailer2_real_t qp2 = q_prev[2];
-    const trailer2_real_t _t4 = TRAILER2_SIN(qp2);
+    const trailer2_real_t _t4 = TRAILER2_SIN_BOUNDED(qp2);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t6 = TRAILER2_COS(qp2);
+    const trailer2_real_t _t6 = TRAILER2_COS_BOUNDED(qp2);
     const trailer2_real_t _t7 = TRAILER2_LIT(3.0)*_t6/TRAILER2_LIT(10.0);
     const trailer2_real_t qp4 = q_prev[4];
-    const trailer2_real_t _t8 = TRAILER2_SIN(qp4);
-    const trailer2_real_t _t9 = TRAILER2_COS(qp4);
+    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(qp4);
+    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(qp4);
     const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
     const trailer2_real_t _t11 = -_t2*_t5 - _t3*_t7;
     const trailer2_real_t _t12 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
@@ -196,16 +196,16 @@ void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_
     trailer2_real_t *norm)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t0 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t1 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_LIT(17.0)*_t7/TRAILER2_LIT(20.0);
     const trailer2_real_t radius_right = p->radius_right;
     const trailer2_real_t _t9 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
@@ -400,16 +400,16 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
     (void)p12;
     (void)p22;
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t0 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t1 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_LIT(17.0)*_t7/TRAILER2_LIT(20.0);
     const trailer2_real_t radius_right = p->radius_right;
     const trailer2_real_t _t9 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
@@ -550,16 +550,16 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t0 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t1 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_LIT(17.0)*_t7/TRAILER2_LIT(20.0);
     const trailer2_real_t radius_right = p->radius_right;
     const trailer2_real_t _t9 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
@@ -714,17 +714,17 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
     trailer2_real_t *gain)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t0 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t1 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t7 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t8 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
     const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
     const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;
@@ -1038,17 +1038,17 @@ void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t
     trailer2_real_t *s, trailer2_real_t *s_norm, trailer2_real_t *gain_next)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t0 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t1 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t7 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t8 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
     const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
     const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;

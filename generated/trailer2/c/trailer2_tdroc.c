@@ -120,16 +120,16 @@ static void trailer2_tdroc_k_minimal_tde(const trailer2_real_t kept[23],
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
 {
     const trailer2_real_t qp3 = q_prev[3];
-    const trailer2_real_t _t8 = TRAILER2_SIN(qp3);
-    const trailer2_real_t _t9 = TRAILER2_COS(qp3);
+    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(qp3);
+    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(qp3);
     const trailer2_real_t qp2 = q_prev[2];
-    const trailer2_real_t _t10 = TRAILER2_SIN(qp2);
+    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(qp2);
     const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t12 = TRAILER2_COS(qp2);
+    const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(qp2);
     const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
     const trailer2_real_t qp4 = q_prev[4];
-    const trailer2_real_t _t14 = TRAILER2_SIN(qp4);
-    const trailer2_real_t _t15 = TRAILER2_COS(qp4);
+    const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(qp4);
+    const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(qp4);
     const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
     const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
@@ -259,16 +259,16 @@ static void trailer2_tdroc_k_minimal_minv_norm(const trailer2_real_t kept[23],
     const trailer2_real_t *q, trailer2_real_t *norm)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t8 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t9 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t10 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t12 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t14 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t15 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
     const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
@@ -408,16 +408,16 @@ static void trailer2_tdroc_k_minimal_tdroc_law(const trailer2_real_t kept[23],
     trailer2_real_t *s_norm)
 {
     const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t8 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t9 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(theta_cart);
+    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t10 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
     const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t12 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
     const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t14 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t15 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
+    const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
     const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);

@@ -124,24 +124,24 @@ static void trailer3_asmc_k_minimal_asmc_law(const trailer3_real_t kept[36],
     trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain_next)
 {
     const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t18 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t18 = TRAILER3_SIN_BOUNDED(theta_tractor);
     const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t20 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t20 = TRAILER3_COS_BOUNDED(theta_tractor);
     const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
     const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t23 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t24 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(theta_cart2);
+    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(theta_cart2);
     const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
     const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
     const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
     const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t29 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t30 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t29 = TRAILER3_SIN_BOUNDED(theta_cart3);
+    const trailer3_real_t _t30 = TRAILER3_COS_BOUNDED(theta_cart3);
     const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
     const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
     const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);

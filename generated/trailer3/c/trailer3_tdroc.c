@@ -136,21 +136,21 @@ static void trailer3_tdroc_k_minimal_tde(const trailer3_real_t kept[30],
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
 {
     const trailer3_real_t qp3 = q_prev[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN(qp3);
-    const trailer3_real_t _t11 = TRAILER3_COS(qp3);
+    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(qp3);
+    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(qp3);
     const trailer3_real_t qp2 = q_prev[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN(qp2);
+    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(qp2);
     const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_COS(qp2);
+    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(qp2);
     const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
     const trailer3_real_t qp4 = q_prev[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN(qp4);
-    const trailer3_real_t _t17 = TRAILER3_COS(qp4);
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(qp4);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(qp4);
     const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
     const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
     const trailer3_real_t qp5 = q_prev[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN(qp5);
-    const trailer3_real_t _t21 = TRAILER3_COS(qp5);
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(qp5);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(qp5);
     const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
     const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
@@ -331,21 +331,21 @@ static void trailer3_tdroc_k_minimal_minv_norm(const trailer3_real_t kept[30],
     const trailer3_real_t *q, trailer3_real_t *norm)
 {
     const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
+    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
     const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
     const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
     const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
     const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
     const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
     const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
@@ -536,21 +536,21 @@ static void trailer3_tdroc_k_minimal_tdroc_law(const trailer3_real_t kept[30],
     trailer3_real_t *s_norm)
 {
     const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
+    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
     const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
     const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
     const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
     const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
     const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
     const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);

@@ -19,7 +19,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0x238e64aau
+#define TRAILER3_CODE_ID 0x52ea3393u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -200,6 +200,28 @@ static inline double trailer3_cos(double x)
 }
 #endif
 #endif
+
+/* sin and cos in the controller kernels (trailer3_laws and the steps' own copies): their angles
+   are a step's validated inputs (|x| <= 1.0e6), so the bounded reduction above alone,
+   in both precisions (NaN beyond the bound, as trailer3_sincos_bounded): no libm sinf/cosf
+   and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
+static inline trailer3_real_t trailer3_sin_bounded(trailer3_real_t x)
+{
+    trailer3_real_t s;
+    trailer3_real_t c;
+    trailer3_sincos_bounded(x, &s, &c);
+    return s;
+}
+
+static inline trailer3_real_t trailer3_cos_bounded(trailer3_real_t x)
+{
+    trailer3_real_t s;
+    trailer3_real_t c;
+    trailer3_sincos_bounded(x, &s, &c);
+    return c;
+}
+#define TRAILER3_SIN_BOUNDED(x) trailer3_sin_bounded(x)
+#define TRAILER3_COS_BOUNDED(x) trailer3_cos_bounded(x)
 /* isfinite is type-generic in C99: no promotion in either build. */
 #define TRAILER3_ISFINITE(x) isfinite(x)
 /* C99's fmax/fmin without a library call: a NaN argument is ignored (the other one is
