@@ -232,3 +232,30 @@ def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
         rows = list(csv.DictReader(f))
     assert len(rows) == 2 * 5 and all(r["status"] == "ok" for r in rows), rows
     assert max(float(r["rms_error_m"]) for r in rows) < 0.05  # m (measured 35 mm: PI start-up)
+
+
+def test_a_diverging_run_is_reported_not_printed(capfd: pytest.CaptureFixture[str],
+                                                 caplog: pytest.LogCaptureFixture,
+                                                 tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Far beyond its stability boundary (held TDROC gain 4 × the predicted 102), the run
+    diverges on the engine: the plant says so (the loop stops it) and MuJoCo's "simulation
+    is unstable" goes to the log, not the terminal nor a MUJOCO_LOG.TXT in the working folder
+    (a bisection used to print one a run, and a log file got committed)."""
+    import logging
+    from dataclasses import replace
+
+    from runtime.bindings.generated import load_robot_code
+    from runtime.experiment.settings import Experiment
+    from runtime.stability.verification import simulated_unstable
+
+    code = load_robot_code("")
+    exp = Experiment()
+    exp = replace(exp, plant=replace(exp.plant, model="mujoco"))
+    monkeypatch.chdir(tmp_path)
+    with caplog.at_level(logging.DEBUG, logger="wmr.mujoco"):
+        assert simulated_unstable(code, 400.0, "paper", dict(code.params), exp)
+    printed = capfd.readouterr()
+    assert "unstable" not in printed.out + printed.err
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()  # MuJoCo's default handler wrote one
+    assert any("The simulation is unstable" in r.getMessage() for r in caplog.records)

@@ -27,6 +27,7 @@ The :class:`runtime.sim.plant.Plant` calls:
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 
 import mujoco
@@ -39,6 +40,23 @@ from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.mujoco.coordinates import CoordinateMap
 from runtime.mujoco.layout import robot_layout
+
+LOG = logging.getLogger("wmr.mujoco")
+
+
+def _engine_warning(text: str) -> None:
+    """MuJoCo's warnings, which it prints on the terminal and appends to MUJOCO_LOG.TXT in
+    the working directory by default, go to the log instead: a run
+    that diverges ("Nan, Inf or huge value …", on purpose in a stability bisection) is
+    detected by :meth:`MujocoPlant.advance` from the engine's warning counters and reported
+    by the loop; anything else is a warning of the log."""
+    if "The simulation is unstable" in text:
+        LOG.debug("MuJoCo: %s", text)
+    else:
+        LOG.warning("MuJoCo: %s", text)
+
+
+mujoco.set_mju_user_warning(_engine_warning)
 
 Array = NDArray[np.float64]
 SETTLE = 0.3  # s the robot settles on its contacts before a run
