@@ -221,31 +221,46 @@ def test_sin_and_cos_of_one_angle_share_one_inlined_reduction(tmp_path: Path) ->
 @pytest.mark.parametrize("robot", ["", "trailer", "trailer2"])
 def test_controllers_link_no_libm_trig(tmp_path: Path, robot: str) -> None:
     """A controller's kernels (its laws and the step's own copies) whose sin and cos take the
-    step's validated angles as they are use the bounded reduction: neither precision links a libm
-    sin/cos (on a Cortex-M4, newlib's cosf argument reduction was 480 B of the two-trailer
-    TDROC step's stack); the model functions keep libm's beyond the bound."""
-    folder = cbuild.GENERATED_C.parent / robot / "c" if robot else cbuild.GENERATED_C
-    prefix = next(folder.glob("*_robot.h")).name.removesuffix("_robot.h")
+    step's validated angles as they are use the bounded reduction: neither precision links a
+    libm sin/cos (on a Cortex-M4, newlib's cosf argument reduction was 480 B of the
+    two-trailer TDROC step's stack); the model functions keep libm's beyond the bound. The
+    laws of (18)-(27) (a K1 field: error dynamics in q) take q's angles as they are; a law
+    that forms an angle itself (the PI's heading error θ_des − θ, up to twice the steps'
+    input bound) keeps libm's, and exactly such a law links it."""
+    from runtime.bindings.generated import load_robot_code
+
+    code = load_robot_code(robot)
+    folder, prefix, up = code.c_dir, code.prefix, code.prefix.upper()
     libm = {"sin", "cos", "sincos", "sinf", "cosf", "sincosf"}
+    laws = (folder / f"{prefix}_laws.c").read_text()
+
+    def law_bodies(name: str) -> list[str]:
+        bodies = []
+        for form in code.controller(name).formulations:
+            body = laws[laws.index(f"void {prefix}_{form}_{name}_law("):]
+            bodies.append(body[:body.index("\n}\n")])
+        return bodies
+
+    unbounded = {c.name for c in code.controller_infos
+                 if any(f"{up}_SIN(" in b or f"{up}_COS(" in b for b in law_bodies(c.name))}
     for float32 in (False, True):
         linked: dict[str, set[str]] = {}
-        for stem in ("laws", "tdroc", "tdc", "asmc", "roc", "pi", "model"):
+        for stem in ("model", *(c.name for c in code.controller_infos)):
             obj = tmp_path / f"{stem}{float32:d}.o"
             subprocess.run(["gcc", "-std=c99", "-O2", "-c", f"-I{folder}",
-                            *([f"-D{prefix.upper()}_FLOAT32"] if float32 else []),
+                            *([f"-D{up}_FLOAT32"] if float32 else []),
                             str(folder / f"{prefix}_{stem}.c"), "-o", str(obj)], check=True)
             nm = subprocess.run(["nm", "-u", str(obj)], capture_output=True, text=True,
                                 check=True).stdout
             linked[stem] = {line.split()[-1] for line in nm.splitlines() if line.strip()}
-        for stem in ("tdroc", "tdc", "asmc", "roc"):
-            assert not linked[stem] & libm, (robot, float32, stem, linked[stem] & libm)
-        # Not vacuous: the model functions link them, and so does the PI (its step and its
-        # law in <prefix>_laws.c), whose heading error θ_des − θ is formed in the kernel (up
-        # to twice the steps' input bound).
-        assert linked["model"] & libm and linked["pi"] & libm, (robot, float32)
-    laws = (folder / f"{prefix}_laws.c").read_text()
-    law = laws[laws.index(f"void {prefix}_minimal_tdc_law("):]
-    law = law[:law.index("\n}\n")]
-    assert f"{prefix.upper()}_SIN(" not in law and f"{prefix.upper()}_COS(" not in law
+        assert linked["model"] & libm, (robot, float32)  # not vacuous: the model links them
+        for c in code.controller_infos:
+            assert bool(linked[c.name] & libm) == (c.name in unbounded), \
+                (robot, float32, c.name, linked[c.name] & libm)
+            if "k1" in c.field_names():
+                assert c.name not in unbounded, (robot, c.name)
+    assert unbounded, robot  # not vacuous: the PI forms its heading error in the kernel
     if robot:  # a trailer's M-hat depends on its hitch angles: the bounded macros are used
-        assert f"{prefix.upper()}_SIN_BOUNDED(" in law or f"{prefix.upper()}_COS_BOUNDED(" in law
+        lyapunov = next(c.name for c in code.controller_infos if "k1" in c.field_names())
+        body = law_bodies(lyapunov)[0]
+        assert f"{up}_SIN_BOUNDED(" in body or f"{up}_COS_BOUNDED(" in body
