@@ -232,13 +232,7 @@ def coordinates(folder: Path, prefix: str) -> tuple[int, int]:
 def measure_m4(folder: Path, rung: Rung) -> None:
     """The TDROC image's generated code bytes and the step's worst-case stack (float32)."""
     from runtime.tooling.firmware.build import ARM_FLAGS, ARM_GCC, SECTION_FLAGS, run_tool
-    from runtime.tooling.firmware.stack import (
-        Frame,
-        elf_frames,
-        parse_callgraph,
-        parse_su,
-        worst_stack,
-    )
+    from runtime.tooling.firmware.stack import compiled_frames, elf_frames, worst_stack
     from runtime.tooling.firmware.symbols import symbols
 
     if shutil.which(ARM_GCC) is None:
@@ -264,10 +258,7 @@ def measure_m4(folder: Path, rung: Rung) -> None:
                   "-o", str(elf)], cwd=work)
         own = {n: s for n, (_, s, k) in symbols(elf).items()
                if n.startswith(f"{prefix}_") and k in "tT"}
-        frames = parse_callgraph(sorted(work.glob("*.ci")))
-        for name, (size, qual) in parse_su(sorted(work.glob("*.su"))).items():
-            frames.setdefault(name, Frame(name, size, qual))
-            frames[name].own, frames[name].qualifier = size, qual
+        frames = compiled_frames(sorted(work.glob("*.ci")), sorted(work.glob("*.su")))
         bound = worst_stack(f"{prefix}_tdroc_step", frames, elf_frames(elf))
         rung.m4_tdroc_code = sum(own.values())
         rung.m4_tdroc_stack = bound.bytes if bound.complete else None

@@ -38,9 +38,8 @@ from runtime.tooling.firmware.emulator import link_emulator_image
 from runtime.tooling.firmware.stack import (
     Frame,
     StackBound,
+    compiled_frames,
     elf_frames,
-    parse_callgraph,
-    parse_su,
     worst_stack,
 )
 from runtime.tooling.firmware.symbols import double_symbols, elf_sizes, generated_rodata, symbols
@@ -73,21 +72,9 @@ def generated_functions(elf: Path) -> dict[str, int]:
     return {n: s for n, (_, s, k) in symbols(elf).items() if n.startswith("wmr_") and k in "tT"}
 
 
-def compiled_frames(objs: Objects) -> dict[str, Frame]:
-    """The compiled functions' frames: the call graph, each frame's size from ``.su``
-    (authoritative for the frame)."""
-    frames = parse_callgraph(objs.ci)
-    for name, (own, qual) in parse_su(objs.su).items():
-        if name in frames:
-            frames[name].own, frames[name].qualifier = own, qual
-        else:
-            frames[name] = Frame(name, own, qual)
-    return frames
-
-
 def _measured_image(objs: Objects, formulation: str) -> OnlyImage:
     elf = link_controller(objs, "tdroc", formulation)
-    frames = compiled_frames(objs)
+    frames = compiled_frames(objs.ci, objs.su)
     return OnlyImage(elf_sizes(elf), generated_functions(elf), generated_rodata(elf),
                      double_symbols(elf),
                      worst_stack("wmr_tdroc_step", frames, elf_frames(elf)), objs)
@@ -167,7 +154,7 @@ def build_report(work: Path, emulate_run: bool = True) -> Report:
     elves = {name: link_controller(f32, name) for name in CONTROLLERS}
     sizes = {name: elf_sizes(elf) for name, elf in elves.items()}
     doubles = {name: double_symbols(elf) for name, elf in elves.items()}
-    frames = compiled_frames(f32)
+    frames = compiled_frames(f32.ci, f32.su)
     library: dict[str, Frame] = {}
     for elf in elves.values():
         for name, frame in elf_frames(elf).items():

@@ -62,6 +62,18 @@ def parse_su(su_files: Sequence[Path]) -> dict[str, tuple[int, str]]:
     return out
 
 
+def compiled_frames(ci_files: Sequence[Path], su_files: Sequence[Path]) -> dict[str, Frame]:
+    """The compiled functions' frames: the call graph (``.ci``), each frame's size from
+    ``.su`` (authoritative for the frame)."""
+    frames = parse_callgraph(ci_files)
+    for name, (own, qual) in parse_su(su_files).items():
+        if name in frames:
+            frames[name].own, frames[name].qualifier = own, qual
+        else:
+            frames[name] = Frame(name, own, qual)
+    return frames
+
+
 _FN_HEADER = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
 _REGS = re.compile(r"\{([^}]*)\}")
 _SUB_SP = re.compile(r"\bsub(?:\.w|w)?\s+sp,\s*(?:sp,\s*)?#(\d+)")
