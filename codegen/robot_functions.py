@@ -24,6 +24,7 @@ from functools import cache
 
 import sympy as sp
 
+from codegen.contact_forces import contact_force_forms, contact_rows
 from codegen.controller_layout import row_span, words
 from codegen.spec import Argument, Field, FunctionSpec, Guard
 from modeling import controllers as ctl
@@ -295,7 +296,39 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(9)", "(31)"),
         ),
     )
-    return specs if staged is None else tuple(staged.with_definitions(f) for f in specs)
+    specs = specs if staged is None else tuple(staged.with_definitions(f) for f in specs)
+    return (*specs, _contact_forces_spec(model, checked(FunctionSpec(
+        "wheel_contact_forces", "", (p, q, wheel_rates, replace(
+            tau, doc="net wheel torques (after bearing friction) " + ", ".join(
+                model.input_names))), ()))))
+
+
+def _contact_forces_spec(model: RobotModel, base: FunctionSpec) -> FunctionSpec:
+    """``wheel_contact_forces``: the ground's force on each wheel from the multipliers of
+    (9) (``codegen.contact_forces``), with ``base``'s inputs and status contract. Its
+    definitions: its own stage's, then those its guards read (a staged robot's M̄)."""
+    forms = contact_force_forms(model)
+    rows = contact_rows(model)
+    axles = "; ".join(f"lateral[{k}]: " + ", ".join(f"'{w}'" for w in ws)
+                      for k, ws in enumerate(rows.lateral_wheels))
+    doc = (
+        "Contact forces from the multipliers of (9), M qddot + H = B tau - A^T lambda:\n"
+        "A_d^T lambda = (B tau - H - M qddot)_d with qddot from the minimal forward\n"
+        "dynamics (the route of (10)-(12)). longitudinal[k] (N): the ground's force on\n"
+        "driven wheel " + ", ".join(f"'{w}'" for w in rows.driven)
+        + " along its heading (positive forward;\n"
+        "(tau - I_w thetaddot)/r). lateral[k] (N): the ground's force along the axle,\n"
+        "positive to the wheel's left, of one no-side-slip row: an axle's wheels share\n"
+        "one row (their split is statically indeterminate).\n"
+        + _wrap(axles + ".") + "\nValid on the constraint manifold (the wheels roll)."
+    )
+    outputs = (out("longitudinal", forms.longitudinal, "N, per driven wheel"),
+               out("lateral", forms.lateral, "N, per no-side-slip row (axle)"))
+    exprs = [*forms.longitudinal, *forms.lateral]
+    guard_defs = (staged_forms(model).stage.definitions_for([g.condition for g in base.guards])
+                  if model.staged else ())
+    return replace(base, doc=doc, outputs=outputs, equations=("(9)", "(10)-(12)"),
+                   definitions=(*forms.stage.definitions_for(exprs), *guard_defs))
 
 
 def _wrap(text: str, width: int = 79) -> str:

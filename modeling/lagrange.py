@@ -97,6 +97,9 @@ class ConstrainedSystem:
     independent: tuple[int, ...]
     potential_energy: sp.Expr = sp.S.Zero
     simplify: Simplifier = default_simplify
+    # What each row of A constrains ("no side slip of wheel 'right'", "rolling of wheel
+    # 'right'"): the wheel contact forces (codegen.contact_forces) read it.
+    constraint_labels: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.q)

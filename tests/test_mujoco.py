@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -154,43 +155,74 @@ def test_static_loads_are_the_engines_where_the_split_is_determinate() -> None:
         assert abs(measured[wheel] - load) < 1e-3 * load, (wheel, load, measured)
 
 
-def test_the_slip_monitor_predicts_the_engines_contact_forces() -> None:
-    """The traction the monitor says each driven wheel needs (from the rolling rows'
-    multipliers) is the friction force MuJoCo's contacts deliver, at a start-up torque
-    (measured 63.16 / 16.10 N against 63.13 / 16.07 N)."""
+def _engine_forces(plant: Any, yaw: float) -> dict[str, np.ndarray]:
+    """The ground's force on each tyre from MuJoCo's contacts, along the heading ``yaw`` of
+    the wheel's body and along its axle (to the left), N."""
+    m, d = plant.model, plant.data
+    e, n = np.array([np.cos(yaw), np.sin(yaw)]), np.array([-np.sin(yaw), np.cos(yaw)])
+    out = {}
+    force = np.zeros(6)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, force)
+        world = c.frame.reshape(3, 3).T @ force[:3]
+        world = -world if world[2] < 0 else world  # the force on the tyre (it pushes up)
+        name = m.geom(c.geom[1]).name or m.geom(c.geom[0]).name
+        out[name.removeprefix("tyre_")] = np.array([world[:2] @ e, world[:2] @ n])
+    return out
+
+
+@pytest.mark.parametrize(("name", "tau", "seconds"),
+                         [("drishti", (10.0, 4.0), 1.0), ("trailer", (6.0, 2.0), 1.5)])
+def test_the_slip_monitor_predicts_the_engines_contact_forces(
+        name: str, tau: tuple[float, float], seconds: float) -> None:
+    """The generated contact forces (``<prefix>_wheel_contact_forces``, the multipliers of
+    (9)) against the friction forces MuJoCo's contacts deliver (μ = 1, point contacts),
+    along a turn from rest under constant torques, every 50 ms: each driven wheel's
+    longitudinal force within 3 % + 0.5 N (measured: Drishti 0.2 %, the trailer 1.5 %: its
+    cart's wheels creep), the axle's lateral force (one multiplier) within 2 % + 0.5 N of
+    the sum over its tyres (measured 1.3 % at the first samples, 0.2 % from 0.5 s), and each
+    wheel's share of it by static load within 3 % + 0.5 N (measured 1.5 %; at higher
+    speeds, beyond the test, MuJoCo's load transfer loads the outer wheel: Drishti at
+    30 rad/s, 87 against 72 N, the axle's sum still within 0.2 %)."""
     from runtime.mujoco.layout import robot_layout
     from runtime.mujoco.plant import MujocoPlant
     from runtime.sim.payload import plant_params_at
     from runtime.sim.slip_monitor import SlipMonitor
 
-    setup = resolve(None)
+    setup = resolve(ROBOTS[name])
     code = setup.code
     exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model="mujoco"))
     layout = robot_layout(code, setup.plant)
     plant = MujocoPlant(code, exp, layout)
-    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0]))
+    masses = np.array([exp.plant.fixed_payload, 0.0]) if name == "drishti" else np.zeros(2)
+    params = plant_params_at(code, exp, 0.0, setup.plant) if name == "drishti" else setup.plant
+    plant.set_payload(masses)
     plant.start(np.zeros(code.nq))
-    tau = np.array([8.0, 3.0])
     plant.set_faults(np.zeros(2), np.full(2, np.inf))
-    plant.advance(list(tau), 0.001, 20)
-    m, d = plant.model, plant.data
-    heading = np.array([np.cos(plant.q[2]), np.sin(plant.q[2]), 0.0])
-    engine = {}
-    force = np.zeros(6)
-    for i in range(d.ncon):
-        c = d.contact[i]
-        mujoco.mj_contactForce(m, d, i, force)
-        name = m.geom(c.geom[1]).name or m.geom(c.geom[0]).name
-        engine[name] = abs(float((c.frame.reshape(3, 3).T @ force[:3]) @ heading))
     monitor = SlipMonitor(code, layout, exp)
-    predicted = monitor.forces(plant.q, plant.wheels()[1], tau,
-                               plant_params_at(code, exp, 0.0, setup.plant))
-    measured = np.array([engine["tyre_right"], engine["tyre_left"]])
-    assert np.allclose(np.abs(predicted), measured, rtol=0.01), (predicted, measured)
-    # Margin: negative where the floor cannot give it.
-    masses = np.array([exp.plant.fixed_payload, 0.0])
-    assert monitor.margin(predicted, 1.0, masses).min() > 0
-    assert monitor.margin(predicted, 0.1, masses)[0] < 0
+    torque = np.array(tau)
+    checked = 0
+    for _ in range(round(seconds / 0.05)):
+        plant.advance(list(torque), 0.001, 50)
+        engine = _engine_forces(plant, float(plant.q[2]))
+        fx, fy = monitor.contact_forces(plant.q, plant.wheels()[1], torque, params, masses)
+        measured = np.array([engine[w] for w in monitor.driven])
+        assert np.all(np.abs(fx - measured[:, 0]) <= 0.03 * np.abs(measured[:, 0]) + 0.5), (
+            fx, measured)
+        assert np.all(np.abs(fy - measured[:, 1]) <= 0.03 * np.abs(measured[:, 1]) + 0.5), (
+            fy, measured)
+        axle = monitor.rows[0]
+        assert set(monitor.driven) <= set(axle)
+        total = sum(engine[w][1] for w in axle)
+        assert abs(fy.sum() - total) <= 0.02 * abs(total) + 0.5, (fy, total)
+        checked += 1
+    assert checked >= 20 and abs(fy.sum()) > 40.0  # a turn, not a straight line
+    # Friction circle: the floor at μ = 1 holds it, at μ = 0.1 it cannot.
+    forces = monitor.forces(plant.q, plant.wheels()[1], torque, params, masses)
+    assert np.allclose(forces, np.hypot(fx, fy))
+    assert monitor.margin(forces, 1.0, masses).min() > 0
+    assert monitor.margin(forces, 0.1, masses).min() < 0
 
 
 def test_traction_mu_lowers_the_torque_limit() -> None:

@@ -546,3 +546,119 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     B[12] = _t28;
     B[13] = _t27;
 }
+
+/* wmr_wheel_contact_forces: documented in wmr_model.h.
+   operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt */
+wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
+    wmr_real_t *lateral)
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t theta = q[2];
+    const wmr_real_t thetadot_r = wheel_rates[0];
+    const wmr_real_t thetadot_l = wheel_rates[1];
+    const wmr_real_t tau_r = tau[0];
+    const wmr_real_t tau_l = tau[1];
+    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
+            + ((((d - d) + (theta - theta)) + (thetadot_r - thetadot_r))
+            + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
+        return WMR_ERR_NONFINITE_INPUT;
+    }
+    const wmr_real_t _t0 = WMR_COS(theta);
+    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t2 = _t0*_t1;
+    const wmr_real_t _t3 = r/b;
+    const wmr_real_t _t4 = WMR_SIN(theta);
+    const wmr_real_t _t5 = _t4*d;
+    const wmr_real_t _t6 = _t3*_t5;
+    const wmr_real_t _t7 = _t1*_t4;
+    const wmr_real_t _t8 = _t0*d;
+    const wmr_real_t _t9 = _t3*_t8;
+    const wmr_real_t _t10 = _t7 + _t9;
+    const wmr_real_t _t11 = _t7 - _t9;
+    const wmr_real_t _t12 = K*_t4;
+    const wmr_real_t _t13 = K*_t0;
+    const wmr_real_t _t14 = -_t3*thetadot_l + _t3*thetadot_r;
+    const wmr_real_t _t15 = _t14*_t14;
+    const wmr_real_t _t16 = _t14*thetadot_r;
+    const wmr_real_t _t17 = _t14*thetadot_l;
+    const wmr_real_t _t18 = _t2 - _t6;
+    const wmr_real_t _t19 = _t12*_t3 + _t18*m;
+    const wmr_real_t _t20 = _t10*m - _t13*_t3;
+    const wmr_real_t _t21 = I*_t3 - _t10*_t13 + _t12*_t18;
+    const wmr_real_t _t22 = _t2 + _t6;
+    const wmr_real_t _t23 = -_t12*_t3 + _t22*m;
+    const wmr_real_t _t24 = _t11*m + _t13*_t3;
+    const wmr_real_t _t25 = -I*_t3 - _t11*_t13 + _t12*_t22;
+    const wmr_real_t _t26 = _t13*_t15;
+    const wmr_real_t _t27 = -_t10*_t16 - _t11*_t17;
+    const wmr_real_t _t28 = _t26 + _t27*m;
+    const wmr_real_t _t29 = _t12*_t15;
+    const wmr_real_t _t30 = _t16*_t18 + _t17*_t22;
+    const wmr_real_t _t31 = _t29 + _t30*m;
+    const wmr_real_t _t32 = _t12*_t27 - _t13*_t30;
+    const wmr_real_t _t33 = _t0*b;
+    const wmr_real_t _t34 = WMR_LIT(0.5)*_t33;
+    const wmr_real_t _t35 = _t4*b;
+    const wmr_real_t _t36 = WMR_LIT(0.5)*_t35;
+    const wmr_real_t _t37 = r*r;
+    const wmr_real_t _t38 = WMR_LIT(0.25)*_t37*m;
+    const wmr_real_t _t39 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t40 = _t37/(b*b);
+    const wmr_real_t _t41 = I_w + _t38 + _t39*_t40;
+    const wmr_real_t _t42 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3;
+    const wmr_real_t _t43 = _t11*_t20 + _t19*_t22 - _t21*_t3;
+    const wmr_real_t _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3;
+    const wmr_real_t _t45 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3;
+    const wmr_real_t _t46 = _t10*_t31 + _t18*_t28 + _t3*_t32;
+    const wmr_real_t _t47 = _t11*_t31 + _t22*_t28 - _t3*_t32;
+    const wmr_real_t _t48 = -_t46 + tau_r;
+    const wmr_real_t _t49 = -_t47 + tau_l;
+    const wmr_real_t _t50 = _t42*_t45 - _t43*_t44;
+    const wmr_real_t _t51 = WMR_LIT(1.0)/_t50;
+    const wmr_real_t _t52 = _t51*(-_t43*_t49 + _t45*_t48);
+    const wmr_real_t _t53 = _t51*(_t42*_t49 - _t44*_t48);
+    const wmr_real_t _t54 = _t18*_t52 + _t22*_t53 + _t27;
+    const wmr_real_t _t55 = _t10*_t52 + _t11*_t53 + _t30;
+    const wmr_real_t _t56 = _t3*_t52 - _t3*_t53;
+    const wmr_real_t _t57 = -_t12*_t56 - _t26 - _t54*m;
+    const wmr_real_t _t58 = _t13*_t56 - _t29 - _t55*m;
+    const wmr_real_t _t59 = -I*_t56 - _t12*_t54 + _t13*_t55;
+    const wmr_real_t _t60 = _t34 + _t5;
+    const wmr_real_t _t61 = _t36 - _t8;
+    const wmr_real_t _t62 = _t34 - _t5;
+    const wmr_real_t _t63 = _t36 + _t8;
+    const wmr_real_t _t64 = -WMR_LIT(1.0)/b;
+    const wmr_real_t _t65 = _t64*(_t57*_t60 + _t58*_t61 - _t59);
+    const wmr_real_t _t66 = _t64*(_t57*_t62 + _t58*_t63 + _t59);
+    const wmr_real_t _t67 = _t64*(-_t33*_t58 + _t35*_t57);
+    const wmr_real_t _t68 = _t38 - _t39*_t40;
+    if (!(r > WMR_LIT(0.0))) { /* r > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(b > WMR_LIT(0.0))) { /* b > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(_t41 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    if (!(_t41*_t41 - _t68*_t68 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+        return WMR_ERR_BAD_PARAMS;
+    }
+    const wmr_real_t r_0 = _t66;
+    const wmr_real_t r_1 = _t65;
+    const wmr_real_t r_2 = -_t67;
+    if (isnan(((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) != 0) {
+        return WMR_ERR_NONFINITE_OUTPUT;
+    }
+    longitudinal[0] = r_0;
+    longitudinal[1] = r_1;
+    lateral[0] = r_2;
+    return WMR_OK;
+}

@@ -275,6 +275,51 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
 
+#define WMR_WHEEL_CONTACT_FORCES_Q_SIZE 5
+#define WMR_WHEEL_CONTACT_FORCES_WHEEL_RATES_SIZE 2
+#define WMR_WHEEL_CONTACT_FORCES_TAU_SIZE 2
+#define WMR_WHEEL_CONTACT_FORCES_LONGITUDINAL_SIZE 2
+#define WMR_WHEEL_CONTACT_FORCES_LATERAL_SIZE 1
+
+/**
+ * Contact forces from the multipliers of (9), M qddot + H = B tau - A^T lambda:
+ * A_d^T lambda = (B tau - H - M qddot)_d with qddot from the minimal forward
+ * dynamics (the route of (10)-(12)). longitudinal[k] (N): the ground's force on
+ * driven wheel 'right', 'left' along its heading (positive forward;
+ * (tau - I_w thetaddot)/r). lateral[k] (N): the ground's force along the axle,
+ * positive to the wheel's left, of one no-side-slip row: an axle's wheels share
+ * one row (their split is statically indeterminate).
+ * lateral[0]: 'right', 'left'.
+ * Valid on the constraint manifold (the wheels roll).
+ *
+ * Paper equations: (9), (10)-(12).
+ *
+ * @param[in]  p wmr_params_t -- lumped robot parameters
+ * @param[in]  q [5] row-major (WMR_WHEEL_CONTACT_FORCES_Q_SIZE): x_c, y_c, theta, theta_r, theta_l
+ *     -- x_c, y_c, theta, theta_r, theta_l
+ * @param[in]  wheel_rates [2] row-major (WMR_WHEEL_CONTACT_FORCES_WHEEL_RATES_SIZE): thetadot_r,
+ *     thetadot_l -- theta_r rate, theta_l rate
+ * @param[in]  tau [2] row-major (WMR_WHEEL_CONTACT_FORCES_TAU_SIZE): tau_r, tau_l -- net wheel
+ *     torques (after bearing friction) tau_r, tau_l
+ * @param[out] longitudinal [2] row-major (WMR_WHEEL_CONTACT_FORCES_LONGITUDINAL_SIZE) -- N, per
+ *     driven wheel
+ * @param[out] lateral [1] row-major (WMR_WHEEL_CONTACT_FORCES_LATERAL_SIZE) -- N, per no-side-slip
+ *     row (axle)
+ * @return WMR_OK on success; on error no output is written:
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[3], q[4]),
+ *         WMR_ERR_BAD_PARAMS if not (r > 0),
+ *         WMR_ERR_BAD_PARAMS if not (b > 0),
+ *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
+ *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
+ *
+ * operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt
+ */
+wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
+    const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
+    wmr_real_t *lateral);
+
 #ifdef __cplusplus
 }
 #endif

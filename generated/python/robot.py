@@ -21,6 +21,10 @@ FORMULATIONS = ('paper', 'minimal')
 # engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose
 # layout follows from its parameters.
 LAYOUT: dict[str, Any] | None = None
+# The wheels of <prefix>_wheel_contact_forces' outputs (codegen.contact_forces):
+# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
+DRIVEN_WHEELS = ('right', 'left')
+LATERAL_WHEELS = (('right', 'left'),)
 # The controllers generated for this robot (modeling.controllers.REGISTRY): name,
 # labels, step features, configuration fields (name, kind, unit, value source).
 CONTROLLERS: tuple[dict[str, Any], ...] = (

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["bias_forces", "forward_dynamics", "kinematics", "linearization", "mass_matrix", "minimal_bias_forces", "minimal_forward_dynamics", "minimal_mass_matrix"]
+__all__ = ["bias_forces", "forward_dynamics", "kinematics", "linearization", "mass_matrix", "minimal_bias_forces", "minimal_forward_dynamics", "minimal_mass_matrix", "wheel_contact_forces"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -481,3 +481,129 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [_t28, _t27],
     ])
     return A, B
+
+
+def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Contact forces from the multipliers of (9), M qddot + H = B tau - A^T lambda:
+    A_d^T lambda = (B tau - H - M qddot)_d with qddot from the minimal forward
+    dynamics (the route of (10)-(12)). longitudinal[k] (N): the ground's force on
+    driven wheel 'right', 'left' along its heading (positive forward;
+    (tau - I_w thetaddot)/r). lateral[k] (N): the ground's force along the axle,
+    positive to the wheel's left, of one no-side-slip row: an axle's wheels share
+    one row (their split is statically indeterminate).
+    lateral[0]: 'right', 'left'.
+    Valid on the constraint manifold (the wheels roll).
+
+    Paper equations: (9), (10)-(12).
+
+    Args:
+        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. x_c, y_c, theta, theta_r, theta_l
+        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_r, thetadot_l. theta_r rate, theta_l rate
+        tau: array of 2 (shape 2x1, row-major): tau_r, tau_l. net wheel torques (after bearing friction) tau_r, tau_l
+        p: params with fields m, I, K, Iw, r, b, d. lumped robot parameters
+
+    Returns:
+        longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
+        lateral: array of 1 (shape 1x1, row-major). N, per no-side-slip row (axle)
+
+    operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt
+    """
+    _, _, theta, _, _ = _flat(q, 5, "q")
+    thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
+    tau_r, tau_l = _flat(tau, 2, "tau")
+    m = float(_field(p, "m"))
+    I = float(_field(p, "I"))
+    K = float(_field(p, "K"))
+    I_w = float(_field(p, "Iw"))
+    r = float(_field(p, "r"))
+    b = float(_field(p, "b"))
+    d = float(_field(p, "d"))
+    if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
+        raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of wheel_contact_forces is NaN or infinite")
+    try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
+        _t0 = math.cos(theta)
+        _t1 = 0.5*r
+        _t2 = _t0*_t1
+        _t3 = r/b
+        _t4 = math.sin(theta)
+        _t5 = _t4*d
+        _t6 = _t3*_t5
+        _t7 = _t1*_t4
+        _t8 = _t0*d
+        _t9 = _t3*_t8
+        _t10 = _t7 + _t9
+        _t11 = _t7 - _t9
+        _t12 = K*_t4
+        _t13 = K*_t0
+        _t14 = -_t3*thetadot_l + _t3*thetadot_r
+        _t15 = _t14*_t14
+        _t16 = _t14*thetadot_r
+        _t17 = _t14*thetadot_l
+        _t18 = _t2 - _t6
+        _t19 = _t12*_t3 + _t18*m
+        _t20 = _t10*m - _t13*_t3
+        _t21 = I*_t3 - _t10*_t13 + _t12*_t18
+        _t22 = _t2 + _t6
+        _t23 = -_t12*_t3 + _t22*m
+        _t24 = _t11*m + _t13*_t3
+        _t25 = -I*_t3 - _t11*_t13 + _t12*_t22
+        _t26 = _t13*_t15
+        _t27 = -_t10*_t16 - _t11*_t17
+        _t28 = _t26 + _t27*m
+        _t29 = _t12*_t15
+        _t30 = _t16*_t18 + _t17*_t22
+        _t31 = _t29 + _t30*m
+        _t32 = _t12*_t27 - _t13*_t30
+        _t33 = _t0*b
+        _t34 = 0.5*_t33
+        _t35 = _t4*b
+        _t36 = 0.5*_t35
+        _t37 = r*r
+        _t38 = 0.25*_t37*m
+        _t39 = I - 2.0*K*d + d*d*m
+        _t40 = _t37/(b*b)
+        _t41 = I_w + _t38 + _t39*_t40
+        _t42 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3
+        _t43 = _t11*_t20 + _t19*_t22 - _t21*_t3
+        _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3
+        _t45 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3
+        _t46 = _t10*_t31 + _t18*_t28 + _t3*_t32
+        _t47 = _t11*_t31 + _t22*_t28 - _t3*_t32
+        _t48 = -_t46 + tau_r
+        _t49 = -_t47 + tau_l
+        _t50 = _t42*_t45 - _t43*_t44
+        _t51 = 1.0/_t50
+        _t52 = _t51*(-_t43*_t49 + _t45*_t48)
+        _t53 = _t51*(_t42*_t49 - _t44*_t48)
+        _t54 = _t18*_t52 + _t22*_t53 + _t27
+        _t55 = _t10*_t52 + _t11*_t53 + _t30
+        _t56 = _t3*_t52 - _t3*_t53
+        _t57 = -_t12*_t56 - _t26 - _t54*m
+        _t58 = _t13*_t56 - _t29 - _t55*m
+        _t59 = -I*_t56 - _t12*_t54 + _t13*_t55
+        _t60 = _t34 + _t5
+        _t61 = _t36 - _t8
+        _t62 = _t34 - _t5
+        _t63 = _t36 + _t8
+        _t64 = -1.0/b
+        _t65 = _t64*(_t57*_t60 + _t58*_t61 - _t59)
+        _t66 = _t64*(_t57*_t62 + _t58*_t63 + _t59)
+        _t67 = _t64*(-_t33*_t58 + _t35*_t57)
+        _t68 = _t38 - _t39*_t40
+    except ZeroDivisionError:
+        raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
+    if not (r > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires r > 0")
+    if not (b > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires b > 0")
+    if not (_t41 > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
+    if not (_t41*_t41 - _t68*_t68 > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
+    longitudinal = np.array([_t66, _t65])
+    lateral = np.array([-_t67])
+    if not np.all(np.isfinite(longitudinal)):
+        raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
+    if not np.all(np.isfinite(lateral)):
+        raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
+    return longitudinal, lateral

@@ -1,26 +1,29 @@
-"""A slip monitor from the rolling constraints' multipliers: the traction each driven wheel
-must transmit, against what friction lets it (μ N).
+"""A slip monitor from the constraint multipliers: the force each driven wheel must transmit,
+against what friction lets it (μ N, a friction circle).
 
-In the constrained dynamics (9), M q̈ + H = B τ + Aᵀ λ, a driven wheel's angle θ_w enters
-the kinetic energy only through its spin, ½ J_w θ̇_w², and the constraints only through its
-rolling row v_w · e_x − r_w θ̇_w = 0 (the wheel centre's speed along its heading equals its
-rim speed). Its row of (9) is therefore J_w θ̈_w = τ_w − r_w λ_w, and the rolling row's
-multiplier λ_w is the longitudinal force the ground must push the wheel with for it to roll:
+The forces are the generated ``<prefix>_wheel_contact_forces`` (``codegen.contact_forces``):
+the multipliers λ of (9), M q̈ + H = B τ − Aᵀ λ, solved from its dependent rows with q̈
+from the minimal forward dynamics (the route of (10)–(12)), in newtons. Per driven wheel:
 
-    F_w = λ_w = (τ_w − τ_f,w − J_w θ̈_w) / r_w,
+* F_x, the ground's force along the wheel's heading (its rolling row's multiplier), given
+  the net torque τ − τ_f (τ_f the bearing friction the plant applies: viscous and
+  tanh-smoothed Coulomb, as ``runtime.sim.plant.GeneratedPlant``); it equals
+  (τ − τ_f − J θ̈)/r, the wheel's own row of (9) (tests/test_contact_forces.py);
+* F_y, the ground's force along the axle (positive to the left): an axle's wheels share
+  one no-side-slip row, whose multiplier is the axle's lateral force. The rigid model does
+  not split it (statically indeterminate); **assumption**: it is split between that axle's
+  wheels in proportion to their static normal loads, F_y,w = F_y,axle N_w / Σ_axle N
+  (equal friction use across the axle; ``LATERAL_WHEELS`` of the generated robot.py says
+  which wheels share a row).
 
-with θ̈_w from the generated minimal forward dynamics at the true state and parameters
-(payload included), τ_f,w the bearing friction the plant applies (viscous and tanh-smoothed
-Coulomb, as ``runtime.sim.plant.GeneratedPlant``) and J_w the parameter that is the wheel's
-spin inertia (``runtime.sim.plant.spin_inertia_keys``). The wheel keeps grip while
-|F_w| ≤ μ N_w; N_w is the wheel's static load (``modeling.mjcf_export.static_loads``, the
-payload on board included), so the margin μ N_w − |F_w| (N) says how close each sample runs
-to slipping. The lateral multipliers are not in it: two wheels on one axle share one
-no-side-slip row, so the rigid model does not split the lateral force between them (that
-split is statically indeterminate); the margin is the longitudinal one, the part a start-up
-or a braking torque uses up. :class:`MonitoredPlant` puts the monitor on any plant of the
-loop and records it along a run; ``runtime.mujoco.comparison`` checks its predicted onset
-of slip against the wheel slip MuJoCo measures.
+N_w is the wheel's static load (``modeling.mjcf_export.static_loads``, the payload on
+board included). The wheel keeps grip while √(F_x² + F_y²) ≤ μ N_w; the margin
+μ N_w − √(F_x² + F_y²) (N) says how close each sample runs to slipping, and
+max_w √(F_x² + F_y²)/N_w is the friction coefficient the sample needs. The true parameters
+enter through the controllers' model (Drishti: the lateral first moment K_lat of an
+off-axis payload is left out). :class:`MonitoredPlant` puts the monitor on any plant of
+the loop and records it along a run; ``runtime.mujoco.comparison`` checks its predicted
+onset of slip against the wheel slip MuJoCo measures.
 """
 
 from __future__ import annotations
@@ -35,48 +38,77 @@ from modeling.mjcf_export import static_loads
 from modeling.planar_robot import PlanarRobot
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
-from runtime.sim.plant import COULOMB_SPEED, Plant, spin_inertia_keys
+from runtime.sim.plant import COULOMB_SPEED, Plant
 
 Array = NDArray[np.float64]
 
 
 class SlipMonitor:
-    """The longitudinal traction of a robot's driven wheels (see the module docstring)."""
+    """The traction of a robot's driven wheels (see the module docstring)."""
 
-    def __init__(self, code: RobotCode, robot: PlanarRobot, exp: Experiment) -> None:
-        keys = spin_inertia_keys(code)
-        if keys is None:
-            raise ValueError(f"robot '{code.name}': no parameter is its driven wheels' spin "
-                             "inertia; the slip monitor needs it")
-        self.code, self.robot, self.keys = code, robot, keys
-        self.driven = [w for w in robot.ordered_wheels() if w.driven]
-        self.radii = np.array([w.radius for w in self.driven])
+    def __init__(self, code: RobotCode, robot: PlanarRobot, exp: Experiment,
+                 lateral: bool = True) -> None:
+        driven = getattr(code.robot, "DRIVEN_WHEELS", None)
+        rows = getattr(code.robot, "LATERAL_WHEELS", None)
+        if driven is None or rows is None or not hasattr(code.model, "wheel_contact_forces"):
+            raise ValueError(f"robot '{code.name}': its generated code has no "
+                             "wheel_contact_forces (generated before the slip monitor); "
+                             "regenerate it with `wmr model`")
+        names = {w.name for w in robot.wheels}
+        unknown = [w for w in (*driven, *(w for r in rows for w in r)) if w not in names]
+        if unknown:
+            raise ValueError(f"robot '{code.name}': wheel '{unknown[0]}' of the generated "
+                             "contact forces is not in the robot's layout")
+        self.code, self.robot, self.lateral = code, robot, lateral
+        self.driven: tuple[str, ...] = tuple(driven)
+        self.rows: tuple[tuple[str, ...], ...] = tuple(tuple(r) for r in rows)
         self.viscous, self.coulomb = exp.plant.viscous, exp.plant.coulomb
         pl = exp.plant
         self.points = ((pl.fixed_payload_x, pl.fixed_payload_y),
                        (pl.extra_payload_x, pl.extra_payload_y))
-        self._cache: dict[tuple[float, ...], Array] = {}
+        self._cache: dict[tuple[float, ...], tuple[Array, Array]] = {}
 
-    def normal_loads(self, masses: Array) -> Array:
-        """N_w (N) of each driven wheel with the experiment's payloads of ``masses`` (kg:
-        fixed, extra) on board."""
+    def _loads(self, masses: Array) -> tuple[Array, Array]:
+        """(N_w of each driven wheel, the share of its axle's lateral force it takes:
+        a (driven × rows) matrix), with the payloads of ``masses`` on board."""
         key = tuple(float(m) for m in masses)
         if key not in self._cache:
             loads = static_loads(self.robot, tuple((m, x, y) for m, (x, y)
                                                    in zip(key, self.points, strict=True)))
-            self._cache[key] = np.array([loads[w.name] for w in self.driven])
+            share = np.zeros((len(self.driven), len(self.rows)))
+            for k, row in enumerate(self.rows):
+                total = sum(loads[w] for w in row)
+                for i, w in enumerate(self.driven):
+                    if w in row:
+                        share[i, k] = loads[w] / total
+            self._cache[key] = (np.array([loads[w] for w in self.driven]), share)
         return self._cache[key]
 
-    def forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float]) -> Array:
-        """F_w (N): the longitudinal force each driven wheel must transmit to roll, at the
-        true state (q, driven-wheel rates) under the applied torque, with the true
-        parameters ``params``."""
+    def normal_loads(self, masses: Array) -> Array:
+        """N_w (N) of each driven wheel with the experiment's payloads of ``masses`` (kg:
+        fixed, extra) on board."""
+        return self._loads(masses)[0]
+
+    def contact_forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
+                       masses: Array) -> tuple[Array, Array]:
+        """(F_x, F_y) (N) of each driven wheel at the true state (q, driven-wheel rates)
+        under the applied torque ``tau``, with the true parameters ``params``: the generated
+        contact forces, the axle's lateral force split by static load (module docstring)."""
+        rates = np.asarray(rates, dtype=np.float64)
         friction = self.viscous * rates + self.coulomb * np.tanh(rates / COULOMB_SPEED)
         net = np.asarray(tau, dtype=np.float64) - friction
-        accel = np.asarray(self.code.model.minimal_forward_dynamics(q, rates, net, dict(params)),
-                           dtype=np.float64)
-        spin = np.array([float(params[k]) for k in self.keys])
-        return np.asarray((net - spin * accel) / self.radii)
+        fx, fy = self.code.model.wheel_contact_forces(q, rates, net, dict(params))
+        share = self._loads(masses)[1]
+        return (np.asarray(fx, dtype=np.float64),
+                share @ np.asarray(fy, dtype=np.float64).reshape(-1))
+
+    def forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
+               masses: Array | None = None) -> Array:
+        """|F| (N) each driven wheel must transmit to roll: √(F_x² + F_y²), or F_x alone
+        (signed) when the monitor was made with ``lateral=False``."""
+        fx, fy = self.contact_forces(q, rates, tau, params,
+                                     np.zeros(2) if masses is None else masses)
+        return fx if not self.lateral else np.hypot(fx, fy)
 
     def margin(self, forces: Array, mu: float, masses: Array) -> Array:
         """μ N_w − |F_w| (N): negative where the wheel needs more traction than it has."""
@@ -118,7 +150,7 @@ class MonitoredPlant:
     def actuate(self, tau: Array) -> list[float]:
         applied = self.inner.actuate(tau)
         forces = self.monitor.forces(self.inner.q, self.inner.wheels()[1],
-                                     np.array(applied), self.params)
+                                     np.array(applied), self.params, self.masses)
         self.forces.append(forces)
         self.needed.append(self.monitor.friction_needed(forces, self.masses))
         return applied

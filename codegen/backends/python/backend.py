@@ -14,6 +14,7 @@ from codegen.backend import RobotTarget
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
+from codegen.contact_forces import contact_rows
 from codegen.controller_api import (
     CONTROLLERS,
     MAX_ABS_INPUT,
@@ -31,6 +32,7 @@ from modeling.version import VERSION
 def robot_py(target: RobotTarget) -> str:
     """``robot.py``: the robot file's default parameters, the plant's, sizes and names."""
     model, robot = target.model, target.robot
+    rows = contact_rows(model)
     params = ", ".join(f'"{p.key}": {robot.lumped[p.key]!r}' for p in model.params)
     name = json.dumps(robot.name)  # a quote in a name cannot end the string
     text = (
@@ -58,6 +60,10 @@ def robot_py(target: RobotTarget) -> str:
         "# engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose\n"
         "# layout follows from its parameters.\n"
         f"LAYOUT: dict[str, Any] | None = {model.layout!r}\n"
+        "# The wheels of <prefix>_wheel_contact_forces' outputs (codegen.contact_forces):\n"
+        "# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.\n"
+        f"DRIVEN_WHEELS = {rows.driven!r}\n"
+        f"LATERAL_WHEELS = {rows.lateral_wheels!r}\n"
         + controllers_py()
     )
 

@@ -347,6 +347,76 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B);
 
+#define TRAILER3_WHEEL_CONTACT_FORCES_Q_SIZE 14
+#define TRAILER3_WHEEL_CONTACT_FORCES_WHEEL_RATES_SIZE 2
+#define TRAILER3_WHEEL_CONTACT_FORCES_TAU_SIZE 2
+#define TRAILER3_WHEEL_CONTACT_FORCES_LONGITUDINAL_SIZE 2
+#define TRAILER3_WHEEL_CONTACT_FORCES_LATERAL_SIZE 4
+
+/**
+ * Contact forces from the multipliers of (9), M qddot + H = B tau - A^T lambda:
+ * A_d^T lambda = (B tau - H - M qddot)_d with qddot from the minimal forward
+ * dynamics (the route of (10)-(12)). longitudinal[k] (N): the ground's force on
+ * driven wheel 'right', 'left' along its heading (positive forward;
+ * (tau - I_w thetaddot)/r). lateral[k] (N): the ground's force along the axle,
+ * positive to the wheel's left, of one no-side-slip row: an axle's wheels share
+ * one row (their split is statically indeterminate).
+ * lateral[0]: 'right', 'left'; lateral[1]: 'cart_right', 'cart_left'; lateral[2]:
+ * 'cart2_right', 'cart2_left'; lateral[3]: 'cart3_right', 'cart3_left'.
+ * Valid on the constraint manifold (the wheels roll).
+ *
+ * Paper equations: (9), (10)-(12).
+ *
+ * @param[in]  p trailer3_params_t -- lumped robot parameters
+ * @param[in]  q [14] row-major (TRAILER3_WHEEL_CONTACT_FORCES_Q_SIZE): x_tractor, y_tractor,
+ *     theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left,
+ *     theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right,
+ *     theta_cart3_left -- x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2,
+ *     theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right,
+ *     theta_cart2_left, theta_cart3_right, theta_cart3_left
+ * @param[in]  wheel_rates [2] row-major (TRAILER3_WHEEL_CONTACT_FORCES_WHEEL_RATES_SIZE):
+ *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
+ * @param[in]  tau [2] row-major (TRAILER3_WHEEL_CONTACT_FORCES_TAU_SIZE): tau_right, tau_left --
+ *     net wheel torques (after bearing friction) tau_right, tau_left
+ * @param[out] longitudinal [2] row-major (TRAILER3_WHEEL_CONTACT_FORCES_LONGITUDINAL_SIZE) -- N,
+ *     per driven wheel
+ * @param[out] lateral [4] row-major (TRAILER3_WHEEL_CONTACT_FORCES_LATERAL_SIZE) -- N, per
+ *     no-side-slip row (axle)
+ * @return TRAILER3_OK on success; on error no output is written:
+ *         TRAILER3_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
+ *         (it does not read, and ignores: q[0], q[1], q[6], q[7], q[8], q[9], q[10], q[11], q[12],
+ *         q[13]),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (radius_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2 > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3 > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_left > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_right > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (J_x_tractor > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
+ *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
+ *
+ * operations after CSE: 696 add, 977 mul, 106 div, 8 sin/cos, 0 sqrt
+ */
+trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
+    const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
+    trailer3_real_t *longitudinal, trailer3_real_t *lateral);
+
 #ifdef __cplusplus
 }
 #endif

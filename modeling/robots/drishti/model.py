@@ -188,6 +188,11 @@ def constraint_matrix() -> sp.Matrix:
     return a.applyfunc(sp.trigsimp)
 
 
+# Row 1 is the axle's: the two wheels' no-side-slip rows are one row (same axle, same n).
+CONSTRAINT_LABELS = ("no side slip of wheels 'right', 'left' (the axle)",
+                     "rolling of wheel 'right'", "rolling of wheel 'left'")
+
+
 def input_matrix() -> sp.Matrix:
     """B of (9): τ_r acts on θ_r, τ_l on θ_l."""
     bm = sp.zeros(5, 2)
@@ -211,6 +216,7 @@ def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
         constraint_matrix=constraint_matrix(),
         input_matrix=input_matrix(),
         independent=(3, 4),
+        constraint_labels=CONSTRAINT_LABELS,
     )
 
 
