@@ -39,9 +39,12 @@ from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode, load_robot_code
 from runtime.experiment.reproduction import PALETTE
 from runtime.experiment.settings import Experiment
+from runtime.mujoco.layout import robot_layout
 from runtime.sim import loop, paths
 from runtime.sim.loop import Run
+from runtime.sim.plant import library_for, make_plant
 from runtime.sim.reference import Reference
+from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 
 
 @dataclass(frozen=True)
@@ -90,13 +93,17 @@ class Metrics:
     saturated_steps: int
     discarded_u: float  # RMS of ||u rows 1-3|| (paper formulation)
     failed_at: float | None
+    # The slip monitor (runtime.sim.slip_monitor): the largest friction coefficient the run
+    # needs, max over samples and driven wheels of sqrt(F_x² + F_y²)/N (NaN: not monitored).
+    friction_needed: float = float("nan")
 
 
 def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x**2)))
 
 
-def metrics(r: Run, ref: Reference, sensing: str) -> Metrics:
+def metrics(r: Run, ref: Reference, sensing: str,
+            friction_needed: float = float("nan")) -> Metrics:
     """The metrics of one run on ``ref``: position error ‖(x_c, y_c) − (x_dc, y_dc)‖ (in %
     of the reference's scale: R1 for the circle, the spacing of the lawn mower's legs; the
     figures use the paper's own scales), torque, k̂."""
@@ -116,6 +123,7 @@ def metrics(r: Run, ref: Reference, sensing: str) -> Metrics:
         saturated_steps=r.saturated,
         discarded_u=rms(r.u_discarded),
         failed_at=r.failed_at,
+        friction_needed=friction_needed,
     )
 
 
@@ -199,6 +207,8 @@ class _Simulator:
     ):
         self.code, self.exp, self.robot, self.refs = code, exp, robot, refs
         self.cache: dict[tuple[str, str, float, str, str, str], Run] = {}
+        self.needed: dict[int, float] = {}  # id(run) -> friction coefficient it needs
+        self.monitor = slip_monitor(code, exp, robot)
 
     def __call__(
         self, sensing: str, estimator: str, eps: float, ctrl: str, form: str, path: str
@@ -208,9 +218,30 @@ class _Simulator:
         key = (sensing, estimator, eps, ctrl, form, path)
         if key not in self.cache:
             e = with_eps(with_sensing(self.exp, sensing, estimator), eps)
-            self.cache[key] = loop.run(self.code, ctrl, form, self.refs[path], self.robot, e,
-                                       check=True)
+            plant = None
+            if self.monitor is not None:
+                base = {**self.code.plant_defaults, **self.robot}
+                plant = MonitoredPlant(make_plant(self.code, library_for(self.code), e, base),
+                                       self.monitor)
+            run = loop.run(self.code, ctrl, form, self.refs[path], self.robot, e, check=True,
+                           plant=plant)
+            if plant is not None and plant.needed:
+                self.needed[id(run)] = float(np.max(plant.needed))
+            self.cache[key] = run
         return self.cache[key]
+
+    def friction_needed(self, run: Run) -> float:
+        return self.needed.get(id(run), float("nan"))
+
+
+def slip_monitor(code: RobotCode, exp: Experiment, robot: dict[str, float]
+                 ) -> SlipMonitor | None:
+    """The slip monitor of the runs (None where the robot's layout cannot be had at these
+    parameters: a bodies-and-wheels robot with drawn parameters)."""
+    try:
+        return SlipMonitor(code, robot_layout(code, {**code.plant_defaults, **robot}), exp)
+    except ValueError:
+        return None
 
 
 def sweep_sets(exp: Experiment, sensings: Sequence[str]) -> list[tuple[str, str]]:
@@ -251,7 +282,7 @@ def reproduce(
             for form, info in pairs:
                 r = sim(sensing, est, eps0, info.name, form, path)
                 runs[(sensing, info.name, form, path)] = r
-                table.append(metrics(r, refs[path], sensing))
+                table.append(metrics(r, refs[path], sensing, sim.friction_needed(r)))
                 if progress:
                     m = table[-1]
                     print(

@@ -136,6 +136,21 @@ def circle_centre(ref: Reference) -> np.ndarray:
     return np.asarray(np.linalg.solve(a, rhs))
 
 
+def _load_split(rep: Reproduction) -> str:
+    """The stated static loads of the driven wheels, fixed payload on board (N)."""
+    from modeling.mjcf_export import static_loads
+    from runtime.mujoco.layout import robot_layout
+
+    try:
+        robot = robot_layout(rep.code, {**rep.code.plant_defaults, **rep.robot})
+    except ValueError:
+        return ""
+    pl = rep.experiment.plant
+    loads = static_loads(robot, ((pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y),))
+    driven = ", ".join(f"{w.name} {loads[w.name]:.1f} N" for w in robot.wheels if w.driven)
+    return f"; here {driven} with the fixed payload"
+
+
 def section_metrics(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
     """The metrics tables, one per sensing model (``metrics.md``)."""
     return [
@@ -146,6 +161,15 @@ def section_metrics(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
         "Δu_a (rad/s² for the minimal formulation; mixed m/s² and rad/s² for the paper's).",
         "TV(τ): total variation of τ (chattering). RMS ‖u₁₋₃‖: the rows of u that τ = Bᵀu",
         "discards (paper formulation).",
+        "μ needed: the largest friction coefficient the run needs, max over samples and driven",
+        "wheels of √(F_x² + F_y²)/N (`runtime/sim/slip_monitor.py`): F_x, F_y the ground's",
+        "force on the wheel from the constraint multipliers of (9) (the generated",
+        "`<prefix>_wheel_contact_forces`), the axle's lateral force split between its wheels in",
+        "proportion to their static loads (an assumption: the rigid model does not split it),",
+        "N the wheel's static load with the payload on board (`modeling.mjcf_export.static_loads`:",
+        "the robot as one rigid assembly on equal contact springs"
+        + _load_split(rep) + "). On a floor of a smaller μ a wheel slips (see docs/MUJOCO.md); the",
+        "smallest traction margin of the run at friction μ is μ N − |F| ≥ (μ − μ needed) N.",
         "",
         metrics_markdown(rep),
     ]

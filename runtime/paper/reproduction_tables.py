@@ -1,13 +1,14 @@
 """The metrics tables of the reproduction (:mod:`runtime.paper.reproduce`), one row per run:
 ``metrics.md``, one Markdown table per sensing model, and ``metrics.csv``, every run in one
-file. The CSV keeps the columns it always had, in the same order, with ``sensing`` appended
-last, so readers of the older file still work. Also the formatting the report shares
-(:func:`fmt_mm`, :func:`sensing_label`).
+file. The CSV keeps the columns it always had, in the same order, with ``sensing`` and then
+``friction_needed`` appended, so readers of the older file still work. Also the formatting
+the report shares (:func:`fmt_mm`, :func:`fmt_mu`, :func:`sensing_label`).
 """
 
 from __future__ import annotations
 
 import csv
+import math
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -16,6 +17,11 @@ from runtime.paper.reproduce import LABELS, Metrics, Reproduction
 
 def fmt_mm(x: float) -> str:
     return f"{x * 1000:.2f}"
+
+
+def fmt_mu(x: float) -> str:
+    """A friction coefficient the slip monitor found a run needs (— : not monitored)."""
+    return "—" if math.isnan(x) else f"{x:.3f}"
 
 
 def sensing_label(rep: Reproduction, sensing: str, estimator: str | None = None) -> str:
@@ -30,15 +36,16 @@ def sensing_label(rep: Reproduction, sensing: str, estimator: str | None = None)
 def metrics_table(rows: Iterable[Metrics]) -> list[str]:
     lines = [
         "| path | form | controller | RMS error [mm] | max error [mm] | RMS [% of scale] "
-        "| RMS τ [N m] | TV(τ) [N m] | median k̂ | max k̂ | saturated steps | RMS ‖u₁₋₃‖ |",
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| RMS τ [N m] | TV(τ) [N m] | median k̂ | max k̂ | saturated steps | RMS ‖u₁₋₃‖ "
+        "| μ needed |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for m in rows:
         lines.append(
             f"| {m.path} | {m.formulation} | {LABELS[m.controller]} | {fmt_mm(m.rms_error)} "
             f"| {fmt_mm(m.max_error)} | {m.rms_percent:.2f} | {m.rms_torque:.2f} "
             f"| {m.torque_variation:.1f} | {m.median_gain:.3f} | {m.max_gain:.3f} "
-            f"| {m.saturated_steps} | {m.discarded_u:.2f} |"
+            f"| {m.saturated_steps} | {m.discarded_u:.2f} | {fmt_mu(m.friction_needed)} |"
         )
     return lines
 
@@ -65,7 +72,8 @@ CSV_COLUMNS = (
     "saturated_steps",
     "rms_discarded_u",
     "failed_at_s",
-    "sensing",  # appended LAST: the older columns keep their positions
+    "sensing",  # appended: the older columns keep their positions
+    "friction_needed",  # the slip monitor's max |F|/N over the run (empty: not monitored)
 )
 
 
@@ -92,5 +100,6 @@ def write_csv(rep: Reproduction, path: Path) -> None:
                     f"{m.discarded_u:.4g}",
                     "" if m.failed_at is None else f"{m.failed_at:.3g}",
                     m.sensing,
+                    "" if math.isnan(m.friction_needed) else f"{m.friction_needed:.4g}",
                 ]
             )
