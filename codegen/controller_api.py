@@ -85,6 +85,8 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
     return (
         StatusCode(f"{P}_OK", 0, "success"),
         StatusCode(f"{P}_WARN_SATURATED", 1, "success, but a torque was clipped to the limit"),
+        StatusCode(f"{P}_WARN_TRACTION", 2,
+                   "traction_check: a driven wheel's traction margin is <= 0 (it slips)"),
         StatusCode(f"{P}_ERR_NULL_POINTER", -1, "a pointer argument is NULL"),
         StatusCode(f"{P}_ERR_NONFINITE_INPUT", -2, "an input is NaN or infinite"),
         StatusCode(f"{P}_ERR_BAD_PARAMS", -3, "robot parameters do not give a valid model"),
@@ -121,6 +123,8 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
             -19,
             "the configuration differs from the one given to _init (any bit of any value)",
         ),
+        StatusCode(f"{P}_ERR_BAD_TRACTION", -20,
+                   "traction check: friction coefficient or a wheel load <= 0"),
     )
 
 

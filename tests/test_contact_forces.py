@@ -8,7 +8,11 @@ robot (a ``[lumped]`` file):
 * the longitudinal forces are the independent route F = (τ − J θ̈)/r of the wheel's own
   row (θ̈ from the generated minimal forward dynamics);
 * bad input returns the contract's statuses (non-finite input, bad parameters) in C and
-  raises in Python, naming the status.
+  raises in Python, naming the status;
+* ``<prefix>_traction_check`` (the firmware's optional check after a step) returns OK and
+  the margins μ N − √(F_x² + (s F_y)²) where every wheel keeps grip, ``<P>_WARN_TRACTION``
+  (2, writing nothing) where one does not, in C and Python alike, at the slip monitor's
+  loads and shares; ``<prefix>_traction_margins`` writes the margins whatever their sign.
 """
 
 from __future__ import annotations
@@ -146,3 +150,69 @@ def test_bad_input_returns_its_status(name: str) -> None:
         with pytest.raises(ValueError, match=f"{prefix}_{status}"):
             gf._python(fn, values)
         assert what, err
+
+
+@pytest.mark.parametrize("name", ["drishti", "trailer"])
+def test_the_traction_check_warns_where_a_wheel_slips(name: str) -> None:
+    import dataclasses
+
+    from runtime.experiment.settings import parse_experiment
+    from runtime.mujoco.layout import robot_layout
+    from runtime.sim.slip_monitor import SlipMonitor
+
+    target = _target(name)
+    code = target.code
+    fns = {f.name: f for f in gf.functions(target)}
+    cm = CModel(target, False)
+    header = (target.c_dir / f"{target.prefix}_types.h").read_text()
+    statuses = {n: int(v) for n, v in re.findall(r"(\w+_(?:ERR|WARN)_\w+) = (-?\d+)", header)}
+    prefix = target.prefix.upper()
+    exp = parse_experiment("")
+    exp = dataclasses.replace(exp, plant=dataclasses.replace(exp.plant, viscous=0.0,
+                                                             coulomb=0.0))
+    monitor = SlipMonitor(code, robot_layout(code, code.plant_defaults), exp)
+    masses = np.zeros(2)
+    loads = monitor.normal_loads(masses)
+    shares = monitor.shares(masses)
+    rng = np.random.default_rng(17)
+    warned = ok = 0
+    for _ in range(30):
+        q = rng.uniform(-2.0, 2.0, code.nq)
+        eta = rng.uniform(-8.0, 8.0, code.nu)
+        tau = rng.uniform(-10.0, 10.0, code.nu)
+        fx, fy = monitor.contact_forces(q, eta, tau, code.params, masses)
+        needed = float(np.max(np.hypot(fx, fy) / loads))
+        for mu in (1.05 * needed, 0.95 * needed):
+            values = {"p": code.params, "q": q, "wheel_rates": eta, "tau": tau,
+                      "mu": np.array([mu]), "loads": loads, "shares": shares}
+            expected = mu * loads - np.hypot(fx, fy)
+            margins = gf._c(cm, fns["traction_margins"], values)[0]
+            assert np.allclose(margins, expected, rtol=1e-9, atol=1e-9)
+            assert np.allclose(gf._python(fns["traction_margins"], values)[0], expected,
+                               rtol=1e-9, atol=1e-9)
+            if np.all(expected > 0):
+                ok += 1
+                assert np.allclose(gf._c(cm, fns["traction_check"], values)[0], expected,
+                                   rtol=1e-9, atol=1e-9)
+                assert np.allclose(gf._python(fns["traction_check"], values)[0], expected,
+                                   rtol=1e-9, atol=1e-9)
+            else:
+                warned += 1
+                warn = statuses[f"{prefix}_WARN_TRACTION"]
+                assert warn > 0
+                with pytest.raises(RuntimeError, match=f"returned {warn}$"):
+                    gf._c(cm, fns["traction_check"], values)
+                with pytest.raises(ValueError, match=f"{prefix}_WARN_TRACTION"):
+                    gf._python(fns["traction_check"], values)
+    assert ok == 30 and warned == 30
+    # Bad input of the check: its own status, or the contract's.
+    good = {"p": code.params, "q": q, "wheel_rates": eta, "tau": tau, "mu": np.array([1.0]),
+            "loads": loads, "shares": shares}
+    for change, status in (({"mu": np.array([0.0])}, "ERR_BAD_TRACTION"),
+                           ({"loads": -loads}, "ERR_BAD_TRACTION"),
+                           ({"mu": np.array([math.nan])}, "ERR_NONFINITE_INPUT")):
+        for fn in ("traction_margins", "traction_check"):
+            with pytest.raises(RuntimeError, match=f"returned {statuses[f'{prefix}_{status}']}$"):
+                gf._c(cm, fns[fn], {**good, **change})
+            with pytest.raises(ValueError, match=f"{prefix}_{status}"):
+                gf._python(fns[fn], {**good, **change})

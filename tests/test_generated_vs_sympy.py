@@ -97,6 +97,9 @@ def _sample_argument(arg: Argument, rng: np.random.Generator, n: int) -> np.ndar
         return _uniform(rng, 0.05, 2.0, n, size)
     if name == "gain":
         return _uniform(rng, 0.0, 10.0, n, size)
+    if name in ("mu", "loads", "shares"):  # a floor that holds: traction_check returns OK
+        lo, hi = {"mu": (0.5, 1.0), "loads": (3000.0, 6000.0), "shares": (0.0, 1.0)}[name]
+        return _uniform(rng, lo, hi, n, size)
     if name == "eps":  # both sides of max(||s||, eps) occur
         return _uniform(rng, 0.01, 1.0, n, size)
     if name == "bounds":  # alpha in [0, 0.9), phi

@@ -18,7 +18,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x68b1d2b9u
+#define WMR_CODE_ID 0xc2edf67bu
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -301,6 +301,7 @@ extern "C" {
 typedef enum {
     WMR_OK = 0, /* success */
     WMR_WARN_SATURATED = 1, /* success, but a torque was clipped to the limit */
+    WMR_WARN_TRACTION = 2, /* traction_check: a driven wheel's traction margin is <= 0 (it slips) */
     WMR_ERR_NULL_POINTER = -1, /* a pointer argument is NULL */
     WMR_ERR_NONFINITE_INPUT = -2, /* an input is NaN or infinite */
     WMR_ERR_BAD_PARAMS = -3, /* robot parameters do not give a valid model */
@@ -321,8 +322,9 @@ typedef enum {
     WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                     rate_window is outside [0, h] */
     WMR_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
-    WMR_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init (any bit
-                                    of any value) */
+    WMR_ERR_CONFIG_CHANGED = -19, /* the configuration differs from the one given to _init (any bit
+                                     of any value) */
+    WMR_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0 */
 } wmr_status_t;
 
 #define WMR_FORMULATION_PAPER 0 /* the five coordinates of (14), tau = B^T u */

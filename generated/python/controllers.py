@@ -32,6 +32,7 @@ except ImportError:  # pragma: no cover
 STATUS: dict[str, int] = {
     "WMR_OK": 0,  # success
     "WMR_WARN_SATURATED": 1,  # success, but a torque was clipped to the limit
+    "WMR_WARN_TRACTION": 2,  # traction_check: a driven wheel's traction margin is <= 0 (it slips)
     "WMR_ERR_NULL_POINTER": -1,  # a pointer argument is NULL
     "WMR_ERR_NONFINITE_INPUT": -2,  # an input is NaN or infinite
     "WMR_ERR_BAD_PARAMS": -3,  # robot parameters do not give a valid model
@@ -51,6 +52,7 @@ STATUS: dict[str, int] = {
     "WMR_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "WMR_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
     "WMR_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (any bit of any value)
+    "WMR_ERR_BAD_TRACTION": -20,  # traction check: friction coefficient or a wheel load <= 0
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1

@@ -89,6 +89,11 @@ class SlipMonitor:
         fixed, extra) on board."""
         return self._loads(masses)[0]
 
+    def shares(self, masses: Array) -> Array:
+        """Each driven wheel's share of its axle's lateral force, N_w / Σ_axle N (the
+        ``shares`` input of the generated ``<prefix>_traction_check``)."""
+        return np.asarray(self._loads(masses)[1].sum(axis=1))
+
     def contact_forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
                        masses: Array) -> tuple[Array, Array]:
         """(F_x, F_y) (N) of each driven wheel at the true state (q, driven-wheel rates)

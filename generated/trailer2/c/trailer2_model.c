@@ -3301,3 +3301,1049 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     lateral[2] = r_4;
     return TRAILER2_OK;
 }
+
+/* trailer2_traction_margins: documented in trailer2_model.h.
+   operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt */
+trailer2_status_t trailer2_traction_margins(const trailer2_params_t *p, const trailer2_real_t *q,
+    const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, const trailer2_real_t *mu,
+    const trailer2_real_t *loads, const trailer2_real_t *shares, trailer2_real_t *margins)
+{
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t thetadot_right = wheel_rates[0];
+    const trailer2_real_t thetadot_left = wheel_rates[1];
+    const trailer2_real_t tau_right = tau[0];
+    const trailer2_real_t tau_left = tau[1];
+    const trailer2_real_t mu_floor = mu[0];
+    const trailer2_real_t load_w0 = loads[0];
+    const trailer2_real_t load_w1 = loads[1];
+    const trailer2_real_t share_w0 = shares[0];
+    const trailer2_real_t share_w1 = shares[1];
+    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
+            + (J_theta_cart2_left - J_theta_cart2_left)) + ((J_theta_cart2_right
+            - J_theta_cart2_right) + (J_theta_cart_left - J_theta_cart_left)))
+            + (((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))
+            + ((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + ((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
+            + (K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)))
+            + (((K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2)
+            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
+            + ((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
+            + (radius_cart2_left - radius_cart2_left))))) + ((((((radius_cart2_right
+            - radius_cart2_right) + (radius_cart_left - radius_cart_left))
+            + (radius_cart_right - radius_cart_right)) + ((radius_left - radius_left)
+            + (radius_right - radius_right))) + (((theta_tractor - theta_tractor)
+            + (theta_cart - theta_cart)) + ((theta_cart2 - theta_cart2)
+            + (thetadot_right - thetadot_right)))) + ((((thetadot_left - thetadot_left)
+            + (tau_right - tau_right)) + ((tau_left - tau_left) + (mu_floor - mu_floor)))
+            + (((load_w0 - load_w0) + (load_w1 - load_w1)) + ((share_w0 - share_w0)
+            + (share_w1 - share_w1)))))) != 0) {
+        return TRAILER2_ERR_NONFINITE_INPUT;
+    }
+    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
+    const trailer2_real_t _t1 = -_t0;
+    const trailer2_real_t _t2 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t3 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_LIT(3.0)*_t3/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t6 = TRAILER2_LIT(3.0)*_t5/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t7 = _t0*_t4 + _t2*_t6;
+    const trailer2_real_t _t8 = -_t7;
+    const trailer2_real_t _t9 = TRAILER2_SIN(theta_cart2);
+    const trailer2_real_t _t10 = -_t9;
+    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t12 = _t11*_t6 + _t4*_t9;
+    const trailer2_real_t _t13 = -_t12;
+    const trailer2_real_t _t14 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t15 = TRAILER2_LIT(17.0)*_t0*_t9/TRAILER2_LIT(20.0) + _t14*_t2;
+    const trailer2_real_t _t16 = -_t15;
+    const trailer2_real_t _t17 = -_t2;
+    const trailer2_real_t _t18 = _t0*_t6 - _t2*_t4;
+    const trailer2_real_t _t19 = -_t11;
+    const trailer2_real_t _t20 = -_t11*_t4 + _t6*_t9;
+    const trailer2_real_t _t21 = _t0*_t14 - TRAILER2_LIT(17.0)*_t2*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t22 = -_t21;
+    const trailer2_real_t _t23 = -radius_right;
+    const trailer2_real_t _t24 = -radius_left;
+    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t26 = -_t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t28 = -_t27;
+    const trailer2_real_t _t29 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t30 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t31 = _t28*_t29;
+    const trailer2_real_t _t32 = _t1*_t31 - _t29*_t8;
+    const trailer2_real_t _t33 = _t28*_t30;
+    const trailer2_real_t _t34 = _t1*_t33 + _t30*_t8;
+    const trailer2_real_t _t35 = _t26*_t29;
+    const trailer2_real_t _t36 = -_t2*_t35 - _t32;
+    const trailer2_real_t _t37 = -TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = _t16*_t37;
+    const trailer2_real_t _t39 = _t10*_t31 - _t13*_t29;
+    const trailer2_real_t _t40 = _t26*_t30;
+    const trailer2_real_t _t41 = -_t2*_t40 - _t34;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t43 = _t16*_t42;
+    const trailer2_real_t _t44 = _t10*_t33 + _t13*_t30;
+    const trailer2_real_t _t45 = _t37/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29;
+    const trailer2_real_t _t47 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30;
+    const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t51 = -_t11*_t35 - _t38 - _t39;
+    const trailer2_real_t _t52 = -TRAILER2_LIT(5.0)*_t51/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t53 = _t52/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37;
+    const trailer2_real_t _t55 = -_t11*_t40 - _t43 - _t44;
+    const trailer2_real_t _t56 = -TRAILER2_LIT(5.0)*_t55/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t57 = _t56/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42;
+    const trailer2_real_t _t59 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t61 = K_theta_tractor_x_tractor*_t3;
+    const trailer2_real_t _t62 = K_theta_tractor_x_tractor_2*_t5;
+    const trailer2_real_t _t63 = _t61 + _t62;
+    const trailer2_real_t _t64 = K_theta_cart_x_tractor*_t0;
+    const trailer2_real_t _t65 = K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t66 = _t64 + _t65;
+    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t9;
+    const trailer2_real_t _t68 = K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t69 = _t67 + _t68;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor*_t5;
+    const trailer2_real_t _t71 = K_theta_tractor_x_tractor_2*_t3 - _t70;
+    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t2;
+    const trailer2_real_t _t73 = K_theta_cart_x_tractor_2*_t0 - _t72;
+    const trailer2_real_t _t74 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t75 = K_theta_cart2_x_tractor_2*_t9 - _t74;
+    const trailer2_real_t _t76 = K_theta_cart_x_tractor_2*_t0;
+    const trailer2_real_t _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76;
+    const trailer2_real_t _t78 = K_theta_cart2_x_tractor_2*_t9;
+    const trailer2_real_t _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78;
+    const trailer2_real_t _t80 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t81 = TRAILER2_LIT(17.0)*_t2/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81;
+    const trailer2_real_t _t83 = _t52*thetadot_right + _t56*thetadot_left;
+    const trailer2_real_t _t84 = _t83*_t83;
+    const trailer2_real_t _t85 = _t74*_t84;
+    const trailer2_real_t _t86 = _t37*thetadot_right + _t42*thetadot_left;
+    const trailer2_real_t _t87 = _t86*_t86;
+    const trailer2_real_t _t88 = -_t29*thetadot_right + _t30*thetadot_left;
+    const trailer2_real_t _t89 = _t88*_t88;
+    const trailer2_real_t _t90 = _t78*_t84;
+    const trailer2_real_t _t91 = _t76*_t87;
+    const trailer2_real_t _t92 = _t67*_t84;
+    const trailer2_real_t _t93 = _t68*_t84;
+    const trailer2_real_t _t94 = _t64*_t87;
+    const trailer2_real_t _t95 = _t65*_t87;
+    const trailer2_real_t _t96 = _t6*_t89;
+    const trailer2_real_t _t97 = _t4*_t89;
+    const trailer2_real_t _t98 = _t80*_t87;
+    const trailer2_real_t _t99 = _t81*_t87;
+    const trailer2_real_t _t100 = _t88*thetadot_right;
+    const trailer2_real_t _t101 = _t88*thetadot_left;
+    const trailer2_real_t _t102 = _t86*thetadot_right;
+    const trailer2_real_t _t103 = _t86*thetadot_left;
+    const trailer2_real_t _t104 = _t83*thetadot_right;
+    const trailer2_real_t _t105 = _t83*thetadot_left;
+    const trailer2_real_t _t106 = _t25*_t29;
+    const trailer2_real_t _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31;
+    const trailer2_real_t _t108 = -TRAILER2_LIT(5.0)*_t107/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t109 = _t108/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = _t106*_t17 + _t32;
+    const trailer2_real_t _t111 = _t25*_t30;
+    const trailer2_real_t _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33;
+    const trailer2_real_t _t113 = -TRAILER2_LIT(5.0)*_t112/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t114 = _t113/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t115 = _t111*_t17 + _t34;
+    const trailer2_real_t _t116 = TRAILER2_LIT(5.0)*_t46/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t117 = _t116/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7;
+    const trailer2_real_t _t119 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t120 = _t119/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7;
+    const trailer2_real_t _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29;
+    const trailer2_real_t _t123 = -TRAILER2_LIT(5.0)*_t122/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t124 = _t123/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t125 = _t106*_t19 + _t108*_t22 + _t39;
+    const trailer2_real_t _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30;
+    const trailer2_real_t _t127 = -TRAILER2_LIT(5.0)*_t126/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t128 = _t127/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t129 = _t111*_t19 + _t113*_t22 + _t44;
+    const trailer2_real_t _t130 = -_t116*_t16 - _t21*_t37;
+    const trailer2_real_t _t131 = -TRAILER2_LIT(5.0)*_t130/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t132 = _t131/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t133 = _t116*_t22 + _t38;
+    const trailer2_real_t _t134 = -_t119*_t16 - _t21*_t42;
+    const trailer2_real_t _t135 = -TRAILER2_LIT(5.0)*_t134/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t136 = _t135/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t137 = _t119*_t22 + _t43;
+    const trailer2_real_t _t138 = TRAILER2_LIT(5.0)*_t54/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t139 = _t138/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9;
+    const trailer2_real_t _t141 = TRAILER2_LIT(5.0)*_t58/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t142 = _t141/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9;
+    const trailer2_real_t _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75;
+    const trailer2_real_t _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69;
+    const trailer2_real_t _t146 = -J_theta_tractor*_t29 + _t31*_t63 + _t35*_t71 + _t37*_t77
+            + _t52*_t79;
+    const trailer2_real_t _t147 = J_theta_cart*_t37 - _t29*_t77 + _t31*_t66 + _t35*_t73 + _t52*_t82;
+    const trailer2_real_t _t148 = J_theta_cart2*_t52 - _t29*_t79 + _t31*_t69 + _t35*_t75
+            + _t37*_t82;
+    const trailer2_real_t _t149 = -_t53 - _t54;
+    const trailer2_real_t _t150 = _t149*_t60;
+    const trailer2_real_t _t151 = J_theta_cart2_left*_t150;
+    const trailer2_real_t _t152 = _t53 - _t54;
+    const trailer2_real_t _t153 = _t152*_t59;
+    const trailer2_real_t _t154 = J_theta_cart2_right*_t153;
+    const trailer2_real_t _t155 = -_t45 - _t46;
+    const trailer2_real_t _t156 = _t155*_t50;
+    const trailer2_real_t _t157 = J_theta_cart_left*_t156;
+    const trailer2_real_t _t158 = _t45 - _t46;
+    const trailer2_real_t _t159 = _t158*_t49;
+    const trailer2_real_t _t160 = J_theta_cart_right*_t159;
+    const trailer2_real_t _t161 = _t47 - _t48;
+    const trailer2_real_t _t162 = _t161*_t49;
+    const trailer2_real_t _t163 = -_t47 - _t48;
+    const trailer2_real_t _t164 = _t163*_t50;
+    const trailer2_real_t _t165 = _t57 - _t58;
+    const trailer2_real_t _t166 = _t165*_t59;
+    const trailer2_real_t _t167 = -_t57 - _t58;
+    const trailer2_real_t _t168 = _t167*_t60;
+    const trailer2_real_t _t169 = _t151*_t168 + _t154*_t166 + _t157*_t164 + _t160*_t162;
+    const trailer2_real_t _t170 = J_x_tractor*_t40 + _t30*_t71 + _t42*_t73 + _t56*_t75;
+    const trailer2_real_t _t171 = J_theta_tractor*_t30 + _t33*_t63 + _t40*_t71 + _t42*_t77
+            + _t56*_t79;
+    const trailer2_real_t _t172 = J_x_tractor*_t33 + _t30*_t63 + _t42*_t66 + _t56*_t69;
+    const trailer2_real_t _t173 = J_theta_cart*_t42 + _t30*_t77 + _t33*_t66 + _t40*_t73 + _t56*_t82;
+    const trailer2_real_t _t174 = J_theta_cart2*_t56 + _t30*_t79 + _t33*_t69 + _t40*_t75
+            + _t42*_t82;
+    const trailer2_real_t _t175 = _t61*_t89 + _t62*_t89 + _t92 + _t93 + _t94 + _t95;
+    const trailer2_real_t _t176 = _t100*_t31 + _t101*_t33;
+    const trailer2_real_t _t177 = _t100*_t108 + _t101*_t113 + _t102*_t116 + _t103*_t119;
+    const trailer2_real_t _t178 = _t100*_t123 + _t101*_t127 + _t102*_t131 + _t103*_t135
+            + _t104*_t138 + _t105*_t141;
+    const trailer2_real_t _t179 = J_x_tractor*_t176 + _t175 + _t177*_t73 + _t178*_t75;
+    const trailer2_real_t _t180 = -K_theta_tractor_x_tractor_2*_t3*_t89 + _t70*_t89 + _t72*_t87
+            + _t85 - _t90 - _t91;
+    const trailer2_real_t _t181 = _t100*_t106 + _t101*_t111;
+    const trailer2_real_t _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180;
+    const trailer2_real_t _t183 =
+            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t3*_t84/TRAILER2_LIT(10.0)
+            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t87/TRAILER2_LIT(10.0) - _t4*_t90
+            - _t4*_t91 - _t6*_t92 - _t6*_t93 - _t6*_t94 - _t6*_t95;
+    const trailer2_real_t _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183;
+    const trailer2_real_t _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85
+            - _t80*_t90 - _t81*_t92 - _t81*_t93;
+    const trailer2_real_t _t186 = J_theta_cart*_t177 + _t176*_t73 + _t178*_t82 + _t181*_t66 + _t185;
+    const trailer2_real_t _t187 = _t67*_t96 + _t67*_t99 + _t68*_t96 + _t68*_t99 - _t74*_t97
+            - _t74*_t98 + _t78*_t97 + _t78*_t98;
+    const trailer2_real_t _t188 = J_theta_cart2*_t178 + _t176*_t75 + _t177*_t82 + _t181*_t69
+            + _t187;
+    const trailer2_real_t _t189 = _t144*_t40 + _t145*_t33 + _t146*_t30 + _t147*_t42 + _t148*_t56
+            + _t169;
+    const trailer2_real_t _t190 = J_theta_cart2_left*_t168*_t168 + J_theta_cart2_right*_t166*_t166
+            + J_theta_cart_left*_t164*_t164 + J_theta_cart_right*_t162*_t162 + J_theta_left
+            + _t170*_t40 + _t171*_t30 + _t172*_t33 + _t173*_t42 + _t174*_t56;
+    const trailer2_real_t _t191 = _t109 - _t110;
+    const trailer2_real_t _t192 = _t191*_t49;
+    const trailer2_real_t _t193 = _t114 - _t115;
+    const trailer2_real_t _t194 = _t193*_t49;
+    const trailer2_real_t _t195 = _t117 - _t118;
+    const trailer2_real_t _t196 = _t195*_t49;
+    const trailer2_real_t _t197 = _t120 - _t121;
+    const trailer2_real_t _t198 = _t197*_t49;
+    const trailer2_real_t _t199 = _t100*_t192 + _t101*_t194 + _t102*_t196 + _t103*_t198;
+    const trailer2_real_t _t200 = -_t109 - _t110;
+    const trailer2_real_t _t201 = _t200*_t50;
+    const trailer2_real_t _t202 = -_t114 - _t115;
+    const trailer2_real_t _t203 = _t202*_t50;
+    const trailer2_real_t _t204 = -_t117 - _t118;
+    const trailer2_real_t _t205 = _t204*_t50;
+    const trailer2_real_t _t206 = -_t120 - _t121;
+    const trailer2_real_t _t207 = _t206*_t50;
+    const trailer2_real_t _t208 = _t100*_t201 + _t101*_t203 + _t102*_t205 + _t103*_t207;
+    const trailer2_real_t _t209 = _t124 - _t125;
+    const trailer2_real_t _t210 = _t209*_t59;
+    const trailer2_real_t _t211 = _t128 - _t129;
+    const trailer2_real_t _t212 = _t211*_t59;
+    const trailer2_real_t _t213 = _t132 - _t133;
+    const trailer2_real_t _t214 = _t213*_t59;
+    const trailer2_real_t _t215 = _t136 - _t137;
+    const trailer2_real_t _t216 = _t215*_t59;
+    const trailer2_real_t _t217 = _t139 - _t140;
+    const trailer2_real_t _t218 = _t217*_t59;
+    const trailer2_real_t _t219 = _t142 - _t143;
+    const trailer2_real_t _t220 = _t219*_t59;
+    const trailer2_real_t _t221 = _t100*_t210 + _t101*_t212 + _t102*_t214 + _t103*_t216
+            + _t104*_t218 + _t105*_t220;
+    const trailer2_real_t _t222 = -_t124 - _t125;
+    const trailer2_real_t _t223 = _t222*_t60;
+    const trailer2_real_t _t224 = -_t128 - _t129;
+    const trailer2_real_t _t225 = _t224*_t60;
+    const trailer2_real_t _t226 = -_t132 - _t133;
+    const trailer2_real_t _t227 = _t226*_t60;
+    const trailer2_real_t _t228 = -_t136 - _t137;
+    const trailer2_real_t _t229 = _t228*_t60;
+    const trailer2_real_t _t230 = -_t139 - _t140;
+    const trailer2_real_t _t231 = _t230*_t60;
+    const trailer2_real_t _t232 = -_t142 - _t143;
+    const trailer2_real_t _t233 = _t232*_t60;
+    const trailer2_real_t _t234 = _t100*_t223 + _t101*_t225 + _t102*_t227 + _t103*_t229
+            + _t104*_t231 + _t105*_t233;
+    const trailer2_real_t _t235 = _t151*_t234 + _t154*_t221 + _t157*_t208 + _t160*_t199 + _t179*_t35
+            + _t182*_t31 - _t184*_t29 + _t186*_t37 + _t188*_t52;
+    const trailer2_real_t _t236 = -_t235 + tau_right;
+    const trailer2_real_t _t237 = J_theta_cart2_left*_t168*_t234 + J_theta_cart2_right*_t166*_t221
+            + J_theta_cart_left*_t164*_t208 + J_theta_cart_right*_t162*_t199 + _t179*_t40
+            + _t182*_t33 + _t184*_t30 + _t186*_t42 + _t188*_t56;
+    const trailer2_real_t _t238 = -_t237 + tau_left;
+    const trailer2_real_t _t239 = J_theta_cart2_left*_t150*_t150 + J_theta_cart2_right*_t153*_t153
+            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t159*_t159 + J_theta_right
+            + _t144*_t35 + _t145*_t31 - _t146*_t29 + _t147*_t37 + _t148*_t52;
+    const trailer2_real_t _t240 = _t169 + _t170*_t35 - _t171*_t29 + _t172*_t31 + _t173*_t37
+            + _t174*_t52;
+    const trailer2_real_t _t241 = -_t189*_t240 + _t190*_t239;
+    const trailer2_real_t _t242 = TRAILER2_LIT(1.0)/_t241;
+    const trailer2_real_t _t243 = _t242*(-_t189*_t238 + _t190*_t236);
+    const trailer2_real_t _t244 = _t242*(-_t236*_t240 + _t238*_t239);
+    const trailer2_real_t _t245 = _t181 + _t243*_t31 + _t244*_t33;
+    const trailer2_real_t _t246 = -_t243*_t29 + _t244*_t30;
+    const trailer2_real_t _t247 = _t177 + _t243*_t37 + _t244*_t42;
+    const trailer2_real_t _t248 = _t178 + _t243*_t52 + _t244*_t56;
+    const trailer2_real_t _t249 = -J_x_tractor*_t245 - _t180 - _t246*_t63 - _t247*_t66 - _t248*_t69;
+    const trailer2_real_t _t250 = _t153*_t243 + _t166*_t244 + _t221;
+    const trailer2_real_t _t251 = -J_theta_cart2_right*_t250;
+    const trailer2_real_t _t252 = _t251*_t59;
+    const trailer2_real_t _t253 = _t150*_t243 + _t168*_t244 + _t234;
+    const trailer2_real_t _t254 = -J_theta_cart2_left*_t253;
+    const trailer2_real_t _t255 = _t254*_t60;
+    const trailer2_real_t _t256 = _t176 + _t243*_t35 + _t244*_t40;
+    const trailer2_real_t _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79
+            - _t247*_t82 - _t256*_t75;
+    const trailer2_real_t _t258 = _t252/TRAILER2_LIT(5.0) - _t255/TRAILER2_LIT(5.0) + _t257;
+    const trailer2_real_t _t259 = -TRAILER2_LIT(5.0)*_t258/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t260 = _t159*_t243 + _t162*_t244 + _t199;
+    const trailer2_real_t _t261 = -J_theta_cart_right*_t260;
+    const trailer2_real_t _t262 = _t261*_t49;
+    const trailer2_real_t _t263 = _t156*_t243 + _t164*_t244 + _t208;
+    const trailer2_real_t _t264 = -J_theta_cart_left*_t263;
+    const trailer2_real_t _t265 = _t264*_t50;
+    const trailer2_real_t _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82
+            - _t256*_t73;
+    const trailer2_real_t _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + _t262/TRAILER2_LIT(5.0)
+            - _t265/TRAILER2_LIT(5.0) + _t266;
+    const trailer2_real_t _t268 = -TRAILER2_LIT(5.0)*_t267/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265
+            + _t249 + _t259*_t9;
+    const trailer2_real_t _t270 = TRAILER2_LIT(500.0)*_t269/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75;
+    const trailer2_real_t _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9
+            + _t255*_t9 + _t271;
+    const trailer2_real_t _t273 = TRAILER2_LIT(500.0)*_t272/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77
+            - _t248*_t79 - _t256*_t71;
+    const trailer2_real_t _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255
+            - _t268*_t8 + _t274;
+    const trailer2_real_t _t276 = TRAILER2_LIT(500.0)*_t275/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t277 = _t25*_t273 + _t27*_t270;
+    const trailer2_real_t _t278 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(500.0);
+    const trailer2_real_t _t279 = -TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(500.0);
+    const trailer2_real_t _t280 = -_t270*_t278 - _t273*_t279;
+    const trailer2_real_t _t281 = _t280*_t280;
+    const trailer2_real_t _t282 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t283 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t284 = _t26*_t282;
+    const trailer2_real_t _t285 = _t28*_t282;
+    const trailer2_real_t _t286 = -_t1*_t285 - _t2*_t284 + _t282*_t8;
+    const trailer2_real_t _t287 = -TRAILER2_LIT(5.0)*_t286/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t288 = _t287/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t289 = _t1*_t284 + _t17*_t285 - _t18*_t282;
+    const trailer2_real_t _t290 = _t26*_t283;
+    const trailer2_real_t _t291 = _t28*_t283;
+    const trailer2_real_t _t292 = -_t1*_t291 - _t2*_t290 - _t283*_t8;
+    const trailer2_real_t _t293 = -TRAILER2_LIT(5.0)*_t292/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t294 = _t293/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t295 = _t1*_t290 + _t17*_t291 + _t18*_t283;
+    const trailer2_real_t _t296 = -_t10*_t285 - _t11*_t284 + _t13*_t282 - _t16*_t287;
+    const trailer2_real_t _t297 = -TRAILER2_LIT(5.0)*_t296/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t298 = _t297/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t299 = _t10*_t284 + _t19*_t285 - _t20*_t282 + _t22*_t287;
+    const trailer2_real_t _t300 = -_t10*_t291 - _t11*_t290 - _t13*_t283 - _t16*_t293;
+    const trailer2_real_t _t301 = -TRAILER2_LIT(5.0)*_t300/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t302 = _t301/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t303 = _t10*_t290 + _t19*_t291 + _t20*_t283 + _t22*_t293;
+    const trailer2_real_t _t304 = J_x_tractor*_t284 - _t282*_t71 + _t287*_t73 + _t297*_t75;
+    const trailer2_real_t _t305 = J_x_tractor*_t285 - _t282*_t63 + _t287*_t66 + _t297*_t69;
+    const trailer2_real_t _t306 = -J_theta_tractor*_t282 + _t284*_t71 + _t285*_t63 + _t287*_t77
+            + _t297*_t79;
+    const trailer2_real_t _t307 = J_theta_cart*_t287 - _t282*_t77 + _t284*_t73 + _t285*_t66
+            + _t297*_t82;
+    const trailer2_real_t _t308 = J_theta_cart2*_t297 - _t282*_t79 + _t284*_t75 + _t285*_t69
+            + _t287*_t82;
+    const trailer2_real_t _t309 = _t288 - _t289;
+    const trailer2_real_t _t310 = _t309*_t49;
+    const trailer2_real_t _t311 = _t294 - _t295;
+    const trailer2_real_t _t312 = _t311*_t49;
+    const trailer2_real_t _t313 = -_t288 - _t289;
+    const trailer2_real_t _t314 = _t313*_t50;
+    const trailer2_real_t _t315 = -_t294 - _t295;
+    const trailer2_real_t _t316 = _t315*_t50;
+    const trailer2_real_t _t317 = _t298 - _t299;
+    const trailer2_real_t _t318 = _t317*_t59;
+    const trailer2_real_t _t319 = _t302 - _t303;
+    const trailer2_real_t _t320 = _t319*_t59;
+    const trailer2_real_t _t321 = -_t298 - _t299;
+    const trailer2_real_t _t322 = _t321*_t60;
+    const trailer2_real_t _t323 = -_t302 - _t303;
+    const trailer2_real_t _t324 = _t323*_t60;
+    const trailer2_real_t _t325 = J_theta_cart2_left*_t322*_t324 + J_theta_cart2_right*_t318*_t320
+            + J_theta_cart_left*_t314*_t316 + J_theta_cart_right*_t310*_t312;
+    const trailer2_real_t _t326 = J_x_tractor*_t290 + _t283*_t71 + _t293*_t73 + _t301*_t75;
+    const trailer2_real_t _t327 = J_theta_tractor*_t283 + _t290*_t71 + _t291*_t63 + _t293*_t77
+            + _t301*_t79;
+    const trailer2_real_t _t328 = J_x_tractor*_t291 + _t283*_t63 + _t293*_t66 + _t301*_t69;
+    const trailer2_real_t _t329 = J_theta_cart*_t293 + _t283*_t77 + _t290*_t73 + _t291*_t66
+            + _t301*_t82;
+    const trailer2_real_t _t330 = J_theta_cart2*_t301 + _t283*_t79 + _t290*_t75 + _t291*_t69
+            + _t293*_t82;
+    const trailer2_real_t _t331 = _t276 - _t277;
+    const trailer2_real_t _t332 = -_t276 - _t277;
+    const trailer2_real_t _t333 = load_w0*mu_floor - TRAILER2_SQRT(_t281*share_w0*share_w0
+            + _t332*_t332);
+    const trailer2_real_t _t334 = load_w1*mu_floor - TRAILER2_SQRT(_t281*share_w1*share_w1
+            + _t331*_t331);
+    const trailer2_real_t _t335 = J_theta_cart2_left*_t322*_t322 + J_theta_cart2_right*_t318*_t318
+            + J_theta_cart_left*_t314*_t314 + J_theta_cart_right*_t310*_t310 + J_theta_right
+            - _t282*_t306 + _t284*_t304 + _t285*_t305 + _t287*_t307 + _t297*_t308;
+    const trailer2_real_t _t336 = _t283*_t306 + _t290*_t304 + _t291*_t305 + _t293*_t307
+            + _t301*_t308 + _t325;
+    const trailer2_real_t _t337 = -_t282*_t327 + _t284*_t326 + _t285*_t328 + _t287*_t329
+            + _t297*_t330 + _t325;
+    const trailer2_real_t _t338 = J_theta_cart2_left*_t324*_t324 + J_theta_cart2_right*_t320*_t320
+            + J_theta_cart_left*_t316*_t316 + J_theta_cart_right*_t312*_t312 + J_theta_left
+            + _t283*_t327 + _t290*_t326 + _t291*_t328 + _t293*_t329 + _t301*_t330;
+    if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart2_right > TRAILER2_LIT(0.0))) { /* radius_cart2_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_left > TRAILER2_LIT(0.0))) { /* radius_cart_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_right > TRAILER2_LIT(0.0))) { /* radius_cart_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_left > TRAILER2_LIT(0.0))) { /* radius_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_right > TRAILER2_LIT(0.0))) { /* radius_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart > TRAILER2_LIT(0.0))) { /* J_theta_cart > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2 > TRAILER2_LIT(0.0))) { /* J_theta_cart2 > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_left > TRAILER2_LIT(0.0))) { /* J_theta_cart2_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_right > TRAILER2_LIT(0.0))) { /* J_theta_cart2_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_left > TRAILER2_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_right > TRAILER2_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_left > TRAILER2_LIT(0.0))) { /* J_theta_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_right > TRAILER2_LIT(0.0))) { /* J_theta_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_tractor > TRAILER2_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(_t335 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(_t335*_t338 - _t336*_t337 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+                                                               model */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(mu_floor > TRAILER2_LIT(0.0))) { /* mu > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(load_w0 > TRAILER2_LIT(0.0))) { /* loads[0] > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(load_w1 > TRAILER2_LIT(0.0))) { /* loads[1] > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    const trailer2_real_t r_0 = _t333;
+    const trailer2_real_t r_1 = _t334;
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+        return TRAILER2_ERR_NONFINITE_OUTPUT;
+    }
+    margins[0] = r_0;
+    margins[1] = r_1;
+    return TRAILER2_OK;
+}
+
+/* trailer2_traction_check: documented in trailer2_model.h.
+   operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt */
+trailer2_status_t trailer2_traction_check(const trailer2_params_t *p, const trailer2_real_t *q,
+    const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, const trailer2_real_t *mu,
+    const trailer2_real_t *loads, const trailer2_real_t *shares, trailer2_real_t *margins)
+{
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t thetadot_right = wheel_rates[0];
+    const trailer2_real_t thetadot_left = wheel_rates[1];
+    const trailer2_real_t tau_right = tau[0];
+    const trailer2_real_t tau_left = tau[1];
+    const trailer2_real_t mu_floor = mu[0];
+    const trailer2_real_t load_w0 = loads[0];
+    const trailer2_real_t load_w1 = loads[1];
+    const trailer2_real_t share_w0 = shares[0];
+    const trailer2_real_t share_w1 = shares[1];
+    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
+            + (J_theta_cart2_left - J_theta_cart2_left)) + ((J_theta_cart2_right
+            - J_theta_cart2_right) + (J_theta_cart_left - J_theta_cart_left)))
+            + (((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))
+            + ((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))))
+            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + ((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
+            + (K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)))
+            + (((K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2)
+            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
+            + ((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
+            + (radius_cart2_left - radius_cart2_left))))) + ((((((radius_cart2_right
+            - radius_cart2_right) + (radius_cart_left - radius_cart_left))
+            + (radius_cart_right - radius_cart_right)) + ((radius_left - radius_left)
+            + (radius_right - radius_right))) + (((theta_tractor - theta_tractor)
+            + (theta_cart - theta_cart)) + ((theta_cart2 - theta_cart2)
+            + (thetadot_right - thetadot_right)))) + ((((thetadot_left - thetadot_left)
+            + (tau_right - tau_right)) + ((tau_left - tau_left) + (mu_floor - mu_floor)))
+            + (((load_w0 - load_w0) + (load_w1 - load_w1)) + ((share_w0 - share_w0)
+            + (share_w1 - share_w1)))))) != 0) {
+        return TRAILER2_ERR_NONFINITE_INPUT;
+    }
+    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
+    const trailer2_real_t _t1 = -_t0;
+    const trailer2_real_t _t2 = TRAILER2_COS(theta_cart);
+    const trailer2_real_t _t3 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t4 = TRAILER2_LIT(3.0)*_t3/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t6 = TRAILER2_LIT(3.0)*_t5/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t7 = _t0*_t4 + _t2*_t6;
+    const trailer2_real_t _t8 = -_t7;
+    const trailer2_real_t _t9 = TRAILER2_SIN(theta_cart2);
+    const trailer2_real_t _t10 = -_t9;
+    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t12 = _t11*_t6 + _t4*_t9;
+    const trailer2_real_t _t13 = -_t12;
+    const trailer2_real_t _t14 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t15 = TRAILER2_LIT(17.0)*_t0*_t9/TRAILER2_LIT(20.0) + _t14*_t2;
+    const trailer2_real_t _t16 = -_t15;
+    const trailer2_real_t _t17 = -_t2;
+    const trailer2_real_t _t18 = _t0*_t6 - _t2*_t4;
+    const trailer2_real_t _t19 = -_t11;
+    const trailer2_real_t _t20 = -_t11*_t4 + _t6*_t9;
+    const trailer2_real_t _t21 = _t0*_t14 - TRAILER2_LIT(17.0)*_t2*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t22 = -_t21;
+    const trailer2_real_t _t23 = -radius_right;
+    const trailer2_real_t _t24 = -radius_left;
+    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t26 = -_t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t28 = -_t27;
+    const trailer2_real_t _t29 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t30 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t31 = _t28*_t29;
+    const trailer2_real_t _t32 = _t1*_t31 - _t29*_t8;
+    const trailer2_real_t _t33 = _t28*_t30;
+    const trailer2_real_t _t34 = _t1*_t33 + _t30*_t8;
+    const trailer2_real_t _t35 = _t26*_t29;
+    const trailer2_real_t _t36 = -_t2*_t35 - _t32;
+    const trailer2_real_t _t37 = -TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = _t16*_t37;
+    const trailer2_real_t _t39 = _t10*_t31 - _t13*_t29;
+    const trailer2_real_t _t40 = _t26*_t30;
+    const trailer2_real_t _t41 = -_t2*_t40 - _t34;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t43 = _t16*_t42;
+    const trailer2_real_t _t44 = _t10*_t33 + _t13*_t30;
+    const trailer2_real_t _t45 = _t37/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29;
+    const trailer2_real_t _t47 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30;
+    const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t51 = -_t11*_t35 - _t38 - _t39;
+    const trailer2_real_t _t52 = -TRAILER2_LIT(5.0)*_t51/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t53 = _t52/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37;
+    const trailer2_real_t _t55 = -_t11*_t40 - _t43 - _t44;
+    const trailer2_real_t _t56 = -TRAILER2_LIT(5.0)*_t55/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t57 = _t56/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42;
+    const trailer2_real_t _t59 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t61 = K_theta_tractor_x_tractor*_t3;
+    const trailer2_real_t _t62 = K_theta_tractor_x_tractor_2*_t5;
+    const trailer2_real_t _t63 = _t61 + _t62;
+    const trailer2_real_t _t64 = K_theta_cart_x_tractor*_t0;
+    const trailer2_real_t _t65 = K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t66 = _t64 + _t65;
+    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t9;
+    const trailer2_real_t _t68 = K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t69 = _t67 + _t68;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor*_t5;
+    const trailer2_real_t _t71 = K_theta_tractor_x_tractor_2*_t3 - _t70;
+    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t2;
+    const trailer2_real_t _t73 = K_theta_cart_x_tractor_2*_t0 - _t72;
+    const trailer2_real_t _t74 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t75 = K_theta_cart2_x_tractor_2*_t9 - _t74;
+    const trailer2_real_t _t76 = K_theta_cart_x_tractor_2*_t0;
+    const trailer2_real_t _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76;
+    const trailer2_real_t _t78 = K_theta_cart2_x_tractor_2*_t9;
+    const trailer2_real_t _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78;
+    const trailer2_real_t _t80 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t81 = TRAILER2_LIT(17.0)*_t2/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81;
+    const trailer2_real_t _t83 = _t52*thetadot_right + _t56*thetadot_left;
+    const trailer2_real_t _t84 = _t83*_t83;
+    const trailer2_real_t _t85 = _t74*_t84;
+    const trailer2_real_t _t86 = _t37*thetadot_right + _t42*thetadot_left;
+    const trailer2_real_t _t87 = _t86*_t86;
+    const trailer2_real_t _t88 = -_t29*thetadot_right + _t30*thetadot_left;
+    const trailer2_real_t _t89 = _t88*_t88;
+    const trailer2_real_t _t90 = _t78*_t84;
+    const trailer2_real_t _t91 = _t76*_t87;
+    const trailer2_real_t _t92 = _t67*_t84;
+    const trailer2_real_t _t93 = _t68*_t84;
+    const trailer2_real_t _t94 = _t64*_t87;
+    const trailer2_real_t _t95 = _t65*_t87;
+    const trailer2_real_t _t96 = _t6*_t89;
+    const trailer2_real_t _t97 = _t4*_t89;
+    const trailer2_real_t _t98 = _t80*_t87;
+    const trailer2_real_t _t99 = _t81*_t87;
+    const trailer2_real_t _t100 = _t88*thetadot_right;
+    const trailer2_real_t _t101 = _t88*thetadot_left;
+    const trailer2_real_t _t102 = _t86*thetadot_right;
+    const trailer2_real_t _t103 = _t86*thetadot_left;
+    const trailer2_real_t _t104 = _t83*thetadot_right;
+    const trailer2_real_t _t105 = _t83*thetadot_left;
+    const trailer2_real_t _t106 = _t25*_t29;
+    const trailer2_real_t _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31;
+    const trailer2_real_t _t108 = -TRAILER2_LIT(5.0)*_t107/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t109 = _t108/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = _t106*_t17 + _t32;
+    const trailer2_real_t _t111 = _t25*_t30;
+    const trailer2_real_t _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33;
+    const trailer2_real_t _t113 = -TRAILER2_LIT(5.0)*_t112/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t114 = _t113/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t115 = _t111*_t17 + _t34;
+    const trailer2_real_t _t116 = TRAILER2_LIT(5.0)*_t46/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t117 = _t116/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7;
+    const trailer2_real_t _t119 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t120 = _t119/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7;
+    const trailer2_real_t _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29;
+    const trailer2_real_t _t123 = -TRAILER2_LIT(5.0)*_t122/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t124 = _t123/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t125 = _t106*_t19 + _t108*_t22 + _t39;
+    const trailer2_real_t _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30;
+    const trailer2_real_t _t127 = -TRAILER2_LIT(5.0)*_t126/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t128 = _t127/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t129 = _t111*_t19 + _t113*_t22 + _t44;
+    const trailer2_real_t _t130 = -_t116*_t16 - _t21*_t37;
+    const trailer2_real_t _t131 = -TRAILER2_LIT(5.0)*_t130/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t132 = _t131/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t133 = _t116*_t22 + _t38;
+    const trailer2_real_t _t134 = -_t119*_t16 - _t21*_t42;
+    const trailer2_real_t _t135 = -TRAILER2_LIT(5.0)*_t134/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t136 = _t135/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t137 = _t119*_t22 + _t43;
+    const trailer2_real_t _t138 = TRAILER2_LIT(5.0)*_t54/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t139 = _t138/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9;
+    const trailer2_real_t _t141 = TRAILER2_LIT(5.0)*_t58/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t142 = _t141/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9;
+    const trailer2_real_t _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75;
+    const trailer2_real_t _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69;
+    const trailer2_real_t _t146 = -J_theta_tractor*_t29 + _t31*_t63 + _t35*_t71 + _t37*_t77
+            + _t52*_t79;
+    const trailer2_real_t _t147 = J_theta_cart*_t37 - _t29*_t77 + _t31*_t66 + _t35*_t73 + _t52*_t82;
+    const trailer2_real_t _t148 = J_theta_cart2*_t52 - _t29*_t79 + _t31*_t69 + _t35*_t75
+            + _t37*_t82;
+    const trailer2_real_t _t149 = -_t53 - _t54;
+    const trailer2_real_t _t150 = _t149*_t60;
+    const trailer2_real_t _t151 = J_theta_cart2_left*_t150;
+    const trailer2_real_t _t152 = _t53 - _t54;
+    const trailer2_real_t _t153 = _t152*_t59;
+    const trailer2_real_t _t154 = J_theta_cart2_right*_t153;
+    const trailer2_real_t _t155 = -_t45 - _t46;
+    const trailer2_real_t _t156 = _t155*_t50;
+    const trailer2_real_t _t157 = J_theta_cart_left*_t156;
+    const trailer2_real_t _t158 = _t45 - _t46;
+    const trailer2_real_t _t159 = _t158*_t49;
+    const trailer2_real_t _t160 = J_theta_cart_right*_t159;
+    const trailer2_real_t _t161 = _t47 - _t48;
+    const trailer2_real_t _t162 = _t161*_t49;
+    const trailer2_real_t _t163 = -_t47 - _t48;
+    const trailer2_real_t _t164 = _t163*_t50;
+    const trailer2_real_t _t165 = _t57 - _t58;
+    const trailer2_real_t _t166 = _t165*_t59;
+    const trailer2_real_t _t167 = -_t57 - _t58;
+    const trailer2_real_t _t168 = _t167*_t60;
+    const trailer2_real_t _t169 = _t151*_t168 + _t154*_t166 + _t157*_t164 + _t160*_t162;
+    const trailer2_real_t _t170 = J_x_tractor*_t40 + _t30*_t71 + _t42*_t73 + _t56*_t75;
+    const trailer2_real_t _t171 = J_theta_tractor*_t30 + _t33*_t63 + _t40*_t71 + _t42*_t77
+            + _t56*_t79;
+    const trailer2_real_t _t172 = J_x_tractor*_t33 + _t30*_t63 + _t42*_t66 + _t56*_t69;
+    const trailer2_real_t _t173 = J_theta_cart*_t42 + _t30*_t77 + _t33*_t66 + _t40*_t73 + _t56*_t82;
+    const trailer2_real_t _t174 = J_theta_cart2*_t56 + _t30*_t79 + _t33*_t69 + _t40*_t75
+            + _t42*_t82;
+    const trailer2_real_t _t175 = _t61*_t89 + _t62*_t89 + _t92 + _t93 + _t94 + _t95;
+    const trailer2_real_t _t176 = _t100*_t31 + _t101*_t33;
+    const trailer2_real_t _t177 = _t100*_t108 + _t101*_t113 + _t102*_t116 + _t103*_t119;
+    const trailer2_real_t _t178 = _t100*_t123 + _t101*_t127 + _t102*_t131 + _t103*_t135
+            + _t104*_t138 + _t105*_t141;
+    const trailer2_real_t _t179 = J_x_tractor*_t176 + _t175 + _t177*_t73 + _t178*_t75;
+    const trailer2_real_t _t180 = -K_theta_tractor_x_tractor_2*_t3*_t89 + _t70*_t89 + _t72*_t87
+            + _t85 - _t90 - _t91;
+    const trailer2_real_t _t181 = _t100*_t106 + _t101*_t111;
+    const trailer2_real_t _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180;
+    const trailer2_real_t _t183 =
+            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t3*_t84/TRAILER2_LIT(10.0)
+            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t87/TRAILER2_LIT(10.0) - _t4*_t90
+            - _t4*_t91 - _t6*_t92 - _t6*_t93 - _t6*_t94 - _t6*_t95;
+    const trailer2_real_t _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183;
+    const trailer2_real_t _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85
+            - _t80*_t90 - _t81*_t92 - _t81*_t93;
+    const trailer2_real_t _t186 = J_theta_cart*_t177 + _t176*_t73 + _t178*_t82 + _t181*_t66 + _t185;
+    const trailer2_real_t _t187 = _t67*_t96 + _t67*_t99 + _t68*_t96 + _t68*_t99 - _t74*_t97
+            - _t74*_t98 + _t78*_t97 + _t78*_t98;
+    const trailer2_real_t _t188 = J_theta_cart2*_t178 + _t176*_t75 + _t177*_t82 + _t181*_t69
+            + _t187;
+    const trailer2_real_t _t189 = _t144*_t40 + _t145*_t33 + _t146*_t30 + _t147*_t42 + _t148*_t56
+            + _t169;
+    const trailer2_real_t _t190 = J_theta_cart2_left*_t168*_t168 + J_theta_cart2_right*_t166*_t166
+            + J_theta_cart_left*_t164*_t164 + J_theta_cart_right*_t162*_t162 + J_theta_left
+            + _t170*_t40 + _t171*_t30 + _t172*_t33 + _t173*_t42 + _t174*_t56;
+    const trailer2_real_t _t191 = _t109 - _t110;
+    const trailer2_real_t _t192 = _t191*_t49;
+    const trailer2_real_t _t193 = _t114 - _t115;
+    const trailer2_real_t _t194 = _t193*_t49;
+    const trailer2_real_t _t195 = _t117 - _t118;
+    const trailer2_real_t _t196 = _t195*_t49;
+    const trailer2_real_t _t197 = _t120 - _t121;
+    const trailer2_real_t _t198 = _t197*_t49;
+    const trailer2_real_t _t199 = _t100*_t192 + _t101*_t194 + _t102*_t196 + _t103*_t198;
+    const trailer2_real_t _t200 = -_t109 - _t110;
+    const trailer2_real_t _t201 = _t200*_t50;
+    const trailer2_real_t _t202 = -_t114 - _t115;
+    const trailer2_real_t _t203 = _t202*_t50;
+    const trailer2_real_t _t204 = -_t117 - _t118;
+    const trailer2_real_t _t205 = _t204*_t50;
+    const trailer2_real_t _t206 = -_t120 - _t121;
+    const trailer2_real_t _t207 = _t206*_t50;
+    const trailer2_real_t _t208 = _t100*_t201 + _t101*_t203 + _t102*_t205 + _t103*_t207;
+    const trailer2_real_t _t209 = _t124 - _t125;
+    const trailer2_real_t _t210 = _t209*_t59;
+    const trailer2_real_t _t211 = _t128 - _t129;
+    const trailer2_real_t _t212 = _t211*_t59;
+    const trailer2_real_t _t213 = _t132 - _t133;
+    const trailer2_real_t _t214 = _t213*_t59;
+    const trailer2_real_t _t215 = _t136 - _t137;
+    const trailer2_real_t _t216 = _t215*_t59;
+    const trailer2_real_t _t217 = _t139 - _t140;
+    const trailer2_real_t _t218 = _t217*_t59;
+    const trailer2_real_t _t219 = _t142 - _t143;
+    const trailer2_real_t _t220 = _t219*_t59;
+    const trailer2_real_t _t221 = _t100*_t210 + _t101*_t212 + _t102*_t214 + _t103*_t216
+            + _t104*_t218 + _t105*_t220;
+    const trailer2_real_t _t222 = -_t124 - _t125;
+    const trailer2_real_t _t223 = _t222*_t60;
+    const trailer2_real_t _t224 = -_t128 - _t129;
+    const trailer2_real_t _t225 = _t224*_t60;
+    const trailer2_real_t _t226 = -_t132 - _t133;
+    const trailer2_real_t _t227 = _t226*_t60;
+    const trailer2_real_t _t228 = -_t136 - _t137;
+    const trailer2_real_t _t229 = _t228*_t60;
+    const trailer2_real_t _t230 = -_t139 - _t140;
+    const trailer2_real_t _t231 = _t230*_t60;
+    const trailer2_real_t _t232 = -_t142 - _t143;
+    const trailer2_real_t _t233 = _t232*_t60;
+    const trailer2_real_t _t234 = _t100*_t223 + _t101*_t225 + _t102*_t227 + _t103*_t229
+            + _t104*_t231 + _t105*_t233;
+    const trailer2_real_t _t235 = _t151*_t234 + _t154*_t221 + _t157*_t208 + _t160*_t199 + _t179*_t35
+            + _t182*_t31 - _t184*_t29 + _t186*_t37 + _t188*_t52;
+    const trailer2_real_t _t236 = -_t235 + tau_right;
+    const trailer2_real_t _t237 = J_theta_cart2_left*_t168*_t234 + J_theta_cart2_right*_t166*_t221
+            + J_theta_cart_left*_t164*_t208 + J_theta_cart_right*_t162*_t199 + _t179*_t40
+            + _t182*_t33 + _t184*_t30 + _t186*_t42 + _t188*_t56;
+    const trailer2_real_t _t238 = -_t237 + tau_left;
+    const trailer2_real_t _t239 = J_theta_cart2_left*_t150*_t150 + J_theta_cart2_right*_t153*_t153
+            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t159*_t159 + J_theta_right
+            + _t144*_t35 + _t145*_t31 - _t146*_t29 + _t147*_t37 + _t148*_t52;
+    const trailer2_real_t _t240 = _t169 + _t170*_t35 - _t171*_t29 + _t172*_t31 + _t173*_t37
+            + _t174*_t52;
+    const trailer2_real_t _t241 = -_t189*_t240 + _t190*_t239;
+    const trailer2_real_t _t242 = TRAILER2_LIT(1.0)/_t241;
+    const trailer2_real_t _t243 = _t242*(-_t189*_t238 + _t190*_t236);
+    const trailer2_real_t _t244 = _t242*(-_t236*_t240 + _t238*_t239);
+    const trailer2_real_t _t245 = _t181 + _t243*_t31 + _t244*_t33;
+    const trailer2_real_t _t246 = -_t243*_t29 + _t244*_t30;
+    const trailer2_real_t _t247 = _t177 + _t243*_t37 + _t244*_t42;
+    const trailer2_real_t _t248 = _t178 + _t243*_t52 + _t244*_t56;
+    const trailer2_real_t _t249 = -J_x_tractor*_t245 - _t180 - _t246*_t63 - _t247*_t66 - _t248*_t69;
+    const trailer2_real_t _t250 = _t153*_t243 + _t166*_t244 + _t221;
+    const trailer2_real_t _t251 = -J_theta_cart2_right*_t250;
+    const trailer2_real_t _t252 = _t251*_t59;
+    const trailer2_real_t _t253 = _t150*_t243 + _t168*_t244 + _t234;
+    const trailer2_real_t _t254 = -J_theta_cart2_left*_t253;
+    const trailer2_real_t _t255 = _t254*_t60;
+    const trailer2_real_t _t256 = _t176 + _t243*_t35 + _t244*_t40;
+    const trailer2_real_t _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79
+            - _t247*_t82 - _t256*_t75;
+    const trailer2_real_t _t258 = _t252/TRAILER2_LIT(5.0) - _t255/TRAILER2_LIT(5.0) + _t257;
+    const trailer2_real_t _t259 = -TRAILER2_LIT(5.0)*_t258/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t260 = _t159*_t243 + _t162*_t244 + _t199;
+    const trailer2_real_t _t261 = -J_theta_cart_right*_t260;
+    const trailer2_real_t _t262 = _t261*_t49;
+    const trailer2_real_t _t263 = _t156*_t243 + _t164*_t244 + _t208;
+    const trailer2_real_t _t264 = -J_theta_cart_left*_t263;
+    const trailer2_real_t _t265 = _t264*_t50;
+    const trailer2_real_t _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82
+            - _t256*_t73;
+    const trailer2_real_t _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + _t262/TRAILER2_LIT(5.0)
+            - _t265/TRAILER2_LIT(5.0) + _t266;
+    const trailer2_real_t _t268 = -TRAILER2_LIT(5.0)*_t267/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265
+            + _t249 + _t259*_t9;
+    const trailer2_real_t _t270 = TRAILER2_LIT(500.0)*_t269/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75;
+    const trailer2_real_t _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9
+            + _t255*_t9 + _t271;
+    const trailer2_real_t _t273 = TRAILER2_LIT(500.0)*_t272/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77
+            - _t248*_t79 - _t256*_t71;
+    const trailer2_real_t _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255
+            - _t268*_t8 + _t274;
+    const trailer2_real_t _t276 = TRAILER2_LIT(500.0)*_t275/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t277 = _t25*_t273 + _t27*_t270;
+    const trailer2_real_t _t278 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(500.0);
+    const trailer2_real_t _t279 = -TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(500.0);
+    const trailer2_real_t _t280 = -_t270*_t278 - _t273*_t279;
+    const trailer2_real_t _t281 = _t280*_t280;
+    const trailer2_real_t _t282 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t283 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t284 = _t26*_t282;
+    const trailer2_real_t _t285 = _t28*_t282;
+    const trailer2_real_t _t286 = -_t1*_t285 - _t2*_t284 + _t282*_t8;
+    const trailer2_real_t _t287 = -TRAILER2_LIT(5.0)*_t286/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t288 = _t287/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t289 = _t1*_t284 + _t17*_t285 - _t18*_t282;
+    const trailer2_real_t _t290 = _t26*_t283;
+    const trailer2_real_t _t291 = _t28*_t283;
+    const trailer2_real_t _t292 = -_t1*_t291 - _t2*_t290 - _t283*_t8;
+    const trailer2_real_t _t293 = -TRAILER2_LIT(5.0)*_t292/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t294 = _t293/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t295 = _t1*_t290 + _t17*_t291 + _t18*_t283;
+    const trailer2_real_t _t296 = -_t10*_t285 - _t11*_t284 + _t13*_t282 - _t16*_t287;
+    const trailer2_real_t _t297 = -TRAILER2_LIT(5.0)*_t296/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t298 = _t297/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t299 = _t10*_t284 + _t19*_t285 - _t20*_t282 + _t22*_t287;
+    const trailer2_real_t _t300 = -_t10*_t291 - _t11*_t290 - _t13*_t283 - _t16*_t293;
+    const trailer2_real_t _t301 = -TRAILER2_LIT(5.0)*_t300/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t302 = _t301/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t303 = _t10*_t290 + _t19*_t291 + _t20*_t283 + _t22*_t293;
+    const trailer2_real_t _t304 = J_x_tractor*_t284 - _t282*_t71 + _t287*_t73 + _t297*_t75;
+    const trailer2_real_t _t305 = J_x_tractor*_t285 - _t282*_t63 + _t287*_t66 + _t297*_t69;
+    const trailer2_real_t _t306 = -J_theta_tractor*_t282 + _t284*_t71 + _t285*_t63 + _t287*_t77
+            + _t297*_t79;
+    const trailer2_real_t _t307 = J_theta_cart*_t287 - _t282*_t77 + _t284*_t73 + _t285*_t66
+            + _t297*_t82;
+    const trailer2_real_t _t308 = J_theta_cart2*_t297 - _t282*_t79 + _t284*_t75 + _t285*_t69
+            + _t287*_t82;
+    const trailer2_real_t _t309 = _t288 - _t289;
+    const trailer2_real_t _t310 = _t309*_t49;
+    const trailer2_real_t _t311 = _t294 - _t295;
+    const trailer2_real_t _t312 = _t311*_t49;
+    const trailer2_real_t _t313 = -_t288 - _t289;
+    const trailer2_real_t _t314 = _t313*_t50;
+    const trailer2_real_t _t315 = -_t294 - _t295;
+    const trailer2_real_t _t316 = _t315*_t50;
+    const trailer2_real_t _t317 = _t298 - _t299;
+    const trailer2_real_t _t318 = _t317*_t59;
+    const trailer2_real_t _t319 = _t302 - _t303;
+    const trailer2_real_t _t320 = _t319*_t59;
+    const trailer2_real_t _t321 = -_t298 - _t299;
+    const trailer2_real_t _t322 = _t321*_t60;
+    const trailer2_real_t _t323 = -_t302 - _t303;
+    const trailer2_real_t _t324 = _t323*_t60;
+    const trailer2_real_t _t325 = J_theta_cart2_left*_t322*_t324 + J_theta_cart2_right*_t318*_t320
+            + J_theta_cart_left*_t314*_t316 + J_theta_cart_right*_t310*_t312;
+    const trailer2_real_t _t326 = J_x_tractor*_t290 + _t283*_t71 + _t293*_t73 + _t301*_t75;
+    const trailer2_real_t _t327 = J_theta_tractor*_t283 + _t290*_t71 + _t291*_t63 + _t293*_t77
+            + _t301*_t79;
+    const trailer2_real_t _t328 = J_x_tractor*_t291 + _t283*_t63 + _t293*_t66 + _t301*_t69;
+    const trailer2_real_t _t329 = J_theta_cart*_t293 + _t283*_t77 + _t290*_t73 + _t291*_t66
+            + _t301*_t82;
+    const trailer2_real_t _t330 = J_theta_cart2*_t301 + _t283*_t79 + _t290*_t75 + _t291*_t69
+            + _t293*_t82;
+    const trailer2_real_t _t331 = _t276 - _t277;
+    const trailer2_real_t _t332 = -_t276 - _t277;
+    const trailer2_real_t _t333 = load_w0*mu_floor - TRAILER2_SQRT(_t281*share_w0*share_w0
+            + _t332*_t332);
+    const trailer2_real_t _t334 = load_w1*mu_floor - TRAILER2_SQRT(_t281*share_w1*share_w1
+            + _t331*_t331);
+    const trailer2_real_t _t335 = J_theta_cart2_left*_t322*_t322 + J_theta_cart2_right*_t318*_t318
+            + J_theta_cart_left*_t314*_t314 + J_theta_cart_right*_t310*_t310 + J_theta_right
+            - _t282*_t306 + _t284*_t304 + _t285*_t305 + _t287*_t307 + _t297*_t308;
+    const trailer2_real_t _t336 = _t283*_t306 + _t290*_t304 + _t291*_t305 + _t293*_t307
+            + _t301*_t308 + _t325;
+    const trailer2_real_t _t337 = -_t282*_t327 + _t284*_t326 + _t285*_t328 + _t287*_t329
+            + _t297*_t330 + _t325;
+    const trailer2_real_t _t338 = J_theta_cart2_left*_t324*_t324 + J_theta_cart2_right*_t320*_t320
+            + J_theta_cart_left*_t316*_t316 + J_theta_cart_right*_t312*_t312 + J_theta_left
+            + _t283*_t327 + _t290*_t326 + _t291*_t328 + _t293*_t329 + _t301*_t330;
+    if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart2_right > TRAILER2_LIT(0.0))) { /* radius_cart2_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_left > TRAILER2_LIT(0.0))) { /* radius_cart_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_right > TRAILER2_LIT(0.0))) { /* radius_cart_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_left > TRAILER2_LIT(0.0))) { /* radius_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(radius_right > TRAILER2_LIT(0.0))) { /* radius_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart > TRAILER2_LIT(0.0))) { /* J_theta_cart > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2 > TRAILER2_LIT(0.0))) { /* J_theta_cart2 > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_left > TRAILER2_LIT(0.0))) { /* J_theta_cart2_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_right > TRAILER2_LIT(0.0))) { /* J_theta_cart2_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_left > TRAILER2_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_right > TRAILER2_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_left > TRAILER2_LIT(0.0))) { /* J_theta_left > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_right > TRAILER2_LIT(0.0))) { /* J_theta_right > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_tractor > TRAILER2_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(_t335 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(_t335*_t338 - _t336*_t337 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+                                                               model */
+        return TRAILER2_ERR_BAD_PARAMS;
+    }
+    if (!(mu_floor > TRAILER2_LIT(0.0))) { /* mu > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(load_w0 > TRAILER2_LIT(0.0))) { /* loads[0] > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(load_w1 > TRAILER2_LIT(0.0))) { /* loads[1] > 0 */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(_t333 > TRAILER2_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+        return TRAILER2_WARN_TRACTION;
+    }
+    if (!(_t334 > TRAILER2_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+        return TRAILER2_WARN_TRACTION;
+    }
+    const trailer2_real_t r_0 = _t333;
+    const trailer2_real_t r_1 = _t334;
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+        return TRAILER2_ERR_NONFINITE_OUTPUT;
+    }
+    margins[0] = r_0;
+    margins[1] = r_1;
+    return TRAILER2_OK;
+}

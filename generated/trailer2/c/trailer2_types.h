@@ -19,7 +19,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x77216ec8u
+#define TRAILER2_CODE_ID 0x9c545b39u
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;
@@ -293,6 +293,8 @@ extern "C" {
 typedef enum {
     TRAILER2_OK = 0, /* success */
     TRAILER2_WARN_SATURATED = 1, /* success, but a torque was clipped to the limit */
+    TRAILER2_WARN_TRACTION = 2, /* traction_check: a driven wheel's traction margin is <= 0 (it
+                                   slips) */
     TRAILER2_ERR_NULL_POINTER = -1, /* a pointer argument is NULL */
     TRAILER2_ERR_NONFINITE_INPUT = -2, /* an input is NaN or infinite */
     TRAILER2_ERR_BAD_PARAMS = -3, /* robot parameters do not give a valid model */
@@ -314,8 +316,9 @@ typedef enum {
     TRAILER2_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                          rate_window is outside [0, h] */
     TRAILER2_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
-    TRAILER2_ERR_CONFIG_CHANGED = -19 /* the configuration differs from the one given to _init (any
-                                         bit of any value) */
+    TRAILER2_ERR_CONFIG_CHANGED = -19, /* the configuration differs from the one given to _init (any
+                                          bit of any value) */
+    TRAILER2_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0 */
 } trailer2_status_t;
 
 /* the eleven coordinates of (14), tau = B^T u: not generated for this robot

@@ -5038,3 +5038,1511 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     lateral[3] = r_5;
     return TRAILER3_OK;
 }
+
+/* trailer3_traction_margins: documented in trailer3_model.h.
+   operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt */
+trailer3_status_t trailer3_traction_margins(const trailer3_params_t *p, const trailer3_real_t *q,
+    const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, const trailer3_real_t *mu,
+    const trailer3_real_t *loads, const trailer3_real_t *shares, trailer3_real_t *margins)
+{
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t thetadot_right = wheel_rates[0];
+    const trailer3_real_t thetadot_left = wheel_rates[1];
+    const trailer3_real_t tau_right = tau[0];
+    const trailer3_real_t tau_left = tau[1];
+    const trailer3_real_t mu_floor = mu[0];
+    const trailer3_real_t load_w0 = loads[0];
+    const trailer3_real_t load_w1 = loads[1];
+    const trailer3_real_t share_w0 = shares[0];
+    const trailer3_real_t share_w1 = shares[1];
+    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
+            + (J_theta_cart2_left - J_theta_cart2_left)) + (((J_theta_cart2_right
+            - J_theta_cart2_right) + (J_theta_cart3 - J_theta_cart3))
+            + (J_theta_cart3_left - J_theta_cart3_left))) + ((((J_theta_cart3_right
+            - J_theta_cart3_right) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + ((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)))) + (((((J_theta_tractor - J_theta_tractor)
+            + (J_x_tractor - J_x_tractor)) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + ((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
+            + (K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)))
+            + ((((K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2)
+            + (K_theta_cart3_x_tractor - K_theta_cart3_x_tractor))
+            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)))))
+            + ((((((radius_cart2_left - radius_cart2_left) + (radius_cart2_right
+            - radius_cart2_right)) + (radius_cart3_left - radius_cart3_left))
+            + (((radius_cart3_right - radius_cart3_right) + (radius_cart_left - radius_cart_left))
+            + (radius_cart_right - radius_cart_right))) + ((((radius_left - radius_left)
+            + (radius_right - radius_right)) + (theta_tractor - theta_tractor))
+            + ((theta_cart - theta_cart) + (theta_cart2 - theta_cart2))))
+            + (((((theta_cart3 - theta_cart3) + (thetadot_right - thetadot_right))
+            + (thetadot_left - thetadot_left)) + ((tau_right - tau_right) + (tau_left - tau_left)))
+            + ((((mu_floor - mu_floor) + (load_w0 - load_w0)) + (load_w1 - load_w1))
+            + ((share_w0 - share_w0) + (share_w1 - share_w1)))))) != 0) {
+        return TRAILER3_ERR_NONFINITE_INPUT;
+    }
+    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
+    const trailer3_real_t _t1 = -_t0;
+    const trailer3_real_t _t2 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t _t3 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t4 = TRAILER3_LIT(3.0)*_t3/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t6 = TRAILER3_LIT(3.0)*_t5/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t7 = _t0*_t4 + _t2*_t6;
+    const trailer3_real_t _t8 = -_t7;
+    const trailer3_real_t _t9 = TRAILER3_SIN(theta_cart2);
+    const trailer3_real_t _t10 = -_t9;
+    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t12 = _t11*_t6 + _t4*_t9;
+    const trailer3_real_t _t13 = -_t12;
+    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t16 = _t11*_t15 + _t14*_t9;
+    const trailer3_real_t _t17 = -_t16;
+    const trailer3_real_t _t18 = TRAILER3_SIN(theta_cart3);
+    const trailer3_real_t _t19 = -_t18;
+    const trailer3_real_t _t20 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t21 = _t18*_t4 + _t20*_t6;
+    const trailer3_real_t _t22 = -_t21;
+    const trailer3_real_t _t23 = _t14*_t18 + _t15*_t20;
+    const trailer3_real_t _t24 = -_t23;
+    const trailer3_real_t _t25 = TRAILER3_LIT(17.0)*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = _t11*_t25 + TRAILER3_LIT(17.0)*_t18*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t27 = -_t26;
+    const trailer3_real_t _t28 = -_t2;
+    const trailer3_real_t _t29 = _t0*_t6 - _t2*_t4;
+    const trailer3_real_t _t30 = -_t11;
+    const trailer3_real_t _t31 = -_t11*_t4 + _t6*_t9;
+    const trailer3_real_t _t32 = _t11*_t14 - TRAILER3_LIT(17.0)*_t2*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t33 = -_t32;
+    const trailer3_real_t _t34 = -_t20;
+    const trailer3_real_t _t35 = _t18*_t6 - _t20*_t4;
+    const trailer3_real_t _t36 = _t14*_t20 - TRAILER3_LIT(17.0)*_t18*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t37 = -_t36;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(17.0)*_t11*_t18/TRAILER3_LIT(20.0) + _t25*_t9;
+    const trailer3_real_t _t39 = -_t38;
+    const trailer3_real_t _t40 = -radius_right;
+    const trailer3_real_t _t41 = -radius_left;
+    const trailer3_real_t _t42 = TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t43 = -_t42;
+    const trailer3_real_t _t44 = -TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t45 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t46 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t47 = _t44*_t45;
+    const trailer3_real_t _t48 = _t1*_t47 - _t45*_t8;
+    const trailer3_real_t _t49 = _t44*_t46;
+    const trailer3_real_t _t50 = _t1*_t49 + _t46*_t8;
+    const trailer3_real_t _t51 = _t43*_t45;
+    const trailer3_real_t _t52 = -_t2*_t51 - _t48;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(5.0)*_t52/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = _t17*_t53;
+    const trailer3_real_t _t55 = _t10*_t47 - _t13*_t45;
+    const trailer3_real_t _t56 = _t43*_t46;
+    const trailer3_real_t _t57 = -_t2*_t56 - _t50;
+    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t59 = _t17*_t58;
+    const trailer3_real_t _t60 = _t10*_t49 + _t13*_t46;
+    const trailer3_real_t _t61 = -_t11*_t51 - _t54 - _t55;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = _t27*_t62;
+    const trailer3_real_t _t64 = _t24*_t53;
+    const trailer3_real_t _t65 = _t19*_t47 - _t22*_t45;
+    const trailer3_real_t _t66 = -_t11*_t56 - _t59 - _t60;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(5.0)*_t66/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t68 = _t27*_t67;
+    const trailer3_real_t _t69 = _t24*_t58;
+    const trailer3_real_t _t70 = _t19*_t49 + _t22*_t46;
+    const trailer3_real_t _t71 = _t53/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45;
+    const trailer3_real_t _t73 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46;
+    const trailer3_real_t _t75 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t77 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53;
+    const trailer3_real_t _t79 = _t67/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t82 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t83 = -_t20*_t51 - _t63 - _t64 - _t65;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(5.0)*_t83/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t85 = _t84/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62;
+    const trailer3_real_t _t87 = -_t20*_t56 - _t68 - _t69 - _t70;
+    const trailer3_real_t _t88 = -TRAILER3_LIT(5.0)*_t87/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t89 = _t88/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67;
+    const trailer3_real_t _t91 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t92 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t93 = K_theta_tractor_x_tractor*_t3;
+    const trailer3_real_t _t94 = K_theta_tractor_x_tractor_2*_t5;
+    const trailer3_real_t _t95 = _t93 + _t94;
+    const trailer3_real_t _t96 = K_theta_cart_x_tractor*_t0;
+    const trailer3_real_t _t97 = K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t98 = _t96 + _t97;
+    const trailer3_real_t _t99 = K_theta_cart2_x_tractor*_t9;
+    const trailer3_real_t _t100 = K_theta_cart2_x_tractor_2*_t11;
+    const trailer3_real_t _t101 = _t100 + _t99;
+    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t103 = K_theta_cart3_x_tractor_2*_t20;
+    const trailer3_real_t _t104 = _t102 + _t103;
+    const trailer3_real_t _t105 = K_theta_tractor_x_tractor*_t5;
+    const trailer3_real_t _t106 = K_theta_tractor_x_tractor_2*_t3 - _t105;
+    const trailer3_real_t _t107 = K_theta_cart_x_tractor*_t2;
+    const trailer3_real_t _t108 = K_theta_cart_x_tractor_2*_t0 - _t107;
+    const trailer3_real_t _t109 = K_theta_cart2_x_tractor*_t11;
+    const trailer3_real_t _t110 = K_theta_cart2_x_tractor_2*_t9 - _t109;
+    const trailer3_real_t _t111 = K_theta_cart3_x_tractor*_t20;
+    const trailer3_real_t _t112 = K_theta_cart3_x_tractor_2*_t18 - _t111;
+    const trailer3_real_t _t113 = K_theta_cart_x_tractor_2*_t0;
+    const trailer3_real_t _t114 = _t107*_t6 - _t113*_t6 + _t4*_t96 + _t4*_t97;
+    const trailer3_real_t _t115 = K_theta_cart2_x_tractor_2*_t9;
+    const trailer3_real_t _t116 = _t100*_t4 + _t109*_t6 - _t115*_t6 + _t4*_t99;
+    const trailer3_real_t _t117 = K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6;
+    const trailer3_real_t _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99;
+    const trailer3_real_t _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15;
+    const trailer3_real_t _t121 = TRAILER3_LIT(17.0)*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t122 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122;
+    const trailer3_real_t _t124 = _t62*thetadot_right + _t67*thetadot_left;
+    const trailer3_real_t _t125 = _t124*_t124;
+    const trailer3_real_t _t126 = _t84*thetadot_right + _t88*thetadot_left;
+    const trailer3_real_t _t127 = _t126*_t126;
+    const trailer3_real_t _t128 = _t111*_t127;
+    const trailer3_real_t _t129 = _t53*thetadot_right + _t58*thetadot_left;
+    const trailer3_real_t _t130 = _t129*_t129;
+    const trailer3_real_t _t131 = -_t45*thetadot_right + _t46*thetadot_left;
+    const trailer3_real_t _t132 = _t131*_t131;
+    const trailer3_real_t _t133 = _t115*_t125;
+    const trailer3_real_t _t134 = _t117*_t127;
+    const trailer3_real_t _t135 = _t113*_t130;
+    const trailer3_real_t _t136 = _t125*_t99;
+    const trailer3_real_t _t137 = _t100*_t125;
+    const trailer3_real_t _t138 = _t102*_t127;
+    const trailer3_real_t _t139 = _t103*_t127;
+    const trailer3_real_t _t140 = _t130*_t96;
+    const trailer3_real_t _t141 = _t130*_t97;
+    const trailer3_real_t _t142 = _t132*_t4;
+    const trailer3_real_t _t143 = _t132*_t6;
+    const trailer3_real_t _t144 = _t130*_t14;
+    const trailer3_real_t _t145 = _t130*_t15;
+    const trailer3_real_t _t146 = _t121*_t125;
+    const trailer3_real_t _t147 = _t122*_t125;
+    const trailer3_real_t _t148 = _t131*thetadot_right;
+    const trailer3_real_t _t149 = _t131*thetadot_left;
+    const trailer3_real_t _t150 = _t129*thetadot_right;
+    const trailer3_real_t _t151 = _t129*thetadot_left;
+    const trailer3_real_t _t152 = _t124*thetadot_right;
+    const trailer3_real_t _t153 = _t124*thetadot_left;
+    const trailer3_real_t _t154 = _t126*thetadot_right;
+    const trailer3_real_t _t155 = _t126*thetadot_left;
+    const trailer3_real_t _t156 = _t42*_t45;
+    const trailer3_real_t _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45;
+    const trailer3_real_t _t158 = -TRAILER3_LIT(5.0)*_t157/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t159 = _t158/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t160 = _t156*_t28 + _t48;
+    const trailer3_real_t _t161 = _t42*_t46;
+    const trailer3_real_t _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46;
+    const trailer3_real_t _t163 = -TRAILER3_LIT(5.0)*_t162/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t164 = _t163/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t165 = _t161*_t28 + _t50;
+    const trailer3_real_t _t166 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t167 = _t166/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7;
+    const trailer3_real_t _t169 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t170 = _t169/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7;
+    const trailer3_real_t _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45;
+    const trailer3_real_t _t173 = -TRAILER3_LIT(5.0)*_t172/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t174 = _t173/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = _t156*_t30 + _t158*_t33 + _t55;
+    const trailer3_real_t _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46;
+    const trailer3_real_t _t177 = -TRAILER3_LIT(5.0)*_t176/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t178 = _t177/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = _t161*_t30 + _t163*_t33 + _t60;
+    const trailer3_real_t _t180 = -_t166*_t17 - _t32*_t53;
+    const trailer3_real_t _t181 = -TRAILER3_LIT(5.0)*_t180/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t182 = _t181/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = _t166*_t33 + _t54;
+    const trailer3_real_t _t184 = -_t169*_t17 - _t32*_t58;
+    const trailer3_real_t _t185 = -TRAILER3_LIT(5.0)*_t184/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t186 = _t185/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = _t169*_t33 + _t59;
+    const trailer3_real_t _t188 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t189 = _t188/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9;
+    const trailer3_real_t _t191 = TRAILER3_LIT(5.0)*_t80/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9;
+    const trailer3_real_t _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45;
+    const trailer3_real_t _t195 = -TRAILER3_LIT(5.0)*_t194/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t196 = _t195/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65;
+    const trailer3_real_t _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46;
+    const trailer3_real_t _t199 = -TRAILER3_LIT(5.0)*_t198/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t200 = _t199/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70;
+    const trailer3_real_t _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53;
+    const trailer3_real_t _t203 = -TRAILER3_LIT(5.0)*_t202/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t204 = _t203/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t205 = _t166*_t37 + _t181*_t39 + _t64;
+    const trailer3_real_t _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58;
+    const trailer3_real_t _t207 = -TRAILER3_LIT(5.0)*_t206/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t208 = _t207/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t209 = _t169*_t37 + _t185*_t39 + _t69;
+    const trailer3_real_t _t210 = -_t188*_t27 - _t38*_t62;
+    const trailer3_real_t _t211 = -TRAILER3_LIT(5.0)*_t210/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t212 = _t211/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t213 = _t188*_t39 + _t63;
+    const trailer3_real_t _t214 = -_t191*_t27 - _t38*_t67;
+    const trailer3_real_t _t215 = -TRAILER3_LIT(5.0)*_t214/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t216 = _t215/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t217 = _t191*_t39 + _t68;
+    const trailer3_real_t _t218 = TRAILER3_LIT(5.0)*_t86/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t219 = _t218/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51;
+    const trailer3_real_t _t221 = TRAILER3_LIT(5.0)*_t90/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t222 = _t221/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56;
+    const trailer3_real_t _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62
+            + _t112*_t84;
+    const trailer3_real_t _t225 = J_x_tractor*_t47 + _t101*_t62 + _t104*_t84 - _t45*_t95
+            + _t53*_t98;
+    const trailer3_real_t _t226 = -J_theta_tractor*_t45 + _t106*_t51 + _t114*_t53 + _t116*_t62
+            + _t118*_t84 + _t47*_t95;
+    const trailer3_real_t _t227 = J_theta_cart*_t53 + _t108*_t51 - _t114*_t45 + _t119*_t62
+            + _t120*_t84 + _t47*_t98;
+    const trailer3_real_t _t228 = J_theta_cart2*_t62 + _t101*_t47 + _t110*_t51 - _t116*_t45
+            + _t119*_t53 + _t123*_t84;
+    const trailer3_real_t _t229 = J_theta_cart3*_t84 + _t104*_t47 + _t112*_t51 - _t118*_t45
+            + _t120*_t53 + _t123*_t62;
+    const trailer3_real_t _t230 = -_t77 - _t78;
+    const trailer3_real_t _t231 = _t230*_t82;
+    const trailer3_real_t _t232 = J_theta_cart2_left*_t231;
+    const trailer3_real_t _t233 = _t77 - _t78;
+    const trailer3_real_t _t234 = _t233*_t81;
+    const trailer3_real_t _t235 = J_theta_cart2_right*_t234;
+    const trailer3_real_t _t236 = -_t85 - _t86;
+    const trailer3_real_t _t237 = _t236*_t92;
+    const trailer3_real_t _t238 = J_theta_cart3_left*_t237;
+    const trailer3_real_t _t239 = _t85 - _t86;
+    const trailer3_real_t _t240 = _t239*_t91;
+    const trailer3_real_t _t241 = J_theta_cart3_right*_t240;
+    const trailer3_real_t _t242 = -_t71 - _t72;
+    const trailer3_real_t _t243 = _t242*_t76;
+    const trailer3_real_t _t244 = J_theta_cart_left*_t243;
+    const trailer3_real_t _t245 = _t71 - _t72;
+    const trailer3_real_t _t246 = _t245*_t75;
+    const trailer3_real_t _t247 = J_theta_cart_right*_t246;
+    const trailer3_real_t _t248 = _t73 - _t74;
+    const trailer3_real_t _t249 = _t248*_t75;
+    const trailer3_real_t _t250 = -_t73 - _t74;
+    const trailer3_real_t _t251 = _t250*_t76;
+    const trailer3_real_t _t252 = _t79 - _t80;
+    const trailer3_real_t _t253 = _t252*_t81;
+    const trailer3_real_t _t254 = -_t79 - _t80;
+    const trailer3_real_t _t255 = _t254*_t82;
+    const trailer3_real_t _t256 = _t89 - _t90;
+    const trailer3_real_t _t257 = _t256*_t91;
+    const trailer3_real_t _t258 = -_t89 - _t90;
+    const trailer3_real_t _t259 = _t258*_t92;
+    const trailer3_real_t _t260 = _t232*_t255 + _t235*_t253 + _t238*_t259 + _t241*_t257
+            + _t244*_t251 + _t247*_t249;
+    const trailer3_real_t _t261 = J_x_tractor*_t56 + _t106*_t46 + _t108*_t58 + _t110*_t67
+            + _t112*_t88;
+    const trailer3_real_t _t262 = J_theta_tractor*_t46 + _t106*_t56 + _t114*_t58 + _t116*_t67
+            + _t118*_t88 + _t49*_t95;
+    const trailer3_real_t _t263 = J_x_tractor*_t49 + _t101*_t67 + _t104*_t88 + _t46*_t95
+            + _t58*_t98;
+    const trailer3_real_t _t264 = J_theta_cart*_t58 + _t108*_t56 + _t114*_t46 + _t119*_t67
+            + _t120*_t88 + _t49*_t98;
+    const trailer3_real_t _t265 = J_theta_cart2*_t67 + _t101*_t49 + _t110*_t56 + _t116*_t46
+            + _t119*_t58 + _t123*_t88;
+    const trailer3_real_t _t266 = J_theta_cart3*_t88 + _t104*_t49 + _t112*_t56 + _t118*_t46
+            + _t120*_t58 + _t123*_t67;
+    const trailer3_real_t _t267 = _t132*_t93 + _t132*_t94 + _t136 + _t137 + _t138 + _t139 + _t140
+            + _t141;
+    const trailer3_real_t _t268 = _t148*_t47 + _t149*_t49;
+    const trailer3_real_t _t269 = _t148*_t158 + _t149*_t163 + _t150*_t166 + _t151*_t169;
+    const trailer3_real_t _t270 = _t148*_t173 + _t149*_t177 + _t150*_t181 + _t151*_t185
+            + _t152*_t188 + _t153*_t191;
+    const trailer3_real_t _t271 = _t148*_t195 + _t149*_t199 + _t150*_t203 + _t151*_t207
+            + _t152*_t211 + _t153*_t215 + _t154*_t218 + _t155*_t221;
+    const trailer3_real_t _t272 = J_x_tractor*_t268 + _t108*_t269 + _t110*_t270 + _t112*_t271
+            + _t267;
+    const trailer3_real_t _t273 = -K_theta_tractor_x_tractor_2*_t132*_t3 + _t105*_t132 + _t107*_t130
+            + _t109*_t125 + _t128 - _t133 - _t134 - _t135;
+    const trailer3_real_t _t274 = _t148*_t156 + _t149*_t161;
+    const trailer3_real_t _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98
+            + _t273;
+    const trailer3_real_t _t276 =
+            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t125*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t127*_t20*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t130*_t2*_t3/TRAILER3_LIT(10.0) - _t133*_t4
+            - _t134*_t4 - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6
+            - _t141*_t6;
+    const trailer3_real_t _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95
+            + _t276;
+    const trailer3_real_t _t278 =
+            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t11*_t125/TRAILER3_LIT(20.0)
+            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t127*_t20/TRAILER3_LIT(20.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t132*_t5/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t132*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t132*_t2*_t5/TRAILER3_LIT(10.0)
+            - _t107*_t142 - _t133*_t14 - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15
+            - _t139*_t15;
+    const trailer3_real_t _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271
+            + _t274*_t98 + _t278;
+    const trailer3_real_t _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144
+            + _t115*_t142 + _t115*_t144 + _t121*_t128 - _t121*_t134 - _t122*_t138 - _t122*_t139
+            + _t143*_t99 + _t145*_t99;
+    const trailer3_real_t _t281 = J_theta_cart2*_t270 + _t101*_t274 + _t110*_t268 + _t119*_t269
+            + _t123*_t271 + _t280;
+    const trailer3_real_t _t282 = _t102*_t143 + _t102*_t145 + _t102*_t147 + _t103*_t143
+            + _t103*_t145 + _t103*_t147 - _t111*_t142 - _t111*_t144 - _t111*_t146 + _t117*_t142
+            + _t117*_t144 + _t117*_t146;
+    const trailer3_real_t _t283 = J_theta_cart3*_t271 + _t104*_t274 + _t112*_t268 + _t120*_t269
+            + _t123*_t270 + _t282;
+    const trailer3_real_t _t284 = _t224*_t56 + _t225*_t49 + _t226*_t46 + _t227*_t58 + _t228*_t67
+            + _t229*_t88 + _t260;
+    const trailer3_real_t _t285 = J_theta_cart2_left*_t255*_t255 + J_theta_cart2_right*_t253*_t253
+            + J_theta_cart3_left*_t259*_t259 + J_theta_cart3_right*_t257*_t257
+            + J_theta_cart_left*_t251*_t251 + J_theta_cart_right*_t249*_t249 + J_theta_left
+            + _t261*_t56 + _t262*_t46 + _t263*_t49 + _t264*_t58 + _t265*_t67 + _t266*_t88;
+    const trailer3_real_t _t286 = _t159 - _t160;
+    const trailer3_real_t _t287 = _t286*_t75;
+    const trailer3_real_t _t288 = _t164 - _t165;
+    const trailer3_real_t _t289 = _t288*_t75;
+    const trailer3_real_t _t290 = _t167 - _t168;
+    const trailer3_real_t _t291 = _t290*_t75;
+    const trailer3_real_t _t292 = _t170 - _t171;
+    const trailer3_real_t _t293 = _t292*_t75;
+    const trailer3_real_t _t294 = _t148*_t287 + _t149*_t289 + _t150*_t291 + _t151*_t293;
+    const trailer3_real_t _t295 = -_t159 - _t160;
+    const trailer3_real_t _t296 = _t295*_t76;
+    const trailer3_real_t _t297 = -_t164 - _t165;
+    const trailer3_real_t _t298 = _t297*_t76;
+    const trailer3_real_t _t299 = -_t167 - _t168;
+    const trailer3_real_t _t300 = _t299*_t76;
+    const trailer3_real_t _t301 = -_t170 - _t171;
+    const trailer3_real_t _t302 = _t301*_t76;
+    const trailer3_real_t _t303 = _t148*_t296 + _t149*_t298 + _t150*_t300 + _t151*_t302;
+    const trailer3_real_t _t304 = _t174 - _t175;
+    const trailer3_real_t _t305 = _t304*_t81;
+    const trailer3_real_t _t306 = _t178 - _t179;
+    const trailer3_real_t _t307 = _t306*_t81;
+    const trailer3_real_t _t308 = _t182 - _t183;
+    const trailer3_real_t _t309 = _t308*_t81;
+    const trailer3_real_t _t310 = _t186 - _t187;
+    const trailer3_real_t _t311 = _t310*_t81;
+    const trailer3_real_t _t312 = _t189 - _t190;
+    const trailer3_real_t _t313 = _t312*_t81;
+    const trailer3_real_t _t314 = _t192 - _t193;
+    const trailer3_real_t _t315 = _t314*_t81;
+    const trailer3_real_t _t316 = _t148*_t305 + _t149*_t307 + _t150*_t309 + _t151*_t311
+            + _t152*_t313 + _t153*_t315;
+    const trailer3_real_t _t317 = -_t174 - _t175;
+    const trailer3_real_t _t318 = _t317*_t82;
+    const trailer3_real_t _t319 = -_t178 - _t179;
+    const trailer3_real_t _t320 = _t319*_t82;
+    const trailer3_real_t _t321 = -_t182 - _t183;
+    const trailer3_real_t _t322 = _t321*_t82;
+    const trailer3_real_t _t323 = -_t186 - _t187;
+    const trailer3_real_t _t324 = _t323*_t82;
+    const trailer3_real_t _t325 = -_t189 - _t190;
+    const trailer3_real_t _t326 = _t325*_t82;
+    const trailer3_real_t _t327 = -_t192 - _t193;
+    const trailer3_real_t _t328 = _t327*_t82;
+    const trailer3_real_t _t329 = _t148*_t318 + _t149*_t320 + _t150*_t322 + _t151*_t324
+            + _t152*_t326 + _t153*_t328;
+    const trailer3_real_t _t330 = _t196 - _t197;
+    const trailer3_real_t _t331 = _t330*_t91;
+    const trailer3_real_t _t332 = _t200 - _t201;
+    const trailer3_real_t _t333 = _t332*_t91;
+    const trailer3_real_t _t334 = _t204 - _t205;
+    const trailer3_real_t _t335 = _t334*_t91;
+    const trailer3_real_t _t336 = _t208 - _t209;
+    const trailer3_real_t _t337 = _t336*_t91;
+    const trailer3_real_t _t338 = _t212 - _t213;
+    const trailer3_real_t _t339 = _t338*_t91;
+    const trailer3_real_t _t340 = _t216 - _t217;
+    const trailer3_real_t _t341 = _t340*_t91;
+    const trailer3_real_t _t342 = _t219 - _t220;
+    const trailer3_real_t _t343 = _t342*_t91;
+    const trailer3_real_t _t344 = _t222 - _t223;
+    const trailer3_real_t _t345 = _t344*_t91;
+    const trailer3_real_t _t346 = _t148*_t331 + _t149*_t333 + _t150*_t335 + _t151*_t337
+            + _t152*_t339 + _t153*_t341 + _t154*_t343 + _t155*_t345;
+    const trailer3_real_t _t347 = -_t196 - _t197;
+    const trailer3_real_t _t348 = _t347*_t92;
+    const trailer3_real_t _t349 = -_t200 - _t201;
+    const trailer3_real_t _t350 = _t349*_t92;
+    const trailer3_real_t _t351 = -_t204 - _t205;
+    const trailer3_real_t _t352 = _t351*_t92;
+    const trailer3_real_t _t353 = -_t208 - _t209;
+    const trailer3_real_t _t354 = _t353*_t92;
+    const trailer3_real_t _t355 = -_t212 - _t213;
+    const trailer3_real_t _t356 = _t355*_t92;
+    const trailer3_real_t _t357 = -_t216 - _t217;
+    const trailer3_real_t _t358 = _t357*_t92;
+    const trailer3_real_t _t359 = -_t219 - _t220;
+    const trailer3_real_t _t360 = _t359*_t92;
+    const trailer3_real_t _t361 = -_t222 - _t223;
+    const trailer3_real_t _t362 = _t361*_t92;
+    const trailer3_real_t _t363 = _t148*_t348 + _t149*_t350 + _t150*_t352 + _t151*_t354
+            + _t152*_t356 + _t153*_t358 + _t154*_t360 + _t155*_t362;
+    const trailer3_real_t _t364 = _t232*_t329 + _t235*_t316 + _t238*_t363 + _t241*_t346
+            + _t244*_t303 + _t247*_t294 + _t272*_t51 + _t275*_t47 - _t277*_t45 + _t279*_t53
+            + _t281*_t62 + _t283*_t84;
+    const trailer3_real_t _t365 = -_t364 + tau_right;
+    const trailer3_real_t _t366 = J_theta_cart2_left*_t255*_t329 + J_theta_cart2_right*_t253*_t316
+            + J_theta_cart3_left*_t259*_t363 + J_theta_cart3_right*_t257*_t346
+            + J_theta_cart_left*_t251*_t303 + J_theta_cart_right*_t249*_t294 + _t272*_t56
+            + _t275*_t49 + _t277*_t46 + _t279*_t58 + _t281*_t67 + _t283*_t88;
+    const trailer3_real_t _t367 = -_t366 + tau_left;
+    const trailer3_real_t _t368 = J_theta_cart2_left*_t231*_t231 + J_theta_cart2_right*_t234*_t234
+            + J_theta_cart3_left*_t237*_t237 + J_theta_cart3_right*_t240*_t240
+            + J_theta_cart_left*_t243*_t243 + J_theta_cart_right*_t246*_t246 + J_theta_right
+            + _t224*_t51 + _t225*_t47 - _t226*_t45 + _t227*_t53 + _t228*_t62 + _t229*_t84;
+    const trailer3_real_t _t369 = _t260 + _t261*_t51 - _t262*_t45 + _t263*_t47 + _t264*_t53
+            + _t265*_t62 + _t266*_t84;
+    const trailer3_real_t _t370 = -_t284*_t369 + _t285*_t368;
+    const trailer3_real_t _t371 = TRAILER3_LIT(1.0)/_t370;
+    const trailer3_real_t _t372 = _t371*(-_t284*_t367 + _t285*_t365);
+    const trailer3_real_t _t373 = _t371*(-_t365*_t369 + _t367*_t368);
+    const trailer3_real_t _t374 = _t274 + _t372*_t47 + _t373*_t49;
+    const trailer3_real_t _t375 = _t268 + _t372*_t51 + _t373*_t56;
+    const trailer3_real_t _t376 = -_t372*_t45 + _t373*_t46;
+    const trailer3_real_t _t377 = _t269 + _t372*_t53 + _t373*_t58;
+    const trailer3_real_t _t378 = _t270 + _t372*_t62 + _t373*_t67;
+    const trailer3_real_t _t379 = _t271 + _t372*_t84 + _t373*_t88;
+    const trailer3_real_t _t380 = -J_theta_tractor*_t376 - _t106*_t375 - _t114*_t377 - _t116*_t378
+            - _t118*_t379 - _t276 - _t374*_t95;
+    const trailer3_real_t _t381 = _t240*_t372 + _t257*_t373 + _t346;
+    const trailer3_real_t _t382 = -J_theta_cart3_right*_t381;
+    const trailer3_real_t _t383 = _t382*_t91;
+    const trailer3_real_t _t384 = _t237*_t372 + _t259*_t373 + _t363;
+    const trailer3_real_t _t385 = -J_theta_cart3_left*_t384;
+    const trailer3_real_t _t386 = _t385*_t92;
+    const trailer3_real_t _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376
+            - _t120*_t377 - _t123*_t378 - _t282;
+    const trailer3_real_t _t388 = _t383/TRAILER3_LIT(5.0) - _t386/TRAILER3_LIT(5.0) + _t387;
+    const trailer3_real_t _t389 = -TRAILER3_LIT(5.0)*_t388/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t390 = _t234*_t372 + _t253*_t373 + _t316;
+    const trailer3_real_t _t391 = -J_theta_cart2_right*_t390;
+    const trailer3_real_t _t392 = _t391*_t81;
+    const trailer3_real_t _t393 = _t231*_t372 + _t255*_t373 + _t329;
+    const trailer3_real_t _t394 = -J_theta_cart2_left*_t393;
+    const trailer3_real_t _t395 = _t394*_t82;
+    const trailer3_real_t _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376
+            - _t119*_t377 - _t123*_t379 - _t280;
+    const trailer3_real_t _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + _t392/TRAILER3_LIT(5.0)
+            - _t395/TRAILER3_LIT(5.0) + _t396;
+    const trailer3_real_t _t398 = -TRAILER3_LIT(5.0)*_t397/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t399 = _t246*_t372 + _t249*_t373 + _t294;
+    const trailer3_real_t _t400 = -J_theta_cart_right*_t399;
+    const trailer3_real_t _t401 = _t400*_t75;
+    const trailer3_real_t _t402 = _t243*_t372 + _t251*_t373 + _t303;
+    const trailer3_real_t _t403 = -J_theta_cart_left*_t402;
+    const trailer3_real_t _t404 = _t403*_t76;
+    const trailer3_real_t _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378
+            - _t120*_t379 - _t278 - _t374*_t98;
+    const trailer3_real_t _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383
+            - _t37*_t386 + _t401/TRAILER3_LIT(5.0) - _t404/TRAILER3_LIT(5.0) + _t405;
+    const trailer3_real_t _t407 = -TRAILER3_LIT(5.0)*_t406/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392
+            - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8;
+    const trailer3_real_t _t409 = TRAILER3_LIT(500.0)*_t408/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378
+            - _t112*_t379 - _t267;
+    const trailer3_real_t _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386
+            - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410;
+    const trailer3_real_t _t412 = TRAILER3_LIT(500.0)*_t411/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273
+            - _t376*_t95 - _t377*_t98;
+    const trailer3_real_t _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401
+            + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413;
+    const trailer3_real_t _t415 = TRAILER3_LIT(500.0)*_t414/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t416 = _t412*_t43 + _t415*_t44;
+    const trailer3_real_t _t417 = TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(500.0);
+    const trailer3_real_t _t418 = -TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(500.0);
+    const trailer3_real_t _t419 = _t412*_t417 + _t415*_t418;
+    const trailer3_real_t _t420 = _t419*_t419;
+    const trailer3_real_t _t421 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t422 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t423 = _t421*_t43;
+    const trailer3_real_t _t424 = _t421*_t44;
+    const trailer3_real_t _t425 = -_t1*_t424 - _t2*_t423 + _t421*_t8;
+    const trailer3_real_t _t426 = -TRAILER3_LIT(5.0)*_t425/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t427 = _t426/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t428 = _t1*_t423 + _t28*_t424 - _t29*_t421;
+    const trailer3_real_t _t429 = _t422*_t43;
+    const trailer3_real_t _t430 = _t422*_t44;
+    const trailer3_real_t _t431 = -_t1*_t430 - _t2*_t429 - _t422*_t8;
+    const trailer3_real_t _t432 = -TRAILER3_LIT(5.0)*_t431/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t433 = _t432/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t434 = _t1*_t429 + _t28*_t430 + _t29*_t422;
+    const trailer3_real_t _t435 = -_t10*_t424 - _t11*_t423 + _t13*_t421 - _t17*_t426;
+    const trailer3_real_t _t436 = -TRAILER3_LIT(5.0)*_t435/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t437 = _t436/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t438 = _t10*_t423 + _t30*_t424 - _t31*_t421 + _t33*_t426;
+    const trailer3_real_t _t439 = -_t10*_t430 - _t11*_t429 - _t13*_t422 - _t17*_t432;
+    const trailer3_real_t _t440 = -TRAILER3_LIT(5.0)*_t439/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t441 = _t440/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t442 = _t10*_t429 + _t30*_t430 + _t31*_t422 + _t33*_t432;
+    const trailer3_real_t _t443 = -_t19*_t424 - _t20*_t423 + _t22*_t421 - _t24*_t426 - _t27*_t436;
+    const trailer3_real_t _t444 = -TRAILER3_LIT(5.0)*_t443/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t445 = _t444/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t446 = _t19*_t423 + _t34*_t424 - _t35*_t421 + _t37*_t426 + _t39*_t436;
+    const trailer3_real_t _t447 = -_t19*_t430 - _t20*_t429 - _t22*_t422 - _t24*_t432 - _t27*_t440;
+    const trailer3_real_t _t448 = -TRAILER3_LIT(5.0)*_t447/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t449 = _t448/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t450 = _t19*_t429 + _t34*_t430 + _t35*_t422 + _t37*_t432 + _t39*_t440;
+    const trailer3_real_t _t451 = J_x_tractor*_t423 - _t106*_t421 + _t108*_t426 + _t110*_t436
+            + _t112*_t444;
+    const trailer3_real_t _t452 = J_x_tractor*_t424 + _t101*_t436 + _t104*_t444 - _t421*_t95
+            + _t426*_t98;
+    const trailer3_real_t _t453 = -J_theta_tractor*_t421 + _t106*_t423 + _t114*_t426 + _t116*_t436
+            + _t118*_t444 + _t424*_t95;
+    const trailer3_real_t _t454 = J_theta_cart*_t426 + _t108*_t423 - _t114*_t421 + _t119*_t436
+            + _t120*_t444 + _t424*_t98;
+    const trailer3_real_t _t455 = J_theta_cart2*_t436 + _t101*_t424 + _t110*_t423 - _t116*_t421
+            + _t119*_t426 + _t123*_t444;
+    const trailer3_real_t _t456 = J_theta_cart3*_t444 + _t104*_t424 + _t112*_t423 - _t118*_t421
+            + _t120*_t426 + _t123*_t436;
+    const trailer3_real_t _t457 = _t427 - _t428;
+    const trailer3_real_t _t458 = _t457*_t75;
+    const trailer3_real_t _t459 = _t433 - _t434;
+    const trailer3_real_t _t460 = _t459*_t75;
+    const trailer3_real_t _t461 = -_t427 - _t428;
+    const trailer3_real_t _t462 = _t461*_t76;
+    const trailer3_real_t _t463 = -_t433 - _t434;
+    const trailer3_real_t _t464 = _t463*_t76;
+    const trailer3_real_t _t465 = _t437 - _t438;
+    const trailer3_real_t _t466 = _t465*_t81;
+    const trailer3_real_t _t467 = _t441 - _t442;
+    const trailer3_real_t _t468 = _t467*_t81;
+    const trailer3_real_t _t469 = -_t437 - _t438;
+    const trailer3_real_t _t470 = _t469*_t82;
+    const trailer3_real_t _t471 = -_t441 - _t442;
+    const trailer3_real_t _t472 = _t471*_t82;
+    const trailer3_real_t _t473 = _t445 - _t446;
+    const trailer3_real_t _t474 = _t473*_t91;
+    const trailer3_real_t _t475 = _t449 - _t450;
+    const trailer3_real_t _t476 = _t475*_t91;
+    const trailer3_real_t _t477 = -_t445 - _t446;
+    const trailer3_real_t _t478 = _t477*_t92;
+    const trailer3_real_t _t479 = -_t449 - _t450;
+    const trailer3_real_t _t480 = _t479*_t92;
+    const trailer3_real_t _t481 = J_theta_cart2_left*_t470*_t472 + J_theta_cart2_right*_t466*_t468
+            + J_theta_cart3_left*_t478*_t480 + J_theta_cart3_right*_t474*_t476
+            + J_theta_cart_left*_t462*_t464 + J_theta_cart_right*_t458*_t460;
+    const trailer3_real_t _t482 = J_x_tractor*_t429 + _t106*_t422 + _t108*_t432 + _t110*_t440
+            + _t112*_t448;
+    const trailer3_real_t _t483 = J_theta_tractor*_t422 + _t106*_t429 + _t114*_t432 + _t116*_t440
+            + _t118*_t448 + _t430*_t95;
+    const trailer3_real_t _t484 = J_x_tractor*_t430 + _t101*_t440 + _t104*_t448 + _t422*_t95
+            + _t432*_t98;
+    const trailer3_real_t _t485 = J_theta_cart*_t432 + _t108*_t429 + _t114*_t422 + _t119*_t440
+            + _t120*_t448 + _t430*_t98;
+    const trailer3_real_t _t486 = J_theta_cart2*_t440 + _t101*_t430 + _t110*_t429 + _t116*_t422
+            + _t119*_t432 + _t123*_t448;
+    const trailer3_real_t _t487 = J_theta_cart3*_t448 + _t104*_t430 + _t112*_t429 + _t118*_t422
+            + _t120*_t432 + _t123*_t440;
+    const trailer3_real_t _t488 = _t409 + _t416;
+    const trailer3_real_t _t489 = -_t409 + _t416;
+    const trailer3_real_t _t490 = load_w0*mu_floor - TRAILER3_SQRT(_t420*share_w0*share_w0
+            + _t489*_t489);
+    const trailer3_real_t _t491 = load_w1*mu_floor - TRAILER3_SQRT(_t420*share_w1*share_w1
+            + _t488*_t488);
+    const trailer3_real_t _t492 = J_theta_cart2_left*_t470*_t470 + J_theta_cart2_right*_t466*_t466
+            + J_theta_cart3_left*_t478*_t478 + J_theta_cart3_right*_t474*_t474
+            + J_theta_cart_left*_t462*_t462 + J_theta_cart_right*_t458*_t458 + J_theta_right
+            - _t421*_t453 + _t423*_t451 + _t424*_t452 + _t426*_t454 + _t436*_t455 + _t444*_t456;
+    const trailer3_real_t _t493 = _t422*_t453 + _t429*_t451 + _t430*_t452 + _t432*_t454
+            + _t440*_t455 + _t448*_t456 + _t481;
+    const trailer3_real_t _t494 = -_t421*_t483 + _t423*_t482 + _t424*_t484 + _t426*_t485
+            + _t436*_t486 + _t444*_t487 + _t481;
+    const trailer3_real_t _t495 = J_theta_cart2_left*_t472*_t472 + J_theta_cart2_right*_t468*_t468
+            + J_theta_cart3_left*_t480*_t480 + J_theta_cart3_right*_t476*_t476
+            + J_theta_cart_left*_t464*_t464 + J_theta_cart_right*_t460*_t460 + J_theta_left
+            + _t422*_t483 + _t429*_t482 + _t430*_t484 + _t432*_t485 + _t440*_t486 + _t448*_t487;
+    if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart2_right > TRAILER3_LIT(0.0))) { /* radius_cart2_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart3_left > TRAILER3_LIT(0.0))) { /* radius_cart3_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart3_right > TRAILER3_LIT(0.0))) { /* radius_cart3_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_left > TRAILER3_LIT(0.0))) { /* radius_cart_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_right > TRAILER3_LIT(0.0))) { /* radius_cart_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_left > TRAILER3_LIT(0.0))) { /* radius_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_right > TRAILER3_LIT(0.0))) { /* radius_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart > TRAILER3_LIT(0.0))) { /* J_theta_cart > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2 > TRAILER3_LIT(0.0))) { /* J_theta_cart2 > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_left > TRAILER3_LIT(0.0))) { /* J_theta_cart2_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_right > TRAILER3_LIT(0.0))) { /* J_theta_cart2_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3 > TRAILER3_LIT(0.0))) { /* J_theta_cart3 > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3_left > TRAILER3_LIT(0.0))) { /* J_theta_cart3_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3_right > TRAILER3_LIT(0.0))) { /* J_theta_cart3_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_left > TRAILER3_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_right > TRAILER3_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_left > TRAILER3_LIT(0.0))) { /* J_theta_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_right > TRAILER3_LIT(0.0))) { /* J_theta_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_tractor > TRAILER3_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(_t492 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(_t492*_t495 - _t493*_t494 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+                                                               model */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(mu_floor > TRAILER3_LIT(0.0))) { /* mu > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(load_w0 > TRAILER3_LIT(0.0))) { /* loads[0] > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(load_w1 > TRAILER3_LIT(0.0))) { /* loads[1] > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    const trailer3_real_t r_0 = _t490;
+    const trailer3_real_t r_1 = _t491;
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+        return TRAILER3_ERR_NONFINITE_OUTPUT;
+    }
+    margins[0] = r_0;
+    margins[1] = r_1;
+    return TRAILER3_OK;
+}
+
+/* trailer3_traction_check: documented in trailer3_model.h.
+   operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt */
+trailer3_status_t trailer3_traction_check(const trailer3_params_t *p, const trailer3_real_t *q,
+    const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, const trailer3_real_t *mu,
+    const trailer3_real_t *loads, const trailer3_real_t *shares, trailer3_real_t *margins)
+{
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t thetadot_right = wheel_rates[0];
+    const trailer3_real_t thetadot_left = wheel_rates[1];
+    const trailer3_real_t tau_right = tau[0];
+    const trailer3_real_t tau_left = tau[1];
+    const trailer3_real_t mu_floor = mu[0];
+    const trailer3_real_t load_w0 = loads[0];
+    const trailer3_real_t load_w1 = loads[1];
+    const trailer3_real_t share_w0 = shares[0];
+    const trailer3_real_t share_w1 = shares[1];
+    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
+            + (J_theta_cart2_left - J_theta_cart2_left)) + (((J_theta_cart2_right
+            - J_theta_cart2_right) + (J_theta_cart3 - J_theta_cart3))
+            + (J_theta_cart3_left - J_theta_cart3_left))) + ((((J_theta_cart3_right
+            - J_theta_cart3_right) + (J_theta_cart_left - J_theta_cart_left))
+            + (J_theta_cart_right - J_theta_cart_right)) + ((J_theta_left - J_theta_left)
+            + (J_theta_right - J_theta_right)))) + (((((J_theta_tractor - J_theta_tractor)
+            + (J_x_tractor - J_x_tractor)) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
+            + ((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
+            + (K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)))
+            + ((((K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2)
+            + (K_theta_cart3_x_tractor - K_theta_cart3_x_tractor))
+            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2))
+            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
+            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)))))
+            + ((((((radius_cart2_left - radius_cart2_left) + (radius_cart2_right
+            - radius_cart2_right)) + (radius_cart3_left - radius_cart3_left))
+            + (((radius_cart3_right - radius_cart3_right) + (radius_cart_left - radius_cart_left))
+            + (radius_cart_right - radius_cart_right))) + ((((radius_left - radius_left)
+            + (radius_right - radius_right)) + (theta_tractor - theta_tractor))
+            + ((theta_cart - theta_cart) + (theta_cart2 - theta_cart2))))
+            + (((((theta_cart3 - theta_cart3) + (thetadot_right - thetadot_right))
+            + (thetadot_left - thetadot_left)) + ((tau_right - tau_right) + (tau_left - tau_left)))
+            + ((((mu_floor - mu_floor) + (load_w0 - load_w0)) + (load_w1 - load_w1))
+            + ((share_w0 - share_w0) + (share_w1 - share_w1)))))) != 0) {
+        return TRAILER3_ERR_NONFINITE_INPUT;
+    }
+    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
+    const trailer3_real_t _t1 = -_t0;
+    const trailer3_real_t _t2 = TRAILER3_COS(theta_cart);
+    const trailer3_real_t _t3 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t4 = TRAILER3_LIT(3.0)*_t3/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t6 = TRAILER3_LIT(3.0)*_t5/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t7 = _t0*_t4 + _t2*_t6;
+    const trailer3_real_t _t8 = -_t7;
+    const trailer3_real_t _t9 = TRAILER3_SIN(theta_cart2);
+    const trailer3_real_t _t10 = -_t9;
+    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart2);
+    const trailer3_real_t _t12 = _t11*_t6 + _t4*_t9;
+    const trailer3_real_t _t13 = -_t12;
+    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t16 = _t11*_t15 + _t14*_t9;
+    const trailer3_real_t _t17 = -_t16;
+    const trailer3_real_t _t18 = TRAILER3_SIN(theta_cart3);
+    const trailer3_real_t _t19 = -_t18;
+    const trailer3_real_t _t20 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t21 = _t18*_t4 + _t20*_t6;
+    const trailer3_real_t _t22 = -_t21;
+    const trailer3_real_t _t23 = _t14*_t18 + _t15*_t20;
+    const trailer3_real_t _t24 = -_t23;
+    const trailer3_real_t _t25 = TRAILER3_LIT(17.0)*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = _t11*_t25 + TRAILER3_LIT(17.0)*_t18*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t27 = -_t26;
+    const trailer3_real_t _t28 = -_t2;
+    const trailer3_real_t _t29 = _t0*_t6 - _t2*_t4;
+    const trailer3_real_t _t30 = -_t11;
+    const trailer3_real_t _t31 = -_t11*_t4 + _t6*_t9;
+    const trailer3_real_t _t32 = _t11*_t14 - TRAILER3_LIT(17.0)*_t2*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t33 = -_t32;
+    const trailer3_real_t _t34 = -_t20;
+    const trailer3_real_t _t35 = _t18*_t6 - _t20*_t4;
+    const trailer3_real_t _t36 = _t14*_t20 - TRAILER3_LIT(17.0)*_t18*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t37 = -_t36;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(17.0)*_t11*_t18/TRAILER3_LIT(20.0) + _t25*_t9;
+    const trailer3_real_t _t39 = -_t38;
+    const trailer3_real_t _t40 = -radius_right;
+    const trailer3_real_t _t41 = -radius_left;
+    const trailer3_real_t _t42 = TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t43 = -_t42;
+    const trailer3_real_t _t44 = -TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t45 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t46 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t47 = _t44*_t45;
+    const trailer3_real_t _t48 = _t1*_t47 - _t45*_t8;
+    const trailer3_real_t _t49 = _t44*_t46;
+    const trailer3_real_t _t50 = _t1*_t49 + _t46*_t8;
+    const trailer3_real_t _t51 = _t43*_t45;
+    const trailer3_real_t _t52 = -_t2*_t51 - _t48;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(5.0)*_t52/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = _t17*_t53;
+    const trailer3_real_t _t55 = _t10*_t47 - _t13*_t45;
+    const trailer3_real_t _t56 = _t43*_t46;
+    const trailer3_real_t _t57 = -_t2*_t56 - _t50;
+    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t59 = _t17*_t58;
+    const trailer3_real_t _t60 = _t10*_t49 + _t13*_t46;
+    const trailer3_real_t _t61 = -_t11*_t51 - _t54 - _t55;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = _t27*_t62;
+    const trailer3_real_t _t64 = _t24*_t53;
+    const trailer3_real_t _t65 = _t19*_t47 - _t22*_t45;
+    const trailer3_real_t _t66 = -_t11*_t56 - _t59 - _t60;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(5.0)*_t66/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t68 = _t27*_t67;
+    const trailer3_real_t _t69 = _t24*_t58;
+    const trailer3_real_t _t70 = _t19*_t49 + _t22*_t46;
+    const trailer3_real_t _t71 = _t53/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45;
+    const trailer3_real_t _t73 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46;
+    const trailer3_real_t _t75 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t77 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53;
+    const trailer3_real_t _t79 = _t67/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t82 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t83 = -_t20*_t51 - _t63 - _t64 - _t65;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(5.0)*_t83/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t85 = _t84/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62;
+    const trailer3_real_t _t87 = -_t20*_t56 - _t68 - _t69 - _t70;
+    const trailer3_real_t _t88 = -TRAILER3_LIT(5.0)*_t87/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t89 = _t88/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67;
+    const trailer3_real_t _t91 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t92 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t93 = K_theta_tractor_x_tractor*_t3;
+    const trailer3_real_t _t94 = K_theta_tractor_x_tractor_2*_t5;
+    const trailer3_real_t _t95 = _t93 + _t94;
+    const trailer3_real_t _t96 = K_theta_cart_x_tractor*_t0;
+    const trailer3_real_t _t97 = K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t98 = _t96 + _t97;
+    const trailer3_real_t _t99 = K_theta_cart2_x_tractor*_t9;
+    const trailer3_real_t _t100 = K_theta_cart2_x_tractor_2*_t11;
+    const trailer3_real_t _t101 = _t100 + _t99;
+    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t103 = K_theta_cart3_x_tractor_2*_t20;
+    const trailer3_real_t _t104 = _t102 + _t103;
+    const trailer3_real_t _t105 = K_theta_tractor_x_tractor*_t5;
+    const trailer3_real_t _t106 = K_theta_tractor_x_tractor_2*_t3 - _t105;
+    const trailer3_real_t _t107 = K_theta_cart_x_tractor*_t2;
+    const trailer3_real_t _t108 = K_theta_cart_x_tractor_2*_t0 - _t107;
+    const trailer3_real_t _t109 = K_theta_cart2_x_tractor*_t11;
+    const trailer3_real_t _t110 = K_theta_cart2_x_tractor_2*_t9 - _t109;
+    const trailer3_real_t _t111 = K_theta_cart3_x_tractor*_t20;
+    const trailer3_real_t _t112 = K_theta_cart3_x_tractor_2*_t18 - _t111;
+    const trailer3_real_t _t113 = K_theta_cart_x_tractor_2*_t0;
+    const trailer3_real_t _t114 = _t107*_t6 - _t113*_t6 + _t4*_t96 + _t4*_t97;
+    const trailer3_real_t _t115 = K_theta_cart2_x_tractor_2*_t9;
+    const trailer3_real_t _t116 = _t100*_t4 + _t109*_t6 - _t115*_t6 + _t4*_t99;
+    const trailer3_real_t _t117 = K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6;
+    const trailer3_real_t _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99;
+    const trailer3_real_t _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15;
+    const trailer3_real_t _t121 = TRAILER3_LIT(17.0)*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t122 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122;
+    const trailer3_real_t _t124 = _t62*thetadot_right + _t67*thetadot_left;
+    const trailer3_real_t _t125 = _t124*_t124;
+    const trailer3_real_t _t126 = _t84*thetadot_right + _t88*thetadot_left;
+    const trailer3_real_t _t127 = _t126*_t126;
+    const trailer3_real_t _t128 = _t111*_t127;
+    const trailer3_real_t _t129 = _t53*thetadot_right + _t58*thetadot_left;
+    const trailer3_real_t _t130 = _t129*_t129;
+    const trailer3_real_t _t131 = -_t45*thetadot_right + _t46*thetadot_left;
+    const trailer3_real_t _t132 = _t131*_t131;
+    const trailer3_real_t _t133 = _t115*_t125;
+    const trailer3_real_t _t134 = _t117*_t127;
+    const trailer3_real_t _t135 = _t113*_t130;
+    const trailer3_real_t _t136 = _t125*_t99;
+    const trailer3_real_t _t137 = _t100*_t125;
+    const trailer3_real_t _t138 = _t102*_t127;
+    const trailer3_real_t _t139 = _t103*_t127;
+    const trailer3_real_t _t140 = _t130*_t96;
+    const trailer3_real_t _t141 = _t130*_t97;
+    const trailer3_real_t _t142 = _t132*_t4;
+    const trailer3_real_t _t143 = _t132*_t6;
+    const trailer3_real_t _t144 = _t130*_t14;
+    const trailer3_real_t _t145 = _t130*_t15;
+    const trailer3_real_t _t146 = _t121*_t125;
+    const trailer3_real_t _t147 = _t122*_t125;
+    const trailer3_real_t _t148 = _t131*thetadot_right;
+    const trailer3_real_t _t149 = _t131*thetadot_left;
+    const trailer3_real_t _t150 = _t129*thetadot_right;
+    const trailer3_real_t _t151 = _t129*thetadot_left;
+    const trailer3_real_t _t152 = _t124*thetadot_right;
+    const trailer3_real_t _t153 = _t124*thetadot_left;
+    const trailer3_real_t _t154 = _t126*thetadot_right;
+    const trailer3_real_t _t155 = _t126*thetadot_left;
+    const trailer3_real_t _t156 = _t42*_t45;
+    const trailer3_real_t _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45;
+    const trailer3_real_t _t158 = -TRAILER3_LIT(5.0)*_t157/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t159 = _t158/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t160 = _t156*_t28 + _t48;
+    const trailer3_real_t _t161 = _t42*_t46;
+    const trailer3_real_t _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46;
+    const trailer3_real_t _t163 = -TRAILER3_LIT(5.0)*_t162/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t164 = _t163/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t165 = _t161*_t28 + _t50;
+    const trailer3_real_t _t166 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t167 = _t166/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7;
+    const trailer3_real_t _t169 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t170 = _t169/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7;
+    const trailer3_real_t _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45;
+    const trailer3_real_t _t173 = -TRAILER3_LIT(5.0)*_t172/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t174 = _t173/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = _t156*_t30 + _t158*_t33 + _t55;
+    const trailer3_real_t _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46;
+    const trailer3_real_t _t177 = -TRAILER3_LIT(5.0)*_t176/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t178 = _t177/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = _t161*_t30 + _t163*_t33 + _t60;
+    const trailer3_real_t _t180 = -_t166*_t17 - _t32*_t53;
+    const trailer3_real_t _t181 = -TRAILER3_LIT(5.0)*_t180/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t182 = _t181/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = _t166*_t33 + _t54;
+    const trailer3_real_t _t184 = -_t169*_t17 - _t32*_t58;
+    const trailer3_real_t _t185 = -TRAILER3_LIT(5.0)*_t184/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t186 = _t185/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = _t169*_t33 + _t59;
+    const trailer3_real_t _t188 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t189 = _t188/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9;
+    const trailer3_real_t _t191 = TRAILER3_LIT(5.0)*_t80/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9;
+    const trailer3_real_t _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45;
+    const trailer3_real_t _t195 = -TRAILER3_LIT(5.0)*_t194/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t196 = _t195/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65;
+    const trailer3_real_t _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46;
+    const trailer3_real_t _t199 = -TRAILER3_LIT(5.0)*_t198/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t200 = _t199/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70;
+    const trailer3_real_t _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53;
+    const trailer3_real_t _t203 = -TRAILER3_LIT(5.0)*_t202/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t204 = _t203/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t205 = _t166*_t37 + _t181*_t39 + _t64;
+    const trailer3_real_t _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58;
+    const trailer3_real_t _t207 = -TRAILER3_LIT(5.0)*_t206/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t208 = _t207/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t209 = _t169*_t37 + _t185*_t39 + _t69;
+    const trailer3_real_t _t210 = -_t188*_t27 - _t38*_t62;
+    const trailer3_real_t _t211 = -TRAILER3_LIT(5.0)*_t210/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t212 = _t211/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t213 = _t188*_t39 + _t63;
+    const trailer3_real_t _t214 = -_t191*_t27 - _t38*_t67;
+    const trailer3_real_t _t215 = -TRAILER3_LIT(5.0)*_t214/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t216 = _t215/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t217 = _t191*_t39 + _t68;
+    const trailer3_real_t _t218 = TRAILER3_LIT(5.0)*_t86/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t219 = _t218/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51;
+    const trailer3_real_t _t221 = TRAILER3_LIT(5.0)*_t90/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t222 = _t221/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56;
+    const trailer3_real_t _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62
+            + _t112*_t84;
+    const trailer3_real_t _t225 = J_x_tractor*_t47 + _t101*_t62 + _t104*_t84 - _t45*_t95
+            + _t53*_t98;
+    const trailer3_real_t _t226 = -J_theta_tractor*_t45 + _t106*_t51 + _t114*_t53 + _t116*_t62
+            + _t118*_t84 + _t47*_t95;
+    const trailer3_real_t _t227 = J_theta_cart*_t53 + _t108*_t51 - _t114*_t45 + _t119*_t62
+            + _t120*_t84 + _t47*_t98;
+    const trailer3_real_t _t228 = J_theta_cart2*_t62 + _t101*_t47 + _t110*_t51 - _t116*_t45
+            + _t119*_t53 + _t123*_t84;
+    const trailer3_real_t _t229 = J_theta_cart3*_t84 + _t104*_t47 + _t112*_t51 - _t118*_t45
+            + _t120*_t53 + _t123*_t62;
+    const trailer3_real_t _t230 = -_t77 - _t78;
+    const trailer3_real_t _t231 = _t230*_t82;
+    const trailer3_real_t _t232 = J_theta_cart2_left*_t231;
+    const trailer3_real_t _t233 = _t77 - _t78;
+    const trailer3_real_t _t234 = _t233*_t81;
+    const trailer3_real_t _t235 = J_theta_cart2_right*_t234;
+    const trailer3_real_t _t236 = -_t85 - _t86;
+    const trailer3_real_t _t237 = _t236*_t92;
+    const trailer3_real_t _t238 = J_theta_cart3_left*_t237;
+    const trailer3_real_t _t239 = _t85 - _t86;
+    const trailer3_real_t _t240 = _t239*_t91;
+    const trailer3_real_t _t241 = J_theta_cart3_right*_t240;
+    const trailer3_real_t _t242 = -_t71 - _t72;
+    const trailer3_real_t _t243 = _t242*_t76;
+    const trailer3_real_t _t244 = J_theta_cart_left*_t243;
+    const trailer3_real_t _t245 = _t71 - _t72;
+    const trailer3_real_t _t246 = _t245*_t75;
+    const trailer3_real_t _t247 = J_theta_cart_right*_t246;
+    const trailer3_real_t _t248 = _t73 - _t74;
+    const trailer3_real_t _t249 = _t248*_t75;
+    const trailer3_real_t _t250 = -_t73 - _t74;
+    const trailer3_real_t _t251 = _t250*_t76;
+    const trailer3_real_t _t252 = _t79 - _t80;
+    const trailer3_real_t _t253 = _t252*_t81;
+    const trailer3_real_t _t254 = -_t79 - _t80;
+    const trailer3_real_t _t255 = _t254*_t82;
+    const trailer3_real_t _t256 = _t89 - _t90;
+    const trailer3_real_t _t257 = _t256*_t91;
+    const trailer3_real_t _t258 = -_t89 - _t90;
+    const trailer3_real_t _t259 = _t258*_t92;
+    const trailer3_real_t _t260 = _t232*_t255 + _t235*_t253 + _t238*_t259 + _t241*_t257
+            + _t244*_t251 + _t247*_t249;
+    const trailer3_real_t _t261 = J_x_tractor*_t56 + _t106*_t46 + _t108*_t58 + _t110*_t67
+            + _t112*_t88;
+    const trailer3_real_t _t262 = J_theta_tractor*_t46 + _t106*_t56 + _t114*_t58 + _t116*_t67
+            + _t118*_t88 + _t49*_t95;
+    const trailer3_real_t _t263 = J_x_tractor*_t49 + _t101*_t67 + _t104*_t88 + _t46*_t95
+            + _t58*_t98;
+    const trailer3_real_t _t264 = J_theta_cart*_t58 + _t108*_t56 + _t114*_t46 + _t119*_t67
+            + _t120*_t88 + _t49*_t98;
+    const trailer3_real_t _t265 = J_theta_cart2*_t67 + _t101*_t49 + _t110*_t56 + _t116*_t46
+            + _t119*_t58 + _t123*_t88;
+    const trailer3_real_t _t266 = J_theta_cart3*_t88 + _t104*_t49 + _t112*_t56 + _t118*_t46
+            + _t120*_t58 + _t123*_t67;
+    const trailer3_real_t _t267 = _t132*_t93 + _t132*_t94 + _t136 + _t137 + _t138 + _t139 + _t140
+            + _t141;
+    const trailer3_real_t _t268 = _t148*_t47 + _t149*_t49;
+    const trailer3_real_t _t269 = _t148*_t158 + _t149*_t163 + _t150*_t166 + _t151*_t169;
+    const trailer3_real_t _t270 = _t148*_t173 + _t149*_t177 + _t150*_t181 + _t151*_t185
+            + _t152*_t188 + _t153*_t191;
+    const trailer3_real_t _t271 = _t148*_t195 + _t149*_t199 + _t150*_t203 + _t151*_t207
+            + _t152*_t211 + _t153*_t215 + _t154*_t218 + _t155*_t221;
+    const trailer3_real_t _t272 = J_x_tractor*_t268 + _t108*_t269 + _t110*_t270 + _t112*_t271
+            + _t267;
+    const trailer3_real_t _t273 = -K_theta_tractor_x_tractor_2*_t132*_t3 + _t105*_t132 + _t107*_t130
+            + _t109*_t125 + _t128 - _t133 - _t134 - _t135;
+    const trailer3_real_t _t274 = _t148*_t156 + _t149*_t161;
+    const trailer3_real_t _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98
+            + _t273;
+    const trailer3_real_t _t276 =
+            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t125*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t127*_t20*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t130*_t2*_t3/TRAILER3_LIT(10.0) - _t133*_t4
+            - _t134*_t4 - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6
+            - _t141*_t6;
+    const trailer3_real_t _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95
+            + _t276;
+    const trailer3_real_t _t278 =
+            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t11*_t125/TRAILER3_LIT(20.0)
+            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t127*_t20/TRAILER3_LIT(20.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t132*_t5/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t132*_t3/TRAILER3_LIT(10.0)
+            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t132*_t2*_t5/TRAILER3_LIT(10.0)
+            - _t107*_t142 - _t133*_t14 - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15
+            - _t139*_t15;
+    const trailer3_real_t _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271
+            + _t274*_t98 + _t278;
+    const trailer3_real_t _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144
+            + _t115*_t142 + _t115*_t144 + _t121*_t128 - _t121*_t134 - _t122*_t138 - _t122*_t139
+            + _t143*_t99 + _t145*_t99;
+    const trailer3_real_t _t281 = J_theta_cart2*_t270 + _t101*_t274 + _t110*_t268 + _t119*_t269
+            + _t123*_t271 + _t280;
+    const trailer3_real_t _t282 = _t102*_t143 + _t102*_t145 + _t102*_t147 + _t103*_t143
+            + _t103*_t145 + _t103*_t147 - _t111*_t142 - _t111*_t144 - _t111*_t146 + _t117*_t142
+            + _t117*_t144 + _t117*_t146;
+    const trailer3_real_t _t283 = J_theta_cart3*_t271 + _t104*_t274 + _t112*_t268 + _t120*_t269
+            + _t123*_t270 + _t282;
+    const trailer3_real_t _t284 = _t224*_t56 + _t225*_t49 + _t226*_t46 + _t227*_t58 + _t228*_t67
+            + _t229*_t88 + _t260;
+    const trailer3_real_t _t285 = J_theta_cart2_left*_t255*_t255 + J_theta_cart2_right*_t253*_t253
+            + J_theta_cart3_left*_t259*_t259 + J_theta_cart3_right*_t257*_t257
+            + J_theta_cart_left*_t251*_t251 + J_theta_cart_right*_t249*_t249 + J_theta_left
+            + _t261*_t56 + _t262*_t46 + _t263*_t49 + _t264*_t58 + _t265*_t67 + _t266*_t88;
+    const trailer3_real_t _t286 = _t159 - _t160;
+    const trailer3_real_t _t287 = _t286*_t75;
+    const trailer3_real_t _t288 = _t164 - _t165;
+    const trailer3_real_t _t289 = _t288*_t75;
+    const trailer3_real_t _t290 = _t167 - _t168;
+    const trailer3_real_t _t291 = _t290*_t75;
+    const trailer3_real_t _t292 = _t170 - _t171;
+    const trailer3_real_t _t293 = _t292*_t75;
+    const trailer3_real_t _t294 = _t148*_t287 + _t149*_t289 + _t150*_t291 + _t151*_t293;
+    const trailer3_real_t _t295 = -_t159 - _t160;
+    const trailer3_real_t _t296 = _t295*_t76;
+    const trailer3_real_t _t297 = -_t164 - _t165;
+    const trailer3_real_t _t298 = _t297*_t76;
+    const trailer3_real_t _t299 = -_t167 - _t168;
+    const trailer3_real_t _t300 = _t299*_t76;
+    const trailer3_real_t _t301 = -_t170 - _t171;
+    const trailer3_real_t _t302 = _t301*_t76;
+    const trailer3_real_t _t303 = _t148*_t296 + _t149*_t298 + _t150*_t300 + _t151*_t302;
+    const trailer3_real_t _t304 = _t174 - _t175;
+    const trailer3_real_t _t305 = _t304*_t81;
+    const trailer3_real_t _t306 = _t178 - _t179;
+    const trailer3_real_t _t307 = _t306*_t81;
+    const trailer3_real_t _t308 = _t182 - _t183;
+    const trailer3_real_t _t309 = _t308*_t81;
+    const trailer3_real_t _t310 = _t186 - _t187;
+    const trailer3_real_t _t311 = _t310*_t81;
+    const trailer3_real_t _t312 = _t189 - _t190;
+    const trailer3_real_t _t313 = _t312*_t81;
+    const trailer3_real_t _t314 = _t192 - _t193;
+    const trailer3_real_t _t315 = _t314*_t81;
+    const trailer3_real_t _t316 = _t148*_t305 + _t149*_t307 + _t150*_t309 + _t151*_t311
+            + _t152*_t313 + _t153*_t315;
+    const trailer3_real_t _t317 = -_t174 - _t175;
+    const trailer3_real_t _t318 = _t317*_t82;
+    const trailer3_real_t _t319 = -_t178 - _t179;
+    const trailer3_real_t _t320 = _t319*_t82;
+    const trailer3_real_t _t321 = -_t182 - _t183;
+    const trailer3_real_t _t322 = _t321*_t82;
+    const trailer3_real_t _t323 = -_t186 - _t187;
+    const trailer3_real_t _t324 = _t323*_t82;
+    const trailer3_real_t _t325 = -_t189 - _t190;
+    const trailer3_real_t _t326 = _t325*_t82;
+    const trailer3_real_t _t327 = -_t192 - _t193;
+    const trailer3_real_t _t328 = _t327*_t82;
+    const trailer3_real_t _t329 = _t148*_t318 + _t149*_t320 + _t150*_t322 + _t151*_t324
+            + _t152*_t326 + _t153*_t328;
+    const trailer3_real_t _t330 = _t196 - _t197;
+    const trailer3_real_t _t331 = _t330*_t91;
+    const trailer3_real_t _t332 = _t200 - _t201;
+    const trailer3_real_t _t333 = _t332*_t91;
+    const trailer3_real_t _t334 = _t204 - _t205;
+    const trailer3_real_t _t335 = _t334*_t91;
+    const trailer3_real_t _t336 = _t208 - _t209;
+    const trailer3_real_t _t337 = _t336*_t91;
+    const trailer3_real_t _t338 = _t212 - _t213;
+    const trailer3_real_t _t339 = _t338*_t91;
+    const trailer3_real_t _t340 = _t216 - _t217;
+    const trailer3_real_t _t341 = _t340*_t91;
+    const trailer3_real_t _t342 = _t219 - _t220;
+    const trailer3_real_t _t343 = _t342*_t91;
+    const trailer3_real_t _t344 = _t222 - _t223;
+    const trailer3_real_t _t345 = _t344*_t91;
+    const trailer3_real_t _t346 = _t148*_t331 + _t149*_t333 + _t150*_t335 + _t151*_t337
+            + _t152*_t339 + _t153*_t341 + _t154*_t343 + _t155*_t345;
+    const trailer3_real_t _t347 = -_t196 - _t197;
+    const trailer3_real_t _t348 = _t347*_t92;
+    const trailer3_real_t _t349 = -_t200 - _t201;
+    const trailer3_real_t _t350 = _t349*_t92;
+    const trailer3_real_t _t351 = -_t204 - _t205;
+    const trailer3_real_t _t352 = _t351*_t92;
+    const trailer3_real_t _t353 = -_t208 - _t209;
+    const trailer3_real_t _t354 = _t353*_t92;
+    const trailer3_real_t _t355 = -_t212 - _t213;
+    const trailer3_real_t _t356 = _t355*_t92;
+    const trailer3_real_t _t357 = -_t216 - _t217;
+    const trailer3_real_t _t358 = _t357*_t92;
+    const trailer3_real_t _t359 = -_t219 - _t220;
+    const trailer3_real_t _t360 = _t359*_t92;
+    const trailer3_real_t _t361 = -_t222 - _t223;
+    const trailer3_real_t _t362 = _t361*_t92;
+    const trailer3_real_t _t363 = _t148*_t348 + _t149*_t350 + _t150*_t352 + _t151*_t354
+            + _t152*_t356 + _t153*_t358 + _t154*_t360 + _t155*_t362;
+    const trailer3_real_t _t364 = _t232*_t329 + _t235*_t316 + _t238*_t363 + _t241*_t346
+            + _t244*_t303 + _t247*_t294 + _t272*_t51 + _t275*_t47 - _t277*_t45 + _t279*_t53
+            + _t281*_t62 + _t283*_t84;
+    const trailer3_real_t _t365 = -_t364 + tau_right;
+    const trailer3_real_t _t366 = J_theta_cart2_left*_t255*_t329 + J_theta_cart2_right*_t253*_t316
+            + J_theta_cart3_left*_t259*_t363 + J_theta_cart3_right*_t257*_t346
+            + J_theta_cart_left*_t251*_t303 + J_theta_cart_right*_t249*_t294 + _t272*_t56
+            + _t275*_t49 + _t277*_t46 + _t279*_t58 + _t281*_t67 + _t283*_t88;
+    const trailer3_real_t _t367 = -_t366 + tau_left;
+    const trailer3_real_t _t368 = J_theta_cart2_left*_t231*_t231 + J_theta_cart2_right*_t234*_t234
+            + J_theta_cart3_left*_t237*_t237 + J_theta_cart3_right*_t240*_t240
+            + J_theta_cart_left*_t243*_t243 + J_theta_cart_right*_t246*_t246 + J_theta_right
+            + _t224*_t51 + _t225*_t47 - _t226*_t45 + _t227*_t53 + _t228*_t62 + _t229*_t84;
+    const trailer3_real_t _t369 = _t260 + _t261*_t51 - _t262*_t45 + _t263*_t47 + _t264*_t53
+            + _t265*_t62 + _t266*_t84;
+    const trailer3_real_t _t370 = -_t284*_t369 + _t285*_t368;
+    const trailer3_real_t _t371 = TRAILER3_LIT(1.0)/_t370;
+    const trailer3_real_t _t372 = _t371*(-_t284*_t367 + _t285*_t365);
+    const trailer3_real_t _t373 = _t371*(-_t365*_t369 + _t367*_t368);
+    const trailer3_real_t _t374 = _t274 + _t372*_t47 + _t373*_t49;
+    const trailer3_real_t _t375 = _t268 + _t372*_t51 + _t373*_t56;
+    const trailer3_real_t _t376 = -_t372*_t45 + _t373*_t46;
+    const trailer3_real_t _t377 = _t269 + _t372*_t53 + _t373*_t58;
+    const trailer3_real_t _t378 = _t270 + _t372*_t62 + _t373*_t67;
+    const trailer3_real_t _t379 = _t271 + _t372*_t84 + _t373*_t88;
+    const trailer3_real_t _t380 = -J_theta_tractor*_t376 - _t106*_t375 - _t114*_t377 - _t116*_t378
+            - _t118*_t379 - _t276 - _t374*_t95;
+    const trailer3_real_t _t381 = _t240*_t372 + _t257*_t373 + _t346;
+    const trailer3_real_t _t382 = -J_theta_cart3_right*_t381;
+    const trailer3_real_t _t383 = _t382*_t91;
+    const trailer3_real_t _t384 = _t237*_t372 + _t259*_t373 + _t363;
+    const trailer3_real_t _t385 = -J_theta_cart3_left*_t384;
+    const trailer3_real_t _t386 = _t385*_t92;
+    const trailer3_real_t _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376
+            - _t120*_t377 - _t123*_t378 - _t282;
+    const trailer3_real_t _t388 = _t383/TRAILER3_LIT(5.0) - _t386/TRAILER3_LIT(5.0) + _t387;
+    const trailer3_real_t _t389 = -TRAILER3_LIT(5.0)*_t388/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t390 = _t234*_t372 + _t253*_t373 + _t316;
+    const trailer3_real_t _t391 = -J_theta_cart2_right*_t390;
+    const trailer3_real_t _t392 = _t391*_t81;
+    const trailer3_real_t _t393 = _t231*_t372 + _t255*_t373 + _t329;
+    const trailer3_real_t _t394 = -J_theta_cart2_left*_t393;
+    const trailer3_real_t _t395 = _t394*_t82;
+    const trailer3_real_t _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376
+            - _t119*_t377 - _t123*_t379 - _t280;
+    const trailer3_real_t _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + _t392/TRAILER3_LIT(5.0)
+            - _t395/TRAILER3_LIT(5.0) + _t396;
+    const trailer3_real_t _t398 = -TRAILER3_LIT(5.0)*_t397/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t399 = _t246*_t372 + _t249*_t373 + _t294;
+    const trailer3_real_t _t400 = -J_theta_cart_right*_t399;
+    const trailer3_real_t _t401 = _t400*_t75;
+    const trailer3_real_t _t402 = _t243*_t372 + _t251*_t373 + _t303;
+    const trailer3_real_t _t403 = -J_theta_cart_left*_t402;
+    const trailer3_real_t _t404 = _t403*_t76;
+    const trailer3_real_t _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378
+            - _t120*_t379 - _t278 - _t374*_t98;
+    const trailer3_real_t _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383
+            - _t37*_t386 + _t401/TRAILER3_LIT(5.0) - _t404/TRAILER3_LIT(5.0) + _t405;
+    const trailer3_real_t _t407 = -TRAILER3_LIT(5.0)*_t406/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392
+            - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8;
+    const trailer3_real_t _t409 = TRAILER3_LIT(500.0)*_t408/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378
+            - _t112*_t379 - _t267;
+    const trailer3_real_t _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386
+            - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410;
+    const trailer3_real_t _t412 = TRAILER3_LIT(500.0)*_t411/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273
+            - _t376*_t95 - _t377*_t98;
+    const trailer3_real_t _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401
+            + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413;
+    const trailer3_real_t _t415 = TRAILER3_LIT(500.0)*_t414/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t416 = _t412*_t43 + _t415*_t44;
+    const trailer3_real_t _t417 = TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(500.0);
+    const trailer3_real_t _t418 = -TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(500.0);
+    const trailer3_real_t _t419 = _t412*_t417 + _t415*_t418;
+    const trailer3_real_t _t420 = _t419*_t419;
+    const trailer3_real_t _t421 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t422 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t423 = _t421*_t43;
+    const trailer3_real_t _t424 = _t421*_t44;
+    const trailer3_real_t _t425 = -_t1*_t424 - _t2*_t423 + _t421*_t8;
+    const trailer3_real_t _t426 = -TRAILER3_LIT(5.0)*_t425/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t427 = _t426/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t428 = _t1*_t423 + _t28*_t424 - _t29*_t421;
+    const trailer3_real_t _t429 = _t422*_t43;
+    const trailer3_real_t _t430 = _t422*_t44;
+    const trailer3_real_t _t431 = -_t1*_t430 - _t2*_t429 - _t422*_t8;
+    const trailer3_real_t _t432 = -TRAILER3_LIT(5.0)*_t431/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t433 = _t432/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t434 = _t1*_t429 + _t28*_t430 + _t29*_t422;
+    const trailer3_real_t _t435 = -_t10*_t424 - _t11*_t423 + _t13*_t421 - _t17*_t426;
+    const trailer3_real_t _t436 = -TRAILER3_LIT(5.0)*_t435/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t437 = _t436/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t438 = _t10*_t423 + _t30*_t424 - _t31*_t421 + _t33*_t426;
+    const trailer3_real_t _t439 = -_t10*_t430 - _t11*_t429 - _t13*_t422 - _t17*_t432;
+    const trailer3_real_t _t440 = -TRAILER3_LIT(5.0)*_t439/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t441 = _t440/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t442 = _t10*_t429 + _t30*_t430 + _t31*_t422 + _t33*_t432;
+    const trailer3_real_t _t443 = -_t19*_t424 - _t20*_t423 + _t22*_t421 - _t24*_t426 - _t27*_t436;
+    const trailer3_real_t _t444 = -TRAILER3_LIT(5.0)*_t443/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t445 = _t444/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t446 = _t19*_t423 + _t34*_t424 - _t35*_t421 + _t37*_t426 + _t39*_t436;
+    const trailer3_real_t _t447 = -_t19*_t430 - _t20*_t429 - _t22*_t422 - _t24*_t432 - _t27*_t440;
+    const trailer3_real_t _t448 = -TRAILER3_LIT(5.0)*_t447/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t449 = _t448/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t450 = _t19*_t429 + _t34*_t430 + _t35*_t422 + _t37*_t432 + _t39*_t440;
+    const trailer3_real_t _t451 = J_x_tractor*_t423 - _t106*_t421 + _t108*_t426 + _t110*_t436
+            + _t112*_t444;
+    const trailer3_real_t _t452 = J_x_tractor*_t424 + _t101*_t436 + _t104*_t444 - _t421*_t95
+            + _t426*_t98;
+    const trailer3_real_t _t453 = -J_theta_tractor*_t421 + _t106*_t423 + _t114*_t426 + _t116*_t436
+            + _t118*_t444 + _t424*_t95;
+    const trailer3_real_t _t454 = J_theta_cart*_t426 + _t108*_t423 - _t114*_t421 + _t119*_t436
+            + _t120*_t444 + _t424*_t98;
+    const trailer3_real_t _t455 = J_theta_cart2*_t436 + _t101*_t424 + _t110*_t423 - _t116*_t421
+            + _t119*_t426 + _t123*_t444;
+    const trailer3_real_t _t456 = J_theta_cart3*_t444 + _t104*_t424 + _t112*_t423 - _t118*_t421
+            + _t120*_t426 + _t123*_t436;
+    const trailer3_real_t _t457 = _t427 - _t428;
+    const trailer3_real_t _t458 = _t457*_t75;
+    const trailer3_real_t _t459 = _t433 - _t434;
+    const trailer3_real_t _t460 = _t459*_t75;
+    const trailer3_real_t _t461 = -_t427 - _t428;
+    const trailer3_real_t _t462 = _t461*_t76;
+    const trailer3_real_t _t463 = -_t433 - _t434;
+    const trailer3_real_t _t464 = _t463*_t76;
+    const trailer3_real_t _t465 = _t437 - _t438;
+    const trailer3_real_t _t466 = _t465*_t81;
+    const trailer3_real_t _t467 = _t441 - _t442;
+    const trailer3_real_t _t468 = _t467*_t81;
+    const trailer3_real_t _t469 = -_t437 - _t438;
+    const trailer3_real_t _t470 = _t469*_t82;
+    const trailer3_real_t _t471 = -_t441 - _t442;
+    const trailer3_real_t _t472 = _t471*_t82;
+    const trailer3_real_t _t473 = _t445 - _t446;
+    const trailer3_real_t _t474 = _t473*_t91;
+    const trailer3_real_t _t475 = _t449 - _t450;
+    const trailer3_real_t _t476 = _t475*_t91;
+    const trailer3_real_t _t477 = -_t445 - _t446;
+    const trailer3_real_t _t478 = _t477*_t92;
+    const trailer3_real_t _t479 = -_t449 - _t450;
+    const trailer3_real_t _t480 = _t479*_t92;
+    const trailer3_real_t _t481 = J_theta_cart2_left*_t470*_t472 + J_theta_cart2_right*_t466*_t468
+            + J_theta_cart3_left*_t478*_t480 + J_theta_cart3_right*_t474*_t476
+            + J_theta_cart_left*_t462*_t464 + J_theta_cart_right*_t458*_t460;
+    const trailer3_real_t _t482 = J_x_tractor*_t429 + _t106*_t422 + _t108*_t432 + _t110*_t440
+            + _t112*_t448;
+    const trailer3_real_t _t483 = J_theta_tractor*_t422 + _t106*_t429 + _t114*_t432 + _t116*_t440
+            + _t118*_t448 + _t430*_t95;
+    const trailer3_real_t _t484 = J_x_tractor*_t430 + _t101*_t440 + _t104*_t448 + _t422*_t95
+            + _t432*_t98;
+    const trailer3_real_t _t485 = J_theta_cart*_t432 + _t108*_t429 + _t114*_t422 + _t119*_t440
+            + _t120*_t448 + _t430*_t98;
+    const trailer3_real_t _t486 = J_theta_cart2*_t440 + _t101*_t430 + _t110*_t429 + _t116*_t422
+            + _t119*_t432 + _t123*_t448;
+    const trailer3_real_t _t487 = J_theta_cart3*_t448 + _t104*_t430 + _t112*_t429 + _t118*_t422
+            + _t120*_t432 + _t123*_t440;
+    const trailer3_real_t _t488 = _t409 + _t416;
+    const trailer3_real_t _t489 = -_t409 + _t416;
+    const trailer3_real_t _t490 = load_w0*mu_floor - TRAILER3_SQRT(_t420*share_w0*share_w0
+            + _t489*_t489);
+    const trailer3_real_t _t491 = load_w1*mu_floor - TRAILER3_SQRT(_t420*share_w1*share_w1
+            + _t488*_t488);
+    const trailer3_real_t _t492 = J_theta_cart2_left*_t470*_t470 + J_theta_cart2_right*_t466*_t466
+            + J_theta_cart3_left*_t478*_t478 + J_theta_cart3_right*_t474*_t474
+            + J_theta_cart_left*_t462*_t462 + J_theta_cart_right*_t458*_t458 + J_theta_right
+            - _t421*_t453 + _t423*_t451 + _t424*_t452 + _t426*_t454 + _t436*_t455 + _t444*_t456;
+    const trailer3_real_t _t493 = _t422*_t453 + _t429*_t451 + _t430*_t452 + _t432*_t454
+            + _t440*_t455 + _t448*_t456 + _t481;
+    const trailer3_real_t _t494 = -_t421*_t483 + _t423*_t482 + _t424*_t484 + _t426*_t485
+            + _t436*_t486 + _t444*_t487 + _t481;
+    const trailer3_real_t _t495 = J_theta_cart2_left*_t472*_t472 + J_theta_cart2_right*_t468*_t468
+            + J_theta_cart3_left*_t480*_t480 + J_theta_cart3_right*_t476*_t476
+            + J_theta_cart_left*_t464*_t464 + J_theta_cart_right*_t460*_t460 + J_theta_left
+            + _t422*_t483 + _t429*_t482 + _t430*_t484 + _t432*_t485 + _t440*_t486 + _t448*_t487;
+    if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart2_right > TRAILER3_LIT(0.0))) { /* radius_cart2_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart3_left > TRAILER3_LIT(0.0))) { /* radius_cart3_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart3_right > TRAILER3_LIT(0.0))) { /* radius_cart3_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_left > TRAILER3_LIT(0.0))) { /* radius_cart_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_cart_right > TRAILER3_LIT(0.0))) { /* radius_cart_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_left > TRAILER3_LIT(0.0))) { /* radius_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(radius_right > TRAILER3_LIT(0.0))) { /* radius_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart > TRAILER3_LIT(0.0))) { /* J_theta_cart > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2 > TRAILER3_LIT(0.0))) { /* J_theta_cart2 > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_left > TRAILER3_LIT(0.0))) { /* J_theta_cart2_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart2_right > TRAILER3_LIT(0.0))) { /* J_theta_cart2_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3 > TRAILER3_LIT(0.0))) { /* J_theta_cart3 > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3_left > TRAILER3_LIT(0.0))) { /* J_theta_cart3_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart3_right > TRAILER3_LIT(0.0))) { /* J_theta_cart3_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_left > TRAILER3_LIT(0.0))) { /* J_theta_cart_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_cart_right > TRAILER3_LIT(0.0))) { /* J_theta_cart_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_left > TRAILER3_LIT(0.0))) { /* J_theta_left > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_right > TRAILER3_LIT(0.0))) { /* J_theta_right > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_theta_tractor > TRAILER3_LIT(0.0))) { /* J_theta_tractor > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(_t492 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(_t492*_t495 - _t493*_t494 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+                                                               model */
+        return TRAILER3_ERR_BAD_PARAMS;
+    }
+    if (!(mu_floor > TRAILER3_LIT(0.0))) { /* mu > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(load_w0 > TRAILER3_LIT(0.0))) { /* loads[0] > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(load_w1 > TRAILER3_LIT(0.0))) { /* loads[1] > 0 */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(_t490 > TRAILER3_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+        return TRAILER3_WARN_TRACTION;
+    }
+    if (!(_t491 > TRAILER3_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+        return TRAILER3_WARN_TRACTION;
+    }
+    const trailer3_real_t r_0 = _t490;
+    const trailer3_real_t r_1 = _t491;
+    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+        return TRAILER3_ERR_NONFINITE_OUTPUT;
+    }
+    margins[0] = r_0;
+    margins[1] = r_1;
+    return TRAILER3_OK;
+}

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["forward_dynamics", "kinematics", "linearization", "minimal_bias_forces", "minimal_forward_dynamics", "minimal_mass_matrix", "wheel_contact_forces"]
+__all__ = ["forward_dynamics", "kinematics", "linearization", "minimal_bias_forces", "minimal_forward_dynamics", "minimal_mass_matrix", "traction_check", "traction_margins", "wheel_contact_forces"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -3581,3 +3581,1242 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     if not np.all(np.isfinite(lateral)):
         raise ValueError("TRAILER3_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     return longitudinal, lateral
+
+
+def traction_margins(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
+    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
+    traction than the floor gives and slips.
+
+    Paper equations: (9), (10)-(12).
+
+    Args:
+        q: array of 14 (shape 14x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right, theta_cart3_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right, theta_cart3_left
+        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
+        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
+        loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
+        shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
+
+    Returns:
+        margins: array of 2 (shape 2x1, row-major). N, per driven wheel
+
+    operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt
+    """
+    _, _, theta_tractor, theta_cart, theta_cart2, theta_cart3, _, _, _, _, _, _, _, _ = _flat(q, 14, "q")
+    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
+    tau_right, tau_left = _flat(tau, 2, "tau")
+    mu_floor, = _flat(mu, 1, "mu")
+    load_w0, load_w1 = _flat(loads, 2, "loads")
+    share_w0, share_w1 = _flat(shares, 2, "shares")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
+    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
+    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
+    J_theta_cart3 = float(_field(p, "J_theta_cart3"))
+    J_theta_cart3_left = float(_field(p, "J_theta_cart3_left"))
+    J_theta_cart3_right = float(_field(p, "J_theta_cart3_right"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
+    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
+    K_theta_cart3_x_tractor = float(_field(p, "K_theta_cart3_x_tractor"))
+    K_theta_cart3_x_tractor_2 = float(_field(p, "K_theta_cart3_x_tractor_2"))
+    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart2_left = float(_field(p, "radius_cart2_left"))
+    radius_cart2_right = float(_field(p, "radius_cart2_right"))
+    radius_cart3_left = float(_field(p, "radius_cart3_left"))
+    radius_cart3_right = float(_field(p, "radius_cart3_right"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    if not all(map(math.isfinite, (theta_tractor, theta_cart, theta_cart2, theta_cart3, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+        raise ValueError("TRAILER3_ERR_NONFINITE_INPUT: an input of traction_margins is NaN or infinite")
+    try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
+        _t0 = math.sin(theta_cart)
+        _t1 = -_t0
+        _t2 = math.cos(theta_cart)
+        _t3 = math.sin(theta_tractor)
+        _t4 = 3.0*_t3/10.0
+        _t5 = math.cos(theta_tractor)
+        _t6 = 3.0*_t5/10.0
+        _t7 = _t0*_t4 + _t2*_t6
+        _t8 = -_t7
+        _t9 = math.sin(theta_cart2)
+        _t10 = -_t9
+        _t11 = math.cos(theta_cart2)
+        _t12 = _t11*_t6 + _t4*_t9
+        _t13 = -_t12
+        _t14 = 17.0*_t0/20.0
+        _t15 = 17.0*_t2/20.0
+        _t16 = _t11*_t15 + _t14*_t9
+        _t17 = -_t16
+        _t18 = math.sin(theta_cart3)
+        _t19 = -_t18
+        _t20 = math.cos(theta_cart3)
+        _t21 = _t18*_t4 + _t20*_t6
+        _t22 = -_t21
+        _t23 = _t14*_t18 + _t15*_t20
+        _t24 = -_t23
+        _t25 = 17.0*_t20/20.0
+        _t26 = _t11*_t25 + 17.0*_t18*_t9/20.0
+        _t27 = -_t26
+        _t28 = -_t2
+        _t29 = _t0*_t6 - _t2*_t4
+        _t30 = -_t11
+        _t31 = -_t11*_t4 + _t6*_t9
+        _t32 = _t11*_t14 - 17.0*_t2*_t9/20.0
+        _t33 = -_t32
+        _t34 = -_t20
+        _t35 = _t18*_t6 - _t20*_t4
+        _t36 = _t14*_t20 - 17.0*_t18*_t2/20.0
+        _t37 = -_t36
+        _t38 = -17.0*_t11*_t18/20.0 + _t25*_t9
+        _t39 = -_t38
+        _t40 = -radius_right
+        _t41 = -radius_left
+        _t42 = 207.0*_t3/1000.0
+        _t43 = -_t42
+        _t44 = -207.0*_t5/1000.0
+        _t45 = 500.0*_t40/207.0
+        _t46 = 500.0*_t41/207.0
+        _t47 = _t44*_t45
+        _t48 = _t1*_t47 - _t45*_t8
+        _t49 = _t44*_t46
+        _t50 = _t1*_t49 + _t46*_t8
+        _t51 = _t43*_t45
+        _t52 = -_t2*_t51 - _t48
+        _t53 = -5.0*_t52/3.0
+        _t54 = _t17*_t53
+        _t55 = _t10*_t47 - _t13*_t45
+        _t56 = _t43*_t46
+        _t57 = -_t2*_t56 - _t50
+        _t58 = -5.0*_t57/3.0
+        _t59 = _t17*_t58
+        _t60 = _t10*_t49 + _t13*_t46
+        _t61 = -_t11*_t51 - _t54 - _t55
+        _t62 = -5.0*_t61/3.0
+        _t63 = _t27*_t62
+        _t64 = _t24*_t53
+        _t65 = _t19*_t47 - _t22*_t45
+        _t66 = -_t11*_t56 - _t59 - _t60
+        _t67 = -5.0*_t66/3.0
+        _t68 = _t27*_t67
+        _t69 = _t24*_t58
+        _t70 = _t19*_t49 + _t22*_t46
+        _t71 = _t53/5.0
+        _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45
+        _t73 = _t58/5.0
+        _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46
+        _t75 = 1.0/radius_cart_right
+        _t76 = 1.0/radius_cart_left
+        _t77 = _t62/5.0
+        _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53
+        _t79 = _t67/5.0
+        _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58
+        _t81 = 1.0/radius_cart2_right
+        _t82 = 1.0/radius_cart2_left
+        _t83 = -_t20*_t51 - _t63 - _t64 - _t65
+        _t84 = -5.0*_t83/3.0
+        _t85 = _t84/5.0
+        _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62
+        _t87 = -_t20*_t56 - _t68 - _t69 - _t70
+        _t88 = -5.0*_t87/3.0
+        _t89 = _t88/5.0
+        _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67
+        _t91 = 1.0/radius_cart3_right
+        _t92 = 1.0/radius_cart3_left
+        _t93 = K_theta_tractor_x_tractor*_t3
+        _t94 = K_theta_tractor_x_tractor_2*_t5
+        _t95 = _t93 + _t94
+        _t96 = K_theta_cart_x_tractor*_t0
+        _t97 = K_theta_cart_x_tractor_2*_t2
+        _t98 = _t96 + _t97
+        _t99 = K_theta_cart2_x_tractor*_t9
+        _t100 = K_theta_cart2_x_tractor_2*_t11
+        _t101 = _t100 + _t99
+        _t102 = K_theta_cart3_x_tractor*_t18
+        _t103 = K_theta_cart3_x_tractor_2*_t20
+        _t104 = _t102 + _t103
+        _t105 = K_theta_tractor_x_tractor*_t5
+        _t106 = K_theta_tractor_x_tractor_2*_t3 - _t105
+        _t107 = K_theta_cart_x_tractor*_t2
+        _t108 = K_theta_cart_x_tractor_2*_t0 - _t107
+        _t109 = K_theta_cart2_x_tractor*_t11
+        _t110 = K_theta_cart2_x_tractor_2*_t9 - _t109
+        _t111 = K_theta_cart3_x_tractor*_t20
+        _t112 = K_theta_cart3_x_tractor_2*_t18 - _t111
+        _t113 = K_theta_cart_x_tractor_2*_t0
+        _t114 = _t107*_t6 - _t113*_t6 + _t4*_t96 + _t4*_t97
+        _t115 = K_theta_cart2_x_tractor_2*_t9
+        _t116 = _t100*_t4 + _t109*_t6 - _t115*_t6 + _t4*_t99
+        _t117 = K_theta_cart3_x_tractor_2*_t18
+        _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6
+        _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99
+        _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15
+        _t121 = 17.0*_t9/20.0
+        _t122 = 17.0*_t11/20.0
+        _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122
+        _t124 = _t62*thetadot_right + _t67*thetadot_left
+        _t125 = _t124*_t124
+        _t126 = _t84*thetadot_right + _t88*thetadot_left
+        _t127 = _t126*_t126
+        _t128 = _t111*_t127
+        _t129 = _t53*thetadot_right + _t58*thetadot_left
+        _t130 = _t129*_t129
+        _t131 = -_t45*thetadot_right + _t46*thetadot_left
+        _t132 = _t131*_t131
+        _t133 = _t115*_t125
+        _t134 = _t117*_t127
+        _t135 = _t113*_t130
+        _t136 = _t125*_t99
+        _t137 = _t100*_t125
+        _t138 = _t102*_t127
+        _t139 = _t103*_t127
+        _t140 = _t130*_t96
+        _t141 = _t130*_t97
+        _t142 = _t132*_t4
+        _t143 = _t132*_t6
+        _t144 = _t130*_t14
+        _t145 = _t130*_t15
+        _t146 = _t121*_t125
+        _t147 = _t122*_t125
+        _t148 = _t131*thetadot_right
+        _t149 = _t131*thetadot_left
+        _t150 = _t129*thetadot_right
+        _t151 = _t129*thetadot_left
+        _t152 = _t124*thetadot_right
+        _t153 = _t124*thetadot_left
+        _t154 = _t126*thetadot_right
+        _t155 = _t126*thetadot_left
+        _t156 = _t42*_t45
+        _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45
+        _t158 = -5.0*_t157/3.0
+        _t159 = _t158/5.0
+        _t160 = _t156*_t28 + _t48
+        _t161 = _t42*_t46
+        _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46
+        _t163 = -5.0*_t162/3.0
+        _t164 = _t163/5.0
+        _t165 = _t161*_t28 + _t50
+        _t166 = 5.0*_t72/3.0
+        _t167 = _t166/5.0
+        _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7
+        _t169 = 5.0*_t74/3.0
+        _t170 = _t169/5.0
+        _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7
+        _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45
+        _t173 = -5.0*_t172/3.0
+        _t174 = _t173/5.0
+        _t175 = _t156*_t30 + _t158*_t33 + _t55
+        _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46
+        _t177 = -5.0*_t176/3.0
+        _t178 = _t177/5.0
+        _t179 = _t161*_t30 + _t163*_t33 + _t60
+        _t180 = -_t166*_t17 - _t32*_t53
+        _t181 = -5.0*_t180/3.0
+        _t182 = _t181/5.0
+        _t183 = _t166*_t33 + _t54
+        _t184 = -_t169*_t17 - _t32*_t58
+        _t185 = -5.0*_t184/3.0
+        _t186 = _t185/5.0
+        _t187 = _t169*_t33 + _t59
+        _t188 = 5.0*_t78/3.0
+        _t189 = _t188/5.0
+        _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9
+        _t191 = 5.0*_t80/3.0
+        _t192 = _t191/5.0
+        _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9
+        _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45
+        _t195 = -5.0*_t194/3.0
+        _t196 = _t195/5.0
+        _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65
+        _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46
+        _t199 = -5.0*_t198/3.0
+        _t200 = _t199/5.0
+        _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70
+        _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53
+        _t203 = -5.0*_t202/3.0
+        _t204 = _t203/5.0
+        _t205 = _t166*_t37 + _t181*_t39 + _t64
+        _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58
+        _t207 = -5.0*_t206/3.0
+        _t208 = _t207/5.0
+        _t209 = _t169*_t37 + _t185*_t39 + _t69
+        _t210 = -_t188*_t27 - _t38*_t62
+        _t211 = -5.0*_t210/3.0
+        _t212 = _t211/5.0
+        _t213 = _t188*_t39 + _t63
+        _t214 = -_t191*_t27 - _t38*_t67
+        _t215 = -5.0*_t214/3.0
+        _t216 = _t215/5.0
+        _t217 = _t191*_t39 + _t68
+        _t218 = 5.0*_t86/3.0
+        _t219 = _t218/5.0
+        _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51
+        _t221 = 5.0*_t90/3.0
+        _t222 = _t221/5.0
+        _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56
+        _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62 + _t112*_t84
+        _t225 = J_x_tractor*_t47 + _t101*_t62 + _t104*_t84 - _t45*_t95 + _t53*_t98
+        _t226 = -J_theta_tractor*_t45 + _t106*_t51 + _t114*_t53 + _t116*_t62 + _t118*_t84 + _t47*_t95
+        _t227 = J_theta_cart*_t53 + _t108*_t51 - _t114*_t45 + _t119*_t62 + _t120*_t84 + _t47*_t98
+        _t228 = J_theta_cart2*_t62 + _t101*_t47 + _t110*_t51 - _t116*_t45 + _t119*_t53 + _t123*_t84
+        _t229 = J_theta_cart3*_t84 + _t104*_t47 + _t112*_t51 - _t118*_t45 + _t120*_t53 + _t123*_t62
+        _t230 = -_t77 - _t78
+        _t231 = _t230*_t82
+        _t232 = J_theta_cart2_left*_t231
+        _t233 = _t77 - _t78
+        _t234 = _t233*_t81
+        _t235 = J_theta_cart2_right*_t234
+        _t236 = -_t85 - _t86
+        _t237 = _t236*_t92
+        _t238 = J_theta_cart3_left*_t237
+        _t239 = _t85 - _t86
+        _t240 = _t239*_t91
+        _t241 = J_theta_cart3_right*_t240
+        _t242 = -_t71 - _t72
+        _t243 = _t242*_t76
+        _t244 = J_theta_cart_left*_t243
+        _t245 = _t71 - _t72
+        _t246 = _t245*_t75
+        _t247 = J_theta_cart_right*_t246
+        _t248 = _t73 - _t74
+        _t249 = _t248*_t75
+        _t250 = -_t73 - _t74
+        _t251 = _t250*_t76
+        _t252 = _t79 - _t80
+        _t253 = _t252*_t81
+        _t254 = -_t79 - _t80
+        _t255 = _t254*_t82
+        _t256 = _t89 - _t90
+        _t257 = _t256*_t91
+        _t258 = -_t89 - _t90
+        _t259 = _t258*_t92
+        _t260 = _t232*_t255 + _t235*_t253 + _t238*_t259 + _t241*_t257 + _t244*_t251 + _t247*_t249
+        _t261 = J_x_tractor*_t56 + _t106*_t46 + _t108*_t58 + _t110*_t67 + _t112*_t88
+        _t262 = J_theta_tractor*_t46 + _t106*_t56 + _t114*_t58 + _t116*_t67 + _t118*_t88 + _t49*_t95
+        _t263 = J_x_tractor*_t49 + _t101*_t67 + _t104*_t88 + _t46*_t95 + _t58*_t98
+        _t264 = J_theta_cart*_t58 + _t108*_t56 + _t114*_t46 + _t119*_t67 + _t120*_t88 + _t49*_t98
+        _t265 = J_theta_cart2*_t67 + _t101*_t49 + _t110*_t56 + _t116*_t46 + _t119*_t58 + _t123*_t88
+        _t266 = J_theta_cart3*_t88 + _t104*_t49 + _t112*_t56 + _t118*_t46 + _t120*_t58 + _t123*_t67
+        _t267 = _t132*_t93 + _t132*_t94 + _t136 + _t137 + _t138 + _t139 + _t140 + _t141
+        _t268 = _t148*_t47 + _t149*_t49
+        _t269 = _t148*_t158 + _t149*_t163 + _t150*_t166 + _t151*_t169
+        _t270 = _t148*_t173 + _t149*_t177 + _t150*_t181 + _t151*_t185 + _t152*_t188 + _t153*_t191
+        _t271 = _t148*_t195 + _t149*_t199 + _t150*_t203 + _t151*_t207 + _t152*_t211 + _t153*_t215 + _t154*_t218 + _t155*_t221
+        _t272 = J_x_tractor*_t268 + _t108*_t269 + _t110*_t270 + _t112*_t271 + _t267
+        _t273 = -K_theta_tractor_x_tractor_2*_t132*_t3 + _t105*_t132 + _t107*_t130 + _t109*_t125 + _t128 - _t133 - _t134 - _t135
+        _t274 = _t148*_t156 + _t149*_t161
+        _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98 + _t273
+        _t276 = 3.0*K_theta_cart2_x_tractor*_t11*_t125*_t3/10.0 + 3.0*K_theta_cart3_x_tractor*_t127*_t20*_t3/10.0 + 3.0*K_theta_cart_x_tractor*_t130*_t2*_t3/10.0 - _t133*_t4 - _t134*_t4 - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6 - _t141*_t6
+        _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95 + _t276
+        _t278 = 17.0*K_theta_cart2_x_tractor*_t0*_t11*_t125/20.0 + 17.0*K_theta_cart3_x_tractor*_t0*_t127*_t20/20.0 + 3.0*K_theta_cart_x_tractor*_t0*_t132*_t5/10.0 + 3.0*K_theta_cart_x_tractor_2*_t0*_t132*_t3/10.0 + 3.0*K_theta_cart_x_tractor_2*_t132*_t2*_t5/10.0 - _t107*_t142 - _t133*_t14 - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15 - _t139*_t15
+        _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271 + _t274*_t98 + _t278
+        _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144 + _t115*_t142 + _t115*_t144 + _t121*_t128 - _t121*_t134 - _t122*_t138 - _t122*_t139 + _t143*_t99 + _t145*_t99
+        _t281 = J_theta_cart2*_t270 + _t101*_t274 + _t110*_t268 + _t119*_t269 + _t123*_t271 + _t280
+        _t282 = _t102*_t143 + _t102*_t145 + _t102*_t147 + _t103*_t143 + _t103*_t145 + _t103*_t147 - _t111*_t142 - _t111*_t144 - _t111*_t146 + _t117*_t142 + _t117*_t144 + _t117*_t146
+        _t283 = J_theta_cart3*_t271 + _t104*_t274 + _t112*_t268 + _t120*_t269 + _t123*_t270 + _t282
+        _t284 = _t224*_t56 + _t225*_t49 + _t226*_t46 + _t227*_t58 + _t228*_t67 + _t229*_t88 + _t260
+        _t285 = J_theta_cart2_left*_t255*_t255 + J_theta_cart2_right*_t253*_t253 + J_theta_cart3_left*_t259*_t259 + J_theta_cart3_right*_t257*_t257 + J_theta_cart_left*_t251*_t251 + J_theta_cart_right*_t249*_t249 + J_theta_left + _t261*_t56 + _t262*_t46 + _t263*_t49 + _t264*_t58 + _t265*_t67 + _t266*_t88
+        _t286 = _t159 - _t160
+        _t287 = _t286*_t75
+        _t288 = _t164 - _t165
+        _t289 = _t288*_t75
+        _t290 = _t167 - _t168
+        _t291 = _t290*_t75
+        _t292 = _t170 - _t171
+        _t293 = _t292*_t75
+        _t294 = _t148*_t287 + _t149*_t289 + _t150*_t291 + _t151*_t293
+        _t295 = -_t159 - _t160
+        _t296 = _t295*_t76
+        _t297 = -_t164 - _t165
+        _t298 = _t297*_t76
+        _t299 = -_t167 - _t168
+        _t300 = _t299*_t76
+        _t301 = -_t170 - _t171
+        _t302 = _t301*_t76
+        _t303 = _t148*_t296 + _t149*_t298 + _t150*_t300 + _t151*_t302
+        _t304 = _t174 - _t175
+        _t305 = _t304*_t81
+        _t306 = _t178 - _t179
+        _t307 = _t306*_t81
+        _t308 = _t182 - _t183
+        _t309 = _t308*_t81
+        _t310 = _t186 - _t187
+        _t311 = _t310*_t81
+        _t312 = _t189 - _t190
+        _t313 = _t312*_t81
+        _t314 = _t192 - _t193
+        _t315 = _t314*_t81
+        _t316 = _t148*_t305 + _t149*_t307 + _t150*_t309 + _t151*_t311 + _t152*_t313 + _t153*_t315
+        _t317 = -_t174 - _t175
+        _t318 = _t317*_t82
+        _t319 = -_t178 - _t179
+        _t320 = _t319*_t82
+        _t321 = -_t182 - _t183
+        _t322 = _t321*_t82
+        _t323 = -_t186 - _t187
+        _t324 = _t323*_t82
+        _t325 = -_t189 - _t190
+        _t326 = _t325*_t82
+        _t327 = -_t192 - _t193
+        _t328 = _t327*_t82
+        _t329 = _t148*_t318 + _t149*_t320 + _t150*_t322 + _t151*_t324 + _t152*_t326 + _t153*_t328
+        _t330 = _t196 - _t197
+        _t331 = _t330*_t91
+        _t332 = _t200 - _t201
+        _t333 = _t332*_t91
+        _t334 = _t204 - _t205
+        _t335 = _t334*_t91
+        _t336 = _t208 - _t209
+        _t337 = _t336*_t91
+        _t338 = _t212 - _t213
+        _t339 = _t338*_t91
+        _t340 = _t216 - _t217
+        _t341 = _t340*_t91
+        _t342 = _t219 - _t220
+        _t343 = _t342*_t91
+        _t344 = _t222 - _t223
+        _t345 = _t344*_t91
+        _t346 = _t148*_t331 + _t149*_t333 + _t150*_t335 + _t151*_t337 + _t152*_t339 + _t153*_t341 + _t154*_t343 + _t155*_t345
+        _t347 = -_t196 - _t197
+        _t348 = _t347*_t92
+        _t349 = -_t200 - _t201
+        _t350 = _t349*_t92
+        _t351 = -_t204 - _t205
+        _t352 = _t351*_t92
+        _t353 = -_t208 - _t209
+        _t354 = _t353*_t92
+        _t355 = -_t212 - _t213
+        _t356 = _t355*_t92
+        _t357 = -_t216 - _t217
+        _t358 = _t357*_t92
+        _t359 = -_t219 - _t220
+        _t360 = _t359*_t92
+        _t361 = -_t222 - _t223
+        _t362 = _t361*_t92
+        _t363 = _t148*_t348 + _t149*_t350 + _t150*_t352 + _t151*_t354 + _t152*_t356 + _t153*_t358 + _t154*_t360 + _t155*_t362
+        _t364 = _t232*_t329 + _t235*_t316 + _t238*_t363 + _t241*_t346 + _t244*_t303 + _t247*_t294 + _t272*_t51 + _t275*_t47 - _t277*_t45 + _t279*_t53 + _t281*_t62 + _t283*_t84
+        _t365 = -_t364 + tau_right
+        _t366 = J_theta_cart2_left*_t255*_t329 + J_theta_cart2_right*_t253*_t316 + J_theta_cart3_left*_t259*_t363 + J_theta_cart3_right*_t257*_t346 + J_theta_cart_left*_t251*_t303 + J_theta_cart_right*_t249*_t294 + _t272*_t56 + _t275*_t49 + _t277*_t46 + _t279*_t58 + _t281*_t67 + _t283*_t88
+        _t367 = -_t366 + tau_left
+        _t368 = J_theta_cart2_left*_t231*_t231 + J_theta_cart2_right*_t234*_t234 + J_theta_cart3_left*_t237*_t237 + J_theta_cart3_right*_t240*_t240 + J_theta_cart_left*_t243*_t243 + J_theta_cart_right*_t246*_t246 + J_theta_right + _t224*_t51 + _t225*_t47 - _t226*_t45 + _t227*_t53 + _t228*_t62 + _t229*_t84
+        _t369 = _t260 + _t261*_t51 - _t262*_t45 + _t263*_t47 + _t264*_t53 + _t265*_t62 + _t266*_t84
+        _t370 = -_t284*_t369 + _t285*_t368
+        _t371 = 1.0/_t370
+        _t372 = _t371*(-_t284*_t367 + _t285*_t365)
+        _t373 = _t371*(-_t365*_t369 + _t367*_t368)
+        _t374 = _t274 + _t372*_t47 + _t373*_t49
+        _t375 = _t268 + _t372*_t51 + _t373*_t56
+        _t376 = -_t372*_t45 + _t373*_t46
+        _t377 = _t269 + _t372*_t53 + _t373*_t58
+        _t378 = _t270 + _t372*_t62 + _t373*_t67
+        _t379 = _t271 + _t372*_t84 + _t373*_t88
+        _t380 = -J_theta_tractor*_t376 - _t106*_t375 - _t114*_t377 - _t116*_t378 - _t118*_t379 - _t276 - _t374*_t95
+        _t381 = _t240*_t372 + _t257*_t373 + _t346
+        _t382 = -J_theta_cart3_right*_t381
+        _t383 = _t382*_t91
+        _t384 = _t237*_t372 + _t259*_t373 + _t363
+        _t385 = -J_theta_cart3_left*_t384
+        _t386 = _t385*_t92
+        _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376 - _t120*_t377 - _t123*_t378 - _t282
+        _t388 = _t383/5.0 - _t386/5.0 + _t387
+        _t389 = -5.0*_t388/3.0
+        _t390 = _t234*_t372 + _t253*_t373 + _t316
+        _t391 = -J_theta_cart2_right*_t390
+        _t392 = _t391*_t81
+        _t393 = _t231*_t372 + _t255*_t373 + _t329
+        _t394 = -J_theta_cart2_left*_t393
+        _t395 = _t394*_t82
+        _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376 - _t119*_t377 - _t123*_t379 - _t280
+        _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + _t392/5.0 - _t395/5.0 + _t396
+        _t398 = -5.0*_t397/3.0
+        _t399 = _t246*_t372 + _t249*_t373 + _t294
+        _t400 = -J_theta_cart_right*_t399
+        _t401 = _t400*_t75
+        _t402 = _t243*_t372 + _t251*_t373 + _t303
+        _t403 = -J_theta_cart_left*_t402
+        _t404 = _t403*_t76
+        _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378 - _t120*_t379 - _t278 - _t374*_t98
+        _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383 - _t37*_t386 + _t401/5.0 - _t404/5.0 + _t405
+        _t407 = -5.0*_t406/3.0
+        _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392 - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8
+        _t409 = 500.0*_t408/207.0
+        _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378 - _t112*_t379 - _t267
+        _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386 - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410
+        _t412 = 500.0*_t411/207.0
+        _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273 - _t376*_t95 - _t377*_t98
+        _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401 + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413
+        _t415 = 500.0*_t414/207.0
+        _t416 = _t412*_t43 + _t415*_t44
+        _t417 = 207.0*_t5/500.0
+        _t418 = -207.0*_t3/500.0
+        _t419 = _t412*_t417 + _t415*_t418
+        _t420 = _t419*_t419
+        _t421 = 500.0*_t40/207.0
+        _t422 = 500.0*_t41/207.0
+        _t423 = _t421*_t43
+        _t424 = _t421*_t44
+        _t425 = -_t1*_t424 - _t2*_t423 + _t421*_t8
+        _t426 = -5.0*_t425/3.0
+        _t427 = _t426/5.0
+        _t428 = _t1*_t423 + _t28*_t424 - _t29*_t421
+        _t429 = _t422*_t43
+        _t430 = _t422*_t44
+        _t431 = -_t1*_t430 - _t2*_t429 - _t422*_t8
+        _t432 = -5.0*_t431/3.0
+        _t433 = _t432/5.0
+        _t434 = _t1*_t429 + _t28*_t430 + _t29*_t422
+        _t435 = -_t10*_t424 - _t11*_t423 + _t13*_t421 - _t17*_t426
+        _t436 = -5.0*_t435/3.0
+        _t437 = _t436/5.0
+        _t438 = _t10*_t423 + _t30*_t424 - _t31*_t421 + _t33*_t426
+        _t439 = -_t10*_t430 - _t11*_t429 - _t13*_t422 - _t17*_t432
+        _t440 = -5.0*_t439/3.0
+        _t441 = _t440/5.0
+        _t442 = _t10*_t429 + _t30*_t430 + _t31*_t422 + _t33*_t432
+        _t443 = -_t19*_t424 - _t20*_t423 + _t22*_t421 - _t24*_t426 - _t27*_t436
+        _t444 = -5.0*_t443/3.0
+        _t445 = _t444/5.0
+        _t446 = _t19*_t423 + _t34*_t424 - _t35*_t421 + _t37*_t426 + _t39*_t436
+        _t447 = -_t19*_t430 - _t20*_t429 - _t22*_t422 - _t24*_t432 - _t27*_t440
+        _t448 = -5.0*_t447/3.0
+        _t449 = _t448/5.0
+        _t450 = _t19*_t429 + _t34*_t430 + _t35*_t422 + _t37*_t432 + _t39*_t440
+        _t451 = J_x_tractor*_t423 - _t106*_t421 + _t108*_t426 + _t110*_t436 + _t112*_t444
+        _t452 = J_x_tractor*_t424 + _t101*_t436 + _t104*_t444 - _t421*_t95 + _t426*_t98
+        _t453 = -J_theta_tractor*_t421 + _t106*_t423 + _t114*_t426 + _t116*_t436 + _t118*_t444 + _t424*_t95
+        _t454 = J_theta_cart*_t426 + _t108*_t423 - _t114*_t421 + _t119*_t436 + _t120*_t444 + _t424*_t98
+        _t455 = J_theta_cart2*_t436 + _t101*_t424 + _t110*_t423 - _t116*_t421 + _t119*_t426 + _t123*_t444
+        _t456 = J_theta_cart3*_t444 + _t104*_t424 + _t112*_t423 - _t118*_t421 + _t120*_t426 + _t123*_t436
+        _t457 = _t427 - _t428
+        _t458 = _t457*_t75
+        _t459 = _t433 - _t434
+        _t460 = _t459*_t75
+        _t461 = -_t427 - _t428
+        _t462 = _t461*_t76
+        _t463 = -_t433 - _t434
+        _t464 = _t463*_t76
+        _t465 = _t437 - _t438
+        _t466 = _t465*_t81
+        _t467 = _t441 - _t442
+        _t468 = _t467*_t81
+        _t469 = -_t437 - _t438
+        _t470 = _t469*_t82
+        _t471 = -_t441 - _t442
+        _t472 = _t471*_t82
+        _t473 = _t445 - _t446
+        _t474 = _t473*_t91
+        _t475 = _t449 - _t450
+        _t476 = _t475*_t91
+        _t477 = -_t445 - _t446
+        _t478 = _t477*_t92
+        _t479 = -_t449 - _t450
+        _t480 = _t479*_t92
+        _t481 = J_theta_cart2_left*_t470*_t472 + J_theta_cart2_right*_t466*_t468 + J_theta_cart3_left*_t478*_t480 + J_theta_cart3_right*_t474*_t476 + J_theta_cart_left*_t462*_t464 + J_theta_cart_right*_t458*_t460
+        _t482 = J_x_tractor*_t429 + _t106*_t422 + _t108*_t432 + _t110*_t440 + _t112*_t448
+        _t483 = J_theta_tractor*_t422 + _t106*_t429 + _t114*_t432 + _t116*_t440 + _t118*_t448 + _t430*_t95
+        _t484 = J_x_tractor*_t430 + _t101*_t440 + _t104*_t448 + _t422*_t95 + _t432*_t98
+        _t485 = J_theta_cart*_t432 + _t108*_t429 + _t114*_t422 + _t119*_t440 + _t120*_t448 + _t430*_t98
+        _t486 = J_theta_cart2*_t440 + _t101*_t430 + _t110*_t429 + _t116*_t422 + _t119*_t432 + _t123*_t448
+        _t487 = J_theta_cart3*_t448 + _t104*_t430 + _t112*_t429 + _t118*_t422 + _t120*_t432 + _t123*_t440
+        _t488 = _t409 + _t416
+        _t489 = -_t409 + _t416
+        _t490 = load_w0*mu_floor - math.sqrt(_t420*share_w0*share_w0 + _t489*_t489)
+        _t491 = load_w1*mu_floor - math.sqrt(_t420*share_w1*share_w1 + _t488*_t488)
+        _t492 = J_theta_cart2_left*_t470*_t470 + J_theta_cart2_right*_t466*_t466 + J_theta_cart3_left*_t478*_t478 + J_theta_cart3_right*_t474*_t474 + J_theta_cart_left*_t462*_t462 + J_theta_cart_right*_t458*_t458 + J_theta_right - _t421*_t453 + _t423*_t451 + _t424*_t452 + _t426*_t454 + _t436*_t455 + _t444*_t456
+        _t493 = _t422*_t453 + _t429*_t451 + _t430*_t452 + _t432*_t454 + _t440*_t455 + _t448*_t456 + _t481
+        _t494 = -_t421*_t483 + _t423*_t482 + _t424*_t484 + _t426*_t485 + _t436*_t486 + _t444*_t487 + _t481
+        _t495 = J_theta_cart2_left*_t472*_t472 + J_theta_cart2_right*_t468*_t468 + J_theta_cart3_left*_t480*_t480 + J_theta_cart3_right*_t476*_t476 + J_theta_cart_left*_t464*_t464 + J_theta_cart_right*_t460*_t460 + J_theta_left + _t422*_t483 + _t429*_t482 + _t430*_t484 + _t432*_t485 + _t440*_t486 + _t448*_t487
+    except ZeroDivisionError:
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins: division by zero (degenerate input)") from None
+    if not (radius_cart2_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart2_left > 0")
+    if not (radius_cart2_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart2_right > 0")
+    if not (radius_cart3_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart3_left > 0")
+    if not (radius_cart3_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart3_right > 0")
+    if not (radius_cart_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart_left > 0")
+    if not (radius_cart_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_cart_right > 0")
+    if not (radius_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_left > 0")
+    if not (radius_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires radius_right > 0")
+    if not (J_theta_cart > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart > 0")
+    if not (J_theta_cart2 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2 > 0")
+    if not (J_theta_cart2_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2_left > 0")
+    if not (J_theta_cart2_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2_right > 0")
+    if not (J_theta_cart3 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart3 > 0")
+    if not (J_theta_cart3_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart3_left > 0")
+    if not (J_theta_cart3_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart3_right > 0")
+    if not (J_theta_cart_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_left > 0")
+    if not (J_theta_cart_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_right > 0")
+    if not (J_theta_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_left > 0")
+    if not (J_theta_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_right > 0")
+    if not (J_theta_tractor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_theta_tractor > 0")
+    if not (J_x_tractor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires J_x_tractor > 0")
+    if not (_t492 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires (S^T M S)[0][0] > 0")
+    if not (_t492*_t495 - _t493*_t494 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_margins requires det(S^T M S) > 0: a positive-definite model")
+    if not (mu_floor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_margins requires mu > 0")
+    if not (load_w0 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_margins requires loads[0] > 0")
+    if not (load_w1 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_margins requires loads[1] > 0")
+    margins = np.array([_t490, _t491])
+    if not np.all(np.isfinite(margins)):
+        raise ValueError("TRAILER3_ERR_NONFINITE_OUTPUT: a result of traction_margins is not finite")
+    return margins
+
+
+def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
+    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
+    traction than the floor gives and slips.
+    A check for firmware after the controller step: returns TRAILER3_WARN_TRACTION (> 0, not
+    an error) when a margin is <= 0, then, as on any status but OK, writes nothing
+    (traction_margins gives the margins whatever their sign).
+
+    Paper equations: (9), (10)-(12).
+
+    Args:
+        q: array of 14 (shape 14x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right, theta_cart3_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right, theta_cart3_left
+        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
+        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
+        loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
+        shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
+
+    Returns:
+        margins: array of 2 (shape 2x1, row-major). N, per driven wheel
+
+    operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt
+    """
+    _, _, theta_tractor, theta_cart, theta_cart2, theta_cart3, _, _, _, _, _, _, _, _ = _flat(q, 14, "q")
+    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
+    tau_right, tau_left = _flat(tau, 2, "tau")
+    mu_floor, = _flat(mu, 1, "mu")
+    load_w0, load_w1 = _flat(loads, 2, "loads")
+    share_w0, share_w1 = _flat(shares, 2, "shares")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
+    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
+    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
+    J_theta_cart3 = float(_field(p, "J_theta_cart3"))
+    J_theta_cart3_left = float(_field(p, "J_theta_cart3_left"))
+    J_theta_cart3_right = float(_field(p, "J_theta_cart3_right"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
+    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
+    K_theta_cart3_x_tractor = float(_field(p, "K_theta_cart3_x_tractor"))
+    K_theta_cart3_x_tractor_2 = float(_field(p, "K_theta_cart3_x_tractor_2"))
+    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart2_left = float(_field(p, "radius_cart2_left"))
+    radius_cart2_right = float(_field(p, "radius_cart2_right"))
+    radius_cart3_left = float(_field(p, "radius_cart3_left"))
+    radius_cart3_right = float(_field(p, "radius_cart3_right"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    if not all(map(math.isfinite, (theta_tractor, theta_cart, theta_cart2, theta_cart3, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+        raise ValueError("TRAILER3_ERR_NONFINITE_INPUT: an input of traction_check is NaN or infinite")
+    try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
+        _t0 = math.sin(theta_cart)
+        _t1 = -_t0
+        _t2 = math.cos(theta_cart)
+        _t3 = math.sin(theta_tractor)
+        _t4 = 3.0*_t3/10.0
+        _t5 = math.cos(theta_tractor)
+        _t6 = 3.0*_t5/10.0
+        _t7 = _t0*_t4 + _t2*_t6
+        _t8 = -_t7
+        _t9 = math.sin(theta_cart2)
+        _t10 = -_t9
+        _t11 = math.cos(theta_cart2)
+        _t12 = _t11*_t6 + _t4*_t9
+        _t13 = -_t12
+        _t14 = 17.0*_t0/20.0
+        _t15 = 17.0*_t2/20.0
+        _t16 = _t11*_t15 + _t14*_t9
+        _t17 = -_t16
+        _t18 = math.sin(theta_cart3)
+        _t19 = -_t18
+        _t20 = math.cos(theta_cart3)
+        _t21 = _t18*_t4 + _t20*_t6
+        _t22 = -_t21
+        _t23 = _t14*_t18 + _t15*_t20
+        _t24 = -_t23
+        _t25 = 17.0*_t20/20.0
+        _t26 = _t11*_t25 + 17.0*_t18*_t9/20.0
+        _t27 = -_t26
+        _t28 = -_t2
+        _t29 = _t0*_t6 - _t2*_t4
+        _t30 = -_t11
+        _t31 = -_t11*_t4 + _t6*_t9
+        _t32 = _t11*_t14 - 17.0*_t2*_t9/20.0
+        _t33 = -_t32
+        _t34 = -_t20
+        _t35 = _t18*_t6 - _t20*_t4
+        _t36 = _t14*_t20 - 17.0*_t18*_t2/20.0
+        _t37 = -_t36
+        _t38 = -17.0*_t11*_t18/20.0 + _t25*_t9
+        _t39 = -_t38
+        _t40 = -radius_right
+        _t41 = -radius_left
+        _t42 = 207.0*_t3/1000.0
+        _t43 = -_t42
+        _t44 = -207.0*_t5/1000.0
+        _t45 = 500.0*_t40/207.0
+        _t46 = 500.0*_t41/207.0
+        _t47 = _t44*_t45
+        _t48 = _t1*_t47 - _t45*_t8
+        _t49 = _t44*_t46
+        _t50 = _t1*_t49 + _t46*_t8
+        _t51 = _t43*_t45
+        _t52 = -_t2*_t51 - _t48
+        _t53 = -5.0*_t52/3.0
+        _t54 = _t17*_t53
+        _t55 = _t10*_t47 - _t13*_t45
+        _t56 = _t43*_t46
+        _t57 = -_t2*_t56 - _t50
+        _t58 = -5.0*_t57/3.0
+        _t59 = _t17*_t58
+        _t60 = _t10*_t49 + _t13*_t46
+        _t61 = -_t11*_t51 - _t54 - _t55
+        _t62 = -5.0*_t61/3.0
+        _t63 = _t27*_t62
+        _t64 = _t24*_t53
+        _t65 = _t19*_t47 - _t22*_t45
+        _t66 = -_t11*_t56 - _t59 - _t60
+        _t67 = -5.0*_t66/3.0
+        _t68 = _t27*_t67
+        _t69 = _t24*_t58
+        _t70 = _t19*_t49 + _t22*_t46
+        _t71 = _t53/5.0
+        _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45
+        _t73 = _t58/5.0
+        _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46
+        _t75 = 1.0/radius_cart_right
+        _t76 = 1.0/radius_cart_left
+        _t77 = _t62/5.0
+        _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53
+        _t79 = _t67/5.0
+        _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58
+        _t81 = 1.0/radius_cart2_right
+        _t82 = 1.0/radius_cart2_left
+        _t83 = -_t20*_t51 - _t63 - _t64 - _t65
+        _t84 = -5.0*_t83/3.0
+        _t85 = _t84/5.0
+        _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62
+        _t87 = -_t20*_t56 - _t68 - _t69 - _t70
+        _t88 = -5.0*_t87/3.0
+        _t89 = _t88/5.0
+        _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67
+        _t91 = 1.0/radius_cart3_right
+        _t92 = 1.0/radius_cart3_left
+        _t93 = K_theta_tractor_x_tractor*_t3
+        _t94 = K_theta_tractor_x_tractor_2*_t5
+        _t95 = _t93 + _t94
+        _t96 = K_theta_cart_x_tractor*_t0
+        _t97 = K_theta_cart_x_tractor_2*_t2
+        _t98 = _t96 + _t97
+        _t99 = K_theta_cart2_x_tractor*_t9
+        _t100 = K_theta_cart2_x_tractor_2*_t11
+        _t101 = _t100 + _t99
+        _t102 = K_theta_cart3_x_tractor*_t18
+        _t103 = K_theta_cart3_x_tractor_2*_t20
+        _t104 = _t102 + _t103
+        _t105 = K_theta_tractor_x_tractor*_t5
+        _t106 = K_theta_tractor_x_tractor_2*_t3 - _t105
+        _t107 = K_theta_cart_x_tractor*_t2
+        _t108 = K_theta_cart_x_tractor_2*_t0 - _t107
+        _t109 = K_theta_cart2_x_tractor*_t11
+        _t110 = K_theta_cart2_x_tractor_2*_t9 - _t109
+        _t111 = K_theta_cart3_x_tractor*_t20
+        _t112 = K_theta_cart3_x_tractor_2*_t18 - _t111
+        _t113 = K_theta_cart_x_tractor_2*_t0
+        _t114 = _t107*_t6 - _t113*_t6 + _t4*_t96 + _t4*_t97
+        _t115 = K_theta_cart2_x_tractor_2*_t9
+        _t116 = _t100*_t4 + _t109*_t6 - _t115*_t6 + _t4*_t99
+        _t117 = K_theta_cart3_x_tractor_2*_t18
+        _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6
+        _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99
+        _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15
+        _t121 = 17.0*_t9/20.0
+        _t122 = 17.0*_t11/20.0
+        _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122
+        _t124 = _t62*thetadot_right + _t67*thetadot_left
+        _t125 = _t124*_t124
+        _t126 = _t84*thetadot_right + _t88*thetadot_left
+        _t127 = _t126*_t126
+        _t128 = _t111*_t127
+        _t129 = _t53*thetadot_right + _t58*thetadot_left
+        _t130 = _t129*_t129
+        _t131 = -_t45*thetadot_right + _t46*thetadot_left
+        _t132 = _t131*_t131
+        _t133 = _t115*_t125
+        _t134 = _t117*_t127
+        _t135 = _t113*_t130
+        _t136 = _t125*_t99
+        _t137 = _t100*_t125
+        _t138 = _t102*_t127
+        _t139 = _t103*_t127
+        _t140 = _t130*_t96
+        _t141 = _t130*_t97
+        _t142 = _t132*_t4
+        _t143 = _t132*_t6
+        _t144 = _t130*_t14
+        _t145 = _t130*_t15
+        _t146 = _t121*_t125
+        _t147 = _t122*_t125
+        _t148 = _t131*thetadot_right
+        _t149 = _t131*thetadot_left
+        _t150 = _t129*thetadot_right
+        _t151 = _t129*thetadot_left
+        _t152 = _t124*thetadot_right
+        _t153 = _t124*thetadot_left
+        _t154 = _t126*thetadot_right
+        _t155 = _t126*thetadot_left
+        _t156 = _t42*_t45
+        _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45
+        _t158 = -5.0*_t157/3.0
+        _t159 = _t158/5.0
+        _t160 = _t156*_t28 + _t48
+        _t161 = _t42*_t46
+        _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46
+        _t163 = -5.0*_t162/3.0
+        _t164 = _t163/5.0
+        _t165 = _t161*_t28 + _t50
+        _t166 = 5.0*_t72/3.0
+        _t167 = _t166/5.0
+        _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7
+        _t169 = 5.0*_t74/3.0
+        _t170 = _t169/5.0
+        _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7
+        _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45
+        _t173 = -5.0*_t172/3.0
+        _t174 = _t173/5.0
+        _t175 = _t156*_t30 + _t158*_t33 + _t55
+        _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46
+        _t177 = -5.0*_t176/3.0
+        _t178 = _t177/5.0
+        _t179 = _t161*_t30 + _t163*_t33 + _t60
+        _t180 = -_t166*_t17 - _t32*_t53
+        _t181 = -5.0*_t180/3.0
+        _t182 = _t181/5.0
+        _t183 = _t166*_t33 + _t54
+        _t184 = -_t169*_t17 - _t32*_t58
+        _t185 = -5.0*_t184/3.0
+        _t186 = _t185/5.0
+        _t187 = _t169*_t33 + _t59
+        _t188 = 5.0*_t78/3.0
+        _t189 = _t188/5.0
+        _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9
+        _t191 = 5.0*_t80/3.0
+        _t192 = _t191/5.0
+        _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9
+        _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45
+        _t195 = -5.0*_t194/3.0
+        _t196 = _t195/5.0
+        _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65
+        _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46
+        _t199 = -5.0*_t198/3.0
+        _t200 = _t199/5.0
+        _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70
+        _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53
+        _t203 = -5.0*_t202/3.0
+        _t204 = _t203/5.0
+        _t205 = _t166*_t37 + _t181*_t39 + _t64
+        _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58
+        _t207 = -5.0*_t206/3.0
+        _t208 = _t207/5.0
+        _t209 = _t169*_t37 + _t185*_t39 + _t69
+        _t210 = -_t188*_t27 - _t38*_t62
+        _t211 = -5.0*_t210/3.0
+        _t212 = _t211/5.0
+        _t213 = _t188*_t39 + _t63
+        _t214 = -_t191*_t27 - _t38*_t67
+        _t215 = -5.0*_t214/3.0
+        _t216 = _t215/5.0
+        _t217 = _t191*_t39 + _t68
+        _t218 = 5.0*_t86/3.0
+        _t219 = _t218/5.0
+        _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51
+        _t221 = 5.0*_t90/3.0
+        _t222 = _t221/5.0
+        _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56
+        _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62 + _t112*_t84
+        _t225 = J_x_tractor*_t47 + _t101*_t62 + _t104*_t84 - _t45*_t95 + _t53*_t98
+        _t226 = -J_theta_tractor*_t45 + _t106*_t51 + _t114*_t53 + _t116*_t62 + _t118*_t84 + _t47*_t95
+        _t227 = J_theta_cart*_t53 + _t108*_t51 - _t114*_t45 + _t119*_t62 + _t120*_t84 + _t47*_t98
+        _t228 = J_theta_cart2*_t62 + _t101*_t47 + _t110*_t51 - _t116*_t45 + _t119*_t53 + _t123*_t84
+        _t229 = J_theta_cart3*_t84 + _t104*_t47 + _t112*_t51 - _t118*_t45 + _t120*_t53 + _t123*_t62
+        _t230 = -_t77 - _t78
+        _t231 = _t230*_t82
+        _t232 = J_theta_cart2_left*_t231
+        _t233 = _t77 - _t78
+        _t234 = _t233*_t81
+        _t235 = J_theta_cart2_right*_t234
+        _t236 = -_t85 - _t86
+        _t237 = _t236*_t92
+        _t238 = J_theta_cart3_left*_t237
+        _t239 = _t85 - _t86
+        _t240 = _t239*_t91
+        _t241 = J_theta_cart3_right*_t240
+        _t242 = -_t71 - _t72
+        _t243 = _t242*_t76
+        _t244 = J_theta_cart_left*_t243
+        _t245 = _t71 - _t72
+        _t246 = _t245*_t75
+        _t247 = J_theta_cart_right*_t246
+        _t248 = _t73 - _t74
+        _t249 = _t248*_t75
+        _t250 = -_t73 - _t74
+        _t251 = _t250*_t76
+        _t252 = _t79 - _t80
+        _t253 = _t252*_t81
+        _t254 = -_t79 - _t80
+        _t255 = _t254*_t82
+        _t256 = _t89 - _t90
+        _t257 = _t256*_t91
+        _t258 = -_t89 - _t90
+        _t259 = _t258*_t92
+        _t260 = _t232*_t255 + _t235*_t253 + _t238*_t259 + _t241*_t257 + _t244*_t251 + _t247*_t249
+        _t261 = J_x_tractor*_t56 + _t106*_t46 + _t108*_t58 + _t110*_t67 + _t112*_t88
+        _t262 = J_theta_tractor*_t46 + _t106*_t56 + _t114*_t58 + _t116*_t67 + _t118*_t88 + _t49*_t95
+        _t263 = J_x_tractor*_t49 + _t101*_t67 + _t104*_t88 + _t46*_t95 + _t58*_t98
+        _t264 = J_theta_cart*_t58 + _t108*_t56 + _t114*_t46 + _t119*_t67 + _t120*_t88 + _t49*_t98
+        _t265 = J_theta_cart2*_t67 + _t101*_t49 + _t110*_t56 + _t116*_t46 + _t119*_t58 + _t123*_t88
+        _t266 = J_theta_cart3*_t88 + _t104*_t49 + _t112*_t56 + _t118*_t46 + _t120*_t58 + _t123*_t67
+        _t267 = _t132*_t93 + _t132*_t94 + _t136 + _t137 + _t138 + _t139 + _t140 + _t141
+        _t268 = _t148*_t47 + _t149*_t49
+        _t269 = _t148*_t158 + _t149*_t163 + _t150*_t166 + _t151*_t169
+        _t270 = _t148*_t173 + _t149*_t177 + _t150*_t181 + _t151*_t185 + _t152*_t188 + _t153*_t191
+        _t271 = _t148*_t195 + _t149*_t199 + _t150*_t203 + _t151*_t207 + _t152*_t211 + _t153*_t215 + _t154*_t218 + _t155*_t221
+        _t272 = J_x_tractor*_t268 + _t108*_t269 + _t110*_t270 + _t112*_t271 + _t267
+        _t273 = -K_theta_tractor_x_tractor_2*_t132*_t3 + _t105*_t132 + _t107*_t130 + _t109*_t125 + _t128 - _t133 - _t134 - _t135
+        _t274 = _t148*_t156 + _t149*_t161
+        _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98 + _t273
+        _t276 = 3.0*K_theta_cart2_x_tractor*_t11*_t125*_t3/10.0 + 3.0*K_theta_cart3_x_tractor*_t127*_t20*_t3/10.0 + 3.0*K_theta_cart_x_tractor*_t130*_t2*_t3/10.0 - _t133*_t4 - _t134*_t4 - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6 - _t141*_t6
+        _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95 + _t276
+        _t278 = 17.0*K_theta_cart2_x_tractor*_t0*_t11*_t125/20.0 + 17.0*K_theta_cart3_x_tractor*_t0*_t127*_t20/20.0 + 3.0*K_theta_cart_x_tractor*_t0*_t132*_t5/10.0 + 3.0*K_theta_cart_x_tractor_2*_t0*_t132*_t3/10.0 + 3.0*K_theta_cart_x_tractor_2*_t132*_t2*_t5/10.0 - _t107*_t142 - _t133*_t14 - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15 - _t139*_t15
+        _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271 + _t274*_t98 + _t278
+        _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144 + _t115*_t142 + _t115*_t144 + _t121*_t128 - _t121*_t134 - _t122*_t138 - _t122*_t139 + _t143*_t99 + _t145*_t99
+        _t281 = J_theta_cart2*_t270 + _t101*_t274 + _t110*_t268 + _t119*_t269 + _t123*_t271 + _t280
+        _t282 = _t102*_t143 + _t102*_t145 + _t102*_t147 + _t103*_t143 + _t103*_t145 + _t103*_t147 - _t111*_t142 - _t111*_t144 - _t111*_t146 + _t117*_t142 + _t117*_t144 + _t117*_t146
+        _t283 = J_theta_cart3*_t271 + _t104*_t274 + _t112*_t268 + _t120*_t269 + _t123*_t270 + _t282
+        _t284 = _t224*_t56 + _t225*_t49 + _t226*_t46 + _t227*_t58 + _t228*_t67 + _t229*_t88 + _t260
+        _t285 = J_theta_cart2_left*_t255*_t255 + J_theta_cart2_right*_t253*_t253 + J_theta_cart3_left*_t259*_t259 + J_theta_cart3_right*_t257*_t257 + J_theta_cart_left*_t251*_t251 + J_theta_cart_right*_t249*_t249 + J_theta_left + _t261*_t56 + _t262*_t46 + _t263*_t49 + _t264*_t58 + _t265*_t67 + _t266*_t88
+        _t286 = _t159 - _t160
+        _t287 = _t286*_t75
+        _t288 = _t164 - _t165
+        _t289 = _t288*_t75
+        _t290 = _t167 - _t168
+        _t291 = _t290*_t75
+        _t292 = _t170 - _t171
+        _t293 = _t292*_t75
+        _t294 = _t148*_t287 + _t149*_t289 + _t150*_t291 + _t151*_t293
+        _t295 = -_t159 - _t160
+        _t296 = _t295*_t76
+        _t297 = -_t164 - _t165
+        _t298 = _t297*_t76
+        _t299 = -_t167 - _t168
+        _t300 = _t299*_t76
+        _t301 = -_t170 - _t171
+        _t302 = _t301*_t76
+        _t303 = _t148*_t296 + _t149*_t298 + _t150*_t300 + _t151*_t302
+        _t304 = _t174 - _t175
+        _t305 = _t304*_t81
+        _t306 = _t178 - _t179
+        _t307 = _t306*_t81
+        _t308 = _t182 - _t183
+        _t309 = _t308*_t81
+        _t310 = _t186 - _t187
+        _t311 = _t310*_t81
+        _t312 = _t189 - _t190
+        _t313 = _t312*_t81
+        _t314 = _t192 - _t193
+        _t315 = _t314*_t81
+        _t316 = _t148*_t305 + _t149*_t307 + _t150*_t309 + _t151*_t311 + _t152*_t313 + _t153*_t315
+        _t317 = -_t174 - _t175
+        _t318 = _t317*_t82
+        _t319 = -_t178 - _t179
+        _t320 = _t319*_t82
+        _t321 = -_t182 - _t183
+        _t322 = _t321*_t82
+        _t323 = -_t186 - _t187
+        _t324 = _t323*_t82
+        _t325 = -_t189 - _t190
+        _t326 = _t325*_t82
+        _t327 = -_t192 - _t193
+        _t328 = _t327*_t82
+        _t329 = _t148*_t318 + _t149*_t320 + _t150*_t322 + _t151*_t324 + _t152*_t326 + _t153*_t328
+        _t330 = _t196 - _t197
+        _t331 = _t330*_t91
+        _t332 = _t200 - _t201
+        _t333 = _t332*_t91
+        _t334 = _t204 - _t205
+        _t335 = _t334*_t91
+        _t336 = _t208 - _t209
+        _t337 = _t336*_t91
+        _t338 = _t212 - _t213
+        _t339 = _t338*_t91
+        _t340 = _t216 - _t217
+        _t341 = _t340*_t91
+        _t342 = _t219 - _t220
+        _t343 = _t342*_t91
+        _t344 = _t222 - _t223
+        _t345 = _t344*_t91
+        _t346 = _t148*_t331 + _t149*_t333 + _t150*_t335 + _t151*_t337 + _t152*_t339 + _t153*_t341 + _t154*_t343 + _t155*_t345
+        _t347 = -_t196 - _t197
+        _t348 = _t347*_t92
+        _t349 = -_t200 - _t201
+        _t350 = _t349*_t92
+        _t351 = -_t204 - _t205
+        _t352 = _t351*_t92
+        _t353 = -_t208 - _t209
+        _t354 = _t353*_t92
+        _t355 = -_t212 - _t213
+        _t356 = _t355*_t92
+        _t357 = -_t216 - _t217
+        _t358 = _t357*_t92
+        _t359 = -_t219 - _t220
+        _t360 = _t359*_t92
+        _t361 = -_t222 - _t223
+        _t362 = _t361*_t92
+        _t363 = _t148*_t348 + _t149*_t350 + _t150*_t352 + _t151*_t354 + _t152*_t356 + _t153*_t358 + _t154*_t360 + _t155*_t362
+        _t364 = _t232*_t329 + _t235*_t316 + _t238*_t363 + _t241*_t346 + _t244*_t303 + _t247*_t294 + _t272*_t51 + _t275*_t47 - _t277*_t45 + _t279*_t53 + _t281*_t62 + _t283*_t84
+        _t365 = -_t364 + tau_right
+        _t366 = J_theta_cart2_left*_t255*_t329 + J_theta_cart2_right*_t253*_t316 + J_theta_cart3_left*_t259*_t363 + J_theta_cart3_right*_t257*_t346 + J_theta_cart_left*_t251*_t303 + J_theta_cart_right*_t249*_t294 + _t272*_t56 + _t275*_t49 + _t277*_t46 + _t279*_t58 + _t281*_t67 + _t283*_t88
+        _t367 = -_t366 + tau_left
+        _t368 = J_theta_cart2_left*_t231*_t231 + J_theta_cart2_right*_t234*_t234 + J_theta_cart3_left*_t237*_t237 + J_theta_cart3_right*_t240*_t240 + J_theta_cart_left*_t243*_t243 + J_theta_cart_right*_t246*_t246 + J_theta_right + _t224*_t51 + _t225*_t47 - _t226*_t45 + _t227*_t53 + _t228*_t62 + _t229*_t84
+        _t369 = _t260 + _t261*_t51 - _t262*_t45 + _t263*_t47 + _t264*_t53 + _t265*_t62 + _t266*_t84
+        _t370 = -_t284*_t369 + _t285*_t368
+        _t371 = 1.0/_t370
+        _t372 = _t371*(-_t284*_t367 + _t285*_t365)
+        _t373 = _t371*(-_t365*_t369 + _t367*_t368)
+        _t374 = _t274 + _t372*_t47 + _t373*_t49
+        _t375 = _t268 + _t372*_t51 + _t373*_t56
+        _t376 = -_t372*_t45 + _t373*_t46
+        _t377 = _t269 + _t372*_t53 + _t373*_t58
+        _t378 = _t270 + _t372*_t62 + _t373*_t67
+        _t379 = _t271 + _t372*_t84 + _t373*_t88
+        _t380 = -J_theta_tractor*_t376 - _t106*_t375 - _t114*_t377 - _t116*_t378 - _t118*_t379 - _t276 - _t374*_t95
+        _t381 = _t240*_t372 + _t257*_t373 + _t346
+        _t382 = -J_theta_cart3_right*_t381
+        _t383 = _t382*_t91
+        _t384 = _t237*_t372 + _t259*_t373 + _t363
+        _t385 = -J_theta_cart3_left*_t384
+        _t386 = _t385*_t92
+        _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376 - _t120*_t377 - _t123*_t378 - _t282
+        _t388 = _t383/5.0 - _t386/5.0 + _t387
+        _t389 = -5.0*_t388/3.0
+        _t390 = _t234*_t372 + _t253*_t373 + _t316
+        _t391 = -J_theta_cart2_right*_t390
+        _t392 = _t391*_t81
+        _t393 = _t231*_t372 + _t255*_t373 + _t329
+        _t394 = -J_theta_cart2_left*_t393
+        _t395 = _t394*_t82
+        _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376 - _t119*_t377 - _t123*_t379 - _t280
+        _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + _t392/5.0 - _t395/5.0 + _t396
+        _t398 = -5.0*_t397/3.0
+        _t399 = _t246*_t372 + _t249*_t373 + _t294
+        _t400 = -J_theta_cart_right*_t399
+        _t401 = _t400*_t75
+        _t402 = _t243*_t372 + _t251*_t373 + _t303
+        _t403 = -J_theta_cart_left*_t402
+        _t404 = _t403*_t76
+        _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378 - _t120*_t379 - _t278 - _t374*_t98
+        _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383 - _t37*_t386 + _t401/5.0 - _t404/5.0 + _t405
+        _t407 = -5.0*_t406/3.0
+        _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392 - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8
+        _t409 = 500.0*_t408/207.0
+        _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378 - _t112*_t379 - _t267
+        _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386 - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410
+        _t412 = 500.0*_t411/207.0
+        _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273 - _t376*_t95 - _t377*_t98
+        _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401 + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413
+        _t415 = 500.0*_t414/207.0
+        _t416 = _t412*_t43 + _t415*_t44
+        _t417 = 207.0*_t5/500.0
+        _t418 = -207.0*_t3/500.0
+        _t419 = _t412*_t417 + _t415*_t418
+        _t420 = _t419*_t419
+        _t421 = 500.0*_t40/207.0
+        _t422 = 500.0*_t41/207.0
+        _t423 = _t421*_t43
+        _t424 = _t421*_t44
+        _t425 = -_t1*_t424 - _t2*_t423 + _t421*_t8
+        _t426 = -5.0*_t425/3.0
+        _t427 = _t426/5.0
+        _t428 = _t1*_t423 + _t28*_t424 - _t29*_t421
+        _t429 = _t422*_t43
+        _t430 = _t422*_t44
+        _t431 = -_t1*_t430 - _t2*_t429 - _t422*_t8
+        _t432 = -5.0*_t431/3.0
+        _t433 = _t432/5.0
+        _t434 = _t1*_t429 + _t28*_t430 + _t29*_t422
+        _t435 = -_t10*_t424 - _t11*_t423 + _t13*_t421 - _t17*_t426
+        _t436 = -5.0*_t435/3.0
+        _t437 = _t436/5.0
+        _t438 = _t10*_t423 + _t30*_t424 - _t31*_t421 + _t33*_t426
+        _t439 = -_t10*_t430 - _t11*_t429 - _t13*_t422 - _t17*_t432
+        _t440 = -5.0*_t439/3.0
+        _t441 = _t440/5.0
+        _t442 = _t10*_t429 + _t30*_t430 + _t31*_t422 + _t33*_t432
+        _t443 = -_t19*_t424 - _t20*_t423 + _t22*_t421 - _t24*_t426 - _t27*_t436
+        _t444 = -5.0*_t443/3.0
+        _t445 = _t444/5.0
+        _t446 = _t19*_t423 + _t34*_t424 - _t35*_t421 + _t37*_t426 + _t39*_t436
+        _t447 = -_t19*_t430 - _t20*_t429 - _t22*_t422 - _t24*_t432 - _t27*_t440
+        _t448 = -5.0*_t447/3.0
+        _t449 = _t448/5.0
+        _t450 = _t19*_t429 + _t34*_t430 + _t35*_t422 + _t37*_t432 + _t39*_t440
+        _t451 = J_x_tractor*_t423 - _t106*_t421 + _t108*_t426 + _t110*_t436 + _t112*_t444
+        _t452 = J_x_tractor*_t424 + _t101*_t436 + _t104*_t444 - _t421*_t95 + _t426*_t98
+        _t453 = -J_theta_tractor*_t421 + _t106*_t423 + _t114*_t426 + _t116*_t436 + _t118*_t444 + _t424*_t95
+        _t454 = J_theta_cart*_t426 + _t108*_t423 - _t114*_t421 + _t119*_t436 + _t120*_t444 + _t424*_t98
+        _t455 = J_theta_cart2*_t436 + _t101*_t424 + _t110*_t423 - _t116*_t421 + _t119*_t426 + _t123*_t444
+        _t456 = J_theta_cart3*_t444 + _t104*_t424 + _t112*_t423 - _t118*_t421 + _t120*_t426 + _t123*_t436
+        _t457 = _t427 - _t428
+        _t458 = _t457*_t75
+        _t459 = _t433 - _t434
+        _t460 = _t459*_t75
+        _t461 = -_t427 - _t428
+        _t462 = _t461*_t76
+        _t463 = -_t433 - _t434
+        _t464 = _t463*_t76
+        _t465 = _t437 - _t438
+        _t466 = _t465*_t81
+        _t467 = _t441 - _t442
+        _t468 = _t467*_t81
+        _t469 = -_t437 - _t438
+        _t470 = _t469*_t82
+        _t471 = -_t441 - _t442
+        _t472 = _t471*_t82
+        _t473 = _t445 - _t446
+        _t474 = _t473*_t91
+        _t475 = _t449 - _t450
+        _t476 = _t475*_t91
+        _t477 = -_t445 - _t446
+        _t478 = _t477*_t92
+        _t479 = -_t449 - _t450
+        _t480 = _t479*_t92
+        _t481 = J_theta_cart2_left*_t470*_t472 + J_theta_cart2_right*_t466*_t468 + J_theta_cart3_left*_t478*_t480 + J_theta_cart3_right*_t474*_t476 + J_theta_cart_left*_t462*_t464 + J_theta_cart_right*_t458*_t460
+        _t482 = J_x_tractor*_t429 + _t106*_t422 + _t108*_t432 + _t110*_t440 + _t112*_t448
+        _t483 = J_theta_tractor*_t422 + _t106*_t429 + _t114*_t432 + _t116*_t440 + _t118*_t448 + _t430*_t95
+        _t484 = J_x_tractor*_t430 + _t101*_t440 + _t104*_t448 + _t422*_t95 + _t432*_t98
+        _t485 = J_theta_cart*_t432 + _t108*_t429 + _t114*_t422 + _t119*_t440 + _t120*_t448 + _t430*_t98
+        _t486 = J_theta_cart2*_t440 + _t101*_t430 + _t110*_t429 + _t116*_t422 + _t119*_t432 + _t123*_t448
+        _t487 = J_theta_cart3*_t448 + _t104*_t430 + _t112*_t429 + _t118*_t422 + _t120*_t432 + _t123*_t440
+        _t488 = _t409 + _t416
+        _t489 = -_t409 + _t416
+        _t490 = load_w0*mu_floor - math.sqrt(_t420*share_w0*share_w0 + _t489*_t489)
+        _t491 = load_w1*mu_floor - math.sqrt(_t420*share_w1*share_w1 + _t488*_t488)
+        _t492 = J_theta_cart2_left*_t470*_t470 + J_theta_cart2_right*_t466*_t466 + J_theta_cart3_left*_t478*_t478 + J_theta_cart3_right*_t474*_t474 + J_theta_cart_left*_t462*_t462 + J_theta_cart_right*_t458*_t458 + J_theta_right - _t421*_t453 + _t423*_t451 + _t424*_t452 + _t426*_t454 + _t436*_t455 + _t444*_t456
+        _t493 = _t422*_t453 + _t429*_t451 + _t430*_t452 + _t432*_t454 + _t440*_t455 + _t448*_t456 + _t481
+        _t494 = -_t421*_t483 + _t423*_t482 + _t424*_t484 + _t426*_t485 + _t436*_t486 + _t444*_t487 + _t481
+        _t495 = J_theta_cart2_left*_t472*_t472 + J_theta_cart2_right*_t468*_t468 + J_theta_cart3_left*_t480*_t480 + J_theta_cart3_right*_t476*_t476 + J_theta_cart_left*_t464*_t464 + J_theta_cart_right*_t460*_t460 + J_theta_left + _t422*_t483 + _t429*_t482 + _t430*_t484 + _t432*_t485 + _t440*_t486 + _t448*_t487
+    except ZeroDivisionError:
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check: division by zero (degenerate input)") from None
+    if not (radius_cart2_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart2_left > 0")
+    if not (radius_cart2_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart2_right > 0")
+    if not (radius_cart3_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart3_left > 0")
+    if not (radius_cart3_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart3_right > 0")
+    if not (radius_cart_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart_left > 0")
+    if not (radius_cart_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_cart_right > 0")
+    if not (radius_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_left > 0")
+    if not (radius_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires radius_right > 0")
+    if not (J_theta_cart > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart > 0")
+    if not (J_theta_cart2 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart2 > 0")
+    if not (J_theta_cart2_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart2_left > 0")
+    if not (J_theta_cart2_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart2_right > 0")
+    if not (J_theta_cart3 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart3 > 0")
+    if not (J_theta_cart3_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart3_left > 0")
+    if not (J_theta_cart3_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart3_right > 0")
+    if not (J_theta_cart_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart_left > 0")
+    if not (J_theta_cart_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_cart_right > 0")
+    if not (J_theta_left > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_left > 0")
+    if not (J_theta_right > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_right > 0")
+    if not (J_theta_tractor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_theta_tractor > 0")
+    if not (J_x_tractor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires J_x_tractor > 0")
+    if not (_t492 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires (S^T M S)[0][0] > 0")
+    if not (_t492*_t495 - _t493*_t494 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_PARAMS: traction_check requires det(S^T M S) > 0: a positive-definite model")
+    if not (mu_floor > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_check requires mu > 0")
+    if not (load_w0 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_check requires loads[0] > 0")
+    if not (load_w1 > 0.0):
+        raise ValueError("TRAILER3_ERR_BAD_TRACTION: traction_check requires loads[1] > 0")
+    if not (_t490 > 0.0):
+        raise ValueError("TRAILER3_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
+    if not (_t491 > 0.0):
+        raise ValueError("TRAILER3_WARN_TRACTION: traction_check requires wheel 'left' keeps grip: margin > 0")
+    margins = np.array([_t490, _t491])
+    if not np.all(np.isfinite(margins)):
+        raise ValueError("TRAILER3_ERR_NONFINITE_OUTPUT: a result of traction_check is not finite")
+    return margins
