@@ -53,17 +53,25 @@ def _function(target: Target) -> gf.Function:
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
 def test_c_python_and_casadi_agree(name: str) -> None:
+    """At the robot's own parameters (a lumped file runs the paper's generated code with its
+    numbers: the small robot is 2 kg, r = 33 mm), each ±10 %, random states and torques
+    (measured: 1e-15 of the largest force)."""
+    setup = resolve(ROBOTS[name])
     target = _target(name)
     fn = _function(target)
     assert [a.name for a in fn.outputs] == ["longitudinal", "lateral"]
     cm = CModel(target, False)
+    rng = np.random.default_rng(5)
     worst = {"c64": 0.0, "casadi": 0.0}
-    for sample in gf.random_samples(target, np.random.default_rng(5), 40):
-        values = gf._inputs(target, fn, sample, "ref", {}, False)
+    for _ in range(40):
+        p = {k: v * rng.uniform(0.9, 1.1) for k, v in setup.nominal.items()}
+        q = rng.uniform(-3.0, 3.0, target.code.nq)
+        values = {"p": p, "q": q, "wheel_rates": rng.uniform(-8.0, 8.0, target.code.nu),
+                  "tau": rng.uniform(-5.0, 5.0, target.code.nu)}
         ref = np.concatenate(gf._python(fn, values))
-        assert np.all(np.isfinite(ref)) and np.max(np.abs(ref)) > 1.0
-        for impl, got in (("c64", gf._c(cm, fn, values)), ("casadi", gf._casadi(target, fn,
-                                                                                 values))):
+        assert np.all(np.isfinite(ref)) and np.max(np.abs(ref)) > 0.1
+        for impl, got in (("c64", gf._c(cm, fn, values)),
+                          ("casadi", gf._casadi(target, fn, values))):
             err = np.max(np.abs(np.concatenate(got) - ref)) / np.max(np.abs(ref))
             worst[impl] = max(worst[impl], float(err))
     assert max(worst.values()) < 1e-10, worst
@@ -78,7 +86,7 @@ def _kkt(name: str) -> tuple[Any, Any, Any, Any]:
         s.mass_matrix, s.bias, s.constraint_matrix, s.constraint_rate_term)))
 
 
-@pytest.mark.parametrize("name", ["drishti", "trailer"])
+@pytest.mark.parametrize("name", sorted(ROBOTS))
 def test_the_forces_are_the_kkt_multipliers_and_the_wheel_row(name: str) -> None:
     """λ of [[M, Aᵀ], [A, 0]] [q̈; λ] = [B τ − H; −Ȧ q̇] in newtons (rolling rows: s λ,
     no-side-slip rows: −s λ, s = 1 for these rows), and F = (τ − J θ̈)/r per driven wheel."""
@@ -90,7 +98,7 @@ def test_the_forces_are_the_kkt_multipliers_and_the_wheel_row(name: str) -> None
     assert keys is not None
     rng = np.random.default_rng(11)
     for _ in range(10):
-        p = {k: v * rng.uniform(0.9, 1.1) for k, v in code.params.items()}
+        p = {k: v * rng.uniform(0.9, 1.1) for k, v in setup.nominal.items()}
         q = rng.uniform(-2.0, 2.0, code.nq)
         eta = rng.uniform(-6.0, 6.0, code.nu)
         tau = rng.uniform(-20.0, 20.0, code.nu)
