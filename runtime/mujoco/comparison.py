@@ -412,6 +412,28 @@ def _summary(comp: Comparison) -> list[str]:
         "than a tenth of the path's size off it (the outcome column): on such a floor the "
         "path must be slower, not the controller stronger.",
     ]
+    limited = [i for i, (_, _, traction) in enumerate(comp.cases) if traction > 0]
+    if limited:
+        i = limited[-1]
+        off = {f: [r for r in comp.rows if r.formulation == f and r.engine[i].status != "ok"]
+               for f in dict.fromkeys(r.formulation for r in comp.rows)}
+        counts = ", ".join(f"{len(v)} of {sum(r.formulation == f for r in comp.rows)} in the "
+                           f"{f} formulation" for f, v in off.items())
+        out += [
+            "",
+            f"Off path under the traction limit ({comp.cases[i][0]}): {counts}. That is "
+            "not slip: the same limit on the model plant, which cannot slip, leaves a run as "
+            "far off (measured on Drishti, TDC on the circle, sample-instant: minimal "
+            "formulation 197 mm RMS and 196 mm off at the end on the model plant, 194 and "
+            "195 mm on MuJoCo; paper formulation 8 and 7 mm off at the end). The paper's "
+            "controllers in the minimal formulation feed back the wheel angles only (the PI "
+            "has a tracker that corrects the pose): while the start-up saturates, the "
+            "wheels lag the reference and the robot rolls a different path; the heading is "
+            "a function of the wheel angles and comes back with them, the position is not "
+            "(the constraints are nonholonomic), so once the wheel angles have caught up an "
+            "offset remains that no error the controller sees contains. The paper "
+            "formulation feeds back x, y, θ and removes it.",
+        ]
     return out
 
 
