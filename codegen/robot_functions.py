@@ -333,56 +333,56 @@ def _contact_forces_spec(model: RobotModel, base: FunctionSpec) -> FunctionSpec:
 
 def _traction_specs(model: RobotModel, base: FunctionSpec) -> tuple[FunctionSpec, ...]:
     """``traction_margins`` and ``traction_check``: each driven wheel's traction margin
-    mu N_w - sqrt(F_x^2 + (s_w F_y)^2) on a friction circle, F_x, F_y the contact forces of
-    (9) (``wheel_contact_forces``), F_y its axle's lateral force and s_w the wheel's share of
-    it (the slip monitor's static-load split, ``runtime.sim.slip_monitor``). The check
-    returns ``<P>_WARN_TRACTION`` (> 0, not an error) where a margin is not positive."""
-    forms = contact_force_forms(model)
+    mu N_w - sqrt(F_x^2 + (s_w F_y)^2) on a friction circle, from the contact forces of (9)
+    that ``wheel_contact_forces`` wrote (F_y its axle's lateral force, s_w the wheel's share
+    of it: the slip monitor's static-load split, ``runtime.sim.slip_monitor``). The check
+    returns ``<P>_WARN_TRACTION`` (> 0, not an error) where a margin is not positive.
+
+    They take the forces, not the state: the firmware has them from the one call of
+    ``wheel_contact_forces`` after its step, and the multipliers' elimination (the bulk of
+    that function, tens of kB of C for a two-trailer train) is written once."""
     rows = contact_rows(model)
-    m = model.nu
+    m, k = model.nu, len(rows.lateral_wheels)
     row_of = []
     for w in rows.driven:
-        holding = [k for k, ws in enumerate(rows.lateral_wheels) if w in ws]
+        holding = [j for j, ws in enumerate(rows.lateral_wheels) if w in ws]
         if len(holding) != 1:
             raise ValueError(f"robot '{model.name}': driven wheel '{w}' is in "
                              f"{len(holding)} no-side-slip rows (one expected)")
         row_of.append(holding[0])
+    fx = sp.symbols(f"force_x0:{m}", real=True)
+    fy = sp.symbols(f"force_y0:{k}", real=True)
     mu = sp.Symbol("mu_floor", positive=True)
     loads = sp.symbols(f"load_w0:{m}", positive=True)
     shares = sp.symbols(f"share_w0:{m}", real=True)
-    margins = [forms.stage.define(
-        mu * loads[i] - sp.sqrt(forms.longitudinal[i] ** 2
-                                + (shares[i] * forms.lateral[row_of[i]]) ** 2))
-        for i in range(m)]
+    margins = [mu * loads[i] - sp.sqrt(fx[i] ** 2 + (shares[i] * fy[row_of[i]]) ** 2)
+               for i in range(m)]
     wheels = ", ".join(f"'{w}'" for w in rows.driven)
-    inputs = (*base.inputs,
+    inputs = (array("longitudinal", fx, "N, per driven wheel (wheel_contact_forces)"),
+              array("lateral", fy, "N, per no-side-slip row (wheel_contact_forces)"),
               array("mu", (mu,), "the floor's friction coefficient"),
               array("loads", loads, f"N_w (N), static normal load of driven wheel {wheels}"),
               array("shares", shares, "each driven wheel's share of its axle's lateral force "
                     "(the slip monitor's: N_w / sum of its axle's N)"))
     bad = status(model, "ERR_BAD_TRACTION")
-    input_guards = (Guard(bad, mu, "mu > 0"),
-                    *(Guard(bad, n, f"loads[{i}] > 0") for i, n in enumerate(loads)))
+    guards = (Guard(bad, mu, "mu > 0"),
+              *(Guard(bad, n, f"loads[{i}] > 0") for i, n in enumerate(loads)))
     doc = ("Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +\n"
-           "(share_k Fy_axle)^2) (N) of driven wheel " + wheels + ", Fx, Fy from the\n"
-           "multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more\n"
-           "traction than the floor gives and slips.")
-    out_margins = out("margins", margins, "N, per driven wheel")
-    guard_defs = (staged_forms(model).stage.definitions_for([g.condition for g in base.guards])
-                  if model.staged else ())
+           "(share_k Fy_axle)^2) (N) of driven wheel " + wheels + ", Fx, Fy the contact\n"
+           "forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel\n"
+           "needs more traction than the floor gives and slips.")
     margin_spec = replace(
-        base, name="traction_margins", doc=doc, inputs=inputs, outputs=(out_margins,),
-        equations=("(9)", "(10)-(12)"), guards=(*base.guards, *input_guards),
-        definitions=(*forms.stage.definitions_for(margins), *guard_defs))
+        base, name="traction_margins", doc=doc, inputs=inputs,
+        outputs=(out("margins", margins, "N, per driven wheel"),),
+        equations=("(9)", "(10)-(12)"), guards=guards, definitions=(), prepared=False)
     warn = status(model, "WARN_TRACTION")
     check = replace(
         margin_spec, name="traction_check",
         doc=doc + "\nA check for firmware after the controller step: returns " + warn
         + " (> 0, not\nan error) when a margin is <= 0, then, as on any status but OK, "
         "writes nothing\n(traction_margins gives the margins whatever their sign).",
-        guards=(*margin_spec.guards,
-                *(Guard(warn, e, f"wheel '{w}' keeps grip: margin > 0")
-                  for e, w in zip(margins, rows.driven, strict=True))))
+        guards=(*guards, *(Guard(warn, e, f"wheel '{w}' keeps grip: margin > 0")
+                           for e, w in zip(margins, rows.driven, strict=True))))
     return margin_spec, check
 
 

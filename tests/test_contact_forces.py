@@ -9,8 +9,9 @@ robot (a ``[lumped]`` file):
   row (θ̈ from the generated minimal forward dynamics);
 * bad input returns the contract's statuses (non-finite input, bad parameters) in C and
   raises in Python, naming the status;
-* ``<prefix>_traction_check`` (the firmware's optional check after a step) returns OK and
-  the margins μ N − √(F_x² + (s F_y)²) where every wheel keeps grip, ``<P>_WARN_TRACTION``
+* ``<prefix>_traction_check`` (the firmware's optional check after a step, on the forces
+  ``wheel_contact_forces`` wrote) returns OK and the margins μ N − √(F_x² + (s F_y)²) where
+  every wheel keeps grip, ``<P>_WARN_TRACTION``
   (2, writing nothing) where one does not, in C and Python alike, at the slip monitor's
   loads and shares; ``<prefix>_traction_margins`` writes the margins whatever their sign.
 """
@@ -190,9 +191,11 @@ def test_the_traction_check_warns_where_a_wheel_slips(name: str) -> None:
         tau = rng.uniform(-10.0, 10.0, code.nu)
         fx, fy = monitor.contact_forces(q, eta, tau, code.params, masses)
         needed = float(np.max(np.hypot(fx, fy) / loads))
+        longitudinal, lateral = code.model.wheel_contact_forces(q, eta, tau, code.params)
         for mu in (1.05 * needed, 0.95 * needed):
-            values = {"p": code.params, "q": q, "wheel_rates": eta, "tau": tau,
-                      "mu": np.array([mu]), "loads": loads, "shares": shares}
+            values = {"longitudinal": np.asarray(longitudinal),
+                      "lateral": np.asarray(lateral), "mu": np.array([mu]), "loads": loads,
+                      "shares": shares}
             expected = mu * loads - np.hypot(fx, fy)
             margins = gf._c(cm, fns["traction_margins"], values)[0]
             assert np.allclose(margins, expected, rtol=1e-9, atol=1e-9)
@@ -214,11 +217,13 @@ def test_the_traction_check_warns_where_a_wheel_slips(name: str) -> None:
                     gf._python(fns["traction_check"], values)
     assert ok == 30 and warned == 30
     # Bad input of the check: its own status, or the contract's.
-    good = {"p": code.params, "q": q, "wheel_rates": eta, "tau": tau, "mu": np.array([1.0]),
-            "loads": loads, "shares": shares}
+    good = {"longitudinal": np.asarray(longitudinal), "lateral": np.asarray(lateral),
+            "mu": np.array([1.0]), "loads": loads, "shares": shares}
     for change, status in (({"mu": np.array([0.0])}, "ERR_BAD_TRACTION"),
                            ({"loads": -loads}, "ERR_BAD_TRACTION"),
-                           ({"mu": np.array([math.nan])}, "ERR_NONFINITE_INPUT")):
+                           ({"mu": np.array([math.nan])}, "ERR_NONFINITE_INPUT"),
+                           ({"lateral": np.full(len(lateral), math.inf)},
+                            "ERR_NONFINITE_INPUT")):
         for fn in ("traction_margins", "traction_check"):
             with pytest.raises(RuntimeError, match=f"returned {statuses[f'{prefix}_{status}']}$"):
                 gf._c(cm, fns[fn], {**good, **change})

@@ -664,119 +664,24 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
 }
 
 /* wmr_traction_margins: documented in wmr_model.h.
-   operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt */
-wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
-    const wmr_real_t *wheel_rates, const wmr_real_t *tau, const wmr_real_t *mu,
-    const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
+   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
+    const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
 {
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t thetadot_r = wheel_rates[0];
-    const wmr_real_t thetadot_l = wheel_rates[1];
-    const wmr_real_t tau_r = tau[0];
-    const wmr_real_t tau_l = tau[1];
+    const wmr_real_t force_x0 = longitudinal[0];
+    const wmr_real_t force_x1 = longitudinal[1];
+    const wmr_real_t force_y0 = lateral[0];
     const wmr_real_t mu_floor = mu[0];
     const wmr_real_t load_w0 = loads[0];
     const wmr_real_t load_w1 = loads[1];
     const wmr_real_t share_w0 = shares[0];
     const wmr_real_t share_w1 = shares[1];
-    if (isnan((((((m - m) + (I - I)) + (K - K)) + ((I_w - I_w) + (r - r)))
-            + (((b - b) + (d - d)) + ((theta - theta) + (thetadot_r - thetadot_r))))
-            + ((((thetadot_l - thetadot_l) + (tau_r - tau_r)) + ((tau_l - tau_l)
-            + (mu_floor - mu_floor))) + (((load_w0 - load_w0) + (load_w1 - load_w1))
-            + ((share_w0 - share_w0) + (share_w1 - share_w1))))) != 0) {
+    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
+            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
+            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_COS(theta);
-    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t2 = _t0*_t1;
-    const wmr_real_t _t3 = r/b;
-    const wmr_real_t _t4 = WMR_SIN(theta);
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = _t3*_t5;
-    const wmr_real_t _t7 = _t1*_t4;
-    const wmr_real_t _t8 = _t0*d;
-    const wmr_real_t _t9 = _t3*_t8;
-    const wmr_real_t _t10 = _t7 + _t9;
-    const wmr_real_t _t11 = _t7 - _t9;
-    const wmr_real_t _t12 = K*_t4;
-    const wmr_real_t _t13 = K*_t0;
-    const wmr_real_t _t14 = -_t3*thetadot_l + _t3*thetadot_r;
-    const wmr_real_t _t15 = _t14*_t14;
-    const wmr_real_t _t16 = _t14*thetadot_r;
-    const wmr_real_t _t17 = _t14*thetadot_l;
-    const wmr_real_t _t18 = _t2 - _t6;
-    const wmr_real_t _t19 = _t12*_t3 + _t18*m;
-    const wmr_real_t _t20 = _t10*m - _t13*_t3;
-    const wmr_real_t _t21 = I*_t3 - _t10*_t13 + _t12*_t18;
-    const wmr_real_t _t22 = _t2 + _t6;
-    const wmr_real_t _t23 = -_t12*_t3 + _t22*m;
-    const wmr_real_t _t24 = _t11*m + _t13*_t3;
-    const wmr_real_t _t25 = -I*_t3 - _t11*_t13 + _t12*_t22;
-    const wmr_real_t _t26 = _t13*_t15;
-    const wmr_real_t _t27 = -_t10*_t16 - _t11*_t17;
-    const wmr_real_t _t28 = _t26 + _t27*m;
-    const wmr_real_t _t29 = _t12*_t15;
-    const wmr_real_t _t30 = _t16*_t18 + _t17*_t22;
-    const wmr_real_t _t31 = _t29 + _t30*m;
-    const wmr_real_t _t32 = _t12*_t27 - _t13*_t30;
-    const wmr_real_t _t33 = _t0*b;
-    const wmr_real_t _t34 = WMR_LIT(0.5)*_t33;
-    const wmr_real_t _t35 = _t4*b;
-    const wmr_real_t _t36 = WMR_LIT(0.5)*_t35;
-    const wmr_real_t _t37 = _t11*_t20 + _t19*_t22 - _t21*_t3;
-    const wmr_real_t _t38 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3;
-    const wmr_real_t _t39 = _t10*_t31 + _t18*_t28 + _t3*_t32;
-    const wmr_real_t _t40 = -_t39 + tau_r;
-    const wmr_real_t _t41 = _t11*_t31 + _t22*_t28 - _t3*_t32;
-    const wmr_real_t _t42 = -_t41 + tau_l;
-    const wmr_real_t _t43 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3;
-    const wmr_real_t _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3;
-    const wmr_real_t _t45 = -_t37*_t44 + _t38*_t43;
-    const wmr_real_t _t46 = WMR_LIT(1.0)/_t45;
-    const wmr_real_t _t47 = _t46*(-_t37*_t42 + _t38*_t40);
-    const wmr_real_t _t48 = _t46*(-_t40*_t44 + _t42*_t43);
-    const wmr_real_t _t49 = _t18*_t47 + _t22*_t48 + _t27;
-    const wmr_real_t _t50 = _t3*_t47 - _t3*_t48;
-    const wmr_real_t _t51 = -_t12*_t50 - _t26 - _t49*m;
-    const wmr_real_t _t52 = _t10*_t47 + _t11*_t48 + _t30;
-    const wmr_real_t _t53 = _t13*_t50 - _t29 - _t52*m;
-    const wmr_real_t _t54 = -WMR_LIT(1.0)/b;
-    const wmr_real_t _t55 = _t54*(-_t33*_t53 + _t35*_t51);
-    const wmr_real_t _t56 = _t55*_t55;
-    const wmr_real_t _t57 = r*r;
-    const wmr_real_t _t58 = WMR_LIT(0.25)*_t57*m;
-    const wmr_real_t _t59 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t60 = _t57/(b*b);
-    const wmr_real_t _t61 = I_w + _t58 + _t59*_t60;
-    const wmr_real_t _t62 = -I*_t50 - _t12*_t49 + _t13*_t52;
-    const wmr_real_t _t63 = _t34 + _t5;
-    const wmr_real_t _t64 = _t36 - _t8;
-    const wmr_real_t _t65 = _t34 - _t5;
-    const wmr_real_t _t66 = _t36 + _t8;
-    const wmr_real_t _t67 = _t54*(_t51*_t63 + _t53*_t64 - _t62);
-    const wmr_real_t _t68 = _t54*(_t51*_t65 + _t53*_t66 + _t62);
-    const wmr_real_t _t69 = load_w0*mu_floor - WMR_SQRT(_t56*share_w0*share_w0 + _t68*_t68);
-    const wmr_real_t _t70 = load_w1*mu_floor - WMR_SQRT(_t56*share_w1*share_w1 + _t67*_t67);
-    const wmr_real_t _t71 = _t58 - _t59*_t60;
-    if (!(r > WMR_LIT(0.0))) { /* r > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(b > WMR_LIT(0.0))) { /* b > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(_t61 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(_t61*_t61 - _t71*_t71 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        return WMR_ERR_BAD_PARAMS;
-    }
+    const wmr_real_t _t0 = force_y0*force_y0;
     if (!(mu_floor > WMR_LIT(0.0))) { /* mu > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
@@ -786,8 +691,8 @@ wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
     if (!(load_w1 > WMR_LIT(0.0))) { /* loads[1] > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
-    const wmr_real_t r_0 = _t69;
-    const wmr_real_t r_1 = _t70;
+    const wmr_real_t r_0 = load_w0*mu_floor - WMR_SQRT(_t0*share_w0*share_w0 + force_x0*force_x0);
+    const wmr_real_t r_1 = load_w1*mu_floor - WMR_SQRT(_t0*share_w1*share_w1 + force_x1*force_x1);
     if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
@@ -797,119 +702,26 @@ wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
 }
 
 /* wmr_traction_check: documented in wmr_model.h.
-   operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt */
-wmr_status_t wmr_traction_check(const wmr_params_t *p, const wmr_real_t *q,
-    const wmr_real_t *wheel_rates, const wmr_real_t *tau, const wmr_real_t *mu,
-    const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
+   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
+    const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
 {
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t thetadot_r = wheel_rates[0];
-    const wmr_real_t thetadot_l = wheel_rates[1];
-    const wmr_real_t tau_r = tau[0];
-    const wmr_real_t tau_l = tau[1];
+    const wmr_real_t force_x0 = longitudinal[0];
+    const wmr_real_t force_x1 = longitudinal[1];
+    const wmr_real_t force_y0 = lateral[0];
     const wmr_real_t mu_floor = mu[0];
     const wmr_real_t load_w0 = loads[0];
     const wmr_real_t load_w1 = loads[1];
     const wmr_real_t share_w0 = shares[0];
     const wmr_real_t share_w1 = shares[1];
-    if (isnan((((((m - m) + (I - I)) + (K - K)) + ((I_w - I_w) + (r - r)))
-            + (((b - b) + (d - d)) + ((theta - theta) + (thetadot_r - thetadot_r))))
-            + ((((thetadot_l - thetadot_l) + (tau_r - tau_r)) + ((tau_l - tau_l)
-            + (mu_floor - mu_floor))) + (((load_w0 - load_w0) + (load_w1 - load_w1))
-            + ((share_w0 - share_w0) + (share_w1 - share_w1))))) != 0) {
+    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
+            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
+            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_COS(theta);
-    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t2 = _t0*_t1;
-    const wmr_real_t _t3 = r/b;
-    const wmr_real_t _t4 = WMR_SIN(theta);
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = _t3*_t5;
-    const wmr_real_t _t7 = _t1*_t4;
-    const wmr_real_t _t8 = _t0*d;
-    const wmr_real_t _t9 = _t3*_t8;
-    const wmr_real_t _t10 = _t7 + _t9;
-    const wmr_real_t _t11 = _t7 - _t9;
-    const wmr_real_t _t12 = K*_t4;
-    const wmr_real_t _t13 = K*_t0;
-    const wmr_real_t _t14 = -_t3*thetadot_l + _t3*thetadot_r;
-    const wmr_real_t _t15 = _t14*_t14;
-    const wmr_real_t _t16 = _t14*thetadot_r;
-    const wmr_real_t _t17 = _t14*thetadot_l;
-    const wmr_real_t _t18 = _t2 - _t6;
-    const wmr_real_t _t19 = _t12*_t3 + _t18*m;
-    const wmr_real_t _t20 = _t10*m - _t13*_t3;
-    const wmr_real_t _t21 = I*_t3 - _t10*_t13 + _t12*_t18;
-    const wmr_real_t _t22 = _t2 + _t6;
-    const wmr_real_t _t23 = -_t12*_t3 + _t22*m;
-    const wmr_real_t _t24 = _t11*m + _t13*_t3;
-    const wmr_real_t _t25 = -I*_t3 - _t11*_t13 + _t12*_t22;
-    const wmr_real_t _t26 = _t13*_t15;
-    const wmr_real_t _t27 = -_t10*_t16 - _t11*_t17;
-    const wmr_real_t _t28 = _t26 + _t27*m;
-    const wmr_real_t _t29 = _t12*_t15;
-    const wmr_real_t _t30 = _t16*_t18 + _t17*_t22;
-    const wmr_real_t _t31 = _t29 + _t30*m;
-    const wmr_real_t _t32 = _t12*_t27 - _t13*_t30;
-    const wmr_real_t _t33 = _t0*b;
-    const wmr_real_t _t34 = WMR_LIT(0.5)*_t33;
-    const wmr_real_t _t35 = _t4*b;
-    const wmr_real_t _t36 = WMR_LIT(0.5)*_t35;
-    const wmr_real_t _t37 = _t11*_t20 + _t19*_t22 - _t21*_t3;
-    const wmr_real_t _t38 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3;
-    const wmr_real_t _t39 = _t10*_t31 + _t18*_t28 + _t3*_t32;
-    const wmr_real_t _t40 = -_t39 + tau_r;
-    const wmr_real_t _t41 = _t11*_t31 + _t22*_t28 - _t3*_t32;
-    const wmr_real_t _t42 = -_t41 + tau_l;
-    const wmr_real_t _t43 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3;
-    const wmr_real_t _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3;
-    const wmr_real_t _t45 = -_t37*_t44 + _t38*_t43;
-    const wmr_real_t _t46 = WMR_LIT(1.0)/_t45;
-    const wmr_real_t _t47 = _t46*(-_t37*_t42 + _t38*_t40);
-    const wmr_real_t _t48 = _t46*(-_t40*_t44 + _t42*_t43);
-    const wmr_real_t _t49 = _t18*_t47 + _t22*_t48 + _t27;
-    const wmr_real_t _t50 = _t3*_t47 - _t3*_t48;
-    const wmr_real_t _t51 = -_t12*_t50 - _t26 - _t49*m;
-    const wmr_real_t _t52 = _t10*_t47 + _t11*_t48 + _t30;
-    const wmr_real_t _t53 = _t13*_t50 - _t29 - _t52*m;
-    const wmr_real_t _t54 = -WMR_LIT(1.0)/b;
-    const wmr_real_t _t55 = _t54*(-_t33*_t53 + _t35*_t51);
-    const wmr_real_t _t56 = _t55*_t55;
-    const wmr_real_t _t57 = r*r;
-    const wmr_real_t _t58 = WMR_LIT(0.25)*_t57*m;
-    const wmr_real_t _t59 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t60 = _t57/(b*b);
-    const wmr_real_t _t61 = I_w + _t58 + _t59*_t60;
-    const wmr_real_t _t62 = -I*_t50 - _t12*_t49 + _t13*_t52;
-    const wmr_real_t _t63 = _t34 + _t5;
-    const wmr_real_t _t64 = _t36 - _t8;
-    const wmr_real_t _t65 = _t34 - _t5;
-    const wmr_real_t _t66 = _t36 + _t8;
-    const wmr_real_t _t67 = _t54*(_t51*_t63 + _t53*_t64 - _t62);
-    const wmr_real_t _t68 = _t54*(_t51*_t65 + _t53*_t66 + _t62);
-    const wmr_real_t _t69 = load_w0*mu_floor - WMR_SQRT(_t56*share_w0*share_w0 + _t68*_t68);
-    const wmr_real_t _t70 = load_w1*mu_floor - WMR_SQRT(_t56*share_w1*share_w1 + _t67*_t67);
-    const wmr_real_t _t71 = _t58 - _t59*_t60;
-    if (!(r > WMR_LIT(0.0))) { /* r > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(b > WMR_LIT(0.0))) { /* b > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(_t61 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return WMR_ERR_BAD_PARAMS;
-    }
-    if (!(_t61*_t61 - _t71*_t71 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        return WMR_ERR_BAD_PARAMS;
-    }
+    const wmr_real_t _t0 = force_y0*force_y0;
+    const wmr_real_t _t1 = load_w0*mu_floor - WMR_SQRT(_t0*share_w0*share_w0 + force_x0*force_x0);
+    const wmr_real_t _t2 = load_w1*mu_floor - WMR_SQRT(_t0*share_w1*share_w1 + force_x1*force_x1);
     if (!(mu_floor > WMR_LIT(0.0))) { /* mu > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
@@ -919,14 +731,14 @@ wmr_status_t wmr_traction_check(const wmr_params_t *p, const wmr_real_t *q,
     if (!(load_w1 > WMR_LIT(0.0))) { /* loads[1] > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
-    if (!(_t69 > WMR_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!(_t1 > WMR_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return WMR_WARN_TRACTION;
     }
-    if (!(_t70 > WMR_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t2 > WMR_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return WMR_WARN_TRACTION;
     }
-    const wmr_real_t r_0 = _t69;
-    const wmr_real_t r_1 = _t70;
+    const wmr_real_t r_0 = _t1;
+    const wmr_real_t r_1 = _t2;
     if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }

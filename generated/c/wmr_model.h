@@ -320,9 +320,8 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
     wmr_real_t *lateral);
 
-#define WMR_TRACTION_MARGINS_Q_SIZE 5
-#define WMR_TRACTION_MARGINS_WHEEL_RATES_SIZE 2
-#define WMR_TRACTION_MARGINS_TAU_SIZE 2
+#define WMR_TRACTION_MARGINS_LONGITUDINAL_SIZE 2
+#define WMR_TRACTION_MARGINS_LATERAL_SIZE 1
 #define WMR_TRACTION_MARGINS_MU_SIZE 1
 #define WMR_TRACTION_MARGINS_LOADS_SIZE 2
 #define WMR_TRACTION_MARGINS_SHARES_SIZE 2
@@ -330,19 +329,16 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_TRACTION_MARGINS_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
- *     x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_TRACTION_MARGINS_WHEEL_RATES_SIZE): thetadot_r,
- *     thetadot_l -- theta_r rate, theta_l rate
- * @param[in]  tau [2] row-major (WMR_TRACTION_MARGINS_TAU_SIZE): tau_r, tau_l -- net wheel torques
- *     (after bearing friction) tau_r, tau_l
+ * @param[in]  longitudinal [2] row-major (WMR_TRACTION_MARGINS_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [1] row-major (WMR_TRACTION_MARGINS_LATERAL_SIZE): force_y0 -- N, per
+ *     no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (WMR_TRACTION_MARGINS_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (WMR_TRACTION_MARGINS_LOADS_SIZE): load_w0, load_w1 -- N_w (N),
@@ -352,26 +348,19 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
  *     N)
  * @param[out] margins [2] row-major (WMR_TRACTION_MARGINS_MARGINS_SIZE) -- N, per driven wheel
  * @return WMR_OK on success; on error no output is written:
- *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[3], q[4]),
- *         WMR_ERR_BAD_PARAMS if not (r > 0),
- *         WMR_ERR_BAD_PARAMS if not (b > 0),
- *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite (it reads every input),
  *         WMR_ERR_BAD_TRACTION if not (mu > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[1] > 0),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
-    const wmr_real_t *wheel_rates, const wmr_real_t *tau, const wmr_real_t *mu,
-    const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);
+wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
+    const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);
 
-#define WMR_TRACTION_CHECK_Q_SIZE 5
-#define WMR_TRACTION_CHECK_WHEEL_RATES_SIZE 2
-#define WMR_TRACTION_CHECK_TAU_SIZE 2
+#define WMR_TRACTION_CHECK_LONGITUDINAL_SIZE 2
+#define WMR_TRACTION_CHECK_LATERAL_SIZE 1
 #define WMR_TRACTION_CHECK_MU_SIZE 1
 #define WMR_TRACTION_CHECK_LOADS_SIZE 2
 #define WMR_TRACTION_CHECK_SHARES_SIZE 2
@@ -379,22 +368,19 @@ wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  * A check for firmware after the controller step: returns WMR_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p wmr_params_t -- lumped robot parameters
- * @param[in]  q [5] row-major (WMR_TRACTION_CHECK_Q_SIZE): x_c, y_c, theta, theta_r, theta_l --
- *     x_c, y_c, theta, theta_r, theta_l
- * @param[in]  wheel_rates [2] row-major (WMR_TRACTION_CHECK_WHEEL_RATES_SIZE): thetadot_r,
- *     thetadot_l -- theta_r rate, theta_l rate
- * @param[in]  tau [2] row-major (WMR_TRACTION_CHECK_TAU_SIZE): tau_r, tau_l -- net wheel torques
- *     (after bearing friction) tau_r, tau_l
+ * @param[in]  longitudinal [2] row-major (WMR_TRACTION_CHECK_LONGITUDINAL_SIZE): force_x0, force_x1
+ *     -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [1] row-major (WMR_TRACTION_CHECK_LATERAL_SIZE): force_y0 -- N, per
+ *     no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (WMR_TRACTION_CHECK_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (WMR_TRACTION_CHECK_LOADS_SIZE): load_w0, load_w1 -- N_w (N),
@@ -404,12 +390,7 @@ wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
  *     N)
  * @param[out] margins [2] row-major (WMR_TRACTION_CHECK_MARGINS_SIZE) -- N, per driven wheel
  * @return WMR_OK on success; on error no output is written:
- *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[3], q[4]),
- *         WMR_ERR_BAD_PARAMS if not (r > 0),
- *         WMR_ERR_BAD_PARAMS if not (b > 0),
- *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         WMR_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite (it reads every input),
  *         WMR_ERR_BAD_TRACTION if not (mu > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[1] > 0),
@@ -417,11 +398,10 @@ wmr_status_t wmr_traction_margins(const wmr_params_t *p, const wmr_real_t *q,
  *         WMR_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-wmr_status_t wmr_traction_check(const wmr_params_t *p, const wmr_real_t *q,
-    const wmr_real_t *wheel_rates, const wmr_real_t *tau, const wmr_real_t *mu,
-    const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);
+wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
+    const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);
 
 #ifdef __cplusplus
 }

@@ -609,143 +609,57 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     return longitudinal, lateral
 
 
-def traction_margins(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
 
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. x_c, y_c, theta, theta_r, theta_l
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_r, thetadot_l. theta_r rate, theta_l rate
-        tau: array of 2 (shape 2x1, row-major): tau_r, tau_l. net wheel torques (after bearing friction) tau_r, tau_l
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 1 (shape 1x1, row-major): force_y0. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields m, I, K, Iw, r, b, d. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta, _, _ = _flat(q, 5, "q")
-    thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
-    tau_r, tau_l = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, = _flat(lateral, 1, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    m = float(_field(p, "m"))
-    I = float(_field(p, "I"))
-    K = float(_field(p, "K"))
-    I_w = float(_field(p, "Iw"))
-    r = float(_field(p, "r"))
-    b = float(_field(p, "b"))
-    d = float(_field(p, "d"))
-    if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, mu_floor, load_w0, load_w1, share_w0, share_w1, m, I, K, I_w, r, b, d,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of traction_margins is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.cos(theta)
-        _t1 = 0.5*r
-        _t2 = _t0*_t1
-        _t3 = r/b
-        _t4 = math.sin(theta)
-        _t5 = _t4*d
-        _t6 = _t3*_t5
-        _t7 = _t1*_t4
-        _t8 = _t0*d
-        _t9 = _t3*_t8
-        _t10 = _t7 + _t9
-        _t11 = _t7 - _t9
-        _t12 = K*_t4
-        _t13 = K*_t0
-        _t14 = -_t3*thetadot_l + _t3*thetadot_r
-        _t15 = _t14*_t14
-        _t16 = _t14*thetadot_r
-        _t17 = _t14*thetadot_l
-        _t18 = _t2 - _t6
-        _t19 = _t12*_t3 + _t18*m
-        _t20 = _t10*m - _t13*_t3
-        _t21 = I*_t3 - _t10*_t13 + _t12*_t18
-        _t22 = _t2 + _t6
-        _t23 = -_t12*_t3 + _t22*m
-        _t24 = _t11*m + _t13*_t3
-        _t25 = -I*_t3 - _t11*_t13 + _t12*_t22
-        _t26 = _t13*_t15
-        _t27 = -_t10*_t16 - _t11*_t17
-        _t28 = _t26 + _t27*m
-        _t29 = _t12*_t15
-        _t30 = _t16*_t18 + _t17*_t22
-        _t31 = _t29 + _t30*m
-        _t32 = _t12*_t27 - _t13*_t30
-        _t33 = _t0*b
-        _t34 = 0.5*_t33
-        _t35 = _t4*b
-        _t36 = 0.5*_t35
-        _t37 = _t11*_t20 + _t19*_t22 - _t21*_t3
-        _t38 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3
-        _t39 = _t10*_t31 + _t18*_t28 + _t3*_t32
-        _t40 = -_t39 + tau_r
-        _t41 = _t11*_t31 + _t22*_t28 - _t3*_t32
-        _t42 = -_t41 + tau_l
-        _t43 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3
-        _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3
-        _t45 = -_t37*_t44 + _t38*_t43
-        _t46 = 1.0/_t45
-        _t47 = _t46*(-_t37*_t42 + _t38*_t40)
-        _t48 = _t46*(-_t40*_t44 + _t42*_t43)
-        _t49 = _t18*_t47 + _t22*_t48 + _t27
-        _t50 = _t3*_t47 - _t3*_t48
-        _t51 = -_t12*_t50 - _t26 - _t49*m
-        _t52 = _t10*_t47 + _t11*_t48 + _t30
-        _t53 = _t13*_t50 - _t29 - _t52*m
-        _t54 = -1.0/b
-        _t55 = _t54*(-_t33*_t53 + _t35*_t51)
-        _t56 = _t55*_t55
-        _t57 = r*r
-        _t58 = 0.25*_t57*m
-        _t59 = I - 2.0*K*d + d*d*m
-        _t60 = _t57/(b*b)
-        _t61 = I_w + _t58 + _t59*_t60
-        _t62 = -I*_t50 - _t12*_t49 + _t13*_t52
-        _t63 = _t34 + _t5
-        _t64 = _t36 - _t8
-        _t65 = _t34 - _t5
-        _t66 = _t36 + _t8
-        _t67 = _t54*(_t51*_t63 + _t53*_t64 - _t62)
-        _t68 = _t54*(_t51*_t65 + _t53*_t66 + _t62)
-        _t69 = load_w0*mu_floor - math.sqrt(_t56*share_w0*share_w0 + _t68*_t68)
-        _t70 = load_w1*mu_floor - math.sqrt(_t56*share_w1*share_w1 + _t67*_t67)
-        _t71 = _t58 - _t59*_t60
+        _t0 = force_y0*force_y0
     except ZeroDivisionError:
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_margins: division by zero (degenerate input)") from None
-    if not (r > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_margins requires r > 0")
-    if not (b > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_margins requires b > 0")
-    if not (_t61 > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_margins requires (S^T M S)[0][0] > 0")
-    if not (_t61*_t61 - _t71*_t71 > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_margins requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("WMR_ERR_BAD_TRACTION: traction_margins: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_margins requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_margins requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_margins requires loads[1] > 0")
-    margins = np.array([_t69, _t70])
+    margins = np.array([
+        load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0),
+        load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1),
+    ])
     if not np.all(np.isfinite(margins)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of traction_margins is not finite")
     return margins
 
 
-def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
     A check for firmware after the controller step: returns WMR_WARN_TRACTION (> 0, not
     an error) when a margin is <= 0, then, as on any status but OK, writes nothing
     (traction_margins gives the margins whatever their sign).
@@ -753,128 +667,41 @@ def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: Arr
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 5 (shape 5x1, row-major): x_c, y_c, theta, theta_r, theta_l. x_c, y_c, theta, theta_r, theta_l
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_r, thetadot_l. theta_r rate, theta_l rate
-        tau: array of 2 (shape 2x1, row-major): tau_r, tau_l. net wheel torques (after bearing friction) tau_r, tau_l
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 1 (shape 1x1, row-major): force_y0. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields m, I, K, Iw, r, b, d. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 67 add, 111 mul, 4 div, 2 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta, _, _ = _flat(q, 5, "q")
-    thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
-    tau_r, tau_l = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, = _flat(lateral, 1, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    m = float(_field(p, "m"))
-    I = float(_field(p, "I"))
-    K = float(_field(p, "K"))
-    I_w = float(_field(p, "Iw"))
-    r = float(_field(p, "r"))
-    b = float(_field(p, "b"))
-    d = float(_field(p, "d"))
-    if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, mu_floor, load_w0, load_w1, share_w0, share_w1, m, I, K, I_w, r, b, d,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of traction_check is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.cos(theta)
-        _t1 = 0.5*r
-        _t2 = _t0*_t1
-        _t3 = r/b
-        _t4 = math.sin(theta)
-        _t5 = _t4*d
-        _t6 = _t3*_t5
-        _t7 = _t1*_t4
-        _t8 = _t0*d
-        _t9 = _t3*_t8
-        _t10 = _t7 + _t9
-        _t11 = _t7 - _t9
-        _t12 = K*_t4
-        _t13 = K*_t0
-        _t14 = -_t3*thetadot_l + _t3*thetadot_r
-        _t15 = _t14*_t14
-        _t16 = _t14*thetadot_r
-        _t17 = _t14*thetadot_l
-        _t18 = _t2 - _t6
-        _t19 = _t12*_t3 + _t18*m
-        _t20 = _t10*m - _t13*_t3
-        _t21 = I*_t3 - _t10*_t13 + _t12*_t18
-        _t22 = _t2 + _t6
-        _t23 = -_t12*_t3 + _t22*m
-        _t24 = _t11*m + _t13*_t3
-        _t25 = -I*_t3 - _t11*_t13 + _t12*_t22
-        _t26 = _t13*_t15
-        _t27 = -_t10*_t16 - _t11*_t17
-        _t28 = _t26 + _t27*m
-        _t29 = _t12*_t15
-        _t30 = _t16*_t18 + _t17*_t22
-        _t31 = _t29 + _t30*m
-        _t32 = _t12*_t27 - _t13*_t30
-        _t33 = _t0*b
-        _t34 = 0.5*_t33
-        _t35 = _t4*b
-        _t36 = 0.5*_t35
-        _t37 = _t11*_t20 + _t19*_t22 - _t21*_t3
-        _t38 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3
-        _t39 = _t10*_t31 + _t18*_t28 + _t3*_t32
-        _t40 = -_t39 + tau_r
-        _t41 = _t11*_t31 + _t22*_t28 - _t3*_t32
-        _t42 = -_t41 + tau_l
-        _t43 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3
-        _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3
-        _t45 = -_t37*_t44 + _t38*_t43
-        _t46 = 1.0/_t45
-        _t47 = _t46*(-_t37*_t42 + _t38*_t40)
-        _t48 = _t46*(-_t40*_t44 + _t42*_t43)
-        _t49 = _t18*_t47 + _t22*_t48 + _t27
-        _t50 = _t3*_t47 - _t3*_t48
-        _t51 = -_t12*_t50 - _t26 - _t49*m
-        _t52 = _t10*_t47 + _t11*_t48 + _t30
-        _t53 = _t13*_t50 - _t29 - _t52*m
-        _t54 = -1.0/b
-        _t55 = _t54*(-_t33*_t53 + _t35*_t51)
-        _t56 = _t55*_t55
-        _t57 = r*r
-        _t58 = 0.25*_t57*m
-        _t59 = I - 2.0*K*d + d*d*m
-        _t60 = _t57/(b*b)
-        _t61 = I_w + _t58 + _t59*_t60
-        _t62 = -I*_t50 - _t12*_t49 + _t13*_t52
-        _t63 = _t34 + _t5
-        _t64 = _t36 - _t8
-        _t65 = _t34 - _t5
-        _t66 = _t36 + _t8
-        _t67 = _t54*(_t51*_t63 + _t53*_t64 - _t62)
-        _t68 = _t54*(_t51*_t65 + _t53*_t66 + _t62)
-        _t69 = load_w0*mu_floor - math.sqrt(_t56*share_w0*share_w0 + _t68*_t68)
-        _t70 = load_w1*mu_floor - math.sqrt(_t56*share_w1*share_w1 + _t67*_t67)
-        _t71 = _t58 - _t59*_t60
+        _t0 = force_y0*force_y0
+        _t1 = load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0)
+        _t2 = load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1)
     except ZeroDivisionError:
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_check: division by zero (degenerate input)") from None
-    if not (r > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_check requires r > 0")
-    if not (b > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_check requires b > 0")
-    if not (_t61 > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_check requires (S^T M S)[0][0] > 0")
-    if not (_t61*_t61 - _t71*_t71 > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: traction_check requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("WMR_ERR_BAD_TRACTION: traction_check: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_check requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_check requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("WMR_ERR_BAD_TRACTION: traction_check requires loads[1] > 0")
-    if not (_t69 > 0.0):
+    if not (_t1 > 0.0):
         raise ValueError("WMR_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
-    if not (_t70 > 0.0):
+    if not (_t2 > 0.0):
         raise ValueError("WMR_WARN_TRACTION: traction_check requires wheel 'left' keeps grip: margin > 0")
-    margins = np.array([_t69, _t70])
+    margins = np.array([_t1, _t2])
     if not np.all(np.isfinite(margins)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of traction_check is not finite")
     return margins

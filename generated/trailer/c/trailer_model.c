@@ -1925,308 +1925,25 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
 }
 
 /* trailer_traction_margins: documented in trailer_model.h.
-   operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt */
-trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *wheel_rates, const trailer_real_t *tau, const trailer_real_t *mu,
-    const trailer_real_t *loads, const trailer_real_t *shares, trailer_real_t *margins)
+   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
+    const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
+    const trailer_real_t *shares, trailer_real_t *margins)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t tau_right = tau[0];
-    const trailer_real_t tau_left = tau[1];
+    const trailer_real_t force_x0 = longitudinal[0];
+    const trailer_real_t force_x1 = longitudinal[1];
+    const trailer_real_t force_y0 = lateral[0];
     const trailer_real_t mu_floor = mu[0];
     const trailer_real_t load_w0 = loads[0];
     const trailer_real_t load_w1 = loads[1];
     const trailer_real_t share_w0 = shares[0];
     const trailer_real_t share_w1 = shares[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)))
-            + (((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + (J_x_tractor - J_x_tractor))) + ((((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
-            + (((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart_left - radius_cart_left)) + (radius_cart_right - radius_cart_right))))
-            + (((((radius_left - radius_left) + (radius_right - radius_right))
-            + ((theta_tractor - theta_tractor) + (theta_cart - theta_cart)))
-            + (((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-            + (tau_right - tau_right))) + ((((tau_left - tau_left) + (mu_floor - mu_floor))
-            + (load_w0 - load_w0)) + (((load_w1 - load_w1) + (share_w0 - share_w0))
-            + (share_w1 - share_w1))))) != 0) {
+    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
+            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
+            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = -_t0;
-    const trailer_real_t _t2 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t3 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t4 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t5 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t7 = _t3*_t4 + _t5*_t6;
-    const trailer_real_t _t8 = -_t7;
-    const trailer_real_t _t9 = -_t2;
-    const trailer_real_t _t10 = -_t3*_t6 + _t4*_t5;
-    const trailer_real_t _t11 = -radius_right;
-    const trailer_real_t _t12 = -radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(207.0)*_t3/TRAILER_LIT(1000.0);
-    const trailer_real_t _t14 = -_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t5/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t17 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
-    const trailer_real_t _t18 = _t15*_t16;
-    const trailer_real_t _t19 = _t1*_t18 - _t16*_t8;
-    const trailer_real_t _t20 = _t15*_t17;
-    const trailer_real_t _t21 = _t1*_t20 + _t17*_t8;
-    const trailer_real_t _t22 = _t14*_t16;
-    const trailer_real_t _t23 = -_t19 - _t2*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(5.0)*_t23/TRAILER_LIT(3.0);
-    const trailer_real_t _t25 = _t24/TRAILER_LIT(5.0);
-    const trailer_real_t _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9;
-    const trailer_real_t _t27 = _t14*_t17;
-    const trailer_real_t _t28 = -_t2*_t27 - _t21;
-    const trailer_real_t _t29 = -TRAILER_LIT(5.0)*_t28/TRAILER_LIT(3.0);
-    const trailer_real_t _t30 = _t29/TRAILER_LIT(5.0);
-    const trailer_real_t _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9;
-    const trailer_real_t _t32 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t33 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor*_t3;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor_2*_t5;
-    const trailer_real_t _t36 = _t34 + _t35;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t39 = _t37 + _t38;
-    const trailer_real_t _t40 = K_theta_tractor_x_tractor*_t5;
-    const trailer_real_t _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40;
-    const trailer_real_t _t42 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0 - _t42;
-    const trailer_real_t _t44 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
-    const trailer_real_t _t45 = TRAILER_LIT(3.0)*_t5/TRAILER_LIT(10.0);
-    const trailer_real_t _t46 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46;
-    const trailer_real_t _t48 = _t24*thetadot_right + _t29*thetadot_left;
-    const trailer_real_t _t49 = _t48*_t48;
-    const trailer_real_t _t50 = -_t16*thetadot_right + _t17*thetadot_left;
-    const trailer_real_t _t51 = _t50*_t50;
-    const trailer_real_t _t52 = _t46*_t49;
-    const trailer_real_t _t53 = _t37*_t49;
-    const trailer_real_t _t54 = _t38*_t49;
-    const trailer_real_t _t55 = _t45*_t51;
-    const trailer_real_t _t56 = _t44*_t51;
-    const trailer_real_t _t57 = _t50*thetadot_right;
-    const trailer_real_t _t58 = _t50*thetadot_left;
-    const trailer_real_t _t59 = _t48*thetadot_right;
-    const trailer_real_t _t60 = _t48*thetadot_left;
-    const trailer_real_t _t61 = _t13*_t16;
-    const trailer_real_t _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2;
-    const trailer_real_t _t63 = -TRAILER_LIT(5.0)*_t62/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
-    const trailer_real_t _t65 = _t19 + _t61*_t9;
-    const trailer_real_t _t66 = _t13*_t17;
-    const trailer_real_t _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20;
-    const trailer_real_t _t68 = -TRAILER_LIT(5.0)*_t67/TRAILER_LIT(3.0);
-    const trailer_real_t _t69 = _t68/TRAILER_LIT(5.0);
-    const trailer_real_t _t70 = _t21 + _t66*_t9;
-    const trailer_real_t _t71 = TRAILER_LIT(5.0)*_t26/TRAILER_LIT(3.0);
-    const trailer_real_t _t72 = _t71/TRAILER_LIT(5.0);
-    const trailer_real_t _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9;
-    const trailer_real_t _t74 = TRAILER_LIT(5.0)*_t31/TRAILER_LIT(3.0);
-    const trailer_real_t _t75 = _t74/TRAILER_LIT(5.0);
-    const trailer_real_t _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9;
-    const trailer_real_t _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43;
-    const trailer_real_t _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39;
-    const trailer_real_t _t79 = -J_theta_tractor*_t16 + _t18*_t36 + _t22*_t41 + _t24*_t47;
-    const trailer_real_t _t80 = J_theta_cart*_t24 - _t16*_t47 + _t18*_t39 + _t22*_t43;
-    const trailer_real_t _t81 = -_t25 - _t26;
-    const trailer_real_t _t82 = _t33*_t81;
-    const trailer_real_t _t83 = J_theta_cart_left*_t82;
-    const trailer_real_t _t84 = _t25 - _t26;
-    const trailer_real_t _t85 = _t32*_t84;
-    const trailer_real_t _t86 = J_theta_cart_right*_t85;
-    const trailer_real_t _t87 = _t30 - _t31;
-    const trailer_real_t _t88 = _t32*_t87;
-    const trailer_real_t _t89 = -_t30 - _t31;
-    const trailer_real_t _t90 = _t33*_t89;
-    const trailer_real_t _t91 = _t83*_t90 + _t86*_t88;
-    const trailer_real_t _t92 = J_x_tractor*_t27 + _t17*_t41 + _t29*_t43;
-    const trailer_real_t _t93 = J_theta_tractor*_t17 + _t20*_t36 + _t27*_t41 + _t29*_t47;
-    const trailer_real_t _t94 = J_x_tractor*_t20 + _t17*_t36 + _t29*_t39;
-    const trailer_real_t _t95 = J_theta_cart*_t29 + _t17*_t47 + _t20*_t39 + _t27*_t43;
-    const trailer_real_t _t96 = _t34*_t51 + _t35*_t51 + _t53 + _t54;
-    const trailer_real_t _t97 = _t18*_t57 + _t20*_t58;
-    const trailer_real_t _t98 = _t57*_t63 + _t58*_t68 + _t59*_t71 + _t60*_t74;
-    const trailer_real_t _t99 = J_x_tractor*_t97 + _t43*_t98 + _t96;
-    const trailer_real_t _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49
-            - _t52;
-    const trailer_real_t _t101 = _t57*_t61 + _t58*_t66;
-    const trailer_real_t _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98;
-    const trailer_real_t _t103 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t49/TRAILER_LIT(10.0) - _t44*_t52
-            - _t45*_t53 - _t45*_t54;
-    const trailer_real_t _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98;
-    const trailer_real_t _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56;
-    const trailer_real_t _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97;
-    const trailer_real_t _t107 = _t17*_t79 + _t20*_t78 + _t27*_t77 + _t29*_t80 + _t91;
-    const trailer_real_t _t108 = J_theta_cart_left*_t90*_t90 + J_theta_cart_right*_t88*_t88
-            + J_theta_left + _t17*_t93 + _t20*_t94 + _t27*_t92 + _t29*_t95;
-    const trailer_real_t _t109 = _t64 - _t65;
-    const trailer_real_t _t110 = _t109*_t32;
-    const trailer_real_t _t111 = _t69 - _t70;
-    const trailer_real_t _t112 = _t111*_t32;
-    const trailer_real_t _t113 = _t72 - _t73;
-    const trailer_real_t _t114 = _t113*_t32;
-    const trailer_real_t _t115 = _t75 - _t76;
-    const trailer_real_t _t116 = _t115*_t32;
-    const trailer_real_t _t117 = _t110*_t57 + _t112*_t58 + _t114*_t59 + _t116*_t60;
-    const trailer_real_t _t118 = -_t64 - _t65;
-    const trailer_real_t _t119 = _t118*_t33;
-    const trailer_real_t _t120 = -_t69 - _t70;
-    const trailer_real_t _t121 = _t120*_t33;
-    const trailer_real_t _t122 = -_t72 - _t73;
-    const trailer_real_t _t123 = _t122*_t33;
-    const trailer_real_t _t124 = -_t75 - _t76;
-    const trailer_real_t _t125 = _t124*_t33;
-    const trailer_real_t _t126 = _t119*_t57 + _t121*_t58 + _t123*_t59 + _t125*_t60;
-    const trailer_real_t _t127 = _t102*_t18 - _t104*_t16 + _t106*_t24 + _t117*_t86 + _t126*_t83
-            + _t22*_t99;
-    const trailer_real_t _t128 = -_t127 + tau_right;
-    const trailer_real_t _t129 = J_theta_cart_left*_t126*_t90 + J_theta_cart_right*_t117*_t88
-            + _t102*_t20 + _t104*_t17 + _t106*_t29 + _t27*_t99;
-    const trailer_real_t _t130 = -_t129 + tau_left;
-    const trailer_real_t _t131 = J_theta_cart_left*_t82*_t82 + J_theta_cart_right*_t85*_t85
-            + J_theta_right - _t16*_t79 + _t18*_t78 + _t22*_t77 + _t24*_t80;
-    const trailer_real_t _t132 = -_t16*_t93 + _t18*_t94 + _t22*_t92 + _t24*_t95 + _t91;
-    const trailer_real_t _t133 = -_t107*_t132 + _t108*_t131;
-    const trailer_real_t _t134 = TRAILER_LIT(1.0)/_t133;
-    const trailer_real_t _t135 = _t134*(-_t107*_t130 + _t108*_t128);
-    const trailer_real_t _t136 = _t134*(-_t128*_t132 + _t130*_t131);
-    const trailer_real_t _t137 = _t101 + _t135*_t18 + _t136*_t20;
-    const trailer_real_t _t138 = _t135*_t22 + _t136*_t27 + _t97;
-    const trailer_real_t _t139 = -_t135*_t16 + _t136*_t17;
-    const trailer_real_t _t140 = _t135*_t24 + _t136*_t29 + _t98;
-    const trailer_real_t _t141 = -J_theta_tractor*_t139 - _t103 - _t137*_t36 - _t138*_t41
-            - _t140*_t47;
-    const trailer_real_t _t142 = _t117 + _t135*_t85 + _t136*_t88;
-    const trailer_real_t _t143 = -J_theta_cart_right*_t142;
-    const trailer_real_t _t144 = _t143*_t32;
-    const trailer_real_t _t145 = _t126 + _t135*_t82 + _t136*_t90;
-    const trailer_real_t _t146 = -J_theta_cart_left*_t145;
-    const trailer_real_t _t147 = _t146*_t33;
-    const trailer_real_t _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47;
-    const trailer_real_t _t149 = _t144/TRAILER_LIT(5.0) - _t147/TRAILER_LIT(5.0) + _t148;
-    const trailer_real_t _t150 = -TRAILER_LIT(5.0)*_t149/TRAILER_LIT(3.0);
-    const trailer_real_t _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8;
-    const trailer_real_t _t152 = TRAILER_LIT(500.0)*_t151/TRAILER_LIT(207.0);
-    const trailer_real_t _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96;
-    const trailer_real_t _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153;
-    const trailer_real_t _t155 = TRAILER_LIT(500.0)*_t154/TRAILER_LIT(207.0);
-    const trailer_real_t _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39;
-    const trailer_real_t _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156;
-    const trailer_real_t _t158 = TRAILER_LIT(500.0)*_t157/TRAILER_LIT(207.0);
-    const trailer_real_t _t159 = _t14*_t155 + _t15*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(207.0)*_t5/TRAILER_LIT(500.0);
-    const trailer_real_t _t161 = -TRAILER_LIT(207.0)*_t3/TRAILER_LIT(500.0);
-    const trailer_real_t _t162 = _t155*_t160 + _t158*_t161;
-    const trailer_real_t _t163 = _t162*_t162;
-    const trailer_real_t _t164 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t165 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
-    const trailer_real_t _t166 = _t14*_t164;
-    const trailer_real_t _t167 = _t15*_t164;
-    const trailer_real_t _t168 = -_t1*_t167 + _t164*_t8 - _t166*_t2;
-    const trailer_real_t _t169 = -TRAILER_LIT(5.0)*_t168/TRAILER_LIT(3.0);
-    const trailer_real_t _t170 = _t169/TRAILER_LIT(5.0);
-    const trailer_real_t _t171 = _t1*_t166 - _t10*_t164 + _t167*_t9;
-    const trailer_real_t _t172 = _t14*_t165;
-    const trailer_real_t _t173 = _t15*_t165;
-    const trailer_real_t _t174 = -_t1*_t173 - _t165*_t8 - _t172*_t2;
-    const trailer_real_t _t175 = -TRAILER_LIT(5.0)*_t174/TRAILER_LIT(3.0);
-    const trailer_real_t _t176 = _t175/TRAILER_LIT(5.0);
-    const trailer_real_t _t177 = _t1*_t172 + _t10*_t165 + _t173*_t9;
-    const trailer_real_t _t178 = J_x_tractor*_t166 - _t164*_t41 + _t169*_t43;
-    const trailer_real_t _t179 = J_x_tractor*_t167 - _t164*_t36 + _t169*_t39;
-    const trailer_real_t _t180 = -J_theta_tractor*_t164 + _t166*_t41 + _t167*_t36 + _t169*_t47;
-    const trailer_real_t _t181 = J_theta_cart*_t169 - _t164*_t47 + _t166*_t43 + _t167*_t39;
-    const trailer_real_t _t182 = _t170 - _t171;
-    const trailer_real_t _t183 = _t182*_t32;
-    const trailer_real_t _t184 = _t176 - _t177;
-    const trailer_real_t _t185 = _t184*_t32;
-    const trailer_real_t _t186 = -_t170 - _t171;
-    const trailer_real_t _t187 = _t186*_t33;
-    const trailer_real_t _t188 = -_t176 - _t177;
-    const trailer_real_t _t189 = _t188*_t33;
-    const trailer_real_t _t190 = J_theta_cart_left*_t187*_t189 + J_theta_cart_right*_t183*_t185;
-    const trailer_real_t _t191 = J_x_tractor*_t172 + _t165*_t41 + _t175*_t43;
-    const trailer_real_t _t192 = J_theta_tractor*_t165 + _t172*_t41 + _t173*_t36 + _t175*_t47;
-    const trailer_real_t _t193 = J_x_tractor*_t173 + _t165*_t36 + _t175*_t39;
-    const trailer_real_t _t194 = J_theta_cart*_t175 + _t165*_t47 + _t172*_t43 + _t173*_t39;
-    const trailer_real_t _t195 = _t152 + _t159;
-    const trailer_real_t _t196 = -_t152 + _t159;
-    const trailer_real_t _t197 = load_w0*mu_floor - TRAILER_SQRT(_t163*share_w0*share_w0
-            + _t196*_t196);
-    const trailer_real_t _t198 = load_w1*mu_floor - TRAILER_SQRT(_t163*share_w1*share_w1
-            + _t195*_t195);
-    const trailer_real_t _t199 = J_theta_cart_left*_t187*_t187 + J_theta_cart_right*_t183*_t183
-            + J_theta_right - _t164*_t180 + _t166*_t178 + _t167*_t179 + _t169*_t181;
-    const trailer_real_t _t200 = _t165*_t180 + _t172*_t178 + _t173*_t179 + _t175*_t181 + _t190;
-    const trailer_real_t _t201 = -_t164*_t192 + _t166*_t191 + _t167*_t193 + _t169*_t194 + _t190;
-    const trailer_real_t _t202 = J_theta_cart_left*_t189*_t189 + J_theta_cart_right*_t185*_t185
-            + J_theta_left + _t165*_t192 + _t172*_t191 + _t173*_t193 + _t175*_t194;
-    if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_right > TRAILER_LIT(0.0))) { /* radius_cart_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_left > TRAILER_LIT(0.0))) { /* radius_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_right > TRAILER_LIT(0.0))) { /* radius_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart > TRAILER_LIT(0.0))) { /* J_theta_cart > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_left > TRAILER_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_right > TRAILER_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_left > TRAILER_LIT(0.0))) { /* J_theta_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_right > TRAILER_LIT(0.0))) { /* J_theta_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_tractor > TRAILER_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(_t199 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(_t199*_t202 - _t200*_t201 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
-                                                              model */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
+    const trailer_real_t _t0 = force_y0*force_y0;
     if (!(mu_floor > TRAILER_LIT(0.0))) { /* mu > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
@@ -2236,8 +1953,10 @@ trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trail
     if (!(load_w1 > TRAILER_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
-    const trailer_real_t r_0 = _t197;
-    const trailer_real_t r_1 = _t198;
+    const trailer_real_t r_0 = load_w0*mu_floor - TRAILER_SQRT(_t0*share_w0*share_w0
+            + force_x0*force_x0);
+    const trailer_real_t r_1 = load_w1*mu_floor - TRAILER_SQRT(_t0*share_w1*share_w1
+            + force_x1*force_x1);
     if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -2247,308 +1966,29 @@ trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trail
 }
 
 /* trailer_traction_check: documented in trailer_model.h.
-   operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt */
-trailer_status_t trailer_traction_check(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *wheel_rates, const trailer_real_t *tau, const trailer_real_t *mu,
-    const trailer_real_t *loads, const trailer_real_t *shares, trailer_real_t *margins)
+   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
+    const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
+    const trailer_real_t *shares, trailer_real_t *margins)
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t tau_right = tau[0];
-    const trailer_real_t tau_left = tau[1];
+    const trailer_real_t force_x0 = longitudinal[0];
+    const trailer_real_t force_x1 = longitudinal[1];
+    const trailer_real_t force_y0 = lateral[0];
     const trailer_real_t mu_floor = mu[0];
     const trailer_real_t load_w0 = loads[0];
     const trailer_real_t load_w1 = loads[1];
     const trailer_real_t share_w0 = shares[0];
     const trailer_real_t share_w1 = shares[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)))
-            + (((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + (J_x_tractor - J_x_tractor))) + ((((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
-            + (((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart_left - radius_cart_left)) + (radius_cart_right - radius_cart_right))))
-            + (((((radius_left - radius_left) + (radius_right - radius_right))
-            + ((theta_tractor - theta_tractor) + (theta_cart - theta_cart)))
-            + (((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-            + (tau_right - tau_right))) + ((((tau_left - tau_left) + (mu_floor - mu_floor))
-            + (load_w0 - load_w0)) + (((load_w1 - load_w1) + (share_w0 - share_w0))
-            + (share_w1 - share_w1))))) != 0) {
+    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
+            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
+            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = -_t0;
-    const trailer_real_t _t2 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t3 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t4 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t5 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t7 = _t3*_t4 + _t5*_t6;
-    const trailer_real_t _t8 = -_t7;
-    const trailer_real_t _t9 = -_t2;
-    const trailer_real_t _t10 = -_t3*_t6 + _t4*_t5;
-    const trailer_real_t _t11 = -radius_right;
-    const trailer_real_t _t12 = -radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(207.0)*_t3/TRAILER_LIT(1000.0);
-    const trailer_real_t _t14 = -_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t5/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t17 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
-    const trailer_real_t _t18 = _t15*_t16;
-    const trailer_real_t _t19 = _t1*_t18 - _t16*_t8;
-    const trailer_real_t _t20 = _t15*_t17;
-    const trailer_real_t _t21 = _t1*_t20 + _t17*_t8;
-    const trailer_real_t _t22 = _t14*_t16;
-    const trailer_real_t _t23 = -_t19 - _t2*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(5.0)*_t23/TRAILER_LIT(3.0);
-    const trailer_real_t _t25 = _t24/TRAILER_LIT(5.0);
-    const trailer_real_t _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9;
-    const trailer_real_t _t27 = _t14*_t17;
-    const trailer_real_t _t28 = -_t2*_t27 - _t21;
-    const trailer_real_t _t29 = -TRAILER_LIT(5.0)*_t28/TRAILER_LIT(3.0);
-    const trailer_real_t _t30 = _t29/TRAILER_LIT(5.0);
-    const trailer_real_t _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9;
-    const trailer_real_t _t32 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t33 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor*_t3;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor_2*_t5;
-    const trailer_real_t _t36 = _t34 + _t35;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t39 = _t37 + _t38;
-    const trailer_real_t _t40 = K_theta_tractor_x_tractor*_t5;
-    const trailer_real_t _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40;
-    const trailer_real_t _t42 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0 - _t42;
-    const trailer_real_t _t44 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
-    const trailer_real_t _t45 = TRAILER_LIT(3.0)*_t5/TRAILER_LIT(10.0);
-    const trailer_real_t _t46 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46;
-    const trailer_real_t _t48 = _t24*thetadot_right + _t29*thetadot_left;
-    const trailer_real_t _t49 = _t48*_t48;
-    const trailer_real_t _t50 = -_t16*thetadot_right + _t17*thetadot_left;
-    const trailer_real_t _t51 = _t50*_t50;
-    const trailer_real_t _t52 = _t46*_t49;
-    const trailer_real_t _t53 = _t37*_t49;
-    const trailer_real_t _t54 = _t38*_t49;
-    const trailer_real_t _t55 = _t45*_t51;
-    const trailer_real_t _t56 = _t44*_t51;
-    const trailer_real_t _t57 = _t50*thetadot_right;
-    const trailer_real_t _t58 = _t50*thetadot_left;
-    const trailer_real_t _t59 = _t48*thetadot_right;
-    const trailer_real_t _t60 = _t48*thetadot_left;
-    const trailer_real_t _t61 = _t13*_t16;
-    const trailer_real_t _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2;
-    const trailer_real_t _t63 = -TRAILER_LIT(5.0)*_t62/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
-    const trailer_real_t _t65 = _t19 + _t61*_t9;
-    const trailer_real_t _t66 = _t13*_t17;
-    const trailer_real_t _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20;
-    const trailer_real_t _t68 = -TRAILER_LIT(5.0)*_t67/TRAILER_LIT(3.0);
-    const trailer_real_t _t69 = _t68/TRAILER_LIT(5.0);
-    const trailer_real_t _t70 = _t21 + _t66*_t9;
-    const trailer_real_t _t71 = TRAILER_LIT(5.0)*_t26/TRAILER_LIT(3.0);
-    const trailer_real_t _t72 = _t71/TRAILER_LIT(5.0);
-    const trailer_real_t _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9;
-    const trailer_real_t _t74 = TRAILER_LIT(5.0)*_t31/TRAILER_LIT(3.0);
-    const trailer_real_t _t75 = _t74/TRAILER_LIT(5.0);
-    const trailer_real_t _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9;
-    const trailer_real_t _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43;
-    const trailer_real_t _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39;
-    const trailer_real_t _t79 = -J_theta_tractor*_t16 + _t18*_t36 + _t22*_t41 + _t24*_t47;
-    const trailer_real_t _t80 = J_theta_cart*_t24 - _t16*_t47 + _t18*_t39 + _t22*_t43;
-    const trailer_real_t _t81 = -_t25 - _t26;
-    const trailer_real_t _t82 = _t33*_t81;
-    const trailer_real_t _t83 = J_theta_cart_left*_t82;
-    const trailer_real_t _t84 = _t25 - _t26;
-    const trailer_real_t _t85 = _t32*_t84;
-    const trailer_real_t _t86 = J_theta_cart_right*_t85;
-    const trailer_real_t _t87 = _t30 - _t31;
-    const trailer_real_t _t88 = _t32*_t87;
-    const trailer_real_t _t89 = -_t30 - _t31;
-    const trailer_real_t _t90 = _t33*_t89;
-    const trailer_real_t _t91 = _t83*_t90 + _t86*_t88;
-    const trailer_real_t _t92 = J_x_tractor*_t27 + _t17*_t41 + _t29*_t43;
-    const trailer_real_t _t93 = J_theta_tractor*_t17 + _t20*_t36 + _t27*_t41 + _t29*_t47;
-    const trailer_real_t _t94 = J_x_tractor*_t20 + _t17*_t36 + _t29*_t39;
-    const trailer_real_t _t95 = J_theta_cart*_t29 + _t17*_t47 + _t20*_t39 + _t27*_t43;
-    const trailer_real_t _t96 = _t34*_t51 + _t35*_t51 + _t53 + _t54;
-    const trailer_real_t _t97 = _t18*_t57 + _t20*_t58;
-    const trailer_real_t _t98 = _t57*_t63 + _t58*_t68 + _t59*_t71 + _t60*_t74;
-    const trailer_real_t _t99 = J_x_tractor*_t97 + _t43*_t98 + _t96;
-    const trailer_real_t _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49
-            - _t52;
-    const trailer_real_t _t101 = _t57*_t61 + _t58*_t66;
-    const trailer_real_t _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98;
-    const trailer_real_t _t103 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t49/TRAILER_LIT(10.0) - _t44*_t52
-            - _t45*_t53 - _t45*_t54;
-    const trailer_real_t _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98;
-    const trailer_real_t _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56;
-    const trailer_real_t _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97;
-    const trailer_real_t _t107 = _t17*_t79 + _t20*_t78 + _t27*_t77 + _t29*_t80 + _t91;
-    const trailer_real_t _t108 = J_theta_cart_left*_t90*_t90 + J_theta_cart_right*_t88*_t88
-            + J_theta_left + _t17*_t93 + _t20*_t94 + _t27*_t92 + _t29*_t95;
-    const trailer_real_t _t109 = _t64 - _t65;
-    const trailer_real_t _t110 = _t109*_t32;
-    const trailer_real_t _t111 = _t69 - _t70;
-    const trailer_real_t _t112 = _t111*_t32;
-    const trailer_real_t _t113 = _t72 - _t73;
-    const trailer_real_t _t114 = _t113*_t32;
-    const trailer_real_t _t115 = _t75 - _t76;
-    const trailer_real_t _t116 = _t115*_t32;
-    const trailer_real_t _t117 = _t110*_t57 + _t112*_t58 + _t114*_t59 + _t116*_t60;
-    const trailer_real_t _t118 = -_t64 - _t65;
-    const trailer_real_t _t119 = _t118*_t33;
-    const trailer_real_t _t120 = -_t69 - _t70;
-    const trailer_real_t _t121 = _t120*_t33;
-    const trailer_real_t _t122 = -_t72 - _t73;
-    const trailer_real_t _t123 = _t122*_t33;
-    const trailer_real_t _t124 = -_t75 - _t76;
-    const trailer_real_t _t125 = _t124*_t33;
-    const trailer_real_t _t126 = _t119*_t57 + _t121*_t58 + _t123*_t59 + _t125*_t60;
-    const trailer_real_t _t127 = _t102*_t18 - _t104*_t16 + _t106*_t24 + _t117*_t86 + _t126*_t83
-            + _t22*_t99;
-    const trailer_real_t _t128 = -_t127 + tau_right;
-    const trailer_real_t _t129 = J_theta_cart_left*_t126*_t90 + J_theta_cart_right*_t117*_t88
-            + _t102*_t20 + _t104*_t17 + _t106*_t29 + _t27*_t99;
-    const trailer_real_t _t130 = -_t129 + tau_left;
-    const trailer_real_t _t131 = J_theta_cart_left*_t82*_t82 + J_theta_cart_right*_t85*_t85
-            + J_theta_right - _t16*_t79 + _t18*_t78 + _t22*_t77 + _t24*_t80;
-    const trailer_real_t _t132 = -_t16*_t93 + _t18*_t94 + _t22*_t92 + _t24*_t95 + _t91;
-    const trailer_real_t _t133 = -_t107*_t132 + _t108*_t131;
-    const trailer_real_t _t134 = TRAILER_LIT(1.0)/_t133;
-    const trailer_real_t _t135 = _t134*(-_t107*_t130 + _t108*_t128);
-    const trailer_real_t _t136 = _t134*(-_t128*_t132 + _t130*_t131);
-    const trailer_real_t _t137 = _t101 + _t135*_t18 + _t136*_t20;
-    const trailer_real_t _t138 = _t135*_t22 + _t136*_t27 + _t97;
-    const trailer_real_t _t139 = -_t135*_t16 + _t136*_t17;
-    const trailer_real_t _t140 = _t135*_t24 + _t136*_t29 + _t98;
-    const trailer_real_t _t141 = -J_theta_tractor*_t139 - _t103 - _t137*_t36 - _t138*_t41
-            - _t140*_t47;
-    const trailer_real_t _t142 = _t117 + _t135*_t85 + _t136*_t88;
-    const trailer_real_t _t143 = -J_theta_cart_right*_t142;
-    const trailer_real_t _t144 = _t143*_t32;
-    const trailer_real_t _t145 = _t126 + _t135*_t82 + _t136*_t90;
-    const trailer_real_t _t146 = -J_theta_cart_left*_t145;
-    const trailer_real_t _t147 = _t146*_t33;
-    const trailer_real_t _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47;
-    const trailer_real_t _t149 = _t144/TRAILER_LIT(5.0) - _t147/TRAILER_LIT(5.0) + _t148;
-    const trailer_real_t _t150 = -TRAILER_LIT(5.0)*_t149/TRAILER_LIT(3.0);
-    const trailer_real_t _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8;
-    const trailer_real_t _t152 = TRAILER_LIT(500.0)*_t151/TRAILER_LIT(207.0);
-    const trailer_real_t _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96;
-    const trailer_real_t _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153;
-    const trailer_real_t _t155 = TRAILER_LIT(500.0)*_t154/TRAILER_LIT(207.0);
-    const trailer_real_t _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39;
-    const trailer_real_t _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156;
-    const trailer_real_t _t158 = TRAILER_LIT(500.0)*_t157/TRAILER_LIT(207.0);
-    const trailer_real_t _t159 = _t14*_t155 + _t15*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(207.0)*_t5/TRAILER_LIT(500.0);
-    const trailer_real_t _t161 = -TRAILER_LIT(207.0)*_t3/TRAILER_LIT(500.0);
-    const trailer_real_t _t162 = _t155*_t160 + _t158*_t161;
-    const trailer_real_t _t163 = _t162*_t162;
-    const trailer_real_t _t164 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t165 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
-    const trailer_real_t _t166 = _t14*_t164;
-    const trailer_real_t _t167 = _t15*_t164;
-    const trailer_real_t _t168 = -_t1*_t167 + _t164*_t8 - _t166*_t2;
-    const trailer_real_t _t169 = -TRAILER_LIT(5.0)*_t168/TRAILER_LIT(3.0);
-    const trailer_real_t _t170 = _t169/TRAILER_LIT(5.0);
-    const trailer_real_t _t171 = _t1*_t166 - _t10*_t164 + _t167*_t9;
-    const trailer_real_t _t172 = _t14*_t165;
-    const trailer_real_t _t173 = _t15*_t165;
-    const trailer_real_t _t174 = -_t1*_t173 - _t165*_t8 - _t172*_t2;
-    const trailer_real_t _t175 = -TRAILER_LIT(5.0)*_t174/TRAILER_LIT(3.0);
-    const trailer_real_t _t176 = _t175/TRAILER_LIT(5.0);
-    const trailer_real_t _t177 = _t1*_t172 + _t10*_t165 + _t173*_t9;
-    const trailer_real_t _t178 = J_x_tractor*_t166 - _t164*_t41 + _t169*_t43;
-    const trailer_real_t _t179 = J_x_tractor*_t167 - _t164*_t36 + _t169*_t39;
-    const trailer_real_t _t180 = -J_theta_tractor*_t164 + _t166*_t41 + _t167*_t36 + _t169*_t47;
-    const trailer_real_t _t181 = J_theta_cart*_t169 - _t164*_t47 + _t166*_t43 + _t167*_t39;
-    const trailer_real_t _t182 = _t170 - _t171;
-    const trailer_real_t _t183 = _t182*_t32;
-    const trailer_real_t _t184 = _t176 - _t177;
-    const trailer_real_t _t185 = _t184*_t32;
-    const trailer_real_t _t186 = -_t170 - _t171;
-    const trailer_real_t _t187 = _t186*_t33;
-    const trailer_real_t _t188 = -_t176 - _t177;
-    const trailer_real_t _t189 = _t188*_t33;
-    const trailer_real_t _t190 = J_theta_cart_left*_t187*_t189 + J_theta_cart_right*_t183*_t185;
-    const trailer_real_t _t191 = J_x_tractor*_t172 + _t165*_t41 + _t175*_t43;
-    const trailer_real_t _t192 = J_theta_tractor*_t165 + _t172*_t41 + _t173*_t36 + _t175*_t47;
-    const trailer_real_t _t193 = J_x_tractor*_t173 + _t165*_t36 + _t175*_t39;
-    const trailer_real_t _t194 = J_theta_cart*_t175 + _t165*_t47 + _t172*_t43 + _t173*_t39;
-    const trailer_real_t _t195 = _t152 + _t159;
-    const trailer_real_t _t196 = -_t152 + _t159;
-    const trailer_real_t _t197 = load_w0*mu_floor - TRAILER_SQRT(_t163*share_w0*share_w0
-            + _t196*_t196);
-    const trailer_real_t _t198 = load_w1*mu_floor - TRAILER_SQRT(_t163*share_w1*share_w1
-            + _t195*_t195);
-    const trailer_real_t _t199 = J_theta_cart_left*_t187*_t187 + J_theta_cart_right*_t183*_t183
-            + J_theta_right - _t164*_t180 + _t166*_t178 + _t167*_t179 + _t169*_t181;
-    const trailer_real_t _t200 = _t165*_t180 + _t172*_t178 + _t173*_t179 + _t175*_t181 + _t190;
-    const trailer_real_t _t201 = -_t164*_t192 + _t166*_t191 + _t167*_t193 + _t169*_t194 + _t190;
-    const trailer_real_t _t202 = J_theta_cart_left*_t189*_t189 + J_theta_cart_right*_t185*_t185
-            + J_theta_left + _t165*_t192 + _t172*_t191 + _t173*_t193 + _t175*_t194;
-    if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_right > TRAILER_LIT(0.0))) { /* radius_cart_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_left > TRAILER_LIT(0.0))) { /* radius_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(radius_right > TRAILER_LIT(0.0))) { /* radius_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart > TRAILER_LIT(0.0))) { /* J_theta_cart > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_left > TRAILER_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_right > TRAILER_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_left > TRAILER_LIT(0.0))) { /* J_theta_left > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_right > TRAILER_LIT(0.0))) { /* J_theta_right > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_tractor > TRAILER_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(_t199 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
-    if (!(_t199*_t202 - _t200*_t201 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
-                                                              model */
-        return TRAILER_ERR_BAD_PARAMS;
-    }
+    const trailer_real_t _t0 = force_y0*force_y0;
+    const trailer_real_t _t1 = load_w0*mu_floor - TRAILER_SQRT(_t0*share_w0*share_w0
+            + force_x0*force_x0);
+    const trailer_real_t _t2 = load_w1*mu_floor - TRAILER_SQRT(_t0*share_w1*share_w1
+            + force_x1*force_x1);
     if (!(mu_floor > TRAILER_LIT(0.0))) { /* mu > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
@@ -2558,14 +1998,14 @@ trailer_status_t trailer_traction_check(const trailer_params_t *p, const trailer
     if (!(load_w1 > TRAILER_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
-    if (!(_t197 > TRAILER_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!(_t1 > TRAILER_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return TRAILER_WARN_TRACTION;
     }
-    if (!(_t198 > TRAILER_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t2 > TRAILER_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return TRAILER_WARN_TRACTION;
     }
-    const trailer_real_t r_0 = _t197;
-    const trailer_real_t r_1 = _t198;
+    const trailer_real_t r_0 = _t1;
+    const trailer_real_t r_1 = _t2;
     if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }

@@ -348,9 +348,8 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral);
 
-#define TRAILER_TRACTION_MARGINS_Q_SIZE 8
-#define TRAILER_TRACTION_MARGINS_WHEEL_RATES_SIZE 2
-#define TRAILER_TRACTION_MARGINS_TAU_SIZE 2
+#define TRAILER_TRACTION_MARGINS_LONGITUDINAL_SIZE 2
+#define TRAILER_TRACTION_MARGINS_LATERAL_SIZE 2
 #define TRAILER_TRACTION_MARGINS_MU_SIZE 1
 #define TRAILER_TRACTION_MARGINS_LOADS_SIZE 2
 #define TRAILER_TRACTION_MARGINS_SHARES_SIZE 2
@@ -358,21 +357,16 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer_params_t -- lumped robot parameters
- * @param[in]  q [8] row-major (TRAILER_TRACTION_MARGINS_Q_SIZE): x_tractor, y_tractor,
- *     theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left --
- *     x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right,
- *     theta_cart_left
- * @param[in]  wheel_rates [2] row-major (TRAILER_TRACTION_MARGINS_WHEEL_RATES_SIZE):
- *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER_TRACTION_MARGINS_TAU_SIZE): tau_right, tau_left -- net
- *     wheel torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER_TRACTION_MARGINS_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [2] row-major (TRAILER_TRACTION_MARGINS_LATERAL_SIZE): force_y0, force_y1 --
+ *     N, per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER_TRACTION_MARGINS_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (TRAILER_TRACTION_MARGINS_LOADS_SIZE): load_w0, load_w1 -- N_w
@@ -383,34 +377,20 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
  * @param[out] margins [2] row-major (TRAILER_TRACTION_MARGINS_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER_OK on success; on error no output is written:
  *         TRAILER_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[4], q[5], q[6], q[7]),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1]),
  *         TRAILER_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER_ERR_BAD_TRACTION if not (loads[1] > 0),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *wheel_rates, const trailer_real_t *tau, const trailer_real_t *mu,
-    const trailer_real_t *loads, const trailer_real_t *shares, trailer_real_t *margins);
+trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
+    const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
+    const trailer_real_t *shares, trailer_real_t *margins);
 
-#define TRAILER_TRACTION_CHECK_Q_SIZE 8
-#define TRAILER_TRACTION_CHECK_WHEEL_RATES_SIZE 2
-#define TRAILER_TRACTION_CHECK_TAU_SIZE 2
+#define TRAILER_TRACTION_CHECK_LONGITUDINAL_SIZE 2
+#define TRAILER_TRACTION_CHECK_LATERAL_SIZE 2
 #define TRAILER_TRACTION_CHECK_MU_SIZE 1
 #define TRAILER_TRACTION_CHECK_LOADS_SIZE 2
 #define TRAILER_TRACTION_CHECK_SHARES_SIZE 2
@@ -418,24 +398,19 @@ trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trail
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  * A check for firmware after the controller step: returns TRAILER_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer_params_t -- lumped robot parameters
- * @param[in]  q [8] row-major (TRAILER_TRACTION_CHECK_Q_SIZE): x_tractor, y_tractor, theta_tractor,
- *     theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left -- x_tractor,
- *     y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right,
- *     theta_cart_left
- * @param[in]  wheel_rates [2] row-major (TRAILER_TRACTION_CHECK_WHEEL_RATES_SIZE): thetadot_right,
- *     thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER_TRACTION_CHECK_TAU_SIZE): tau_right, tau_left -- net wheel
- *     torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER_TRACTION_CHECK_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [2] row-major (TRAILER_TRACTION_CHECK_LATERAL_SIZE): force_y0, force_y1 -- N,
+ *     per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER_TRACTION_CHECK_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (TRAILER_TRACTION_CHECK_LOADS_SIZE): load_w0, load_w1 -- N_w (N),
@@ -446,20 +421,7 @@ trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trail
  * @param[out] margins [2] row-major (TRAILER_TRACTION_CHECK_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER_OK on success; on error no output is written:
  *         TRAILER_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[4], q[5], q[6], q[7]),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1]),
  *         TRAILER_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER_ERR_BAD_TRACTION if not (loads[1] > 0),
@@ -467,11 +429,11 @@ trailer_status_t trailer_traction_margins(const trailer_params_t *p, const trail
  *         TRAILER_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer_status_t trailer_traction_check(const trailer_params_t *p, const trailer_real_t *q,
-    const trailer_real_t *wheel_rates, const trailer_real_t *tau, const trailer_real_t *mu,
-    const trailer_real_t *loads, const trailer_real_t *shares, trailer_real_t *margins);
+trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
+    const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
+    const trailer_real_t *shares, trailer_real_t *margins);
 
 #ifdef __cplusplus
 }

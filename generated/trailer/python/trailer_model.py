@@ -1457,300 +1457,57 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     return longitudinal, lateral
 
 
-def traction_margins(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
 
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 8 (shape 8x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
-        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 2 (shape 2x1, row-major): force_y0, force_y1. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
-    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
-    tau_right, tau_left = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, _ = _flat(lateral, 2, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    J_theta_cart = float(_field(p, "J_theta_cart"))
-    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
-    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
-    J_theta_left = float(_field(p, "J_theta_left"))
-    J_theta_right = float(_field(p, "J_theta_right"))
-    J_theta_tractor = float(_field(p, "J_theta_tractor"))
-    J_x_tractor = float(_field(p, "J_x_tractor"))
-    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
-    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
-    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
-    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
-    radius_cart_left = float(_field(p, "radius_cart_left"))
-    radius_cart_right = float(_field(p, "radius_cart_right"))
-    radius_left = float(_field(p, "radius_left"))
-    radius_right = float(_field(p, "radius_right"))
-    if not all(map(math.isfinite, (theta_tractor, theta_cart, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAILER_ERR_NONFINITE_INPUT: an input of traction_margins is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.sin(theta_cart)
-        _t1 = -_t0
-        _t2 = math.cos(theta_cart)
-        _t3 = math.sin(theta_tractor)
-        _t4 = 3.0*_t0/10.0
-        _t5 = math.cos(theta_tractor)
-        _t6 = 3.0*_t2/10.0
-        _t7 = _t3*_t4 + _t5*_t6
-        _t8 = -_t7
-        _t9 = -_t2
-        _t10 = -_t3*_t6 + _t4*_t5
-        _t11 = -radius_right
-        _t12 = -radius_left
-        _t13 = 207.0*_t3/1000.0
-        _t14 = -_t13
-        _t15 = -207.0*_t5/1000.0
-        _t16 = 500.0*_t11/207.0
-        _t17 = 500.0*_t12/207.0
-        _t18 = _t15*_t16
-        _t19 = _t1*_t18 - _t16*_t8
-        _t20 = _t15*_t17
-        _t21 = _t1*_t20 + _t17*_t8
-        _t22 = _t14*_t16
-        _t23 = -_t19 - _t2*_t22
-        _t24 = -5.0*_t23/3.0
-        _t25 = _t24/5.0
-        _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9
-        _t27 = _t14*_t17
-        _t28 = -_t2*_t27 - _t21
-        _t29 = -5.0*_t28/3.0
-        _t30 = _t29/5.0
-        _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9
-        _t32 = 1.0/radius_cart_right
-        _t33 = 1.0/radius_cart_left
-        _t34 = K_theta_tractor_x_tractor*_t3
-        _t35 = K_theta_tractor_x_tractor_2*_t5
-        _t36 = _t34 + _t35
-        _t37 = K_theta_cart_x_tractor*_t0
-        _t38 = K_theta_cart_x_tractor_2*_t2
-        _t39 = _t37 + _t38
-        _t40 = K_theta_tractor_x_tractor*_t5
-        _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40
-        _t42 = K_theta_cart_x_tractor*_t2
-        _t43 = K_theta_cart_x_tractor_2*_t0 - _t42
-        _t44 = 3.0*_t3/10.0
-        _t45 = 3.0*_t5/10.0
-        _t46 = K_theta_cart_x_tractor_2*_t0
-        _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46
-        _t48 = _t24*thetadot_right + _t29*thetadot_left
-        _t49 = _t48*_t48
-        _t50 = -_t16*thetadot_right + _t17*thetadot_left
-        _t51 = _t50*_t50
-        _t52 = _t46*_t49
-        _t53 = _t37*_t49
-        _t54 = _t38*_t49
-        _t55 = _t45*_t51
-        _t56 = _t44*_t51
-        _t57 = _t50*thetadot_right
-        _t58 = _t50*thetadot_left
-        _t59 = _t48*thetadot_right
-        _t60 = _t48*thetadot_left
-        _t61 = _t13*_t16
-        _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2
-        _t63 = -5.0*_t62/3.0
-        _t64 = _t63/5.0
-        _t65 = _t19 + _t61*_t9
-        _t66 = _t13*_t17
-        _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20
-        _t68 = -5.0*_t67/3.0
-        _t69 = _t68/5.0
-        _t70 = _t21 + _t66*_t9
-        _t71 = 5.0*_t26/3.0
-        _t72 = _t71/5.0
-        _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9
-        _t74 = 5.0*_t31/3.0
-        _t75 = _t74/5.0
-        _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9
-        _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43
-        _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39
-        _t79 = -J_theta_tractor*_t16 + _t18*_t36 + _t22*_t41 + _t24*_t47
-        _t80 = J_theta_cart*_t24 - _t16*_t47 + _t18*_t39 + _t22*_t43
-        _t81 = -_t25 - _t26
-        _t82 = _t33*_t81
-        _t83 = J_theta_cart_left*_t82
-        _t84 = _t25 - _t26
-        _t85 = _t32*_t84
-        _t86 = J_theta_cart_right*_t85
-        _t87 = _t30 - _t31
-        _t88 = _t32*_t87
-        _t89 = -_t30 - _t31
-        _t90 = _t33*_t89
-        _t91 = _t83*_t90 + _t86*_t88
-        _t92 = J_x_tractor*_t27 + _t17*_t41 + _t29*_t43
-        _t93 = J_theta_tractor*_t17 + _t20*_t36 + _t27*_t41 + _t29*_t47
-        _t94 = J_x_tractor*_t20 + _t17*_t36 + _t29*_t39
-        _t95 = J_theta_cart*_t29 + _t17*_t47 + _t20*_t39 + _t27*_t43
-        _t96 = _t34*_t51 + _t35*_t51 + _t53 + _t54
-        _t97 = _t18*_t57 + _t20*_t58
-        _t98 = _t57*_t63 + _t58*_t68 + _t59*_t71 + _t60*_t74
-        _t99 = J_x_tractor*_t97 + _t43*_t98 + _t96
-        _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49 - _t52
-        _t101 = _t57*_t61 + _t58*_t66
-        _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98
-        _t103 = 3.0*K_theta_cart_x_tractor*_t2*_t3*_t49/10.0 - _t44*_t52 - _t45*_t53 - _t45*_t54
-        _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98
-        _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56
-        _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97
-        _t107 = _t17*_t79 + _t20*_t78 + _t27*_t77 + _t29*_t80 + _t91
-        _t108 = J_theta_cart_left*_t90*_t90 + J_theta_cart_right*_t88*_t88 + J_theta_left + _t17*_t93 + _t20*_t94 + _t27*_t92 + _t29*_t95
-        _t109 = _t64 - _t65
-        _t110 = _t109*_t32
-        _t111 = _t69 - _t70
-        _t112 = _t111*_t32
-        _t113 = _t72 - _t73
-        _t114 = _t113*_t32
-        _t115 = _t75 - _t76
-        _t116 = _t115*_t32
-        _t117 = _t110*_t57 + _t112*_t58 + _t114*_t59 + _t116*_t60
-        _t118 = -_t64 - _t65
-        _t119 = _t118*_t33
-        _t120 = -_t69 - _t70
-        _t121 = _t120*_t33
-        _t122 = -_t72 - _t73
-        _t123 = _t122*_t33
-        _t124 = -_t75 - _t76
-        _t125 = _t124*_t33
-        _t126 = _t119*_t57 + _t121*_t58 + _t123*_t59 + _t125*_t60
-        _t127 = _t102*_t18 - _t104*_t16 + _t106*_t24 + _t117*_t86 + _t126*_t83 + _t22*_t99
-        _t128 = -_t127 + tau_right
-        _t129 = J_theta_cart_left*_t126*_t90 + J_theta_cart_right*_t117*_t88 + _t102*_t20 + _t104*_t17 + _t106*_t29 + _t27*_t99
-        _t130 = -_t129 + tau_left
-        _t131 = J_theta_cart_left*_t82*_t82 + J_theta_cart_right*_t85*_t85 + J_theta_right - _t16*_t79 + _t18*_t78 + _t22*_t77 + _t24*_t80
-        _t132 = -_t16*_t93 + _t18*_t94 + _t22*_t92 + _t24*_t95 + _t91
-        _t133 = -_t107*_t132 + _t108*_t131
-        _t134 = 1.0/_t133
-        _t135 = _t134*(-_t107*_t130 + _t108*_t128)
-        _t136 = _t134*(-_t128*_t132 + _t130*_t131)
-        _t137 = _t101 + _t135*_t18 + _t136*_t20
-        _t138 = _t135*_t22 + _t136*_t27 + _t97
-        _t139 = -_t135*_t16 + _t136*_t17
-        _t140 = _t135*_t24 + _t136*_t29 + _t98
-        _t141 = -J_theta_tractor*_t139 - _t103 - _t137*_t36 - _t138*_t41 - _t140*_t47
-        _t142 = _t117 + _t135*_t85 + _t136*_t88
-        _t143 = -J_theta_cart_right*_t142
-        _t144 = _t143*_t32
-        _t145 = _t126 + _t135*_t82 + _t136*_t90
-        _t146 = -J_theta_cart_left*_t145
-        _t147 = _t146*_t33
-        _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47
-        _t149 = _t144/5.0 - _t147/5.0 + _t148
-        _t150 = -5.0*_t149/3.0
-        _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8
-        _t152 = 500.0*_t151/207.0
-        _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96
-        _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153
-        _t155 = 500.0*_t154/207.0
-        _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39
-        _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156
-        _t158 = 500.0*_t157/207.0
-        _t159 = _t14*_t155 + _t15*_t158
-        _t160 = 207.0*_t5/500.0
-        _t161 = -207.0*_t3/500.0
-        _t162 = _t155*_t160 + _t158*_t161
-        _t163 = _t162*_t162
-        _t164 = 500.0*_t11/207.0
-        _t165 = 500.0*_t12/207.0
-        _t166 = _t14*_t164
-        _t167 = _t15*_t164
-        _t168 = -_t1*_t167 + _t164*_t8 - _t166*_t2
-        _t169 = -5.0*_t168/3.0
-        _t170 = _t169/5.0
-        _t171 = _t1*_t166 - _t10*_t164 + _t167*_t9
-        _t172 = _t14*_t165
-        _t173 = _t15*_t165
-        _t174 = -_t1*_t173 - _t165*_t8 - _t172*_t2
-        _t175 = -5.0*_t174/3.0
-        _t176 = _t175/5.0
-        _t177 = _t1*_t172 + _t10*_t165 + _t173*_t9
-        _t178 = J_x_tractor*_t166 - _t164*_t41 + _t169*_t43
-        _t179 = J_x_tractor*_t167 - _t164*_t36 + _t169*_t39
-        _t180 = -J_theta_tractor*_t164 + _t166*_t41 + _t167*_t36 + _t169*_t47
-        _t181 = J_theta_cart*_t169 - _t164*_t47 + _t166*_t43 + _t167*_t39
-        _t182 = _t170 - _t171
-        _t183 = _t182*_t32
-        _t184 = _t176 - _t177
-        _t185 = _t184*_t32
-        _t186 = -_t170 - _t171
-        _t187 = _t186*_t33
-        _t188 = -_t176 - _t177
-        _t189 = _t188*_t33
-        _t190 = J_theta_cart_left*_t187*_t189 + J_theta_cart_right*_t183*_t185
-        _t191 = J_x_tractor*_t172 + _t165*_t41 + _t175*_t43
-        _t192 = J_theta_tractor*_t165 + _t172*_t41 + _t173*_t36 + _t175*_t47
-        _t193 = J_x_tractor*_t173 + _t165*_t36 + _t175*_t39
-        _t194 = J_theta_cart*_t175 + _t165*_t47 + _t172*_t43 + _t173*_t39
-        _t195 = _t152 + _t159
-        _t196 = -_t152 + _t159
-        _t197 = load_w0*mu_floor - math.sqrt(_t163*share_w0*share_w0 + _t196*_t196)
-        _t198 = load_w1*mu_floor - math.sqrt(_t163*share_w1*share_w1 + _t195*_t195)
-        _t199 = J_theta_cart_left*_t187*_t187 + J_theta_cart_right*_t183*_t183 + J_theta_right - _t164*_t180 + _t166*_t178 + _t167*_t179 + _t169*_t181
-        _t200 = _t165*_t180 + _t172*_t178 + _t173*_t179 + _t175*_t181 + _t190
-        _t201 = -_t164*_t192 + _t166*_t191 + _t167*_t193 + _t169*_t194 + _t190
-        _t202 = J_theta_cart_left*_t189*_t189 + J_theta_cart_right*_t185*_t185 + J_theta_left + _t165*_t192 + _t172*_t191 + _t173*_t193 + _t175*_t194
+        _t0 = force_y0*force_y0
     except ZeroDivisionError:
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins: division by zero (degenerate input)") from None
-    if not (radius_cart_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires radius_cart_left > 0")
-    if not (radius_cart_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires radius_cart_right > 0")
-    if not (radius_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires radius_left > 0")
-    if not (radius_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires radius_right > 0")
-    if not (J_theta_cart > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_cart > 0")
-    if not (J_theta_cart_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_left > 0")
-    if not (J_theta_cart_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_right > 0")
-    if not (J_theta_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_left > 0")
-    if not (J_theta_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_right > 0")
-    if not (J_theta_tractor > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_theta_tractor > 0")
-    if not (J_x_tractor > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires J_x_tractor > 0")
-    if not (_t199 > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires (S^T M S)[0][0] > 0")
-    if not (_t199*_t202 - _t200*_t201 > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_margins requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_margins: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_margins requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_margins requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_margins requires loads[1] > 0")
-    margins = np.array([_t197, _t198])
+    margins = np.array([
+        load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0),
+        load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1),
+    ])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of traction_margins is not finite")
     return margins
 
 
-def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
     A check for firmware after the controller step: returns TRAILER_WARN_TRACTION (> 0, not
     an error) when a margin is <= 0, then, as on any status but OK, writes nothing
     (traction_margins gives the margins whatever their sign).
@@ -1758,285 +1515,41 @@ def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: Arr
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 8 (shape 8x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
-        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 2 (shape 2x1, row-major): force_y0, force_y1. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 228 add, 351 mul, 38 div, 4 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
-    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
-    tau_right, tau_left = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, _ = _flat(lateral, 2, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    J_theta_cart = float(_field(p, "J_theta_cart"))
-    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
-    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
-    J_theta_left = float(_field(p, "J_theta_left"))
-    J_theta_right = float(_field(p, "J_theta_right"))
-    J_theta_tractor = float(_field(p, "J_theta_tractor"))
-    J_x_tractor = float(_field(p, "J_x_tractor"))
-    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
-    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
-    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
-    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
-    radius_cart_left = float(_field(p, "radius_cart_left"))
-    radius_cart_right = float(_field(p, "radius_cart_right"))
-    radius_left = float(_field(p, "radius_left"))
-    radius_right = float(_field(p, "radius_right"))
-    if not all(map(math.isfinite, (theta_tractor, theta_cart, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAILER_ERR_NONFINITE_INPUT: an input of traction_check is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.sin(theta_cart)
-        _t1 = -_t0
-        _t2 = math.cos(theta_cart)
-        _t3 = math.sin(theta_tractor)
-        _t4 = 3.0*_t0/10.0
-        _t5 = math.cos(theta_tractor)
-        _t6 = 3.0*_t2/10.0
-        _t7 = _t3*_t4 + _t5*_t6
-        _t8 = -_t7
-        _t9 = -_t2
-        _t10 = -_t3*_t6 + _t4*_t5
-        _t11 = -radius_right
-        _t12 = -radius_left
-        _t13 = 207.0*_t3/1000.0
-        _t14 = -_t13
-        _t15 = -207.0*_t5/1000.0
-        _t16 = 500.0*_t11/207.0
-        _t17 = 500.0*_t12/207.0
-        _t18 = _t15*_t16
-        _t19 = _t1*_t18 - _t16*_t8
-        _t20 = _t15*_t17
-        _t21 = _t1*_t20 + _t17*_t8
-        _t22 = _t14*_t16
-        _t23 = -_t19 - _t2*_t22
-        _t24 = -5.0*_t23/3.0
-        _t25 = _t24/5.0
-        _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9
-        _t27 = _t14*_t17
-        _t28 = -_t2*_t27 - _t21
-        _t29 = -5.0*_t28/3.0
-        _t30 = _t29/5.0
-        _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9
-        _t32 = 1.0/radius_cart_right
-        _t33 = 1.0/radius_cart_left
-        _t34 = K_theta_tractor_x_tractor*_t3
-        _t35 = K_theta_tractor_x_tractor_2*_t5
-        _t36 = _t34 + _t35
-        _t37 = K_theta_cart_x_tractor*_t0
-        _t38 = K_theta_cart_x_tractor_2*_t2
-        _t39 = _t37 + _t38
-        _t40 = K_theta_tractor_x_tractor*_t5
-        _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40
-        _t42 = K_theta_cart_x_tractor*_t2
-        _t43 = K_theta_cart_x_tractor_2*_t0 - _t42
-        _t44 = 3.0*_t3/10.0
-        _t45 = 3.0*_t5/10.0
-        _t46 = K_theta_cart_x_tractor_2*_t0
-        _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46
-        _t48 = _t24*thetadot_right + _t29*thetadot_left
-        _t49 = _t48*_t48
-        _t50 = -_t16*thetadot_right + _t17*thetadot_left
-        _t51 = _t50*_t50
-        _t52 = _t46*_t49
-        _t53 = _t37*_t49
-        _t54 = _t38*_t49
-        _t55 = _t45*_t51
-        _t56 = _t44*_t51
-        _t57 = _t50*thetadot_right
-        _t58 = _t50*thetadot_left
-        _t59 = _t48*thetadot_right
-        _t60 = _t48*thetadot_left
-        _t61 = _t13*_t16
-        _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2
-        _t63 = -5.0*_t62/3.0
-        _t64 = _t63/5.0
-        _t65 = _t19 + _t61*_t9
-        _t66 = _t13*_t17
-        _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20
-        _t68 = -5.0*_t67/3.0
-        _t69 = _t68/5.0
-        _t70 = _t21 + _t66*_t9
-        _t71 = 5.0*_t26/3.0
-        _t72 = _t71/5.0
-        _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9
-        _t74 = 5.0*_t31/3.0
-        _t75 = _t74/5.0
-        _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9
-        _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43
-        _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39
-        _t79 = -J_theta_tractor*_t16 + _t18*_t36 + _t22*_t41 + _t24*_t47
-        _t80 = J_theta_cart*_t24 - _t16*_t47 + _t18*_t39 + _t22*_t43
-        _t81 = -_t25 - _t26
-        _t82 = _t33*_t81
-        _t83 = J_theta_cart_left*_t82
-        _t84 = _t25 - _t26
-        _t85 = _t32*_t84
-        _t86 = J_theta_cart_right*_t85
-        _t87 = _t30 - _t31
-        _t88 = _t32*_t87
-        _t89 = -_t30 - _t31
-        _t90 = _t33*_t89
-        _t91 = _t83*_t90 + _t86*_t88
-        _t92 = J_x_tractor*_t27 + _t17*_t41 + _t29*_t43
-        _t93 = J_theta_tractor*_t17 + _t20*_t36 + _t27*_t41 + _t29*_t47
-        _t94 = J_x_tractor*_t20 + _t17*_t36 + _t29*_t39
-        _t95 = J_theta_cart*_t29 + _t17*_t47 + _t20*_t39 + _t27*_t43
-        _t96 = _t34*_t51 + _t35*_t51 + _t53 + _t54
-        _t97 = _t18*_t57 + _t20*_t58
-        _t98 = _t57*_t63 + _t58*_t68 + _t59*_t71 + _t60*_t74
-        _t99 = J_x_tractor*_t97 + _t43*_t98 + _t96
-        _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49 - _t52
-        _t101 = _t57*_t61 + _t58*_t66
-        _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98
-        _t103 = 3.0*K_theta_cart_x_tractor*_t2*_t3*_t49/10.0 - _t44*_t52 - _t45*_t53 - _t45*_t54
-        _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98
-        _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56
-        _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97
-        _t107 = _t17*_t79 + _t20*_t78 + _t27*_t77 + _t29*_t80 + _t91
-        _t108 = J_theta_cart_left*_t90*_t90 + J_theta_cart_right*_t88*_t88 + J_theta_left + _t17*_t93 + _t20*_t94 + _t27*_t92 + _t29*_t95
-        _t109 = _t64 - _t65
-        _t110 = _t109*_t32
-        _t111 = _t69 - _t70
-        _t112 = _t111*_t32
-        _t113 = _t72 - _t73
-        _t114 = _t113*_t32
-        _t115 = _t75 - _t76
-        _t116 = _t115*_t32
-        _t117 = _t110*_t57 + _t112*_t58 + _t114*_t59 + _t116*_t60
-        _t118 = -_t64 - _t65
-        _t119 = _t118*_t33
-        _t120 = -_t69 - _t70
-        _t121 = _t120*_t33
-        _t122 = -_t72 - _t73
-        _t123 = _t122*_t33
-        _t124 = -_t75 - _t76
-        _t125 = _t124*_t33
-        _t126 = _t119*_t57 + _t121*_t58 + _t123*_t59 + _t125*_t60
-        _t127 = _t102*_t18 - _t104*_t16 + _t106*_t24 + _t117*_t86 + _t126*_t83 + _t22*_t99
-        _t128 = -_t127 + tau_right
-        _t129 = J_theta_cart_left*_t126*_t90 + J_theta_cart_right*_t117*_t88 + _t102*_t20 + _t104*_t17 + _t106*_t29 + _t27*_t99
-        _t130 = -_t129 + tau_left
-        _t131 = J_theta_cart_left*_t82*_t82 + J_theta_cart_right*_t85*_t85 + J_theta_right - _t16*_t79 + _t18*_t78 + _t22*_t77 + _t24*_t80
-        _t132 = -_t16*_t93 + _t18*_t94 + _t22*_t92 + _t24*_t95 + _t91
-        _t133 = -_t107*_t132 + _t108*_t131
-        _t134 = 1.0/_t133
-        _t135 = _t134*(-_t107*_t130 + _t108*_t128)
-        _t136 = _t134*(-_t128*_t132 + _t130*_t131)
-        _t137 = _t101 + _t135*_t18 + _t136*_t20
-        _t138 = _t135*_t22 + _t136*_t27 + _t97
-        _t139 = -_t135*_t16 + _t136*_t17
-        _t140 = _t135*_t24 + _t136*_t29 + _t98
-        _t141 = -J_theta_tractor*_t139 - _t103 - _t137*_t36 - _t138*_t41 - _t140*_t47
-        _t142 = _t117 + _t135*_t85 + _t136*_t88
-        _t143 = -J_theta_cart_right*_t142
-        _t144 = _t143*_t32
-        _t145 = _t126 + _t135*_t82 + _t136*_t90
-        _t146 = -J_theta_cart_left*_t145
-        _t147 = _t146*_t33
-        _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47
-        _t149 = _t144/5.0 - _t147/5.0 + _t148
-        _t150 = -5.0*_t149/3.0
-        _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8
-        _t152 = 500.0*_t151/207.0
-        _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96
-        _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153
-        _t155 = 500.0*_t154/207.0
-        _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39
-        _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156
-        _t158 = 500.0*_t157/207.0
-        _t159 = _t14*_t155 + _t15*_t158
-        _t160 = 207.0*_t5/500.0
-        _t161 = -207.0*_t3/500.0
-        _t162 = _t155*_t160 + _t158*_t161
-        _t163 = _t162*_t162
-        _t164 = 500.0*_t11/207.0
-        _t165 = 500.0*_t12/207.0
-        _t166 = _t14*_t164
-        _t167 = _t15*_t164
-        _t168 = -_t1*_t167 + _t164*_t8 - _t166*_t2
-        _t169 = -5.0*_t168/3.0
-        _t170 = _t169/5.0
-        _t171 = _t1*_t166 - _t10*_t164 + _t167*_t9
-        _t172 = _t14*_t165
-        _t173 = _t15*_t165
-        _t174 = -_t1*_t173 - _t165*_t8 - _t172*_t2
-        _t175 = -5.0*_t174/3.0
-        _t176 = _t175/5.0
-        _t177 = _t1*_t172 + _t10*_t165 + _t173*_t9
-        _t178 = J_x_tractor*_t166 - _t164*_t41 + _t169*_t43
-        _t179 = J_x_tractor*_t167 - _t164*_t36 + _t169*_t39
-        _t180 = -J_theta_tractor*_t164 + _t166*_t41 + _t167*_t36 + _t169*_t47
-        _t181 = J_theta_cart*_t169 - _t164*_t47 + _t166*_t43 + _t167*_t39
-        _t182 = _t170 - _t171
-        _t183 = _t182*_t32
-        _t184 = _t176 - _t177
-        _t185 = _t184*_t32
-        _t186 = -_t170 - _t171
-        _t187 = _t186*_t33
-        _t188 = -_t176 - _t177
-        _t189 = _t188*_t33
-        _t190 = J_theta_cart_left*_t187*_t189 + J_theta_cart_right*_t183*_t185
-        _t191 = J_x_tractor*_t172 + _t165*_t41 + _t175*_t43
-        _t192 = J_theta_tractor*_t165 + _t172*_t41 + _t173*_t36 + _t175*_t47
-        _t193 = J_x_tractor*_t173 + _t165*_t36 + _t175*_t39
-        _t194 = J_theta_cart*_t175 + _t165*_t47 + _t172*_t43 + _t173*_t39
-        _t195 = _t152 + _t159
-        _t196 = -_t152 + _t159
-        _t197 = load_w0*mu_floor - math.sqrt(_t163*share_w0*share_w0 + _t196*_t196)
-        _t198 = load_w1*mu_floor - math.sqrt(_t163*share_w1*share_w1 + _t195*_t195)
-        _t199 = J_theta_cart_left*_t187*_t187 + J_theta_cart_right*_t183*_t183 + J_theta_right - _t164*_t180 + _t166*_t178 + _t167*_t179 + _t169*_t181
-        _t200 = _t165*_t180 + _t172*_t178 + _t173*_t179 + _t175*_t181 + _t190
-        _t201 = -_t164*_t192 + _t166*_t191 + _t167*_t193 + _t169*_t194 + _t190
-        _t202 = J_theta_cart_left*_t189*_t189 + J_theta_cart_right*_t185*_t185 + J_theta_left + _t165*_t192 + _t172*_t191 + _t173*_t193 + _t175*_t194
+        _t0 = force_y0*force_y0
+        _t1 = load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0)
+        _t2 = load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1)
     except ZeroDivisionError:
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check: division by zero (degenerate input)") from None
-    if not (radius_cart_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires radius_cart_left > 0")
-    if not (radius_cart_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires radius_cart_right > 0")
-    if not (radius_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires radius_left > 0")
-    if not (radius_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires radius_right > 0")
-    if not (J_theta_cart > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_cart > 0")
-    if not (J_theta_cart_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_cart_left > 0")
-    if not (J_theta_cart_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_cart_right > 0")
-    if not (J_theta_left > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_left > 0")
-    if not (J_theta_right > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_right > 0")
-    if not (J_theta_tractor > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_theta_tractor > 0")
-    if not (J_x_tractor > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires J_x_tractor > 0")
-    if not (_t199 > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires (S^T M S)[0][0] > 0")
-    if not (_t199*_t202 - _t200*_t201 > 0.0):
-        raise ValueError("TRAILER_ERR_BAD_PARAMS: traction_check requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_check: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_check requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_check requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_TRACTION: traction_check requires loads[1] > 0")
-    if not (_t197 > 0.0):
+    if not (_t1 > 0.0):
         raise ValueError("TRAILER_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
-    if not (_t198 > 0.0):
+    if not (_t2 > 0.0):
         raise ValueError("TRAILER_WARN_TRACTION: traction_check requires wheel 'left' keeps grip: margin > 0")
-    margins = np.array([_t197, _t198])
+    margins = np.array([_t1, _t2])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of traction_check is not finite")
     return margins

@@ -382,9 +382,8 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *longitudinal, trailer2_real_t *lateral);
 
-#define TRAILER2_TRACTION_MARGINS_Q_SIZE 11
-#define TRAILER2_TRACTION_MARGINS_WHEEL_RATES_SIZE 2
-#define TRAILER2_TRACTION_MARGINS_TAU_SIZE 2
+#define TRAILER2_TRACTION_MARGINS_LONGITUDINAL_SIZE 2
+#define TRAILER2_TRACTION_MARGINS_LATERAL_SIZE 3
 #define TRAILER2_TRACTION_MARGINS_MU_SIZE 1
 #define TRAILER2_TRACTION_MARGINS_LOADS_SIZE 2
 #define TRAILER2_TRACTION_MARGINS_SHARES_SIZE 2
@@ -392,22 +391,16 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer2_params_t -- lumped robot parameters
- * @param[in]  q [11] row-major (TRAILER2_TRACTION_MARGINS_Q_SIZE): x_tractor, y_tractor,
- *     theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right,
- *     theta_cart_left, theta_cart2_right, theta_cart2_left -- x_tractor, y_tractor, theta_tractor,
- *     theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left,
- *     theta_cart2_right, theta_cart2_left
- * @param[in]  wheel_rates [2] row-major (TRAILER2_TRACTION_MARGINS_WHEEL_RATES_SIZE):
- *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER2_TRACTION_MARGINS_TAU_SIZE): tau_right, tau_left -- net
- *     wheel torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER2_TRACTION_MARGINS_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [3] row-major (TRAILER2_TRACTION_MARGINS_LATERAL_SIZE): force_y0, force_y1,
+ *     force_y2 -- N, per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER2_TRACTION_MARGINS_MU_SIZE): mu_floor -- the floor's
  *     friction coefficient
  * @param[in]  loads [2] row-major (TRAILER2_TRACTION_MARGINS_LOADS_SIZE): load_w0, load_w1 -- N_w
@@ -418,39 +411,20 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
  * @param[out] margins [2] row-major (TRAILER2_TRACTION_MARGINS_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER2_OK on success; on error no output is written:
  *         TRAILER2_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[5], q[6], q[7], q[8], q[9], q[10]),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart2_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart2_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2 > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1], lateral[2]),
  *         TRAILER2_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER2_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER2_ERR_BAD_TRACTION if not (loads[1] > 0),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer2_status_t trailer2_traction_margins(const trailer2_params_t *p, const trailer2_real_t *q,
-    const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, const trailer2_real_t *mu,
-    const trailer2_real_t *loads, const trailer2_real_t *shares, trailer2_real_t *margins);
+trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
+    const trailer2_real_t *lateral, const trailer2_real_t *mu, const trailer2_real_t *loads,
+    const trailer2_real_t *shares, trailer2_real_t *margins);
 
-#define TRAILER2_TRACTION_CHECK_Q_SIZE 11
-#define TRAILER2_TRACTION_CHECK_WHEEL_RATES_SIZE 2
-#define TRAILER2_TRACTION_CHECK_TAU_SIZE 2
+#define TRAILER2_TRACTION_CHECK_LONGITUDINAL_SIZE 2
+#define TRAILER2_TRACTION_CHECK_LATERAL_SIZE 3
 #define TRAILER2_TRACTION_CHECK_MU_SIZE 1
 #define TRAILER2_TRACTION_CHECK_LOADS_SIZE 2
 #define TRAILER2_TRACTION_CHECK_SHARES_SIZE 2
@@ -458,25 +432,19 @@ trailer2_status_t trailer2_traction_margins(const trailer2_params_t *p, const tr
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  * A check for firmware after the controller step: returns TRAILER2_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer2_params_t -- lumped robot parameters
- * @param[in]  q [11] row-major (TRAILER2_TRACTION_CHECK_Q_SIZE): x_tractor, y_tractor,
- *     theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right,
- *     theta_cart_left, theta_cart2_right, theta_cart2_left -- x_tractor, y_tractor, theta_tractor,
- *     theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left,
- *     theta_cart2_right, theta_cart2_left
- * @param[in]  wheel_rates [2] row-major (TRAILER2_TRACTION_CHECK_WHEEL_RATES_SIZE): thetadot_right,
- *     thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER2_TRACTION_CHECK_TAU_SIZE): tau_right, tau_left -- net
- *     wheel torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER2_TRACTION_CHECK_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [3] row-major (TRAILER2_TRACTION_CHECK_LATERAL_SIZE): force_y0, force_y1,
+ *     force_y2 -- N, per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER2_TRACTION_CHECK_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (TRAILER2_TRACTION_CHECK_LOADS_SIZE): load_w0, load_w1 -- N_w
@@ -487,25 +455,7 @@ trailer2_status_t trailer2_traction_margins(const trailer2_params_t *p, const tr
  * @param[out] margins [2] row-major (TRAILER2_TRACTION_CHECK_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER2_OK on success; on error no output is written:
  *         TRAILER2_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[5], q[6], q[7], q[8], q[9], q[10]),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart2_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart2_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2 > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart2_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1], lateral[2]),
  *         TRAILER2_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER2_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER2_ERR_BAD_TRACTION if not (loads[1] > 0),
@@ -513,11 +463,11 @@ trailer2_status_t trailer2_traction_margins(const trailer2_params_t *p, const tr
  *         TRAILER2_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer2_status_t trailer2_traction_check(const trailer2_params_t *p, const trailer2_real_t *q,
-    const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, const trailer2_real_t *mu,
-    const trailer2_real_t *loads, const trailer2_real_t *shares, trailer2_real_t *margins);
+trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
+    const trailer2_real_t *lateral, const trailer2_real_t *mu, const trailer2_real_t *loads,
+    const trailer2_real_t *shares, trailer2_real_t *margins);
 
 #ifdef __cplusplus
 }

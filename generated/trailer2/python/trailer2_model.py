@@ -2408,453 +2408,57 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     return longitudinal, lateral
 
 
-def traction_margins(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
 
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 11 (shape 11x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
-        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 3 (shape 3x1, row-major): force_y0, force_y1, force_y2. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
-    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
-    tau_right, tau_left = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, _, _ = _flat(lateral, 3, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    J_theta_cart = float(_field(p, "J_theta_cart"))
-    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
-    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
-    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
-    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
-    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
-    J_theta_left = float(_field(p, "J_theta_left"))
-    J_theta_right = float(_field(p, "J_theta_right"))
-    J_theta_tractor = float(_field(p, "J_theta_tractor"))
-    J_x_tractor = float(_field(p, "J_x_tractor"))
-    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
-    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
-    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
-    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
-    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
-    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
-    radius_cart2_left = float(_field(p, "radius_cart2_left"))
-    radius_cart2_right = float(_field(p, "radius_cart2_right"))
-    radius_cart_left = float(_field(p, "radius_cart_left"))
-    radius_cart_right = float(_field(p, "radius_cart_right"))
-    radius_left = float(_field(p, "radius_left"))
-    radius_right = float(_field(p, "radius_right"))
-    if not all(map(math.isfinite, (theta_tractor, theta_cart, theta_cart2, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAILER2_ERR_NONFINITE_INPUT: an input of traction_margins is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.sin(theta_cart)
-        _t1 = -_t0
-        _t2 = math.cos(theta_cart)
-        _t3 = math.sin(theta_tractor)
-        _t4 = 3.0*_t3/10.0
-        _t5 = math.cos(theta_tractor)
-        _t6 = 3.0*_t5/10.0
-        _t7 = _t0*_t4 + _t2*_t6
-        _t8 = -_t7
-        _t9 = math.sin(theta_cart2)
-        _t10 = -_t9
-        _t11 = math.cos(theta_cart2)
-        _t12 = _t11*_t6 + _t4*_t9
-        _t13 = -_t12
-        _t14 = 17.0*_t11/20.0
-        _t15 = 17.0*_t0*_t9/20.0 + _t14*_t2
-        _t16 = -_t15
-        _t17 = -_t2
-        _t18 = _t0*_t6 - _t2*_t4
-        _t19 = -_t11
-        _t20 = -_t11*_t4 + _t6*_t9
-        _t21 = _t0*_t14 - 17.0*_t2*_t9/20.0
-        _t22 = -_t21
-        _t23 = -radius_right
-        _t24 = -radius_left
-        _t25 = 207.0*_t3/1000.0
-        _t26 = -_t25
-        _t27 = 207.0*_t5/1000.0
-        _t28 = -_t27
-        _t29 = 500.0*_t23/207.0
-        _t30 = 500.0*_t24/207.0
-        _t31 = _t28*_t29
-        _t32 = _t1*_t31 - _t29*_t8
-        _t33 = _t28*_t30
-        _t34 = _t1*_t33 + _t30*_t8
-        _t35 = _t26*_t29
-        _t36 = -_t2*_t35 - _t32
-        _t37 = -5.0*_t36/3.0
-        _t38 = _t16*_t37
-        _t39 = _t10*_t31 - _t13*_t29
-        _t40 = _t26*_t30
-        _t41 = -_t2*_t40 - _t34
-        _t42 = -5.0*_t41/3.0
-        _t43 = _t16*_t42
-        _t44 = _t10*_t33 + _t13*_t30
-        _t45 = _t37/5.0
-        _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29
-        _t47 = _t42/5.0
-        _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30
-        _t49 = 1.0/radius_cart_right
-        _t50 = 1.0/radius_cart_left
-        _t51 = -_t11*_t35 - _t38 - _t39
-        _t52 = -5.0*_t51/3.0
-        _t53 = _t52/5.0
-        _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37
-        _t55 = -_t11*_t40 - _t43 - _t44
-        _t56 = -5.0*_t55/3.0
-        _t57 = _t56/5.0
-        _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42
-        _t59 = 1.0/radius_cart2_right
-        _t60 = 1.0/radius_cart2_left
-        _t61 = K_theta_tractor_x_tractor*_t3
-        _t62 = K_theta_tractor_x_tractor_2*_t5
-        _t63 = _t61 + _t62
-        _t64 = K_theta_cart_x_tractor*_t0
-        _t65 = K_theta_cart_x_tractor_2*_t2
-        _t66 = _t64 + _t65
-        _t67 = K_theta_cart2_x_tractor*_t9
-        _t68 = K_theta_cart2_x_tractor_2*_t11
-        _t69 = _t67 + _t68
-        _t70 = K_theta_tractor_x_tractor*_t5
-        _t71 = K_theta_tractor_x_tractor_2*_t3 - _t70
-        _t72 = K_theta_cart_x_tractor*_t2
-        _t73 = K_theta_cart_x_tractor_2*_t0 - _t72
-        _t74 = K_theta_cart2_x_tractor*_t11
-        _t75 = K_theta_cart2_x_tractor_2*_t9 - _t74
-        _t76 = K_theta_cart_x_tractor_2*_t0
-        _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76
-        _t78 = K_theta_cart2_x_tractor_2*_t9
-        _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78
-        _t80 = 17.0*_t0/20.0
-        _t81 = 17.0*_t2/20.0
-        _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81
-        _t83 = _t52*thetadot_right + _t56*thetadot_left
-        _t84 = _t83*_t83
-        _t85 = _t74*_t84
-        _t86 = _t37*thetadot_right + _t42*thetadot_left
-        _t87 = _t86*_t86
-        _t88 = -_t29*thetadot_right + _t30*thetadot_left
-        _t89 = _t88*_t88
-        _t90 = _t78*_t84
-        _t91 = _t76*_t87
-        _t92 = _t67*_t84
-        _t93 = _t68*_t84
-        _t94 = _t64*_t87
-        _t95 = _t65*_t87
-        _t96 = _t6*_t89
-        _t97 = _t4*_t89
-        _t98 = _t80*_t87
-        _t99 = _t81*_t87
-        _t100 = _t88*thetadot_right
-        _t101 = _t88*thetadot_left
-        _t102 = _t86*thetadot_right
-        _t103 = _t86*thetadot_left
-        _t104 = _t83*thetadot_right
-        _t105 = _t83*thetadot_left
-        _t106 = _t25*_t29
-        _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31
-        _t108 = -5.0*_t107/3.0
-        _t109 = _t108/5.0
-        _t110 = _t106*_t17 + _t32
-        _t111 = _t25*_t30
-        _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33
-        _t113 = -5.0*_t112/3.0
-        _t114 = _t113/5.0
-        _t115 = _t111*_t17 + _t34
-        _t116 = 5.0*_t46/3.0
-        _t117 = _t116/5.0
-        _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7
-        _t119 = 5.0*_t48/3.0
-        _t120 = _t119/5.0
-        _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7
-        _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29
-        _t123 = -5.0*_t122/3.0
-        _t124 = _t123/5.0
-        _t125 = _t106*_t19 + _t108*_t22 + _t39
-        _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30
-        _t127 = -5.0*_t126/3.0
-        _t128 = _t127/5.0
-        _t129 = _t111*_t19 + _t113*_t22 + _t44
-        _t130 = -_t116*_t16 - _t21*_t37
-        _t131 = -5.0*_t130/3.0
-        _t132 = _t131/5.0
-        _t133 = _t116*_t22 + _t38
-        _t134 = -_t119*_t16 - _t21*_t42
-        _t135 = -5.0*_t134/3.0
-        _t136 = _t135/5.0
-        _t137 = _t119*_t22 + _t43
-        _t138 = 5.0*_t54/3.0
-        _t139 = _t138/5.0
-        _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9
-        _t141 = 5.0*_t58/3.0
-        _t142 = _t141/5.0
-        _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9
-        _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75
-        _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69
-        _t146 = -J_theta_tractor*_t29 + _t31*_t63 + _t35*_t71 + _t37*_t77 + _t52*_t79
-        _t147 = J_theta_cart*_t37 - _t29*_t77 + _t31*_t66 + _t35*_t73 + _t52*_t82
-        _t148 = J_theta_cart2*_t52 - _t29*_t79 + _t31*_t69 + _t35*_t75 + _t37*_t82
-        _t149 = -_t53 - _t54
-        _t150 = _t149*_t60
-        _t151 = J_theta_cart2_left*_t150
-        _t152 = _t53 - _t54
-        _t153 = _t152*_t59
-        _t154 = J_theta_cart2_right*_t153
-        _t155 = -_t45 - _t46
-        _t156 = _t155*_t50
-        _t157 = J_theta_cart_left*_t156
-        _t158 = _t45 - _t46
-        _t159 = _t158*_t49
-        _t160 = J_theta_cart_right*_t159
-        _t161 = _t47 - _t48
-        _t162 = _t161*_t49
-        _t163 = -_t47 - _t48
-        _t164 = _t163*_t50
-        _t165 = _t57 - _t58
-        _t166 = _t165*_t59
-        _t167 = -_t57 - _t58
-        _t168 = _t167*_t60
-        _t169 = _t151*_t168 + _t154*_t166 + _t157*_t164 + _t160*_t162
-        _t170 = J_x_tractor*_t40 + _t30*_t71 + _t42*_t73 + _t56*_t75
-        _t171 = J_theta_tractor*_t30 + _t33*_t63 + _t40*_t71 + _t42*_t77 + _t56*_t79
-        _t172 = J_x_tractor*_t33 + _t30*_t63 + _t42*_t66 + _t56*_t69
-        _t173 = J_theta_cart*_t42 + _t30*_t77 + _t33*_t66 + _t40*_t73 + _t56*_t82
-        _t174 = J_theta_cart2*_t56 + _t30*_t79 + _t33*_t69 + _t40*_t75 + _t42*_t82
-        _t175 = _t61*_t89 + _t62*_t89 + _t92 + _t93 + _t94 + _t95
-        _t176 = _t100*_t31 + _t101*_t33
-        _t177 = _t100*_t108 + _t101*_t113 + _t102*_t116 + _t103*_t119
-        _t178 = _t100*_t123 + _t101*_t127 + _t102*_t131 + _t103*_t135 + _t104*_t138 + _t105*_t141
-        _t179 = J_x_tractor*_t176 + _t175 + _t177*_t73 + _t178*_t75
-        _t180 = -K_theta_tractor_x_tractor_2*_t3*_t89 + _t70*_t89 + _t72*_t87 + _t85 - _t90 - _t91
-        _t181 = _t100*_t106 + _t101*_t111
-        _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180
-        _t183 = 3.0*K_theta_cart2_x_tractor*_t11*_t3*_t84/10.0 + 3.0*K_theta_cart_x_tractor*_t2*_t3*_t87/10.0 - _t4*_t90 - _t4*_t91 - _t6*_t92 - _t6*_t93 - _t6*_t94 - _t6*_t95
-        _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183
-        _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85 - _t80*_t90 - _t81*_t92 - _t81*_t93
-        _t186 = J_theta_cart*_t177 + _t176*_t73 + _t178*_t82 + _t181*_t66 + _t185
-        _t187 = _t67*_t96 + _t67*_t99 + _t68*_t96 + _t68*_t99 - _t74*_t97 - _t74*_t98 + _t78*_t97 + _t78*_t98
-        _t188 = J_theta_cart2*_t178 + _t176*_t75 + _t177*_t82 + _t181*_t69 + _t187
-        _t189 = _t144*_t40 + _t145*_t33 + _t146*_t30 + _t147*_t42 + _t148*_t56 + _t169
-        _t190 = J_theta_cart2_left*_t168*_t168 + J_theta_cart2_right*_t166*_t166 + J_theta_cart_left*_t164*_t164 + J_theta_cart_right*_t162*_t162 + J_theta_left + _t170*_t40 + _t171*_t30 + _t172*_t33 + _t173*_t42 + _t174*_t56
-        _t191 = _t109 - _t110
-        _t192 = _t191*_t49
-        _t193 = _t114 - _t115
-        _t194 = _t193*_t49
-        _t195 = _t117 - _t118
-        _t196 = _t195*_t49
-        _t197 = _t120 - _t121
-        _t198 = _t197*_t49
-        _t199 = _t100*_t192 + _t101*_t194 + _t102*_t196 + _t103*_t198
-        _t200 = -_t109 - _t110
-        _t201 = _t200*_t50
-        _t202 = -_t114 - _t115
-        _t203 = _t202*_t50
-        _t204 = -_t117 - _t118
-        _t205 = _t204*_t50
-        _t206 = -_t120 - _t121
-        _t207 = _t206*_t50
-        _t208 = _t100*_t201 + _t101*_t203 + _t102*_t205 + _t103*_t207
-        _t209 = _t124 - _t125
-        _t210 = _t209*_t59
-        _t211 = _t128 - _t129
-        _t212 = _t211*_t59
-        _t213 = _t132 - _t133
-        _t214 = _t213*_t59
-        _t215 = _t136 - _t137
-        _t216 = _t215*_t59
-        _t217 = _t139 - _t140
-        _t218 = _t217*_t59
-        _t219 = _t142 - _t143
-        _t220 = _t219*_t59
-        _t221 = _t100*_t210 + _t101*_t212 + _t102*_t214 + _t103*_t216 + _t104*_t218 + _t105*_t220
-        _t222 = -_t124 - _t125
-        _t223 = _t222*_t60
-        _t224 = -_t128 - _t129
-        _t225 = _t224*_t60
-        _t226 = -_t132 - _t133
-        _t227 = _t226*_t60
-        _t228 = -_t136 - _t137
-        _t229 = _t228*_t60
-        _t230 = -_t139 - _t140
-        _t231 = _t230*_t60
-        _t232 = -_t142 - _t143
-        _t233 = _t232*_t60
-        _t234 = _t100*_t223 + _t101*_t225 + _t102*_t227 + _t103*_t229 + _t104*_t231 + _t105*_t233
-        _t235 = _t151*_t234 + _t154*_t221 + _t157*_t208 + _t160*_t199 + _t179*_t35 + _t182*_t31 - _t184*_t29 + _t186*_t37 + _t188*_t52
-        _t236 = -_t235 + tau_right
-        _t237 = J_theta_cart2_left*_t168*_t234 + J_theta_cart2_right*_t166*_t221 + J_theta_cart_left*_t164*_t208 + J_theta_cart_right*_t162*_t199 + _t179*_t40 + _t182*_t33 + _t184*_t30 + _t186*_t42 + _t188*_t56
-        _t238 = -_t237 + tau_left
-        _t239 = J_theta_cart2_left*_t150*_t150 + J_theta_cart2_right*_t153*_t153 + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t159*_t159 + J_theta_right + _t144*_t35 + _t145*_t31 - _t146*_t29 + _t147*_t37 + _t148*_t52
-        _t240 = _t169 + _t170*_t35 - _t171*_t29 + _t172*_t31 + _t173*_t37 + _t174*_t52
-        _t241 = -_t189*_t240 + _t190*_t239
-        _t242 = 1.0/_t241
-        _t243 = _t242*(-_t189*_t238 + _t190*_t236)
-        _t244 = _t242*(-_t236*_t240 + _t238*_t239)
-        _t245 = _t181 + _t243*_t31 + _t244*_t33
-        _t246 = -_t243*_t29 + _t244*_t30
-        _t247 = _t177 + _t243*_t37 + _t244*_t42
-        _t248 = _t178 + _t243*_t52 + _t244*_t56
-        _t249 = -J_x_tractor*_t245 - _t180 - _t246*_t63 - _t247*_t66 - _t248*_t69
-        _t250 = _t153*_t243 + _t166*_t244 + _t221
-        _t251 = -J_theta_cart2_right*_t250
-        _t252 = _t251*_t59
-        _t253 = _t150*_t243 + _t168*_t244 + _t234
-        _t254 = -J_theta_cart2_left*_t253
-        _t255 = _t254*_t60
-        _t256 = _t176 + _t243*_t35 + _t244*_t40
-        _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79 - _t247*_t82 - _t256*_t75
-        _t258 = _t252/5.0 - _t255/5.0 + _t257
-        _t259 = -5.0*_t258/3.0
-        _t260 = _t159*_t243 + _t162*_t244 + _t199
-        _t261 = -J_theta_cart_right*_t260
-        _t262 = _t261*_t49
-        _t263 = _t156*_t243 + _t164*_t244 + _t208
-        _t264 = -J_theta_cart_left*_t263
-        _t265 = _t264*_t50
-        _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82 - _t256*_t73
-        _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + _t262/5.0 - _t265/5.0 + _t266
-        _t268 = -5.0*_t267/3.0
-        _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265 + _t249 + _t259*_t9
-        _t270 = 500.0*_t269/207.0
-        _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75
-        _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9 + _t255*_t9 + _t271
-        _t273 = 500.0*_t272/207.0
-        _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77 - _t248*_t79 - _t256*_t71
-        _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255 - _t268*_t8 + _t274
-        _t276 = 500.0*_t275/207.0
-        _t277 = _t25*_t273 + _t27*_t270
-        _t278 = 207.0*_t3/500.0
-        _t279 = -207.0*_t5/500.0
-        _t280 = -_t270*_t278 - _t273*_t279
-        _t281 = _t280*_t280
-        _t282 = 500.0*_t23/207.0
-        _t283 = 500.0*_t24/207.0
-        _t284 = _t26*_t282
-        _t285 = _t28*_t282
-        _t286 = -_t1*_t285 - _t2*_t284 + _t282*_t8
-        _t287 = -5.0*_t286/3.0
-        _t288 = _t287/5.0
-        _t289 = _t1*_t284 + _t17*_t285 - _t18*_t282
-        _t290 = _t26*_t283
-        _t291 = _t28*_t283
-        _t292 = -_t1*_t291 - _t2*_t290 - _t283*_t8
-        _t293 = -5.0*_t292/3.0
-        _t294 = _t293/5.0
-        _t295 = _t1*_t290 + _t17*_t291 + _t18*_t283
-        _t296 = -_t10*_t285 - _t11*_t284 + _t13*_t282 - _t16*_t287
-        _t297 = -5.0*_t296/3.0
-        _t298 = _t297/5.0
-        _t299 = _t10*_t284 + _t19*_t285 - _t20*_t282 + _t22*_t287
-        _t300 = -_t10*_t291 - _t11*_t290 - _t13*_t283 - _t16*_t293
-        _t301 = -5.0*_t300/3.0
-        _t302 = _t301/5.0
-        _t303 = _t10*_t290 + _t19*_t291 + _t20*_t283 + _t22*_t293
-        _t304 = J_x_tractor*_t284 - _t282*_t71 + _t287*_t73 + _t297*_t75
-        _t305 = J_x_tractor*_t285 - _t282*_t63 + _t287*_t66 + _t297*_t69
-        _t306 = -J_theta_tractor*_t282 + _t284*_t71 + _t285*_t63 + _t287*_t77 + _t297*_t79
-        _t307 = J_theta_cart*_t287 - _t282*_t77 + _t284*_t73 + _t285*_t66 + _t297*_t82
-        _t308 = J_theta_cart2*_t297 - _t282*_t79 + _t284*_t75 + _t285*_t69 + _t287*_t82
-        _t309 = _t288 - _t289
-        _t310 = _t309*_t49
-        _t311 = _t294 - _t295
-        _t312 = _t311*_t49
-        _t313 = -_t288 - _t289
-        _t314 = _t313*_t50
-        _t315 = -_t294 - _t295
-        _t316 = _t315*_t50
-        _t317 = _t298 - _t299
-        _t318 = _t317*_t59
-        _t319 = _t302 - _t303
-        _t320 = _t319*_t59
-        _t321 = -_t298 - _t299
-        _t322 = _t321*_t60
-        _t323 = -_t302 - _t303
-        _t324 = _t323*_t60
-        _t325 = J_theta_cart2_left*_t322*_t324 + J_theta_cart2_right*_t318*_t320 + J_theta_cart_left*_t314*_t316 + J_theta_cart_right*_t310*_t312
-        _t326 = J_x_tractor*_t290 + _t283*_t71 + _t293*_t73 + _t301*_t75
-        _t327 = J_theta_tractor*_t283 + _t290*_t71 + _t291*_t63 + _t293*_t77 + _t301*_t79
-        _t328 = J_x_tractor*_t291 + _t283*_t63 + _t293*_t66 + _t301*_t69
-        _t329 = J_theta_cart*_t293 + _t283*_t77 + _t290*_t73 + _t291*_t66 + _t301*_t82
-        _t330 = J_theta_cart2*_t301 + _t283*_t79 + _t290*_t75 + _t291*_t69 + _t293*_t82
-        _t331 = _t276 - _t277
-        _t332 = -_t276 - _t277
-        _t333 = load_w0*mu_floor - math.sqrt(_t281*share_w0*share_w0 + _t332*_t332)
-        _t334 = load_w1*mu_floor - math.sqrt(_t281*share_w1*share_w1 + _t331*_t331)
-        _t335 = J_theta_cart2_left*_t322*_t322 + J_theta_cart2_right*_t318*_t318 + J_theta_cart_left*_t314*_t314 + J_theta_cart_right*_t310*_t310 + J_theta_right - _t282*_t306 + _t284*_t304 + _t285*_t305 + _t287*_t307 + _t297*_t308
-        _t336 = _t283*_t306 + _t290*_t304 + _t291*_t305 + _t293*_t307 + _t301*_t308 + _t325
-        _t337 = -_t282*_t327 + _t284*_t326 + _t285*_t328 + _t287*_t329 + _t297*_t330 + _t325
-        _t338 = J_theta_cart2_left*_t324*_t324 + J_theta_cart2_right*_t320*_t320 + J_theta_cart_left*_t316*_t316 + J_theta_cart_right*_t312*_t312 + J_theta_left + _t283*_t327 + _t290*_t326 + _t291*_t328 + _t293*_t329 + _t301*_t330
+        _t0 = force_y0*force_y0
     except ZeroDivisionError:
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins: division by zero (degenerate input)") from None
-    if not (radius_cart2_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_cart2_left > 0")
-    if not (radius_cart2_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_cart2_right > 0")
-    if not (radius_cart_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_cart_left > 0")
-    if not (radius_cart_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_cart_right > 0")
-    if not (radius_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_left > 0")
-    if not (radius_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires radius_right > 0")
-    if not (J_theta_cart > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart > 0")
-    if not (J_theta_cart2 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2 > 0")
-    if not (J_theta_cart2_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2_left > 0")
-    if not (J_theta_cart2_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart2_right > 0")
-    if not (J_theta_cart_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_left > 0")
-    if not (J_theta_cart_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_cart_right > 0")
-    if not (J_theta_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_left > 0")
-    if not (J_theta_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_right > 0")
-    if not (J_theta_tractor > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_theta_tractor > 0")
-    if not (J_x_tractor > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires J_x_tractor > 0")
-    if not (_t335 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires (S^T M S)[0][0] > 0")
-    if not (_t335*_t338 - _t336*_t337 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_margins requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_margins: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_margins requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_margins requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_margins requires loads[1] > 0")
-    margins = np.array([_t333, _t334])
+    margins = np.array([
+        load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0),
+        load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1),
+    ])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAILER2_ERR_NONFINITE_OUTPUT: a result of traction_margins is not finite")
     return margins
 
 
-def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike, p: Any) -> NDArray[np.float64]:
+def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, loads: ArrayLike, shares: ArrayLike) -> NDArray[np.float64]:
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
-    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
-    multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
-    traction than the floor gives and slips.
+    (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+    forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+    needs more traction than the floor gives and slips.
     A check for firmware after the controller step: returns TRAILER2_WARN_TRACTION (> 0, not
     an error) when a margin is <= 0, then, as on any status but OK, writes nothing
     (traction_margins gives the margins whatever their sign).
@@ -2862,438 +2466,41 @@ def traction_check(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, mu: Arr
     Paper equations: (9), (10)-(12).
 
     Args:
-        q: array of 11 (shape 11x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left. x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left
-        wheel_rates: array of 2 (shape 2x1, row-major): thetadot_right, thetadot_left. theta_right rate, theta_left rate
-        tau: array of 2 (shape 2x1, row-major): tau_right, tau_left. net wheel torques (after bearing friction) tau_right, tau_left
+        longitudinal: array of 2 (shape 2x1, row-major): force_x0, force_x1. N, per driven wheel (wheel_contact_forces)
+        lateral: array of 3 (shape 3x1, row-major): force_y0, force_y1, force_y2. N, per no-side-slip row (wheel_contact_forces)
         mu: array of 1 (shape 1x1, row-major): mu_floor. the floor's friction coefficient
         loads: array of 2 (shape 2x1, row-major): load_w0, load_w1. N_w (N), static normal load of driven wheel 'right', 'left'
         shares: array of 2 (shape 2x1, row-major): share_w0, share_w1. each driven wheel's share of its axle's lateral force (the slip monitor's: N_w / sum of its axle's N)
-        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. lumped robot parameters
 
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 434 add, 627 mul, 67 div, 6 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
     """
-    _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
-    thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
-    tau_right, tau_left = _flat(tau, 2, "tau")
+    force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
+    force_y0, _, _ = _flat(lateral, 3, "lateral")
     mu_floor, = _flat(mu, 1, "mu")
     load_w0, load_w1 = _flat(loads, 2, "loads")
     share_w0, share_w1 = _flat(shares, 2, "shares")
-    J_theta_cart = float(_field(p, "J_theta_cart"))
-    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
-    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
-    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
-    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
-    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
-    J_theta_left = float(_field(p, "J_theta_left"))
-    J_theta_right = float(_field(p, "J_theta_right"))
-    J_theta_tractor = float(_field(p, "J_theta_tractor"))
-    J_x_tractor = float(_field(p, "J_x_tractor"))
-    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
-    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
-    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
-    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
-    K_theta_tractor_x_tractor = float(_field(p, "K_theta_tractor_x_tractor"))
-    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
-    radius_cart2_left = float(_field(p, "radius_cart2_left"))
-    radius_cart2_right = float(_field(p, "radius_cart2_right"))
-    radius_cart_left = float(_field(p, "radius_cart_left"))
-    radius_cart_right = float(_field(p, "radius_cart_right"))
-    radius_left = float(_field(p, "radius_left"))
-    radius_right = float(_field(p, "radius_right"))
-    if not all(map(math.isfinite, (theta_tractor, theta_cart, theta_cart2, thetadot_right, thetadot_left, tau_right, tau_left, mu_floor, load_w0, load_w1, share_w0, share_w1, J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
+    if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAILER2_ERR_NONFINITE_INPUT: an input of traction_check is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.sin(theta_cart)
-        _t1 = -_t0
-        _t2 = math.cos(theta_cart)
-        _t3 = math.sin(theta_tractor)
-        _t4 = 3.0*_t3/10.0
-        _t5 = math.cos(theta_tractor)
-        _t6 = 3.0*_t5/10.0
-        _t7 = _t0*_t4 + _t2*_t6
-        _t8 = -_t7
-        _t9 = math.sin(theta_cart2)
-        _t10 = -_t9
-        _t11 = math.cos(theta_cart2)
-        _t12 = _t11*_t6 + _t4*_t9
-        _t13 = -_t12
-        _t14 = 17.0*_t11/20.0
-        _t15 = 17.0*_t0*_t9/20.0 + _t14*_t2
-        _t16 = -_t15
-        _t17 = -_t2
-        _t18 = _t0*_t6 - _t2*_t4
-        _t19 = -_t11
-        _t20 = -_t11*_t4 + _t6*_t9
-        _t21 = _t0*_t14 - 17.0*_t2*_t9/20.0
-        _t22 = -_t21
-        _t23 = -radius_right
-        _t24 = -radius_left
-        _t25 = 207.0*_t3/1000.0
-        _t26 = -_t25
-        _t27 = 207.0*_t5/1000.0
-        _t28 = -_t27
-        _t29 = 500.0*_t23/207.0
-        _t30 = 500.0*_t24/207.0
-        _t31 = _t28*_t29
-        _t32 = _t1*_t31 - _t29*_t8
-        _t33 = _t28*_t30
-        _t34 = _t1*_t33 + _t30*_t8
-        _t35 = _t26*_t29
-        _t36 = -_t2*_t35 - _t32
-        _t37 = -5.0*_t36/3.0
-        _t38 = _t16*_t37
-        _t39 = _t10*_t31 - _t13*_t29
-        _t40 = _t26*_t30
-        _t41 = -_t2*_t40 - _t34
-        _t42 = -5.0*_t41/3.0
-        _t43 = _t16*_t42
-        _t44 = _t10*_t33 + _t13*_t30
-        _t45 = _t37/5.0
-        _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29
-        _t47 = _t42/5.0
-        _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30
-        _t49 = 1.0/radius_cart_right
-        _t50 = 1.0/radius_cart_left
-        _t51 = -_t11*_t35 - _t38 - _t39
-        _t52 = -5.0*_t51/3.0
-        _t53 = _t52/5.0
-        _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37
-        _t55 = -_t11*_t40 - _t43 - _t44
-        _t56 = -5.0*_t55/3.0
-        _t57 = _t56/5.0
-        _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42
-        _t59 = 1.0/radius_cart2_right
-        _t60 = 1.0/radius_cart2_left
-        _t61 = K_theta_tractor_x_tractor*_t3
-        _t62 = K_theta_tractor_x_tractor_2*_t5
-        _t63 = _t61 + _t62
-        _t64 = K_theta_cart_x_tractor*_t0
-        _t65 = K_theta_cart_x_tractor_2*_t2
-        _t66 = _t64 + _t65
-        _t67 = K_theta_cart2_x_tractor*_t9
-        _t68 = K_theta_cart2_x_tractor_2*_t11
-        _t69 = _t67 + _t68
-        _t70 = K_theta_tractor_x_tractor*_t5
-        _t71 = K_theta_tractor_x_tractor_2*_t3 - _t70
-        _t72 = K_theta_cart_x_tractor*_t2
-        _t73 = K_theta_cart_x_tractor_2*_t0 - _t72
-        _t74 = K_theta_cart2_x_tractor*_t11
-        _t75 = K_theta_cart2_x_tractor_2*_t9 - _t74
-        _t76 = K_theta_cart_x_tractor_2*_t0
-        _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76
-        _t78 = K_theta_cart2_x_tractor_2*_t9
-        _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78
-        _t80 = 17.0*_t0/20.0
-        _t81 = 17.0*_t2/20.0
-        _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81
-        _t83 = _t52*thetadot_right + _t56*thetadot_left
-        _t84 = _t83*_t83
-        _t85 = _t74*_t84
-        _t86 = _t37*thetadot_right + _t42*thetadot_left
-        _t87 = _t86*_t86
-        _t88 = -_t29*thetadot_right + _t30*thetadot_left
-        _t89 = _t88*_t88
-        _t90 = _t78*_t84
-        _t91 = _t76*_t87
-        _t92 = _t67*_t84
-        _t93 = _t68*_t84
-        _t94 = _t64*_t87
-        _t95 = _t65*_t87
-        _t96 = _t6*_t89
-        _t97 = _t4*_t89
-        _t98 = _t80*_t87
-        _t99 = _t81*_t87
-        _t100 = _t88*thetadot_right
-        _t101 = _t88*thetadot_left
-        _t102 = _t86*thetadot_right
-        _t103 = _t86*thetadot_left
-        _t104 = _t83*thetadot_right
-        _t105 = _t83*thetadot_left
-        _t106 = _t25*_t29
-        _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31
-        _t108 = -5.0*_t107/3.0
-        _t109 = _t108/5.0
-        _t110 = _t106*_t17 + _t32
-        _t111 = _t25*_t30
-        _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33
-        _t113 = -5.0*_t112/3.0
-        _t114 = _t113/5.0
-        _t115 = _t111*_t17 + _t34
-        _t116 = 5.0*_t46/3.0
-        _t117 = _t116/5.0
-        _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7
-        _t119 = 5.0*_t48/3.0
-        _t120 = _t119/5.0
-        _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7
-        _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29
-        _t123 = -5.0*_t122/3.0
-        _t124 = _t123/5.0
-        _t125 = _t106*_t19 + _t108*_t22 + _t39
-        _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30
-        _t127 = -5.0*_t126/3.0
-        _t128 = _t127/5.0
-        _t129 = _t111*_t19 + _t113*_t22 + _t44
-        _t130 = -_t116*_t16 - _t21*_t37
-        _t131 = -5.0*_t130/3.0
-        _t132 = _t131/5.0
-        _t133 = _t116*_t22 + _t38
-        _t134 = -_t119*_t16 - _t21*_t42
-        _t135 = -5.0*_t134/3.0
-        _t136 = _t135/5.0
-        _t137 = _t119*_t22 + _t43
-        _t138 = 5.0*_t54/3.0
-        _t139 = _t138/5.0
-        _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9
-        _t141 = 5.0*_t58/3.0
-        _t142 = _t141/5.0
-        _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9
-        _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75
-        _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69
-        _t146 = -J_theta_tractor*_t29 + _t31*_t63 + _t35*_t71 + _t37*_t77 + _t52*_t79
-        _t147 = J_theta_cart*_t37 - _t29*_t77 + _t31*_t66 + _t35*_t73 + _t52*_t82
-        _t148 = J_theta_cart2*_t52 - _t29*_t79 + _t31*_t69 + _t35*_t75 + _t37*_t82
-        _t149 = -_t53 - _t54
-        _t150 = _t149*_t60
-        _t151 = J_theta_cart2_left*_t150
-        _t152 = _t53 - _t54
-        _t153 = _t152*_t59
-        _t154 = J_theta_cart2_right*_t153
-        _t155 = -_t45 - _t46
-        _t156 = _t155*_t50
-        _t157 = J_theta_cart_left*_t156
-        _t158 = _t45 - _t46
-        _t159 = _t158*_t49
-        _t160 = J_theta_cart_right*_t159
-        _t161 = _t47 - _t48
-        _t162 = _t161*_t49
-        _t163 = -_t47 - _t48
-        _t164 = _t163*_t50
-        _t165 = _t57 - _t58
-        _t166 = _t165*_t59
-        _t167 = -_t57 - _t58
-        _t168 = _t167*_t60
-        _t169 = _t151*_t168 + _t154*_t166 + _t157*_t164 + _t160*_t162
-        _t170 = J_x_tractor*_t40 + _t30*_t71 + _t42*_t73 + _t56*_t75
-        _t171 = J_theta_tractor*_t30 + _t33*_t63 + _t40*_t71 + _t42*_t77 + _t56*_t79
-        _t172 = J_x_tractor*_t33 + _t30*_t63 + _t42*_t66 + _t56*_t69
-        _t173 = J_theta_cart*_t42 + _t30*_t77 + _t33*_t66 + _t40*_t73 + _t56*_t82
-        _t174 = J_theta_cart2*_t56 + _t30*_t79 + _t33*_t69 + _t40*_t75 + _t42*_t82
-        _t175 = _t61*_t89 + _t62*_t89 + _t92 + _t93 + _t94 + _t95
-        _t176 = _t100*_t31 + _t101*_t33
-        _t177 = _t100*_t108 + _t101*_t113 + _t102*_t116 + _t103*_t119
-        _t178 = _t100*_t123 + _t101*_t127 + _t102*_t131 + _t103*_t135 + _t104*_t138 + _t105*_t141
-        _t179 = J_x_tractor*_t176 + _t175 + _t177*_t73 + _t178*_t75
-        _t180 = -K_theta_tractor_x_tractor_2*_t3*_t89 + _t70*_t89 + _t72*_t87 + _t85 - _t90 - _t91
-        _t181 = _t100*_t106 + _t101*_t111
-        _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180
-        _t183 = 3.0*K_theta_cart2_x_tractor*_t11*_t3*_t84/10.0 + 3.0*K_theta_cart_x_tractor*_t2*_t3*_t87/10.0 - _t4*_t90 - _t4*_t91 - _t6*_t92 - _t6*_t93 - _t6*_t94 - _t6*_t95
-        _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183
-        _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85 - _t80*_t90 - _t81*_t92 - _t81*_t93
-        _t186 = J_theta_cart*_t177 + _t176*_t73 + _t178*_t82 + _t181*_t66 + _t185
-        _t187 = _t67*_t96 + _t67*_t99 + _t68*_t96 + _t68*_t99 - _t74*_t97 - _t74*_t98 + _t78*_t97 + _t78*_t98
-        _t188 = J_theta_cart2*_t178 + _t176*_t75 + _t177*_t82 + _t181*_t69 + _t187
-        _t189 = _t144*_t40 + _t145*_t33 + _t146*_t30 + _t147*_t42 + _t148*_t56 + _t169
-        _t190 = J_theta_cart2_left*_t168*_t168 + J_theta_cart2_right*_t166*_t166 + J_theta_cart_left*_t164*_t164 + J_theta_cart_right*_t162*_t162 + J_theta_left + _t170*_t40 + _t171*_t30 + _t172*_t33 + _t173*_t42 + _t174*_t56
-        _t191 = _t109 - _t110
-        _t192 = _t191*_t49
-        _t193 = _t114 - _t115
-        _t194 = _t193*_t49
-        _t195 = _t117 - _t118
-        _t196 = _t195*_t49
-        _t197 = _t120 - _t121
-        _t198 = _t197*_t49
-        _t199 = _t100*_t192 + _t101*_t194 + _t102*_t196 + _t103*_t198
-        _t200 = -_t109 - _t110
-        _t201 = _t200*_t50
-        _t202 = -_t114 - _t115
-        _t203 = _t202*_t50
-        _t204 = -_t117 - _t118
-        _t205 = _t204*_t50
-        _t206 = -_t120 - _t121
-        _t207 = _t206*_t50
-        _t208 = _t100*_t201 + _t101*_t203 + _t102*_t205 + _t103*_t207
-        _t209 = _t124 - _t125
-        _t210 = _t209*_t59
-        _t211 = _t128 - _t129
-        _t212 = _t211*_t59
-        _t213 = _t132 - _t133
-        _t214 = _t213*_t59
-        _t215 = _t136 - _t137
-        _t216 = _t215*_t59
-        _t217 = _t139 - _t140
-        _t218 = _t217*_t59
-        _t219 = _t142 - _t143
-        _t220 = _t219*_t59
-        _t221 = _t100*_t210 + _t101*_t212 + _t102*_t214 + _t103*_t216 + _t104*_t218 + _t105*_t220
-        _t222 = -_t124 - _t125
-        _t223 = _t222*_t60
-        _t224 = -_t128 - _t129
-        _t225 = _t224*_t60
-        _t226 = -_t132 - _t133
-        _t227 = _t226*_t60
-        _t228 = -_t136 - _t137
-        _t229 = _t228*_t60
-        _t230 = -_t139 - _t140
-        _t231 = _t230*_t60
-        _t232 = -_t142 - _t143
-        _t233 = _t232*_t60
-        _t234 = _t100*_t223 + _t101*_t225 + _t102*_t227 + _t103*_t229 + _t104*_t231 + _t105*_t233
-        _t235 = _t151*_t234 + _t154*_t221 + _t157*_t208 + _t160*_t199 + _t179*_t35 + _t182*_t31 - _t184*_t29 + _t186*_t37 + _t188*_t52
-        _t236 = -_t235 + tau_right
-        _t237 = J_theta_cart2_left*_t168*_t234 + J_theta_cart2_right*_t166*_t221 + J_theta_cart_left*_t164*_t208 + J_theta_cart_right*_t162*_t199 + _t179*_t40 + _t182*_t33 + _t184*_t30 + _t186*_t42 + _t188*_t56
-        _t238 = -_t237 + tau_left
-        _t239 = J_theta_cart2_left*_t150*_t150 + J_theta_cart2_right*_t153*_t153 + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t159*_t159 + J_theta_right + _t144*_t35 + _t145*_t31 - _t146*_t29 + _t147*_t37 + _t148*_t52
-        _t240 = _t169 + _t170*_t35 - _t171*_t29 + _t172*_t31 + _t173*_t37 + _t174*_t52
-        _t241 = -_t189*_t240 + _t190*_t239
-        _t242 = 1.0/_t241
-        _t243 = _t242*(-_t189*_t238 + _t190*_t236)
-        _t244 = _t242*(-_t236*_t240 + _t238*_t239)
-        _t245 = _t181 + _t243*_t31 + _t244*_t33
-        _t246 = -_t243*_t29 + _t244*_t30
-        _t247 = _t177 + _t243*_t37 + _t244*_t42
-        _t248 = _t178 + _t243*_t52 + _t244*_t56
-        _t249 = -J_x_tractor*_t245 - _t180 - _t246*_t63 - _t247*_t66 - _t248*_t69
-        _t250 = _t153*_t243 + _t166*_t244 + _t221
-        _t251 = -J_theta_cart2_right*_t250
-        _t252 = _t251*_t59
-        _t253 = _t150*_t243 + _t168*_t244 + _t234
-        _t254 = -J_theta_cart2_left*_t253
-        _t255 = _t254*_t60
-        _t256 = _t176 + _t243*_t35 + _t244*_t40
-        _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79 - _t247*_t82 - _t256*_t75
-        _t258 = _t252/5.0 - _t255/5.0 + _t257
-        _t259 = -5.0*_t258/3.0
-        _t260 = _t159*_t243 + _t162*_t244 + _t199
-        _t261 = -J_theta_cart_right*_t260
-        _t262 = _t261*_t49
-        _t263 = _t156*_t243 + _t164*_t244 + _t208
-        _t264 = -J_theta_cart_left*_t263
-        _t265 = _t264*_t50
-        _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82 - _t256*_t73
-        _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + _t262/5.0 - _t265/5.0 + _t266
-        _t268 = -5.0*_t267/3.0
-        _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265 + _t249 + _t259*_t9
-        _t270 = 500.0*_t269/207.0
-        _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75
-        _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9 + _t255*_t9 + _t271
-        _t273 = 500.0*_t272/207.0
-        _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77 - _t248*_t79 - _t256*_t71
-        _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255 - _t268*_t8 + _t274
-        _t276 = 500.0*_t275/207.0
-        _t277 = _t25*_t273 + _t27*_t270
-        _t278 = 207.0*_t3/500.0
-        _t279 = -207.0*_t5/500.0
-        _t280 = -_t270*_t278 - _t273*_t279
-        _t281 = _t280*_t280
-        _t282 = 500.0*_t23/207.0
-        _t283 = 500.0*_t24/207.0
-        _t284 = _t26*_t282
-        _t285 = _t28*_t282
-        _t286 = -_t1*_t285 - _t2*_t284 + _t282*_t8
-        _t287 = -5.0*_t286/3.0
-        _t288 = _t287/5.0
-        _t289 = _t1*_t284 + _t17*_t285 - _t18*_t282
-        _t290 = _t26*_t283
-        _t291 = _t28*_t283
-        _t292 = -_t1*_t291 - _t2*_t290 - _t283*_t8
-        _t293 = -5.0*_t292/3.0
-        _t294 = _t293/5.0
-        _t295 = _t1*_t290 + _t17*_t291 + _t18*_t283
-        _t296 = -_t10*_t285 - _t11*_t284 + _t13*_t282 - _t16*_t287
-        _t297 = -5.0*_t296/3.0
-        _t298 = _t297/5.0
-        _t299 = _t10*_t284 + _t19*_t285 - _t20*_t282 + _t22*_t287
-        _t300 = -_t10*_t291 - _t11*_t290 - _t13*_t283 - _t16*_t293
-        _t301 = -5.0*_t300/3.0
-        _t302 = _t301/5.0
-        _t303 = _t10*_t290 + _t19*_t291 + _t20*_t283 + _t22*_t293
-        _t304 = J_x_tractor*_t284 - _t282*_t71 + _t287*_t73 + _t297*_t75
-        _t305 = J_x_tractor*_t285 - _t282*_t63 + _t287*_t66 + _t297*_t69
-        _t306 = -J_theta_tractor*_t282 + _t284*_t71 + _t285*_t63 + _t287*_t77 + _t297*_t79
-        _t307 = J_theta_cart*_t287 - _t282*_t77 + _t284*_t73 + _t285*_t66 + _t297*_t82
-        _t308 = J_theta_cart2*_t297 - _t282*_t79 + _t284*_t75 + _t285*_t69 + _t287*_t82
-        _t309 = _t288 - _t289
-        _t310 = _t309*_t49
-        _t311 = _t294 - _t295
-        _t312 = _t311*_t49
-        _t313 = -_t288 - _t289
-        _t314 = _t313*_t50
-        _t315 = -_t294 - _t295
-        _t316 = _t315*_t50
-        _t317 = _t298 - _t299
-        _t318 = _t317*_t59
-        _t319 = _t302 - _t303
-        _t320 = _t319*_t59
-        _t321 = -_t298 - _t299
-        _t322 = _t321*_t60
-        _t323 = -_t302 - _t303
-        _t324 = _t323*_t60
-        _t325 = J_theta_cart2_left*_t322*_t324 + J_theta_cart2_right*_t318*_t320 + J_theta_cart_left*_t314*_t316 + J_theta_cart_right*_t310*_t312
-        _t326 = J_x_tractor*_t290 + _t283*_t71 + _t293*_t73 + _t301*_t75
-        _t327 = J_theta_tractor*_t283 + _t290*_t71 + _t291*_t63 + _t293*_t77 + _t301*_t79
-        _t328 = J_x_tractor*_t291 + _t283*_t63 + _t293*_t66 + _t301*_t69
-        _t329 = J_theta_cart*_t293 + _t283*_t77 + _t290*_t73 + _t291*_t66 + _t301*_t82
-        _t330 = J_theta_cart2*_t301 + _t283*_t79 + _t290*_t75 + _t291*_t69 + _t293*_t82
-        _t331 = _t276 - _t277
-        _t332 = -_t276 - _t277
-        _t333 = load_w0*mu_floor - math.sqrt(_t281*share_w0*share_w0 + _t332*_t332)
-        _t334 = load_w1*mu_floor - math.sqrt(_t281*share_w1*share_w1 + _t331*_t331)
-        _t335 = J_theta_cart2_left*_t322*_t322 + J_theta_cart2_right*_t318*_t318 + J_theta_cart_left*_t314*_t314 + J_theta_cart_right*_t310*_t310 + J_theta_right - _t282*_t306 + _t284*_t304 + _t285*_t305 + _t287*_t307 + _t297*_t308
-        _t336 = _t283*_t306 + _t290*_t304 + _t291*_t305 + _t293*_t307 + _t301*_t308 + _t325
-        _t337 = -_t282*_t327 + _t284*_t326 + _t285*_t328 + _t287*_t329 + _t297*_t330 + _t325
-        _t338 = J_theta_cart2_left*_t324*_t324 + J_theta_cart2_right*_t320*_t320 + J_theta_cart_left*_t316*_t316 + J_theta_cart_right*_t312*_t312 + J_theta_left + _t283*_t327 + _t290*_t326 + _t291*_t328 + _t293*_t329 + _t301*_t330
+        _t0 = force_y0*force_y0
+        _t1 = load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0)
+        _t2 = load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1)
     except ZeroDivisionError:
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check: division by zero (degenerate input)") from None
-    if not (radius_cart2_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_cart2_left > 0")
-    if not (radius_cart2_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_cart2_right > 0")
-    if not (radius_cart_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_cart_left > 0")
-    if not (radius_cart_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_cart_right > 0")
-    if not (radius_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_left > 0")
-    if not (radius_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires radius_right > 0")
-    if not (J_theta_cart > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart > 0")
-    if not (J_theta_cart2 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart2 > 0")
-    if not (J_theta_cart2_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart2_left > 0")
-    if not (J_theta_cart2_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart2_right > 0")
-    if not (J_theta_cart_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart_left > 0")
-    if not (J_theta_cart_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_cart_right > 0")
-    if not (J_theta_left > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_left > 0")
-    if not (J_theta_right > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_right > 0")
-    if not (J_theta_tractor > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_theta_tractor > 0")
-    if not (J_x_tractor > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires J_x_tractor > 0")
-    if not (_t335 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires (S^T M S)[0][0] > 0")
-    if not (_t335*_t338 - _t336*_t337 > 0.0):
-        raise ValueError("TRAILER2_ERR_BAD_PARAMS: traction_check requires det(S^T M S) > 0: a positive-definite model")
+        raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_check: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_check requires mu > 0")
     if not (load_w0 > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_check requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAILER2_ERR_BAD_TRACTION: traction_check requires loads[1] > 0")
-    if not (_t333 > 0.0):
+    if not (_t1 > 0.0):
         raise ValueError("TRAILER2_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
-    if not (_t334 > 0.0):
+    if not (_t2 > 0.0):
         raise ValueError("TRAILER2_WARN_TRACTION: traction_check requires wheel 'left' keeps grip: margin > 0")
-    margins = np.array([_t333, _t334])
+    margins = np.array([_t1, _t2])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAILER2_ERR_NONFINITE_OUTPUT: a result of traction_check is not finite")
     return margins

@@ -417,9 +417,8 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *longitudinal, trailer3_real_t *lateral);
 
-#define TRAILER3_TRACTION_MARGINS_Q_SIZE 14
-#define TRAILER3_TRACTION_MARGINS_WHEEL_RATES_SIZE 2
-#define TRAILER3_TRACTION_MARGINS_TAU_SIZE 2
+#define TRAILER3_TRACTION_MARGINS_LONGITUDINAL_SIZE 2
+#define TRAILER3_TRACTION_MARGINS_LATERAL_SIZE 4
 #define TRAILER3_TRACTION_MARGINS_MU_SIZE 1
 #define TRAILER3_TRACTION_MARGINS_LOADS_SIZE 2
 #define TRAILER3_TRACTION_MARGINS_SHARES_SIZE 2
@@ -427,23 +426,16 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer3_params_t -- lumped robot parameters
- * @param[in]  q [14] row-major (TRAILER3_TRACTION_MARGINS_Q_SIZE): x_tractor, y_tractor,
- *     theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left,
- *     theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right,
- *     theta_cart3_left -- x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2,
- *     theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right,
- *     theta_cart2_left, theta_cart3_right, theta_cart3_left
- * @param[in]  wheel_rates [2] row-major (TRAILER3_TRACTION_MARGINS_WHEEL_RATES_SIZE):
- *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER3_TRACTION_MARGINS_TAU_SIZE): tau_right, tau_left -- net
- *     wheel torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER3_TRACTION_MARGINS_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [4] row-major (TRAILER3_TRACTION_MARGINS_LATERAL_SIZE): force_y0, force_y1,
+ *     force_y2, force_y3 -- N, per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER3_TRACTION_MARGINS_MU_SIZE): mu_floor -- the floor's
  *     friction coefficient
  * @param[in]  loads [2] row-major (TRAILER3_TRACTION_MARGINS_LOADS_SIZE): load_w0, load_w1 -- N_w
@@ -454,45 +446,20 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
  * @param[out] margins [2] row-major (TRAILER3_TRACTION_MARGINS_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER3_OK on success; on error no output is written:
  *         TRAILER3_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[6], q[7], q[8], q[9], q[10], q[11], q[12],
- *         q[13]),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2 > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3 > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1], lateral[2], lateral[3]),
  *         TRAILER3_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER3_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER3_ERR_BAD_TRACTION if not (loads[1] > 0),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer3_status_t trailer3_traction_margins(const trailer3_params_t *p, const trailer3_real_t *q,
-    const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, const trailer3_real_t *mu,
-    const trailer3_real_t *loads, const trailer3_real_t *shares, trailer3_real_t *margins);
+trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
+    const trailer3_real_t *lateral, const trailer3_real_t *mu, const trailer3_real_t *loads,
+    const trailer3_real_t *shares, trailer3_real_t *margins);
 
-#define TRAILER3_TRACTION_CHECK_Q_SIZE 14
-#define TRAILER3_TRACTION_CHECK_WHEEL_RATES_SIZE 2
-#define TRAILER3_TRACTION_CHECK_TAU_SIZE 2
+#define TRAILER3_TRACTION_CHECK_LONGITUDINAL_SIZE 2
+#define TRAILER3_TRACTION_CHECK_LATERAL_SIZE 4
 #define TRAILER3_TRACTION_CHECK_MU_SIZE 1
 #define TRAILER3_TRACTION_CHECK_LOADS_SIZE 2
 #define TRAILER3_TRACTION_CHECK_SHARES_SIZE 2
@@ -500,26 +467,19 @@ trailer3_status_t trailer3_traction_margins(const trailer3_params_t *p, const tr
 
 /**
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
- * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy from the
- * multipliers of (9) (wheel_contact_forces). Negative: the wheel needs more
- * traction than the floor gives and slips.
+ * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
+ * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
+ * needs more traction than the floor gives and slips.
  * A check for firmware after the controller step: returns TRAILER3_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
  *
  * Paper equations: (9), (10)-(12).
  *
- * @param[in]  p trailer3_params_t -- lumped robot parameters
- * @param[in]  q [14] row-major (TRAILER3_TRACTION_CHECK_Q_SIZE): x_tractor, y_tractor,
- *     theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left,
- *     theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right,
- *     theta_cart3_left -- x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2,
- *     theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right,
- *     theta_cart2_left, theta_cart3_right, theta_cart3_left
- * @param[in]  wheel_rates [2] row-major (TRAILER3_TRACTION_CHECK_WHEEL_RATES_SIZE): thetadot_right,
- *     thetadot_left -- theta_right rate, theta_left rate
- * @param[in]  tau [2] row-major (TRAILER3_TRACTION_CHECK_TAU_SIZE): tau_right, tau_left -- net
- *     wheel torques (after bearing friction) tau_right, tau_left
+ * @param[in]  longitudinal [2] row-major (TRAILER3_TRACTION_CHECK_LONGITUDINAL_SIZE): force_x0,
+ *     force_x1 -- N, per driven wheel (wheel_contact_forces)
+ * @param[in]  lateral [4] row-major (TRAILER3_TRACTION_CHECK_LATERAL_SIZE): force_y0, force_y1,
+ *     force_y2, force_y3 -- N, per no-side-slip row (wheel_contact_forces)
  * @param[in]  mu [1] row-major (TRAILER3_TRACTION_CHECK_MU_SIZE): mu_floor -- the floor's friction
  *     coefficient
  * @param[in]  loads [2] row-major (TRAILER3_TRACTION_CHECK_LOADS_SIZE): load_w0, load_w1 -- N_w
@@ -530,31 +490,7 @@ trailer3_status_t trailer3_traction_margins(const trailer3_params_t *p, const tr
  * @param[out] margins [2] row-major (TRAILER3_TRACTION_CHECK_MARGINS_SIZE) -- N, per driven wheel
  * @return TRAILER3_OK on success; on error no output is written:
  *         TRAILER3_ERR_NONFINITE_INPUT if an input it reads is NaN or infinite
- *         (it does not read, and ignores: q[0], q[1], q[6], q[7], q[8], q[9], q[10], q[11], q[12],
- *         q[13]),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart2_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart3_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_cart_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (radius_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2 > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart2_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3 > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart3_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_cart_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_left > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_right > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (J_x_tractor > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
- *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
+ *         (it does not read, and ignores: lateral[1], lateral[2], lateral[3]),
  *         TRAILER3_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAILER3_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAILER3_ERR_BAD_TRACTION if not (loads[1] > 0),
@@ -562,11 +498,11 @@ trailer3_status_t trailer3_traction_margins(const trailer3_params_t *p, const tr
  *         TRAILER3_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 700 add, 986 mul, 106 div, 8 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  */
-trailer3_status_t trailer3_traction_check(const trailer3_params_t *p, const trailer3_real_t *q,
-    const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, const trailer3_real_t *mu,
-    const trailer3_real_t *loads, const trailer3_real_t *shares, trailer3_real_t *margins);
+trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
+    const trailer3_real_t *lateral, const trailer3_real_t *mu, const trailer3_real_t *loads,
+    const trailer3_real_t *shares, trailer3_real_t *margins);
 
 #ifdef __cplusplus
 }
