@@ -27,7 +27,7 @@ lint: $(STAMP)
 	$(VENV)/bin/mypy
 
 reproduce: $(STAMP)
-	$(PY) -m runtime reproduce --out docs/reproduction
+	$(PY) -m runtime reproduce --out docs/reproduction --compare-plant mujoco
 
 ## Benchmarks and firmware reports; checks the Cortex-M4 cross-compiler first, so that a
 ## missing one fails before BENCHMARKS.md is rewritten.

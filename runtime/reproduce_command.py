@@ -109,6 +109,11 @@ def main(argv: list[str] | None = None) -> int:
         "when installed, for the paper's robot; ./reproduction/<robot> for another)",
     )  # fmt: skip
     parser.add_argument("--no-plots", action="store_true", help="skip the figures")
+    parser.add_argument(
+        "--compare-plant", choices=("mujoco",), default=None,
+        help="repeat every run on MuJoCo (the MJCF `wmr mjcf` writes; the experiment's "
+        "contact settings) and put both plants side by side in REPORT.md",
+    )
     args = parser.parse_args(argv)
     start = time.perf_counter()
     try:
@@ -128,17 +133,38 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
     if not setting.is_paper_robot:
-        return _main_robot(setting, sensings, out, not args.no_plots, start)
-    rep = reproduce(exp, progress=True, sensings=sensings)
-    t_plot = time.perf_counter()
-    write_outputs(rep, out, plots=not args.no_plots)
-    end = time.perf_counter()
-    print_summary(rep)
-    print(
-        f"wrote {out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
-        f"figures and files {end - t_plot:.1f} s)"
-    )
-    return 0
+        status = _main_robot(setting, sensings, out, not args.no_plots, start)
+    else:
+        rep = reproduce(exp, progress=True, sensings=sensings)
+        t_plot = time.perf_counter()
+        write_outputs(rep, out, plots=not args.no_plots)
+        end = time.perf_counter()
+        print_summary(rep)
+        print(
+            f"wrote {out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
+            f"figures and files {end - t_plot:.1f} s)"
+        )
+        status = 0
+    if status == 0 and args.compare_plant is not None:
+        _compare_plant(setting, sensings, out)
+    return status
+
+
+def _compare_plant(setting: Setting, sensings: tuple[str, ...], out: Path) -> None:
+    """``--compare-plant mujoco``: every run again on the model plant and on MuJoCo at the
+    experiment's floor (:func:`runtime.mujoco.comparison.compare`), appended to
+    ``REPORT.md`` side by side (:func:`runtime.mujoco.comparison.report_section`)."""
+    from runtime.mujoco.comparison import compare, report_section
+
+    friction = setting.experiment.plant.friction
+    t0 = time.perf_counter()
+    comp = compare(setting, sensings, ((f"μ = {friction:g}", friction, 0.0),),
+                   progress=True, onset_frictions=())
+    report = out / "REPORT.md"
+    text = report.read_text(encoding="utf-8").rstrip("\n")
+    report.write_text(text + "\n\n" + "\n".join(report_section(comp)), encoding="utf-8")
+    print(f"wrote {report}: the model plant against MuJoCo, {len(comp.rows)} runs each "
+          f"({time.perf_counter() - t0:.1f} s)")
 
 
 def _main_robot(setting: Setting, sensings: tuple[str, ...], out: Path, plots: bool,

@@ -17,6 +17,7 @@ About 10 s on one core.
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 from typing import Any
 
@@ -264,6 +265,40 @@ def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
         rows = list(csv.DictReader(f))
     assert len(rows) == 2 * 5 and all(r["status"] == "ok" for r in rows), rows
     assert max(float(r["rms_error_m"]) for r in rows) < 0.05  # m (measured 35 mm: PI start-up)
+
+
+def test_wmr_reproduce_puts_the_model_plant_and_mujoco_side_by_side(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--compare-plant mujoco`` appends to REPORT.md every run on both plants (one table
+    row each, with numbers from each plant); a plant it does not know is refused."""
+    experiment = tmp_path / "short.toml"
+    experiment.write_text("[paths]\ncircle_duration = 2.0\nlawnmower_duration = 2.0\n")
+    out = tmp_path / "out"
+    assert wmr(["reproduce", "--robot", str(ROBOTS["small_robot"]), "--experiment",
+                str(experiment), "--sensing", "sample-instant", "--no-plots", "--out", str(out),
+                "--compare-plant", "mujoco"]) == 0
+    text = (out / "REPORT.md").read_text()
+    head, _, section = text.partition("## The same runs on an independent engine (MuJoCo)")
+    assert section and head.strip(), text[-2000:]
+    runs = len(resolve(ROBOTS["small_robot"]).code.runs())
+    rows = [line for line in section.splitlines() if line.startswith("| sample-instant |")]
+    assert len(rows) == 2 * runs, section
+    numbers = r"[\d.]+ / [\d.]+ "
+    measured = 0
+    for line in rows:
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        model, engine = cells[4], cells[5]
+        if "init refused" in model:  # the small robot's ROC (its bounds; both plants)
+            assert "init refused" in engine, line
+        else:
+            assert re.match(numbers, model) and re.match(numbers, engine), line
+            measured += 1
+    assert measured >= len(rows) - 2, section
+    assert "of 2 runs ok" not in section and f"of {2 * runs} runs ok on MuJoCo" in section
+    with pytest.raises(SystemExit) as exc:
+        wmr(["reproduce", "--compare-plant", "bullet", "--out", str(tmp_path / "x")])
+    assert exc.value.code == 2
+    assert "invalid choice: 'bullet'" in capsys.readouterr().err
 
 
 def test_a_diverging_run_is_reported_not_printed(capfd: pytest.CaptureFixture[str],

@@ -287,20 +287,7 @@ def markdown(comp: Comparison) -> str:
         "",
     ]
     lines += _summary(comp)
-    lines += ["", "## Every run", ""]
-    head = "| sensing | path | formulation | controller | model plant |"
-    rule = "|---|---|---|---|---|"
-    for label, _, _ in comp.cases:
-        head += f" MuJoCo {label} | slip, sat |"
-        rule += "---|---|"
-    lines += [head, rule]
-    for r in comp.rows:
-        m = r.model
-        line = (f"| {r.sensing} | {r.path} | {r.formulation} | {labels[r.controller]} | "
-                f"{_mm(m.rms)} / {_mm(m.max)} {_status(m)} |")
-        for c in r.engine:
-            line += f" {_mm(c.rms)} / {_mm(c.max)} {_status(c)} | {_slip(c)}, {c.saturated} |"
-        lines.append(line)
+    lines += ["", "## Every run", "", *_runs_table(comp)]
     lines += ["", "## Wheel loads at rest (N)", "",
               "The slip monitor and the traction limit take each wheel's normal load from a "
               "stated static split (`modeling.mjcf_export.static_loads`: the robot as one "
@@ -378,21 +365,76 @@ def markdown(comp: Comparison) -> str:
     return "\n".join(lines)
 
 
+def _runs_table(comp: Comparison) -> list[str]:
+    """Every run: the model plant's RMS / max and outcome, then each case's on MuJoCo."""
+    labels = {i.name: i.label for _, i in comp.setting.robot.code.runs()}
+    head = "| sensing | path | formulation | controller | model plant |"
+    rule = "|---|---|---|---|---|"
+    for label, _, _ in comp.cases:
+        head += f" MuJoCo {label} | slip, sat |"
+        rule += "---|---|"
+    lines = [head, rule]
+    for r in comp.rows:
+        m = r.model
+        line = (f"| {r.sensing} | {r.path} | {r.formulation} | {labels[r.controller]} | "
+                f"{_mm(m.rms)} / {_mm(m.max)} {_status(m)} |")
+        for c in r.engine:
+            line += f" {_mm(c.rms)} / {_mm(c.max)} {_status(c)} | {_slip(c)}, {c.saturated} |"
+        lines.append(line)
+    return lines
+
+
+def _case_summary(comp: Comparison, i: int) -> str:
+    """One case's counts (runs ok on each plant, runs that slipped) and RMS differences."""
+    label = comp.cases[i][0]
+    diffs = [r.engine[i].rms - r.model.rms for r in comp.rows
+             if r.model.status == "ok" and not math.isnan(r.engine[i].rms)]
+    ok = sum(r.engine[i].status == "ok" for r in comp.rows)
+    model_ok = sum(r.model.status == "ok" for r in comp.rows)
+    slipping = sum(r.engine[i].slip_onset is not None for r in comp.rows)
+    text = (f"**{label}**: {ok} of {len(comp.rows)} runs ok on MuJoCo ({model_ok} on "
+            f"the model plant); a wheel slipped in {slipping}.")
+    if diffs:
+        text += (f" RMS MuJoCo − model over the runs ok on the model: "
+                 f"{min(diffs) * 1e3:+.2f} … {max(diffs) * 1e3:+.2f} mm.")
+    return text
+
+
+def report_section(comp: Comparison) -> list[str]:
+    """The reproduction report's section (``wmr reproduce --compare-plant mujoco``): the
+    same runs on the model plant and on MuJoCo at the experiment's floor, side by side,
+    with where and why they differ."""
+    pl = comp.setting.experiment.plant
+    model_t = [r.model.seconds for r in comp.rows]
+    engine_t = [c.seconds for r in comp.rows for c in r.engine]
+    return [
+        "## The same runs on an independent engine (MuJoCo)", "",
+        "Every run above, repeated by the same closed loop (generated C controller, "
+        "encoders, odometry, payload schedule) on MuJoCo, on the MJCF `wmr mjcf` writes "
+        "from the robot's description (its planar inertias are the derived model's, tested "
+        "to 1e-6; point-contact wheels, friction coefficient "
+        f"{pl.friction:g}, contact time constant {pl.contact_timeconst:g} s). The model "
+        "plant cannot slip; the engine's wheels roll only as far as friction lets them, "
+        "its contacts are soft, its Coulomb bearing friction is exact and its body may "
+        "pitch on its supports: the differences below are those. Errors in mm (RMS / max), "
+        "outcome as above; slip: the driven wheels' largest rim speed less ground speed "
+        f"(mm/s) and when it first exceeds {SLIP_THRESHOLD * 1e3:.0f} mm/s; sat: samples "
+        "whose torque was clipped.", "",
+        *(f"* {_case_summary(comp, i)}" for i in range(len(comp.cases))),
+        f"* Run time: {np.mean(model_t) * 1e3:.0f} ms a run on the model plant, "
+        f"{np.mean(engine_t) * 1e3:.0f} ms on MuJoCo "
+        f"({np.mean(engine_t) / np.mean(model_t):.1f} ×).", "",
+        *_runs_table(comp), "",
+        "Lower floors (μ = 0.2, 0.1, and 0.1 with the traction-aware torque limit) and the "
+        "slip monitor's predicted onset of slip against the engine's: docs/MUJOCO.md "
+        "(`python -m runtime.mujoco.comparison`).", "",
+    ]
+
+
 def _summary(comp: Comparison) -> list[str]:
     """Where and why the plants differ, with the numbers of this run."""
     out = ["## Where they differ, and why", ""]
-    for i, (label, _, _) in enumerate(comp.cases):
-        diffs = [r.engine[i].rms - r.model.rms for r in comp.rows
-                 if r.model.status == "ok" and not math.isnan(r.engine[i].rms)]
-        ok = sum(r.engine[i].status == "ok" for r in comp.rows)
-        model_ok = sum(r.model.status == "ok" for r in comp.rows)
-        slipping = sum(r.engine[i].slip_onset is not None for r in comp.rows)
-        text = (f"* **{label}**: {ok} of {len(comp.rows)} runs ok on MuJoCo ({model_ok} on "
-                f"the model plant); a wheel slipped in {slipping}.")
-        if diffs:
-            text += (f" RMS MuJoCo − model over the runs ok on the model: "
-                     f"{min(diffs) * 1e3:+.2f} … {max(diffs) * 1e3:+.2f} mm.")
-        out.append(text)
+    out += [f"* {_case_summary(comp, i)}" for i in range(len(comp.cases))]
     out += [
         "",
         "With grip (μ = 1) the engine confirms the model: the rolling constraints hold to "
