@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -128,6 +129,35 @@ def test_a_failing_run_is_recorded_with_its_error() -> None:
     assert rec["status"] == "error" and rec["index"] == 3 and not rec["stable"]
     assert "sensing.window" in rec["error"] and rec["p.sensing.velocity"] == "motor-encoder"
     assert math.isnan(rec["rms_error"])
+
+
+def test_robot_of_bodies_on_mujoco_draws_what_the_engine_can_carry(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A bodies-and-wheels robot is its description on MuJoCo: the default campaign leaves
+    its base parameters out (and says so) and its runs complete on the engine; a campaign
+    file drawing one is refused before any run, naming the field."""
+    from runtime.campaign.command import resolve_campaign
+    from runtime.campaign.runner import run_one
+    from runtime.campaign.spec import CampaignSpecError
+
+    trailer = Path(__file__).resolve().parents[1] / "modeling/robots/trailer/trailer.toml"
+    default, tgt = resolve_campaign(None, trailer, 2, plant="mujoco")
+    drawn = dict(default.vary)
+    assert default.experiment.plant.model == "mujoco"
+    assert not [k for k in drawn if k.startswith("robot.")] and "plant.extra_payload" in drawn
+    note = capsys.readouterr().err
+    assert "the default campaign does not draw" in note and "robot.J_theta_tractor" in note
+    short = replace(default, duration=1.5, controllers=("tdroc",))
+    for i in range(2):  # drawn payloads, friction, gains, h, ε, sensing: on the engine
+        rec = run_one(short, i, tgt, base_values(short, tgt.plant))
+        assert rec["status"] != "error", rec["error"]  # not the engine refusing a draw
+        assert rec["status"] == "ok" or "diverged_error" in rec["error"], rec
+    spec = tmp_path / "c.toml"
+    spec.write_text('[vary."robot.J_theta_tractor"]\nspread = 0.3\n')
+    with pytest.raises(CampaignSpecError, match=r'vary\."robot\.J_theta_tractor".*MuJoCo'):
+        resolve_campaign(spec, trailer, 1, plant="mujoco")
+    on_model, _ = resolve_campaign(spec, trailer, 1)  # the generated plant draws it
+    assert "robot.J_theta_tractor" in dict(on_model.vary)
 
 
 def test_robot_of_bodies_runs_and_draws_its_predicted_boundary(tmp_path: Path) -> None:

@@ -66,9 +66,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def with_plant(campaign: Campaign, model: str) -> Campaign:
-    """``campaign`` run on the plant ``model`` (``--plant``): MuJoCo builds a lumped
-    robot from each run's drawn parameters; a bodies-and-wheels robot's engine has its
-    description's numbers, so its parameters must not be drawn (refused)."""
+    """``campaign`` run on the plant ``model`` (``--plant``)."""
     if model not in PLANT_MODELS:
         raise CampaignSpecError(f"--plant {model!r}: expected one of {', '.join(PLANT_MODELS)}")
     exp = campaign.experiment
@@ -77,11 +75,41 @@ def with_plant(campaign: Campaign, model: str) -> Campaign:
     return replace(campaign, experiment=exp)
 
 
+def engine_draws(campaign: Campaign, code: Any, default: bool) -> Campaign:
+    """On MuJoCo a ``[lumped]`` or ``[physical]`` robot is built from each run's drawn
+    parameters (``modeling.planar_robot.from_lumped``), but a bodies-and-wheels robot is
+    its description's bodies and wheels (``runtime.mujoco.layout.robot_layout``): a drawn
+    base parameter has no masses and inertias to become there. Its default campaign draws
+    what the engine can carry (payload masses and places, bearing friction, gains, h, ε,
+    sensing) and not ``robot.*``; a campaign file that draws ``robot.*`` is refused here,
+    before any run, naming the field."""
+    if (campaign.experiment.plant.model != "mujoco"
+            or getattr(code.robot, "LAYOUT", None) is None):
+        return campaign
+    drawn = [k for k, _ in campaign.vary if k.startswith("robot.")]
+    if not drawn:
+        return campaign
+    if not default:
+        raise CampaignSpecError(
+            f"{campaign.source}: vary.\"{drawn[0]}\": robot '{code.name}' runs on MuJoCo as "
+            "its description's bodies and wheels, which a drawn base parameter cannot "
+            "change; draw the payloads (plant.fixed_payload, plant.extra_payload and their "
+            "places) for inertial uncertainty on the engine, or run it on the generated "
+            "plant")
+    print(f"note: robot '{code.name}' on MuJoCo: its description's bodies and wheels are "
+          f"the engine's robot; the default campaign does not draw {', '.join(drawn)}",
+          file=sys.stderr)
+    return replace(campaign, vary=tuple((k, d) for k, d in campaign.vary
+                                        if not k.startswith("robot.")))
+
+
 def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | None,
-                     generated: Path | None = None) -> tuple[Campaign, Any]:
+                     generated: Path | None = None,
+                     plant: str | None = None) -> tuple[Campaign, Any]:
     """The checked campaign and its robot target (raises ``CampaignSpecError`` or
     ``ValueError`` with a one-line message). The campaign's experiment is scaled to the
-    robot as every command scales it (identity for the paper's robot)."""
+    robot as every command scales it (identity for the paper's robot). ``plant``
+    (``--plant``) overrides the experiment's ``[plant] model`` (:func:`engine_draws`)."""
     from runtime.campaign.runner import target
     from runtime.experiment.scale import robot_scale, scaled_experiment
 
@@ -106,9 +134,12 @@ def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | No
     else:
         campaign = load_campaign(spec, tgt.plant, available)
     exp, _ = scaled_experiment(campaign.experiment, robot_scale(code, tgt.nominal))
-    return replace(campaign, experiment=exp, runs=runs or campaign.runs, robot=named,
-                   generated=folder, robot_sha256=tgt.sha256,
-                   source=str(spec) if spec else campaign.source), tgt
+    campaign = replace(campaign, experiment=exp, runs=runs or campaign.runs, robot=named,
+                       generated=folder, robot_sha256=tgt.sha256,
+                       source=str(spec) if spec else campaign.source)
+    if plant is not None:
+        campaign = with_plant(campaign, plant)
+    return engine_draws(campaign, code, default=spec is None), tgt
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -119,9 +150,8 @@ def main(argv: list[str] | None = None) -> int:
               "workers run the campaign", file=sys.stderr)
         return 2
     try:
-        campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs, args.generated)
-        if args.plant_model is not None:
-            campaign = with_plant(campaign, args.plant_model)
+        campaign, tgt = resolve_campaign(args.spec, args.robot, args.runs, args.generated,
+                                         args.plant_model)
         out = writable_folder(args.out)
         store.check_folder(out, campaign)
     except (CampaignSpecError, OutputFolderError, store.CampaignFolderError, ValueError) as exc:
