@@ -273,6 +273,7 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
+
 {
     wmr_status_t status = WMR_OK;
     const wmr_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -468,6 +468,7 @@ trailer_status_t trailer_roc_step_detail(trailer_roc_state_t *state,
     const trailer_roc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+
 {
     trailer_status_t status = TRAILER_OK;
     const trailer_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -315,6 +315,7 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     const trailer2_pi_config_t *config, const trailer2_real_t q[11], const trailer2_real_t qdot[11],
     const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
     const trailer2_real_t qddot_des[11], trailer2_real_t tau[2], trailer2_error_detail_t *detail)
+
 {
     trailer2_status_t status = TRAILER2_OK;
     const trailer2_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -632,6 +632,7 @@ trailer2_status_t trailer2_roc_step_detail(trailer2_roc_state_t *state,
     const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
     const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11], trailer2_real_t tau[2],
     trailer2_error_detail_t *detail)
+
 {
     trailer2_status_t status = TRAILER2_OK;
     const trailer2_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -826,6 +826,7 @@ trailer3_status_t trailer3_roc_step_detail(trailer3_roc_state_t *state,
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
     trailer3_error_detail_t *detail)
+
 {
     trailer3_status_t status = TRAILER3_OK;
     const trailer3_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
