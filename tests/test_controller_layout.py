@@ -221,7 +221,7 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
         "            return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, i);" in body
     )
     tdroc = c_texts["tdroc.c"]
-    start = tdroc.index("static bool toy_tdroc_config_unchanged(")
+    start = tdroc.index("static inline bool toy_tdroc_config_unchanged(")
     compared = tdroc[start:tdroc.index("\n}\n", start)]
     for value in ("nominal.J_theta", "nominal.radius_l", "q_vel", "held_gain"):
         assert (f"diff |= toy_real_bits(config->{value}) ^ toy_real_bits(kept->{value});"

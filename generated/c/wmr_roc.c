@@ -24,7 +24,7 @@ const wmr_roc_config_t wmr_roc_frozen_config = WMR_ROC_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 12 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_roc_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
+static inline void wmr_roc_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -69,7 +69,7 @@ static void wmr_roc_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 73 add, 91 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static void wmr_roc_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t *q,
+static inline void wmr_roc_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u,
@@ -199,7 +199,7 @@ static void wmr_roc_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t 
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 20 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_roc_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
+static inline void wmr_roc_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -232,7 +232,7 @@ static void wmr_roc_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t kep
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 20 add, 27 mul, 2 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static void wmr_roc_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_real_t *q,
+static inline void wmr_roc_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u,
@@ -319,7 +319,7 @@ wmr_status_t wmr_roc_check_config(const wmr_roc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -334,7 +334,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_roc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_roc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -358,7 +358,7 @@ static bool wmr_roc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[
 #ifndef WMR_ROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
+static inline bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
     const wmr_roc_config_t *kept)
 {
     wmr_bits_t diff = 0u;

@@ -24,7 +24,7 @@ const wmr_tdc_config_t wmr_tdc_frozen_config = WMR_TDC_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
+static inline void wmr_tdc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[13])
 {
     const wmr_real_t m = p->m;
@@ -66,7 +66,7 @@ static void wmr_tdc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
+static inline void wmr_tdc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     wmr_real_t *H1hat)
 {
@@ -134,7 +134,7 @@ static void wmr_tdc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
+static inline void wmr_tdc_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -165,7 +165,7 @@ static void wmr_tdc_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t 
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 39 add, 42 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
+static inline void wmr_tdc_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     wmr_real_t *u)
@@ -246,7 +246,7 @@ static void wmr_tdc_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_rea
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
+static inline void wmr_tdc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[3])
 {
     const wmr_real_t m = p->m;
@@ -276,7 +276,7 @@ static void wmr_tdc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
+static inline void wmr_tdc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     wmr_real_t *H1hat)
 {
@@ -302,7 +302,7 @@ static void wmr_tdc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+static inline void wmr_tdc_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -328,7 +328,7 @@ static void wmr_tdc_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kep
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdc_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+static inline void wmr_tdc_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     wmr_real_t *u)
@@ -388,7 +388,7 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -403,7 +403,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_tdc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_tdc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -427,7 +427,7 @@ static bool wmr_tdc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[
 #ifndef WMR_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
+static inline bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
     const wmr_tdc_config_t *kept)
 {
     wmr_bits_t diff = 0u;

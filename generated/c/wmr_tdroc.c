@@ -23,8 +23,8 @@ const wmr_tdroc_config_t wmr_tdroc_frozen_config = WMR_TDROC_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn,
-    const wmr_real_t *w, wmr_real_t *gain)
+static inline void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm,
+    const wmr_real_t *dn, const wmr_real_t *w, wmr_real_t *gain)
 {
     const wmr_real_t minv_norm_1 = minv_norm[0];
     const wmr_real_t dn0 = dn[0];
@@ -52,7 +52,7 @@ static void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const w
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
+static inline void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[13])
 {
     const wmr_real_t m = p->m;
@@ -94,9 +94,9 @@ static void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_rea
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    wmr_real_t *H1hat)
+static inline void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[13],
+    const wmr_real_t *trig_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now,
+    const wmr_real_t *qdot_then, wmr_real_t *H1hat)
 {
     const wmr_real_t qd_now0 = qdot_now[0];
     const wmr_real_t qd_then0 = qdot_then[0];
@@ -161,8 +161,8 @@ static void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
+static inline void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
     const wmr_real_t Om_old0 = older[0];
@@ -188,7 +188,7 @@ static void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer, const wm
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
+static inline void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -219,10 +219,11 @@ static void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_rea
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 53 add, 62 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
-    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
-    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
-    const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
+static inline void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9],
+    const wmr_real_t *trig, const wmr_real_t *e, const wmr_real_t *edot,
+    const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
+    const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps,
+    wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
     const wmr_real_t e0 = e[0];
     const wmr_real_t edot0 = edot[0];
@@ -323,7 +324,7 @@ static void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
+static inline void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[3])
 {
     const wmr_real_t m = p->m;
@@ -353,7 +354,7 @@ static void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
+static inline void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     wmr_real_t *H1hat)
 {
@@ -378,8 +379,8 @@ static void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
+static inline void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
     const wmr_real_t Om_old0 = older[0];
@@ -396,7 +397,7 @@ static void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer, const 
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_minimal_tdroc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+static inline void wmr_tdroc_k_minimal_tdroc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -422,7 +423,7 @@ static void wmr_tdroc_k_minimal_tdroc_law_keep(const wmr_params_t *p, wmr_real_t
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_tdroc_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+static inline void wmr_tdroc_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
@@ -520,7 +521,7 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -535,7 +536,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -559,7 +560,7 @@ static bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdo
 #ifndef WMR_TDROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
+static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     const wmr_tdroc_config_t *kept)
 {
     wmr_bits_t diff = 0u;

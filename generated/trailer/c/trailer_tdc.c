@@ -24,8 +24,8 @@ const trailer_tdc_config_t trailer_tdc_frozen_config = TRAILER_TDC_FROZEN_CONFIG
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
-static void trailer_tdc_k_minimal_tde_keep(const trailer_params_t *p, const trailer_real_t *span,
-    trailer_real_t kept[17])
+static inline void trailer_tdc_k_minimal_tde_keep(const trailer_params_t *p,
+    const trailer_real_t *span, trailer_real_t kept[17])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -75,9 +75,9 @@ static void trailer_tdc_k_minimal_tde_keep(const trailer_params_t *p, const trai
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 68 add, 104 mul, 11 div, 4 sin/cos, 0 sqrt */
-static void trailer_tdc_k_minimal_tde(const trailer_real_t kept[17], const trailer_real_t *q_prev,
-    const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
-    trailer_real_t *H1hat)
+static inline void trailer_tdc_k_minimal_tde(const trailer_real_t kept[17],
+    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
+    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
 {
     const trailer_real_t qp3 = q_prev[3];
     const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(qp3);
@@ -170,7 +170,8 @@ static void trailer_tdc_k_minimal_tde(const trailer_real_t kept[17], const trail
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
-static void trailer_tdc_k_minimal_tdc_law_keep(const trailer_params_t *p, trailer_real_t kept[16])
+static inline void trailer_tdc_k_minimal_tdc_law_keep(const trailer_params_t *p,
+    trailer_real_t kept[16])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -217,10 +218,11 @@ static void trailer_tdc_k_minimal_tdc_law_keep(const trailer_params_t *p, traile
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 70 add, 105 mul, 10 div, 4 sin/cos, 0 sqrt */
-static void trailer_tdc_k_minimal_tdc_law(const trailer_real_t kept[16], const trailer_real_t *q,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
+static inline void trailer_tdc_k_minimal_tdc_law(const trailer_real_t kept[16],
+    const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
+    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
+    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
+    trailer_real_t *u)
 {
     (void)p12;
     (void)p22;
@@ -347,7 +349,7 @@ trailer_status_t trailer_tdc_check_config(const trailer_tdc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer_bits_t trailer_real_bits(trailer_real_t x)
+static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
 {
     union {
         trailer_real_t value;
@@ -362,8 +364,8 @@ static trailer_bits_t trailer_real_bits(trailer_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer_check_step_inputs which input, and its status. */
-static bool trailer_tdc_inputs_bounded(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+static inline bool trailer_tdc_inputs_bounded(const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8])
 {
 #ifdef TRAILER_FLOAT32
@@ -387,7 +389,7 @@ static bool trailer_tdc_inputs_bounded(const trailer_real_t q[8], const trailer_
 #ifndef TRAILER_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer_tdc_config_unchanged(const trailer_tdc_config_t *config,
+static inline bool trailer_tdc_config_unchanged(const trailer_tdc_config_t *config,
     const trailer_tdc_config_t *kept)
 {
     trailer_bits_t diff = 0u;

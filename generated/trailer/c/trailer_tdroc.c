@@ -23,7 +23,7 @@ const trailer_tdroc_config_t trailer_tdroc_frozen_config = TRAILER_TDROC_FROZEN_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void trailer_tdroc_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
+static inline void trailer_tdroc_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
     const trailer_real_t *dn, const trailer_real_t *w, trailer_real_t *gain)
 {
     const trailer_real_t minv_norm_1 = minv_norm[0];
@@ -52,8 +52,8 @@ static void trailer_tdroc_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
-static void trailer_tdroc_k_minimal_tde_keep(const trailer_params_t *p, const trailer_real_t *span,
-    trailer_real_t kept[17])
+static inline void trailer_tdroc_k_minimal_tde_keep(const trailer_params_t *p,
+    const trailer_real_t *span, trailer_real_t kept[17])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -103,9 +103,9 @@ static void trailer_tdroc_k_minimal_tde_keep(const trailer_params_t *p, const tr
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 68 add, 104 mul, 11 div, 4 sin/cos, 0 sqrt */
-static void trailer_tdroc_k_minimal_tde(const trailer_real_t kept[17], const trailer_real_t *q_prev,
-    const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
-    trailer_real_t *H1hat)
+static inline void trailer_tdroc_k_minimal_tde(const trailer_real_t kept[17],
+    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
+    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
 {
     const trailer_real_t qp3 = q_prev[3];
     const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(qp3);
@@ -197,7 +197,7 @@ static void trailer_tdroc_k_minimal_tde(const trailer_real_t kept[17], const tra
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
-static void trailer_tdroc_k_minimal_minv_norm_keep(const trailer_params_t *p,
+static inline void trailer_tdroc_k_minimal_minv_norm_keep(const trailer_params_t *p,
     trailer_real_t kept[16])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
@@ -244,7 +244,7 @@ static void trailer_tdroc_k_minimal_minv_norm_keep(const trailer_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 66 add, 103 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static void trailer_tdroc_k_minimal_minv_norm(const trailer_real_t kept[16],
+static inline void trailer_tdroc_k_minimal_minv_norm(const trailer_real_t kept[16],
     const trailer_real_t *q, trailer_real_t *norm)
 {
     const trailer_real_t theta_cart = q[3];
@@ -328,7 +328,7 @@ static void trailer_tdroc_k_minimal_minv_norm(const trailer_real_t kept[16],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void trailer_tdroc_k_minimal_omega_difference(const trailer_real_t *newer,
+static inline void trailer_tdroc_k_minimal_omega_difference(const trailer_real_t *newer,
     const trailer_real_t *older, trailer_real_t *norm)
 {
     const trailer_real_t Om_new0 = newer[0];
@@ -345,7 +345,7 @@ static void trailer_tdroc_k_minimal_omega_difference(const trailer_real_t *newer
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 75 add, 113 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void trailer_tdroc_k_minimal_tdroc_law(const trailer_real_t kept[16],
+static inline void trailer_tdroc_k_minimal_tdroc_law(const trailer_real_t kept[16],
     const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
@@ -516,7 +516,7 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer_bits_t trailer_real_bits(trailer_real_t x)
+static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
 {
     union {
         trailer_real_t value;
@@ -531,8 +531,8 @@ static trailer_bits_t trailer_real_bits(trailer_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer_check_step_inputs which input, and its status. */
-static bool trailer_tdroc_inputs_bounded(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+static inline bool trailer_tdroc_inputs_bounded(const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8])
 {
 #ifdef TRAILER_FLOAT32
@@ -556,7 +556,7 @@ static bool trailer_tdroc_inputs_bounded(const trailer_real_t q[8], const traile
 #ifndef TRAILER_TDROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer_tdroc_config_unchanged(const trailer_tdroc_config_t *config,
+static inline bool trailer_tdroc_config_unchanged(const trailer_tdroc_config_t *config,
     const trailer_tdroc_config_t *kept)
 {
     trailer_bits_t diff = 0u;

@@ -24,8 +24,8 @@ const trailer2_tdc_config_t trailer2_tdc_frozen_config = TRAILER2_TDC_FROZEN_CON
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
-static void trailer2_tdc_k_minimal_tde_keep(const trailer2_params_t *p, const trailer2_real_t *span,
-    trailer2_real_t kept[24])
+static inline void trailer2_tdc_k_minimal_tde_keep(const trailer2_params_t *p,
+    const trailer2_real_t *span, trailer2_real_t kept[24])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -91,7 +91,7 @@ static void trailer2_tdc_k_minimal_tde_keep(const trailer2_params_t *p, const tr
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 122 add, 181 mul, 19 div, 6 sin/cos, 0 sqrt */
-static void trailer2_tdc_k_minimal_tde(const trailer2_real_t kept[24],
+static inline void trailer2_tdc_k_minimal_tde(const trailer2_real_t kept[24],
     const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
 {
@@ -231,7 +231,7 @@ static void trailer2_tdc_k_minimal_tde(const trailer2_real_t kept[24],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
-static void trailer2_tdc_k_minimal_tdc_law_keep(const trailer2_params_t *p,
+static inline void trailer2_tdc_k_minimal_tdc_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[23])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -295,10 +295,11 @@ static void trailer2_tdc_k_minimal_tdc_law_keep(const trailer2_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 124 add, 181 mul, 17 div, 6 sin/cos, 0 sqrt */
-static void trailer2_tdc_k_minimal_tdc_law(const trailer2_real_t kept[23], const trailer2_real_t *q,
-    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
-    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
-    const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u)
+static inline void trailer2_tdc_k_minimal_tdc_law(const trailer2_real_t kept[23],
+    const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
+    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
+    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
+    trailer2_real_t *u)
 {
     (void)p12;
     (void)p22;
@@ -470,7 +471,7 @@ trailer2_status_t trailer2_tdc_check_config(const trailer2_tdc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
+static inline trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
     union {
         trailer2_real_t value;
@@ -485,9 +486,9 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
-static bool trailer2_tdc_inputs_bounded(const trailer2_real_t q[11], const trailer2_real_t qdot[11],
-    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
-    const trailer2_real_t qddot_des[11])
+static inline bool trailer2_tdc_inputs_bounded(const trailer2_real_t q[11],
+    const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
+    const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11])
 {
 #ifdef TRAILER2_FLOAT32
     const trailer2_bits_t mask = 0x7fffffffu;
@@ -510,7 +511,7 @@ static bool trailer2_tdc_inputs_bounded(const trailer2_real_t q[11], const trail
 #ifndef TRAILER2_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer2_tdc_config_unchanged(const trailer2_tdc_config_t *config,
+static inline bool trailer2_tdc_config_unchanged(const trailer2_tdc_config_t *config,
     const trailer2_tdc_config_t *kept)
 {
     trailer2_bits_t diff = 0u;

@@ -23,7 +23,7 @@ const trailer2_tdroc_config_t trailer2_tdroc_frozen_config = TRAILER2_TDROC_FROZ
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void trailer2_tdroc_k_tdroc_weighted_gain(const trailer2_real_t *minv_norm,
+static inline void trailer2_tdroc_k_tdroc_weighted_gain(const trailer2_real_t *minv_norm,
     const trailer2_real_t *dn, const trailer2_real_t *w, trailer2_real_t *gain)
 {
     const trailer2_real_t minv_norm_1 = minv_norm[0];
@@ -52,7 +52,7 @@ static void trailer2_tdroc_k_tdroc_weighted_gain(const trailer2_real_t *minv_nor
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
-static void trailer2_tdroc_k_minimal_tde_keep(const trailer2_params_t *p,
+static inline void trailer2_tdroc_k_minimal_tde_keep(const trailer2_params_t *p,
     const trailer2_real_t *span, trailer2_real_t kept[24])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -119,7 +119,7 @@ static void trailer2_tdroc_k_minimal_tde_keep(const trailer2_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 122 add, 181 mul, 19 div, 6 sin/cos, 0 sqrt */
-static void trailer2_tdroc_k_minimal_tde(const trailer2_real_t kept[24],
+static inline void trailer2_tdroc_k_minimal_tde(const trailer2_real_t kept[24],
     const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
 {
@@ -258,7 +258,7 @@ static void trailer2_tdroc_k_minimal_tde(const trailer2_real_t kept[24],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
-static void trailer2_tdroc_k_minimal_minv_norm_keep(const trailer2_params_t *p,
+static inline void trailer2_tdroc_k_minimal_minv_norm_keep(const trailer2_params_t *p,
     trailer2_real_t kept[23])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -321,7 +321,7 @@ static void trailer2_tdroc_k_minimal_minv_norm_keep(const trailer2_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 120 add, 179 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static void trailer2_tdroc_k_minimal_minv_norm(const trailer2_real_t kept[23],
+static inline void trailer2_tdroc_k_minimal_minv_norm(const trailer2_real_t kept[23],
     const trailer2_real_t *q, trailer2_real_t *norm)
 {
     const trailer2_real_t theta_cart = q[3];
@@ -449,7 +449,7 @@ static void trailer2_tdroc_k_minimal_minv_norm(const trailer2_real_t kept[23],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void trailer2_tdroc_k_minimal_omega_difference(const trailer2_real_t *newer,
+static inline void trailer2_tdroc_k_minimal_omega_difference(const trailer2_real_t *newer,
     const trailer2_real_t *older, trailer2_real_t *norm)
 {
     const trailer2_real_t Om_new0 = newer[0];
@@ -466,7 +466,7 @@ static void trailer2_tdroc_k_minimal_omega_difference(const trailer2_real_t *new
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 129 add, 189 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void trailer2_tdroc_k_minimal_tdroc_law(const trailer2_real_t kept[23],
+static inline void trailer2_tdroc_k_minimal_tdroc_law(const trailer2_real_t kept[23],
     const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
     const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
@@ -683,7 +683,7 @@ trailer2_status_t trailer2_tdroc_check_config(const trailer2_tdroc_config_t *con
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
+static inline trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
     union {
         trailer2_real_t value;
@@ -698,7 +698,7 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
-static bool trailer2_tdroc_inputs_bounded(const trailer2_real_t q[11],
+static inline bool trailer2_tdroc_inputs_bounded(const trailer2_real_t q[11],
     const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
     const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11])
 {
@@ -723,7 +723,7 @@ static bool trailer2_tdroc_inputs_bounded(const trailer2_real_t q[11],
 #ifndef TRAILER2_TDROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer2_tdroc_config_unchanged(const trailer2_tdroc_config_t *config,
+static inline bool trailer2_tdroc_config_unchanged(const trailer2_tdroc_config_t *config,
     const trailer2_tdroc_config_t *kept)
 {
     trailer2_bits_t diff = 0u;

@@ -24,8 +24,8 @@ const trailer3_tdc_config_t trailer3_tdc_frozen_config = TRAILER3_TDC_FROZEN_CON
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 9 div, 0 sin/cos, 0 sqrt */
-static void trailer3_tdc_k_minimal_tde_keep(const trailer3_params_t *p, const trailer3_real_t *span,
-    trailer3_real_t kept[31])
+static inline void trailer3_tdc_k_minimal_tde_keep(const trailer3_params_t *p,
+    const trailer3_real_t *span, trailer3_real_t kept[31])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -107,7 +107,7 @@ static void trailer3_tdc_k_minimal_tde_keep(const trailer3_params_t *p, const tr
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 189 add, 273 mul, 28 div, 8 sin/cos, 0 sqrt */
-static void trailer3_tdc_k_minimal_tde(const trailer3_real_t kept[31],
+static inline void trailer3_tdc_k_minimal_tde(const trailer3_real_t kept[31],
     const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
 {
@@ -303,7 +303,7 @@ static void trailer3_tdc_k_minimal_tde(const trailer3_real_t kept[31],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 8 div, 0 sin/cos, 0 sqrt */
-static void trailer3_tdc_k_minimal_tdc_law_keep(const trailer3_params_t *p,
+static inline void trailer3_tdc_k_minimal_tdc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[30])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -383,10 +383,11 @@ static void trailer3_tdc_k_minimal_tdc_law_keep(const trailer3_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 191 add, 272 mul, 25 div, 8 sin/cos, 0 sqrt */
-static void trailer3_tdc_k_minimal_tdc_law(const trailer3_real_t kept[30], const trailer3_real_t *q,
-    const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
-    const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
-    const trailer3_real_t *p22, const trailer3_real_t *H1hat, trailer3_real_t *u)
+static inline void trailer3_tdc_k_minimal_tdc_law(const trailer3_real_t kept[30],
+    const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
+    const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
+    const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
+    trailer3_real_t *u)
 {
     (void)p12;
     (void)p22;
@@ -614,7 +615,7 @@ trailer3_status_t trailer3_tdc_check_config(const trailer3_tdc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
+static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
     union {
         trailer3_real_t value;
@@ -629,9 +630,9 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
-static bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14], const trailer3_real_t qdot[14],
-    const trailer3_real_t q_des[14], const trailer3_real_t qdot_des[14],
-    const trailer3_real_t qddot_des[14])
+static inline bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14],
+    const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14])
 {
 #ifdef TRAILER3_FLOAT32
     const trailer3_bits_t mask = 0x7fffffffu;
@@ -654,7 +655,7 @@ static bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14], const trail
 #ifndef TRAILER3_TDC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer3_tdc_config_unchanged(const trailer3_tdc_config_t *config,
+static inline bool trailer3_tdc_config_unchanged(const trailer3_tdc_config_t *config,
     const trailer3_tdc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;

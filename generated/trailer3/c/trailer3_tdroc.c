@@ -23,7 +23,7 @@ const trailer3_tdroc_config_t trailer3_tdroc_frozen_config = TRAILER3_TDROC_FROZ
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void trailer3_tdroc_k_tdroc_weighted_gain(const trailer3_real_t *minv_norm,
+static inline void trailer3_tdroc_k_tdroc_weighted_gain(const trailer3_real_t *minv_norm,
     const trailer3_real_t *dn, const trailer3_real_t *w, trailer3_real_t *gain)
 {
     const trailer3_real_t minv_norm_1 = minv_norm[0];
@@ -52,7 +52,7 @@ static void trailer3_tdroc_k_tdroc_weighted_gain(const trailer3_real_t *minv_nor
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 9 div, 0 sin/cos, 0 sqrt */
-static void trailer3_tdroc_k_minimal_tde_keep(const trailer3_params_t *p,
+static inline void trailer3_tdroc_k_minimal_tde_keep(const trailer3_params_t *p,
     const trailer3_real_t *span, trailer3_real_t kept[31])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -135,7 +135,7 @@ static void trailer3_tdroc_k_minimal_tde_keep(const trailer3_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 189 add, 273 mul, 28 div, 8 sin/cos, 0 sqrt */
-static void trailer3_tdroc_k_minimal_tde(const trailer3_real_t kept[31],
+static inline void trailer3_tdroc_k_minimal_tde(const trailer3_real_t kept[31],
     const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
 {
@@ -330,7 +330,7 @@ static void trailer3_tdroc_k_minimal_tde(const trailer3_real_t kept[31],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 4 mul, 8 div, 0 sin/cos, 0 sqrt */
-static void trailer3_tdroc_k_minimal_minv_norm_keep(const trailer3_params_t *p,
+static inline void trailer3_tdroc_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     trailer3_real_t kept[30])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -409,7 +409,7 @@ static void trailer3_tdroc_k_minimal_minv_norm_keep(const trailer3_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 187 add, 270 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static void trailer3_tdroc_k_minimal_minv_norm(const trailer3_real_t kept[30],
+static inline void trailer3_tdroc_k_minimal_minv_norm(const trailer3_real_t kept[30],
     const trailer3_real_t *q, trailer3_real_t *norm)
 {
     const trailer3_real_t theta_cart = q[3];
@@ -593,7 +593,7 @@ static void trailer3_tdroc_k_minimal_minv_norm(const trailer3_real_t kept[30],
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void trailer3_tdroc_k_minimal_omega_difference(const trailer3_real_t *newer,
+static inline void trailer3_tdroc_k_minimal_omega_difference(const trailer3_real_t *newer,
     const trailer3_real_t *older, trailer3_real_t *norm)
 {
     const trailer3_real_t Om_new0 = newer[0];
@@ -610,7 +610,7 @@ static void trailer3_tdroc_k_minimal_omega_difference(const trailer3_real_t *new
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 196 add, 280 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void trailer3_tdroc_k_minimal_tdroc_law(const trailer3_real_t kept[30],
+static inline void trailer3_tdroc_k_minimal_tdroc_law(const trailer3_real_t kept[30],
     const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
@@ -884,7 +884,7 @@ trailer3_status_t trailer3_tdroc_check_config(const trailer3_tdroc_config_t *con
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
+static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
     union {
         trailer3_real_t value;
@@ -899,7 +899,7 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
-static bool trailer3_tdroc_inputs_bounded(const trailer3_real_t q[14],
+static inline bool trailer3_tdroc_inputs_bounded(const trailer3_real_t q[14],
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14])
 {
@@ -924,7 +924,7 @@ static bool trailer3_tdroc_inputs_bounded(const trailer3_real_t q[14],
 #ifndef TRAILER3_TDROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer3_tdroc_config_unchanged(const trailer3_tdroc_config_t *config,
+static inline bool trailer3_tdroc_config_unchanged(const trailer3_tdroc_config_t *config,
     const trailer3_tdroc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
