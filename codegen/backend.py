@@ -38,7 +38,8 @@ class FunctionIR:
     spec with guards, by the guard conditions as a trailing output ``guard_`` (what the C
     and Python printers print, and what ``ops`` counts).
     ``plain``: the CSE of the spec's outputs alone, for a backend that has no guards
-    (CasADi); the same object as ``cse`` when the spec has none.
+    (CasADi), without the shared reciprocals (CasADi's C divides as its graph says); the
+    same object as ``cse`` when the spec has no guards.
     ``ops``: ``count_ops(cse)``, the "operations after CSE" every function documents.
     ``prepared``: for a spec with ``prepared``, ``cse`` split at the parameters (what a
     prepare-parameters API evaluates once, and the per-call rest); else None.
@@ -58,7 +59,7 @@ class FunctionIR:
 def function_ir(spec: FunctionSpec) -> FunctionIR:
     """The shared form of ``spec`` (CSE once for its checked form, and once more for its
     outputs alone if it has guards)."""
-    checked = cse.cse_function(spec.checked_spec())
+    checked = cse.cse_function(spec.checked_spec(), reciprocals=True)
     plain = cse.cse_function(spec) if spec.guards else checked
     split = prepared_form(checked, spec) if spec.prepared else None
     return FunctionIR(spec, checked, plain, cse.count_ops(checked), split)

@@ -4,8 +4,10 @@
 ``sympy.cse`` over every output at once (so a mass matrix and its derivative share their
 sines), followed by one printing-driven step: the compound base of a power that prints as
 a repeated product (``(a + b)**2`` -> ``_t*_t``) becomes a temporary so it is evaluated
-once. Temporaries are named ``_t0, _t1, ...`` in order of definition, so the result (and
-every file printed from it) is the same whatever the hash seed.
+once, and (``reciprocals``, the printed backends) a symbol divided by in several places
+is divided by once (its reciprocal a temporary). Temporaries are named ``_t0, _t1, ...``
+in order of definition, so the result (and every file printed from it) is the same
+whatever the hash seed.
 """
 
 from __future__ import annotations
@@ -91,23 +93,25 @@ def _temp_names(taken: set[str]) -> Iterator[str]:
 _CACHE: dict[tuple[object, ...], CseResult] = {}
 
 
-def cse_function(spec: FunctionSpec) -> CseResult:
-    """Eliminate common subexpressions across all outputs of ``spec``.
+def cse_function(spec: FunctionSpec, reciprocals: bool = False) -> CseResult:
+    """Eliminate common subexpressions across all outputs of ``spec``; with
+    ``reciprocals``, also divide by each symbol once (the printed backends' form; CasADi's
+    graph is left as SymPy's CSE gives it, so that its C is CasADi's own).
 
     Memoised on the spec's name, inputs and output expressions: every backend and the
     report ask for the same CSE, and it is the expensive step of generation.
     """
     key = (spec.name, spec.input_symbols(), tuple((a.name, a.exprs) for a in spec.outputs),
-           spec.definitions)
+           spec.definitions, reciprocals)
     hit = _CACHE.get(key)
     if hit is not None and hit.spec == spec:
         return hit
-    result = _cse_function(spec)
+    result = _cse_function(spec, reciprocals)
     _CACHE[key] = result
     return result
 
 
-def _cse_function(spec: FunctionSpec) -> CseResult:
+def _cse_function(spec: FunctionSpec, reciprocals: bool) -> CseResult:
     check_spec(spec)
     defined = [sym for sym, _ in spec.definitions]
     flat = [e for _, e in spec.definitions] + [e for arg in spec.outputs for e in arg.exprs]
@@ -159,6 +163,8 @@ def _cse_function(spec: FunctionSpec) -> CseResult:
         new_e = visit(e)
         hoisted.append((sym, new_e))  # bases found inside e were appended first
     outputs_flat = [visit(e) for e in reduced]
+    if reciprocals:
+        hoisted, outputs_flat = _share_reciprocals(hoisted, outputs_flat)
 
     # Final names _t0, _t1, ... in definition order (skipping names of input symbols).
     names = _temp_names(taken)
@@ -173,6 +179,43 @@ def _cse_function(spec: FunctionSpec) -> CseResult:
         outputs.append(tuple(outputs_flat[offset : offset + n]))
         offset += n
     return CseResult(spec=spec, temps=temps, outputs=tuple(outputs))
+
+
+def _share_reciprocals(
+    temps: list[tuple[sp.Symbol, sp.Expr]], outputs: list[sp.Expr]
+) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    """One division per symbol: a symbol that appears in two or more places with a negative
+    integer power (``r/b`` and ``1/(b*b)``: two divisions as printed) gets a temporary
+    ``1/x`` right after it is known, and those powers become powers of it (``r*_t``,
+    ``_t*_t``). A division costs several multiplications' time on every target."""
+    counts: Counter[sp.Symbol] = Counter()
+    for e in [e for _, e in temps] + outputs:
+        for node in sp.preorder_traversal(e):
+            if (isinstance(node, sp.Pow) and isinstance(node.base, sp.Symbol)
+                    and node.exp.is_Integer and node.exp < 0):
+                counts[node.base] += 1
+    shared = {s for s, n in counts.items() if n >= 2}
+    if not shared:
+        return temps, outputs
+    counter = itertools.count()
+    inverse = {s: sp.Symbol(f"_cse_inv{next(counter)}")
+               for s in sorted(shared, key=sp.default_sort_key)}
+
+    def rewrite(e: sp.Expr) -> sp.Expr:
+        return e.replace(
+            lambda x: (isinstance(x, sp.Pow) and x.base in inverse and x.exp.is_Integer
+                       and x.exp < 0),
+            lambda x: inverse[x.base] ** (-x.exp),
+        )
+
+    defined = {s for s, _ in temps}
+    out = [(inverse[s], sp.Integer(1) / s) for s in sorted(shared - defined,
+                                                              key=sp.default_sort_key)]
+    for sym, e in temps:
+        out.append((sym, rewrite(e)))
+        if sym in inverse:
+            out.append((inverse[sym], sp.Integer(1) / sym))
+    return out, [rewrite(e) for e in outputs]
 
 
 def _inline_trivial(

@@ -148,11 +148,15 @@ def parameter_symbols(spec: FunctionSpec) -> frozenset[sp.Symbol]:
     return frozenset(s for a in spec.inputs if a.kind == "params" for s in a.all_symbols())
 
 
-def prepared_form(result: CseResult, spec: FunctionSpec) -> PreparedForm:
-    """Split ``result`` (the CSE of ``spec.checked_spec()``) at the parameters of ``spec``."""
+def prepared_form(result: CseResult, spec: FunctionSpec,
+                  fixed_inputs: frozenset[str] = frozenset()) -> PreparedForm:
+    """Split ``result`` (the CSE of ``spec.checked_spec()``) at the parameters of ``spec``;
+    the inputs named in ``fixed_inputs`` count as parameters (values that change only with
+    them, e.g. a controller's configuration-derived span)."""
     if not spec.returns_status:
         raise ValueError(f"{spec.name}: a prepared function must return a status")
-    params = parameter_symbols(spec)
+    params = parameter_symbols(spec) | frozenset(
+        s for a in spec.inputs if a.name in fixed_inputs for s in a.all_symbols())
     if not params:
         raise ValueError(f"{spec.name}: a prepared function needs a params input")
     fixed: set[sp.Symbol] = set(params)  # parameter symbols and parameter-only temporaries

@@ -132,3 +132,27 @@ def test_make_bench_needs_the_cross_compiler_before_writing(tmp_path: Path) -> N
     assert result.returncode != 0
     assert "arm-none-eabi-gcc not found" in result.stderr
     assert (root / "BENCHMARKS.md").read_bytes() == before
+
+
+def test_the_readme_ratio_tables_are_those_of_benchmarks_md() -> None:
+    """`make bench` writes the ratio tables into BENCHMARKS.md and, between two markers,
+    into the README: the README's block must be BENCHMARKS.md's lines, as they are."""
+    from runtime.tooling.bench.report import README_BEGIN, README_END
+
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text()
+    start, end = readme.find(README_BEGIN), readme.find(README_END)
+    assert 0 <= start < end, "the README lost the markers of make bench's ratio tables"
+    block = readme[start + len(README_BEGIN):end].strip("\n")
+    assert "| ratio |" in block and "forward dynamics ratio" in block
+    assert block in (root / "BENCHMARKS.md").read_text()
+
+
+def test_sync_readme_replaces_only_the_marked_block(tmp_path: Path) -> None:
+    from runtime.tooling.bench.report import README_BEGIN, README_END, sync_readme
+
+    readme = tmp_path / "README.md"
+    readme.write_text(f"before\n{README_BEGIN}\nold\n{README_END}\nafter\n")
+    assert sync_readme(readme, ["| new |"])
+    assert readme.read_text() == f"before\n{README_BEGIN}\n| new |\n{README_END}\nafter\n"
+    assert not sync_readme(tmp_path / "missing.md", ["x"])

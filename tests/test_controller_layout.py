@@ -141,7 +141,8 @@ def c_texts() -> dict[str, str]:
 
 def _function_body(text: str, name: str) -> str:
     """The body of C function ``name`` (from its definition to the closing brace)."""
-    match = re.search(rf"^\w+ {re.escape(name)}\(.*?^\{{\n(.*?)^\}}\n", text, re.S | re.M)
+    match = re.search(rf"^(?:static inline )?\w+ {re.escape(name)}\(.*?^\{{\n(.*?)^\}}\n", text,
+                      re.S | re.M)
     assert match, f"no definition of {name}"
     return match.group(1)
 
@@ -170,7 +171,7 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
     step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step_detail")
     assert "off = 4;" in step
     assert "out_tau[1] = u[1];" in step
-    history = _function_body(c_texts["controller.c"], "toy_push_history")
+    history = _function_body(c_texts["controller.h"], "toy_push_history")  # static inline
     assert "u_prev[4] = tau[0];" in history and "u_prev[5] = tau[1];" in history
     assert "for (i = 0; i < 8; ++i)" in history
     assert (
@@ -220,7 +221,7 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
         "            return toy_fail(detail, TOY_ERR_BAD_NOMINAL, TOY_FIELD_NOMINAL, i);" in body
     )
     tdroc = c_texts["tdroc.c"]
-    start = tdroc.index("static bool toy_tdroc_config_unchanged(")
+    start = tdroc.index("static inline bool toy_tdroc_config_unchanged(")
     compared = tdroc[start:tdroc.index("\n}\n", start)]
     for value in ("nominal.J_theta", "nominal.radius_l", "q_vel", "held_gain"):
         assert (f"diff |= toy_real_bits(config->{value}) ^ toy_real_bits(kept->{value});"

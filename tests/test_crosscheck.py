@@ -190,7 +190,7 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     laws.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     tdc = copy / "c" / "trailer_tdc.c"
     text = tdc.read_text()
-    end = text.index("\n}\n", text.index("static void trailer_tdc_k_minimal_tdc_law("))
+    end = text.index("\n}\n", text.index("static inline void trailer_tdc_k_minimal_tdc_law("))
     tdc.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     out_file = tmp_path / "report.txt"
     status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])

@@ -23,8 +23,8 @@ const wmr_asmc_config_t wmr_asmc_frozen_config = WMR_ASMC_FROZEN_CONFIG;
    (documented in wmr_laws.h), a copy
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 11 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void wmr_asmc_k_paper_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
+   operations after CSE: 1 add, 12 mul, 1 div, 0 sin/cos, 0 sqrt */
+static inline void wmr_asmc_k_paper_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -33,33 +33,34 @@ static void wmr_asmc_k_paper_asmc_law_keep(const wmr_params_t *p, wmr_real_t kep
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
     const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t2 = WMR_LIT(0.5)*_t1;
-    const wmr_real_t _t3 = d/(b*b);
-    const wmr_real_t _t4 = WMR_LIT(2.0)*_t0;
-    const wmr_real_t _t5 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t6 = _t1*r;
-    const wmr_real_t _t7 = _t6*d;
-    const wmr_real_t _t8 = K*_t2;
-    const wmr_real_t _t9 = I*_t6 - K*_t7;
-    const wmr_real_t _t10 = -_t9;
-    const wmr_real_t _t11 = K*_t5;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t1 = r*r;
+    const wmr_real_t _t2 = _t0;
+    const wmr_real_t _t3 = WMR_LIT(0.5)*_t2;
+    const wmr_real_t _t4 = _t0*_t0*d;
+    const wmr_real_t _t5 = WMR_LIT(2.0)*_t1;
+    const wmr_real_t _t6 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t7 = _t2*r;
+    const wmr_real_t _t8 = _t7*d;
+    const wmr_real_t _t9 = K*_t3;
+    const wmr_real_t _t10 = I*_t7 - K*_t8;
+    const wmr_real_t _t11 = -_t10;
+    const wmr_real_t _t12 = K*_t6;
     kept[0] = m;
     kept[1] = I;
     kept[2] = K;
     kept[3] = I_w;
-    kept[4] = _t0;
-    kept[5] = _t2;
-    kept[6] = _t3;
-    kept[7] = _t4;
-    kept[8] = _t5;
-    kept[9] = _t6;
-    kept[10] = _t7;
-    kept[11] = _t8;
-    kept[12] = _t9;
-    kept[13] = _t10;
-    kept[14] = _t11;
+    kept[4] = _t1;
+    kept[5] = _t3;
+    kept[6] = _t4;
+    kept[7] = _t5;
+    kept[8] = _t6;
+    kept[9] = _t7;
+    kept[10] = _t8;
+    kept[11] = _t9;
+    kept[12] = _t10;
+    kept[13] = _t11;
+    kept[14] = _t12;
 }
 #endif
 
@@ -68,121 +69,121 @@ static void wmr_asmc_k_paper_asmc_law_keep(const wmr_params_t *p, wmr_real_t kep
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 63 add, 82 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_asmc_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_t *q,
+static inline void wmr_asmc_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
     wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next)
 {
     const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t12 = _t0*thetadot_l*thetadot_l;
+    const wmr_real_t _t1 = kept[4];
+    const wmr_real_t _t13 = _t1*thetadot_l*thetadot_l;
     const wmr_real_t theta = q[2];
-    const wmr_real_t _t13 = WMR_SIN_BOUNDED(theta);
+    const wmr_real_t _t14 = WMR_SIN_BOUNDED(theta);
     const wmr_real_t m = kept[0];
-    const wmr_real_t _t14 = _t13*m;
-    const wmr_real_t _t2 = kept[5];
-    const wmr_real_t _t15 = _t14*_t2;
+    const wmr_real_t _t15 = _t14*m;
+    const wmr_real_t _t3 = kept[5];
+    const wmr_real_t _t16 = _t15*_t3;
     const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t16 = _t0*thetadot_r*thetadot_r;
-    const wmr_real_t _t17 = WMR_COS_BOUNDED(theta);
-    const wmr_real_t _t18 = _t17*m;
-    const wmr_real_t _t19 = _t12*_t18;
-    const wmr_real_t _t20 = _t16*_t18;
-    const wmr_real_t _t4 = kept[7];
-    const wmr_real_t _t21 = _t4*thetadot_l*thetadot_r;
+    const wmr_real_t _t17 = _t1*thetadot_r*thetadot_r;
+    const wmr_real_t _t18 = WMR_COS_BOUNDED(theta);
+    const wmr_real_t _t19 = _t18*m;
+    const wmr_real_t _t20 = _t13*_t19;
+    const wmr_real_t _t21 = _t17*_t19;
+    const wmr_real_t _t5 = kept[7];
+    const wmr_real_t _t22 = _t5*thetadot_l*thetadot_r;
     const wmr_real_t e0 = e[0];
     const wmr_real_t edot0 = edot[0];
     const wmr_real_t p12_0 = p12[0];
     const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t22 = e0*p12_0 + edot0*p22_0;
+    const wmr_real_t _t23 = e0*p12_0 + edot0*p22_0;
     const wmr_real_t e1 = e[1];
     const wmr_real_t edot1 = edot[1];
     const wmr_real_t p12_1 = p12[1];
     const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t23 = e1*p12_1 + edot1*p22_1;
+    const wmr_real_t _t24 = e1*p12_1 + edot1*p22_1;
     const wmr_real_t e2 = e[2];
     const wmr_real_t edot2 = edot[2];
     const wmr_real_t p12_2 = p12[2];
     const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t24 = e2*p12_2 + edot2*p22_2;
+    const wmr_real_t _t25 = e2*p12_2 + edot2*p22_2;
     const wmr_real_t e3 = e[3];
     const wmr_real_t edot3 = edot[3];
     const wmr_real_t p12_3 = p12[3];
     const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t25 = e3*p12_3 + edot3*p22_3;
+    const wmr_real_t _t26 = e3*p12_3 + edot3*p22_3;
     const wmr_real_t e4 = e[4];
     const wmr_real_t edot4 = edot[4];
     const wmr_real_t p12_4 = p12[4];
     const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t26 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t27 = wmr_norm5(_t22, _t23, _t24, _t25, _t26);
+    const wmr_real_t _t27 = e4*p12_4 + edot4*p22_4;
+    const wmr_real_t _t28 = wmr_norm5(_t23, _t24, _t25, _t26, _t27);
     const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t28 = gain_1/WMR_FMAX(_t27, eps_1);
+    const wmr_real_t _t29 = gain_1/WMR_FMAX(_t28, eps_1);
     const wmr_real_t qdd_des0 = qddot_des[0];
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t29 = _t22*_t28 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t _t30 = _t23*_t29 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const wmr_real_t qdd_des2 = qddot_des[2];
     const wmr_real_t k1_2 = k1[2];
     const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t30 = _t24*_t28 + e2*k1_2 + edot2*k2_2 + qdd_des2;
+    const wmr_real_t _t31 = _t25*_t29 + e2*k1_2 + edot2*k2_2 + qdd_des2;
     const wmr_real_t K = kept[2];
-    const wmr_real_t _t31 = K*_t30;
-    const wmr_real_t _t5 = kept[8];
-    const wmr_real_t _t32 = _t18*_t5;
-    const wmr_real_t _t33 = K*_t13;
-    const wmr_real_t _t6 = kept[9];
-    const wmr_real_t _t34 = _t33*_t6;
-    const wmr_real_t _t7 = kept[10];
-    const wmr_real_t _t35 = _t14*_t7;
-    const wmr_real_t _t36 = _t32 + _t34 - _t35;
+    const wmr_real_t _t32 = K*_t31;
+    const wmr_real_t _t6 = kept[8];
+    const wmr_real_t _t33 = _t19*_t6;
+    const wmr_real_t _t34 = K*_t14;
+    const wmr_real_t _t7 = kept[9];
+    const wmr_real_t _t35 = _t34*_t7;
+    const wmr_real_t _t8 = kept[10];
+    const wmr_real_t _t36 = _t15*_t8;
+    const wmr_real_t _t37 = _t33 + _t35 - _t36;
     const wmr_real_t qdd_des3 = qddot_des[3];
     const wmr_real_t k1_3 = k1[3];
     const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t37 = _t25*_t28 + e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t38 = _t32 - _t34 + _t35;
+    const wmr_real_t _t38 = _t26*_t29 + e3*k1_3 + edot3*k2_3 + qdd_des3;
+    const wmr_real_t _t39 = _t33 - _t35 + _t36;
     const wmr_real_t qdd_des4 = qddot_des[4];
     const wmr_real_t k1_4 = k1[4];
     const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t39 = _t26*_t28 + e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t _t3 = kept[6];
-    const wmr_real_t _t40 = _t14*_t3;
+    const wmr_real_t _t40 = _t27*_t29 + e4*k1_4 + edot4*k2_4 + qdd_des4;
+    const wmr_real_t _t4 = kept[6];
+    const wmr_real_t _t41 = _t15*_t4;
     const wmr_real_t qdd_des1 = qddot_des[1];
     const wmr_real_t k1_1 = k1[1];
     const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t41 = _t23*_t28 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t42 = _t14*_t5;
-    const wmr_real_t _t43 = K*_t17;
-    const wmr_real_t _t44 = _t43*_t6;
-    const wmr_real_t _t45 = _t18*_t7;
-    const wmr_real_t _t46 = _t42 + _t44 - _t45;
-    const wmr_real_t _t47 = _t42 - _t44 + _t45;
+    const wmr_real_t _t42 = _t24*_t29 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t43 = _t15*_t6;
+    const wmr_real_t _t44 = K*_t18;
+    const wmr_real_t _t45 = _t44*_t7;
+    const wmr_real_t _t46 = _t19*_t8;
+    const wmr_real_t _t47 = _t43 + _t45 - _t46;
+    const wmr_real_t _t48 = _t43 - _t45 + _t46;
     const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t _t11 = kept[14];
-    const wmr_real_t _t48 = _t11*thetadot*thetadot;
+    const wmr_real_t _t12 = kept[14];
+    const wmr_real_t _t49 = _t12*thetadot*thetadot;
     const wmr_real_t adapt_0 = adapt[0];
     const wmr_real_t h = adapt[1];
     const wmr_real_t I = kept[1];
     const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t8 = kept[11];
-    const wmr_real_t _t9 = kept[12];
-    const wmr_real_t _t10 = kept[13];
-    u[0] = _t13*_t31 + _t15*(-_t12 + _t16) + _t29*m + _t3*(-_t18*_t21 + _t19 + _t20) - _t36*_t37
-            - _t38*_t39;
-    u[1] = -_t17*_t31 + _t2*(_t19 - _t20) - _t37*_t47 - _t39*_t46 + _t40*(_t12 + _t16 - _t21)
-            + _t41*m;
-    u[2] = I*_t30 + _t10*_t37 + _t29*_t33 + _t39*_t9 - _t41*_t43 + _t8*(-_t12 + _t16);
-    u[3] = I_w*_t37 + _t29*_t36 + _t30*_t9 + _t41*_t47 + _t48;
-    u[4] = I_w*_t39 + _t10*_t30 + _t29*_t38 + _t41*_t46 + _t48;
-    s[0] = _t22;
-    s[1] = _t23;
-    s[2] = _t24;
-    s[3] = _t25;
-    s[4] = _t26;
-    s_norm[0] = _t27;
-    gain_next[0] = _t27*adapt_0*h + gain_1;
+    const wmr_real_t _t9 = kept[11];
+    const wmr_real_t _t10 = kept[12];
+    const wmr_real_t _t11 = kept[13];
+    u[0] = _t14*_t32 + _t16*(-_t13 + _t17) + _t30*m - _t37*_t38 - _t39*_t40
+            + _t4*(-_t19*_t22 + _t20 + _t21);
+    u[1] = -_t18*_t32 + _t3*(_t20 - _t21) - _t38*_t48 - _t40*_t47 + _t41*(_t13 + _t17 - _t22)
+            + _t42*m;
+    u[2] = I*_t31 + _t10*_t40 + _t11*_t38 + _t30*_t34 - _t42*_t44 + _t9*(-_t13 + _t17);
+    u[3] = I_w*_t38 + _t10*_t31 + _t30*_t37 + _t42*_t48 + _t49;
+    u[4] = I_w*_t40 + _t11*_t31 + _t30*_t39 + _t42*_t47 + _t49;
+    s[0] = _t23;
+    s[1] = _t24;
+    s[2] = _t25;
+    s[3] = _t26;
+    s[4] = _t27;
+    s_norm[0] = _t28;
+    gain_next[0] = _t28*adapt_0*h + gain_1;
 }
 
 #ifndef WMR_ASMC_FROZEN  /* _init's only: a frozen build's state is compiled in */
@@ -191,7 +192,7 @@ static void wmr_asmc_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 20 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_asmc_k_minimal_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
+static inline void wmr_asmc_k_minimal_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -224,7 +225,7 @@ static void wmr_asmc_k_minimal_asmc_law_keep(const wmr_params_t *p, wmr_real_t k
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 16 add, 24 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_asmc_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
+static inline void wmr_asmc_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
@@ -307,7 +308,7 @@ wmr_status_t wmr_asmc_check_config(const wmr_asmc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -322,7 +323,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_asmc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_asmc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -346,7 +347,7 @@ static bool wmr_asmc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot
 #ifndef WMR_ASMC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_asmc_config_unchanged(const wmr_asmc_config_t *config,
+static inline bool wmr_asmc_config_unchanged(const wmr_asmc_config_t *config,
     const wmr_asmc_config_t *kept)
 {
     wmr_bits_t diff = 0u;
@@ -475,10 +476,13 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     return wmr_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
 }
 
-wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config_t *config,
-    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
-    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
-    wmr_error_detail_t *detail)
+/* The step of one formulation: called with a constant one (below), so that the compiler
+   specialises the body to it (the other formulation's branches gone, the controlled rows'
+   loops of a known count) as a frozen build's compiled-in configuration lets it. */
+WMR_STEP_INLINE wmr_status_t wmr_asmc_step_as(wmr_asmc_state_t *state,
+    const wmr_asmc_config_t *config, const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    wmr_real_t tau[2], wmr_error_detail_t *detail, int formulation)
 {
     wmr_status_t status = WMR_OK;
     const wmr_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -543,11 +547,11 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
         /* which input, and its status */
         return wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
-    paper = WMR_IS_PAPER(cfg->formulation);
+    paper = WMR_IS_PAPER(formulation);  /* cfg->formulation: the config compared above */
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
-    (void)wmr_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
+    (void)wmr_controlled_slice(formulation, q, qdot, q_des, qdot_des, e, edot);
     /* The law. */
     {
         wmr_real_t s[5];
@@ -607,4 +611,30 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
     }
     return status;
     }
+}
+
+wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+
+{
+#ifdef WMR_ASMC_FROZEN
+    return wmr_asmc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        wmr_asmc_frozen_config.formulation);
+#elif WMR_STEP_PER_FORMULATION
+    /* the formulation _init validated and kept; a step given another configuration fails its
+       comparison before the formulation is read */
+    if ((state != NULL) && (state->magic == WMR_STATE_MAGIC)
+            && WMR_IS_PAPER(state->config.formulation)) {
+        return wmr_asmc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+            WMR_FORMULATION_PAPER);
+    }
+    return wmr_asmc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        WMR_FORMULATION_MINIMAL);
+#else
+    return wmr_asmc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        ((state != NULL) && (state->magic == WMR_STATE_MAGIC)) ? state->config.formulation
+        : WMR_FORMULATION_MINIMAL);
+#endif
 }

@@ -4,7 +4,9 @@
  * Template: codegen/backends/c/templates/controller_common.h.jinja
  *
  * Validation and bookkeeping shared by the four controllers (wmr_tdc, wmr_tdroc,
- * wmr_roc, wmr_asmc): one copy in flash however many controllers are linked.
+ * wmr_roc, wmr_asmc): one copy in flash however many controllers are linked,
+ * except the four small per-step helpers at the end, static inline so that each step inlines
+ * them (no call, and scheduled with the step).
  */
 #ifndef WMR_CONTROLLER_H
 #define WMR_CONTROLLER_H
@@ -150,8 +152,22 @@ wmr_status_t wmr_check_step_inputs(const wmr_real_t q[5], const wmr_real_t qdot[
  */
 void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 
+/* A controller step's body, specialised per formulation by inlining it at each call with a
+   constant formulation: gcc and clang are told to, unless optimising for size (-Os: one
+   body, not two); another compiler may inline it or not (the same results either way). */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define WMR_STEP_INLINE static inline __attribute__((always_inline))
+#define WMR_STEP_PER_FORMULATION 1
+#else
+#define WMR_STEP_INLINE static inline
+#define WMR_STEP_PER_FORMULATION 0  /* one body, called once: inlined, no copy */
+#endif
+
 /** Cap an adaptive gain at WMR_GAIN_MAX (NaN and +Inf count as beyond it). */
-wmr_real_t wmr_cap_gain(wmr_real_t gain);
+static inline wmr_real_t wmr_cap_gain(wmr_real_t gain)
+{
+    return gain <= WMR_GAIN_MAX ? gain : WMR_GAIN_MAX;
+}
 
 /**
  * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
@@ -159,17 +175,56 @@ wmr_real_t wmr_cap_gain(wmr_real_t gain);
  * index 3 of q in the minimal form, 0 in the paper form (the caller passes
  * the other per-coordinate arrays from there, without copying them).
  */
-int wmr_controlled_slice(int formulation, const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], wmr_real_t e[5],
-    wmr_real_t edot[5]);
+static inline int wmr_controlled_slice(int formulation, const wmr_real_t q[5],
+    const wmr_real_t qdot[5], const wmr_real_t q_des[5], const wmr_real_t qdot_des[5],
+    wmr_real_t e[5], wmr_real_t edot[5])
+{
+    const int nc = WMR_IS_PAPER(formulation) ? 5 : 2;
+    const int off = WMR_IS_PAPER(formulation) ? 0 : 3;
+    int i;
+    (void)formulation;  /* unread when the formulation is chosen at compile time */
+    for (i = 0; i < nc; ++i) {
+        e[i] = q_des[off + i] - q[off + i];
+        edot[i] = qdot_des[off + i] - qdot[off + i];
+    }
+    return nc;
+}
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5], wmr_real_t qdot_prev2[5],
-    wmr_real_t u_prev[5], wmr_real_t u_prev2[5], const wmr_real_t q[5], const wmr_real_t qdot[5],
-    const wmr_real_t tau[2]);
+static inline void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5],
+    wmr_real_t qdot_prev2[5], wmr_real_t u_prev[5], wmr_real_t u_prev2[5], const wmr_real_t q[5],
+    const wmr_real_t qdot[5], const wmr_real_t tau[2])
+{
+    int i;
+    for (i = 0; i < 5; ++i) {
+        q_prev[i] = q[i];
+        qdot_prev2[i] = qdot_prev[i];
+        qdot_prev[i] = qdot[i];
+        u_prev2[i] = u_prev[i];
+        u_prev[i] = WMR_LIT(0.0);
+    }
+    u_prev[3] = tau[0];
+    u_prev[4] = tau[1];
+}
 
 /** Clip tau to +-tau_max: WMR_WARN_SATURATED if it had to, else WMR_OK. */
-wmr_status_t wmr_saturate(wmr_real_t tau[2], wmr_real_t tau_max);
+static inline wmr_status_t wmr_saturate(wmr_real_t tau[2], wmr_real_t tau_max)
+{
+    wmr_status_t status = WMR_OK;
+    int i;
+    for (i = 0; i < 2; ++i) {
+        if (tau[i] > tau_max) {
+            tau[i] = tau_max;
+            status = WMR_WARN_SATURATED;
+        } else if (tau[i] < -tau_max) {
+            tau[i] = -tau_max;
+            status = WMR_WARN_SATURATED;
+        } else {
+            /* within the limit: unchanged (MISRA C:2012 rule 15.7) */
+        }
+    }
+    return status;
+}
 
 #ifdef __cplusplus
 }

@@ -420,7 +420,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
  * @param[out] s_norm [1] row-major (WMR_PAPER_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (WMR_PAPER_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 74 add, 110 mul, 3 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -476,7 +476,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * @param[out] s_norm [1] row-major (WMR_PAPER_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (WMR_PAPER_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 64 add, 101 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,

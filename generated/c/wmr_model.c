@@ -68,46 +68,47 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M)
 }
 
 /* wmr_bias_forces: documented in wmr_model.h.
-   operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 9 add, 38 mul, 1 div, 2 sin/cos, 0 sqrt */
 void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     wmr_real_t *H)
 {
-    const wmr_real_t theta = q[2];
-    const wmr_real_t _t0 = WMR_SIN(theta);
     const wmr_real_t b = p->b;
-    const wmr_real_t _t1 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t theta = q[2];
+    const wmr_real_t _t1 = WMR_SIN(theta);
+    const wmr_real_t _t2 = _t0;
     const wmr_real_t r = p->r;
-    const wmr_real_t _t2 = r*r;
-    const wmr_real_t _t3 = _t1*_t2;
-    const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
+    const wmr_real_t _t3 = r*r;
+    const wmr_real_t _t4 = _t2*_t3;
+    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
     const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t5 = thetadot_l*thetadot_l;
+    const wmr_real_t _t6 = thetadot_l*thetadot_l;
     const wmr_real_t m = p->m;
-    const wmr_real_t _t6 = _t5*m;
-    const wmr_real_t _t7 = _t4*_t6;
+    const wmr_real_t _t7 = _t6*m;
+    const wmr_real_t _t8 = _t5*_t7;
     const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t8 = thetadot_r*thetadot_r;
-    const wmr_real_t _t9 = _t8*m;
-    const wmr_real_t _t10 = _t0*_t9;
-    const wmr_real_t _t11 = WMR_COS(theta);
+    const wmr_real_t _t9 = thetadot_r*thetadot_r;
+    const wmr_real_t _t10 = _t9*m;
+    const wmr_real_t _t11 = _t1*_t10;
+    const wmr_real_t _t12 = WMR_COS(theta);
     const wmr_real_t d = p->d;
-    const wmr_real_t _t12 = _t2*d/(b*b);
-    const wmr_real_t _t13 = _t11*_t12;
-    const wmr_real_t _t14 = WMR_LIT(2.0)*m*thetadot_l*thetadot_r;
-    const wmr_real_t _t15 = _t0*_t12;
+    const wmr_real_t _t13 = _t0*_t0*_t3*d;
+    const wmr_real_t _t14 = _t12*_t13;
+    const wmr_real_t _t15 = WMR_LIT(2.0)*m*thetadot_l*thetadot_r;
+    const wmr_real_t _t16 = _t1*_t13;
     const wmr_real_t K = p->K;
-    const wmr_real_t _t16 = WMR_LIT(0.5)*K;
+    const wmr_real_t _t17 = WMR_LIT(0.5)*K;
     const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t _t17 = _t16*r*thetadot*thetadot;
-    H[0] = -_t0*_t7 + _t10*_t4 - _t13*_t14 + _t13*_t6 + _t13*_t9;
-    H[1] = _t10*_t12 - _t11*_t4*_t9 + _t11*_t7 - _t14*_t15 + _t15*_t6;
-    H[2] = WMR_LIT(0.5)*K*_t1*_t2*_t8 - _t16*_t3*_t5;
-    H[3] = _t17;
-    H[4] = _t17;
+    const wmr_real_t _t18 = _t17*r*thetadot*thetadot;
+    H[0] = -_t1*_t8 + _t10*_t14 + _t11*_t5 - _t14*_t15 + _t14*_t7;
+    H[1] = -_t10*_t12*_t5 + _t11*_t13 + _t12*_t8 - _t15*_t16 + _t16*_t7;
+    H[2] = WMR_LIT(0.5)*K*_t2*_t3*_t9 - _t17*_t4*_t6;
+    H[3] = _t18;
+    H[4] = _t18;
 }
 
 /* wmr_forward_dynamics: documented in wmr_model.h.
-   operations after CSE: 27 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 27 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
@@ -128,55 +129,56 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
             + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_LIT(2.0)*d;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t1*_t2;
-    const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
-    const wmr_real_t _t5 = WMR_LIT(0.25)*_t1*m;
-    const wmr_real_t _t6 = I - K*_t0 + d*d*m;
-    const wmr_real_t _t7 = -_t3*_t6 + _t5;
-    const wmr_real_t _t8 = I_w + _t3*_t6 + _t5;
-    const wmr_real_t _t9 = -_t7*_t7 + _t8*_t8;
-    const wmr_real_t _t10 = WMR_LIT(1.0)/_t9;
-    const wmr_real_t _t11 = _t2*r*r*r*(-K + d*m);
-    const wmr_real_t _t12 = r/b;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t1 = WMR_LIT(2.0)*d;
+    const wmr_real_t _t2 = r*r;
+    const wmr_real_t _t3 = _t0*_t0;
+    const wmr_real_t _t4 = _t2*_t3;
+    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
+    const wmr_real_t _t6 = WMR_LIT(0.25)*_t2*m;
+    const wmr_real_t _t7 = I - K*_t1 + d*d*m;
+    const wmr_real_t _t8 = -_t4*_t7 + _t6;
+    const wmr_real_t _t9 = I_w + _t4*_t7 + _t6;
+    const wmr_real_t _t10 = -_t8*_t8 + _t9*_t9;
+    const wmr_real_t _t11 = WMR_LIT(1.0)/_t10;
+    const wmr_real_t _t12 = _t3*r*r*r*(-K + d*m);
+    const wmr_real_t _t13 = _t0*r;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t8 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t9 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t10 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t _t13 = WMR_SIN(theta);
-    const wmr_real_t _t14 = _t13*b;
-    const wmr_real_t _t15 = WMR_COS(theta);
-    const wmr_real_t _t16 = _t0*_t15;
-    const wmr_real_t _t17 = thetadot_l - thetadot_r;
-    const wmr_real_t _t18 = _t17*_t4;
-    const wmr_real_t _t19 = _t15*b;
-    const wmr_real_t _t20 = _t0*_t13;
-    const wmr_real_t _t21 = _t11*_t17;
-    const wmr_real_t _t22 = _t21*thetadot_l + tau_r;
-    const wmr_real_t _t23 = -_t21*thetadot_r + tau_l;
-    const wmr_real_t _t24 = _t10*(_t22*_t8 - _t23*_t7);
-    const wmr_real_t _t25 = _t12*_t24;
-    const wmr_real_t _t26 = WMR_LIT(0.5)*_t25;
-    const wmr_real_t _t27 = _t10*(-_t22*_t7 + _t23*_t8);
-    const wmr_real_t _t28 = _t12*_t27;
-    const wmr_real_t _t29 = WMR_LIT(0.5)*_t28;
-    const wmr_real_t r_0 = _t18*(_t14*(thetadot_l + thetadot_r) + _t16*(-thetadot_l + thetadot_r))
-            + _t26*(_t19 - _t20) + _t29*(_t19 + _t20);
-    const wmr_real_t r_1 = -_t18*(_t19*(thetadot_l + thetadot_r) + _t20*(thetadot_l - thetadot_r))
-            + _t26*(_t14 + _t16) + _t29*(_t14 - _t16);
-    const wmr_real_t r_2 = _t25 - _t28;
-    const wmr_real_t r_3 = _t24;
-    const wmr_real_t r_4 = _t27;
+    const wmr_real_t _t14 = WMR_SIN(theta);
+    const wmr_real_t _t15 = _t14*b;
+    const wmr_real_t _t16 = WMR_COS(theta);
+    const wmr_real_t _t17 = _t1*_t16;
+    const wmr_real_t _t18 = thetadot_l - thetadot_r;
+    const wmr_real_t _t19 = _t18*_t5;
+    const wmr_real_t _t20 = _t16*b;
+    const wmr_real_t _t21 = _t1*_t14;
+    const wmr_real_t _t22 = _t12*_t18;
+    const wmr_real_t _t23 = _t22*thetadot_l + tau_r;
+    const wmr_real_t _t24 = -_t22*thetadot_r + tau_l;
+    const wmr_real_t _t25 = _t11*(_t23*_t9 - _t24*_t8);
+    const wmr_real_t _t26 = _t13*_t25;
+    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
+    const wmr_real_t _t28 = _t11*(-_t23*_t8 + _t24*_t9);
+    const wmr_real_t _t29 = _t13*_t28;
+    const wmr_real_t _t30 = WMR_LIT(0.5)*_t29;
+    const wmr_real_t r_0 = _t19*(_t15*(thetadot_l + thetadot_r) + _t17*(-thetadot_l + thetadot_r))
+            + _t27*(_t20 - _t21) + _t30*(_t20 + _t21);
+    const wmr_real_t r_1 = -_t19*(_t20*(thetadot_l + thetadot_r) + _t21*(thetadot_l - thetadot_r))
+            + _t27*(_t15 + _t17) + _t30*(_t15 - _t17);
+    const wmr_real_t r_2 = _t26 - _t29;
+    const wmr_real_t r_3 = _t25;
+    const wmr_real_t r_4 = _t28;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
@@ -189,7 +191,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
 }
 
 /* wmr_model_prepare: documented in wmr_model.h.
-   operations after CSE: 7 add, 19 mul, 3 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt */
 wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared)
 {
     const wmr_real_t m = p->m;
@@ -203,40 +205,41 @@ wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prep
             != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_LIT(2.0)*d;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t1*_t2;
-    const wmr_real_t _t4 = WMR_LIT(0.5)*_t3;
-    const wmr_real_t _t5 = WMR_LIT(0.25)*_t1*m;
-    const wmr_real_t _t6 = I - K*_t0 + d*d*m;
-    const wmr_real_t _t7 = -_t3*_t6 + _t5;
-    const wmr_real_t _t8 = I_w + _t3*_t6 + _t5;
-    const wmr_real_t _t9 = -_t7*_t7 + _t8*_t8;
-    const wmr_real_t _t10 = WMR_LIT(1.0)/_t9;
-    const wmr_real_t _t11 = _t2*r*r*r*(-K + d*m);
-    const wmr_real_t _t12 = r/b;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t1 = WMR_LIT(2.0)*d;
+    const wmr_real_t _t2 = r*r;
+    const wmr_real_t _t3 = _t0*_t0;
+    const wmr_real_t _t4 = _t2*_t3;
+    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
+    const wmr_real_t _t6 = WMR_LIT(0.25)*_t2*m;
+    const wmr_real_t _t7 = I - K*_t1 + d*d*m;
+    const wmr_real_t _t8 = -_t4*_t7 + _t6;
+    const wmr_real_t _t9 = I_w + _t4*_t7 + _t6;
+    const wmr_real_t _t10 = -_t8*_t8 + _t9*_t9;
+    const wmr_real_t _t11 = WMR_LIT(1.0)/_t10;
+    const wmr_real_t _t12 = _t3*r*r*r*(-K + d*m);
+    const wmr_real_t _t13 = _t0*r;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t8 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t9 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t10 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
     prepared->magic = WMR_MODEL_PREPARED_MAGIC;
     prepared->forward_dynamics[0] = b;
-    prepared->forward_dynamics[1] = _t0;
-    prepared->forward_dynamics[2] = _t4;
-    prepared->forward_dynamics[3] = _t7;
-    prepared->forward_dynamics[4] = _t8;
-    prepared->forward_dynamics[5] = _t10;
-    prepared->forward_dynamics[6] = _t11;
-    prepared->forward_dynamics[7] = _t12;
+    prepared->forward_dynamics[1] = _t1;
+    prepared->forward_dynamics[2] = _t5;
+    prepared->forward_dynamics[3] = _t8;
+    prepared->forward_dynamics[4] = _t9;
+    prepared->forward_dynamics[5] = _t11;
+    prepared->forward_dynamics[6] = _t12;
+    prepared->forward_dynamics[7] = _t13;
     return WMR_OK;
 }
 
@@ -252,42 +255,42 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
     if (isnan(theta - theta) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t13 = WMR_SIN(theta);
-    const wmr_real_t _t15 = WMR_COS(theta);
+    const wmr_real_t _t14 = WMR_SIN(theta);
+    const wmr_real_t _t16 = WMR_COS(theta);
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
     const wmr_real_t b = prepared->forward_dynamics[0];
-    const wmr_real_t _t14 = _t13*b;
-    const wmr_real_t _t0 = prepared->forward_dynamics[1];
-    const wmr_real_t _t16 = _t0*_t15;
-    const wmr_real_t _t17 = thetadot_l - thetadot_r;
-    const wmr_real_t _t4 = prepared->forward_dynamics[2];
-    const wmr_real_t _t18 = _t17*_t4;
-    const wmr_real_t _t19 = _t15*b;
-    const wmr_real_t _t20 = _t0*_t13;
-    const wmr_real_t _t11 = prepared->forward_dynamics[6];
-    const wmr_real_t _t21 = _t11*_t17;
-    const wmr_real_t _t22 = _t21*thetadot_l + tau_r;
-    const wmr_real_t _t23 = -_t21*thetadot_r + tau_l;
-    const wmr_real_t _t7 = prepared->forward_dynamics[3];
-    const wmr_real_t _t8 = prepared->forward_dynamics[4];
-    const wmr_real_t _t10 = prepared->forward_dynamics[5];
-    const wmr_real_t _t24 = _t10*(_t22*_t8 - _t23*_t7);
-    const wmr_real_t _t12 = prepared->forward_dynamics[7];
-    const wmr_real_t _t25 = _t12*_t24;
-    const wmr_real_t _t26 = WMR_LIT(0.5)*_t25;
-    const wmr_real_t _t27 = _t10*(-_t22*_t7 + _t23*_t8);
-    const wmr_real_t _t28 = _t12*_t27;
-    const wmr_real_t _t29 = WMR_LIT(0.5)*_t28;
-    const wmr_real_t r_0 = _t18*(_t14*(thetadot_l + thetadot_r) + _t16*(-thetadot_l + thetadot_r))
-            + _t26*(_t19 - _t20) + _t29*(_t19 + _t20);
-    const wmr_real_t r_1 = -_t18*(_t19*(thetadot_l + thetadot_r) + _t20*(thetadot_l - thetadot_r))
-            + _t26*(_t14 + _t16) + _t29*(_t14 - _t16);
-    const wmr_real_t r_2 = _t25 - _t28;
-    const wmr_real_t r_3 = _t24;
-    const wmr_real_t r_4 = _t27;
+    const wmr_real_t _t15 = _t14*b;
+    const wmr_real_t _t1 = prepared->forward_dynamics[1];
+    const wmr_real_t _t17 = _t1*_t16;
+    const wmr_real_t _t18 = thetadot_l - thetadot_r;
+    const wmr_real_t _t5 = prepared->forward_dynamics[2];
+    const wmr_real_t _t19 = _t18*_t5;
+    const wmr_real_t _t20 = _t16*b;
+    const wmr_real_t _t21 = _t1*_t14;
+    const wmr_real_t _t12 = prepared->forward_dynamics[6];
+    const wmr_real_t _t22 = _t12*_t18;
+    const wmr_real_t _t23 = _t22*thetadot_l + tau_r;
+    const wmr_real_t _t24 = -_t22*thetadot_r + tau_l;
+    const wmr_real_t _t8 = prepared->forward_dynamics[3];
+    const wmr_real_t _t9 = prepared->forward_dynamics[4];
+    const wmr_real_t _t11 = prepared->forward_dynamics[5];
+    const wmr_real_t _t25 = _t11*(_t23*_t9 - _t24*_t8);
+    const wmr_real_t _t13 = prepared->forward_dynamics[7];
+    const wmr_real_t _t26 = _t13*_t25;
+    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
+    const wmr_real_t _t28 = _t11*(-_t23*_t8 + _t24*_t9);
+    const wmr_real_t _t29 = _t13*_t28;
+    const wmr_real_t _t30 = WMR_LIT(0.5)*_t29;
+    const wmr_real_t r_0 = _t19*(_t15*(thetadot_l + thetadot_r) + _t17*(-thetadot_l + thetadot_r))
+            + _t27*(_t20 - _t21) + _t30*(_t20 + _t21);
+    const wmr_real_t r_1 = -_t19*(_t20*(thetadot_l + thetadot_r) + _t21*(thetadot_l - thetadot_r))
+            + _t27*(_t15 + _t17) + _t30*(_t15 - _t17);
+    const wmr_real_t r_2 = _t26 - _t29;
+    const wmr_real_t r_3 = _t25;
+    const wmr_real_t r_4 = _t28;
     if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
         /* an input not checked yet, reaching the results through +, -, * only */
         if (isnan(((thetadot_r - thetadot_r) + (thetadot_l - thetadot_l))
@@ -438,71 +441,72 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
 }
 
 /* wmr_linearization: documented in wmr_model.h.
-   operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 20 add, 46 mul, 2 div, 2 sin/cos, 0 sqrt */
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B)
 {
     (void)tau;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t _t0 = WMR_SIN(theta);
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t2 = _t0*_t1;
-    const wmr_real_t _t3 = WMR_COS(theta);
     const wmr_real_t b = p->b;
-    const wmr_real_t _t4 = r/b;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t theta = q[2];
+    const wmr_real_t _t1 = WMR_SIN(theta);
+    const wmr_real_t r = p->r;
+    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_COS(theta);
+    const wmr_real_t _t5 = _t0*r;
     const wmr_real_t d = p->d;
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = _t3*_t5;
-    const wmr_real_t _t7 = _t2 - _t6;
-    const wmr_real_t _t8 = _t2 + _t6;
-    const wmr_real_t _t9 = _t1*_t3;
-    const wmr_real_t _t10 = _t0*_t5;
-    const wmr_real_t _t11 = -_t10 + _t9;
-    const wmr_real_t _t12 = _t10 + _t9;
-    const wmr_real_t _t13 = r*r;
+    const wmr_real_t _t6 = _t5*d;
+    const wmr_real_t _t7 = _t4*_t6;
+    const wmr_real_t _t8 = _t3 - _t7;
+    const wmr_real_t _t9 = _t3 + _t7;
+    const wmr_real_t _t10 = _t2*_t4;
+    const wmr_real_t _t11 = _t1*_t6;
+    const wmr_real_t _t12 = _t10 - _t11;
+    const wmr_real_t _t13 = _t10 + _t11;
+    const wmr_real_t _t14 = r*r;
     const wmr_real_t m = p->m;
-    const wmr_real_t _t14 = WMR_LIT(0.25)*_t13*m;
+    const wmr_real_t _t15 = WMR_LIT(0.25)*_t14*m;
     const wmr_real_t I = p->Iz;
     const wmr_real_t K = p->K;
-    const wmr_real_t _t15 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t16 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t17 = _t13*_t16;
-    const wmr_real_t _t18 = _t14 - _t15*_t17;
+    const wmr_real_t _t16 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t17 = _t0*_t0;
+    const wmr_real_t _t18 = _t14*_t17;
+    const wmr_real_t _t19 = _t15 - _t16*_t18;
     const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t19 = I_w + _t14 + _t15*_t17;
-    const wmr_real_t _t20 = WMR_LIT(1.0)/(-_t18*_t18 + _t19*_t19);
-    const wmr_real_t _t21 = _t16*r*r*r*(-K + d*m);
+    const wmr_real_t _t20 = I_w + _t15 + _t16*_t18;
+    const wmr_real_t _t21 = WMR_LIT(1.0)/(-_t19*_t19 + _t20*_t20);
+    const wmr_real_t _t22 = _t17*r*r*r*(-K + d*m);
     const wmr_real_t thetadot_l = wheel_rates[1];
-    const wmr_real_t _t22 = _t21*thetadot_l;
+    const wmr_real_t _t23 = _t22*thetadot_l;
     const wmr_real_t thetadot_r = wheel_rates[0];
-    const wmr_real_t _t23 = _t21*thetadot_r;
-    const wmr_real_t _t24 = _t21*(thetadot_l - thetadot_r);
-    const wmr_real_t _t25 = _t23 - _t24;
-    const wmr_real_t _t26 = _t22 + _t24;
-    const wmr_real_t _t27 = _t19*_t20;
-    const wmr_real_t _t28 = -_t18*_t20;
+    const wmr_real_t _t24 = _t22*thetadot_r;
+    const wmr_real_t _t25 = _t22*(thetadot_l - thetadot_r);
+    const wmr_real_t _t26 = _t24 - _t25;
+    const wmr_real_t _t27 = _t23 + _t25;
+    const wmr_real_t _t28 = _t20*_t21;
+    const wmr_real_t _t29 = -_t19*_t21;
     A[0] = WMR_LIT(0.0);
     A[1] = WMR_LIT(0.0);
-    A[2] = -_t7*thetadot_l - _t8*thetadot_r;
+    A[2] = -_t8*thetadot_l - _t9*thetadot_r;
     A[3] = WMR_LIT(0.0);
     A[4] = WMR_LIT(0.0);
-    A[5] = _t11;
-    A[6] = _t12;
+    A[5] = _t12;
+    A[6] = _t13;
     A[7] = WMR_LIT(0.0);
     A[8] = WMR_LIT(0.0);
-    A[9] = _t11*thetadot_r + _t12*thetadot_l;
+    A[9] = _t12*thetadot_r + _t13*thetadot_l;
     A[10] = WMR_LIT(0.0);
     A[11] = WMR_LIT(0.0);
-    A[12] = _t8;
-    A[13] = _t7;
+    A[12] = _t9;
+    A[13] = _t8;
     A[14] = WMR_LIT(0.0);
     A[15] = WMR_LIT(0.0);
     A[16] = WMR_LIT(0.0);
     A[17] = WMR_LIT(0.0);
     A[18] = WMR_LIT(0.0);
-    A[19] = _t4;
-    A[20] = -_t4;
+    A[19] = _t5;
+    A[20] = -_t5;
     A[21] = WMR_LIT(0.0);
     A[22] = WMR_LIT(0.0);
     A[23] = WMR_LIT(0.0);
@@ -522,15 +526,15 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     A[37] = WMR_LIT(0.0);
     A[38] = WMR_LIT(0.0);
     A[39] = WMR_LIT(0.0);
-    A[40] = _t20*(-_t18*_t25 - _t19*_t22);
-    A[41] = _t20*(_t18*_t23 + _t19*_t26);
+    A[40] = _t21*(-_t19*_t26 - _t20*_t23);
+    A[41] = _t21*(_t19*_t24 + _t20*_t27);
     A[42] = WMR_LIT(0.0);
     A[43] = WMR_LIT(0.0);
     A[44] = WMR_LIT(0.0);
     A[45] = WMR_LIT(0.0);
     A[46] = WMR_LIT(0.0);
-    A[47] = _t20*(_t18*_t22 + _t19*_t25);
-    A[48] = _t20*(-_t18*_t26 - _t19*_t23);
+    A[47] = _t21*(_t19*_t23 + _t20*_t26);
+    A[48] = _t21*(-_t19*_t27 - _t20*_t24);
     B[0] = WMR_LIT(0.0);
     B[1] = WMR_LIT(0.0);
     B[2] = WMR_LIT(0.0);
@@ -541,14 +545,14 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     B[7] = WMR_LIT(0.0);
     B[8] = WMR_LIT(0.0);
     B[9] = WMR_LIT(0.0);
-    B[10] = _t27;
-    B[11] = _t28;
-    B[12] = _t28;
-    B[13] = _t27;
+    B[10] = _t28;
+    B[11] = _t29;
+    B[12] = _t29;
+    B[13] = _t28;
 }
 
 /* wmr_wheel_contact_forces: documented in wmr_model.h.
-   operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
     wmr_real_t *lateral)
@@ -570,90 +574,91 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
             + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = WMR_COS(theta);
-    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t2 = _t0*_t1;
-    const wmr_real_t _t3 = r/b;
-    const wmr_real_t _t4 = WMR_SIN(theta);
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = _t3*_t5;
-    const wmr_real_t _t7 = _t1*_t4;
-    const wmr_real_t _t8 = _t0*d;
-    const wmr_real_t _t9 = _t3*_t8;
-    const wmr_real_t _t10 = _t7 + _t9;
-    const wmr_real_t _t11 = _t7 - _t9;
-    const wmr_real_t _t12 = K*_t4;
-    const wmr_real_t _t13 = K*_t0;
-    const wmr_real_t _t14 = -_t3*thetadot_l + _t3*thetadot_r;
-    const wmr_real_t _t15 = _t14*_t14;
-    const wmr_real_t _t16 = _t14*thetadot_r;
-    const wmr_real_t _t17 = _t14*thetadot_l;
-    const wmr_real_t _t18 = _t2 - _t6;
-    const wmr_real_t _t19 = _t12*_t3 + _t18*m;
-    const wmr_real_t _t20 = _t10*m - _t13*_t3;
-    const wmr_real_t _t21 = I*_t3 - _t10*_t13 + _t12*_t18;
-    const wmr_real_t _t22 = _t2 + _t6;
-    const wmr_real_t _t23 = -_t12*_t3 + _t22*m;
-    const wmr_real_t _t24 = _t11*m + _t13*_t3;
-    const wmr_real_t _t25 = -I*_t3 - _t11*_t13 + _t12*_t22;
-    const wmr_real_t _t26 = _t13*_t15;
-    const wmr_real_t _t27 = -_t10*_t16 - _t11*_t17;
-    const wmr_real_t _t28 = _t26 + _t27*m;
-    const wmr_real_t _t29 = _t12*_t15;
-    const wmr_real_t _t30 = _t16*_t18 + _t17*_t22;
-    const wmr_real_t _t31 = _t29 + _t30*m;
-    const wmr_real_t _t32 = _t12*_t27 - _t13*_t30;
-    const wmr_real_t _t33 = _t0*b;
-    const wmr_real_t _t34 = WMR_LIT(0.5)*_t33;
-    const wmr_real_t _t35 = _t4*b;
-    const wmr_real_t _t36 = WMR_LIT(0.5)*_t35;
-    const wmr_real_t _t37 = r*r;
-    const wmr_real_t _t38 = WMR_LIT(0.25)*_t37*m;
-    const wmr_real_t _t39 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t40 = _t37/(b*b);
-    const wmr_real_t _t41 = I_w + _t38 + _t39*_t40;
-    const wmr_real_t _t42 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3;
-    const wmr_real_t _t43 = _t11*_t20 + _t19*_t22 - _t21*_t3;
-    const wmr_real_t _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3;
-    const wmr_real_t _t45 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3;
-    const wmr_real_t _t46 = _t10*_t31 + _t18*_t28 + _t3*_t32;
-    const wmr_real_t _t47 = _t11*_t31 + _t22*_t28 - _t3*_t32;
-    const wmr_real_t _t48 = -_t46 + tau_r;
-    const wmr_real_t _t49 = -_t47 + tau_l;
-    const wmr_real_t _t50 = _t42*_t45 - _t43*_t44;
-    const wmr_real_t _t51 = WMR_LIT(1.0)/_t50;
-    const wmr_real_t _t52 = _t51*(-_t43*_t49 + _t45*_t48);
-    const wmr_real_t _t53 = _t51*(_t42*_t49 - _t44*_t48);
-    const wmr_real_t _t54 = _t18*_t52 + _t22*_t53 + _t27;
-    const wmr_real_t _t55 = _t10*_t52 + _t11*_t53 + _t30;
-    const wmr_real_t _t56 = _t3*_t52 - _t3*_t53;
-    const wmr_real_t _t57 = -_t12*_t56 - _t26 - _t54*m;
-    const wmr_real_t _t58 = _t13*_t56 - _t29 - _t55*m;
-    const wmr_real_t _t59 = -I*_t56 - _t12*_t54 + _t13*_t55;
-    const wmr_real_t _t60 = _t34 + _t5;
-    const wmr_real_t _t61 = _t36 - _t8;
-    const wmr_real_t _t62 = _t34 - _t5;
-    const wmr_real_t _t63 = _t36 + _t8;
-    const wmr_real_t _t64 = -WMR_LIT(1.0)/b;
-    const wmr_real_t _t65 = _t64*(_t57*_t60 + _t58*_t61 - _t59);
-    const wmr_real_t _t66 = _t64*(_t57*_t62 + _t58*_t63 + _t59);
-    const wmr_real_t _t67 = _t64*(-_t33*_t58 + _t35*_t57);
-    const wmr_real_t _t68 = _t38 - _t39*_t40;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t1 = WMR_COS(theta);
+    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = _t0*r;
+    const wmr_real_t _t5 = WMR_SIN(theta);
+    const wmr_real_t _t6 = _t5*d;
+    const wmr_real_t _t7 = _t4*_t6;
+    const wmr_real_t _t8 = _t2*_t5;
+    const wmr_real_t _t9 = _t1*d;
+    const wmr_real_t _t10 = _t4*_t9;
+    const wmr_real_t _t11 = _t10 + _t8;
+    const wmr_real_t _t12 = -_t10 + _t8;
+    const wmr_real_t _t13 = K*_t5;
+    const wmr_real_t _t14 = K*_t1;
+    const wmr_real_t _t15 = -_t4*thetadot_l + _t4*thetadot_r;
+    const wmr_real_t _t16 = _t15*_t15;
+    const wmr_real_t _t17 = _t15*thetadot_r;
+    const wmr_real_t _t18 = _t15*thetadot_l;
+    const wmr_real_t _t19 = _t3 - _t7;
+    const wmr_real_t _t20 = _t13*_t4 + _t19*m;
+    const wmr_real_t _t21 = _t11*m - _t14*_t4;
+    const wmr_real_t _t22 = I*_t4 - _t11*_t14 + _t13*_t19;
+    const wmr_real_t _t23 = _t3 + _t7;
+    const wmr_real_t _t24 = -_t13*_t4 + _t23*m;
+    const wmr_real_t _t25 = _t12*m + _t14*_t4;
+    const wmr_real_t _t26 = -I*_t4 - _t12*_t14 + _t13*_t23;
+    const wmr_real_t _t27 = _t14*_t16;
+    const wmr_real_t _t28 = -_t11*_t17 - _t12*_t18;
+    const wmr_real_t _t29 = _t27 + _t28*m;
+    const wmr_real_t _t30 = _t13*_t16;
+    const wmr_real_t _t31 = _t17*_t19 + _t18*_t23;
+    const wmr_real_t _t32 = _t30 + _t31*m;
+    const wmr_real_t _t33 = _t13*_t28 - _t14*_t31;
+    const wmr_real_t _t34 = _t1*b;
+    const wmr_real_t _t35 = WMR_LIT(0.5)*_t34;
+    const wmr_real_t _t36 = _t5*b;
+    const wmr_real_t _t37 = WMR_LIT(0.5)*_t36;
+    const wmr_real_t _t38 = r*r;
+    const wmr_real_t _t39 = WMR_LIT(0.25)*_t38*m;
+    const wmr_real_t _t40 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t41 = _t0*_t0*_t38;
+    const wmr_real_t _t42 = I_w + _t39 + _t40*_t41;
+    const wmr_real_t _t43 = I_w + _t11*_t21 + _t19*_t20 + _t22*_t4;
+    const wmr_real_t _t44 = _t12*_t21 + _t20*_t23 - _t22*_t4;
+    const wmr_real_t _t45 = _t11*_t25 + _t19*_t24 + _t26*_t4;
+    const wmr_real_t _t46 = I_w + _t12*_t25 + _t23*_t24 - _t26*_t4;
+    const wmr_real_t _t47 = _t11*_t32 + _t19*_t29 + _t33*_t4;
+    const wmr_real_t _t48 = _t12*_t32 + _t23*_t29 - _t33*_t4;
+    const wmr_real_t _t49 = -_t47 + tau_r;
+    const wmr_real_t _t50 = -_t48 + tau_l;
+    const wmr_real_t _t51 = _t43*_t46 - _t44*_t45;
+    const wmr_real_t _t52 = WMR_LIT(1.0)/_t51;
+    const wmr_real_t _t53 = _t52*(-_t44*_t50 + _t46*_t49);
+    const wmr_real_t _t54 = _t52*(_t43*_t50 - _t45*_t49);
+    const wmr_real_t _t55 = _t19*_t53 + _t23*_t54 + _t28;
+    const wmr_real_t _t56 = _t11*_t53 + _t12*_t54 + _t31;
+    const wmr_real_t _t57 = _t4*_t53 - _t4*_t54;
+    const wmr_real_t _t58 = -_t13*_t57 - _t27 - _t55*m;
+    const wmr_real_t _t59 = _t14*_t57 - _t30 - _t56*m;
+    const wmr_real_t _t60 = -I*_t57 - _t13*_t55 + _t14*_t56;
+    const wmr_real_t _t61 = _t35 + _t6;
+    const wmr_real_t _t62 = _t37 - _t9;
+    const wmr_real_t _t63 = _t35 - _t6;
+    const wmr_real_t _t64 = _t37 + _t9;
+    const wmr_real_t _t65 = -_t0;
+    const wmr_real_t _t66 = _t65*(_t58*_t61 + _t59*_t62 - _t60);
+    const wmr_real_t _t67 = _t65*(_t58*_t63 + _t59*_t64 + _t60);
+    const wmr_real_t _t68 = _t65*(-_t34*_t59 + _t36*_t58);
+    const wmr_real_t _t69 = _t39 - _t40*_t41;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t41 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t42 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t41*_t41 - _t68*_t68 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t42*_t42 - _t69*_t69 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t66;
-    const wmr_real_t r_1 = _t65;
-    const wmr_real_t r_2 = -_t67;
+    const wmr_real_t r_0 = _t67;
+    const wmr_real_t r_1 = _t66;
+    const wmr_real_t r_2 = -_t68;
     if (isnan(((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) != 0) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }

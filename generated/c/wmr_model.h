@@ -59,7 +59,7 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
  *     thetadot_l -- generalised velocities
  * @param[out] H [5] row-major (WMR_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 9 add, 38 mul, 1 div, 2 sin/cos, 0 sqrt
  */
 void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     wmr_real_t *H);
@@ -98,7 +98,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  * With fixed parameters, wmr_model_prepare once and wmr_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 27 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 27 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
@@ -118,7 +118,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
  *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model).
  *
- * operations after CSE: 7 add, 19 mul, 3 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared);
 
@@ -270,7 +270,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
  * @param[out] A [7x7] row-major (WMR_LINEARIZATION_A_SIZE) -- 7x7 row-major
  * @param[out] B [7x2] row-major (WMR_LINEARIZATION_B_SIZE) -- 7x2 row-major
  *
- * operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 20 add, 46 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
@@ -314,7 +314,7 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,

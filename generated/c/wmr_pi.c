@@ -24,7 +24,7 @@ const wmr_pi_config_t wmr_pi_frozen_config = WMR_PI_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 2 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_pi_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+static inline void wmr_pi_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
@@ -40,7 +40,7 @@ static void wmr_pi_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 17 add, 19 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static void wmr_pi_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
+static inline void wmr_pi_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *q_des, const wmr_real_t *qdot_des,
     const wmr_real_t *integral, const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u,
     wmr_real_t *integral_next)
@@ -131,7 +131,7 @@ wmr_status_t wmr_pi_check_config(const wmr_pi_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -146,7 +146,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -170,7 +170,7 @@ static bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5
 #ifndef WMR_PI_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_pi_config_unchanged(const wmr_pi_config_t *config,
+static inline bool wmr_pi_config_unchanged(const wmr_pi_config_t *config,
     const wmr_pi_config_t *kept)
 {
     wmr_bits_t diff = 0u;
@@ -273,6 +273,7 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
+
 {
     wmr_status_t status = WMR_OK;
     const wmr_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

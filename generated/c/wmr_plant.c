@@ -6,55 +6,56 @@
 #include "wmr_plant.h"
 
 /* wmr_plant_state_derivative: documented in wmr_plant.h.
-   operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 22 add, 47 mul, 2 div, 2 sin/cos, 0 sqrt */
 void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x,
     const wmr_real_t *tau, wmr_real_t *xdot)
 {
-    const wmr_real_t theta = x[2];
-    const wmr_real_t _t0 = WMR_COS(theta);
-    const wmr_real_t r = pp->r;
-    const wmr_real_t _t1 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t2 = _t0*_t1;
-    const wmr_real_t _t3 = WMR_SIN(theta);
     const wmr_real_t b = pp->b;
-    const wmr_real_t _t4 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t5 = _t4*r;
+    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
+    const wmr_real_t theta = x[2];
+    const wmr_real_t _t1 = WMR_COS(theta);
+    const wmr_real_t r = pp->r;
+    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_SIN(theta);
+    const wmr_real_t _t5 = _t0;
+    const wmr_real_t _t6 = _t5*r;
     const wmr_real_t d = pp->d;
-    const wmr_real_t _t6 = _t5*d;
-    const wmr_real_t _t7 = _t3*_t6;
-    const wmr_real_t _t8 = _t1*_t3;
-    const wmr_real_t _t9 = _t0*_t6;
-    const wmr_real_t _t10 = r*r;
-    const wmr_real_t _t11 = WMR_LIT(0.25)*_t10;
+    const wmr_real_t _t7 = _t6*d;
+    const wmr_real_t _t8 = _t4*_t7;
+    const wmr_real_t _t9 = _t2*_t4;
+    const wmr_real_t _t10 = _t1*_t7;
+    const wmr_real_t _t11 = r*r;
+    const wmr_real_t _t12 = WMR_LIT(0.25)*_t11;
     const wmr_real_t m = pp->m;
     const wmr_real_t I = pp->Iz;
     const wmr_real_t K = pp->K;
-    const wmr_real_t _t12 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t13 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t14 = _t10*_t13;
-    const wmr_real_t _t15 = _t11*m - _t12*_t14;
+    const wmr_real_t _t13 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t14 = _t0*_t0;
+    const wmr_real_t _t15 = _t11*_t14;
+    const wmr_real_t _t16 = _t12*m - _t13*_t15;
     const wmr_real_t K_lat = pp->K_lat;
-    const wmr_real_t _t16 = WMR_LIT(4.0)*K_lat;
-    const wmr_real_t _t17 = _t11*_t4;
+    const wmr_real_t _t17 = WMR_LIT(4.0)*K_lat;
+    const wmr_real_t _t18 = _t12*_t5;
     const wmr_real_t I_w = pp->Iw;
-    const wmr_real_t _t18 = I_w + _t12*_t14;
-    const wmr_real_t _t19 = _t17*(-_t16 + b*m) + _t18;
-    const wmr_real_t _t20 = _t17*(_t16 + b*m) + _t18;
-    const wmr_real_t _t21 = WMR_LIT(1.0)/(-_t15*_t15 + _t19*_t20);
+    const wmr_real_t _t19 = I_w + _t13*_t15;
+    const wmr_real_t _t20 = _t18*(-_t17 + b*m) + _t19;
+    const wmr_real_t _t21 = _t18*(_t17 + b*m) + _t19;
+    const wmr_real_t _t22 = WMR_LIT(1.0)/(-_t16*_t16 + _t20*_t21);
     const wmr_real_t thetadot_r = x[5];
     const wmr_real_t thetadot_l = x[6];
-    const wmr_real_t _t22 = _t13*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r);
+    const wmr_real_t _t23 = _t14*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r);
     const wmr_real_t tau_l = tau[1];
-    const wmr_real_t _t23 = -_t22*thetadot_r + tau_l;
+    const wmr_real_t _t24 = -_t23*thetadot_r + tau_l;
     const wmr_real_t tau_r = tau[0];
-    const wmr_real_t _t24 = _t22*thetadot_l + tau_r;
-    xdot[0] = thetadot_l*(_t2 + _t7) + thetadot_r*(_t2 - _t7);
-    xdot[1] = thetadot_l*(_t8 - _t9) + thetadot_r*(_t8 + _t9);
-    xdot[2] = _t4*r*thetadot_r - _t5*thetadot_l;
+    const wmr_real_t _t25 = _t23*thetadot_l + tau_r;
+    xdot[0] = thetadot_l*(_t3 + _t8) + thetadot_r*(_t3 - _t8);
+    xdot[1] = thetadot_l*(-_t10 + _t9) + thetadot_r*(_t10 + _t9);
+    xdot[2] = _t5*r*thetadot_r - _t6*thetadot_l;
     xdot[3] = thetadot_r;
     xdot[4] = thetadot_l;
-    xdot[5] = _t21*(-_t15*_t23 + _t20*_t24);
-    xdot[6] = _t21*(-_t15*_t24 + _t19*_t23);
+    xdot[5] = _t22*(-_t16*_t24 + _t21*_t25);
+    xdot[6] = _t22*(-_t16*_t25 + _t20*_t24);
 }
 
 /* wmr_plant_params_with_payload: documented in wmr_plant.h.

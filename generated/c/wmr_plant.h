@@ -29,7 +29,7 @@ extern "C" {
  *     torques after friction
  * @param[out] xdot [7] row-major (WMR_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 22 add, 47 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x,
     const wmr_real_t *tau, wmr_real_t *xdot);

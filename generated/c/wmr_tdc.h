@@ -56,9 +56,9 @@ typedef struct {
     wmr_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                _init) */
     wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
-    wmr_real_t k_paper_tde_trig[10]; /* paper_tde_trig's parameter-only values (at _init) */
+    wmr_real_t k_paper_tde_trig[13]; /* paper_tde_trig's parameter-only values (at _init) */
     wmr_real_t k_paper_tdc_law_trig[9]; /* paper_tdc_law_trig's parameter-only values (at _init) */
-    wmr_real_t k_minimal_tde[2]; /* minimal_tde's parameter-only values (at _init) */
+    wmr_real_t k_minimal_tde[3]; /* minimal_tde's parameter-only values (at _init) */
     wmr_real_t k_minimal_tdc_law[2]; /* minimal_tdc_law's parameter-only values (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

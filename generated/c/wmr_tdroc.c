@@ -23,8 +23,8 @@ const wmr_tdroc_config_t wmr_tdroc_frozen_config = WMR_TDROC_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn,
-    const wmr_real_t *w, wmr_real_t *gain)
+static inline void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm,
+    const wmr_real_t *dn, const wmr_real_t *w, wmr_real_t *gain)
 {
     const wmr_real_t minv_norm_1 = minv_norm[0];
     const wmr_real_t dn0 = dn[0];
@@ -51,8 +51,9 @@ static void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const w
    (documented in wmr_laws.h), a copy
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 8 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, wmr_real_t kept[10])
+   operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
+static inline void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
+    wmr_real_t kept[13])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -61,23 +62,30 @@ static void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, wmr_real_t ke
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
     const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t1 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t2 = _t1*r;
-    const wmr_real_t _t3 = _t2*d;
-    const wmr_real_t _t4 = K*_t2;
-    const wmr_real_t _t5 = I*_t2 - K*_t1*d*r;
-    const wmr_real_t _t6 = -_t5;
+    const wmr_real_t span_1 = span[0];
+    const wmr_real_t _t0 = WMR_LIT(1.0)/span_1;
+    const wmr_real_t _t1 = _t0*m;
+    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t3 = WMR_LIT(1.0)/b;
+    const wmr_real_t _t4 = _t3*r;
+    const wmr_real_t _t5 = _t4*d;
+    const wmr_real_t _t6 = K*_t4;
+    const wmr_real_t _t7 = I*_t4 - K*_t3*d*r;
+    const wmr_real_t _t8 = -_t7;
+    const wmr_real_t _t9 = K*_t0;
     kept[0] = m;
     kept[1] = I;
     kept[2] = K;
     kept[3] = I_w;
     kept[4] = _t0;
-    kept[5] = _t2;
-    kept[6] = _t3;
+    kept[5] = _t1;
+    kept[6] = _t2;
     kept[7] = _t4;
     kept[8] = _t5;
     kept[9] = _t6;
+    kept[10] = _t7;
+    kept[11] = _t8;
+    kept[12] = _t9;
 }
 #endif
 
@@ -85,53 +93,51 @@ static void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, wmr_real_t ke
    wmr_laws.h), a copy
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 34 add, 40 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[10], const wmr_real_t *trig_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    const wmr_real_t *span, wmr_real_t *H1hat)
+   operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[13],
+    const wmr_real_t *trig_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now,
+    const wmr_real_t *qdot_then, wmr_real_t *H1hat)
 {
     const wmr_real_t qd_now0 = qdot_now[0];
     const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t7 = qd_now0 - qd_then0;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t8 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t9 = _t8*m;
+    const wmr_real_t _t10 = qd_now0 - qd_then0;
     const wmr_real_t qd_now2 = qdot_now[2];
     const wmr_real_t qd_then2 = qdot_then[2];
-    const wmr_real_t _t10 = qd_now2 - qd_then2;
-    const wmr_real_t _t11 = _t10*_t8;
+    const wmr_real_t _t11 = qd_now2 - qd_then2;
+    const wmr_real_t _t0 = kept[4];
+    const wmr_real_t _t12 = _t0*_t11;
     const wmr_real_t trig_prev_s0 = trig_prev[0];
     const wmr_real_t K = kept[2];
-    const wmr_real_t _t12 = K*trig_prev_s0;
+    const wmr_real_t _t13 = K*trig_prev_s0;
     const wmr_real_t trig_prev_c0 = trig_prev[1];
-    const wmr_real_t _t13 = m*trig_prev_c0;
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t14 = _t0*_t13;
-    const wmr_real_t _t2 = kept[5];
-    const wmr_real_t _t15 = _t12*_t2;
-    const wmr_real_t _t16 = m*trig_prev_s0;
-    const wmr_real_t _t3 = kept[6];
-    const wmr_real_t _t17 = _t16*_t3;
-    const wmr_real_t _t18 = _t14 + _t15 - _t17;
+    const wmr_real_t m = kept[0];
+    const wmr_real_t _t14 = m*trig_prev_c0;
+    const wmr_real_t _t2 = kept[6];
+    const wmr_real_t _t15 = _t14*_t2;
+    const wmr_real_t _t4 = kept[7];
+    const wmr_real_t _t16 = _t13*_t4;
+    const wmr_real_t _t17 = m*trig_prev_s0;
+    const wmr_real_t _t5 = kept[8];
+    const wmr_real_t _t18 = _t17*_t5;
+    const wmr_real_t _t19 = _t15 + _t16 - _t18;
     const wmr_real_t qd_now3 = qdot_now[3];
     const wmr_real_t qd_then3 = qdot_then[3];
-    const wmr_real_t _t19 = _t8*(qd_now3 - qd_then3);
-    const wmr_real_t _t20 = _t14 - _t15 + _t17;
+    const wmr_real_t _t20 = _t0*(qd_now3 - qd_then3);
+    const wmr_real_t _t21 = _t15 - _t16 + _t18;
     const wmr_real_t qd_now4 = qdot_now[4];
     const wmr_real_t qd_then4 = qdot_then[4];
-    const wmr_real_t _t21 = _t8*(qd_now4 - qd_then4);
+    const wmr_real_t _t22 = _t0*(qd_now4 - qd_then4);
     const wmr_real_t qd_now1 = qdot_now[1];
     const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t22 = qd_now1 - qd_then1;
-    const wmr_real_t _t23 = _t0*_t16;
-    const wmr_real_t _t4 = kept[7];
-    const wmr_real_t _t24 = _t4*trig_prev_c0;
-    const wmr_real_t _t25 = _t13*_t3;
-    const wmr_real_t _t26 = _t23 - _t24 + _t25;
-    const wmr_real_t _t27 = _t23 + _t24 - _t25;
-    const wmr_real_t _t28 = _t7*_t8;
-    const wmr_real_t _t29 = _t22*_t8;
+    const wmr_real_t _t23 = qd_now1 - qd_then1;
+    const wmr_real_t _t24 = _t17*_t2;
+    const wmr_real_t _t6 = kept[9];
+    const wmr_real_t _t25 = _t6*trig_prev_c0;
+    const wmr_real_t _t26 = _t14*_t5;
+    const wmr_real_t _t27 = _t24 - _t25 + _t26;
+    const wmr_real_t _t28 = _t24 + _t25 - _t26;
+    const wmr_real_t _t29 = _t0*_t10;
+    const wmr_real_t _t30 = _t0*_t23;
     const wmr_real_t up0 = u_prev[0];
     const wmr_real_t up1 = u_prev[1];
     const wmr_real_t up2 = u_prev[2];
@@ -139,13 +145,15 @@ static void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[10], const wmr_real
     const wmr_real_t up4 = u_prev[4];
     const wmr_real_t I = kept[1];
     const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t5 = kept[8];
-    const wmr_real_t _t6 = kept[9];
-    H1hat[0] = -_t11*_t12 + _t18*_t19 + _t20*_t21 - _t7*_t9 + up0;
-    H1hat[1] = K*_t10*_t8*trig_prev_c0 + _t19*_t26 + _t21*_t27 - _t22*_t9 + up1;
-    H1hat[2] = -I*_t11 + K*_t22*_t8*trig_prev_c0 - _t12*_t28 - _t19*_t6 - _t21*_t5 + up2;
-    H1hat[3] = -I_w*_t19 - _t11*_t5 - _t18*_t28 - _t26*_t29 + up3;
-    H1hat[4] = -I_w*_t21 - _t11*_t6 - _t20*_t28 - _t27*_t29 + up4;
+    const wmr_real_t _t1 = kept[5];
+    const wmr_real_t _t7 = kept[10];
+    const wmr_real_t _t8 = kept[11];
+    const wmr_real_t _t9 = kept[12];
+    H1hat[0] = -_t1*_t10 - _t12*_t13 + _t19*_t20 + _t21*_t22 + up0;
+    H1hat[1] = -_t1*_t23 + _t11*_t9*trig_prev_c0 + _t20*_t27 + _t22*_t28 + up1;
+    H1hat[2] = -I*_t12 - _t13*_t29 - _t20*_t8 - _t22*_t7 + _t23*_t9*trig_prev_c0 + up2;
+    H1hat[3] = -I_w*_t20 - _t12*_t7 - _t19*_t29 - _t27*_t30 + up3;
+    H1hat[4] = -I_w*_t22 - _t12*_t8 - _t21*_t29 - _t28*_t30 + up4;
 }
 
 /* wmr_tdroc_k_paper_omega_difference: a copy of wmr_paper_omega_difference of wmr_laws.c
@@ -153,8 +161,8 @@ static void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[10], const wmr_real
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
+static inline void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
     const wmr_real_t Om_old0 = older[0];
@@ -180,7 +188,7 @@ static void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer, const wm
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
+static inline void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -211,10 +219,11 @@ static void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_rea
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 53 add, 62 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
-    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
-    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
-    const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
+static inline void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9],
+    const wmr_real_t *trig, const wmr_real_t *e, const wmr_real_t *edot,
+    const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
+    const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps,
+    wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
     const wmr_real_t e0 = e[0];
     const wmr_real_t edot0 = edot[0];
@@ -314,8 +323,81 @@ static void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr
    (documented in wmr_laws.h), a copy
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
+static inline void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
+    wmr_real_t kept[3])
+{
+    const wmr_real_t m = p->m;
+    const wmr_real_t I = p->Iz;
+    const wmr_real_t K = p->K;
+    const wmr_real_t I_w = p->Iw;
+    const wmr_real_t r = p->r;
+    const wmr_real_t b = p->b;
+    const wmr_real_t d = p->d;
+    const wmr_real_t span_1 = span[0];
+    const wmr_real_t _t0 = r*r;
+    const wmr_real_t _t1 = _t0*m;
+    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
+    const wmr_real_t _t3 = _t0*_t2;
+    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
+    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
+    const wmr_real_t _t6 = WMR_LIT(1.0)/span_1;
+    const wmr_real_t _t7 = WMR_LIT(0.25)*_t0*m - _t4;
+    kept[0] = _t5;
+    kept[1] = _t6;
+    kept[2] = _t7;
+}
+#endif
+
+/* wmr_tdroc_k_minimal_tde: the per-step part of wmr_minimal_tde of wmr_laws.c (documented in
+   wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
+    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
+    wmr_real_t *H1hat)
+{
+    (void)q_prev;
+    const wmr_real_t qd_now0 = qdot_now[0];
+    const wmr_real_t qd_then0 = qdot_then[0];
+    const wmr_real_t _t6 = kept[1];
+    const wmr_real_t _t8 = _t6*(qd_now0 - qd_then0);
+    const wmr_real_t qd_now1 = qdot_now[1];
+    const wmr_real_t qd_then1 = qdot_then[1];
+    const wmr_real_t _t9 = _t6*(qd_now1 - qd_then1);
+    const wmr_real_t up0 = u_prev[0];
+    const wmr_real_t up1 = u_prev[1];
+    const wmr_real_t _t5 = kept[0];
+    const wmr_real_t _t7 = kept[2];
+    H1hat[0] = -_t5*_t8 - _t7*_t9 + up0;
+    H1hat[1] = -_t5*_t9 - _t7*_t8 + up1;
+}
+
+/* wmr_tdroc_k_minimal_omega_difference: a copy of wmr_minimal_omega_difference of wmr_laws.c
+   (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
+static inline void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
+{
+    const wmr_real_t Om_new0 = newer[0];
+    const wmr_real_t Om_old0 = older[0];
+    const wmr_real_t _t0 = Om_new0 - Om_old0;
+    const wmr_real_t Om_new1 = newer[1];
+    const wmr_real_t Om_old1 = older[1];
+    const wmr_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = wmr_norm2(_t0, _t1);
+}
+
+#ifndef WMR_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
+/* wmr_tdroc_k_minimal_tdroc_law_keep: the parameter-only part of wmr_minimal_tdroc_law of
+   wmr_laws.c (documented in wmr_laws.h), a copy
+   private to this file that the step can inline: no call, and the compiler schedules it
+   with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, wmr_real_t kept[2])
+static inline void wmr_tdroc_k_minimal_tdroc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -336,55 +418,12 @@ static void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, wmr_real_t kept[
 }
 #endif
 
-/* wmr_tdroc_k_minimal_tde: the per-step part of wmr_minimal_tde of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt */
-static void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[2], const wmr_real_t *q_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    const wmr_real_t *span, wmr_real_t *H1hat)
-{
-    (void)q_prev;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t7 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t8 = _t7*(qd_now0 - qd_then0);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t9 = _t7*(qd_now1 - qd_then1);
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t6 = kept[1];
-    H1hat[0] = -_t5*_t8 - _t6*_t9 + up0;
-    H1hat[1] = -_t5*_t9 - _t6*_t8 + up1;
-}
-
-/* wmr_tdroc_k_minimal_omega_difference: a copy of wmr_minimal_omega_difference of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
-{
-    const wmr_real_t Om_new0 = newer[0];
-    const wmr_real_t Om_old0 = older[0];
-    const wmr_real_t _t0 = Om_new0 - Om_old0;
-    const wmr_real_t Om_new1 = newer[1];
-    const wmr_real_t Om_old1 = older[1];
-    const wmr_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = wmr_norm2(_t0, _t1);
-}
-
 /* wmr_tdroc_k_minimal_tdroc_law: the per-step part of wmr_minimal_tdroc_law of wmr_laws.c
    (documented in wmr_laws.h), a copy
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void wmr_tdroc_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+static inline void wmr_tdroc_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
@@ -482,7 +521,7 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static wmr_bits_t wmr_real_bits(wmr_real_t x)
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
 {
     union {
         wmr_real_t value;
@@ -497,7 +536,7 @@ static wmr_bits_t wmr_real_bits(wmr_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks wmr_check_step_inputs which input, and its status. */
-static bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
+static inline bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdot[5],
     const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5])
 {
 #ifdef WMR_FLOAT32
@@ -521,7 +560,7 @@ static bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_real_t qdo
 #ifndef WMR_TDROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
+static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     const wmr_tdroc_config_t *kept)
 {
     wmr_bits_t diff = 0u;
@@ -620,7 +659,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
         ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
-        wmr_tdroc_k_paper_tde_trig_keep(&config->nominal, fresh.k_paper_tde_trig);
+        wmr_tdroc_k_paper_tde_trig_keep(&config->nominal, &fresh.tde_span, fresh.k_paper_tde_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_tde_trig[0] = WMR_LIT(0.0);
         fresh.k_paper_tde_trig[1] = WMR_LIT(0.0);
@@ -632,6 +671,9 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         fresh.k_paper_tde_trig[7] = WMR_LIT(0.0);
         fresh.k_paper_tde_trig[8] = WMR_LIT(0.0);
         fresh.k_paper_tde_trig[9] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[10] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[11] = WMR_LIT(0.0);
+        fresh.k_paper_tde_trig[12] = WMR_LIT(0.0);
     }
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tdroc_law_trig keeps */
         wmr_tdroc_k_paper_tdroc_law_trig_keep(&config->nominal, fresh.k_paper_tdroc_law_trig);
@@ -647,13 +689,14 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         fresh.k_paper_tdroc_law_trig[8] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tde keeps */
-        wmr_tdroc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tde);
+        wmr_tdroc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tde[0] = WMR_LIT(0.0);
         fresh.k_minimal_tde[1] = WMR_LIT(0.0);
+        fresh.k_minimal_tde[2] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tdroc_law keeps */
-        wmr_tdroc_k_minimal_tde_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+        wmr_tdroc_k_minimal_tdroc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tdroc_law[0] = WMR_LIT(0.0);
         fresh.k_minimal_tdroc_law[1] = WMR_LIT(0.0);
@@ -683,10 +726,13 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     return wmr_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
 }
 
-wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
-    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
-    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
-    wmr_error_detail_t *detail)
+/* The step of one formulation: called with a constant one (below), so that the compiler
+   specialises the body to it (the other formulation's branches gone, the controlled rows'
+   loops of a known count) as a frozen build's compiled-in configuration lets it. */
+WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
+    const wmr_tdroc_config_t *config, const wmr_real_t q[5], const wmr_real_t qdot[5],
+    const wmr_real_t q_des[5], const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5],
+    wmr_real_t tau[2], wmr_error_detail_t *detail, int formulation)
 {
     wmr_status_t status = WMR_OK;
     const wmr_tdroc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -760,7 +806,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         /* which input, and its status */
         return wmr_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
     }
-    paper = WMR_IS_PAPER(cfg->formulation);
+    paper = WMR_IS_PAPER(formulation);  /* cfg->formulation: the config compared above */
     off = paper ? 0 : 3;
     gain = state->gain;
     s_norm = state->s_norm;
@@ -772,7 +818,7 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         trig[0] = WMR_LIT(0.0);
         trig[1] = WMR_LIT(0.0);
     }
-    nc = wmr_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
+    nc = wmr_controlled_slice(formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
        the backward quotient the mean of the accelerations of u(t-h) (weight 1 - c) and
@@ -781,11 +827,9 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         const bool central = cfg->accel_estimator == WMR_ACCEL_CENTRAL;
 #ifdef WMR_TDROC_FROZEN
         /* the same values as _init keeps, of the compiled-in configuration: folded */
-        const wmr_real_t span = central ? WMR_LIT(2.0) * cfg->h : cfg->h;
         const wmr_real_t c2 = cfg->accel_estimator == WMR_ACCEL_MATCHED
             ? cfg->rate_window / (WMR_LIT(2.0) * cfg->h) : WMR_LIT(0.0);
 #else
-        const wmr_real_t span = state->tde_span;  /* kept by _init */
         const wmr_real_t c2 = state->tde_c2;
 #endif
         /* the rates now and then, the controlled slice read in place */
@@ -802,9 +846,9 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
         }
         if (paper) {
             wmr_tdroc_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen,
-                    &span, H1hat);
+                    H1hat);
         } else {
-            wmr_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, &span, H1hat);
+            wmr_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -918,4 +962,30 @@ wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_con
     }
     return status;
     }
+}
+
+wmr_status_t wmr_tdroc_step_detail(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+
+{
+#ifdef WMR_TDROC_FROZEN
+    return wmr_tdroc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        wmr_tdroc_frozen_config.formulation);
+#elif WMR_STEP_PER_FORMULATION
+    /* the formulation _init validated and kept; a step given another configuration fails its
+       comparison before the formulation is read */
+    if ((state != NULL) && (state->magic == WMR_STATE_MAGIC)
+            && WMR_IS_PAPER(state->config.formulation)) {
+        return wmr_tdroc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+            WMR_FORMULATION_PAPER);
+    }
+    return wmr_tdroc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        WMR_FORMULATION_MINIMAL);
+#else
+    return wmr_tdroc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+        ((state != NULL) && (state->magic == WMR_STATE_MAGIC)) ? state->config.formulation
+        : WMR_FORMULATION_MINIMAL);
+#endif
 }

@@ -67,10 +67,10 @@ typedef struct {
     wmr_real_t weights[WMR_MAX_WINDOW]; /* normalised weights of (25) for the full window (at
                                            _init) */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */
-    wmr_real_t k_paper_tde_trig[10]; /* paper_tde_trig's parameter-only values (at _init) */
+    wmr_real_t k_paper_tde_trig[13]; /* paper_tde_trig's parameter-only values (at _init) */
     wmr_real_t k_paper_tdroc_law_trig[9]; /* paper_tdroc_law_trig's parameter-only values (at
                                              _init) */
-    wmr_real_t k_minimal_tde[2]; /* minimal_tde's parameter-only values (at _init) */
+    wmr_real_t k_minimal_tde[3]; /* minimal_tde's parameter-only values (at _init) */
     wmr_real_t k_minimal_tdroc_law[2]; /* minimal_tdroc_law's parameter-only values (at _init) */
     wmr_real_t H1hat[5];    /* last estimate of H1 (TDE) or H-hat (model) */
     wmr_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

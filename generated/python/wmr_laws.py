@@ -791,7 +791,7 @@ def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, 
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 74 add, 109 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 74 add, 110 mul, 3 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, thetadot, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -811,69 +811,70 @@ def paper_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike, 
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = r*r
-    _t1 = _t0*thetadot_l*thetadot_l
-    _t2 = math.sin(theta)
-    _t3 = _t2*m
-    _t4 = 1.0/b
-    _t5 = 0.5*_t4
-    _t6 = _t3*_t5
-    _t7 = _t0*thetadot_r*thetadot_r
-    _t8 = math.cos(theta)
-    _t9 = _t8*m
-    _t10 = _t1*_t9
-    _t11 = d/(b*b)
-    _t12 = _t7*_t9
-    _t13 = 2.0*_t0*thetadot_l*thetadot_r
-    _t14 = e0*p12_0 + edot0*p22_0
-    _t15 = e1*p12_1 + edot1*p22_1
-    _t16 = e2*p12_2 + edot2*p22_2
-    _t17 = e3*p12_3 + edot3*p22_3
-    _t18 = e4*p12_4 + edot4*p22_4
-    _t19 = _norm(_t14, _t15, _t16, _t17, _t18)
-    _t20 = e0*k1_0 + edot0*k2_0
-    _t21 = e1*k1_1 + edot1*k2_1
-    _t22 = e2*k1_2 + edot2*k2_2
-    _t23 = e3*k1_3 + edot3*k2_3
-    _t24 = e4*k1_4 + edot4*k2_4
-    _t25 = (alpha*(_norm(_t20, _t21, _t22, _t23, _t24) + _norm(qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4)) + phi)/(1.0 - alpha)
-    _t26 = _t25/max(_t19, eps_1)
-    _t27 = _t14*_t26 + _t20 + qdd_des0
-    _t28 = _t16*_t26 + _t22 + qdd_des2
-    _t29 = K*_t28
-    _t30 = 0.5*r
-    _t31 = _t30*_t9
-    _t32 = _t4*r
-    _t33 = K*_t2
-    _t34 = _t32*_t33
-    _t35 = _t32*d
-    _t36 = _t3*_t35
-    _t37 = _t31 + _t34 - _t36
-    _t38 = _t17*_t26 + _t23 + qdd_des3
-    _t39 = _t31 - _t34 + _t36
-    _t40 = _t18*_t26 + _t24 + qdd_des4
-    _t41 = _t11*_t3
-    _t42 = _t15*_t26 + _t21 + qdd_des1
-    _t43 = _t3*_t30
-    _t44 = K*_t8
-    _t45 = _t32*_t44
-    _t46 = _t35*_t9
-    _t47 = _t43 + _t45 - _t46
-    _t48 = _t43 - _t45 + _t46
-    _t49 = K*_t5
-    _t50 = I*_t32 - K*_t35
-    _t51 = -_t50
-    _t52 = K*_t30*thetadot*thetadot
+    _t0 = 1.0/b
+    _t1 = r*r
+    _t2 = _t1*thetadot_l*thetadot_l
+    _t3 = math.sin(theta)
+    _t4 = _t3*m
+    _t5 = _t0
+    _t6 = 0.5*_t5
+    _t7 = _t4*_t6
+    _t8 = _t1*thetadot_r*thetadot_r
+    _t9 = math.cos(theta)
+    _t10 = _t9*m
+    _t11 = _t10*_t2
+    _t12 = _t0*_t0*d
+    _t13 = _t10*_t8
+    _t14 = 2.0*_t1*thetadot_l*thetadot_r
+    _t15 = e0*p12_0 + edot0*p22_0
+    _t16 = e1*p12_1 + edot1*p22_1
+    _t17 = e2*p12_2 + edot2*p22_2
+    _t18 = e3*p12_3 + edot3*p22_3
+    _t19 = e4*p12_4 + edot4*p22_4
+    _t20 = _norm(_t15, _t16, _t17, _t18, _t19)
+    _t21 = e0*k1_0 + edot0*k2_0
+    _t22 = e1*k1_1 + edot1*k2_1
+    _t23 = e2*k1_2 + edot2*k2_2
+    _t24 = e3*k1_3 + edot3*k2_3
+    _t25 = e4*k1_4 + edot4*k2_4
+    _t26 = (alpha*(_norm(_t21, _t22, _t23, _t24, _t25) + _norm(qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4)) + phi)/(1.0 - alpha)
+    _t27 = _t26/max(_t20, eps_1)
+    _t28 = _t15*_t27 + _t21 + qdd_des0
+    _t29 = _t17*_t27 + _t23 + qdd_des2
+    _t30 = K*_t29
+    _t31 = 0.5*r
+    _t32 = _t10*_t31
+    _t33 = _t5*r
+    _t34 = K*_t3
+    _t35 = _t33*_t34
+    _t36 = _t33*d
+    _t37 = _t36*_t4
+    _t38 = _t32 + _t35 - _t37
+    _t39 = _t18*_t27 + _t24 + qdd_des3
+    _t40 = _t32 - _t35 + _t37
+    _t41 = _t19*_t27 + _t25 + qdd_des4
+    _t42 = _t12*_t4
+    _t43 = _t16*_t27 + _t22 + qdd_des1
+    _t44 = _t31*_t4
+    _t45 = K*_t9
+    _t46 = _t33*_t45
+    _t47 = _t10*_t36
+    _t48 = _t44 + _t46 - _t47
+    _t49 = _t44 - _t46 + _t47
+    _t50 = K*_t6
+    _t51 = I*_t33 - K*_t36
+    _t52 = -_t51
+    _t53 = K*_t31*thetadot*thetadot
     u = np.array([
-        -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t29 + _t27*m - _t37*_t38 - _t39*_t40 + _t6*_t7,
-        _t1*_t41 + _t10*_t5 - _t12*_t5 - _t13*_t41 - _t29*_t8 - _t38*_t48 - _t40*_t47 + _t41*_t7 + _t42*m,
-        I*_t28 - _t1*_t49 + _t27*_t33 + _t38*_t51 + _t40*_t50 - _t42*_t44 + _t49*_t7,
-        I_w*_t38 + _t27*_t37 + _t28*_t50 + _t42*_t48 + _t52,
-        I_w*_t40 + _t27*_t39 + _t28*_t51 + _t42*_t47 + _t52,
+        -_t10*_t12*_t14 + _t11*_t12 + _t12*_t13 - _t2*_t7 + _t28*m + _t3*_t30 - _t38*_t39 - _t40*_t41 + _t7*_t8,
+        _t11*_t6 - _t13*_t6 - _t14*_t42 + _t2*_t42 - _t30*_t9 - _t39*_t49 - _t41*_t48 + _t42*_t8 + _t43*m,
+        I*_t29 - _t2*_t50 + _t28*_t34 + _t39*_t52 + _t41*_t51 - _t43*_t45 + _t50*_t8,
+        I_w*_t39 + _t28*_t38 + _t29*_t51 + _t43*_t49 + _t53,
+        I_w*_t41 + _t28*_t40 + _t29*_t52 + _t43*_t48 + _t53,
     ])
-    s = np.array([_t14, _t15, _t16, _t17, _t18])
-    s_norm = np.array([_t19])
-    gain = np.array([_t25])
+    s = np.array([_t15, _t16, _t17, _t18, _t19])
+    s_norm = np.array([_t20])
+    gain = np.array([_t26])
     return u, s, s_norm, gain
 
 
@@ -905,7 +906,7 @@ def paper_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike,
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 64 add, 100 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 64 add, 101 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, thetadot, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -926,63 +927,64 @@ def paper_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike,
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = r*r
-    _t1 = _t0*thetadot_l*thetadot_l
-    _t2 = math.sin(theta)
-    _t3 = _t2*m
-    _t4 = 1.0/b
-    _t5 = 0.5*_t4
-    _t6 = _t3*_t5
-    _t7 = _t0*thetadot_r*thetadot_r
-    _t8 = math.cos(theta)
-    _t9 = _t8*m
-    _t10 = _t1*_t9
-    _t11 = d/(b*b)
-    _t12 = _t7*_t9
-    _t13 = 2.0*_t0*thetadot_l*thetadot_r
-    _t14 = e0*p12_0 + edot0*p22_0
-    _t15 = e1*p12_1 + edot1*p22_1
-    _t16 = e2*p12_2 + edot2*p22_2
-    _t17 = e3*p12_3 + edot3*p22_3
-    _t18 = e4*p12_4 + edot4*p22_4
-    _t19 = _norm(_t14, _t15, _t16, _t17, _t18)
-    _t20 = gain_1/max(_t19, eps_1)
-    _t21 = _t14*_t20 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t22 = _t16*_t20 + e2*k1_2 + edot2*k2_2 + qdd_des2
-    _t23 = K*_t22
-    _t24 = 0.5*r
-    _t25 = _t24*_t9
-    _t26 = _t4*r
-    _t27 = K*_t2
-    _t28 = _t26*_t27
-    _t29 = _t26*d
-    _t30 = _t29*_t3
-    _t31 = _t25 + _t28 - _t30
-    _t32 = _t17*_t20 + e3*k1_3 + edot3*k2_3 + qdd_des3
-    _t33 = _t25 - _t28 + _t30
-    _t34 = _t18*_t20 + e4*k1_4 + edot4*k2_4 + qdd_des4
-    _t35 = _t11*_t3
-    _t36 = _t15*_t20 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t37 = _t24*_t3
-    _t38 = K*_t8
-    _t39 = _t26*_t38
-    _t40 = _t29*_t9
-    _t41 = _t37 + _t39 - _t40
-    _t42 = _t37 - _t39 + _t40
-    _t43 = K*_t5
-    _t44 = I*_t26 - K*_t29
-    _t45 = -_t44
-    _t46 = K*_t24*thetadot*thetadot
+    _t0 = 1.0/b
+    _t1 = r*r
+    _t2 = _t1*thetadot_l*thetadot_l
+    _t3 = math.sin(theta)
+    _t4 = _t3*m
+    _t5 = _t0
+    _t6 = 0.5*_t5
+    _t7 = _t4*_t6
+    _t8 = _t1*thetadot_r*thetadot_r
+    _t9 = math.cos(theta)
+    _t10 = _t9*m
+    _t11 = _t10*_t2
+    _t12 = _t0*_t0*d
+    _t13 = _t10*_t8
+    _t14 = 2.0*_t1*thetadot_l*thetadot_r
+    _t15 = e0*p12_0 + edot0*p22_0
+    _t16 = e1*p12_1 + edot1*p22_1
+    _t17 = e2*p12_2 + edot2*p22_2
+    _t18 = e3*p12_3 + edot3*p22_3
+    _t19 = e4*p12_4 + edot4*p22_4
+    _t20 = _norm(_t15, _t16, _t17, _t18, _t19)
+    _t21 = gain_1/max(_t20, eps_1)
+    _t22 = _t15*_t21 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t23 = _t17*_t21 + e2*k1_2 + edot2*k2_2 + qdd_des2
+    _t24 = K*_t23
+    _t25 = 0.5*r
+    _t26 = _t10*_t25
+    _t27 = _t5*r
+    _t28 = K*_t3
+    _t29 = _t27*_t28
+    _t30 = _t27*d
+    _t31 = _t30*_t4
+    _t32 = _t26 + _t29 - _t31
+    _t33 = _t18*_t21 + e3*k1_3 + edot3*k2_3 + qdd_des3
+    _t34 = _t26 - _t29 + _t31
+    _t35 = _t19*_t21 + e4*k1_4 + edot4*k2_4 + qdd_des4
+    _t36 = _t12*_t4
+    _t37 = _t16*_t21 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t38 = _t25*_t4
+    _t39 = K*_t9
+    _t40 = _t27*_t39
+    _t41 = _t10*_t30
+    _t42 = _t38 + _t40 - _t41
+    _t43 = _t38 - _t40 + _t41
+    _t44 = K*_t6
+    _t45 = I*_t27 - K*_t30
+    _t46 = -_t45
+    _t47 = K*_t25*thetadot*thetadot
     u = np.array([
-        -_t1*_t6 + _t10*_t11 + _t11*_t12 - _t11*_t13*_t9 + _t2*_t23 + _t21*m - _t31*_t32 - _t33*_t34 + _t6*_t7,
-        _t1*_t35 + _t10*_t5 - _t12*_t5 - _t13*_t35 - _t23*_t8 - _t32*_t42 - _t34*_t41 + _t35*_t7 + _t36*m,
-        I*_t22 - _t1*_t43 + _t21*_t27 + _t32*_t45 + _t34*_t44 - _t36*_t38 + _t43*_t7,
-        I_w*_t32 + _t21*_t31 + _t22*_t44 + _t36*_t42 + _t46,
-        I_w*_t34 + _t21*_t33 + _t22*_t45 + _t36*_t41 + _t46,
+        -_t10*_t12*_t14 + _t11*_t12 + _t12*_t13 - _t2*_t7 + _t22*m + _t24*_t3 - _t32*_t33 - _t34*_t35 + _t7*_t8,
+        _t11*_t6 - _t13*_t6 - _t14*_t36 + _t2*_t36 - _t24*_t9 - _t33*_t43 - _t35*_t42 + _t36*_t8 + _t37*m,
+        I*_t23 - _t2*_t44 + _t22*_t28 + _t33*_t46 + _t35*_t45 - _t37*_t39 + _t44*_t8,
+        I_w*_t33 + _t22*_t32 + _t23*_t45 + _t37*_t43 + _t47,
+        I_w*_t35 + _t22*_t34 + _t23*_t46 + _t37*_t42 + _t47,
     ])
-    s = np.array([_t14, _t15, _t16, _t17, _t18])
-    s_norm = np.array([_t19])
-    gain_next = np.array([_t19*gamma*h + gain_1])
+    s = np.array([_t15, _t16, _t17, _t18, _t19])
+    s_norm = np.array([_t20])
+    gain_next = np.array([_t20*gamma*h + gain_1])
     return u, s, s_norm, gain_next
 
 

@@ -116,7 +116,7 @@ def bias_forces(q: ArrayLike, qdot: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         H: array of 5 (shape 5x1, row-major)
 
-    operations after CSE: 9 add, 37 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 9 add, 38 mul, 1 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, thetadot, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -125,30 +125,31 @@ def bias_forces(q: ArrayLike, qdot: ArrayLike, p: Any) -> NDArray[np.float64]:
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = math.sin(theta)
-    _t1 = 1.0/b
-    _t2 = r*r
-    _t3 = _t1*_t2
-    _t4 = 0.5*_t3
-    _t5 = thetadot_l*thetadot_l
-    _t6 = _t5*m
-    _t7 = _t4*_t6
-    _t8 = thetadot_r*thetadot_r
-    _t9 = _t8*m
-    _t10 = _t0*_t9
-    _t11 = math.cos(theta)
-    _t12 = _t2*d/(b*b)
-    _t13 = _t11*_t12
-    _t14 = 2.0*m*thetadot_l*thetadot_r
-    _t15 = _t0*_t12
-    _t16 = 0.5*K
-    _t17 = _t16*r*thetadot*thetadot
+    _t0 = 1.0/b
+    _t1 = math.sin(theta)
+    _t2 = _t0
+    _t3 = r*r
+    _t4 = _t2*_t3
+    _t5 = 0.5*_t4
+    _t6 = thetadot_l*thetadot_l
+    _t7 = _t6*m
+    _t8 = _t5*_t7
+    _t9 = thetadot_r*thetadot_r
+    _t10 = _t9*m
+    _t11 = _t1*_t10
+    _t12 = math.cos(theta)
+    _t13 = _t0*_t0*_t3*d
+    _t14 = _t12*_t13
+    _t15 = 2.0*m*thetadot_l*thetadot_r
+    _t16 = _t1*_t13
+    _t17 = 0.5*K
+    _t18 = _t17*r*thetadot*thetadot
     H = np.array([
-        -_t0*_t7 + _t10*_t4 - _t13*_t14 + _t13*_t6 + _t13*_t9,
-        _t10*_t12 - _t11*_t4*_t9 + _t11*_t7 - _t14*_t15 + _t15*_t6,
-        0.5*K*_t1*_t2*_t8 - _t16*_t3*_t5,
-        _t17,
-        _t17,
+        -_t1*_t8 + _t10*_t14 + _t11*_t5 - _t14*_t15 + _t14*_t7,
+        -_t10*_t12*_t5 + _t11*_t13 + _t12*_t8 - _t15*_t16 + _t16*_t7,
+        0.5*K*_t2*_t3*_t9 - _t17*_t4*_t6,
+        _t18,
+        _t18,
     ])
     return H
 
@@ -171,7 +172,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 5 (shape 5x1, row-major)
 
-    operations after CSE: 27 add, 51 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 27 add, 52 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -186,50 +187,51 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of forward_dynamics is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.sin(theta)
-        _t1 = _t0*b
-        _t2 = math.cos(theta)
-        _t3 = 2.0*d
-        _t4 = _t2*_t3
-        _t5 = thetadot_l - thetadot_r
-        _t6 = r*r
-        _t7 = 1.0/(b*b)
-        _t8 = _t6*_t7
-        _t9 = 0.5*_t5*_t8
-        _t10 = _t2*b
-        _t11 = _t0*_t3
-        _t12 = 0.25*_t6*m
-        _t13 = I - K*_t3 + d*d*m
-        _t14 = _t12 - _t13*_t8
-        _t15 = I_w + _t12 + _t13*_t8
-        _t16 = -_t14*_t14 + _t15*_t15
-        _t17 = 1.0/_t16
-        _t18 = _t5*_t7*r*r*r*(-K + d*m)
-        _t19 = _t18*thetadot_l + tau_r
-        _t20 = -_t18*thetadot_r + tau_l
-        _t21 = _t17*(-_t14*_t20 + _t15*_t19)
-        _t22 = r/b
-        _t23 = _t21*_t22
-        _t24 = 0.5*_t23
-        _t25 = _t17*(-_t14*_t19 + _t15*_t20)
-        _t26 = _t22*_t25
-        _t27 = 0.5*_t26
+        _t0 = 1.0/b
+        _t1 = math.sin(theta)
+        _t2 = _t1*b
+        _t3 = math.cos(theta)
+        _t4 = 2.0*d
+        _t5 = _t3*_t4
+        _t6 = thetadot_l - thetadot_r
+        _t7 = r*r
+        _t8 = _t0*_t0
+        _t9 = _t7*_t8
+        _t10 = 0.5*_t6*_t9
+        _t11 = _t3*b
+        _t12 = _t1*_t4
+        _t13 = 0.25*_t7*m
+        _t14 = I - K*_t4 + d*d*m
+        _t15 = _t13 - _t14*_t9
+        _t16 = I_w + _t13 + _t14*_t9
+        _t17 = -_t15*_t15 + _t16*_t16
+        _t18 = 1.0/_t17
+        _t19 = _t6*_t8*r*r*r*(-K + d*m)
+        _t20 = _t19*thetadot_l + tau_r
+        _t21 = -_t19*thetadot_r + tau_l
+        _t22 = _t18*(-_t15*_t21 + _t16*_t20)
+        _t23 = _t0*r
+        _t24 = _t22*_t23
+        _t25 = 0.5*_t24
+        _t26 = _t18*(-_t15*_t20 + _t16*_t21)
+        _t27 = _t23*_t26
+        _t28 = 0.5*_t27
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires b > 0")
-    if not (_t15 > 0.0):
-        raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
     if not (_t16 > 0.0):
+        raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
+    if not (_t17 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
     qddot = np.array([
-        _t24*(_t10 - _t11) + _t27*(_t10 + _t11) + _t9*(_t1*thetadot_l + _t1*thetadot_r - _t4*thetadot_l + _t4*thetadot_r),
-        _t24*(_t1 + _t4) + _t27*(_t1 - _t4) - _t9*(_t10*thetadot_l + _t10*thetadot_r + _t11*thetadot_l - _t11*thetadot_r),
-        _t23 - _t26,
-        _t21,
-        _t25,
+        _t10*(_t2*thetadot_l + _t2*thetadot_r - _t5*thetadot_l + _t5*thetadot_r) + _t25*(_t11 - _t12) + _t28*(_t11 + _t12),
+        -_t10*(_t11*thetadot_l + _t11*thetadot_r + _t12*thetadot_l - _t12*thetadot_r) + _t25*(_t2 + _t5) + _t28*(_t2 - _t5),
+        _t24 - _t27,
+        _t22,
+        _t26,
     ])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
@@ -421,7 +423,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 49 (shape 7x7, row-major). 7x7 row-major
         B: array of 14 (shape 7x2, row-major). 7x2 row-major
 
-    operations after CSE: 20 add, 45 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 20 add, 46 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
@@ -433,43 +435,44 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = math.sin(theta)
-    _t1 = 0.5*r
-    _t2 = _t0*_t1
-    _t3 = math.cos(theta)
-    _t4 = r/b
-    _t5 = _t4*d
-    _t6 = _t3*_t5
-    _t7 = _t2 - _t6
-    _t8 = _t2 + _t6
-    _t9 = _t1*_t3
-    _t10 = _t0*_t5
-    _t11 = -_t10 + _t9
-    _t12 = _t10 + _t9
-    _t13 = r*r
-    _t14 = 0.25*_t13*m
-    _t15 = I - 2.0*K*d + d*d*m
-    _t16 = 1.0/(b*b)
-    _t17 = _t13*_t16
-    _t18 = _t14 - _t15*_t17
-    _t19 = I_w + _t14 + _t15*_t17
-    _t20 = 1.0/(-_t18*_t18 + _t19*_t19)
-    _t21 = _t16*r*r*r*(-K + d*m)
-    _t22 = _t21*thetadot_l
-    _t23 = _t21*thetadot_r
-    _t24 = _t21*(thetadot_l - thetadot_r)
-    _t25 = _t23 - _t24
-    _t26 = _t22 + _t24
-    _t27 = _t19*_t20
-    _t28 = -_t18*_t20
+    _t0 = 1.0/b
+    _t1 = math.sin(theta)
+    _t2 = 0.5*r
+    _t3 = _t1*_t2
+    _t4 = math.cos(theta)
+    _t5 = _t0*r
+    _t6 = _t5*d
+    _t7 = _t4*_t6
+    _t8 = _t3 - _t7
+    _t9 = _t3 + _t7
+    _t10 = _t2*_t4
+    _t11 = _t1*_t6
+    _t12 = _t10 - _t11
+    _t13 = _t10 + _t11
+    _t14 = r*r
+    _t15 = 0.25*_t14*m
+    _t16 = I - 2.0*K*d + d*d*m
+    _t17 = _t0*_t0
+    _t18 = _t14*_t17
+    _t19 = _t15 - _t16*_t18
+    _t20 = I_w + _t15 + _t16*_t18
+    _t21 = 1.0/(-_t19*_t19 + _t20*_t20)
+    _t22 = _t17*r*r*r*(-K + d*m)
+    _t23 = _t22*thetadot_l
+    _t24 = _t22*thetadot_r
+    _t25 = _t22*(thetadot_l - thetadot_r)
+    _t26 = _t24 - _t25
+    _t27 = _t23 + _t25
+    _t28 = _t20*_t21
+    _t29 = -_t19*_t21
     A = np.array([
-        [0.0, 0.0, -_t7*thetadot_l - _t8*thetadot_r, 0.0, 0.0, _t11, _t12],
-        [0.0, 0.0, _t11*thetadot_r + _t12*thetadot_l, 0.0, 0.0, _t8, _t7],
-        [0.0, 0.0, 0.0, 0.0, 0.0, _t4, -_t4],
+        [0.0, 0.0, -_t8*thetadot_l - _t9*thetadot_r, 0.0, 0.0, _t12, _t13],
+        [0.0, 0.0, _t12*thetadot_r + _t13*thetadot_l, 0.0, 0.0, _t9, _t8],
+        [0.0, 0.0, 0.0, 0.0, 0.0, _t5, -_t5],
         [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
         [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-        [0.0, 0.0, 0.0, 0.0, 0.0, _t20*(-_t18*_t25 - _t19*_t22), _t20*(_t18*_t23 + _t19*_t26)],
-        [0.0, 0.0, 0.0, 0.0, 0.0, _t20*(_t18*_t22 + _t19*_t25), _t20*(-_t18*_t26 - _t19*_t23)],
+        [0.0, 0.0, 0.0, 0.0, 0.0, _t21*(-_t19*_t26 - _t20*_t23), _t21*(_t19*_t24 + _t20*_t27)],
+        [0.0, 0.0, 0.0, 0.0, 0.0, _t21*(_t19*_t23 + _t20*_t26), _t21*(-_t19*_t27 - _t20*_t24)],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -477,8 +480,8 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t27, _t28],
-        [_t28, _t27],
+        [_t28, _t29],
+        [_t29, _t28],
     ])
     return A, B
 
@@ -506,7 +509,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 1 (shape 1x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 63 add, 102 mul, 4 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
@@ -521,87 +524,88 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     if not all(map(math.isfinite, (theta, thetadot_r, thetadot_l, tau_r, tau_l, m, I, K, I_w, r, b, d,))):
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of wheel_contact_forces is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = math.cos(theta)
-        _t1 = 0.5*r
-        _t2 = _t0*_t1
-        _t3 = r/b
-        _t4 = math.sin(theta)
-        _t5 = _t4*d
-        _t6 = _t3*_t5
-        _t7 = _t1*_t4
-        _t8 = _t0*d
-        _t9 = _t3*_t8
-        _t10 = _t7 + _t9
-        _t11 = _t7 - _t9
-        _t12 = K*_t4
-        _t13 = K*_t0
-        _t14 = -_t3*thetadot_l + _t3*thetadot_r
-        _t15 = _t14*_t14
-        _t16 = _t14*thetadot_r
-        _t17 = _t14*thetadot_l
-        _t18 = _t2 - _t6
-        _t19 = _t12*_t3 + _t18*m
-        _t20 = _t10*m - _t13*_t3
-        _t21 = I*_t3 - _t10*_t13 + _t12*_t18
-        _t22 = _t2 + _t6
-        _t23 = -_t12*_t3 + _t22*m
-        _t24 = _t11*m + _t13*_t3
-        _t25 = -I*_t3 - _t11*_t13 + _t12*_t22
-        _t26 = _t13*_t15
-        _t27 = -_t10*_t16 - _t11*_t17
-        _t28 = _t26 + _t27*m
-        _t29 = _t12*_t15
-        _t30 = _t16*_t18 + _t17*_t22
-        _t31 = _t29 + _t30*m
-        _t32 = _t12*_t27 - _t13*_t30
-        _t33 = _t0*b
-        _t34 = 0.5*_t33
-        _t35 = _t4*b
-        _t36 = 0.5*_t35
-        _t37 = r*r
-        _t38 = 0.25*_t37*m
-        _t39 = I - 2.0*K*d + d*d*m
-        _t40 = _t37/(b*b)
-        _t41 = I_w + _t38 + _t39*_t40
-        _t42 = I_w + _t10*_t20 + _t18*_t19 + _t21*_t3
-        _t43 = _t11*_t20 + _t19*_t22 - _t21*_t3
-        _t44 = _t10*_t24 + _t18*_t23 + _t25*_t3
-        _t45 = I_w + _t11*_t24 + _t22*_t23 - _t25*_t3
-        _t46 = _t10*_t31 + _t18*_t28 + _t3*_t32
-        _t47 = _t11*_t31 + _t22*_t28 - _t3*_t32
-        _t48 = -_t46 + tau_r
-        _t49 = -_t47 + tau_l
-        _t50 = _t42*_t45 - _t43*_t44
-        _t51 = 1.0/_t50
-        _t52 = _t51*(-_t43*_t49 + _t45*_t48)
-        _t53 = _t51*(_t42*_t49 - _t44*_t48)
-        _t54 = _t18*_t52 + _t22*_t53 + _t27
-        _t55 = _t10*_t52 + _t11*_t53 + _t30
-        _t56 = _t3*_t52 - _t3*_t53
-        _t57 = -_t12*_t56 - _t26 - _t54*m
-        _t58 = _t13*_t56 - _t29 - _t55*m
-        _t59 = -I*_t56 - _t12*_t54 + _t13*_t55
-        _t60 = _t34 + _t5
-        _t61 = _t36 - _t8
-        _t62 = _t34 - _t5
-        _t63 = _t36 + _t8
-        _t64 = -1.0/b
-        _t65 = _t64*(_t57*_t60 + _t58*_t61 - _t59)
-        _t66 = _t64*(_t57*_t62 + _t58*_t63 + _t59)
-        _t67 = _t64*(-_t33*_t58 + _t35*_t57)
-        _t68 = _t38 - _t39*_t40
+        _t0 = 1.0/b
+        _t1 = math.cos(theta)
+        _t2 = 0.5*r
+        _t3 = _t1*_t2
+        _t4 = _t0*r
+        _t5 = math.sin(theta)
+        _t6 = _t5*d
+        _t7 = _t4*_t6
+        _t8 = _t2*_t5
+        _t9 = _t1*d
+        _t10 = _t4*_t9
+        _t11 = _t10 + _t8
+        _t12 = -_t10 + _t8
+        _t13 = K*_t5
+        _t14 = K*_t1
+        _t15 = -_t4*thetadot_l + _t4*thetadot_r
+        _t16 = _t15*_t15
+        _t17 = _t15*thetadot_r
+        _t18 = _t15*thetadot_l
+        _t19 = _t3 - _t7
+        _t20 = _t13*_t4 + _t19*m
+        _t21 = _t11*m - _t14*_t4
+        _t22 = I*_t4 - _t11*_t14 + _t13*_t19
+        _t23 = _t3 + _t7
+        _t24 = -_t13*_t4 + _t23*m
+        _t25 = _t12*m + _t14*_t4
+        _t26 = -I*_t4 - _t12*_t14 + _t13*_t23
+        _t27 = _t14*_t16
+        _t28 = -_t11*_t17 - _t12*_t18
+        _t29 = _t27 + _t28*m
+        _t30 = _t13*_t16
+        _t31 = _t17*_t19 + _t18*_t23
+        _t32 = _t30 + _t31*m
+        _t33 = _t13*_t28 - _t14*_t31
+        _t34 = _t1*b
+        _t35 = 0.5*_t34
+        _t36 = _t5*b
+        _t37 = 0.5*_t36
+        _t38 = r*r
+        _t39 = 0.25*_t38*m
+        _t40 = I - 2.0*K*d + d*d*m
+        _t41 = _t0*_t0*_t38
+        _t42 = I_w + _t39 + _t40*_t41
+        _t43 = I_w + _t11*_t21 + _t19*_t20 + _t22*_t4
+        _t44 = _t12*_t21 + _t20*_t23 - _t22*_t4
+        _t45 = _t11*_t25 + _t19*_t24 + _t26*_t4
+        _t46 = I_w + _t12*_t25 + _t23*_t24 - _t26*_t4
+        _t47 = _t11*_t32 + _t19*_t29 + _t33*_t4
+        _t48 = _t12*_t32 + _t23*_t29 - _t33*_t4
+        _t49 = -_t47 + tau_r
+        _t50 = -_t48 + tau_l
+        _t51 = _t43*_t46 - _t44*_t45
+        _t52 = 1.0/_t51
+        _t53 = _t52*(-_t44*_t50 + _t46*_t49)
+        _t54 = _t52*(_t43*_t50 - _t45*_t49)
+        _t55 = _t19*_t53 + _t23*_t54 + _t28
+        _t56 = _t11*_t53 + _t12*_t54 + _t31
+        _t57 = _t4*_t53 - _t4*_t54
+        _t58 = -_t13*_t57 - _t27 - _t55*m
+        _t59 = _t14*_t57 - _t30 - _t56*m
+        _t60 = -I*_t57 - _t13*_t55 + _t14*_t56
+        _t61 = _t35 + _t6
+        _t62 = _t37 - _t9
+        _t63 = _t35 - _t6
+        _t64 = _t37 + _t9
+        _t65 = -_t0
+        _t66 = _t65*(_t58*_t61 + _t59*_t62 - _t60)
+        _t67 = _t65*(_t58*_t63 + _t59*_t64 + _t60)
+        _t68 = _t65*(-_t34*_t59 + _t36*_t58)
+        _t69 = _t39 - _t40*_t41
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires b > 0")
-    if not (_t41 > 0.0):
+    if not (_t42 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t41*_t41 - _t68*_t68 > 0.0):
+    if not (_t42*_t42 - _t69*_t69 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t66, _t65])
-    lateral = np.array([-_t67])
+    longitudinal = np.array([_t67, _t66])
+    lateral = np.array([-_t68])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):

@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 7 (shape 7x1, row-major)
 
-    operations after CSE: 22 add, 47 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 22 add, 47 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _, thetadot_r, thetadot_l = _flat(x, 7, "x")
     tau_r, tau_l = _flat(tau, 2, "tau")
@@ -73,39 +73,40 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     r = float(_field(pp, "r"))
     b = float(_field(pp, "b"))
     d = float(_field(pp, "d"))
-    _t0 = math.cos(theta)
-    _t1 = 0.5*r
-    _t2 = _t0*_t1
-    _t3 = math.sin(theta)
-    _t4 = 1.0/b
-    _t5 = _t4*r
-    _t6 = _t5*d
-    _t7 = _t3*_t6
-    _t8 = _t1*_t3
-    _t9 = _t0*_t6
-    _t10 = r*r
-    _t11 = 0.25*_t10
-    _t12 = I - 2.0*K*d + d*d*m
-    _t13 = 1.0/(b*b)
-    _t14 = _t10*_t13
-    _t15 = _t11*m - _t12*_t14
-    _t16 = 4.0*K_lat
-    _t17 = _t11*_t4
-    _t18 = I_w + _t12*_t14
-    _t19 = _t17*(-_t16 + b*m) + _t18
-    _t20 = _t17*(_t16 + b*m) + _t18
-    _t21 = 1.0/(-_t15*_t15 + _t19*_t20)
-    _t22 = _t13*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r)
-    _t23 = -_t22*thetadot_r + tau_l
-    _t24 = _t22*thetadot_l + tau_r
+    _t0 = 1.0/b
+    _t1 = math.cos(theta)
+    _t2 = 0.5*r
+    _t3 = _t1*_t2
+    _t4 = math.sin(theta)
+    _t5 = _t0
+    _t6 = _t5*r
+    _t7 = _t6*d
+    _t8 = _t4*_t7
+    _t9 = _t2*_t4
+    _t10 = _t1*_t7
+    _t11 = r*r
+    _t12 = 0.25*_t11
+    _t13 = I - 2.0*K*d + d*d*m
+    _t14 = _t0*_t0
+    _t15 = _t11*_t14
+    _t16 = _t12*m - _t13*_t15
+    _t17 = 4.0*K_lat
+    _t18 = _t12*_t5
+    _t19 = I_w + _t13*_t15
+    _t20 = _t18*(-_t17 + b*m) + _t19
+    _t21 = _t18*(_t17 + b*m) + _t19
+    _t22 = 1.0/(-_t16*_t16 + _t20*_t21)
+    _t23 = _t14*r*r*r*(-K + d*m)*(thetadot_l - thetadot_r)
+    _t24 = -_t23*thetadot_r + tau_l
+    _t25 = _t23*thetadot_l + tau_r
     xdot = np.array([
-        thetadot_l*(_t2 + _t7) + thetadot_r*(_t2 - _t7),
-        thetadot_l*(_t8 - _t9) + thetadot_r*(_t8 + _t9),
-        _t4*r*thetadot_r - _t5*thetadot_l,
+        thetadot_l*(_t3 + _t8) + thetadot_r*(_t3 - _t8),
+        thetadot_l*(-_t10 + _t9) + thetadot_r*(_t10 + _t9),
+        _t5*r*thetadot_r - _t6*thetadot_l,
         thetadot_r,
         thetadot_l,
-        _t21*(-_t15*_t23 + _t20*_t24),
-        _t21*(-_t15*_t24 + _t19*_t23),
+        _t22*(-_t16*_t24 + _t21*_t25),
+        _t22*(-_t16*_t25 + _t20*_t24),
     ])
     return xdot
 

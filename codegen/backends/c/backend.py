@@ -149,8 +149,15 @@ def _template(name: str, source: str, **context: object) -> str:
     return format_c(text)
 
 
+# Kernel inputs a controller step derives from its configuration alone, so split with the
+# parameters: (17)'s span (h or 2h), whose reciprocal _init then keeps (no division a step).
+# The controller's _init passes &fresh.tde_<name>, which it computes before the kept values.
+STEP_FIXED_INPUTS = frozenset({"span"})
+
+
 def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: str,
-                 config: CConfig, frozen: str) -> tuple[str, list[KeptKernel]]:
+                 config: CConfig, frozen: str, unguarded: frozenset[str] = frozenset()
+                 ) -> tuple[str, list[KeptKernel]]:
     """Static copies, named ``<kp><kernel>``, of the kernels of ``module`` that ``text``
     (a controller's C) calls under those names, in the module's order: the step then calls
     functions of its own file, which the compiler inlines and schedules with the step.
@@ -159,7 +166,8 @@ def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: st
     (:func:`~codegen.backends.c.render.kept_kernel`): ``<kp><kernel>_keep``, which the
     controller's ``_init`` calls to keep those values in the state, and ``<kp><kernel>``,
     the per-step rest reading them (``_keep`` is compiled only without ``frozen``, the
-    define of a build whose state, kept values included, is compiled in). Returns the C and
+    define of a build whose state, kept values included, is compiled in, except that of a
+    kernel in ``unguarded``, which the configuration check calls too). Returns the C and
     the kept kernels."""
     called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", text))
     by_name = {f.spec.name: f for f in functions}
@@ -174,7 +182,7 @@ def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: st
             continue
         if f.spec.returns_status:
             raise ValueError(f"{module}: step kernel {f.spec.name} returns a status")
-        split = kept_kernel(f, config, f"{kp}{f.spec.name}")
+        split = kept_kernel(f, config, f"{kp}{f.spec.name}", fixed_inputs=STEP_FIXED_INPUTS)
         if split is not None:
             # Two kernels that keep the same values (the minimal form's M-bar in the TDE
             # and in the law) share one _keep: else the compiler merges the copies into an
@@ -193,6 +201,8 @@ def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: st
         ctx["name"] = f"{kp}{f.spec.name}"
         ctx["unless"] = ""
         contexts.append(ctx)
+    always = {str(k.keep["name"]) for k in kept if k.name in unguarded}
+    contexts = [{**c, "unless": ""} if c["name"] in always else c for c in contexts]
     if not contexts:
         return "", kept
     return template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja", functions=contexts,
@@ -239,10 +249,19 @@ class CBackend:
             # Rendered once to see which kernels the step calls, then with their copies
             # (and the state with the values the split ones keep).
             first = _template("controller.c.jinja", law, step_kernels="", kept_kernels=[],
-                              **context)
+                              span_kept=[], span_needed=True, **context)
+            # a robot whose ||Mhat(q)^-1|| depends on q: the configuration check evaluates
+            # the step's copy (at q = 0), not the laws module's, so only one is linked
             text, kept = step_kernels(first, kp, laws.functions, laws.name, config,
-                                      f"{pre.upper()}_{info.name.upper()}_FROZEN")
-            kept_ctx = [{"name": k.name, "size": k.size, "keep": k.keep["name"]} for k in kept]
+                                      f"{pre.upper()}_{info.name.upper()}_FROZEN",
+                                      frozenset({"minimal_minv_norm"} if layout.minv_needs_q
+                                                else ()))
+            kept_ctx = [{"name": k.name, "size": k.size, "keep": k.keep["name"],
+                         "fixed": list(k.fixed)} for k in kept]
+            # the step's span is needed only by a (17) kernel that did not keep 1/span
+            span_kept = [k.name for k in kept if "span" in k.fixed]
+            tde_called = set(re.findall(rf"\b{re.escape(kp)}(\w+_tde(?:_trig)?)\(", first))
+            context.update(span_kept=span_kept, span_needed=bool(tde_called - set(span_kept)))
             files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law,
                                                       kept_kernels=kept_ctx, **context)
             files[f"{pre}_{info.name}.c"] = _template(

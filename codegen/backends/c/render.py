@@ -907,24 +907,27 @@ class KeptKernel:
     size: int
     keep: dict[str, object]  # function contexts, as _function_context's
     call: dict[str, object]
+    fixed: tuple[str, ...] = ()  # inputs _keep takes after the parameters, not the step
 
 
-def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kept"
-                ) -> KeptKernel | None:
+def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kept",
+                fixed_inputs: frozenset[str] = frozenset()) -> KeptKernel | None:
     """``ir`` (a kernel without status or guards, with a ``"params"`` input) as
-    ``<name>_keep(p, kept)`` and ``<name>(kept, other inputs..., outputs...)``, or None if
-    nothing but parameters would be kept (then there is nothing to evaluate once)."""
+    ``<name>_keep(p, fixed inputs..., kept)`` and ``<name>(kept, other inputs...,
+    outputs...)``, or None if nothing but parameters would be kept (then there is nothing
+    to evaluate once). The inputs named in ``fixed_inputs`` (values the caller derives from
+    its configuration alone) are split with the parameters: ``_keep`` takes them."""
     spec = ir.spec
     if spec.returns_status or spec.guards or not any(a.kind == "params" for a in spec.inputs):
         return None
-    form = prepared_form(ir.cse, replace(spec, returns_status=True))
+    form = prepared_form(ir.cse, replace(spec, returns_status=True), fixed_inputs)
     if not form.param_temps:
         return None
     slots = input_slots(spec)
     names = _local_names(spec, slots)
     printer = _printer(names, (*form.param_temps, *form.state_temps), config, spec)
     # keep: the parameters read, the parameter-only temporaries, the kept values stored
-    param_args = [a for a in spec.inputs if a.kind == "params"]
+    param_args = [a for a in spec.inputs if a.kind == "params" or a.name in fixed_inputs]
     used_params = form.used_params()
     body = [_decl(names[s.symbol], _access(s.arg, s.field, s.index))
             for s in slots if s.symbol in used_params]
@@ -941,7 +944,7 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
     }
     # call: the per-step rest, each input and kept value read before its first use
     printer = _printer(names, (*form.param_temps, *form.state_temps), config, spec)
-    state_args = [a for a in spec.inputs if a.kind != "params"]
+    state_args = [a for a in spec.inputs if a.kind != "params" and a.name not in fixed_inputs]
     used = form.used_state()
     loads = {s.symbol: _decl(names[s.symbol], _access(s.arg, s.field, s.index))
              for s in slots if s.symbol in used}
@@ -962,4 +965,5 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
                    *(_param_decl(a, False, config) for a in spec.outputs)],
         "ops": op_count_from(printer.ops).comment(), "body": body,
     }
-    return KeptKernel(spec.name, len(form.kept), keep, call)
+    moved = tuple(a.name for a in spec.inputs if a.name in fixed_inputs)
+    return KeptKernel(spec.name, len(form.kept), keep, call, moved)

@@ -4,7 +4,9 @@
  * Template: codegen/backends/c/templates/controller_common.h.jinja
  *
  * Validation and bookkeeping shared by the four controllers (trailer_tdc, trailer_tdroc,
- * trailer_roc, trailer_asmc): one copy in flash however many controllers are linked.
+ * trailer_roc, trailer_asmc): one copy in flash however many controllers are linked,
+ * except the four small per-step helpers at the end, static inline so that each step inlines
+ * them (no call, and scheduled with the step).
  */
 #ifndef TRAILER_CONTROLLER_H
 #define TRAILER_CONTROLLER_H
@@ -141,8 +143,22 @@ trailer_status_t trailer_check_step_inputs(const trailer_real_t q[8], const trai
  */
 void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAILER_MAX_WINDOW]);
 
+/* A controller step's body, specialised per formulation by inlining it at each call with a
+   constant formulation: gcc and clang are told to, unless optimising for size (-Os: one
+   body, not two); another compiler may inline it or not (the same results either way). */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER_STEP_INLINE static inline __attribute__((always_inline))
+#define TRAILER_STEP_PER_FORMULATION 1
+#else
+#define TRAILER_STEP_INLINE static inline
+#define TRAILER_STEP_PER_FORMULATION 0  /* one body, called once: inlined, no copy */
+#endif
+
 /** Cap an adaptive gain at TRAILER_GAIN_MAX (NaN and +Inf count as beyond it). */
-trailer_real_t trailer_cap_gain(trailer_real_t gain);
+static inline trailer_real_t trailer_cap_gain(trailer_real_t gain)
+{
+    return gain <= TRAILER_GAIN_MAX ? gain : TRAILER_GAIN_MAX;
+}
 
 /**
  * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
@@ -150,17 +166,56 @@ trailer_real_t trailer_cap_gain(trailer_real_t gain);
  * index 4 of q in the minimal form, 0 in the paper form (the caller passes
  * the other per-coordinate arrays from there, without copying them).
  */
-int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
+static inline int trailer_controlled_slice(int formulation, const trailer_real_t q[8],
     const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    trailer_real_t e[8], trailer_real_t edot[8]);
+    trailer_real_t e[8], trailer_real_t edot[8])
+{
+    const int nc = 2;
+    const int off = 4;
+    int i;
+    (void)formulation;  /* only the minimal formulation is generated */
+    for (i = 0; i < nc; ++i) {
+        e[i] = q_des[off + i] - q[off + i];
+        edot[i] = qdot_des[off + i] - qdot[off + i];
+    }
+    return nc;
+}
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],
+static inline void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],
     trailer_real_t qdot_prev2[8], trailer_real_t u_prev[8], trailer_real_t u_prev2[8],
-    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t tau[2]);
+    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t tau[2])
+{
+    int i;
+    for (i = 0; i < 8; ++i) {
+        q_prev[i] = q[i];
+        qdot_prev2[i] = qdot_prev[i];
+        qdot_prev[i] = qdot[i];
+        u_prev2[i] = u_prev[i];
+        u_prev[i] = TRAILER_LIT(0.0);
+    }
+    u_prev[4] = tau[0];
+    u_prev[5] = tau[1];
+}
 
 /** Clip tau to +-tau_max: TRAILER_WARN_SATURATED if it had to, else TRAILER_OK. */
-trailer_status_t trailer_saturate(trailer_real_t tau[2], trailer_real_t tau_max);
+static inline trailer_status_t trailer_saturate(trailer_real_t tau[2], trailer_real_t tau_max)
+{
+    trailer_status_t status = TRAILER_OK;
+    int i;
+    for (i = 0; i < 2; ++i) {
+        if (tau[i] > tau_max) {
+            tau[i] = tau_max;
+            status = TRAILER_WARN_SATURATED;
+        } else if (tau[i] < -tau_max) {
+            tau[i] = -tau_max;
+            status = TRAILER_WARN_SATURATED;
+        } else {
+            /* within the limit: unchanged (MISRA C:2012 rule 15.7) */
+        }
+    }
+    return status;
+}
 
 #ifdef __cplusplus
 }

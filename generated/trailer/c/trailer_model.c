@@ -1080,7 +1080,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 419 add, 626 mul, 41 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 419 add, 626 mul, 40 div, 4 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
@@ -1349,154 +1349,155 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t233 = J_theta_cart_left*_t144*_t144 + J_theta_cart_right*_t142*_t142
             + J_theta_left + _t11*_t150 + _t14*_t154 + _t149*_t22 + _t159*_t24;
     const trailer_real_t _t234 = _t230*_t233 - _t231*_t232;
-    const trailer_real_t _t235 = TRAILER_LIT(1.0)/(_t234*_t234);
-    const trailer_real_t _t236 = -_t10*_t168 + _t12*_t166 + _t137*_t217 + _t140*_t219 + _t16*_t163
+    const trailer_real_t _t235 = TRAILER_LIT(1.0)/_t234;
+    const trailer_real_t _t236 = _t235*_t235;
+    const trailer_real_t _t237 = -_t10*_t168 + _t12*_t166 + _t137*_t217 + _t140*_t219 + _t16*_t163
             + _t170*_t18;
     const trailer_real_t tau_right = tau[0];
-    const trailer_real_t _t237 = -_t236 + tau_right;
-    const trailer_real_t _t238 = TRAILER_LIT(1.0)/_t234;
-    const trailer_real_t _t239 = _t237*_t238;
-    const trailer_real_t _t240 = _t233*_t238;
-    const trailer_real_t _t241 = _t11*_t168 + _t14*_t166 + _t163*_t22 + _t170*_t24 + _t171*_t217
+    const trailer_real_t _t238 = -_t237 + tau_right;
+    const trailer_real_t _t239 = _t235;
+    const trailer_real_t _t240 = _t238*_t239;
+    const trailer_real_t _t241 = _t233*_t239;
+    const trailer_real_t _t242 = _t11*_t168 + _t14*_t166 + _t163*_t22 + _t170*_t24 + _t171*_t217
             + _t172*_t219;
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t242 = -_t241 + tau_left;
-    const trailer_real_t _t243 = _t238*_t242;
-    const trailer_real_t _t244 = _t231*_t238;
-    const trailer_real_t _t245 = -_t231*_t242 + _t233*_t237;
-    const trailer_real_t _t246 = TRAILER_LIT(2.0)*_t38;
-    const trailer_real_t _t247 = TRAILER_LIT(5.0)*_t88/TRAILER_LIT(3.0);
-    const trailer_real_t _t248 = _t247/TRAILER_LIT(5.0);
-    const trailer_real_t _t249 = _t0*_t16 + _t66 + _t67;
-    const trailer_real_t _t250 = TRAILER_LIT(5.0)*_t91/TRAILER_LIT(3.0);
-    const trailer_real_t _t251 = _t250/TRAILER_LIT(5.0);
-    const trailer_real_t _t252 = _t0*_t22 + _t69 + _t70;
-    const trailer_real_t _t253 = -_t162*_t180;
-    const trailer_real_t _t254 = TRAILER_LIT(2.0)*_t45;
-    const trailer_real_t _t255 = _t254*_t35 - _t254*_t47;
-    const trailer_real_t _t256 = _t254*_t31 + _t254*_t32;
-    const trailer_real_t _t257 = TRAILER_LIT(3.0)*_t45/TRAILER_LIT(5.0);
-    const trailer_real_t _t258 = _t257*_t4;
-    const trailer_real_t _t259 = _t2*_t257;
-    const trailer_real_t _t260 = _t258*_t33 + _t258*_t34 - _t259*_t37 + _t259*_t43;
-    const trailer_real_t _t261 = _t230*_t238;
-    const trailer_real_t _t262 = _t232*_t238;
-    const trailer_real_t _t263 = _t230*_t242 - _t232*_t237;
-    const trailer_real_t _t264 = _t107*_t171 + _t110*_t137 + _t12*_t149 + _t121*_t14
+    const trailer_real_t _t243 = -_t242 + tau_left;
+    const trailer_real_t _t244 = _t239*_t243;
+    const trailer_real_t _t245 = _t231*_t239;
+    const trailer_real_t _t246 = -_t231*_t243 + _t233*_t238;
+    const trailer_real_t _t247 = TRAILER_LIT(2.0)*_t38;
+    const trailer_real_t _t248 = TRAILER_LIT(5.0)*_t88/TRAILER_LIT(3.0);
+    const trailer_real_t _t249 = _t248/TRAILER_LIT(5.0);
+    const trailer_real_t _t250 = _t0*_t16 + _t66 + _t67;
+    const trailer_real_t _t251 = TRAILER_LIT(5.0)*_t91/TRAILER_LIT(3.0);
+    const trailer_real_t _t252 = _t251/TRAILER_LIT(5.0);
+    const trailer_real_t _t253 = _t0*_t22 + _t69 + _t70;
+    const trailer_real_t _t254 = -_t162*_t180;
+    const trailer_real_t _t255 = TRAILER_LIT(2.0)*_t45;
+    const trailer_real_t _t256 = _t255*_t35 - _t255*_t47;
+    const trailer_real_t _t257 = _t255*_t31 + _t255*_t32;
+    const trailer_real_t _t258 = TRAILER_LIT(3.0)*_t45/TRAILER_LIT(5.0);
+    const trailer_real_t _t259 = _t258*_t4;
+    const trailer_real_t _t260 = _t2*_t258;
+    const trailer_real_t _t261 = _t259*_t33 + _t259*_t34 - _t260*_t37 + _t260*_t43;
+    const trailer_real_t _t262 = _t230*_t239;
+    const trailer_real_t _t263 = _t232*_t239;
+    const trailer_real_t _t264 = _t230*_t243 - _t232*_t238;
+    const trailer_real_t _t265 = _t107*_t171 + _t110*_t137 + _t12*_t149 + _t121*_t14
             + _t123*(-_t10*_t22 + _t11*_t16) + _t127*_t64 + _t134*_t76 + _t140*_t97 + _t154*_t62
             + _t159*_t73 + _t172*_t94 + _t180*_t181 + _t36*(-_t10*_t14 + _t11*_t12);
-    const trailer_real_t _t265 = _t110*_t182 + _t14*_t184*_t36
+    const trailer_real_t _t266 = _t110*_t182 + _t14*_t184*_t36
             + _t14*(TRAILER_LIT(2.0)*_t146 + TRAILER_LIT(2.0)*_t147 + TRAILER_LIT(2.0)*_t148)
             + _t180*_t185 + _t183*_t97 + _t186*_t22 + _t188*_t76 + _t64*(TRAILER_LIT(2.0)*_t151
             + _t186 + _t187);
-    const trailer_real_t _t266 = _t174*_t190 - _t54;
-    const trailer_real_t _t267 = _t174*_t191 + _t48;
-    const trailer_real_t _t268 = _t174*_t194 + _t195;
-    const trailer_real_t _t269 = _t197*_t201 + _t198*_t206;
-    const trailer_real_t _t270 = _t174*_t175 + _t197*_t203 + _t198*_t208 + _t199*_t211
+    const trailer_real_t _t267 = _t174*_t190 - _t54;
+    const trailer_real_t _t268 = _t174*_t191 + _t48;
+    const trailer_real_t _t269 = _t174*_t194 + _t195;
+    const trailer_real_t _t270 = _t197*_t201 + _t198*_t206;
+    const trailer_real_t _t271 = _t174*_t175 + _t197*_t203 + _t198*_t208 + _t199*_t211
             + _t200*_t214;
-    const trailer_real_t _t271 = _t204 - _t205;
-    const trailer_real_t _t272 = _t271*_t92;
-    const trailer_real_t _t273 = _t209 - _t210;
-    const trailer_real_t _t274 = _t273*_t92;
-    const trailer_real_t _t275 = _t212 - _t213;
-    const trailer_real_t _t276 = _t275*_t92;
-    const trailer_real_t _t277 = _t215 - _t216;
-    const trailer_real_t _t278 = _t277*_t92;
-    const trailer_real_t _t279 = _t174*_t177 + _t197*_t272 + _t198*_t274 + _t199*_t276
-            + _t200*_t278;
-    const trailer_real_t _t280 = -_t204 - _t205;
-    const trailer_real_t _t281 = _t105*_t280;
-    const trailer_real_t _t282 = -_t209 - _t210;
-    const trailer_real_t _t283 = _t105*_t282;
-    const trailer_real_t _t284 = -_t212 - _t213;
-    const trailer_real_t _t285 = _t105*_t284;
-    const trailer_real_t _t286 = -_t215 - _t216;
-    const trailer_real_t _t287 = _t105*_t286;
-    const trailer_real_t _t288 = _t174*_t179 + _t197*_t281 + _t198*_t283 + _t199*_t285
-            + _t200*_t287;
-    const trailer_real_t _t289 = -_t10*_t221 - _t10*_t222 - _t10*_t268 + _t107*_t218 + _t12*_t163
-            + _t12*_t266 + _t121*_t165 + _t124*_t161 + _t127*_t269 + _t134*_t270 + _t137*_t288
-            + _t140*_t279 + _t16*_t267 + _t166*_t62 + _t170*_t73 - _t18*_t196 + _t220*_t94;
-    const trailer_real_t _t290 = _t11*_t221 + _t11*_t222 + _t11*_t268 + _t110*_t218 + _t14*_t163
-            + _t14*_t266 + _t149*_t165 + _t152*_t161 + _t154*_t269 + _t159*_t270 + _t166*_t64
-            + _t170*_t76 + _t171*_t288 + _t172*_t279 - _t196*_t24 + _t22*_t267 + _t220*_t97;
-    const trailer_real_t _t291 = _t107*_t223 + _t12*_t225*_t36
+    const trailer_real_t _t272 = _t204 - _t205;
+    const trailer_real_t _t273 = _t272*_t92;
+    const trailer_real_t _t274 = _t209 - _t210;
+    const trailer_real_t _t275 = _t274*_t92;
+    const trailer_real_t _t276 = _t212 - _t213;
+    const trailer_real_t _t277 = _t276*_t92;
+    const trailer_real_t _t278 = _t215 - _t216;
+    const trailer_real_t _t279 = _t278*_t92;
+    const trailer_real_t _t280 = _t174*_t177 + _t197*_t273 + _t198*_t275 + _t199*_t277
+            + _t200*_t279;
+    const trailer_real_t _t281 = -_t204 - _t205;
+    const trailer_real_t _t282 = _t105*_t281;
+    const trailer_real_t _t283 = -_t209 - _t210;
+    const trailer_real_t _t284 = _t105*_t283;
+    const trailer_real_t _t285 = -_t212 - _t213;
+    const trailer_real_t _t286 = _t105*_t285;
+    const trailer_real_t _t287 = -_t215 - _t216;
+    const trailer_real_t _t288 = _t105*_t287;
+    const trailer_real_t _t289 = _t174*_t179 + _t197*_t282 + _t198*_t284 + _t199*_t286
+            + _t200*_t288;
+    const trailer_real_t _t290 = -_t10*_t221 - _t10*_t222 - _t10*_t269 + _t107*_t218 + _t12*_t163
+            + _t12*_t267 + _t121*_t165 + _t124*_t161 + _t127*_t270 + _t134*_t271 + _t137*_t289
+            + _t140*_t280 + _t16*_t268 + _t166*_t62 + _t170*_t73 - _t18*_t196 + _t220*_t94;
+    const trailer_real_t _t291 = _t11*_t221 + _t11*_t222 + _t11*_t269 + _t110*_t218 + _t14*_t163
+            + _t14*_t267 + _t149*_t165 + _t152*_t161 + _t154*_t270 + _t159*_t271 + _t166*_t64
+            + _t170*_t76 + _t171*_t289 + _t172*_t280 - _t196*_t24 + _t22*_t268 + _t220*_t97;
+    const trailer_real_t _t292 = _t107*_t223 + _t12*_t225*_t36
             + _t12*(TRAILER_LIT(2.0)*_t118 + TRAILER_LIT(2.0)*_t119 + TRAILER_LIT(2.0)*_t120)
             + _t16*_t227 + _t180*_t226 + _t224*_t94 + _t229*_t73 + _t62*(TRAILER_LIT(2.0)*_t122
             + _t227 + _t228);
-    const trailer_real_t _t292 = _t230*_t265 - _t231*_t264 - _t232*_t264 + _t233*_t291;
-    const trailer_real_t _t293 = -_t235*_t292;
-    const trailer_real_t _t294 = _t239*_t265 - _t240*_t289 - _t243*_t264 + _t244*_t290
-            + _t245*_t293;
-    const trailer_real_t _t295 = _t100*_t172 + _t103*_t140 + _t113*_t171 + _t116*_t137
+    const trailer_real_t _t293 = _t230*_t266 - _t231*_t265 - _t232*_t265 + _t233*_t292;
+    const trailer_real_t _t294 = -_t236*_t293;
+    const trailer_real_t _t295 = _t240*_t266 - _t241*_t290 - _t244*_t265 + _t245*_t291
+            + _t246*_t294;
+    const trailer_real_t _t296 = _t100*_t172 + _t103*_t140 + _t113*_t171 + _t116*_t137
             + _t125*(_t16*_t24 + _t18*_t22) + _t134*_t80 + _t159*_t78 - _t180*_t181
             + _t38*(_t12*_t24 + _t14*_t18);
-    const trailer_real_t _t296 = _t103*_t183 + _t116*_t182 + _t14*_t24*_t246 - _t180*_t185
+    const trailer_real_t _t297 = _t103*_t183 + _t116*_t182 + _t14*_t24*_t247 - _t180*_t185
             + _t187*_t22 + _t188*_t80;
-    const trailer_real_t _t297 = _t175*_t190 - _t57;
-    const trailer_real_t _t298 = _t175*_t191 + _t53;
-    const trailer_real_t _t299 = _t175*_t194 - _t195;
-    const trailer_real_t _t300 = _t175*_t175 + _t197*_t211 + _t198*_t214 + _t199*_t247
-            + _t200*_t250;
-    const trailer_real_t _t301 = _t248 - _t249;
-    const trailer_real_t _t302 = _t301*_t92;
-    const trailer_real_t _t303 = _t251 - _t252;
-    const trailer_real_t _t304 = _t303*_t92;
-    const trailer_real_t _t305 = _t175*_t177 + _t197*_t276 + _t198*_t278 + _t199*_t302
-            + _t200*_t304;
-    const trailer_real_t _t306 = -_t248 - _t249;
-    const trailer_real_t _t307 = _t105*_t306;
-    const trailer_real_t _t308 = -_t251 - _t252;
-    const trailer_real_t _t309 = _t105*_t308;
-    const trailer_real_t _t310 = _t175*_t179 + _t197*_t285 + _t198*_t287 + _t199*_t307
-            + _t200*_t309;
-    const trailer_real_t _t311 = -_t10*_t253 - _t10*_t299 + _t100*_t220 + _t113*_t218 + _t12*_t297
-            + _t125*(_t16*_t162 + _t161*_t18) + _t134*_t300 + _t137*_t310 + _t140*_t305 + _t16*_t298
+    const trailer_real_t _t298 = _t175*_t190 - _t57;
+    const trailer_real_t _t299 = _t175*_t191 + _t53;
+    const trailer_real_t _t300 = _t175*_t194 - _t195;
+    const trailer_real_t _t301 = _t175*_t175 + _t197*_t211 + _t198*_t214 + _t199*_t248
+            + _t200*_t251;
+    const trailer_real_t _t302 = _t249 - _t250;
+    const trailer_real_t _t303 = _t302*_t92;
+    const trailer_real_t _t304 = _t252 - _t253;
+    const trailer_real_t _t305 = _t304*_t92;
+    const trailer_real_t _t306 = _t175*_t177 + _t197*_t277 + _t198*_t279 + _t199*_t303
+            + _t200*_t305;
+    const trailer_real_t _t307 = -_t249 - _t250;
+    const trailer_real_t _t308 = _t105*_t307;
+    const trailer_real_t _t309 = -_t252 - _t253;
+    const trailer_real_t _t310 = _t105*_t309;
+    const trailer_real_t _t311 = _t175*_t179 + _t197*_t286 + _t198*_t288 + _t199*_t308
+            + _t200*_t310;
+    const trailer_real_t _t312 = -_t10*_t254 - _t10*_t300 + _t100*_t220 + _t113*_t218 + _t12*_t298
+            + _t125*(_t16*_t162 + _t161*_t18) + _t134*_t301 + _t137*_t311 + _t140*_t306 + _t16*_t299
             + _t170*_t78 + _t18*_t196 + _t38*(_t12*_t162 + _t165*_t18);
-    const trailer_real_t _t312 = _t103*_t220 + _t11*_t253 + _t11*_t299 + _t116*_t218
-            + _t125*(_t161*_t24 + _t162*_t22) + _t14*_t297 + _t159*_t300 + _t170*_t80 + _t171*_t310
-            + _t172*_t305 + _t196*_t24 + _t22*_t298 + _t38*(_t14*_t162 + _t165*_t24);
-    const trailer_real_t _t313 = _t100*_t224 + _t113*_t223 + _t12*_t18*_t246 + _t16*_t228
+    const trailer_real_t _t313 = _t103*_t220 + _t11*_t254 + _t11*_t300 + _t116*_t218
+            + _t125*(_t161*_t24 + _t162*_t22) + _t14*_t298 + _t159*_t301 + _t170*_t80 + _t171*_t311
+            + _t172*_t306 + _t196*_t24 + _t22*_t299 + _t38*(_t14*_t162 + _t165*_t24);
+    const trailer_real_t _t314 = _t100*_t224 + _t113*_t223 + _t12*_t18*_t247 + _t16*_t228
             - _t180*_t226 + _t229*_t78;
-    const trailer_real_t _t314 = _t230*_t296 - _t231*_t295 - _t232*_t295 + _t233*_t313;
-    const trailer_real_t _t315 = -_t235*_t314;
-    const trailer_real_t _t316 = _t239*_t296 - _t240*_t311 - _t243*_t295 + _t244*_t312
-            + _t245*_t315;
-    const trailer_real_t _t317 = -_t10*_t255 + _t18*_t190;
-    const trailer_real_t _t318 = -_t10*_t256 + _t18*_t191;
-    const trailer_real_t _t319 = _t18*_t194;
-    const trailer_real_t _t320 = -_t10*_t260;
-    const trailer_real_t _t321 = -_t10*_t173 + _t45*_t62;
-    const trailer_real_t _t322 = -_t10*_t30 + _t12*_t45;
-    const trailer_real_t _t323 = -_t10*_t174 + _t175*_t18 + _t45*_t73 + _t49*_t78;
-    const trailer_real_t _t324 = -_t10*_t176 + _t100*_t49 + _t177*_t18 + _t45*_t94;
-    const trailer_real_t _t325 = -_t10*_t178 + _t107*_t45 + _t113*_t49 + _t179*_t18;
-    const trailer_real_t _t326 = -_t10*_t319 + _t12*_t317 + _t121*_t322 + _t127*_t321 + _t134*_t323
-            + _t137*_t325 + _t140*_t324 + _t16*_t318 + _t18*_t320;
-    const trailer_real_t _t327 = _t11*_t319 + _t14*_t317 + _t149*_t322 + _t154*_t321 + _t159*_t323
-            + _t171*_t325 + _t172*_t324 + _t22*_t318 + _t24*_t320;
-    const trailer_real_t _t328 = -_t240*_t326 + _t244*_t327;
-    const trailer_real_t _t329 = _t11*_t255 + _t190*_t24;
-    const trailer_real_t _t330 = _t11*_t256 + _t191*_t24;
-    const trailer_real_t _t331 = _t194*_t24;
-    const trailer_real_t _t332 = _t11*_t260;
-    const trailer_real_t _t333 = _t11*_t173 + _t45*_t64;
-    const trailer_real_t _t334 = _t11*_t30 + _t14*_t45;
-    const trailer_real_t _t335 = _t11*_t174 + _t175*_t24 + _t45*_t76 + _t49*_t80;
-    const trailer_real_t _t336 = _t103*_t49 + _t11*_t176 + _t177*_t24 + _t45*_t97;
-    const trailer_real_t _t337 = _t11*_t178 + _t110*_t45 + _t116*_t49 + _t179*_t24;
-    const trailer_real_t _t338 = -_t10*_t331 + _t12*_t329 + _t121*_t334 + _t127*_t333 + _t134*_t335
-            + _t137*_t337 + _t140*_t336 + _t16*_t330 + _t18*_t332;
-    const trailer_real_t _t339 = _t11*_t331 + _t14*_t329 + _t149*_t334 + _t154*_t333 + _t159*_t335
-            + _t171*_t337 + _t172*_t336 + _t22*_t330 + _t24*_t332;
-    const trailer_real_t _t340 = -_t240*_t338 + _t244*_t339;
-    const trailer_real_t _t341 = -_t239*_t264 + _t243*_t291 - _t261*_t290 + _t262*_t289
-            + _t263*_t293;
-    const trailer_real_t _t342 = -_t239*_t295 + _t243*_t313 - _t261*_t312 + _t262*_t311
-            + _t263*_t315;
-    const trailer_real_t _t343 = -_t230*_t238*_t327 + _t262*_t326;
-    const trailer_real_t _t344 = -_t230*_t238*_t339 + _t262*_t338;
+    const trailer_real_t _t315 = _t230*_t297 - _t231*_t296 - _t232*_t296 + _t233*_t314;
+    const trailer_real_t _t316 = -_t236*_t315;
+    const trailer_real_t _t317 = _t240*_t297 - _t241*_t312 - _t244*_t296 + _t245*_t313
+            + _t246*_t316;
+    const trailer_real_t _t318 = -_t10*_t256 + _t18*_t190;
+    const trailer_real_t _t319 = -_t10*_t257 + _t18*_t191;
+    const trailer_real_t _t320 = _t18*_t194;
+    const trailer_real_t _t321 = -_t10*_t261;
+    const trailer_real_t _t322 = -_t10*_t173 + _t45*_t62;
+    const trailer_real_t _t323 = -_t10*_t30 + _t12*_t45;
+    const trailer_real_t _t324 = -_t10*_t174 + _t175*_t18 + _t45*_t73 + _t49*_t78;
+    const trailer_real_t _t325 = -_t10*_t176 + _t100*_t49 + _t177*_t18 + _t45*_t94;
+    const trailer_real_t _t326 = -_t10*_t178 + _t107*_t45 + _t113*_t49 + _t179*_t18;
+    const trailer_real_t _t327 = -_t10*_t320 + _t12*_t318 + _t121*_t323 + _t127*_t322 + _t134*_t324
+            + _t137*_t326 + _t140*_t325 + _t16*_t319 + _t18*_t321;
+    const trailer_real_t _t328 = _t11*_t320 + _t14*_t318 + _t149*_t323 + _t154*_t322 + _t159*_t324
+            + _t171*_t326 + _t172*_t325 + _t22*_t319 + _t24*_t321;
+    const trailer_real_t _t329 = -_t241*_t327 + _t245*_t328;
+    const trailer_real_t _t330 = _t11*_t256 + _t190*_t24;
+    const trailer_real_t _t331 = _t11*_t257 + _t191*_t24;
+    const trailer_real_t _t332 = _t194*_t24;
+    const trailer_real_t _t333 = _t11*_t261;
+    const trailer_real_t _t334 = _t11*_t173 + _t45*_t64;
+    const trailer_real_t _t335 = _t11*_t30 + _t14*_t45;
+    const trailer_real_t _t336 = _t11*_t174 + _t175*_t24 + _t45*_t76 + _t49*_t80;
+    const trailer_real_t _t337 = _t103*_t49 + _t11*_t176 + _t177*_t24 + _t45*_t97;
+    const trailer_real_t _t338 = _t11*_t178 + _t110*_t45 + _t116*_t49 + _t179*_t24;
+    const trailer_real_t _t339 = -_t10*_t332 + _t12*_t330 + _t121*_t335 + _t127*_t334 + _t134*_t336
+            + _t137*_t338 + _t140*_t337 + _t16*_t331 + _t18*_t333;
+    const trailer_real_t _t340 = _t11*_t332 + _t14*_t330 + _t149*_t335 + _t154*_t334 + _t159*_t336
+            + _t171*_t338 + _t172*_t337 + _t22*_t331 + _t24*_t333;
+    const trailer_real_t _t341 = -_t241*_t339 + _t245*_t340;
+    const trailer_real_t _t342 = -_t240*_t265 + _t244*_t292 - _t262*_t291 + _t263*_t290
+            + _t264*_t294;
+    const trailer_real_t _t343 = -_t240*_t296 + _t244*_t314 - _t262*_t313 + _t263*_t312
+            + _t264*_t316;
+    const trailer_real_t _t344 = -_t230*_t239*_t328 + _t263*_t327;
+    const trailer_real_t _t345 = -_t230*_t239*_t340 + _t263*_t339;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
     A[2] = _t173;
@@ -1579,24 +1580,24 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[79] = _t144;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t294;
-    A[83] = _t316;
+    A[82] = _t295;
+    A[83] = _t317;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t328;
-    A[89] = _t340;
+    A[88] = _t329;
+    A[89] = _t341;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t341;
-    A[93] = _t342;
+    A[92] = _t342;
+    A[93] = _t343;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t343;
-    A[99] = _t344;
+    A[98] = _t344;
+    A[99] = _t345;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -1613,10 +1614,10 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t240;
-    B[17] = -_t244;
-    B[18] = -_t262;
-    B[19] = _t261;
+    B[16] = _t241;
+    B[17] = -_t245;
+    B[18] = -_t263;
+    B[19] = _t262;
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.

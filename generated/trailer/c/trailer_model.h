@@ -286,7 +286,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] A [10x10] row-major (TRAILER_LINEARIZATION_A_SIZE) -- 10x10 row-major
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
- * operations after CSE: 419 add, 626 mul, 41 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 419 add, 626 mul, 40 div, 4 sin/cos, 0 sqrt
  */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,

@@ -24,7 +24,8 @@ const trailer_pi_config_t trailer_pi_frozen_config = TRAILER_PI_FROZEN_CONFIG;
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static void trailer_pi_k_minimal_pi_law_keep(const trailer_params_t *p, trailer_real_t kept[2])
+static inline void trailer_pi_k_minimal_pi_law_keep(const trailer_params_t *p,
+    trailer_real_t kept[2])
 {
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
@@ -40,10 +41,10 @@ static void trailer_pi_k_minimal_pi_law_keep(const trailer_params_t *p, trailer_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static void trailer_pi_k_minimal_pi_law(const trailer_real_t kept[2], const trailer_real_t *q,
-    const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,
-    const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,
-    trailer_real_t *u, trailer_real_t *integral_next)
+static inline void trailer_pi_k_minimal_pi_law(const trailer_real_t kept[2],
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *q_des,
+    const trailer_real_t *qdot_des, const trailer_real_t *integral, const trailer_real_t *gains,
+    const trailer_real_t *limits, trailer_real_t *u, trailer_real_t *integral_next)
 {
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t qd_2 = q_des[2];
@@ -134,7 +135,7 @@ trailer_status_t trailer_pi_check_config(const trailer_pi_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer_bits_t trailer_real_bits(trailer_real_t x)
+static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
 {
     union {
         trailer_real_t value;
@@ -149,8 +150,8 @@ static trailer_bits_t trailer_real_bits(trailer_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer_check_step_inputs which input, and its status. */
-static bool trailer_pi_inputs_bounded(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+static inline bool trailer_pi_inputs_bounded(const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8])
 {
 #ifdef TRAILER_FLOAT32
@@ -174,7 +175,7 @@ static bool trailer_pi_inputs_bounded(const trailer_real_t q[8], const trailer_r
 #ifndef TRAILER_PI_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer_pi_config_unchanged(const trailer_pi_config_t *config,
+static inline bool trailer_pi_config_unchanged(const trailer_pi_config_t *config,
     const trailer_pi_config_t *kept)
 {
     trailer_bits_t diff = 0u;
@@ -301,6 +302,7 @@ trailer_status_t trailer_pi_step_detail(trailer_pi_state_t *state,
     const trailer_pi_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+
 {
     trailer_status_t status = TRAILER_OK;
     const trailer_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

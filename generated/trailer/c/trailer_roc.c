@@ -24,7 +24,8 @@ const trailer_roc_config_t trailer_roc_frozen_config = TRAILER_ROC_FROZEN_CONFIG
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt */
-static void trailer_roc_k_minimal_roc_law_keep(const trailer_params_t *p, trailer_real_t kept[17])
+static inline void trailer_roc_k_minimal_roc_law_keep(const trailer_params_t *p,
+    trailer_real_t kept[17])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -73,12 +74,12 @@ static void trailer_roc_k_minimal_roc_law_keep(const trailer_params_t *p, traile
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 143 add, 212 mul, 20 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static void trailer_roc_k_minimal_roc_law(const trailer_real_t kept[17], const trailer_real_t *q,
-    const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
-    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
-    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *bounds,
-    const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
-    trailer_real_t *gain)
+static inline void trailer_roc_k_minimal_roc_law(const trailer_real_t kept[17],
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
+    const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
+    const trailer_real_t *k2, const trailer_real_t *p12, const trailer_real_t *p22,
+    const trailer_real_t *bounds, const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s,
+    trailer_real_t *s_norm, trailer_real_t *gain)
 {
     const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(theta_cart);
@@ -296,7 +297,7 @@ trailer_status_t trailer_roc_check_config(const trailer_roc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer_bits_t trailer_real_bits(trailer_real_t x)
+static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
 {
     union {
         trailer_real_t value;
@@ -311,8 +312,8 @@ static trailer_bits_t trailer_real_bits(trailer_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer_check_step_inputs which input, and its status. */
-static bool trailer_roc_inputs_bounded(const trailer_real_t q[8], const trailer_real_t qdot[8],
-    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+static inline bool trailer_roc_inputs_bounded(const trailer_real_t q[8],
+    const trailer_real_t qdot[8], const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8])
 {
 #ifdef TRAILER_FLOAT32
@@ -336,7 +337,7 @@ static bool trailer_roc_inputs_bounded(const trailer_real_t q[8], const trailer_
 #ifndef TRAILER_ROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer_roc_config_unchanged(const trailer_roc_config_t *config,
+static inline bool trailer_roc_config_unchanged(const trailer_roc_config_t *config,
     const trailer_roc_config_t *kept)
 {
     trailer_bits_t diff = 0u;
@@ -468,6 +469,7 @@ trailer_status_t trailer_roc_step_detail(trailer_roc_state_t *state,
     const trailer_roc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+
 {
     trailer_status_t status = TRAILER_OK;
     const trailer_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -24,7 +24,7 @@ const trailer2_asmc_config_t trailer2_asmc_frozen_config = TRAILER2_ASMC_FROZEN_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 6 mul, 8 div, 0 sin/cos, 0 sqrt */
-static void trailer2_asmc_k_minimal_asmc_law_keep(const trailer2_params_t *p,
+static inline void trailer2_asmc_k_minimal_asmc_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[25])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -92,7 +92,7 @@ static void trailer2_asmc_k_minimal_asmc_law_keep(const trailer2_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 274 add, 382 mul, 38 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void trailer2_asmc_k_minimal_asmc_law(const trailer2_real_t kept[25],
+static inline void trailer2_asmc_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
     const trailer2_real_t *k2, const trailer2_real_t *p12, const trailer2_real_t *p22,
@@ -438,7 +438,7 @@ trailer2_status_t trailer2_asmc_check_config(const trailer2_asmc_config_t *confi
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
+static inline trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
     union {
         trailer2_real_t value;
@@ -453,7 +453,7 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
-static bool trailer2_asmc_inputs_bounded(const trailer2_real_t q[11],
+static inline bool trailer2_asmc_inputs_bounded(const trailer2_real_t q[11],
     const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
     const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11])
 {
@@ -478,7 +478,7 @@ static bool trailer2_asmc_inputs_bounded(const trailer2_real_t q[11],
 #ifndef TRAILER2_ASMC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer2_asmc_config_unchanged(const trailer2_asmc_config_t *config,
+static inline bool trailer2_asmc_config_unchanged(const trailer2_asmc_config_t *config,
     const trailer2_asmc_config_t *kept)
 {
     trailer2_bits_t diff = 0u;
@@ -629,6 +629,7 @@ trailer2_status_t trailer2_asmc_step_detail(trailer2_asmc_state_t *state,
     const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
     const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11], trailer2_real_t tau[2],
     trailer2_error_detail_t *detail)
+
 {
     trailer2_status_t status = TRAILER2_OK;
     const trailer2_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -1764,7 +1764,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
 }
 
 /* trailer2_linearization: documented in trailer2_model.h.
-   operations after CSE: 932 add, 1286 mul, 91 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 932 add, 1286 mul, 90 div, 6 sin/cos, 0 sqrt */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
     trailer2_real_t *B)
@@ -2295,311 +2295,312 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
             + J_theta_cart_left*_t297*_t297 + J_theta_cart_right*_t295*_t295 + J_theta_left
             + _t18*_t308 + _t21*_t313 + _t28*_t307 + _t30*_t319 + _t325*_t46;
     const trailer2_real_t _t470 = _t466*_t469 - _t467*_t468;
-    const trailer2_real_t _t471 = TRAILER2_LIT(1.0)/(_t470*_t470);
-    const trailer2_real_t _t472 = TRAILER2_LIT(1.0)/_t470;
-    const trailer2_real_t _t473 = _t469*_t472;
-    const trailer2_real_t _t474 = -_t17*_t335 + _t19*_t333 + _t23*_t330 + _t25*_t337 + _t284*_t443
+    const trailer2_real_t _t471 = TRAILER2_LIT(1.0)/_t470;
+    const trailer2_real_t _t472 = _t471*_t471;
+    const trailer2_real_t _t473 = _t471;
+    const trailer2_real_t _t474 = _t469*_t473;
+    const trailer2_real_t _t475 = -_t17*_t335 + _t19*_t333 + _t23*_t330 + _t25*_t337 + _t284*_t443
             + _t287*_t445 + _t290*_t447 + _t293*_t449 + _t339*_t40;
     const trailer2_real_t tau_right = tau[0];
-    const trailer2_real_t _t475 = -_t474 + tau_right;
-    const trailer2_real_t _t476 = _t472*_t475;
-    const trailer2_real_t _t477 = _t467*_t472;
-    const trailer2_real_t _t478 = _t18*_t335 + _t21*_t333 + _t28*_t330 + _t30*_t337 + _t339*_t46
+    const trailer2_real_t _t476 = -_t475 + tau_right;
+    const trailer2_real_t _t477 = _t473*_t476;
+    const trailer2_real_t _t478 = _t467*_t473;
+    const trailer2_real_t _t479 = _t18*_t335 + _t21*_t333 + _t28*_t330 + _t30*_t337 + _t339*_t46
             + _t340*_t443 + _t341*_t445 + _t342*_t447 + _t343*_t449;
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t479 = -_t478 + tau_left;
-    const trailer2_real_t _t480 = _t472*_t479;
-    const trailer2_real_t _t481 = -_t467*_t479 + _t469*_t475;
-    const trailer2_real_t _t482 = -_t109 + _t110 + _t113 + _t114;
-    const trailer2_real_t _t483 = _t25*_t46 + _t30*_t40;
-    const trailer2_real_t _t484 = TRAILER2_LIT(2.0)*_t30;
-    const trailer2_real_t _t485 = _t46*_t484;
-    const trailer2_real_t _t486 = TRAILER2_LIT(2.0)*_t14;
-    const trailer2_real_t _t487 = TRAILER2_LIT(5.0)*_t169/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t488 = _t487/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t489 = _t0*_t23 + _t119 + _t120;
-    const trailer2_real_t _t490 = TRAILER2_LIT(5.0)*_t172/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t491 = _t490/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t492 = _t0*_t28 + _t122 + _t123;
-    const trailer2_real_t _t493 = _t11*_t487 - _t131*_t486 - _t209;
-    const trailer2_real_t _t494 = -TRAILER2_LIT(5.0)*_t493/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t495 = _t494/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t496 = -_t14*_t487 + _t143 + TRAILER2_LIT(2.0)*_t144;
-    const trailer2_real_t _t497 = _t11*_t490 - _t133*_t486 - _t213;
-    const trailer2_real_t _t498 = -TRAILER2_LIT(5.0)*_t497/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t499 = _t498/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t500 = -_t14*_t490 + _t145 + TRAILER2_LIT(2.0)*_t146;
-    const trailer2_real_t _t501 = TRAILER2_LIT(5.0)*_t204/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t502 = _t501/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t503 = _t11*_t131 + _t42;
-    const trailer2_real_t _t504 = TRAILER2_LIT(5.0)*_t206/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t505 = _t504/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t506 = _t11*_t133 + _t48;
-    const trailer2_real_t _t507 = _t76*_t96 + _t76*_t97 + _t78*_t84 - _t78*_t85;
-    const trailer2_real_t _t508 = _t77*_t92 + _t79*_t92 + _t80*_t92 - _t81*_t92;
-    const trailer2_real_t _t509 = -_t328*_t360;
-    const trailer2_real_t _t510 = _t25*_t329 + _t328*_t40;
-    const trailer2_real_t _t511 = _t30*_t329 + _t328*_t46;
-    const trailer2_real_t _t512 = TRAILER2_LIT(2.0)*_t25;
-    const trailer2_real_t _t513 = _t40*_t512;
-    const trailer2_real_t _t514 = TRAILER2_LIT(2.0)*_t65;
-    const trailer2_real_t _t515 = TRAILER2_LIT(5.0)*_t210/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t516 = _t515/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t517 = _t136 + _t137 + _t143 + _t23*_t7;
-    const trailer2_real_t _t518 = TRAILER2_LIT(5.0)*_t214/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t519 = _t518/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t520 = _t140 + _t141 + _t145 + _t28*_t7;
-    const trailer2_real_t _t521 = -_t329*_t361;
-    const trailer2_real_t _t522 = TRAILER2_LIT(2.0)*_t87;
-    const trailer2_real_t _t523 = _t522*_t60 - _t522*_t89;
-    const trailer2_real_t _t524 = _t522*_t54 + _t522*_t55;
-    const trailer2_real_t _t525 = TRAILER2_LIT(3.0)*_t87/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t526 = _t4*_t525;
-    const trailer2_real_t _t527 = _t2*_t525;
-    const trailer2_real_t _t528 = _t526*_t56 + _t526*_t57 - _t527*_t62 + _t527*_t68;
-    const trailer2_real_t _t529 = _t526*_t58 + _t526*_t59 - _t527*_t64 + _t527*_t73;
-    const trailer2_real_t _t530 = _t466*_t472;
-    const trailer2_real_t _t531 = _t468*_t472;
-    const trailer2_real_t _t532 = _t466*_t479 - _t468*_t475;
-    const trailer2_real_t _t533 = _t115*_t313 + _t117*_t265 + _t126*_t319 + _t129*_t275
+    const trailer2_real_t _t480 = -_t479 + tau_left;
+    const trailer2_real_t _t481 = _t473*_t480;
+    const trailer2_real_t _t482 = -_t467*_t480 + _t469*_t476;
+    const trailer2_real_t _t483 = -_t109 + _t110 + _t113 + _t114;
+    const trailer2_real_t _t484 = _t25*_t46 + _t30*_t40;
+    const trailer2_real_t _t485 = TRAILER2_LIT(2.0)*_t30;
+    const trailer2_real_t _t486 = _t46*_t485;
+    const trailer2_real_t _t487 = TRAILER2_LIT(2.0)*_t14;
+    const trailer2_real_t _t488 = TRAILER2_LIT(5.0)*_t169/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t489 = _t488/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t490 = _t0*_t23 + _t119 + _t120;
+    const trailer2_real_t _t491 = TRAILER2_LIT(5.0)*_t172/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t492 = _t491/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t493 = _t0*_t28 + _t122 + _t123;
+    const trailer2_real_t _t494 = _t11*_t488 - _t131*_t487 - _t209;
+    const trailer2_real_t _t495 = -TRAILER2_LIT(5.0)*_t494/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t496 = _t495/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t497 = -_t14*_t488 + _t143 + TRAILER2_LIT(2.0)*_t144;
+    const trailer2_real_t _t498 = _t11*_t491 - _t133*_t487 - _t213;
+    const trailer2_real_t _t499 = -TRAILER2_LIT(5.0)*_t498/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t500 = _t499/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t501 = -_t14*_t491 + _t145 + TRAILER2_LIT(2.0)*_t146;
+    const trailer2_real_t _t502 = TRAILER2_LIT(5.0)*_t204/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t503 = _t502/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t504 = _t11*_t131 + _t42;
+    const trailer2_real_t _t505 = TRAILER2_LIT(5.0)*_t206/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t506 = _t505/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t507 = _t11*_t133 + _t48;
+    const trailer2_real_t _t508 = _t76*_t96 + _t76*_t97 + _t78*_t84 - _t78*_t85;
+    const trailer2_real_t _t509 = _t77*_t92 + _t79*_t92 + _t80*_t92 - _t81*_t92;
+    const trailer2_real_t _t510 = -_t328*_t360;
+    const trailer2_real_t _t511 = _t25*_t329 + _t328*_t40;
+    const trailer2_real_t _t512 = _t30*_t329 + _t328*_t46;
+    const trailer2_real_t _t513 = TRAILER2_LIT(2.0)*_t25;
+    const trailer2_real_t _t514 = _t40*_t513;
+    const trailer2_real_t _t515 = TRAILER2_LIT(2.0)*_t65;
+    const trailer2_real_t _t516 = TRAILER2_LIT(5.0)*_t210/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t517 = _t516/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t518 = _t136 + _t137 + _t143 + _t23*_t7;
+    const trailer2_real_t _t519 = TRAILER2_LIT(5.0)*_t214/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t520 = _t519/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t521 = _t140 + _t141 + _t145 + _t28*_t7;
+    const trailer2_real_t _t522 = -_t329*_t361;
+    const trailer2_real_t _t523 = TRAILER2_LIT(2.0)*_t87;
+    const trailer2_real_t _t524 = _t523*_t60 - _t523*_t89;
+    const trailer2_real_t _t525 = _t523*_t54 + _t523*_t55;
+    const trailer2_real_t _t526 = TRAILER2_LIT(3.0)*_t87/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t527 = _t4*_t526;
+    const trailer2_real_t _t528 = _t2*_t526;
+    const trailer2_real_t _t529 = _t527*_t56 + _t527*_t57 - _t528*_t62 + _t528*_t68;
+    const trailer2_real_t _t530 = _t527*_t58 + _t527*_t59 - _t528*_t64 + _t528*_t73;
+    const trailer2_real_t _t531 = _t466*_t473;
+    const trailer2_real_t _t532 = _t468*_t473;
+    const trailer2_real_t _t533 = _t466*_t480 - _t468*_t476;
+    const trailer2_real_t _t534 = _t115*_t313 + _t117*_t265 + _t126*_t319 + _t129*_t275
             + _t158*_t325 + _t161*_t281 + _t175*_t343 + _t178*_t293 + _t188*_t342 + _t19*_t307
             + _t191*_t290 + _t21*_t257 + _t217*_t341 + _t220*_t287 + _t236*_t340 + _t239*_t284
             + _t259*(-_t17*_t28 + _t18*_t23) + _t360*_t362 + _t361*_t363
             + _t61*(-_t17*_t21 + _t18*_t19);
-    const trailer2_real_t _t534 = _t117*(TRAILER2_LIT(2.0)*_t309 + _t371 + _t372 + _t373)
+    const trailer2_real_t _t535 = _t117*(TRAILER2_LIT(2.0)*_t309 + _t371 + _t372 + _t373)
             + _t129*_t374 + _t161*_t375 + _t178*_t367 + _t191*_t366 + _t21*_t368*_t61
             + _t21*(TRAILER2_LIT(2.0)*_t303 + TRAILER2_LIT(2.0)*_t304 + TRAILER2_LIT(2.0)*_t305
             + TRAILER2_LIT(2.0)*_t306) + _t220*_t365 + _t239*_t364 + _t28*_t371 + _t360*_t369
             + _t361*_t370;
-    const trailer2_real_t _t535 = _t345*_t348 + _t347*_t349 + _t376*_t407 + _t377*_t411
+    const trailer2_real_t _t536 = _t345*_t348 + _t347*_t349 + _t376*_t407 + _t377*_t411
             + _t378*_t414 + _t379*_t417 + _t380*_t399 + _t381*_t403;
-    const trailer2_real_t _t536 = _t385 - _t386;
-    const trailer2_real_t _t537 = _t173*_t536;
-    const trailer2_real_t _t538 = _t390 - _t391;
-    const trailer2_real_t _t539 = _t173*_t538;
-    const trailer2_real_t _t540 = _t393 - _t394;
-    const trailer2_real_t _t541 = _t173*_t540;
-    const trailer2_real_t _t542 = _t396 - _t397;
-    const trailer2_real_t _t543 = _t173*_t542;
-    const trailer2_real_t _t544 = _t345*_t351 + _t376*_t541 + _t377*_t543 + _t380*_t537
-            + _t381*_t539;
-    const trailer2_real_t _t545 = -_t385 - _t386;
-    const trailer2_real_t _t546 = _t186*_t545;
-    const trailer2_real_t _t547 = -_t390 - _t391;
-    const trailer2_real_t _t548 = _t186*_t547;
-    const trailer2_real_t _t549 = -_t393 - _t394;
-    const trailer2_real_t _t550 = _t186*_t549;
-    const trailer2_real_t _t551 = -_t396 - _t397;
-    const trailer2_real_t _t552 = _t186*_t551;
-    const trailer2_real_t _t553 = _t345*_t353 + _t376*_t550 + _t377*_t552 + _t380*_t546
-            + _t381*_t548;
-    const trailer2_real_t _t554 = _t400 - _t401;
-    const trailer2_real_t _t555 = _t215*_t554;
-    const trailer2_real_t _t556 = _t404 - _t405;
-    const trailer2_real_t _t557 = _t215*_t556;
-    const trailer2_real_t _t558 = _t408 - _t409;
-    const trailer2_real_t _t559 = _t215*_t558;
-    const trailer2_real_t _t560 = _t412 - _t413;
-    const trailer2_real_t _t561 = _t215*_t560;
-    const trailer2_real_t _t562 = _t415 - _t416;
-    const trailer2_real_t _t563 = _t215*_t562;
-    const trailer2_real_t _t564 = _t418 - _t419;
-    const trailer2_real_t _t565 = _t215*_t564;
-    const trailer2_real_t _t566 = _t345*_t355 + _t347*_t356 + _t376*_t559 + _t377*_t561
-            + _t378*_t563 + _t379*_t565 + _t380*_t555 + _t381*_t557;
-    const trailer2_real_t _t567 = -_t400 - _t401;
-    const trailer2_real_t _t568 = _t234*_t567;
-    const trailer2_real_t _t569 = -_t404 - _t405;
-    const trailer2_real_t _t570 = _t234*_t569;
-    const trailer2_real_t _t571 = -_t408 - _t409;
-    const trailer2_real_t _t572 = _t234*_t571;
-    const trailer2_real_t _t573 = -_t412 - _t413;
-    const trailer2_real_t _t574 = _t234*_t573;
-    const trailer2_real_t _t575 = -_t415 - _t416;
-    const trailer2_real_t _t576 = _t234*_t575;
-    const trailer2_real_t _t577 = -_t418 - _t419;
-    const trailer2_real_t _t578 = _t234*_t577;
-    const trailer2_real_t _t579 = _t345*_t358 + _t347*_t359 + _t376*_t572 + _t377*_t574
-            + _t378*_t576 + _t379*_t578 + _t380*_t568 + _t381*_t570;
-    const trailer2_real_t _t580 = _t345*_t421 + _t347*_t423 - _t99;
-    const trailer2_real_t _t581 = _t345*_t424 + _t347*_t425 + _t90;
-    const trailer2_real_t _t582 = _t345*_t428 + _t347*_t431 + _t432 + _t433;
-    const trailer2_real_t _t583 = _t347*_t436 - _t437;
-    const trailer2_real_t _t584 = _t345*_t441 - _t442;
-    const trailer2_real_t _t585 = _t380*_t382 + _t381*_t387;
-    const trailer2_real_t _t586 = _t345*_t346 + _t376*_t392 + _t377*_t395 + _t380*_t384
+    const trailer2_real_t _t537 = _t385 - _t386;
+    const trailer2_real_t _t538 = _t173*_t537;
+    const trailer2_real_t _t539 = _t390 - _t391;
+    const trailer2_real_t _t540 = _t173*_t539;
+    const trailer2_real_t _t541 = _t393 - _t394;
+    const trailer2_real_t _t542 = _t173*_t541;
+    const trailer2_real_t _t543 = _t396 - _t397;
+    const trailer2_real_t _t544 = _t173*_t543;
+    const trailer2_real_t _t545 = _t345*_t351 + _t376*_t542 + _t377*_t544 + _t380*_t538
+            + _t381*_t540;
+    const trailer2_real_t _t546 = -_t385 - _t386;
+    const trailer2_real_t _t547 = _t186*_t546;
+    const trailer2_real_t _t548 = -_t390 - _t391;
+    const trailer2_real_t _t549 = _t186*_t548;
+    const trailer2_real_t _t550 = -_t393 - _t394;
+    const trailer2_real_t _t551 = _t186*_t550;
+    const trailer2_real_t _t552 = -_t396 - _t397;
+    const trailer2_real_t _t553 = _t186*_t552;
+    const trailer2_real_t _t554 = _t345*_t353 + _t376*_t551 + _t377*_t553 + _t380*_t547
+            + _t381*_t549;
+    const trailer2_real_t _t555 = _t400 - _t401;
+    const trailer2_real_t _t556 = _t215*_t555;
+    const trailer2_real_t _t557 = _t404 - _t405;
+    const trailer2_real_t _t558 = _t215*_t557;
+    const trailer2_real_t _t559 = _t408 - _t409;
+    const trailer2_real_t _t560 = _t215*_t559;
+    const trailer2_real_t _t561 = _t412 - _t413;
+    const trailer2_real_t _t562 = _t215*_t561;
+    const trailer2_real_t _t563 = _t415 - _t416;
+    const trailer2_real_t _t564 = _t215*_t563;
+    const trailer2_real_t _t565 = _t418 - _t419;
+    const trailer2_real_t _t566 = _t215*_t565;
+    const trailer2_real_t _t567 = _t345*_t355 + _t347*_t356 + _t376*_t560 + _t377*_t562
+            + _t378*_t564 + _t379*_t566 + _t380*_t556 + _t381*_t558;
+    const trailer2_real_t _t568 = -_t400 - _t401;
+    const trailer2_real_t _t569 = _t234*_t568;
+    const trailer2_real_t _t570 = -_t404 - _t405;
+    const trailer2_real_t _t571 = _t234*_t570;
+    const trailer2_real_t _t572 = -_t408 - _t409;
+    const trailer2_real_t _t573 = _t234*_t572;
+    const trailer2_real_t _t574 = -_t412 - _t413;
+    const trailer2_real_t _t575 = _t234*_t574;
+    const trailer2_real_t _t576 = -_t415 - _t416;
+    const trailer2_real_t _t577 = _t234*_t576;
+    const trailer2_real_t _t578 = -_t418 - _t419;
+    const trailer2_real_t _t579 = _t234*_t578;
+    const trailer2_real_t _t580 = _t345*_t358 + _t347*_t359 + _t376*_t573 + _t377*_t575
+            + _t378*_t577 + _t379*_t579 + _t380*_t569 + _t381*_t571;
+    const trailer2_real_t _t581 = _t345*_t421 + _t347*_t423 - _t99;
+    const trailer2_real_t _t582 = _t345*_t424 + _t347*_t425 + _t90;
+    const trailer2_real_t _t583 = _t345*_t428 + _t347*_t431 + _t432 + _t433;
+    const trailer2_real_t _t584 = _t347*_t436 - _t437;
+    const trailer2_real_t _t585 = _t345*_t441 - _t442;
+    const trailer2_real_t _t586 = _t380*_t382 + _t381*_t387;
+    const trailer2_real_t _t587 = _t345*_t346 + _t376*_t392 + _t377*_t395 + _t380*_t384
             + _t381*_t389;
-    const trailer2_real_t _t587 = _t115*_t333 + _t126*_t337 + _t158*_t339 - _t17*_t451 - _t17*_t452
-            - _t17*_t453 - _t17*_t582 + _t175*_t450 + _t188*_t448 + _t19*_t330 + _t19*_t580
-            + _t217*_t446 + _t23*_t581 + _t236*_t444 + _t25*_t583 + _t257*_t332 + _t260*_t327
-            + _t265*_t585 + _t275*_t586 + _t281*_t535 + _t284*_t579 + _t287*_t566 + _t290*_t553
-            + _t293*_t544 + _t40*_t584;
-    const trailer2_real_t _t588 = _t117*_t333 + _t129*_t337 + _t161*_t339 + _t178*_t450 + _t18*_t451
-            + _t18*_t452 + _t18*_t453 + _t18*_t582 + _t191*_t448 + _t21*_t330 + _t21*_t580
-            + _t220*_t446 + _t239*_t444 + _t28*_t581 + _t30*_t583 + _t307*_t332 + _t310*_t327
-            + _t313*_t585 + _t319*_t586 + _t325*_t535 + _t340*_t579 + _t341*_t566 + _t342*_t553
-            + _t343*_t544 + _t46*_t584;
-    const trailer2_real_t _t589 = _t115*(TRAILER2_LIT(2.0)*_t258 + _t461 + _t462 + _t463)
+    const trailer2_real_t _t588 = _t115*_t333 + _t126*_t337 + _t158*_t339 - _t17*_t451 - _t17*_t452
+            - _t17*_t453 - _t17*_t583 + _t175*_t450 + _t188*_t448 + _t19*_t330 + _t19*_t581
+            + _t217*_t446 + _t23*_t582 + _t236*_t444 + _t25*_t584 + _t257*_t332 + _t260*_t327
+            + _t265*_t586 + _t275*_t587 + _t281*_t536 + _t284*_t580 + _t287*_t567 + _t290*_t554
+            + _t293*_t545 + _t40*_t585;
+    const trailer2_real_t _t589 = _t117*_t333 + _t129*_t337 + _t161*_t339 + _t178*_t450 + _t18*_t451
+            + _t18*_t452 + _t18*_t453 + _t18*_t583 + _t191*_t448 + _t21*_t330 + _t21*_t581
+            + _t220*_t446 + _t239*_t444 + _t28*_t582 + _t30*_t584 + _t307*_t332 + _t310*_t327
+            + _t313*_t586 + _t319*_t587 + _t325*_t536 + _t340*_t580 + _t341*_t567 + _t342*_t554
+            + _t343*_t545 + _t46*_t585;
+    const trailer2_real_t _t590 = _t115*(TRAILER2_LIT(2.0)*_t258 + _t461 + _t462 + _t463)
             + _t126*_t464 + _t158*_t465 + _t175*_t457 + _t188*_t456 + _t19*_t458*_t61
             + _t19*(TRAILER2_LIT(2.0)*_t253 + TRAILER2_LIT(2.0)*_t254 + TRAILER2_LIT(2.0)*_t255
             + TRAILER2_LIT(2.0)*_t256) + _t217*_t455 + _t23*_t461 + _t236*_t454 + _t360*_t459
             + _t361*_t460;
-    const trailer2_real_t _t590 = _t466*_t534 - _t467*_t533 - _t468*_t533 + _t469*_t589;
-    const trailer2_real_t _t591 = -_t471*_t590;
-    const trailer2_real_t _t592 = -_t473*_t587 + _t476*_t534 + _t477*_t588 - _t480*_t533
-            + _t481*_t591;
-    const trailer2_real_t _t593 = _t131*_t319 + _t133*_t275 + _t148*_t325 + _t151*_t281
+    const trailer2_real_t _t591 = _t466*_t535 - _t467*_t534 - _t468*_t534 + _t469*_t590;
+    const trailer2_real_t _t592 = -_t472*_t591;
+    const trailer2_real_t _t593 = -_t474*_t588 + _t477*_t535 + _t478*_t589 - _t481*_t534
+            + _t482*_t592;
+    const trailer2_real_t _t594 = _t131*_t319 + _t133*_t275 + _t148*_t325 + _t151*_t281
             + _t181*_t343 + _t184*_t293 + _t194*_t342 + _t197*_t290 + _t223*_t341 + _t226*_t287
-            + _t242*_t340 + _t245*_t284 + _t261*(_t23*_t30 + _t25*_t28) - _t360*_t362 + _t482*_t483
+            + _t242*_t340 + _t245*_t284 + _t261*(_t23*_t30 + _t25*_t28) - _t360*_t362 + _t483*_t484
             + _t63*(_t19*_t30 + _t21*_t25);
-    const trailer2_real_t _t594 = _t133*_t374 + _t151*_t375 + _t184*_t367 + _t197*_t366
-            + _t21*_t484*_t63 + _t226*_t365 + _t245*_t364 + _t28*_t372 - _t360*_t369 + _t482*_t485;
-    const trailer2_real_t _t595 = _t346*_t348 + _t348*_t349 + _t376*_t494 + _t377*_t498
-            + _t378*_t501 + _t379*_t504 + _t380*_t407 + _t381*_t411;
-    const trailer2_real_t _t596 = _t488 - _t489;
-    const trailer2_real_t _t597 = _t173*_t596;
-    const trailer2_real_t _t598 = _t491 - _t492;
-    const trailer2_real_t _t599 = _t173*_t598;
-    const trailer2_real_t _t600 = _t346*_t351 + _t376*_t597 + _t377*_t599 + _t380*_t541
-            + _t381*_t543;
-    const trailer2_real_t _t601 = -_t488 - _t489;
-    const trailer2_real_t _t602 = _t186*_t601;
-    const trailer2_real_t _t603 = -_t491 - _t492;
-    const trailer2_real_t _t604 = _t186*_t603;
-    const trailer2_real_t _t605 = _t346*_t353 + _t376*_t602 + _t377*_t604 + _t380*_t550
-            + _t381*_t552;
-    const trailer2_real_t _t606 = _t495 - _t496;
-    const trailer2_real_t _t607 = _t215*_t606;
-    const trailer2_real_t _t608 = _t499 - _t500;
-    const trailer2_real_t _t609 = _t215*_t608;
-    const trailer2_real_t _t610 = _t502 - _t503;
-    const trailer2_real_t _t611 = _t215*_t610;
-    const trailer2_real_t _t612 = _t505 - _t506;
-    const trailer2_real_t _t613 = _t215*_t612;
-    const trailer2_real_t _t614 = _t346*_t355 + _t348*_t356 + _t376*_t607 + _t377*_t609
-            + _t378*_t611 + _t379*_t613 + _t380*_t559 + _t381*_t561;
-    const trailer2_real_t _t615 = -_t495 - _t496;
-    const trailer2_real_t _t616 = _t234*_t615;
-    const trailer2_real_t _t617 = -_t499 - _t500;
-    const trailer2_real_t _t618 = _t234*_t617;
-    const trailer2_real_t _t619 = -_t502 - _t503;
-    const trailer2_real_t _t620 = _t234*_t619;
-    const trailer2_real_t _t621 = -_t505 - _t506;
-    const trailer2_real_t _t622 = _t234*_t621;
-    const trailer2_real_t _t623 = _t346*_t358 + _t348*_t359 + _t376*_t616 + _t377*_t618
-            + _t378*_t620 + _t379*_t622 + _t380*_t572 + _t381*_t574;
-    const trailer2_real_t _t624 = -_t102 + _t346*_t421 + _t348*_t423;
-    const trailer2_real_t _t625 = _t346*_t424 + _t348*_t425 + _t95;
-    const trailer2_real_t _t626 = _t346*_t428 + _t348*_t431 - _t433;
-    const trailer2_real_t _t627 = _t348*_t436 + _t437 + _t507;
-    const trailer2_real_t _t628 = _t346*_t441 - _t508;
-    const trailer2_real_t _t629 = _t346*_t346 + _t376*_t487 + _t377*_t490 + _t380*_t392
+    const trailer2_real_t _t595 = _t133*_t374 + _t151*_t375 + _t184*_t367 + _t197*_t366
+            + _t21*_t485*_t63 + _t226*_t365 + _t245*_t364 + _t28*_t372 - _t360*_t369 + _t483*_t486;
+    const trailer2_real_t _t596 = _t346*_t348 + _t348*_t349 + _t376*_t495 + _t377*_t499
+            + _t378*_t502 + _t379*_t505 + _t380*_t407 + _t381*_t411;
+    const trailer2_real_t _t597 = _t489 - _t490;
+    const trailer2_real_t _t598 = _t173*_t597;
+    const trailer2_real_t _t599 = _t492 - _t493;
+    const trailer2_real_t _t600 = _t173*_t599;
+    const trailer2_real_t _t601 = _t346*_t351 + _t376*_t598 + _t377*_t600 + _t380*_t542
+            + _t381*_t544;
+    const trailer2_real_t _t602 = -_t489 - _t490;
+    const trailer2_real_t _t603 = _t186*_t602;
+    const trailer2_real_t _t604 = -_t492 - _t493;
+    const trailer2_real_t _t605 = _t186*_t604;
+    const trailer2_real_t _t606 = _t346*_t353 + _t376*_t603 + _t377*_t605 + _t380*_t551
+            + _t381*_t553;
+    const trailer2_real_t _t607 = _t496 - _t497;
+    const trailer2_real_t _t608 = _t215*_t607;
+    const trailer2_real_t _t609 = _t500 - _t501;
+    const trailer2_real_t _t610 = _t215*_t609;
+    const trailer2_real_t _t611 = _t503 - _t504;
+    const trailer2_real_t _t612 = _t215*_t611;
+    const trailer2_real_t _t613 = _t506 - _t507;
+    const trailer2_real_t _t614 = _t215*_t613;
+    const trailer2_real_t _t615 = _t346*_t355 + _t348*_t356 + _t376*_t608 + _t377*_t610
+            + _t378*_t612 + _t379*_t614 + _t380*_t560 + _t381*_t562;
+    const trailer2_real_t _t616 = -_t496 - _t497;
+    const trailer2_real_t _t617 = _t234*_t616;
+    const trailer2_real_t _t618 = -_t500 - _t501;
+    const trailer2_real_t _t619 = _t234*_t618;
+    const trailer2_real_t _t620 = -_t503 - _t504;
+    const trailer2_real_t _t621 = _t234*_t620;
+    const trailer2_real_t _t622 = -_t506 - _t507;
+    const trailer2_real_t _t623 = _t234*_t622;
+    const trailer2_real_t _t624 = _t346*_t358 + _t348*_t359 + _t376*_t617 + _t377*_t619
+            + _t378*_t621 + _t379*_t623 + _t380*_t573 + _t381*_t575;
+    const trailer2_real_t _t625 = -_t102 + _t346*_t421 + _t348*_t423;
+    const trailer2_real_t _t626 = _t346*_t424 + _t348*_t425 + _t95;
+    const trailer2_real_t _t627 = _t346*_t428 + _t348*_t431 - _t433;
+    const trailer2_real_t _t628 = _t348*_t436 + _t437 + _t508;
+    const trailer2_real_t _t629 = _t346*_t441 - _t509;
+    const trailer2_real_t _t630 = _t346*_t346 + _t376*_t488 + _t377*_t491 + _t380*_t392
             + _t381*_t395;
-    const trailer2_real_t _t630 = _t131*_t337 + _t148*_t339 - _t17*_t509 - _t17*_t626 + _t181*_t450
-            + _t19*_t624 + _t194*_t448 + _t223*_t446 + _t23*_t625 + _t242*_t444 + _t25*_t627
-            + _t261*(_t23*_t328 + _t25*_t327) + _t275*_t629 + _t281*_t595 + _t284*_t623
-            + _t287*_t614 + _t290*_t605 + _t293*_t600 + _t40*_t628 + _t482*_t510
+    const trailer2_real_t _t631 = _t131*_t337 + _t148*_t339 - _t17*_t510 - _t17*_t627 + _t181*_t450
+            + _t19*_t625 + _t194*_t448 + _t223*_t446 + _t23*_t626 + _t242*_t444 + _t25*_t628
+            + _t261*(_t23*_t328 + _t25*_t327) + _t275*_t630 + _t281*_t596 + _t284*_t624
+            + _t287*_t615 + _t290*_t606 + _t293*_t601 + _t40*_t629 + _t483*_t511
             + _t63*(_t19*_t328 + _t25*_t332);
-    const trailer2_real_t _t631 = _t133*_t337 + _t151*_t339 + _t18*_t509 + _t18*_t626 + _t184*_t450
-            + _t197*_t448 + _t21*_t624 + _t226*_t446 + _t245*_t444 + _t261*(_t28*_t328 + _t30*_t327)
-            + _t28*_t625 + _t30*_t627 + _t319*_t629 + _t325*_t595 + _t340*_t623 + _t341*_t614
-            + _t342*_t605 + _t343*_t600 + _t46*_t628 + _t482*_t511 + _t63*(_t21*_t328 + _t30*_t332);
-    const trailer2_real_t _t632 = _t131*_t464 + _t148*_t465 + _t181*_t457 + _t19*_t512*_t63
-            + _t194*_t456 + _t223*_t455 + _t23*_t462 + _t242*_t454 - _t360*_t459 + _t482*_t513;
-    const trailer2_real_t _t633 = _t466*_t594 - _t467*_t593 - _t468*_t593 + _t469*_t632;
-    const trailer2_real_t _t634 = -_t471*_t633;
-    const trailer2_real_t _t635 = -_t473*_t630 + _t476*_t594 + _t477*_t631 - _t480*_t593
-            + _t481*_t634;
-    const trailer2_real_t _t636 = _t153*_t325 + _t155*_t281 + _t229*_t341 + _t232*_t287
-            + _t248*_t340 + _t251*_t284 + _t263*(_t23*_t46 + _t28*_t40) - _t361*_t363 - _t482*_t483
+    const trailer2_real_t _t632 = _t133*_t337 + _t151*_t339 + _t18*_t510 + _t18*_t627 + _t184*_t450
+            + _t197*_t448 + _t21*_t625 + _t226*_t446 + _t245*_t444 + _t261*(_t28*_t328 + _t30*_t327)
+            + _t28*_t626 + _t30*_t628 + _t319*_t630 + _t325*_t596 + _t340*_t624 + _t341*_t615
+            + _t342*_t606 + _t343*_t601 + _t46*_t629 + _t483*_t512 + _t63*(_t21*_t328 + _t30*_t332);
+    const trailer2_real_t _t633 = _t131*_t464 + _t148*_t465 + _t181*_t457 + _t19*_t513*_t63
+            + _t194*_t456 + _t223*_t455 + _t23*_t462 + _t242*_t454 - _t360*_t459 + _t483*_t514;
+    const trailer2_real_t _t634 = _t466*_t595 - _t467*_t594 - _t468*_t594 + _t469*_t633;
+    const trailer2_real_t _t635 = -_t472*_t634;
+    const trailer2_real_t _t636 = -_t474*_t631 + _t477*_t595 + _t478*_t632 - _t481*_t594
+            + _t482*_t635;
+    const trailer2_real_t _t637 = _t153*_t325 + _t155*_t281 + _t229*_t341 + _t232*_t287
+            + _t248*_t340 + _t251*_t284 + _t263*(_t23*_t46 + _t28*_t40) - _t361*_t363 - _t483*_t484
             + _t65*(_t19*_t46 + _t21*_t40);
-    const trailer2_real_t _t637 = _t155*_t375 + _t21*_t46*_t514 + _t232*_t365 + _t251*_t364
-            + _t28*_t373 - _t361*_t370 - _t482*_t485;
-    const trailer2_real_t _t638 = _t349*_t349 + _t376*_t501 + _t377*_t504 + _t378*_t515
-            + _t379*_t518 + _t380*_t414 + _t381*_t417;
-    const trailer2_real_t _t639 = _t516 - _t517;
-    const trailer2_real_t _t640 = _t215*_t639;
-    const trailer2_real_t _t641 = _t519 - _t520;
-    const trailer2_real_t _t642 = _t215*_t641;
-    const trailer2_real_t _t643 = _t349*_t356 + _t376*_t611 + _t377*_t613 + _t378*_t640
-            + _t379*_t642 + _t380*_t563 + _t381*_t565;
-    const trailer2_real_t _t644 = -_t516 - _t517;
-    const trailer2_real_t _t645 = _t234*_t644;
-    const trailer2_real_t _t646 = -_t519 - _t520;
-    const trailer2_real_t _t647 = _t234*_t646;
-    const trailer2_real_t _t648 = _t349*_t359 + _t376*_t620 + _t377*_t622 + _t378*_t645
-            + _t379*_t647 + _t380*_t576 + _t381*_t578;
-    const trailer2_real_t _t649 = _t349*_t423 - _t98;
-    const trailer2_real_t _t650 = _t349*_t425 + _t86;
-    const trailer2_real_t _t651 = _t349*_t431 - _t432;
-    const trailer2_real_t _t652 = _t349*_t436 - _t507;
-    const trailer2_real_t _t653 = _t442 + _t508;
-    const trailer2_real_t _t654 = _t153*_t339 - _t17*_t521 - _t17*_t651 + _t19*_t649 + _t229*_t446
-            + _t23*_t650 + _t248*_t444 + _t25*_t652 + _t263*(_t23*_t329 + _t327*_t40) + _t281*_t638
-            + _t284*_t648 + _t287*_t643 + _t40*_t653 - _t482*_t510 + _t65*(_t19*_t329 + _t332*_t40);
-    const trailer2_real_t _t655 = _t155*_t339 + _t18*_t521 + _t18*_t651 + _t21*_t649 + _t232*_t446
-            + _t251*_t444 + _t263*(_t28*_t329 + _t327*_t46) + _t28*_t650 + _t30*_t652 + _t325*_t638
-            + _t340*_t648 + _t341*_t643 + _t46*_t653 - _t482*_t511 + _t65*(_t21*_t329 + _t332*_t46);
-    const trailer2_real_t _t656 = _t153*_t465 + _t19*_t40*_t514 + _t229*_t455 + _t23*_t463
-            + _t248*_t454 - _t361*_t460 - _t482*_t513;
-    const trailer2_real_t _t657 = _t466*_t637 - _t467*_t636 - _t468*_t636 + _t469*_t656;
-    const trailer2_real_t _t658 = -_t471*_t657;
-    const trailer2_real_t _t659 = -_t473*_t654 + _t476*_t637 + _t477*_t655 - _t480*_t636
-            + _t481*_t658;
-    const trailer2_real_t _t660 = _t148*_t91 + _t153*_t82 + _t158*_t87 - _t17*_t347 + _t25*_t348
+    const trailer2_real_t _t638 = _t155*_t375 + _t21*_t46*_t515 + _t232*_t365 + _t251*_t364
+            + _t28*_t373 - _t361*_t370 - _t483*_t486;
+    const trailer2_real_t _t639 = _t349*_t349 + _t376*_t502 + _t377*_t505 + _t378*_t516
+            + _t379*_t519 + _t380*_t414 + _t381*_t417;
+    const trailer2_real_t _t640 = _t517 - _t518;
+    const trailer2_real_t _t641 = _t215*_t640;
+    const trailer2_real_t _t642 = _t520 - _t521;
+    const trailer2_real_t _t643 = _t215*_t642;
+    const trailer2_real_t _t644 = _t349*_t356 + _t376*_t612 + _t377*_t614 + _t378*_t641
+            + _t379*_t643 + _t380*_t564 + _t381*_t566;
+    const trailer2_real_t _t645 = -_t517 - _t518;
+    const trailer2_real_t _t646 = _t234*_t645;
+    const trailer2_real_t _t647 = -_t520 - _t521;
+    const trailer2_real_t _t648 = _t234*_t647;
+    const trailer2_real_t _t649 = _t349*_t359 + _t376*_t621 + _t377*_t623 + _t378*_t646
+            + _t379*_t648 + _t380*_t577 + _t381*_t579;
+    const trailer2_real_t _t650 = _t349*_t423 - _t98;
+    const trailer2_real_t _t651 = _t349*_t425 + _t86;
+    const trailer2_real_t _t652 = _t349*_t431 - _t432;
+    const trailer2_real_t _t653 = _t349*_t436 - _t508;
+    const trailer2_real_t _t654 = _t442 + _t509;
+    const trailer2_real_t _t655 = _t153*_t339 - _t17*_t522 - _t17*_t652 + _t19*_t650 + _t229*_t446
+            + _t23*_t651 + _t248*_t444 + _t25*_t653 + _t263*(_t23*_t329 + _t327*_t40) + _t281*_t639
+            + _t284*_t649 + _t287*_t644 + _t40*_t654 - _t483*_t511 + _t65*(_t19*_t329 + _t332*_t40);
+    const trailer2_real_t _t656 = _t155*_t339 + _t18*_t522 + _t18*_t652 + _t21*_t650 + _t232*_t446
+            + _t251*_t444 + _t263*(_t28*_t329 + _t327*_t46) + _t28*_t651 + _t30*_t653 + _t325*_t639
+            + _t340*_t649 + _t341*_t644 + _t46*_t654 - _t483*_t512 + _t65*(_t21*_t329 + _t332*_t46);
+    const trailer2_real_t _t657 = _t153*_t465 + _t19*_t40*_t515 + _t229*_t455 + _t23*_t463
+            + _t248*_t454 - _t361*_t460 - _t483*_t514;
+    const trailer2_real_t _t658 = _t466*_t638 - _t467*_t637 - _t468*_t637 + _t469*_t657;
+    const trailer2_real_t _t659 = -_t472*_t658;
+    const trailer2_real_t _t660 = -_t474*_t655 + _t477*_t638 + _t478*_t656 - _t481*_t637
+            + _t482*_t659;
+    const trailer2_real_t _t661 = _t148*_t91 + _t153*_t82 + _t158*_t87 - _t17*_t347 + _t25*_t348
             + _t349*_t40;
-    const trailer2_real_t _t661 = -_t17*_t350 + _t175*_t87 + _t181*_t91 + _t25*_t351;
-    const trailer2_real_t _t662 = -_t17*_t352 + _t188*_t87 + _t194*_t91 + _t25*_t353;
-    const trailer2_real_t _t663 = -_t17*_t354 + _t217*_t87 + _t223*_t91 + _t229*_t82 + _t25*_t355
+    const trailer2_real_t _t662 = -_t17*_t350 + _t175*_t87 + _t181*_t91 + _t25*_t351;
+    const trailer2_real_t _t663 = -_t17*_t352 + _t188*_t87 + _t194*_t91 + _t25*_t353;
+    const trailer2_real_t _t664 = -_t17*_t354 + _t217*_t87 + _t223*_t91 + _t229*_t82 + _t25*_t355
             + _t356*_t40;
-    const trailer2_real_t _t664 = -_t17*_t357 + _t236*_t87 + _t242*_t91 + _t248*_t82 + _t25*_t358
+    const trailer2_real_t _t665 = -_t17*_t357 + _t236*_t87 + _t242*_t91 + _t248*_t82 + _t25*_t358
             + _t359*_t40;
-    const trailer2_real_t _t665 = -_t17*_t523 + _t25*_t421 + _t40*_t423;
-    const trailer2_real_t _t666 = -_t17*_t524 + _t25*_t424 + _t40*_t425;
-    const trailer2_real_t _t667 = _t25*_t428 + _t40*_t431;
-    const trailer2_real_t _t668 = -_t17*_t528 + _t40*_t436;
-    const trailer2_real_t _t669 = -_t17*_t529 + _t25*_t441;
-    const trailer2_real_t _t670 = _t115*_t87 - _t17*_t344;
-    const trailer2_real_t _t671 = -_t17*_t53 + _t19*_t87;
-    const trailer2_real_t _t672 = _t126*_t87 + _t131*_t91 - _t17*_t345 + _t25*_t346;
-    const trailer2_real_t _t673 = -_t17*_t667 + _t19*_t665 + _t23*_t666 + _t25*_t668 + _t257*_t671
-            + _t265*_t670 + _t275*_t672 + _t281*_t660 + _t284*_t664 + _t287*_t663 + _t290*_t662
-            + _t293*_t661 + _t40*_t669;
-    const trailer2_real_t _t674 = _t18*_t667 + _t21*_t665 + _t28*_t666 + _t30*_t668 + _t307*_t671
-            + _t313*_t670 + _t319*_t672 + _t325*_t660 + _t340*_t664 + _t341*_t663 + _t342*_t662
-            + _t343*_t661 + _t46*_t669;
-    const trailer2_real_t _t675 = -_t469*_t472*_t673 + _t477*_t674;
-    const trailer2_real_t _t676 = _t151*_t91 + _t155*_t82 + _t161*_t87 + _t18*_t347 + _t30*_t348
+    const trailer2_real_t _t666 = -_t17*_t524 + _t25*_t421 + _t40*_t423;
+    const trailer2_real_t _t667 = -_t17*_t525 + _t25*_t424 + _t40*_t425;
+    const trailer2_real_t _t668 = _t25*_t428 + _t40*_t431;
+    const trailer2_real_t _t669 = -_t17*_t529 + _t40*_t436;
+    const trailer2_real_t _t670 = -_t17*_t530 + _t25*_t441;
+    const trailer2_real_t _t671 = _t115*_t87 - _t17*_t344;
+    const trailer2_real_t _t672 = -_t17*_t53 + _t19*_t87;
+    const trailer2_real_t _t673 = _t126*_t87 + _t131*_t91 - _t17*_t345 + _t25*_t346;
+    const trailer2_real_t _t674 = -_t17*_t668 + _t19*_t666 + _t23*_t667 + _t25*_t669 + _t257*_t672
+            + _t265*_t671 + _t275*_t673 + _t281*_t661 + _t284*_t665 + _t287*_t664 + _t290*_t663
+            + _t293*_t662 + _t40*_t670;
+    const trailer2_real_t _t675 = _t18*_t668 + _t21*_t666 + _t28*_t667 + _t30*_t669 + _t307*_t672
+            + _t313*_t671 + _t319*_t673 + _t325*_t661 + _t340*_t665 + _t341*_t664 + _t342*_t663
+            + _t343*_t662 + _t46*_t670;
+    const trailer2_real_t _t676 = -_t469*_t473*_t674 + _t478*_t675;
+    const trailer2_real_t _t677 = _t151*_t91 + _t155*_t82 + _t161*_t87 + _t18*_t347 + _t30*_t348
             + _t349*_t46;
-    const trailer2_real_t _t677 = _t178*_t87 + _t18*_t350 + _t184*_t91 + _t30*_t351;
-    const trailer2_real_t _t678 = _t18*_t352 + _t191*_t87 + _t197*_t91 + _t30*_t353;
-    const trailer2_real_t _t679 = _t18*_t354 + _t220*_t87 + _t226*_t91 + _t232*_t82 + _t30*_t355
+    const trailer2_real_t _t678 = _t178*_t87 + _t18*_t350 + _t184*_t91 + _t30*_t351;
+    const trailer2_real_t _t679 = _t18*_t352 + _t191*_t87 + _t197*_t91 + _t30*_t353;
+    const trailer2_real_t _t680 = _t18*_t354 + _t220*_t87 + _t226*_t91 + _t232*_t82 + _t30*_t355
             + _t356*_t46;
-    const trailer2_real_t _t680 = _t18*_t357 + _t239*_t87 + _t245*_t91 + _t251*_t82 + _t30*_t358
+    const trailer2_real_t _t681 = _t18*_t357 + _t239*_t87 + _t245*_t91 + _t251*_t82 + _t30*_t358
             + _t359*_t46;
-    const trailer2_real_t _t681 = _t18*_t523 + _t30*_t421 + _t423*_t46;
-    const trailer2_real_t _t682 = _t18*_t524 + _t30*_t424 + _t425*_t46;
-    const trailer2_real_t _t683 = _t30*_t428 + _t431*_t46;
-    const trailer2_real_t _t684 = _t18*_t528 + _t436*_t46;
-    const trailer2_real_t _t685 = _t18*_t529 + _t30*_t441;
-    const trailer2_real_t _t686 = _t117*_t87 + _t18*_t344;
-    const trailer2_real_t _t687 = _t18*_t53 + _t21*_t87;
-    const trailer2_real_t _t688 = _t129*_t87 + _t133*_t91 + _t18*_t345 + _t30*_t346;
-    const trailer2_real_t _t689 = -_t17*_t683 + _t19*_t681 + _t23*_t682 + _t25*_t684 + _t257*_t687
-            + _t265*_t686 + _t275*_t688 + _t281*_t676 + _t284*_t680 + _t287*_t679 + _t290*_t678
-            + _t293*_t677 + _t40*_t685;
-    const trailer2_real_t _t690 = _t18*_t683 + _t21*_t681 + _t28*_t682 + _t30*_t684 + _t307*_t687
-            + _t313*_t686 + _t319*_t688 + _t325*_t676 + _t340*_t680 + _t341*_t679 + _t342*_t678
-            + _t343*_t677 + _t46*_t685;
-    const trailer2_real_t _t691 = -_t469*_t472*_t689 + _t477*_t690;
-    const trailer2_real_t _t692 = -_t476*_t533 + _t480*_t589 - _t530*_t588 + _t531*_t587
-            + _t532*_t591;
-    const trailer2_real_t _t693 = -_t476*_t593 + _t480*_t632 - _t530*_t631 + _t531*_t630
-            + _t532*_t634;
-    const trailer2_real_t _t694 = -_t476*_t636 + _t480*_t656 - _t530*_t655 + _t531*_t654
-            + _t532*_t658;
-    const trailer2_real_t _t695 = -_t530*_t674 + _t531*_t673;
-    const trailer2_real_t _t696 = -_t530*_t690 + _t531*_t689;
+    const trailer2_real_t _t682 = _t18*_t524 + _t30*_t421 + _t423*_t46;
+    const trailer2_real_t _t683 = _t18*_t525 + _t30*_t424 + _t425*_t46;
+    const trailer2_real_t _t684 = _t30*_t428 + _t431*_t46;
+    const trailer2_real_t _t685 = _t18*_t529 + _t436*_t46;
+    const trailer2_real_t _t686 = _t18*_t530 + _t30*_t441;
+    const trailer2_real_t _t687 = _t117*_t87 + _t18*_t344;
+    const trailer2_real_t _t688 = _t18*_t53 + _t21*_t87;
+    const trailer2_real_t _t689 = _t129*_t87 + _t133*_t91 + _t18*_t345 + _t30*_t346;
+    const trailer2_real_t _t690 = -_t17*_t684 + _t19*_t682 + _t23*_t683 + _t25*_t685 + _t257*_t688
+            + _t265*_t687 + _t275*_t689 + _t281*_t677 + _t284*_t681 + _t287*_t680 + _t290*_t679
+            + _t293*_t678 + _t40*_t686;
+    const trailer2_real_t _t691 = _t18*_t684 + _t21*_t682 + _t28*_t683 + _t30*_t685 + _t307*_t688
+            + _t313*_t687 + _t319*_t689 + _t325*_t677 + _t340*_t681 + _t341*_t680 + _t342*_t679
+            + _t343*_t678 + _t46*_t686;
+    const trailer2_real_t _t692 = -_t469*_t473*_t690 + _t478*_t691;
+    const trailer2_real_t _t693 = -_t477*_t534 + _t481*_t590 - _t531*_t589 + _t532*_t588
+            + _t533*_t592;
+    const trailer2_real_t _t694 = -_t477*_t594 + _t481*_t633 - _t531*_t632 + _t532*_t631
+            + _t533*_t635;
+    const trailer2_real_t _t695 = -_t477*_t637 + _t481*_t657 - _t531*_t656 + _t532*_t655
+            + _t533*_t659;
+    const trailer2_real_t _t696 = -_t531*_t675 + _t532*_t674;
+    const trailer2_real_t _t697 = -_t531*_t691 + _t532*_t690;
     A[0] = TRAILER2_LIT(0.0);
     A[1] = TRAILER2_LIT(0.0);
     A[2] = _t344;
@@ -2745,30 +2746,30 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[142] = _t301;
     A[143] = TRAILER2_LIT(0.0);
     A[144] = TRAILER2_LIT(0.0);
-    A[145] = _t592;
-    A[146] = _t635;
-    A[147] = _t659;
+    A[145] = _t593;
+    A[146] = _t636;
+    A[147] = _t660;
     A[148] = TRAILER2_LIT(0.0);
     A[149] = TRAILER2_LIT(0.0);
     A[150] = TRAILER2_LIT(0.0);
     A[151] = TRAILER2_LIT(0.0);
     A[152] = TRAILER2_LIT(0.0);
     A[153] = TRAILER2_LIT(0.0);
-    A[154] = _t675;
-    A[155] = _t691;
+    A[154] = _t676;
+    A[155] = _t692;
     A[156] = TRAILER2_LIT(0.0);
     A[157] = TRAILER2_LIT(0.0);
-    A[158] = _t692;
-    A[159] = _t693;
-    A[160] = _t694;
+    A[158] = _t693;
+    A[159] = _t694;
+    A[160] = _t695;
     A[161] = TRAILER2_LIT(0.0);
     A[162] = TRAILER2_LIT(0.0);
     A[163] = TRAILER2_LIT(0.0);
     A[164] = TRAILER2_LIT(0.0);
     A[165] = TRAILER2_LIT(0.0);
     A[166] = TRAILER2_LIT(0.0);
-    A[167] = _t695;
-    A[168] = _t696;
+    A[167] = _t696;
+    A[168] = _t697;
     B[0] = TRAILER2_LIT(0.0);
     B[1] = TRAILER2_LIT(0.0);
     B[2] = TRAILER2_LIT(0.0);
@@ -2791,10 +2792,10 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     B[19] = TRAILER2_LIT(0.0);
     B[20] = TRAILER2_LIT(0.0);
     B[21] = TRAILER2_LIT(0.0);
-    B[22] = _t473;
-    B[23] = -_t477;
-    B[24] = -_t531;
-    B[25] = _t530;
+    B[22] = _t474;
+    B[23] = -_t478;
+    B[24] = -_t532;
+    B[25] = _t531;
 }
 
 /* trailer2_wheel_contact_forces: documented in trailer2_model.h.

@@ -313,7 +313,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
  * @param[out] A [13x13] row-major (TRAILER2_LINEARIZATION_A_SIZE) -- 13x13 row-major
  * @param[out] B [13x2] row-major (TRAILER2_LINEARIZATION_B_SIZE) -- 13x2 row-major
  *
- * operations after CSE: 932 add, 1286 mul, 91 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 932 add, 1286 mul, 90 div, 6 sin/cos, 0 sqrt
  */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,

@@ -24,7 +24,7 @@ const trailer2_roc_config_t trailer2_roc_frozen_config = TRAILER2_ROC_FROZEN_CON
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 6 mul, 8 div, 0 sin/cos, 0 sqrt */
-static void trailer2_roc_k_minimal_roc_law_keep(const trailer2_params_t *p,
+static inline void trailer2_roc_k_minimal_roc_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[25])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -92,12 +92,12 @@ static void trailer2_roc_k_minimal_roc_law_keep(const trailer2_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 278 add, 385 mul, 39 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static void trailer2_roc_k_minimal_roc_law(const trailer2_real_t kept[25], const trailer2_real_t *q,
-    const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
-    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
-    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *bounds,
-    const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm,
-    trailer2_real_t *gain)
+static inline void trailer2_roc_k_minimal_roc_law(const trailer2_real_t kept[25],
+    const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
+    const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
+    const trailer2_real_t *k2, const trailer2_real_t *p12, const trailer2_real_t *p22,
+    const trailer2_real_t *bounds, const trailer2_real_t *eps, trailer2_real_t *u,
+    trailer2_real_t *s, trailer2_real_t *s_norm, trailer2_real_t *gain)
 {
     const trailer2_real_t theta_cart = q[3];
     const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_cart);
@@ -442,7 +442,7 @@ trailer2_status_t trailer2_roc_check_config(const trailer2_roc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
+static inline trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
 {
     union {
         trailer2_real_t value;
@@ -457,9 +457,9 @@ static trailer2_bits_t trailer2_real_bits(trailer2_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer2_check_step_inputs which input, and its status. */
-static bool trailer2_roc_inputs_bounded(const trailer2_real_t q[11], const trailer2_real_t qdot[11],
-    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
-    const trailer2_real_t qddot_des[11])
+static inline bool trailer2_roc_inputs_bounded(const trailer2_real_t q[11],
+    const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
+    const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11])
 {
 #ifdef TRAILER2_FLOAT32
     const trailer2_bits_t mask = 0x7fffffffu;
@@ -482,7 +482,7 @@ static bool trailer2_roc_inputs_bounded(const trailer2_real_t q[11], const trail
 #ifndef TRAILER2_ROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer2_roc_config_unchanged(const trailer2_roc_config_t *config,
+static inline bool trailer2_roc_config_unchanged(const trailer2_roc_config_t *config,
     const trailer2_roc_config_t *kept)
 {
     trailer2_bits_t diff = 0u;
@@ -632,6 +632,7 @@ trailer2_status_t trailer2_roc_step_detail(trailer2_roc_state_t *state,
     const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
     const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11], trailer2_real_t tau[2],
     trailer2_error_detail_t *detail)
+
 {
     trailer2_status_t status = TRAILER2_OK;
     const trailer2_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

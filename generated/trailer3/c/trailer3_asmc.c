@@ -24,7 +24,7 @@ const trailer3_asmc_config_t trailer3_asmc_frozen_config = TRAILER3_ASMC_FROZEN_
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 10 mul, 14 div, 0 sin/cos, 0 sqrt */
-static void trailer3_asmc_k_minimal_asmc_law_keep(const trailer3_params_t *p,
+static inline void trailer3_asmc_k_minimal_asmc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[36])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -116,7 +116,7 @@ static void trailer3_asmc_k_minimal_asmc_law_keep(const trailer3_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 456 add, 610 mul, 62 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static void trailer3_asmc_k_minimal_asmc_law(const trailer3_real_t kept[36],
+static inline void trailer3_asmc_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
     const trailer3_real_t *k2, const trailer3_real_t *p12, const trailer3_real_t *p22,
@@ -618,7 +618,7 @@ trailer3_status_t trailer3_asmc_check_config(const trailer3_asmc_config_t *confi
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
+static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
     union {
         trailer3_real_t value;
@@ -633,7 +633,7 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
-static bool trailer3_asmc_inputs_bounded(const trailer3_real_t q[14],
+static inline bool trailer3_asmc_inputs_bounded(const trailer3_real_t q[14],
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14])
 {
@@ -658,7 +658,7 @@ static bool trailer3_asmc_inputs_bounded(const trailer3_real_t q[14],
 #ifndef TRAILER3_ASMC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer3_asmc_config_unchanged(const trailer3_asmc_config_t *config,
+static inline bool trailer3_asmc_config_unchanged(const trailer3_asmc_config_t *config,
     const trailer3_asmc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
@@ -823,6 +823,7 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
     trailer3_error_detail_t *detail)
+
 {
     trailer3_status_t status = TRAILER3_OK;
     const trailer3_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

@@ -4,7 +4,9 @@
  * Template: codegen/backends/c/templates/controller_common.h.jinja
  *
  * Validation and bookkeeping shared by the four controllers (trailer3_tdc, trailer3_tdroc,
- * trailer3_roc, trailer3_asmc): one copy in flash however many controllers are linked.
+ * trailer3_roc, trailer3_asmc): one copy in flash however many controllers are linked,
+ * except the four small per-step helpers at the end, static inline so that each step inlines
+ * them (no call, and scheduled with the step).
  */
 #ifndef TRAILER3_CONTROLLER_H
 #define TRAILER3_CONTROLLER_H
@@ -144,8 +146,22 @@ trailer3_status_t trailer3_check_step_inputs(const trailer3_real_t q[14],
  */
 void trailer3_window_weights(int active, trailer3_real_t a, trailer3_real_t w[TRAILER3_MAX_WINDOW]);
 
+/* A controller step's body, specialised per formulation by inlining it at each call with a
+   constant formulation: gcc and clang are told to, unless optimising for size (-Os: one
+   body, not two); another compiler may inline it or not (the same results either way). */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER3_STEP_INLINE static inline __attribute__((always_inline))
+#define TRAILER3_STEP_PER_FORMULATION 1
+#else
+#define TRAILER3_STEP_INLINE static inline
+#define TRAILER3_STEP_PER_FORMULATION 0  /* one body, called once: inlined, no copy */
+#endif
+
 /** Cap an adaptive gain at TRAILER3_GAIN_MAX (NaN and +Inf count as beyond it). */
-trailer3_real_t trailer3_cap_gain(trailer3_real_t gain);
+static inline trailer3_real_t trailer3_cap_gain(trailer3_real_t gain)
+{
+    return gain <= TRAILER3_GAIN_MAX ? gain : TRAILER3_GAIN_MAX;
+}
 
 /**
  * e = q_des - q and edot = qdot_des - qdot of the controlled coordinates (paper: all;
@@ -153,17 +169,56 @@ trailer3_real_t trailer3_cap_gain(trailer3_real_t gain);
  * index 6 of q in the minimal form, 0 in the paper form (the caller passes
  * the other per-coordinate arrays from there, without copying them).
  */
-int trailer3_controlled_slice(int formulation, const trailer3_real_t q[14],
+static inline int trailer3_controlled_slice(int formulation, const trailer3_real_t q[14],
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
-    const trailer3_real_t qdot_des[14], trailer3_real_t e[14], trailer3_real_t edot[14]);
+    const trailer3_real_t qdot_des[14], trailer3_real_t e[14], trailer3_real_t edot[14])
+{
+    const int nc = 2;
+    const int off = 6;
+    int i;
+    (void)formulation;  /* only the minimal formulation is generated */
+    for (i = 0; i < nc; ++i) {
+        e[i] = q_des[off + i] - q[off + i];
+        edot[i] = qdot_des[off + i] - qdot[off + i];
+    }
+    return nc;
+}
 
 /** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-void trailer3_push_history(trailer3_real_t q_prev[14], trailer3_real_t qdot_prev[14],
+static inline void trailer3_push_history(trailer3_real_t q_prev[14], trailer3_real_t qdot_prev[14],
     trailer3_real_t qdot_prev2[14], trailer3_real_t u_prev[14], trailer3_real_t u_prev2[14],
-    const trailer3_real_t q[14], const trailer3_real_t qdot[14], const trailer3_real_t tau[2]);
+    const trailer3_real_t q[14], const trailer3_real_t qdot[14], const trailer3_real_t tau[2])
+{
+    int i;
+    for (i = 0; i < 14; ++i) {
+        q_prev[i] = q[i];
+        qdot_prev2[i] = qdot_prev[i];
+        qdot_prev[i] = qdot[i];
+        u_prev2[i] = u_prev[i];
+        u_prev[i] = TRAILER3_LIT(0.0);
+    }
+    u_prev[6] = tau[0];
+    u_prev[7] = tau[1];
+}
 
 /** Clip tau to +-tau_max: TRAILER3_WARN_SATURATED if it had to, else TRAILER3_OK. */
-trailer3_status_t trailer3_saturate(trailer3_real_t tau[2], trailer3_real_t tau_max);
+static inline trailer3_status_t trailer3_saturate(trailer3_real_t tau[2], trailer3_real_t tau_max)
+{
+    trailer3_status_t status = TRAILER3_OK;
+    int i;
+    for (i = 0; i < 2; ++i) {
+        if (tau[i] > tau_max) {
+            tau[i] = tau_max;
+            status = TRAILER3_WARN_SATURATED;
+        } else if (tau[i] < -tau_max) {
+            tau[i] = -tau_max;
+            status = TRAILER3_WARN_SATURATED;
+        } else {
+            /* within the limit: unchanged (MISRA C:2012 rule 15.7) */
+        }
+    }
+    return status;
+}
 
 #ifdef __cplusplus
 }

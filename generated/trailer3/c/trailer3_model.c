@@ -2588,7 +2588,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
 }
 
 /* trailer3_linearization: documented in trailer3_model.h.
-   operations after CSE: 1692 add, 2243 mul, 168 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 1692 add, 2243 mul, 167 div, 8 sin/cos, 0 sqrt */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B)
@@ -3461,554 +3461,555 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
             + J_theta_cart_left*_t496*_t496 + J_theta_cart_right*_t494*_t494 + J_theta_left
             + _t28*_t512 + _t31*_t518 + _t38*_t511 + _t40*_t525 + _t49*_t532 + _t539*_t75;
     const trailer3_real_t _t770 = _t766*_t769 - _t767*_t768;
-    const trailer3_real_t _t771 = TRAILER3_LIT(1.0)/(_t770*_t770);
-    const trailer3_real_t _t772 = TRAILER3_LIT(1.0)/_t770;
-    const trailer3_real_t _t773 = _t769*_t772;
-    const trailer3_real_t _t774 = -_t27*_t550 + _t29*_t548 + _t33*_t545 + _t35*_t552 + _t44*_t554
+    const trailer3_real_t _t771 = TRAILER3_LIT(1.0)/_t770;
+    const trailer3_real_t _t772 = _t771*_t771;
+    const trailer3_real_t _t773 = _t771;
+    const trailer3_real_t _t774 = _t769*_t773;
+    const trailer3_real_t _t775 = -_t27*_t550 + _t29*_t548 + _t33*_t545 + _t35*_t552 + _t44*_t554
             + _t477*_t733 + _t480*_t735 + _t483*_t737 + _t486*_t739 + _t489*_t741 + _t492*_t743
             + _t556*_t68;
     const trailer3_real_t tau_right = tau[0];
-    const trailer3_real_t _t775 = -_t774 + tau_right;
-    const trailer3_real_t _t776 = _t772*_t775;
-    const trailer3_real_t _t777 = _t767*_t772;
-    const trailer3_real_t _t778 = _t28*_t550 + _t31*_t548 + _t38*_t545 + _t40*_t552 + _t49*_t554
+    const trailer3_real_t _t776 = -_t775 + tau_right;
+    const trailer3_real_t _t777 = _t773*_t776;
+    const trailer3_real_t _t778 = _t767*_t773;
+    const trailer3_real_t _t779 = _t28*_t550 + _t31*_t548 + _t38*_t545 + _t40*_t552 + _t49*_t554
             + _t556*_t75 + _t557*_t733 + _t558*_t735 + _t559*_t737 + _t560*_t739 + _t561*_t741
             + _t562*_t743;
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t779 = -_t778 + tau_left;
-    const trailer3_real_t _t780 = _t772*_t779;
-    const trailer3_real_t _t781 = -_t767*_t779 + _t769*_t775;
-    const trailer3_real_t _t782 = -_t161 + _t162 + _t165 + _t166;
-    const trailer3_real_t _t783 = -_t169 + _t170 + _t175 + _t176;
-    const trailer3_real_t _t784 = _t35*_t49 + _t40*_t44;
-    const trailer3_real_t _t785 = _t35*_t75 + _t40*_t68;
-    const trailer3_real_t _t786 = TRAILER3_LIT(2.0)*_t40;
-    const trailer3_real_t _t787 = _t49*_t786;
-    const trailer3_real_t _t788 = _t75*_t786;
-    const trailer3_real_t _t789 = _t10*_t152 + _t10*_t153 + _t11*_t131 - _t11*_t132;
-    const trailer3_real_t _t790 = _t10*_t155 + _t10*_t156 + _t11*_t136 - _t11*_t137;
-    const trailer3_real_t _t791 = _t115*_t144 + _t116*_t144 + _t117*_t144 - _t118*_t144;
-    const trailer3_real_t _t792 = _t119*_t144 + _t120*_t144 + _t121*_t144 - _t122*_t144;
-    const trailer3_real_t _t793 = TRAILER3_LIT(2.0)*_t21;
-    const trailer3_real_t _t794 = TRAILER3_LIT(2.0)*_t23;
-    const trailer3_real_t _t795 = TRAILER3_LIT(5.0)*_t275/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t796 = _t795/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t797 = _t0*_t33 + _t183 + _t184;
-    const trailer3_real_t _t798 = TRAILER3_LIT(5.0)*_t278/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t799 = _t798/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t800 = _t0*_t38 + _t186 + _t187;
-    const trailer3_real_t _t801 = _t12*_t795 - _t195*_t793 - _t315;
-    const trailer3_real_t _t802 = -TRAILER3_LIT(5.0)*_t801/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t803 = _t802/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t804 = TRAILER3_LIT(2.0)*_t207 + _t208 - _t21*_t795;
-    const trailer3_real_t _t805 = _t12*_t798 - _t197*_t793 - _t319;
-    const trailer3_real_t _t806 = -TRAILER3_LIT(5.0)*_t805/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t807 = _t806/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t808 = TRAILER3_LIT(2.0)*_t209 - _t21*_t798 + _t210;
-    const trailer3_real_t _t809 = TRAILER3_LIT(5.0)*_t310/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t810 = _t809/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t811 = _t12*_t195 + _t60;
-    const trailer3_real_t _t812 = TRAILER3_LIT(5.0)*_t312/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t813 = _t812/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t814 = _t12*_t197 + _t64;
-    const trailer3_real_t _t815 = _t16*_t795 + _t18*_t802 - _t195*_t794 - _t373;
-    const trailer3_real_t _t816 = -TRAILER3_LIT(5.0)*_t815/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t817 = _t816/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t818 = -_t23*_t795 + TRAILER3_LIT(2.0)*_t237 + _t239 - _t24*_t802;
-    const trailer3_real_t _t819 = _t16*_t798 + _t18*_t806 - _t197*_t794 - _t378;
-    const trailer3_real_t _t820 = -TRAILER3_LIT(5.0)*_t819/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t821 = _t820/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t822 = -_t23*_t798 - _t24*_t806 + TRAILER3_LIT(2.0)*_t240 + _t242;
-    const trailer3_real_t _t823 = _t18*_t809 - _t218*_t24;
-    const trailer3_real_t _t824 = -TRAILER3_LIT(5.0)*_t823/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t825 = _t824/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t826 = _t238 - _t24*_t809;
-    const trailer3_real_t _t827 = _t18*_t812 - _t221*_t24;
-    const trailer3_real_t _t828 = -TRAILER3_LIT(5.0)*_t827/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t829 = _t828/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t830 = -_t24*_t812 + _t241;
-    const trailer3_real_t _t831 = TRAILER3_LIT(5.0)*_t364/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t832 = _t831/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t833 = _t16*_t195 + _t18*_t218 + _t71;
-    const trailer3_real_t _t834 = TRAILER3_LIT(5.0)*_t366/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t835 = _t834/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t836 = _t16*_t197 + _t18*_t221 + _t78;
-    const trailer3_real_t _t837 = -_t542*_t592;
-    const trailer3_real_t _t838 = _t35*_t543 + _t44*_t542;
-    const trailer3_real_t _t839 = _t35*_t544 + _t542*_t68;
-    const trailer3_real_t _t840 = _t40*_t543 + _t49*_t542;
-    const trailer3_real_t _t841 = _t40*_t544 + _t542*_t75;
-    const trailer3_real_t _t842 = TRAILER3_LIT(2.0)*_t35;
-    const trailer3_real_t _t843 = _t44*_t842;
-    const trailer3_real_t _t844 = _t68*_t842;
-    const trailer3_real_t _t845 = -_t171 + _t172 + _t177 + _t178;
-    const trailer3_real_t _t846 = _t44*_t75 + _t49*_t68;
-    const trailer3_real_t _t847 = TRAILER3_LIT(2.0)*_t49;
-    const trailer3_real_t _t848 = _t75*_t847;
-    const trailer3_real_t _t849 = _t123*_t152 + _t123*_t153 + _t125*_t131 - _t125*_t132;
-    const trailer3_real_t _t850 = _t124*_t135 + _t126*_t135 + _t127*_t135 - _t128*_t135;
-    const trailer3_real_t _t851 = TRAILER3_LIT(2.0)*_t24;
-    const trailer3_real_t _t852 = TRAILER3_LIT(5.0)*_t316/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t853 = _t852/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t854 = _t200 + _t201 + _t208 + _t33*_t7;
-    const trailer3_real_t _t855 = TRAILER3_LIT(5.0)*_t320/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t856 = _t855/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t857 = _t204 + _t205 + _t210 + _t38*_t7;
-    const trailer3_real_t _t858 = _t18*_t852 - _t223*_t851 - _t374;
-    const trailer3_real_t _t859 = -TRAILER3_LIT(5.0)*_t858/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t860 = _t859/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t861 = -_t24*_t852 + TRAILER3_LIT(2.0)*_t243 + _t244;
-    const trailer3_real_t _t862 = _t18*_t855 - _t225*_t851 - _t379;
-    const trailer3_real_t _t863 = -TRAILER3_LIT(5.0)*_t862/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t864 = _t863/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t865 = -_t24*_t855 + TRAILER3_LIT(2.0)*_t245 + _t246;
-    const trailer3_real_t _t866 = TRAILER3_LIT(5.0)*_t368/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t867 = _t866/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t868 = _t18*_t223 + _t70;
-    const trailer3_real_t _t869 = TRAILER3_LIT(5.0)*_t370/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t870 = _t869/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t871 = _t18*_t225 + _t77;
-    const trailer3_real_t _t872 = -_t543*_t593;
-    const trailer3_real_t _t873 = _t44*_t544 + _t543*_t68;
-    const trailer3_real_t _t874 = _t49*_t544 + _t543*_t75;
-    const trailer3_real_t _t875 = TRAILER3_LIT(2.0)*_t44;
-    const trailer3_real_t _t876 = _t68*_t875;
-    const trailer3_real_t _t877 = TRAILER3_LIT(2.0)*_t99;
-    const trailer3_real_t _t878 = TRAILER3_LIT(5.0)*_t375/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t879 = _t878/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t880 = _t13*_t33 + _t229 + _t230 + _t239 + _t244;
-    const trailer3_real_t _t881 = TRAILER3_LIT(5.0)*_t380/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t882 = _t881/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t883 = _t13*_t38 + _t234 + _t235 + _t242 + _t246;
-    const trailer3_real_t _t884 = -_t544*_t591;
-    const trailer3_real_t _t885 = TRAILER3_LIT(2.0)*_t139;
-    const trailer3_real_t _t886 = -_t141*_t885 + _t885*_t92;
-    const trailer3_real_t _t887 = _t84*_t885 + _t85*_t885;
-    const trailer3_real_t _t888 = TRAILER3_LIT(3.0)*_t139/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t889 = _t4*_t888;
-    const trailer3_real_t _t890 = _t2*_t888;
-    const trailer3_real_t _t891 = _t102*_t890 + _t86*_t889 + _t87*_t889 - _t890*_t94;
-    const trailer3_real_t _t892 = _t107*_t890 + _t88*_t889 + _t889*_t89 - _t890*_t96;
-    const trailer3_real_t _t893 = _t112*_t890 + _t889*_t90 + _t889*_t91 - _t890*_t98;
-    const trailer3_real_t _t894 = _t766*_t772;
-    const trailer3_real_t _t895 = _t768*_t772;
-    const trailer3_real_t _t896 = _t766*_t779 - _t768*_t775;
-    const trailer3_real_t _t897 = _t179*_t518 + _t181*_t446 + _t190*_t525 + _t193*_t459
+    const trailer3_real_t _t780 = -_t779 + tau_left;
+    const trailer3_real_t _t781 = _t773*_t780;
+    const trailer3_real_t _t782 = -_t767*_t780 + _t769*_t776;
+    const trailer3_real_t _t783 = -_t161 + _t162 + _t165 + _t166;
+    const trailer3_real_t _t784 = -_t169 + _t170 + _t175 + _t176;
+    const trailer3_real_t _t785 = _t35*_t49 + _t40*_t44;
+    const trailer3_real_t _t786 = _t35*_t75 + _t40*_t68;
+    const trailer3_real_t _t787 = TRAILER3_LIT(2.0)*_t40;
+    const trailer3_real_t _t788 = _t49*_t787;
+    const trailer3_real_t _t789 = _t75*_t787;
+    const trailer3_real_t _t790 = _t10*_t152 + _t10*_t153 + _t11*_t131 - _t11*_t132;
+    const trailer3_real_t _t791 = _t10*_t155 + _t10*_t156 + _t11*_t136 - _t11*_t137;
+    const trailer3_real_t _t792 = _t115*_t144 + _t116*_t144 + _t117*_t144 - _t118*_t144;
+    const trailer3_real_t _t793 = _t119*_t144 + _t120*_t144 + _t121*_t144 - _t122*_t144;
+    const trailer3_real_t _t794 = TRAILER3_LIT(2.0)*_t21;
+    const trailer3_real_t _t795 = TRAILER3_LIT(2.0)*_t23;
+    const trailer3_real_t _t796 = TRAILER3_LIT(5.0)*_t275/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t797 = _t796/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t798 = _t0*_t33 + _t183 + _t184;
+    const trailer3_real_t _t799 = TRAILER3_LIT(5.0)*_t278/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t800 = _t799/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t801 = _t0*_t38 + _t186 + _t187;
+    const trailer3_real_t _t802 = _t12*_t796 - _t195*_t794 - _t315;
+    const trailer3_real_t _t803 = -TRAILER3_LIT(5.0)*_t802/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t804 = _t803/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t805 = TRAILER3_LIT(2.0)*_t207 + _t208 - _t21*_t796;
+    const trailer3_real_t _t806 = _t12*_t799 - _t197*_t794 - _t319;
+    const trailer3_real_t _t807 = -TRAILER3_LIT(5.0)*_t806/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t808 = _t807/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t809 = TRAILER3_LIT(2.0)*_t209 - _t21*_t799 + _t210;
+    const trailer3_real_t _t810 = TRAILER3_LIT(5.0)*_t310/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t811 = _t810/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t812 = _t12*_t195 + _t60;
+    const trailer3_real_t _t813 = TRAILER3_LIT(5.0)*_t312/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t814 = _t813/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t815 = _t12*_t197 + _t64;
+    const trailer3_real_t _t816 = _t16*_t796 + _t18*_t803 - _t195*_t795 - _t373;
+    const trailer3_real_t _t817 = -TRAILER3_LIT(5.0)*_t816/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t818 = _t817/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t819 = -_t23*_t796 + TRAILER3_LIT(2.0)*_t237 + _t239 - _t24*_t803;
+    const trailer3_real_t _t820 = _t16*_t799 + _t18*_t807 - _t197*_t795 - _t378;
+    const trailer3_real_t _t821 = -TRAILER3_LIT(5.0)*_t820/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t822 = _t821/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t823 = -_t23*_t799 - _t24*_t807 + TRAILER3_LIT(2.0)*_t240 + _t242;
+    const trailer3_real_t _t824 = _t18*_t810 - _t218*_t24;
+    const trailer3_real_t _t825 = -TRAILER3_LIT(5.0)*_t824/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t826 = _t825/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t827 = _t238 - _t24*_t810;
+    const trailer3_real_t _t828 = _t18*_t813 - _t221*_t24;
+    const trailer3_real_t _t829 = -TRAILER3_LIT(5.0)*_t828/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t830 = _t829/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t831 = -_t24*_t813 + _t241;
+    const trailer3_real_t _t832 = TRAILER3_LIT(5.0)*_t364/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t833 = _t832/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t834 = _t16*_t195 + _t18*_t218 + _t71;
+    const trailer3_real_t _t835 = TRAILER3_LIT(5.0)*_t366/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t836 = _t835/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t837 = _t16*_t197 + _t18*_t221 + _t78;
+    const trailer3_real_t _t838 = -_t542*_t592;
+    const trailer3_real_t _t839 = _t35*_t543 + _t44*_t542;
+    const trailer3_real_t _t840 = _t35*_t544 + _t542*_t68;
+    const trailer3_real_t _t841 = _t40*_t543 + _t49*_t542;
+    const trailer3_real_t _t842 = _t40*_t544 + _t542*_t75;
+    const trailer3_real_t _t843 = TRAILER3_LIT(2.0)*_t35;
+    const trailer3_real_t _t844 = _t44*_t843;
+    const trailer3_real_t _t845 = _t68*_t843;
+    const trailer3_real_t _t846 = -_t171 + _t172 + _t177 + _t178;
+    const trailer3_real_t _t847 = _t44*_t75 + _t49*_t68;
+    const trailer3_real_t _t848 = TRAILER3_LIT(2.0)*_t49;
+    const trailer3_real_t _t849 = _t75*_t848;
+    const trailer3_real_t _t850 = _t123*_t152 + _t123*_t153 + _t125*_t131 - _t125*_t132;
+    const trailer3_real_t _t851 = _t124*_t135 + _t126*_t135 + _t127*_t135 - _t128*_t135;
+    const trailer3_real_t _t852 = TRAILER3_LIT(2.0)*_t24;
+    const trailer3_real_t _t853 = TRAILER3_LIT(5.0)*_t316/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t854 = _t853/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t855 = _t200 + _t201 + _t208 + _t33*_t7;
+    const trailer3_real_t _t856 = TRAILER3_LIT(5.0)*_t320/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t857 = _t856/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t858 = _t204 + _t205 + _t210 + _t38*_t7;
+    const trailer3_real_t _t859 = _t18*_t853 - _t223*_t852 - _t374;
+    const trailer3_real_t _t860 = -TRAILER3_LIT(5.0)*_t859/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t861 = _t860/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t862 = -_t24*_t853 + TRAILER3_LIT(2.0)*_t243 + _t244;
+    const trailer3_real_t _t863 = _t18*_t856 - _t225*_t852 - _t379;
+    const trailer3_real_t _t864 = -TRAILER3_LIT(5.0)*_t863/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t865 = _t864/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t866 = -_t24*_t856 + TRAILER3_LIT(2.0)*_t245 + _t246;
+    const trailer3_real_t _t867 = TRAILER3_LIT(5.0)*_t368/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t868 = _t867/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t869 = _t18*_t223 + _t70;
+    const trailer3_real_t _t870 = TRAILER3_LIT(5.0)*_t370/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t871 = _t870/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t872 = _t18*_t225 + _t77;
+    const trailer3_real_t _t873 = -_t543*_t593;
+    const trailer3_real_t _t874 = _t44*_t544 + _t543*_t68;
+    const trailer3_real_t _t875 = _t49*_t544 + _t543*_t75;
+    const trailer3_real_t _t876 = TRAILER3_LIT(2.0)*_t44;
+    const trailer3_real_t _t877 = _t68*_t876;
+    const trailer3_real_t _t878 = TRAILER3_LIT(2.0)*_t99;
+    const trailer3_real_t _t879 = TRAILER3_LIT(5.0)*_t375/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t880 = _t879/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t881 = _t13*_t33 + _t229 + _t230 + _t239 + _t244;
+    const trailer3_real_t _t882 = TRAILER3_LIT(5.0)*_t380/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t883 = _t882/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t884 = _t13*_t38 + _t234 + _t235 + _t242 + _t246;
+    const trailer3_real_t _t885 = -_t544*_t591;
+    const trailer3_real_t _t886 = TRAILER3_LIT(2.0)*_t139;
+    const trailer3_real_t _t887 = -_t141*_t886 + _t886*_t92;
+    const trailer3_real_t _t888 = _t84*_t886 + _t85*_t886;
+    const trailer3_real_t _t889 = TRAILER3_LIT(3.0)*_t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t890 = _t4*_t889;
+    const trailer3_real_t _t891 = _t2*_t889;
+    const trailer3_real_t _t892 = _t102*_t891 + _t86*_t890 + _t87*_t890 - _t891*_t94;
+    const trailer3_real_t _t893 = _t107*_t891 + _t88*_t890 + _t89*_t890 - _t891*_t96;
+    const trailer3_real_t _t894 = _t112*_t891 + _t890*_t90 + _t890*_t91 - _t891*_t98;
+    const trailer3_real_t _t895 = _t766*_t773;
+    const trailer3_real_t _t896 = _t768*_t773;
+    const trailer3_real_t _t897 = _t766*_t780 - _t768*_t776;
+    const trailer3_real_t _t898 = _t179*_t518 + _t181*_t446 + _t190*_t525 + _t193*_t459
             + _t212*_t532 + _t215*_t467 + _t248*_t539 + _t251*_t474 + _t281*_t562 + _t284*_t492
             + _t29*_t511 + _t294*_t561 + _t297*_t489 + _t31*_t436 + _t323*_t558 + _t326*_t480
             + _t342*_t557 + _t345*_t477 + _t383*_t560 + _t386*_t486 + _t408*_t559 + _t411*_t483
             + _t438*(-_t27*_t38 + _t28*_t33) + _t591*_t594 + _t592*_t595 + _t593*_t596
             + _t93*(-_t27*_t31 + _t28*_t29);
-    const trailer3_real_t _t898 = _t181*(TRAILER3_LIT(2.0)*_t513 + _t607 + _t608 + _t609 + _t610)
+    const trailer3_real_t _t899 = _t181*(TRAILER3_LIT(2.0)*_t513 + _t607 + _t608 + _t609 + _t610)
             + _t193*_t611 + _t215*_t612 + _t251*_t613 + _t284*_t602 + _t297*_t601 + _t31*_t603*_t93
             + _t31*(TRAILER3_LIT(2.0)*_t506 + TRAILER3_LIT(2.0)*_t507 + TRAILER3_LIT(2.0)*_t508
             + TRAILER3_LIT(2.0)*_t509 + TRAILER3_LIT(2.0)*_t510) + _t326*_t598 + _t345*_t597
             + _t38*_t607 + _t386*_t600 + _t411*_t599 + _t591*_t604 + _t592*_t605 + _t593*_t606;
-    const trailer3_real_t _t899 = -_t150 - _t151 + _t564*_t615 + _t566*_t617 + _t569*_t619;
-    const trailer3_real_t _t900 = _t142 + _t564*_t620 + _t566*_t621 + _t569*_t622;
-    const trailer3_real_t _t901 = _t564*_t625 + _t566*_t628 + _t569*_t631 - _t632 + _t633 + _t634
+    const trailer3_real_t _t900 = -_t150 - _t151 + _t564*_t615 + _t566*_t617 + _t569*_t619;
+    const trailer3_real_t _t901 = _t142 + _t564*_t620 + _t566*_t621 + _t569*_t622;
+    const trailer3_real_t _t902 = _t564*_t625 + _t566*_t628 + _t569*_t631 - _t632 + _t633 + _t634
             + _t635 + _t636 + _t637;
-    const trailer3_real_t _t902 = _t566*_t640 + _t569*_t643 - _t644;
-    const trailer3_real_t _t903 = _t564*_t648 + _t569*_t650 - _t651;
-    const trailer3_real_t _t904 = _t564*_t652 + _t566*_t655 - _t656;
-    const trailer3_real_t _t905 = _t657*_t665 + _t658*_t670;
-    const trailer3_real_t _t906 = _t564*_t565 + _t657*_t667 + _t658*_t672 + _t659*_t675
+    const trailer3_real_t _t903 = _t566*_t640 + _t569*_t643 - _t644;
+    const trailer3_real_t _t904 = _t564*_t648 + _t569*_t650 - _t651;
+    const trailer3_real_t _t905 = _t564*_t652 + _t566*_t655 - _t656;
+    const trailer3_real_t _t906 = _t657*_t665 + _t658*_t670;
+    const trailer3_real_t _t907 = _t564*_t565 + _t657*_t667 + _t658*_t672 + _t659*_t675
             + _t660*_t678;
-    const trailer3_real_t _t907 = _t564*_t567 + _t566*_t568 + _t657*_t682 + _t658*_t686
+    const trailer3_real_t _t908 = _t564*_t567 + _t566*_t568 + _t657*_t682 + _t658*_t686
             + _t659*_t690 + _t660*_t694 + _t661*_t697 + _t662*_t700;
-    const trailer3_real_t _t908 = _t564*_t570 + _t566*_t571 + _t569*_t572 + _t657*_t704
+    const trailer3_real_t _t909 = _t564*_t570 + _t566*_t571 + _t569*_t572 + _t657*_t704
             + _t658*_t708 + _t659*_t712 + _t660*_t716 + _t661*_t720 + _t662*_t724 + _t663*_t727
             + _t664*_t730;
-    const trailer3_real_t _t909 = _t668 - _t669;
-    const trailer3_real_t _t910 = _t279*_t909;
-    const trailer3_real_t _t911 = _t673 - _t674;
-    const trailer3_real_t _t912 = _t279*_t911;
-    const trailer3_real_t _t913 = _t676 - _t677;
-    const trailer3_real_t _t914 = _t279*_t913;
-    const trailer3_real_t _t915 = _t679 - _t680;
-    const trailer3_real_t _t916 = _t279*_t915;
-    const trailer3_real_t _t917 = _t564*_t574 + _t657*_t910 + _t658*_t912 + _t659*_t914
-            + _t660*_t916;
-    const trailer3_real_t _t918 = -_t668 - _t669;
-    const trailer3_real_t _t919 = _t292*_t918;
-    const trailer3_real_t _t920 = -_t673 - _t674;
-    const trailer3_real_t _t921 = _t292*_t920;
-    const trailer3_real_t _t922 = -_t676 - _t677;
-    const trailer3_real_t _t923 = _t292*_t922;
-    const trailer3_real_t _t924 = -_t679 - _t680;
-    const trailer3_real_t _t925 = _t292*_t924;
-    const trailer3_real_t _t926 = _t564*_t576 + _t657*_t919 + _t658*_t921 + _t659*_t923
-            + _t660*_t925;
-    const trailer3_real_t _t927 = _t683 - _t684;
-    const trailer3_real_t _t928 = _t321*_t927;
-    const trailer3_real_t _t929 = _t687 - _t688;
-    const trailer3_real_t _t930 = _t321*_t929;
-    const trailer3_real_t _t931 = _t691 - _t692;
-    const trailer3_real_t _t932 = _t321*_t931;
-    const trailer3_real_t _t933 = _t695 - _t696;
-    const trailer3_real_t _t934 = _t321*_t933;
-    const trailer3_real_t _t935 = _t698 - _t699;
-    const trailer3_real_t _t936 = _t321*_t935;
-    const trailer3_real_t _t937 = _t701 - _t702;
-    const trailer3_real_t _t938 = _t321*_t937;
-    const trailer3_real_t _t939 = _t564*_t578 + _t566*_t579 + _t657*_t928 + _t658*_t930
-            + _t659*_t932 + _t660*_t934 + _t661*_t936 + _t662*_t938;
-    const trailer3_real_t _t940 = -_t683 - _t684;
-    const trailer3_real_t _t941 = _t340*_t940;
-    const trailer3_real_t _t942 = -_t687 - _t688;
-    const trailer3_real_t _t943 = _t340*_t942;
-    const trailer3_real_t _t944 = -_t691 - _t692;
-    const trailer3_real_t _t945 = _t340*_t944;
-    const trailer3_real_t _t946 = -_t695 - _t696;
-    const trailer3_real_t _t947 = _t340*_t946;
-    const trailer3_real_t _t948 = -_t698 - _t699;
-    const trailer3_real_t _t949 = _t340*_t948;
-    const trailer3_real_t _t950 = -_t701 - _t702;
-    const trailer3_real_t _t951 = _t340*_t950;
-    const trailer3_real_t _t952 = _t564*_t581 + _t566*_t582 + _t657*_t941 + _t658*_t943
-            + _t659*_t945 + _t660*_t947 + _t661*_t949 + _t662*_t951;
-    const trailer3_real_t _t953 = _t705 - _t706;
-    const trailer3_real_t _t954 = _t381*_t953;
-    const trailer3_real_t _t955 = _t709 - _t710;
-    const trailer3_real_t _t956 = _t381*_t955;
-    const trailer3_real_t _t957 = _t713 - _t714;
-    const trailer3_real_t _t958 = _t381*_t957;
-    const trailer3_real_t _t959 = _t717 - _t718;
-    const trailer3_real_t _t960 = _t381*_t959;
-    const trailer3_real_t _t961 = _t721 - _t722;
-    const trailer3_real_t _t962 = _t381*_t961;
-    const trailer3_real_t _t963 = _t725 - _t726;
-    const trailer3_real_t _t964 = _t381*_t963;
-    const trailer3_real_t _t965 = _t728 - _t729;
-    const trailer3_real_t _t966 = _t381*_t965;
-    const trailer3_real_t _t967 = _t731 - _t732;
-    const trailer3_real_t _t968 = _t381*_t967;
-    const trailer3_real_t _t969 = _t564*_t584 + _t566*_t585 + _t569*_t586 + _t657*_t954
-            + _t658*_t956 + _t659*_t958 + _t660*_t960 + _t661*_t962 + _t662*_t964 + _t663*_t966
-            + _t664*_t968;
-    const trailer3_real_t _t970 = -_t705 - _t706;
-    const trailer3_real_t _t971 = _t406*_t970;
-    const trailer3_real_t _t972 = -_t709 - _t710;
-    const trailer3_real_t _t973 = _t406*_t972;
-    const trailer3_real_t _t974 = -_t713 - _t714;
-    const trailer3_real_t _t975 = _t406*_t974;
-    const trailer3_real_t _t976 = -_t717 - _t718;
-    const trailer3_real_t _t977 = _t406*_t976;
-    const trailer3_real_t _t978 = -_t721 - _t722;
-    const trailer3_real_t _t979 = _t406*_t978;
-    const trailer3_real_t _t980 = -_t725 - _t726;
-    const trailer3_real_t _t981 = _t406*_t980;
-    const trailer3_real_t _t982 = -_t728 - _t729;
-    const trailer3_real_t _t983 = _t406*_t982;
-    const trailer3_real_t _t984 = -_t731 - _t732;
-    const trailer3_real_t _t985 = _t406*_t984;
-    const trailer3_real_t _t986 = _t564*_t588 + _t566*_t589 + _t569*_t590 + _t657*_t971
-            + _t658*_t973 + _t659*_t975 + _t660*_t977 + _t661*_t979 + _t662*_t981 + _t663*_t983
-            + _t664*_t985;
-    const trailer3_real_t _t987 = _t179*_t548 + _t190*_t552 + _t212*_t554 + _t248*_t556 - _t27*_t745
-            - _t27*_t746 - _t27*_t747 - _t27*_t748 - _t27*_t901 + _t281*_t744 + _t29*_t545
-            + _t29*_t899 + _t294*_t742 + _t323*_t736 + _t33*_t900 + _t342*_t734 + _t35*_t902
-            + _t383*_t740 + _t408*_t738 + _t436*_t547 + _t439*_t541 + _t44*_t903 + _t446*_t905
-            + _t459*_t906 + _t467*_t907 + _t474*_t908 + _t477*_t952 + _t480*_t939 + _t483*_t986
-            + _t486*_t969 + _t489*_t926 + _t492*_t917 + _t68*_t904;
-    const trailer3_real_t _t988 = _t181*_t548 + _t193*_t552 + _t215*_t554 + _t251*_t556 + _t28*_t745
-            + _t28*_t746 + _t28*_t747 + _t28*_t748 + _t28*_t901 + _t284*_t744 + _t297*_t742
-            + _t31*_t545 + _t31*_t899 + _t326*_t736 + _t345*_t734 + _t38*_t900 + _t386*_t740
-            + _t40*_t902 + _t411*_t738 + _t49*_t903 + _t511*_t547 + _t514*_t541 + _t518*_t905
-            + _t525*_t906 + _t532*_t907 + _t539*_t908 + _t557*_t952 + _t558*_t939 + _t559*_t986
-            + _t560*_t969 + _t561*_t926 + _t562*_t917 + _t75*_t904;
-    const trailer3_real_t _t989 = _t179*(TRAILER3_LIT(2.0)*_t437 + _t757 + _t760 + _t761 + _t762)
+    const trailer3_real_t _t910 = _t668 - _t669;
+    const trailer3_real_t _t911 = _t279*_t910;
+    const trailer3_real_t _t912 = _t673 - _t674;
+    const trailer3_real_t _t913 = _t279*_t912;
+    const trailer3_real_t _t914 = _t676 - _t677;
+    const trailer3_real_t _t915 = _t279*_t914;
+    const trailer3_real_t _t916 = _t679 - _t680;
+    const trailer3_real_t _t917 = _t279*_t916;
+    const trailer3_real_t _t918 = _t564*_t574 + _t657*_t911 + _t658*_t913 + _t659*_t915
+            + _t660*_t917;
+    const trailer3_real_t _t919 = -_t668 - _t669;
+    const trailer3_real_t _t920 = _t292*_t919;
+    const trailer3_real_t _t921 = -_t673 - _t674;
+    const trailer3_real_t _t922 = _t292*_t921;
+    const trailer3_real_t _t923 = -_t676 - _t677;
+    const trailer3_real_t _t924 = _t292*_t923;
+    const trailer3_real_t _t925 = -_t679 - _t680;
+    const trailer3_real_t _t926 = _t292*_t925;
+    const trailer3_real_t _t927 = _t564*_t576 + _t657*_t920 + _t658*_t922 + _t659*_t924
+            + _t660*_t926;
+    const trailer3_real_t _t928 = _t683 - _t684;
+    const trailer3_real_t _t929 = _t321*_t928;
+    const trailer3_real_t _t930 = _t687 - _t688;
+    const trailer3_real_t _t931 = _t321*_t930;
+    const trailer3_real_t _t932 = _t691 - _t692;
+    const trailer3_real_t _t933 = _t321*_t932;
+    const trailer3_real_t _t934 = _t695 - _t696;
+    const trailer3_real_t _t935 = _t321*_t934;
+    const trailer3_real_t _t936 = _t698 - _t699;
+    const trailer3_real_t _t937 = _t321*_t936;
+    const trailer3_real_t _t938 = _t701 - _t702;
+    const trailer3_real_t _t939 = _t321*_t938;
+    const trailer3_real_t _t940 = _t564*_t578 + _t566*_t579 + _t657*_t929 + _t658*_t931
+            + _t659*_t933 + _t660*_t935 + _t661*_t937 + _t662*_t939;
+    const trailer3_real_t _t941 = -_t683 - _t684;
+    const trailer3_real_t _t942 = _t340*_t941;
+    const trailer3_real_t _t943 = -_t687 - _t688;
+    const trailer3_real_t _t944 = _t340*_t943;
+    const trailer3_real_t _t945 = -_t691 - _t692;
+    const trailer3_real_t _t946 = _t340*_t945;
+    const trailer3_real_t _t947 = -_t695 - _t696;
+    const trailer3_real_t _t948 = _t340*_t947;
+    const trailer3_real_t _t949 = -_t698 - _t699;
+    const trailer3_real_t _t950 = _t340*_t949;
+    const trailer3_real_t _t951 = -_t701 - _t702;
+    const trailer3_real_t _t952 = _t340*_t951;
+    const trailer3_real_t _t953 = _t564*_t581 + _t566*_t582 + _t657*_t942 + _t658*_t944
+            + _t659*_t946 + _t660*_t948 + _t661*_t950 + _t662*_t952;
+    const trailer3_real_t _t954 = _t705 - _t706;
+    const trailer3_real_t _t955 = _t381*_t954;
+    const trailer3_real_t _t956 = _t709 - _t710;
+    const trailer3_real_t _t957 = _t381*_t956;
+    const trailer3_real_t _t958 = _t713 - _t714;
+    const trailer3_real_t _t959 = _t381*_t958;
+    const trailer3_real_t _t960 = _t717 - _t718;
+    const trailer3_real_t _t961 = _t381*_t960;
+    const trailer3_real_t _t962 = _t721 - _t722;
+    const trailer3_real_t _t963 = _t381*_t962;
+    const trailer3_real_t _t964 = _t725 - _t726;
+    const trailer3_real_t _t965 = _t381*_t964;
+    const trailer3_real_t _t966 = _t728 - _t729;
+    const trailer3_real_t _t967 = _t381*_t966;
+    const trailer3_real_t _t968 = _t731 - _t732;
+    const trailer3_real_t _t969 = _t381*_t968;
+    const trailer3_real_t _t970 = _t564*_t584 + _t566*_t585 + _t569*_t586 + _t657*_t955
+            + _t658*_t957 + _t659*_t959 + _t660*_t961 + _t661*_t963 + _t662*_t965 + _t663*_t967
+            + _t664*_t969;
+    const trailer3_real_t _t971 = -_t705 - _t706;
+    const trailer3_real_t _t972 = _t406*_t971;
+    const trailer3_real_t _t973 = -_t709 - _t710;
+    const trailer3_real_t _t974 = _t406*_t973;
+    const trailer3_real_t _t975 = -_t713 - _t714;
+    const trailer3_real_t _t976 = _t406*_t975;
+    const trailer3_real_t _t977 = -_t717 - _t718;
+    const trailer3_real_t _t978 = _t406*_t977;
+    const trailer3_real_t _t979 = -_t721 - _t722;
+    const trailer3_real_t _t980 = _t406*_t979;
+    const trailer3_real_t _t981 = -_t725 - _t726;
+    const trailer3_real_t _t982 = _t406*_t981;
+    const trailer3_real_t _t983 = -_t728 - _t729;
+    const trailer3_real_t _t984 = _t406*_t983;
+    const trailer3_real_t _t985 = -_t731 - _t732;
+    const trailer3_real_t _t986 = _t406*_t985;
+    const trailer3_real_t _t987 = _t564*_t588 + _t566*_t589 + _t569*_t590 + _t657*_t972
+            + _t658*_t974 + _t659*_t976 + _t660*_t978 + _t661*_t980 + _t662*_t982 + _t663*_t984
+            + _t664*_t986;
+    const trailer3_real_t _t988 = _t179*_t548 + _t190*_t552 + _t212*_t554 + _t248*_t556 - _t27*_t745
+            - _t27*_t746 - _t27*_t747 - _t27*_t748 - _t27*_t902 + _t281*_t744 + _t29*_t545
+            + _t29*_t900 + _t294*_t742 + _t323*_t736 + _t33*_t901 + _t342*_t734 + _t35*_t903
+            + _t383*_t740 + _t408*_t738 + _t436*_t547 + _t439*_t541 + _t44*_t904 + _t446*_t906
+            + _t459*_t907 + _t467*_t908 + _t474*_t909 + _t477*_t953 + _t480*_t940 + _t483*_t987
+            + _t486*_t970 + _t489*_t927 + _t492*_t918 + _t68*_t905;
+    const trailer3_real_t _t989 = _t181*_t548 + _t193*_t552 + _t215*_t554 + _t251*_t556 + _t28*_t745
+            + _t28*_t746 + _t28*_t747 + _t28*_t748 + _t28*_t902 + _t284*_t744 + _t297*_t742
+            + _t31*_t545 + _t31*_t900 + _t326*_t736 + _t345*_t734 + _t38*_t901 + _t386*_t740
+            + _t40*_t903 + _t411*_t738 + _t49*_t904 + _t511*_t547 + _t514*_t541 + _t518*_t906
+            + _t525*_t907 + _t532*_t908 + _t539*_t909 + _t557*_t953 + _t558*_t940 + _t559*_t987
+            + _t560*_t970 + _t561*_t927 + _t562*_t918 + _t75*_t905;
+    const trailer3_real_t _t990 = _t179*(TRAILER3_LIT(2.0)*_t437 + _t757 + _t760 + _t761 + _t762)
             + _t190*_t763 + _t212*_t764 + _t248*_t765 + _t281*_t754 + _t29*_t755*_t93
             + _t29*(TRAILER3_LIT(2.0)*_t431 + TRAILER3_LIT(2.0)*_t432 + TRAILER3_LIT(2.0)*_t433
             + TRAILER3_LIT(2.0)*_t434 + TRAILER3_LIT(2.0)*_t435) + _t294*_t753 + _t323*_t750
             + _t33*_t757 + _t342*_t749 + _t383*_t752 + _t408*_t751 + _t591*_t756 + _t592*_t758
             + _t593*_t759;
-    const trailer3_real_t _t990 = _t766*_t898 - _t767*_t897 - _t768*_t897 + _t769*_t989;
-    const trailer3_real_t _t991 = -_t771*_t990;
-    const trailer3_real_t _t992 = -_t773*_t987 + _t776*_t898 + _t777*_t988 - _t780*_t897
-            + _t781*_t991;
-    const trailer3_real_t _t993 = _t195*_t525 + _t197*_t459 + _t218*_t532 + _t221*_t467
+    const trailer3_real_t _t991 = _t766*_t899 - _t767*_t898 - _t768*_t898 + _t769*_t990;
+    const trailer3_real_t _t992 = -_t772*_t991;
+    const trailer3_real_t _t993 = -_t774*_t988 + _t777*_t899 + _t778*_t989 - _t781*_t898
+            + _t782*_t992;
+    const trailer3_real_t _t994 = _t195*_t525 + _t197*_t459 + _t218*_t532 + _t221*_t467
             + _t254*_t539 + _t257*_t474 + _t287*_t562 + _t290*_t492 + _t300*_t561 + _t303*_t489
             + _t329*_t558 + _t332*_t480 + _t348*_t557 + _t351*_t477 + _t389*_t560 + _t392*_t486
-            + _t414*_t559 + _t417*_t483 + _t440*(_t33*_t40 + _t35*_t38) - _t592*_t595 + _t782*_t784
-            + _t783*_t785 + _t95*(_t29*_t40 + _t31*_t35);
-    const trailer3_real_t _t994 = _t197*_t611 + _t221*_t612 + _t257*_t613 + _t290*_t602
-            + _t303*_t601 + _t31*_t786*_t95 + _t332*_t598 + _t351*_t597 + _t38*_t608 + _t392*_t600
-            + _t417*_t599 - _t592*_t605 + _t782*_t787 + _t783*_t788;
-    const trailer3_real_t _t995 = -_t148 - _t149 + _t565*_t615 + _t567*_t617 + _t570*_t619;
-    const trailer3_real_t _t996 = _t147 + _t565*_t620 + _t567*_t621 + _t570*_t622;
-    const trailer3_real_t _t997 = _t565*_t625 + _t567*_t628 + _t570*_t631 + _t632 - _t633 - _t634
+            + _t414*_t559 + _t417*_t483 + _t440*(_t33*_t40 + _t35*_t38) - _t592*_t595 + _t783*_t785
+            + _t784*_t786 + _t95*(_t29*_t40 + _t31*_t35);
+    const trailer3_real_t _t995 = _t197*_t611 + _t221*_t612 + _t257*_t613 + _t290*_t602
+            + _t303*_t601 + _t31*_t787*_t95 + _t332*_t598 + _t351*_t597 + _t38*_t608 + _t392*_t600
+            + _t417*_t599 - _t592*_t605 + _t783*_t788 + _t784*_t789;
+    const trailer3_real_t _t996 = -_t148 - _t149 + _t565*_t615 + _t567*_t617 + _t570*_t619;
+    const trailer3_real_t _t997 = _t147 + _t565*_t620 + _t567*_t621 + _t570*_t622;
+    const trailer3_real_t _t998 = _t565*_t625 + _t567*_t628 + _t570*_t631 + _t632 - _t633 - _t634
             - _t635;
-    const trailer3_real_t _t998 = _t567*_t640 + _t570*_t643 + _t644 + _t789 + _t790;
-    const trailer3_real_t _t999 = _t565*_t648 + _t570*_t650 - _t791;
-    const trailer3_real_t _t1000 = _t565*_t652 + _t567*_t655 - _t792;
-    const trailer3_real_t _t1001 = _t565*_t565 + _t657*_t675 + _t658*_t678 + _t659*_t795
-            + _t660*_t798;
-    const trailer3_real_t _t1002 = _t565*_t567 + _t567*_t568 + _t657*_t690 + _t658*_t694
-            + _t659*_t802 + _t660*_t806 + _t661*_t809 + _t662*_t812;
-    const trailer3_real_t _t1003 = _t565*_t570 + _t567*_t571 + _t570*_t572 + _t657*_t712
-            + _t658*_t716 + _t659*_t816 + _t660*_t820 + _t661*_t824 + _t662*_t828 + _t663*_t831
-            + _t664*_t834;
-    const trailer3_real_t _t1004 = _t796 - _t797;
-    const trailer3_real_t _t1005 = _t1004*_t279;
-    const trailer3_real_t _t1006 = _t799 - _t800;
-    const trailer3_real_t _t1007 = _t1006*_t279;
-    const trailer3_real_t _t1008 = _t1005*_t659 + _t1007*_t660 + _t565*_t574 + _t657*_t914
-            + _t658*_t916;
-    const trailer3_real_t _t1009 = -_t796 - _t797;
-    const trailer3_real_t _t1010 = _t1009*_t292;
-    const trailer3_real_t _t1011 = -_t799 - _t800;
-    const trailer3_real_t _t1012 = _t1011*_t292;
-    const trailer3_real_t _t1013 = _t1010*_t659 + _t1012*_t660 + _t565*_t576 + _t657*_t923
-            + _t658*_t925;
-    const trailer3_real_t _t1014 = _t803 - _t804;
-    const trailer3_real_t _t1015 = _t1014*_t321;
-    const trailer3_real_t _t1016 = _t807 - _t808;
-    const trailer3_real_t _t1017 = _t1016*_t321;
-    const trailer3_real_t _t1018 = _t810 - _t811;
-    const trailer3_real_t _t1019 = _t1018*_t321;
-    const trailer3_real_t _t1020 = _t813 - _t814;
-    const trailer3_real_t _t1021 = _t1020*_t321;
-    const trailer3_real_t _t1022 = _t1015*_t659 + _t1017*_t660 + _t1019*_t661 + _t1021*_t662
-            + _t565*_t578 + _t567*_t579 + _t657*_t932 + _t658*_t934;
-    const trailer3_real_t _t1023 = -_t803 - _t804;
-    const trailer3_real_t _t1024 = _t1023*_t340;
-    const trailer3_real_t _t1025 = -_t807 - _t808;
-    const trailer3_real_t _t1026 = _t1025*_t340;
-    const trailer3_real_t _t1027 = -_t810 - _t811;
-    const trailer3_real_t _t1028 = _t1027*_t340;
-    const trailer3_real_t _t1029 = -_t813 - _t814;
-    const trailer3_real_t _t1030 = _t1029*_t340;
-    const trailer3_real_t _t1031 = _t1024*_t659 + _t1026*_t660 + _t1028*_t661 + _t1030*_t662
-            + _t565*_t581 + _t567*_t582 + _t657*_t945 + _t658*_t947;
-    const trailer3_real_t _t1032 = _t817 - _t818;
-    const trailer3_real_t _t1033 = _t1032*_t381;
-    const trailer3_real_t _t1034 = _t821 - _t822;
-    const trailer3_real_t _t1035 = _t1034*_t381;
-    const trailer3_real_t _t1036 = _t825 - _t826;
-    const trailer3_real_t _t1037 = _t1036*_t381;
-    const trailer3_real_t _t1038 = _t829 - _t830;
-    const trailer3_real_t _t1039 = _t1038*_t381;
-    const trailer3_real_t _t1040 = _t832 - _t833;
-    const trailer3_real_t _t1041 = _t1040*_t381;
-    const trailer3_real_t _t1042 = _t835 - _t836;
-    const trailer3_real_t _t1043 = _t1042*_t381;
-    const trailer3_real_t _t1044 = _t1033*_t659 + _t1035*_t660 + _t1037*_t661 + _t1039*_t662
-            + _t1041*_t663 + _t1043*_t664 + _t565*_t584 + _t567*_t585 + _t570*_t586 + _t657*_t958
-            + _t658*_t960;
-    const trailer3_real_t _t1045 = -_t817 - _t818;
-    const trailer3_real_t _t1046 = _t1045*_t406;
-    const trailer3_real_t _t1047 = -_t821 - _t822;
-    const trailer3_real_t _t1048 = _t1047*_t406;
-    const trailer3_real_t _t1049 = -_t825 - _t826;
-    const trailer3_real_t _t1050 = _t1049*_t406;
-    const trailer3_real_t _t1051 = -_t829 - _t830;
-    const trailer3_real_t _t1052 = _t1051*_t406;
-    const trailer3_real_t _t1053 = -_t832 - _t833;
-    const trailer3_real_t _t1054 = _t1053*_t406;
-    const trailer3_real_t _t1055 = -_t835 - _t836;
-    const trailer3_real_t _t1056 = _t1055*_t406;
-    const trailer3_real_t _t1057 = _t1046*_t659 + _t1048*_t660 + _t1050*_t661 + _t1052*_t662
-            + _t1054*_t663 + _t1056*_t664 + _t565*_t588 + _t567*_t589 + _t570*_t590 + _t657*_t975
-            + _t658*_t977;
-    const trailer3_real_t _t1058 = _t1000*_t68 + _t1001*_t459 + _t1002*_t467 + _t1003*_t474
-            + _t1008*_t492 + _t1013*_t489 + _t1022*_t480 + _t1031*_t477 + _t1044*_t486
-            + _t1057*_t483 + _t195*_t552 + _t218*_t554 + _t254*_t556 - _t27*_t837 - _t27*_t997
-            + _t287*_t744 + _t29*_t995 + _t300*_t742 + _t329*_t736 + _t33*_t996 + _t348*_t734
-            + _t35*_t998 + _t389*_t740 + _t414*_t738 + _t44*_t999 + _t440*(_t33*_t542 + _t35*_t541)
-            + _t782*_t838 + _t783*_t839 + _t95*(_t29*_t542 + _t35*_t547);
-    const trailer3_real_t _t1059 = _t1000*_t75 + _t1001*_t525 + _t1002*_t532 + _t1003*_t539
-            + _t1008*_t562 + _t1013*_t561 + _t1022*_t558 + _t1031*_t557 + _t1044*_t560
-            + _t1057*_t559 + _t197*_t552 + _t221*_t554 + _t257*_t556 + _t28*_t837 + _t28*_t997
-            + _t290*_t744 + _t303*_t742 + _t31*_t995 + _t332*_t736 + _t351*_t734 + _t38*_t996
-            + _t392*_t740 + _t40*_t998 + _t417*_t738 + _t440*(_t38*_t542 + _t40*_t541) + _t49*_t999
-            + _t782*_t840 + _t783*_t841 + _t95*(_t31*_t542 + _t40*_t547);
-    const trailer3_real_t _t1060 = _t195*_t763 + _t218*_t764 + _t254*_t765 + _t287*_t754
-            + _t29*_t842*_t95 + _t300*_t753 + _t329*_t750 + _t33*_t760 + _t348*_t749 + _t389*_t752
-            + _t414*_t751 - _t592*_t758 + _t782*_t843 + _t783*_t844;
-    const trailer3_real_t _t1061 = _t1060*_t769 + _t766*_t994 - _t767*_t993 - _t768*_t993;
-    const trailer3_real_t _t1062 = -_t1061*_t771;
-    const trailer3_real_t _t1063 = -_t1058*_t773 + _t1059*_t777 + _t1062*_t781 + _t776*_t994
-            - _t780*_t993;
-    const trailer3_real_t _t1064 = _t223*_t532 + _t225*_t467 + _t260*_t539 + _t263*_t474
+    const trailer3_real_t _t999 = _t567*_t640 + _t570*_t643 + _t644 + _t790 + _t791;
+    const trailer3_real_t _t1000 = _t565*_t648 + _t570*_t650 - _t792;
+    const trailer3_real_t _t1001 = _t565*_t652 + _t567*_t655 - _t793;
+    const trailer3_real_t _t1002 = _t565*_t565 + _t657*_t675 + _t658*_t678 + _t659*_t796
+            + _t660*_t799;
+    const trailer3_real_t _t1003 = _t565*_t567 + _t567*_t568 + _t657*_t690 + _t658*_t694
+            + _t659*_t803 + _t660*_t807 + _t661*_t810 + _t662*_t813;
+    const trailer3_real_t _t1004 = _t565*_t570 + _t567*_t571 + _t570*_t572 + _t657*_t712
+            + _t658*_t716 + _t659*_t817 + _t660*_t821 + _t661*_t825 + _t662*_t829 + _t663*_t832
+            + _t664*_t835;
+    const trailer3_real_t _t1005 = _t797 - _t798;
+    const trailer3_real_t _t1006 = _t1005*_t279;
+    const trailer3_real_t _t1007 = _t800 - _t801;
+    const trailer3_real_t _t1008 = _t1007*_t279;
+    const trailer3_real_t _t1009 = _t1006*_t659 + _t1008*_t660 + _t565*_t574 + _t657*_t915
+            + _t658*_t917;
+    const trailer3_real_t _t1010 = -_t797 - _t798;
+    const trailer3_real_t _t1011 = _t1010*_t292;
+    const trailer3_real_t _t1012 = -_t800 - _t801;
+    const trailer3_real_t _t1013 = _t1012*_t292;
+    const trailer3_real_t _t1014 = _t1011*_t659 + _t1013*_t660 + _t565*_t576 + _t657*_t924
+            + _t658*_t926;
+    const trailer3_real_t _t1015 = _t804 - _t805;
+    const trailer3_real_t _t1016 = _t1015*_t321;
+    const trailer3_real_t _t1017 = _t808 - _t809;
+    const trailer3_real_t _t1018 = _t1017*_t321;
+    const trailer3_real_t _t1019 = _t811 - _t812;
+    const trailer3_real_t _t1020 = _t1019*_t321;
+    const trailer3_real_t _t1021 = _t814 - _t815;
+    const trailer3_real_t _t1022 = _t1021*_t321;
+    const trailer3_real_t _t1023 = _t1016*_t659 + _t1018*_t660 + _t1020*_t661 + _t1022*_t662
+            + _t565*_t578 + _t567*_t579 + _t657*_t933 + _t658*_t935;
+    const trailer3_real_t _t1024 = -_t804 - _t805;
+    const trailer3_real_t _t1025 = _t1024*_t340;
+    const trailer3_real_t _t1026 = -_t808 - _t809;
+    const trailer3_real_t _t1027 = _t1026*_t340;
+    const trailer3_real_t _t1028 = -_t811 - _t812;
+    const trailer3_real_t _t1029 = _t1028*_t340;
+    const trailer3_real_t _t1030 = -_t814 - _t815;
+    const trailer3_real_t _t1031 = _t1030*_t340;
+    const trailer3_real_t _t1032 = _t1025*_t659 + _t1027*_t660 + _t1029*_t661 + _t1031*_t662
+            + _t565*_t581 + _t567*_t582 + _t657*_t946 + _t658*_t948;
+    const trailer3_real_t _t1033 = _t818 - _t819;
+    const trailer3_real_t _t1034 = _t1033*_t381;
+    const trailer3_real_t _t1035 = _t822 - _t823;
+    const trailer3_real_t _t1036 = _t1035*_t381;
+    const trailer3_real_t _t1037 = _t826 - _t827;
+    const trailer3_real_t _t1038 = _t1037*_t381;
+    const trailer3_real_t _t1039 = _t830 - _t831;
+    const trailer3_real_t _t1040 = _t1039*_t381;
+    const trailer3_real_t _t1041 = _t833 - _t834;
+    const trailer3_real_t _t1042 = _t1041*_t381;
+    const trailer3_real_t _t1043 = _t836 - _t837;
+    const trailer3_real_t _t1044 = _t1043*_t381;
+    const trailer3_real_t _t1045 = _t1034*_t659 + _t1036*_t660 + _t1038*_t661 + _t1040*_t662
+            + _t1042*_t663 + _t1044*_t664 + _t565*_t584 + _t567*_t585 + _t570*_t586 + _t657*_t959
+            + _t658*_t961;
+    const trailer3_real_t _t1046 = -_t818 - _t819;
+    const trailer3_real_t _t1047 = _t1046*_t406;
+    const trailer3_real_t _t1048 = -_t822 - _t823;
+    const trailer3_real_t _t1049 = _t1048*_t406;
+    const trailer3_real_t _t1050 = -_t826 - _t827;
+    const trailer3_real_t _t1051 = _t1050*_t406;
+    const trailer3_real_t _t1052 = -_t830 - _t831;
+    const trailer3_real_t _t1053 = _t1052*_t406;
+    const trailer3_real_t _t1054 = -_t833 - _t834;
+    const trailer3_real_t _t1055 = _t1054*_t406;
+    const trailer3_real_t _t1056 = -_t836 - _t837;
+    const trailer3_real_t _t1057 = _t1056*_t406;
+    const trailer3_real_t _t1058 = _t1047*_t659 + _t1049*_t660 + _t1051*_t661 + _t1053*_t662
+            + _t1055*_t663 + _t1057*_t664 + _t565*_t588 + _t567*_t589 + _t570*_t590 + _t657*_t976
+            + _t658*_t978;
+    const trailer3_real_t _t1059 = _t1000*_t44 + _t1001*_t68 + _t1002*_t459 + _t1003*_t467
+            + _t1004*_t474 + _t1009*_t492 + _t1014*_t489 + _t1023*_t480 + _t1032*_t477
+            + _t1045*_t486 + _t1058*_t483 + _t195*_t552 + _t218*_t554 + _t254*_t556 - _t27*_t838
+            - _t27*_t998 + _t287*_t744 + _t29*_t996 + _t300*_t742 + _t329*_t736 + _t33*_t997
+            + _t348*_t734 + _t35*_t999 + _t389*_t740 + _t414*_t738 + _t440*(_t33*_t542 + _t35*_t541)
+            + _t783*_t839 + _t784*_t840 + _t95*(_t29*_t542 + _t35*_t547);
+    const trailer3_real_t _t1060 = _t1000*_t49 + _t1001*_t75 + _t1002*_t525 + _t1003*_t532
+            + _t1004*_t539 + _t1009*_t562 + _t1014*_t561 + _t1023*_t558 + _t1032*_t557
+            + _t1045*_t560 + _t1058*_t559 + _t197*_t552 + _t221*_t554 + _t257*_t556 + _t28*_t838
+            + _t28*_t998 + _t290*_t744 + _t303*_t742 + _t31*_t996 + _t332*_t736 + _t351*_t734
+            + _t38*_t997 + _t392*_t740 + _t40*_t999 + _t417*_t738 + _t440*(_t38*_t542 + _t40*_t541)
+            + _t783*_t841 + _t784*_t842 + _t95*(_t31*_t542 + _t40*_t547);
+    const trailer3_real_t _t1061 = _t195*_t763 + _t218*_t764 + _t254*_t765 + _t287*_t754
+            + _t29*_t843*_t95 + _t300*_t753 + _t329*_t750 + _t33*_t760 + _t348*_t749 + _t389*_t752
+            + _t414*_t751 - _t592*_t758 + _t783*_t844 + _t784*_t845;
+    const trailer3_real_t _t1062 = _t1061*_t769 + _t766*_t995 - _t767*_t994 - _t768*_t994;
+    const trailer3_real_t _t1063 = -_t1062*_t772;
+    const trailer3_real_t _t1064 = -_t1059*_t774 + _t1060*_t778 + _t1063*_t782 + _t777*_t995
+            - _t781*_t994;
+    const trailer3_real_t _t1065 = _t223*_t532 + _t225*_t467 + _t260*_t539 + _t263*_t474
             + _t335*_t558 + _t338*_t480 + _t354*_t557 + _t357*_t477 + _t395*_t560 + _t398*_t486
-            + _t420*_t559 + _t423*_t483 + _t442*(_t33*_t49 + _t38*_t44) - _t593*_t596 - _t782*_t784
-            + _t845*_t846 + _t97*(_t29*_t49 + _t31*_t44);
-    const trailer3_real_t _t1065 = _t225*_t612 + _t263*_t613 + _t31*_t847*_t97 + _t338*_t598
-            + _t357*_t597 + _t38*_t609 + _t398*_t600 + _t423*_t599 - _t593*_t606 - _t782*_t787
-            + _t845*_t848;
-    const trailer3_real_t _t1066 = -_t157 + _t568*_t617 + _t571*_t619;
-    const trailer3_real_t _t1067 = _t138 + _t568*_t621 + _t571*_t622;
-    const trailer3_real_t _t1068 = _t568*_t628 + _t571*_t631 - _t637;
-    const trailer3_real_t _t1069 = _t568*_t640 + _t571*_t643 - _t790;
-    const trailer3_real_t _t1070 = _t571*_t650 + _t651 + _t791 + _t849;
-    const trailer3_real_t _t1071 = _t568*_t655 - _t850;
-    const trailer3_real_t _t1072 = _t568*_t568 + _t657*_t697 + _t658*_t700 + _t659*_t809
-            + _t660*_t812 + _t661*_t852 + _t662*_t855;
-    const trailer3_real_t _t1073 = _t568*_t571 + _t571*_t572 + _t657*_t720 + _t658*_t724
-            + _t659*_t824 + _t660*_t828 + _t661*_t859 + _t662*_t863 + _t663*_t866 + _t664*_t869;
-    const trailer3_real_t _t1074 = _t853 - _t854;
-    const trailer3_real_t _t1075 = _t1074*_t321;
-    const trailer3_real_t _t1076 = _t856 - _t857;
-    const trailer3_real_t _t1077 = _t1076*_t321;
-    const trailer3_real_t _t1078 = _t1019*_t659 + _t1021*_t660 + _t1075*_t661 + _t1077*_t662
-            + _t568*_t579 + _t657*_t936 + _t658*_t938;
-    const trailer3_real_t _t1079 = -_t853 - _t854;
-    const trailer3_real_t _t1080 = _t1079*_t340;
-    const trailer3_real_t _t1081 = -_t856 - _t857;
-    const trailer3_real_t _t1082 = _t1081*_t340;
-    const trailer3_real_t _t1083 = _t1028*_t659 + _t1030*_t660 + _t1080*_t661 + _t1082*_t662
-            + _t568*_t582 + _t657*_t949 + _t658*_t951;
-    const trailer3_real_t _t1084 = _t860 - _t861;
-    const trailer3_real_t _t1085 = _t1084*_t381;
-    const trailer3_real_t _t1086 = _t864 - _t865;
-    const trailer3_real_t _t1087 = _t1086*_t381;
-    const trailer3_real_t _t1088 = _t867 - _t868;
-    const trailer3_real_t _t1089 = _t1088*_t381;
-    const trailer3_real_t _t1090 = _t870 - _t871;
-    const trailer3_real_t _t1091 = _t1090*_t381;
-    const trailer3_real_t _t1092 = _t1037*_t659 + _t1039*_t660 + _t1085*_t661 + _t1087*_t662
-            + _t1089*_t663 + _t1091*_t664 + _t568*_t585 + _t571*_t586 + _t657*_t962 + _t658*_t964;
-    const trailer3_real_t _t1093 = -_t860 - _t861;
-    const trailer3_real_t _t1094 = _t1093*_t406;
-    const trailer3_real_t _t1095 = -_t864 - _t865;
-    const trailer3_real_t _t1096 = _t1095*_t406;
-    const trailer3_real_t _t1097 = -_t867 - _t868;
-    const trailer3_real_t _t1098 = _t1097*_t406;
-    const trailer3_real_t _t1099 = -_t870 - _t871;
-    const trailer3_real_t _t1100 = _t1099*_t406;
-    const trailer3_real_t _t1101 = _t1050*_t659 + _t1052*_t660 + _t1094*_t661 + _t1096*_t662
-            + _t1098*_t663 + _t1100*_t664 + _t568*_t589 + _t571*_t590 + _t657*_t979 + _t658*_t981;
-    const trailer3_real_t _t1102 = _t1066*_t29 + _t1067*_t33 - _t1068*_t27 + _t1069*_t35
-            + _t1070*_t44 + _t1071*_t68 + _t1072*_t467 + _t1073*_t474 + _t1078*_t480 + _t1083*_t477
-            + _t1092*_t486 + _t1101*_t483 + _t223*_t554 + _t260*_t556 - _t27*_t872 + _t335*_t736
+            + _t420*_t559 + _t423*_t483 + _t442*(_t33*_t49 + _t38*_t44) - _t593*_t596 - _t783*_t785
+            + _t846*_t847 + _t97*(_t29*_t49 + _t31*_t44);
+    const trailer3_real_t _t1066 = _t225*_t612 + _t263*_t613 + _t31*_t848*_t97 + _t338*_t598
+            + _t357*_t597 + _t38*_t609 + _t398*_t600 + _t423*_t599 - _t593*_t606 - _t783*_t788
+            + _t846*_t849;
+    const trailer3_real_t _t1067 = -_t157 + _t568*_t617 + _t571*_t619;
+    const trailer3_real_t _t1068 = _t138 + _t568*_t621 + _t571*_t622;
+    const trailer3_real_t _t1069 = _t568*_t628 + _t571*_t631 - _t637;
+    const trailer3_real_t _t1070 = _t568*_t640 + _t571*_t643 - _t791;
+    const trailer3_real_t _t1071 = _t571*_t650 + _t651 + _t792 + _t850;
+    const trailer3_real_t _t1072 = _t568*_t655 - _t851;
+    const trailer3_real_t _t1073 = _t568*_t568 + _t657*_t697 + _t658*_t700 + _t659*_t810
+            + _t660*_t813 + _t661*_t853 + _t662*_t856;
+    const trailer3_real_t _t1074 = _t568*_t571 + _t571*_t572 + _t657*_t720 + _t658*_t724
+            + _t659*_t825 + _t660*_t829 + _t661*_t860 + _t662*_t864 + _t663*_t867 + _t664*_t870;
+    const trailer3_real_t _t1075 = _t854 - _t855;
+    const trailer3_real_t _t1076 = _t1075*_t321;
+    const trailer3_real_t _t1077 = _t857 - _t858;
+    const trailer3_real_t _t1078 = _t1077*_t321;
+    const trailer3_real_t _t1079 = _t1020*_t659 + _t1022*_t660 + _t1076*_t661 + _t1078*_t662
+            + _t568*_t579 + _t657*_t937 + _t658*_t939;
+    const trailer3_real_t _t1080 = -_t854 - _t855;
+    const trailer3_real_t _t1081 = _t1080*_t340;
+    const trailer3_real_t _t1082 = -_t857 - _t858;
+    const trailer3_real_t _t1083 = _t1082*_t340;
+    const trailer3_real_t _t1084 = _t1029*_t659 + _t1031*_t660 + _t1081*_t661 + _t1083*_t662
+            + _t568*_t582 + _t657*_t950 + _t658*_t952;
+    const trailer3_real_t _t1085 = _t861 - _t862;
+    const trailer3_real_t _t1086 = _t1085*_t381;
+    const trailer3_real_t _t1087 = _t865 - _t866;
+    const trailer3_real_t _t1088 = _t1087*_t381;
+    const trailer3_real_t _t1089 = _t868 - _t869;
+    const trailer3_real_t _t1090 = _t1089*_t381;
+    const trailer3_real_t _t1091 = _t871 - _t872;
+    const trailer3_real_t _t1092 = _t1091*_t381;
+    const trailer3_real_t _t1093 = _t1038*_t659 + _t1040*_t660 + _t1086*_t661 + _t1088*_t662
+            + _t1090*_t663 + _t1092*_t664 + _t568*_t585 + _t571*_t586 + _t657*_t963 + _t658*_t965;
+    const trailer3_real_t _t1094 = -_t861 - _t862;
+    const trailer3_real_t _t1095 = _t1094*_t406;
+    const trailer3_real_t _t1096 = -_t865 - _t866;
+    const trailer3_real_t _t1097 = _t1096*_t406;
+    const trailer3_real_t _t1098 = -_t868 - _t869;
+    const trailer3_real_t _t1099 = _t1098*_t406;
+    const trailer3_real_t _t1100 = -_t871 - _t872;
+    const trailer3_real_t _t1101 = _t1100*_t406;
+    const trailer3_real_t _t1102 = _t1051*_t659 + _t1053*_t660 + _t1095*_t661 + _t1097*_t662
+            + _t1099*_t663 + _t1101*_t664 + _t568*_t589 + _t571*_t590 + _t657*_t980 + _t658*_t982;
+    const trailer3_real_t _t1103 = _t1067*_t29 + _t1068*_t33 - _t1069*_t27 + _t1070*_t35
+            + _t1071*_t44 + _t1072*_t68 + _t1073*_t467 + _t1074*_t474 + _t1079*_t480 + _t1084*_t477
+            + _t1093*_t486 + _t1102*_t483 + _t223*_t554 + _t260*_t556 - _t27*_t873 + _t335*_t736
             + _t354*_t734 + _t395*_t740 + _t420*_t738 + _t442*(_t33*_t543 + _t44*_t541)
-            - _t782*_t838 + _t845*_t873 + _t97*(_t29*_t543 + _t44*_t547);
-    const trailer3_real_t _t1103 = _t1066*_t31 + _t1067*_t38 + _t1068*_t28 + _t1069*_t40
-            + _t1070*_t49 + _t1071*_t75 + _t1072*_t532 + _t1073*_t539 + _t1078*_t558 + _t1083*_t557
-            + _t1092*_t560 + _t1101*_t559 + _t225*_t554 + _t263*_t556 + _t28*_t872 + _t338*_t736
+            - _t783*_t839 + _t846*_t874 + _t97*(_t29*_t543 + _t44*_t547);
+    const trailer3_real_t _t1104 = _t1067*_t31 + _t1068*_t38 + _t1069*_t28 + _t1070*_t40
+            + _t1071*_t49 + _t1072*_t75 + _t1073*_t532 + _t1074*_t539 + _t1079*_t558 + _t1084*_t557
+            + _t1093*_t560 + _t1102*_t559 + _t225*_t554 + _t263*_t556 + _t28*_t873 + _t338*_t736
             + _t357*_t734 + _t398*_t740 + _t423*_t738 + _t442*(_t38*_t543 + _t49*_t541)
-            - _t782*_t840 + _t845*_t874 + _t97*(_t31*_t543 + _t49*_t547);
-    const trailer3_real_t _t1104 = _t223*_t764 + _t260*_t765 + _t29*_t875*_t97 + _t33*_t761
-            + _t335*_t750 + _t354*_t749 + _t395*_t752 + _t420*_t751 - _t593*_t759 - _t782*_t843
-            + _t845*_t876;
-    const trailer3_real_t _t1105 = -_t1064*_t767 - _t1064*_t768 + _t1065*_t766 + _t1104*_t769;
-    const trailer3_real_t _t1106 = -_t1105*_t771;
-    const trailer3_real_t _t1107 = -_t1064*_t780 + _t1065*_t776 - _t1102*_t773 + _t1103*_t777
-            + _t1106*_t781;
-    const trailer3_real_t _t1108 = _t265*_t539 + _t267*_t474 + _t401*_t560 + _t404*_t486
-            + _t426*_t559 + _t429*_t483 + _t444*(_t33*_t75 + _t38*_t68) - _t591*_t594 - _t783*_t785
-            - _t845*_t846 + _t99*(_t29*_t75 + _t31*_t68);
-    const trailer3_real_t _t1109 = _t267*_t613 + _t31*_t75*_t877 + _t38*_t610 + _t404*_t600
-            + _t429*_t599 - _t591*_t604 - _t783*_t788 - _t845*_t848;
-    const trailer3_real_t _t1110 = -_t154 + _t572*_t619;
-    const trailer3_real_t _t1111 = _t133 + _t572*_t622;
-    const trailer3_real_t _t1112 = _t572*_t631 - _t636;
-    const trailer3_real_t _t1113 = _t572*_t643 - _t789;
-    const trailer3_real_t _t1114 = _t572*_t650 - _t849;
-    const trailer3_real_t _t1115 = _t656 + _t792 + _t850;
-    const trailer3_real_t _t1116 = _t572*_t572 + _t657*_t727 + _t658*_t730 + _t659*_t831
-            + _t660*_t834 + _t661*_t866 + _t662*_t869 + _t663*_t878 + _t664*_t881;
-    const trailer3_real_t _t1117 = _t879 - _t880;
-    const trailer3_real_t _t1118 = _t1117*_t381;
-    const trailer3_real_t _t1119 = _t882 - _t883;
-    const trailer3_real_t _t1120 = _t1119*_t381;
-    const trailer3_real_t _t1121 = _t1041*_t659 + _t1043*_t660 + _t1089*_t661 + _t1091*_t662
-            + _t1118*_t663 + _t1120*_t664 + _t572*_t586 + _t657*_t966 + _t658*_t968;
-    const trailer3_real_t _t1122 = -_t879 - _t880;
-    const trailer3_real_t _t1123 = _t1122*_t406;
-    const trailer3_real_t _t1124 = -_t882 - _t883;
-    const trailer3_real_t _t1125 = _t1124*_t406;
-    const trailer3_real_t _t1126 = _t1054*_t659 + _t1056*_t660 + _t1098*_t661 + _t1100*_t662
-            + _t1123*_t663 + _t1125*_t664 + _t572*_t590 + _t657*_t983 + _t658*_t985;
-    const trailer3_real_t _t1127 = _t1110*_t29 + _t1111*_t33 - _t1112*_t27 + _t1113*_t35
-            + _t1114*_t44 + _t1115*_t68 + _t1116*_t474 + _t1121*_t486 + _t1126*_t483 + _t265*_t556
-            - _t27*_t884 + _t401*_t740 + _t426*_t738 + _t444*(_t33*_t544 + _t541*_t68) - _t783*_t839
-            - _t845*_t873 + _t99*(_t29*_t544 + _t547*_t68);
-    const trailer3_real_t _t1128 = _t1110*_t31 + _t1111*_t38 + _t1112*_t28 + _t1113*_t40
-            + _t1114*_t49 + _t1115*_t75 + _t1116*_t539 + _t1121*_t560 + _t1126*_t559 + _t267*_t556
-            + _t28*_t884 + _t404*_t740 + _t429*_t738 + _t444*(_t38*_t544 + _t541*_t75) - _t783*_t841
-            - _t845*_t874 + _t99*(_t31*_t544 + _t547*_t75);
-    const trailer3_real_t _t1129 = _t265*_t765 + _t29*_t68*_t877 + _t33*_t762 + _t401*_t752
-            + _t426*_t751 - _t591*_t756 - _t783*_t844 - _t845*_t876;
-    const trailer3_real_t _t1130 = -_t1108*_t767 - _t1108*_t768 + _t1109*_t766 + _t1129*_t769;
-    const trailer3_real_t _t1131 = -_t1130*_t771;
-    const trailer3_real_t _t1132 = -_t1108*_t780 + _t1109*_t776 - _t1127*_t773 + _t1128*_t777
-            + _t1131*_t781;
-    const trailer3_real_t _t1133 = -_t27*_t886 + _t35*_t615 + _t44*_t617 + _t619*_t68;
-    const trailer3_real_t _t1134 = -_t27*_t887 + _t35*_t620 + _t44*_t621 + _t622*_t68;
-    const trailer3_real_t _t1135 = _t35*_t625 + _t44*_t628 + _t631*_t68;
-    const trailer3_real_t _t1136 = -_t27*_t891 + _t44*_t640 + _t643*_t68;
-    const trailer3_real_t _t1137 = -_t27*_t892 + _t35*_t648 + _t650*_t68;
-    const trailer3_real_t _t1138 = -_t27*_t893 + _t35*_t652 + _t44*_t655;
-    const trailer3_real_t _t1139 = _t139*_t179 - _t27*_t563;
-    const trailer3_real_t _t1140 = _t139*_t29 - _t27*_t83;
-    const trailer3_real_t _t1141 = _t139*_t190 + _t143*_t195 - _t27*_t564 + _t35*_t565;
-    const trailer3_real_t _t1142 = _t134*_t223 + _t139*_t212 + _t143*_t218 - _t27*_t566 + _t35*_t567
+            - _t783*_t841 + _t846*_t875 + _t97*(_t31*_t543 + _t49*_t547);
+    const trailer3_real_t _t1105 = _t223*_t764 + _t260*_t765 + _t29*_t876*_t97 + _t33*_t761
+            + _t335*_t750 + _t354*_t749 + _t395*_t752 + _t420*_t751 - _t593*_t759 - _t783*_t844
+            + _t846*_t877;
+    const trailer3_real_t _t1106 = -_t1065*_t767 - _t1065*_t768 + _t1066*_t766 + _t1105*_t769;
+    const trailer3_real_t _t1107 = -_t1106*_t772;
+    const trailer3_real_t _t1108 = -_t1065*_t781 + _t1066*_t777 - _t1103*_t774 + _t1104*_t778
+            + _t1107*_t782;
+    const trailer3_real_t _t1109 = _t265*_t539 + _t267*_t474 + _t401*_t560 + _t404*_t486
+            + _t426*_t559 + _t429*_t483 + _t444*(_t33*_t75 + _t38*_t68) - _t591*_t594 - _t784*_t786
+            - _t846*_t847 + _t99*(_t29*_t75 + _t31*_t68);
+    const trailer3_real_t _t1110 = _t267*_t613 + _t31*_t75*_t878 + _t38*_t610 + _t404*_t600
+            + _t429*_t599 - _t591*_t604 - _t784*_t789 - _t846*_t849;
+    const trailer3_real_t _t1111 = -_t154 + _t572*_t619;
+    const trailer3_real_t _t1112 = _t133 + _t572*_t622;
+    const trailer3_real_t _t1113 = _t572*_t631 - _t636;
+    const trailer3_real_t _t1114 = _t572*_t643 - _t790;
+    const trailer3_real_t _t1115 = _t572*_t650 - _t850;
+    const trailer3_real_t _t1116 = _t656 + _t793 + _t851;
+    const trailer3_real_t _t1117 = _t572*_t572 + _t657*_t727 + _t658*_t730 + _t659*_t832
+            + _t660*_t835 + _t661*_t867 + _t662*_t870 + _t663*_t879 + _t664*_t882;
+    const trailer3_real_t _t1118 = _t880 - _t881;
+    const trailer3_real_t _t1119 = _t1118*_t381;
+    const trailer3_real_t _t1120 = _t883 - _t884;
+    const trailer3_real_t _t1121 = _t1120*_t381;
+    const trailer3_real_t _t1122 = _t1042*_t659 + _t1044*_t660 + _t1090*_t661 + _t1092*_t662
+            + _t1119*_t663 + _t1121*_t664 + _t572*_t586 + _t657*_t967 + _t658*_t969;
+    const trailer3_real_t _t1123 = -_t880 - _t881;
+    const trailer3_real_t _t1124 = _t1123*_t406;
+    const trailer3_real_t _t1125 = -_t883 - _t884;
+    const trailer3_real_t _t1126 = _t1125*_t406;
+    const trailer3_real_t _t1127 = _t1055*_t659 + _t1057*_t660 + _t1099*_t661 + _t1101*_t662
+            + _t1124*_t663 + _t1126*_t664 + _t572*_t590 + _t657*_t984 + _t658*_t986;
+    const trailer3_real_t _t1128 = _t1111*_t29 + _t1112*_t33 - _t1113*_t27 + _t1114*_t35
+            + _t1115*_t44 + _t1116*_t68 + _t1117*_t474 + _t1122*_t486 + _t1127*_t483 + _t265*_t556
+            - _t27*_t885 + _t401*_t740 + _t426*_t738 + _t444*(_t33*_t544 + _t541*_t68) - _t784*_t840
+            - _t846*_t874 + _t99*(_t29*_t544 + _t547*_t68);
+    const trailer3_real_t _t1129 = _t1111*_t31 + _t1112*_t38 + _t1113*_t28 + _t1114*_t40
+            + _t1115*_t49 + _t1116*_t75 + _t1117*_t539 + _t1122*_t560 + _t1127*_t559 + _t267*_t556
+            + _t28*_t885 + _t404*_t740 + _t429*_t738 + _t444*(_t38*_t544 + _t541*_t75) - _t784*_t842
+            - _t846*_t875 + _t99*(_t31*_t544 + _t547*_t75);
+    const trailer3_real_t _t1130 = _t265*_t765 + _t29*_t68*_t878 + _t33*_t762 + _t401*_t752
+            + _t426*_t751 - _t591*_t756 - _t784*_t845 - _t846*_t877;
+    const trailer3_real_t _t1131 = -_t1109*_t767 - _t1109*_t768 + _t1110*_t766 + _t1130*_t769;
+    const trailer3_real_t _t1132 = -_t1131*_t772;
+    const trailer3_real_t _t1133 = -_t1109*_t781 + _t1110*_t777 - _t1128*_t774 + _t1129*_t778
+            + _t1132*_t782;
+    const trailer3_real_t _t1134 = -_t27*_t887 + _t35*_t615 + _t44*_t617 + _t619*_t68;
+    const trailer3_real_t _t1135 = -_t27*_t888 + _t35*_t620 + _t44*_t621 + _t622*_t68;
+    const trailer3_real_t _t1136 = _t35*_t625 + _t44*_t628 + _t631*_t68;
+    const trailer3_real_t _t1137 = -_t27*_t892 + _t44*_t640 + _t643*_t68;
+    const trailer3_real_t _t1138 = -_t27*_t893 + _t35*_t648 + _t650*_t68;
+    const trailer3_real_t _t1139 = -_t27*_t894 + _t35*_t652 + _t44*_t655;
+    const trailer3_real_t _t1140 = _t139*_t179 - _t27*_t563;
+    const trailer3_real_t _t1141 = _t139*_t29 - _t27*_t83;
+    const trailer3_real_t _t1142 = _t139*_t190 + _t143*_t195 - _t27*_t564 + _t35*_t565;
+    const trailer3_real_t _t1143 = _t134*_t223 + _t139*_t212 + _t143*_t218 - _t27*_t566 + _t35*_t567
             + _t44*_t568;
-    const trailer3_real_t _t1143 = _t129*_t265 + _t134*_t260 + _t139*_t248 + _t143*_t254
+    const trailer3_real_t _t1144 = _t129*_t265 + _t134*_t260 + _t139*_t248 + _t143*_t254
             - _t27*_t569 + _t35*_t570 + _t44*_t571 + _t572*_t68;
-    const trailer3_real_t _t1144 = _t139*_t281 + _t143*_t287 - _t27*_t573 + _t35*_t574;
-    const trailer3_real_t _t1145 = _t139*_t294 + _t143*_t300 - _t27*_t575 + _t35*_t576;
-    const trailer3_real_t _t1146 = _t134*_t335 + _t139*_t323 + _t143*_t329 - _t27*_t577 + _t35*_t578
+    const trailer3_real_t _t1145 = _t139*_t281 + _t143*_t287 - _t27*_t573 + _t35*_t574;
+    const trailer3_real_t _t1146 = _t139*_t294 + _t143*_t300 - _t27*_t575 + _t35*_t576;
+    const trailer3_real_t _t1147 = _t134*_t335 + _t139*_t323 + _t143*_t329 - _t27*_t577 + _t35*_t578
             + _t44*_t579;
-    const trailer3_real_t _t1147 = _t134*_t354 + _t139*_t342 + _t143*_t348 - _t27*_t580 + _t35*_t581
+    const trailer3_real_t _t1148 = _t134*_t354 + _t139*_t342 + _t143*_t348 - _t27*_t580 + _t35*_t581
             + _t44*_t582;
-    const trailer3_real_t _t1148 = _t129*_t401 + _t134*_t395 + _t139*_t383 + _t143*_t389
+    const trailer3_real_t _t1149 = _t129*_t401 + _t134*_t395 + _t139*_t383 + _t143*_t389
             - _t27*_t583 + _t35*_t584 + _t44*_t585 + _t586*_t68;
-    const trailer3_real_t _t1149 = _t129*_t426 + _t134*_t420 + _t139*_t408 + _t143*_t414
+    const trailer3_real_t _t1150 = _t129*_t426 + _t134*_t420 + _t139*_t408 + _t143*_t414
             - _t27*_t587 + _t35*_t588 + _t44*_t589 + _t590*_t68;
-    const trailer3_real_t _t1150 = _t1133*_t29 + _t1134*_t33 - _t1135*_t27 + _t1136*_t35
-            + _t1137*_t44 + _t1138*_t68 + _t1139*_t446 + _t1140*_t436 + _t1141*_t459 + _t1142*_t467
-            + _t1143*_t474 + _t1144*_t492 + _t1145*_t489 + _t1146*_t480 + _t1147*_t477
-            + _t1148*_t486 + _t1149*_t483;
-    const trailer3_real_t _t1151 = _t1133*_t31 + _t1134*_t38 + _t1135*_t28 + _t1136*_t40
-            + _t1137*_t49 + _t1138*_t75 + _t1139*_t518 + _t1140*_t511 + _t1141*_t525 + _t1142*_t532
-            + _t1143*_t539 + _t1144*_t562 + _t1145*_t561 + _t1146*_t558 + _t1147*_t557
-            + _t1148*_t560 + _t1149*_t559;
-    const trailer3_real_t _t1152 = -_t1150*_t769*_t772 + _t1151*_t777;
-    const trailer3_real_t _t1153 = _t28*_t886 + _t40*_t615 + _t49*_t617 + _t619*_t75;
-    const trailer3_real_t _t1154 = _t28*_t887 + _t40*_t620 + _t49*_t621 + _t622*_t75;
-    const trailer3_real_t _t1155 = _t40*_t625 + _t49*_t628 + _t631*_t75;
-    const trailer3_real_t _t1156 = _t28*_t891 + _t49*_t640 + _t643*_t75;
-    const trailer3_real_t _t1157 = _t28*_t892 + _t40*_t648 + _t650*_t75;
-    const trailer3_real_t _t1158 = _t28*_t893 + _t40*_t652 + _t49*_t655;
-    const trailer3_real_t _t1159 = _t139*_t181 + _t28*_t563;
-    const trailer3_real_t _t1160 = _t139*_t31 + _t28*_t83;
-    const trailer3_real_t _t1161 = _t139*_t193 + _t143*_t197 + _t28*_t564 + _t40*_t565;
-    const trailer3_real_t _t1162 = _t134*_t225 + _t139*_t215 + _t143*_t221 + _t28*_t566 + _t40*_t567
+    const trailer3_real_t _t1151 = _t1134*_t29 + _t1135*_t33 - _t1136*_t27 + _t1137*_t35
+            + _t1138*_t44 + _t1139*_t68 + _t1140*_t446 + _t1141*_t436 + _t1142*_t459 + _t1143*_t467
+            + _t1144*_t474 + _t1145*_t492 + _t1146*_t489 + _t1147*_t480 + _t1148*_t477
+            + _t1149*_t486 + _t1150*_t483;
+    const trailer3_real_t _t1152 = _t1134*_t31 + _t1135*_t38 + _t1136*_t28 + _t1137*_t40
+            + _t1138*_t49 + _t1139*_t75 + _t1140*_t518 + _t1141*_t511 + _t1142*_t525 + _t1143*_t532
+            + _t1144*_t539 + _t1145*_t562 + _t1146*_t561 + _t1147*_t558 + _t1148*_t557
+            + _t1149*_t560 + _t1150*_t559;
+    const trailer3_real_t _t1153 = -_t1151*_t769*_t773 + _t1152*_t778;
+    const trailer3_real_t _t1154 = _t28*_t887 + _t40*_t615 + _t49*_t617 + _t619*_t75;
+    const trailer3_real_t _t1155 = _t28*_t888 + _t40*_t620 + _t49*_t621 + _t622*_t75;
+    const trailer3_real_t _t1156 = _t40*_t625 + _t49*_t628 + _t631*_t75;
+    const trailer3_real_t _t1157 = _t28*_t892 + _t49*_t640 + _t643*_t75;
+    const trailer3_real_t _t1158 = _t28*_t893 + _t40*_t648 + _t650*_t75;
+    const trailer3_real_t _t1159 = _t28*_t894 + _t40*_t652 + _t49*_t655;
+    const trailer3_real_t _t1160 = _t139*_t181 + _t28*_t563;
+    const trailer3_real_t _t1161 = _t139*_t31 + _t28*_t83;
+    const trailer3_real_t _t1162 = _t139*_t193 + _t143*_t197 + _t28*_t564 + _t40*_t565;
+    const trailer3_real_t _t1163 = _t134*_t225 + _t139*_t215 + _t143*_t221 + _t28*_t566 + _t40*_t567
             + _t49*_t568;
-    const trailer3_real_t _t1163 = _t129*_t267 + _t134*_t263 + _t139*_t251 + _t143*_t257
+    const trailer3_real_t _t1164 = _t129*_t267 + _t134*_t263 + _t139*_t251 + _t143*_t257
             + _t28*_t569 + _t40*_t570 + _t49*_t571 + _t572*_t75;
-    const trailer3_real_t _t1164 = _t139*_t284 + _t143*_t290 + _t28*_t573 + _t40*_t574;
-    const trailer3_real_t _t1165 = _t139*_t297 + _t143*_t303 + _t28*_t575 + _t40*_t576;
-    const trailer3_real_t _t1166 = _t134*_t338 + _t139*_t326 + _t143*_t332 + _t28*_t577 + _t40*_t578
+    const trailer3_real_t _t1165 = _t139*_t284 + _t143*_t290 + _t28*_t573 + _t40*_t574;
+    const trailer3_real_t _t1166 = _t139*_t297 + _t143*_t303 + _t28*_t575 + _t40*_t576;
+    const trailer3_real_t _t1167 = _t134*_t338 + _t139*_t326 + _t143*_t332 + _t28*_t577 + _t40*_t578
             + _t49*_t579;
-    const trailer3_real_t _t1167 = _t134*_t357 + _t139*_t345 + _t143*_t351 + _t28*_t580 + _t40*_t581
+    const trailer3_real_t _t1168 = _t134*_t357 + _t139*_t345 + _t143*_t351 + _t28*_t580 + _t40*_t581
             + _t49*_t582;
-    const trailer3_real_t _t1168 = _t129*_t404 + _t134*_t398 + _t139*_t386 + _t143*_t392
+    const trailer3_real_t _t1169 = _t129*_t404 + _t134*_t398 + _t139*_t386 + _t143*_t392
             + _t28*_t583 + _t40*_t584 + _t49*_t585 + _t586*_t75;
-    const trailer3_real_t _t1169 = _t129*_t429 + _t134*_t423 + _t139*_t411 + _t143*_t417
+    const trailer3_real_t _t1170 = _t129*_t429 + _t134*_t423 + _t139*_t411 + _t143*_t417
             + _t28*_t587 + _t40*_t588 + _t49*_t589 + _t590*_t75;
-    const trailer3_real_t _t1170 = _t1153*_t29 + _t1154*_t33 - _t1155*_t27 + _t1156*_t35
-            + _t1157*_t44 + _t1158*_t68 + _t1159*_t446 + _t1160*_t436 + _t1161*_t459 + _t1162*_t467
-            + _t1163*_t474 + _t1164*_t492 + _t1165*_t489 + _t1166*_t480 + _t1167*_t477
-            + _t1168*_t486 + _t1169*_t483;
-    const trailer3_real_t _t1171 = _t1153*_t31 + _t1154*_t38 + _t1155*_t28 + _t1156*_t40
-            + _t1157*_t49 + _t1158*_t75 + _t1159*_t518 + _t1160*_t511 + _t1161*_t525 + _t1162*_t532
-            + _t1163*_t539 + _t1164*_t562 + _t1165*_t561 + _t1166*_t558 + _t1167*_t557
-            + _t1168*_t560 + _t1169*_t559;
-    const trailer3_real_t _t1172 = -_t1170*_t769*_t772 + _t1171*_t777;
-    const trailer3_real_t _t1173 = -_t776*_t897 + _t780*_t989 - _t894*_t988 + _t895*_t987
-            + _t896*_t991;
-    const trailer3_real_t _t1174 = _t1058*_t895 - _t1059*_t894 + _t1060*_t780 + _t1062*_t896
-            - _t776*_t993;
-    const trailer3_real_t _t1175 = -_t1064*_t776 + _t1102*_t895 - _t1103*_t894 + _t1104*_t780
-            + _t1106*_t896;
-    const trailer3_real_t _t1176 = -_t1108*_t776 + _t1127*_t895 - _t1128*_t894 + _t1129*_t780
-            + _t1131*_t896;
-    const trailer3_real_t _t1177 = _t1150*_t895 - _t1151*_t894;
-    const trailer3_real_t _t1178 = _t1170*_t895 - _t1171*_t894;
+    const trailer3_real_t _t1171 = _t1154*_t29 + _t1155*_t33 - _t1156*_t27 + _t1157*_t35
+            + _t1158*_t44 + _t1159*_t68 + _t1160*_t446 + _t1161*_t436 + _t1162*_t459 + _t1163*_t467
+            + _t1164*_t474 + _t1165*_t492 + _t1166*_t489 + _t1167*_t480 + _t1168*_t477
+            + _t1169*_t486 + _t1170*_t483;
+    const trailer3_real_t _t1172 = _t1154*_t31 + _t1155*_t38 + _t1156*_t28 + _t1157*_t40
+            + _t1158*_t49 + _t1159*_t75 + _t1160*_t518 + _t1161*_t511 + _t1162*_t525 + _t1163*_t532
+            + _t1164*_t539 + _t1165*_t562 + _t1166*_t561 + _t1167*_t558 + _t1168*_t557
+            + _t1169*_t560 + _t1170*_t559;
+    const trailer3_real_t _t1173 = -_t1171*_t769*_t773 + _t1172*_t778;
+    const trailer3_real_t _t1174 = -_t777*_t898 + _t781*_t990 - _t895*_t989 + _t896*_t988
+            + _t897*_t992;
+    const trailer3_real_t _t1175 = _t1059*_t896 - _t1060*_t895 + _t1061*_t781 + _t1063*_t897
+            - _t777*_t994;
+    const trailer3_real_t _t1176 = -_t1065*_t777 + _t1103*_t896 - _t1104*_t895 + _t1105*_t781
+            + _t1107*_t897;
+    const trailer3_real_t _t1177 = -_t1109*_t777 + _t1128*_t896 - _t1129*_t895 + _t1130*_t781
+            + _t1132*_t897;
+    const trailer3_real_t _t1178 = _t1151*_t896 - _t1152*_t895;
+    const trailer3_real_t _t1179 = _t1171*_t896 - _t1172*_t895;
     A[0] = TRAILER3_LIT(0.0);
     A[1] = TRAILER3_LIT(0.0);
     A[2] = _t563;
@@ -4235,10 +4236,10 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[223] = _t504;
     A[224] = TRAILER3_LIT(0.0);
     A[225] = TRAILER3_LIT(0.0);
-    A[226] = _t992;
-    A[227] = _t1063;
-    A[228] = _t1107;
-    A[229] = _t1132;
+    A[226] = _t993;
+    A[227] = _t1064;
+    A[228] = _t1108;
+    A[229] = _t1133;
     A[230] = TRAILER3_LIT(0.0);
     A[231] = TRAILER3_LIT(0.0);
     A[232] = TRAILER3_LIT(0.0);
@@ -4247,14 +4248,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[235] = TRAILER3_LIT(0.0);
     A[236] = TRAILER3_LIT(0.0);
     A[237] = TRAILER3_LIT(0.0);
-    A[238] = _t1152;
-    A[239] = _t1172;
+    A[238] = _t1153;
+    A[239] = _t1173;
     A[240] = TRAILER3_LIT(0.0);
     A[241] = TRAILER3_LIT(0.0);
-    A[242] = _t1173;
-    A[243] = _t1174;
-    A[244] = _t1175;
-    A[245] = _t1176;
+    A[242] = _t1174;
+    A[243] = _t1175;
+    A[244] = _t1176;
+    A[245] = _t1177;
     A[246] = TRAILER3_LIT(0.0);
     A[247] = TRAILER3_LIT(0.0);
     A[248] = TRAILER3_LIT(0.0);
@@ -4263,8 +4264,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[251] = TRAILER3_LIT(0.0);
     A[252] = TRAILER3_LIT(0.0);
     A[253] = TRAILER3_LIT(0.0);
-    A[254] = _t1177;
-    A[255] = _t1178;
+    A[254] = _t1178;
+    A[255] = _t1179;
     B[0] = TRAILER3_LIT(0.0);
     B[1] = TRAILER3_LIT(0.0);
     B[2] = TRAILER3_LIT(0.0);
@@ -4293,10 +4294,10 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     B[25] = TRAILER3_LIT(0.0);
     B[26] = TRAILER3_LIT(0.0);
     B[27] = TRAILER3_LIT(0.0);
-    B[28] = _t773;
-    B[29] = -_t777;
-    B[30] = -_t895;
-    B[31] = _t894;
+    B[28] = _t774;
+    B[29] = -_t778;
+    B[30] = -_t896;
+    B[31] = _t895;
 }
 
 /* trailer3_wheel_contact_forces: documented in trailer3_model.h.

@@ -341,7 +341,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
  * @param[out] A [16x16] row-major (TRAILER3_LINEARIZATION_A_SIZE) -- 16x16 row-major
  * @param[out] B [16x2] row-major (TRAILER3_LINEARIZATION_B_SIZE) -- 16x2 row-major
  *
- * operations after CSE: 1692 add, 2243 mul, 168 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 1692 add, 2243 mul, 167 div, 8 sin/cos, 0 sqrt
  */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,

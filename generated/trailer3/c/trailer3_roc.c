@@ -24,7 +24,7 @@ const trailer3_roc_config_t trailer3_roc_frozen_config = TRAILER3_ROC_FROZEN_CON
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 0 add, 10 mul, 14 div, 0 sin/cos, 0 sqrt */
-static void trailer3_roc_k_minimal_roc_law_keep(const trailer3_params_t *p,
+static inline void trailer3_roc_k_minimal_roc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[36])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -116,12 +116,12 @@ static void trailer3_roc_k_minimal_roc_law_keep(const trailer3_params_t *p,
    private to this file that the step can inline: no call, and the compiler schedules it
    with the step (in a frozen build, the configuration's arithmetic folded).
    operations after CSE: 460 add, 613 mul, 63 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static void trailer3_roc_k_minimal_roc_law(const trailer3_real_t kept[36], const trailer3_real_t *q,
-    const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
-    const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
-    const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *bounds,
-    const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm,
-    trailer3_real_t *gain)
+static inline void trailer3_roc_k_minimal_roc_law(const trailer3_real_t kept[36],
+    const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
+    const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
+    const trailer3_real_t *k2, const trailer3_real_t *p12, const trailer3_real_t *p22,
+    const trailer3_real_t *bounds, const trailer3_real_t *eps, trailer3_real_t *u,
+    trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain)
 {
     const trailer3_real_t theta_cart = q[3];
     const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart);
@@ -622,7 +622,7 @@ trailer3_status_t trailer3_roc_check_config(const trailer3_roc_config_t *config)
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
+static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
 {
     union {
         trailer3_real_t value;
@@ -637,9 +637,9 @@ static trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
    pass of independent integer compares OR-ed together, in this file so that the step inlines
    it; only a step that fails it asks trailer3_check_step_inputs which input, and its status. */
-static bool trailer3_roc_inputs_bounded(const trailer3_real_t q[14], const trailer3_real_t qdot[14],
-    const trailer3_real_t q_des[14], const trailer3_real_t qdot_des[14],
-    const trailer3_real_t qddot_des[14])
+static inline bool trailer3_roc_inputs_bounded(const trailer3_real_t q[14],
+    const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14])
 {
 #ifdef TRAILER3_FLOAT32
     const trailer3_bits_t mask = 0x7fffffffu;
@@ -662,7 +662,7 @@ static bool trailer3_roc_inputs_bounded(const trailer3_real_t q[14], const trail
 #ifndef TRAILER3_ROC_FROZEN
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
-static bool trailer3_roc_config_unchanged(const trailer3_roc_config_t *config,
+static inline bool trailer3_roc_config_unchanged(const trailer3_roc_config_t *config,
     const trailer3_roc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
@@ -826,6 +826,7 @@ trailer3_status_t trailer3_roc_step_detail(trailer3_roc_state_t *state,
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
     trailer3_error_detail_t *detail)
+
 {
     trailer3_status_t status = TRAILER3_OK;
     const trailer3_roc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */

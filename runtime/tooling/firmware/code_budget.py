@@ -33,7 +33,7 @@ PARTS: tuple[Part, ...] = (
     Part("input checks, error detail", "every step",
          re.compile(r"check_step_inputs|fail|\w+_inputs_bounded")),
     Part("step: history, commit, saturation", "every step",
-         re.compile(r"\w+_step(_detail)?|saturate|cap_gain|push_history|controlled_slice")),
+         re.compile(r"\w+_step(_detail|_as)?|saturate|cap_gain|push_history|controlled_slice")),
     Part("control law and estimators (from SymPy)", "every step",
          re.compile(rf"(\w+_k_)?(({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain)"
                     r"|norm(\d+|_scaled)|sincos_bounded|(sin|cos)_bounded")),
@@ -43,7 +43,7 @@ UNCLASSIFIED = "unclassified"
 
 def part_of(function: str, prefix: str = "wmr_") -> str:
     """The name of the part a generated function (``wmr_...``) belongs to."""
-    bare = function.removeprefix(prefix)
+    bare = function.removeprefix(prefix).split(".")[0]  # gcc's clones: f.isra.0, f.part.0
     for part in PARTS:
         if part.pattern.fullmatch(bare):
             return part.name
