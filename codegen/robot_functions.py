@@ -123,13 +123,52 @@ def forward_dynamics_forms(
     model: RobotModel, system: ConstrainedSystem | None = None
 ) -> tuple[sp.Matrix, sp.Matrix]:
     """(η̇, q̈) in evaluation form: the grouped 2×2 solve when there are two driven wheels
-    (``ConstrainedSystem.compact_forward_dynamics``), else adj(M̄)/det(M̄) left unexpanded."""
+    (``ConstrainedSystem.compact_forward_dynamics``), else adj(M̄)/det(M̄) left unexpanded;
+    q̈'s position rows rotated once from the body frame (``_rotated_plane_rows``)."""
     s = model.system if system is None else system
     tau = model.tau
     if model.nu == 2:
-        return s.compact_forward_dynamics(tau, model.evaluation_form)
-    eta_dot = s.minimal_forward_dynamics(tau)
-    return eta_dot, s.null_space * eta_dot + s.null_space_rate
+        eta_dot, qdd = s.compact_forward_dynamics(tau, model.evaluation_form)
+    else:
+        eta_dot = s.minimal_forward_dynamics(tau)
+        qdd = s.null_space * eta_dot + s.null_space_rate
+    return eta_dot, _rotated_plane_rows(model, s, eta_dot, qdd)
+
+
+def _rotated_plane_rows(
+    model: RobotModel, s: ConstrainedSystem, eta_dot: sp.Matrix, qdd: sp.Matrix
+) -> sp.Matrix:
+    """``qdd`` with its two position rows (ẍ, ÿ) of q̈ = S η̇ + Ṡ η (9), (31) written as
+    R(θ) a: a = R(θ)ᵀ(S η̇ + Ṡ η) in the body frame, free of the heading θ, computed once
+    and rotated once (cos θ and sin θ applied to two values; the expanded rows repeat
+    them in every product). ``qdd`` unchanged when the robot has no such pair of rows
+    (rows that depend on θ whose body-frame form does not)."""
+    heading = model.heading
+    rows = [i for i in range(len(model.q))
+            if i not in model.actuated and model.q[i] != heading
+            and (s.null_space.row(i).has(heading) or s.null_space_rate[i].has(heading))]
+    if len(rows) != 2:
+        return qdd
+    i, j = rows
+    c, sn = sp.cos(heading), sp.sin(heading)
+    e = sp.symbols(f"_eta_dot0:{len(eta_dot)}")  # η̇ held as symbols while factoring
+    body = []
+    for along, across in ((c, sn), (-sn, c)):  # rows of R(θ)ᵀ
+        s_row = (along * s.null_space.row(i) + across * s.null_space.row(j)).applyfunc(
+            sp.trigsimp)
+        rate = sp.trigsimp(along * s.null_space_rate[i] + across * s.null_space_rate[j])
+        if s_row.has(heading) or rate.has(heading):
+            return qdd
+        # factored per row (r(η̇_r + η̇_l)/2, d r(η̇_r − η̇_l)/b for Drishti): the factors
+        # CSE shares with θ̈'s row
+        body.append(sp.factor((s_row * sp.Matrix(e))[0]).xreplace(dict(zip(e, eta_dot,
+                                                                             strict=True)))
+                    + sp.factor(rate))
+    a0, a1 = body
+    out = sp.Matrix(qdd)
+    out[i] = c * a0 - sn * a1
+    out[j] = sn * a0 + c * a1
+    return out
 
 
 @dataclass(frozen=True)

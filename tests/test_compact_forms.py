@@ -39,3 +39,33 @@ def test_compact_form_groups_the_axle_inertia() -> None:
     assert sp.simplify(entry - (wmr.I_w + wmr.m * wmr.r**2 / 4
                                 + wmr.r**2 / wmr.b**2 * axle)) == 0
     assert entry.has(sp.factor(axle)) or entry.has(axle)
+
+
+def test_plane_accelerations_are_rotated_once_from_the_body_frame() -> None:
+    """``forward_dynamics_forms``: ẍ, ÿ as R(θ) a with a free of θ (one rotation, which CSE
+    keeps as two temporaries), equal to the reduced forward dynamics (9), (14)."""
+    from codegen.robot_functions import forward_dynamics_forms
+    from modeling.robots.drishti.model import robot_model
+
+    model = robot_model()
+    _, qdd = forward_dynamics_forms(model)
+    theta = model.heading
+    c, s = sp.cos(theta), sp.sin(theta)
+    # the form as written (not expanded): two products each, of cos θ and sin θ with the
+    # same two θ-free factors (a0, a1)
+    a0, a1 = qdd[0].coeff(c), qdd[1].coeff(c)
+    assert len(sp.Add.make_args(qdd[0])) == len(sp.Add.make_args(qdd[1])) == 2
+    assert a0 != 0 and a1 != 0 and not a0.has(theta) and not a1.has(theta)
+    assert qdd[0] == c * a0 - s * a1 and qdd[1] == s * a0 + c * a1
+    ref = model.system.reduced_forward_dynamics(model.tau)
+    params = tuple(p.symbol for p in model.params)
+    args = (*params, *model.q, *model.qdot, *model.tau)
+    f = sp.lambdify(args, [*qdd, *ref], "math")
+    rng = np.random.default_rng(5)
+    nominal = np.array([36.0, 5.72, 0.34, 0.07, 0.096, 0.414, 0.12])
+    assert len(params) == len(nominal)
+    for _ in range(100):
+        p = nominal * rng.uniform(0.7, 1.3, len(nominal))
+        vals = np.array(f(*p, *rng.uniform(-3, 3, 10), *rng.uniform(-5, 5, 2)))
+        ours, want = vals[:5], vals[5:]
+        assert np.linalg.norm(ours - want) <= 1e-12 * max(np.linalg.norm(want), 1.0)

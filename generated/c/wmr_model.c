@@ -108,7 +108,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
 }
 
 /* wmr_forward_dynamics: documented in wmr_model.h.
-   operations after CSE: 27 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 20 add, 44 mul, 2 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
@@ -124,62 +124,58 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
-            + ((((d - d) + (theta - theta)) + (thetadot_r - thetadot_r))
-            + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
+    if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+            | wmr_exp_carry(r) | wmr_exp_carry(b) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+            | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+            | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t1 = WMR_LIT(2.0)*d;
-    const wmr_real_t _t2 = r*r;
-    const wmr_real_t _t3 = _t0*_t0;
-    const wmr_real_t _t4 = _t2*_t3;
-    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
-    const wmr_real_t _t6 = WMR_LIT(0.25)*_t2*m;
-    const wmr_real_t _t7 = I - K*_t1 + d*d*m;
-    const wmr_real_t _t8 = -_t4*_t7 + _t6;
-    const wmr_real_t _t9 = I_w + _t4*_t7 + _t6;
-    const wmr_real_t _t10 = -_t8*_t8 + _t9*_t9;
-    const wmr_real_t _t11 = WMR_LIT(1.0)/_t10;
-    const wmr_real_t _t12 = _t3*r*r*r*(-K + d*m);
-    const wmr_real_t _t13 = _t0*r;
+    const wmr_real_t _t1 = r*r;
+    const wmr_real_t _t2 = _t0*_t0;
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_LIT(0.25)*_t1*m;
+    const wmr_real_t _t5 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t6 = -_t3*_t5 + _t4;
+    const wmr_real_t _t7 = I_w + _t3*_t5 + _t4;
+    const wmr_real_t _t8 = -_t6*_t6 + _t7*_t7;
+    const wmr_real_t _t9 = WMR_LIT(1.0)/_t8;
+    const wmr_real_t _t10 = _t2*r*r*r*(-K + d*m);
+    const wmr_real_t _t11 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t12 = _t3*d;
+    const wmr_real_t _t13 = _t0;
+    const wmr_real_t _t14 = _t13*r;
+    const wmr_real_t _t15 = _t14*d;
+    const wmr_real_t _t16 = -WMR_LIT(0.5)*_t1*_t13;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t7 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t10 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t8 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t _t14 = WMR_SIN(theta);
-    const wmr_real_t _t15 = _t14*b;
-    const wmr_real_t _t16 = WMR_COS(theta);
-    const wmr_real_t _t17 = _t1*_t16;
+    const wmr_real_t _t17 = WMR_COS(theta);
     const wmr_real_t _t18 = thetadot_l - thetadot_r;
-    const wmr_real_t _t19 = _t18*_t5;
-    const wmr_real_t _t20 = _t16*b;
-    const wmr_real_t _t21 = _t1*_t14;
-    const wmr_real_t _t22 = _t12*_t18;
-    const wmr_real_t _t23 = _t22*thetadot_l + tau_r;
-    const wmr_real_t _t24 = -_t22*thetadot_r + tau_l;
-    const wmr_real_t _t25 = _t11*(_t23*_t9 - _t24*_t8);
-    const wmr_real_t _t26 = _t13*_t25;
-    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
-    const wmr_real_t _t28 = _t11*(-_t23*_t8 + _t24*_t9);
-    const wmr_real_t _t29 = _t13*_t28;
-    const wmr_real_t _t30 = WMR_LIT(0.5)*_t29;
-    const wmr_real_t r_0 = _t19*(_t15*(thetadot_l + thetadot_r) + _t17*(-thetadot_l + thetadot_r))
-            + _t27*(_t20 - _t21) + _t30*(_t20 + _t21);
-    const wmr_real_t r_1 = -_t19*(_t20*(thetadot_l + thetadot_r) + _t21*(thetadot_l - thetadot_r))
-            + _t27*(_t15 + _t17) + _t30*(_t15 - _t17);
-    const wmr_real_t r_2 = _t26 - _t29;
-    const wmr_real_t r_3 = _t25;
-    const wmr_real_t r_4 = _t28;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
+    const wmr_real_t _t19 = _t10*_t18;
+    const wmr_real_t _t20 = _t19*thetadot_l + tau_r;
+    const wmr_real_t _t21 = -_t19*thetadot_r + tau_l;
+    const wmr_real_t _t22 = _t9*(_t20*_t7 - _t21*_t6);
+    const wmr_real_t _t23 = _t9*(-_t20*_t6 + _t21*_t7);
+    const wmr_real_t _t24 = _t11*(_t22 + _t23) - _t12*_t18*_t18;
+    const wmr_real_t _t25 = WMR_SIN(theta);
+    const wmr_real_t _t26 = _t15*(_t22 - _t23) + _t16*_t18*(thetadot_l + thetadot_r);
+    const wmr_real_t r_0 = _t17*_t24 - _t25*_t26;
+    const wmr_real_t r_1 = _t17*_t26 + _t24*_t25;
+    const wmr_real_t r_2 = _t14*(_t22 - _t23);
+    const wmr_real_t r_3 = _t22;
+    const wmr_real_t r_4 = _t23;
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2) | wmr_exp_carry(r_3)
+            | wmr_exp_carry(r_4)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -191,7 +187,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
 }
 
 /* wmr_model_prepare: documented in wmr_model.h.
-   operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 7 add, 24 mul, 2 div, 0 sin/cos, 0 sqrt */
 wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared)
 {
     const wmr_real_t m = p->m;
@@ -201,50 +197,54 @@ wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prep
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
     const wmr_real_t d = p->d;
-    if (isnan((((m - m) + (I - I)) + ((K - K) + (I_w - I_w))) + (((r - r) + (b - b)) + (d - d)))
-            != 0) {
+    if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+            | wmr_exp_carry(r) | wmr_exp_carry(b) | wmr_exp_carry(d)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t1 = WMR_LIT(2.0)*d;
-    const wmr_real_t _t2 = r*r;
-    const wmr_real_t _t3 = _t0*_t0;
-    const wmr_real_t _t4 = _t2*_t3;
-    const wmr_real_t _t5 = WMR_LIT(0.5)*_t4;
-    const wmr_real_t _t6 = WMR_LIT(0.25)*_t2*m;
-    const wmr_real_t _t7 = I - K*_t1 + d*d*m;
-    const wmr_real_t _t8 = -_t4*_t7 + _t6;
-    const wmr_real_t _t9 = I_w + _t4*_t7 + _t6;
-    const wmr_real_t _t10 = -_t8*_t8 + _t9*_t9;
-    const wmr_real_t _t11 = WMR_LIT(1.0)/_t10;
-    const wmr_real_t _t12 = _t3*r*r*r*(-K + d*m);
-    const wmr_real_t _t13 = _t0*r;
+    const wmr_real_t _t1 = r*r;
+    const wmr_real_t _t2 = _t0*_t0;
+    const wmr_real_t _t3 = _t1*_t2;
+    const wmr_real_t _t4 = WMR_LIT(0.25)*_t1*m;
+    const wmr_real_t _t5 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t6 = -_t3*_t5 + _t4;
+    const wmr_real_t _t7 = I_w + _t3*_t5 + _t4;
+    const wmr_real_t _t8 = -_t6*_t6 + _t7*_t7;
+    const wmr_real_t _t9 = WMR_LIT(1.0)/_t8;
+    const wmr_real_t _t10 = _t2*r*r*r*(-K + d*m);
+    const wmr_real_t _t11 = WMR_LIT(0.5)*r;
+    const wmr_real_t _t12 = _t3*d;
+    const wmr_real_t _t13 = _t0;
+    const wmr_real_t _t14 = _t13*r;
+    const wmr_real_t _t15 = _t14*d;
+    const wmr_real_t _t16 = -WMR_LIT(0.5)*_t1*_t13;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t7 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t10 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t8 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
     prepared->magic = WMR_MODEL_PREPARED_MAGIC;
-    prepared->forward_dynamics[0] = b;
-    prepared->forward_dynamics[1] = _t1;
-    prepared->forward_dynamics[2] = _t5;
-    prepared->forward_dynamics[3] = _t8;
-    prepared->forward_dynamics[4] = _t9;
-    prepared->forward_dynamics[5] = _t11;
-    prepared->forward_dynamics[6] = _t12;
-    prepared->forward_dynamics[7] = _t13;
+    prepared->forward_dynamics[0] = _t6;
+    prepared->forward_dynamics[1] = _t7;
+    prepared->forward_dynamics[2] = _t9;
+    prepared->forward_dynamics[3] = _t10;
+    prepared->forward_dynamics[4] = _t11;
+    prepared->forward_dynamics[5] = _t12;
+    prepared->forward_dynamics[6] = _t14;
+    prepared->forward_dynamics[7] = _t15;
+    prepared->forward_dynamics[8] = _t16;
     return WMR_OK;
 }
 
 /* wmr_forward_dynamics_prepared: documented in wmr_model.h.
-   operations after CSE: 20 add, 28 mul, 0 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 13 add, 20 mul, 0 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
     const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot)
 {
@@ -252,49 +252,42 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
         return WMR_ERR_NOT_INITIALISED;
     }
     const wmr_real_t theta = q[2];
-    if (isnan(theta - theta) != 0) {
+    if (((wmr_exp_carry(theta)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t14 = WMR_SIN(theta);
-    const wmr_real_t _t16 = WMR_COS(theta);
+    const wmr_real_t _t17 = WMR_COS(theta);
+    const wmr_real_t _t25 = WMR_SIN(theta);
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    const wmr_real_t b = prepared->forward_dynamics[0];
-    const wmr_real_t _t15 = _t14*b;
-    const wmr_real_t _t1 = prepared->forward_dynamics[1];
-    const wmr_real_t _t17 = _t1*_t16;
     const wmr_real_t _t18 = thetadot_l - thetadot_r;
-    const wmr_real_t _t5 = prepared->forward_dynamics[2];
-    const wmr_real_t _t19 = _t18*_t5;
-    const wmr_real_t _t20 = _t16*b;
-    const wmr_real_t _t21 = _t1*_t14;
-    const wmr_real_t _t12 = prepared->forward_dynamics[6];
-    const wmr_real_t _t22 = _t12*_t18;
-    const wmr_real_t _t23 = _t22*thetadot_l + tau_r;
-    const wmr_real_t _t24 = -_t22*thetadot_r + tau_l;
-    const wmr_real_t _t8 = prepared->forward_dynamics[3];
-    const wmr_real_t _t9 = prepared->forward_dynamics[4];
-    const wmr_real_t _t11 = prepared->forward_dynamics[5];
-    const wmr_real_t _t25 = _t11*(_t23*_t9 - _t24*_t8);
-    const wmr_real_t _t13 = prepared->forward_dynamics[7];
-    const wmr_real_t _t26 = _t13*_t25;
-    const wmr_real_t _t27 = WMR_LIT(0.5)*_t26;
-    const wmr_real_t _t28 = _t11*(-_t23*_t8 + _t24*_t9);
-    const wmr_real_t _t29 = _t13*_t28;
-    const wmr_real_t _t30 = WMR_LIT(0.5)*_t29;
-    const wmr_real_t r_0 = _t19*(_t15*(thetadot_l + thetadot_r) + _t17*(-thetadot_l + thetadot_r))
-            + _t27*(_t20 - _t21) + _t30*(_t20 + _t21);
-    const wmr_real_t r_1 = -_t19*(_t20*(thetadot_l + thetadot_r) + _t21*(thetadot_l - thetadot_r))
-            + _t27*(_t15 + _t17) + _t30*(_t15 - _t17);
-    const wmr_real_t r_2 = _t26 - _t29;
-    const wmr_real_t r_3 = _t25;
-    const wmr_real_t r_4 = _t28;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
+    const wmr_real_t _t10 = prepared->forward_dynamics[3];
+    const wmr_real_t _t19 = _t10*_t18;
+    const wmr_real_t _t20 = _t19*thetadot_l + tau_r;
+    const wmr_real_t _t21 = -_t19*thetadot_r + tau_l;
+    const wmr_real_t _t6 = prepared->forward_dynamics[0];
+    const wmr_real_t _t7 = prepared->forward_dynamics[1];
+    const wmr_real_t _t9 = prepared->forward_dynamics[2];
+    const wmr_real_t _t22 = _t9*(_t20*_t7 - _t21*_t6);
+    const wmr_real_t _t23 = _t9*(-_t20*_t6 + _t21*_t7);
+    const wmr_real_t _t11 = prepared->forward_dynamics[4];
+    const wmr_real_t _t12 = prepared->forward_dynamics[5];
+    const wmr_real_t _t24 = _t11*(_t22 + _t23) - _t12*_t18*_t18;
+    const wmr_real_t _t15 = prepared->forward_dynamics[7];
+    const wmr_real_t _t16 = prepared->forward_dynamics[8];
+    const wmr_real_t _t26 = _t15*(_t22 - _t23) + _t16*_t18*(thetadot_l + thetadot_r);
+    const wmr_real_t _t14 = prepared->forward_dynamics[6];
+    const wmr_real_t r_0 = _t17*_t24 - _t25*_t26;
+    const wmr_real_t r_1 = _t17*_t26 + _t24*_t25;
+    const wmr_real_t r_2 = _t14*(_t22 - _t23);
+    const wmr_real_t r_3 = _t22;
+    const wmr_real_t r_4 = _t23;
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2) | wmr_exp_carry(r_3)
+            | wmr_exp_carry(r_4)) & WMR_EXP_CARRY_TOP) != 0u) {
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_r - thetadot_r) + (thetadot_l - thetadot_l))
-                + ((tau_r - tau_r) + (tau_l - tau_l))) != 0) {
+        if (((wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
             return WMR_ERR_NONFINITE_INPUT;
         }
         return WMR_ERR_NONFINITE_OUTPUT;
@@ -401,9 +394,10 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
-            + ((((d - d) + (thetadot_r - thetadot_r)) + (thetadot_l - thetadot_l))
-            + ((tau_r - tau_r) + (tau_l - tau_l)))) != 0) {
+    if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+            | wmr_exp_carry(r) | wmr_exp_carry(b) | wmr_exp_carry(d) | wmr_exp_carry(thetadot_r)
+            | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r) | wmr_exp_carry(tau_l))
+            & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = r*r;
@@ -432,7 +426,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
     }
     const wmr_real_t r_0 = _t8*(_t10*_t6 - _t11*_t5);
     const wmr_real_t r_1 = _t8*(-_t10*_t5 + _t11*_t6);
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;
@@ -569,9 +563,10 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
     const wmr_real_t thetadot_l = wheel_rates[1];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (isnan(((((m - m) + (I - I)) + (K - K)) + (((I_w - I_w) + (r - r)) + (b - b)))
-            + ((((d - d) + (theta - theta)) + (thetadot_r - thetadot_r))
-            + (((thetadot_l - thetadot_l) + (tau_r - tau_r)) + (tau_l - tau_l)))) != 0) {
+    if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+            | wmr_exp_carry(r) | wmr_exp_carry(b) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+            | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+            | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_LIT(1.0)/b;
@@ -659,7 +654,8 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
     const wmr_real_t r_0 = _t67;
     const wmr_real_t r_1 = _t66;
     const wmr_real_t r_2 = -_t68;
-    if (isnan(((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) != 0) {
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2)) & WMR_EXP_CARRY_TOP)
+            != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     longitudinal[0] = r_0;
@@ -681,9 +677,9 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
     const wmr_real_t load_w1 = loads[1];
     const wmr_real_t share_w0 = shares[0];
     const wmr_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((wmr_exp_carry(force_x0) | wmr_exp_carry(force_x1) | wmr_exp_carry(force_y0)
+            | wmr_exp_carry(mu_floor) | wmr_exp_carry(load_w0) | wmr_exp_carry(load_w1)
+            | wmr_exp_carry(share_w0) | wmr_exp_carry(share_w1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = force_y0*force_y0;
@@ -698,7 +694,7 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
     }
     const wmr_real_t r_0 = load_w0*mu_floor - WMR_SQRT(_t0*share_w0*share_w0 + force_x0*force_x0);
     const wmr_real_t r_1 = load_w1*mu_floor - WMR_SQRT(_t0*share_w1*share_w1 + force_x1*force_x1);
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;
@@ -719,9 +715,9 @@ wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t
     const wmr_real_t load_w1 = loads[1];
     const wmr_real_t share_w0 = shares[0];
     const wmr_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((wmr_exp_carry(force_x0) | wmr_exp_carry(force_x1) | wmr_exp_carry(force_y0)
+            | wmr_exp_carry(mu_floor) | wmr_exp_carry(load_w0) | wmr_exp_carry(load_w1)
+            | wmr_exp_carry(share_w0) | wmr_exp_carry(share_w1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = force_y0*force_y0;
@@ -744,7 +740,7 @@ wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t
     }
     const wmr_real_t r_0 = _t1;
     const wmr_real_t r_1 = _t2;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;

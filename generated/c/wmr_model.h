@@ -19,7 +19,7 @@ extern "C" {
    once by wmr_model_prepare; caller-owned, fixed size. Fill it with wmr_model_prepare only. */
 typedef struct {
     long magic; /* WMR_MODEL_PREPARED_MAGIC once prepared */
-    wmr_real_t forward_dynamics[8]; /* b, 7 parameter-only subexpressions, for
+    wmr_real_t forward_dynamics[9]; /* 9 parameter-only subexpressions, for
                                        wmr_forward_dynamics_prepared */
 } wmr_model_prepared_t;
 
@@ -98,7 +98,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  * With fixed parameters, wmr_model_prepare once and wmr_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 27 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 20 add, 44 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
@@ -118,7 +118,7 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
  *         WMR_ERR_BAD_PARAMS if not ((S^T M S)[0][0] > 0),
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model).
  *
- * operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 7 add, 24 mul, 2 div, 0 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prepared);
 
@@ -146,7 +146,7 @@ wmr_status_t wmr_model_prepare(const wmr_params_t *p, wmr_model_prepared_t *prep
  *         (it does not read, and ignores: q[0], q[1], q[3], q[4], qdot[0], qdot[1], qdot[2]),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 20 add, 28 mul, 0 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 13 add, 20 mul, 0 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
     const wmr_real_t *q, const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);

@@ -14,11 +14,12 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0xc3c99171u
+#define WMR_CODE_ID 0x6e642234u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -61,6 +62,32 @@ typedef double wmr_real_t;
 #define WMR_FABS(x) fabs(x)
 #define WMR_INF HUGE_VAL
 #endif
+
+/* The checked functions' non-finite tests, in integer operations on the values' bits (the
+   floating-point units stay with the arithmetic): wmr_exp_carry(x) is x's exponent field
+   plus one in its lowest place, so its top bit is set exactly when the exponent is all ones
+   (x is NaN or +-Inf); the top bit of the OR of several is set when any one is not finite.
+   WMR_EXP_CARRY_TOP is that bit. */
+#ifdef WMR_FLOAT32
+typedef uint32_t wmr_exp_bits_t;
+#define WMR_EXP_FIELD 0x7f800000u
+#define WMR_EXP_LOWEST 0x00800000u
+#else
+typedef uint64_t wmr_exp_bits_t;
+#define WMR_EXP_FIELD UINT64_C(0x7ff0000000000000)
+#define WMR_EXP_LOWEST UINT64_C(0x0010000000000000)
+#endif
+#define WMR_EXP_CARRY_TOP (WMR_EXP_FIELD + WMR_EXP_LOWEST)
+
+static inline wmr_exp_bits_t wmr_exp_carry(wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        wmr_exp_bits_t bits;
+    } rep;
+    rep.value = x;
+    return (rep.bits & WMR_EXP_FIELD) + WMR_EXP_LOWEST;
+}
 
 /* sin and cos. wmr_sincos_bounded(x, &s, &c): both, for |x| <= 1.0e6 (the controller steps'
    input bound; NaN beyond, and for Inf and NaN), from one argument reduction and without a

@@ -172,7 +172,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 5 (shape 5x1, row-major)
 
-    operations after CSE: 27 add, 52 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 20 add, 45 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -188,50 +188,43 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         raise ValueError("WMR_ERR_NONFINITE_INPUT: an input of forward_dynamics is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
         _t0 = 1.0/b
-        _t1 = math.sin(theta)
-        _t2 = _t1*b
-        _t3 = math.cos(theta)
-        _t4 = 2.0*d
+        _t1 = math.cos(theta)
+        _t2 = thetadot_l - thetadot_r
+        _t3 = r*r
+        _t4 = _t0*_t0
         _t5 = _t3*_t4
-        _t6 = thetadot_l - thetadot_r
-        _t7 = r*r
-        _t8 = _t0*_t0
-        _t9 = _t7*_t8
-        _t10 = 0.5*_t6*_t9
-        _t11 = _t3*b
-        _t12 = _t1*_t4
-        _t13 = 0.25*_t7*m
-        _t14 = I - K*_t4 + d*d*m
-        _t15 = _t13 - _t14*_t9
-        _t16 = I_w + _t13 + _t14*_t9
-        _t17 = -_t15*_t15 + _t16*_t16
-        _t18 = 1.0/_t17
-        _t19 = _t6*_t8*r*r*r*(-K + d*m)
-        _t20 = _t19*thetadot_l + tau_r
-        _t21 = -_t19*thetadot_r + tau_l
-        _t22 = _t18*(-_t15*_t21 + _t16*_t20)
-        _t23 = _t0*r
-        _t24 = _t22*_t23
-        _t25 = 0.5*_t24
-        _t26 = _t18*(-_t15*_t20 + _t16*_t21)
-        _t27 = _t23*_t26
-        _t28 = 0.5*_t27
+        _t6 = 0.25*_t3*m
+        _t7 = I - 2.0*K*d + d*d*m
+        _t8 = -_t5*_t7 + _t6
+        _t9 = I_w + _t5*_t7 + _t6
+        _t10 = -_t8*_t8 + _t9*_t9
+        _t11 = 1.0/_t10
+        _t12 = _t2*_t4*r*r*r*(-K + d*m)
+        _t13 = _t12*thetadot_l + tau_r
+        _t14 = -_t12*thetadot_r + tau_l
+        _t15 = _t11*(_t13*_t9 - _t14*_t8)
+        _t16 = _t11*(-_t13*_t8 + _t14*_t9)
+        _t17 = -_t2*_t2*_t5*d + 0.5*r*(_t15 + _t16)
+        _t18 = math.sin(theta)
+        _t19 = _t0
+        _t20 = _t19*r
+        _t21 = -0.5*_t19*_t2*_t3*(thetadot_l + thetadot_r) + _t20*d*(_t15 - _t16)
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires b > 0")
-    if not (_t16 > 0.0):
+    if not (_t9 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t17 > 0.0):
+    if not (_t10 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
     qddot = np.array([
-        _t10*(_t2*thetadot_l + _t2*thetadot_r - _t5*thetadot_l + _t5*thetadot_r) + _t25*(_t11 - _t12) + _t28*(_t11 + _t12),
-        -_t10*(_t11*thetadot_l + _t11*thetadot_r + _t12*thetadot_l - _t12*thetadot_r) + _t25*(_t2 + _t5) + _t28*(_t2 - _t5),
-        _t24 - _t27,
-        _t22,
-        _t26,
+        _t1*_t17 - _t18*_t21,
+        _t1*_t21 + _t17*_t18,
+        _t15*_t20 - _t16*_t20,
+        _t15,
+        _t16,
     ])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")

@@ -246,8 +246,9 @@ def _decl(name: str, value: str) -> _Line:
     return _Line("decl", name, value)
 
 
-def _nonfinite_check(names: Sequence[str], status: str) -> list[_Line]:
-    return [_Line("check", value=_any_nonfinite(names), status=status)] if names and status else []
+def _nonfinite_check(names: Sequence[str], status: str, config: CConfig) -> list[_Line]:
+    return ([_Line("check", value=_any_nonfinite(names, config), status=status)]
+            if names and status else [])
 
 
 def _local_names(spec: FunctionSpec, slots: Sequence[InputSlot]) -> dict[sp.Symbol, str]:
@@ -295,7 +296,8 @@ def _output_stores(
 
 
 def _commit(
-    spec: FunctionSpec, stores: list[tuple[str, str]], late_inputs: Sequence[str] = ()
+    spec: FunctionSpec, stores: list[tuple[str, str]], config: CConfig,
+    late_inputs: Sequence[str] = (),
 ) -> list[_Line]:
     """The stores; for a checked function, into locals first, the finite-output check,
     then the stores: no output written on error. ``late_inputs`` are inputs not checked
@@ -304,8 +306,8 @@ def _commit(
     if not (spec.returns_status and spec.nonfinite_output):
         return [_Line("store", target, value) for target, value in stores]
     results = [f"r_{k}" for k in range(len(stores))]
-    check = _with_late_check(_nonfinite_check(results, spec.nonfinite_output), late_inputs,
-                             spec.nonfinite_input)
+    check = _with_late_check(_nonfinite_check(results, spec.nonfinite_output, config),
+                             late_inputs, spec.nonfinite_input, config)
     return [
         *(_decl(r, value) for r, (_, value) in zip(results, stores, strict=True)),
         *check,
@@ -388,7 +390,8 @@ def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str,
     load_for = _LazyLoads({} if checked else loads)
     if checked:  # the check reads every input: all loaded first
         body += loads.values()
-        body += _nonfinite_check([line.target for line in loads.values()], spec.nonfinite_input)
+        body += _nonfinite_check([line.target for line in loads.values()], spec.nonfinite_input,
+                                 config)
     body += _temp_lines(temps, load_for, printer)
     body += load_for([e for _, e in guards])
     body += _guard_lines(spec, guards, printer, config)
@@ -396,7 +399,7 @@ def _function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str,
     body += load_for([e for _, e in late_guards])
     body += _guard_lines(spec, late_guards, printer, config)
     body += load_for.rest()  # every read before the first store: outputs may alias inputs
-    body += _commit(spec, _output_stores(spec, outputs, printer, config))
+    body += _commit(spec, _output_stores(spec, outputs, printer, config), config)
     ops = op_count_from(printer.ops)
 
     name = f"{config.prefix}{spec.name}"
@@ -494,7 +497,7 @@ def _prepare_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[st
     loads = [(names[s.symbol], _access(s.arg, s.field, s.index))
              for s in param_slots if s.symbol in used]
     body = [_decl(n, v) for n, v in loads]
-    body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+    body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input, config)
     body += [_decl(str(s), printer.expr_code(e)) for s, e in form.param_temps]
     guards = _guard_lines(spec, form.param_guards, printer, config)
     body += guards
@@ -596,12 +599,13 @@ def _state_inputs(form: PreparedForm) -> _StateInputs:
     return _StateInputs(calls, frozenset(early), frozenset(late), lazy)
 
 
-def _with_late_check(lines: list[_Line], late: Sequence[str], status: str) -> list[_Line]:
+def _with_late_check(lines: list[_Line], late: Sequence[str], status: str,
+                     config: CConfig) -> list[_Line]:
     """``lines`` (checks) that, failing, first return ``status`` if a late input is not
     finite."""
     if not late:
         return lines
-    return [replace(line, inner=_any_nonfinite(late), inner_status=status,
+    return [replace(line, inner=_any_nonfinite(late, config), inner_status=status,
                     inner_doc="an input not checked yet, reaching the results through "
                     "+, -, * only")
             for line in lines]
@@ -639,7 +643,7 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
                  for s in state_slots if s.symbol in part]
         body += [_decl(n, v) for n, v in loads]
         if part is inputs.early or not inputs.lazy:
-            body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input)
+            body += _nonfinite_check([n for n, _ in loads], spec.nonfinite_input, config)
         else:
             late_names = [n for n, _ in loads]
         if part is inputs.early:
@@ -650,9 +654,10 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
                         load_for, printer)
     body += load_for([g for _, g in form.state_guards])
     guards = _guard_lines(spec, form.state_guards, printer, config)
-    body += _with_late_check(guards, late_names, spec.nonfinite_input)
+    body += _with_late_check(guards, late_names, spec.nonfinite_input, config)
     body += load_for([e for exprs in form.outputs for e in exprs])
-    body += _commit(spec, _output_stores(spec, form.outputs, printer, config), late_names)
+    body += _commit(spec, _output_stores(spec, form.outputs, printer, config), config,
+                    late_names)
     ops = op_count_from(printer.ops)
 
     name = f"{api.function}_prepared"
@@ -691,21 +696,18 @@ def _prepared_context(ir: FunctionIR, api: _Prepared, config: CConfig) -> dict[s
     }
 
 
-def _any_nonfinite(names: Sequence[str]) -> str:
+def _any_nonfinite(names: Sequence[str], config: CConfig) -> str:
     """One branch-free test that is true when any of ``names`` is NaN or infinite.
 
-    x - x is 0 for a finite x and NaN for NaN or ±Inf, and a sum of zeros and NaNs is NaN
-    exactly when one term is: the same answer as one ``isfinite`` per value, without a
-    compare and branch per value (and without keeping every value live across them).
-    The sum is balanced, so its chain of dependent additions is log2(n) long.
+    Integer operations on the bits (``<prefix>exp_carry`` of the types header: the
+    exponent field plus one, whose top bit is set exactly for NaN and ±Inf), OR-ed and
+    tested once: the same answer as one ``isfinite`` per value, without a compare and
+    branch per value, and on the integer units, which the arithmetic around it leaves idle
+    (the former floating-point form, a balanced sum of ``x - x``, took as many
+    floating-point operations as values: about 1 ns of the forward dynamics' 22).
     """
-    def tree(terms: list[str]) -> str:  # a balanced sum: a short dependency chain
-        if len(terms) == 1:
-            return terms[0]
-        half = (len(terms) + 1) // 2
-        return f"({tree(terms[:half])} + {tree(terms[half:])})"
-
-    return "isnan" + tree([f"({n} - {n})" for n in names]) + " != 0"  # MISRA 14.4
+    carries = " | ".join(f"{config.prefix}exp_carry({n})" for n in names)
+    return f"(({carries}) & {config.macro_prefix}EXP_CARRY_TOP) != 0u"  # MISRA 14.4
 
 
 CODE_ID_UNSET = "0x00000000u"  # <PREFIX>_CODE_ID until the backend has every file (stamp_code_id)
@@ -956,7 +958,7 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
     body += _temp_lines(form.state_temps, load_for, printer)
     body += load_for([e for exprs in form.outputs for e in exprs])
     body += load_for.rest()
-    body += _commit(spec, _output_stores(spec, form.outputs, printer, config))
+    body += _commit(spec, _output_stores(spec, form.outputs, printer, config), config)
     call: dict[str, object] = {
         "name": name, "origin": f"the per-step part of {config.prefix}{spec.name}",
         "return_type": "void",

@@ -32,18 +32,18 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
-            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
-            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
-            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
-            + (radius_left - radius_left)) + ((radius_right - radius_right)
-            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
-            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
-            + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
+    if (((trailer_exp_carry(J_theta_cart) | trailer_exp_carry(J_theta_cart_left)
+            | trailer_exp_carry(J_theta_cart_right) | trailer_exp_carry(J_theta_left)
+            | trailer_exp_carry(J_theta_right) | trailer_exp_carry(J_theta_tractor)
+            | trailer_exp_carry(J_x_tractor) | trailer_exp_carry(K_theta_cart_x_tractor)
+            | trailer_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer_exp_carry(K_theta_tractor_x_tractor)
+            | trailer_exp_carry(K_theta_tractor_x_tractor_2) | trailer_exp_carry(radius_cart_left)
+            | trailer_exp_carry(radius_cart_right) | trailer_exp_carry(radius_left)
+            | trailer_exp_carry(radius_right) | trailer_exp_carry(theta_tractor)
+            | trailer_exp_carry(theta_cart) | trailer_exp_carry(thetadot_right)
+            | trailer_exp_carry(thetadot_left) | trailer_exp_carry(tau_right)
+            | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
@@ -237,8 +237,9 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t r_5 = _t133;
     const trailer_real_t r_6 = _t138;
     const trailer_real_t r_7 = _t139;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
-            + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
+            | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
+            | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -272,15 +273,15 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    if (isnan(((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left)))
-            + (((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + ((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))))
-            + ((((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))
-            + ((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart_left - radius_cart_left))) + (((radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left)) + (radius_right - radius_right)))) != 0) {
+    if (((trailer_exp_carry(J_theta_cart) | trailer_exp_carry(J_theta_cart_left)
+            | trailer_exp_carry(J_theta_cart_right) | trailer_exp_carry(J_theta_left)
+            | trailer_exp_carry(J_theta_right) | trailer_exp_carry(J_theta_tractor)
+            | trailer_exp_carry(J_x_tractor) | trailer_exp_carry(K_theta_cart_x_tractor)
+            | trailer_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer_exp_carry(K_theta_tractor_x_tractor)
+            | trailer_exp_carry(K_theta_tractor_x_tractor_2) | trailer_exp_carry(radius_cart_left)
+            | trailer_exp_carry(radius_cart_right) | trailer_exp_carry(radius_left)
+            | trailer_exp_carry(radius_right)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
@@ -355,7 +356,8 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     }
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
-    if (isnan((theta_tractor - theta_tractor) + (theta_cart - theta_cart)) != 0) {
+    if (((trailer_exp_carry(theta_tractor) | trailer_exp_carry(theta_cart)) & TRAILER_EXP_CARRY_TOP)
+            != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
@@ -518,16 +520,18 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t _t139 = _t126 + _t132*_t79 + _t133*_t87;
     if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
+                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
+                & TRAILER_EXP_CARRY_TOP) != 0u) {
             return TRAILER_ERR_NONFINITE_INPUT;
         }
         return TRAILER_ERR_BAD_PARAMS;
     }
     if (!(_t108 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
+                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
+                & TRAILER_EXP_CARRY_TOP) != 0u) {
             return TRAILER_ERR_NONFINITE_INPUT;
         }
         return TRAILER_ERR_BAD_PARAMS;
@@ -540,11 +544,13 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t r_5 = _t133;
     const trailer_real_t r_6 = _t138;
     const trailer_real_t r_7 = _t139;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
-            + (((r_4 - r_4) + (r_5 - r_5)) + ((r_6 - r_6) + (r_7 - r_7)))) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
+            | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
+            | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
+                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
+                & TRAILER_EXP_CARRY_TOP) != 0u) {
             return TRAILER_ERR_NONFINITE_INPUT;
         }
         return TRAILER_ERR_NONFINITE_OUTPUT;
@@ -878,18 +884,18 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
-            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
-            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
-            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
-            + (radius_left - radius_left)) + ((radius_right - radius_right)
-            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
-            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
-            + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
+    if (((trailer_exp_carry(J_theta_cart) | trailer_exp_carry(J_theta_cart_left)
+            | trailer_exp_carry(J_theta_cart_right) | trailer_exp_carry(J_theta_left)
+            | trailer_exp_carry(J_theta_right) | trailer_exp_carry(J_theta_tractor)
+            | trailer_exp_carry(J_x_tractor) | trailer_exp_carry(K_theta_cart_x_tractor)
+            | trailer_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer_exp_carry(K_theta_tractor_x_tractor)
+            | trailer_exp_carry(K_theta_tractor_x_tractor_2) | trailer_exp_carry(radius_cart_left)
+            | trailer_exp_carry(radius_cart_right) | trailer_exp_carry(radius_left)
+            | trailer_exp_carry(radius_right) | trailer_exp_carry(theta_tractor)
+            | trailer_exp_carry(theta_cart) | trailer_exp_carry(thetadot_right)
+            | trailer_exp_carry(thetadot_left) | trailer_exp_carry(tau_right)
+            | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
@@ -1071,7 +1077,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     }
     const trailer_real_t r_0 = _t129;
     const trailer_real_t r_1 = _t130;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;
@@ -1647,18 +1653,18 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t thetadot_left = wheel_rates[1];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart_left - J_theta_cart_left))
-            + (J_theta_cart_right - J_theta_cart_right)) + (((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor)))
-            + ((((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))
-            + ((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))))
-            + (((((radius_cart_left - radius_cart_left) + (radius_cart_right - radius_cart_right))
-            + (radius_left - radius_left)) + ((radius_right - radius_right)
-            + (theta_tractor - theta_tractor))) + ((((theta_cart - theta_cart)
-            + (thetadot_right - thetadot_right)) + (thetadot_left - thetadot_left))
-            + ((tau_right - tau_right) + (tau_left - tau_left))))) != 0) {
+    if (((trailer_exp_carry(J_theta_cart) | trailer_exp_carry(J_theta_cart_left)
+            | trailer_exp_carry(J_theta_cart_right) | trailer_exp_carry(J_theta_left)
+            | trailer_exp_carry(J_theta_right) | trailer_exp_carry(J_theta_tractor)
+            | trailer_exp_carry(J_x_tractor) | trailer_exp_carry(K_theta_cart_x_tractor)
+            | trailer_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer_exp_carry(K_theta_tractor_x_tractor)
+            | trailer_exp_carry(K_theta_tractor_x_tractor_2) | trailer_exp_carry(radius_cart_left)
+            | trailer_exp_carry(radius_cart_right) | trailer_exp_carry(radius_left)
+            | trailer_exp_carry(radius_right) | trailer_exp_carry(theta_tractor)
+            | trailer_exp_carry(theta_cart) | trailer_exp_carry(thetadot_right)
+            | trailer_exp_carry(thetadot_left) | trailer_exp_carry(tau_right)
+            | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
@@ -1915,7 +1921,8 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t r_1 = _t193;
     const trailer_real_t r_2 = -_t194;
     const trailer_real_t r_3 = -_t150;
-    if (isnan(((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3))) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
+            | trailer_exp_carry(r_3)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     longitudinal[0] = r_0;
@@ -1939,9 +1946,10 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
     const trailer_real_t load_w1 = loads[1];
     const trailer_real_t share_w0 = shares[0];
     const trailer_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer_exp_carry(force_x0) | trailer_exp_carry(force_x1) | trailer_exp_carry(force_y0)
+            | trailer_exp_carry(mu_floor) | trailer_exp_carry(load_w0) | trailer_exp_carry(load_w1)
+            | trailer_exp_carry(share_w0) | trailer_exp_carry(share_w1)) & TRAILER_EXP_CARRY_TOP)
+            != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = force_y0*force_y0;
@@ -1958,7 +1966,7 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
             + force_x0*force_x0);
     const trailer_real_t r_1 = load_w1*mu_floor - TRAILER_SQRT(_t0*share_w1*share_w1
             + force_x1*force_x1);
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;
@@ -1980,9 +1988,10 @@ trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
     const trailer_real_t load_w1 = loads[1];
     const trailer_real_t share_w0 = shares[0];
     const trailer_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer_exp_carry(force_x0) | trailer_exp_carry(force_x1) | trailer_exp_carry(force_y0)
+            | trailer_exp_carry(mu_floor) | trailer_exp_carry(load_w0) | trailer_exp_carry(load_w1)
+            | trailer_exp_carry(share_w0) | trailer_exp_carry(share_w1)) & TRAILER_EXP_CARRY_TOP)
+            != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = force_y0*force_y0;
@@ -2007,7 +2016,7 @@ trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
     }
     const trailer_real_t r_0 = _t1;
     const trailer_real_t r_1 = _t2;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;

@@ -15,11 +15,12 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0xc927a19bu
+#define TRAILER_CODE_ID 0x0c9239f6u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -62,6 +63,32 @@ typedef double trailer_real_t;
 #define TRAILER_FABS(x) fabs(x)
 #define TRAILER_INF HUGE_VAL
 #endif
+
+/* The checked functions' non-finite tests, in integer operations on the values' bits (the
+   floating-point units stay with the arithmetic): trailer_exp_carry(x) is x's exponent field
+   plus one in its lowest place, so its top bit is set exactly when the exponent is all ones
+   (x is NaN or +-Inf); the top bit of the OR of several is set when any one is not finite.
+   TRAILER_EXP_CARRY_TOP is that bit. */
+#ifdef TRAILER_FLOAT32
+typedef uint32_t trailer_exp_bits_t;
+#define TRAILER_EXP_FIELD 0x7f800000u
+#define TRAILER_EXP_LOWEST 0x00800000u
+#else
+typedef uint64_t trailer_exp_bits_t;
+#define TRAILER_EXP_FIELD UINT64_C(0x7ff0000000000000)
+#define TRAILER_EXP_LOWEST UINT64_C(0x0010000000000000)
+#endif
+#define TRAILER_EXP_CARRY_TOP (TRAILER_EXP_FIELD + TRAILER_EXP_LOWEST)
+
+static inline trailer_exp_bits_t trailer_exp_carry(trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        trailer_exp_bits_t bits;
+    } rep;
+    rep.value = x;
+    return (rep.bits & TRAILER_EXP_FIELD) + TRAILER_EXP_LOWEST;
+}
 
 /* sin and cos. trailer_sincos_bounded(x, &s, &c): both, for |x| <= 1.0e6 (the controller steps'
    input bound; NaN beyond, and for Inf and NaN), from one argument reduction and without a

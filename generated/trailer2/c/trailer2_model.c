@@ -40,24 +40,24 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + ((J_theta_cart2_left - J_theta_cart2_left) + (J_theta_cart2_right
-            - J_theta_cart2_right))) + (((J_theta_cart_left - J_theta_cart_left)
-            + (J_theta_cart_right - J_theta_cart_right)) + ((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)))) + ((((J_theta_tractor - J_theta_tractor)
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))))
-            + (((((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart_left - radius_cart_left))) + (((radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left)) + (radius_right - radius_right)))
-            + ((((theta_tractor - theta_tractor) + (theta_cart - theta_cart))
-            + ((theta_cart2 - theta_cart2) + (thetadot_right - thetadot_right)))
-            + (((thetadot_left - thetadot_left) + (tau_right - tau_right))
-            + (tau_left - tau_left))))) != 0) {
+    if (((trailer2_exp_carry(J_theta_cart) | trailer2_exp_carry(J_theta_cart2)
+            | trailer2_exp_carry(J_theta_cart2_left) | trailer2_exp_carry(J_theta_cart2_right)
+            | trailer2_exp_carry(J_theta_cart_left) | trailer2_exp_carry(J_theta_cart_right)
+            | trailer2_exp_carry(J_theta_left) | trailer2_exp_carry(J_theta_right)
+            | trailer2_exp_carry(J_theta_tractor) | trailer2_exp_carry(J_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer2_exp_carry(radius_cart2_left) | trailer2_exp_carry(radius_cart2_right)
+            | trailer2_exp_carry(radius_cart_left) | trailer2_exp_carry(radius_cart_right)
+            | trailer2_exp_carry(radius_left) | trailer2_exp_carry(radius_right)
+            | trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
+            | trailer2_exp_carry(theta_cart2) | trailer2_exp_carry(thetadot_right)
+            | trailer2_exp_carry(thetadot_left) | trailer2_exp_carry(tau_right)
+            | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
@@ -393,9 +393,10 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t r_8 = _t243;
     const trailer2_real_t r_9 = _t244;
     const trailer2_real_t r_10 = _t245;
-    if (isnan(((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + (((r_3 - r_3) + (r_4 - r_4))
-            + (r_5 - r_5))) + ((((r_6 - r_6) + (r_7 - r_7)) + (r_8 - r_8))
-            + ((r_9 - r_9) + (r_10 - r_10)))) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
+            | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
+            | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
+            | trailer2_exp_carry(r_9) | trailer2_exp_carry(r_10)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -439,21 +440,21 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
     const trailer2_real_t radius_left = p->radius_left;
     const trailer2_real_t radius_right = p->radius_right;
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + (J_theta_cart2_left - J_theta_cart2_left)) + (((J_theta_cart2_right
-            - J_theta_cart2_right) + (J_theta_cart_left - J_theta_cart_left))
-            + (J_theta_cart_right - J_theta_cart_right))) + ((((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)) + (J_theta_tractor - J_theta_tractor))
-            + ((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))))
-            + (((((K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)
-            + (K_theta_cart2_x_tractor - K_theta_cart2_x_tractor))
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + (((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))
-            + (radius_cart2_left - radius_cart2_left))) + ((((radius_cart2_right
-            - radius_cart2_right) + (radius_cart_left - radius_cart_left))
-            + (radius_cart_right - radius_cart_right)) + ((radius_left - radius_left)
-            + (radius_right - radius_right))))) != 0) {
+    if (((trailer2_exp_carry(J_theta_cart) | trailer2_exp_carry(J_theta_cart2)
+            | trailer2_exp_carry(J_theta_cart2_left) | trailer2_exp_carry(J_theta_cart2_right)
+            | trailer2_exp_carry(J_theta_cart_left) | trailer2_exp_carry(J_theta_cart_right)
+            | trailer2_exp_carry(J_theta_left) | trailer2_exp_carry(J_theta_right)
+            | trailer2_exp_carry(J_theta_tractor) | trailer2_exp_carry(J_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer2_exp_carry(radius_cart2_left) | trailer2_exp_carry(radius_cart2_right)
+            | trailer2_exp_carry(radius_cart_left) | trailer2_exp_carry(radius_cart_right)
+            | trailer2_exp_carry(radius_left) | trailer2_exp_carry(radius_right))
+            & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
@@ -555,8 +556,8 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t theta_cart = q[3];
     const trailer2_real_t theta_cart2 = q[4];
-    if (isnan(((theta_tractor - theta_tractor) + (theta_cart - theta_cart))
-            + (theta_cart2 - theta_cart2)) != 0) {
+    if (((trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
+            | trailer2_exp_carry(theta_cart2)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
@@ -848,16 +849,18 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t _t245 = _t142*_t235 + _t160*_t236 + _t229;
     if (!(_t181 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
+                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
+                & TRAILER2_EXP_CARRY_TOP) != 0u) {
             return TRAILER2_ERR_NONFINITE_INPUT;
         }
         return TRAILER2_ERR_BAD_PARAMS;
     }
     if (!(_t185 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
+                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
+                & TRAILER2_EXP_CARRY_TOP) != 0u) {
             return TRAILER2_ERR_NONFINITE_INPUT;
         }
         return TRAILER2_ERR_BAD_PARAMS;
@@ -873,12 +876,14 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t r_8 = _t243;
     const trailer2_real_t r_9 = _t244;
     const trailer2_real_t r_10 = _t245;
-    if (isnan(((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + (((r_3 - r_3) + (r_4 - r_4))
-            + (r_5 - r_5))) + ((((r_6 - r_6) + (r_7 - r_7)) + (r_8 - r_8))
-            + ((r_9 - r_9) + (r_10 - r_10)))) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
+            | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
+            | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
+            | trailer2_exp_carry(r_9) | trailer2_exp_carry(r_10)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
+                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
+                & TRAILER2_EXP_CARRY_TOP) != 0u) {
             return TRAILER2_ERR_NONFINITE_INPUT;
         }
         return TRAILER2_ERR_NONFINITE_OUTPUT;
@@ -1420,24 +1425,24 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t thetadot_left = wheel_rates[1];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + ((J_theta_cart2_left - J_theta_cart2_left) + (J_theta_cart2_right
-            - J_theta_cart2_right))) + (((J_theta_cart_left - J_theta_cart_left)
-            + (J_theta_cart_right - J_theta_cart_right)) + ((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)))) + ((((J_theta_tractor - J_theta_tractor)
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))))
-            + (((((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart_left - radius_cart_left))) + (((radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left)) + (radius_right - radius_right)))
-            + ((((theta_tractor - theta_tractor) + (theta_cart - theta_cart))
-            + ((theta_cart2 - theta_cart2) + (thetadot_right - thetadot_right)))
-            + (((thetadot_left - thetadot_left) + (tau_right - tau_right))
-            + (tau_left - tau_left))))) != 0) {
+    if (((trailer2_exp_carry(J_theta_cart) | trailer2_exp_carry(J_theta_cart2)
+            | trailer2_exp_carry(J_theta_cart2_left) | trailer2_exp_carry(J_theta_cart2_right)
+            | trailer2_exp_carry(J_theta_cart_left) | trailer2_exp_carry(J_theta_cart_right)
+            | trailer2_exp_carry(J_theta_left) | trailer2_exp_carry(J_theta_right)
+            | trailer2_exp_carry(J_theta_tractor) | trailer2_exp_carry(J_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer2_exp_carry(radius_cart2_left) | trailer2_exp_carry(radius_cart2_right)
+            | trailer2_exp_carry(radius_cart_left) | trailer2_exp_carry(radius_cart_right)
+            | trailer2_exp_carry(radius_left) | trailer2_exp_carry(radius_right)
+            | trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
+            | trailer2_exp_carry(theta_cart2) | trailer2_exp_carry(thetadot_right)
+            | trailer2_exp_carry(thetadot_left) | trailer2_exp_carry(tau_right)
+            | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
@@ -1755,7 +1760,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     }
     const trailer2_real_t r_0 = _t231;
     const trailer2_real_t r_1 = _t232;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;
@@ -2833,24 +2838,24 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t thetadot_left = wheel_rates[1];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + ((J_theta_cart2_left - J_theta_cart2_left) + (J_theta_cart2_right
-            - J_theta_cart2_right))) + (((J_theta_cart_left - J_theta_cart_left)
-            + (J_theta_cart_right - J_theta_cart_right)) + ((J_theta_left - J_theta_left)
-            + (J_theta_right - J_theta_right)))) + ((((J_theta_tractor - J_theta_tractor)
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + (K_theta_tractor_x_tractor - K_theta_tractor_x_tractor))))
-            + (((((K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2)
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart_left - radius_cart_left))) + (((radius_cart_right - radius_cart_right)
-            + (radius_left - radius_left)) + (radius_right - radius_right)))
-            + ((((theta_tractor - theta_tractor) + (theta_cart - theta_cart))
-            + ((theta_cart2 - theta_cart2) + (thetadot_right - thetadot_right)))
-            + (((thetadot_left - thetadot_left) + (tau_right - tau_right))
-            + (tau_left - tau_left))))) != 0) {
+    if (((trailer2_exp_carry(J_theta_cart) | trailer2_exp_carry(J_theta_cart2)
+            | trailer2_exp_carry(J_theta_cart2_left) | trailer2_exp_carry(J_theta_cart2_right)
+            | trailer2_exp_carry(J_theta_cart_left) | trailer2_exp_carry(J_theta_cart_right)
+            | trailer2_exp_carry(J_theta_left) | trailer2_exp_carry(J_theta_right)
+            | trailer2_exp_carry(J_theta_tractor) | trailer2_exp_carry(J_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor)
+            | trailer2_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor)
+            | trailer2_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor)
+            | trailer2_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer2_exp_carry(radius_cart2_left) | trailer2_exp_carry(radius_cart2_right)
+            | trailer2_exp_carry(radius_cart_left) | trailer2_exp_carry(radius_cart_right)
+            | trailer2_exp_carry(radius_left) | trailer2_exp_carry(radius_right)
+            | trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
+            | trailer2_exp_carry(theta_cart2) | trailer2_exp_carry(thetadot_right)
+            | trailer2_exp_carry(thetadot_left) | trailer2_exp_carry(tau_right)
+            | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
@@ -3292,7 +3297,8 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t r_2 = -_t329;
     const trailer2_real_t r_3 = -_t268;
     const trailer2_real_t r_4 = -_t259;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + ((r_3 - r_3) + (r_4 - r_4))) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
+            | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     longitudinal[0] = r_0;
@@ -3317,9 +3323,10 @@ trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
     const trailer2_real_t load_w1 = loads[1];
     const trailer2_real_t share_w0 = shares[0];
     const trailer2_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer2_exp_carry(force_x0) | trailer2_exp_carry(force_x1) | trailer2_exp_carry(force_y0)
+            | trailer2_exp_carry(mu_floor) | trailer2_exp_carry(load_w0)
+            | trailer2_exp_carry(load_w1) | trailer2_exp_carry(share_w0)
+            | trailer2_exp_carry(share_w1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = force_y0*force_y0;
@@ -3336,7 +3343,7 @@ trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
             + force_x0*force_x0);
     const trailer2_real_t r_1 = load_w1*mu_floor - TRAILER2_SQRT(_t0*share_w1*share_w1
             + force_x1*force_x1);
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;
@@ -3358,9 +3365,10 @@ trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
     const trailer2_real_t load_w1 = loads[1];
     const trailer2_real_t share_w0 = shares[0];
     const trailer2_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer2_exp_carry(force_x0) | trailer2_exp_carry(force_x1) | trailer2_exp_carry(force_y0)
+            | trailer2_exp_carry(mu_floor) | trailer2_exp_carry(load_w0)
+            | trailer2_exp_carry(load_w1) | trailer2_exp_carry(share_w0)
+            | trailer2_exp_carry(share_w1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
     const trailer2_real_t _t0 = force_y0*force_y0;
@@ -3385,7 +3393,7 @@ trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
     }
     const trailer2_real_t r_0 = _t1;
     const trailer2_real_t r_1 = _t2;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;

@@ -15,11 +15,12 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x0e53aa9au
+#define TRAILER2_CODE_ID 0x8a7feaacu
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;
@@ -62,6 +63,32 @@ typedef double trailer2_real_t;
 #define TRAILER2_FABS(x) fabs(x)
 #define TRAILER2_INF HUGE_VAL
 #endif
+
+/* The checked functions' non-finite tests, in integer operations on the values' bits (the
+   floating-point units stay with the arithmetic): trailer2_exp_carry(x) is x's exponent field
+   plus one in its lowest place, so its top bit is set exactly when the exponent is all ones
+   (x is NaN or +-Inf); the top bit of the OR of several is set when any one is not finite.
+   TRAILER2_EXP_CARRY_TOP is that bit. */
+#ifdef TRAILER2_FLOAT32
+typedef uint32_t trailer2_exp_bits_t;
+#define TRAILER2_EXP_FIELD 0x7f800000u
+#define TRAILER2_EXP_LOWEST 0x00800000u
+#else
+typedef uint64_t trailer2_exp_bits_t;
+#define TRAILER2_EXP_FIELD UINT64_C(0x7ff0000000000000)
+#define TRAILER2_EXP_LOWEST UINT64_C(0x0010000000000000)
+#endif
+#define TRAILER2_EXP_CARRY_TOP (TRAILER2_EXP_FIELD + TRAILER2_EXP_LOWEST)
+
+static inline trailer2_exp_bits_t trailer2_exp_carry(trailer2_real_t x)
+{
+    union {
+        trailer2_real_t value;
+        trailer2_exp_bits_t bits;
+    } rep;
+    rep.value = x;
+    return (rep.bits & TRAILER2_EXP_FIELD) + TRAILER2_EXP_LOWEST;
+}
 
 /* sin and cos. trailer2_sincos_bounded(x, &s, &c): both, for |x| <= 1.0e6 (the controller steps'
    input bound; NaN beyond, and for Inf and NaN), from one argument reduction and without a

@@ -48,30 +48,29 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + (J_theta_cart2_left - J_theta_cart2_left)) + ((J_theta_cart2_right
-            - J_theta_cart2_right) + (J_theta_cart3 - J_theta_cart3)))
-            + ((((J_theta_cart3_left - J_theta_cart3_left) + (J_theta_cart3_right
-            - J_theta_cart3_right)) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))))
-            + (((((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + ((K_theta_cart3_x_tractor - K_theta_cart3_x_tractor)
-            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2)))))
-            + ((((((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart3_left - radius_cart3_left))) + (((radius_cart3_right
-            - radius_cart3_right) + (radius_cart_left - radius_cart_left))
-            + ((radius_cart_right - radius_cart_right) + (radius_left - radius_left))))
-            + (((((radius_right - radius_right) + (theta_tractor - theta_tractor))
-            + (theta_cart - theta_cart)) + ((theta_cart2 - theta_cart2)
-            + (theta_cart3 - theta_cart3))) + (((thetadot_right - thetadot_right)
-            + (thetadot_left - thetadot_left)) + ((tau_right - tau_right)
-            + (tau_left - tau_left)))))) != 0) {
+    if (((trailer3_exp_carry(J_theta_cart) | trailer3_exp_carry(J_theta_cart2)
+            | trailer3_exp_carry(J_theta_cart2_left) | trailer3_exp_carry(J_theta_cart2_right)
+            | trailer3_exp_carry(J_theta_cart3) | trailer3_exp_carry(J_theta_cart3_left)
+            | trailer3_exp_carry(J_theta_cart3_right) | trailer3_exp_carry(J_theta_cart_left)
+            | trailer3_exp_carry(J_theta_cart_right) | trailer3_exp_carry(J_theta_left)
+            | trailer3_exp_carry(J_theta_right) | trailer3_exp_carry(J_theta_tractor)
+            | trailer3_exp_carry(J_x_tractor) | trailer3_exp_carry(K_theta_cart_x_tractor)
+            | trailer3_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor_2)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer3_exp_carry(radius_cart2_left) | trailer3_exp_carry(radius_cart2_right)
+            | trailer3_exp_carry(radius_cart3_left) | trailer3_exp_carry(radius_cart3_right)
+            | trailer3_exp_carry(radius_cart_left) | trailer3_exp_carry(radius_cart_right)
+            | trailer3_exp_carry(radius_left) | trailer3_exp_carry(radius_right)
+            | trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
+            | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3)
+            | trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+            | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
@@ -578,10 +577,12 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t r_11 = _t373;
     const trailer3_real_t r_12 = _t374;
     const trailer3_real_t r_13 = _t375;
-    if (isnan(((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
-            + (((r_4 - r_4) + (r_5 - r_5)) + (r_6 - r_6))) + ((((r_7 - r_7) + (r_8 - r_8))
-            + ((r_9 - r_9) + (r_10 - r_10))) + (((r_11 - r_11) + (r_12 - r_12)) + (r_13 - r_13))))
-            != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
+            | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
+            | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
+            | trailer3_exp_carry(r_9) | trailer3_exp_carry(r_10) | trailer3_exp_carry(r_11)
+            | trailer3_exp_carry(r_12) | trailer3_exp_carry(r_13)) & TRAILER3_EXP_CARRY_TOP)
+            != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -635,26 +636,25 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
-    if (isnan((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + ((J_theta_cart2_left - J_theta_cart2_left) + (J_theta_cart2_right
-            - J_theta_cart2_right))) + (((J_theta_cart3 - J_theta_cart3)
-            + (J_theta_cart3_left - J_theta_cart3_left)) + ((J_theta_cart3_right
-            - J_theta_cart3_right) + (J_theta_cart_left - J_theta_cart_left))))
-            + ((((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))
-            + ((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor)))
-            + (((J_x_tractor - J_x_tractor) + (K_theta_cart_x_tractor - K_theta_cart_x_tractor))
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2))))
-            + (((((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + ((K_theta_cart3_x_tractor - K_theta_cart3_x_tractor)
-            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2)))
-            + (((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))
-            + (radius_cart2_left - radius_cart2_left))) + ((((radius_cart2_right
-            - radius_cart2_right) + (radius_cart3_left - radius_cart3_left))
-            + ((radius_cart3_right - radius_cart3_right) + (radius_cart_left - radius_cart_left)))
-            + (((radius_cart_right - radius_cart_right) + (radius_left - radius_left))
-            + (radius_right - radius_right))))) != 0) {
+    if (((trailer3_exp_carry(J_theta_cart) | trailer3_exp_carry(J_theta_cart2)
+            | trailer3_exp_carry(J_theta_cart2_left) | trailer3_exp_carry(J_theta_cart2_right)
+            | trailer3_exp_carry(J_theta_cart3) | trailer3_exp_carry(J_theta_cart3_left)
+            | trailer3_exp_carry(J_theta_cart3_right) | trailer3_exp_carry(J_theta_cart_left)
+            | trailer3_exp_carry(J_theta_cart_right) | trailer3_exp_carry(J_theta_left)
+            | trailer3_exp_carry(J_theta_right) | trailer3_exp_carry(J_theta_tractor)
+            | trailer3_exp_carry(J_x_tractor) | trailer3_exp_carry(K_theta_cart_x_tractor)
+            | trailer3_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor_2)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer3_exp_carry(radius_cart2_left) | trailer3_exp_carry(radius_cart2_right)
+            | trailer3_exp_carry(radius_cart3_left) | trailer3_exp_carry(radius_cart3_right)
+            | trailer3_exp_carry(radius_cart_left) | trailer3_exp_carry(radius_cart_right)
+            | trailer3_exp_carry(radius_left) | trailer3_exp_carry(radius_right))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
@@ -789,8 +789,9 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t theta_cart = q[3];
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t theta_cart3 = q[5];
-    if (isnan(((theta_tractor - theta_tractor) + (theta_cart - theta_cart))
-            + ((theta_cart2 - theta_cart2) + (theta_cart3 - theta_cart3))) != 0) {
+    if (((trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
+            | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
@@ -1240,16 +1241,18 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t _t375 = _t227*_t362 + _t249*_t363 + _t356;
     if (!(_t274 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+                & TRAILER3_EXP_CARRY_TOP) != 0u) {
             return TRAILER3_ERR_NONFINITE_INPUT;
         }
         return TRAILER3_ERR_BAD_PARAMS;
     }
     if (!(_t278 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+                & TRAILER3_EXP_CARRY_TOP) != 0u) {
             return TRAILER3_ERR_NONFINITE_INPUT;
         }
         return TRAILER3_ERR_BAD_PARAMS;
@@ -1268,13 +1271,16 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t r_11 = _t373;
     const trailer3_real_t r_12 = _t374;
     const trailer3_real_t r_13 = _t375;
-    if (isnan(((((r_0 - r_0) + (r_1 - r_1)) + ((r_2 - r_2) + (r_3 - r_3)))
-            + (((r_4 - r_4) + (r_5 - r_5)) + (r_6 - r_6))) + ((((r_7 - r_7) + (r_8 - r_8))
-            + ((r_9 - r_9) + (r_10 - r_10))) + (((r_11 - r_11) + (r_12 - r_12)) + (r_13 - r_13))))
-            != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
+            | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
+            | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
+            | trailer3_exp_carry(r_9) | trailer3_exp_carry(r_10) | trailer3_exp_carry(r_11)
+            | trailer3_exp_carry(r_12) | trailer3_exp_carry(r_13)) & TRAILER3_EXP_CARRY_TOP)
+            != 0u) {
         /* an input not checked yet, reaching the results through +, -, * only */
-        if (isnan(((thetadot_right - thetadot_right) + (thetadot_left - thetadot_left))
-                + ((tau_right - tau_right) + (tau_left - tau_left))) != 0) {
+        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+                & TRAILER3_EXP_CARRY_TOP) != 0u) {
             return TRAILER3_ERR_NONFINITE_INPUT;
         }
         return TRAILER3_ERR_NONFINITE_OUTPUT;
@@ -2071,30 +2077,29 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t thetadot_left = wheel_rates[1];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + (J_theta_cart2_left - J_theta_cart2_left)) + ((J_theta_cart2_right
-            - J_theta_cart2_right) + (J_theta_cart3 - J_theta_cart3)))
-            + ((((J_theta_cart3_left - J_theta_cart3_left) + (J_theta_cart3_right
-            - J_theta_cart3_right)) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))))
-            + (((((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + ((K_theta_cart3_x_tractor - K_theta_cart3_x_tractor)
-            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2)))))
-            + ((((((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart3_left - radius_cart3_left))) + (((radius_cart3_right
-            - radius_cart3_right) + (radius_cart_left - radius_cart_left))
-            + ((radius_cart_right - radius_cart_right) + (radius_left - radius_left))))
-            + (((((radius_right - radius_right) + (theta_tractor - theta_tractor))
-            + (theta_cart - theta_cart)) + ((theta_cart2 - theta_cart2)
-            + (theta_cart3 - theta_cart3))) + (((thetadot_right - thetadot_right)
-            + (thetadot_left - thetadot_left)) + ((tau_right - tau_right)
-            + (tau_left - tau_left)))))) != 0) {
+    if (((trailer3_exp_carry(J_theta_cart) | trailer3_exp_carry(J_theta_cart2)
+            | trailer3_exp_carry(J_theta_cart2_left) | trailer3_exp_carry(J_theta_cart2_right)
+            | trailer3_exp_carry(J_theta_cart3) | trailer3_exp_carry(J_theta_cart3_left)
+            | trailer3_exp_carry(J_theta_cart3_right) | trailer3_exp_carry(J_theta_cart_left)
+            | trailer3_exp_carry(J_theta_cart_right) | trailer3_exp_carry(J_theta_left)
+            | trailer3_exp_carry(J_theta_right) | trailer3_exp_carry(J_theta_tractor)
+            | trailer3_exp_carry(J_x_tractor) | trailer3_exp_carry(K_theta_cart_x_tractor)
+            | trailer3_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor_2)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer3_exp_carry(radius_cart2_left) | trailer3_exp_carry(radius_cart2_right)
+            | trailer3_exp_carry(radius_cart3_left) | trailer3_exp_carry(radius_cart3_right)
+            | trailer3_exp_carry(radius_cart_left) | trailer3_exp_carry(radius_cart_right)
+            | trailer3_exp_carry(radius_left) | trailer3_exp_carry(radius_right)
+            | trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
+            | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3)
+            | trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+            | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
@@ -2579,7 +2584,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     }
     const trailer3_real_t r_0 = _t354;
     const trailer3_real_t r_1 = _t355;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     wheel_accels[0] = r_0;
@@ -4343,30 +4348,29 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t thetadot_left = wheel_rates[1];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    if (isnan(((((((J_theta_cart - J_theta_cart) + (J_theta_cart2 - J_theta_cart2))
-            + (J_theta_cart2_left - J_theta_cart2_left)) + ((J_theta_cart2_right
-            - J_theta_cart2_right) + (J_theta_cart3 - J_theta_cart3)))
-            + ((((J_theta_cart3_left - J_theta_cart3_left) + (J_theta_cart3_right
-            - J_theta_cart3_right)) + (J_theta_cart_left - J_theta_cart_left))
-            + ((J_theta_cart_right - J_theta_cart_right) + (J_theta_left - J_theta_left))))
-            + (((((J_theta_right - J_theta_right) + (J_theta_tractor - J_theta_tractor))
-            + (J_x_tractor - J_x_tractor)) + ((K_theta_cart_x_tractor - K_theta_cart_x_tractor)
-            + (K_theta_cart_x_tractor_2 - K_theta_cart_x_tractor_2)))
-            + (((K_theta_cart2_x_tractor - K_theta_cart2_x_tractor)
-            + (K_theta_cart2_x_tractor_2 - K_theta_cart2_x_tractor_2))
-            + ((K_theta_cart3_x_tractor - K_theta_cart3_x_tractor)
-            + (K_theta_cart3_x_tractor_2 - K_theta_cart3_x_tractor_2)))))
-            + ((((((K_theta_tractor_x_tractor - K_theta_tractor_x_tractor)
-            + (K_theta_tractor_x_tractor_2 - K_theta_tractor_x_tractor_2))
-            + (radius_cart2_left - radius_cart2_left)) + ((radius_cart2_right - radius_cart2_right)
-            + (radius_cart3_left - radius_cart3_left))) + (((radius_cart3_right
-            - radius_cart3_right) + (radius_cart_left - radius_cart_left))
-            + ((radius_cart_right - radius_cart_right) + (radius_left - radius_left))))
-            + (((((radius_right - radius_right) + (theta_tractor - theta_tractor))
-            + (theta_cart - theta_cart)) + ((theta_cart2 - theta_cart2)
-            + (theta_cart3 - theta_cart3))) + (((thetadot_right - thetadot_right)
-            + (thetadot_left - thetadot_left)) + ((tau_right - tau_right)
-            + (tau_left - tau_left)))))) != 0) {
+    if (((trailer3_exp_carry(J_theta_cart) | trailer3_exp_carry(J_theta_cart2)
+            | trailer3_exp_carry(J_theta_cart2_left) | trailer3_exp_carry(J_theta_cart2_right)
+            | trailer3_exp_carry(J_theta_cart3) | trailer3_exp_carry(J_theta_cart3_left)
+            | trailer3_exp_carry(J_theta_cart3_right) | trailer3_exp_carry(J_theta_cart_left)
+            | trailer3_exp_carry(J_theta_cart_right) | trailer3_exp_carry(J_theta_left)
+            | trailer3_exp_carry(J_theta_right) | trailer3_exp_carry(J_theta_tractor)
+            | trailer3_exp_carry(J_x_tractor) | trailer3_exp_carry(K_theta_cart_x_tractor)
+            | trailer3_exp_carry(K_theta_cart_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor)
+            | trailer3_exp_carry(K_theta_cart2_x_tractor_2)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor)
+            | trailer3_exp_carry(K_theta_cart3_x_tractor_2)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor)
+            | trailer3_exp_carry(K_theta_tractor_x_tractor_2)
+            | trailer3_exp_carry(radius_cart2_left) | trailer3_exp_carry(radius_cart2_right)
+            | trailer3_exp_carry(radius_cart3_left) | trailer3_exp_carry(radius_cart3_right)
+            | trailer3_exp_carry(radius_cart_left) | trailer3_exp_carry(radius_cart_right)
+            | trailer3_exp_carry(radius_left) | trailer3_exp_carry(radius_right)
+            | trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
+            | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3)
+            | trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
+            | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
@@ -5027,8 +5031,9 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t r_3 = -_t407;
     const trailer3_real_t r_4 = -_t398;
     const trailer3_real_t r_5 = -_t389;
-    if (isnan((((r_0 - r_0) + (r_1 - r_1)) + (r_2 - r_2)) + (((r_3 - r_3) + (r_4 - r_4))
-            + (r_5 - r_5))) != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
+            | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5))
+            & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     longitudinal[0] = r_0;
@@ -5054,9 +5059,10 @@ trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
     const trailer3_real_t load_w1 = loads[1];
     const trailer3_real_t share_w0 = shares[0];
     const trailer3_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer3_exp_carry(force_x0) | trailer3_exp_carry(force_x1) | trailer3_exp_carry(force_y0)
+            | trailer3_exp_carry(mu_floor) | trailer3_exp_carry(load_w0)
+            | trailer3_exp_carry(load_w1) | trailer3_exp_carry(share_w0)
+            | trailer3_exp_carry(share_w1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = force_y0*force_y0;
@@ -5073,7 +5079,7 @@ trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
             + force_x0*force_x0);
     const trailer3_real_t r_1 = load_w1*mu_floor - TRAILER3_SQRT(_t0*share_w1*share_w1
             + force_x1*force_x1);
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;
@@ -5095,9 +5101,10 @@ trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
     const trailer3_real_t load_w1 = loads[1];
     const trailer3_real_t share_w0 = shares[0];
     const trailer3_real_t share_w1 = shares[1];
-    if (isnan((((force_x0 - force_x0) + (force_x1 - force_x1))
-            + ((force_y0 - force_y0) + (mu_floor - mu_floor))) + (((load_w0 - load_w0)
-            + (load_w1 - load_w1)) + ((share_w0 - share_w0) + (share_w1 - share_w1)))) != 0) {
+    if (((trailer3_exp_carry(force_x0) | trailer3_exp_carry(force_x1) | trailer3_exp_carry(force_y0)
+            | trailer3_exp_carry(mu_floor) | trailer3_exp_carry(load_w0)
+            | trailer3_exp_carry(load_w1) | trailer3_exp_carry(share_w0)
+            | trailer3_exp_carry(share_w1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = force_y0*force_y0;
@@ -5122,7 +5129,7 @@ trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
     }
     const trailer3_real_t r_0 = _t1;
     const trailer3_real_t r_1 = _t2;
-    if (isnan((r_0 - r_0) + (r_1 - r_1)) != 0) {
+    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     margins[0] = r_0;
