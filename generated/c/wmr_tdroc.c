@@ -607,8 +607,9 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
         s->trig_prev[i] = WMR_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = WMR_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * WMR_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = WMR_LIT(0.0);
     }
     s->gain = WMR_LIT(0.0);
     s->s_norm = WMR_LIT(0.0);
@@ -746,8 +747,8 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     wmr_real_t H1hat[5];
     wmr_real_t trig[2];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     wmr_real_t gain, s_norm, u_discarded;
-    wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    wmr_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
@@ -859,29 +860,35 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
         if (paper) {
-            wmr_tdroc_k_paper_omega_difference(H1hat, state->H1hat, &dn[0]);
+            wmr_tdroc_k_paper_omega_difference(H1hat, state->H1hat, &dn_new);
         } else {
-            wmr_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
+            wmr_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
         }
-        for (i = 1; i < WMR_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        omega_head = omega_head == 0 ? WMR_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= WMR_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const wmr_real_t *const older = &state->omega_ring[omega_head];
+        const wmr_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         wmr_real_t w_warm[WMR_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
@@ -940,9 +947,11 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     for (i = 0; i < 2; ++i) {
         state->trig_prev[i] = trig[i];
     }
-    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + WMR_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->gain = gain;
     state->s_norm = s_norm;

@@ -1019,8 +1019,9 @@ static void trailer3_tdroc_clear(trailer3_tdroc_state_t *s)
         s->H1hat[i] = TRAILER3_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = TRAILER3_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * TRAILER3_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = TRAILER3_LIT(0.0);
     }
     s->gain = TRAILER3_LIT(0.0);
     s->s_norm = TRAILER3_LIT(0.0);
@@ -1118,8 +1119,8 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     trailer3_real_t H1hat[14];
     trailer3_real_t gain, s_norm, u_discarded;
     trailer3_real_t minv_norm;
-    trailer3_real_t dn[TRAILER3_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    trailer3_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return trailer3_fail(detail, TRAILER3_ERR_NULL_POINTER, TRAILER3_FIELD_STATE, -1);
@@ -1218,25 +1219,31 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
-        trailer3_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
-        for (i = 1; i < TRAILER3_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        trailer3_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
+        omega_head = omega_head == 0 ? TRAILER3_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= TRAILER3_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const trailer3_real_t *const older = &state->omega_ring[omega_head];
+        const trailer3_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         trailer3_real_t w_warm[TRAILER3_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer3_real_t *w = state->weights;  /* the full window's, from _init */
@@ -1288,9 +1295,11 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     for (i = 0; i < 14; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + TRAILER3_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->minv_norm = minv_norm;
     state->gain = gain;
