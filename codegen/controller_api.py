@@ -214,7 +214,7 @@ def c_controller_context(
             "config_fields": config_fields(spec),
             "config_values": config_values(spec, param_fields),
             "config_lines": config_struct_lines(spec, layout),
-            "base_checks": BASE_CHECKS}
+            "base_checks": BASE_CHECKS, "max_window": MAX_WINDOW}
 
 
 def config_values(spec: ControllerSpec, param_fields: list[str]) -> list[tuple[str, str, int]]:

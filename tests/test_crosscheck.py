@@ -177,21 +177,18 @@ def test_trailer_crosscheck_detects_a_deviating_implementation(
 def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> None:
     """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law`` (the
     TDC law kernel; it evaluates the staged M-hat at q) scales u[0] by 1 + 1e-6, and so
-    does the TDC step's own copy of it (``trailer_tdc_k_minimal_tdc_law``): the crosscheck
+    does the TDC step (both through ``trailer_k_minimal_tdc_law``): the crosscheck
     of that folder fails for C double, in that function's row and in the TDC controller,
     and nowhere else."""
     copy = tmp_path / "trailer"
     shutil.copytree(TRAILER / "python", copy / "python")
     shutil.copytree(TRAILER / "c", copy / "c")
     (copy / "casadi").symlink_to(TRAILER / "casadi", target_is_directory=True)
-    laws = copy / "c" / "trailer_laws.c"
-    text = laws.read_text()
-    end = text.index("\n}\n", text.index("void trailer_minimal_tdc_law("))  # void: no return
-    laws.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
-    tdc = copy / "c" / "trailer_tdc.c"
-    text = tdc.read_text()
-    end = text.index("\n}\n", text.index("static inline void trailer_tdc_k_minimal_tdc_law("))
-    tdc.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
+    # the kernel is written once (trailer_kernels.h): the laws function wraps it
+    kernels = copy / "c" / "trailer_kernels.h"
+    text = kernels.read_text()
+    end = text.index("\n}\n", text.index("static inline void trailer_k_minimal_tdc_law("))
+    kernels.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     out_file = tmp_path / "report.txt"
     status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])
     out = out_file.read_text()

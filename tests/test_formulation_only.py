@@ -89,8 +89,8 @@ def test_one_formulation_at_compile_time(tmp_path: Path, only: str, formulation:
     assert o_lines[1:] == d_lines[1:]  # same statuses and torques, to the last bit
     assert any(line.split()[0] == "0" and float(line.split()[1]) != 0.0 for line in o_lines[1:])
     trig = "_trig" if other == "paper" else ""  # the paper's M-hat depends on the heading
-    # the step's own copies of the kernels (wmr_tdroc_k_*), and _init's ||Mhat^-1||
-    for name in [*(f"wmr_tdroc_k_{other}_{kernel}"
+    # the kernels the step calls (wmr_k_*, wmr_kernels.h), and _init's ||Mhat^-1||
+    for name in [*(f"wmr_k_{other}_{kernel}"
                    for kernel in (f"tde{trig}", "omega_difference", f"tdroc_law{trig}")),
                  f"wmr_{other}_minv_norm"]:
         assert name in default_syms

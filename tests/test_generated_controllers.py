@@ -45,7 +45,7 @@ def _compare_states(
     c_fields: dict[str, Any], py_state: dict[str, Any], info: ControllerSpec
 ) -> None:
     required = {"steps", "gain", "s_norm", "H1hat", "tau"}
-    required |= ({"omega_dnorm"} if info.window else set()) | ({"trig_prev"} if info.tde else set())
+    required |= ({"omega_ring"} if info.window else set()) | ({"trig_prev"} if info.tde else set())
     common = {k for k in c_fields.keys() & py_state.keys() if not isinstance(c_fields[k], dict)}
     assert required <= common, sorted(required - common)
     for key in sorted(common):

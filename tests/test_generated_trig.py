@@ -233,12 +233,18 @@ def test_controllers_link_no_libm_trig(tmp_path: Path, robot: str) -> None:
     folder, prefix, up = code.c_dir, code.prefix, code.prefix.upper()
     libm = {"sin", "cos", "sincos", "sinf", "cosf", "sincosf"}
     laws = (folder / f"{prefix}_laws.c").read_text()
+    kernels = (folder / f"{prefix}_kernels.h").read_text()
 
     def law_bodies(name: str) -> list[str]:
+        """Each formulation's law: its laws.c body, or the kernel it wraps (kernels.h)."""
         bodies = []
         for form in code.controller(name).formulations:
             body = laws[laws.index(f"void {prefix}_{form}_{name}_law("):]
-            bodies.append(body[:body.index("\n}\n")])
+            body = body[:body.index("\n}\n")]
+            if f"{prefix}_k_{form}_{name}_law(" in body:
+                body = kernels[kernels.index(f"void {prefix}_k_{form}_{name}_law("):]
+                body = body[:body.index("\n}\n")]
+            bodies.append(body)
         return bodies
 
     unbounded = {c.name for c in code.controller_infos

@@ -72,8 +72,8 @@ def test_tde_step_calls_the_trig_kernels() -> None:
         assert step.count("wmr_sincos_bounded(q[2], &trig[0], &trig[1]);") == 1, ctrl
         assert "WMR_SIN(" not in step and "WMR_COS(" not in step, ctrl
         assert step.index("wmr_check_step_inputs(") < step.index("wmr_sincos_bounded("), ctrl
-        # the step's own copies of the kernels, reading the values _init kept
-        assert (f"wmr_{ctrl}_k_paper_{ctrl}_law_trig(kept_paper_{ctrl}_law_trig, trig,"
+        # the shared kernels (wmr_kernels.h), reading the values _init kept
+        assert (f"wmr_k_paper_{ctrl}_law_trig(kept_paper_{ctrl}_law_trig, trig,"
                 in step), ctrl
-        assert (f"wmr_{ctrl}_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev,"
+        assert ("wmr_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev,"
                 in step), ctrl

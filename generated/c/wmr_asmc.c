@@ -10,6 +10,7 @@
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
+#include "wmr_kernels.h"
 
 #ifdef WMR_ASMC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,262 +18,6 @@
 #include "wmr_asmc_frozen.h"
 const wmr_asmc_config_t wmr_asmc_frozen_config = WMR_ASMC_FROZEN_CONFIG;
 #endif
-
-#ifndef WMR_ASMC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_asmc_k_paper_asmc_law_keep: the parameter-only part of wmr_paper_asmc_law of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 12 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_asmc_k_paper_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t _t2 = _t0;
-    const wmr_real_t _t3 = WMR_LIT(0.5)*_t2;
-    const wmr_real_t _t4 = _t0*_t0*d;
-    const wmr_real_t _t5 = WMR_LIT(2.0)*_t1;
-    const wmr_real_t _t6 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t7 = _t2*r;
-    const wmr_real_t _t8 = _t7*d;
-    const wmr_real_t _t9 = K*_t3;
-    const wmr_real_t _t10 = I*_t7 - K*_t8;
-    const wmr_real_t _t11 = -_t10;
-    const wmr_real_t _t12 = K*_t6;
-    kept[0] = m;
-    kept[1] = I;
-    kept[2] = K;
-    kept[3] = I_w;
-    kept[4] = _t1;
-    kept[5] = _t3;
-    kept[6] = _t4;
-    kept[7] = _t5;
-    kept[8] = _t6;
-    kept[9] = _t7;
-    kept[10] = _t8;
-    kept[11] = _t9;
-    kept[12] = _t10;
-    kept[13] = _t11;
-    kept[14] = _t12;
-}
-#endif
-
-/* wmr_asmc_k_paper_asmc_law: the per-step part of wmr_paper_asmc_law of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 63 add, 82 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_asmc_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_t *q,
-    const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
-    const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
-    const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
-    wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next)
-{
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t1 = kept[4];
-    const wmr_real_t _t13 = _t1*thetadot_l*thetadot_l;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t _t14 = WMR_SIN_BOUNDED(theta);
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t15 = _t14*m;
-    const wmr_real_t _t3 = kept[5];
-    const wmr_real_t _t16 = _t15*_t3;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t17 = _t1*thetadot_r*thetadot_r;
-    const wmr_real_t _t18 = WMR_COS_BOUNDED(theta);
-    const wmr_real_t _t19 = _t18*m;
-    const wmr_real_t _t20 = _t13*_t19;
-    const wmr_real_t _t21 = _t17*_t19;
-    const wmr_real_t _t5 = kept[7];
-    const wmr_real_t _t22 = _t5*thetadot_l*thetadot_r;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t23 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t24 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t p12_2 = p12[2];
-    const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t25 = e2*p12_2 + edot2*p22_2;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t p12_3 = p12[3];
-    const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t26 = e3*p12_3 + edot3*p22_3;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t p12_4 = p12[4];
-    const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t27 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t28 = wmr_norm5(_t23, _t24, _t25, _t26, _t27);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t29 = gain_1/WMR_FMAX(_t28, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t30 = _t23*_t29 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t31 = _t25*_t29 + e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = kept[2];
-    const wmr_real_t _t32 = K*_t31;
-    const wmr_real_t _t6 = kept[8];
-    const wmr_real_t _t33 = _t19*_t6;
-    const wmr_real_t _t34 = K*_t14;
-    const wmr_real_t _t7 = kept[9];
-    const wmr_real_t _t35 = _t34*_t7;
-    const wmr_real_t _t8 = kept[10];
-    const wmr_real_t _t36 = _t15*_t8;
-    const wmr_real_t _t37 = _t33 + _t35 - _t36;
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t38 = _t26*_t29 + e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t39 = _t33 - _t35 + _t36;
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t40 = _t27*_t29 + e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t _t4 = kept[6];
-    const wmr_real_t _t41 = _t15*_t4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t42 = _t24*_t29 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t43 = _t15*_t6;
-    const wmr_real_t _t44 = K*_t18;
-    const wmr_real_t _t45 = _t44*_t7;
-    const wmr_real_t _t46 = _t19*_t8;
-    const wmr_real_t _t47 = _t43 + _t45 - _t46;
-    const wmr_real_t _t48 = _t43 - _t45 + _t46;
-    const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t _t12 = kept[14];
-    const wmr_real_t _t49 = _t12*thetadot*thetadot;
-    const wmr_real_t adapt_0 = adapt[0];
-    const wmr_real_t h = adapt[1];
-    const wmr_real_t I = kept[1];
-    const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t9 = kept[11];
-    const wmr_real_t _t10 = kept[12];
-    const wmr_real_t _t11 = kept[13];
-    u[0] = _t14*_t32 + _t16*(-_t13 + _t17) + _t30*m - _t37*_t38 - _t39*_t40
-            + _t4*(-_t19*_t22 + _t20 + _t21);
-    u[1] = -_t18*_t32 + _t3*(_t20 - _t21) - _t38*_t48 - _t40*_t47 + _t41*(_t13 + _t17 - _t22)
-            + _t42*m;
-    u[2] = I*_t31 + _t10*_t40 + _t11*_t38 + _t30*_t34 - _t42*_t44 + _t9*(-_t13 + _t17);
-    u[3] = I_w*_t38 + _t10*_t31 + _t30*_t37 + _t42*_t48 + _t49;
-    u[4] = I_w*_t40 + _t11*_t31 + _t30*_t39 + _t42*_t47 + _t49;
-    s[0] = _t23;
-    s[1] = _t24;
-    s[2] = _t25;
-    s[3] = _t26;
-    s[4] = _t27;
-    s_norm[0] = _t28;
-    gain_next[0] = _t28*adapt_0*h + gain_1;
-}
-
-#ifndef WMR_ASMC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_asmc_k_minimal_asmc_law_keep: the parameter-only part of wmr_minimal_asmc_law of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 7 add, 20 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_asmc_k_minimal_asmc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t _t6 = WMR_LIT(0.25)*_t0*m - _t4;
-    const wmr_real_t _t7 = _t2*r*r*r;
-    const wmr_real_t _t8 = K*_t7;
-    const wmr_real_t _t9 = _t7*d*m;
-    const wmr_real_t _t10 = -_t8 + _t9;
-    const wmr_real_t _t11 = _t8 - _t9;
-    kept[0] = _t5;
-    kept[1] = _t6;
-    kept[2] = _t10;
-    kept[3] = _t11;
-}
-#endif
-
-/* wmr_asmc_k_minimal_asmc_law: the per-step part of wmr_minimal_asmc_law of wmr_laws.c (documented
-   in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 16 add, 24 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_asmc_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
-    const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
-    const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
-    const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
-    wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain_next)
-{
-    (void)q;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t12 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t13 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t14 = wmr_norm2(_t12, _t13);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t15 = gain_1/WMR_FMAX(_t14, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t16 = _t12*_t15 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t17 = _t13*_t15 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t18 = thetadot_l*thetadot_l;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t19 = thetadot_l*thetadot_r;
-    const wmr_real_t _t10 = kept[2];
-    const wmr_real_t _t20 = _t10*_t19;
-    const wmr_real_t _t21 = thetadot_r*thetadot_r;
-    const wmr_real_t adapt_0 = adapt[0];
-    const wmr_real_t h = adapt[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t6 = kept[1];
-    const wmr_real_t _t11 = kept[3];
-    u[0] = _t11*_t18 + _t16*_t5 + _t17*_t6 + _t20;
-    u[1] = _t11*_t21 + _t16*_t6 + _t17*_t5 + _t20;
-    s[0] = _t12;
-    s[1] = _t13;
-    s_norm[0] = _t14;
-    gain_next[0] = _t14*adapt_0*h + gain_1;
-}
 
 wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
     wmr_error_detail_t *detail)
@@ -425,7 +170,7 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
     wmr_controller_p(config->k1, config->k2, config->q_pos, config->q_vel, fresh.p12, fresh.p22);
     fresh.gain0 = config->gain0;
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_asmc_law keeps */
-        wmr_asmc_k_paper_asmc_law_keep(&config->nominal, fresh.k_paper_asmc_law);
+        wmr_k_paper_roc_law_keep(&config->nominal, fresh.k_paper_asmc_law);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_asmc_law[0] = WMR_LIT(0.0);
         fresh.k_paper_asmc_law[1] = WMR_LIT(0.0);
@@ -444,7 +189,7 @@ wmr_status_t wmr_asmc_init(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
         fresh.k_paper_asmc_law[14] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_asmc_law keeps */
-        wmr_asmc_k_minimal_asmc_law_keep(&config->nominal, fresh.k_minimal_asmc_law);
+        wmr_k_minimal_roc_law_keep(&config->nominal, fresh.k_minimal_asmc_law);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_asmc_law[0] = WMR_LIT(0.0);
         fresh.k_minimal_asmc_law[1] = WMR_LIT(0.0);
@@ -557,12 +302,12 @@ WMR_STEP_INLINE wmr_status_t wmr_asmc_step_as(wmr_asmc_state_t *state,
         wmr_real_t s[5];
         if (paper) {
             const wmr_real_t adapt[2] = {cfg->gamma, cfg->h};
-            wmr_asmc_k_paper_asmc_law(kept_paper_asmc_law, q, qdot, e, edot, &qddot_des[off],
+            wmr_k_paper_asmc_law(kept_paper_asmc_law, q, qdot, e, edot, &qddot_des[off],
                     &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain,
                     &cfg->eps, adapt, u, s, &s_norm, &gain);
         } else {
             const wmr_real_t adapt[2] = {cfg->gamma, cfg->h};
-            wmr_asmc_k_minimal_asmc_law(kept_minimal_asmc_law, q, qdot, e, edot, &qddot_des[off],
+            wmr_k_minimal_asmc_law(kept_minimal_asmc_law, q, qdot, e, edot, &qddot_des[off],
                     &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain,
                     &cfg->eps, adapt, u, s, &s_norm, &gain);
         }

@@ -4,6 +4,7 @@
  * Template: codegen/backends/c/templates/module.c.jinja
  */
 #include "wmr_laws.h"
+#include "wmr_kernels.h"
 
 /* wmr_lyapunov_p: documented in wmr_laws.h.
    operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt */
@@ -25,24 +26,7 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P)
 void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn, const wmr_real_t *w,
     wmr_real_t *gain)
 {
-    const wmr_real_t minv_norm_1 = minv_norm[0];
-    const wmr_real_t dn0 = dn[0];
-    const wmr_real_t dn1 = dn[1];
-    const wmr_real_t dn2 = dn[2];
-    const wmr_real_t dn3 = dn[3];
-    const wmr_real_t dn4 = dn[4];
-    const wmr_real_t dn5 = dn[5];
-    const wmr_real_t dn6 = dn[6];
-    const wmr_real_t dn7 = dn[7];
-    const wmr_real_t w0 = w[0];
-    const wmr_real_t w1 = w[1];
-    const wmr_real_t w2 = w[2];
-    const wmr_real_t w3 = w[3];
-    const wmr_real_t w4 = w[4];
-    const wmr_real_t w5 = w[5];
-    const wmr_real_t w6 = w[6];
-    const wmr_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
+    wmr_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
 }
 
 /* wmr_paper_tde: documented in wmr_laws.h.
@@ -119,65 +103,9 @@ void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     const wmr_real_t *span, wmr_real_t *H1hat)
 {
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t0 = qd_now0 - qd_then0;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t1 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t2 = _t1*m;
-    const wmr_real_t qd_now2 = qdot_now[2];
-    const wmr_real_t qd_then2 = qdot_then[2];
-    const wmr_real_t _t3 = qd_now2 - qd_then2;
-    const wmr_real_t _t4 = _t1*_t3;
-    const wmr_real_t K = p->K;
-    const wmr_real_t trig_prev_s0 = trig_prev[0];
-    const wmr_real_t _t5 = K*trig_prev_s0;
-    const wmr_real_t trig_prev_c0 = trig_prev[1];
-    const wmr_real_t _t6 = m*trig_prev_c0;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t7 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t8 = _t6*_t7;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t9 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t10 = _t9*r;
-    const wmr_real_t _t11 = _t10*_t5;
-    const wmr_real_t _t12 = m*trig_prev_s0;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t13 = _t10*d;
-    const wmr_real_t _t14 = _t12*_t13;
-    const wmr_real_t _t15 = _t11 - _t14 + _t8;
-    const wmr_real_t qd_now3 = qdot_now[3];
-    const wmr_real_t qd_then3 = qdot_then[3];
-    const wmr_real_t _t16 = _t1*(qd_now3 - qd_then3);
-    const wmr_real_t _t17 = -_t11 + _t14 + _t8;
-    const wmr_real_t qd_now4 = qdot_now[4];
-    const wmr_real_t qd_then4 = qdot_then[4];
-    const wmr_real_t _t18 = _t1*(qd_now4 - qd_then4);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t19 = qd_now1 - qd_then1;
-    const wmr_real_t _t20 = _t12*_t7;
-    const wmr_real_t _t21 = K*_t10*trig_prev_c0;
-    const wmr_real_t _t22 = _t13*_t6;
-    const wmr_real_t _t23 = _t20 - _t21 + _t22;
-    const wmr_real_t _t24 = _t20 + _t21 - _t22;
-    const wmr_real_t _t25 = _t0*_t1;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t _t26 = I*_t10 - K*_t9*d*r;
-    const wmr_real_t _t27 = -_t26;
-    const wmr_real_t _t28 = _t1*_t19;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t up2 = u_prev[2];
-    const wmr_real_t up3 = u_prev[3];
-    const wmr_real_t up4 = u_prev[4];
-    H1hat[0] = -_t0*_t2 + _t15*_t16 + _t17*_t18 - _t4*_t5 + up0;
-    H1hat[1] = K*_t1*_t3*trig_prev_c0 + _t16*_t23 + _t18*_t24 - _t19*_t2 + up1;
-    H1hat[2] = -I*_t4 + K*_t1*_t19*trig_prev_c0 - _t16*_t27 - _t18*_t26 - _t25*_t5 + up2;
-    H1hat[3] = -I_w*_t16 - _t15*_t25 - _t23*_t28 - _t26*_t4 + up3;
-    H1hat[4] = -I_w*_t18 - _t17*_t25 - _t24*_t28 - _t27*_t4 + up4;
+    wmr_real_t kept[13];
+    wmr_k_paper_tde_trig_keep(p, span, kept);
+    wmr_k_paper_tde_trig(kept, trig_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* wmr_paper_minv_norm: documented in wmr_laws.h.
@@ -378,22 +306,7 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
 void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm)
 {
-    const wmr_real_t Om_new0 = newer[0];
-    const wmr_real_t Om_old0 = older[0];
-    const wmr_real_t _t0 = Om_new0 - Om_old0;
-    const wmr_real_t Om_new1 = newer[1];
-    const wmr_real_t Om_old1 = older[1];
-    const wmr_real_t _t1 = Om_new1 - Om_old1;
-    const wmr_real_t Om_new2 = newer[2];
-    const wmr_real_t Om_old2 = older[2];
-    const wmr_real_t _t2 = Om_new2 - Om_old2;
-    const wmr_real_t Om_new3 = newer[3];
-    const wmr_real_t Om_old3 = older[3];
-    const wmr_real_t _t3 = Om_new3 - Om_old3;
-    const wmr_real_t Om_new4 = newer[4];
-    const wmr_real_t Om_old4 = older[4];
-    const wmr_real_t _t4 = Om_new4 - Om_old4;
-    norm[0] = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
+    wmr_k_paper_omega_difference(newer, older, norm);
 }
 
 /* wmr_paper_tdc_law: documented in wmr_laws.h.
@@ -482,77 +395,9 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
 {
-    (void)p12;
-    (void)p22;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t1 = e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = p->K;
-    const wmr_real_t _t2 = K*_t1;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t3 = e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t m = p->m;
-    const wmr_real_t trig_c0 = trig[1];
-    const wmr_real_t _t4 = m*trig_c0;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t5 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t6 = _t4*_t5;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t7 = r/b;
-    const wmr_real_t trig_s0 = trig[0];
-    const wmr_real_t _t8 = K*trig_s0;
-    const wmr_real_t _t9 = _t7*_t8;
-    const wmr_real_t _t10 = m*trig_s0;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t11 = _t7*d;
-    const wmr_real_t _t12 = _t10*_t11;
-    const wmr_real_t _t13 = -_t12 + _t6 + _t9;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t14 = e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t _t15 = _t12 + _t6 - _t9;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t16 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t17 = _t10*_t5;
-    const wmr_real_t _t18 = K*trig_c0;
-    const wmr_real_t _t19 = _t18*_t7;
-    const wmr_real_t _t20 = _t11*_t4;
-    const wmr_real_t _t21 = _t17 - _t19 + _t20;
-    const wmr_real_t _t22 = _t17 + _t19 - _t20;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t _t23 = I*_t7 - K*_t11;
-    const wmr_real_t _t24 = -_t23;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t H1hat2 = H1hat[2];
-    const wmr_real_t H1hat3 = H1hat[3];
-    const wmr_real_t H1hat4 = H1hat[4];
-    u[0] = H1hat0 + _t0*m - _t13*_t3 - _t14*_t15 + _t2*trig_s0;
-    u[1] = H1hat1 - _t14*_t22 + _t16*m - _t2*trig_c0 - _t21*_t3;
-    u[2] = H1hat2 + I*_t1 + _t0*_t8 + _t14*_t23 - _t16*_t18 + _t24*_t3;
-    u[3] = H1hat3 + I_w*_t3 + _t0*_t13 + _t1*_t23 + _t16*_t21;
-    u[4] = H1hat4 + I_w*_t14 + _t0*_t15 + _t1*_t24 + _t16*_t22;
+    wmr_real_t kept[9];
+    wmr_k_paper_tdc_law_trig_keep(p, kept);
+    wmr_k_paper_tdc_law_trig(kept, trig, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* wmr_paper_tdroc_law: documented in wmr_laws.h.
@@ -666,100 +511,10 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
     const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t0 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t1 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t p12_2 = p12[2];
-    const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t2 = e2*p12_2 + edot2*p22_2;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t p12_3 = p12[3];
-    const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t3 = e3*p12_3 + edot3*p22_3;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t p12_4 = p12[4];
-    const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t4 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t5 = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t6 = gain_1/WMR_FMAX(_t5, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t7 = _t0*_t6 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t8 = _t2*_t6 + e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = p->K;
-    const wmr_real_t _t9 = K*_t8;
-    const wmr_real_t m = p->m;
-    const wmr_real_t trig_c0 = trig[1];
-    const wmr_real_t _t10 = m*trig_c0;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t11 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t12 = _t10*_t11;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t13 = r/b;
-    const wmr_real_t trig_s0 = trig[0];
-    const wmr_real_t _t14 = K*trig_s0;
-    const wmr_real_t _t15 = _t13*_t14;
-    const wmr_real_t _t16 = m*trig_s0;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t17 = _t13*d;
-    const wmr_real_t _t18 = _t16*_t17;
-    const wmr_real_t _t19 = _t12 + _t15 - _t18;
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t20 = _t3*_t6 + e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t21 = _t12 - _t15 + _t18;
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t22 = _t4*_t6 + e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t23 = _t1*_t6 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t24 = _t11*_t16;
-    const wmr_real_t _t25 = K*trig_c0;
-    const wmr_real_t _t26 = _t13*_t25;
-    const wmr_real_t _t27 = _t10*_t17;
-    const wmr_real_t _t28 = _t24 + _t26 - _t27;
-    const wmr_real_t _t29 = _t24 - _t26 + _t27;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t _t30 = I*_t13 - K*_t17;
-    const wmr_real_t _t31 = -_t30;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t H1hat2 = H1hat[2];
-    const wmr_real_t H1hat3 = H1hat[3];
-    const wmr_real_t H1hat4 = H1hat[4];
-    u[0] = H1hat0 - _t19*_t20 - _t21*_t22 + _t7*m + _t9*trig_s0;
-    u[1] = H1hat1 - _t20*_t29 - _t22*_t28 + _t23*m - _t9*trig_c0;
-    u[2] = H1hat2 + I*_t8 + _t14*_t7 + _t20*_t31 + _t22*_t30 - _t23*_t25;
-    u[3] = H1hat3 + I_w*_t20 + _t19*_t7 + _t23*_t29 + _t30*_t8;
-    u[4] = H1hat4 + I_w*_t22 + _t21*_t7 + _t23*_t28 + _t31*_t8;
-    s[0] = _t0;
-    s[1] = _t1;
-    s[2] = _t2;
-    s[3] = _t3;
-    s[4] = _t4;
-    s_norm[0] = _t5;
+    wmr_real_t kept[9];
+    wmr_k_paper_tdc_law_trig_keep(p, kept);
+    wmr_k_paper_tdroc_law_trig(kept, trig, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps,
+            u, s, s_norm);
 }
 
 /* wmr_paper_roc_law: documented in wmr_laws.h.
@@ -769,125 +524,10 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
     const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
 {
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t2 = _t1*thetadot_l*thetadot_l;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t _t3 = WMR_SIN_BOUNDED(theta);
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t4 = _t3*m;
-    const wmr_real_t _t5 = _t0;
-    const wmr_real_t _t6 = WMR_LIT(0.5)*_t5;
-    const wmr_real_t _t7 = _t4*_t6;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t8 = _t1*thetadot_r*thetadot_r;
-    const wmr_real_t _t9 = WMR_COS_BOUNDED(theta);
-    const wmr_real_t _t10 = _t9*m;
-    const wmr_real_t _t11 = _t10*_t2;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t12 = _t0*_t0*d;
-    const wmr_real_t _t13 = _t10*_t8;
-    const wmr_real_t _t14 = WMR_LIT(2.0)*_t1*thetadot_l*thetadot_r;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t15 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t16 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t p12_2 = p12[2];
-    const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t17 = e2*p12_2 + edot2*p22_2;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t p12_3 = p12[3];
-    const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t18 = e3*p12_3 + edot3*p22_3;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t p12_4 = p12[4];
-    const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t19 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t20 = wmr_norm5(_t15, _t16, _t17, _t18, _t19);
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t21 = e0*k1_0 + edot0*k2_0;
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t22 = e1*k1_1 + edot1*k2_1;
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t23 = e2*k1_2 + edot2*k2_2;
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t24 = e3*k1_3 + edot3*k2_3;
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t25 = e4*k1_4 + edot4*k2_4;
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t alpha = bounds[0];
-    const wmr_real_t phi = bounds[1];
-    const wmr_real_t _t26 = (alpha*(wmr_norm5(_t21, _t22, _t23, _t24, _t25)
-            + wmr_norm5(qdd_des0, qdd_des1, qdd_des2, qdd_des3, qdd_des4)) + phi)/(WMR_LIT(1.0)
-            - alpha);
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t27 = _t26/WMR_FMAX(_t20, eps_1);
-    const wmr_real_t _t28 = _t15*_t27 + _t21 + qdd_des0;
-    const wmr_real_t _t29 = _t17*_t27 + _t23 + qdd_des2;
-    const wmr_real_t K = p->K;
-    const wmr_real_t _t30 = K*_t29;
-    const wmr_real_t _t31 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t32 = _t10*_t31;
-    const wmr_real_t _t33 = _t5*r;
-    const wmr_real_t _t34 = K*_t3;
-    const wmr_real_t _t35 = _t33*_t34;
-    const wmr_real_t _t36 = _t33*d;
-    const wmr_real_t _t37 = _t36*_t4;
-    const wmr_real_t _t38 = _t32 + _t35 - _t37;
-    const wmr_real_t _t39 = _t18*_t27 + _t24 + qdd_des3;
-    const wmr_real_t _t40 = _t32 - _t35 + _t37;
-    const wmr_real_t _t41 = _t19*_t27 + _t25 + qdd_des4;
-    const wmr_real_t _t42 = _t12*_t4;
-    const wmr_real_t _t43 = _t16*_t27 + _t22 + qdd_des1;
-    const wmr_real_t _t44 = _t31*_t4;
-    const wmr_real_t _t45 = K*_t9;
-    const wmr_real_t _t46 = _t33*_t45;
-    const wmr_real_t _t47 = _t10*_t36;
-    const wmr_real_t _t48 = _t44 + _t46 - _t47;
-    const wmr_real_t _t49 = _t44 - _t46 + _t47;
-    const wmr_real_t _t50 = K*_t6;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t _t51 = I*_t33 - K*_t36;
-    const wmr_real_t _t52 = -_t51;
-    const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t _t53 = K*_t31*thetadot*thetadot;
-    const wmr_real_t I_w = p->Iw;
-    u[0] = -_t10*_t12*_t14 + _t11*_t12 + _t12*_t13 - _t2*_t7 + _t28*m + _t3*_t30 - _t38*_t39
-            - _t40*_t41 + _t7*_t8;
-    u[1] = _t11*_t6 - _t13*_t6 - _t14*_t42 + _t2*_t42 - _t30*_t9 - _t39*_t49 - _t41*_t48 + _t42*_t8
-            + _t43*m;
-    u[2] = I*_t29 - _t2*_t50 + _t28*_t34 + _t39*_t52 + _t41*_t51 - _t43*_t45 + _t50*_t8;
-    u[3] = I_w*_t39 + _t28*_t38 + _t29*_t51 + _t43*_t49 + _t53;
-    u[4] = I_w*_t41 + _t28*_t40 + _t29*_t52 + _t43*_t48 + _t53;
-    s[0] = _t15;
-    s[1] = _t16;
-    s[2] = _t17;
-    s[3] = _t18;
-    s[4] = _t19;
-    s_norm[0] = _t20;
-    gain[0] = _t26;
+    wmr_real_t kept[15];
+    wmr_k_paper_roc_law_keep(p, kept);
+    wmr_k_paper_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u, s,
+            s_norm, gain);
 }
 
 /* wmr_paper_asmc_law: documented in wmr_laws.h.
@@ -898,118 +538,10 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
     wmr_real_t *s_norm, wmr_real_t *gain_next)
 {
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t0 = WMR_LIT(1.0)/b;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t2 = _t1*thetadot_l*thetadot_l;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t _t3 = WMR_SIN_BOUNDED(theta);
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t4 = _t3*m;
-    const wmr_real_t _t5 = _t0;
-    const wmr_real_t _t6 = WMR_LIT(0.5)*_t5;
-    const wmr_real_t _t7 = _t4*_t6;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t8 = _t1*thetadot_r*thetadot_r;
-    const wmr_real_t _t9 = WMR_COS_BOUNDED(theta);
-    const wmr_real_t _t10 = _t9*m;
-    const wmr_real_t _t11 = _t10*_t2;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t12 = _t0*_t0*d;
-    const wmr_real_t _t13 = _t10*_t8;
-    const wmr_real_t _t14 = WMR_LIT(2.0)*_t1*thetadot_l*thetadot_r;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t15 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t16 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t p12_2 = p12[2];
-    const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t17 = e2*p12_2 + edot2*p22_2;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t p12_3 = p12[3];
-    const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t18 = e3*p12_3 + edot3*p22_3;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t p12_4 = p12[4];
-    const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t19 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t20 = wmr_norm5(_t15, _t16, _t17, _t18, _t19);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t21 = gain_1/WMR_FMAX(_t20, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t22 = _t15*_t21 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t23 = _t17*_t21 + e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = p->K;
-    const wmr_real_t _t24 = K*_t23;
-    const wmr_real_t _t25 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t26 = _t10*_t25;
-    const wmr_real_t _t27 = _t5*r;
-    const wmr_real_t _t28 = K*_t3;
-    const wmr_real_t _t29 = _t27*_t28;
-    const wmr_real_t _t30 = _t27*d;
-    const wmr_real_t _t31 = _t30*_t4;
-    const wmr_real_t _t32 = _t26 + _t29 - _t31;
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t33 = _t18*_t21 + e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t34 = _t26 - _t29 + _t31;
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t35 = _t19*_t21 + e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t _t36 = _t12*_t4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t37 = _t16*_t21 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t38 = _t25*_t4;
-    const wmr_real_t _t39 = K*_t9;
-    const wmr_real_t _t40 = _t27*_t39;
-    const wmr_real_t _t41 = _t10*_t30;
-    const wmr_real_t _t42 = _t38 + _t40 - _t41;
-    const wmr_real_t _t43 = _t38 - _t40 + _t41;
-    const wmr_real_t _t44 = K*_t6;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t _t45 = I*_t27 - K*_t30;
-    const wmr_real_t _t46 = -_t45;
-    const wmr_real_t thetadot = qdot[2];
-    const wmr_real_t _t47 = K*_t25*thetadot*thetadot;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t adapt_0 = adapt[0];
-    const wmr_real_t h = adapt[1];
-    u[0] = -_t10*_t12*_t14 + _t11*_t12 + _t12*_t13 - _t2*_t7 + _t22*m + _t24*_t3 - _t32*_t33
-            - _t34*_t35 + _t7*_t8;
-    u[1] = _t11*_t6 - _t13*_t6 - _t14*_t36 + _t2*_t36 - _t24*_t9 - _t33*_t43 - _t35*_t42 + _t36*_t8
-            + _t37*m;
-    u[2] = I*_t23 - _t2*_t44 + _t22*_t28 + _t33*_t46 + _t35*_t45 - _t37*_t39 + _t44*_t8;
-    u[3] = I_w*_t33 + _t22*_t32 + _t23*_t45 + _t37*_t43 + _t47;
-    u[4] = I_w*_t35 + _t22*_t34 + _t23*_t46 + _t37*_t42 + _t47;
-    s[0] = _t15;
-    s[1] = _t16;
-    s[2] = _t17;
-    s[3] = _t18;
-    s[4] = _t19;
-    s_norm[0] = _t20;
-    gain_next[0] = _t20*adapt_0*h + gain_1;
+    wmr_real_t kept[15];
+    wmr_k_paper_roc_law_keep(p, kept);
+    wmr_k_paper_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps, adapt, u,
+            s, s_norm, gain_next);
 }
 
 /* wmr_minimal_tde: documented in wmr_laws.h.
@@ -1018,33 +550,9 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
     const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
     wmr_real_t *H1hat)
 {
-    (void)q_prev;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t6 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t7 = _t6*(qd_now0 - qd_then0);
-    const wmr_real_t _t8 = WMR_LIT(0.25)*_t0*m - _t4;
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t9 = _t6*(qd_now1 - qd_then1);
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    H1hat[0] = -_t5*_t7 - _t8*_t9 + up0;
-    H1hat[1] = -_t5*_t9 - _t7*_t8 + up1;
+    wmr_real_t kept[3];
+    wmr_k_minimal_tde_keep(p, span, kept);
+    wmr_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* wmr_minimal_minv_norm: documented in wmr_laws.h.
@@ -1127,13 +635,7 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
 void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
     wmr_real_t *norm)
 {
-    const wmr_real_t Om_new0 = newer[0];
-    const wmr_real_t Om_old0 = older[0];
-    const wmr_real_t _t0 = Om_new0 - Om_old0;
-    const wmr_real_t Om_new1 = newer[1];
-    const wmr_real_t Om_old1 = older[1];
-    const wmr_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = wmr_norm2(_t0, _t1);
+    wmr_k_minimal_omega_difference(newer, older, norm);
 }
 
 /* wmr_minimal_tdc_law: documented in wmr_laws.h.
@@ -1142,39 +644,9 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, wmr_real_t *u)
 {
-    (void)q;
-    (void)p12;
-    (void)p22;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t1 = r*r;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t2 = _t1*m;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t3 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t4 = _t1*_t3;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t5 = I*_t4 - WMR_LIT(2.0)*K*_t4*d + _t2*_t3*d*d;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t6 = I_w + WMR_LIT(0.25)*_t2 + _t5;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t7 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t8 = WMR_LIT(0.25)*_t1*m - _t5;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t0*_t6 + _t7*_t8;
-    u[1] = H1hat1 + _t0*_t8 + _t6*_t7;
+    wmr_real_t kept[2];
+    wmr_k_minimal_tdc_law_keep(p, kept);
+    wmr_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* wmr_minimal_tdroc_law: documented in wmr_laws.h.
@@ -1184,50 +656,10 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
     const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
 {
-    (void)q;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t6 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t9 = gain_1/WMR_FMAX(_t8, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t _t11 = WMR_LIT(0.25)*_t0*m - _t4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t12 = _t7*_t9 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t10*_t5 + _t11*_t12;
-    u[1] = H1hat1 + _t10*_t11 + _t12*_t5;
-    s[0] = _t6;
-    s[1] = _t7;
-    s_norm[0] = _t8;
+    wmr_real_t kept[2];
+    wmr_k_minimal_tdc_law_keep(p, kept);
+    wmr_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u, s,
+            s_norm);
 }
 
 /* wmr_minimal_roc_law: documented in wmr_laws.h.
@@ -1237,63 +669,10 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
     const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm, wmr_real_t *gain)
 {
-    (void)q;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t6 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t9 = e0*k1_0 + edot0*k2_0;
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t10 = e1*k1_1 + edot1*k2_1;
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t alpha = bounds[0];
-    const wmr_real_t phi = bounds[1];
-    const wmr_real_t _t11 = (alpha*(wmr_norm2(_t10, _t9) + wmr_norm2(qdd_des0, qdd_des1))
-            + phi)/(WMR_LIT(1.0) - alpha);
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t12 = _t11/WMR_FMAX(_t8, eps_1);
-    const wmr_real_t _t13 = _t12*_t6 + _t9 + qdd_des0;
-    const wmr_real_t _t14 = WMR_LIT(0.25)*_t0*m - _t4;
-    const wmr_real_t _t15 = _t10 + _t12*_t7 + qdd_des1;
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t16 = thetadot_l*thetadot_l;
-    const wmr_real_t _t17 = _t2*r*r*r;
-    const wmr_real_t _t18 = K*_t17;
-    const wmr_real_t _t19 = _t17*d*m;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t20 = thetadot_l*thetadot_r;
-    const wmr_real_t _t21 = -_t18*_t20 + _t19*_t20;
-    const wmr_real_t _t22 = thetadot_r*thetadot_r;
-    u[0] = _t13*_t5 + _t14*_t15 + _t16*_t18 - _t16*_t19 + _t21;
-    u[1] = _t13*_t14 + _t15*_t5 + _t18*_t22 - _t19*_t22 + _t21;
-    s[0] = _t6;
-    s[1] = _t7;
-    s_norm[0] = _t8;
-    gain[0] = _t11;
+    wmr_real_t kept[4];
+    wmr_k_minimal_roc_law_keep(p, kept);
+    wmr_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u, s,
+            s_norm, gain);
 }
 
 /* wmr_minimal_asmc_law: documented in wmr_laws.h.
@@ -1304,60 +683,10 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
     const wmr_real_t *eps, const wmr_real_t *adapt, wmr_real_t *u, wmr_real_t *s,
     wmr_real_t *s_norm, wmr_real_t *gain_next)
 {
-    (void)q;
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t m = p->m;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t6 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t7 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t8 = wmr_norm2(_t6, _t7);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t9 = gain_1/WMR_FMAX(_t8, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t _t11 = WMR_LIT(0.25)*_t0*m - _t4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t12 = _t7*_t9 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t13 = thetadot_l*thetadot_l;
-    const wmr_real_t _t14 = _t2*r*r*r;
-    const wmr_real_t _t15 = K*_t14;
-    const wmr_real_t _t16 = _t14*d*m;
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t17 = thetadot_l*thetadot_r;
-    const wmr_real_t _t18 = -_t15*_t17 + _t16*_t17;
-    const wmr_real_t _t19 = thetadot_r*thetadot_r;
-    const wmr_real_t adapt_0 = adapt[0];
-    const wmr_real_t h = adapt[1];
-    u[0] = _t10*_t5 + _t11*_t12 + _t13*_t15 - _t13*_t16 + _t18;
-    u[1] = _t10*_t11 + _t12*_t5 + _t15*_t19 - _t16*_t19 + _t18;
-    s[0] = _t6;
-    s[1] = _t7;
-    s_norm[0] = _t8;
-    gain_next[0] = _t8*adapt_0*h + gain_1;
+    wmr_real_t kept[4];
+    wmr_k_minimal_roc_law_keep(p, kept);
+    wmr_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps, adapt, u,
+            s, s_norm, gain_next);
 }
 
 /* wmr_minimal_pi_law: documented in wmr_laws.h.
@@ -1366,46 +695,7 @@ void wmr_minimal_pi_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
     const wmr_real_t *q_des, const wmr_real_t *qdot_des, const wmr_real_t *integral,
     const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u, wmr_real_t *integral_next)
 {
-    const wmr_real_t r = p->r;
-    const wmr_real_t _t0 = WMR_LIT(1.0)/r;
-    const wmr_real_t theta = q[2];
-    const wmr_real_t qd_2 = q_des[2];
-    const wmr_real_t _t1 = qd_2 - theta;
-    const wmr_real_t qdd_0 = qdot_des[0];
-    const wmr_real_t qdd_1 = qdot_des[1];
-    const wmr_real_t _t2 = qdd_0*WMR_COS(qd_2) + qdd_1*WMR_SIN(qd_2);
-    const wmr_real_t _t3 = WMR_COS(theta);
-    const wmr_real_t x_c = q[0];
-    const wmr_real_t qd_0 = q_des[0];
-    const wmr_real_t _t4 = qd_0 - x_c;
-    const wmr_real_t _t5 = WMR_SIN(theta);
-    const wmr_real_t y_c = q[1];
-    const wmr_real_t qd_1 = q_des[1];
-    const wmr_real_t _t6 = qd_1 - y_c;
-    const wmr_real_t kx = gains[0];
-    const wmr_real_t _t7 = _t2*WMR_COS(_t1) + kx*(_t3*_t4 + _t5*_t6);
-    const wmr_real_t b = p->b;
-    const wmr_real_t qdd_2 = qdot_des[2];
-    const wmr_real_t ky = gains[1];
-    const wmr_real_t ktheta = gains[2];
-    const wmr_real_t _t8 = WMR_LIT(0.5)*_t0*b*(_t2*(ktheta*WMR_SIN(_t1) + ky*(_t3*_t6 - _t4*_t5))
-            + qdd_2);
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t9 = _t0*_t7 + _t8 - thetadot_r;
-    const wmr_real_t tau_max = limits[1];
-    const wmr_real_t _t10 = -tau_max;
-    const wmr_real_t ki = gains[4];
-    const wmr_real_t h = limits[0];
-    const wmr_real_t _t11 = h*ki;
-    const wmr_real_t I_0 = integral[0];
-    const wmr_real_t _t12 = WMR_FMIN(tau_max, WMR_FMAX(_t10, I_0 + _t11*_t9));
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t13 = _t0*_t7 - _t8 - thetadot_l;
-    const wmr_real_t I_1 = integral[1];
-    const wmr_real_t _t14 = WMR_FMIN(tau_max, WMR_FMAX(_t10, I_1 + _t11*_t13));
-    const wmr_real_t kp = gains[3];
-    u[0] = _t12 + _t9*kp;
-    u[1] = _t13*kp + _t14;
-    integral_next[0] = _t12;
-    integral_next[1] = _t14;
+    wmr_real_t kept[2];
+    wmr_k_minimal_pi_law_keep(p, kept);
+    wmr_k_minimal_pi_law(kept, q, qdot, q_des, qdot_des, integral, gains, limits, u, integral_next);
 }

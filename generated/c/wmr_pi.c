@@ -10,6 +10,7 @@
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
+#include "wmr_kernels.h"
 
 #ifdef WMR_PI_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,75 +18,6 @@
 #include "wmr_pi_frozen.h"
 const wmr_pi_config_t wmr_pi_frozen_config = WMR_PI_FROZEN_CONFIG;
 #endif
-
-#ifndef WMR_PI_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_pi_k_minimal_pi_law_keep: the parameter-only part of wmr_minimal_pi_law of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 2 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_pi_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
-{
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t _t0 = WMR_LIT(1.0)/r;
-    const wmr_real_t _t1 = WMR_LIT(0.5)*_t0*b;
-    kept[0] = _t0;
-    kept[1] = _t1;
-}
-#endif
-
-/* wmr_pi_k_minimal_pi_law: the per-step part of wmr_minimal_pi_law of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 17 add, 19 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void wmr_pi_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
-    const wmr_real_t *qdot, const wmr_real_t *q_des, const wmr_real_t *qdot_des,
-    const wmr_real_t *integral, const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u,
-    wmr_real_t *integral_next)
-{
-    const wmr_real_t theta = q[2];
-    const wmr_real_t qd_2 = q_des[2];
-    const wmr_real_t _t2 = qd_2 - theta;
-    const wmr_real_t qdd_0 = qdot_des[0];
-    const wmr_real_t qdd_1 = qdot_des[1];
-    const wmr_real_t _t3 = qdd_0*WMR_COS(qd_2) + qdd_1*WMR_SIN(qd_2);
-    const wmr_real_t _t4 = WMR_COS(theta);
-    const wmr_real_t x_c = q[0];
-    const wmr_real_t qd_0 = q_des[0];
-    const wmr_real_t _t5 = qd_0 - x_c;
-    const wmr_real_t _t6 = WMR_SIN(theta);
-    const wmr_real_t y_c = q[1];
-    const wmr_real_t qd_1 = q_des[1];
-    const wmr_real_t _t7 = qd_1 - y_c;
-    const wmr_real_t kx = gains[0];
-    const wmr_real_t _t8 = _t3*WMR_COS(_t2) + kx*(_t4*_t5 + _t6*_t7);
-    const wmr_real_t qdd_2 = qdot_des[2];
-    const wmr_real_t ky = gains[1];
-    const wmr_real_t ktheta = gains[2];
-    const wmr_real_t _t1 = kept[1];
-    const wmr_real_t _t9 = _t1*(_t3*(ktheta*WMR_SIN(_t2) + ky*(_t4*_t7 - _t5*_t6)) + qdd_2);
-    const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t0 = kept[0];
-    const wmr_real_t _t10 = _t0*_t8 + _t9 - thetadot_r;
-    const wmr_real_t tau_max = limits[1];
-    const wmr_real_t _t11 = -tau_max;
-    const wmr_real_t ki = gains[4];
-    const wmr_real_t h = limits[0];
-    const wmr_real_t _t12 = h*ki;
-    const wmr_real_t I_0 = integral[0];
-    const wmr_real_t _t13 = WMR_FMIN(tau_max, WMR_FMAX(_t11, I_0 + _t10*_t12));
-    const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t14 = _t0*_t8 - _t9 - thetadot_l;
-    const wmr_real_t I_1 = integral[1];
-    const wmr_real_t _t15 = WMR_FMIN(tau_max, WMR_FMAX(_t11, I_1 + _t12*_t14));
-    const wmr_real_t kp = gains[3];
-    u[0] = _t10*kp + _t13;
-    u[1] = _t14*kp + _t15;
-    integral_next[0] = _t13;
-    integral_next[1] = _t15;
-}
 
 wmr_status_t wmr_pi_check_config_detail(const wmr_pi_config_t *config,
     wmr_error_detail_t *detail)
@@ -243,7 +175,7 @@ wmr_status_t wmr_pi_init(wmr_pi_state_t *state, const wmr_pi_config_t *config)
     fresh.magic = WMR_STATE_MAGIC;
     fresh.config = *config;
     /* the values the step's minimal_pi_law keeps */
-    wmr_pi_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
+    wmr_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
     wmr_pi_clear(&fresh);
     *state = fresh;
     return WMR_OK;
@@ -342,8 +274,8 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     {
         const wmr_real_t gains[5] = {cfg->kx, cfg->ky, cfg->ktheta, cfg->kp, cfg->ki};
         const wmr_real_t limits[2] = {cfg->h, cfg->tau_max};
-        wmr_pi_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
-                gains, limits, u, integral);
+        wmr_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral, gains,
+                limits, u, integral);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated for pi). */
     out_tau[0] = u[0];

@@ -10,6 +10,7 @@
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
+#include "wmr_kernels.h"
 
 #ifdef WMR_TDC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,344 +18,6 @@
 #include "wmr_tdc_frozen.h"
 const wmr_tdc_config_t wmr_tdc_frozen_config = WMR_TDC_FROZEN_CONFIG;
 #endif
-
-#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdc_k_paper_tde_trig_keep: the parameter-only part of wmr_paper_tde_trig of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
-    wmr_real_t kept[13])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t0 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t3 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t4 = _t3*r;
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = K*_t4;
-    const wmr_real_t _t7 = I*_t4 - K*_t3*d*r;
-    const wmr_real_t _t8 = -_t7;
-    const wmr_real_t _t9 = K*_t0;
-    kept[0] = m;
-    kept[1] = I;
-    kept[2] = K;
-    kept[3] = I_w;
-    kept[4] = _t0;
-    kept[5] = _t1;
-    kept[6] = _t2;
-    kept[7] = _t4;
-    kept[8] = _t5;
-    kept[9] = _t6;
-    kept[10] = _t7;
-    kept[11] = _t8;
-    kept[12] = _t9;
-}
-#endif
-
-/* wmr_tdc_k_paper_tde_trig: the per-step part of wmr_paper_tde_trig of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    wmr_real_t *H1hat)
-{
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t10 = qd_now0 - qd_then0;
-    const wmr_real_t qd_now2 = qdot_now[2];
-    const wmr_real_t qd_then2 = qdot_then[2];
-    const wmr_real_t _t11 = qd_now2 - qd_then2;
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t12 = _t0*_t11;
-    const wmr_real_t trig_prev_s0 = trig_prev[0];
-    const wmr_real_t K = kept[2];
-    const wmr_real_t _t13 = K*trig_prev_s0;
-    const wmr_real_t trig_prev_c0 = trig_prev[1];
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t14 = m*trig_prev_c0;
-    const wmr_real_t _t2 = kept[6];
-    const wmr_real_t _t15 = _t14*_t2;
-    const wmr_real_t _t4 = kept[7];
-    const wmr_real_t _t16 = _t13*_t4;
-    const wmr_real_t _t17 = m*trig_prev_s0;
-    const wmr_real_t _t5 = kept[8];
-    const wmr_real_t _t18 = _t17*_t5;
-    const wmr_real_t _t19 = _t15 + _t16 - _t18;
-    const wmr_real_t qd_now3 = qdot_now[3];
-    const wmr_real_t qd_then3 = qdot_then[3];
-    const wmr_real_t _t20 = _t0*(qd_now3 - qd_then3);
-    const wmr_real_t _t21 = _t15 - _t16 + _t18;
-    const wmr_real_t qd_now4 = qdot_now[4];
-    const wmr_real_t qd_then4 = qdot_then[4];
-    const wmr_real_t _t22 = _t0*(qd_now4 - qd_then4);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t23 = qd_now1 - qd_then1;
-    const wmr_real_t _t24 = _t17*_t2;
-    const wmr_real_t _t6 = kept[9];
-    const wmr_real_t _t25 = _t6*trig_prev_c0;
-    const wmr_real_t _t26 = _t14*_t5;
-    const wmr_real_t _t27 = _t24 - _t25 + _t26;
-    const wmr_real_t _t28 = _t24 + _t25 - _t26;
-    const wmr_real_t _t29 = _t0*_t10;
-    const wmr_real_t _t30 = _t0*_t23;
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t up2 = u_prev[2];
-    const wmr_real_t up3 = u_prev[3];
-    const wmr_real_t up4 = u_prev[4];
-    const wmr_real_t I = kept[1];
-    const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t1 = kept[5];
-    const wmr_real_t _t7 = kept[10];
-    const wmr_real_t _t8 = kept[11];
-    const wmr_real_t _t9 = kept[12];
-    H1hat[0] = -_t1*_t10 - _t12*_t13 + _t19*_t20 + _t21*_t22 + up0;
-    H1hat[1] = -_t1*_t23 + _t11*_t9*trig_prev_c0 + _t20*_t27 + _t22*_t28 + up1;
-    H1hat[2] = -I*_t12 - _t13*_t29 - _t20*_t8 - _t22*_t7 + _t23*_t9*trig_prev_c0 + up2;
-    H1hat[3] = -I_w*_t20 - _t12*_t7 - _t19*_t29 - _t27*_t30 + up3;
-    H1hat[4] = -I_w*_t22 - _t12*_t8 - _t21*_t29 - _t28*_t30 + up4;
-}
-
-#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdc_k_paper_tdc_law_trig_keep: the parameter-only part of wmr_paper_tdc_law_trig of
-   wmr_laws.c (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t1 = r/b;
-    const wmr_real_t _t2 = _t1*d;
-    const wmr_real_t _t3 = I*_t1 - K*_t2;
-    const wmr_real_t _t4 = -_t3;
-    kept[0] = m;
-    kept[1] = I;
-    kept[2] = K;
-    kept[3] = I_w;
-    kept[4] = _t0;
-    kept[5] = _t1;
-    kept[6] = _t2;
-    kept[7] = _t3;
-    kept[8] = _t4;
-}
-#endif
-
-/* wmr_tdc_k_paper_tdc_law_trig: the per-step part of wmr_paper_tdc_law_trig of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 39 add, 42 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
-    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
-    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
-    wmr_real_t *u)
-{
-    (void)p12;
-    (void)p22;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t5 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t6 = e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = kept[2];
-    const wmr_real_t _t7 = K*_t6;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t8 = e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t trig_c0 = trig[1];
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t9 = m*trig_c0;
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t10 = _t0*_t9;
-    const wmr_real_t trig_s0 = trig[0];
-    const wmr_real_t _t11 = K*trig_s0;
-    const wmr_real_t _t1 = kept[5];
-    const wmr_real_t _t12 = _t1*_t11;
-    const wmr_real_t _t13 = m*trig_s0;
-    const wmr_real_t _t2 = kept[6];
-    const wmr_real_t _t14 = _t13*_t2;
-    const wmr_real_t _t15 = _t10 + _t12 - _t14;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t16 = e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t _t17 = _t10 - _t12 + _t14;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t18 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t19 = _t0*_t13;
-    const wmr_real_t _t20 = K*trig_c0;
-    const wmr_real_t _t21 = _t1*_t20;
-    const wmr_real_t _t22 = _t2*_t9;
-    const wmr_real_t _t23 = _t19 - _t21 + _t22;
-    const wmr_real_t _t24 = _t19 + _t21 - _t22;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t H1hat2 = H1hat[2];
-    const wmr_real_t H1hat3 = H1hat[3];
-    const wmr_real_t H1hat4 = H1hat[4];
-    const wmr_real_t I = kept[1];
-    const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t3 = kept[7];
-    const wmr_real_t _t4 = kept[8];
-    u[0] = H1hat0 - _t15*_t8 - _t16*_t17 + _t5*m + _t7*trig_s0;
-    u[1] = H1hat1 - _t16*_t24 + _t18*m - _t23*_t8 - _t7*trig_c0;
-    u[2] = H1hat2 + I*_t6 + _t11*_t5 + _t16*_t3 - _t18*_t20 + _t4*_t8;
-    u[3] = H1hat3 + I_w*_t8 + _t15*_t5 + _t18*_t23 + _t3*_t6;
-    u[4] = H1hat4 + I_w*_t16 + _t17*_t5 + _t18*_t24 + _t4*_t6;
-}
-
-#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdc_k_minimal_tde_keep: the parameter-only part of wmr_minimal_tde of wmr_laws.c (documented
-   in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
-    wmr_real_t kept[3])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t _t6 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t _t7 = WMR_LIT(0.25)*_t0*m - _t4;
-    kept[0] = _t5;
-    kept[1] = _t6;
-    kept[2] = _t7;
-}
-#endif
-
-/* wmr_tdc_k_minimal_tde: the per-step part of wmr_minimal_tde of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    wmr_real_t *H1hat)
-{
-    (void)q_prev;
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t6 = kept[1];
-    const wmr_real_t _t8 = _t6*(qd_now0 - qd_then0);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t9 = _t6*(qd_now1 - qd_then1);
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t7 = kept[2];
-    H1hat[0] = -_t5*_t8 - _t7*_t9 + up0;
-    H1hat[1] = -_t5*_t9 - _t7*_t8 + up1;
-}
-
-#ifndef WMR_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdc_k_minimal_tdc_law_keep: the parameter-only part of wmr_minimal_tdc_law of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t _t6 = WMR_LIT(0.25)*_t0*m - _t4;
-    kept[0] = _t5;
-    kept[1] = _t6;
-}
-#endif
-
-/* wmr_tdc_k_minimal_tdc_law: the per-step part of wmr_minimal_tdc_law of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdc_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
-    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
-    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
-    wmr_real_t *u)
-{
-    (void)q;
-    (void)p12;
-    (void)p22;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t7 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t8 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t6 = kept[1];
-    u[0] = H1hat0 + _t5*_t7 + _t6*_t8;
-    u[1] = H1hat1 + _t5*_t8 + _t6*_t7;
-}
 
 wmr_status_t wmr_tdc_check_config_detail(const wmr_tdc_config_t *config,
     wmr_error_detail_t *detail)
@@ -510,7 +173,7 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
     fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
         ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
-        wmr_tdc_k_paper_tde_trig_keep(&config->nominal, &fresh.tde_span, fresh.k_paper_tde_trig);
+        wmr_k_paper_tde_trig_keep(&config->nominal, &fresh.tde_span, fresh.k_paper_tde_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_tde_trig[0] = WMR_LIT(0.0);
         fresh.k_paper_tde_trig[1] = WMR_LIT(0.0);
@@ -527,7 +190,7 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
         fresh.k_paper_tde_trig[12] = WMR_LIT(0.0);
     }
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tdc_law_trig keeps */
-        wmr_tdc_k_paper_tdc_law_trig_keep(&config->nominal, fresh.k_paper_tdc_law_trig);
+        wmr_k_paper_tdc_law_trig_keep(&config->nominal, fresh.k_paper_tdc_law_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_tdc_law_trig[0] = WMR_LIT(0.0);
         fresh.k_paper_tdc_law_trig[1] = WMR_LIT(0.0);
@@ -540,14 +203,14 @@ wmr_status_t wmr_tdc_init(wmr_tdc_state_t *state, const wmr_tdc_config_t *config
         fresh.k_paper_tdc_law_trig[8] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tde keeps */
-        wmr_tdc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+        wmr_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tde[0] = WMR_LIT(0.0);
         fresh.k_minimal_tde[1] = WMR_LIT(0.0);
         fresh.k_minimal_tde[2] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tdc_law keeps */
-        wmr_tdc_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
+        wmr_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tdc_law[0] = WMR_LIT(0.0);
         fresh.k_minimal_tdc_law[1] = WMR_LIT(0.0);
@@ -693,9 +356,9 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_tdc_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen, H1hat);
+            wmr_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen, H1hat);
         } else {
-            wmr_tdc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+            wmr_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -705,11 +368,11 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     /* The law. */
     {
         if (paper) {
-            wmr_tdc_k_paper_tdc_law_trig(kept_paper_tdc_law_trig, trig, e, edot, &qddot_des[off],
+            wmr_k_paper_tdc_law_trig(kept_paper_tdc_law_trig, trig, e, edot, &qddot_des[off],
                     &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         } else {
-            wmr_tdc_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off],
-                    &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+            wmr_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off], &cfg->k1[off],
+                    &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
         }
     }
     /* tau = B^T u (paper: rows 4-5; minimal: u itself). */

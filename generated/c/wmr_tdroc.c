@@ -10,6 +10,7 @@
 #include "wmr_controller.h"
 #include "wmr_laws.h"
 #include "wmr_model.h"
+#include "wmr_kernels.h"
 
 #ifdef WMR_TDROC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,450 +18,6 @@
 #include "wmr_tdroc_frozen.h"
 const wmr_tdroc_config_t wmr_tdroc_frozen_config = WMR_TDROC_FROZEN_CONFIG;
 #endif
-
-/* wmr_tdroc_k_tdroc_weighted_gain: a copy of wmr_tdroc_weighted_gain of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_tdroc_weighted_gain(const wmr_real_t *minv_norm,
-    const wmr_real_t *dn, const wmr_real_t *w, wmr_real_t *gain)
-{
-    const wmr_real_t minv_norm_1 = minv_norm[0];
-    const wmr_real_t dn0 = dn[0];
-    const wmr_real_t dn1 = dn[1];
-    const wmr_real_t dn2 = dn[2];
-    const wmr_real_t dn3 = dn[3];
-    const wmr_real_t dn4 = dn[4];
-    const wmr_real_t dn5 = dn[5];
-    const wmr_real_t dn6 = dn[6];
-    const wmr_real_t dn7 = dn[7];
-    const wmr_real_t w0 = w[0];
-    const wmr_real_t w1 = w[1];
-    const wmr_real_t w2 = w[2];
-    const wmr_real_t w3 = w[3];
-    const wmr_real_t w4 = w[4];
-    const wmr_real_t w5 = w[5];
-    const wmr_real_t w6 = w[6];
-    const wmr_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
-}
-
-#ifndef WMR_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdroc_k_paper_tde_trig_keep: the parameter-only part of wmr_paper_tde_trig of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
-    wmr_real_t kept[13])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t0 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t3 = WMR_LIT(1.0)/b;
-    const wmr_real_t _t4 = _t3*r;
-    const wmr_real_t _t5 = _t4*d;
-    const wmr_real_t _t6 = K*_t4;
-    const wmr_real_t _t7 = I*_t4 - K*_t3*d*r;
-    const wmr_real_t _t8 = -_t7;
-    const wmr_real_t _t9 = K*_t0;
-    kept[0] = m;
-    kept[1] = I;
-    kept[2] = K;
-    kept[3] = I_w;
-    kept[4] = _t0;
-    kept[5] = _t1;
-    kept[6] = _t2;
-    kept[7] = _t4;
-    kept[8] = _t5;
-    kept[9] = _t6;
-    kept[10] = _t7;
-    kept[11] = _t8;
-    kept[12] = _t9;
-}
-#endif
-
-/* wmr_tdroc_k_paper_tde_trig: the per-step part of wmr_paper_tde_trig of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_paper_tde_trig(const wmr_real_t kept[13],
-    const wmr_real_t *trig_prev, const wmr_real_t *u_prev, const wmr_real_t *qdot_now,
-    const wmr_real_t *qdot_then, wmr_real_t *H1hat)
-{
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t10 = qd_now0 - qd_then0;
-    const wmr_real_t qd_now2 = qdot_now[2];
-    const wmr_real_t qd_then2 = qdot_then[2];
-    const wmr_real_t _t11 = qd_now2 - qd_then2;
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t12 = _t0*_t11;
-    const wmr_real_t trig_prev_s0 = trig_prev[0];
-    const wmr_real_t K = kept[2];
-    const wmr_real_t _t13 = K*trig_prev_s0;
-    const wmr_real_t trig_prev_c0 = trig_prev[1];
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t14 = m*trig_prev_c0;
-    const wmr_real_t _t2 = kept[6];
-    const wmr_real_t _t15 = _t14*_t2;
-    const wmr_real_t _t4 = kept[7];
-    const wmr_real_t _t16 = _t13*_t4;
-    const wmr_real_t _t17 = m*trig_prev_s0;
-    const wmr_real_t _t5 = kept[8];
-    const wmr_real_t _t18 = _t17*_t5;
-    const wmr_real_t _t19 = _t15 + _t16 - _t18;
-    const wmr_real_t qd_now3 = qdot_now[3];
-    const wmr_real_t qd_then3 = qdot_then[3];
-    const wmr_real_t _t20 = _t0*(qd_now3 - qd_then3);
-    const wmr_real_t _t21 = _t15 - _t16 + _t18;
-    const wmr_real_t qd_now4 = qdot_now[4];
-    const wmr_real_t qd_then4 = qdot_then[4];
-    const wmr_real_t _t22 = _t0*(qd_now4 - qd_then4);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t23 = qd_now1 - qd_then1;
-    const wmr_real_t _t24 = _t17*_t2;
-    const wmr_real_t _t6 = kept[9];
-    const wmr_real_t _t25 = _t6*trig_prev_c0;
-    const wmr_real_t _t26 = _t14*_t5;
-    const wmr_real_t _t27 = _t24 - _t25 + _t26;
-    const wmr_real_t _t28 = _t24 + _t25 - _t26;
-    const wmr_real_t _t29 = _t0*_t10;
-    const wmr_real_t _t30 = _t0*_t23;
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t up2 = u_prev[2];
-    const wmr_real_t up3 = u_prev[3];
-    const wmr_real_t up4 = u_prev[4];
-    const wmr_real_t I = kept[1];
-    const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t1 = kept[5];
-    const wmr_real_t _t7 = kept[10];
-    const wmr_real_t _t8 = kept[11];
-    const wmr_real_t _t9 = kept[12];
-    H1hat[0] = -_t1*_t10 - _t12*_t13 + _t19*_t20 + _t21*_t22 + up0;
-    H1hat[1] = -_t1*_t23 + _t11*_t9*trig_prev_c0 + _t20*_t27 + _t22*_t28 + up1;
-    H1hat[2] = -I*_t12 - _t13*_t29 - _t20*_t8 - _t22*_t7 + _t23*_t9*trig_prev_c0 + up2;
-    H1hat[3] = -I_w*_t20 - _t12*_t7 - _t19*_t29 - _t27*_t30 + up3;
-    H1hat[4] = -I_w*_t22 - _t12*_t8 - _t21*_t29 - _t28*_t30 + up4;
-}
-
-/* wmr_tdroc_k_paper_omega_difference: a copy of wmr_paper_omega_difference of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void wmr_tdroc_k_paper_omega_difference(const wmr_real_t *newer,
-    const wmr_real_t *older, wmr_real_t *norm)
-{
-    const wmr_real_t Om_new0 = newer[0];
-    const wmr_real_t Om_old0 = older[0];
-    const wmr_real_t _t0 = Om_new0 - Om_old0;
-    const wmr_real_t Om_new1 = newer[1];
-    const wmr_real_t Om_old1 = older[1];
-    const wmr_real_t _t1 = Om_new1 - Om_old1;
-    const wmr_real_t Om_new2 = newer[2];
-    const wmr_real_t Om_old2 = older[2];
-    const wmr_real_t _t2 = Om_new2 - Om_old2;
-    const wmr_real_t Om_new3 = newer[3];
-    const wmr_real_t Om_old3 = older[3];
-    const wmr_real_t _t3 = Om_new3 - Om_old3;
-    const wmr_real_t Om_new4 = newer[4];
-    const wmr_real_t Om_old4 = older[4];
-    const wmr_real_t _t4 = Om_new4 - Om_old4;
-    norm[0] = wmr_norm5(_t0, _t1, _t2, _t3, _t4);
-}
-
-#ifndef WMR_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdroc_k_paper_tdroc_law_trig_keep: the parameter-only part of wmr_paper_tdroc_law_trig of
-   wmr_laws.c (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_paper_tdroc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = WMR_LIT(0.5)*r;
-    const wmr_real_t _t1 = r/b;
-    const wmr_real_t _t2 = _t1*d;
-    const wmr_real_t _t3 = I*_t1 - K*_t2;
-    const wmr_real_t _t4 = -_t3;
-    kept[0] = m;
-    kept[1] = I;
-    kept[2] = K;
-    kept[3] = I_w;
-    kept[4] = _t0;
-    kept[5] = _t1;
-    kept[6] = _t2;
-    kept[7] = _t3;
-    kept[8] = _t4;
-}
-#endif
-
-/* wmr_tdroc_k_paper_tdroc_law_trig: the per-step part of wmr_paper_tdroc_law_trig of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 53 add, 62 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_tdroc_k_paper_tdroc_law_trig(const wmr_real_t kept[9],
-    const wmr_real_t *trig, const wmr_real_t *e, const wmr_real_t *edot,
-    const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
-    const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain, const wmr_real_t *eps,
-    wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
-{
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t5 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t6 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t e2 = e[2];
-    const wmr_real_t edot2 = edot[2];
-    const wmr_real_t p12_2 = p12[2];
-    const wmr_real_t p22_2 = p22[2];
-    const wmr_real_t _t7 = e2*p12_2 + edot2*p22_2;
-    const wmr_real_t e3 = e[3];
-    const wmr_real_t edot3 = edot[3];
-    const wmr_real_t p12_3 = p12[3];
-    const wmr_real_t p22_3 = p22[3];
-    const wmr_real_t _t8 = e3*p12_3 + edot3*p22_3;
-    const wmr_real_t e4 = e[4];
-    const wmr_real_t edot4 = edot[4];
-    const wmr_real_t p12_4 = p12[4];
-    const wmr_real_t p22_4 = p22[4];
-    const wmr_real_t _t9 = e4*p12_4 + edot4*p22_4;
-    const wmr_real_t _t10 = wmr_norm5(_t5, _t6, _t7, _t8, _t9);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t11 = gain_1/WMR_FMAX(_t10, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t12 = _t11*_t5 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des2 = qddot_des[2];
-    const wmr_real_t k1_2 = k1[2];
-    const wmr_real_t k2_2 = k2[2];
-    const wmr_real_t _t13 = _t11*_t7 + e2*k1_2 + edot2*k2_2 + qdd_des2;
-    const wmr_real_t K = kept[2];
-    const wmr_real_t _t14 = K*_t13;
-    const wmr_real_t trig_c0 = trig[1];
-    const wmr_real_t m = kept[0];
-    const wmr_real_t _t15 = m*trig_c0;
-    const wmr_real_t _t0 = kept[4];
-    const wmr_real_t _t16 = _t0*_t15;
-    const wmr_real_t trig_s0 = trig[0];
-    const wmr_real_t _t17 = K*trig_s0;
-    const wmr_real_t _t1 = kept[5];
-    const wmr_real_t _t18 = _t1*_t17;
-    const wmr_real_t _t19 = m*trig_s0;
-    const wmr_real_t _t2 = kept[6];
-    const wmr_real_t _t20 = _t19*_t2;
-    const wmr_real_t _t21 = _t16 + _t18 - _t20;
-    const wmr_real_t qdd_des3 = qddot_des[3];
-    const wmr_real_t k1_3 = k1[3];
-    const wmr_real_t k2_3 = k2[3];
-    const wmr_real_t _t22 = _t11*_t8 + e3*k1_3 + edot3*k2_3 + qdd_des3;
-    const wmr_real_t _t23 = _t16 - _t18 + _t20;
-    const wmr_real_t qdd_des4 = qddot_des[4];
-    const wmr_real_t k1_4 = k1[4];
-    const wmr_real_t k2_4 = k2[4];
-    const wmr_real_t _t24 = _t11*_t9 + e4*k1_4 + edot4*k2_4 + qdd_des4;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t25 = _t11*_t6 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t _t26 = _t0*_t19;
-    const wmr_real_t _t27 = K*trig_c0;
-    const wmr_real_t _t28 = _t1*_t27;
-    const wmr_real_t _t29 = _t15*_t2;
-    const wmr_real_t _t30 = _t26 + _t28 - _t29;
-    const wmr_real_t _t31 = _t26 - _t28 + _t29;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t H1hat2 = H1hat[2];
-    const wmr_real_t H1hat3 = H1hat[3];
-    const wmr_real_t H1hat4 = H1hat[4];
-    const wmr_real_t I = kept[1];
-    const wmr_real_t I_w = kept[3];
-    const wmr_real_t _t3 = kept[7];
-    const wmr_real_t _t4 = kept[8];
-    u[0] = H1hat0 + _t12*m + _t14*trig_s0 - _t21*_t22 - _t23*_t24;
-    u[1] = H1hat1 - _t14*trig_c0 - _t22*_t31 - _t24*_t30 + _t25*m;
-    u[2] = H1hat2 + I*_t13 + _t12*_t17 + _t22*_t4 + _t24*_t3 - _t25*_t27;
-    u[3] = H1hat3 + I_w*_t22 + _t12*_t21 + _t13*_t3 + _t25*_t31;
-    u[4] = H1hat4 + I_w*_t24 + _t12*_t23 + _t13*_t4 + _t25*_t30;
-    s[0] = _t5;
-    s[1] = _t6;
-    s[2] = _t7;
-    s[3] = _t8;
-    s[4] = _t9;
-    s_norm[0] = _t10;
-}
-
-#ifndef WMR_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdroc_k_minimal_tde_keep: the parameter-only part of wmr_minimal_tde of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
-    wmr_real_t kept[3])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t span_1 = span[0];
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t _t6 = WMR_LIT(1.0)/span_1;
-    const wmr_real_t _t7 = WMR_LIT(0.25)*_t0*m - _t4;
-    kept[0] = _t5;
-    kept[1] = _t6;
-    kept[2] = _t7;
-}
-#endif
-
-/* wmr_tdroc_k_minimal_tde: the per-step part of wmr_minimal_tde of wmr_laws.c (documented in
-   wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
-    const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
-    wmr_real_t *H1hat)
-{
-    (void)q_prev;
-    const wmr_real_t qd_now0 = qdot_now[0];
-    const wmr_real_t qd_then0 = qdot_then[0];
-    const wmr_real_t _t6 = kept[1];
-    const wmr_real_t _t8 = _t6*(qd_now0 - qd_then0);
-    const wmr_real_t qd_now1 = qdot_now[1];
-    const wmr_real_t qd_then1 = qdot_then[1];
-    const wmr_real_t _t9 = _t6*(qd_now1 - qd_then1);
-    const wmr_real_t up0 = u_prev[0];
-    const wmr_real_t up1 = u_prev[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t7 = kept[2];
-    H1hat[0] = -_t5*_t8 - _t7*_t9 + up0;
-    H1hat[1] = -_t5*_t9 - _t7*_t8 + up1;
-}
-
-/* wmr_tdroc_k_minimal_omega_difference: a copy of wmr_minimal_omega_difference of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void wmr_tdroc_k_minimal_omega_difference(const wmr_real_t *newer,
-    const wmr_real_t *older, wmr_real_t *norm)
-{
-    const wmr_real_t Om_new0 = newer[0];
-    const wmr_real_t Om_old0 = older[0];
-    const wmr_real_t _t0 = Om_new0 - Om_old0;
-    const wmr_real_t Om_new1 = newer[1];
-    const wmr_real_t Om_old1 = older[1];
-    const wmr_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = wmr_norm2(_t0, _t1);
-}
-
-#ifndef WMR_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* wmr_tdroc_k_minimal_tdroc_law_keep: the parameter-only part of wmr_minimal_tdroc_law of
-   wmr_laws.c (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_tdroc_k_minimal_tdroc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
-{
-    const wmr_real_t m = p->m;
-    const wmr_real_t I = p->Iz;
-    const wmr_real_t K = p->K;
-    const wmr_real_t I_w = p->Iw;
-    const wmr_real_t r = p->r;
-    const wmr_real_t b = p->b;
-    const wmr_real_t d = p->d;
-    const wmr_real_t _t0 = r*r;
-    const wmr_real_t _t1 = _t0*m;
-    const wmr_real_t _t2 = WMR_LIT(1.0)/(b*b);
-    const wmr_real_t _t3 = _t0*_t2;
-    const wmr_real_t _t4 = I*_t3 - WMR_LIT(2.0)*K*_t3*d + _t1*_t2*d*d;
-    const wmr_real_t _t5 = I_w + WMR_LIT(0.25)*_t1 + _t4;
-    const wmr_real_t _t6 = WMR_LIT(0.25)*_t0*m - _t4;
-    kept[0] = _t5;
-    kept[1] = _t6;
-}
-#endif
-
-/* wmr_tdroc_k_minimal_tdroc_law: the per-step part of wmr_minimal_tdroc_law of wmr_laws.c
-   (documented in wmr_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_tdroc_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
-    const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
-    const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
-    const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
-{
-    (void)q;
-    const wmr_real_t e0 = e[0];
-    const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t7 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t8 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t9 = wmr_norm2(_t7, _t8);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t10 = gain_1/WMR_FMAX(_t9, eps_1);
-    const wmr_real_t qdd_des0 = qddot_des[0];
-    const wmr_real_t k1_0 = k1[0];
-    const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t11 = _t10*_t7 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const wmr_real_t qdd_des1 = qddot_des[1];
-    const wmr_real_t k1_1 = k1[1];
-    const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t12 = _t10*_t8 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const wmr_real_t H1hat0 = H1hat[0];
-    const wmr_real_t H1hat1 = H1hat[1];
-    const wmr_real_t _t5 = kept[0];
-    const wmr_real_t _t6 = kept[1];
-    u[0] = H1hat0 + _t11*_t5 + _t12*_t6;
-    u[1] = H1hat1 + _t11*_t6 + _t12*_t5;
-    s[0] = _t7;
-    s[1] = _t8;
-    s_norm[0] = _t9;
-}
 
 wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
     wmr_error_detail_t *detail)
@@ -607,8 +164,9 @@ static void wmr_tdroc_clear(wmr_tdroc_state_t *s)
         s->trig_prev[i] = WMR_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = WMR_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * WMR_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = WMR_LIT(0.0);
     }
     s->gain = WMR_LIT(0.0);
     s->s_norm = WMR_LIT(0.0);
@@ -659,7 +217,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
     fresh.tde_c2 = config->accel_estimator == WMR_ACCEL_MATCHED
         ? config->rate_window / (WMR_LIT(2.0) * config->h) : WMR_LIT(0.0);
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tde_trig keeps */
-        wmr_tdroc_k_paper_tde_trig_keep(&config->nominal, &fresh.tde_span, fresh.k_paper_tde_trig);
+        wmr_k_paper_tde_trig_keep(&config->nominal, &fresh.tde_span, fresh.k_paper_tde_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_tde_trig[0] = WMR_LIT(0.0);
         fresh.k_paper_tde_trig[1] = WMR_LIT(0.0);
@@ -676,7 +234,7 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         fresh.k_paper_tde_trig[12] = WMR_LIT(0.0);
     }
     if (WMR_IS_PAPER(config->formulation)) {  /* the values the step's paper_tdroc_law_trig keeps */
-        wmr_tdroc_k_paper_tdroc_law_trig_keep(&config->nominal, fresh.k_paper_tdroc_law_trig);
+        wmr_k_paper_tdc_law_trig_keep(&config->nominal, fresh.k_paper_tdroc_law_trig);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_paper_tdroc_law_trig[0] = WMR_LIT(0.0);
         fresh.k_paper_tdroc_law_trig[1] = WMR_LIT(0.0);
@@ -689,14 +247,14 @@ wmr_status_t wmr_tdroc_init(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
         fresh.k_paper_tdroc_law_trig[8] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tde keeps */
-        wmr_tdroc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+        wmr_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tde[0] = WMR_LIT(0.0);
         fresh.k_minimal_tde[1] = WMR_LIT(0.0);
         fresh.k_minimal_tde[2] = WMR_LIT(0.0);
     }
     if (!WMR_IS_PAPER(config->formulation)) {  /* the values the step's minimal_tdroc_law keeps */
-        wmr_tdroc_k_minimal_tdroc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+        wmr_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     } else {  /* not read: zero, so that the state is the same whatever was in memory */
         fresh.k_minimal_tdroc_law[0] = WMR_LIT(0.0);
         fresh.k_minimal_tdroc_law[1] = WMR_LIT(0.0);
@@ -746,8 +304,8 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     wmr_real_t H1hat[5];
     wmr_real_t trig[2];  /* sin, cos of q's angles: the law's, then (17)'s next step */
     wmr_real_t gain, s_norm, u_discarded;
-    wmr_real_t dn[WMR_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    wmr_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return wmr_fail(detail, WMR_ERR_NULL_POINTER, WMR_FIELD_STATE, -1);
@@ -845,10 +403,9 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
             H1hat[i] = WMR_LIT(0.0);
         }
         if (paper) {
-            wmr_tdroc_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen,
-                    H1hat);
+            wmr_k_paper_tde_trig(kept_paper_tde_trig, state->trig_prev, up, qdn, qdthen, H1hat);
         } else {
-            wmr_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+            wmr_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
         }
     } else {
         for (i = 0; i < 5; ++i) {
@@ -859,29 +416,35 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
         if (paper) {
-            wmr_tdroc_k_paper_omega_difference(H1hat, state->H1hat, &dn[0]);
+            wmr_k_paper_omega_difference(H1hat, state->H1hat, &dn_new);
         } else {
-            wmr_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
+            wmr_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
         }
-        for (i = 1; i < WMR_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        omega_head = omega_head == 0 ? WMR_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= WMR_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const wmr_real_t *const older = &state->omega_ring[omega_head];
+        const wmr_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         wmr_real_t w_warm[WMR_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
@@ -890,7 +453,7 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
-        wmr_tdroc_k_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
+        wmr_k_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = wmr_cap_gain(gain);
     } else {
@@ -900,11 +463,11 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     {
         wmr_real_t s[5];
         if (paper) {
-            wmr_tdroc_k_paper_tdroc_law_trig(kept_paper_tdroc_law_trig, trig, e, edot,
-                    &qddot_des[off], &cfg->k1[off], &cfg->k2[off], &state->p12[off],
-                    &state->p22[off], H1hat, &gain, &cfg->eps, u, s, &s_norm);
+            wmr_k_paper_tdroc_law_trig(kept_paper_tdroc_law_trig, trig, e, edot, &qddot_des[off],
+                    &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
+                    &cfg->eps, u, s, &s_norm);
         } else {
-            wmr_tdroc_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+            wmr_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
                     &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                     &cfg->eps, u, s, &s_norm);
         }
@@ -940,9 +503,11 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     for (i = 0; i < 2; ++i) {
         state->trig_prev[i] = trig[i];
     }
-    for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + WMR_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->gain = gain;
     state->s_norm = s_norm;

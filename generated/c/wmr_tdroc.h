@@ -62,8 +62,10 @@ typedef struct {
                                _init) */
     wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
     int omega_count;        /* Omega's seen, at most WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
-    wmr_real_t omega_dnorm[WMR_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first: all (25)
-                                               needs */
+    int omega_head;         /* 0..WMR_MAX_WINDOW - 1: where omega_ring holds the newest norm */
+    /* ||Omega(i) - Omega(i+1)||, all (25) needs, each written at k and k + WMR_MAX_WINDOW:
+       the window, newest first, is omega_ring[omega_head ...], contiguous (no shift, no %) */
+    wmr_real_t omega_ring[2 * WMR_MAX_WINDOW];
     wmr_real_t weights[WMR_MAX_WINDOW]; /* normalised weights of (25) for the full window (at
                                            _init) */
     wmr_real_t minv_norm;   /* ||Mhat^-1||_F of (25) for the nominal parameters (at _init) */

@@ -266,6 +266,7 @@ class _Controller:
         self.u_prev2 = np.zeros(5)
         self.omega = np.zeros((MAX_WINDOW + 1, 5))
         self.omega_count = 0
+        self.omega_head = 0  # where the C ring holds the newest norm (see omega_ring)
         self.H1hat = np.zeros(5)
         self.gain = self.gain0 if self.adaptive else 0.0
         self.s_norm = 0.0
@@ -292,6 +293,16 @@ class _Controller:
         """‖Ω(i) − Ω(i+1)‖ of the window, newest first: all the C state keeps of it
         (``omega_dnorm``; the C's Ω(1) is its ``H1hat``)."""
         return np.asarray(np.linalg.norm(self.omega[:-1] - self.omega[1:], axis=1))
+
+    @property
+    def omega_ring(self) -> NDArray[np.float64]:
+        """The C state's ring of those norms (``omega_ring``): each written at i and
+        i + MAX_WINDOW, so the window newest first is the slice from ``omega_head``."""
+        ring = np.zeros(2 * MAX_WINDOW)
+        for i, d in enumerate(self.omega_dnorm):
+            k = (self.omega_head + i) % MAX_WINDOW
+            ring[k] = ring[k + MAX_WINDOW] = d
+        return ring
 
     @classmethod
     def value_bits(cls, c: Config) -> tuple[int, ...]:
@@ -387,11 +398,11 @@ class _Controller:
 
     def state(self) -> dict[str, Any]:
         """A deep copy of the state (for inspection and for the C/Python cross-check), with
-        what the C state keeps instead of the Ω window (``omega_dnorm``) and of q(t − h)'s
+        what the C state keeps instead of the Ω window (``omega_ring``) and of q(t − h)'s
         angles (``trig_prev``)."""
         out = copy.deepcopy({k: v for k, v in vars(self).items() if k != "config"})
         if self.window:
-            out["omega_dnorm"] = self.omega_dnorm
+            out["omega_ring"] = self.omega_ring
         if self.tde and TRIG_SIZE:
             out["trig_prev"] = self.trig_prev
         return out
@@ -426,6 +437,7 @@ class _Controller:
             k1 = k2 = p12 = p22 = np.zeros(0)
         H1hat = self.H1hat.copy()
         omega, omega_count, gain, s_norm = self.omega.copy(), self.omega_count, self.gain, self.s_norm
+        omega_head = self.omega_head
         if self.tde:
             H1hat = np.zeros(5)
             if self.steps >= 2:
@@ -444,6 +456,7 @@ class _Controller:
                 omega[0, :nc] = H1hat[:nc]
                 if omega_count <= MAX_WINDOW:
                     omega_count += 1
+                omega_head = (omega_head - 1) % MAX_WINDOW
             gain = 0.0
             if c.hold_gain:
                 gain = float(c.held_gain)
@@ -481,6 +494,7 @@ class _Controller:
             status = "WMR_WARN_SATURATED"
         # Commit (only now: on any error above the state is unchanged).
         self.H1hat, self.omega, self.omega_count = H1hat, omega, omega_count
+        self.omega_head = omega_head
         self.gain, self.s_norm, self.u_discarded = gain, s_norm, u_discarded
         self.q_prev = qv.copy()
         self.qdot_prev2 = self.qdot_prev.copy()

@@ -26,6 +26,7 @@ from codegen.backends.c.render import (
     kept_kernel,
     norm_arities,
     render_all_ir,
+    render_module,
     render_types,
     stamp_code_id,
 )
@@ -156,24 +157,22 @@ STEP_FIXED_INPUTS = frozenset({"span"})
 
 
 def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: str,
-                 config: CConfig, frozen: str, unguarded: frozenset[str] = frozenset()
-                 ) -> tuple[str, list[KeptKernel]]:
-    """Static copies, named ``<kp><kernel>``, of the kernels of ``module`` that ``text``
-    (a controller's C) calls under those names, in the module's order: the step then calls
-    functions of its own file, which the compiler inlines and schedules with the step.
+                 config: CConfig) -> tuple[str, list[KeptKernel]]:
+    """The kernels of ``module`` that ``text`` (the controllers' C) calls as ``<kp><kernel>``,
+    in the module's order, each once as a ``static inline`` function for the shared header
+    every controller includes: its step then calls functions of its own translation unit,
+    which the compiler inlines and schedules with the step.
 
     A kernel with parameter-only subexpressions is split at its parameters
-    (:func:`~codegen.backends.c.render.kept_kernel`): ``<kp><kernel>_keep``, which the
+    (:func:`~codegen.backends.c.render.kept_kernel`): ``<kp><kernel>_keep``, which a
     controller's ``_init`` calls to keep those values in the state, and ``<kp><kernel>``,
-    the per-step rest reading them (``_keep`` is compiled only without ``frozen``, the
-    define of a build whose state, kept values included, is compiled in, except that of a
-    kernel in ``unguarded``, which the configuration check calls too). Returns the C and
-    the kept kernels."""
+    the per-step rest reading them (a frozen build never calls ``_keep``: static inline, it
+    is not compiled then). Returns the C and the kept kernels."""
     called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", text))
     by_name = {f.spec.name: f for f in functions}
     unknown = called - set(by_name)
     if unknown:
-        raise ValueError(f"{module}: the step calls {sorted(unknown)}, not kernels of it")
+        raise ValueError(f"{module}: the steps call {sorted(unknown)}, not kernels of it")
     contexts: list[dict[str, object]] = []
     kept: list[KeptKernel] = []
     keeps: dict[tuple[object, ...], str] = {}  # a _keep's parameters and body -> its name
@@ -190,23 +189,47 @@ def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: st
             same = keeps.get(_keep_key(split.keep))
             if same is None:
                 keeps[_keep_key(split.keep)] = str(split.keep["name"])
-                contexts.append({**split.keep, "unless": frozen})
+                contexts.append({**split.keep, "unless": ""})
             else:
                 split = replace(split, keep={**split.keep, "name": same})
             kept.append(split)
             contexts.append({**split.call, "unless": ""})
             continue
         ctx = _function_context(f, config, module)
-        ctx["origin"] = f"a copy of {ctx['name']}"
+        ctx["origin"] = f"the body of {ctx['name']}"
         ctx["name"] = f"{kp}{f.spec.name}"
         ctx["unless"] = ""
         contexts.append(ctx)
-    always = {str(k.keep["name"]) for k in kept if k.name in unguarded}
-    contexts = [{**c, "unless": ""} if c["name"] in always else c for c in contexts]
     if not contexts:
         return "", kept
     return template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja", functions=contexts,
                                 laws=module, config=config), kept
+
+
+def law_wrappers(functions: Sequence[FunctionIR], kernels: str, kp: str,
+                 kept: Sequence[KeptKernel], config: CConfig) -> dict[str, list[str]]:
+    """The body of each laws function the steps call as ``<kp><kernel>`` (``kernels``, the
+    shared header's C): a call of that kernel, or, split, its ``_keep`` into a local then the
+    per-step part (the steps' rounding: e.g. 1/span kept, then a product)."""
+    defined = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", kernels))
+    split = {k.name: k for k in kept}
+    out: dict[str, list[str]] = {}
+    for f in functions:
+        spec = f.spec
+        if spec.name not in defined:
+            continue
+        outputs = [a.name for a in spec.outputs]
+        k = split.get(spec.name)
+        if k is None:
+            args = [a.name for a in spec.inputs] + outputs
+            out[spec.name] = [f"{kp}{spec.name}({', '.join(args)});"]
+            continue
+        fixed = [a.name for a in spec.inputs if a.kind == "params" or a.name in k.fixed]
+        rest = [a.name for a in spec.inputs if a.kind != "params" and a.name not in k.fixed]
+        out[spec.name] = [f"{config.real_type} kept[{k.size}];",
+                          f"{k.keep['name']}({', '.join([*fixed, 'kept'])});",
+                          f"{kp}{spec.name}({', '.join(['kept', *rest, *outputs])});"]
+    return out
 
 
 def _keep_key(ctx: dict[str, object]) -> tuple[object, ...]:
@@ -241,31 +264,47 @@ class CBackend:
                 nominal_bounds=nominal_bounds(target), **c_common_context(),
             )
         laws = next(m for m in target.modules if m.name == f"{pre}_laws")
+        kp = f"{pre}_k_"  # the steps' kernels, written once in <prefix>_kernels.h
+        kernels_h = f"{pre}_kernels.h"
+        contexts: dict[str, dict[str, object]] = {}
+        firsts: dict[str, str] = {}
         for info in CONTROLLERS:
-            kp = f"{pre}_{info.name}_k_"  # the step's private copies of its kernels
-            context = dict(layout=layout, c=info, max_abs_input=MAX_ABS_INPUT,
-                           step_kernel_prefix=kp,
-                           **c_controller_context(info, param_fields, layout, target.model))
-            # Rendered once to see which kernels the step calls, then with their copies
-            # (and the state with the values the split ones keep).
-            first = _template("controller.c.jinja", law, step_kernels="", kept_kernels=[],
-                              span_kept=[], span_needed=True, **context)
-            # a robot whose ||Mhat(q)^-1|| depends on q: the configuration check evaluates
-            # the step's copy (at q = 0), not the laws module's, so only one is linked
-            text, kept = step_kernels(first, kp, laws.functions, laws.name, config,
-                                      f"{pre.upper()}_{info.name.upper()}_FROZEN",
-                                      frozenset({"minimal_minv_norm"} if layout.minv_needs_q
-                                                else ()))
+            contexts[info.name] = dict(
+                layout=layout, c=info, max_abs_input=MAX_ABS_INPUT, step_kernel_prefix=kp,
+                **c_controller_context(info, param_fields, layout, target.model))
+            # Rendered once to see which kernels the step calls, then with them (and the
+            # state with the values the split ones keep).
+            firsts[info.name] = _template("controller.c.jinja", law, step_kernels="",
+                                          kept_kernels=[], span_kept=[], span_needed=True,
+                                          **contexts[info.name])
+        # a robot whose ||Mhat(q)^-1|| depends on q: the configuration check evaluates the
+        # step's kernel (at q = 0), not the laws module's function
+        text, kept = step_kernels("".join(firsts.values()), kp, laws.functions, laws.name,
+                                  config)
+        files[kernels_h] = _template(
+            "kernels.h.jinja", law, guard=f"{pre.upper()}_KERNELS_H", kernels=text,
+            laws=laws.name, prefix=pre, types_header=config.types_header)
+        # the laws module's functions of the same kernels: thin wrappers over them
+        files.update(render_module(
+            laws.functions, laws.name, config, source=source, includes=[kernels_h],
+            wrappers=law_wrappers(laws.functions, text, kp, kept, config)))
+        for info in CONTROLLERS:
+            context = contexts[info.name]
+            first = firsts[info.name]
+            called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", first))
+            mine = [k for k in kept if k.name in called]
             kept_ctx = [{"name": k.name, "size": k.size, "keep": k.keep["name"],
-                         "fixed": list(k.fixed)} for k in kept]
+                         "fixed": list(k.fixed)} for k in mine]
             # the step's span is needed only by a (17) kernel that did not keep 1/span
-            span_kept = [k.name for k in kept if "span" in k.fixed]
+            span_kept = [k.name for k in mine if "span" in k.fixed]
             tde_called = set(re.findall(rf"\b{re.escape(kp)}(\w+_tde(?:_trig)?)\(", first))
             context.update(span_kept=span_kept, span_needed=bool(tde_called - set(span_kept)))
             files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law,
                                                       kept_kernels=kept_ctx, **context)
             files[f"{pre}_{info.name}.c"] = _template(
-                "controller.c.jinja", law, step_kernels=text, kept_kernels=kept_ctx, **context)
+                "controller.c.jinja", law,
+                step_kernels=f'#include "{kernels_h}"' if called else "",
+                kept_kernels=kept_ctx, **context)
         robot = target.robot
         fields = [(p.c_field, repr(robot.lumped[p.key])) for p in target.model.params]
         files[f"{pre}_robot.h"] = _template(

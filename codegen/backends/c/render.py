@@ -795,8 +795,13 @@ def render_module(
     config: CConfig | None = None,
     *,
     source: str = "",
+    wrappers: Mapping[str, Sequence[str]] | None = None,
+    includes: Sequence[str] = (),
 ) -> dict[str, str]:
-    """:func:`render` from the functions' shared form (no CSE here)."""
+    """:func:`render` from the functions' shared form (no CSE here). ``wrappers``: the body
+    (C statements) of each function so named, written instead of its own (the laws module's
+    thin wrappers over the steps' shared kernels); ``includes``: headers its ``.c``
+    includes after its own."""
     config = config or CConfig()
     if not module.isidentifier():
         raise ValueError(f"module name {module!r} is not an identifier")
@@ -819,7 +824,10 @@ def render_module(
             raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
     contexts = []
     for f in functions:
-        contexts.append(_function_context(f, config, module))
+        ctx = _function_context(f, config, module)
+        if wrappers and f.spec.name in wrappers:
+            ctx["wrapper"] = list(wrappers[f.spec.name])
+        contexts.append(ctx)
         if f.prepared is not None:
             assert api is not None
             contexts += [_prepare_context(f, api, config), _prepared_context(f, api, config)]
@@ -835,6 +843,7 @@ def render_module(
                 header=module + ".h",
                 functions=contexts,
                 prepared=api,
+                includes=list(includes),
             )
         )
     return files

@@ -10,6 +10,7 @@
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
+#include "trailer_kernels.h"
 
 #ifdef TRAILER_ASMC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,247 +18,6 @@
 #include "trailer_asmc_frozen.h"
 const trailer_asmc_config_t trailer_asmc_frozen_config = TRAILER_ASMC_FROZEN_CONFIG;
 #endif
-
-#ifndef TRAILER_ASMC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer_asmc_k_minimal_asmc_law_keep: the parameter-only part of trailer_minimal_asmc_law of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_asmc_k_minimal_asmc_law_keep(const trailer_params_t *p,
-    trailer_real_t kept[17])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-    kept[16] = _t6;
-}
-#endif
-
-/* trailer_asmc_k_minimal_asmc_law: the per-step part of trailer_minimal_asmc_law of trailer_laws.c
-   (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 139 add, 209 mul, 19 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_asmc_k_minimal_asmc_law(const trailer_real_t kept[17],
-    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
-    const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
-    const trailer_real_t *k2, const trailer_real_t *p12, const trailer_real_t *p22,
-    const trailer_real_t *gain, const trailer_real_t *eps, const trailer_real_t *adapt,
-    trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm, trailer_real_t *gain_next)
-{
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
-    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t19 = _t1*_t16;
-    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
-    const trailer_real_t _t21 = -_t0*_t15;
-    const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
-    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
-    const trailer_real_t _t26 = -_t1*_t15;
-    const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
-    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
-    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
-    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t41 = _t40*_t40;
-    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer_real_t _t43 = _t42*_t42;
-    const trailer_real_t _t44 = _t39*_t41;
-    const trailer_real_t _t45 = _t33*_t41;
-    const trailer_real_t _t46 = _t34*_t41;
-    const trailer_real_t _t47 = _t38*_t43;
-    const trailer_real_t _t48 = _t37*_t43;
-    const trailer_real_t _t49 = _t42*thetadot_right;
-    const trailer_real_t _t50 = _t42*thetadot_left;
-    const trailer_real_t _t51 = _t40*thetadot_right;
-    const trailer_real_t _t52 = _t40*thetadot_left;
-    const trailer_real_t _t53 = _t0*_t15;
-    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
-    const trailer_real_t _t57 = _t18 - _t53*_t8;
-    const trailer_real_t _t58 = _t1*_t15;
-    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
-    const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
-    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
-    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
-    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
-    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
-    const trailer_real_t _t72 = _t31 + _t32;
-    const trailer_real_t _t73 = _t33 + _t34;
-    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
-    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
-    const trailer_real_t _t78 = -_t24 - _t25;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t79 = _t3*_t78;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t80 = J_theta_cart_left*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t82 = _t4*_t81;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t83 = J_theta_cart_right*_t82;
-    const trailer_real_t _t84 = _t29 - _t30;
-    const trailer_real_t _t85 = _t4*_t84;
-    const trailer_real_t _t86 = -_t29 - _t30;
-    const trailer_real_t _t87 = _t3*_t86;
-    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
-    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
-    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
-    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
-    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
-    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
-    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
-    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
-    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
-    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
-    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
-    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
-    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
-    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t104 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t105 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t106 = trailer_norm2(_t104, _t105);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t107 = gain_1/TRAILER_FMAX(_t106, eps_1);
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t108 = _t104*_t107 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t109 = _t105*_t107 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t110 = _t56 - _t57;
-    const trailer_real_t _t111 = _t110*_t4;
-    const trailer_real_t _t112 = _t61 - _t62;
-    const trailer_real_t _t113 = _t112*_t4;
-    const trailer_real_t _t114 = _t64 - _t65;
-    const trailer_real_t _t115 = _t114*_t4;
-    const trailer_real_t _t116 = _t67 - _t68;
-    const trailer_real_t _t117 = _t116*_t4;
-    const trailer_real_t _t118 = _t111*_t49 + _t113*_t50 + _t115*_t51 + _t117*_t52;
-    const trailer_real_t _t119 = -_t56 - _t57;
-    const trailer_real_t _t120 = _t119*_t3;
-    const trailer_real_t _t121 = -_t61 - _t62;
-    const trailer_real_t _t122 = _t121*_t3;
-    const trailer_real_t _t123 = -_t64 - _t65;
-    const trailer_real_t _t124 = _t123*_t3;
-    const trailer_real_t _t125 = -_t67 - _t68;
-    const trailer_real_t _t126 = _t125*_t3;
-    const trailer_real_t _t127 = _t120*_t49 + _t122*_t50 + _t124*_t51 + _t126*_t52;
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t128 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
-            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
-    const trailer_real_t _t129 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
-    const trailer_real_t _t130 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t131 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
-            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
-    const trailer_real_t _t132 = -_t0*_t101 + _t103*_t23 + _t118*_t83 + _t127*_t80 + _t17*_t99
-            + _t21*_t96;
-    const trailer_real_t _t133 = J_theta_cart_left*_t127*_t87 + J_theta_cart_right*_t118*_t85
-            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
-    const trailer_real_t adapt_0 = adapt[0];
-    const trailer_real_t h = adapt[1];
-    u[0] = _t108*_t128 + _t109*_t129 + _t132;
-    u[1] = _t108*_t130 + _t109*_t131 + _t133;
-    s[0] = _t104;
-    s[1] = _t105;
-    s_norm[0] = _t106;
-    gain_next[0] = _t106*adapt_0*h + gain_1;
-}
 
 trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *config,
     trailer_error_detail_t *detail)
@@ -436,7 +196,7 @@ trailer_status_t trailer_asmc_init(trailer_asmc_state_t *state, const trailer_as
             fresh.p22);
     fresh.gain0 = config->gain0;
     /* the values the step's minimal_asmc_law keeps */
-    trailer_asmc_k_minimal_asmc_law_keep(&config->nominal, fresh.k_minimal_asmc_law);
+    trailer_k_minimal_roc_law_keep(&config->nominal, fresh.k_minimal_asmc_law);
     trailer_asmc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;
@@ -537,7 +297,7 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     {
         trailer_real_t s[8];
         const trailer_real_t adapt[2] = {cfg->gamma, cfg->h};
-        trailer_asmc_k_minimal_asmc_law(kept_minimal_asmc_law, q, qdot, e, edot, &qddot_des[off],
+        trailer_k_minimal_asmc_law(kept_minimal_asmc_law, q, qdot, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], &state->gain,
                 &cfg->eps, adapt, u, s, &s_norm, &gain);
     }

@@ -5,6 +5,7 @@
  * Template: codegen/backends/c/templates/module.c.jinja
  */
 #include "trailer_laws.h"
+#include "trailer_kernels.h"
 
 /* trailer_lyapunov_p: documented in trailer_laws.h.
    operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt */
@@ -26,24 +27,7 @@ void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P)
 void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn,
     const trailer_real_t *w, trailer_real_t *gain)
 {
-    const trailer_real_t minv_norm_1 = minv_norm[0];
-    const trailer_real_t dn0 = dn[0];
-    const trailer_real_t dn1 = dn[1];
-    const trailer_real_t dn2 = dn[2];
-    const trailer_real_t dn3 = dn[3];
-    const trailer_real_t dn4 = dn[4];
-    const trailer_real_t dn5 = dn[5];
-    const trailer_real_t dn6 = dn[6];
-    const trailer_real_t dn7 = dn[7];
-    const trailer_real_t w0 = w[0];
-    const trailer_real_t w1 = w[1];
-    const trailer_real_t w2 = w[2];
-    const trailer_real_t w3 = w[3];
-    const trailer_real_t w4 = w[4];
-    const trailer_real_t w5 = w[5];
-    const trailer_real_t w6 = w[6];
-    const trailer_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
+    trailer_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
@@ -52,94 +36,9 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(qp3);
-    const trailer_real_t _t3 = TRAILER_COS_BOUNDED(qp3);
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t4 = TRAILER_SIN_BOUNDED(qp2);
-    const trailer_real_t _t5 = TRAILER_COS_BOUNDED(qp2);
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
-    const trailer_real_t _t7 = -TRAILER_LIT(3.0)*_t2*_t4/TRAILER_LIT(10.0) - _t5*_t6;
-    const trailer_real_t _t8 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t9 = _t0*_t8;
-    const trailer_real_t _t10 = -TRAILER_LIT(207.0)*_t5/TRAILER_LIT(1000.0);
-    const trailer_real_t _t11 = _t0*_t10;
-    const trailer_real_t _t12 = _t0*_t7 + _t11*_t2 - _t3*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(5.0)*_t12/TRAILER_LIT(3.0);
-    const trailer_real_t _t14 = _t13/TRAILER_LIT(5.0);
-    const trailer_real_t _t15 = TRAILER_LIT(3.0)*_t2*_t5/TRAILER_LIT(10.0) - _t4*_t6;
-    const trailer_real_t _t16 = -_t0*_t15 - _t11*_t3 - _t2*_t9;
-    const trailer_real_t _t17 = _t1*_t8;
-    const trailer_real_t _t18 = _t1*_t10;
-    const trailer_real_t _t19 = -_t1*_t7 - _t17*_t3 + _t18*_t2;
-    const trailer_real_t _t20 = -TRAILER_LIT(5.0)*_t19/TRAILER_LIT(3.0);
-    const trailer_real_t _t21 = _t20/TRAILER_LIT(5.0);
-    const trailer_real_t _t22 = _t1*_t15 - _t17*_t2 - _t18*_t3;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t23 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t24 = K_theta_cart_x_tractor_2*_t3;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t3;
-    const trailer_real_t _t26 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t5/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t28 = -K_theta_tractor_x_tractor*_t5 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t2 - _t25;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t30 = J_x_tractor*_t9 - _t0*_t28 + _t13*_t29;
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t5;
-    const trailer_real_t _t32 = _t23 + _t24;
-    const trailer_real_t _t33 = J_x_tractor*_t11 - _t0*_t31 + _t13*_t32;
-    const trailer_real_t _t34 = -K_theta_cart_x_tractor_2*_t2*_t27 + _t23*_t26 + _t24*_t26
-            + _t25*_t27;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t35 = J_theta_cart*_t13 - _t0*_t34 + _t11*_t32 + _t29*_t9;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t36 = -J_theta_tractor*_t0 + _t11*_t31 + _t13*_t34 + _t28*_t9;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t37 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t38 = _t14 - _t16;
-    const trailer_real_t _t39 = _t37*_t38;
-    const trailer_real_t _t40 = _t21 - _t22;
-    const trailer_real_t _t41 = _t37*_t40;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t42 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t43 = -_t14 - _t16;
-    const trailer_real_t _t44 = _t42*_t43;
-    const trailer_real_t _t45 = -_t21 - _t22;
-    const trailer_real_t _t46 = _t42*_t45;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t47 = J_theta_cart_left*_t44*_t46 + J_theta_cart_right*_t39*_t41;
-    const trailer_real_t _t48 = J_x_tractor*_t17 + _t1*_t28 + _t20*_t29;
-    const trailer_real_t _t49 = J_x_tractor*_t18 + _t1*_t31 + _t20*_t32;
-    const trailer_real_t _t50 = J_theta_cart*_t20 + _t1*_t34 + _t17*_t29 + _t18*_t32;
-    const trailer_real_t _t51 = J_theta_tractor*_t1 + _t17*_t28 + _t18*_t31 + _t20*_t34;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t52 = TRAILER_LIT(1.0)/span_1;
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t53 = _t52*(qd_now0 - qd_then0);
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t54 = _t52*(qd_now1 - qd_then1);
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t55 = J_theta_cart_left*_t44*_t44 + J_theta_cart_right*_t39*_t39
-            + J_theta_right - _t0*_t36 + _t11*_t33 + _t13*_t35 + _t30*_t9;
-    const trailer_real_t _t56 = _t1*_t36 + _t17*_t30 + _t18*_t33 + _t20*_t35 + _t47;
-    const trailer_real_t _t57 = -_t0*_t51 + _t11*_t49 + _t13*_t50 + _t47 + _t48*_t9;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t58 = J_theta_cart_left*_t46*_t46 + J_theta_cart_right*_t41*_t41
-            + J_theta_left + _t1*_t51 + _t17*_t48 + _t18*_t49 + _t20*_t50;
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t53*_t55 - _t54*_t56 + up0;
-    H1hat[1] = -_t53*_t57 - _t54*_t58 + up1;
+    trailer_real_t kept[17];
+    trailer_k_minimal_tde_keep(p, span, kept);
+    trailer_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
@@ -147,84 +46,9 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t12 = _t11*_t6;
-    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
-    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
-    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
-    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
-    const trailer_real_t _t18 = _t7*_t9;
-    const trailer_real_t _t19 = _t11*_t7;
-    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
-    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t33 = _t24 + _t25;
-    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
-    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
-            + _t26*_t28;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
-    const trailer_real_t _t38 = _t15 - _t17;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t40 = _t38*_t39;
-    const trailer_real_t _t41 = _t22 - _t23;
-    const trailer_real_t _t42 = _t39*_t41;
-    const trailer_real_t _t43 = -_t15 - _t17;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t45 = _t43*_t44;
-    const trailer_real_t _t46 = -_t22 - _t23;
-    const trailer_real_t _t47 = _t44*_t46;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
-    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
-    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
-    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
-    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t53 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
-            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
-    const trailer_real_t _t54 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
-    const trailer_real_t _t55 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t56 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
-            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
-    norm[0] = trailer_norm4(_t53, _t54, _t55, _t56)/TRAILER_FABS(_t53*_t56 - _t54*_t55);
+    trailer_real_t kept[16];
+    trailer_k_minimal_minv_norm_keep(p, kept);
+    trailer_k_minimal_minv_norm(kept, q, norm);
 }
 
 /* trailer_minimal_tdroc_gain: documented in trailer_laws.h.
@@ -286,13 +110,7 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
 void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
     trailer_real_t *norm)
 {
-    const trailer_real_t Om_new0 = newer[0];
-    const trailer_real_t Om_old0 = older[0];
-    const trailer_real_t _t0 = Om_new0 - Om_old0;
-    const trailer_real_t Om_new1 = newer[1];
-    const trailer_real_t Om_old1 = older[1];
-    const trailer_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer_norm2(_t0, _t1);
+    trailer_k_minimal_omega_difference(newer, older, norm);
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
@@ -302,101 +120,9 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
 {
-    (void)p12;
-    (void)p22;
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t12 = _t11*_t6;
-    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
-    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
-    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
-    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
-    const trailer_real_t _t18 = _t7*_t9;
-    const trailer_real_t _t19 = _t11*_t7;
-    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
-    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t33 = _t24 + _t25;
-    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
-    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
-            + _t26*_t28;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
-    const trailer_real_t _t38 = _t15 - _t17;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t40 = _t38*_t39;
-    const trailer_real_t _t41 = _t22 - _t23;
-    const trailer_real_t _t42 = _t39*_t41;
-    const trailer_real_t _t43 = -_t15 - _t17;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t45 = _t43*_t44;
-    const trailer_real_t _t46 = -_t22 - _t23;
-    const trailer_real_t _t47 = _t44*_t46;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
-    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
-    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
-    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
-    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t53 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t54 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t55 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
-            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
-    const trailer_real_t _t56 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
-    const trailer_real_t _t57 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t58 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
-            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t53*_t55 + _t54*_t56;
-    u[1] = H1hat1 + _t53*_t57 + _t54*_t58;
+    trailer_real_t kept[16];
+    trailer_k_minimal_minv_norm_keep(p, kept);
+    trailer_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
@@ -407,112 +133,10 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t12 = _t11*_t6;
-    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
-    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
-    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
-    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
-    const trailer_real_t _t18 = _t7*_t9;
-    const trailer_real_t _t19 = _t11*_t7;
-    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
-    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t33 = _t24 + _t25;
-    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
-    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
-            + _t26*_t28;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
-    const trailer_real_t _t38 = _t15 - _t17;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t40 = _t38*_t39;
-    const trailer_real_t _t41 = _t22 - _t23;
-    const trailer_real_t _t42 = _t39*_t41;
-    const trailer_real_t _t43 = -_t15 - _t17;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t45 = _t43*_t44;
-    const trailer_real_t _t46 = -_t22 - _t23;
-    const trailer_real_t _t47 = _t44*_t46;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
-    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
-    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
-    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
-    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t53 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t54 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t55 = trailer_norm2(_t53, _t54);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t56 = gain_1/TRAILER_FMAX(_t55, eps_1);
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t57 = _t53*_t56 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t58 = _t54*_t56 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t59 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
-            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
-    const trailer_real_t _t60 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
-    const trailer_real_t _t61 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t62 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
-            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t57*_t59 + _t58*_t60;
-    u[1] = H1hat1 + _t57*_t61 + _t58*_t62;
-    s[0] = _t53;
-    s[1] = _t54;
-    s_norm[0] = _t55;
+    trailer_real_t kept[16];
+    trailer_k_minimal_minv_norm_keep(p, kept);
+    trailer_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u,
+            s, s_norm);
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
@@ -524,190 +148,10 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
-    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
-    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t12 = _t11*_t9;
-    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
-    const trailer_real_t _t14 = _t10*_t11;
-    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
-    const trailer_real_t _t16 = -_t8*_t9;
-    const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t21 = -_t10*_t8;
-    const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
-    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
-    const trailer_real_t _t36 = _t35*_t35;
-    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
-    const trailer_real_t _t38 = _t37*_t37;
-    const trailer_real_t _t39 = _t34*_t36;
-    const trailer_real_t _t40 = _t28*_t36;
-    const trailer_real_t _t41 = _t29*_t36;
-    const trailer_real_t _t42 = _t33*_t38;
-    const trailer_real_t _t43 = _t32*_t38;
-    const trailer_real_t _t44 = _t37*thetadot_right;
-    const trailer_real_t _t45 = _t37*thetadot_left;
-    const trailer_real_t _t46 = _t35*thetadot_right;
-    const trailer_real_t _t47 = _t35*thetadot_left;
-    const trailer_real_t _t48 = _t8*_t9;
-    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
-    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
-    const trailer_real_t _t52 = -_t1*_t48 + _t13;
-    const trailer_real_t _t53 = _t10*_t8;
-    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
-    const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
-    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
-    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
-    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
-    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
-    const trailer_real_t _t67 = _t26 + _t27;
-    const trailer_real_t _t68 = _t28 + _t29;
-    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
-    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
-    const trailer_real_t _t73 = -_t19 - _t20;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t75 = _t73*_t74;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t76 = J_theta_cart_left*_t75;
-    const trailer_real_t _t77 = _t19 - _t20;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t79 = _t77*_t78;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t80 = J_theta_cart_right*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t82 = _t78*_t81;
-    const trailer_real_t _t83 = -_t24 - _t25;
-    const trailer_real_t _t84 = _t74*_t83;
-    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
-    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
-    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
-    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
-    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
-    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
-    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
-    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
-    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
-    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
-            - _t39;
-    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
-    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
-    const trailer_real_t _t97 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
-            - _t33*_t40 - _t33*_t41;
-    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
-    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
-    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t101 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t102 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t103 = trailer_norm2(_t101, _t102);
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t104 = e0*k1_0 + edot0*k2_0;
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t105 = e1*k1_1 + edot1*k2_1;
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t alpha = bounds[0];
-    const trailer_real_t phi = bounds[1];
-    const trailer_real_t _t106 = (alpha*(trailer_norm2(_t104, _t105)
-            + trailer_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER_LIT(1.0) - alpha);
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t107 = _t106/TRAILER_FMAX(_t103, eps_1);
-    const trailer_real_t _t108 = _t101*_t107 + _t104 + qdd_des0;
-    const trailer_real_t _t109 = _t102*_t107 + _t105 + qdd_des1;
-    const trailer_real_t _t110 = _t51 - _t52;
-    const trailer_real_t _t111 = _t110*_t78;
-    const trailer_real_t _t112 = _t56 - _t57;
-    const trailer_real_t _t113 = _t112*_t78;
-    const trailer_real_t _t114 = _t59 - _t60;
-    const trailer_real_t _t115 = _t114*_t78;
-    const trailer_real_t _t116 = _t62 - _t63;
-    const trailer_real_t _t117 = _t116*_t78;
-    const trailer_real_t _t118 = _t111*_t44 + _t113*_t45 + _t115*_t46 + _t117*_t47;
-    const trailer_real_t _t119 = -_t51 - _t52;
-    const trailer_real_t _t120 = _t119*_t74;
-    const trailer_real_t _t121 = -_t56 - _t57;
-    const trailer_real_t _t122 = _t121*_t74;
-    const trailer_real_t _t123 = -_t59 - _t60;
-    const trailer_real_t _t124 = _t123*_t74;
-    const trailer_real_t _t125 = -_t62 - _t63;
-    const trailer_real_t _t126 = _t125*_t74;
-    const trailer_real_t _t127 = _t120*_t44 + _t122*_t45 + _t124*_t46 + _t126*_t47;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t128 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
-            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
-    const trailer_real_t _t129 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
-    const trailer_real_t _t130 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t131 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
-            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
-    const trailer_real_t _t132 = _t100*_t18 + _t118*_t80 + _t12*_t96 + _t127*_t76 + _t16*_t93
-            - _t9*_t98;
-    const trailer_real_t _t133 = J_theta_cart_left*_t127*_t84 + J_theta_cart_right*_t118*_t82
-            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
-    u[0] = _t108*_t128 + _t109*_t129 + _t132;
-    u[1] = _t108*_t130 + _t109*_t131 + _t133;
-    s[0] = _t101;
-    s[1] = _t102;
-    s_norm[0] = _t103;
-    gain[0] = _t106;
+    trailer_real_t kept[17];
+    trailer_k_minimal_roc_law_keep(p, kept);
+    trailer_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
+            s, s_norm, gain);
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
@@ -719,187 +163,10 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
-    const trailer_real_t _t4 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
-    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
-    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
-    const trailer_real_t _t12 = _t11*_t9;
-    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
-    const trailer_real_t _t14 = _t10*_t11;
-    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
-    const trailer_real_t _t16 = -_t8*_t9;
-    const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t21 = -_t10*_t8;
-    const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
-    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
-    const trailer_real_t _t36 = _t35*_t35;
-    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
-    const trailer_real_t _t38 = _t37*_t37;
-    const trailer_real_t _t39 = _t34*_t36;
-    const trailer_real_t _t40 = _t28*_t36;
-    const trailer_real_t _t41 = _t29*_t36;
-    const trailer_real_t _t42 = _t33*_t38;
-    const trailer_real_t _t43 = _t32*_t38;
-    const trailer_real_t _t44 = _t37*thetadot_right;
-    const trailer_real_t _t45 = _t37*thetadot_left;
-    const trailer_real_t _t46 = _t35*thetadot_right;
-    const trailer_real_t _t47 = _t35*thetadot_left;
-    const trailer_real_t _t48 = _t8*_t9;
-    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
-    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
-    const trailer_real_t _t52 = -_t1*_t48 + _t13;
-    const trailer_real_t _t53 = _t10*_t8;
-    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
-    const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
-    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
-    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
-    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
-    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
-    const trailer_real_t _t67 = _t26 + _t27;
-    const trailer_real_t _t68 = _t28 + _t29;
-    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
-    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
-    const trailer_real_t _t73 = -_t19 - _t20;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t75 = _t73*_t74;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t76 = J_theta_cart_left*_t75;
-    const trailer_real_t _t77 = _t19 - _t20;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t79 = _t77*_t78;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t80 = J_theta_cart_right*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t82 = _t78*_t81;
-    const trailer_real_t _t83 = -_t24 - _t25;
-    const trailer_real_t _t84 = _t74*_t83;
-    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
-    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
-    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
-    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
-    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
-    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
-    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
-    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
-    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
-    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
-            - _t39;
-    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
-    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
-    const trailer_real_t _t97 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
-            - _t33*_t40 - _t33*_t41;
-    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
-    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
-    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t101 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t102 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t103 = trailer_norm2(_t101, _t102);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t104 = gain_1/TRAILER_FMAX(_t103, eps_1);
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t105 = _t101*_t104 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t106 = _t102*_t104 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t107 = _t51 - _t52;
-    const trailer_real_t _t108 = _t107*_t78;
-    const trailer_real_t _t109 = _t56 - _t57;
-    const trailer_real_t _t110 = _t109*_t78;
-    const trailer_real_t _t111 = _t59 - _t60;
-    const trailer_real_t _t112 = _t111*_t78;
-    const trailer_real_t _t113 = _t62 - _t63;
-    const trailer_real_t _t114 = _t113*_t78;
-    const trailer_real_t _t115 = _t108*_t44 + _t110*_t45 + _t112*_t46 + _t114*_t47;
-    const trailer_real_t _t116 = -_t51 - _t52;
-    const trailer_real_t _t117 = _t116*_t74;
-    const trailer_real_t _t118 = -_t56 - _t57;
-    const trailer_real_t _t119 = _t118*_t74;
-    const trailer_real_t _t120 = -_t59 - _t60;
-    const trailer_real_t _t121 = _t120*_t74;
-    const trailer_real_t _t122 = -_t62 - _t63;
-    const trailer_real_t _t123 = _t122*_t74;
-    const trailer_real_t _t124 = _t117*_t44 + _t119*_t45 + _t121*_t46 + _t123*_t47;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t125 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
-            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
-    const trailer_real_t _t126 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
-    const trailer_real_t _t127 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t128 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
-            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
-    const trailer_real_t _t129 = _t100*_t18 + _t115*_t80 + _t12*_t96 + _t124*_t76 + _t16*_t93
-            - _t9*_t98;
-    const trailer_real_t _t130 = J_theta_cart_left*_t124*_t84 + J_theta_cart_right*_t115*_t82
-            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
-    const trailer_real_t adapt_0 = adapt[0];
-    const trailer_real_t h = adapt[1];
-    u[0] = _t105*_t125 + _t106*_t126 + _t129;
-    u[1] = _t105*_t127 + _t106*_t128 + _t130;
-    s[0] = _t101;
-    s[1] = _t102;
-    s_norm[0] = _t103;
-    gain_next[0] = _t103*adapt_0*h + gain_1;
+    trailer_real_t kept[17];
+    trailer_k_minimal_roc_law_keep(p, kept);
+    trailer_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
+            adapt, u, s, s_norm, gain_next);
 }
 
 /* trailer_minimal_pi_law: documented in trailer_laws.h.
@@ -909,48 +176,8 @@ void trailer_minimal_pi_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,
     trailer_real_t *u, trailer_real_t *integral_next)
 {
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = TRAILER_LIT(1.0)/radius_right;
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t qd_2 = q_des[2];
-    const trailer_real_t _t1 = qd_2 - theta_tractor;
-    const trailer_real_t qdd_0 = qdot_des[0];
-    const trailer_real_t qdd_1 = qdot_des[1];
-    const trailer_real_t _t2 = qdd_0*TRAILER_COS(qd_2) + qdd_1*TRAILER_SIN(qd_2);
-    const trailer_real_t _t3 = TRAILER_COS(theta_tractor);
-    const trailer_real_t x_tractor = q[0];
-    const trailer_real_t qd_0 = q_des[0];
-    const trailer_real_t _t4 = qd_0 - x_tractor;
-    const trailer_real_t _t5 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t y_tractor = q[1];
-    const trailer_real_t qd_1 = q_des[1];
-    const trailer_real_t _t6 = qd_1 - y_tractor;
-    const trailer_real_t kx = gains[0];
-    const trailer_real_t _t7 = _t2*TRAILER_COS(_t1) + kx*(_t3*_t4 + _t5*_t6);
-    const trailer_real_t qdd_2 = qdot_des[2];
-    const trailer_real_t ky = gains[1];
-    const trailer_real_t ktheta = gains[2];
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2*(ktheta*TRAILER_SIN(_t1)
-            + ky*(_t3*_t6 - _t4*_t5))/TRAILER_LIT(1000.0)
-            + TRAILER_LIT(207.0)*qdd_2/TRAILER_LIT(1000.0);
-    const trailer_real_t thetadot_right = qdot[4];
-    const trailer_real_t _t9 = _t0*_t7 + _t0*_t8 - thetadot_right;
-    const trailer_real_t tau_max = limits[1];
-    const trailer_real_t _t10 = -tau_max;
-    const trailer_real_t ki = gains[4];
-    const trailer_real_t h = limits[0];
-    const trailer_real_t _t11 = h*ki;
-    const trailer_real_t I_0 = integral[0];
-    const trailer_real_t _t12 = TRAILER_FMIN(tau_max, TRAILER_FMAX(_t10, I_0 + _t11*_t9));
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(1.0)/radius_left;
-    const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t14 = _t13*_t7 - _t13*_t8 - thetadot_left;
-    const trailer_real_t I_1 = integral[1];
-    const trailer_real_t _t15 = TRAILER_FMIN(tau_max, TRAILER_FMAX(_t10, I_1 + _t11*_t14));
-    const trailer_real_t kp = gains[3];
-    u[0] = _t12 + _t9*kp;
-    u[1] = _t14*kp + _t15;
-    integral_next[0] = _t12;
-    integral_next[1] = _t15;
+    trailer_real_t kept[2];
+    trailer_k_minimal_pi_law_keep(p, kept);
+    trailer_k_minimal_pi_law(kept, q, qdot, q_des, qdot_des, integral, gains, limits, u,
+            integral_next);
 }

@@ -10,6 +10,7 @@
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
+#include "trailer_kernels.h"
 
 #ifdef TRAILER_TDC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,305 +18,6 @@
 #include "trailer_tdc_frozen.h"
 const trailer_tdc_config_t trailer_tdc_frozen_config = TRAILER_TDC_FROZEN_CONFIG;
 #endif
-
-#ifndef TRAILER_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer_tdc_k_minimal_tde_keep: the parameter-only part of trailer_minimal_tde of trailer_laws.c
-   (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_tdc_k_minimal_tde_keep(const trailer_params_t *p,
-    const trailer_real_t *span, trailer_real_t kept[17])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/span_1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-    kept[16] = _t6;
-}
-#endif
-
-/* trailer_tdc_k_minimal_tde: the per-step part of trailer_minimal_tde of trailer_laws.c (documented
-   in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 68 add, 104 mul, 11 div, 4 sin/cos, 0 sqrt */
-static inline void trailer_tdc_k_minimal_tde(const trailer_real_t kept[17],
-    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
-    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
-{
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(qp3);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(qp3);
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(qp2);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(qp2);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - TRAILER_LIT(3.0)*_t7*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t8 + _t16*_t7;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = TRAILER_LIT(3.0)*_t10*_t7/TRAILER_LIT(10.0) - _t11*_t9;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t7 - _t16*_t8;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t8 + _t23*_t7;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t7 - _t23*_t8;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t9;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t7 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t7 + _t30);
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t40 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t41 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t52 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t53 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t54 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t55 = _t6*(qd_now0 - qd_then0);
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t56 = _t6*(qd_now1 - qd_then1);
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t57 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t41 + _t14*_t35 + _t16*_t38 + _t18*_t40;
-    const trailer_real_t _t58 = _t1*_t41 + _t22*_t35 + _t23*_t38 + _t25*_t40 + _t50;
-    const trailer_real_t _t59 = -_t0*_t54 + _t14*_t51 + _t16*_t52 + _t18*_t53 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t60 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t54 + _t22*_t51 + _t23*_t52 + _t25*_t53;
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t55*_t57 - _t56*_t58 + up0;
-    H1hat[1] = -_t55*_t59 - _t56*_t60 + up1;
-}
-
-#ifndef TRAILER_TDC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer_tdc_k_minimal_tdc_law_keep: the parameter-only part of trailer_minimal_tdc_law of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_tdc_k_minimal_tdc_law_keep(const trailer_params_t *p,
-    trailer_real_t kept[16])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-}
-#endif
-
-/* trailer_tdc_k_minimal_tdc_law: the per-step part of trailer_minimal_tdc_law of trailer_laws.c
-   (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 70 add, 105 mul, 10 div, 4 sin/cos, 0 sqrt */
-static inline void trailer_tdc_k_minimal_tdc_law(const trailer_real_t kept[16],
-    const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
-    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
-    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
-    trailer_real_t *u)
-{
-    (void)p12;
-    (void)p22;
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t55 = e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t56 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t57 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t58 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t59 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t60 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t55*_t57 + _t56*_t58;
-    u[1] = H1hat1 + _t55*_t59 + _t56*_t60;
-}
 
 trailer_status_t trailer_tdc_check_config_detail(const trailer_tdc_config_t *config,
     trailer_error_detail_t *detail)
@@ -494,9 +196,9 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
     fresh.tde_c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
         ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
     /* the values the step's minimal_tde keeps */
-    trailer_tdc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+    trailer_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_tdc_law keeps */
-    trailer_tdc_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;
@@ -623,7 +325,7 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
             up[i] = TRAILER_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_tdc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
@@ -631,8 +333,8 @@ trailer_status_t trailer_tdc_step_detail(trailer_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer_tdc_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off],
-                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+        trailer_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off], &cfg->k1[off],
+                &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];

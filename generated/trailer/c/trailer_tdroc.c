@@ -10,6 +10,7 @@
 #include "trailer_controller.h"
 #include "trailer_laws.h"
 #include "trailer_model.h"
+#include "trailer_kernels.h"
 
 #ifdef TRAILER_TDROC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,444 +18,6 @@
 #include "trailer_tdroc_frozen.h"
 const trailer_tdroc_config_t trailer_tdroc_frozen_config = TRAILER_TDROC_FROZEN_CONFIG;
 #endif
-
-/* trailer_tdroc_k_tdroc_weighted_gain: a copy of trailer_tdroc_weighted_gain of trailer_laws.c
-   (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_tdroc_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
-    const trailer_real_t *dn, const trailer_real_t *w, trailer_real_t *gain)
-{
-    const trailer_real_t minv_norm_1 = minv_norm[0];
-    const trailer_real_t dn0 = dn[0];
-    const trailer_real_t dn1 = dn[1];
-    const trailer_real_t dn2 = dn[2];
-    const trailer_real_t dn3 = dn[3];
-    const trailer_real_t dn4 = dn[4];
-    const trailer_real_t dn5 = dn[5];
-    const trailer_real_t dn6 = dn[6];
-    const trailer_real_t dn7 = dn[7];
-    const trailer_real_t w0 = w[0];
-    const trailer_real_t w1 = w[1];
-    const trailer_real_t w2 = w[2];
-    const trailer_real_t w3 = w[3];
-    const trailer_real_t w4 = w[4];
-    const trailer_real_t w5 = w[5];
-    const trailer_real_t w6 = w[6];
-    const trailer_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
-}
-
-#ifndef TRAILER_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer_tdroc_k_minimal_tde_keep: the parameter-only part of trailer_minimal_tde of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_tdroc_k_minimal_tde_keep(const trailer_params_t *p,
-    const trailer_real_t *span, trailer_real_t kept[17])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/span_1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-    kept[16] = _t6;
-}
-#endif
-
-/* trailer_tdroc_k_minimal_tde: the per-step part of trailer_minimal_tde of trailer_laws.c
-   (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 68 add, 104 mul, 11 div, 4 sin/cos, 0 sqrt */
-static inline void trailer_tdroc_k_minimal_tde(const trailer_real_t kept[17],
-    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
-    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
-{
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(qp3);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(qp3);
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(qp2);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(qp2);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - TRAILER_LIT(3.0)*_t7*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t8 + _t16*_t7;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = TRAILER_LIT(3.0)*_t10*_t7/TRAILER_LIT(10.0) - _t11*_t9;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t7 - _t16*_t8;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t8 + _t23*_t7;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t7 - _t23*_t8;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t9;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t7 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t7 + _t30);
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t40 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t41 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t52 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t53 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t54 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t55 = _t6*(qd_now0 - qd_then0);
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t56 = _t6*(qd_now1 - qd_then1);
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t57 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t41 + _t14*_t35 + _t16*_t38 + _t18*_t40;
-    const trailer_real_t _t58 = _t1*_t41 + _t22*_t35 + _t23*_t38 + _t25*_t40 + _t50;
-    const trailer_real_t _t59 = -_t0*_t54 + _t14*_t51 + _t16*_t52 + _t18*_t53 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t60 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t54 + _t22*_t51 + _t23*_t52 + _t25*_t53;
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t55*_t57 - _t56*_t58 + up0;
-    H1hat[1] = -_t55*_t59 - _t56*_t60 + up1;
-}
-
-/* trailer_tdroc_k_minimal_minv_norm_keep: the parameter-only part of trailer_minimal_minv_norm of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_tdroc_k_minimal_minv_norm_keep(const trailer_params_t *p,
-    trailer_real_t kept[16])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-}
-
-/* trailer_tdroc_k_minimal_minv_norm: the per-step part of trailer_minimal_minv_norm of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 66 add, 103 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static inline void trailer_tdroc_k_minimal_minv_norm(const trailer_real_t kept[16],
-    const trailer_real_t *q, trailer_real_t *norm)
-{
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t55 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t56 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t57 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t58 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
-    norm[0] = trailer_norm4(_t55, _t56, _t57, _t58)/TRAILER_FABS(_t55*_t58 - _t56*_t57);
-}
-
-/* trailer_tdroc_k_minimal_omega_difference: a copy of trailer_minimal_omega_difference of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer_tdroc_k_minimal_omega_difference(const trailer_real_t *newer,
-    const trailer_real_t *older, trailer_real_t *norm)
-{
-    const trailer_real_t Om_new0 = newer[0];
-    const trailer_real_t Om_old0 = older[0];
-    const trailer_real_t _t0 = Om_new0 - Om_old0;
-    const trailer_real_t Om_new1 = newer[1];
-    const trailer_real_t Om_old1 = older[1];
-    const trailer_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer_norm2(_t0, _t1);
-}
-
-/* trailer_tdroc_k_minimal_tdroc_law: the per-step part of trailer_minimal_tdroc_law of
-   trailer_laws.c (documented in trailer_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 75 add, 113 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_tdroc_k_minimal_tdroc_law(const trailer_real_t kept[16],
-    const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
-    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
-    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
-    const trailer_real_t *gain, const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s,
-    trailer_real_t *s_norm)
-{
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t e0 = e[0];
-    const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t55 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t56 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t57 = trailer_norm2(_t55, _t56);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t58 = gain_1/TRAILER_FMAX(_t57, eps_1);
-    const trailer_real_t qdd_des0 = qddot_des[0];
-    const trailer_real_t k1_0 = k1[0];
-    const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t59 = _t55*_t58 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer_real_t qdd_des1 = qddot_des[1];
-    const trailer_real_t k1_1 = k1[1];
-    const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t60 = _t56*_t58 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t61 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t62 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t63 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t64 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
-    const trailer_real_t H1hat0 = H1hat[0];
-    const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t59*_t61 + _t60*_t62;
-    u[1] = H1hat1 + _t59*_t63 + _t60*_t64;
-    s[0] = _t55;
-    s[1] = _t56;
-    s_norm[0] = _t57;
-}
 
 trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t *config,
     trailer_error_detail_t *detail)
@@ -501,8 +64,8 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
                 TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
                 TRAILER_LIT(0.0)}; /* evaluated at q in the steps */
         trailer_real_t kept[16];  /* the step's copy, as _init would keep it */
-        trailer_tdroc_k_minimal_minv_norm_keep(&config->nominal, kept);
-        trailer_tdroc_k_minimal_minv_norm(kept, q0, &minv_norm);
+        trailer_k_minimal_minv_norm_keep(&config->nominal, kept);
+        trailer_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
             return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
         }
@@ -623,8 +186,9 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
         s->H1hat[i] = TRAILER_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = TRAILER_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * TRAILER_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = TRAILER_LIT(0.0);
     }
     s->gain = TRAILER_LIT(0.0);
     s->s_norm = TRAILER_LIT(0.0);
@@ -673,11 +237,11 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
     fresh.tde_c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
         ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
     /* the values the step's minimal_tde keeps */
-    trailer_tdroc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+    trailer_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_minv_norm keeps */
-    trailer_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
+    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;
@@ -721,8 +285,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     trailer_real_t H1hat[8];
     trailer_real_t gain, s_norm, u_discarded;
     trailer_real_t minv_norm;
-    trailer_real_t dn[TRAILER_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    trailer_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return trailer_fail(detail, TRAILER_ERR_NULL_POINTER, TRAILER_FIELD_STATE, -1);
@@ -811,7 +375,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
             up[i] = TRAILER_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
@@ -821,25 +385,31 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
-        trailer_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
-        for (i = 1; i < TRAILER_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        trailer_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
+        omega_head = omega_head == 0 ? TRAILER_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= TRAILER_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const trailer_real_t *const older = &state->omega_ring[omega_head];
+        const trailer_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         trailer_real_t w_warm[TRAILER_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer_real_t *w = state->weights;  /* the full window's, from _init */
@@ -848,8 +418,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer_tdroc_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
-        trailer_tdroc_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
+        trailer_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
+        trailer_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer_cap_gain(gain);
     } else {
@@ -858,7 +428,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_tdroc_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+        trailer_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                 &cfg->eps, u, s, &s_norm);
     }
@@ -891,9 +461,11 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     for (i = 0; i < 8; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + TRAILER_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->minv_norm = minv_norm;
     state->gain = gain;

@@ -10,6 +10,7 @@
 #include "trailer2_controller.h"
 #include "trailer2_laws.h"
 #include "trailer2_model.h"
+#include "trailer2_kernels.h"
 
 #ifdef TRAILER2_PI_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,78 +18,6 @@
 #include "trailer2_pi_frozen.h"
 const trailer2_pi_config_t trailer2_pi_frozen_config = TRAILER2_PI_FROZEN_CONFIG;
 #endif
-
-#ifndef TRAILER2_PI_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer2_pi_k_minimal_pi_law_keep: the parameter-only part of trailer2_minimal_pi_law of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_pi_k_minimal_pi_law_keep(const trailer2_params_t *p,
-    trailer2_real_t kept[2])
-{
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t0 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t1 = TRAILER2_LIT(1.0)/radius_left;
-    kept[0] = _t0;
-    kept[1] = _t1;
-}
-#endif
-
-/* trailer2_pi_k_minimal_pi_law: the per-step part of trailer2_minimal_pi_law of trailer2_laws.c
-   (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void trailer2_pi_k_minimal_pi_law(const trailer2_real_t kept[2],
-    const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *q_des,
-    const trailer2_real_t *qdot_des, const trailer2_real_t *integral, const trailer2_real_t *gains,
-    const trailer2_real_t *limits, trailer2_real_t *u, trailer2_real_t *integral_next)
-{
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t qd_2 = q_des[2];
-    const trailer2_real_t _t2 = qd_2 - theta_tractor;
-    const trailer2_real_t qdd_0 = qdot_des[0];
-    const trailer2_real_t qdd_1 = qdot_des[1];
-    const trailer2_real_t _t3 = qdd_0*TRAILER2_COS(qd_2) + qdd_1*TRAILER2_SIN(qd_2);
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t x_tractor = q[0];
-    const trailer2_real_t qd_0 = q_des[0];
-    const trailer2_real_t _t5 = qd_0 - x_tractor;
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t y_tractor = q[1];
-    const trailer2_real_t qd_1 = q_des[1];
-    const trailer2_real_t _t7 = qd_1 - y_tractor;
-    const trailer2_real_t kx = gains[0];
-    const trailer2_real_t _t8 = _t3*TRAILER2_COS(_t2) + kx*(_t4*_t5 + _t6*_t7);
-    const trailer2_real_t qdd_2 = qdot_des[2];
-    const trailer2_real_t ky = gains[1];
-    const trailer2_real_t ktheta = gains[2];
-    const trailer2_real_t _t9 = TRAILER2_LIT(207.0)*_t3*(ktheta*TRAILER2_SIN(_t2)
-            + ky*(_t4*_t7 - _t5*_t6))/TRAILER2_LIT(1000.0)
-            + TRAILER2_LIT(207.0)*qdd_2/TRAILER2_LIT(1000.0);
-    const trailer2_real_t thetadot_right = qdot[5];
-    const trailer2_real_t _t0 = kept[0];
-    const trailer2_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;
-    const trailer2_real_t tau_max = limits[1];
-    const trailer2_real_t _t11 = -tau_max;
-    const trailer2_real_t ki = gains[4];
-    const trailer2_real_t h = limits[0];
-    const trailer2_real_t _t12 = h*ki;
-    const trailer2_real_t I_0 = integral[0];
-    const trailer2_real_t _t13 = TRAILER2_FMIN(tau_max, TRAILER2_FMAX(_t11, I_0 + _t10*_t12));
-    const trailer2_real_t thetadot_left = qdot[6];
-    const trailer2_real_t _t1 = kept[1];
-    const trailer2_real_t _t14 = _t1*(_t8 - _t9) - thetadot_left;
-    const trailer2_real_t I_1 = integral[1];
-    const trailer2_real_t _t15 = TRAILER2_FMIN(tau_max, TRAILER2_FMAX(_t11, I_1 + _t12*_t14));
-    const trailer2_real_t kp = gains[3];
-    u[0] = _t10*kp + _t13;
-    u[1] = _t14*kp + _t15;
-    integral_next[0] = _t13;
-    integral_next[1] = _t15;
-}
 
 trailer2_status_t trailer2_pi_check_config_detail(const trailer2_pi_config_t *config,
     trailer2_error_detail_t *detail)
@@ -286,7 +215,7 @@ trailer2_status_t trailer2_pi_init(trailer2_pi_state_t *state, const trailer2_pi
     fresh.magic = TRAILER2_STATE_MAGIC;
     fresh.config = *config;
     /* the values the step's minimal_pi_law keeps */
-    trailer2_pi_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
+    trailer2_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
     trailer2_pi_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -385,7 +314,7 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     {
         const trailer2_real_t gains[5] = {cfg->kx, cfg->ky, cfg->ktheta, cfg->kp, cfg->ki};
         const trailer2_real_t limits[2] = {cfg->h, cfg->tau_max};
-        trailer2_pi_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
+        trailer2_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
                 gains, limits, u, integral);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */

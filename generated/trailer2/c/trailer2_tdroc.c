@@ -10,6 +10,7 @@
 #include "trailer2_controller.h"
 #include "trailer2_laws.h"
 #include "trailer2_model.h"
+#include "trailer2_kernels.h"
 
 #ifdef TRAILER2_TDROC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,609 +18,6 @@
 #include "trailer2_tdroc_frozen.h"
 const trailer2_tdroc_config_t trailer2_tdroc_frozen_config = TRAILER2_TDROC_FROZEN_CONFIG;
 #endif
-
-/* trailer2_tdroc_k_tdroc_weighted_gain: a copy of trailer2_tdroc_weighted_gain of trailer2_laws.c
-   (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_tdroc_k_tdroc_weighted_gain(const trailer2_real_t *minv_norm,
-    const trailer2_real_t *dn, const trailer2_real_t *w, trailer2_real_t *gain)
-{
-    const trailer2_real_t minv_norm_1 = minv_norm[0];
-    const trailer2_real_t dn0 = dn[0];
-    const trailer2_real_t dn1 = dn[1];
-    const trailer2_real_t dn2 = dn[2];
-    const trailer2_real_t dn3 = dn[3];
-    const trailer2_real_t dn4 = dn[4];
-    const trailer2_real_t dn5 = dn[5];
-    const trailer2_real_t dn6 = dn[6];
-    const trailer2_real_t dn7 = dn[7];
-    const trailer2_real_t w0 = w[0];
-    const trailer2_real_t w1 = w[1];
-    const trailer2_real_t w2 = w[2];
-    const trailer2_real_t w3 = w[3];
-    const trailer2_real_t w4 = w[4];
-    const trailer2_real_t w5 = w[5];
-    const trailer2_real_t w6 = w[6];
-    const trailer2_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
-}
-
-#ifndef TRAILER2_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer2_tdroc_k_minimal_tde_keep: the parameter-only part of trailer2_minimal_tde of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_tdroc_k_minimal_tde_keep(const trailer2_params_t *p,
-    const trailer2_real_t *span, trailer2_real_t kept[24])
-{
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t span_1 = span[0];
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(1.0)/span_1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart_left;
-    kept[5] = J_theta_cart_right;
-    kept[6] = J_theta_left;
-    kept[7] = J_theta_right;
-    kept[8] = J_x_tractor;
-    kept[9] = K_theta_cart_x_tractor;
-    kept[10] = K_theta_cart_x_tractor_2;
-    kept[11] = K_theta_cart2_x_tractor;
-    kept[12] = K_theta_cart2_x_tractor_2;
-    kept[13] = K_theta_tractor_x_tractor;
-    kept[14] = K_theta_tractor_x_tractor_2;
-    kept[15] = _t0;
-    kept[16] = _t1;
-    kept[17] = _t2;
-    kept[18] = _t3;
-    kept[19] = _t4;
-    kept[20] = _t5;
-    kept[21] = _t6;
-    kept[22] = _t7;
-    kept[23] = _t8;
-}
-#endif
-
-/* trailer2_tdroc_k_minimal_tde: the per-step part of trailer2_minimal_tde of trailer2_laws.c
-   (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 122 add, 181 mul, 19 div, 6 sin/cos, 0 sqrt */
-static inline void trailer2_tdroc_k_minimal_tde(const trailer2_real_t kept[24],
-    const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
-    const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
-{
-    const trailer2_real_t qp3 = q_prev[3];
-    const trailer2_real_t _t9 = TRAILER2_SIN_BOUNDED(qp3);
-    const trailer2_real_t _t10 = TRAILER2_COS_BOUNDED(qp3);
-    const trailer2_real_t qp2 = q_prev[2];
-    const trailer2_real_t _t11 = TRAILER2_SIN_BOUNDED(qp2);
-    const trailer2_real_t _t12 = TRAILER2_LIT(3.0)*_t11/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t13 = TRAILER2_COS_BOUNDED(qp2);
-    const trailer2_real_t _t14 = TRAILER2_LIT(3.0)*_t13/TRAILER2_LIT(10.0);
-    const trailer2_real_t qp4 = q_prev[4];
-    const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(qp4);
-    const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(qp4);
-    const trailer2_real_t _t17 = TRAILER2_LIT(17.0)*_t16/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t18 = -_t10*_t14 - _t12*_t9;
-    const trailer2_real_t _t19 = -TRAILER2_LIT(207.0)*_t11/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t0 = kept[15];
-    const trailer2_real_t _t20 = _t0*_t19;
-    const trailer2_real_t _t21 = -TRAILER2_LIT(207.0)*_t13/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t22 = _t0*_t21;
-    const trailer2_real_t _t23 = _t0*_t18 - _t10*_t20 + _t22*_t9;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(5.0)*_t23/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t25 = _t24/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t26 = -_t10*_t12 + TRAILER2_LIT(3.0)*_t13*_t9/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t27 = -_t0*_t26 - _t10*_t22 - _t20*_t9;
-    const trailer2_real_t _t1 = kept[16];
-    const trailer2_real_t _t28 = _t1*_t19;
-    const trailer2_real_t _t29 = _t1*_t21;
-    const trailer2_real_t _t30 = -_t1*_t18 - _t10*_t28 + _t29*_t9;
-    const trailer2_real_t _t31 = -TRAILER2_LIT(5.0)*_t30/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t32 = _t31/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t33 = _t1*_t26 - _t10*_t29 - _t28*_t9;
-    const trailer2_real_t _t34 = -_t12*_t15 - _t14*_t16;
-    const trailer2_real_t _t35 = -_t10*_t17 - TRAILER2_LIT(17.0)*_t15*_t9/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t36 = _t0*_t34 + _t15*_t22 - _t16*_t20 - _t24*_t35;
-    const trailer2_real_t _t37 = -TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t38 = _t37/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t39 = -_t12*_t16 + TRAILER2_LIT(3.0)*_t13*_t15/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t40 = TRAILER2_LIT(17.0)*_t10*_t15/TRAILER2_LIT(20.0) - _t17*_t9;
-    const trailer2_real_t _t41 = -_t0*_t39 - _t15*_t20 - _t16*_t22 + _t24*_t40;
-    const trailer2_real_t _t42 = -_t1*_t34 + _t15*_t29 - _t16*_t28 - _t31*_t35;
-    const trailer2_real_t _t43 = -TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t44 = _t43/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t45 = _t1*_t39 - _t15*_t28 - _t16*_t29 + _t31*_t40;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
-    const trailer2_real_t _t46 = K_theta_cart_x_tractor*_t9;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
-    const trailer2_real_t _t47 = K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor*_t15;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
-    const trailer2_real_t _t49 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t50 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t _t51 = K_theta_cart2_x_tractor*_t16;
-    const trailer2_real_t _t52 = K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t54 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
-    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
-    const trailer2_real_t _t55 = -K_theta_tractor_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t11;
-    const trailer2_real_t _t56 = K_theta_cart_x_tractor_2*_t9 - _t50;
-    const trailer2_real_t _t57 = K_theta_cart2_x_tractor_2*_t15 - _t51;
-    const trailer2_real_t J_x_tractor = kept[8];
-    const trailer2_real_t _t58 = J_x_tractor*_t20 - _t0*_t55 + _t24*_t56 + _t37*_t57;
-    const trailer2_real_t _t59 = K_theta_tractor_x_tractor*_t11 + K_theta_tractor_x_tractor_2*_t13;
-    const trailer2_real_t _t60 = _t46 + _t47;
-    const trailer2_real_t _t61 = _t48 + _t49;
-    const trailer2_real_t _t62 = J_x_tractor*_t22 - _t0*_t59 + _t24*_t60 + _t37*_t61;
-    const trailer2_real_t _t63 = _t12*(_t46 + _t47) + _t14*(-K_theta_cart_x_tractor_2*_t9 + _t50);
-    const trailer2_real_t _t64 = _t53*(_t48 + _t49) + _t54*(_t51 - _t52);
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t65 = J_theta_cart*_t24 - _t0*_t63 + _t20*_t56 + _t22*_t60 + _t37*_t64;
-    const trailer2_real_t _t66 = _t12*(_t48 + _t49) + _t14*(_t51 - _t52);
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t67 = J_theta_cart2*_t37 - _t0*_t66 + _t20*_t57 + _t22*_t61 + _t24*_t64;
-    const trailer2_real_t _t2 = kept[17];
-    const trailer2_real_t _t68 = _t2 + _t20*_t55 + _t22*_t59 + _t24*_t63 + _t37*_t66;
-    const trailer2_real_t _t69 = _t25 - _t27;
-    const trailer2_real_t _t3 = kept[18];
-    const trailer2_real_t _t70 = _t3*_t69;
-    const trailer2_real_t _t71 = _t32 - _t33;
-    const trailer2_real_t _t72 = _t3*_t71;
-    const trailer2_real_t _t73 = -_t25 - _t27;
-    const trailer2_real_t _t4 = kept[19];
-    const trailer2_real_t _t74 = _t4*_t73;
-    const trailer2_real_t _t75 = -_t32 - _t33;
-    const trailer2_real_t _t76 = _t4*_t75;
-    const trailer2_real_t _t77 = _t38 - _t41;
-    const trailer2_real_t _t5 = kept[20];
-    const trailer2_real_t _t78 = _t5*_t77;
-    const trailer2_real_t _t79 = _t44 - _t45;
-    const trailer2_real_t _t80 = _t5*_t79;
-    const trailer2_real_t _t81 = -_t38 - _t41;
-    const trailer2_real_t _t6 = kept[21];
-    const trailer2_real_t _t82 = _t6*_t81;
-    const trailer2_real_t _t83 = -_t44 - _t45;
-    const trailer2_real_t _t84 = _t6*_t83;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t85 = J_theta_cart2_left*_t82*_t84 + J_theta_cart2_right*_t78*_t80
-            + J_theta_cart_left*_t74*_t76 + J_theta_cart_right*_t70*_t72;
-    const trailer2_real_t _t86 = J_x_tractor*_t28 + _t1*_t55 + _t31*_t56 + _t43*_t57;
-    const trailer2_real_t _t87 = J_x_tractor*_t29 + _t1*_t59 + _t31*_t60 + _t43*_t61;
-    const trailer2_real_t _t88 = J_theta_cart*_t31 + _t1*_t63 + _t28*_t56 + _t29*_t60 + _t43*_t64;
-    const trailer2_real_t _t89 = J_theta_cart2*_t43 + _t1*_t66 + _t28*_t57 + _t29*_t61 + _t31*_t64;
-    const trailer2_real_t _t7 = kept[22];
-    const trailer2_real_t _t90 = _t28*_t55 + _t29*_t59 + _t31*_t63 + _t43*_t66 + _t7;
-    const trailer2_real_t qd_now0 = qdot_now[0];
-    const trailer2_real_t qd_then0 = qdot_then[0];
-    const trailer2_real_t _t8 = kept[23];
-    const trailer2_real_t _t91 = _t8*(qd_now0 - qd_then0);
-    const trailer2_real_t qd_now1 = qdot_now[1];
-    const trailer2_real_t qd_then1 = qdot_then[1];
-    const trailer2_real_t _t92 = _t8*(qd_now1 - qd_then1);
-    const trailer2_real_t J_theta_right = kept[7];
-    const trailer2_real_t _t93 = J_theta_cart2_left*_t82*_t82 + J_theta_cart2_right*_t78*_t78
-            + J_theta_cart_left*_t74*_t74 + J_theta_cart_right*_t70*_t70 + J_theta_right - _t0*_t68
-            + _t20*_t58 + _t22*_t62 + _t24*_t65 + _t37*_t67;
-    const trailer2_real_t _t94 = _t1*_t68 + _t28*_t58 + _t29*_t62 + _t31*_t65 + _t43*_t67 + _t85;
-    const trailer2_real_t _t95 = -_t0*_t90 + _t20*_t86 + _t22*_t87 + _t24*_t88 + _t37*_t89 + _t85;
-    const trailer2_real_t J_theta_left = kept[6];
-    const trailer2_real_t _t96 = J_theta_cart2_left*_t84*_t84 + J_theta_cart2_right*_t80*_t80
-            + J_theta_cart_left*_t76*_t76 + J_theta_cart_right*_t72*_t72 + J_theta_left + _t1*_t90
-            + _t28*_t86 + _t29*_t87 + _t31*_t88 + _t43*_t89;
-    const trailer2_real_t up0 = u_prev[0];
-    const trailer2_real_t up1 = u_prev[1];
-    H1hat[0] = -_t91*_t93 - _t92*_t94 + up0;
-    H1hat[1] = -_t91*_t95 - _t92*_t96 + up1;
-}
-
-/* trailer2_tdroc_k_minimal_minv_norm_keep: the parameter-only part of trailer2_minimal_minv_norm of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_tdroc_k_minimal_minv_norm_keep(const trailer2_params_t *p,
-    trailer2_real_t kept[23])
-{
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart_left;
-    kept[5] = J_theta_cart_right;
-    kept[6] = J_theta_left;
-    kept[7] = J_theta_right;
-    kept[8] = J_x_tractor;
-    kept[9] = K_theta_cart_x_tractor;
-    kept[10] = K_theta_cart_x_tractor_2;
-    kept[11] = K_theta_cart2_x_tractor;
-    kept[12] = K_theta_cart2_x_tractor_2;
-    kept[13] = K_theta_tractor_x_tractor;
-    kept[14] = K_theta_tractor_x_tractor_2;
-    kept[15] = _t0;
-    kept[16] = _t1;
-    kept[17] = _t2;
-    kept[18] = _t3;
-    kept[19] = _t4;
-    kept[20] = _t5;
-    kept[21] = _t6;
-    kept[22] = _t7;
-}
-
-/* trailer2_tdroc_k_minimal_minv_norm: the per-step part of trailer2_minimal_minv_norm of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 120 add, 179 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static inline void trailer2_tdroc_k_minimal_minv_norm(const trailer2_real_t kept[23],
-    const trailer2_real_t *q, trailer2_real_t *norm)
-{
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(theta_cart);
-    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
-    const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
-    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t0 = kept[15];
-    const trailer2_real_t _t19 = _t0*_t18;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t21 = _t0*_t20;
-    const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
-    const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
-    const trailer2_real_t _t1 = kept[16];
-    const trailer2_real_t _t27 = _t1*_t18;
-    const trailer2_real_t _t28 = _t1*_t20;
-    const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
-    const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
-    const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
-    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
-    const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
-    const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
-    const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
-    const trailer2_real_t _t46 = K_theta_cart_x_tractor_2*_t9;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
-    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t14;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
-    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
-    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
-    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
-    const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer2_real_t _t55 = K_theta_cart_x_tractor_2*_t8 - _t49;
-    const trailer2_real_t _t56 = K_theta_cart2_x_tractor_2*_t14 - _t50;
-    const trailer2_real_t J_x_tractor = kept[8];
-    const trailer2_real_t _t57 = J_x_tractor*_t19 - _t0*_t54 + _t23*_t55 + _t36*_t56;
-    const trailer2_real_t _t58 = K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer2_real_t _t59 = _t45 + _t46;
-    const trailer2_real_t _t60 = _t47 + _t48;
-    const trailer2_real_t _t61 = J_x_tractor*_t21 - _t0*_t58 + _t23*_t59 + _t36*_t60;
-    const trailer2_real_t _t62 = _t11*(_t45 + _t46) + _t13*(-K_theta_cart_x_tractor_2*_t8 + _t49);
-    const trailer2_real_t _t63 = _t11*(_t47 + _t48) + _t13*(_t50 - _t51);
-    const trailer2_real_t _t2 = kept[17];
-    const trailer2_real_t _t64 = _t19*_t54 + _t2 + _t21*_t58 + _t23*_t62 + _t36*_t63;
-    const trailer2_real_t _t65 = _t52*(_t47 + _t48) + _t53*(_t50 - _t51);
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t66 = J_theta_cart*_t23 - _t0*_t62 + _t19*_t55 + _t21*_t59 + _t36*_t65;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t67 = J_theta_cart2*_t36 - _t0*_t63 + _t19*_t56 + _t21*_t60 + _t23*_t65;
-    const trailer2_real_t _t68 = _t24 - _t26;
-    const trailer2_real_t _t3 = kept[18];
-    const trailer2_real_t _t69 = _t3*_t68;
-    const trailer2_real_t _t70 = _t31 - _t32;
-    const trailer2_real_t _t71 = _t3*_t70;
-    const trailer2_real_t _t72 = -_t24 - _t26;
-    const trailer2_real_t _t4 = kept[19];
-    const trailer2_real_t _t73 = _t4*_t72;
-    const trailer2_real_t _t74 = -_t31 - _t32;
-    const trailer2_real_t _t75 = _t4*_t74;
-    const trailer2_real_t _t76 = _t37 - _t40;
-    const trailer2_real_t _t5 = kept[20];
-    const trailer2_real_t _t77 = _t5*_t76;
-    const trailer2_real_t _t78 = _t43 - _t44;
-    const trailer2_real_t _t79 = _t5*_t78;
-    const trailer2_real_t _t80 = -_t37 - _t40;
-    const trailer2_real_t _t6 = kept[21];
-    const trailer2_real_t _t81 = _t6*_t80;
-    const trailer2_real_t _t82 = -_t43 - _t44;
-    const trailer2_real_t _t83 = _t6*_t82;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t84 = J_theta_cart2_left*_t81*_t83 + J_theta_cart2_right*_t77*_t79
-            + J_theta_cart_left*_t73*_t75 + J_theta_cart_right*_t69*_t71;
-    const trailer2_real_t _t85 = J_x_tractor*_t27 + _t1*_t54 + _t30*_t55 + _t42*_t56;
-    const trailer2_real_t _t7 = kept[22];
-    const trailer2_real_t _t86 = _t27*_t54 + _t28*_t58 + _t30*_t62 + _t42*_t63 + _t7;
-    const trailer2_real_t _t87 = J_x_tractor*_t28 + _t1*_t58 + _t30*_t59 + _t42*_t60;
-    const trailer2_real_t _t88 = J_theta_cart*_t30 + _t1*_t62 + _t27*_t55 + _t28*_t59 + _t42*_t65;
-    const trailer2_real_t _t89 = J_theta_cart2*_t42 + _t1*_t63 + _t27*_t56 + _t28*_t60 + _t30*_t65;
-    const trailer2_real_t J_theta_right = kept[7];
-    const trailer2_real_t _t90 = J_theta_cart2_left*_t81*_t81 + J_theta_cart2_right*_t77*_t77
-            + J_theta_cart_left*_t73*_t73 + J_theta_cart_right*_t69*_t69 + J_theta_right - _t0*_t64
-            + _t19*_t57 + _t21*_t61 + _t23*_t66 + _t36*_t67;
-    const trailer2_real_t _t91 = _t1*_t64 + _t27*_t57 + _t28*_t61 + _t30*_t66 + _t42*_t67 + _t84;
-    const trailer2_real_t _t92 = -_t0*_t86 + _t19*_t85 + _t21*_t87 + _t23*_t88 + _t36*_t89 + _t84;
-    const trailer2_real_t J_theta_left = kept[6];
-    const trailer2_real_t _t93 = J_theta_cart2_left*_t83*_t83 + J_theta_cart2_right*_t79*_t79
-            + J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t71*_t71 + J_theta_left + _t1*_t86
-            + _t27*_t85 + _t28*_t87 + _t30*_t88 + _t42*_t89;
-    norm[0] = trailer2_norm4(_t90, _t91, _t92, _t93)/TRAILER2_FABS(_t90*_t93 - _t91*_t92);
-}
-
-/* trailer2_tdroc_k_minimal_omega_difference: a copy of trailer2_minimal_omega_difference of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer2_tdroc_k_minimal_omega_difference(const trailer2_real_t *newer,
-    const trailer2_real_t *older, trailer2_real_t *norm)
-{
-    const trailer2_real_t Om_new0 = newer[0];
-    const trailer2_real_t Om_old0 = older[0];
-    const trailer2_real_t _t0 = Om_new0 - Om_old0;
-    const trailer2_real_t Om_new1 = newer[1];
-    const trailer2_real_t Om_old1 = older[1];
-    const trailer2_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer2_norm2(_t0, _t1);
-}
-
-/* trailer2_tdroc_k_minimal_tdroc_law: the per-step part of trailer2_minimal_tdroc_law of
-   trailer2_laws.c (documented in trailer2_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 129 add, 189 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer2_tdroc_k_minimal_tdroc_law(const trailer2_real_t kept[23],
-    const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
-    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
-    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
-    const trailer2_real_t *gain, const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s,
-    trailer2_real_t *s_norm)
-{
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t8 = TRAILER2_SIN_BOUNDED(theta_cart);
-    const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
-    const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
-    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t0 = kept[15];
-    const trailer2_real_t _t19 = _t0*_t18;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t21 = _t0*_t20;
-    const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
-    const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
-    const trailer2_real_t _t1 = kept[16];
-    const trailer2_real_t _t27 = _t1*_t18;
-    const trailer2_real_t _t28 = _t1*_t20;
-    const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
-    const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
-    const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
-    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
-    const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
-    const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[9];
-    const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[10];
-    const trailer2_real_t _t46 = K_theta_cart_x_tractor_2*_t9;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[11];
-    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t14;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[12];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
-    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
-    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
-    const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
-    const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer2_real_t _t55 = K_theta_cart_x_tractor_2*_t8 - _t49;
-    const trailer2_real_t _t56 = K_theta_cart2_x_tractor_2*_t14 - _t50;
-    const trailer2_real_t J_x_tractor = kept[8];
-    const trailer2_real_t _t57 = J_x_tractor*_t19 - _t0*_t54 + _t23*_t55 + _t36*_t56;
-    const trailer2_real_t _t58 = K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer2_real_t _t59 = _t45 + _t46;
-    const trailer2_real_t _t60 = _t47 + _t48;
-    const trailer2_real_t _t61 = J_x_tractor*_t21 - _t0*_t58 + _t23*_t59 + _t36*_t60;
-    const trailer2_real_t _t62 = _t11*(_t45 + _t46) + _t13*(-K_theta_cart_x_tractor_2*_t8 + _t49);
-    const trailer2_real_t _t63 = _t11*(_t47 + _t48) + _t13*(_t50 - _t51);
-    const trailer2_real_t _t2 = kept[17];
-    const trailer2_real_t _t64 = _t19*_t54 + _t2 + _t21*_t58 + _t23*_t62 + _t36*_t63;
-    const trailer2_real_t _t65 = _t52*(_t47 + _t48) + _t53*(_t50 - _t51);
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t66 = J_theta_cart*_t23 - _t0*_t62 + _t19*_t55 + _t21*_t59 + _t36*_t65;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t67 = J_theta_cart2*_t36 - _t0*_t63 + _t19*_t56 + _t21*_t60 + _t23*_t65;
-    const trailer2_real_t _t68 = _t24 - _t26;
-    const trailer2_real_t _t3 = kept[18];
-    const trailer2_real_t _t69 = _t3*_t68;
-    const trailer2_real_t _t70 = _t31 - _t32;
-    const trailer2_real_t _t71 = _t3*_t70;
-    const trailer2_real_t _t72 = -_t24 - _t26;
-    const trailer2_real_t _t4 = kept[19];
-    const trailer2_real_t _t73 = _t4*_t72;
-    const trailer2_real_t _t74 = -_t31 - _t32;
-    const trailer2_real_t _t75 = _t4*_t74;
-    const trailer2_real_t _t76 = _t37 - _t40;
-    const trailer2_real_t _t5 = kept[20];
-    const trailer2_real_t _t77 = _t5*_t76;
-    const trailer2_real_t _t78 = _t43 - _t44;
-    const trailer2_real_t _t79 = _t5*_t78;
-    const trailer2_real_t _t80 = -_t37 - _t40;
-    const trailer2_real_t _t6 = kept[21];
-    const trailer2_real_t _t81 = _t6*_t80;
-    const trailer2_real_t _t82 = -_t43 - _t44;
-    const trailer2_real_t _t83 = _t6*_t82;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t84 = J_theta_cart2_left*_t81*_t83 + J_theta_cart2_right*_t77*_t79
-            + J_theta_cart_left*_t73*_t75 + J_theta_cart_right*_t69*_t71;
-    const trailer2_real_t _t85 = J_x_tractor*_t27 + _t1*_t54 + _t30*_t55 + _t42*_t56;
-    const trailer2_real_t _t7 = kept[22];
-    const trailer2_real_t _t86 = _t27*_t54 + _t28*_t58 + _t30*_t62 + _t42*_t63 + _t7;
-    const trailer2_real_t _t87 = J_x_tractor*_t28 + _t1*_t58 + _t30*_t59 + _t42*_t60;
-    const trailer2_real_t _t88 = J_theta_cart*_t30 + _t1*_t62 + _t27*_t55 + _t28*_t59 + _t42*_t65;
-    const trailer2_real_t _t89 = J_theta_cart2*_t42 + _t1*_t63 + _t27*_t56 + _t28*_t60 + _t30*_t65;
-    const trailer2_real_t e0 = e[0];
-    const trailer2_real_t edot0 = edot[0];
-    const trailer2_real_t p12_0 = p12[0];
-    const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t90 = e0*p12_0 + edot0*p22_0;
-    const trailer2_real_t e1 = e[1];
-    const trailer2_real_t edot1 = edot[1];
-    const trailer2_real_t p12_1 = p12[1];
-    const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t91 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t92 = trailer2_norm2(_t90, _t91);
-    const trailer2_real_t gain_1 = gain[0];
-    const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t93 = gain_1/TRAILER2_FMAX(_t92, eps_1);
-    const trailer2_real_t qdd_des0 = qddot_des[0];
-    const trailer2_real_t k1_0 = k1[0];
-    const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t94 = _t90*_t93 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer2_real_t qdd_des1 = qddot_des[1];
-    const trailer2_real_t k1_1 = k1[1];
-    const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t95 = _t91*_t93 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t J_theta_right = kept[7];
-    const trailer2_real_t _t96 = J_theta_cart2_left*_t81*_t81 + J_theta_cart2_right*_t77*_t77
-            + J_theta_cart_left*_t73*_t73 + J_theta_cart_right*_t69*_t69 + J_theta_right - _t0*_t64
-            + _t19*_t57 + _t21*_t61 + _t23*_t66 + _t36*_t67;
-    const trailer2_real_t _t97 = _t1*_t64 + _t27*_t57 + _t28*_t61 + _t30*_t66 + _t42*_t67 + _t84;
-    const trailer2_real_t _t98 = -_t0*_t86 + _t19*_t85 + _t21*_t87 + _t23*_t88 + _t36*_t89 + _t84;
-    const trailer2_real_t J_theta_left = kept[6];
-    const trailer2_real_t _t99 = J_theta_cart2_left*_t83*_t83 + J_theta_cart2_right*_t79*_t79
-            + J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t71*_t71 + J_theta_left + _t1*_t86
-            + _t27*_t85 + _t28*_t87 + _t30*_t88 + _t42*_t89;
-    const trailer2_real_t H1hat0 = H1hat[0];
-    const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t94*_t96 + _t95*_t97;
-    u[1] = H1hat1 + _t94*_t98 + _t95*_t99;
-    s[0] = _t90;
-    s[1] = _t91;
-    s_norm[0] = _t92;
-}
 
 trailer2_status_t trailer2_tdroc_check_config_detail(const trailer2_tdroc_config_t *config,
     trailer2_error_detail_t *detail)
@@ -668,8 +66,8 @@ trailer2_status_t trailer2_tdroc_check_config_detail(const trailer2_tdroc_config
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0),
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0)};
         trailer2_real_t kept[23];  /* the step's copy, as _init would keep it */
-        trailer2_tdroc_k_minimal_minv_norm_keep(&config->nominal, kept);
-        trailer2_tdroc_k_minimal_minv_norm(kept, q0, &minv_norm);
+        trailer2_k_minimal_minv_norm_keep(&config->nominal, kept);
+        trailer2_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
             return trailer2_fail(detail, TRAILER2_ERR_BAD_NOMINAL, TRAILER2_FIELD_NOMINAL, -1);
         }
@@ -804,8 +202,9 @@ static void trailer2_tdroc_clear(trailer2_tdroc_state_t *s)
         s->H1hat[i] = TRAILER2_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < TRAILER2_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = TRAILER2_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * TRAILER2_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = TRAILER2_LIT(0.0);
     }
     s->gain = TRAILER2_LIT(0.0);
     s->s_norm = TRAILER2_LIT(0.0);
@@ -854,11 +253,11 @@ trailer2_status_t trailer2_tdroc_init(trailer2_tdroc_state_t *state,
     fresh.tde_c2 = config->accel_estimator == TRAILER2_ACCEL_MATCHED
         ? config->rate_window / (TRAILER2_LIT(2.0) * config->h) : TRAILER2_LIT(0.0);
     /* the values the step's minimal_tde keeps */
-    trailer2_tdroc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+    trailer2_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_minv_norm keeps */
-    trailer2_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
+    trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer2_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer2_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -903,8 +302,8 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     trailer2_real_t H1hat[11];
     trailer2_real_t gain, s_norm, u_discarded;
     trailer2_real_t minv_norm;
-    trailer2_real_t dn[TRAILER2_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    trailer2_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return trailer2_fail(detail, TRAILER2_ERR_NULL_POINTER, TRAILER2_FIELD_STATE, -1);
@@ -993,7 +392,7 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
             up[i] = TRAILER2_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER2_LIT(0.0);
         }
-        trailer2_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer2_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
     } else {
         for (i = 0; i < 11; ++i) {
             H1hat[i] = TRAILER2_LIT(0.0);
@@ -1003,25 +402,31 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
-        trailer2_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
-        for (i = 1; i < TRAILER2_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        trailer2_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
+        omega_head = omega_head == 0 ? TRAILER2_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= TRAILER2_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < TRAILER2_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const trailer2_real_t *const older = &state->omega_ring[omega_head];
+        const trailer2_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         trailer2_real_t w_warm[TRAILER2_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer2_real_t *w = state->weights;  /* the full window's, from _init */
@@ -1030,8 +435,8 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer2_tdroc_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
-        trailer2_tdroc_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
+        trailer2_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
+        trailer2_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer2_cap_gain(gain);
     } else {
@@ -1040,7 +445,7 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     /* The law. */
     {
         trailer2_real_t s[11];
-        trailer2_tdroc_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+        trailer2_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                 &cfg->eps, u, s, &s_norm);
     }
@@ -1073,9 +478,11 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     for (i = 0; i < 11; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < TRAILER2_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + TRAILER2_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->minv_norm = minv_norm;
     state->gain = gain;

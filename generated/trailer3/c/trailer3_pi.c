@@ -10,6 +10,7 @@
 #include "trailer3_controller.h"
 #include "trailer3_laws.h"
 #include "trailer3_model.h"
+#include "trailer3_kernels.h"
 
 #ifdef TRAILER3_PI_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,78 +18,6 @@
 #include "trailer3_pi_frozen.h"
 const trailer3_pi_config_t trailer3_pi_frozen_config = TRAILER3_PI_FROZEN_CONFIG;
 #endif
-
-#ifndef TRAILER3_PI_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer3_pi_k_minimal_pi_law_keep: the parameter-only part of trailer3_minimal_pi_law of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_pi_k_minimal_pi_law_keep(const trailer3_params_t *p,
-    trailer3_real_t kept[2])
-{
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t1 = TRAILER3_LIT(1.0)/radius_left;
-    kept[0] = _t0;
-    kept[1] = _t1;
-}
-#endif
-
-/* trailer3_pi_k_minimal_pi_law: the per-step part of trailer3_minimal_pi_law of trailer3_laws.c
-   (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void trailer3_pi_k_minimal_pi_law(const trailer3_real_t kept[2],
-    const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *q_des,
-    const trailer3_real_t *qdot_des, const trailer3_real_t *integral, const trailer3_real_t *gains,
-    const trailer3_real_t *limits, trailer3_real_t *u, trailer3_real_t *integral_next)
-{
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t qd_2 = q_des[2];
-    const trailer3_real_t _t2 = qd_2 - theta_tractor;
-    const trailer3_real_t qdd_0 = qdot_des[0];
-    const trailer3_real_t qdd_1 = qdot_des[1];
-    const trailer3_real_t _t3 = qdd_0*TRAILER3_COS(qd_2) + qdd_1*TRAILER3_SIN(qd_2);
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t x_tractor = q[0];
-    const trailer3_real_t qd_0 = q_des[0];
-    const trailer3_real_t _t5 = qd_0 - x_tractor;
-    const trailer3_real_t _t6 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t y_tractor = q[1];
-    const trailer3_real_t qd_1 = q_des[1];
-    const trailer3_real_t _t7 = qd_1 - y_tractor;
-    const trailer3_real_t kx = gains[0];
-    const trailer3_real_t _t8 = _t3*TRAILER3_COS(_t2) + kx*(_t4*_t5 + _t6*_t7);
-    const trailer3_real_t qdd_2 = qdot_des[2];
-    const trailer3_real_t ky = gains[1];
-    const trailer3_real_t ktheta = gains[2];
-    const trailer3_real_t _t9 = TRAILER3_LIT(207.0)*_t3*(ktheta*TRAILER3_SIN(_t2)
-            + ky*(_t4*_t7 - _t5*_t6))/TRAILER3_LIT(1000.0)
-            + TRAILER3_LIT(207.0)*qdd_2/TRAILER3_LIT(1000.0);
-    const trailer3_real_t thetadot_right = qdot[6];
-    const trailer3_real_t _t0 = kept[0];
-    const trailer3_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;
-    const trailer3_real_t tau_max = limits[1];
-    const trailer3_real_t _t11 = -tau_max;
-    const trailer3_real_t ki = gains[4];
-    const trailer3_real_t h = limits[0];
-    const trailer3_real_t _t12 = h*ki;
-    const trailer3_real_t I_0 = integral[0];
-    const trailer3_real_t _t13 = TRAILER3_FMIN(tau_max, TRAILER3_FMAX(_t11, I_0 + _t10*_t12));
-    const trailer3_real_t thetadot_left = qdot[7];
-    const trailer3_real_t _t1 = kept[1];
-    const trailer3_real_t _t14 = _t1*(_t8 - _t9) - thetadot_left;
-    const trailer3_real_t I_1 = integral[1];
-    const trailer3_real_t _t15 = TRAILER3_FMIN(tau_max, TRAILER3_FMAX(_t11, I_1 + _t12*_t14));
-    const trailer3_real_t kp = gains[3];
-    u[0] = _t10*kp + _t13;
-    u[1] = _t14*kp + _t15;
-    integral_next[0] = _t13;
-    integral_next[1] = _t15;
-}
 
 trailer3_status_t trailer3_pi_check_config_detail(const trailer3_pi_config_t *config,
     trailer3_error_detail_t *detail)
@@ -300,7 +229,7 @@ trailer3_status_t trailer3_pi_init(trailer3_pi_state_t *state, const trailer3_pi
     fresh.magic = TRAILER3_STATE_MAGIC;
     fresh.config = *config;
     /* the values the step's minimal_pi_law keeps */
-    trailer3_pi_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
+    trailer3_k_minimal_pi_law_keep(&config->nominal, fresh.k_minimal_pi_law);
     trailer3_pi_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;
@@ -399,7 +328,7 @@ trailer3_status_t trailer3_pi_step_detail(trailer3_pi_state_t *state,
     {
         const trailer3_real_t gains[5] = {cfg->kx, cfg->ky, cfg->ktheta, cfg->kp, cfg->ki};
         const trailer3_real_t limits[2] = {cfg->h, cfg->tau_max};
-        trailer3_pi_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
+        trailer3_k_minimal_pi_law(kept_minimal_pi_law, q, qdot, q_des, qdot_des, state->integral,
                 gains, limits, u, integral);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */

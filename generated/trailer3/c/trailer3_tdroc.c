@@ -10,6 +10,7 @@
 #include "trailer3_controller.h"
 #include "trailer3_laws.h"
 #include "trailer3_model.h"
+#include "trailer3_kernels.h"
 
 #ifdef TRAILER3_TDROC_FROZEN
 /* The configuration the `freeze` command validated on the host with this code, and the state
@@ -17,809 +18,6 @@
 #include "trailer3_tdroc_frozen.h"
 const trailer3_tdroc_config_t trailer3_tdroc_frozen_config = TRAILER3_TDROC_FROZEN_CONFIG;
 #endif
-
-/* trailer3_tdroc_k_tdroc_weighted_gain: a copy of trailer3_tdroc_weighted_gain of trailer3_laws.c
-   (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_tdroc_k_tdroc_weighted_gain(const trailer3_real_t *minv_norm,
-    const trailer3_real_t *dn, const trailer3_real_t *w, trailer3_real_t *gain)
-{
-    const trailer3_real_t minv_norm_1 = minv_norm[0];
-    const trailer3_real_t dn0 = dn[0];
-    const trailer3_real_t dn1 = dn[1];
-    const trailer3_real_t dn2 = dn[2];
-    const trailer3_real_t dn3 = dn[3];
-    const trailer3_real_t dn4 = dn[4];
-    const trailer3_real_t dn5 = dn[5];
-    const trailer3_real_t dn6 = dn[6];
-    const trailer3_real_t dn7 = dn[7];
-    const trailer3_real_t w0 = w[0];
-    const trailer3_real_t w1 = w[1];
-    const trailer3_real_t w2 = w[2];
-    const trailer3_real_t w3 = w[3];
-    const trailer3_real_t w4 = w[4];
-    const trailer3_real_t w5 = w[5];
-    const trailer3_real_t w6 = w[6];
-    const trailer3_real_t w7 = w[7];
-    gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
-}
-
-#ifndef TRAILER3_TDROC_FROZEN  /* _init's only: a frozen build's state is compiled in */
-/* trailer3_tdroc_k_minimal_tde_keep: the parameter-only part of trailer3_minimal_tde of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 9 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_tdroc_k_minimal_tde_keep(const trailer3_params_t *p,
-    const trailer3_real_t *span, trailer3_real_t kept[31])
-{
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t span_1 = span[0];
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/span_1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart3;
-    kept[5] = J_theta_cart3_left;
-    kept[6] = J_theta_cart3_right;
-    kept[7] = J_theta_cart_left;
-    kept[8] = J_theta_cart_right;
-    kept[9] = J_theta_left;
-    kept[10] = J_theta_right;
-    kept[11] = J_x_tractor;
-    kept[12] = K_theta_cart_x_tractor;
-    kept[13] = K_theta_cart_x_tractor_2;
-    kept[14] = K_theta_cart2_x_tractor;
-    kept[15] = K_theta_cart2_x_tractor_2;
-    kept[16] = K_theta_cart3_x_tractor;
-    kept[17] = K_theta_cart3_x_tractor_2;
-    kept[18] = K_theta_tractor_x_tractor;
-    kept[19] = K_theta_tractor_x_tractor_2;
-    kept[20] = _t0;
-    kept[21] = _t1;
-    kept[22] = _t2;
-    kept[23] = _t3;
-    kept[24] = _t4;
-    kept[25] = _t5;
-    kept[26] = _t6;
-    kept[27] = _t7;
-    kept[28] = _t8;
-    kept[29] = _t9;
-    kept[30] = _t10;
-}
-#endif
-
-/* trailer3_tdroc_k_minimal_tde: the per-step part of trailer3_minimal_tde of trailer3_laws.c
-   (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 189 add, 273 mul, 28 div, 8 sin/cos, 0 sqrt */
-static inline void trailer3_tdroc_k_minimal_tde(const trailer3_real_t kept[31],
-    const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
-    const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
-{
-    const trailer3_real_t qp3 = q_prev[3];
-    const trailer3_real_t _t11 = TRAILER3_SIN_BOUNDED(qp3);
-    const trailer3_real_t _t12 = TRAILER3_COS_BOUNDED(qp3);
-    const trailer3_real_t qp2 = q_prev[2];
-    const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(qp2);
-    const trailer3_real_t _t14 = TRAILER3_LIT(3.0)*_t13/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t15 = TRAILER3_COS_BOUNDED(qp2);
-    const trailer3_real_t _t16 = TRAILER3_LIT(3.0)*_t15/TRAILER3_LIT(10.0);
-    const trailer3_real_t qp4 = q_prev[4];
-    const trailer3_real_t _t17 = TRAILER3_SIN_BOUNDED(qp4);
-    const trailer3_real_t _t18 = TRAILER3_COS_BOUNDED(qp4);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t20 = TRAILER3_LIT(17.0)*_t12/TRAILER3_LIT(20.0);
-    const trailer3_real_t qp5 = q_prev[5];
-    const trailer3_real_t _t21 = TRAILER3_SIN_BOUNDED(qp5);
-    const trailer3_real_t _t22 = TRAILER3_COS_BOUNDED(qp5);
-    const trailer3_real_t _t23 = TRAILER3_LIT(17.0)*_t22/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t24 = -_t11*_t14 - _t12*_t16;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(207.0)*_t13/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t26 = _t0*_t25;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(207.0)*_t15/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t28 = _t0*_t27;
-    const trailer3_real_t _t29 = _t0*_t24 + _t11*_t28 - _t12*_t26;
-    const trailer3_real_t _t30 = -TRAILER3_LIT(5.0)*_t29/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t31 = _t30/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t32 = TRAILER3_LIT(3.0)*_t11*_t15/TRAILER3_LIT(10.0) - _t12*_t14;
-    const trailer3_real_t _t33 = -_t0*_t32 - _t11*_t26 - _t12*_t28;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t34 = _t1*_t25;
-    const trailer3_real_t _t35 = _t1*_t27;
-    const trailer3_real_t _t36 = -_t1*_t24 + _t11*_t35 - _t12*_t34;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(5.0)*_t36/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t38 = _t37/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t39 = _t1*_t32 - _t11*_t34 - _t12*_t35;
-    const trailer3_real_t _t40 = -_t14*_t17 - _t16*_t18;
-    const trailer3_real_t _t41 = -_t17*_t19 - _t18*_t20;
-    const trailer3_real_t _t42 = _t0*_t40 + _t17*_t28 - _t18*_t26 - _t30*_t41;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(5.0)*_t42/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t44 = _t43/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t45 = -_t14*_t18 + TRAILER3_LIT(3.0)*_t15*_t17/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t46 = TRAILER3_LIT(17.0)*_t12*_t17/TRAILER3_LIT(20.0) - _t18*_t19;
-    const trailer3_real_t _t47 = -_t0*_t45 - _t17*_t26 - _t18*_t28 + _t30*_t46;
-    const trailer3_real_t _t48 = -_t1*_t40 + _t17*_t35 - _t18*_t34 - _t37*_t41;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t50 = _t49/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t51 = _t1*_t45 - _t17*_t34 - _t18*_t35 + _t37*_t46;
-    const trailer3_real_t _t52 = -_t14*_t21 - _t16*_t22;
-    const trailer3_real_t _t53 = -_t19*_t21 - _t20*_t22;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(17.0)*_t17*_t21/TRAILER3_LIT(20.0) - _t18*_t23;
-    const trailer3_real_t _t55 = _t0*_t52 + _t21*_t28 - _t22*_t26 - _t30*_t53 - _t43*_t54;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(5.0)*_t55/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t57 = _t56/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t58 = -_t14*_t22 + TRAILER3_LIT(3.0)*_t15*_t21/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t59 = TRAILER3_LIT(17.0)*_t12*_t21/TRAILER3_LIT(20.0) - _t19*_t22;
-    const trailer3_real_t _t60 = -_t17*_t23 + TRAILER3_LIT(17.0)*_t18*_t21/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t61 = -_t0*_t58 - _t21*_t26 - _t22*_t28 + _t30*_t59 + _t43*_t60;
-    const trailer3_real_t _t62 = -_t1*_t52 + _t21*_t35 - _t22*_t34 - _t37*_t53 - _t49*_t54;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t64 = _t63/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t65 = _t1*_t58 - _t21*_t34 - _t22*_t35 + _t37*_t59 + _t49*_t60;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t67 = K_theta_cart_x_tractor_2*_t12;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t69 = K_theta_cart2_x_tractor_2*_t18;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t71 = K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t72 = K_theta_cart_x_tractor*_t12;
-    const trailer3_real_t _t73 = K_theta_cart2_x_tractor*_t18;
-    const trailer3_real_t _t74 = K_theta_cart3_x_tractor*_t22;
-    const trailer3_real_t _t75 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t78 = TRAILER3_LIT(17.0)*_t18/TRAILER3_LIT(20.0);
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t79 = -K_theta_tractor_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t13;
-    const trailer3_real_t _t80 = K_theta_cart_x_tractor_2*_t11 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart2_x_tractor_2*_t17 - _t73;
-    const trailer3_real_t _t82 = K_theta_cart3_x_tractor_2*_t21 - _t74;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t83 = J_x_tractor*_t26 - _t0*_t79 + _t30*_t80 + _t43*_t81 + _t56*_t82;
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t15;
-    const trailer3_real_t _t85 = _t66 + _t67;
-    const trailer3_real_t _t86 = _t68 + _t69;
-    const trailer3_real_t _t87 = _t70 + _t71;
-    const trailer3_real_t _t88 = J_x_tractor*_t28 - _t0*_t84 + _t30*_t85 + _t43*_t86 + _t56*_t87;
-    const trailer3_real_t _t89 = _t14*(_t66 + _t67) + _t16*(-K_theta_cart_x_tractor_2*_t11 + _t72);
-    const trailer3_real_t _t90 = _t19*(_t68 + _t69) + _t20*(_t73 - _t75);
-    const trailer3_real_t _t91 = _t19*(_t70 + _t71) + _t20*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t92 = J_theta_cart*_t30 - _t0*_t89 + _t26*_t80 + _t28*_t85 + _t43*_t90
-            + _t56*_t91;
-    const trailer3_real_t _t93 = _t14*(_t68 + _t69) + _t16*(_t73 - _t75);
-    const trailer3_real_t _t94 = _t77*(_t70 + _t71) + _t78*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t95 = J_theta_cart2*_t43 - _t0*_t93 + _t26*_t81 + _t28*_t86 + _t30*_t90
-            + _t56*_t94;
-    const trailer3_real_t _t96 = _t14*(_t70 + _t71) + _t16*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t56 - _t0*_t96 + _t26*_t82 + _t28*_t87 + _t30*_t91
-            + _t43*_t94;
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t98 = _t2 + _t26*_t79 + _t28*_t84 + _t30*_t89 + _t43*_t93 + _t56*_t96;
-    const trailer3_real_t _t99 = _t31 - _t33;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t100 = _t3*_t99;
-    const trailer3_real_t _t101 = _t38 - _t39;
-    const trailer3_real_t _t102 = _t101*_t3;
-    const trailer3_real_t _t103 = -_t31 - _t33;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t104 = _t103*_t4;
-    const trailer3_real_t _t105 = -_t38 - _t39;
-    const trailer3_real_t _t106 = _t105*_t4;
-    const trailer3_real_t _t107 = _t44 - _t47;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t108 = _t107*_t5;
-    const trailer3_real_t _t109 = _t50 - _t51;
-    const trailer3_real_t _t110 = _t109*_t5;
-    const trailer3_real_t _t111 = -_t44 - _t47;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t112 = _t111*_t6;
-    const trailer3_real_t _t113 = -_t50 - _t51;
-    const trailer3_real_t _t114 = _t113*_t6;
-    const trailer3_real_t _t115 = _t57 - _t61;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t116 = _t115*_t7;
-    const trailer3_real_t _t117 = _t64 - _t65;
-    const trailer3_real_t _t118 = _t117*_t7;
-    const trailer3_real_t _t119 = -_t57 - _t61;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t120 = _t119*_t8;
-    const trailer3_real_t _t121 = -_t64 - _t65;
-    const trailer3_real_t _t122 = _t121*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t123 = J_theta_cart2_left*_t112*_t114 + J_theta_cart2_right*_t108*_t110
-            + J_theta_cart3_left*_t120*_t122 + J_theta_cart3_right*_t116*_t118
-            + J_theta_cart_left*_t104*_t106 + J_theta_cart_right*_t100*_t102;
-    const trailer3_real_t _t124 = J_x_tractor*_t34 + _t1*_t79 + _t37*_t80 + _t49*_t81 + _t63*_t82;
-    const trailer3_real_t _t125 = J_x_tractor*_t35 + _t1*_t84 + _t37*_t85 + _t49*_t86 + _t63*_t87;
-    const trailer3_real_t _t126 = J_theta_cart*_t37 + _t1*_t89 + _t34*_t80 + _t35*_t85 + _t49*_t90
-            + _t63*_t91;
-    const trailer3_real_t _t127 = J_theta_cart2*_t49 + _t1*_t93 + _t34*_t81 + _t35*_t86 + _t37*_t90
-            + _t63*_t94;
-    const trailer3_real_t _t128 = J_theta_cart3*_t63 + _t1*_t96 + _t34*_t82 + _t35*_t87 + _t37*_t91
-            + _t49*_t94;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t129 = _t34*_t79 + _t35*_t84 + _t37*_t89 + _t49*_t93 + _t63*_t96 + _t9;
-    const trailer3_real_t qd_now0 = qdot_now[0];
-    const trailer3_real_t qd_then0 = qdot_then[0];
-    const trailer3_real_t _t10 = kept[30];
-    const trailer3_real_t _t130 = _t10*(qd_now0 - qd_then0);
-    const trailer3_real_t qd_now1 = qdot_now[1];
-    const trailer3_real_t qd_then1 = qdot_then[1];
-    const trailer3_real_t _t131 = _t10*(qd_now1 - qd_then1);
-    const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t132 = J_theta_cart2_left*_t112*_t112 + J_theta_cart2_right*_t108*_t108
-            + J_theta_cart3_left*_t120*_t120 + J_theta_cart3_right*_t116*_t116
-            + J_theta_cart_left*_t104*_t104 + J_theta_cart_right*_t100*_t100 + J_theta_right
-            - _t0*_t98 + _t26*_t83 + _t28*_t88 + _t30*_t92 + _t43*_t95 + _t56*_t97;
-    const trailer3_real_t _t133 = _t1*_t98 + _t123 + _t34*_t83 + _t35*_t88 + _t37*_t92 + _t49*_t95
-            + _t63*_t97;
-    const trailer3_real_t _t134 = -_t0*_t129 + _t123 + _t124*_t26 + _t125*_t28 + _t126*_t30
-            + _t127*_t43 + _t128*_t56;
-    const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t135 = J_theta_cart2_left*_t114*_t114 + J_theta_cart2_right*_t110*_t110
-            + J_theta_cart3_left*_t122*_t122 + J_theta_cart3_right*_t118*_t118
-            + J_theta_cart_left*_t106*_t106 + J_theta_cart_right*_t102*_t102 + J_theta_left
-            + _t1*_t129 + _t124*_t34 + _t125*_t35 + _t126*_t37 + _t127*_t49 + _t128*_t63;
-    const trailer3_real_t up0 = u_prev[0];
-    const trailer3_real_t up1 = u_prev[1];
-    H1hat[0] = -_t130*_t132 - _t131*_t133 + up0;
-    H1hat[1] = -_t130*_t134 - _t131*_t135 + up1;
-}
-
-/* trailer3_tdroc_k_minimal_minv_norm_keep: the parameter-only part of trailer3_minimal_minv_norm of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 0 add, 4 mul, 8 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_tdroc_k_minimal_minv_norm_keep(const trailer3_params_t *p,
-    trailer3_real_t kept[30])
-{
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart3;
-    kept[5] = J_theta_cart3_left;
-    kept[6] = J_theta_cart3_right;
-    kept[7] = J_theta_cart_left;
-    kept[8] = J_theta_cart_right;
-    kept[9] = J_theta_left;
-    kept[10] = J_theta_right;
-    kept[11] = J_x_tractor;
-    kept[12] = K_theta_cart_x_tractor;
-    kept[13] = K_theta_cart_x_tractor_2;
-    kept[14] = K_theta_cart2_x_tractor;
-    kept[15] = K_theta_cart2_x_tractor_2;
-    kept[16] = K_theta_cart3_x_tractor;
-    kept[17] = K_theta_cart3_x_tractor_2;
-    kept[18] = K_theta_tractor_x_tractor;
-    kept[19] = K_theta_tractor_x_tractor_2;
-    kept[20] = _t0;
-    kept[21] = _t1;
-    kept[22] = _t2;
-    kept[23] = _t3;
-    kept[24] = _t4;
-    kept[25] = _t5;
-    kept[26] = _t6;
-    kept[27] = _t7;
-    kept[28] = _t8;
-    kept[29] = _t9;
-}
-
-/* trailer3_tdroc_k_minimal_minv_norm: the per-step part of trailer3_minimal_minv_norm of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 187 add, 270 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static inline void trailer3_tdroc_k_minimal_minv_norm(const trailer3_real_t kept[30],
-    const trailer3_real_t *q, trailer3_real_t *norm)
-{
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t27 = _t0*_t26;
-    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t33 = _t1*_t24;
-    const trailer3_real_t _t34 = _t1*_t26;
-    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
-    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
-    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
-    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
-    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
-    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
-    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
-    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
-    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
-    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
-    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
-    const trailer3_real_t _t84 = _t65 + _t66;
-    const trailer3_real_t _t85 = _t67 + _t68;
-    const trailer3_real_t _t86 = _t69 + _t70;
-    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
-    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
-    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
-    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
-    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
-    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
-            + _t55*_t93;
-    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
-            + _t55*_t95;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
-            + _t42*_t95;
-    const trailer3_real_t _t98 = _t30 - _t32;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t99 = _t3*_t98;
-    const trailer3_real_t _t100 = _t37 - _t38;
-    const trailer3_real_t _t101 = _t100*_t3;
-    const trailer3_real_t _t102 = -_t30 - _t32;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t103 = _t102*_t4;
-    const trailer3_real_t _t104 = -_t37 - _t38;
-    const trailer3_real_t _t105 = _t104*_t4;
-    const trailer3_real_t _t106 = _t43 - _t46;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t107 = _t106*_t5;
-    const trailer3_real_t _t108 = _t49 - _t50;
-    const trailer3_real_t _t109 = _t108*_t5;
-    const trailer3_real_t _t110 = -_t43 - _t46;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t111 = _t110*_t6;
-    const trailer3_real_t _t112 = -_t49 - _t50;
-    const trailer3_real_t _t113 = _t112*_t6;
-    const trailer3_real_t _t114 = _t56 - _t60;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = _t63 - _t64;
-    const trailer3_real_t _t117 = _t116*_t7;
-    const trailer3_real_t _t118 = -_t56 - _t60;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t119 = _t118*_t8;
-    const trailer3_real_t _t120 = -_t63 - _t64;
-    const trailer3_real_t _t121 = _t120*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
-            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
-            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
-    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
-    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
-    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
-            + _t62*_t93;
-    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
-            + _t62*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
-            + _t48*_t95;
-    const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t129 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
-            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
-            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
-    const trailer3_real_t _t130 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
-            + _t62*_t97;
-    const trailer3_real_t _t131 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
-            + _t127*_t42 + _t128*_t55;
-    const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t132 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
-            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
-            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
-            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
-    norm[0] = trailer3_norm4(_t129, _t130, _t131, _t132)/TRAILER3_FABS(_t129*_t132 - _t130*_t131);
-}
-
-/* trailer3_tdroc_k_minimal_omega_difference: a copy of trailer3_minimal_omega_difference of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer3_tdroc_k_minimal_omega_difference(const trailer3_real_t *newer,
-    const trailer3_real_t *older, trailer3_real_t *norm)
-{
-    const trailer3_real_t Om_new0 = newer[0];
-    const trailer3_real_t Om_old0 = older[0];
-    const trailer3_real_t _t0 = Om_new0 - Om_old0;
-    const trailer3_real_t Om_new1 = newer[1];
-    const trailer3_real_t Om_old1 = older[1];
-    const trailer3_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer3_norm2(_t0, _t1);
-}
-
-/* trailer3_tdroc_k_minimal_tdroc_law: the per-step part of trailer3_minimal_tdroc_law of
-   trailer3_laws.c (documented in trailer3_laws.h), a copy
-   private to this file that the step can inline: no call, and the compiler schedules it
-   with the step (in a frozen build, the configuration's arithmetic folded).
-   operations after CSE: 196 add, 280 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer3_tdroc_k_minimal_tdroc_law(const trailer3_real_t kept[30],
-    const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
-    const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
-    const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
-    const trailer3_real_t *gain, const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s,
-    trailer3_real_t *s_norm)
-{
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t27 = _t0*_t26;
-    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t33 = _t1*_t24;
-    const trailer3_real_t _t34 = _t1*_t26;
-    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
-    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
-    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
-    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
-    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
-    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
-    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
-    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
-    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
-    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
-    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
-    const trailer3_real_t _t84 = _t65 + _t66;
-    const trailer3_real_t _t85 = _t67 + _t68;
-    const trailer3_real_t _t86 = _t69 + _t70;
-    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
-    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
-    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
-    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
-    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
-    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
-            + _t55*_t93;
-    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
-            + _t55*_t95;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
-            + _t42*_t95;
-    const trailer3_real_t _t98 = _t30 - _t32;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t99 = _t3*_t98;
-    const trailer3_real_t _t100 = _t37 - _t38;
-    const trailer3_real_t _t101 = _t100*_t3;
-    const trailer3_real_t _t102 = -_t30 - _t32;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t103 = _t102*_t4;
-    const trailer3_real_t _t104 = -_t37 - _t38;
-    const trailer3_real_t _t105 = _t104*_t4;
-    const trailer3_real_t _t106 = _t43 - _t46;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t107 = _t106*_t5;
-    const trailer3_real_t _t108 = _t49 - _t50;
-    const trailer3_real_t _t109 = _t108*_t5;
-    const trailer3_real_t _t110 = -_t43 - _t46;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t111 = _t110*_t6;
-    const trailer3_real_t _t112 = -_t49 - _t50;
-    const trailer3_real_t _t113 = _t112*_t6;
-    const trailer3_real_t _t114 = _t56 - _t60;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = _t63 - _t64;
-    const trailer3_real_t _t117 = _t116*_t7;
-    const trailer3_real_t _t118 = -_t56 - _t60;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t119 = _t118*_t8;
-    const trailer3_real_t _t120 = -_t63 - _t64;
-    const trailer3_real_t _t121 = _t120*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
-            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
-            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
-    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
-    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
-    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
-            + _t62*_t93;
-    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
-            + _t62*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
-            + _t48*_t95;
-    const trailer3_real_t e0 = e[0];
-    const trailer3_real_t edot0 = edot[0];
-    const trailer3_real_t p12_0 = p12[0];
-    const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t129 = e0*p12_0 + edot0*p22_0;
-    const trailer3_real_t e1 = e[1];
-    const trailer3_real_t edot1 = edot[1];
-    const trailer3_real_t p12_1 = p12[1];
-    const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t130 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t131 = trailer3_norm2(_t129, _t130);
-    const trailer3_real_t gain_1 = gain[0];
-    const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t132 = gain_1/TRAILER3_FMAX(_t131, eps_1);
-    const trailer3_real_t qdd_des0 = qddot_des[0];
-    const trailer3_real_t k1_0 = k1[0];
-    const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t133 = _t129*_t132 + e0*k1_0 + edot0*k2_0 + qdd_des0;
-    const trailer3_real_t qdd_des1 = qddot_des[1];
-    const trailer3_real_t k1_1 = k1[1];
-    const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t134 = _t130*_t132 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t135 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
-            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
-            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
-    const trailer3_real_t _t136 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
-            + _t62*_t97;
-    const trailer3_real_t _t137 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
-            + _t127*_t42 + _t128*_t55;
-    const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t138 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
-            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
-            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
-            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
-    const trailer3_real_t H1hat0 = H1hat[0];
-    const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t133*_t135 + _t134*_t136;
-    u[1] = H1hat1 + _t133*_t137 + _t134*_t138;
-    s[0] = _t129;
-    s[1] = _t130;
-    s_norm[0] = _t131;
-}
 
 trailer3_status_t trailer3_tdroc_check_config_detail(const trailer3_tdroc_config_t *config,
     trailer3_error_detail_t *detail)
@@ -869,8 +67,8 @@ trailer3_status_t trailer3_tdroc_check_config_detail(const trailer3_tdroc_config
                 TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0),
                 TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0)};
         trailer3_real_t kept[30];  /* the step's copy, as _init would keep it */
-        trailer3_tdroc_k_minimal_minv_norm_keep(&config->nominal, kept);
-        trailer3_tdroc_k_minimal_minv_norm(kept, q0, &minv_norm);
+        trailer3_k_minimal_minv_norm_keep(&config->nominal, kept);
+        trailer3_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
             return trailer3_fail(detail, TRAILER3_ERR_BAD_NOMINAL, TRAILER3_FIELD_NOMINAL, -1);
         }
@@ -1019,8 +217,9 @@ static void trailer3_tdroc_clear(trailer3_tdroc_state_t *s)
         s->H1hat[i] = TRAILER3_LIT(0.0);
     }
     s->omega_count = 0;
-    for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-        s->omega_dnorm[i] = TRAILER3_LIT(0.0);
+    s->omega_head = 0;
+    for (i = 0; i < 2 * TRAILER3_MAX_WINDOW; ++i) {
+        s->omega_ring[i] = TRAILER3_LIT(0.0);
     }
     s->gain = TRAILER3_LIT(0.0);
     s->s_norm = TRAILER3_LIT(0.0);
@@ -1069,11 +268,11 @@ trailer3_status_t trailer3_tdroc_init(trailer3_tdroc_state_t *state,
     fresh.tde_c2 = config->accel_estimator == TRAILER3_ACCEL_MATCHED
         ? config->rate_window / (TRAILER3_LIT(2.0) * config->h) : TRAILER3_LIT(0.0);
     /* the values the step's minimal_tde keeps */
-    trailer3_tdroc_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
+    trailer3_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_minv_norm keeps */
-    trailer3_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
+    trailer3_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer3_tdroc_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer3_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer3_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;
@@ -1118,8 +317,8 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     trailer3_real_t H1hat[14];
     trailer3_real_t gain, s_norm, u_discarded;
     trailer3_real_t minv_norm;
-    trailer3_real_t dn[TRAILER3_MAX_WINDOW];  /* the window's difference norms after this step */
-    int omega_count;
+    trailer3_real_t dn_new;  /* the window's newest difference norm after this step */
+    int omega_count, omega_head;
     bool pushed;
     if (state == NULL) {
         return trailer3_fail(detail, TRAILER3_ERR_NULL_POINTER, TRAILER3_FIELD_STATE, -1);
@@ -1208,7 +407,7 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
             up[i] = TRAILER3_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER3_LIT(0.0);
         }
-        trailer3_tdroc_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer3_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
     } else {
         for (i = 0; i < 14; ++i) {
             H1hat[i] = TRAILER3_LIT(0.0);
@@ -1218,25 +417,31 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
        normalised gain over the window as it is after this step. (25) reads the window only
        through ||Omega(i) - Omega(i+1)||, so the state keeps those norms, not the Omega's:
        the one new norm needs the previous Omega(1) only, which is state->H1hat (every step
-       from the third pushes its H1hat; the two before push nothing and leave H1hat 0). */
+       from the third pushes its H1hat; the two before push nothing and leave H1hat 0).
+       The norms are a ring written twice (at k and k + MAX_WINDOW): a push moves the head
+       back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
+       which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
+       the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
     omega_count = state->omega_count;
+    omega_head = state->omega_head;
     if (pushed) {
-        trailer3_tdroc_k_minimal_omega_difference(H1hat, state->H1hat, &dn[0]);
-        for (i = 1; i < TRAILER3_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i - 1];
-        }
+        trailer3_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
+        omega_head = omega_head == 0 ? TRAILER3_MAX_WINDOW - 1 : omega_head - 1;
         if (omega_count <= TRAILER3_MAX_WINDOW) {
             omega_count += 1;
         }
     } else {
-        for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-            dn[i] = state->omega_dnorm[i];
-        }
+        dn_new = state->omega_ring[omega_head];
     }
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
+        /* the window after this step, newest first: read in place but for the new norm (a
+           local array of constant indices, which the inlined kernel keeps in registers) */
+        const trailer3_real_t *const older = &state->omega_ring[omega_head];
+        const trailer3_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
+                older[6], older[7]};
         trailer3_real_t w_warm[TRAILER3_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer3_real_t *w = state->weights;  /* the full window's, from _init */
@@ -1245,8 +450,8 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer3_tdroc_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
-        trailer3_tdroc_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
+        trailer3_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
+        trailer3_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer3_cap_gain(gain);
     } else {
@@ -1255,7 +460,7 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     /* The law. */
     {
         trailer3_real_t s[14];
-        trailer3_tdroc_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+        trailer3_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                 &cfg->eps, u, s, &s_norm);
     }
@@ -1288,9 +493,11 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     for (i = 0; i < 14; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-        state->omega_dnorm[i] = dn[i];  /* shifted by one when this step pushed */
+    if (pushed) {
+        state->omega_ring[omega_head] = dn_new;
+        state->omega_ring[omega_head + TRAILER3_MAX_WINDOW] = dn_new;
     }
+    state->omega_head = omega_head;
     state->omega_count = omega_count;
     state->minv_norm = minv_norm;
     state->gain = gain;

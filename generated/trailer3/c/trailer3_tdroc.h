@@ -63,8 +63,10 @@ typedef struct {
     trailer3_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                     _init) */
     int omega_count;        /* Omega's seen, at most TRAILER3_MAX_WINDOW + 1 (Omega(1) is H1hat) */
-    trailer3_real_t omega_dnorm[TRAILER3_MAX_WINDOW]; /* ||Omega(i) - Omega(i+1)||, newest first:
-                                                         all (25) needs */
+    int omega_head;         /* 0..TRAILER3_MAX_WINDOW - 1: where omega_ring holds the newest norm */
+    /* ||Omega(i) - Omega(i+1)||, all (25) needs, each written at k and k + TRAILER3_MAX_WINDOW:
+       the window, newest first, is omega_ring[omega_head ...], contiguous (no shift, no %) */
+    trailer3_real_t omega_ring[2 * TRAILER3_MAX_WINDOW];
     trailer3_real_t weights[TRAILER3_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                      (at _init) */
     trailer3_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */

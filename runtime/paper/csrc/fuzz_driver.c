@@ -253,7 +253,7 @@ static int state_finite_roc(const wmr_roc_state_t *s) { return COMMON_STATE_FINI
 static int state_finite_asmc(const wmr_asmc_state_t *s) { return COMMON_STATE_FINITE(s); }
 static int state_finite_tdroc(const wmr_tdroc_state_t *s)
 {
-    return COMMON_STATE_FINITE(s) && all_finite(s->omega_dnorm, WMR_MAX_WINDOW)
+    return COMMON_STATE_FINITE(s) && all_finite(s->omega_ring, 2 * WMR_MAX_WINDOW)
         && isfinite(s->minv_norm);
 }
 

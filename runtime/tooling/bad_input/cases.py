@@ -111,9 +111,9 @@ def _nominal(**changes: float) -> Mutation:
 
 
 def max_window(lib: cbuild.CLibrary) -> int:
-    """WMR_MAX_WINDOW, read from the C state (omega_dnorm has WMR_MAX_WINDOW entries)."""
+    """WMR_MAX_WINDOW, read from the C state (omega_ring has 2 WMR_MAX_WINDOW entries)."""
     fields = dict(lib.ffi.typeof("wmr_tdroc_state_t").fields)
-    return int(fields["omega_dnorm"].type.length)
+    return int(fields["omega_ring"].type.length) // 2
 
 
 def applies_to(mutate: Mutation) -> tuple[str, ...]:

@@ -148,14 +148,14 @@ def operations(summary: str) -> int:
 def tdroc_step_kernels(folder: Path, prefix: str, table: dict[str, str]) -> list[str]:
     """The kernels (functions of the op table) ``<prefix>_tdroc_step_detail`` calls for the
     minimal formulation: what a step evaluates (those _init calls once are not counted). The
-    step calls its own copies of them, ``<prefix>_tdroc_k_<kernel>``; their parameter-only
+    step calls them as ``<prefix>_k_<kernel>`` (``<prefix>_kernels.h``); their parameter-only
     part is evaluated by _init, but the whole kernel's operations are counted here."""
     text = (folder / "c" / f"{prefix}_tdroc.c").read_text()
     # the step's body: specialised per formulation (step_as) where it has two, else inline
     marker = next(m for m in (f"{prefix}_status_t {prefix}_tdroc_step_as(",
                               f"{prefix}_status_t {prefix}_tdroc_step_detail(") if m in text)
     body = text[text.index(marker):]
-    called = set(re.findall(rf"\b{prefix}_(?:tdroc_k_)?(\w+)\(", body))
+    called = set(re.findall(rf"\b{prefix}_(?:k_)?(\w+)\(", body))
     return sorted(k for k in table if k in called and not k.startswith("paper_"))
 
 

@@ -130,10 +130,12 @@ class CController:
             st.qdot_prev2[i], st.u_prev[i] = float(hist.qdot_prev2[i]), float(hist.u_prev[i])
             st.u_prev2[i] = float(hist.u_prev2[i])
             st.H1hat[i] = float(hist.H1hat[i])
-        if "omega_dnorm" in self.state_fields:  # C keeps the window's difference norms
+        if "omega_ring" in self.state_fields:  # C keeps the window's difference norms
+            # in a ring written twice (at i and i + MAX_WINDOW), the newest at omega_head
             dnorm = np.linalg.norm(hist.omega[:-1] - hist.omega[1:], axis=1)
             for i in range(hc.MAX_WINDOW):
-                st.omega_dnorm[i] = float(dnorm[i])
+                st.omega_ring[i] = st.omega_ring[i + hc.MAX_WINDOW] = float(dnorm[i])
+            st.omega_head = 0
             st.omega_count = hist.omega_count
         if "trig_prev" in self.state_fields:  # sin, cos of q(t-h)'s angles, as the step keeps
             angles = pyctl.TRIG[int(self.cfg.formulation)] if hist.steps else ()

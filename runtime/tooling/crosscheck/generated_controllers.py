@@ -344,7 +344,7 @@ def _round_config(config: Any) -> Any:
 def _round_state(ctl: Any, names: list[str]) -> None:
     for name in names:
         if isinstance(getattr(type(ctl), name, None), property):
-            continue  # derived from the rounded fields (omega_dnorm, trig_prev)
+            continue  # derived from the rounded fields (omega_ring, trig_prev)
         v = getattr(ctl, name, None)
         if isinstance(v, float) or (isinstance(v, np.ndarray) and v.dtype.kind == "f"):
             setattr(ctl, name, f32(v))
