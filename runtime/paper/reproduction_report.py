@@ -15,7 +15,14 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from runtime.paper import printed_paths
-from runtime.paper.reproduce import CONTRAST, LABELS, UNSTABLE_FACTOR, Figure, Reproduction
+from runtime.paper.reproduce import (
+    CONTRAST,
+    LABELS,
+    UNSTABLE_FACTOR,
+    Figure,
+    Reproduction,
+    slip_monitor,
+)
 from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, sensing_label
 from runtime.paper.reproduction_verdicts import best, claims, stability, stable_on_all_paths
 from runtime.sim.reference import RAMP, Reference
@@ -137,17 +144,13 @@ def circle_centre(ref: Reference) -> np.ndarray:
 
 
 def _load_split(rep: Reproduction) -> str:
-    """The stated static loads of the driven wheels, fixed payload on board (N)."""
-    from modeling.mjcf_export import static_loads
-    from runtime.mujoco.layout import robot_layout
-
-    try:
-        robot = robot_layout(rep.code, {**rep.code.plant_defaults, **rep.robot})
-    except ValueError:
+    """The stated static loads of the driven wheels, fixed payload on board (N): the slip
+    monitor's (:func:`runtime.paper.reproduce.slip_monitor`), which the runs used."""
+    monitor = slip_monitor(rep.code, rep.experiment, rep.robot)
+    if monitor is None:
         return ""
-    pl = rep.experiment.plant
-    loads = static_loads(robot, ((pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y),))
-    driven = ", ".join(f"{w.name} {loads[w.name]:.1f} N" for w in robot.wheels if w.driven)
+    loads = monitor.normal_loads(np.array([rep.experiment.plant.fixed_payload, 0.0]))
+    driven = ", ".join(f"{w} {n:.1f} N" for w, n in zip(monitor.driven, loads, strict=True))
     return f"; here {driven} with the fixed payload"
 
 

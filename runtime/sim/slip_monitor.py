@@ -46,8 +46,7 @@ Array = NDArray[np.float64]
 class SlipMonitor:
     """The traction of a robot's driven wheels (see the module docstring)."""
 
-    def __init__(self, code: RobotCode, robot: PlanarRobot, exp: Experiment,
-                 lateral: bool = True) -> None:
+    def __init__(self, code: RobotCode, robot: PlanarRobot, exp: Experiment) -> None:
         driven = getattr(code.robot, "DRIVEN_WHEELS", None)
         rows = getattr(code.robot, "LATERAL_WHEELS", None)
         if driven is None or rows is None or not hasattr(code.model, "wheel_contact_forces"):
@@ -59,7 +58,7 @@ class SlipMonitor:
         if unknown:
             raise ValueError(f"robot '{code.name}': wheel '{unknown[0]}' of the generated "
                              "contact forces is not in the robot's layout")
-        self.code, self.robot, self.lateral = code, robot, lateral
+        self.code, self.robot = code, robot
         self.driven: tuple[str, ...] = tuple(driven)
         self.rows: tuple[tuple[str, ...], ...] = tuple(tuple(r) for r in rows)
         self.viscous, self.coulomb = exp.plant.viscous, exp.plant.coulomb
@@ -109,11 +108,10 @@ class SlipMonitor:
 
     def forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
                masses: Array | None = None) -> Array:
-        """|F| (N) each driven wheel must transmit to roll: √(F_x² + F_y²), or F_x alone
-        (signed) when the monitor was made with ``lateral=False``."""
+        """|F| (N) each driven wheel must transmit to roll: √(F_x² + F_y²)."""
         fx, fy = self.contact_forces(q, rates, tau, params,
                                      np.zeros(2) if masses is None else masses)
-        return fx if not self.lateral else np.hypot(fx, fy)
+        return np.asarray(np.hypot(fx, fy))
 
     def margin(self, forces: Array, mu: float, masses: Array) -> Array:
         """μ N_w − |F_w| (N): negative where the wheel needs more traction than it has."""
