@@ -21,9 +21,7 @@ from pathlib import Path
 
 from modeling.mjcf_export import ContactSettings, mjcf
 from modeling.planar_robot import PlanarRobot, from_description, from_lumped
-from modeling.robot_io import RobotFileError, is_description, shipped_robot_file
-
-DEFAULT_ROBOT = "drishti"
+from modeling.robot_io import DEFAULT_ROBOT, RobotFileError, is_description, shipped_robot_file
 
 
 def planar_robot(path: Path) -> PlanarRobot:
