@@ -227,12 +227,10 @@ class ExpressionPrinterMixin:
             else:
                 num.append(self._factor(factor))
         if coeff != 1:
-            if isinstance(coeff, sp.Rational) and not (coeff.is_Integer or _is_exact_binary(coeff)):
-                if coeff.p != 1:
-                    num.insert(0, (self.lit(float(coeff.p)), True))
-                den.insert(0, (self.lit(float(coeff.q)), True))
-            else:
-                num.insert(0, (self.lit(float(coeff)), True))
+            # One literal, the double nearest the coefficient (2/3*x: 0.6666666666666666*x):
+            # a multiplication where p*x/q would divide at run time (the compiler may not
+            # fold x/3 into a product); at most one rounding more, as CasADi's C prints it.
+            num.insert(0, (self.lit(float(coeff)), True))
         if not num:
             num.append((self.lit(1.0), True))
         out = "*".join(text for text, _ in num)

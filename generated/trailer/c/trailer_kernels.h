@@ -44,7 +44,7 @@ static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm
 
 /* trailer_k_minimal_tde_keep: the parameter-only part of trailer_minimal_tde (trailer_laws.h
    documents it).
-   operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 3 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const trailer_real_t *span,
     trailer_real_t kept[17])
 {
@@ -64,8 +64,8 @@ static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const t
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t2 = -J_theta_tractor*_t0;
     const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
@@ -91,7 +91,7 @@ static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const t
 }
 
 /* trailer_k_minimal_tde: the per-step part of trailer_minimal_tde (trailer_laws.h documents it).
-   operations after CSE: 68 add, 104 mul, 11 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 68 add, 106 mul, 0 div, 4 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_tde(const trailer_real_t kept[17],
     const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
     const trailer_real_t *qdot_then, trailer_real_t *H1hat)
@@ -102,32 +102,32 @@ static inline void trailer_k_minimal_tde(const trailer_real_t kept[17],
     const trailer_real_t qp2 = q_prev[2];
     const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(qp2);
     const trailer_real_t _t10 = TRAILER_COS_BOUNDED(qp2);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = -_t10*_t11 - TRAILER_LIT(3.0)*_t7*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
+    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t8;
+    const trailer_real_t _t12 = -_t10*_t11 - TRAILER_LIT(0.3)*_t7*_t9;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t9;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
     const trailer_real_t _t16 = _t0*_t15;
     const trailer_real_t _t17 = _t0*_t12 - _t14*_t8 + _t16*_t7;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
-    const trailer_real_t _t20 = TRAILER_LIT(3.0)*_t10*_t7/TRAILER_LIT(10.0) - _t11*_t9;
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
+    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t10*_t7 - _t11*_t9;
     const trailer_real_t _t21 = -_t0*_t20 - _t14*_t7 - _t16*_t8;
     const trailer_real_t _t1 = kept[11];
     const trailer_real_t _t22 = _t1*_t13;
     const trailer_real_t _t23 = _t1*_t15;
     const trailer_real_t _t24 = -_t1*_t12 - _t22*_t8 + _t23*_t7;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
+    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
     const trailer_real_t _t27 = _t1*_t20 - _t22*_t7 - _t23*_t8;
     const trailer_real_t K_theta_cart_x_tractor = kept[6];
     const trailer_real_t _t28 = K_theta_cart_x_tractor*_t7;
     const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t8;
     const trailer_real_t _t30 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
+    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t9;
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
     const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t9;
@@ -183,7 +183,7 @@ static inline void trailer_k_minimal_tde(const trailer_real_t kept[17],
 
 /* trailer_k_minimal_minv_norm_keep: the parameter-only part of trailer_minimal_minv_norm
    (trailer_laws.h documents it).
-   operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 2 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
     trailer_real_t kept[16])
 {
@@ -202,8 +202,8 @@ static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t2 = -J_theta_tractor*_t0;
     const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
@@ -228,7 +228,7 @@ static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
 
 /* trailer_k_minimal_minv_norm: the per-step part of trailer_minimal_minv_norm (trailer_laws.h
    documents it).
-   operations after CSE: 66 add, 103 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 66 add, 105 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 static inline void trailer_k_minimal_minv_norm(const trailer_real_t kept[16],
     const trailer_real_t *q, trailer_real_t *norm)
 {
@@ -237,34 +237,34 @@ static inline void trailer_k_minimal_minv_norm(const trailer_real_t kept[16],
     const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
+    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
     const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
     const trailer_real_t _t16 = _t0*_t15;
     const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
     const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
     const trailer_real_t _t1 = kept[11];
     const trailer_real_t _t22 = _t1*_t13;
     const trailer_real_t _t23 = _t1*_t15;
     const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
+    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
     const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
     const trailer_real_t K_theta_cart_x_tractor = kept[6];
     const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
     const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
+    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
     const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
@@ -325,7 +325,7 @@ static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newe
 
 /* trailer_k_minimal_tdc_law: the per-step part of trailer_minimal_tdc_law (trailer_laws.h documents
    it).
-   operations after CSE: 70 add, 105 mul, 10 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 70 add, 107 mul, 0 div, 4 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[16], const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -338,34 +338,34 @@ static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[16], cons
     const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
+    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
     const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
     const trailer_real_t _t16 = _t0*_t15;
     const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
     const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
     const trailer_real_t _t1 = kept[11];
     const trailer_real_t _t22 = _t1*_t13;
     const trailer_real_t _t23 = _t1*_t15;
     const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
+    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
     const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
     const trailer_real_t K_theta_cart_x_tractor = kept[6];
     const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
     const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
+    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
     const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
@@ -426,7 +426,7 @@ static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[16], cons
 
 /* trailer_k_minimal_tdroc_law: the per-step part of trailer_minimal_tdroc_law (trailer_laws.h
    documents it).
-   operations after CSE: 75 add, 113 mul, 11 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 75 add, 115 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[16],
     const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -439,34 +439,34 @@ static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[16],
     const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(3.0)*_t6/TRAILER_LIT(10.0);
+    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
     const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(207.0)*_t8/TRAILER_LIT(1000.0);
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t10/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
     const trailer_real_t _t16 = _t0*_t15;
     const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
     const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
     const trailer_real_t _t1 = kept[11];
     const trailer_real_t _t22 = _t1*_t13;
     const trailer_real_t _t23 = _t1*_t15;
     const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(5.0)*_t24/TRAILER_LIT(3.0);
-    const trailer_real_t _t26 = _t25/TRAILER_LIT(5.0);
+    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
+    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
     const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
     const trailer_real_t K_theta_cart_x_tractor = kept[6];
     const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
     const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t10/TRAILER_LIT(10.0);
+    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
     const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
@@ -540,7 +540,7 @@ static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[16],
 
 /* trailer_k_minimal_roc_law_keep: the parameter-only part of trailer_minimal_roc_law
    (trailer_laws.h documents it).
-   operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 5 mul, 2 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
     trailer_real_t kept[17])
 {
@@ -559,13 +559,13 @@ static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t2 = -J_theta_tractor*_t0;
     const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart_left;
     kept[2] = J_theta_cart_right;
@@ -587,7 +587,7 @@ static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
 
 /* trailer_k_minimal_roc_law: the per-step part of trailer_minimal_roc_law (trailer_laws.h documents
    it).
-   operations after CSE: 143 add, 212 mul, 20 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 143 add, 218 mul, 2 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -600,13 +600,13 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], cons
     const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
     const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
     const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
+    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t17 = _t0*_t16;
     const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
@@ -615,13 +615,13 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], cons
     const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
     const trailer_real_t _t21 = -_t0*_t15;
     const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
     const trailer_real_t _t26 = -_t1*_t15;
     const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
-    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
     const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
@@ -633,8 +633,8 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], cons
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
     const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
     const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
+    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
     const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
@@ -653,19 +653,19 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], cons
     const trailer_real_t _t52 = _t40*thetadot_left;
     const trailer_real_t _t53 = _t0*_t15;
     const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = _t18 - _t53*_t8;
     const trailer_real_t _t58 = _t1*_t15;
     const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
+    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
     const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
-    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
+    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
     const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
     const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
     const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
@@ -778,7 +778,7 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], cons
 
 /* trailer_k_minimal_asmc_law: the per-step part of trailer_minimal_asmc_law (trailer_laws.h
    documents it).
-   operations after CSE: 139 add, 209 mul, 19 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 139 add, 215 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
     const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
@@ -791,13 +791,13 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
     const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
     const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
     const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
+    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
     const trailer_real_t _t0 = kept[10];
     const trailer_real_t _t17 = _t0*_t16;
     const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
@@ -806,13 +806,13 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
     const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
     const trailer_real_t _t21 = -_t0*_t15;
     const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
     const trailer_real_t _t26 = -_t1*_t15;
     const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
-    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
     const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
     const trailer_real_t K_theta_tractor_x_tractor = kept[8];
     const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
@@ -824,8 +824,8 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
     const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
     const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
+    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
     const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
@@ -844,19 +844,19 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
     const trailer_real_t _t52 = _t40*thetadot_left;
     const trailer_real_t _t53 = _t0*_t15;
     const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = _t18 - _t53*_t8;
     const trailer_real_t _t58 = _t1*_t15;
     const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
+    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
     const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
-    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
+    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
     const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
     const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
     const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
@@ -979,7 +979,7 @@ static inline void trailer_k_minimal_pi_law_keep(const trailer_params_t *p, trai
 
 /* trailer_k_minimal_pi_law: the per-step part of trailer_minimal_pi_law (trailer_laws.h documents
    it).
-   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 static inline void trailer_k_minimal_pi_law(const trailer_real_t kept[2], const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,
     const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,
@@ -1004,9 +1004,8 @@ static inline void trailer_k_minimal_pi_law(const trailer_real_t kept[2], const 
     const trailer_real_t qdd_2 = qdot_des[2];
     const trailer_real_t ky = gains[1];
     const trailer_real_t ktheta = gains[2];
-    const trailer_real_t _t9 = TRAILER_LIT(207.0)*_t3*(ktheta*TRAILER_SIN(_t2)
-            + ky*(_t4*_t7 - _t5*_t6))/TRAILER_LIT(1000.0)
-            + TRAILER_LIT(207.0)*qdd_2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = TRAILER_LIT(0.207)*_t3*(ktheta*TRAILER_SIN(_t2)
+            + ky*(_t4*_t7 - _t5*_t6)) + TRAILER_LIT(0.207)*qdd_2;
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t _t0 = kept[0];
     const trailer_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;

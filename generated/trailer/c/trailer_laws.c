@@ -31,7 +31,7 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
-   operations after CSE: 68 add, 110 mul, 16 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 68 add, 112 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 66 add, 109 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 66 add, 111 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
-   operations after CSE: 70 add, 111 mul, 14 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 70 add, 113 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -126,7 +126,7 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 75 add, 119 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 75 add, 121 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -140,7 +140,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 143 add, 224 mul, 25 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 143 add, 230 mul, 4 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -155,7 +155,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 139 add, 221 mul, 24 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 139 add, 227 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -170,7 +170,7 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
 }
 
 /* trailer_minimal_pi_law: documented in trailer_laws.h.
-   operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 void trailer_minimal_pi_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,
     const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,

@@ -7,7 +7,7 @@
 #include "trailer_model.h"
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 141 add, 216 mul, 24 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 141 add, 222 mul, 3 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -46,13 +46,13 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t2 = -J_theta_tractor*_t0;
     const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -89,26 +89,26 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
     const trailer_real_t _t8 = TRAILER_COS(theta_cart);
     const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
+    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
     const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
     const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
     const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
+    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
     const trailer_real_t _t17 = _t0*_t16;
     const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
     const trailer_real_t _t19 = _t1*_t16;
     const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
     const trailer_real_t _t21 = -_t0*_t15;
     const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
     const trailer_real_t _t26 = -_t1*_t15;
     const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
-    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
     const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
     const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
     const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
@@ -116,8 +116,8 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
     const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
     const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
+    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
     const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
     const trailer_real_t _t41 = _t40*_t40;
@@ -134,19 +134,19 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     const trailer_real_t _t52 = _t40*thetadot_left;
     const trailer_real_t _t53 = _t0*_t15;
     const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = _t18 - _t53*_t8;
     const trailer_real_t _t58 = _t1*_t15;
     const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
+    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
     const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
-    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
+    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
     const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
     const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
     const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
@@ -254,7 +254,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 5 mul, 2 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -284,13 +284,13 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
             | trailer_exp_carry(radius_right)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t1 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t2 = -J_theta_tractor*_t0;
     const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*K_theta_cart_x_tractor/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -346,7 +346,7 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 141 add, 211 mul, 19 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 141 add, 217 mul, 1 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -368,12 +368,12 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t10 = TRAILER_LIT(3.0)*_t7/TRAILER_LIT(10.0);
-    const trailer_real_t _t12 = TRAILER_LIT(3.0)*_t8/TRAILER_LIT(10.0);
+    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
     const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
     const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(207.0)*_t9/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = -TRAILER_LIT(207.0)*_t11/TRAILER_LIT(1000.0);
+    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
+    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
     const trailer_real_t _t0 = prepared->forward_dynamics[10];
     const trailer_real_t _t17 = _t0*_t16;
     const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
@@ -382,13 +382,13 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
     const trailer_real_t _t21 = -_t0*_t15;
     const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
     const trailer_real_t _t26 = -_t1*_t15;
     const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
-    const trailer_real_t _t29 = _t28/TRAILER_LIT(5.0);
+    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
     const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
     const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[8];
     const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
@@ -400,8 +400,8 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
     const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
     const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(3.0)*_t9/TRAILER_LIT(10.0);
-    const trailer_real_t _t38 = TRAILER_LIT(3.0)*_t11/TRAILER_LIT(10.0);
+    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
+    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
     const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
     const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
     const trailer_real_t _t41 = _t40*_t40;
@@ -418,19 +418,19 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     const trailer_real_t _t52 = _t40*thetadot_left;
     const trailer_real_t _t53 = _t0*_t15;
     const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = _t18 - _t53*_t8;
     const trailer_real_t _t58 = _t1*_t15;
     const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(5.0)*_t59/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
+    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
     const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(5.0)*_t30/TRAILER_LIT(3.0);
-    const trailer_real_t _t67 = _t66/TRAILER_LIT(5.0);
+    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
+    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
     const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
     const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
     const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
@@ -567,7 +567,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 }
 
 /* trailer_kinematics: documented in trailer_model.h.
-   operations after CSE: 20 add, 44 mul, 12 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 20 add, 46 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
@@ -576,28 +576,28 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t6 = -TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t7 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = -TRAILER_LIT(0.207)*_t2;
     const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
     const trailer_real_t _t12 = _t11*_t6;
     const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
-    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
-    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
+    const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
     const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
     const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
     const trailer_real_t _t18 = _t7*_t9;
     const trailer_real_t _t19 = _t11*_t7;
     const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t21 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
     const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
     const trailer_real_t _t24 = _t15 - _t17;
     const trailer_real_t _t25 = _t22 - _t23;
@@ -628,7 +628,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 62 add, 103 mul, 14 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 62 add, 105 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
@@ -637,36 +637,36 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t6 = -TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t7 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t9 = -TRAILER_LIT(0.207)*_t2;
     const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
     const trailer_real_t _t12 = _t11*_t6;
     const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
-    const trailer_real_t _t14 = -TRAILER_LIT(5.0)*_t13/TRAILER_LIT(3.0);
-    const trailer_real_t _t15 = _t14/TRAILER_LIT(5.0);
+    const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
+    const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
     const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
     const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
     const trailer_real_t _t18 = _t7*_t9;
     const trailer_real_t _t19 = _t11*_t7;
     const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t22 = _t21/TRAILER_LIT(5.0);
+    const trailer_real_t _t21 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
     const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
     const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t27 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t28 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t27 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t28 = TRAILER_LIT(0.3)*_t4;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
@@ -716,7 +716,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 84 add, 147 mul, 23 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 84 add, 153 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
@@ -725,30 +725,30 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
     const trailer_real_t _t12 = _t11*_t9;
     const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
     const trailer_real_t _t14 = _t10*_t11;
     const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
     const trailer_real_t _t16 = -_t8*_t9;
     const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
     const trailer_real_t _t21 = -_t10*_t8;
     const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
@@ -760,8 +760,8 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
     const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
     const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_t4;
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
@@ -780,19 +780,19 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t47 = _t35*thetadot_left;
     const trailer_real_t _t48 = _t8*_t9;
     const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
-    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t50 = -TRAILER_LIT(1.6666666666666667)*_t49;
+    const trailer_real_t _t51 = TRAILER_LIT(0.2)*_t50;
     const trailer_real_t _t52 = -_t1*_t48 + _t13;
     const trailer_real_t _t53 = _t10*_t8;
     const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t58 = TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t59 = TRAILER_LIT(0.2)*_t58;
     const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t61 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t62 = TRAILER_LIT(0.2)*_t61;
     const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t _t64 = TRAILER_LIT(1.0)/radius_cart_left;
@@ -834,8 +834,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t95 = _t26 + _t27;
     const trailer_real_t _t96 = K_theta_tractor_x_tractor_2*_t2 - _t30;
     const trailer_real_t _t97 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
-    const trailer_real_t _t98 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+    const trailer_real_t _t98 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39
             - _t33*_t40 - _t33*_t41;
     const trailer_real_t _t99 = _t88*_t96 + _t89*_t97 + _t93*_t95 + _t98;
     const trailer_real_t _t100 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
@@ -858,7 +857,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 130 add, 211 mul, 24 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 130 add, 217 mul, 3 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -901,28 +900,28 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
+    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
     const trailer_real_t _t12 = _t11*_t9;
     const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
     const trailer_real_t _t14 = _t10*_t11;
     const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
     const trailer_real_t _t16 = -_t8*_t9;
     const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
     const trailer_real_t _t21 = -_t10*_t8;
     const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
     const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
     const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
@@ -930,8 +929,8 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
     const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
     const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t33 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_t4;
     const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
     const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
     const trailer_real_t _t36 = _t35*_t35;
@@ -948,19 +947,19 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t _t47 = _t35*thetadot_left;
     const trailer_real_t _t48 = _t8*_t9;
     const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(5.0)*_t49/TRAILER_LIT(3.0);
-    const trailer_real_t _t51 = _t50/TRAILER_LIT(5.0);
+    const trailer_real_t _t50 = -TRAILER_LIT(1.6666666666666667)*_t49;
+    const trailer_real_t _t51 = TRAILER_LIT(0.2)*_t50;
     const trailer_real_t _t52 = -_t1*_t48 + _t13;
     const trailer_real_t _t53 = _t10*_t8;
     const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(5.0)*_t54/TRAILER_LIT(3.0);
-    const trailer_real_t _t56 = _t55/TRAILER_LIT(5.0);
+    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
     const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t59 = _t58/TRAILER_LIT(5.0);
+    const trailer_real_t _t58 = TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t59 = TRAILER_LIT(0.2)*_t58;
     const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t62 = _t61/TRAILER_LIT(5.0);
+    const trailer_real_t _t61 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t62 = TRAILER_LIT(0.2)*_t61;
     const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
     const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
     const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
@@ -996,8 +995,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
             - _t39;
     const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
     const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
-    const trailer_real_t _t97 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t36/TRAILER_LIT(10.0) - _t32*_t39
+    const trailer_real_t _t97 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39
             - _t33*_t40 - _t33*_t41;
     const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
     const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
@@ -1086,7 +1084,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 419 add, 626 mul, 40 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 419 add, 638 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
@@ -1096,31 +1094,31 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
-    const trailer_real_t _t9 = TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
+    const trailer_real_t _t9 = TRAILER_LIT(0.207)*_t4;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t _t12 = -_t10*_t9;
     const trailer_real_t _t13 = -_t0*_t12 + _t10*_t6;
     const trailer_real_t _t14 = -_t11*_t9;
     const trailer_real_t _t15 = -_t0*_t14 - _t11*_t6;
     const trailer_real_t _t16 = -_t10*_t8;
     const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = -_t1*_t12 - _t10*_t7;
     const trailer_real_t _t21 = -_t0*_t16 + _t20;
     const trailer_real_t _t22 = -_t11*_t8;
     const trailer_real_t _t23 = -_t1*_t22 - _t15;
-    const trailer_real_t _t24 = -TRAILER_LIT(5.0)*_t23/TRAILER_LIT(3.0);
-    const trailer_real_t _t25 = _t24/TRAILER_LIT(5.0);
+    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t23;
+    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
     const trailer_real_t _t26 = -_t1*_t14 + _t11*_t7;
     const trailer_real_t _t27 = -_t0*_t22 + _t26;
     const trailer_real_t thetadot_right = wheel_rates[0];
@@ -1140,9 +1138,9 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t36 = -K_theta_tractor_x_tractor_2*_t2 + _t35;
     const trailer_real_t _t37 = K_theta_cart_x_tractor*_t1;
     const trailer_real_t _t38 = -K_theta_cart_x_tractor_2*_t0 + _t37;
-    const trailer_real_t _t39 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t39 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t40 = _t33*_t39;
-    const trailer_real_t _t41 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t41 = TRAILER_LIT(0.3)*_t4;
     const trailer_real_t _t42 = _t37*_t41;
     const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0;
     const trailer_real_t _t44 = _t34*_t39;
@@ -1174,23 +1172,23 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t70 = -_t11*_t7;
     const trailer_real_t _t71 = -_t0*_t64 + _t70;
     const trailer_real_t _t72 = -_t66 - _t68;
-    const trailer_real_t _t73 = -TRAILER_LIT(5.0)*_t72/TRAILER_LIT(3.0);
+    const trailer_real_t _t73 = -TRAILER_LIT(1.6666666666666667)*_t72;
     const trailer_real_t _t74 = _t73*thetadot_right;
     const trailer_real_t _t75 = -_t69 - _t71;
-    const trailer_real_t _t76 = -TRAILER_LIT(5.0)*_t75/TRAILER_LIT(3.0);
+    const trailer_real_t _t76 = -TRAILER_LIT(1.6666666666666667)*_t75;
     const trailer_real_t _t77 = _t76*thetadot_left;
-    const trailer_real_t _t78 = TRAILER_LIT(5.0)*_t21/TRAILER_LIT(3.0);
+    const trailer_real_t _t78 = TRAILER_LIT(1.6666666666666667)*_t21;
     const trailer_real_t _t79 = _t78*thetadot_right;
-    const trailer_real_t _t80 = TRAILER_LIT(5.0)*_t27/TRAILER_LIT(3.0);
+    const trailer_real_t _t80 = TRAILER_LIT(1.6666666666666667)*_t27;
     const trailer_real_t _t81 = _t80*thetadot_left;
-    const trailer_real_t _t82 = _t73/TRAILER_LIT(5.0);
+    const trailer_real_t _t82 = TRAILER_LIT(0.2)*_t73;
     const trailer_real_t _t83 = -_t1*_t62 + _t13;
-    const trailer_real_t _t84 = _t76/TRAILER_LIT(5.0);
+    const trailer_real_t _t84 = TRAILER_LIT(0.2)*_t76;
     const trailer_real_t _t85 = -_t1*_t64 + _t15;
-    const trailer_real_t _t86 = _t78/TRAILER_LIT(5.0);
+    const trailer_real_t _t86 = TRAILER_LIT(0.2)*_t78;
     const trailer_real_t _t87 = -_t10*_t6;
     const trailer_real_t _t88 = _t0*_t12 - _t1*_t16 + _t87;
-    const trailer_real_t _t89 = _t80/TRAILER_LIT(5.0);
+    const trailer_real_t _t89 = TRAILER_LIT(0.2)*_t80;
     const trailer_real_t _t90 = _t11*_t6;
     const trailer_real_t _t91 = _t0*_t14 - _t1*_t22 + _t90;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
@@ -1275,8 +1273,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t164 = _t48 + _t53;
     const trailer_real_t _t165 = _t45*_t63 + _t45*_t65;
     const trailer_real_t _t166 = J_x_tractor*_t165 + _t125*_t162 + _t164;
-    const trailer_real_t _t167 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t50/TRAILER_LIT(10.0) - _t39*_t52
+    const trailer_real_t _t167 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t50 - _t39*_t52
             - _t41*_t55 - _t41*_t56;
     const trailer_real_t _t168 = _t123*_t165 + _t128*_t162 - _t161*_t36 + _t167;
     const trailer_real_t _t169 = _t46*_t58 - _t46*_t59 + _t46*_t60 + _t46*_t61;
@@ -1303,14 +1300,12 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t189 = TRAILER_LIT(2.0)*_t49;
     const trailer_real_t _t190 = _t189*_t37 - _t189*_t43;
     const trailer_real_t _t191 = _t189*_t33 + _t189*_t34;
-    const trailer_real_t _t192 = TRAILER_LIT(3.0)*_t49/TRAILER_LIT(5.0);
+    const trailer_real_t _t192 = TRAILER_LIT(0.6)*_t49;
     const trailer_real_t _t193 = _t192*_t4;
-    const trailer_real_t _t194 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t49/TRAILER_LIT(5.0) - _t192*_t2*_t43
-            - _t193*_t33 - _t193*_t34;
+    const trailer_real_t _t194 = TRAILER_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t2*_t49
+            - _t192*_t2*_t43 - _t193*_t33 - _t193*_t34;
     const trailer_real_t _t195 = _t39*_t55 + _t39*_t56 + _t41*_t51 - _t41*_t52;
-    const trailer_real_t _t196 =
-            -TRAILER_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t4*_t46/TRAILER_LIT(10.0) + _t40*_t46
+    const trailer_real_t _t196 = -TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t4*_t46 + _t40*_t46
             + _t42*_t46 + _t44*_t46;
     const trailer_real_t _t197 = _t45*thetadot_right;
     const trailer_real_t _t198 = _t45*thetadot_left;
@@ -1318,19 +1313,19 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t200 = _t49*thetadot_left;
     const trailer_real_t _t201 = _t10*_t9;
     const trailer_real_t _t202 = _t0*_t201 - _t1*_t62 - _t87;
-    const trailer_real_t _t203 = -TRAILER_LIT(5.0)*_t202/TRAILER_LIT(3.0);
-    const trailer_real_t _t204 = _t203/TRAILER_LIT(5.0);
+    const trailer_real_t _t203 = -TRAILER_LIT(1.6666666666666667)*_t202;
+    const trailer_real_t _t204 = TRAILER_LIT(0.2)*_t203;
     const trailer_real_t _t205 = -_t1*_t201 + _t68;
     const trailer_real_t _t206 = _t11*_t9;
     const trailer_real_t _t207 = _t0*_t206 - _t1*_t64 - _t90;
-    const trailer_real_t _t208 = -TRAILER_LIT(5.0)*_t207/TRAILER_LIT(3.0);
-    const trailer_real_t _t209 = _t208/TRAILER_LIT(5.0);
+    const trailer_real_t _t208 = -TRAILER_LIT(1.6666666666666667)*_t207;
+    const trailer_real_t _t209 = TRAILER_LIT(0.2)*_t208;
     const trailer_real_t _t210 = -_t1*_t206 + _t71;
-    const trailer_real_t _t211 = TRAILER_LIT(5.0)*_t83/TRAILER_LIT(3.0);
-    const trailer_real_t _t212 = _t211/TRAILER_LIT(5.0);
+    const trailer_real_t _t211 = TRAILER_LIT(1.6666666666666667)*_t83;
+    const trailer_real_t _t212 = TRAILER_LIT(0.2)*_t211;
     const trailer_real_t _t213 = _t0*_t62 + _t20;
-    const trailer_real_t _t214 = TRAILER_LIT(5.0)*_t85/TRAILER_LIT(3.0);
-    const trailer_real_t _t215 = _t214/TRAILER_LIT(5.0);
+    const trailer_real_t _t214 = TRAILER_LIT(1.6666666666666667)*_t85;
+    const trailer_real_t _t215 = TRAILER_LIT(0.2)*_t214;
     const trailer_real_t _t216 = _t0*_t64 + _t26;
     const trailer_real_t _t217 = _t108*_t45 + _t111*_t45 + _t114*_t49 + _t117*_t49;
     const trailer_real_t _t218 = J_theta_cart_left*_t217;
@@ -1372,17 +1367,17 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t245 = _t231*_t239;
     const trailer_real_t _t246 = -_t231*_t243 + _t233*_t238;
     const trailer_real_t _t247 = TRAILER_LIT(2.0)*_t38;
-    const trailer_real_t _t248 = TRAILER_LIT(5.0)*_t88/TRAILER_LIT(3.0);
-    const trailer_real_t _t249 = _t248/TRAILER_LIT(5.0);
+    const trailer_real_t _t248 = TRAILER_LIT(1.6666666666666667)*_t88;
+    const trailer_real_t _t249 = TRAILER_LIT(0.2)*_t248;
     const trailer_real_t _t250 = _t0*_t16 + _t66 + _t67;
-    const trailer_real_t _t251 = TRAILER_LIT(5.0)*_t91/TRAILER_LIT(3.0);
-    const trailer_real_t _t252 = _t251/TRAILER_LIT(5.0);
+    const trailer_real_t _t251 = TRAILER_LIT(1.6666666666666667)*_t91;
+    const trailer_real_t _t252 = TRAILER_LIT(0.2)*_t251;
     const trailer_real_t _t253 = _t0*_t22 + _t69 + _t70;
     const trailer_real_t _t254 = -_t162*_t180;
     const trailer_real_t _t255 = TRAILER_LIT(2.0)*_t45;
     const trailer_real_t _t256 = _t255*_t35 - _t255*_t47;
     const trailer_real_t _t257 = _t255*_t31 + _t255*_t32;
-    const trailer_real_t _t258 = TRAILER_LIT(3.0)*_t45/TRAILER_LIT(5.0);
+    const trailer_real_t _t258 = TRAILER_LIT(0.6)*_t45;
     const trailer_real_t _t259 = _t258*_t4;
     const trailer_real_t _t260 = _t2*_t258;
     const trailer_real_t _t261 = _t259*_t33 + _t259*_t34 - _t260*_t37 + _t260*_t43;
@@ -1627,7 +1622,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.
-   operations after CSE: 224 add, 342 mul, 38 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 224 add, 352 mul, 3 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral)
@@ -1671,33 +1666,33 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _t1 = -_t0;
     const trailer_real_t _t2 = TRAILER_COS(theta_cart);
     const trailer_real_t _t3 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t4 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t5 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t6 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
+    const trailer_real_t _t6 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t7 = _t3*_t4 + _t5*_t6;
     const trailer_real_t _t8 = -_t7;
     const trailer_real_t _t9 = -_t2;
     const trailer_real_t _t10 = -_t3*_t6 + _t4*_t5;
     const trailer_real_t _t11 = -radius_right;
     const trailer_real_t _t12 = -radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(207.0)*_t3/TRAILER_LIT(1000.0);
+    const trailer_real_t _t13 = TRAILER_LIT(0.207)*_t3;
     const trailer_real_t _t14 = -_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(207.0)*_t5/TRAILER_LIT(1000.0);
-    const trailer_real_t _t16 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t17 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
+    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t5;
+    const trailer_real_t _t16 = TRAILER_LIT(2.4154589371980677)*_t11;
+    const trailer_real_t _t17 = TRAILER_LIT(2.4154589371980677)*_t12;
     const trailer_real_t _t18 = _t15*_t16;
     const trailer_real_t _t19 = _t1*_t18 - _t16*_t8;
     const trailer_real_t _t20 = _t15*_t17;
     const trailer_real_t _t21 = _t1*_t20 + _t17*_t8;
     const trailer_real_t _t22 = _t14*_t16;
     const trailer_real_t _t23 = -_t19 - _t2*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(5.0)*_t23/TRAILER_LIT(3.0);
-    const trailer_real_t _t25 = _t24/TRAILER_LIT(5.0);
+    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t23;
+    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
     const trailer_real_t _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9;
     const trailer_real_t _t27 = _t14*_t17;
     const trailer_real_t _t28 = -_t2*_t27 - _t21;
-    const trailer_real_t _t29 = -TRAILER_LIT(5.0)*_t28/TRAILER_LIT(3.0);
-    const trailer_real_t _t30 = _t29/TRAILER_LIT(5.0);
+    const trailer_real_t _t29 = -TRAILER_LIT(1.6666666666666667)*_t28;
+    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
     const trailer_real_t _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9;
     const trailer_real_t _t32 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t33 = TRAILER_LIT(1.0)/radius_cart_left;
@@ -1711,8 +1706,8 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40;
     const trailer_real_t _t42 = K_theta_cart_x_tractor*_t2;
     const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0 - _t42;
-    const trailer_real_t _t44 = TRAILER_LIT(3.0)*_t3/TRAILER_LIT(10.0);
-    const trailer_real_t _t45 = TRAILER_LIT(3.0)*_t5/TRAILER_LIT(10.0);
+    const trailer_real_t _t44 = TRAILER_LIT(0.3)*_t3;
+    const trailer_real_t _t45 = TRAILER_LIT(0.3)*_t5;
     const trailer_real_t _t46 = K_theta_cart_x_tractor_2*_t0;
     const trailer_real_t _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46;
     const trailer_real_t _t48 = _t24*thetadot_right + _t29*thetadot_left;
@@ -1730,19 +1725,19 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _t60 = _t48*thetadot_left;
     const trailer_real_t _t61 = _t13*_t16;
     const trailer_real_t _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2;
-    const trailer_real_t _t63 = -TRAILER_LIT(5.0)*_t62/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = -TRAILER_LIT(1.6666666666666667)*_t62;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = _t19 + _t61*_t9;
     const trailer_real_t _t66 = _t13*_t17;
     const trailer_real_t _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20;
-    const trailer_real_t _t68 = -TRAILER_LIT(5.0)*_t67/TRAILER_LIT(3.0);
-    const trailer_real_t _t69 = _t68/TRAILER_LIT(5.0);
+    const trailer_real_t _t68 = -TRAILER_LIT(1.6666666666666667)*_t67;
+    const trailer_real_t _t69 = TRAILER_LIT(0.2)*_t68;
     const trailer_real_t _t70 = _t21 + _t66*_t9;
-    const trailer_real_t _t71 = TRAILER_LIT(5.0)*_t26/TRAILER_LIT(3.0);
-    const trailer_real_t _t72 = _t71/TRAILER_LIT(5.0);
+    const trailer_real_t _t71 = TRAILER_LIT(1.6666666666666667)*_t26;
+    const trailer_real_t _t72 = TRAILER_LIT(0.2)*_t71;
     const trailer_real_t _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9;
-    const trailer_real_t _t74 = TRAILER_LIT(5.0)*_t31/TRAILER_LIT(3.0);
-    const trailer_real_t _t75 = _t74/TRAILER_LIT(5.0);
+    const trailer_real_t _t74 = TRAILER_LIT(1.6666666666666667)*_t31;
+    const trailer_real_t _t75 = TRAILER_LIT(0.2)*_t74;
     const trailer_real_t _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9;
     const trailer_real_t _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43;
     const trailer_real_t _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39;
@@ -1771,8 +1766,7 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
             - _t52;
     const trailer_real_t _t101 = _t57*_t61 + _t58*_t66;
     const trailer_real_t _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98;
-    const trailer_real_t _t103 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t49/TRAILER_LIT(10.0) - _t44*_t52
+    const trailer_real_t _t103 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t3*_t49 - _t44*_t52
             - _t45*_t53 - _t45*_t54;
     const trailer_real_t _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98;
     const trailer_real_t _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56;
@@ -1824,30 +1818,30 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _t146 = -J_theta_cart_left*_t145;
     const trailer_real_t _t147 = _t146*_t33;
     const trailer_real_t _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47;
-    const trailer_real_t _t149 = _t144/TRAILER_LIT(5.0) - _t147/TRAILER_LIT(5.0) + _t148;
-    const trailer_real_t _t150 = -TRAILER_LIT(5.0)*_t149/TRAILER_LIT(3.0);
+    const trailer_real_t _t149 = TRAILER_LIT(0.2)*_t144 - TRAILER_LIT(0.2)*_t147 + _t148;
+    const trailer_real_t _t150 = -TRAILER_LIT(1.6666666666666667)*_t149;
     const trailer_real_t _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8;
-    const trailer_real_t _t152 = TRAILER_LIT(500.0)*_t151/TRAILER_LIT(207.0);
+    const trailer_real_t _t152 = TRAILER_LIT(2.4154589371980677)*_t151;
     const trailer_real_t _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96;
     const trailer_real_t _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153;
-    const trailer_real_t _t155 = TRAILER_LIT(500.0)*_t154/TRAILER_LIT(207.0);
+    const trailer_real_t _t155 = TRAILER_LIT(2.4154589371980677)*_t154;
     const trailer_real_t _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39;
     const trailer_real_t _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156;
-    const trailer_real_t _t158 = TRAILER_LIT(500.0)*_t157/TRAILER_LIT(207.0);
+    const trailer_real_t _t158 = TRAILER_LIT(2.4154589371980677)*_t157;
     const trailer_real_t _t159 = _t14*_t155 + _t15*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(500.0)*_t11/TRAILER_LIT(207.0);
-    const trailer_real_t _t161 = TRAILER_LIT(500.0)*_t12/TRAILER_LIT(207.0);
+    const trailer_real_t _t160 = TRAILER_LIT(2.4154589371980677)*_t11;
+    const trailer_real_t _t161 = TRAILER_LIT(2.4154589371980677)*_t12;
     const trailer_real_t _t162 = _t14*_t160;
     const trailer_real_t _t163 = _t15*_t160;
     const trailer_real_t _t164 = -_t1*_t163 + _t160*_t8 - _t162*_t2;
-    const trailer_real_t _t165 = -TRAILER_LIT(5.0)*_t164/TRAILER_LIT(3.0);
-    const trailer_real_t _t166 = _t165/TRAILER_LIT(5.0);
+    const trailer_real_t _t165 = -TRAILER_LIT(1.6666666666666667)*_t164;
+    const trailer_real_t _t166 = TRAILER_LIT(0.2)*_t165;
     const trailer_real_t _t167 = _t1*_t162 - _t10*_t160 + _t163*_t9;
     const trailer_real_t _t168 = _t14*_t161;
     const trailer_real_t _t169 = _t15*_t161;
     const trailer_real_t _t170 = -_t1*_t169 - _t161*_t8 - _t168*_t2;
-    const trailer_real_t _t171 = -TRAILER_LIT(5.0)*_t170/TRAILER_LIT(3.0);
-    const trailer_real_t _t172 = _t171/TRAILER_LIT(5.0);
+    const trailer_real_t _t171 = -TRAILER_LIT(1.6666666666666667)*_t170;
+    const trailer_real_t _t172 = TRAILER_LIT(0.2)*_t171;
     const trailer_real_t _t173 = _t1*_t168 + _t10*_t161 + _t169*_t9;
     const trailer_real_t _t174 = J_x_tractor*_t162 - _t160*_t41 + _t165*_t43;
     const trailer_real_t _t175 = J_x_tractor*_t163 - _t160*_t36 + _t165*_t39;
@@ -1866,8 +1860,8 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _t188 = J_theta_tractor*_t161 + _t168*_t41 + _t169*_t36 + _t171*_t47;
     const trailer_real_t _t189 = J_x_tractor*_t169 + _t161*_t36 + _t171*_t39;
     const trailer_real_t _t190 = J_theta_cart*_t171 + _t161*_t47 + _t168*_t43 + _t169*_t39;
-    const trailer_real_t _t191 = TRAILER_LIT(207.0)*_t5/TRAILER_LIT(500.0);
-    const trailer_real_t _t192 = -TRAILER_LIT(207.0)*_t3/TRAILER_LIT(500.0);
+    const trailer_real_t _t191 = TRAILER_LIT(0.414)*_t5;
+    const trailer_real_t _t192 = -TRAILER_LIT(0.414)*_t3;
     const trailer_real_t _t193 = _t152 + _t159;
     const trailer_real_t _t194 = _t155*_t191 + _t158*_t192;
     const trailer_real_t _t195 = -_t152 + _t159;

@@ -76,7 +76,7 @@ typedef struct {
  * With fixed parameters, trailer_model_prepare once and trailer_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 141 add, 216 mul, 24 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 141 add, 222 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot);
@@ -103,7 +103,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
  *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 0 add, 5 mul, 5 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 0 add, 5 mul, 2 div, 0 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared);
@@ -138,7 +138,7 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 141 add, 211 mul, 19 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 141 add, 217 mul, 1 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
@@ -163,7 +163,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [6] row-major (TRAILER_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 20 add, 44 mul, 12 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 20 add, 46 mul, 2 div, 4 sin/cos, 0 sqrt
  */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates);
@@ -185,7 +185,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
  *     theta_cart_left
  * @param[out] M [2x2] row-major (TRAILER_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 62 add, 103 mul, 14 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 62 add, 105 mul, 2 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M);
@@ -208,7 +208,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAILER_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 84 add, 147 mul, 23 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 84 add, 153 mul, 2 div, 4 sin/cos, 0 sqrt
  */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H);
@@ -251,7 +251,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 130 add, 211 mul, 24 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 130 add, 217 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
@@ -286,7 +286,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] A [10x10] row-major (TRAILER_LINEARIZATION_A_SIZE) -- 10x10 row-major
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
- * operations after CSE: 419 add, 626 mul, 40 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 419 add, 638 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
@@ -342,7 +342,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 224 add, 342 mul, 38 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 224 add, 352 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,

@@ -7,7 +7,7 @@
 #include "trailer_plant.h"
 
 /* trailer_plant_state_derivative: documented in trailer_plant.h.
-   operations after CSE: 134 add, 219 mul, 24 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 134 add, 225 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot)
 {
@@ -16,30 +16,30 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = x[2];
     const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(3.0)*_t0/TRAILER_LIT(10.0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
     const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(3.0)*_t1/TRAILER_LIT(10.0);
+    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
     const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(207.0)*_t2/TRAILER_LIT(1000.0);
+    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
     const trailer_real_t radius_right = pp->radius_right;
-    const trailer_real_t _t9 = -TRAILER_LIT(500.0)*radius_right/TRAILER_LIT(207.0);
+    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = pp->radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(500.0)*radius_left/TRAILER_LIT(207.0);
-    const trailer_real_t _t11 = -TRAILER_LIT(207.0)*_t4/TRAILER_LIT(1000.0);
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
     const trailer_real_t _t12 = _t11*_t9;
     const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
     const trailer_real_t _t14 = _t10*_t11;
     const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
     const trailer_real_t _t16 = -_t8*_t9;
     const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(5.0)*_t17/TRAILER_LIT(3.0);
-    const trailer_real_t _t19 = _t18/TRAILER_LIT(5.0);
+    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
     const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
     const trailer_real_t _t21 = -_t10*_t8;
     const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(5.0)*_t22/TRAILER_LIT(3.0);
-    const trailer_real_t _t24 = _t23/TRAILER_LIT(5.0);
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
     const trailer_real_t thetadot_right = x[8];
     const trailer_real_t _t26 = _t12*thetadot_right;
@@ -55,8 +55,8 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t1;
     const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t4;
     const trailer_real_t _t33 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t34 = TRAILER_LIT(3.0)*_t2/TRAILER_LIT(10.0);
-    const trailer_real_t _t35 = TRAILER_LIT(3.0)*_t4/TRAILER_LIT(10.0);
+    const trailer_real_t _t34 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t35 = TRAILER_LIT(0.3)*_t4;
     const trailer_real_t _t36 = K_theta_cart_x_tractor_2*_t0;
     const trailer_real_t _t37 = _t18*thetadot_right + _t23*thetadot_left;
     const trailer_real_t _t38 = _t37*_t37;
@@ -73,19 +73,19 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
     const trailer_real_t _t49 = _t37*thetadot_left;
     const trailer_real_t _t50 = _t8*_t9;
     const trailer_real_t _t51 = _t0*_t50 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t52 = -TRAILER_LIT(5.0)*_t51/TRAILER_LIT(3.0);
-    const trailer_real_t _t53 = _t52/TRAILER_LIT(5.0);
+    const trailer_real_t _t52 = -TRAILER_LIT(1.6666666666666667)*_t51;
+    const trailer_real_t _t53 = TRAILER_LIT(0.2)*_t52;
     const trailer_real_t _t54 = -_t1*_t50 + _t13;
     const trailer_real_t _t55 = _t10*_t8;
     const trailer_real_t _t56 = _t0*_t55 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t57 = -TRAILER_LIT(5.0)*_t56/TRAILER_LIT(3.0);
-    const trailer_real_t _t58 = _t57/TRAILER_LIT(5.0);
+    const trailer_real_t _t57 = -TRAILER_LIT(1.6666666666666667)*_t56;
+    const trailer_real_t _t58 = TRAILER_LIT(0.2)*_t57;
     const trailer_real_t _t59 = -_t1*_t55 + _t15;
-    const trailer_real_t _t60 = TRAILER_LIT(5.0)*_t20/TRAILER_LIT(3.0);
-    const trailer_real_t _t61 = _t60/TRAILER_LIT(5.0);
+    const trailer_real_t _t60 = TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
     const trailer_real_t _t62 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t63 = TRAILER_LIT(5.0)*_t25/TRAILER_LIT(3.0);
-    const trailer_real_t _t64 = _t63/TRAILER_LIT(5.0);
+    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
+    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
     const trailer_real_t _t65 = _t0*_t14 - _t1*_t21 + _t10*_t6;
     const trailer_real_t _t66 = K_theta_tractor_x_tractor_2*_t2 - _t32;
     const trailer_real_t _t67 = K_theta_cart_x_tractor_2*_t0 - _t33;
@@ -128,8 +128,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
             - _t41;
     const trailer_real_t _t97 = _t46*_t50 + _t47*_t55;
     const trailer_real_t _t98 = J_x_tractor*_t97 + _t70*_t94 + _t96;
-    const trailer_real_t _t99 =
-            TRAILER_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t38/TRAILER_LIT(10.0) - _t34*_t41
+    const trailer_real_t _t99 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t38 - _t34*_t41
             - _t35*_t42 - _t35*_t43;
     const trailer_real_t _t100 = _t66*_t93 + _t69*_t97 + _t72*_t94 + _t99;
     const trailer_real_t _t101 = _t30*_t44 + _t31*_t44 - _t33*_t45 + _t36*_t45;

@@ -115,7 +115,7 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     Returns:
         H1hat: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 68 add, 110 mul, 16 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 68 add, 112 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, qp2, qp3, _, _, _, _ = _flat(q_prev, 8, "q_prev")
     up0, up1 = _flat(u_prev, 2, "u_prev")
@@ -137,34 +137,34 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     radius_cart_right = float(_field(p, "radius_cart_right"))
     radius_left = float(_field(p, "radius_left"))
     radius_right = float(_field(p, "radius_right"))
-    _t0 = -500.0*radius_right/207.0
-    _t1 = -500.0*radius_left/207.0
+    _t0 = -2.4154589371980677*radius_right
+    _t1 = -2.4154589371980677*radius_left
     _t2 = math.sin(qp3)
     _t3 = math.cos(qp3)
     _t4 = math.sin(qp2)
     _t5 = math.cos(qp2)
-    _t6 = 3.0*_t3/10.0
-    _t7 = -3.0*_t2*_t4/10.0 - _t5*_t6
-    _t8 = -207.0*_t4/1000.0
+    _t6 = 0.3*_t3
+    _t7 = -0.3*_t2*_t4 - _t5*_t6
+    _t8 = -0.207*_t4
     _t9 = _t0*_t8
-    _t10 = -207.0*_t5/1000.0
+    _t10 = -0.207*_t5
     _t11 = _t0*_t10
     _t12 = _t0*_t7 + _t11*_t2 - _t3*_t9
-    _t13 = -5.0*_t12/3.0
-    _t14 = _t13/5.0
-    _t15 = 3.0*_t2*_t5/10.0 - _t4*_t6
+    _t13 = -1.6666666666666667*_t12
+    _t14 = 0.2*_t13
+    _t15 = 0.3*_t2*_t5 - _t4*_t6
     _t16 = -_t0*_t15 - _t11*_t3 - _t2*_t9
     _t17 = _t1*_t8
     _t18 = _t1*_t10
     _t19 = -_t1*_t7 - _t17*_t3 + _t18*_t2
-    _t20 = -5.0*_t19/3.0
-    _t21 = _t20/5.0
+    _t20 = -1.6666666666666667*_t19
+    _t21 = 0.2*_t20
     _t22 = _t1*_t15 - _t17*_t2 - _t18*_t3
     _t23 = K_theta_cart_x_tractor*_t2
     _t24 = K_theta_cart_x_tractor_2*_t3
     _t25 = K_theta_cart_x_tractor*_t3
-    _t26 = 3.0*_t4/10.0
-    _t27 = 3.0*_t5/10.0
+    _t26 = 0.3*_t4
+    _t27 = 0.3*_t5
     _t28 = -K_theta_tractor_x_tractor*_t5 + K_theta_tractor_x_tractor_2*_t4
     _t29 = K_theta_cart_x_tractor_2*_t2 - _t25
     _t30 = J_x_tractor*_t9 - _t0*_t28 + _t13*_t29
@@ -213,7 +213,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 66 add, 109 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs
+    operations after CSE: 66 add, 111 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -234,32 +234,32 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
-    _t6 = -500.0*radius_right/207.0
-    _t7 = -500.0*radius_left/207.0
+    _t5 = 0.3*_t1
+    _t6 = -2.4154589371980677*radius_right
+    _t7 = -2.4154589371980677*radius_left
     _t8 = -_t2*_t3 - _t4*_t5
-    _t9 = -207.0*_t2/1000.0
+    _t9 = -0.207*_t2
     _t10 = _t6*_t9
-    _t11 = -207.0*_t4/1000.0
+    _t11 = -0.207*_t4
     _t12 = _t11*_t6
     _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8
-    _t14 = -5.0*_t13/3.0
-    _t15 = _t14/5.0
+    _t14 = -1.6666666666666667*_t13
+    _t15 = 0.2*_t14
     _t16 = -_t2*_t5 + _t3*_t4
     _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6
     _t18 = _t7*_t9
     _t19 = _t11*_t7
     _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8
-    _t21 = -5.0*_t20/3.0
-    _t22 = _t21/5.0
+    _t21 = -1.6666666666666667*_t20
+    _t22 = 0.2*_t21
     _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7
     _t24 = K_theta_cart_x_tractor*_t0
     _t25 = K_theta_cart_x_tractor_2*_t1
     _t26 = K_theta_cart_x_tractor*_t1
-    _t27 = 3.0*_t2/10.0
-    _t28 = 3.0*_t4/10.0
+    _t27 = 0.3*_t2
+    _t28 = 0.3*_t4
     _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t30 = K_theta_cart_x_tractor_2*_t0 - _t26
     _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6
@@ -377,7 +377,7 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     Returns:
         u: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 70 add, 111 mul, 14 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 70 add, 113 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -406,32 +406,32 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
-    _t6 = -500.0*radius_right/207.0
-    _t7 = -500.0*radius_left/207.0
+    _t5 = 0.3*_t1
+    _t6 = -2.4154589371980677*radius_right
+    _t7 = -2.4154589371980677*radius_left
     _t8 = -_t2*_t3 - _t4*_t5
-    _t9 = -207.0*_t2/1000.0
+    _t9 = -0.207*_t2
     _t10 = _t6*_t9
-    _t11 = -207.0*_t4/1000.0
+    _t11 = -0.207*_t4
     _t12 = _t11*_t6
     _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8
-    _t14 = -5.0*_t13/3.0
-    _t15 = _t14/5.0
+    _t14 = -1.6666666666666667*_t13
+    _t15 = 0.2*_t14
     _t16 = -_t2*_t5 + _t3*_t4
     _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6
     _t18 = _t7*_t9
     _t19 = _t11*_t7
     _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8
-    _t21 = -5.0*_t20/3.0
-    _t22 = _t21/5.0
+    _t21 = -1.6666666666666667*_t20
+    _t22 = 0.2*_t21
     _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7
     _t24 = K_theta_cart_x_tractor*_t0
     _t25 = K_theta_cart_x_tractor_2*_t1
     _t26 = K_theta_cart_x_tractor*_t1
-    _t27 = 3.0*_t2/10.0
-    _t28 = 3.0*_t4/10.0
+    _t27 = 0.3*_t2
+    _t28 = 0.3*_t4
     _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t30 = K_theta_cart_x_tractor_2*_t0 - _t26
     _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6
@@ -495,7 +495,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 75 add, 119 mul, 15 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 75 add, 121 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -526,32 +526,32 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
-    _t6 = -500.0*radius_right/207.0
-    _t7 = -500.0*radius_left/207.0
+    _t5 = 0.3*_t1
+    _t6 = -2.4154589371980677*radius_right
+    _t7 = -2.4154589371980677*radius_left
     _t8 = -_t2*_t3 - _t4*_t5
-    _t9 = -207.0*_t2/1000.0
+    _t9 = -0.207*_t2
     _t10 = _t6*_t9
-    _t11 = -207.0*_t4/1000.0
+    _t11 = -0.207*_t4
     _t12 = _t11*_t6
     _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8
-    _t14 = -5.0*_t13/3.0
-    _t15 = _t14/5.0
+    _t14 = -1.6666666666666667*_t13
+    _t15 = 0.2*_t14
     _t16 = -_t2*_t5 + _t3*_t4
     _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6
     _t18 = _t7*_t9
     _t19 = _t11*_t7
     _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8
-    _t21 = -5.0*_t20/3.0
-    _t22 = _t21/5.0
+    _t21 = -1.6666666666666667*_t20
+    _t22 = 0.2*_t21
     _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7
     _t24 = K_theta_cart_x_tractor*_t0
     _t25 = K_theta_cart_x_tractor_2*_t1
     _t26 = K_theta_cart_x_tractor*_t1
-    _t27 = 3.0*_t2/10.0
-    _t28 = 3.0*_t4/10.0
+    _t27 = 0.3*_t2
+    _t28 = 0.3*_t4
     _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t30 = K_theta_cart_x_tractor_2*_t0 - _t26
     _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6
@@ -622,7 +622,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 143 add, 224 mul, 25 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 143 add, 230 mul, 4 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -653,28 +653,28 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
+    _t5 = 0.3*_t1
     _t6 = _t2*_t3 + _t4*_t5
     _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 207.0*_t2/1000.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
-    _t11 = -207.0*_t4/1000.0
+    _t8 = 0.207*_t2
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = -0.207*_t4
     _t12 = _t11*_t9
     _t13 = -_t0*_t12 + _t6*_t9
     _t14 = _t10*_t11
     _t15 = -_t0*_t14 - _t10*_t6
     _t16 = -_t8*_t9
     _t17 = -_t1*_t16 - _t13
-    _t18 = -5.0*_t17/3.0
-    _t19 = _t18/5.0
+    _t18 = -1.6666666666666667*_t17
+    _t19 = 0.2*_t18
     _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
     _t21 = -_t10*_t8
     _t22 = -_t1*_t21 - _t15
-    _t23 = -5.0*_t22/3.0
-    _t24 = _t23/5.0
+    _t23 = -1.6666666666666667*_t22
+    _t24 = 0.2*_t23
     _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
     _t26 = K_theta_tractor_x_tractor*_t2
     _t27 = K_theta_tractor_x_tractor_2*_t4
@@ -682,8 +682,8 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t29 = K_theta_cart_x_tractor_2*_t1
     _t30 = K_theta_tractor_x_tractor*_t4
     _t31 = K_theta_cart_x_tractor*_t1
-    _t32 = 3.0*_t2/10.0
-    _t33 = 3.0*_t4/10.0
+    _t32 = 0.3*_t2
+    _t33 = 0.3*_t4
     _t34 = K_theta_cart_x_tractor_2*_t0
     _t35 = _t18*thetadot_right + _t23*thetadot_left
     _t36 = _t35*_t35
@@ -700,19 +700,19 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t47 = _t35*thetadot_left
     _t48 = _t8*_t9
     _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9
-    _t50 = -5.0*_t49/3.0
-    _t51 = _t50/5.0
+    _t50 = -1.6666666666666667*_t49
+    _t51 = 0.2*_t50
     _t52 = -_t1*_t48 + _t13
     _t53 = _t10*_t8
     _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7
-    _t55 = -5.0*_t54/3.0
-    _t56 = _t55/5.0
+    _t55 = -1.6666666666666667*_t54
+    _t56 = 0.2*_t55
     _t57 = -_t1*_t53 + _t15
-    _t58 = 5.0*_t20/3.0
-    _t59 = _t58/5.0
+    _t58 = 1.6666666666666667*_t20
+    _t59 = 0.2*_t58
     _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9
-    _t61 = 5.0*_t25/3.0
-    _t62 = _t61/5.0
+    _t61 = 1.6666666666666667*_t25
+    _t62 = 0.2*_t61
     _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6
     _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30
     _t65 = K_theta_cart_x_tractor_2*_t0 - _t31
@@ -747,7 +747,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36 - _t39
     _t95 = _t44*_t48 + _t45*_t53
     _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94
-    _t97 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t36/10.0 - _t32*_t39 - _t33*_t40 - _t33*_t41
+    _t97 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39 - _t33*_t40 - _t33*_t41
     _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97
     _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43
     _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99
@@ -822,7 +822,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 139 add, 221 mul, 24 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 139 add, 227 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -854,28 +854,28 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
+    _t5 = 0.3*_t1
     _t6 = _t2*_t3 + _t4*_t5
     _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 207.0*_t2/1000.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
-    _t11 = -207.0*_t4/1000.0
+    _t8 = 0.207*_t2
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = -0.207*_t4
     _t12 = _t11*_t9
     _t13 = -_t0*_t12 + _t6*_t9
     _t14 = _t10*_t11
     _t15 = -_t0*_t14 - _t10*_t6
     _t16 = -_t8*_t9
     _t17 = -_t1*_t16 - _t13
-    _t18 = -5.0*_t17/3.0
-    _t19 = _t18/5.0
+    _t18 = -1.6666666666666667*_t17
+    _t19 = 0.2*_t18
     _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
     _t21 = -_t10*_t8
     _t22 = -_t1*_t21 - _t15
-    _t23 = -5.0*_t22/3.0
-    _t24 = _t23/5.0
+    _t23 = -1.6666666666666667*_t22
+    _t24 = 0.2*_t23
     _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
     _t26 = K_theta_tractor_x_tractor*_t2
     _t27 = K_theta_tractor_x_tractor_2*_t4
@@ -883,8 +883,8 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t29 = K_theta_cart_x_tractor_2*_t1
     _t30 = K_theta_tractor_x_tractor*_t4
     _t31 = K_theta_cart_x_tractor*_t1
-    _t32 = 3.0*_t2/10.0
-    _t33 = 3.0*_t4/10.0
+    _t32 = 0.3*_t2
+    _t33 = 0.3*_t4
     _t34 = K_theta_cart_x_tractor_2*_t0
     _t35 = _t18*thetadot_right + _t23*thetadot_left
     _t36 = _t35*_t35
@@ -901,19 +901,19 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t47 = _t35*thetadot_left
     _t48 = _t8*_t9
     _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9
-    _t50 = -5.0*_t49/3.0
-    _t51 = _t50/5.0
+    _t50 = -1.6666666666666667*_t49
+    _t51 = 0.2*_t50
     _t52 = -_t1*_t48 + _t13
     _t53 = _t10*_t8
     _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7
-    _t55 = -5.0*_t54/3.0
-    _t56 = _t55/5.0
+    _t55 = -1.6666666666666667*_t54
+    _t56 = 0.2*_t55
     _t57 = -_t1*_t53 + _t15
-    _t58 = 5.0*_t20/3.0
-    _t59 = _t58/5.0
+    _t58 = 1.6666666666666667*_t20
+    _t59 = 0.2*_t58
     _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9
-    _t61 = 5.0*_t25/3.0
-    _t62 = _t61/5.0
+    _t61 = 1.6666666666666667*_t25
+    _t62 = 0.2*_t61
     _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6
     _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30
     _t65 = K_theta_cart_x_tractor_2*_t0 - _t31
@@ -948,7 +948,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36 - _t39
     _t95 = _t44*_t48 + _t45*_t53
     _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94
-    _t97 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t36/10.0 - _t32*_t39 - _t33*_t40 - _t33*_t41
+    _t97 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39 - _t33*_t40 - _t33*_t41
     _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97
     _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43
     _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99
@@ -1012,7 +1012,7 @@ def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: Ar
         u: array of 2 (shape 2x1, row-major)
         integral_next: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+    operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
     """
     x_tractor, y_tractor, theta_tractor, _, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -1031,7 +1031,7 @@ def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: Ar
     _t5 = math.sin(theta_tractor)
     _t6 = qd_1 - y_tractor
     _t7 = _t2*math.cos(_t1) + kx*(_t3*_t4 + _t5*_t6)
-    _t8 = 207.0*_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5))/1000.0 + 207.0*qdd_2/1000.0
+    _t8 = 0.207*_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5)) + 0.207*qdd_2
     _t9 = _t0*_t7 + _t0*_t8 - thetadot_right
     _t10 = -tau_max
     _t11 = h*ki

@@ -65,7 +65,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 8 (shape 8x1, row-major)
 
-    operations after CSE: 141 add, 223 mul, 24 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 141 add, 229 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -91,28 +91,28 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t0 = math.sin(theta_cart)
         _t1 = math.cos(theta_cart)
         _t2 = math.sin(theta_tractor)
-        _t3 = 3.0*_t0/10.0
+        _t3 = 0.3*_t0
         _t4 = math.cos(theta_tractor)
-        _t5 = 3.0*_t1/10.0
+        _t5 = 0.3*_t1
         _t6 = _t2*_t3 + _t4*_t5
         _t7 = -_t2*_t5 + _t3*_t4
-        _t8 = 207.0*_t2/1000.0
-        _t9 = -500.0*radius_right/207.0
-        _t10 = -500.0*radius_left/207.0
-        _t11 = -207.0*_t4/1000.0
+        _t8 = 0.207*_t2
+        _t9 = -2.4154589371980677*radius_right
+        _t10 = -2.4154589371980677*radius_left
+        _t11 = -0.207*_t4
         _t12 = _t11*_t9
         _t13 = -_t0*_t12 + _t6*_t9
         _t14 = _t10*_t11
         _t15 = -_t0*_t14 - _t10*_t6
         _t16 = -_t8*_t9
         _t17 = -_t1*_t16 - _t13
-        _t18 = -5.0*_t17/3.0
-        _t19 = _t18/5.0
+        _t18 = -1.6666666666666667*_t17
+        _t19 = 0.2*_t18
         _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
         _t21 = -_t10*_t8
         _t22 = -_t1*_t21 - _t15
-        _t23 = -5.0*_t22/3.0
-        _t24 = _t23/5.0
+        _t23 = -1.6666666666666667*_t22
+        _t24 = 0.2*_t23
         _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
         _t26 = K_theta_tractor_x_tractor*_t2
         _t27 = K_theta_tractor_x_tractor_2*_t4
@@ -120,8 +120,8 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t29 = K_theta_cart_x_tractor_2*_t1
         _t30 = K_theta_tractor_x_tractor*_t4
         _t31 = K_theta_cart_x_tractor*_t1
-        _t32 = 3.0*_t2/10.0
-        _t33 = 3.0*_t4/10.0
+        _t32 = 0.3*_t2
+        _t33 = 0.3*_t4
         _t34 = K_theta_cart_x_tractor_2*_t0
         _t35 = _t18*thetadot_right + _t23*thetadot_left
         _t36 = _t35*_t35
@@ -138,19 +138,19 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t47 = _t35*thetadot_left
         _t48 = _t8*_t9
         _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9
-        _t50 = -5.0*_t49/3.0
-        _t51 = _t50/5.0
+        _t50 = -1.6666666666666667*_t49
+        _t51 = 0.2*_t50
         _t52 = -_t1*_t48 + _t13
         _t53 = _t10*_t8
         _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7
-        _t55 = -5.0*_t54/3.0
-        _t56 = _t55/5.0
+        _t55 = -1.6666666666666667*_t54
+        _t56 = 0.2*_t55
         _t57 = -_t1*_t53 + _t15
-        _t58 = 5.0*_t20/3.0
-        _t59 = _t58/5.0
+        _t58 = 1.6666666666666667*_t20
+        _t59 = 0.2*_t58
         _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9
-        _t61 = 5.0*_t25/3.0
-        _t62 = _t61/5.0
+        _t61 = 1.6666666666666667*_t25
+        _t62 = 0.2*_t61
         _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6
         _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30
         _t65 = K_theta_cart_x_tractor_2*_t0 - _t31
@@ -185,7 +185,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36 - _t39
         _t95 = _t44*_t48 + _t45*_t53
         _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94
-        _t97 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t36/10.0 - _t32*_t39 - _t33*_t40 - _t33*_t41
+        _t97 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39 - _t33*_t40 - _t33*_t41
         _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97
         _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43
         _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99
@@ -272,7 +272,7 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     Returns:
         pose_rates: array of 6 (shape 6x1, row-major)
 
-    operations after CSE: 20 add, 44 mul, 12 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 20 add, 46 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -283,26 +283,26 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
-    _t6 = -500.0*radius_right/207.0
-    _t7 = -500.0*radius_left/207.0
+    _t5 = 0.3*_t1
+    _t6 = -2.4154589371980677*radius_right
+    _t7 = -2.4154589371980677*radius_left
     _t8 = -_t2*_t3 - _t4*_t5
-    _t9 = -207.0*_t2/1000.0
+    _t9 = -0.207*_t2
     _t10 = _t6*_t9
-    _t11 = -207.0*_t4/1000.0
+    _t11 = -0.207*_t4
     _t12 = _t11*_t6
     _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8
-    _t14 = -5.0*_t13/3.0
-    _t15 = _t14/5.0
+    _t14 = -1.6666666666666667*_t13
+    _t15 = 0.2*_t14
     _t16 = -_t2*_t5 + _t3*_t4
     _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6
     _t18 = _t7*_t9
     _t19 = _t11*_t7
     _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8
-    _t21 = -5.0*_t20/3.0
-    _t22 = _t21/5.0
+    _t21 = -1.6666666666666667*_t20
+    _t22 = 0.2*_t21
     _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7
     _t24 = _t15 - _t17
     _t25 = _t22 - _t23
@@ -336,7 +336,7 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 2x2, row-major). 2x2 row-major
 
-    operations after CSE: 62 add, 103 mul, 14 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 62 add, 105 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -357,32 +357,32 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
-    _t6 = -500.0*radius_right/207.0
-    _t7 = -500.0*radius_left/207.0
+    _t5 = 0.3*_t1
+    _t6 = -2.4154589371980677*radius_right
+    _t7 = -2.4154589371980677*radius_left
     _t8 = -_t2*_t3 - _t4*_t5
-    _t9 = -207.0*_t2/1000.0
+    _t9 = -0.207*_t2
     _t10 = _t6*_t9
-    _t11 = -207.0*_t4/1000.0
+    _t11 = -0.207*_t4
     _t12 = _t11*_t6
     _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8
-    _t14 = -5.0*_t13/3.0
-    _t15 = _t14/5.0
+    _t14 = -1.6666666666666667*_t13
+    _t15 = 0.2*_t14
     _t16 = -_t2*_t5 + _t3*_t4
     _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6
     _t18 = _t7*_t9
     _t19 = _t11*_t7
     _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8
-    _t21 = -5.0*_t20/3.0
-    _t22 = _t21/5.0
+    _t21 = -1.6666666666666667*_t20
+    _t22 = 0.2*_t21
     _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7
     _t24 = K_theta_cart_x_tractor*_t0
     _t25 = K_theta_cart_x_tractor_2*_t1
     _t26 = K_theta_cart_x_tractor*_t1
-    _t27 = 3.0*_t2/10.0
-    _t28 = 3.0*_t4/10.0
+    _t27 = 0.3*_t2
+    _t28 = 0.3*_t4
     _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t30 = K_theta_cart_x_tractor_2*_t0 - _t26
     _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6
@@ -431,7 +431,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     Returns:
         H: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 84 add, 147 mul, 23 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 84 add, 153 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -450,28 +450,28 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
+    _t5 = 0.3*_t1
     _t6 = _t2*_t3 + _t4*_t5
     _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 207.0*_t2/1000.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
-    _t11 = -207.0*_t4/1000.0
+    _t8 = 0.207*_t2
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = -0.207*_t4
     _t12 = _t11*_t9
     _t13 = -_t0*_t12 + _t6*_t9
     _t14 = _t10*_t11
     _t15 = -_t0*_t14 - _t10*_t6
     _t16 = -_t8*_t9
     _t17 = -_t1*_t16 - _t13
-    _t18 = -5.0*_t17/3.0
-    _t19 = _t18/5.0
+    _t18 = -1.6666666666666667*_t17
+    _t19 = 0.2*_t18
     _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
     _t21 = -_t10*_t8
     _t22 = -_t1*_t21 - _t15
-    _t23 = -5.0*_t22/3.0
-    _t24 = _t23/5.0
+    _t23 = -1.6666666666666667*_t22
+    _t24 = 0.2*_t23
     _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
     _t26 = K_theta_tractor_x_tractor*_t2
     _t27 = K_theta_tractor_x_tractor_2*_t4
@@ -479,8 +479,8 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t29 = K_theta_cart_x_tractor_2*_t1
     _t30 = K_theta_tractor_x_tractor*_t4
     _t31 = K_theta_cart_x_tractor*_t1
-    _t32 = 3.0*_t2/10.0
-    _t33 = 3.0*_t4/10.0
+    _t32 = 0.3*_t2
+    _t33 = 0.3*_t4
     _t34 = K_theta_cart_x_tractor_2*_t0
     _t35 = _t18*thetadot_right + _t23*thetadot_left
     _t36 = _t35*_t35
@@ -497,19 +497,19 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t47 = _t35*thetadot_left
     _t48 = _t8*_t9
     _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9
-    _t50 = -5.0*_t49/3.0
-    _t51 = _t50/5.0
+    _t50 = -1.6666666666666667*_t49
+    _t51 = 0.2*_t50
     _t52 = -_t1*_t48 + _t13
     _t53 = _t10*_t8
     _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7
-    _t55 = -5.0*_t54/3.0
-    _t56 = _t55/5.0
+    _t55 = -1.6666666666666667*_t54
+    _t56 = 0.2*_t55
     _t57 = -_t1*_t53 + _t15
-    _t58 = 5.0*_t20/3.0
-    _t59 = _t58/5.0
+    _t58 = 1.6666666666666667*_t20
+    _t59 = 0.2*_t58
     _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9
-    _t61 = 5.0*_t25/3.0
-    _t62 = _t61/5.0
+    _t61 = 1.6666666666666667*_t25
+    _t62 = 0.2*_t61
     _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6
     _t64 = 1.0/radius_cart_left
     _t65 = -_t51 - _t52
@@ -545,7 +545,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t95 = _t26 + _t27
     _t96 = K_theta_tractor_x_tractor_2*_t2 - _t30
     _t97 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34
-    _t98 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t36/10.0 - _t32*_t39 - _t33*_t40 - _t33*_t41
+    _t98 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39 - _t33*_t40 - _t33*_t41
     _t99 = _t88*_t96 + _t89*_t97 + _t93*_t95 + _t98
     _t100 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43
     _t101 = J_theta_cart*_t89 + _t100 + _t86*_t88 + _t91*_t93
@@ -577,7 +577,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 130 add, 211 mul, 24 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 130 add, 217 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -603,28 +603,28 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t0 = math.sin(theta_cart)
         _t1 = math.cos(theta_cart)
         _t2 = math.sin(theta_tractor)
-        _t3 = 3.0*_t0/10.0
+        _t3 = 0.3*_t0
         _t4 = math.cos(theta_tractor)
-        _t5 = 3.0*_t1/10.0
+        _t5 = 0.3*_t1
         _t6 = _t2*_t3 + _t4*_t5
         _t7 = -_t2*_t5 + _t3*_t4
-        _t8 = 207.0*_t2/1000.0
-        _t9 = -500.0*radius_right/207.0
-        _t10 = -500.0*radius_left/207.0
-        _t11 = -207.0*_t4/1000.0
+        _t8 = 0.207*_t2
+        _t9 = -2.4154589371980677*radius_right
+        _t10 = -2.4154589371980677*radius_left
+        _t11 = -0.207*_t4
         _t12 = _t11*_t9
         _t13 = -_t0*_t12 + _t6*_t9
         _t14 = _t10*_t11
         _t15 = -_t0*_t14 - _t10*_t6
         _t16 = -_t8*_t9
         _t17 = -_t1*_t16 - _t13
-        _t18 = -5.0*_t17/3.0
-        _t19 = _t18/5.0
+        _t18 = -1.6666666666666667*_t17
+        _t19 = 0.2*_t18
         _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
         _t21 = -_t10*_t8
         _t22 = -_t1*_t21 - _t15
-        _t23 = -5.0*_t22/3.0
-        _t24 = _t23/5.0
+        _t23 = -1.6666666666666667*_t22
+        _t24 = 0.2*_t23
         _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
         _t26 = K_theta_tractor_x_tractor*_t2
         _t27 = K_theta_tractor_x_tractor_2*_t4
@@ -632,8 +632,8 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t29 = K_theta_cart_x_tractor_2*_t1
         _t30 = K_theta_tractor_x_tractor*_t4
         _t31 = K_theta_cart_x_tractor*_t1
-        _t32 = 3.0*_t2/10.0
-        _t33 = 3.0*_t4/10.0
+        _t32 = 0.3*_t2
+        _t33 = 0.3*_t4
         _t34 = K_theta_cart_x_tractor_2*_t0
         _t35 = _t18*thetadot_right + _t23*thetadot_left
         _t36 = _t35*_t35
@@ -650,19 +650,19 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t47 = _t35*thetadot_left
         _t48 = _t8*_t9
         _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9
-        _t50 = -5.0*_t49/3.0
-        _t51 = _t50/5.0
+        _t50 = -1.6666666666666667*_t49
+        _t51 = 0.2*_t50
         _t52 = -_t1*_t48 + _t13
         _t53 = _t10*_t8
         _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7
-        _t55 = -5.0*_t54/3.0
-        _t56 = _t55/5.0
+        _t55 = -1.6666666666666667*_t54
+        _t56 = 0.2*_t55
         _t57 = -_t1*_t53 + _t15
-        _t58 = 5.0*_t20/3.0
-        _t59 = _t58/5.0
+        _t58 = 1.6666666666666667*_t20
+        _t59 = 0.2*_t58
         _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9
-        _t61 = 5.0*_t25/3.0
-        _t62 = _t61/5.0
+        _t61 = 1.6666666666666667*_t25
+        _t62 = 0.2*_t61
         _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6
         _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30
         _t65 = K_theta_cart_x_tractor_2*_t0 - _t31
@@ -697,7 +697,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36 - _t39
         _t95 = _t44*_t48 + _t45*_t53
         _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94
-        _t97 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t36/10.0 - _t32*_t39 - _t33*_t40 - _t33*_t41
+        _t97 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39 - _t33*_t40 - _t33*_t41
         _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97
         _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43
         _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99
@@ -782,7 +782,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 100 (shape 10x10, row-major). 10x10 row-major
         B: array of 20 (shape 10x2, row-major). 10x2 row-major
 
-    operations after CSE: 419 add, 626 mul, 40 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 419 add, 638 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -805,29 +805,29 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
+    _t5 = 0.3*_t1
     _t6 = _t2*_t3 + _t4*_t5
     _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 207.0*_t2/1000.0
-    _t9 = 207.0*_t4/1000.0
-    _t10 = -500.0*radius_right/207.0
-    _t11 = -500.0*radius_left/207.0
+    _t8 = 0.207*_t2
+    _t9 = 0.207*_t4
+    _t10 = -2.4154589371980677*radius_right
+    _t11 = -2.4154589371980677*radius_left
     _t12 = -_t10*_t9
     _t13 = -_t0*_t12 + _t10*_t6
     _t14 = -_t11*_t9
     _t15 = -_t0*_t14 - _t11*_t6
     _t16 = -_t10*_t8
     _t17 = -_t1*_t16 - _t13
-    _t18 = -5.0*_t17/3.0
-    _t19 = _t18/5.0
+    _t18 = -1.6666666666666667*_t17
+    _t19 = 0.2*_t18
     _t20 = -_t1*_t12 - _t10*_t7
     _t21 = -_t0*_t16 + _t20
     _t22 = -_t11*_t8
     _t23 = -_t1*_t22 - _t15
-    _t24 = -5.0*_t23/3.0
-    _t25 = _t24/5.0
+    _t24 = -1.6666666666666667*_t23
+    _t25 = 0.2*_t24
     _t26 = -_t1*_t14 + _t11*_t7
     _t27 = -_t0*_t22 + _t26
     _t28 = _t12*thetadot_right
@@ -841,9 +841,9 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t36 = -K_theta_tractor_x_tractor_2*_t2 + _t35
     _t37 = K_theta_cart_x_tractor*_t1
     _t38 = -K_theta_cart_x_tractor_2*_t0 + _t37
-    _t39 = 3.0*_t2/10.0
+    _t39 = 0.3*_t2
     _t40 = _t33*_t39
-    _t41 = 3.0*_t4/10.0
+    _t41 = 0.3*_t4
     _t42 = _t37*_t41
     _t43 = K_theta_cart_x_tractor_2*_t0
     _t44 = _t34*_t39
@@ -875,23 +875,23 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t70 = -_t11*_t7
     _t71 = -_t0*_t64 + _t70
     _t72 = -_t66 - _t68
-    _t73 = -5.0*_t72/3.0
+    _t73 = -1.6666666666666667*_t72
     _t74 = _t73*thetadot_right
     _t75 = -_t69 - _t71
-    _t76 = -5.0*_t75/3.0
+    _t76 = -1.6666666666666667*_t75
     _t77 = _t76*thetadot_left
-    _t78 = 5.0*_t21/3.0
+    _t78 = 1.6666666666666667*_t21
     _t79 = _t78*thetadot_right
-    _t80 = 5.0*_t27/3.0
+    _t80 = 1.6666666666666667*_t27
     _t81 = _t80*thetadot_left
-    _t82 = _t73/5.0
+    _t82 = 0.2*_t73
     _t83 = -_t1*_t62 + _t13
-    _t84 = _t76/5.0
+    _t84 = 0.2*_t76
     _t85 = -_t1*_t64 + _t15
-    _t86 = _t78/5.0
+    _t86 = 0.2*_t78
     _t87 = -_t10*_t6
     _t88 = _t0*_t12 - _t1*_t16 + _t87
-    _t89 = _t80/5.0
+    _t89 = 0.2*_t80
     _t90 = _t11*_t6
     _t91 = _t0*_t14 - _t1*_t22 + _t90
     _t92 = 1.0/radius_cart_right
@@ -969,7 +969,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t164 = _t48 + _t53
     _t165 = _t45*_t63 + _t45*_t65
     _t166 = J_x_tractor*_t165 + _t125*_t162 + _t164
-    _t167 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t50/10.0 - _t39*_t52 - _t41*_t55 - _t41*_t56
+    _t167 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t50 - _t39*_t52 - _t41*_t55 - _t41*_t56
     _t168 = _t123*_t165 + _t128*_t162 - _t161*_t36 + _t167
     _t169 = _t46*_t58 - _t46*_t59 + _t46*_t60 + _t46*_t61
     _t170 = J_theta_cart*_t162 + _t125*_t165 - _t161*_t38 + _t169
@@ -994,30 +994,30 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t189 = 2.0*_t49
     _t190 = _t189*_t37 - _t189*_t43
     _t191 = _t189*_t33 + _t189*_t34
-    _t192 = 3.0*_t49/5.0
+    _t192 = 0.6*_t49
     _t193 = _t192*_t4
-    _t194 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t49/5.0 - _t192*_t2*_t43 - _t193*_t33 - _t193*_t34
+    _t194 = 0.6*K_theta_cart_x_tractor*_t1*_t2*_t49 - _t192*_t2*_t43 - _t193*_t33 - _t193*_t34
     _t195 = _t39*_t55 + _t39*_t56 + _t41*_t51 - _t41*_t52
-    _t196 = -3.0*K_theta_cart_x_tractor_2*_t0*_t4*_t46/10.0 + _t40*_t46 + _t42*_t46 + _t44*_t46
+    _t196 = -0.3*K_theta_cart_x_tractor_2*_t0*_t4*_t46 + _t40*_t46 + _t42*_t46 + _t44*_t46
     _t197 = _t45*thetadot_right
     _t198 = _t45*thetadot_left
     _t199 = _t49*thetadot_right
     _t200 = _t49*thetadot_left
     _t201 = _t10*_t9
     _t202 = _t0*_t201 - _t1*_t62 - _t87
-    _t203 = -5.0*_t202/3.0
-    _t204 = _t203/5.0
+    _t203 = -1.6666666666666667*_t202
+    _t204 = 0.2*_t203
     _t205 = -_t1*_t201 + _t68
     _t206 = _t11*_t9
     _t207 = _t0*_t206 - _t1*_t64 - _t90
-    _t208 = -5.0*_t207/3.0
-    _t209 = _t208/5.0
+    _t208 = -1.6666666666666667*_t207
+    _t209 = 0.2*_t208
     _t210 = -_t1*_t206 + _t71
-    _t211 = 5.0*_t83/3.0
-    _t212 = _t211/5.0
+    _t211 = 1.6666666666666667*_t83
+    _t212 = 0.2*_t211
     _t213 = _t0*_t62 + _t20
-    _t214 = 5.0*_t85/3.0
-    _t215 = _t214/5.0
+    _t214 = 1.6666666666666667*_t85
+    _t215 = 0.2*_t214
     _t216 = _t0*_t64 + _t26
     _t217 = _t108*_t45 + _t111*_t45 + _t114*_t49 + _t117*_t49
     _t218 = J_theta_cart_left*_t217
@@ -1050,17 +1050,17 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t245 = _t231*_t239
     _t246 = -_t231*_t243 + _t233*_t238
     _t247 = 2.0*_t38
-    _t248 = 5.0*_t88/3.0
-    _t249 = _t248/5.0
+    _t248 = 1.6666666666666667*_t88
+    _t249 = 0.2*_t248
     _t250 = _t0*_t16 + _t66 + _t67
-    _t251 = 5.0*_t91/3.0
-    _t252 = _t251/5.0
+    _t251 = 1.6666666666666667*_t91
+    _t252 = 0.2*_t251
     _t253 = _t0*_t22 + _t69 + _t70
     _t254 = -_t162*_t180
     _t255 = 2.0*_t45
     _t256 = _t255*_t35 - _t255*_t47
     _t257 = _t255*_t31 + _t255*_t32
-    _t258 = 3.0*_t45/5.0
+    _t258 = 0.6*_t45
     _t259 = _t258*_t4
     _t260 = _t2*_t258
     _t261 = _t259*_t33 + _t259*_t34 - _t260*_t37 + _t260*_t43
@@ -1198,7 +1198,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 2 (shape 2x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 224 add, 342 mul, 38 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 224 add, 352 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -1225,33 +1225,33 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t1 = -_t0
         _t2 = math.cos(theta_cart)
         _t3 = math.sin(theta_tractor)
-        _t4 = 3.0*_t0/10.0
+        _t4 = 0.3*_t0
         _t5 = math.cos(theta_tractor)
-        _t6 = 3.0*_t2/10.0
+        _t6 = 0.3*_t2
         _t7 = _t3*_t4 + _t5*_t6
         _t8 = -_t7
         _t9 = -_t2
         _t10 = -_t3*_t6 + _t4*_t5
         _t11 = -radius_right
         _t12 = -radius_left
-        _t13 = 207.0*_t3/1000.0
+        _t13 = 0.207*_t3
         _t14 = -_t13
-        _t15 = -207.0*_t5/1000.0
-        _t16 = 500.0*_t11/207.0
-        _t17 = 500.0*_t12/207.0
+        _t15 = -0.207*_t5
+        _t16 = 2.4154589371980677*_t11
+        _t17 = 2.4154589371980677*_t12
         _t18 = _t15*_t16
         _t19 = _t1*_t18 - _t16*_t8
         _t20 = _t15*_t17
         _t21 = _t1*_t20 + _t17*_t8
         _t22 = _t14*_t16
         _t23 = -_t19 - _t2*_t22
-        _t24 = -5.0*_t23/3.0
-        _t25 = _t24/5.0
+        _t24 = -1.6666666666666667*_t23
+        _t25 = 0.2*_t24
         _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9
         _t27 = _t14*_t17
         _t28 = -_t2*_t27 - _t21
-        _t29 = -5.0*_t28/3.0
-        _t30 = _t29/5.0
+        _t29 = -1.6666666666666667*_t28
+        _t30 = 0.2*_t29
         _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9
         _t32 = 1.0/radius_cart_right
         _t33 = 1.0/radius_cart_left
@@ -1265,8 +1265,8 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40
         _t42 = K_theta_cart_x_tractor*_t2
         _t43 = K_theta_cart_x_tractor_2*_t0 - _t42
-        _t44 = 3.0*_t3/10.0
-        _t45 = 3.0*_t5/10.0
+        _t44 = 0.3*_t3
+        _t45 = 0.3*_t5
         _t46 = K_theta_cart_x_tractor_2*_t0
         _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46
         _t48 = _t24*thetadot_right + _t29*thetadot_left
@@ -1284,19 +1284,19 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t60 = _t48*thetadot_left
         _t61 = _t13*_t16
         _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2
-        _t63 = -5.0*_t62/3.0
-        _t64 = _t63/5.0
+        _t63 = -1.6666666666666667*_t62
+        _t64 = 0.2*_t63
         _t65 = _t19 + _t61*_t9
         _t66 = _t13*_t17
         _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20
-        _t68 = -5.0*_t67/3.0
-        _t69 = _t68/5.0
+        _t68 = -1.6666666666666667*_t67
+        _t69 = 0.2*_t68
         _t70 = _t21 + _t66*_t9
-        _t71 = 5.0*_t26/3.0
-        _t72 = _t71/5.0
+        _t71 = 1.6666666666666667*_t26
+        _t72 = 0.2*_t71
         _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9
-        _t74 = 5.0*_t31/3.0
-        _t75 = _t74/5.0
+        _t74 = 1.6666666666666667*_t31
+        _t75 = 0.2*_t74
         _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9
         _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43
         _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39
@@ -1324,7 +1324,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49 - _t52
         _t101 = _t57*_t61 + _t58*_t66
         _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98
-        _t103 = 3.0*K_theta_cart_x_tractor*_t2*_t3*_t49/10.0 - _t44*_t52 - _t45*_t53 - _t45*_t54
+        _t103 = 0.3*K_theta_cart_x_tractor*_t2*_t3*_t49 - _t44*_t52 - _t45*_t53 - _t45*_t54
         _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98
         _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56
         _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97
@@ -1370,30 +1370,30 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t146 = -J_theta_cart_left*_t145
         _t147 = _t146*_t33
         _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47
-        _t149 = _t144/5.0 - _t147/5.0 + _t148
-        _t150 = -5.0*_t149/3.0
+        _t149 = 0.2*_t144 - 0.2*_t147 + _t148
+        _t150 = -1.6666666666666667*_t149
         _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8
-        _t152 = 500.0*_t151/207.0
+        _t152 = 2.4154589371980677*_t151
         _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96
         _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153
-        _t155 = 500.0*_t154/207.0
+        _t155 = 2.4154589371980677*_t154
         _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39
         _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156
-        _t158 = 500.0*_t157/207.0
+        _t158 = 2.4154589371980677*_t157
         _t159 = _t14*_t155 + _t15*_t158
-        _t160 = 500.0*_t11/207.0
-        _t161 = 500.0*_t12/207.0
+        _t160 = 2.4154589371980677*_t11
+        _t161 = 2.4154589371980677*_t12
         _t162 = _t14*_t160
         _t163 = _t15*_t160
         _t164 = -_t1*_t163 + _t160*_t8 - _t162*_t2
-        _t165 = -5.0*_t164/3.0
-        _t166 = _t165/5.0
+        _t165 = -1.6666666666666667*_t164
+        _t166 = 0.2*_t165
         _t167 = _t1*_t162 - _t10*_t160 + _t163*_t9
         _t168 = _t14*_t161
         _t169 = _t15*_t161
         _t170 = -_t1*_t169 - _t161*_t8 - _t168*_t2
-        _t171 = -5.0*_t170/3.0
-        _t172 = _t171/5.0
+        _t171 = -1.6666666666666667*_t170
+        _t172 = 0.2*_t171
         _t173 = _t1*_t168 + _t10*_t161 + _t169*_t9
         _t174 = J_x_tractor*_t162 - _t160*_t41 + _t165*_t43
         _t175 = J_x_tractor*_t163 - _t160*_t36 + _t165*_t39
@@ -1412,8 +1412,8 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t188 = J_theta_tractor*_t161 + _t168*_t41 + _t169*_t36 + _t171*_t47
         _t189 = J_x_tractor*_t169 + _t161*_t36 + _t171*_t39
         _t190 = J_theta_cart*_t171 + _t161*_t47 + _t168*_t43 + _t169*_t39
-        _t191 = 207.0*_t5/500.0
-        _t192 = -207.0*_t3/500.0
+        _t191 = 0.414*_t5
+        _t192 = -0.414*_t3
         _t193 = _t152 + _t159
         _t194 = _t155*_t191 + _t158*_t192
         _t195 = -_t152 + _t159

@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 10 (shape 10x1, row-major)
 
-    operations after CSE: 134 add, 219 mul, 24 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 134 add, 225 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _, thetadot_right, thetadot_left = _flat(x, 10, "x")
     tau_right, tau_left = _flat(tau, 2, "tau")
@@ -83,28 +83,28 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t0/10.0
+    _t3 = 0.3*_t0
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t1/10.0
+    _t5 = 0.3*_t1
     _t6 = _t2*_t3 + _t4*_t5
     _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 207.0*_t2/1000.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
-    _t11 = -207.0*_t4/1000.0
+    _t8 = 0.207*_t2
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = -0.207*_t4
     _t12 = _t11*_t9
     _t13 = -_t0*_t12 + _t6*_t9
     _t14 = _t10*_t11
     _t15 = -_t0*_t14 - _t10*_t6
     _t16 = -_t8*_t9
     _t17 = -_t1*_t16 - _t13
-    _t18 = -5.0*_t17/3.0
-    _t19 = _t18/5.0
+    _t18 = -1.6666666666666667*_t17
+    _t19 = 0.2*_t18
     _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
     _t21 = -_t10*_t8
     _t22 = -_t1*_t21 - _t15
-    _t23 = -5.0*_t22/3.0
-    _t24 = _t23/5.0
+    _t23 = -1.6666666666666667*_t22
+    _t24 = 0.2*_t23
     _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
     _t26 = _t12*thetadot_right
     _t27 = _t14*thetadot_left
@@ -114,8 +114,8 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t31 = K_theta_cart_x_tractor_2*_t1
     _t32 = K_theta_tractor_x_tractor*_t4
     _t33 = K_theta_cart_x_tractor*_t1
-    _t34 = 3.0*_t2/10.0
-    _t35 = 3.0*_t4/10.0
+    _t34 = 0.3*_t2
+    _t35 = 0.3*_t4
     _t36 = K_theta_cart_x_tractor_2*_t0
     _t37 = _t18*thetadot_right + _t23*thetadot_left
     _t38 = _t37*_t37
@@ -132,19 +132,19 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t49 = _t37*thetadot_left
     _t50 = _t8*_t9
     _t51 = _t0*_t50 - _t1*_t12 - _t7*_t9
-    _t52 = -5.0*_t51/3.0
-    _t53 = _t52/5.0
+    _t52 = -1.6666666666666667*_t51
+    _t53 = 0.2*_t52
     _t54 = -_t1*_t50 + _t13
     _t55 = _t10*_t8
     _t56 = _t0*_t55 - _t1*_t14 + _t10*_t7
-    _t57 = -5.0*_t56/3.0
-    _t58 = _t57/5.0
+    _t57 = -1.6666666666666667*_t56
+    _t58 = 0.2*_t57
     _t59 = -_t1*_t55 + _t15
-    _t60 = 5.0*_t20/3.0
-    _t61 = _t60/5.0
+    _t60 = 1.6666666666666667*_t20
+    _t61 = 0.2*_t60
     _t62 = _t0*_t12 - _t1*_t16 - _t6*_t9
-    _t63 = 5.0*_t25/3.0
-    _t64 = _t63/5.0
+    _t63 = 1.6666666666666667*_t25
+    _t64 = 0.2*_t63
     _t65 = _t0*_t14 - _t1*_t21 + _t10*_t6
     _t66 = K_theta_tractor_x_tractor_2*_t2 - _t32
     _t67 = K_theta_cart_x_tractor_2*_t0 - _t33
@@ -179,7 +179,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t96 = -K_theta_tractor_x_tractor_2*_t2*_t40 + _t32*_t40 + _t33*_t38 - _t41
     _t97 = _t46*_t50 + _t47*_t55
     _t98 = J_x_tractor*_t97 + _t70*_t94 + _t96
-    _t99 = 3.0*K_theta_cart_x_tractor*_t1*_t2*_t38/10.0 - _t34*_t41 - _t35*_t42 - _t35*_t43
+    _t99 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t38 - _t34*_t41 - _t35*_t42 - _t35*_t43
     _t100 = _t66*_t93 + _t69*_t97 + _t72*_t94 + _t99
     _t101 = _t30*_t44 + _t31*_t44 - _t33*_t45 + _t36*_t45
     _t102 = J_theta_cart*_t94 + _t101 + _t67*_t93 + _t70*_t97

@@ -44,7 +44,7 @@ static inline void trailer2_k_tdroc_weighted_gain(const trailer2_real_t *minv_no
 
 /* trailer2_k_minimal_tde_keep: the parameter-only part of trailer2_minimal_tde (trailer2_laws.h
    documents it).
-   operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 5 div, 0 sin/cos, 0 sqrt */
 static inline void trailer2_k_minimal_tde_keep(const trailer2_params_t *p,
     const trailer2_real_t *span, trailer2_real_t kept[24])
 {
@@ -71,8 +71,8 @@ static inline void trailer2_k_minimal_tde_keep(const trailer2_params_t *p,
     const trailer2_real_t radius_left = p->radius_left;
     const trailer2_real_t radius_right = p->radius_right;
     const trailer2_real_t span_1 = span[0];
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t2 = -J_theta_tractor*_t0;
     const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
@@ -107,7 +107,7 @@ static inline void trailer2_k_minimal_tde_keep(const trailer2_params_t *p,
 }
 
 /* trailer2_k_minimal_tde: the per-step part of trailer2_minimal_tde (trailer2_laws.h documents it).
-   operations after CSE: 122 add, 181 mul, 19 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 122 add, 185 mul, 0 div, 6 sin/cos, 0 sqrt */
 static inline void trailer2_k_minimal_tde(const trailer2_real_t kept[24],
     const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
@@ -117,42 +117,42 @@ static inline void trailer2_k_minimal_tde(const trailer2_real_t kept[24],
     const trailer2_real_t _t10 = TRAILER2_COS_BOUNDED(qp3);
     const trailer2_real_t qp2 = q_prev[2];
     const trailer2_real_t _t11 = TRAILER2_SIN_BOUNDED(qp2);
-    const trailer2_real_t _t12 = TRAILER2_LIT(3.0)*_t11/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t11;
     const trailer2_real_t _t13 = TRAILER2_COS_BOUNDED(qp2);
-    const trailer2_real_t _t14 = TRAILER2_LIT(3.0)*_t13/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t14 = TRAILER2_LIT(0.3)*_t13;
     const trailer2_real_t qp4 = q_prev[4];
     const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(qp4);
     const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(qp4);
-    const trailer2_real_t _t17 = TRAILER2_LIT(17.0)*_t16/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.85)*_t16;
     const trailer2_real_t _t18 = -_t10*_t14 - _t12*_t9;
-    const trailer2_real_t _t19 = -TRAILER2_LIT(207.0)*_t11/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t19 = -TRAILER2_LIT(0.207)*_t11;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t20 = _t0*_t19;
-    const trailer2_real_t _t21 = -TRAILER2_LIT(207.0)*_t13/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t21 = -TRAILER2_LIT(0.207)*_t13;
     const trailer2_real_t _t22 = _t0*_t21;
     const trailer2_real_t _t23 = _t0*_t18 - _t10*_t20 + _t22*_t9;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(5.0)*_t23/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t25 = _t24/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t26 = -_t10*_t12 + TRAILER2_LIT(3.0)*_t13*_t9/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t24 = -TRAILER2_LIT(1.6666666666666667)*_t23;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.2)*_t24;
+    const trailer2_real_t _t26 = -_t10*_t12 + TRAILER2_LIT(0.3)*_t13*_t9;
     const trailer2_real_t _t27 = -_t0*_t26 - _t10*_t22 - _t20*_t9;
     const trailer2_real_t _t1 = kept[16];
     const trailer2_real_t _t28 = _t1*_t19;
     const trailer2_real_t _t29 = _t1*_t21;
     const trailer2_real_t _t30 = -_t1*_t18 - _t10*_t28 + _t29*_t9;
-    const trailer2_real_t _t31 = -TRAILER2_LIT(5.0)*_t30/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t32 = _t31/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t31 = -TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t32 = TRAILER2_LIT(0.2)*_t31;
     const trailer2_real_t _t33 = _t1*_t26 - _t10*_t29 - _t28*_t9;
     const trailer2_real_t _t34 = -_t12*_t15 - _t14*_t16;
-    const trailer2_real_t _t35 = -_t10*_t17 - TRAILER2_LIT(17.0)*_t15*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t35 = -_t10*_t17 - TRAILER2_LIT(0.85)*_t15*_t9;
     const trailer2_real_t _t36 = _t0*_t34 + _t15*_t22 - _t16*_t20 - _t24*_t35;
-    const trailer2_real_t _t37 = -TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t38 = _t37/TRAILER2_LIT(5.0);
-    const trailer2_real_t _t39 = -_t12*_t16 + TRAILER2_LIT(3.0)*_t13*_t15/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t40 = TRAILER2_LIT(17.0)*_t10*_t15/TRAILER2_LIT(20.0) - _t17*_t9;
+    const trailer2_real_t _t37 = -TRAILER2_LIT(1.6666666666666667)*_t36;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.2)*_t37;
+    const trailer2_real_t _t39 = -_t12*_t16 + TRAILER2_LIT(0.3)*_t13*_t15;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.85)*_t10*_t15 - _t17*_t9;
     const trailer2_real_t _t41 = -_t0*_t39 - _t15*_t20 - _t16*_t22 + _t24*_t40;
     const trailer2_real_t _t42 = -_t1*_t34 + _t15*_t29 - _t16*_t28 - _t31*_t35;
-    const trailer2_real_t _t43 = -TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t44 = _t43/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t43 = -TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t44 = TRAILER2_LIT(0.2)*_t43;
     const trailer2_real_t _t45 = _t1*_t39 - _t15*_t28 - _t16*_t29 + _t31*_t40;
     const trailer2_real_t K_theta_cart_x_tractor = kept[9];
     const trailer2_real_t _t46 = K_theta_cart_x_tractor*_t9;
@@ -165,8 +165,8 @@ static inline void trailer2_k_minimal_tde(const trailer2_real_t kept[24],
     const trailer2_real_t _t50 = K_theta_cart_x_tractor*_t10;
     const trailer2_real_t _t51 = K_theta_cart2_x_tractor*_t16;
     const trailer2_real_t _t52 = K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t54 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t53 = TRAILER2_LIT(0.85)*_t9;
+    const trailer2_real_t _t54 = TRAILER2_LIT(0.85)*_t10;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
     const trailer2_real_t _t55 = -K_theta_tractor_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t11;
@@ -244,7 +244,7 @@ static inline void trailer2_k_minimal_tde(const trailer2_real_t kept[24],
 
 /* trailer2_k_minimal_minv_norm_keep: the parameter-only part of trailer2_minimal_minv_norm
    (trailer2_laws.h documents it).
-   operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 4 div, 0 sin/cos, 0 sqrt */
 static inline void trailer2_k_minimal_minv_norm_keep(const trailer2_params_t *p,
     trailer2_real_t kept[23])
 {
@@ -270,8 +270,8 @@ static inline void trailer2_k_minimal_minv_norm_keep(const trailer2_params_t *p,
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
     const trailer2_real_t radius_left = p->radius_left;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t2 = -J_theta_tractor*_t0;
     const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
@@ -305,7 +305,7 @@ static inline void trailer2_k_minimal_minv_norm_keep(const trailer2_params_t *p,
 
 /* trailer2_k_minimal_minv_norm: the per-step part of trailer2_minimal_minv_norm (trailer2_laws.h
    documents it).
-   operations after CSE: 120 add, 179 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 120 add, 183 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 static inline void trailer2_k_minimal_minv_norm(const trailer2_real_t kept[23],
     const trailer2_real_t *q, trailer2_real_t *norm)
 {
@@ -314,42 +314,42 @@ static inline void trailer2_k_minimal_minv_norm(const trailer2_real_t kept[23],
     const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t10;
     const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
     const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
-    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.85)*_t15;
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t10;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t19 = _t0*_t18;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t20 = -TRAILER2_LIT(0.207)*_t12;
     const trailer2_real_t _t21 = _t0*_t20;
     const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t23 = -TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.2)*_t23;
     const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
     const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
     const trailer2_real_t _t1 = kept[16];
     const trailer2_real_t _t27 = _t1*_t18;
     const trailer2_real_t _t28 = _t1*_t20;
     const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
     const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(0.85)*_t14*_t8 - _t16*_t9;
     const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
     const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
-    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.85)*_t14*_t9 - _t16*_t8;
     const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
     const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
     const trailer2_real_t K_theta_cart_x_tractor = kept[9];
     const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
@@ -362,8 +362,8 @@ static inline void trailer2_k_minimal_minv_norm(const trailer2_real_t kept[23],
     const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
     const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
     const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
-    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t52 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t53 = TRAILER2_LIT(0.85)*_t9;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
     const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
@@ -446,7 +446,7 @@ static inline void trailer2_k_minimal_omega_difference(const trailer2_real_t *ne
 
 /* trailer2_k_minimal_tdc_law: the per-step part of trailer2_minimal_tdc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 124 add, 181 mul, 17 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 124 add, 185 mul, 0 div, 6 sin/cos, 0 sqrt */
 static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[23],
     const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -460,42 +460,42 @@ static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[23],
     const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t10;
     const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
     const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
-    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.85)*_t15;
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t10;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t19 = _t0*_t18;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t20 = -TRAILER2_LIT(0.207)*_t12;
     const trailer2_real_t _t21 = _t0*_t20;
     const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t23 = -TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.2)*_t23;
     const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
     const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
     const trailer2_real_t _t1 = kept[16];
     const trailer2_real_t _t27 = _t1*_t18;
     const trailer2_real_t _t28 = _t1*_t20;
     const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
     const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(0.85)*_t14*_t8 - _t16*_t9;
     const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
     const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
-    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.85)*_t14*_t9 - _t16*_t8;
     const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
     const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
     const trailer2_real_t K_theta_cart_x_tractor = kept[9];
     const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
@@ -508,8 +508,8 @@ static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[23],
     const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
     const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
     const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
-    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t52 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t53 = TRAILER2_LIT(0.85)*_t9;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
     const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
@@ -592,7 +592,7 @@ static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[23],
 
 /* trailer2_k_minimal_tdroc_law: the per-step part of trailer2_minimal_tdroc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 129 add, 189 mul, 18 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 129 add, 193 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer2_k_minimal_tdroc_law(const trailer2_real_t kept[23],
     const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -605,42 +605,42 @@ static inline void trailer2_k_minimal_tdroc_law(const trailer2_real_t kept[23],
     const trailer2_real_t _t9 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t10 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t11 = TRAILER2_LIT(3.0)*_t10/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t10;
     const trailer2_real_t _t12 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t14 = TRAILER2_SIN_BOUNDED(theta_cart2);
     const trailer2_real_t _t15 = TRAILER2_COS_BOUNDED(theta_cart2);
-    const trailer2_real_t _t16 = TRAILER2_LIT(17.0)*_t15/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.85)*_t15;
     const trailer2_real_t _t17 = -_t11*_t8 - _t13*_t9;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t10/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t10;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t19 = _t0*_t18;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t20 = -TRAILER2_LIT(0.207)*_t12;
     const trailer2_real_t _t21 = _t0*_t20;
     const trailer2_real_t _t22 = _t0*_t17 - _t19*_t9 + _t21*_t8;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(5.0)*_t22/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t24 = _t23/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t23 = -TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.2)*_t23;
     const trailer2_real_t _t25 = -_t11*_t9 + _t13*_t8;
     const trailer2_real_t _t26 = -_t0*_t25 - _t19*_t8 - _t21*_t9;
     const trailer2_real_t _t1 = kept[16];
     const trailer2_real_t _t27 = _t1*_t18;
     const trailer2_real_t _t28 = _t1*_t20;
     const trailer2_real_t _t29 = -_t1*_t17 - _t27*_t9 + _t28*_t8;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t32 = _t1*_t25 - _t27*_t8 - _t28*_t9;
     const trailer2_real_t _t33 = -_t11*_t14 - _t13*_t15;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(17.0)*_t14*_t8/TRAILER2_LIT(20.0) - _t16*_t9;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(0.85)*_t14*_t8 - _t16*_t9;
     const trailer2_real_t _t35 = _t0*_t33 + _t14*_t21 - _t15*_t19 - _t23*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
     const trailer2_real_t _t38 = -_t11*_t15 + _t13*_t14;
-    const trailer2_real_t _t39 = TRAILER2_LIT(17.0)*_t14*_t9/TRAILER2_LIT(20.0) - _t16*_t8;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.85)*_t14*_t9 - _t16*_t8;
     const trailer2_real_t _t40 = -_t0*_t38 - _t14*_t19 - _t15*_t21 + _t23*_t39;
     const trailer2_real_t _t41 = -_t1*_t33 + _t14*_t28 - _t15*_t27 - _t30*_t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t1*_t38 - _t14*_t27 - _t15*_t28 + _t30*_t39;
     const trailer2_real_t K_theta_cart_x_tractor = kept[9];
     const trailer2_real_t _t45 = K_theta_cart_x_tractor*_t8;
@@ -653,8 +653,8 @@ static inline void trailer2_k_minimal_tdroc_law(const trailer2_real_t kept[23],
     const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t9;
     const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15;
     const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t14;
-    const trailer2_real_t _t52 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t53 = TRAILER2_LIT(17.0)*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t52 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t53 = TRAILER2_LIT(0.85)*_t9;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[14];
     const trailer2_real_t _t54 = -K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t10;
@@ -750,7 +750,7 @@ static inline void trailer2_k_minimal_tdroc_law(const trailer2_real_t kept[23],
 
 /* trailer2_k_minimal_roc_law_keep: the parameter-only part of trailer2_minimal_roc_law
    (trailer2_laws.h documents it).
-   operations after CSE: 0 add, 6 mul, 8 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 6 mul, 4 div, 0 sin/cos, 0 sqrt */
 static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[25])
 {
@@ -776,16 +776,16 @@ static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
     const trailer2_real_t radius_left = p->radius_left;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t2 = -J_theta_tractor*_t0;
     const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
     const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(3.0)*K_theta_cart_x_tractor/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t9 = TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart2;
     kept[2] = J_theta_cart2_left;
@@ -815,7 +815,7 @@ static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
 
 /* trailer2_k_minimal_roc_law: the per-step part of trailer2_minimal_roc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 278 add, 385 mul, 39 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 278 add, 399 mul, 2 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
@@ -828,21 +828,21 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t11 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t12 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t _t14 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
     const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t17 = TRAILER2_SIN_BOUNDED(theta_cart2);
     const trailer2_real_t _t18 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
     const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
     const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(17.0)*_t11*_t17/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t26 = -TRAILER2_LIT(207.0)*_t14/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t27 = _t0*_t26;
     const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
@@ -851,25 +851,25 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
     const trailer2_real_t _t31 = -_t0*_t25;
     const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(5.0)*_t32/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
     const trailer2_real_t _t34 = -_t21*_t33;
     const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
     const trailer2_real_t _t36 = -_t1*_t25;
     const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
     const trailer2_real_t _t39 = -_t21*_t38;
     const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = _t33/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
     const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
     const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
     const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
     const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(5.0)*_t49/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t51 = _t50/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
     const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
@@ -888,8 +888,8 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
     const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
     const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t65 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
     const trailer2_real_t thetadot_right = qdot[5];
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
@@ -917,41 +917,41 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t88 = _t66*thetadot_left;
     const trailer2_real_t _t89 = _t0*_t25;
     const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(5.0)*_t90/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = -_t11*_t89 + _t28;
     const trailer2_real_t _t94 = _t1*_t25;
     const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(5.0)*_t95/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
     const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t100 = _t99/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
     const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
     const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
     const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
     const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(5.0)*_t113/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t115 = _t114/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
+    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
     const trailer2_real_t _t116 = -_t24*_t99 + _t34;
     const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(5.0)*_t117/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
+    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
     const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t122 = _t121/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
     const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(5.0)*_t52/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t125 = _t124/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
+    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
     const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
     const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
     const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
@@ -1133,7 +1133,7 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
 
 /* trailer2_k_minimal_asmc_law: the per-step part of trailer2_minimal_asmc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 274 add, 382 mul, 38 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 274 add, 396 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
@@ -1146,21 +1146,21 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t11 = TRAILER2_COS_BOUNDED(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t12 = TRAILER2_SIN_BOUNDED(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t _t14 = TRAILER2_COS_BOUNDED(theta_tractor);
-    const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
     const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t17 = TRAILER2_SIN_BOUNDED(theta_cart2);
     const trailer2_real_t _t18 = TRAILER2_COS_BOUNDED(theta_cart2);
     const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
     const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
     const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(17.0)*_t11*_t17/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t26 = -TRAILER2_LIT(207.0)*_t14/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
     const trailer2_real_t _t0 = kept[15];
     const trailer2_real_t _t27 = _t0*_t26;
     const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
@@ -1169,25 +1169,25 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
     const trailer2_real_t _t31 = -_t0*_t25;
     const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(5.0)*_t32/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
     const trailer2_real_t _t34 = -_t21*_t33;
     const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
     const trailer2_real_t _t36 = -_t1*_t25;
     const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
     const trailer2_real_t _t39 = -_t21*_t38;
     const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = _t33/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
     const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
     const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
     const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
     const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(5.0)*_t49/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t51 = _t50/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
     const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[13];
     const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
@@ -1206,8 +1206,8 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
     const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
     const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t65 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
     const trailer2_real_t thetadot_right = qdot[5];
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
@@ -1235,41 +1235,41 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t88 = _t66*thetadot_left;
     const trailer2_real_t _t89 = _t0*_t25;
     const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(5.0)*_t90/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = -_t11*_t89 + _t28;
     const trailer2_real_t _t94 = _t1*_t25;
     const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(5.0)*_t95/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
     const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t100 = _t99/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
     const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
     const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
     const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
     const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(5.0)*_t113/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t115 = _t114/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
+    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
     const trailer2_real_t _t116 = -_t24*_t99 + _t34;
     const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(5.0)*_t117/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
+    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
     const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t122 = _t121/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
     const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(5.0)*_t52/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t125 = _t124/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
+    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
     const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
     const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
     const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
@@ -1462,7 +1462,7 @@ static inline void trailer2_k_minimal_pi_law_keep(const trailer2_params_t *p,
 
 /* trailer2_k_minimal_pi_law: the per-step part of trailer2_minimal_pi_law (trailer2_laws.h
    documents it).
-   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 static inline void trailer2_k_minimal_pi_law(const trailer2_real_t kept[2],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *q_des,
     const trailer2_real_t *qdot_des, const trailer2_real_t *integral, const trailer2_real_t *gains,
@@ -1487,9 +1487,8 @@ static inline void trailer2_k_minimal_pi_law(const trailer2_real_t kept[2],
     const trailer2_real_t qdd_2 = qdot_des[2];
     const trailer2_real_t ky = gains[1];
     const trailer2_real_t ktheta = gains[2];
-    const trailer2_real_t _t9 = TRAILER2_LIT(207.0)*_t3*(ktheta*TRAILER2_SIN(_t2)
-            + ky*(_t4*_t7 - _t5*_t6))/TRAILER2_LIT(1000.0)
-            + TRAILER2_LIT(207.0)*qdd_2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.207)*_t3*(ktheta*TRAILER2_SIN(_t2)
+            + ky*(_t4*_t7 - _t5*_t6)) + TRAILER2_LIT(0.207)*qdd_2;
     const trailer2_real_t thetadot_right = qdot[5];
     const trailer2_real_t _t0 = kept[0];
     const trailer2_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;

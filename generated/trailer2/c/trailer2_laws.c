@@ -31,7 +31,7 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.
-   operations after CSE: 122 add, 191 mul, 26 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 122 add, 195 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 120 add, 189 mul, 24 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 120 add, 193 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
 }
 
 /* trailer2_minimal_tdc_law: documented in trailer2_laws.h.
-   operations after CSE: 124 add, 191 mul, 23 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 124 add, 195 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -126,7 +126,7 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 129 add, 199 mul, 24 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 129 add, 203 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -140,7 +140,7 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 278 add, 412 mul, 47 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 278 add, 426 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -155,7 +155,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 274 add, 409 mul, 46 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 274 add, 423 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -170,7 +170,7 @@ void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t
 }
 
 /* trailer2_minimal_pi_law: documented in trailer2_laws.h.
-   operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 void trailer2_minimal_pi_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *q_des, const trailer2_real_t *qdot_des,
     const trailer2_real_t *integral, const trailer2_real_t *gains, const trailer2_real_t *limits,

@@ -7,7 +7,7 @@
 #include "trailer2_model.h"
 
 /* trailer2_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 282 add, 396 mul, 46 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 282 add, 410 mul, 5 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *tau, trailer2_real_t *qddot)
 {
@@ -60,16 +60,16 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t2 = -J_theta_tractor*_t0;
     const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
     const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(3.0)*K_theta_cart_x_tractor/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t9 = TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -121,45 +121,45 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
     const trailer2_real_t _t11 = TRAILER2_COS(theta_cart);
     const trailer2_real_t _t12 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
     const trailer2_real_t _t14 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
     const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
     const trailer2_real_t _t17 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t18 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
     const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
     const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(17.0)*_t11*_t17/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t26 = -TRAILER2_LIT(207.0)*_t14/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
     const trailer2_real_t _t27 = _t0*_t26;
     const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
     const trailer2_real_t _t29 = _t1*_t26;
     const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
     const trailer2_real_t _t31 = -_t0*_t25;
     const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(5.0)*_t32/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
     const trailer2_real_t _t34 = -_t21*_t33;
     const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
     const trailer2_real_t _t36 = -_t1*_t25;
     const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
     const trailer2_real_t _t39 = -_t21*_t38;
     const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = _t33/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
     const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
     const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
     const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
     const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(5.0)*_t49/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t51 = _t50/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
     const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
     const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
     const trailer2_real_t _t54 = K_theta_tractor_x_tractor_2*_t14;
@@ -172,8 +172,8 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
     const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
     const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t65 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
     const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
     const trailer2_real_t _t67 = _t66*_t66;
     const trailer2_real_t _t68 = _t61*_t67;
@@ -199,41 +199,41 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t _t88 = _t66*thetadot_left;
     const trailer2_real_t _t89 = _t0*_t25;
     const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(5.0)*_t90/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = -_t11*_t89 + _t28;
     const trailer2_real_t _t94 = _t1*_t25;
     const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(5.0)*_t95/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
     const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t100 = _t99/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
     const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
     const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
     const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
     const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(5.0)*_t113/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t115 = _t114/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
+    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
     const trailer2_real_t _t116 = -_t24*_t99 + _t34;
     const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(5.0)*_t117/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
+    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
     const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t122 = _t121/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
     const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(5.0)*_t52/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t125 = _t124/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
+    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
     const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
     const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
     const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
@@ -414,7 +414,7 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
 }
 
 /* trailer2_model_prepare: documented in trailer2_model.h.
-   operations after CSE: 0 add, 6 mul, 8 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 6 mul, 4 div, 0 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     trailer2_model_prepared_t *prepared)
 {
@@ -457,16 +457,16 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
             & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t1 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t2 = -J_theta_tractor*_t0;
     const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
     const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(3.0)*K_theta_cart_x_tractor/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t9 = TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -545,7 +545,7 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
 }
 
 /* trailer2_forward_dynamics_prepared: documented in trailer2_model.h.
-   operations after CSE: 282 add, 390 mul, 38 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 282 add, 404 mul, 1 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepared_t *prepared,
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *tau,
     trailer2_real_t *qddot)
@@ -570,17 +570,17 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t13 = TRAILER2_LIT(3.0)*_t12/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(3.0)*_t14/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
     const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
     const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(17.0)*_t18/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t21 = TRAILER2_LIT(17.0)*_t10*_t17/TRAILER2_LIT(20.0) + _t11*_t20;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
     const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
     const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(17.0)*_t11*_t17/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t12/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t26 = -TRAILER2_LIT(207.0)*_t14/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
     const trailer2_real_t _t0 = prepared->forward_dynamics[15];
     const trailer2_real_t _t27 = _t0*_t26;
     const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
@@ -589,25 +589,25 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
     const trailer2_real_t _t31 = -_t0*_t25;
     const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(5.0)*_t32/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
     const trailer2_real_t _t34 = -_t21*_t33;
     const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
     const trailer2_real_t _t36 = -_t1*_t25;
     const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
     const trailer2_real_t _t39 = -_t21*_t38;
     const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = _t33/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
     const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
     const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
     const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
     const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(5.0)*_t49/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t51 = _t50/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
     const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
     const trailer2_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[13];
     const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
@@ -626,8 +626,8 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
     const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
     const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(17.0)*_t10/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t65 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
     const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
     const trailer2_real_t _t67 = _t66*_t66;
     const trailer2_real_t _t68 = _t61*_t67;
@@ -653,41 +653,41 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     const trailer2_real_t _t88 = _t66*thetadot_left;
     const trailer2_real_t _t89 = _t0*_t25;
     const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(5.0)*_t90/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = -_t11*_t89 + _t28;
     const trailer2_real_t _t94 = _t1*_t25;
     const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(5.0)*_t95/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
     const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(5.0)*_t42/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t100 = _t99/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
     const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
     const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
     const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
     const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(5.0)*_t113/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t115 = _t114/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
+    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
     const trailer2_real_t _t116 = -_t24*_t99 + _t34;
     const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(5.0)*_t117/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
+    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
     const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t122 = _t121/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
     const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(5.0)*_t52/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t125 = _t124/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
+    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
     const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
     const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
     const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
@@ -903,7 +903,7 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
 }
 
 /* trailer2_kinematics: documented in trailer2_model.h.
-   operations after CSE: 43 add, 83 mul, 21 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 43 add, 87 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *pose_rates)
 {
@@ -912,44 +912,44 @@ void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_LIT(17.0)*_t7/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t7;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t9 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t9 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t10 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t10 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t11 = -_t0*_t3 - _t1*_t5;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t12 = -TRAILER2_LIT(0.207)*_t2;
     const trailer2_real_t _t13 = _t12*_t9;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = -TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t _t15 = _t14*_t9;
     const trailer2_real_t _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(5.0)*_t16/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t18 = _t17/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(1.6666666666666667)*_t16;
+    const trailer2_real_t _t18 = TRAILER2_LIT(0.2)*_t17;
     const trailer2_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9;
     const trailer2_real_t _t21 = _t10*_t12;
     const trailer2_real_t _t22 = _t10*_t14;
     const trailer2_real_t _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(5.0)*_t23/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t25 = _t24/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t24 = -TRAILER2_LIT(1.6666666666666667)*_t23;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.2)*_t24;
     const trailer2_real_t _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19;
     const trailer2_real_t _t27 = -_t3*_t6 - _t5*_t7;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(17.0)*_t0*_t6/TRAILER2_LIT(20.0) - _t1*_t8;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.85)*_t0*_t6 - _t1*_t8;
     const trailer2_real_t _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t32 = -_t3*_t7 + _t5*_t6;
-    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(17.0)*_t1*_t6/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(0.85)*_t1*_t6;
     const trailer2_real_t _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9;
     const trailer2_real_t _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
     const trailer2_real_t _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33;
     const trailer2_real_t _t39 = _t18 - _t20;
     const trailer2_real_t _t40 = _t25 - _t26;
@@ -998,7 +998,7 @@ void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
 }
 
 /* trailer2_minimal_mass_matrix: documented in trailer2_model.h.
-   operations after CSE: 116 add, 183 mul, 23 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 116 add, 187 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *M)
 {
@@ -1007,44 +1007,44 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_LIT(17.0)*_t7/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t7;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t9 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t9 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t10 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t10 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t11 = -_t0*_t3 - _t1*_t5;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t12 = -TRAILER2_LIT(0.207)*_t2;
     const trailer2_real_t _t13 = _t12*_t9;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = -TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t _t15 = _t14*_t9;
     const trailer2_real_t _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(5.0)*_t16/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t18 = _t17/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(1.6666666666666667)*_t16;
+    const trailer2_real_t _t18 = TRAILER2_LIT(0.2)*_t17;
     const trailer2_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9;
     const trailer2_real_t _t21 = _t10*_t12;
     const trailer2_real_t _t22 = _t10*_t14;
     const trailer2_real_t _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(5.0)*_t23/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t25 = _t24/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t24 = -TRAILER2_LIT(1.6666666666666667)*_t23;
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.2)*_t24;
     const trailer2_real_t _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19;
     const trailer2_real_t _t27 = -_t3*_t6 - _t5*_t7;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(17.0)*_t0*_t6/TRAILER2_LIT(20.0) - _t1*_t8;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.85)*_t0*_t6 - _t1*_t8;
     const trailer2_real_t _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t31 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t32 = -_t3*_t7 + _t5*_t6;
-    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(17.0)*_t1*_t6/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(0.85)*_t1*_t6;
     const trailer2_real_t _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9;
     const trailer2_real_t _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t37 = _t36/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
     const trailer2_real_t _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33;
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t _t39 = K_theta_cart_x_tractor*_t0;
@@ -1057,8 +1057,8 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t43 = K_theta_cart_x_tractor*_t1;
     const trailer2_real_t _t44 = K_theta_cart2_x_tractor*_t7;
     const trailer2_real_t _t45 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer2_real_t _t46 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t47 = TRAILER2_LIT(17.0)*_t1/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t46 = TRAILER2_LIT(0.85)*_t0;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.85)*_t1;
     const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer2_real_t _t48 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
@@ -1133,7 +1133,7 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
 }
 
 /* trailer2_minimal_bias_forces: documented in trailer2_model.h.
-   operations after CSE: 193 add, 301 mul, 45 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 193 add, 315 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *H)
 {
@@ -1142,50 +1142,50 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
     const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(17.0)*_t1*_t7/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t _t19 = _t16*_t18;
     const trailer2_real_t _t20 = -_t0*_t19 + _t16*_t6;
     const trailer2_real_t _t21 = _t17*_t18;
     const trailer2_real_t _t22 = -_t0*_t21 - _t17*_t6;
     const trailer2_real_t _t23 = -_t15*_t16;
     const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(5.0)*_t24/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
     const trailer2_real_t _t26 = -_t11*_t25;
     const trailer2_real_t _t27 = _t16*_t9 - _t19*_t7;
     const trailer2_real_t _t28 = -_t15*_t17;
     const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
     const trailer2_real_t _t31 = -_t11*_t30;
     const trailer2_real_t _t32 = -_t17*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = _t25/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
     const trailer2_real_t _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t35 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17;
     const trailer2_real_t _t37 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t39 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7;
     const trailer2_real_t _t41 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7;
     const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer2_real_t _t45 = K_theta_tractor_x_tractor*_t2;
@@ -1204,8 +1204,8 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t53 = K_theta_cart2_x_tractor*_t8;
     const trailer2_real_t _t54 = K_theta_cart_x_tractor_2*_t0;
     const trailer2_real_t _t55 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t56 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t57 = TRAILER2_LIT(17.0)*_t1/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t56 = TRAILER2_LIT(0.85)*_t0;
+    const trailer2_real_t _t57 = TRAILER2_LIT(0.85)*_t1;
     const trailer2_real_t thetadot_right = wheel_rates[0];
     const trailer2_real_t thetadot_left = wheel_rates[1];
     const trailer2_real_t _t58 = _t38*thetadot_right + _t42*thetadot_left;
@@ -1233,41 +1233,41 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t80 = _t58*thetadot_left;
     const trailer2_real_t _t81 = _t15*_t16;
     const trailer2_real_t _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t83 = -TRAILER2_LIT(5.0)*_t82/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t84 = _t83/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t83 = -TRAILER2_LIT(1.6666666666666667)*_t82;
+    const trailer2_real_t _t84 = TRAILER2_LIT(0.2)*_t83;
     const trailer2_real_t _t85 = -_t1*_t81 + _t20;
     const trailer2_real_t _t86 = _t15*_t17;
     const trailer2_real_t _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t88 = -TRAILER2_LIT(5.0)*_t87/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t89 = _t88/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t88 = -TRAILER2_LIT(1.6666666666666667)*_t87;
+    const trailer2_real_t _t89 = TRAILER2_LIT(0.2)*_t88;
     const trailer2_real_t _t90 = -_t1*_t86 + _t22;
-    const trailer2_real_t _t91 = TRAILER2_LIT(5.0)*_t34/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6;
-    const trailer2_real_t _t94 = TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t95 = _t94/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t94 = TRAILER2_LIT(1.6666666666666667)*_t36;
+    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t94;
     const trailer2_real_t _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6;
     const trailer2_real_t _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81;
-    const trailer2_real_t _t98 = -TRAILER2_LIT(5.0)*_t97/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t99 = _t98/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t98 = -TRAILER2_LIT(1.6666666666666667)*_t97;
+    const trailer2_real_t _t99 = TRAILER2_LIT(0.2)*_t98;
     const trailer2_real_t _t100 = -_t14*_t83 + _t27 - _t8*_t81;
     const trailer2_real_t _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86;
-    const trailer2_real_t _t102 = -TRAILER2_LIT(5.0)*_t101/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = -TRAILER2_LIT(1.6666666666666667)*_t101;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = -_t14*_t88 + _t32 - _t8*_t86;
     const trailer2_real_t _t105 = _t11*_t91 - _t14*_t25;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t14*_t91 + _t26;
     const trailer2_real_t _t109 = _t11*_t94 - _t14*_t30;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t14*_t94 + _t31;
-    const trailer2_real_t _t113 = TRAILER2_LIT(5.0)*_t40/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t114 = _t113/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t113 = TRAILER2_LIT(1.6666666666666667)*_t40;
+    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
     const trailer2_real_t _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8;
-    const trailer2_real_t _t116 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t117 = _t116/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
     const trailer2_real_t _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8;
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
     const trailer2_real_t _t119 = TRAILER2_LIT(1.0)/radius_cart2_left;
@@ -1350,10 +1350,9 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t184 = K_theta_tractor_x_tractor_2*_t2 - _t51;
     const trailer2_real_t _t185 = _t3*_t47 + _t3*_t48 + _t5*_t52 - _t5*_t54;
     const trailer2_real_t _t186 = _t3*_t49 + _t3*_t50 + _t5*_t53 - _t5*_t55;
-    const trailer2_real_t _t187 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t59*_t8/TRAILER2_LIT(10.0)
-            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t62/TRAILER2_LIT(10.0) - _t3*_t65
-            - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70;
+    const trailer2_real_t _t187 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t59*_t8
+            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67
+            - _t5*_t68 - _t5*_t69 - _t5*_t70;
     const trailer2_real_t _t188 = _t174*_t184 + _t175*_t185 + _t176*_t186 + _t181*_t183 + _t187;
     const trailer2_real_t _t189 = _t49*_t56 + _t50*_t56 + _t53*_t57 - _t55*_t57;
     const trailer2_real_t _t190 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60
@@ -1391,7 +1390,7 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
 }
 
 /* trailer2_minimal_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 265 add, 399 mul, 46 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 265 add, 413 mul, 5 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *wheel_accels)
@@ -1448,47 +1447,47 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
     const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(17.0)*_t1*_t7/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t16 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t17 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t _t19 = _t16*_t18;
     const trailer2_real_t _t20 = -_t0*_t19 + _t16*_t6;
     const trailer2_real_t _t21 = _t17*_t18;
     const trailer2_real_t _t22 = -_t0*_t21 - _t17*_t6;
     const trailer2_real_t _t23 = -_t15*_t16;
     const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(5.0)*_t24/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
     const trailer2_real_t _t26 = -_t11*_t25;
     const trailer2_real_t _t27 = _t16*_t9 - _t19*_t7;
     const trailer2_real_t _t28 = -_t15*_t17;
     const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
     const trailer2_real_t _t31 = -_t11*_t30;
     const trailer2_real_t _t32 = -_t17*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = _t25/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
     const trailer2_real_t _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t35 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17;
     const trailer2_real_t _t37 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t39 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7;
     const trailer2_real_t _t41 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7;
     const trailer2_real_t _t45 = K_theta_tractor_x_tractor*_t2;
     const trailer2_real_t _t46 = K_theta_tractor_x_tractor_2*_t4;
@@ -1501,8 +1500,8 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t _t53 = K_theta_cart2_x_tractor*_t8;
     const trailer2_real_t _t54 = K_theta_cart_x_tractor_2*_t0;
     const trailer2_real_t _t55 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t56 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t57 = TRAILER2_LIT(17.0)*_t1/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t56 = TRAILER2_LIT(0.85)*_t0;
+    const trailer2_real_t _t57 = TRAILER2_LIT(0.85)*_t1;
     const trailer2_real_t _t58 = _t38*thetadot_right + _t42*thetadot_left;
     const trailer2_real_t _t59 = _t58*_t58;
     const trailer2_real_t _t60 = _t53*_t59;
@@ -1528,41 +1527,41 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t _t80 = _t58*thetadot_left;
     const trailer2_real_t _t81 = _t15*_t16;
     const trailer2_real_t _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t83 = -TRAILER2_LIT(5.0)*_t82/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t84 = _t83/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t83 = -TRAILER2_LIT(1.6666666666666667)*_t82;
+    const trailer2_real_t _t84 = TRAILER2_LIT(0.2)*_t83;
     const trailer2_real_t _t85 = -_t1*_t81 + _t20;
     const trailer2_real_t _t86 = _t15*_t17;
     const trailer2_real_t _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t88 = -TRAILER2_LIT(5.0)*_t87/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t89 = _t88/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t88 = -TRAILER2_LIT(1.6666666666666667)*_t87;
+    const trailer2_real_t _t89 = TRAILER2_LIT(0.2)*_t88;
     const trailer2_real_t _t90 = -_t1*_t86 + _t22;
-    const trailer2_real_t _t91 = TRAILER2_LIT(5.0)*_t34/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t92 = _t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t91 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
     const trailer2_real_t _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6;
-    const trailer2_real_t _t94 = TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t95 = _t94/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t94 = TRAILER2_LIT(1.6666666666666667)*_t36;
+    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t94;
     const trailer2_real_t _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6;
     const trailer2_real_t _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81;
-    const trailer2_real_t _t98 = -TRAILER2_LIT(5.0)*_t97/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t99 = _t98/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t98 = -TRAILER2_LIT(1.6666666666666667)*_t97;
+    const trailer2_real_t _t99 = TRAILER2_LIT(0.2)*_t98;
     const trailer2_real_t _t100 = -_t14*_t83 + _t27 - _t8*_t81;
     const trailer2_real_t _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86;
-    const trailer2_real_t _t102 = -TRAILER2_LIT(5.0)*_t101/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t103 = _t102/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t102 = -TRAILER2_LIT(1.6666666666666667)*_t101;
+    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
     const trailer2_real_t _t104 = -_t14*_t88 + _t32 - _t8*_t86;
     const trailer2_real_t _t105 = _t11*_t91 - _t14*_t25;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(5.0)*_t105/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t107 = _t106/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
     const trailer2_real_t _t108 = -_t14*_t91 + _t26;
     const trailer2_real_t _t109 = _t11*_t94 - _t14*_t30;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(5.0)*_t109/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t111 = _t110/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
+    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
     const trailer2_real_t _t112 = -_t14*_t94 + _t31;
-    const trailer2_real_t _t113 = TRAILER2_LIT(5.0)*_t40/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t114 = _t113/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t113 = TRAILER2_LIT(1.6666666666666667)*_t40;
+    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
     const trailer2_real_t _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8;
-    const trailer2_real_t _t116 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t117 = _t116/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
     const trailer2_real_t _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8;
     const trailer2_real_t _t119 = K_theta_tractor_x_tractor_2*_t2 - _t51;
     const trailer2_real_t _t120 = K_theta_cart_x_tractor_2*_t0 - _t52;
@@ -1624,10 +1623,9 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
             + _t60 - _t65 - _t66;
     const trailer2_real_t _t169 = _t75*_t81 + _t76*_t86;
     const trailer2_real_t _t170 = J_x_tractor*_t169 + _t124*_t165 + _t125*_t166 + _t168;
-    const trailer2_real_t _t171 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t59*_t8/TRAILER2_LIT(10.0)
-            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t62/TRAILER2_LIT(10.0) - _t3*_t65
-            - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70;
+    const trailer2_real_t _t171 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t59*_t8
+            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67
+            - _t5*_t68 - _t5*_t69 - _t5*_t70;
     const trailer2_real_t _t172 = _t119*_t164 + _t123*_t169 + _t127*_t165 + _t128*_t166 + _t171;
     const trailer2_real_t _t173 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60
             - _t56*_t65 - _t57*_t67 - _t57*_t68;
@@ -1769,7 +1767,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
 }
 
 /* trailer2_linearization: documented in trailer2_model.h.
-   operations after CSE: 932 add, 1286 mul, 90 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 932 add, 1318 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
     trailer2_real_t *B)
@@ -1779,54 +1777,54 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
     const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(17.0)*_t1*_t7/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
-    const trailer2_real_t _t16 = TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t18 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t _t19 = -_t16*_t17;
     const trailer2_real_t _t20 = -_t0*_t19 + _t17*_t6;
     const trailer2_real_t _t21 = -_t16*_t18;
     const trailer2_real_t _t22 = -_t0*_t21 - _t18*_t6;
     const trailer2_real_t _t23 = -_t15*_t17;
     const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(5.0)*_t24/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
     const trailer2_real_t _t26 = -_t11*_t25;
     const trailer2_real_t _t27 = _t17*_t9 - _t19*_t7;
     const trailer2_real_t _t28 = -_t15*_t18;
     const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
     const trailer2_real_t _t31 = -_t11*_t30;
     const trailer2_real_t _t32 = -_t18*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = _t25/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
     const trailer2_real_t _t34 = -_t1*_t19 - _t12*_t17;
     const trailer2_real_t _t35 = -_t0*_t23 + _t34;
-    const trailer2_real_t _t36 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t37 = -_t1*_t21 + _t12*_t18;
     const trailer2_real_t _t38 = -_t0*_t28 + _t37;
     const trailer2_real_t _t39 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t40 = -TRAILER2_LIT(5.0)*_t39/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t41 = _t40/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t40 = -TRAILER2_LIT(1.6666666666666667)*_t39;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t40;
     const trailer2_real_t _t42 = -_t14*_t25;
     const trailer2_real_t _t43 = -_t13*_t17 - _t19*_t8;
     const trailer2_real_t _t44 = -_t23*_t7 + _t42 + _t43;
     const trailer2_real_t _t45 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(5.0)*_t45/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t47 = _t46/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
     const trailer2_real_t _t48 = -_t14*_t30;
     const trailer2_real_t _t49 = _t13*_t18 - _t21*_t8;
     const trailer2_real_t _t50 = -_t28*_t7 + _t48 + _t49;
@@ -1863,9 +1861,9 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t73 = K_theta_cart2_x_tractor_2*_t7;
     const trailer2_real_t _t74 = _t5*_t73;
     const trailer2_real_t _t75 = _t3*_t59;
-    const trailer2_real_t _t76 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t76 = TRAILER2_LIT(0.85)*_t0;
     const trailer2_real_t _t77 = _t58*_t76;
-    const trailer2_real_t _t78 = TRAILER2_LIT(17.0)*_t1/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t78 = TRAILER2_LIT(0.85)*_t1;
     const trailer2_real_t _t79 = _t64*_t78;
     const trailer2_real_t _t80 = _t59*_t76;
     const trailer2_real_t _t81 = _t73*_t78;
@@ -1913,14 +1911,14 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t123 = -_t12*_t18;
     const trailer2_real_t _t124 = -_t0*_t117 + _t123;
     const trailer2_real_t _t125 = -_t119 - _t121;
-    const trailer2_real_t _t126 = -TRAILER2_LIT(5.0)*_t125/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t126 = -TRAILER2_LIT(1.6666666666666667)*_t125;
     const trailer2_real_t _t127 = _t126*thetadot_right;
     const trailer2_real_t _t128 = -_t122 - _t124;
-    const trailer2_real_t _t129 = -TRAILER2_LIT(5.0)*_t128/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t129 = -TRAILER2_LIT(1.6666666666666667)*_t128;
     const trailer2_real_t _t130 = _t129*thetadot_left;
-    const trailer2_real_t _t131 = TRAILER2_LIT(5.0)*_t35/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t131 = TRAILER2_LIT(1.6666666666666667)*_t35;
     const trailer2_real_t _t132 = _t131*thetadot_right;
-    const trailer2_real_t _t133 = TRAILER2_LIT(5.0)*_t38/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t133 = TRAILER2_LIT(1.6666666666666667)*_t38;
     const trailer2_real_t _t134 = _t133*thetadot_left;
     const trailer2_real_t _t135 = -_t11*_t126;
     const trailer2_real_t _t136 = _t19*_t8;
@@ -1935,29 +1933,29 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t145 = _t14*_t30;
     const trailer2_real_t _t146 = -_t11*_t133;
     const trailer2_real_t _t147 = -_t143 - _t144;
-    const trailer2_real_t _t148 = -TRAILER2_LIT(5.0)*_t147/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t148 = -TRAILER2_LIT(1.6666666666666667)*_t147;
     const trailer2_real_t _t149 = _t148*thetadot_right;
     const trailer2_real_t _t150 = -_t145 - _t146;
-    const trailer2_real_t _t151 = -TRAILER2_LIT(5.0)*_t150/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t151 = -TRAILER2_LIT(1.6666666666666667)*_t150;
     const trailer2_real_t _t152 = _t151*thetadot_left;
-    const trailer2_real_t _t153 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t153 = TRAILER2_LIT(1.6666666666666667)*_t44;
     const trailer2_real_t _t154 = _t153*thetadot_right;
-    const trailer2_real_t _t155 = TRAILER2_LIT(5.0)*_t50/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t155 = TRAILER2_LIT(1.6666666666666667)*_t50;
     const trailer2_real_t _t156 = _t155*thetadot_left;
     const trailer2_real_t _t157 = -_t135 - _t136 - _t138;
-    const trailer2_real_t _t158 = -TRAILER2_LIT(5.0)*_t157/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t158 = -TRAILER2_LIT(1.6666666666666667)*_t157;
     const trailer2_real_t _t159 = _t158*thetadot_right;
     const trailer2_real_t _t160 = -_t139 - _t140 - _t142;
-    const trailer2_real_t _t161 = -TRAILER2_LIT(5.0)*_t160/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t161 = -TRAILER2_LIT(1.6666666666666667)*_t160;
     const trailer2_real_t _t162 = _t161*thetadot_left;
-    const trailer2_real_t _t163 = _t126/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t163 = TRAILER2_LIT(0.2)*_t126;
     const trailer2_real_t _t164 = -_t1*_t115 + _t20;
-    const trailer2_real_t _t165 = _t129/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t165 = TRAILER2_LIT(0.2)*_t129;
     const trailer2_real_t _t166 = -_t1*_t117 + _t22;
-    const trailer2_real_t _t167 = _t131/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t167 = TRAILER2_LIT(0.2)*_t131;
     const trailer2_real_t _t168 = -_t17*_t6;
     const trailer2_real_t _t169 = _t0*_t19 - _t1*_t23 + _t168;
-    const trailer2_real_t _t170 = _t133/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t170 = TRAILER2_LIT(0.2)*_t133;
     const trailer2_real_t _t171 = _t18*_t6;
     const trailer2_real_t _t172 = _t0*_t21 - _t1*_t28 + _t171;
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
@@ -1988,19 +1986,19 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t196 = -_t170 - _t172;
     const trailer2_real_t _t197 = _t186*_t196;
     const trailer2_real_t _t198 = _t197*thetadot_left;
-    const trailer2_real_t _t199 = _t158/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t199 = TRAILER2_LIT(0.2)*_t158;
     const trailer2_real_t _t200 = -_t115*_t8 - _t126*_t14 + _t27;
-    const trailer2_real_t _t201 = _t161/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t201 = TRAILER2_LIT(0.2)*_t161;
     const trailer2_real_t _t202 = -_t117*_t8 - _t129*_t14 + _t32;
-    const trailer2_real_t _t203 = _t148/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t203 = TRAILER2_LIT(0.2)*_t148;
     const trailer2_real_t _t204 = -_t131*_t14 + _t26;
-    const trailer2_real_t _t205 = _t151/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t205 = TRAILER2_LIT(0.2)*_t151;
     const trailer2_real_t _t206 = -_t133*_t14 + _t31;
-    const trailer2_real_t _t207 = _t153/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t207 = TRAILER2_LIT(0.2)*_t153;
     const trailer2_real_t _t208 = -_t17*_t9;
     const trailer2_real_t _t209 = _t11*_t25;
     const trailer2_real_t _t210 = _t19*_t7 + _t208 + _t209 - _t23*_t8;
-    const trailer2_real_t _t211 = _t155/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t211 = TRAILER2_LIT(0.2)*_t155;
     const trailer2_real_t _t212 = _t18*_t9;
     const trailer2_real_t _t213 = _t11*_t30;
     const trailer2_real_t _t214 = _t21*_t7 + _t212 + _t213 - _t28*_t8;
@@ -2136,10 +2134,9 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t331 = _t86 + _t90 + _t95;
     const trailer2_real_t _t332 = _t116*_t87 + _t118*_t87;
     const trailer2_real_t _t333 = J_x_tractor*_t332 + _t261*_t328 + _t263*_t329 + _t331;
-    const trailer2_real_t _t334 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t8*_t83/TRAILER2_LIT(10.0)
-            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t92/TRAILER2_LIT(10.0) - _t100*_t5
-            - _t101*_t5 - _t3*_t85 - _t3*_t94 - _t5*_t96 - _t5*_t97;
+    const trailer2_real_t _t334 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t83
+            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
+            - _t3*_t85 - _t3*_t94 - _t5*_t96 - _t5*_t97;
     const trailer2_real_t _t335 = _t259*_t332 + _t266*_t328 + _t267*_t329 - _t327*_t61 + _t334;
     const trailer2_real_t _t336 = _t103*_t88 - _t104*_t88 + _t105*_t88 + _t106*_t88 + _t76*_t84
             - _t76*_t85 - _t78*_t96 - _t78*_t97;
@@ -2195,41 +2192,41 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t381 = _t87*thetadot_left;
     const trailer2_real_t _t382 = _t16*_t17;
     const trailer2_real_t _t383 = _t0*_t382 - _t1*_t115 - _t168;
-    const trailer2_real_t _t384 = -TRAILER2_LIT(5.0)*_t383/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t385 = _t384/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t384 = -TRAILER2_LIT(1.6666666666666667)*_t383;
+    const trailer2_real_t _t385 = TRAILER2_LIT(0.2)*_t384;
     const trailer2_real_t _t386 = -_t1*_t382 + _t121;
     const trailer2_real_t _t387 = _t16*_t18;
     const trailer2_real_t _t388 = _t0*_t387 - _t1*_t117 - _t171;
-    const trailer2_real_t _t389 = -TRAILER2_LIT(5.0)*_t388/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t390 = _t389/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t389 = -TRAILER2_LIT(1.6666666666666667)*_t388;
+    const trailer2_real_t _t390 = TRAILER2_LIT(0.2)*_t389;
     const trailer2_real_t _t391 = -_t1*_t387 + _t124;
-    const trailer2_real_t _t392 = TRAILER2_LIT(5.0)*_t164/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t393 = _t392/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t392 = TRAILER2_LIT(1.6666666666666667)*_t164;
+    const trailer2_real_t _t393 = TRAILER2_LIT(0.2)*_t392;
     const trailer2_real_t _t394 = _t0*_t115 + _t34;
-    const trailer2_real_t _t395 = TRAILER2_LIT(5.0)*_t166/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t396 = _t395/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t395 = TRAILER2_LIT(1.6666666666666667)*_t166;
+    const trailer2_real_t _t396 = TRAILER2_LIT(0.2)*_t395;
     const trailer2_real_t _t397 = _t0*_t117 + _t37;
     const trailer2_real_t _t398 = _t11*_t384 - _t115*_t8 - _t208 + _t382*_t7;
-    const trailer2_real_t _t399 = -TRAILER2_LIT(5.0)*_t398/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t400 = _t399/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t399 = -TRAILER2_LIT(1.6666666666666667)*_t398;
+    const trailer2_real_t _t400 = TRAILER2_LIT(0.2)*_t399;
     const trailer2_real_t _t401 = _t138 - _t14*_t384 - _t382*_t8;
     const trailer2_real_t _t402 = _t11*_t389 - _t117*_t8 - _t212 + _t387*_t7;
-    const trailer2_real_t _t403 = -TRAILER2_LIT(5.0)*_t402/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t404 = _t403/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t403 = -TRAILER2_LIT(1.6666666666666667)*_t402;
+    const trailer2_real_t _t404 = TRAILER2_LIT(0.2)*_t403;
     const trailer2_real_t _t405 = -_t14*_t389 + _t142 - _t387*_t8;
     const trailer2_real_t _t406 = _t11*_t392 - _t126*_t14;
-    const trailer2_real_t _t407 = -TRAILER2_LIT(5.0)*_t406/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t408 = _t407/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t407 = -TRAILER2_LIT(1.6666666666666667)*_t406;
+    const trailer2_real_t _t408 = TRAILER2_LIT(0.2)*_t407;
     const trailer2_real_t _t409 = _t135 - _t14*_t392;
     const trailer2_real_t _t410 = _t11*_t395 - _t129*_t14;
-    const trailer2_real_t _t411 = -TRAILER2_LIT(5.0)*_t410/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t412 = _t411/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t411 = -TRAILER2_LIT(1.6666666666666667)*_t410;
+    const trailer2_real_t _t412 = TRAILER2_LIT(0.2)*_t411;
     const trailer2_real_t _t413 = _t139 - _t14*_t395;
-    const trailer2_real_t _t414 = TRAILER2_LIT(5.0)*_t200/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t415 = _t414/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t414 = TRAILER2_LIT(1.6666666666666667)*_t200;
+    const trailer2_real_t _t415 = TRAILER2_LIT(0.2)*_t414;
     const trailer2_real_t _t416 = _t11*_t126 + _t115*_t7 + _t43;
-    const trailer2_real_t _t417 = TRAILER2_LIT(5.0)*_t202/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t418 = _t417/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t417 = TRAILER2_LIT(1.6666666666666667)*_t202;
+    const trailer2_real_t _t418 = TRAILER2_LIT(0.2)*_t417;
     const trailer2_real_t _t419 = _t11*_t129 + _t117*_t7 + _t49;
     const trailer2_real_t _t420 = TRAILER2_LIT(2.0)*_t91;
     const trailer2_real_t _t421 = _t420*_t62 - _t420*_t68;
@@ -2237,25 +2234,22 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t423 = _t422*_t64 - _t422*_t73;
     const trailer2_real_t _t424 = _t420*_t56 + _t420*_t57;
     const trailer2_real_t _t425 = _t422*_t58 + _t422*_t59;
-    const trailer2_real_t _t426 = TRAILER2_LIT(3.0)*_t91/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t426 = TRAILER2_LIT(0.6)*_t91;
     const trailer2_real_t _t427 = _t4*_t426;
-    const trailer2_real_t _t428 =
-            TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t91/TRAILER2_LIT(5.0) - _t2*_t426*_t68
-            - _t427*_t56 - _t427*_t57;
-    const trailer2_real_t _t429 = TRAILER2_LIT(3.0)*_t82/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t428 = TRAILER2_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t2*_t91
+            - _t2*_t426*_t68 - _t427*_t56 - _t427*_t57;
+    const trailer2_real_t _t429 = TRAILER2_LIT(0.6)*_t82;
     const trailer2_real_t _t430 = _t4*_t429;
-    const trailer2_real_t _t431 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t8*_t82/TRAILER2_LIT(5.0)
+    const trailer2_real_t _t431 = TRAILER2_LIT(0.6)*K_theta_cart2_x_tractor*_t2*_t8*_t82
             - _t2*_t429*_t73 - _t430*_t58 - _t430*_t59;
     const trailer2_real_t _t432 = _t3*_t96 + _t3*_t97 + _t5*_t84 - _t5*_t85;
     const trailer2_real_t _t433 = _t100*_t3 + _t101*_t3 + _t5*_t93 - _t5*_t94;
-    const trailer2_real_t _t434 = TRAILER2_LIT(17.0)*_t82/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t434 = TRAILER2_LIT(1.7)*_t82;
     const trailer2_real_t _t435 = _t1*_t434;
-    const trailer2_real_t _t436 =
-            TRAILER2_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t8*_t82/TRAILER2_LIT(10.0)
+    const trailer2_real_t _t436 = TRAILER2_LIT(1.7)*K_theta_cart2_x_tractor*_t0*_t8*_t82
             - _t0*_t434*_t73 - _t435*_t58 - _t435*_t59;
     const trailer2_real_t _t437 = _t66*_t88 + _t67*_t88 - _t69*_t88 + _t70*_t88;
-    const trailer2_real_t _t438 = TRAILER2_LIT(17.0)*_t91/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t438 = TRAILER2_LIT(1.7)*_t91;
     const trailer2_real_t _t439 = _t0*_t438;
     const trailer2_real_t _t440 = _t1*_t438;
     const trailer2_real_t _t441 = -_t439*_t64 + _t439*_t73 + _t440*_t58 + _t440*_t59;
@@ -2321,25 +2315,25 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t485 = TRAILER2_LIT(2.0)*_t30;
     const trailer2_real_t _t486 = _t46*_t485;
     const trailer2_real_t _t487 = TRAILER2_LIT(2.0)*_t14;
-    const trailer2_real_t _t488 = TRAILER2_LIT(5.0)*_t169/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t489 = _t488/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t488 = TRAILER2_LIT(1.6666666666666667)*_t169;
+    const trailer2_real_t _t489 = TRAILER2_LIT(0.2)*_t488;
     const trailer2_real_t _t490 = _t0*_t23 + _t119 + _t120;
-    const trailer2_real_t _t491 = TRAILER2_LIT(5.0)*_t172/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t492 = _t491/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t491 = TRAILER2_LIT(1.6666666666666667)*_t172;
+    const trailer2_real_t _t492 = TRAILER2_LIT(0.2)*_t491;
     const trailer2_real_t _t493 = _t0*_t28 + _t122 + _t123;
     const trailer2_real_t _t494 = _t11*_t488 - _t131*_t487 - _t209;
-    const trailer2_real_t _t495 = -TRAILER2_LIT(5.0)*_t494/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t496 = _t495/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t495 = -TRAILER2_LIT(1.6666666666666667)*_t494;
+    const trailer2_real_t _t496 = TRAILER2_LIT(0.2)*_t495;
     const trailer2_real_t _t497 = -_t14*_t488 + _t143 + TRAILER2_LIT(2.0)*_t144;
     const trailer2_real_t _t498 = _t11*_t491 - _t133*_t487 - _t213;
-    const trailer2_real_t _t499 = -TRAILER2_LIT(5.0)*_t498/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t500 = _t499/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t499 = -TRAILER2_LIT(1.6666666666666667)*_t498;
+    const trailer2_real_t _t500 = TRAILER2_LIT(0.2)*_t499;
     const trailer2_real_t _t501 = -_t14*_t491 + _t145 + TRAILER2_LIT(2.0)*_t146;
-    const trailer2_real_t _t502 = TRAILER2_LIT(5.0)*_t204/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t503 = _t502/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t502 = TRAILER2_LIT(1.6666666666666667)*_t204;
+    const trailer2_real_t _t503 = TRAILER2_LIT(0.2)*_t502;
     const trailer2_real_t _t504 = _t11*_t131 + _t42;
-    const trailer2_real_t _t505 = TRAILER2_LIT(5.0)*_t206/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t506 = _t505/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t505 = TRAILER2_LIT(1.6666666666666667)*_t206;
+    const trailer2_real_t _t506 = TRAILER2_LIT(0.2)*_t505;
     const trailer2_real_t _t507 = _t11*_t133 + _t48;
     const trailer2_real_t _t508 = _t76*_t96 + _t76*_t97 + _t78*_t84 - _t78*_t85;
     const trailer2_real_t _t509 = _t77*_t92 + _t79*_t92 + _t80*_t92 - _t81*_t92;
@@ -2349,17 +2343,17 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _t513 = TRAILER2_LIT(2.0)*_t25;
     const trailer2_real_t _t514 = _t40*_t513;
     const trailer2_real_t _t515 = TRAILER2_LIT(2.0)*_t65;
-    const trailer2_real_t _t516 = TRAILER2_LIT(5.0)*_t210/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t517 = _t516/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t516 = TRAILER2_LIT(1.6666666666666667)*_t210;
+    const trailer2_real_t _t517 = TRAILER2_LIT(0.2)*_t516;
     const trailer2_real_t _t518 = _t136 + _t137 + _t143 + _t23*_t7;
-    const trailer2_real_t _t519 = TRAILER2_LIT(5.0)*_t214/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t520 = _t519/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t519 = TRAILER2_LIT(1.6666666666666667)*_t214;
+    const trailer2_real_t _t520 = TRAILER2_LIT(0.2)*_t519;
     const trailer2_real_t _t521 = _t140 + _t141 + _t145 + _t28*_t7;
     const trailer2_real_t _t522 = -_t329*_t361;
     const trailer2_real_t _t523 = TRAILER2_LIT(2.0)*_t87;
     const trailer2_real_t _t524 = _t523*_t60 - _t523*_t89;
     const trailer2_real_t _t525 = _t523*_t54 + _t523*_t55;
-    const trailer2_real_t _t526 = TRAILER2_LIT(3.0)*_t87/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t526 = TRAILER2_LIT(0.6)*_t87;
     const trailer2_real_t _t527 = _t4*_t526;
     const trailer2_real_t _t528 = _t2*_t526;
     const trailer2_real_t _t529 = _t527*_t56 + _t527*_t57 - _t528*_t62 + _t528*_t68;
@@ -2804,7 +2798,7 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
 }
 
 /* trailer2_wheel_contact_forces: documented in trailer2_model.h.
-   operations after CSE: 430 add, 618 mul, 67 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 430 add, 640 mul, 5 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *longitudinal, trailer2_real_t *lateral)
@@ -2862,9 +2856,9 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t1 = -_t0;
     const trailer2_real_t _t2 = TRAILER2_COS(theta_cart);
     const trailer2_real_t _t3 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t4 = TRAILER2_LIT(3.0)*_t3/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
     const trailer2_real_t _t5 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t6 = TRAILER2_LIT(3.0)*_t5/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t6 = TRAILER2_LIT(0.3)*_t5;
     const trailer2_real_t _t7 = _t0*_t4 + _t2*_t6;
     const trailer2_real_t _t8 = -_t7;
     const trailer2_real_t _t9 = TRAILER2_SIN(theta_cart2);
@@ -2872,50 +2866,50 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t11 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t12 = _t11*_t6 + _t4*_t9;
     const trailer2_real_t _t13 = -_t12;
-    const trailer2_real_t _t14 = TRAILER2_LIT(17.0)*_t11/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(17.0)*_t0*_t9/TRAILER2_LIT(20.0) + _t14*_t2;
+    const trailer2_real_t _t14 = TRAILER2_LIT(0.85)*_t11;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.85)*_t0*_t9 + _t14*_t2;
     const trailer2_real_t _t16 = -_t15;
     const trailer2_real_t _t17 = -_t2;
     const trailer2_real_t _t18 = _t0*_t6 - _t2*_t4;
     const trailer2_real_t _t19 = -_t11;
     const trailer2_real_t _t20 = -_t11*_t4 + _t6*_t9;
-    const trailer2_real_t _t21 = _t0*_t14 - TRAILER2_LIT(17.0)*_t2*_t9/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t21 = _t0*_t14 - TRAILER2_LIT(0.85)*_t2*_t9;
     const trailer2_real_t _t22 = -_t21;
     const trailer2_real_t _t23 = -radius_right;
     const trailer2_real_t _t24 = -radius_left;
-    const trailer2_real_t _t25 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t3;
     const trailer2_real_t _t26 = -_t25;
-    const trailer2_real_t _t27 = TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.207)*_t5;
     const trailer2_real_t _t28 = -_t27;
-    const trailer2_real_t _t29 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t30 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t29 = TRAILER2_LIT(2.4154589371980677)*_t23;
+    const trailer2_real_t _t30 = TRAILER2_LIT(2.4154589371980677)*_t24;
     const trailer2_real_t _t31 = _t28*_t29;
     const trailer2_real_t _t32 = _t1*_t31 - _t29*_t8;
     const trailer2_real_t _t33 = _t28*_t30;
     const trailer2_real_t _t34 = _t1*_t33 + _t30*_t8;
     const trailer2_real_t _t35 = _t26*_t29;
     const trailer2_real_t _t36 = -_t2*_t35 - _t32;
-    const trailer2_real_t _t37 = -TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t37 = -TRAILER2_LIT(1.6666666666666667)*_t36;
     const trailer2_real_t _t38 = _t16*_t37;
     const trailer2_real_t _t39 = _t10*_t31 - _t13*_t29;
     const trailer2_real_t _t40 = _t26*_t30;
     const trailer2_real_t _t41 = -_t2*_t40 - _t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
     const trailer2_real_t _t43 = _t16*_t42;
     const trailer2_real_t _t44 = _t10*_t33 + _t13*_t30;
-    const trailer2_real_t _t45 = _t37/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*_t37;
     const trailer2_real_t _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29;
-    const trailer2_real_t _t47 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30;
     const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t _t51 = -_t11*_t35 - _t38 - _t39;
-    const trailer2_real_t _t52 = -TRAILER2_LIT(5.0)*_t51/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t53 = _t52/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t52 = -TRAILER2_LIT(1.6666666666666667)*_t51;
+    const trailer2_real_t _t53 = TRAILER2_LIT(0.2)*_t52;
     const trailer2_real_t _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37;
     const trailer2_real_t _t55 = -_t11*_t40 - _t43 - _t44;
-    const trailer2_real_t _t56 = -TRAILER2_LIT(5.0)*_t55/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t57 = _t56/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t56 = -TRAILER2_LIT(1.6666666666666667)*_t55;
+    const trailer2_real_t _t57 = TRAILER2_LIT(0.2)*_t56;
     const trailer2_real_t _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42;
     const trailer2_real_t _t59 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t _t60 = TRAILER2_LIT(1.0)/radius_cart2_left;
@@ -2938,8 +2932,8 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76;
     const trailer2_real_t _t78 = K_theta_cart2_x_tractor_2*_t9;
     const trailer2_real_t _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78;
-    const trailer2_real_t _t80 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t81 = TRAILER2_LIT(17.0)*_t2/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t80 = TRAILER2_LIT(0.85)*_t0;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.85)*_t2;
     const trailer2_real_t _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81;
     const trailer2_real_t _t83 = _t52*thetadot_right + _t56*thetadot_left;
     const trailer2_real_t _t84 = _t83*_t83;
@@ -2966,41 +2960,41 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t105 = _t83*thetadot_left;
     const trailer2_real_t _t106 = _t25*_t29;
     const trailer2_real_t _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31;
-    const trailer2_real_t _t108 = -TRAILER2_LIT(5.0)*_t107/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t109 = _t108/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t108 = -TRAILER2_LIT(1.6666666666666667)*_t107;
+    const trailer2_real_t _t109 = TRAILER2_LIT(0.2)*_t108;
     const trailer2_real_t _t110 = _t106*_t17 + _t32;
     const trailer2_real_t _t111 = _t25*_t30;
     const trailer2_real_t _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33;
-    const trailer2_real_t _t113 = -TRAILER2_LIT(5.0)*_t112/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t114 = _t113/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t113 = -TRAILER2_LIT(1.6666666666666667)*_t112;
+    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
     const trailer2_real_t _t115 = _t111*_t17 + _t34;
-    const trailer2_real_t _t116 = TRAILER2_LIT(5.0)*_t46/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t117 = _t116/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t46;
+    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
     const trailer2_real_t _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7;
-    const trailer2_real_t _t119 = TRAILER2_LIT(5.0)*_t48/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t120 = _t119/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t119 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t120 = TRAILER2_LIT(0.2)*_t119;
     const trailer2_real_t _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7;
     const trailer2_real_t _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29;
-    const trailer2_real_t _t123 = -TRAILER2_LIT(5.0)*_t122/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t124 = _t123/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t123 = -TRAILER2_LIT(1.6666666666666667)*_t122;
+    const trailer2_real_t _t124 = TRAILER2_LIT(0.2)*_t123;
     const trailer2_real_t _t125 = _t106*_t19 + _t108*_t22 + _t39;
     const trailer2_real_t _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30;
-    const trailer2_real_t _t127 = -TRAILER2_LIT(5.0)*_t126/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t128 = _t127/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t127 = -TRAILER2_LIT(1.6666666666666667)*_t126;
+    const trailer2_real_t _t128 = TRAILER2_LIT(0.2)*_t127;
     const trailer2_real_t _t129 = _t111*_t19 + _t113*_t22 + _t44;
     const trailer2_real_t _t130 = -_t116*_t16 - _t21*_t37;
-    const trailer2_real_t _t131 = -TRAILER2_LIT(5.0)*_t130/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t132 = _t131/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t131 = -TRAILER2_LIT(1.6666666666666667)*_t130;
+    const trailer2_real_t _t132 = TRAILER2_LIT(0.2)*_t131;
     const trailer2_real_t _t133 = _t116*_t22 + _t38;
     const trailer2_real_t _t134 = -_t119*_t16 - _t21*_t42;
-    const trailer2_real_t _t135 = -TRAILER2_LIT(5.0)*_t134/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t136 = _t135/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t135 = -TRAILER2_LIT(1.6666666666666667)*_t134;
+    const trailer2_real_t _t136 = TRAILER2_LIT(0.2)*_t135;
     const trailer2_real_t _t137 = _t119*_t22 + _t43;
-    const trailer2_real_t _t138 = TRAILER2_LIT(5.0)*_t54/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t139 = _t138/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t138 = TRAILER2_LIT(1.6666666666666667)*_t54;
+    const trailer2_real_t _t139 = TRAILER2_LIT(0.2)*_t138;
     const trailer2_real_t _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9;
-    const trailer2_real_t _t141 = TRAILER2_LIT(5.0)*_t58/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t142 = _t141/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t141 = TRAILER2_LIT(1.6666666666666667)*_t58;
+    const trailer2_real_t _t142 = TRAILER2_LIT(0.2)*_t141;
     const trailer2_real_t _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9;
     const trailer2_real_t _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75;
     const trailer2_real_t _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69;
@@ -3047,10 +3041,9 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
             + _t85 - _t90 - _t91;
     const trailer2_real_t _t181 = _t100*_t106 + _t101*_t111;
     const trailer2_real_t _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180;
-    const trailer2_real_t _t183 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t3*_t84/TRAILER2_LIT(10.0)
-            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t2*_t3*_t87/TRAILER2_LIT(10.0) - _t4*_t90
-            - _t4*_t91 - _t6*_t92 - _t6*_t93 - _t6*_t94 - _t6*_t95;
+    const trailer2_real_t _t183 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t11*_t3*_t84
+            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t3*_t87 - _t4*_t90 - _t4*_t91 - _t6*_t92
+            - _t6*_t93 - _t6*_t94 - _t6*_t95;
     const trailer2_real_t _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183;
     const trailer2_real_t _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85
             - _t80*_t90 - _t81*_t92 - _t81*_t93;
@@ -3140,8 +3133,8 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t256 = _t176 + _t243*_t35 + _t244*_t40;
     const trailer2_real_t _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79
             - _t247*_t82 - _t256*_t75;
-    const trailer2_real_t _t258 = _t252/TRAILER2_LIT(5.0) - _t255/TRAILER2_LIT(5.0) + _t257;
-    const trailer2_real_t _t259 = -TRAILER2_LIT(5.0)*_t258/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t258 = TRAILER2_LIT(0.2)*_t252 - TRAILER2_LIT(0.2)*_t255 + _t257;
+    const trailer2_real_t _t259 = -TRAILER2_LIT(1.6666666666666667)*_t258;
     const trailer2_real_t _t260 = _t159*_t243 + _t162*_t244 + _t199;
     const trailer2_real_t _t261 = -J_theta_cart_right*_t260;
     const trailer2_real_t _t262 = _t261*_t49;
@@ -3150,43 +3143,43 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _t265 = _t264*_t50;
     const trailer2_real_t _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82
             - _t256*_t73;
-    const trailer2_real_t _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + _t262/TRAILER2_LIT(5.0)
-            - _t265/TRAILER2_LIT(5.0) + _t266;
-    const trailer2_real_t _t268 = -TRAILER2_LIT(5.0)*_t267/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + TRAILER2_LIT(0.2)*_t262
+            - TRAILER2_LIT(0.2)*_t265 + _t266;
+    const trailer2_real_t _t268 = -TRAILER2_LIT(1.6666666666666667)*_t267;
     const trailer2_real_t _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265
             + _t249 + _t259*_t9;
-    const trailer2_real_t _t270 = TRAILER2_LIT(500.0)*_t269/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t270 = TRAILER2_LIT(2.4154589371980677)*_t269;
     const trailer2_real_t _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75;
     const trailer2_real_t _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9
             + _t255*_t9 + _t271;
-    const trailer2_real_t _t273 = TRAILER2_LIT(500.0)*_t272/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t273 = TRAILER2_LIT(2.4154589371980677)*_t272;
     const trailer2_real_t _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77
             - _t248*_t79 - _t256*_t71;
     const trailer2_real_t _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255
             - _t268*_t8 + _t274;
-    const trailer2_real_t _t276 = TRAILER2_LIT(500.0)*_t275/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t276 = TRAILER2_LIT(2.4154589371980677)*_t275;
     const trailer2_real_t _t277 = _t25*_t273 + _t27*_t270;
-    const trailer2_real_t _t278 = TRAILER2_LIT(500.0)*_t23/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t279 = TRAILER2_LIT(500.0)*_t24/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t278 = TRAILER2_LIT(2.4154589371980677)*_t23;
+    const trailer2_real_t _t279 = TRAILER2_LIT(2.4154589371980677)*_t24;
     const trailer2_real_t _t280 = _t26*_t278;
     const trailer2_real_t _t281 = _t278*_t28;
     const trailer2_real_t _t282 = -_t1*_t281 - _t2*_t280 + _t278*_t8;
-    const trailer2_real_t _t283 = -TRAILER2_LIT(5.0)*_t282/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t284 = _t283/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t283 = -TRAILER2_LIT(1.6666666666666667)*_t282;
+    const trailer2_real_t _t284 = TRAILER2_LIT(0.2)*_t283;
     const trailer2_real_t _t285 = _t1*_t280 + _t17*_t281 - _t18*_t278;
     const trailer2_real_t _t286 = _t26*_t279;
     const trailer2_real_t _t287 = _t279*_t28;
     const trailer2_real_t _t288 = -_t1*_t287 - _t2*_t286 - _t279*_t8;
-    const trailer2_real_t _t289 = -TRAILER2_LIT(5.0)*_t288/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t290 = _t289/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t289 = -TRAILER2_LIT(1.6666666666666667)*_t288;
+    const trailer2_real_t _t290 = TRAILER2_LIT(0.2)*_t289;
     const trailer2_real_t _t291 = _t1*_t286 + _t17*_t287 + _t18*_t279;
     const trailer2_real_t _t292 = -_t10*_t281 - _t11*_t280 + _t13*_t278 - _t16*_t283;
-    const trailer2_real_t _t293 = -TRAILER2_LIT(5.0)*_t292/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t294 = _t293/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t293 = -TRAILER2_LIT(1.6666666666666667)*_t292;
+    const trailer2_real_t _t294 = TRAILER2_LIT(0.2)*_t293;
     const trailer2_real_t _t295 = _t10*_t280 + _t19*_t281 - _t20*_t278 + _t22*_t283;
     const trailer2_real_t _t296 = -_t10*_t287 - _t11*_t286 - _t13*_t279 - _t16*_t289;
-    const trailer2_real_t _t297 = -TRAILER2_LIT(5.0)*_t296/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t298 = _t297/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t297 = -TRAILER2_LIT(1.6666666666666667)*_t296;
+    const trailer2_real_t _t298 = TRAILER2_LIT(0.2)*_t297;
     const trailer2_real_t _t299 = _t10*_t286 + _t19*_t287 + _t20*_t279 + _t22*_t289;
     const trailer2_real_t _t300 = J_x_tractor*_t280 - _t278*_t71 + _t283*_t73 + _t293*_t75;
     const trailer2_real_t _t301 = J_x_tractor*_t281 - _t278*_t63 + _t283*_t66 + _t293*_t69;
@@ -3222,8 +3215,8 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
             + _t297*_t82;
     const trailer2_real_t _t326 = J_theta_cart2*_t297 + _t279*_t79 + _t286*_t75 + _t287*_t69
             + _t289*_t82;
-    const trailer2_real_t _t327 = TRAILER2_LIT(207.0)*_t3/TRAILER2_LIT(500.0);
-    const trailer2_real_t _t328 = -TRAILER2_LIT(207.0)*_t5/TRAILER2_LIT(500.0);
+    const trailer2_real_t _t327 = TRAILER2_LIT(0.414)*_t3;
+    const trailer2_real_t _t328 = -TRAILER2_LIT(0.414)*_t5;
     const trailer2_real_t _t329 = -_t270*_t327 - _t273*_t328;
     const trailer2_real_t _t330 = _t276 - _t277;
     const trailer2_real_t _t331 = -_t276 - _t277;

@@ -7,7 +7,7 @@
 #include "trailer2_plant.h"
 
 /* trailer2_plant_state_derivative: documented in trailer2_plant.h.
-   operations after CSE: 271 add, 411 mul, 46 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 271 add, 425 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const trailer2_real_t *x,
     const trailer2_real_t *tau, trailer2_real_t *xdot)
 {
@@ -16,50 +16,50 @@ void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const tr
     const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = x[2];
     const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(3.0)*_t2/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(3.0)*_t4/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
     const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer2_real_t theta_cart2 = x[4];
     const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
     const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
     const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(17.0)*_t8/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t11 = TRAILER2_LIT(17.0)*_t0*_t7/TRAILER2_LIT(20.0) + _t1*_t10;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
     const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
     const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(17.0)*_t1*_t7/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t15 = TRAILER2_LIT(207.0)*_t2/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
     const trailer2_real_t radius_right = pp->radius_right;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(500.0)*radius_right/TRAILER2_LIT(207.0);
+    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = pp->radius_left;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(500.0)*radius_left/TRAILER2_LIT(207.0);
-    const trailer2_real_t _t18 = -TRAILER2_LIT(207.0)*_t4/TRAILER2_LIT(1000.0);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t4;
     const trailer2_real_t _t19 = _t16*_t18;
     const trailer2_real_t _t20 = -_t0*_t19 + _t16*_t6;
     const trailer2_real_t _t21 = _t17*_t18;
     const trailer2_real_t _t22 = -_t0*_t21 - _t17*_t6;
     const trailer2_real_t _t23 = -_t15*_t16;
     const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(5.0)*_t24/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
     const trailer2_real_t _t26 = -_t11*_t25;
     const trailer2_real_t _t27 = _t16*_t9 - _t19*_t7;
     const trailer2_real_t _t28 = -_t15*_t17;
     const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(5.0)*_t29/TRAILER2_LIT(3.0);
+    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
     const trailer2_real_t _t31 = -_t11*_t30;
     const trailer2_real_t _t32 = -_t17*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = _t25/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
     const trailer2_real_t _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t35 = _t30/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t30;
     const trailer2_real_t _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17;
     const trailer2_real_t _t37 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(5.0)*_t37/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t39 = _t38/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t38;
     const trailer2_real_t _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7;
     const trailer2_real_t _t41 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(5.0)*_t41/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t43 = _t42/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
     const trailer2_real_t _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7;
     const trailer2_real_t thetadot_right = x[11];
     const trailer2_real_t _t45 = _t19*thetadot_right;
@@ -82,8 +82,8 @@ void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const tr
     const trailer2_real_t _t55 = K_theta_cart2_x_tractor*_t8;
     const trailer2_real_t _t56 = K_theta_cart_x_tractor_2*_t0;
     const trailer2_real_t _t57 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t58 = TRAILER2_LIT(17.0)*_t0/TRAILER2_LIT(20.0);
-    const trailer2_real_t _t59 = TRAILER2_LIT(17.0)*_t1/TRAILER2_LIT(20.0);
+    const trailer2_real_t _t58 = TRAILER2_LIT(0.85)*_t0;
+    const trailer2_real_t _t59 = TRAILER2_LIT(0.85)*_t1;
     const trailer2_real_t _t60 = _t38*thetadot_right + _t42*thetadot_left;
     const trailer2_real_t _t61 = _t60*_t60;
     const trailer2_real_t _t62 = _t55*_t61;
@@ -109,41 +109,41 @@ void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const tr
     const trailer2_real_t _t82 = _t60*thetadot_left;
     const trailer2_real_t _t83 = _t15*_t16;
     const trailer2_real_t _t84 = _t0*_t83 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t85 = -TRAILER2_LIT(5.0)*_t84/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t86 = _t85/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t85 = -TRAILER2_LIT(1.6666666666666667)*_t84;
+    const trailer2_real_t _t86 = TRAILER2_LIT(0.2)*_t85;
     const trailer2_real_t _t87 = -_t1*_t83 + _t20;
     const trailer2_real_t _t88 = _t15*_t17;
     const trailer2_real_t _t89 = _t0*_t88 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t90 = -TRAILER2_LIT(5.0)*_t89/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t91 = _t90/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t90 = -TRAILER2_LIT(1.6666666666666667)*_t89;
+    const trailer2_real_t _t91 = TRAILER2_LIT(0.2)*_t90;
     const trailer2_real_t _t92 = -_t1*_t88 + _t22;
-    const trailer2_real_t _t93 = TRAILER2_LIT(5.0)*_t34/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t94 = _t93/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t93 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t94 = TRAILER2_LIT(0.2)*_t93;
     const trailer2_real_t _t95 = _t0*_t19 - _t1*_t23 - _t16*_t6;
-    const trailer2_real_t _t96 = TRAILER2_LIT(5.0)*_t36/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t97 = _t96/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t96 = TRAILER2_LIT(1.6666666666666667)*_t36;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
     const trailer2_real_t _t98 = _t0*_t21 - _t1*_t28 + _t17*_t6;
     const trailer2_real_t _t99 = _t11*_t85 - _t13*_t16 - _t19*_t8 + _t7*_t83;
-    const trailer2_real_t _t100 = -TRAILER2_LIT(5.0)*_t99/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t101 = _t100/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t100 = -TRAILER2_LIT(1.6666666666666667)*_t99;
+    const trailer2_real_t _t101 = TRAILER2_LIT(0.2)*_t100;
     const trailer2_real_t _t102 = -_t14*_t85 + _t27 - _t8*_t83;
     const trailer2_real_t _t103 = _t11*_t90 + _t13*_t17 - _t21*_t8 + _t7*_t88;
-    const trailer2_real_t _t104 = -TRAILER2_LIT(5.0)*_t103/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t105 = _t104/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t104 = -TRAILER2_LIT(1.6666666666666667)*_t103;
+    const trailer2_real_t _t105 = TRAILER2_LIT(0.2)*_t104;
     const trailer2_real_t _t106 = -_t14*_t90 + _t32 - _t8*_t88;
     const trailer2_real_t _t107 = _t11*_t93 - _t14*_t25;
-    const trailer2_real_t _t108 = -TRAILER2_LIT(5.0)*_t107/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t109 = _t108/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t108 = -TRAILER2_LIT(1.6666666666666667)*_t107;
+    const trailer2_real_t _t109 = TRAILER2_LIT(0.2)*_t108;
     const trailer2_real_t _t110 = -_t14*_t93 + _t26;
     const trailer2_real_t _t111 = _t11*_t96 - _t14*_t30;
-    const trailer2_real_t _t112 = -TRAILER2_LIT(5.0)*_t111/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t113 = _t112/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t112 = -TRAILER2_LIT(1.6666666666666667)*_t111;
+    const trailer2_real_t _t113 = TRAILER2_LIT(0.2)*_t112;
     const trailer2_real_t _t114 = -_t14*_t96 + _t31;
-    const trailer2_real_t _t115 = TRAILER2_LIT(5.0)*_t40/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t116 = _t115/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t115 = TRAILER2_LIT(1.6666666666666667)*_t40;
+    const trailer2_real_t _t116 = TRAILER2_LIT(0.2)*_t115;
     const trailer2_real_t _t117 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8;
-    const trailer2_real_t _t118 = TRAILER2_LIT(5.0)*_t44/TRAILER2_LIT(3.0);
-    const trailer2_real_t _t119 = _t118/TRAILER2_LIT(5.0);
+    const trailer2_real_t _t118 = TRAILER2_LIT(1.6666666666666667)*_t44;
+    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
     const trailer2_real_t _t120 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8;
     const trailer2_real_t _t121 = K_theta_tractor_x_tractor_2*_t2 - _t53;
     const trailer2_real_t _t122 = K_theta_cart_x_tractor_2*_t0 - _t54;
@@ -217,10 +217,9 @@ void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const tr
             + _t62 - _t67 - _t68;
     const trailer2_real_t _t171 = _t77*_t83 + _t78*_t88;
     const trailer2_real_t _t172 = J_x_tractor*_t171 + _t126*_t167 + _t127*_t168 + _t170;
-    const trailer2_real_t _t173 =
-            TRAILER2_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t61*_t8/TRAILER2_LIT(10.0)
-            + TRAILER2_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t64/TRAILER2_LIT(10.0) - _t3*_t67
-            - _t3*_t68 - _t5*_t69 - _t5*_t70 - _t5*_t71 - _t5*_t72;
+    const trailer2_real_t _t173 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t61*_t8
+            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t64 - _t3*_t67 - _t3*_t68 - _t5*_t69
+            - _t5*_t70 - _t5*_t71 - _t5*_t72;
     const trailer2_real_t _t174 = _t121*_t166 + _t125*_t171 + _t129*_t167 + _t130*_t168 + _t173;
     const trailer2_real_t _t175 = _t49*_t73 + _t50*_t73 - _t54*_t74 + _t56*_t74 + _t58*_t62
             - _t58*_t67 - _t59*_t69 - _t59*_t70;

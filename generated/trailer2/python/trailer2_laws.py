@@ -115,7 +115,7 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     Returns:
         H1hat: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 122 add, 191 mul, 26 div, 6 sin/cos, 0 sqrt
+    operations after CSE: 122 add, 195 mul, 5 div, 6 sin/cos, 0 sqrt
     """
     _, _, qp2, qp3, qp4, _, _, _, _, _, _ = _flat(q_prev, 11, "q_prev")
     up0, up1 = _flat(u_prev, 2, "u_prev")
@@ -144,44 +144,44 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     radius_cart_right = float(_field(p, "radius_cart_right"))
     radius_left = float(_field(p, "radius_left"))
     radius_right = float(_field(p, "radius_right"))
-    _t0 = -500.0*radius_right/207.0
-    _t1 = -500.0*radius_left/207.0
+    _t0 = -2.4154589371980677*radius_right
+    _t1 = -2.4154589371980677*radius_left
     _t2 = math.sin(qp3)
     _t3 = math.cos(qp3)
     _t4 = math.sin(qp2)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = math.cos(qp2)
-    _t7 = 3.0*_t6/10.0
+    _t7 = 0.3*_t6
     _t8 = math.sin(qp4)
     _t9 = math.cos(qp4)
-    _t10 = 17.0*_t9/20.0
+    _t10 = 0.85*_t9
     _t11 = -_t2*_t5 - _t3*_t7
-    _t12 = -207.0*_t4/1000.0
+    _t12 = -0.207*_t4
     _t13 = _t0*_t12
-    _t14 = -207.0*_t6/1000.0
+    _t14 = -0.207*_t6
     _t15 = _t0*_t14
     _t16 = _t0*_t11 - _t13*_t3 + _t15*_t2
-    _t17 = -5.0*_t16/3.0
-    _t18 = _t17/5.0
-    _t19 = 3.0*_t2*_t6/10.0 - _t3*_t5
+    _t17 = -1.6666666666666667*_t16
+    _t18 = 0.2*_t17
+    _t19 = 0.3*_t2*_t6 - _t3*_t5
     _t20 = -_t0*_t19 - _t13*_t2 - _t15*_t3
     _t21 = _t1*_t12
     _t22 = _t1*_t14
     _t23 = -_t1*_t11 + _t2*_t22 - _t21*_t3
-    _t24 = -5.0*_t23/3.0
-    _t25 = _t24/5.0
+    _t24 = -1.6666666666666667*_t23
+    _t25 = 0.2*_t24
     _t26 = _t1*_t19 - _t2*_t21 - _t22*_t3
     _t27 = -_t5*_t8 - _t7*_t9
-    _t28 = -_t10*_t3 - 17.0*_t2*_t8/20.0
+    _t28 = -_t10*_t3 - 0.85*_t2*_t8
     _t29 = _t0*_t27 - _t13*_t9 + _t15*_t8 - _t17*_t28
-    _t30 = -5.0*_t29/3.0
-    _t31 = _t30/5.0
-    _t32 = -_t5*_t9 + 3.0*_t6*_t8/10.0
-    _t33 = -_t10*_t2 + 17.0*_t3*_t8/20.0
+    _t30 = -1.6666666666666667*_t29
+    _t31 = 0.2*_t30
+    _t32 = -_t5*_t9 + 0.3*_t6*_t8
+    _t33 = -_t10*_t2 + 0.85*_t3*_t8
     _t34 = -_t0*_t32 - _t13*_t8 - _t15*_t9 + _t17*_t33
     _t35 = -_t1*_t27 - _t21*_t9 + _t22*_t8 - _t24*_t28
-    _t36 = -5.0*_t35/3.0
-    _t37 = _t36/5.0
+    _t36 = -1.6666666666666667*_t35
+    _t37 = 0.2*_t36
     _t38 = _t1*_t32 - _t21*_t8 - _t22*_t9 + _t24*_t33
     _t39 = K_theta_cart_x_tractor*_t2
     _t40 = K_theta_cart_x_tractor_2*_t3
@@ -190,8 +190,8 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     _t43 = K_theta_cart_x_tractor*_t3
     _t44 = K_theta_cart2_x_tractor*_t9
     _t45 = K_theta_cart2_x_tractor_2*_t8
-    _t46 = 17.0*_t2/20.0
-    _t47 = 17.0*_t3/20.0
+    _t46 = 0.85*_t2
+    _t47 = 0.85*_t3
     _t48 = -K_theta_tractor_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t4
     _t49 = K_theta_cart_x_tractor_2*_t2 - _t43
     _t50 = K_theta_cart2_x_tractor_2*_t8 - _t44
@@ -256,7 +256,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 120 add, 189 mul, 24 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs
+    operations after CSE: 120 add, 193 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -284,41 +284,41 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t2/10.0
+    _t3 = 0.3*_t2
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = math.sin(theta_cart2)
     _t7 = math.cos(theta_cart2)
-    _t8 = 17.0*_t7/20.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
+    _t8 = 0.85*_t7
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
     _t11 = -_t0*_t3 - _t1*_t5
-    _t12 = -207.0*_t2/1000.0
+    _t12 = -0.207*_t2
     _t13 = _t12*_t9
-    _t14 = -207.0*_t4/1000.0
+    _t14 = -0.207*_t4
     _t15 = _t14*_t9
     _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9
-    _t17 = -5.0*_t16/3.0
-    _t18 = _t17/5.0
+    _t17 = -1.6666666666666667*_t16
+    _t18 = 0.2*_t17
     _t19 = _t0*_t5 - _t1*_t3
     _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9
     _t21 = _t10*_t12
     _t22 = _t10*_t14
     _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11
-    _t24 = -5.0*_t23/3.0
-    _t25 = _t24/5.0
+    _t24 = -1.6666666666666667*_t23
+    _t25 = 0.2*_t24
     _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19
     _t27 = -_t3*_t6 - _t5*_t7
-    _t28 = -17.0*_t0*_t6/20.0 - _t1*_t8
+    _t28 = -0.85*_t0*_t6 - _t1*_t8
     _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9
-    _t30 = -5.0*_t29/3.0
-    _t31 = _t30/5.0
+    _t30 = -1.6666666666666667*_t29
+    _t31 = 0.2*_t30
     _t32 = -_t3*_t7 + _t5*_t6
-    _t33 = -_t0*_t8 + 17.0*_t1*_t6/20.0
+    _t33 = -_t0*_t8 + 0.85*_t1*_t6
     _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9
     _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28
-    _t36 = -5.0*_t35/3.0
-    _t37 = _t36/5.0
+    _t36 = -1.6666666666666667*_t35
+    _t37 = 0.2*_t36
     _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33
     _t39 = K_theta_cart_x_tractor*_t0
     _t40 = K_theta_cart_x_tractor_2*_t1
@@ -327,8 +327,8 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t43 = K_theta_cart_x_tractor*_t1
     _t44 = K_theta_cart2_x_tractor*_t7
     _t45 = K_theta_cart2_x_tractor_2*_t6
-    _t46 = 17.0*_t0/20.0
-    _t47 = 17.0*_t1/20.0
+    _t46 = 0.85*_t0
+    _t47 = 0.85*_t1
     _t48 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t49 = K_theta_cart_x_tractor_2*_t0 - _t43
     _t50 = K_theta_cart2_x_tractor_2*_t6 - _t44
@@ -462,7 +462,7 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     Returns:
         u: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 124 add, 191 mul, 23 div, 6 sin/cos, 0 sqrt
+    operations after CSE: 124 add, 195 mul, 4 div, 6 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -498,41 +498,41 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t2/10.0
+    _t3 = 0.3*_t2
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = math.sin(theta_cart2)
     _t7 = math.cos(theta_cart2)
-    _t8 = 17.0*_t7/20.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
+    _t8 = 0.85*_t7
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
     _t11 = -_t0*_t3 - _t1*_t5
-    _t12 = -207.0*_t2/1000.0
+    _t12 = -0.207*_t2
     _t13 = _t12*_t9
-    _t14 = -207.0*_t4/1000.0
+    _t14 = -0.207*_t4
     _t15 = _t14*_t9
     _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9
-    _t17 = -5.0*_t16/3.0
-    _t18 = _t17/5.0
+    _t17 = -1.6666666666666667*_t16
+    _t18 = 0.2*_t17
     _t19 = _t0*_t5 - _t1*_t3
     _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9
     _t21 = _t10*_t12
     _t22 = _t10*_t14
     _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11
-    _t24 = -5.0*_t23/3.0
-    _t25 = _t24/5.0
+    _t24 = -1.6666666666666667*_t23
+    _t25 = 0.2*_t24
     _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19
     _t27 = -_t3*_t6 - _t5*_t7
-    _t28 = -17.0*_t0*_t6/20.0 - _t1*_t8
+    _t28 = -0.85*_t0*_t6 - _t1*_t8
     _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9
-    _t30 = -5.0*_t29/3.0
-    _t31 = _t30/5.0
+    _t30 = -1.6666666666666667*_t29
+    _t31 = 0.2*_t30
     _t32 = -_t3*_t7 + _t5*_t6
-    _t33 = -_t0*_t8 + 17.0*_t1*_t6/20.0
+    _t33 = -_t0*_t8 + 0.85*_t1*_t6
     _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9
     _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28
-    _t36 = -5.0*_t35/3.0
-    _t37 = _t36/5.0
+    _t36 = -1.6666666666666667*_t35
+    _t37 = 0.2*_t36
     _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33
     _t39 = K_theta_cart_x_tractor*_t0
     _t40 = K_theta_cart_x_tractor_2*_t1
@@ -541,8 +541,8 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     _t43 = K_theta_cart_x_tractor*_t1
     _t44 = K_theta_cart2_x_tractor*_t7
     _t45 = K_theta_cart2_x_tractor_2*_t6
-    _t46 = 17.0*_t0/20.0
-    _t47 = 17.0*_t1/20.0
+    _t46 = 0.85*_t0
+    _t47 = 0.85*_t1
     _t48 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t49 = K_theta_cart_x_tractor_2*_t0 - _t43
     _t50 = K_theta_cart2_x_tractor_2*_t6 - _t44
@@ -622,7 +622,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 129 add, 199 mul, 24 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 129 add, 203 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -660,41 +660,41 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t2/10.0
+    _t3 = 0.3*_t2
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = math.sin(theta_cart2)
     _t7 = math.cos(theta_cart2)
-    _t8 = 17.0*_t7/20.0
-    _t9 = -500.0*radius_right/207.0
-    _t10 = -500.0*radius_left/207.0
+    _t8 = 0.85*_t7
+    _t9 = -2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
     _t11 = -_t0*_t3 - _t1*_t5
-    _t12 = -207.0*_t2/1000.0
+    _t12 = -0.207*_t2
     _t13 = _t12*_t9
-    _t14 = -207.0*_t4/1000.0
+    _t14 = -0.207*_t4
     _t15 = _t14*_t9
     _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9
-    _t17 = -5.0*_t16/3.0
-    _t18 = _t17/5.0
+    _t17 = -1.6666666666666667*_t16
+    _t18 = 0.2*_t17
     _t19 = _t0*_t5 - _t1*_t3
     _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9
     _t21 = _t10*_t12
     _t22 = _t10*_t14
     _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11
-    _t24 = -5.0*_t23/3.0
-    _t25 = _t24/5.0
+    _t24 = -1.6666666666666667*_t23
+    _t25 = 0.2*_t24
     _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19
     _t27 = -_t3*_t6 - _t5*_t7
-    _t28 = -17.0*_t0*_t6/20.0 - _t1*_t8
+    _t28 = -0.85*_t0*_t6 - _t1*_t8
     _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9
-    _t30 = -5.0*_t29/3.0
-    _t31 = _t30/5.0
+    _t30 = -1.6666666666666667*_t29
+    _t31 = 0.2*_t30
     _t32 = -_t3*_t7 + _t5*_t6
-    _t33 = -_t0*_t8 + 17.0*_t1*_t6/20.0
+    _t33 = -_t0*_t8 + 0.85*_t1*_t6
     _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9
     _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28
-    _t36 = -5.0*_t35/3.0
-    _t37 = _t36/5.0
+    _t36 = -1.6666666666666667*_t35
+    _t37 = 0.2*_t36
     _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33
     _t39 = K_theta_cart_x_tractor*_t0
     _t40 = K_theta_cart_x_tractor_2*_t1
@@ -703,8 +703,8 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t43 = K_theta_cart_x_tractor*_t1
     _t44 = K_theta_cart2_x_tractor*_t7
     _t45 = K_theta_cart2_x_tractor_2*_t6
-    _t46 = 17.0*_t0/20.0
-    _t47 = 17.0*_t1/20.0
+    _t46 = 0.85*_t0
+    _t47 = 0.85*_t1
     _t48 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2
     _t49 = K_theta_cart_x_tractor_2*_t0 - _t43
     _t50 = K_theta_cart2_x_tractor_2*_t6 - _t44
@@ -791,7 +791,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 278 add, 412 mul, 47 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 278 add, 426 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     _, _, _, _, _, thetadot_right, thetadot_left, _, _, _, _ = _flat(qdot, 11, "qdot")
@@ -829,47 +829,47 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t2/10.0
+    _t3 = 0.3*_t2
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = _t0*_t3 + _t1*_t5
     _t7 = math.sin(theta_cart2)
     _t8 = math.cos(theta_cart2)
     _t9 = _t3*_t7 + _t5*_t8
-    _t10 = 17.0*_t8/20.0
-    _t11 = 17.0*_t0*_t7/20.0 + _t1*_t10
+    _t10 = 0.85*_t8
+    _t11 = 0.85*_t0*_t7 + _t1*_t10
     _t12 = _t0*_t5 - _t1*_t3
     _t13 = -_t3*_t8 + _t5*_t7
-    _t14 = _t0*_t10 - 17.0*_t1*_t7/20.0
-    _t15 = 207.0*_t2/1000.0
-    _t16 = -500.0*radius_right/207.0
-    _t17 = -500.0*radius_left/207.0
-    _t18 = -207.0*_t4/1000.0
+    _t14 = _t0*_t10 - 0.85*_t1*_t7
+    _t15 = 0.207*_t2
+    _t16 = -2.4154589371980677*radius_right
+    _t17 = -2.4154589371980677*radius_left
+    _t18 = -0.207*_t4
     _t19 = _t16*_t18
     _t20 = -_t0*_t19 + _t16*_t6
     _t21 = _t17*_t18
     _t22 = -_t0*_t21 - _t17*_t6
     _t23 = -_t15*_t16
     _t24 = -_t1*_t23 - _t20
-    _t25 = -5.0*_t24/3.0
+    _t25 = -1.6666666666666667*_t24
     _t26 = -_t11*_t25
     _t27 = _t16*_t9 - _t19*_t7
     _t28 = -_t15*_t17
     _t29 = -_t1*_t28 - _t22
-    _t30 = -5.0*_t29/3.0
+    _t30 = -1.6666666666666667*_t29
     _t31 = -_t11*_t30
     _t32 = -_t17*_t9 - _t21*_t7
-    _t33 = _t25/5.0
+    _t33 = 0.2*_t25
     _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16
-    _t35 = _t30/5.0
+    _t35 = 0.2*_t30
     _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17
     _t37 = -_t23*_t8 - _t26 - _t27
-    _t38 = -5.0*_t37/3.0
-    _t39 = _t38/5.0
+    _t38 = -1.6666666666666667*_t37
+    _t39 = 0.2*_t38
     _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7
     _t41 = -_t28*_t8 - _t31 - _t32
-    _t42 = -5.0*_t41/3.0
-    _t43 = _t42/5.0
+    _t42 = -1.6666666666666667*_t41
+    _t43 = 0.2*_t42
     _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7
     _t45 = K_theta_tractor_x_tractor*_t2
     _t46 = K_theta_tractor_x_tractor_2*_t4
@@ -882,8 +882,8 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t53 = K_theta_cart2_x_tractor*_t8
     _t54 = K_theta_cart_x_tractor_2*_t0
     _t55 = K_theta_cart2_x_tractor_2*_t7
-    _t56 = 17.0*_t0/20.0
-    _t57 = 17.0*_t1/20.0
+    _t56 = 0.85*_t0
+    _t57 = 0.85*_t1
     _t58 = _t38*thetadot_right + _t42*thetadot_left
     _t59 = _t58*_t58
     _t60 = _t53*_t59
@@ -909,41 +909,41 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t80 = _t58*thetadot_left
     _t81 = _t15*_t16
     _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16
-    _t83 = -5.0*_t82/3.0
-    _t84 = _t83/5.0
+    _t83 = -1.6666666666666667*_t82
+    _t84 = 0.2*_t83
     _t85 = -_t1*_t81 + _t20
     _t86 = _t15*_t17
     _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17
-    _t88 = -5.0*_t87/3.0
-    _t89 = _t88/5.0
+    _t88 = -1.6666666666666667*_t87
+    _t89 = 0.2*_t88
     _t90 = -_t1*_t86 + _t22
-    _t91 = 5.0*_t34/3.0
-    _t92 = _t91/5.0
+    _t91 = 1.6666666666666667*_t34
+    _t92 = 0.2*_t91
     _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6
-    _t94 = 5.0*_t36/3.0
-    _t95 = _t94/5.0
+    _t94 = 1.6666666666666667*_t36
+    _t95 = 0.2*_t94
     _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6
     _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81
-    _t98 = -5.0*_t97/3.0
-    _t99 = _t98/5.0
+    _t98 = -1.6666666666666667*_t97
+    _t99 = 0.2*_t98
     _t100 = -_t14*_t83 + _t27 - _t8*_t81
     _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86
-    _t102 = -5.0*_t101/3.0
-    _t103 = _t102/5.0
+    _t102 = -1.6666666666666667*_t101
+    _t103 = 0.2*_t102
     _t104 = -_t14*_t88 + _t32 - _t8*_t86
     _t105 = _t11*_t91 - _t14*_t25
-    _t106 = -5.0*_t105/3.0
-    _t107 = _t106/5.0
+    _t106 = -1.6666666666666667*_t105
+    _t107 = 0.2*_t106
     _t108 = -_t14*_t91 + _t26
     _t109 = _t11*_t94 - _t14*_t30
-    _t110 = -5.0*_t109/3.0
-    _t111 = _t110/5.0
+    _t110 = -1.6666666666666667*_t109
+    _t111 = 0.2*_t110
     _t112 = -_t14*_t94 + _t31
-    _t113 = 5.0*_t40/3.0
-    _t114 = _t113/5.0
+    _t113 = 1.6666666666666667*_t40
+    _t114 = 0.2*_t113
     _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8
-    _t116 = 5.0*_t44/3.0
-    _t117 = _t116/5.0
+    _t116 = 1.6666666666666667*_t44
+    _t117 = 0.2*_t116
     _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8
     _t119 = K_theta_tractor_x_tractor_2*_t2 - _t51
     _t120 = K_theta_cart_x_tractor_2*_t0 - _t52
@@ -997,7 +997,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t168 = -K_theta_tractor_x_tractor_2*_t2*_t64 + _t51*_t64 + _t52*_t62 + _t60 - _t65 - _t66
     _t169 = _t75*_t81 + _t76*_t86
     _t170 = J_x_tractor*_t169 + _t124*_t165 + _t125*_t166 + _t168
-    _t171 = 3.0*K_theta_cart2_x_tractor*_t2*_t59*_t8/10.0 + 3.0*K_theta_cart_x_tractor*_t1*_t2*_t62/10.0 - _t3*_t65 - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70
+    _t171 = 0.3*K_theta_cart2_x_tractor*_t2*_t59*_t8 + 0.3*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70
     _t172 = _t119*_t164 + _t123*_t169 + _t127*_t165 + _t128*_t166 + _t171
     _t173 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60 - _t56*_t65 - _t57*_t67 - _t57*_t68
     _t174 = J_theta_cart*_t165 + _t120*_t164 + _t124*_t169 + _t130*_t166 + _t173
@@ -1100,7 +1100,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 274 add, 409 mul, 46 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 274 add, 423 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     _, _, _, _, _, thetadot_right, thetadot_left, _, _, _, _ = _flat(qdot, 11, "qdot")
@@ -1139,47 +1139,47 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t0 = math.sin(theta_cart)
     _t1 = math.cos(theta_cart)
     _t2 = math.sin(theta_tractor)
-    _t3 = 3.0*_t2/10.0
+    _t3 = 0.3*_t2
     _t4 = math.cos(theta_tractor)
-    _t5 = 3.0*_t4/10.0
+    _t5 = 0.3*_t4
     _t6 = _t0*_t3 + _t1*_t5
     _t7 = math.sin(theta_cart2)
     _t8 = math.cos(theta_cart2)
     _t9 = _t3*_t7 + _t5*_t8
-    _t10 = 17.0*_t8/20.0
-    _t11 = 17.0*_t0*_t7/20.0 + _t1*_t10
+    _t10 = 0.85*_t8
+    _t11 = 0.85*_t0*_t7 + _t1*_t10
     _t12 = _t0*_t5 - _t1*_t3
     _t13 = -_t3*_t8 + _t5*_t7
-    _t14 = _t0*_t10 - 17.0*_t1*_t7/20.0
-    _t15 = 207.0*_t2/1000.0
-    _t16 = -500.0*radius_right/207.0
-    _t17 = -500.0*radius_left/207.0
-    _t18 = -207.0*_t4/1000.0
+    _t14 = _t0*_t10 - 0.85*_t1*_t7
+    _t15 = 0.207*_t2
+    _t16 = -2.4154589371980677*radius_right
+    _t17 = -2.4154589371980677*radius_left
+    _t18 = -0.207*_t4
     _t19 = _t16*_t18
     _t20 = -_t0*_t19 + _t16*_t6
     _t21 = _t17*_t18
     _t22 = -_t0*_t21 - _t17*_t6
     _t23 = -_t15*_t16
     _t24 = -_t1*_t23 - _t20
-    _t25 = -5.0*_t24/3.0
+    _t25 = -1.6666666666666667*_t24
     _t26 = -_t11*_t25
     _t27 = _t16*_t9 - _t19*_t7
     _t28 = -_t15*_t17
     _t29 = -_t1*_t28 - _t22
-    _t30 = -5.0*_t29/3.0
+    _t30 = -1.6666666666666667*_t29
     _t31 = -_t11*_t30
     _t32 = -_t17*_t9 - _t21*_t7
-    _t33 = _t25/5.0
+    _t33 = 0.2*_t25
     _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16
-    _t35 = _t30/5.0
+    _t35 = 0.2*_t30
     _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17
     _t37 = -_t23*_t8 - _t26 - _t27
-    _t38 = -5.0*_t37/3.0
-    _t39 = _t38/5.0
+    _t38 = -1.6666666666666667*_t37
+    _t39 = 0.2*_t38
     _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7
     _t41 = -_t28*_t8 - _t31 - _t32
-    _t42 = -5.0*_t41/3.0
-    _t43 = _t42/5.0
+    _t42 = -1.6666666666666667*_t41
+    _t43 = 0.2*_t42
     _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7
     _t45 = K_theta_tractor_x_tractor*_t2
     _t46 = K_theta_tractor_x_tractor_2*_t4
@@ -1192,8 +1192,8 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t53 = K_theta_cart2_x_tractor*_t8
     _t54 = K_theta_cart_x_tractor_2*_t0
     _t55 = K_theta_cart2_x_tractor_2*_t7
-    _t56 = 17.0*_t0/20.0
-    _t57 = 17.0*_t1/20.0
+    _t56 = 0.85*_t0
+    _t57 = 0.85*_t1
     _t58 = _t38*thetadot_right + _t42*thetadot_left
     _t59 = _t58*_t58
     _t60 = _t53*_t59
@@ -1219,41 +1219,41 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t80 = _t58*thetadot_left
     _t81 = _t15*_t16
     _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16
-    _t83 = -5.0*_t82/3.0
-    _t84 = _t83/5.0
+    _t83 = -1.6666666666666667*_t82
+    _t84 = 0.2*_t83
     _t85 = -_t1*_t81 + _t20
     _t86 = _t15*_t17
     _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17
-    _t88 = -5.0*_t87/3.0
-    _t89 = _t88/5.0
+    _t88 = -1.6666666666666667*_t87
+    _t89 = 0.2*_t88
     _t90 = -_t1*_t86 + _t22
-    _t91 = 5.0*_t34/3.0
-    _t92 = _t91/5.0
+    _t91 = 1.6666666666666667*_t34
+    _t92 = 0.2*_t91
     _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6
-    _t94 = 5.0*_t36/3.0
-    _t95 = _t94/5.0
+    _t94 = 1.6666666666666667*_t36
+    _t95 = 0.2*_t94
     _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6
     _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81
-    _t98 = -5.0*_t97/3.0
-    _t99 = _t98/5.0
+    _t98 = -1.6666666666666667*_t97
+    _t99 = 0.2*_t98
     _t100 = -_t14*_t83 + _t27 - _t8*_t81
     _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86
-    _t102 = -5.0*_t101/3.0
-    _t103 = _t102/5.0
+    _t102 = -1.6666666666666667*_t101
+    _t103 = 0.2*_t102
     _t104 = -_t14*_t88 + _t32 - _t8*_t86
     _t105 = _t11*_t91 - _t14*_t25
-    _t106 = -5.0*_t105/3.0
-    _t107 = _t106/5.0
+    _t106 = -1.6666666666666667*_t105
+    _t107 = 0.2*_t106
     _t108 = -_t14*_t91 + _t26
     _t109 = _t11*_t94 - _t14*_t30
-    _t110 = -5.0*_t109/3.0
-    _t111 = _t110/5.0
+    _t110 = -1.6666666666666667*_t109
+    _t111 = 0.2*_t110
     _t112 = -_t14*_t94 + _t31
-    _t113 = 5.0*_t40/3.0
-    _t114 = _t113/5.0
+    _t113 = 1.6666666666666667*_t40
+    _t114 = 0.2*_t113
     _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8
-    _t116 = 5.0*_t44/3.0
-    _t117 = _t116/5.0
+    _t116 = 1.6666666666666667*_t44
+    _t117 = 0.2*_t116
     _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8
     _t119 = K_theta_tractor_x_tractor_2*_t2 - _t51
     _t120 = K_theta_cart_x_tractor_2*_t0 - _t52
@@ -1307,7 +1307,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t168 = -K_theta_tractor_x_tractor_2*_t2*_t64 + _t51*_t64 + _t52*_t62 + _t60 - _t65 - _t66
     _t169 = _t75*_t81 + _t76*_t86
     _t170 = J_x_tractor*_t169 + _t124*_t165 + _t125*_t166 + _t168
-    _t171 = 3.0*K_theta_cart2_x_tractor*_t2*_t59*_t8/10.0 + 3.0*K_theta_cart_x_tractor*_t1*_t2*_t62/10.0 - _t3*_t65 - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70
+    _t171 = 0.3*K_theta_cart2_x_tractor*_t2*_t59*_t8 + 0.3*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67 - _t5*_t68 - _t5*_t69 - _t5*_t70
     _t172 = _t119*_t164 + _t123*_t169 + _t127*_t165 + _t128*_t166 + _t171
     _t173 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60 - _t56*_t65 - _t57*_t67 - _t57*_t68
     _t174 = J_theta_cart*_t165 + _t120*_t164 + _t124*_t169 + _t130*_t166 + _t173
@@ -1399,7 +1399,7 @@ def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: Ar
         u: array of 2 (shape 2x1, row-major)
         integral_next: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+    operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
     """
     x_tractor, y_tractor, theta_tractor, _, _, _, _, _, _, _, _ = _flat(q, 11, "q")
     _, _, _, _, _, thetadot_right, thetadot_left, _, _, _, _ = _flat(qdot, 11, "qdot")
@@ -1418,7 +1418,7 @@ def minimal_pi_law(q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: Ar
     _t5 = math.sin(theta_tractor)
     _t6 = qd_1 - y_tractor
     _t7 = _t2*math.cos(_t1) + kx*(_t3*_t4 + _t5*_t6)
-    _t8 = 207.0*_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5))/1000.0 + 207.0*qdd_2/1000.0
+    _t8 = 0.207*_t2*(ktheta*math.sin(_t1) + ky*(_t3*_t6 - _t4*_t5)) + 0.207*qdd_2
     _t9 = _t0*_t7 + _t0*_t8 - thetadot_right
     _t10 = -tau_max
     _t11 = h*ki

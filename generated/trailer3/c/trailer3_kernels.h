@@ -44,7 +44,7 @@ static inline void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_no
 
 /* trailer3_k_minimal_tde_keep: the parameter-only part of trailer3_minimal_tde (trailer3_laws.h
    documents it).
-   operations after CSE: 0 add, 4 mul, 9 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
     const trailer3_real_t *span, trailer3_real_t kept[31])
 {
@@ -78,8 +78,8 @@ static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
     const trailer3_real_t span_1 = span[0];
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t2 = -J_theta_tractor*_t0;
     const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
@@ -123,7 +123,7 @@ static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
 }
 
 /* trailer3_k_minimal_tde: the per-step part of trailer3_minimal_tde (trailer3_laws.h documents it).
-   operations after CSE: 189 add, 273 mul, 28 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 189 add, 279 mul, 0 div, 8 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[31],
     const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
@@ -133,61 +133,61 @@ static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[31],
     const trailer3_real_t _t12 = TRAILER3_COS_BOUNDED(qp3);
     const trailer3_real_t qp2 = q_prev[2];
     const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(qp2);
-    const trailer3_real_t _t14 = TRAILER3_LIT(3.0)*_t13/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
     const trailer3_real_t _t15 = TRAILER3_COS_BOUNDED(qp2);
-    const trailer3_real_t _t16 = TRAILER3_LIT(3.0)*_t15/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t15;
     const trailer3_real_t qp4 = q_prev[4];
     const trailer3_real_t _t17 = TRAILER3_SIN_BOUNDED(qp4);
     const trailer3_real_t _t18 = TRAILER3_COS_BOUNDED(qp4);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t20 = TRAILER3_LIT(17.0)*_t12/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.85)*_t12;
     const trailer3_real_t qp5 = q_prev[5];
     const trailer3_real_t _t21 = TRAILER3_SIN_BOUNDED(qp5);
     const trailer3_real_t _t22 = TRAILER3_COS_BOUNDED(qp5);
-    const trailer3_real_t _t23 = TRAILER3_LIT(17.0)*_t22/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t22;
     const trailer3_real_t _t24 = -_t11*_t14 - _t12*_t16;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(207.0)*_t13/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t25 = -TRAILER3_LIT(0.207)*_t13;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t26 = _t0*_t25;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(207.0)*_t15/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t27 = -TRAILER3_LIT(0.207)*_t15;
     const trailer3_real_t _t28 = _t0*_t27;
     const trailer3_real_t _t29 = _t0*_t24 + _t11*_t28 - _t12*_t26;
-    const trailer3_real_t _t30 = -TRAILER3_LIT(5.0)*_t29/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t31 = _t30/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t32 = TRAILER3_LIT(3.0)*_t11*_t15/TRAILER3_LIT(10.0) - _t12*_t14;
+    const trailer3_real_t _t30 = -TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t11*_t15 - _t12*_t14;
     const trailer3_real_t _t33 = -_t0*_t32 - _t11*_t26 - _t12*_t28;
     const trailer3_real_t _t1 = kept[21];
     const trailer3_real_t _t34 = _t1*_t25;
     const trailer3_real_t _t35 = _t1*_t27;
     const trailer3_real_t _t36 = -_t1*_t24 + _t11*_t35 - _t12*_t34;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(5.0)*_t36/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t38 = _t37/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
     const trailer3_real_t _t39 = _t1*_t32 - _t11*_t34 - _t12*_t35;
     const trailer3_real_t _t40 = -_t14*_t17 - _t16*_t18;
     const trailer3_real_t _t41 = -_t17*_t19 - _t18*_t20;
     const trailer3_real_t _t42 = _t0*_t40 + _t17*_t28 - _t18*_t26 - _t30*_t41;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(5.0)*_t42/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t44 = _t43/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t45 = -_t14*_t18 + TRAILER3_LIT(3.0)*_t15*_t17/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t46 = TRAILER3_LIT(17.0)*_t12*_t17/TRAILER3_LIT(20.0) - _t18*_t19;
+    const trailer3_real_t _t43 = -TRAILER3_LIT(1.6666666666666667)*_t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*_t43;
+    const trailer3_real_t _t45 = -_t14*_t18 + TRAILER3_LIT(0.3)*_t15*_t17;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.85)*_t12*_t17 - _t18*_t19;
     const trailer3_real_t _t47 = -_t0*_t45 - _t17*_t26 - _t18*_t28 + _t30*_t46;
     const trailer3_real_t _t48 = -_t1*_t40 + _t17*_t35 - _t18*_t34 - _t37*_t41;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t50 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t51 = _t1*_t45 - _t17*_t34 - _t18*_t35 + _t37*_t46;
     const trailer3_real_t _t52 = -_t14*_t21 - _t16*_t22;
     const trailer3_real_t _t53 = -_t19*_t21 - _t20*_t22;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(17.0)*_t17*_t21/TRAILER3_LIT(20.0) - _t18*_t23;
+    const trailer3_real_t _t54 = -TRAILER3_LIT(0.85)*_t17*_t21 - _t18*_t23;
     const trailer3_real_t _t55 = _t0*_t52 + _t21*_t28 - _t22*_t26 - _t30*_t53 - _t43*_t54;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(5.0)*_t55/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t57 = _t56/TRAILER3_LIT(5.0);
-    const trailer3_real_t _t58 = -_t14*_t22 + TRAILER3_LIT(3.0)*_t15*_t21/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t59 = TRAILER3_LIT(17.0)*_t12*_t21/TRAILER3_LIT(20.0) - _t19*_t22;
-    const trailer3_real_t _t60 = -_t17*_t23 + TRAILER3_LIT(17.0)*_t18*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t56 = -TRAILER3_LIT(1.6666666666666667)*_t55;
+    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t56;
+    const trailer3_real_t _t58 = -_t14*_t22 + TRAILER3_LIT(0.3)*_t15*_t21;
+    const trailer3_real_t _t59 = TRAILER3_LIT(0.85)*_t12*_t21 - _t19*_t22;
+    const trailer3_real_t _t60 = -_t17*_t23 + TRAILER3_LIT(0.85)*_t18*_t21;
     const trailer3_real_t _t61 = -_t0*_t58 - _t21*_t26 - _t22*_t28 + _t30*_t59 + _t43*_t60;
     const trailer3_real_t _t62 = -_t1*_t52 + _t21*_t35 - _t22*_t34 - _t37*_t53 - _t49*_t54;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t64 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t63;
     const trailer3_real_t _t65 = _t1*_t58 - _t21*_t34 - _t22*_t35 + _t37*_t59 + _t49*_t60;
     const trailer3_real_t K_theta_cart_x_tractor = kept[12];
     const trailer3_real_t _t66 = K_theta_cart_x_tractor*_t11;
@@ -206,8 +206,8 @@ static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[31],
     const trailer3_real_t _t74 = K_theta_cart3_x_tractor*_t22;
     const trailer3_real_t _t75 = K_theta_cart2_x_tractor_2*_t17;
     const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t78 = TRAILER3_LIT(17.0)*_t18/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
+    const trailer3_real_t _t78 = TRAILER3_LIT(0.85)*_t18;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
     const trailer3_real_t _t79 = -K_theta_tractor_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t13;
@@ -316,7 +316,7 @@ static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[31],
 
 /* trailer3_k_minimal_minv_norm_keep: the parameter-only part of trailer3_minimal_minv_norm
    (trailer3_laws.h documents it).
-   operations after CSE: 0 add, 4 mul, 8 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     trailer3_real_t kept[30])
 {
@@ -349,8 +349,8 @@ static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t2 = -J_theta_tractor*_t0;
     const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
@@ -393,7 +393,7 @@ static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
 
 /* trailer3_k_minimal_minv_norm: the per-step part of trailer3_minimal_minv_norm (trailer3_laws.h
    documents it).
-   operations after CSE: 187 add, 270 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 187 add, 276 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[30],
     const trailer3_real_t *q, trailer3_real_t *norm)
 {
@@ -402,61 +402,61 @@ static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[30],
     const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
     const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
     const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
     const trailer3_real_t _t27 = _t0*_t26;
     const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
     const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
     const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
     const trailer3_real_t _t1 = kept[21];
     const trailer3_real_t _t33 = _t1*_t24;
     const trailer3_real_t _t34 = _t1*_t26;
     const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
     const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
     const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
     const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
     const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
     const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
+    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
     const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
     const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
     const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
     const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
     const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
     const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
     const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
+    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
     const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
     const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
     const trailer3_real_t K_theta_cart_x_tractor = kept[12];
     const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
@@ -475,8 +475,8 @@ static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[30],
     const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
     const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
     const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
     const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
@@ -590,7 +590,7 @@ static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *ne
 
 /* trailer3_k_minimal_tdc_law: the per-step part of trailer3_minimal_tdc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 191 add, 272 mul, 25 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 191 add, 278 mul, 0 div, 8 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
     const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -604,61 +604,61 @@ static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
     const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
     const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
     const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
     const trailer3_real_t _t27 = _t0*_t26;
     const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
     const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
     const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
     const trailer3_real_t _t1 = kept[21];
     const trailer3_real_t _t33 = _t1*_t24;
     const trailer3_real_t _t34 = _t1*_t26;
     const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
     const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
     const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
     const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
     const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
     const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
+    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
     const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
     const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
     const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
     const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
     const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
     const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
     const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
+    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
     const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
     const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
     const trailer3_real_t K_theta_cart_x_tractor = kept[12];
     const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
@@ -677,8 +677,8 @@ static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
     const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
     const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
     const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
     const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
@@ -792,7 +792,7 @@ static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
 
 /* trailer3_k_minimal_tdroc_law: the per-step part of trailer3_minimal_tdroc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 196 add, 280 mul, 26 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 196 add, 286 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[30],
     const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -805,61 +805,61 @@ static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[30],
     const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*_t12/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(3.0)*_t14/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
     const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t10/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t19 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
     const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(17.0)*_t21/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
     const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(207.0)*_t12/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(207.0)*_t14/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
     const trailer3_real_t _t27 = _t0*_t26;
     const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(5.0)*_t28/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t30 = _t29/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
     const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
     const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
     const trailer3_real_t _t1 = kept[21];
     const trailer3_real_t _t33 = _t1*_t24;
     const trailer3_real_t _t34 = _t1*_t26;
     const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(5.0)*_t35/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t37 = _t36/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
     const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
     const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
     const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
     const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(5.0)*_t41/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t43 = _t42/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
     const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(17.0)*_t11*_t16/TRAILER3_LIT(20.0) - _t17*_t18;
+    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
     const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
     const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(5.0)*_t47/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t49 = _t48/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
     const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
     const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
     const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(17.0)*_t16*_t20/TRAILER3_LIT(20.0) - _t17*_t22;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
     const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t56 = _t55/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
     const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(17.0)*_t11*_t20/TRAILER3_LIT(20.0) - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(17.0)*_t17*_t20/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
+    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
     const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
     const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
     const trailer3_real_t K_theta_cart_x_tractor = kept[12];
     const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
@@ -878,8 +878,8 @@ static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[30],
     const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
     const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
     const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t77 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
     const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
@@ -1006,7 +1006,7 @@ static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[30],
 
 /* trailer3_k_minimal_roc_law_keep: the parameter-only part of trailer3_minimal_roc_law
    (trailer3_laws.h documents it).
-   operations after CSE: 0 add, 10 mul, 14 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 10 mul, 6 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[36])
 {
@@ -1039,8 +1039,8 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t2 = -J_theta_tractor*_t0;
     const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
@@ -1049,12 +1049,12 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    const trailer3_real_t _t10 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t12 = TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart2;
     kept[2] = J_theta_cart2_left;
@@ -1095,7 +1095,7 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
 
 /* trailer3_k_minimal_roc_law: the per-step part of trailer3_minimal_roc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 460 add, 613 mul, 63 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 460 add, 637 mul, 2 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -1108,32 +1108,32 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t18 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
     const trailer3_real_t _t20 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
     const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(theta_cart2);
     const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(theta_cart2);
     const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t29 = TRAILER3_SIN_BOUNDED(theta_cart3);
     const trailer3_real_t _t30 = TRAILER3_COS_BOUNDED(theta_cart3);
     const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
     const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t34 = TRAILER3_LIT(17.0)*_t23*_t29/TRAILER3_LIT(20.0) + _t24*_t33;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
     const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
     const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(17.0)*_t17*_t23/TRAILER3_LIT(20.0) + _t24*_t26;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
     const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(17.0)*_t17*_t29/TRAILER3_LIT(20.0) + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(17.0)*_t24*_t29/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t41 = TRAILER3_LIT(207.0)*_t18/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t42 = -TRAILER3_LIT(207.0)*_t20/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
+    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t43 = _t0*_t42;
     const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
@@ -1142,39 +1142,39 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
     const trailer3_real_t _t47 = -_t0*_t41;
     const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t28*_t49;
     const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
     const trailer3_real_t _t52 = -_t1*_t41;
     const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
     const trailer3_real_t _t55 = -_t28*_t54;
     const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
     const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
     const trailer3_real_t _t59 = -_t34*_t58;
     const trailer3_real_t _t60 = -_t32*_t49;
     const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
     const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
     const trailer3_real_t _t64 = -_t34*_t63;
     const trailer3_real_t _t65 = -_t32*_t54;
     const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
     const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
     const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
     const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(5.0)*_t75/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t77 = _t76/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
     const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
     const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(5.0)*_t79/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t81 = _t80/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
     const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
@@ -1199,8 +1199,8 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
     const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
     const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(17.0)*_t23/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t99 = TRAILER3_LIT(17.0)*_t24/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
+    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
@@ -1237,71 +1237,71 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t131 = _t102*thetadot_left;
     const trailer3_real_t _t132 = _t0*_t41;
     const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(5.0)*_t133/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t135 = _t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
     const trailer3_real_t _t136 = -_t132*_t17 + _t44;
     const trailer3_real_t _t137 = _t1*_t41;
     const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t143 = _t142/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
     const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(5.0)*_t70/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
     const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
     const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
     const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
     const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(5.0)*_t152/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
     const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t142*_t37 + _t50;
     const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t165 = _t164/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
     const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
     const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
     const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
     const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
     const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
+    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
     const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
     const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
+    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
     const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
     const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(5.0)*_t182/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
     const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(5.0)*_t186/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t188 = _t187/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
+    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
     const trailer3_real_t _t189 = -_t164*_t40 + _t59;
     const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(5.0)*_t190/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
     const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t195 = _t194/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
+    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
     const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t82/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t198 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
     const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
     const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
     const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
@@ -1569,7 +1569,7 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
 
 /* trailer3_k_minimal_asmc_law: the per-step part of trailer3_minimal_asmc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 456 add, 610 mul, 62 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 456 add, 634 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -1582,32 +1582,32 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t18 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
     const trailer3_real_t _t20 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
     const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(theta_cart2);
     const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(theta_cart2);
     const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t29 = TRAILER3_SIN_BOUNDED(theta_cart3);
     const trailer3_real_t _t30 = TRAILER3_COS_BOUNDED(theta_cart3);
     const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
     const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t34 = TRAILER3_LIT(17.0)*_t23*_t29/TRAILER3_LIT(20.0) + _t24*_t33;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
     const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
     const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(17.0)*_t17*_t23/TRAILER3_LIT(20.0) + _t24*_t26;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
     const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(17.0)*_t17*_t29/TRAILER3_LIT(20.0) + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(17.0)*_t24*_t29/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t41 = TRAILER3_LIT(207.0)*_t18/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t42 = -TRAILER3_LIT(207.0)*_t20/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
+    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
     const trailer3_real_t _t0 = kept[20];
     const trailer3_real_t _t43 = _t0*_t42;
     const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
@@ -1616,39 +1616,39 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
     const trailer3_real_t _t47 = -_t0*_t41;
     const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t28*_t49;
     const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
     const trailer3_real_t _t52 = -_t1*_t41;
     const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
     const trailer3_real_t _t55 = -_t28*_t54;
     const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
     const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
     const trailer3_real_t _t59 = -_t34*_t58;
     const trailer3_real_t _t60 = -_t32*_t49;
     const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
     const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
     const trailer3_real_t _t64 = -_t34*_t63;
     const trailer3_real_t _t65 = -_t32*_t54;
     const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
     const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
     const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
     const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(5.0)*_t75/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t77 = _t76/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
     const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
     const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(5.0)*_t79/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t81 = _t80/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
     const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
     const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
@@ -1673,8 +1673,8 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
     const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
     const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(17.0)*_t23/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t99 = TRAILER3_LIT(17.0)*_t24/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
+    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
@@ -1711,71 +1711,71 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t _t131 = _t102*thetadot_left;
     const trailer3_real_t _t132 = _t0*_t41;
     const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(5.0)*_t133/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t135 = _t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
     const trailer3_real_t _t136 = -_t132*_t17 + _t44;
     const trailer3_real_t _t137 = _t1*_t41;
     const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t143 = _t142/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
     const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(5.0)*_t70/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
     const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
     const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
     const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
     const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(5.0)*_t152/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
     const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t142*_t37 + _t50;
     const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t165 = _t164/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
     const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
     const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
     const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
     const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
     const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
+    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
     const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
     const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
+    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
     const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
     const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(5.0)*_t182/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
     const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(5.0)*_t186/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t188 = _t187/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
+    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
     const trailer3_real_t _t189 = -_t164*_t40 + _t59;
     const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(5.0)*_t190/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
     const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t195 = _t194/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
+    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
     const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t82/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t198 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
     const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
     const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
     const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
@@ -2054,7 +2054,7 @@ static inline void trailer3_k_minimal_pi_law_keep(const trailer3_params_t *p,
 
 /* trailer3_k_minimal_pi_law: the per-step part of trailer3_minimal_pi_law (trailer3_laws.h
    documents it).
-   operations after CSE: 17 add, 20 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 static inline void trailer3_k_minimal_pi_law(const trailer3_real_t kept[2],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *q_des,
     const trailer3_real_t *qdot_des, const trailer3_real_t *integral, const trailer3_real_t *gains,
@@ -2079,9 +2079,8 @@ static inline void trailer3_k_minimal_pi_law(const trailer3_real_t kept[2],
     const trailer3_real_t qdd_2 = qdot_des[2];
     const trailer3_real_t ky = gains[1];
     const trailer3_real_t ktheta = gains[2];
-    const trailer3_real_t _t9 = TRAILER3_LIT(207.0)*_t3*(ktheta*TRAILER3_SIN(_t2)
-            + ky*(_t4*_t7 - _t5*_t6))/TRAILER3_LIT(1000.0)
-            + TRAILER3_LIT(207.0)*qdd_2/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.207)*_t3*(ktheta*TRAILER3_SIN(_t2)
+            + ky*(_t4*_t7 - _t5*_t6)) + TRAILER3_LIT(0.207)*qdd_2;
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t _t0 = kept[0];
     const trailer3_real_t _t10 = _t0*(_t8 + _t9) - thetadot_right;

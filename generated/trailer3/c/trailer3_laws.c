@@ -31,7 +31,7 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.
-   operations after CSE: 189 add, 289 mul, 37 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 189 add, 295 mul, 7 div, 8 sin/cos, 0 sqrt */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_p
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 187 add, 286 mul, 34 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 187 add, 292 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
 }
 
 /* trailer3_minimal_tdc_law: documented in trailer3_laws.h.
-   operations after CSE: 191 add, 288 mul, 33 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 191 add, 294 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -126,7 +126,7 @@ void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 196 add, 296 mul, 34 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 196 add, 302 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -140,7 +140,7 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 460 add, 670 mul, 79 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 460 add, 694 mul, 8 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -155,7 +155,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 456 add, 667 mul, 78 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 456 add, 691 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -170,7 +170,7 @@ void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t
 }
 
 /* trailer3_minimal_pi_law: documented in trailer3_laws.h.
-   operations after CSE: 17 add, 22 mul, 4 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
+   operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
 void trailer3_minimal_pi_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *q_des, const trailer3_real_t *qdot_des,
     const trailer3_real_t *integral, const trailer3_real_t *gains, const trailer3_real_t *limits,

@@ -7,7 +7,7 @@
 #include "trailer3_model.h"
 
 /* trailer3_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 470 add, 634 mul, 76 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 470 add, 658 mul, 7 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *tau, trailer3_real_t *qddot)
 {
@@ -73,8 +73,8 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t2 = -J_theta_tractor*_t0;
     const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
@@ -83,12 +83,12 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    const trailer3_real_t _t10 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t12 = TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -155,69 +155,69 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
     const trailer3_real_t _t17 = TRAILER3_COS(theta_cart);
     const trailer3_real_t _t18 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
     const trailer3_real_t _t20 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
     const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
     const trailer3_real_t _t23 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t24 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
     const trailer3_real_t _t29 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t30 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
     const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t34 = TRAILER3_LIT(17.0)*_t23*_t29/TRAILER3_LIT(20.0) + _t24*_t33;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
     const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
     const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(17.0)*_t17*_t23/TRAILER3_LIT(20.0) + _t24*_t26;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
     const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(17.0)*_t17*_t29/TRAILER3_LIT(20.0) + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(17.0)*_t24*_t29/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t41 = TRAILER3_LIT(207.0)*_t18/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t42 = -TRAILER3_LIT(207.0)*_t20/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
+    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
     const trailer3_real_t _t43 = _t0*_t42;
     const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
     const trailer3_real_t _t45 = _t1*_t42;
     const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
     const trailer3_real_t _t47 = -_t0*_t41;
     const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t28*_t49;
     const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
     const trailer3_real_t _t52 = -_t1*_t41;
     const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
     const trailer3_real_t _t55 = -_t28*_t54;
     const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
     const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
     const trailer3_real_t _t59 = -_t34*_t58;
     const trailer3_real_t _t60 = -_t32*_t49;
     const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
     const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
     const trailer3_real_t _t64 = -_t34*_t63;
     const trailer3_real_t _t65 = -_t32*_t54;
     const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
     const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
     const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
     const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(5.0)*_t75/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t77 = _t76/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
     const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
     const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(5.0)*_t79/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t81 = _t80/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
     const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
     const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
     const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
@@ -234,8 +234,8 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
     const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
     const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(17.0)*_t23/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t99 = TRAILER3_LIT(17.0)*_t24/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
+    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
     const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
     const trailer3_real_t _t101 = _t100*_t100;
     const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
@@ -270,71 +270,71 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t _t131 = _t102*thetadot_left;
     const trailer3_real_t _t132 = _t0*_t41;
     const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(5.0)*_t133/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t135 = _t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
     const trailer3_real_t _t136 = -_t132*_t17 + _t44;
     const trailer3_real_t _t137 = _t1*_t41;
     const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t143 = _t142/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
     const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(5.0)*_t70/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
     const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
     const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
     const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
     const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(5.0)*_t152/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
     const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t142*_t37 + _t50;
     const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t165 = _t164/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
     const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
     const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
     const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
     const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
     const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
+    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
     const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
     const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
+    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
     const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
     const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(5.0)*_t182/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
     const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(5.0)*_t186/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t188 = _t187/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
+    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
     const trailer3_real_t _t189 = -_t164*_t40 + _t59;
     const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(5.0)*_t190/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
     const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t195 = _t194/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
+    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
     const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t82/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t198 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
     const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
     const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
     const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
@@ -603,7 +603,7 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
 }
 
 /* trailer3_model_prepare: documented in trailer3_model.h.
-   operations after CSE: 0 add, 10 mul, 14 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 0 add, 10 mul, 6 div, 0 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     trailer3_model_prepared_t *prepared)
 {
@@ -657,8 +657,8 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t1 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t2 = -J_theta_tractor*_t0;
     const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
@@ -667,12 +667,12 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    const trailer3_real_t _t10 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t12 = TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t13 = TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -777,7 +777,7 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
 }
 
 /* trailer3_forward_dynamics_prepared: documented in trailer3_model.h.
-   operations after CSE: 470 add, 624 mul, 62 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 470 add, 648 mul, 1 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepared_t *prepared,
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *tau,
     trailer3_real_t *qddot)
@@ -806,25 +806,25 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t19 = TRAILER3_LIT(3.0)*_t18/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t21 = TRAILER3_LIT(3.0)*_t20/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
     const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
     const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(17.0)*_t16/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t27 = TRAILER3_LIT(17.0)*_t17/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
     const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
     const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(17.0)*_t30/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t34 = TRAILER3_LIT(17.0)*_t23*_t29/TRAILER3_LIT(20.0) + _t24*_t33;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
     const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
     const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(17.0)*_t17*_t23/TRAILER3_LIT(20.0) + _t24*_t26;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
     const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(17.0)*_t17*_t29/TRAILER3_LIT(20.0) + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(17.0)*_t24*_t29/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t41 = TRAILER3_LIT(207.0)*_t18/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t42 = -TRAILER3_LIT(207.0)*_t20/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
+    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
+    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
     const trailer3_real_t _t0 = prepared->forward_dynamics[20];
     const trailer3_real_t _t43 = _t0*_t42;
     const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
@@ -833,39 +833,39 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
     const trailer3_real_t _t47 = -_t0*_t41;
     const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t28*_t49;
     const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
     const trailer3_real_t _t52 = -_t1*_t41;
     const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
     const trailer3_real_t _t55 = -_t28*_t54;
     const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
     const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
     const trailer3_real_t _t59 = -_t34*_t58;
     const trailer3_real_t _t60 = -_t32*_t49;
     const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
     const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
     const trailer3_real_t _t64 = -_t34*_t63;
     const trailer3_real_t _t65 = -_t32*_t54;
     const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
     const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = _t63/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
     const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
     const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(5.0)*_t75/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t77 = _t76/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
     const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
     const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(5.0)*_t79/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t81 = _t80/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
     const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
     const trailer3_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[18];
     const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
@@ -890,8 +890,8 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
     const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
     const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(17.0)*_t23/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t99 = TRAILER3_LIT(17.0)*_t24/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
+    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
     const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
     const trailer3_real_t _t101 = _t100*_t100;
     const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
@@ -926,71 +926,71 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     const trailer3_real_t _t131 = _t102*thetadot_left;
     const trailer3_real_t _t132 = _t0*_t41;
     const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(5.0)*_t133/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t135 = _t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
     const trailer3_real_t _t136 = -_t132*_t17 + _t44;
     const trailer3_real_t _t137 = _t1*_t41;
     const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t143 = _t142/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
     const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(5.0)*_t70/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
     const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
     const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
     const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
     const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(5.0)*_t152/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
     const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t142*_t37 + _t50;
     const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t165 = _t164/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
     const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
     const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
     const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
     const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
     const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
+    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
     const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
     const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
+    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
     const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
     const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(5.0)*_t182/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
     const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(5.0)*_t186/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t188 = _t187/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
+    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
     const trailer3_real_t _t189 = -_t164*_t40 + _t59;
     const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(5.0)*_t190/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
     const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t195 = _t194/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
+    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
     const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t82/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t198 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
     const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
     const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
     const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
@@ -1303,7 +1303,7 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
 }
 
 /* trailer3_kinematics: documented in trailer3_model.h.
-   operations after CSE: 72 add, 131 mul, 31 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 137 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *pose_rates)
 {
@@ -1312,63 +1312,63 @@ void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t6 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t7 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t9 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t11 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t12 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t13 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t13 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t14 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t14 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t15 = -_t0*_t3 - _t1*_t5;
-    const trailer3_real_t _t16 = -TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t16 = -TRAILER3_LIT(0.207)*_t2;
     const trailer3_real_t _t17 = _t13*_t16;
-    const trailer3_real_t _t18 = -TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t _t19 = _t13*_t18;
     const trailer3_real_t _t20 = _t0*_t19 - _t1*_t17 + _t13*_t15;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(5.0)*_t20/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t22 = _t21/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t21 = -TRAILER3_LIT(1.6666666666666667)*_t20;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.2)*_t21;
     const trailer3_real_t _t23 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t24 = -_t0*_t17 - _t1*_t19 - _t13*_t23;
     const trailer3_real_t _t25 = _t14*_t16;
     const trailer3_real_t _t26 = _t14*_t18;
     const trailer3_real_t _t27 = _t0*_t26 - _t1*_t25 - _t14*_t15;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(5.0)*_t27/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t29 = _t28/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t28 = -TRAILER3_LIT(1.6666666666666667)*_t27;
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.2)*_t28;
     const trailer3_real_t _t30 = -_t0*_t25 - _t1*_t26 + _t14*_t23;
     const trailer3_real_t _t31 = -_t3*_t6 - _t5*_t7;
     const trailer3_real_t _t32 = -_t6*_t8 - _t7*_t9;
     const trailer3_real_t _t33 = _t13*_t31 - _t17*_t7 + _t19*_t6 - _t21*_t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(5.0)*_t33/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t35 = _t34/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
     const trailer3_real_t _t36 = -_t3*_t7 + _t5*_t6;
-    const trailer3_real_t _t37 = TRAILER3_LIT(17.0)*_t1*_t6/TRAILER3_LIT(20.0) - _t7*_t8;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t1*_t6 - _t7*_t8;
     const trailer3_real_t _t38 = -_t13*_t36 - _t17*_t6 - _t19*_t7 + _t21*_t37;
     const trailer3_real_t _t39 = -_t14*_t31 - _t25*_t7 + _t26*_t6 - _t28*_t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t41 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t42 = _t14*_t36 - _t25*_t6 - _t26*_t7 + _t28*_t37;
     const trailer3_real_t _t43 = -_t10*_t3 - _t11*_t5;
     const trailer3_real_t _t44 = -_t10*_t8 - _t11*_t9;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(17.0)*_t10*_t6/TRAILER3_LIT(20.0) - _t12*_t7;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t7;
     const trailer3_real_t _t46 = _t10*_t19 - _t11*_t17 + _t13*_t43 - _t21*_t44 - _t34*_t45;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(5.0)*_t46/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t48 = _t47/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
     const trailer3_real_t _t49 = _t10*_t5 - _t11*_t3;
-    const trailer3_real_t _t50 = TRAILER3_LIT(17.0)*_t1*_t10/TRAILER3_LIT(20.0) - _t11*_t8;
-    const trailer3_real_t _t51 = TRAILER3_LIT(17.0)*_t10*_t7/TRAILER3_LIT(20.0) - _t12*_t6;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t1*_t10 - _t11*_t8;
+    const trailer3_real_t _t51 = TRAILER3_LIT(0.85)*_t10*_t7 - _t12*_t6;
     const trailer3_real_t _t52 = -_t10*_t17 - _t11*_t19 - _t13*_t49 + _t21*_t50 + _t34*_t51;
     const trailer3_real_t _t53 = _t10*_t26 - _t11*_t25 - _t14*_t43 - _t28*_t44 - _t40*_t45;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t55 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t56 = -_t10*_t25 - _t11*_t26 + _t14*_t49 + _t28*_t50 + _t40*_t51;
     const trailer3_real_t _t57 = _t22 - _t24;
     const trailer3_real_t _t58 = _t29 - _t30;
@@ -1435,7 +1435,7 @@ void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
 }
 
 /* trailer3_minimal_mass_matrix: documented in trailer3_model.h.
-   operations after CSE: 183 add, 280 mul, 33 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 183 add, 286 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *M)
 {
@@ -1444,63 +1444,63 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t6 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t7 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t9 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t11 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t12 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t13 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t13 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t14 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t14 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t15 = -_t0*_t3 - _t1*_t5;
-    const trailer3_real_t _t16 = -TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t16 = -TRAILER3_LIT(0.207)*_t2;
     const trailer3_real_t _t17 = _t13*_t16;
-    const trailer3_real_t _t18 = -TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t _t19 = _t13*_t18;
     const trailer3_real_t _t20 = _t0*_t19 - _t1*_t17 + _t13*_t15;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(5.0)*_t20/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t22 = _t21/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t21 = -TRAILER3_LIT(1.6666666666666667)*_t20;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.2)*_t21;
     const trailer3_real_t _t23 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t24 = -_t0*_t17 - _t1*_t19 - _t13*_t23;
     const trailer3_real_t _t25 = _t14*_t16;
     const trailer3_real_t _t26 = _t14*_t18;
     const trailer3_real_t _t27 = _t0*_t26 - _t1*_t25 - _t14*_t15;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(5.0)*_t27/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t29 = _t28/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t28 = -TRAILER3_LIT(1.6666666666666667)*_t27;
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.2)*_t28;
     const trailer3_real_t _t30 = -_t0*_t25 - _t1*_t26 + _t14*_t23;
     const trailer3_real_t _t31 = -_t3*_t6 - _t5*_t7;
     const trailer3_real_t _t32 = -_t6*_t8 - _t7*_t9;
     const trailer3_real_t _t33 = _t13*_t31 - _t17*_t7 + _t19*_t6 - _t21*_t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(5.0)*_t33/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t35 = _t34/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
     const trailer3_real_t _t36 = -_t3*_t7 + _t5*_t6;
-    const trailer3_real_t _t37 = TRAILER3_LIT(17.0)*_t1*_t6/TRAILER3_LIT(20.0) - _t7*_t8;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t1*_t6 - _t7*_t8;
     const trailer3_real_t _t38 = -_t13*_t36 - _t17*_t6 - _t19*_t7 + _t21*_t37;
     const trailer3_real_t _t39 = -_t14*_t31 - _t25*_t7 + _t26*_t6 - _t28*_t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t41 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t42 = _t14*_t36 - _t25*_t6 - _t26*_t7 + _t28*_t37;
     const trailer3_real_t _t43 = -_t10*_t3 - _t11*_t5;
     const trailer3_real_t _t44 = -_t10*_t8 - _t11*_t9;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(17.0)*_t10*_t6/TRAILER3_LIT(20.0) - _t12*_t7;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t7;
     const trailer3_real_t _t46 = _t10*_t19 - _t11*_t17 + _t13*_t43 - _t21*_t44 - _t34*_t45;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(5.0)*_t46/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t48 = _t47/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
     const trailer3_real_t _t49 = _t10*_t5 - _t11*_t3;
-    const trailer3_real_t _t50 = TRAILER3_LIT(17.0)*_t1*_t10/TRAILER3_LIT(20.0) - _t11*_t8;
-    const trailer3_real_t _t51 = TRAILER3_LIT(17.0)*_t10*_t7/TRAILER3_LIT(20.0) - _t12*_t6;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t1*_t10 - _t11*_t8;
+    const trailer3_real_t _t51 = TRAILER3_LIT(0.85)*_t10*_t7 - _t12*_t6;
     const trailer3_real_t _t52 = -_t10*_t17 - _t11*_t19 - _t13*_t49 + _t21*_t50 + _t34*_t51;
     const trailer3_real_t _t53 = _t10*_t26 - _t11*_t25 - _t14*_t43 - _t28*_t44 - _t40*_t45;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(5.0)*_t53/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t55 = _t54/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t54;
     const trailer3_real_t _t56 = -_t10*_t25 - _t11*_t26 + _t14*_t49 + _t28*_t50 + _t40*_t51;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t _t57 = K_theta_cart_x_tractor*_t0;
@@ -1519,8 +1519,8 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t65 = K_theta_cart3_x_tractor*_t11;
     const trailer3_real_t _t66 = K_theta_cart2_x_tractor_2*_t6;
     const trailer3_real_t _t67 = K_theta_cart3_x_tractor_2*_t10;
-    const trailer3_real_t _t68 = TRAILER3_LIT(17.0)*_t6/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t69 = TRAILER3_LIT(17.0)*_t7/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t7;
     const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer3_real_t _t70 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
@@ -1628,7 +1628,7 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
 }
 
 /* trailer3_minimal_bias_forces: documented in trailer3_model.h.
-   operations after CSE: 345 add, 521 mul, 77 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 345 add, 545 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *H)
 {
@@ -1637,75 +1637,75 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
     const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(17.0)*_t14/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t13*_t7/TRAILER3_LIT(20.0) + _t17*_t8;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
     const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(17.0)*_t1*_t7/TRAILER3_LIT(20.0) + _t10*_t8;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
     const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(17.0)*_t1*_t13/TRAILER3_LIT(20.0) + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(17.0)*_t13*_t8/TRAILER3_LIT(20.0) + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t28 = -TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t _t29 = _t26*_t28;
     const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
     const trailer3_real_t _t31 = _t27*_t28;
     const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
     const trailer3_real_t _t33 = -_t25*_t26;
     const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(5.0)*_t34/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
     const trailer3_real_t _t36 = -_t12*_t35;
     const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
     const trailer3_real_t _t38 = -_t25*_t27;
     const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
     const trailer3_real_t _t41 = -_t12*_t40;
     const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
     const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(5.0)*_t43/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
     const trailer3_real_t _t45 = -_t18*_t44;
     const trailer3_real_t _t46 = -_t16*_t35;
     const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
     const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t18*_t49;
     const trailer3_real_t _t51 = -_t16*_t40;
     const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = _t35/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
     const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = _t44/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
     const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
     const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
     const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(5.0)*_t65/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t67 = _t66/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
     const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
     const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer3_real_t _t69 = K_theta_tractor_x_tractor*_t2;
@@ -1730,8 +1730,8 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t81 = K_theta_cart_x_tractor_2*_t0;
     const trailer3_real_t _t82 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t _t83 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t84 = TRAILER3_LIT(17.0)*_t7/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t85 = TRAILER3_LIT(17.0)*_t8/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t85 = TRAILER3_LIT(0.85)*_t8;
     const trailer3_real_t thetadot_right = wheel_rates[0];
     const trailer3_real_t thetadot_left = wheel_rates[1];
     const trailer3_real_t _t86 = _t44*thetadot_right + _t49*thetadot_left;
@@ -1768,71 +1768,71 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t117 = _t88*thetadot_left;
     const trailer3_real_t _t118 = _t25*_t26;
     const trailer3_real_t _t119 = _t0*_t118 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t120 = -TRAILER3_LIT(5.0)*_t119/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t121 = _t120/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t120 = -TRAILER3_LIT(1.6666666666666667)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
     const trailer3_real_t _t122 = -_t1*_t118 + _t30;
     const trailer3_real_t _t123 = _t25*_t27;
     const trailer3_real_t _t124 = _t0*_t123 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(5.0)*_t124/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t126 = _t125/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
+    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
     const trailer3_real_t _t127 = -_t1*_t123 + _t32;
-    const trailer3_real_t _t128 = TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t129 = _t128/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t129 = TRAILER3_LIT(0.2)*_t128;
     const trailer3_real_t _t130 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t131 = TRAILER3_LIT(5.0)*_t56/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t132 = _t131/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t131 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
     const trailer3_real_t _t133 = _t0*_t31 - _t1*_t38 + _t27*_t6;
     const trailer3_real_t _t134 = _t118*_t7 + _t12*_t120 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(5.0)*_t134/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t136 = _t135/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
     const trailer3_real_t _t137 = -_t118*_t8 - _t120*_t21 + _t37;
     const trailer3_real_t _t138 = _t12*_t125 + _t123*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t123*_t8 - _t125*_t21 + _t42;
     const trailer3_real_t _t142 = _t12*_t128 - _t21*_t35;
-    const trailer3_real_t _t143 = -TRAILER3_LIT(5.0)*_t142/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t144 = _t143/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
+    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
     const trailer3_real_t _t145 = -_t128*_t21 + _t36;
     const trailer3_real_t _t146 = _t12*_t131 - _t21*_t40;
-    const trailer3_real_t _t147 = -TRAILER3_LIT(5.0)*_t146/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t148 = _t147/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
+    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
     const trailer3_real_t _t149 = -_t131*_t21 + _t41;
-    const trailer3_real_t _t150 = TRAILER3_LIT(5.0)*_t58/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t151 = _t150/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t58;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
     const trailer3_real_t _t152 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t153 = TRAILER3_LIT(5.0)*_t60/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
     const trailer3_real_t _t156 = _t118*_t13 + _t120*_t16 + _t135*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t118*_t14 - _t120*_t23 - _t135*_t24 + _t47;
     const trailer3_real_t _t160 = _t123*_t13 + _t125*_t16 + _t139*_t18 - _t14*_t31 + _t22*_t27;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t123*_t14 - _t125*_t23 - _t139*_t24 + _t52;
     const trailer3_real_t _t164 = _t128*_t16 + _t143*_t18 - _t23*_t35;
-    const trailer3_real_t _t165 = -TRAILER3_LIT(5.0)*_t164/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t166 = _t165/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t165 = -TRAILER3_LIT(1.6666666666666667)*_t164;
+    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t165;
     const trailer3_real_t _t167 = -_t128*_t23 - _t143*_t24 + _t46;
     const trailer3_real_t _t168 = _t131*_t16 + _t147*_t18 - _t23*_t40;
-    const trailer3_real_t _t169 = -TRAILER3_LIT(5.0)*_t168/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t170 = _t169/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t169 = -TRAILER3_LIT(1.6666666666666667)*_t168;
+    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
     const trailer3_real_t _t171 = -_t131*_t23 - _t147*_t24 + _t51;
     const trailer3_real_t _t172 = _t150*_t18 - _t24*_t44;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(5.0)*_t172/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t174 = _t173/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
     const trailer3_real_t _t175 = -_t150*_t24 + _t45;
     const trailer3_real_t _t176 = _t153*_t18 - _t24*_t49;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(5.0)*_t176/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t178 = _t177/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
+    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
     const trailer3_real_t _t179 = -_t153*_t24 + _t50;
-    const trailer3_real_t _t180 = TRAILER3_LIT(5.0)*_t64/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t181 = _t180/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t180 = TRAILER3_LIT(1.6666666666666667)*_t64;
+    const trailer3_real_t _t181 = TRAILER3_LIT(0.2)*_t180;
     const trailer3_real_t _t182 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t183 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
     const trailer3_real_t _t186 = TRAILER3_LIT(1.0)/radius_cart2_left;
@@ -1967,23 +1967,20 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t293 = _t3*_t71 + _t3*_t72 + _t5*_t78 - _t5*_t81;
     const trailer3_real_t _t294 = _t3*_t73 + _t3*_t74 + _t5*_t79 - _t5*_t82;
     const trailer3_real_t _t295 = _t3*_t75 + _t3*_t76 + _t5*_t80 - _t5*_t83;
-    const trailer3_real_t _t296 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t8*_t87/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t14*_t2*_t89/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t92/TRAILER3_LIT(10.0) - _t100*_t5
-            - _t101*_t5 - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98
-            - _t5*_t99;
+    const trailer3_real_t _t296 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t87
+            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t89
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
+            - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98 - _t5*_t99;
     const trailer3_real_t _t297 = _t280*_t292 + _t281*_t293 + _t282*_t294 + _t283*_t295
             + _t289*_t291 + _t296;
     const trailer3_real_t _t298 = _t10*_t73 + _t10*_t74 + _t11*_t79 - _t11*_t82;
     const trailer3_real_t _t299 = _t10*_t75 + _t10*_t76 + _t11*_t80 - _t11*_t83;
-    const trailer3_real_t _t300 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t8*_t87/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t14*_t89/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t4*_t94/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t2*_t94/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t1*_t4*_t94/TRAILER3_LIT(10.0) - _t10*_t95
-            - _t10*_t96 - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
+    const trailer3_real_t _t300 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t87
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t89
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t94
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t94
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t94 - _t10*_t95 - _t10*_t96
+            - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
     const trailer3_real_t _t301 = J_theta_cart*_t281 + _t276*_t280 + _t282*_t298 + _t283*_t299
             + _t285*_t289 + _t300;
@@ -2035,7 +2032,7 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
 }
 
 /* trailer3_minimal_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 447 add, 657 mul, 78 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 447 add, 681 mul, 7 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *wheel_accels)
@@ -2105,71 +2102,71 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
     const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
     const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(17.0)*_t14/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t13*_t7/TRAILER3_LIT(20.0) + _t17*_t8;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
     const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(17.0)*_t1*_t7/TRAILER3_LIT(20.0) + _t10*_t8;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
     const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(17.0)*_t1*_t13/TRAILER3_LIT(20.0) + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(17.0)*_t13*_t8/TRAILER3_LIT(20.0) + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t26 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t27 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t28 = -TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t _t29 = _t26*_t28;
     const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
     const trailer3_real_t _t31 = _t27*_t28;
     const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
     const trailer3_real_t _t33 = -_t25*_t26;
     const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(5.0)*_t34/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
     const trailer3_real_t _t36 = -_t12*_t35;
     const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
     const trailer3_real_t _t38 = -_t25*_t27;
     const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
     const trailer3_real_t _t41 = -_t12*_t40;
     const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
     const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(5.0)*_t43/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
     const trailer3_real_t _t45 = -_t18*_t44;
     const trailer3_real_t _t46 = -_t16*_t35;
     const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
     const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t18*_t49;
     const trailer3_real_t _t51 = -_t16*_t40;
     const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = _t35/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
     const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = _t44/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
     const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
     const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
     const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(5.0)*_t65/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t67 = _t66/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
     const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
     const trailer3_real_t _t69 = K_theta_tractor_x_tractor*_t2;
     const trailer3_real_t _t70 = K_theta_tractor_x_tractor_2*_t4;
@@ -2186,8 +2183,8 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t _t81 = K_theta_cart_x_tractor_2*_t0;
     const trailer3_real_t _t82 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t _t83 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t84 = TRAILER3_LIT(17.0)*_t7/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t85 = TRAILER3_LIT(17.0)*_t8/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t85 = TRAILER3_LIT(0.85)*_t8;
     const trailer3_real_t _t86 = _t44*thetadot_right + _t49*thetadot_left;
     const trailer3_real_t _t87 = _t86*_t86;
     const trailer3_real_t _t88 = _t62*thetadot_right + _t66*thetadot_left;
@@ -2222,71 +2219,71 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t _t117 = _t88*thetadot_left;
     const trailer3_real_t _t118 = _t25*_t26;
     const trailer3_real_t _t119 = _t0*_t118 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t120 = -TRAILER3_LIT(5.0)*_t119/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t121 = _t120/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t120 = -TRAILER3_LIT(1.6666666666666667)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
     const trailer3_real_t _t122 = -_t1*_t118 + _t30;
     const trailer3_real_t _t123 = _t25*_t27;
     const trailer3_real_t _t124 = _t0*_t123 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(5.0)*_t124/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t126 = _t125/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
+    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
     const trailer3_real_t _t127 = -_t1*_t123 + _t32;
-    const trailer3_real_t _t128 = TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t129 = _t128/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t129 = TRAILER3_LIT(0.2)*_t128;
     const trailer3_real_t _t130 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t131 = TRAILER3_LIT(5.0)*_t56/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t132 = _t131/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t131 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
     const trailer3_real_t _t133 = _t0*_t31 - _t1*_t38 + _t27*_t6;
     const trailer3_real_t _t134 = _t118*_t7 + _t12*_t120 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(5.0)*_t134/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t136 = _t135/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
     const trailer3_real_t _t137 = -_t118*_t8 - _t120*_t21 + _t37;
     const trailer3_real_t _t138 = _t12*_t125 + _t123*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(5.0)*_t138/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t140 = _t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t _t141 = -_t123*_t8 - _t125*_t21 + _t42;
     const trailer3_real_t _t142 = _t12*_t128 - _t21*_t35;
-    const trailer3_real_t _t143 = -TRAILER3_LIT(5.0)*_t142/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t144 = _t143/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
+    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
     const trailer3_real_t _t145 = -_t128*_t21 + _t36;
     const trailer3_real_t _t146 = _t12*_t131 - _t21*_t40;
-    const trailer3_real_t _t147 = -TRAILER3_LIT(5.0)*_t146/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t148 = _t147/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
+    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
     const trailer3_real_t _t149 = -_t131*_t21 + _t41;
-    const trailer3_real_t _t150 = TRAILER3_LIT(5.0)*_t58/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t151 = _t150/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t58;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
     const trailer3_real_t _t152 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t153 = TRAILER3_LIT(5.0)*_t60/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t154 = _t153/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
     const trailer3_real_t _t155 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
     const trailer3_real_t _t156 = _t118*_t13 + _t120*_t16 + _t135*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(5.0)*_t156/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t158 = _t157/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t _t159 = -_t118*_t14 - _t120*_t23 - _t135*_t24 + _t47;
     const trailer3_real_t _t160 = _t123*_t13 + _t125*_t16 + _t139*_t18 - _t14*_t31 + _t22*_t27;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(5.0)*_t160/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t162 = _t161/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
+    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
     const trailer3_real_t _t163 = -_t123*_t14 - _t125*_t23 - _t139*_t24 + _t52;
     const trailer3_real_t _t164 = _t128*_t16 + _t143*_t18 - _t23*_t35;
-    const trailer3_real_t _t165 = -TRAILER3_LIT(5.0)*_t164/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t166 = _t165/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t165 = -TRAILER3_LIT(1.6666666666666667)*_t164;
+    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t165;
     const trailer3_real_t _t167 = -_t128*_t23 - _t143*_t24 + _t46;
     const trailer3_real_t _t168 = _t131*_t16 + _t147*_t18 - _t23*_t40;
-    const trailer3_real_t _t169 = -TRAILER3_LIT(5.0)*_t168/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t170 = _t169/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t169 = -TRAILER3_LIT(1.6666666666666667)*_t168;
+    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
     const trailer3_real_t _t171 = -_t131*_t23 - _t147*_t24 + _t51;
     const trailer3_real_t _t172 = _t150*_t18 - _t24*_t44;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(5.0)*_t172/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t174 = _t173/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
     const trailer3_real_t _t175 = -_t150*_t24 + _t45;
     const trailer3_real_t _t176 = _t153*_t18 - _t24*_t49;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(5.0)*_t176/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t178 = _t177/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
+    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
     const trailer3_real_t _t179 = -_t153*_t24 + _t50;
-    const trailer3_real_t _t180 = TRAILER3_LIT(5.0)*_t64/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t181 = _t180/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t180 = TRAILER3_LIT(1.6666666666666667)*_t64;
+    const trailer3_real_t _t181 = TRAILER3_LIT(0.2)*_t180;
     const trailer3_real_t _t182 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t183 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t184 = _t183/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t183 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
     const trailer3_real_t _t185 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
     const trailer3_real_t _t186 = K_theta_tractor_x_tractor_2*_t2 - _t77;
     const trailer3_real_t _t187 = K_theta_cart_x_tractor_2*_t0 - _t78;
@@ -2379,21 +2376,18 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t _t256 = _t110*_t118 + _t111*_t123;
     const trailer3_real_t _t257 = J_x_tractor*_t256 + _t192*_t251 + _t193*_t252 + _t194*_t253
             + _t255;
-    const trailer3_real_t _t258 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t8*_t87/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t14*_t2*_t89/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t92/TRAILER3_LIT(10.0) - _t100*_t5
-            - _t101*_t5 - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98
-            - _t5*_t99;
+    const trailer3_real_t _t258 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t87
+            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t89
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
+            - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98 - _t5*_t99;
     const trailer3_real_t _t259 = _t186*_t250 + _t191*_t256 + _t196*_t251 + _t197*_t252
             + _t198*_t253 + _t258;
-    const trailer3_real_t _t260 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t8*_t87/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t14*_t89/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t4*_t94/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t2*_t94/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t1*_t4*_t94/TRAILER3_LIT(10.0) - _t10*_t95
-            - _t10*_t96 - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
+    const trailer3_real_t _t260 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t87
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t89
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t94
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t94
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t94 - _t10*_t95 - _t10*_t96
+            - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
     const trailer3_real_t _t261 = J_theta_cart*_t251 + _t187*_t250 + _t192*_t256 + _t200*_t252
             + _t201*_t253 + _t260;
     const trailer3_real_t _t262 = -_t100*_t85 - _t101*_t85 - _t104*_t79 + _t104*_t82 + _t105*_t73
@@ -2593,7 +2587,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
 }
 
 /* trailer3_linearization: documented in trailer3_model.h.
-   operations after CSE: 1692 add, 2243 mul, 167 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 1692 add, 2305 mul, 7 div, 8 sin/cos, 0 sqrt */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B)
@@ -2603,84 +2597,84 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
     const trailer3_real_t theta_cart3 = q[5];
     const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
     const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(17.0)*_t14/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t13*_t7/TRAILER3_LIT(20.0) + _t17*_t8;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
     const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(17.0)*_t1*_t7/TRAILER3_LIT(20.0) + _t10*_t8;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
     const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(17.0)*_t1*_t13/TRAILER3_LIT(20.0) + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(17.0)*_t13*_t8/TRAILER3_LIT(20.0) + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t26 = TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t28 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t _t29 = -_t26*_t27;
     const trailer3_real_t _t30 = -_t0*_t29 + _t27*_t6;
     const trailer3_real_t _t31 = -_t26*_t28;
     const trailer3_real_t _t32 = -_t0*_t31 - _t28*_t6;
     const trailer3_real_t _t33 = -_t25*_t27;
     const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(5.0)*_t34/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
     const trailer3_real_t _t36 = -_t12*_t35;
     const trailer3_real_t _t37 = _t27*_t9 - _t29*_t7;
     const trailer3_real_t _t38 = -_t25*_t28;
     const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
     const trailer3_real_t _t41 = -_t12*_t40;
     const trailer3_real_t _t42 = -_t28*_t9 - _t31*_t7;
     const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(5.0)*_t43/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
     const trailer3_real_t _t45 = -_t18*_t44;
     const trailer3_real_t _t46 = -_t16*_t35;
     const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t27;
     const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t18*_t49;
     const trailer3_real_t _t51 = -_t16*_t40;
     const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t28;
-    const trailer3_real_t _t53 = _t35/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
     const trailer3_real_t _t54 = -_t1*_t29 - _t19*_t27;
     const trailer3_real_t _t55 = -_t0*_t33 + _t54;
-    const trailer3_real_t _t56 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t57 = -_t1*_t31 + _t19*_t28;
     const trailer3_real_t _t58 = -_t0*_t38 + _t57;
-    const trailer3_real_t _t59 = _t44/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t44;
     const trailer3_real_t _t60 = -_t21*_t35;
     const trailer3_real_t _t61 = -_t20*_t27 - _t29*_t8;
     const trailer3_real_t _t62 = -_t33*_t7 + _t60 + _t61;
-    const trailer3_real_t _t63 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t64 = -_t21*_t40;
     const trailer3_real_t _t65 = _t20*_t28 - _t31*_t8;
     const trailer3_real_t _t66 = -_t38*_t7 + _t64 + _t65;
     const trailer3_real_t _t67 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t68 = -TRAILER3_LIT(5.0)*_t67/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t69 = _t68/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t68 = -TRAILER3_LIT(1.6666666666666667)*_t67;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t68;
     const trailer3_real_t _t70 = -_t24*_t44;
     const trailer3_real_t _t71 = -_t23*_t35;
     const trailer3_real_t _t72 = -_t14*_t29 - _t22*_t27;
     const trailer3_real_t _t73 = -_t13*_t33 + _t70 + _t71 + _t72;
     const trailer3_real_t _t74 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t75 = -TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t76 = _t75/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t75 = -TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(0.2)*_t75;
     const trailer3_real_t _t77 = -_t24*_t49;
     const trailer3_real_t _t78 = -_t23*_t40;
     const trailer3_real_t _t79 = -_t14*_t31 + _t22*_t28;
@@ -2737,9 +2731,9 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t120 = _t11*_t98;
     const trailer3_real_t _t121 = _t10*_t91;
     const trailer3_real_t _t122 = _t11*_t112;
-    const trailer3_real_t _t123 = TRAILER3_LIT(17.0)*_t7/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.85)*_t7;
     const trailer3_real_t _t124 = _t123*_t90;
-    const trailer3_real_t _t125 = TRAILER3_LIT(17.0)*_t8/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t125 = TRAILER3_LIT(0.85)*_t8;
     const trailer3_real_t _t126 = _t125*_t98;
     const trailer3_real_t _t127 = _t123*_t91;
     const trailer3_real_t _t128 = _t112*_t125;
@@ -2804,14 +2798,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t187 = -_t19*_t28;
     const trailer3_real_t _t188 = -_t0*_t181 + _t187;
     const trailer3_real_t _t189 = -_t183 - _t185;
-    const trailer3_real_t _t190 = -TRAILER3_LIT(5.0)*_t189/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t190 = -TRAILER3_LIT(1.6666666666666667)*_t189;
     const trailer3_real_t _t191 = _t190*thetadot_right;
     const trailer3_real_t _t192 = -_t186 - _t188;
-    const trailer3_real_t _t193 = -TRAILER3_LIT(5.0)*_t192/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t193 = -TRAILER3_LIT(1.6666666666666667)*_t192;
     const trailer3_real_t _t194 = _t193*thetadot_left;
-    const trailer3_real_t _t195 = TRAILER3_LIT(5.0)*_t55/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t195 = TRAILER3_LIT(1.6666666666666667)*_t55;
     const trailer3_real_t _t196 = _t195*thetadot_right;
-    const trailer3_real_t _t197 = TRAILER3_LIT(5.0)*_t58/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t58;
     const trailer3_real_t _t198 = _t197*thetadot_left;
     const trailer3_real_t _t199 = -_t12*_t190;
     const trailer3_real_t _t200 = _t29*_t8;
@@ -2826,20 +2820,20 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t209 = -_t12*_t197;
     const trailer3_real_t _t210 = _t21*_t40;
     const trailer3_real_t _t211 = -_t199 - _t200 - _t202;
-    const trailer3_real_t _t212 = -TRAILER3_LIT(5.0)*_t211/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t212 = -TRAILER3_LIT(1.6666666666666667)*_t211;
     const trailer3_real_t _t213 = _t212*thetadot_right;
     const trailer3_real_t _t214 = -_t203 - _t204 - _t206;
-    const trailer3_real_t _t215 = -TRAILER3_LIT(5.0)*_t214/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t215 = -TRAILER3_LIT(1.6666666666666667)*_t214;
     const trailer3_real_t _t216 = _t215*thetadot_left;
     const trailer3_real_t _t217 = -_t207 - _t208;
-    const trailer3_real_t _t218 = -TRAILER3_LIT(5.0)*_t217/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t218 = -TRAILER3_LIT(1.6666666666666667)*_t217;
     const trailer3_real_t _t219 = _t218*thetadot_right;
     const trailer3_real_t _t220 = -_t209 - _t210;
-    const trailer3_real_t _t221 = -TRAILER3_LIT(5.0)*_t220/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t221 = -TRAILER3_LIT(1.6666666666666667)*_t220;
     const trailer3_real_t _t222 = _t221*thetadot_left;
-    const trailer3_real_t _t223 = TRAILER3_LIT(5.0)*_t62/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t223 = TRAILER3_LIT(1.6666666666666667)*_t62;
     const trailer3_real_t _t224 = _t223*thetadot_right;
-    const trailer3_real_t _t225 = TRAILER3_LIT(5.0)*_t66/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t225 = TRAILER3_LIT(1.6666666666666667)*_t66;
     const trailer3_real_t _t226 = _t225*thetadot_left;
     const trailer3_real_t _t227 = -_t18*_t212;
     const trailer3_real_t _t228 = -_t16*_t190;
@@ -2862,35 +2856,35 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t245 = -_t18*_t225;
     const trailer3_real_t _t246 = _t24*_t49;
     const trailer3_real_t _t247 = -_t227 - _t228 - _t229 - _t231;
-    const trailer3_real_t _t248 = -TRAILER3_LIT(5.0)*_t247/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t248 = -TRAILER3_LIT(1.6666666666666667)*_t247;
     const trailer3_real_t _t249 = _t248*thetadot_right;
     const trailer3_real_t _t250 = -_t232 - _t233 - _t234 - _t236;
-    const trailer3_real_t _t251 = -TRAILER3_LIT(5.0)*_t250/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t251 = -TRAILER3_LIT(1.6666666666666667)*_t250;
     const trailer3_real_t _t252 = _t251*thetadot_left;
     const trailer3_real_t _t253 = -_t237 - _t238 - _t239;
-    const trailer3_real_t _t254 = -TRAILER3_LIT(5.0)*_t253/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t254 = -TRAILER3_LIT(1.6666666666666667)*_t253;
     const trailer3_real_t _t255 = _t254*thetadot_right;
     const trailer3_real_t _t256 = -_t240 - _t241 - _t242;
-    const trailer3_real_t _t257 = -TRAILER3_LIT(5.0)*_t256/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t257 = -TRAILER3_LIT(1.6666666666666667)*_t256;
     const trailer3_real_t _t258 = _t257*thetadot_left;
     const trailer3_real_t _t259 = -_t243 - _t244;
-    const trailer3_real_t _t260 = -TRAILER3_LIT(5.0)*_t259/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t260 = -TRAILER3_LIT(1.6666666666666667)*_t259;
     const trailer3_real_t _t261 = _t260*thetadot_right;
     const trailer3_real_t _t262 = -_t245 - _t246;
-    const trailer3_real_t _t263 = -TRAILER3_LIT(5.0)*_t262/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t263 = -TRAILER3_LIT(1.6666666666666667)*_t262;
     const trailer3_real_t _t264 = _t263*thetadot_left;
-    const trailer3_real_t _t265 = TRAILER3_LIT(5.0)*_t73/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t265 = TRAILER3_LIT(1.6666666666666667)*_t73;
     const trailer3_real_t _t266 = _t265*thetadot_right;
-    const trailer3_real_t _t267 = TRAILER3_LIT(5.0)*_t80/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t267 = TRAILER3_LIT(1.6666666666666667)*_t80;
     const trailer3_real_t _t268 = _t267*thetadot_left;
-    const trailer3_real_t _t269 = _t190/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t269 = TRAILER3_LIT(0.2)*_t190;
     const trailer3_real_t _t270 = -_t1*_t179 + _t30;
-    const trailer3_real_t _t271 = _t193/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t271 = TRAILER3_LIT(0.2)*_t193;
     const trailer3_real_t _t272 = -_t1*_t181 + _t32;
-    const trailer3_real_t _t273 = _t195/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t273 = TRAILER3_LIT(0.2)*_t195;
     const trailer3_real_t _t274 = -_t27*_t6;
     const trailer3_real_t _t275 = _t0*_t29 - _t1*_t33 + _t274;
-    const trailer3_real_t _t276 = _t197/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t276 = TRAILER3_LIT(0.2)*_t197;
     const trailer3_real_t _t277 = _t28*_t6;
     const trailer3_real_t _t278 = _t0*_t31 - _t1*_t38 + _t277;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
@@ -2921,19 +2915,19 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t302 = -_t276 - _t278;
     const trailer3_real_t _t303 = _t292*_t302;
     const trailer3_real_t _t304 = _t303*thetadot_left;
-    const trailer3_real_t _t305 = _t212/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t305 = TRAILER3_LIT(0.2)*_t212;
     const trailer3_real_t _t306 = -_t179*_t8 - _t190*_t21 + _t37;
-    const trailer3_real_t _t307 = _t215/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t307 = TRAILER3_LIT(0.2)*_t215;
     const trailer3_real_t _t308 = -_t181*_t8 - _t193*_t21 + _t42;
-    const trailer3_real_t _t309 = _t218/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t309 = TRAILER3_LIT(0.2)*_t218;
     const trailer3_real_t _t310 = -_t195*_t21 + _t36;
-    const trailer3_real_t _t311 = _t221/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t311 = TRAILER3_LIT(0.2)*_t221;
     const trailer3_real_t _t312 = -_t197*_t21 + _t41;
-    const trailer3_real_t _t313 = _t223/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t313 = TRAILER3_LIT(0.2)*_t223;
     const trailer3_real_t _t314 = -_t27*_t9;
     const trailer3_real_t _t315 = _t12*_t35;
     const trailer3_real_t _t316 = _t29*_t7 + _t314 + _t315 - _t33*_t8;
-    const trailer3_real_t _t317 = _t225/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t317 = TRAILER3_LIT(0.2)*_t225;
     const trailer3_real_t _t318 = _t28*_t9;
     const trailer3_real_t _t319 = _t12*_t40;
     const trailer3_real_t _t320 = _t31*_t7 + _t318 + _t319 - _t38*_t8;
@@ -2977,24 +2971,24 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t356 = -_t317 - _t320;
     const trailer3_real_t _t357 = _t340*_t356;
     const trailer3_real_t _t358 = _t357*thetadot_left;
-    const trailer3_real_t _t359 = _t248/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t359 = TRAILER3_LIT(0.2)*_t248;
     const trailer3_real_t _t360 = -_t14*_t179 - _t190*_t23 - _t212*_t24 + _t47;
-    const trailer3_real_t _t361 = _t251/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t361 = TRAILER3_LIT(0.2)*_t251;
     const trailer3_real_t _t362 = -_t14*_t181 - _t193*_t23 - _t215*_t24 + _t52;
-    const trailer3_real_t _t363 = _t254/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t363 = TRAILER3_LIT(0.2)*_t254;
     const trailer3_real_t _t364 = -_t195*_t23 - _t218*_t24 + _t46;
-    const trailer3_real_t _t365 = _t257/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t365 = TRAILER3_LIT(0.2)*_t257;
     const trailer3_real_t _t366 = -_t197*_t23 - _t221*_t24 + _t51;
-    const trailer3_real_t _t367 = _t260/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t367 = TRAILER3_LIT(0.2)*_t260;
     const trailer3_real_t _t368 = -_t223*_t24 + _t45;
-    const trailer3_real_t _t369 = _t263/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t369 = TRAILER3_LIT(0.2)*_t263;
     const trailer3_real_t _t370 = -_t225*_t24 + _t50;
-    const trailer3_real_t _t371 = _t265/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t371 = TRAILER3_LIT(0.2)*_t265;
     const trailer3_real_t _t372 = -_t15*_t27;
     const trailer3_real_t _t373 = _t16*_t35;
     const trailer3_real_t _t374 = _t18*_t44;
     const trailer3_real_t _t375 = _t13*_t29 - _t14*_t33 + _t372 + _t373 + _t374;
-    const trailer3_real_t _t376 = _t267/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t376 = TRAILER3_LIT(0.2)*_t267;
     const trailer3_real_t _t377 = _t15*_t28;
     const trailer3_real_t _t378 = _t16*_t40;
     const trailer3_real_t _t379 = _t18*_t49;
@@ -3186,22 +3180,18 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t547 = _t139*_t180 + _t139*_t182;
     const trailer3_real_t _t548 = J_x_tractor*_t547 + _t440*_t542 + _t442*_t543 + _t444*_t544
             + _t546;
-    const trailer3_real_t _t549 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t135*_t2*_t8/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t130*_t14*_t2/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t144*_t2/TRAILER3_LIT(10.0) - _t132*_t3
-            - _t137*_t3 - _t146*_t3 - _t148*_t5 - _t149*_t5 - _t152*_t5 - _t153*_t5 - _t155*_t5
-            - _t156*_t5;
+    const trailer3_real_t _t549 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t135*_t2*_t8
+            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t130*_t14*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t144*_t2 - _t132*_t3 - _t137*_t3
+            - _t146*_t3 - _t148*_t5 - _t149*_t5 - _t152*_t5 - _t153*_t5 - _t155*_t5 - _t156*_t5;
     const trailer3_real_t _t550 = _t438*_t547 + _t447*_t542 + _t448*_t543 + _t449*_t544 - _t541*_t93
             + _t549;
-    const trailer3_real_t _t551 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t135*_t8/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t130*_t14/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t140*_t4/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t140*_t2/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t1*_t140*_t4/TRAILER3_LIT(10.0)
-            - _t10*_t132 - _t10*_t137 - _t11*_t152 - _t11*_t153 - _t11*_t155 - _t11*_t156
-            - _t140*_t158;
+    const trailer3_real_t _t551 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t135*_t8
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t130*_t14
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t140*_t4
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t140*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t140*_t4 - _t10*_t132 - _t10*_t137
+            - _t11*_t152 - _t11*_t153 - _t11*_t155 - _t11*_t156 - _t140*_t158;
     const trailer3_real_t _t552 = J_theta_cart*_t542 + _t440*_t547 + _t452*_t543 + _t454*_t544
             - _t541*_t95 + _t551;
     const trailer3_real_t _t553 = _t123*_t131 - _t123*_t132 - _t125*_t152 - _t125*_t153
@@ -3286,20 +3276,17 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t620 = _t614*_t86 + _t614*_t87;
     const trailer3_real_t _t621 = _t616*_t88 + _t616*_t89;
     const trailer3_real_t _t622 = _t618*_t90 + _t618*_t91;
-    const trailer3_real_t _t623 = TRAILER3_LIT(3.0)*_t143/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t623 = TRAILER3_LIT(0.6)*_t143;
     const trailer3_real_t _t624 = _t4*_t623;
-    const trailer3_real_t _t625 =
-            TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t143*_t2/TRAILER3_LIT(5.0)
+    const trailer3_real_t _t625 = TRAILER3_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t143*_t2
             - _t102*_t2*_t623 - _t624*_t86 - _t624*_t87;
-    const trailer3_real_t _t626 = TRAILER3_LIT(3.0)*_t134/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t626 = TRAILER3_LIT(0.6)*_t134;
     const trailer3_real_t _t627 = _t4*_t626;
-    const trailer3_real_t _t628 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t134*_t2*_t8/TRAILER3_LIT(5.0)
+    const trailer3_real_t _t628 = TRAILER3_LIT(0.6)*K_theta_cart2_x_tractor*_t134*_t2*_t8
             - _t107*_t2*_t626 - _t627*_t88 - _t627*_t89;
-    const trailer3_real_t _t629 = TRAILER3_LIT(3.0)*_t129/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t629 = TRAILER3_LIT(0.6)*_t129;
     const trailer3_real_t _t630 = _t4*_t629;
-    const trailer3_real_t _t631 =
-            TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t129*_t14*_t2/TRAILER3_LIT(5.0)
+    const trailer3_real_t _t631 = TRAILER3_LIT(0.6)*K_theta_cart3_x_tractor*_t129*_t14*_t2
             - _t112*_t2*_t629 - _t630*_t90 - _t630*_t91;
     const trailer3_real_t _t632 = _t146*_t5;
     const trailer3_real_t _t633 = _t145*_t5;
@@ -3307,24 +3294,21 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t635 = _t149*_t3;
     const trailer3_real_t _t636 = _t131*_t5 - _t132*_t5 + _t152*_t3 + _t153*_t3;
     const trailer3_real_t _t637 = _t136*_t5 - _t137*_t5 + _t155*_t3 + _t156*_t3;
-    const trailer3_real_t _t638 = TRAILER3_LIT(17.0)*_t134/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t638 = TRAILER3_LIT(1.7)*_t134;
     const trailer3_real_t _t639 = _t1*_t638;
-    const trailer3_real_t _t640 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t134*_t8/TRAILER3_LIT(10.0)
+    const trailer3_real_t _t640 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t0*_t134*_t8
             - _t0*_t107*_t638 - _t639*_t88 - _t639*_t89;
-    const trailer3_real_t _t641 = TRAILER3_LIT(17.0)*_t129/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t641 = TRAILER3_LIT(1.7)*_t129;
     const trailer3_real_t _t642 = _t1*_t641;
-    const trailer3_real_t _t643 =
-            TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t129*_t14/TRAILER3_LIT(10.0)
+    const trailer3_real_t _t643 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t0*_t129*_t14
             - _t0*_t112*_t641 - _t642*_t90 - _t642*_t91;
     const trailer3_real_t _t644 = _t100*_t140 + _t101*_t140 - _t103*_t140 + _t104*_t140;
-    const trailer3_real_t _t645 = TRAILER3_LIT(17.0)*_t143/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t645 = TRAILER3_LIT(1.7)*_t143;
     const trailer3_real_t _t646 = _t0*_t645;
     const trailer3_real_t _t647 = _t1*_t645;
     const trailer3_real_t _t648 = _t107*_t646 - _t646*_t96 + _t647*_t88 + _t647*_t89;
     const trailer3_real_t _t649 = _t641*_t8;
-    const trailer3_real_t _t650 =
-            TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t129*_t14*_t7/TRAILER3_LIT(10.0)
+    const trailer3_real_t _t650 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t129*_t14*_t7
             - _t112*_t641*_t7 - _t649*_t90 - _t649*_t91;
     const trailer3_real_t _t651 = _t105*_t140 + _t106*_t140 - _t108*_t140 + _t109*_t140;
     const trailer3_real_t _t652 = _t112*_t646 - _t646*_t98 + _t647*_t90 + _t647*_t91;
@@ -3342,71 +3326,71 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t664 = _t129*thetadot_left;
     const trailer3_real_t _t665 = _t26*_t27;
     const trailer3_real_t _t666 = _t0*_t665 - _t1*_t179 - _t274;
-    const trailer3_real_t _t667 = -TRAILER3_LIT(5.0)*_t666/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t668 = _t667/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t667 = -TRAILER3_LIT(1.6666666666666667)*_t666;
+    const trailer3_real_t _t668 = TRAILER3_LIT(0.2)*_t667;
     const trailer3_real_t _t669 = -_t1*_t665 + _t185;
     const trailer3_real_t _t670 = _t26*_t28;
     const trailer3_real_t _t671 = _t0*_t670 - _t1*_t181 - _t277;
-    const trailer3_real_t _t672 = -TRAILER3_LIT(5.0)*_t671/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t673 = _t672/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t672 = -TRAILER3_LIT(1.6666666666666667)*_t671;
+    const trailer3_real_t _t673 = TRAILER3_LIT(0.2)*_t672;
     const trailer3_real_t _t674 = -_t1*_t670 + _t188;
-    const trailer3_real_t _t675 = TRAILER3_LIT(5.0)*_t270/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t676 = _t675/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t675 = TRAILER3_LIT(1.6666666666666667)*_t270;
+    const trailer3_real_t _t676 = TRAILER3_LIT(0.2)*_t675;
     const trailer3_real_t _t677 = _t0*_t179 + _t54;
-    const trailer3_real_t _t678 = TRAILER3_LIT(5.0)*_t272/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t679 = _t678/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t678 = TRAILER3_LIT(1.6666666666666667)*_t272;
+    const trailer3_real_t _t679 = TRAILER3_LIT(0.2)*_t678;
     const trailer3_real_t _t680 = _t0*_t181 + _t57;
     const trailer3_real_t _t681 = _t12*_t667 - _t179*_t8 - _t314 + _t665*_t7;
-    const trailer3_real_t _t682 = -TRAILER3_LIT(5.0)*_t681/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t683 = _t682/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t682 = -TRAILER3_LIT(1.6666666666666667)*_t681;
+    const trailer3_real_t _t683 = TRAILER3_LIT(0.2)*_t682;
     const trailer3_real_t _t684 = _t202 - _t21*_t667 - _t665*_t8;
     const trailer3_real_t _t685 = _t12*_t672 - _t181*_t8 - _t318 + _t670*_t7;
-    const trailer3_real_t _t686 = -TRAILER3_LIT(5.0)*_t685/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t687 = _t686/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t686 = -TRAILER3_LIT(1.6666666666666667)*_t685;
+    const trailer3_real_t _t687 = TRAILER3_LIT(0.2)*_t686;
     const trailer3_real_t _t688 = _t206 - _t21*_t672 - _t670*_t8;
     const trailer3_real_t _t689 = _t12*_t675 - _t190*_t21;
-    const trailer3_real_t _t690 = -TRAILER3_LIT(5.0)*_t689/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t691 = _t690/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t690 = -TRAILER3_LIT(1.6666666666666667)*_t689;
+    const trailer3_real_t _t691 = TRAILER3_LIT(0.2)*_t690;
     const trailer3_real_t _t692 = _t199 - _t21*_t675;
     const trailer3_real_t _t693 = _t12*_t678 - _t193*_t21;
-    const trailer3_real_t _t694 = -TRAILER3_LIT(5.0)*_t693/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t695 = _t694/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t694 = -TRAILER3_LIT(1.6666666666666667)*_t693;
+    const trailer3_real_t _t695 = TRAILER3_LIT(0.2)*_t694;
     const trailer3_real_t _t696 = _t203 - _t21*_t678;
-    const trailer3_real_t _t697 = TRAILER3_LIT(5.0)*_t306/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t698 = _t697/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t697 = TRAILER3_LIT(1.6666666666666667)*_t306;
+    const trailer3_real_t _t698 = TRAILER3_LIT(0.2)*_t697;
     const trailer3_real_t _t699 = _t12*_t190 + _t179*_t7 + _t61;
-    const trailer3_real_t _t700 = TRAILER3_LIT(5.0)*_t308/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t701 = _t700/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t700 = TRAILER3_LIT(1.6666666666666667)*_t308;
+    const trailer3_real_t _t701 = TRAILER3_LIT(0.2)*_t700;
     const trailer3_real_t _t702 = _t12*_t193 + _t181*_t7 + _t65;
     const trailer3_real_t _t703 = _t13*_t665 - _t14*_t179 + _t16*_t667 + _t18*_t682 - _t372;
-    const trailer3_real_t _t704 = -TRAILER3_LIT(5.0)*_t703/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t705 = _t704/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t704 = -TRAILER3_LIT(1.6666666666666667)*_t703;
+    const trailer3_real_t _t705 = TRAILER3_LIT(0.2)*_t704;
     const trailer3_real_t _t706 = -_t14*_t665 - _t23*_t667 + _t231 - _t24*_t682;
     const trailer3_real_t _t707 = _t13*_t670 - _t14*_t181 + _t16*_t672 + _t18*_t686 - _t377;
-    const trailer3_real_t _t708 = -TRAILER3_LIT(5.0)*_t707/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t709 = _t708/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t708 = -TRAILER3_LIT(1.6666666666666667)*_t707;
+    const trailer3_real_t _t709 = TRAILER3_LIT(0.2)*_t708;
     const trailer3_real_t _t710 = -_t14*_t670 - _t23*_t672 + _t236 - _t24*_t686;
     const trailer3_real_t _t711 = _t16*_t675 + _t18*_t690 - _t190*_t23;
-    const trailer3_real_t _t712 = -TRAILER3_LIT(5.0)*_t711/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t713 = _t712/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t712 = -TRAILER3_LIT(1.6666666666666667)*_t711;
+    const trailer3_real_t _t713 = TRAILER3_LIT(0.2)*_t712;
     const trailer3_real_t _t714 = _t228 - _t23*_t675 - _t24*_t690;
     const trailer3_real_t _t715 = _t16*_t678 + _t18*_t694 - _t193*_t23;
-    const trailer3_real_t _t716 = -TRAILER3_LIT(5.0)*_t715/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t717 = _t716/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t716 = -TRAILER3_LIT(1.6666666666666667)*_t715;
+    const trailer3_real_t _t717 = TRAILER3_LIT(0.2)*_t716;
     const trailer3_real_t _t718 = -_t23*_t678 + _t233 - _t24*_t694;
     const trailer3_real_t _t719 = _t18*_t697 - _t212*_t24;
-    const trailer3_real_t _t720 = -TRAILER3_LIT(5.0)*_t719/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t721 = _t720/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t720 = -TRAILER3_LIT(1.6666666666666667)*_t719;
+    const trailer3_real_t _t721 = TRAILER3_LIT(0.2)*_t720;
     const trailer3_real_t _t722 = _t227 - _t24*_t697;
     const trailer3_real_t _t723 = _t18*_t700 - _t215*_t24;
-    const trailer3_real_t _t724 = -TRAILER3_LIT(5.0)*_t723/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t725 = _t724/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t724 = -TRAILER3_LIT(1.6666666666666667)*_t723;
+    const trailer3_real_t _t725 = TRAILER3_LIT(0.2)*_t724;
     const trailer3_real_t _t726 = _t232 - _t24*_t700;
-    const trailer3_real_t _t727 = TRAILER3_LIT(5.0)*_t360/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t728 = _t727/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t727 = TRAILER3_LIT(1.6666666666666667)*_t360;
+    const trailer3_real_t _t728 = TRAILER3_LIT(0.2)*_t727;
     const trailer3_real_t _t729 = _t13*_t179 + _t16*_t190 + _t18*_t212 + _t72;
-    const trailer3_real_t _t730 = TRAILER3_LIT(5.0)*_t362/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t731 = _t730/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t730 = TRAILER3_LIT(1.6666666666666667)*_t362;
+    const trailer3_real_t _t731 = TRAILER3_LIT(0.2)*_t730;
     const trailer3_real_t _t732 = _t13*_t181 + _t16*_t193 + _t18*_t215 + _t79;
     const trailer3_real_t _t733 = _t134*_t355 + _t134*_t358 + _t139*_t343 + _t139*_t346
             + _t143*_t349 + _t143*_t352;
@@ -3497,47 +3481,47 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t793 = _t119*_t144 + _t120*_t144 + _t121*_t144 - _t122*_t144;
     const trailer3_real_t _t794 = TRAILER3_LIT(2.0)*_t21;
     const trailer3_real_t _t795 = TRAILER3_LIT(2.0)*_t23;
-    const trailer3_real_t _t796 = TRAILER3_LIT(5.0)*_t275/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t797 = _t796/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t796 = TRAILER3_LIT(1.6666666666666667)*_t275;
+    const trailer3_real_t _t797 = TRAILER3_LIT(0.2)*_t796;
     const trailer3_real_t _t798 = _t0*_t33 + _t183 + _t184;
-    const trailer3_real_t _t799 = TRAILER3_LIT(5.0)*_t278/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t800 = _t799/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t799 = TRAILER3_LIT(1.6666666666666667)*_t278;
+    const trailer3_real_t _t800 = TRAILER3_LIT(0.2)*_t799;
     const trailer3_real_t _t801 = _t0*_t38 + _t186 + _t187;
     const trailer3_real_t _t802 = _t12*_t796 - _t195*_t794 - _t315;
-    const trailer3_real_t _t803 = -TRAILER3_LIT(5.0)*_t802/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t804 = _t803/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t803 = -TRAILER3_LIT(1.6666666666666667)*_t802;
+    const trailer3_real_t _t804 = TRAILER3_LIT(0.2)*_t803;
     const trailer3_real_t _t805 = TRAILER3_LIT(2.0)*_t207 + _t208 - _t21*_t796;
     const trailer3_real_t _t806 = _t12*_t799 - _t197*_t794 - _t319;
-    const trailer3_real_t _t807 = -TRAILER3_LIT(5.0)*_t806/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t808 = _t807/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t807 = -TRAILER3_LIT(1.6666666666666667)*_t806;
+    const trailer3_real_t _t808 = TRAILER3_LIT(0.2)*_t807;
     const trailer3_real_t _t809 = TRAILER3_LIT(2.0)*_t209 - _t21*_t799 + _t210;
-    const trailer3_real_t _t810 = TRAILER3_LIT(5.0)*_t310/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t811 = _t810/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t810 = TRAILER3_LIT(1.6666666666666667)*_t310;
+    const trailer3_real_t _t811 = TRAILER3_LIT(0.2)*_t810;
     const trailer3_real_t _t812 = _t12*_t195 + _t60;
-    const trailer3_real_t _t813 = TRAILER3_LIT(5.0)*_t312/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t814 = _t813/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t813 = TRAILER3_LIT(1.6666666666666667)*_t312;
+    const trailer3_real_t _t814 = TRAILER3_LIT(0.2)*_t813;
     const trailer3_real_t _t815 = _t12*_t197 + _t64;
     const trailer3_real_t _t816 = _t16*_t796 + _t18*_t803 - _t195*_t795 - _t373;
-    const trailer3_real_t _t817 = -TRAILER3_LIT(5.0)*_t816/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t818 = _t817/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t817 = -TRAILER3_LIT(1.6666666666666667)*_t816;
+    const trailer3_real_t _t818 = TRAILER3_LIT(0.2)*_t817;
     const trailer3_real_t _t819 = -_t23*_t796 + TRAILER3_LIT(2.0)*_t237 + _t239 - _t24*_t803;
     const trailer3_real_t _t820 = _t16*_t799 + _t18*_t807 - _t197*_t795 - _t378;
-    const trailer3_real_t _t821 = -TRAILER3_LIT(5.0)*_t820/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t822 = _t821/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t821 = -TRAILER3_LIT(1.6666666666666667)*_t820;
+    const trailer3_real_t _t822 = TRAILER3_LIT(0.2)*_t821;
     const trailer3_real_t _t823 = -_t23*_t799 - _t24*_t807 + TRAILER3_LIT(2.0)*_t240 + _t242;
     const trailer3_real_t _t824 = _t18*_t810 - _t218*_t24;
-    const trailer3_real_t _t825 = -TRAILER3_LIT(5.0)*_t824/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t826 = _t825/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t825 = -TRAILER3_LIT(1.6666666666666667)*_t824;
+    const trailer3_real_t _t826 = TRAILER3_LIT(0.2)*_t825;
     const trailer3_real_t _t827 = _t238 - _t24*_t810;
     const trailer3_real_t _t828 = _t18*_t813 - _t221*_t24;
-    const trailer3_real_t _t829 = -TRAILER3_LIT(5.0)*_t828/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t830 = _t829/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t829 = -TRAILER3_LIT(1.6666666666666667)*_t828;
+    const trailer3_real_t _t830 = TRAILER3_LIT(0.2)*_t829;
     const trailer3_real_t _t831 = -_t24*_t813 + _t241;
-    const trailer3_real_t _t832 = TRAILER3_LIT(5.0)*_t364/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t833 = _t832/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t832 = TRAILER3_LIT(1.6666666666666667)*_t364;
+    const trailer3_real_t _t833 = TRAILER3_LIT(0.2)*_t832;
     const trailer3_real_t _t834 = _t16*_t195 + _t18*_t218 + _t71;
-    const trailer3_real_t _t835 = TRAILER3_LIT(5.0)*_t366/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t836 = _t835/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t835 = TRAILER3_LIT(1.6666666666666667)*_t366;
+    const trailer3_real_t _t836 = TRAILER3_LIT(0.2)*_t835;
     const trailer3_real_t _t837 = _t16*_t197 + _t18*_t221 + _t78;
     const trailer3_real_t _t838 = -_t542*_t592;
     const trailer3_real_t _t839 = _t35*_t543 + _t44*_t542;
@@ -3554,25 +3538,25 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t850 = _t123*_t152 + _t123*_t153 + _t125*_t131 - _t125*_t132;
     const trailer3_real_t _t851 = _t124*_t135 + _t126*_t135 + _t127*_t135 - _t128*_t135;
     const trailer3_real_t _t852 = TRAILER3_LIT(2.0)*_t24;
-    const trailer3_real_t _t853 = TRAILER3_LIT(5.0)*_t316/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t854 = _t853/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t853 = TRAILER3_LIT(1.6666666666666667)*_t316;
+    const trailer3_real_t _t854 = TRAILER3_LIT(0.2)*_t853;
     const trailer3_real_t _t855 = _t200 + _t201 + _t208 + _t33*_t7;
-    const trailer3_real_t _t856 = TRAILER3_LIT(5.0)*_t320/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t857 = _t856/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t856 = TRAILER3_LIT(1.6666666666666667)*_t320;
+    const trailer3_real_t _t857 = TRAILER3_LIT(0.2)*_t856;
     const trailer3_real_t _t858 = _t204 + _t205 + _t210 + _t38*_t7;
     const trailer3_real_t _t859 = _t18*_t853 - _t223*_t852 - _t374;
-    const trailer3_real_t _t860 = -TRAILER3_LIT(5.0)*_t859/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t861 = _t860/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t860 = -TRAILER3_LIT(1.6666666666666667)*_t859;
+    const trailer3_real_t _t861 = TRAILER3_LIT(0.2)*_t860;
     const trailer3_real_t _t862 = -_t24*_t853 + TRAILER3_LIT(2.0)*_t243 + _t244;
     const trailer3_real_t _t863 = _t18*_t856 - _t225*_t852 - _t379;
-    const trailer3_real_t _t864 = -TRAILER3_LIT(5.0)*_t863/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t865 = _t864/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t864 = -TRAILER3_LIT(1.6666666666666667)*_t863;
+    const trailer3_real_t _t865 = TRAILER3_LIT(0.2)*_t864;
     const trailer3_real_t _t866 = -_t24*_t856 + TRAILER3_LIT(2.0)*_t245 + _t246;
-    const trailer3_real_t _t867 = TRAILER3_LIT(5.0)*_t368/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t868 = _t867/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t867 = TRAILER3_LIT(1.6666666666666667)*_t368;
+    const trailer3_real_t _t868 = TRAILER3_LIT(0.2)*_t867;
     const trailer3_real_t _t869 = _t18*_t223 + _t70;
-    const trailer3_real_t _t870 = TRAILER3_LIT(5.0)*_t370/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t871 = _t870/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t870 = TRAILER3_LIT(1.6666666666666667)*_t370;
+    const trailer3_real_t _t871 = TRAILER3_LIT(0.2)*_t870;
     const trailer3_real_t _t872 = _t18*_t225 + _t77;
     const trailer3_real_t _t873 = -_t543*_t593;
     const trailer3_real_t _t874 = _t44*_t544 + _t543*_t68;
@@ -3580,17 +3564,17 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t876 = TRAILER3_LIT(2.0)*_t44;
     const trailer3_real_t _t877 = _t68*_t876;
     const trailer3_real_t _t878 = TRAILER3_LIT(2.0)*_t99;
-    const trailer3_real_t _t879 = TRAILER3_LIT(5.0)*_t375/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t880 = _t879/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t879 = TRAILER3_LIT(1.6666666666666667)*_t375;
+    const trailer3_real_t _t880 = TRAILER3_LIT(0.2)*_t879;
     const trailer3_real_t _t881 = _t13*_t33 + _t229 + _t230 + _t239 + _t244;
-    const trailer3_real_t _t882 = TRAILER3_LIT(5.0)*_t380/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t883 = _t882/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t882 = TRAILER3_LIT(1.6666666666666667)*_t380;
+    const trailer3_real_t _t883 = TRAILER3_LIT(0.2)*_t882;
     const trailer3_real_t _t884 = _t13*_t38 + _t234 + _t235 + _t242 + _t246;
     const trailer3_real_t _t885 = -_t544*_t591;
     const trailer3_real_t _t886 = TRAILER3_LIT(2.0)*_t139;
     const trailer3_real_t _t887 = -_t141*_t886 + _t886*_t92;
     const trailer3_real_t _t888 = _t84*_t886 + _t85*_t886;
-    const trailer3_real_t _t889 = TRAILER3_LIT(3.0)*_t139/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t889 = TRAILER3_LIT(0.6)*_t139;
     const trailer3_real_t _t890 = _t4*_t889;
     const trailer3_real_t _t891 = _t2*_t889;
     const trailer3_real_t _t892 = _t102*_t891 + _t86*_t890 + _t87*_t890 - _t891*_t94;
@@ -4306,7 +4290,7 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
 }
 
 /* trailer3_wheel_contact_forces: documented in trailer3_model.h.
-   operations after CSE: 696 add, 977 mul, 106 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 696 add, 1013 mul, 7 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *longitudinal, trailer3_real_t *lateral)
@@ -4377,9 +4361,9 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t1 = -_t0;
     const trailer3_real_t _t2 = TRAILER3_COS(theta_cart);
     const trailer3_real_t _t3 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t4 = TRAILER3_LIT(3.0)*_t3/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t _t5 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t6 = TRAILER3_LIT(3.0)*_t5/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t6 = TRAILER3_LIT(0.3)*_t5;
     const trailer3_real_t _t7 = _t0*_t4 + _t2*_t6;
     const trailer3_real_t _t8 = -_t7;
     const trailer3_real_t _t9 = TRAILER3_SIN(theta_cart2);
@@ -4387,8 +4371,8 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t11 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t12 = _t11*_t6 + _t4*_t9;
     const trailer3_real_t _t13 = -_t12;
-    const trailer3_real_t _t14 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t15 = TRAILER3_LIT(17.0)*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t2;
     const trailer3_real_t _t16 = _t11*_t15 + _t14*_t9;
     const trailer3_real_t _t17 = -_t16;
     const trailer3_real_t _t18 = TRAILER3_SIN(theta_cart3);
@@ -4398,71 +4382,71 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t22 = -_t21;
     const trailer3_real_t _t23 = _t14*_t18 + _t15*_t20;
     const trailer3_real_t _t24 = -_t23;
-    const trailer3_real_t _t25 = TRAILER3_LIT(17.0)*_t20/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t26 = _t11*_t25 + TRAILER3_LIT(17.0)*_t18*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t26 = _t11*_t25 + TRAILER3_LIT(0.85)*_t18*_t9;
     const trailer3_real_t _t27 = -_t26;
     const trailer3_real_t _t28 = -_t2;
     const trailer3_real_t _t29 = _t0*_t6 - _t2*_t4;
     const trailer3_real_t _t30 = -_t11;
     const trailer3_real_t _t31 = -_t11*_t4 + _t6*_t9;
-    const trailer3_real_t _t32 = _t11*_t14 - TRAILER3_LIT(17.0)*_t2*_t9/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t32 = _t11*_t14 - TRAILER3_LIT(0.85)*_t2*_t9;
     const trailer3_real_t _t33 = -_t32;
     const trailer3_real_t _t34 = -_t20;
     const trailer3_real_t _t35 = _t18*_t6 - _t20*_t4;
-    const trailer3_real_t _t36 = _t14*_t20 - TRAILER3_LIT(17.0)*_t18*_t2/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t36 = _t14*_t20 - TRAILER3_LIT(0.85)*_t18*_t2;
     const trailer3_real_t _t37 = -_t36;
-    const trailer3_real_t _t38 = -TRAILER3_LIT(17.0)*_t11*_t18/TRAILER3_LIT(20.0) + _t25*_t9;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(0.85)*_t11*_t18 + _t25*_t9;
     const trailer3_real_t _t39 = -_t38;
     const trailer3_real_t _t40 = -radius_right;
     const trailer3_real_t _t41 = -radius_left;
-    const trailer3_real_t _t42 = TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.207)*_t3;
     const trailer3_real_t _t43 = -_t42;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(1000.0);
-    const trailer3_real_t _t45 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t46 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t44 = -TRAILER3_LIT(0.207)*_t5;
+    const trailer3_real_t _t45 = TRAILER3_LIT(2.4154589371980677)*_t40;
+    const trailer3_real_t _t46 = TRAILER3_LIT(2.4154589371980677)*_t41;
     const trailer3_real_t _t47 = _t44*_t45;
     const trailer3_real_t _t48 = _t1*_t47 - _t45*_t8;
     const trailer3_real_t _t49 = _t44*_t46;
     const trailer3_real_t _t50 = _t1*_t49 + _t46*_t8;
     const trailer3_real_t _t51 = _t43*_t45;
     const trailer3_real_t _t52 = -_t2*_t51 - _t48;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(5.0)*_t52/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
     const trailer3_real_t _t54 = _t17*_t53;
     const trailer3_real_t _t55 = _t10*_t47 - _t13*_t45;
     const trailer3_real_t _t56 = _t43*_t46;
     const trailer3_real_t _t57 = -_t2*_t56 - _t50;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(5.0)*_t57/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
     const trailer3_real_t _t59 = _t17*_t58;
     const trailer3_real_t _t60 = _t10*_t49 + _t13*_t46;
     const trailer3_real_t _t61 = -_t11*_t51 - _t54 - _t55;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
     const trailer3_real_t _t63 = _t27*_t62;
     const trailer3_real_t _t64 = _t24*_t53;
     const trailer3_real_t _t65 = _t19*_t47 - _t22*_t45;
     const trailer3_real_t _t66 = -_t11*_t56 - _t59 - _t60;
-    const trailer3_real_t _t67 = -TRAILER3_LIT(5.0)*_t66/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t67 = -TRAILER3_LIT(1.6666666666666667)*_t66;
     const trailer3_real_t _t68 = _t27*_t67;
     const trailer3_real_t _t69 = _t24*_t58;
     const trailer3_real_t _t70 = _t19*_t49 + _t22*_t46;
-    const trailer3_real_t _t71 = _t53/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t53;
     const trailer3_real_t _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45;
-    const trailer3_real_t _t73 = _t58/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t58;
     const trailer3_real_t _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46;
     const trailer3_real_t _t75 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t76 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t77 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53;
-    const trailer3_real_t _t79 = _t67/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t79 = TRAILER3_LIT(0.2)*_t67;
     const trailer3_real_t _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58;
     const trailer3_real_t _t81 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t _t82 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t _t83 = -_t20*_t51 - _t63 - _t64 - _t65;
-    const trailer3_real_t _t84 = -TRAILER3_LIT(5.0)*_t83/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t85 = _t84/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t84 = -TRAILER3_LIT(1.6666666666666667)*_t83;
+    const trailer3_real_t _t85 = TRAILER3_LIT(0.2)*_t84;
     const trailer3_real_t _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62;
     const trailer3_real_t _t87 = -_t20*_t56 - _t68 - _t69 - _t70;
-    const trailer3_real_t _t88 = -TRAILER3_LIT(5.0)*_t87/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t89 = _t88/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t88 = -TRAILER3_LIT(1.6666666666666667)*_t87;
+    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t88;
     const trailer3_real_t _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67;
     const trailer3_real_t _t91 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t _t92 = TRAILER3_LIT(1.0)/radius_cart3_left;
@@ -4494,8 +4478,8 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6;
     const trailer3_real_t _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99;
     const trailer3_real_t _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15;
-    const trailer3_real_t _t121 = TRAILER3_LIT(17.0)*_t9/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t122 = TRAILER3_LIT(17.0)*_t11/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t121 = TRAILER3_LIT(0.85)*_t9;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.85)*_t11;
     const trailer3_real_t _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122;
     const trailer3_real_t _t124 = _t62*thetadot_right + _t67*thetadot_left;
     const trailer3_real_t _t125 = _t124*_t124;
@@ -4531,71 +4515,71 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t155 = _t126*thetadot_left;
     const trailer3_real_t _t156 = _t42*_t45;
     const trailer3_real_t _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45;
-    const trailer3_real_t _t158 = -TRAILER3_LIT(5.0)*_t157/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t159 = _t158/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t158 = -TRAILER3_LIT(1.6666666666666667)*_t157;
+    const trailer3_real_t _t159 = TRAILER3_LIT(0.2)*_t158;
     const trailer3_real_t _t160 = _t156*_t28 + _t48;
     const trailer3_real_t _t161 = _t42*_t46;
     const trailer3_real_t _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46;
-    const trailer3_real_t _t163 = -TRAILER3_LIT(5.0)*_t162/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t164 = _t163/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
     const trailer3_real_t _t165 = _t161*_t28 + _t50;
-    const trailer3_real_t _t166 = TRAILER3_LIT(5.0)*_t72/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t167 = _t166/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t166 = TRAILER3_LIT(1.6666666666666667)*_t72;
+    const trailer3_real_t _t167 = TRAILER3_LIT(0.2)*_t166;
     const trailer3_real_t _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7;
-    const trailer3_real_t _t169 = TRAILER3_LIT(5.0)*_t74/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t170 = _t169/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t169 = TRAILER3_LIT(1.6666666666666667)*_t74;
+    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
     const trailer3_real_t _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7;
     const trailer3_real_t _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(5.0)*_t172/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t174 = _t173/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
     const trailer3_real_t _t175 = _t156*_t30 + _t158*_t33 + _t55;
     const trailer3_real_t _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(5.0)*_t176/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t178 = _t177/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
+    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
     const trailer3_real_t _t179 = _t161*_t30 + _t163*_t33 + _t60;
     const trailer3_real_t _t180 = -_t166*_t17 - _t32*_t53;
-    const trailer3_real_t _t181 = -TRAILER3_LIT(5.0)*_t180/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t182 = _t181/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t181 = -TRAILER3_LIT(1.6666666666666667)*_t180;
+    const trailer3_real_t _t182 = TRAILER3_LIT(0.2)*_t181;
     const trailer3_real_t _t183 = _t166*_t33 + _t54;
     const trailer3_real_t _t184 = -_t169*_t17 - _t32*_t58;
-    const trailer3_real_t _t185 = -TRAILER3_LIT(5.0)*_t184/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t186 = _t185/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t185 = -TRAILER3_LIT(1.6666666666666667)*_t184;
+    const trailer3_real_t _t186 = TRAILER3_LIT(0.2)*_t185;
     const trailer3_real_t _t187 = _t169*_t33 + _t59;
-    const trailer3_real_t _t188 = TRAILER3_LIT(5.0)*_t78/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t189 = _t188/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t188 = TRAILER3_LIT(1.6666666666666667)*_t78;
+    const trailer3_real_t _t189 = TRAILER3_LIT(0.2)*_t188;
     const trailer3_real_t _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9;
-    const trailer3_real_t _t191 = TRAILER3_LIT(5.0)*_t80/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t192 = _t191/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t191 = TRAILER3_LIT(1.6666666666666667)*_t80;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
     const trailer3_real_t _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9;
     const trailer3_real_t _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45;
-    const trailer3_real_t _t195 = -TRAILER3_LIT(5.0)*_t194/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t196 = _t195/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t195 = -TRAILER3_LIT(1.6666666666666667)*_t194;
+    const trailer3_real_t _t196 = TRAILER3_LIT(0.2)*_t195;
     const trailer3_real_t _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65;
     const trailer3_real_t _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46;
-    const trailer3_real_t _t199 = -TRAILER3_LIT(5.0)*_t198/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t200 = _t199/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t199 = -TRAILER3_LIT(1.6666666666666667)*_t198;
+    const trailer3_real_t _t200 = TRAILER3_LIT(0.2)*_t199;
     const trailer3_real_t _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70;
     const trailer3_real_t _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53;
-    const trailer3_real_t _t203 = -TRAILER3_LIT(5.0)*_t202/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t204 = _t203/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t203 = -TRAILER3_LIT(1.6666666666666667)*_t202;
+    const trailer3_real_t _t204 = TRAILER3_LIT(0.2)*_t203;
     const trailer3_real_t _t205 = _t166*_t37 + _t181*_t39 + _t64;
     const trailer3_real_t _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58;
-    const trailer3_real_t _t207 = -TRAILER3_LIT(5.0)*_t206/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t208 = _t207/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t207 = -TRAILER3_LIT(1.6666666666666667)*_t206;
+    const trailer3_real_t _t208 = TRAILER3_LIT(0.2)*_t207;
     const trailer3_real_t _t209 = _t169*_t37 + _t185*_t39 + _t69;
     const trailer3_real_t _t210 = -_t188*_t27 - _t38*_t62;
-    const trailer3_real_t _t211 = -TRAILER3_LIT(5.0)*_t210/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t212 = _t211/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t211 = -TRAILER3_LIT(1.6666666666666667)*_t210;
+    const trailer3_real_t _t212 = TRAILER3_LIT(0.2)*_t211;
     const trailer3_real_t _t213 = _t188*_t39 + _t63;
     const trailer3_real_t _t214 = -_t191*_t27 - _t38*_t67;
-    const trailer3_real_t _t215 = -TRAILER3_LIT(5.0)*_t214/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t216 = _t215/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t215 = -TRAILER3_LIT(1.6666666666666667)*_t214;
+    const trailer3_real_t _t216 = TRAILER3_LIT(0.2)*_t215;
     const trailer3_real_t _t217 = _t191*_t39 + _t68;
-    const trailer3_real_t _t218 = TRAILER3_LIT(5.0)*_t86/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t219 = _t218/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t218 = TRAILER3_LIT(1.6666666666666667)*_t86;
+    const trailer3_real_t _t219 = TRAILER3_LIT(0.2)*_t218;
     const trailer3_real_t _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51;
-    const trailer3_real_t _t221 = TRAILER3_LIT(5.0)*_t90/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t222 = _t221/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t221 = TRAILER3_LIT(1.6666666666666667)*_t90;
+    const trailer3_real_t _t222 = TRAILER3_LIT(0.2)*_t221;
     const trailer3_real_t _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56;
     const trailer3_real_t _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62
             + _t112*_t84;
@@ -4668,22 +4652,18 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t274 = _t148*_t156 + _t149*_t161;
     const trailer3_real_t _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98
             + _t273;
-    const trailer3_real_t _t276 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t11*_t125*_t3/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t127*_t20*_t3/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t130*_t2*_t3/TRAILER3_LIT(10.0) - _t133*_t4
-            - _t134*_t4 - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6
-            - _t141*_t6;
+    const trailer3_real_t _t276 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t11*_t125*_t3
+            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t127*_t20*_t3
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t130*_t2*_t3 - _t133*_t4 - _t134*_t4
+            - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6 - _t141*_t6;
     const trailer3_real_t _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95
             + _t276;
-    const trailer3_real_t _t278 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t11*_t125/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t127*_t20/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t132*_t5/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t132*_t3/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t132*_t2*_t5/TRAILER3_LIT(10.0)
-            - _t107*_t142 - _t133*_t14 - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15
-            - _t139*_t15;
+    const trailer3_real_t _t278 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t11*_t125
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t127*_t20
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t132*_t5
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t132*_t3
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t132*_t2*_t5 - _t107*_t142 - _t133*_t14
+            - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15 - _t139*_t15;
     const trailer3_real_t _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271
             + _t274*_t98 + _t278;
     const trailer3_real_t _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144
@@ -4819,8 +4799,8 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t386 = _t385*_t92;
     const trailer3_real_t _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376
             - _t120*_t377 - _t123*_t378 - _t282;
-    const trailer3_real_t _t388 = _t383/TRAILER3_LIT(5.0) - _t386/TRAILER3_LIT(5.0) + _t387;
-    const trailer3_real_t _t389 = -TRAILER3_LIT(5.0)*_t388/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t388 = TRAILER3_LIT(0.2)*_t383 - TRAILER3_LIT(0.2)*_t386 + _t387;
+    const trailer3_real_t _t389 = -TRAILER3_LIT(1.6666666666666667)*_t388;
     const trailer3_real_t _t390 = _t234*_t372 + _t253*_t373 + _t316;
     const trailer3_real_t _t391 = -J_theta_cart2_right*_t390;
     const trailer3_real_t _t392 = _t391*_t81;
@@ -4829,9 +4809,9 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t395 = _t394*_t82;
     const trailer3_real_t _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376
             - _t119*_t377 - _t123*_t379 - _t280;
-    const trailer3_real_t _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + _t392/TRAILER3_LIT(5.0)
-            - _t395/TRAILER3_LIT(5.0) + _t396;
-    const trailer3_real_t _t398 = -TRAILER3_LIT(5.0)*_t397/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + TRAILER3_LIT(0.2)*_t392
+            - TRAILER3_LIT(0.2)*_t395 + _t396;
+    const trailer3_real_t _t398 = -TRAILER3_LIT(1.6666666666666667)*_t397;
     const trailer3_real_t _t399 = _t246*_t372 + _t249*_t373 + _t294;
     const trailer3_real_t _t400 = -J_theta_cart_right*_t399;
     const trailer3_real_t _t401 = _t400*_t75;
@@ -4841,51 +4821,51 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378
             - _t120*_t379 - _t278 - _t374*_t98;
     const trailer3_real_t _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383
-            - _t37*_t386 + _t401/TRAILER3_LIT(5.0) - _t404/TRAILER3_LIT(5.0) + _t405;
-    const trailer3_real_t _t407 = -TRAILER3_LIT(5.0)*_t406/TRAILER3_LIT(3.0);
+            - _t37*_t386 + TRAILER3_LIT(0.2)*_t401 - TRAILER3_LIT(0.2)*_t404 + _t405;
+    const trailer3_real_t _t407 = -TRAILER3_LIT(1.6666666666666667)*_t406;
     const trailer3_real_t _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392
             - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8;
-    const trailer3_real_t _t409 = TRAILER3_LIT(500.0)*_t408/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t409 = TRAILER3_LIT(2.4154589371980677)*_t408;
     const trailer3_real_t _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378
             - _t112*_t379 - _t267;
     const trailer3_real_t _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386
             - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410;
-    const trailer3_real_t _t412 = TRAILER3_LIT(500.0)*_t411/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t412 = TRAILER3_LIT(2.4154589371980677)*_t411;
     const trailer3_real_t _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273
             - _t376*_t95 - _t377*_t98;
     const trailer3_real_t _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401
             + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413;
-    const trailer3_real_t _t415 = TRAILER3_LIT(500.0)*_t414/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t415 = TRAILER3_LIT(2.4154589371980677)*_t414;
     const trailer3_real_t _t416 = _t412*_t43 + _t415*_t44;
-    const trailer3_real_t _t417 = TRAILER3_LIT(500.0)*_t40/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t418 = TRAILER3_LIT(500.0)*_t41/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t417 = TRAILER3_LIT(2.4154589371980677)*_t40;
+    const trailer3_real_t _t418 = TRAILER3_LIT(2.4154589371980677)*_t41;
     const trailer3_real_t _t419 = _t417*_t43;
     const trailer3_real_t _t420 = _t417*_t44;
     const trailer3_real_t _t421 = -_t1*_t420 - _t2*_t419 + _t417*_t8;
-    const trailer3_real_t _t422 = -TRAILER3_LIT(5.0)*_t421/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t423 = _t422/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t422 = -TRAILER3_LIT(1.6666666666666667)*_t421;
+    const trailer3_real_t _t423 = TRAILER3_LIT(0.2)*_t422;
     const trailer3_real_t _t424 = _t1*_t419 + _t28*_t420 - _t29*_t417;
     const trailer3_real_t _t425 = _t418*_t43;
     const trailer3_real_t _t426 = _t418*_t44;
     const trailer3_real_t _t427 = -_t1*_t426 - _t2*_t425 - _t418*_t8;
-    const trailer3_real_t _t428 = -TRAILER3_LIT(5.0)*_t427/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t429 = _t428/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t428 = -TRAILER3_LIT(1.6666666666666667)*_t427;
+    const trailer3_real_t _t429 = TRAILER3_LIT(0.2)*_t428;
     const trailer3_real_t _t430 = _t1*_t425 + _t28*_t426 + _t29*_t418;
     const trailer3_real_t _t431 = -_t10*_t420 - _t11*_t419 + _t13*_t417 - _t17*_t422;
-    const trailer3_real_t _t432 = -TRAILER3_LIT(5.0)*_t431/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t433 = _t432/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t432 = -TRAILER3_LIT(1.6666666666666667)*_t431;
+    const trailer3_real_t _t433 = TRAILER3_LIT(0.2)*_t432;
     const trailer3_real_t _t434 = _t10*_t419 + _t30*_t420 - _t31*_t417 + _t33*_t422;
     const trailer3_real_t _t435 = -_t10*_t426 - _t11*_t425 - _t13*_t418 - _t17*_t428;
-    const trailer3_real_t _t436 = -TRAILER3_LIT(5.0)*_t435/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t437 = _t436/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t436 = -TRAILER3_LIT(1.6666666666666667)*_t435;
+    const trailer3_real_t _t437 = TRAILER3_LIT(0.2)*_t436;
     const trailer3_real_t _t438 = _t10*_t425 + _t30*_t426 + _t31*_t418 + _t33*_t428;
     const trailer3_real_t _t439 = -_t19*_t420 - _t20*_t419 + _t22*_t417 - _t24*_t422 - _t27*_t432;
-    const trailer3_real_t _t440 = -TRAILER3_LIT(5.0)*_t439/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t441 = _t440/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t440 = -TRAILER3_LIT(1.6666666666666667)*_t439;
+    const trailer3_real_t _t441 = TRAILER3_LIT(0.2)*_t440;
     const trailer3_real_t _t442 = _t19*_t419 + _t34*_t420 - _t35*_t417 + _t37*_t422 + _t39*_t432;
     const trailer3_real_t _t443 = -_t19*_t426 - _t20*_t425 - _t22*_t418 - _t24*_t428 - _t27*_t436;
-    const trailer3_real_t _t444 = -TRAILER3_LIT(5.0)*_t443/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t445 = _t444/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t444 = -TRAILER3_LIT(1.6666666666666667)*_t443;
+    const trailer3_real_t _t445 = TRAILER3_LIT(0.2)*_t444;
     const trailer3_real_t _t446 = _t19*_t425 + _t34*_t426 + _t35*_t418 + _t37*_t428 + _t39*_t436;
     const trailer3_real_t _t447 = J_x_tractor*_t419 - _t106*_t417 + _t108*_t422 + _t110*_t432
             + _t112*_t440;
@@ -4938,8 +4918,8 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
             + _t119*_t428 + _t123*_t444;
     const trailer3_real_t _t483 = J_theta_cart3*_t444 + _t104*_t426 + _t112*_t425 + _t118*_t418
             + _t120*_t428 + _t123*_t436;
-    const trailer3_real_t _t484 = TRAILER3_LIT(207.0)*_t5/TRAILER3_LIT(500.0);
-    const trailer3_real_t _t485 = -TRAILER3_LIT(207.0)*_t3/TRAILER3_LIT(500.0);
+    const trailer3_real_t _t484 = TRAILER3_LIT(0.414)*_t5;
+    const trailer3_real_t _t485 = -TRAILER3_LIT(0.414)*_t3;
     const trailer3_real_t _t486 = _t409 + _t416;
     const trailer3_real_t _t487 = _t412*_t484 + _t415*_t485;
     const trailer3_real_t _t488 = -_t409 + _t416;

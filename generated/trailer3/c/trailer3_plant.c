@@ -7,7 +7,7 @@
 #include "trailer3_plant.h"
 
 /* trailer3_plant_state_derivative: documented in trailer3_plant.h.
-   operations after CSE: 455 add, 673 mul, 78 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 455 add, 697 mul, 7 div, 8 sin/cos, 0 sqrt */
 void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const trailer3_real_t *x,
     const trailer3_real_t *tau, trailer3_real_t *xdot)
 {
@@ -16,75 +16,75 @@ void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const tr
     const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = x[2];
     const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(3.0)*_t2/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(3.0)*_t4/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
     const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
     const trailer3_real_t theta_cart2 = x[4];
     const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
     const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
     const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(17.0)*_t0/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t11 = TRAILER3_LIT(17.0)*_t1/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
     const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
     const trailer3_real_t theta_cart3 = x[5];
     const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
     const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
     const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(17.0)*_t14/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t18 = TRAILER3_LIT(17.0)*_t13*_t7/TRAILER3_LIT(20.0) + _t17*_t8;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
     const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
     const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(17.0)*_t1*_t7/TRAILER3_LIT(20.0) + _t10*_t8;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
     const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(17.0)*_t1*_t13/TRAILER3_LIT(20.0) + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(17.0)*_t13*_t8/TRAILER3_LIT(20.0) + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(207.0)*_t2/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
     const trailer3_real_t radius_right = pp->radius_right;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(500.0)*radius_right/TRAILER3_LIT(207.0);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = pp->radius_left;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(500.0)*radius_left/TRAILER3_LIT(207.0);
-    const trailer3_real_t _t28 = -TRAILER3_LIT(207.0)*_t4/TRAILER3_LIT(1000.0);
+    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
     const trailer3_real_t _t29 = _t26*_t28;
     const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
     const trailer3_real_t _t31 = _t27*_t28;
     const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
     const trailer3_real_t _t33 = -_t25*_t26;
     const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(5.0)*_t34/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
     const trailer3_real_t _t36 = -_t12*_t35;
     const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
     const trailer3_real_t _t38 = -_t25*_t27;
     const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(5.0)*_t39/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
     const trailer3_real_t _t41 = -_t12*_t40;
     const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
     const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(5.0)*_t43/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
     const trailer3_real_t _t45 = -_t18*_t44;
     const trailer3_real_t _t46 = -_t16*_t35;
     const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
     const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(5.0)*_t48/TRAILER3_LIT(3.0);
+    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
     const trailer3_real_t _t50 = -_t18*_t49;
     const trailer3_real_t _t51 = -_t16*_t40;
     const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = _t35/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
     const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = _t40/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
     const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = _t44/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
     const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = _t49/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
     const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
     const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(5.0)*_t61/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t63 = _t62/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
     const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
     const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(5.0)*_t65/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t67 = _t66/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
     const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
     const trailer3_real_t thetadot_right = x[14];
     const trailer3_real_t _t69 = _t29*thetadot_right;
@@ -113,8 +113,8 @@ void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const tr
     const trailer3_real_t _t83 = K_theta_cart_x_tractor_2*_t0;
     const trailer3_real_t _t84 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t _t85 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t86 = TRAILER3_LIT(17.0)*_t7/TRAILER3_LIT(20.0);
-    const trailer3_real_t _t87 = TRAILER3_LIT(17.0)*_t8/TRAILER3_LIT(20.0);
+    const trailer3_real_t _t86 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t87 = TRAILER3_LIT(0.85)*_t8;
     const trailer3_real_t _t88 = _t44*thetadot_right + _t49*thetadot_left;
     const trailer3_real_t _t89 = _t88*_t88;
     const trailer3_real_t _t90 = _t62*thetadot_right + _t66*thetadot_left;
@@ -149,71 +149,71 @@ void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const tr
     const trailer3_real_t _t119 = _t90*thetadot_left;
     const trailer3_real_t _t120 = _t25*_t26;
     const trailer3_real_t _t121 = _t0*_t120 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t122 = -TRAILER3_LIT(5.0)*_t121/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t123 = _t122/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
     const trailer3_real_t _t124 = -_t1*_t120 + _t30;
     const trailer3_real_t _t125 = _t25*_t27;
     const trailer3_real_t _t126 = _t0*_t125 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t127 = -TRAILER3_LIT(5.0)*_t126/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t128 = _t127/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t127 = -TRAILER3_LIT(1.6666666666666667)*_t126;
+    const trailer3_real_t _t128 = TRAILER3_LIT(0.2)*_t127;
     const trailer3_real_t _t129 = -_t1*_t125 + _t32;
-    const trailer3_real_t _t130 = TRAILER3_LIT(5.0)*_t54/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t131 = _t130/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t130 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
     const trailer3_real_t _t132 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t133 = TRAILER3_LIT(5.0)*_t56/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t134 = _t133/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t133 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t134 = TRAILER3_LIT(0.2)*_t133;
     const trailer3_real_t _t135 = _t0*_t31 - _t1*_t38 + _t27*_t6;
     const trailer3_real_t _t136 = _t12*_t122 + _t120*_t7 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t137 = -TRAILER3_LIT(5.0)*_t136/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t138 = _t137/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t137 = -TRAILER3_LIT(1.6666666666666667)*_t136;
+    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
     const trailer3_real_t _t139 = -_t120*_t8 - _t122*_t21 + _t37;
     const trailer3_real_t _t140 = _t12*_t127 + _t125*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t141 = -TRAILER3_LIT(5.0)*_t140/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t142 = _t141/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t141 = -TRAILER3_LIT(1.6666666666666667)*_t140;
+    const trailer3_real_t _t142 = TRAILER3_LIT(0.2)*_t141;
     const trailer3_real_t _t143 = -_t125*_t8 - _t127*_t21 + _t42;
     const trailer3_real_t _t144 = _t12*_t130 - _t21*_t35;
-    const trailer3_real_t _t145 = -TRAILER3_LIT(5.0)*_t144/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t146 = _t145/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t145 = -TRAILER3_LIT(1.6666666666666667)*_t144;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
     const trailer3_real_t _t147 = -_t130*_t21 + _t36;
     const trailer3_real_t _t148 = _t12*_t133 - _t21*_t40;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(5.0)*_t148/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t150 = _t149/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
     const trailer3_real_t _t151 = -_t133*_t21 + _t41;
-    const trailer3_real_t _t152 = TRAILER3_LIT(5.0)*_t58/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t153 = _t152/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t58;
+    const trailer3_real_t _t153 = TRAILER3_LIT(0.2)*_t152;
     const trailer3_real_t _t154 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t155 = TRAILER3_LIT(5.0)*_t60/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t156 = _t155/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
     const trailer3_real_t _t157 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
     const trailer3_real_t _t158 = _t120*_t13 + _t122*_t16 + _t137*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t159 = -TRAILER3_LIT(5.0)*_t158/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t160 = _t159/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t159 = -TRAILER3_LIT(1.6666666666666667)*_t158;
+    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t159;
     const trailer3_real_t _t161 = -_t120*_t14 - _t122*_t23 - _t137*_t24 + _t47;
     const trailer3_real_t _t162 = _t125*_t13 + _t127*_t16 - _t14*_t31 + _t141*_t18 + _t22*_t27;
-    const trailer3_real_t _t163 = -TRAILER3_LIT(5.0)*_t162/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t164 = _t163/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
     const trailer3_real_t _t165 = -_t125*_t14 - _t127*_t23 - _t141*_t24 + _t52;
     const trailer3_real_t _t166 = _t130*_t16 + _t145*_t18 - _t23*_t35;
-    const trailer3_real_t _t167 = -TRAILER3_LIT(5.0)*_t166/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t168 = _t167/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t167 = -TRAILER3_LIT(1.6666666666666667)*_t166;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
     const trailer3_real_t _t169 = -_t130*_t23 - _t145*_t24 + _t46;
     const trailer3_real_t _t170 = _t133*_t16 + _t149*_t18 - _t23*_t40;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(5.0)*_t170/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t172 = _t171/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
     const trailer3_real_t _t173 = -_t133*_t23 - _t149*_t24 + _t51;
     const trailer3_real_t _t174 = _t152*_t18 - _t24*_t44;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(5.0)*_t174/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t176 = _t175/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
+    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
     const trailer3_real_t _t177 = -_t152*_t24 + _t45;
     const trailer3_real_t _t178 = _t155*_t18 - _t24*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(5.0)*_t178/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t180 = _t179/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
+    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
     const trailer3_real_t _t181 = -_t155*_t24 + _t50;
-    const trailer3_real_t _t182 = TRAILER3_LIT(5.0)*_t64/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t183 = _t182/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t182 = TRAILER3_LIT(1.6666666666666667)*_t64;
+    const trailer3_real_t _t183 = TRAILER3_LIT(0.2)*_t182;
     const trailer3_real_t _t184 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t185 = TRAILER3_LIT(5.0)*_t68/TRAILER3_LIT(3.0);
-    const trailer3_real_t _t186 = _t185/TRAILER3_LIT(5.0);
+    const trailer3_real_t _t185 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t186 = TRAILER3_LIT(0.2)*_t185;
     const trailer3_real_t _t187 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
     const trailer3_real_t _t188 = K_theta_tractor_x_tractor_2*_t2 - _t79;
     const trailer3_real_t _t189 = K_theta_cart_x_tractor_2*_t0 - _t80;
@@ -323,21 +323,18 @@ void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const tr
     const trailer3_real_t _t258 = _t112*_t120 + _t113*_t125;
     const trailer3_real_t _t259 = J_x_tractor*_t258 + _t194*_t253 + _t195*_t254 + _t196*_t255
             + _t257;
-    const trailer3_real_t _t260 =
-            TRAILER3_LIT(3.0)*K_theta_cart2_x_tractor*_t2*_t8*_t89/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart3_x_tractor*_t14*_t2*_t91/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t1*_t2*_t94/TRAILER3_LIT(10.0) - _t100*_t5
-            - _t101*_t5 - _t102*_t5 - _t103*_t5 - _t104*_t5 - _t105*_t5 - _t3*_t97 - _t3*_t98
-            - _t3*_t99;
+    const trailer3_real_t _t260 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t89
+            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t91
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t94 - _t100*_t5 - _t101*_t5
+            - _t102*_t5 - _t103*_t5 - _t104*_t5 - _t105*_t5 - _t3*_t97 - _t3*_t98 - _t3*_t99;
     const trailer3_real_t _t261 = _t188*_t252 + _t193*_t258 + _t198*_t253 + _t199*_t254
             + _t200*_t255 + _t260;
-    const trailer3_real_t _t262 =
-            TRAILER3_LIT(17.0)*K_theta_cart2_x_tractor*_t0*_t8*_t89/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(17.0)*K_theta_cart3_x_tractor*_t0*_t14*_t91/TRAILER3_LIT(20.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor*_t0*_t4*_t96/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t0*_t2*_t96/TRAILER3_LIT(10.0)
-            + TRAILER3_LIT(3.0)*K_theta_cart_x_tractor_2*_t1*_t4*_t96/TRAILER3_LIT(10.0) - _t10*_t97
-            - _t10*_t98 - _t100*_t11 - _t101*_t11 - _t102*_t11 - _t103*_t11 - _t106*_t80;
+    const trailer3_real_t _t262 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t89
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t91
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t96
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t96
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t96 - _t10*_t97 - _t10*_t98
+            - _t100*_t11 - _t101*_t11 - _t102*_t11 - _t103*_t11 - _t106*_t80;
     const trailer3_real_t _t263 = J_theta_cart*_t253 + _t189*_t252 + _t194*_t258 + _t202*_t254
             + _t203*_t255 + _t262;
     const trailer3_real_t _t264 = -_t102*_t87 - _t103*_t87 - _t106*_t81 + _t106*_t84 + _t107*_t75

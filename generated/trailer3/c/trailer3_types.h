@@ -8,7 +8,8 @@
  * status codes and every struct that generated functions take or fill (except a module's
  * prepared parameters, <module>_prepared_t, in that module's header). Build with
  * -DTRAILER3_FLOAT32 for single precision: then no double literal or double
- * math function is used anywhere.
+ * math function is used anywhere, but for the bounded sin/cos's argument reduction on an
+ * x86 host without FMA (there in double: fmaf would be a library call).
  */
 #ifndef TRAILER3_TYPES_H
 #define TRAILER3_TYPES_H
@@ -20,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0xc2749b76u
+#define TRAILER3_CODE_ID 0xe1cd200au
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -136,12 +137,24 @@ static inline void trailer3_sincos_bounded(float x, float *s, float *c)
 {
     const float shift = 12582912.0f;
     const float k = ((x * 0.636619772f) + shift) - shift;
-    /* pi/2 in three floats: each product is exact inside fmaf, and x - k part1 is exact (a
+#if !defined(__FP_FAST_FMAF) && defined(__SSE2_MATH__)
+    /* An x86 host without -mfma, where fmaf is a library call and double arithmetic is
+       as fast as float's: the reduction in double, pi/2 in parts of 33 bits as in the
+       double build (k part1 and x - k part1 exact for |k| < 2^20), rounded to float once. */
+    const double kd = (double)k;
+    const float rk = (float)((((double)x - (kd * 1.57079632673412561417e+00))
+                              - (kd * 6.07710050630396597660e-11))
+                             - (kd * 2.02226624879595063154e-21));
+#else
+    /* pi/2 in three floats: each product is exact inside fmaf (one instruction where the
+       compiler defines __FP_FAST_FMAF, e.g. a Cortex-M4F), and x - k part1 is exact (a
        multiple of 2^-23 below 2 in magnitude for |k| < 2^22). */
     const float r1 = fmaf(-k, 1.57079637f, x);
     const float r2 = fmaf(-k, -4.37113883e-08f, r1);
+    const float rk = fmaf(-k, -1.71512451e-15f, r2);
+#endif
     /* below 0.78, k = 0 and r = x: taken as it is, which also keeps -0's sign */
-    const float r = (fabsf(x) < 0.78f) ? x : fmaf(-k, -1.71512451e-15f, r2);
+    const float r = (fabsf(x) < 0.78f) ? x : rk;
     const float z = r * r;
     const float z2 = z * z;
     const float ps = ((-1.0f / 6.0f) + (z * (1.0f / 120.0f)))
