@@ -156,3 +156,56 @@ def test_sync_readme_replaces_only_the_marked_block(tmp_path: Path) -> None:
     assert sync_readme(readme, ["| new |"])
     assert readme.read_text() == f"before\n{README_BEGIN}\n| new |\n{README_END}\nafter\n"
     assert not sync_readme(tmp_path / "missing.md", ["x"])
+
+
+def test_every_shipped_robot_is_benchmarked_against_casadi_on_the_same_inputs() -> None:
+    """The trailer's forward dynamics (both formulations) and its TDROC step's kernels,
+    ours in double and float32 against CasADi's C of the same specs in double and float:
+    built into one executable that checks every variant against ours before it times
+    (else it refuses, and this raises), the checksums agreeing, the ratios summarised."""
+    from runtime.tooling.bench.robot_c_bench import (
+        FUNCTIONS,
+        VARIANTS,
+        robot_functions,
+        run_robot,
+        summarise,
+    )
+
+    rows = run_robot("trailer", 300, 2)
+    names = {s.name for s in robot_functions("trailer").specs}
+    assert set(FUNCTIONS) <= names and "minimal_minv_norm" in names  # it depends on q
+    assert {(r["function"], r["variant"]) for r in rows} == {
+        (n, v) for n in names for v in VARIANTS}
+    by = {(r["function"], r["variant"]): r for r in rows}
+    for (name, variant), row in by.items():
+        ref = by[(name, "ours")]["checksum"]
+        tol = 1e-4 if variant.endswith("float32") else 1e-9
+        assert abs(row["checksum"] - ref) <= tol * max(abs(ref), 1.0), (name, variant)
+        assert len(row["ns"]) == 2 and min(row["ns"]) > 0.0
+    s = summarise(rows)
+    step = s[("trailer", "tdroc_step_kernels", "ours")]["median"]
+    assert step > s[("trailer", "minimal_tdroc_law", "ours")]["median"]
+    assert s[("trailer", "forward_dynamics", "ours_float32/casadi_float32")]["median"] > 0.0
+
+
+def test_a_parameter_struct_read_in_place_must_have_the_specs_layout(tmp_path: Path) -> None:
+    """The harness passes our parameters struct as a pointer into the flat inputs (as the
+    competitors read theirs); a struct whose members are in another order than the spec's
+    fields, or of another size, does not compile."""
+    import subprocess
+
+    import sympy as sp
+
+    from codegen.spec import Argument, Field
+    from runtime.tooling.bench.c_variants import params_in_place
+
+    a, b = sp.symbols("a b")
+    arg = Argument("p", "params", fields=(Field("a", (a,)), Field("b", (b,))))
+    _, checks = params_in_place(arg, "pair_t", "double", 0, "t")
+    for struct, compiles in (("double a; double b;", True), ("double b; double a;", False),
+                             ("double a; double b; double c;", False)):
+        src = tmp_path / "layout.c"
+        src.write_text(f"#include <stddef.h>\ntypedef struct {{ {struct} }} pair_t;\n{checks}")
+        proc = subprocess.run(["gcc", "-std=c99", "-fsyntax-only", str(src)],
+                              capture_output=True, text=True)
+        assert (proc.returncode == 0) == compiles, (struct, proc.stderr)

@@ -57,20 +57,21 @@ def uses_trig(spec: FunctionSpec) -> bool:
 
 
 def renamed_objects(workdir: Path, sources: list[Path], defines: tuple[str, ...],
-                    tag: str) -> list[str]:
-    """``sources`` compiled with ``defines``, every ``wmr_`` symbol (defined or referenced)
-    renamed to ``<tag>wmr_`` so that the objects link beside the default build."""
+                    tag: str, include: Path = GENERATED_C, symbols: str = "wmr_") -> list[str]:
+    """``sources`` compiled with ``defines``, every symbol (defined or referenced) that
+    starts with ``symbols`` renamed to ``<tag><symbol>`` so that the objects link beside
+    the default build."""
     objs = []
     for src in sources:
         obj = workdir / f"{tag}{src.stem}.o"
-        subprocess.run(["gcc", *CFLAGS, *defines, "-c", f"-I{GENERATED_C}", str(src), "-o",
+        subprocess.run(["gcc", *CFLAGS, *defines, "-c", f"-I{include}", str(src), "-o",
                         str(obj)], check=True)
         names = [*subprocess.run(["nm", "--defined-only", "-g", str(obj)], check=True,
                                  capture_output=True, text=True).stdout.split(),
                  *subprocess.run(["nm", "-u", str(obj)], check=True, capture_output=True,
                                  text=True).stdout.split()]
         mapping = workdir / f"{tag}{src.stem}.redefine"
-        mapping.write_text("".join(f"{n} {tag}{n}\n" for n in names if n.startswith("wmr_")))
+        mapping.write_text("".join(f"{n} {tag}{n}\n" for n in names if n.startswith(symbols)))
         subprocess.run(["objcopy", f"--redefine-syms={mapping}", str(obj)], check=True)
         objs.append(str(obj))
     return objs
@@ -163,9 +164,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
     lines.insert(0, f"typedef struct {{ float {members}; }} wmr_params_f32_t;")
     for name in used:
         lines.append(
-            ours_wrapper(specs[name], "ours32", "float").replace(
-                "const wmr_params_t", "const wmr_params_f32_t"
-            )
+            ours_wrapper(specs[name], "ours32", "float", "wmr_params_f32_t")
         )
     # libm sin/cos prototypes: our signatures under the renamed symbols.
     for name in (n for n in used if uses_trig(specs[n])):
@@ -179,9 +178,7 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
     if unchecked:
         lines.insert(0, '#include "wmrn_model.h"')
     for spec in unchecked:
-        lines.append(ours_wrapper(spec, "oursn", "double").replace(
-            "const wmr_params_t", "const wmrn_params_t").replace(
-            f"wmr_{spec.name}(", f"wmrn_{spec.name}("))
+        lines.append(ours_wrapper(spec, "oursn", "double", c_prefix="wmrn"))
     for name in HAND_WRITTEN & set(used):
         lines.append(
             f"static void hand_w_{name}(const void *in, void *out) "

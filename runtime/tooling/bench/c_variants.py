@@ -6,12 +6,12 @@ timing harness every variant runs in.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from codegen.robot_functions import law_specs, model_specs
-from codegen.spec import FunctionSpec
+from codegen.spec import Argument, FunctionSpec
 from modeling.robots.drishti.model import robot_model
 
 MODEL_FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "kinematics")
@@ -39,15 +39,21 @@ def output_sizes(spec: FunctionSpec) -> list[int]:
     return [len(a.exprs) for a in spec.outputs]
 
 
-def input_ranges(spec: FunctionSpec) -> list[tuple[float, float]]:
-    """Plausible ranges per flattened input: parameters ±20 % around Drishti's, angles,
-    rates, gains; keeps every variant on the same, physically meaningful inputs."""
-    drishti = {"m": 36.0, "I": 5.72, "K": 0.34, "I_w": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
+DRISHTI_NOMINAL = {"m": 36.0, "I": 5.72, "K": 0.34, "I_w": 0.07, "r": 0.096, "b": 0.414,
+                   "d": 0.12}
+
+
+def input_ranges(spec: FunctionSpec, nominal: Mapping[str, float] = DRISHTI_NOMINAL,
+                 spread: float = 0.2) -> list[tuple[float, float]]:
+    """Plausible ranges per flattened input: parameters (``nominal``, by symbol name)
+    within ±``spread`` of their values, angles, rates, gains; keeps every variant on the
+    same, physically meaningful inputs."""
     out = []
     for s in spec.input_symbols():
         name = str(s)
-        if name in drishti:
-            out.append((0.8 * drishti[name], 1.2 * drishti[name]))
+        if name in nominal:
+            lo, hi = (1 - spread) * nominal[name], (1 + spread) * nominal[name]
+            out.append((min(lo, hi), max(lo, hi)))
         elif name.startswith(("w", "eps", "h", "span", "k1", "k2", "p12", "p22", "gamma")):
             out.append((0.1, 1.0))
         elif name in ("alpha",):
@@ -76,16 +82,33 @@ def sympy_c(specs: Sequence[FunctionSpec]) -> str:
     return "\n".join(lines)
 
 
-def ours_wrapper(spec: FunctionSpec, prefix: str, real: str) -> str:
-    """``<prefix>_<name>(in, out)`` calling our generated function (params struct first)."""
+def params_in_place(arg: Argument, ctype: str, real: str, offset: int, tag: str
+                    ) -> tuple[str, str]:
+    """The parameters struct ``ctype`` read in place from the flat inputs at ``offset``,
+    as the other variants read theirs (no per-call copy in the timed loop): the argument's
+    C expression, and compile-time checks that the struct is exactly those ``real``s in
+    the spec's order (a layout that differs fails to compile)."""
+    n = len(arg.fields)
+    checks = [f"typedef char {tag}_size[sizeof({ctype}) == {n} * sizeof({real}) ? 1 : -1];"]
+    checks += [f"typedef char {tag}_at{k}[offsetof({ctype}, {f.c_field}) == {k} * "
+               f"sizeof({real}) ? 1 : -1];" for k, f in enumerate(arg.fields)]
+    return f"(const {ctype} *)(in + {offset})", "\n".join(checks) + "\n"
+
+
+def ours_wrapper(spec: FunctionSpec, prefix: str, real: str, params_ctype: str = "",
+                 c_prefix: str = "wmr") -> str:
+    """``<prefix>_<name>(in, out)`` calling our generated ``<c_prefix>_<name>``
+    (``f32_<c_prefix>_<name>`` in float), its parameters struct (``params_ctype``, default
+    ``<c_prefix>_params_t``) read in place: :func:`params_in_place`."""
+    params_ctype = params_ctype or f"{c_prefix}_params_t"
     args, off = [], 0
-    body = []
+    checks = ""
     for a in spec.inputs:
         n = len(a.all_symbols())
         if a.kind == "params":
-            fields = ", ".join(f"in[{off + k}]" for k in range(n))
-            body.append(f"    const wmr_params_t {a.name}_s = {{{fields}}};")
-            args.append(f"&{a.name}_s")
+            expr, checks = params_in_place(a, params_ctype, real, off,
+                                           f"{prefix}_{spec.name}_{a.name}")
+            args.append(expr)
         else:
             args.append(f"in + {off}")
         off += n
@@ -93,12 +116,12 @@ def ours_wrapper(spec: FunctionSpec, prefix: str, real: str) -> str:
     for size in output_sizes(spec):
         outs.append(f"out + {o}")
         o += size
-    fn = f"{'f32_' if real == 'float' else ''}wmr_{spec.name}"
+    fn = f"{'f32_' if real == 'float' else ''}{c_prefix}_{spec.name}"
     return (
-        f"static void {prefix}_{spec.name}(const void *in_, void *out_)\n{{\n"
+        checks
+        + f"static void {prefix}_{spec.name}(const void *in_, void *out_)\n{{\n"
         f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
-        + "\n".join(body)
-        + f"\n    {fn}({', '.join(args + outs)});\n}}\n"
+        f"    {fn}({', '.join(args + outs)});\n}}\n"
     )
 
 
@@ -162,6 +185,7 @@ def casadi_wrapper(spec: FunctionSpec) -> str:
 
 HARNESS = r"""
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <time.h>
 

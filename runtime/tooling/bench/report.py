@@ -19,6 +19,9 @@ from runtime.tooling.bench.c_bench import run_c, summarise_c
 from runtime.tooling.bench.c_variants import MODEL_FUNCTIONS, STEP_KERNELS, specs_by_name
 from runtime.tooling.bench.op_counts import casadi_op_count
 from runtime.tooling.bench.python_timings import python_bench, toolchain_times
+from runtime.tooling.bench.robot_c_bench import run as run_robots
+from runtime.tooling.bench.robot_c_bench import section as robots_section
+from runtime.tooling.bench.robot_c_bench import summarise as summarise_robots
 from runtime.tooling.bench.scale import Rung
 from runtime.tooling.bench.scale import measure as measure_scaling
 from runtime.tooling.bench.scale import section as scale_section
@@ -46,7 +49,8 @@ def _cell(x: dict[str, float], digits: int = 1, unit: str = "") -> str:
 
 
 def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any],
-                  runs: int) -> list[str]:
+                  runs: int, robots: dict[tuple[str, str, str], dict[str, float]]
+                  ) -> list[str]:
     """The full TDROC step (``wmr_tdroc_step``) against the hand-written step, per
     formulation and precision, and the goals of issue 31 that the host measures (ratios
     per repetition: median and range)."""
@@ -86,16 +90,17 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         "|---|---:|",
         *[f"| {v} | {_cell(x)} |" for v, x in fd.items()],
         "",
-        *ratio_tables(c, steps),
+        *ratio_tables(c, steps, robots),
     ]
     return lines
 
 
-def ratio_tables(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any]
-                 ) -> list[str]:
+def ratio_tables(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, Any],
+                 robots: dict[tuple[str, str, str], dict[str, float]]) -> list[str]:
     """The goals of issue 31 as measured: each ratio's median and range over the
-    repetitions (the step's per formulation and precision, the forward dynamics'). The
-    README carries these lines as they are (:func:`sync_readme`)."""
+    repetitions (the step's per formulation and precision, the forward dynamics', and
+    every shipped robot's against CasADi's C). The README carries these lines as they are
+    (:func:`sync_readme`)."""
     st = summarise_steps(steps)
     cases = sorted({case for case, _ in st}, key=lambda c: (c.split("/")[0] != "paper", c))
     fd_ratio = {k[1]: v for k, v in c.items() if k[0] == "forward_dynamics_ratio"}
@@ -115,7 +120,27 @@ def ratio_tables(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, An
         "|---|---:|---|",
         *[f"| {k} | {_cell(v, 2, '×')} | {_verdict(v, FD_GOALS.get(k, ''))} |"
           for k, v in sorted(fd_ratio.items())],
+        "",
+        *robot_ratio_table(robots),
     ]
+    return lines
+
+
+def robot_ratio_table(robots: dict[tuple[str, str, str], dict[str, float]]) -> list[str]:
+    """Per shipped robot: ours / CasADi's C (the same specs), double and float32."""
+    names = list(dict.fromkeys(k[0] for k in robots))
+    functions = ("forward_dynamics", "minimal_forward_dynamics", "tdroc_step_kernels")
+    lines = [
+        "| ours / CasADi's C, per robot (goal ≤ 0.8) | "
+        + " | ".join(f"{f}, {p}" for f in functions for p in ("double", "float32")) + " |",
+        "|---|" + "---:|" * (2 * len(functions)),
+    ]
+    for robot in names:
+        cells = [_cell(robots[key], 2, "×") if key in robots else "—"
+                 for f in functions
+                 for key in ((robot, f, "ours/casadi"),
+                             (robot, f, "ours_float32/casadi_float32"))]
+        lines.append(f"| {robot} | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -165,6 +190,8 @@ def write_report(
     calls: int,
     repeats: int,
     scaling: list[Rung],
+    robots: dict[tuple[str, str, str], dict[str, float]],
+    robot_calls: int,
     runs: int = 1,
 ) -> str:
     funcs = [*MODEL_FUNCTIONS, *(f"{k}_step_kernels" for k in STEP_KERNELS)]
@@ -213,7 +240,9 @@ def write_report(
         "every variant once). A controller step here is the sum of its kernels (TDE (17),",
         "TDROC gain (25), law); the complete step is timed below.",
         "",
-        *_step_section(c, steps, runs),
+        *_step_section(c, steps, runs, robots),
+        "",
+        *robots_section(robots, robot_calls, repeats),
         "",
         "## Python, µs per call of the forward dynamics",
         "",
@@ -272,6 +301,8 @@ def main(argv: list[str] | None = None) -> int:
     c = summarise_c(run_c(args.calls, args.repeats))
     print("C step benchmark ...", flush=True)
     steps = run_steps(args.calls, args.repeats, args.runs)
+    robot_calls = max(1, args.calls // 5)  # the trailers' functions take 5-30x longer
+    robots = summarise_robots(run_robots(robot_calls, args.repeats))
     print("Python benchmarks ...", flush=True)
     py = python_bench(max(1, args.calls // 100))
     specs = specs_by_name()
@@ -293,11 +324,12 @@ def main(argv: list[str] | None = None) -> int:
     tool = toolchain_times()
     print("scaling with the robot ...", flush=True)
     scaling = measure_scaling()
-    text = write_report(c, steps, py, ops, tool, args.calls, args.repeats, scaling, args.runs)
+    text = write_report(c, steps, py, ops, tool, args.calls, args.repeats, scaling, robots,
+                        robot_calls, args.runs)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "BENCHMARKS.md").write_text(text)
     # the README's ratio tables are BENCHMARKS.md's (tests/test_bench.py compares them)
-    sync_readme(args.out / "README.md", ratio_tables(c, steps))
+    sync_readme(args.out / "README.md", ratio_tables(c, steps, robots))
     (args.out / "benchmarks.json").write_text(
         json.dumps(
             {
@@ -306,6 +338,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"{case}/{v}": s for (case, v), s in sorted(summarise_steps(steps).items())
                 },
                 "c_step_checks": steps["checks"],
+                "c_robots_ns": {"/".join(k): s for k, s in sorted(robots.items())},
                 "python_us": py,
                 "ops": ops,
                 "toolchain": tool,
