@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0xe1cd200au
+#define TRAILER3_CODE_ID 0xc4d70652u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -97,26 +97,36 @@ static inline trailer3_exp_bits_t trailer3_exp_carry(trailer3_real_t x)
    bound and
    libm's beyond, and TRAILER3_SIN / TRAILER3_COS call them; float32's call sinf / cosf.
    -DTRAILER3_LIBM_TRIG:
-   libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then Taylor polynomials
-   in r^2 by Estrin's scheme (the terms left out are below half an ulp for |r| <= pi/4):
+   libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then minimax polynomials
+   in r^2 by Estrin's scheme (fdlibm's in double, degree 13 and 14; degree 7 and 8 in
+   float32; each within a small fraction of an ulp for |r| <= pi/4):
    within 2.5 ulp of the exact values in double (2 ulp of glibc's) and 2 ulp in float32
    (tests). Needs IEEE evaluation: round-to-nearest, no -ffast-math, FLT_EVAL_METHOD 0 (k =
    round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23; an x87 build is refused
    below); FMA contraction (-ffp-contract=fast) costs double up to about 3.4 ulp. */
+/* The trig helpers are inlined wherever they are called, however large the caller (at -O2
+   gcc declines to inline them into a large function): a sin and a cos of one angle then
+   share one reduction and one pair of polynomials instead of two calls computing both.
+   Optimising for size (-Os, the firmware images), one shared copy as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER3_TRIG_INLINE static inline __attribute__((always_inline))
+#else
+#define TRAILER3_TRIG_INLINE static inline
+#endif
 #ifdef TRAILER3_LIBM_TRIG
 #ifndef TRAILER3_FLOAT32
-static inline double trailer3_sin(double x)
+TRAILER3_TRIG_INLINE double trailer3_sin(double x)
 {
     return sin(x);
 }
 
-static inline double trailer3_cos(double x)
+TRAILER3_TRIG_INLINE double trailer3_cos(double x)
 {
     return cos(x);
 }
 #endif
 
-static inline void trailer3_sincos_bounded(trailer3_real_t x, trailer3_real_t *s,
+TRAILER3_TRIG_INLINE void trailer3_sincos_bounded(trailer3_real_t x, trailer3_real_t *s,
     trailer3_real_t *c)
 {
     *s = TRAILER3_SIN(x);
@@ -127,13 +137,13 @@ static inline void trailer3_sincos_bounded(trailer3_real_t x, trailer3_real_t *s
 #error "the generated sin/cos need IEEE evaluation: define TRAILER3_LIBM_TRIG"
 #endif
 /* 1 where the reductions below are exact: |x| <= 1.0e6; 0 for Inf and NaN. */
-static inline int trailer3_trig_in_range(trailer3_real_t x)
+TRAILER3_TRIG_INLINE int trailer3_trig_in_range(trailer3_real_t x)
 {
     return TRAILER3_FABS(x) <= TRAILER3_LIT(1.0e6);
 }
 
 #ifdef TRAILER3_FLOAT32
-static inline void trailer3_sincos_bounded(float x, float *s, float *c)
+TRAILER3_TRIG_INLINE void trailer3_sincos_bounded(float x, float *s, float *c)
 {
     const float shift = 12582912.0f;
     const float k = ((x * 0.636619772f) + shift) - shift;
@@ -157,11 +167,11 @@ static inline void trailer3_sincos_bounded(float x, float *s, float *c)
     const float r = (fabsf(x) < 0.78f) ? x : rk;
     const float z = r * r;
     const float z2 = z * z;
-    const float ps = ((-1.0f / 6.0f) + (z * (1.0f / 120.0f)))
-                     + (z2 * ((-1.0f / 5040.0f) + (z * (1.0f / 362880.0f))));
-    const float pc = ((-0.5f + (z * (1.0f / 24.0f)))
-                      + (z2 * ((-1.0f / 720.0f) + (z * (1.0f / 40320.0f)))))
-                     + ((z2 * z2) * (-1.0f / 3628800.0f));
+    /* minimax on |r| <= pi/4: sin within 2^-37, cos within 2^-33 (relative) */
+    const float ps = (-0.1666666716337204f + (z * 0.008333329111337662f))
+                     + (z2 * (-0.0001983933470910415f + (z * 2.71831163445313e-06f)));
+    const float pc = (-0.5f + (z * 0.04166661947965622f))
+                     + (z2 * (-0.001388668199069798f + (z * 2.4383567506447434e-05f)));
     /* sin r = r below 2^-12 (the correction is under half an ulp). */
     const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
     const float cr = 1.0f + (z * pc);
@@ -175,7 +185,7 @@ static inline void trailer3_sincos_bounded(float x, float *s, float *c)
 }
 #else
 /* sin and cos of x within the bound (anything finite beyond it). */
-static inline void trailer3_sincos_kernel(double x, double *s, double *c)
+TRAILER3_TRIG_INLINE void trailer3_sincos_kernel(double x, double *s, double *c)
 {
     const double shift = 6755399441055744.0;
     const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
@@ -191,16 +201,14 @@ static inline void trailer3_sincos_kernel(double x, double *s, double *c)
     const double z = r3 * r3;
     const double z2 = z * z;
     const double z4 = z2 * z2;
-    const double ps = (((-1.0 / 6.0) + (z * (1.0 / 120.0)))
-                       + (z2 * ((-1.0 / 5040.0) + (z * (1.0 / 362880.0)))))
-                      + (z4 * (((-1.0 / 39916800.0) + (z * (1.0 / 6227020800.0)))
-                               + (z2 * ((-1.0 / 1307674368000.0)
-                                        + (z * (1.0 / 355687428096000.0))))));
-    const double pc = ((-0.5 + (z * (1.0 / 24.0)))
-                       + (z2 * ((-1.0 / 720.0) + (z * (1.0 / 40320.0)))))
-                      + (z4 * (((-1.0 / 3628800.0) + (z * (1.0 / 479001600.0)))
-                               + (z2 * ((-1.0 / 87178291200.0)
-                                        + (z * (1.0 / 20922789888000.0))))));
+    /* fdlibm's minimax coefficients (k_sin.c, k_cos.c): within 2^-58 on |r| <= pi/4 */
+    const double ps = ((-1.66666666666666324348e-01 + (z * 8.33333333332248946124e-03))
+                       + (z2 * (-1.98412698298579493134e-04 + (z * 2.75573137070700676789e-06))))
+                      + (z4 * (-2.50507602534068634195e-08 + (z * 1.58969099521155010221e-10)));
+    const double pc = ((-0.5 + (z * 4.16666666666666019037e-02))
+                       + (z2 * (-1.38888888888741095749e-03 + (z * 2.48015872894767294178e-05))))
+                      + (z4 * ((-2.75573143513906633035e-07 + (z * 2.08757232129817482790e-09))
+                               + (z2 * -1.13596475577881948265e-11)));
     /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
@@ -212,7 +220,7 @@ static inline void trailer3_sincos_kernel(double x, double *s, double *c)
     *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
 }
 
-static inline void trailer3_sincos_bounded(double x, double *s, double *c)
+TRAILER3_TRIG_INLINE void trailer3_sincos_bounded(double x, double *s, double *c)
 {
     double sk;
     double ck;
@@ -223,7 +231,7 @@ static inline void trailer3_sincos_bounded(double x, double *s, double *c)
 
 /* The kernel's reduction and polynomials are the same code in both: once inlined, a sin
    and a cos of one angle share them. */
-static inline double trailer3_sin(double x)
+TRAILER3_TRIG_INLINE double trailer3_sin(double x)
 {
     double s;
     double c;
@@ -231,7 +239,7 @@ static inline double trailer3_sin(double x)
     return (trailer3_trig_in_range(x) != 0) ? s : sin(x);
 }
 
-static inline double trailer3_cos(double x)
+TRAILER3_TRIG_INLINE double trailer3_cos(double x)
 {
     double s;
     double c;
@@ -245,7 +253,7 @@ static inline double trailer3_cos(double x)
    are a step's validated inputs (|x| <= 1.0e6), so the bounded reduction above alone,
    in both precisions (NaN beyond the bound, as trailer3_sincos_bounded): no libm sinf/cosf
    and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
-static inline trailer3_real_t trailer3_sin_bounded(trailer3_real_t x)
+TRAILER3_TRIG_INLINE trailer3_real_t trailer3_sin_bounded(trailer3_real_t x)
 {
     trailer3_real_t s;
     trailer3_real_t c;
@@ -253,7 +261,7 @@ static inline trailer3_real_t trailer3_sin_bounded(trailer3_real_t x)
     return s;
 }
 
-static inline trailer3_real_t trailer3_cos_bounded(trailer3_real_t x)
+TRAILER3_TRIG_INLINE trailer3_real_t trailer3_cos_bounded(trailer3_real_t x)
 {
     trailer3_real_t s;
     trailer3_real_t c;
