@@ -217,13 +217,15 @@ def section(s: dict[tuple[str, str, str], dict[str, float]], calls: int, repeats
         "## Every shipped robot: ours against CasADi's C, ns per call (gcc -O2)",
         "",
         "The same specs through CasADi's `CodeGenerator` (double, and `casadi_real` float),",
-        "one process per robot, interleaved repetitions of "
-        f"{calls:,} calls over 256 input sets (parameters within ±"
-        f"{100 * PARAMETER_SPREAD:.0f} % of the robot file's), each variant checked against",
-        "ours (double) first: 1e-9 relative to the largest output, float32 1e-3. The TDROC",
-        "step's kernels (minimal formulation): TDE (17), the window's difference, ‖M⁻¹‖ when",
-        "it depends on q, the gain (25), the law (22), summed per repetition. Ratio: ours /",
-        "CasADi per repetition, median (min–max); goal ≤ 0.8 (issue 31).",
+        f"one process per robot, interleaved repetitions of {calls:,} calls over 256 input",
+        f"sets (parameters within ±{100 * PARAMETER_SPREAD:.0f} % of the robot file's; our "
+        "parameters struct read in place",
+        "from them, as CasADi reads its arrays), each variant checked against ours (double)",
+        "first: 1e-9 relative to the largest output, float32 1e-3. Ours checks its inputs,",
+        "parameters and results (the statuses of the contract); CasADi's C checks nothing.",
+        "The TDROC step's kernels (minimal formulation): TDE (17), the window's difference,",
+        "‖M⁻¹‖ when it depends on q, the gain (25), the law (22), summed per repetition.",
+        "Ratio: ours / CasADi per repetition, median (min–max); goal ≤ 0.8 (issue 31).",
         "",
         "| robot | function | ours double | CasADi double | ratio | ours float32 "
         "| CasADi float | ratio |",
