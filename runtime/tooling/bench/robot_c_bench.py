@@ -39,7 +39,7 @@ FUNCTIONS = ("forward_dynamics", "minimal_forward_dynamics")
 # nominal ||M^-1|| (per step when it depends on q), the gain (25), the law (22).
 STEP_KERNELS = ("minimal_tde", "minimal_omega_difference", "minimal_minv_norm",
                 "tdroc_weighted_gain", "minimal_tdroc_law")
-# variant: (C real type, tolerance against ours double relative to the largest output)
+# variant: its C real type (the harness checks float against ours double to 1e-3, double to 1e-9)
 VARIANTS = {"ours": "double", "ours_float32": "float", "casadi": "double",
             "casadi_float32": "float"}
 PARAMETER_SPREAD = 0.05  # parameters drawn within ±5 % of the robot file's values
