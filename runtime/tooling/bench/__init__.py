@@ -12,6 +12,9 @@ Writes ``BENCHMARKS.md`` and ``benchmarks.json`` at the repository root.
 
 Modules: :mod:`.c_variants` (the functions, their inputs and the C of each variant),
 :mod:`.c_bench` (one executable for all of them, run and summarised),
+:mod:`.step_bench` (the complete TDROC step against the hand-written one),
+:mod:`.robot_c_bench` (every shipped robot's functions against CasADi's C),
+:mod:`.scale` (how cost grows with the robot),
 :mod:`.python_timings` (Python variants and cold-start toolchain times), :mod:`.op_counts`
 (CasADi's operation counts), :mod:`.report` (the reports and the command line).
 """

@@ -33,6 +33,7 @@ from runtime.tooling.bench.c_variants import (
     ours_wrapper,
     output_sizes,
     prepared_wrapper,
+    prototype,
     specs_by_name,
     sympy_c,
 )
@@ -154,12 +155,8 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
         )
     # float32 prototypes: our signatures with float and the renamed symbols.
     for name in used:
-        spec = specs[name]
-        params = []
-        for a in spec.inputs:
-            params.append("const wmr_params_f32_t *" if a.kind == "params" else "const float *")
-        params += ["float *"] * len(spec.outputs)
-        lines.append(f"void f32_wmr_{name}({', '.join(params)});")
+        lines.append(prototype(specs[name], f"f32_wmr_{name}", "float", "wmr_params_f32_t",
+                               "wmr_status_t"))
     members = ", ".join(p.c_field for p in LUMPED)  # wmr_params_t's, in order
     lines.insert(0, f"typedef struct {{ float {members}; }} wmr_params_f32_t;")
     for name in used:
@@ -169,10 +166,8 @@ def build_bench(workdir: Path, cases: list[dict[str, Any]], specs: dict[str, Fun
     # libm sin/cos prototypes: our signatures under the renamed symbols.
     for name in (n for n in used if uses_trig(specs[n])):
         spec = specs[name]
-        params = ["const wmr_params_t *" if a.kind == "params" else "const double *"
-                  for a in spec.inputs] + ["double *"] * len(spec.outputs)
-        ret = "wmr_status_t" if spec.returns_status else "void"
-        lines.append(f"{ret} lm_wmr_{name}({', '.join(params)});")
+        lines.append(prototype(spec, f"lm_wmr_{name}", "double", "wmr_params_t",
+                               "wmr_status_t"))
         lines.append(ours_wrapper(spec, "ourslm", "double").replace(
             f"    wmr_{name}(", f"    lm_wmr_{name}("))
     if unchecked:
@@ -281,22 +276,21 @@ def run_c(calls: int, repeats: int) -> list[dict[str, Any]]:
     return rows
 
 
+def spread(values: list[float]) -> dict[str, float]:
+    """Median, min and max of repeated measurements (what every table reports)."""
+    return {"median": statistics.median(values), "min": min(values), "max": max(values)}
+
+
 def summarise_c(rows: list[dict[str, Any]]) -> dict[tuple[str, str], dict[str, float]]:
     out = {}
     for r in rows:
-        ns = r["ns"]
-        out[(r["function"], r["variant"])] = {
-            "median": statistics.median(ns),
-            "min": min(ns),
-            "max": max(ns),
-        }
+        out[(r["function"], r["variant"])] = spread(r["ns"])
     # Ratios per repetition (both timed in the same repetition): median, min, max.
     ns_of = {(r["function"], r["variant"]): r["ns"] for r in rows}
     for f, num, den in RATIO_PAIRS:
         if (f, num) in ns_of and (f, den) in ns_of:
             ratios = [a / b for a, b in zip(ns_of[(f, num)], ns_of[(f, den)], strict=True)]
-            out[(f"{f}_ratio", f"{num}/{den}")] = {
-                "median": statistics.median(ratios), "min": min(ratios), "max": max(ratios)}
+            out[(f"{f}_ratio", f"{num}/{den}")] = spread(ratios)
     # Controller steps: sum of their kernels' medians (and of mins and maxes).
     for ctrl, kernels in STEP_KERNELS.items():
         for variant in ("ours", "ours_float32", "casadi", "sympy"):

@@ -10,6 +10,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from codegen.backends.casadi import to_casadi
 from codegen.robot_functions import law_specs, model_specs
 from codegen.spec import Argument, FunctionSpec
 from modeling.robots.drishti.model import robot_model
@@ -168,19 +169,35 @@ def prepared_wrapper(spec: FunctionSpec, prefix: str = "oursp") -> str:
     )
 
 
-def casadi_wrapper(spec: FunctionSpec) -> str:
-    sizes = [len(a.all_symbols()) for a in spec.inputs]
-    offs = np.cumsum([0, *sizes])[:-1]
-    args = ", ".join(f"in + {o}" for o in offs)
+def casadi_wrapper(spec: FunctionSpec, prefix: str = "casadi_", real: str = "double") -> str:
+    """``<prefix>w_<name>(in, out)`` calling CasADi's generated ``<prefix><name>`` (declared
+    here: CasADi's headers of two precisions cannot both be included) with the arg/res
+    pointer arrays into the flat inputs and outputs and work vectors as large as the
+    function asks for."""
+    function = to_casadi(spec)
+    offs = np.cumsum([0, *(len(a.all_symbols()) for a in spec.inputs)])[:-1]
     out_offs = np.cumsum([0, *output_sizes(spec)])[:-1]
-    res = ", ".join(f"out + {o}" for o in out_offs)
+    name = f"{prefix}{spec.name}"
     return (
-        f"static void casadi_w_{spec.name}(const void *in_, void *out_)\n{{\n"
-        f"    const double *in = (const double *)in_;\n    double *out = (double *)out_;\n"
-        f"    const double *arg[{len(sizes)}] = {{{args}}};\n"
-        f"    double *res[{len(out_offs)}] = {{{res}}};\n"
-        f"    casadi_{spec.name}(arg, res, 0, 0, 0);\n}}\n"
+        f"int {name}(const {real} **arg, {real} **res, long long int *iw, {real} *w, int mem);\n"
+        f"static {real} {name}_wv[{max(1, function.sz_w())}];\n"
+        f"static long long int {name}_iwv[{max(1, function.sz_iw())}];\n"
+        f"static void {prefix}w_{spec.name}(const void *in_, void *out_)\n{{\n"
+        f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
+        f"    const {real} *arg[{len(offs)}] = {{{', '.join(f'in + {o}' for o in offs)}}};\n"
+        f"    {real} *res[{len(out_offs)}] = {{{', '.join(f'out + {o}' for o in out_offs)}}};\n"
+        f"    (void){name}(arg, res, {name}_iwv, {name}_wv, 0);\n}}\n"
     )
+
+
+def prototype(spec: FunctionSpec, function: str, real: str, params_ctype: str,
+              status_type: str) -> str:
+    """The C declaration of our generated ``spec`` as ``function`` (a renamed object's
+    symbol: the float32 or libm-trig build), in ``real`` with ``params_ctype``."""
+    params = [f"const {params_ctype} *" if a.kind == "params" else f"const {real} *"
+              for a in spec.inputs] + [f"{real} *"] * len(spec.outputs)
+    ret = status_type if spec.returns_status else "void"
+    return f"{ret} {function}({', '.join(params)});"
 
 
 HARNESS = r"""

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from codegen.backends.casadi import to_casadi
+from runtime.tooling.bench.c_bench import spread
 from runtime.tooling.bench.c_variants import specs_by_name
 
 ROOT = Path(__file__).resolve().parents[3]  # the repository
@@ -61,7 +62,7 @@ def python_bench(number: int) -> list[dict[str, Any]]:
             {
                 "function": "forward_dynamics",
                 "variant": label,
-                "us": {"median": statistics.median(per), "min": min(per), "max": max(per)},
+                "us": spread(per),
             }
         )
     return rows

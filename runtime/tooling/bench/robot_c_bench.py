@@ -10,7 +10,6 @@ CasADi's C, the competitor that grows with the robot at no cost to anyone.
 from __future__ import annotations
 
 import json
-import statistics
 import subprocess
 import tempfile
 from dataclasses import dataclass
@@ -18,19 +17,20 @@ from pathlib import Path
 from typing import Any
 
 from codegen.backends.casadi import generate_c
-from codegen.backends.casadi.render import to_casadi
 from codegen.robot_functions import law_specs, minv_norm_needs_q, model_specs
 from codegen.spec import FunctionSpec
 from modeling.robot_file import load_robot_model
 from modeling.robot_io import shipped_robot_file
 from modeling.robot_model import RobotModel
-from runtime.tooling.bench.c_bench import CFLAGS, renamed_objects
+from runtime.tooling.bench.c_bench import CFLAGS, renamed_objects, spread
 from runtime.tooling.bench.c_variants import (
     HARNESS,
+    casadi_wrapper,
     input_ranges,
     input_size,
     ours_wrapper,
     output_sizes,
+    prototype,
 )
 from runtime.tooling.bench.scale import LADDER, ROOT, generated_folder
 
@@ -71,40 +71,6 @@ def nominal_values(model: RobotModel) -> dict[str, float]:
     return {str(p.symbol): model.values[p.key] for p in model.params}
 
 
-def _prototype(spec: FunctionSpec, prefix: str, real: str) -> str:
-    ptype = f"{prefix}_params_f32_t" if real == "float" else f"{prefix}_params_t"
-    params = [f"const {ptype} *" if a.kind == "params" else f"const {real} *"
-              for a in spec.inputs] + [f"{real} *"] * len(spec.outputs)
-    ret = f"{prefix}_status_t" if spec.returns_status else "void"
-    return f"{ret} {'f32_' if real == 'float' else ''}{prefix}_{spec.name}({', '.join(params)});"
-
-
-def _casadi_wrapper(spec: FunctionSpec, tag: str, real: str) -> str:
-    """``<tag>_<name>(in, out)`` calling CasADi's ``<tag>_<name>`` (arg/res pointer arrays,
-    a work vector as large as the function asks for)."""
-    arg_offs, off = [], 0
-    for a in spec.inputs:
-        arg_offs.append(off)
-        off += len(a.all_symbols())
-    res_offs, o = [], 0
-    for size in output_sizes(spec):
-        res_offs.append(o)
-        o += size
-    name = f"{tag}_{spec.name}"
-    function = to_casadi(spec)
-    return (
-        f"int {name}(const {real} **arg, {real} **res, long long int *iw, {real} *w, int mem);\n"
-        f"static {real} {name}_w[{max(1, function.sz_w())}];\n"
-        f"static long long int {name}_iw[{max(1, function.sz_iw())}];\n"
-        f"static void {name}_call(const void *in_, void *out_)\n{{\n"
-        f"    const {real} *in = (const {real} *)in_;\n    {real} *out = ({real} *)out_;\n"
-        f"    const {real} *arg[{len(arg_offs)}] = "
-        f"{{{', '.join(f'in + {k}' for k in arg_offs)}}};\n"
-        f"    {real} *res[{len(res_offs)}] = {{{', '.join(f'out + {k}' for k in res_offs)}}};\n"
-        f"    (void){name}(arg, res, {name}_iw, {name}_w, 0);\n}}\n"
-    )
-
-
 def build(workdir: Path, rf: RobotFunctions) -> Path:
     """One executable timing ours (double, float32) and CasADi's (double, float) C of
     ``rf``'s functions in the harness of :mod:`c_variants`; returns its path."""
@@ -134,14 +100,15 @@ def build(workdir: Path, rf: RobotFunctions) -> Path:
         lines += [
             f"static const double lo_{spec.name}[{n_in}] = {{{', '.join(map(repr, lo))}}};",
             f"static const double hi_{spec.name}[{n_in}] = {{{', '.join(map(repr, hi))}}};",
-            _prototype(spec, prefix, "float"),
+            prototype(spec, f"f32_{prefix}_{spec.name}", "float", f"{prefix}_params_f32_t",
+                      f"{prefix}_status_t"),
             ours_wrapper(spec, "ours", "double", c_prefix=prefix),
             ours_wrapper(spec, "ours32", "float", f"{prefix}_params_f32_t", prefix),
-            _casadi_wrapper(spec, "casadi", "double"),
-            _casadi_wrapper(spec, "casadif", "float"),
+            casadi_wrapper(spec, "casadi_", "double"),
+            casadi_wrapper(spec, "casadif_", "float"),
         ]
-    fns = {"ours": "ours_{}", "ours_float32": "ours32_{}", "casadi": "casadi_{}_call",
-           "casadi_float32": "casadif_{}_call"}
+    fns = {"ours": "ours_{}", "ours_float32": "ours32_{}", "casadi": "casadi_w_{}",
+           "casadi_float32": "casadif_w_{}"}
     cases = [
         f'        {{"{s.name}", "{v}", {fns[v].format(s.name)}, {input_size(s)}, '
         f"{sum(output_sizes(s))}, {int(real == 'float')}, lo_{s.name}, hi_{s.name}, 0}},"
@@ -186,10 +153,6 @@ def run(calls: int = 200_000, repeats: int = 7, robots: tuple[str, ...] = LADDER
     return rows
 
 
-def _spread(values: list[float]) -> dict[str, float]:
-    return {"median": statistics.median(values), "min": min(values), "max": max(values)}
-
-
 def summarise(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str, float]]:
     """(robot, function, variant) → ns, and (robot, function, "ours/casadi" or
     "ours_float32/casadi_float32") → the per-repetition ratio; function "tdroc_step_kernels"
@@ -200,12 +163,12 @@ def summarise(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str
         for v in VARIANTS:
             ns[(robot, "tdroc_step_kernels", v)] = [
                 sum(t) for t in zip(*(ns[(robot, k, v)] for k in kernels), strict=True)]
-    out = {key: _spread(t) for key, t in ns.items()}
+    out = {key: spread(t) for key, t in ns.items()}
     for (robot, function, variant), t in ns.items():
         if variant.startswith("ours"):
             other = variant.replace("ours", "casadi")
             ratios = [a / b for a, b in zip(t, ns[(robot, function, other)], strict=True)]
-            out[(robot, function, f"{variant}/{other}")] = _spread(ratios)
+            out[(robot, function, f"{variant}/{other}")] = spread(ratios)
     return out
 
 

@@ -26,14 +26,13 @@ every run.
 from __future__ import annotations
 
 import json
-import statistics
 import subprocess
 import tempfile
 from pathlib import Path
 from typing import Any
 
 from runtime.bindings.cbuild import GENERATED_C
-from runtime.tooling.bench.c_bench import renamed_objects
+from runtime.tooling.bench.c_bench import renamed_objects, spread
 from runtime.tooling.firmware.build import frozen_define
 
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"
@@ -423,10 +422,6 @@ def run_steps(calls: int, repeats: int, runs: int = 1,
     return {"checks": checks, "rows": rows}
 
 
-def _stats(xs: list[float]) -> dict[str, float]:
-    return {"median": statistics.median(xs), "min": min(xs), "max": max(xs)}
-
-
 def summarise_steps(result: dict[str, Any]) -> dict[tuple[str, str], dict[str, float]]:
     """(case "formulation/precision", variant) -> median, min, max ns per step; and
     (case, "ratio:num/den") -> median, min, max of the per-repetition ratios."""
@@ -434,11 +429,11 @@ def summarise_steps(result: dict[str, Any]) -> dict[tuple[str, str], dict[str, f
     by_case: dict[str, dict[str, list[float]]] = {}
     for r in result["rows"]:
         case = f"{r['formulation']}/{r['precision']}"
-        out[(case, r["variant"])] = _stats(r["ns"])
+        out[(case, r["variant"])] = spread(r["ns"])
         by_case.setdefault(case, {})[r["variant"]] = r["ns"]
     for case, ns in by_case.items():
         for num, den in RATIOS:
             if num in ns and den in ns:
-                out[(case, f"ratio:{num}/{den}")] = _stats(
+                out[(case, f"ratio:{num}/{den}")] = spread(
                     [a / b for a, b in zip(ns[num], ns[den], strict=True)])
     return out
