@@ -156,6 +156,11 @@ def _template(name: str, source: str, **context: object) -> str:
 STEP_FIXED_INPUTS = frozenset({"span"})
 
 
+def called_kernels(text: str, kp: str) -> set[str]:
+    """The kernel names ``text`` (C) calls or defines as ``<kp><name>(``."""
+    return set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", text))
+
+
 def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: str,
                  config: CConfig) -> tuple[str, list[KeptKernel]]:
     """The kernels of ``module`` that ``text`` (the controllers' C) calls as ``<kp><kernel>``,
@@ -168,7 +173,7 @@ def step_kernels(text: str, kp: str, functions: Sequence[FunctionIR], module: st
     controller's ``_init`` calls to keep those values in the state, and ``<kp><kernel>``,
     the per-step rest reading them (a frozen build never calls ``_keep``: static inline, it
     is not compiled then). Returns the C and the kept kernels."""
-    called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", text))
+    called = called_kernels(text, kp)
     by_name = {f.spec.name: f for f in functions}
     unknown = called - set(by_name)
     if unknown:
@@ -211,7 +216,7 @@ def law_wrappers(functions: Sequence[FunctionIR], kernels: str, kp: str,
     """The body of each laws function the steps call as ``<kp><kernel>`` (``kernels``, the
     shared header's C): a call of that kernel, or, split, its ``_keep`` into a local then the
     per-step part (the steps' rounding: e.g. 1/span kept, then a product)."""
-    defined = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", kernels))
+    defined = called_kernels(kernels, kp)
     split = {k.name: k for k in kept}
     out: dict[str, list[str]] = {}
     for f in functions:
@@ -291,13 +296,13 @@ class CBackend:
         for info in CONTROLLERS:
             context = contexts[info.name]
             first = firsts[info.name]
-            called = set(re.findall(rf"\b{re.escape(kp)}(\w+)\(", first))
+            called = called_kernels(first, kp)
             mine = [k for k in kept if k.name in called]
             kept_ctx = [{"name": k.name, "size": k.size, "keep": k.keep["name"],
                          "fixed": list(k.fixed)} for k in mine]
             # the step's span is needed only by a (17) kernel that did not keep 1/span
             span_kept = [k.name for k in mine if "span" in k.fixed]
-            tde_called = set(re.findall(rf"\b{re.escape(kp)}(\w+_tde(?:_trig)?)\(", first))
+            tde_called = {k for k in called if k.endswith(("_tde", "_tde_trig"))}
             context.update(span_kept=span_kept, span_needed=bool(tde_called - set(span_kept)))
             files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law,
                                                       kept_kernels=kept_ctx, **context)
