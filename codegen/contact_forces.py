@@ -132,4 +132,8 @@ def contact_force_forms(model: RobotModel) -> ContactForms:
     forces = [stage.define(_row_scale(model, r) * lam[r]) for r in rows.rolling]
     forces += [stage.define(-_row_scale(model, r) * lam[r]) for r in rows.lateral]
     m = len(rows.rolling)
-    return ContactForms(stage, sp.Matrix(forces[:m]), sp.Matrix(forces[m:]))
+    # The multipliers are invariant under planar rigid motions (each a force along its
+    # wheel's own axes): evaluated in the root body's frame.
+    longitudinal, lateral = s.in_root_frame(stage, [sp.Matrix(forces[:m]),
+                                                    sp.Matrix(forces[m:])])
+    return ContactForms(stage, longitudinal, lateral)

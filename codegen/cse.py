@@ -163,6 +163,7 @@ def _cse_function(spec: FunctionSpec, reciprocals: bool) -> CseResult:
         new_e = visit(e)
         hoisted.append((sym, new_e))  # bases found inside e were appended first
     outputs_flat = [visit(e) for e in reduced]
+    hoisted, outputs_flat = _merge_equal_temps(hoisted, outputs_flat)
     if reciprocals:
         hoisted, outputs_flat = _share_reciprocals(hoisted, outputs_flat)
 
@@ -216,6 +217,29 @@ def _share_reciprocals(
         if sym in inverse:
             out.append((inverse[sym], sp.Integer(1) / sym))
     return out, [rewrite(e) for e in outputs]
+
+
+def _merge_equal_temps(
+    temps: list[tuple[sp.Symbol, sp.Expr]], outputs: list[sp.Expr]
+) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    """Temporaries equal to an earlier one, or to its negation, read as that one (value
+    numbering after CSE). SymPy's CSE matches subexpressions as they were written; two
+    definitions of a stage that become equal once their own temporaries are named (the
+    root frame's S and its derivative, Ṡ, repeat products of S's entries) or that differ
+    by a sign stay apart there. Negation is exact: the values are the same bits."""
+    subs: dict[sp.Basic, sp.Expr] = {}
+    seen: dict[sp.Expr, sp.Symbol] = {}
+    kept: list[tuple[sp.Symbol, sp.Expr]] = []
+    for sym, e in temps:
+        e = e.xreplace(subs) if subs else e
+        if e in seen:
+            subs[sym] = seen[e]
+        elif not e.is_Atom and -e in seen:
+            subs[sym] = -seen[-e]
+        else:
+            seen[e] = sym
+            kept.append((sym, e))
+    return kept, [e.xreplace(subs) for e in outputs] if subs else outputs
 
 
 def _inline_trivial(

@@ -204,10 +204,12 @@ def staged_forms(model: RobotModel, plant: bool = False) -> StagedForms:
     through the quantities (``modeling.staged``)."""
     system = model.plant_system if plant else model.system
     stage = Stage("_ps" if plant else "_ms")
-    sm = system.staged_minimal(stage)
+    # In the root body's frame (the same functions of q, with the hitch angles' sin and
+    # cos only; q̇'s and q̈'s x, y rows rotated back once): so are their Jacobians.
+    sm = system.staged_minimal(stage, root_frame=True)
     eta_dot, qdd = sm.forward_dynamics(model.tau)
     x = [*model.q, *system.eta]
-    xdot = sp.Matrix([*sm.velocities, *eta_dot])
+    xdot = sp.Matrix([*sm.world_velocities(), *eta_dot])
     jac_x = sp.Matrix(len(xdot), len(x), lambda i, j: stage.derivative(xdot[i], x[j]))
     jac_u = sp.Matrix(len(xdot), model.nu, lambda i, j: stage.derivative(xdot[i],
                                                                           model.tau[j]))
@@ -642,14 +644,29 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
 
 
 def _trig_of_inputs_only(spec: FunctionSpec) -> bool:
-    """Whether every sin and cos of ``spec`` takes one input coordinate as it is: then its
-    argument is a value a step has validated (|x| <= the steps' input bound) and the
-    bounded reduction serves (``FunctionSpec.bounded_trig``). An angle formed inside the
-    kernel (the PI's heading error θ_des − θ reaches twice the bound) keeps libm's."""
+    """Whether every sin and cos of ``spec`` takes one input coordinate as it is, or the
+    difference of two coordinates of one input array (a hitch angle θ_child − θ_root of
+    the root-frame evaluation, ``ConstrainedSystem.root_frame_point``): then its argument is
+    a value a step has validated (|x| <= the steps' input bound), or a hitch angle, which
+    a real hitch keeps within a turn, and the bounded reduction serves
+    (``FunctionSpec.bounded_trig``; beyond the bound it gives NaN, which the step reports
+    as a non-finite result). An angle formed from two arrays (the PI's heading error
+    θ_des − θ, a reference against a measurement) keeps libm's."""
     exprs = [e for a in spec.outputs for e in a.exprs] + [e for _, e in spec.definitions]
     inputs = set(spec.input_symbols())
+    arrays = [set(a.all_symbols()) for a in spec.inputs if a.kind == "array"]
+
+    def bounded(x: sp.Expr) -> bool:
+        if x in inputs:
+            return True
+        terms = sp.Add.make_args(x)
+        plus = [t for t in terms if t in inputs]
+        minus = [-t for t in terms if t not in inputs and -t in inputs]
+        return (len(terms) == 2 and len(plus) == len(minus) == 1
+                and any({plus[0], minus[0]} <= s for s in arrays))
+
     trig = {f for e in exprs for f in sp.sympify(e).atoms(sp.sin, sp.cos)}
-    return all(f.args[0] in inputs for f in trig)
+    return all(bounded(f.args[0]) for f in trig)
 
 
 def plant_params_arg(model: RobotModel, name: str = "pp") -> Argument:

@@ -71,12 +71,32 @@ class StagedMinimal:
     mass_matrix: sp.Matrix  # M̄ = Sᵀ M S, k × k
     bias: sp.Matrix  # H̄, k × 1
     input_matrix: sp.Matrix  # Sᵀ B, k × m
+    # (x, y indices, the root yaw) when S, q̇ and Ṡ η are the root frame's (their x, y
+    # rows rotate by R(θ_root) into the world's); None: they are the world frame's
+    plane: tuple[int, int, sp.Symbol] | None = None
 
     def forward_dynamics(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
-        """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ solved in the stage, q̈ = S η̇ + Ṡ η."""
+        """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ solved in the stage, q̈ = S η̇ + Ṡ η in the world
+        frame."""
         eta_dot = self.stage.solve(self.mass_matrix, self.input_matrix * tau - self.bias)
         qdd = self.stage.matrix(self.null_space * eta_dot + self.null_space_rate)
-        return eta_dot, qdd
+        return eta_dot, self.in_world(qdd)
+
+    def world_velocities(self) -> sp.Matrix:
+        """q̇ = S η in the world frame."""
+        return self.in_world(self.velocities)
+
+    def in_world(self, column: sp.Matrix) -> sp.Matrix:
+        """A column over q with its (x, y) rows rotated by R(θ_root) once when they are
+        the root frame's (``plane``); unchanged otherwise."""
+        if self.plane is None:
+            return column
+        x, y, theta = self.plane
+        a, b = column[x], column[y]
+        c, s = sp.cos(theta), sp.sin(theta)
+        out = sp.Matrix(column)
+        out[x], out[y] = self.stage.define(c * a - s * b), self.stage.define(s * a + c * b)
+        return out
 
 
 @dataclass(frozen=True)
@@ -100,6 +120,11 @@ class ConstrainedSystem:
     # What each row of A constrains ("no side slip of wheel 'right'", "rolling of wheel
     # 'right'"): the wheel contact forces (codegen.contact_forces) read it.
     constraint_labels: tuple[str, ...] = ()
+    # Indices of (x, y, the root body's yaw, the other bodies' absolute yaws) when T, A
+    # and B are invariant under a rigid planar motion of the whole robot (x, y rotated and
+    # shifted, every yaw turned by the same angle): ``staged_minimal(root_frame=True)``
+    # and ``in_root_frame`` use it. Empty: no such symmetry is claimed.
+    planar_frame: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         n = len(self.q)
@@ -215,31 +240,79 @@ class ConstrainedSystem:
         """Sᵀ B: the Lagrange multipliers do no work along S, so only Sᵀ B τ drives η."""
         return (self.null_space.T * self.input_matrix).applyfunc(self.simplify)
 
-    def staged_minimal(self, stage: Stage) -> StagedMinimal:
+    def staged_minimal(self, stage: Stage, root_frame: bool = False) -> StagedMinimal:
         """The minimal form through ``stage``'s quantities (see :class:`StagedMinimal`):
         the cost of S, M and H, which are small, plus one product per entry, where
         ``minimal_mass_matrix`` and ``minimal_bias`` multiply out (tens of thousands of
-        operations for a tractor with two trailers)."""
+        operations for a tractor with two trailers).
+
+        ``root_frame`` (with a ``planar_frame``): S, its derivatives, M and H evaluated
+        in the root body's frame (``root_frame_point``), every other quantity from them;
+        M̄, H̄, Sᵀ B and η̇ are the same functions of q, S, q̇ and Ṡ η the root frame's
+        (the result's ``plane`` rotates their x, y rows back). There S depends on the
+        hitch angles only, so its slopes along a child's yaw and along the root's are
+        equal and opposite, and Ṡ η is written once per hitch angle."""
         n, k = len(self.q), len(self.independent)
         s = self.staged_null_space(stage)
         eta = sp.Matrix(self.eta)
+        # ∂S/∂q_j, S's own entries differentiated (each a quantity)
+        slopes = {(i, j, a): d for i in self.dependent for j in range(n) for a in range(k)
+                  if (d := stage.derivative(s[i, a], self.q[j])) != 0}
+        mass, bias = self.mass_matrix, self.bias
+        plane: tuple[int, int, sp.Symbol] | None = None
+        if root_frame and self.planar_frame:
+            at_root = self.root_frame_point()
+            flat = stage.substituted([*s, *slopes.values()], at_root)
+            s = sp.Matrix(n, k, flat[:n * k])
+            slopes = dict(zip(slopes, flat[n * k:], strict=True))
+            mass, bias = mass.xreplace(at_root), bias.xreplace(at_root)
+            plane = self.planar_frame[0], self.planar_frame[1], self.q[self.planar_frame[2]]
         v = stage.matrix(s * eta)  # q̇ on the manifold (independent rows: η itself)
         on_manifold = {self.qdot[i]: v[i] for i in self.dependent}
-        m = stage.matrix(self.mass_matrix)
-        h = stage.matrix(self.bias.xreplace(on_manifold))
-        # Ṡ η = Σ_j ∂S/∂q_j η (S η)_j; S's own entries differentiated (each a quantity).
+        m = stage.matrix(mass)
+        h = stage.matrix(bias.xreplace(on_manifold))
+        # Ṡ η = Σ_j ∂S/∂q_j η (S η)_j, the terms of equal (or opposite) slopes gathered.
         rate = sp.zeros(n, 1)
         for i in self.dependent:
-            total = sp.S.Zero
-            for j in range(n):
-                for a in range(k):
-                    d = stage.derivative(s[i, a], self.q[j])
-                    if d != 0:
-                        total += d * eta[a] * v[j]
-            rate[i] = stage.define(total)
-        mbar = stage.matrix(s.T * m * s)
+            gathered: dict[sp.Expr, sp.Expr] = {}
+            for (row, j, a), d in slopes.items():
+                if row == i and d != 0:
+                    sign, key = (-1, -d) if d.could_extract_minus_sign() else (1, d)
+                    gathered[key] = gathered.get(key, sp.S.Zero) + sign * eta[a] * v[j]
+            rate[i] = stage.define(sp.Add(*(d * stage.define(c) for d, c in gathered.items())))
+        ms = stage.matrix(m * s)
+        # M̄ is symmetric: each entry on and above the diagonal formed once
+        mbar = sp.Matrix(k, k, lambda i, j: stage.define(
+            (s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
         hbar = stage.matrix(s.T * (m * rate + h))
-        return StagedMinimal(stage, s, v, rate, mbar, hbar, stage.matrix(s.T * self.input_matrix))
+        return StagedMinimal(stage, s, v, rate, mbar, hbar, stage.matrix(s.T * self.input_matrix),
+                             plane)
+
+    def root_frame_point(self) -> dict[sp.Symbol, sp.Expr]:
+        """The substitution evaluating a function of q in the root body's frame: the
+        root's yaw 0, every other yaw relative to it (``planar_frame``); x and y do not
+        occur in a planar robot's S, M or H."""
+        _, _, root, *others = self.planar_frame
+        theta = self.q[root]
+        at_root: dict[sp.Symbol, sp.Expr] = {theta: sp.S.Zero}
+        at_root.update({self.q[i]: self.q[i] - theta for i in others})
+        return at_root
+
+    def in_root_frame(self, stage: Stage, matrices: list[sp.Matrix]) -> list[sp.Matrix]:
+        """``matrices``, quantities of ``stage`` invariant under planar rigid motions (M̄,
+        H̄, η̇, a multiplier of (9): a force along a wheel's own axes), evaluated in the
+        root body's frame (``root_frame_point``): the same functions of q, written with the
+        sines and cosines of the yaws relative to the root's only. Unchanged without a
+        ``planar_frame``. (``staged_minimal(root_frame=True)`` evaluates its ingredients
+        there instead, which also halves Ṡ η.)"""
+        if not self.planar_frame:
+            return matrices
+        flat = stage.substituted([e for m in matrices for e in m], self.root_frame_point())
+        out, k = [], 0
+        for m in matrices:
+            out.append(sp.Matrix(m.rows, m.cols, flat[k:k + len(m)]))
+            k += len(m)
+        return out
 
     def staged_null_space(self, stage: Stage) -> sp.Matrix:
         """S(q) with its entries quantities of ``stage`` (here the closed form's entries;

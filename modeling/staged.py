@@ -42,14 +42,18 @@ class Stage:
 
     # --- naming ------------------------------------------------------------------------
     def define(self, expr: sp.Expr) -> sp.Expr:
-        """A symbol standing for ``expr`` (the same symbol for the same expression), or
-        ``expr`` itself when it is a number or a symbol."""
+        """A symbol standing for ``expr`` (the same symbol for the same expression, its
+        negation for the negated one), or ``expr`` itself when it is a number or a
+        symbol."""
         expr = sp.sympify(expr)
         if expr.is_Number or expr.is_Symbol or not expr.free_symbols:
             return expr
         hit = self._by_expr.get(expr)
         if hit is not None:
             return hit
+        hit = self._by_expr.get(-expr)  # a negation is exact: no second quantity for it
+        if hit is not None:
+            return -hit
         sym = sp.Symbol(f"{self.prefix}{len(self.definitions)}", real=True)
         self.definitions[sym] = expr
         self._by_expr[expr] = sym
@@ -63,7 +67,10 @@ class Stage:
         return isinstance(s, sp.Symbol) and s in self.definitions
 
     def _is_leaf(self, e: sp.Expr) -> bool:
-        """Whether ``e`` is a number, an input, or a quantity defined from inputs only."""
+        """Whether ``e`` is a number, an input, or a quantity defined from inputs only (or
+        the negation of one: ``define`` returns −s for a negated definition)."""
+        if e.could_extract_minus_sign():
+            e = -e
         if not self.is_quantity(e):
             return not (e.free_symbols & self.definitions.keys())
         return not (self.definitions[e].free_symbols & self.definitions.keys())
@@ -173,11 +180,12 @@ class Stage:
         """``exprs`` with inputs replaced by ``mapping``: every quantity that depends on a
         replaced input is defined again (a new symbol) with the replacement, so that, say,
         M̂(q) and M̂(q(t − h)) are both evaluated in one function."""
+        exprs = [sp.sympify(e) for e in exprs]
         renamed: dict[sp.Basic, sp.Expr] = dict(mapping)
-        for sym, e in list(self.definitions.items()):
+        for sym, e in self.definitions_for(exprs):  # only what exprs read, in order
             if e.free_symbols & renamed.keys():
                 renamed[sym] = self.define(e.xreplace(renamed))
-        return [sp.sympify(e).xreplace(renamed) for e in exprs]
+        return [e.xreplace(renamed) for e in exprs]
 
     # --- what generated code needs ----------------------------------------------------
     def definitions_for(self, exprs: Iterable[sp.Expr]) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:

@@ -9,6 +9,8 @@ relative, our float32 build to 1e-4.
 
 from __future__ import annotations
 
+import math
+import shutil
 from collections import defaultdict
 from pathlib import Path
 
@@ -160,11 +162,14 @@ def test_sync_readme_replaces_only_the_marked_block(tmp_path: Path) -> None:
 
 def test_every_shipped_robot_is_benchmarked_against_casadi_on_the_same_inputs() -> None:
     """The trailer's forward dynamics (both formulations) and its TDROC step's kernels,
-    ours in double and float32 against CasADi's C of the same specs in double and float:
+    ours in double and float32 against CasADi's C of the same specs in double and float,
+    and the forward dynamics against the hand-written C (csrc/hand_trailer.c, derived by
+    hand from the robot's kinetic energy: an independent route to the same numbers):
     built into one executable that checks every variant against ours before it times
     (else it refuses, and this raises), the checksums agreeing, the ratios summarised."""
     from runtime.tooling.bench.robot_c_bench import (
         FUNCTIONS,
+        HAND_VARIANTS,
         VARIANTS,
         robot_functions,
         run_robot,
@@ -175,7 +180,8 @@ def test_every_shipped_robot_is_benchmarked_against_casadi_on_the_same_inputs() 
     names = {s.name for s in robot_functions("trailer").specs}
     assert set(FUNCTIONS) <= names and "minimal_minv_norm" in names  # it depends on q
     assert {(r["function"], r["variant"]) for r in rows} == {
-        (n, v) for n in names for v in VARIANTS}
+        (n, v) for n in names for v in VARIANTS} | {
+        (n, v) for n in FUNCTIONS for v in HAND_VARIANTS}
     by = {(r["function"], r["variant"]): r for r in rows}
     for (name, variant), row in by.items():
         ref = by[(name, "ours")]["checksum"]
@@ -186,6 +192,7 @@ def test_every_shipped_robot_is_benchmarked_against_casadi_on_the_same_inputs() 
     step = s[("trailer", "tdroc_step_kernels", "ours")]["median"]
     assert step > s[("trailer", "minimal_tdroc_law", "ours")]["median"]
     assert s[("trailer", "forward_dynamics", "ours_float32/casadi_float32")]["median"] > 0.0
+    assert s[("trailer", "minimal_forward_dynamics", "ours_float32/hand_float32")]["median"] > 0
 
 
 def test_a_parameter_struct_read_in_place_must_have_the_specs_layout(tmp_path: Path) -> None:
@@ -209,3 +216,76 @@ def test_a_parameter_struct_read_in_place_must_have_the_specs_layout(tmp_path: P
         proc = subprocess.run(["gcc", "-std=c99", "-fsyntax-only", str(src)],
                               capture_output=True, text=True)
         assert (proc.returncode == 0) == compiles, (struct, proc.stderr)
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+def test_hand_written_trailer_forward_dynamics_keeps_our_contract(tmp_path: Path) -> None:
+    """The trailer's hand-written competitor (csrc/hand_trailer.c) under our contract: on
+    every bad input (each input it reads NaN or infinite, each positive parameter zero or
+    negative, a mass matrix made indefinite, torques that overflow) the status of
+    trailer_forward_dynamics and trailer_minimal_forward_dynamics, and on good ones and
+    on inputs neither reads (NaN there) their results (1e-12): a faster competitor that
+    skipped a check would not be comparable."""
+    import subprocess
+
+    from runtime.tooling.bench.c_bench import BENCH_CSRC
+    from runtime.tooling.bench.robot_c_bench import nominal_values, robot_functions
+
+    rf = robot_functions("trailer")
+    specs = {s.name: s for s in rf.specs}
+    nominal = nominal_values(rf.model)
+    harness = ['#include <math.h>', '#include <stdio.h>', '#include "trailer_model.h"']
+    checked = []
+    for name in ("forward_dynamics", "minimal_forward_dynamics"):
+        spec = specs[name]
+        symbols = [str(s) for s in spec.input_symbols()]
+        base = [nominal.get(s, 0.3 + 0.1 * k) for k, s in enumerate(symbols)]
+        cases = [base]
+        for k, s in enumerate(symbols):
+            for bad in (math.nan, math.inf, -math.inf):
+                cases.append([*base[:k], bad, *base[k + 1:]])
+            if s in nominal:
+                for bad in (0.0, -nominal[s]):
+                    cases.append([*base[:k], bad, *base[k + 1:]])
+        k4 = symbols.index("K_theta_tractor_x_tractor_2")
+        cases.append([*base[:k4], 1e3, *base[k4 + 1:]])  # M-bar indefinite
+        cases.append([*base[:-2], 1e308, -1e308])  # torques whose accelerations overflow
+        n_in, n_out = len(symbols), sum(len(a.exprs) for a in spec.outputs)
+        rows = ", ".join("{" + ", ".join(repr(x).replace("nan", "NAN").replace("inf", "INFINITY")
+                                         for x in c) + "}" for c in cases)
+        offs = [0]
+        for a in spec.inputs:
+            offs.append(offs[-1] + len(a.all_symbols()))
+        args = ["(const trailer_params_t *)in"] + [f"in + {o}" for o in offs[1:-1]]
+        harness += [
+            f"int hand_trailer_{name}(const double *in, double *out);",
+            f"static const double cases_{name}[{len(cases)}][{n_in}] = {{{rows}}};",
+            f"static void run_{name}(void) {{",
+            f"    for (int c = 0; c < {len(cases)}; ++c) {{",
+            f"        const double *in = cases_{name}[c];",
+            f"        double a[{n_out}], b[{n_out}], worst = 0.0;",
+            f"        int sa = trailer_{name}({', '.join(args)}, a);",
+            f"        int sb = hand_trailer_{name}(in, b);",
+            f"        for (int k = 0; sa == 0 && sb == 0 && k < {n_out}; ++k)",
+            "            worst = fmax(worst, fabs(a[k] - b[k]) / fmax(1.0, fabs(a[k])));",
+            f'        printf("{name} %d %d %.3e\\n", sa, sb, worst);',
+            "    }",
+            "}",
+        ]
+        checked.append(name)
+    harness.append("int main(void) { " + " ".join(f"run_{n}();" for n in checked)
+                   + " return 0; }")
+    src = tmp_path / "contract.c"
+    src.write_text("\n".join(harness) + "\n")
+    exe = tmp_path / "contract"
+    subprocess.run(["gcc", "-std=c99", "-O2", f"-I{rf.c_dir}", str(src),
+                    str(rf.c_dir / "trailer_model.c"), str(BENCH_CSRC / "hand_trailer.c"),
+                    "-lm", "-o", str(exe)], check=True)
+    lines = subprocess.run([str(exe)], capture_output=True, text=True,
+                           check=True).stdout.split("\n")
+    results = [line.split() for line in lines if line]
+    for name, ours, hand, worst in results:
+        assert ours == hand, (name, ours, hand)
+        assert float(worst) <= 1e-12, (name, worst)
+    for name in checked:  # not vacuous: every status of the contract occurs
+        assert {r[1] for r in results if r[0] == name} == {"0", "-2", "-3", "-4"}, name

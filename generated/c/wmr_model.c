@@ -546,7 +546,7 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
 }
 
 /* wmr_wheel_contact_forces: documented in wmr_model.h.
-   operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
     wmr_real_t *lateral)
@@ -580,80 +580,83 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
     const wmr_real_t _t8 = _t2*_t5;
     const wmr_real_t _t9 = _t1*d;
     const wmr_real_t _t10 = _t4*_t9;
-    const wmr_real_t _t11 = _t10 + _t8;
-    const wmr_real_t _t12 = -_t10 + _t8;
-    const wmr_real_t _t13 = K*_t5;
-    const wmr_real_t _t14 = K*_t1;
-    const wmr_real_t _t15 = -_t4*thetadot_l + _t4*thetadot_r;
-    const wmr_real_t _t16 = _t15*_t15;
-    const wmr_real_t _t17 = _t15*thetadot_r;
-    const wmr_real_t _t18 = _t15*thetadot_l;
-    const wmr_real_t _t19 = _t3 - _t7;
-    const wmr_real_t _t20 = _t13*_t4 + _t19*m;
-    const wmr_real_t _t21 = _t11*m - _t14*_t4;
-    const wmr_real_t _t22 = I*_t4 - _t11*_t14 + _t13*_t19;
-    const wmr_real_t _t23 = _t3 + _t7;
-    const wmr_real_t _t24 = -_t13*_t4 + _t23*m;
-    const wmr_real_t _t25 = _t12*m + _t14*_t4;
-    const wmr_real_t _t26 = -I*_t4 - _t12*_t14 + _t13*_t23;
-    const wmr_real_t _t27 = _t14*_t16;
-    const wmr_real_t _t28 = -_t11*_t17 - _t12*_t18;
-    const wmr_real_t _t29 = _t27 + _t28*m;
-    const wmr_real_t _t30 = _t13*_t16;
-    const wmr_real_t _t31 = _t17*_t19 + _t18*_t23;
-    const wmr_real_t _t32 = _t30 + _t31*m;
-    const wmr_real_t _t33 = _t13*_t28 - _t14*_t31;
-    const wmr_real_t _t34 = _t1*b;
-    const wmr_real_t _t35 = WMR_LIT(0.5)*_t34;
-    const wmr_real_t _t36 = _t5*b;
-    const wmr_real_t _t37 = WMR_LIT(0.5)*_t36;
-    const wmr_real_t _t38 = r*r;
-    const wmr_real_t _t39 = WMR_LIT(0.25)*_t38*m;
-    const wmr_real_t _t40 = I - WMR_LIT(2.0)*K*d + d*d*m;
-    const wmr_real_t _t41 = _t0*_t0*_t38;
-    const wmr_real_t _t42 = I_w + _t39 + _t40*_t41;
-    const wmr_real_t _t43 = I_w + _t11*_t21 + _t19*_t20 + _t22*_t4;
-    const wmr_real_t _t44 = _t12*_t21 + _t20*_t23 - _t22*_t4;
-    const wmr_real_t _t45 = _t11*_t25 + _t19*_t24 + _t26*_t4;
-    const wmr_real_t _t46 = I_w + _t12*_t25 + _t23*_t24 - _t26*_t4;
-    const wmr_real_t _t47 = _t11*_t32 + _t19*_t29 + _t33*_t4;
-    const wmr_real_t _t48 = _t12*_t32 + _t23*_t29 - _t33*_t4;
-    const wmr_real_t _t49 = -_t47 + tau_r;
-    const wmr_real_t _t50 = -_t48 + tau_l;
-    const wmr_real_t _t51 = _t43*_t46 - _t44*_t45;
-    const wmr_real_t _t52 = WMR_LIT(1.0)/_t51;
-    const wmr_real_t _t53 = _t52*(-_t44*_t50 + _t46*_t49);
-    const wmr_real_t _t54 = _t52*(_t43*_t50 - _t45*_t49);
-    const wmr_real_t _t55 = _t19*_t53 + _t23*_t54 + _t28;
-    const wmr_real_t _t56 = _t11*_t53 + _t12*_t54 + _t31;
-    const wmr_real_t _t57 = _t4*_t53 - _t4*_t54;
-    const wmr_real_t _t58 = -_t13*_t57 - _t27 - _t55*m;
-    const wmr_real_t _t59 = _t14*_t57 - _t30 - _t56*m;
-    const wmr_real_t _t60 = -I*_t57 - _t13*_t55 + _t14*_t56;
-    const wmr_real_t _t61 = _t35 + _t6;
-    const wmr_real_t _t62 = _t37 - _t9;
-    const wmr_real_t _t63 = _t35 - _t6;
-    const wmr_real_t _t64 = _t37 + _t9;
-    const wmr_real_t _t65 = -_t0;
-    const wmr_real_t _t66 = _t65*(_t58*_t61 + _t59*_t62 - _t60);
-    const wmr_real_t _t67 = _t65*(_t58*_t63 + _t59*_t64 + _t60);
-    const wmr_real_t _t68 = _t65*(-_t34*_t59 + _t36*_t58);
-    const wmr_real_t _t69 = _t39 - _t40*_t41;
+    const wmr_real_t _t11 = K*_t5;
+    const wmr_real_t _t12 = K*_t1;
+    const wmr_real_t _t13 = -_t4*thetadot_l + _t4*thetadot_r;
+    const wmr_real_t _t14 = _t13*_t13;
+    const wmr_real_t _t15 = _t11*_t4;
+    const wmr_real_t _t16 = -_t12*_t4;
+    const wmr_real_t _t17 = I*_t4;
+    const wmr_real_t _t18 = _t3 + _t7;
+    const wmr_real_t _t19 = -_t10 + _t8;
+    const wmr_real_t _t20 = _t11*_t18 - _t12*_t19 - _t17;
+    const wmr_real_t _t21 = _t20*_t4;
+    const wmr_real_t _t22 = _t12*_t14;
+    const wmr_real_t _t23 = _t10 + _t8;
+    const wmr_real_t _t24 = -_t13*thetadot_r;
+    const wmr_real_t _t25 = -_t13*thetadot_l;
+    const wmr_real_t _t26 = _t19*_t25 + _t23*_t24;
+    const wmr_real_t _t27 = _t22 + _t26*m;
+    const wmr_real_t _t28 = _t11*_t14;
+    const wmr_real_t _t29 = _t3 - _t7;
+    const wmr_real_t _t30 = -_t18*_t25 - _t24*_t29;
+    const wmr_real_t _t31 = _t28 + _t30*m;
+    const wmr_real_t _t32 = _t4*(_t11*_t26 - _t12*_t30);
+    const wmr_real_t _t33 = _t1*b;
+    const wmr_real_t _t34 = WMR_LIT(0.5)*_t33;
+    const wmr_real_t _t35 = _t5*b;
+    const wmr_real_t _t36 = WMR_LIT(0.5)*_t35;
+    const wmr_real_t _t37 = r*r;
+    const wmr_real_t _t38 = WMR_LIT(0.25)*_t37*m;
+    const wmr_real_t _t39 = I - WMR_LIT(2.0)*K*d + d*d*m;
+    const wmr_real_t _t40 = _t0*_t0*_t37;
+    const wmr_real_t _t41 = I_w + _t38 + _t39*_t40;
+    const wmr_real_t _t42 = _t15 + _t29*m;
+    const wmr_real_t _t43 = -_t15 + _t18*m;
+    const wmr_real_t _t44 = _t16 + _t23*m;
+    const wmr_real_t _t45 = -_t16 + _t19*m;
+    const wmr_real_t _t46 = _t11*_t29 - _t12*_t23 + _t17;
+    const wmr_real_t _t47 = I_w + _t23*_t44 + _t29*_t42 + _t4*_t46;
+    const wmr_real_t _t48 = _t21 + _t23*_t45 + _t29*_t43;
+    const wmr_real_t _t49 = I_w + _t18*_t43 + _t19*_t45 - _t21;
+    const wmr_real_t _t50 = _t23*_t31 + _t27*_t29 + _t32;
+    const wmr_real_t _t51 = _t18*_t27 + _t19*_t31 - _t32;
+    const wmr_real_t _t52 = -_t50 + tau_r;
+    const wmr_real_t _t53 = -_t51 + tau_l;
+    const wmr_real_t _t54 = _t47*_t49 - _t48*_t48;
+    const wmr_real_t _t55 = WMR_LIT(1.0)/_t54;
+    const wmr_real_t _t56 = _t55*(-_t48*_t53 + _t49*_t52);
+    const wmr_real_t _t57 = _t55*(_t47*_t53 - _t48*_t52);
+    const wmr_real_t _t58 = _t18*_t57 + _t26 + _t29*_t56;
+    const wmr_real_t _t59 = _t19*_t57 + _t23*_t56 + _t30;
+    const wmr_real_t _t60 = _t4*_t56 - _t4*_t57;
+    const wmr_real_t _t61 = -_t11*_t60 - _t22 - _t58*m;
+    const wmr_real_t _t62 = _t12*_t60 - _t28 - _t59*m;
+    const wmr_real_t _t63 = -I*_t60 - _t11*_t58 + _t12*_t59;
+    const wmr_real_t _t64 = _t34 + _t6;
+    const wmr_real_t _t65 = _t36 - _t9;
+    const wmr_real_t _t66 = _t34 - _t6;
+    const wmr_real_t _t67 = _t36 + _t9;
+    const wmr_real_t _t68 = -_t0;
+    const wmr_real_t _t69 = _t68*(_t61*_t64 + _t62*_t65 - _t63);
+    const wmr_real_t _t70 = _t68*(_t61*_t66 + _t62*_t67 + _t63);
+    const wmr_real_t _t71 = _t68*(-_t33*_t62 + _t35*_t61);
+    const wmr_real_t _t72 = _t38 - _t39*_t40;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t42 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t41 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return WMR_ERR_BAD_PARAMS;
     }
-    if (!(_t42*_t42 - _t69*_t69 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t41*_t41 - _t72*_t72 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t r_0 = _t67;
-    const wmr_real_t r_1 = _t66;
-    const wmr_real_t r_2 = -_t68;
+    const wmr_real_t r_0 = _t70;
+    const wmr_real_t r_1 = _t69;
+    const wmr_real_t r_2 = -_t71;
     if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2)) & WMR_EXP_CARRY_TOP)
             != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;

@@ -314,7 +314,7 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *         WMR_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,

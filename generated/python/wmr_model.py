@@ -502,7 +502,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 1 (shape 1x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 63 add, 104 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta, _, _ = _flat(q, 5, "q")
     thetadot_r, thetadot_l = _flat(wheel_rates, 2, "wheel_rates")
@@ -528,77 +528,80 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t8 = _t2*_t5
         _t9 = _t1*d
         _t10 = _t4*_t9
-        _t11 = _t10 + _t8
-        _t12 = -_t10 + _t8
-        _t13 = K*_t5
-        _t14 = K*_t1
-        _t15 = -_t4*thetadot_l + _t4*thetadot_r
-        _t16 = _t15*_t15
-        _t17 = _t15*thetadot_r
-        _t18 = _t15*thetadot_l
-        _t19 = _t3 - _t7
-        _t20 = _t13*_t4 + _t19*m
-        _t21 = _t11*m - _t14*_t4
-        _t22 = I*_t4 - _t11*_t14 + _t13*_t19
-        _t23 = _t3 + _t7
-        _t24 = -_t13*_t4 + _t23*m
-        _t25 = _t12*m + _t14*_t4
-        _t26 = -I*_t4 - _t12*_t14 + _t13*_t23
-        _t27 = _t14*_t16
-        _t28 = -_t11*_t17 - _t12*_t18
-        _t29 = _t27 + _t28*m
-        _t30 = _t13*_t16
-        _t31 = _t17*_t19 + _t18*_t23
-        _t32 = _t30 + _t31*m
-        _t33 = _t13*_t28 - _t14*_t31
-        _t34 = _t1*b
-        _t35 = 0.5*_t34
-        _t36 = _t5*b
-        _t37 = 0.5*_t36
-        _t38 = r*r
-        _t39 = 0.25*_t38*m
-        _t40 = I - 2.0*K*d + d*d*m
-        _t41 = _t0*_t0*_t38
-        _t42 = I_w + _t39 + _t40*_t41
-        _t43 = I_w + _t11*_t21 + _t19*_t20 + _t22*_t4
-        _t44 = _t12*_t21 + _t20*_t23 - _t22*_t4
-        _t45 = _t11*_t25 + _t19*_t24 + _t26*_t4
-        _t46 = I_w + _t12*_t25 + _t23*_t24 - _t26*_t4
-        _t47 = _t11*_t32 + _t19*_t29 + _t33*_t4
-        _t48 = _t12*_t32 + _t23*_t29 - _t33*_t4
-        _t49 = -_t47 + tau_r
-        _t50 = -_t48 + tau_l
-        _t51 = _t43*_t46 - _t44*_t45
-        _t52 = 1.0/_t51
-        _t53 = _t52*(-_t44*_t50 + _t46*_t49)
-        _t54 = _t52*(_t43*_t50 - _t45*_t49)
-        _t55 = _t19*_t53 + _t23*_t54 + _t28
-        _t56 = _t11*_t53 + _t12*_t54 + _t31
-        _t57 = _t4*_t53 - _t4*_t54
-        _t58 = -_t13*_t57 - _t27 - _t55*m
-        _t59 = _t14*_t57 - _t30 - _t56*m
-        _t60 = -I*_t57 - _t13*_t55 + _t14*_t56
-        _t61 = _t35 + _t6
-        _t62 = _t37 - _t9
-        _t63 = _t35 - _t6
-        _t64 = _t37 + _t9
-        _t65 = -_t0
-        _t66 = _t65*(_t58*_t61 + _t59*_t62 - _t60)
-        _t67 = _t65*(_t58*_t63 + _t59*_t64 + _t60)
-        _t68 = _t65*(-_t34*_t59 + _t36*_t58)
-        _t69 = _t39 - _t40*_t41
+        _t11 = K*_t5
+        _t12 = K*_t1
+        _t13 = -_t4*thetadot_l + _t4*thetadot_r
+        _t14 = _t13*_t13
+        _t15 = _t11*_t4
+        _t16 = -_t12*_t4
+        _t17 = I*_t4
+        _t18 = _t3 + _t7
+        _t19 = -_t10 + _t8
+        _t20 = _t11*_t18 - _t12*_t19 - _t17
+        _t21 = _t20*_t4
+        _t22 = _t12*_t14
+        _t23 = _t10 + _t8
+        _t24 = -_t13*thetadot_r
+        _t25 = -_t13*thetadot_l
+        _t26 = _t19*_t25 + _t23*_t24
+        _t27 = _t22 + _t26*m
+        _t28 = _t11*_t14
+        _t29 = _t3 - _t7
+        _t30 = -_t18*_t25 - _t24*_t29
+        _t31 = _t28 + _t30*m
+        _t32 = _t4*(_t11*_t26 - _t12*_t30)
+        _t33 = _t1*b
+        _t34 = 0.5*_t33
+        _t35 = _t5*b
+        _t36 = 0.5*_t35
+        _t37 = r*r
+        _t38 = 0.25*_t37*m
+        _t39 = I - 2.0*K*d + d*d*m
+        _t40 = _t0*_t0*_t37
+        _t41 = I_w + _t38 + _t39*_t40
+        _t42 = _t15 + _t29*m
+        _t43 = -_t15 + _t18*m
+        _t44 = _t16 + _t23*m
+        _t45 = -_t16 + _t19*m
+        _t46 = _t11*_t29 - _t12*_t23 + _t17
+        _t47 = I_w + _t23*_t44 + _t29*_t42 + _t4*_t46
+        _t48 = _t21 + _t23*_t45 + _t29*_t43
+        _t49 = I_w + _t18*_t43 + _t19*_t45 - _t21
+        _t50 = _t23*_t31 + _t27*_t29 + _t32
+        _t51 = _t18*_t27 + _t19*_t31 - _t32
+        _t52 = -_t50 + tau_r
+        _t53 = -_t51 + tau_l
+        _t54 = _t47*_t49 - _t48*_t48
+        _t55 = 1.0/_t54
+        _t56 = _t55*(-_t48*_t53 + _t49*_t52)
+        _t57 = _t55*(_t47*_t53 - _t48*_t52)
+        _t58 = _t18*_t57 + _t26 + _t29*_t56
+        _t59 = _t19*_t57 + _t23*_t56 + _t30
+        _t60 = _t4*_t56 - _t4*_t57
+        _t61 = -_t11*_t60 - _t22 - _t58*m
+        _t62 = _t12*_t60 - _t28 - _t59*m
+        _t63 = -I*_t60 - _t11*_t58 + _t12*_t59
+        _t64 = _t34 + _t6
+        _t65 = _t36 - _t9
+        _t66 = _t34 - _t6
+        _t67 = _t36 + _t9
+        _t68 = -_t0
+        _t69 = _t68*(_t61*_t64 + _t62*_t65 - _t63)
+        _t70 = _t68*(_t61*_t66 + _t62*_t67 + _t63)
+        _t71 = _t68*(-_t33*_t62 + _t35*_t61)
+        _t72 = _t38 - _t39*_t40
     except ZeroDivisionError:
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (r > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires r > 0")
     if not (b > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires b > 0")
-    if not (_t42 > 0.0):
+    if not (_t41 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t42*_t42 - _t69*_t69 > 0.0):
+    if not (_t41*_t41 - _t72*_t72 > 0.0):
         raise ValueError("WMR_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t67, _t66])
-    lateral = np.array([-_t68])
+    longitudinal = np.array([_t70, _t69])
+    lateral = np.array([-_t71])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("WMR_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):

@@ -301,6 +301,8 @@ def _system(sym: RobotDescription) -> DescribedSystem:
         input_matrix=description_input_matrix(sym),
         independent=independent,
         simplify=trig_reduce,
+        planar_frame=(0, 1, coords.body_angle[sym.root.name],
+                      *(coords.body_angle[b.name] for b in sym.bodies if b is not sym.root)),
         description=sym,
         coordinate_names=coords.names,
         inputs=tuple(sp.Symbol(f"tau_{w.name}", real=True) for w in sym.wheels if w.driven),

@@ -199,33 +199,31 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_
         const trailer_real_t t3 = TRAILER_LIT(1.2077294685990339)*p->radius_right;
         const trailer_real_t t4 = p->K_theta_cart_x_tractor*p->radius_right;
         const trailer_real_t t5 = TRAILER_LIT(0.5)*p->radius_right;
-        const trailer_real_t t6 = -p->J_theta_cart*t3 + p->K_theta_cart_x_tractor_2*t5
-                + TRAILER_LIT(0.7246376811594203)*t4;
-        const trailer_real_t t7 = TRAILER_LIT(2.4154589371980677)*p->radius_right;
-        const trailer_real_t t8 = p->J_theta_tractor*t7 + p->K_theta_tractor_x_tractor_2*t5
-                - TRAILER_LIT(0.36231884057971014)*t4;
-        const trailer_real_t t9 = p->J_x_tractor*t5 - p->K_theta_cart_x_tractor_2*t3
-                + p->K_theta_tractor_x_tractor_2*t7;
+        const trailer_real_t t6 = TRAILER_LIT(2.4154589371980677)*p->radius_right;
+        const trailer_real_t t7 = TRAILER_LIT(0.1916555812270998)*p->radius_left*p->radius_right;
+        const trailer_real_t t8 = TRAILER_LIT(1.2077294685990339)*p->radius_left;
+        const trailer_real_t t9 = p->K_theta_cart_x_tractor*p->radius_left;
         const trailer_real_t t10 = TRAILER_LIT(0.5)*p->radius_left;
-        const trailer_real_t t11 = TRAILER_LIT(2.4154589371980677)*p->radius_left;
-        const trailer_real_t t12 = TRAILER_LIT(1.2077294685990339)*p->radius_left;
-        const trailer_real_t t13 = TRAILER_LIT(0.1916555812270998)*p->radius_left*p->radius_right;
-        const trailer_real_t t14 = t1*t13 + t13*t2;
-        const trailer_real_t t15 = p->J_x_tractor*t10 + p->K_theta_cart_x_tractor_2*t12
-                - p->K_theta_tractor_x_tractor_2*t11;
-        const trailer_real_t t16 = p->K_theta_cart_x_tractor*p->radius_left;
-        const trailer_real_t t17 = p->J_theta_cart*t12 + p->K_theta_cart_x_tractor_2*t10
-                - TRAILER_LIT(0.7246376811594203)*t16;
-        const trailer_real_t t18 = -p->J_theta_tractor*t11 + p->K_theta_tractor_x_tractor_2*t10
-                + TRAILER_LIT(0.36231884057971014)*t16;
-        const trailer_real_t t19 = p->radius_left*p->radius_left;
+        const trailer_real_t t11 = p->J_theta_cart*t8 + p->K_theta_cart_x_tractor_2*t10
+                - TRAILER_LIT(0.7246376811594203)*t9;
+        const trailer_real_t t12 = TRAILER_LIT(2.4154589371980677)*p->radius_left;
+        const trailer_real_t t13 = -p->J_theta_tractor*t12 + p->K_theta_tractor_x_tractor_2*t10
+                + TRAILER_LIT(0.36231884057971014)*t9;
+        const trailer_real_t t14 = p->J_x_tractor*t10 + p->K_theta_cart_x_tractor_2*t8
+                - p->K_theta_tractor_x_tractor_2*t12;
+        const trailer_real_t t15 = t1*t7 - t11*t3 + t13*t6 + t14*t5 + t2*t7;
+        const trailer_real_t t16 = p->radius_left*p->radius_left;
         const trailer_real_t mbar[4] = {
             p->J_theta_right + TRAILER_LIT(0.5498903124927069)*t0*t1
-                    + TRAILER_LIT(0.06679852505309342)*t0*t2 - t3*t6 + t5*t9 + t7*t8,
-            t10*t9 - t11*t8 + t12*t6 + t14,
-            t14 + t15*t5 - t17*t3 + t18*t7,
-            p->J_theta_left + TRAILER_LIT(0.06679852505309342)*t1*t19 + t10*t15 - t11*t18 + t12*t17
-                    + TRAILER_LIT(0.5498903124927069)*t19*t2
+                    + TRAILER_LIT(0.06679852505309342)*t0*t2 - t3*(-p->J_theta_cart*t3
+                    + p->K_theta_cart_x_tractor_2*t5 + TRAILER_LIT(0.7246376811594203)*t4)
+                    + t5*(p->J_x_tractor*t5 - p->K_theta_cart_x_tractor_2*t3
+                    + p->K_theta_tractor_x_tractor_2*t6) + t6*(p->J_theta_tractor*t6
+                    + p->K_theta_tractor_x_tractor_2*t5 - TRAILER_LIT(0.36231884057971014)*t4),
+            t15,
+            t15,
+            p->J_theta_left + TRAILER_LIT(0.06679852505309342)*t1*t16 + t10*t14 + t11*t8 - t12*t13
+                    + TRAILER_LIT(0.5498903124927069)*t16*t2
         };
         ok = ok && (mbar[0] > TRAILER_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */

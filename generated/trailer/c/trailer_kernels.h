@@ -44,8 +44,136 @@ static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm
 
 /* trailer_k_minimal_tde_keep: the parameter-only part of trailer_minimal_tde (trailer_laws.h
    documents it).
-   operations after CSE: 0 add, 4 mul, 3 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 3 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const trailer_real_t *span,
+    trailer_real_t kept[18])
+{
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t span_1 = span[0];
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t7 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t8 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t9 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer_real_t _t10 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart_left;
+    kept[2] = J_theta_cart_right;
+    kept[3] = J_theta_left;
+    kept[4] = J_theta_right;
+    kept[5] = K_theta_cart_x_tractor;
+    kept[6] = K_theta_cart_x_tractor_2;
+    kept[7] = _t0;
+    kept[8] = _t1;
+    kept[9] = _t2;
+    kept[10] = _t3;
+    kept[11] = _t4;
+    kept[12] = _t5;
+    kept[13] = _t6;
+    kept[14] = _t7;
+    kept[15] = _t8;
+    kept[16] = _t9;
+    kept[17] = _t10;
+}
+
+/* trailer_k_minimal_tde: the per-step part of trailer_minimal_tde (trailer_laws.h documents it).
+   operations after CSE: 41 add, 59 mul, 0 div, 2 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tde(const trailer_real_t kept[18],
+    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
+    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
+{
+    const trailer_real_t qp2 = q_prev[2];
+    const trailer_real_t qp3 = q_prev[3];
+    const trailer_real_t _t11 = qp2 - qp3;
+    const trailer_real_t _t12 = TRAILER_SIN_BOUNDED(_t11);
+    const trailer_real_t _t13 = TRAILER_COS_BOUNDED(_t11);
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t13;
+    const trailer_real_t _t15 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t0 = kept[7];
+    const trailer_real_t _t1 = kept[8];
+    const trailer_real_t _t16 = _t0*_t14 - _t1*_t12;
+    const trailer_real_t _t17 = -TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = -_t0*_t15;
+    const trailer_real_t _t2 = kept[9];
+    const trailer_real_t _t3 = kept[10];
+    const trailer_real_t _t20 = -_t12*_t3 + _t14*_t2;
+    const trailer_real_t _t21 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = -_t15*_t2;
+    const trailer_real_t qd_now0 = qdot_now[0];
+    const trailer_real_t qd_then0 = qdot_then[0];
+    const trailer_real_t _t4 = kept[11];
+    const trailer_real_t _t24 = _t4*(qd_now0 - qd_then0);
+    const trailer_real_t qd_now1 = qdot_now[1];
+    const trailer_real_t qd_then1 = qdot_then[1];
+    const trailer_real_t _t25 = _t4*(qd_now1 - qd_then1);
+    const trailer_real_t _t26 = _t1*_t13 + _t18 - _t19;
+    const trailer_real_t _t27 = _t13*_t3 + _t22 - _t23;
+    const trailer_real_t _t5 = kept[12];
+    const trailer_real_t _t28 = _t26*_t5;
+    const trailer_real_t _t29 = _t27*_t5;
+    const trailer_real_t _t30 = _t1*_t13 - _t18 - _t19;
+    const trailer_real_t _t31 = _t13*_t3 - _t22 - _t23;
+    const trailer_real_t _t6 = kept[13];
+    const trailer_real_t _t32 = _t30*_t6;
+    const trailer_real_t _t33 = _t31*_t6;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t34 = -K_theta_cart_x_tractor*_t12 + K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t14 + K_theta_cart_x_tractor_2*_t15;
+    const trailer_real_t _t7 = kept[14];
+    const trailer_real_t _t36 = _t17*_t34 + _t7;
+    const trailer_real_t _t8 = kept[15];
+    const trailer_real_t _t37 = _t21*_t34 + _t8;
+    const trailer_real_t _t9 = kept[16];
+    const trailer_real_t _t38 = _t17*_t35 + _t9;
+    const trailer_real_t _t10 = kept[17];
+    const trailer_real_t _t39 = _t10 + _t21*_t35;
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t40 = J_theta_cart*_t17 + _t0*_t35 + _t1*_t34;
+    const trailer_real_t _t41 = J_theta_cart*_t21 + _t2*_t35 + _t3*_t34;
+    const trailer_real_t J_theta_cart_right = kept[2];
+    const trailer_real_t _t42 = J_theta_cart_right*_t28;
+    const trailer_real_t _t43 = J_theta_cart_right*_t29;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t44 = J_theta_cart_left*_t32;
+    const trailer_real_t _t45 = J_theta_cart_left*_t33;
+    const trailer_real_t J_theta_right = kept[4];
+    const trailer_real_t _t46 = J_theta_right + _t0*_t38 + _t1*_t36 + _t17*_t40 + _t28*_t42
+            + _t32*_t44;
+    const trailer_real_t _t47 = _t0*_t39 + _t1*_t37 + _t17*_t41 + _t28*_t43 + _t32*_t45;
+    const trailer_real_t J_theta_left = kept[3];
+    const trailer_real_t _t48 = J_theta_left + _t2*_t39 + _t21*_t41 + _t29*_t43 + _t3*_t37
+            + _t33*_t45;
+    const trailer_real_t up0 = u_prev[0];
+    const trailer_real_t up1 = u_prev[1];
+    H1hat[0] = -_t24*_t46 - _t25*_t47 + up0;
+    H1hat[1] = -_t24*_t47 - _t25*_t48 + up1;
+}
+
+/* trailer_k_minimal_minv_norm_keep: the parameter-only part of trailer_minimal_minv_norm
+   (trailer_laws.h documents it).
+   operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
     trailer_real_t kept[17])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
@@ -57,255 +185,106 @@ static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const t
     const trailer_real_t J_x_tractor = p->J_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t7 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer_real_t _t8 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t9 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart_left;
     kept[2] = J_theta_cart_right;
     kept[3] = J_theta_left;
     kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-    kept[16] = _t6;
-}
-
-/* trailer_k_minimal_tde: the per-step part of trailer_minimal_tde (trailer_laws.h documents it).
-   operations after CSE: 68 add, 106 mul, 0 div, 4 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tde(const trailer_real_t kept[17],
-    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
-    const trailer_real_t *qdot_then, trailer_real_t *H1hat)
-{
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(qp3);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(qp3);
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(qp2);
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(qp2);
-    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t12 = -_t10*_t11 - TRAILER_LIT(0.3)*_t7*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t8 + _t16*_t7;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t10*_t7 - _t11*_t9;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t7 - _t16*_t8;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t8 + _t23*_t7;
-    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
-    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t7 - _t23*_t8;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t9;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t9;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t7 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t7 + _t30);
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t40 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t41 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t52 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t53 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t54 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t qd_now0 = qdot_now[0];
-    const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t55 = _t6*(qd_now0 - qd_then0);
-    const trailer_real_t qd_now1 = qdot_now[1];
-    const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t56 = _t6*(qd_now1 - qd_then1);
-    const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t57 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t41 + _t14*_t35 + _t16*_t38 + _t18*_t40;
-    const trailer_real_t _t58 = _t1*_t41 + _t22*_t35 + _t23*_t38 + _t25*_t40 + _t50;
-    const trailer_real_t _t59 = -_t0*_t54 + _t14*_t51 + _t16*_t52 + _t18*_t53 + _t50;
-    const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t60 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t54 + _t22*_t51 + _t23*_t52 + _t25*_t53;
-    const trailer_real_t up0 = u_prev[0];
-    const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t55*_t57 - _t56*_t58 + up0;
-    H1hat[1] = -_t55*_t59 - _t56*_t60 + up1;
-}
-
-/* trailer_k_minimal_minv_norm_keep: the parameter-only part of trailer_minimal_minv_norm
-   (trailer_laws.h documents it).
-   operations after CSE: 0 add, 4 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
-    trailer_real_t kept[16])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_left;
-    kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
+    kept[5] = K_theta_cart_x_tractor;
+    kept[6] = K_theta_cart_x_tractor_2;
+    kept[7] = _t0;
+    kept[8] = _t1;
+    kept[9] = _t2;
+    kept[10] = _t3;
+    kept[11] = _t4;
+    kept[12] = _t5;
+    kept[13] = _t6;
+    kept[14] = _t7;
+    kept[15] = _t8;
+    kept[16] = _t9;
 }
 
 /* trailer_k_minimal_minv_norm: the per-step part of trailer_minimal_minv_norm (trailer_laws.h
    documents it).
-   operations after CSE: 66 add, 105 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static inline void trailer_k_minimal_minv_norm(const trailer_real_t kept[16],
+   operations after CSE: 38 add, 58 mul, 1 div, 2 sin/cos, 1 sqrt, 1 fabs */
+static inline void trailer_k_minimal_minv_norm(const trailer_real_t kept[17],
     const trailer_real_t *q, trailer_real_t *norm)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
-    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN_BOUNDED(_t10);
+    const trailer_real_t _t12 = TRAILER_COS_BOUNDED(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = kept[7];
+    const trailer_real_t _t1 = kept[8];
+    const trailer_real_t _t15 = _t0*_t13 + _t1*_t11;
+    const trailer_real_t _t16 = -TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t0*_t14;
+    const trailer_real_t _t2 = kept[9];
+    const trailer_real_t _t3 = kept[10];
+    const trailer_real_t _t19 = _t11*_t3 + _t13*_t2;
+    const trailer_real_t _t20 = -TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.2)*_t20;
+    const trailer_real_t _t22 = _t14*_t2;
+    const trailer_real_t _t23 = _t1*_t12 + _t17 - _t18;
+    const trailer_real_t _t4 = kept[11];
+    const trailer_real_t _t24 = _t23*_t4;
+    const trailer_real_t _t25 = _t1*_t12 - _t17 - _t18;
+    const trailer_real_t _t5 = kept[12];
+    const trailer_real_t _t26 = _t25*_t5;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t27 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t _t6 = kept[13];
+    const trailer_real_t _t28 = _t20*_t27 + _t6;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t7 = kept[14];
+    const trailer_real_t _t30 = _t20*_t29 + _t7;
     const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t31 = J_theta_cart*_t20 + _t2*_t29 + _t27*_t3;
+    const trailer_real_t _t32 = _t12*_t3 + _t21 - _t22;
+    const trailer_real_t _t33 = _t32*_t4;
     const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
+    const trailer_real_t _t34 = J_theta_cart_right*_t33;
+    const trailer_real_t _t35 = _t12*_t3 - _t21 - _t22;
+    const trailer_real_t _t36 = _t35*_t5;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t37 = J_theta_cart_left*_t36;
+    const trailer_real_t _t38 = _t0*_t30 + _t1*_t28 + _t16*_t31 + _t24*_t34 + _t26*_t37;
+    const trailer_real_t _t39 = _t38*_t38;
+    const trailer_real_t _t8 = kept[15];
+    const trailer_real_t _t40 = _t16*_t27 + _t8;
+    const trailer_real_t _t9 = kept[16];
+    const trailer_real_t _t41 = _t16*_t29 + _t9;
+    const trailer_real_t _t42 = J_theta_cart*_t16 + _t0*_t29 + _t1*_t27;
+    const trailer_real_t _t43 = J_theta_cart_right*_t24;
+    const trailer_real_t _t44 = J_theta_cart_left*_t26;
     const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t55 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t56 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t57 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
+    const trailer_real_t _t45 = J_theta_right + _t0*_t41 + _t1*_t40 + _t16*_t42 + _t24*_t43
+            + _t26*_t44;
     const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t58 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
-    norm[0] = trailer_norm4(_t55, _t56, _t57, _t58)/TRAILER_FABS(_t55*_t58 - _t56*_t57);
+    const trailer_real_t _t46 = J_theta_left + _t2*_t30 + _t20*_t31 + _t28*_t3 + _t33*_t34
+            + _t36*_t37;
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t39 + _t45*_t45 + _t46*_t46)/TRAILER_FABS(_t39
+            - _t45*_t46);
 }
 
 /* trailer_k_minimal_omega_difference: the body of trailer_minimal_omega_difference (trailer_laws.h
@@ -323,226 +302,243 @@ static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newe
     norm[0] = trailer_norm2(_t0, _t1);
 }
 
+/* trailer_k_minimal_tdc_law_keep: the parameter-only part of trailer_minimal_tdc_law
+   (trailer_laws.h documents it).
+   operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tdc_law_keep(const trailer_params_t *p,
+    trailer_real_t kept[17])
+{
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t7 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t8 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart_left;
+    kept[2] = J_theta_cart_right;
+    kept[3] = J_theta_left;
+    kept[4] = J_theta_right;
+    kept[5] = K_theta_cart_x_tractor;
+    kept[6] = K_theta_cart_x_tractor_2;
+    kept[7] = _t0;
+    kept[8] = _t1;
+    kept[9] = _t2;
+    kept[10] = _t3;
+    kept[11] = _t4;
+    kept[12] = _t5;
+    kept[13] = _t6;
+    kept[14] = _t7;
+    kept[15] = _t8;
+    kept[16] = _t9;
+}
+
 /* trailer_k_minimal_tdc_law: the per-step part of trailer_minimal_tdc_law (trailer_laws.h documents
    it).
-   operations after CSE: 70 add, 107 mul, 0 div, 4 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[16], const trailer_real_t *q,
+   operations after CSE: 43 add, 61 mul, 0 div, 2 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[17], const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
 {
     (void)p12;
     (void)p22;
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
-    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN_BOUNDED(_t10);
+    const trailer_real_t _t12 = TRAILER_COS_BOUNDED(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = kept[7];
+    const trailer_real_t _t1 = kept[8];
+    const trailer_real_t _t15 = _t0*_t13 + _t1*_t11;
+    const trailer_real_t _t16 = -TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t0*_t14;
+    const trailer_real_t _t2 = kept[9];
+    const trailer_real_t _t3 = kept[10];
+    const trailer_real_t _t19 = _t11*_t3 + _t13*_t2;
+    const trailer_real_t _t20 = -TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.2)*_t20;
+    const trailer_real_t _t22 = _t14*_t2;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t55 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t23 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t56 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t24 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t25 = _t1*_t12 + _t17 - _t18;
+    const trailer_real_t _t26 = _t12*_t3 + _t21 - _t22;
+    const trailer_real_t _t4 = kept[11];
+    const trailer_real_t _t27 = _t25*_t4;
+    const trailer_real_t _t28 = _t26*_t4;
+    const trailer_real_t _t29 = _t1*_t12 - _t17 - _t18;
+    const trailer_real_t _t30 = _t12*_t3 - _t21 - _t22;
+    const trailer_real_t _t5 = kept[12];
+    const trailer_real_t _t31 = _t29*_t5;
+    const trailer_real_t _t32 = _t30*_t5;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t6 = kept[13];
+    const trailer_real_t _t35 = _t16*_t33 + _t6;
+    const trailer_real_t _t7 = kept[14];
+    const trailer_real_t _t36 = _t20*_t33 + _t7;
+    const trailer_real_t _t8 = kept[15];
+    const trailer_real_t _t37 = _t16*_t34 + _t8;
+    const trailer_real_t _t9 = kept[16];
+    const trailer_real_t _t38 = _t20*_t34 + _t9;
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t39 = J_theta_cart*_t16 + _t0*_t34 + _t1*_t33;
+    const trailer_real_t _t40 = J_theta_cart*_t20 + _t2*_t34 + _t3*_t33;
+    const trailer_real_t J_theta_cart_right = kept[2];
+    const trailer_real_t _t41 = J_theta_cart_right*_t27;
+    const trailer_real_t _t42 = J_theta_cart_right*_t28;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t43 = J_theta_cart_left*_t31;
+    const trailer_real_t _t44 = J_theta_cart_left*_t32;
     const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t57 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t58 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t59 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
+    const trailer_real_t _t45 = J_theta_right + _t0*_t37 + _t1*_t35 + _t16*_t39 + _t27*_t41
+            + _t31*_t43;
+    const trailer_real_t _t46 = _t0*_t38 + _t1*_t36 + _t16*_t40 + _t27*_t42 + _t31*_t44;
     const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t60 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
+    const trailer_real_t _t47 = J_theta_left + _t2*_t38 + _t20*_t40 + _t28*_t42 + _t3*_t36
+            + _t32*_t44;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t55*_t57 + _t56*_t58;
-    u[1] = H1hat1 + _t55*_t59 + _t56*_t60;
+    u[0] = H1hat0 + _t23*_t45 + _t24*_t46;
+    u[1] = H1hat1 + _t23*_t46 + _t24*_t47;
 }
 
 /* trailer_k_minimal_tdroc_law: the per-step part of trailer_minimal_tdroc_law (trailer_laws.h
    documents it).
-   operations after CSE: 75 add, 115 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[16],
+   operations after CSE: 48 add, 69 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[17],
     const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
     const trailer_real_t *gain, const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t8 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t6;
-    const trailer_real_t _t10 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t12 = -_t10*_t11 - _t8*_t9;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t8;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t14 = _t0*_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t10;
-    const trailer_real_t _t16 = _t0*_t15;
-    const trailer_real_t _t17 = _t0*_t12 - _t14*_t7 + _t16*_t6;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = _t10*_t9 - _t11*_t8;
-    const trailer_real_t _t21 = -_t0*_t20 - _t14*_t6 - _t16*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t22 = _t1*_t13;
-    const trailer_real_t _t23 = _t1*_t15;
-    const trailer_real_t _t24 = -_t1*_t12 - _t22*_t7 + _t23*_t6;
-    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t24;
-    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
-    const trailer_real_t _t27 = _t1*_t20 - _t22*_t6 - _t23*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t6;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t31 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t10;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t33 = -K_theta_tractor_x_tractor*_t10 + K_theta_tractor_x_tractor_2*_t8;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t6 - _t30;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t35 = J_x_tractor*_t14 - _t0*_t33 + _t18*_t34;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor*_t8 + K_theta_tractor_x_tractor_2*_t10;
-    const trailer_real_t _t37 = _t28 + _t29;
-    const trailer_real_t _t38 = J_x_tractor*_t16 - _t0*_t36 + _t18*_t37;
-    const trailer_real_t _t39 = _t31*(_t28 + _t29) + _t32*(-K_theta_cart_x_tractor_2*_t6 + _t30);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t40 = _t14*_t33 + _t16*_t36 + _t18*_t39 + _t2;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t18 - _t0*_t39 + _t14*_t34 + _t16*_t37;
-    const trailer_real_t _t42 = _t19 - _t21;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t43 = _t3*_t42;
-    const trailer_real_t _t44 = _t26 - _t27;
-    const trailer_real_t _t45 = _t3*_t44;
-    const trailer_real_t _t46 = -_t19 - _t21;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t47 = _t4*_t46;
-    const trailer_real_t _t48 = -_t26 - _t27;
-    const trailer_real_t _t49 = _t4*_t48;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t50 = J_theta_cart_left*_t47*_t49 + J_theta_cart_right*_t43*_t45;
-    const trailer_real_t _t51 = J_x_tractor*_t22 + _t1*_t33 + _t25*_t34;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t52 = _t22*_t33 + _t23*_t36 + _t25*_t39 + _t5;
-    const trailer_real_t _t53 = J_x_tractor*_t23 + _t1*_t36 + _t25*_t37;
-    const trailer_real_t _t54 = J_theta_cart*_t25 + _t1*_t39 + _t22*_t34 + _t23*_t37;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN_BOUNDED(_t10);
+    const trailer_real_t _t12 = TRAILER_COS_BOUNDED(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = kept[7];
+    const trailer_real_t _t1 = kept[8];
+    const trailer_real_t _t15 = _t0*_t13 + _t1*_t11;
+    const trailer_real_t _t16 = -TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t0*_t14;
+    const trailer_real_t _t2 = kept[9];
+    const trailer_real_t _t3 = kept[10];
+    const trailer_real_t _t19 = _t11*_t3 + _t13*_t2;
+    const trailer_real_t _t20 = -TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.2)*_t20;
+    const trailer_real_t _t22 = _t14*_t2;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t55 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t23 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t p12_1 = p12[1];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t56 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t57 = trailer_norm2(_t55, _t56);
+    const trailer_real_t _t24 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t25 = trailer_norm2(_t23, _t24);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t58 = gain_1/TRAILER_FMAX(_t57, eps_1);
+    const trailer_real_t _t26 = gain_1/TRAILER_FMAX(_t25, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t59 = _t55*_t58 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t27 = _t23*_t26 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t60 = _t56*_t58 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t28 = _t24*_t26 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t29 = _t1*_t12 + _t17 - _t18;
+    const trailer_real_t _t30 = _t12*_t3 + _t21 - _t22;
+    const trailer_real_t _t4 = kept[11];
+    const trailer_real_t _t31 = _t29*_t4;
+    const trailer_real_t _t32 = _t30*_t4;
+    const trailer_real_t _t33 = _t1*_t12 - _t17 - _t18;
+    const trailer_real_t _t34 = _t12*_t3 - _t21 - _t22;
+    const trailer_real_t _t5 = kept[12];
+    const trailer_real_t _t35 = _t33*_t5;
+    const trailer_real_t _t36 = _t34*_t5;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t _t38 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t6 = kept[13];
+    const trailer_real_t _t39 = _t16*_t37 + _t6;
+    const trailer_real_t _t7 = kept[14];
+    const trailer_real_t _t40 = _t20*_t37 + _t7;
+    const trailer_real_t _t8 = kept[15];
+    const trailer_real_t _t41 = _t16*_t38 + _t8;
+    const trailer_real_t _t9 = kept[16];
+    const trailer_real_t _t42 = _t20*_t38 + _t9;
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t43 = J_theta_cart*_t16 + _t0*_t38 + _t1*_t37;
+    const trailer_real_t _t44 = J_theta_cart*_t20 + _t2*_t38 + _t3*_t37;
+    const trailer_real_t J_theta_cart_right = kept[2];
+    const trailer_real_t _t45 = J_theta_cart_right*_t31;
+    const trailer_real_t _t46 = J_theta_cart_right*_t32;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t47 = J_theta_cart_left*_t35;
+    const trailer_real_t _t48 = J_theta_cart_left*_t36;
     const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t61 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t43*_t43
-            + J_theta_right - _t0*_t40 + _t14*_t35 + _t16*_t38 + _t18*_t41;
-    const trailer_real_t _t62 = _t1*_t40 + _t22*_t35 + _t23*_t38 + _t25*_t41 + _t50;
-    const trailer_real_t _t63 = -_t0*_t52 + _t14*_t51 + _t16*_t53 + _t18*_t54 + _t50;
+    const trailer_real_t _t49 = J_theta_right + _t0*_t41 + _t1*_t39 + _t16*_t43 + _t31*_t45
+            + _t35*_t47;
+    const trailer_real_t _t50 = _t0*_t42 + _t1*_t40 + _t16*_t44 + _t31*_t46 + _t35*_t48;
     const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t64 = J_theta_cart_left*_t49*_t49 + J_theta_cart_right*_t45*_t45
-            + J_theta_left + _t1*_t52 + _t22*_t51 + _t23*_t53 + _t25*_t54;
+    const trailer_real_t _t51 = J_theta_left + _t2*_t42 + _t20*_t44 + _t3*_t40 + _t32*_t46
+            + _t36*_t48;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t59*_t61 + _t60*_t62;
-    u[1] = H1hat1 + _t59*_t63 + _t60*_t64;
-    s[0] = _t55;
-    s[1] = _t56;
-    s_norm[0] = _t57;
+    u[0] = H1hat0 + _t27*_t49 + _t28*_t50;
+    u[1] = H1hat1 + _t27*_t50 + _t28*_t51;
+    s[0] = _t23;
+    s[1] = _t24;
+    s_norm[0] = _t25;
 }
 
 /* trailer_k_minimal_roc_law_keep: the parameter-only part of trailer_minimal_roc_law
    (trailer_laws.h documents it).
-   operations after CSE: 0 add, 5 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
-    trailer_real_t kept[17])
+    trailer_real_t kept[18])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -559,409 +555,323 @@ static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t7 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t8 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart_left;
     kept[2] = J_theta_cart_right;
     kept[3] = J_theta_left;
     kept[4] = J_theta_right;
-    kept[5] = J_x_tractor;
-    kept[6] = K_theta_cart_x_tractor;
-    kept[7] = K_theta_cart_x_tractor_2;
-    kept[8] = K_theta_tractor_x_tractor;
-    kept[9] = K_theta_tractor_x_tractor_2;
-    kept[10] = _t0;
-    kept[11] = _t1;
-    kept[12] = _t2;
-    kept[13] = _t3;
-    kept[14] = _t4;
-    kept[15] = _t5;
-    kept[16] = _t6;
+    kept[5] = K_theta_cart_x_tractor;
+    kept[6] = K_theta_cart_x_tractor_2;
+    kept[7] = K_theta_tractor_x_tractor;
+    kept[8] = _t0;
+    kept[9] = _t1;
+    kept[10] = _t2;
+    kept[11] = _t3;
+    kept[12] = _t4;
+    kept[13] = _t5;
+    kept[14] = _t6;
+    kept[15] = _t7;
+    kept[16] = _t8;
+    kept[17] = _t9;
 }
 
 /* trailer_k_minimal_roc_law: the per-step part of trailer_minimal_roc_law (trailer_laws.h documents
    it).
-   operations after CSE: 143 add, 218 mul, 2 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[17], const trailer_real_t *q,
+   operations after CSE: 83 add, 122 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[18], const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *bounds,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
-    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t19 = _t1*_t16;
-    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
-    const trailer_real_t _t21 = -_t0*_t15;
-    const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
-    const trailer_real_t _t26 = -_t1*_t15;
-    const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
-    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
-    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN_BOUNDED(_t10);
+    const trailer_real_t _t12 = TRAILER_COS_BOUNDED(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = kept[8];
+    const trailer_real_t _t1 = kept[9];
+    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
+    const trailer_real_t _t2 = kept[10];
+    const trailer_real_t _t3 = kept[11];
+    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
+    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = _t1*_t12;
+    const trailer_real_t _t20 = _t0*_t14;
+    const trailer_real_t _t21 = _t19 - _t20;
+    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = _t12*_t3;
+    const trailer_real_t _t25 = _t14*_t2;
+    const trailer_real_t _t26 = _t24 - _t25;
+    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
+    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t41 = _t40*_t40;
-    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer_real_t _t43 = _t42*_t42;
-    const trailer_real_t _t44 = _t39*_t41;
-    const trailer_real_t _t45 = _t33*_t41;
-    const trailer_real_t _t46 = _t34*_t41;
-    const trailer_real_t _t47 = _t38*_t43;
-    const trailer_real_t _t48 = _t37*_t43;
-    const trailer_real_t _t49 = _t42*thetadot_right;
-    const trailer_real_t _t50 = _t42*thetadot_left;
-    const trailer_real_t _t51 = _t40*thetadot_right;
-    const trailer_real_t _t52 = _t40*thetadot_left;
-    const trailer_real_t _t53 = _t0*_t15;
-    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = _t18 - _t53*_t8;
-    const trailer_real_t _t58 = _t1*_t15;
-    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
-    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
-    const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
-    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
-    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
-    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
-    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
-    const trailer_real_t _t72 = _t31 + _t32;
-    const trailer_real_t _t73 = _t33 + _t34;
-    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
-    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
-    const trailer_real_t _t78 = -_t24 - _t25;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t79 = _t3*_t78;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t80 = J_theta_cart_left*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t82 = _t4*_t81;
+    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer_real_t _t33 = _t32*_t32;
+    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t35 = _t34*_t34;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t38 = _t32*thetadot_right;
+    const trailer_real_t _t39 = _t32*thetadot_left;
+    const trailer_real_t _t40 = _t18 + _t21;
+    const trailer_real_t _t4 = kept[12];
+    const trailer_real_t _t41 = _t4*_t40;
     const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t83 = J_theta_cart_right*_t82;
-    const trailer_real_t _t84 = _t29 - _t30;
-    const trailer_real_t _t85 = _t4*_t84;
-    const trailer_real_t _t86 = -_t29 - _t30;
-    const trailer_real_t _t87 = _t3*_t86;
-    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
-    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
-    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
-    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
-    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
-    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
-    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
-    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
-    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
-    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
-    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
-    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
-    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
-    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
+    const trailer_real_t _t42 = J_theta_cart_right*_t41;
+    const trailer_real_t _t43 = _t23 + _t26;
+    const trailer_real_t _t44 = _t4*_t43;
+    const trailer_real_t _t45 = J_theta_cart_right*_t44;
+    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
+    const trailer_real_t _t5 = kept[13];
+    const trailer_real_t _t47 = _t46*_t5;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t48 = J_theta_cart_left*_t47;
+    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
+    const trailer_real_t _t50 = _t49*_t5;
+    const trailer_real_t _t51 = J_theta_cart_left*_t50;
+    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t K_theta_tractor_x_tractor = kept[7];
+    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
+            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
+    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
+    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
+    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
+    const trailer_real_t _t57 = _t52*_t56 + _t53;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
+    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
+    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
+    const trailer_real_t _t63 = _t33*(_t36 + _t37);
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t104 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t65 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t p12_1 = p12[1];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t105 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t106 = trailer_norm2(_t104, _t105);
+    const trailer_real_t _t66 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t67 = trailer_norm2(_t65, _t66);
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t107 = e0*k1_0 + edot0*k2_0;
+    const trailer_real_t _t68 = e0*k1_0 + edot0*k2_0;
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t108 = e1*k1_1 + edot1*k2_1;
+    const trailer_real_t _t69 = e1*k1_1 + edot1*k2_1;
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t alpha = bounds[0];
     const trailer_real_t phi = bounds[1];
-    const trailer_real_t _t109 = (alpha*(trailer_norm2(_t107, _t108)
+    const trailer_real_t _t70 = (alpha*(trailer_norm2(_t68, _t69)
             + trailer_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER_LIT(1.0) - alpha);
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t110 = _t109/TRAILER_FMAX(_t106, eps_1);
-    const trailer_real_t _t111 = _t104*_t110 + _t107 + qdd_des0;
-    const trailer_real_t _t112 = _t105*_t110 + _t108 + qdd_des1;
-    const trailer_real_t _t113 = _t56 - _t57;
-    const trailer_real_t _t114 = _t113*_t4;
-    const trailer_real_t _t115 = _t61 - _t62;
-    const trailer_real_t _t116 = _t115*_t4;
-    const trailer_real_t _t117 = _t64 - _t65;
-    const trailer_real_t _t118 = _t117*_t4;
-    const trailer_real_t _t119 = _t67 - _t68;
-    const trailer_real_t _t120 = _t119*_t4;
-    const trailer_real_t _t121 = _t114*_t49 + _t116*_t50 + _t118*_t51 + _t120*_t52;
-    const trailer_real_t _t122 = -_t56 - _t57;
-    const trailer_real_t _t123 = _t122*_t3;
-    const trailer_real_t _t124 = -_t61 - _t62;
-    const trailer_real_t _t125 = _t124*_t3;
-    const trailer_real_t _t126 = -_t64 - _t65;
-    const trailer_real_t _t127 = _t126*_t3;
-    const trailer_real_t _t128 = -_t67 - _t68;
-    const trailer_real_t _t129 = _t128*_t3;
-    const trailer_real_t _t130 = _t123*_t49 + _t125*_t50 + _t127*_t51 + _t129*_t52;
+    const trailer_real_t _t71 = _t70/TRAILER_FMAX(_t67, eps_1);
+    const trailer_real_t _t72 = _t65*_t71 + _t68 + qdd_des0;
+    const trailer_real_t _t73 = _t66*_t71 + _t69 + qdd_des1;
+    const trailer_real_t _t74 = -_t15 + _t28;
+    const trailer_real_t _t75 = _t4*_t74;
+    const trailer_real_t _t76 = -_t16 + _t30;
+    const trailer_real_t _t77 = _t4*_t76;
+    const trailer_real_t _t78 = -_t15 - _t28;
+    const trailer_real_t _t79 = _t5*_t78;
+    const trailer_real_t _t80 = -_t16 - _t30;
+    const trailer_real_t _t81 = _t5*_t80;
+    const trailer_real_t _t82 = _t54*_t75 + _t55*_t77;
+    const trailer_real_t _t83 = _t54*_t79 + _t55*_t81;
+    const trailer_real_t _t6 = kept[14];
+    const trailer_real_t _t84 = _t17*_t52 + _t6;
+    const trailer_real_t _t7 = kept[15];
+    const trailer_real_t _t85 = _t22*_t52 + _t7;
+    const trailer_real_t _t8 = kept[16];
+    const trailer_real_t _t86 = _t17*_t58 + _t8;
+    const trailer_real_t _t9 = kept[17];
+    const trailer_real_t _t87 = _t22*_t58 + _t9;
+    const trailer_real_t _t88 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
+    const trailer_real_t _t89 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
     const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t131 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
-            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
-    const trailer_real_t _t132 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
-    const trailer_real_t _t133 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
+    const trailer_real_t _t90 = J_theta_right + _t0*_t86 + _t1*_t84 + _t17*_t88 + _t41*_t42
+            + _t47*_t48;
+    const trailer_real_t _t91 = _t0*_t87 + _t1*_t85 + _t17*_t89 + _t41*_t45 + _t47*_t51;
     const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t134 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
-            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
-    const trailer_real_t _t135 = -_t0*_t101 + _t103*_t23 + _t121*_t83 + _t130*_t80 + _t17*_t99
-            + _t21*_t96;
-    const trailer_real_t _t136 = J_theta_cart_left*_t130*_t87 + J_theta_cart_right*_t121*_t85
-            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
-    u[0] = _t111*_t131 + _t112*_t132 + _t135;
-    u[1] = _t111*_t133 + _t112*_t134 + _t136;
-    s[0] = _t104;
-    s[1] = _t105;
-    s_norm[0] = _t106;
-    gain[0] = _t109;
+    const trailer_real_t _t92 = J_theta_left + _t2*_t87 + _t22*_t89 + _t3*_t85 + _t44*_t45
+            + _t50*_t51;
+    const trailer_real_t _t93 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t82 + _t48*_t83;
+    const trailer_real_t _t94 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t82 + _t51*_t83;
+    u[0] = _t72*_t90 + _t73*_t91 + _t93;
+    u[1] = _t72*_t91 + _t73*_t92 + _t94;
+    s[0] = _t65;
+    s[1] = _t66;
+    s_norm[0] = _t67;
+    gain[0] = _t70;
 }
 
 /* trailer_k_minimal_asmc_law: the per-step part of trailer_minimal_asmc_law (trailer_laws.h
    documents it).
-   operations after CSE: 139 add, 215 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[17],
+   operations after CSE: 79 add, 119 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
     const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
     const trailer_real_t *k2, const trailer_real_t *p12, const trailer_real_t *p22,
     const trailer_real_t *gain, const trailer_real_t *eps, const trailer_real_t *adapt,
     trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t7 = TRAILER_SIN_BOUNDED(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS_BOUNDED(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t9 = TRAILER_SIN_BOUNDED(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t11 = TRAILER_COS_BOUNDED(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
-    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
-    const trailer_real_t _t0 = kept[10];
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
-    const trailer_real_t _t1 = kept[11];
-    const trailer_real_t _t19 = _t1*_t16;
-    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
-    const trailer_real_t _t21 = -_t0*_t15;
-    const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
-    const trailer_real_t _t26 = -_t1*_t15;
-    const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
-    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = kept[8];
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[9];
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
-    const trailer_real_t K_theta_cart_x_tractor = kept[6];
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[7];
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
-    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN_BOUNDED(_t10);
+    const trailer_real_t _t12 = TRAILER_COS_BOUNDED(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = kept[8];
+    const trailer_real_t _t1 = kept[9];
+    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
+    const trailer_real_t _t2 = kept[10];
+    const trailer_real_t _t3 = kept[11];
+    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
+    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = _t1*_t12;
+    const trailer_real_t _t20 = _t0*_t14;
+    const trailer_real_t _t21 = _t19 - _t20;
+    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = _t12*_t3;
+    const trailer_real_t _t25 = _t14*_t2;
+    const trailer_real_t _t26 = _t24 - _t25;
+    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
+    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
-    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t41 = _t40*_t40;
-    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer_real_t _t43 = _t42*_t42;
-    const trailer_real_t _t44 = _t39*_t41;
-    const trailer_real_t _t45 = _t33*_t41;
-    const trailer_real_t _t46 = _t34*_t41;
-    const trailer_real_t _t47 = _t38*_t43;
-    const trailer_real_t _t48 = _t37*_t43;
-    const trailer_real_t _t49 = _t42*thetadot_right;
-    const trailer_real_t _t50 = _t42*thetadot_left;
-    const trailer_real_t _t51 = _t40*thetadot_right;
-    const trailer_real_t _t52 = _t40*thetadot_left;
-    const trailer_real_t _t53 = _t0*_t15;
-    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = _t18 - _t53*_t8;
-    const trailer_real_t _t58 = _t1*_t15;
-    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
-    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
-    const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
-    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
-    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
-    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
-    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
-    const trailer_real_t J_x_tractor = kept[5];
-    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
-    const trailer_real_t _t72 = _t31 + _t32;
-    const trailer_real_t _t73 = _t33 + _t34;
-    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
-    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
-    const trailer_real_t _t2 = kept[12];
-    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
-    const trailer_real_t _t78 = -_t24 - _t25;
-    const trailer_real_t _t3 = kept[13];
-    const trailer_real_t _t79 = _t3*_t78;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t80 = J_theta_cart_left*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t4 = kept[14];
-    const trailer_real_t _t82 = _t4*_t81;
+    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer_real_t _t33 = _t32*_t32;
+    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t35 = _t34*_t34;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t38 = _t32*thetadot_right;
+    const trailer_real_t _t39 = _t32*thetadot_left;
+    const trailer_real_t _t40 = _t18 + _t21;
+    const trailer_real_t _t4 = kept[12];
+    const trailer_real_t _t41 = _t4*_t40;
     const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t83 = J_theta_cart_right*_t82;
-    const trailer_real_t _t84 = _t29 - _t30;
-    const trailer_real_t _t85 = _t4*_t84;
-    const trailer_real_t _t86 = -_t29 - _t30;
-    const trailer_real_t _t87 = _t3*_t86;
-    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
-    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
-    const trailer_real_t _t5 = kept[15];
-    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
-    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
-    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
-    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
-    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
-    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
-    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
-    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
-    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
-    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
-    const trailer_real_t _t6 = kept[16];
-    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
-    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
-    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
-    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
+    const trailer_real_t _t42 = J_theta_cart_right*_t41;
+    const trailer_real_t _t43 = _t23 + _t26;
+    const trailer_real_t _t44 = _t4*_t43;
+    const trailer_real_t _t45 = J_theta_cart_right*_t44;
+    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
+    const trailer_real_t _t5 = kept[13];
+    const trailer_real_t _t47 = _t46*_t5;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t48 = J_theta_cart_left*_t47;
+    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
+    const trailer_real_t _t50 = _t49*_t5;
+    const trailer_real_t _t51 = J_theta_cart_left*_t50;
+    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t K_theta_tractor_x_tractor = kept[7];
+    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
+            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
+    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
+    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
+    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
+    const trailer_real_t _t57 = _t52*_t56 + _t53;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
+    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
+    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
+    const trailer_real_t _t63 = _t33*(_t36 + _t37);
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t104 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t65 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t p12_1 = p12[1];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t105 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t106 = trailer_norm2(_t104, _t105);
+    const trailer_real_t _t66 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t67 = trailer_norm2(_t65, _t66);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t107 = gain_1/TRAILER_FMAX(_t106, eps_1);
+    const trailer_real_t _t68 = gain_1/TRAILER_FMAX(_t67, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t108 = _t104*_t107 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t69 = _t65*_t68 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t109 = _t105*_t107 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t110 = _t56 - _t57;
-    const trailer_real_t _t111 = _t110*_t4;
-    const trailer_real_t _t112 = _t61 - _t62;
-    const trailer_real_t _t113 = _t112*_t4;
-    const trailer_real_t _t114 = _t64 - _t65;
-    const trailer_real_t _t115 = _t114*_t4;
-    const trailer_real_t _t116 = _t67 - _t68;
-    const trailer_real_t _t117 = _t116*_t4;
-    const trailer_real_t _t118 = _t111*_t49 + _t113*_t50 + _t115*_t51 + _t117*_t52;
-    const trailer_real_t _t119 = -_t56 - _t57;
-    const trailer_real_t _t120 = _t119*_t3;
-    const trailer_real_t _t121 = -_t61 - _t62;
-    const trailer_real_t _t122 = _t121*_t3;
-    const trailer_real_t _t123 = -_t64 - _t65;
-    const trailer_real_t _t124 = _t123*_t3;
-    const trailer_real_t _t125 = -_t67 - _t68;
-    const trailer_real_t _t126 = _t125*_t3;
-    const trailer_real_t _t127 = _t120*_t49 + _t122*_t50 + _t124*_t51 + _t126*_t52;
+    const trailer_real_t _t70 = _t66*_t68 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t71 = -_t15 + _t28;
+    const trailer_real_t _t72 = _t4*_t71;
+    const trailer_real_t _t73 = -_t16 + _t30;
+    const trailer_real_t _t74 = _t4*_t73;
+    const trailer_real_t _t75 = -_t15 - _t28;
+    const trailer_real_t _t76 = _t5*_t75;
+    const trailer_real_t _t77 = -_t16 - _t30;
+    const trailer_real_t _t78 = _t5*_t77;
+    const trailer_real_t _t79 = _t54*_t72 + _t55*_t74;
+    const trailer_real_t _t80 = _t54*_t76 + _t55*_t78;
+    const trailer_real_t _t6 = kept[14];
+    const trailer_real_t _t81 = _t17*_t52 + _t6;
+    const trailer_real_t _t7 = kept[15];
+    const trailer_real_t _t82 = _t22*_t52 + _t7;
+    const trailer_real_t _t8 = kept[16];
+    const trailer_real_t _t83 = _t17*_t58 + _t8;
+    const trailer_real_t _t9 = kept[17];
+    const trailer_real_t _t84 = _t22*_t58 + _t9;
+    const trailer_real_t _t85 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
+    const trailer_real_t _t86 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
     const trailer_real_t J_theta_right = kept[4];
-    const trailer_real_t _t128 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
-            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
-    const trailer_real_t _t129 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
-    const trailer_real_t _t130 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
+    const trailer_real_t _t87 = J_theta_right + _t0*_t83 + _t1*_t81 + _t17*_t85 + _t41*_t42
+            + _t47*_t48;
+    const trailer_real_t _t88 = _t0*_t84 + _t1*_t82 + _t17*_t86 + _t41*_t45 + _t47*_t51;
     const trailer_real_t J_theta_left = kept[3];
-    const trailer_real_t _t131 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
-            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
-    const trailer_real_t _t132 = -_t0*_t101 + _t103*_t23 + _t118*_t83 + _t127*_t80 + _t17*_t99
-            + _t21*_t96;
-    const trailer_real_t _t133 = J_theta_cart_left*_t127*_t87 + J_theta_cart_right*_t118*_t85
-            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
+    const trailer_real_t _t89 = J_theta_left + _t2*_t84 + _t22*_t86 + _t3*_t82 + _t44*_t45
+            + _t50*_t51;
+    const trailer_real_t _t90 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t79 + _t48*_t80;
+    const trailer_real_t _t91 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t79 + _t51*_t80;
     const trailer_real_t adapt_0 = adapt[0];
     const trailer_real_t h = adapt[1];
-    u[0] = _t108*_t128 + _t109*_t129 + _t132;
-    u[1] = _t108*_t130 + _t109*_t131 + _t133;
-    s[0] = _t104;
-    s[1] = _t105;
-    s_norm[0] = _t106;
-    gain_next[0] = _t106*adapt_0*h + gain_1;
+    u[0] = _t69*_t87 + _t70*_t88 + _t90;
+    u[1] = _t69*_t88 + _t70*_t89 + _t91;
+    s[0] = _t65;
+    s[1] = _t66;
+    s_norm[0] = _t67;
+    gain_next[0] = _t67*adapt_0*h + gain_1;
 }
 
 /* trailer_k_minimal_pi_law_keep: the parameter-only part of trailer_minimal_pi_law (trailer_laws.h

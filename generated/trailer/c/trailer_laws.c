@@ -31,22 +31,22 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
-   operations after CSE: 68 add, 112 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 45 add, 71 mul, 3 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
-    trailer_real_t kept[17];
+    trailer_real_t kept[18];
     trailer_k_minimal_tde_keep(p, span, kept);
     trailer_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 66 add, 111 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 42 add, 70 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
-    trailer_real_t kept[16];
+    trailer_real_t kept[17];
     trailer_k_minimal_minv_norm_keep(p, kept);
     trailer_k_minimal_minv_norm(kept, q, norm);
 }
@@ -114,33 +114,33 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
-   operations after CSE: 70 add, 113 mul, 2 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 47 add, 73 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
 {
-    trailer_real_t kept[16];
-    trailer_k_minimal_minv_norm_keep(p, kept);
+    trailer_real_t kept[17];
+    trailer_k_minimal_tdc_law_keep(p, kept);
     trailer_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 75 add, 121 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 52 add, 81 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
     const trailer_real_t *p22, const trailer_real_t *H1hat, const trailer_real_t *gain,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm)
 {
-    trailer_real_t kept[16];
-    trailer_k_minimal_minv_norm_keep(p, kept);
+    trailer_real_t kept[17];
+    trailer_k_minimal_tdc_law_keep(p, kept);
     trailer_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u,
             s, s_norm);
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 143 add, 230 mul, 4 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 87 add, 137 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -148,14 +148,14 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    trailer_real_t kept[17];
+    trailer_real_t kept[18];
     trailer_k_minimal_roc_law_keep(p, kept);
     trailer_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 139 add, 227 mul, 3 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 83 add, 134 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -163,7 +163,7 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    trailer_real_t kept[17];
+    trailer_real_t kept[18];
     trailer_k_minimal_roc_law_keep(p, kept);
     trailer_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

@@ -7,7 +7,7 @@
 #include "trailer_model.h"
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 141 add, 222 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 84 add, 135 mul, 3 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -46,13 +46,16 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t7 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer_real_t _t8 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -86,157 +89,114 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
-    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
-    const trailer_real_t _t19 = _t1*_t16;
-    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
-    const trailer_real_t _t21 = -_t0*_t15;
-    const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
-    const trailer_real_t _t26 = -_t1*_t15;
-    const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
-    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
-    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t41 = _t40*_t40;
-    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer_real_t _t43 = _t42*_t42;
-    const trailer_real_t _t44 = _t39*_t41;
-    const trailer_real_t _t45 = _t33*_t41;
-    const trailer_real_t _t46 = _t34*_t41;
-    const trailer_real_t _t47 = _t38*_t43;
-    const trailer_real_t _t48 = _t37*_t43;
-    const trailer_real_t _t49 = _t42*thetadot_right;
-    const trailer_real_t _t50 = _t42*thetadot_left;
-    const trailer_real_t _t51 = _t40*thetadot_right;
-    const trailer_real_t _t52 = _t40*thetadot_left;
-    const trailer_real_t _t53 = _t0*_t15;
-    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = _t18 - _t53*_t8;
-    const trailer_real_t _t58 = _t1*_t15;
-    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
-    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
-    const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
-    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
-    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
-    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
-    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
-    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
-    const trailer_real_t _t72 = _t31 + _t32;
-    const trailer_real_t _t73 = _t33 + _t34;
-    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
-    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
-    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
-    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
-    const trailer_real_t _t78 = -_t24 - _t25;
-    const trailer_real_t _t79 = _t3*_t78;
-    const trailer_real_t _t80 = J_theta_cart_left*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t82 = _t4*_t81;
-    const trailer_real_t _t83 = J_theta_cart_right*_t82;
-    const trailer_real_t _t84 = _t29 - _t30;
-    const trailer_real_t _t85 = _t4*_t84;
-    const trailer_real_t _t86 = -_t29 - _t30;
-    const trailer_real_t _t87 = _t3*_t86;
-    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
-    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
-    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
-    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
-    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
-    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
-    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
-    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
-    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
-    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
-    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
-    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
-    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
-    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
-    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
-    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
-    const trailer_real_t _t104 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
-            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
-    const trailer_real_t _t105 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
-    const trailer_real_t _t106 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
-    const trailer_real_t _t107 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
-            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
-    const trailer_real_t _t108 = _t104*_t107 - _t105*_t106;
-    const trailer_real_t _t109 = _t56 - _t57;
-    const trailer_real_t _t110 = _t109*_t4;
-    const trailer_real_t _t111 = _t61 - _t62;
-    const trailer_real_t _t112 = _t111*_t4;
-    const trailer_real_t _t113 = _t64 - _t65;
-    const trailer_real_t _t114 = _t113*_t4;
-    const trailer_real_t _t115 = _t67 - _t68;
-    const trailer_real_t _t116 = _t115*_t4;
-    const trailer_real_t _t117 = _t110*_t49 + _t112*_t50 + _t114*_t51 + _t116*_t52;
-    const trailer_real_t _t118 = -_t56 - _t57;
-    const trailer_real_t _t119 = _t118*_t3;
-    const trailer_real_t _t120 = -_t61 - _t62;
-    const trailer_real_t _t121 = _t120*_t3;
-    const trailer_real_t _t122 = -_t64 - _t65;
-    const trailer_real_t _t123 = _t122*_t3;
-    const trailer_real_t _t124 = -_t67 - _t68;
-    const trailer_real_t _t125 = _t124*_t3;
-    const trailer_real_t _t126 = _t119*_t49 + _t121*_t50 + _t123*_t51 + _t125*_t52;
-    const trailer_real_t _t127 = -_t0*_t101 + _t103*_t23 + _t117*_t83 + _t126*_t80 + _t17*_t99
-            + _t21*_t96;
-    const trailer_real_t _t128 = J_theta_cart_left*_t126*_t87 + J_theta_cart_right*_t117*_t85
-            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
-    const trailer_real_t _t129 = -_t127 + tau_right;
-    const trailer_real_t _t130 = -_t128 + tau_left;
-    const trailer_real_t _t131 = TRAILER_LIT(1.0)/_t108;
-    const trailer_real_t _t132 = _t131*(-_t105*_t130 + _t107*_t129);
-    const trailer_real_t _t133 = _t131*(_t104*_t130 - _t106*_t129);
-    const trailer_real_t _t134 = _t132*_t17 + _t133*_t19 + _t98;
-    const trailer_real_t _t135 = _t132*_t21 + _t133*_t26 + _t94;
-    const trailer_real_t _t136 = -_t0*_t132 + _t1*_t133;
-    const trailer_real_t _t137 = _t132*_t23 + _t133*_t28 + _t95;
-    const trailer_real_t _t138 = _t117 + _t132*_t82 + _t133*_t85;
-    const trailer_real_t _t139 = _t126 + _t132*_t79 + _t133*_t87;
-    if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN(_t10);
+    const trailer_real_t _t12 = TRAILER_COS(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
+    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
+    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = _t1*_t12;
+    const trailer_real_t _t20 = _t0*_t14;
+    const trailer_real_t _t21 = _t19 - _t20;
+    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = _t12*_t3;
+    const trailer_real_t _t25 = _t14*_t2;
+    const trailer_real_t _t26 = _t24 - _t25;
+    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
+    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
+    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer_real_t _t33 = _t32*_t32;
+    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t35 = _t34*_t34;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
+    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t38 = _t32*thetadot_right;
+    const trailer_real_t _t39 = _t32*thetadot_left;
+    const trailer_real_t _t40 = _t18 + _t21;
+    const trailer_real_t _t41 = _t4*_t40;
+    const trailer_real_t _t42 = J_theta_cart_right*_t41;
+    const trailer_real_t _t43 = _t23 + _t26;
+    const trailer_real_t _t44 = _t4*_t43;
+    const trailer_real_t _t45 = J_theta_cart_right*_t44;
+    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
+    const trailer_real_t _t47 = _t46*_t5;
+    const trailer_real_t _t48 = J_theta_cart_left*_t47;
+    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
+    const trailer_real_t _t50 = _t49*_t5;
+    const trailer_real_t _t51 = J_theta_cart_left*_t50;
+    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
+            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
+    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
+    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
+    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
+    const trailer_real_t _t57 = _t52*_t56 + _t53;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
+    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
+    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
+    const trailer_real_t _t63 = _t33*(_t36 + _t37);
+    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
+    const trailer_real_t _t65 = _t17*_t52 + _t6;
+    const trailer_real_t _t66 = _t17*_t58 + _t7;
+    const trailer_real_t _t67 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
+    const trailer_real_t _t68 = J_theta_right + _t0*_t66 + _t1*_t65 + _t17*_t67 + _t41*_t42
+            + _t47*_t48;
+    const trailer_real_t _t69 = _t22*_t52 + _t8;
+    const trailer_real_t _t70 = _t22*_t58 + _t9;
+    const trailer_real_t _t71 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
+    const trailer_real_t _t72 = _t0*_t70 + _t1*_t69 + _t17*_t71 + _t41*_t45 + _t47*_t51;
+    const trailer_real_t _t73 = J_theta_left + _t2*_t70 + _t22*_t71 + _t3*_t69 + _t44*_t45
+            + _t50*_t51;
+    const trailer_real_t _t74 = _t68*_t73 - _t72*_t72;
+    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t76 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t77 = -_t15 + _t28;
+    const trailer_real_t _t78 = _t4*_t77;
+    const trailer_real_t _t79 = -_t16 + _t30;
+    const trailer_real_t _t80 = _t4*_t79;
+    const trailer_real_t _t81 = -_t15 - _t28;
+    const trailer_real_t _t82 = _t5*_t81;
+    const trailer_real_t _t83 = -_t16 - _t30;
+    const trailer_real_t _t84 = _t5*_t83;
+    const trailer_real_t _t85 = _t54*_t78 + _t55*_t80;
+    const trailer_real_t _t86 = _t54*_t82 + _t55*_t84;
+    const trailer_real_t _t87 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t85 + _t48*_t86;
+    const trailer_real_t _t88 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t85 + _t51*_t86;
+    const trailer_real_t _t89 = -_t87 + tau_right;
+    const trailer_real_t _t90 = -_t88 + tau_left;
+    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t74;
+    const trailer_real_t _t92 = _t91*(-_t72*_t90 + _t73*_t89);
+    const trailer_real_t _t93 = _t91*(_t68*_t90 - _t72*_t89);
+    const trailer_real_t _t94 = _t1*_t92 + _t3*_t93;
+    const trailer_real_t _t95 = _t0*_t92 + _t2*_t93;
+    const trailer_real_t _t96 = _t17*_t92 + _t22*_t93 + _t56;
+    const trailer_real_t _t97 = _t41*_t92 + _t44*_t93 + _t85;
+    const trailer_real_t _t98 = _t47*_t92 + _t50*_t93 + _t86;
+    const trailer_real_t _t99 = -_t60*_t75 + _t76*_t94;
+    const trailer_real_t _t100 = _t60*_t76 + _t75*_t94;
+    if (!(_t68 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t108 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t74 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t134;
-    const trailer_real_t r_1 = _t135;
-    const trailer_real_t r_2 = _t136;
-    const trailer_real_t r_3 = _t137;
-    const trailer_real_t r_4 = _t132;
-    const trailer_real_t r_5 = _t133;
-    const trailer_real_t r_6 = _t138;
-    const trailer_real_t r_7 = _t139;
+    const trailer_real_t r_0 = _t99;
+    const trailer_real_t r_1 = _t100;
+    const trailer_real_t r_2 = _t95;
+    const trailer_real_t r_3 = _t96;
+    const trailer_real_t r_4 = _t92;
+    const trailer_real_t r_5 = _t93;
+    const trailer_real_t r_6 = _t97;
+    const trailer_real_t r_7 = _t98;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
@@ -254,7 +214,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 0 add, 5 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -284,13 +244,16 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
             | trailer_exp_carry(radius_right)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t5 = J_theta_tractor*_t1;
-    const trailer_real_t _t6 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer_real_t _t7 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer_real_t _t8 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -330,23 +293,24 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     prepared->forward_dynamics[2] = J_theta_cart_right;
     prepared->forward_dynamics[3] = J_theta_left;
     prepared->forward_dynamics[4] = J_theta_right;
-    prepared->forward_dynamics[5] = J_x_tractor;
-    prepared->forward_dynamics[6] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[7] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[8] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[9] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[10] = _t0;
-    prepared->forward_dynamics[11] = _t1;
-    prepared->forward_dynamics[12] = _t2;
-    prepared->forward_dynamics[13] = _t3;
-    prepared->forward_dynamics[14] = _t4;
-    prepared->forward_dynamics[15] = _t5;
-    prepared->forward_dynamics[16] = _t6;
+    prepared->forward_dynamics[5] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[6] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[7] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[8] = _t0;
+    prepared->forward_dynamics[9] = _t1;
+    prepared->forward_dynamics[10] = _t2;
+    prepared->forward_dynamics[11] = _t3;
+    prepared->forward_dynamics[12] = _t4;
+    prepared->forward_dynamics[13] = _t5;
+    prepared->forward_dynamics[14] = _t6;
+    prepared->forward_dynamics[15] = _t7;
+    prepared->forward_dynamics[16] = _t8;
+    prepared->forward_dynamics[17] = _t9;
     return TRAILER_OK;
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 141 add, 217 mul, 1 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 80 add, 123 mul, 1 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -355,204 +319,148 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
         return TRAILER_ERR_NOT_INITIALISED;
     }
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    if (((trailer_exp_carry(theta_tractor) | trailer_exp_carry(theta_cart)) & TRAILER_EXP_CARRY_TOP)
-            != 0u) {
+    if (((trailer_exp_carry(theta_tractor)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t7 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t8 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t11 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t76 = TRAILER_COS(theta_tractor);
+    const trailer_real_t theta_cart = q[3];
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t8;
-    const trailer_real_t _t13 = _t10*_t9 + _t11*_t12;
-    const trailer_real_t _t14 = _t10*_t11 - _t12*_t9;
-    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t16 = -TRAILER_LIT(0.207)*_t11;
-    const trailer_real_t _t0 = prepared->forward_dynamics[10];
-    const trailer_real_t _t17 = _t0*_t16;
-    const trailer_real_t _t18 = _t0*_t13 - _t17*_t7;
-    const trailer_real_t _t1 = prepared->forward_dynamics[11];
-    const trailer_real_t _t19 = _t1*_t16;
-    const trailer_real_t _t20 = -_t1*_t13 - _t19*_t7;
-    const trailer_real_t _t21 = -_t0*_t15;
-    const trailer_real_t _t22 = -_t18 - _t21*_t8;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t14 - _t17*_t8 - _t21*_t7;
-    const trailer_real_t _t26 = -_t1*_t15;
-    const trailer_real_t _t27 = -_t20 - _t26*_t8;
-    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
-    const trailer_real_t _t30 = _t1*_t14 - _t19*_t8 - _t26*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[8];
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t9;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[9];
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t11;
-    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[6];
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[7];
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t11;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t8;
-    const trailer_real_t _t37 = TRAILER_LIT(0.3)*_t9;
-    const trailer_real_t _t38 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t39 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t40 = _t23*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t41 = _t40*_t40;
-    const trailer_real_t _t42 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer_real_t _t43 = _t42*_t42;
-    const trailer_real_t _t44 = _t39*_t41;
-    const trailer_real_t _t45 = _t33*_t41;
-    const trailer_real_t _t46 = _t34*_t41;
-    const trailer_real_t _t47 = _t38*_t43;
-    const trailer_real_t _t48 = _t37*_t43;
-    const trailer_real_t _t49 = _t42*thetadot_right;
-    const trailer_real_t _t50 = _t42*thetadot_left;
-    const trailer_real_t _t51 = _t40*thetadot_right;
-    const trailer_real_t _t52 = _t40*thetadot_left;
-    const trailer_real_t _t53 = _t0*_t15;
-    const trailer_real_t _t54 = -_t0*_t14 - _t17*_t8 + _t53*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = _t18 - _t53*_t8;
-    const trailer_real_t _t58 = _t1*_t15;
-    const trailer_real_t _t59 = _t1*_t14 - _t19*_t8 + _t58*_t7;
-    const trailer_real_t _t60 = -TRAILER_LIT(1.6666666666666667)*_t59;
-    const trailer_real_t _t61 = TRAILER_LIT(0.2)*_t60;
-    const trailer_real_t _t62 = _t20 - _t58*_t8;
-    const trailer_real_t _t63 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
-    const trailer_real_t _t65 = -_t0*_t13 + _t17*_t7 - _t21*_t8;
-    const trailer_real_t _t66 = TRAILER_LIT(1.6666666666666667)*_t30;
-    const trailer_real_t _t67 = TRAILER_LIT(0.2)*_t66;
-    const trailer_real_t _t68 = _t1*_t13 + _t19*_t7 - _t26*_t8;
-    const trailer_real_t _t69 = K_theta_tractor_x_tractor_2*_t9 - _t35;
-    const trailer_real_t _t70 = K_theta_cart_x_tractor_2*_t7 - _t36;
-    const trailer_real_t J_x_tractor = prepared->forward_dynamics[5];
-    const trailer_real_t _t71 = J_x_tractor*_t21 - _t0*_t69 + _t23*_t70;
-    const trailer_real_t _t72 = _t31 + _t32;
-    const trailer_real_t _t73 = _t33 + _t34;
-    const trailer_real_t _t74 = J_x_tractor*_t17 - _t0*_t72 + _t23*_t73;
-    const trailer_real_t _t75 = _t37*(_t33 + _t34) + _t38*(_t36 - _t39);
-    const trailer_real_t _t2 = prepared->forward_dynamics[12];
-    const trailer_real_t _t76 = _t17*_t72 + _t2 + _t21*_t69 + _t23*_t75;
-    const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer_real_t _t77 = J_theta_cart*_t23 - _t0*_t75 + _t17*_t73 + _t21*_t70;
-    const trailer_real_t _t78 = -_t24 - _t25;
-    const trailer_real_t _t3 = prepared->forward_dynamics[13];
-    const trailer_real_t _t79 = _t3*_t78;
-    const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
-    const trailer_real_t _t80 = J_theta_cart_left*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t4 = prepared->forward_dynamics[14];
-    const trailer_real_t _t82 = _t4*_t81;
+    if (((trailer_exp_carry(theta_cart) | trailer_exp_carry(thetadot_right)
+            | trailer_exp_carry(thetadot_left) | trailer_exp_carry(tau_right)
+            | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
+        return TRAILER_ERR_NONFINITE_INPUT;
+    }
+    const trailer_real_t _t10 = theta_cart - theta_tractor;
+    const trailer_real_t _t11 = TRAILER_SIN(_t10);
+    const trailer_real_t _t12 = TRAILER_COS(_t10);
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
+    const trailer_real_t _t0 = prepared->forward_dynamics[8];
+    const trailer_real_t _t1 = prepared->forward_dynamics[9];
+    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
+    const trailer_real_t _t2 = prepared->forward_dynamics[10];
+    const trailer_real_t _t3 = prepared->forward_dynamics[11];
+    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
+    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = _t1*_t12;
+    const trailer_real_t _t20 = _t0*_t14;
+    const trailer_real_t _t21 = _t19 - _t20;
+    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = _t12*_t3;
+    const trailer_real_t _t25 = _t14*_t2;
+    const trailer_real_t _t26 = _t24 - _t25;
+    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
+    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
+    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[5];
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
+    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer_real_t _t33 = _t32*_t32;
+    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t35 = _t34*_t34;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
+    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[6];
+    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t38 = _t32*thetadot_right;
+    const trailer_real_t _t39 = _t32*thetadot_left;
+    const trailer_real_t _t40 = _t18 + _t21;
+    const trailer_real_t _t4 = prepared->forward_dynamics[12];
+    const trailer_real_t _t41 = _t4*_t40;
     const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
-    const trailer_real_t _t83 = J_theta_cart_right*_t82;
-    const trailer_real_t _t84 = _t29 - _t30;
-    const trailer_real_t _t85 = _t4*_t84;
-    const trailer_real_t _t86 = -_t29 - _t30;
-    const trailer_real_t _t87 = _t3*_t86;
-    const trailer_real_t _t88 = _t80*_t87 + _t83*_t85;
-    const trailer_real_t _t89 = J_x_tractor*_t26 + _t1*_t69 + _t28*_t70;
-    const trailer_real_t _t5 = prepared->forward_dynamics[15];
-    const trailer_real_t _t90 = _t19*_t72 + _t26*_t69 + _t28*_t75 + _t5;
-    const trailer_real_t _t91 = J_x_tractor*_t19 + _t1*_t72 + _t28*_t73;
-    const trailer_real_t _t92 = J_theta_cart*_t28 + _t1*_t75 + _t19*_t73 + _t26*_t70;
-    const trailer_real_t _t93 = _t43*(_t31 + _t32) + _t45 + _t46;
-    const trailer_real_t _t94 = _t17*_t49 + _t19*_t50;
-    const trailer_real_t _t95 = _t49*_t55 + _t50*_t60 + _t51*_t63 + _t52*_t66;
-    const trailer_real_t _t96 = J_x_tractor*_t94 + _t70*_t95 + _t93;
-    const trailer_real_t _t97 = _t36*_t41 + _t43*(-K_theta_tractor_x_tractor_2*_t9 + _t35) - _t44;
-    const trailer_real_t _t98 = _t49*_t53 + _t50*_t58;
-    const trailer_real_t _t99 = J_x_tractor*_t98 + _t73*_t95 + _t97;
-    const trailer_real_t _t6 = prepared->forward_dynamics[16];
-    const trailer_real_t _t100 = -_t37*_t44 + _t38*(-_t45 - _t46) + _t41*_t6*_t8*_t9;
-    const trailer_real_t _t101 = _t100 + _t69*_t94 + _t72*_t98 + _t75*_t95;
-    const trailer_real_t _t102 = _t47*(_t33 + _t34) + _t48*(-_t36 + _t39);
-    const trailer_real_t _t103 = J_theta_cart*_t95 + _t102 + _t70*_t94 + _t73*_t98;
+    const trailer_real_t _t42 = J_theta_cart_right*_t41;
+    const trailer_real_t _t43 = _t23 + _t26;
+    const trailer_real_t _t44 = _t4*_t43;
+    const trailer_real_t _t45 = J_theta_cart_right*_t44;
+    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
+    const trailer_real_t _t5 = prepared->forward_dynamics[13];
+    const trailer_real_t _t47 = _t46*_t5;
+    const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
+    const trailer_real_t _t48 = J_theta_cart_left*_t47;
+    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
+    const trailer_real_t _t50 = _t49*_t5;
+    const trailer_real_t _t51 = J_theta_cart_left*_t50;
+    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
+    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[7];
+    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
+            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
+    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
+    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
+    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
+    const trailer_real_t _t57 = _t52*_t56 + _t53;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
+    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
+    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
+    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
+    const trailer_real_t _t63 = _t33*(_t36 + _t37);
+    const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
+    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
+    const trailer_real_t _t6 = prepared->forward_dynamics[14];
+    const trailer_real_t _t65 = _t17*_t52 + _t6;
+    const trailer_real_t _t7 = prepared->forward_dynamics[15];
+    const trailer_real_t _t66 = _t17*_t58 + _t7;
+    const trailer_real_t _t67 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
     const trailer_real_t J_theta_right = prepared->forward_dynamics[4];
-    const trailer_real_t _t104 = J_theta_cart_left*_t79*_t79 + J_theta_cart_right*_t82*_t82
-            + J_theta_right - _t0*_t76 + _t17*_t74 + _t21*_t71 + _t23*_t77;
-    const trailer_real_t _t105 = _t1*_t76 + _t19*_t74 + _t26*_t71 + _t28*_t77 + _t88;
-    const trailer_real_t _t106 = -_t0*_t90 + _t17*_t91 + _t21*_t89 + _t23*_t92 + _t88;
+    const trailer_real_t _t68 = J_theta_right + _t0*_t66 + _t1*_t65 + _t17*_t67 + _t41*_t42
+            + _t47*_t48;
+    const trailer_real_t _t8 = prepared->forward_dynamics[16];
+    const trailer_real_t _t69 = _t22*_t52 + _t8;
+    const trailer_real_t _t9 = prepared->forward_dynamics[17];
+    const trailer_real_t _t70 = _t22*_t58 + _t9;
+    const trailer_real_t _t71 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
+    const trailer_real_t _t72 = _t0*_t70 + _t1*_t69 + _t17*_t71 + _t41*_t45 + _t47*_t51;
     const trailer_real_t J_theta_left = prepared->forward_dynamics[3];
-    const trailer_real_t _t107 = J_theta_cart_left*_t87*_t87 + J_theta_cart_right*_t85*_t85
-            + J_theta_left + _t1*_t90 + _t19*_t91 + _t26*_t89 + _t28*_t92;
-    const trailer_real_t _t108 = _t104*_t107 - _t105*_t106;
-    const trailer_real_t _t109 = _t56 - _t57;
-    const trailer_real_t _t110 = _t109*_t4;
-    const trailer_real_t _t111 = _t61 - _t62;
-    const trailer_real_t _t112 = _t111*_t4;
-    const trailer_real_t _t113 = _t64 - _t65;
-    const trailer_real_t _t114 = _t113*_t4;
-    const trailer_real_t _t115 = _t67 - _t68;
-    const trailer_real_t _t116 = _t115*_t4;
-    const trailer_real_t _t117 = _t110*_t49 + _t112*_t50 + _t114*_t51 + _t116*_t52;
-    const trailer_real_t _t118 = -_t56 - _t57;
-    const trailer_real_t _t119 = _t118*_t3;
-    const trailer_real_t _t120 = -_t61 - _t62;
-    const trailer_real_t _t121 = _t120*_t3;
-    const trailer_real_t _t122 = -_t64 - _t65;
-    const trailer_real_t _t123 = _t122*_t3;
-    const trailer_real_t _t124 = -_t67 - _t68;
-    const trailer_real_t _t125 = _t124*_t3;
-    const trailer_real_t _t126 = _t119*_t49 + _t121*_t50 + _t123*_t51 + _t125*_t52;
-    const trailer_real_t _t127 = -_t0*_t101 + _t103*_t23 + _t117*_t83 + _t126*_t80 + _t17*_t99
-            + _t21*_t96;
-    const trailer_real_t _t128 = J_theta_cart_left*_t126*_t87 + J_theta_cart_right*_t117*_t85
-            + _t1*_t101 + _t103*_t28 + _t19*_t99 + _t26*_t96;
-    const trailer_real_t _t129 = -_t127 + tau_right;
-    const trailer_real_t _t130 = -_t128 + tau_left;
-    const trailer_real_t _t131 = TRAILER_LIT(1.0)/_t108;
-    const trailer_real_t _t132 = _t131*(-_t105*_t130 + _t107*_t129);
-    const trailer_real_t _t133 = _t131*(_t104*_t130 - _t106*_t129);
-    const trailer_real_t _t134 = _t132*_t17 + _t133*_t19 + _t98;
-    const trailer_real_t _t135 = _t132*_t21 + _t133*_t26 + _t94;
-    const trailer_real_t _t136 = -_t0*_t132 + _t1*_t133;
-    const trailer_real_t _t137 = _t132*_t23 + _t133*_t28 + _t95;
-    const trailer_real_t _t138 = _t117 + _t132*_t82 + _t133*_t85;
-    const trailer_real_t _t139 = _t126 + _t132*_t79 + _t133*_t87;
-    if (!(_t104 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
-                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
-                & TRAILER_EXP_CARRY_TOP) != 0u) {
-            return TRAILER_ERR_NONFINITE_INPUT;
-        }
+    const trailer_real_t _t73 = J_theta_left + _t2*_t70 + _t22*_t71 + _t3*_t69 + _t44*_t45
+            + _t50*_t51;
+    const trailer_real_t _t74 = _t68*_t73 - _t72*_t72;
+    const trailer_real_t _t77 = -_t15 + _t28;
+    const trailer_real_t _t78 = _t4*_t77;
+    const trailer_real_t _t79 = -_t16 + _t30;
+    const trailer_real_t _t80 = _t4*_t79;
+    const trailer_real_t _t81 = -_t15 - _t28;
+    const trailer_real_t _t82 = _t5*_t81;
+    const trailer_real_t _t83 = -_t16 - _t30;
+    const trailer_real_t _t84 = _t5*_t83;
+    const trailer_real_t _t85 = _t54*_t78 + _t55*_t80;
+    const trailer_real_t _t86 = _t54*_t82 + _t55*_t84;
+    const trailer_real_t _t87 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t85 + _t48*_t86;
+    const trailer_real_t _t88 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t85 + _t51*_t86;
+    const trailer_real_t _t89 = -_t87 + tau_right;
+    const trailer_real_t _t90 = -_t88 + tau_left;
+    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t74;
+    const trailer_real_t _t92 = _t91*(-_t72*_t90 + _t73*_t89);
+    const trailer_real_t _t93 = _t91*(_t68*_t90 - _t72*_t89);
+    const trailer_real_t _t94 = _t1*_t92 + _t3*_t93;
+    const trailer_real_t _t95 = _t0*_t92 + _t2*_t93;
+    const trailer_real_t _t96 = _t17*_t92 + _t22*_t93 + _t56;
+    const trailer_real_t _t97 = _t41*_t92 + _t44*_t93 + _t85;
+    const trailer_real_t _t98 = _t47*_t92 + _t50*_t93 + _t86;
+    const trailer_real_t _t99 = -_t60*_t75 + _t76*_t94;
+    const trailer_real_t _t100 = _t60*_t76 + _t75*_t94;
+    if (!(_t68 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t108 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
-                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
-                & TRAILER_EXP_CARRY_TOP) != 0u) {
-            return TRAILER_ERR_NONFINITE_INPUT;
-        }
+    if (!(_t74 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t134;
-    const trailer_real_t r_1 = _t135;
-    const trailer_real_t r_2 = _t136;
-    const trailer_real_t r_3 = _t137;
-    const trailer_real_t r_4 = _t132;
-    const trailer_real_t r_5 = _t133;
-    const trailer_real_t r_6 = _t138;
-    const trailer_real_t r_7 = _t139;
+    const trailer_real_t r_0 = _t99;
+    const trailer_real_t r_1 = _t100;
+    const trailer_real_t r_2 = _t95;
+    const trailer_real_t r_3 = _t96;
+    const trailer_real_t r_4 = _t92;
+    const trailer_real_t r_5 = _t93;
+    const trailer_real_t r_6 = _t97;
+    const trailer_real_t r_7 = _t98;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer_exp_carry(thetadot_right) | trailer_exp_carry(thetadot_left)
-                | trailer_exp_carry(tau_right) | trailer_exp_carry(tau_left))
-                & TRAILER_EXP_CARRY_TOP) != 0u) {
-            return TRAILER_ERR_NONFINITE_INPUT;
-        }
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -567,297 +475,228 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 }
 
 /* trailer_kinematics: documented in trailer_model.h.
-   operations after CSE: 20 add, 46 mul, 2 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 16 add, 36 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t0 = theta_cart - theta_tractor;
+    const trailer_real_t _t1 = TRAILER_SIN(_t0);
+    const trailer_real_t _t2 = TRAILER_COS(_t0);
+    const trailer_real_t _t3 = -TRAILER_LIT(0.3)*_t2;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t4 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t5 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t6 = _t1*_t5 - _t3*_t4;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t6;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
+    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t10 = _t4*_t9;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
-    const trailer_real_t _t12 = _t11*_t6;
-    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t13 = _t1*_t12 - _t11*_t3;
     const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
     const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
-    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
-    const trailer_real_t _t18 = _t7*_t9;
-    const trailer_real_t _t19 = _t11*_t7;
-    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
-    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
-    const trailer_real_t _t24 = _t15 - _t17;
-    const trailer_real_t _t25 = _t22 - _t23;
+    const trailer_real_t _t16 = _t11*_t9;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t26 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t27 = _t24*_t26;
-    const trailer_real_t _t28 = _t25*_t26;
-    const trailer_real_t _t29 = -_t15 - _t17;
-    const trailer_real_t _t30 = -_t22 - _t23;
+    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t31 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t32 = _t29*_t31;
-    const trailer_real_t _t33 = _t30*_t31;
+    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t19 = -_t10 + _t2*_t5 + _t8;
+    const trailer_real_t _t20 = _t12*_t2 + _t15 - _t16;
+    const trailer_real_t _t21 = _t17*_t19;
+    const trailer_real_t _t22 = _t17*_t20;
+    const trailer_real_t _t23 = -_t10 + _t2*_t5 - _t8;
+    const trailer_real_t _t24 = _t12*_t2 - _t15 - _t16;
+    const trailer_real_t _t25 = _t18*_t23;
+    const trailer_real_t _t26 = _t18*_t24;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t34 = _t12*thetadot_right + _t19*thetadot_left;
-    const trailer_real_t _t35 = _t10*thetadot_right + _t18*thetadot_left;
-    const trailer_real_t _t36 = -_t6*thetadot_right + _t7*thetadot_left;
-    const trailer_real_t _t37 = _t14*thetadot_right + _t21*thetadot_left;
-    const trailer_real_t _t38 = _t27*thetadot_right + _t28*thetadot_left;
-    const trailer_real_t _t39 = _t32*thetadot_right + _t33*thetadot_left;
-    pose_rates[0] = _t34;
-    pose_rates[1] = _t35;
-    pose_rates[2] = _t36;
-    pose_rates[3] = _t37;
-    pose_rates[4] = _t38;
-    pose_rates[5] = _t39;
+    const trailer_real_t _t27 = _t12*thetadot_left + _t5*thetadot_right;
+    const trailer_real_t _t28 = _t11*thetadot_left + _t4*thetadot_right;
+    const trailer_real_t _t29 = _t14*thetadot_left + _t7*thetadot_right;
+    const trailer_real_t _t30 = _t21*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t31 = _t25*thetadot_right + _t26*thetadot_left;
+    const trailer_real_t _t32 = _t27*TRAILER_COS(theta_tractor);
+    const trailer_real_t _t33 = _t27*TRAILER_SIN(theta_tractor);
+    pose_rates[0] = _t32;
+    pose_rates[1] = _t33;
+    pose_rates[2] = _t28;
+    pose_rates[3] = _t29;
+    pose_rates[4] = _t30;
+    pose_rates[5] = _t31;
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 62 add, 105 mul, 2 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 39 add, 65 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t0 = theta_cart - theta_tractor;
+    const trailer_real_t _t1 = TRAILER_SIN(_t0);
+    const trailer_real_t _t2 = TRAILER_COS(_t0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t6 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t7 = _t1*_t6 + _t3*_t5;
+    const trailer_real_t _t8 = -TRAILER_LIT(1.6666666666666667)*_t7;
+    const trailer_real_t _t9 = TRAILER_LIT(0.2)*_t8;
+    const trailer_real_t _t10 = _t4*_t5;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t7 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t8 = -_t2*_t3 - _t4*_t5;
-    const trailer_real_t _t9 = -TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t10 = _t6*_t9;
-    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
-    const trailer_real_t _t12 = _t11*_t6;
-    const trailer_real_t _t13 = _t0*_t12 - _t1*_t10 + _t6*_t8;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t13 = _t1*_t12 + _t11*_t3;
     const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
     const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
-    const trailer_real_t _t16 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t17 = -_t0*_t10 - _t1*_t12 - _t16*_t6;
-    const trailer_real_t _t18 = _t7*_t9;
-    const trailer_real_t _t19 = _t11*_t7;
-    const trailer_real_t _t20 = _t0*_t19 - _t1*_t18 - _t7*_t8;
-    const trailer_real_t _t21 = -TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
-    const trailer_real_t _t23 = -_t0*_t18 - _t1*_t19 + _t16*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t27 = TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t28 = TRAILER_LIT(0.3)*_t4;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t0 - _t26;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t31 = J_x_tractor*_t10 + _t14*_t30 - _t29*_t6;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t33 = _t24 + _t25;
-    const trailer_real_t _t34 = J_x_tractor*_t12 + _t14*_t33 - _t32*_t6;
-    const trailer_real_t _t35 = -K_theta_cart_x_tractor_2*_t0*_t28 + _t24*_t27 + _t25*_t27
-            + _t26*_t28;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t36 = -J_theta_tractor*_t6 + _t10*_t29 + _t12*_t32 + _t14*_t35;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t37 = J_theta_cart*_t14 + _t10*_t30 + _t12*_t33 - _t35*_t6;
-    const trailer_real_t _t38 = _t15 - _t17;
+    const trailer_real_t _t16 = _t11*_t4;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t39 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t40 = _t38*_t39;
-    const trailer_real_t _t41 = _t22 - _t23;
-    const trailer_real_t _t42 = _t39*_t41;
-    const trailer_real_t _t43 = -_t15 - _t17;
+    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t45 = _t43*_t44;
-    const trailer_real_t _t46 = -_t22 - _t23;
-    const trailer_real_t _t47 = _t44*_t46;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t19 = -_t10 + _t2*_t6 + _t9;
+    const trailer_real_t _t20 = _t12*_t2 + _t15 - _t16;
+    const trailer_real_t _t21 = _t17*_t19;
+    const trailer_real_t _t22 = _t17*_t20;
+    const trailer_real_t _t23 = -_t10 + _t2*_t6 - _t9;
+    const trailer_real_t _t24 = _t12*_t2 - _t15 - _t16;
+    const trailer_real_t _t25 = _t18*_t23;
+    const trailer_real_t _t26 = _t18*_t24;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t29 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t27*_t8;
+    const trailer_real_t _t30 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t14*_t27;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t31 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t28*_t8;
+    const trailer_real_t _t32 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t14*_t28;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t33 = J_theta_cart*_t8 + _t27*_t6 + _t28*_t5;
+    const trailer_real_t _t34 = J_theta_cart*_t14 + _t11*_t28 + _t12*_t27;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t48 = J_theta_cart_left*_t45*_t47 + J_theta_cart_right*_t40*_t42;
-    const trailer_real_t _t49 = J_x_tractor*_t18 + _t21*_t30 + _t29*_t7;
-    const trailer_real_t _t50 = J_theta_tractor*_t7 + _t18*_t29 + _t19*_t32 + _t21*_t35;
-    const trailer_real_t _t51 = J_x_tractor*_t19 + _t21*_t33 + _t32*_t7;
-    const trailer_real_t _t52 = J_theta_cart*_t21 + _t18*_t30 + _t19*_t33 + _t35*_t7;
+    const trailer_real_t _t35 = J_theta_cart_right*_t21;
+    const trailer_real_t _t36 = J_theta_cart_right*_t22;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t37 = J_theta_cart_left*_t25;
+    const trailer_real_t _t38 = J_theta_cart_left*_t26;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t53 = J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t40*_t40
-            + J_theta_right + _t10*_t31 + _t12*_t34 + _t14*_t37 - _t36*_t6;
-    const trailer_real_t _t54 = _t18*_t31 + _t19*_t34 + _t21*_t37 + _t36*_t7 + _t48;
-    const trailer_real_t _t55 = _t10*_t49 + _t12*_t51 + _t14*_t52 + _t48 - _t50*_t6;
+    const trailer_real_t _t39 = J_theta_right + _t21*_t35 + _t25*_t37 + _t29*_t6 + _t31*_t5
+            + _t33*_t8;
+    const trailer_real_t _t40 = _t21*_t36 + _t25*_t38 + _t30*_t6 + _t32*_t5 + _t34*_t8;
     const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t56 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t42*_t42
-            + J_theta_left + _t18*_t49 + _t19*_t51 + _t21*_t52 + _t50*_t7;
-    M[0] = _t53;
-    M[1] = _t54;
-    M[2] = _t55;
-    M[3] = _t56;
+    const trailer_real_t _t41 = J_theta_left + _t11*_t32 + _t12*_t30 + _t14*_t34 + _t22*_t36
+            + _t26*_t38;
+    M[0] = _t39;
+    M[1] = _t40;
+    M[2] = _t40;
+    M[3] = _t41;
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 84 add, 153 mul, 2 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 43 add, 81 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
-    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t0 = theta_cart - theta_tractor;
+    const trailer_real_t _t1 = TRAILER_SIN(_t0);
+    const trailer_real_t _t2 = TRAILER_COS(_t0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
-    const trailer_real_t _t12 = _t11*_t9;
-    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
-    const trailer_real_t _t14 = _t10*_t11;
-    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
-    const trailer_real_t _t16 = -_t8*_t9;
-    const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t21 = -_t10*_t8;
-    const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
+    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
+    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
+    const trailer_real_t _t13 = _t2*_t6;
+    const trailer_real_t _t14 = _t4*_t5;
+    const trailer_real_t _t15 = _t13 - _t14;
+    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t2*_t9;
+    const trailer_real_t _t19 = _t4*_t8;
+    const trailer_real_t _t20 = _t18 - _t19;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
     const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_t4;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
+    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t2;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
-    const trailer_real_t _t36 = _t35*_t35;
-    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
-    const trailer_real_t _t38 = _t37*_t37;
-    const trailer_real_t _t39 = _t34*_t36;
-    const trailer_real_t _t40 = _t28*_t36;
-    const trailer_real_t _t41 = _t29*_t36;
-    const trailer_real_t _t42 = _t33*_t38;
-    const trailer_real_t _t43 = _t32*_t38;
-    const trailer_real_t _t44 = _t37*thetadot_right;
-    const trailer_real_t _t45 = _t37*thetadot_left;
-    const trailer_real_t _t46 = _t35*thetadot_right;
-    const trailer_real_t _t47 = _t35*thetadot_left;
-    const trailer_real_t _t48 = _t8*_t9;
-    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(1.6666666666666667)*_t49;
-    const trailer_real_t _t51 = TRAILER_LIT(0.2)*_t50;
-    const trailer_real_t _t52 = -_t1*_t48 + _t13;
-    const trailer_real_t _t53 = _t10*_t8;
-    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t59 = TRAILER_LIT(0.2)*_t58;
-    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t62 = TRAILER_LIT(0.2)*_t61;
-    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
+    const trailer_real_t _t26 = _t5*thetadot_right + _t8*thetadot_left;
+    const trailer_real_t _t27 = _t26*_t26;
+    const trailer_real_t _t28 = _t11*thetadot_right + _t16*thetadot_left;
+    const trailer_real_t _t29 = _t28*_t28;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t32 = _t26*thetadot_right;
+    const trailer_real_t _t33 = _t26*thetadot_left;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t64 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t65 = -_t51 - _t52;
-    const trailer_real_t _t66 = _t64*_t65;
-    const trailer_real_t _t67 = -_t56 - _t57;
-    const trailer_real_t _t68 = _t64*_t67;
-    const trailer_real_t _t69 = -_t59 - _t60;
-    const trailer_real_t _t70 = _t64*_t69;
-    const trailer_real_t _t71 = -_t62 - _t63;
-    const trailer_real_t _t72 = _t64*_t71;
-    const trailer_real_t _t73 = _t44*_t66 + _t45*_t68 + _t46*_t70 + _t47*_t72;
+    const trailer_real_t _t34 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t35 = -_t22 - _t7;
+    const trailer_real_t _t36 = _t34*_t35;
+    const trailer_real_t _t37 = -_t10 - _t24;
+    const trailer_real_t _t38 = _t34*_t37;
+    const trailer_real_t _t39 = -_t28*thetadot_right + _t32;
+    const trailer_real_t _t40 = -_t28*thetadot_left + _t33;
+    const trailer_real_t _t41 = _t36*_t39 + _t38*_t40;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t74 = J_theta_cart_left*_t73;
+    const trailer_real_t _t42 = J_theta_cart_left*_t41;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t75 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t76 = _t51 - _t52;
-    const trailer_real_t _t77 = _t75*_t76;
-    const trailer_real_t _t78 = _t56 - _t57;
-    const trailer_real_t _t79 = _t75*_t78;
-    const trailer_real_t _t80 = _t59 - _t60;
-    const trailer_real_t _t81 = _t75*_t80;
-    const trailer_real_t _t82 = _t62 - _t63;
-    const trailer_real_t _t83 = _t75*_t82;
-    const trailer_real_t _t84 = _t44*_t77 + _t45*_t79 + _t46*_t81 + _t47*_t83;
+    const trailer_real_t _t43 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t44 = _t22 - _t7;
+    const trailer_real_t _t45 = _t43*_t44;
+    const trailer_real_t _t46 = -_t10 + _t24;
+    const trailer_real_t _t47 = _t43*_t46;
+    const trailer_real_t _t48 = _t39*_t45 + _t40*_t47;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t85 = J_theta_cart_right*_t84;
-    const trailer_real_t _t86 = K_theta_cart_x_tractor_2*_t0 - _t31;
-    const trailer_real_t _t87 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
-    const trailer_real_t _t88 = _t12*_t44 + _t14*_t45;
-    const trailer_real_t _t89 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t90 = J_x_tractor*_t88 + _t86*_t89 + _t87;
-    const trailer_real_t _t91 = _t28 + _t29;
-    const trailer_real_t _t92 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
-            - _t39;
-    const trailer_real_t _t93 = _t44*_t48 + _t45*_t53;
-    const trailer_real_t _t94 = J_x_tractor*_t93 + _t89*_t91 + _t92;
-    const trailer_real_t _t95 = _t26 + _t27;
-    const trailer_real_t _t96 = K_theta_tractor_x_tractor_2*_t2 - _t30;
-    const trailer_real_t _t97 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
-    const trailer_real_t _t98 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39
-            - _t33*_t40 - _t33*_t41;
-    const trailer_real_t _t99 = _t88*_t96 + _t89*_t97 + _t93*_t95 + _t98;
-    const trailer_real_t _t100 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
+    const trailer_real_t _t49 = J_theta_cart_right*_t48;
+    const trailer_real_t _t50 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t51 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27
+            + _t25*_t29;
+    const trailer_real_t _t52 = _t21*_t39 + _t23*_t40;
+    const trailer_real_t _t53 = _t50*_t52 + _t51;
+    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t55 = -_t29*_t30 - _t29*_t31;
+    const trailer_real_t _t56 = _t32*_t6 + _t33*_t9;
+    const trailer_real_t _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor_2*_t1 - _t25;
+    const trailer_real_t _t59 = _t27*_t30 + _t27*_t31;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t101 = J_theta_cart*_t89 + _t100 + _t86*_t88 + _t91*_t93;
-    const trailer_real_t _t102 = _t19 - _t20;
-    const trailer_real_t _t103 = _t24 - _t25;
-    const trailer_real_t _t104 = _t102*_t75;
-    const trailer_real_t _t105 = _t103*_t75;
-    const trailer_real_t _t106 = -_t19 - _t20;
-    const trailer_real_t _t107 = -_t24 - _t25;
-    const trailer_real_t _t108 = _t106*_t64;
-    const trailer_real_t _t109 = _t107*_t64;
-    const trailer_real_t _t110 = _t101*_t18 + _t104*_t85 + _t108*_t74 + _t12*_t94 + _t16*_t90
-            - _t9*_t99;
-    const trailer_real_t _t111 = _t10*_t99 + _t101*_t23 + _t105*_t85 + _t109*_t74 + _t14*_t94
-            + _t21*_t90;
-    H[0] = _t110;
-    H[1] = _t111;
+    const trailer_real_t _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59;
+    const trailer_real_t _t61 = _t12 + _t15;
+    const trailer_real_t _t62 = _t17 + _t20;
+    const trailer_real_t _t63 = _t43*_t61;
+    const trailer_real_t _t64 = _t43*_t62;
+    const trailer_real_t _t65 = -_t12 + _t13 - _t14;
+    const trailer_real_t _t66 = -_t17 + _t18 - _t19;
+    const trailer_real_t _t67 = _t34*_t65;
+    const trailer_real_t _t68 = _t34*_t66;
+    const trailer_real_t _t69 = _t11*_t60 + _t42*_t67 + _t49*_t63 + _t5*_t57 + _t53*_t6;
+    const trailer_real_t _t70 = _t16*_t60 + _t42*_t68 + _t49*_t64 + _t53*_t9 + _t57*_t8;
+    H[0] = _t69;
+    H[1] = _t70;
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 130 add, 217 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 74 add, 124 mul, 3 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -897,143 +736,97 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
-    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(0.207)*_t4;
-    const trailer_real_t _t12 = _t11*_t9;
-    const trailer_real_t _t13 = -_t0*_t12 + _t6*_t9;
-    const trailer_real_t _t14 = _t10*_t11;
-    const trailer_real_t _t15 = -_t0*_t14 - _t10*_t6;
-    const trailer_real_t _t16 = -_t8*_t9;
-    const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t21 = -_t10*_t8;
-    const trailer_real_t _t22 = -_t1*_t21 - _t15;
-    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t0 = theta_cart - theta_tractor;
+    const trailer_real_t _t1 = TRAILER_SIN(_t0);
+    const trailer_real_t _t2 = TRAILER_COS(_t0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
+    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
+    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
+    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
+    const trailer_real_t _t13 = _t2*_t6;
+    const trailer_real_t _t14 = _t4*_t5;
+    const trailer_real_t _t15 = _t13 - _t14;
+    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t2*_t9;
+    const trailer_real_t _t19 = _t4*_t8;
+    const trailer_real_t _t20 = _t18 - _t19;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
     const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t26 = K_theta_tractor_x_tractor*_t2;
-    const trailer_real_t _t27 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t30 = K_theta_tractor_x_tractor*_t4;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_t4;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t _t35 = _t18*thetadot_right + _t23*thetadot_left;
-    const trailer_real_t _t36 = _t35*_t35;
-    const trailer_real_t _t37 = _t10*thetadot_left - _t9*thetadot_right;
-    const trailer_real_t _t38 = _t37*_t37;
-    const trailer_real_t _t39 = _t34*_t36;
-    const trailer_real_t _t40 = _t28*_t36;
-    const trailer_real_t _t41 = _t29*_t36;
-    const trailer_real_t _t42 = _t33*_t38;
-    const trailer_real_t _t43 = _t32*_t38;
-    const trailer_real_t _t44 = _t37*thetadot_right;
-    const trailer_real_t _t45 = _t37*thetadot_left;
-    const trailer_real_t _t46 = _t35*thetadot_right;
-    const trailer_real_t _t47 = _t35*thetadot_left;
-    const trailer_real_t _t48 = _t8*_t9;
-    const trailer_real_t _t49 = _t0*_t48 - _t1*_t12 - _t7*_t9;
-    const trailer_real_t _t50 = -TRAILER_LIT(1.6666666666666667)*_t49;
-    const trailer_real_t _t51 = TRAILER_LIT(0.2)*_t50;
-    const trailer_real_t _t52 = -_t1*_t48 + _t13;
-    const trailer_real_t _t53 = _t10*_t8;
-    const trailer_real_t _t54 = _t0*_t53 - _t1*_t14 + _t10*_t7;
-    const trailer_real_t _t55 = -TRAILER_LIT(1.6666666666666667)*_t54;
-    const trailer_real_t _t56 = TRAILER_LIT(0.2)*_t55;
-    const trailer_real_t _t57 = -_t1*_t53 + _t15;
-    const trailer_real_t _t58 = TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t59 = TRAILER_LIT(0.2)*_t58;
-    const trailer_real_t _t60 = _t0*_t12 - _t1*_t16 - _t6*_t9;
-    const trailer_real_t _t61 = TRAILER_LIT(1.6666666666666667)*_t25;
-    const trailer_real_t _t62 = TRAILER_LIT(0.2)*_t61;
-    const trailer_real_t _t63 = _t0*_t14 - _t1*_t21 + _t10*_t6;
-    const trailer_real_t _t64 = K_theta_tractor_x_tractor_2*_t2 - _t30;
-    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t0 - _t31;
-    const trailer_real_t _t66 = J_x_tractor*_t16 + _t18*_t65 - _t64*_t9;
-    const trailer_real_t _t67 = _t26 + _t27;
-    const trailer_real_t _t68 = _t28 + _t29;
-    const trailer_real_t _t69 = J_x_tractor*_t12 + _t18*_t68 - _t67*_t9;
-    const trailer_real_t _t70 = _t28*_t32 + _t29*_t32 + _t31*_t33 - _t33*_t34;
-    const trailer_real_t _t71 = -J_theta_tractor*_t9 + _t12*_t67 + _t16*_t64 + _t18*_t70;
-    const trailer_real_t _t72 = J_theta_cart*_t18 + _t12*_t68 + _t16*_t65 - _t70*_t9;
-    const trailer_real_t _t73 = -_t19 - _t20;
-    const trailer_real_t _t74 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t75 = _t73*_t74;
-    const trailer_real_t _t76 = J_theta_cart_left*_t75;
-    const trailer_real_t _t77 = _t19 - _t20;
-    const trailer_real_t _t78 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t79 = _t77*_t78;
-    const trailer_real_t _t80 = J_theta_cart_right*_t79;
-    const trailer_real_t _t81 = _t24 - _t25;
-    const trailer_real_t _t82 = _t78*_t81;
-    const trailer_real_t _t83 = -_t24 - _t25;
-    const trailer_real_t _t84 = _t74*_t83;
-    const trailer_real_t _t85 = _t76*_t84 + _t80*_t82;
-    const trailer_real_t _t86 = J_x_tractor*_t21 + _t10*_t64 + _t23*_t65;
-    const trailer_real_t _t87 = J_theta_tractor*_t10 + _t14*_t67 + _t21*_t64 + _t23*_t70;
-    const trailer_real_t _t88 = J_x_tractor*_t14 + _t10*_t67 + _t23*_t68;
-    const trailer_real_t _t89 = J_theta_cart*_t23 + _t10*_t70 + _t14*_t68 + _t21*_t65;
-    const trailer_real_t _t90 = _t26*_t38 + _t27*_t38 + _t40 + _t41;
-    const trailer_real_t _t91 = _t12*_t44 + _t14*_t45;
-    const trailer_real_t _t92 = _t44*_t50 + _t45*_t55 + _t46*_t58 + _t47*_t61;
-    const trailer_real_t _t93 = J_x_tractor*_t91 + _t65*_t92 + _t90;
-    const trailer_real_t _t94 = -K_theta_tractor_x_tractor_2*_t2*_t38 + _t30*_t38 + _t31*_t36
-            - _t39;
-    const trailer_real_t _t95 = _t44*_t48 + _t45*_t53;
-    const trailer_real_t _t96 = J_x_tractor*_t95 + _t68*_t92 + _t94;
-    const trailer_real_t _t97 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t36 - _t32*_t39
-            - _t33*_t40 - _t33*_t41;
-    const trailer_real_t _t98 = _t64*_t91 + _t67*_t95 + _t70*_t92 + _t97;
-    const trailer_real_t _t99 = _t28*_t42 + _t29*_t42 - _t31*_t43 + _t34*_t43;
-    const trailer_real_t _t100 = J_theta_cart*_t92 + _t65*_t91 + _t68*_t95 + _t99;
-    const trailer_real_t _t101 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t79*_t79
-            + J_theta_right + _t12*_t69 + _t16*_t66 + _t18*_t72 - _t71*_t9;
-    const trailer_real_t _t102 = _t10*_t71 + _t14*_t69 + _t21*_t66 + _t23*_t72 + _t85;
-    const trailer_real_t _t103 = _t12*_t88 + _t16*_t86 + _t18*_t89 + _t85 - _t87*_t9;
-    const trailer_real_t _t104 = J_theta_cart_left*_t84*_t84 + J_theta_cart_right*_t82*_t82
-            + J_theta_left + _t10*_t87 + _t14*_t88 + _t21*_t86 + _t23*_t89;
-    const trailer_real_t _t105 = _t101*_t104 - _t102*_t103;
-    const trailer_real_t _t106 = _t51 - _t52;
-    const trailer_real_t _t107 = _t106*_t78;
-    const trailer_real_t _t108 = _t56 - _t57;
-    const trailer_real_t _t109 = _t108*_t78;
-    const trailer_real_t _t110 = _t59 - _t60;
-    const trailer_real_t _t111 = _t110*_t78;
-    const trailer_real_t _t112 = _t62 - _t63;
-    const trailer_real_t _t113 = _t112*_t78;
-    const trailer_real_t _t114 = _t107*_t44 + _t109*_t45 + _t111*_t46 + _t113*_t47;
-    const trailer_real_t _t115 = -_t51 - _t52;
-    const trailer_real_t _t116 = _t115*_t74;
-    const trailer_real_t _t117 = -_t56 - _t57;
-    const trailer_real_t _t118 = _t117*_t74;
-    const trailer_real_t _t119 = -_t59 - _t60;
-    const trailer_real_t _t120 = _t119*_t74;
-    const trailer_real_t _t121 = -_t62 - _t63;
-    const trailer_real_t _t122 = _t121*_t74;
-    const trailer_real_t _t123 = _t116*_t44 + _t118*_t45 + _t120*_t46 + _t122*_t47;
-    const trailer_real_t _t124 = _t100*_t18 + _t114*_t80 + _t12*_t96 + _t123*_t76 + _t16*_t93
-            - _t9*_t98;
-    const trailer_real_t _t125 = J_theta_cart_left*_t123*_t84 + J_theta_cart_right*_t114*_t82
-            + _t10*_t98 + _t100*_t23 + _t14*_t96 + _t21*_t93;
-    const trailer_real_t _t126 = -_t124 + tau_right;
-    const trailer_real_t _t127 = -_t125 + tau_left;
-    const trailer_real_t _t128 = TRAILER_LIT(1.0)/_t105;
-    const trailer_real_t _t129 = _t128*(-_t102*_t127 + _t104*_t126);
-    const trailer_real_t _t130 = _t128*(_t101*_t127 - _t103*_t126);
+    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t _t26 = _t5*thetadot_right + _t8*thetadot_left;
+    const trailer_real_t _t27 = _t26*_t26;
+    const trailer_real_t _t28 = _t11*thetadot_right + _t16*thetadot_left;
+    const trailer_real_t _t29 = _t28*_t28;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t32 = _t26*thetadot_right;
+    const trailer_real_t _t33 = _t26*thetadot_left;
+    const trailer_real_t _t34 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t35 = _t12 + _t15;
+    const trailer_real_t _t36 = _t34*_t35;
+    const trailer_real_t _t37 = J_theta_cart_right*_t36;
+    const trailer_real_t _t38 = _t17 + _t20;
+    const trailer_real_t _t39 = _t34*_t38;
+    const trailer_real_t _t40 = J_theta_cart_right*_t39;
+    const trailer_real_t _t41 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t42 = -_t12 + _t13 - _t14;
+    const trailer_real_t _t43 = _t41*_t42;
+    const trailer_real_t _t44 = J_theta_cart_left*_t43;
+    const trailer_real_t _t45 = -_t17 + _t18 - _t19;
+    const trailer_real_t _t46 = _t41*_t45;
+    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27
+            + _t25*_t29;
+    const trailer_real_t _t50 = -_t28*thetadot_right + _t32;
+    const trailer_real_t _t51 = -_t28*thetadot_left + _t33;
+    const trailer_real_t _t52 = _t21*_t50 + _t23*_t51;
+    const trailer_real_t _t53 = _t48*_t52 + _t49;
+    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t55 = -_t29*_t30 - _t29*_t31;
+    const trailer_real_t _t56 = _t32*_t6 + _t33*_t9;
+    const trailer_real_t _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55;
+    const trailer_real_t _t58 = K_theta_cart_x_tractor_2*_t1 - _t25;
+    const trailer_real_t _t59 = _t27*_t30 + _t27*_t31;
+    const trailer_real_t _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59;
+    const trailer_real_t _t61 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48;
+    const trailer_real_t _t62 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54;
+    const trailer_real_t _t63 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54;
+    const trailer_real_t _t64 = J_theta_right + _t11*_t63 + _t36*_t37 + _t43*_t44 + _t5*_t62
+            + _t6*_t61;
+    const trailer_real_t _t65 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48;
+    const trailer_real_t _t66 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54;
+    const trailer_real_t _t67 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8;
+    const trailer_real_t _t68 = _t11*_t67 + _t36*_t40 + _t43*_t47 + _t5*_t66 + _t6*_t65;
+    const trailer_real_t _t69 = J_theta_left + _t16*_t67 + _t39*_t40 + _t46*_t47 + _t65*_t9
+            + _t66*_t8;
+    const trailer_real_t _t70 = _t64*_t69 - _t68*_t68;
+    const trailer_real_t _t71 = _t22 - _t7;
+    const trailer_real_t _t72 = _t34*_t71;
+    const trailer_real_t _t73 = -_t10 + _t24;
+    const trailer_real_t _t74 = _t34*_t73;
+    const trailer_real_t _t75 = -_t22 - _t7;
+    const trailer_real_t _t76 = _t41*_t75;
+    const trailer_real_t _t77 = -_t10 - _t24;
+    const trailer_real_t _t78 = _t41*_t77;
+    const trailer_real_t _t79 = _t50*_t72 + _t51*_t74;
+    const trailer_real_t _t80 = _t50*_t76 + _t51*_t78;
+    const trailer_real_t _t81 = _t11*_t60 + _t37*_t79 + _t44*_t80 + _t5*_t57 + _t53*_t6;
+    const trailer_real_t _t82 = _t16*_t60 + _t40*_t79 + _t47*_t80 + _t53*_t9 + _t57*_t8;
+    const trailer_real_t _t83 = -_t81 + tau_right;
+    const trailer_real_t _t84 = -_t82 + tau_left;
+    const trailer_real_t _t85 = TRAILER_LIT(1.0)/_t70;
+    const trailer_real_t _t86 = _t85*(-_t68*_t84 + _t69*_t83);
+    const trailer_real_t _t87 = _t85*(_t64*_t84 - _t68*_t83);
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1067,14 +860,14 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t101 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t64 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t105 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t70 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t129;
-    const trailer_real_t r_1 = _t130;
+    const trailer_real_t r_0 = _t86;
+    const trailer_real_t r_1 = _t87;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -1084,441 +877,256 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 419 add, 638 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 209 add, 332 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
 {
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = TRAILER_COS(theta_cart);
     const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t _t2 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t6 = _t2*_t3 + _t4*_t5;
-    const trailer_real_t _t7 = -_t2*_t5 + _t3*_t4;
-    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t9 = TRAILER_LIT(0.207)*_t4;
+    const trailer_real_t theta_cart = q[3];
+    const trailer_real_t _t0 = theta_cart - theta_tractor;
+    const trailer_real_t _t1 = TRAILER_SIN(_t0);
+    const trailer_real_t _t2 = TRAILER_COS(_t0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t12 = -_t10*_t9;
-    const trailer_real_t _t13 = -_t0*_t12 + _t10*_t6;
-    const trailer_real_t _t14 = -_t11*_t9;
-    const trailer_real_t _t15 = -_t0*_t14 - _t11*_t6;
-    const trailer_real_t _t16 = -_t10*_t8;
-    const trailer_real_t _t17 = -_t1*_t16 - _t13;
-    const trailer_real_t _t18 = -TRAILER_LIT(1.6666666666666667)*_t17;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
-    const trailer_real_t _t20 = -_t1*_t12 - _t10*_t7;
-    const trailer_real_t _t21 = -_t0*_t16 + _t20;
-    const trailer_real_t _t22 = -_t11*_t8;
-    const trailer_real_t _t23 = -_t1*_t22 - _t15;
-    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t23;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
-    const trailer_real_t _t26 = -_t1*_t14 + _t11*_t7;
-    const trailer_real_t _t27 = -_t0*_t22 + _t26;
+    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
+    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
+    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
+    const trailer_real_t _t13 = _t2*_t6;
+    const trailer_real_t _t14 = _t4*_t5;
+    const trailer_real_t _t15 = _t13 - _t14;
+    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
+    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
+    const trailer_real_t _t18 = _t2*_t9;
+    const trailer_real_t _t19 = _t4*_t8;
+    const trailer_real_t _t20 = _t18 - _t19;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
     const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t _t28 = _t12*thetadot_right;
+    const trailer_real_t _t25 = _t5*thetadot_right;
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t29 = _t14*thetadot_left;
-    const trailer_real_t _t30 = _t28 + _t29;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t31 = K_theta_tractor_x_tractor*_t2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer_real_t _t26 = _t8*thetadot_left;
+    const trailer_real_t _t27 = _t11*thetadot_right;
+    const trailer_real_t _t28 = _t16*thetadot_left;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t0;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor*_t1;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor*_t4;
-    const trailer_real_t _t36 = -K_theta_tractor_x_tractor_2*_t2 + _t35;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t1;
-    const trailer_real_t _t38 = -K_theta_cart_x_tractor_2*_t0 + _t37;
-    const trailer_real_t _t39 = TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t40 = _t33*_t39;
-    const trailer_real_t _t41 = TRAILER_LIT(0.3)*_t4;
-    const trailer_real_t _t42 = _t37*_t41;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t _t44 = _t34*_t39;
-    const trailer_real_t _t45 = -_t10*thetadot_right + _t11*thetadot_left;
-    const trailer_real_t _t46 = _t45*_t45;
-    const trailer_real_t _t47 = K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t48 = _t35*_t46 - _t46*_t47;
-    const trailer_real_t _t49 = _t18*thetadot_right + _t24*thetadot_left;
-    const trailer_real_t _t50 = _t49*_t49;
-    const trailer_real_t _t51 = _t37*_t50;
-    const trailer_real_t _t52 = _t43*_t50;
-    const trailer_real_t _t53 = _t51 - _t52;
-    const trailer_real_t _t54 = _t31*_t46 + _t32*_t46;
-    const trailer_real_t _t55 = _t33*_t50;
-    const trailer_real_t _t56 = _t34*_t50;
-    const trailer_real_t _t57 = _t55 + _t56;
-    const trailer_real_t _t58 = _t33*_t41;
-    const trailer_real_t _t59 = _t37*_t39;
-    const trailer_real_t _t60 = _t39*_t43;
-    const trailer_real_t _t61 = _t34*_t41;
-    const trailer_real_t _t62 = _t10*_t8;
-    const trailer_real_t _t63 = _t62*thetadot_right;
-    const trailer_real_t _t64 = _t11*_t8;
-    const trailer_real_t _t65 = _t64*thetadot_left;
-    const trailer_real_t _t66 = _t1*_t12;
-    const trailer_real_t _t67 = _t10*_t7;
-    const trailer_real_t _t68 = -_t0*_t62 + _t67;
-    const trailer_real_t _t69 = _t1*_t14;
-    const trailer_real_t _t70 = -_t11*_t7;
-    const trailer_real_t _t71 = -_t0*_t64 + _t70;
-    const trailer_real_t _t72 = -_t66 - _t68;
-    const trailer_real_t _t73 = -TRAILER_LIT(1.6666666666666667)*_t72;
-    const trailer_real_t _t74 = _t73*thetadot_right;
-    const trailer_real_t _t75 = -_t69 - _t71;
-    const trailer_real_t _t76 = -TRAILER_LIT(1.6666666666666667)*_t75;
-    const trailer_real_t _t77 = _t76*thetadot_left;
-    const trailer_real_t _t78 = TRAILER_LIT(1.6666666666666667)*_t21;
-    const trailer_real_t _t79 = _t78*thetadot_right;
-    const trailer_real_t _t80 = TRAILER_LIT(1.6666666666666667)*_t27;
-    const trailer_real_t _t81 = _t80*thetadot_left;
-    const trailer_real_t _t82 = TRAILER_LIT(0.2)*_t73;
-    const trailer_real_t _t83 = -_t1*_t62 + _t13;
-    const trailer_real_t _t84 = TRAILER_LIT(0.2)*_t76;
-    const trailer_real_t _t85 = -_t1*_t64 + _t15;
-    const trailer_real_t _t86 = TRAILER_LIT(0.2)*_t78;
-    const trailer_real_t _t87 = -_t10*_t6;
-    const trailer_real_t _t88 = _t0*_t12 - _t1*_t16 + _t87;
-    const trailer_real_t _t89 = TRAILER_LIT(0.2)*_t80;
-    const trailer_real_t _t90 = _t11*_t6;
-    const trailer_real_t _t91 = _t0*_t14 - _t1*_t22 + _t90;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t92 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t93 = _t82 - _t83;
-    const trailer_real_t _t94 = _t92*_t93;
-    const trailer_real_t _t95 = _t94*thetadot_right;
-    const trailer_real_t _t96 = _t84 - _t85;
-    const trailer_real_t _t97 = _t92*_t96;
-    const trailer_real_t _t98 = _t97*thetadot_left;
-    const trailer_real_t _t99 = _t86 - _t88;
-    const trailer_real_t _t100 = _t92*_t99;
-    const trailer_real_t _t101 = _t100*thetadot_right;
-    const trailer_real_t _t102 = _t89 - _t91;
-    const trailer_real_t _t103 = _t102*_t92;
-    const trailer_real_t _t104 = _t103*thetadot_left;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t105 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t106 = -_t82 - _t83;
-    const trailer_real_t _t107 = _t105*_t106;
-    const trailer_real_t _t108 = _t107*thetadot_right;
-    const trailer_real_t _t109 = -_t84 - _t85;
-    const trailer_real_t _t110 = _t105*_t109;
-    const trailer_real_t _t111 = _t110*thetadot_left;
-    const trailer_real_t _t112 = -_t86 - _t88;
-    const trailer_real_t _t113 = _t105*_t112;
-    const trailer_real_t _t114 = _t113*thetadot_right;
-    const trailer_real_t _t115 = -_t89 - _t91;
-    const trailer_real_t _t116 = _t105*_t115;
-    const trailer_real_t _t117 = _t116*thetadot_left;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t118 = J_x_tractor*_t16;
-    const trailer_real_t _t119 = _t10*_t36;
-    const trailer_real_t _t120 = -_t18*_t38;
-    const trailer_real_t _t121 = _t118 + _t119 + _t120;
-    const trailer_real_t _t122 = J_x_tractor*_t12;
-    const trailer_real_t _t123 = _t31 + _t32;
-    const trailer_real_t _t124 = -_t10*_t123;
-    const trailer_real_t _t125 = _t33 + _t34;
-    const trailer_real_t _t126 = _t125*_t18;
-    const trailer_real_t _t127 = _t122 + _t124 + _t126;
-    const trailer_real_t _t128 = _t40 - _t41*_t43 + _t42 + _t44;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t129 = -J_theta_tractor*_t10 + _t12*_t123 + _t128*_t18 - _t16*_t36;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t3;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t34 = _t25 + _t26;
+    const trailer_real_t _t35 = _t34*_t34;
+    const trailer_real_t _t36 = _t27 + _t28;
+    const trailer_real_t _t37 = _t36*_t36;
+    const trailer_real_t _t38 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t39 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t _t40 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t41 = _t34*thetadot_right;
+    const trailer_real_t _t42 = _t34*thetadot_left;
+    const trailer_real_t _t43 = _t29 + _t30;
+    const trailer_real_t _t44 = _t11*_t43;
+    const trailer_real_t _t45 = _t16*_t43;
+    const trailer_real_t _t46 = _t32 - _t33;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t130 = J_theta_cart*_t18;
-    const trailer_real_t _t131 = -_t16*_t38;
-    const trailer_real_t _t132 = -_t10*_t128;
-    const trailer_real_t _t133 = _t12*_t125;
-    const trailer_real_t _t134 = _t130 + _t131 + _t132 + _t133;
-    const trailer_real_t _t135 = -_t19 - _t21;
-    const trailer_real_t _t136 = _t105*_t135;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t137 = J_theta_cart_left*_t136;
-    const trailer_real_t _t138 = _t19 - _t21;
-    const trailer_real_t _t139 = _t138*_t92;
+    const trailer_real_t _t47 = J_theta_cart*_t11 + _t43*_t6 + _t46*_t5;
+    const trailer_real_t _t48 = J_theta_cart*_t16 + _t43*_t9 + _t46*_t8;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t49 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t50 = _t12 + _t15;
+    const trailer_real_t _t51 = _t49*_t50;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t140 = J_theta_cart_right*_t139;
-    const trailer_real_t _t141 = _t25 - _t27;
-    const trailer_real_t _t142 = _t141*_t92;
-    const trailer_real_t _t143 = -_t25 - _t27;
-    const trailer_real_t _t144 = _t105*_t143;
-    const trailer_real_t _t145 = _t137*_t144 + _t140*_t142;
-    const trailer_real_t _t146 = J_x_tractor*_t22;
-    const trailer_real_t _t147 = -_t11*_t36;
-    const trailer_real_t _t148 = -_t24*_t38;
-    const trailer_real_t _t149 = _t146 + _t147 + _t148;
-    const trailer_real_t _t150 = J_theta_tractor*_t11 + _t123*_t14 + _t128*_t24 - _t22*_t36;
-    const trailer_real_t _t151 = J_x_tractor*_t14;
-    const trailer_real_t _t152 = _t11*_t123;
-    const trailer_real_t _t153 = _t125*_t24;
-    const trailer_real_t _t154 = _t151 + _t152 + _t153;
-    const trailer_real_t _t155 = J_theta_cart*_t24;
-    const trailer_real_t _t156 = -_t22*_t38;
-    const trailer_real_t _t157 = _t11*_t128;
-    const trailer_real_t _t158 = _t125*_t14;
-    const trailer_real_t _t159 = _t155 + _t156 + _t157 + _t158;
-    const trailer_real_t _t160 = _t54 + _t57;
-    const trailer_real_t _t161 = _t28*_t45 + _t29*_t45;
-    const trailer_real_t _t162 = _t45*_t74 + _t45*_t77 + _t49*_t79 + _t49*_t81;
-    const trailer_real_t _t163 = J_x_tractor*_t161 + _t160 - _t162*_t38;
-    const trailer_real_t _t164 = _t48 + _t53;
-    const trailer_real_t _t165 = _t45*_t63 + _t45*_t65;
-    const trailer_real_t _t166 = J_x_tractor*_t165 + _t125*_t162 + _t164;
-    const trailer_real_t _t167 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t50 - _t39*_t52
-            - _t41*_t55 - _t41*_t56;
-    const trailer_real_t _t168 = _t123*_t165 + _t128*_t162 - _t161*_t36 + _t167;
-    const trailer_real_t _t169 = _t46*_t58 - _t46*_t59 + _t46*_t60 + _t46*_t61;
-    const trailer_real_t _t170 = J_theta_cart*_t162 + _t125*_t165 - _t161*_t38 + _t169;
-    const trailer_real_t _t171 = J_theta_cart_left*_t144;
-    const trailer_real_t _t172 = J_theta_cart_right*_t142;
-    const trailer_real_t _t173 = _t63 + _t65;
-    const trailer_real_t _t174 = _t74 + _t77;
-    const trailer_real_t _t175 = _t79 + _t81;
-    const trailer_real_t _t176 = _t95 + _t98;
-    const trailer_real_t _t177 = _t101 + _t104;
-    const trailer_real_t _t178 = _t108 + _t111;
-    const trailer_real_t _t179 = _t114 + _t117;
-    const trailer_real_t _t180 = _t58 - _t59 + _t60 + _t61;
-    const trailer_real_t _t181 = -_t10*_t24 + _t11*_t18;
-    const trailer_real_t _t182 = TRAILER_LIT(2.0)*_t171;
-    const trailer_real_t _t183 = TRAILER_LIT(2.0)*_t172;
-    const trailer_real_t _t184 = TRAILER_LIT(2.0)*_t11;
-    const trailer_real_t _t185 = _t184*_t24;
-    const trailer_real_t _t186 = TRAILER_LIT(2.0)*_t152;
-    const trailer_real_t _t187 = TRAILER_LIT(2.0)*_t153;
-    const trailer_real_t _t188 = TRAILER_LIT(2.0)*_t155 + TRAILER_LIT(2.0)*_t156
-            + TRAILER_LIT(2.0)*_t157 + TRAILER_LIT(2.0)*_t158;
-    const trailer_real_t _t189 = TRAILER_LIT(2.0)*_t49;
-    const trailer_real_t _t190 = _t189*_t37 - _t189*_t43;
-    const trailer_real_t _t191 = _t189*_t33 + _t189*_t34;
-    const trailer_real_t _t192 = TRAILER_LIT(0.6)*_t49;
-    const trailer_real_t _t193 = _t192*_t4;
-    const trailer_real_t _t194 = TRAILER_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t2*_t49
-            - _t192*_t2*_t43 - _t193*_t33 - _t193*_t34;
-    const trailer_real_t _t195 = _t39*_t55 + _t39*_t56 + _t41*_t51 - _t41*_t52;
-    const trailer_real_t _t196 = -TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t4*_t46 + _t40*_t46
-            + _t42*_t46 + _t44*_t46;
-    const trailer_real_t _t197 = _t45*thetadot_right;
-    const trailer_real_t _t198 = _t45*thetadot_left;
-    const trailer_real_t _t199 = _t49*thetadot_right;
-    const trailer_real_t _t200 = _t49*thetadot_left;
-    const trailer_real_t _t201 = _t10*_t9;
-    const trailer_real_t _t202 = _t0*_t201 - _t1*_t62 - _t87;
-    const trailer_real_t _t203 = -TRAILER_LIT(1.6666666666666667)*_t202;
-    const trailer_real_t _t204 = TRAILER_LIT(0.2)*_t203;
-    const trailer_real_t _t205 = -_t1*_t201 + _t68;
-    const trailer_real_t _t206 = _t11*_t9;
-    const trailer_real_t _t207 = _t0*_t206 - _t1*_t64 - _t90;
-    const trailer_real_t _t208 = -TRAILER_LIT(1.6666666666666667)*_t207;
-    const trailer_real_t _t209 = TRAILER_LIT(0.2)*_t208;
-    const trailer_real_t _t210 = -_t1*_t206 + _t71;
-    const trailer_real_t _t211 = TRAILER_LIT(1.6666666666666667)*_t83;
-    const trailer_real_t _t212 = TRAILER_LIT(0.2)*_t211;
-    const trailer_real_t _t213 = _t0*_t62 + _t20;
-    const trailer_real_t _t214 = TRAILER_LIT(1.6666666666666667)*_t85;
-    const trailer_real_t _t215 = TRAILER_LIT(0.2)*_t214;
-    const trailer_real_t _t216 = _t0*_t64 + _t26;
-    const trailer_real_t _t217 = _t108*_t45 + _t111*_t45 + _t114*_t49 + _t117*_t49;
-    const trailer_real_t _t218 = J_theta_cart_left*_t217;
-    const trailer_real_t _t219 = _t101*_t49 + _t104*_t49 + _t45*_t95 + _t45*_t98;
-    const trailer_real_t _t220 = J_theta_cart_right*_t219;
-    const trailer_real_t _t221 = _t165*_t36;
-    const trailer_real_t _t222 = _t162*_t180;
-    const trailer_real_t _t223 = TRAILER_LIT(2.0)*_t137;
-    const trailer_real_t _t224 = TRAILER_LIT(2.0)*_t140;
-    const trailer_real_t _t225 = -TRAILER_LIT(2.0)*_t10;
-    const trailer_real_t _t226 = _t18*_t225;
-    const trailer_real_t _t227 = TRAILER_LIT(2.0)*_t124;
-    const trailer_real_t _t228 = TRAILER_LIT(2.0)*_t126;
-    const trailer_real_t _t229 = TRAILER_LIT(2.0)*_t130 + TRAILER_LIT(2.0)*_t131
-            + TRAILER_LIT(2.0)*_t132 + TRAILER_LIT(2.0)*_t133;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t230 = J_theta_cart_left*_t136*_t136 + J_theta_cart_right*_t139*_t139
-            + J_theta_right - _t10*_t129 + _t12*_t127 + _t121*_t16 + _t134*_t18;
-    const trailer_real_t _t231 = _t11*_t129 + _t121*_t22 + _t127*_t14 + _t134*_t24 + _t145;
-    const trailer_real_t _t232 = -_t10*_t150 + _t12*_t154 + _t145 + _t149*_t16 + _t159*_t18;
+    const trailer_real_t _t52 = J_theta_cart_right*_t51;
+    const trailer_real_t _t53 = _t17 + _t20;
+    const trailer_real_t _t54 = _t49*_t53;
+    const trailer_real_t _t55 = J_theta_cart_right*_t54;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t56 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t57 = -_t12 + _t13 - _t14;
+    const trailer_real_t _t58 = _t56*_t57;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t59 = J_theta_cart_left*_t58;
+    const trailer_real_t _t60 = -_t17 + _t18 - _t19;
+    const trailer_real_t _t61 = _t56*_t60;
+    const trailer_real_t _t62 = J_theta_cart_left*_t61;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t63 = K_theta_tractor_x_tractor*_t35 + _t31*_t37 - _t37*_t38;
+    const trailer_real_t _t64 = -_t36*thetadot_right + _t41;
+    const trailer_real_t _t65 = -_t36*thetadot_left + _t42;
+    const trailer_real_t _t66 = _t21*_t64 + _t23*_t65;
+    const trailer_real_t _t67 = _t43*_t66 + _t63;
+    const trailer_real_t _t68 = -_t37*_t39 - _t37*_t40;
+    const trailer_real_t _t69 = _t41*_t6 + _t42*_t9;
+    const trailer_real_t _t70 = -K_theta_tractor_x_tractor*_t69 + _t46*_t66 + _t68;
+    const trailer_real_t _t71 = K_theta_cart_x_tractor_2*_t1 - _t31;
+    const trailer_real_t _t72 = _t35*_t39 + _t35*_t40;
+    const trailer_real_t _t73 = J_theta_cart*_t66 + _t69*_t71 + _t72;
+    const trailer_real_t _t74 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t76 = _t16*_t71;
+    const trailer_real_t _t77 = _t71*_t9;
+    const trailer_real_t _t78 = _t39 + _t40;
+    const trailer_real_t _t79 = _t78*_t8;
+    const trailer_real_t _t80 = -_t10 + _t24;
+    const trailer_real_t _t81 = _t49*_t80;
+    const trailer_real_t _t82 = J_theta_cart_right*_t81;
+    const trailer_real_t _t83 = -_t10 - _t24;
+    const trailer_real_t _t84 = _t56*_t83;
+    const trailer_real_t _t85 = J_theta_cart_left*_t84;
+    const trailer_real_t _t86 = TRAILER_LIT(2.0)*_t36;
+    const trailer_real_t _t87 = _t31*_t86 - _t38*_t86;
+    const trailer_real_t _t88 = TRAILER_LIT(0.6)*_t36;
+    const trailer_real_t _t89 = -_t29*_t88 - _t30*_t88;
+    const trailer_real_t _t90 = -_t22 - _t7;
+    const trailer_real_t _t91 = _t56*_t90;
+    const trailer_real_t _t92 = J_theta_cart_left*_t91;
+    const trailer_real_t _t93 = _t22 - _t7;
+    const trailer_real_t _t94 = _t49*_t93;
+    const trailer_real_t _t95 = J_theta_cart_right*_t94;
+    const trailer_real_t _t96 = _t6*_t71;
+    const trailer_real_t _t97 = _t5*_t78;
+    const trailer_real_t _t98 = _t11*_t71;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t99 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t45;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t100 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t46;
     const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t233 = J_theta_cart_left*_t144*_t144 + J_theta_cart_right*_t142*_t142
-            + J_theta_left + _t11*_t150 + _t14*_t154 + _t149*_t22 + _t159*_t24;
-    const trailer_real_t _t234 = _t230*_t233 - _t231*_t232;
-    const trailer_real_t _t235 = TRAILER_LIT(1.0)/_t234;
-    const trailer_real_t _t236 = _t235*_t235;
-    const trailer_real_t _t237 = -_t10*_t168 + _t12*_t166 + _t137*_t217 + _t140*_t219 + _t16*_t163
-            + _t170*_t18;
+    const trailer_real_t _t101 = J_theta_left + _t100*_t8 + _t16*_t48 + _t54*_t55 + _t61*_t62
+            + _t9*_t99;
+    const trailer_real_t _t102 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t44;
+    const trailer_real_t _t103 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t46;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t104 = J_theta_right + _t102*_t6 + _t103*_t5 + _t11*_t47 + _t51*_t52
+            + _t58*_t59;
+    const trailer_real_t _t105 = _t100*_t5 + _t11*_t48 + _t51*_t55 + _t58*_t62 + _t6*_t99;
+    const trailer_real_t _t106 = _t101*_t104 - _t105*_t105;
+    const trailer_real_t _t107 = TRAILER_LIT(1.0)/_t106;
+    const trailer_real_t _t108 = _t107;
+    const trailer_real_t _t109 = _t101*_t108;
+    const trailer_real_t _t110 = _t105*_t108;
+    const trailer_real_t _t111 = _t64*_t94 + _t65*_t81;
+    const trailer_real_t _t112 = _t64*_t91 + _t65*_t84;
+    const trailer_real_t _t113 = _t11*_t73 + _t111*_t52 + _t112*_t59 + _t5*_t70 + _t6*_t67;
     const trailer_real_t tau_right = tau[0];
-    const trailer_real_t _t238 = -_t237 + tau_right;
-    const trailer_real_t _t239 = _t235;
-    const trailer_real_t _t240 = _t238*_t239;
-    const trailer_real_t _t241 = _t233*_t239;
-    const trailer_real_t _t242 = _t11*_t168 + _t14*_t166 + _t163*_t22 + _t170*_t24 + _t171*_t217
-            + _t172*_t219;
+    const trailer_real_t _t114 = -_t113 + tau_right;
+    const trailer_real_t _t115 = _t108*_t114;
+    const trailer_real_t _t116 = _t111*_t55 + _t112*_t62 + _t16*_t73 + _t67*_t9 + _t70*_t8;
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t243 = -_t242 + tau_left;
-    const trailer_real_t _t244 = _t239*_t243;
-    const trailer_real_t _t245 = _t231*_t239;
-    const trailer_real_t _t246 = -_t231*_t243 + _t233*_t238;
-    const trailer_real_t _t247 = TRAILER_LIT(2.0)*_t38;
-    const trailer_real_t _t248 = TRAILER_LIT(1.6666666666666667)*_t88;
-    const trailer_real_t _t249 = TRAILER_LIT(0.2)*_t248;
-    const trailer_real_t _t250 = _t0*_t16 + _t66 + _t67;
-    const trailer_real_t _t251 = TRAILER_LIT(1.6666666666666667)*_t91;
-    const trailer_real_t _t252 = TRAILER_LIT(0.2)*_t251;
-    const trailer_real_t _t253 = _t0*_t22 + _t69 + _t70;
-    const trailer_real_t _t254 = -_t162*_t180;
-    const trailer_real_t _t255 = TRAILER_LIT(2.0)*_t45;
-    const trailer_real_t _t256 = _t255*_t35 - _t255*_t47;
-    const trailer_real_t _t257 = _t255*_t31 + _t255*_t32;
-    const trailer_real_t _t258 = TRAILER_LIT(0.6)*_t45;
-    const trailer_real_t _t259 = _t258*_t4;
-    const trailer_real_t _t260 = _t2*_t258;
-    const trailer_real_t _t261 = _t259*_t33 + _t259*_t34 - _t260*_t37 + _t260*_t43;
-    const trailer_real_t _t262 = _t230*_t239;
-    const trailer_real_t _t263 = _t232*_t239;
-    const trailer_real_t _t264 = _t230*_t243 - _t232*_t238;
-    const trailer_real_t _t265 = _t107*_t171 + _t110*_t137 + _t12*_t149 + _t121*_t14
-            + _t123*(-_t10*_t22 + _t11*_t16) + _t127*_t64 + _t134*_t76 + _t140*_t97 + _t154*_t62
-            + _t159*_t73 + _t172*_t94 + _t180*_t181 + _t36*(-_t10*_t14 + _t11*_t12);
-    const trailer_real_t _t266 = _t110*_t182 + _t14*_t184*_t36
-            + _t14*(TRAILER_LIT(2.0)*_t146 + TRAILER_LIT(2.0)*_t147 + TRAILER_LIT(2.0)*_t148)
-            + _t180*_t185 + _t183*_t97 + _t186*_t22 + _t188*_t76 + _t64*(TRAILER_LIT(2.0)*_t151
-            + _t186 + _t187);
-    const trailer_real_t _t267 = _t174*_t190 - _t54;
-    const trailer_real_t _t268 = _t174*_t191 + _t48;
-    const trailer_real_t _t269 = _t174*_t194 + _t195;
-    const trailer_real_t _t270 = _t197*_t201 + _t198*_t206;
-    const trailer_real_t _t271 = _t174*_t175 + _t197*_t203 + _t198*_t208 + _t199*_t211
-            + _t200*_t214;
-    const trailer_real_t _t272 = _t204 - _t205;
-    const trailer_real_t _t273 = _t272*_t92;
-    const trailer_real_t _t274 = _t209 - _t210;
-    const trailer_real_t _t275 = _t274*_t92;
-    const trailer_real_t _t276 = _t212 - _t213;
-    const trailer_real_t _t277 = _t276*_t92;
-    const trailer_real_t _t278 = _t215 - _t216;
-    const trailer_real_t _t279 = _t278*_t92;
-    const trailer_real_t _t280 = _t174*_t177 + _t197*_t273 + _t198*_t275 + _t199*_t277
-            + _t200*_t279;
-    const trailer_real_t _t281 = -_t204 - _t205;
-    const trailer_real_t _t282 = _t105*_t281;
-    const trailer_real_t _t283 = -_t209 - _t210;
-    const trailer_real_t _t284 = _t105*_t283;
-    const trailer_real_t _t285 = -_t212 - _t213;
-    const trailer_real_t _t286 = _t105*_t285;
-    const trailer_real_t _t287 = -_t215 - _t216;
-    const trailer_real_t _t288 = _t105*_t287;
-    const trailer_real_t _t289 = _t174*_t179 + _t197*_t282 + _t198*_t284 + _t199*_t286
-            + _t200*_t288;
-    const trailer_real_t _t290 = -_t10*_t221 - _t10*_t222 - _t10*_t269 + _t107*_t218 + _t12*_t163
-            + _t12*_t267 + _t121*_t165 + _t124*_t161 + _t127*_t270 + _t134*_t271 + _t137*_t289
-            + _t140*_t280 + _t16*_t268 + _t166*_t62 + _t170*_t73 - _t18*_t196 + _t220*_t94;
-    const trailer_real_t _t291 = _t11*_t221 + _t11*_t222 + _t11*_t269 + _t110*_t218 + _t14*_t163
-            + _t14*_t267 + _t149*_t165 + _t152*_t161 + _t154*_t270 + _t159*_t271 + _t166*_t64
-            + _t170*_t76 + _t171*_t289 + _t172*_t280 - _t196*_t24 + _t22*_t268 + _t220*_t97;
-    const trailer_real_t _t292 = _t107*_t223 + _t12*_t225*_t36
-            + _t12*(TRAILER_LIT(2.0)*_t118 + TRAILER_LIT(2.0)*_t119 + TRAILER_LIT(2.0)*_t120)
-            + _t16*_t227 + _t180*_t226 + _t224*_t94 + _t229*_t73 + _t62*(TRAILER_LIT(2.0)*_t122
-            + _t227 + _t228);
-    const trailer_real_t _t293 = _t230*_t266 - _t231*_t265 - _t232*_t265 + _t233*_t292;
-    const trailer_real_t _t294 = -_t236*_t293;
-    const trailer_real_t _t295 = _t240*_t266 - _t241*_t290 - _t244*_t265 + _t245*_t291
-            + _t246*_t294;
-    const trailer_real_t _t296 = _t100*_t172 + _t103*_t140 + _t113*_t171 + _t116*_t137
-            + _t125*(_t16*_t24 + _t18*_t22) + _t134*_t80 + _t159*_t78 - _t180*_t181
-            + _t38*(_t12*_t24 + _t14*_t18);
-    const trailer_real_t _t297 = _t103*_t183 + _t116*_t182 + _t14*_t24*_t247 - _t180*_t185
-            + _t187*_t22 + _t188*_t80;
-    const trailer_real_t _t298 = _t175*_t190 - _t57;
-    const trailer_real_t _t299 = _t175*_t191 + _t53;
-    const trailer_real_t _t300 = _t175*_t194 - _t195;
-    const trailer_real_t _t301 = _t175*_t175 + _t197*_t211 + _t198*_t214 + _t199*_t248
-            + _t200*_t251;
-    const trailer_real_t _t302 = _t249 - _t250;
-    const trailer_real_t _t303 = _t302*_t92;
-    const trailer_real_t _t304 = _t252 - _t253;
-    const trailer_real_t _t305 = _t304*_t92;
-    const trailer_real_t _t306 = _t175*_t177 + _t197*_t277 + _t198*_t279 + _t199*_t303
-            + _t200*_t305;
-    const trailer_real_t _t307 = -_t249 - _t250;
-    const trailer_real_t _t308 = _t105*_t307;
-    const trailer_real_t _t309 = -_t252 - _t253;
-    const trailer_real_t _t310 = _t105*_t309;
-    const trailer_real_t _t311 = _t175*_t179 + _t197*_t286 + _t198*_t288 + _t199*_t308
-            + _t200*_t310;
-    const trailer_real_t _t312 = -_t10*_t254 - _t10*_t300 + _t100*_t220 + _t113*_t218 + _t12*_t298
-            + _t125*(_t16*_t162 + _t161*_t18) + _t134*_t301 + _t137*_t311 + _t140*_t306 + _t16*_t299
-            + _t170*_t78 + _t18*_t196 + _t38*(_t12*_t162 + _t165*_t18);
-    const trailer_real_t _t313 = _t103*_t220 + _t11*_t254 + _t11*_t300 + _t116*_t218
-            + _t125*(_t161*_t24 + _t162*_t22) + _t14*_t298 + _t159*_t301 + _t170*_t80 + _t171*_t311
-            + _t172*_t306 + _t196*_t24 + _t22*_t299 + _t38*(_t14*_t162 + _t165*_t24);
-    const trailer_real_t _t314 = _t100*_t224 + _t113*_t223 + _t12*_t18*_t247 + _t16*_t228
-            - _t180*_t226 + _t229*_t78;
-    const trailer_real_t _t315 = _t230*_t297 - _t231*_t296 - _t232*_t296 + _t233*_t314;
-    const trailer_real_t _t316 = -_t236*_t315;
-    const trailer_real_t _t317 = _t240*_t297 - _t241*_t312 - _t244*_t296 + _t245*_t313
-            + _t246*_t316;
-    const trailer_real_t _t318 = -_t10*_t256 + _t18*_t190;
-    const trailer_real_t _t319 = -_t10*_t257 + _t18*_t191;
-    const trailer_real_t _t320 = _t18*_t194;
-    const trailer_real_t _t321 = -_t10*_t261;
-    const trailer_real_t _t322 = -_t10*_t173 + _t45*_t62;
-    const trailer_real_t _t323 = -_t10*_t30 + _t12*_t45;
-    const trailer_real_t _t324 = -_t10*_t174 + _t175*_t18 + _t45*_t73 + _t49*_t78;
-    const trailer_real_t _t325 = -_t10*_t176 + _t100*_t49 + _t177*_t18 + _t45*_t94;
-    const trailer_real_t _t326 = -_t10*_t178 + _t107*_t45 + _t113*_t49 + _t179*_t18;
-    const trailer_real_t _t327 = -_t10*_t320 + _t12*_t318 + _t121*_t323 + _t127*_t322 + _t134*_t324
-            + _t137*_t326 + _t140*_t325 + _t16*_t319 + _t18*_t321;
-    const trailer_real_t _t328 = _t11*_t320 + _t14*_t318 + _t149*_t323 + _t154*_t322 + _t159*_t324
-            + _t171*_t326 + _t172*_t325 + _t22*_t319 + _t24*_t321;
-    const trailer_real_t _t329 = -_t241*_t327 + _t245*_t328;
-    const trailer_real_t _t330 = _t11*_t256 + _t190*_t24;
-    const trailer_real_t _t331 = _t11*_t257 + _t191*_t24;
-    const trailer_real_t _t332 = _t194*_t24;
-    const trailer_real_t _t333 = _t11*_t261;
-    const trailer_real_t _t334 = _t11*_t173 + _t45*_t64;
-    const trailer_real_t _t335 = _t11*_t30 + _t14*_t45;
-    const trailer_real_t _t336 = _t11*_t174 + _t175*_t24 + _t45*_t76 + _t49*_t80;
-    const trailer_real_t _t337 = _t103*_t49 + _t11*_t176 + _t177*_t24 + _t45*_t97;
-    const trailer_real_t _t338 = _t11*_t178 + _t110*_t45 + _t116*_t49 + _t179*_t24;
-    const trailer_real_t _t339 = -_t10*_t332 + _t12*_t330 + _t121*_t335 + _t127*_t334 + _t134*_t336
-            + _t137*_t338 + _t140*_t337 + _t16*_t331 + _t18*_t333;
-    const trailer_real_t _t340 = _t11*_t332 + _t14*_t330 + _t149*_t335 + _t154*_t334 + _t159*_t336
-            + _t171*_t338 + _t172*_t337 + _t22*_t331 + _t24*_t333;
-    const trailer_real_t _t341 = -_t241*_t339 + _t245*_t340;
-    const trailer_real_t _t342 = -_t240*_t265 + _t244*_t292 - _t262*_t291 + _t263*_t290
-            + _t264*_t294;
-    const trailer_real_t _t343 = -_t240*_t296 + _t244*_t314 - _t262*_t313 + _t263*_t312
-            + _t264*_t316;
-    const trailer_real_t _t344 = -_t230*_t239*_t328 + _t263*_t327;
-    const trailer_real_t _t345 = -_t230*_t239*_t340 + _t263*_t339;
+    const trailer_real_t _t117 = -_t116 + tau_left;
+    const trailer_real_t _t118 = _t108*_t117;
+    const trailer_real_t _t119 = _t23*_t43 + _t76;
+    const trailer_real_t _t120 = _t16*_t78 + _t23*_t46;
+    const trailer_real_t _t121 = J_theta_cart*_t23 + _t77 + _t79;
+    const trailer_real_t _t122 = _t11*_t121 + _t119*_t6 + _t120*_t5 + _t21*_t48 + _t51*_t82
+            + _t55*_t94 + _t58*_t85 + _t62*_t91;
+    const trailer_real_t _t123 = _t119*_t9 + _t120*_t8 + _t121*_t16 + _t23*_t48 + _t54*_t82
+            + _t55*_t81 + _t61*_t85 + _t62*_t84;
+    const trailer_real_t _t124 = _t21*_t43 + _t98;
+    const trailer_real_t _t125 = _t11*_t78 + _t21*_t46;
+    const trailer_real_t _t126 = J_theta_cart*_t21 + _t96 + _t97;
+    const trailer_real_t _t127 = _t11*_t126 + _t124*_t6 + _t125*_t5 + _t21*_t47 + _t51*_t95
+            + _t52*_t94 + _t58*_t92 + _t59*_t91;
+    const trailer_real_t _t128 = _t101*_t127 + _t104*_t123 - TRAILER_LIT(2.0)*_t105*_t122;
+    const trailer_real_t _t129 = -_t107*_t107*_t128;
+    const trailer_real_t _t130 = _t115*_t123 - _t118*_t122 + _t129*(_t101*_t114 - _t105*_t117);
+    const trailer_real_t _t131 = TRAILER_LIT(2.0)*K_theta_tractor_x_tractor*_t34;
+    const trailer_real_t _t132 = TRAILER_LIT(0.6)*_t34;
+    const trailer_real_t _t133 = _t132*_t29 + _t132*_t30;
+    const trailer_real_t _t134 = _t25 + _t34;
+    const trailer_real_t _t135 = _t5*thetadot_left;
+    const trailer_real_t _t136 = -_t36;
+    const trailer_real_t _t137 = -K_theta_tractor_x_tractor*_t5 + _t98;
+    const trailer_real_t _t138 = -K_theta_tractor_x_tractor*_t8 + _t76;
+    const trailer_real_t _t139 = _t8*thetadot_right;
+    const trailer_real_t _t140 = _t26 + _t34;
+    const trailer_real_t _t141 = _t104*_t108;
+    const trailer_real_t _t142 = -_t115*_t122 + _t118*_t127 + _t129*(_t104*_t117 - _t105*_t114);
+    const trailer_real_t _t143 = _t6*thetadot_right + _t9*thetadot_left;
+    const trailer_real_t _t144 = _t143*_t74;
+    const trailer_real_t _t145 = _t143*_t75;
+    const trailer_real_t _t146 = _t6*_t74;
+    const trailer_real_t _t147 = _t74*_t9;
+    const trailer_real_t _t148 = _t6*_t75;
+    const trailer_real_t _t149 = _t75*_t9;
+    const trailer_real_t _t150 = _t21*thetadot_right + _t23*thetadot_left;
+    const trailer_real_t _t151 = _t81*thetadot_left + _t94*thetadot_right;
+    const trailer_real_t _t152 = _t84*thetadot_left + _t91*thetadot_right;
+    const trailer_real_t _t153 = _t150*_t87 + _t29*_t37 + _t30*_t37;
+    const trailer_real_t _t154 = _t150*_t89 + _t32*_t37 - _t33*_t37;
+    const trailer_real_t _t155 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t35 - _t32*_t35;
+    const trailer_real_t _t156 = -_t150*thetadot_right;
+    const trailer_real_t _t157 = -_t150*thetadot_left;
+    const trailer_real_t _t158 = -_t11*_t64 + _t156*_t21 + _t157*_t23 - _t16*_t65;
+    const trailer_real_t _t159 = _t156*_t94 + _t157*_t81 - _t51*_t64 - _t54*_t65;
+    const trailer_real_t _t160 = _t156*_t91 + _t157*_t84 - _t58*_t64 - _t61*_t65;
+    const trailer_real_t _t161 = _t11*_t155 + _t111*_t95 + _t112*_t92 + _t153*_t6 + _t154*_t5
+            + _t158*_t47 + _t159*_t52 + _t160*_t59 + _t21*_t73 - _t44*_t69 + _t66*_t96 + _t66*_t97;
+    const trailer_real_t _t162 = _t111*_t82 + _t112*_t85 + _t153*_t9 + _t154*_t8 + _t155*_t16
+            + _t158*_t48 + _t159*_t55 + _t160*_t62 + _t23*_t73 - _t45*_t69 + _t66*_t77 + _t66*_t79;
+    const trailer_real_t _t163 = -_t109*_t161 + _t110*_t162 + _t130;
+    const trailer_real_t _t164 = _t101*_t108*_t161 - _t110*_t162 - _t130;
+    const trailer_real_t _t165 = _t11*_t87 + _t131*_t5;
+    const trailer_real_t _t166 = _t11*_t89;
+    const trailer_real_t _t167 = _t133*_t5;
+    const trailer_real_t _t168 = _t134*_t6 + _t135*_t9;
+    const trailer_real_t _t169 = _t134 + _t136 - _t27;
+    const trailer_real_t _t170 = -_t11*thetadot_left + _t135;
+    const trailer_real_t _t171 = _t169*_t21 + _t170*_t23;
+    const trailer_real_t _t172 = _t169*_t94 + _t170*_t81;
+    const trailer_real_t _t173 = _t169*_t91 + _t170*_t84;
+    const trailer_real_t _t174 = _t11*_t167 + _t137*_t168 + _t165*_t6 + _t166*_t5 + _t171*_t47
+            + _t172*_t52 + _t173*_t59;
+    const trailer_real_t _t175 = _t138*_t168 + _t16*_t167 + _t165*_t9 + _t166*_t8 + _t171*_t48
+            + _t172*_t55 + _t173*_t62;
+    const trailer_real_t _t176 = -_t101*_t108*_t174 + _t110*_t175;
+    const trailer_real_t _t177 = _t131*_t8 + _t16*_t87;
+    const trailer_real_t _t178 = _t16*_t89;
+    const trailer_real_t _t179 = _t133*_t8;
+    const trailer_real_t _t180 = _t139*_t6 + _t140*_t9;
+    const trailer_real_t _t181 = _t139 - _t16*thetadot_right;
+    const trailer_real_t _t182 = _t136 + _t140 - _t28;
+    const trailer_real_t _t183 = _t181*_t21 + _t182*_t23;
+    const trailer_real_t _t184 = _t181*_t94 + _t182*_t81;
+    const trailer_real_t _t185 = _t181*_t91 + _t182*_t84;
+    const trailer_real_t _t186 = _t11*_t179 + _t137*_t180 + _t177*_t6 + _t178*_t5 + _t183*_t47
+            + _t184*_t52 + _t185*_t59;
+    const trailer_real_t _t187 = _t138*_t180 + _t16*_t179 + _t177*_t9 + _t178*_t8 + _t183*_t48
+            + _t184*_t55 + _t185*_t62;
+    const trailer_real_t _t188 = -_t101*_t108*_t186 + _t110*_t187;
+    const trailer_real_t _t189 = _t110*_t161 - _t141*_t162 + _t142;
+    const trailer_real_t _t190 = _t104*_t108*_t162 - _t110*_t161 - _t142;
+    const trailer_real_t _t191 = _t110*_t174 - _t141*_t175;
+    const trailer_real_t _t192 = _t110*_t186 - _t141*_t187;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
-    A[2] = _t173;
+    A[2] = -_t145;
     A[3] = TRAILER_LIT(0.0);
     A[4] = TRAILER_LIT(0.0);
     A[5] = TRAILER_LIT(0.0);
     A[6] = TRAILER_LIT(0.0);
     A[7] = TRAILER_LIT(0.0);
-    A[8] = _t12;
-    A[9] = _t14;
+    A[8] = _t146;
+    A[9] = _t147;
     A[10] = TRAILER_LIT(0.0);
     A[11] = TRAILER_LIT(0.0);
-    A[12] = _t30;
+    A[12] = _t144;
     A[13] = TRAILER_LIT(0.0);
     A[14] = TRAILER_LIT(0.0);
     A[15] = TRAILER_LIT(0.0);
     A[16] = TRAILER_LIT(0.0);
     A[17] = TRAILER_LIT(0.0);
-    A[18] = _t16;
-    A[19] = _t22;
+    A[18] = _t148;
+    A[19] = _t149;
     A[20] = TRAILER_LIT(0.0);
     A[21] = TRAILER_LIT(0.0);
     A[22] = TRAILER_LIT(0.0);
@@ -1527,18 +1135,18 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[25] = TRAILER_LIT(0.0);
     A[26] = TRAILER_LIT(0.0);
     A[27] = TRAILER_LIT(0.0);
-    A[28] = -_t10;
-    A[29] = _t11;
+    A[28] = _t5;
+    A[29] = _t8;
     A[30] = TRAILER_LIT(0.0);
     A[31] = TRAILER_LIT(0.0);
-    A[32] = _t174;
-    A[33] = _t175;
+    A[32] = _t150;
+    A[33] = -_t150;
     A[34] = TRAILER_LIT(0.0);
     A[35] = TRAILER_LIT(0.0);
     A[36] = TRAILER_LIT(0.0);
     A[37] = TRAILER_LIT(0.0);
-    A[38] = _t18;
-    A[39] = _t24;
+    A[38] = _t11;
+    A[39] = _t16;
     A[40] = TRAILER_LIT(0.0);
     A[41] = TRAILER_LIT(0.0);
     A[42] = TRAILER_LIT(0.0);
@@ -1561,44 +1169,44 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[59] = TRAILER_LIT(1.0);
     A[60] = TRAILER_LIT(0.0);
     A[61] = TRAILER_LIT(0.0);
-    A[62] = _t176;
-    A[63] = _t177;
+    A[62] = _t151;
+    A[63] = -_t151;
     A[64] = TRAILER_LIT(0.0);
     A[65] = TRAILER_LIT(0.0);
     A[66] = TRAILER_LIT(0.0);
     A[67] = TRAILER_LIT(0.0);
-    A[68] = _t139;
-    A[69] = _t142;
+    A[68] = _t51;
+    A[69] = _t54;
     A[70] = TRAILER_LIT(0.0);
     A[71] = TRAILER_LIT(0.0);
-    A[72] = _t178;
-    A[73] = _t179;
+    A[72] = _t152;
+    A[73] = -_t152;
     A[74] = TRAILER_LIT(0.0);
     A[75] = TRAILER_LIT(0.0);
     A[76] = TRAILER_LIT(0.0);
     A[77] = TRAILER_LIT(0.0);
-    A[78] = _t136;
-    A[79] = _t144;
+    A[78] = _t58;
+    A[79] = _t61;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t295;
-    A[83] = _t317;
+    A[82] = _t163;
+    A[83] = _t164;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t329;
-    A[89] = _t341;
+    A[88] = _t176;
+    A[89] = _t188;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t342;
-    A[93] = _t343;
+    A[92] = _t189;
+    A[93] = _t190;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t344;
-    A[99] = _t345;
+    A[98] = _t191;
+    A[99] = _t192;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -1615,14 +1223,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t241;
-    B[17] = -_t245;
-    B[18] = -_t263;
-    B[19] = _t262;
+    B[16] = _t109;
+    B[17] = -_t110;
+    B[18] = -_t110;
+    B[19] = _t141;
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.
-   operations after CSE: 224 add, 352 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 136 add, 202 mul, 3 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral)
@@ -1662,215 +1270,148 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = TRAILER_SIN(theta_cart);
-    const trailer_real_t _t1 = -_t0;
-    const trailer_real_t _t2 = TRAILER_COS(theta_cart);
-    const trailer_real_t _t3 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t0;
-    const trailer_real_t _t5 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t6 = TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t7 = _t3*_t4 + _t5*_t6;
-    const trailer_real_t _t8 = -_t7;
-    const trailer_real_t _t9 = -_t2;
-    const trailer_real_t _t10 = -_t3*_t6 + _t4*_t5;
-    const trailer_real_t _t11 = -radius_right;
-    const trailer_real_t _t12 = -radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(0.207)*_t3;
-    const trailer_real_t _t14 = -_t13;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t16 = TRAILER_LIT(2.4154589371980677)*_t11;
-    const trailer_real_t _t17 = TRAILER_LIT(2.4154589371980677)*_t12;
-    const trailer_real_t _t18 = _t15*_t16;
-    const trailer_real_t _t19 = _t1*_t18 - _t16*_t8;
-    const trailer_real_t _t20 = _t15*_t17;
-    const trailer_real_t _t21 = _t1*_t20 + _t17*_t8;
-    const trailer_real_t _t22 = _t14*_t16;
-    const trailer_real_t _t23 = -_t19 - _t2*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t23;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
-    const trailer_real_t _t26 = _t1*_t22 - _t10*_t16 + _t18*_t9;
-    const trailer_real_t _t27 = _t14*_t17;
-    const trailer_real_t _t28 = -_t2*_t27 - _t21;
-    const trailer_real_t _t29 = -TRAILER_LIT(1.6666666666666667)*_t28;
+    const trailer_real_t _t0 = -radius_right;
+    const trailer_real_t _t1 = -radius_left;
+    const trailer_real_t _t2 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t4 = theta_cart - theta_tractor;
+    const trailer_real_t _t5 = TRAILER_SIN(_t4);
+    const trailer_real_t _t6 = -_t5;
+    const trailer_real_t _t7 = TRAILER_COS(_t4);
+    const trailer_real_t _t8 = TRAILER_LIT(0.3)*_t7;
+    const trailer_real_t _t9 = -_t8;
+    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t5;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*_t0;
+    const trailer_real_t _t12 = -TRAILER_LIT(0.5)*_t0;
+    const trailer_real_t _t13 = _t11*_t9 + _t12*_t6;
+    const trailer_real_t _t14 = TRAILER_LIT(2.4154589371980677)*_t1;
+    const trailer_real_t _t15 = -TRAILER_LIT(0.5)*_t1;
+    const trailer_real_t _t16 = _t14*_t9 + _t15*_t6;
+    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t13;
+    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
+    const trailer_real_t _t19 = _t12*_t7;
+    const trailer_real_t _t20 = _t10*_t11;
+    const trailer_real_t _t21 = _t19 - _t20;
+    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = _t15*_t7;
+    const trailer_real_t _t25 = _t10*_t14;
+    const trailer_real_t _t26 = _t24 - _t25;
+    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
     const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
-    const trailer_real_t _t31 = _t1*_t27 + _t10*_t17 + _t20*_t9;
-    const trailer_real_t _t32 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t33 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor*_t3;
-    const trailer_real_t _t35 = K_theta_tractor_x_tractor_2*_t5;
-    const trailer_real_t _t36 = _t34 + _t35;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t0;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t39 = _t37 + _t38;
-    const trailer_real_t _t40 = K_theta_tractor_x_tractor*_t5;
-    const trailer_real_t _t41 = K_theta_tractor_x_tractor_2*_t3 - _t40;
-    const trailer_real_t _t42 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor_2*_t0 - _t42;
-    const trailer_real_t _t44 = TRAILER_LIT(0.3)*_t3;
-    const trailer_real_t _t45 = TRAILER_LIT(0.3)*_t5;
-    const trailer_real_t _t46 = K_theta_cart_x_tractor_2*_t0;
-    const trailer_real_t _t47 = _t37*_t44 + _t38*_t44 + _t42*_t45 - _t45*_t46;
-    const trailer_real_t _t48 = _t24*thetadot_right + _t29*thetadot_left;
-    const trailer_real_t _t49 = _t48*_t48;
-    const trailer_real_t _t50 = -_t16*thetadot_right + _t17*thetadot_left;
-    const trailer_real_t _t51 = _t50*_t50;
-    const trailer_real_t _t52 = _t46*_t49;
-    const trailer_real_t _t53 = _t37*_t49;
-    const trailer_real_t _t54 = _t38*_t49;
-    const trailer_real_t _t55 = _t45*_t51;
-    const trailer_real_t _t56 = _t44*_t51;
-    const trailer_real_t _t57 = _t50*thetadot_right;
-    const trailer_real_t _t58 = _t50*thetadot_left;
-    const trailer_real_t _t59 = _t48*thetadot_right;
-    const trailer_real_t _t60 = _t48*thetadot_left;
-    const trailer_real_t _t61 = _t13*_t16;
-    const trailer_real_t _t62 = -_t1*_t61 - _t10*_t16 - _t18*_t2;
-    const trailer_real_t _t63 = -TRAILER_LIT(1.6666666666666667)*_t62;
-    const trailer_real_t _t64 = TRAILER_LIT(0.2)*_t63;
-    const trailer_real_t _t65 = _t19 + _t61*_t9;
-    const trailer_real_t _t66 = _t13*_t17;
-    const trailer_real_t _t67 = -_t1*_t66 + _t10*_t17 - _t2*_t20;
-    const trailer_real_t _t68 = -TRAILER_LIT(1.6666666666666667)*_t67;
-    const trailer_real_t _t69 = TRAILER_LIT(0.2)*_t68;
-    const trailer_real_t _t70 = _t21 + _t66*_t9;
-    const trailer_real_t _t71 = TRAILER_LIT(1.6666666666666667)*_t26;
-    const trailer_real_t _t72 = TRAILER_LIT(0.2)*_t71;
-    const trailer_real_t _t73 = _t0*_t18 - _t16*_t7 + _t22*_t9;
-    const trailer_real_t _t74 = TRAILER_LIT(1.6666666666666667)*_t31;
-    const trailer_real_t _t75 = TRAILER_LIT(0.2)*_t74;
-    const trailer_real_t _t76 = _t0*_t20 + _t17*_t7 + _t27*_t9;
-    const trailer_real_t _t77 = J_x_tractor*_t22 - _t16*_t41 + _t24*_t43;
-    const trailer_real_t _t78 = J_x_tractor*_t18 - _t16*_t36 + _t24*_t39;
-    const trailer_real_t _t79 = -J_theta_tractor*_t16 + _t18*_t36 + _t22*_t41 + _t24*_t47;
-    const trailer_real_t _t80 = J_theta_cart*_t24 - _t16*_t47 + _t18*_t39 + _t22*_t43;
-    const trailer_real_t _t81 = -_t25 - _t26;
-    const trailer_real_t _t82 = _t33*_t81;
-    const trailer_real_t _t83 = J_theta_cart_left*_t82;
-    const trailer_real_t _t84 = _t25 - _t26;
-    const trailer_real_t _t85 = _t32*_t84;
-    const trailer_real_t _t86 = J_theta_cart_right*_t85;
-    const trailer_real_t _t87 = _t30 - _t31;
-    const trailer_real_t _t88 = _t32*_t87;
-    const trailer_real_t _t89 = -_t30 - _t31;
-    const trailer_real_t _t90 = _t33*_t89;
-    const trailer_real_t _t91 = _t83*_t90 + _t86*_t88;
-    const trailer_real_t _t92 = J_x_tractor*_t27 + _t17*_t41 + _t29*_t43;
-    const trailer_real_t _t93 = J_theta_tractor*_t17 + _t20*_t36 + _t27*_t41 + _t29*_t47;
-    const trailer_real_t _t94 = J_x_tractor*_t20 + _t17*_t36 + _t29*_t39;
-    const trailer_real_t _t95 = J_theta_cart*_t29 + _t17*_t47 + _t20*_t39 + _t27*_t43;
-    const trailer_real_t _t96 = _t34*_t51 + _t35*_t51 + _t53 + _t54;
-    const trailer_real_t _t97 = _t18*_t57 + _t20*_t58;
-    const trailer_real_t _t98 = _t57*_t63 + _t58*_t68 + _t59*_t71 + _t60*_t74;
-    const trailer_real_t _t99 = J_x_tractor*_t97 + _t43*_t98 + _t96;
-    const trailer_real_t _t100 = -K_theta_tractor_x_tractor_2*_t3*_t51 + _t40*_t51 + _t42*_t49
-            - _t52;
-    const trailer_real_t _t101 = _t57*_t61 + _t58*_t66;
-    const trailer_real_t _t102 = J_x_tractor*_t101 + _t100 + _t39*_t98;
-    const trailer_real_t _t103 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t3*_t49 - _t44*_t52
-            - _t45*_t53 - _t45*_t54;
-    const trailer_real_t _t104 = _t101*_t36 + _t103 + _t41*_t97 + _t47*_t98;
-    const trailer_real_t _t105 = _t37*_t55 + _t38*_t55 - _t42*_t56 + _t46*_t56;
-    const trailer_real_t _t106 = J_theta_cart*_t98 + _t101*_t39 + _t105 + _t43*_t97;
-    const trailer_real_t _t107 = _t17*_t79 + _t20*_t78 + _t27*_t77 + _t29*_t80 + _t91;
-    const trailer_real_t _t108 = J_theta_cart_left*_t90*_t90 + J_theta_cart_right*_t88*_t88
-            + J_theta_left + _t17*_t93 + _t20*_t94 + _t27*_t92 + _t29*_t95;
-    const trailer_real_t _t109 = _t64 - _t65;
-    const trailer_real_t _t110 = _t109*_t32;
-    const trailer_real_t _t111 = _t69 - _t70;
-    const trailer_real_t _t112 = _t111*_t32;
-    const trailer_real_t _t113 = _t72 - _t73;
-    const trailer_real_t _t114 = _t113*_t32;
-    const trailer_real_t _t115 = _t75 - _t76;
-    const trailer_real_t _t116 = _t115*_t32;
-    const trailer_real_t _t117 = _t110*_t57 + _t112*_t58 + _t114*_t59 + _t116*_t60;
-    const trailer_real_t _t118 = -_t64 - _t65;
-    const trailer_real_t _t119 = _t118*_t33;
-    const trailer_real_t _t120 = -_t69 - _t70;
-    const trailer_real_t _t121 = _t120*_t33;
-    const trailer_real_t _t122 = -_t72 - _t73;
-    const trailer_real_t _t123 = _t122*_t33;
-    const trailer_real_t _t124 = -_t75 - _t76;
-    const trailer_real_t _t125 = _t124*_t33;
-    const trailer_real_t _t126 = _t119*_t57 + _t121*_t58 + _t123*_t59 + _t125*_t60;
-    const trailer_real_t _t127 = _t102*_t18 - _t104*_t16 + _t106*_t24 + _t117*_t86 + _t126*_t83
-            + _t22*_t99;
-    const trailer_real_t _t128 = -_t127 + tau_right;
-    const trailer_real_t _t129 = J_theta_cart_left*_t126*_t90 + J_theta_cart_right*_t117*_t88
-            + _t102*_t20 + _t104*_t17 + _t106*_t29 + _t27*_t99;
-    const trailer_real_t _t130 = -_t129 + tau_left;
-    const trailer_real_t _t131 = J_theta_cart_left*_t82*_t82 + J_theta_cart_right*_t85*_t85
-            + J_theta_right - _t16*_t79 + _t18*_t78 + _t22*_t77 + _t24*_t80;
-    const trailer_real_t _t132 = -_t16*_t93 + _t18*_t94 + _t22*_t92 + _t24*_t95 + _t91;
-    const trailer_real_t _t133 = -_t107*_t132 + _t108*_t131;
-    const trailer_real_t _t134 = TRAILER_LIT(1.0)/_t133;
-    const trailer_real_t _t135 = _t134*(-_t107*_t130 + _t108*_t128);
-    const trailer_real_t _t136 = _t134*(-_t128*_t132 + _t130*_t131);
-    const trailer_real_t _t137 = _t101 + _t135*_t18 + _t136*_t20;
-    const trailer_real_t _t138 = _t135*_t22 + _t136*_t27 + _t97;
-    const trailer_real_t _t139 = -_t135*_t16 + _t136*_t17;
-    const trailer_real_t _t140 = _t135*_t24 + _t136*_t29 + _t98;
-    const trailer_real_t _t141 = -J_theta_tractor*_t139 - _t103 - _t137*_t36 - _t138*_t41
-            - _t140*_t47;
-    const trailer_real_t _t142 = _t117 + _t135*_t85 + _t136*_t88;
-    const trailer_real_t _t143 = -J_theta_cart_right*_t142;
-    const trailer_real_t _t144 = _t143*_t32;
-    const trailer_real_t _t145 = _t126 + _t135*_t82 + _t136*_t90;
-    const trailer_real_t _t146 = -J_theta_cart_left*_t145;
-    const trailer_real_t _t147 = _t146*_t33;
-    const trailer_real_t _t148 = -J_theta_cart*_t140 - _t105 - _t137*_t39 - _t138*_t43 - _t139*_t47;
-    const trailer_real_t _t149 = TRAILER_LIT(0.2)*_t144 - TRAILER_LIT(0.2)*_t147 + _t148;
-    const trailer_real_t _t150 = -TRAILER_LIT(1.6666666666666667)*_t149;
-    const trailer_real_t _t151 = -_t10*_t144 - _t10*_t147 + _t141 - _t150*_t8;
-    const trailer_real_t _t152 = TRAILER_LIT(2.4154589371980677)*_t151;
-    const trailer_real_t _t153 = -J_x_tractor*_t138 - _t139*_t41 - _t140*_t43 - _t96;
-    const trailer_real_t _t154 = _t0*_t144 + _t0*_t147 - _t150*_t2 + _t153;
-    const trailer_real_t _t155 = TRAILER_LIT(2.4154589371980677)*_t154;
-    const trailer_real_t _t156 = -J_x_tractor*_t137 - _t100 - _t139*_t36 - _t140*_t39;
-    const trailer_real_t _t157 = _t0*_t150 + _t144*_t2 + _t147*_t2 + _t156;
-    const trailer_real_t _t158 = TRAILER_LIT(2.4154589371980677)*_t157;
-    const trailer_real_t _t159 = _t14*_t155 + _t15*_t158;
-    const trailer_real_t _t160 = TRAILER_LIT(2.4154589371980677)*_t11;
-    const trailer_real_t _t161 = TRAILER_LIT(2.4154589371980677)*_t12;
-    const trailer_real_t _t162 = _t14*_t160;
-    const trailer_real_t _t163 = _t15*_t160;
-    const trailer_real_t _t164 = -_t1*_t163 + _t160*_t8 - _t162*_t2;
-    const trailer_real_t _t165 = -TRAILER_LIT(1.6666666666666667)*_t164;
-    const trailer_real_t _t166 = TRAILER_LIT(0.2)*_t165;
-    const trailer_real_t _t167 = _t1*_t162 - _t10*_t160 + _t163*_t9;
-    const trailer_real_t _t168 = _t14*_t161;
-    const trailer_real_t _t169 = _t15*_t161;
-    const trailer_real_t _t170 = -_t1*_t169 - _t161*_t8 - _t168*_t2;
-    const trailer_real_t _t171 = -TRAILER_LIT(1.6666666666666667)*_t170;
-    const trailer_real_t _t172 = TRAILER_LIT(0.2)*_t171;
-    const trailer_real_t _t173 = _t1*_t168 + _t10*_t161 + _t169*_t9;
-    const trailer_real_t _t174 = J_x_tractor*_t162 - _t160*_t41 + _t165*_t43;
-    const trailer_real_t _t175 = J_x_tractor*_t163 - _t160*_t36 + _t165*_t39;
-    const trailer_real_t _t176 = -J_theta_tractor*_t160 + _t162*_t41 + _t163*_t36 + _t165*_t47;
-    const trailer_real_t _t177 = J_theta_cart*_t165 - _t160*_t47 + _t162*_t43 + _t163*_t39;
-    const trailer_real_t _t178 = _t166 - _t167;
-    const trailer_real_t _t179 = _t178*_t32;
-    const trailer_real_t _t180 = _t172 - _t173;
-    const trailer_real_t _t181 = _t180*_t32;
-    const trailer_real_t _t182 = -_t166 - _t167;
-    const trailer_real_t _t183 = _t182*_t33;
-    const trailer_real_t _t184 = -_t172 - _t173;
-    const trailer_real_t _t185 = _t184*_t33;
-    const trailer_real_t _t186 = J_theta_cart_left*_t183*_t185 + J_theta_cart_right*_t179*_t181;
-    const trailer_real_t _t187 = J_x_tractor*_t168 + _t161*_t41 + _t171*_t43;
-    const trailer_real_t _t188 = J_theta_tractor*_t161 + _t168*_t41 + _t169*_t36 + _t171*_t47;
-    const trailer_real_t _t189 = J_x_tractor*_t169 + _t161*_t36 + _t171*_t39;
-    const trailer_real_t _t190 = J_theta_cart*_t171 + _t161*_t47 + _t168*_t43 + _t169*_t39;
-    const trailer_real_t _t191 = TRAILER_LIT(0.414)*_t5;
-    const trailer_real_t _t192 = -TRAILER_LIT(0.414)*_t3;
-    const trailer_real_t _t193 = _t152 + _t159;
-    const trailer_real_t _t194 = _t155*_t191 + _t158*_t192;
-    const trailer_real_t _t195 = -_t152 + _t159;
-    const trailer_real_t _t196 = J_theta_cart_left*_t183*_t183 + J_theta_cart_right*_t179*_t179
-            + J_theta_right - _t160*_t176 + _t162*_t174 + _t163*_t175 + _t165*_t177;
-    const trailer_real_t _t197 = _t161*_t176 + _t168*_t174 + _t169*_t175 + _t171*_t177 + _t186;
-    const trailer_real_t _t198 = -_t160*_t188 + _t162*_t187 + _t163*_t189 + _t165*_t190 + _t186;
-    const trailer_real_t _t199 = J_theta_cart_left*_t185*_t185 + J_theta_cart_right*_t181*_t181
-            + J_theta_left + _t161*_t188 + _t168*_t187 + _t169*_t189 + _t171*_t190;
+    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t5;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor_2*_t7;
+    const trailer_real_t _t33 = _t31 + _t32;
+    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t7;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t10;
+    const trailer_real_t _t36 = _t11*thetadot_right + _t14*thetadot_left;
+    const trailer_real_t _t37 = _t36*_t36;
+    const trailer_real_t _t38 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t39 = _t38*_t38;
+    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t10;
+    const trailer_real_t _t41 = K_theta_cart_x_tractor_2*_t8;
+    const trailer_real_t _t42 = _t18 + _t21;
+    const trailer_real_t _t43 = _t2*_t42;
+    const trailer_real_t _t44 = J_theta_cart_right*_t43;
+    const trailer_real_t _t45 = _t23 + _t26;
+    const trailer_real_t _t46 = _t2*_t45;
+    const trailer_real_t _t47 = J_theta_cart_right*_t46;
+    const trailer_real_t _t48 = -_t18 + _t19 - _t20;
+    const trailer_real_t _t49 = _t3*_t48;
+    const trailer_real_t _t50 = J_theta_cart_left*_t49;
+    const trailer_real_t _t51 = -_t23 + _t24 - _t25;
+    const trailer_real_t _t52 = _t3*_t51;
+    const trailer_real_t _t53 = J_theta_cart_left*_t52;
+    const trailer_real_t _t54 = -K_theta_cart_x_tractor_2*_t39*_t5 + K_theta_tractor_x_tractor*_t37
+            + _t34*_t39;
+    const trailer_real_t _t55 = _t36*thetadot_right;
+    const trailer_real_t _t56 = _t36*thetadot_left;
+    const trailer_real_t _t57 = _t38*thetadot_right;
+    const trailer_real_t _t58 = _t38*thetadot_left;
+    const trailer_real_t _t59 = _t27*_t55 - _t27*_t57 + _t29*_t56 - _t29*_t58;
+    const trailer_real_t _t60 = _t33*_t59 + _t54;
+    const trailer_real_t _t61 = -_t39*_t40 - _t39*_t41;
+    const trailer_real_t _t62 = _t12*_t55 + _t15*_t56;
+    const trailer_real_t _t63 = -K_theta_tractor_x_tractor*_t62 + _t61;
+    const trailer_real_t _t64 = _t35*_t59 + _t63;
+    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t5 - _t34;
+    const trailer_real_t _t66 = _t37*_t40 + _t37*_t41;
+    const trailer_real_t _t67 = _t62*_t65 + _t66;
+    const trailer_real_t _t68 = J_theta_cart*_t59 + _t67;
+    const trailer_real_t _t69 = J_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t14 + _t22*_t33;
+    const trailer_real_t _t70 = J_theta_tractor*_t14 + K_theta_tractor_x_tractor_2*_t15 + _t22*_t35;
+    const trailer_real_t _t71 = J_theta_cart*_t22 + _t14*_t35 + _t15*_t33;
+    const trailer_real_t _t72 = _t11*_t70 + _t12*_t69 + _t17*_t71 + _t43*_t47 + _t49*_t53;
+    const trailer_real_t _t73 = J_theta_left + _t14*_t70 + _t15*_t69 + _t22*_t71 + _t46*_t47
+            + _t52*_t53;
+    const trailer_real_t _t74 = -_t13 + _t28;
+    const trailer_real_t _t75 = _t2*_t74;
+    const trailer_real_t _t76 = -_t16 + _t30;
+    const trailer_real_t _t77 = _t2*_t76;
+    const trailer_real_t _t78 = _t55*_t75 + _t56*_t77 - _t57*_t75 - _t58*_t77;
+    const trailer_real_t _t79 = -_t13 - _t28;
+    const trailer_real_t _t80 = _t3*_t79;
+    const trailer_real_t _t81 = -_t16 - _t30;
+    const trailer_real_t _t82 = _t3*_t81;
+    const trailer_real_t _t83 = _t55*_t80 + _t56*_t82 - _t57*_t80 - _t58*_t82;
+    const trailer_real_t _t84 = _t11*_t64 + _t12*_t60 + _t17*_t68 + _t44*_t78 + _t50*_t83;
+    const trailer_real_t _t85 = -_t84 + tau_right;
+    const trailer_real_t _t86 = _t14*_t64 + _t15*_t60 + _t22*_t68 + _t47*_t78 + _t53*_t83;
+    const trailer_real_t _t87 = -_t86 + tau_left;
+    const trailer_real_t _t88 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t17*_t33;
+    const trailer_real_t _t89 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t17*_t35;
+    const trailer_real_t _t90 = J_theta_cart*_t17 + _t11*_t35 + _t12*_t33;
+    const trailer_real_t _t91 = J_theta_right + _t11*_t89 + _t12*_t88 + _t17*_t90 + _t43*_t44
+            + _t49*_t50;
+    const trailer_real_t _t92 = -_t72*_t72 + _t73*_t91;
+    const trailer_real_t _t93 = TRAILER_LIT(1.0)/_t92;
+    const trailer_real_t _t94 = _t93*(-_t72*_t87 + _t73*_t85);
+    const trailer_real_t _t95 = _t93*(-_t72*_t85 + _t87*_t91);
+    const trailer_real_t _t96 = _t12*_t94 + _t15*_t95;
+    const trailer_real_t _t97 = _t11*_t94 + _t14*_t95;
+    const trailer_real_t _t98 = _t17*_t94 + _t22*_t95 + _t59;
+    const trailer_real_t _t99 = -J_x_tractor*_t96 - K_theta_tractor_x_tractor_2*_t97 - _t33*_t98
+            - _t54;
+    const trailer_real_t _t100 = _t43*_t94 + _t46*_t95 + _t78;
+    const trailer_real_t _t101 = -J_theta_cart_right*_t100;
+    const trailer_real_t _t102 = _t101*_t2;
+    const trailer_real_t _t103 = _t49*_t94 + _t52*_t95 + _t83;
+    const trailer_real_t _t104 = -J_theta_cart_left*_t103;
+    const trailer_real_t _t105 = _t104*_t3;
+    const trailer_real_t _t106 = -J_theta_cart*_t98 - _t33*_t96 - _t35*_t97 - _t67;
+    const trailer_real_t _t107 = TRAILER_LIT(0.2)*_t102 - TRAILER_LIT(0.2)*_t105 + _t106;
+    const trailer_real_t _t108 = -TRAILER_LIT(1.6666666666666667)*_t107;
+    const trailer_real_t _t109 = _t102*_t7 + _t105*_t7 + _t108*_t5 + _t99;
+    const trailer_real_t _t110 = TRAILER_LIT(0.5)*_t109;
+    const trailer_real_t _t111 = -J_theta_tractor*_t97 - K_theta_tractor_x_tractor_2*_t96
+            - _t35*_t98 - _t63;
+    const trailer_real_t _t112 = -_t10*_t102 - _t10*_t105 + _t108*_t8 + _t111;
+    const trailer_real_t _t113 = TRAILER_LIT(2.4154589371980677)*_t112;
+    const trailer_real_t _t114 = K_theta_tractor_x_tractor_2*_t37 + _t31*_t39 + _t32*_t39;
+    const trailer_real_t _t115 = -J_x_tractor*_t62 + K_theta_tractor_x_tractor*_t97 - _t114
+            - _t65*_t98;
+    const trailer_real_t _t116 = _t102*_t5 + _t105*_t5 - _t108*_t7 + _t115;
+    const trailer_real_t _t117 = -_t110 + _t113;
+    const trailer_real_t _t118 = -_t110 - _t113;
+    const trailer_real_t _t119 = _t12*_t7 + _t18 - _t20;
+    const trailer_real_t _t120 = _t15*_t7 + _t23 - _t25;
+    const trailer_real_t _t121 = _t119*_t2;
+    const trailer_real_t _t122 = _t120*_t2;
+    const trailer_real_t _t123 = _t12*_t7 - _t18 - _t20;
+    const trailer_real_t _t124 = _t15*_t7 - _t23 - _t25;
+    const trailer_real_t _t125 = _t123*_t3;
+    const trailer_real_t _t126 = _t124*_t3;
+    const trailer_real_t _t127 = J_theta_cart_right*_t121;
+    const trailer_real_t _t128 = J_theta_cart_right*_t122;
+    const trailer_real_t _t129 = J_theta_cart_left*_t125;
+    const trailer_real_t _t130 = J_theta_cart_left*_t126;
+    const trailer_real_t _t131 = J_theta_right + _t11*_t89 + _t12*_t88 + _t121*_t127 + _t125*_t129
+            + _t17*_t90;
+    const trailer_real_t _t132 = _t11*_t70 + _t12*_t69 + _t121*_t128 + _t125*_t130 + _t17*_t71;
+    const trailer_real_t _t133 = J_theta_left + _t122*_t128 + _t126*_t130 + _t14*_t70 + _t15*_t69
+            + _t22*_t71;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1904,17 +1445,17 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t196 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t131 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t196*_t199 - _t197*_t198 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+    if (!(_t131*_t133 - _t132*_t132 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
                                                               model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t195;
-    const trailer_real_t r_1 = _t193;
-    const trailer_real_t r_2 = -_t194;
-    const trailer_real_t r_3 = -_t150;
+    const trailer_real_t r_0 = _t118;
+    const trailer_real_t r_1 = _t117;
+    const trailer_real_t r_2 = -_t116;
+    const trailer_real_t r_3 = -_t108;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;

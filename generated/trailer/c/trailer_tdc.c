@@ -198,7 +198,7 @@ trailer_status_t trailer_tdc_init(trailer_tdc_state_t *state, const trailer_tdc_
     /* the values the step's minimal_tde keeps */
     trailer_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_tdc_law keeps */
-    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    trailer_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;

@@ -63,7 +63,7 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
         const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
                 TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
                 TRAILER_LIT(0.0)}; /* evaluated at q in the steps */
-        trailer_real_t kept[16];  /* the step's copy, as _init would keep it */
+        trailer_real_t kept[17];  /* the step's copy, as _init would keep it */
         trailer_k_minimal_minv_norm_keep(&config->nominal, kept);
         trailer_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
@@ -241,7 +241,7 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
     /* the values the step's minimal_minv_norm keeps */
     trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;

@@ -70,10 +70,10 @@ typedef struct {
     trailer_real_t weights[TRAILER_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                    (at _init) */
     trailer_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
-    trailer_real_t k_minimal_tde[17]; /* minimal_tde's parameter-only values (at _init) */
-    trailer_real_t k_minimal_minv_norm[16]; /* minimal_minv_norm's parameter-only values (at
+    trailer_real_t k_minimal_tde[18]; /* minimal_tde's parameter-only values (at _init) */
+    trailer_real_t k_minimal_minv_norm[17]; /* minimal_minv_norm's parameter-only values (at
                                                _init) */
-    trailer_real_t k_minimal_tdroc_law[16]; /* minimal_tdroc_law's parameter-only values (at
+    trailer_real_t k_minimal_tdroc_law[17]; /* minimal_tdroc_law's parameter-only values (at
                                                _init) */
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0x43bc405cu
+#define TRAILER_CODE_ID 0xa2a24f14u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -317,19 +317,6 @@ static inline trailer_real_t trailer_norm2(trailer_real_t x0, trailer_real_t x1)
     {
         const trailer_real_t x[2] = {x0, x1};
         return trailer_norm_scaled(x, 2);
-    }
-}
-
-static inline trailer_real_t trailer_norm4(trailer_real_t x0, trailer_real_t x1, trailer_real_t x2,
-    trailer_real_t x3)
-{
-    const trailer_real_t sum = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3;
-    if (sum <= TRAILER_REAL_MAX) {
-        return TRAILER_SQRT(sum);
-    }
-    {
-        const trailer_real_t x[4] = {x0, x1, x2, x3};
-        return trailer_norm_scaled(x, 4);
     }
 }
 

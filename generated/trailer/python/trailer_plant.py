@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 10 (shape 10x1, row-major)
 
-    operations after CSE: 134 add, 225 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 77 add, 132 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _, thetadot_right, thetadot_left = _flat(x, 10, "x")
     tau_right, tau_left = _flat(tau, 2, "tau")
@@ -80,154 +80,110 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     radius_cart_right = float(_field(pp, "radius_cart_right"))
     radius_left = float(_field(pp, "radius_left"))
     radius_right = float(_field(pp, "radius_right"))
-    _t0 = math.sin(theta_cart)
-    _t1 = math.cos(theta_cart)
-    _t2 = math.sin(theta_tractor)
-    _t3 = 0.3*_t0
-    _t4 = math.cos(theta_tractor)
-    _t5 = 0.3*_t1
-    _t6 = _t2*_t3 + _t4*_t5
-    _t7 = -_t2*_t5 + _t3*_t4
-    _t8 = 0.207*_t2
-    _t9 = -2.4154589371980677*radius_right
-    _t10 = -2.4154589371980677*radius_left
-    _t11 = -0.207*_t4
-    _t12 = _t11*_t9
-    _t13 = -_t0*_t12 + _t6*_t9
-    _t14 = _t10*_t11
-    _t15 = -_t0*_t14 - _t10*_t6
-    _t16 = -_t8*_t9
-    _t17 = -_t1*_t16 - _t13
-    _t18 = -1.6666666666666667*_t17
-    _t19 = 0.2*_t18
-    _t20 = -_t0*_t16 - _t1*_t12 - _t7*_t9
-    _t21 = -_t10*_t8
-    _t22 = -_t1*_t21 - _t15
-    _t23 = -1.6666666666666667*_t22
+    _t0 = theta_cart - theta_tractor
+    _t1 = math.sin(_t0)
+    _t2 = math.cos(_t0)
+    _t3 = 0.3*_t2
+    _t4 = 0.3*_t1
+    _t5 = 2.4154589371980677*radius_right
+    _t6 = 0.5*radius_right
+    _t7 = -_t1*_t6 - _t3*_t5
+    _t8 = -2.4154589371980677*radius_left
+    _t9 = 0.5*radius_left
+    _t10 = -_t1*_t9 - _t3*_t8
+    _t11 = 1.6666666666666667*_t7
+    _t12 = 0.2*_t11
+    _t13 = _t2*_t6
+    _t14 = _t4*_t5
+    _t15 = _t13 - _t14
+    _t16 = 1.6666666666666667*_t10
+    _t17 = 0.2*_t16
+    _t18 = _t2*_t9
+    _t19 = _t4*_t8
+    _t20 = _t18 - _t19
+    _t21 = 1.6666666666666667*_t15
+    _t22 = 0.2*_t21
+    _t23 = 1.6666666666666667*_t20
     _t24 = 0.2*_t23
-    _t25 = -_t0*_t21 - _t1*_t14 + _t10*_t7
-    _t26 = _t12*thetadot_right
-    _t27 = _t14*thetadot_left
-    _t28 = K_theta_tractor_x_tractor*_t2
-    _t29 = K_theta_tractor_x_tractor_2*_t4
-    _t30 = K_theta_cart_x_tractor*_t0
-    _t31 = K_theta_cart_x_tractor_2*_t1
-    _t32 = K_theta_tractor_x_tractor*_t4
-    _t33 = K_theta_cart_x_tractor*_t1
-    _t34 = 0.3*_t2
-    _t35 = 0.3*_t4
-    _t36 = K_theta_cart_x_tractor_2*_t0
-    _t37 = _t18*thetadot_right + _t23*thetadot_left
-    _t38 = _t37*_t37
-    _t39 = _t10*thetadot_left - _t9*thetadot_right
-    _t40 = _t39*_t39
-    _t41 = _t36*_t38
-    _t42 = _t30*_t38
-    _t43 = _t31*_t38
-    _t44 = _t35*_t40
-    _t45 = _t34*_t40
-    _t46 = _t39*thetadot_right
-    _t47 = _t39*thetadot_left
-    _t48 = _t37*thetadot_right
-    _t49 = _t37*thetadot_left
-    _t50 = _t8*_t9
-    _t51 = _t0*_t50 - _t1*_t12 - _t7*_t9
-    _t52 = -1.6666666666666667*_t51
-    _t53 = 0.2*_t52
-    _t54 = -_t1*_t50 + _t13
-    _t55 = _t10*_t8
-    _t56 = _t0*_t55 - _t1*_t14 + _t10*_t7
-    _t57 = -1.6666666666666667*_t56
-    _t58 = 0.2*_t57
-    _t59 = -_t1*_t55 + _t15
-    _t60 = 1.6666666666666667*_t20
-    _t61 = 0.2*_t60
-    _t62 = _t0*_t12 - _t1*_t16 - _t6*_t9
-    _t63 = 1.6666666666666667*_t25
-    _t64 = 0.2*_t63
-    _t65 = _t0*_t14 - _t1*_t21 + _t10*_t6
-    _t66 = K_theta_tractor_x_tractor_2*_t2 - _t32
-    _t67 = K_theta_cart_x_tractor_2*_t0 - _t33
-    _t68 = J_x_tractor*_t16 + _t18*_t67 - _t66*_t9
-    _t69 = _t28 + _t29
-    _t70 = _t30 + _t31
-    _t71 = J_x_tractor*_t12 + _t18*_t70 - _t69*_t9
-    _t72 = _t30*_t34 + _t31*_t34 + _t33*_t35 - _t35*_t36
-    _t73 = -J_theta_tractor*_t9 + _t12*_t69 + _t16*_t66 + _t18*_t72
-    _t74 = J_theta_cart*_t18 + _t12*_t70 + _t16*_t67 - _t72*_t9
-    _t75 = -_t19 - _t20
-    _t76 = 1.0/radius_cart_left
-    _t77 = _t75*_t76
-    _t78 = J_theta_cart_left*_t77
-    _t79 = _t19 - _t20
-    _t80 = 1.0/radius_cart_right
-    _t81 = _t79*_t80
-    _t82 = J_theta_cart_right*_t81
-    _t83 = _t24 - _t25
-    _t84 = _t80*_t83
-    _t85 = -_t24 - _t25
-    _t86 = _t76*_t85
-    _t87 = _t78*_t86 + _t82*_t84
-    _t88 = J_x_tractor*_t21 + _t10*_t66 + _t23*_t67
-    _t89 = J_theta_tractor*_t10 + _t14*_t69 + _t21*_t66 + _t23*_t72
-    _t90 = J_x_tractor*_t14 + _t10*_t69 + _t23*_t70
-    _t91 = J_theta_cart*_t23 + _t10*_t72 + _t14*_t70 + _t21*_t67
-    _t92 = _t28*_t40 + _t29*_t40 + _t42 + _t43
-    _t93 = _t26*_t39 + _t27*_t39
-    _t94 = _t46*_t52 + _t47*_t57 + _t48*_t60 + _t49*_t63
-    _t95 = J_x_tractor*_t93 + _t67*_t94 + _t92
-    _t96 = -K_theta_tractor_x_tractor_2*_t2*_t40 + _t32*_t40 + _t33*_t38 - _t41
-    _t97 = _t46*_t50 + _t47*_t55
-    _t98 = J_x_tractor*_t97 + _t70*_t94 + _t96
-    _t99 = 0.3*K_theta_cart_x_tractor*_t1*_t2*_t38 - _t34*_t41 - _t35*_t42 - _t35*_t43
-    _t100 = _t66*_t93 + _t69*_t97 + _t72*_t94 + _t99
-    _t101 = _t30*_t44 + _t31*_t44 - _t33*_t45 + _t36*_t45
-    _t102 = J_theta_cart*_t94 + _t101 + _t67*_t93 + _t70*_t97
-    _t103 = _t26 + _t27
-    _t104 = _t16*thetadot_right + _t21*thetadot_left
-    _t105 = _t81*thetadot_right + _t84*thetadot_left
-    _t106 = _t77*thetadot_right + _t86*thetadot_left
-    _t107 = _t53 - _t54
-    _t108 = _t107*_t80
-    _t109 = _t58 - _t59
-    _t110 = _t109*_t80
-    _t111 = _t61 - _t62
-    _t112 = _t111*_t80
-    _t113 = _t64 - _t65
-    _t114 = _t113*_t80
-    _t115 = _t108*_t46 + _t110*_t47 + _t112*_t48 + _t114*_t49
-    _t116 = -_t53 - _t54
-    _t117 = _t116*_t76
-    _t118 = -_t58 - _t59
-    _t119 = _t118*_t76
-    _t120 = -_t61 - _t62
-    _t121 = _t120*_t76
-    _t122 = -_t64 - _t65
-    _t123 = _t122*_t76
-    _t124 = _t117*_t46 + _t119*_t47 + _t121*_t48 + _t123*_t49
-    _t125 = J_theta_cart_left*_t77*_t77 + J_theta_cart_right*_t81*_t81 + J_theta_right + _t12*_t71 + _t16*_t68 + _t18*_t74 - _t73*_t9
-    _t126 = _t10*_t73 + _t14*_t71 + _t21*_t68 + _t23*_t74 + _t87
-    _t127 = _t12*_t90 + _t16*_t88 + _t18*_t91 + _t87 - _t89*_t9
-    _t128 = J_theta_cart_left*_t86*_t86 + J_theta_cart_right*_t84*_t84 + J_theta_left + _t10*_t89 + _t14*_t90 + _t21*_t88 + _t23*_t91
-    _t129 = -_t100*_t9 + _t102*_t18 + _t115*_t82 + _t12*_t98 + _t124*_t78 + _t16*_t95
-    _t130 = J_theta_cart_left*_t124*_t86 + J_theta_cart_right*_t115*_t84 + _t10*_t100 + _t102*_t23 + _t14*_t98 + _t21*_t95
-    _t131 = -_t129 + tau_right
-    _t132 = -_t130 + tau_left
-    _t133 = _t125*_t128 - _t126*_t127
-    _t134 = 1.0/_t133
-    _t135 = _t134*(-_t126*_t132 + _t128*_t131)
-    _t136 = _t134*(_t125*_t132 - _t127*_t131)
+    _t25 = K_theta_cart_x_tractor*_t2
+    _t26 = _t5*thetadot_right + _t8*thetadot_left
+    _t27 = _t26*_t26
+    _t28 = _t11*thetadot_right + _t16*thetadot_left
+    _t29 = _t28*_t28
+    _t30 = K_theta_cart_x_tractor*_t4
+    _t31 = K_theta_cart_x_tractor_2*_t3
+    _t32 = _t26*thetadot_right
+    _t33 = _t26*thetadot_left
+    _t34 = 1.0/radius_cart_right
+    _t35 = _t12 + _t15
+    _t36 = _t34*_t35
+    _t37 = J_theta_cart_right*_t36
+    _t38 = _t17 + _t20
+    _t39 = _t34*_t38
+    _t40 = J_theta_cart_right*_t39
+    _t41 = 1.0/radius_cart_left
+    _t42 = -_t12 + _t13 - _t14
+    _t43 = _t41*_t42
+    _t44 = J_theta_cart_left*_t43
+    _t45 = -_t17 + _t18 - _t19
+    _t46 = _t41*_t45
+    _t47 = J_theta_cart_left*_t46
+    _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27 + _t25*_t29
+    _t50 = -_t28*thetadot_right + _t32
+    _t51 = -_t28*thetadot_left + _t33
+    _t52 = _t21*_t50 + _t23*_t51
+    _t53 = _t48*_t52 + _t49
+    _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t55 = -_t29*_t30 - _t29*_t31
+    _t56 = _t32*_t6 + _t33*_t9
+    _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55
+    _t58 = K_theta_cart_x_tractor_2*_t1 - _t25
+    _t59 = _t27*_t30 + _t27*_t31
+    _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59
+    _t61 = _t22 - _t7
+    _t62 = _t34*_t61
+    _t63 = -_t10 + _t24
+    _t64 = _t34*_t63
+    _t65 = -_t22 - _t7
+    _t66 = _t41*_t65
+    _t67 = -_t10 - _t24
+    _t68 = _t41*_t67
+    _t69 = _t6*thetadot_right + _t9*thetadot_left
+    _t70 = _t36*thetadot_right + _t39*thetadot_left
+    _t71 = _t43*thetadot_right + _t46*thetadot_left
+    _t72 = _t50*_t62 + _t51*_t64
+    _t73 = _t50*_t66 + _t51*_t68
+    _t74 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48
+    _t75 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48
+    _t76 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54
+    _t77 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54
+    _t78 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54
+    _t79 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8
+    _t80 = J_theta_right + _t11*_t78 + _t36*_t37 + _t43*_t44 + _t5*_t76 + _t6*_t74
+    _t81 = _t11*_t79 + _t36*_t40 + _t43*_t47 + _t5*_t77 + _t6*_t75
+    _t82 = J_theta_left + _t16*_t79 + _t39*_t40 + _t46*_t47 + _t75*_t9 + _t77*_t8
+    _t83 = _t11*_t60 + _t37*_t72 + _t44*_t73 + _t5*_t57 + _t53*_t6
+    _t84 = _t16*_t60 + _t40*_t72 + _t47*_t73 + _t53*_t9 + _t57*_t8
+    _t85 = -_t83 + tau_right
+    _t86 = -_t84 + tau_left
+    _t87 = _t80*_t82 - _t81*_t81
+    _t88 = 1.0/_t87
+    _t89 = _t88*(-_t81*_t86 + _t82*_t85)
+    _t90 = _t88*(_t80*_t86 - _t81*_t85)
+    _t91 = _t69*math.cos(theta_tractor)
+    _t92 = _t69*math.sin(theta_tractor)
     xdot = np.array([
-        _t103,
-        _t104,
-        _t39,
-        _t37,
+        _t91,
+        _t92,
+        _t26,
+        _t28,
         thetadot_right,
         thetadot_left,
-        _t105,
-        _t106,
-        _t135,
-        _t136,
+        _t70,
+        _t71,
+        _t89,
+        _t90,
     ])
     return xdot
 

@@ -31,22 +31,22 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.
-   operations after CSE: 122 add, 195 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 86 add, 135 mul, 5 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
 {
-    trailer2_real_t kept[24];
+    trailer2_real_t kept[25];
     trailer2_k_minimal_tde_keep(p, span, kept);
     trailer2_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 120 add, 193 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 87 add, 138 mul, 5 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
-    trailer2_real_t kept[23];
+    trailer2_real_t kept[24];
     trailer2_k_minimal_minv_norm_keep(p, kept);
     trailer2_k_minimal_minv_norm(kept, q, norm);
 }
@@ -114,33 +114,33 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
 }
 
 /* trailer2_minimal_tdc_law: documented in trailer2_laws.h.
-   operations after CSE: 124 add, 195 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 92 add, 141 mul, 4 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u)
 {
-    trailer2_real_t kept[23];
-    trailer2_k_minimal_minv_norm_keep(p, kept);
+    trailer2_real_t kept[24];
+    trailer2_k_minimal_tdc_law_keep(p, kept);
     trailer2_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 129 add, 203 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 97 add, 149 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, const trailer2_real_t *gain,
     const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm)
 {
-    trailer2_real_t kept[23];
-    trailer2_k_minimal_minv_norm_keep(p, kept);
+    trailer2_real_t kept[24];
+    trailer2_k_minimal_tdc_law_keep(p, kept);
     trailer2_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u,
             s, s_norm);
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 278 add, 426 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 196 add, 288 mul, 6 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -155,7 +155,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 274 add, 423 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 192 add, 285 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,

@@ -7,7 +7,7 @@
 #include "trailer2_model.h"
 
 /* trailer2_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 282 add, 410 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 199 add, 284 mul, 5 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *tau, trailer2_real_t *qddot)
 {
@@ -60,16 +60,18 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t0 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t2 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t7 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t8 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer2_real_t _t9 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer2_real_t _t10 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer2_real_t _t11 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -118,281 +120,244 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart);
-    const trailer2_real_t _t12 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
-    const trailer2_real_t _t14 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
-    const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
-    const trailer2_real_t _t17 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t18 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
-    const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
-    const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
-    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
-    const trailer2_real_t _t27 = _t0*_t26;
-    const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
-    const trailer2_real_t _t29 = _t1*_t26;
-    const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
-    const trailer2_real_t _t31 = -_t0*_t25;
-    const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
-    const trailer2_real_t _t34 = -_t21*_t33;
-    const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
-    const trailer2_real_t _t36 = -_t1*_t25;
-    const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
-    const trailer2_real_t _t39 = -_t21*_t38;
-    const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
-    const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
-    const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
-    const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
-    const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
-    const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t12 = -theta_tractor;
+    const trailer2_real_t _t13 = _t12 + theta_cart;
+    const trailer2_real_t _t14 = TRAILER2_SIN(_t13);
+    const trailer2_real_t _t15 = TRAILER2_COS(_t13);
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.3)*_t15;
+    const trailer2_real_t _t17 = _t12 + theta_cart2;
+    const trailer2_real_t _t18 = TRAILER2_SIN(_t17);
+    const trailer2_real_t _t19 = TRAILER2_COS(_t17);
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.3)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t19;
+    const trailer2_real_t _t22 = TRAILER2_LIT(0.3)*_t14;
+    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t18;
+    const trailer2_real_t _t24 = -_t0*_t16 - _t1*_t14;
+    const trailer2_real_t _t25 = -_t14*_t3 - _t16*_t2;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.85)*_t14*_t18 - _t15*_t21;
+    const trailer2_real_t _t27 = TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t28 = _t26*_t27;
+    const trailer2_real_t _t29 = -_t0*_t20 - _t1*_t18;
+    const trailer2_real_t _t30 = _t28 + _t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(1.6666666666666667)*_t25;
+    const trailer2_real_t _t32 = _t26*_t31;
+    const trailer2_real_t _t33 = -_t18*_t3 - _t2*_t20;
+    const trailer2_real_t _t34 = _t32 + _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t27;
+    const trailer2_real_t _t36 = _t1*_t15;
+    const trailer2_real_t _t37 = _t0*_t22;
+    const trailer2_real_t _t38 = _t36 - _t37;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t31;
+    const trailer2_real_t _t40 = _t15*_t3;
+    const trailer2_real_t _t41 = _t2*_t22;
+    const trailer2_real_t _t42 = _t40 - _t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t44 = TRAILER2_LIT(0.2)*_t43;
+    const trailer2_real_t _t45 = -_t14*_t21 + TRAILER2_LIT(0.85)*_t15*_t18;
+    const trailer2_real_t _t46 = _t27*_t45;
+    const trailer2_real_t _t47 = _t1*_t19;
+    const trailer2_real_t _t48 = _t0*_t23;
+    const trailer2_real_t _t49 = _t47 - _t48;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.6666666666666667)*_t34;
     const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
-    const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
-    const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
-    const trailer2_real_t _t54 = K_theta_tractor_x_tractor_2*_t14;
-    const trailer2_real_t _t55 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t _t56 = K_theta_cart_x_tractor_2*_t11;
-    const trailer2_real_t _t57 = K_theta_cart2_x_tractor*_t17;
-    const trailer2_real_t _t58 = K_theta_cart2_x_tractor_2*_t18;
-    const trailer2_real_t _t59 = K_theta_tractor_x_tractor*_t14;
-    const trailer2_real_t _t60 = K_theta_cart_x_tractor*_t11;
-    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
-    const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
-    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
-    const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
-    const trailer2_real_t _t67 = _t66*_t66;
-    const trailer2_real_t _t68 = _t61*_t67;
-    const trailer2_real_t _t69 = _t33*thetadot_right + _t38*thetadot_left;
-    const trailer2_real_t _t70 = _t69*_t69;
-    const trailer2_real_t _t71 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer2_real_t _t72 = _t71*_t71;
-    const trailer2_real_t _t73 = _t63*_t67;
-    const trailer2_real_t _t74 = _t62*_t70;
-    const trailer2_real_t _t75 = _t57*_t67;
-    const trailer2_real_t _t76 = _t58*_t67;
-    const trailer2_real_t _t77 = _t55*_t70;
-    const trailer2_real_t _t78 = _t56*_t70;
-    const trailer2_real_t _t79 = _t15*_t72;
-    const trailer2_real_t _t80 = _t13*_t72;
-    const trailer2_real_t _t81 = _t64*_t70;
-    const trailer2_real_t _t82 = _t65*_t70;
-    const trailer2_real_t _t83 = _t71*thetadot_right;
-    const trailer2_real_t _t84 = _t71*thetadot_left;
-    const trailer2_real_t _t85 = _t69*thetadot_right;
-    const trailer2_real_t _t86 = _t69*thetadot_left;
-    const trailer2_real_t _t87 = _t66*thetadot_right;
-    const trailer2_real_t _t88 = _t66*thetadot_left;
-    const trailer2_real_t _t89 = _t0*_t25;
-    const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
-    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
-    const trailer2_real_t _t93 = -_t11*_t89 + _t28;
-    const trailer2_real_t _t94 = _t1*_t25;
-    const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
-    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
-    const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
-    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
-    const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
-    const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
-    const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
-    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
-    const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
-    const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
-    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
-    const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
-    const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
-    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
-    const trailer2_real_t _t116 = -_t24*_t99 + _t34;
-    const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
-    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
-    const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
-    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
-    const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
-    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
-    const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
-    const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
-    const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
-    const trailer2_real_t _t129 = K_theta_cart2_x_tractor_2*_t17 - _t61;
-    const trailer2_real_t _t130 = J_x_tractor*_t31 - _t0*_t127 + _t128*_t33 + _t129*_t46;
-    const trailer2_real_t _t131 = _t53 + _t54;
-    const trailer2_real_t _t132 = _t55 + _t56;
-    const trailer2_real_t _t133 = _t57 + _t58;
-    const trailer2_real_t _t134 = J_x_tractor*_t27 - _t0*_t131 + _t132*_t33 + _t133*_t46;
-    const trailer2_real_t _t135 = _t13*(_t55 + _t56) + _t15*(_t60 - _t62);
-    const trailer2_real_t _t136 = _t13*(_t57 + _t58) + _t15*(_t61 - _t63);
-    const trailer2_real_t _t137 = _t127*_t31 + _t131*_t27 + _t135*_t33 + _t136*_t46 + _t2;
-    const trailer2_real_t _t138 = _t64*(_t57 + _t58) + _t65*(_t61 - _t63);
-    const trailer2_real_t _t139 = J_theta_cart*_t33 - _t0*_t135 + _t128*_t31 + _t132*_t27
-            + _t138*_t46;
-    const trailer2_real_t _t140 = J_theta_cart2*_t46 - _t0*_t136 + _t129*_t31 + _t133*_t27
-            + _t138*_t33;
-    const trailer2_real_t _t141 = -_t47 - _t48;
-    const trailer2_real_t _t142 = _t141*_t3;
-    const trailer2_real_t _t143 = J_theta_cart2_left*_t142;
-    const trailer2_real_t _t144 = _t47 - _t48;
-    const trailer2_real_t _t145 = _t144*_t4;
-    const trailer2_real_t _t146 = J_theta_cart2_right*_t145;
-    const trailer2_real_t _t147 = -_t41 - _t42;
-    const trailer2_real_t _t148 = _t147*_t5;
-    const trailer2_real_t _t149 = J_theta_cart_left*_t148;
-    const trailer2_real_t _t150 = _t41 - _t42;
-    const trailer2_real_t _t151 = _t150*_t6;
-    const trailer2_real_t _t152 = J_theta_cart_right*_t151;
-    const trailer2_real_t _t153 = _t43 - _t44;
-    const trailer2_real_t _t154 = _t153*_t6;
-    const trailer2_real_t _t155 = -_t43 - _t44;
-    const trailer2_real_t _t156 = _t155*_t5;
-    const trailer2_real_t _t157 = _t51 - _t52;
-    const trailer2_real_t _t158 = _t157*_t4;
-    const trailer2_real_t _t159 = -_t51 - _t52;
-    const trailer2_real_t _t160 = _t159*_t3;
-    const trailer2_real_t _t161 = _t143*_t160 + _t146*_t158 + _t149*_t156 + _t152*_t154;
-    const trailer2_real_t _t162 = J_x_tractor*_t36 + _t1*_t127 + _t128*_t38 + _t129*_t50;
-    const trailer2_real_t _t163 = _t127*_t36 + _t131*_t29 + _t135*_t38 + _t136*_t50 + _t7;
-    const trailer2_real_t _t164 = J_x_tractor*_t29 + _t1*_t131 + _t132*_t38 + _t133*_t50;
-    const trailer2_real_t _t165 = J_theta_cart*_t38 + _t1*_t135 + _t128*_t36 + _t132*_t29
-            + _t138*_t50;
-    const trailer2_real_t _t166 = J_theta_cart2*_t50 + _t1*_t136 + _t129*_t36 + _t133*_t29
-            + _t138*_t38;
-    const trailer2_real_t _t167 = _t72*(_t53 + _t54) + _t75 + _t76 + _t77 + _t78;
-    const trailer2_real_t _t168 = _t27*_t83 + _t29*_t84;
-    const trailer2_real_t _t169 = _t102*_t86 + _t83*_t91 + _t84*_t96 + _t85*_t99;
-    const trailer2_real_t _t170 = _t106*_t83 + _t110*_t84 + _t114*_t85 + _t118*_t86 + _t121*_t87
-            + _t124*_t88;
-    const trailer2_real_t _t171 = J_x_tractor*_t168 + _t128*_t169 + _t129*_t170 + _t167;
-    const trailer2_real_t _t172 = _t60*_t70 + _t68 + _t72*(-K_theta_tractor_x_tractor_2*_t12 + _t59)
-            - _t73 - _t74;
-    const trailer2_real_t _t173 = _t83*_t89 + _t84*_t94;
-    const trailer2_real_t _t174 = J_x_tractor*_t173 + _t132*_t169 + _t133*_t170 + _t172;
-    const trailer2_real_t _t175 = _t12*(_t11*_t70*_t8 + _t18*_t67*_t9) + _t13*(-_t73 - _t74)
-            + _t15*(-_t75 - _t76 - _t77 - _t78);
-    const trailer2_real_t _t176 = _t127*_t168 + _t131*_t173 + _t135*_t169 + _t136*_t170 + _t175;
-    const trailer2_real_t _t177 = _t64*(_t68 - _t73) + _t65*(-_t75 - _t76) + _t79*(_t55 + _t56)
-            + _t80*(-_t60 + _t62);
-    const trailer2_real_t _t178 = J_theta_cart*_t169 + _t128*_t168 + _t132*_t173 + _t138*_t170
-            + _t177;
-    const trailer2_real_t _t179 = _t57*(_t79 + _t82) + _t58*(_t79 + _t82) + _t61*(-_t80 - _t81)
-            + _t63*(_t80 + _t81);
-    const trailer2_real_t _t180 = J_theta_cart2*_t170 + _t129*_t168 + _t133*_t173 + _t138*_t169
-            + _t179;
-    const trailer2_real_t _t181 = J_theta_cart2_left*_t142*_t142 + J_theta_cart2_right*_t145*_t145
-            + J_theta_cart_left*_t148*_t148 + J_theta_cart_right*_t151*_t151 + J_theta_right
-            - _t0*_t137 + _t130*_t31 + _t134*_t27 + _t139*_t33 + _t140*_t46;
-    const trailer2_real_t _t182 = _t1*_t137 + _t130*_t36 + _t134*_t29 + _t139*_t38 + _t140*_t50
-            + _t161;
-    const trailer2_real_t _t183 = -_t0*_t163 + _t161 + _t162*_t31 + _t164*_t27 + _t165*_t33
-            + _t166*_t46;
-    const trailer2_real_t _t184 = J_theta_cart2_left*_t160*_t160 + J_theta_cart2_right*_t158*_t158
-            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t154*_t154 + J_theta_left
-            + _t1*_t163 + _t162*_t36 + _t164*_t29 + _t165*_t38 + _t166*_t50;
-    const trailer2_real_t _t185 = _t181*_t184 - _t182*_t183;
-    const trailer2_real_t _t186 = _t92 - _t93;
+    const trailer2_real_t _t52 = _t31*_t45;
+    const trailer2_real_t _t53 = _t19*_t3;
+    const trailer2_real_t _t54 = _t2*_t23;
+    const trailer2_real_t _t55 = _t53 - _t54;
+    const trailer2_real_t _t56 = _t46 - _t47 + _t48;
+    const trailer2_real_t _t57 = _t52 - _t53 + _t54;
+    const trailer2_real_t _t58 = TRAILER2_LIT(1.6666666666666667)*_t38;
+    const trailer2_real_t _t59 = _t26*_t58;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t61 = _t26*_t60;
+    const trailer2_real_t _t62 = TRAILER2_LIT(0.2)*_t58;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t60;
+    const trailer2_real_t _t64 = -_t49 - _t59;
+    const trailer2_real_t _t65 = -TRAILER2_LIT(1.6666666666666667)*_t64;
+    const trailer2_real_t _t66 = TRAILER2_LIT(0.2)*_t65;
+    const trailer2_real_t _t67 = _t45*_t58;
+    const trailer2_real_t _t68 = _t29 + _t67;
+    const trailer2_real_t _t69 = -_t55 - _t61;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(1.6666666666666667)*_t69;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.2)*_t70;
+    const trailer2_real_t _t72 = _t45*_t60;
+    const trailer2_real_t _t73 = _t33 + _t72;
+    const trailer2_real_t _t74 = _t46 + _t59;
+    const trailer2_real_t _t75 = -TRAILER2_LIT(1.6666666666666667)*_t74;
+    const trailer2_real_t _t76 = TRAILER2_LIT(0.2)*_t75;
+    const trailer2_real_t _t77 = _t52 + _t61;
+    const trailer2_real_t _t78 = -TRAILER2_LIT(1.6666666666666667)*_t77;
+    const trailer2_real_t _t79 = TRAILER2_LIT(0.2)*_t78;
+    const trailer2_real_t _t80 = TRAILER2_LIT(1.6666666666666667)*_t56;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.2)*_t80;
+    const trailer2_real_t _t82 = TRAILER2_LIT(1.6666666666666667)*_t57;
+    const trailer2_real_t _t83 = TRAILER2_LIT(0.2)*_t82;
+    const trailer2_real_t _t84 = K_theta_cart2_x_tractor*_t18;
+    const trailer2_real_t _t85 = K_theta_cart2_x_tractor_2*_t19;
+    const trailer2_real_t _t86 = K_theta_cart_x_tractor*_t15;
+    const trailer2_real_t _t87 = K_theta_cart2_x_tractor*_t19;
+    const trailer2_real_t _t88 = TRAILER2_LIT(0.85)*_t14;
+    const trailer2_real_t _t89 = TRAILER2_LIT(0.85)*_t15;
+    const trailer2_real_t _t90 = K_theta_cart2_x_tractor_2*_t18;
+    const trailer2_real_t _t91 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer2_real_t _t92 = _t91*_t91;
+    const trailer2_real_t _t93 = _t43*thetadot_right + _t50*thetadot_left;
+    const trailer2_real_t _t94 = _t93*_t93;
+    const trailer2_real_t _t95 = _t87*_t94;
+    const trailer2_real_t _t96 = _t27*thetadot_right + _t31*thetadot_left;
+    const trailer2_real_t _t97 = _t96*_t96;
+    const trailer2_real_t _t98 = _t90*_t94;
+    const trailer2_real_t _t99 = K_theta_cart2_x_tractor*_t23;
+    const trailer2_real_t _t100 = K_theta_cart2_x_tractor_2*_t20;
+    const trailer2_real_t _t101 = K_theta_cart_x_tractor*_t22;
+    const trailer2_real_t _t102 = K_theta_cart_x_tractor_2*_t16;
+    const trailer2_real_t _t103 = _t89*_t94;
+    const trailer2_real_t _t104 = _t88*_t97;
+    const trailer2_real_t _t105 = _t89*_t97;
+    const trailer2_real_t _t106 = _t91*thetadot_right;
+    const trailer2_real_t _t107 = _t91*thetadot_left;
+    const trailer2_real_t _t108 = _t96*thetadot_right;
+    const trailer2_real_t _t109 = _t96*thetadot_left;
+    const trailer2_real_t _t110 = _t35 + _t38;
+    const trailer2_real_t _t111 = _t110*_t4;
+    const trailer2_real_t _t112 = J_theta_cart_right*_t111;
+    const trailer2_real_t _t113 = _t39 + _t42;
+    const trailer2_real_t _t114 = _t113*_t4;
+    const trailer2_real_t _t115 = J_theta_cart_right*_t114;
+    const trailer2_real_t _t116 = -_t35 + _t36 - _t37;
+    const trailer2_real_t _t117 = _t116*_t5;
+    const trailer2_real_t _t118 = J_theta_cart_left*_t117;
+    const trailer2_real_t _t119 = -_t39 + _t40 - _t41;
+    const trailer2_real_t _t120 = _t119*_t5;
+    const trailer2_real_t _t121 = J_theta_cart_left*_t120;
+    const trailer2_real_t _t122 = _t44 - _t46 + _t49;
+    const trailer2_real_t _t123 = _t122*_t6;
+    const trailer2_real_t _t124 = J_theta_cart2_right*_t123;
+    const trailer2_real_t _t125 = _t51 - _t52 + _t55;
+    const trailer2_real_t _t126 = _t125*_t6;
+    const trailer2_real_t _t127 = J_theta_cart2_right*_t126;
+    const trailer2_real_t _t128 = -_t44 - _t56;
+    const trailer2_real_t _t129 = _t128*_t7;
+    const trailer2_real_t _t130 = J_theta_cart2_left*_t129;
+    const trailer2_real_t _t131 = -_t51 - _t57;
+    const trailer2_real_t _t132 = _t131*_t7;
+    const trailer2_real_t _t133 = J_theta_cart2_left*_t132;
+    const trailer2_real_t _t134 = K_theta_cart_x_tractor*_t14 + K_theta_cart_x_tractor_2*_t15;
+    const trailer2_real_t _t135 = _t84 + _t85;
+    const trailer2_real_t _t136 = K_theta_tractor_x_tractor*_t92 + _t95
+            + _t97*(-K_theta_cart_x_tractor_2*_t14 + _t86) - _t98;
+    const trailer2_real_t _t137 = _t106 - _t108;
+    const trailer2_real_t _t138 = _t107 - _t109;
+    const trailer2_real_t _t139 = _t137*_t58 + _t138*_t60;
+    const trailer2_real_t _t140 = _t93*thetadot_right;
+    const trailer2_real_t _t141 = _t93*thetadot_left;
+    const trailer2_real_t _t142 = _t106*_t65 + _t107*_t70 + _t108*_t75 + _t109*_t78 + _t140*_t80
+            + _t141*_t82;
+    const trailer2_real_t _t143 = _t134*_t139 + _t135*_t142 + _t136;
+    const trailer2_real_t _t144 = K_theta_cart_x_tractor*_t16 - K_theta_cart_x_tractor_2*_t22;
+    const trailer2_real_t _t145 = K_theta_cart2_x_tractor*_t20 - K_theta_cart2_x_tractor_2*_t23;
+    const trailer2_real_t _t146 = _t94*(-_t100 - _t99) + _t97*(-_t101 - _t102);
+    const trailer2_real_t _t147 = _t1*_t106 + _t107*_t3;
+    const trailer2_real_t _t148 = -K_theta_tractor_x_tractor*_t147 + _t139*_t144 + _t142*_t145
+            + _t146;
+    const trailer2_real_t _t149 = K_theta_cart_x_tractor_2*_t14 - _t86;
+    const trailer2_real_t _t150 = _t88*(_t84 + _t85) + _t89*(_t87 - _t90);
+    const trailer2_real_t _t151 = _t103*(-_t84 - _t85) + _t88*(_t95 - _t98) + _t92*(_t101 + _t102);
+    const trailer2_real_t _t152 = J_theta_cart*_t139 + _t142*_t150 + _t147*_t149 + _t151;
+    const trailer2_real_t _t153 = K_theta_cart2_x_tractor_2*_t18 - _t87;
+    const trailer2_real_t _t154 = _t104*(-_t87 + _t90) + _t105*(_t84 + _t85) + _t92*(_t100 + _t99);
+    const trailer2_real_t _t155 = J_theta_cart2*_t142 + _t139*_t150 + _t147*_t153 + _t154;
+    const trailer2_real_t _t156 = _t134*_t27 + _t135*_t43 + _t8;
+    const trailer2_real_t _t157 = _t144*_t27 + _t145*_t43 + _t9;
+    const trailer2_real_t _t158 = J_theta_cart*_t27 + _t0*_t144 + _t1*_t134 + _t150*_t43;
+    const trailer2_real_t _t159 = J_theta_cart2*_t43 + _t0*_t145 + _t1*_t135 + _t150*_t27;
+    const trailer2_real_t _t160 = J_theta_right + _t0*_t157 + _t1*_t156 + _t111*_t112 + _t117*_t118
+            + _t123*_t124 + _t129*_t130 + _t158*_t27 + _t159*_t43;
+    const trailer2_real_t _t161 = _t10 + _t134*_t31 + _t135*_t50;
+    const trailer2_real_t _t162 = _t11 + _t144*_t31 + _t145*_t50;
+    const trailer2_real_t _t163 = J_theta_cart*_t31 + _t134*_t3 + _t144*_t2 + _t150*_t50;
+    const trailer2_real_t _t164 = J_theta_cart2*_t50 + _t135*_t3 + _t145*_t2 + _t150*_t31;
+    const trailer2_real_t _t165 = _t0*_t162 + _t1*_t161 + _t111*_t115 + _t117*_t121 + _t123*_t127
+            + _t129*_t133 + _t163*_t27 + _t164*_t43;
+    const trailer2_real_t _t166 = J_theta_left + _t114*_t115 + _t120*_t121 + _t126*_t127
+            + _t132*_t133 + _t161*_t3 + _t162*_t2 + _t163*_t31 + _t164*_t50;
+    const trailer2_real_t _t167 = _t160*_t166 - _t165*_t165;
+    const trailer2_real_t _t168 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t169 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t170 = -_t24 + _t62;
+    const trailer2_real_t _t171 = _t170*_t4;
+    const trailer2_real_t _t172 = -_t25 + _t63;
+    const trailer2_real_t _t173 = _t172*_t4;
+    const trailer2_real_t _t174 = -_t24 - _t62;
+    const trailer2_real_t _t175 = _t174*_t5;
+    const trailer2_real_t _t176 = -_t25 - _t63;
+    const trailer2_real_t _t177 = _t176*_t5;
+    const trailer2_real_t _t178 = _t66 - _t68;
+    const trailer2_real_t _t179 = _t178*_t6;
+    const trailer2_real_t _t180 = _t71 - _t73;
+    const trailer2_real_t _t181 = _t180*_t6;
+    const trailer2_real_t _t182 = -_t28 + _t67 + _t76;
+    const trailer2_real_t _t183 = _t182*_t6;
+    const trailer2_real_t _t184 = -_t32 + _t72 + _t79;
+    const trailer2_real_t _t185 = _t184*_t6;
+    const trailer2_real_t _t186 = _t30 + _t81;
     const trailer2_real_t _t187 = _t186*_t6;
-    const trailer2_real_t _t188 = _t97 - _t98;
+    const trailer2_real_t _t188 = _t34 + _t83;
     const trailer2_real_t _t189 = _t188*_t6;
-    const trailer2_real_t _t190 = _t100 - _t101;
-    const trailer2_real_t _t191 = _t190*_t6;
-    const trailer2_real_t _t192 = _t103 - _t104;
-    const trailer2_real_t _t193 = _t192*_t6;
-    const trailer2_real_t _t194 = _t187*_t83 + _t189*_t84 + _t191*_t85 + _t193*_t86;
-    const trailer2_real_t _t195 = -_t92 - _t93;
-    const trailer2_real_t _t196 = _t195*_t5;
-    const trailer2_real_t _t197 = -_t97 - _t98;
-    const trailer2_real_t _t198 = _t197*_t5;
-    const trailer2_real_t _t199 = -_t100 - _t101;
-    const trailer2_real_t _t200 = _t199*_t5;
-    const trailer2_real_t _t201 = -_t103 - _t104;
-    const trailer2_real_t _t202 = _t201*_t5;
-    const trailer2_real_t _t203 = _t196*_t83 + _t198*_t84 + _t200*_t85 + _t202*_t86;
-    const trailer2_real_t _t204 = _t107 - _t108;
-    const trailer2_real_t _t205 = _t204*_t4;
-    const trailer2_real_t _t206 = _t111 - _t112;
-    const trailer2_real_t _t207 = _t206*_t4;
-    const trailer2_real_t _t208 = _t115 - _t116;
-    const trailer2_real_t _t209 = _t208*_t4;
-    const trailer2_real_t _t210 = _t119 - _t120;
-    const trailer2_real_t _t211 = _t210*_t4;
-    const trailer2_real_t _t212 = _t122 - _t123;
-    const trailer2_real_t _t213 = _t212*_t4;
-    const trailer2_real_t _t214 = _t125 - _t126;
-    const trailer2_real_t _t215 = _t214*_t4;
-    const trailer2_real_t _t216 = _t205*_t83 + _t207*_t84 + _t209*_t85 + _t211*_t86 + _t213*_t87
-            + _t215*_t88;
-    const trailer2_real_t _t217 = -_t107 - _t108;
-    const trailer2_real_t _t218 = _t217*_t3;
-    const trailer2_real_t _t219 = -_t111 - _t112;
-    const trailer2_real_t _t220 = _t219*_t3;
-    const trailer2_real_t _t221 = -_t115 - _t116;
-    const trailer2_real_t _t222 = _t221*_t3;
-    const trailer2_real_t _t223 = -_t119 - _t120;
-    const trailer2_real_t _t224 = _t223*_t3;
-    const trailer2_real_t _t225 = -_t122 - _t123;
-    const trailer2_real_t _t226 = _t225*_t3;
-    const trailer2_real_t _t227 = -_t125 - _t126;
-    const trailer2_real_t _t228 = _t227*_t3;
-    const trailer2_real_t _t229 = _t218*_t83 + _t220*_t84 + _t222*_t85 + _t224*_t86 + _t226*_t87
-            + _t228*_t88;
-    const trailer2_real_t _t230 = -_t0*_t176 + _t143*_t229 + _t146*_t216 + _t149*_t203 + _t152*_t194
-            + _t171*_t31 + _t174*_t27 + _t178*_t33 + _t180*_t46;
-    const trailer2_real_t _t231 = J_theta_cart2_left*_t160*_t229 + J_theta_cart2_right*_t158*_t216
-            + J_theta_cart_left*_t156*_t203 + J_theta_cart_right*_t154*_t194 + _t1*_t176
-            + _t171*_t36 + _t174*_t29 + _t178*_t38 + _t180*_t50;
-    const trailer2_real_t _t232 = -_t230 + tau_right;
-    const trailer2_real_t _t233 = -_t231 + tau_left;
-    const trailer2_real_t _t234 = TRAILER2_LIT(1.0)/_t185;
-    const trailer2_real_t _t235 = _t234*(-_t182*_t233 + _t184*_t232);
-    const trailer2_real_t _t236 = _t234*(_t181*_t233 - _t183*_t232);
-    const trailer2_real_t _t237 = _t173 + _t235*_t27 + _t236*_t29;
-    const trailer2_real_t _t238 = _t168 + _t235*_t31 + _t236*_t36;
-    const trailer2_real_t _t239 = -_t0*_t235 + _t1*_t236;
-    const trailer2_real_t _t240 = _t169 + _t235*_t33 + _t236*_t38;
-    const trailer2_real_t _t241 = _t170 + _t235*_t46 + _t236*_t50;
-    const trailer2_real_t _t242 = _t151*_t235 + _t154*_t236 + _t194;
-    const trailer2_real_t _t243 = _t148*_t235 + _t156*_t236 + _t203;
-    const trailer2_real_t _t244 = _t145*_t235 + _t158*_t236 + _t216;
-    const trailer2_real_t _t245 = _t142*_t235 + _t160*_t236 + _t229;
-    if (!(_t181 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer2_real_t _t190 = -_t66 - _t68;
+    const trailer2_real_t _t191 = _t190*_t7;
+    const trailer2_real_t _t192 = -_t71 - _t73;
+    const trailer2_real_t _t193 = _t192*_t7;
+    const trailer2_real_t _t194 = -_t28 + _t67 - _t76;
+    const trailer2_real_t _t195 = _t194*_t7;
+    const trailer2_real_t _t196 = -_t32 + _t72 - _t79;
+    const trailer2_real_t _t197 = _t196*_t7;
+    const trailer2_real_t _t198 = _t30 - _t81;
+    const trailer2_real_t _t199 = _t198*_t7;
+    const trailer2_real_t _t200 = _t34 - _t83;
+    const trailer2_real_t _t201 = _t200*_t7;
+    const trailer2_real_t _t202 = _t137*_t171 + _t138*_t173;
+    const trailer2_real_t _t203 = _t137*_t175 + _t138*_t177;
+    const trailer2_real_t _t204 = _t106*_t179 + _t107*_t181 + _t108*_t183 + _t109*_t185
+            + _t140*_t187 + _t141*_t189;
+    const trailer2_real_t _t205 = _t106*_t191 + _t107*_t193 + _t108*_t195 + _t109*_t197
+            + _t140*_t199 + _t141*_t201;
+    const trailer2_real_t _t206 = _t0*_t148 + _t1*_t143 + _t112*_t202 + _t118*_t203 + _t124*_t204
+            + _t130*_t205 + _t152*_t27 + _t155*_t43;
+    const trailer2_real_t _t207 = _t115*_t202 + _t121*_t203 + _t127*_t204 + _t133*_t205 + _t143*_t3
+            + _t148*_t2 + _t152*_t31 + _t155*_t50;
+    const trailer2_real_t _t208 = -_t206 + tau_right;
+    const trailer2_real_t _t209 = -_t207 + tau_left;
+    const trailer2_real_t _t210 = TRAILER2_LIT(1.0)/_t167;
+    const trailer2_real_t _t211 = _t210*(-_t165*_t209 + _t166*_t208);
+    const trailer2_real_t _t212 = _t210*(_t160*_t209 - _t165*_t208);
+    const trailer2_real_t _t213 = _t1*_t211 + _t212*_t3;
+    const trailer2_real_t _t214 = _t0*_t211 + _t2*_t212;
+    const trailer2_real_t _t215 = _t139 + _t211*_t27 + _t212*_t31;
+    const trailer2_real_t _t216 = _t142 + _t211*_t43 + _t212*_t50;
+    const trailer2_real_t _t217 = _t111*_t211 + _t114*_t212 + _t202;
+    const trailer2_real_t _t218 = _t117*_t211 + _t120*_t212 + _t203;
+    const trailer2_real_t _t219 = _t123*_t211 + _t126*_t212 + _t204;
+    const trailer2_real_t _t220 = _t129*_t211 + _t132*_t212 + _t205;
+    const trailer2_real_t _t221 = -_t147*_t168 + _t169*_t213;
+    const trailer2_real_t _t222 = _t147*_t169 + _t168*_t213;
+    if (!(_t160 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t185 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t167 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t237;
-    const trailer2_real_t r_1 = _t238;
-    const trailer2_real_t r_2 = _t239;
-    const trailer2_real_t r_3 = _t240;
-    const trailer2_real_t r_4 = _t241;
-    const trailer2_real_t r_5 = _t235;
-    const trailer2_real_t r_6 = _t236;
-    const trailer2_real_t r_7 = _t242;
-    const trailer2_real_t r_8 = _t243;
-    const trailer2_real_t r_9 = _t244;
-    const trailer2_real_t r_10 = _t245;
+    const trailer2_real_t r_0 = _t221;
+    const trailer2_real_t r_1 = _t222;
+    const trailer2_real_t r_2 = _t214;
+    const trailer2_real_t r_3 = _t215;
+    const trailer2_real_t r_4 = _t216;
+    const trailer2_real_t r_5 = _t211;
+    const trailer2_real_t r_6 = _t212;
+    const trailer2_real_t r_7 = _t217;
+    const trailer2_real_t r_8 = _t218;
+    const trailer2_real_t r_9 = _t219;
+    const trailer2_real_t r_10 = _t220;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
             | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
@@ -414,7 +379,7 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
 }
 
 /* trailer2_model_prepare: documented in trailer2_model.h.
-   operations after CSE: 0 add, 6 mul, 4 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 4 div, 0 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     trailer2_model_prepared_t *prepared)
 {
@@ -457,16 +422,18 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
             & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t0 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t1 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t2 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t7 = J_theta_tractor*_t1;
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t7 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t8 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer2_real_t _t9 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer2_real_t _t10 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer2_real_t _t11 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -524,28 +491,28 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     prepared->forward_dynamics[5] = J_theta_cart_right;
     prepared->forward_dynamics[6] = J_theta_left;
     prepared->forward_dynamics[7] = J_theta_right;
-    prepared->forward_dynamics[8] = J_x_tractor;
-    prepared->forward_dynamics[9] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[10] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[11] = K_theta_cart2_x_tractor;
-    prepared->forward_dynamics[12] = K_theta_cart2_x_tractor_2;
-    prepared->forward_dynamics[13] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[14] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[15] = _t0;
-    prepared->forward_dynamics[16] = _t1;
-    prepared->forward_dynamics[17] = _t2;
-    prepared->forward_dynamics[18] = _t3;
-    prepared->forward_dynamics[19] = _t4;
-    prepared->forward_dynamics[20] = _t5;
-    prepared->forward_dynamics[21] = _t6;
-    prepared->forward_dynamics[22] = _t7;
-    prepared->forward_dynamics[23] = _t8;
-    prepared->forward_dynamics[24] = _t9;
+    prepared->forward_dynamics[8] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[9] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[10] = K_theta_cart2_x_tractor;
+    prepared->forward_dynamics[11] = K_theta_cart2_x_tractor_2;
+    prepared->forward_dynamics[12] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[13] = _t0;
+    prepared->forward_dynamics[14] = _t1;
+    prepared->forward_dynamics[15] = _t2;
+    prepared->forward_dynamics[16] = _t3;
+    prepared->forward_dynamics[17] = _t4;
+    prepared->forward_dynamics[18] = _t5;
+    prepared->forward_dynamics[19] = _t6;
+    prepared->forward_dynamics[20] = _t7;
+    prepared->forward_dynamics[21] = _t8;
+    prepared->forward_dynamics[22] = _t9;
+    prepared->forward_dynamics[23] = _t10;
+    prepared->forward_dynamics[24] = _t11;
     return TRAILER2_OK;
 }
 
 /* trailer2_forward_dynamics_prepared: documented in trailer2_model.h.
-   operations after CSE: 282 add, 404 mul, 1 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 195 add, 272 mul, 1 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepared_t *prepared,
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *tau,
     trailer2_real_t *qddot)
@@ -554,338 +521,288 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
         return TRAILER2_ERR_NOT_INITIALISED;
     }
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t theta_cart2 = q[4];
-    if (((trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
-            | trailer2_exp_carry(theta_cart2)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
+    if (((trailer2_exp_carry(theta_tractor)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t10 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart);
-    const trailer2_real_t _t12 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t14 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t17 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t18 = TRAILER2_COS(theta_cart2);
+    const trailer2_real_t _t168 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t169 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t thetadot_right = qdot[5];
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t12;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.3)*_t14;
-    const trailer2_real_t _t16 = _t10*_t13 + _t11*_t15;
-    const trailer2_real_t _t19 = _t13*_t17 + _t15*_t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t18;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t10*_t17 + _t11*_t20;
-    const trailer2_real_t _t22 = _t10*_t15 - _t11*_t13;
-    const trailer2_real_t _t23 = -_t13*_t18 + _t15*_t17;
-    const trailer2_real_t _t24 = _t10*_t20 - TRAILER2_LIT(0.85)*_t11*_t17;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t12;
-    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t14;
-    const trailer2_real_t _t0 = prepared->forward_dynamics[15];
-    const trailer2_real_t _t27 = _t0*_t26;
-    const trailer2_real_t _t28 = _t0*_t16 - _t10*_t27;
-    const trailer2_real_t _t1 = prepared->forward_dynamics[16];
-    const trailer2_real_t _t29 = _t1*_t26;
-    const trailer2_real_t _t30 = -_t1*_t16 - _t10*_t29;
-    const trailer2_real_t _t31 = -_t0*_t25;
-    const trailer2_real_t _t32 = -_t11*_t31 - _t28;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t32;
-    const trailer2_real_t _t34 = -_t21*_t33;
-    const trailer2_real_t _t35 = _t0*_t19 - _t17*_t27;
-    const trailer2_real_t _t36 = -_t1*_t25;
-    const trailer2_real_t _t37 = -_t11*_t36 - _t30;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
-    const trailer2_real_t _t39 = -_t21*_t38;
-    const trailer2_real_t _t40 = -_t1*_t19 - _t17*_t29;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t33;
-    const trailer2_real_t _t42 = -_t0*_t22 - _t10*_t31 - _t11*_t27;
-    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t38;
-    const trailer2_real_t _t44 = _t1*_t22 - _t10*_t36 - _t11*_t29;
-    const trailer2_real_t _t45 = -_t18*_t31 - _t34 - _t35;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
-    const trailer2_real_t _t48 = -_t0*_t23 - _t17*_t31 - _t18*_t27 - _t24*_t33;
-    const trailer2_real_t _t49 = -_t18*_t36 - _t39 - _t40;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(1.6666666666666667)*_t49;
+    if (((trailer2_exp_carry(theta_cart) | trailer2_exp_carry(theta_cart2)
+            | trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
+            | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
+            & TRAILER2_EXP_CARRY_TOP) != 0u) {
+        return TRAILER2_ERR_NONFINITE_INPUT;
+    }
+    const trailer2_real_t _t12 = -theta_tractor;
+    const trailer2_real_t _t13 = _t12 + theta_cart;
+    const trailer2_real_t _t14 = TRAILER2_SIN(_t13);
+    const trailer2_real_t _t15 = TRAILER2_COS(_t13);
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.3)*_t15;
+    const trailer2_real_t _t17 = _t12 + theta_cart2;
+    const trailer2_real_t _t18 = TRAILER2_SIN(_t17);
+    const trailer2_real_t _t19 = TRAILER2_COS(_t17);
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.3)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.85)*_t19;
+    const trailer2_real_t _t22 = TRAILER2_LIT(0.3)*_t14;
+    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t18;
+    const trailer2_real_t _t0 = prepared->forward_dynamics[13];
+    const trailer2_real_t _t1 = prepared->forward_dynamics[14];
+    const trailer2_real_t _t24 = -_t0*_t16 - _t1*_t14;
+    const trailer2_real_t _t2 = prepared->forward_dynamics[15];
+    const trailer2_real_t _t3 = prepared->forward_dynamics[16];
+    const trailer2_real_t _t25 = -_t14*_t3 - _t16*_t2;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.85)*_t14*_t18 - _t15*_t21;
+    const trailer2_real_t _t27 = TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t28 = _t26*_t27;
+    const trailer2_real_t _t29 = -_t0*_t20 - _t1*_t18;
+    const trailer2_real_t _t30 = _t28 + _t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(1.6666666666666667)*_t25;
+    const trailer2_real_t _t32 = _t26*_t31;
+    const trailer2_real_t _t33 = -_t18*_t3 - _t2*_t20;
+    const trailer2_real_t _t34 = _t32 + _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t27;
+    const trailer2_real_t _t36 = _t1*_t15;
+    const trailer2_real_t _t37 = _t0*_t22;
+    const trailer2_real_t _t38 = _t36 - _t37;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t31;
+    const trailer2_real_t _t40 = _t15*_t3;
+    const trailer2_real_t _t41 = _t2*_t22;
+    const trailer2_real_t _t42 = _t40 - _t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t44 = TRAILER2_LIT(0.2)*_t43;
+    const trailer2_real_t _t45 = -_t14*_t21 + TRAILER2_LIT(0.85)*_t15*_t18;
+    const trailer2_real_t _t46 = _t27*_t45;
+    const trailer2_real_t _t47 = _t1*_t19;
+    const trailer2_real_t _t48 = _t0*_t23;
+    const trailer2_real_t _t49 = _t47 - _t48;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.6666666666666667)*_t34;
     const trailer2_real_t _t51 = TRAILER2_LIT(0.2)*_t50;
-    const trailer2_real_t _t52 = _t1*_t23 - _t17*_t36 - _t18*_t29 - _t24*_t38;
-    const trailer2_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[13];
-    const trailer2_real_t _t53 = K_theta_tractor_x_tractor*_t12;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[14];
-    const trailer2_real_t _t54 = K_theta_tractor_x_tractor_2*_t14;
-    const trailer2_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[9];
-    const trailer2_real_t _t55 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[10];
-    const trailer2_real_t _t56 = K_theta_cart_x_tractor_2*_t11;
-    const trailer2_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[11];
-    const trailer2_real_t _t57 = K_theta_cart2_x_tractor*_t17;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[12];
-    const trailer2_real_t _t58 = K_theta_cart2_x_tractor_2*_t18;
-    const trailer2_real_t _t59 = K_theta_tractor_x_tractor*_t14;
-    const trailer2_real_t _t60 = K_theta_cart_x_tractor*_t11;
-    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t18;
-    const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t _t63 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t64 = TRAILER2_LIT(0.85)*_t10;
-    const trailer2_real_t _t65 = TRAILER2_LIT(0.85)*_t11;
-    const trailer2_real_t _t66 = _t46*thetadot_right + _t50*thetadot_left;
-    const trailer2_real_t _t67 = _t66*_t66;
-    const trailer2_real_t _t68 = _t61*_t67;
-    const trailer2_real_t _t69 = _t33*thetadot_right + _t38*thetadot_left;
-    const trailer2_real_t _t70 = _t69*_t69;
-    const trailer2_real_t _t71 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer2_real_t _t72 = _t71*_t71;
-    const trailer2_real_t _t73 = _t63*_t67;
-    const trailer2_real_t _t74 = _t62*_t70;
-    const trailer2_real_t _t75 = _t57*_t67;
-    const trailer2_real_t _t76 = _t58*_t67;
-    const trailer2_real_t _t77 = _t55*_t70;
-    const trailer2_real_t _t78 = _t56*_t70;
-    const trailer2_real_t _t79 = _t15*_t72;
-    const trailer2_real_t _t80 = _t13*_t72;
-    const trailer2_real_t _t81 = _t64*_t70;
-    const trailer2_real_t _t82 = _t65*_t70;
-    const trailer2_real_t _t83 = _t71*thetadot_right;
-    const trailer2_real_t _t84 = _t71*thetadot_left;
-    const trailer2_real_t _t85 = _t69*thetadot_right;
-    const trailer2_real_t _t86 = _t69*thetadot_left;
-    const trailer2_real_t _t87 = _t66*thetadot_right;
-    const trailer2_real_t _t88 = _t66*thetadot_left;
-    const trailer2_real_t _t89 = _t0*_t25;
-    const trailer2_real_t _t90 = -_t0*_t22 + _t10*_t89 - _t11*_t27;
-    const trailer2_real_t _t91 = -TRAILER2_LIT(1.6666666666666667)*_t90;
-    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
-    const trailer2_real_t _t93 = -_t11*_t89 + _t28;
-    const trailer2_real_t _t94 = _t1*_t25;
-    const trailer2_real_t _t95 = _t1*_t22 + _t10*_t94 - _t11*_t29;
-    const trailer2_real_t _t96 = -TRAILER2_LIT(1.6666666666666667)*_t95;
-    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
-    const trailer2_real_t _t98 = -_t11*_t94 + _t30;
-    const trailer2_real_t _t99 = TRAILER2_LIT(1.6666666666666667)*_t42;
-    const trailer2_real_t _t100 = TRAILER2_LIT(0.2)*_t99;
-    const trailer2_real_t _t101 = -_t0*_t16 + _t10*_t27 - _t11*_t31;
-    const trailer2_real_t _t102 = TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
-    const trailer2_real_t _t104 = _t1*_t16 + _t10*_t29 - _t11*_t36;
-    const trailer2_real_t _t105 = -_t0*_t23 + _t17*_t89 - _t18*_t27 + _t21*_t91;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
-    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
-    const trailer2_real_t _t108 = -_t18*_t89 - _t24*_t91 + _t35;
-    const trailer2_real_t _t109 = _t1*_t23 + _t17*_t94 - _t18*_t29 + _t21*_t96;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
-    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
-    const trailer2_real_t _t112 = -_t18*_t94 - _t24*_t96 + _t40;
-    const trailer2_real_t _t113 = _t21*_t99 - _t24*_t33;
-    const trailer2_real_t _t114 = -TRAILER2_LIT(1.6666666666666667)*_t113;
-    const trailer2_real_t _t115 = TRAILER2_LIT(0.2)*_t114;
-    const trailer2_real_t _t116 = -_t24*_t99 + _t34;
-    const trailer2_real_t _t117 = _t102*_t21 - _t24*_t38;
-    const trailer2_real_t _t118 = -TRAILER2_LIT(1.6666666666666667)*_t117;
-    const trailer2_real_t _t119 = TRAILER2_LIT(0.2)*_t118;
-    const trailer2_real_t _t120 = -_t102*_t24 + _t39;
-    const trailer2_real_t _t121 = TRAILER2_LIT(1.6666666666666667)*_t48;
-    const trailer2_real_t _t122 = TRAILER2_LIT(0.2)*_t121;
-    const trailer2_real_t _t123 = -_t0*_t19 + _t17*_t27 - _t18*_t31 + _t21*_t33;
-    const trailer2_real_t _t124 = TRAILER2_LIT(1.6666666666666667)*_t52;
-    const trailer2_real_t _t125 = TRAILER2_LIT(0.2)*_t124;
-    const trailer2_real_t _t126 = _t1*_t19 + _t17*_t29 - _t18*_t36 + _t21*_t38;
-    const trailer2_real_t _t127 = K_theta_tractor_x_tractor_2*_t12 - _t59;
-    const trailer2_real_t _t128 = K_theta_cart_x_tractor_2*_t10 - _t60;
-    const trailer2_real_t _t129 = K_theta_cart2_x_tractor_2*_t17 - _t61;
-    const trailer2_real_t J_x_tractor = prepared->forward_dynamics[8];
-    const trailer2_real_t _t130 = J_x_tractor*_t31 - _t0*_t127 + _t128*_t33 + _t129*_t46;
-    const trailer2_real_t _t131 = _t53 + _t54;
-    const trailer2_real_t _t132 = _t55 + _t56;
-    const trailer2_real_t _t133 = _t57 + _t58;
-    const trailer2_real_t _t134 = J_x_tractor*_t27 - _t0*_t131 + _t132*_t33 + _t133*_t46;
-    const trailer2_real_t _t135 = _t13*(_t55 + _t56) + _t15*(_t60 - _t62);
-    const trailer2_real_t _t136 = _t13*(_t57 + _t58) + _t15*(_t61 - _t63);
-    const trailer2_real_t _t2 = prepared->forward_dynamics[17];
-    const trailer2_real_t _t137 = _t127*_t31 + _t131*_t27 + _t135*_t33 + _t136*_t46 + _t2;
-    const trailer2_real_t _t138 = _t64*(_t57 + _t58) + _t65*(_t61 - _t63);
-    const trailer2_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer2_real_t _t139 = J_theta_cart*_t33 - _t0*_t135 + _t128*_t31 + _t132*_t27
-            + _t138*_t46;
-    const trailer2_real_t J_theta_cart2 = prepared->forward_dynamics[1];
-    const trailer2_real_t _t140 = J_theta_cart2*_t46 - _t0*_t136 + _t129*_t31 + _t133*_t27
-            + _t138*_t33;
-    const trailer2_real_t _t141 = -_t47 - _t48;
-    const trailer2_real_t _t3 = prepared->forward_dynamics[18];
-    const trailer2_real_t _t142 = _t141*_t3;
-    const trailer2_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
-    const trailer2_real_t _t143 = J_theta_cart2_left*_t142;
-    const trailer2_real_t _t144 = _t47 - _t48;
-    const trailer2_real_t _t4 = prepared->forward_dynamics[19];
-    const trailer2_real_t _t145 = _t144*_t4;
-    const trailer2_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
-    const trailer2_real_t _t146 = J_theta_cart2_right*_t145;
-    const trailer2_real_t _t147 = -_t41 - _t42;
-    const trailer2_real_t _t5 = prepared->forward_dynamics[20];
-    const trailer2_real_t _t148 = _t147*_t5;
-    const trailer2_real_t J_theta_cart_left = prepared->forward_dynamics[4];
-    const trailer2_real_t _t149 = J_theta_cart_left*_t148;
-    const trailer2_real_t _t150 = _t41 - _t42;
-    const trailer2_real_t _t6 = prepared->forward_dynamics[21];
-    const trailer2_real_t _t151 = _t150*_t6;
+    const trailer2_real_t _t52 = _t31*_t45;
+    const trailer2_real_t _t53 = _t19*_t3;
+    const trailer2_real_t _t54 = _t2*_t23;
+    const trailer2_real_t _t55 = _t53 - _t54;
+    const trailer2_real_t _t56 = _t46 - _t47 + _t48;
+    const trailer2_real_t _t57 = _t52 - _t53 + _t54;
+    const trailer2_real_t _t58 = TRAILER2_LIT(1.6666666666666667)*_t38;
+    const trailer2_real_t _t59 = _t26*_t58;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.6666666666666667)*_t42;
+    const trailer2_real_t _t61 = _t26*_t60;
+    const trailer2_real_t _t62 = TRAILER2_LIT(0.2)*_t58;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t60;
+    const trailer2_real_t _t64 = -_t49 - _t59;
+    const trailer2_real_t _t65 = -TRAILER2_LIT(1.6666666666666667)*_t64;
+    const trailer2_real_t _t66 = TRAILER2_LIT(0.2)*_t65;
+    const trailer2_real_t _t67 = _t45*_t58;
+    const trailer2_real_t _t68 = _t29 + _t67;
+    const trailer2_real_t _t69 = -_t55 - _t61;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(1.6666666666666667)*_t69;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.2)*_t70;
+    const trailer2_real_t _t72 = _t45*_t60;
+    const trailer2_real_t _t73 = _t33 + _t72;
+    const trailer2_real_t _t74 = _t46 + _t59;
+    const trailer2_real_t _t75 = -TRAILER2_LIT(1.6666666666666667)*_t74;
+    const trailer2_real_t _t76 = TRAILER2_LIT(0.2)*_t75;
+    const trailer2_real_t _t77 = _t52 + _t61;
+    const trailer2_real_t _t78 = -TRAILER2_LIT(1.6666666666666667)*_t77;
+    const trailer2_real_t _t79 = TRAILER2_LIT(0.2)*_t78;
+    const trailer2_real_t _t80 = TRAILER2_LIT(1.6666666666666667)*_t56;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.2)*_t80;
+    const trailer2_real_t _t82 = TRAILER2_LIT(1.6666666666666667)*_t57;
+    const trailer2_real_t _t83 = TRAILER2_LIT(0.2)*_t82;
+    const trailer2_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[10];
+    const trailer2_real_t _t84 = K_theta_cart2_x_tractor*_t18;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[11];
+    const trailer2_real_t _t85 = K_theta_cart2_x_tractor_2*_t19;
+    const trailer2_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[8];
+    const trailer2_real_t _t86 = K_theta_cart_x_tractor*_t15;
+    const trailer2_real_t _t87 = K_theta_cart2_x_tractor*_t19;
+    const trailer2_real_t _t88 = TRAILER2_LIT(0.85)*_t14;
+    const trailer2_real_t _t89 = TRAILER2_LIT(0.85)*_t15;
+    const trailer2_real_t _t90 = K_theta_cart2_x_tractor_2*_t18;
+    const trailer2_real_t _t91 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer2_real_t _t92 = _t91*_t91;
+    const trailer2_real_t _t93 = _t43*thetadot_right + _t50*thetadot_left;
+    const trailer2_real_t _t94 = _t93*_t93;
+    const trailer2_real_t _t95 = _t87*_t94;
+    const trailer2_real_t _t96 = _t27*thetadot_right + _t31*thetadot_left;
+    const trailer2_real_t _t97 = _t96*_t96;
+    const trailer2_real_t _t98 = _t90*_t94;
+    const trailer2_real_t _t99 = K_theta_cart2_x_tractor*_t23;
+    const trailer2_real_t _t100 = K_theta_cart2_x_tractor_2*_t20;
+    const trailer2_real_t _t101 = K_theta_cart_x_tractor*_t22;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[9];
+    const trailer2_real_t _t102 = K_theta_cart_x_tractor_2*_t16;
+    const trailer2_real_t _t103 = _t89*_t94;
+    const trailer2_real_t _t104 = _t88*_t97;
+    const trailer2_real_t _t105 = _t89*_t97;
+    const trailer2_real_t _t106 = _t91*thetadot_right;
+    const trailer2_real_t _t107 = _t91*thetadot_left;
+    const trailer2_real_t _t108 = _t96*thetadot_right;
+    const trailer2_real_t _t109 = _t96*thetadot_left;
+    const trailer2_real_t _t110 = _t35 + _t38;
+    const trailer2_real_t _t4 = prepared->forward_dynamics[17];
+    const trailer2_real_t _t111 = _t110*_t4;
     const trailer2_real_t J_theta_cart_right = prepared->forward_dynamics[5];
-    const trailer2_real_t _t152 = J_theta_cart_right*_t151;
-    const trailer2_real_t _t153 = _t43 - _t44;
-    const trailer2_real_t _t154 = _t153*_t6;
-    const trailer2_real_t _t155 = -_t43 - _t44;
-    const trailer2_real_t _t156 = _t155*_t5;
-    const trailer2_real_t _t157 = _t51 - _t52;
-    const trailer2_real_t _t158 = _t157*_t4;
-    const trailer2_real_t _t159 = -_t51 - _t52;
-    const trailer2_real_t _t160 = _t159*_t3;
-    const trailer2_real_t _t161 = _t143*_t160 + _t146*_t158 + _t149*_t156 + _t152*_t154;
-    const trailer2_real_t _t162 = J_x_tractor*_t36 + _t1*_t127 + _t128*_t38 + _t129*_t50;
-    const trailer2_real_t _t7 = prepared->forward_dynamics[22];
-    const trailer2_real_t _t163 = _t127*_t36 + _t131*_t29 + _t135*_t38 + _t136*_t50 + _t7;
-    const trailer2_real_t _t164 = J_x_tractor*_t29 + _t1*_t131 + _t132*_t38 + _t133*_t50;
-    const trailer2_real_t _t165 = J_theta_cart*_t38 + _t1*_t135 + _t128*_t36 + _t132*_t29
-            + _t138*_t50;
-    const trailer2_real_t _t166 = J_theta_cart2*_t50 + _t1*_t136 + _t129*_t36 + _t133*_t29
-            + _t138*_t38;
-    const trailer2_real_t _t167 = _t72*(_t53 + _t54) + _t75 + _t76 + _t77 + _t78;
-    const trailer2_real_t _t168 = _t27*_t83 + _t29*_t84;
-    const trailer2_real_t _t169 = _t102*_t86 + _t83*_t91 + _t84*_t96 + _t85*_t99;
-    const trailer2_real_t _t170 = _t106*_t83 + _t110*_t84 + _t114*_t85 + _t118*_t86 + _t121*_t87
-            + _t124*_t88;
-    const trailer2_real_t _t171 = J_x_tractor*_t168 + _t128*_t169 + _t129*_t170 + _t167;
-    const trailer2_real_t _t172 = _t60*_t70 + _t68 + _t72*(-K_theta_tractor_x_tractor_2*_t12 + _t59)
-            - _t73 - _t74;
-    const trailer2_real_t _t173 = _t83*_t89 + _t84*_t94;
-    const trailer2_real_t _t174 = J_x_tractor*_t173 + _t132*_t169 + _t133*_t170 + _t172;
-    const trailer2_real_t _t8 = prepared->forward_dynamics[23];
-    const trailer2_real_t _t9 = prepared->forward_dynamics[24];
-    const trailer2_real_t _t175 = _t12*(_t11*_t70*_t8 + _t18*_t67*_t9) + _t13*(-_t73 - _t74)
-            + _t15*(-_t75 - _t76 - _t77 - _t78);
-    const trailer2_real_t _t176 = _t127*_t168 + _t131*_t173 + _t135*_t169 + _t136*_t170 + _t175;
-    const trailer2_real_t _t177 = _t64*(_t68 - _t73) + _t65*(-_t75 - _t76) + _t79*(_t55 + _t56)
-            + _t80*(-_t60 + _t62);
-    const trailer2_real_t _t178 = J_theta_cart*_t169 + _t128*_t168 + _t132*_t173 + _t138*_t170
-            + _t177;
-    const trailer2_real_t _t179 = _t57*(_t79 + _t82) + _t58*(_t79 + _t82) + _t61*(-_t80 - _t81)
-            + _t63*(_t80 + _t81);
-    const trailer2_real_t _t180 = J_theta_cart2*_t170 + _t129*_t168 + _t133*_t173 + _t138*_t169
-            + _t179;
+    const trailer2_real_t _t112 = J_theta_cart_right*_t111;
+    const trailer2_real_t _t113 = _t39 + _t42;
+    const trailer2_real_t _t114 = _t113*_t4;
+    const trailer2_real_t _t115 = J_theta_cart_right*_t114;
+    const trailer2_real_t _t116 = -_t35 + _t36 - _t37;
+    const trailer2_real_t _t5 = prepared->forward_dynamics[18];
+    const trailer2_real_t _t117 = _t116*_t5;
+    const trailer2_real_t J_theta_cart_left = prepared->forward_dynamics[4];
+    const trailer2_real_t _t118 = J_theta_cart_left*_t117;
+    const trailer2_real_t _t119 = -_t39 + _t40 - _t41;
+    const trailer2_real_t _t120 = _t119*_t5;
+    const trailer2_real_t _t121 = J_theta_cart_left*_t120;
+    const trailer2_real_t _t122 = _t44 - _t46 + _t49;
+    const trailer2_real_t _t6 = prepared->forward_dynamics[19];
+    const trailer2_real_t _t123 = _t122*_t6;
+    const trailer2_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
+    const trailer2_real_t _t124 = J_theta_cart2_right*_t123;
+    const trailer2_real_t _t125 = _t51 - _t52 + _t55;
+    const trailer2_real_t _t126 = _t125*_t6;
+    const trailer2_real_t _t127 = J_theta_cart2_right*_t126;
+    const trailer2_real_t _t128 = -_t44 - _t56;
+    const trailer2_real_t _t7 = prepared->forward_dynamics[20];
+    const trailer2_real_t _t129 = _t128*_t7;
+    const trailer2_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
+    const trailer2_real_t _t130 = J_theta_cart2_left*_t129;
+    const trailer2_real_t _t131 = -_t51 - _t57;
+    const trailer2_real_t _t132 = _t131*_t7;
+    const trailer2_real_t _t133 = J_theta_cart2_left*_t132;
+    const trailer2_real_t _t134 = K_theta_cart_x_tractor*_t14 + K_theta_cart_x_tractor_2*_t15;
+    const trailer2_real_t _t135 = _t84 + _t85;
+    const trailer2_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[12];
+    const trailer2_real_t _t136 = K_theta_tractor_x_tractor*_t92 + _t95
+            + _t97*(-K_theta_cart_x_tractor_2*_t14 + _t86) - _t98;
+    const trailer2_real_t _t137 = _t106 - _t108;
+    const trailer2_real_t _t138 = _t107 - _t109;
+    const trailer2_real_t _t139 = _t137*_t58 + _t138*_t60;
+    const trailer2_real_t _t140 = _t93*thetadot_right;
+    const trailer2_real_t _t141 = _t93*thetadot_left;
+    const trailer2_real_t _t142 = _t106*_t65 + _t107*_t70 + _t108*_t75 + _t109*_t78 + _t140*_t80
+            + _t141*_t82;
+    const trailer2_real_t _t143 = _t134*_t139 + _t135*_t142 + _t136;
+    const trailer2_real_t _t144 = K_theta_cart_x_tractor*_t16 - K_theta_cart_x_tractor_2*_t22;
+    const trailer2_real_t _t145 = K_theta_cart2_x_tractor*_t20 - K_theta_cart2_x_tractor_2*_t23;
+    const trailer2_real_t _t146 = _t94*(-_t100 - _t99) + _t97*(-_t101 - _t102);
+    const trailer2_real_t _t147 = _t1*_t106 + _t107*_t3;
+    const trailer2_real_t _t148 = -K_theta_tractor_x_tractor*_t147 + _t139*_t144 + _t142*_t145
+            + _t146;
+    const trailer2_real_t _t149 = K_theta_cart_x_tractor_2*_t14 - _t86;
+    const trailer2_real_t _t150 = _t88*(_t84 + _t85) + _t89*(_t87 - _t90);
+    const trailer2_real_t _t151 = _t103*(-_t84 - _t85) + _t88*(_t95 - _t98) + _t92*(_t101 + _t102);
+    const trailer2_real_t J_theta_cart = prepared->forward_dynamics[0];
+    const trailer2_real_t _t152 = J_theta_cart*_t139 + _t142*_t150 + _t147*_t149 + _t151;
+    const trailer2_real_t _t153 = K_theta_cart2_x_tractor_2*_t18 - _t87;
+    const trailer2_real_t _t154 = _t104*(-_t87 + _t90) + _t105*(_t84 + _t85) + _t92*(_t100 + _t99);
+    const trailer2_real_t J_theta_cart2 = prepared->forward_dynamics[1];
+    const trailer2_real_t _t155 = J_theta_cart2*_t142 + _t139*_t150 + _t147*_t153 + _t154;
+    const trailer2_real_t _t8 = prepared->forward_dynamics[21];
+    const trailer2_real_t _t156 = _t134*_t27 + _t135*_t43 + _t8;
+    const trailer2_real_t _t9 = prepared->forward_dynamics[22];
+    const trailer2_real_t _t157 = _t144*_t27 + _t145*_t43 + _t9;
+    const trailer2_real_t _t158 = J_theta_cart*_t27 + _t0*_t144 + _t1*_t134 + _t150*_t43;
+    const trailer2_real_t _t159 = J_theta_cart2*_t43 + _t0*_t145 + _t1*_t135 + _t150*_t27;
     const trailer2_real_t J_theta_right = prepared->forward_dynamics[7];
-    const trailer2_real_t _t181 = J_theta_cart2_left*_t142*_t142 + J_theta_cart2_right*_t145*_t145
-            + J_theta_cart_left*_t148*_t148 + J_theta_cart_right*_t151*_t151 + J_theta_right
-            - _t0*_t137 + _t130*_t31 + _t134*_t27 + _t139*_t33 + _t140*_t46;
-    const trailer2_real_t _t182 = _t1*_t137 + _t130*_t36 + _t134*_t29 + _t139*_t38 + _t140*_t50
-            + _t161;
-    const trailer2_real_t _t183 = -_t0*_t163 + _t161 + _t162*_t31 + _t164*_t27 + _t165*_t33
-            + _t166*_t46;
+    const trailer2_real_t _t160 = J_theta_right + _t0*_t157 + _t1*_t156 + _t111*_t112 + _t117*_t118
+            + _t123*_t124 + _t129*_t130 + _t158*_t27 + _t159*_t43;
+    const trailer2_real_t _t10 = prepared->forward_dynamics[23];
+    const trailer2_real_t _t161 = _t10 + _t134*_t31 + _t135*_t50;
+    const trailer2_real_t _t11 = prepared->forward_dynamics[24];
+    const trailer2_real_t _t162 = _t11 + _t144*_t31 + _t145*_t50;
+    const trailer2_real_t _t163 = J_theta_cart*_t31 + _t134*_t3 + _t144*_t2 + _t150*_t50;
+    const trailer2_real_t _t164 = J_theta_cart2*_t50 + _t135*_t3 + _t145*_t2 + _t150*_t31;
+    const trailer2_real_t _t165 = _t0*_t162 + _t1*_t161 + _t111*_t115 + _t117*_t121 + _t123*_t127
+            + _t129*_t133 + _t163*_t27 + _t164*_t43;
     const trailer2_real_t J_theta_left = prepared->forward_dynamics[6];
-    const trailer2_real_t _t184 = J_theta_cart2_left*_t160*_t160 + J_theta_cart2_right*_t158*_t158
-            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t154*_t154 + J_theta_left
-            + _t1*_t163 + _t162*_t36 + _t164*_t29 + _t165*_t38 + _t166*_t50;
-    const trailer2_real_t _t185 = _t181*_t184 - _t182*_t183;
-    const trailer2_real_t _t186 = _t92 - _t93;
+    const trailer2_real_t _t166 = J_theta_left + _t114*_t115 + _t120*_t121 + _t126*_t127
+            + _t132*_t133 + _t161*_t3 + _t162*_t2 + _t163*_t31 + _t164*_t50;
+    const trailer2_real_t _t167 = _t160*_t166 - _t165*_t165;
+    const trailer2_real_t _t170 = -_t24 + _t62;
+    const trailer2_real_t _t171 = _t170*_t4;
+    const trailer2_real_t _t172 = -_t25 + _t63;
+    const trailer2_real_t _t173 = _t172*_t4;
+    const trailer2_real_t _t174 = -_t24 - _t62;
+    const trailer2_real_t _t175 = _t174*_t5;
+    const trailer2_real_t _t176 = -_t25 - _t63;
+    const trailer2_real_t _t177 = _t176*_t5;
+    const trailer2_real_t _t178 = _t66 - _t68;
+    const trailer2_real_t _t179 = _t178*_t6;
+    const trailer2_real_t _t180 = _t71 - _t73;
+    const trailer2_real_t _t181 = _t180*_t6;
+    const trailer2_real_t _t182 = -_t28 + _t67 + _t76;
+    const trailer2_real_t _t183 = _t182*_t6;
+    const trailer2_real_t _t184 = -_t32 + _t72 + _t79;
+    const trailer2_real_t _t185 = _t184*_t6;
+    const trailer2_real_t _t186 = _t30 + _t81;
     const trailer2_real_t _t187 = _t186*_t6;
-    const trailer2_real_t _t188 = _t97 - _t98;
+    const trailer2_real_t _t188 = _t34 + _t83;
     const trailer2_real_t _t189 = _t188*_t6;
-    const trailer2_real_t _t190 = _t100 - _t101;
-    const trailer2_real_t _t191 = _t190*_t6;
-    const trailer2_real_t _t192 = _t103 - _t104;
-    const trailer2_real_t _t193 = _t192*_t6;
-    const trailer2_real_t _t194 = _t187*_t83 + _t189*_t84 + _t191*_t85 + _t193*_t86;
-    const trailer2_real_t _t195 = -_t92 - _t93;
-    const trailer2_real_t _t196 = _t195*_t5;
-    const trailer2_real_t _t197 = -_t97 - _t98;
-    const trailer2_real_t _t198 = _t197*_t5;
-    const trailer2_real_t _t199 = -_t100 - _t101;
-    const trailer2_real_t _t200 = _t199*_t5;
-    const trailer2_real_t _t201 = -_t103 - _t104;
-    const trailer2_real_t _t202 = _t201*_t5;
-    const trailer2_real_t _t203 = _t196*_t83 + _t198*_t84 + _t200*_t85 + _t202*_t86;
-    const trailer2_real_t _t204 = _t107 - _t108;
-    const trailer2_real_t _t205 = _t204*_t4;
-    const trailer2_real_t _t206 = _t111 - _t112;
-    const trailer2_real_t _t207 = _t206*_t4;
-    const trailer2_real_t _t208 = _t115 - _t116;
-    const trailer2_real_t _t209 = _t208*_t4;
-    const trailer2_real_t _t210 = _t119 - _t120;
-    const trailer2_real_t _t211 = _t210*_t4;
-    const trailer2_real_t _t212 = _t122 - _t123;
-    const trailer2_real_t _t213 = _t212*_t4;
-    const trailer2_real_t _t214 = _t125 - _t126;
-    const trailer2_real_t _t215 = _t214*_t4;
-    const trailer2_real_t _t216 = _t205*_t83 + _t207*_t84 + _t209*_t85 + _t211*_t86 + _t213*_t87
-            + _t215*_t88;
-    const trailer2_real_t _t217 = -_t107 - _t108;
-    const trailer2_real_t _t218 = _t217*_t3;
-    const trailer2_real_t _t219 = -_t111 - _t112;
-    const trailer2_real_t _t220 = _t219*_t3;
-    const trailer2_real_t _t221 = -_t115 - _t116;
-    const trailer2_real_t _t222 = _t221*_t3;
-    const trailer2_real_t _t223 = -_t119 - _t120;
-    const trailer2_real_t _t224 = _t223*_t3;
-    const trailer2_real_t _t225 = -_t122 - _t123;
-    const trailer2_real_t _t226 = _t225*_t3;
-    const trailer2_real_t _t227 = -_t125 - _t126;
-    const trailer2_real_t _t228 = _t227*_t3;
-    const trailer2_real_t _t229 = _t218*_t83 + _t220*_t84 + _t222*_t85 + _t224*_t86 + _t226*_t87
-            + _t228*_t88;
-    const trailer2_real_t _t230 = -_t0*_t176 + _t143*_t229 + _t146*_t216 + _t149*_t203 + _t152*_t194
-            + _t171*_t31 + _t174*_t27 + _t178*_t33 + _t180*_t46;
-    const trailer2_real_t _t231 = J_theta_cart2_left*_t160*_t229 + J_theta_cart2_right*_t158*_t216
-            + J_theta_cart_left*_t156*_t203 + J_theta_cart_right*_t154*_t194 + _t1*_t176
-            + _t171*_t36 + _t174*_t29 + _t178*_t38 + _t180*_t50;
-    const trailer2_real_t _t232 = -_t230 + tau_right;
-    const trailer2_real_t _t233 = -_t231 + tau_left;
-    const trailer2_real_t _t234 = TRAILER2_LIT(1.0)/_t185;
-    const trailer2_real_t _t235 = _t234*(-_t182*_t233 + _t184*_t232);
-    const trailer2_real_t _t236 = _t234*(_t181*_t233 - _t183*_t232);
-    const trailer2_real_t _t237 = _t173 + _t235*_t27 + _t236*_t29;
-    const trailer2_real_t _t238 = _t168 + _t235*_t31 + _t236*_t36;
-    const trailer2_real_t _t239 = -_t0*_t235 + _t1*_t236;
-    const trailer2_real_t _t240 = _t169 + _t235*_t33 + _t236*_t38;
-    const trailer2_real_t _t241 = _t170 + _t235*_t46 + _t236*_t50;
-    const trailer2_real_t _t242 = _t151*_t235 + _t154*_t236 + _t194;
-    const trailer2_real_t _t243 = _t148*_t235 + _t156*_t236 + _t203;
-    const trailer2_real_t _t244 = _t145*_t235 + _t158*_t236 + _t216;
-    const trailer2_real_t _t245 = _t142*_t235 + _t160*_t236 + _t229;
-    if (!(_t181 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
-                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
-                & TRAILER2_EXP_CARRY_TOP) != 0u) {
-            return TRAILER2_ERR_NONFINITE_INPUT;
-        }
+    const trailer2_real_t _t190 = -_t66 - _t68;
+    const trailer2_real_t _t191 = _t190*_t7;
+    const trailer2_real_t _t192 = -_t71 - _t73;
+    const trailer2_real_t _t193 = _t192*_t7;
+    const trailer2_real_t _t194 = -_t28 + _t67 - _t76;
+    const trailer2_real_t _t195 = _t194*_t7;
+    const trailer2_real_t _t196 = -_t32 + _t72 - _t79;
+    const trailer2_real_t _t197 = _t196*_t7;
+    const trailer2_real_t _t198 = _t30 - _t81;
+    const trailer2_real_t _t199 = _t198*_t7;
+    const trailer2_real_t _t200 = _t34 - _t83;
+    const trailer2_real_t _t201 = _t200*_t7;
+    const trailer2_real_t _t202 = _t137*_t171 + _t138*_t173;
+    const trailer2_real_t _t203 = _t137*_t175 + _t138*_t177;
+    const trailer2_real_t _t204 = _t106*_t179 + _t107*_t181 + _t108*_t183 + _t109*_t185
+            + _t140*_t187 + _t141*_t189;
+    const trailer2_real_t _t205 = _t106*_t191 + _t107*_t193 + _t108*_t195 + _t109*_t197
+            + _t140*_t199 + _t141*_t201;
+    const trailer2_real_t _t206 = _t0*_t148 + _t1*_t143 + _t112*_t202 + _t118*_t203 + _t124*_t204
+            + _t130*_t205 + _t152*_t27 + _t155*_t43;
+    const trailer2_real_t _t207 = _t115*_t202 + _t121*_t203 + _t127*_t204 + _t133*_t205 + _t143*_t3
+            + _t148*_t2 + _t152*_t31 + _t155*_t50;
+    const trailer2_real_t _t208 = -_t206 + tau_right;
+    const trailer2_real_t _t209 = -_t207 + tau_left;
+    const trailer2_real_t _t210 = TRAILER2_LIT(1.0)/_t167;
+    const trailer2_real_t _t211 = _t210*(-_t165*_t209 + _t166*_t208);
+    const trailer2_real_t _t212 = _t210*(_t160*_t209 - _t165*_t208);
+    const trailer2_real_t _t213 = _t1*_t211 + _t212*_t3;
+    const trailer2_real_t _t214 = _t0*_t211 + _t2*_t212;
+    const trailer2_real_t _t215 = _t139 + _t211*_t27 + _t212*_t31;
+    const trailer2_real_t _t216 = _t142 + _t211*_t43 + _t212*_t50;
+    const trailer2_real_t _t217 = _t111*_t211 + _t114*_t212 + _t202;
+    const trailer2_real_t _t218 = _t117*_t211 + _t120*_t212 + _t203;
+    const trailer2_real_t _t219 = _t123*_t211 + _t126*_t212 + _t204;
+    const trailer2_real_t _t220 = _t129*_t211 + _t132*_t212 + _t205;
+    const trailer2_real_t _t221 = -_t147*_t168 + _t169*_t213;
+    const trailer2_real_t _t222 = _t147*_t169 + _t168*_t213;
+    if (!(_t160 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t185 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
-                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
-                & TRAILER2_EXP_CARRY_TOP) != 0u) {
-            return TRAILER2_ERR_NONFINITE_INPUT;
-        }
+    if (!(_t167 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t237;
-    const trailer2_real_t r_1 = _t238;
-    const trailer2_real_t r_2 = _t239;
-    const trailer2_real_t r_3 = _t240;
-    const trailer2_real_t r_4 = _t241;
-    const trailer2_real_t r_5 = _t235;
-    const trailer2_real_t r_6 = _t236;
-    const trailer2_real_t r_7 = _t242;
-    const trailer2_real_t r_8 = _t243;
-    const trailer2_real_t r_9 = _t244;
-    const trailer2_real_t r_10 = _t245;
+    const trailer2_real_t r_0 = _t221;
+    const trailer2_real_t r_1 = _t222;
+    const trailer2_real_t r_2 = _t214;
+    const trailer2_real_t r_3 = _t215;
+    const trailer2_real_t r_4 = _t216;
+    const trailer2_real_t r_5 = _t211;
+    const trailer2_real_t r_6 = _t212;
+    const trailer2_real_t r_7 = _t217;
+    const trailer2_real_t r_8 = _t218;
+    const trailer2_real_t r_9 = _t219;
+    const trailer2_real_t r_10 = _t220;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
             | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
             | trailer2_exp_carry(r_9) | trailer2_exp_carry(r_10)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer2_exp_carry(thetadot_right) | trailer2_exp_carry(thetadot_left)
-                | trailer2_exp_carry(tau_right) | trailer2_exp_carry(tau_left))
-                & TRAILER2_EXP_CARRY_TOP) != 0u) {
-            return TRAILER2_ERR_NONFINITE_INPUT;
-        }
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -903,494 +820,454 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
 }
 
 /* trailer2_kinematics: documented in trailer2_model.h.
-   operations after CSE: 43 add, 87 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 38 add, 73 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *pose_rates)
 {
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t4 = _t0 + theta_cart2;
+    const trailer2_real_t _t5 = TRAILER2_SIN(_t4);
+    const trailer2_real_t _t6 = TRAILER2_COS(_t4);
+    const trailer2_real_t _t7 = TRAILER2_LIT(0.85)*_t6;
+    const trailer2_real_t _t8 = -TRAILER2_LIT(0.3)*_t3;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t9 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t10 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t11 = -_t0*_t3 - _t1*_t5;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t13 = _t12*_t9;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(0.207)*_t4;
+    const trailer2_real_t _t9 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t11 = _t10*_t2 - _t8*_t9;
+    const trailer2_real_t _t12 = -TRAILER2_LIT(1.6666666666666667)*_t11;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.2)*_t12;
+    const trailer2_real_t _t14 = TRAILER2_LIT(0.3)*_t2;
     const trailer2_real_t _t15 = _t14*_t9;
-    const trailer2_real_t _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(1.6666666666666667)*_t16;
-    const trailer2_real_t _t18 = TRAILER2_LIT(0.2)*_t17;
-    const trailer2_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer2_real_t _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9;
-    const trailer2_real_t _t21 = _t10*_t12;
-    const trailer2_real_t _t22 = _t10*_t14;
-    const trailer2_real_t _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.2)*_t24;
-    const trailer2_real_t _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19;
-    const trailer2_real_t _t27 = -_t3*_t6 - _t5*_t7;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(0.85)*_t0*_t6 - _t1*_t8;
-    const trailer2_real_t _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
-    const trailer2_real_t _t32 = -_t3*_t7 + _t5*_t6;
-    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(0.85)*_t1*_t6;
-    const trailer2_real_t _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9;
-    const trailer2_real_t _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
-    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
-    const trailer2_real_t _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33;
-    const trailer2_real_t _t39 = _t18 - _t20;
-    const trailer2_real_t _t40 = _t25 - _t26;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t18 = -_t16*_t8 + _t17*_t2;
+    const trailer2_real_t _t19 = -TRAILER2_LIT(1.6666666666666667)*_t18;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*_t19;
+    const trailer2_real_t _t21 = _t14*_t16;
+    const trailer2_real_t _t22 = -TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t23 = -TRAILER2_LIT(0.85)*_t2*_t5 - _t3*_t7;
+    const trailer2_real_t _t24 = _t10*_t5 - _t12*_t23 - _t22*_t9;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t5;
+    const trailer2_real_t _t28 = _t27*_t9;
+    const trailer2_real_t _t29 = -_t2*_t7 + TRAILER2_LIT(0.85)*_t3*_t5;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = -_t16*_t22 + _t17*_t5 - _t19*_t23;
+    const trailer2_real_t _t32 = -TRAILER2_LIT(1.6666666666666667)*_t31;
+    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t32;
+    const trailer2_real_t _t34 = _t16*_t27;
+    const trailer2_real_t _t35 = _t19*_t29;
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t42 = _t39*_t41;
-    const trailer2_real_t _t43 = _t40*_t41;
-    const trailer2_real_t _t44 = -_t18 - _t20;
-    const trailer2_real_t _t45 = -_t25 - _t26;
+    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t46 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t47 = _t44*_t46;
-    const trailer2_real_t _t48 = _t45*_t46;
-    const trailer2_real_t _t49 = _t31 - _t34;
-    const trailer2_real_t _t50 = _t37 - _t38;
+    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t51 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t52 = _t49*_t51;
-    const trailer2_real_t _t53 = _t50*_t51;
-    const trailer2_real_t _t54 = -_t31 - _t34;
-    const trailer2_real_t _t55 = -_t37 - _t38;
+    const trailer2_real_t _t38 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t56 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t57 = _t54*_t56;
-    const trailer2_real_t _t58 = _t55*_t56;
+    const trailer2_real_t _t39 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t40 = _t10*_t3 + _t13 - _t15;
+    const trailer2_real_t _t41 = _t17*_t3 + _t20 - _t21;
+    const trailer2_real_t _t42 = _t36*_t40;
+    const trailer2_real_t _t43 = _t36*_t41;
+    const trailer2_real_t _t44 = _t10*_t3 - _t13 - _t15;
+    const trailer2_real_t _t45 = _t17*_t3 - _t20 - _t21;
+    const trailer2_real_t _t46 = _t37*_t44;
+    const trailer2_real_t _t47 = _t37*_t45;
+    const trailer2_real_t _t48 = _t10*_t6 + _t26 - _t28 - _t30;
+    const trailer2_real_t _t49 = _t17*_t6 + _t33 - _t34 - _t35;
+    const trailer2_real_t _t50 = _t38*_t48;
+    const trailer2_real_t _t51 = _t38*_t49;
+    const trailer2_real_t _t52 = _t10*_t6 - _t26 - _t28 - _t30;
+    const trailer2_real_t _t53 = _t17*_t6 - _t33 - _t34 - _t35;
+    const trailer2_real_t _t54 = _t39*_t52;
+    const trailer2_real_t _t55 = _t39*_t53;
     const trailer2_real_t thetadot_right = wheel_rates[0];
     const trailer2_real_t thetadot_left = wheel_rates[1];
-    const trailer2_real_t _t59 = _t15*thetadot_right + _t22*thetadot_left;
-    const trailer2_real_t _t60 = _t13*thetadot_right + _t21*thetadot_left;
-    const trailer2_real_t _t61 = _t10*thetadot_left - _t9*thetadot_right;
-    const trailer2_real_t _t62 = _t17*thetadot_right + _t24*thetadot_left;
-    const trailer2_real_t _t63 = _t30*thetadot_right + _t36*thetadot_left;
-    const trailer2_real_t _t64 = _t42*thetadot_right + _t43*thetadot_left;
-    const trailer2_real_t _t65 = _t47*thetadot_right + _t48*thetadot_left;
-    const trailer2_real_t _t66 = _t52*thetadot_right + _t53*thetadot_left;
-    const trailer2_real_t _t67 = _t57*thetadot_right + _t58*thetadot_left;
-    pose_rates[0] = _t59;
-    pose_rates[1] = _t60;
-    pose_rates[2] = _t61;
-    pose_rates[3] = _t62;
-    pose_rates[4] = _t63;
-    pose_rates[5] = _t64;
-    pose_rates[6] = _t65;
-    pose_rates[7] = _t66;
-    pose_rates[8] = _t67;
+    const trailer2_real_t _t56 = _t10*thetadot_right + _t17*thetadot_left;
+    const trailer2_real_t _t57 = _t16*thetadot_left + _t9*thetadot_right;
+    const trailer2_real_t _t58 = _t12*thetadot_right + _t19*thetadot_left;
+    const trailer2_real_t _t59 = _t25*thetadot_right + _t32*thetadot_left;
+    const trailer2_real_t _t60 = _t42*thetadot_right + _t43*thetadot_left;
+    const trailer2_real_t _t61 = _t46*thetadot_right + _t47*thetadot_left;
+    const trailer2_real_t _t62 = _t50*thetadot_right + _t51*thetadot_left;
+    const trailer2_real_t _t63 = _t54*thetadot_right + _t55*thetadot_left;
+    const trailer2_real_t _t64 = _t56*TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t65 = _t56*TRAILER2_SIN(theta_tractor);
+    pose_rates[0] = _t64;
+    pose_rates[1] = _t65;
+    pose_rates[2] = _t57;
+    pose_rates[3] = _t58;
+    pose_rates[4] = _t59;
+    pose_rates[5] = _t60;
+    pose_rates[6] = _t61;
+    pose_rates[7] = _t62;
+    pose_rates[8] = _t63;
 }
 
 /* trailer2_minimal_mass_matrix: documented in trailer2_model.h.
-   operations after CSE: 116 add, 187 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 84 add, 133 mul, 4 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *M)
 {
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t6 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t7 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t11 = _t10*_t3;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t9 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t10 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t11 = -_t0*_t3 - _t1*_t5;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t13 = _t12*_t9;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(0.207)*_t4;
-    const trailer2_real_t _t15 = _t14*_t9;
-    const trailer2_real_t _t16 = _t0*_t15 - _t1*_t13 + _t11*_t9;
+    const trailer2_real_t _t14 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t16 = _t14*_t4 + _t15*_t2;
     const trailer2_real_t _t17 = -TRAILER2_LIT(1.6666666666666667)*_t16;
     const trailer2_real_t _t18 = TRAILER2_LIT(0.2)*_t17;
-    const trailer2_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer2_real_t _t20 = -_t0*_t13 - _t1*_t15 - _t19*_t9;
-    const trailer2_real_t _t21 = _t10*_t12;
-    const trailer2_real_t _t22 = _t10*_t14;
-    const trailer2_real_t _t23 = _t0*_t22 - _t1*_t21 - _t10*_t11;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.2)*_t24;
-    const trailer2_real_t _t26 = -_t0*_t21 - _t1*_t22 + _t10*_t19;
-    const trailer2_real_t _t27 = -_t3*_t6 - _t5*_t7;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(0.85)*_t0*_t6 - _t1*_t8;
-    const trailer2_real_t _t29 = -_t13*_t7 + _t15*_t6 - _t17*_t28 + _t27*_t9;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t30;
-    const trailer2_real_t _t32 = -_t3*_t7 + _t5*_t6;
-    const trailer2_real_t _t33 = -_t0*_t8 + TRAILER2_LIT(0.85)*_t1*_t6;
-    const trailer2_real_t _t34 = -_t13*_t6 - _t15*_t7 + _t17*_t33 - _t32*_t9;
-    const trailer2_real_t _t35 = -_t10*_t27 - _t21*_t7 + _t22*_t6 - _t24*_t28;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t35;
-    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
-    const trailer2_real_t _t38 = _t10*_t32 - _t21*_t6 - _t22*_t7 + _t24*_t33;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t _t39 = K_theta_cart_x_tractor*_t0;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t40 = K_theta_cart_x_tractor_2*_t1;
+    const trailer2_real_t _t19 = _t12*_t14;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t22 = _t2*_t21 + _t20*_t4;
+    const trailer2_real_t _t23 = -TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.2)*_t23;
+    const trailer2_real_t _t25 = _t12*_t20;
+    const trailer2_real_t _t26 = -_t11 - _t2*_t9;
+    const trailer2_real_t _t27 = _t14*_t8 + _t15*_t6 - _t17*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(1.6666666666666667)*_t27;
+    const trailer2_real_t _t29 = TRAILER2_LIT(0.2)*_t28;
+    const trailer2_real_t _t30 = _t13*_t14;
+    const trailer2_real_t _t31 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t32 = _t17*_t31;
+    const trailer2_real_t _t33 = _t20*_t8 + _t21*_t6 - _t23*_t26;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(1.6666666666666667)*_t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t34;
+    const trailer2_real_t _t36 = _t13*_t20;
+    const trailer2_real_t _t37 = _t23*_t31;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t41 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t _t38 = K_theta_cart2_x_tractor*_t6;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t42 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t43 = K_theta_cart_x_tractor*_t1;
-    const trailer2_real_t _t44 = K_theta_cart2_x_tractor*_t7;
-    const trailer2_real_t _t45 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.85)*_t0;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.85)*_t1;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t48 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer2_real_t _t49 = K_theta_cart_x_tractor_2*_t0 - _t43;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor_2*_t6 - _t44;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t51 = J_x_tractor*_t13 + _t17*_t49 + _t30*_t50 - _t48*_t9;
-    const trailer2_real_t _t52 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer2_real_t _t53 = _t39 + _t40;
-    const trailer2_real_t _t54 = _t41 + _t42;
-    const trailer2_real_t _t55 = J_x_tractor*_t15 + _t17*_t53 + _t30*_t54 - _t52*_t9;
-    const trailer2_real_t _t56 = -K_theta_cart_x_tractor_2*_t0*_t5 + _t3*_t39 + _t3*_t40 + _t43*_t5;
-    const trailer2_real_t _t57 = _t3*_t41 + _t3*_t42 + _t44*_t5 - _t45*_t5;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t58 = -J_theta_tractor*_t9 + _t13*_t48 + _t15*_t52 + _t17*_t56
-            + _t30*_t57;
-    const trailer2_real_t _t59 = _t41*_t46 + _t42*_t46 + _t44*_t47 - _t45*_t47;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t60 = J_theta_cart*_t17 + _t13*_t49 + _t15*_t53 + _t30*_t59 - _t56*_t9;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t61 = J_theta_cart2*_t30 + _t13*_t50 + _t15*_t54 + _t17*_t59 - _t57*_t9;
-    const trailer2_real_t _t62 = _t18 - _t20;
+    const trailer2_real_t _t39 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.85)*_t2;
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t63 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t64 = _t62*_t63;
-    const trailer2_real_t _t65 = _t25 - _t26;
-    const trailer2_real_t _t66 = _t63*_t65;
-    const trailer2_real_t _t67 = -_t18 - _t20;
+    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t68 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t69 = _t67*_t68;
-    const trailer2_real_t _t70 = -_t25 - _t26;
-    const trailer2_real_t _t71 = _t68*_t70;
-    const trailer2_real_t _t72 = _t31 - _t34;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t73 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t74 = _t72*_t73;
-    const trailer2_real_t _t75 = _t37 - _t38;
-    const trailer2_real_t _t76 = _t73*_t75;
-    const trailer2_real_t _t77 = -_t31 - _t34;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t78 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t79 = _t77*_t78;
-    const trailer2_real_t _t80 = -_t37 - _t38;
-    const trailer2_real_t _t81 = _t78*_t80;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t44 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t45 = _t15*_t3 + _t18 - _t19;
+    const trailer2_real_t _t46 = _t21*_t3 + _t24 - _t25;
+    const trailer2_real_t _t47 = _t41*_t45;
+    const trailer2_real_t _t48 = _t41*_t46;
+    const trailer2_real_t _t49 = _t15*_t3 - _t18 - _t19;
+    const trailer2_real_t _t50 = _t21*_t3 - _t24 - _t25;
+    const trailer2_real_t _t51 = _t42*_t49;
+    const trailer2_real_t _t52 = _t42*_t50;
+    const trailer2_real_t _t53 = _t15*_t7 + _t29 - _t30 - _t32;
+    const trailer2_real_t _t54 = _t21*_t7 + _t35 - _t36 - _t37;
+    const trailer2_real_t _t55 = _t43*_t53;
+    const trailer2_real_t _t56 = _t43*_t54;
+    const trailer2_real_t _t57 = _t15*_t7 - _t29 - _t30 - _t32;
+    const trailer2_real_t _t58 = _t21*_t7 - _t35 - _t36 - _t37;
+    const trailer2_real_t _t59 = _t44*_t57;
+    const trailer2_real_t _t60 = _t44*_t58;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t61 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t62 = _t38 + _t39;
+    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
+    const trailer2_real_t _t64 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
+    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
+            + _t38*_t40 + _t39*_t40;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t66 = J_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t14 + _t17*_t61
+            + _t28*_t62;
+    const trailer2_real_t _t67 = J_x_tractor*_t21 + K_theta_tractor_x_tractor_2*_t20 + _t23*_t61
+            + _t34*_t62;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t68 = J_theta_tractor*_t14 + K_theta_tractor_x_tractor_2*_t15 + _t17*_t63
+            + _t28*_t64;
+    const trailer2_real_t _t69 = J_theta_tractor*_t20 + K_theta_tractor_x_tractor_2*_t21 + _t23*_t63
+            + _t34*_t64;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t70 = J_theta_cart*_t17 + _t14*_t63 + _t15*_t61 + _t28*_t65;
+    const trailer2_real_t _t71 = J_theta_cart*_t23 + _t20*_t63 + _t21*_t61 + _t34*_t65;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t72 = J_theta_cart2*_t28 + _t14*_t64 + _t15*_t62 + _t17*_t65;
+    const trailer2_real_t _t73 = J_theta_cart2*_t34 + _t20*_t64 + _t21*_t62 + _t23*_t65;
     const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t82 = J_theta_cart2_left*_t79*_t81 + J_theta_cart2_right*_t74*_t76
-            + J_theta_cart_left*_t69*_t71 + J_theta_cart_right*_t64*_t66;
-    const trailer2_real_t _t83 = J_x_tractor*_t21 + _t10*_t48 + _t24*_t49 + _t36*_t50;
-    const trailer2_real_t _t84 = J_theta_tractor*_t10 + _t21*_t48 + _t22*_t52 + _t24*_t56
-            + _t36*_t57;
-    const trailer2_real_t _t85 = J_x_tractor*_t22 + _t10*_t52 + _t24*_t53 + _t36*_t54;
-    const trailer2_real_t _t86 = J_theta_cart*_t24 + _t10*_t56 + _t21*_t49 + _t22*_t53 + _t36*_t59;
-    const trailer2_real_t _t87 = J_theta_cart2*_t36 + _t10*_t57 + _t21*_t50 + _t22*_t54 + _t24*_t59;
+    const trailer2_real_t _t74 = J_theta_cart_right*_t47;
+    const trailer2_real_t _t75 = J_theta_cart_right*_t48;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t76 = J_theta_cart_left*_t51;
+    const trailer2_real_t _t77 = J_theta_cart_left*_t52;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t78 = J_theta_cart2_right*_t55;
+    const trailer2_real_t _t79 = J_theta_cart2_right*_t56;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t80 = J_theta_cart2_left*_t59;
+    const trailer2_real_t _t81 = J_theta_cart2_left*_t60;
     const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t88 = J_theta_cart2_left*_t79*_t79 + J_theta_cart2_right*_t74*_t74
-            + J_theta_cart_left*_t69*_t69 + J_theta_cart_right*_t64*_t64 + J_theta_right + _t13*_t51
-            + _t15*_t55 + _t17*_t60 + _t30*_t61 - _t58*_t9;
-    const trailer2_real_t _t89 = _t10*_t58 + _t21*_t51 + _t22*_t55 + _t24*_t60 + _t36*_t61 + _t82;
-    const trailer2_real_t _t90 = _t13*_t83 + _t15*_t85 + _t17*_t86 + _t30*_t87 + _t82 - _t84*_t9;
+    const trailer2_real_t _t82 = J_theta_right + _t14*_t68 + _t15*_t66 + _t17*_t70 + _t28*_t72
+            + _t47*_t74 + _t51*_t76 + _t55*_t78 + _t59*_t80;
+    const trailer2_real_t _t83 = _t14*_t69 + _t15*_t67 + _t17*_t71 + _t28*_t73 + _t47*_t75
+            + _t51*_t77 + _t55*_t79 + _t59*_t81;
     const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t91 = J_theta_cart2_left*_t81*_t81 + J_theta_cart2_right*_t76*_t76
-            + J_theta_cart_left*_t71*_t71 + J_theta_cart_right*_t66*_t66 + J_theta_left + _t10*_t84
-            + _t21*_t83 + _t22*_t85 + _t24*_t86 + _t36*_t87;
-    M[0] = _t88;
-    M[1] = _t89;
-    M[2] = _t90;
-    M[3] = _t91;
+    const trailer2_real_t _t84 = J_theta_left + _t20*_t69 + _t21*_t67 + _t23*_t71 + _t34*_t73
+            + _t48*_t75 + _t52*_t77 + _t56*_t79 + _t60*_t81;
+    M[0] = _t82;
+    M[1] = _t83;
+    M[2] = _t83;
+    M[3] = _t84;
 }
 
 /* trailer2_minimal_bias_forces: documented in trailer2_model.h.
-   operations after CSE: 193 add, 315 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 131 add, 207 mul, 4 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *H)
 {
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
-    const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
-    const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
-    const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t12 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t14 = -_t12*_t4 - _t13*_t2;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t4;
-    const trailer2_real_t _t19 = _t16*_t18;
-    const trailer2_real_t _t20 = -_t0*_t19 + _t16*_t6;
-    const trailer2_real_t _t21 = _t17*_t18;
-    const trailer2_real_t _t22 = -_t0*_t21 - _t17*_t6;
-    const trailer2_real_t _t23 = -_t15*_t16;
-    const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = -_t11*_t25;
-    const trailer2_real_t _t27 = _t16*_t9 - _t19*_t7;
-    const trailer2_real_t _t28 = -_t15*_t17;
-    const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t31 = -_t11*_t30;
-    const trailer2_real_t _t32 = -_t17*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t30;
-    const trailer2_real_t _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t37 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t38;
-    const trailer2_real_t _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7;
-    const trailer2_real_t _t41 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t15 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t17 = -_t15*_t4 - _t16*_t2;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.6666666666666667)*_t14;
+    const trailer2_real_t _t20 = _t18*_t19;
+    const trailer2_real_t _t21 = -_t12*_t8 - _t13*_t6;
+    const trailer2_real_t _t22 = _t20 + _t21;
+    const trailer2_real_t _t23 = TRAILER2_LIT(1.6666666666666667)*_t17;
+    const trailer2_real_t _t24 = _t18*_t23;
+    const trailer2_real_t _t25 = -_t15*_t8 - _t16*_t6;
+    const trailer2_real_t _t26 = _t24 + _t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t19;
+    const trailer2_real_t _t28 = _t13*_t3;
+    const trailer2_real_t _t29 = _t10*_t12;
+    const trailer2_real_t _t30 = _t28 - _t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t23;
+    const trailer2_real_t _t32 = _t16*_t3;
+    const trailer2_real_t _t33 = _t10*_t15;
+    const trailer2_real_t _t34 = _t32 - _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t35;
+    const trailer2_real_t _t37 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t38 = _t19*_t37;
+    const trailer2_real_t _t39 = _t13*_t7;
+    const trailer2_real_t _t40 = _t11*_t12;
+    const trailer2_real_t _t41 = _t39 - _t40;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.6666666666666667)*_t26;
     const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
-    const trailer2_real_t _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t45 = K_theta_tractor_x_tractor*_t2;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t46 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t _t47 = K_theta_cart_x_tractor*_t0;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t48 = K_theta_cart_x_tractor_2*_t1;
+    const trailer2_real_t _t44 = _t23*_t37;
+    const trailer2_real_t _t45 = _t16*_t7;
+    const trailer2_real_t _t46 = _t11*_t15;
+    const trailer2_real_t _t47 = _t45 - _t46;
+    const trailer2_real_t _t48 = _t38 - _t39 + _t40;
+    const trailer2_real_t _t49 = _t44 - _t45 + _t46;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t51 = _t18*_t50;
+    const trailer2_real_t _t52 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t53 = _t18*_t52;
+    const trailer2_real_t _t54 = TRAILER2_LIT(0.2)*_t50;
+    const trailer2_real_t _t55 = TRAILER2_LIT(0.2)*_t52;
+    const trailer2_real_t _t56 = -_t41 - _t51;
+    const trailer2_real_t _t57 = -TRAILER2_LIT(1.6666666666666667)*_t56;
+    const trailer2_real_t _t58 = TRAILER2_LIT(0.2)*_t57;
+    const trailer2_real_t _t59 = _t37*_t50;
+    const trailer2_real_t _t60 = _t21 + _t59;
+    const trailer2_real_t _t61 = -_t47 - _t53;
+    const trailer2_real_t _t62 = -TRAILER2_LIT(1.6666666666666667)*_t61;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t62;
+    const trailer2_real_t _t64 = _t37*_t52;
+    const trailer2_real_t _t65 = _t25 + _t64;
+    const trailer2_real_t _t66 = _t38 + _t51;
+    const trailer2_real_t _t67 = -TRAILER2_LIT(1.6666666666666667)*_t66;
+    const trailer2_real_t _t68 = TRAILER2_LIT(0.2)*_t67;
+    const trailer2_real_t _t69 = _t44 + _t53;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(1.6666666666666667)*_t69;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.2)*_t70;
+    const trailer2_real_t _t72 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t73 = TRAILER2_LIT(0.2)*_t72;
+    const trailer2_real_t _t74 = TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t49 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t76 = K_theta_cart2_x_tractor*_t6;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t51 = K_theta_tractor_x_tractor*_t4;
-    const trailer2_real_t _t52 = K_theta_cart_x_tractor*_t1;
-    const trailer2_real_t _t53 = K_theta_cart2_x_tractor*_t8;
-    const trailer2_real_t _t54 = K_theta_cart_x_tractor_2*_t0;
-    const trailer2_real_t _t55 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t56 = TRAILER2_LIT(0.85)*_t0;
-    const trailer2_real_t _t57 = TRAILER2_LIT(0.85)*_t1;
+    const trailer2_real_t _t77 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t _t78 = K_theta_cart_x_tractor*_t3;
+    const trailer2_real_t _t79 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t80 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.85)*_t3;
+    const trailer2_real_t _t82 = K_theta_cart2_x_tractor_2*_t6;
     const trailer2_real_t thetadot_right = wheel_rates[0];
     const trailer2_real_t thetadot_left = wheel_rates[1];
-    const trailer2_real_t _t58 = _t38*thetadot_right + _t42*thetadot_left;
-    const trailer2_real_t _t59 = _t58*_t58;
-    const trailer2_real_t _t60 = _t53*_t59;
-    const trailer2_real_t _t61 = _t25*thetadot_right + _t30*thetadot_left;
-    const trailer2_real_t _t62 = _t61*_t61;
-    const trailer2_real_t _t63 = -_t16*thetadot_right + _t17*thetadot_left;
-    const trailer2_real_t _t64 = _t63*_t63;
-    const trailer2_real_t _t65 = _t55*_t59;
-    const trailer2_real_t _t66 = _t54*_t62;
-    const trailer2_real_t _t67 = _t49*_t59;
-    const trailer2_real_t _t68 = _t50*_t59;
-    const trailer2_real_t _t69 = _t47*_t62;
-    const trailer2_real_t _t70 = _t48*_t62;
-    const trailer2_real_t _t71 = _t5*_t64;
-    const trailer2_real_t _t72 = _t3*_t64;
-    const trailer2_real_t _t73 = _t56*_t62;
-    const trailer2_real_t _t74 = _t57*_t62;
-    const trailer2_real_t _t75 = _t63*thetadot_right;
-    const trailer2_real_t _t76 = _t63*thetadot_left;
-    const trailer2_real_t _t77 = _t61*thetadot_right;
-    const trailer2_real_t _t78 = _t61*thetadot_left;
-    const trailer2_real_t _t79 = _t58*thetadot_right;
-    const trailer2_real_t _t80 = _t58*thetadot_left;
-    const trailer2_real_t _t81 = _t15*_t16;
-    const trailer2_real_t _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t83 = -TRAILER2_LIT(1.6666666666666667)*_t82;
-    const trailer2_real_t _t84 = TRAILER2_LIT(0.2)*_t83;
-    const trailer2_real_t _t85 = -_t1*_t81 + _t20;
-    const trailer2_real_t _t86 = _t15*_t17;
-    const trailer2_real_t _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t88 = -TRAILER2_LIT(1.6666666666666667)*_t87;
-    const trailer2_real_t _t89 = TRAILER2_LIT(0.2)*_t88;
-    const trailer2_real_t _t90 = -_t1*_t86 + _t22;
-    const trailer2_real_t _t91 = TRAILER2_LIT(1.6666666666666667)*_t34;
-    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
-    const trailer2_real_t _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6;
-    const trailer2_real_t _t94 = TRAILER2_LIT(1.6666666666666667)*_t36;
-    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t94;
-    const trailer2_real_t _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6;
-    const trailer2_real_t _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81;
-    const trailer2_real_t _t98 = -TRAILER2_LIT(1.6666666666666667)*_t97;
-    const trailer2_real_t _t99 = TRAILER2_LIT(0.2)*_t98;
-    const trailer2_real_t _t100 = -_t14*_t83 + _t27 - _t8*_t81;
-    const trailer2_real_t _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86;
-    const trailer2_real_t _t102 = -TRAILER2_LIT(1.6666666666666667)*_t101;
-    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
-    const trailer2_real_t _t104 = -_t14*_t88 + _t32 - _t8*_t86;
-    const trailer2_real_t _t105 = _t11*_t91 - _t14*_t25;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
-    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
-    const trailer2_real_t _t108 = -_t14*_t91 + _t26;
-    const trailer2_real_t _t109 = _t11*_t94 - _t14*_t30;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
-    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
-    const trailer2_real_t _t112 = -_t14*_t94 + _t31;
-    const trailer2_real_t _t113 = TRAILER2_LIT(1.6666666666666667)*_t40;
-    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
-    const trailer2_real_t _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8;
-    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
-    const trailer2_real_t _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8;
+    const trailer2_real_t _t83 = _t12*thetadot_right + _t15*thetadot_left;
+    const trailer2_real_t _t84 = _t83*_t83;
+    const trailer2_real_t _t85 = _t35*thetadot_right + _t42*thetadot_left;
+    const trailer2_real_t _t86 = _t85*_t85;
+    const trailer2_real_t _t87 = _t79*_t86;
+    const trailer2_real_t _t88 = _t19*thetadot_right + _t23*thetadot_left;
+    const trailer2_real_t _t89 = _t88*_t88;
+    const trailer2_real_t _t90 = _t82*_t86;
+    const trailer2_real_t _t91 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t92 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer2_real_t _t93 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t94 = K_theta_cart_x_tractor_2*_t4;
+    const trailer2_real_t _t95 = _t81*_t86;
+    const trailer2_real_t _t96 = _t80*_t89;
+    const trailer2_real_t _t97 = _t81*_t89;
+    const trailer2_real_t _t98 = _t83*thetadot_right;
+    const trailer2_real_t _t99 = _t83*thetadot_left;
+    const trailer2_real_t _t100 = _t88*thetadot_right;
+    const trailer2_real_t _t101 = _t88*thetadot_left;
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t119 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t120 = -_t100 - _t99;
-    const trailer2_real_t _t121 = _t119*_t120;
-    const trailer2_real_t _t122 = -_t103 - _t104;
-    const trailer2_real_t _t123 = _t119*_t122;
-    const trailer2_real_t _t124 = -_t107 - _t108;
-    const trailer2_real_t _t125 = _t119*_t124;
-    const trailer2_real_t _t126 = -_t111 - _t112;
-    const trailer2_real_t _t127 = _t119*_t126;
-    const trailer2_real_t _t128 = -_t114 - _t115;
-    const trailer2_real_t _t129 = _t119*_t128;
-    const trailer2_real_t _t130 = -_t117 - _t118;
-    const trailer2_real_t _t131 = _t119*_t130;
-    const trailer2_real_t _t132 = _t121*_t75 + _t123*_t76 + _t125*_t77 + _t127*_t78 + _t129*_t79
-            + _t131*_t80;
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t103 = -_t58 - _t60;
+    const trailer2_real_t _t104 = _t102*_t103;
+    const trailer2_real_t _t105 = -_t63 - _t65;
+    const trailer2_real_t _t106 = _t102*_t105;
+    const trailer2_real_t _t107 = -_t20 + _t59 - _t68;
+    const trailer2_real_t _t108 = _t102*_t107;
+    const trailer2_real_t _t109 = -_t24 + _t64 - _t71;
+    const trailer2_real_t _t110 = _t102*_t109;
+    const trailer2_real_t _t111 = _t22 - _t73;
+    const trailer2_real_t _t112 = _t102*_t111;
+    const trailer2_real_t _t113 = _t26 - _t75;
+    const trailer2_real_t _t114 = _t102*_t113;
+    const trailer2_real_t _t115 = _t85*thetadot_right;
+    const trailer2_real_t _t116 = _t85*thetadot_left;
+    const trailer2_real_t _t117 = _t100*_t108 + _t101*_t110 + _t104*_t98 + _t106*_t99 + _t112*_t115
+            + _t114*_t116;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t133 = J_theta_cart2_left*_t132;
+    const trailer2_real_t _t118 = J_theta_cart2_left*_t117;
     const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t134 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t135 = -_t100 + _t99;
-    const trailer2_real_t _t136 = _t134*_t135;
-    const trailer2_real_t _t137 = _t103 - _t104;
-    const trailer2_real_t _t138 = _t134*_t137;
-    const trailer2_real_t _t139 = _t107 - _t108;
-    const trailer2_real_t _t140 = _t134*_t139;
-    const trailer2_real_t _t141 = _t111 - _t112;
-    const trailer2_real_t _t142 = _t134*_t141;
-    const trailer2_real_t _t143 = _t114 - _t115;
-    const trailer2_real_t _t144 = _t134*_t143;
-    const trailer2_real_t _t145 = _t117 - _t118;
-    const trailer2_real_t _t146 = _t134*_t145;
-    const trailer2_real_t _t147 = _t136*_t75 + _t138*_t76 + _t140*_t77 + _t142*_t78 + _t144*_t79
-            + _t146*_t80;
+    const trailer2_real_t _t119 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t120 = _t58 - _t60;
+    const trailer2_real_t _t121 = _t119*_t120;
+    const trailer2_real_t _t122 = _t63 - _t65;
+    const trailer2_real_t _t123 = _t119*_t122;
+    const trailer2_real_t _t124 = -_t20 + _t59 + _t68;
+    const trailer2_real_t _t125 = _t119*_t124;
+    const trailer2_real_t _t126 = -_t24 + _t64 + _t71;
+    const trailer2_real_t _t127 = _t119*_t126;
+    const trailer2_real_t _t128 = _t22 + _t73;
+    const trailer2_real_t _t129 = _t119*_t128;
+    const trailer2_real_t _t130 = _t26 + _t75;
+    const trailer2_real_t _t131 = _t119*_t130;
+    const trailer2_real_t _t132 = _t100*_t125 + _t101*_t127 + _t115*_t129 + _t116*_t131 + _t121*_t98
+            + _t123*_t99;
     const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t148 = J_theta_cart2_right*_t147;
+    const trailer2_real_t _t133 = J_theta_cart2_right*_t132;
     const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t149 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t150 = -_t84 - _t85;
-    const trailer2_real_t _t151 = _t149*_t150;
-    const trailer2_real_t _t152 = -_t89 - _t90;
-    const trailer2_real_t _t153 = _t149*_t152;
-    const trailer2_real_t _t154 = -_t92 - _t93;
-    const trailer2_real_t _t155 = _t149*_t154;
-    const trailer2_real_t _t156 = -_t95 - _t96;
-    const trailer2_real_t _t157 = _t149*_t156;
-    const trailer2_real_t _t158 = _t151*_t75 + _t153*_t76 + _t155*_t77 + _t157*_t78;
+    const trailer2_real_t _t134 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t135 = -_t14 - _t54;
+    const trailer2_real_t _t136 = _t134*_t135;
+    const trailer2_real_t _t137 = -_t17 - _t55;
+    const trailer2_real_t _t138 = _t134*_t137;
+    const trailer2_real_t _t139 = -_t100 + _t98;
+    const trailer2_real_t _t140 = -_t101 + _t99;
+    const trailer2_real_t _t141 = _t136*_t139 + _t138*_t140;
     const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t159 = J_theta_cart_left*_t158;
+    const trailer2_real_t _t142 = J_theta_cart_left*_t141;
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t160 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t161 = _t84 - _t85;
-    const trailer2_real_t _t162 = _t160*_t161;
-    const trailer2_real_t _t163 = _t89 - _t90;
-    const trailer2_real_t _t164 = _t160*_t163;
-    const trailer2_real_t _t165 = _t92 - _t93;
-    const trailer2_real_t _t166 = _t160*_t165;
-    const trailer2_real_t _t167 = _t95 - _t96;
-    const trailer2_real_t _t168 = _t160*_t167;
-    const trailer2_real_t _t169 = _t162*_t75 + _t164*_t76 + _t166*_t77 + _t168*_t78;
+    const trailer2_real_t _t143 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t144 = -_t14 + _t54;
+    const trailer2_real_t _t145 = _t143*_t144;
+    const trailer2_real_t _t146 = -_t17 + _t55;
+    const trailer2_real_t _t147 = _t143*_t146;
+    const trailer2_real_t _t148 = _t139*_t145 + _t140*_t147;
     const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t170 = J_theta_cart_right*_t169;
-    const trailer2_real_t _t171 = K_theta_cart_x_tractor_2*_t0 - _t52;
-    const trailer2_real_t _t172 = K_theta_cart2_x_tractor_2*_t7 - _t53;
-    const trailer2_real_t _t173 = _t45*_t64 + _t46*_t64 + _t67 + _t68 + _t69 + _t70;
-    const trailer2_real_t _t174 = _t19*_t75 + _t21*_t76;
-    const trailer2_real_t _t175 = _t75*_t83 + _t76*_t88 + _t77*_t91 + _t78*_t94;
-    const trailer2_real_t _t176 = _t102*_t76 + _t106*_t77 + _t110*_t78 + _t113*_t79 + _t116*_t80
-            + _t75*_t98;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t177 = J_x_tractor*_t174 + _t171*_t175 + _t172*_t176 + _t173;
-    const trailer2_real_t _t178 = _t47 + _t48;
-    const trailer2_real_t _t179 = _t49 + _t50;
-    const trailer2_real_t _t180 = -K_theta_tractor_x_tractor_2*_t2*_t64 + _t51*_t64 + _t52*_t62
-            + _t60 - _t65 - _t66;
-    const trailer2_real_t _t181 = _t75*_t81 + _t76*_t86;
-    const trailer2_real_t _t182 = J_x_tractor*_t181 + _t175*_t178 + _t176*_t179 + _t180;
-    const trailer2_real_t _t183 = _t45 + _t46;
-    const trailer2_real_t _t184 = K_theta_tractor_x_tractor_2*_t2 - _t51;
-    const trailer2_real_t _t185 = _t3*_t47 + _t3*_t48 + _t5*_t52 - _t5*_t54;
-    const trailer2_real_t _t186 = _t3*_t49 + _t3*_t50 + _t5*_t53 - _t5*_t55;
-    const trailer2_real_t _t187 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t59*_t8
-            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67
-            - _t5*_t68 - _t5*_t69 - _t5*_t70;
-    const trailer2_real_t _t188 = _t174*_t184 + _t175*_t185 + _t176*_t186 + _t181*_t183 + _t187;
-    const trailer2_real_t _t189 = _t49*_t56 + _t50*_t56 + _t53*_t57 - _t55*_t57;
-    const trailer2_real_t _t190 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60
-            - _t56*_t65 - _t57*_t67 - _t57*_t68;
+    const trailer2_real_t _t149 = J_theta_cart_right*_t148;
+    const trailer2_real_t _t150 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t151 = _t76 + _t77;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t _t152 = -K_theta_cart_x_tractor_2*_t2*_t89
+            + K_theta_tractor_x_tractor*_t84 + _t78*_t89 + _t87 - _t90;
+    const trailer2_real_t _t153 = _t139*_t50 + _t140*_t52;
+    const trailer2_real_t _t154 = _t100*_t67 + _t101*_t70 + _t115*_t72 + _t116*_t74 + _t57*_t98
+            + _t62*_t99;
+    const trailer2_real_t _t155 = _t150*_t153 + _t151*_t154 + _t152;
+    const trailer2_real_t _t156 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t157 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t158 = -_t86*_t91 - _t86*_t92 - _t89*_t93 - _t89*_t94;
+    const trailer2_real_t _t159 = _t13*_t98 + _t16*_t99;
+    const trailer2_real_t _t160 = -K_theta_tractor_x_tractor*_t159 + _t153*_t156 + _t154*_t157
+            + _t158;
+    const trailer2_real_t _t161 = K_theta_cart_x_tractor_2*_t2 - _t78;
+    const trailer2_real_t _t162 = _t76*_t80 + _t77*_t80 + _t79*_t81 - _t81*_t82;
+    const trailer2_real_t _t163 = -_t76*_t95 - _t77*_t95 + _t80*_t87 - _t80*_t90 + _t84*_t93
+            + _t84*_t94;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t191 = J_theta_cart*_t175 + _t171*_t174 + _t176*_t189 + _t178*_t181
-            + _t190;
-    const trailer2_real_t _t192 = _t49*_t71 + _t49*_t74 + _t50*_t71 + _t50*_t74 - _t53*_t72
-            - _t53*_t73 + _t55*_t72 + _t55*_t73;
+    const trailer2_real_t _t164 = J_theta_cart*_t153 + _t154*_t162 + _t159*_t161 + _t163;
+    const trailer2_real_t _t165 = K_theta_cart2_x_tractor_2*_t6 - _t79;
+    const trailer2_real_t _t166 = _t76*_t97 + _t77*_t97 - _t79*_t96 + _t82*_t96 + _t84*_t91
+            + _t84*_t92;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t193 = J_theta_cart2*_t176 + _t172*_t174 + _t175*_t189 + _t179*_t181
-            + _t192;
-    const trailer2_real_t _t194 = _t33 - _t34;
-    const trailer2_real_t _t195 = _t35 - _t36;
-    const trailer2_real_t _t196 = _t160*_t194;
-    const trailer2_real_t _t197 = _t160*_t195;
-    const trailer2_real_t _t198 = -_t33 - _t34;
-    const trailer2_real_t _t199 = -_t35 - _t36;
-    const trailer2_real_t _t200 = _t149*_t198;
-    const trailer2_real_t _t201 = _t149*_t199;
-    const trailer2_real_t _t202 = _t39 - _t40;
-    const trailer2_real_t _t203 = _t43 - _t44;
-    const trailer2_real_t _t204 = _t134*_t202;
-    const trailer2_real_t _t205 = _t134*_t203;
-    const trailer2_real_t _t206 = -_t39 - _t40;
-    const trailer2_real_t _t207 = -_t43 - _t44;
-    const trailer2_real_t _t208 = _t119*_t206;
-    const trailer2_real_t _t209 = _t119*_t207;
-    const trailer2_real_t _t210 = _t133*_t208 + _t148*_t204 + _t159*_t200 - _t16*_t188 + _t170*_t196
-            + _t177*_t23 + _t182*_t19 + _t191*_t25 + _t193*_t38;
-    const trailer2_real_t _t211 = _t133*_t209 + _t148*_t205 + _t159*_t201 + _t17*_t188 + _t170*_t197
-            + _t177*_t28 + _t182*_t21 + _t191*_t30 + _t193*_t42;
-    H[0] = _t210;
-    H[1] = _t211;
+    const trailer2_real_t _t167 = J_theta_cart2*_t154 + _t153*_t162 + _t159*_t165 + _t166;
+    const trailer2_real_t _t168 = _t27 + _t30;
+    const trailer2_real_t _t169 = _t31 + _t34;
+    const trailer2_real_t _t170 = _t143*_t168;
+    const trailer2_real_t _t171 = _t143*_t169;
+    const trailer2_real_t _t172 = -_t27 + _t28 - _t29;
+    const trailer2_real_t _t173 = -_t31 + _t32 - _t33;
+    const trailer2_real_t _t174 = _t134*_t172;
+    const trailer2_real_t _t175 = _t134*_t173;
+    const trailer2_real_t _t176 = _t36 - _t38 + _t41;
+    const trailer2_real_t _t177 = _t43 - _t44 + _t47;
+    const trailer2_real_t _t178 = _t119*_t176;
+    const trailer2_real_t _t179 = _t119*_t177;
+    const trailer2_real_t _t180 = -_t36 - _t48;
+    const trailer2_real_t _t181 = -_t43 - _t49;
+    const trailer2_real_t _t182 = _t102*_t180;
+    const trailer2_real_t _t183 = _t102*_t181;
+    const trailer2_real_t _t184 = _t118*_t182 + _t12*_t160 + _t13*_t155 + _t133*_t178 + _t142*_t174
+            + _t149*_t170 + _t164*_t19 + _t167*_t35;
+    const trailer2_real_t _t185 = _t118*_t183 + _t133*_t179 + _t142*_t175 + _t149*_t171 + _t15*_t160
+            + _t155*_t16 + _t164*_t23 + _t167*_t42;
+    H[0] = _t184;
+    H[1] = _t185;
 }
 
 /* trailer2_minimal_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 265 add, 413 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 183 add, 275 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *wheel_accels)
@@ -1444,264 +1321,229 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
-    const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
-    const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
-    const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
-    const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(0.207)*_t4;
-    const trailer2_real_t _t19 = _t16*_t18;
-    const trailer2_real_t _t20 = -_t0*_t19 + _t16*_t6;
-    const trailer2_real_t _t21 = _t17*_t18;
-    const trailer2_real_t _t22 = -_t0*_t21 - _t17*_t6;
-    const trailer2_real_t _t23 = -_t15*_t16;
-    const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = -_t11*_t25;
-    const trailer2_real_t _t27 = _t16*_t9 - _t19*_t7;
-    const trailer2_real_t _t28 = -_t15*_t17;
-    const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t31 = -_t11*_t30;
-    const trailer2_real_t _t32 = -_t17*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t34 = -_t0*_t23 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t30;
-    const trailer2_real_t _t36 = -_t0*_t28 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t37 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(1.6666666666666667)*_t37;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t38;
-    const trailer2_real_t _t40 = -_t13*_t16 - _t14*_t25 - _t19*_t8 - _t23*_t7;
-    const trailer2_real_t _t41 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t12 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t14 = -_t12*_t4 - _t13*_t2;
+    const trailer2_real_t _t15 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t17 = -_t15*_t4 - _t16*_t2;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.6666666666666667)*_t14;
+    const trailer2_real_t _t20 = _t18*_t19;
+    const trailer2_real_t _t21 = -_t12*_t8 - _t13*_t6;
+    const trailer2_real_t _t22 = _t20 + _t21;
+    const trailer2_real_t _t23 = TRAILER2_LIT(1.6666666666666667)*_t17;
+    const trailer2_real_t _t24 = _t18*_t23;
+    const trailer2_real_t _t25 = -_t15*_t8 - _t16*_t6;
+    const trailer2_real_t _t26 = _t24 + _t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t19;
+    const trailer2_real_t _t28 = _t13*_t3;
+    const trailer2_real_t _t29 = _t10*_t12;
+    const trailer2_real_t _t30 = _t28 - _t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t23;
+    const trailer2_real_t _t32 = _t16*_t3;
+    const trailer2_real_t _t33 = _t10*_t15;
+    const trailer2_real_t _t34 = _t32 - _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t35;
+    const trailer2_real_t _t37 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t38 = _t19*_t37;
+    const trailer2_real_t _t39 = _t13*_t7;
+    const trailer2_real_t _t40 = _t11*_t12;
+    const trailer2_real_t _t41 = _t39 - _t40;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.6666666666666667)*_t26;
     const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
-    const trailer2_real_t _t44 = _t13*_t17 - _t14*_t30 - _t21*_t8 - _t28*_t7;
-    const trailer2_real_t _t45 = K_theta_tractor_x_tractor*_t2;
-    const trailer2_real_t _t46 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer2_real_t _t47 = K_theta_cart_x_tractor*_t0;
-    const trailer2_real_t _t48 = K_theta_cart_x_tractor_2*_t1;
-    const trailer2_real_t _t49 = K_theta_cart2_x_tractor*_t7;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t51 = K_theta_tractor_x_tractor*_t4;
-    const trailer2_real_t _t52 = K_theta_cart_x_tractor*_t1;
-    const trailer2_real_t _t53 = K_theta_cart2_x_tractor*_t8;
-    const trailer2_real_t _t54 = K_theta_cart_x_tractor_2*_t0;
-    const trailer2_real_t _t55 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t56 = TRAILER2_LIT(0.85)*_t0;
-    const trailer2_real_t _t57 = TRAILER2_LIT(0.85)*_t1;
-    const trailer2_real_t _t58 = _t38*thetadot_right + _t42*thetadot_left;
-    const trailer2_real_t _t59 = _t58*_t58;
-    const trailer2_real_t _t60 = _t53*_t59;
-    const trailer2_real_t _t61 = _t25*thetadot_right + _t30*thetadot_left;
-    const trailer2_real_t _t62 = _t61*_t61;
-    const trailer2_real_t _t63 = -_t16*thetadot_right + _t17*thetadot_left;
-    const trailer2_real_t _t64 = _t63*_t63;
-    const trailer2_real_t _t65 = _t55*_t59;
-    const trailer2_real_t _t66 = _t54*_t62;
-    const trailer2_real_t _t67 = _t49*_t59;
-    const trailer2_real_t _t68 = _t50*_t59;
-    const trailer2_real_t _t69 = _t47*_t62;
-    const trailer2_real_t _t70 = _t48*_t62;
-    const trailer2_real_t _t71 = _t5*_t64;
-    const trailer2_real_t _t72 = _t3*_t64;
-    const trailer2_real_t _t73 = _t56*_t62;
-    const trailer2_real_t _t74 = _t57*_t62;
-    const trailer2_real_t _t75 = _t63*thetadot_right;
-    const trailer2_real_t _t76 = _t63*thetadot_left;
-    const trailer2_real_t _t77 = _t61*thetadot_right;
-    const trailer2_real_t _t78 = _t61*thetadot_left;
-    const trailer2_real_t _t79 = _t58*thetadot_right;
-    const trailer2_real_t _t80 = _t58*thetadot_left;
-    const trailer2_real_t _t81 = _t15*_t16;
-    const trailer2_real_t _t82 = _t0*_t81 - _t1*_t19 - _t12*_t16;
-    const trailer2_real_t _t83 = -TRAILER2_LIT(1.6666666666666667)*_t82;
-    const trailer2_real_t _t84 = TRAILER2_LIT(0.2)*_t83;
-    const trailer2_real_t _t85 = -_t1*_t81 + _t20;
-    const trailer2_real_t _t86 = _t15*_t17;
-    const trailer2_real_t _t87 = _t0*_t86 - _t1*_t21 + _t12*_t17;
-    const trailer2_real_t _t88 = -TRAILER2_LIT(1.6666666666666667)*_t87;
-    const trailer2_real_t _t89 = TRAILER2_LIT(0.2)*_t88;
-    const trailer2_real_t _t90 = -_t1*_t86 + _t22;
-    const trailer2_real_t _t91 = TRAILER2_LIT(1.6666666666666667)*_t34;
-    const trailer2_real_t _t92 = TRAILER2_LIT(0.2)*_t91;
-    const trailer2_real_t _t93 = _t0*_t19 - _t1*_t23 - _t16*_t6;
-    const trailer2_real_t _t94 = TRAILER2_LIT(1.6666666666666667)*_t36;
-    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t94;
-    const trailer2_real_t _t96 = _t0*_t21 - _t1*_t28 + _t17*_t6;
-    const trailer2_real_t _t97 = _t11*_t83 - _t13*_t16 - _t19*_t8 + _t7*_t81;
-    const trailer2_real_t _t98 = -TRAILER2_LIT(1.6666666666666667)*_t97;
-    const trailer2_real_t _t99 = TRAILER2_LIT(0.2)*_t98;
-    const trailer2_real_t _t100 = -_t14*_t83 + _t27 - _t8*_t81;
-    const trailer2_real_t _t101 = _t11*_t88 + _t13*_t17 - _t21*_t8 + _t7*_t86;
-    const trailer2_real_t _t102 = -TRAILER2_LIT(1.6666666666666667)*_t101;
-    const trailer2_real_t _t103 = TRAILER2_LIT(0.2)*_t102;
-    const trailer2_real_t _t104 = -_t14*_t88 + _t32 - _t8*_t86;
-    const trailer2_real_t _t105 = _t11*_t91 - _t14*_t25;
-    const trailer2_real_t _t106 = -TRAILER2_LIT(1.6666666666666667)*_t105;
-    const trailer2_real_t _t107 = TRAILER2_LIT(0.2)*_t106;
-    const trailer2_real_t _t108 = -_t14*_t91 + _t26;
-    const trailer2_real_t _t109 = _t11*_t94 - _t14*_t30;
-    const trailer2_real_t _t110 = -TRAILER2_LIT(1.6666666666666667)*_t109;
-    const trailer2_real_t _t111 = TRAILER2_LIT(0.2)*_t110;
-    const trailer2_real_t _t112 = -_t14*_t94 + _t31;
-    const trailer2_real_t _t113 = TRAILER2_LIT(1.6666666666666667)*_t40;
-    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
-    const trailer2_real_t _t115 = _t11*_t25 - _t16*_t9 + _t19*_t7 - _t23*_t8;
-    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
-    const trailer2_real_t _t118 = _t11*_t30 + _t17*_t9 + _t21*_t7 - _t28*_t8;
-    const trailer2_real_t _t119 = K_theta_tractor_x_tractor_2*_t2 - _t51;
-    const trailer2_real_t _t120 = K_theta_cart_x_tractor_2*_t0 - _t52;
-    const trailer2_real_t _t121 = K_theta_cart2_x_tractor_2*_t7 - _t53;
-    const trailer2_real_t _t122 = J_x_tractor*_t23 - _t119*_t16 + _t120*_t25 + _t121*_t38;
-    const trailer2_real_t _t123 = _t45 + _t46;
-    const trailer2_real_t _t124 = _t47 + _t48;
-    const trailer2_real_t _t125 = _t49 + _t50;
-    const trailer2_real_t _t126 = J_x_tractor*_t19 - _t123*_t16 + _t124*_t25 + _t125*_t38;
-    const trailer2_real_t _t127 = _t3*_t47 + _t3*_t48 + _t5*_t52 - _t5*_t54;
-    const trailer2_real_t _t128 = _t3*_t49 + _t3*_t50 + _t5*_t53 - _t5*_t55;
-    const trailer2_real_t _t129 = -J_theta_tractor*_t16 + _t119*_t23 + _t123*_t19 + _t127*_t25
-            + _t128*_t38;
-    const trailer2_real_t _t130 = _t49*_t56 + _t50*_t56 + _t53*_t57 - _t55*_t57;
-    const trailer2_real_t _t131 = J_theta_cart*_t25 + _t120*_t23 + _t124*_t19 - _t127*_t16
-            + _t130*_t38;
-    const trailer2_real_t _t132 = J_theta_cart2*_t38 + _t121*_t23 + _t125*_t19 - _t128*_t16
-            + _t130*_t25;
-    const trailer2_real_t _t133 = -_t39 - _t40;
-    const trailer2_real_t _t134 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t135 = _t133*_t134;
-    const trailer2_real_t _t136 = J_theta_cart2_left*_t135;
-    const trailer2_real_t _t137 = _t39 - _t40;
-    const trailer2_real_t _t138 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t139 = _t137*_t138;
-    const trailer2_real_t _t140 = J_theta_cart2_right*_t139;
-    const trailer2_real_t _t141 = -_t33 - _t34;
-    const trailer2_real_t _t142 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t143 = _t141*_t142;
-    const trailer2_real_t _t144 = J_theta_cart_left*_t143;
-    const trailer2_real_t _t145 = _t33 - _t34;
-    const trailer2_real_t _t146 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t147 = _t145*_t146;
-    const trailer2_real_t _t148 = J_theta_cart_right*_t147;
-    const trailer2_real_t _t149 = _t35 - _t36;
-    const trailer2_real_t _t150 = _t146*_t149;
-    const trailer2_real_t _t151 = -_t35 - _t36;
-    const trailer2_real_t _t152 = _t142*_t151;
-    const trailer2_real_t _t153 = _t43 - _t44;
-    const trailer2_real_t _t154 = _t138*_t153;
-    const trailer2_real_t _t155 = -_t43 - _t44;
-    const trailer2_real_t _t156 = _t134*_t155;
-    const trailer2_real_t _t157 = _t136*_t156 + _t140*_t154 + _t144*_t152 + _t148*_t150;
-    const trailer2_real_t _t158 = J_x_tractor*_t28 + _t119*_t17 + _t120*_t30 + _t121*_t42;
-    const trailer2_real_t _t159 = J_theta_tractor*_t17 + _t119*_t28 + _t123*_t21 + _t127*_t30
-            + _t128*_t42;
-    const trailer2_real_t _t160 = J_x_tractor*_t21 + _t123*_t17 + _t124*_t30 + _t125*_t42;
-    const trailer2_real_t _t161 = J_theta_cart*_t30 + _t120*_t28 + _t124*_t21 + _t127*_t17
-            + _t130*_t42;
-    const trailer2_real_t _t162 = J_theta_cart2*_t42 + _t121*_t28 + _t125*_t21 + _t128*_t17
-            + _t130*_t30;
-    const trailer2_real_t _t163 = _t45*_t64 + _t46*_t64 + _t67 + _t68 + _t69 + _t70;
-    const trailer2_real_t _t164 = _t19*_t75 + _t21*_t76;
-    const trailer2_real_t _t165 = _t75*_t83 + _t76*_t88 + _t77*_t91 + _t78*_t94;
-    const trailer2_real_t _t166 = _t102*_t76 + _t106*_t77 + _t110*_t78 + _t113*_t79 + _t116*_t80
-            + _t75*_t98;
-    const trailer2_real_t _t167 = J_x_tractor*_t164 + _t120*_t165 + _t121*_t166 + _t163;
-    const trailer2_real_t _t168 = -K_theta_tractor_x_tractor_2*_t2*_t64 + _t51*_t64 + _t52*_t62
-            + _t60 - _t65 - _t66;
-    const trailer2_real_t _t169 = _t75*_t81 + _t76*_t86;
-    const trailer2_real_t _t170 = J_x_tractor*_t169 + _t124*_t165 + _t125*_t166 + _t168;
-    const trailer2_real_t _t171 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t59*_t8
-            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t62 - _t3*_t65 - _t3*_t66 - _t5*_t67
-            - _t5*_t68 - _t5*_t69 - _t5*_t70;
-    const trailer2_real_t _t172 = _t119*_t164 + _t123*_t169 + _t127*_t165 + _t128*_t166 + _t171;
-    const trailer2_real_t _t173 = _t47*_t71 + _t48*_t71 - _t52*_t72 + _t54*_t72 + _t56*_t60
-            - _t56*_t65 - _t57*_t67 - _t57*_t68;
-    const trailer2_real_t _t174 = J_theta_cart*_t165 + _t120*_t164 + _t124*_t169 + _t130*_t166
-            + _t173;
-    const trailer2_real_t _t175 = _t49*_t71 + _t49*_t74 + _t50*_t71 + _t50*_t74 - _t53*_t72
-            - _t53*_t73 + _t55*_t72 + _t55*_t73;
-    const trailer2_real_t _t176 = J_theta_cart2*_t166 + _t121*_t164 + _t125*_t169 + _t130*_t165
-            + _t175;
-    const trailer2_real_t _t177 = J_theta_cart2_left*_t135*_t135 + J_theta_cart2_right*_t139*_t139
-            + J_theta_cart_left*_t143*_t143 + J_theta_cart_right*_t147*_t147 + J_theta_right
-            + _t122*_t23 + _t126*_t19 - _t129*_t16 + _t131*_t25 + _t132*_t38;
-    const trailer2_real_t _t178 = _t122*_t28 + _t126*_t21 + _t129*_t17 + _t131*_t30 + _t132*_t42
-            + _t157;
-    const trailer2_real_t _t179 = _t157 + _t158*_t23 - _t159*_t16 + _t160*_t19 + _t161*_t25
-            + _t162*_t38;
-    const trailer2_real_t _t180 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t154*_t154
-            + J_theta_cart_left*_t152*_t152 + J_theta_cart_right*_t150*_t150 + J_theta_left
-            + _t158*_t28 + _t159*_t17 + _t160*_t21 + _t161*_t30 + _t162*_t42;
-    const trailer2_real_t _t181 = _t177*_t180 - _t178*_t179;
-    const trailer2_real_t _t182 = _t84 - _t85;
-    const trailer2_real_t _t183 = _t146*_t182;
-    const trailer2_real_t _t184 = _t89 - _t90;
-    const trailer2_real_t _t185 = _t146*_t184;
-    const trailer2_real_t _t186 = _t92 - _t93;
-    const trailer2_real_t _t187 = _t146*_t186;
-    const trailer2_real_t _t188 = _t95 - _t96;
-    const trailer2_real_t _t189 = _t146*_t188;
-    const trailer2_real_t _t190 = _t183*_t75 + _t185*_t76 + _t187*_t77 + _t189*_t78;
-    const trailer2_real_t _t191 = -_t84 - _t85;
-    const trailer2_real_t _t192 = _t142*_t191;
-    const trailer2_real_t _t193 = -_t89 - _t90;
-    const trailer2_real_t _t194 = _t142*_t193;
-    const trailer2_real_t _t195 = -_t92 - _t93;
-    const trailer2_real_t _t196 = _t142*_t195;
-    const trailer2_real_t _t197 = -_t95 - _t96;
-    const trailer2_real_t _t198 = _t142*_t197;
-    const trailer2_real_t _t199 = _t192*_t75 + _t194*_t76 + _t196*_t77 + _t198*_t78;
-    const trailer2_real_t _t200 = -_t100 + _t99;
-    const trailer2_real_t _t201 = _t138*_t200;
-    const trailer2_real_t _t202 = _t103 - _t104;
-    const trailer2_real_t _t203 = _t138*_t202;
-    const trailer2_real_t _t204 = _t107 - _t108;
-    const trailer2_real_t _t205 = _t138*_t204;
-    const trailer2_real_t _t206 = _t111 - _t112;
-    const trailer2_real_t _t207 = _t138*_t206;
-    const trailer2_real_t _t208 = _t114 - _t115;
-    const trailer2_real_t _t209 = _t138*_t208;
-    const trailer2_real_t _t210 = _t117 - _t118;
-    const trailer2_real_t _t211 = _t138*_t210;
-    const trailer2_real_t _t212 = _t201*_t75 + _t203*_t76 + _t205*_t77 + _t207*_t78 + _t209*_t79
-            + _t211*_t80;
-    const trailer2_real_t _t213 = -_t100 - _t99;
-    const trailer2_real_t _t214 = _t134*_t213;
-    const trailer2_real_t _t215 = -_t103 - _t104;
-    const trailer2_real_t _t216 = _t134*_t215;
-    const trailer2_real_t _t217 = -_t107 - _t108;
-    const trailer2_real_t _t218 = _t134*_t217;
-    const trailer2_real_t _t219 = -_t111 - _t112;
-    const trailer2_real_t _t220 = _t134*_t219;
-    const trailer2_real_t _t221 = -_t114 - _t115;
-    const trailer2_real_t _t222 = _t134*_t221;
-    const trailer2_real_t _t223 = -_t117 - _t118;
-    const trailer2_real_t _t224 = _t134*_t223;
-    const trailer2_real_t _t225 = _t214*_t75 + _t216*_t76 + _t218*_t77 + _t220*_t78 + _t222*_t79
-            + _t224*_t80;
-    const trailer2_real_t _t226 = _t136*_t225 + _t140*_t212 + _t144*_t199 + _t148*_t190 - _t16*_t172
-            + _t167*_t23 + _t170*_t19 + _t174*_t25 + _t176*_t38;
-    const trailer2_real_t _t227 = J_theta_cart2_left*_t156*_t225 + J_theta_cart2_right*_t154*_t212
-            + J_theta_cart_left*_t152*_t199 + J_theta_cart_right*_t150*_t190 + _t167*_t28
-            + _t17*_t172 + _t170*_t21 + _t174*_t30 + _t176*_t42;
-    const trailer2_real_t _t228 = -_t226 + tau_right;
-    const trailer2_real_t _t229 = -_t227 + tau_left;
-    const trailer2_real_t _t230 = TRAILER2_LIT(1.0)/_t181;
-    const trailer2_real_t _t231 = _t230*(-_t178*_t229 + _t180*_t228);
-    const trailer2_real_t _t232 = _t230*(_t177*_t229 - _t179*_t228);
+    const trailer2_real_t _t44 = _t23*_t37;
+    const trailer2_real_t _t45 = _t16*_t7;
+    const trailer2_real_t _t46 = _t11*_t15;
+    const trailer2_real_t _t47 = _t45 - _t46;
+    const trailer2_real_t _t48 = _t38 - _t39 + _t40;
+    const trailer2_real_t _t49 = _t44 - _t45 + _t46;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t51 = _t18*_t50;
+    const trailer2_real_t _t52 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t53 = _t18*_t52;
+    const trailer2_real_t _t54 = TRAILER2_LIT(0.2)*_t50;
+    const trailer2_real_t _t55 = TRAILER2_LIT(0.2)*_t52;
+    const trailer2_real_t _t56 = -_t41 - _t51;
+    const trailer2_real_t _t57 = -TRAILER2_LIT(1.6666666666666667)*_t56;
+    const trailer2_real_t _t58 = TRAILER2_LIT(0.2)*_t57;
+    const trailer2_real_t _t59 = _t37*_t50;
+    const trailer2_real_t _t60 = _t21 + _t59;
+    const trailer2_real_t _t61 = -_t47 - _t53;
+    const trailer2_real_t _t62 = -TRAILER2_LIT(1.6666666666666667)*_t61;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t62;
+    const trailer2_real_t _t64 = _t37*_t52;
+    const trailer2_real_t _t65 = _t25 + _t64;
+    const trailer2_real_t _t66 = _t38 + _t51;
+    const trailer2_real_t _t67 = -TRAILER2_LIT(1.6666666666666667)*_t66;
+    const trailer2_real_t _t68 = TRAILER2_LIT(0.2)*_t67;
+    const trailer2_real_t _t69 = _t44 + _t53;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(1.6666666666666667)*_t69;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.2)*_t70;
+    const trailer2_real_t _t72 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t73 = TRAILER2_LIT(0.2)*_t72;
+    const trailer2_real_t _t74 = TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
+    const trailer2_real_t _t76 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t _t77 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t78 = K_theta_cart_x_tractor*_t3;
+    const trailer2_real_t _t79 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t80 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.85)*_t3;
+    const trailer2_real_t _t82 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer2_real_t _t83 = _t12*thetadot_right + _t15*thetadot_left;
+    const trailer2_real_t _t84 = _t83*_t83;
+    const trailer2_real_t _t85 = _t35*thetadot_right + _t42*thetadot_left;
+    const trailer2_real_t _t86 = _t85*_t85;
+    const trailer2_real_t _t87 = _t79*_t86;
+    const trailer2_real_t _t88 = _t19*thetadot_right + _t23*thetadot_left;
+    const trailer2_real_t _t89 = _t88*_t88;
+    const trailer2_real_t _t90 = _t82*_t86;
+    const trailer2_real_t _t91 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t92 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer2_real_t _t93 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t _t94 = K_theta_cart_x_tractor_2*_t4;
+    const trailer2_real_t _t95 = _t81*_t86;
+    const trailer2_real_t _t96 = _t80*_t89;
+    const trailer2_real_t _t97 = _t81*_t89;
+    const trailer2_real_t _t98 = _t83*thetadot_right;
+    const trailer2_real_t _t99 = _t83*thetadot_left;
+    const trailer2_real_t _t100 = _t88*thetadot_right;
+    const trailer2_real_t _t101 = _t88*thetadot_left;
+    const trailer2_real_t _t102 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t103 = _t27 + _t30;
+    const trailer2_real_t _t104 = _t102*_t103;
+    const trailer2_real_t _t105 = J_theta_cart_right*_t104;
+    const trailer2_real_t _t106 = _t31 + _t34;
+    const trailer2_real_t _t107 = _t102*_t106;
+    const trailer2_real_t _t108 = J_theta_cart_right*_t107;
+    const trailer2_real_t _t109 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t110 = -_t27 + _t28 - _t29;
+    const trailer2_real_t _t111 = _t109*_t110;
+    const trailer2_real_t _t112 = J_theta_cart_left*_t111;
+    const trailer2_real_t _t113 = -_t31 + _t32 - _t33;
+    const trailer2_real_t _t114 = _t109*_t113;
+    const trailer2_real_t _t115 = J_theta_cart_left*_t114;
+    const trailer2_real_t _t116 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t117 = _t36 - _t38 + _t41;
+    const trailer2_real_t _t118 = _t116*_t117;
+    const trailer2_real_t _t119 = J_theta_cart2_right*_t118;
+    const trailer2_real_t _t120 = _t43 - _t44 + _t47;
+    const trailer2_real_t _t121 = _t116*_t120;
+    const trailer2_real_t _t122 = J_theta_cart2_right*_t121;
+    const trailer2_real_t _t123 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t124 = -_t36 - _t48;
+    const trailer2_real_t _t125 = _t123*_t124;
+    const trailer2_real_t _t126 = J_theta_cart2_left*_t125;
+    const trailer2_real_t _t127 = -_t43 - _t49;
+    const trailer2_real_t _t128 = _t123*_t127;
+    const trailer2_real_t _t129 = J_theta_cart2_left*_t128;
+    const trailer2_real_t _t130 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t131 = _t76 + _t77;
+    const trailer2_real_t _t132 = -K_theta_cart_x_tractor_2*_t2*_t89
+            + K_theta_tractor_x_tractor*_t84 + _t78*_t89 + _t87 - _t90;
+    const trailer2_real_t _t133 = -_t100 + _t98;
+    const trailer2_real_t _t134 = -_t101 + _t99;
+    const trailer2_real_t _t135 = _t133*_t50 + _t134*_t52;
+    const trailer2_real_t _t136 = _t85*thetadot_right;
+    const trailer2_real_t _t137 = _t85*thetadot_left;
+    const trailer2_real_t _t138 = _t100*_t67 + _t101*_t70 + _t136*_t72 + _t137*_t74 + _t57*_t98
+            + _t62*_t99;
+    const trailer2_real_t _t139 = _t130*_t135 + _t131*_t138 + _t132;
+    const trailer2_real_t _t140 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t141 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t142 = -_t86*_t91 - _t86*_t92 - _t89*_t93 - _t89*_t94;
+    const trailer2_real_t _t143 = _t13*_t98 + _t16*_t99;
+    const trailer2_real_t _t144 = -K_theta_tractor_x_tractor*_t143 + _t135*_t140 + _t138*_t141
+            + _t142;
+    const trailer2_real_t _t145 = K_theta_cart_x_tractor_2*_t2 - _t78;
+    const trailer2_real_t _t146 = _t76*_t80 + _t77*_t80 + _t79*_t81 - _t81*_t82;
+    const trailer2_real_t _t147 = -_t76*_t95 - _t77*_t95 + _t80*_t87 - _t80*_t90 + _t84*_t93
+            + _t84*_t94;
+    const trailer2_real_t _t148 = J_theta_cart*_t135 + _t138*_t146 + _t143*_t145 + _t147;
+    const trailer2_real_t _t149 = K_theta_cart2_x_tractor_2*_t6 - _t79;
+    const trailer2_real_t _t150 = _t76*_t97 + _t77*_t97 - _t79*_t96 + _t82*_t96 + _t84*_t91
+            + _t84*_t92;
+    const trailer2_real_t _t151 = J_theta_cart2*_t138 + _t135*_t146 + _t143*_t149 + _t150;
+    const trailer2_real_t _t152 = J_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t12 + _t130*_t19
+            + _t131*_t35;
+    const trailer2_real_t _t153 = J_theta_tractor*_t12 + K_theta_tractor_x_tractor_2*_t13
+            + _t140*_t19 + _t141*_t35;
+    const trailer2_real_t _t154 = J_theta_cart*_t19 + _t12*_t140 + _t13*_t130 + _t146*_t35;
+    const trailer2_real_t _t155 = J_theta_cart2*_t35 + _t12*_t141 + _t13*_t131 + _t146*_t19;
+    const trailer2_real_t _t156 = J_theta_right + _t104*_t105 + _t111*_t112 + _t118*_t119
+            + _t12*_t153 + _t125*_t126 + _t13*_t152 + _t154*_t19 + _t155*_t35;
+    const trailer2_real_t _t157 = J_x_tractor*_t16 + K_theta_tractor_x_tractor_2*_t15 + _t130*_t23
+            + _t131*_t42;
+    const trailer2_real_t _t158 = J_theta_tractor*_t15 + K_theta_tractor_x_tractor_2*_t16
+            + _t140*_t23 + _t141*_t42;
+    const trailer2_real_t _t159 = J_theta_cart*_t23 + _t130*_t16 + _t140*_t15 + _t146*_t42;
+    const trailer2_real_t _t160 = J_theta_cart2*_t42 + _t131*_t16 + _t141*_t15 + _t146*_t23;
+    const trailer2_real_t _t161 = _t104*_t108 + _t111*_t115 + _t118*_t122 + _t12*_t158 + _t125*_t129
+            + _t13*_t157 + _t159*_t19 + _t160*_t35;
+    const trailer2_real_t _t162 = J_theta_left + _t107*_t108 + _t114*_t115 + _t121*_t122
+            + _t128*_t129 + _t15*_t158 + _t157*_t16 + _t159*_t23 + _t160*_t42;
+    const trailer2_real_t _t163 = _t156*_t162 - _t161*_t161;
+    const trailer2_real_t _t164 = -_t14 + _t54;
+    const trailer2_real_t _t165 = _t102*_t164;
+    const trailer2_real_t _t166 = -_t17 + _t55;
+    const trailer2_real_t _t167 = _t102*_t166;
+    const trailer2_real_t _t168 = -_t14 - _t54;
+    const trailer2_real_t _t169 = _t109*_t168;
+    const trailer2_real_t _t170 = -_t17 - _t55;
+    const trailer2_real_t _t171 = _t109*_t170;
+    const trailer2_real_t _t172 = _t58 - _t60;
+    const trailer2_real_t _t173 = _t116*_t172;
+    const trailer2_real_t _t174 = _t63 - _t65;
+    const trailer2_real_t _t175 = _t116*_t174;
+    const trailer2_real_t _t176 = -_t20 + _t59 + _t68;
+    const trailer2_real_t _t177 = _t116*_t176;
+    const trailer2_real_t _t178 = -_t24 + _t64 + _t71;
+    const trailer2_real_t _t179 = _t116*_t178;
+    const trailer2_real_t _t180 = _t22 + _t73;
+    const trailer2_real_t _t181 = _t116*_t180;
+    const trailer2_real_t _t182 = _t26 + _t75;
+    const trailer2_real_t _t183 = _t116*_t182;
+    const trailer2_real_t _t184 = -_t58 - _t60;
+    const trailer2_real_t _t185 = _t123*_t184;
+    const trailer2_real_t _t186 = -_t63 - _t65;
+    const trailer2_real_t _t187 = _t123*_t186;
+    const trailer2_real_t _t188 = -_t20 + _t59 - _t68;
+    const trailer2_real_t _t189 = _t123*_t188;
+    const trailer2_real_t _t190 = -_t24 + _t64 - _t71;
+    const trailer2_real_t _t191 = _t123*_t190;
+    const trailer2_real_t _t192 = _t22 - _t73;
+    const trailer2_real_t _t193 = _t123*_t192;
+    const trailer2_real_t _t194 = _t26 - _t75;
+    const trailer2_real_t _t195 = _t123*_t194;
+    const trailer2_real_t _t196 = _t133*_t165 + _t134*_t167;
+    const trailer2_real_t _t197 = _t133*_t169 + _t134*_t171;
+    const trailer2_real_t _t198 = _t100*_t177 + _t101*_t179 + _t136*_t181 + _t137*_t183 + _t173*_t98
+            + _t175*_t99;
+    const trailer2_real_t _t199 = _t100*_t189 + _t101*_t191 + _t136*_t193 + _t137*_t195 + _t185*_t98
+            + _t187*_t99;
+    const trailer2_real_t _t200 = _t105*_t196 + _t112*_t197 + _t119*_t198 + _t12*_t144 + _t126*_t199
+            + _t13*_t139 + _t148*_t19 + _t151*_t35;
+    const trailer2_real_t _t201 = _t108*_t196 + _t115*_t197 + _t122*_t198 + _t129*_t199 + _t139*_t16
+            + _t144*_t15 + _t148*_t23 + _t151*_t42;
+    const trailer2_real_t _t202 = -_t200 + tau_right;
+    const trailer2_real_t _t203 = -_t201 + tau_left;
+    const trailer2_real_t _t204 = TRAILER2_LIT(1.0)/_t163;
+    const trailer2_real_t _t205 = _t204*(-_t161*_t203 + _t162*_t202);
+    const trailer2_real_t _t206 = _t204*(_t156*_t203 - _t161*_t202);
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -1750,14 +1592,14 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t177 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t156 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t181 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t163 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t231;
-    const trailer2_real_t r_1 = _t232;
+    const trailer2_real_t r_0 = _t205;
+    const trailer2_real_t r_1 = _t206;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
@@ -1767,842 +1609,674 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
 }
 
 /* trailer2_linearization: documented in trailer2_model.h.
-   operations after CSE: 932 add, 1318 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 736 add, 933 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
     trailer2_real_t *B)
 {
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = TRAILER2_COS(theta_cart);
     const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t2 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t4 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t5 = TRAILER2_LIT(0.3)*_t4;
-    const trailer2_real_t _t6 = _t0*_t3 + _t1*_t5;
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t7 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t8 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t8;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.85)*_t0*_t7 + _t1*_t10;
-    const trailer2_real_t _t12 = _t0*_t5 - _t1*_t3;
-    const trailer2_real_t _t13 = -_t3*_t8 + _t5*_t7;
-    const trailer2_real_t _t14 = _t0*_t10 - TRAILER2_LIT(0.85)*_t1*_t7;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t16 = TRAILER2_LIT(0.207)*_t4;
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t12 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t14 = -_t12*_t4 - _t13*_t2;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t19 = -_t16*_t17;
-    const trailer2_real_t _t20 = -_t0*_t19 + _t17*_t6;
-    const trailer2_real_t _t21 = -_t16*_t18;
-    const trailer2_real_t _t22 = -_t0*_t21 - _t18*_t6;
-    const trailer2_real_t _t23 = -_t15*_t17;
-    const trailer2_real_t _t24 = -_t1*_t23 - _t20;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = -_t11*_t25;
-    const trailer2_real_t _t27 = _t17*_t9 - _t19*_t7;
-    const trailer2_real_t _t28 = -_t15*_t18;
-    const trailer2_real_t _t29 = -_t1*_t28 - _t22;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t31 = -_t11*_t30;
-    const trailer2_real_t _t32 = -_t18*_t9 - _t21*_t7;
-    const trailer2_real_t _t33 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t34 = -_t1*_t19 - _t12*_t17;
-    const trailer2_real_t _t35 = -_t0*_t23 + _t34;
-    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t30;
-    const trailer2_real_t _t37 = -_t1*_t21 + _t12*_t18;
-    const trailer2_real_t _t38 = -_t0*_t28 + _t37;
-    const trailer2_real_t _t39 = -_t23*_t8 - _t26 - _t27;
-    const trailer2_real_t _t40 = -TRAILER2_LIT(1.6666666666666667)*_t39;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t40;
-    const trailer2_real_t _t42 = -_t14*_t25;
-    const trailer2_real_t _t43 = -_t13*_t17 - _t19*_t8;
-    const trailer2_real_t _t44 = -_t23*_t7 + _t42 + _t43;
-    const trailer2_real_t _t45 = -_t28*_t8 - _t31 - _t32;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(1.6666666666666667)*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
-    const trailer2_real_t _t48 = -_t14*_t30;
-    const trailer2_real_t _t49 = _t13*_t18 - _t21*_t8;
-    const trailer2_real_t _t50 = -_t28*_t7 + _t48 + _t49;
+    const trailer2_real_t _t15 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t16 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t17 = -_t15*_t4 - _t16*_t2;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.6666666666666667)*_t14;
+    const trailer2_real_t _t20 = _t18*_t19;
+    const trailer2_real_t _t21 = -_t12*_t8 - _t13*_t6;
+    const trailer2_real_t _t22 = _t20 + _t21;
+    const trailer2_real_t _t23 = TRAILER2_LIT(1.6666666666666667)*_t17;
+    const trailer2_real_t _t24 = _t18*_t23;
+    const trailer2_real_t _t25 = -_t15*_t8 - _t16*_t6;
+    const trailer2_real_t _t26 = _t24 + _t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t19;
+    const trailer2_real_t _t28 = _t13*_t3;
+    const trailer2_real_t _t29 = _t10*_t12;
+    const trailer2_real_t _t30 = _t28 - _t29;
+    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*_t23;
+    const trailer2_real_t _t32 = _t16*_t3;
+    const trailer2_real_t _t33 = _t10*_t15;
+    const trailer2_real_t _t34 = _t32 - _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.6666666666666667)*_t22;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t35;
+    const trailer2_real_t _t37 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t38 = _t19*_t37;
+    const trailer2_real_t _t39 = _t13*_t7;
+    const trailer2_real_t _t40 = _t11*_t12;
+    const trailer2_real_t _t41 = _t39 - _t40;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.6666666666666667)*_t26;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.2)*_t42;
+    const trailer2_real_t _t44 = _t23*_t37;
+    const trailer2_real_t _t45 = _t16*_t7;
+    const trailer2_real_t _t46 = _t11*_t15;
+    const trailer2_real_t _t47 = _t45 - _t46;
+    const trailer2_real_t _t48 = _t38 - _t39 + _t40;
+    const trailer2_real_t _t49 = _t44 - _t45 + _t46;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.6666666666666667)*_t30;
+    const trailer2_real_t _t51 = _t18*_t50;
+    const trailer2_real_t _t52 = _t41 + _t51;
+    const trailer2_real_t _t53 = TRAILER2_LIT(1.6666666666666667)*_t34;
+    const trailer2_real_t _t54 = _t18*_t53;
+    const trailer2_real_t _t55 = _t47 + _t54;
+    const trailer2_real_t _t56 = _t38 + _t51;
+    const trailer2_real_t _t57 = _t44 + _t54;
+    const trailer2_real_t _t58 = TRAILER2_LIT(0.2)*_t50;
+    const trailer2_real_t _t59 = TRAILER2_LIT(0.2)*_t53;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.6666666666666667)*_t52;
+    const trailer2_real_t _t61 = TRAILER2_LIT(0.2)*_t60;
+    const trailer2_real_t _t62 = _t37*_t50;
+    const trailer2_real_t _t63 = _t21 + _t62;
+    const trailer2_real_t _t64 = TRAILER2_LIT(1.6666666666666667)*_t55;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*_t64;
+    const trailer2_real_t _t66 = _t37*_t53;
+    const trailer2_real_t _t67 = _t25 + _t66;
+    const trailer2_real_t _t68 = -TRAILER2_LIT(1.6666666666666667)*_t56;
+    const trailer2_real_t _t69 = TRAILER2_LIT(0.2)*_t68;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(1.6666666666666667)*_t57;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.2)*_t70;
+    const trailer2_real_t _t72 = TRAILER2_LIT(1.6666666666666667)*_t48;
+    const trailer2_real_t _t73 = TRAILER2_LIT(0.2)*_t72;
+    const trailer2_real_t _t74 = TRAILER2_LIT(1.6666666666666667)*_t49;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
+    const trailer2_real_t _t76 = _t20 - _t62;
+    const trailer2_real_t _t77 = _t24 - _t66;
     const trailer2_real_t thetadot_right = wheel_rates[0];
-    const trailer2_real_t _t51 = _t19*thetadot_right;
+    const trailer2_real_t _t78 = _t12*thetadot_right;
     const trailer2_real_t thetadot_left = wheel_rates[1];
-    const trailer2_real_t _t52 = _t21*thetadot_left;
-    const trailer2_real_t _t53 = _t51 + _t52;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t54 = K_theta_tractor_x_tractor*_t2;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t55 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer2_real_t _t79 = _t15*thetadot_left;
+    const trailer2_real_t _t80 = _t19*thetadot_right;
+    const trailer2_real_t _t81 = _t23*thetadot_left;
+    const trailer2_real_t _t82 = _t35*thetadot_right;
+    const trailer2_real_t _t83 = _t42*thetadot_left;
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t _t56 = K_theta_cart_x_tractor*_t0;
+    const trailer2_real_t _t84 = K_theta_cart_x_tractor*_t2;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t57 = K_theta_cart_x_tractor_2*_t1;
+    const trailer2_real_t _t85 = K_theta_cart_x_tractor_2*_t3;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t58 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t86 = K_theta_cart2_x_tractor*_t6;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t59 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t60 = K_theta_tractor_x_tractor*_t4;
-    const trailer2_real_t _t61 = -K_theta_tractor_x_tractor_2*_t2 + _t60;
-    const trailer2_real_t _t62 = K_theta_cart_x_tractor*_t1;
-    const trailer2_real_t _t63 = -K_theta_cart_x_tractor_2*_t0 + _t62;
-    const trailer2_real_t _t64 = K_theta_cart2_x_tractor*_t8;
-    const trailer2_real_t _t65 = -K_theta_cart2_x_tractor_2*_t7 + _t64;
-    const trailer2_real_t _t66 = _t3*_t56;
-    const trailer2_real_t _t67 = _t5*_t62;
-    const trailer2_real_t _t68 = K_theta_cart_x_tractor_2*_t0;
-    const trailer2_real_t _t69 = _t5*_t68;
-    const trailer2_real_t _t70 = _t3*_t57;
-    const trailer2_real_t _t71 = _t3*_t58;
-    const trailer2_real_t _t72 = _t5*_t64;
-    const trailer2_real_t _t73 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t74 = _t5*_t73;
-    const trailer2_real_t _t75 = _t3*_t59;
-    const trailer2_real_t _t76 = TRAILER2_LIT(0.85)*_t0;
-    const trailer2_real_t _t77 = _t58*_t76;
-    const trailer2_real_t _t78 = TRAILER2_LIT(0.85)*_t1;
-    const trailer2_real_t _t79 = _t64*_t78;
-    const trailer2_real_t _t80 = _t59*_t76;
-    const trailer2_real_t _t81 = _t73*_t78;
-    const trailer2_real_t _t82 = _t40*thetadot_right + _t46*thetadot_left;
-    const trailer2_real_t _t83 = _t82*_t82;
-    const trailer2_real_t _t84 = _t64*_t83;
-    const trailer2_real_t _t85 = _t73*_t83;
-    const trailer2_real_t _t86 = _t84 - _t85;
-    const trailer2_real_t _t87 = -_t17*thetadot_right + _t18*thetadot_left;
-    const trailer2_real_t _t88 = _t87*_t87;
-    const trailer2_real_t _t89 = K_theta_tractor_x_tractor_2*_t2;
-    const trailer2_real_t _t90 = _t60*_t88 - _t88*_t89;
-    const trailer2_real_t _t91 = _t25*thetadot_right + _t30*thetadot_left;
-    const trailer2_real_t _t92 = _t91*_t91;
-    const trailer2_real_t _t93 = _t62*_t92;
-    const trailer2_real_t _t94 = _t68*_t92;
-    const trailer2_real_t _t95 = _t93 - _t94;
-    const trailer2_real_t _t96 = _t58*_t83;
-    const trailer2_real_t _t97 = _t59*_t83;
-    const trailer2_real_t _t98 = _t96 + _t97;
-    const trailer2_real_t _t99 = _t54*_t88 + _t55*_t88;
-    const trailer2_real_t _t100 = _t56*_t92;
-    const trailer2_real_t _t101 = _t57*_t92;
-    const trailer2_real_t _t102 = _t100 + _t101;
-    const trailer2_real_t _t103 = _t5*_t56;
-    const trailer2_real_t _t104 = _t3*_t62;
-    const trailer2_real_t _t105 = _t3*_t68;
-    const trailer2_real_t _t106 = _t5*_t57;
-    const trailer2_real_t _t107 = _t5*_t58;
-    const trailer2_real_t _t108 = _t3*_t64;
-    const trailer2_real_t _t109 = _t64*_t76;
-    const trailer2_real_t _t110 = _t58*_t78;
-    const trailer2_real_t _t111 = _t3*_t73;
-    const trailer2_real_t _t112 = _t5*_t59;
-    const trailer2_real_t _t113 = _t73*_t76;
-    const trailer2_real_t _t114 = _t59*_t78;
-    const trailer2_real_t _t115 = _t15*_t17;
-    const trailer2_real_t _t116 = _t115*thetadot_right;
-    const trailer2_real_t _t117 = _t15*_t18;
-    const trailer2_real_t _t118 = _t117*thetadot_left;
-    const trailer2_real_t _t119 = _t1*_t19;
-    const trailer2_real_t _t120 = _t12*_t17;
-    const trailer2_real_t _t121 = -_t0*_t115 + _t120;
-    const trailer2_real_t _t122 = _t1*_t21;
-    const trailer2_real_t _t123 = -_t12*_t18;
-    const trailer2_real_t _t124 = -_t0*_t117 + _t123;
-    const trailer2_real_t _t125 = -_t119 - _t121;
-    const trailer2_real_t _t126 = -TRAILER2_LIT(1.6666666666666667)*_t125;
-    const trailer2_real_t _t127 = _t126*thetadot_right;
-    const trailer2_real_t _t128 = -_t122 - _t124;
-    const trailer2_real_t _t129 = -TRAILER2_LIT(1.6666666666666667)*_t128;
-    const trailer2_real_t _t130 = _t129*thetadot_left;
-    const trailer2_real_t _t131 = TRAILER2_LIT(1.6666666666666667)*_t35;
-    const trailer2_real_t _t132 = _t131*thetadot_right;
-    const trailer2_real_t _t133 = TRAILER2_LIT(1.6666666666666667)*_t38;
-    const trailer2_real_t _t134 = _t133*thetadot_left;
-    const trailer2_real_t _t135 = -_t11*_t126;
-    const trailer2_real_t _t136 = _t19*_t8;
-    const trailer2_real_t _t137 = _t13*_t17;
-    const trailer2_real_t _t138 = -_t115*_t7 + _t137;
-    const trailer2_real_t _t139 = -_t11*_t129;
-    const trailer2_real_t _t140 = _t21*_t8;
-    const trailer2_real_t _t141 = -_t13*_t18;
-    const trailer2_real_t _t142 = -_t117*_t7 + _t141;
-    const trailer2_real_t _t143 = _t14*_t25;
-    const trailer2_real_t _t144 = -_t11*_t131;
-    const trailer2_real_t _t145 = _t14*_t30;
-    const trailer2_real_t _t146 = -_t11*_t133;
-    const trailer2_real_t _t147 = -_t143 - _t144;
-    const trailer2_real_t _t148 = -TRAILER2_LIT(1.6666666666666667)*_t147;
-    const trailer2_real_t _t149 = _t148*thetadot_right;
-    const trailer2_real_t _t150 = -_t145 - _t146;
-    const trailer2_real_t _t151 = -TRAILER2_LIT(1.6666666666666667)*_t150;
-    const trailer2_real_t _t152 = _t151*thetadot_left;
-    const trailer2_real_t _t153 = TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t154 = _t153*thetadot_right;
-    const trailer2_real_t _t155 = TRAILER2_LIT(1.6666666666666667)*_t50;
-    const trailer2_real_t _t156 = _t155*thetadot_left;
-    const trailer2_real_t _t157 = -_t135 - _t136 - _t138;
-    const trailer2_real_t _t158 = -TRAILER2_LIT(1.6666666666666667)*_t157;
-    const trailer2_real_t _t159 = _t158*thetadot_right;
-    const trailer2_real_t _t160 = -_t139 - _t140 - _t142;
-    const trailer2_real_t _t161 = -TRAILER2_LIT(1.6666666666666667)*_t160;
-    const trailer2_real_t _t162 = _t161*thetadot_left;
-    const trailer2_real_t _t163 = TRAILER2_LIT(0.2)*_t126;
-    const trailer2_real_t _t164 = -_t1*_t115 + _t20;
-    const trailer2_real_t _t165 = TRAILER2_LIT(0.2)*_t129;
-    const trailer2_real_t _t166 = -_t1*_t117 + _t22;
-    const trailer2_real_t _t167 = TRAILER2_LIT(0.2)*_t131;
-    const trailer2_real_t _t168 = -_t17*_t6;
-    const trailer2_real_t _t169 = _t0*_t19 - _t1*_t23 + _t168;
-    const trailer2_real_t _t170 = TRAILER2_LIT(0.2)*_t133;
-    const trailer2_real_t _t171 = _t18*_t6;
-    const trailer2_real_t _t172 = _t0*_t21 - _t1*_t28 + _t171;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t173 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t174 = _t163 - _t164;
-    const trailer2_real_t _t175 = _t173*_t174;
-    const trailer2_real_t _t176 = _t175*thetadot_right;
-    const trailer2_real_t _t177 = _t165 - _t166;
-    const trailer2_real_t _t178 = _t173*_t177;
-    const trailer2_real_t _t179 = _t178*thetadot_left;
-    const trailer2_real_t _t180 = _t167 - _t169;
-    const trailer2_real_t _t181 = _t173*_t180;
-    const trailer2_real_t _t182 = _t181*thetadot_right;
-    const trailer2_real_t _t183 = _t170 - _t172;
-    const trailer2_real_t _t184 = _t173*_t183;
-    const trailer2_real_t _t185 = _t184*thetadot_left;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t186 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t187 = -_t163 - _t164;
-    const trailer2_real_t _t188 = _t186*_t187;
-    const trailer2_real_t _t189 = _t188*thetadot_right;
-    const trailer2_real_t _t190 = -_t165 - _t166;
-    const trailer2_real_t _t191 = _t186*_t190;
-    const trailer2_real_t _t192 = _t191*thetadot_left;
-    const trailer2_real_t _t193 = -_t167 - _t169;
-    const trailer2_real_t _t194 = _t186*_t193;
-    const trailer2_real_t _t195 = _t194*thetadot_right;
-    const trailer2_real_t _t196 = -_t170 - _t172;
-    const trailer2_real_t _t197 = _t186*_t196;
-    const trailer2_real_t _t198 = _t197*thetadot_left;
-    const trailer2_real_t _t199 = TRAILER2_LIT(0.2)*_t158;
-    const trailer2_real_t _t200 = -_t115*_t8 - _t126*_t14 + _t27;
-    const trailer2_real_t _t201 = TRAILER2_LIT(0.2)*_t161;
-    const trailer2_real_t _t202 = -_t117*_t8 - _t129*_t14 + _t32;
-    const trailer2_real_t _t203 = TRAILER2_LIT(0.2)*_t148;
-    const trailer2_real_t _t204 = -_t131*_t14 + _t26;
-    const trailer2_real_t _t205 = TRAILER2_LIT(0.2)*_t151;
-    const trailer2_real_t _t206 = -_t133*_t14 + _t31;
-    const trailer2_real_t _t207 = TRAILER2_LIT(0.2)*_t153;
-    const trailer2_real_t _t208 = -_t17*_t9;
-    const trailer2_real_t _t209 = _t11*_t25;
-    const trailer2_real_t _t210 = _t19*_t7 + _t208 + _t209 - _t23*_t8;
-    const trailer2_real_t _t211 = TRAILER2_LIT(0.2)*_t155;
-    const trailer2_real_t _t212 = _t18*_t9;
-    const trailer2_real_t _t213 = _t11*_t30;
-    const trailer2_real_t _t214 = _t21*_t7 + _t212 + _t213 - _t28*_t8;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t215 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t216 = _t199 - _t200;
-    const trailer2_real_t _t217 = _t215*_t216;
-    const trailer2_real_t _t218 = _t217*thetadot_right;
-    const trailer2_real_t _t219 = _t201 - _t202;
-    const trailer2_real_t _t220 = _t215*_t219;
-    const trailer2_real_t _t221 = _t220*thetadot_left;
-    const trailer2_real_t _t222 = _t203 - _t204;
-    const trailer2_real_t _t223 = _t215*_t222;
-    const trailer2_real_t _t224 = _t223*thetadot_right;
-    const trailer2_real_t _t225 = _t205 - _t206;
-    const trailer2_real_t _t226 = _t215*_t225;
-    const trailer2_real_t _t227 = _t226*thetadot_left;
-    const trailer2_real_t _t228 = _t207 - _t210;
-    const trailer2_real_t _t229 = _t215*_t228;
-    const trailer2_real_t _t230 = _t229*thetadot_right;
-    const trailer2_real_t _t231 = _t211 - _t214;
-    const trailer2_real_t _t232 = _t215*_t231;
-    const trailer2_real_t _t233 = _t232*thetadot_left;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t234 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t235 = -_t199 - _t200;
-    const trailer2_real_t _t236 = _t234*_t235;
-    const trailer2_real_t _t237 = _t236*thetadot_right;
-    const trailer2_real_t _t238 = -_t201 - _t202;
-    const trailer2_real_t _t239 = _t234*_t238;
-    const trailer2_real_t _t240 = _t239*thetadot_left;
-    const trailer2_real_t _t241 = -_t203 - _t204;
-    const trailer2_real_t _t242 = _t234*_t241;
-    const trailer2_real_t _t243 = _t242*thetadot_right;
-    const trailer2_real_t _t244 = -_t205 - _t206;
-    const trailer2_real_t _t245 = _t234*_t244;
-    const trailer2_real_t _t246 = _t245*thetadot_left;
-    const trailer2_real_t _t247 = -_t207 - _t210;
-    const trailer2_real_t _t248 = _t234*_t247;
-    const trailer2_real_t _t249 = _t248*thetadot_right;
-    const trailer2_real_t _t250 = -_t211 - _t214;
-    const trailer2_real_t _t251 = _t234*_t250;
-    const trailer2_real_t _t252 = _t251*thetadot_left;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t253 = J_x_tractor*_t23;
-    const trailer2_real_t _t254 = _t17*_t61;
-    const trailer2_real_t _t255 = -_t25*_t63;
-    const trailer2_real_t _t256 = -_t40*_t65;
-    const trailer2_real_t _t257 = _t253 + _t254 + _t255 + _t256;
-    const trailer2_real_t _t258 = J_x_tractor*_t19;
-    const trailer2_real_t _t259 = _t54 + _t55;
-    const trailer2_real_t _t260 = -_t17*_t259;
-    const trailer2_real_t _t261 = _t56 + _t57;
-    const trailer2_real_t _t262 = _t25*_t261;
-    const trailer2_real_t _t263 = _t58 + _t59;
-    const trailer2_real_t _t264 = _t263*_t40;
-    const trailer2_real_t _t265 = _t258 + _t260 + _t262 + _t264;
-    const trailer2_real_t _t266 = _t66 + _t67 - _t69 + _t70;
-    const trailer2_real_t _t267 = _t71 + _t72 - _t74 + _t75;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t268 = -J_theta_tractor*_t17 + _t19*_t259 - _t23*_t61 + _t25*_t266
-            + _t267*_t40;
+    const trailer2_real_t _t87 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t88 = K_theta_cart_x_tractor*_t3;
+    const trailer2_real_t _t89 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t90 = K_theta_cart_x_tractor*_t4;
+    const trailer2_real_t _t91 = K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t92 = K_theta_cart2_x_tractor*_t8;
+    const trailer2_real_t _t93 = K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t94 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t95 = _t86*_t94;
+    const trailer2_real_t _t96 = TRAILER2_LIT(0.85)*_t3;
+    const trailer2_real_t _t97 = _t89*_t96;
+    const trailer2_real_t _t98 = _t87*_t94;
+    const trailer2_real_t _t99 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer2_real_t _t100 = _t96*_t99;
+    const trailer2_real_t _t101 = _t78 + _t79;
+    const trailer2_real_t _t102 = _t101*_t101;
+    const trailer2_real_t _t103 = _t82 + _t83;
+    const trailer2_real_t _t104 = _t103*_t103;
+    const trailer2_real_t _t105 = _t104*_t89;
+    const trailer2_real_t _t106 = _t80 + _t81;
+    const trailer2_real_t _t107 = _t106*_t106;
+    const trailer2_real_t _t108 = _t104*_t99;
+    const trailer2_real_t _t109 = K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t110 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t111 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer2_real_t _t112 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t _t113 = K_theta_cart_x_tractor_2*_t4;
+    const trailer2_real_t _t114 = _t104*_t86;
+    const trailer2_real_t _t115 = _t104*_t87;
+    const trailer2_real_t _t116 = _t89*_t94;
+    const trailer2_real_t _t117 = _t86*_t96;
+    const trailer2_real_t _t118 = _t94*_t99;
+    const trailer2_real_t _t119 = _t87*_t96;
+    const trailer2_real_t _t120 = _t101*thetadot_right;
+    const trailer2_real_t _t121 = _t101*thetadot_left;
+    const trailer2_real_t _t122 = _t106*thetadot_right;
+    const trailer2_real_t _t123 = _t106*thetadot_left;
+    const trailer2_real_t _t124 = _t84 + _t85;
+    const trailer2_real_t _t125 = _t124*_t19;
+    const trailer2_real_t _t126 = _t86 + _t87;
+    const trailer2_real_t _t127 = _t126*_t35;
+    const trailer2_real_t _t128 = _t124*_t23;
+    const trailer2_real_t _t129 = _t126*_t42;
+    const trailer2_real_t _t130 = _t90 - _t91;
+    const trailer2_real_t _t131 = -_t100 + _t95 + _t97 + _t98;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t269 = J_theta_cart*_t25;
-    const trailer2_real_t _t270 = -_t23*_t63;
-    const trailer2_real_t _t271 = -_t17*_t266;
-    const trailer2_real_t _t272 = _t19*_t261;
-    const trailer2_real_t _t273 = _t77 + _t79 + _t80 - _t81;
-    const trailer2_real_t _t274 = _t273*_t40;
-    const trailer2_real_t _t275 = _t269 + _t270 + _t271 + _t272 + _t274;
+    const trailer2_real_t _t132 = J_theta_cart*_t19 + _t12*_t130 + _t124*_t13 + _t131*_t35;
+    const trailer2_real_t _t133 = J_theta_cart*_t23 + _t124*_t16 + _t130*_t15 + _t131*_t42;
+    const trailer2_real_t _t134 = _t92 - _t93;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t276 = J_theta_cart2*_t40;
-    const trailer2_real_t _t277 = -_t23*_t65;
-    const trailer2_real_t _t278 = -_t17*_t267;
-    const trailer2_real_t _t279 = _t19*_t263;
-    const trailer2_real_t _t280 = _t25*_t273;
-    const trailer2_real_t _t281 = _t276 + _t277 + _t278 + _t279 + _t280;
-    const trailer2_real_t _t282 = -_t41 - _t44;
-    const trailer2_real_t _t283 = _t234*_t282;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t284 = J_theta_cart2_left*_t283;
-    const trailer2_real_t _t285 = _t41 - _t44;
-    const trailer2_real_t _t286 = _t215*_t285;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t287 = J_theta_cart2_right*_t286;
-    const trailer2_real_t _t288 = -_t33 - _t35;
-    const trailer2_real_t _t289 = _t186*_t288;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t290 = J_theta_cart_left*_t289;
-    const trailer2_real_t _t291 = _t33 - _t35;
-    const trailer2_real_t _t292 = _t173*_t291;
+    const trailer2_real_t _t135 = J_theta_cart2*_t35 + _t12*_t134 + _t126*_t13 + _t131*_t19;
+    const trailer2_real_t _t136 = J_theta_cart2*_t42 + _t126*_t16 + _t131*_t23 + _t134*_t15;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t137 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t138 = _t27 + _t30;
+    const trailer2_real_t _t139 = _t137*_t138;
     const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t293 = J_theta_cart_right*_t292;
-    const trailer2_real_t _t294 = _t36 - _t38;
-    const trailer2_real_t _t295 = _t173*_t294;
-    const trailer2_real_t _t296 = -_t36 - _t38;
-    const trailer2_real_t _t297 = _t186*_t296;
-    const trailer2_real_t _t298 = _t47 - _t50;
-    const trailer2_real_t _t299 = _t215*_t298;
-    const trailer2_real_t _t300 = -_t47 - _t50;
-    const trailer2_real_t _t301 = _t234*_t300;
-    const trailer2_real_t _t302 = _t284*_t301 + _t287*_t299 + _t290*_t297 + _t293*_t295;
-    const trailer2_real_t _t303 = J_x_tractor*_t28;
-    const trailer2_real_t _t304 = -_t18*_t61;
-    const trailer2_real_t _t305 = -_t30*_t63;
-    const trailer2_real_t _t306 = -_t46*_t65;
-    const trailer2_real_t _t307 = _t303 + _t304 + _t305 + _t306;
-    const trailer2_real_t _t308 = J_theta_tractor*_t18 + _t21*_t259 + _t266*_t30 + _t267*_t46
-            - _t28*_t61;
-    const trailer2_real_t _t309 = J_x_tractor*_t21;
-    const trailer2_real_t _t310 = _t18*_t259;
-    const trailer2_real_t _t311 = _t261*_t30;
-    const trailer2_real_t _t312 = _t263*_t46;
-    const trailer2_real_t _t313 = _t309 + _t310 + _t311 + _t312;
-    const trailer2_real_t _t314 = J_theta_cart*_t30;
-    const trailer2_real_t _t315 = -_t28*_t63;
-    const trailer2_real_t _t316 = _t18*_t266;
-    const trailer2_real_t _t317 = _t21*_t261;
-    const trailer2_real_t _t318 = _t273*_t46;
-    const trailer2_real_t _t319 = _t314 + _t315 + _t316 + _t317 + _t318;
-    const trailer2_real_t _t320 = J_theta_cart2*_t46;
-    const trailer2_real_t _t321 = -_t28*_t65;
-    const trailer2_real_t _t322 = _t18*_t267;
-    const trailer2_real_t _t323 = _t21*_t263;
-    const trailer2_real_t _t324 = _t273*_t30;
-    const trailer2_real_t _t325 = _t320 + _t321 + _t322 + _t323 + _t324;
-    const trailer2_real_t _t326 = _t102 + _t98 + _t99;
-    const trailer2_real_t _t327 = _t51*_t87 + _t52*_t87;
-    const trailer2_real_t _t328 = _t127*_t87 + _t130*_t87 + _t132*_t91 + _t134*_t91;
-    const trailer2_real_t _t329 = _t149*_t91 + _t152*_t91 + _t154*_t82 + _t156*_t82 + _t159*_t87
-            + _t162*_t87;
-    const trailer2_real_t _t330 = J_x_tractor*_t327 + _t326 - _t328*_t63 - _t329*_t65;
-    const trailer2_real_t _t331 = _t86 + _t90 + _t95;
-    const trailer2_real_t _t332 = _t116*_t87 + _t118*_t87;
-    const trailer2_real_t _t333 = J_x_tractor*_t332 + _t261*_t328 + _t263*_t329 + _t331;
-    const trailer2_real_t _t334 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t83
-            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
-            - _t3*_t85 - _t3*_t94 - _t5*_t96 - _t5*_t97;
-    const trailer2_real_t _t335 = _t259*_t332 + _t266*_t328 + _t267*_t329 - _t327*_t61 + _t334;
-    const trailer2_real_t _t336 = _t103*_t88 - _t104*_t88 + _t105*_t88 + _t106*_t88 + _t76*_t84
-            - _t76*_t85 - _t78*_t96 - _t78*_t97;
-    const trailer2_real_t _t337 = J_theta_cart*_t328 + _t261*_t332 + _t273*_t329 - _t327*_t63
-            + _t336;
-    const trailer2_real_t _t338 = _t107*_t88 - _t108*_t88 - _t109*_t92 + _t110*_t92 + _t111*_t88
-            + _t112*_t88 + _t113*_t92 + _t114*_t92;
-    const trailer2_real_t _t339 = J_theta_cart2*_t329 + _t263*_t332 + _t273*_t328 - _t327*_t65
-            + _t338;
-    const trailer2_real_t _t340 = J_theta_cart2_left*_t301;
-    const trailer2_real_t _t341 = J_theta_cart2_right*_t299;
-    const trailer2_real_t _t342 = J_theta_cart_left*_t297;
-    const trailer2_real_t _t343 = J_theta_cart_right*_t295;
-    const trailer2_real_t _t344 = _t116 + _t118;
-    const trailer2_real_t _t345 = _t127 + _t130;
-    const trailer2_real_t _t346 = _t132 + _t134;
-    const trailer2_real_t _t347 = _t159 + _t162;
-    const trailer2_real_t _t348 = _t149 + _t152;
-    const trailer2_real_t _t349 = _t154 + _t156;
-    const trailer2_real_t _t350 = _t176 + _t179;
-    const trailer2_real_t _t351 = _t182 + _t185;
-    const trailer2_real_t _t352 = _t189 + _t192;
-    const trailer2_real_t _t353 = _t195 + _t198;
-    const trailer2_real_t _t354 = _t218 + _t221;
-    const trailer2_real_t _t355 = _t224 + _t227;
-    const trailer2_real_t _t356 = _t230 + _t233;
-    const trailer2_real_t _t357 = _t237 + _t240;
-    const trailer2_real_t _t358 = _t243 + _t246;
-    const trailer2_real_t _t359 = _t249 + _t252;
-    const trailer2_real_t _t360 = _t103 - _t104 + _t105 + _t106;
-    const trailer2_real_t _t361 = _t107 - _t108 + _t111 + _t112;
-    const trailer2_real_t _t362 = -_t17*_t30 + _t18*_t25;
-    const trailer2_real_t _t363 = -_t17*_t46 + _t18*_t40;
-    const trailer2_real_t _t364 = TRAILER2_LIT(2.0)*_t340;
-    const trailer2_real_t _t365 = TRAILER2_LIT(2.0)*_t341;
-    const trailer2_real_t _t366 = TRAILER2_LIT(2.0)*_t342;
-    const trailer2_real_t _t367 = TRAILER2_LIT(2.0)*_t343;
-    const trailer2_real_t _t368 = TRAILER2_LIT(2.0)*_t18;
-    const trailer2_real_t _t369 = _t30*_t368;
-    const trailer2_real_t _t370 = _t368*_t46;
-    const trailer2_real_t _t371 = TRAILER2_LIT(2.0)*_t310;
-    const trailer2_real_t _t372 = TRAILER2_LIT(2.0)*_t311;
-    const trailer2_real_t _t373 = TRAILER2_LIT(2.0)*_t312;
-    const trailer2_real_t _t374 = TRAILER2_LIT(2.0)*_t314 + TRAILER2_LIT(2.0)*_t315
-            + TRAILER2_LIT(2.0)*_t316 + TRAILER2_LIT(2.0)*_t317 + TRAILER2_LIT(2.0)*_t318;
-    const trailer2_real_t _t375 = TRAILER2_LIT(2.0)*_t320 + TRAILER2_LIT(2.0)*_t321
-            + TRAILER2_LIT(2.0)*_t322 + TRAILER2_LIT(2.0)*_t323 + TRAILER2_LIT(2.0)*_t324;
-    const trailer2_real_t _t376 = _t91*thetadot_right;
-    const trailer2_real_t _t377 = _t91*thetadot_left;
-    const trailer2_real_t _t378 = _t82*thetadot_right;
-    const trailer2_real_t _t379 = _t82*thetadot_left;
-    const trailer2_real_t _t380 = _t87*thetadot_right;
-    const trailer2_real_t _t381 = _t87*thetadot_left;
-    const trailer2_real_t _t382 = _t16*_t17;
-    const trailer2_real_t _t383 = _t0*_t382 - _t1*_t115 - _t168;
-    const trailer2_real_t _t384 = -TRAILER2_LIT(1.6666666666666667)*_t383;
-    const trailer2_real_t _t385 = TRAILER2_LIT(0.2)*_t384;
-    const trailer2_real_t _t386 = -_t1*_t382 + _t121;
-    const trailer2_real_t _t387 = _t16*_t18;
-    const trailer2_real_t _t388 = _t0*_t387 - _t1*_t117 - _t171;
-    const trailer2_real_t _t389 = -TRAILER2_LIT(1.6666666666666667)*_t388;
-    const trailer2_real_t _t390 = TRAILER2_LIT(0.2)*_t389;
-    const trailer2_real_t _t391 = -_t1*_t387 + _t124;
-    const trailer2_real_t _t392 = TRAILER2_LIT(1.6666666666666667)*_t164;
-    const trailer2_real_t _t393 = TRAILER2_LIT(0.2)*_t392;
-    const trailer2_real_t _t394 = _t0*_t115 + _t34;
-    const trailer2_real_t _t395 = TRAILER2_LIT(1.6666666666666667)*_t166;
-    const trailer2_real_t _t396 = TRAILER2_LIT(0.2)*_t395;
-    const trailer2_real_t _t397 = _t0*_t117 + _t37;
-    const trailer2_real_t _t398 = _t11*_t384 - _t115*_t8 - _t208 + _t382*_t7;
-    const trailer2_real_t _t399 = -TRAILER2_LIT(1.6666666666666667)*_t398;
-    const trailer2_real_t _t400 = TRAILER2_LIT(0.2)*_t399;
-    const trailer2_real_t _t401 = _t138 - _t14*_t384 - _t382*_t8;
-    const trailer2_real_t _t402 = _t11*_t389 - _t117*_t8 - _t212 + _t387*_t7;
-    const trailer2_real_t _t403 = -TRAILER2_LIT(1.6666666666666667)*_t402;
-    const trailer2_real_t _t404 = TRAILER2_LIT(0.2)*_t403;
-    const trailer2_real_t _t405 = -_t14*_t389 + _t142 - _t387*_t8;
-    const trailer2_real_t _t406 = _t11*_t392 - _t126*_t14;
-    const trailer2_real_t _t407 = -TRAILER2_LIT(1.6666666666666667)*_t406;
-    const trailer2_real_t _t408 = TRAILER2_LIT(0.2)*_t407;
-    const trailer2_real_t _t409 = _t135 - _t14*_t392;
-    const trailer2_real_t _t410 = _t11*_t395 - _t129*_t14;
-    const trailer2_real_t _t411 = -TRAILER2_LIT(1.6666666666666667)*_t410;
-    const trailer2_real_t _t412 = TRAILER2_LIT(0.2)*_t411;
-    const trailer2_real_t _t413 = _t139 - _t14*_t395;
-    const trailer2_real_t _t414 = TRAILER2_LIT(1.6666666666666667)*_t200;
-    const trailer2_real_t _t415 = TRAILER2_LIT(0.2)*_t414;
-    const trailer2_real_t _t416 = _t11*_t126 + _t115*_t7 + _t43;
-    const trailer2_real_t _t417 = TRAILER2_LIT(1.6666666666666667)*_t202;
-    const trailer2_real_t _t418 = TRAILER2_LIT(0.2)*_t417;
-    const trailer2_real_t _t419 = _t11*_t129 + _t117*_t7 + _t49;
-    const trailer2_real_t _t420 = TRAILER2_LIT(2.0)*_t91;
-    const trailer2_real_t _t421 = _t420*_t62 - _t420*_t68;
-    const trailer2_real_t _t422 = TRAILER2_LIT(2.0)*_t82;
-    const trailer2_real_t _t423 = _t422*_t64 - _t422*_t73;
-    const trailer2_real_t _t424 = _t420*_t56 + _t420*_t57;
-    const trailer2_real_t _t425 = _t422*_t58 + _t422*_t59;
-    const trailer2_real_t _t426 = TRAILER2_LIT(0.6)*_t91;
-    const trailer2_real_t _t427 = _t4*_t426;
-    const trailer2_real_t _t428 = TRAILER2_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t2*_t91
-            - _t2*_t426*_t68 - _t427*_t56 - _t427*_t57;
-    const trailer2_real_t _t429 = TRAILER2_LIT(0.6)*_t82;
-    const trailer2_real_t _t430 = _t4*_t429;
-    const trailer2_real_t _t431 = TRAILER2_LIT(0.6)*K_theta_cart2_x_tractor*_t2*_t8*_t82
-            - _t2*_t429*_t73 - _t430*_t58 - _t430*_t59;
-    const trailer2_real_t _t432 = _t3*_t96 + _t3*_t97 + _t5*_t84 - _t5*_t85;
-    const trailer2_real_t _t433 = _t100*_t3 + _t101*_t3 + _t5*_t93 - _t5*_t94;
-    const trailer2_real_t _t434 = TRAILER2_LIT(1.7)*_t82;
-    const trailer2_real_t _t435 = _t1*_t434;
-    const trailer2_real_t _t436 = TRAILER2_LIT(1.7)*K_theta_cart2_x_tractor*_t0*_t8*_t82
-            - _t0*_t434*_t73 - _t435*_t58 - _t435*_t59;
-    const trailer2_real_t _t437 = _t66*_t88 + _t67*_t88 - _t69*_t88 + _t70*_t88;
-    const trailer2_real_t _t438 = TRAILER2_LIT(1.7)*_t91;
-    const trailer2_real_t _t439 = _t0*_t438;
-    const trailer2_real_t _t440 = _t1*_t438;
-    const trailer2_real_t _t441 = -_t439*_t64 + _t439*_t73 + _t440*_t58 + _t440*_t59;
-    const trailer2_real_t _t442 = _t71*_t88 + _t72*_t88 - _t74*_t88 + _t75*_t88;
-    const trailer2_real_t _t443 = _t237*_t87 + _t240*_t87 + _t243*_t91 + _t246*_t91 + _t249*_t82
-            + _t252*_t82;
-    const trailer2_real_t _t444 = J_theta_cart2_left*_t443;
-    const trailer2_real_t _t445 = _t218*_t87 + _t221*_t87 + _t224*_t91 + _t227*_t91 + _t230*_t82
-            + _t233*_t82;
-    const trailer2_real_t _t446 = J_theta_cart2_right*_t445;
-    const trailer2_real_t _t447 = _t189*_t87 + _t192*_t87 + _t195*_t91 + _t198*_t91;
-    const trailer2_real_t _t448 = J_theta_cart_left*_t447;
-    const trailer2_real_t _t449 = _t176*_t87 + _t179*_t87 + _t182*_t91 + _t185*_t91;
-    const trailer2_real_t _t450 = J_theta_cart_right*_t449;
-    const trailer2_real_t _t451 = _t329*_t361;
-    const trailer2_real_t _t452 = _t332*_t61;
-    const trailer2_real_t _t453 = _t328*_t360;
-    const trailer2_real_t _t454 = TRAILER2_LIT(2.0)*_t284;
-    const trailer2_real_t _t455 = TRAILER2_LIT(2.0)*_t287;
-    const trailer2_real_t _t456 = TRAILER2_LIT(2.0)*_t290;
-    const trailer2_real_t _t457 = TRAILER2_LIT(2.0)*_t293;
-    const trailer2_real_t _t458 = -TRAILER2_LIT(2.0)*_t17;
-    const trailer2_real_t _t459 = _t25*_t458;
-    const trailer2_real_t _t460 = _t40*_t458;
-    const trailer2_real_t _t461 = TRAILER2_LIT(2.0)*_t260;
-    const trailer2_real_t _t462 = TRAILER2_LIT(2.0)*_t262;
-    const trailer2_real_t _t463 = TRAILER2_LIT(2.0)*_t264;
-    const trailer2_real_t _t464 = TRAILER2_LIT(2.0)*_t269 + TRAILER2_LIT(2.0)*_t270
-            + TRAILER2_LIT(2.0)*_t271 + TRAILER2_LIT(2.0)*_t272 + TRAILER2_LIT(2.0)*_t274;
-    const trailer2_real_t _t465 = TRAILER2_LIT(2.0)*_t276 + TRAILER2_LIT(2.0)*_t277
-            + TRAILER2_LIT(2.0)*_t278 + TRAILER2_LIT(2.0)*_t279 + TRAILER2_LIT(2.0)*_t280;
+    const trailer2_real_t _t140 = J_theta_cart_right*_t139;
+    const trailer2_real_t _t141 = _t31 + _t34;
+    const trailer2_real_t _t142 = _t137*_t141;
+    const trailer2_real_t _t143 = J_theta_cart_right*_t142;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t144 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t145 = -_t27 + _t28 - _t29;
+    const trailer2_real_t _t146 = _t144*_t145;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t147 = J_theta_cart_left*_t146;
+    const trailer2_real_t _t148 = -_t31 + _t32 - _t33;
+    const trailer2_real_t _t149 = _t144*_t148;
+    const trailer2_real_t _t150 = J_theta_cart_left*_t149;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t151 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t152 = _t36 - _t38 + _t41;
+    const trailer2_real_t _t153 = _t151*_t152;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t154 = J_theta_cart2_right*_t153;
+    const trailer2_real_t _t155 = _t43 - _t44 + _t47;
+    const trailer2_real_t _t156 = _t151*_t155;
+    const trailer2_real_t _t157 = J_theta_cart2_right*_t156;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t158 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t159 = -_t36 - _t48;
+    const trailer2_real_t _t160 = _t158*_t159;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t161 = J_theta_cart2_left*_t160;
+    const trailer2_real_t _t162 = -_t43 - _t49;
+    const trailer2_real_t _t163 = _t158*_t162;
+    const trailer2_real_t _t164 = J_theta_cart2_left*_t163;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t _t165 = K_theta_tractor_x_tractor*_t102 + _t105 - _t107*_t109 + _t107*_t88
+            - _t108;
+    const trailer2_real_t _t166 = _t120 - _t122;
+    const trailer2_real_t _t167 = _t121 - _t123;
+    const trailer2_real_t _t168 = _t166*_t50 + _t167*_t53;
+    const trailer2_real_t _t169 = _t103*thetadot_right;
+    const trailer2_real_t _t170 = _t103*thetadot_left;
+    const trailer2_real_t _t171 = _t120*_t60 + _t121*_t64 + _t122*_t68 + _t123*_t70 + _t169*_t72
+            + _t170*_t74;
+    const trailer2_real_t _t172 = _t124*_t168 + _t126*_t171 + _t165;
+    const trailer2_real_t _t173 = -_t104*_t110 - _t104*_t111 - _t107*_t112 - _t107*_t113;
+    const trailer2_real_t _t174 = _t120*_t13 + _t121*_t16;
+    const trailer2_real_t _t175 = -K_theta_tractor_x_tractor*_t174 + _t130*_t168 + _t134*_t171
+            + _t173;
+    const trailer2_real_t _t176 = K_theta_cart_x_tractor_2*_t2 - _t88;
+    const trailer2_real_t _t177 = _t102*_t112 + _t102*_t113 + _t105*_t94 - _t108*_t94 - _t114*_t96
+            - _t115*_t96;
+    const trailer2_real_t _t178 = J_theta_cart*_t168 + _t131*_t171 + _t174*_t176 + _t177;
+    const trailer2_real_t _t179 = K_theta_cart2_x_tractor_2*_t6 - _t89;
+    const trailer2_real_t _t180 = _t102*_t110 + _t102*_t111 - _t107*_t116 + _t107*_t117
+            + _t107*_t118 + _t107*_t119;
+    const trailer2_real_t _t181 = J_theta_cart2*_t171 + _t131*_t168 + _t174*_t179 + _t180;
+    const trailer2_real_t _t182 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t183 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t184 = _t179*_t42;
+    const trailer2_real_t _t185 = _t176*_t23;
+    const trailer2_real_t _t186 = _t124*_t53 + _t185;
+    const trailer2_real_t _t187 = _t110 + _t111;
+    const trailer2_real_t _t188 = _t187*_t42;
+    const trailer2_real_t _t189 = _t112 + _t113;
+    const trailer2_real_t _t190 = _t130*_t53 + _t189*_t23;
+    const trailer2_real_t _t191 = _t15*_t189;
+    const trailer2_real_t _t192 = _t16*_t176;
+    const trailer2_real_t _t193 = J_theta_cart*_t53 + _t191 + _t192;
+    const trailer2_real_t _t194 = _t131*_t53;
+    const trailer2_real_t _t195 = _t15*_t187;
+    const trailer2_real_t _t196 = _t16*_t179;
+    const trailer2_real_t _t197 = _t195 + _t196;
+    const trailer2_real_t _t198 = -_t17 + _t59;
+    const trailer2_real_t _t199 = _t137*_t198;
+    const trailer2_real_t _t200 = J_theta_cart_right*_t199;
+    const trailer2_real_t _t201 = -_t17 - _t59;
+    const trailer2_real_t _t202 = _t144*_t201;
+    const trailer2_real_t _t203 = J_theta_cart_left*_t202;
+    const trailer2_real_t _t204 = _t65 - _t67;
+    const trailer2_real_t _t205 = _t151*_t204;
+    const trailer2_real_t _t206 = J_theta_cart2_right*_t205;
+    const trailer2_real_t _t207 = -_t65 - _t67;
+    const trailer2_real_t _t208 = _t158*_t207;
+    const trailer2_real_t _t209 = J_theta_cart2_left*_t208;
+    const trailer2_real_t _t210 = _t139*_t200;
+    const trailer2_real_t _t211 = _t146*_t203;
+    const trailer2_real_t _t212 = _t133*_t50;
+    const trailer2_real_t _t213 = -_t14 + _t58;
+    const trailer2_real_t _t214 = _t137*_t213;
+    const trailer2_real_t _t215 = _t143*_t214;
+    const trailer2_real_t _t216 = -_t14 - _t58;
+    const trailer2_real_t _t217 = _t144*_t216;
+    const trailer2_real_t _t218 = _t150*_t217;
+    const trailer2_real_t _t219 = _t142*_t200;
+    const trailer2_real_t _t220 = _t149*_t203;
+    const trailer2_real_t _t221 = _t133*_t53;
+    const trailer2_real_t _t222 = _t143*_t199;
+    const trailer2_real_t _t223 = _t150*_t202;
+    const trailer2_real_t _t224 = TRAILER2_LIT(2.0)*_t103;
+    const trailer2_real_t _t225 = _t224*_t89 - _t224*_t99;
+    const trailer2_real_t _t226 = _t114 + _t115;
+    const trailer2_real_t _t227 = TRAILER2_LIT(2.0)*_t106;
+    const trailer2_real_t _t228 = -_t109*_t227 + _t227*_t88;
+    const trailer2_real_t _t229 = _t50*thetadot_right + _t53*thetadot_left;
+    const trailer2_real_t _t230 = _t107*_t84 + _t107*_t85 + _t228*_t229;
+    const trailer2_real_t _t231 = TRAILER2_LIT(0.6)*_t103;
+    const trailer2_real_t _t232 = -_t231*_t86 - _t231*_t87;
+    const trailer2_real_t _t233 = _t104*_t93;
+    const trailer2_real_t _t234 = _t104*_t92;
+    const trailer2_real_t _t235 = TRAILER2_LIT(0.6)*_t106;
+    const trailer2_real_t _t236 = -_t235*_t84 - _t235*_t85;
+    const trailer2_real_t _t237 = _t107*_t90 - _t107*_t91 + _t229*_t236;
+    const trailer2_real_t _t238 = _t102*_t90;
+    const trailer2_real_t _t239 = _t102*_t91;
+    const trailer2_real_t _t240 = TRAILER2_LIT(1.7)*_t103;
+    const trailer2_real_t _t241 = _t240*_t3;
+    const trailer2_real_t _t242 = TRAILER2_LIT(1.7)*K_theta_cart2_x_tractor*_t103*_t2*_t7
+            - _t2*_t240*_t99 - _t241*_t86 - _t241*_t87;
+    const trailer2_real_t _t243 = _t102*_t92;
+    const trailer2_real_t _t244 = _t102*_t93;
+    const trailer2_real_t _t245 = TRAILER2_LIT(1.7)*_t106;
+    const trailer2_real_t _t246 = _t2*_t245;
+    const trailer2_real_t _t247 = _t245*_t3;
+    const trailer2_real_t _t248 = -_t246*_t89 + _t246*_t99 + _t247*_t86 + _t247*_t87;
+    const trailer2_real_t _t249 = _t229*_t248;
+    const trailer2_real_t _t250 = -_t229*thetadot_right;
+    const trailer2_real_t _t251 = _t250*_t68;
+    const trailer2_real_t _t252 = -_t229*thetadot_left;
+    const trailer2_real_t _t253 = _t252*_t70;
+    const trailer2_real_t _t254 = TRAILER2_LIT(1.6666666666666667)*_t76;
+    const trailer2_real_t _t255 = TRAILER2_LIT(1.6666666666666667)*_t77;
+    const trailer2_real_t _t256 = _t122*_t254 + _t123*_t255;
+    const trailer2_real_t _t257 = TRAILER2_LIT(0.2)*_t254;
+    const trailer2_real_t _t258 = TRAILER2_LIT(0.2)*_t255;
+    const trailer2_real_t _t259 = TRAILER2_LIT(1.6666666666666667)*_t63;
+    const trailer2_real_t _t260 = TRAILER2_LIT(0.2)*_t259;
+    const trailer2_real_t _t261 = TRAILER2_LIT(1.6666666666666667)*_t67;
+    const trailer2_real_t _t262 = TRAILER2_LIT(0.2)*_t261;
+    const trailer2_real_t _t263 = -_t20 + _t62 + _t69;
+    const trailer2_real_t _t264 = _t151*_t263;
+    const trailer2_real_t _t265 = _t250*_t264;
+    const trailer2_real_t _t266 = -_t24 + _t66 + _t71;
+    const trailer2_real_t _t267 = _t151*_t266;
+    const trailer2_real_t _t268 = _t252*_t267;
+    const trailer2_real_t _t269 = _t257 - _t56;
+    const trailer2_real_t _t270 = _t151*_t269;
+    const trailer2_real_t _t271 = _t258 - _t57;
+    const trailer2_real_t _t272 = _t151*_t271;
+    const trailer2_real_t _t273 = _t122*_t270 + _t123*_t272;
+    const trailer2_real_t _t274 = -_t69 - _t76;
+    const trailer2_real_t _t275 = _t158*_t274;
+    const trailer2_real_t _t276 = _t250*_t275;
+    const trailer2_real_t _t277 = -_t71 - _t77;
+    const trailer2_real_t _t278 = _t158*_t277;
+    const trailer2_real_t _t279 = _t252*_t278;
+    const trailer2_real_t _t280 = -_t257 - _t56;
+    const trailer2_real_t _t281 = _t158*_t280;
+    const trailer2_real_t _t282 = -_t258 - _t57;
+    const trailer2_real_t _t283 = _t158*_t282;
+    const trailer2_real_t _t284 = _t122*_t281 + _t123*_t283;
+    const trailer2_real_t _t285 = -_t61 - _t63;
+    const trailer2_real_t _t286 = _t158*_t285;
+    const trailer2_real_t _t287 = J_theta_cart2_left*_t286;
+    const trailer2_real_t _t288 = _t61 - _t63;
+    const trailer2_real_t _t289 = _t151*_t288;
+    const trailer2_real_t _t290 = J_theta_cart2_right*_t289;
+    const trailer2_real_t _t291 = -_t146*_t166 - _t149*_t167 + _t202*_t252 + _t217*_t250;
+    const trailer2_real_t _t292 = _t147*_t291;
+    const trailer2_real_t _t293 = J_theta_cart_left*_t217;
+    const trailer2_real_t _t294 = _t166*_t217 + _t167*_t202;
+    const trailer2_real_t _t295 = _t293*_t294;
+    const trailer2_real_t _t296 = -_t139*_t166 - _t142*_t167 + _t199*_t252 + _t214*_t250;
+    const trailer2_real_t _t297 = _t140*_t296;
+    const trailer2_real_t _t298 = J_theta_cart_right*_t214;
+    const trailer2_real_t _t299 = _t166*_t214 + _t167*_t199;
+    const trailer2_real_t _t300 = _t298*_t299;
+    const trailer2_real_t _t301 = _t12*_t189;
+    const trailer2_real_t _t302 = _t168*_t301;
+    const trailer2_real_t _t303 = _t12*_t187;
+    const trailer2_real_t _t304 = _t171*_t303;
+    const trailer2_real_t _t305 = _t13*_t176;
+    const trailer2_real_t _t306 = _t168*_t305;
+    const trailer2_real_t _t307 = _t13*_t179;
+    const trailer2_real_t _t308 = _t171*_t307;
+    const trailer2_real_t _t309 = _t125*_t174;
+    const trailer2_real_t _t310 = _t127*_t174;
+    const trailer2_real_t _t311 = _t178*_t50;
+    const trailer2_real_t _t312 = -_t166*_t19 - _t167*_t23 + _t250*_t50 + _t252*_t53;
+    const trailer2_real_t _t313 = _t132*_t312;
+    const trailer2_real_t _t314 = _t150*_t291;
+    const trailer2_real_t _t315 = _t203*_t294;
+    const trailer2_real_t _t316 = _t143*_t296;
+    const trailer2_real_t _t317 = _t200*_t299;
+    const trailer2_real_t _t318 = _t168*_t191;
+    const trailer2_real_t _t319 = _t171*_t195;
+    const trailer2_real_t _t320 = _t168*_t192;
+    const trailer2_real_t _t321 = _t171*_t196;
+    const trailer2_real_t _t322 = _t128*_t174;
+    const trailer2_real_t _t323 = _t129*_t174;
+    const trailer2_real_t _t324 = _t178*_t53;
+    const trailer2_real_t _t325 = _t133*_t312;
+    const trailer2_real_t _t326 = _t179*_t35;
+    const trailer2_real_t _t327 = _t176*_t19;
+    const trailer2_real_t _t328 = _t124*_t50 + _t327;
+    const trailer2_real_t _t329 = _t187*_t35;
+    const trailer2_real_t _t330 = _t130*_t50 + _t189*_t19;
+    const trailer2_real_t _t331 = J_theta_cart*_t50 + _t301 + _t305;
+    const trailer2_real_t _t332 = _t131*_t50;
+    const trailer2_real_t _t333 = _t303 + _t307;
+    const trailer2_real_t _t334 = _t139*_t298;
+    const trailer2_real_t _t335 = _t146*_t293;
+    const trailer2_real_t _t336 = _t132*_t50;
+    const trailer2_real_t _t337 = _t140*_t214;
+    const trailer2_real_t _t338 = _t147*_t217;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t339 = J_x_tractor*_t16 + K_theta_tractor_x_tractor_2*_t15 + _t128
+            + _t129;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t340 = J_theta_tractor*_t15 + K_theta_tractor_x_tractor_2*_t16
+            + _t130*_t23 + _t134*_t42;
+    const trailer2_real_t _t341 = _t12*_t340 + _t13*_t339 + _t133*_t19 + _t136*_t35 + _t139*_t143
+            + _t146*_t150 + _t153*_t157 + _t160*_t164;
+    const trailer2_real_t _t342 = TRAILER2_LIT(2.0)*_t341;
+    const trailer2_real_t _t343 = J_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t12 + _t125
+            + _t127;
+    const trailer2_real_t _t344 = J_theta_tractor*_t12 + K_theta_tractor_x_tractor_2*_t13
+            + _t130*_t19 + _t134*_t35;
     const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t466 = J_theta_cart2_left*_t283*_t283 + J_theta_cart2_right*_t286*_t286
-            + J_theta_cart_left*_t289*_t289 + J_theta_cart_right*_t292*_t292 + J_theta_right
-            - _t17*_t268 + _t19*_t265 + _t23*_t257 + _t25*_t275 + _t281*_t40;
-    const trailer2_real_t _t467 = _t18*_t268 + _t21*_t265 + _t257*_t28 + _t275*_t30 + _t281*_t46
-            + _t302;
-    const trailer2_real_t _t468 = -_t17*_t308 + _t19*_t313 + _t23*_t307 + _t25*_t319 + _t302
-            + _t325*_t40;
+    const trailer2_real_t _t345 = J_theta_right + _t12*_t344 + _t13*_t343 + _t132*_t19 + _t135*_t35
+            + _t139*_t140 + _t146*_t147 + _t153*_t154 + _t160*_t161;
     const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t469 = J_theta_cart2_left*_t301*_t301 + J_theta_cart2_right*_t299*_t299
-            + J_theta_cart_left*_t297*_t297 + J_theta_cart_right*_t295*_t295 + J_theta_left
-            + _t18*_t308 + _t21*_t313 + _t28*_t307 + _t30*_t319 + _t325*_t46;
-    const trailer2_real_t _t470 = _t466*_t469 - _t467*_t468;
-    const trailer2_real_t _t471 = TRAILER2_LIT(1.0)/_t470;
-    const trailer2_real_t _t472 = _t471*_t471;
-    const trailer2_real_t _t473 = _t471;
-    const trailer2_real_t _t474 = _t469*_t473;
-    const trailer2_real_t _t475 = -_t17*_t335 + _t19*_t333 + _t23*_t330 + _t25*_t337 + _t284*_t443
-            + _t287*_t445 + _t290*_t447 + _t293*_t449 + _t339*_t40;
+    const trailer2_real_t _t346 = J_theta_left + _t133*_t23 + _t136*_t42 + _t142*_t143 + _t149*_t150
+            + _t15*_t340 + _t156*_t157 + _t16*_t339 + _t163*_t164;
+    const trailer2_real_t _t347 = -_t341*_t341 + _t345*_t346;
+    const trailer2_real_t _t348 = TRAILER2_LIT(1.0)/_t347;
+    const trailer2_real_t _t349 = _t348*_t348;
+    const trailer2_real_t _t350 = _t348;
+    const trailer2_real_t _t351 = _t346*_t350;
+    const trailer2_real_t _t352 = _t22 + _t73;
+    const trailer2_real_t _t353 = _t151*_t352;
+    const trailer2_real_t _t354 = _t26 + _t75;
+    const trailer2_real_t _t355 = _t151*_t354;
+    const trailer2_real_t _t356 = _t120*_t289 + _t121*_t205 + _t122*_t264 + _t123*_t267
+            + _t169*_t353 + _t170*_t355;
+    const trailer2_real_t _t357 = _t22 - _t73;
+    const trailer2_real_t _t358 = _t158*_t357;
+    const trailer2_real_t _t359 = _t26 - _t75;
+    const trailer2_real_t _t360 = _t158*_t359;
+    const trailer2_real_t _t361 = _t120*_t286 + _t121*_t208 + _t122*_t275 + _t123*_t278
+            + _t169*_t358 + _t170*_t360;
+    const trailer2_real_t _t362 = _t12*_t175 + _t13*_t172 + _t140*_t299 + _t147*_t294 + _t154*_t356
+            + _t161*_t361 + _t178*_t19 + _t181*_t35;
     const trailer2_real_t tau_right = tau[0];
-    const trailer2_real_t _t476 = -_t475 + tau_right;
-    const trailer2_real_t _t477 = _t473*_t476;
-    const trailer2_real_t _t478 = _t467*_t473;
-    const trailer2_real_t _t479 = _t18*_t335 + _t21*_t333 + _t28*_t330 + _t30*_t337 + _t339*_t46
-            + _t340*_t443 + _t341*_t445 + _t342*_t447 + _t343*_t449;
+    const trailer2_real_t _t363 = -_t362 + tau_right;
+    const trailer2_real_t _t364 = _t350*_t363;
+    const trailer2_real_t _t365 = _t341*_t350;
+    const trailer2_real_t _t366 = _t143*_t299 + _t15*_t175 + _t150*_t294 + _t157*_t356 + _t16*_t172
+            + _t164*_t361 + _t178*_t23 + _t181*_t42;
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t480 = -_t479 + tau_left;
-    const trailer2_real_t _t481 = _t473*_t480;
-    const trailer2_real_t _t482 = -_t467*_t480 + _t469*_t476;
-    const trailer2_real_t _t483 = -_t109 + _t110 + _t113 + _t114;
-    const trailer2_real_t _t484 = _t25*_t46 + _t30*_t40;
-    const trailer2_real_t _t485 = TRAILER2_LIT(2.0)*_t30;
-    const trailer2_real_t _t486 = _t46*_t485;
-    const trailer2_real_t _t487 = TRAILER2_LIT(2.0)*_t14;
-    const trailer2_real_t _t488 = TRAILER2_LIT(1.6666666666666667)*_t169;
-    const trailer2_real_t _t489 = TRAILER2_LIT(0.2)*_t488;
-    const trailer2_real_t _t490 = _t0*_t23 + _t119 + _t120;
-    const trailer2_real_t _t491 = TRAILER2_LIT(1.6666666666666667)*_t172;
-    const trailer2_real_t _t492 = TRAILER2_LIT(0.2)*_t491;
-    const trailer2_real_t _t493 = _t0*_t28 + _t122 + _t123;
-    const trailer2_real_t _t494 = _t11*_t488 - _t131*_t487 - _t209;
-    const trailer2_real_t _t495 = -TRAILER2_LIT(1.6666666666666667)*_t494;
-    const trailer2_real_t _t496 = TRAILER2_LIT(0.2)*_t495;
-    const trailer2_real_t _t497 = -_t14*_t488 + _t143 + TRAILER2_LIT(2.0)*_t144;
-    const trailer2_real_t _t498 = _t11*_t491 - _t133*_t487 - _t213;
-    const trailer2_real_t _t499 = -TRAILER2_LIT(1.6666666666666667)*_t498;
-    const trailer2_real_t _t500 = TRAILER2_LIT(0.2)*_t499;
-    const trailer2_real_t _t501 = -_t14*_t491 + _t145 + TRAILER2_LIT(2.0)*_t146;
-    const trailer2_real_t _t502 = TRAILER2_LIT(1.6666666666666667)*_t204;
-    const trailer2_real_t _t503 = TRAILER2_LIT(0.2)*_t502;
-    const trailer2_real_t _t504 = _t11*_t131 + _t42;
-    const trailer2_real_t _t505 = TRAILER2_LIT(1.6666666666666667)*_t206;
-    const trailer2_real_t _t506 = TRAILER2_LIT(0.2)*_t505;
-    const trailer2_real_t _t507 = _t11*_t133 + _t48;
-    const trailer2_real_t _t508 = _t76*_t96 + _t76*_t97 + _t78*_t84 - _t78*_t85;
-    const trailer2_real_t _t509 = _t77*_t92 + _t79*_t92 + _t80*_t92 - _t81*_t92;
-    const trailer2_real_t _t510 = -_t328*_t360;
-    const trailer2_real_t _t511 = _t25*_t329 + _t328*_t40;
-    const trailer2_real_t _t512 = _t30*_t329 + _t328*_t46;
-    const trailer2_real_t _t513 = TRAILER2_LIT(2.0)*_t25;
-    const trailer2_real_t _t514 = _t40*_t513;
-    const trailer2_real_t _t515 = TRAILER2_LIT(2.0)*_t65;
-    const trailer2_real_t _t516 = TRAILER2_LIT(1.6666666666666667)*_t210;
-    const trailer2_real_t _t517 = TRAILER2_LIT(0.2)*_t516;
-    const trailer2_real_t _t518 = _t136 + _t137 + _t143 + _t23*_t7;
-    const trailer2_real_t _t519 = TRAILER2_LIT(1.6666666666666667)*_t214;
-    const trailer2_real_t _t520 = TRAILER2_LIT(0.2)*_t519;
-    const trailer2_real_t _t521 = _t140 + _t141 + _t145 + _t28*_t7;
-    const trailer2_real_t _t522 = -_t329*_t361;
-    const trailer2_real_t _t523 = TRAILER2_LIT(2.0)*_t87;
-    const trailer2_real_t _t524 = _t523*_t60 - _t523*_t89;
-    const trailer2_real_t _t525 = _t523*_t54 + _t523*_t55;
-    const trailer2_real_t _t526 = TRAILER2_LIT(0.6)*_t87;
-    const trailer2_real_t _t527 = _t4*_t526;
-    const trailer2_real_t _t528 = _t2*_t526;
-    const trailer2_real_t _t529 = _t527*_t56 + _t527*_t57 - _t528*_t62 + _t528*_t68;
-    const trailer2_real_t _t530 = _t527*_t58 + _t527*_t59 - _t528*_t64 + _t528*_t73;
-    const trailer2_real_t _t531 = _t466*_t473;
-    const trailer2_real_t _t532 = _t468*_t473;
-    const trailer2_real_t _t533 = _t466*_t480 - _t468*_t476;
-    const trailer2_real_t _t534 = _t115*_t313 + _t117*_t265 + _t126*_t319 + _t129*_t275
-            + _t158*_t325 + _t161*_t281 + _t175*_t343 + _t178*_t293 + _t188*_t342 + _t19*_t307
-            + _t191*_t290 + _t21*_t257 + _t217*_t341 + _t220*_t287 + _t236*_t340 + _t239*_t284
-            + _t259*(-_t17*_t28 + _t18*_t23) + _t360*_t362 + _t361*_t363
-            + _t61*(-_t17*_t21 + _t18*_t19);
-    const trailer2_real_t _t535 = _t117*(TRAILER2_LIT(2.0)*_t309 + _t371 + _t372 + _t373)
-            + _t129*_t374 + _t161*_t375 + _t178*_t367 + _t191*_t366 + _t21*_t368*_t61
-            + _t21*(TRAILER2_LIT(2.0)*_t303 + TRAILER2_LIT(2.0)*_t304 + TRAILER2_LIT(2.0)*_t305
-            + TRAILER2_LIT(2.0)*_t306) + _t220*_t365 + _t239*_t364 + _t28*_t371 + _t360*_t369
-            + _t361*_t370;
-    const trailer2_real_t _t536 = _t345*_t348 + _t347*_t349 + _t376*_t407 + _t377*_t411
-            + _t378*_t414 + _t379*_t417 + _t380*_t399 + _t381*_t403;
-    const trailer2_real_t _t537 = _t385 - _t386;
-    const trailer2_real_t _t538 = _t173*_t537;
-    const trailer2_real_t _t539 = _t390 - _t391;
-    const trailer2_real_t _t540 = _t173*_t539;
-    const trailer2_real_t _t541 = _t393 - _t394;
-    const trailer2_real_t _t542 = _t173*_t541;
-    const trailer2_real_t _t543 = _t396 - _t397;
-    const trailer2_real_t _t544 = _t173*_t543;
-    const trailer2_real_t _t545 = _t345*_t351 + _t376*_t542 + _t377*_t544 + _t380*_t538
-            + _t381*_t540;
-    const trailer2_real_t _t546 = -_t385 - _t386;
-    const trailer2_real_t _t547 = _t186*_t546;
-    const trailer2_real_t _t548 = -_t390 - _t391;
-    const trailer2_real_t _t549 = _t186*_t548;
-    const trailer2_real_t _t550 = -_t393 - _t394;
-    const trailer2_real_t _t551 = _t186*_t550;
-    const trailer2_real_t _t552 = -_t396 - _t397;
-    const trailer2_real_t _t553 = _t186*_t552;
-    const trailer2_real_t _t554 = _t345*_t353 + _t376*_t551 + _t377*_t553 + _t380*_t547
-            + _t381*_t549;
-    const trailer2_real_t _t555 = _t400 - _t401;
-    const trailer2_real_t _t556 = _t215*_t555;
-    const trailer2_real_t _t557 = _t404 - _t405;
-    const trailer2_real_t _t558 = _t215*_t557;
-    const trailer2_real_t _t559 = _t408 - _t409;
-    const trailer2_real_t _t560 = _t215*_t559;
-    const trailer2_real_t _t561 = _t412 - _t413;
-    const trailer2_real_t _t562 = _t215*_t561;
-    const trailer2_real_t _t563 = _t415 - _t416;
-    const trailer2_real_t _t564 = _t215*_t563;
-    const trailer2_real_t _t565 = _t418 - _t419;
-    const trailer2_real_t _t566 = _t215*_t565;
-    const trailer2_real_t _t567 = _t345*_t355 + _t347*_t356 + _t376*_t560 + _t377*_t562
-            + _t378*_t564 + _t379*_t566 + _t380*_t556 + _t381*_t558;
-    const trailer2_real_t _t568 = -_t400 - _t401;
-    const trailer2_real_t _t569 = _t234*_t568;
-    const trailer2_real_t _t570 = -_t404 - _t405;
-    const trailer2_real_t _t571 = _t234*_t570;
-    const trailer2_real_t _t572 = -_t408 - _t409;
-    const trailer2_real_t _t573 = _t234*_t572;
-    const trailer2_real_t _t574 = -_t412 - _t413;
-    const trailer2_real_t _t575 = _t234*_t574;
-    const trailer2_real_t _t576 = -_t415 - _t416;
-    const trailer2_real_t _t577 = _t234*_t576;
-    const trailer2_real_t _t578 = -_t418 - _t419;
-    const trailer2_real_t _t579 = _t234*_t578;
-    const trailer2_real_t _t580 = _t345*_t358 + _t347*_t359 + _t376*_t573 + _t377*_t575
-            + _t378*_t577 + _t379*_t579 + _t380*_t569 + _t381*_t571;
-    const trailer2_real_t _t581 = _t345*_t421 + _t347*_t423 - _t99;
-    const trailer2_real_t _t582 = _t345*_t424 + _t347*_t425 + _t90;
-    const trailer2_real_t _t583 = _t345*_t428 + _t347*_t431 + _t432 + _t433;
-    const trailer2_real_t _t584 = _t347*_t436 - _t437;
-    const trailer2_real_t _t585 = _t345*_t441 - _t442;
-    const trailer2_real_t _t586 = _t380*_t382 + _t381*_t387;
-    const trailer2_real_t _t587 = _t345*_t346 + _t376*_t392 + _t377*_t395 + _t380*_t384
-            + _t381*_t389;
-    const trailer2_real_t _t588 = _t115*_t333 + _t126*_t337 + _t158*_t339 - _t17*_t451 - _t17*_t452
-            - _t17*_t453 - _t17*_t583 + _t175*_t450 + _t188*_t448 + _t19*_t330 + _t19*_t581
-            + _t217*_t446 + _t23*_t582 + _t236*_t444 + _t25*_t584 + _t257*_t332 + _t260*_t327
-            + _t265*_t586 + _t275*_t587 + _t281*_t536 + _t284*_t580 + _t287*_t567 + _t290*_t554
-            + _t293*_t545 + _t40*_t585;
-    const trailer2_real_t _t589 = _t117*_t333 + _t129*_t337 + _t161*_t339 + _t178*_t450 + _t18*_t451
-            + _t18*_t452 + _t18*_t453 + _t18*_t583 + _t191*_t448 + _t21*_t330 + _t21*_t581
-            + _t220*_t446 + _t239*_t444 + _t28*_t582 + _t30*_t584 + _t307*_t332 + _t310*_t327
-            + _t313*_t586 + _t319*_t587 + _t325*_t536 + _t340*_t580 + _t341*_t567 + _t342*_t554
-            + _t343*_t545 + _t46*_t585;
-    const trailer2_real_t _t590 = _t115*(TRAILER2_LIT(2.0)*_t258 + _t461 + _t462 + _t463)
-            + _t126*_t464 + _t158*_t465 + _t175*_t457 + _t188*_t456 + _t19*_t458*_t61
-            + _t19*(TRAILER2_LIT(2.0)*_t253 + TRAILER2_LIT(2.0)*_t254 + TRAILER2_LIT(2.0)*_t255
-            + TRAILER2_LIT(2.0)*_t256) + _t217*_t455 + _t23*_t461 + _t236*_t454 + _t360*_t459
-            + _t361*_t460;
-    const trailer2_real_t _t591 = _t466*_t535 - _t467*_t534 - _t468*_t534 + _t469*_t590;
-    const trailer2_real_t _t592 = -_t472*_t591;
-    const trailer2_real_t _t593 = -_t474*_t588 + _t477*_t535 + _t478*_t589 - _t481*_t534
-            + _t482*_t592;
-    const trailer2_real_t _t594 = _t131*_t319 + _t133*_t275 + _t148*_t325 + _t151*_t281
-            + _t181*_t343 + _t184*_t293 + _t194*_t342 + _t197*_t290 + _t223*_t341 + _t226*_t287
-            + _t242*_t340 + _t245*_t284 + _t261*(_t23*_t30 + _t25*_t28) - _t360*_t362 + _t483*_t484
-            + _t63*(_t19*_t30 + _t21*_t25);
-    const trailer2_real_t _t595 = _t133*_t374 + _t151*_t375 + _t184*_t367 + _t197*_t366
-            + _t21*_t485*_t63 + _t226*_t365 + _t245*_t364 + _t28*_t372 - _t360*_t369 + _t483*_t486;
-    const trailer2_real_t _t596 = _t346*_t348 + _t348*_t349 + _t376*_t495 + _t377*_t499
-            + _t378*_t502 + _t379*_t505 + _t380*_t407 + _t381*_t411;
-    const trailer2_real_t _t597 = _t489 - _t490;
-    const trailer2_real_t _t598 = _t173*_t597;
-    const trailer2_real_t _t599 = _t492 - _t493;
-    const trailer2_real_t _t600 = _t173*_t599;
-    const trailer2_real_t _t601 = _t346*_t351 + _t376*_t598 + _t377*_t600 + _t380*_t542
-            + _t381*_t544;
-    const trailer2_real_t _t602 = -_t489 - _t490;
-    const trailer2_real_t _t603 = _t186*_t602;
-    const trailer2_real_t _t604 = -_t492 - _t493;
-    const trailer2_real_t _t605 = _t186*_t604;
-    const trailer2_real_t _t606 = _t346*_t353 + _t376*_t603 + _t377*_t605 + _t380*_t551
-            + _t381*_t553;
-    const trailer2_real_t _t607 = _t496 - _t497;
-    const trailer2_real_t _t608 = _t215*_t607;
-    const trailer2_real_t _t609 = _t500 - _t501;
-    const trailer2_real_t _t610 = _t215*_t609;
-    const trailer2_real_t _t611 = _t503 - _t504;
-    const trailer2_real_t _t612 = _t215*_t611;
-    const trailer2_real_t _t613 = _t506 - _t507;
-    const trailer2_real_t _t614 = _t215*_t613;
-    const trailer2_real_t _t615 = _t346*_t355 + _t348*_t356 + _t376*_t608 + _t377*_t610
-            + _t378*_t612 + _t379*_t614 + _t380*_t560 + _t381*_t562;
-    const trailer2_real_t _t616 = -_t496 - _t497;
-    const trailer2_real_t _t617 = _t234*_t616;
-    const trailer2_real_t _t618 = -_t500 - _t501;
-    const trailer2_real_t _t619 = _t234*_t618;
-    const trailer2_real_t _t620 = -_t503 - _t504;
-    const trailer2_real_t _t621 = _t234*_t620;
-    const trailer2_real_t _t622 = -_t506 - _t507;
-    const trailer2_real_t _t623 = _t234*_t622;
-    const trailer2_real_t _t624 = _t346*_t358 + _t348*_t359 + _t376*_t617 + _t377*_t619
-            + _t378*_t621 + _t379*_t623 + _t380*_t573 + _t381*_t575;
-    const trailer2_real_t _t625 = -_t102 + _t346*_t421 + _t348*_t423;
-    const trailer2_real_t _t626 = _t346*_t424 + _t348*_t425 + _t95;
-    const trailer2_real_t _t627 = _t346*_t428 + _t348*_t431 - _t433;
-    const trailer2_real_t _t628 = _t348*_t436 + _t437 + _t508;
-    const trailer2_real_t _t629 = _t346*_t441 - _t509;
-    const trailer2_real_t _t630 = _t346*_t346 + _t376*_t488 + _t377*_t491 + _t380*_t392
-            + _t381*_t395;
-    const trailer2_real_t _t631 = _t131*_t337 + _t148*_t339 - _t17*_t510 - _t17*_t627 + _t181*_t450
-            + _t19*_t625 + _t194*_t448 + _t223*_t446 + _t23*_t626 + _t242*_t444 + _t25*_t628
-            + _t261*(_t23*_t328 + _t25*_t327) + _t275*_t630 + _t281*_t596 + _t284*_t624
-            + _t287*_t615 + _t290*_t606 + _t293*_t601 + _t40*_t629 + _t483*_t511
-            + _t63*(_t19*_t328 + _t25*_t332);
-    const trailer2_real_t _t632 = _t133*_t337 + _t151*_t339 + _t18*_t510 + _t18*_t627 + _t184*_t450
-            + _t197*_t448 + _t21*_t625 + _t226*_t446 + _t245*_t444 + _t261*(_t28*_t328 + _t30*_t327)
-            + _t28*_t626 + _t30*_t628 + _t319*_t630 + _t325*_t596 + _t340*_t624 + _t341*_t615
-            + _t342*_t606 + _t343*_t601 + _t46*_t629 + _t483*_t512 + _t63*(_t21*_t328 + _t30*_t332);
-    const trailer2_real_t _t633 = _t131*_t464 + _t148*_t465 + _t181*_t457 + _t19*_t513*_t63
-            + _t194*_t456 + _t223*_t455 + _t23*_t462 + _t242*_t454 - _t360*_t459 + _t483*_t514;
-    const trailer2_real_t _t634 = _t466*_t595 - _t467*_t594 - _t468*_t594 + _t469*_t633;
-    const trailer2_real_t _t635 = -_t472*_t634;
-    const trailer2_real_t _t636 = -_t474*_t631 + _t477*_t595 + _t478*_t632 - _t481*_t594
-            + _t482*_t635;
-    const trailer2_real_t _t637 = _t153*_t325 + _t155*_t281 + _t229*_t341 + _t232*_t287
-            + _t248*_t340 + _t251*_t284 + _t263*(_t23*_t46 + _t28*_t40) - _t361*_t363 - _t483*_t484
-            + _t65*(_t19*_t46 + _t21*_t40);
-    const trailer2_real_t _t638 = _t155*_t375 + _t21*_t46*_t515 + _t232*_t365 + _t251*_t364
-            + _t28*_t373 - _t361*_t370 - _t483*_t486;
-    const trailer2_real_t _t639 = _t349*_t349 + _t376*_t502 + _t377*_t505 + _t378*_t516
-            + _t379*_t519 + _t380*_t414 + _t381*_t417;
-    const trailer2_real_t _t640 = _t517 - _t518;
-    const trailer2_real_t _t641 = _t215*_t640;
-    const trailer2_real_t _t642 = _t520 - _t521;
-    const trailer2_real_t _t643 = _t215*_t642;
-    const trailer2_real_t _t644 = _t349*_t356 + _t376*_t612 + _t377*_t614 + _t378*_t641
-            + _t379*_t643 + _t380*_t564 + _t381*_t566;
-    const trailer2_real_t _t645 = -_t517 - _t518;
-    const trailer2_real_t _t646 = _t234*_t645;
-    const trailer2_real_t _t647 = -_t520 - _t521;
-    const trailer2_real_t _t648 = _t234*_t647;
-    const trailer2_real_t _t649 = _t349*_t359 + _t376*_t621 + _t377*_t623 + _t378*_t646
-            + _t379*_t648 + _t380*_t577 + _t381*_t579;
-    const trailer2_real_t _t650 = _t349*_t423 - _t98;
-    const trailer2_real_t _t651 = _t349*_t425 + _t86;
-    const trailer2_real_t _t652 = _t349*_t431 - _t432;
-    const trailer2_real_t _t653 = _t349*_t436 - _t508;
-    const trailer2_real_t _t654 = _t442 + _t509;
-    const trailer2_real_t _t655 = _t153*_t339 - _t17*_t522 - _t17*_t652 + _t19*_t650 + _t229*_t446
-            + _t23*_t651 + _t248*_t444 + _t25*_t653 + _t263*(_t23*_t329 + _t327*_t40) + _t281*_t639
-            + _t284*_t649 + _t287*_t644 + _t40*_t654 - _t483*_t511 + _t65*(_t19*_t329 + _t332*_t40);
-    const trailer2_real_t _t656 = _t155*_t339 + _t18*_t522 + _t18*_t652 + _t21*_t650 + _t232*_t446
-            + _t251*_t444 + _t263*(_t28*_t329 + _t327*_t46) + _t28*_t651 + _t30*_t653 + _t325*_t639
-            + _t340*_t649 + _t341*_t644 + _t46*_t654 - _t483*_t512 + _t65*(_t21*_t329 + _t332*_t46);
-    const trailer2_real_t _t657 = _t153*_t465 + _t19*_t40*_t515 + _t229*_t455 + _t23*_t463
-            + _t248*_t454 - _t361*_t460 - _t483*_t514;
-    const trailer2_real_t _t658 = _t466*_t638 - _t467*_t637 - _t468*_t637 + _t469*_t657;
-    const trailer2_real_t _t659 = -_t472*_t658;
-    const trailer2_real_t _t660 = -_t474*_t655 + _t477*_t638 + _t478*_t656 - _t481*_t637
-            + _t482*_t659;
-    const trailer2_real_t _t661 = _t148*_t91 + _t153*_t82 + _t158*_t87 - _t17*_t347 + _t25*_t348
-            + _t349*_t40;
-    const trailer2_real_t _t662 = -_t17*_t350 + _t175*_t87 + _t181*_t91 + _t25*_t351;
-    const trailer2_real_t _t663 = -_t17*_t352 + _t188*_t87 + _t194*_t91 + _t25*_t353;
-    const trailer2_real_t _t664 = -_t17*_t354 + _t217*_t87 + _t223*_t91 + _t229*_t82 + _t25*_t355
-            + _t356*_t40;
-    const trailer2_real_t _t665 = -_t17*_t357 + _t236*_t87 + _t242*_t91 + _t248*_t82 + _t25*_t358
-            + _t359*_t40;
-    const trailer2_real_t _t666 = -_t17*_t524 + _t25*_t421 + _t40*_t423;
-    const trailer2_real_t _t667 = -_t17*_t525 + _t25*_t424 + _t40*_t425;
-    const trailer2_real_t _t668 = _t25*_t428 + _t40*_t431;
-    const trailer2_real_t _t669 = -_t17*_t529 + _t40*_t436;
-    const trailer2_real_t _t670 = -_t17*_t530 + _t25*_t441;
-    const trailer2_real_t _t671 = _t115*_t87 - _t17*_t344;
-    const trailer2_real_t _t672 = -_t17*_t53 + _t19*_t87;
-    const trailer2_real_t _t673 = _t126*_t87 + _t131*_t91 - _t17*_t345 + _t25*_t346;
-    const trailer2_real_t _t674 = -_t17*_t668 + _t19*_t666 + _t23*_t667 + _t25*_t669 + _t257*_t672
-            + _t265*_t671 + _t275*_t673 + _t281*_t661 + _t284*_t665 + _t287*_t664 + _t290*_t663
-            + _t293*_t662 + _t40*_t670;
-    const trailer2_real_t _t675 = _t18*_t668 + _t21*_t666 + _t28*_t667 + _t30*_t669 + _t307*_t672
-            + _t313*_t671 + _t319*_t673 + _t325*_t661 + _t340*_t665 + _t341*_t664 + _t342*_t663
-            + _t343*_t662 + _t46*_t670;
-    const trailer2_real_t _t676 = -_t469*_t473*_t674 + _t478*_t675;
-    const trailer2_real_t _t677 = _t151*_t91 + _t155*_t82 + _t161*_t87 + _t18*_t347 + _t30*_t348
-            + _t349*_t46;
-    const trailer2_real_t _t678 = _t178*_t87 + _t18*_t350 + _t184*_t91 + _t30*_t351;
-    const trailer2_real_t _t679 = _t18*_t352 + _t191*_t87 + _t197*_t91 + _t30*_t353;
-    const trailer2_real_t _t680 = _t18*_t354 + _t220*_t87 + _t226*_t91 + _t232*_t82 + _t30*_t355
-            + _t356*_t46;
-    const trailer2_real_t _t681 = _t18*_t357 + _t239*_t87 + _t245*_t91 + _t251*_t82 + _t30*_t358
-            + _t359*_t46;
-    const trailer2_real_t _t682 = _t18*_t524 + _t30*_t421 + _t423*_t46;
-    const trailer2_real_t _t683 = _t18*_t525 + _t30*_t424 + _t425*_t46;
-    const trailer2_real_t _t684 = _t30*_t428 + _t431*_t46;
-    const trailer2_real_t _t685 = _t18*_t529 + _t436*_t46;
-    const trailer2_real_t _t686 = _t18*_t530 + _t30*_t441;
-    const trailer2_real_t _t687 = _t117*_t87 + _t18*_t344;
-    const trailer2_real_t _t688 = _t18*_t53 + _t21*_t87;
-    const trailer2_real_t _t689 = _t129*_t87 + _t133*_t91 + _t18*_t345 + _t30*_t346;
-    const trailer2_real_t _t690 = -_t17*_t684 + _t19*_t682 + _t23*_t683 + _t25*_t685 + _t257*_t688
-            + _t265*_t687 + _t275*_t689 + _t281*_t677 + _t284*_t681 + _t287*_t680 + _t290*_t679
-            + _t293*_t678 + _t40*_t686;
-    const trailer2_real_t _t691 = _t18*_t684 + _t21*_t682 + _t28*_t683 + _t30*_t685 + _t307*_t688
-            + _t313*_t687 + _t319*_t689 + _t325*_t677 + _t340*_t681 + _t341*_t680 + _t342*_t679
-            + _t343*_t678 + _t46*_t686;
-    const trailer2_real_t _t692 = -_t469*_t473*_t690 + _t478*_t691;
-    const trailer2_real_t _t693 = -_t477*_t534 + _t481*_t590 - _t531*_t589 + _t532*_t588
-            + _t533*_t592;
-    const trailer2_real_t _t694 = -_t477*_t594 + _t481*_t633 - _t531*_t632 + _t532*_t631
-            + _t533*_t635;
-    const trailer2_real_t _t695 = -_t477*_t637 + _t481*_t657 - _t531*_t656 + _t532*_t655
-            + _t533*_t659;
-    const trailer2_real_t _t696 = -_t531*_t675 + _t532*_t674;
-    const trailer2_real_t _t697 = -_t531*_t691 + _t532*_t690;
+    const trailer2_real_t _t367 = -_t366 + tau_left;
+    const trailer2_real_t _t368 = _t350*_t367;
+    const trailer2_real_t _t369 = -_t341*_t367 + _t346*_t363;
+    const trailer2_real_t _t370 = -_t116 + _t117 + _t118 + _t119;
+    const trailer2_real_t _t371 = _t370*_t42;
+    const trailer2_real_t _t372 = _t23*_t370;
+    const trailer2_real_t _t373 = J_theta_cart2_right*_t267;
+    const trailer2_real_t _t374 = J_theta_cart2_left*_t278;
+    const trailer2_real_t _t375 = _t105*_t96 - _t108*_t96 + _t114*_t94 + _t115*_t94;
+    const trailer2_real_t _t376 = -_t100*_t107 + _t107*_t95 + _t107*_t97 + _t107*_t98;
+    const trailer2_real_t _t377 = TRAILER2_LIT(2.0)*_t20 - TRAILER2_LIT(2.0)*_t62;
+    const trailer2_real_t _t378 = -TRAILER2_LIT(1.6666666666666667)*_t377;
+    const trailer2_real_t _t379 = TRAILER2_LIT(0.2)*_t378;
+    const trailer2_real_t _t380 = TRAILER2_LIT(2.0)*_t38 + TRAILER2_LIT(2.0)*_t51;
+    const trailer2_real_t _t381 = TRAILER2_LIT(2.0)*_t24 - TRAILER2_LIT(2.0)*_t66;
+    const trailer2_real_t _t382 = -TRAILER2_LIT(1.6666666666666667)*_t381;
+    const trailer2_real_t _t383 = TRAILER2_LIT(0.2)*_t382;
+    const trailer2_real_t _t384 = TRAILER2_LIT(2.0)*_t44 + TRAILER2_LIT(2.0)*_t54;
+    const trailer2_real_t _t385 = J_theta_cart2_left*_t275;
+    const trailer2_real_t _t386 = J_theta_cart2_right*_t264;
+    const trailer2_real_t _t387 = _t370*(_t168*_t35 + _t171*_t19);
+    const trailer2_real_t _t388 = _t370*(_t168*_t42 + _t171*_t23);
+    const trailer2_real_t _t389 = _t35*_t370;
+    const trailer2_real_t _t390 = _t19*_t370;
+    const trailer2_real_t _t391 = J_theta_cart2_right*_t355;
+    const trailer2_real_t _t392 = J_theta_cart2_left*_t360;
+    const trailer2_real_t _t393 = J_theta_cart2_left*_t358;
+    const trailer2_real_t _t394 = J_theta_cart2_right*_t353;
+    const trailer2_real_t _t395 = TRAILER2_LIT(2.0)*K_theta_tractor_x_tractor*_t101;
+    const trailer2_real_t _t396 = TRAILER2_LIT(0.6)*_t101;
+    const trailer2_real_t _t397 = _t396*_t84 + _t396*_t85;
+    const trailer2_real_t _t398 = _t396*_t86 + _t396*_t87;
+    const trailer2_real_t _t399 = _t101 + _t78;
+    const trailer2_real_t _t400 = _t12*thetadot_left;
+    const trailer2_real_t _t401 = -_t106;
+    const trailer2_real_t _t402 = _t19*thetadot_left;
+    const trailer2_real_t _t403 = -K_theta_tractor_x_tractor*_t12 + _t326 + _t327;
+    const trailer2_real_t _t404 = -K_theta_tractor_x_tractor*_t15 + _t184 + _t185;
+    const trailer2_real_t _t405 = _t15*thetadot_right;
+    const trailer2_real_t _t406 = _t101 + _t79;
+    const trailer2_real_t _t407 = _t23*thetadot_right;
+    const trailer2_real_t _t408 = _t345*_t350;
+    const trailer2_real_t _t409 = -_t341*_t363 + _t345*_t367;
+    const trailer2_real_t _t410 = _t13*thetadot_right + _t16*thetadot_left;
+    const trailer2_real_t _t411 = _t182*_t410;
+    const trailer2_real_t _t412 = _t183*_t410;
+    const trailer2_real_t _t413 = _t13*_t182;
+    const trailer2_real_t _t414 = _t16*_t182;
+    const trailer2_real_t _t415 = _t13*_t183;
+    const trailer2_real_t _t416 = _t16*_t183;
+    const trailer2_real_t _t417 = _t60*thetadot_right + _t64*thetadot_left;
+    const trailer2_real_t _t418 = _t68*thetadot_right + _t70*thetadot_left;
+    const trailer2_real_t _t419 = _t72*thetadot_right + _t74*thetadot_left;
+    const trailer2_real_t _t420 = _t199*thetadot_left + _t214*thetadot_right;
+    const trailer2_real_t _t421 = _t202*thetadot_left + _t217*thetadot_right;
+    const trailer2_real_t _t422 = _t205*thetadot_left + _t289*thetadot_right;
+    const trailer2_real_t _t423 = _t264*thetadot_right + _t267*thetadot_left;
+    const trailer2_real_t _t424 = _t353*thetadot_right + _t355*thetadot_left;
+    const trailer2_real_t _t425 = _t208*thetadot_left + _t286*thetadot_right;
+    const trailer2_real_t _t426 = _t275*thetadot_right + _t278*thetadot_left;
+    const trailer2_real_t _t427 = _t358*thetadot_right + _t360*thetadot_left;
+    const trailer2_real_t _t428 = _t126*_t64 + _t184 + _t186;
+    const trailer2_real_t _t429 = _t134*_t64 + _t188 + _t190;
+    const trailer2_real_t _t430 = _t131*_t64 + _t193;
+    const trailer2_real_t _t431 = J_theta_cart2*_t64 + _t194 + _t197;
+    const trailer2_real_t _t432 = _t12*_t429 + _t13*_t428 + _t136*_t60 + _t153*_t206 + _t157*_t289
+            + _t160*_t209 + _t164*_t286 + _t19*_t430 + _t210 + _t211 + _t212 + _t215 + _t218
+            + _t35*_t431;
+    const trailer2_real_t _t433 = _t136*_t64 + _t15*_t429 + _t156*_t206 + _t157*_t205 + _t16*_t428
+            + _t163*_t209 + _t164*_t208 + _t219 + _t220 + _t221 + _t222 + _t223 + _t23*_t430
+            + _t42*_t431;
+    const trailer2_real_t _t434 = _t225*_t417 + _t226 + _t230;
+    const trailer2_real_t _t435 = _t232*_t417 - _t233 + _t234 + _t237;
+    const trailer2_real_t _t436 = -_t238 + _t239 + _t242*_t417;
+    const trailer2_real_t _t437 = -_t243 + _t244 + _t249;
+    const trailer2_real_t _t438 = _t417*thetadot_right;
+    const trailer2_real_t _t439 = _t417*thetadot_left;
+    const trailer2_real_t _t440 = -_t120*_t35 - _t121*_t42 + _t169*_t259 + _t170*_t261 - _t251
+            - _t253 + _t256 + _t438*_t72 + _t439*_t74;
+    const trailer2_real_t _t441 = _t260 + _t52;
+    const trailer2_real_t _t442 = _t151*_t441;
+    const trailer2_real_t _t443 = _t262 + _t55;
+    const trailer2_real_t _t444 = _t151*_t443;
+    const trailer2_real_t _t445 = -_t120*_t153 - _t121*_t156 + _t169*_t442 + _t170*_t444 - _t265
+            - _t268 + _t273 + _t353*_t438 + _t355*_t439;
+    const trailer2_real_t _t446 = -_t260 + _t52;
+    const trailer2_real_t _t447 = _t158*_t446;
+    const trailer2_real_t _t448 = -_t262 + _t55;
+    const trailer2_real_t _t449 = _t158*_t448;
+    const trailer2_real_t _t450 = -_t120*_t160 - _t121*_t163 + _t169*_t447 + _t170*_t449 - _t276
+            - _t279 + _t284 + _t358*_t438 + _t360*_t439;
+    const trailer2_real_t _t451 = _t12*_t435 + _t13*_t434 + _t135*_t440 + _t154*_t445 + _t161*_t450
+            + _t181*_t60 + _t19*_t436 + _t287*_t361 + _t290*_t356 + _t292 + _t295 + _t297 + _t300
+            + _t302 + _t304 + _t306 + _t308 - _t309 - _t310 + _t311 + _t313 + _t35*_t437;
+    const trailer2_real_t _t452 = _t136*_t440 + _t15*_t435 + _t157*_t445 + _t16*_t434 + _t164*_t450
+            + _t181*_t64 + _t206*_t356 + _t209*_t361 + _t23*_t436 + _t314 + _t315 + _t316 + _t317
+            + _t318 + _t319 + _t320 + _t321 - _t322 - _t323 + _t324 + _t325 + _t42*_t437;
+    const trailer2_real_t _t453 = _t126*_t60 + _t326 + _t328;
+    const trailer2_real_t _t454 = _t134*_t60 + _t329 + _t330;
+    const trailer2_real_t _t455 = _t131*_t60 + _t331;
+    const trailer2_real_t _t456 = J_theta_cart2*_t60 + _t332 + _t333;
+    const trailer2_real_t _t457 = _t12*_t454 + _t13*_t453 + _t135*_t60 + _t153*_t290 + _t154*_t289
+            + _t160*_t287 + _t161*_t286 + _t19*_t455 + _t334 + _t335 + _t336 + _t337 + _t338
+            + _t35*_t456;
+    const trailer2_real_t _t458 = -_t342*_t432 + _t345*_t433 + _t346*_t457;
+    const trailer2_real_t _t459 = -_t349*_t458;
+    const trailer2_real_t _t460 = -_t351*_t451 + _t364*_t433 + _t365*_t452 - _t368*_t432
+            + _t369*_t459;
+    const trailer2_real_t _t461 = _t126*_t70 - _t186;
+    const trailer2_real_t _t462 = _t134*_t70 - _t190;
+    const trailer2_real_t _t463 = _t131*_t70 - _t193 + _t371;
+    const trailer2_real_t _t464 = J_theta_cart2*_t70 - _t194 + _t372;
+    const trailer2_real_t _t465 = _t12*_t462 + _t13*_t461 + _t136*_t68 + _t153*_t373 + _t157*_t264
+            + _t160*_t374 + _t164*_t275 + _t19*_t463 - _t210 - _t211 - _t212 - _t215 - _t218
+            + _t35*_t464;
+    const trailer2_real_t _t466 = _t136*_t70 + _t15*_t462 + _t156*_t373 + _t157*_t267 + _t16*_t461
+            + _t163*_t374 + _t164*_t278 - _t219 - _t220 - _t221 - _t222 - _t223 + _t23*_t463
+            + _t42*_t464;
+    const trailer2_real_t _t467 = _t225*_t418 - _t230;
+    const trailer2_real_t _t468 = _t232*_t418 - _t237;
+    const trailer2_real_t _t469 = _t238 - _t239 + _t242*_t418 + _t375;
+    const trailer2_real_t _t470 = -_t249 - _t376;
+    const trailer2_real_t _t471 = _t418*thetadot_right;
+    const trailer2_real_t _t472 = _t418*thetadot_left;
+    const trailer2_real_t _t473 = _t120*_t254 + _t121*_t255 + _t122*_t378 + _t123*_t382
+            + _t169*_t254 + _t170*_t255 + _t251 + _t253 + _t471*_t72 + _t472*_t74;
+    const trailer2_real_t _t474 = _t379 + _t380;
+    const trailer2_real_t _t475 = _t151*_t474;
+    const trailer2_real_t _t476 = _t383 + _t384;
+    const trailer2_real_t _t477 = _t151*_t476;
+    const trailer2_real_t _t478 = _t120*_t270 + _t121*_t272 + _t122*_t475 + _t123*_t477
+            + _t169*_t270 + _t170*_t272 + _t265 + _t268 + _t353*_t471 + _t355*_t472;
+    const trailer2_real_t _t479 = -_t379 + _t380;
+    const trailer2_real_t _t480 = _t158*_t479;
+    const trailer2_real_t _t481 = -_t383 + _t384;
+    const trailer2_real_t _t482 = _t158*_t481;
+    const trailer2_real_t _t483 = _t120*_t281 + _t121*_t283 + _t122*_t480 + _t123*_t482
+            + _t169*_t281 + _t170*_t283 + _t276 + _t279 + _t358*_t471 + _t360*_t472;
+    const trailer2_real_t _t484 = _t12*_t468 + _t13*_t467 + _t135*_t473 + _t154*_t478 + _t161*_t483
+            + _t181*_t68 + _t19*_t469 - _t292 - _t295 - _t297 - _t300 - _t302 - _t306 + _t309
+            - _t311 - _t313 + _t35*_t470 + _t356*_t386 + _t361*_t385 + _t387;
+    const trailer2_real_t _t485 = _t136*_t473 + _t15*_t468 + _t157*_t478 + _t16*_t467 + _t164*_t483
+            + _t181*_t70 + _t23*_t469 - _t314 - _t315 - _t316 - _t317 - _t318 - _t320 + _t322
+            - _t324 - _t325 + _t356*_t373 + _t361*_t374 + _t388 + _t42*_t470;
+    const trailer2_real_t _t486 = _t126*_t68 - _t328;
+    const trailer2_real_t _t487 = _t134*_t68 - _t330;
+    const trailer2_real_t _t488 = _t131*_t68 - _t331 + _t389;
+    const trailer2_real_t _t489 = J_theta_cart2*_t68 - _t332 + _t390;
+    const trailer2_real_t _t490 = _t12*_t487 + _t13*_t486 + _t135*_t68 + _t153*_t386 + _t154*_t264
+            + _t160*_t385 + _t161*_t275 + _t19*_t488 - _t334 - _t335 - _t336 - _t337 - _t338
+            + _t35*_t489;
+    const trailer2_real_t _t491 = -_t342*_t465 + _t345*_t466 + _t346*_t490;
+    const trailer2_real_t _t492 = -_t349*_t491;
+    const trailer2_real_t _t493 = -_t351*_t484 + _t364*_t466 + _t365*_t485 - _t368*_t465
+            + _t369*_t492;
+    const trailer2_real_t _t494 = _t126*_t74 - _t184;
+    const trailer2_real_t _t495 = _t134*_t74 - _t188;
+    const trailer2_real_t _t496 = _t131*_t74 - _t371;
+    const trailer2_real_t _t497 = J_theta_cart2*_t74 - _t197 - _t372;
+    const trailer2_real_t _t498 = _t12*_t495 + _t13*_t494 + _t136*_t72 + _t153*_t391 + _t157*_t353
+            + _t160*_t392 + _t164*_t358 + _t19*_t496 + _t35*_t497;
+    const trailer2_real_t _t499 = _t136*_t74 + _t15*_t495 + _t156*_t391 + _t157*_t355 + _t16*_t494
+            + _t163*_t392 + _t164*_t360 + _t23*_t496 + _t42*_t497;
+    const trailer2_real_t _t500 = _t225*_t419 - _t226;
+    const trailer2_real_t _t501 = _t232*_t419 + _t233 - _t234;
+    const trailer2_real_t _t502 = _t242*_t419 - _t375;
+    const trailer2_real_t _t503 = _t243 - _t244 + _t376;
+    const trailer2_real_t _t504 = _t419*thetadot_right;
+    const trailer2_real_t _t505 = _t419*thetadot_left;
+    const trailer2_real_t _t506 = _t120*_t259 + _t121*_t261 - _t169*_t35 - _t170*_t42 + _t256
+            + _t504*_t72 + _t505*_t74;
+    const trailer2_real_t _t507 = _t120*_t442 + _t121*_t444 - _t153*_t169 - _t156*_t170 + _t273
+            + _t353*_t504 + _t355*_t505;
+    const trailer2_real_t _t508 = _t120*_t447 + _t121*_t449 - _t160*_t169 - _t163*_t170 + _t284
+            + _t358*_t504 + _t360*_t505;
+    const trailer2_real_t _t509 = _t12*_t501 + _t13*_t500 + _t135*_t506 + _t154*_t507 + _t161*_t508
+            + _t181*_t72 + _t19*_t502 - _t304 - _t308 + _t310 + _t35*_t503 + _t356*_t394
+            + _t361*_t393 - _t387;
+    const trailer2_real_t _t510 = _t136*_t506 + _t15*_t501 + _t157*_t507 + _t16*_t500 + _t164*_t508
+            + _t181*_t74 + _t23*_t502 - _t319 - _t321 + _t323 + _t356*_t391 + _t361*_t392 - _t388
+            + _t42*_t503;
+    const trailer2_real_t _t511 = _t126*_t72 - _t326;
+    const trailer2_real_t _t512 = _t134*_t72 - _t329;
+    const trailer2_real_t _t513 = _t131*_t72 - _t389;
+    const trailer2_real_t _t514 = J_theta_cart2*_t72 - _t333 - _t390;
+    const trailer2_real_t _t515 = _t12*_t512 + _t13*_t511 + _t135*_t72 + _t153*_t394 + _t154*_t353
+            + _t160*_t393 + _t161*_t358 + _t19*_t513 + _t35*_t514;
+    const trailer2_real_t _t516 = -_t342*_t498 + _t345*_t499 + _t346*_t515;
+    const trailer2_real_t _t517 = -_t349*_t516;
+    const trailer2_real_t _t518 = -_t351*_t509 + _t364*_t499 + _t365*_t510 - _t368*_t498
+            + _t369*_t517;
+    const trailer2_real_t _t519 = _t12*_t395 + _t19*_t228 + _t225*_t35;
+    const trailer2_real_t _t520 = _t19*_t236 + _t232*_t35;
+    const trailer2_real_t _t521 = _t12*_t397 + _t242*_t35;
+    const trailer2_real_t _t522 = _t12*_t398 + _t19*_t248;
+    const trailer2_real_t _t523 = _t13*_t399 + _t16*_t400;
+    const trailer2_real_t _t524 = _t399 + _t401 - _t80;
+    const trailer2_real_t _t525 = _t400 - _t402;
+    const trailer2_real_t _t526 = _t50*_t524 + _t525*_t53;
+    const trailer2_real_t _t527 = _t106 + _t80;
+    const trailer2_real_t _t528 = _t103 + _t82;
+    const trailer2_real_t _t529 = _t35*thetadot_left;
+    const trailer2_real_t _t530 = _t399*_t60 + _t400*_t64 + _t402*_t70 + _t527*_t68 + _t528*_t72
+            + _t529*_t74;
+    const trailer2_real_t _t531 = _t199*_t525 + _t214*_t524;
+    const trailer2_real_t _t532 = _t202*_t525 + _t217*_t524;
+    const trailer2_real_t _t533 = _t205*_t400 + _t264*_t527 + _t267*_t402 + _t289*_t399
+            + _t353*_t528 + _t355*_t529;
+    const trailer2_real_t _t534 = _t208*_t400 + _t275*_t527 + _t278*_t402 + _t286*_t399
+            + _t358*_t528 + _t360*_t529;
+    const trailer2_real_t _t535 = _t12*_t520 + _t13*_t519 + _t132*_t526 + _t135*_t530 + _t140*_t531
+            + _t147*_t532 + _t154*_t533 + _t161*_t534 + _t19*_t521 + _t35*_t522 + _t403*_t523;
+    const trailer2_real_t _t536 = _t133*_t526 + _t136*_t530 + _t143*_t531 + _t15*_t520 + _t150*_t532
+            + _t157*_t533 + _t16*_t519 + _t164*_t534 + _t23*_t521 + _t404*_t523 + _t42*_t522;
+    const trailer2_real_t _t537 = -_t346*_t350*_t535 + _t365*_t536;
+    const trailer2_real_t _t538 = _t15*_t395 + _t225*_t42 + _t228*_t23;
+    const trailer2_real_t _t539 = _t23*_t236 + _t232*_t42;
+    const trailer2_real_t _t540 = _t15*_t397 + _t242*_t42;
+    const trailer2_real_t _t541 = _t15*_t398 + _t23*_t248;
+    const trailer2_real_t _t542 = _t13*_t405 + _t16*_t406;
+    const trailer2_real_t _t543 = _t405 - _t407;
+    const trailer2_real_t _t544 = _t401 + _t406 - _t81;
+    const trailer2_real_t _t545 = _t50*_t543 + _t53*_t544;
+    const trailer2_real_t _t546 = _t106 + _t81;
+    const trailer2_real_t _t547 = _t42*thetadot_right;
+    const trailer2_real_t _t548 = _t103 + _t83;
+    const trailer2_real_t _t549 = _t405*_t60 + _t406*_t64 + _t407*_t68 + _t546*_t70 + _t547*_t72
+            + _t548*_t74;
+    const trailer2_real_t _t550 = _t199*_t544 + _t214*_t543;
+    const trailer2_real_t _t551 = _t202*_t544 + _t217*_t543;
+    const trailer2_real_t _t552 = _t205*_t406 + _t264*_t407 + _t267*_t546 + _t289*_t405
+            + _t353*_t547 + _t355*_t548;
+    const trailer2_real_t _t553 = _t208*_t406 + _t275*_t407 + _t278*_t546 + _t286*_t405
+            + _t358*_t547 + _t360*_t548;
+    const trailer2_real_t _t554 = _t12*_t539 + _t13*_t538 + _t132*_t545 + _t135*_t549 + _t140*_t550
+            + _t147*_t551 + _t154*_t552 + _t161*_t553 + _t19*_t540 + _t35*_t541 + _t403*_t542;
+    const trailer2_real_t _t555 = _t133*_t545 + _t136*_t549 + _t143*_t550 + _t15*_t539 + _t150*_t551
+            + _t157*_t552 + _t16*_t538 + _t164*_t553 + _t23*_t540 + _t404*_t542 + _t42*_t541;
+    const trailer2_real_t _t556 = -_t346*_t350*_t554 + _t365*_t555;
+    const trailer2_real_t _t557 = -_t364*_t432 + _t365*_t451 + _t368*_t457 - _t408*_t452
+            + _t409*_t459;
+    const trailer2_real_t _t558 = -_t364*_t465 + _t365*_t484 + _t368*_t490 - _t408*_t485
+            + _t409*_t492;
+    const trailer2_real_t _t559 = -_t364*_t498 + _t365*_t509 + _t368*_t515 - _t408*_t510
+            + _t409*_t517;
+    const trailer2_real_t _t560 = _t365*_t535 - _t408*_t536;
+    const trailer2_real_t _t561 = _t365*_t554 - _t408*_t555;
     A[0] = TRAILER2_LIT(0.0);
     A[1] = TRAILER2_LIT(0.0);
-    A[2] = _t344;
+    A[2] = -_t412;
     A[3] = TRAILER2_LIT(0.0);
     A[4] = TRAILER2_LIT(0.0);
     A[5] = TRAILER2_LIT(0.0);
@@ -2611,11 +2285,11 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[8] = TRAILER2_LIT(0.0);
     A[9] = TRAILER2_LIT(0.0);
     A[10] = TRAILER2_LIT(0.0);
-    A[11] = _t19;
-    A[12] = _t21;
+    A[11] = _t413;
+    A[12] = _t414;
     A[13] = TRAILER2_LIT(0.0);
     A[14] = TRAILER2_LIT(0.0);
-    A[15] = _t53;
+    A[15] = _t411;
     A[16] = TRAILER2_LIT(0.0);
     A[17] = TRAILER2_LIT(0.0);
     A[18] = TRAILER2_LIT(0.0);
@@ -2624,8 +2298,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[21] = TRAILER2_LIT(0.0);
     A[22] = TRAILER2_LIT(0.0);
     A[23] = TRAILER2_LIT(0.0);
-    A[24] = _t23;
-    A[25] = _t28;
+    A[24] = _t415;
+    A[25] = _t416;
     A[26] = TRAILER2_LIT(0.0);
     A[27] = TRAILER2_LIT(0.0);
     A[28] = TRAILER2_LIT(0.0);
@@ -2637,12 +2311,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[34] = TRAILER2_LIT(0.0);
     A[35] = TRAILER2_LIT(0.0);
     A[36] = TRAILER2_LIT(0.0);
-    A[37] = -_t17;
-    A[38] = _t18;
+    A[37] = _t12;
+    A[38] = _t15;
     A[39] = TRAILER2_LIT(0.0);
     A[40] = TRAILER2_LIT(0.0);
-    A[41] = _t345;
-    A[42] = _t346;
+    A[41] = _t229;
+    A[42] = -_t229;
     A[43] = TRAILER2_LIT(0.0);
     A[44] = TRAILER2_LIT(0.0);
     A[45] = TRAILER2_LIT(0.0);
@@ -2650,21 +2324,21 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[47] = TRAILER2_LIT(0.0);
     A[48] = TRAILER2_LIT(0.0);
     A[49] = TRAILER2_LIT(0.0);
-    A[50] = _t25;
-    A[51] = _t30;
+    A[50] = _t19;
+    A[51] = _t23;
     A[52] = TRAILER2_LIT(0.0);
     A[53] = TRAILER2_LIT(0.0);
-    A[54] = _t347;
-    A[55] = _t348;
-    A[56] = _t349;
+    A[54] = _t417;
+    A[55] = _t418;
+    A[56] = _t419;
     A[57] = TRAILER2_LIT(0.0);
     A[58] = TRAILER2_LIT(0.0);
     A[59] = TRAILER2_LIT(0.0);
     A[60] = TRAILER2_LIT(0.0);
     A[61] = TRAILER2_LIT(0.0);
     A[62] = TRAILER2_LIT(0.0);
-    A[63] = _t40;
-    A[64] = _t46;
+    A[63] = _t35;
+    A[64] = _t42;
     A[65] = TRAILER2_LIT(0.0);
     A[66] = TRAILER2_LIT(0.0);
     A[67] = TRAILER2_LIT(0.0);
@@ -2693,8 +2367,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[90] = TRAILER2_LIT(1.0);
     A[91] = TRAILER2_LIT(0.0);
     A[92] = TRAILER2_LIT(0.0);
-    A[93] = _t350;
-    A[94] = _t351;
+    A[93] = _t420;
+    A[94] = -_t420;
     A[95] = TRAILER2_LIT(0.0);
     A[96] = TRAILER2_LIT(0.0);
     A[97] = TRAILER2_LIT(0.0);
@@ -2702,12 +2376,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[99] = TRAILER2_LIT(0.0);
     A[100] = TRAILER2_LIT(0.0);
     A[101] = TRAILER2_LIT(0.0);
-    A[102] = _t292;
-    A[103] = _t295;
+    A[102] = _t139;
+    A[103] = _t142;
     A[104] = TRAILER2_LIT(0.0);
     A[105] = TRAILER2_LIT(0.0);
-    A[106] = _t352;
-    A[107] = _t353;
+    A[106] = _t421;
+    A[107] = -_t421;
     A[108] = TRAILER2_LIT(0.0);
     A[109] = TRAILER2_LIT(0.0);
     A[110] = TRAILER2_LIT(0.0);
@@ -2715,60 +2389,60 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[112] = TRAILER2_LIT(0.0);
     A[113] = TRAILER2_LIT(0.0);
     A[114] = TRAILER2_LIT(0.0);
-    A[115] = _t289;
-    A[116] = _t297;
+    A[115] = _t146;
+    A[116] = _t149;
     A[117] = TRAILER2_LIT(0.0);
     A[118] = TRAILER2_LIT(0.0);
-    A[119] = _t354;
-    A[120] = _t355;
-    A[121] = _t356;
+    A[119] = _t422;
+    A[120] = _t423;
+    A[121] = _t424;
     A[122] = TRAILER2_LIT(0.0);
     A[123] = TRAILER2_LIT(0.0);
     A[124] = TRAILER2_LIT(0.0);
     A[125] = TRAILER2_LIT(0.0);
     A[126] = TRAILER2_LIT(0.0);
     A[127] = TRAILER2_LIT(0.0);
-    A[128] = _t286;
-    A[129] = _t299;
+    A[128] = _t153;
+    A[129] = _t156;
     A[130] = TRAILER2_LIT(0.0);
     A[131] = TRAILER2_LIT(0.0);
-    A[132] = _t357;
-    A[133] = _t358;
-    A[134] = _t359;
+    A[132] = _t425;
+    A[133] = _t426;
+    A[134] = _t427;
     A[135] = TRAILER2_LIT(0.0);
     A[136] = TRAILER2_LIT(0.0);
     A[137] = TRAILER2_LIT(0.0);
     A[138] = TRAILER2_LIT(0.0);
     A[139] = TRAILER2_LIT(0.0);
     A[140] = TRAILER2_LIT(0.0);
-    A[141] = _t283;
-    A[142] = _t301;
+    A[141] = _t160;
+    A[142] = _t163;
     A[143] = TRAILER2_LIT(0.0);
     A[144] = TRAILER2_LIT(0.0);
-    A[145] = _t593;
-    A[146] = _t636;
-    A[147] = _t660;
+    A[145] = _t460;
+    A[146] = _t493;
+    A[147] = _t518;
     A[148] = TRAILER2_LIT(0.0);
     A[149] = TRAILER2_LIT(0.0);
     A[150] = TRAILER2_LIT(0.0);
     A[151] = TRAILER2_LIT(0.0);
     A[152] = TRAILER2_LIT(0.0);
     A[153] = TRAILER2_LIT(0.0);
-    A[154] = _t676;
-    A[155] = _t692;
+    A[154] = _t537;
+    A[155] = _t556;
     A[156] = TRAILER2_LIT(0.0);
     A[157] = TRAILER2_LIT(0.0);
-    A[158] = _t693;
-    A[159] = _t694;
-    A[160] = _t695;
+    A[158] = _t557;
+    A[159] = _t558;
+    A[160] = _t559;
     A[161] = TRAILER2_LIT(0.0);
     A[162] = TRAILER2_LIT(0.0);
     A[163] = TRAILER2_LIT(0.0);
     A[164] = TRAILER2_LIT(0.0);
     A[165] = TRAILER2_LIT(0.0);
     A[166] = TRAILER2_LIT(0.0);
-    A[167] = _t696;
-    A[168] = _t697;
+    A[167] = _t560;
+    A[168] = _t561;
     B[0] = TRAILER2_LIT(0.0);
     B[1] = TRAILER2_LIT(0.0);
     B[2] = TRAILER2_LIT(0.0);
@@ -2791,14 +2465,14 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     B[19] = TRAILER2_LIT(0.0);
     B[20] = TRAILER2_LIT(0.0);
     B[21] = TRAILER2_LIT(0.0);
-    B[22] = _t474;
-    B[23] = -_t478;
-    B[24] = -_t532;
-    B[25] = _t531;
+    B[22] = _t351;
+    B[23] = -_t365;
+    B[24] = -_t365;
+    B[25] = _t408;
 }
 
 /* trailer2_wheel_contact_forces: documented in trailer2_model.h.
-   operations after CSE: 430 add, 640 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 324 add, 452 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *longitudinal, trailer2_real_t *lateral)
@@ -2852,384 +2526,329 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = TRAILER2_SIN(theta_cart);
-    const trailer2_real_t _t1 = -_t0;
-    const trailer2_real_t _t2 = TRAILER2_COS(theta_cart);
-    const trailer2_real_t _t3 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t5 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t6 = TRAILER2_LIT(0.3)*_t5;
-    const trailer2_real_t _t7 = _t0*_t4 + _t2*_t6;
-    const trailer2_real_t _t8 = -_t7;
-    const trailer2_real_t _t9 = TRAILER2_SIN(theta_cart2);
-    const trailer2_real_t _t10 = -_t9;
-    const trailer2_real_t _t11 = TRAILER2_COS(theta_cart2);
-    const trailer2_real_t _t12 = _t11*_t6 + _t4*_t9;
-    const trailer2_real_t _t13 = -_t12;
-    const trailer2_real_t _t14 = TRAILER2_LIT(0.85)*_t11;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.85)*_t0*_t9 + _t14*_t2;
-    const trailer2_real_t _t16 = -_t15;
-    const trailer2_real_t _t17 = -_t2;
-    const trailer2_real_t _t18 = _t0*_t6 - _t2*_t4;
-    const trailer2_real_t _t19 = -_t11;
-    const trailer2_real_t _t20 = -_t11*_t4 + _t6*_t9;
-    const trailer2_real_t _t21 = _t0*_t14 - TRAILER2_LIT(0.85)*_t2*_t9;
-    const trailer2_real_t _t22 = -_t21;
-    const trailer2_real_t _t23 = -radius_right;
-    const trailer2_real_t _t24 = -radius_left;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.207)*_t3;
-    const trailer2_real_t _t26 = -_t25;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.207)*_t5;
-    const trailer2_real_t _t28 = -_t27;
-    const trailer2_real_t _t29 = TRAILER2_LIT(2.4154589371980677)*_t23;
-    const trailer2_real_t _t30 = TRAILER2_LIT(2.4154589371980677)*_t24;
-    const trailer2_real_t _t31 = _t28*_t29;
-    const trailer2_real_t _t32 = _t1*_t31 - _t29*_t8;
-    const trailer2_real_t _t33 = _t28*_t30;
-    const trailer2_real_t _t34 = _t1*_t33 + _t30*_t8;
-    const trailer2_real_t _t35 = _t26*_t29;
-    const trailer2_real_t _t36 = -_t2*_t35 - _t32;
-    const trailer2_real_t _t37 = -TRAILER2_LIT(1.6666666666666667)*_t36;
-    const trailer2_real_t _t38 = _t16*_t37;
-    const trailer2_real_t _t39 = _t10*_t31 - _t13*_t29;
-    const trailer2_real_t _t40 = _t26*_t30;
-    const trailer2_real_t _t41 = -_t2*_t40 - _t34;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(1.6666666666666667)*_t41;
-    const trailer2_real_t _t43 = _t16*_t42;
-    const trailer2_real_t _t44 = _t10*_t33 + _t13*_t30;
-    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*_t37;
-    const trailer2_real_t _t46 = _t1*_t35 + _t17*_t31 - _t18*_t29;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t42;
-    const trailer2_real_t _t48 = _t1*_t40 + _t17*_t33 + _t18*_t30;
-    const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t51 = -_t11*_t35 - _t38 - _t39;
-    const trailer2_real_t _t52 = -TRAILER2_LIT(1.6666666666666667)*_t51;
+    const trailer2_real_t _t0 = -radius_right;
+    const trailer2_real_t _t1 = -radius_left;
+    const trailer2_real_t _t2 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t6 = -theta_tractor;
+    const trailer2_real_t _t7 = _t6 + theta_cart;
+    const trailer2_real_t _t8 = TRAILER2_SIN(_t7);
+    const trailer2_real_t _t9 = -_t8;
+    const trailer2_real_t _t10 = TRAILER2_COS(_t7);
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t10;
+    const trailer2_real_t _t12 = -_t11;
+    const trailer2_real_t _t13 = _t6 + theta_cart2;
+    const trailer2_real_t _t14 = TRAILER2_SIN(_t13);
+    const trailer2_real_t _t15 = -_t14;
+    const trailer2_real_t _t16 = TRAILER2_COS(_t13);
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.3)*_t16;
+    const trailer2_real_t _t18 = -_t17;
+    const trailer2_real_t _t19 = TRAILER2_LIT(0.85)*_t16;
+    const trailer2_real_t _t20 = -_t10*_t19 - TRAILER2_LIT(0.85)*_t14*_t8;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.3)*_t8;
+    const trailer2_real_t _t22 = TRAILER2_LIT(0.3)*_t14;
+    const trailer2_real_t _t23 = TRAILER2_LIT(0.85)*_t10*_t14 - _t19*_t8;
+    const trailer2_real_t _t24 = -TRAILER2_LIT(2.4154589371980677)*_t0;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(0.5)*_t0;
+    const trailer2_real_t _t26 = _t12*_t24 + _t25*_t9;
+    const trailer2_real_t _t27 = TRAILER2_LIT(2.4154589371980677)*_t1;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.5)*_t1;
+    const trailer2_real_t _t29 = _t12*_t27 + _t28*_t9;
+    const trailer2_real_t _t30 = TRAILER2_LIT(1.6666666666666667)*_t26;
+    const trailer2_real_t _t31 = _t20*_t30;
+    const trailer2_real_t _t32 = _t15*_t25 + _t18*_t24;
+    const trailer2_real_t _t33 = _t31 + _t32;
+    const trailer2_real_t _t34 = TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t35 = _t20*_t34;
+    const trailer2_real_t _t36 = _t15*_t28 + _t18*_t27;
+    const trailer2_real_t _t37 = _t35 + _t36;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.2)*_t30;
+    const trailer2_real_t _t39 = _t10*_t25;
+    const trailer2_real_t _t40 = _t21*_t24;
+    const trailer2_real_t _t41 = _t39 - _t40;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*_t34;
+    const trailer2_real_t _t43 = _t10*_t28;
+    const trailer2_real_t _t44 = _t21*_t27;
+    const trailer2_real_t _t45 = _t43 - _t44;
+    const trailer2_real_t _t46 = TRAILER2_LIT(1.6666666666666667)*_t33;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.2)*_t46;
+    const trailer2_real_t _t48 = _t23*_t30;
+    const trailer2_real_t _t49 = _t16*_t25;
+    const trailer2_real_t _t50 = _t22*_t24;
+    const trailer2_real_t _t51 = _t49 - _t50;
+    const trailer2_real_t _t52 = TRAILER2_LIT(1.6666666666666667)*_t37;
     const trailer2_real_t _t53 = TRAILER2_LIT(0.2)*_t52;
-    const trailer2_real_t _t54 = _t10*_t35 + _t19*_t31 - _t20*_t29 + _t22*_t37;
-    const trailer2_real_t _t55 = -_t11*_t40 - _t43 - _t44;
-    const trailer2_real_t _t56 = -TRAILER2_LIT(1.6666666666666667)*_t55;
-    const trailer2_real_t _t57 = TRAILER2_LIT(0.2)*_t56;
-    const trailer2_real_t _t58 = _t10*_t40 + _t19*_t33 + _t20*_t30 + _t22*_t42;
-    const trailer2_real_t _t59 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t60 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t61 = K_theta_tractor_x_tractor*_t3;
-    const trailer2_real_t _t62 = K_theta_tractor_x_tractor_2*_t5;
-    const trailer2_real_t _t63 = _t61 + _t62;
-    const trailer2_real_t _t64 = K_theta_cart_x_tractor*_t0;
-    const trailer2_real_t _t65 = K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t _t66 = _t64 + _t65;
-    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t9;
-    const trailer2_real_t _t68 = K_theta_cart2_x_tractor_2*_t11;
-    const trailer2_real_t _t69 = _t67 + _t68;
-    const trailer2_real_t _t70 = K_theta_tractor_x_tractor*_t5;
-    const trailer2_real_t _t71 = K_theta_tractor_x_tractor_2*_t3 - _t70;
-    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t2;
-    const trailer2_real_t _t73 = K_theta_cart_x_tractor_2*_t0 - _t72;
-    const trailer2_real_t _t74 = K_theta_cart2_x_tractor*_t11;
-    const trailer2_real_t _t75 = K_theta_cart2_x_tractor_2*_t9 - _t74;
-    const trailer2_real_t _t76 = K_theta_cart_x_tractor_2*_t0;
-    const trailer2_real_t _t77 = _t4*_t64 + _t4*_t65 + _t6*_t72 - _t6*_t76;
-    const trailer2_real_t _t78 = K_theta_cart2_x_tractor_2*_t9;
-    const trailer2_real_t _t79 = _t4*_t67 + _t4*_t68 + _t6*_t74 - _t6*_t78;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.85)*_t0;
-    const trailer2_real_t _t81 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t _t82 = _t67*_t80 + _t68*_t80 + _t74*_t81 - _t78*_t81;
-    const trailer2_real_t _t83 = _t52*thetadot_right + _t56*thetadot_left;
-    const trailer2_real_t _t84 = _t83*_t83;
-    const trailer2_real_t _t85 = _t74*_t84;
-    const trailer2_real_t _t86 = _t37*thetadot_right + _t42*thetadot_left;
-    const trailer2_real_t _t87 = _t86*_t86;
-    const trailer2_real_t _t88 = -_t29*thetadot_right + _t30*thetadot_left;
-    const trailer2_real_t _t89 = _t88*_t88;
-    const trailer2_real_t _t90 = _t78*_t84;
-    const trailer2_real_t _t91 = _t76*_t87;
-    const trailer2_real_t _t92 = _t67*_t84;
-    const trailer2_real_t _t93 = _t68*_t84;
-    const trailer2_real_t _t94 = _t64*_t87;
-    const trailer2_real_t _t95 = _t65*_t87;
-    const trailer2_real_t _t96 = _t6*_t89;
-    const trailer2_real_t _t97 = _t4*_t89;
-    const trailer2_real_t _t98 = _t80*_t87;
-    const trailer2_real_t _t99 = _t81*_t87;
-    const trailer2_real_t _t100 = _t88*thetadot_right;
-    const trailer2_real_t _t101 = _t88*thetadot_left;
-    const trailer2_real_t _t102 = _t86*thetadot_right;
-    const trailer2_real_t _t103 = _t86*thetadot_left;
-    const trailer2_real_t _t104 = _t83*thetadot_right;
-    const trailer2_real_t _t105 = _t83*thetadot_left;
-    const trailer2_real_t _t106 = _t25*_t29;
-    const trailer2_real_t _t107 = -_t1*_t106 - _t18*_t29 - _t2*_t31;
-    const trailer2_real_t _t108 = -TRAILER2_LIT(1.6666666666666667)*_t107;
-    const trailer2_real_t _t109 = TRAILER2_LIT(0.2)*_t108;
-    const trailer2_real_t _t110 = _t106*_t17 + _t32;
-    const trailer2_real_t _t111 = _t25*_t30;
-    const trailer2_real_t _t112 = -_t1*_t111 + _t18*_t30 - _t2*_t33;
-    const trailer2_real_t _t113 = -TRAILER2_LIT(1.6666666666666667)*_t112;
-    const trailer2_real_t _t114 = TRAILER2_LIT(0.2)*_t113;
-    const trailer2_real_t _t115 = _t111*_t17 + _t34;
-    const trailer2_real_t _t116 = TRAILER2_LIT(1.6666666666666667)*_t46;
-    const trailer2_real_t _t117 = TRAILER2_LIT(0.2)*_t116;
-    const trailer2_real_t _t118 = _t0*_t31 + _t17*_t35 - _t29*_t7;
-    const trailer2_real_t _t119 = TRAILER2_LIT(1.6666666666666667)*_t48;
-    const trailer2_real_t _t120 = TRAILER2_LIT(0.2)*_t119;
-    const trailer2_real_t _t121 = _t0*_t33 + _t17*_t40 + _t30*_t7;
-    const trailer2_real_t _t122 = -_t10*_t106 - _t108*_t16 - _t11*_t31 - _t20*_t29;
-    const trailer2_real_t _t123 = -TRAILER2_LIT(1.6666666666666667)*_t122;
-    const trailer2_real_t _t124 = TRAILER2_LIT(0.2)*_t123;
-    const trailer2_real_t _t125 = _t106*_t19 + _t108*_t22 + _t39;
-    const trailer2_real_t _t126 = -_t10*_t111 - _t11*_t33 - _t113*_t16 + _t20*_t30;
-    const trailer2_real_t _t127 = -TRAILER2_LIT(1.6666666666666667)*_t126;
-    const trailer2_real_t _t128 = TRAILER2_LIT(0.2)*_t127;
-    const trailer2_real_t _t129 = _t111*_t19 + _t113*_t22 + _t44;
-    const trailer2_real_t _t130 = -_t116*_t16 - _t21*_t37;
-    const trailer2_real_t _t131 = -TRAILER2_LIT(1.6666666666666667)*_t130;
-    const trailer2_real_t _t132 = TRAILER2_LIT(0.2)*_t131;
-    const trailer2_real_t _t133 = _t116*_t22 + _t38;
-    const trailer2_real_t _t134 = -_t119*_t16 - _t21*_t42;
-    const trailer2_real_t _t135 = -TRAILER2_LIT(1.6666666666666667)*_t134;
-    const trailer2_real_t _t136 = TRAILER2_LIT(0.2)*_t135;
-    const trailer2_real_t _t137 = _t119*_t22 + _t43;
-    const trailer2_real_t _t138 = TRAILER2_LIT(1.6666666666666667)*_t54;
-    const trailer2_real_t _t139 = TRAILER2_LIT(0.2)*_t138;
-    const trailer2_real_t _t140 = -_t12*_t29 + _t15*_t37 + _t19*_t35 + _t31*_t9;
-    const trailer2_real_t _t141 = TRAILER2_LIT(1.6666666666666667)*_t58;
-    const trailer2_real_t _t142 = TRAILER2_LIT(0.2)*_t141;
-    const trailer2_real_t _t143 = _t12*_t30 + _t15*_t42 + _t19*_t40 + _t33*_t9;
-    const trailer2_real_t _t144 = J_x_tractor*_t35 - _t29*_t71 + _t37*_t73 + _t52*_t75;
-    const trailer2_real_t _t145 = J_x_tractor*_t31 - _t29*_t63 + _t37*_t66 + _t52*_t69;
-    const trailer2_real_t _t146 = -J_theta_tractor*_t29 + _t31*_t63 + _t35*_t71 + _t37*_t77
-            + _t52*_t79;
-    const trailer2_real_t _t147 = J_theta_cart*_t37 - _t29*_t77 + _t31*_t66 + _t35*_t73 + _t52*_t82;
-    const trailer2_real_t _t148 = J_theta_cart2*_t52 - _t29*_t79 + _t31*_t69 + _t35*_t75
-            + _t37*_t82;
-    const trailer2_real_t _t149 = -_t53 - _t54;
-    const trailer2_real_t _t150 = _t149*_t60;
-    const trailer2_real_t _t151 = J_theta_cart2_left*_t150;
-    const trailer2_real_t _t152 = _t53 - _t54;
-    const trailer2_real_t _t153 = _t152*_t59;
-    const trailer2_real_t _t154 = J_theta_cart2_right*_t153;
-    const trailer2_real_t _t155 = -_t45 - _t46;
-    const trailer2_real_t _t156 = _t155*_t50;
-    const trailer2_real_t _t157 = J_theta_cart_left*_t156;
-    const trailer2_real_t _t158 = _t45 - _t46;
-    const trailer2_real_t _t159 = _t158*_t49;
-    const trailer2_real_t _t160 = J_theta_cart_right*_t159;
-    const trailer2_real_t _t161 = _t47 - _t48;
-    const trailer2_real_t _t162 = _t161*_t49;
-    const trailer2_real_t _t163 = -_t47 - _t48;
-    const trailer2_real_t _t164 = _t163*_t50;
-    const trailer2_real_t _t165 = _t57 - _t58;
-    const trailer2_real_t _t166 = _t165*_t59;
-    const trailer2_real_t _t167 = -_t57 - _t58;
-    const trailer2_real_t _t168 = _t167*_t60;
-    const trailer2_real_t _t169 = _t151*_t168 + _t154*_t166 + _t157*_t164 + _t160*_t162;
-    const trailer2_real_t _t170 = J_x_tractor*_t40 + _t30*_t71 + _t42*_t73 + _t56*_t75;
-    const trailer2_real_t _t171 = J_theta_tractor*_t30 + _t33*_t63 + _t40*_t71 + _t42*_t77
-            + _t56*_t79;
-    const trailer2_real_t _t172 = J_x_tractor*_t33 + _t30*_t63 + _t42*_t66 + _t56*_t69;
-    const trailer2_real_t _t173 = J_theta_cart*_t42 + _t30*_t77 + _t33*_t66 + _t40*_t73 + _t56*_t82;
-    const trailer2_real_t _t174 = J_theta_cart2*_t56 + _t30*_t79 + _t33*_t69 + _t40*_t75
-            + _t42*_t82;
-    const trailer2_real_t _t175 = _t61*_t89 + _t62*_t89 + _t92 + _t93 + _t94 + _t95;
-    const trailer2_real_t _t176 = _t100*_t31 + _t101*_t33;
-    const trailer2_real_t _t177 = _t100*_t108 + _t101*_t113 + _t102*_t116 + _t103*_t119;
-    const trailer2_real_t _t178 = _t100*_t123 + _t101*_t127 + _t102*_t131 + _t103*_t135
-            + _t104*_t138 + _t105*_t141;
-    const trailer2_real_t _t179 = J_x_tractor*_t176 + _t175 + _t177*_t73 + _t178*_t75;
-    const trailer2_real_t _t180 = -K_theta_tractor_x_tractor_2*_t3*_t89 + _t70*_t89 + _t72*_t87
-            + _t85 - _t90 - _t91;
-    const trailer2_real_t _t181 = _t100*_t106 + _t101*_t111;
-    const trailer2_real_t _t182 = J_x_tractor*_t181 + _t177*_t66 + _t178*_t69 + _t180;
-    const trailer2_real_t _t183 = TRAILER2_LIT(0.3)*K_theta_cart2_x_tractor*_t11*_t3*_t84
-            + TRAILER2_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t3*_t87 - _t4*_t90 - _t4*_t91 - _t6*_t92
-            - _t6*_t93 - _t6*_t94 - _t6*_t95;
-    const trailer2_real_t _t184 = _t176*_t71 + _t177*_t77 + _t178*_t79 + _t181*_t63 + _t183;
-    const trailer2_real_t _t185 = _t64*_t96 + _t65*_t96 - _t72*_t97 + _t76*_t97 + _t80*_t85
-            - _t80*_t90 - _t81*_t92 - _t81*_t93;
-    const trailer2_real_t _t186 = J_theta_cart*_t177 + _t176*_t73 + _t178*_t82 + _t181*_t66 + _t185;
-    const trailer2_real_t _t187 = _t67*_t96 + _t67*_t99 + _t68*_t96 + _t68*_t99 - _t74*_t97
-            - _t74*_t98 + _t78*_t97 + _t78*_t98;
-    const trailer2_real_t _t188 = J_theta_cart2*_t178 + _t176*_t75 + _t177*_t82 + _t181*_t69
-            + _t187;
-    const trailer2_real_t _t189 = _t144*_t40 + _t145*_t33 + _t146*_t30 + _t147*_t42 + _t148*_t56
-            + _t169;
-    const trailer2_real_t _t190 = J_theta_cart2_left*_t168*_t168 + J_theta_cart2_right*_t166*_t166
-            + J_theta_cart_left*_t164*_t164 + J_theta_cart_right*_t162*_t162 + J_theta_left
-            + _t170*_t40 + _t171*_t30 + _t172*_t33 + _t173*_t42 + _t174*_t56;
-    const trailer2_real_t _t191 = _t109 - _t110;
-    const trailer2_real_t _t192 = _t191*_t49;
-    const trailer2_real_t _t193 = _t114 - _t115;
-    const trailer2_real_t _t194 = _t193*_t49;
-    const trailer2_real_t _t195 = _t117 - _t118;
-    const trailer2_real_t _t196 = _t195*_t49;
-    const trailer2_real_t _t197 = _t120 - _t121;
-    const trailer2_real_t _t198 = _t197*_t49;
-    const trailer2_real_t _t199 = _t100*_t192 + _t101*_t194 + _t102*_t196 + _t103*_t198;
-    const trailer2_real_t _t200 = -_t109 - _t110;
-    const trailer2_real_t _t201 = _t200*_t50;
-    const trailer2_real_t _t202 = -_t114 - _t115;
-    const trailer2_real_t _t203 = _t202*_t50;
-    const trailer2_real_t _t204 = -_t117 - _t118;
-    const trailer2_real_t _t205 = _t204*_t50;
-    const trailer2_real_t _t206 = -_t120 - _t121;
-    const trailer2_real_t _t207 = _t206*_t50;
-    const trailer2_real_t _t208 = _t100*_t201 + _t101*_t203 + _t102*_t205 + _t103*_t207;
-    const trailer2_real_t _t209 = _t124 - _t125;
-    const trailer2_real_t _t210 = _t209*_t59;
-    const trailer2_real_t _t211 = _t128 - _t129;
-    const trailer2_real_t _t212 = _t211*_t59;
-    const trailer2_real_t _t213 = _t132 - _t133;
-    const trailer2_real_t _t214 = _t213*_t59;
-    const trailer2_real_t _t215 = _t136 - _t137;
-    const trailer2_real_t _t216 = _t215*_t59;
-    const trailer2_real_t _t217 = _t139 - _t140;
-    const trailer2_real_t _t218 = _t217*_t59;
-    const trailer2_real_t _t219 = _t142 - _t143;
-    const trailer2_real_t _t220 = _t219*_t59;
-    const trailer2_real_t _t221 = _t100*_t210 + _t101*_t212 + _t102*_t214 + _t103*_t216
-            + _t104*_t218 + _t105*_t220;
-    const trailer2_real_t _t222 = -_t124 - _t125;
-    const trailer2_real_t _t223 = _t222*_t60;
-    const trailer2_real_t _t224 = -_t128 - _t129;
-    const trailer2_real_t _t225 = _t224*_t60;
-    const trailer2_real_t _t226 = -_t132 - _t133;
-    const trailer2_real_t _t227 = _t226*_t60;
-    const trailer2_real_t _t228 = -_t136 - _t137;
-    const trailer2_real_t _t229 = _t228*_t60;
-    const trailer2_real_t _t230 = -_t139 - _t140;
-    const trailer2_real_t _t231 = _t230*_t60;
-    const trailer2_real_t _t232 = -_t142 - _t143;
-    const trailer2_real_t _t233 = _t232*_t60;
-    const trailer2_real_t _t234 = _t100*_t223 + _t101*_t225 + _t102*_t227 + _t103*_t229
-            + _t104*_t231 + _t105*_t233;
-    const trailer2_real_t _t235 = _t151*_t234 + _t154*_t221 + _t157*_t208 + _t160*_t199 + _t179*_t35
-            + _t182*_t31 - _t184*_t29 + _t186*_t37 + _t188*_t52;
-    const trailer2_real_t _t236 = -_t235 + tau_right;
-    const trailer2_real_t _t237 = J_theta_cart2_left*_t168*_t234 + J_theta_cart2_right*_t166*_t221
-            + J_theta_cart_left*_t164*_t208 + J_theta_cart_right*_t162*_t199 + _t179*_t40
-            + _t182*_t33 + _t184*_t30 + _t186*_t42 + _t188*_t56;
-    const trailer2_real_t _t238 = -_t237 + tau_left;
-    const trailer2_real_t _t239 = J_theta_cart2_left*_t150*_t150 + J_theta_cart2_right*_t153*_t153
-            + J_theta_cart_left*_t156*_t156 + J_theta_cart_right*_t159*_t159 + J_theta_right
-            + _t144*_t35 + _t145*_t31 - _t146*_t29 + _t147*_t37 + _t148*_t52;
-    const trailer2_real_t _t240 = _t169 + _t170*_t35 - _t171*_t29 + _t172*_t31 + _t173*_t37
-            + _t174*_t52;
-    const trailer2_real_t _t241 = -_t189*_t240 + _t190*_t239;
-    const trailer2_real_t _t242 = TRAILER2_LIT(1.0)/_t241;
-    const trailer2_real_t _t243 = _t242*(-_t189*_t238 + _t190*_t236);
-    const trailer2_real_t _t244 = _t242*(-_t236*_t240 + _t238*_t239);
-    const trailer2_real_t _t245 = _t181 + _t243*_t31 + _t244*_t33;
-    const trailer2_real_t _t246 = -_t243*_t29 + _t244*_t30;
-    const trailer2_real_t _t247 = _t177 + _t243*_t37 + _t244*_t42;
-    const trailer2_real_t _t248 = _t178 + _t243*_t52 + _t244*_t56;
-    const trailer2_real_t _t249 = -J_x_tractor*_t245 - _t180 - _t246*_t63 - _t247*_t66 - _t248*_t69;
-    const trailer2_real_t _t250 = _t153*_t243 + _t166*_t244 + _t221;
-    const trailer2_real_t _t251 = -J_theta_cart2_right*_t250;
-    const trailer2_real_t _t252 = _t251*_t59;
-    const trailer2_real_t _t253 = _t150*_t243 + _t168*_t244 + _t234;
-    const trailer2_real_t _t254 = -J_theta_cart2_left*_t253;
-    const trailer2_real_t _t255 = _t254*_t60;
-    const trailer2_real_t _t256 = _t176 + _t243*_t35 + _t244*_t40;
-    const trailer2_real_t _t257 = -J_theta_cart2*_t248 - _t187 - _t245*_t69 - _t246*_t79
-            - _t247*_t82 - _t256*_t75;
-    const trailer2_real_t _t258 = TRAILER2_LIT(0.2)*_t252 - TRAILER2_LIT(0.2)*_t255 + _t257;
-    const trailer2_real_t _t259 = -TRAILER2_LIT(1.6666666666666667)*_t258;
-    const trailer2_real_t _t260 = _t159*_t243 + _t162*_t244 + _t199;
-    const trailer2_real_t _t261 = -J_theta_cart_right*_t260;
-    const trailer2_real_t _t262 = _t261*_t49;
-    const trailer2_real_t _t263 = _t156*_t243 + _t164*_t244 + _t208;
-    const trailer2_real_t _t264 = -J_theta_cart_left*_t263;
-    const trailer2_real_t _t265 = _t264*_t50;
-    const trailer2_real_t _t266 = -J_theta_cart*_t247 - _t185 - _t245*_t66 - _t246*_t77 - _t248*_t82
-            - _t256*_t73;
-    const trailer2_real_t _t267 = -_t16*_t259 - _t22*_t252 - _t22*_t255 + TRAILER2_LIT(0.2)*_t262
-            - TRAILER2_LIT(0.2)*_t265 + _t266;
-    const trailer2_real_t _t268 = -TRAILER2_LIT(1.6666666666666667)*_t267;
-    const trailer2_real_t _t269 = _t0*_t268 + _t11*_t252 + _t11*_t255 + _t2*_t262 + _t2*_t265
-            + _t249 + _t259*_t9;
-    const trailer2_real_t _t270 = TRAILER2_LIT(2.4154589371980677)*_t269;
-    const trailer2_real_t _t271 = -J_x_tractor*_t256 - _t175 - _t246*_t71 - _t247*_t73 - _t248*_t75;
-    const trailer2_real_t _t272 = _t0*_t262 + _t0*_t265 - _t11*_t259 - _t2*_t268 + _t252*_t9
-            + _t255*_t9 + _t271;
-    const trailer2_real_t _t273 = TRAILER2_LIT(2.4154589371980677)*_t272;
-    const trailer2_real_t _t274 = -J_theta_tractor*_t246 - _t183 - _t245*_t63 - _t247*_t77
-            - _t248*_t79 - _t256*_t71;
-    const trailer2_real_t _t275 = -_t13*_t259 - _t18*_t262 - _t18*_t265 - _t20*_t252 - _t20*_t255
-            - _t268*_t8 + _t274;
-    const trailer2_real_t _t276 = TRAILER2_LIT(2.4154589371980677)*_t275;
-    const trailer2_real_t _t277 = _t25*_t273 + _t27*_t270;
-    const trailer2_real_t _t278 = TRAILER2_LIT(2.4154589371980677)*_t23;
-    const trailer2_real_t _t279 = TRAILER2_LIT(2.4154589371980677)*_t24;
-    const trailer2_real_t _t280 = _t26*_t278;
-    const trailer2_real_t _t281 = _t278*_t28;
-    const trailer2_real_t _t282 = -_t1*_t281 - _t2*_t280 + _t278*_t8;
-    const trailer2_real_t _t283 = -TRAILER2_LIT(1.6666666666666667)*_t282;
-    const trailer2_real_t _t284 = TRAILER2_LIT(0.2)*_t283;
-    const trailer2_real_t _t285 = _t1*_t280 + _t17*_t281 - _t18*_t278;
-    const trailer2_real_t _t286 = _t26*_t279;
-    const trailer2_real_t _t287 = _t279*_t28;
-    const trailer2_real_t _t288 = -_t1*_t287 - _t2*_t286 - _t279*_t8;
-    const trailer2_real_t _t289 = -TRAILER2_LIT(1.6666666666666667)*_t288;
-    const trailer2_real_t _t290 = TRAILER2_LIT(0.2)*_t289;
-    const trailer2_real_t _t291 = _t1*_t286 + _t17*_t287 + _t18*_t279;
-    const trailer2_real_t _t292 = -_t10*_t281 - _t11*_t280 + _t13*_t278 - _t16*_t283;
-    const trailer2_real_t _t293 = -TRAILER2_LIT(1.6666666666666667)*_t292;
-    const trailer2_real_t _t294 = TRAILER2_LIT(0.2)*_t293;
-    const trailer2_real_t _t295 = _t10*_t280 + _t19*_t281 - _t20*_t278 + _t22*_t283;
-    const trailer2_real_t _t296 = -_t10*_t287 - _t11*_t286 - _t13*_t279 - _t16*_t289;
-    const trailer2_real_t _t297 = -TRAILER2_LIT(1.6666666666666667)*_t296;
-    const trailer2_real_t _t298 = TRAILER2_LIT(0.2)*_t297;
-    const trailer2_real_t _t299 = _t10*_t286 + _t19*_t287 + _t20*_t279 + _t22*_t289;
-    const trailer2_real_t _t300 = J_x_tractor*_t280 - _t278*_t71 + _t283*_t73 + _t293*_t75;
-    const trailer2_real_t _t301 = J_x_tractor*_t281 - _t278*_t63 + _t283*_t66 + _t293*_t69;
-    const trailer2_real_t _t302 = -J_theta_tractor*_t278 + _t280*_t71 + _t281*_t63 + _t283*_t77
-            + _t293*_t79;
-    const trailer2_real_t _t303 = J_theta_cart*_t283 - _t278*_t77 + _t280*_t73 + _t281*_t66
-            + _t293*_t82;
-    const trailer2_real_t _t304 = J_theta_cart2*_t293 - _t278*_t79 + _t280*_t75 + _t281*_t69
-            + _t283*_t82;
-    const trailer2_real_t _t305 = _t284 - _t285;
-    const trailer2_real_t _t306 = _t305*_t49;
-    const trailer2_real_t _t307 = _t290 - _t291;
-    const trailer2_real_t _t308 = _t307*_t49;
-    const trailer2_real_t _t309 = -_t284 - _t285;
-    const trailer2_real_t _t310 = _t309*_t50;
-    const trailer2_real_t _t311 = -_t290 - _t291;
-    const trailer2_real_t _t312 = _t311*_t50;
-    const trailer2_real_t _t313 = _t294 - _t295;
-    const trailer2_real_t _t314 = _t313*_t59;
-    const trailer2_real_t _t315 = _t298 - _t299;
-    const trailer2_real_t _t316 = _t315*_t59;
-    const trailer2_real_t _t317 = -_t294 - _t295;
-    const trailer2_real_t _t318 = _t317*_t60;
-    const trailer2_real_t _t319 = -_t298 - _t299;
-    const trailer2_real_t _t320 = _t319*_t60;
-    const trailer2_real_t _t321 = J_theta_cart2_left*_t318*_t320 + J_theta_cart2_right*_t314*_t316
-            + J_theta_cart_left*_t310*_t312 + J_theta_cart_right*_t306*_t308;
-    const trailer2_real_t _t322 = J_x_tractor*_t286 + _t279*_t71 + _t289*_t73 + _t297*_t75;
-    const trailer2_real_t _t323 = J_theta_tractor*_t279 + _t286*_t71 + _t287*_t63 + _t289*_t77
-            + _t297*_t79;
-    const trailer2_real_t _t324 = J_x_tractor*_t287 + _t279*_t63 + _t289*_t66 + _t297*_t69;
-    const trailer2_real_t _t325 = J_theta_cart*_t289 + _t279*_t77 + _t286*_t73 + _t287*_t66
-            + _t297*_t82;
-    const trailer2_real_t _t326 = J_theta_cart2*_t297 + _t279*_t79 + _t286*_t75 + _t287*_t69
-            + _t289*_t82;
-    const trailer2_real_t _t327 = TRAILER2_LIT(0.414)*_t3;
-    const trailer2_real_t _t328 = -TRAILER2_LIT(0.414)*_t5;
-    const trailer2_real_t _t329 = -_t270*_t327 - _t273*_t328;
-    const trailer2_real_t _t330 = _t276 - _t277;
-    const trailer2_real_t _t331 = -_t276 - _t277;
-    const trailer2_real_t _t332 = J_theta_cart2_left*_t318*_t318 + J_theta_cart2_right*_t314*_t314
-            + J_theta_cart_left*_t310*_t310 + J_theta_cart_right*_t306*_t306 + J_theta_right
-            - _t278*_t302 + _t280*_t300 + _t281*_t301 + _t283*_t303 + _t293*_t304;
-    const trailer2_real_t _t333 = _t279*_t302 + _t286*_t300 + _t287*_t301 + _t289*_t303
-            + _t297*_t304 + _t321;
-    const trailer2_real_t _t334 = -_t278*_t323 + _t280*_t322 + _t281*_t324 + _t283*_t325
-            + _t293*_t326 + _t321;
-    const trailer2_real_t _t335 = J_theta_cart2_left*_t320*_t320 + J_theta_cart2_right*_t316*_t316
-            + J_theta_cart_left*_t312*_t312 + J_theta_cart_right*_t308*_t308 + J_theta_left
-            + _t279*_t323 + _t286*_t322 + _t287*_t324 + _t289*_t325 + _t297*_t326;
+    const trailer2_real_t _t54 = _t23*_t34;
+    const trailer2_real_t _t55 = _t16*_t28;
+    const trailer2_real_t _t56 = _t22*_t27;
+    const trailer2_real_t _t57 = _t55 - _t56;
+    const trailer2_real_t _t58 = _t48 - _t49 + _t50;
+    const trailer2_real_t _t59 = _t54 - _t55 + _t56;
+    const trailer2_real_t _t60 = TRAILER2_LIT(1.6666666666666667)*_t41;
+    const trailer2_real_t _t61 = _t20*_t60;
+    const trailer2_real_t _t62 = TRAILER2_LIT(1.6666666666666667)*_t45;
+    const trailer2_real_t _t63 = _t20*_t62;
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.2)*_t60;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*_t62;
+    const trailer2_real_t _t66 = -_t51 - _t61;
+    const trailer2_real_t _t67 = -TRAILER2_LIT(1.6666666666666667)*_t66;
+    const trailer2_real_t _t68 = TRAILER2_LIT(0.2)*_t67;
+    const trailer2_real_t _t69 = _t23*_t60;
+    const trailer2_real_t _t70 = _t32 + _t69;
+    const trailer2_real_t _t71 = -_t57 - _t63;
+    const trailer2_real_t _t72 = -TRAILER2_LIT(1.6666666666666667)*_t71;
+    const trailer2_real_t _t73 = TRAILER2_LIT(0.2)*_t72;
+    const trailer2_real_t _t74 = _t23*_t62;
+    const trailer2_real_t _t75 = _t36 + _t74;
+    const trailer2_real_t _t76 = _t48 + _t61;
+    const trailer2_real_t _t77 = -TRAILER2_LIT(1.6666666666666667)*_t76;
+    const trailer2_real_t _t78 = TRAILER2_LIT(0.2)*_t77;
+    const trailer2_real_t _t79 = _t54 + _t63;
+    const trailer2_real_t _t80 = -TRAILER2_LIT(1.6666666666666667)*_t79;
+    const trailer2_real_t _t81 = TRAILER2_LIT(0.2)*_t80;
+    const trailer2_real_t _t82 = TRAILER2_LIT(1.6666666666666667)*_t58;
+    const trailer2_real_t _t83 = TRAILER2_LIT(0.2)*_t82;
+    const trailer2_real_t _t84 = TRAILER2_LIT(1.6666666666666667)*_t59;
+    const trailer2_real_t _t85 = TRAILER2_LIT(0.2)*_t84;
+    const trailer2_real_t _t86 = K_theta_cart_x_tractor*_t8;
+    const trailer2_real_t _t87 = K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t88 = _t86 + _t87;
+    const trailer2_real_t _t89 = K_theta_cart2_x_tractor*_t14;
+    const trailer2_real_t _t90 = K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t91 = _t89 + _t90;
+    const trailer2_real_t _t92 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t _t93 = K_theta_cart2_x_tractor*_t16;
+    const trailer2_real_t _t94 = K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t21;
+    const trailer2_real_t _t95 = K_theta_cart2_x_tractor*_t17 - K_theta_cart2_x_tractor_2*_t22;
+    const trailer2_real_t _t96 = TRAILER2_LIT(0.85)*_t8;
+    const trailer2_real_t _t97 = TRAILER2_LIT(0.85)*_t10;
+    const trailer2_real_t _t98 = K_theta_cart2_x_tractor_2*_t14;
+    const trailer2_real_t _t99 = _t89*_t96 + _t90*_t96 + _t93*_t97 - _t97*_t98;
+    const trailer2_real_t _t100 = _t24*thetadot_right + _t27*thetadot_left;
+    const trailer2_real_t _t101 = _t100*_t100;
+    const trailer2_real_t _t102 = _t46*thetadot_right + _t52*thetadot_left;
+    const trailer2_real_t _t103 = _t102*_t102;
+    const trailer2_real_t _t104 = _t103*_t93;
+    const trailer2_real_t _t105 = _t30*thetadot_right + _t34*thetadot_left;
+    const trailer2_real_t _t106 = _t105*_t105;
+    const trailer2_real_t _t107 = _t103*_t98;
+    const trailer2_real_t _t108 = _t103*_t89;
+    const trailer2_real_t _t109 = _t103*_t90;
+    const trailer2_real_t _t110 = K_theta_cart2_x_tractor*_t22;
+    const trailer2_real_t _t111 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer2_real_t _t112 = K_theta_cart_x_tractor*_t21;
+    const trailer2_real_t _t113 = K_theta_cart_x_tractor_2*_t11;
+    const trailer2_real_t _t114 = _t106*_t96;
+    const trailer2_real_t _t115 = _t106*_t97;
+    const trailer2_real_t _t116 = _t38 + _t41;
+    const trailer2_real_t _t117 = _t116*_t2;
+    const trailer2_real_t _t118 = J_theta_cart_right*_t117;
+    const trailer2_real_t _t119 = _t42 + _t45;
+    const trailer2_real_t _t120 = _t119*_t2;
+    const trailer2_real_t _t121 = J_theta_cart_right*_t120;
+    const trailer2_real_t _t122 = -_t38 + _t39 - _t40;
+    const trailer2_real_t _t123 = _t122*_t3;
+    const trailer2_real_t _t124 = J_theta_cart_left*_t123;
+    const trailer2_real_t _t125 = -_t42 + _t43 - _t44;
+    const trailer2_real_t _t126 = _t125*_t3;
+    const trailer2_real_t _t127 = J_theta_cart_left*_t126;
+    const trailer2_real_t _t128 = _t47 - _t48 + _t51;
+    const trailer2_real_t _t129 = _t128*_t4;
+    const trailer2_real_t _t130 = J_theta_cart2_right*_t129;
+    const trailer2_real_t _t131 = _t53 - _t54 + _t57;
+    const trailer2_real_t _t132 = _t131*_t4;
+    const trailer2_real_t _t133 = J_theta_cart2_right*_t132;
+    const trailer2_real_t _t134 = -_t47 - _t58;
+    const trailer2_real_t _t135 = _t134*_t5;
+    const trailer2_real_t _t136 = J_theta_cart2_left*_t135;
+    const trailer2_real_t _t137 = -_t53 - _t59;
+    const trailer2_real_t _t138 = _t137*_t5;
+    const trailer2_real_t _t139 = J_theta_cart2_left*_t138;
+    const trailer2_real_t _t140 = -K_theta_cart_x_tractor_2*_t106*_t8
+            + K_theta_tractor_x_tractor*_t101 + _t104 + _t106*_t92 - _t107;
+    const trailer2_real_t _t141 = _t100*thetadot_right;
+    const trailer2_real_t _t142 = _t100*thetadot_left;
+    const trailer2_real_t _t143 = _t105*thetadot_right;
+    const trailer2_real_t _t144 = _t105*thetadot_left;
+    const trailer2_real_t _t145 = _t141*_t60 + _t142*_t62 - _t143*_t60 - _t144*_t62;
+    const trailer2_real_t _t146 = _t102*thetadot_right;
+    const trailer2_real_t _t147 = _t102*thetadot_left;
+    const trailer2_real_t _t148 = _t141*_t67 + _t142*_t72 + _t143*_t77 + _t144*_t80 + _t146*_t82
+            + _t147*_t84;
+    const trailer2_real_t _t149 = _t140 + _t145*_t88 + _t148*_t91;
+    const trailer2_real_t _t150 = -_t103*_t110 - _t103*_t111 - _t106*_t112 - _t106*_t113;
+    const trailer2_real_t _t151 = _t141*_t25 + _t142*_t28;
+    const trailer2_real_t _t152 = -K_theta_tractor_x_tractor*_t151 + _t150;
+    const trailer2_real_t _t153 = _t145*_t94 + _t148*_t95 + _t152;
+    const trailer2_real_t _t154 = K_theta_cart_x_tractor_2*_t8 - _t92;
+    const trailer2_real_t _t155 = _t101*_t112 + _t101*_t113 + _t104*_t96 - _t107*_t96 - _t108*_t97
+            - _t109*_t97;
+    const trailer2_real_t _t156 = _t151*_t154 + _t155;
+    const trailer2_real_t _t157 = J_theta_cart*_t145 + _t148*_t99 + _t156;
+    const trailer2_real_t _t158 = K_theta_cart2_x_tractor_2*_t14 - _t93;
+    const trailer2_real_t _t159 = _t101*_t110 + _t101*_t111 - _t114*_t93 + _t114*_t98 + _t115*_t89
+            + _t115*_t90;
+    const trailer2_real_t _t160 = _t151*_t158 + _t159;
+    const trailer2_real_t _t161 = J_theta_cart2*_t148 + _t145*_t99 + _t160;
+    const trailer2_real_t _t162 = J_x_tractor*_t28 + K_theta_tractor_x_tractor_2*_t27 + _t34*_t88
+            + _t52*_t91;
+    const trailer2_real_t _t163 = J_theta_tractor*_t27 + K_theta_tractor_x_tractor_2*_t28
+            + _t34*_t94 + _t52*_t95;
+    const trailer2_real_t _t164 = J_theta_cart*_t34 + _t27*_t94 + _t28*_t88 + _t52*_t99;
+    const trailer2_real_t _t165 = J_theta_cart2*_t52 + _t27*_t95 + _t28*_t91 + _t34*_t99;
+    const trailer2_real_t _t166 = _t117*_t121 + _t123*_t127 + _t129*_t133 + _t135*_t139 + _t162*_t25
+            + _t163*_t24 + _t164*_t30 + _t165*_t46;
+    const trailer2_real_t _t167 = J_theta_left + _t120*_t121 + _t126*_t127 + _t132*_t133
+            + _t138*_t139 + _t162*_t28 + _t163*_t27 + _t164*_t34 + _t165*_t52;
+    const trailer2_real_t _t168 = -_t26 + _t64;
+    const trailer2_real_t _t169 = _t168*_t2;
+    const trailer2_real_t _t170 = -_t29 + _t65;
+    const trailer2_real_t _t171 = _t170*_t2;
+    const trailer2_real_t _t172 = _t141*_t169 + _t142*_t171 - _t143*_t169 - _t144*_t171;
+    const trailer2_real_t _t173 = -_t26 - _t64;
+    const trailer2_real_t _t174 = _t173*_t3;
+    const trailer2_real_t _t175 = -_t29 - _t65;
+    const trailer2_real_t _t176 = _t175*_t3;
+    const trailer2_real_t _t177 = _t141*_t174 + _t142*_t176 - _t143*_t174 - _t144*_t176;
+    const trailer2_real_t _t178 = _t68 - _t70;
+    const trailer2_real_t _t179 = _t178*_t4;
+    const trailer2_real_t _t180 = _t73 - _t75;
+    const trailer2_real_t _t181 = _t180*_t4;
+    const trailer2_real_t _t182 = -_t31 + _t69 + _t78;
+    const trailer2_real_t _t183 = _t182*_t4;
+    const trailer2_real_t _t184 = -_t35 + _t74 + _t81;
+    const trailer2_real_t _t185 = _t184*_t4;
+    const trailer2_real_t _t186 = _t33 + _t83;
+    const trailer2_real_t _t187 = _t186*_t4;
+    const trailer2_real_t _t188 = _t37 + _t85;
+    const trailer2_real_t _t189 = _t188*_t4;
+    const trailer2_real_t _t190 = _t141*_t179 + _t142*_t181 + _t143*_t183 + _t144*_t185
+            + _t146*_t187 + _t147*_t189;
+    const trailer2_real_t _t191 = -_t68 - _t70;
+    const trailer2_real_t _t192 = _t191*_t5;
+    const trailer2_real_t _t193 = -_t73 - _t75;
+    const trailer2_real_t _t194 = _t193*_t5;
+    const trailer2_real_t _t195 = -_t31 + _t69 - _t78;
+    const trailer2_real_t _t196 = _t195*_t5;
+    const trailer2_real_t _t197 = -_t35 + _t74 - _t81;
+    const trailer2_real_t _t198 = _t197*_t5;
+    const trailer2_real_t _t199 = _t33 - _t83;
+    const trailer2_real_t _t200 = _t199*_t5;
+    const trailer2_real_t _t201 = _t37 - _t85;
+    const trailer2_real_t _t202 = _t201*_t5;
+    const trailer2_real_t _t203 = _t141*_t192 + _t142*_t194 + _t143*_t196 + _t144*_t198
+            + _t146*_t200 + _t147*_t202;
+    const trailer2_real_t _t204 = _t118*_t172 + _t124*_t177 + _t130*_t190 + _t136*_t203 + _t149*_t25
+            + _t153*_t24 + _t157*_t30 + _t161*_t46;
+    const trailer2_real_t _t205 = -_t204 + tau_right;
+    const trailer2_real_t _t206 = _t121*_t172 + _t127*_t177 + _t133*_t190 + _t139*_t203 + _t149*_t28
+            + _t153*_t27 + _t157*_t34 + _t161*_t52;
+    const trailer2_real_t _t207 = -_t206 + tau_left;
+    const trailer2_real_t _t208 = J_x_tractor*_t25 + K_theta_tractor_x_tractor_2*_t24 + _t30*_t88
+            + _t46*_t91;
+    const trailer2_real_t _t209 = J_theta_tractor*_t24 + K_theta_tractor_x_tractor_2*_t25
+            + _t30*_t94 + _t46*_t95;
+    const trailer2_real_t _t210 = J_theta_cart*_t30 + _t24*_t94 + _t25*_t88 + _t46*_t99;
+    const trailer2_real_t _t211 = J_theta_cart2*_t46 + _t24*_t95 + _t25*_t91 + _t30*_t99;
+    const trailer2_real_t _t212 = J_theta_right + _t117*_t118 + _t123*_t124 + _t129*_t130
+            + _t135*_t136 + _t208*_t25 + _t209*_t24 + _t210*_t30 + _t211*_t46;
+    const trailer2_real_t _t213 = -_t166*_t166 + _t167*_t212;
+    const trailer2_real_t _t214 = TRAILER2_LIT(1.0)/_t213;
+    const trailer2_real_t _t215 = _t214*(-_t166*_t207 + _t167*_t205);
+    const trailer2_real_t _t216 = _t214*(-_t166*_t205 + _t207*_t212);
+    const trailer2_real_t _t217 = _t215*_t25 + _t216*_t28;
+    const trailer2_real_t _t218 = _t215*_t24 + _t216*_t27;
+    const trailer2_real_t _t219 = _t145 + _t215*_t30 + _t216*_t34;
+    const trailer2_real_t _t220 = _t148 + _t215*_t46 + _t216*_t52;
+    const trailer2_real_t _t221 = -J_x_tractor*_t217 - K_theta_tractor_x_tractor_2*_t218 - _t140
+            - _t219*_t88 - _t220*_t91;
+    const trailer2_real_t _t222 = _t129*_t215 + _t132*_t216 + _t190;
+    const trailer2_real_t _t223 = -J_theta_cart2_right*_t222;
+    const trailer2_real_t _t224 = _t223*_t4;
+    const trailer2_real_t _t225 = _t135*_t215 + _t138*_t216 + _t203;
+    const trailer2_real_t _t226 = -J_theta_cart2_left*_t225;
+    const trailer2_real_t _t227 = _t226*_t5;
+    const trailer2_real_t _t228 = -J_theta_cart2*_t220 - _t160 - _t217*_t91 - _t218*_t95
+            - _t219*_t99;
+    const trailer2_real_t _t229 = TRAILER2_LIT(0.2)*_t224 - TRAILER2_LIT(0.2)*_t227 + _t228;
+    const trailer2_real_t _t230 = -TRAILER2_LIT(1.6666666666666667)*_t229;
+    const trailer2_real_t _t231 = _t117*_t215 + _t120*_t216 + _t172;
+    const trailer2_real_t _t232 = -J_theta_cart_right*_t231;
+    const trailer2_real_t _t233 = _t2*_t232;
+    const trailer2_real_t _t234 = _t123*_t215 + _t126*_t216 + _t177;
+    const trailer2_real_t _t235 = -J_theta_cart_left*_t234;
+    const trailer2_real_t _t236 = _t235*_t3;
+    const trailer2_real_t _t237 = -J_theta_cart*_t219 - _t156 - _t217*_t88 - _t218*_t94
+            - _t220*_t99;
+    const trailer2_real_t _t238 = -_t20*_t230 - _t224*_t23 - _t227*_t23 + TRAILER2_LIT(0.2)*_t233
+            - TRAILER2_LIT(0.2)*_t236 + _t237;
+    const trailer2_real_t _t239 = -TRAILER2_LIT(1.6666666666666667)*_t238;
+    const trailer2_real_t _t240 = _t10*_t233 + _t10*_t236 + _t14*_t230 + _t16*_t224 + _t16*_t227
+            + _t221 + _t239*_t8;
+    const trailer2_real_t _t241 = TRAILER2_LIT(0.5)*_t240;
+    const trailer2_real_t _t242 = -J_theta_tractor*_t218 - K_theta_tractor_x_tractor_2*_t217 - _t152
+            - _t219*_t94 - _t220*_t95;
+    const trailer2_real_t _t243 = TRAILER2_LIT(0.3)*_t10*_t239 + TRAILER2_LIT(0.3)*_t16*_t230
+            - _t21*_t233 - _t21*_t236 - _t22*_t224 - _t22*_t227 + _t242;
+    const trailer2_real_t _t244 = TRAILER2_LIT(2.4154589371980677)*_t243;
+    const trailer2_real_t _t245 = -_t15*_t25 - _t18*_t24 - _t20*_t30;
+    const trailer2_real_t _t246 = -TRAILER2_LIT(1.6666666666666667)*_t245;
+    const trailer2_real_t _t247 = TRAILER2_LIT(0.2)*_t246;
+    const trailer2_real_t _t248 = -_t15*_t28 - _t18*_t27 - _t20*_t34;
+    const trailer2_real_t _t249 = -TRAILER2_LIT(1.6666666666666667)*_t248;
+    const trailer2_real_t _t250 = TRAILER2_LIT(0.2)*_t249;
+    const trailer2_real_t _t251 = K_theta_tractor_x_tractor_2*_t101 + _t106*_t86 + _t106*_t87
+            + _t108 + _t109;
+    const trailer2_real_t _t252 = -J_x_tractor*_t151 + K_theta_tractor_x_tractor*_t218 - _t154*_t219
+            - _t158*_t220 - _t251;
+    const trailer2_real_t _t253 = -_t10*_t239 + _t14*_t224 + _t14*_t227 - _t16*_t230 + _t233*_t8
+            + _t236*_t8 + _t252;
+    const trailer2_real_t _t254 = -_t241 + _t244;
+    const trailer2_real_t _t255 = -_t241 - _t244;
+    const trailer2_real_t _t256 = _t10*_t25 + _t38 - _t40;
+    const trailer2_real_t _t257 = _t10*_t28 + _t42 - _t44;
+    const trailer2_real_t _t258 = _t2*_t256;
+    const trailer2_real_t _t259 = _t2*_t257;
+    const trailer2_real_t _t260 = _t10*_t25 - _t38 - _t40;
+    const trailer2_real_t _t261 = _t10*_t28 - _t42 - _t44;
+    const trailer2_real_t _t262 = _t260*_t3;
+    const trailer2_real_t _t263 = _t261*_t3;
+    const trailer2_real_t _t264 = _t16*_t25 + _t247 - _t48 - _t50;
+    const trailer2_real_t _t265 = _t16*_t28 + _t250 - _t54 - _t56;
+    const trailer2_real_t _t266 = _t264*_t4;
+    const trailer2_real_t _t267 = _t265*_t4;
+    const trailer2_real_t _t268 = _t16*_t25 - _t247 - _t48 - _t50;
+    const trailer2_real_t _t269 = _t16*_t28 - _t250 - _t54 - _t56;
+    const trailer2_real_t _t270 = _t268*_t5;
+    const trailer2_real_t _t271 = _t269*_t5;
+    const trailer2_real_t _t272 = J_x_tractor*_t25 + K_theta_tractor_x_tractor_2*_t24 + _t246*_t91
+            + _t30*_t88;
+    const trailer2_real_t _t273 = J_x_tractor*_t28 + K_theta_tractor_x_tractor_2*_t27 + _t249*_t91
+            + _t34*_t88;
+    const trailer2_real_t _t274 = J_theta_tractor*_t24 + K_theta_tractor_x_tractor_2*_t25
+            + _t246*_t95 + _t30*_t94;
+    const trailer2_real_t _t275 = J_theta_tractor*_t27 + K_theta_tractor_x_tractor_2*_t28
+            + _t249*_t95 + _t34*_t94;
+    const trailer2_real_t _t276 = J_theta_cart*_t30 + _t24*_t94 + _t246*_t99 + _t25*_t88;
+    const trailer2_real_t _t277 = J_theta_cart*_t34 + _t249*_t99 + _t27*_t94 + _t28*_t88;
+    const trailer2_real_t _t278 = J_theta_cart2*_t246 + _t24*_t95 + _t25*_t91 + _t30*_t99;
+    const trailer2_real_t _t279 = J_theta_cart2*_t249 + _t27*_t95 + _t28*_t91 + _t34*_t99;
+    const trailer2_real_t _t280 = J_theta_cart_right*_t258;
+    const trailer2_real_t _t281 = J_theta_cart_right*_t259;
+    const trailer2_real_t _t282 = J_theta_cart_left*_t262;
+    const trailer2_real_t _t283 = J_theta_cart_left*_t263;
+    const trailer2_real_t _t284 = J_theta_cart2_right*_t266;
+    const trailer2_real_t _t285 = J_theta_cart2_right*_t267;
+    const trailer2_real_t _t286 = J_theta_cart2_left*_t270;
+    const trailer2_real_t _t287 = J_theta_cart2_left*_t271;
+    const trailer2_real_t _t288 = J_theta_right + _t24*_t274 + _t246*_t278 + _t25*_t272
+            + _t258*_t280 + _t262*_t282 + _t266*_t284 + _t270*_t286 + _t276*_t30;
+    const trailer2_real_t _t289 = _t24*_t275 + _t246*_t279 + _t25*_t273 + _t258*_t281 + _t262*_t283
+            + _t266*_t285 + _t270*_t287 + _t277*_t30;
+    const trailer2_real_t _t290 = J_theta_left + _t249*_t279 + _t259*_t281 + _t263*_t283
+            + _t267*_t285 + _t27*_t275 + _t271*_t287 + _t273*_t28 + _t277*_t34;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -3278,18 +2897,18 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t332 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t288 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t332*_t335 - _t333*_t334 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+    if (!(_t288*_t290 - _t289*_t289 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
                                                                model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t331;
-    const trailer2_real_t r_1 = _t330;
-    const trailer2_real_t r_2 = -_t329;
-    const trailer2_real_t r_3 = -_t268;
-    const trailer2_real_t r_4 = -_t259;
+    const trailer2_real_t r_0 = _t255;
+    const trailer2_real_t r_1 = _t254;
+    const trailer2_real_t r_2 = -_t253;
+    const trailer2_real_t r_3 = -_t239;
+    const trailer2_real_t r_4 = -_t230;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;

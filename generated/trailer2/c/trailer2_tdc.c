@@ -215,7 +215,7 @@ trailer2_status_t trailer2_tdc_init(trailer2_tdc_state_t *state,
     /* the values the step's minimal_tde keeps */
     trailer2_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_tdc_law keeps */
-    trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    trailer2_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer2_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;

@@ -65,7 +65,7 @@ trailer2_status_t trailer2_tdroc_check_config_detail(const trailer2_tdroc_config
         const trailer2_real_t q0[11] = {TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0),
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0),
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0)};
-        trailer2_real_t kept[23];  /* the step's copy, as _init would keep it */
+        trailer2_real_t kept[24];  /* the step's copy, as _init would keep it */
         trailer2_k_minimal_minv_norm_keep(&config->nominal, kept);
         trailer2_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
@@ -257,7 +257,7 @@ trailer2_status_t trailer2_tdroc_init(trailer2_tdroc_state_t *state,
     /* the values the step's minimal_minv_norm keeps */
     trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer2_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer2_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;

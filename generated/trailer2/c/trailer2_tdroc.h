@@ -70,10 +70,10 @@ typedef struct {
     trailer2_real_t weights[TRAILER2_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                      (at _init) */
     trailer2_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
-    trailer2_real_t k_minimal_tde[24]; /* minimal_tde's parameter-only values (at _init) */
-    trailer2_real_t k_minimal_minv_norm[23]; /* minimal_minv_norm's parameter-only values (at
+    trailer2_real_t k_minimal_tde[25]; /* minimal_tde's parameter-only values (at _init) */
+    trailer2_real_t k_minimal_minv_norm[24]; /* minimal_minv_norm's parameter-only values (at
                                                 _init) */
-    trailer2_real_t k_minimal_tdroc_law[23]; /* minimal_tdroc_law's parameter-only values (at
+    trailer2_real_t k_minimal_tdroc_law[24]; /* minimal_tdroc_law's parameter-only values (at
                                                 _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer2_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x16730260u
+#define TRAILER2_CODE_ID 0x17674097u
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;
@@ -317,19 +317,6 @@ static inline trailer2_real_t trailer2_norm2(trailer2_real_t x0, trailer2_real_t
     {
         const trailer2_real_t x[2] = {x0, x1};
         return trailer2_norm_scaled(x, 2);
-    }
-}
-
-static inline trailer2_real_t trailer2_norm4(trailer2_real_t x0, trailer2_real_t x1,
-    trailer2_real_t x2, trailer2_real_t x3)
-{
-    const trailer2_real_t sum = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3;
-    if (sum <= TRAILER2_REAL_MAX) {
-        return TRAILER2_SQRT(sum);
-    }
-    {
-        const trailer2_real_t x[4] = {x0, x1, x2, x3};
-        return trailer2_norm_scaled(x, 4);
     }
 }
 

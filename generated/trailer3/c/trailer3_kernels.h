@@ -44,9 +44,9 @@ static inline void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_no
 
 /* trailer3_k_minimal_tde_keep: the parameter-only part of trailer3_minimal_tde (trailer3_laws.h
    documents it).
-   operations after CSE: 0 add, 4 mul, 7 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 7 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
-    const trailer3_real_t *span, trailer3_real_t kept[31])
+    const trailer3_real_t *span, trailer3_real_t kept[32])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -67,7 +67,6 @@ static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
@@ -78,17 +77,21 @@ static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
     const trailer3_real_t span_1 = span[0];
-    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
-    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/span_1;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/span_1;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t11 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t12 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t13 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer3_real_t _t14 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart2;
     kept[2] = J_theta_cart2_left;
@@ -100,225 +103,218 @@ static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
     kept[8] = J_theta_cart_right;
     kept[9] = J_theta_left;
     kept[10] = J_theta_right;
-    kept[11] = J_x_tractor;
-    kept[12] = K_theta_cart_x_tractor;
-    kept[13] = K_theta_cart_x_tractor_2;
-    kept[14] = K_theta_cart2_x_tractor;
-    kept[15] = K_theta_cart2_x_tractor_2;
-    kept[16] = K_theta_cart3_x_tractor;
-    kept[17] = K_theta_cart3_x_tractor_2;
-    kept[18] = K_theta_tractor_x_tractor;
-    kept[19] = K_theta_tractor_x_tractor_2;
-    kept[20] = _t0;
-    kept[21] = _t1;
-    kept[22] = _t2;
-    kept[23] = _t3;
-    kept[24] = _t4;
-    kept[25] = _t5;
-    kept[26] = _t6;
-    kept[27] = _t7;
-    kept[28] = _t8;
-    kept[29] = _t9;
-    kept[30] = _t10;
+    kept[11] = K_theta_cart_x_tractor;
+    kept[12] = K_theta_cart_x_tractor_2;
+    kept[13] = K_theta_cart2_x_tractor;
+    kept[14] = K_theta_cart2_x_tractor_2;
+    kept[15] = K_theta_cart3_x_tractor;
+    kept[16] = K_theta_cart3_x_tractor_2;
+    kept[17] = _t0;
+    kept[18] = _t1;
+    kept[19] = _t2;
+    kept[20] = _t3;
+    kept[21] = _t4;
+    kept[22] = _t5;
+    kept[23] = _t6;
+    kept[24] = _t7;
+    kept[25] = _t8;
+    kept[26] = _t9;
+    kept[27] = _t10;
+    kept[28] = _t11;
+    kept[29] = _t12;
+    kept[30] = _t13;
+    kept[31] = _t14;
 }
 
 /* trailer3_k_minimal_tde: the per-step part of trailer3_minimal_tde (trailer3_laws.h documents it).
-   operations after CSE: 189 add, 279 mul, 0 div, 8 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[31],
+   operations after CSE: 136 add, 200 mul, 0 div, 6 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[32],
     const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
 {
-    const trailer3_real_t qp3 = q_prev[3];
-    const trailer3_real_t _t11 = TRAILER3_SIN_BOUNDED(qp3);
-    const trailer3_real_t _t12 = TRAILER3_COS_BOUNDED(qp3);
     const trailer3_real_t qp2 = q_prev[2];
-    const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(qp2);
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t15 = TRAILER3_COS_BOUNDED(qp2);
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t15;
+    const trailer3_real_t qp3 = q_prev[3];
+    const trailer3_real_t _t15 = qp2 - qp3;
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(_t15);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(_t15);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t17;
     const trailer3_real_t qp4 = q_prev[4];
-    const trailer3_real_t _t17 = TRAILER3_SIN_BOUNDED(qp4);
-    const trailer3_real_t _t18 = TRAILER3_COS_BOUNDED(qp4);
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.85)*_t12;
+    const trailer3_real_t _t19 = qp2 - qp4;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t17;
+    const trailer3_real_t _t25 = _t21*_t24;
     const trailer3_real_t qp5 = q_prev[5];
-    const trailer3_real_t _t21 = TRAILER3_SIN_BOUNDED(qp5);
-    const trailer3_real_t _t22 = TRAILER3_COS_BOUNDED(qp5);
-    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t22;
-    const trailer3_real_t _t24 = -_t11*_t14 - _t12*_t16;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(0.207)*_t13;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t26 = _t0*_t25;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(0.207)*_t15;
-    const trailer3_real_t _t28 = _t0*_t27;
-    const trailer3_real_t _t29 = _t0*_t24 + _t11*_t28 - _t12*_t26;
-    const trailer3_real_t _t30 = -TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.2)*_t30;
-    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t11*_t15 - _t12*_t14;
-    const trailer3_real_t _t33 = -_t0*_t32 - _t11*_t26 - _t12*_t28;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t34 = _t1*_t25;
-    const trailer3_real_t _t35 = _t1*_t27;
-    const trailer3_real_t _t36 = -_t1*_t24 + _t11*_t35 - _t12*_t34;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
-    const trailer3_real_t _t39 = _t1*_t32 - _t11*_t34 - _t12*_t35;
-    const trailer3_real_t _t40 = -_t14*_t17 - _t16*_t18;
-    const trailer3_real_t _t41 = -_t17*_t19 - _t18*_t20;
-    const trailer3_real_t _t42 = _t0*_t40 + _t17*_t28 - _t18*_t26 - _t30*_t41;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(1.6666666666666667)*_t42;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*_t43;
-    const trailer3_real_t _t45 = -_t14*_t18 + TRAILER3_LIT(0.3)*_t15*_t17;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.85)*_t12*_t17 - _t18*_t19;
-    const trailer3_real_t _t47 = -_t0*_t45 - _t17*_t26 - _t18*_t28 + _t30*_t46;
-    const trailer3_real_t _t48 = -_t1*_t40 + _t17*_t35 - _t18*_t34 - _t37*_t41;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t51 = _t1*_t45 - _t17*_t34 - _t18*_t35 + _t37*_t46;
-    const trailer3_real_t _t52 = -_t14*_t21 - _t16*_t22;
-    const trailer3_real_t _t53 = -_t19*_t21 - _t20*_t22;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(0.85)*_t17*_t21 - _t18*_t23;
-    const trailer3_real_t _t55 = _t0*_t52 + _t21*_t28 - _t22*_t26 - _t30*_t53 - _t43*_t54;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(1.6666666666666667)*_t55;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t56;
-    const trailer3_real_t _t58 = -_t14*_t22 + TRAILER3_LIT(0.3)*_t15*_t21;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.85)*_t12*_t21 - _t19*_t22;
-    const trailer3_real_t _t60 = -_t17*_t23 + TRAILER3_LIT(0.85)*_t18*_t21;
-    const trailer3_real_t _t61 = -_t0*_t58 - _t21*_t26 - _t22*_t28 + _t30*_t59 + _t43*_t60;
-    const trailer3_real_t _t62 = -_t1*_t52 + _t21*_t35 - _t22*_t34 - _t37*_t53 - _t49*_t54;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t63;
-    const trailer3_real_t _t65 = _t1*_t58 - _t21*_t34 - _t22*_t35 + _t37*_t59 + _t49*_t60;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t67 = K_theta_cart_x_tractor_2*_t12;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t69 = K_theta_cart2_x_tractor_2*_t18;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t71 = K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t72 = K_theta_cart_x_tractor*_t12;
-    const trailer3_real_t _t73 = K_theta_cart2_x_tractor*_t18;
-    const trailer3_real_t _t74 = K_theta_cart3_x_tractor*_t22;
-    const trailer3_real_t _t75 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t _t78 = TRAILER3_LIT(0.85)*_t18;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t79 = -K_theta_tractor_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t13;
-    const trailer3_real_t _t80 = K_theta_cart_x_tractor_2*_t11 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart2_x_tractor_2*_t17 - _t73;
-    const trailer3_real_t _t82 = K_theta_cart3_x_tractor_2*_t21 - _t74;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t83 = J_x_tractor*_t26 - _t0*_t79 + _t30*_t80 + _t43*_t81 + _t56*_t82;
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor*_t13 + K_theta_tractor_x_tractor_2*_t15;
-    const trailer3_real_t _t85 = _t66 + _t67;
-    const trailer3_real_t _t86 = _t68 + _t69;
-    const trailer3_real_t _t87 = _t70 + _t71;
-    const trailer3_real_t _t88 = J_x_tractor*_t28 - _t0*_t84 + _t30*_t85 + _t43*_t86 + _t56*_t87;
-    const trailer3_real_t _t89 = _t14*(_t66 + _t67) + _t16*(-K_theta_cart_x_tractor_2*_t11 + _t72);
-    const trailer3_real_t _t90 = _t19*(_t68 + _t69) + _t20*(_t73 - _t75);
-    const trailer3_real_t _t91 = _t19*(_t70 + _t71) + _t20*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t92 = J_theta_cart*_t30 - _t0*_t89 + _t26*_t80 + _t28*_t85 + _t43*_t90
-            + _t56*_t91;
-    const trailer3_real_t _t93 = _t14*(_t68 + _t69) + _t16*(_t73 - _t75);
-    const trailer3_real_t _t94 = _t77*(_t70 + _t71) + _t78*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t95 = J_theta_cart2*_t43 - _t0*_t93 + _t26*_t81 + _t28*_t86 + _t30*_t90
-            + _t56*_t94;
-    const trailer3_real_t _t96 = _t14*(_t70 + _t71) + _t16*(_t74 - _t76);
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t56 - _t0*_t96 + _t26*_t82 + _t28*_t87 + _t30*_t91
-            + _t43*_t94;
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t98 = _t2 + _t26*_t79 + _t28*_t84 + _t30*_t89 + _t43*_t93 + _t56*_t96;
-    const trailer3_real_t _t99 = _t31 - _t33;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t100 = _t3*_t99;
-    const trailer3_real_t _t101 = _t38 - _t39;
-    const trailer3_real_t _t102 = _t101*_t3;
-    const trailer3_real_t _t103 = -_t31 - _t33;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t104 = _t103*_t4;
-    const trailer3_real_t _t105 = -_t38 - _t39;
-    const trailer3_real_t _t106 = _t105*_t4;
-    const trailer3_real_t _t107 = _t44 - _t47;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t108 = _t107*_t5;
-    const trailer3_real_t _t109 = _t50 - _t51;
-    const trailer3_real_t _t110 = _t109*_t5;
-    const trailer3_real_t _t111 = -_t44 - _t47;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t112 = _t111*_t6;
-    const trailer3_real_t _t113 = -_t50 - _t51;
-    const trailer3_real_t _t114 = _t113*_t6;
-    const trailer3_real_t _t115 = _t57 - _t61;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t116 = _t115*_t7;
-    const trailer3_real_t _t117 = _t64 - _t65;
-    const trailer3_real_t _t118 = _t117*_t7;
-    const trailer3_real_t _t119 = -_t57 - _t61;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t120 = _t119*_t8;
-    const trailer3_real_t _t121 = -_t64 - _t65;
-    const trailer3_real_t _t122 = _t121*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t123 = J_theta_cart2_left*_t112*_t114 + J_theta_cart2_right*_t108*_t110
-            + J_theta_cart3_left*_t120*_t122 + J_theta_cart3_right*_t116*_t118
-            + J_theta_cart_left*_t104*_t106 + J_theta_cart_right*_t100*_t102;
-    const trailer3_real_t _t124 = J_x_tractor*_t34 + _t1*_t79 + _t37*_t80 + _t49*_t81 + _t63*_t82;
-    const trailer3_real_t _t125 = J_x_tractor*_t35 + _t1*_t84 + _t37*_t85 + _t49*_t86 + _t63*_t87;
-    const trailer3_real_t _t126 = J_theta_cart*_t37 + _t1*_t89 + _t34*_t80 + _t35*_t85 + _t49*_t90
-            + _t63*_t91;
-    const trailer3_real_t _t127 = J_theta_cart2*_t49 + _t1*_t93 + _t34*_t81 + _t35*_t86 + _t37*_t90
-            + _t63*_t94;
-    const trailer3_real_t _t128 = J_theta_cart3*_t63 + _t1*_t96 + _t34*_t82 + _t35*_t87 + _t37*_t91
-            + _t49*_t94;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t129 = _t34*_t79 + _t35*_t84 + _t37*_t89 + _t49*_t93 + _t63*_t96 + _t9;
+    const trailer3_real_t _t26 = qp2 - qp5;
+    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t24*_t28;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.85)*_t21;
+    const trailer3_real_t _t33 = _t28*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t36 = _t20*_t24;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t38 = _t24*_t27;
+    const trailer3_real_t _t39 = _t27*_t32;
+    const trailer3_real_t _t0 = kept[17];
+    const trailer3_real_t _t1 = kept[18];
+    const trailer3_real_t _t40 = _t0*_t18 - _t1*_t16;
+    const trailer3_real_t _t41 = -TRAILER3_LIT(1.6666666666666667)*_t40;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.2)*_t41;
+    const trailer3_real_t _t43 = -_t0*_t34;
+    const trailer3_real_t _t2 = kept[19];
+    const trailer3_real_t _t3 = kept[20];
+    const trailer3_real_t _t44 = -_t16*_t3 + _t18*_t2;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = -_t2*_t34;
+    const trailer3_real_t _t48 = -_t20*_t23 - _t25;
+    const trailer3_real_t _t49 = _t0*_t22 - _t1*_t20 - _t41*_t48;
+    const trailer3_real_t _t50 = -TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t51 = TRAILER3_LIT(0.2)*_t50;
+    const trailer3_real_t _t52 = _t21*_t23 - _t36;
+    const trailer3_real_t _t53 = -_t0*_t35 - _t1*_t21 + _t41*_t52;
+    const trailer3_real_t _t54 = _t2*_t22 - _t20*_t3 - _t45*_t48;
+    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
+    const trailer3_real_t _t57 = -_t2*_t35 - _t21*_t3 + _t45*_t52;
+    const trailer3_real_t _t58 = -_t23*_t27 - _t30;
+    const trailer3_real_t _t59 = -_t27*_t31 - _t33;
+    const trailer3_real_t _t60 = _t0*_t29 - _t1*_t27 - _t41*_t58 - _t50*_t59;
+    const trailer3_real_t _t61 = -TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t61;
+    const trailer3_real_t _t63 = _t23*_t28 - _t38;
+    const trailer3_real_t _t64 = _t28*_t31 - _t39;
+    const trailer3_real_t _t65 = -_t0*_t37 - _t1*_t28 + _t41*_t63 + _t50*_t64;
+    const trailer3_real_t _t66 = _t2*_t29 - _t27*_t3 - _t45*_t58 - _t55*_t59;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
+    const trailer3_real_t _t69 = -_t2*_t37 - _t28*_t3 + _t45*_t63 + _t55*_t64;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t70 = K_theta_cart2_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t71 = K_theta_cart3_x_tractor*_t27;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t72 = K_theta_cart3_x_tractor_2*_t28;
     const trailer3_real_t qd_now0 = qdot_now[0];
     const trailer3_real_t qd_then0 = qdot_then[0];
-    const trailer3_real_t _t10 = kept[30];
-    const trailer3_real_t _t130 = _t10*(qd_now0 - qd_then0);
+    const trailer3_real_t _t4 = kept[21];
+    const trailer3_real_t _t73 = _t4*(qd_now0 - qd_then0);
     const trailer3_real_t qd_now1 = qdot_now[1];
     const trailer3_real_t qd_then1 = qdot_then[1];
-    const trailer3_real_t _t131 = _t10*(qd_now1 - qd_then1);
+    const trailer3_real_t _t74 = _t4*(qd_now1 - qd_then1);
+    const trailer3_real_t _t75 = _t1*_t17 + _t42 - _t43;
+    const trailer3_real_t _t76 = _t17*_t3 + _t46 - _t47;
+    const trailer3_real_t _t5 = kept[22];
+    const trailer3_real_t _t77 = _t5*_t75;
+    const trailer3_real_t _t78 = _t5*_t76;
+    const trailer3_real_t _t79 = _t1*_t17 - _t42 - _t43;
+    const trailer3_real_t _t80 = _t17*_t3 - _t46 - _t47;
+    const trailer3_real_t _t6 = kept[23];
+    const trailer3_real_t _t81 = _t6*_t79;
+    const trailer3_real_t _t82 = _t6*_t80;
+    const trailer3_real_t _t83 = _t51 - _t53;
+    const trailer3_real_t _t84 = _t56 - _t57;
+    const trailer3_real_t _t7 = kept[24];
+    const trailer3_real_t _t85 = _t7*_t83;
+    const trailer3_real_t _t86 = _t7*_t84;
+    const trailer3_real_t _t87 = -_t51 - _t53;
+    const trailer3_real_t _t88 = -_t56 - _t57;
+    const trailer3_real_t _t8 = kept[25];
+    const trailer3_real_t _t89 = _t8*_t87;
+    const trailer3_real_t _t90 = _t8*_t88;
+    const trailer3_real_t _t91 = _t62 - _t65;
+    const trailer3_real_t _t92 = _t68 - _t69;
+    const trailer3_real_t _t9 = kept[26];
+    const trailer3_real_t _t93 = _t9*_t91;
+    const trailer3_real_t _t94 = _t9*_t92;
+    const trailer3_real_t _t95 = -_t62 - _t65;
+    const trailer3_real_t _t96 = -_t68 - _t69;
+    const trailer3_real_t _t10 = kept[27];
+    const trailer3_real_t _t97 = _t10*_t95;
+    const trailer3_real_t _t98 = _t10*_t96;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t99 = -K_theta_cart_x_tractor*_t16 + K_theta_cart_x_tractor_2*_t17;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t100 = K_theta_cart2_x_tractor_2*_t21 - _t70;
+    const trailer3_real_t _t101 = K_theta_cart3_x_tractor_2*_t28 - _t71;
+    const trailer3_real_t _t102 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t103 = K_theta_cart2_x_tractor*_t22 + K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t104 = K_theta_cart3_x_tractor*_t29 + K_theta_cart3_x_tractor_2*_t37;
+    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t25
+            + K_theta_cart2_x_tractor_2*(-_t21*_t23 + _t36) + _t23*_t70;
+    const trailer3_real_t _t106 = K_theta_cart3_x_tractor*_t30 + K_theta_cart3_x_tractor_2*_t38
+            + _t23*(_t71 - _t72);
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t33 + K_theta_cart3_x_tractor_2*_t39
+            + _t31*(_t71 - _t72);
+    const trailer3_real_t _t11 = kept[28];
+    const trailer3_real_t _t108 = _t100*_t50 + _t101*_t61 + _t11 + _t41*_t99;
+    const trailer3_real_t _t12 = kept[29];
+    const trailer3_real_t _t109 = _t100*_t55 + _t101*_t67 + _t12 + _t45*_t99;
+    const trailer3_real_t _t13 = kept[30];
+    const trailer3_real_t _t110 = _t102*_t41 + _t103*_t50 + _t104*_t61 + _t13;
+    const trailer3_real_t _t14 = kept[31];
+    const trailer3_real_t _t111 = _t102*_t45 + _t103*_t55 + _t104*_t67 + _t14;
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t112 = J_theta_cart*_t41 + _t0*_t102 + _t1*_t99 + _t105*_t50
+            + _t106*_t61;
+    const trailer3_real_t _t113 = J_theta_cart*_t45 + _t102*_t2 + _t105*_t55 + _t106*_t67
+            + _t3*_t99;
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t114 = J_theta_cart2*_t50 + _t0*_t103 + _t1*_t100 + _t105*_t41
+            + _t107*_t61;
+    const trailer3_real_t _t115 = J_theta_cart2*_t55 + _t100*_t3 + _t103*_t2 + _t105*_t45
+            + _t107*_t67;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t116 = J_theta_cart3*_t61 + _t0*_t104 + _t1*_t101 + _t106*_t41
+            + _t107*_t50;
+    const trailer3_real_t _t117 = J_theta_cart3*_t67 + _t101*_t3 + _t104*_t2 + _t106*_t45
+            + _t107*_t55;
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t118 = J_theta_cart_right*_t77;
+    const trailer3_real_t _t119 = J_theta_cart_right*_t78;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t120 = J_theta_cart_left*_t81;
+    const trailer3_real_t _t121 = J_theta_cart_left*_t82;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t122 = J_theta_cart2_right*_t85;
+    const trailer3_real_t _t123 = J_theta_cart2_right*_t86;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t124 = J_theta_cart2_left*_t89;
+    const trailer3_real_t _t125 = J_theta_cart2_left*_t90;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t126 = J_theta_cart3_right*_t93;
+    const trailer3_real_t _t127 = J_theta_cart3_right*_t94;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t128 = J_theta_cart3_left*_t97;
+    const trailer3_real_t _t129 = J_theta_cart3_left*_t98;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t132 = J_theta_cart2_left*_t112*_t112 + J_theta_cart2_right*_t108*_t108
-            + J_theta_cart3_left*_t120*_t120 + J_theta_cart3_right*_t116*_t116
-            + J_theta_cart_left*_t104*_t104 + J_theta_cart_right*_t100*_t100 + J_theta_right
-            - _t0*_t98 + _t26*_t83 + _t28*_t88 + _t30*_t92 + _t43*_t95 + _t56*_t97;
-    const trailer3_real_t _t133 = _t1*_t98 + _t123 + _t34*_t83 + _t35*_t88 + _t37*_t92 + _t49*_t95
-            + _t63*_t97;
-    const trailer3_real_t _t134 = -_t0*_t129 + _t123 + _t124*_t26 + _t125*_t28 + _t126*_t30
-            + _t127*_t43 + _t128*_t56;
+    const trailer3_real_t _t130 = J_theta_right + _t0*_t110 + _t1*_t108 + _t112*_t41 + _t114*_t50
+            + _t116*_t61 + _t118*_t77 + _t120*_t81 + _t122*_t85 + _t124*_t89 + _t126*_t93
+            + _t128*_t97;
+    const trailer3_real_t _t131 = _t0*_t111 + _t1*_t109 + _t113*_t41 + _t115*_t50 + _t117*_t61
+            + _t119*_t77 + _t121*_t81 + _t123*_t85 + _t125*_t89 + _t127*_t93 + _t129*_t97;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t135 = J_theta_cart2_left*_t114*_t114 + J_theta_cart2_right*_t110*_t110
-            + J_theta_cart3_left*_t122*_t122 + J_theta_cart3_right*_t118*_t118
-            + J_theta_cart_left*_t106*_t106 + J_theta_cart_right*_t102*_t102 + J_theta_left
-            + _t1*_t129 + _t124*_t34 + _t125*_t35 + _t126*_t37 + _t127*_t49 + _t128*_t63;
+    const trailer3_real_t _t132 = J_theta_left + _t109*_t3 + _t111*_t2 + _t113*_t45 + _t115*_t55
+            + _t117*_t67 + _t119*_t78 + _t121*_t82 + _t123*_t86 + _t125*_t90 + _t127*_t94
+            + _t129*_t98;
     const trailer3_real_t up0 = u_prev[0];
     const trailer3_real_t up1 = u_prev[1];
-    H1hat[0] = -_t130*_t132 - _t131*_t133 + up0;
-    H1hat[1] = -_t130*_t134 - _t131*_t135 + up1;
+    H1hat[0] = -_t130*_t73 - _t131*_t74 + up0;
+    H1hat[1] = -_t131*_t73 - _t132*_t74 + up1;
 }
 
 /* trailer3_k_minimal_minv_norm_keep: the parameter-only part of trailer3_minimal_minv_norm
    (trailer3_laws.h documents it).
-   operations after CSE: 0 add, 4 mul, 6 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 12 mul, 6 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
-    trailer3_real_t kept[30])
+    trailer3_real_t kept[31])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -339,7 +335,6 @@ static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
@@ -349,16 +344,20 @@ static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t10 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t11 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer3_real_t _t12 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t13 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart2;
     kept[2] = J_theta_cart2_left;
@@ -370,207 +369,198 @@ static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
     kept[8] = J_theta_cart_right;
     kept[9] = J_theta_left;
     kept[10] = J_theta_right;
-    kept[11] = J_x_tractor;
-    kept[12] = K_theta_cart_x_tractor;
-    kept[13] = K_theta_cart_x_tractor_2;
-    kept[14] = K_theta_cart2_x_tractor;
-    kept[15] = K_theta_cart2_x_tractor_2;
-    kept[16] = K_theta_cart3_x_tractor;
-    kept[17] = K_theta_cart3_x_tractor_2;
-    kept[18] = K_theta_tractor_x_tractor;
-    kept[19] = K_theta_tractor_x_tractor_2;
-    kept[20] = _t0;
-    kept[21] = _t1;
-    kept[22] = _t2;
-    kept[23] = _t3;
-    kept[24] = _t4;
-    kept[25] = _t5;
-    kept[26] = _t6;
-    kept[27] = _t7;
-    kept[28] = _t8;
-    kept[29] = _t9;
+    kept[11] = K_theta_cart_x_tractor;
+    kept[12] = K_theta_cart_x_tractor_2;
+    kept[13] = K_theta_cart2_x_tractor;
+    kept[14] = K_theta_cart2_x_tractor_2;
+    kept[15] = K_theta_cart3_x_tractor;
+    kept[16] = K_theta_cart3_x_tractor_2;
+    kept[17] = _t0;
+    kept[18] = _t1;
+    kept[19] = _t2;
+    kept[20] = _t3;
+    kept[21] = _t4;
+    kept[22] = _t5;
+    kept[23] = _t6;
+    kept[24] = _t7;
+    kept[25] = _t8;
+    kept[26] = _t9;
+    kept[27] = _t10;
+    kept[28] = _t11;
+    kept[29] = _t12;
+    kept[30] = _t13;
 }
 
 /* trailer3_k_minimal_minv_norm: the per-step part of trailer3_minimal_minv_norm (trailer3_laws.h
    documents it).
-   operations after CSE: 187 add, 276 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
-static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[30],
+   operations after CSE: 137 add, 206 mul, 1 div, 6 sin/cos, 1 sqrt, 1 fabs */
+static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[31],
     const trailer3_real_t *q, trailer3_real_t *norm)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
+    const trailer3_real_t _t14 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t15 = _t14 + theta_cart;
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(_t15);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(_t15);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t17;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t19 = _t14 + theta_cart2;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t17;
+    const trailer3_real_t _t25 = _t21*_t24;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
-    const trailer3_real_t _t27 = _t0*_t26;
-    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t33 = _t1*_t24;
-    const trailer3_real_t _t34 = _t1*_t26;
-    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
-    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
-    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
-    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
-    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
+    const trailer3_real_t _t26 = _t14 + theta_cart3;
+    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t24*_t28;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.85)*_t28;
+    const trailer3_real_t _t33 = _t21*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t0 = kept[17];
+    const trailer3_real_t _t1 = kept[18];
+    const trailer3_real_t _t37 = _t0*_t18 + _t1*_t16;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.2)*_t38;
+    const trailer3_real_t _t40 = _t0*_t34;
+    const trailer3_real_t _t2 = kept[19];
+    const trailer3_real_t _t3 = kept[20];
+    const trailer3_real_t _t41 = _t16*_t3 + _t18*_t2;
     const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
     const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
-    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
-    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
-    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
-    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
-    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
-    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
-    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
-    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
-    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
-    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
-    const trailer3_real_t _t84 = _t65 + _t66;
-    const trailer3_real_t _t85 = _t67 + _t68;
-    const trailer3_real_t _t86 = _t69 + _t70;
-    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
-    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
-    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
-    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
-    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
-    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
+    const trailer3_real_t _t44 = _t2*_t34;
+    const trailer3_real_t _t45 = -_t20*_t23 - _t25;
+    const trailer3_real_t _t46 = _t0*_t22 + _t1*_t20 - _t38*_t45;
+    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
+    const trailer3_real_t _t49 = _t0*_t35;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t17*_t20 - _t21*_t23;
+    const trailer3_real_t _t51 = _t38*_t50;
+    const trailer3_real_t _t52 = _t2*_t22 + _t20*_t3 - _t42*_t45;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t53;
+    const trailer3_real_t _t55 = _t2*_t35;
+    const trailer3_real_t _t56 = _t42*_t50;
+    const trailer3_real_t _t57 = -_t23*_t27 - _t30;
+    const trailer3_real_t _t58 = -_t20*_t31 - _t33;
+    const trailer3_real_t _t59 = _t0*_t29 + _t1*_t27 - _t38*_t57 - _t47*_t58;
+    const trailer3_real_t _t60 = -TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t60;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.85)*_t17*_t27 - _t23*_t28;
+    const trailer3_real_t _t63 = -_t20*_t32 + TRAILER3_LIT(0.85)*_t21*_t27;
+    const trailer3_real_t _t64 = _t0*_t36 - _t1*_t28 + _t38*_t62 + _t47*_t63;
+    const trailer3_real_t _t65 = _t2*_t29 + _t27*_t3 - _t42*_t57 - _t53*_t58;
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
+    const trailer3_real_t _t68 = _t2*_t36 - _t28*_t3 + _t42*_t62 + _t53*_t63;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t69 = K_theta_cart2_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t70 = K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t71 = K_theta_cart3_x_tractor*_t27;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t72 = K_theta_cart3_x_tractor_2*_t28;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t74 = _t1*_t17 + _t39 - _t40;
+    const trailer3_real_t _t4 = kept[21];
+    const trailer3_real_t _t75 = _t4*_t74;
+    const trailer3_real_t _t76 = _t1*_t17 - _t39 - _t40;
+    const trailer3_real_t _t5 = kept[22];
+    const trailer3_real_t _t77 = _t5*_t76;
+    const trailer3_real_t _t78 = _t1*_t21 + _t48 - _t49 - _t51;
+    const trailer3_real_t _t6 = kept[23];
+    const trailer3_real_t _t79 = _t6*_t78;
+    const trailer3_real_t _t80 = _t1*_t21 - _t48 - _t49 - _t51;
+    const trailer3_real_t _t7 = kept[24];
+    const trailer3_real_t _t81 = _t7*_t80;
+    const trailer3_real_t _t82 = _t61 - _t64;
+    const trailer3_real_t _t8 = kept[25];
+    const trailer3_real_t _t83 = _t8*_t82;
+    const trailer3_real_t _t84 = -_t61 - _t64;
+    const trailer3_real_t _t9 = kept[26];
+    const trailer3_real_t _t85 = _t84*_t9;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t16 + K_theta_cart_x_tractor_2*_t17;
+    const trailer3_real_t _t87 = _t69 + _t70;
+    const trailer3_real_t _t88 = _t71 + _t72;
+    const trailer3_real_t _t10 = kept[27];
+    const trailer3_real_t _t89 = _t10 + _t42*_t86 + _t53*_t87 + _t66*_t88;
+    const trailer3_real_t _t90 = K_theta_cart_x_tractor*_t18 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t91 = K_theta_cart2_x_tractor*_t22 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t92 = K_theta_cart3_x_tractor*_t29 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t11 = kept[28];
+    const trailer3_real_t _t93 = _t11 + _t42*_t90 + _t53*_t91 + _t66*_t92;
+    const trailer3_real_t _t94 = K_theta_cart2_x_tractor*_t25 - K_theta_cart2_x_tractor_2*_t20*_t24
+            + _t23*(_t69 + _t70);
+    const trailer3_real_t _t95 = K_theta_cart3_x_tractor*_t30 - K_theta_cart3_x_tractor_2*_t24*_t27
+            + _t23*(_t71 + _t72);
     const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
-            + _t55*_t93;
-    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
+    const trailer3_real_t _t96 = J_theta_cart*_t42 + _t2*_t90 + _t3*_t86 + _t53*_t94 + _t66*_t95;
+    const trailer3_real_t _t97 = K_theta_cart3_x_tractor*_t33 - K_theta_cart3_x_tractor_2*_t21*_t31
+            + _t73*(_t71 + _t72);
     const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
-            + _t55*_t95;
+    const trailer3_real_t _t98 = J_theta_cart2*_t53 + _t2*_t91 + _t3*_t87 + _t42*_t94 + _t66*_t97;
     const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
-            + _t42*_t95;
-    const trailer3_real_t _t98 = _t30 - _t32;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t99 = _t3*_t98;
-    const trailer3_real_t _t100 = _t37 - _t38;
-    const trailer3_real_t _t101 = _t100*_t3;
-    const trailer3_real_t _t102 = -_t30 - _t32;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t103 = _t102*_t4;
-    const trailer3_real_t _t104 = -_t37 - _t38;
-    const trailer3_real_t _t105 = _t104*_t4;
-    const trailer3_real_t _t106 = _t43 - _t46;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t107 = _t106*_t5;
-    const trailer3_real_t _t108 = _t49 - _t50;
-    const trailer3_real_t _t109 = _t108*_t5;
-    const trailer3_real_t _t110 = -_t43 - _t46;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t111 = _t110*_t6;
-    const trailer3_real_t _t112 = -_t49 - _t50;
-    const trailer3_real_t _t113 = _t112*_t6;
-    const trailer3_real_t _t114 = _t56 - _t60;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = _t63 - _t64;
-    const trailer3_real_t _t117 = _t116*_t7;
-    const trailer3_real_t _t118 = -_t56 - _t60;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t119 = _t118*_t8;
-    const trailer3_real_t _t120 = -_t63 - _t64;
-    const trailer3_real_t _t121 = _t120*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t99 = J_theta_cart3*_t66 + _t2*_t92 + _t3*_t88 + _t42*_t95 + _t53*_t97;
+    const trailer3_real_t _t100 = _t17*_t3 + _t43 - _t44;
+    const trailer3_real_t _t101 = _t100*_t4;
     const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
-            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
-            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
-    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
-    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
-    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
-            + _t62*_t93;
-    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
-            + _t62*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
-            + _t48*_t95;
+    const trailer3_real_t _t102 = J_theta_cart_right*_t101;
+    const trailer3_real_t _t103 = _t17*_t3 - _t43 - _t44;
+    const trailer3_real_t _t104 = _t103*_t5;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t105 = J_theta_cart_left*_t104;
+    const trailer3_real_t _t106 = _t21*_t3 + _t54 - _t55 - _t56;
+    const trailer3_real_t _t107 = _t106*_t6;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t108 = J_theta_cart2_right*_t107;
+    const trailer3_real_t _t109 = _t21*_t3 - _t54 - _t55 - _t56;
+    const trailer3_real_t _t110 = _t109*_t7;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t111 = J_theta_cart2_left*_t110;
+    const trailer3_real_t _t112 = _t67 - _t68;
+    const trailer3_real_t _t113 = _t112*_t8;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t114 = J_theta_cart3_right*_t113;
+    const trailer3_real_t _t115 = -_t67 - _t68;
+    const trailer3_real_t _t116 = _t115*_t9;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t117 = J_theta_cart3_left*_t116;
+    const trailer3_real_t _t118 = _t0*_t93 + _t1*_t89 + _t102*_t75 + _t105*_t77 + _t108*_t79
+            + _t111*_t81 + _t114*_t83 + _t117*_t85 + _t38*_t96 + _t47*_t98 + _t60*_t99;
+    const trailer3_real_t _t119 = _t118*_t118;
+    const trailer3_real_t _t12 = kept[29];
+    const trailer3_real_t _t120 = _t12 + _t38*_t86 + _t47*_t87 + _t60*_t88;
+    const trailer3_real_t _t13 = kept[30];
+    const trailer3_real_t _t121 = _t13 + _t38*_t90 + _t47*_t91 + _t60*_t92;
+    const trailer3_real_t _t122 = J_theta_cart*_t38 + _t0*_t90 + _t1*_t86 + _t47*_t94 + _t60*_t95;
+    const trailer3_real_t _t123 = J_theta_cart2*_t47 + _t0*_t91 + _t1*_t87 + _t38*_t94 + _t60*_t97;
+    const trailer3_real_t _t124 = J_theta_cart3*_t60 + _t0*_t92 + _t1*_t88 + _t38*_t95 + _t47*_t97;
+    const trailer3_real_t _t125 = J_theta_cart_right*_t75;
+    const trailer3_real_t _t126 = J_theta_cart_left*_t77;
+    const trailer3_real_t _t127 = J_theta_cart2_right*_t79;
+    const trailer3_real_t _t128 = J_theta_cart2_left*_t81;
+    const trailer3_real_t _t129 = J_theta_cart3_right*_t83;
+    const trailer3_real_t _t130 = J_theta_cart3_left*_t85;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t129 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
-            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
-            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
-    const trailer3_real_t _t130 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
-            + _t62*_t97;
-    const trailer3_real_t _t131 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
-            + _t127*_t42 + _t128*_t55;
+    const trailer3_real_t _t131 = J_theta_right + _t0*_t121 + _t1*_t120 + _t122*_t38 + _t123*_t47
+            + _t124*_t60 + _t125*_t75 + _t126*_t77 + _t127*_t79 + _t128*_t81 + _t129*_t83
+            + _t130*_t85;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t132 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
-            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
-            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
-            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
-    norm[0] = trailer3_norm4(_t129, _t130, _t131, _t132)/TRAILER3_FABS(_t129*_t132 - _t130*_t131);
+    const trailer3_real_t _t132 = J_theta_left + _t101*_t102 + _t104*_t105 + _t107*_t108
+            + _t110*_t111 + _t113*_t114 + _t116*_t117 + _t2*_t93 + _t3*_t89 + _t42*_t96 + _t53*_t98
+            + _t66*_t99;
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t119 + _t131*_t131 + _t132*_t132)/TRAILER3_FABS(_t119
+            - _t131*_t132);
 }
 
 /* trailer3_k_minimal_omega_difference: the body of trailer3_minimal_omega_difference
@@ -588,10 +578,91 @@ static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *ne
     norm[0] = trailer3_norm2(_t0, _t1);
 }
 
+/* trailer3_k_minimal_tdc_law_keep: the parameter-only part of trailer3_minimal_tdc_law
+   (trailer3_laws.h documents it).
+   operations after CSE: 4 add, 12 mul, 6 div, 0 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tdc_law_keep(const trailer3_params_t *p,
+    trailer3_real_t kept[31])
+{
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t10 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t11 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t12 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer3_real_t _t13 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    kept[0] = J_theta_cart;
+    kept[1] = J_theta_cart2;
+    kept[2] = J_theta_cart2_left;
+    kept[3] = J_theta_cart2_right;
+    kept[4] = J_theta_cart3;
+    kept[5] = J_theta_cart3_left;
+    kept[6] = J_theta_cart3_right;
+    kept[7] = J_theta_cart_left;
+    kept[8] = J_theta_cart_right;
+    kept[9] = J_theta_left;
+    kept[10] = J_theta_right;
+    kept[11] = K_theta_cart_x_tractor;
+    kept[12] = K_theta_cart_x_tractor_2;
+    kept[13] = K_theta_cart2_x_tractor;
+    kept[14] = K_theta_cart2_x_tractor_2;
+    kept[15] = K_theta_cart3_x_tractor;
+    kept[16] = K_theta_cart3_x_tractor_2;
+    kept[17] = _t0;
+    kept[18] = _t1;
+    kept[19] = _t2;
+    kept[20] = _t3;
+    kept[21] = _t4;
+    kept[22] = _t5;
+    kept[23] = _t6;
+    kept[24] = _t7;
+    kept[25] = _t8;
+    kept[26] = _t9;
+    kept[27] = _t10;
+    kept[28] = _t11;
+    kept[29] = _t12;
+    kept[30] = _t13;
+}
+
 /* trailer3_k_minimal_tdc_law: the per-step part of trailer3_minimal_tdc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 191 add, 278 mul, 0 div, 8 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
+   operations after CSE: 142 add, 209 mul, 0 div, 6 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[31],
     const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
@@ -599,414 +670,402 @@ static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[30],
 {
     (void)p12;
     (void)p22;
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
+    const trailer3_real_t _t14 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t15 = _t14 + theta_cart;
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(_t15);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(_t15);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t17;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t19 = _t14 + theta_cart2;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t17;
+    const trailer3_real_t _t25 = _t21*_t24;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
-    const trailer3_real_t _t27 = _t0*_t26;
-    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t33 = _t1*_t24;
-    const trailer3_real_t _t34 = _t1*_t26;
-    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
-    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
-    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
-    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
-    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
+    const trailer3_real_t _t26 = _t14 + theta_cart3;
+    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t24*_t28;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.85)*_t28;
+    const trailer3_real_t _t33 = _t21*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t0 = kept[17];
+    const trailer3_real_t _t1 = kept[18];
+    const trailer3_real_t _t37 = _t0*_t18 + _t1*_t16;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.2)*_t38;
+    const trailer3_real_t _t40 = _t0*_t34;
+    const trailer3_real_t _t2 = kept[19];
+    const trailer3_real_t _t3 = kept[20];
+    const trailer3_real_t _t41 = _t16*_t3 + _t18*_t2;
     const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
     const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
-    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
-    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
-    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
-    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
-    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
-    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
-    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
-    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
-    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
-    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
-    const trailer3_real_t _t84 = _t65 + _t66;
-    const trailer3_real_t _t85 = _t67 + _t68;
-    const trailer3_real_t _t86 = _t69 + _t70;
-    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
-    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
-    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
-    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
-    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
-    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
-            + _t55*_t93;
-    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
-            + _t55*_t95;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
-            + _t42*_t95;
-    const trailer3_real_t _t98 = _t30 - _t32;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t99 = _t3*_t98;
-    const trailer3_real_t _t100 = _t37 - _t38;
-    const trailer3_real_t _t101 = _t100*_t3;
-    const trailer3_real_t _t102 = -_t30 - _t32;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t103 = _t102*_t4;
-    const trailer3_real_t _t104 = -_t37 - _t38;
-    const trailer3_real_t _t105 = _t104*_t4;
-    const trailer3_real_t _t106 = _t43 - _t46;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t107 = _t106*_t5;
-    const trailer3_real_t _t108 = _t49 - _t50;
-    const trailer3_real_t _t109 = _t108*_t5;
-    const trailer3_real_t _t110 = -_t43 - _t46;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t111 = _t110*_t6;
-    const trailer3_real_t _t112 = -_t49 - _t50;
-    const trailer3_real_t _t113 = _t112*_t6;
-    const trailer3_real_t _t114 = _t56 - _t60;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = _t63 - _t64;
-    const trailer3_real_t _t117 = _t116*_t7;
-    const trailer3_real_t _t118 = -_t56 - _t60;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t119 = _t118*_t8;
-    const trailer3_real_t _t120 = -_t63 - _t64;
-    const trailer3_real_t _t121 = _t120*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
-            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
-            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
-    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
-    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
-    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
-            + _t62*_t93;
-    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
-            + _t62*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
-            + _t48*_t95;
+    const trailer3_real_t _t44 = _t2*_t34;
+    const trailer3_real_t _t45 = -_t20*_t23 - _t25;
+    const trailer3_real_t _t46 = _t0*_t22 + _t1*_t20 - _t38*_t45;
+    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
+    const trailer3_real_t _t49 = _t0*_t35;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t17*_t20 - _t21*_t23;
+    const trailer3_real_t _t51 = _t38*_t50;
+    const trailer3_real_t _t52 = _t2*_t22 + _t20*_t3 - _t42*_t45;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t53;
+    const trailer3_real_t _t55 = _t2*_t35;
+    const trailer3_real_t _t56 = _t42*_t50;
+    const trailer3_real_t _t57 = -_t23*_t27 - _t30;
+    const trailer3_real_t _t58 = -_t20*_t31 - _t33;
+    const trailer3_real_t _t59 = _t0*_t29 + _t1*_t27 - _t38*_t57 - _t47*_t58;
+    const trailer3_real_t _t60 = -TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t60;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.85)*_t17*_t27 - _t23*_t28;
+    const trailer3_real_t _t63 = -_t20*_t32 + TRAILER3_LIT(0.85)*_t21*_t27;
+    const trailer3_real_t _t64 = _t0*_t36 - _t1*_t28 + _t38*_t62 + _t47*_t63;
+    const trailer3_real_t _t65 = _t2*_t29 + _t27*_t3 - _t42*_t57 - _t53*_t58;
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
+    const trailer3_real_t _t68 = _t2*_t36 - _t28*_t3 + _t42*_t62 + _t53*_t63;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t69 = K_theta_cart2_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t70 = K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t71 = K_theta_cart3_x_tractor*_t27;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t72 = K_theta_cart3_x_tractor_2*_t28;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.85)*_t20;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t129 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t74 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t130 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t75 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t76 = _t1*_t17 + _t39 - _t40;
+    const trailer3_real_t _t77 = _t17*_t3 + _t43 - _t44;
+    const trailer3_real_t _t4 = kept[21];
+    const trailer3_real_t _t78 = _t4*_t76;
+    const trailer3_real_t _t79 = _t4*_t77;
+    const trailer3_real_t _t80 = _t1*_t17 - _t39 - _t40;
+    const trailer3_real_t _t81 = _t17*_t3 - _t43 - _t44;
+    const trailer3_real_t _t5 = kept[22];
+    const trailer3_real_t _t82 = _t5*_t80;
+    const trailer3_real_t _t83 = _t5*_t81;
+    const trailer3_real_t _t84 = _t1*_t21 + _t48 - _t49 - _t51;
+    const trailer3_real_t _t85 = _t21*_t3 + _t54 - _t55 - _t56;
+    const trailer3_real_t _t6 = kept[23];
+    const trailer3_real_t _t86 = _t6*_t84;
+    const trailer3_real_t _t87 = _t6*_t85;
+    const trailer3_real_t _t88 = _t1*_t21 - _t48 - _t49 - _t51;
+    const trailer3_real_t _t89 = _t21*_t3 - _t54 - _t55 - _t56;
+    const trailer3_real_t _t7 = kept[24];
+    const trailer3_real_t _t90 = _t7*_t88;
+    const trailer3_real_t _t91 = _t7*_t89;
+    const trailer3_real_t _t92 = _t61 - _t64;
+    const trailer3_real_t _t93 = _t67 - _t68;
+    const trailer3_real_t _t8 = kept[25];
+    const trailer3_real_t _t94 = _t8*_t92;
+    const trailer3_real_t _t95 = _t8*_t93;
+    const trailer3_real_t _t96 = -_t61 - _t64;
+    const trailer3_real_t _t97 = -_t67 - _t68;
+    const trailer3_real_t _t9 = kept[26];
+    const trailer3_real_t _t98 = _t9*_t96;
+    const trailer3_real_t _t99 = _t9*_t97;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t100 = K_theta_cart_x_tractor*_t16 + K_theta_cart_x_tractor_2*_t17;
+    const trailer3_real_t _t101 = _t69 + _t70;
+    const trailer3_real_t _t102 = _t71 + _t72;
+    const trailer3_real_t _t103 = K_theta_cart_x_tractor*_t18 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t104 = K_theta_cart2_x_tractor*_t22 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t105 = K_theta_cart3_x_tractor*_t29 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t25 - K_theta_cart2_x_tractor_2*_t20*_t24
+            + _t23*(_t69 + _t70);
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t30 - K_theta_cart3_x_tractor_2*_t24*_t27
+            + _t23*(_t71 + _t72);
+    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t33 - K_theta_cart3_x_tractor_2*_t21*_t31
+            + _t73*(_t71 + _t72);
+    const trailer3_real_t _t10 = kept[27];
+    const trailer3_real_t _t109 = _t10 + _t100*_t38 + _t101*_t47 + _t102*_t60;
+    const trailer3_real_t _t11 = kept[28];
+    const trailer3_real_t _t110 = _t100*_t42 + _t101*_t53 + _t102*_t66 + _t11;
+    const trailer3_real_t _t12 = kept[29];
+    const trailer3_real_t _t111 = _t103*_t38 + _t104*_t47 + _t105*_t60 + _t12;
+    const trailer3_real_t _t13 = kept[30];
+    const trailer3_real_t _t112 = _t103*_t42 + _t104*_t53 + _t105*_t66 + _t13;
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t113 = J_theta_cart*_t38 + _t0*_t103 + _t1*_t100 + _t106*_t47
+            + _t107*_t60;
+    const trailer3_real_t _t114 = J_theta_cart*_t42 + _t100*_t3 + _t103*_t2 + _t106*_t53
+            + _t107*_t66;
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t115 = J_theta_cart2*_t47 + _t0*_t104 + _t1*_t101 + _t106*_t38
+            + _t108*_t60;
+    const trailer3_real_t _t116 = J_theta_cart2*_t53 + _t101*_t3 + _t104*_t2 + _t106*_t42
+            + _t108*_t66;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t117 = J_theta_cart3*_t60 + _t0*_t105 + _t1*_t102 + _t107*_t38
+            + _t108*_t47;
+    const trailer3_real_t _t118 = J_theta_cart3*_t66 + _t102*_t3 + _t105*_t2 + _t107*_t42
+            + _t108*_t53;
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t119 = J_theta_cart_right*_t78;
+    const trailer3_real_t _t120 = J_theta_cart_right*_t79;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t121 = J_theta_cart_left*_t82;
+    const trailer3_real_t _t122 = J_theta_cart_left*_t83;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t123 = J_theta_cart2_right*_t86;
+    const trailer3_real_t _t124 = J_theta_cart2_right*_t87;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t125 = J_theta_cart2_left*_t90;
+    const trailer3_real_t _t126 = J_theta_cart2_left*_t91;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t127 = J_theta_cart3_right*_t94;
+    const trailer3_real_t _t128 = J_theta_cart3_right*_t95;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t129 = J_theta_cart3_left*_t98;
+    const trailer3_real_t _t130 = J_theta_cart3_left*_t99;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t131 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
-            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
-            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
-    const trailer3_real_t _t132 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
-            + _t62*_t97;
-    const trailer3_real_t _t133 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
-            + _t127*_t42 + _t128*_t55;
+    const trailer3_real_t _t131 = J_theta_right + _t0*_t111 + _t1*_t109 + _t113*_t38 + _t115*_t47
+            + _t117*_t60 + _t119*_t78 + _t121*_t82 + _t123*_t86 + _t125*_t90 + _t127*_t94
+            + _t129*_t98;
+    const trailer3_real_t _t132 = _t0*_t112 + _t1*_t110 + _t114*_t38 + _t116*_t47 + _t118*_t60
+            + _t120*_t78 + _t122*_t82 + _t124*_t86 + _t126*_t90 + _t128*_t94 + _t130*_t98;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t134 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
-            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
-            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
-            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
+    const trailer3_real_t _t133 = J_theta_left + _t110*_t3 + _t112*_t2 + _t114*_t42 + _t116*_t53
+            + _t118*_t66 + _t120*_t79 + _t122*_t83 + _t124*_t87 + _t126*_t91 + _t128*_t95
+            + _t130*_t99;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t129*_t131 + _t130*_t132;
-    u[1] = H1hat1 + _t129*_t133 + _t130*_t134;
+    u[0] = H1hat0 + _t131*_t74 + _t132*_t75;
+    u[1] = H1hat1 + _t132*_t74 + _t133*_t75;
 }
 
 /* trailer3_k_minimal_tdroc_law: the per-step part of trailer3_minimal_tdroc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 196 add, 286 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[30],
+   operations after CSE: 147 add, 217 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[31],
     const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
     const trailer3_real_t *gain, const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s,
     trailer3_real_t *s_norm)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t10 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t11 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
+    const trailer3_real_t _t14 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t15 = _t14 + theta_cart;
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(_t15);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(_t15);
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t17;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t10;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t19 = _t14 + theta_cart2;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t17;
+    const trailer3_real_t _t25 = _t21*_t24;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t23 = -_t10*_t13 - _t11*_t15;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.207)*_t12;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t25 = _t0*_t24;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(0.207)*_t14;
-    const trailer3_real_t _t27 = _t0*_t26;
-    const trailer3_real_t _t28 = _t0*_t23 + _t10*_t27 - _t11*_t25;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = _t10*_t15 - _t11*_t13;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t10*_t25 - _t11*_t27;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t33 = _t1*_t24;
-    const trailer3_real_t _t34 = _t1*_t26;
-    const trailer3_real_t _t35 = -_t1*_t23 + _t10*_t34 - _t11*_t33;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
-    const trailer3_real_t _t38 = _t1*_t31 - _t10*_t33 - _t11*_t34;
-    const trailer3_real_t _t39 = -_t13*_t16 - _t15*_t17;
-    const trailer3_real_t _t40 = -_t16*_t18 - _t17*_t19;
-    const trailer3_real_t _t41 = _t0*_t39 + _t16*_t27 - _t17*_t25 - _t29*_t40;
+    const trailer3_real_t _t26 = _t14 + theta_cart3;
+    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t24*_t28;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.85)*_t28;
+    const trailer3_real_t _t33 = _t21*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t0 = kept[17];
+    const trailer3_real_t _t1 = kept[18];
+    const trailer3_real_t _t37 = _t0*_t18 + _t1*_t16;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.2)*_t38;
+    const trailer3_real_t _t40 = _t0*_t34;
+    const trailer3_real_t _t2 = kept[19];
+    const trailer3_real_t _t3 = kept[20];
+    const trailer3_real_t _t41 = _t16*_t3 + _t18*_t2;
     const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
     const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
-    const trailer3_real_t _t44 = -_t13*_t17 + _t15*_t16;
-    const trailer3_real_t _t45 = TRAILER3_LIT(0.85)*_t11*_t16 - _t17*_t18;
-    const trailer3_real_t _t46 = -_t0*_t44 - _t16*_t25 - _t17*_t27 + _t29*_t45;
-    const trailer3_real_t _t47 = -_t1*_t39 + _t16*_t34 - _t17*_t33 - _t36*_t40;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*_t48;
-    const trailer3_real_t _t50 = _t1*_t44 - _t16*_t33 - _t17*_t34 + _t36*_t45;
-    const trailer3_real_t _t51 = -_t13*_t20 - _t15*_t21;
-    const trailer3_real_t _t52 = -_t18*_t20 - _t19*_t21;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t16*_t20 - _t17*_t22;
-    const trailer3_real_t _t54 = _t0*_t51 + _t20*_t27 - _t21*_t25 - _t29*_t52 - _t42*_t53;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t57 = -_t13*_t21 + _t15*_t20;
-    const trailer3_real_t _t58 = TRAILER3_LIT(0.85)*_t11*_t20 - _t18*_t21;
-    const trailer3_real_t _t59 = -_t16*_t22 + TRAILER3_LIT(0.85)*_t17*_t20;
-    const trailer3_real_t _t60 = -_t0*_t57 - _t20*_t25 - _t21*_t27 + _t29*_t58 + _t42*_t59;
-    const trailer3_real_t _t61 = -_t1*_t51 + _t20*_t34 - _t21*_t33 - _t36*_t52 - _t48*_t53;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = _t1*_t57 - _t20*_t33 - _t21*_t34 + _t36*_t58 + _t48*_t59;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor_2*_t11;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t67 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t69 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor_2*_t21;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t11;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t21;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t76 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t78 = -K_theta_tractor_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t12;
-    const trailer3_real_t _t79 = K_theta_cart_x_tractor_2*_t10 - _t71;
-    const trailer3_real_t _t80 = K_theta_cart2_x_tractor_2*_t16 - _t72;
-    const trailer3_real_t _t81 = K_theta_cart3_x_tractor_2*_t20 - _t73;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t82 = J_x_tractor*_t25 - _t0*_t78 + _t29*_t79 + _t42*_t80 + _t55*_t81;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t14;
-    const trailer3_real_t _t84 = _t65 + _t66;
-    const trailer3_real_t _t85 = _t67 + _t68;
-    const trailer3_real_t _t86 = _t69 + _t70;
-    const trailer3_real_t _t87 = J_x_tractor*_t27 - _t0*_t83 + _t29*_t84 + _t42*_t85 + _t55*_t86;
-    const trailer3_real_t _t88 = _t13*(_t65 + _t66) + _t15*(-K_theta_cart_x_tractor_2*_t10 + _t71);
-    const trailer3_real_t _t89 = _t13*(_t67 + _t68) + _t15*(_t72 - _t74);
-    const trailer3_real_t _t90 = _t13*(_t69 + _t70) + _t15*(_t73 - _t75);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t91 = _t2 + _t25*_t78 + _t27*_t83 + _t29*_t88 + _t42*_t89 + _t55*_t90;
-    const trailer3_real_t _t92 = _t18*(_t67 + _t68) + _t19*(_t72 - _t74);
-    const trailer3_real_t _t93 = _t18*(_t69 + _t70) + _t19*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t94 = J_theta_cart*_t29 - _t0*_t88 + _t25*_t79 + _t27*_t84 + _t42*_t92
-            + _t55*_t93;
-    const trailer3_real_t _t95 = _t76*(_t69 + _t70) + _t77*(_t73 - _t75);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t96 = J_theta_cart2*_t42 - _t0*_t89 + _t25*_t80 + _t27*_t85 + _t29*_t92
-            + _t55*_t95;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t97 = J_theta_cart3*_t55 - _t0*_t90 + _t25*_t81 + _t27*_t86 + _t29*_t93
-            + _t42*_t95;
-    const trailer3_real_t _t98 = _t30 - _t32;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t99 = _t3*_t98;
-    const trailer3_real_t _t100 = _t37 - _t38;
-    const trailer3_real_t _t101 = _t100*_t3;
-    const trailer3_real_t _t102 = -_t30 - _t32;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t103 = _t102*_t4;
-    const trailer3_real_t _t104 = -_t37 - _t38;
-    const trailer3_real_t _t105 = _t104*_t4;
-    const trailer3_real_t _t106 = _t43 - _t46;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t107 = _t106*_t5;
-    const trailer3_real_t _t108 = _t49 - _t50;
-    const trailer3_real_t _t109 = _t108*_t5;
-    const trailer3_real_t _t110 = -_t43 - _t46;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t111 = _t110*_t6;
-    const trailer3_real_t _t112 = -_t49 - _t50;
-    const trailer3_real_t _t113 = _t112*_t6;
-    const trailer3_real_t _t114 = _t56 - _t60;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = _t63 - _t64;
-    const trailer3_real_t _t117 = _t116*_t7;
-    const trailer3_real_t _t118 = -_t56 - _t60;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t119 = _t118*_t8;
-    const trailer3_real_t _t120 = -_t63 - _t64;
-    const trailer3_real_t _t121 = _t120*_t8;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t111*_t113 + J_theta_cart2_right*_t107*_t109
-            + J_theta_cart3_left*_t119*_t121 + J_theta_cart3_right*_t115*_t117
-            + J_theta_cart_left*_t103*_t105 + J_theta_cart_right*_t101*_t99;
-    const trailer3_real_t _t123 = J_x_tractor*_t33 + _t1*_t78 + _t36*_t79 + _t48*_t80 + _t62*_t81;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t124 = _t33*_t78 + _t34*_t83 + _t36*_t88 + _t48*_t89 + _t62*_t90 + _t9;
-    const trailer3_real_t _t125 = J_x_tractor*_t34 + _t1*_t83 + _t36*_t84 + _t48*_t85 + _t62*_t86;
-    const trailer3_real_t _t126 = J_theta_cart*_t36 + _t1*_t88 + _t33*_t79 + _t34*_t84 + _t48*_t92
-            + _t62*_t93;
-    const trailer3_real_t _t127 = J_theta_cart2*_t48 + _t1*_t89 + _t33*_t80 + _t34*_t85 + _t36*_t92
-            + _t62*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3*_t62 + _t1*_t90 + _t33*_t81 + _t34*_t86 + _t36*_t93
-            + _t48*_t95;
+    const trailer3_real_t _t44 = _t2*_t34;
+    const trailer3_real_t _t45 = -_t20*_t23 - _t25;
+    const trailer3_real_t _t46 = _t0*_t22 + _t1*_t20 - _t38*_t45;
+    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
+    const trailer3_real_t _t49 = _t0*_t35;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t17*_t20 - _t21*_t23;
+    const trailer3_real_t _t51 = _t38*_t50;
+    const trailer3_real_t _t52 = _t2*_t22 + _t20*_t3 - _t42*_t45;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t53;
+    const trailer3_real_t _t55 = _t2*_t35;
+    const trailer3_real_t _t56 = _t42*_t50;
+    const trailer3_real_t _t57 = -_t23*_t27 - _t30;
+    const trailer3_real_t _t58 = -_t20*_t31 - _t33;
+    const trailer3_real_t _t59 = _t0*_t29 + _t1*_t27 - _t38*_t57 - _t47*_t58;
+    const trailer3_real_t _t60 = -TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t60;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.85)*_t17*_t27 - _t23*_t28;
+    const trailer3_real_t _t63 = -_t20*_t32 + TRAILER3_LIT(0.85)*_t21*_t27;
+    const trailer3_real_t _t64 = _t0*_t36 - _t1*_t28 + _t38*_t62 + _t47*_t63;
+    const trailer3_real_t _t65 = _t2*_t29 + _t27*_t3 - _t42*_t57 - _t53*_t58;
+    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
+    const trailer3_real_t _t68 = _t2*_t36 - _t28*_t3 + _t42*_t62 + _t53*_t63;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t69 = K_theta_cart2_x_tractor*_t20;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t70 = K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t71 = K_theta_cart3_x_tractor*_t27;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t72 = K_theta_cart3_x_tractor_2*_t28;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.85)*_t20;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t129 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t74 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t130 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t131 = trailer3_norm2(_t129, _t130);
+    const trailer3_real_t _t75 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t76 = trailer3_norm2(_t74, _t75);
     const trailer3_real_t gain_1 = gain[0];
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t132 = gain_1/TRAILER3_FMAX(_t131, eps_1);
+    const trailer3_real_t _t77 = gain_1/TRAILER3_FMAX(_t76, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t133 = _t129*_t132 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t78 = _t74*_t77 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t134 = _t130*_t132 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t79 = _t75*_t77 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t80 = _t1*_t17 + _t39 - _t40;
+    const trailer3_real_t _t81 = _t17*_t3 + _t43 - _t44;
+    const trailer3_real_t _t4 = kept[21];
+    const trailer3_real_t _t82 = _t4*_t80;
+    const trailer3_real_t _t83 = _t4*_t81;
+    const trailer3_real_t _t84 = _t1*_t17 - _t39 - _t40;
+    const trailer3_real_t _t85 = _t17*_t3 - _t43 - _t44;
+    const trailer3_real_t _t5 = kept[22];
+    const trailer3_real_t _t86 = _t5*_t84;
+    const trailer3_real_t _t87 = _t5*_t85;
+    const trailer3_real_t _t88 = _t1*_t21 + _t48 - _t49 - _t51;
+    const trailer3_real_t _t89 = _t21*_t3 + _t54 - _t55 - _t56;
+    const trailer3_real_t _t6 = kept[23];
+    const trailer3_real_t _t90 = _t6*_t88;
+    const trailer3_real_t _t91 = _t6*_t89;
+    const trailer3_real_t _t92 = _t1*_t21 - _t48 - _t49 - _t51;
+    const trailer3_real_t _t93 = _t21*_t3 - _t54 - _t55 - _t56;
+    const trailer3_real_t _t7 = kept[24];
+    const trailer3_real_t _t94 = _t7*_t92;
+    const trailer3_real_t _t95 = _t7*_t93;
+    const trailer3_real_t _t96 = _t61 - _t64;
+    const trailer3_real_t _t97 = _t67 - _t68;
+    const trailer3_real_t _t8 = kept[25];
+    const trailer3_real_t _t98 = _t8*_t96;
+    const trailer3_real_t _t99 = _t8*_t97;
+    const trailer3_real_t _t100 = -_t61 - _t64;
+    const trailer3_real_t _t101 = -_t67 - _t68;
+    const trailer3_real_t _t9 = kept[26];
+    const trailer3_real_t _t102 = _t100*_t9;
+    const trailer3_real_t _t103 = _t101*_t9;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t104 = K_theta_cart_x_tractor*_t16 + K_theta_cart_x_tractor_2*_t17;
+    const trailer3_real_t _t105 = _t69 + _t70;
+    const trailer3_real_t _t106 = _t71 + _t72;
+    const trailer3_real_t _t107 = K_theta_cart_x_tractor*_t18 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t108 = K_theta_cart2_x_tractor*_t22 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t109 = K_theta_cart3_x_tractor*_t29 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t110 = K_theta_cart2_x_tractor*_t25 - K_theta_cart2_x_tractor_2*_t20*_t24
+            + _t23*(_t69 + _t70);
+    const trailer3_real_t _t111 = K_theta_cart3_x_tractor*_t30 - K_theta_cart3_x_tractor_2*_t24*_t27
+            + _t23*(_t71 + _t72);
+    const trailer3_real_t _t112 = K_theta_cart3_x_tractor*_t33 - K_theta_cart3_x_tractor_2*_t21*_t31
+            + _t73*(_t71 + _t72);
+    const trailer3_real_t _t10 = kept[27];
+    const trailer3_real_t _t113 = _t10 + _t104*_t38 + _t105*_t47 + _t106*_t60;
+    const trailer3_real_t _t11 = kept[28];
+    const trailer3_real_t _t114 = _t104*_t42 + _t105*_t53 + _t106*_t66 + _t11;
+    const trailer3_real_t _t12 = kept[29];
+    const trailer3_real_t _t115 = _t107*_t38 + _t108*_t47 + _t109*_t60 + _t12;
+    const trailer3_real_t _t13 = kept[30];
+    const trailer3_real_t _t116 = _t107*_t42 + _t108*_t53 + _t109*_t66 + _t13;
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t117 = J_theta_cart*_t38 + _t0*_t107 + _t1*_t104 + _t110*_t47
+            + _t111*_t60;
+    const trailer3_real_t _t118 = J_theta_cart*_t42 + _t104*_t3 + _t107*_t2 + _t110*_t53
+            + _t111*_t66;
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t119 = J_theta_cart2*_t47 + _t0*_t108 + _t1*_t105 + _t110*_t38
+            + _t112*_t60;
+    const trailer3_real_t _t120 = J_theta_cart2*_t53 + _t105*_t3 + _t108*_t2 + _t110*_t42
+            + _t112*_t66;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t121 = J_theta_cart3*_t60 + _t0*_t109 + _t1*_t106 + _t111*_t38
+            + _t112*_t47;
+    const trailer3_real_t _t122 = J_theta_cart3*_t66 + _t106*_t3 + _t109*_t2 + _t111*_t42
+            + _t112*_t53;
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t123 = J_theta_cart_right*_t82;
+    const trailer3_real_t _t124 = J_theta_cart_right*_t83;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t125 = J_theta_cart_left*_t86;
+    const trailer3_real_t _t126 = J_theta_cart_left*_t87;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t127 = J_theta_cart2_right*_t90;
+    const trailer3_real_t _t128 = J_theta_cart2_right*_t91;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t129 = J_theta_cart2_left*_t94;
+    const trailer3_real_t _t130 = J_theta_cart2_left*_t95;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t131 = J_theta_cart3_right*_t98;
+    const trailer3_real_t _t132 = J_theta_cart3_right*_t99;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t133 = J_theta_cart3_left*_t102;
+    const trailer3_real_t _t134 = J_theta_cart3_left*_t103;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t135 = J_theta_cart2_left*_t111*_t111 + J_theta_cart2_right*_t107*_t107
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t115*_t115
-            + J_theta_cart_left*_t103*_t103 + J_theta_cart_right*_t99*_t99 + J_theta_right
-            - _t0*_t91 + _t25*_t82 + _t27*_t87 + _t29*_t94 + _t42*_t96 + _t55*_t97;
-    const trailer3_real_t _t136 = _t1*_t91 + _t122 + _t33*_t82 + _t34*_t87 + _t36*_t94 + _t48*_t96
-            + _t62*_t97;
-    const trailer3_real_t _t137 = -_t0*_t124 + _t122 + _t123*_t25 + _t125*_t27 + _t126*_t29
-            + _t127*_t42 + _t128*_t55;
+    const trailer3_real_t _t135 = J_theta_right + _t0*_t115 + _t1*_t113 + _t102*_t133 + _t117*_t38
+            + _t119*_t47 + _t121*_t60 + _t123*_t82 + _t125*_t86 + _t127*_t90 + _t129*_t94
+            + _t131*_t98;
+    const trailer3_real_t _t136 = _t0*_t116 + _t1*_t114 + _t102*_t134 + _t118*_t38 + _t120*_t47
+            + _t122*_t60 + _t124*_t82 + _t126*_t86 + _t128*_t90 + _t130*_t94 + _t132*_t98;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t138 = J_theta_cart2_left*_t113*_t113 + J_theta_cart2_right*_t109*_t109
-            + J_theta_cart3_left*_t121*_t121 + J_theta_cart3_right*_t117*_t117
-            + J_theta_cart_left*_t105*_t105 + J_theta_cart_right*_t101*_t101 + J_theta_left
-            + _t1*_t124 + _t123*_t33 + _t125*_t34 + _t126*_t36 + _t127*_t48 + _t128*_t62;
+    const trailer3_real_t _t137 = J_theta_left + _t103*_t134 + _t114*_t3 + _t116*_t2 + _t118*_t42
+            + _t120*_t53 + _t122*_t66 + _t124*_t83 + _t126*_t87 + _t128*_t91 + _t130*_t95
+            + _t132*_t99;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t133*_t135 + _t134*_t136;
-    u[1] = H1hat1 + _t133*_t137 + _t134*_t138;
-    s[0] = _t129;
-    s[1] = _t130;
-    s_norm[0] = _t131;
+    u[0] = H1hat0 + _t135*_t78 + _t136*_t79;
+    u[1] = H1hat1 + _t136*_t78 + _t137*_t79;
+    s[0] = _t74;
+    s[1] = _t75;
+    s_norm[0] = _t76;
 }
 
 /* trailer3_k_minimal_roc_law_keep: the parameter-only part of trailer3_minimal_roc_law
    (trailer3_laws.h documents it).
-   operations after CSE: 0 add, 10 mul, 6 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt */
 static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[36])
 {
@@ -1039,22 +1098,24 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
     const trailer3_real_t radius_left = p->radius_left;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
     const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t14 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t15 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t16 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer3_real_t _t17 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     kept[0] = J_theta_cart;
     kept[1] = J_theta_cart2;
     kept[2] = J_theta_cart2_left;
@@ -1066,36 +1127,36 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     kept[8] = J_theta_cart_right;
     kept[9] = J_theta_left;
     kept[10] = J_theta_right;
-    kept[11] = J_x_tractor;
-    kept[12] = K_theta_cart_x_tractor;
-    kept[13] = K_theta_cart_x_tractor_2;
-    kept[14] = K_theta_cart2_x_tractor;
-    kept[15] = K_theta_cart2_x_tractor_2;
-    kept[16] = K_theta_cart3_x_tractor;
-    kept[17] = K_theta_cart3_x_tractor_2;
-    kept[18] = K_theta_tractor_x_tractor;
-    kept[19] = K_theta_tractor_x_tractor_2;
-    kept[20] = _t0;
-    kept[21] = _t1;
-    kept[22] = _t2;
-    kept[23] = _t3;
-    kept[24] = _t4;
-    kept[25] = _t5;
-    kept[26] = _t6;
-    kept[27] = _t7;
-    kept[28] = _t8;
-    kept[29] = _t9;
-    kept[30] = _t10;
-    kept[31] = _t11;
-    kept[32] = _t12;
-    kept[33] = _t13;
-    kept[34] = _t14;
-    kept[35] = _t15;
+    kept[11] = K_theta_cart_x_tractor;
+    kept[12] = K_theta_cart_x_tractor_2;
+    kept[13] = K_theta_cart2_x_tractor;
+    kept[14] = K_theta_cart2_x_tractor_2;
+    kept[15] = K_theta_cart3_x_tractor;
+    kept[16] = K_theta_cart3_x_tractor_2;
+    kept[17] = K_theta_tractor_x_tractor;
+    kept[18] = _t0;
+    kept[19] = _t1;
+    kept[20] = _t2;
+    kept[21] = _t3;
+    kept[22] = _t4;
+    kept[23] = _t5;
+    kept[24] = _t6;
+    kept[25] = _t7;
+    kept[26] = _t8;
+    kept[27] = _t9;
+    kept[28] = _t10;
+    kept[29] = _t11;
+    kept[30] = _t12;
+    kept[31] = _t13;
+    kept[32] = _t14;
+    kept[33] = _t15;
+    kept[34] = _t16;
+    kept[35] = _t17;
 }
 
 /* trailer3_k_minimal_roc_law: the per-step part of trailer3_minimal_roc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 460 add, 637 mul, 2 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 342 add, 460 mul, 2 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -1103,473 +1164,441 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *bounds, const trailer3_real_t *eps, trailer3_real_t *u,
     trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t18 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
-    const trailer3_real_t _t20 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
+    const trailer3_real_t _t18 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t19 = _t18 + theta_cart;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
+    const trailer3_real_t _t23 = _t18 + theta_cart2;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t29 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t30 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
-    const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
-    const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
-    const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
-    const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t43 = _t0*_t42;
-    const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t45 = _t1*_t42;
-    const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
-    const trailer3_real_t _t47 = -_t0*_t41;
-    const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t28*_t49;
-    const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
-    const trailer3_real_t _t52 = -_t1*_t41;
-    const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = -_t28*_t54;
-    const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
-    const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = -_t34*_t58;
-    const trailer3_real_t _t60 = -_t32*_t49;
-    const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
-    const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t64 = -_t34*_t63;
-    const trailer3_real_t _t65 = -_t32*_t54;
-    const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
-    const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
-    const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
-    const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
-    const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t85 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t23;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t89 = K_theta_cart3_x_tractor*_t29;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t91 = K_theta_tractor_x_tractor*_t20;
-    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t17;
-    const trailer3_real_t _t93 = K_theta_cart2_x_tractor*_t24;
-    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
-    const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t29 = _t18 + theta_cart3;
+    const trailer3_real_t _t30 = TRAILER3_SIN_BOUNDED(_t29);
+    const trailer3_real_t _t31 = TRAILER3_COS_BOUNDED(_t29);
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
+    const trailer3_real_t _t0 = kept[18];
+    const trailer3_real_t _t1 = kept[19];
+    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
+    const trailer3_real_t _t2 = kept[20];
+    const trailer3_real_t _t3 = kept[21];
+    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
+    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
+    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t41 = _t39*_t40;
+    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
+    const trailer3_real_t _t43 = _t41 + _t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
+    const trailer3_real_t _t45 = _t39*_t44;
+    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
+    const trailer3_real_t _t47 = _t45 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t50 = _t48*_t49;
+    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
+    const trailer3_real_t _t52 = _t40*_t51;
+    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
+    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t56 = _t48*_t55;
+    const trailer3_real_t _t57 = _t44*_t51;
+    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
+    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t61 = _t1*_t21;
+    const trailer3_real_t _t62 = _t0*_t34;
+    const trailer3_real_t _t63 = _t61 - _t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
+    const trailer3_real_t _t65 = _t21*_t3;
+    const trailer3_real_t _t66 = _t2*_t34;
+    const trailer3_real_t _t67 = _t65 - _t66;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
+    const trailer3_real_t _t70 = _t40*_t69;
+    const trailer3_real_t _t71 = _t1*_t25;
+    const trailer3_real_t _t72 = _t0*_t35;
+    const trailer3_real_t _t73 = _t71 - _t72;
+    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
+    const trailer3_real_t _t75 = _t44*_t69;
+    const trailer3_real_t _t76 = _t25*_t3;
+    const trailer3_real_t _t77 = _t2*_t35;
+    const trailer3_real_t _t78 = _t76 - _t77;
+    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
+    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
+    const trailer3_real_t _t83 = _t0*_t36;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
+    const trailer3_real_t _t85 = _t40*_t84;
+    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
+    const trailer3_real_t _t87 = _t49*_t86;
+    const trailer3_real_t _t88 = _t1*_t31;
+    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
+    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
+    const trailer3_real_t _t92 = _t2*_t36;
+    const trailer3_real_t _t93 = _t44*_t84;
+    const trailer3_real_t _t94 = _t55*_t86;
+    const trailer3_real_t _t95 = _t3*_t31;
+    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
+    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
+    const trailer3_real_t _t98 = _t39*_t97;
+    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
+    const trailer3_real_t _t100 = _t39*_t99;
+    const trailer3_real_t _t101 = _t51*_t97;
+    const trailer3_real_t _t102 = _t51*_t99;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t105 = -_t73 - _t98;
+    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
+    const trailer3_real_t _t108 = _t69*_t97;
+    const trailer3_real_t _t109 = _t108 + _t42;
+    const trailer3_real_t _t110 = -_t100 - _t78;
+    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
+    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
+    const trailer3_real_t _t113 = _t69*_t99;
+    const trailer3_real_t _t114 = _t113 + _t46;
+    const trailer3_real_t _t115 = _t70 + _t98;
+    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
+    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t118 = _t100 + _t75;
+    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
+    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t84*_t97;
+    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
+    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t133 = _t84*_t99;
+    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
+    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
+    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
+    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
+    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
+    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
+    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t146 = _t121*_t86 + _t50;
+    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t150 = _t123*_t86 + _t56;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
+    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
+    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
+    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t thetadot_left = qdot[7];
-    const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
-    const trailer3_real_t _t101 = _t100*_t100;
-    const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
-    const trailer3_real_t _t103 = _t102*_t102;
-    const trailer3_real_t _t104 = _t103*_t94;
-    const trailer3_real_t _t105 = _t49*thetadot_right + _t54*thetadot_left;
-    const trailer3_real_t _t106 = _t105*_t105;
-    const trailer3_real_t _t107 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer3_real_t _t108 = _t107*_t107;
-    const trailer3_real_t _t109 = _t101*_t96;
-    const trailer3_real_t _t110 = _t103*_t97;
-    const trailer3_real_t _t111 = _t106*_t95;
-    const trailer3_real_t _t112 = _t101*_t87;
-    const trailer3_real_t _t113 = _t101*_t88;
-    const trailer3_real_t _t114 = _t103*_t89;
-    const trailer3_real_t _t115 = _t103*_t90;
-    const trailer3_real_t _t116 = _t106*_t85;
-    const trailer3_real_t _t117 = _t106*_t86;
-    const trailer3_real_t _t118 = _t108*_t19;
-    const trailer3_real_t _t119 = _t108*_t21;
-    const trailer3_real_t _t120 = _t106*_t26;
-    const trailer3_real_t _t121 = _t106*_t27;
-    const trailer3_real_t _t122 = _t101*_t98;
-    const trailer3_real_t _t123 = _t101*_t99;
-    const trailer3_real_t _t124 = _t107*thetadot_right;
-    const trailer3_real_t _t125 = _t107*thetadot_left;
-    const trailer3_real_t _t126 = _t105*thetadot_right;
-    const trailer3_real_t _t127 = _t105*thetadot_left;
-    const trailer3_real_t _t128 = _t100*thetadot_right;
-    const trailer3_real_t _t129 = _t100*thetadot_left;
-    const trailer3_real_t _t130 = _t102*thetadot_right;
-    const trailer3_real_t _t131 = _t102*thetadot_left;
-    const trailer3_real_t _t132 = _t0*_t41;
-    const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = -_t132*_t17 + _t44;
-    const trailer3_real_t _t137 = _t1*_t41;
-    const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
-    const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
-    const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
-    const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t142*_t37 + _t50;
-    const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
-    const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
-    const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
-    const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
-    const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
-    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
-    const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
-    const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
-    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
-    const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
-    const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
-    const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
-    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
-    const trailer3_real_t _t189 = -_t164*_t40 + _t59;
-    const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
-    const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
-    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
-    const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
-    const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
-    const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
-    const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
-    const trailer3_real_t _t202 = K_theta_cart2_x_tractor_2*_t23 - _t93;
-    const trailer3_real_t _t203 = K_theta_cart3_x_tractor_2*_t29 - _t94;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t204 = J_x_tractor*_t47 - _t0*_t200 + _t201*_t49 + _t202*_t58
-            + _t203*_t76;
-    const trailer3_real_t _t205 = _t83 + _t84;
-    const trailer3_real_t _t206 = _t85 + _t86;
-    const trailer3_real_t _t207 = _t87 + _t88;
-    const trailer3_real_t _t208 = _t89 + _t90;
-    const trailer3_real_t _t209 = J_x_tractor*_t43 - _t0*_t205 + _t206*_t49 + _t207*_t58
-            + _t208*_t76;
-    const trailer3_real_t _t210 = _t19*(_t85 + _t86) + _t21*(_t92 - _t95);
-    const trailer3_real_t _t211 = _t19*(_t87 + _t88) + _t21*(_t93 - _t96);
-    const trailer3_real_t _t212 = _t19*(_t89 + _t90) + _t21*(_t94 - _t97);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t213 = _t2 + _t200*_t47 + _t205*_t43 + _t210*_t49 + _t211*_t58
-            + _t212*_t76;
-    const trailer3_real_t _t214 = _t26*(_t87 + _t88) + _t27*(_t93 - _t96);
-    const trailer3_real_t _t215 = _t26*(_t89 + _t90) + _t27*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t216 = J_theta_cart*_t49 - _t0*_t210 + _t201*_t47 + _t206*_t43
-            + _t214*_t58 + _t215*_t76;
-    const trailer3_real_t _t217 = _t98*(_t89 + _t90) + _t99*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t218 = J_theta_cart2*_t58 - _t0*_t211 + _t202*_t47 + _t207*_t43
-            + _t214*_t49 + _t217*_t76;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t219 = J_theta_cart3*_t76 - _t0*_t212 + _t203*_t47 + _t208*_t43
-            + _t215*_t49 + _t217*_t58;
-    const trailer3_real_t _t220 = -_t71 - _t72;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t221 = _t220*_t3;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t222 = J_theta_cart2_left*_t221;
-    const trailer3_real_t _t223 = _t71 - _t72;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t224 = _t223*_t4;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t225 = J_theta_cart2_right*_t224;
-    const trailer3_real_t _t226 = -_t77 - _t78;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t227 = _t226*_t5;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t228 = J_theta_cart3_left*_t227;
-    const trailer3_real_t _t229 = _t77 - _t78;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t230 = _t229*_t6;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t231 = J_theta_cart3_right*_t230;
-    const trailer3_real_t _t232 = -_t67 - _t68;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t233 = _t232*_t7;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t234 = J_theta_cart_left*_t233;
-    const trailer3_real_t _t235 = _t67 - _t68;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t236 = _t235*_t8;
+    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer3_real_t _t167 = _t166*_t166;
+    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
+    const trailer3_real_t _t169 = _t168*_t168;
+    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
+    const trailer3_real_t _t171 = _t170*_t170;
+    const trailer3_real_t _t172 = _t161*_t171;
+    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
+    const trailer3_real_t _t174 = _t173*_t173;
+    const trailer3_real_t _t175 = _t162*_t169;
+    const trailer3_real_t _t176 = _t163*_t171;
+    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
+    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
+    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
+    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
+    const trailer3_real_t _t181 = _t169*_t28;
+    const trailer3_real_t _t182 = _t171*_t28;
+    const trailer3_real_t _t183 = _t174*_t27;
+    const trailer3_real_t _t184 = _t174*_t28;
+    const trailer3_real_t _t185 = _t165*_t171;
+    const trailer3_real_t _t186 = _t164*_t169;
+    const trailer3_real_t _t187 = _t165*_t169;
+    const trailer3_real_t _t188 = _t166*thetadot_right;
+    const trailer3_real_t _t189 = _t166*thetadot_left;
+    const trailer3_real_t _t190 = _t173*thetadot_right;
+    const trailer3_real_t _t191 = _t173*thetadot_left;
+    const trailer3_real_t _t192 = _t60 + _t63;
+    const trailer3_real_t _t4 = kept[22];
+    const trailer3_real_t _t193 = _t192*_t4;
     const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t237 = J_theta_cart_right*_t236;
-    const trailer3_real_t _t238 = _t69 - _t70;
-    const trailer3_real_t _t239 = _t238*_t8;
-    const trailer3_real_t _t240 = -_t69 - _t70;
-    const trailer3_real_t _t241 = _t240*_t7;
-    const trailer3_real_t _t242 = _t73 - _t74;
-    const trailer3_real_t _t243 = _t242*_t4;
-    const trailer3_real_t _t244 = -_t73 - _t74;
-    const trailer3_real_t _t245 = _t244*_t3;
-    const trailer3_real_t _t246 = _t81 - _t82;
-    const trailer3_real_t _t247 = _t246*_t6;
-    const trailer3_real_t _t248 = -_t81 - _t82;
-    const trailer3_real_t _t249 = _t248*_t5;
-    const trailer3_real_t _t250 = _t222*_t245 + _t225*_t243 + _t228*_t249 + _t231*_t247
-            + _t234*_t241 + _t237*_t239;
-    const trailer3_real_t _t251 = J_x_tractor*_t52 + _t1*_t200 + _t201*_t54 + _t202*_t63
-            + _t203*_t80;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t252 = _t200*_t52 + _t205*_t45 + _t210*_t54 + _t211*_t63 + _t212*_t80
-            + _t9;
-    const trailer3_real_t _t253 = J_x_tractor*_t45 + _t1*_t205 + _t206*_t54 + _t207*_t63
-            + _t208*_t80;
-    const trailer3_real_t _t254 = J_theta_cart*_t54 + _t1*_t210 + _t201*_t52 + _t206*_t45
-            + _t214*_t63 + _t215*_t80;
-    const trailer3_real_t _t255 = J_theta_cart2*_t63 + _t1*_t211 + _t202*_t52 + _t207*_t45
-            + _t214*_t54 + _t217*_t80;
-    const trailer3_real_t _t256 = J_theta_cart3*_t80 + _t1*_t212 + _t203*_t52 + _t208*_t45
-            + _t215*_t54 + _t217*_t63;
-    const trailer3_real_t _t257 = _t108*(_t83 + _t84) + _t112 + _t113 + _t114 + _t115 + _t116
-            + _t117;
-    const trailer3_real_t _t258 = _t124*_t43 + _t125*_t45;
-    const trailer3_real_t _t259 = _t124*_t134 + _t125*_t139 + _t126*_t142 + _t127*_t145;
-    const trailer3_real_t _t260 = _t124*_t149 + _t125*_t153 + _t126*_t157 + _t127*_t161
-            + _t128*_t164 + _t129*_t167;
-    const trailer3_real_t _t261 = _t124*_t171 + _t125*_t175 + _t126*_t179 + _t127*_t183
-            + _t128*_t187 + _t129*_t191 + _t130*_t194 + _t131*_t197;
-    const trailer3_real_t _t262 = J_x_tractor*_t258 + _t201*_t259 + _t202*_t260 + _t203*_t261
-            + _t257;
-    const trailer3_real_t _t263 = _t101*_t93 + _t104 + _t106*_t92
-            + _t108*(-K_theta_tractor_x_tractor_2*_t18 + _t91) - _t109 - _t110 - _t111;
-    const trailer3_real_t _t264 = _t124*_t132 + _t125*_t137;
-    const trailer3_real_t _t265 = J_x_tractor*_t264 + _t206*_t259 + _t207*_t260 + _t208*_t261
-            + _t263;
-    const trailer3_real_t _t10 = kept[30];
-    const trailer3_real_t _t11 = kept[31];
-    const trailer3_real_t _t12 = kept[32];
-    const trailer3_real_t _t266 = _t18*(_t10*_t106*_t17 + _t101*_t12*_t24 + _t103*_t11*_t30)
-            + _t19*(-_t109 - _t110 - _t111) + _t21*(-_t112 - _t113 - _t114 - _t115 - _t116 - _t117);
-    const trailer3_real_t _t267 = _t200*_t258 + _t205*_t264 + _t210*_t259 + _t211*_t260
-            + _t212*_t261 + _t266;
-    const trailer3_real_t _t13 = kept[33];
-    const trailer3_real_t _t14 = kept[34];
-    const trailer3_real_t _t15 = kept[35];
-    const trailer3_real_t _t268 = _t108*_t13*_t17*_t20 - _t118*_t92
-            + _t16*(_t101*_t15*_t24 + _t103*_t14*_t30 + _t108*(_t10*_t20 + _t13*_t18))
-            + _t26*(-_t109 - _t110) + _t27*(-_t112 - _t113 - _t114 - _t115);
-    const trailer3_real_t _t269 = J_theta_cart*_t259 + _t201*_t258 + _t206*_t264 + _t214*_t260
-            + _t215*_t261 + _t268;
-    const trailer3_real_t _t270 = _t118*(-_t93 + _t96) + _t119*(_t87 + _t88) + _t120*(-_t93 + _t96)
-            + _t121*(_t87 + _t88) + _t98*(_t104 - _t110) + _t99*(-_t114 - _t115);
-    const trailer3_real_t _t271 = J_theta_cart2*_t260 + _t202*_t258 + _t207*_t264 + _t214*_t259
-            + _t217*_t261 + _t270;
-    const trailer3_real_t _t272 = _t89*(_t119 + _t121 + _t123) + _t90*(_t119 + _t121 + _t123)
-            + _t94*(-_t118 - _t120 - _t122) + _t97*(_t118 + _t120 + _t122);
-    const trailer3_real_t _t273 = J_theta_cart3*_t261 + _t203*_t258 + _t208*_t264 + _t215*_t259
-            + _t217*_t260 + _t272;
+    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
+    const trailer3_real_t _t195 = _t64 + _t67;
+    const trailer3_real_t _t196 = _t195*_t4;
+    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
+    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
+    const trailer3_real_t _t5 = kept[23];
+    const trailer3_real_t _t199 = _t198*_t5;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
+    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
+    const trailer3_real_t _t202 = _t201*_t5;
+    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
+    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
+    const trailer3_real_t _t6 = kept[24];
+    const trailer3_real_t _t205 = _t204*_t6;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
+    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
+    const trailer3_real_t _t208 = _t207*_t6;
+    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
+    const trailer3_real_t _t210 = -_t68 - _t79;
+    const trailer3_real_t _t7 = kept[25];
+    const trailer3_real_t _t211 = _t210*_t7;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
+    const trailer3_real_t _t213 = -_t74 - _t80;
+    const trailer3_real_t _t214 = _t213*_t7;
+    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
+    const trailer3_real_t _t216 = _t82 - _t89;
+    const trailer3_real_t _t8 = kept[26];
+    const trailer3_real_t _t217 = _t216*_t8;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
+    const trailer3_real_t _t219 = _t91 - _t96;
+    const trailer3_real_t _t220 = _t219*_t8;
+    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
+    const trailer3_real_t _t222 = -_t82 - _t89;
+    const trailer3_real_t _t9 = kept[27];
+    const trailer3_real_t _t223 = _t222*_t9;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
+    const trailer3_real_t _t225 = -_t91 - _t96;
+    const trailer3_real_t _t226 = _t225*_t9;
+    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
+    const trailer3_real_t _t229 = _t155 + _t156;
+    const trailer3_real_t _t230 = _t157 + _t158;
+    const trailer3_real_t K_theta_tractor_x_tractor = kept[17];
+    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
+            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
+    const trailer3_real_t _t232 = _t188 - _t190;
+    const trailer3_real_t _t233 = _t189 - _t191;
+    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
+    const trailer3_real_t _t235 = _t168*thetadot_right;
+    const trailer3_real_t _t236 = _t168*thetadot_left;
+    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
+            + _t121*_t235 + _t123*_t236;
+    const trailer3_real_t _t238 = _t170*thetadot_right;
+    const trailer3_real_t _t239 = _t170*thetadot_left;
+    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
+            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
+    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
+    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
+            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
+    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
+    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
+            + _t240*_t244 + _t245;
+    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
+    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
+    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
+    const trailer3_real_t _t10 = kept[28];
+    const trailer3_real_t _t11 = kept[29];
+    const trailer3_real_t _t12 = kept[30];
+    const trailer3_real_t _t13 = kept[31];
+    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
+            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
+            + _t251;
+    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
+    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
+    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
+            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
+            + _t255;
+    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
+    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
+            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
+            + _t258;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t274 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t260 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t275 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t276 = trailer3_norm2(_t274, _t275);
+    const trailer3_real_t _t261 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t262 = trailer3_norm2(_t260, _t261);
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t277 = e0*k1_0 + edot0*k2_0;
+    const trailer3_real_t _t263 = e0*k1_0 + edot0*k2_0;
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t278 = e1*k1_1 + edot1*k2_1;
+    const trailer3_real_t _t264 = e1*k1_1 + edot1*k2_1;
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t alpha = bounds[0];
     const trailer3_real_t phi = bounds[1];
-    const trailer3_real_t _t279 = (alpha*(trailer3_norm2(_t277, _t278)
+    const trailer3_real_t _t265 = (alpha*(trailer3_norm2(_t263, _t264)
             + trailer3_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER3_LIT(1.0) - alpha);
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t280 = _t279/TRAILER3_FMAX(_t276, eps_1);
-    const trailer3_real_t _t281 = _t274*_t280 + _t277 + qdd_des0;
-    const trailer3_real_t _t282 = _t275*_t280 + _t278 + qdd_des1;
-    const trailer3_real_t _t283 = _t135 - _t136;
-    const trailer3_real_t _t284 = _t283*_t8;
-    const trailer3_real_t _t285 = _t140 - _t141;
-    const trailer3_real_t _t286 = _t285*_t8;
-    const trailer3_real_t _t287 = _t143 - _t144;
-    const trailer3_real_t _t288 = _t287*_t8;
-    const trailer3_real_t _t289 = _t146 - _t147;
-    const trailer3_real_t _t290 = _t289*_t8;
-    const trailer3_real_t _t291 = _t124*_t284 + _t125*_t286 + _t126*_t288 + _t127*_t290;
-    const trailer3_real_t _t292 = -_t135 - _t136;
-    const trailer3_real_t _t293 = _t292*_t7;
-    const trailer3_real_t _t294 = -_t140 - _t141;
-    const trailer3_real_t _t295 = _t294*_t7;
-    const trailer3_real_t _t296 = -_t143 - _t144;
-    const trailer3_real_t _t297 = _t296*_t7;
-    const trailer3_real_t _t298 = -_t146 - _t147;
-    const trailer3_real_t _t299 = _t298*_t7;
-    const trailer3_real_t _t300 = _t124*_t293 + _t125*_t295 + _t126*_t297 + _t127*_t299;
-    const trailer3_real_t _t301 = _t150 - _t151;
-    const trailer3_real_t _t302 = _t301*_t4;
-    const trailer3_real_t _t303 = _t154 - _t155;
-    const trailer3_real_t _t304 = _t303*_t4;
-    const trailer3_real_t _t305 = _t158 - _t159;
-    const trailer3_real_t _t306 = _t305*_t4;
-    const trailer3_real_t _t307 = _t162 - _t163;
-    const trailer3_real_t _t308 = _t307*_t4;
-    const trailer3_real_t _t309 = _t165 - _t166;
-    const trailer3_real_t _t310 = _t309*_t4;
-    const trailer3_real_t _t311 = _t168 - _t169;
-    const trailer3_real_t _t312 = _t311*_t4;
-    const trailer3_real_t _t313 = _t124*_t302 + _t125*_t304 + _t126*_t306 + _t127*_t308
-            + _t128*_t310 + _t129*_t312;
-    const trailer3_real_t _t314 = -_t150 - _t151;
-    const trailer3_real_t _t315 = _t3*_t314;
-    const trailer3_real_t _t316 = -_t154 - _t155;
-    const trailer3_real_t _t317 = _t3*_t316;
-    const trailer3_real_t _t318 = -_t158 - _t159;
-    const trailer3_real_t _t319 = _t3*_t318;
-    const trailer3_real_t _t320 = -_t162 - _t163;
-    const trailer3_real_t _t321 = _t3*_t320;
-    const trailer3_real_t _t322 = -_t165 - _t166;
-    const trailer3_real_t _t323 = _t3*_t322;
-    const trailer3_real_t _t324 = -_t168 - _t169;
-    const trailer3_real_t _t325 = _t3*_t324;
-    const trailer3_real_t _t326 = _t124*_t315 + _t125*_t317 + _t126*_t319 + _t127*_t321
-            + _t128*_t323 + _t129*_t325;
-    const trailer3_real_t _t327 = _t172 - _t173;
-    const trailer3_real_t _t328 = _t327*_t6;
-    const trailer3_real_t _t329 = _t176 - _t177;
-    const trailer3_real_t _t330 = _t329*_t6;
-    const trailer3_real_t _t331 = _t180 - _t181;
-    const trailer3_real_t _t332 = _t331*_t6;
-    const trailer3_real_t _t333 = _t184 - _t185;
-    const trailer3_real_t _t334 = _t333*_t6;
-    const trailer3_real_t _t335 = _t188 - _t189;
-    const trailer3_real_t _t336 = _t335*_t6;
-    const trailer3_real_t _t337 = _t192 - _t193;
-    const trailer3_real_t _t338 = _t337*_t6;
-    const trailer3_real_t _t339 = _t195 - _t196;
-    const trailer3_real_t _t340 = _t339*_t6;
-    const trailer3_real_t _t341 = _t198 - _t199;
-    const trailer3_real_t _t342 = _t341*_t6;
-    const trailer3_real_t _t343 = _t124*_t328 + _t125*_t330 + _t126*_t332 + _t127*_t334
-            + _t128*_t336 + _t129*_t338 + _t130*_t340 + _t131*_t342;
-    const trailer3_real_t _t344 = -_t172 - _t173;
-    const trailer3_real_t _t345 = _t344*_t5;
-    const trailer3_real_t _t346 = -_t176 - _t177;
-    const trailer3_real_t _t347 = _t346*_t5;
-    const trailer3_real_t _t348 = -_t180 - _t181;
-    const trailer3_real_t _t349 = _t348*_t5;
-    const trailer3_real_t _t350 = -_t184 - _t185;
-    const trailer3_real_t _t351 = _t350*_t5;
-    const trailer3_real_t _t352 = -_t188 - _t189;
-    const trailer3_real_t _t353 = _t352*_t5;
-    const trailer3_real_t _t354 = -_t192 - _t193;
-    const trailer3_real_t _t355 = _t354*_t5;
-    const trailer3_real_t _t356 = -_t195 - _t196;
-    const trailer3_real_t _t357 = _t356*_t5;
-    const trailer3_real_t _t358 = -_t198 - _t199;
-    const trailer3_real_t _t359 = _t358*_t5;
-    const trailer3_real_t _t360 = _t124*_t345 + _t125*_t347 + _t126*_t349 + _t127*_t351
-            + _t128*_t353 + _t129*_t355 + _t130*_t357 + _t131*_t359;
+    const trailer3_real_t _t266 = _t265/TRAILER3_FMAX(_t262, eps_1);
+    const trailer3_real_t _t267 = _t260*_t266 + _t263 + qdd_des0;
+    const trailer3_real_t _t268 = _t261*_t266 + _t264 + qdd_des1;
+    const trailer3_real_t _t269 = _t103 - _t37;
+    const trailer3_real_t _t270 = _t269*_t4;
+    const trailer3_real_t _t271 = _t104 - _t38;
+    const trailer3_real_t _t272 = _t271*_t4;
+    const trailer3_real_t _t273 = -_t103 - _t37;
+    const trailer3_real_t _t274 = _t273*_t5;
+    const trailer3_real_t _t275 = -_t104 - _t38;
+    const trailer3_real_t _t276 = _t275*_t5;
+    const trailer3_real_t _t277 = _t107 - _t109;
+    const trailer3_real_t _t278 = _t277*_t6;
+    const trailer3_real_t _t279 = _t112 - _t114;
+    const trailer3_real_t _t280 = _t279*_t6;
+    const trailer3_real_t _t281 = _t108 + _t117 - _t41;
+    const trailer3_real_t _t282 = _t281*_t6;
+    const trailer3_real_t _t283 = _t113 + _t120 - _t45;
+    const trailer3_real_t _t284 = _t283*_t6;
+    const trailer3_real_t _t285 = _t122 + _t43;
+    const trailer3_real_t _t286 = _t285*_t6;
+    const trailer3_real_t _t287 = _t124 + _t47;
+    const trailer3_real_t _t288 = _t287*_t6;
+    const trailer3_real_t _t289 = -_t107 - _t109;
+    const trailer3_real_t _t290 = _t289*_t7;
+    const trailer3_real_t _t291 = -_t112 - _t114;
+    const trailer3_real_t _t292 = _t291*_t7;
+    const trailer3_real_t _t293 = _t108 - _t117 - _t41;
+    const trailer3_real_t _t294 = _t293*_t7;
+    const trailer3_real_t _t295 = _t113 - _t120 - _t45;
+    const trailer3_real_t _t296 = _t295*_t7;
+    const trailer3_real_t _t297 = -_t122 + _t43;
+    const trailer3_real_t _t298 = _t297*_t7;
+    const trailer3_real_t _t299 = -_t124 + _t47;
+    const trailer3_real_t _t300 = _t299*_t7;
+    const trailer3_real_t _t301 = _t127 - _t129;
+    const trailer3_real_t _t302 = _t301*_t8;
+    const trailer3_real_t _t303 = _t132 - _t134;
+    const trailer3_real_t _t304 = _t303*_t8;
+    const trailer3_real_t _t305 = _t137 - _t138;
+    const trailer3_real_t _t306 = _t305*_t8;
+    const trailer3_real_t _t307 = _t141 - _t142;
+    const trailer3_real_t _t308 = _t307*_t8;
+    const trailer3_real_t _t309 = _t145 - _t146;
+    const trailer3_real_t _t310 = _t309*_t8;
+    const trailer3_real_t _t311 = _t149 - _t150;
+    const trailer3_real_t _t312 = _t311*_t8;
+    const trailer3_real_t _t313 = _t152 + _t54;
+    const trailer3_real_t _t314 = _t313*_t8;
+    const trailer3_real_t _t315 = _t154 + _t59;
+    const trailer3_real_t _t316 = _t315*_t8;
+    const trailer3_real_t _t317 = -_t127 - _t129;
+    const trailer3_real_t _t318 = _t317*_t9;
+    const trailer3_real_t _t319 = -_t132 - _t134;
+    const trailer3_real_t _t320 = _t319*_t9;
+    const trailer3_real_t _t321 = -_t137 - _t138;
+    const trailer3_real_t _t322 = _t321*_t9;
+    const trailer3_real_t _t323 = -_t141 - _t142;
+    const trailer3_real_t _t324 = _t323*_t9;
+    const trailer3_real_t _t325 = -_t145 - _t146;
+    const trailer3_real_t _t326 = _t325*_t9;
+    const trailer3_real_t _t327 = -_t149 - _t150;
+    const trailer3_real_t _t328 = _t327*_t9;
+    const trailer3_real_t _t329 = -_t152 + _t54;
+    const trailer3_real_t _t330 = _t329*_t9;
+    const trailer3_real_t _t331 = -_t154 + _t59;
+    const trailer3_real_t _t332 = _t331*_t9;
+    const trailer3_real_t _t333 = _t232*_t270 + _t233*_t272;
+    const trailer3_real_t _t334 = _t232*_t274 + _t233*_t276;
+    const trailer3_real_t _t335 = _t188*_t278 + _t189*_t280 + _t190*_t282 + _t191*_t284
+            + _t235*_t286 + _t236*_t288;
+    const trailer3_real_t _t336 = _t188*_t290 + _t189*_t292 + _t190*_t294 + _t191*_t296
+            + _t235*_t298 + _t236*_t300;
+    const trailer3_real_t _t337 = _t188*_t302 + _t189*_t304 + _t190*_t306 + _t191*_t308
+            + _t235*_t310 + _t236*_t312 + _t238*_t314 + _t239*_t316;
+    const trailer3_real_t _t338 = _t188*_t318 + _t189*_t320 + _t190*_t322 + _t191*_t324
+            + _t235*_t326 + _t236*_t328 + _t238*_t330 + _t239*_t332;
+    const trailer3_real_t _t14 = kept[32];
+    const trailer3_real_t _t339 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
+    const trailer3_real_t _t15 = kept[33];
+    const trailer3_real_t _t340 = _t15 + _t228*_t44 + _t229*_t55 + _t230*_t90;
+    const trailer3_real_t _t16 = kept[34];
+    const trailer3_real_t _t341 = _t16 + _t242*_t40 + _t243*_t49 + _t244*_t81;
+    const trailer3_real_t _t17 = kept[35];
+    const trailer3_real_t _t342 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
+    const trailer3_real_t _t343 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
+            + _t250*_t81;
+    const trailer3_real_t _t344 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
+            + _t250*_t90;
+    const trailer3_real_t _t345 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
+            + _t254*_t81;
+    const trailer3_real_t _t346 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
+            + _t254*_t90;
+    const trailer3_real_t _t347 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
+            + _t254*_t49;
+    const trailer3_real_t _t348 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
+            + _t254*_t55;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t361 = J_theta_cart2_left*_t221*_t221 + J_theta_cart2_right*_t224*_t224
-            + J_theta_cart3_left*_t227*_t227 + J_theta_cart3_right*_t230*_t230
-            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t236*_t236 + J_theta_right
-            - _t0*_t213 + _t204*_t47 + _t209*_t43 + _t216*_t49 + _t218*_t58 + _t219*_t76;
-    const trailer3_real_t _t362 = _t1*_t213 + _t204*_t52 + _t209*_t45 + _t216*_t54 + _t218*_t63
-            + _t219*_t80 + _t250;
-    const trailer3_real_t _t363 = -_t0*_t252 + _t250 + _t251*_t47 + _t253*_t43 + _t254*_t49
-            + _t255*_t58 + _t256*_t76;
+    const trailer3_real_t _t349 = J_theta_right + _t0*_t341 + _t1*_t339 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t343*_t40 + _t345*_t49
+            + _t347*_t81;
+    const trailer3_real_t _t350 = _t0*_t342 + _t1*_t340 + _t193*_t197 + _t199*_t203 + _t205*_t209
+            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t344*_t40 + _t346*_t49 + _t348*_t81;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t364 = J_theta_cart2_left*_t245*_t245 + J_theta_cart2_right*_t243*_t243
-            + J_theta_cart3_left*_t249*_t249 + J_theta_cart3_right*_t247*_t247
-            + J_theta_cart_left*_t241*_t241 + J_theta_cart_right*_t239*_t239 + J_theta_left
-            + _t1*_t252 + _t251*_t52 + _t253*_t45 + _t254*_t54 + _t255*_t63 + _t256*_t80;
-    const trailer3_real_t _t365 = -_t0*_t267 + _t222*_t326 + _t225*_t313 + _t228*_t360 + _t231*_t343
-            + _t234*_t300 + _t237*_t291 + _t262*_t47 + _t265*_t43 + _t269*_t49 + _t271*_t58
-            + _t273*_t76;
-    const trailer3_real_t _t366 = J_theta_cart2_left*_t245*_t326 + J_theta_cart2_right*_t243*_t313
-            + J_theta_cart3_left*_t249*_t360 + J_theta_cart3_right*_t247*_t343
-            + J_theta_cart_left*_t241*_t300 + J_theta_cart_right*_t239*_t291 + _t1*_t267
-            + _t262*_t52 + _t265*_t45 + _t269*_t54 + _t271*_t63 + _t273*_t80;
-    u[0] = _t281*_t361 + _t282*_t362 + _t365;
-    u[1] = _t281*_t363 + _t282*_t364 + _t366;
-    s[0] = _t274;
-    s[1] = _t275;
-    s_norm[0] = _t276;
-    gain[0] = _t279;
+    const trailer3_real_t _t351 = J_theta_left + _t196*_t197 + _t2*_t342 + _t202*_t203 + _t208*_t209
+            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t3*_t340 + _t344*_t44 + _t346*_t55
+            + _t348*_t90;
+    const trailer3_real_t _t352 = _t0*_t247 + _t1*_t241 + _t194*_t333 + _t200*_t334 + _t206*_t335
+            + _t212*_t336 + _t218*_t337 + _t224*_t338 + _t252*_t40 + _t256*_t49 + _t259*_t81;
+    const trailer3_real_t _t353 = _t197*_t333 + _t2*_t247 + _t203*_t334 + _t209*_t335 + _t215*_t336
+            + _t221*_t337 + _t227*_t338 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
+    u[0] = _t267*_t349 + _t268*_t350 + _t352;
+    u[1] = _t267*_t350 + _t268*_t351 + _t353;
+    s[0] = _t260;
+    s[1] = _t261;
+    s_norm[0] = _t262;
+    gain[0] = _t265;
 }
 
 /* trailer3_k_minimal_asmc_law: the per-step part of trailer3_minimal_asmc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 456 add, 634 mul, 1 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 338 add, 457 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -1577,465 +1606,433 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *gain, const trailer3_real_t *eps, const trailer3_real_t *adapt,
     trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain_next)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(theta_cart);
-    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t18 = TRAILER3_SIN_BOUNDED(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
-    const trailer3_real_t _t20 = TRAILER3_COS_BOUNDED(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
+    const trailer3_real_t _t18 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t19 = _t18 + theta_cart;
+    const trailer3_real_t _t20 = TRAILER3_SIN_BOUNDED(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS_BOUNDED(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(theta_cart2);
-    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(theta_cart2);
-    const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
+    const trailer3_real_t _t23 = _t18 + theta_cart2;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t29 = TRAILER3_SIN_BOUNDED(theta_cart3);
-    const trailer3_real_t _t30 = TRAILER3_COS_BOUNDED(theta_cart3);
-    const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
-    const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
-    const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
-    const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
-    const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
-    const trailer3_real_t _t0 = kept[20];
-    const trailer3_real_t _t43 = _t0*_t42;
-    const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
-    const trailer3_real_t _t1 = kept[21];
-    const trailer3_real_t _t45 = _t1*_t42;
-    const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
-    const trailer3_real_t _t47 = -_t0*_t41;
-    const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t28*_t49;
-    const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
-    const trailer3_real_t _t52 = -_t1*_t41;
-    const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = -_t28*_t54;
-    const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
-    const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = -_t34*_t58;
-    const trailer3_real_t _t60 = -_t32*_t49;
-    const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
-    const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t64 = -_t34*_t63;
-    const trailer3_real_t _t65 = -_t32*_t54;
-    const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
-    const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
-    const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
-    const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
-    const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
-    const trailer3_real_t K_theta_tractor_x_tractor = kept[18];
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[19];
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[12];
-    const trailer3_real_t _t85 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[13];
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[14];
-    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t23;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[15];
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[16];
-    const trailer3_real_t _t89 = K_theta_cart3_x_tractor*_t29;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[17];
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t91 = K_theta_tractor_x_tractor*_t20;
-    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t17;
-    const trailer3_real_t _t93 = K_theta_cart2_x_tractor*_t24;
-    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
-    const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t29 = _t18 + theta_cart3;
+    const trailer3_real_t _t30 = TRAILER3_SIN_BOUNDED(_t29);
+    const trailer3_real_t _t31 = TRAILER3_COS_BOUNDED(_t29);
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
+    const trailer3_real_t _t0 = kept[18];
+    const trailer3_real_t _t1 = kept[19];
+    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
+    const trailer3_real_t _t2 = kept[20];
+    const trailer3_real_t _t3 = kept[21];
+    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
+    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
+    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t41 = _t39*_t40;
+    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
+    const trailer3_real_t _t43 = _t41 + _t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
+    const trailer3_real_t _t45 = _t39*_t44;
+    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
+    const trailer3_real_t _t47 = _t45 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t50 = _t48*_t49;
+    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
+    const trailer3_real_t _t52 = _t40*_t51;
+    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
+    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t56 = _t48*_t55;
+    const trailer3_real_t _t57 = _t44*_t51;
+    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
+    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t61 = _t1*_t21;
+    const trailer3_real_t _t62 = _t0*_t34;
+    const trailer3_real_t _t63 = _t61 - _t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
+    const trailer3_real_t _t65 = _t21*_t3;
+    const trailer3_real_t _t66 = _t2*_t34;
+    const trailer3_real_t _t67 = _t65 - _t66;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
+    const trailer3_real_t _t70 = _t40*_t69;
+    const trailer3_real_t _t71 = _t1*_t25;
+    const trailer3_real_t _t72 = _t0*_t35;
+    const trailer3_real_t _t73 = _t71 - _t72;
+    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
+    const trailer3_real_t _t75 = _t44*_t69;
+    const trailer3_real_t _t76 = _t25*_t3;
+    const trailer3_real_t _t77 = _t2*_t35;
+    const trailer3_real_t _t78 = _t76 - _t77;
+    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
+    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
+    const trailer3_real_t _t83 = _t0*_t36;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
+    const trailer3_real_t _t85 = _t40*_t84;
+    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
+    const trailer3_real_t _t87 = _t49*_t86;
+    const trailer3_real_t _t88 = _t1*_t31;
+    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
+    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
+    const trailer3_real_t _t92 = _t2*_t36;
+    const trailer3_real_t _t93 = _t44*_t84;
+    const trailer3_real_t _t94 = _t55*_t86;
+    const trailer3_real_t _t95 = _t3*_t31;
+    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
+    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
+    const trailer3_real_t _t98 = _t39*_t97;
+    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
+    const trailer3_real_t _t100 = _t39*_t99;
+    const trailer3_real_t _t101 = _t51*_t97;
+    const trailer3_real_t _t102 = _t51*_t99;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t105 = -_t73 - _t98;
+    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
+    const trailer3_real_t _t108 = _t69*_t97;
+    const trailer3_real_t _t109 = _t108 + _t42;
+    const trailer3_real_t _t110 = -_t100 - _t78;
+    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
+    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
+    const trailer3_real_t _t113 = _t69*_t99;
+    const trailer3_real_t _t114 = _t113 + _t46;
+    const trailer3_real_t _t115 = _t70 + _t98;
+    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
+    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t118 = _t100 + _t75;
+    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
+    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t84*_t97;
+    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
+    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t133 = _t84*_t99;
+    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
+    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
+    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
+    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
+    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
+    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
+    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t146 = _t121*_t86 + _t50;
+    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t150 = _t123*_t86 + _t56;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
+    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
+    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
+    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
+    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
+    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
+    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
+    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
+    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
+    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t thetadot_left = qdot[7];
-    const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
-    const trailer3_real_t _t101 = _t100*_t100;
-    const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
-    const trailer3_real_t _t103 = _t102*_t102;
-    const trailer3_real_t _t104 = _t103*_t94;
-    const trailer3_real_t _t105 = _t49*thetadot_right + _t54*thetadot_left;
-    const trailer3_real_t _t106 = _t105*_t105;
-    const trailer3_real_t _t107 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer3_real_t _t108 = _t107*_t107;
-    const trailer3_real_t _t109 = _t101*_t96;
-    const trailer3_real_t _t110 = _t103*_t97;
-    const trailer3_real_t _t111 = _t106*_t95;
-    const trailer3_real_t _t112 = _t101*_t87;
-    const trailer3_real_t _t113 = _t101*_t88;
-    const trailer3_real_t _t114 = _t103*_t89;
-    const trailer3_real_t _t115 = _t103*_t90;
-    const trailer3_real_t _t116 = _t106*_t85;
-    const trailer3_real_t _t117 = _t106*_t86;
-    const trailer3_real_t _t118 = _t108*_t19;
-    const trailer3_real_t _t119 = _t108*_t21;
-    const trailer3_real_t _t120 = _t106*_t26;
-    const trailer3_real_t _t121 = _t106*_t27;
-    const trailer3_real_t _t122 = _t101*_t98;
-    const trailer3_real_t _t123 = _t101*_t99;
-    const trailer3_real_t _t124 = _t107*thetadot_right;
-    const trailer3_real_t _t125 = _t107*thetadot_left;
-    const trailer3_real_t _t126 = _t105*thetadot_right;
-    const trailer3_real_t _t127 = _t105*thetadot_left;
-    const trailer3_real_t _t128 = _t100*thetadot_right;
-    const trailer3_real_t _t129 = _t100*thetadot_left;
-    const trailer3_real_t _t130 = _t102*thetadot_right;
-    const trailer3_real_t _t131 = _t102*thetadot_left;
-    const trailer3_real_t _t132 = _t0*_t41;
-    const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = -_t132*_t17 + _t44;
-    const trailer3_real_t _t137 = _t1*_t41;
-    const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
-    const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
-    const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
-    const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t142*_t37 + _t50;
-    const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
-    const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
-    const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
-    const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
-    const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
-    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
-    const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
-    const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
-    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
-    const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
-    const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
-    const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
-    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
-    const trailer3_real_t _t189 = -_t164*_t40 + _t59;
-    const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
-    const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
-    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
-    const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
-    const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
-    const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
-    const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
-    const trailer3_real_t _t202 = K_theta_cart2_x_tractor_2*_t23 - _t93;
-    const trailer3_real_t _t203 = K_theta_cart3_x_tractor_2*_t29 - _t94;
-    const trailer3_real_t J_x_tractor = kept[11];
-    const trailer3_real_t _t204 = J_x_tractor*_t47 - _t0*_t200 + _t201*_t49 + _t202*_t58
-            + _t203*_t76;
-    const trailer3_real_t _t205 = _t83 + _t84;
-    const trailer3_real_t _t206 = _t85 + _t86;
-    const trailer3_real_t _t207 = _t87 + _t88;
-    const trailer3_real_t _t208 = _t89 + _t90;
-    const trailer3_real_t _t209 = J_x_tractor*_t43 - _t0*_t205 + _t206*_t49 + _t207*_t58
-            + _t208*_t76;
-    const trailer3_real_t _t210 = _t19*(_t85 + _t86) + _t21*(_t92 - _t95);
-    const trailer3_real_t _t211 = _t19*(_t87 + _t88) + _t21*(_t93 - _t96);
-    const trailer3_real_t _t212 = _t19*(_t89 + _t90) + _t21*(_t94 - _t97);
-    const trailer3_real_t _t2 = kept[22];
-    const trailer3_real_t _t213 = _t2 + _t200*_t47 + _t205*_t43 + _t210*_t49 + _t211*_t58
-            + _t212*_t76;
-    const trailer3_real_t _t214 = _t26*(_t87 + _t88) + _t27*(_t93 - _t96);
-    const trailer3_real_t _t215 = _t26*(_t89 + _t90) + _t27*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t216 = J_theta_cart*_t49 - _t0*_t210 + _t201*_t47 + _t206*_t43
-            + _t214*_t58 + _t215*_t76;
-    const trailer3_real_t _t217 = _t98*(_t89 + _t90) + _t99*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t218 = J_theta_cart2*_t58 - _t0*_t211 + _t202*_t47 + _t207*_t43
-            + _t214*_t49 + _t217*_t76;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t219 = J_theta_cart3*_t76 - _t0*_t212 + _t203*_t47 + _t208*_t43
-            + _t215*_t49 + _t217*_t58;
-    const trailer3_real_t _t220 = -_t71 - _t72;
-    const trailer3_real_t _t3 = kept[23];
-    const trailer3_real_t _t221 = _t220*_t3;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t222 = J_theta_cart2_left*_t221;
-    const trailer3_real_t _t223 = _t71 - _t72;
-    const trailer3_real_t _t4 = kept[24];
-    const trailer3_real_t _t224 = _t223*_t4;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t225 = J_theta_cart2_right*_t224;
-    const trailer3_real_t _t226 = -_t77 - _t78;
-    const trailer3_real_t _t5 = kept[25];
-    const trailer3_real_t _t227 = _t226*_t5;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t228 = J_theta_cart3_left*_t227;
-    const trailer3_real_t _t229 = _t77 - _t78;
-    const trailer3_real_t _t6 = kept[26];
-    const trailer3_real_t _t230 = _t229*_t6;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t231 = J_theta_cart3_right*_t230;
-    const trailer3_real_t _t232 = -_t67 - _t68;
-    const trailer3_real_t _t7 = kept[27];
-    const trailer3_real_t _t233 = _t232*_t7;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t234 = J_theta_cart_left*_t233;
-    const trailer3_real_t _t235 = _t67 - _t68;
-    const trailer3_real_t _t8 = kept[28];
-    const trailer3_real_t _t236 = _t235*_t8;
+    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer3_real_t _t167 = _t166*_t166;
+    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
+    const trailer3_real_t _t169 = _t168*_t168;
+    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
+    const trailer3_real_t _t171 = _t170*_t170;
+    const trailer3_real_t _t172 = _t161*_t171;
+    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
+    const trailer3_real_t _t174 = _t173*_t173;
+    const trailer3_real_t _t175 = _t162*_t169;
+    const trailer3_real_t _t176 = _t163*_t171;
+    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
+    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
+    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
+    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
+    const trailer3_real_t _t181 = _t169*_t28;
+    const trailer3_real_t _t182 = _t171*_t28;
+    const trailer3_real_t _t183 = _t174*_t27;
+    const trailer3_real_t _t184 = _t174*_t28;
+    const trailer3_real_t _t185 = _t165*_t171;
+    const trailer3_real_t _t186 = _t164*_t169;
+    const trailer3_real_t _t187 = _t165*_t169;
+    const trailer3_real_t _t188 = _t166*thetadot_right;
+    const trailer3_real_t _t189 = _t166*thetadot_left;
+    const trailer3_real_t _t190 = _t173*thetadot_right;
+    const trailer3_real_t _t191 = _t173*thetadot_left;
+    const trailer3_real_t _t192 = _t60 + _t63;
+    const trailer3_real_t _t4 = kept[22];
+    const trailer3_real_t _t193 = _t192*_t4;
     const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t237 = J_theta_cart_right*_t236;
-    const trailer3_real_t _t238 = _t69 - _t70;
-    const trailer3_real_t _t239 = _t238*_t8;
-    const trailer3_real_t _t240 = -_t69 - _t70;
-    const trailer3_real_t _t241 = _t240*_t7;
-    const trailer3_real_t _t242 = _t73 - _t74;
-    const trailer3_real_t _t243 = _t242*_t4;
-    const trailer3_real_t _t244 = -_t73 - _t74;
-    const trailer3_real_t _t245 = _t244*_t3;
-    const trailer3_real_t _t246 = _t81 - _t82;
-    const trailer3_real_t _t247 = _t246*_t6;
-    const trailer3_real_t _t248 = -_t81 - _t82;
-    const trailer3_real_t _t249 = _t248*_t5;
-    const trailer3_real_t _t250 = _t222*_t245 + _t225*_t243 + _t228*_t249 + _t231*_t247
-            + _t234*_t241 + _t237*_t239;
-    const trailer3_real_t _t251 = J_x_tractor*_t52 + _t1*_t200 + _t201*_t54 + _t202*_t63
-            + _t203*_t80;
-    const trailer3_real_t _t9 = kept[29];
-    const trailer3_real_t _t252 = _t200*_t52 + _t205*_t45 + _t210*_t54 + _t211*_t63 + _t212*_t80
-            + _t9;
-    const trailer3_real_t _t253 = J_x_tractor*_t45 + _t1*_t205 + _t206*_t54 + _t207*_t63
-            + _t208*_t80;
-    const trailer3_real_t _t254 = J_theta_cart*_t54 + _t1*_t210 + _t201*_t52 + _t206*_t45
-            + _t214*_t63 + _t215*_t80;
-    const trailer3_real_t _t255 = J_theta_cart2*_t63 + _t1*_t211 + _t202*_t52 + _t207*_t45
-            + _t214*_t54 + _t217*_t80;
-    const trailer3_real_t _t256 = J_theta_cart3*_t80 + _t1*_t212 + _t203*_t52 + _t208*_t45
-            + _t215*_t54 + _t217*_t63;
-    const trailer3_real_t _t257 = _t108*(_t83 + _t84) + _t112 + _t113 + _t114 + _t115 + _t116
-            + _t117;
-    const trailer3_real_t _t258 = _t124*_t43 + _t125*_t45;
-    const trailer3_real_t _t259 = _t124*_t134 + _t125*_t139 + _t126*_t142 + _t127*_t145;
-    const trailer3_real_t _t260 = _t124*_t149 + _t125*_t153 + _t126*_t157 + _t127*_t161
-            + _t128*_t164 + _t129*_t167;
-    const trailer3_real_t _t261 = _t124*_t171 + _t125*_t175 + _t126*_t179 + _t127*_t183
-            + _t128*_t187 + _t129*_t191 + _t130*_t194 + _t131*_t197;
-    const trailer3_real_t _t262 = J_x_tractor*_t258 + _t201*_t259 + _t202*_t260 + _t203*_t261
-            + _t257;
-    const trailer3_real_t _t263 = _t101*_t93 + _t104 + _t106*_t92
-            + _t108*(-K_theta_tractor_x_tractor_2*_t18 + _t91) - _t109 - _t110 - _t111;
-    const trailer3_real_t _t264 = _t124*_t132 + _t125*_t137;
-    const trailer3_real_t _t265 = J_x_tractor*_t264 + _t206*_t259 + _t207*_t260 + _t208*_t261
-            + _t263;
-    const trailer3_real_t _t10 = kept[30];
-    const trailer3_real_t _t11 = kept[31];
-    const trailer3_real_t _t12 = kept[32];
-    const trailer3_real_t _t266 = _t18*(_t10*_t106*_t17 + _t101*_t12*_t24 + _t103*_t11*_t30)
-            + _t19*(-_t109 - _t110 - _t111) + _t21*(-_t112 - _t113 - _t114 - _t115 - _t116 - _t117);
-    const trailer3_real_t _t267 = _t200*_t258 + _t205*_t264 + _t210*_t259 + _t211*_t260
-            + _t212*_t261 + _t266;
-    const trailer3_real_t _t13 = kept[33];
-    const trailer3_real_t _t14 = kept[34];
-    const trailer3_real_t _t15 = kept[35];
-    const trailer3_real_t _t268 = _t108*_t13*_t17*_t20 - _t118*_t92
-            + _t16*(_t101*_t15*_t24 + _t103*_t14*_t30 + _t108*(_t10*_t20 + _t13*_t18))
-            + _t26*(-_t109 - _t110) + _t27*(-_t112 - _t113 - _t114 - _t115);
-    const trailer3_real_t _t269 = J_theta_cart*_t259 + _t201*_t258 + _t206*_t264 + _t214*_t260
-            + _t215*_t261 + _t268;
-    const trailer3_real_t _t270 = _t118*(-_t93 + _t96) + _t119*(_t87 + _t88) + _t120*(-_t93 + _t96)
-            + _t121*(_t87 + _t88) + _t98*(_t104 - _t110) + _t99*(-_t114 - _t115);
-    const trailer3_real_t _t271 = J_theta_cart2*_t260 + _t202*_t258 + _t207*_t264 + _t214*_t259
-            + _t217*_t261 + _t270;
-    const trailer3_real_t _t272 = _t89*(_t119 + _t121 + _t123) + _t90*(_t119 + _t121 + _t123)
-            + _t94*(-_t118 - _t120 - _t122) + _t97*(_t118 + _t120 + _t122);
-    const trailer3_real_t _t273 = J_theta_cart3*_t261 + _t203*_t258 + _t208*_t264 + _t215*_t259
-            + _t217*_t260 + _t272;
+    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
+    const trailer3_real_t _t195 = _t64 + _t67;
+    const trailer3_real_t _t196 = _t195*_t4;
+    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
+    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
+    const trailer3_real_t _t5 = kept[23];
+    const trailer3_real_t _t199 = _t198*_t5;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
+    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
+    const trailer3_real_t _t202 = _t201*_t5;
+    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
+    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
+    const trailer3_real_t _t6 = kept[24];
+    const trailer3_real_t _t205 = _t204*_t6;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
+    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
+    const trailer3_real_t _t208 = _t207*_t6;
+    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
+    const trailer3_real_t _t210 = -_t68 - _t79;
+    const trailer3_real_t _t7 = kept[25];
+    const trailer3_real_t _t211 = _t210*_t7;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
+    const trailer3_real_t _t213 = -_t74 - _t80;
+    const trailer3_real_t _t214 = _t213*_t7;
+    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
+    const trailer3_real_t _t216 = _t82 - _t89;
+    const trailer3_real_t _t8 = kept[26];
+    const trailer3_real_t _t217 = _t216*_t8;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
+    const trailer3_real_t _t219 = _t91 - _t96;
+    const trailer3_real_t _t220 = _t219*_t8;
+    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
+    const trailer3_real_t _t222 = -_t82 - _t89;
+    const trailer3_real_t _t9 = kept[27];
+    const trailer3_real_t _t223 = _t222*_t9;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
+    const trailer3_real_t _t225 = -_t91 - _t96;
+    const trailer3_real_t _t226 = _t225*_t9;
+    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
+    const trailer3_real_t _t229 = _t155 + _t156;
+    const trailer3_real_t _t230 = _t157 + _t158;
+    const trailer3_real_t K_theta_tractor_x_tractor = kept[17];
+    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
+            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
+    const trailer3_real_t _t232 = _t188 - _t190;
+    const trailer3_real_t _t233 = _t189 - _t191;
+    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
+    const trailer3_real_t _t235 = _t168*thetadot_right;
+    const trailer3_real_t _t236 = _t168*thetadot_left;
+    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
+            + _t121*_t235 + _t123*_t236;
+    const trailer3_real_t _t238 = _t170*thetadot_right;
+    const trailer3_real_t _t239 = _t170*thetadot_left;
+    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
+            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
+    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
+    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
+            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
+    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
+    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
+            + _t240*_t244 + _t245;
+    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
+    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
+    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
+    const trailer3_real_t _t10 = kept[28];
+    const trailer3_real_t _t11 = kept[29];
+    const trailer3_real_t _t12 = kept[30];
+    const trailer3_real_t _t13 = kept[31];
+    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
+            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
+            + _t251;
+    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
+    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
+    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
+            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
+            + _t255;
+    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
+    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
+            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
+            + _t258;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t274 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t260 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t275 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t276 = trailer3_norm2(_t274, _t275);
+    const trailer3_real_t _t261 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t262 = trailer3_norm2(_t260, _t261);
     const trailer3_real_t gain_1 = gain[0];
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t277 = gain_1/TRAILER3_FMAX(_t276, eps_1);
+    const trailer3_real_t _t263 = gain_1/TRAILER3_FMAX(_t262, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t278 = _t274*_t277 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t264 = _t260*_t263 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t279 = _t275*_t277 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t _t280 = _t135 - _t136;
-    const trailer3_real_t _t281 = _t280*_t8;
-    const trailer3_real_t _t282 = _t140 - _t141;
-    const trailer3_real_t _t283 = _t282*_t8;
-    const trailer3_real_t _t284 = _t143 - _t144;
-    const trailer3_real_t _t285 = _t284*_t8;
-    const trailer3_real_t _t286 = _t146 - _t147;
-    const trailer3_real_t _t287 = _t286*_t8;
-    const trailer3_real_t _t288 = _t124*_t281 + _t125*_t283 + _t126*_t285 + _t127*_t287;
-    const trailer3_real_t _t289 = -_t135 - _t136;
-    const trailer3_real_t _t290 = _t289*_t7;
-    const trailer3_real_t _t291 = -_t140 - _t141;
-    const trailer3_real_t _t292 = _t291*_t7;
-    const trailer3_real_t _t293 = -_t143 - _t144;
-    const trailer3_real_t _t294 = _t293*_t7;
-    const trailer3_real_t _t295 = -_t146 - _t147;
-    const trailer3_real_t _t296 = _t295*_t7;
-    const trailer3_real_t _t297 = _t124*_t290 + _t125*_t292 + _t126*_t294 + _t127*_t296;
-    const trailer3_real_t _t298 = _t150 - _t151;
-    const trailer3_real_t _t299 = _t298*_t4;
-    const trailer3_real_t _t300 = _t154 - _t155;
-    const trailer3_real_t _t301 = _t300*_t4;
-    const trailer3_real_t _t302 = _t158 - _t159;
-    const trailer3_real_t _t303 = _t302*_t4;
-    const trailer3_real_t _t304 = _t162 - _t163;
-    const trailer3_real_t _t305 = _t304*_t4;
-    const trailer3_real_t _t306 = _t165 - _t166;
-    const trailer3_real_t _t307 = _t306*_t4;
-    const trailer3_real_t _t308 = _t168 - _t169;
-    const trailer3_real_t _t309 = _t308*_t4;
-    const trailer3_real_t _t310 = _t124*_t299 + _t125*_t301 + _t126*_t303 + _t127*_t305
-            + _t128*_t307 + _t129*_t309;
-    const trailer3_real_t _t311 = -_t150 - _t151;
-    const trailer3_real_t _t312 = _t3*_t311;
-    const trailer3_real_t _t313 = -_t154 - _t155;
-    const trailer3_real_t _t314 = _t3*_t313;
-    const trailer3_real_t _t315 = -_t158 - _t159;
-    const trailer3_real_t _t316 = _t3*_t315;
-    const trailer3_real_t _t317 = -_t162 - _t163;
-    const trailer3_real_t _t318 = _t3*_t317;
-    const trailer3_real_t _t319 = -_t165 - _t166;
-    const trailer3_real_t _t320 = _t3*_t319;
-    const trailer3_real_t _t321 = -_t168 - _t169;
-    const trailer3_real_t _t322 = _t3*_t321;
-    const trailer3_real_t _t323 = _t124*_t312 + _t125*_t314 + _t126*_t316 + _t127*_t318
-            + _t128*_t320 + _t129*_t322;
-    const trailer3_real_t _t324 = _t172 - _t173;
-    const trailer3_real_t _t325 = _t324*_t6;
-    const trailer3_real_t _t326 = _t176 - _t177;
-    const trailer3_real_t _t327 = _t326*_t6;
-    const trailer3_real_t _t328 = _t180 - _t181;
-    const trailer3_real_t _t329 = _t328*_t6;
-    const trailer3_real_t _t330 = _t184 - _t185;
-    const trailer3_real_t _t331 = _t330*_t6;
-    const trailer3_real_t _t332 = _t188 - _t189;
-    const trailer3_real_t _t333 = _t332*_t6;
-    const trailer3_real_t _t334 = _t192 - _t193;
-    const trailer3_real_t _t335 = _t334*_t6;
-    const trailer3_real_t _t336 = _t195 - _t196;
-    const trailer3_real_t _t337 = _t336*_t6;
-    const trailer3_real_t _t338 = _t198 - _t199;
-    const trailer3_real_t _t339 = _t338*_t6;
-    const trailer3_real_t _t340 = _t124*_t325 + _t125*_t327 + _t126*_t329 + _t127*_t331
-            + _t128*_t333 + _t129*_t335 + _t130*_t337 + _t131*_t339;
-    const trailer3_real_t _t341 = -_t172 - _t173;
-    const trailer3_real_t _t342 = _t341*_t5;
-    const trailer3_real_t _t343 = -_t176 - _t177;
-    const trailer3_real_t _t344 = _t343*_t5;
-    const trailer3_real_t _t345 = -_t180 - _t181;
-    const trailer3_real_t _t346 = _t345*_t5;
-    const trailer3_real_t _t347 = -_t184 - _t185;
-    const trailer3_real_t _t348 = _t347*_t5;
-    const trailer3_real_t _t349 = -_t188 - _t189;
-    const trailer3_real_t _t350 = _t349*_t5;
-    const trailer3_real_t _t351 = -_t192 - _t193;
-    const trailer3_real_t _t352 = _t351*_t5;
-    const trailer3_real_t _t353 = -_t195 - _t196;
-    const trailer3_real_t _t354 = _t353*_t5;
-    const trailer3_real_t _t355 = -_t198 - _t199;
-    const trailer3_real_t _t356 = _t355*_t5;
-    const trailer3_real_t _t357 = _t124*_t342 + _t125*_t344 + _t126*_t346 + _t127*_t348
-            + _t128*_t350 + _t129*_t352 + _t130*_t354 + _t131*_t356;
+    const trailer3_real_t _t265 = _t261*_t263 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t266 = _t103 - _t37;
+    const trailer3_real_t _t267 = _t266*_t4;
+    const trailer3_real_t _t268 = _t104 - _t38;
+    const trailer3_real_t _t269 = _t268*_t4;
+    const trailer3_real_t _t270 = -_t103 - _t37;
+    const trailer3_real_t _t271 = _t270*_t5;
+    const trailer3_real_t _t272 = -_t104 - _t38;
+    const trailer3_real_t _t273 = _t272*_t5;
+    const trailer3_real_t _t274 = _t107 - _t109;
+    const trailer3_real_t _t275 = _t274*_t6;
+    const trailer3_real_t _t276 = _t112 - _t114;
+    const trailer3_real_t _t277 = _t276*_t6;
+    const trailer3_real_t _t278 = _t108 + _t117 - _t41;
+    const trailer3_real_t _t279 = _t278*_t6;
+    const trailer3_real_t _t280 = _t113 + _t120 - _t45;
+    const trailer3_real_t _t281 = _t280*_t6;
+    const trailer3_real_t _t282 = _t122 + _t43;
+    const trailer3_real_t _t283 = _t282*_t6;
+    const trailer3_real_t _t284 = _t124 + _t47;
+    const trailer3_real_t _t285 = _t284*_t6;
+    const trailer3_real_t _t286 = -_t107 - _t109;
+    const trailer3_real_t _t287 = _t286*_t7;
+    const trailer3_real_t _t288 = -_t112 - _t114;
+    const trailer3_real_t _t289 = _t288*_t7;
+    const trailer3_real_t _t290 = _t108 - _t117 - _t41;
+    const trailer3_real_t _t291 = _t290*_t7;
+    const trailer3_real_t _t292 = _t113 - _t120 - _t45;
+    const trailer3_real_t _t293 = _t292*_t7;
+    const trailer3_real_t _t294 = -_t122 + _t43;
+    const trailer3_real_t _t295 = _t294*_t7;
+    const trailer3_real_t _t296 = -_t124 + _t47;
+    const trailer3_real_t _t297 = _t296*_t7;
+    const trailer3_real_t _t298 = _t127 - _t129;
+    const trailer3_real_t _t299 = _t298*_t8;
+    const trailer3_real_t _t300 = _t132 - _t134;
+    const trailer3_real_t _t301 = _t300*_t8;
+    const trailer3_real_t _t302 = _t137 - _t138;
+    const trailer3_real_t _t303 = _t302*_t8;
+    const trailer3_real_t _t304 = _t141 - _t142;
+    const trailer3_real_t _t305 = _t304*_t8;
+    const trailer3_real_t _t306 = _t145 - _t146;
+    const trailer3_real_t _t307 = _t306*_t8;
+    const trailer3_real_t _t308 = _t149 - _t150;
+    const trailer3_real_t _t309 = _t308*_t8;
+    const trailer3_real_t _t310 = _t152 + _t54;
+    const trailer3_real_t _t311 = _t310*_t8;
+    const trailer3_real_t _t312 = _t154 + _t59;
+    const trailer3_real_t _t313 = _t312*_t8;
+    const trailer3_real_t _t314 = -_t127 - _t129;
+    const trailer3_real_t _t315 = _t314*_t9;
+    const trailer3_real_t _t316 = -_t132 - _t134;
+    const trailer3_real_t _t317 = _t316*_t9;
+    const trailer3_real_t _t318 = -_t137 - _t138;
+    const trailer3_real_t _t319 = _t318*_t9;
+    const trailer3_real_t _t320 = -_t141 - _t142;
+    const trailer3_real_t _t321 = _t320*_t9;
+    const trailer3_real_t _t322 = -_t145 - _t146;
+    const trailer3_real_t _t323 = _t322*_t9;
+    const trailer3_real_t _t324 = -_t149 - _t150;
+    const trailer3_real_t _t325 = _t324*_t9;
+    const trailer3_real_t _t326 = -_t152 + _t54;
+    const trailer3_real_t _t327 = _t326*_t9;
+    const trailer3_real_t _t328 = -_t154 + _t59;
+    const trailer3_real_t _t329 = _t328*_t9;
+    const trailer3_real_t _t330 = _t232*_t267 + _t233*_t269;
+    const trailer3_real_t _t331 = _t232*_t271 + _t233*_t273;
+    const trailer3_real_t _t332 = _t188*_t275 + _t189*_t277 + _t190*_t279 + _t191*_t281
+            + _t235*_t283 + _t236*_t285;
+    const trailer3_real_t _t333 = _t188*_t287 + _t189*_t289 + _t190*_t291 + _t191*_t293
+            + _t235*_t295 + _t236*_t297;
+    const trailer3_real_t _t334 = _t188*_t299 + _t189*_t301 + _t190*_t303 + _t191*_t305
+            + _t235*_t307 + _t236*_t309 + _t238*_t311 + _t239*_t313;
+    const trailer3_real_t _t335 = _t188*_t315 + _t189*_t317 + _t190*_t319 + _t191*_t321
+            + _t235*_t323 + _t236*_t325 + _t238*_t327 + _t239*_t329;
+    const trailer3_real_t _t14 = kept[32];
+    const trailer3_real_t _t336 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
+    const trailer3_real_t _t15 = kept[33];
+    const trailer3_real_t _t337 = _t15 + _t228*_t44 + _t229*_t55 + _t230*_t90;
+    const trailer3_real_t _t16 = kept[34];
+    const trailer3_real_t _t338 = _t16 + _t242*_t40 + _t243*_t49 + _t244*_t81;
+    const trailer3_real_t _t17 = kept[35];
+    const trailer3_real_t _t339 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
+    const trailer3_real_t _t340 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
+            + _t250*_t81;
+    const trailer3_real_t _t341 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
+            + _t250*_t90;
+    const trailer3_real_t _t342 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
+            + _t254*_t81;
+    const trailer3_real_t _t343 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
+            + _t254*_t90;
+    const trailer3_real_t _t344 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
+            + _t254*_t49;
+    const trailer3_real_t _t345 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
+            + _t254*_t55;
     const trailer3_real_t J_theta_right = kept[10];
-    const trailer3_real_t _t358 = J_theta_cart2_left*_t221*_t221 + J_theta_cart2_right*_t224*_t224
-            + J_theta_cart3_left*_t227*_t227 + J_theta_cart3_right*_t230*_t230
-            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t236*_t236 + J_theta_right
-            - _t0*_t213 + _t204*_t47 + _t209*_t43 + _t216*_t49 + _t218*_t58 + _t219*_t76;
-    const trailer3_real_t _t359 = _t1*_t213 + _t204*_t52 + _t209*_t45 + _t216*_t54 + _t218*_t63
-            + _t219*_t80 + _t250;
-    const trailer3_real_t _t360 = -_t0*_t252 + _t250 + _t251*_t47 + _t253*_t43 + _t254*_t49
-            + _t255*_t58 + _t256*_t76;
+    const trailer3_real_t _t346 = J_theta_right + _t0*_t338 + _t1*_t336 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t340*_t40 + _t342*_t49
+            + _t344*_t81;
+    const trailer3_real_t _t347 = _t0*_t339 + _t1*_t337 + _t193*_t197 + _t199*_t203 + _t205*_t209
+            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t341*_t40 + _t343*_t49 + _t345*_t81;
     const trailer3_real_t J_theta_left = kept[9];
-    const trailer3_real_t _t361 = J_theta_cart2_left*_t245*_t245 + J_theta_cart2_right*_t243*_t243
-            + J_theta_cart3_left*_t249*_t249 + J_theta_cart3_right*_t247*_t247
-            + J_theta_cart_left*_t241*_t241 + J_theta_cart_right*_t239*_t239 + J_theta_left
-            + _t1*_t252 + _t251*_t52 + _t253*_t45 + _t254*_t54 + _t255*_t63 + _t256*_t80;
-    const trailer3_real_t _t362 = -_t0*_t267 + _t222*_t323 + _t225*_t310 + _t228*_t357 + _t231*_t340
-            + _t234*_t297 + _t237*_t288 + _t262*_t47 + _t265*_t43 + _t269*_t49 + _t271*_t58
-            + _t273*_t76;
-    const trailer3_real_t _t363 = J_theta_cart2_left*_t245*_t323 + J_theta_cart2_right*_t243*_t310
-            + J_theta_cart3_left*_t249*_t357 + J_theta_cart3_right*_t247*_t340
-            + J_theta_cart_left*_t241*_t297 + J_theta_cart_right*_t239*_t288 + _t1*_t267
-            + _t262*_t52 + _t265*_t45 + _t269*_t54 + _t271*_t63 + _t273*_t80;
+    const trailer3_real_t _t348 = J_theta_left + _t196*_t197 + _t2*_t339 + _t202*_t203 + _t208*_t209
+            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t3*_t337 + _t341*_t44 + _t343*_t55
+            + _t345*_t90;
+    const trailer3_real_t _t349 = _t0*_t247 + _t1*_t241 + _t194*_t330 + _t200*_t331 + _t206*_t332
+            + _t212*_t333 + _t218*_t334 + _t224*_t335 + _t252*_t40 + _t256*_t49 + _t259*_t81;
+    const trailer3_real_t _t350 = _t197*_t330 + _t2*_t247 + _t203*_t331 + _t209*_t332 + _t215*_t333
+            + _t221*_t334 + _t227*_t335 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
     const trailer3_real_t adapt_0 = adapt[0];
     const trailer3_real_t h = adapt[1];
-    u[0] = _t278*_t358 + _t279*_t359 + _t362;
-    u[1] = _t278*_t360 + _t279*_t361 + _t363;
-    s[0] = _t274;
-    s[1] = _t275;
-    s_norm[0] = _t276;
-    gain_next[0] = _t276*adapt_0*h + gain_1;
+    u[0] = _t264*_t346 + _t265*_t347 + _t349;
+    u[1] = _t264*_t347 + _t265*_t348 + _t350;
+    s[0] = _t260;
+    s[1] = _t261;
+    s_norm[0] = _t262;
+    gain_next[0] = _t262*adapt_0*h + gain_1;
 }
 
 /* trailer3_k_minimal_pi_law_keep: the parameter-only part of trailer3_minimal_pi_law

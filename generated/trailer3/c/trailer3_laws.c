@@ -31,22 +31,22 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.
-   operations after CSE: 189 add, 295 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 140 add, 215 mul, 7 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
 {
-    trailer3_real_t kept[31];
+    trailer3_real_t kept[32];
     trailer3_k_minimal_tde_keep(p, span, kept);
     trailer3_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 187 add, 292 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fabs */
+   operations after CSE: 141 add, 221 mul, 7 div, 6 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
-    trailer3_real_t kept[30];
+    trailer3_real_t kept[31];
     trailer3_k_minimal_minv_norm_keep(p, kept);
     trailer3_k_minimal_minv_norm(kept, q, norm);
 }
@@ -114,33 +114,33 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
 }
 
 /* trailer3_minimal_tdc_law: documented in trailer3_laws.h.
-   operations after CSE: 191 add, 294 mul, 6 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 146 add, 224 mul, 6 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
     const trailer3_real_t *p22, const trailer3_real_t *H1hat, trailer3_real_t *u)
 {
-    trailer3_real_t kept[30];
-    trailer3_k_minimal_minv_norm_keep(p, kept);
+    trailer3_real_t kept[31];
+    trailer3_k_minimal_tdc_law_keep(p, kept);
     trailer3_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 196 add, 302 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 151 add, 232 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
     const trailer3_real_t *p22, const trailer3_real_t *H1hat, const trailer3_real_t *gain,
     const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm)
 {
-    trailer3_real_t kept[30];
-    trailer3_k_minimal_minv_norm_keep(p, kept);
+    trailer3_real_t kept[31];
+    trailer3_k_minimal_tdc_law_keep(p, kept);
     trailer3_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u,
             s, s_norm);
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 460 add, 694 mul, 8 div, 8 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 346 add, 501 mul, 8 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -155,7 +155,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 456 add, 691 mul, 7 div, 8 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 342 add, 498 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,

@@ -7,7 +7,7 @@
 #include "trailer3_model.h"
 
 /* trailer3_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 470 add, 658 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 355 add, 489 mul, 7 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *tau, trailer3_real_t *qddot)
 {
@@ -73,22 +73,24 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
     const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t14 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t15 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer3_real_t _t16 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t17 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -152,431 +154,402 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart);
-    const trailer3_real_t _t18 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
-    const trailer3_real_t _t20 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
-    const trailer3_real_t _t23 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t24 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
-    const trailer3_real_t _t29 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t30 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
-    const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
-    const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
-    const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
-    const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
-    const trailer3_real_t _t43 = _t0*_t42;
-    const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
-    const trailer3_real_t _t45 = _t1*_t42;
-    const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
-    const trailer3_real_t _t47 = -_t0*_t41;
-    const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t28*_t49;
-    const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
-    const trailer3_real_t _t52 = -_t1*_t41;
-    const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = -_t28*_t54;
-    const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
-    const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = -_t34*_t58;
-    const trailer3_real_t _t60 = -_t32*_t49;
-    const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
-    const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t64 = -_t34*_t63;
-    const trailer3_real_t _t65 = -_t32*_t54;
-    const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
-    const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
-    const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
-    const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
-    const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
-    const trailer3_real_t _t85 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor_2*_t17;
-    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t23;
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t _t89 = K_theta_cart3_x_tractor*_t29;
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t91 = K_theta_tractor_x_tractor*_t20;
-    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t17;
-    const trailer3_real_t _t93 = K_theta_cart2_x_tractor*_t24;
-    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
-    const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
-    const trailer3_real_t _t101 = _t100*_t100;
-    const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
-    const trailer3_real_t _t103 = _t102*_t102;
-    const trailer3_real_t _t104 = _t103*_t94;
-    const trailer3_real_t _t105 = _t49*thetadot_right + _t54*thetadot_left;
-    const trailer3_real_t _t106 = _t105*_t105;
-    const trailer3_real_t _t107 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer3_real_t _t108 = _t107*_t107;
-    const trailer3_real_t _t109 = _t101*_t96;
-    const trailer3_real_t _t110 = _t103*_t97;
-    const trailer3_real_t _t111 = _t106*_t95;
-    const trailer3_real_t _t112 = _t101*_t87;
-    const trailer3_real_t _t113 = _t101*_t88;
-    const trailer3_real_t _t114 = _t103*_t89;
-    const trailer3_real_t _t115 = _t103*_t90;
-    const trailer3_real_t _t116 = _t106*_t85;
-    const trailer3_real_t _t117 = _t106*_t86;
-    const trailer3_real_t _t118 = _t108*_t19;
-    const trailer3_real_t _t119 = _t108*_t21;
-    const trailer3_real_t _t120 = _t106*_t26;
-    const trailer3_real_t _t121 = _t106*_t27;
-    const trailer3_real_t _t122 = _t101*_t98;
-    const trailer3_real_t _t123 = _t101*_t99;
-    const trailer3_real_t _t124 = _t107*thetadot_right;
-    const trailer3_real_t _t125 = _t107*thetadot_left;
-    const trailer3_real_t _t126 = _t105*thetadot_right;
-    const trailer3_real_t _t127 = _t105*thetadot_left;
-    const trailer3_real_t _t128 = _t100*thetadot_right;
-    const trailer3_real_t _t129 = _t100*thetadot_left;
-    const trailer3_real_t _t130 = _t102*thetadot_right;
-    const trailer3_real_t _t131 = _t102*thetadot_left;
-    const trailer3_real_t _t132 = _t0*_t41;
-    const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = -_t132*_t17 + _t44;
-    const trailer3_real_t _t137 = _t1*_t41;
-    const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
-    const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
-    const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    const trailer3_real_t _t18 = -theta_tractor;
+    const trailer3_real_t _t19 = _t18 + theta_cart;
+    const trailer3_real_t _t20 = TRAILER3_SIN(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = _t18 + theta_cart2;
+    const trailer3_real_t _t24 = TRAILER3_SIN(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS(_t23);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
+    const trailer3_real_t _t29 = _t18 + theta_cart3;
+    const trailer3_real_t _t30 = TRAILER3_SIN(_t29);
+    const trailer3_real_t _t31 = TRAILER3_COS(_t29);
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
+    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
+    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
+    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
+    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t41 = _t39*_t40;
+    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
+    const trailer3_real_t _t43 = _t41 + _t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
+    const trailer3_real_t _t45 = _t39*_t44;
+    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
+    const trailer3_real_t _t47 = _t45 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t50 = _t48*_t49;
+    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
+    const trailer3_real_t _t52 = _t40*_t51;
+    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
+    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t56 = _t48*_t55;
+    const trailer3_real_t _t57 = _t44*_t51;
+    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
+    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t61 = _t1*_t21;
+    const trailer3_real_t _t62 = _t0*_t34;
+    const trailer3_real_t _t63 = _t61 - _t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
+    const trailer3_real_t _t65 = _t21*_t3;
+    const trailer3_real_t _t66 = _t2*_t34;
+    const trailer3_real_t _t67 = _t65 - _t66;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
+    const trailer3_real_t _t70 = _t40*_t69;
+    const trailer3_real_t _t71 = _t1*_t25;
+    const trailer3_real_t _t72 = _t0*_t35;
+    const trailer3_real_t _t73 = _t71 - _t72;
+    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
+    const trailer3_real_t _t75 = _t44*_t69;
+    const trailer3_real_t _t76 = _t25*_t3;
+    const trailer3_real_t _t77 = _t2*_t35;
+    const trailer3_real_t _t78 = _t76 - _t77;
+    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
+    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
+    const trailer3_real_t _t83 = _t0*_t36;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
+    const trailer3_real_t _t85 = _t40*_t84;
+    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
+    const trailer3_real_t _t87 = _t49*_t86;
+    const trailer3_real_t _t88 = _t1*_t31;
+    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
+    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
+    const trailer3_real_t _t92 = _t2*_t36;
+    const trailer3_real_t _t93 = _t44*_t84;
+    const trailer3_real_t _t94 = _t55*_t86;
+    const trailer3_real_t _t95 = _t3*_t31;
+    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
+    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
+    const trailer3_real_t _t98 = _t39*_t97;
+    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
+    const trailer3_real_t _t100 = _t39*_t99;
+    const trailer3_real_t _t101 = _t51*_t97;
+    const trailer3_real_t _t102 = _t51*_t99;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t105 = -_t73 - _t98;
+    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
+    const trailer3_real_t _t108 = _t69*_t97;
+    const trailer3_real_t _t109 = _t108 + _t42;
+    const trailer3_real_t _t110 = -_t100 - _t78;
+    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
+    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
+    const trailer3_real_t _t113 = _t69*_t99;
+    const trailer3_real_t _t114 = _t113 + _t46;
+    const trailer3_real_t _t115 = _t70 + _t98;
+    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
+    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t118 = _t100 + _t75;
+    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
+    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t84*_t97;
+    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
+    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t133 = _t84*_t99;
+    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
+    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
+    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
+    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
+    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
+    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
+    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t146 = _t121*_t86 + _t50;
+    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t150 = _t123*_t86 + _t56;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
     const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
-    const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t142*_t37 + _t50;
-    const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
-    const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
-    const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
-    const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
-    const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
-    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
-    const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
-    const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
-    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
-    const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
-    const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
-    const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
-    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
-    const trailer3_real_t _t189 = -_t164*_t40 + _t59;
-    const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
-    const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
-    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
-    const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
-    const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
-    const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
-    const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
-    const trailer3_real_t _t202 = K_theta_cart2_x_tractor_2*_t23 - _t93;
-    const trailer3_real_t _t203 = K_theta_cart3_x_tractor_2*_t29 - _t94;
-    const trailer3_real_t _t204 = J_x_tractor*_t47 - _t0*_t200 + _t201*_t49 + _t202*_t58
-            + _t203*_t76;
-    const trailer3_real_t _t205 = _t83 + _t84;
-    const trailer3_real_t _t206 = _t85 + _t86;
-    const trailer3_real_t _t207 = _t87 + _t88;
-    const trailer3_real_t _t208 = _t89 + _t90;
-    const trailer3_real_t _t209 = J_x_tractor*_t43 - _t0*_t205 + _t206*_t49 + _t207*_t58
-            + _t208*_t76;
-    const trailer3_real_t _t210 = _t19*(_t85 + _t86) + _t21*(_t92 - _t95);
-    const trailer3_real_t _t211 = _t19*(_t87 + _t88) + _t21*(_t93 - _t96);
-    const trailer3_real_t _t212 = _t19*(_t89 + _t90) + _t21*(_t94 - _t97);
-    const trailer3_real_t _t213 = _t2 + _t200*_t47 + _t205*_t43 + _t210*_t49 + _t211*_t58
-            + _t212*_t76;
-    const trailer3_real_t _t214 = _t26*(_t87 + _t88) + _t27*(_t93 - _t96);
-    const trailer3_real_t _t215 = _t26*(_t89 + _t90) + _t27*(_t94 - _t97);
-    const trailer3_real_t _t216 = J_theta_cart*_t49 - _t0*_t210 + _t201*_t47 + _t206*_t43
-            + _t214*_t58 + _t215*_t76;
-    const trailer3_real_t _t217 = _t98*(_t89 + _t90) + _t99*(_t94 - _t97);
-    const trailer3_real_t _t218 = J_theta_cart2*_t58 - _t0*_t211 + _t202*_t47 + _t207*_t43
-            + _t214*_t49 + _t217*_t76;
-    const trailer3_real_t _t219 = J_theta_cart3*_t76 - _t0*_t212 + _t203*_t47 + _t208*_t43
-            + _t215*_t49 + _t217*_t58;
-    const trailer3_real_t _t220 = -_t71 - _t72;
-    const trailer3_real_t _t221 = _t220*_t3;
-    const trailer3_real_t _t222 = J_theta_cart2_left*_t221;
-    const trailer3_real_t _t223 = _t71 - _t72;
-    const trailer3_real_t _t224 = _t223*_t4;
-    const trailer3_real_t _t225 = J_theta_cart2_right*_t224;
-    const trailer3_real_t _t226 = -_t77 - _t78;
-    const trailer3_real_t _t227 = _t226*_t5;
-    const trailer3_real_t _t228 = J_theta_cart3_left*_t227;
-    const trailer3_real_t _t229 = _t77 - _t78;
-    const trailer3_real_t _t230 = _t229*_t6;
-    const trailer3_real_t _t231 = J_theta_cart3_right*_t230;
-    const trailer3_real_t _t232 = -_t67 - _t68;
-    const trailer3_real_t _t233 = _t232*_t7;
-    const trailer3_real_t _t234 = J_theta_cart_left*_t233;
-    const trailer3_real_t _t235 = _t67 - _t68;
-    const trailer3_real_t _t236 = _t235*_t8;
-    const trailer3_real_t _t237 = J_theta_cart_right*_t236;
-    const trailer3_real_t _t238 = _t69 - _t70;
-    const trailer3_real_t _t239 = _t238*_t8;
-    const trailer3_real_t _t240 = -_t69 - _t70;
-    const trailer3_real_t _t241 = _t240*_t7;
-    const trailer3_real_t _t242 = _t73 - _t74;
-    const trailer3_real_t _t243 = _t242*_t4;
-    const trailer3_real_t _t244 = -_t73 - _t74;
-    const trailer3_real_t _t245 = _t244*_t3;
-    const trailer3_real_t _t246 = _t81 - _t82;
-    const trailer3_real_t _t247 = _t246*_t6;
-    const trailer3_real_t _t248 = -_t81 - _t82;
-    const trailer3_real_t _t249 = _t248*_t5;
-    const trailer3_real_t _t250 = _t222*_t245 + _t225*_t243 + _t228*_t249 + _t231*_t247
-            + _t234*_t241 + _t237*_t239;
-    const trailer3_real_t _t251 = J_x_tractor*_t52 + _t1*_t200 + _t201*_t54 + _t202*_t63
-            + _t203*_t80;
-    const trailer3_real_t _t252 = _t200*_t52 + _t205*_t45 + _t210*_t54 + _t211*_t63 + _t212*_t80
-            + _t9;
-    const trailer3_real_t _t253 = J_x_tractor*_t45 + _t1*_t205 + _t206*_t54 + _t207*_t63
-            + _t208*_t80;
-    const trailer3_real_t _t254 = J_theta_cart*_t54 + _t1*_t210 + _t201*_t52 + _t206*_t45
-            + _t214*_t63 + _t215*_t80;
-    const trailer3_real_t _t255 = J_theta_cart2*_t63 + _t1*_t211 + _t202*_t52 + _t207*_t45
-            + _t214*_t54 + _t217*_t80;
-    const trailer3_real_t _t256 = J_theta_cart3*_t80 + _t1*_t212 + _t203*_t52 + _t208*_t45
-            + _t215*_t54 + _t217*_t63;
-    const trailer3_real_t _t257 = _t108*(_t83 + _t84) + _t112 + _t113 + _t114 + _t115 + _t116
-            + _t117;
-    const trailer3_real_t _t258 = _t124*_t43 + _t125*_t45;
-    const trailer3_real_t _t259 = _t124*_t134 + _t125*_t139 + _t126*_t142 + _t127*_t145;
-    const trailer3_real_t _t260 = _t124*_t149 + _t125*_t153 + _t126*_t157 + _t127*_t161
-            + _t128*_t164 + _t129*_t167;
-    const trailer3_real_t _t261 = _t124*_t171 + _t125*_t175 + _t126*_t179 + _t127*_t183
-            + _t128*_t187 + _t129*_t191 + _t130*_t194 + _t131*_t197;
-    const trailer3_real_t _t262 = J_x_tractor*_t258 + _t201*_t259 + _t202*_t260 + _t203*_t261
-            + _t257;
-    const trailer3_real_t _t263 = _t101*_t93 + _t104 + _t106*_t92
-            + _t108*(-K_theta_tractor_x_tractor_2*_t18 + _t91) - _t109 - _t110 - _t111;
-    const trailer3_real_t _t264 = _t124*_t132 + _t125*_t137;
-    const trailer3_real_t _t265 = J_x_tractor*_t264 + _t206*_t259 + _t207*_t260 + _t208*_t261
-            + _t263;
-    const trailer3_real_t _t266 = _t18*(_t10*_t106*_t17 + _t101*_t12*_t24 + _t103*_t11*_t30)
-            + _t19*(-_t109 - _t110 - _t111) + _t21*(-_t112 - _t113 - _t114 - _t115 - _t116 - _t117);
-    const trailer3_real_t _t267 = _t200*_t258 + _t205*_t264 + _t210*_t259 + _t211*_t260
-            + _t212*_t261 + _t266;
-    const trailer3_real_t _t268 = _t108*_t13*_t17*_t20 - _t118*_t92
-            + _t16*(_t101*_t15*_t24 + _t103*_t14*_t30 + _t108*(_t10*_t20 + _t13*_t18))
-            + _t26*(-_t109 - _t110) + _t27*(-_t112 - _t113 - _t114 - _t115);
-    const trailer3_real_t _t269 = J_theta_cart*_t259 + _t201*_t258 + _t206*_t264 + _t214*_t260
-            + _t215*_t261 + _t268;
-    const trailer3_real_t _t270 = _t118*(-_t93 + _t96) + _t119*(_t87 + _t88) + _t120*(-_t93 + _t96)
-            + _t121*(_t87 + _t88) + _t98*(_t104 - _t110) + _t99*(-_t114 - _t115);
-    const trailer3_real_t _t271 = J_theta_cart2*_t260 + _t202*_t258 + _t207*_t264 + _t214*_t259
-            + _t217*_t261 + _t270;
-    const trailer3_real_t _t272 = _t89*(_t119 + _t121 + _t123) + _t90*(_t119 + _t121 + _t123)
-            + _t94*(-_t118 - _t120 - _t122) + _t97*(_t118 + _t120 + _t122);
-    const trailer3_real_t _t273 = J_theta_cart3*_t261 + _t203*_t258 + _t208*_t264 + _t215*_t259
-            + _t217*_t260 + _t272;
-    const trailer3_real_t _t274 = J_theta_cart2_left*_t221*_t221 + J_theta_cart2_right*_t224*_t224
-            + J_theta_cart3_left*_t227*_t227 + J_theta_cart3_right*_t230*_t230
-            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t236*_t236 + J_theta_right
-            - _t0*_t213 + _t204*_t47 + _t209*_t43 + _t216*_t49 + _t218*_t58 + _t219*_t76;
-    const trailer3_real_t _t275 = _t1*_t213 + _t204*_t52 + _t209*_t45 + _t216*_t54 + _t218*_t63
-            + _t219*_t80 + _t250;
-    const trailer3_real_t _t276 = -_t0*_t252 + _t250 + _t251*_t47 + _t253*_t43 + _t254*_t49
-            + _t255*_t58 + _t256*_t76;
-    const trailer3_real_t _t277 = J_theta_cart2_left*_t245*_t245 + J_theta_cart2_right*_t243*_t243
-            + J_theta_cart3_left*_t249*_t249 + J_theta_cart3_right*_t247*_t247
-            + J_theta_cart_left*_t241*_t241 + J_theta_cart_right*_t239*_t239 + J_theta_left
-            + _t1*_t252 + _t251*_t52 + _t253*_t45 + _t254*_t54 + _t255*_t63 + _t256*_t80;
-    const trailer3_real_t _t278 = _t274*_t277 - _t275*_t276;
-    const trailer3_real_t _t279 = _t135 - _t136;
-    const trailer3_real_t _t280 = _t279*_t8;
-    const trailer3_real_t _t281 = _t140 - _t141;
-    const trailer3_real_t _t282 = _t281*_t8;
-    const trailer3_real_t _t283 = _t143 - _t144;
-    const trailer3_real_t _t284 = _t283*_t8;
-    const trailer3_real_t _t285 = _t146 - _t147;
-    const trailer3_real_t _t286 = _t285*_t8;
-    const trailer3_real_t _t287 = _t124*_t280 + _t125*_t282 + _t126*_t284 + _t127*_t286;
-    const trailer3_real_t _t288 = -_t135 - _t136;
-    const trailer3_real_t _t289 = _t288*_t7;
-    const trailer3_real_t _t290 = -_t140 - _t141;
-    const trailer3_real_t _t291 = _t290*_t7;
-    const trailer3_real_t _t292 = -_t143 - _t144;
-    const trailer3_real_t _t293 = _t292*_t7;
-    const trailer3_real_t _t294 = -_t146 - _t147;
-    const trailer3_real_t _t295 = _t294*_t7;
-    const trailer3_real_t _t296 = _t124*_t289 + _t125*_t291 + _t126*_t293 + _t127*_t295;
-    const trailer3_real_t _t297 = _t150 - _t151;
-    const trailer3_real_t _t298 = _t297*_t4;
-    const trailer3_real_t _t299 = _t154 - _t155;
-    const trailer3_real_t _t300 = _t299*_t4;
-    const trailer3_real_t _t301 = _t158 - _t159;
-    const trailer3_real_t _t302 = _t301*_t4;
-    const trailer3_real_t _t303 = _t162 - _t163;
-    const trailer3_real_t _t304 = _t303*_t4;
-    const trailer3_real_t _t305 = _t165 - _t166;
-    const trailer3_real_t _t306 = _t305*_t4;
-    const trailer3_real_t _t307 = _t168 - _t169;
-    const trailer3_real_t _t308 = _t307*_t4;
-    const trailer3_real_t _t309 = _t124*_t298 + _t125*_t300 + _t126*_t302 + _t127*_t304
-            + _t128*_t306 + _t129*_t308;
-    const trailer3_real_t _t310 = -_t150 - _t151;
-    const trailer3_real_t _t311 = _t3*_t310;
-    const trailer3_real_t _t312 = -_t154 - _t155;
-    const trailer3_real_t _t313 = _t3*_t312;
-    const trailer3_real_t _t314 = -_t158 - _t159;
-    const trailer3_real_t _t315 = _t3*_t314;
-    const trailer3_real_t _t316 = -_t162 - _t163;
-    const trailer3_real_t _t317 = _t3*_t316;
-    const trailer3_real_t _t318 = -_t165 - _t166;
-    const trailer3_real_t _t319 = _t3*_t318;
-    const trailer3_real_t _t320 = -_t168 - _t169;
-    const trailer3_real_t _t321 = _t3*_t320;
-    const trailer3_real_t _t322 = _t124*_t311 + _t125*_t313 + _t126*_t315 + _t127*_t317
-            + _t128*_t319 + _t129*_t321;
-    const trailer3_real_t _t323 = _t172 - _t173;
-    const trailer3_real_t _t324 = _t323*_t6;
-    const trailer3_real_t _t325 = _t176 - _t177;
-    const trailer3_real_t _t326 = _t325*_t6;
-    const trailer3_real_t _t327 = _t180 - _t181;
-    const trailer3_real_t _t328 = _t327*_t6;
-    const trailer3_real_t _t329 = _t184 - _t185;
-    const trailer3_real_t _t330 = _t329*_t6;
-    const trailer3_real_t _t331 = _t188 - _t189;
-    const trailer3_real_t _t332 = _t331*_t6;
-    const trailer3_real_t _t333 = _t192 - _t193;
-    const trailer3_real_t _t334 = _t333*_t6;
-    const trailer3_real_t _t335 = _t195 - _t196;
-    const trailer3_real_t _t336 = _t335*_t6;
-    const trailer3_real_t _t337 = _t198 - _t199;
-    const trailer3_real_t _t338 = _t337*_t6;
-    const trailer3_real_t _t339 = _t124*_t324 + _t125*_t326 + _t126*_t328 + _t127*_t330
-            + _t128*_t332 + _t129*_t334 + _t130*_t336 + _t131*_t338;
-    const trailer3_real_t _t340 = -_t172 - _t173;
-    const trailer3_real_t _t341 = _t340*_t5;
-    const trailer3_real_t _t342 = -_t176 - _t177;
-    const trailer3_real_t _t343 = _t342*_t5;
-    const trailer3_real_t _t344 = -_t180 - _t181;
-    const trailer3_real_t _t345 = _t344*_t5;
-    const trailer3_real_t _t346 = -_t184 - _t185;
-    const trailer3_real_t _t347 = _t346*_t5;
-    const trailer3_real_t _t348 = -_t188 - _t189;
-    const trailer3_real_t _t349 = _t348*_t5;
-    const trailer3_real_t _t350 = -_t192 - _t193;
-    const trailer3_real_t _t351 = _t350*_t5;
-    const trailer3_real_t _t352 = -_t195 - _t196;
-    const trailer3_real_t _t353 = _t352*_t5;
-    const trailer3_real_t _t354 = -_t198 - _t199;
-    const trailer3_real_t _t355 = _t354*_t5;
-    const trailer3_real_t _t356 = _t124*_t341 + _t125*_t343 + _t126*_t345 + _t127*_t347
-            + _t128*_t349 + _t129*_t351 + _t130*_t353 + _t131*_t355;
-    const trailer3_real_t _t357 = -_t0*_t267 + _t222*_t322 + _t225*_t309 + _t228*_t356 + _t231*_t339
-            + _t234*_t296 + _t237*_t287 + _t262*_t47 + _t265*_t43 + _t269*_t49 + _t271*_t58
-            + _t273*_t76;
-    const trailer3_real_t _t358 = J_theta_cart2_left*_t245*_t322 + J_theta_cart2_right*_t243*_t309
-            + J_theta_cart3_left*_t249*_t356 + J_theta_cart3_right*_t247*_t339
-            + J_theta_cart_left*_t241*_t296 + J_theta_cart_right*_t239*_t287 + _t1*_t267
-            + _t262*_t52 + _t265*_t45 + _t269*_t54 + _t271*_t63 + _t273*_t80;
-    const trailer3_real_t _t359 = -_t357 + tau_right;
-    const trailer3_real_t _t360 = -_t358 + tau_left;
-    const trailer3_real_t _t361 = TRAILER3_LIT(1.0)/_t278;
-    const trailer3_real_t _t362 = _t361*(-_t275*_t360 + _t277*_t359);
-    const trailer3_real_t _t363 = _t361*(_t274*_t360 - _t276*_t359);
-    const trailer3_real_t _t364 = _t264 + _t362*_t43 + _t363*_t45;
-    const trailer3_real_t _t365 = _t258 + _t362*_t47 + _t363*_t52;
-    const trailer3_real_t _t366 = -_t0*_t362 + _t1*_t363;
-    const trailer3_real_t _t367 = _t259 + _t362*_t49 + _t363*_t54;
-    const trailer3_real_t _t368 = _t260 + _t362*_t58 + _t363*_t63;
-    const trailer3_real_t _t369 = _t261 + _t362*_t76 + _t363*_t80;
-    const trailer3_real_t _t370 = _t236*_t362 + _t239*_t363 + _t287;
-    const trailer3_real_t _t371 = _t233*_t362 + _t241*_t363 + _t296;
-    const trailer3_real_t _t372 = _t224*_t362 + _t243*_t363 + _t309;
-    const trailer3_real_t _t373 = _t221*_t362 + _t245*_t363 + _t322;
-    const trailer3_real_t _t374 = _t230*_t362 + _t247*_t363 + _t339;
-    const trailer3_real_t _t375 = _t227*_t362 + _t249*_t363 + _t356;
-    if (!(_t274 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
+    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
+    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
+    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
+    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
+    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer3_real_t _t167 = _t166*_t166;
+    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
+    const trailer3_real_t _t169 = _t168*_t168;
+    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
+    const trailer3_real_t _t171 = _t170*_t170;
+    const trailer3_real_t _t172 = _t161*_t171;
+    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
+    const trailer3_real_t _t174 = _t173*_t173;
+    const trailer3_real_t _t175 = _t162*_t169;
+    const trailer3_real_t _t176 = _t163*_t171;
+    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
+    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
+    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
+    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
+    const trailer3_real_t _t181 = _t169*_t28;
+    const trailer3_real_t _t182 = _t171*_t28;
+    const trailer3_real_t _t183 = _t174*_t27;
+    const trailer3_real_t _t184 = _t174*_t28;
+    const trailer3_real_t _t185 = _t165*_t171;
+    const trailer3_real_t _t186 = _t164*_t169;
+    const trailer3_real_t _t187 = _t165*_t169;
+    const trailer3_real_t _t188 = _t166*thetadot_right;
+    const trailer3_real_t _t189 = _t166*thetadot_left;
+    const trailer3_real_t _t190 = _t173*thetadot_right;
+    const trailer3_real_t _t191 = _t173*thetadot_left;
+    const trailer3_real_t _t192 = _t60 + _t63;
+    const trailer3_real_t _t193 = _t192*_t4;
+    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
+    const trailer3_real_t _t195 = _t64 + _t67;
+    const trailer3_real_t _t196 = _t195*_t4;
+    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
+    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
+    const trailer3_real_t _t199 = _t198*_t5;
+    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
+    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
+    const trailer3_real_t _t202 = _t201*_t5;
+    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
+    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
+    const trailer3_real_t _t205 = _t204*_t6;
+    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
+    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
+    const trailer3_real_t _t208 = _t207*_t6;
+    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
+    const trailer3_real_t _t210 = -_t68 - _t79;
+    const trailer3_real_t _t211 = _t210*_t7;
+    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
+    const trailer3_real_t _t213 = -_t74 - _t80;
+    const trailer3_real_t _t214 = _t213*_t7;
+    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
+    const trailer3_real_t _t216 = _t82 - _t89;
+    const trailer3_real_t _t217 = _t216*_t8;
+    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
+    const trailer3_real_t _t219 = _t91 - _t96;
+    const trailer3_real_t _t220 = _t219*_t8;
+    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
+    const trailer3_real_t _t222 = -_t82 - _t89;
+    const trailer3_real_t _t223 = _t222*_t9;
+    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
+    const trailer3_real_t _t225 = -_t91 - _t96;
+    const trailer3_real_t _t226 = _t225*_t9;
+    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
+    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
+    const trailer3_real_t _t229 = _t155 + _t156;
+    const trailer3_real_t _t230 = _t157 + _t158;
+    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
+            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
+    const trailer3_real_t _t232 = _t188 - _t190;
+    const trailer3_real_t _t233 = _t189 - _t191;
+    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
+    const trailer3_real_t _t235 = _t168*thetadot_right;
+    const trailer3_real_t _t236 = _t168*thetadot_left;
+    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
+            + _t121*_t235 + _t123*_t236;
+    const trailer3_real_t _t238 = _t170*thetadot_right;
+    const trailer3_real_t _t239 = _t170*thetadot_left;
+    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
+            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
+    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
+    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
+            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
+    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
+    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
+            + _t240*_t244 + _t245;
+    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
+    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
+    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
+    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
+            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
+    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
+            + _t251;
+    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
+    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
+    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
+            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
+    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
+            + _t255;
+    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
+    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
+            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
+    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
+            + _t258;
+    const trailer3_real_t _t260 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
+    const trailer3_real_t _t261 = _t15 + _t242*_t40 + _t243*_t49 + _t244*_t81;
+    const trailer3_real_t _t262 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
+            + _t250*_t81;
+    const trailer3_real_t _t263 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
+            + _t254*_t81;
+    const trailer3_real_t _t264 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
+            + _t254*_t49;
+    const trailer3_real_t _t265 = J_theta_right + _t0*_t261 + _t1*_t260 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t262*_t40 + _t263*_t49
+            + _t264*_t81;
+    const trailer3_real_t _t266 = _t16 + _t228*_t44 + _t229*_t55 + _t230*_t90;
+    const trailer3_real_t _t267 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
+    const trailer3_real_t _t268 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
+            + _t250*_t90;
+    const trailer3_real_t _t269 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
+            + _t254*_t90;
+    const trailer3_real_t _t270 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
+            + _t254*_t55;
+    const trailer3_real_t _t271 = _t0*_t267 + _t1*_t266 + _t193*_t197 + _t199*_t203 + _t205*_t209
+            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t268*_t40 + _t269*_t49 + _t270*_t81;
+    const trailer3_real_t _t272 = J_theta_left + _t196*_t197 + _t2*_t267 + _t202*_t203 + _t208*_t209
+            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t266*_t3 + _t268*_t44 + _t269*_t55
+            + _t270*_t90;
+    const trailer3_real_t _t273 = _t265*_t272 - _t271*_t271;
+    const trailer3_real_t _t274 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t275 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t276 = _t103 - _t37;
+    const trailer3_real_t _t277 = _t276*_t4;
+    const trailer3_real_t _t278 = _t104 - _t38;
+    const trailer3_real_t _t279 = _t278*_t4;
+    const trailer3_real_t _t280 = -_t103 - _t37;
+    const trailer3_real_t _t281 = _t280*_t5;
+    const trailer3_real_t _t282 = -_t104 - _t38;
+    const trailer3_real_t _t283 = _t282*_t5;
+    const trailer3_real_t _t284 = _t107 - _t109;
+    const trailer3_real_t _t285 = _t284*_t6;
+    const trailer3_real_t _t286 = _t112 - _t114;
+    const trailer3_real_t _t287 = _t286*_t6;
+    const trailer3_real_t _t288 = _t108 + _t117 - _t41;
+    const trailer3_real_t _t289 = _t288*_t6;
+    const trailer3_real_t _t290 = _t113 + _t120 - _t45;
+    const trailer3_real_t _t291 = _t290*_t6;
+    const trailer3_real_t _t292 = _t122 + _t43;
+    const trailer3_real_t _t293 = _t292*_t6;
+    const trailer3_real_t _t294 = _t124 + _t47;
+    const trailer3_real_t _t295 = _t294*_t6;
+    const trailer3_real_t _t296 = -_t107 - _t109;
+    const trailer3_real_t _t297 = _t296*_t7;
+    const trailer3_real_t _t298 = -_t112 - _t114;
+    const trailer3_real_t _t299 = _t298*_t7;
+    const trailer3_real_t _t300 = _t108 - _t117 - _t41;
+    const trailer3_real_t _t301 = _t300*_t7;
+    const trailer3_real_t _t302 = _t113 - _t120 - _t45;
+    const trailer3_real_t _t303 = _t302*_t7;
+    const trailer3_real_t _t304 = -_t122 + _t43;
+    const trailer3_real_t _t305 = _t304*_t7;
+    const trailer3_real_t _t306 = -_t124 + _t47;
+    const trailer3_real_t _t307 = _t306*_t7;
+    const trailer3_real_t _t308 = _t127 - _t129;
+    const trailer3_real_t _t309 = _t308*_t8;
+    const trailer3_real_t _t310 = _t132 - _t134;
+    const trailer3_real_t _t311 = _t310*_t8;
+    const trailer3_real_t _t312 = _t137 - _t138;
+    const trailer3_real_t _t313 = _t312*_t8;
+    const trailer3_real_t _t314 = _t141 - _t142;
+    const trailer3_real_t _t315 = _t314*_t8;
+    const trailer3_real_t _t316 = _t145 - _t146;
+    const trailer3_real_t _t317 = _t316*_t8;
+    const trailer3_real_t _t318 = _t149 - _t150;
+    const trailer3_real_t _t319 = _t318*_t8;
+    const trailer3_real_t _t320 = _t152 + _t54;
+    const trailer3_real_t _t321 = _t320*_t8;
+    const trailer3_real_t _t322 = _t154 + _t59;
+    const trailer3_real_t _t323 = _t322*_t8;
+    const trailer3_real_t _t324 = -_t127 - _t129;
+    const trailer3_real_t _t325 = _t324*_t9;
+    const trailer3_real_t _t326 = -_t132 - _t134;
+    const trailer3_real_t _t327 = _t326*_t9;
+    const trailer3_real_t _t328 = -_t137 - _t138;
+    const trailer3_real_t _t329 = _t328*_t9;
+    const trailer3_real_t _t330 = -_t141 - _t142;
+    const trailer3_real_t _t331 = _t330*_t9;
+    const trailer3_real_t _t332 = -_t145 - _t146;
+    const trailer3_real_t _t333 = _t332*_t9;
+    const trailer3_real_t _t334 = -_t149 - _t150;
+    const trailer3_real_t _t335 = _t334*_t9;
+    const trailer3_real_t _t336 = -_t152 + _t54;
+    const trailer3_real_t _t337 = _t336*_t9;
+    const trailer3_real_t _t338 = -_t154 + _t59;
+    const trailer3_real_t _t339 = _t338*_t9;
+    const trailer3_real_t _t340 = _t232*_t277 + _t233*_t279;
+    const trailer3_real_t _t341 = _t232*_t281 + _t233*_t283;
+    const trailer3_real_t _t342 = _t188*_t285 + _t189*_t287 + _t190*_t289 + _t191*_t291
+            + _t235*_t293 + _t236*_t295;
+    const trailer3_real_t _t343 = _t188*_t297 + _t189*_t299 + _t190*_t301 + _t191*_t303
+            + _t235*_t305 + _t236*_t307;
+    const trailer3_real_t _t344 = _t188*_t309 + _t189*_t311 + _t190*_t313 + _t191*_t315
+            + _t235*_t317 + _t236*_t319 + _t238*_t321 + _t239*_t323;
+    const trailer3_real_t _t345 = _t188*_t325 + _t189*_t327 + _t190*_t329 + _t191*_t331
+            + _t235*_t333 + _t236*_t335 + _t238*_t337 + _t239*_t339;
+    const trailer3_real_t _t346 = _t0*_t247 + _t1*_t241 + _t194*_t340 + _t200*_t341 + _t206*_t342
+            + _t212*_t343 + _t218*_t344 + _t224*_t345 + _t252*_t40 + _t256*_t49 + _t259*_t81;
+    const trailer3_real_t _t347 = _t197*_t340 + _t2*_t247 + _t203*_t341 + _t209*_t342 + _t215*_t343
+            + _t221*_t344 + _t227*_t345 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
+    const trailer3_real_t _t348 = -_t346 + tau_right;
+    const trailer3_real_t _t349 = -_t347 + tau_left;
+    const trailer3_real_t _t350 = TRAILER3_LIT(1.0)/_t273;
+    const trailer3_real_t _t351 = _t350*(-_t271*_t349 + _t272*_t348);
+    const trailer3_real_t _t352 = _t350*(_t265*_t349 - _t271*_t348);
+    const trailer3_real_t _t353 = _t1*_t351 + _t3*_t352;
+    const trailer3_real_t _t354 = _t0*_t351 + _t2*_t352;
+    const trailer3_real_t _t355 = _t234 + _t351*_t40 + _t352*_t44;
+    const trailer3_real_t _t356 = _t237 + _t351*_t49 + _t352*_t55;
+    const trailer3_real_t _t357 = _t240 + _t351*_t81 + _t352*_t90;
+    const trailer3_real_t _t358 = _t193*_t351 + _t196*_t352 + _t340;
+    const trailer3_real_t _t359 = _t199*_t351 + _t202*_t352 + _t341;
+    const trailer3_real_t _t360 = _t205*_t351 + _t208*_t352 + _t342;
+    const trailer3_real_t _t361 = _t211*_t351 + _t214*_t352 + _t343;
+    const trailer3_real_t _t362 = _t217*_t351 + _t220*_t352 + _t344;
+    const trailer3_real_t _t363 = _t223*_t351 + _t226*_t352 + _t345;
+    const trailer3_real_t _t364 = -_t246*_t274 + _t275*_t353;
+    const trailer3_real_t _t365 = _t246*_t275 + _t274*_t353;
+    if (!(_t265 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t278 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t273 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
     const trailer3_real_t r_0 = _t364;
     const trailer3_real_t r_1 = _t365;
-    const trailer3_real_t r_2 = _t366;
-    const trailer3_real_t r_3 = _t367;
-    const trailer3_real_t r_4 = _t368;
-    const trailer3_real_t r_5 = _t369;
-    const trailer3_real_t r_6 = _t362;
-    const trailer3_real_t r_7 = _t363;
-    const trailer3_real_t r_8 = _t370;
-    const trailer3_real_t r_9 = _t371;
-    const trailer3_real_t r_10 = _t372;
-    const trailer3_real_t r_11 = _t373;
-    const trailer3_real_t r_12 = _t374;
-    const trailer3_real_t r_13 = _t375;
+    const trailer3_real_t r_2 = _t354;
+    const trailer3_real_t r_3 = _t355;
+    const trailer3_real_t r_4 = _t356;
+    const trailer3_real_t r_5 = _t357;
+    const trailer3_real_t r_6 = _t351;
+    const trailer3_real_t r_7 = _t352;
+    const trailer3_real_t r_8 = _t358;
+    const trailer3_real_t r_9 = _t359;
+    const trailer3_real_t r_10 = _t360;
+    const trailer3_real_t r_11 = _t361;
+    const trailer3_real_t r_12 = _t362;
+    const trailer3_real_t r_13 = _t363;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
             | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
@@ -603,7 +576,7 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
 }
 
 /* trailer3_model_prepare: documented in trailer3_model.h.
-   operations after CSE: 0 add, 10 mul, 6 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     trailer3_model_prepared_t *prepared)
 {
@@ -657,22 +630,24 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = -J_theta_tractor*_t0;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t9 = J_theta_tractor*_t1;
+    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
     const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
+    const trailer3_real_t _t14 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
+    const trailer3_real_t _t15 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
+    const trailer3_real_t _t16 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
+    const trailer3_real_t _t17 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -748,36 +723,36 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     prepared->forward_dynamics[8] = J_theta_cart_right;
     prepared->forward_dynamics[9] = J_theta_left;
     prepared->forward_dynamics[10] = J_theta_right;
-    prepared->forward_dynamics[11] = J_x_tractor;
-    prepared->forward_dynamics[12] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[13] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[14] = K_theta_cart2_x_tractor;
-    prepared->forward_dynamics[15] = K_theta_cart2_x_tractor_2;
-    prepared->forward_dynamics[16] = K_theta_cart3_x_tractor;
-    prepared->forward_dynamics[17] = K_theta_cart3_x_tractor_2;
-    prepared->forward_dynamics[18] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[19] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[20] = _t0;
-    prepared->forward_dynamics[21] = _t1;
-    prepared->forward_dynamics[22] = _t2;
-    prepared->forward_dynamics[23] = _t3;
-    prepared->forward_dynamics[24] = _t4;
-    prepared->forward_dynamics[25] = _t5;
-    prepared->forward_dynamics[26] = _t6;
-    prepared->forward_dynamics[27] = _t7;
-    prepared->forward_dynamics[28] = _t8;
-    prepared->forward_dynamics[29] = _t9;
-    prepared->forward_dynamics[30] = _t10;
-    prepared->forward_dynamics[31] = _t11;
-    prepared->forward_dynamics[32] = _t12;
-    prepared->forward_dynamics[33] = _t13;
-    prepared->forward_dynamics[34] = _t14;
-    prepared->forward_dynamics[35] = _t15;
+    prepared->forward_dynamics[11] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[12] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[13] = K_theta_cart2_x_tractor;
+    prepared->forward_dynamics[14] = K_theta_cart2_x_tractor_2;
+    prepared->forward_dynamics[15] = K_theta_cart3_x_tractor;
+    prepared->forward_dynamics[16] = K_theta_cart3_x_tractor_2;
+    prepared->forward_dynamics[17] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[18] = _t0;
+    prepared->forward_dynamics[19] = _t1;
+    prepared->forward_dynamics[20] = _t2;
+    prepared->forward_dynamics[21] = _t3;
+    prepared->forward_dynamics[22] = _t4;
+    prepared->forward_dynamics[23] = _t5;
+    prepared->forward_dynamics[24] = _t6;
+    prepared->forward_dynamics[25] = _t7;
+    prepared->forward_dynamics[26] = _t8;
+    prepared->forward_dynamics[27] = _t9;
+    prepared->forward_dynamics[28] = _t10;
+    prepared->forward_dynamics[29] = _t11;
+    prepared->forward_dynamics[30] = _t12;
+    prepared->forward_dynamics[31] = _t13;
+    prepared->forward_dynamics[32] = _t14;
+    prepared->forward_dynamics[33] = _t15;
+    prepared->forward_dynamics[34] = _t16;
+    prepared->forward_dynamics[35] = _t17;
     return TRAILER3_OK;
 }
 
 /* trailer3_forward_dynamics_prepared: documented in trailer3_model.h.
-   operations after CSE: 470 add, 648 mul, 1 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 351 add, 473 mul, 1 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepared_t *prepared,
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *tau,
     trailer3_real_t *qddot)
@@ -786,503 +761,460 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
         return TRAILER3_ERR_NOT_INITIALISED;
     }
     const trailer3_real_t theta_tractor = q[2];
+    if (((trailer3_exp_carry(theta_tractor)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
+        return TRAILER3_ERR_NONFINITE_INPUT;
+    }
+    const trailer3_real_t _t274 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t275 = TRAILER3_COS(theta_tractor);
     const trailer3_real_t theta_cart = q[3];
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t theta_cart3 = q[5];
-    if (((trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
-            | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3))
-            & TRAILER3_EXP_CARRY_TOP) != 0u) {
-        return TRAILER3_ERR_NONFINITE_INPUT;
-    }
-    const trailer3_real_t _t16 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t17 = TRAILER3_COS(theta_cart);
-    const trailer3_real_t _t18 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t20 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t23 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t24 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t29 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t30 = TRAILER3_COS(theta_cart3);
     const trailer3_real_t thetadot_right = qdot[6];
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t22 = _t16*_t19 + _t17*_t21;
-    const trailer3_real_t _t25 = _t19*_t23 + _t21*_t24;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t17;
-    const trailer3_real_t _t28 = _t23*_t26 + _t24*_t27;
-    const trailer3_real_t _t31 = _t19*_t29 + _t21*_t30;
-    const trailer3_real_t _t32 = _t26*_t29 + _t27*_t30;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t30;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t23*_t29 + _t24*_t33;
-    const trailer3_real_t _t35 = _t16*_t21 - _t17*_t19;
-    const trailer3_real_t _t36 = -_t19*_t24 + _t21*_t23;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(0.85)*_t17*_t23 + _t24*_t26;
-    const trailer3_real_t _t38 = -_t19*_t30 + _t21*_t29;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.85)*_t17*_t29 + _t26*_t30;
-    const trailer3_real_t _t40 = _t23*_t33 - TRAILER3_LIT(0.85)*_t24*_t29;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.207)*_t18;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(0.207)*_t20;
-    const trailer3_real_t _t0 = prepared->forward_dynamics[20];
-    const trailer3_real_t _t43 = _t0*_t42;
-    const trailer3_real_t _t44 = _t0*_t22 - _t16*_t43;
-    const trailer3_real_t _t1 = prepared->forward_dynamics[21];
-    const trailer3_real_t _t45 = _t1*_t42;
-    const trailer3_real_t _t46 = -_t1*_t22 - _t16*_t45;
-    const trailer3_real_t _t47 = -_t0*_t41;
-    const trailer3_real_t _t48 = -_t17*_t47 - _t44;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t28*_t49;
-    const trailer3_real_t _t51 = _t0*_t25 - _t23*_t43;
-    const trailer3_real_t _t52 = -_t1*_t41;
-    const trailer3_real_t _t53 = -_t17*_t52 - _t46;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = -_t28*_t54;
-    const trailer3_real_t _t56 = -_t1*_t25 - _t23*_t45;
-    const trailer3_real_t _t57 = -_t24*_t47 - _t50 - _t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = -_t34*_t58;
-    const trailer3_real_t _t60 = -_t32*_t49;
-    const trailer3_real_t _t61 = _t0*_t31 - _t29*_t43;
-    const trailer3_real_t _t62 = -_t24*_t52 - _t55 - _t56;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t64 = -_t34*_t63;
-    const trailer3_real_t _t65 = -_t32*_t54;
-    const trailer3_real_t _t66 = -_t1*_t31 - _t29*_t45;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t68 = -_t0*_t35 - _t16*_t47 - _t17*_t43;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t70 = _t1*_t35 - _t16*_t52 - _t17*_t45;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t72 = -_t0*_t36 - _t23*_t47 - _t24*_t43 - _t37*_t49;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t63;
-    const trailer3_real_t _t74 = _t1*_t36 - _t23*_t52 - _t24*_t45 - _t37*_t54;
-    const trailer3_real_t _t75 = -_t30*_t47 - _t59 - _t60 - _t61;
-    const trailer3_real_t _t76 = -TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = -_t0*_t38 - _t29*_t47 - _t30*_t43 - _t39*_t49 - _t40*_t58;
-    const trailer3_real_t _t79 = -_t30*_t52 - _t64 - _t65 - _t66;
-    const trailer3_real_t _t80 = -TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*_t80;
-    const trailer3_real_t _t82 = _t1*_t38 - _t29*_t52 - _t30*_t45 - _t39*_t54 - _t40*_t63;
-    const trailer3_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[18];
-    const trailer3_real_t _t83 = K_theta_tractor_x_tractor*_t18;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[19];
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor_2*_t20;
-    const trailer3_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[12];
-    const trailer3_real_t _t85 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[13];
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor_2*_t17;
-    const trailer3_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[14];
-    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t23;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[15];
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t K_theta_cart3_x_tractor = prepared->forward_dynamics[16];
-    const trailer3_real_t _t89 = K_theta_cart3_x_tractor*_t29;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = prepared->forward_dynamics[17];
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t91 = K_theta_tractor_x_tractor*_t20;
-    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t17;
-    const trailer3_real_t _t93 = K_theta_cart2_x_tractor*_t24;
-    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t95 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t96 = K_theta_cart2_x_tractor_2*_t23;
-    const trailer3_real_t _t97 = K_theta_cart3_x_tractor_2*_t29;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t99 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t100 = _t58*thetadot_right + _t63*thetadot_left;
-    const trailer3_real_t _t101 = _t100*_t100;
-    const trailer3_real_t _t102 = _t76*thetadot_right + _t80*thetadot_left;
-    const trailer3_real_t _t103 = _t102*_t102;
-    const trailer3_real_t _t104 = _t103*_t94;
-    const trailer3_real_t _t105 = _t49*thetadot_right + _t54*thetadot_left;
-    const trailer3_real_t _t106 = _t105*_t105;
-    const trailer3_real_t _t107 = -_t0*thetadot_right + _t1*thetadot_left;
-    const trailer3_real_t _t108 = _t107*_t107;
-    const trailer3_real_t _t109 = _t101*_t96;
-    const trailer3_real_t _t110 = _t103*_t97;
-    const trailer3_real_t _t111 = _t106*_t95;
-    const trailer3_real_t _t112 = _t101*_t87;
-    const trailer3_real_t _t113 = _t101*_t88;
-    const trailer3_real_t _t114 = _t103*_t89;
-    const trailer3_real_t _t115 = _t103*_t90;
-    const trailer3_real_t _t116 = _t106*_t85;
-    const trailer3_real_t _t117 = _t106*_t86;
-    const trailer3_real_t _t118 = _t108*_t19;
-    const trailer3_real_t _t119 = _t108*_t21;
-    const trailer3_real_t _t120 = _t106*_t26;
-    const trailer3_real_t _t121 = _t106*_t27;
-    const trailer3_real_t _t122 = _t101*_t98;
-    const trailer3_real_t _t123 = _t101*_t99;
-    const trailer3_real_t _t124 = _t107*thetadot_right;
-    const trailer3_real_t _t125 = _t107*thetadot_left;
-    const trailer3_real_t _t126 = _t105*thetadot_right;
-    const trailer3_real_t _t127 = _t105*thetadot_left;
-    const trailer3_real_t _t128 = _t100*thetadot_right;
-    const trailer3_real_t _t129 = _t100*thetadot_left;
-    const trailer3_real_t _t130 = _t102*thetadot_right;
-    const trailer3_real_t _t131 = _t102*thetadot_left;
-    const trailer3_real_t _t132 = _t0*_t41;
-    const trailer3_real_t _t133 = -_t0*_t35 + _t132*_t16 - _t17*_t43;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = -_t132*_t17 + _t44;
-    const trailer3_real_t _t137 = _t1*_t41;
-    const trailer3_real_t _t138 = _t1*_t35 + _t137*_t16 - _t17*_t45;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t137*_t17 + _t46;
-    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = -_t0*_t22 + _t16*_t43 - _t17*_t47;
-    const trailer3_real_t _t145 = TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = _t1*_t22 + _t16*_t45 - _t17*_t52;
-    const trailer3_real_t _t148 = -_t0*_t36 + _t132*_t23 + _t134*_t28 - _t24*_t43;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = -_t132*_t24 - _t134*_t37 + _t51;
-    const trailer3_real_t _t152 = _t1*_t36 + _t137*_t23 + _t139*_t28 - _t24*_t45;
-    const trailer3_real_t _t153 = -TRAILER3_LIT(1.6666666666666667)*_t152;
+    if (((trailer3_exp_carry(theta_cart) | trailer3_exp_carry(theta_cart2)
+            | trailer3_exp_carry(theta_cart3) | trailer3_exp_carry(thetadot_right)
+            | trailer3_exp_carry(thetadot_left) | trailer3_exp_carry(tau_right)
+            | trailer3_exp_carry(tau_left)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
+        return TRAILER3_ERR_NONFINITE_INPUT;
+    }
+    const trailer3_real_t _t18 = -theta_tractor;
+    const trailer3_real_t _t19 = _t18 + theta_cart;
+    const trailer3_real_t _t20 = TRAILER3_SIN(_t19);
+    const trailer3_real_t _t21 = TRAILER3_COS(_t19);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = _t18 + theta_cart2;
+    const trailer3_real_t _t24 = TRAILER3_SIN(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS(_t23);
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
+    const trailer3_real_t _t29 = _t18 + theta_cart3;
+    const trailer3_real_t _t30 = TRAILER3_SIN(_t29);
+    const trailer3_real_t _t31 = TRAILER3_COS(_t29);
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
+    const trailer3_real_t _t0 = prepared->forward_dynamics[18];
+    const trailer3_real_t _t1 = prepared->forward_dynamics[19];
+    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
+    const trailer3_real_t _t2 = prepared->forward_dynamics[20];
+    const trailer3_real_t _t3 = prepared->forward_dynamics[21];
+    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
+    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
+    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
+    const trailer3_real_t _t41 = _t39*_t40;
+    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
+    const trailer3_real_t _t43 = _t41 + _t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
+    const trailer3_real_t _t45 = _t39*_t44;
+    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
+    const trailer3_real_t _t47 = _t45 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t50 = _t48*_t49;
+    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
+    const trailer3_real_t _t52 = _t40*_t51;
+    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
+    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
+    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t56 = _t48*_t55;
+    const trailer3_real_t _t57 = _t44*_t51;
+    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
+    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t61 = _t1*_t21;
+    const trailer3_real_t _t62 = _t0*_t34;
+    const trailer3_real_t _t63 = _t61 - _t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
+    const trailer3_real_t _t65 = _t21*_t3;
+    const trailer3_real_t _t66 = _t2*_t34;
+    const trailer3_real_t _t67 = _t65 - _t66;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
+    const trailer3_real_t _t70 = _t40*_t69;
+    const trailer3_real_t _t71 = _t1*_t25;
+    const trailer3_real_t _t72 = _t0*_t35;
+    const trailer3_real_t _t73 = _t71 - _t72;
+    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
+    const trailer3_real_t _t75 = _t44*_t69;
+    const trailer3_real_t _t76 = _t25*_t3;
+    const trailer3_real_t _t77 = _t2*_t35;
+    const trailer3_real_t _t78 = _t76 - _t77;
+    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
+    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
+    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
+    const trailer3_real_t _t83 = _t0*_t36;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
+    const trailer3_real_t _t85 = _t40*_t84;
+    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
+    const trailer3_real_t _t87 = _t49*_t86;
+    const trailer3_real_t _t88 = _t1*_t31;
+    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
+    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
+    const trailer3_real_t _t92 = _t2*_t36;
+    const trailer3_real_t _t93 = _t44*_t84;
+    const trailer3_real_t _t94 = _t55*_t86;
+    const trailer3_real_t _t95 = _t3*_t31;
+    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
+    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
+    const trailer3_real_t _t98 = _t39*_t97;
+    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
+    const trailer3_real_t _t100 = _t39*_t99;
+    const trailer3_real_t _t101 = _t51*_t97;
+    const trailer3_real_t _t102 = _t51*_t99;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t105 = -_t73 - _t98;
+    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
+    const trailer3_real_t _t108 = _t69*_t97;
+    const trailer3_real_t _t109 = _t108 + _t42;
+    const trailer3_real_t _t110 = -_t100 - _t78;
+    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
+    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
+    const trailer3_real_t _t113 = _t69*_t99;
+    const trailer3_real_t _t114 = _t113 + _t46;
+    const trailer3_real_t _t115 = _t70 + _t98;
+    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
+    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t118 = _t100 + _t75;
+    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
+    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t84*_t97;
+    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
+    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t133 = _t84*_t99;
+    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
+    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
+    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
+    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
+    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
+    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
+    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t146 = _t121*_t86 + _t50;
+    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t150 = _t123*_t86 + _t56;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
     const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = -_t137*_t24 - _t139*_t37 + _t56;
-    const trailer3_real_t _t156 = _t142*_t28 - _t37*_t49;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t142*_t37 + _t50;
-    const trailer3_real_t _t160 = _t145*_t28 - _t37*_t54;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t145*_t37 + _t55;
-    const trailer3_real_t _t164 = TRAILER3_LIT(1.6666666666666667)*_t72;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.2)*_t164;
-    const trailer3_real_t _t166 = -_t0*_t25 + _t23*_t43 - _t24*_t47 + _t28*_t49;
-    const trailer3_real_t _t167 = TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = _t1*_t25 + _t23*_t45 - _t24*_t52 + _t28*_t54;
-    const trailer3_real_t _t170 = -_t0*_t38 + _t132*_t29 + _t134*_t32 + _t149*_t34 - _t30*_t43;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
-    const trailer3_real_t _t173 = -_t132*_t30 - _t134*_t39 - _t149*_t40 + _t61;
-    const trailer3_real_t _t174 = _t1*_t38 + _t137*_t29 + _t139*_t32 + _t153*_t34 - _t30*_t45;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
-    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
-    const trailer3_real_t _t177 = -_t137*_t30 - _t139*_t39 - _t153*_t40 + _t66;
-    const trailer3_real_t _t178 = _t142*_t32 + _t157*_t34 - _t39*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
-    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
-    const trailer3_real_t _t181 = -_t142*_t39 - _t157*_t40 + _t60;
-    const trailer3_real_t _t182 = _t145*_t32 + _t161*_t34 - _t39*_t54;
-    const trailer3_real_t _t183 = -TRAILER3_LIT(1.6666666666666667)*_t182;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = -_t145*_t39 - _t161*_t40 + _t65;
-    const trailer3_real_t _t186 = _t164*_t34 - _t40*_t58;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t186;
-    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
-    const trailer3_real_t _t189 = -_t164*_t40 + _t59;
-    const trailer3_real_t _t190 = _t167*_t34 - _t40*_t63;
-    const trailer3_real_t _t191 = -TRAILER3_LIT(1.6666666666666667)*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
-    const trailer3_real_t _t193 = -_t167*_t40 + _t64;
-    const trailer3_real_t _t194 = TRAILER3_LIT(1.6666666666666667)*_t78;
-    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
-    const trailer3_real_t _t196 = -_t0*_t31 + _t29*_t43 - _t30*_t47 + _t32*_t49 + _t34*_t58;
-    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t198 = TRAILER3_LIT(0.2)*_t197;
-    const trailer3_real_t _t199 = _t1*_t31 + _t29*_t45 - _t30*_t52 + _t32*_t54 + _t34*_t63;
-    const trailer3_real_t _t200 = K_theta_tractor_x_tractor_2*_t18 - _t91;
-    const trailer3_real_t _t201 = K_theta_cart_x_tractor_2*_t16 - _t92;
-    const trailer3_real_t _t202 = K_theta_cart2_x_tractor_2*_t23 - _t93;
-    const trailer3_real_t _t203 = K_theta_cart3_x_tractor_2*_t29 - _t94;
-    const trailer3_real_t J_x_tractor = prepared->forward_dynamics[11];
-    const trailer3_real_t _t204 = J_x_tractor*_t47 - _t0*_t200 + _t201*_t49 + _t202*_t58
-            + _t203*_t76;
-    const trailer3_real_t _t205 = _t83 + _t84;
-    const trailer3_real_t _t206 = _t85 + _t86;
-    const trailer3_real_t _t207 = _t87 + _t88;
-    const trailer3_real_t _t208 = _t89 + _t90;
-    const trailer3_real_t _t209 = J_x_tractor*_t43 - _t0*_t205 + _t206*_t49 + _t207*_t58
-            + _t208*_t76;
-    const trailer3_real_t _t210 = _t19*(_t85 + _t86) + _t21*(_t92 - _t95);
-    const trailer3_real_t _t211 = _t19*(_t87 + _t88) + _t21*(_t93 - _t96);
-    const trailer3_real_t _t212 = _t19*(_t89 + _t90) + _t21*(_t94 - _t97);
-    const trailer3_real_t _t2 = prepared->forward_dynamics[22];
-    const trailer3_real_t _t213 = _t2 + _t200*_t47 + _t205*_t43 + _t210*_t49 + _t211*_t58
-            + _t212*_t76;
-    const trailer3_real_t _t214 = _t26*(_t87 + _t88) + _t27*(_t93 - _t96);
-    const trailer3_real_t _t215 = _t26*(_t89 + _t90) + _t27*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer3_real_t _t216 = J_theta_cart*_t49 - _t0*_t210 + _t201*_t47 + _t206*_t43
-            + _t214*_t58 + _t215*_t76;
-    const trailer3_real_t _t217 = _t98*(_t89 + _t90) + _t99*(_t94 - _t97);
-    const trailer3_real_t J_theta_cart2 = prepared->forward_dynamics[1];
-    const trailer3_real_t _t218 = J_theta_cart2*_t58 - _t0*_t211 + _t202*_t47 + _t207*_t43
-            + _t214*_t49 + _t217*_t76;
-    const trailer3_real_t J_theta_cart3 = prepared->forward_dynamics[4];
-    const trailer3_real_t _t219 = J_theta_cart3*_t76 - _t0*_t212 + _t203*_t47 + _t208*_t43
-            + _t215*_t49 + _t217*_t58;
-    const trailer3_real_t _t220 = -_t71 - _t72;
-    const trailer3_real_t _t3 = prepared->forward_dynamics[23];
-    const trailer3_real_t _t221 = _t220*_t3;
-    const trailer3_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
-    const trailer3_real_t _t222 = J_theta_cart2_left*_t221;
-    const trailer3_real_t _t223 = _t71 - _t72;
-    const trailer3_real_t _t4 = prepared->forward_dynamics[24];
-    const trailer3_real_t _t224 = _t223*_t4;
-    const trailer3_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
-    const trailer3_real_t _t225 = J_theta_cart2_right*_t224;
-    const trailer3_real_t _t226 = -_t77 - _t78;
-    const trailer3_real_t _t5 = prepared->forward_dynamics[25];
-    const trailer3_real_t _t227 = _t226*_t5;
-    const trailer3_real_t J_theta_cart3_left = prepared->forward_dynamics[5];
-    const trailer3_real_t _t228 = J_theta_cart3_left*_t227;
-    const trailer3_real_t _t229 = _t77 - _t78;
-    const trailer3_real_t _t6 = prepared->forward_dynamics[26];
-    const trailer3_real_t _t230 = _t229*_t6;
-    const trailer3_real_t J_theta_cart3_right = prepared->forward_dynamics[6];
-    const trailer3_real_t _t231 = J_theta_cart3_right*_t230;
-    const trailer3_real_t _t232 = -_t67 - _t68;
-    const trailer3_real_t _t7 = prepared->forward_dynamics[27];
-    const trailer3_real_t _t233 = _t232*_t7;
-    const trailer3_real_t J_theta_cart_left = prepared->forward_dynamics[7];
-    const trailer3_real_t _t234 = J_theta_cart_left*_t233;
-    const trailer3_real_t _t235 = _t67 - _t68;
-    const trailer3_real_t _t8 = prepared->forward_dynamics[28];
-    const trailer3_real_t _t236 = _t235*_t8;
+    const trailer3_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[13];
+    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[14];
+    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
+    const trailer3_real_t K_theta_cart3_x_tractor = prepared->forward_dynamics[15];
+    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = prepared->forward_dynamics[16];
+    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[11];
+    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
+    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
+    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
+    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
+    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
+    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
+    const trailer3_real_t _t167 = _t166*_t166;
+    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
+    const trailer3_real_t _t169 = _t168*_t168;
+    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
+    const trailer3_real_t _t171 = _t170*_t170;
+    const trailer3_real_t _t172 = _t161*_t171;
+    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
+    const trailer3_real_t _t174 = _t173*_t173;
+    const trailer3_real_t _t175 = _t162*_t169;
+    const trailer3_real_t _t176 = _t163*_t171;
+    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
+    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
+    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
+    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
+    const trailer3_real_t _t181 = _t169*_t28;
+    const trailer3_real_t _t182 = _t171*_t28;
+    const trailer3_real_t _t183 = _t174*_t27;
+    const trailer3_real_t _t184 = _t174*_t28;
+    const trailer3_real_t _t185 = _t165*_t171;
+    const trailer3_real_t _t186 = _t164*_t169;
+    const trailer3_real_t _t187 = _t165*_t169;
+    const trailer3_real_t _t188 = _t166*thetadot_right;
+    const trailer3_real_t _t189 = _t166*thetadot_left;
+    const trailer3_real_t _t190 = _t173*thetadot_right;
+    const trailer3_real_t _t191 = _t173*thetadot_left;
+    const trailer3_real_t _t192 = _t60 + _t63;
+    const trailer3_real_t _t4 = prepared->forward_dynamics[22];
+    const trailer3_real_t _t193 = _t192*_t4;
     const trailer3_real_t J_theta_cart_right = prepared->forward_dynamics[8];
-    const trailer3_real_t _t237 = J_theta_cart_right*_t236;
-    const trailer3_real_t _t238 = _t69 - _t70;
-    const trailer3_real_t _t239 = _t238*_t8;
-    const trailer3_real_t _t240 = -_t69 - _t70;
-    const trailer3_real_t _t241 = _t240*_t7;
-    const trailer3_real_t _t242 = _t73 - _t74;
-    const trailer3_real_t _t243 = _t242*_t4;
-    const trailer3_real_t _t244 = -_t73 - _t74;
-    const trailer3_real_t _t245 = _t244*_t3;
-    const trailer3_real_t _t246 = _t81 - _t82;
-    const trailer3_real_t _t247 = _t246*_t6;
-    const trailer3_real_t _t248 = -_t81 - _t82;
-    const trailer3_real_t _t249 = _t248*_t5;
-    const trailer3_real_t _t250 = _t222*_t245 + _t225*_t243 + _t228*_t249 + _t231*_t247
-            + _t234*_t241 + _t237*_t239;
-    const trailer3_real_t _t251 = J_x_tractor*_t52 + _t1*_t200 + _t201*_t54 + _t202*_t63
-            + _t203*_t80;
-    const trailer3_real_t _t9 = prepared->forward_dynamics[29];
-    const trailer3_real_t _t252 = _t200*_t52 + _t205*_t45 + _t210*_t54 + _t211*_t63 + _t212*_t80
-            + _t9;
-    const trailer3_real_t _t253 = J_x_tractor*_t45 + _t1*_t205 + _t206*_t54 + _t207*_t63
-            + _t208*_t80;
-    const trailer3_real_t _t254 = J_theta_cart*_t54 + _t1*_t210 + _t201*_t52 + _t206*_t45
-            + _t214*_t63 + _t215*_t80;
-    const trailer3_real_t _t255 = J_theta_cart2*_t63 + _t1*_t211 + _t202*_t52 + _t207*_t45
-            + _t214*_t54 + _t217*_t80;
-    const trailer3_real_t _t256 = J_theta_cart3*_t80 + _t1*_t212 + _t203*_t52 + _t208*_t45
-            + _t215*_t54 + _t217*_t63;
-    const trailer3_real_t _t257 = _t108*(_t83 + _t84) + _t112 + _t113 + _t114 + _t115 + _t116
-            + _t117;
-    const trailer3_real_t _t258 = _t124*_t43 + _t125*_t45;
-    const trailer3_real_t _t259 = _t124*_t134 + _t125*_t139 + _t126*_t142 + _t127*_t145;
-    const trailer3_real_t _t260 = _t124*_t149 + _t125*_t153 + _t126*_t157 + _t127*_t161
-            + _t128*_t164 + _t129*_t167;
-    const trailer3_real_t _t261 = _t124*_t171 + _t125*_t175 + _t126*_t179 + _t127*_t183
-            + _t128*_t187 + _t129*_t191 + _t130*_t194 + _t131*_t197;
-    const trailer3_real_t _t262 = J_x_tractor*_t258 + _t201*_t259 + _t202*_t260 + _t203*_t261
-            + _t257;
-    const trailer3_real_t _t263 = _t101*_t93 + _t104 + _t106*_t92
-            + _t108*(-K_theta_tractor_x_tractor_2*_t18 + _t91) - _t109 - _t110 - _t111;
-    const trailer3_real_t _t264 = _t124*_t132 + _t125*_t137;
-    const trailer3_real_t _t265 = J_x_tractor*_t264 + _t206*_t259 + _t207*_t260 + _t208*_t261
-            + _t263;
-    const trailer3_real_t _t10 = prepared->forward_dynamics[30];
-    const trailer3_real_t _t11 = prepared->forward_dynamics[31];
-    const trailer3_real_t _t12 = prepared->forward_dynamics[32];
-    const trailer3_real_t _t266 = _t18*(_t10*_t106*_t17 + _t101*_t12*_t24 + _t103*_t11*_t30)
-            + _t19*(-_t109 - _t110 - _t111) + _t21*(-_t112 - _t113 - _t114 - _t115 - _t116 - _t117);
-    const trailer3_real_t _t267 = _t200*_t258 + _t205*_t264 + _t210*_t259 + _t211*_t260
-            + _t212*_t261 + _t266;
-    const trailer3_real_t _t13 = prepared->forward_dynamics[33];
-    const trailer3_real_t _t14 = prepared->forward_dynamics[34];
-    const trailer3_real_t _t15 = prepared->forward_dynamics[35];
-    const trailer3_real_t _t268 = _t108*_t13*_t17*_t20 - _t118*_t92
-            + _t16*(_t101*_t15*_t24 + _t103*_t14*_t30 + _t108*(_t10*_t20 + _t13*_t18))
-            + _t26*(-_t109 - _t110) + _t27*(-_t112 - _t113 - _t114 - _t115);
-    const trailer3_real_t _t269 = J_theta_cart*_t259 + _t201*_t258 + _t206*_t264 + _t214*_t260
-            + _t215*_t261 + _t268;
-    const trailer3_real_t _t270 = _t118*(-_t93 + _t96) + _t119*(_t87 + _t88) + _t120*(-_t93 + _t96)
-            + _t121*(_t87 + _t88) + _t98*(_t104 - _t110) + _t99*(-_t114 - _t115);
-    const trailer3_real_t _t271 = J_theta_cart2*_t260 + _t202*_t258 + _t207*_t264 + _t214*_t259
-            + _t217*_t261 + _t270;
-    const trailer3_real_t _t272 = _t89*(_t119 + _t121 + _t123) + _t90*(_t119 + _t121 + _t123)
-            + _t94*(-_t118 - _t120 - _t122) + _t97*(_t118 + _t120 + _t122);
-    const trailer3_real_t _t273 = J_theta_cart3*_t261 + _t203*_t258 + _t208*_t264 + _t215*_t259
-            + _t217*_t260 + _t272;
+    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
+    const trailer3_real_t _t195 = _t64 + _t67;
+    const trailer3_real_t _t196 = _t195*_t4;
+    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
+    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
+    const trailer3_real_t _t5 = prepared->forward_dynamics[23];
+    const trailer3_real_t _t199 = _t198*_t5;
+    const trailer3_real_t J_theta_cart_left = prepared->forward_dynamics[7];
+    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
+    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
+    const trailer3_real_t _t202 = _t201*_t5;
+    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
+    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
+    const trailer3_real_t _t6 = prepared->forward_dynamics[24];
+    const trailer3_real_t _t205 = _t204*_t6;
+    const trailer3_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
+    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
+    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
+    const trailer3_real_t _t208 = _t207*_t6;
+    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
+    const trailer3_real_t _t210 = -_t68 - _t79;
+    const trailer3_real_t _t7 = prepared->forward_dynamics[25];
+    const trailer3_real_t _t211 = _t210*_t7;
+    const trailer3_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
+    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
+    const trailer3_real_t _t213 = -_t74 - _t80;
+    const trailer3_real_t _t214 = _t213*_t7;
+    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
+    const trailer3_real_t _t216 = _t82 - _t89;
+    const trailer3_real_t _t8 = prepared->forward_dynamics[26];
+    const trailer3_real_t _t217 = _t216*_t8;
+    const trailer3_real_t J_theta_cart3_right = prepared->forward_dynamics[6];
+    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
+    const trailer3_real_t _t219 = _t91 - _t96;
+    const trailer3_real_t _t220 = _t219*_t8;
+    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
+    const trailer3_real_t _t222 = -_t82 - _t89;
+    const trailer3_real_t _t9 = prepared->forward_dynamics[27];
+    const trailer3_real_t _t223 = _t222*_t9;
+    const trailer3_real_t J_theta_cart3_left = prepared->forward_dynamics[5];
+    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
+    const trailer3_real_t _t225 = -_t91 - _t96;
+    const trailer3_real_t _t226 = _t225*_t9;
+    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[12];
+    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
+    const trailer3_real_t _t229 = _t155 + _t156;
+    const trailer3_real_t _t230 = _t157 + _t158;
+    const trailer3_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[17];
+    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
+            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
+    const trailer3_real_t _t232 = _t188 - _t190;
+    const trailer3_real_t _t233 = _t189 - _t191;
+    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
+    const trailer3_real_t _t235 = _t168*thetadot_right;
+    const trailer3_real_t _t236 = _t168*thetadot_left;
+    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
+            + _t121*_t235 + _t123*_t236;
+    const trailer3_real_t _t238 = _t170*thetadot_right;
+    const trailer3_real_t _t239 = _t170*thetadot_left;
+    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
+            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
+    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
+    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
+    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
+    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
+            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
+    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
+    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
+            + _t240*_t244 + _t245;
+    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
+    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
+    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
+    const trailer3_real_t _t10 = prepared->forward_dynamics[28];
+    const trailer3_real_t _t11 = prepared->forward_dynamics[29];
+    const trailer3_real_t _t12 = prepared->forward_dynamics[30];
+    const trailer3_real_t _t13 = prepared->forward_dynamics[31];
+    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
+            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
+    const trailer3_real_t J_theta_cart = prepared->forward_dynamics[0];
+    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
+            + _t251;
+    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
+    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
+    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
+            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
+    const trailer3_real_t J_theta_cart2 = prepared->forward_dynamics[1];
+    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
+            + _t255;
+    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
+    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
+            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
+    const trailer3_real_t J_theta_cart3 = prepared->forward_dynamics[4];
+    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
+            + _t258;
+    const trailer3_real_t _t14 = prepared->forward_dynamics[32];
+    const trailer3_real_t _t260 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
+    const trailer3_real_t _t15 = prepared->forward_dynamics[33];
+    const trailer3_real_t _t261 = _t15 + _t242*_t40 + _t243*_t49 + _t244*_t81;
+    const trailer3_real_t _t262 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
+            + _t250*_t81;
+    const trailer3_real_t _t263 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
+            + _t254*_t81;
+    const trailer3_real_t _t264 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
+            + _t254*_t49;
     const trailer3_real_t J_theta_right = prepared->forward_dynamics[10];
-    const trailer3_real_t _t274 = J_theta_cart2_left*_t221*_t221 + J_theta_cart2_right*_t224*_t224
-            + J_theta_cart3_left*_t227*_t227 + J_theta_cart3_right*_t230*_t230
-            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t236*_t236 + J_theta_right
-            - _t0*_t213 + _t204*_t47 + _t209*_t43 + _t216*_t49 + _t218*_t58 + _t219*_t76;
-    const trailer3_real_t _t275 = _t1*_t213 + _t204*_t52 + _t209*_t45 + _t216*_t54 + _t218*_t63
-            + _t219*_t80 + _t250;
-    const trailer3_real_t _t276 = -_t0*_t252 + _t250 + _t251*_t47 + _t253*_t43 + _t254*_t49
-            + _t255*_t58 + _t256*_t76;
+    const trailer3_real_t _t265 = J_theta_right + _t0*_t261 + _t1*_t260 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t262*_t40 + _t263*_t49
+            + _t264*_t81;
+    const trailer3_real_t _t16 = prepared->forward_dynamics[34];
+    const trailer3_real_t _t266 = _t16 + _t228*_t44 + _t229*_t55 + _t230*_t90;
+    const trailer3_real_t _t17 = prepared->forward_dynamics[35];
+    const trailer3_real_t _t267 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
+    const trailer3_real_t _t268 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
+            + _t250*_t90;
+    const trailer3_real_t _t269 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
+            + _t254*_t90;
+    const trailer3_real_t _t270 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
+            + _t254*_t55;
+    const trailer3_real_t _t271 = _t0*_t267 + _t1*_t266 + _t193*_t197 + _t199*_t203 + _t205*_t209
+            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t268*_t40 + _t269*_t49 + _t270*_t81;
     const trailer3_real_t J_theta_left = prepared->forward_dynamics[9];
-    const trailer3_real_t _t277 = J_theta_cart2_left*_t245*_t245 + J_theta_cart2_right*_t243*_t243
-            + J_theta_cart3_left*_t249*_t249 + J_theta_cart3_right*_t247*_t247
-            + J_theta_cart_left*_t241*_t241 + J_theta_cart_right*_t239*_t239 + J_theta_left
-            + _t1*_t252 + _t251*_t52 + _t253*_t45 + _t254*_t54 + _t255*_t63 + _t256*_t80;
-    const trailer3_real_t _t278 = _t274*_t277 - _t275*_t276;
-    const trailer3_real_t _t279 = _t135 - _t136;
-    const trailer3_real_t _t280 = _t279*_t8;
-    const trailer3_real_t _t281 = _t140 - _t141;
-    const trailer3_real_t _t282 = _t281*_t8;
-    const trailer3_real_t _t283 = _t143 - _t144;
-    const trailer3_real_t _t284 = _t283*_t8;
-    const trailer3_real_t _t285 = _t146 - _t147;
-    const trailer3_real_t _t286 = _t285*_t8;
-    const trailer3_real_t _t287 = _t124*_t280 + _t125*_t282 + _t126*_t284 + _t127*_t286;
-    const trailer3_real_t _t288 = -_t135 - _t136;
-    const trailer3_real_t _t289 = _t288*_t7;
-    const trailer3_real_t _t290 = -_t140 - _t141;
-    const trailer3_real_t _t291 = _t290*_t7;
-    const trailer3_real_t _t292 = -_t143 - _t144;
-    const trailer3_real_t _t293 = _t292*_t7;
-    const trailer3_real_t _t294 = -_t146 - _t147;
-    const trailer3_real_t _t295 = _t294*_t7;
-    const trailer3_real_t _t296 = _t124*_t289 + _t125*_t291 + _t126*_t293 + _t127*_t295;
-    const trailer3_real_t _t297 = _t150 - _t151;
-    const trailer3_real_t _t298 = _t297*_t4;
-    const trailer3_real_t _t299 = _t154 - _t155;
-    const trailer3_real_t _t300 = _t299*_t4;
-    const trailer3_real_t _t301 = _t158 - _t159;
-    const trailer3_real_t _t302 = _t301*_t4;
-    const trailer3_real_t _t303 = _t162 - _t163;
-    const trailer3_real_t _t304 = _t303*_t4;
-    const trailer3_real_t _t305 = _t165 - _t166;
-    const trailer3_real_t _t306 = _t305*_t4;
-    const trailer3_real_t _t307 = _t168 - _t169;
-    const trailer3_real_t _t308 = _t307*_t4;
-    const trailer3_real_t _t309 = _t124*_t298 + _t125*_t300 + _t126*_t302 + _t127*_t304
-            + _t128*_t306 + _t129*_t308;
-    const trailer3_real_t _t310 = -_t150 - _t151;
-    const trailer3_real_t _t311 = _t3*_t310;
-    const trailer3_real_t _t312 = -_t154 - _t155;
-    const trailer3_real_t _t313 = _t3*_t312;
-    const trailer3_real_t _t314 = -_t158 - _t159;
-    const trailer3_real_t _t315 = _t3*_t314;
-    const trailer3_real_t _t316 = -_t162 - _t163;
-    const trailer3_real_t _t317 = _t3*_t316;
-    const trailer3_real_t _t318 = -_t165 - _t166;
-    const trailer3_real_t _t319 = _t3*_t318;
-    const trailer3_real_t _t320 = -_t168 - _t169;
-    const trailer3_real_t _t321 = _t3*_t320;
-    const trailer3_real_t _t322 = _t124*_t311 + _t125*_t313 + _t126*_t315 + _t127*_t317
-            + _t128*_t319 + _t129*_t321;
-    const trailer3_real_t _t323 = _t172 - _t173;
-    const trailer3_real_t _t324 = _t323*_t6;
-    const trailer3_real_t _t325 = _t176 - _t177;
-    const trailer3_real_t _t326 = _t325*_t6;
-    const trailer3_real_t _t327 = _t180 - _t181;
-    const trailer3_real_t _t328 = _t327*_t6;
-    const trailer3_real_t _t329 = _t184 - _t185;
-    const trailer3_real_t _t330 = _t329*_t6;
-    const trailer3_real_t _t331 = _t188 - _t189;
-    const trailer3_real_t _t332 = _t331*_t6;
-    const trailer3_real_t _t333 = _t192 - _t193;
-    const trailer3_real_t _t334 = _t333*_t6;
-    const trailer3_real_t _t335 = _t195 - _t196;
-    const trailer3_real_t _t336 = _t335*_t6;
-    const trailer3_real_t _t337 = _t198 - _t199;
-    const trailer3_real_t _t338 = _t337*_t6;
-    const trailer3_real_t _t339 = _t124*_t324 + _t125*_t326 + _t126*_t328 + _t127*_t330
-            + _t128*_t332 + _t129*_t334 + _t130*_t336 + _t131*_t338;
-    const trailer3_real_t _t340 = -_t172 - _t173;
-    const trailer3_real_t _t341 = _t340*_t5;
-    const trailer3_real_t _t342 = -_t176 - _t177;
-    const trailer3_real_t _t343 = _t342*_t5;
-    const trailer3_real_t _t344 = -_t180 - _t181;
-    const trailer3_real_t _t345 = _t344*_t5;
-    const trailer3_real_t _t346 = -_t184 - _t185;
-    const trailer3_real_t _t347 = _t346*_t5;
-    const trailer3_real_t _t348 = -_t188 - _t189;
-    const trailer3_real_t _t349 = _t348*_t5;
-    const trailer3_real_t _t350 = -_t192 - _t193;
-    const trailer3_real_t _t351 = _t350*_t5;
-    const trailer3_real_t _t352 = -_t195 - _t196;
-    const trailer3_real_t _t353 = _t352*_t5;
-    const trailer3_real_t _t354 = -_t198 - _t199;
-    const trailer3_real_t _t355 = _t354*_t5;
-    const trailer3_real_t _t356 = _t124*_t341 + _t125*_t343 + _t126*_t345 + _t127*_t347
-            + _t128*_t349 + _t129*_t351 + _t130*_t353 + _t131*_t355;
-    const trailer3_real_t _t357 = -_t0*_t267 + _t222*_t322 + _t225*_t309 + _t228*_t356 + _t231*_t339
-            + _t234*_t296 + _t237*_t287 + _t262*_t47 + _t265*_t43 + _t269*_t49 + _t271*_t58
-            + _t273*_t76;
-    const trailer3_real_t _t358 = J_theta_cart2_left*_t245*_t322 + J_theta_cart2_right*_t243*_t309
-            + J_theta_cart3_left*_t249*_t356 + J_theta_cart3_right*_t247*_t339
-            + J_theta_cart_left*_t241*_t296 + J_theta_cart_right*_t239*_t287 + _t1*_t267
-            + _t262*_t52 + _t265*_t45 + _t269*_t54 + _t271*_t63 + _t273*_t80;
-    const trailer3_real_t _t359 = -_t357 + tau_right;
-    const trailer3_real_t _t360 = -_t358 + tau_left;
-    const trailer3_real_t _t361 = TRAILER3_LIT(1.0)/_t278;
-    const trailer3_real_t _t362 = _t361*(-_t275*_t360 + _t277*_t359);
-    const trailer3_real_t _t363 = _t361*(_t274*_t360 - _t276*_t359);
-    const trailer3_real_t _t364 = _t264 + _t362*_t43 + _t363*_t45;
-    const trailer3_real_t _t365 = _t258 + _t362*_t47 + _t363*_t52;
-    const trailer3_real_t _t366 = -_t0*_t362 + _t1*_t363;
-    const trailer3_real_t _t367 = _t259 + _t362*_t49 + _t363*_t54;
-    const trailer3_real_t _t368 = _t260 + _t362*_t58 + _t363*_t63;
-    const trailer3_real_t _t369 = _t261 + _t362*_t76 + _t363*_t80;
-    const trailer3_real_t _t370 = _t236*_t362 + _t239*_t363 + _t287;
-    const trailer3_real_t _t371 = _t233*_t362 + _t241*_t363 + _t296;
-    const trailer3_real_t _t372 = _t224*_t362 + _t243*_t363 + _t309;
-    const trailer3_real_t _t373 = _t221*_t362 + _t245*_t363 + _t322;
-    const trailer3_real_t _t374 = _t230*_t362 + _t247*_t363 + _t339;
-    const trailer3_real_t _t375 = _t227*_t362 + _t249*_t363 + _t356;
-    if (!(_t274 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
-                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
-                & TRAILER3_EXP_CARRY_TOP) != 0u) {
-            return TRAILER3_ERR_NONFINITE_INPUT;
-        }
+    const trailer3_real_t _t272 = J_theta_left + _t196*_t197 + _t2*_t267 + _t202*_t203 + _t208*_t209
+            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t266*_t3 + _t268*_t44 + _t269*_t55
+            + _t270*_t90;
+    const trailer3_real_t _t273 = _t265*_t272 - _t271*_t271;
+    const trailer3_real_t _t276 = _t103 - _t37;
+    const trailer3_real_t _t277 = _t276*_t4;
+    const trailer3_real_t _t278 = _t104 - _t38;
+    const trailer3_real_t _t279 = _t278*_t4;
+    const trailer3_real_t _t280 = -_t103 - _t37;
+    const trailer3_real_t _t281 = _t280*_t5;
+    const trailer3_real_t _t282 = -_t104 - _t38;
+    const trailer3_real_t _t283 = _t282*_t5;
+    const trailer3_real_t _t284 = _t107 - _t109;
+    const trailer3_real_t _t285 = _t284*_t6;
+    const trailer3_real_t _t286 = _t112 - _t114;
+    const trailer3_real_t _t287 = _t286*_t6;
+    const trailer3_real_t _t288 = _t108 + _t117 - _t41;
+    const trailer3_real_t _t289 = _t288*_t6;
+    const trailer3_real_t _t290 = _t113 + _t120 - _t45;
+    const trailer3_real_t _t291 = _t290*_t6;
+    const trailer3_real_t _t292 = _t122 + _t43;
+    const trailer3_real_t _t293 = _t292*_t6;
+    const trailer3_real_t _t294 = _t124 + _t47;
+    const trailer3_real_t _t295 = _t294*_t6;
+    const trailer3_real_t _t296 = -_t107 - _t109;
+    const trailer3_real_t _t297 = _t296*_t7;
+    const trailer3_real_t _t298 = -_t112 - _t114;
+    const trailer3_real_t _t299 = _t298*_t7;
+    const trailer3_real_t _t300 = _t108 - _t117 - _t41;
+    const trailer3_real_t _t301 = _t300*_t7;
+    const trailer3_real_t _t302 = _t113 - _t120 - _t45;
+    const trailer3_real_t _t303 = _t302*_t7;
+    const trailer3_real_t _t304 = -_t122 + _t43;
+    const trailer3_real_t _t305 = _t304*_t7;
+    const trailer3_real_t _t306 = -_t124 + _t47;
+    const trailer3_real_t _t307 = _t306*_t7;
+    const trailer3_real_t _t308 = _t127 - _t129;
+    const trailer3_real_t _t309 = _t308*_t8;
+    const trailer3_real_t _t310 = _t132 - _t134;
+    const trailer3_real_t _t311 = _t310*_t8;
+    const trailer3_real_t _t312 = _t137 - _t138;
+    const trailer3_real_t _t313 = _t312*_t8;
+    const trailer3_real_t _t314 = _t141 - _t142;
+    const trailer3_real_t _t315 = _t314*_t8;
+    const trailer3_real_t _t316 = _t145 - _t146;
+    const trailer3_real_t _t317 = _t316*_t8;
+    const trailer3_real_t _t318 = _t149 - _t150;
+    const trailer3_real_t _t319 = _t318*_t8;
+    const trailer3_real_t _t320 = _t152 + _t54;
+    const trailer3_real_t _t321 = _t320*_t8;
+    const trailer3_real_t _t322 = _t154 + _t59;
+    const trailer3_real_t _t323 = _t322*_t8;
+    const trailer3_real_t _t324 = -_t127 - _t129;
+    const trailer3_real_t _t325 = _t324*_t9;
+    const trailer3_real_t _t326 = -_t132 - _t134;
+    const trailer3_real_t _t327 = _t326*_t9;
+    const trailer3_real_t _t328 = -_t137 - _t138;
+    const trailer3_real_t _t329 = _t328*_t9;
+    const trailer3_real_t _t330 = -_t141 - _t142;
+    const trailer3_real_t _t331 = _t330*_t9;
+    const trailer3_real_t _t332 = -_t145 - _t146;
+    const trailer3_real_t _t333 = _t332*_t9;
+    const trailer3_real_t _t334 = -_t149 - _t150;
+    const trailer3_real_t _t335 = _t334*_t9;
+    const trailer3_real_t _t336 = -_t152 + _t54;
+    const trailer3_real_t _t337 = _t336*_t9;
+    const trailer3_real_t _t338 = -_t154 + _t59;
+    const trailer3_real_t _t339 = _t338*_t9;
+    const trailer3_real_t _t340 = _t232*_t277 + _t233*_t279;
+    const trailer3_real_t _t341 = _t232*_t281 + _t233*_t283;
+    const trailer3_real_t _t342 = _t188*_t285 + _t189*_t287 + _t190*_t289 + _t191*_t291
+            + _t235*_t293 + _t236*_t295;
+    const trailer3_real_t _t343 = _t188*_t297 + _t189*_t299 + _t190*_t301 + _t191*_t303
+            + _t235*_t305 + _t236*_t307;
+    const trailer3_real_t _t344 = _t188*_t309 + _t189*_t311 + _t190*_t313 + _t191*_t315
+            + _t235*_t317 + _t236*_t319 + _t238*_t321 + _t239*_t323;
+    const trailer3_real_t _t345 = _t188*_t325 + _t189*_t327 + _t190*_t329 + _t191*_t331
+            + _t235*_t333 + _t236*_t335 + _t238*_t337 + _t239*_t339;
+    const trailer3_real_t _t346 = _t0*_t247 + _t1*_t241 + _t194*_t340 + _t200*_t341 + _t206*_t342
+            + _t212*_t343 + _t218*_t344 + _t224*_t345 + _t252*_t40 + _t256*_t49 + _t259*_t81;
+    const trailer3_real_t _t347 = _t197*_t340 + _t2*_t247 + _t203*_t341 + _t209*_t342 + _t215*_t343
+            + _t221*_t344 + _t227*_t345 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
+    const trailer3_real_t _t348 = -_t346 + tau_right;
+    const trailer3_real_t _t349 = -_t347 + tau_left;
+    const trailer3_real_t _t350 = TRAILER3_LIT(1.0)/_t273;
+    const trailer3_real_t _t351 = _t350*(-_t271*_t349 + _t272*_t348);
+    const trailer3_real_t _t352 = _t350*(_t265*_t349 - _t271*_t348);
+    const trailer3_real_t _t353 = _t1*_t351 + _t3*_t352;
+    const trailer3_real_t _t354 = _t0*_t351 + _t2*_t352;
+    const trailer3_real_t _t355 = _t234 + _t351*_t40 + _t352*_t44;
+    const trailer3_real_t _t356 = _t237 + _t351*_t49 + _t352*_t55;
+    const trailer3_real_t _t357 = _t240 + _t351*_t81 + _t352*_t90;
+    const trailer3_real_t _t358 = _t193*_t351 + _t196*_t352 + _t340;
+    const trailer3_real_t _t359 = _t199*_t351 + _t202*_t352 + _t341;
+    const trailer3_real_t _t360 = _t205*_t351 + _t208*_t352 + _t342;
+    const trailer3_real_t _t361 = _t211*_t351 + _t214*_t352 + _t343;
+    const trailer3_real_t _t362 = _t217*_t351 + _t220*_t352 + _t344;
+    const trailer3_real_t _t363 = _t223*_t351 + _t226*_t352 + _t345;
+    const trailer3_real_t _t364 = -_t246*_t274 + _t275*_t353;
+    const trailer3_real_t _t365 = _t246*_t275 + _t274*_t353;
+    if (!(_t265 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t278 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
-                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
-                & TRAILER3_EXP_CARRY_TOP) != 0u) {
-            return TRAILER3_ERR_NONFINITE_INPUT;
-        }
+    if (!(_t273 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
     const trailer3_real_t r_0 = _t364;
     const trailer3_real_t r_1 = _t365;
-    const trailer3_real_t r_2 = _t366;
-    const trailer3_real_t r_3 = _t367;
-    const trailer3_real_t r_4 = _t368;
-    const trailer3_real_t r_5 = _t369;
-    const trailer3_real_t r_6 = _t362;
-    const trailer3_real_t r_7 = _t363;
-    const trailer3_real_t r_8 = _t370;
-    const trailer3_real_t r_9 = _t371;
-    const trailer3_real_t r_10 = _t372;
-    const trailer3_real_t r_11 = _t373;
-    const trailer3_real_t r_12 = _t374;
-    const trailer3_real_t r_13 = _t375;
+    const trailer3_real_t r_2 = _t354;
+    const trailer3_real_t r_3 = _t355;
+    const trailer3_real_t r_4 = _t356;
+    const trailer3_real_t r_5 = _t357;
+    const trailer3_real_t r_6 = _t351;
+    const trailer3_real_t r_7 = _t352;
+    const trailer3_real_t r_8 = _t358;
+    const trailer3_real_t r_9 = _t359;
+    const trailer3_real_t r_10 = _t360;
+    const trailer3_real_t r_11 = _t361;
+    const trailer3_real_t r_12 = _t362;
+    const trailer3_real_t r_13 = _t363;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
             | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
             | trailer3_exp_carry(r_9) | trailer3_exp_carry(r_10) | trailer3_exp_carry(r_11)
             | trailer3_exp_carry(r_12) | trailer3_exp_carry(r_13)) & TRAILER3_EXP_CARRY_TOP)
             != 0u) {
-        /* an input not checked yet, reaching the results through +, -, * only */
-        if (((trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
-                | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
-                & TRAILER3_EXP_CARRY_TOP) != 0u) {
-            return TRAILER3_ERR_NONFINITE_INPUT;
-        }
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
@@ -1303,736 +1235,705 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
 }
 
 /* trailer3_kinematics: documented in trailer3_model.h.
-   operations after CSE: 72 add, 137 mul, 6 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 62 add, 117 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *pose_rates)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t6 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t7 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t1;
+    const trailer3_real_t _t4 = _t0 + theta_cart2;
+    const trailer3_real_t _t5 = TRAILER3_SIN(_t4);
+    const trailer3_real_t _t6 = TRAILER3_COS(_t4);
+    const trailer3_real_t _t7 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart3);
+    const trailer3_real_t _t9 = _t0 + theta_cart3;
+    const trailer3_real_t _t10 = TRAILER3_SIN(_t9);
+    const trailer3_real_t _t11 = TRAILER3_COS(_t9);
     const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t13 = -TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t13 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t14 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t16 = -_t13*_t14 + _t15*_t2;
+    const trailer3_real_t _t17 = -TRAILER3_LIT(1.6666666666666667)*_t16;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.2)*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t20 = _t14*_t19;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t14 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t15 = -_t0*_t3 - _t1*_t5;
-    const trailer3_real_t _t16 = -TRAILER3_LIT(0.207)*_t2;
-    const trailer3_real_t _t17 = _t13*_t16;
-    const trailer3_real_t _t18 = -TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t19 = _t13*_t18;
-    const trailer3_real_t _t20 = _t0*_t19 - _t1*_t17 + _t13*_t15;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(1.6666666666666667)*_t20;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.2)*_t21;
-    const trailer3_real_t _t23 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t24 = -_t0*_t17 - _t1*_t19 - _t13*_t23;
-    const trailer3_real_t _t25 = _t14*_t16;
-    const trailer3_real_t _t26 = _t14*_t18;
-    const trailer3_real_t _t27 = _t0*_t26 - _t1*_t25 - _t14*_t15;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(1.6666666666666667)*_t27;
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.2)*_t28;
-    const trailer3_real_t _t30 = -_t0*_t25 - _t1*_t26 + _t14*_t23;
-    const trailer3_real_t _t31 = -_t3*_t6 - _t5*_t7;
-    const trailer3_real_t _t32 = -_t6*_t8 - _t7*_t9;
-    const trailer3_real_t _t33 = _t13*_t31 - _t17*_t7 + _t19*_t6 - _t21*_t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
-    const trailer3_real_t _t36 = -_t3*_t7 + _t5*_t6;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t1*_t6 - _t7*_t8;
-    const trailer3_real_t _t38 = -_t13*_t36 - _t17*_t6 - _t19*_t7 + _t21*_t37;
-    const trailer3_real_t _t39 = -_t14*_t31 - _t25*_t7 + _t26*_t6 - _t28*_t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t42 = _t14*_t36 - _t25*_t6 - _t26*_t7 + _t28*_t37;
-    const trailer3_real_t _t43 = -_t10*_t3 - _t11*_t5;
-    const trailer3_real_t _t44 = -_t10*_t8 - _t11*_t9;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t7;
-    const trailer3_real_t _t46 = _t10*_t19 - _t11*_t17 + _t13*_t43 - _t21*_t44 - _t34*_t45;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
-    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
-    const trailer3_real_t _t49 = _t10*_t5 - _t11*_t3;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t1*_t10 - _t11*_t8;
-    const trailer3_real_t _t51 = TRAILER3_LIT(0.85)*_t10*_t7 - _t12*_t6;
-    const trailer3_real_t _t52 = -_t10*_t17 - _t11*_t19 - _t13*_t49 + _t21*_t50 + _t34*_t51;
-    const trailer3_real_t _t53 = _t10*_t26 - _t11*_t25 - _t14*_t43 - _t28*_t44 - _t40*_t45;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t56 = -_t10*_t25 - _t11*_t26 + _t14*_t49 + _t28*_t50 + _t40*_t51;
-    const trailer3_real_t _t57 = _t22 - _t24;
-    const trailer3_real_t _t58 = _t29 - _t30;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t23 = -_t13*_t21 + _t2*_t22;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(1.6666666666666667)*_t23;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.2)*_t24;
+    const trailer3_real_t _t26 = _t19*_t21;
+    const trailer3_real_t _t27 = -TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t28 = -_t5*_t7 - _t6*_t8;
+    const trailer3_real_t _t29 = -_t14*_t27 + _t15*_t5 - _t17*_t28;
+    const trailer3_real_t _t30 = -TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t5;
+    const trailer3_real_t _t33 = _t14*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t3*_t5 - _t6*_t7;
+    const trailer3_real_t _t35 = _t17*_t34;
+    const trailer3_real_t _t36 = -_t21*_t27 + _t22*_t5 - _t24*_t28;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
+    const trailer3_real_t _t39 = _t21*_t32;
+    const trailer3_real_t _t40 = _t24*_t34;
+    const trailer3_real_t _t41 = -TRAILER3_LIT(0.3)*_t11;
+    const trailer3_real_t _t42 = -_t10*_t7 - _t11*_t8;
+    const trailer3_real_t _t43 = -TRAILER3_LIT(0.85)*_t10*_t5 - _t12*_t6;
+    const trailer3_real_t _t44 = _t10*_t15 - _t14*_t41 - _t17*_t42 - _t30*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.3)*_t10;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.85)*_t10*_t3 - _t11*_t7;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t5;
+    const trailer3_real_t _t50 = -_t11*_t15 + _t14*_t47 + _t17*_t48 + _t30*_t49;
+    const trailer3_real_t _t51 = _t10*_t22 - _t21*_t41 - _t24*_t42 - _t37*_t43;
+    const trailer3_real_t _t52 = -TRAILER3_LIT(1.6666666666666667)*_t51;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
+    const trailer3_real_t _t54 = -_t11*_t22 + _t21*_t47 + _t24*_t48 + _t37*_t49;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t60 = _t57*_t59;
-    const trailer3_real_t _t61 = _t58*_t59;
-    const trailer3_real_t _t62 = -_t22 - _t24;
-    const trailer3_real_t _t63 = -_t29 - _t30;
+    const trailer3_real_t _t55 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t65 = _t62*_t64;
-    const trailer3_real_t _t66 = _t63*_t64;
-    const trailer3_real_t _t67 = _t35 - _t38;
-    const trailer3_real_t _t68 = _t41 - _t42;
+    const trailer3_real_t _t56 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t70 = _t67*_t69;
-    const trailer3_real_t _t71 = _t68*_t69;
-    const trailer3_real_t _t72 = -_t35 - _t38;
-    const trailer3_real_t _t73 = -_t41 - _t42;
+    const trailer3_real_t _t57 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t74 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t75 = _t72*_t74;
-    const trailer3_real_t _t76 = _t73*_t74;
-    const trailer3_real_t _t77 = _t48 - _t52;
-    const trailer3_real_t _t78 = _t55 - _t56;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t79 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t80 = _t77*_t79;
-    const trailer3_real_t _t81 = _t78*_t79;
-    const trailer3_real_t _t82 = -_t48 - _t52;
-    const trailer3_real_t _t83 = -_t55 - _t56;
+    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t84 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t85 = _t82*_t84;
-    const trailer3_real_t _t86 = _t83*_t84;
+    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t61 = _t15*_t3 + _t18 - _t20;
+    const trailer3_real_t _t62 = _t22*_t3 + _t25 - _t26;
+    const trailer3_real_t _t63 = _t55*_t61;
+    const trailer3_real_t _t64 = _t55*_t62;
+    const trailer3_real_t _t65 = _t15*_t3 - _t18 - _t20;
+    const trailer3_real_t _t66 = _t22*_t3 - _t25 - _t26;
+    const trailer3_real_t _t67 = _t56*_t65;
+    const trailer3_real_t _t68 = _t56*_t66;
+    const trailer3_real_t _t69 = _t15*_t6 + _t31 - _t33 - _t35;
+    const trailer3_real_t _t70 = _t22*_t6 + _t38 - _t39 - _t40;
+    const trailer3_real_t _t71 = _t57*_t69;
+    const trailer3_real_t _t72 = _t57*_t70;
+    const trailer3_real_t _t73 = _t15*_t6 - _t31 - _t33 - _t35;
+    const trailer3_real_t _t74 = _t22*_t6 - _t38 - _t39 - _t40;
+    const trailer3_real_t _t75 = _t58*_t73;
+    const trailer3_real_t _t76 = _t58*_t74;
+    const trailer3_real_t _t77 = _t46 - _t50;
+    const trailer3_real_t _t78 = _t53 - _t54;
+    const trailer3_real_t _t79 = _t59*_t77;
+    const trailer3_real_t _t80 = _t59*_t78;
+    const trailer3_real_t _t81 = -_t46 - _t50;
+    const trailer3_real_t _t82 = -_t53 - _t54;
+    const trailer3_real_t _t83 = _t60*_t81;
+    const trailer3_real_t _t84 = _t60*_t82;
     const trailer3_real_t thetadot_right = wheel_rates[0];
     const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t87 = _t19*thetadot_right + _t26*thetadot_left;
-    const trailer3_real_t _t88 = _t17*thetadot_right + _t25*thetadot_left;
-    const trailer3_real_t _t89 = -_t13*thetadot_right + _t14*thetadot_left;
-    const trailer3_real_t _t90 = _t21*thetadot_right + _t28*thetadot_left;
-    const trailer3_real_t _t91 = _t34*thetadot_right + _t40*thetadot_left;
-    const trailer3_real_t _t92 = _t47*thetadot_right + _t54*thetadot_left;
-    const trailer3_real_t _t93 = _t60*thetadot_right + _t61*thetadot_left;
-    const trailer3_real_t _t94 = _t65*thetadot_right + _t66*thetadot_left;
-    const trailer3_real_t _t95 = _t70*thetadot_right + _t71*thetadot_left;
-    const trailer3_real_t _t96 = _t75*thetadot_right + _t76*thetadot_left;
-    const trailer3_real_t _t97 = _t80*thetadot_right + _t81*thetadot_left;
-    const trailer3_real_t _t98 = _t85*thetadot_right + _t86*thetadot_left;
-    pose_rates[0] = _t87;
-    pose_rates[1] = _t88;
-    pose_rates[2] = _t89;
-    pose_rates[3] = _t90;
-    pose_rates[4] = _t91;
-    pose_rates[5] = _t92;
-    pose_rates[6] = _t93;
-    pose_rates[7] = _t94;
-    pose_rates[8] = _t95;
-    pose_rates[9] = _t96;
-    pose_rates[10] = _t97;
-    pose_rates[11] = _t98;
+    const trailer3_real_t _t85 = _t15*thetadot_right + _t22*thetadot_left;
+    const trailer3_real_t _t86 = _t14*thetadot_right + _t21*thetadot_left;
+    const trailer3_real_t _t87 = _t17*thetadot_right + _t24*thetadot_left;
+    const trailer3_real_t _t88 = _t30*thetadot_right + _t37*thetadot_left;
+    const trailer3_real_t _t89 = _t45*thetadot_right + _t52*thetadot_left;
+    const trailer3_real_t _t90 = _t63*thetadot_right + _t64*thetadot_left;
+    const trailer3_real_t _t91 = _t67*thetadot_right + _t68*thetadot_left;
+    const trailer3_real_t _t92 = _t71*thetadot_right + _t72*thetadot_left;
+    const trailer3_real_t _t93 = _t75*thetadot_right + _t76*thetadot_left;
+    const trailer3_real_t _t94 = _t79*thetadot_right + _t80*thetadot_left;
+    const trailer3_real_t _t95 = _t83*thetadot_right + _t84*thetadot_left;
+    const trailer3_real_t _t96 = _t85*TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t97 = _t85*TRAILER3_SIN(theta_tractor);
+    pose_rates[0] = _t96;
+    pose_rates[1] = _t97;
+    pose_rates[2] = _t86;
+    pose_rates[3] = _t87;
+    pose_rates[4] = _t88;
+    pose_rates[5] = _t89;
+    pose_rates[6] = _t90;
+    pose_rates[7] = _t91;
+    pose_rates[8] = _t92;
+    pose_rates[9] = _t93;
+    pose_rates[10] = _t94;
+    pose_rates[11] = _t95;
 }
 
 /* trailer3_minimal_mass_matrix: documented in trailer3_model.h.
-   operations after CSE: 183 add, 286 mul, 6 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 138 add, 216 mul, 6 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *M)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t6 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t7 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t1;
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
+    const trailer3_real_t _t11 = _t10*_t7;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t10 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t11;
+    const trailer3_real_t _t12 = _t0 + theta_cart3;
+    const trailer3_real_t _t13 = TRAILER3_SIN(_t12);
+    const trailer3_real_t _t14 = TRAILER3_COS(_t12);
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
+    const trailer3_real_t _t16 = _t10*_t14;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t14;
+    const trailer3_real_t _t19 = _t18*_t7;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t13;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t13 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t23 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t25 = _t2*_t24 + _t23*_t4;
+    const trailer3_real_t _t26 = -TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t28 = _t20*_t23;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t14 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t15 = -_t0*_t3 - _t1*_t5;
-    const trailer3_real_t _t16 = -TRAILER3_LIT(0.207)*_t2;
-    const trailer3_real_t _t17 = _t13*_t16;
-    const trailer3_real_t _t18 = -TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t19 = _t13*_t18;
-    const trailer3_real_t _t20 = _t0*_t19 - _t1*_t17 + _t13*_t15;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(1.6666666666666667)*_t20;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.2)*_t21;
-    const trailer3_real_t _t23 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t24 = -_t0*_t17 - _t1*_t19 - _t13*_t23;
-    const trailer3_real_t _t25 = _t14*_t16;
-    const trailer3_real_t _t26 = _t14*_t18;
-    const trailer3_real_t _t27 = _t0*_t26 - _t1*_t25 - _t14*_t15;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(1.6666666666666667)*_t27;
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.2)*_t28;
-    const trailer3_real_t _t30 = -_t0*_t25 - _t1*_t26 + _t14*_t23;
-    const trailer3_real_t _t31 = -_t3*_t6 - _t5*_t7;
-    const trailer3_real_t _t32 = -_t6*_t8 - _t7*_t9;
-    const trailer3_real_t _t33 = _t13*_t31 - _t17*_t7 + _t19*_t6 - _t21*_t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
-    const trailer3_real_t _t36 = -_t3*_t7 + _t5*_t6;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t1*_t6 - _t7*_t8;
-    const trailer3_real_t _t38 = -_t13*_t36 - _t17*_t6 - _t19*_t7 + _t21*_t37;
-    const trailer3_real_t _t39 = -_t14*_t31 - _t25*_t7 + _t26*_t6 - _t28*_t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t42 = _t14*_t36 - _t25*_t6 - _t26*_t7 + _t28*_t37;
-    const trailer3_real_t _t43 = -_t10*_t3 - _t11*_t5;
-    const trailer3_real_t _t44 = -_t10*_t8 - _t11*_t9;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t7;
-    const trailer3_real_t _t46 = _t10*_t19 - _t11*_t17 + _t13*_t43 - _t21*_t44 - _t34*_t45;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(1.6666666666666667)*_t46;
-    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
-    const trailer3_real_t _t49 = _t10*_t5 - _t11*_t3;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t1*_t10 - _t11*_t8;
-    const trailer3_real_t _t51 = TRAILER3_LIT(0.85)*_t10*_t7 - _t12*_t6;
-    const trailer3_real_t _t52 = -_t10*_t17 - _t11*_t19 - _t13*_t49 + _t21*_t50 + _t34*_t51;
-    const trailer3_real_t _t53 = _t10*_t26 - _t11*_t25 - _t14*_t43 - _t28*_t44 - _t40*_t45;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t56 = -_t10*_t25 - _t11*_t26 + _t14*_t49 + _t28*_t50 + _t40*_t51;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t57 = K_theta_cart_x_tractor*_t0;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t58 = K_theta_cart_x_tractor_2*_t1;
+    const trailer3_real_t _t29 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t30 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t31 = _t2*_t30 + _t29*_t4;
+    const trailer3_real_t _t32 = -TRAILER3_LIT(1.6666666666666667)*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.2)*_t32;
+    const trailer3_real_t _t34 = _t20*_t29;
+    const trailer3_real_t _t35 = -_t11 - _t6*_t9;
+    const trailer3_real_t _t36 = _t23*_t8 + _t24*_t6 - _t26*_t35;
+    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
+    const trailer3_real_t _t39 = _t21*_t23;
+    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t41 = _t26*_t40;
+    const trailer3_real_t _t42 = _t29*_t8 + _t30*_t6 - _t32*_t35;
+    const trailer3_real_t _t43 = -TRAILER3_LIT(1.6666666666666667)*_t42;
+    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*_t43;
+    const trailer3_real_t _t45 = _t21*_t29;
+    const trailer3_real_t _t46 = _t32*_t40;
+    const trailer3_real_t _t47 = -_t13*_t9 - _t16;
+    const trailer3_real_t _t48 = -_t17*_t6 - _t19;
+    const trailer3_real_t _t49 = _t13*_t24 + _t15*_t23 - _t26*_t47 - _t37*_t48;
+    const trailer3_real_t _t50 = -TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t51 = TRAILER3_LIT(0.2)*_t50;
+    const trailer3_real_t _t52 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
+    const trailer3_real_t _t54 = -_t14*_t24 + _t22*_t23 + _t26*_t52 + _t37*_t53;
+    const trailer3_real_t _t55 = _t13*_t30 + _t15*_t29 - _t32*_t47 - _t43*_t48;
+    const trailer3_real_t _t56 = -TRAILER3_LIT(1.6666666666666667)*_t55;
+    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t56;
+    const trailer3_real_t _t58 = -_t14*_t30 + _t22*_t29 + _t32*_t52 + _t43*_t53;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer3_real_t _t59 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
     const trailer3_real_t _t60 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t61 = K_theta_cart3_x_tractor*_t10;
+    const trailer3_real_t _t61 = K_theta_cart3_x_tractor*_t13;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t62 = K_theta_cart3_x_tractor_2*_t11;
-    const trailer3_real_t _t63 = K_theta_cart_x_tractor*_t1;
-    const trailer3_real_t _t64 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t65 = K_theta_cart3_x_tractor*_t11;
-    const trailer3_real_t _t66 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t67 = K_theta_cart3_x_tractor_2*_t10;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t70 = -K_theta_tractor_x_tractor*_t4 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor_2*_t0 - _t63;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor_2*_t6 - _t64;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor_2*_t10 - _t65;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t74 = J_x_tractor*_t17 - _t13*_t70 + _t21*_t71 + _t34*_t72 + _t47*_t73;
-    const trailer3_real_t _t75 = K_theta_tractor_x_tractor*_t2 + K_theta_tractor_x_tractor_2*_t4;
-    const trailer3_real_t _t76 = _t57 + _t58;
-    const trailer3_real_t _t77 = _t59 + _t60;
-    const trailer3_real_t _t78 = _t61 + _t62;
-    const trailer3_real_t _t79 = J_x_tractor*_t19 - _t13*_t75 + _t21*_t76 + _t34*_t77 + _t47*_t78;
-    const trailer3_real_t _t80 = -K_theta_cart_x_tractor_2*_t0*_t5 + _t3*_t57 + _t3*_t58 + _t5*_t63;
-    const trailer3_real_t _t81 = _t3*_t59 + _t3*_t60 + _t5*_t64 - _t5*_t66;
-    const trailer3_real_t _t82 = _t3*_t61 + _t3*_t62 + _t5*_t65 - _t5*_t67;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t83 = -J_theta_tractor*_t13 + _t17*_t70 + _t19*_t75 + _t21*_t80
-            + _t34*_t81 + _t47*_t82;
-    const trailer3_real_t _t84 = _t59*_t8 + _t60*_t8 + _t64*_t9 - _t66*_t9;
-    const trailer3_real_t _t85 = _t61*_t8 + _t62*_t8 + _t65*_t9 - _t67*_t9;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t86 = J_theta_cart*_t21 - _t13*_t80 + _t17*_t71 + _t19*_t76 + _t34*_t84
-            + _t47*_t85;
-    const trailer3_real_t _t87 = _t61*_t68 + _t62*_t68 + _t65*_t69 - _t67*_t69;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t88 = J_theta_cart2*_t34 - _t13*_t81 + _t17*_t72 + _t19*_t77 + _t21*_t84
-            + _t47*_t87;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t89 = J_theta_cart3*_t47 - _t13*_t82 + _t17*_t73 + _t19*_t78 + _t21*_t85
-            + _t34*_t87;
-    const trailer3_real_t _t90 = _t22 - _t24;
+    const trailer3_real_t _t62 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.85)*_t6;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t91 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t92 = _t90*_t91;
-    const trailer3_real_t _t93 = _t29 - _t30;
-    const trailer3_real_t _t94 = _t91*_t93;
-    const trailer3_real_t _t95 = -_t22 - _t24;
+    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t96 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t97 = _t95*_t96;
-    const trailer3_real_t _t98 = -_t29 - _t30;
-    const trailer3_real_t _t99 = _t96*_t98;
-    const trailer3_real_t _t100 = _t35 - _t38;
+    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t101 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t102 = _t100*_t101;
-    const trailer3_real_t _t103 = _t41 - _t42;
-    const trailer3_real_t _t104 = _t101*_t103;
-    const trailer3_real_t _t105 = -_t35 - _t38;
+    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t106 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t107 = _t105*_t106;
-    const trailer3_real_t _t108 = -_t41 - _t42;
-    const trailer3_real_t _t109 = _t106*_t108;
-    const trailer3_real_t _t110 = _t48 - _t52;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t111 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t112 = _t110*_t111;
-    const trailer3_real_t _t113 = _t55 - _t56;
-    const trailer3_real_t _t114 = _t111*_t113;
-    const trailer3_real_t _t115 = -_t48 - _t52;
+    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t116 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t117 = _t115*_t116;
-    const trailer3_real_t _t118 = -_t55 - _t56;
-    const trailer3_real_t _t119 = _t116*_t118;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t70 = _t24*_t3 + _t27 - _t28;
+    const trailer3_real_t _t71 = _t3*_t30 + _t33 - _t34;
+    const trailer3_real_t _t72 = _t64*_t70;
+    const trailer3_real_t _t73 = _t64*_t71;
+    const trailer3_real_t _t74 = _t24*_t3 - _t27 - _t28;
+    const trailer3_real_t _t75 = _t3*_t30 - _t33 - _t34;
+    const trailer3_real_t _t76 = _t65*_t74;
+    const trailer3_real_t _t77 = _t65*_t75;
+    const trailer3_real_t _t78 = _t24*_t7 + _t38 - _t39 - _t41;
+    const trailer3_real_t _t79 = _t30*_t7 + _t44 - _t45 - _t46;
+    const trailer3_real_t _t80 = _t66*_t78;
+    const trailer3_real_t _t81 = _t66*_t79;
+    const trailer3_real_t _t82 = _t24*_t7 - _t38 - _t39 - _t41;
+    const trailer3_real_t _t83 = _t30*_t7 - _t44 - _t45 - _t46;
+    const trailer3_real_t _t84 = _t67*_t82;
+    const trailer3_real_t _t85 = _t67*_t83;
+    const trailer3_real_t _t86 = _t51 - _t54;
+    const trailer3_real_t _t87 = _t57 - _t58;
+    const trailer3_real_t _t88 = _t68*_t86;
+    const trailer3_real_t _t89 = _t68*_t87;
+    const trailer3_real_t _t90 = -_t51 - _t54;
+    const trailer3_real_t _t91 = -_t57 - _t58;
+    const trailer3_real_t _t92 = _t69*_t90;
+    const trailer3_real_t _t93 = _t69*_t91;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t94 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t95 = _t59 + _t60;
+    const trailer3_real_t _t96 = _t61 + _t62;
+    const trailer3_real_t _t97 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
+    const trailer3_real_t _t98 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t _t99 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
+    const trailer3_real_t _t100 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
+            + _t59*_t9 + _t60*_t9;
+    const trailer3_real_t _t101 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
+            + _t61*_t9 + _t62*_t9;
+    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
+            + _t61*_t63 + _t62*_t63;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t103 = J_x_tractor*_t24 + K_theta_tractor_x_tractor_2*_t23 + _t26*_t94
+            + _t37*_t95 + _t50*_t96;
+    const trailer3_real_t _t104 = J_x_tractor*_t30 + K_theta_tractor_x_tractor_2*_t29 + _t32*_t94
+            + _t43*_t95 + _t56*_t96;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t105 = J_theta_tractor*_t23 + K_theta_tractor_x_tractor_2*_t24
+            + _t26*_t97 + _t37*_t98 + _t50*_t99;
+    const trailer3_real_t _t106 = J_theta_tractor*_t29 + K_theta_tractor_x_tractor_2*_t30
+            + _t32*_t97 + _t43*_t98 + _t56*_t99;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t107 = J_theta_cart*_t26 + _t100*_t37 + _t101*_t50 + _t23*_t97
+            + _t24*_t94;
+    const trailer3_real_t _t108 = J_theta_cart*_t32 + _t100*_t43 + _t101*_t56 + _t29*_t97
+            + _t30*_t94;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t109 = J_theta_cart2*_t37 + _t100*_t26 + _t102*_t50 + _t23*_t98
+            + _t24*_t95;
+    const trailer3_real_t _t110 = J_theta_cart2*_t43 + _t100*_t32 + _t102*_t56 + _t29*_t98
+            + _t30*_t95;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t111 = J_theta_cart3*_t50 + _t101*_t26 + _t102*_t37 + _t23*_t99
+            + _t24*_t96;
+    const trailer3_real_t _t112 = J_theta_cart3*_t56 + _t101*_t32 + _t102*_t43 + _t29*_t99
+            + _t30*_t96;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t120 = J_theta_cart2_left*_t107*_t109 + J_theta_cart2_right*_t102*_t104
-            + J_theta_cart3_left*_t117*_t119 + J_theta_cart3_right*_t112*_t114
-            + J_theta_cart_left*_t97*_t99 + J_theta_cart_right*_t92*_t94;
-    const trailer3_real_t _t121 = J_x_tractor*_t25 + _t14*_t70 + _t28*_t71 + _t40*_t72 + _t54*_t73;
-    const trailer3_real_t _t122 = J_theta_tractor*_t14 + _t25*_t70 + _t26*_t75 + _t28*_t80
-            + _t40*_t81 + _t54*_t82;
-    const trailer3_real_t _t123 = J_x_tractor*_t26 + _t14*_t75 + _t28*_t76 + _t40*_t77 + _t54*_t78;
-    const trailer3_real_t _t124 = J_theta_cart*_t28 + _t14*_t80 + _t25*_t71 + _t26*_t76 + _t40*_t84
-            + _t54*_t85;
-    const trailer3_real_t _t125 = J_theta_cart2*_t40 + _t14*_t81 + _t25*_t72 + _t26*_t77 + _t28*_t84
-            + _t54*_t87;
-    const trailer3_real_t _t126 = J_theta_cart3*_t54 + _t14*_t82 + _t25*_t73 + _t26*_t78 + _t28*_t85
-            + _t40*_t87;
+    const trailer3_real_t _t113 = J_theta_cart_right*_t72;
+    const trailer3_real_t _t114 = J_theta_cart_right*_t73;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t _t115 = J_theta_cart_left*_t76;
+    const trailer3_real_t _t116 = J_theta_cart_left*_t77;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t _t117 = J_theta_cart2_right*_t80;
+    const trailer3_real_t _t118 = J_theta_cart2_right*_t81;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t _t119 = J_theta_cart2_left*_t84;
+    const trailer3_real_t _t120 = J_theta_cart2_left*_t85;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t _t121 = J_theta_cart3_right*_t88;
+    const trailer3_real_t _t122 = J_theta_cart3_right*_t89;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t _t123 = J_theta_cart3_left*_t92;
+    const trailer3_real_t _t124 = J_theta_cart3_left*_t93;
     const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t127 = J_theta_cart2_left*_t107*_t107 + J_theta_cart2_right*_t102*_t102
-            + J_theta_cart3_left*_t117*_t117 + J_theta_cart3_right*_t112*_t112
-            + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t92*_t92 + J_theta_right - _t13*_t83
-            + _t17*_t74 + _t19*_t79 + _t21*_t86 + _t34*_t88 + _t47*_t89;
-    const trailer3_real_t _t128 = _t120 + _t14*_t83 + _t25*_t74 + _t26*_t79 + _t28*_t86 + _t40*_t88
-            + _t54*_t89;
-    const trailer3_real_t _t129 = _t120 + _t121*_t17 - _t122*_t13 + _t123*_t19 + _t124*_t21
-            + _t125*_t34 + _t126*_t47;
+    const trailer3_real_t _t125 = J_theta_right + _t103*_t24 + _t105*_t23 + _t107*_t26 + _t109*_t37
+            + _t111*_t50 + _t113*_t72 + _t115*_t76 + _t117*_t80 + _t119*_t84 + _t121*_t88
+            + _t123*_t92;
+    const trailer3_real_t _t126 = _t104*_t24 + _t106*_t23 + _t108*_t26 + _t110*_t37 + _t112*_t50
+            + _t114*_t72 + _t116*_t76 + _t118*_t80 + _t120*_t84 + _t122*_t88 + _t124*_t92;
     const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t130 = J_theta_cart2_left*_t109*_t109 + J_theta_cart2_right*_t104*_t104
-            + J_theta_cart3_left*_t119*_t119 + J_theta_cart3_right*_t114*_t114
-            + J_theta_cart_left*_t99*_t99 + J_theta_cart_right*_t94*_t94 + J_theta_left + _t121*_t25
-            + _t122*_t14 + _t123*_t26 + _t124*_t28 + _t125*_t40 + _t126*_t54;
-    M[0] = _t127;
-    M[1] = _t128;
-    M[2] = _t129;
-    M[3] = _t130;
+    const trailer3_real_t _t127 = J_theta_left + _t104*_t30 + _t106*_t29 + _t108*_t32 + _t110*_t43
+            + _t112*_t56 + _t114*_t73 + _t116*_t77 + _t118*_t81 + _t120*_t85 + _t122*_t89
+            + _t124*_t93;
+    M[0] = _t125;
+    M[1] = _t126;
+    M[2] = _t126;
+    M[3] = _t127;
 }
 
 /* trailer3_minimal_bias_forces: documented in trailer3_model.h.
-   operations after CSE: 345 add, 545 mul, 6 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 256 add, 391 mul, 6 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *H)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
-    const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
-    const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
-    const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
-    const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
-    const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t11 = _t0 + theta_cart3;
+    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
+    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t29 = _t26*_t28;
-    const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
-    const trailer3_real_t _t31 = _t27*_t28;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
-    const trailer3_real_t _t33 = -_t25*_t26;
-    const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
-    const trailer3_real_t _t36 = -_t12*_t35;
-    const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
-    const trailer3_real_t _t38 = -_t25*_t27;
-    const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = -_t12*_t40;
-    const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
-    const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t45 = -_t18*_t44;
-    const trailer3_real_t _t46 = -_t16*_t35;
-    const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
-    const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t18*_t49;
-    const trailer3_real_t _t51 = -_t16*_t40;
-    const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
-    const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
-    const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
-    const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t69 = K_theta_tractor_x_tractor*_t2;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t70 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t0;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t72 = K_theta_cart_x_tractor_2*_t1;
+    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
+    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
+    const trailer3_real_t _t27 = _t25*_t26;
+    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
+    const trailer3_real_t _t29 = _t27 + _t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
+    const trailer3_real_t _t31 = _t25*_t30;
+    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
+    const trailer3_real_t _t33 = _t31 + _t32;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t38 = _t26*_t37;
+    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
+    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t42 = _t34*_t41;
+    const trailer3_real_t _t43 = _t30*_t37;
+    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
+    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t47 = _t20*_t3;
+    const trailer3_real_t _t48 = _t16*_t19;
+    const trailer3_real_t _t49 = _t47 - _t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t51 = _t23*_t3;
+    const trailer3_real_t _t52 = _t16*_t22;
+    const trailer3_real_t _t53 = _t51 - _t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t56 = _t26*_t55;
+    const trailer3_real_t _t57 = _t20*_t7;
+    const trailer3_real_t _t58 = _t17*_t19;
+    const trailer3_real_t _t59 = _t57 - _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
+    const trailer3_real_t _t61 = _t30*_t55;
+    const trailer3_real_t _t62 = _t23*_t7;
+    const trailer3_real_t _t63 = _t17*_t22;
+    const trailer3_real_t _t64 = _t62 - _t63;
+    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
+    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
+    const trailer3_real_t _t69 = _t18*_t19;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t71 = _t26*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t73 = _t35*_t72;
+    const trailer3_real_t _t74 = _t13*_t20;
+    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
+    const trailer3_real_t _t78 = _t18*_t22;
+    const trailer3_real_t _t79 = _t30*_t70;
+    const trailer3_real_t _t80 = _t41*_t72;
+    const trailer3_real_t _t81 = _t13*_t23;
+    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
+    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t84 = _t25*_t83;
+    const trailer3_real_t _t85 = TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t86 = _t25*_t85;
+    const trailer3_real_t _t87 = _t37*_t83;
+    const trailer3_real_t _t88 = _t37*_t85;
+    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t83;
+    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t85;
+    const trailer3_real_t _t91 = -_t59 - _t84;
+    const trailer3_real_t _t92 = -TRAILER3_LIT(1.6666666666666667)*_t91;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.2)*_t92;
+    const trailer3_real_t _t94 = _t55*_t83;
+    const trailer3_real_t _t95 = _t28 + _t94;
+    const trailer3_real_t _t96 = -_t64 - _t86;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t99 = _t55*_t85;
+    const trailer3_real_t _t100 = _t32 + _t99;
+    const trailer3_real_t _t101 = _t56 + _t84;
+    const trailer3_real_t _t102 = -TRAILER3_LIT(1.6666666666666667)*_t101;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t102;
+    const trailer3_real_t _t104 = _t61 + _t86;
+    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
+    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t108 = TRAILER3_LIT(0.2)*_t107;
+    const trailer3_real_t _t109 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
+    const trailer3_real_t _t111 = -_t34*_t92 + _t69 - _t74 - _t87;
+    const trailer3_real_t _t112 = -TRAILER3_LIT(1.6666666666666667)*_t111;
+    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t112;
+    const trailer3_real_t _t114 = _t70*_t83;
+    const trailer3_real_t _t115 = _t114 + _t39 + _t72*_t92;
+    const trailer3_real_t _t116 = -_t34*_t97 + _t78 - _t81 - _t88;
+    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
+    const trailer3_real_t _t119 = _t70*_t85;
+    const trailer3_real_t _t120 = _t119 + _t44 + _t72*_t97;
+    const trailer3_real_t _t121 = -_t102*_t34 + _t71 + _t87;
+    const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
+    const trailer3_real_t _t124 = _t102*_t72 - _t114 + _t38;
+    const trailer3_real_t _t125 = -_t105*_t34 + _t79 + _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t105*_t72 - _t119 + _t43;
+    const trailer3_real_t _t129 = -_t107*_t34 + _t73;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
+    const trailer3_real_t _t132 = _t107*_t72 + _t36;
+    const trailer3_real_t _t133 = -_t109*_t34 + _t80;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
+    const trailer3_real_t _t136 = _t109*_t72 + _t42;
+    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t73 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t141 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t142 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t143 = K_theta_cart3_x_tractor*_t12;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t77 = K_theta_tractor_x_tractor*_t4;
-    const trailer3_real_t _t78 = K_theta_cart_x_tractor*_t1;
-    const trailer3_real_t _t79 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t80 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t81 = K_theta_cart_x_tractor_2*_t0;
-    const trailer3_real_t _t82 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t83 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t85 = TRAILER3_LIT(0.85)*_t8;
+    const trailer3_real_t _t144 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t _t145 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t146 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t147 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t148 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t149 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.85)*_t7;
     const trailer3_real_t thetadot_right = wheel_rates[0];
     const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t86 = _t44*thetadot_right + _t49*thetadot_left;
-    const trailer3_real_t _t87 = _t86*_t86;
-    const trailer3_real_t _t88 = _t62*thetadot_right + _t66*thetadot_left;
-    const trailer3_real_t _t89 = _t88*_t88;
-    const trailer3_real_t _t90 = _t80*_t89;
-    const trailer3_real_t _t91 = _t35*thetadot_right + _t40*thetadot_left;
-    const trailer3_real_t _t92 = _t91*_t91;
-    const trailer3_real_t _t93 = -_t26*thetadot_right + _t27*thetadot_left;
-    const trailer3_real_t _t94 = _t93*_t93;
-    const trailer3_real_t _t95 = _t82*_t87;
-    const trailer3_real_t _t96 = _t83*_t89;
-    const trailer3_real_t _t97 = _t81*_t92;
-    const trailer3_real_t _t98 = _t73*_t87;
-    const trailer3_real_t _t99 = _t74*_t87;
-    const trailer3_real_t _t100 = _t75*_t89;
-    const trailer3_real_t _t101 = _t76*_t89;
-    const trailer3_real_t _t102 = _t71*_t92;
-    const trailer3_real_t _t103 = _t72*_t92;
-    const trailer3_real_t _t104 = _t3*_t94;
-    const trailer3_real_t _t105 = _t5*_t94;
-    const trailer3_real_t _t106 = _t10*_t92;
-    const trailer3_real_t _t107 = _t11*_t92;
-    const trailer3_real_t _t108 = _t84*_t87;
-    const trailer3_real_t _t109 = _t85*_t87;
-    const trailer3_real_t _t110 = _t93*thetadot_right;
-    const trailer3_real_t _t111 = _t93*thetadot_left;
-    const trailer3_real_t _t112 = _t91*thetadot_right;
-    const trailer3_real_t _t113 = _t91*thetadot_left;
-    const trailer3_real_t _t114 = _t86*thetadot_right;
-    const trailer3_real_t _t115 = _t86*thetadot_left;
-    const trailer3_real_t _t116 = _t88*thetadot_right;
-    const trailer3_real_t _t117 = _t88*thetadot_left;
-    const trailer3_real_t _t118 = _t25*_t26;
-    const trailer3_real_t _t119 = _t0*_t118 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t120 = -TRAILER3_LIT(1.6666666666666667)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
-    const trailer3_real_t _t122 = -_t1*_t118 + _t30;
-    const trailer3_real_t _t123 = _t25*_t27;
-    const trailer3_real_t _t124 = _t0*_t123 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
-    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
-    const trailer3_real_t _t127 = -_t1*_t123 + _t32;
-    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t129 = TRAILER3_LIT(0.2)*_t128;
-    const trailer3_real_t _t130 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t131 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t133 = _t0*_t31 - _t1*_t38 + _t27*_t6;
-    const trailer3_real_t _t134 = _t118*_t7 + _t12*_t120 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
-    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
-    const trailer3_real_t _t137 = -_t118*_t8 - _t120*_t21 + _t37;
-    const trailer3_real_t _t138 = _t12*_t125 + _t123*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t123*_t8 - _t125*_t21 + _t42;
-    const trailer3_real_t _t142 = _t12*_t128 - _t21*_t35;
-    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
-    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
-    const trailer3_real_t _t145 = -_t128*_t21 + _t36;
-    const trailer3_real_t _t146 = _t12*_t131 - _t21*_t40;
-    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
-    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
-    const trailer3_real_t _t149 = -_t131*_t21 + _t41;
-    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t58;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
-    const trailer3_real_t _t152 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
-    const trailer3_real_t _t156 = _t118*_t13 + _t120*_t16 + _t135*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t118*_t14 - _t120*_t23 - _t135*_t24 + _t47;
-    const trailer3_real_t _t160 = _t123*_t13 + _t125*_t16 + _t139*_t18 - _t14*_t31 + _t22*_t27;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t123*_t14 - _t125*_t23 - _t139*_t24 + _t52;
-    const trailer3_real_t _t164 = _t128*_t16 + _t143*_t18 - _t23*_t35;
-    const trailer3_real_t _t165 = -TRAILER3_LIT(1.6666666666666667)*_t164;
-    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t165;
-    const trailer3_real_t _t167 = -_t128*_t23 - _t143*_t24 + _t46;
-    const trailer3_real_t _t168 = _t131*_t16 + _t147*_t18 - _t23*_t40;
-    const trailer3_real_t _t169 = -TRAILER3_LIT(1.6666666666666667)*_t168;
-    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
-    const trailer3_real_t _t171 = -_t131*_t23 - _t147*_t24 + _t51;
-    const trailer3_real_t _t172 = _t150*_t18 - _t24*_t44;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
-    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
-    const trailer3_real_t _t175 = -_t150*_t24 + _t45;
-    const trailer3_real_t _t176 = _t153*_t18 - _t24*_t49;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
-    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
-    const trailer3_real_t _t179 = -_t153*_t24 + _t50;
-    const trailer3_real_t _t180 = TRAILER3_LIT(1.6666666666666667)*_t64;
-    const trailer3_real_t _t181 = TRAILER3_LIT(0.2)*_t180;
-    const trailer3_real_t _t182 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t183 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
+    const trailer3_real_t _t152 = _t19*thetadot_right + _t22*thetadot_left;
+    const trailer3_real_t _t153 = _t152*_t152;
+    const trailer3_real_t _t154 = _t35*thetadot_right + _t41*thetadot_left;
+    const trailer3_real_t _t155 = _t154*_t154;
+    const trailer3_real_t _t156 = _t67*thetadot_right + _t76*thetadot_left;
+    const trailer3_real_t _t157 = _t156*_t156;
+    const trailer3_real_t _t158 = _t147*_t157;
+    const trailer3_real_t _t159 = _t26*thetadot_right + _t30*thetadot_left;
+    const trailer3_real_t _t160 = _t159*_t159;
+    const trailer3_real_t _t161 = _t148*_t155;
+    const trailer3_real_t _t162 = _t149*_t157;
+    const trailer3_real_t _t163 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t164 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t166 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t167 = _t10*_t155;
+    const trailer3_real_t _t168 = _t10*_t157;
+    const trailer3_real_t _t169 = _t160*_t9;
+    const trailer3_real_t _t170 = _t10*_t160;
+    const trailer3_real_t _t171 = _t151*_t157;
+    const trailer3_real_t _t172 = _t150*_t155;
+    const trailer3_real_t _t173 = _t151*_t155;
+    const trailer3_real_t _t174 = _t152*thetadot_right;
+    const trailer3_real_t _t175 = _t152*thetadot_left;
+    const trailer3_real_t _t176 = _t159*thetadot_right;
+    const trailer3_real_t _t177 = _t159*thetadot_left;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t186 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t187 = -_t136 - _t137;
-    const trailer3_real_t _t188 = _t186*_t187;
-    const trailer3_real_t _t189 = -_t140 - _t141;
-    const trailer3_real_t _t190 = _t186*_t189;
-    const trailer3_real_t _t191 = -_t144 - _t145;
-    const trailer3_real_t _t192 = _t186*_t191;
-    const trailer3_real_t _t193 = -_t148 - _t149;
-    const trailer3_real_t _t194 = _t186*_t193;
-    const trailer3_real_t _t195 = -_t151 - _t152;
-    const trailer3_real_t _t196 = _t186*_t195;
-    const trailer3_real_t _t197 = -_t154 - _t155;
-    const trailer3_real_t _t198 = _t186*_t197;
-    const trailer3_real_t _t199 = _t110*_t188 + _t111*_t190 + _t112*_t192 + _t113*_t194
-            + _t114*_t196 + _t115*_t198;
+    const trailer3_real_t _t178 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t179 = -_t93 - _t95;
+    const trailer3_real_t _t180 = _t178*_t179;
+    const trailer3_real_t _t181 = -_t100 - _t98;
+    const trailer3_real_t _t182 = _t178*_t181;
+    const trailer3_real_t _t183 = -_t103 - _t27 + _t94;
+    const trailer3_real_t _t184 = _t178*_t183;
+    const trailer3_real_t _t185 = -_t106 - _t31 + _t99;
+    const trailer3_real_t _t186 = _t178*_t185;
+    const trailer3_real_t _t187 = -_t108 + _t29;
+    const trailer3_real_t _t188 = _t178*_t187;
+    const trailer3_real_t _t189 = -_t110 + _t33;
+    const trailer3_real_t _t190 = _t178*_t189;
+    const trailer3_real_t _t191 = _t154*thetadot_right;
+    const trailer3_real_t _t192 = _t154*thetadot_left;
+    const trailer3_real_t _t193 = _t174*_t180 + _t175*_t182 + _t176*_t184 + _t177*_t186
+            + _t188*_t191 + _t190*_t192;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t200 = J_theta_cart2_left*_t199;
+    const trailer3_real_t _t194 = J_theta_cart2_left*_t193;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t201 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t202 = _t136 - _t137;
-    const trailer3_real_t _t203 = _t201*_t202;
-    const trailer3_real_t _t204 = _t140 - _t141;
-    const trailer3_real_t _t205 = _t201*_t204;
-    const trailer3_real_t _t206 = _t144 - _t145;
-    const trailer3_real_t _t207 = _t201*_t206;
-    const trailer3_real_t _t208 = _t148 - _t149;
-    const trailer3_real_t _t209 = _t201*_t208;
-    const trailer3_real_t _t210 = _t151 - _t152;
-    const trailer3_real_t _t211 = _t201*_t210;
-    const trailer3_real_t _t212 = _t154 - _t155;
-    const trailer3_real_t _t213 = _t201*_t212;
-    const trailer3_real_t _t214 = _t110*_t203 + _t111*_t205 + _t112*_t207 + _t113*_t209
-            + _t114*_t211 + _t115*_t213;
+    const trailer3_real_t _t195 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t196 = _t93 - _t95;
+    const trailer3_real_t _t197 = _t195*_t196;
+    const trailer3_real_t _t198 = -_t100 + _t98;
+    const trailer3_real_t _t199 = _t195*_t198;
+    const trailer3_real_t _t200 = _t103 - _t27 + _t94;
+    const trailer3_real_t _t201 = _t195*_t200;
+    const trailer3_real_t _t202 = _t106 - _t31 + _t99;
+    const trailer3_real_t _t203 = _t195*_t202;
+    const trailer3_real_t _t204 = _t108 + _t29;
+    const trailer3_real_t _t205 = _t195*_t204;
+    const trailer3_real_t _t206 = _t110 + _t33;
+    const trailer3_real_t _t207 = _t195*_t206;
+    const trailer3_real_t _t208 = _t174*_t197 + _t175*_t199 + _t176*_t201 + _t177*_t203
+            + _t191*_t205 + _t192*_t207;
     const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t215 = J_theta_cart2_right*_t214;
+    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t216 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t217 = -_t158 - _t159;
-    const trailer3_real_t _t218 = _t216*_t217;
-    const trailer3_real_t _t219 = -_t162 - _t163;
-    const trailer3_real_t _t220 = _t216*_t219;
-    const trailer3_real_t _t221 = -_t166 - _t167;
-    const trailer3_real_t _t222 = _t216*_t221;
-    const trailer3_real_t _t223 = -_t170 - _t171;
-    const trailer3_real_t _t224 = _t216*_t223;
-    const trailer3_real_t _t225 = -_t174 - _t175;
-    const trailer3_real_t _t226 = _t216*_t225;
-    const trailer3_real_t _t227 = -_t178 - _t179;
-    const trailer3_real_t _t228 = _t216*_t227;
-    const trailer3_real_t _t229 = -_t181 - _t182;
-    const trailer3_real_t _t230 = _t216*_t229;
-    const trailer3_real_t _t231 = -_t184 - _t185;
-    const trailer3_real_t _t232 = _t216*_t231;
-    const trailer3_real_t _t233 = _t110*_t218 + _t111*_t220 + _t112*_t222 + _t113*_t224
-            + _t114*_t226 + _t115*_t228 + _t116*_t230 + _t117*_t232;
+    const trailer3_real_t _t210 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t211 = -_t113 - _t115;
+    const trailer3_real_t _t212 = _t210*_t211;
+    const trailer3_real_t _t213 = -_t118 - _t120;
+    const trailer3_real_t _t214 = _t210*_t213;
+    const trailer3_real_t _t215 = -_t123 - _t124;
+    const trailer3_real_t _t216 = _t210*_t215;
+    const trailer3_real_t _t217 = -_t127 - _t128;
+    const trailer3_real_t _t218 = _t210*_t217;
+    const trailer3_real_t _t219 = -_t131 - _t132;
+    const trailer3_real_t _t220 = _t210*_t219;
+    const trailer3_real_t _t221 = -_t135 - _t136;
+    const trailer3_real_t _t222 = _t210*_t221;
+    const trailer3_real_t _t223 = -_t138 + _t40;
+    const trailer3_real_t _t224 = _t210*_t223;
+    const trailer3_real_t _t225 = -_t140 + _t45;
+    const trailer3_real_t _t226 = _t210*_t225;
+    const trailer3_real_t _t227 = _t156*thetadot_right;
+    const trailer3_real_t _t228 = _t156*thetadot_left;
+    const trailer3_real_t _t229 = _t174*_t212 + _t175*_t214 + _t176*_t216 + _t177*_t218
+            + _t191*_t220 + _t192*_t222 + _t224*_t227 + _t226*_t228;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t234 = J_theta_cart3_left*_t233;
+    const trailer3_real_t _t230 = J_theta_cart3_left*_t229;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t235 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t236 = _t158 - _t159;
-    const trailer3_real_t _t237 = _t235*_t236;
-    const trailer3_real_t _t238 = _t162 - _t163;
-    const trailer3_real_t _t239 = _t235*_t238;
-    const trailer3_real_t _t240 = _t166 - _t167;
-    const trailer3_real_t _t241 = _t235*_t240;
-    const trailer3_real_t _t242 = _t170 - _t171;
-    const trailer3_real_t _t243 = _t235*_t242;
-    const trailer3_real_t _t244 = _t174 - _t175;
-    const trailer3_real_t _t245 = _t235*_t244;
-    const trailer3_real_t _t246 = _t178 - _t179;
-    const trailer3_real_t _t247 = _t235*_t246;
-    const trailer3_real_t _t248 = _t181 - _t182;
-    const trailer3_real_t _t249 = _t235*_t248;
-    const trailer3_real_t _t250 = _t184 - _t185;
-    const trailer3_real_t _t251 = _t235*_t250;
-    const trailer3_real_t _t252 = _t110*_t237 + _t111*_t239 + _t112*_t241 + _t113*_t243
-            + _t114*_t245 + _t115*_t247 + _t116*_t249 + _t117*_t251;
+    const trailer3_real_t _t231 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t232 = _t113 - _t115;
+    const trailer3_real_t _t233 = _t231*_t232;
+    const trailer3_real_t _t234 = _t118 - _t120;
+    const trailer3_real_t _t235 = _t231*_t234;
+    const trailer3_real_t _t236 = _t123 - _t124;
+    const trailer3_real_t _t237 = _t231*_t236;
+    const trailer3_real_t _t238 = _t127 - _t128;
+    const trailer3_real_t _t239 = _t231*_t238;
+    const trailer3_real_t _t240 = _t131 - _t132;
+    const trailer3_real_t _t241 = _t231*_t240;
+    const trailer3_real_t _t242 = _t135 - _t136;
+    const trailer3_real_t _t243 = _t231*_t242;
+    const trailer3_real_t _t244 = _t138 + _t40;
+    const trailer3_real_t _t245 = _t231*_t244;
+    const trailer3_real_t _t246 = _t140 + _t45;
+    const trailer3_real_t _t247 = _t231*_t246;
+    const trailer3_real_t _t248 = _t174*_t233 + _t175*_t235 + _t176*_t237 + _t177*_t239
+            + _t191*_t241 + _t192*_t243 + _t227*_t245 + _t228*_t247;
     const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t253 = J_theta_cart3_right*_t252;
+    const trailer3_real_t _t249 = J_theta_cart3_right*_t248;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t254 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t255 = -_t121 - _t122;
-    const trailer3_real_t _t256 = _t254*_t255;
-    const trailer3_real_t _t257 = -_t126 - _t127;
-    const trailer3_real_t _t258 = _t254*_t257;
-    const trailer3_real_t _t259 = -_t129 - _t130;
-    const trailer3_real_t _t260 = _t254*_t259;
-    const trailer3_real_t _t261 = -_t132 - _t133;
-    const trailer3_real_t _t262 = _t254*_t261;
-    const trailer3_real_t _t263 = _t110*_t256 + _t111*_t258 + _t112*_t260 + _t113*_t262;
+    const trailer3_real_t _t250 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t251 = -_t21 - _t89;
+    const trailer3_real_t _t252 = _t250*_t251;
+    const trailer3_real_t _t253 = -_t24 - _t90;
+    const trailer3_real_t _t254 = _t250*_t253;
+    const trailer3_real_t _t255 = _t174 - _t176;
+    const trailer3_real_t _t256 = _t175 - _t177;
+    const trailer3_real_t _t257 = _t252*_t255 + _t254*_t256;
     const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t264 = J_theta_cart_left*_t263;
+    const trailer3_real_t _t258 = J_theta_cart_left*_t257;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t265 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t266 = _t121 - _t122;
-    const trailer3_real_t _t267 = _t265*_t266;
-    const trailer3_real_t _t268 = _t126 - _t127;
-    const trailer3_real_t _t269 = _t265*_t268;
-    const trailer3_real_t _t270 = _t129 - _t130;
-    const trailer3_real_t _t271 = _t265*_t270;
-    const trailer3_real_t _t272 = _t132 - _t133;
-    const trailer3_real_t _t273 = _t265*_t272;
-    const trailer3_real_t _t274 = _t110*_t267 + _t111*_t269 + _t112*_t271 + _t113*_t273;
+    const trailer3_real_t _t259 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t260 = -_t21 + _t89;
+    const trailer3_real_t _t261 = _t259*_t260;
+    const trailer3_real_t _t262 = -_t24 + _t90;
+    const trailer3_real_t _t263 = _t259*_t262;
+    const trailer3_real_t _t264 = _t255*_t261 + _t256*_t263;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t275 = J_theta_cart_right*_t274;
-    const trailer3_real_t _t276 = K_theta_cart_x_tractor_2*_t0 - _t78;
-    const trailer3_real_t _t277 = K_theta_cart2_x_tractor_2*_t7 - _t79;
-    const trailer3_real_t _t278 = K_theta_cart3_x_tractor_2*_t13 - _t80;
-    const trailer3_real_t _t279 = _t100 + _t101 + _t102 + _t103 + _t69*_t94 + _t70*_t94 + _t98
-            + _t99;
-    const trailer3_real_t _t280 = _t110*_t29 + _t111*_t31;
-    const trailer3_real_t _t281 = _t110*_t120 + _t111*_t125 + _t112*_t128 + _t113*_t131;
-    const trailer3_real_t _t282 = _t110*_t135 + _t111*_t139 + _t112*_t143 + _t113*_t147
-            + _t114*_t150 + _t115*_t153;
-    const trailer3_real_t _t283 = _t110*_t157 + _t111*_t161 + _t112*_t165 + _t113*_t169
-            + _t114*_t173 + _t115*_t177 + _t116*_t180 + _t117*_t183;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t284 = J_x_tractor*_t280 + _t276*_t281 + _t277*_t282 + _t278*_t283
-            + _t279;
-    const trailer3_real_t _t285 = _t71 + _t72;
-    const trailer3_real_t _t286 = _t73 + _t74;
-    const trailer3_real_t _t287 = _t75 + _t76;
-    const trailer3_real_t _t288 = -K_theta_tractor_x_tractor_2*_t2*_t94 + _t77*_t94 + _t78*_t92
-            + _t79*_t87 + _t90 - _t95 - _t96 - _t97;
-    const trailer3_real_t _t289 = _t110*_t118 + _t111*_t123;
-    const trailer3_real_t _t290 = J_x_tractor*_t289 + _t281*_t285 + _t282*_t286 + _t283*_t287
-            + _t288;
-    const trailer3_real_t _t291 = _t69 + _t70;
-    const trailer3_real_t _t292 = K_theta_tractor_x_tractor_2*_t2 - _t77;
-    const trailer3_real_t _t293 = _t3*_t71 + _t3*_t72 + _t5*_t78 - _t5*_t81;
-    const trailer3_real_t _t294 = _t3*_t73 + _t3*_t74 + _t5*_t79 - _t5*_t82;
-    const trailer3_real_t _t295 = _t3*_t75 + _t3*_t76 + _t5*_t80 - _t5*_t83;
-    const trailer3_real_t _t296 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t87
-            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t89
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
-            - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98 - _t5*_t99;
-    const trailer3_real_t _t297 = _t280*_t292 + _t281*_t293 + _t282*_t294 + _t283*_t295
-            + _t289*_t291 + _t296;
-    const trailer3_real_t _t298 = _t10*_t73 + _t10*_t74 + _t11*_t79 - _t11*_t82;
-    const trailer3_real_t _t299 = _t10*_t75 + _t10*_t76 + _t11*_t80 - _t11*_t83;
-    const trailer3_real_t _t300 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t87
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t89
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t94
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t94
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t94 - _t10*_t95 - _t10*_t96
-            - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
+    const trailer3_real_t _t265 = J_theta_cart_right*_t264;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t266 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t267 = _t141 + _t142;
+    const trailer3_real_t _t268 = _t143 + _t144;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t269 = -K_theta_cart_x_tractor_2*_t160*_t2
+            + K_theta_tractor_x_tractor*_t153 + _t145*_t160 + _t146*_t155 + _t158 - _t161 - _t162;
+    const trailer3_real_t _t270 = _t255*_t83 + _t256*_t85;
+    const trailer3_real_t _t271 = _t102*_t176 + _t105*_t177 + _t107*_t191 + _t109*_t192 + _t174*_t92
+            + _t175*_t97;
+    const trailer3_real_t _t272 = _t112*_t174 + _t117*_t175 + _t122*_t176 + _t126*_t177
+            + _t130*_t191 + _t134*_t192 + _t137*_t227 + _t139*_t228;
+    const trailer3_real_t _t273 = _t266*_t270 + _t267*_t271 + _t268*_t272 + _t269;
+    const trailer3_real_t _t274 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t275 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t276 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t277 = -K_theta_cart_x_tractor*_t16*_t160
+            - K_theta_cart_x_tractor_2*_t160*_t4 - _t155*_t163 - _t155*_t164 - _t157*_t165
+            - _t157*_t166;
+    const trailer3_real_t _t278 = _t174*_t20 + _t175*_t23;
+    const trailer3_real_t _t279 = -K_theta_tractor_x_tractor*_t278 + _t270*_t274 + _t271*_t275
+            + _t272*_t276 + _t277;
+    const trailer3_real_t _t280 = K_theta_cart_x_tractor_2*_t2 - _t145;
+    const trailer3_real_t _t281 = _t10*_t146 - _t10*_t148 + _t141*_t9 + _t142*_t9;
+    const trailer3_real_t _t282 = _t10*_t147 - _t10*_t149 + _t143*_t9 + _t144*_t9;
+    const trailer3_real_t _t283 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t155*_t2*_t7
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t157*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t153*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t153*_t3 - _t141*_t167 - _t142*_t167
+            - _t143*_t168 - _t144*_t168 - _t161*_t9 - _t162*_t9;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t301 = J_theta_cart*_t281 + _t276*_t280 + _t282*_t298 + _t283*_t299
-            + _t285*_t289 + _t300;
-    const trailer3_real_t _t302 = _t75*_t84 + _t76*_t84 + _t80*_t85 - _t83*_t85;
-    const trailer3_real_t _t303 = -_t100*_t85 - _t101*_t85 - _t104*_t79 + _t104*_t82 + _t105*_t73
-            + _t105*_t74 - _t106*_t79 + _t106*_t82 + _t107*_t73 + _t107*_t74 + _t84*_t90
-            - _t84*_t96;
+    const trailer3_real_t _t284 = J_theta_cart*_t270 + _t271*_t281 + _t272*_t282 + _t278*_t280
+            + _t283;
+    const trailer3_real_t _t285 = K_theta_cart2_x_tractor_2*_t6 - _t146;
+    const trailer3_real_t _t286 = _t143*_t150 + _t144*_t150 + _t147*_t151 - _t149*_t151;
+    const trailer3_real_t _t287 = _t141*_t170 + _t142*_t170 - _t143*_t171 - _t144*_t171
+            - _t146*_t169 + _t148*_t169 + _t150*_t158 - _t150*_t162 + _t153*_t163 + _t153*_t164;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t304 = J_theta_cart2*_t282 + _t277*_t280 + _t281*_t298 + _t283*_t302
-            + _t286*_t289 + _t303;
-    const trailer3_real_t _t305 = -_t104*_t80 + _t104*_t83 + _t105*_t75 + _t105*_t76 - _t106*_t80
-            + _t106*_t83 + _t107*_t75 + _t107*_t76 - _t108*_t80 + _t108*_t83 + _t109*_t75
-            + _t109*_t76;
+    const trailer3_real_t _t288 = J_theta_cart2*_t271 + _t270*_t281 + _t272*_t286 + _t278*_t285
+            + _t287;
+    const trailer3_real_t _t289 = K_theta_cart3_x_tractor_2*_t12 - _t147;
+    const trailer3_real_t _t290 = _t143*_t170 + _t143*_t173 + _t144*_t170 + _t144*_t173
+            - _t147*_t169 - _t147*_t172 + _t149*_t169 + _t149*_t172 + _t153*_t165 + _t153*_t166;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t306 = J_theta_cart3*_t283 + _t278*_t280 + _t281*_t299 + _t282*_t302
-            + _t287*_t289 + _t305;
-    const trailer3_real_t _t307 = _t53 - _t54;
-    const trailer3_real_t _t308 = _t55 - _t56;
-    const trailer3_real_t _t309 = _t265*_t307;
-    const trailer3_real_t _t310 = _t265*_t308;
-    const trailer3_real_t _t311 = -_t53 - _t54;
-    const trailer3_real_t _t312 = -_t55 - _t56;
-    const trailer3_real_t _t313 = _t254*_t311;
-    const trailer3_real_t _t314 = _t254*_t312;
-    const trailer3_real_t _t315 = _t57 - _t58;
-    const trailer3_real_t _t316 = _t59 - _t60;
-    const trailer3_real_t _t317 = _t201*_t315;
-    const trailer3_real_t _t318 = _t201*_t316;
-    const trailer3_real_t _t319 = -_t57 - _t58;
-    const trailer3_real_t _t320 = -_t59 - _t60;
-    const trailer3_real_t _t321 = _t186*_t319;
-    const trailer3_real_t _t322 = _t186*_t320;
-    const trailer3_real_t _t323 = _t63 - _t64;
-    const trailer3_real_t _t324 = _t67 - _t68;
-    const trailer3_real_t _t325 = _t235*_t323;
-    const trailer3_real_t _t326 = _t235*_t324;
-    const trailer3_real_t _t327 = -_t63 - _t64;
-    const trailer3_real_t _t328 = -_t67 - _t68;
-    const trailer3_real_t _t329 = _t216*_t327;
-    const trailer3_real_t _t330 = _t216*_t328;
-    const trailer3_real_t _t331 = _t200*_t321 + _t215*_t317 + _t234*_t329 + _t253*_t325 - _t26*_t297
-            + _t264*_t313 + _t275*_t309 + _t284*_t33 + _t29*_t290 + _t301*_t35 + _t304*_t44
-            + _t306*_t62;
-    const trailer3_real_t _t332 = _t200*_t322 + _t215*_t318 + _t234*_t330 + _t253*_t326
-            + _t264*_t314 + _t27*_t297 + _t275*_t310 + _t284*_t38 + _t290*_t31 + _t301*_t40
-            + _t304*_t49 + _t306*_t66;
-    H[0] = _t331;
-    H[1] = _t332;
+    const trailer3_real_t _t291 = J_theta_cart3*_t272 + _t270*_t282 + _t271*_t286 + _t278*_t289
+            + _t290;
+    const trailer3_real_t _t292 = _t46 + _t49;
+    const trailer3_real_t _t293 = _t50 + _t53;
+    const trailer3_real_t _t294 = _t259*_t292;
+    const trailer3_real_t _t295 = _t259*_t293;
+    const trailer3_real_t _t296 = -_t46 + _t47 - _t48;
+    const trailer3_real_t _t297 = -_t50 + _t51 - _t52;
+    const trailer3_real_t _t298 = _t250*_t296;
+    const trailer3_real_t _t299 = _t250*_t297;
+    const trailer3_real_t _t300 = _t54 - _t56 + _t59;
+    const trailer3_real_t _t301 = _t60 - _t61 + _t64;
+    const trailer3_real_t _t302 = _t195*_t300;
+    const trailer3_real_t _t303 = _t195*_t301;
+    const trailer3_real_t _t304 = -_t54 - _t65;
+    const trailer3_real_t _t305 = -_t60 - _t66;
+    const trailer3_real_t _t306 = _t178*_t304;
+    const trailer3_real_t _t307 = _t178*_t305;
+    const trailer3_real_t _t308 = _t68 - _t75;
+    const trailer3_real_t _t309 = _t77 - _t82;
+    const trailer3_real_t _t310 = _t231*_t308;
+    const trailer3_real_t _t311 = _t231*_t309;
+    const trailer3_real_t _t312 = -_t68 - _t75;
+    const trailer3_real_t _t313 = -_t77 - _t82;
+    const trailer3_real_t _t314 = _t210*_t312;
+    const trailer3_real_t _t315 = _t210*_t313;
+    const trailer3_real_t _t316 = _t19*_t279 + _t194*_t306 + _t20*_t273 + _t209*_t302 + _t230*_t314
+            + _t249*_t310 + _t258*_t298 + _t26*_t284 + _t265*_t294 + _t288*_t35 + _t291*_t67;
+    const trailer3_real_t _t317 = _t194*_t307 + _t209*_t303 + _t22*_t279 + _t23*_t273 + _t230*_t315
+            + _t249*_t311 + _t258*_t299 + _t265*_t295 + _t284*_t30 + _t288*_t41 + _t291*_t76;
+    H[0] = _t316;
+    H[1] = _t317;
 }
 
 /* trailer3_minimal_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 447 add, 681 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 333 add, 488 mul, 7 div, 6 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *wheel_accels)
@@ -2099,414 +2000,386 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
-    const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
-    const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
-    const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
-    const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
-    const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
-    const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
-    const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t29 = _t26*_t28;
-    const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
-    const trailer3_real_t _t31 = _t27*_t28;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
-    const trailer3_real_t _t33 = -_t25*_t26;
-    const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
-    const trailer3_real_t _t36 = -_t12*_t35;
-    const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
-    const trailer3_real_t _t38 = -_t25*_t27;
-    const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = -_t12*_t40;
-    const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
-    const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t45 = -_t18*_t44;
-    const trailer3_real_t _t46 = -_t16*_t35;
-    const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
-    const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t18*_t49;
-    const trailer3_real_t _t51 = -_t16*_t40;
-    const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
-    const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
-    const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
-    const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
-    const trailer3_real_t _t69 = K_theta_tractor_x_tractor*_t2;
-    const trailer3_real_t _t70 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t0;
-    const trailer3_real_t _t72 = K_theta_cart_x_tractor_2*_t1;
-    const trailer3_real_t _t73 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t77 = K_theta_tractor_x_tractor*_t4;
-    const trailer3_real_t _t78 = K_theta_cart_x_tractor*_t1;
-    const trailer3_real_t _t79 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t80 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t81 = K_theta_cart_x_tractor_2*_t0;
-    const trailer3_real_t _t82 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t83 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t85 = TRAILER3_LIT(0.85)*_t8;
-    const trailer3_real_t _t86 = _t44*thetadot_right + _t49*thetadot_left;
-    const trailer3_real_t _t87 = _t86*_t86;
-    const trailer3_real_t _t88 = _t62*thetadot_right + _t66*thetadot_left;
-    const trailer3_real_t _t89 = _t88*_t88;
-    const trailer3_real_t _t90 = _t80*_t89;
-    const trailer3_real_t _t91 = _t35*thetadot_right + _t40*thetadot_left;
-    const trailer3_real_t _t92 = _t91*_t91;
-    const trailer3_real_t _t93 = -_t26*thetadot_right + _t27*thetadot_left;
-    const trailer3_real_t _t94 = _t93*_t93;
-    const trailer3_real_t _t95 = _t82*_t87;
-    const trailer3_real_t _t96 = _t83*_t89;
-    const trailer3_real_t _t97 = _t81*_t92;
-    const trailer3_real_t _t98 = _t73*_t87;
-    const trailer3_real_t _t99 = _t74*_t87;
-    const trailer3_real_t _t100 = _t75*_t89;
-    const trailer3_real_t _t101 = _t76*_t89;
-    const trailer3_real_t _t102 = _t71*_t92;
-    const trailer3_real_t _t103 = _t72*_t92;
-    const trailer3_real_t _t104 = _t3*_t94;
-    const trailer3_real_t _t105 = _t5*_t94;
-    const trailer3_real_t _t106 = _t10*_t92;
-    const trailer3_real_t _t107 = _t11*_t92;
-    const trailer3_real_t _t108 = _t84*_t87;
-    const trailer3_real_t _t109 = _t85*_t87;
-    const trailer3_real_t _t110 = _t93*thetadot_right;
-    const trailer3_real_t _t111 = _t93*thetadot_left;
-    const trailer3_real_t _t112 = _t91*thetadot_right;
-    const trailer3_real_t _t113 = _t91*thetadot_left;
-    const trailer3_real_t _t114 = _t86*thetadot_right;
-    const trailer3_real_t _t115 = _t86*thetadot_left;
-    const trailer3_real_t _t116 = _t88*thetadot_right;
-    const trailer3_real_t _t117 = _t88*thetadot_left;
-    const trailer3_real_t _t118 = _t25*_t26;
-    const trailer3_real_t _t119 = _t0*_t118 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t120 = -TRAILER3_LIT(1.6666666666666667)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
-    const trailer3_real_t _t122 = -_t1*_t118 + _t30;
-    const trailer3_real_t _t123 = _t25*_t27;
-    const trailer3_real_t _t124 = _t0*_t123 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
-    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
-    const trailer3_real_t _t127 = -_t1*_t123 + _t32;
-    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t129 = TRAILER3_LIT(0.2)*_t128;
-    const trailer3_real_t _t130 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t131 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t133 = _t0*_t31 - _t1*_t38 + _t27*_t6;
-    const trailer3_real_t _t134 = _t118*_t7 + _t12*_t120 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
-    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
-    const trailer3_real_t _t137 = -_t118*_t8 - _t120*_t21 + _t37;
-    const trailer3_real_t _t138 = _t12*_t125 + _t123*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
+    const trailer3_real_t _t11 = _t0 + theta_cart3;
+    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
+    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
+    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
+    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
+    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
+    const trailer3_real_t _t27 = _t25*_t26;
+    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
+    const trailer3_real_t _t29 = _t27 + _t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
+    const trailer3_real_t _t31 = _t25*_t30;
+    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
+    const trailer3_real_t _t33 = _t31 + _t32;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t38 = _t26*_t37;
+    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
+    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t42 = _t34*_t41;
+    const trailer3_real_t _t43 = _t30*_t37;
+    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
+    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t47 = _t20*_t3;
+    const trailer3_real_t _t48 = _t16*_t19;
+    const trailer3_real_t _t49 = _t47 - _t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t51 = _t23*_t3;
+    const trailer3_real_t _t52 = _t16*_t22;
+    const trailer3_real_t _t53 = _t51 - _t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t56 = _t26*_t55;
+    const trailer3_real_t _t57 = _t20*_t7;
+    const trailer3_real_t _t58 = _t17*_t19;
+    const trailer3_real_t _t59 = _t57 - _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
+    const trailer3_real_t _t61 = _t30*_t55;
+    const trailer3_real_t _t62 = _t23*_t7;
+    const trailer3_real_t _t63 = _t17*_t22;
+    const trailer3_real_t _t64 = _t62 - _t63;
+    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
+    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
+    const trailer3_real_t _t69 = _t18*_t19;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t71 = _t26*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t73 = _t35*_t72;
+    const trailer3_real_t _t74 = _t13*_t20;
+    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
+    const trailer3_real_t _t78 = _t18*_t22;
+    const trailer3_real_t _t79 = _t30*_t70;
+    const trailer3_real_t _t80 = _t41*_t72;
+    const trailer3_real_t _t81 = _t13*_t23;
+    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
+    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t84 = _t25*_t83;
+    const trailer3_real_t _t85 = TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t86 = _t25*_t85;
+    const trailer3_real_t _t87 = _t37*_t83;
+    const trailer3_real_t _t88 = _t37*_t85;
+    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t83;
+    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t85;
+    const trailer3_real_t _t91 = -_t59 - _t84;
+    const trailer3_real_t _t92 = -TRAILER3_LIT(1.6666666666666667)*_t91;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.2)*_t92;
+    const trailer3_real_t _t94 = _t55*_t83;
+    const trailer3_real_t _t95 = _t28 + _t94;
+    const trailer3_real_t _t96 = -_t64 - _t86;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t99 = _t55*_t85;
+    const trailer3_real_t _t100 = _t32 + _t99;
+    const trailer3_real_t _t101 = _t56 + _t84;
+    const trailer3_real_t _t102 = -TRAILER3_LIT(1.6666666666666667)*_t101;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t102;
+    const trailer3_real_t _t104 = _t61 + _t86;
+    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
+    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t108 = TRAILER3_LIT(0.2)*_t107;
+    const trailer3_real_t _t109 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
+    const trailer3_real_t _t111 = -_t34*_t92 + _t69 - _t74 - _t87;
+    const trailer3_real_t _t112 = -TRAILER3_LIT(1.6666666666666667)*_t111;
+    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t112;
+    const trailer3_real_t _t114 = _t70*_t83;
+    const trailer3_real_t _t115 = _t114 + _t39 + _t72*_t92;
+    const trailer3_real_t _t116 = -_t34*_t97 + _t78 - _t81 - _t88;
+    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
+    const trailer3_real_t _t119 = _t70*_t85;
+    const trailer3_real_t _t120 = _t119 + _t44 + _t72*_t97;
+    const trailer3_real_t _t121 = -_t102*_t34 + _t71 + _t87;
+    const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
+    const trailer3_real_t _t124 = _t102*_t72 - _t114 + _t38;
+    const trailer3_real_t _t125 = -_t105*_t34 + _t79 + _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t105*_t72 - _t119 + _t43;
+    const trailer3_real_t _t129 = -_t107*_t34 + _t73;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
+    const trailer3_real_t _t132 = _t107*_t72 + _t36;
+    const trailer3_real_t _t133 = -_t109*_t34 + _t80;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
+    const trailer3_real_t _t136 = _t109*_t72 + _t42;
+    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(1.6666666666666667)*_t82;
     const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = -_t123*_t8 - _t125*_t21 + _t42;
-    const trailer3_real_t _t142 = _t12*_t128 - _t21*_t35;
-    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
-    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
-    const trailer3_real_t _t145 = -_t128*_t21 + _t36;
-    const trailer3_real_t _t146 = _t12*_t131 - _t21*_t40;
-    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
-    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
-    const trailer3_real_t _t149 = -_t131*_t21 + _t41;
-    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t58;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
-    const trailer3_real_t _t152 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
-    const trailer3_real_t _t156 = _t118*_t13 + _t120*_t16 + _t135*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t157 = -TRAILER3_LIT(1.6666666666666667)*_t156;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t _t159 = -_t118*_t14 - _t120*_t23 - _t135*_t24 + _t47;
-    const trailer3_real_t _t160 = _t123*_t13 + _t125*_t16 + _t139*_t18 - _t14*_t31 + _t22*_t27;
-    const trailer3_real_t _t161 = -TRAILER3_LIT(1.6666666666666667)*_t160;
-    const trailer3_real_t _t162 = TRAILER3_LIT(0.2)*_t161;
-    const trailer3_real_t _t163 = -_t123*_t14 - _t125*_t23 - _t139*_t24 + _t52;
-    const trailer3_real_t _t164 = _t128*_t16 + _t143*_t18 - _t23*_t35;
-    const trailer3_real_t _t165 = -TRAILER3_LIT(1.6666666666666667)*_t164;
-    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t165;
-    const trailer3_real_t _t167 = -_t128*_t23 - _t143*_t24 + _t46;
-    const trailer3_real_t _t168 = _t131*_t16 + _t147*_t18 - _t23*_t40;
-    const trailer3_real_t _t169 = -TRAILER3_LIT(1.6666666666666667)*_t168;
-    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
-    const trailer3_real_t _t171 = -_t131*_t23 - _t147*_t24 + _t51;
-    const trailer3_real_t _t172 = _t150*_t18 - _t24*_t44;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
-    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
-    const trailer3_real_t _t175 = -_t150*_t24 + _t45;
-    const trailer3_real_t _t176 = _t153*_t18 - _t24*_t49;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
-    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
-    const trailer3_real_t _t179 = -_t153*_t24 + _t50;
-    const trailer3_real_t _t180 = TRAILER3_LIT(1.6666666666666667)*_t64;
-    const trailer3_real_t _t181 = TRAILER3_LIT(0.2)*_t180;
-    const trailer3_real_t _t182 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t183 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t184 = TRAILER3_LIT(0.2)*_t183;
-    const trailer3_real_t _t185 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
-    const trailer3_real_t _t186 = K_theta_tractor_x_tractor_2*_t2 - _t77;
-    const trailer3_real_t _t187 = K_theta_cart_x_tractor_2*_t0 - _t78;
-    const trailer3_real_t _t188 = K_theta_cart2_x_tractor_2*_t7 - _t79;
-    const trailer3_real_t _t189 = K_theta_cart3_x_tractor_2*_t13 - _t80;
-    const trailer3_real_t _t190 = J_x_tractor*_t33 - _t186*_t26 + _t187*_t35 + _t188*_t44
-            + _t189*_t62;
-    const trailer3_real_t _t191 = _t69 + _t70;
-    const trailer3_real_t _t192 = _t71 + _t72;
-    const trailer3_real_t _t193 = _t73 + _t74;
-    const trailer3_real_t _t194 = _t75 + _t76;
-    const trailer3_real_t _t195 = J_x_tractor*_t29 - _t191*_t26 + _t192*_t35 + _t193*_t44
-            + _t194*_t62;
-    const trailer3_real_t _t196 = _t3*_t71 + _t3*_t72 + _t5*_t78 - _t5*_t81;
-    const trailer3_real_t _t197 = _t3*_t73 + _t3*_t74 + _t5*_t79 - _t5*_t82;
-    const trailer3_real_t _t198 = _t3*_t75 + _t3*_t76 + _t5*_t80 - _t5*_t83;
-    const trailer3_real_t _t199 = -J_theta_tractor*_t26 + _t186*_t33 + _t191*_t29 + _t196*_t35
-            + _t197*_t44 + _t198*_t62;
-    const trailer3_real_t _t200 = _t10*_t73 + _t10*_t74 + _t11*_t79 - _t11*_t82;
-    const trailer3_real_t _t201 = _t10*_t75 + _t10*_t76 + _t11*_t80 - _t11*_t83;
-    const trailer3_real_t _t202 = J_theta_cart*_t35 + _t187*_t33 + _t192*_t29 - _t196*_t26
-            + _t200*_t44 + _t201*_t62;
-    const trailer3_real_t _t203 = _t75*_t84 + _t76*_t84 + _t80*_t85 - _t83*_t85;
-    const trailer3_real_t _t204 = J_theta_cart2*_t44 + _t188*_t33 + _t193*_t29 - _t197*_t26
-            + _t200*_t35 + _t203*_t62;
-    const trailer3_real_t _t205 = J_theta_cart3*_t62 + _t189*_t33 + _t194*_t29 - _t198*_t26
-            + _t201*_t35 + _t203*_t44;
-    const trailer3_real_t _t206 = -_t57 - _t58;
-    const trailer3_real_t _t207 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t141 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t _t142 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t143 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t _t144 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t145 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t146 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t147 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t148 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t149 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t152 = _t19*thetadot_right + _t22*thetadot_left;
+    const trailer3_real_t _t153 = _t152*_t152;
+    const trailer3_real_t _t154 = _t35*thetadot_right + _t41*thetadot_left;
+    const trailer3_real_t _t155 = _t154*_t154;
+    const trailer3_real_t _t156 = _t67*thetadot_right + _t76*thetadot_left;
+    const trailer3_real_t _t157 = _t156*_t156;
+    const trailer3_real_t _t158 = _t147*_t157;
+    const trailer3_real_t _t159 = _t26*thetadot_right + _t30*thetadot_left;
+    const trailer3_real_t _t160 = _t159*_t159;
+    const trailer3_real_t _t161 = _t148*_t155;
+    const trailer3_real_t _t162 = _t149*_t157;
+    const trailer3_real_t _t163 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t164 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t166 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t167 = _t10*_t155;
+    const trailer3_real_t _t168 = _t10*_t157;
+    const trailer3_real_t _t169 = _t160*_t9;
+    const trailer3_real_t _t170 = _t10*_t160;
+    const trailer3_real_t _t171 = _t151*_t157;
+    const trailer3_real_t _t172 = _t150*_t155;
+    const trailer3_real_t _t173 = _t151*_t155;
+    const trailer3_real_t _t174 = _t152*thetadot_right;
+    const trailer3_real_t _t175 = _t152*thetadot_left;
+    const trailer3_real_t _t176 = _t159*thetadot_right;
+    const trailer3_real_t _t177 = _t159*thetadot_left;
+    const trailer3_real_t _t178 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t179 = _t46 + _t49;
+    const trailer3_real_t _t180 = _t178*_t179;
+    const trailer3_real_t _t181 = J_theta_cart_right*_t180;
+    const trailer3_real_t _t182 = _t50 + _t53;
+    const trailer3_real_t _t183 = _t178*_t182;
+    const trailer3_real_t _t184 = J_theta_cart_right*_t183;
+    const trailer3_real_t _t185 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t186 = -_t46 + _t47 - _t48;
+    const trailer3_real_t _t187 = _t185*_t186;
+    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
+    const trailer3_real_t _t189 = -_t50 + _t51 - _t52;
+    const trailer3_real_t _t190 = _t185*_t189;
+    const trailer3_real_t _t191 = J_theta_cart_left*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t193 = _t54 - _t56 + _t59;
+    const trailer3_real_t _t194 = _t192*_t193;
+    const trailer3_real_t _t195 = J_theta_cart2_right*_t194;
+    const trailer3_real_t _t196 = _t60 - _t61 + _t64;
+    const trailer3_real_t _t197 = _t192*_t196;
+    const trailer3_real_t _t198 = J_theta_cart2_right*_t197;
+    const trailer3_real_t _t199 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t200 = -_t54 - _t65;
+    const trailer3_real_t _t201 = _t199*_t200;
+    const trailer3_real_t _t202 = J_theta_cart2_left*_t201;
+    const trailer3_real_t _t203 = -_t60 - _t66;
+    const trailer3_real_t _t204 = _t199*_t203;
+    const trailer3_real_t _t205 = J_theta_cart2_left*_t204;
+    const trailer3_real_t _t206 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t207 = _t68 - _t75;
     const trailer3_real_t _t208 = _t206*_t207;
-    const trailer3_real_t _t209 = J_theta_cart2_left*_t208;
-    const trailer3_real_t _t210 = _t57 - _t58;
-    const trailer3_real_t _t211 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t212 = _t210*_t211;
-    const trailer3_real_t _t213 = J_theta_cart2_right*_t212;
-    const trailer3_real_t _t214 = -_t63 - _t64;
-    const trailer3_real_t _t215 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t216 = _t214*_t215;
-    const trailer3_real_t _t217 = J_theta_cart3_left*_t216;
-    const trailer3_real_t _t218 = _t63 - _t64;
-    const trailer3_real_t _t219 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t220 = _t218*_t219;
-    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
-    const trailer3_real_t _t222 = -_t53 - _t54;
-    const trailer3_real_t _t223 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t224 = _t222*_t223;
-    const trailer3_real_t _t225 = J_theta_cart_left*_t224;
-    const trailer3_real_t _t226 = _t53 - _t54;
-    const trailer3_real_t _t227 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t228 = _t226*_t227;
-    const trailer3_real_t _t229 = J_theta_cart_right*_t228;
-    const trailer3_real_t _t230 = _t55 - _t56;
-    const trailer3_real_t _t231 = _t227*_t230;
-    const trailer3_real_t _t232 = -_t55 - _t56;
-    const trailer3_real_t _t233 = _t223*_t232;
-    const trailer3_real_t _t234 = _t59 - _t60;
-    const trailer3_real_t _t235 = _t211*_t234;
-    const trailer3_real_t _t236 = -_t59 - _t60;
-    const trailer3_real_t _t237 = _t207*_t236;
-    const trailer3_real_t _t238 = _t67 - _t68;
-    const trailer3_real_t _t239 = _t219*_t238;
-    const trailer3_real_t _t240 = -_t67 - _t68;
-    const trailer3_real_t _t241 = _t215*_t240;
-    const trailer3_real_t _t242 = _t209*_t237 + _t213*_t235 + _t217*_t241 + _t221*_t239
-            + _t225*_t233 + _t229*_t231;
-    const trailer3_real_t _t243 = J_x_tractor*_t38 + _t186*_t27 + _t187*_t40 + _t188*_t49
-            + _t189*_t66;
-    const trailer3_real_t _t244 = J_theta_tractor*_t27 + _t186*_t38 + _t191*_t31 + _t196*_t40
-            + _t197*_t49 + _t198*_t66;
-    const trailer3_real_t _t245 = J_x_tractor*_t31 + _t191*_t27 + _t192*_t40 + _t193*_t49
-            + _t194*_t66;
-    const trailer3_real_t _t246 = J_theta_cart*_t40 + _t187*_t38 + _t192*_t31 + _t196*_t27
-            + _t200*_t49 + _t201*_t66;
-    const trailer3_real_t _t247 = J_theta_cart2*_t49 + _t188*_t38 + _t193*_t31 + _t197*_t27
-            + _t200*_t40 + _t203*_t66;
-    const trailer3_real_t _t248 = J_theta_cart3*_t66 + _t189*_t38 + _t194*_t31 + _t198*_t27
-            + _t201*_t40 + _t203*_t49;
-    const trailer3_real_t _t249 = _t100 + _t101 + _t102 + _t103 + _t69*_t94 + _t70*_t94 + _t98
-            + _t99;
-    const trailer3_real_t _t250 = _t110*_t29 + _t111*_t31;
-    const trailer3_real_t _t251 = _t110*_t120 + _t111*_t125 + _t112*_t128 + _t113*_t131;
-    const trailer3_real_t _t252 = _t110*_t135 + _t111*_t139 + _t112*_t143 + _t113*_t147
-            + _t114*_t150 + _t115*_t153;
-    const trailer3_real_t _t253 = _t110*_t157 + _t111*_t161 + _t112*_t165 + _t113*_t169
-            + _t114*_t173 + _t115*_t177 + _t116*_t180 + _t117*_t183;
-    const trailer3_real_t _t254 = J_x_tractor*_t250 + _t187*_t251 + _t188*_t252 + _t189*_t253
-            + _t249;
-    const trailer3_real_t _t255 = -K_theta_tractor_x_tractor_2*_t2*_t94 + _t77*_t94 + _t78*_t92
-            + _t79*_t87 + _t90 - _t95 - _t96 - _t97;
-    const trailer3_real_t _t256 = _t110*_t118 + _t111*_t123;
-    const trailer3_real_t _t257 = J_x_tractor*_t256 + _t192*_t251 + _t193*_t252 + _t194*_t253
-            + _t255;
-    const trailer3_real_t _t258 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t87
-            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t89
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t92 - _t100*_t5 - _t101*_t5
-            - _t102*_t5 - _t103*_t5 - _t3*_t95 - _t3*_t96 - _t3*_t97 - _t5*_t98 - _t5*_t99;
-    const trailer3_real_t _t259 = _t186*_t250 + _t191*_t256 + _t196*_t251 + _t197*_t252
-            + _t198*_t253 + _t258;
-    const trailer3_real_t _t260 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t87
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t89
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t94
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t94
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t94 - _t10*_t95 - _t10*_t96
-            - _t100*_t11 - _t101*_t11 - _t104*_t78 - _t11*_t98 - _t11*_t99;
-    const trailer3_real_t _t261 = J_theta_cart*_t251 + _t187*_t250 + _t192*_t256 + _t200*_t252
-            + _t201*_t253 + _t260;
-    const trailer3_real_t _t262 = -_t100*_t85 - _t101*_t85 - _t104*_t79 + _t104*_t82 + _t105*_t73
-            + _t105*_t74 - _t106*_t79 + _t106*_t82 + _t107*_t73 + _t107*_t74 + _t84*_t90
-            - _t84*_t96;
-    const trailer3_real_t _t263 = J_theta_cart2*_t252 + _t188*_t250 + _t193*_t256 + _t200*_t251
-            + _t203*_t253 + _t262;
-    const trailer3_real_t _t264 = -_t104*_t80 + _t104*_t83 + _t105*_t75 + _t105*_t76 - _t106*_t80
-            + _t106*_t83 + _t107*_t75 + _t107*_t76 - _t108*_t80 + _t108*_t83 + _t109*_t75
-            + _t109*_t76;
-    const trailer3_real_t _t265 = J_theta_cart3*_t253 + _t189*_t250 + _t194*_t256 + _t201*_t251
-            + _t203*_t252 + _t264;
-    const trailer3_real_t _t266 = J_theta_cart2_left*_t208*_t208 + J_theta_cart2_right*_t212*_t212
-            + J_theta_cart3_left*_t216*_t216 + J_theta_cart3_right*_t220*_t220
-            + J_theta_cart_left*_t224*_t224 + J_theta_cart_right*_t228*_t228 + J_theta_right
-            + _t190*_t33 + _t195*_t29 - _t199*_t26 + _t202*_t35 + _t204*_t44 + _t205*_t62;
-    const trailer3_real_t _t267 = _t190*_t38 + _t195*_t31 + _t199*_t27 + _t202*_t40 + _t204*_t49
-            + _t205*_t66 + _t242;
-    const trailer3_real_t _t268 = _t242 + _t243*_t33 - _t244*_t26 + _t245*_t29 + _t246*_t35
-            + _t247*_t44 + _t248*_t62;
-    const trailer3_real_t _t269 = J_theta_cart2_left*_t237*_t237 + J_theta_cart2_right*_t235*_t235
-            + J_theta_cart3_left*_t241*_t241 + J_theta_cart3_right*_t239*_t239
-            + J_theta_cart_left*_t233*_t233 + J_theta_cart_right*_t231*_t231 + J_theta_left
-            + _t243*_t38 + _t244*_t27 + _t245*_t31 + _t246*_t40 + _t247*_t49 + _t248*_t66;
-    const trailer3_real_t _t270 = _t266*_t269 - _t267*_t268;
-    const trailer3_real_t _t271 = _t121 - _t122;
-    const trailer3_real_t _t272 = _t227*_t271;
-    const trailer3_real_t _t273 = _t126 - _t127;
-    const trailer3_real_t _t274 = _t227*_t273;
-    const trailer3_real_t _t275 = _t129 - _t130;
-    const trailer3_real_t _t276 = _t227*_t275;
-    const trailer3_real_t _t277 = _t132 - _t133;
-    const trailer3_real_t _t278 = _t227*_t277;
-    const trailer3_real_t _t279 = _t110*_t272 + _t111*_t274 + _t112*_t276 + _t113*_t278;
-    const trailer3_real_t _t280 = -_t121 - _t122;
-    const trailer3_real_t _t281 = _t223*_t280;
-    const trailer3_real_t _t282 = -_t126 - _t127;
-    const trailer3_real_t _t283 = _t223*_t282;
-    const trailer3_real_t _t284 = -_t129 - _t130;
-    const trailer3_real_t _t285 = _t223*_t284;
-    const trailer3_real_t _t286 = -_t132 - _t133;
-    const trailer3_real_t _t287 = _t223*_t286;
-    const trailer3_real_t _t288 = _t110*_t281 + _t111*_t283 + _t112*_t285 + _t113*_t287;
-    const trailer3_real_t _t289 = _t136 - _t137;
-    const trailer3_real_t _t290 = _t211*_t289;
-    const trailer3_real_t _t291 = _t140 - _t141;
-    const trailer3_real_t _t292 = _t211*_t291;
-    const trailer3_real_t _t293 = _t144 - _t145;
-    const trailer3_real_t _t294 = _t211*_t293;
-    const trailer3_real_t _t295 = _t148 - _t149;
-    const trailer3_real_t _t296 = _t211*_t295;
-    const trailer3_real_t _t297 = _t151 - _t152;
-    const trailer3_real_t _t298 = _t211*_t297;
-    const trailer3_real_t _t299 = _t154 - _t155;
-    const trailer3_real_t _t300 = _t211*_t299;
-    const trailer3_real_t _t301 = _t110*_t290 + _t111*_t292 + _t112*_t294 + _t113*_t296
-            + _t114*_t298 + _t115*_t300;
-    const trailer3_real_t _t302 = -_t136 - _t137;
-    const trailer3_real_t _t303 = _t207*_t302;
-    const trailer3_real_t _t304 = -_t140 - _t141;
-    const trailer3_real_t _t305 = _t207*_t304;
-    const trailer3_real_t _t306 = -_t144 - _t145;
-    const trailer3_real_t _t307 = _t207*_t306;
-    const trailer3_real_t _t308 = -_t148 - _t149;
-    const trailer3_real_t _t309 = _t207*_t308;
-    const trailer3_real_t _t310 = -_t151 - _t152;
-    const trailer3_real_t _t311 = _t207*_t310;
-    const trailer3_real_t _t312 = -_t154 - _t155;
-    const trailer3_real_t _t313 = _t207*_t312;
-    const trailer3_real_t _t314 = _t110*_t303 + _t111*_t305 + _t112*_t307 + _t113*_t309
-            + _t114*_t311 + _t115*_t313;
-    const trailer3_real_t _t315 = _t158 - _t159;
-    const trailer3_real_t _t316 = _t219*_t315;
-    const trailer3_real_t _t317 = _t162 - _t163;
-    const trailer3_real_t _t318 = _t219*_t317;
-    const trailer3_real_t _t319 = _t166 - _t167;
-    const trailer3_real_t _t320 = _t219*_t319;
-    const trailer3_real_t _t321 = _t170 - _t171;
-    const trailer3_real_t _t322 = _t219*_t321;
-    const trailer3_real_t _t323 = _t174 - _t175;
-    const trailer3_real_t _t324 = _t219*_t323;
-    const trailer3_real_t _t325 = _t178 - _t179;
-    const trailer3_real_t _t326 = _t219*_t325;
-    const trailer3_real_t _t327 = _t181 - _t182;
-    const trailer3_real_t _t328 = _t219*_t327;
-    const trailer3_real_t _t329 = _t184 - _t185;
-    const trailer3_real_t _t330 = _t219*_t329;
-    const trailer3_real_t _t331 = _t110*_t316 + _t111*_t318 + _t112*_t320 + _t113*_t322
-            + _t114*_t324 + _t115*_t326 + _t116*_t328 + _t117*_t330;
-    const trailer3_real_t _t332 = -_t158 - _t159;
-    const trailer3_real_t _t333 = _t215*_t332;
-    const trailer3_real_t _t334 = -_t162 - _t163;
-    const trailer3_real_t _t335 = _t215*_t334;
-    const trailer3_real_t _t336 = -_t166 - _t167;
-    const trailer3_real_t _t337 = _t215*_t336;
-    const trailer3_real_t _t338 = -_t170 - _t171;
-    const trailer3_real_t _t339 = _t215*_t338;
-    const trailer3_real_t _t340 = -_t174 - _t175;
-    const trailer3_real_t _t341 = _t215*_t340;
-    const trailer3_real_t _t342 = -_t178 - _t179;
-    const trailer3_real_t _t343 = _t215*_t342;
-    const trailer3_real_t _t344 = -_t181 - _t182;
-    const trailer3_real_t _t345 = _t215*_t344;
-    const trailer3_real_t _t346 = -_t184 - _t185;
-    const trailer3_real_t _t347 = _t215*_t346;
-    const trailer3_real_t _t348 = _t110*_t333 + _t111*_t335 + _t112*_t337 + _t113*_t339
-            + _t114*_t341 + _t115*_t343 + _t116*_t345 + _t117*_t347;
-    const trailer3_real_t _t349 = _t209*_t314 + _t213*_t301 + _t217*_t348 + _t221*_t331
-            + _t225*_t288 + _t229*_t279 + _t254*_t33 + _t257*_t29 - _t259*_t26 + _t261*_t35
-            + _t263*_t44 + _t265*_t62;
-    const trailer3_real_t _t350 = J_theta_cart2_left*_t237*_t314 + J_theta_cart2_right*_t235*_t301
-            + J_theta_cart3_left*_t241*_t348 + J_theta_cart3_right*_t239*_t331
-            + J_theta_cart_left*_t233*_t288 + J_theta_cart_right*_t231*_t279 + _t254*_t38
-            + _t257*_t31 + _t259*_t27 + _t261*_t40 + _t263*_t49 + _t265*_t66;
-    const trailer3_real_t _t351 = -_t349 + tau_right;
-    const trailer3_real_t _t352 = -_t350 + tau_left;
-    const trailer3_real_t _t353 = TRAILER3_LIT(1.0)/_t270;
-    const trailer3_real_t _t354 = _t353*(-_t267*_t352 + _t269*_t351);
-    const trailer3_real_t _t355 = _t353*(_t266*_t352 - _t268*_t351);
+    const trailer3_real_t _t209 = J_theta_cart3_right*_t208;
+    const trailer3_real_t _t210 = _t77 - _t82;
+    const trailer3_real_t _t211 = _t206*_t210;
+    const trailer3_real_t _t212 = J_theta_cart3_right*_t211;
+    const trailer3_real_t _t213 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t214 = -_t68 - _t75;
+    const trailer3_real_t _t215 = _t213*_t214;
+    const trailer3_real_t _t216 = J_theta_cart3_left*_t215;
+    const trailer3_real_t _t217 = -_t77 - _t82;
+    const trailer3_real_t _t218 = _t213*_t217;
+    const trailer3_real_t _t219 = J_theta_cart3_left*_t218;
+    const trailer3_real_t _t220 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t221 = _t141 + _t142;
+    const trailer3_real_t _t222 = _t143 + _t144;
+    const trailer3_real_t _t223 = -K_theta_cart_x_tractor_2*_t160*_t2
+            + K_theta_tractor_x_tractor*_t153 + _t145*_t160 + _t146*_t155 + _t158 - _t161 - _t162;
+    const trailer3_real_t _t224 = _t174 - _t176;
+    const trailer3_real_t _t225 = _t175 - _t177;
+    const trailer3_real_t _t226 = _t224*_t83 + _t225*_t85;
+    const trailer3_real_t _t227 = _t154*thetadot_right;
+    const trailer3_real_t _t228 = _t154*thetadot_left;
+    const trailer3_real_t _t229 = _t102*_t176 + _t105*_t177 + _t107*_t227 + _t109*_t228 + _t174*_t92
+            + _t175*_t97;
+    const trailer3_real_t _t230 = _t156*thetadot_right;
+    const trailer3_real_t _t231 = _t156*thetadot_left;
+    const trailer3_real_t _t232 = _t112*_t174 + _t117*_t175 + _t122*_t176 + _t126*_t177
+            + _t130*_t227 + _t134*_t228 + _t137*_t230 + _t139*_t231;
+    const trailer3_real_t _t233 = _t220*_t226 + _t221*_t229 + _t222*_t232 + _t223;
+    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t235 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t236 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t237 = -K_theta_cart_x_tractor*_t16*_t160
+            - K_theta_cart_x_tractor_2*_t160*_t4 - _t155*_t163 - _t155*_t164 - _t157*_t165
+            - _t157*_t166;
+    const trailer3_real_t _t238 = _t174*_t20 + _t175*_t23;
+    const trailer3_real_t _t239 = -K_theta_tractor_x_tractor*_t238 + _t226*_t234 + _t229*_t235
+            + _t232*_t236 + _t237;
+    const trailer3_real_t _t240 = K_theta_cart_x_tractor_2*_t2 - _t145;
+    const trailer3_real_t _t241 = _t10*_t146 - _t10*_t148 + _t141*_t9 + _t142*_t9;
+    const trailer3_real_t _t242 = _t10*_t147 - _t10*_t149 + _t143*_t9 + _t144*_t9;
+    const trailer3_real_t _t243 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t155*_t2*_t7
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t157*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t153*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t153*_t3 - _t141*_t167 - _t142*_t167
+            - _t143*_t168 - _t144*_t168 - _t161*_t9 - _t162*_t9;
+    const trailer3_real_t _t244 = J_theta_cart*_t226 + _t229*_t241 + _t232*_t242 + _t238*_t240
+            + _t243;
+    const trailer3_real_t _t245 = K_theta_cart2_x_tractor_2*_t6 - _t146;
+    const trailer3_real_t _t246 = _t143*_t150 + _t144*_t150 + _t147*_t151 - _t149*_t151;
+    const trailer3_real_t _t247 = _t141*_t170 + _t142*_t170 - _t143*_t171 - _t144*_t171
+            - _t146*_t169 + _t148*_t169 + _t150*_t158 - _t150*_t162 + _t153*_t163 + _t153*_t164;
+    const trailer3_real_t _t248 = J_theta_cart2*_t229 + _t226*_t241 + _t232*_t246 + _t238*_t245
+            + _t247;
+    const trailer3_real_t _t249 = K_theta_cart3_x_tractor_2*_t12 - _t147;
+    const trailer3_real_t _t250 = _t143*_t170 + _t143*_t173 + _t144*_t170 + _t144*_t173
+            - _t147*_t169 - _t147*_t172 + _t149*_t169 + _t149*_t172 + _t153*_t165 + _t153*_t166;
+    const trailer3_real_t _t251 = J_theta_cart3*_t232 + _t226*_t242 + _t229*_t246 + _t238*_t249
+            + _t250;
+    const trailer3_real_t _t252 = J_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_t19 + _t220*_t26
+            + _t221*_t35 + _t222*_t67;
+    const trailer3_real_t _t253 = J_theta_tractor*_t19 + K_theta_tractor_x_tractor_2*_t20
+            + _t234*_t26 + _t235*_t35 + _t236*_t67;
+    const trailer3_real_t _t254 = J_theta_cart*_t26 + _t19*_t234 + _t20*_t220 + _t241*_t35
+            + _t242*_t67;
+    const trailer3_real_t _t255 = J_theta_cart2*_t35 + _t19*_t235 + _t20*_t221 + _t241*_t26
+            + _t246*_t67;
+    const trailer3_real_t _t256 = J_theta_cart3*_t67 + _t19*_t236 + _t20*_t222 + _t242*_t26
+            + _t246*_t35;
+    const trailer3_real_t _t257 = J_theta_right + _t180*_t181 + _t187*_t188 + _t19*_t253
+            + _t194*_t195 + _t20*_t252 + _t201*_t202 + _t208*_t209 + _t215*_t216 + _t254*_t26
+            + _t255*_t35 + _t256*_t67;
+    const trailer3_real_t _t258 = J_x_tractor*_t23 + K_theta_tractor_x_tractor_2*_t22 + _t220*_t30
+            + _t221*_t41 + _t222*_t76;
+    const trailer3_real_t _t259 = J_theta_tractor*_t22 + K_theta_tractor_x_tractor_2*_t23
+            + _t234*_t30 + _t235*_t41 + _t236*_t76;
+    const trailer3_real_t _t260 = J_theta_cart*_t30 + _t22*_t234 + _t220*_t23 + _t241*_t41
+            + _t242*_t76;
+    const trailer3_real_t _t261 = J_theta_cart2*_t41 + _t22*_t235 + _t221*_t23 + _t241*_t30
+            + _t246*_t76;
+    const trailer3_real_t _t262 = J_theta_cart3*_t76 + _t22*_t236 + _t222*_t23 + _t242*_t30
+            + _t246*_t41;
+    const trailer3_real_t _t263 = _t180*_t184 + _t187*_t191 + _t19*_t259 + _t194*_t198 + _t20*_t258
+            + _t201*_t205 + _t208*_t212 + _t215*_t219 + _t26*_t260 + _t261*_t35 + _t262*_t67;
+    const trailer3_real_t _t264 = J_theta_left + _t183*_t184 + _t190*_t191 + _t197*_t198
+            + _t204*_t205 + _t211*_t212 + _t218*_t219 + _t22*_t259 + _t23*_t258 + _t260*_t30
+            + _t261*_t41 + _t262*_t76;
+    const trailer3_real_t _t265 = _t257*_t264 - _t263*_t263;
+    const trailer3_real_t _t266 = -_t21 + _t89;
+    const trailer3_real_t _t267 = _t178*_t266;
+    const trailer3_real_t _t268 = -_t24 + _t90;
+    const trailer3_real_t _t269 = _t178*_t268;
+    const trailer3_real_t _t270 = -_t21 - _t89;
+    const trailer3_real_t _t271 = _t185*_t270;
+    const trailer3_real_t _t272 = -_t24 - _t90;
+    const trailer3_real_t _t273 = _t185*_t272;
+    const trailer3_real_t _t274 = _t93 - _t95;
+    const trailer3_real_t _t275 = _t192*_t274;
+    const trailer3_real_t _t276 = -_t100 + _t98;
+    const trailer3_real_t _t277 = _t192*_t276;
+    const trailer3_real_t _t278 = _t103 - _t27 + _t94;
+    const trailer3_real_t _t279 = _t192*_t278;
+    const trailer3_real_t _t280 = _t106 - _t31 + _t99;
+    const trailer3_real_t _t281 = _t192*_t280;
+    const trailer3_real_t _t282 = _t108 + _t29;
+    const trailer3_real_t _t283 = _t192*_t282;
+    const trailer3_real_t _t284 = _t110 + _t33;
+    const trailer3_real_t _t285 = _t192*_t284;
+    const trailer3_real_t _t286 = -_t93 - _t95;
+    const trailer3_real_t _t287 = _t199*_t286;
+    const trailer3_real_t _t288 = -_t100 - _t98;
+    const trailer3_real_t _t289 = _t199*_t288;
+    const trailer3_real_t _t290 = -_t103 - _t27 + _t94;
+    const trailer3_real_t _t291 = _t199*_t290;
+    const trailer3_real_t _t292 = -_t106 - _t31 + _t99;
+    const trailer3_real_t _t293 = _t199*_t292;
+    const trailer3_real_t _t294 = -_t108 + _t29;
+    const trailer3_real_t _t295 = _t199*_t294;
+    const trailer3_real_t _t296 = -_t110 + _t33;
+    const trailer3_real_t _t297 = _t199*_t296;
+    const trailer3_real_t _t298 = _t113 - _t115;
+    const trailer3_real_t _t299 = _t206*_t298;
+    const trailer3_real_t _t300 = _t118 - _t120;
+    const trailer3_real_t _t301 = _t206*_t300;
+    const trailer3_real_t _t302 = _t123 - _t124;
+    const trailer3_real_t _t303 = _t206*_t302;
+    const trailer3_real_t _t304 = _t127 - _t128;
+    const trailer3_real_t _t305 = _t206*_t304;
+    const trailer3_real_t _t306 = _t131 - _t132;
+    const trailer3_real_t _t307 = _t206*_t306;
+    const trailer3_real_t _t308 = _t135 - _t136;
+    const trailer3_real_t _t309 = _t206*_t308;
+    const trailer3_real_t _t310 = _t138 + _t40;
+    const trailer3_real_t _t311 = _t206*_t310;
+    const trailer3_real_t _t312 = _t140 + _t45;
+    const trailer3_real_t _t313 = _t206*_t312;
+    const trailer3_real_t _t314 = -_t113 - _t115;
+    const trailer3_real_t _t315 = _t213*_t314;
+    const trailer3_real_t _t316 = -_t118 - _t120;
+    const trailer3_real_t _t317 = _t213*_t316;
+    const trailer3_real_t _t318 = -_t123 - _t124;
+    const trailer3_real_t _t319 = _t213*_t318;
+    const trailer3_real_t _t320 = -_t127 - _t128;
+    const trailer3_real_t _t321 = _t213*_t320;
+    const trailer3_real_t _t322 = -_t131 - _t132;
+    const trailer3_real_t _t323 = _t213*_t322;
+    const trailer3_real_t _t324 = -_t135 - _t136;
+    const trailer3_real_t _t325 = _t213*_t324;
+    const trailer3_real_t _t326 = -_t138 + _t40;
+    const trailer3_real_t _t327 = _t213*_t326;
+    const trailer3_real_t _t328 = -_t140 + _t45;
+    const trailer3_real_t _t329 = _t213*_t328;
+    const trailer3_real_t _t330 = _t224*_t267 + _t225*_t269;
+    const trailer3_real_t _t331 = _t224*_t271 + _t225*_t273;
+    const trailer3_real_t _t332 = _t174*_t275 + _t175*_t277 + _t176*_t279 + _t177*_t281
+            + _t227*_t283 + _t228*_t285;
+    const trailer3_real_t _t333 = _t174*_t287 + _t175*_t289 + _t176*_t291 + _t177*_t293
+            + _t227*_t295 + _t228*_t297;
+    const trailer3_real_t _t334 = _t174*_t299 + _t175*_t301 + _t176*_t303 + _t177*_t305
+            + _t227*_t307 + _t228*_t309 + _t230*_t311 + _t231*_t313;
+    const trailer3_real_t _t335 = _t174*_t315 + _t175*_t317 + _t176*_t319 + _t177*_t321
+            + _t227*_t323 + _t228*_t325 + _t230*_t327 + _t231*_t329;
+    const trailer3_real_t _t336 = _t181*_t330 + _t188*_t331 + _t19*_t239 + _t195*_t332 + _t20*_t233
+            + _t202*_t333 + _t209*_t334 + _t216*_t335 + _t244*_t26 + _t248*_t35 + _t251*_t67;
+    const trailer3_real_t _t337 = _t184*_t330 + _t191*_t331 + _t198*_t332 + _t205*_t333
+            + _t212*_t334 + _t219*_t335 + _t22*_t239 + _t23*_t233 + _t244*_t30 + _t248*_t41
+            + _t251*_t76;
+    const trailer3_real_t _t338 = -_t336 + tau_right;
+    const trailer3_real_t _t339 = -_t337 + tau_left;
+    const trailer3_real_t _t340 = TRAILER3_LIT(1.0)/_t265;
+    const trailer3_real_t _t341 = _t340*(-_t263*_t339 + _t264*_t338);
+    const trailer3_real_t _t342 = _t340*(_t257*_t339 - _t263*_t338);
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -2570,14 +2443,14 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t266 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t257 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t270 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t265 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t354;
-    const trailer3_real_t r_1 = _t355;
+    const trailer3_real_t r_0 = _t341;
+    const trailer3_real_t r_1 = _t342;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
@@ -2587,1421 +2460,1216 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
 }
 
 /* trailer3_linearization: documented in trailer3_model.h.
-   operations after CSE: 1692 add, 2305 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 1483 add, 1843 mul, 7 div, 8 sin/cos, 0 sqrt */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B)
 {
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
-    const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
-    const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
-    const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
-    const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
-    const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.207)*_t4;
+    const trailer3_real_t _t11 = _t0 + theta_cart3;
+    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
+    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t29 = -_t26*_t27;
-    const trailer3_real_t _t30 = -_t0*_t29 + _t27*_t6;
-    const trailer3_real_t _t31 = -_t26*_t28;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t28*_t6;
-    const trailer3_real_t _t33 = -_t25*_t27;
-    const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
-    const trailer3_real_t _t36 = -_t12*_t35;
-    const trailer3_real_t _t37 = _t27*_t9 - _t29*_t7;
-    const trailer3_real_t _t38 = -_t25*_t28;
-    const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = -_t12*_t40;
-    const trailer3_real_t _t42 = -_t28*_t9 - _t31*_t7;
-    const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t45 = -_t18*_t44;
-    const trailer3_real_t _t46 = -_t16*_t35;
-    const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t27;
-    const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t18*_t49;
-    const trailer3_real_t _t51 = -_t16*_t40;
-    const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t28;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t54 = -_t1*_t29 - _t19*_t27;
-    const trailer3_real_t _t55 = -_t0*_t33 + _t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t57 = -_t1*_t31 + _t19*_t28;
-    const trailer3_real_t _t58 = -_t0*_t38 + _t57;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t60 = -_t21*_t35;
-    const trailer3_real_t _t61 = -_t20*_t27 - _t29*_t8;
-    const trailer3_real_t _t62 = -_t33*_t7 + _t60 + _t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t64 = -_t21*_t40;
-    const trailer3_real_t _t65 = _t20*_t28 - _t31*_t8;
-    const trailer3_real_t _t66 = -_t38*_t7 + _t64 + _t65;
-    const trailer3_real_t _t67 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t68 = -TRAILER3_LIT(1.6666666666666667)*_t67;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*_t68;
-    const trailer3_real_t _t70 = -_t24*_t44;
-    const trailer3_real_t _t71 = -_t23*_t35;
-    const trailer3_real_t _t72 = -_t14*_t29 - _t22*_t27;
-    const trailer3_real_t _t73 = -_t13*_t33 + _t70 + _t71 + _t72;
-    const trailer3_real_t _t74 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t75 = -TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t76 = TRAILER3_LIT(0.2)*_t75;
-    const trailer3_real_t _t77 = -_t24*_t49;
-    const trailer3_real_t _t78 = -_t23*_t40;
-    const trailer3_real_t _t79 = -_t14*_t31 + _t22*_t28;
-    const trailer3_real_t _t80 = -_t13*_t38 + _t77 + _t78 + _t79;
+    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
+    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
+    const trailer3_real_t _t27 = _t25*_t26;
+    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
+    const trailer3_real_t _t29 = _t27 + _t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
+    const trailer3_real_t _t31 = _t25*_t30;
+    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
+    const trailer3_real_t _t33 = _t31 + _t32;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t38 = _t26*_t37;
+    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
+    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t42 = _t34*_t41;
+    const trailer3_real_t _t43 = _t30*_t37;
+    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
+    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t47 = _t20*_t3;
+    const trailer3_real_t _t48 = _t16*_t19;
+    const trailer3_real_t _t49 = _t47 - _t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t51 = _t23*_t3;
+    const trailer3_real_t _t52 = _t16*_t22;
+    const trailer3_real_t _t53 = _t51 - _t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t56 = _t26*_t55;
+    const trailer3_real_t _t57 = _t20*_t7;
+    const trailer3_real_t _t58 = _t17*_t19;
+    const trailer3_real_t _t59 = _t57 - _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
+    const trailer3_real_t _t61 = _t30*_t55;
+    const trailer3_real_t _t62 = _t23*_t7;
+    const trailer3_real_t _t63 = _t17*_t22;
+    const trailer3_real_t _t64 = _t62 - _t63;
+    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
+    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
+    const trailer3_real_t _t69 = _t18*_t19;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t71 = _t26*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t73 = _t35*_t72;
+    const trailer3_real_t _t74 = _t13*_t20;
+    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
+    const trailer3_real_t _t78 = _t18*_t22;
+    const trailer3_real_t _t79 = _t30*_t70;
+    const trailer3_real_t _t80 = _t41*_t72;
+    const trailer3_real_t _t81 = _t13*_t23;
+    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
+    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t84 = _t25*_t83;
+    const trailer3_real_t _t85 = _t59 + _t84;
+    const trailer3_real_t _t86 = TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t87 = _t25*_t86;
+    const trailer3_real_t _t88 = _t64 + _t87;
+    const trailer3_real_t _t89 = _t56 + _t84;
+    const trailer3_real_t _t90 = _t61 + _t87;
+    const trailer3_real_t _t91 = _t37*_t83;
+    const trailer3_real_t _t92 = TRAILER3_LIT(1.6666666666666667)*_t85;
+    const trailer3_real_t _t93 = _t34*_t92;
+    const trailer3_real_t _t94 = -_t69 + _t74 + _t91 + _t93;
+    const trailer3_real_t _t95 = _t37*_t86;
+    const trailer3_real_t _t96 = TRAILER3_LIT(1.6666666666666667)*_t88;
+    const trailer3_real_t _t97 = _t34*_t96;
+    const trailer3_real_t _t98 = -_t78 + _t81 + _t95 + _t97;
+    const trailer3_real_t _t99 = -TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t100 = _t34*_t99;
+    const trailer3_real_t _t101 = _t71 + _t91;
+    const trailer3_real_t _t102 = -_t100 + _t101;
+    const trailer3_real_t _t103 = -TRAILER3_LIT(1.6666666666666667)*_t90;
+    const trailer3_real_t _t104 = _t103*_t34;
+    const trailer3_real_t _t105 = _t79 + _t95;
+    const trailer3_real_t _t106 = -_t104 + _t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t108 = _t107*_t34;
+    const trailer3_real_t _t109 = _t108 - _t73;
+    const trailer3_real_t _t110 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t111 = _t110*_t34;
+    const trailer3_real_t _t112 = _t111 - _t80;
+    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t83;
+    const trailer3_real_t _t114 = TRAILER3_LIT(0.2)*_t86;
+    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t92;
+    const trailer3_real_t _t116 = _t55*_t83;
+    const trailer3_real_t _t117 = _t116 + _t28;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t96;
+    const trailer3_real_t _t119 = _t55*_t86;
+    const trailer3_real_t _t120 = _t119 + _t32;
+    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t103;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t107;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t110;
+    const trailer3_real_t _t125 = -_t116 + _t27;
+    const trailer3_real_t _t126 = -_t119 + _t31;
+    const trailer3_real_t _t127 = TRAILER3_LIT(1.6666666666666667)*_t94;
+    const trailer3_real_t _t128 = TRAILER3_LIT(0.2)*_t127;
+    const trailer3_real_t _t129 = _t70*_t83;
+    const trailer3_real_t _t130 = _t72*_t92;
+    const trailer3_real_t _t131 = _t129 + _t130 + _t39;
+    const trailer3_real_t _t132 = TRAILER3_LIT(1.6666666666666667)*_t98;
+    const trailer3_real_t _t133 = TRAILER3_LIT(0.2)*_t132;
+    const trailer3_real_t _t134 = _t70*_t86;
+    const trailer3_real_t _t135 = _t72*_t96;
+    const trailer3_real_t _t136 = _t134 + _t135 + _t44;
+    const trailer3_real_t _t137 = -TRAILER3_LIT(1.6666666666666667)*_t102;
+    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
+    const trailer3_real_t _t139 = _t72*_t99;
+    const trailer3_real_t _t140 = -_t129 + _t38;
+    const trailer3_real_t _t141 = _t139 + _t140;
+    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t106;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = _t103*_t72;
+    const trailer3_real_t _t145 = -_t134 + _t43;
+    const trailer3_real_t _t146 = _t144 + _t145;
+    const trailer3_real_t _t147 = TRAILER3_LIT(1.6666666666666667)*_t109;
+    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
+    const trailer3_real_t _t149 = _t107*_t72;
+    const trailer3_real_t _t150 = _t149 + _t36;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t112;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = _t110*_t72;
+    const trailer3_real_t _t154 = _t153 + _t42;
+    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t75;
+    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
+    const trailer3_real_t _t157 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
     const trailer3_real_t thetadot_right = wheel_rates[0];
-    const trailer3_real_t _t81 = _t29*thetadot_right;
+    const trailer3_real_t _t159 = _t19*thetadot_right;
     const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t82 = _t31*thetadot_left;
-    const trailer3_real_t _t83 = _t81 + _t82;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t84 = K_theta_tractor_x_tractor*_t2;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t85 = K_theta_tractor_x_tractor_2*_t4;
+    const trailer3_real_t _t160 = _t22*thetadot_left;
+    const trailer3_real_t _t161 = _t26*thetadot_right;
+    const trailer3_real_t _t162 = _t30*thetadot_left;
+    const trailer3_real_t _t163 = _t35*thetadot_right;
+    const trailer3_real_t _t164 = _t41*thetadot_left;
+    const trailer3_real_t _t165 = _t67*thetadot_right;
+    const trailer3_real_t _t166 = _t76*thetadot_left;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t0;
+    const trailer3_real_t _t167 = K_theta_cart_x_tractor*_t2;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t87 = K_theta_cart_x_tractor_2*_t1;
+    const trailer3_real_t _t168 = K_theta_cart_x_tractor_2*_t3;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t169 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t89 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t170 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t171 = K_theta_cart3_x_tractor*_t12;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t91 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t92 = K_theta_tractor_x_tractor*_t4;
-    const trailer3_real_t _t93 = -K_theta_tractor_x_tractor_2*_t2 + _t92;
-    const trailer3_real_t _t94 = K_theta_cart_x_tractor*_t1;
-    const trailer3_real_t _t95 = -K_theta_cart_x_tractor_2*_t0 + _t94;
-    const trailer3_real_t _t96 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t97 = -K_theta_cart2_x_tractor_2*_t7 + _t96;
-    const trailer3_real_t _t98 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t99 = -K_theta_cart3_x_tractor_2*_t13 + _t98;
-    const trailer3_real_t _t100 = _t3*_t86;
-    const trailer3_real_t _t101 = _t5*_t94;
-    const trailer3_real_t _t102 = K_theta_cart_x_tractor_2*_t0;
-    const trailer3_real_t _t103 = _t102*_t5;
-    const trailer3_real_t _t104 = _t3*_t87;
-    const trailer3_real_t _t105 = _t3*_t88;
-    const trailer3_real_t _t106 = _t5*_t96;
-    const trailer3_real_t _t107 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t108 = _t107*_t5;
-    const trailer3_real_t _t109 = _t3*_t89;
-    const trailer3_real_t _t110 = _t3*_t90;
-    const trailer3_real_t _t111 = _t5*_t98;
-    const trailer3_real_t _t112 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t113 = _t112*_t5;
-    const trailer3_real_t _t114 = _t3*_t91;
-    const trailer3_real_t _t115 = _t10*_t88;
-    const trailer3_real_t _t116 = _t11*_t96;
-    const trailer3_real_t _t117 = _t10*_t89;
-    const trailer3_real_t _t118 = _t107*_t11;
-    const trailer3_real_t _t119 = _t10*_t90;
-    const trailer3_real_t _t120 = _t11*_t98;
-    const trailer3_real_t _t121 = _t10*_t91;
-    const trailer3_real_t _t122 = _t11*_t112;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t124 = _t123*_t90;
-    const trailer3_real_t _t125 = TRAILER3_LIT(0.85)*_t8;
-    const trailer3_real_t _t126 = _t125*_t98;
-    const trailer3_real_t _t127 = _t123*_t91;
-    const trailer3_real_t _t128 = _t112*_t125;
-    const trailer3_real_t _t129 = _t68*thetadot_right + _t75*thetadot_left;
-    const trailer3_real_t _t130 = _t129*_t129;
-    const trailer3_real_t _t131 = _t130*_t98;
-    const trailer3_real_t _t132 = _t112*_t130;
-    const trailer3_real_t _t133 = _t131 - _t132;
-    const trailer3_real_t _t134 = _t44*thetadot_right + _t49*thetadot_left;
-    const trailer3_real_t _t135 = _t134*_t134;
-    const trailer3_real_t _t136 = _t135*_t96;
-    const trailer3_real_t _t137 = _t107*_t135;
-    const trailer3_real_t _t138 = _t136 - _t137;
-    const trailer3_real_t _t139 = -_t27*thetadot_right + _t28*thetadot_left;
-    const trailer3_real_t _t140 = _t139*_t139;
-    const trailer3_real_t _t141 = K_theta_tractor_x_tractor_2*_t2;
-    const trailer3_real_t _t142 = -_t140*_t141 + _t140*_t92;
-    const trailer3_real_t _t143 = _t35*thetadot_right + _t40*thetadot_left;
-    const trailer3_real_t _t144 = _t143*_t143;
-    const trailer3_real_t _t145 = _t144*_t94;
-    const trailer3_real_t _t146 = _t102*_t144;
-    const trailer3_real_t _t147 = _t145 - _t146;
-    const trailer3_real_t _t148 = _t144*_t86;
-    const trailer3_real_t _t149 = _t144*_t87;
-    const trailer3_real_t _t150 = _t140*_t84;
-    const trailer3_real_t _t151 = _t140*_t85;
-    const trailer3_real_t _t152 = _t130*_t90;
-    const trailer3_real_t _t153 = _t130*_t91;
-    const trailer3_real_t _t154 = _t152 + _t153;
-    const trailer3_real_t _t155 = _t135*_t88;
-    const trailer3_real_t _t156 = _t135*_t89;
-    const trailer3_real_t _t157 = _t155 + _t156;
-    const trailer3_real_t _t158 = _t3*_t94;
-    const trailer3_real_t _t159 = _t5*_t88;
-    const trailer3_real_t _t160 = _t3*_t96;
-    const trailer3_real_t _t161 = _t10*_t96;
-    const trailer3_real_t _t162 = _t11*_t88;
-    const trailer3_real_t _t163 = _t107*_t3;
-    const trailer3_real_t _t164 = _t5*_t89;
-    const trailer3_real_t _t165 = _t10*_t107;
-    const trailer3_real_t _t166 = _t11*_t89;
-    const trailer3_real_t _t167 = _t5*_t90;
-    const trailer3_real_t _t168 = _t3*_t98;
-    const trailer3_real_t _t169 = _t10*_t98;
-    const trailer3_real_t _t170 = _t11*_t90;
-    const trailer3_real_t _t171 = _t123*_t98;
-    const trailer3_real_t _t172 = _t125*_t90;
-    const trailer3_real_t _t173 = _t112*_t3;
-    const trailer3_real_t _t174 = _t5*_t91;
-    const trailer3_real_t _t175 = _t10*_t112;
-    const trailer3_real_t _t176 = _t11*_t91;
-    const trailer3_real_t _t177 = _t112*_t123;
-    const trailer3_real_t _t178 = _t125*_t91;
-    const trailer3_real_t _t179 = _t25*_t27;
-    const trailer3_real_t _t180 = _t179*thetadot_right;
-    const trailer3_real_t _t181 = _t25*_t28;
-    const trailer3_real_t _t182 = _t181*thetadot_left;
-    const trailer3_real_t _t183 = _t1*_t29;
-    const trailer3_real_t _t184 = _t19*_t27;
-    const trailer3_real_t _t185 = -_t0*_t179 + _t184;
-    const trailer3_real_t _t186 = _t1*_t31;
-    const trailer3_real_t _t187 = -_t19*_t28;
-    const trailer3_real_t _t188 = -_t0*_t181 + _t187;
-    const trailer3_real_t _t189 = -_t183 - _t185;
-    const trailer3_real_t _t190 = -TRAILER3_LIT(1.6666666666666667)*_t189;
-    const trailer3_real_t _t191 = _t190*thetadot_right;
-    const trailer3_real_t _t192 = -_t186 - _t188;
-    const trailer3_real_t _t193 = -TRAILER3_LIT(1.6666666666666667)*_t192;
-    const trailer3_real_t _t194 = _t193*thetadot_left;
-    const trailer3_real_t _t195 = TRAILER3_LIT(1.6666666666666667)*_t55;
-    const trailer3_real_t _t196 = _t195*thetadot_right;
-    const trailer3_real_t _t197 = TRAILER3_LIT(1.6666666666666667)*_t58;
-    const trailer3_real_t _t198 = _t197*thetadot_left;
-    const trailer3_real_t _t199 = -_t12*_t190;
-    const trailer3_real_t _t200 = _t29*_t8;
-    const trailer3_real_t _t201 = _t20*_t27;
-    const trailer3_real_t _t202 = -_t179*_t7 + _t201;
-    const trailer3_real_t _t203 = -_t12*_t193;
-    const trailer3_real_t _t204 = _t31*_t8;
-    const trailer3_real_t _t205 = -_t20*_t28;
-    const trailer3_real_t _t206 = -_t181*_t7 + _t205;
-    const trailer3_real_t _t207 = -_t12*_t195;
-    const trailer3_real_t _t208 = _t21*_t35;
-    const trailer3_real_t _t209 = -_t12*_t197;
-    const trailer3_real_t _t210 = _t21*_t40;
-    const trailer3_real_t _t211 = -_t199 - _t200 - _t202;
-    const trailer3_real_t _t212 = -TRAILER3_LIT(1.6666666666666667)*_t211;
-    const trailer3_real_t _t213 = _t212*thetadot_right;
-    const trailer3_real_t _t214 = -_t203 - _t204 - _t206;
-    const trailer3_real_t _t215 = -TRAILER3_LIT(1.6666666666666667)*_t214;
-    const trailer3_real_t _t216 = _t215*thetadot_left;
-    const trailer3_real_t _t217 = -_t207 - _t208;
-    const trailer3_real_t _t218 = -TRAILER3_LIT(1.6666666666666667)*_t217;
-    const trailer3_real_t _t219 = _t218*thetadot_right;
-    const trailer3_real_t _t220 = -_t209 - _t210;
-    const trailer3_real_t _t221 = -TRAILER3_LIT(1.6666666666666667)*_t220;
-    const trailer3_real_t _t222 = _t221*thetadot_left;
-    const trailer3_real_t _t223 = TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t224 = _t223*thetadot_right;
-    const trailer3_real_t _t225 = TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t226 = _t225*thetadot_left;
-    const trailer3_real_t _t227 = -_t18*_t212;
-    const trailer3_real_t _t228 = -_t16*_t190;
-    const trailer3_real_t _t229 = _t14*_t29;
-    const trailer3_real_t _t230 = _t22*_t27;
-    const trailer3_real_t _t231 = -_t13*_t179 + _t230;
-    const trailer3_real_t _t232 = -_t18*_t215;
-    const trailer3_real_t _t233 = -_t16*_t193;
-    const trailer3_real_t _t234 = _t14*_t31;
-    const trailer3_real_t _t235 = -_t22*_t28;
-    const trailer3_real_t _t236 = -_t13*_t181 + _t235;
-    const trailer3_real_t _t237 = -_t16*_t195;
-    const trailer3_real_t _t238 = -_t18*_t218;
-    const trailer3_real_t _t239 = _t23*_t35;
-    const trailer3_real_t _t240 = -_t16*_t197;
-    const trailer3_real_t _t241 = -_t18*_t221;
-    const trailer3_real_t _t242 = _t23*_t40;
-    const trailer3_real_t _t243 = -_t18*_t223;
-    const trailer3_real_t _t244 = _t24*_t44;
-    const trailer3_real_t _t245 = -_t18*_t225;
-    const trailer3_real_t _t246 = _t24*_t49;
-    const trailer3_real_t _t247 = -_t227 - _t228 - _t229 - _t231;
-    const trailer3_real_t _t248 = -TRAILER3_LIT(1.6666666666666667)*_t247;
-    const trailer3_real_t _t249 = _t248*thetadot_right;
-    const trailer3_real_t _t250 = -_t232 - _t233 - _t234 - _t236;
-    const trailer3_real_t _t251 = -TRAILER3_LIT(1.6666666666666667)*_t250;
-    const trailer3_real_t _t252 = _t251*thetadot_left;
-    const trailer3_real_t _t253 = -_t237 - _t238 - _t239;
-    const trailer3_real_t _t254 = -TRAILER3_LIT(1.6666666666666667)*_t253;
-    const trailer3_real_t _t255 = _t254*thetadot_right;
-    const trailer3_real_t _t256 = -_t240 - _t241 - _t242;
-    const trailer3_real_t _t257 = -TRAILER3_LIT(1.6666666666666667)*_t256;
-    const trailer3_real_t _t258 = _t257*thetadot_left;
-    const trailer3_real_t _t259 = -_t243 - _t244;
-    const trailer3_real_t _t260 = -TRAILER3_LIT(1.6666666666666667)*_t259;
-    const trailer3_real_t _t261 = _t260*thetadot_right;
-    const trailer3_real_t _t262 = -_t245 - _t246;
-    const trailer3_real_t _t263 = -TRAILER3_LIT(1.6666666666666667)*_t262;
-    const trailer3_real_t _t264 = _t263*thetadot_left;
-    const trailer3_real_t _t265 = TRAILER3_LIT(1.6666666666666667)*_t73;
-    const trailer3_real_t _t266 = _t265*thetadot_right;
-    const trailer3_real_t _t267 = TRAILER3_LIT(1.6666666666666667)*_t80;
-    const trailer3_real_t _t268 = _t267*thetadot_left;
-    const trailer3_real_t _t269 = TRAILER3_LIT(0.2)*_t190;
-    const trailer3_real_t _t270 = -_t1*_t179 + _t30;
-    const trailer3_real_t _t271 = TRAILER3_LIT(0.2)*_t193;
-    const trailer3_real_t _t272 = -_t1*_t181 + _t32;
-    const trailer3_real_t _t273 = TRAILER3_LIT(0.2)*_t195;
-    const trailer3_real_t _t274 = -_t27*_t6;
-    const trailer3_real_t _t275 = _t0*_t29 - _t1*_t33 + _t274;
-    const trailer3_real_t _t276 = TRAILER3_LIT(0.2)*_t197;
-    const trailer3_real_t _t277 = _t28*_t6;
-    const trailer3_real_t _t278 = _t0*_t31 - _t1*_t38 + _t277;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t279 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t280 = _t269 - _t270;
-    const trailer3_real_t _t281 = _t279*_t280;
-    const trailer3_real_t _t282 = _t281*thetadot_right;
-    const trailer3_real_t _t283 = _t271 - _t272;
-    const trailer3_real_t _t284 = _t279*_t283;
-    const trailer3_real_t _t285 = _t284*thetadot_left;
-    const trailer3_real_t _t286 = _t273 - _t275;
-    const trailer3_real_t _t287 = _t279*_t286;
-    const trailer3_real_t _t288 = _t287*thetadot_right;
-    const trailer3_real_t _t289 = _t276 - _t278;
-    const trailer3_real_t _t290 = _t279*_t289;
-    const trailer3_real_t _t291 = _t290*thetadot_left;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t292 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t293 = -_t269 - _t270;
-    const trailer3_real_t _t294 = _t292*_t293;
-    const trailer3_real_t _t295 = _t294*thetadot_right;
-    const trailer3_real_t _t296 = -_t271 - _t272;
-    const trailer3_real_t _t297 = _t292*_t296;
-    const trailer3_real_t _t298 = _t297*thetadot_left;
-    const trailer3_real_t _t299 = -_t273 - _t275;
-    const trailer3_real_t _t300 = _t292*_t299;
-    const trailer3_real_t _t301 = _t300*thetadot_right;
-    const trailer3_real_t _t302 = -_t276 - _t278;
-    const trailer3_real_t _t303 = _t292*_t302;
-    const trailer3_real_t _t304 = _t303*thetadot_left;
-    const trailer3_real_t _t305 = TRAILER3_LIT(0.2)*_t212;
-    const trailer3_real_t _t306 = -_t179*_t8 - _t190*_t21 + _t37;
-    const trailer3_real_t _t307 = TRAILER3_LIT(0.2)*_t215;
-    const trailer3_real_t _t308 = -_t181*_t8 - _t193*_t21 + _t42;
-    const trailer3_real_t _t309 = TRAILER3_LIT(0.2)*_t218;
-    const trailer3_real_t _t310 = -_t195*_t21 + _t36;
-    const trailer3_real_t _t311 = TRAILER3_LIT(0.2)*_t221;
-    const trailer3_real_t _t312 = -_t197*_t21 + _t41;
-    const trailer3_real_t _t313 = TRAILER3_LIT(0.2)*_t223;
-    const trailer3_real_t _t314 = -_t27*_t9;
-    const trailer3_real_t _t315 = _t12*_t35;
-    const trailer3_real_t _t316 = _t29*_t7 + _t314 + _t315 - _t33*_t8;
-    const trailer3_real_t _t317 = TRAILER3_LIT(0.2)*_t225;
-    const trailer3_real_t _t318 = _t28*_t9;
-    const trailer3_real_t _t319 = _t12*_t40;
-    const trailer3_real_t _t320 = _t31*_t7 + _t318 + _t319 - _t38*_t8;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t321 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t322 = _t305 - _t306;
-    const trailer3_real_t _t323 = _t321*_t322;
-    const trailer3_real_t _t324 = _t323*thetadot_right;
-    const trailer3_real_t _t325 = _t307 - _t308;
-    const trailer3_real_t _t326 = _t321*_t325;
-    const trailer3_real_t _t327 = _t326*thetadot_left;
-    const trailer3_real_t _t328 = _t309 - _t310;
-    const trailer3_real_t _t329 = _t321*_t328;
-    const trailer3_real_t _t330 = _t329*thetadot_right;
-    const trailer3_real_t _t331 = _t311 - _t312;
-    const trailer3_real_t _t332 = _t321*_t331;
-    const trailer3_real_t _t333 = _t332*thetadot_left;
-    const trailer3_real_t _t334 = _t313 - _t316;
-    const trailer3_real_t _t335 = _t321*_t334;
-    const trailer3_real_t _t336 = _t335*thetadot_right;
-    const trailer3_real_t _t337 = _t317 - _t320;
-    const trailer3_real_t _t338 = _t321*_t337;
-    const trailer3_real_t _t339 = _t338*thetadot_left;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t340 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t341 = -_t305 - _t306;
-    const trailer3_real_t _t342 = _t340*_t341;
-    const trailer3_real_t _t343 = _t342*thetadot_right;
-    const trailer3_real_t _t344 = -_t307 - _t308;
-    const trailer3_real_t _t345 = _t340*_t344;
-    const trailer3_real_t _t346 = _t345*thetadot_left;
-    const trailer3_real_t _t347 = -_t309 - _t310;
-    const trailer3_real_t _t348 = _t340*_t347;
-    const trailer3_real_t _t349 = _t348*thetadot_right;
-    const trailer3_real_t _t350 = -_t311 - _t312;
-    const trailer3_real_t _t351 = _t340*_t350;
-    const trailer3_real_t _t352 = _t351*thetadot_left;
-    const trailer3_real_t _t353 = -_t313 - _t316;
-    const trailer3_real_t _t354 = _t340*_t353;
-    const trailer3_real_t _t355 = _t354*thetadot_right;
-    const trailer3_real_t _t356 = -_t317 - _t320;
-    const trailer3_real_t _t357 = _t340*_t356;
-    const trailer3_real_t _t358 = _t357*thetadot_left;
-    const trailer3_real_t _t359 = TRAILER3_LIT(0.2)*_t248;
-    const trailer3_real_t _t360 = -_t14*_t179 - _t190*_t23 - _t212*_t24 + _t47;
-    const trailer3_real_t _t361 = TRAILER3_LIT(0.2)*_t251;
-    const trailer3_real_t _t362 = -_t14*_t181 - _t193*_t23 - _t215*_t24 + _t52;
-    const trailer3_real_t _t363 = TRAILER3_LIT(0.2)*_t254;
-    const trailer3_real_t _t364 = -_t195*_t23 - _t218*_t24 + _t46;
-    const trailer3_real_t _t365 = TRAILER3_LIT(0.2)*_t257;
-    const trailer3_real_t _t366 = -_t197*_t23 - _t221*_t24 + _t51;
-    const trailer3_real_t _t367 = TRAILER3_LIT(0.2)*_t260;
-    const trailer3_real_t _t368 = -_t223*_t24 + _t45;
-    const trailer3_real_t _t369 = TRAILER3_LIT(0.2)*_t263;
-    const trailer3_real_t _t370 = -_t225*_t24 + _t50;
-    const trailer3_real_t _t371 = TRAILER3_LIT(0.2)*_t265;
-    const trailer3_real_t _t372 = -_t15*_t27;
-    const trailer3_real_t _t373 = _t16*_t35;
-    const trailer3_real_t _t374 = _t18*_t44;
-    const trailer3_real_t _t375 = _t13*_t29 - _t14*_t33 + _t372 + _t373 + _t374;
-    const trailer3_real_t _t376 = TRAILER3_LIT(0.2)*_t267;
-    const trailer3_real_t _t377 = _t15*_t28;
-    const trailer3_real_t _t378 = _t16*_t40;
-    const trailer3_real_t _t379 = _t18*_t49;
-    const trailer3_real_t _t380 = _t13*_t31 - _t14*_t38 + _t377 + _t378 + _t379;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t381 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t382 = _t359 - _t360;
-    const trailer3_real_t _t383 = _t381*_t382;
-    const trailer3_real_t _t384 = _t383*thetadot_right;
-    const trailer3_real_t _t385 = _t361 - _t362;
-    const trailer3_real_t _t386 = _t381*_t385;
-    const trailer3_real_t _t387 = _t386*thetadot_left;
-    const trailer3_real_t _t388 = _t363 - _t364;
-    const trailer3_real_t _t389 = _t381*_t388;
-    const trailer3_real_t _t390 = _t389*thetadot_right;
-    const trailer3_real_t _t391 = _t365 - _t366;
-    const trailer3_real_t _t392 = _t381*_t391;
-    const trailer3_real_t _t393 = _t392*thetadot_left;
-    const trailer3_real_t _t394 = _t367 - _t368;
-    const trailer3_real_t _t395 = _t381*_t394;
-    const trailer3_real_t _t396 = _t395*thetadot_right;
-    const trailer3_real_t _t397 = _t369 - _t370;
-    const trailer3_real_t _t398 = _t381*_t397;
-    const trailer3_real_t _t399 = _t398*thetadot_left;
-    const trailer3_real_t _t400 = _t371 - _t375;
-    const trailer3_real_t _t401 = _t381*_t400;
-    const trailer3_real_t _t402 = _t401*thetadot_right;
-    const trailer3_real_t _t403 = _t376 - _t380;
-    const trailer3_real_t _t404 = _t381*_t403;
-    const trailer3_real_t _t405 = _t404*thetadot_left;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t406 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t407 = -_t359 - _t360;
-    const trailer3_real_t _t408 = _t406*_t407;
-    const trailer3_real_t _t409 = _t408*thetadot_right;
-    const trailer3_real_t _t410 = -_t361 - _t362;
-    const trailer3_real_t _t411 = _t406*_t410;
-    const trailer3_real_t _t412 = _t411*thetadot_left;
-    const trailer3_real_t _t413 = -_t363 - _t364;
-    const trailer3_real_t _t414 = _t406*_t413;
-    const trailer3_real_t _t415 = _t414*thetadot_right;
-    const trailer3_real_t _t416 = -_t365 - _t366;
-    const trailer3_real_t _t417 = _t406*_t416;
-    const trailer3_real_t _t418 = _t417*thetadot_left;
-    const trailer3_real_t _t419 = -_t367 - _t368;
-    const trailer3_real_t _t420 = _t406*_t419;
-    const trailer3_real_t _t421 = _t420*thetadot_right;
-    const trailer3_real_t _t422 = -_t369 - _t370;
-    const trailer3_real_t _t423 = _t406*_t422;
-    const trailer3_real_t _t424 = _t423*thetadot_left;
-    const trailer3_real_t _t425 = -_t371 - _t375;
-    const trailer3_real_t _t426 = _t406*_t425;
-    const trailer3_real_t _t427 = _t426*thetadot_right;
-    const trailer3_real_t _t428 = -_t376 - _t380;
-    const trailer3_real_t _t429 = _t406*_t428;
-    const trailer3_real_t _t430 = _t429*thetadot_left;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t431 = J_x_tractor*_t33;
-    const trailer3_real_t _t432 = _t27*_t93;
-    const trailer3_real_t _t433 = -_t35*_t95;
-    const trailer3_real_t _t434 = -_t44*_t97;
-    const trailer3_real_t _t435 = -_t68*_t99;
-    const trailer3_real_t _t436 = _t431 + _t432 + _t433 + _t434 + _t435;
-    const trailer3_real_t _t437 = J_x_tractor*_t29;
-    const trailer3_real_t _t438 = _t84 + _t85;
-    const trailer3_real_t _t439 = -_t27*_t438;
-    const trailer3_real_t _t440 = _t86 + _t87;
-    const trailer3_real_t _t441 = _t35*_t440;
-    const trailer3_real_t _t442 = _t88 + _t89;
-    const trailer3_real_t _t443 = _t44*_t442;
-    const trailer3_real_t _t444 = _t90 + _t91;
-    const trailer3_real_t _t445 = _t444*_t68;
-    const trailer3_real_t _t446 = _t437 + _t439 + _t441 + _t443 + _t445;
-    const trailer3_real_t _t447 = _t100 + _t101 - _t103 + _t104;
-    const trailer3_real_t _t448 = _t105 + _t106 - _t108 + _t109;
-    const trailer3_real_t _t449 = _t110 + _t111 - _t113 + _t114;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t450 = -J_theta_tractor*_t27 + _t29*_t438 - _t33*_t93 + _t35*_t447
-            + _t44*_t448 + _t449*_t68;
+    const trailer3_real_t _t172 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t173 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t174 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t175 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t176 = K_theta_cart_x_tractor*_t4;
+    const trailer3_real_t _t177 = K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t178 = K_theta_cart2_x_tractor*_t8;
+    const trailer3_real_t _t179 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t180 = K_theta_cart3_x_tractor*_t14;
+    const trailer3_real_t _t181 = K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t182 = _t169*_t9;
+    const trailer3_real_t _t183 = _t10*_t174;
+    const trailer3_real_t _t184 = _t170*_t9;
+    const trailer3_real_t _t185 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t186 = _t10*_t185;
+    const trailer3_real_t _t187 = _t171*_t9;
+    const trailer3_real_t _t188 = _t10*_t175;
+    const trailer3_real_t _t189 = _t172*_t9;
+    const trailer3_real_t _t190 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t191 = _t10*_t190;
+    const trailer3_real_t _t192 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t193 = _t171*_t192;
+    const trailer3_real_t _t194 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t195 = _t175*_t194;
+    const trailer3_real_t _t196 = _t172*_t192;
+    const trailer3_real_t _t197 = _t190*_t194;
+    const trailer3_real_t _t198 = _t159 + _t160;
+    const trailer3_real_t _t199 = _t198*_t198;
+    const trailer3_real_t _t200 = _t163 + _t164;
+    const trailer3_real_t _t201 = _t200*_t200;
+    const trailer3_real_t _t202 = _t174*_t201;
+    const trailer3_real_t _t203 = _t165 + _t166;
+    const trailer3_real_t _t204 = _t203*_t203;
+    const trailer3_real_t _t205 = _t175*_t204;
+    const trailer3_real_t _t206 = _t161 + _t162;
+    const trailer3_real_t _t207 = _t206*_t206;
+    const trailer3_real_t _t208 = _t185*_t201;
+    const trailer3_real_t _t209 = _t190*_t204;
+    const trailer3_real_t _t210 = K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t211 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t212 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t213 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t214 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t215 = K_theta_cart_x_tractor*_t16;
+    const trailer3_real_t _t216 = K_theta_cart_x_tractor_2*_t4;
+    const trailer3_real_t _t217 = _t169*_t201;
+    const trailer3_real_t _t218 = _t170*_t201;
+    const trailer3_real_t _t219 = _t171*_t204;
+    const trailer3_real_t _t220 = _t172*_t204;
+    const trailer3_real_t _t221 = _t174*_t9;
+    const trailer3_real_t _t222 = _t10*_t169;
+    const trailer3_real_t _t223 = _t185*_t9;
+    const trailer3_real_t _t224 = _t10*_t170;
+    const trailer3_real_t _t225 = _t175*_t9;
+    const trailer3_real_t _t226 = _t10*_t171;
+    const trailer3_real_t _t227 = _t175*_t192;
+    const trailer3_real_t _t228 = _t171*_t194;
+    const trailer3_real_t _t229 = _t190*_t9;
+    const trailer3_real_t _t230 = _t10*_t172;
+    const trailer3_real_t _t231 = _t190*_t192;
+    const trailer3_real_t _t232 = _t172*_t194;
+    const trailer3_real_t _t233 = _t198*thetadot_right;
+    const trailer3_real_t _t234 = _t198*thetadot_left;
+    const trailer3_real_t _t235 = _t206*thetadot_right;
+    const trailer3_real_t _t236 = _t206*thetadot_left;
+    const trailer3_real_t _t237 = _t167 + _t168;
+    const trailer3_real_t _t238 = _t237*_t26;
+    const trailer3_real_t _t239 = _t169 + _t170;
+    const trailer3_real_t _t240 = _t239*_t35;
+    const trailer3_real_t _t241 = _t171 + _t172;
+    const trailer3_real_t _t242 = _t241*_t67;
+    const trailer3_real_t _t243 = _t237*_t30;
+    const trailer3_real_t _t244 = _t239*_t41;
+    const trailer3_real_t _t245 = _t241*_t76;
+    const trailer3_real_t _t246 = _t176 - _t177;
+    const trailer3_real_t _t247 = _t182 + _t183 + _t184 - _t186;
+    const trailer3_real_t _t248 = _t187 + _t188 + _t189 - _t191;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t451 = J_theta_cart*_t35;
-    const trailer3_real_t _t452 = _t115 + _t116 + _t117 - _t118;
-    const trailer3_real_t _t453 = _t44*_t452;
-    const trailer3_real_t _t454 = _t119 + _t120 + _t121 - _t122;
-    const trailer3_real_t _t455 = _t454*_t68;
-    const trailer3_real_t _t456 = -_t33*_t95;
-    const trailer3_real_t _t457 = -_t27*_t447;
-    const trailer3_real_t _t458 = _t29*_t440;
-    const trailer3_real_t _t459 = _t451 + _t453 + _t455 + _t456 + _t457 + _t458;
+    const trailer3_real_t _t249 = J_theta_cart*_t26 + _t19*_t246 + _t20*_t237 + _t247*_t35
+            + _t248*_t67;
+    const trailer3_real_t _t250 = J_theta_cart*_t30 + _t22*_t246 + _t23*_t237 + _t247*_t41
+            + _t248*_t76;
+    const trailer3_real_t _t251 = _t178 - _t179;
+    const trailer3_real_t _t252 = _t193 + _t195 + _t196 - _t197;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t460 = J_theta_cart2*_t44;
-    const trailer3_real_t _t461 = _t35*_t452;
-    const trailer3_real_t _t462 = _t124 + _t126 + _t127 - _t128;
-    const trailer3_real_t _t463 = _t462*_t68;
-    const trailer3_real_t _t464 = -_t33*_t97;
-    const trailer3_real_t _t465 = -_t27*_t448;
-    const trailer3_real_t _t466 = _t29*_t442;
-    const trailer3_real_t _t467 = _t460 + _t461 + _t463 + _t464 + _t465 + _t466;
+    const trailer3_real_t _t253 = J_theta_cart2*_t35 + _t19*_t251 + _t20*_t239 + _t247*_t26
+            + _t252*_t67;
+    const trailer3_real_t _t254 = J_theta_cart2*_t41 + _t22*_t251 + _t23*_t239 + _t247*_t30
+            + _t252*_t76;
+    const trailer3_real_t _t255 = _t180 - _t181;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t468 = J_theta_cart3*_t68;
-    const trailer3_real_t _t469 = -_t27*_t449;
-    const trailer3_real_t _t470 = _t35*_t454;
-    const trailer3_real_t _t471 = _t44*_t462;
-    const trailer3_real_t _t472 = -_t33*_t99;
-    const trailer3_real_t _t473 = _t29*_t444;
-    const trailer3_real_t _t474 = _t468 + _t469 + _t470 + _t471 + _t472 + _t473;
-    const trailer3_real_t _t475 = -_t59 - _t62;
-    const trailer3_real_t _t476 = _t340*_t475;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t477 = J_theta_cart2_left*_t476;
-    const trailer3_real_t _t478 = _t59 - _t62;
-    const trailer3_real_t _t479 = _t321*_t478;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t480 = J_theta_cart2_right*_t479;
-    const trailer3_real_t _t481 = -_t69 - _t73;
-    const trailer3_real_t _t482 = _t406*_t481;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t483 = J_theta_cart3_left*_t482;
-    const trailer3_real_t _t484 = _t69 - _t73;
-    const trailer3_real_t _t485 = _t381*_t484;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t486 = J_theta_cart3_right*_t485;
-    const trailer3_real_t _t487 = -_t53 - _t55;
-    const trailer3_real_t _t488 = _t292*_t487;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t489 = J_theta_cart_left*_t488;
-    const trailer3_real_t _t490 = _t53 - _t55;
-    const trailer3_real_t _t491 = _t279*_t490;
+    const trailer3_real_t _t256 = J_theta_cart3*_t67 + _t19*_t255 + _t20*_t241 + _t248*_t26
+            + _t252*_t35;
+    const trailer3_real_t _t257 = J_theta_cart3*_t76 + _t22*_t255 + _t23*_t241 + _t248*_t30
+            + _t252*_t41;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t258 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t259 = _t46 + _t49;
+    const trailer3_real_t _t260 = _t258*_t259;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t492 = J_theta_cart_right*_t491;
-    const trailer3_real_t _t493 = _t56 - _t58;
-    const trailer3_real_t _t494 = _t279*_t493;
-    const trailer3_real_t _t495 = -_t56 - _t58;
-    const trailer3_real_t _t496 = _t292*_t495;
-    const trailer3_real_t _t497 = _t63 - _t66;
-    const trailer3_real_t _t498 = _t321*_t497;
-    const trailer3_real_t _t499 = -_t63 - _t66;
-    const trailer3_real_t _t500 = _t340*_t499;
-    const trailer3_real_t _t501 = _t76 - _t80;
-    const trailer3_real_t _t502 = _t381*_t501;
-    const trailer3_real_t _t503 = -_t76 - _t80;
-    const trailer3_real_t _t504 = _t406*_t503;
-    const trailer3_real_t _t505 = _t477*_t500 + _t480*_t498 + _t483*_t504 + _t486*_t502
-            + _t489*_t496 + _t492*_t494;
-    const trailer3_real_t _t506 = J_x_tractor*_t38;
-    const trailer3_real_t _t507 = -_t28*_t93;
-    const trailer3_real_t _t508 = -_t40*_t95;
-    const trailer3_real_t _t509 = -_t49*_t97;
-    const trailer3_real_t _t510 = -_t75*_t99;
-    const trailer3_real_t _t511 = _t506 + _t507 + _t508 + _t509 + _t510;
-    const trailer3_real_t _t512 = J_theta_tractor*_t28 + _t31*_t438 - _t38*_t93 + _t40*_t447
-            + _t448*_t49 + _t449*_t75;
-    const trailer3_real_t _t513 = J_x_tractor*_t31;
-    const trailer3_real_t _t514 = _t28*_t438;
-    const trailer3_real_t _t515 = _t40*_t440;
-    const trailer3_real_t _t516 = _t442*_t49;
-    const trailer3_real_t _t517 = _t444*_t75;
-    const trailer3_real_t _t518 = _t513 + _t514 + _t515 + _t516 + _t517;
-    const trailer3_real_t _t519 = J_theta_cart*_t40;
-    const trailer3_real_t _t520 = _t452*_t49;
-    const trailer3_real_t _t521 = _t454*_t75;
-    const trailer3_real_t _t522 = -_t38*_t95;
-    const trailer3_real_t _t523 = _t28*_t447;
-    const trailer3_real_t _t524 = _t31*_t440;
-    const trailer3_real_t _t525 = _t519 + _t520 + _t521 + _t522 + _t523 + _t524;
-    const trailer3_real_t _t526 = J_theta_cart2*_t49;
-    const trailer3_real_t _t527 = _t40*_t452;
-    const trailer3_real_t _t528 = _t462*_t75;
-    const trailer3_real_t _t529 = -_t38*_t97;
-    const trailer3_real_t _t530 = _t28*_t448;
-    const trailer3_real_t _t531 = _t31*_t442;
-    const trailer3_real_t _t532 = _t526 + _t527 + _t528 + _t529 + _t530 + _t531;
-    const trailer3_real_t _t533 = J_theta_cart3*_t75;
-    const trailer3_real_t _t534 = _t28*_t449;
-    const trailer3_real_t _t535 = _t40*_t454;
-    const trailer3_real_t _t536 = _t462*_t49;
-    const trailer3_real_t _t537 = -_t38*_t99;
-    const trailer3_real_t _t538 = _t31*_t444;
-    const trailer3_real_t _t539 = _t533 + _t534 + _t535 + _t536 + _t537 + _t538;
-    const trailer3_real_t _t540 = _t148 + _t149 + _t150 + _t151 + _t154 + _t157;
-    const trailer3_real_t _t541 = _t139*_t81 + _t139*_t82;
-    const trailer3_real_t _t542 = _t139*_t191 + _t139*_t194 + _t143*_t196 + _t143*_t198;
-    const trailer3_real_t _t543 = _t134*_t224 + _t134*_t226 + _t139*_t213 + _t139*_t216
-            + _t143*_t219 + _t143*_t222;
-    const trailer3_real_t _t544 = _t129*_t266 + _t129*_t268 + _t134*_t261 + _t134*_t264
-            + _t139*_t249 + _t139*_t252 + _t143*_t255 + _t143*_t258;
-    const trailer3_real_t _t545 = J_x_tractor*_t541 + _t540 - _t542*_t95 - _t543*_t97 - _t544*_t99;
-    const trailer3_real_t _t546 = _t133 + _t138 + _t142 + _t147;
-    const trailer3_real_t _t547 = _t139*_t180 + _t139*_t182;
-    const trailer3_real_t _t548 = J_x_tractor*_t547 + _t440*_t542 + _t442*_t543 + _t444*_t544
-            + _t546;
-    const trailer3_real_t _t549 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t135*_t2*_t8
-            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t130*_t14*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t144*_t2 - _t132*_t3 - _t137*_t3
-            - _t146*_t3 - _t148*_t5 - _t149*_t5 - _t152*_t5 - _t153*_t5 - _t155*_t5 - _t156*_t5;
-    const trailer3_real_t _t550 = _t438*_t547 + _t447*_t542 + _t448*_t543 + _t449*_t544 - _t541*_t93
-            + _t549;
-    const trailer3_real_t _t551 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t135*_t8
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t130*_t14
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t140*_t4
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t140*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t140*_t4 - _t10*_t132 - _t10*_t137
-            - _t11*_t152 - _t11*_t153 - _t11*_t155 - _t11*_t156 - _t140*_t158;
-    const trailer3_real_t _t552 = J_theta_cart*_t542 + _t440*_t547 + _t452*_t543 + _t454*_t544
-            - _t541*_t95 + _t551;
-    const trailer3_real_t _t553 = _t123*_t131 - _t123*_t132 - _t125*_t152 - _t125*_t153
-            + _t140*_t159 - _t140*_t160 + _t140*_t163 + _t140*_t164 - _t144*_t161 + _t144*_t162
-            + _t144*_t165 + _t144*_t166;
-    const trailer3_real_t _t554 = J_theta_cart2*_t543 + _t442*_t547 + _t452*_t542 + _t462*_t544
-            - _t541*_t97 + _t553;
-    const trailer3_real_t _t555 = -_t135*_t171 + _t135*_t172 + _t135*_t177 + _t135*_t178
-            + _t140*_t167 - _t140*_t168 + _t140*_t173 + _t140*_t174 - _t144*_t169 + _t144*_t170
-            + _t144*_t175 + _t144*_t176;
-    const trailer3_real_t _t556 = J_theta_cart3*_t544 + _t444*_t547 + _t454*_t542 + _t462*_t543
-            - _t541*_t99 + _t555;
-    const trailer3_real_t _t557 = J_theta_cart2_left*_t500;
-    const trailer3_real_t _t558 = J_theta_cart2_right*_t498;
-    const trailer3_real_t _t559 = J_theta_cart3_left*_t504;
-    const trailer3_real_t _t560 = J_theta_cart3_right*_t502;
-    const trailer3_real_t _t561 = J_theta_cart_left*_t496;
-    const trailer3_real_t _t562 = J_theta_cart_right*_t494;
-    const trailer3_real_t _t563 = _t180 + _t182;
-    const trailer3_real_t _t564 = _t191 + _t194;
-    const trailer3_real_t _t565 = _t196 + _t198;
-    const trailer3_real_t _t566 = _t213 + _t216;
-    const trailer3_real_t _t567 = _t219 + _t222;
-    const trailer3_real_t _t568 = _t224 + _t226;
-    const trailer3_real_t _t569 = _t249 + _t252;
-    const trailer3_real_t _t570 = _t255 + _t258;
-    const trailer3_real_t _t571 = _t261 + _t264;
-    const trailer3_real_t _t572 = _t266 + _t268;
-    const trailer3_real_t _t573 = _t282 + _t285;
-    const trailer3_real_t _t574 = _t288 + _t291;
-    const trailer3_real_t _t575 = _t295 + _t298;
-    const trailer3_real_t _t576 = _t301 + _t304;
-    const trailer3_real_t _t577 = _t324 + _t327;
-    const trailer3_real_t _t578 = _t330 + _t333;
-    const trailer3_real_t _t579 = _t336 + _t339;
-    const trailer3_real_t _t580 = _t343 + _t346;
-    const trailer3_real_t _t581 = _t349 + _t352;
-    const trailer3_real_t _t582 = _t355 + _t358;
-    const trailer3_real_t _t583 = _t384 + _t387;
-    const trailer3_real_t _t584 = _t390 + _t393;
-    const trailer3_real_t _t585 = _t396 + _t399;
-    const trailer3_real_t _t586 = _t402 + _t405;
-    const trailer3_real_t _t587 = _t409 + _t412;
-    const trailer3_real_t _t588 = _t415 + _t418;
-    const trailer3_real_t _t589 = _t421 + _t424;
-    const trailer3_real_t _t590 = _t427 + _t430;
-    const trailer3_real_t _t591 = _t167 - _t168 + _t173 + _t174;
-    const trailer3_real_t _t592 = _t102*_t3 - _t158 + _t5*_t86 + _t5*_t87;
-    const trailer3_real_t _t593 = _t159 - _t160 + _t163 + _t164;
-    const trailer3_real_t _t594 = -_t27*_t75 + _t28*_t68;
-    const trailer3_real_t _t595 = -_t27*_t40 + _t28*_t35;
-    const trailer3_real_t _t596 = -_t27*_t49 + _t28*_t44;
-    const trailer3_real_t _t597 = TRAILER3_LIT(2.0)*_t557;
-    const trailer3_real_t _t598 = TRAILER3_LIT(2.0)*_t558;
-    const trailer3_real_t _t599 = TRAILER3_LIT(2.0)*_t559;
-    const trailer3_real_t _t600 = TRAILER3_LIT(2.0)*_t560;
-    const trailer3_real_t _t601 = TRAILER3_LIT(2.0)*_t561;
-    const trailer3_real_t _t602 = TRAILER3_LIT(2.0)*_t562;
-    const trailer3_real_t _t603 = TRAILER3_LIT(2.0)*_t28;
-    const trailer3_real_t _t604 = _t603*_t75;
-    const trailer3_real_t _t605 = _t40*_t603;
-    const trailer3_real_t _t606 = _t49*_t603;
-    const trailer3_real_t _t607 = TRAILER3_LIT(2.0)*_t514;
-    const trailer3_real_t _t608 = TRAILER3_LIT(2.0)*_t515;
-    const trailer3_real_t _t609 = TRAILER3_LIT(2.0)*_t516;
-    const trailer3_real_t _t610 = TRAILER3_LIT(2.0)*_t517;
-    const trailer3_real_t _t611 = TRAILER3_LIT(2.0)*_t519 + TRAILER3_LIT(2.0)*_t520
-            + TRAILER3_LIT(2.0)*_t521 + TRAILER3_LIT(2.0)*_t522 + TRAILER3_LIT(2.0)*_t523
-            + TRAILER3_LIT(2.0)*_t524;
-    const trailer3_real_t _t612 = TRAILER3_LIT(2.0)*_t526 + TRAILER3_LIT(2.0)*_t527
-            + TRAILER3_LIT(2.0)*_t528 + TRAILER3_LIT(2.0)*_t529 + TRAILER3_LIT(2.0)*_t530
-            + TRAILER3_LIT(2.0)*_t531;
-    const trailer3_real_t _t613 = TRAILER3_LIT(2.0)*_t533 + TRAILER3_LIT(2.0)*_t534
-            + TRAILER3_LIT(2.0)*_t535 + TRAILER3_LIT(2.0)*_t536 + TRAILER3_LIT(2.0)*_t537
-            + TRAILER3_LIT(2.0)*_t538;
-    const trailer3_real_t _t614 = TRAILER3_LIT(2.0)*_t143;
-    const trailer3_real_t _t615 = -_t102*_t614 + _t614*_t94;
-    const trailer3_real_t _t616 = TRAILER3_LIT(2.0)*_t134;
-    const trailer3_real_t _t617 = -_t107*_t616 + _t616*_t96;
-    const trailer3_real_t _t618 = TRAILER3_LIT(2.0)*_t129;
-    const trailer3_real_t _t619 = -_t112*_t618 + _t618*_t98;
-    const trailer3_real_t _t620 = _t614*_t86 + _t614*_t87;
-    const trailer3_real_t _t621 = _t616*_t88 + _t616*_t89;
-    const trailer3_real_t _t622 = _t618*_t90 + _t618*_t91;
-    const trailer3_real_t _t623 = TRAILER3_LIT(0.6)*_t143;
-    const trailer3_real_t _t624 = _t4*_t623;
-    const trailer3_real_t _t625 = TRAILER3_LIT(0.6)*K_theta_cart_x_tractor*_t1*_t143*_t2
-            - _t102*_t2*_t623 - _t624*_t86 - _t624*_t87;
-    const trailer3_real_t _t626 = TRAILER3_LIT(0.6)*_t134;
-    const trailer3_real_t _t627 = _t4*_t626;
-    const trailer3_real_t _t628 = TRAILER3_LIT(0.6)*K_theta_cart2_x_tractor*_t134*_t2*_t8
-            - _t107*_t2*_t626 - _t627*_t88 - _t627*_t89;
-    const trailer3_real_t _t629 = TRAILER3_LIT(0.6)*_t129;
-    const trailer3_real_t _t630 = _t4*_t629;
-    const trailer3_real_t _t631 = TRAILER3_LIT(0.6)*K_theta_cart3_x_tractor*_t129*_t14*_t2
-            - _t112*_t2*_t629 - _t630*_t90 - _t630*_t91;
-    const trailer3_real_t _t632 = _t146*_t5;
-    const trailer3_real_t _t633 = _t145*_t5;
-    const trailer3_real_t _t634 = _t148*_t3;
-    const trailer3_real_t _t635 = _t149*_t3;
-    const trailer3_real_t _t636 = _t131*_t5 - _t132*_t5 + _t152*_t3 + _t153*_t3;
-    const trailer3_real_t _t637 = _t136*_t5 - _t137*_t5 + _t155*_t3 + _t156*_t3;
-    const trailer3_real_t _t638 = TRAILER3_LIT(1.7)*_t134;
-    const trailer3_real_t _t639 = _t1*_t638;
-    const trailer3_real_t _t640 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t0*_t134*_t8
-            - _t0*_t107*_t638 - _t639*_t88 - _t639*_t89;
-    const trailer3_real_t _t641 = TRAILER3_LIT(1.7)*_t129;
-    const trailer3_real_t _t642 = _t1*_t641;
-    const trailer3_real_t _t643 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t0*_t129*_t14
-            - _t0*_t112*_t641 - _t642*_t90 - _t642*_t91;
-    const trailer3_real_t _t644 = _t100*_t140 + _t101*_t140 - _t103*_t140 + _t104*_t140;
-    const trailer3_real_t _t645 = TRAILER3_LIT(1.7)*_t143;
-    const trailer3_real_t _t646 = _t0*_t645;
-    const trailer3_real_t _t647 = _t1*_t645;
-    const trailer3_real_t _t648 = _t107*_t646 - _t646*_t96 + _t647*_t88 + _t647*_t89;
-    const trailer3_real_t _t649 = _t641*_t8;
-    const trailer3_real_t _t650 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t129*_t14*_t7
-            - _t112*_t641*_t7 - _t649*_t90 - _t649*_t91;
-    const trailer3_real_t _t651 = _t105*_t140 + _t106*_t140 - _t108*_t140 + _t109*_t140;
-    const trailer3_real_t _t652 = _t112*_t646 - _t646*_t98 + _t647*_t90 + _t647*_t91;
-    const trailer3_real_t _t653 = _t638*_t7;
-    const trailer3_real_t _t654 = _t638*_t8;
-    const trailer3_real_t _t655 = _t112*_t653 - _t653*_t98 + _t654*_t90 + _t654*_t91;
-    const trailer3_real_t _t656 = _t110*_t140 + _t111*_t140 - _t113*_t140 + _t114*_t140;
-    const trailer3_real_t _t657 = _t139*thetadot_right;
-    const trailer3_real_t _t658 = _t139*thetadot_left;
-    const trailer3_real_t _t659 = _t143*thetadot_right;
-    const trailer3_real_t _t660 = _t143*thetadot_left;
-    const trailer3_real_t _t661 = _t134*thetadot_right;
-    const trailer3_real_t _t662 = _t134*thetadot_left;
-    const trailer3_real_t _t663 = _t129*thetadot_right;
-    const trailer3_real_t _t664 = _t129*thetadot_left;
-    const trailer3_real_t _t665 = _t26*_t27;
-    const trailer3_real_t _t666 = _t0*_t665 - _t1*_t179 - _t274;
-    const trailer3_real_t _t667 = -TRAILER3_LIT(1.6666666666666667)*_t666;
-    const trailer3_real_t _t668 = TRAILER3_LIT(0.2)*_t667;
-    const trailer3_real_t _t669 = -_t1*_t665 + _t185;
-    const trailer3_real_t _t670 = _t26*_t28;
-    const trailer3_real_t _t671 = _t0*_t670 - _t1*_t181 - _t277;
-    const trailer3_real_t _t672 = -TRAILER3_LIT(1.6666666666666667)*_t671;
-    const trailer3_real_t _t673 = TRAILER3_LIT(0.2)*_t672;
-    const trailer3_real_t _t674 = -_t1*_t670 + _t188;
-    const trailer3_real_t _t675 = TRAILER3_LIT(1.6666666666666667)*_t270;
-    const trailer3_real_t _t676 = TRAILER3_LIT(0.2)*_t675;
-    const trailer3_real_t _t677 = _t0*_t179 + _t54;
-    const trailer3_real_t _t678 = TRAILER3_LIT(1.6666666666666667)*_t272;
-    const trailer3_real_t _t679 = TRAILER3_LIT(0.2)*_t678;
-    const trailer3_real_t _t680 = _t0*_t181 + _t57;
-    const trailer3_real_t _t681 = _t12*_t667 - _t179*_t8 - _t314 + _t665*_t7;
-    const trailer3_real_t _t682 = -TRAILER3_LIT(1.6666666666666667)*_t681;
-    const trailer3_real_t _t683 = TRAILER3_LIT(0.2)*_t682;
-    const trailer3_real_t _t684 = _t202 - _t21*_t667 - _t665*_t8;
-    const trailer3_real_t _t685 = _t12*_t672 - _t181*_t8 - _t318 + _t670*_t7;
-    const trailer3_real_t _t686 = -TRAILER3_LIT(1.6666666666666667)*_t685;
-    const trailer3_real_t _t687 = TRAILER3_LIT(0.2)*_t686;
-    const trailer3_real_t _t688 = _t206 - _t21*_t672 - _t670*_t8;
-    const trailer3_real_t _t689 = _t12*_t675 - _t190*_t21;
-    const trailer3_real_t _t690 = -TRAILER3_LIT(1.6666666666666667)*_t689;
-    const trailer3_real_t _t691 = TRAILER3_LIT(0.2)*_t690;
-    const trailer3_real_t _t692 = _t199 - _t21*_t675;
-    const trailer3_real_t _t693 = _t12*_t678 - _t193*_t21;
-    const trailer3_real_t _t694 = -TRAILER3_LIT(1.6666666666666667)*_t693;
-    const trailer3_real_t _t695 = TRAILER3_LIT(0.2)*_t694;
-    const trailer3_real_t _t696 = _t203 - _t21*_t678;
-    const trailer3_real_t _t697 = TRAILER3_LIT(1.6666666666666667)*_t306;
-    const trailer3_real_t _t698 = TRAILER3_LIT(0.2)*_t697;
-    const trailer3_real_t _t699 = _t12*_t190 + _t179*_t7 + _t61;
-    const trailer3_real_t _t700 = TRAILER3_LIT(1.6666666666666667)*_t308;
-    const trailer3_real_t _t701 = TRAILER3_LIT(0.2)*_t700;
-    const trailer3_real_t _t702 = _t12*_t193 + _t181*_t7 + _t65;
-    const trailer3_real_t _t703 = _t13*_t665 - _t14*_t179 + _t16*_t667 + _t18*_t682 - _t372;
-    const trailer3_real_t _t704 = -TRAILER3_LIT(1.6666666666666667)*_t703;
-    const trailer3_real_t _t705 = TRAILER3_LIT(0.2)*_t704;
-    const trailer3_real_t _t706 = -_t14*_t665 - _t23*_t667 + _t231 - _t24*_t682;
-    const trailer3_real_t _t707 = _t13*_t670 - _t14*_t181 + _t16*_t672 + _t18*_t686 - _t377;
-    const trailer3_real_t _t708 = -TRAILER3_LIT(1.6666666666666667)*_t707;
-    const trailer3_real_t _t709 = TRAILER3_LIT(0.2)*_t708;
-    const trailer3_real_t _t710 = -_t14*_t670 - _t23*_t672 + _t236 - _t24*_t686;
-    const trailer3_real_t _t711 = _t16*_t675 + _t18*_t690 - _t190*_t23;
-    const trailer3_real_t _t712 = -TRAILER3_LIT(1.6666666666666667)*_t711;
-    const trailer3_real_t _t713 = TRAILER3_LIT(0.2)*_t712;
-    const trailer3_real_t _t714 = _t228 - _t23*_t675 - _t24*_t690;
-    const trailer3_real_t _t715 = _t16*_t678 + _t18*_t694 - _t193*_t23;
-    const trailer3_real_t _t716 = -TRAILER3_LIT(1.6666666666666667)*_t715;
-    const trailer3_real_t _t717 = TRAILER3_LIT(0.2)*_t716;
-    const trailer3_real_t _t718 = -_t23*_t678 + _t233 - _t24*_t694;
-    const trailer3_real_t _t719 = _t18*_t697 - _t212*_t24;
-    const trailer3_real_t _t720 = -TRAILER3_LIT(1.6666666666666667)*_t719;
-    const trailer3_real_t _t721 = TRAILER3_LIT(0.2)*_t720;
-    const trailer3_real_t _t722 = _t227 - _t24*_t697;
-    const trailer3_real_t _t723 = _t18*_t700 - _t215*_t24;
-    const trailer3_real_t _t724 = -TRAILER3_LIT(1.6666666666666667)*_t723;
-    const trailer3_real_t _t725 = TRAILER3_LIT(0.2)*_t724;
-    const trailer3_real_t _t726 = _t232 - _t24*_t700;
-    const trailer3_real_t _t727 = TRAILER3_LIT(1.6666666666666667)*_t360;
-    const trailer3_real_t _t728 = TRAILER3_LIT(0.2)*_t727;
-    const trailer3_real_t _t729 = _t13*_t179 + _t16*_t190 + _t18*_t212 + _t72;
-    const trailer3_real_t _t730 = TRAILER3_LIT(1.6666666666666667)*_t362;
-    const trailer3_real_t _t731 = TRAILER3_LIT(0.2)*_t730;
-    const trailer3_real_t _t732 = _t13*_t181 + _t16*_t193 + _t18*_t215 + _t79;
-    const trailer3_real_t _t733 = _t134*_t355 + _t134*_t358 + _t139*_t343 + _t139*_t346
-            + _t143*_t349 + _t143*_t352;
-    const trailer3_real_t _t734 = J_theta_cart2_left*_t733;
-    const trailer3_real_t _t735 = _t134*_t336 + _t134*_t339 + _t139*_t324 + _t139*_t327
-            + _t143*_t330 + _t143*_t333;
-    const trailer3_real_t _t736 = J_theta_cart2_right*_t735;
-    const trailer3_real_t _t737 = _t129*_t427 + _t129*_t430 + _t134*_t421 + _t134*_t424
-            + _t139*_t409 + _t139*_t412 + _t143*_t415 + _t143*_t418;
-    const trailer3_real_t _t738 = J_theta_cart3_left*_t737;
-    const trailer3_real_t _t739 = _t129*_t402 + _t129*_t405 + _t134*_t396 + _t134*_t399
-            + _t139*_t384 + _t139*_t387 + _t143*_t390 + _t143*_t393;
-    const trailer3_real_t _t740 = J_theta_cart3_right*_t739;
-    const trailer3_real_t _t741 = _t139*_t295 + _t139*_t298 + _t143*_t301 + _t143*_t304;
-    const trailer3_real_t _t742 = J_theta_cart_left*_t741;
-    const trailer3_real_t _t743 = _t139*_t282 + _t139*_t285 + _t143*_t288 + _t143*_t291;
-    const trailer3_real_t _t744 = J_theta_cart_right*_t743;
-    const trailer3_real_t _t745 = _t547*_t93;
-    const trailer3_real_t _t746 = _t542*_t592;
-    const trailer3_real_t _t747 = _t543*_t593;
-    const trailer3_real_t _t748 = _t544*_t591;
-    const trailer3_real_t _t749 = TRAILER3_LIT(2.0)*_t477;
-    const trailer3_real_t _t750 = TRAILER3_LIT(2.0)*_t480;
-    const trailer3_real_t _t751 = TRAILER3_LIT(2.0)*_t483;
-    const trailer3_real_t _t752 = TRAILER3_LIT(2.0)*_t486;
-    const trailer3_real_t _t753 = TRAILER3_LIT(2.0)*_t489;
-    const trailer3_real_t _t754 = TRAILER3_LIT(2.0)*_t492;
-    const trailer3_real_t _t755 = -TRAILER3_LIT(2.0)*_t27;
-    const trailer3_real_t _t756 = _t68*_t755;
-    const trailer3_real_t _t757 = TRAILER3_LIT(2.0)*_t439;
-    const trailer3_real_t _t758 = _t35*_t755;
-    const trailer3_real_t _t759 = _t44*_t755;
-    const trailer3_real_t _t760 = TRAILER3_LIT(2.0)*_t441;
-    const trailer3_real_t _t761 = TRAILER3_LIT(2.0)*_t443;
-    const trailer3_real_t _t762 = TRAILER3_LIT(2.0)*_t445;
-    const trailer3_real_t _t763 = TRAILER3_LIT(2.0)*_t451 + TRAILER3_LIT(2.0)*_t453
-            + TRAILER3_LIT(2.0)*_t455 + TRAILER3_LIT(2.0)*_t456 + TRAILER3_LIT(2.0)*_t457
-            + TRAILER3_LIT(2.0)*_t458;
-    const trailer3_real_t _t764 = TRAILER3_LIT(2.0)*_t460 + TRAILER3_LIT(2.0)*_t461
-            + TRAILER3_LIT(2.0)*_t463 + TRAILER3_LIT(2.0)*_t464 + TRAILER3_LIT(2.0)*_t465
-            + TRAILER3_LIT(2.0)*_t466;
-    const trailer3_real_t _t765 = TRAILER3_LIT(2.0)*_t468 + TRAILER3_LIT(2.0)*_t469
-            + TRAILER3_LIT(2.0)*_t470 + TRAILER3_LIT(2.0)*_t471 + TRAILER3_LIT(2.0)*_t472
-            + TRAILER3_LIT(2.0)*_t473;
+    const trailer3_real_t _t261 = J_theta_cart_right*_t260;
+    const trailer3_real_t _t262 = _t50 + _t53;
+    const trailer3_real_t _t263 = _t258*_t262;
+    const trailer3_real_t _t264 = J_theta_cart_right*_t263;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t _t265 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t266 = -_t46 + _t47 - _t48;
+    const trailer3_real_t _t267 = _t265*_t266;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t _t268 = J_theta_cart_left*_t267;
+    const trailer3_real_t _t269 = -_t50 + _t51 - _t52;
+    const trailer3_real_t _t270 = _t265*_t269;
+    const trailer3_real_t _t271 = J_theta_cart_left*_t270;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t272 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t273 = _t54 - _t56 + _t59;
+    const trailer3_real_t _t274 = _t272*_t273;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t _t275 = J_theta_cart2_right*_t274;
+    const trailer3_real_t _t276 = _t60 - _t61 + _t64;
+    const trailer3_real_t _t277 = _t272*_t276;
+    const trailer3_real_t _t278 = J_theta_cart2_right*_t277;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t _t279 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t280 = -_t54 - _t65;
+    const trailer3_real_t _t281 = _t279*_t280;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t _t282 = J_theta_cart2_left*_t281;
+    const trailer3_real_t _t283 = -_t60 - _t66;
+    const trailer3_real_t _t284 = _t279*_t283;
+    const trailer3_real_t _t285 = J_theta_cart2_left*_t284;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t286 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t287 = _t68 - _t75;
+    const trailer3_real_t _t288 = _t286*_t287;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t _t289 = J_theta_cart3_right*_t288;
+    const trailer3_real_t _t290 = _t77 - _t82;
+    const trailer3_real_t _t291 = _t286*_t290;
+    const trailer3_real_t _t292 = J_theta_cart3_right*_t291;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t _t293 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t294 = -_t68 - _t75;
+    const trailer3_real_t _t295 = _t293*_t294;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t _t296 = J_theta_cart3_left*_t295;
+    const trailer3_real_t _t297 = -_t77 - _t82;
+    const trailer3_real_t _t298 = _t293*_t297;
+    const trailer3_real_t _t299 = J_theta_cart3_left*_t298;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t300 = K_theta_tractor_x_tractor*_t199 + _t173*_t207 + _t202 + _t205
+            - _t207*_t210 - _t208 - _t209;
+    const trailer3_real_t _t301 = _t233 - _t235;
+    const trailer3_real_t _t302 = _t234 - _t236;
+    const trailer3_real_t _t303 = _t301*_t83 + _t302*_t86;
+    const trailer3_real_t _t304 = _t200*thetadot_right;
+    const trailer3_real_t _t305 = _t200*thetadot_left;
+    const trailer3_real_t _t306 = _t103*_t236 + _t107*_t304 + _t110*_t305 + _t233*_t92 + _t234*_t96
+            + _t235*_t99;
+    const trailer3_real_t _t307 = _t203*thetadot_right;
+    const trailer3_real_t _t308 = _t203*thetadot_left;
+    const trailer3_real_t _t309 = _t127*_t233 + _t132*_t234 + _t137*_t235 + _t142*_t236
+            + _t147*_t304 + _t151*_t305 + _t155*_t307 + _t157*_t308;
+    const trailer3_real_t _t310 = _t237*_t303 + _t239*_t306 + _t241*_t309 + _t300;
+    const trailer3_real_t _t311 = -_t201*_t211 - _t201*_t212 - _t204*_t213 - _t204*_t214
+            - _t207*_t215 - _t207*_t216;
+    const trailer3_real_t _t312 = _t20*_t233 + _t23*_t234;
+    const trailer3_real_t _t313 = -K_theta_tractor_x_tractor*_t312 + _t246*_t303 + _t251*_t306
+            + _t255*_t309 + _t311;
+    const trailer3_real_t _t314 = K_theta_cart_x_tractor_2*_t2 - _t173;
+    const trailer3_real_t _t315 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t201*_t7
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t204
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t199*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t199*_t3 - _t10*_t217 - _t10*_t218
+            - _t10*_t219 - _t10*_t220 - _t208*_t9 - _t209*_t9;
+    const trailer3_real_t _t316 = J_theta_cart*_t303 + _t247*_t306 + _t248*_t309 + _t312*_t314
+            + _t315;
+    const trailer3_real_t _t317 = K_theta_cart2_x_tractor_2*_t6 - _t174;
+    const trailer3_real_t _t318 = _t192*_t205 - _t192*_t209 - _t194*_t219 - _t194*_t220
+            + _t199*_t211 + _t199*_t212 - _t207*_t221 + _t207*_t222 + _t207*_t223 + _t207*_t224;
+    const trailer3_real_t _t319 = J_theta_cart2*_t306 + _t247*_t303 + _t252*_t309 + _t312*_t317
+            + _t318;
+    const trailer3_real_t _t320 = K_theta_cart3_x_tractor_2*_t12 - _t175;
+    const trailer3_real_t _t321 = _t199*_t213 + _t199*_t214 - _t201*_t227 + _t201*_t228
+            + _t201*_t231 + _t201*_t232 - _t207*_t225 + _t207*_t226 + _t207*_t229 + _t207*_t230;
+    const trailer3_real_t _t322 = J_theta_cart3*_t309 + _t248*_t303 + _t252*_t306 + _t312*_t320
+            + _t321;
+    const trailer3_real_t _t323 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t324 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t325 = _t30*_t314;
+    const trailer3_real_t _t326 = _t237*_t86 + _t325;
+    const trailer3_real_t _t327 = _t320*_t76;
+    const trailer3_real_t _t328 = _t317*_t41;
+    const trailer3_real_t _t329 = _t327 + _t328;
+    const trailer3_real_t _t330 = _t213 + _t214;
+    const trailer3_real_t _t331 = _t330*_t76;
+    const trailer3_real_t _t332 = _t211 + _t212;
+    const trailer3_real_t _t333 = _t332*_t41;
+    const trailer3_real_t _t334 = _t215 + _t216;
+    const trailer3_real_t _t335 = _t246*_t86 + _t30*_t334;
+    const trailer3_real_t _t336 = J_theta_cart*_t86;
+    const trailer3_real_t _t337 = _t22*_t334;
+    const trailer3_real_t _t338 = _t23*_t314;
+    const trailer3_real_t _t339 = _t22*_t332;
+    const trailer3_real_t _t340 = _t23*_t317;
+    const trailer3_real_t _t341 = _t247*_t86;
+    const trailer3_real_t _t342 = _t248*_t86;
+    const trailer3_real_t _t343 = _t22*_t330;
+    const trailer3_real_t _t344 = _t23*_t320;
+    const trailer3_real_t _t345 = _t343 + _t344;
+    const trailer3_real_t _t346 = _t114 - _t24;
+    const trailer3_real_t _t347 = _t258*_t346;
+    const trailer3_real_t _t348 = J_theta_cart_right*_t347;
+    const trailer3_real_t _t349 = -_t114 - _t24;
+    const trailer3_real_t _t350 = _t265*_t349;
+    const trailer3_real_t _t351 = J_theta_cart_left*_t350;
+    const trailer3_real_t _t352 = _t118 - _t120;
+    const trailer3_real_t _t353 = _t272*_t352;
+    const trailer3_real_t _t354 = J_theta_cart2_right*_t353;
+    const trailer3_real_t _t355 = -_t118 - _t120;
+    const trailer3_real_t _t356 = _t279*_t355;
+    const trailer3_real_t _t357 = J_theta_cart2_left*_t356;
+    const trailer3_real_t _t358 = _t133 - _t136;
+    const trailer3_real_t _t359 = _t286*_t358;
+    const trailer3_real_t _t360 = J_theta_cart3_right*_t359;
+    const trailer3_real_t _t361 = -_t133 - _t136;
+    const trailer3_real_t _t362 = _t293*_t361;
+    const trailer3_real_t _t363 = J_theta_cart3_left*_t362;
+    const trailer3_real_t _t364 = _t260*_t348;
+    const trailer3_real_t _t365 = _t267*_t351;
+    const trailer3_real_t _t366 = _t250*_t83;
+    const trailer3_real_t _t367 = _t113 - _t21;
+    const trailer3_real_t _t368 = _t258*_t367;
+    const trailer3_real_t _t369 = _t264*_t368;
+    const trailer3_real_t _t370 = -_t113 - _t21;
+    const trailer3_real_t _t371 = _t265*_t370;
+    const trailer3_real_t _t372 = _t271*_t371;
+    const trailer3_real_t _t373 = _t263*_t348;
+    const trailer3_real_t _t374 = _t270*_t351;
+    const trailer3_real_t _t375 = _t250*_t86;
+    const trailer3_real_t _t376 = _t264*_t347;
+    const trailer3_real_t _t377 = _t271*_t350;
+    const trailer3_real_t _t378 = TRAILER3_LIT(2.0)*_t200;
+    const trailer3_real_t _t379 = _t174*_t378 - _t185*_t378;
+    const trailer3_real_t _t380 = TRAILER3_LIT(2.0)*_t203;
+    const trailer3_real_t _t381 = _t175*_t380 - _t190*_t380;
+    const trailer3_real_t _t382 = _t219 + _t220;
+    const trailer3_real_t _t383 = _t217 + _t218;
+    const trailer3_real_t _t384 = TRAILER3_LIT(2.0)*_t206;
+    const trailer3_real_t _t385 = _t173*_t384 - _t210*_t384;
+    const trailer3_real_t _t386 = _t83*thetadot_right + _t86*thetadot_left;
+    const trailer3_real_t _t387 = _t167*_t207 + _t168*_t207 + _t385*_t386;
+    const trailer3_real_t _t388 = _t178*_t201;
+    const trailer3_real_t _t389 = _t179*_t201;
+    const trailer3_real_t _t390 = _t180*_t204;
+    const trailer3_real_t _t391 = _t181*_t204;
+    const trailer3_real_t _t392 = _t176*_t207;
+    const trailer3_real_t _t393 = _t177*_t207;
+    const trailer3_real_t _t394 = TRAILER3_LIT(0.6)*_t206;
+    const trailer3_real_t _t395 = -_t167*_t394 - _t168*_t394;
+    const trailer3_real_t _t396 = _t386*_t395;
+    const trailer3_real_t _t397 = TRAILER3_LIT(0.6)*_t200;
+    const trailer3_real_t _t398 = -_t169*_t397 - _t170*_t397;
+    const trailer3_real_t _t399 = TRAILER3_LIT(0.6)*_t203;
+    const trailer3_real_t _t400 = -_t171*_t399 - _t172*_t399;
+    const trailer3_real_t _t401 = _t176*_t199;
+    const trailer3_real_t _t402 = _t177*_t199;
+    const trailer3_real_t _t403 = TRAILER3_LIT(1.7)*_t200;
+    const trailer3_real_t _t404 = _t3*_t403;
+    const trailer3_real_t _t405 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t200*_t7
+            - _t169*_t404 - _t170*_t404 - _t185*_t2*_t403;
+    const trailer3_real_t _t406 = TRAILER3_LIT(1.7)*_t203;
+    const trailer3_real_t _t407 = _t3*_t406;
+    const trailer3_real_t _t408 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t2*_t203
+            - _t171*_t407 - _t172*_t407 - _t190*_t2*_t406;
+    const trailer3_real_t _t409 = _t178*_t199;
+    const trailer3_real_t _t410 = _t179*_t199;
+    const trailer3_real_t _t411 = TRAILER3_LIT(1.7)*_t206;
+    const trailer3_real_t _t412 = _t2*_t411;
+    const trailer3_real_t _t413 = _t3*_t411;
+    const trailer3_real_t _t414 = _t169*_t413 + _t170*_t413 - _t174*_t412 + _t185*_t412;
+    const trailer3_real_t _t415 = _t386*_t414;
+    const trailer3_real_t _t416 = _t406*_t7;
+    const trailer3_real_t _t417 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t203*_t6
+            - _t171*_t416 - _t172*_t416 - _t190*_t406*_t6;
+    const trailer3_real_t _t418 = _t180*_t199;
+    const trailer3_real_t _t419 = _t181*_t199;
+    const trailer3_real_t _t420 = _t171*_t413 + _t172*_t413 - _t175*_t412 + _t190*_t412;
+    const trailer3_real_t _t421 = _t386*_t420;
+    const trailer3_real_t _t422 = _t403*_t6;
+    const trailer3_real_t _t423 = _t403*_t7;
+    const trailer3_real_t _t424 = _t171*_t423 + _t172*_t423 - _t175*_t422 + _t190*_t422;
+    const trailer3_real_t _t425 = -_t386*thetadot_right;
+    const trailer3_real_t _t426 = _t425*_t99;
+    const trailer3_real_t _t427 = -_t386*thetadot_left;
+    const trailer3_real_t _t428 = _t103*_t427;
+    const trailer3_real_t _t429 = TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t430 = TRAILER3_LIT(1.6666666666666667)*_t126;
+    const trailer3_real_t _t431 = _t235*_t429 + _t236*_t430;
+    const trailer3_real_t _t432 = _t34*_t429;
+    const trailer3_real_t _t433 = _t34*_t430;
+    const trailer3_real_t _t434 = _t137*_t425;
+    const trailer3_real_t _t435 = _t142*_t427;
+    const trailer3_real_t _t436 = TRAILER3_LIT(0.2)*_t429;
+    const trailer3_real_t _t437 = TRAILER3_LIT(0.2)*_t430;
+    const trailer3_real_t _t438 = TRAILER3_LIT(1.6666666666666667)*_t117;
+    const trailer3_real_t _t439 = TRAILER3_LIT(0.2)*_t438;
+    const trailer3_real_t _t440 = TRAILER3_LIT(1.6666666666666667)*_t120;
+    const trailer3_real_t _t441 = TRAILER3_LIT(0.2)*_t440;
+    const trailer3_real_t _t442 = _t116 + _t121 - _t27;
+    const trailer3_real_t _t443 = _t272*_t442;
+    const trailer3_real_t _t444 = _t425*_t443;
+    const trailer3_real_t _t445 = _t119 + _t122 - _t31;
+    const trailer3_real_t _t446 = _t272*_t445;
+    const trailer3_real_t _t447 = _t427*_t446;
+    const trailer3_real_t _t448 = _t436 - _t89;
+    const trailer3_real_t _t449 = _t272*_t448;
+    const trailer3_real_t _t450 = _t437 - _t90;
+    const trailer3_real_t _t451 = _t272*_t450;
+    const trailer3_real_t _t452 = _t235*_t449 + _t236*_t451;
+    const trailer3_real_t _t453 = -_t121 - _t125;
+    const trailer3_real_t _t454 = _t279*_t453;
+    const trailer3_real_t _t455 = _t425*_t454;
+    const trailer3_real_t _t456 = -_t122 - _t126;
+    const trailer3_real_t _t457 = _t279*_t456;
+    const trailer3_real_t _t458 = _t427*_t457;
+    const trailer3_real_t _t459 = -_t436 - _t89;
+    const trailer3_real_t _t460 = _t279*_t459;
+    const trailer3_real_t _t461 = -_t437 - _t90;
+    const trailer3_real_t _t462 = _t279*_t461;
+    const trailer3_real_t _t463 = _t235*_t460 + _t236*_t462;
+    const trailer3_real_t _t464 = -_t140 - _t432;
+    const trailer3_real_t _t465 = -TRAILER3_LIT(1.6666666666666667)*_t464;
+    const trailer3_real_t _t466 = TRAILER3_LIT(0.2)*_t465;
+    const trailer3_real_t _t467 = _t429*_t72;
+    const trailer3_real_t _t468 = _t101 + _t467;
+    const trailer3_real_t _t469 = -_t145 - _t433;
+    const trailer3_real_t _t470 = -TRAILER3_LIT(1.6666666666666667)*_t469;
+    const trailer3_real_t _t471 = TRAILER3_LIT(0.2)*_t470;
+    const trailer3_real_t _t472 = _t430*_t72;
+    const trailer3_real_t _t473 = _t105 + _t472;
+    const trailer3_real_t _t474 = _t130 - _t34*_t438;
+    const trailer3_real_t _t475 = -TRAILER3_LIT(1.6666666666666667)*_t474;
+    const trailer3_real_t _t476 = TRAILER3_LIT(0.2)*_t475;
+    const trailer3_real_t _t477 = _t438*_t72 + _t93;
+    const trailer3_real_t _t478 = _t135 - _t34*_t440;
+    const trailer3_real_t _t479 = -TRAILER3_LIT(1.6666666666666667)*_t478;
+    const trailer3_real_t _t480 = TRAILER3_LIT(0.2)*_t479;
+    const trailer3_real_t _t481 = _t440*_t72 + _t97;
+    const trailer3_real_t _t482 = TRAILER3_LIT(1.6666666666666667)*_t131;
+    const trailer3_real_t _t483 = TRAILER3_LIT(0.2)*_t482;
+    const trailer3_real_t _t484 = TRAILER3_LIT(1.6666666666666667)*_t136;
+    const trailer3_real_t _t485 = TRAILER3_LIT(0.2)*_t484;
+    const trailer3_real_t _t486 = _t138 - _t141;
+    const trailer3_real_t _t487 = _t286*_t486;
+    const trailer3_real_t _t488 = _t425*_t487;
+    const trailer3_real_t _t489 = _t143 - _t146;
+    const trailer3_real_t _t490 = _t286*_t489;
+    const trailer3_real_t _t491 = _t427*_t490;
+    const trailer3_real_t _t492 = -_t138 - _t141;
+    const trailer3_real_t _t493 = _t293*_t492;
+    const trailer3_real_t _t494 = _t425*_t493;
+    const trailer3_real_t _t495 = -_t143 - _t146;
+    const trailer3_real_t _t496 = _t293*_t495;
+    const trailer3_real_t _t497 = _t427*_t496;
+    const trailer3_real_t _t498 = -_t115 - _t117;
+    const trailer3_real_t _t499 = _t279*_t498;
+    const trailer3_real_t _t500 = J_theta_cart2_left*_t499;
+    const trailer3_real_t _t501 = _t115 - _t117;
+    const trailer3_real_t _t502 = _t272*_t501;
+    const trailer3_real_t _t503 = J_theta_cart2_right*_t502;
+    const trailer3_real_t _t504 = -_t128 - _t131;
+    const trailer3_real_t _t505 = _t293*_t504;
+    const trailer3_real_t _t506 = J_theta_cart3_left*_t505;
+    const trailer3_real_t _t507 = _t128 - _t131;
+    const trailer3_real_t _t508 = _t286*_t507;
+    const trailer3_real_t _t509 = J_theta_cart3_right*_t508;
+    const trailer3_real_t _t510 = -_t267*_t301 - _t270*_t302 + _t350*_t427 + _t371*_t425;
+    const trailer3_real_t _t511 = _t268*_t510;
+    const trailer3_real_t _t512 = J_theta_cart_left*_t371;
+    const trailer3_real_t _t513 = _t301*_t371 + _t302*_t350;
+    const trailer3_real_t _t514 = _t512*_t513;
+    const trailer3_real_t _t515 = -_t260*_t301 - _t263*_t302 + _t347*_t427 + _t368*_t425;
+    const trailer3_real_t _t516 = _t261*_t515;
+    const trailer3_real_t _t517 = J_theta_cart_right*_t368;
+    const trailer3_real_t _t518 = _t301*_t368 + _t302*_t347;
+    const trailer3_real_t _t519 = _t517*_t518;
+    const trailer3_real_t _t520 = _t19*_t334;
+    const trailer3_real_t _t521 = _t303*_t520;
+    const trailer3_real_t _t522 = _t19*_t332;
+    const trailer3_real_t _t523 = _t306*_t522;
+    const trailer3_real_t _t524 = _t19*_t330;
+    const trailer3_real_t _t525 = _t309*_t524;
+    const trailer3_real_t _t526 = _t20*_t314;
+    const trailer3_real_t _t527 = _t303*_t526;
+    const trailer3_real_t _t528 = _t20*_t317;
+    const trailer3_real_t _t529 = _t306*_t528;
+    const trailer3_real_t _t530 = _t20*_t320;
+    const trailer3_real_t _t531 = _t309*_t530;
+    const trailer3_real_t _t532 = _t238*_t312;
+    const trailer3_real_t _t533 = _t240*_t312;
+    const trailer3_real_t _t534 = _t242*_t312;
+    const trailer3_real_t _t535 = _t316*_t83;
+    const trailer3_real_t _t536 = -_t26*_t301 - _t30*_t302 + _t425*_t83 + _t427*_t86;
+    const trailer3_real_t _t537 = _t249*_t536;
+    const trailer3_real_t _t538 = _t271*_t510;
+    const trailer3_real_t _t539 = _t351*_t513;
+    const trailer3_real_t _t540 = _t264*_t515;
+    const trailer3_real_t _t541 = _t348*_t518;
+    const trailer3_real_t _t542 = _t303*_t337;
+    const trailer3_real_t _t543 = _t306*_t339;
+    const trailer3_real_t _t544 = _t309*_t343;
+    const trailer3_real_t _t545 = _t303*_t338;
+    const trailer3_real_t _t546 = _t306*_t340;
+    const trailer3_real_t _t547 = _t309*_t344;
+    const trailer3_real_t _t548 = _t243*_t312;
+    const trailer3_real_t _t549 = _t244*_t312;
+    const trailer3_real_t _t550 = _t245*_t312;
+    const trailer3_real_t _t551 = _t316*_t86;
+    const trailer3_real_t _t552 = _t250*_t536;
+    const trailer3_real_t _t553 = _t26*_t314;
+    const trailer3_real_t _t554 = _t237*_t83 + _t553;
+    const trailer3_real_t _t555 = _t320*_t67;
+    const trailer3_real_t _t556 = _t317*_t35;
+    const trailer3_real_t _t557 = _t555 + _t556;
+    const trailer3_real_t _t558 = _t330*_t67;
+    const trailer3_real_t _t559 = _t332*_t35;
+    const trailer3_real_t _t560 = _t246*_t83 + _t26*_t334;
+    const trailer3_real_t _t561 = J_theta_cart*_t83;
+    const trailer3_real_t _t562 = _t247*_t83;
+    const trailer3_real_t _t563 = _t248*_t83;
+    const trailer3_real_t _t564 = _t524 + _t530;
+    const trailer3_real_t _t565 = _t260*_t517;
+    const trailer3_real_t _t566 = _t267*_t512;
+    const trailer3_real_t _t567 = _t249*_t83;
+    const trailer3_real_t _t568 = _t261*_t368;
+    const trailer3_real_t _t569 = _t268*_t371;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t570 = J_x_tractor*_t23 + K_theta_tractor_x_tractor_2*_t22 + _t243
+            + _t244 + _t245;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t571 = J_theta_tractor*_t22 + K_theta_tractor_x_tractor_2*_t23
+            + _t246*_t30 + _t251*_t41 + _t255*_t76;
+    const trailer3_real_t _t572 = _t19*_t571 + _t20*_t570 + _t250*_t26 + _t254*_t35 + _t257*_t67
+            + _t260*_t264 + _t267*_t271 + _t274*_t278 + _t281*_t285 + _t288*_t292 + _t295*_t299;
+    const trailer3_real_t _t573 = TRAILER3_LIT(2.0)*_t572;
+    const trailer3_real_t _t574 = J_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_t19 + _t238
+            + _t240 + _t242;
+    const trailer3_real_t _t575 = J_theta_tractor*_t19 + K_theta_tractor_x_tractor_2*_t20
+            + _t246*_t26 + _t251*_t35 + _t255*_t67;
     const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t766 = J_theta_cart2_left*_t476*_t476 + J_theta_cart2_right*_t479*_t479
-            + J_theta_cart3_left*_t482*_t482 + J_theta_cart3_right*_t485*_t485
-            + J_theta_cart_left*_t488*_t488 + J_theta_cart_right*_t491*_t491 + J_theta_right
-            - _t27*_t450 + _t29*_t446 + _t33*_t436 + _t35*_t459 + _t44*_t467 + _t474*_t68;
-    const trailer3_real_t _t767 = _t28*_t450 + _t31*_t446 + _t38*_t436 + _t40*_t459 + _t467*_t49
-            + _t474*_t75 + _t505;
-    const trailer3_real_t _t768 = -_t27*_t512 + _t29*_t518 + _t33*_t511 + _t35*_t525 + _t44*_t532
-            + _t505 + _t539*_t68;
+    const trailer3_real_t _t576 = J_theta_right + _t19*_t575 + _t20*_t574 + _t249*_t26 + _t253*_t35
+            + _t256*_t67 + _t260*_t261 + _t267*_t268 + _t274*_t275 + _t281*_t282 + _t288*_t289
+            + _t295*_t296;
     const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t769 = J_theta_cart2_left*_t500*_t500 + J_theta_cart2_right*_t498*_t498
-            + J_theta_cart3_left*_t504*_t504 + J_theta_cart3_right*_t502*_t502
-            + J_theta_cart_left*_t496*_t496 + J_theta_cart_right*_t494*_t494 + J_theta_left
-            + _t28*_t512 + _t31*_t518 + _t38*_t511 + _t40*_t525 + _t49*_t532 + _t539*_t75;
-    const trailer3_real_t _t770 = _t766*_t769 - _t767*_t768;
-    const trailer3_real_t _t771 = TRAILER3_LIT(1.0)/_t770;
-    const trailer3_real_t _t772 = _t771*_t771;
-    const trailer3_real_t _t773 = _t771;
-    const trailer3_real_t _t774 = _t769*_t773;
-    const trailer3_real_t _t775 = -_t27*_t550 + _t29*_t548 + _t33*_t545 + _t35*_t552 + _t44*_t554
-            + _t477*_t733 + _t480*_t735 + _t483*_t737 + _t486*_t739 + _t489*_t741 + _t492*_t743
-            + _t556*_t68;
+    const trailer3_real_t _t577 = J_theta_left + _t22*_t571 + _t23*_t570 + _t250*_t30 + _t254*_t41
+            + _t257*_t76 + _t263*_t264 + _t270*_t271 + _t277*_t278 + _t284*_t285 + _t291*_t292
+            + _t298*_t299;
+    const trailer3_real_t _t578 = -_t572*_t572 + _t576*_t577;
+    const trailer3_real_t _t579 = TRAILER3_LIT(1.0)/_t578;
+    const trailer3_real_t _t580 = _t579*_t579;
+    const trailer3_real_t _t581 = _t579;
+    const trailer3_real_t _t582 = _t577*_t581;
+    const trailer3_real_t _t583 = _t123 + _t29;
+    const trailer3_real_t _t584 = _t272*_t583;
+    const trailer3_real_t _t585 = _t124 + _t33;
+    const trailer3_real_t _t586 = _t272*_t585;
+    const trailer3_real_t _t587 = _t233*_t502 + _t234*_t353 + _t235*_t443 + _t236*_t446
+            + _t304*_t584 + _t305*_t586;
+    const trailer3_real_t _t588 = -_t123 + _t29;
+    const trailer3_real_t _t589 = _t279*_t588;
+    const trailer3_real_t _t590 = -_t124 + _t33;
+    const trailer3_real_t _t591 = _t279*_t590;
+    const trailer3_real_t _t592 = _t233*_t499 + _t234*_t356 + _t235*_t454 + _t236*_t457
+            + _t304*_t589 + _t305*_t591;
+    const trailer3_real_t _t593 = _t148 - _t150;
+    const trailer3_real_t _t594 = _t286*_t593;
+    const trailer3_real_t _t595 = _t152 - _t154;
+    const trailer3_real_t _t596 = _t286*_t595;
+    const trailer3_real_t _t597 = _t156 + _t40;
+    const trailer3_real_t _t598 = _t286*_t597;
+    const trailer3_real_t _t599 = _t158 + _t45;
+    const trailer3_real_t _t600 = _t286*_t599;
+    const trailer3_real_t _t601 = _t233*_t508 + _t234*_t359 + _t235*_t487 + _t236*_t490
+            + _t304*_t594 + _t305*_t596 + _t307*_t598 + _t308*_t600;
+    const trailer3_real_t _t602 = -_t148 - _t150;
+    const trailer3_real_t _t603 = _t293*_t602;
+    const trailer3_real_t _t604 = -_t152 - _t154;
+    const trailer3_real_t _t605 = _t293*_t604;
+    const trailer3_real_t _t606 = -_t156 + _t40;
+    const trailer3_real_t _t607 = _t293*_t606;
+    const trailer3_real_t _t608 = -_t158 + _t45;
+    const trailer3_real_t _t609 = _t293*_t608;
+    const trailer3_real_t _t610 = _t233*_t505 + _t234*_t362 + _t235*_t493 + _t236*_t496
+            + _t304*_t603 + _t305*_t605 + _t307*_t607 + _t308*_t609;
+    const trailer3_real_t _t611 = _t19*_t313 + _t20*_t310 + _t26*_t316 + _t261*_t518 + _t268*_t513
+            + _t275*_t587 + _t282*_t592 + _t289*_t601 + _t296*_t610 + _t319*_t35 + _t322*_t67;
     const trailer3_real_t tau_right = tau[0];
-    const trailer3_real_t _t776 = -_t775 + tau_right;
-    const trailer3_real_t _t777 = _t773*_t776;
-    const trailer3_real_t _t778 = _t767*_t773;
-    const trailer3_real_t _t779 = _t28*_t550 + _t31*_t548 + _t38*_t545 + _t40*_t552 + _t49*_t554
-            + _t556*_t75 + _t557*_t733 + _t558*_t735 + _t559*_t737 + _t560*_t739 + _t561*_t741
-            + _t562*_t743;
+    const trailer3_real_t _t612 = -_t611 + tau_right;
+    const trailer3_real_t _t613 = _t581*_t612;
+    const trailer3_real_t _t614 = _t572*_t581;
+    const trailer3_real_t _t615 = _t22*_t313 + _t23*_t310 + _t264*_t518 + _t271*_t513 + _t278*_t587
+            + _t285*_t592 + _t292*_t601 + _t299*_t610 + _t30*_t316 + _t319*_t41 + _t322*_t76;
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t780 = -_t779 + tau_left;
-    const trailer3_real_t _t781 = _t773*_t780;
-    const trailer3_real_t _t782 = -_t767*_t780 + _t769*_t776;
-    const trailer3_real_t _t783 = -_t161 + _t162 + _t165 + _t166;
-    const trailer3_real_t _t784 = -_t169 + _t170 + _t175 + _t176;
-    const trailer3_real_t _t785 = _t35*_t49 + _t40*_t44;
-    const trailer3_real_t _t786 = _t35*_t75 + _t40*_t68;
-    const trailer3_real_t _t787 = TRAILER3_LIT(2.0)*_t40;
-    const trailer3_real_t _t788 = _t49*_t787;
-    const trailer3_real_t _t789 = _t75*_t787;
-    const trailer3_real_t _t790 = _t10*_t152 + _t10*_t153 + _t11*_t131 - _t11*_t132;
-    const trailer3_real_t _t791 = _t10*_t155 + _t10*_t156 + _t11*_t136 - _t11*_t137;
-    const trailer3_real_t _t792 = _t115*_t144 + _t116*_t144 + _t117*_t144 - _t118*_t144;
-    const trailer3_real_t _t793 = _t119*_t144 + _t120*_t144 + _t121*_t144 - _t122*_t144;
-    const trailer3_real_t _t794 = TRAILER3_LIT(2.0)*_t21;
-    const trailer3_real_t _t795 = TRAILER3_LIT(2.0)*_t23;
-    const trailer3_real_t _t796 = TRAILER3_LIT(1.6666666666666667)*_t275;
-    const trailer3_real_t _t797 = TRAILER3_LIT(0.2)*_t796;
-    const trailer3_real_t _t798 = _t0*_t33 + _t183 + _t184;
-    const trailer3_real_t _t799 = TRAILER3_LIT(1.6666666666666667)*_t278;
-    const trailer3_real_t _t800 = TRAILER3_LIT(0.2)*_t799;
-    const trailer3_real_t _t801 = _t0*_t38 + _t186 + _t187;
-    const trailer3_real_t _t802 = _t12*_t796 - _t195*_t794 - _t315;
-    const trailer3_real_t _t803 = -TRAILER3_LIT(1.6666666666666667)*_t802;
-    const trailer3_real_t _t804 = TRAILER3_LIT(0.2)*_t803;
-    const trailer3_real_t _t805 = TRAILER3_LIT(2.0)*_t207 + _t208 - _t21*_t796;
-    const trailer3_real_t _t806 = _t12*_t799 - _t197*_t794 - _t319;
-    const trailer3_real_t _t807 = -TRAILER3_LIT(1.6666666666666667)*_t806;
-    const trailer3_real_t _t808 = TRAILER3_LIT(0.2)*_t807;
-    const trailer3_real_t _t809 = TRAILER3_LIT(2.0)*_t209 - _t21*_t799 + _t210;
-    const trailer3_real_t _t810 = TRAILER3_LIT(1.6666666666666667)*_t310;
-    const trailer3_real_t _t811 = TRAILER3_LIT(0.2)*_t810;
-    const trailer3_real_t _t812 = _t12*_t195 + _t60;
-    const trailer3_real_t _t813 = TRAILER3_LIT(1.6666666666666667)*_t312;
-    const trailer3_real_t _t814 = TRAILER3_LIT(0.2)*_t813;
-    const trailer3_real_t _t815 = _t12*_t197 + _t64;
-    const trailer3_real_t _t816 = _t16*_t796 + _t18*_t803 - _t195*_t795 - _t373;
-    const trailer3_real_t _t817 = -TRAILER3_LIT(1.6666666666666667)*_t816;
-    const trailer3_real_t _t818 = TRAILER3_LIT(0.2)*_t817;
-    const trailer3_real_t _t819 = -_t23*_t796 + TRAILER3_LIT(2.0)*_t237 + _t239 - _t24*_t803;
-    const trailer3_real_t _t820 = _t16*_t799 + _t18*_t807 - _t197*_t795 - _t378;
-    const trailer3_real_t _t821 = -TRAILER3_LIT(1.6666666666666667)*_t820;
-    const trailer3_real_t _t822 = TRAILER3_LIT(0.2)*_t821;
-    const trailer3_real_t _t823 = -_t23*_t799 - _t24*_t807 + TRAILER3_LIT(2.0)*_t240 + _t242;
-    const trailer3_real_t _t824 = _t18*_t810 - _t218*_t24;
-    const trailer3_real_t _t825 = -TRAILER3_LIT(1.6666666666666667)*_t824;
-    const trailer3_real_t _t826 = TRAILER3_LIT(0.2)*_t825;
-    const trailer3_real_t _t827 = _t238 - _t24*_t810;
-    const trailer3_real_t _t828 = _t18*_t813 - _t221*_t24;
-    const trailer3_real_t _t829 = -TRAILER3_LIT(1.6666666666666667)*_t828;
-    const trailer3_real_t _t830 = TRAILER3_LIT(0.2)*_t829;
-    const trailer3_real_t _t831 = -_t24*_t813 + _t241;
-    const trailer3_real_t _t832 = TRAILER3_LIT(1.6666666666666667)*_t364;
-    const trailer3_real_t _t833 = TRAILER3_LIT(0.2)*_t832;
-    const trailer3_real_t _t834 = _t16*_t195 + _t18*_t218 + _t71;
-    const trailer3_real_t _t835 = TRAILER3_LIT(1.6666666666666667)*_t366;
-    const trailer3_real_t _t836 = TRAILER3_LIT(0.2)*_t835;
-    const trailer3_real_t _t837 = _t16*_t197 + _t18*_t221 + _t78;
-    const trailer3_real_t _t838 = -_t542*_t592;
-    const trailer3_real_t _t839 = _t35*_t543 + _t44*_t542;
-    const trailer3_real_t _t840 = _t35*_t544 + _t542*_t68;
-    const trailer3_real_t _t841 = _t40*_t543 + _t49*_t542;
-    const trailer3_real_t _t842 = _t40*_t544 + _t542*_t75;
-    const trailer3_real_t _t843 = TRAILER3_LIT(2.0)*_t35;
-    const trailer3_real_t _t844 = _t44*_t843;
-    const trailer3_real_t _t845 = _t68*_t843;
-    const trailer3_real_t _t846 = -_t171 + _t172 + _t177 + _t178;
-    const trailer3_real_t _t847 = _t44*_t75 + _t49*_t68;
-    const trailer3_real_t _t848 = TRAILER3_LIT(2.0)*_t49;
-    const trailer3_real_t _t849 = _t75*_t848;
-    const trailer3_real_t _t850 = _t123*_t152 + _t123*_t153 + _t125*_t131 - _t125*_t132;
-    const trailer3_real_t _t851 = _t124*_t135 + _t126*_t135 + _t127*_t135 - _t128*_t135;
-    const trailer3_real_t _t852 = TRAILER3_LIT(2.0)*_t24;
-    const trailer3_real_t _t853 = TRAILER3_LIT(1.6666666666666667)*_t316;
-    const trailer3_real_t _t854 = TRAILER3_LIT(0.2)*_t853;
-    const trailer3_real_t _t855 = _t200 + _t201 + _t208 + _t33*_t7;
-    const trailer3_real_t _t856 = TRAILER3_LIT(1.6666666666666667)*_t320;
-    const trailer3_real_t _t857 = TRAILER3_LIT(0.2)*_t856;
-    const trailer3_real_t _t858 = _t204 + _t205 + _t210 + _t38*_t7;
-    const trailer3_real_t _t859 = _t18*_t853 - _t223*_t852 - _t374;
-    const trailer3_real_t _t860 = -TRAILER3_LIT(1.6666666666666667)*_t859;
-    const trailer3_real_t _t861 = TRAILER3_LIT(0.2)*_t860;
-    const trailer3_real_t _t862 = -_t24*_t853 + TRAILER3_LIT(2.0)*_t243 + _t244;
-    const trailer3_real_t _t863 = _t18*_t856 - _t225*_t852 - _t379;
-    const trailer3_real_t _t864 = -TRAILER3_LIT(1.6666666666666667)*_t863;
-    const trailer3_real_t _t865 = TRAILER3_LIT(0.2)*_t864;
-    const trailer3_real_t _t866 = -_t24*_t856 + TRAILER3_LIT(2.0)*_t245 + _t246;
-    const trailer3_real_t _t867 = TRAILER3_LIT(1.6666666666666667)*_t368;
-    const trailer3_real_t _t868 = TRAILER3_LIT(0.2)*_t867;
-    const trailer3_real_t _t869 = _t18*_t223 + _t70;
-    const trailer3_real_t _t870 = TRAILER3_LIT(1.6666666666666667)*_t370;
-    const trailer3_real_t _t871 = TRAILER3_LIT(0.2)*_t870;
-    const trailer3_real_t _t872 = _t18*_t225 + _t77;
-    const trailer3_real_t _t873 = -_t543*_t593;
-    const trailer3_real_t _t874 = _t44*_t544 + _t543*_t68;
-    const trailer3_real_t _t875 = _t49*_t544 + _t543*_t75;
-    const trailer3_real_t _t876 = TRAILER3_LIT(2.0)*_t44;
-    const trailer3_real_t _t877 = _t68*_t876;
-    const trailer3_real_t _t878 = TRAILER3_LIT(2.0)*_t99;
-    const trailer3_real_t _t879 = TRAILER3_LIT(1.6666666666666667)*_t375;
-    const trailer3_real_t _t880 = TRAILER3_LIT(0.2)*_t879;
-    const trailer3_real_t _t881 = _t13*_t33 + _t229 + _t230 + _t239 + _t244;
-    const trailer3_real_t _t882 = TRAILER3_LIT(1.6666666666666667)*_t380;
-    const trailer3_real_t _t883 = TRAILER3_LIT(0.2)*_t882;
-    const trailer3_real_t _t884 = _t13*_t38 + _t234 + _t235 + _t242 + _t246;
-    const trailer3_real_t _t885 = -_t544*_t591;
-    const trailer3_real_t _t886 = TRAILER3_LIT(2.0)*_t139;
-    const trailer3_real_t _t887 = -_t141*_t886 + _t886*_t92;
-    const trailer3_real_t _t888 = _t84*_t886 + _t85*_t886;
-    const trailer3_real_t _t889 = TRAILER3_LIT(0.6)*_t139;
-    const trailer3_real_t _t890 = _t4*_t889;
-    const trailer3_real_t _t891 = _t2*_t889;
-    const trailer3_real_t _t892 = _t102*_t891 + _t86*_t890 + _t87*_t890 - _t891*_t94;
-    const trailer3_real_t _t893 = _t107*_t891 + _t88*_t890 + _t89*_t890 - _t891*_t96;
-    const trailer3_real_t _t894 = _t112*_t891 + _t890*_t90 + _t890*_t91 - _t891*_t98;
-    const trailer3_real_t _t895 = _t766*_t773;
-    const trailer3_real_t _t896 = _t768*_t773;
-    const trailer3_real_t _t897 = _t766*_t780 - _t768*_t776;
-    const trailer3_real_t _t898 = _t179*_t518 + _t181*_t446 + _t190*_t525 + _t193*_t459
-            + _t212*_t532 + _t215*_t467 + _t248*_t539 + _t251*_t474 + _t281*_t562 + _t284*_t492
-            + _t29*_t511 + _t294*_t561 + _t297*_t489 + _t31*_t436 + _t323*_t558 + _t326*_t480
-            + _t342*_t557 + _t345*_t477 + _t383*_t560 + _t386*_t486 + _t408*_t559 + _t411*_t483
-            + _t438*(-_t27*_t38 + _t28*_t33) + _t591*_t594 + _t592*_t595 + _t593*_t596
-            + _t93*(-_t27*_t31 + _t28*_t29);
-    const trailer3_real_t _t899 = _t181*(TRAILER3_LIT(2.0)*_t513 + _t607 + _t608 + _t609 + _t610)
-            + _t193*_t611 + _t215*_t612 + _t251*_t613 + _t284*_t602 + _t297*_t601 + _t31*_t603*_t93
-            + _t31*(TRAILER3_LIT(2.0)*_t506 + TRAILER3_LIT(2.0)*_t507 + TRAILER3_LIT(2.0)*_t508
-            + TRAILER3_LIT(2.0)*_t509 + TRAILER3_LIT(2.0)*_t510) + _t326*_t598 + _t345*_t597
-            + _t38*_t607 + _t386*_t600 + _t411*_t599 + _t591*_t604 + _t592*_t605 + _t593*_t606;
-    const trailer3_real_t _t900 = -_t150 - _t151 + _t564*_t615 + _t566*_t617 + _t569*_t619;
-    const trailer3_real_t _t901 = _t142 + _t564*_t620 + _t566*_t621 + _t569*_t622;
-    const trailer3_real_t _t902 = _t564*_t625 + _t566*_t628 + _t569*_t631 - _t632 + _t633 + _t634
-            + _t635 + _t636 + _t637;
-    const trailer3_real_t _t903 = _t566*_t640 + _t569*_t643 - _t644;
-    const trailer3_real_t _t904 = _t564*_t648 + _t569*_t650 - _t651;
-    const trailer3_real_t _t905 = _t564*_t652 + _t566*_t655 - _t656;
-    const trailer3_real_t _t906 = _t657*_t665 + _t658*_t670;
-    const trailer3_real_t _t907 = _t564*_t565 + _t657*_t667 + _t658*_t672 + _t659*_t675
-            + _t660*_t678;
-    const trailer3_real_t _t908 = _t564*_t567 + _t566*_t568 + _t657*_t682 + _t658*_t686
-            + _t659*_t690 + _t660*_t694 + _t661*_t697 + _t662*_t700;
-    const trailer3_real_t _t909 = _t564*_t570 + _t566*_t571 + _t569*_t572 + _t657*_t704
-            + _t658*_t708 + _t659*_t712 + _t660*_t716 + _t661*_t720 + _t662*_t724 + _t663*_t727
-            + _t664*_t730;
-    const trailer3_real_t _t910 = _t668 - _t669;
-    const trailer3_real_t _t911 = _t279*_t910;
-    const trailer3_real_t _t912 = _t673 - _t674;
-    const trailer3_real_t _t913 = _t279*_t912;
-    const trailer3_real_t _t914 = _t676 - _t677;
-    const trailer3_real_t _t915 = _t279*_t914;
-    const trailer3_real_t _t916 = _t679 - _t680;
-    const trailer3_real_t _t917 = _t279*_t916;
-    const trailer3_real_t _t918 = _t564*_t574 + _t657*_t911 + _t658*_t913 + _t659*_t915
-            + _t660*_t917;
-    const trailer3_real_t _t919 = -_t668 - _t669;
-    const trailer3_real_t _t920 = _t292*_t919;
-    const trailer3_real_t _t921 = -_t673 - _t674;
-    const trailer3_real_t _t922 = _t292*_t921;
-    const trailer3_real_t _t923 = -_t676 - _t677;
-    const trailer3_real_t _t924 = _t292*_t923;
-    const trailer3_real_t _t925 = -_t679 - _t680;
-    const trailer3_real_t _t926 = _t292*_t925;
-    const trailer3_real_t _t927 = _t564*_t576 + _t657*_t920 + _t658*_t922 + _t659*_t924
-            + _t660*_t926;
-    const trailer3_real_t _t928 = _t683 - _t684;
-    const trailer3_real_t _t929 = _t321*_t928;
-    const trailer3_real_t _t930 = _t687 - _t688;
-    const trailer3_real_t _t931 = _t321*_t930;
-    const trailer3_real_t _t932 = _t691 - _t692;
-    const trailer3_real_t _t933 = _t321*_t932;
-    const trailer3_real_t _t934 = _t695 - _t696;
-    const trailer3_real_t _t935 = _t321*_t934;
-    const trailer3_real_t _t936 = _t698 - _t699;
-    const trailer3_real_t _t937 = _t321*_t936;
-    const trailer3_real_t _t938 = _t701 - _t702;
-    const trailer3_real_t _t939 = _t321*_t938;
-    const trailer3_real_t _t940 = _t564*_t578 + _t566*_t579 + _t657*_t929 + _t658*_t931
-            + _t659*_t933 + _t660*_t935 + _t661*_t937 + _t662*_t939;
-    const trailer3_real_t _t941 = -_t683 - _t684;
-    const trailer3_real_t _t942 = _t340*_t941;
-    const trailer3_real_t _t943 = -_t687 - _t688;
-    const trailer3_real_t _t944 = _t340*_t943;
-    const trailer3_real_t _t945 = -_t691 - _t692;
-    const trailer3_real_t _t946 = _t340*_t945;
-    const trailer3_real_t _t947 = -_t695 - _t696;
-    const trailer3_real_t _t948 = _t340*_t947;
-    const trailer3_real_t _t949 = -_t698 - _t699;
-    const trailer3_real_t _t950 = _t340*_t949;
-    const trailer3_real_t _t951 = -_t701 - _t702;
-    const trailer3_real_t _t952 = _t340*_t951;
-    const trailer3_real_t _t953 = _t564*_t581 + _t566*_t582 + _t657*_t942 + _t658*_t944
-            + _t659*_t946 + _t660*_t948 + _t661*_t950 + _t662*_t952;
-    const trailer3_real_t _t954 = _t705 - _t706;
-    const trailer3_real_t _t955 = _t381*_t954;
-    const trailer3_real_t _t956 = _t709 - _t710;
-    const trailer3_real_t _t957 = _t381*_t956;
-    const trailer3_real_t _t958 = _t713 - _t714;
-    const trailer3_real_t _t959 = _t381*_t958;
-    const trailer3_real_t _t960 = _t717 - _t718;
-    const trailer3_real_t _t961 = _t381*_t960;
-    const trailer3_real_t _t962 = _t721 - _t722;
-    const trailer3_real_t _t963 = _t381*_t962;
-    const trailer3_real_t _t964 = _t725 - _t726;
-    const trailer3_real_t _t965 = _t381*_t964;
-    const trailer3_real_t _t966 = _t728 - _t729;
-    const trailer3_real_t _t967 = _t381*_t966;
-    const trailer3_real_t _t968 = _t731 - _t732;
-    const trailer3_real_t _t969 = _t381*_t968;
-    const trailer3_real_t _t970 = _t564*_t584 + _t566*_t585 + _t569*_t586 + _t657*_t955
-            + _t658*_t957 + _t659*_t959 + _t660*_t961 + _t661*_t963 + _t662*_t965 + _t663*_t967
-            + _t664*_t969;
-    const trailer3_real_t _t971 = -_t705 - _t706;
-    const trailer3_real_t _t972 = _t406*_t971;
-    const trailer3_real_t _t973 = -_t709 - _t710;
-    const trailer3_real_t _t974 = _t406*_t973;
-    const trailer3_real_t _t975 = -_t713 - _t714;
-    const trailer3_real_t _t976 = _t406*_t975;
-    const trailer3_real_t _t977 = -_t717 - _t718;
-    const trailer3_real_t _t978 = _t406*_t977;
-    const trailer3_real_t _t979 = -_t721 - _t722;
-    const trailer3_real_t _t980 = _t406*_t979;
-    const trailer3_real_t _t981 = -_t725 - _t726;
-    const trailer3_real_t _t982 = _t406*_t981;
-    const trailer3_real_t _t983 = -_t728 - _t729;
-    const trailer3_real_t _t984 = _t406*_t983;
-    const trailer3_real_t _t985 = -_t731 - _t732;
-    const trailer3_real_t _t986 = _t406*_t985;
-    const trailer3_real_t _t987 = _t564*_t588 + _t566*_t589 + _t569*_t590 + _t657*_t972
-            + _t658*_t974 + _t659*_t976 + _t660*_t978 + _t661*_t980 + _t662*_t982 + _t663*_t984
-            + _t664*_t986;
-    const trailer3_real_t _t988 = _t179*_t548 + _t190*_t552 + _t212*_t554 + _t248*_t556 - _t27*_t745
-            - _t27*_t746 - _t27*_t747 - _t27*_t748 - _t27*_t902 + _t281*_t744 + _t29*_t545
-            + _t29*_t900 + _t294*_t742 + _t323*_t736 + _t33*_t901 + _t342*_t734 + _t35*_t903
-            + _t383*_t740 + _t408*_t738 + _t436*_t547 + _t439*_t541 + _t44*_t904 + _t446*_t906
-            + _t459*_t907 + _t467*_t908 + _t474*_t909 + _t477*_t953 + _t480*_t940 + _t483*_t987
-            + _t486*_t970 + _t489*_t927 + _t492*_t918 + _t68*_t905;
-    const trailer3_real_t _t989 = _t181*_t548 + _t193*_t552 + _t215*_t554 + _t251*_t556 + _t28*_t745
-            + _t28*_t746 + _t28*_t747 + _t28*_t748 + _t28*_t902 + _t284*_t744 + _t297*_t742
-            + _t31*_t545 + _t31*_t900 + _t326*_t736 + _t345*_t734 + _t38*_t901 + _t386*_t740
-            + _t40*_t903 + _t411*_t738 + _t49*_t904 + _t511*_t547 + _t514*_t541 + _t518*_t906
-            + _t525*_t907 + _t532*_t908 + _t539*_t909 + _t557*_t953 + _t558*_t940 + _t559*_t987
-            + _t560*_t970 + _t561*_t927 + _t562*_t918 + _t75*_t905;
-    const trailer3_real_t _t990 = _t179*(TRAILER3_LIT(2.0)*_t437 + _t757 + _t760 + _t761 + _t762)
-            + _t190*_t763 + _t212*_t764 + _t248*_t765 + _t281*_t754 + _t29*_t755*_t93
-            + _t29*(TRAILER3_LIT(2.0)*_t431 + TRAILER3_LIT(2.0)*_t432 + TRAILER3_LIT(2.0)*_t433
-            + TRAILER3_LIT(2.0)*_t434 + TRAILER3_LIT(2.0)*_t435) + _t294*_t753 + _t323*_t750
-            + _t33*_t757 + _t342*_t749 + _t383*_t752 + _t408*_t751 + _t591*_t756 + _t592*_t758
-            + _t593*_t759;
-    const trailer3_real_t _t991 = _t766*_t899 - _t767*_t898 - _t768*_t898 + _t769*_t990;
-    const trailer3_real_t _t992 = -_t772*_t991;
-    const trailer3_real_t _t993 = -_t774*_t988 + _t777*_t899 + _t778*_t989 - _t781*_t898
-            + _t782*_t992;
-    const trailer3_real_t _t994 = _t195*_t525 + _t197*_t459 + _t218*_t532 + _t221*_t467
-            + _t254*_t539 + _t257*_t474 + _t287*_t562 + _t290*_t492 + _t300*_t561 + _t303*_t489
-            + _t329*_t558 + _t332*_t480 + _t348*_t557 + _t351*_t477 + _t389*_t560 + _t392*_t486
-            + _t414*_t559 + _t417*_t483 + _t440*(_t33*_t40 + _t35*_t38) - _t592*_t595 + _t783*_t785
-            + _t784*_t786 + _t95*(_t29*_t40 + _t31*_t35);
-    const trailer3_real_t _t995 = _t197*_t611 + _t221*_t612 + _t257*_t613 + _t290*_t602
-            + _t303*_t601 + _t31*_t787*_t95 + _t332*_t598 + _t351*_t597 + _t38*_t608 + _t392*_t600
-            + _t417*_t599 - _t592*_t605 + _t783*_t788 + _t784*_t789;
-    const trailer3_real_t _t996 = -_t148 - _t149 + _t565*_t615 + _t567*_t617 + _t570*_t619;
-    const trailer3_real_t _t997 = _t147 + _t565*_t620 + _t567*_t621 + _t570*_t622;
-    const trailer3_real_t _t998 = _t565*_t625 + _t567*_t628 + _t570*_t631 + _t632 - _t633 - _t634
-            - _t635;
-    const trailer3_real_t _t999 = _t567*_t640 + _t570*_t643 + _t644 + _t790 + _t791;
-    const trailer3_real_t _t1000 = _t565*_t648 + _t570*_t650 - _t792;
-    const trailer3_real_t _t1001 = _t565*_t652 + _t567*_t655 - _t793;
-    const trailer3_real_t _t1002 = _t565*_t565 + _t657*_t675 + _t658*_t678 + _t659*_t796
-            + _t660*_t799;
-    const trailer3_real_t _t1003 = _t565*_t567 + _t567*_t568 + _t657*_t690 + _t658*_t694
-            + _t659*_t803 + _t660*_t807 + _t661*_t810 + _t662*_t813;
-    const trailer3_real_t _t1004 = _t565*_t570 + _t567*_t571 + _t570*_t572 + _t657*_t712
-            + _t658*_t716 + _t659*_t817 + _t660*_t821 + _t661*_t825 + _t662*_t829 + _t663*_t832
-            + _t664*_t835;
-    const trailer3_real_t _t1005 = _t797 - _t798;
-    const trailer3_real_t _t1006 = _t1005*_t279;
-    const trailer3_real_t _t1007 = _t800 - _t801;
-    const trailer3_real_t _t1008 = _t1007*_t279;
-    const trailer3_real_t _t1009 = _t1006*_t659 + _t1008*_t660 + _t565*_t574 + _t657*_t915
-            + _t658*_t917;
-    const trailer3_real_t _t1010 = -_t797 - _t798;
-    const trailer3_real_t _t1011 = _t1010*_t292;
-    const trailer3_real_t _t1012 = -_t800 - _t801;
-    const trailer3_real_t _t1013 = _t1012*_t292;
-    const trailer3_real_t _t1014 = _t1011*_t659 + _t1013*_t660 + _t565*_t576 + _t657*_t924
-            + _t658*_t926;
-    const trailer3_real_t _t1015 = _t804 - _t805;
-    const trailer3_real_t _t1016 = _t1015*_t321;
-    const trailer3_real_t _t1017 = _t808 - _t809;
-    const trailer3_real_t _t1018 = _t1017*_t321;
-    const trailer3_real_t _t1019 = _t811 - _t812;
-    const trailer3_real_t _t1020 = _t1019*_t321;
-    const trailer3_real_t _t1021 = _t814 - _t815;
-    const trailer3_real_t _t1022 = _t1021*_t321;
-    const trailer3_real_t _t1023 = _t1016*_t659 + _t1018*_t660 + _t1020*_t661 + _t1022*_t662
-            + _t565*_t578 + _t567*_t579 + _t657*_t933 + _t658*_t935;
-    const trailer3_real_t _t1024 = -_t804 - _t805;
-    const trailer3_real_t _t1025 = _t1024*_t340;
-    const trailer3_real_t _t1026 = -_t808 - _t809;
-    const trailer3_real_t _t1027 = _t1026*_t340;
-    const trailer3_real_t _t1028 = -_t811 - _t812;
-    const trailer3_real_t _t1029 = _t1028*_t340;
-    const trailer3_real_t _t1030 = -_t814 - _t815;
-    const trailer3_real_t _t1031 = _t1030*_t340;
-    const trailer3_real_t _t1032 = _t1025*_t659 + _t1027*_t660 + _t1029*_t661 + _t1031*_t662
-            + _t565*_t581 + _t567*_t582 + _t657*_t946 + _t658*_t948;
-    const trailer3_real_t _t1033 = _t818 - _t819;
-    const trailer3_real_t _t1034 = _t1033*_t381;
-    const trailer3_real_t _t1035 = _t822 - _t823;
-    const trailer3_real_t _t1036 = _t1035*_t381;
-    const trailer3_real_t _t1037 = _t826 - _t827;
-    const trailer3_real_t _t1038 = _t1037*_t381;
-    const trailer3_real_t _t1039 = _t830 - _t831;
-    const trailer3_real_t _t1040 = _t1039*_t381;
-    const trailer3_real_t _t1041 = _t833 - _t834;
-    const trailer3_real_t _t1042 = _t1041*_t381;
-    const trailer3_real_t _t1043 = _t836 - _t837;
-    const trailer3_real_t _t1044 = _t1043*_t381;
-    const trailer3_real_t _t1045 = _t1034*_t659 + _t1036*_t660 + _t1038*_t661 + _t1040*_t662
-            + _t1042*_t663 + _t1044*_t664 + _t565*_t584 + _t567*_t585 + _t570*_t586 + _t657*_t959
-            + _t658*_t961;
-    const trailer3_real_t _t1046 = -_t818 - _t819;
-    const trailer3_real_t _t1047 = _t1046*_t406;
-    const trailer3_real_t _t1048 = -_t822 - _t823;
-    const trailer3_real_t _t1049 = _t1048*_t406;
-    const trailer3_real_t _t1050 = -_t826 - _t827;
-    const trailer3_real_t _t1051 = _t1050*_t406;
-    const trailer3_real_t _t1052 = -_t830 - _t831;
-    const trailer3_real_t _t1053 = _t1052*_t406;
-    const trailer3_real_t _t1054 = -_t833 - _t834;
-    const trailer3_real_t _t1055 = _t1054*_t406;
-    const trailer3_real_t _t1056 = -_t836 - _t837;
-    const trailer3_real_t _t1057 = _t1056*_t406;
-    const trailer3_real_t _t1058 = _t1047*_t659 + _t1049*_t660 + _t1051*_t661 + _t1053*_t662
-            + _t1055*_t663 + _t1057*_t664 + _t565*_t588 + _t567*_t589 + _t570*_t590 + _t657*_t976
-            + _t658*_t978;
-    const trailer3_real_t _t1059 = _t1000*_t44 + _t1001*_t68 + _t1002*_t459 + _t1003*_t467
-            + _t1004*_t474 + _t1009*_t492 + _t1014*_t489 + _t1023*_t480 + _t1032*_t477
-            + _t1045*_t486 + _t1058*_t483 + _t195*_t552 + _t218*_t554 + _t254*_t556 - _t27*_t838
-            - _t27*_t998 + _t287*_t744 + _t29*_t996 + _t300*_t742 + _t329*_t736 + _t33*_t997
-            + _t348*_t734 + _t35*_t999 + _t389*_t740 + _t414*_t738 + _t440*(_t33*_t542 + _t35*_t541)
-            + _t783*_t839 + _t784*_t840 + _t95*(_t29*_t542 + _t35*_t547);
-    const trailer3_real_t _t1060 = _t1000*_t49 + _t1001*_t75 + _t1002*_t525 + _t1003*_t532
-            + _t1004*_t539 + _t1009*_t562 + _t1014*_t561 + _t1023*_t558 + _t1032*_t557
-            + _t1045*_t560 + _t1058*_t559 + _t197*_t552 + _t221*_t554 + _t257*_t556 + _t28*_t838
-            + _t28*_t998 + _t290*_t744 + _t303*_t742 + _t31*_t996 + _t332*_t736 + _t351*_t734
-            + _t38*_t997 + _t392*_t740 + _t40*_t999 + _t417*_t738 + _t440*(_t38*_t542 + _t40*_t541)
-            + _t783*_t841 + _t784*_t842 + _t95*(_t31*_t542 + _t40*_t547);
-    const trailer3_real_t _t1061 = _t195*_t763 + _t218*_t764 + _t254*_t765 + _t287*_t754
-            + _t29*_t843*_t95 + _t300*_t753 + _t329*_t750 + _t33*_t760 + _t348*_t749 + _t389*_t752
-            + _t414*_t751 - _t592*_t758 + _t783*_t844 + _t784*_t845;
-    const trailer3_real_t _t1062 = _t1061*_t769 + _t766*_t995 - _t767*_t994 - _t768*_t994;
-    const trailer3_real_t _t1063 = -_t1062*_t772;
-    const trailer3_real_t _t1064 = -_t1059*_t774 + _t1060*_t778 + _t1063*_t782 + _t777*_t995
-            - _t781*_t994;
-    const trailer3_real_t _t1065 = _t223*_t532 + _t225*_t467 + _t260*_t539 + _t263*_t474
-            + _t335*_t558 + _t338*_t480 + _t354*_t557 + _t357*_t477 + _t395*_t560 + _t398*_t486
-            + _t420*_t559 + _t423*_t483 + _t442*(_t33*_t49 + _t38*_t44) - _t593*_t596 - _t783*_t785
-            + _t846*_t847 + _t97*(_t29*_t49 + _t31*_t44);
-    const trailer3_real_t _t1066 = _t225*_t612 + _t263*_t613 + _t31*_t848*_t97 + _t338*_t598
-            + _t357*_t597 + _t38*_t609 + _t398*_t600 + _t423*_t599 - _t593*_t606 - _t783*_t788
-            + _t846*_t849;
-    const trailer3_real_t _t1067 = -_t157 + _t568*_t617 + _t571*_t619;
-    const trailer3_real_t _t1068 = _t138 + _t568*_t621 + _t571*_t622;
-    const trailer3_real_t _t1069 = _t568*_t628 + _t571*_t631 - _t637;
-    const trailer3_real_t _t1070 = _t568*_t640 + _t571*_t643 - _t791;
-    const trailer3_real_t _t1071 = _t571*_t650 + _t651 + _t792 + _t850;
-    const trailer3_real_t _t1072 = _t568*_t655 - _t851;
-    const trailer3_real_t _t1073 = _t568*_t568 + _t657*_t697 + _t658*_t700 + _t659*_t810
-            + _t660*_t813 + _t661*_t853 + _t662*_t856;
-    const trailer3_real_t _t1074 = _t568*_t571 + _t571*_t572 + _t657*_t720 + _t658*_t724
-            + _t659*_t825 + _t660*_t829 + _t661*_t860 + _t662*_t864 + _t663*_t867 + _t664*_t870;
-    const trailer3_real_t _t1075 = _t854 - _t855;
-    const trailer3_real_t _t1076 = _t1075*_t321;
-    const trailer3_real_t _t1077 = _t857 - _t858;
-    const trailer3_real_t _t1078 = _t1077*_t321;
-    const trailer3_real_t _t1079 = _t1020*_t659 + _t1022*_t660 + _t1076*_t661 + _t1078*_t662
-            + _t568*_t579 + _t657*_t937 + _t658*_t939;
-    const trailer3_real_t _t1080 = -_t854 - _t855;
-    const trailer3_real_t _t1081 = _t1080*_t340;
-    const trailer3_real_t _t1082 = -_t857 - _t858;
-    const trailer3_real_t _t1083 = _t1082*_t340;
-    const trailer3_real_t _t1084 = _t1029*_t659 + _t1031*_t660 + _t1081*_t661 + _t1083*_t662
-            + _t568*_t582 + _t657*_t950 + _t658*_t952;
-    const trailer3_real_t _t1085 = _t861 - _t862;
-    const trailer3_real_t _t1086 = _t1085*_t381;
-    const trailer3_real_t _t1087 = _t865 - _t866;
-    const trailer3_real_t _t1088 = _t1087*_t381;
-    const trailer3_real_t _t1089 = _t868 - _t869;
-    const trailer3_real_t _t1090 = _t1089*_t381;
-    const trailer3_real_t _t1091 = _t871 - _t872;
-    const trailer3_real_t _t1092 = _t1091*_t381;
-    const trailer3_real_t _t1093 = _t1038*_t659 + _t1040*_t660 + _t1086*_t661 + _t1088*_t662
-            + _t1090*_t663 + _t1092*_t664 + _t568*_t585 + _t571*_t586 + _t657*_t963 + _t658*_t965;
-    const trailer3_real_t _t1094 = -_t861 - _t862;
-    const trailer3_real_t _t1095 = _t1094*_t406;
-    const trailer3_real_t _t1096 = -_t865 - _t866;
-    const trailer3_real_t _t1097 = _t1096*_t406;
-    const trailer3_real_t _t1098 = -_t868 - _t869;
-    const trailer3_real_t _t1099 = _t1098*_t406;
-    const trailer3_real_t _t1100 = -_t871 - _t872;
-    const trailer3_real_t _t1101 = _t1100*_t406;
-    const trailer3_real_t _t1102 = _t1051*_t659 + _t1053*_t660 + _t1095*_t661 + _t1097*_t662
-            + _t1099*_t663 + _t1101*_t664 + _t568*_t589 + _t571*_t590 + _t657*_t980 + _t658*_t982;
-    const trailer3_real_t _t1103 = _t1067*_t29 + _t1068*_t33 - _t1069*_t27 + _t1070*_t35
-            + _t1071*_t44 + _t1072*_t68 + _t1073*_t467 + _t1074*_t474 + _t1079*_t480 + _t1084*_t477
-            + _t1093*_t486 + _t1102*_t483 + _t223*_t554 + _t260*_t556 - _t27*_t873 + _t335*_t736
-            + _t354*_t734 + _t395*_t740 + _t420*_t738 + _t442*(_t33*_t543 + _t44*_t541)
-            - _t783*_t839 + _t846*_t874 + _t97*(_t29*_t543 + _t44*_t547);
-    const trailer3_real_t _t1104 = _t1067*_t31 + _t1068*_t38 + _t1069*_t28 + _t1070*_t40
-            + _t1071*_t49 + _t1072*_t75 + _t1073*_t532 + _t1074*_t539 + _t1079*_t558 + _t1084*_t557
-            + _t1093*_t560 + _t1102*_t559 + _t225*_t554 + _t263*_t556 + _t28*_t873 + _t338*_t736
-            + _t357*_t734 + _t398*_t740 + _t423*_t738 + _t442*(_t38*_t543 + _t49*_t541)
-            - _t783*_t841 + _t846*_t875 + _t97*(_t31*_t543 + _t49*_t547);
-    const trailer3_real_t _t1105 = _t223*_t764 + _t260*_t765 + _t29*_t876*_t97 + _t33*_t761
-            + _t335*_t750 + _t354*_t749 + _t395*_t752 + _t420*_t751 - _t593*_t759 - _t783*_t844
-            + _t846*_t877;
-    const trailer3_real_t _t1106 = -_t1065*_t767 - _t1065*_t768 + _t1066*_t766 + _t1105*_t769;
-    const trailer3_real_t _t1107 = -_t1106*_t772;
-    const trailer3_real_t _t1108 = -_t1065*_t781 + _t1066*_t777 - _t1103*_t774 + _t1104*_t778
-            + _t1107*_t782;
-    const trailer3_real_t _t1109 = _t265*_t539 + _t267*_t474 + _t401*_t560 + _t404*_t486
-            + _t426*_t559 + _t429*_t483 + _t444*(_t33*_t75 + _t38*_t68) - _t591*_t594 - _t784*_t786
-            - _t846*_t847 + _t99*(_t29*_t75 + _t31*_t68);
-    const trailer3_real_t _t1110 = _t267*_t613 + _t31*_t75*_t878 + _t38*_t610 + _t404*_t600
-            + _t429*_t599 - _t591*_t604 - _t784*_t789 - _t846*_t849;
-    const trailer3_real_t _t1111 = -_t154 + _t572*_t619;
-    const trailer3_real_t _t1112 = _t133 + _t572*_t622;
-    const trailer3_real_t _t1113 = _t572*_t631 - _t636;
-    const trailer3_real_t _t1114 = _t572*_t643 - _t790;
-    const trailer3_real_t _t1115 = _t572*_t650 - _t850;
-    const trailer3_real_t _t1116 = _t656 + _t793 + _t851;
-    const trailer3_real_t _t1117 = _t572*_t572 + _t657*_t727 + _t658*_t730 + _t659*_t832
-            + _t660*_t835 + _t661*_t867 + _t662*_t870 + _t663*_t879 + _t664*_t882;
-    const trailer3_real_t _t1118 = _t880 - _t881;
-    const trailer3_real_t _t1119 = _t1118*_t381;
-    const trailer3_real_t _t1120 = _t883 - _t884;
-    const trailer3_real_t _t1121 = _t1120*_t381;
-    const trailer3_real_t _t1122 = _t1042*_t659 + _t1044*_t660 + _t1090*_t661 + _t1092*_t662
-            + _t1119*_t663 + _t1121*_t664 + _t572*_t586 + _t657*_t967 + _t658*_t969;
-    const trailer3_real_t _t1123 = -_t880 - _t881;
-    const trailer3_real_t _t1124 = _t1123*_t406;
-    const trailer3_real_t _t1125 = -_t883 - _t884;
-    const trailer3_real_t _t1126 = _t1125*_t406;
-    const trailer3_real_t _t1127 = _t1055*_t659 + _t1057*_t660 + _t1099*_t661 + _t1101*_t662
-            + _t1124*_t663 + _t1126*_t664 + _t572*_t590 + _t657*_t984 + _t658*_t986;
-    const trailer3_real_t _t1128 = _t1111*_t29 + _t1112*_t33 - _t1113*_t27 + _t1114*_t35
-            + _t1115*_t44 + _t1116*_t68 + _t1117*_t474 + _t1122*_t486 + _t1127*_t483 + _t265*_t556
-            - _t27*_t885 + _t401*_t740 + _t426*_t738 + _t444*(_t33*_t544 + _t541*_t68) - _t784*_t840
-            - _t846*_t874 + _t99*(_t29*_t544 + _t547*_t68);
-    const trailer3_real_t _t1129 = _t1111*_t31 + _t1112*_t38 + _t1113*_t28 + _t1114*_t40
-            + _t1115*_t49 + _t1116*_t75 + _t1117*_t539 + _t1122*_t560 + _t1127*_t559 + _t267*_t556
-            + _t28*_t885 + _t404*_t740 + _t429*_t738 + _t444*(_t38*_t544 + _t541*_t75) - _t784*_t842
-            - _t846*_t875 + _t99*(_t31*_t544 + _t547*_t75);
-    const trailer3_real_t _t1130 = _t265*_t765 + _t29*_t68*_t878 + _t33*_t762 + _t401*_t752
-            + _t426*_t751 - _t591*_t756 - _t784*_t845 - _t846*_t877;
-    const trailer3_real_t _t1131 = -_t1109*_t767 - _t1109*_t768 + _t1110*_t766 + _t1130*_t769;
-    const trailer3_real_t _t1132 = -_t1131*_t772;
-    const trailer3_real_t _t1133 = -_t1109*_t781 + _t1110*_t777 - _t1128*_t774 + _t1129*_t778
-            + _t1132*_t782;
-    const trailer3_real_t _t1134 = -_t27*_t887 + _t35*_t615 + _t44*_t617 + _t619*_t68;
-    const trailer3_real_t _t1135 = -_t27*_t888 + _t35*_t620 + _t44*_t621 + _t622*_t68;
-    const trailer3_real_t _t1136 = _t35*_t625 + _t44*_t628 + _t631*_t68;
-    const trailer3_real_t _t1137 = -_t27*_t892 + _t44*_t640 + _t643*_t68;
-    const trailer3_real_t _t1138 = -_t27*_t893 + _t35*_t648 + _t650*_t68;
-    const trailer3_real_t _t1139 = -_t27*_t894 + _t35*_t652 + _t44*_t655;
-    const trailer3_real_t _t1140 = _t139*_t179 - _t27*_t563;
-    const trailer3_real_t _t1141 = _t139*_t29 - _t27*_t83;
-    const trailer3_real_t _t1142 = _t139*_t190 + _t143*_t195 - _t27*_t564 + _t35*_t565;
-    const trailer3_real_t _t1143 = _t134*_t223 + _t139*_t212 + _t143*_t218 - _t27*_t566 + _t35*_t567
-            + _t44*_t568;
-    const trailer3_real_t _t1144 = _t129*_t265 + _t134*_t260 + _t139*_t248 + _t143*_t254
-            - _t27*_t569 + _t35*_t570 + _t44*_t571 + _t572*_t68;
-    const trailer3_real_t _t1145 = _t139*_t281 + _t143*_t287 - _t27*_t573 + _t35*_t574;
-    const trailer3_real_t _t1146 = _t139*_t294 + _t143*_t300 - _t27*_t575 + _t35*_t576;
-    const trailer3_real_t _t1147 = _t134*_t335 + _t139*_t323 + _t143*_t329 - _t27*_t577 + _t35*_t578
-            + _t44*_t579;
-    const trailer3_real_t _t1148 = _t134*_t354 + _t139*_t342 + _t143*_t348 - _t27*_t580 + _t35*_t581
-            + _t44*_t582;
-    const trailer3_real_t _t1149 = _t129*_t401 + _t134*_t395 + _t139*_t383 + _t143*_t389
-            - _t27*_t583 + _t35*_t584 + _t44*_t585 + _t586*_t68;
-    const trailer3_real_t _t1150 = _t129*_t426 + _t134*_t420 + _t139*_t408 + _t143*_t414
-            - _t27*_t587 + _t35*_t588 + _t44*_t589 + _t590*_t68;
-    const trailer3_real_t _t1151 = _t1134*_t29 + _t1135*_t33 - _t1136*_t27 + _t1137*_t35
-            + _t1138*_t44 + _t1139*_t68 + _t1140*_t446 + _t1141*_t436 + _t1142*_t459 + _t1143*_t467
-            + _t1144*_t474 + _t1145*_t492 + _t1146*_t489 + _t1147*_t480 + _t1148*_t477
-            + _t1149*_t486 + _t1150*_t483;
-    const trailer3_real_t _t1152 = _t1134*_t31 + _t1135*_t38 + _t1136*_t28 + _t1137*_t40
-            + _t1138*_t49 + _t1139*_t75 + _t1140*_t518 + _t1141*_t511 + _t1142*_t525 + _t1143*_t532
-            + _t1144*_t539 + _t1145*_t562 + _t1146*_t561 + _t1147*_t558 + _t1148*_t557
-            + _t1149*_t560 + _t1150*_t559;
-    const trailer3_real_t _t1153 = -_t1151*_t769*_t773 + _t1152*_t778;
-    const trailer3_real_t _t1154 = _t28*_t887 + _t40*_t615 + _t49*_t617 + _t619*_t75;
-    const trailer3_real_t _t1155 = _t28*_t888 + _t40*_t620 + _t49*_t621 + _t622*_t75;
-    const trailer3_real_t _t1156 = _t40*_t625 + _t49*_t628 + _t631*_t75;
-    const trailer3_real_t _t1157 = _t28*_t892 + _t49*_t640 + _t643*_t75;
-    const trailer3_real_t _t1158 = _t28*_t893 + _t40*_t648 + _t650*_t75;
-    const trailer3_real_t _t1159 = _t28*_t894 + _t40*_t652 + _t49*_t655;
-    const trailer3_real_t _t1160 = _t139*_t181 + _t28*_t563;
-    const trailer3_real_t _t1161 = _t139*_t31 + _t28*_t83;
-    const trailer3_real_t _t1162 = _t139*_t193 + _t143*_t197 + _t28*_t564 + _t40*_t565;
-    const trailer3_real_t _t1163 = _t134*_t225 + _t139*_t215 + _t143*_t221 + _t28*_t566 + _t40*_t567
-            + _t49*_t568;
-    const trailer3_real_t _t1164 = _t129*_t267 + _t134*_t263 + _t139*_t251 + _t143*_t257
-            + _t28*_t569 + _t40*_t570 + _t49*_t571 + _t572*_t75;
-    const trailer3_real_t _t1165 = _t139*_t284 + _t143*_t290 + _t28*_t573 + _t40*_t574;
-    const trailer3_real_t _t1166 = _t139*_t297 + _t143*_t303 + _t28*_t575 + _t40*_t576;
-    const trailer3_real_t _t1167 = _t134*_t338 + _t139*_t326 + _t143*_t332 + _t28*_t577 + _t40*_t578
-            + _t49*_t579;
-    const trailer3_real_t _t1168 = _t134*_t357 + _t139*_t345 + _t143*_t351 + _t28*_t580 + _t40*_t581
-            + _t49*_t582;
-    const trailer3_real_t _t1169 = _t129*_t404 + _t134*_t398 + _t139*_t386 + _t143*_t392
-            + _t28*_t583 + _t40*_t584 + _t49*_t585 + _t586*_t75;
-    const trailer3_real_t _t1170 = _t129*_t429 + _t134*_t423 + _t139*_t411 + _t143*_t417
-            + _t28*_t587 + _t40*_t588 + _t49*_t589 + _t590*_t75;
-    const trailer3_real_t _t1171 = _t1154*_t29 + _t1155*_t33 - _t1156*_t27 + _t1157*_t35
-            + _t1158*_t44 + _t1159*_t68 + _t1160*_t446 + _t1161*_t436 + _t1162*_t459 + _t1163*_t467
-            + _t1164*_t474 + _t1165*_t492 + _t1166*_t489 + _t1167*_t480 + _t1168*_t477
-            + _t1169*_t486 + _t1170*_t483;
-    const trailer3_real_t _t1172 = _t1154*_t31 + _t1155*_t38 + _t1156*_t28 + _t1157*_t40
-            + _t1158*_t49 + _t1159*_t75 + _t1160*_t518 + _t1161*_t511 + _t1162*_t525 + _t1163*_t532
-            + _t1164*_t539 + _t1165*_t562 + _t1166*_t561 + _t1167*_t558 + _t1168*_t557
-            + _t1169*_t560 + _t1170*_t559;
-    const trailer3_real_t _t1173 = -_t1171*_t769*_t773 + _t1172*_t778;
-    const trailer3_real_t _t1174 = -_t777*_t898 + _t781*_t990 - _t895*_t989 + _t896*_t988
-            + _t897*_t992;
-    const trailer3_real_t _t1175 = _t1059*_t896 - _t1060*_t895 + _t1061*_t781 + _t1063*_t897
-            - _t777*_t994;
-    const trailer3_real_t _t1176 = -_t1065*_t777 + _t1103*_t896 - _t1104*_t895 + _t1105*_t781
-            + _t1107*_t897;
-    const trailer3_real_t _t1177 = -_t1109*_t777 + _t1128*_t896 - _t1129*_t895 + _t1130*_t781
-            + _t1132*_t897;
-    const trailer3_real_t _t1178 = _t1151*_t896 - _t1152*_t895;
-    const trailer3_real_t _t1179 = _t1171*_t896 - _t1172*_t895;
+    const trailer3_real_t _t616 = -_t615 + tau_left;
+    const trailer3_real_t _t617 = _t581*_t616;
+    const trailer3_real_t _t618 = -_t572*_t616 + _t577*_t612;
+    const trailer3_real_t _t619 = -_t221 + _t222 + _t223 + _t224;
+    const trailer3_real_t _t620 = _t41*_t619;
+    const trailer3_real_t _t621 = -_t225 + _t226 + _t229 + _t230;
+    const trailer3_real_t _t622 = _t621*_t76;
+    const trailer3_real_t _t623 = _t30*_t619;
+    const trailer3_real_t _t624 = _t30*_t621;
+    const trailer3_real_t _t625 = J_theta_cart2_right*_t446;
+    const trailer3_real_t _t626 = J_theta_cart2_left*_t457;
+    const trailer3_real_t _t627 = J_theta_cart3_right*_t490;
+    const trailer3_real_t _t628 = J_theta_cart3_left*_t496;
+    const trailer3_real_t _t629 = _t10*_t205 - _t10*_t209 + _t219*_t9 + _t220*_t9;
+    const trailer3_real_t _t630 = _t10*_t202 - _t10*_t208 + _t217*_t9 + _t218*_t9;
+    const trailer3_real_t _t631 = _t182*_t207 + _t183*_t207 + _t184*_t207 - _t186*_t207;
+    const trailer3_real_t _t632 = _t187*_t207 + _t188*_t207 + _t189*_t207 - _t191*_t207;
+    const trailer3_real_t _t633 = -TRAILER3_LIT(2.0)*_t116 + TRAILER3_LIT(2.0)*_t27;
+    const trailer3_real_t _t634 = -TRAILER3_LIT(1.6666666666666667)*_t633;
+    const trailer3_real_t _t635 = TRAILER3_LIT(0.2)*_t634;
+    const trailer3_real_t _t636 = TRAILER3_LIT(2.0)*_t56 + TRAILER3_LIT(2.0)*_t84;
+    const trailer3_real_t _t637 = -TRAILER3_LIT(2.0)*_t119 + TRAILER3_LIT(2.0)*_t31;
+    const trailer3_real_t _t638 = -TRAILER3_LIT(1.6666666666666667)*_t637;
+    const trailer3_real_t _t639 = TRAILER3_LIT(0.2)*_t638;
+    const trailer3_real_t _t640 = TRAILER3_LIT(2.0)*_t61 + TRAILER3_LIT(2.0)*_t87;
+    const trailer3_real_t _t641 = -TRAILER3_LIT(2.0)*_t129 + TRAILER3_LIT(2.0)*_t26*_t37
+            - _t34*_t634;
+    const trailer3_real_t _t642 = -TRAILER3_LIT(1.6666666666666667)*_t641;
+    const trailer3_real_t _t643 = TRAILER3_LIT(0.2)*_t642;
+    const trailer3_real_t _t644 = -_t634*_t72 + TRAILER3_LIT(2.0)*_t71 + TRAILER3_LIT(2.0)*_t91;
+    const trailer3_real_t _t645 = -TRAILER3_LIT(2.0)*_t134 + TRAILER3_LIT(2.0)*_t30*_t37
+            - _t34*_t638;
+    const trailer3_real_t _t646 = -TRAILER3_LIT(1.6666666666666667)*_t645;
+    const trailer3_real_t _t647 = TRAILER3_LIT(0.2)*_t646;
+    const trailer3_real_t _t648 = -_t638*_t72 + TRAILER3_LIT(2.0)*_t79 + TRAILER3_LIT(2.0)*_t95;
+    const trailer3_real_t _t649 = _t139 - _t432;
+    const trailer3_real_t _t650 = -TRAILER3_LIT(1.6666666666666667)*_t649;
+    const trailer3_real_t _t651 = TRAILER3_LIT(0.2)*_t650;
+    const trailer3_real_t _t652 = _t100 + _t467;
+    const trailer3_real_t _t653 = _t144 - _t433;
+    const trailer3_real_t _t654 = -TRAILER3_LIT(1.6666666666666667)*_t653;
+    const trailer3_real_t _t655 = TRAILER3_LIT(0.2)*_t654;
+    const trailer3_real_t _t656 = _t104 + _t472;
+    const trailer3_real_t _t657 = TRAILER3_LIT(1.6666666666666667)*_t141;
+    const trailer3_real_t _t658 = TRAILER3_LIT(0.2)*_t657;
+    const trailer3_real_t _t659 = TRAILER3_LIT(1.6666666666666667)*_t146;
+    const trailer3_real_t _t660 = TRAILER3_LIT(0.2)*_t659;
+    const trailer3_real_t _t661 = J_theta_cart2_left*_t454;
+    const trailer3_real_t _t662 = J_theta_cart2_right*_t443;
+    const trailer3_real_t _t663 = J_theta_cart3_left*_t493;
+    const trailer3_real_t _t664 = J_theta_cart3_right*_t487;
+    const trailer3_real_t _t665 = _t619*(_t26*_t306 + _t303*_t35);
+    const trailer3_real_t _t666 = _t621*(_t26*_t309 + _t303*_t67);
+    const trailer3_real_t _t667 = _t619*(_t30*_t306 + _t303*_t41);
+    const trailer3_real_t _t668 = _t621*(_t30*_t309 + _t303*_t76);
+    const trailer3_real_t _t669 = _t35*_t619;
+    const trailer3_real_t _t670 = _t621*_t67;
+    const trailer3_real_t _t671 = _t26*_t619;
+    const trailer3_real_t _t672 = _t26*_t621;
+    const trailer3_real_t _t673 = -_t227 + _t228 + _t231 + _t232;
+    const trailer3_real_t _t674 = _t673*_t76;
+    const trailer3_real_t _t675 = _t41*_t673;
+    const trailer3_real_t _t676 = J_theta_cart2_right*_t586;
+    const trailer3_real_t _t677 = J_theta_cart2_left*_t591;
+    const trailer3_real_t _t678 = J_theta_cart3_right*_t596;
+    const trailer3_real_t _t679 = J_theta_cart3_left*_t605;
+    const trailer3_real_t _t680 = _t192*_t219 + _t192*_t220 + _t194*_t205 - _t194*_t209;
+    const trailer3_real_t _t681 = _t193*_t201 + _t195*_t201 + _t196*_t201 - _t197*_t201;
+    const trailer3_real_t _t682 = TRAILER3_LIT(2.0)*_t149 + TRAILER3_LIT(2.0)*_t36;
+    const trailer3_real_t _t683 = -TRAILER3_LIT(1.6666666666666667)*_t682;
+    const trailer3_real_t _t684 = TRAILER3_LIT(0.2)*_t683;
+    const trailer3_real_t _t685 = TRAILER3_LIT(2.0)*_t108;
+    const trailer3_real_t _t686 = TRAILER3_LIT(2.0)*_t153 + TRAILER3_LIT(2.0)*_t42;
+    const trailer3_real_t _t687 = -TRAILER3_LIT(1.6666666666666667)*_t686;
+    const trailer3_real_t _t688 = TRAILER3_LIT(0.2)*_t687;
+    const trailer3_real_t _t689 = TRAILER3_LIT(2.0)*_t111;
+    const trailer3_real_t _t690 = TRAILER3_LIT(1.6666666666666667)*_t150;
+    const trailer3_real_t _t691 = TRAILER3_LIT(0.2)*_t690;
+    const trailer3_real_t _t692 = TRAILER3_LIT(1.6666666666666667)*_t154;
+    const trailer3_real_t _t693 = TRAILER3_LIT(0.2)*_t692;
+    const trailer3_real_t _t694 = J_theta_cart2_left*_t589;
+    const trailer3_real_t _t695 = J_theta_cart2_right*_t584;
+    const trailer3_real_t _t696 = J_theta_cart3_left*_t603;
+    const trailer3_real_t _t697 = J_theta_cart3_right*_t594;
+    const trailer3_real_t _t698 = _t673*(_t306*_t67 + _t309*_t35);
+    const trailer3_real_t _t699 = _t673*(_t306*_t76 + _t309*_t41);
+    const trailer3_real_t _t700 = _t67*_t673;
+    const trailer3_real_t _t701 = _t35*_t673;
+    const trailer3_real_t _t702 = J_theta_cart3_right*_t600;
+    const trailer3_real_t _t703 = J_theta_cart3_left*_t609;
+    const trailer3_real_t _t704 = J_theta_cart3_left*_t607;
+    const trailer3_real_t _t705 = J_theta_cart3_right*_t598;
+    const trailer3_real_t _t706 = TRAILER3_LIT(2.0)*K_theta_tractor_x_tractor*_t198;
+    const trailer3_real_t _t707 = TRAILER3_LIT(0.6)*_t198;
+    const trailer3_real_t _t708 = _t167*_t707 + _t168*_t707;
+    const trailer3_real_t _t709 = _t169*_t707 + _t170*_t707;
+    const trailer3_real_t _t710 = _t171*_t707 + _t172*_t707;
+    const trailer3_real_t _t711 = _t159 + _t198;
+    const trailer3_real_t _t712 = _t19*thetadot_left;
+    const trailer3_real_t _t713 = -_t206;
+    const trailer3_real_t _t714 = _t26*thetadot_left;
+    const trailer3_real_t _t715 = -K_theta_tractor_x_tractor*_t19 + _t553 + _t557;
+    const trailer3_real_t _t716 = -K_theta_tractor_x_tractor*_t22 + _t325 + _t329;
+    const trailer3_real_t _t717 = _t22*thetadot_right;
+    const trailer3_real_t _t718 = _t160 + _t198;
+    const trailer3_real_t _t719 = _t30*thetadot_right;
+    const trailer3_real_t _t720 = _t576*_t581;
+    const trailer3_real_t _t721 = -_t572*_t612 + _t576*_t616;
+    const trailer3_real_t _t722 = _t20*thetadot_right + _t23*thetadot_left;
+    const trailer3_real_t _t723 = _t323*_t722;
+    const trailer3_real_t _t724 = _t324*_t722;
+    const trailer3_real_t _t725 = _t20*_t323;
+    const trailer3_real_t _t726 = _t23*_t323;
+    const trailer3_real_t _t727 = _t20*_t324;
+    const trailer3_real_t _t728 = _t23*_t324;
+    const trailer3_real_t _t729 = _t92*thetadot_right + _t96*thetadot_left;
+    const trailer3_real_t _t730 = _t103*thetadot_left + _t99*thetadot_right;
+    const trailer3_real_t _t731 = _t107*thetadot_right + _t110*thetadot_left;
+    const trailer3_real_t _t732 = _t127*thetadot_right + _t132*thetadot_left;
+    const trailer3_real_t _t733 = _t137*thetadot_right + _t142*thetadot_left;
+    const trailer3_real_t _t734 = _t147*thetadot_right + _t151*thetadot_left;
+    const trailer3_real_t _t735 = _t155*thetadot_right + _t157*thetadot_left;
+    const trailer3_real_t _t736 = _t347*thetadot_left + _t368*thetadot_right;
+    const trailer3_real_t _t737 = _t350*thetadot_left + _t371*thetadot_right;
+    const trailer3_real_t _t738 = _t353*thetadot_left + _t502*thetadot_right;
+    const trailer3_real_t _t739 = _t443*thetadot_right + _t446*thetadot_left;
+    const trailer3_real_t _t740 = _t584*thetadot_right + _t586*thetadot_left;
+    const trailer3_real_t _t741 = _t356*thetadot_left + _t499*thetadot_right;
+    const trailer3_real_t _t742 = _t454*thetadot_right + _t457*thetadot_left;
+    const trailer3_real_t _t743 = _t589*thetadot_right + _t591*thetadot_left;
+    const trailer3_real_t _t744 = _t359*thetadot_left + _t508*thetadot_right;
+    const trailer3_real_t _t745 = _t487*thetadot_right + _t490*thetadot_left;
+    const trailer3_real_t _t746 = _t594*thetadot_right + _t596*thetadot_left;
+    const trailer3_real_t _t747 = _t598*thetadot_right + _t600*thetadot_left;
+    const trailer3_real_t _t748 = _t362*thetadot_left + _t505*thetadot_right;
+    const trailer3_real_t _t749 = _t493*thetadot_right + _t496*thetadot_left;
+    const trailer3_real_t _t750 = _t603*thetadot_right + _t605*thetadot_left;
+    const trailer3_real_t _t751 = _t607*thetadot_right + _t609*thetadot_left;
+    const trailer3_real_t _t752 = _t132*_t241 + _t239*_t96 + _t326 + _t329;
+    const trailer3_real_t _t753 = _t132*_t255 + _t251*_t96 + _t331 + _t333 + _t335;
+    const trailer3_real_t _t754 = _t132*_t248 + _t247*_t96 + _t336 + _t337 + _t338;
+    const trailer3_real_t _t755 = J_theta_cart2*_t96 + _t132*_t252 + _t339 + _t340 + _t341;
+    const trailer3_real_t _t756 = J_theta_cart3*_t132 + _t252*_t96 + _t342 + _t345;
+    const trailer3_real_t _t757 = _t127*_t257 + _t19*_t753 + _t20*_t752 + _t254*_t92 + _t26*_t754
+            + _t274*_t354 + _t278*_t502 + _t281*_t357 + _t285*_t499 + _t288*_t360 + _t292*_t508
+            + _t295*_t363 + _t299*_t505 + _t35*_t755 + _t364 + _t365 + _t366 + _t369 + _t372
+            + _t67*_t756;
+    const trailer3_real_t _t758 = _t132*_t257 + _t22*_t753 + _t23*_t752 + _t254*_t96 + _t277*_t354
+            + _t278*_t353 + _t284*_t357 + _t285*_t356 + _t291*_t360 + _t292*_t359 + _t298*_t363
+            + _t299*_t362 + _t30*_t754 + _t373 + _t374 + _t375 + _t376 + _t377 + _t41*_t755
+            + _t756*_t76;
+    const trailer3_real_t _t759 = _t379*_t729 + _t381*_t732 + _t382 + _t383 + _t387;
+    const trailer3_real_t _t760 = _t388 - _t389 + _t390 - _t391 + _t392 - _t393 + _t396
+            + _t398*_t729 + _t400*_t732;
+    const trailer3_real_t _t761 = -_t401 + _t402 + _t405*_t729 + _t408*_t732;
+    const trailer3_real_t _t762 = -_t409 + _t410 + _t415 + _t417*_t732;
+    const trailer3_real_t _t763 = -_t418 + _t419 + _t421 + _t424*_t729;
+    const trailer3_real_t _t764 = _t729*thetadot_right;
+    const trailer3_real_t _t765 = _t729*thetadot_left;
+    const trailer3_real_t _t766 = _t107*_t764 + _t110*_t765 - _t233*_t35 - _t234*_t41 + _t304*_t438
+            + _t305*_t440 - _t426 - _t428 + _t431;
+    const trailer3_real_t _t767 = _t732*thetadot_right;
+    const trailer3_real_t _t768 = _t732*thetadot_left;
+    const trailer3_real_t _t769 = _t147*_t764 + _t151*_t765 + _t155*_t767 + _t157*_t768 - _t233*_t67
+            - _t234*_t76 + _t235*_t465 + _t236*_t470 + _t304*_t475 + _t305*_t479 + _t307*_t482
+            + _t308*_t484 - _t434 - _t435;
+    const trailer3_real_t _t770 = _t439 + _t85;
+    const trailer3_real_t _t771 = _t272*_t770;
+    const trailer3_real_t _t772 = _t441 + _t88;
+    const trailer3_real_t _t773 = _t272*_t772;
+    const trailer3_real_t _t774 = -_t233*_t274 - _t234*_t277 + _t304*_t771 + _t305*_t773 - _t444
+            - _t447 + _t452 + _t584*_t764 + _t586*_t765;
+    const trailer3_real_t _t775 = -_t439 + _t85;
+    const trailer3_real_t _t776 = _t279*_t775;
+    const trailer3_real_t _t777 = -_t441 + _t88;
+    const trailer3_real_t _t778 = _t279*_t777;
+    const trailer3_real_t _t779 = -_t233*_t281 - _t234*_t284 + _t304*_t776 + _t305*_t778 - _t455
+            - _t458 + _t463 + _t589*_t764 + _t591*_t765;
+    const trailer3_real_t _t780 = _t466 - _t468;
+    const trailer3_real_t _t781 = _t286*_t780;
+    const trailer3_real_t _t782 = _t471 - _t473;
+    const trailer3_real_t _t783 = _t286*_t782;
+    const trailer3_real_t _t784 = _t476 - _t477;
+    const trailer3_real_t _t785 = _t286*_t784;
+    const trailer3_real_t _t786 = _t480 - _t481;
+    const trailer3_real_t _t787 = _t286*_t786;
+    const trailer3_real_t _t788 = _t483 + _t94;
+    const trailer3_real_t _t789 = _t286*_t788;
+    const trailer3_real_t _t790 = _t485 + _t98;
+    const trailer3_real_t _t791 = _t286*_t790;
+    const trailer3_real_t _t792 = -_t233*_t288 - _t234*_t291 + _t235*_t781 + _t236*_t783
+            + _t304*_t785 + _t305*_t787 + _t307*_t789 + _t308*_t791 - _t488 - _t491 + _t594*_t764
+            + _t596*_t765 + _t598*_t767 + _t600*_t768;
+    const trailer3_real_t _t793 = -_t466 - _t468;
+    const trailer3_real_t _t794 = _t293*_t793;
+    const trailer3_real_t _t795 = -_t471 - _t473;
+    const trailer3_real_t _t796 = _t293*_t795;
+    const trailer3_real_t _t797 = -_t476 - _t477;
+    const trailer3_real_t _t798 = _t293*_t797;
+    const trailer3_real_t _t799 = -_t480 - _t481;
+    const trailer3_real_t _t800 = _t293*_t799;
+    const trailer3_real_t _t801 = -_t483 + _t94;
+    const trailer3_real_t _t802 = _t293*_t801;
+    const trailer3_real_t _t803 = -_t485 + _t98;
+    const trailer3_real_t _t804 = _t293*_t803;
+    const trailer3_real_t _t805 = -_t233*_t295 - _t234*_t298 + _t235*_t794 + _t236*_t796
+            + _t304*_t798 + _t305*_t800 + _t307*_t802 + _t308*_t804 - _t494 - _t497 + _t603*_t764
+            + _t605*_t765 + _t607*_t767 + _t609*_t768;
+    const trailer3_real_t _t806 = _t127*_t322 + _t19*_t760 + _t20*_t759 + _t253*_t766 + _t256*_t769
+            + _t26*_t761 + _t275*_t774 + _t282*_t779 + _t289*_t792 + _t296*_t805 + _t319*_t92
+            + _t35*_t762 + _t500*_t592 + _t503*_t587 + _t506*_t610 + _t509*_t601 + _t511 + _t514
+            + _t516 + _t519 + _t521 + _t523 + _t525 + _t527 + _t529 + _t531 - _t532 - _t533 - _t534
+            + _t535 + _t537 + _t67*_t763;
+    const trailer3_real_t _t807 = _t132*_t322 + _t22*_t760 + _t23*_t759 + _t254*_t766 + _t257*_t769
+            + _t278*_t774 + _t285*_t779 + _t292*_t792 + _t299*_t805 + _t30*_t761 + _t319*_t96
+            + _t354*_t587 + _t357*_t592 + _t360*_t601 + _t363*_t610 + _t41*_t762 + _t538 + _t539
+            + _t540 + _t541 + _t542 + _t543 + _t544 + _t545 + _t546 + _t547 - _t548 - _t549 - _t550
+            + _t551 + _t552 + _t76*_t763;
+    const trailer3_real_t _t808 = _t127*_t241 + _t239*_t92 + _t554 + _t557;
+    const trailer3_real_t _t809 = _t127*_t255 + _t251*_t92 + _t558 + _t559 + _t560;
+    const trailer3_real_t _t810 = _t127*_t248 + _t247*_t92 + _t520 + _t526 + _t561;
+    const trailer3_real_t _t811 = J_theta_cart2*_t92 + _t127*_t252 + _t522 + _t528 + _t562;
+    const trailer3_real_t _t812 = J_theta_cart3*_t127 + _t252*_t92 + _t563 + _t564;
+    const trailer3_real_t _t813 = _t127*_t256 + _t19*_t809 + _t20*_t808 + _t253*_t92 + _t26*_t810
+            + _t274*_t503 + _t275*_t502 + _t281*_t500 + _t282*_t499 + _t288*_t509 + _t289*_t508
+            + _t295*_t506 + _t296*_t505 + _t35*_t811 + _t565 + _t566 + _t567 + _t568 + _t569
+            + _t67*_t812;
+    const trailer3_real_t _t814 = -_t573*_t757 + _t576*_t758 + _t577*_t813;
+    const trailer3_real_t _t815 = -_t580*_t814;
+    const trailer3_real_t _t816 = -_t582*_t806 + _t613*_t758 + _t614*_t807 - _t617*_t757
+            + _t618*_t815;
+    const trailer3_real_t _t817 = _t103*_t239 + _t142*_t241 - _t326;
+    const trailer3_real_t _t818 = _t103*_t251 + _t142*_t255 - _t335;
+    const trailer3_real_t _t819 = _t103*_t247 + _t142*_t248 - _t336 - _t337 - _t338 + _t620 + _t622;
+    const trailer3_real_t _t820 = J_theta_cart2*_t103 + _t142*_t252 - _t341 + _t623;
+    const trailer3_real_t _t821 = J_theta_cart3*_t142 + _t103*_t252 - _t342 + _t624;
+    const trailer3_real_t _t822 = _t137*_t257 + _t19*_t818 + _t20*_t817 + _t254*_t99 + _t26*_t819
+            + _t274*_t625 + _t278*_t443 + _t281*_t626 + _t285*_t454 + _t288*_t627 + _t292*_t487
+            + _t295*_t628 + _t299*_t493 + _t35*_t820 - _t364 - _t365 - _t366 - _t369 - _t372
+            + _t67*_t821;
+    const trailer3_real_t _t823 = _t103*_t254 + _t142*_t257 + _t22*_t818 + _t23*_t817 + _t277*_t625
+            + _t278*_t446 + _t284*_t626 + _t285*_t457 + _t291*_t627 + _t292*_t490 + _t298*_t628
+            + _t299*_t496 + _t30*_t819 - _t373 - _t374 - _t375 - _t376 - _t377 + _t41*_t820
+            + _t76*_t821;
+    const trailer3_real_t _t824 = _t379*_t730 + _t381*_t733 - _t387;
+    const trailer3_real_t _t825 = -_t392 + _t393 - _t396 + _t398*_t730 + _t400*_t733;
+    const trailer3_real_t _t826 = _t401 - _t402 + _t405*_t730 + _t408*_t733 + _t629 + _t630;
+    const trailer3_real_t _t827 = -_t415 + _t417*_t733 - _t631;
+    const trailer3_real_t _t828 = -_t421 + _t424*_t730 - _t632;
+    const trailer3_real_t _t829 = _t730*thetadot_right;
+    const trailer3_real_t _t830 = _t730*thetadot_left;
+    const trailer3_real_t _t831 = _t107*_t829 + _t110*_t830 + _t233*_t429 + _t234*_t430
+            + _t235*_t634 + _t236*_t638 + _t304*_t429 + _t305*_t430 + _t426 + _t428;
+    const trailer3_real_t _t832 = _t733*thetadot_right;
+    const trailer3_real_t _t833 = _t733*thetadot_left;
+    const trailer3_real_t _t834 = _t147*_t829 + _t151*_t830 + _t155*_t832 + _t157*_t833
+            + _t233*_t465 + _t234*_t470 + _t235*_t642 + _t236*_t646 + _t304*_t650 + _t305*_t654
+            + _t307*_t657 + _t308*_t659 + _t434 + _t435;
+    const trailer3_real_t _t835 = _t635 + _t636;
+    const trailer3_real_t _t836 = _t272*_t835;
+    const trailer3_real_t _t837 = _t639 + _t640;
+    const trailer3_real_t _t838 = _t272*_t837;
+    const trailer3_real_t _t839 = _t233*_t449 + _t234*_t451 + _t235*_t836 + _t236*_t838
+            + _t304*_t449 + _t305*_t451 + _t444 + _t447 + _t584*_t829 + _t586*_t830;
+    const trailer3_real_t _t840 = -_t635 + _t636;
+    const trailer3_real_t _t841 = _t279*_t840;
+    const trailer3_real_t _t842 = -_t639 + _t640;
+    const trailer3_real_t _t843 = _t279*_t842;
+    const trailer3_real_t _t844 = _t233*_t460 + _t234*_t462 + _t235*_t841 + _t236*_t843
+            + _t304*_t460 + _t305*_t462 + _t455 + _t458 + _t589*_t829 + _t591*_t830;
+    const trailer3_real_t _t845 = _t643 + _t644;
+    const trailer3_real_t _t846 = _t286*_t845;
+    const trailer3_real_t _t847 = _t647 + _t648;
+    const trailer3_real_t _t848 = _t286*_t847;
+    const trailer3_real_t _t849 = _t651 - _t652;
+    const trailer3_real_t _t850 = _t286*_t849;
+    const trailer3_real_t _t851 = _t655 - _t656;
+    const trailer3_real_t _t852 = _t286*_t851;
+    const trailer3_real_t _t853 = -_t102 + _t658;
+    const trailer3_real_t _t854 = _t286*_t853;
+    const trailer3_real_t _t855 = -_t106 + _t660;
+    const trailer3_real_t _t856 = _t286*_t855;
+    const trailer3_real_t _t857 = _t233*_t781 + _t234*_t783 + _t235*_t846 + _t236*_t848
+            + _t304*_t850 + _t305*_t852 + _t307*_t854 + _t308*_t856 + _t488 + _t491 + _t594*_t829
+            + _t596*_t830 + _t598*_t832 + _t600*_t833;
+    const trailer3_real_t _t858 = -_t643 + _t644;
+    const trailer3_real_t _t859 = _t293*_t858;
+    const trailer3_real_t _t860 = -_t647 + _t648;
+    const trailer3_real_t _t861 = _t293*_t860;
+    const trailer3_real_t _t862 = -_t651 - _t652;
+    const trailer3_real_t _t863 = _t293*_t862;
+    const trailer3_real_t _t864 = -_t655 - _t656;
+    const trailer3_real_t _t865 = _t293*_t864;
+    const trailer3_real_t _t866 = -_t102 - _t658;
+    const trailer3_real_t _t867 = _t293*_t866;
+    const trailer3_real_t _t868 = -_t106 - _t660;
+    const trailer3_real_t _t869 = _t293*_t868;
+    const trailer3_real_t _t870 = _t233*_t794 + _t234*_t796 + _t235*_t859 + _t236*_t861
+            + _t304*_t863 + _t305*_t865 + _t307*_t867 + _t308*_t869 + _t494 + _t497 + _t603*_t829
+            + _t605*_t830 + _t607*_t832 + _t609*_t833;
+    const trailer3_real_t _t871 = _t137*_t322 + _t19*_t825 + _t20*_t824 + _t253*_t831 + _t256*_t834
+            + _t26*_t826 + _t275*_t839 + _t282*_t844 + _t289*_t857 + _t296*_t870 + _t319*_t99
+            + _t35*_t827 - _t511 - _t514 - _t516 - _t519 - _t521 - _t527 + _t532 - _t535 - _t537
+            + _t587*_t662 + _t592*_t661 + _t601*_t664 + _t610*_t663 + _t665 + _t666 + _t67*_t828;
+    const trailer3_real_t _t872 = _t103*_t319 + _t142*_t322 + _t22*_t825 + _t23*_t824 + _t254*_t831
+            + _t257*_t834 + _t278*_t839 + _t285*_t844 + _t292*_t857 + _t299*_t870 + _t30*_t826
+            + _t41*_t827 - _t538 - _t539 - _t540 - _t541 - _t542 - _t545 + _t548 - _t551 - _t552
+            + _t587*_t625 + _t592*_t626 + _t601*_t627 + _t610*_t628 + _t667 + _t668 + _t76*_t828;
+    const trailer3_real_t _t873 = _t137*_t241 + _t239*_t99 - _t554;
+    const trailer3_real_t _t874 = _t137*_t255 + _t251*_t99 - _t560;
+    const trailer3_real_t _t875 = _t137*_t248 + _t247*_t99 - _t520 - _t526 - _t561 + _t669 + _t670;
+    const trailer3_real_t _t876 = J_theta_cart2*_t99 + _t137*_t252 - _t562 + _t671;
+    const trailer3_real_t _t877 = J_theta_cart3*_t137 + _t252*_t99 - _t563 + _t672;
+    const trailer3_real_t _t878 = _t137*_t256 + _t19*_t874 + _t20*_t873 + _t253*_t99 + _t26*_t875
+            + _t274*_t662 + _t275*_t443 + _t281*_t661 + _t282*_t454 + _t288*_t664 + _t289*_t487
+            + _t295*_t663 + _t296*_t493 + _t35*_t876 - _t565 - _t566 - _t567 - _t568 - _t569
+            + _t67*_t877;
+    const trailer3_real_t _t879 = -_t573*_t822 + _t576*_t823 + _t577*_t878;
+    const trailer3_real_t _t880 = -_t580*_t879;
+    const trailer3_real_t _t881 = -_t582*_t871 + _t613*_t823 + _t614*_t872 - _t617*_t822
+            + _t618*_t880;
+    const trailer3_real_t _t882 = _t110*_t239 + _t151*_t241 - _t328;
+    const trailer3_real_t _t883 = _t110*_t251 + _t151*_t255 - _t333;
+    const trailer3_real_t _t884 = _t110*_t247 + _t151*_t248 - _t620;
+    const trailer3_real_t _t885 = J_theta_cart2*_t110 + _t151*_t252 - _t339 - _t340 - _t623 + _t674;
+    const trailer3_real_t _t886 = J_theta_cart3*_t151 + _t110*_t252 + _t675;
+    const trailer3_real_t _t887 = _t107*_t254 + _t147*_t257 + _t19*_t883 + _t20*_t882 + _t26*_t884
+            + _t274*_t676 + _t278*_t584 + _t281*_t677 + _t285*_t589 + _t288*_t678 + _t292*_t594
+            + _t295*_t679 + _t299*_t603 + _t35*_t885 + _t67*_t886;
+    const trailer3_real_t _t888 = _t110*_t254 + _t151*_t257 + _t22*_t883 + _t23*_t882 + _t277*_t676
+            + _t278*_t586 + _t284*_t677 + _t285*_t591 + _t291*_t678 + _t292*_t596 + _t298*_t679
+            + _t299*_t605 + _t30*_t884 + _t41*_t885 + _t76*_t886;
+    const trailer3_real_t _t889 = _t379*_t731 + _t381*_t734 - _t383;
+    const trailer3_real_t _t890 = -_t388 + _t389 + _t398*_t731 + _t400*_t734;
+    const trailer3_real_t _t891 = _t405*_t731 + _t408*_t734 - _t630;
+    const trailer3_real_t _t892 = _t409 - _t410 + _t417*_t734 + _t631 + _t680;
+    const trailer3_real_t _t893 = _t424*_t731 - _t681;
+    const trailer3_real_t _t894 = _t731*thetadot_right;
+    const trailer3_real_t _t895 = _t731*thetadot_left;
+    const trailer3_real_t _t896 = _t107*_t894 + _t110*_t895 + _t233*_t438 + _t234*_t440 - _t304*_t35
+            - _t305*_t41 + _t431;
+    const trailer3_real_t _t897 = _t734*thetadot_right;
+    const trailer3_real_t _t898 = _t734*thetadot_left;
+    const trailer3_real_t _t899 = _t147*_t894 + _t151*_t895 + _t155*_t897 + _t157*_t898
+            + _t233*_t475 + _t234*_t479 + _t235*_t650 + _t236*_t654 + _t304*_t683 + _t305*_t687
+            + _t307*_t690 + _t308*_t692;
+    const trailer3_real_t _t900 = _t233*_t771 + _t234*_t773 - _t274*_t304 - _t277*_t305 + _t452
+            + _t584*_t894 + _t586*_t895;
+    const trailer3_real_t _t901 = _t233*_t776 + _t234*_t778 - _t281*_t304 - _t284*_t305 + _t463
+            + _t589*_t894 + _t591*_t895;
+    const trailer3_real_t _t902 = _t684 - _t685 + TRAILER3_LIT(2.0)*_t73;
+    const trailer3_real_t _t903 = _t286*_t902;
+    const trailer3_real_t _t904 = _t688 - _t689 + TRAILER3_LIT(2.0)*_t80;
+    const trailer3_real_t _t905 = _t286*_t904;
+    const trailer3_real_t _t906 = _t109 + _t691;
+    const trailer3_real_t _t907 = _t286*_t906;
+    const trailer3_real_t _t908 = _t112 + _t693;
+    const trailer3_real_t _t909 = _t286*_t908;
+    const trailer3_real_t _t910 = _t233*_t785 + _t234*_t787 + _t235*_t850 + _t236*_t852
+            + _t304*_t903 + _t305*_t905 + _t307*_t907 + _t308*_t909 + _t594*_t894 + _t596*_t895
+            + _t598*_t897 + _t600*_t898;
+    const trailer3_real_t _t911 = TRAILER3_LIT(2.0)*_t35*_t72 - _t684 - _t685;
+    const trailer3_real_t _t912 = _t293*_t911;
+    const trailer3_real_t _t913 = TRAILER3_LIT(2.0)*_t41*_t72 - _t688 - _t689;
+    const trailer3_real_t _t914 = _t293*_t913;
+    const trailer3_real_t _t915 = _t108 - _t691 - _t73;
+    const trailer3_real_t _t916 = _t293*_t915;
+    const trailer3_real_t _t917 = _t111 - _t693 - _t80;
+    const trailer3_real_t _t918 = _t293*_t917;
+    const trailer3_real_t _t919 = _t233*_t798 + _t234*_t800 + _t235*_t863 + _t236*_t865
+            + _t304*_t912 + _t305*_t914 + _t307*_t916 + _t308*_t918 + _t603*_t894 + _t605*_t895
+            + _t607*_t897 + _t609*_t898;
+    const trailer3_real_t _t920 = _t107*_t319 + _t147*_t322 + _t19*_t890 + _t20*_t889 + _t253*_t896
+            + _t256*_t899 + _t26*_t891 + _t275*_t900 + _t282*_t901 + _t289*_t910 + _t296*_t919
+            + _t35*_t892 - _t523 - _t529 + _t533 + _t587*_t695 + _t592*_t694 + _t601*_t697
+            + _t610*_t696 - _t665 + _t67*_t893 + _t698;
+    const trailer3_real_t _t921 = _t110*_t319 + _t151*_t322 + _t22*_t890 + _t23*_t889 + _t254*_t896
+            + _t257*_t899 + _t278*_t900 + _t285*_t901 + _t292*_t910 + _t299*_t919 + _t30*_t891
+            + _t41*_t892 - _t543 - _t546 + _t549 + _t587*_t676 + _t592*_t677 + _t601*_t678
+            + _t610*_t679 - _t667 + _t699 + _t76*_t893;
+    const trailer3_real_t _t922 = _t107*_t239 + _t147*_t241 - _t556;
+    const trailer3_real_t _t923 = _t107*_t251 + _t147*_t255 - _t559;
+    const trailer3_real_t _t924 = _t107*_t247 + _t147*_t248 - _t669;
+    const trailer3_real_t _t925 = J_theta_cart2*_t107 + _t147*_t252 - _t522 - _t528 - _t671 + _t700;
+    const trailer3_real_t _t926 = J_theta_cart3*_t147 + _t107*_t252 + _t701;
+    const trailer3_real_t _t927 = _t107*_t253 + _t147*_t256 + _t19*_t923 + _t20*_t922 + _t26*_t924
+            + _t274*_t695 + _t275*_t584 + _t281*_t694 + _t282*_t589 + _t288*_t697 + _t289*_t594
+            + _t295*_t696 + _t296*_t603 + _t35*_t925 + _t67*_t926;
+    const trailer3_real_t _t928 = -_t573*_t887 + _t576*_t888 + _t577*_t927;
+    const trailer3_real_t _t929 = -_t580*_t928;
+    const trailer3_real_t _t930 = -_t582*_t920 + _t613*_t888 + _t614*_t921 - _t617*_t887
+            + _t618*_t929;
+    const trailer3_real_t _t931 = _t157*_t241 - _t327;
+    const trailer3_real_t _t932 = _t157*_t255 - _t331;
+    const trailer3_real_t _t933 = _t157*_t248 - _t622;
+    const trailer3_real_t _t934 = _t157*_t252 - _t674;
+    const trailer3_real_t _t935 = J_theta_cart3*_t157 - _t345 - _t624 - _t675;
+    const trailer3_real_t _t936 = _t155*_t257 + _t19*_t932 + _t20*_t931 + _t26*_t933 + _t288*_t702
+            + _t292*_t598 + _t295*_t703 + _t299*_t607 + _t35*_t934 + _t67*_t935;
+    const trailer3_real_t _t937 = _t157*_t257 + _t22*_t932 + _t23*_t931 + _t291*_t702 + _t292*_t600
+            + _t298*_t703 + _t299*_t609 + _t30*_t933 + _t41*_t934 + _t76*_t935;
+    const trailer3_real_t _t938 = _t381*_t735 - _t382;
+    const trailer3_real_t _t939 = -_t390 + _t391 + _t400*_t735;
+    const trailer3_real_t _t940 = _t408*_t735 - _t629;
+    const trailer3_real_t _t941 = _t417*_t735 - _t680;
+    const trailer3_real_t _t942 = _t418 - _t419 + _t632 + _t681;
+    const trailer3_real_t _t943 = _t735*thetadot_right;
+    const trailer3_real_t _t944 = _t735*thetadot_left;
+    const trailer3_real_t _t945 = _t155*_t943 + _t157*_t944 + _t233*_t482 + _t234*_t484
+            + _t235*_t657 + _t236*_t659 + _t304*_t690 + _t305*_t692 - _t307*_t67 - _t308*_t76;
+    const trailer3_real_t _t946 = _t233*_t789 + _t234*_t791 + _t235*_t854 + _t236*_t856
+            - _t288*_t307 - _t291*_t308 + _t304*_t907 + _t305*_t909 + _t598*_t943 + _t600*_t944;
+    const trailer3_real_t _t947 = _t233*_t802 + _t234*_t804 + _t235*_t867 + _t236*_t869
+            - _t295*_t307 - _t298*_t308 + _t304*_t916 + _t305*_t918 + _t607*_t943 + _t609*_t944;
+    const trailer3_real_t _t948 = _t155*_t322 + _t19*_t939 + _t20*_t938 + _t256*_t945 + _t26*_t940
+            + _t289*_t946 + _t296*_t947 + _t35*_t941 - _t525 - _t531 + _t534 + _t601*_t705
+            + _t610*_t704 - _t666 + _t67*_t942 - _t698;
+    const trailer3_real_t _t949 = _t157*_t322 + _t22*_t939 + _t23*_t938 + _t257*_t945 + _t292*_t946
+            + _t299*_t947 + _t30*_t940 + _t41*_t941 - _t544 - _t547 + _t550 + _t601*_t702
+            + _t610*_t703 - _t668 - _t699 + _t76*_t942;
+    const trailer3_real_t _t950 = _t155*_t241 - _t555;
+    const trailer3_real_t _t951 = _t155*_t255 - _t558;
+    const trailer3_real_t _t952 = _t155*_t248 - _t670;
+    const trailer3_real_t _t953 = _t155*_t252 - _t700;
+    const trailer3_real_t _t954 = J_theta_cart3*_t155 - _t564 - _t672 - _t701;
+    const trailer3_real_t _t955 = _t155*_t256 + _t19*_t951 + _t20*_t950 + _t26*_t952 + _t288*_t705
+            + _t289*_t598 + _t295*_t704 + _t296*_t607 + _t35*_t953 + _t67*_t954;
+    const trailer3_real_t _t956 = -_t573*_t936 + _t576*_t937 + _t577*_t955;
+    const trailer3_real_t _t957 = -_t580*_t956;
+    const trailer3_real_t _t958 = -_t582*_t948 + _t613*_t937 + _t614*_t949 - _t617*_t936
+            + _t618*_t957;
+    const trailer3_real_t _t959 = _t19*_t706 + _t26*_t385 + _t35*_t379 + _t381*_t67;
+    const trailer3_real_t _t960 = _t26*_t395 + _t35*_t398 + _t400*_t67;
+    const trailer3_real_t _t961 = _t19*_t708 + _t35*_t405 + _t408*_t67;
+    const trailer3_real_t _t962 = _t19*_t709 + _t26*_t414 + _t417*_t67;
+    const trailer3_real_t _t963 = _t19*_t710 + _t26*_t420 + _t35*_t424;
+    const trailer3_real_t _t964 = _t20*_t711 + _t23*_t712;
+    const trailer3_real_t _t965 = -_t161 + _t711 + _t713;
+    const trailer3_real_t _t966 = _t712 - _t714;
+    const trailer3_real_t _t967 = _t83*_t965 + _t86*_t966;
+    const trailer3_real_t _t968 = _t161 + _t206;
+    const trailer3_real_t _t969 = _t163 + _t200;
+    const trailer3_real_t _t970 = _t35*thetadot_left;
+    const trailer3_real_t _t971 = _t103*_t714 + _t107*_t969 + _t110*_t970 + _t711*_t92 + _t712*_t96
+            + _t968*_t99;
+    const trailer3_real_t _t972 = _t165 + _t203;
+    const trailer3_real_t _t973 = _t67*thetadot_left;
+    const trailer3_real_t _t974 = _t127*_t711 + _t132*_t712 + _t137*_t968 + _t142*_t714
+            + _t147*_t969 + _t151*_t970 + _t155*_t972 + _t157*_t973;
+    const trailer3_real_t _t975 = _t347*_t966 + _t368*_t965;
+    const trailer3_real_t _t976 = _t350*_t966 + _t371*_t965;
+    const trailer3_real_t _t977 = _t353*_t712 + _t443*_t968 + _t446*_t714 + _t502*_t711
+            + _t584*_t969 + _t586*_t970;
+    const trailer3_real_t _t978 = _t356*_t712 + _t454*_t968 + _t457*_t714 + _t499*_t711
+            + _t589*_t969 + _t591*_t970;
+    const trailer3_real_t _t979 = _t359*_t712 + _t487*_t968 + _t490*_t714 + _t508*_t711
+            + _t594*_t969 + _t596*_t970 + _t598*_t972 + _t600*_t973;
+    const trailer3_real_t _t980 = _t362*_t712 + _t493*_t968 + _t496*_t714 + _t505*_t711
+            + _t603*_t969 + _t605*_t970 + _t607*_t972 + _t609*_t973;
+    const trailer3_real_t _t981 = _t19*_t960 + _t20*_t959 + _t249*_t967 + _t253*_t971 + _t256*_t974
+            + _t26*_t961 + _t261*_t975 + _t268*_t976 + _t275*_t977 + _t282*_t978 + _t289*_t979
+            + _t296*_t980 + _t35*_t962 + _t67*_t963 + _t715*_t964;
+    const trailer3_real_t _t982 = _t22*_t960 + _t23*_t959 + _t250*_t967 + _t254*_t971 + _t257*_t974
+            + _t264*_t975 + _t271*_t976 + _t278*_t977 + _t285*_t978 + _t292*_t979 + _t299*_t980
+            + _t30*_t961 + _t41*_t962 + _t716*_t964 + _t76*_t963;
+    const trailer3_real_t _t983 = -_t577*_t581*_t981 + _t614*_t982;
+    const trailer3_real_t _t984 = _t22*_t706 + _t30*_t385 + _t379*_t41 + _t381*_t76;
+    const trailer3_real_t _t985 = _t30*_t395 + _t398*_t41 + _t400*_t76;
+    const trailer3_real_t _t986 = _t22*_t708 + _t405*_t41 + _t408*_t76;
+    const trailer3_real_t _t987 = _t22*_t709 + _t30*_t414 + _t417*_t76;
+    const trailer3_real_t _t988 = _t22*_t710 + _t30*_t420 + _t41*_t424;
+    const trailer3_real_t _t989 = _t20*_t717 + _t23*_t718;
+    const trailer3_real_t _t990 = _t717 - _t719;
+    const trailer3_real_t _t991 = -_t162 + _t713 + _t718;
+    const trailer3_real_t _t992 = _t83*_t990 + _t86*_t991;
+    const trailer3_real_t _t993 = _t162 + _t206;
+    const trailer3_real_t _t994 = _t41*thetadot_right;
+    const trailer3_real_t _t995 = _t164 + _t200;
+    const trailer3_real_t _t996 = _t103*_t993 + _t107*_t994 + _t110*_t995 + _t717*_t92 + _t718*_t96
+            + _t719*_t99;
+    const trailer3_real_t _t997 = _t76*thetadot_right;
+    const trailer3_real_t _t998 = _t166 + _t203;
+    const trailer3_real_t _t999 = _t127*_t717 + _t132*_t718 + _t137*_t719 + _t142*_t993
+            + _t147*_t994 + _t151*_t995 + _t155*_t997 + _t157*_t998;
+    const trailer3_real_t _t1000 = _t347*_t991 + _t368*_t990;
+    const trailer3_real_t _t1001 = _t350*_t991 + _t371*_t990;
+    const trailer3_real_t _t1002 = _t353*_t718 + _t443*_t719 + _t446*_t993 + _t502*_t717
+            + _t584*_t994 + _t586*_t995;
+    const trailer3_real_t _t1003 = _t356*_t718 + _t454*_t719 + _t457*_t993 + _t499*_t717
+            + _t589*_t994 + _t591*_t995;
+    const trailer3_real_t _t1004 = _t359*_t718 + _t487*_t719 + _t490*_t993 + _t508*_t717
+            + _t594*_t994 + _t596*_t995 + _t598*_t997 + _t600*_t998;
+    const trailer3_real_t _t1005 = _t362*_t718 + _t493*_t719 + _t496*_t993 + _t505*_t717
+            + _t603*_t994 + _t605*_t995 + _t607*_t997 + _t609*_t998;
+    const trailer3_real_t _t1006 = _t1000*_t261 + _t1001*_t268 + _t1002*_t275 + _t1003*_t282
+            + _t1004*_t289 + _t1005*_t296 + _t19*_t985 + _t20*_t984 + _t249*_t992 + _t253*_t996
+            + _t256*_t999 + _t26*_t986 + _t35*_t987 + _t67*_t988 + _t715*_t989;
+    const trailer3_real_t _t1007 = _t1000*_t264 + _t1001*_t271 + _t1002*_t278 + _t1003*_t285
+            + _t1004*_t292 + _t1005*_t299 + _t22*_t985 + _t23*_t984 + _t250*_t992 + _t254*_t996
+            + _t257*_t999 + _t30*_t986 + _t41*_t987 + _t716*_t989 + _t76*_t988;
+    const trailer3_real_t _t1008 = -_t1006*_t577*_t581 + _t1007*_t614;
+    const trailer3_real_t _t1009 = -_t613*_t757 + _t614*_t806 + _t617*_t813 - _t720*_t807
+            + _t721*_t815;
+    const trailer3_real_t _t1010 = -_t613*_t822 + _t614*_t871 + _t617*_t878 - _t720*_t872
+            + _t721*_t880;
+    const trailer3_real_t _t1011 = -_t613*_t887 + _t614*_t920 + _t617*_t927 - _t720*_t921
+            + _t721*_t929;
+    const trailer3_real_t _t1012 = -_t613*_t936 + _t614*_t948 + _t617*_t955 - _t720*_t949
+            + _t721*_t957;
+    const trailer3_real_t _t1013 = _t614*_t981 - _t720*_t982;
+    const trailer3_real_t _t1014 = _t1006*_t614 - _t1007*_t720;
     A[0] = TRAILER3_LIT(0.0);
     A[1] = TRAILER3_LIT(0.0);
-    A[2] = _t563;
+    A[2] = -_t724;
     A[3] = TRAILER3_LIT(0.0);
     A[4] = TRAILER3_LIT(0.0);
     A[5] = TRAILER3_LIT(0.0);
@@ -4013,11 +3681,11 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[11] = TRAILER3_LIT(0.0);
     A[12] = TRAILER3_LIT(0.0);
     A[13] = TRAILER3_LIT(0.0);
-    A[14] = _t29;
-    A[15] = _t31;
+    A[14] = _t725;
+    A[15] = _t726;
     A[16] = TRAILER3_LIT(0.0);
     A[17] = TRAILER3_LIT(0.0);
-    A[18] = _t83;
+    A[18] = _t723;
     A[19] = TRAILER3_LIT(0.0);
     A[20] = TRAILER3_LIT(0.0);
     A[21] = TRAILER3_LIT(0.0);
@@ -4029,8 +3697,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[27] = TRAILER3_LIT(0.0);
     A[28] = TRAILER3_LIT(0.0);
     A[29] = TRAILER3_LIT(0.0);
-    A[30] = _t33;
-    A[31] = _t38;
+    A[30] = _t727;
+    A[31] = _t728;
     A[32] = TRAILER3_LIT(0.0);
     A[33] = TRAILER3_LIT(0.0);
     A[34] = TRAILER3_LIT(0.0);
@@ -4045,12 +3713,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[43] = TRAILER3_LIT(0.0);
     A[44] = TRAILER3_LIT(0.0);
     A[45] = TRAILER3_LIT(0.0);
-    A[46] = -_t27;
-    A[47] = _t28;
+    A[46] = _t19;
+    A[47] = _t22;
     A[48] = TRAILER3_LIT(0.0);
     A[49] = TRAILER3_LIT(0.0);
-    A[50] = _t564;
-    A[51] = _t565;
+    A[50] = _t386;
+    A[51] = -_t386;
     A[52] = TRAILER3_LIT(0.0);
     A[53] = TRAILER3_LIT(0.0);
     A[54] = TRAILER3_LIT(0.0);
@@ -4061,13 +3729,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[59] = TRAILER3_LIT(0.0);
     A[60] = TRAILER3_LIT(0.0);
     A[61] = TRAILER3_LIT(0.0);
-    A[62] = _t35;
-    A[63] = _t40;
+    A[62] = _t26;
+    A[63] = _t30;
     A[64] = TRAILER3_LIT(0.0);
     A[65] = TRAILER3_LIT(0.0);
-    A[66] = _t566;
-    A[67] = _t567;
-    A[68] = _t568;
+    A[66] = _t729;
+    A[67] = _t730;
+    A[68] = _t731;
     A[69] = TRAILER3_LIT(0.0);
     A[70] = TRAILER3_LIT(0.0);
     A[71] = TRAILER3_LIT(0.0);
@@ -4077,14 +3745,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[75] = TRAILER3_LIT(0.0);
     A[76] = TRAILER3_LIT(0.0);
     A[77] = TRAILER3_LIT(0.0);
-    A[78] = _t44;
-    A[79] = _t49;
+    A[78] = _t35;
+    A[79] = _t41;
     A[80] = TRAILER3_LIT(0.0);
     A[81] = TRAILER3_LIT(0.0);
-    A[82] = _t569;
-    A[83] = _t570;
-    A[84] = _t571;
-    A[85] = _t572;
+    A[82] = _t732;
+    A[83] = _t733;
+    A[84] = _t734;
+    A[85] = _t735;
     A[86] = TRAILER3_LIT(0.0);
     A[87] = TRAILER3_LIT(0.0);
     A[88] = TRAILER3_LIT(0.0);
@@ -4093,8 +3761,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[91] = TRAILER3_LIT(0.0);
     A[92] = TRAILER3_LIT(0.0);
     A[93] = TRAILER3_LIT(0.0);
-    A[94] = _t68;
-    A[95] = _t75;
+    A[94] = _t67;
+    A[95] = _t76;
     A[96] = TRAILER3_LIT(0.0);
     A[97] = TRAILER3_LIT(0.0);
     A[98] = TRAILER3_LIT(0.0);
@@ -4129,8 +3797,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[127] = TRAILER3_LIT(1.0);
     A[128] = TRAILER3_LIT(0.0);
     A[129] = TRAILER3_LIT(0.0);
-    A[130] = _t573;
-    A[131] = _t574;
+    A[130] = _t736;
+    A[131] = -_t736;
     A[132] = TRAILER3_LIT(0.0);
     A[133] = TRAILER3_LIT(0.0);
     A[134] = TRAILER3_LIT(0.0);
@@ -4141,12 +3809,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[139] = TRAILER3_LIT(0.0);
     A[140] = TRAILER3_LIT(0.0);
     A[141] = TRAILER3_LIT(0.0);
-    A[142] = _t491;
-    A[143] = _t494;
+    A[142] = _t260;
+    A[143] = _t263;
     A[144] = TRAILER3_LIT(0.0);
     A[145] = TRAILER3_LIT(0.0);
-    A[146] = _t575;
-    A[147] = _t576;
+    A[146] = _t737;
+    A[147] = -_t737;
     A[148] = TRAILER3_LIT(0.0);
     A[149] = TRAILER3_LIT(0.0);
     A[150] = TRAILER3_LIT(0.0);
@@ -4157,13 +3825,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[155] = TRAILER3_LIT(0.0);
     A[156] = TRAILER3_LIT(0.0);
     A[157] = TRAILER3_LIT(0.0);
-    A[158] = _t488;
-    A[159] = _t496;
+    A[158] = _t267;
+    A[159] = _t270;
     A[160] = TRAILER3_LIT(0.0);
     A[161] = TRAILER3_LIT(0.0);
-    A[162] = _t577;
-    A[163] = _t578;
-    A[164] = _t579;
+    A[162] = _t738;
+    A[163] = _t739;
+    A[164] = _t740;
     A[165] = TRAILER3_LIT(0.0);
     A[166] = TRAILER3_LIT(0.0);
     A[167] = TRAILER3_LIT(0.0);
@@ -4173,13 +3841,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[171] = TRAILER3_LIT(0.0);
     A[172] = TRAILER3_LIT(0.0);
     A[173] = TRAILER3_LIT(0.0);
-    A[174] = _t479;
-    A[175] = _t498;
+    A[174] = _t274;
+    A[175] = _t277;
     A[176] = TRAILER3_LIT(0.0);
     A[177] = TRAILER3_LIT(0.0);
-    A[178] = _t580;
-    A[179] = _t581;
-    A[180] = _t582;
+    A[178] = _t741;
+    A[179] = _t742;
+    A[180] = _t743;
     A[181] = TRAILER3_LIT(0.0);
     A[182] = TRAILER3_LIT(0.0);
     A[183] = TRAILER3_LIT(0.0);
@@ -4189,14 +3857,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[187] = TRAILER3_LIT(0.0);
     A[188] = TRAILER3_LIT(0.0);
     A[189] = TRAILER3_LIT(0.0);
-    A[190] = _t476;
-    A[191] = _t500;
+    A[190] = _t281;
+    A[191] = _t284;
     A[192] = TRAILER3_LIT(0.0);
     A[193] = TRAILER3_LIT(0.0);
-    A[194] = _t583;
-    A[195] = _t584;
-    A[196] = _t585;
-    A[197] = _t586;
+    A[194] = _t744;
+    A[195] = _t745;
+    A[196] = _t746;
+    A[197] = _t747;
     A[198] = TRAILER3_LIT(0.0);
     A[199] = TRAILER3_LIT(0.0);
     A[200] = TRAILER3_LIT(0.0);
@@ -4205,14 +3873,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[203] = TRAILER3_LIT(0.0);
     A[204] = TRAILER3_LIT(0.0);
     A[205] = TRAILER3_LIT(0.0);
-    A[206] = _t485;
-    A[207] = _t502;
+    A[206] = _t288;
+    A[207] = _t291;
     A[208] = TRAILER3_LIT(0.0);
     A[209] = TRAILER3_LIT(0.0);
-    A[210] = _t587;
-    A[211] = _t588;
-    A[212] = _t589;
-    A[213] = _t590;
+    A[210] = _t748;
+    A[211] = _t749;
+    A[212] = _t750;
+    A[213] = _t751;
     A[214] = TRAILER3_LIT(0.0);
     A[215] = TRAILER3_LIT(0.0);
     A[216] = TRAILER3_LIT(0.0);
@@ -4221,14 +3889,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[219] = TRAILER3_LIT(0.0);
     A[220] = TRAILER3_LIT(0.0);
     A[221] = TRAILER3_LIT(0.0);
-    A[222] = _t482;
-    A[223] = _t504;
+    A[222] = _t295;
+    A[223] = _t298;
     A[224] = TRAILER3_LIT(0.0);
     A[225] = TRAILER3_LIT(0.0);
-    A[226] = _t993;
-    A[227] = _t1064;
-    A[228] = _t1108;
-    A[229] = _t1133;
+    A[226] = _t816;
+    A[227] = _t881;
+    A[228] = _t930;
+    A[229] = _t958;
     A[230] = TRAILER3_LIT(0.0);
     A[231] = TRAILER3_LIT(0.0);
     A[232] = TRAILER3_LIT(0.0);
@@ -4237,14 +3905,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[235] = TRAILER3_LIT(0.0);
     A[236] = TRAILER3_LIT(0.0);
     A[237] = TRAILER3_LIT(0.0);
-    A[238] = _t1153;
-    A[239] = _t1173;
+    A[238] = _t983;
+    A[239] = _t1008;
     A[240] = TRAILER3_LIT(0.0);
     A[241] = TRAILER3_LIT(0.0);
-    A[242] = _t1174;
-    A[243] = _t1175;
-    A[244] = _t1176;
-    A[245] = _t1177;
+    A[242] = _t1009;
+    A[243] = _t1010;
+    A[244] = _t1011;
+    A[245] = _t1012;
     A[246] = TRAILER3_LIT(0.0);
     A[247] = TRAILER3_LIT(0.0);
     A[248] = TRAILER3_LIT(0.0);
@@ -4253,8 +3921,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[251] = TRAILER3_LIT(0.0);
     A[252] = TRAILER3_LIT(0.0);
     A[253] = TRAILER3_LIT(0.0);
-    A[254] = _t1178;
-    A[255] = _t1179;
+    A[254] = _t1013;
+    A[255] = _t1014;
     B[0] = TRAILER3_LIT(0.0);
     B[1] = TRAILER3_LIT(0.0);
     B[2] = TRAILER3_LIT(0.0);
@@ -4283,14 +3951,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     B[25] = TRAILER3_LIT(0.0);
     B[26] = TRAILER3_LIT(0.0);
     B[27] = TRAILER3_LIT(0.0);
-    B[28] = _t774;
-    B[29] = -_t778;
-    B[30] = -_t896;
-    B[31] = _t895;
+    B[28] = _t582;
+    B[29] = -_t614;
+    B[30] = -_t614;
+    B[31] = _t720;
 }
 
 /* trailer3_wheel_contact_forces: documented in trailer3_model.h.
-   operations after CSE: 696 add, 1013 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 550 add, 759 mul, 7 div, 6 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *longitudinal, trailer3_real_t *lateral)
@@ -4357,584 +4025,531 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = -_t0;
-    const trailer3_real_t _t2 = TRAILER3_COS(theta_cart);
-    const trailer3_real_t _t3 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t _t5 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t6 = TRAILER3_LIT(0.3)*_t5;
-    const trailer3_real_t _t7 = _t0*_t4 + _t2*_t6;
-    const trailer3_real_t _t8 = -_t7;
-    const trailer3_real_t _t9 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t10 = -_t9;
-    const trailer3_real_t _t11 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t12 = _t11*_t6 + _t4*_t9;
-    const trailer3_real_t _t13 = -_t12;
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t16 = _t11*_t15 + _t14*_t9;
+    const trailer3_real_t _t0 = -radius_right;
+    const trailer3_real_t _t1 = -radius_left;
+    const trailer3_real_t _t2 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t8 = -theta_tractor;
+    const trailer3_real_t _t9 = _t8 + theta_cart;
+    const trailer3_real_t _t10 = TRAILER3_SIN(_t9);
+    const trailer3_real_t _t11 = -_t10;
+    const trailer3_real_t _t12 = TRAILER3_COS(_t9);
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
+    const trailer3_real_t _t14 = -_t13;
+    const trailer3_real_t _t15 = _t8 + theta_cart2;
+    const trailer3_real_t _t16 = TRAILER3_SIN(_t15);
     const trailer3_real_t _t17 = -_t16;
-    const trailer3_real_t _t18 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t19 = -_t18;
-    const trailer3_real_t _t20 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t21 = _t18*_t4 + _t20*_t6;
-    const trailer3_real_t _t22 = -_t21;
-    const trailer3_real_t _t23 = _t14*_t18 + _t15*_t20;
-    const trailer3_real_t _t24 = -_t23;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.85)*_t20;
-    const trailer3_real_t _t26 = _t11*_t25 + TRAILER3_LIT(0.85)*_t18*_t9;
-    const trailer3_real_t _t27 = -_t26;
-    const trailer3_real_t _t28 = -_t2;
-    const trailer3_real_t _t29 = _t0*_t6 - _t2*_t4;
-    const trailer3_real_t _t30 = -_t11;
-    const trailer3_real_t _t31 = -_t11*_t4 + _t6*_t9;
-    const trailer3_real_t _t32 = _t11*_t14 - TRAILER3_LIT(0.85)*_t2*_t9;
-    const trailer3_real_t _t33 = -_t32;
-    const trailer3_real_t _t34 = -_t20;
-    const trailer3_real_t _t35 = _t18*_t6 - _t20*_t4;
-    const trailer3_real_t _t36 = _t14*_t20 - TRAILER3_LIT(0.85)*_t18*_t2;
-    const trailer3_real_t _t37 = -_t36;
-    const trailer3_real_t _t38 = -TRAILER3_LIT(0.85)*_t11*_t18 + _t25*_t9;
-    const trailer3_real_t _t39 = -_t38;
-    const trailer3_real_t _t40 = -radius_right;
-    const trailer3_real_t _t41 = -radius_left;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.207)*_t3;
-    const trailer3_real_t _t43 = -_t42;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(0.207)*_t5;
-    const trailer3_real_t _t45 = TRAILER3_LIT(2.4154589371980677)*_t40;
-    const trailer3_real_t _t46 = TRAILER3_LIT(2.4154589371980677)*_t41;
-    const trailer3_real_t _t47 = _t44*_t45;
-    const trailer3_real_t _t48 = _t1*_t47 - _t45*_t8;
-    const trailer3_real_t _t49 = _t44*_t46;
-    const trailer3_real_t _t50 = _t1*_t49 + _t46*_t8;
-    const trailer3_real_t _t51 = _t43*_t45;
-    const trailer3_real_t _t52 = -_t2*_t51 - _t48;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
-    const trailer3_real_t _t54 = _t17*_t53;
-    const trailer3_real_t _t55 = _t10*_t47 - _t13*_t45;
-    const trailer3_real_t _t56 = _t43*_t46;
-    const trailer3_real_t _t57 = -_t2*_t56 - _t50;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = _t17*_t58;
-    const trailer3_real_t _t60 = _t10*_t49 + _t13*_t46;
-    const trailer3_real_t _t61 = -_t11*_t51 - _t54 - _t55;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = _t27*_t62;
-    const trailer3_real_t _t64 = _t24*_t53;
-    const trailer3_real_t _t65 = _t19*_t47 - _t22*_t45;
-    const trailer3_real_t _t66 = -_t11*_t56 - _t59 - _t60;
-    const trailer3_real_t _t67 = -TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t68 = _t27*_t67;
-    const trailer3_real_t _t69 = _t24*_t58;
-    const trailer3_real_t _t70 = _t19*_t49 + _t22*_t46;
+    const trailer3_real_t _t18 = TRAILER3_COS(_t15);
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
+    const trailer3_real_t _t20 = -_t19;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t10;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t12;
+    const trailer3_real_t _t23 = -_t16*_t21 - _t18*_t22;
+    const trailer3_real_t _t24 = _t8 + theta_cart3;
+    const trailer3_real_t _t25 = TRAILER3_SIN(_t24);
+    const trailer3_real_t _t26 = -_t25;
+    const trailer3_real_t _t27 = TRAILER3_COS(_t24);
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t29 = -_t28;
+    const trailer3_real_t _t30 = -_t21*_t25 - _t22*_t27;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t32 = -TRAILER3_LIT(0.85)*_t16*_t25 - _t18*_t31;
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.3)*_t10;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t12*_t16 - _t18*_t21;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t25;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t12*_t25 - _t21*_t27;
+    const trailer3_real_t _t38 = -_t16*_t31 + TRAILER3_LIT(0.85)*_t18*_t25;
+    const trailer3_real_t _t39 = -TRAILER3_LIT(2.4154589371980677)*_t0;
+    const trailer3_real_t _t40 = -TRAILER3_LIT(0.5)*_t0;
+    const trailer3_real_t _t41 = _t11*_t40 + _t14*_t39;
+    const trailer3_real_t _t42 = TRAILER3_LIT(2.4154589371980677)*_t1;
+    const trailer3_real_t _t43 = -TRAILER3_LIT(0.5)*_t1;
+    const trailer3_real_t _t44 = _t11*_t43 + _t14*_t42;
+    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t46 = _t23*_t45;
+    const trailer3_real_t _t47 = _t17*_t40 + _t20*_t39;
+    const trailer3_real_t _t48 = _t46 + _t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t50 = _t23*_t49;
+    const trailer3_real_t _t51 = _t17*_t43 + _t20*_t42;
+    const trailer3_real_t _t52 = _t50 + _t51;
+    const trailer3_real_t _t53 = TRAILER3_LIT(1.6666666666666667)*_t48;
+    const trailer3_real_t _t54 = _t32*_t53;
+    const trailer3_real_t _t55 = _t30*_t45;
+    const trailer3_real_t _t56 = _t26*_t40 + _t29*_t39;
+    const trailer3_real_t _t57 = _t54 + _t55 + _t56;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.6666666666666667)*_t52;
+    const trailer3_real_t _t59 = _t32*_t58;
+    const trailer3_real_t _t60 = _t30*_t49;
+    const trailer3_real_t _t61 = _t26*_t43 + _t29*_t42;
+    const trailer3_real_t _t62 = _t59 + _t60 + _t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t64 = _t12*_t40;
+    const trailer3_real_t _t65 = _t33*_t39;
+    const trailer3_real_t _t66 = _t64 - _t65;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
+    const trailer3_real_t _t68 = _t12*_t43;
+    const trailer3_real_t _t69 = _t33*_t42;
+    const trailer3_real_t _t70 = _t68 - _t69;
     const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t53;
-    const trailer3_real_t _t72 = _t1*_t51 + _t28*_t47 - _t29*_t45;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t74 = _t1*_t56 + _t28*_t49 + _t29*_t46;
-    const trailer3_real_t _t75 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t76 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t78 = _t10*_t51 + _t30*_t47 - _t31*_t45 + _t33*_t53;
-    const trailer3_real_t _t79 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t80 = _t10*_t56 + _t30*_t49 + _t31*_t46 + _t33*_t58;
-    const trailer3_real_t _t81 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t82 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t83 = -_t20*_t51 - _t63 - _t64 - _t65;
-    const trailer3_real_t _t84 = -TRAILER3_LIT(1.6666666666666667)*_t83;
-    const trailer3_real_t _t85 = TRAILER3_LIT(0.2)*_t84;
-    const trailer3_real_t _t86 = _t19*_t51 + _t34*_t47 - _t35*_t45 + _t37*_t53 + _t39*_t62;
-    const trailer3_real_t _t87 = -_t20*_t56 - _t68 - _t69 - _t70;
-    const trailer3_real_t _t88 = -TRAILER3_LIT(1.6666666666666667)*_t87;
-    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t88;
-    const trailer3_real_t _t90 = _t19*_t56 + _t34*_t49 + _t35*_t46 + _t37*_t58 + _t39*_t67;
-    const trailer3_real_t _t91 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t92 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t93 = K_theta_tractor_x_tractor*_t3;
-    const trailer3_real_t _t94 = K_theta_tractor_x_tractor_2*_t5;
-    const trailer3_real_t _t95 = _t93 + _t94;
-    const trailer3_real_t _t96 = K_theta_cart_x_tractor*_t0;
-    const trailer3_real_t _t97 = K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t _t98 = _t96 + _t97;
-    const trailer3_real_t _t99 = K_theta_cart2_x_tractor*_t9;
-    const trailer3_real_t _t100 = K_theta_cart2_x_tractor_2*_t11;
-    const trailer3_real_t _t101 = _t100 + _t99;
-    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t103 = K_theta_cart3_x_tractor_2*_t20;
-    const trailer3_real_t _t104 = _t102 + _t103;
-    const trailer3_real_t _t105 = K_theta_tractor_x_tractor*_t5;
-    const trailer3_real_t _t106 = K_theta_tractor_x_tractor_2*_t3 - _t105;
-    const trailer3_real_t _t107 = K_theta_cart_x_tractor*_t2;
-    const trailer3_real_t _t108 = K_theta_cart_x_tractor_2*_t0 - _t107;
-    const trailer3_real_t _t109 = K_theta_cart2_x_tractor*_t11;
-    const trailer3_real_t _t110 = K_theta_cart2_x_tractor_2*_t9 - _t109;
-    const trailer3_real_t _t111 = K_theta_cart3_x_tractor*_t20;
-    const trailer3_real_t _t112 = K_theta_cart3_x_tractor_2*_t18 - _t111;
-    const trailer3_real_t _t113 = K_theta_cart_x_tractor_2*_t0;
-    const trailer3_real_t _t114 = _t107*_t6 - _t113*_t6 + _t4*_t96 + _t4*_t97;
-    const trailer3_real_t _t115 = K_theta_cart2_x_tractor_2*_t9;
-    const trailer3_real_t _t116 = _t100*_t4 + _t109*_t6 - _t115*_t6 + _t4*_t99;
-    const trailer3_real_t _t117 = K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t118 = _t102*_t4 + _t103*_t4 + _t111*_t6 - _t117*_t6;
-    const trailer3_real_t _t119 = _t100*_t14 + _t109*_t15 - _t115*_t15 + _t14*_t99;
-    const trailer3_real_t _t120 = _t102*_t14 + _t103*_t14 + _t111*_t15 - _t117*_t15;
-    const trailer3_real_t _t121 = TRAILER3_LIT(0.85)*_t9;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.85)*_t11;
-    const trailer3_real_t _t123 = _t102*_t121 + _t103*_t121 + _t111*_t122 - _t117*_t122;
-    const trailer3_real_t _t124 = _t62*thetadot_right + _t67*thetadot_left;
-    const trailer3_real_t _t125 = _t124*_t124;
-    const trailer3_real_t _t126 = _t84*thetadot_right + _t88*thetadot_left;
-    const trailer3_real_t _t127 = _t126*_t126;
-    const trailer3_real_t _t128 = _t111*_t127;
-    const trailer3_real_t _t129 = _t53*thetadot_right + _t58*thetadot_left;
-    const trailer3_real_t _t130 = _t129*_t129;
-    const trailer3_real_t _t131 = -_t45*thetadot_right + _t46*thetadot_left;
-    const trailer3_real_t _t132 = _t131*_t131;
-    const trailer3_real_t _t133 = _t115*_t125;
-    const trailer3_real_t _t134 = _t117*_t127;
-    const trailer3_real_t _t135 = _t113*_t130;
-    const trailer3_real_t _t136 = _t125*_t99;
-    const trailer3_real_t _t137 = _t100*_t125;
-    const trailer3_real_t _t138 = _t102*_t127;
-    const trailer3_real_t _t139 = _t103*_t127;
-    const trailer3_real_t _t140 = _t130*_t96;
-    const trailer3_real_t _t141 = _t130*_t97;
-    const trailer3_real_t _t142 = _t132*_t4;
-    const trailer3_real_t _t143 = _t132*_t6;
-    const trailer3_real_t _t144 = _t130*_t14;
-    const trailer3_real_t _t145 = _t130*_t15;
-    const trailer3_real_t _t146 = _t121*_t125;
-    const trailer3_real_t _t147 = _t122*_t125;
-    const trailer3_real_t _t148 = _t131*thetadot_right;
-    const trailer3_real_t _t149 = _t131*thetadot_left;
-    const trailer3_real_t _t150 = _t129*thetadot_right;
-    const trailer3_real_t _t151 = _t129*thetadot_left;
-    const trailer3_real_t _t152 = _t124*thetadot_right;
-    const trailer3_real_t _t153 = _t124*thetadot_left;
-    const trailer3_real_t _t154 = _t126*thetadot_right;
-    const trailer3_real_t _t155 = _t126*thetadot_left;
-    const trailer3_real_t _t156 = _t42*_t45;
-    const trailer3_real_t _t157 = -_t1*_t156 - _t2*_t47 - _t29*_t45;
-    const trailer3_real_t _t158 = -TRAILER3_LIT(1.6666666666666667)*_t157;
-    const trailer3_real_t _t159 = TRAILER3_LIT(0.2)*_t158;
-    const trailer3_real_t _t160 = _t156*_t28 + _t48;
-    const trailer3_real_t _t161 = _t42*_t46;
-    const trailer3_real_t _t162 = -_t1*_t161 - _t2*_t49 + _t29*_t46;
-    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
-    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
-    const trailer3_real_t _t165 = _t161*_t28 + _t50;
-    const trailer3_real_t _t166 = TRAILER3_LIT(1.6666666666666667)*_t72;
-    const trailer3_real_t _t167 = TRAILER3_LIT(0.2)*_t166;
-    const trailer3_real_t _t168 = _t0*_t47 + _t28*_t51 - _t45*_t7;
-    const trailer3_real_t _t169 = TRAILER3_LIT(1.6666666666666667)*_t74;
-    const trailer3_real_t _t170 = TRAILER3_LIT(0.2)*_t169;
-    const trailer3_real_t _t171 = _t0*_t49 + _t28*_t56 + _t46*_t7;
-    const trailer3_real_t _t172 = -_t10*_t156 - _t11*_t47 - _t158*_t17 - _t31*_t45;
-    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
-    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
-    const trailer3_real_t _t175 = _t156*_t30 + _t158*_t33 + _t55;
-    const trailer3_real_t _t176 = -_t10*_t161 - _t11*_t49 - _t163*_t17 + _t31*_t46;
-    const trailer3_real_t _t177 = -TRAILER3_LIT(1.6666666666666667)*_t176;
-    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
-    const trailer3_real_t _t179 = _t161*_t30 + _t163*_t33 + _t60;
-    const trailer3_real_t _t180 = -_t166*_t17 - _t32*_t53;
-    const trailer3_real_t _t181 = -TRAILER3_LIT(1.6666666666666667)*_t180;
-    const trailer3_real_t _t182 = TRAILER3_LIT(0.2)*_t181;
-    const trailer3_real_t _t183 = _t166*_t33 + _t54;
-    const trailer3_real_t _t184 = -_t169*_t17 - _t32*_t58;
-    const trailer3_real_t _t185 = -TRAILER3_LIT(1.6666666666666667)*_t184;
-    const trailer3_real_t _t186 = TRAILER3_LIT(0.2)*_t185;
-    const trailer3_real_t _t187 = _t169*_t33 + _t59;
-    const trailer3_real_t _t188 = TRAILER3_LIT(1.6666666666666667)*_t78;
-    const trailer3_real_t _t189 = TRAILER3_LIT(0.2)*_t188;
-    const trailer3_real_t _t190 = -_t12*_t45 + _t16*_t53 + _t30*_t51 + _t47*_t9;
-    const trailer3_real_t _t191 = TRAILER3_LIT(1.6666666666666667)*_t80;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.2)*_t191;
-    const trailer3_real_t _t193 = _t12*_t46 + _t16*_t58 + _t30*_t56 + _t49*_t9;
-    const trailer3_real_t _t194 = -_t156*_t19 - _t158*_t24 - _t173*_t27 - _t20*_t47 - _t35*_t45;
-    const trailer3_real_t _t195 = -TRAILER3_LIT(1.6666666666666667)*_t194;
-    const trailer3_real_t _t196 = TRAILER3_LIT(0.2)*_t195;
-    const trailer3_real_t _t197 = _t156*_t34 + _t158*_t37 + _t173*_t39 + _t65;
-    const trailer3_real_t _t198 = -_t161*_t19 - _t163*_t24 - _t177*_t27 - _t20*_t49 + _t35*_t46;
-    const trailer3_real_t _t199 = -TRAILER3_LIT(1.6666666666666667)*_t198;
-    const trailer3_real_t _t200 = TRAILER3_LIT(0.2)*_t199;
-    const trailer3_real_t _t201 = _t161*_t34 + _t163*_t37 + _t177*_t39 + _t70;
-    const trailer3_real_t _t202 = -_t166*_t24 - _t181*_t27 - _t36*_t53;
-    const trailer3_real_t _t203 = -TRAILER3_LIT(1.6666666666666667)*_t202;
-    const trailer3_real_t _t204 = TRAILER3_LIT(0.2)*_t203;
-    const trailer3_real_t _t205 = _t166*_t37 + _t181*_t39 + _t64;
-    const trailer3_real_t _t206 = -_t169*_t24 - _t185*_t27 - _t36*_t58;
-    const trailer3_real_t _t207 = -TRAILER3_LIT(1.6666666666666667)*_t206;
-    const trailer3_real_t _t208 = TRAILER3_LIT(0.2)*_t207;
-    const trailer3_real_t _t209 = _t169*_t37 + _t185*_t39 + _t69;
-    const trailer3_real_t _t210 = -_t188*_t27 - _t38*_t62;
-    const trailer3_real_t _t211 = -TRAILER3_LIT(1.6666666666666667)*_t210;
-    const trailer3_real_t _t212 = TRAILER3_LIT(0.2)*_t211;
-    const trailer3_real_t _t213 = _t188*_t39 + _t63;
-    const trailer3_real_t _t214 = -_t191*_t27 - _t38*_t67;
-    const trailer3_real_t _t215 = -TRAILER3_LIT(1.6666666666666667)*_t214;
-    const trailer3_real_t _t216 = TRAILER3_LIT(0.2)*_t215;
-    const trailer3_real_t _t217 = _t191*_t39 + _t68;
-    const trailer3_real_t _t218 = TRAILER3_LIT(1.6666666666666667)*_t86;
-    const trailer3_real_t _t219 = TRAILER3_LIT(0.2)*_t218;
-    const trailer3_real_t _t220 = _t18*_t47 - _t21*_t45 + _t23*_t53 + _t26*_t62 + _t34*_t51;
-    const trailer3_real_t _t221 = TRAILER3_LIT(1.6666666666666667)*_t90;
-    const trailer3_real_t _t222 = TRAILER3_LIT(0.2)*_t221;
-    const trailer3_real_t _t223 = _t18*_t49 + _t21*_t46 + _t23*_t58 + _t26*_t67 + _t34*_t56;
-    const trailer3_real_t _t224 = J_x_tractor*_t51 - _t106*_t45 + _t108*_t53 + _t110*_t62
-            + _t112*_t84;
-    const trailer3_real_t _t225 = J_x_tractor*_t47 + _t101*_t62 + _t104*_t84 - _t45*_t95
-            + _t53*_t98;
-    const trailer3_real_t _t226 = -J_theta_tractor*_t45 + _t106*_t51 + _t114*_t53 + _t116*_t62
-            + _t118*_t84 + _t47*_t95;
-    const trailer3_real_t _t227 = J_theta_cart*_t53 + _t108*_t51 - _t114*_t45 + _t119*_t62
-            + _t120*_t84 + _t47*_t98;
-    const trailer3_real_t _t228 = J_theta_cart2*_t62 + _t101*_t47 + _t110*_t51 - _t116*_t45
-            + _t119*_t53 + _t123*_t84;
-    const trailer3_real_t _t229 = J_theta_cart3*_t84 + _t104*_t47 + _t112*_t51 - _t118*_t45
-            + _t120*_t53 + _t123*_t62;
-    const trailer3_real_t _t230 = -_t77 - _t78;
-    const trailer3_real_t _t231 = _t230*_t82;
-    const trailer3_real_t _t232 = J_theta_cart2_left*_t231;
-    const trailer3_real_t _t233 = _t77 - _t78;
-    const trailer3_real_t _t234 = _t233*_t81;
-    const trailer3_real_t _t235 = J_theta_cart2_right*_t234;
-    const trailer3_real_t _t236 = -_t85 - _t86;
-    const trailer3_real_t _t237 = _t236*_t92;
-    const trailer3_real_t _t238 = J_theta_cart3_left*_t237;
-    const trailer3_real_t _t239 = _t85 - _t86;
-    const trailer3_real_t _t240 = _t239*_t91;
-    const trailer3_real_t _t241 = J_theta_cart3_right*_t240;
-    const trailer3_real_t _t242 = -_t71 - _t72;
-    const trailer3_real_t _t243 = _t242*_t76;
-    const trailer3_real_t _t244 = J_theta_cart_left*_t243;
-    const trailer3_real_t _t245 = _t71 - _t72;
-    const trailer3_real_t _t246 = _t245*_t75;
-    const trailer3_real_t _t247 = J_theta_cart_right*_t246;
-    const trailer3_real_t _t248 = _t73 - _t74;
-    const trailer3_real_t _t249 = _t248*_t75;
-    const trailer3_real_t _t250 = -_t73 - _t74;
-    const trailer3_real_t _t251 = _t250*_t76;
-    const trailer3_real_t _t252 = _t79 - _t80;
-    const trailer3_real_t _t253 = _t252*_t81;
-    const trailer3_real_t _t254 = -_t79 - _t80;
-    const trailer3_real_t _t255 = _t254*_t82;
-    const trailer3_real_t _t256 = _t89 - _t90;
-    const trailer3_real_t _t257 = _t256*_t91;
-    const trailer3_real_t _t258 = -_t89 - _t90;
-    const trailer3_real_t _t259 = _t258*_t92;
-    const trailer3_real_t _t260 = _t232*_t255 + _t235*_t253 + _t238*_t259 + _t241*_t257
-            + _t244*_t251 + _t247*_t249;
-    const trailer3_real_t _t261 = J_x_tractor*_t56 + _t106*_t46 + _t108*_t58 + _t110*_t67
-            + _t112*_t88;
-    const trailer3_real_t _t262 = J_theta_tractor*_t46 + _t106*_t56 + _t114*_t58 + _t116*_t67
-            + _t118*_t88 + _t49*_t95;
-    const trailer3_real_t _t263 = J_x_tractor*_t49 + _t101*_t67 + _t104*_t88 + _t46*_t95
-            + _t58*_t98;
-    const trailer3_real_t _t264 = J_theta_cart*_t58 + _t108*_t56 + _t114*_t46 + _t119*_t67
-            + _t120*_t88 + _t49*_t98;
-    const trailer3_real_t _t265 = J_theta_cart2*_t67 + _t101*_t49 + _t110*_t56 + _t116*_t46
-            + _t119*_t58 + _t123*_t88;
-    const trailer3_real_t _t266 = J_theta_cart3*_t88 + _t104*_t49 + _t112*_t56 + _t118*_t46
-            + _t120*_t58 + _t123*_t67;
-    const trailer3_real_t _t267 = _t132*_t93 + _t132*_t94 + _t136 + _t137 + _t138 + _t139 + _t140
-            + _t141;
-    const trailer3_real_t _t268 = _t148*_t47 + _t149*_t49;
-    const trailer3_real_t _t269 = _t148*_t158 + _t149*_t163 + _t150*_t166 + _t151*_t169;
-    const trailer3_real_t _t270 = _t148*_t173 + _t149*_t177 + _t150*_t181 + _t151*_t185
-            + _t152*_t188 + _t153*_t191;
-    const trailer3_real_t _t271 = _t148*_t195 + _t149*_t199 + _t150*_t203 + _t151*_t207
-            + _t152*_t211 + _t153*_t215 + _t154*_t218 + _t155*_t221;
-    const trailer3_real_t _t272 = J_x_tractor*_t268 + _t108*_t269 + _t110*_t270 + _t112*_t271
-            + _t267;
-    const trailer3_real_t _t273 = -K_theta_tractor_x_tractor_2*_t132*_t3 + _t105*_t132 + _t107*_t130
-            + _t109*_t125 + _t128 - _t133 - _t134 - _t135;
-    const trailer3_real_t _t274 = _t148*_t156 + _t149*_t161;
-    const trailer3_real_t _t275 = J_x_tractor*_t274 + _t101*_t270 + _t104*_t271 + _t269*_t98
-            + _t273;
-    const trailer3_real_t _t276 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t11*_t125*_t3
-            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t127*_t20*_t3
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t130*_t2*_t3 - _t133*_t4 - _t134*_t4
-            - _t135*_t4 - _t136*_t6 - _t137*_t6 - _t138*_t6 - _t139*_t6 - _t140*_t6 - _t141*_t6;
-    const trailer3_real_t _t277 = _t106*_t268 + _t114*_t269 + _t116*_t270 + _t118*_t271 + _t274*_t95
-            + _t276;
-    const trailer3_real_t _t278 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t11*_t125
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t127*_t20
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t132*_t5
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t132*_t3
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t132*_t2*_t5 - _t107*_t142 - _t133*_t14
-            - _t134*_t14 - _t136*_t15 - _t137*_t15 - _t138*_t15 - _t139*_t15;
-    const trailer3_real_t _t279 = J_theta_cart*_t269 + _t108*_t268 + _t119*_t270 + _t120*_t271
-            + _t274*_t98 + _t278;
-    const trailer3_real_t _t280 = _t100*_t143 + _t100*_t145 - _t109*_t142 - _t109*_t144
-            + _t115*_t142 + _t115*_t144 + _t121*_t128 - _t121*_t134 - _t122*_t138 - _t122*_t139
-            + _t143*_t99 + _t145*_t99;
-    const trailer3_real_t _t281 = J_theta_cart2*_t270 + _t101*_t274 + _t110*_t268 + _t119*_t269
-            + _t123*_t271 + _t280;
-    const trailer3_real_t _t282 = _t102*_t143 + _t102*_t145 + _t102*_t147 + _t103*_t143
-            + _t103*_t145 + _t103*_t147 - _t111*_t142 - _t111*_t144 - _t111*_t146 + _t117*_t142
-            + _t117*_t144 + _t117*_t146;
-    const trailer3_real_t _t283 = J_theta_cart3*_t271 + _t104*_t274 + _t112*_t268 + _t120*_t269
-            + _t123*_t270 + _t282;
-    const trailer3_real_t _t284 = _t224*_t56 + _t225*_t49 + _t226*_t46 + _t227*_t58 + _t228*_t67
-            + _t229*_t88 + _t260;
-    const trailer3_real_t _t285 = J_theta_cart2_left*_t255*_t255 + J_theta_cart2_right*_t253*_t253
-            + J_theta_cart3_left*_t259*_t259 + J_theta_cart3_right*_t257*_t257
-            + J_theta_cart_left*_t251*_t251 + J_theta_cart_right*_t249*_t249 + J_theta_left
-            + _t261*_t56 + _t262*_t46 + _t263*_t49 + _t264*_t58 + _t265*_t67 + _t266*_t88;
-    const trailer3_real_t _t286 = _t159 - _t160;
-    const trailer3_real_t _t287 = _t286*_t75;
-    const trailer3_real_t _t288 = _t164 - _t165;
-    const trailer3_real_t _t289 = _t288*_t75;
-    const trailer3_real_t _t290 = _t167 - _t168;
-    const trailer3_real_t _t291 = _t290*_t75;
-    const trailer3_real_t _t292 = _t170 - _t171;
-    const trailer3_real_t _t293 = _t292*_t75;
-    const trailer3_real_t _t294 = _t148*_t287 + _t149*_t289 + _t150*_t291 + _t151*_t293;
-    const trailer3_real_t _t295 = -_t159 - _t160;
-    const trailer3_real_t _t296 = _t295*_t76;
-    const trailer3_real_t _t297 = -_t164 - _t165;
-    const trailer3_real_t _t298 = _t297*_t76;
-    const trailer3_real_t _t299 = -_t167 - _t168;
-    const trailer3_real_t _t300 = _t299*_t76;
-    const trailer3_real_t _t301 = -_t170 - _t171;
-    const trailer3_real_t _t302 = _t301*_t76;
-    const trailer3_real_t _t303 = _t148*_t296 + _t149*_t298 + _t150*_t300 + _t151*_t302;
-    const trailer3_real_t _t304 = _t174 - _t175;
-    const trailer3_real_t _t305 = _t304*_t81;
-    const trailer3_real_t _t306 = _t178 - _t179;
-    const trailer3_real_t _t307 = _t306*_t81;
-    const trailer3_real_t _t308 = _t182 - _t183;
-    const trailer3_real_t _t309 = _t308*_t81;
-    const trailer3_real_t _t310 = _t186 - _t187;
-    const trailer3_real_t _t311 = _t310*_t81;
-    const trailer3_real_t _t312 = _t189 - _t190;
-    const trailer3_real_t _t313 = _t312*_t81;
-    const trailer3_real_t _t314 = _t192 - _t193;
-    const trailer3_real_t _t315 = _t314*_t81;
-    const trailer3_real_t _t316 = _t148*_t305 + _t149*_t307 + _t150*_t309 + _t151*_t311
-            + _t152*_t313 + _t153*_t315;
-    const trailer3_real_t _t317 = -_t174 - _t175;
-    const trailer3_real_t _t318 = _t317*_t82;
-    const trailer3_real_t _t319 = -_t178 - _t179;
-    const trailer3_real_t _t320 = _t319*_t82;
-    const trailer3_real_t _t321 = -_t182 - _t183;
-    const trailer3_real_t _t322 = _t321*_t82;
-    const trailer3_real_t _t323 = -_t186 - _t187;
-    const trailer3_real_t _t324 = _t323*_t82;
-    const trailer3_real_t _t325 = -_t189 - _t190;
-    const trailer3_real_t _t326 = _t325*_t82;
-    const trailer3_real_t _t327 = -_t192 - _t193;
-    const trailer3_real_t _t328 = _t327*_t82;
-    const trailer3_real_t _t329 = _t148*_t318 + _t149*_t320 + _t150*_t322 + _t151*_t324
-            + _t152*_t326 + _t153*_t328;
-    const trailer3_real_t _t330 = _t196 - _t197;
-    const trailer3_real_t _t331 = _t330*_t91;
-    const trailer3_real_t _t332 = _t200 - _t201;
-    const trailer3_real_t _t333 = _t332*_t91;
-    const trailer3_real_t _t334 = _t204 - _t205;
-    const trailer3_real_t _t335 = _t334*_t91;
-    const trailer3_real_t _t336 = _t208 - _t209;
-    const trailer3_real_t _t337 = _t336*_t91;
-    const trailer3_real_t _t338 = _t212 - _t213;
-    const trailer3_real_t _t339 = _t338*_t91;
-    const trailer3_real_t _t340 = _t216 - _t217;
-    const trailer3_real_t _t341 = _t340*_t91;
-    const trailer3_real_t _t342 = _t219 - _t220;
-    const trailer3_real_t _t343 = _t342*_t91;
-    const trailer3_real_t _t344 = _t222 - _t223;
-    const trailer3_real_t _t345 = _t344*_t91;
-    const trailer3_real_t _t346 = _t148*_t331 + _t149*_t333 + _t150*_t335 + _t151*_t337
-            + _t152*_t339 + _t153*_t341 + _t154*_t343 + _t155*_t345;
-    const trailer3_real_t _t347 = -_t196 - _t197;
-    const trailer3_real_t _t348 = _t347*_t92;
-    const trailer3_real_t _t349 = -_t200 - _t201;
-    const trailer3_real_t _t350 = _t349*_t92;
-    const trailer3_real_t _t351 = -_t204 - _t205;
-    const trailer3_real_t _t352 = _t351*_t92;
-    const trailer3_real_t _t353 = -_t208 - _t209;
-    const trailer3_real_t _t354 = _t353*_t92;
-    const trailer3_real_t _t355 = -_t212 - _t213;
-    const trailer3_real_t _t356 = _t355*_t92;
-    const trailer3_real_t _t357 = -_t216 - _t217;
-    const trailer3_real_t _t358 = _t357*_t92;
-    const trailer3_real_t _t359 = -_t219 - _t220;
-    const trailer3_real_t _t360 = _t359*_t92;
-    const trailer3_real_t _t361 = -_t222 - _t223;
-    const trailer3_real_t _t362 = _t361*_t92;
-    const trailer3_real_t _t363 = _t148*_t348 + _t149*_t350 + _t150*_t352 + _t151*_t354
-            + _t152*_t356 + _t153*_t358 + _t154*_t360 + _t155*_t362;
-    const trailer3_real_t _t364 = _t232*_t329 + _t235*_t316 + _t238*_t363 + _t241*_t346
-            + _t244*_t303 + _t247*_t294 + _t272*_t51 + _t275*_t47 - _t277*_t45 + _t279*_t53
-            + _t281*_t62 + _t283*_t84;
-    const trailer3_real_t _t365 = -_t364 + tau_right;
-    const trailer3_real_t _t366 = J_theta_cart2_left*_t255*_t329 + J_theta_cart2_right*_t253*_t316
-            + J_theta_cart3_left*_t259*_t363 + J_theta_cart3_right*_t257*_t346
-            + J_theta_cart_left*_t251*_t303 + J_theta_cart_right*_t249*_t294 + _t272*_t56
-            + _t275*_t49 + _t277*_t46 + _t279*_t58 + _t281*_t67 + _t283*_t88;
-    const trailer3_real_t _t367 = -_t366 + tau_left;
-    const trailer3_real_t _t368 = J_theta_cart2_left*_t231*_t231 + J_theta_cart2_right*_t234*_t234
-            + J_theta_cart3_left*_t237*_t237 + J_theta_cart3_right*_t240*_t240
-            + J_theta_cart_left*_t243*_t243 + J_theta_cart_right*_t246*_t246 + J_theta_right
-            + _t224*_t51 + _t225*_t47 - _t226*_t45 + _t227*_t53 + _t228*_t62 + _t229*_t84;
-    const trailer3_real_t _t369 = _t260 + _t261*_t51 - _t262*_t45 + _t263*_t47 + _t264*_t53
-            + _t265*_t62 + _t266*_t84;
-    const trailer3_real_t _t370 = -_t284*_t369 + _t285*_t368;
-    const trailer3_real_t _t371 = TRAILER3_LIT(1.0)/_t370;
-    const trailer3_real_t _t372 = _t371*(-_t284*_t367 + _t285*_t365);
-    const trailer3_real_t _t373 = _t371*(-_t365*_t369 + _t367*_t368);
-    const trailer3_real_t _t374 = _t274 + _t372*_t47 + _t373*_t49;
-    const trailer3_real_t _t375 = _t268 + _t372*_t51 + _t373*_t56;
-    const trailer3_real_t _t376 = -_t372*_t45 + _t373*_t46;
-    const trailer3_real_t _t377 = _t269 + _t372*_t53 + _t373*_t58;
-    const trailer3_real_t _t378 = _t270 + _t372*_t62 + _t373*_t67;
-    const trailer3_real_t _t379 = _t271 + _t372*_t84 + _t373*_t88;
-    const trailer3_real_t _t380 = -J_theta_tractor*_t376 - _t106*_t375 - _t114*_t377 - _t116*_t378
-            - _t118*_t379 - _t276 - _t374*_t95;
-    const trailer3_real_t _t381 = _t240*_t372 + _t257*_t373 + _t346;
-    const trailer3_real_t _t382 = -J_theta_cart3_right*_t381;
-    const trailer3_real_t _t383 = _t382*_t91;
-    const trailer3_real_t _t384 = _t237*_t372 + _t259*_t373 + _t363;
-    const trailer3_real_t _t385 = -J_theta_cart3_left*_t384;
-    const trailer3_real_t _t386 = _t385*_t92;
-    const trailer3_real_t _t387 = -J_theta_cart3*_t379 - _t104*_t374 - _t112*_t375 - _t118*_t376
-            - _t120*_t377 - _t123*_t378 - _t282;
-    const trailer3_real_t _t388 = TRAILER3_LIT(0.2)*_t383 - TRAILER3_LIT(0.2)*_t386 + _t387;
-    const trailer3_real_t _t389 = -TRAILER3_LIT(1.6666666666666667)*_t388;
-    const trailer3_real_t _t390 = _t234*_t372 + _t253*_t373 + _t316;
-    const trailer3_real_t _t391 = -J_theta_cart2_right*_t390;
-    const trailer3_real_t _t392 = _t391*_t81;
-    const trailer3_real_t _t393 = _t231*_t372 + _t255*_t373 + _t329;
-    const trailer3_real_t _t394 = -J_theta_cart2_left*_t393;
-    const trailer3_real_t _t395 = _t394*_t82;
-    const trailer3_real_t _t396 = -J_theta_cart2*_t378 - _t101*_t374 - _t110*_t375 - _t116*_t376
-            - _t119*_t377 - _t123*_t379 - _t280;
-    const trailer3_real_t _t397 = -_t27*_t389 - _t383*_t39 - _t386*_t39 + TRAILER3_LIT(0.2)*_t392
-            - TRAILER3_LIT(0.2)*_t395 + _t396;
+    const trailer3_real_t _t72 = _t35*_t45;
+    const trailer3_real_t _t73 = _t18*_t40;
+    const trailer3_real_t _t74 = _t34*_t39;
+    const trailer3_real_t _t75 = _t73 - _t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(0.2)*_t58;
+    const trailer3_real_t _t77 = _t35*_t49;
+    const trailer3_real_t _t78 = _t18*_t43;
+    const trailer3_real_t _t79 = _t34*_t42;
+    const trailer3_real_t _t80 = _t78 - _t79;
+    const trailer3_real_t _t81 = _t72 - _t73 + _t74;
+    const trailer3_real_t _t82 = _t77 - _t78 + _t79;
+    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t57;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.2)*_t83;
+    const trailer3_real_t _t85 = _t36*_t39;
+    const trailer3_real_t _t86 = _t37*_t45;
+    const trailer3_real_t _t87 = _t38*_t53;
+    const trailer3_real_t _t88 = _t27*_t40;
+    const trailer3_real_t _t89 = _t85 + _t86 + _t87 - _t88;
+    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t62;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
+    const trailer3_real_t _t92 = _t36*_t42;
+    const trailer3_real_t _t93 = _t37*_t49;
+    const trailer3_real_t _t94 = _t38*_t58;
+    const trailer3_real_t _t95 = _t27*_t43;
+    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
+    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t98 = _t23*_t97;
+    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t100 = _t23*_t99;
+    const trailer3_real_t _t101 = _t30*_t97;
+    const trailer3_real_t _t102 = _t30*_t99;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
+    const trailer3_real_t _t105 = -_t75 - _t98;
+    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
+    const trailer3_real_t _t108 = _t35*_t97;
+    const trailer3_real_t _t109 = _t108 + _t47;
+    const trailer3_real_t _t110 = -_t100 - _t80;
+    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
+    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
+    const trailer3_real_t _t113 = _t35*_t99;
+    const trailer3_real_t _t114 = _t113 + _t51;
+    const trailer3_real_t _t115 = _t72 + _t98;
+    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
+    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t118 = _t100 + _t77;
+    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t81;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
+    const trailer3_real_t _t125 = -_t101 - _t106*_t32 + _t85 - _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t37*_t97;
+    const trailer3_real_t _t129 = _t106*_t38 + _t128 + _t56;
+    const trailer3_real_t _t130 = -_t102 - _t111*_t32 + _t92 - _t95;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t133 = _t37*_t99;
+    const trailer3_real_t _t134 = _t111*_t38 + _t133 + _t61;
+    const trailer3_real_t _t135 = _t101 - _t116*_t32 + _t86;
+    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
+    const trailer3_real_t _t138 = _t116*_t38 - _t128 + _t55;
+    const trailer3_real_t _t139 = _t102 - _t119*_t32 + _t93;
+    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = _t119*_t38 - _t133 + _t60;
+    const trailer3_real_t _t143 = -_t121*_t32 + _t87;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t146 = _t121*_t38 + _t54;
+    const trailer3_real_t _t147 = -_t123*_t32 + _t94;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t150 = _t123*_t38 + _t59;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
+    const trailer3_real_t _t155 = K_theta_cart_x_tractor*_t10;
+    const trailer3_real_t _t156 = K_theta_cart_x_tractor_2*_t12;
+    const trailer3_real_t _t157 = _t155 + _t156;
+    const trailer3_real_t _t158 = K_theta_cart2_x_tractor*_t16;
+    const trailer3_real_t _t159 = K_theta_cart2_x_tractor_2*_t18;
+    const trailer3_real_t _t160 = _t158 + _t159;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t25;
+    const trailer3_real_t _t162 = K_theta_cart3_x_tractor_2*_t27;
+    const trailer3_real_t _t163 = _t161 + _t162;
+    const trailer3_real_t _t164 = K_theta_cart_x_tractor*_t12;
+    const trailer3_real_t _t165 = K_theta_cart2_x_tractor*_t18;
+    const trailer3_real_t _t166 = K_theta_cart3_x_tractor*_t27;
+    const trailer3_real_t _t167 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t33;
+    const trailer3_real_t _t168 = K_theta_cart2_x_tractor*_t19 - K_theta_cart2_x_tractor_2*_t34;
+    const trailer3_real_t _t169 = K_theta_cart3_x_tractor*_t28 - K_theta_cart3_x_tractor_2*_t36;
+    const trailer3_real_t _t170 = K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t171 = _t158*_t21 + _t159*_t21 + _t165*_t22 - _t170*_t22;
+    const trailer3_real_t _t172 = K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t173 = _t161*_t21 + _t162*_t21 + _t166*_t22 - _t172*_t22;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t175 = TRAILER3_LIT(0.85)*_t18;
+    const trailer3_real_t _t176 = _t161*_t174 + _t162*_t174 + _t166*_t175 - _t172*_t175;
+    const trailer3_real_t _t177 = _t39*thetadot_right + _t42*thetadot_left;
+    const trailer3_real_t _t178 = _t177*_t177;
+    const trailer3_real_t _t179 = _t53*thetadot_right + _t58*thetadot_left;
+    const trailer3_real_t _t180 = _t179*_t179;
+    const trailer3_real_t _t181 = _t83*thetadot_right + _t90*thetadot_left;
+    const trailer3_real_t _t182 = _t181*_t181;
+    const trailer3_real_t _t183 = _t166*_t182;
+    const trailer3_real_t _t184 = _t45*thetadot_right + _t49*thetadot_left;
+    const trailer3_real_t _t185 = _t184*_t184;
+    const trailer3_real_t _t186 = _t170*_t180;
+    const trailer3_real_t _t187 = _t172*_t182;
+    const trailer3_real_t _t188 = _t158*_t180;
+    const trailer3_real_t _t189 = _t159*_t180;
+    const trailer3_real_t _t190 = _t161*_t182;
+    const trailer3_real_t _t191 = _t162*_t182;
+    const trailer3_real_t _t192 = K_theta_cart2_x_tractor*_t34;
+    const trailer3_real_t _t193 = K_theta_cart2_x_tractor_2*_t19;
+    const trailer3_real_t _t194 = K_theta_cart3_x_tractor*_t36;
+    const trailer3_real_t _t195 = K_theta_cart3_x_tractor_2*_t28;
+    const trailer3_real_t _t196 = _t185*_t21;
+    const trailer3_real_t _t197 = _t185*_t22;
+    const trailer3_real_t _t198 = _t174*_t180;
+    const trailer3_real_t _t199 = _t175*_t180;
+    const trailer3_real_t _t200 = _t63 + _t66;
+    const trailer3_real_t _t201 = _t2*_t200;
+    const trailer3_real_t _t202 = J_theta_cart_right*_t201;
+    const trailer3_real_t _t203 = _t67 + _t70;
+    const trailer3_real_t _t204 = _t2*_t203;
+    const trailer3_real_t _t205 = J_theta_cart_right*_t204;
+    const trailer3_real_t _t206 = -_t63 + _t64 - _t65;
+    const trailer3_real_t _t207 = _t206*_t3;
+    const trailer3_real_t _t208 = J_theta_cart_left*_t207;
+    const trailer3_real_t _t209 = -_t67 + _t68 - _t69;
+    const trailer3_real_t _t210 = _t209*_t3;
+    const trailer3_real_t _t211 = J_theta_cart_left*_t210;
+    const trailer3_real_t _t212 = _t71 - _t72 + _t75;
+    const trailer3_real_t _t213 = _t212*_t4;
+    const trailer3_real_t _t214 = J_theta_cart2_right*_t213;
+    const trailer3_real_t _t215 = _t76 - _t77 + _t80;
+    const trailer3_real_t _t216 = _t215*_t4;
+    const trailer3_real_t _t217 = J_theta_cart2_right*_t216;
+    const trailer3_real_t _t218 = -_t71 - _t81;
+    const trailer3_real_t _t219 = _t218*_t5;
+    const trailer3_real_t _t220 = J_theta_cart2_left*_t219;
+    const trailer3_real_t _t221 = -_t76 - _t82;
+    const trailer3_real_t _t222 = _t221*_t5;
+    const trailer3_real_t _t223 = J_theta_cart2_left*_t222;
+    const trailer3_real_t _t224 = _t84 - _t89;
+    const trailer3_real_t _t225 = _t224*_t6;
+    const trailer3_real_t _t226 = J_theta_cart3_right*_t225;
+    const trailer3_real_t _t227 = _t91 - _t96;
+    const trailer3_real_t _t228 = _t227*_t6;
+    const trailer3_real_t _t229 = J_theta_cart3_right*_t228;
+    const trailer3_real_t _t230 = -_t84 - _t89;
+    const trailer3_real_t _t231 = _t230*_t7;
+    const trailer3_real_t _t232 = J_theta_cart3_left*_t231;
+    const trailer3_real_t _t233 = -_t91 - _t96;
+    const trailer3_real_t _t234 = _t233*_t7;
+    const trailer3_real_t _t235 = J_theta_cart3_left*_t234;
+    const trailer3_real_t _t236 = -K_theta_cart_x_tractor_2*_t10*_t185
+            + K_theta_tractor_x_tractor*_t178 + _t164*_t185 + _t165*_t180 + _t183 - _t186 - _t187;
+    const trailer3_real_t _t237 = _t177*thetadot_right;
+    const trailer3_real_t _t238 = _t177*thetadot_left;
+    const trailer3_real_t _t239 = _t184*thetadot_right;
+    const trailer3_real_t _t240 = _t184*thetadot_left;
+    const trailer3_real_t _t241 = _t237*_t97 + _t238*_t99 - _t239*_t97 - _t240*_t99;
+    const trailer3_real_t _t242 = _t179*thetadot_right;
+    const trailer3_real_t _t243 = _t179*thetadot_left;
+    const trailer3_real_t _t244 = _t106*_t237 + _t111*_t238 + _t116*_t239 + _t119*_t240
+            + _t121*_t242 + _t123*_t243;
+    const trailer3_real_t _t245 = _t181*thetadot_right;
+    const trailer3_real_t _t246 = _t181*thetadot_left;
+    const trailer3_real_t _t247 = _t126*_t237 + _t131*_t238 + _t136*_t239 + _t140*_t240
+            + _t144*_t242 + _t148*_t243 + _t151*_t245 + _t153*_t246;
+    const trailer3_real_t _t248 = _t157*_t241 + _t160*_t244 + _t163*_t247 + _t236;
+    const trailer3_real_t _t249 = -K_theta_cart_x_tractor*_t185*_t33
+            - K_theta_cart_x_tractor_2*_t13*_t185 - _t180*_t192 - _t180*_t193 - _t182*_t194
+            - _t182*_t195;
+    const trailer3_real_t _t250 = _t237*_t40 + _t238*_t43;
+    const trailer3_real_t _t251 = -K_theta_tractor_x_tractor*_t250 + _t249;
+    const trailer3_real_t _t252 = _t167*_t241 + _t168*_t244 + _t169*_t247 + _t251;
+    const trailer3_real_t _t253 = K_theta_cart_x_tractor_2*_t10 - _t164;
+    const trailer3_real_t _t254 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t10*_t18*_t180
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t10*_t182*_t27
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t10*_t178
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t12*_t178 - _t186*_t21 - _t187*_t21
+            - _t188*_t22 - _t189*_t22 - _t190*_t22 - _t191*_t22;
+    const trailer3_real_t _t255 = _t250*_t253 + _t254;
+    const trailer3_real_t _t256 = J_theta_cart*_t241 + _t171*_t244 + _t173*_t247 + _t255;
+    const trailer3_real_t _t257 = K_theta_cart2_x_tractor_2*_t16 - _t165;
+    const trailer3_real_t _t258 = _t158*_t197 + _t159*_t197 - _t165*_t196 + _t170*_t196
+            + _t174*_t183 - _t174*_t187 - _t175*_t190 - _t175*_t191 + _t178*_t192 + _t178*_t193;
+    const trailer3_real_t _t259 = _t250*_t257 + _t258;
+    const trailer3_real_t _t260 = J_theta_cart2*_t244 + _t171*_t241 + _t176*_t247 + _t259;
+    const trailer3_real_t _t261 = K_theta_cart3_x_tractor_2*_t25 - _t166;
+    const trailer3_real_t _t262 = _t161*_t197 + _t161*_t199 + _t162*_t197 + _t162*_t199
+            - _t166*_t196 - _t166*_t198 + _t172*_t196 + _t172*_t198 + _t178*_t194 + _t178*_t195;
+    const trailer3_real_t _t263 = _t250*_t261 + _t262;
+    const trailer3_real_t _t264 = J_theta_cart3*_t247 + _t173*_t241 + _t176*_t244 + _t263;
+    const trailer3_real_t _t265 = J_x_tractor*_t43 + K_theta_tractor_x_tractor_2*_t42 + _t157*_t49
+            + _t160*_t58 + _t163*_t90;
+    const trailer3_real_t _t266 = J_theta_tractor*_t42 + K_theta_tractor_x_tractor_2*_t43
+            + _t167*_t49 + _t168*_t58 + _t169*_t90;
+    const trailer3_real_t _t267 = J_theta_cart*_t49 + _t157*_t43 + _t167*_t42 + _t171*_t58
+            + _t173*_t90;
+    const trailer3_real_t _t268 = J_theta_cart2*_t58 + _t160*_t43 + _t168*_t42 + _t171*_t49
+            + _t176*_t90;
+    const trailer3_real_t _t269 = J_theta_cart3*_t90 + _t163*_t43 + _t169*_t42 + _t173*_t49
+            + _t176*_t58;
+    const trailer3_real_t _t270 = _t201*_t205 + _t207*_t211 + _t213*_t217 + _t219*_t223
+            + _t225*_t229 + _t231*_t235 + _t265*_t40 + _t266*_t39 + _t267*_t45 + _t268*_t53
+            + _t269*_t83;
+    const trailer3_real_t _t271 = J_theta_left + _t204*_t205 + _t210*_t211 + _t216*_t217
+            + _t222*_t223 + _t228*_t229 + _t234*_t235 + _t265*_t43 + _t266*_t42 + _t267*_t49
+            + _t268*_t58 + _t269*_t90;
+    const trailer3_real_t _t272 = _t103 - _t41;
+    const trailer3_real_t _t273 = _t2*_t272;
+    const trailer3_real_t _t274 = _t104 - _t44;
+    const trailer3_real_t _t275 = _t2*_t274;
+    const trailer3_real_t _t276 = _t237*_t273 + _t238*_t275 - _t239*_t273 - _t240*_t275;
+    const trailer3_real_t _t277 = -_t103 - _t41;
+    const trailer3_real_t _t278 = _t277*_t3;
+    const trailer3_real_t _t279 = -_t104 - _t44;
+    const trailer3_real_t _t280 = _t279*_t3;
+    const trailer3_real_t _t281 = _t237*_t278 + _t238*_t280 - _t239*_t278 - _t240*_t280;
+    const trailer3_real_t _t282 = _t107 - _t109;
+    const trailer3_real_t _t283 = _t282*_t4;
+    const trailer3_real_t _t284 = _t112 - _t114;
+    const trailer3_real_t _t285 = _t284*_t4;
+    const trailer3_real_t _t286 = _t108 + _t117 - _t46;
+    const trailer3_real_t _t287 = _t286*_t4;
+    const trailer3_real_t _t288 = _t113 + _t120 - _t50;
+    const trailer3_real_t _t289 = _t288*_t4;
+    const trailer3_real_t _t290 = _t122 + _t48;
+    const trailer3_real_t _t291 = _t290*_t4;
+    const trailer3_real_t _t292 = _t124 + _t52;
+    const trailer3_real_t _t293 = _t292*_t4;
+    const trailer3_real_t _t294 = _t237*_t283 + _t238*_t285 + _t239*_t287 + _t240*_t289
+            + _t242*_t291 + _t243*_t293;
+    const trailer3_real_t _t295 = -_t107 - _t109;
+    const trailer3_real_t _t296 = _t295*_t5;
+    const trailer3_real_t _t297 = -_t112 - _t114;
+    const trailer3_real_t _t298 = _t297*_t5;
+    const trailer3_real_t _t299 = _t108 - _t117 - _t46;
+    const trailer3_real_t _t300 = _t299*_t5;
+    const trailer3_real_t _t301 = _t113 - _t120 - _t50;
+    const trailer3_real_t _t302 = _t301*_t5;
+    const trailer3_real_t _t303 = -_t122 + _t48;
+    const trailer3_real_t _t304 = _t303*_t5;
+    const trailer3_real_t _t305 = -_t124 + _t52;
+    const trailer3_real_t _t306 = _t305*_t5;
+    const trailer3_real_t _t307 = _t237*_t296 + _t238*_t298 + _t239*_t300 + _t240*_t302
+            + _t242*_t304 + _t243*_t306;
+    const trailer3_real_t _t308 = _t127 - _t129;
+    const trailer3_real_t _t309 = _t308*_t6;
+    const trailer3_real_t _t310 = _t132 - _t134;
+    const trailer3_real_t _t311 = _t310*_t6;
+    const trailer3_real_t _t312 = _t137 - _t138;
+    const trailer3_real_t _t313 = _t312*_t6;
+    const trailer3_real_t _t314 = _t141 - _t142;
+    const trailer3_real_t _t315 = _t314*_t6;
+    const trailer3_real_t _t316 = _t145 - _t146;
+    const trailer3_real_t _t317 = _t316*_t6;
+    const trailer3_real_t _t318 = _t149 - _t150;
+    const trailer3_real_t _t319 = _t318*_t6;
+    const trailer3_real_t _t320 = _t152 + _t57;
+    const trailer3_real_t _t321 = _t320*_t6;
+    const trailer3_real_t _t322 = _t154 + _t62;
+    const trailer3_real_t _t323 = _t322*_t6;
+    const trailer3_real_t _t324 = _t237*_t309 + _t238*_t311 + _t239*_t313 + _t240*_t315
+            + _t242*_t317 + _t243*_t319 + _t245*_t321 + _t246*_t323;
+    const trailer3_real_t _t325 = -_t127 - _t129;
+    const trailer3_real_t _t326 = _t325*_t7;
+    const trailer3_real_t _t327 = -_t132 - _t134;
+    const trailer3_real_t _t328 = _t327*_t7;
+    const trailer3_real_t _t329 = -_t137 - _t138;
+    const trailer3_real_t _t330 = _t329*_t7;
+    const trailer3_real_t _t331 = -_t141 - _t142;
+    const trailer3_real_t _t332 = _t331*_t7;
+    const trailer3_real_t _t333 = -_t145 - _t146;
+    const trailer3_real_t _t334 = _t333*_t7;
+    const trailer3_real_t _t335 = -_t149 - _t150;
+    const trailer3_real_t _t336 = _t335*_t7;
+    const trailer3_real_t _t337 = -_t152 + _t57;
+    const trailer3_real_t _t338 = _t337*_t7;
+    const trailer3_real_t _t339 = -_t154 + _t62;
+    const trailer3_real_t _t340 = _t339*_t7;
+    const trailer3_real_t _t341 = _t237*_t326 + _t238*_t328 + _t239*_t330 + _t240*_t332
+            + _t242*_t334 + _t243*_t336 + _t245*_t338 + _t246*_t340;
+    const trailer3_real_t _t342 = _t202*_t276 + _t208*_t281 + _t214*_t294 + _t220*_t307
+            + _t226*_t324 + _t232*_t341 + _t248*_t40 + _t252*_t39 + _t256*_t45 + _t260*_t53
+            + _t264*_t83;
+    const trailer3_real_t _t343 = -_t342 + tau_right;
+    const trailer3_real_t _t344 = _t205*_t276 + _t211*_t281 + _t217*_t294 + _t223*_t307
+            + _t229*_t324 + _t235*_t341 + _t248*_t43 + _t252*_t42 + _t256*_t49 + _t260*_t58
+            + _t264*_t90;
+    const trailer3_real_t _t345 = -_t344 + tau_left;
+    const trailer3_real_t _t346 = J_x_tractor*_t40 + K_theta_tractor_x_tractor_2*_t39 + _t157*_t45
+            + _t160*_t53 + _t163*_t83;
+    const trailer3_real_t _t347 = J_theta_tractor*_t39 + K_theta_tractor_x_tractor_2*_t40
+            + _t167*_t45 + _t168*_t53 + _t169*_t83;
+    const trailer3_real_t _t348 = J_theta_cart*_t45 + _t157*_t40 + _t167*_t39 + _t171*_t53
+            + _t173*_t83;
+    const trailer3_real_t _t349 = J_theta_cart2*_t53 + _t160*_t40 + _t168*_t39 + _t171*_t45
+            + _t176*_t83;
+    const trailer3_real_t _t350 = J_theta_cart3*_t83 + _t163*_t40 + _t169*_t39 + _t173*_t45
+            + _t176*_t53;
+    const trailer3_real_t _t351 = J_theta_right + _t201*_t202 + _t207*_t208 + _t213*_t214
+            + _t219*_t220 + _t225*_t226 + _t231*_t232 + _t346*_t40 + _t347*_t39 + _t348*_t45
+            + _t349*_t53 + _t350*_t83;
+    const trailer3_real_t _t352 = -_t270*_t270 + _t271*_t351;
+    const trailer3_real_t _t353 = TRAILER3_LIT(1.0)/_t352;
+    const trailer3_real_t _t354 = _t353*(-_t270*_t345 + _t271*_t343);
+    const trailer3_real_t _t355 = _t353*(-_t270*_t343 + _t345*_t351);
+    const trailer3_real_t _t356 = _t354*_t40 + _t355*_t43;
+    const trailer3_real_t _t357 = _t354*_t39 + _t355*_t42;
+    const trailer3_real_t _t358 = _t241 + _t354*_t45 + _t355*_t49;
+    const trailer3_real_t _t359 = _t244 + _t354*_t53 + _t355*_t58;
+    const trailer3_real_t _t360 = _t247 + _t354*_t83 + _t355*_t90;
+    const trailer3_real_t _t361 = -J_x_tractor*_t356 - K_theta_tractor_x_tractor_2*_t357
+            - _t157*_t358 - _t160*_t359 - _t163*_t360 - _t236;
+    const trailer3_real_t _t362 = _t225*_t354 + _t228*_t355 + _t324;
+    const trailer3_real_t _t363 = -J_theta_cart3_right*_t362;
+    const trailer3_real_t _t364 = _t363*_t6;
+    const trailer3_real_t _t365 = _t231*_t354 + _t234*_t355 + _t341;
+    const trailer3_real_t _t366 = -J_theta_cart3_left*_t365;
+    const trailer3_real_t _t367 = _t366*_t7;
+    const trailer3_real_t _t368 = -J_theta_cart3*_t360 - _t163*_t356 - _t169*_t357 - _t173*_t358
+            - _t176*_t359 - _t263;
+    const trailer3_real_t _t369 = TRAILER3_LIT(0.2)*_t364 - TRAILER3_LIT(0.2)*_t367 + _t368;
+    const trailer3_real_t _t370 = -TRAILER3_LIT(1.6666666666666667)*_t369;
+    const trailer3_real_t _t371 = _t213*_t354 + _t216*_t355 + _t294;
+    const trailer3_real_t _t372 = -J_theta_cart2_right*_t371;
+    const trailer3_real_t _t373 = _t372*_t4;
+    const trailer3_real_t _t374 = _t219*_t354 + _t222*_t355 + _t307;
+    const trailer3_real_t _t375 = -J_theta_cart2_left*_t374;
+    const trailer3_real_t _t376 = _t375*_t5;
+    const trailer3_real_t _t377 = -J_theta_cart2*_t359 - _t160*_t356 - _t168*_t357 - _t171*_t358
+            - _t176*_t360 - _t259;
+    const trailer3_real_t _t378 = -_t32*_t370 - _t364*_t38 - _t367*_t38 + TRAILER3_LIT(0.2)*_t373
+            - TRAILER3_LIT(0.2)*_t376 + _t377;
+    const trailer3_real_t _t379 = -TRAILER3_LIT(1.6666666666666667)*_t378;
+    const trailer3_real_t _t380 = _t201*_t354 + _t204*_t355 + _t276;
+    const trailer3_real_t _t381 = -J_theta_cart_right*_t380;
+    const trailer3_real_t _t382 = _t2*_t381;
+    const trailer3_real_t _t383 = _t207*_t354 + _t210*_t355 + _t281;
+    const trailer3_real_t _t384 = -J_theta_cart_left*_t383;
+    const trailer3_real_t _t385 = _t3*_t384;
+    const trailer3_real_t _t386 = -J_theta_cart*_t358 - _t157*_t356 - _t167*_t357 - _t171*_t359
+            - _t173*_t360 - _t255;
+    const trailer3_real_t _t387 = -_t23*_t379 - _t30*_t370 - _t35*_t373 - _t35*_t376 - _t364*_t37
+            - _t367*_t37 + TRAILER3_LIT(0.2)*_t382 - TRAILER3_LIT(0.2)*_t385 + _t386;
+    const trailer3_real_t _t388 = -TRAILER3_LIT(1.6666666666666667)*_t387;
+    const trailer3_real_t _t389 = _t10*_t388 + _t12*_t382 + _t12*_t385 + _t16*_t379 + _t18*_t373
+            + _t18*_t376 + _t25*_t370 + _t27*_t364 + _t27*_t367 + _t361;
+    const trailer3_real_t _t390 = TRAILER3_LIT(0.5)*_t389;
+    const trailer3_real_t _t391 = -J_theta_tractor*_t357 - K_theta_tractor_x_tractor_2*_t356
+            - _t167*_t358 - _t168*_t359 - _t169*_t360 - _t251;
+    const trailer3_real_t _t392 = TRAILER3_LIT(0.3)*_t12*_t388 + TRAILER3_LIT(0.3)*_t18*_t379
+            + TRAILER3_LIT(0.3)*_t27*_t370 - _t33*_t382 - _t33*_t385 - _t34*_t373 - _t34*_t376
+            - _t36*_t364 - _t36*_t367 + _t391;
+    const trailer3_real_t _t393 = TRAILER3_LIT(2.4154589371980677)*_t392;
+    const trailer3_real_t _t394 = -_t17*_t40 - _t20*_t39 - _t23*_t45;
+    const trailer3_real_t _t395 = -TRAILER3_LIT(1.6666666666666667)*_t394;
+    const trailer3_real_t _t396 = TRAILER3_LIT(0.2)*_t395;
+    const trailer3_real_t _t397 = -_t17*_t43 - _t20*_t42 - _t23*_t49;
     const trailer3_real_t _t398 = -TRAILER3_LIT(1.6666666666666667)*_t397;
-    const trailer3_real_t _t399 = _t246*_t372 + _t249*_t373 + _t294;
-    const trailer3_real_t _t400 = -J_theta_cart_right*_t399;
-    const trailer3_real_t _t401 = _t400*_t75;
-    const trailer3_real_t _t402 = _t243*_t372 + _t251*_t373 + _t303;
-    const trailer3_real_t _t403 = -J_theta_cart_left*_t402;
-    const trailer3_real_t _t404 = _t403*_t76;
-    const trailer3_real_t _t405 = -J_theta_cart*_t377 - _t108*_t375 - _t114*_t376 - _t119*_t378
-            - _t120*_t379 - _t278 - _t374*_t98;
-    const trailer3_real_t _t406 = -_t17*_t398 - _t24*_t389 - _t33*_t392 - _t33*_t395 - _t37*_t383
-            - _t37*_t386 + TRAILER3_LIT(0.2)*_t401 - TRAILER3_LIT(0.2)*_t404 + _t405;
-    const trailer3_real_t _t407 = -TRAILER3_LIT(1.6666666666666667)*_t406;
-    const trailer3_real_t _t408 = -_t13*_t398 - _t22*_t389 - _t29*_t401 - _t29*_t404 - _t31*_t392
-            - _t31*_t395 - _t35*_t383 - _t35*_t386 + _t380 - _t407*_t8;
-    const trailer3_real_t _t409 = TRAILER3_LIT(2.4154589371980677)*_t408;
-    const trailer3_real_t _t410 = -J_x_tractor*_t375 - _t106*_t376 - _t108*_t377 - _t110*_t378
-            - _t112*_t379 - _t267;
-    const trailer3_real_t _t411 = _t0*_t401 + _t0*_t404 - _t11*_t398 + _t18*_t383 + _t18*_t386
-            - _t2*_t407 - _t20*_t389 + _t392*_t9 + _t395*_t9 + _t410;
-    const trailer3_real_t _t412 = TRAILER3_LIT(2.4154589371980677)*_t411;
-    const trailer3_real_t _t413 = -J_x_tractor*_t374 - _t101*_t378 - _t104*_t379 - _t273
-            - _t376*_t95 - _t377*_t98;
-    const trailer3_real_t _t414 = _t0*_t407 + _t11*_t392 + _t11*_t395 + _t18*_t389 + _t2*_t401
-            + _t2*_t404 + _t20*_t383 + _t20*_t386 + _t398*_t9 + _t413;
-    const trailer3_real_t _t415 = TRAILER3_LIT(2.4154589371980677)*_t414;
-    const trailer3_real_t _t416 = _t412*_t43 + _t415*_t44;
-    const trailer3_real_t _t417 = TRAILER3_LIT(2.4154589371980677)*_t40;
-    const trailer3_real_t _t418 = TRAILER3_LIT(2.4154589371980677)*_t41;
-    const trailer3_real_t _t419 = _t417*_t43;
-    const trailer3_real_t _t420 = _t417*_t44;
-    const trailer3_real_t _t421 = -_t1*_t420 - _t2*_t419 + _t417*_t8;
-    const trailer3_real_t _t422 = -TRAILER3_LIT(1.6666666666666667)*_t421;
-    const trailer3_real_t _t423 = TRAILER3_LIT(0.2)*_t422;
-    const trailer3_real_t _t424 = _t1*_t419 + _t28*_t420 - _t29*_t417;
-    const trailer3_real_t _t425 = _t418*_t43;
-    const trailer3_real_t _t426 = _t418*_t44;
-    const trailer3_real_t _t427 = -_t1*_t426 - _t2*_t425 - _t418*_t8;
-    const trailer3_real_t _t428 = -TRAILER3_LIT(1.6666666666666667)*_t427;
-    const trailer3_real_t _t429 = TRAILER3_LIT(0.2)*_t428;
-    const trailer3_real_t _t430 = _t1*_t425 + _t28*_t426 + _t29*_t418;
-    const trailer3_real_t _t431 = -_t10*_t420 - _t11*_t419 + _t13*_t417 - _t17*_t422;
-    const trailer3_real_t _t432 = -TRAILER3_LIT(1.6666666666666667)*_t431;
-    const trailer3_real_t _t433 = TRAILER3_LIT(0.2)*_t432;
-    const trailer3_real_t _t434 = _t10*_t419 + _t30*_t420 - _t31*_t417 + _t33*_t422;
-    const trailer3_real_t _t435 = -_t10*_t426 - _t11*_t425 - _t13*_t418 - _t17*_t428;
-    const trailer3_real_t _t436 = -TRAILER3_LIT(1.6666666666666667)*_t435;
-    const trailer3_real_t _t437 = TRAILER3_LIT(0.2)*_t436;
-    const trailer3_real_t _t438 = _t10*_t425 + _t30*_t426 + _t31*_t418 + _t33*_t428;
-    const trailer3_real_t _t439 = -_t19*_t420 - _t20*_t419 + _t22*_t417 - _t24*_t422 - _t27*_t432;
-    const trailer3_real_t _t440 = -TRAILER3_LIT(1.6666666666666667)*_t439;
-    const trailer3_real_t _t441 = TRAILER3_LIT(0.2)*_t440;
-    const trailer3_real_t _t442 = _t19*_t419 + _t34*_t420 - _t35*_t417 + _t37*_t422 + _t39*_t432;
-    const trailer3_real_t _t443 = -_t19*_t426 - _t20*_t425 - _t22*_t418 - _t24*_t428 - _t27*_t436;
-    const trailer3_real_t _t444 = -TRAILER3_LIT(1.6666666666666667)*_t443;
-    const trailer3_real_t _t445 = TRAILER3_LIT(0.2)*_t444;
-    const trailer3_real_t _t446 = _t19*_t425 + _t34*_t426 + _t35*_t418 + _t37*_t428 + _t39*_t436;
-    const trailer3_real_t _t447 = J_x_tractor*_t419 - _t106*_t417 + _t108*_t422 + _t110*_t432
-            + _t112*_t440;
-    const trailer3_real_t _t448 = J_x_tractor*_t420 + _t101*_t432 + _t104*_t440 - _t417*_t95
-            + _t422*_t98;
-    const trailer3_real_t _t449 = -J_theta_tractor*_t417 + _t106*_t419 + _t114*_t422 + _t116*_t432
-            + _t118*_t440 + _t420*_t95;
-    const trailer3_real_t _t450 = J_theta_cart*_t422 + _t108*_t419 - _t114*_t417 + _t119*_t432
-            + _t120*_t440 + _t420*_t98;
-    const trailer3_real_t _t451 = J_theta_cart2*_t432 + _t101*_t420 + _t110*_t419 - _t116*_t417
-            + _t119*_t422 + _t123*_t440;
-    const trailer3_real_t _t452 = J_theta_cart3*_t440 + _t104*_t420 + _t112*_t419 - _t118*_t417
-            + _t120*_t422 + _t123*_t432;
-    const trailer3_real_t _t453 = _t423 - _t424;
-    const trailer3_real_t _t454 = _t453*_t75;
-    const trailer3_real_t _t455 = _t429 - _t430;
-    const trailer3_real_t _t456 = _t455*_t75;
-    const trailer3_real_t _t457 = -_t423 - _t424;
-    const trailer3_real_t _t458 = _t457*_t76;
-    const trailer3_real_t _t459 = -_t429 - _t430;
-    const trailer3_real_t _t460 = _t459*_t76;
-    const trailer3_real_t _t461 = _t433 - _t434;
-    const trailer3_real_t _t462 = _t461*_t81;
-    const trailer3_real_t _t463 = _t437 - _t438;
-    const trailer3_real_t _t464 = _t463*_t81;
-    const trailer3_real_t _t465 = -_t433 - _t434;
-    const trailer3_real_t _t466 = _t465*_t82;
-    const trailer3_real_t _t467 = -_t437 - _t438;
-    const trailer3_real_t _t468 = _t467*_t82;
-    const trailer3_real_t _t469 = _t441 - _t442;
-    const trailer3_real_t _t470 = _t469*_t91;
-    const trailer3_real_t _t471 = _t445 - _t446;
-    const trailer3_real_t _t472 = _t471*_t91;
-    const trailer3_real_t _t473 = -_t441 - _t442;
-    const trailer3_real_t _t474 = _t473*_t92;
-    const trailer3_real_t _t475 = -_t445 - _t446;
-    const trailer3_real_t _t476 = _t475*_t92;
-    const trailer3_real_t _t477 = J_theta_cart2_left*_t466*_t468 + J_theta_cart2_right*_t462*_t464
-            + J_theta_cart3_left*_t474*_t476 + J_theta_cart3_right*_t470*_t472
-            + J_theta_cart_left*_t458*_t460 + J_theta_cart_right*_t454*_t456;
-    const trailer3_real_t _t478 = J_x_tractor*_t425 + _t106*_t418 + _t108*_t428 + _t110*_t436
-            + _t112*_t444;
-    const trailer3_real_t _t479 = J_theta_tractor*_t418 + _t106*_t425 + _t114*_t428 + _t116*_t436
-            + _t118*_t444 + _t426*_t95;
-    const trailer3_real_t _t480 = J_x_tractor*_t426 + _t101*_t436 + _t104*_t444 + _t418*_t95
-            + _t428*_t98;
-    const trailer3_real_t _t481 = J_theta_cart*_t428 + _t108*_t425 + _t114*_t418 + _t119*_t436
-            + _t120*_t444 + _t426*_t98;
-    const trailer3_real_t _t482 = J_theta_cart2*_t436 + _t101*_t426 + _t110*_t425 + _t116*_t418
-            + _t119*_t428 + _t123*_t444;
-    const trailer3_real_t _t483 = J_theta_cart3*_t444 + _t104*_t426 + _t112*_t425 + _t118*_t418
-            + _t120*_t428 + _t123*_t436;
-    const trailer3_real_t _t484 = TRAILER3_LIT(0.414)*_t5;
-    const trailer3_real_t _t485 = -TRAILER3_LIT(0.414)*_t3;
-    const trailer3_real_t _t486 = _t409 + _t416;
-    const trailer3_real_t _t487 = _t412*_t484 + _t415*_t485;
-    const trailer3_real_t _t488 = -_t409 + _t416;
-    const trailer3_real_t _t489 = J_theta_cart2_left*_t466*_t466 + J_theta_cart2_right*_t462*_t462
-            + J_theta_cart3_left*_t474*_t474 + J_theta_cart3_right*_t470*_t470
-            + J_theta_cart_left*_t458*_t458 + J_theta_cart_right*_t454*_t454 + J_theta_right
-            - _t417*_t449 + _t419*_t447 + _t420*_t448 + _t422*_t450 + _t432*_t451 + _t440*_t452;
-    const trailer3_real_t _t490 = _t418*_t449 + _t425*_t447 + _t426*_t448 + _t428*_t450
-            + _t436*_t451 + _t444*_t452 + _t477;
-    const trailer3_real_t _t491 = -_t417*_t479 + _t419*_t478 + _t420*_t480 + _t422*_t481
-            + _t432*_t482 + _t440*_t483 + _t477;
-    const trailer3_real_t _t492 = J_theta_cart2_left*_t468*_t468 + J_theta_cart2_right*_t464*_t464
-            + J_theta_cart3_left*_t476*_t476 + J_theta_cart3_right*_t472*_t472
-            + J_theta_cart_left*_t460*_t460 + J_theta_cart_right*_t456*_t456 + J_theta_left
-            + _t418*_t479 + _t425*_t478 + _t426*_t480 + _t428*_t481 + _t436*_t482 + _t444*_t483;
+    const trailer3_real_t _t399 = TRAILER3_LIT(0.2)*_t398;
+    const trailer3_real_t _t400 = -_t26*_t40 - _t29*_t39 - _t30*_t45 - _t32*_t395;
+    const trailer3_real_t _t401 = -TRAILER3_LIT(1.6666666666666667)*_t400;
+    const trailer3_real_t _t402 = TRAILER3_LIT(0.2)*_t401;
+    const trailer3_real_t _t403 = -_t27*_t40 + _t36*_t39 + _t37*_t45 + _t38*_t395;
+    const trailer3_real_t _t404 = -_t26*_t43 - _t29*_t42 - _t30*_t49 - _t32*_t398;
+    const trailer3_real_t _t405 = -TRAILER3_LIT(1.6666666666666667)*_t404;
+    const trailer3_real_t _t406 = TRAILER3_LIT(0.2)*_t405;
+    const trailer3_real_t _t407 = -_t27*_t43 + _t36*_t42 + _t37*_t49 + _t38*_t398;
+    const trailer3_real_t _t408 = K_theta_tractor_x_tractor_2*_t178 + _t155*_t185 + _t156*_t185
+            + _t188 + _t189 + _t190 + _t191;
+    const trailer3_real_t _t409 = -J_x_tractor*_t250 + K_theta_tractor_x_tractor*_t357 - _t253*_t358
+            - _t257*_t359 - _t261*_t360 - _t408;
+    const trailer3_real_t _t410 = _t10*_t382 + _t10*_t385 - _t12*_t388 + _t16*_t373 + _t16*_t376
+            - _t18*_t379 + _t25*_t364 + _t25*_t367 - _t27*_t370 + _t409;
+    const trailer3_real_t _t411 = -_t390 + _t393;
+    const trailer3_real_t _t412 = -_t390 - _t393;
+    const trailer3_real_t _t413 = _t12*_t40 + _t63 - _t65;
+    const trailer3_real_t _t414 = _t12*_t43 + _t67 - _t69;
+    const trailer3_real_t _t415 = _t2*_t413;
+    const trailer3_real_t _t416 = _t2*_t414;
+    const trailer3_real_t _t417 = _t12*_t40 - _t63 - _t65;
+    const trailer3_real_t _t418 = _t12*_t43 - _t67 - _t69;
+    const trailer3_real_t _t419 = _t3*_t417;
+    const trailer3_real_t _t420 = _t3*_t418;
+    const trailer3_real_t _t421 = _t18*_t40 + _t396 - _t72 - _t74;
+    const trailer3_real_t _t422 = _t18*_t43 + _t399 - _t77 - _t79;
+    const trailer3_real_t _t423 = _t4*_t421;
+    const trailer3_real_t _t424 = _t4*_t422;
+    const trailer3_real_t _t425 = _t18*_t40 - _t396 - _t72 - _t74;
+    const trailer3_real_t _t426 = _t18*_t43 - _t399 - _t77 - _t79;
+    const trailer3_real_t _t427 = _t425*_t5;
+    const trailer3_real_t _t428 = _t426*_t5;
+    const trailer3_real_t _t429 = _t402 - _t403;
+    const trailer3_real_t _t430 = _t406 - _t407;
+    const trailer3_real_t _t431 = _t429*_t6;
+    const trailer3_real_t _t432 = _t430*_t6;
+    const trailer3_real_t _t433 = -_t402 - _t403;
+    const trailer3_real_t _t434 = -_t406 - _t407;
+    const trailer3_real_t _t435 = _t433*_t7;
+    const trailer3_real_t _t436 = _t434*_t7;
+    const trailer3_real_t _t437 = J_x_tractor*_t40 + K_theta_tractor_x_tractor_2*_t39 + _t157*_t45
+            + _t160*_t395 + _t163*_t401;
+    const trailer3_real_t _t438 = J_x_tractor*_t43 + K_theta_tractor_x_tractor_2*_t42 + _t157*_t49
+            + _t160*_t398 + _t163*_t405;
+    const trailer3_real_t _t439 = J_theta_tractor*_t39 + K_theta_tractor_x_tractor_2*_t40
+            + _t167*_t45 + _t168*_t395 + _t169*_t401;
+    const trailer3_real_t _t440 = J_theta_tractor*_t42 + K_theta_tractor_x_tractor_2*_t43
+            + _t167*_t49 + _t168*_t398 + _t169*_t405;
+    const trailer3_real_t _t441 = J_theta_cart*_t45 + _t157*_t40 + _t167*_t39 + _t171*_t395
+            + _t173*_t401;
+    const trailer3_real_t _t442 = J_theta_cart*_t49 + _t157*_t43 + _t167*_t42 + _t171*_t398
+            + _t173*_t405;
+    const trailer3_real_t _t443 = J_theta_cart2*_t395 + _t160*_t40 + _t168*_t39 + _t171*_t45
+            + _t176*_t401;
+    const trailer3_real_t _t444 = J_theta_cart2*_t398 + _t160*_t43 + _t168*_t42 + _t171*_t49
+            + _t176*_t405;
+    const trailer3_real_t _t445 = J_theta_cart3*_t401 + _t163*_t40 + _t169*_t39 + _t173*_t45
+            + _t176*_t395;
+    const trailer3_real_t _t446 = J_theta_cart3*_t405 + _t163*_t43 + _t169*_t42 + _t173*_t49
+            + _t176*_t398;
+    const trailer3_real_t _t447 = J_theta_cart_right*_t415;
+    const trailer3_real_t _t448 = J_theta_cart_right*_t416;
+    const trailer3_real_t _t449 = J_theta_cart_left*_t419;
+    const trailer3_real_t _t450 = J_theta_cart_left*_t420;
+    const trailer3_real_t _t451 = J_theta_cart2_right*_t423;
+    const trailer3_real_t _t452 = J_theta_cart2_right*_t424;
+    const trailer3_real_t _t453 = J_theta_cart2_left*_t427;
+    const trailer3_real_t _t454 = J_theta_cart2_left*_t428;
+    const trailer3_real_t _t455 = J_theta_cart3_right*_t431;
+    const trailer3_real_t _t456 = J_theta_cart3_right*_t432;
+    const trailer3_real_t _t457 = J_theta_cart3_left*_t435;
+    const trailer3_real_t _t458 = J_theta_cart3_left*_t436;
+    const trailer3_real_t _t459 = J_theta_right + _t39*_t439 + _t395*_t443 + _t40*_t437
+            + _t401*_t445 + _t415*_t447 + _t419*_t449 + _t423*_t451 + _t427*_t453 + _t431*_t455
+            + _t435*_t457 + _t441*_t45;
+    const trailer3_real_t _t460 = _t39*_t440 + _t395*_t444 + _t40*_t438 + _t401*_t446 + _t415*_t448
+            + _t419*_t450 + _t423*_t452 + _t427*_t454 + _t431*_t456 + _t435*_t458 + _t442*_t45;
+    const trailer3_real_t _t461 = J_theta_left + _t398*_t444 + _t405*_t446 + _t416*_t448
+            + _t42*_t440 + _t420*_t450 + _t424*_t452 + _t428*_t454 + _t43*_t438 + _t432*_t456
+            + _t436*_t458 + _t442*_t49;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -4998,19 +4613,19 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t489 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t459 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t489*_t492 - _t490*_t491 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+    if (!(_t459*_t461 - _t460*_t460 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
                                                                model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t488;
-    const trailer3_real_t r_1 = _t486;
-    const trailer3_real_t r_2 = -_t487;
-    const trailer3_real_t r_3 = -_t407;
-    const trailer3_real_t r_4 = -_t398;
-    const trailer3_real_t r_5 = -_t389;
+    const trailer3_real_t r_0 = _t412;
+    const trailer3_real_t r_1 = _t411;
+    const trailer3_real_t r_2 = -_t410;
+    const trailer3_real_t r_3 = -_t388;
+    const trailer3_real_t r_4 = -_t379;
+    const trailer3_real_t r_5 = -_t370;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5))
             & TRAILER3_EXP_CARRY_TOP) != 0u) {

@@ -7,481 +7,452 @@
 #include "trailer3_plant.h"
 
 /* trailer3_plant_state_derivative: documented in trailer3_plant.h.
-   operations after CSE: 455 add, 697 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 340 add, 504 mul, 7 div, 8 sin/cos, 0 sqrt */
 void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const trailer3_real_t *x,
     const trailer3_real_t *tau, trailer3_real_t *xdot)
 {
-    const trailer3_real_t theta_cart = x[3];
-    const trailer3_real_t _t0 = TRAILER3_SIN(theta_cart);
-    const trailer3_real_t _t1 = TRAILER3_COS(theta_cart);
     const trailer3_real_t theta_tractor = x[2];
-    const trailer3_real_t _t2 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t4 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t5 = TRAILER3_LIT(0.3)*_t4;
-    const trailer3_real_t _t6 = _t0*_t3 + _t1*_t5;
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = x[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
     const trailer3_real_t theta_cart2 = x[4];
-    const trailer3_real_t _t7 = TRAILER3_SIN(theta_cart2);
-    const trailer3_real_t _t8 = TRAILER3_COS(theta_cart2);
-    const trailer3_real_t _t9 = _t3*_t7 + _t5*_t8;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t0;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*_t1;
-    const trailer3_real_t _t12 = _t10*_t7 + _t11*_t8;
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart3 = x[5];
-    const trailer3_real_t _t13 = TRAILER3_SIN(theta_cart3);
-    const trailer3_real_t _t14 = TRAILER3_COS(theta_cart3);
-    const trailer3_real_t _t15 = _t13*_t3 + _t14*_t5;
-    const trailer3_real_t _t16 = _t10*_t13 + _t11*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t13*_t7 + _t17*_t8;
-    const trailer3_real_t _t19 = _t0*_t5 - _t1*_t3;
-    const trailer3_real_t _t20 = -_t3*_t8 + _t5*_t7;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(0.85)*_t1*_t7 + _t10*_t8;
-    const trailer3_real_t _t22 = _t13*_t5 - _t14*_t3;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(0.85)*_t1*_t13 + _t10*_t14;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(0.85)*_t13*_t8 + _t17*_t7;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t11 = _t0 + theta_cart3;
+    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
+    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
     const trailer3_real_t radius_right = pp->radius_right;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
     const trailer3_real_t radius_left = pp->radius_left;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t29 = _t26*_t28;
-    const trailer3_real_t _t30 = -_t0*_t29 + _t26*_t6;
-    const trailer3_real_t _t31 = _t27*_t28;
-    const trailer3_real_t _t32 = -_t0*_t31 - _t27*_t6;
-    const trailer3_real_t _t33 = -_t25*_t26;
-    const trailer3_real_t _t34 = -_t1*_t33 - _t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(1.6666666666666667)*_t34;
-    const trailer3_real_t _t36 = -_t12*_t35;
-    const trailer3_real_t _t37 = _t26*_t9 - _t29*_t7;
-    const trailer3_real_t _t38 = -_t25*_t27;
-    const trailer3_real_t _t39 = -_t1*_t38 - _t32;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = -_t12*_t40;
-    const trailer3_real_t _t42 = -_t27*_t9 - _t31*_t7;
-    const trailer3_real_t _t43 = -_t33*_t8 - _t36 - _t37;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t45 = -_t18*_t44;
-    const trailer3_real_t _t46 = -_t16*_t35;
-    const trailer3_real_t _t47 = -_t13*_t29 + _t15*_t26;
-    const trailer3_real_t _t48 = -_t38*_t8 - _t41 - _t42;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = -_t18*_t49;
-    const trailer3_real_t _t51 = -_t16*_t40;
-    const trailer3_real_t _t52 = -_t13*_t31 - _t15*_t27;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t54 = -_t0*_t33 - _t1*_t29 - _t19*_t26;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t56 = -_t0*_t38 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t58 = -_t20*_t26 - _t21*_t35 - _t29*_t8 - _t33*_t7;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t60 = _t20*_t27 - _t21*_t40 - _t31*_t8 - _t38*_t7;
-    const trailer3_real_t _t61 = -_t14*_t33 - _t45 - _t46 - _t47;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(1.6666666666666667)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t62;
-    const trailer3_real_t _t64 = -_t13*_t33 - _t14*_t29 - _t22*_t26 - _t23*_t35 - _t24*_t44;
-    const trailer3_real_t _t65 = -_t14*_t38 - _t50 - _t51 - _t52;
-    const trailer3_real_t _t66 = -TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t66;
-    const trailer3_real_t _t68 = -_t13*_t38 - _t14*_t31 + _t22*_t27 - _t23*_t40 - _t24*_t49;
-    const trailer3_real_t thetadot_right = x[14];
-    const trailer3_real_t _t69 = _t29*thetadot_right;
-    const trailer3_real_t thetadot_left = x[15];
-    const trailer3_real_t _t70 = _t31*thetadot_left;
-    const trailer3_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t71 = K_theta_tractor_x_tractor*_t2;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t72 = K_theta_tractor_x_tractor_2*_t4;
-    const trailer3_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
-    const trailer3_real_t _t73 = K_theta_cart_x_tractor*_t0;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t74 = K_theta_cart_x_tractor_2*_t1;
-    const trailer3_real_t K_theta_cart2_x_tractor = pp->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t75 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = pp->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t76 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t K_theta_cart3_x_tractor = pp->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t77 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = pp->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t78 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t79 = K_theta_tractor_x_tractor*_t4;
-    const trailer3_real_t _t80 = K_theta_cart_x_tractor*_t1;
-    const trailer3_real_t _t81 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t82 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t83 = K_theta_cart_x_tractor_2*_t0;
-    const trailer3_real_t _t84 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t85 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t86 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t87 = TRAILER3_LIT(0.85)*_t8;
-    const trailer3_real_t _t88 = _t44*thetadot_right + _t49*thetadot_left;
-    const trailer3_real_t _t89 = _t88*_t88;
-    const trailer3_real_t _t90 = _t62*thetadot_right + _t66*thetadot_left;
-    const trailer3_real_t _t91 = _t90*_t90;
-    const trailer3_real_t _t92 = _t82*_t91;
-    const trailer3_real_t _t93 = _t35*thetadot_right + _t40*thetadot_left;
-    const trailer3_real_t _t94 = _t93*_t93;
-    const trailer3_real_t _t95 = -_t26*thetadot_right + _t27*thetadot_left;
-    const trailer3_real_t _t96 = _t95*_t95;
-    const trailer3_real_t _t97 = _t84*_t89;
-    const trailer3_real_t _t98 = _t85*_t91;
-    const trailer3_real_t _t99 = _t83*_t94;
-    const trailer3_real_t _t100 = _t75*_t89;
-    const trailer3_real_t _t101 = _t76*_t89;
-    const trailer3_real_t _t102 = _t77*_t91;
-    const trailer3_real_t _t103 = _t78*_t91;
-    const trailer3_real_t _t104 = _t73*_t94;
-    const trailer3_real_t _t105 = _t74*_t94;
-    const trailer3_real_t _t106 = _t3*_t96;
-    const trailer3_real_t _t107 = _t5*_t96;
-    const trailer3_real_t _t108 = _t10*_t94;
-    const trailer3_real_t _t109 = _t11*_t94;
-    const trailer3_real_t _t110 = _t86*_t89;
-    const trailer3_real_t _t111 = _t87*_t89;
-    const trailer3_real_t _t112 = _t95*thetadot_right;
-    const trailer3_real_t _t113 = _t95*thetadot_left;
-    const trailer3_real_t _t114 = _t93*thetadot_right;
-    const trailer3_real_t _t115 = _t93*thetadot_left;
-    const trailer3_real_t _t116 = _t88*thetadot_right;
-    const trailer3_real_t _t117 = _t88*thetadot_left;
-    const trailer3_real_t _t118 = _t90*thetadot_right;
-    const trailer3_real_t _t119 = _t90*thetadot_left;
-    const trailer3_real_t _t120 = _t25*_t26;
-    const trailer3_real_t _t121 = _t0*_t120 - _t1*_t29 - _t19*_t26;
+    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
+    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
+    const trailer3_real_t _t27 = _t25*_t26;
+    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
+    const trailer3_real_t _t29 = _t27 + _t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
+    const trailer3_real_t _t31 = _t25*_t30;
+    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
+    const trailer3_real_t _t33 = _t31 + _t32;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t38 = _t26*_t37;
+    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
+    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t42 = _t34*_t41;
+    const trailer3_real_t _t43 = _t30*_t37;
+    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
+    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t47 = _t20*_t3;
+    const trailer3_real_t _t48 = _t16*_t19;
+    const trailer3_real_t _t49 = _t47 - _t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
+    const trailer3_real_t _t51 = _t23*_t3;
+    const trailer3_real_t _t52 = _t16*_t22;
+    const trailer3_real_t _t53 = _t51 - _t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
+    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t56 = _t26*_t55;
+    const trailer3_real_t _t57 = _t20*_t7;
+    const trailer3_real_t _t58 = _t17*_t19;
+    const trailer3_real_t _t59 = _t57 - _t58;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
+    const trailer3_real_t _t61 = _t30*_t55;
+    const trailer3_real_t _t62 = _t23*_t7;
+    const trailer3_real_t _t63 = _t17*_t22;
+    const trailer3_real_t _t64 = _t62 - _t63;
+    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
+    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
+    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
+    const trailer3_real_t _t69 = _t18*_t19;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t71 = _t26*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t73 = _t35*_t72;
+    const trailer3_real_t _t74 = _t13*_t20;
+    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
+    const trailer3_real_t _t78 = _t18*_t22;
+    const trailer3_real_t _t79 = _t30*_t70;
+    const trailer3_real_t _t80 = _t41*_t72;
+    const trailer3_real_t _t81 = _t13*_t23;
+    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
+    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t84 = _t25*_t83;
+    const trailer3_real_t _t85 = TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t86 = _t25*_t85;
+    const trailer3_real_t _t87 = _t37*_t83;
+    const trailer3_real_t _t88 = _t37*_t85;
+    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t83;
+    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t85;
+    const trailer3_real_t _t91 = -_t59 - _t84;
+    const trailer3_real_t _t92 = -TRAILER3_LIT(1.6666666666666667)*_t91;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.2)*_t92;
+    const trailer3_real_t _t94 = _t55*_t83;
+    const trailer3_real_t _t95 = _t28 + _t94;
+    const trailer3_real_t _t96 = -_t64 - _t86;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t96;
+    const trailer3_real_t _t98 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t99 = _t55*_t85;
+    const trailer3_real_t _t100 = _t32 + _t99;
+    const trailer3_real_t _t101 = _t56 + _t84;
+    const trailer3_real_t _t102 = -TRAILER3_LIT(1.6666666666666667)*_t101;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t102;
+    const trailer3_real_t _t104 = _t61 + _t86;
+    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
+    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
+    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
+    const trailer3_real_t _t108 = TRAILER3_LIT(0.2)*_t107;
+    const trailer3_real_t _t109 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
+    const trailer3_real_t _t111 = -_t34*_t92 + _t69 - _t74 - _t87;
+    const trailer3_real_t _t112 = -TRAILER3_LIT(1.6666666666666667)*_t111;
+    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t112;
+    const trailer3_real_t _t114 = _t70*_t83;
+    const trailer3_real_t _t115 = _t114 + _t39 + _t72*_t92;
+    const trailer3_real_t _t116 = -_t34*_t97 + _t78 - _t81 - _t88;
+    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
+    const trailer3_real_t _t119 = _t70*_t85;
+    const trailer3_real_t _t120 = _t119 + _t44 + _t72*_t97;
+    const trailer3_real_t _t121 = -_t102*_t34 + _t71 + _t87;
     const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
     const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
-    const trailer3_real_t _t124 = -_t1*_t120 + _t30;
-    const trailer3_real_t _t125 = _t25*_t27;
-    const trailer3_real_t _t126 = _t0*_t125 - _t1*_t31 + _t19*_t27;
-    const trailer3_real_t _t127 = -TRAILER3_LIT(1.6666666666666667)*_t126;
-    const trailer3_real_t _t128 = TRAILER3_LIT(0.2)*_t127;
-    const trailer3_real_t _t129 = -_t1*_t125 + _t32;
-    const trailer3_real_t _t130 = TRAILER3_LIT(1.6666666666666667)*_t54;
+    const trailer3_real_t _t124 = _t102*_t72 - _t114 + _t38;
+    const trailer3_real_t _t125 = -_t105*_t34 + _t79 + _t88;
+    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
+    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
+    const trailer3_real_t _t128 = _t105*_t72 - _t119 + _t43;
+    const trailer3_real_t _t129 = -_t107*_t34 + _t73;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
     const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
-    const trailer3_real_t _t132 = _t0*_t29 - _t1*_t33 - _t26*_t6;
-    const trailer3_real_t _t133 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t134 = TRAILER3_LIT(0.2)*_t133;
-    const trailer3_real_t _t135 = _t0*_t31 - _t1*_t38 + _t27*_t6;
-    const trailer3_real_t _t136 = _t12*_t122 + _t120*_t7 - _t20*_t26 - _t29*_t8;
-    const trailer3_real_t _t137 = -TRAILER3_LIT(1.6666666666666667)*_t136;
+    const trailer3_real_t _t132 = _t107*_t72 + _t36;
+    const trailer3_real_t _t133 = -_t109*_t34 + _t80;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
+    const trailer3_real_t _t136 = _t109*_t72 + _t42;
+    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t75;
     const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
-    const trailer3_real_t _t139 = -_t120*_t8 - _t122*_t21 + _t37;
-    const trailer3_real_t _t140 = _t12*_t127 + _t125*_t7 + _t20*_t27 - _t31*_t8;
-    const trailer3_real_t _t141 = -TRAILER3_LIT(1.6666666666666667)*_t140;
-    const trailer3_real_t _t142 = TRAILER3_LIT(0.2)*_t141;
-    const trailer3_real_t _t143 = -_t125*_t8 - _t127*_t21 + _t42;
-    const trailer3_real_t _t144 = _t12*_t130 - _t21*_t35;
-    const trailer3_real_t _t145 = -TRAILER3_LIT(1.6666666666666667)*_t144;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = -_t130*_t21 + _t36;
-    const trailer3_real_t _t148 = _t12*_t133 - _t21*_t40;
-    const trailer3_real_t _t149 = -TRAILER3_LIT(1.6666666666666667)*_t148;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = -_t133*_t21 + _t41;
-    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t58;
-    const trailer3_real_t _t153 = TRAILER3_LIT(0.2)*_t152;
-    const trailer3_real_t _t154 = _t12*_t35 - _t26*_t9 + _t29*_t7 - _t33*_t8;
-    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
-    const trailer3_real_t _t157 = _t12*_t40 + _t27*_t9 + _t31*_t7 - _t38*_t8;
-    const trailer3_real_t _t158 = _t120*_t13 + _t122*_t16 + _t137*_t18 - _t14*_t29 - _t22*_t26;
-    const trailer3_real_t _t159 = -TRAILER3_LIT(1.6666666666666667)*_t158;
-    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t159;
-    const trailer3_real_t _t161 = -_t120*_t14 - _t122*_t23 - _t137*_t24 + _t47;
-    const trailer3_real_t _t162 = _t125*_t13 + _t127*_t16 - _t14*_t31 + _t141*_t18 + _t22*_t27;
-    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
-    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
-    const trailer3_real_t _t165 = -_t125*_t14 - _t127*_t23 - _t141*_t24 + _t52;
-    const trailer3_real_t _t166 = _t130*_t16 + _t145*_t18 - _t23*_t35;
-    const trailer3_real_t _t167 = -TRAILER3_LIT(1.6666666666666667)*_t166;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = -_t130*_t23 - _t145*_t24 + _t46;
-    const trailer3_real_t _t170 = _t133*_t16 + _t149*_t18 - _t23*_t40;
-    const trailer3_real_t _t171 = -TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(0.2)*_t171;
-    const trailer3_real_t _t173 = -_t133*_t23 - _t149*_t24 + _t51;
-    const trailer3_real_t _t174 = _t152*_t18 - _t24*_t44;
-    const trailer3_real_t _t175 = -TRAILER3_LIT(1.6666666666666667)*_t174;
-    const trailer3_real_t _t176 = TRAILER3_LIT(0.2)*_t175;
-    const trailer3_real_t _t177 = -_t152*_t24 + _t45;
-    const trailer3_real_t _t178 = _t155*_t18 - _t24*_t49;
-    const trailer3_real_t _t179 = -TRAILER3_LIT(1.6666666666666667)*_t178;
-    const trailer3_real_t _t180 = TRAILER3_LIT(0.2)*_t179;
-    const trailer3_real_t _t181 = -_t155*_t24 + _t50;
-    const trailer3_real_t _t182 = TRAILER3_LIT(1.6666666666666667)*_t64;
-    const trailer3_real_t _t183 = TRAILER3_LIT(0.2)*_t182;
-    const trailer3_real_t _t184 = _t13*_t29 - _t14*_t33 - _t15*_t26 + _t16*_t35 + _t18*_t44;
-    const trailer3_real_t _t185 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t186 = TRAILER3_LIT(0.2)*_t185;
-    const trailer3_real_t _t187 = _t13*_t31 - _t14*_t38 + _t15*_t27 + _t16*_t40 + _t18*_t49;
-    const trailer3_real_t _t188 = K_theta_tractor_x_tractor_2*_t2 - _t79;
-    const trailer3_real_t _t189 = K_theta_cart_x_tractor_2*_t0 - _t80;
-    const trailer3_real_t _t190 = K_theta_cart2_x_tractor_2*_t7 - _t81;
-    const trailer3_real_t _t191 = K_theta_cart3_x_tractor_2*_t13 - _t82;
-    const trailer3_real_t J_x_tractor = pp->J_x_tractor;
-    const trailer3_real_t _t192 = J_x_tractor*_t33 - _t188*_t26 + _t189*_t35 + _t190*_t44
-            + _t191*_t62;
-    const trailer3_real_t _t193 = _t71 + _t72;
-    const trailer3_real_t _t194 = _t73 + _t74;
-    const trailer3_real_t _t195 = _t75 + _t76;
-    const trailer3_real_t _t196 = _t77 + _t78;
-    const trailer3_real_t _t197 = J_x_tractor*_t29 - _t193*_t26 + _t194*_t35 + _t195*_t44
-            + _t196*_t62;
-    const trailer3_real_t _t198 = _t3*_t73 + _t3*_t74 + _t5*_t80 - _t5*_t83;
-    const trailer3_real_t _t199 = _t3*_t75 + _t3*_t76 + _t5*_t81 - _t5*_t84;
-    const trailer3_real_t _t200 = _t3*_t77 + _t3*_t78 + _t5*_t82 - _t5*_t85;
-    const trailer3_real_t J_theta_tractor = pp->J_theta_tractor;
-    const trailer3_real_t _t201 = -J_theta_tractor*_t26 + _t188*_t33 + _t193*_t29 + _t198*_t35
-            + _t199*_t44 + _t200*_t62;
-    const trailer3_real_t _t202 = _t10*_t75 + _t10*_t76 + _t11*_t81 - _t11*_t84;
-    const trailer3_real_t _t203 = _t10*_t77 + _t10*_t78 + _t11*_t82 - _t11*_t85;
-    const trailer3_real_t J_theta_cart = pp->J_theta_cart;
-    const trailer3_real_t _t204 = J_theta_cart*_t35 + _t189*_t33 + _t194*_t29 - _t198*_t26
-            + _t202*_t44 + _t203*_t62;
-    const trailer3_real_t _t205 = _t77*_t86 + _t78*_t86 + _t82*_t87 - _t85*_t87;
-    const trailer3_real_t J_theta_cart2 = pp->J_theta_cart2;
-    const trailer3_real_t _t206 = J_theta_cart2*_t44 + _t190*_t33 + _t195*_t29 - _t199*_t26
-            + _t202*_t35 + _t205*_t62;
-    const trailer3_real_t J_theta_cart3 = pp->J_theta_cart3;
-    const trailer3_real_t _t207 = J_theta_cart3*_t62 + _t191*_t33 + _t196*_t29 - _t200*_t26
-            + _t203*_t35 + _t205*_t44;
-    const trailer3_real_t _t208 = -_t57 - _t58;
-    const trailer3_real_t radius_cart2_left = pp->radius_cart2_left;
-    const trailer3_real_t _t209 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t210 = _t208*_t209;
-    const trailer3_real_t J_theta_cart2_left = pp->J_theta_cart2_left;
-    const trailer3_real_t _t211 = J_theta_cart2_left*_t210;
-    const trailer3_real_t _t212 = _t57 - _t58;
-    const trailer3_real_t radius_cart2_right = pp->radius_cart2_right;
-    const trailer3_real_t _t213 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t214 = _t212*_t213;
-    const trailer3_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
-    const trailer3_real_t _t215 = J_theta_cart2_right*_t214;
-    const trailer3_real_t _t216 = -_t63 - _t64;
-    const trailer3_real_t radius_cart3_left = pp->radius_cart3_left;
-    const trailer3_real_t _t217 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t218 = _t216*_t217;
-    const trailer3_real_t J_theta_cart3_left = pp->J_theta_cart3_left;
-    const trailer3_real_t _t219 = J_theta_cart3_left*_t218;
-    const trailer3_real_t _t220 = _t63 - _t64;
-    const trailer3_real_t radius_cart3_right = pp->radius_cart3_right;
-    const trailer3_real_t _t221 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t222 = _t220*_t221;
-    const trailer3_real_t J_theta_cart3_right = pp->J_theta_cart3_right;
-    const trailer3_real_t _t223 = J_theta_cart3_right*_t222;
-    const trailer3_real_t _t224 = -_t53 - _t54;
-    const trailer3_real_t radius_cart_left = pp->radius_cart_left;
-    const trailer3_real_t _t225 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t226 = _t224*_t225;
-    const trailer3_real_t J_theta_cart_left = pp->J_theta_cart_left;
-    const trailer3_real_t _t227 = J_theta_cart_left*_t226;
-    const trailer3_real_t _t228 = _t53 - _t54;
+    const trailer3_real_t _t139 = TRAILER3_LIT(1.6666666666666667)*_t82;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
+    const trailer3_real_t K_theta_cart2_x_tractor = pp->K_theta_cart2_x_tractor;
+    const trailer3_real_t _t141 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = pp->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t142 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t K_theta_cart3_x_tractor = pp->K_theta_cart3_x_tractor;
+    const trailer3_real_t _t143 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = pp->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t _t144 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
+    const trailer3_real_t _t145 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t146 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t147 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t148 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t149 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t thetadot_right = x[14];
+    const trailer3_real_t thetadot_left = x[15];
+    const trailer3_real_t _t152 = _t19*thetadot_right + _t22*thetadot_left;
+    const trailer3_real_t _t153 = _t152*_t152;
+    const trailer3_real_t _t154 = _t35*thetadot_right + _t41*thetadot_left;
+    const trailer3_real_t _t155 = _t154*_t154;
+    const trailer3_real_t _t156 = _t67*thetadot_right + _t76*thetadot_left;
+    const trailer3_real_t _t157 = _t156*_t156;
+    const trailer3_real_t _t158 = _t147*_t157;
+    const trailer3_real_t _t159 = _t26*thetadot_right + _t30*thetadot_left;
+    const trailer3_real_t _t160 = _t159*_t159;
+    const trailer3_real_t _t161 = _t148*_t155;
+    const trailer3_real_t _t162 = _t149*_t157;
+    const trailer3_real_t _t163 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t164 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t166 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t167 = _t10*_t155;
+    const trailer3_real_t _t168 = _t10*_t157;
+    const trailer3_real_t _t169 = _t160*_t9;
+    const trailer3_real_t _t170 = _t10*_t160;
+    const trailer3_real_t _t171 = _t151*_t157;
+    const trailer3_real_t _t172 = _t150*_t155;
+    const trailer3_real_t _t173 = _t151*_t155;
+    const trailer3_real_t _t174 = _t152*thetadot_right;
+    const trailer3_real_t _t175 = _t152*thetadot_left;
+    const trailer3_real_t _t176 = _t159*thetadot_right;
+    const trailer3_real_t _t177 = _t159*thetadot_left;
     const trailer3_real_t radius_cart_right = pp->radius_cart_right;
-    const trailer3_real_t _t229 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t230 = _t228*_t229;
+    const trailer3_real_t _t178 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t179 = _t46 + _t49;
+    const trailer3_real_t _t180 = _t178*_t179;
     const trailer3_real_t J_theta_cart_right = pp->J_theta_cart_right;
-    const trailer3_real_t _t231 = J_theta_cart_right*_t230;
-    const trailer3_real_t _t232 = _t55 - _t56;
-    const trailer3_real_t _t233 = _t229*_t232;
-    const trailer3_real_t _t234 = -_t55 - _t56;
-    const trailer3_real_t _t235 = _t225*_t234;
-    const trailer3_real_t _t236 = _t59 - _t60;
-    const trailer3_real_t _t237 = _t213*_t236;
-    const trailer3_real_t _t238 = -_t59 - _t60;
-    const trailer3_real_t _t239 = _t209*_t238;
-    const trailer3_real_t _t240 = _t67 - _t68;
-    const trailer3_real_t _t241 = _t221*_t240;
-    const trailer3_real_t _t242 = -_t67 - _t68;
-    const trailer3_real_t _t243 = _t217*_t242;
-    const trailer3_real_t _t244 = _t211*_t239 + _t215*_t237 + _t219*_t243 + _t223*_t241
-            + _t227*_t235 + _t231*_t233;
-    const trailer3_real_t _t245 = J_x_tractor*_t38 + _t188*_t27 + _t189*_t40 + _t190*_t49
-            + _t191*_t66;
-    const trailer3_real_t _t246 = J_theta_tractor*_t27 + _t188*_t38 + _t193*_t31 + _t198*_t40
-            + _t199*_t49 + _t200*_t66;
-    const trailer3_real_t _t247 = J_x_tractor*_t31 + _t193*_t27 + _t194*_t40 + _t195*_t49
-            + _t196*_t66;
-    const trailer3_real_t _t248 = J_theta_cart*_t40 + _t189*_t38 + _t194*_t31 + _t198*_t27
-            + _t202*_t49 + _t203*_t66;
-    const trailer3_real_t _t249 = J_theta_cart2*_t49 + _t190*_t38 + _t195*_t31 + _t199*_t27
-            + _t202*_t40 + _t205*_t66;
-    const trailer3_real_t _t250 = J_theta_cart3*_t66 + _t191*_t38 + _t196*_t31 + _t200*_t27
-            + _t203*_t40 + _t205*_t49;
-    const trailer3_real_t _t251 = _t100 + _t101 + _t102 + _t103 + _t104 + _t105 + _t71*_t96
-            + _t72*_t96;
-    const trailer3_real_t _t252 = _t69*_t95 + _t70*_t95;
-    const trailer3_real_t _t253 = _t112*_t122 + _t113*_t127 + _t114*_t130 + _t115*_t133;
-    const trailer3_real_t _t254 = _t112*_t137 + _t113*_t141 + _t114*_t145 + _t115*_t149
-            + _t116*_t152 + _t117*_t155;
-    const trailer3_real_t _t255 = _t112*_t159 + _t113*_t163 + _t114*_t167 + _t115*_t171
-            + _t116*_t175 + _t117*_t179 + _t118*_t182 + _t119*_t185;
-    const trailer3_real_t _t256 = J_x_tractor*_t252 + _t189*_t253 + _t190*_t254 + _t191*_t255
-            + _t251;
-    const trailer3_real_t _t257 = -K_theta_tractor_x_tractor_2*_t2*_t96 + _t79*_t96 + _t80*_t94
-            + _t81*_t89 + _t92 - _t97 - _t98 - _t99;
-    const trailer3_real_t _t258 = _t112*_t120 + _t113*_t125;
-    const trailer3_real_t _t259 = J_x_tractor*_t258 + _t194*_t253 + _t195*_t254 + _t196*_t255
-            + _t257;
-    const trailer3_real_t _t260 = TRAILER3_LIT(0.3)*K_theta_cart2_x_tractor*_t2*_t8*_t89
-            + TRAILER3_LIT(0.3)*K_theta_cart3_x_tractor*_t14*_t2*_t91
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t1*_t2*_t94 - _t100*_t5 - _t101*_t5
-            - _t102*_t5 - _t103*_t5 - _t104*_t5 - _t105*_t5 - _t3*_t97 - _t3*_t98 - _t3*_t99;
-    const trailer3_real_t _t261 = _t188*_t252 + _t193*_t258 + _t198*_t253 + _t199*_t254
-            + _t200*_t255 + _t260;
-    const trailer3_real_t _t262 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t0*_t8*_t89
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t0*_t14*_t91
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t0*_t4*_t96
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t0*_t2*_t96
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t4*_t96 - _t10*_t97 - _t10*_t98
-            - _t100*_t11 - _t101*_t11 - _t102*_t11 - _t103*_t11 - _t106*_t80;
-    const trailer3_real_t _t263 = J_theta_cart*_t253 + _t189*_t252 + _t194*_t258 + _t202*_t254
-            + _t203*_t255 + _t262;
-    const trailer3_real_t _t264 = -_t102*_t87 - _t103*_t87 - _t106*_t81 + _t106*_t84 + _t107*_t75
-            + _t107*_t76 - _t108*_t81 + _t108*_t84 + _t109*_t75 + _t109*_t76 + _t86*_t92
-            - _t86*_t98;
-    const trailer3_real_t _t265 = J_theta_cart2*_t254 + _t190*_t252 + _t195*_t258 + _t202*_t253
-            + _t205*_t255 + _t264;
-    const trailer3_real_t _t266 = -_t106*_t82 + _t106*_t85 + _t107*_t77 + _t107*_t78 - _t108*_t82
-            + _t108*_t85 + _t109*_t77 + _t109*_t78 - _t110*_t82 + _t110*_t85 + _t111*_t77
-            + _t111*_t78;
-    const trailer3_real_t _t267 = J_theta_cart3*_t255 + _t191*_t252 + _t196*_t258 + _t203*_t253
-            + _t205*_t254 + _t266;
-    const trailer3_real_t _t268 = _t69 + _t70;
-    const trailer3_real_t _t269 = _t33*thetadot_right + _t38*thetadot_left;
-    const trailer3_real_t _t270 = _t230*thetadot_right + _t233*thetadot_left;
-    const trailer3_real_t _t271 = _t226*thetadot_right + _t235*thetadot_left;
-    const trailer3_real_t _t272 = _t214*thetadot_right + _t237*thetadot_left;
-    const trailer3_real_t _t273 = _t210*thetadot_right + _t239*thetadot_left;
-    const trailer3_real_t _t274 = _t222*thetadot_right + _t241*thetadot_left;
-    const trailer3_real_t _t275 = _t218*thetadot_right + _t243*thetadot_left;
-    const trailer3_real_t _t276 = _t123 - _t124;
-    const trailer3_real_t _t277 = _t229*_t276;
-    const trailer3_real_t _t278 = _t128 - _t129;
-    const trailer3_real_t _t279 = _t229*_t278;
-    const trailer3_real_t _t280 = _t131 - _t132;
-    const trailer3_real_t _t281 = _t229*_t280;
-    const trailer3_real_t _t282 = _t134 - _t135;
-    const trailer3_real_t _t283 = _t229*_t282;
-    const trailer3_real_t _t284 = _t112*_t277 + _t113*_t279 + _t114*_t281 + _t115*_t283;
-    const trailer3_real_t _t285 = -_t123 - _t124;
-    const trailer3_real_t _t286 = _t225*_t285;
-    const trailer3_real_t _t287 = -_t128 - _t129;
-    const trailer3_real_t _t288 = _t225*_t287;
-    const trailer3_real_t _t289 = -_t131 - _t132;
-    const trailer3_real_t _t290 = _t225*_t289;
-    const trailer3_real_t _t291 = -_t134 - _t135;
-    const trailer3_real_t _t292 = _t225*_t291;
-    const trailer3_real_t _t293 = _t112*_t286 + _t113*_t288 + _t114*_t290 + _t115*_t292;
-    const trailer3_real_t _t294 = _t138 - _t139;
-    const trailer3_real_t _t295 = _t213*_t294;
-    const trailer3_real_t _t296 = _t142 - _t143;
-    const trailer3_real_t _t297 = _t213*_t296;
-    const trailer3_real_t _t298 = _t146 - _t147;
-    const trailer3_real_t _t299 = _t213*_t298;
-    const trailer3_real_t _t300 = _t150 - _t151;
+    const trailer3_real_t _t181 = J_theta_cart_right*_t180;
+    const trailer3_real_t _t182 = _t50 + _t53;
+    const trailer3_real_t _t183 = _t178*_t182;
+    const trailer3_real_t _t184 = J_theta_cart_right*_t183;
+    const trailer3_real_t radius_cart_left = pp->radius_cart_left;
+    const trailer3_real_t _t185 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t186 = -_t46 + _t47 - _t48;
+    const trailer3_real_t _t187 = _t185*_t186;
+    const trailer3_real_t J_theta_cart_left = pp->J_theta_cart_left;
+    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
+    const trailer3_real_t _t189 = -_t50 + _t51 - _t52;
+    const trailer3_real_t _t190 = _t185*_t189;
+    const trailer3_real_t _t191 = J_theta_cart_left*_t190;
+    const trailer3_real_t radius_cart2_right = pp->radius_cart2_right;
+    const trailer3_real_t _t192 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t193 = _t54 - _t56 + _t59;
+    const trailer3_real_t _t194 = _t192*_t193;
+    const trailer3_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
+    const trailer3_real_t _t195 = J_theta_cart2_right*_t194;
+    const trailer3_real_t _t196 = _t60 - _t61 + _t64;
+    const trailer3_real_t _t197 = _t192*_t196;
+    const trailer3_real_t _t198 = J_theta_cart2_right*_t197;
+    const trailer3_real_t radius_cart2_left = pp->radius_cart2_left;
+    const trailer3_real_t _t199 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t200 = -_t54 - _t65;
+    const trailer3_real_t _t201 = _t199*_t200;
+    const trailer3_real_t J_theta_cart2_left = pp->J_theta_cart2_left;
+    const trailer3_real_t _t202 = J_theta_cart2_left*_t201;
+    const trailer3_real_t _t203 = -_t60 - _t66;
+    const trailer3_real_t _t204 = _t199*_t203;
+    const trailer3_real_t _t205 = J_theta_cart2_left*_t204;
+    const trailer3_real_t radius_cart3_right = pp->radius_cart3_right;
+    const trailer3_real_t _t206 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t207 = _t68 - _t75;
+    const trailer3_real_t _t208 = _t206*_t207;
+    const trailer3_real_t J_theta_cart3_right = pp->J_theta_cart3_right;
+    const trailer3_real_t _t209 = J_theta_cart3_right*_t208;
+    const trailer3_real_t _t210 = _t77 - _t82;
+    const trailer3_real_t _t211 = _t206*_t210;
+    const trailer3_real_t _t212 = J_theta_cart3_right*_t211;
+    const trailer3_real_t radius_cart3_left = pp->radius_cart3_left;
+    const trailer3_real_t _t213 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t214 = -_t68 - _t75;
+    const trailer3_real_t _t215 = _t213*_t214;
+    const trailer3_real_t J_theta_cart3_left = pp->J_theta_cart3_left;
+    const trailer3_real_t _t216 = J_theta_cart3_left*_t215;
+    const trailer3_real_t _t217 = -_t77 - _t82;
+    const trailer3_real_t _t218 = _t213*_t217;
+    const trailer3_real_t _t219 = J_theta_cart3_left*_t218;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t220 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t221 = _t141 + _t142;
+    const trailer3_real_t _t222 = _t143 + _t144;
+    const trailer3_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t223 = -K_theta_cart_x_tractor_2*_t160*_t2
+            + K_theta_tractor_x_tractor*_t153 + _t145*_t160 + _t146*_t155 + _t158 - _t161 - _t162;
+    const trailer3_real_t _t224 = _t174 - _t176;
+    const trailer3_real_t _t225 = _t175 - _t177;
+    const trailer3_real_t _t226 = _t224*_t83 + _t225*_t85;
+    const trailer3_real_t _t227 = _t154*thetadot_right;
+    const trailer3_real_t _t228 = _t154*thetadot_left;
+    const trailer3_real_t _t229 = _t102*_t176 + _t105*_t177 + _t107*_t227 + _t109*_t228 + _t174*_t92
+            + _t175*_t97;
+    const trailer3_real_t _t230 = _t156*thetadot_right;
+    const trailer3_real_t _t231 = _t156*thetadot_left;
+    const trailer3_real_t _t232 = _t112*_t174 + _t117*_t175 + _t122*_t176 + _t126*_t177
+            + _t130*_t227 + _t134*_t228 + _t137*_t230 + _t139*_t231;
+    const trailer3_real_t _t233 = _t220*_t226 + _t221*_t229 + _t222*_t232 + _t223;
+    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t235 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t236 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t237 = -K_theta_cart_x_tractor*_t16*_t160
+            - K_theta_cart_x_tractor_2*_t160*_t4 - _t155*_t163 - _t155*_t164 - _t157*_t165
+            - _t157*_t166;
+    const trailer3_real_t _t238 = _t174*_t20 + _t175*_t23;
+    const trailer3_real_t _t239 = -K_theta_tractor_x_tractor*_t238 + _t226*_t234 + _t229*_t235
+            + _t232*_t236 + _t237;
+    const trailer3_real_t _t240 = K_theta_cart_x_tractor_2*_t2 - _t145;
+    const trailer3_real_t _t241 = _t10*_t146 - _t10*_t148 + _t141*_t9 + _t142*_t9;
+    const trailer3_real_t _t242 = _t10*_t147 - _t10*_t149 + _t143*_t9 + _t144*_t9;
+    const trailer3_real_t _t243 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t155*_t2*_t7
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t157*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t153*_t2
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t153*_t3 - _t141*_t167 - _t142*_t167
+            - _t143*_t168 - _t144*_t168 - _t161*_t9 - _t162*_t9;
+    const trailer3_real_t J_theta_cart = pp->J_theta_cart;
+    const trailer3_real_t _t244 = J_theta_cart*_t226 + _t229*_t241 + _t232*_t242 + _t238*_t240
+            + _t243;
+    const trailer3_real_t _t245 = K_theta_cart2_x_tractor_2*_t6 - _t146;
+    const trailer3_real_t _t246 = _t143*_t150 + _t144*_t150 + _t147*_t151 - _t149*_t151;
+    const trailer3_real_t _t247 = _t141*_t170 + _t142*_t170 - _t143*_t171 - _t144*_t171
+            - _t146*_t169 + _t148*_t169 + _t150*_t158 - _t150*_t162 + _t153*_t163 + _t153*_t164;
+    const trailer3_real_t J_theta_cart2 = pp->J_theta_cart2;
+    const trailer3_real_t _t248 = J_theta_cart2*_t229 + _t226*_t241 + _t232*_t246 + _t238*_t245
+            + _t247;
+    const trailer3_real_t _t249 = K_theta_cart3_x_tractor_2*_t12 - _t147;
+    const trailer3_real_t _t250 = _t143*_t170 + _t143*_t173 + _t144*_t170 + _t144*_t173
+            - _t147*_t169 - _t147*_t172 + _t149*_t169 + _t149*_t172 + _t153*_t165 + _t153*_t166;
+    const trailer3_real_t J_theta_cart3 = pp->J_theta_cart3;
+    const trailer3_real_t _t251 = J_theta_cart3*_t232 + _t226*_t242 + _t229*_t246 + _t238*_t249
+            + _t250;
+    const trailer3_real_t _t252 = -_t21 + _t89;
+    const trailer3_real_t _t253 = _t178*_t252;
+    const trailer3_real_t _t254 = -_t24 + _t90;
+    const trailer3_real_t _t255 = _t178*_t254;
+    const trailer3_real_t _t256 = -_t21 - _t89;
+    const trailer3_real_t _t257 = _t185*_t256;
+    const trailer3_real_t _t258 = -_t24 - _t90;
+    const trailer3_real_t _t259 = _t185*_t258;
+    const trailer3_real_t _t260 = _t93 - _t95;
+    const trailer3_real_t _t261 = _t192*_t260;
+    const trailer3_real_t _t262 = -_t100 + _t98;
+    const trailer3_real_t _t263 = _t192*_t262;
+    const trailer3_real_t _t264 = _t103 - _t27 + _t94;
+    const trailer3_real_t _t265 = _t192*_t264;
+    const trailer3_real_t _t266 = _t106 - _t31 + _t99;
+    const trailer3_real_t _t267 = _t192*_t266;
+    const trailer3_real_t _t268 = _t108 + _t29;
+    const trailer3_real_t _t269 = _t192*_t268;
+    const trailer3_real_t _t270 = _t110 + _t33;
+    const trailer3_real_t _t271 = _t192*_t270;
+    const trailer3_real_t _t272 = -_t93 - _t95;
+    const trailer3_real_t _t273 = _t199*_t272;
+    const trailer3_real_t _t274 = -_t100 - _t98;
+    const trailer3_real_t _t275 = _t199*_t274;
+    const trailer3_real_t _t276 = -_t103 - _t27 + _t94;
+    const trailer3_real_t _t277 = _t199*_t276;
+    const trailer3_real_t _t278 = -_t106 - _t31 + _t99;
+    const trailer3_real_t _t279 = _t199*_t278;
+    const trailer3_real_t _t280 = -_t108 + _t29;
+    const trailer3_real_t _t281 = _t199*_t280;
+    const trailer3_real_t _t282 = -_t110 + _t33;
+    const trailer3_real_t _t283 = _t199*_t282;
+    const trailer3_real_t _t284 = _t113 - _t115;
+    const trailer3_real_t _t285 = _t206*_t284;
+    const trailer3_real_t _t286 = _t118 - _t120;
+    const trailer3_real_t _t287 = _t206*_t286;
+    const trailer3_real_t _t288 = _t123 - _t124;
+    const trailer3_real_t _t289 = _t206*_t288;
+    const trailer3_real_t _t290 = _t127 - _t128;
+    const trailer3_real_t _t291 = _t206*_t290;
+    const trailer3_real_t _t292 = _t131 - _t132;
+    const trailer3_real_t _t293 = _t206*_t292;
+    const trailer3_real_t _t294 = _t135 - _t136;
+    const trailer3_real_t _t295 = _t206*_t294;
+    const trailer3_real_t _t296 = _t138 + _t40;
+    const trailer3_real_t _t297 = _t206*_t296;
+    const trailer3_real_t _t298 = _t140 + _t45;
+    const trailer3_real_t _t299 = _t206*_t298;
+    const trailer3_real_t _t300 = -_t113 - _t115;
     const trailer3_real_t _t301 = _t213*_t300;
-    const trailer3_real_t _t302 = _t153 - _t154;
+    const trailer3_real_t _t302 = -_t118 - _t120;
     const trailer3_real_t _t303 = _t213*_t302;
-    const trailer3_real_t _t304 = _t156 - _t157;
+    const trailer3_real_t _t304 = -_t123 - _t124;
     const trailer3_real_t _t305 = _t213*_t304;
-    const trailer3_real_t _t306 = _t112*_t295 + _t113*_t297 + _t114*_t299 + _t115*_t301
-            + _t116*_t303 + _t117*_t305;
-    const trailer3_real_t _t307 = -_t138 - _t139;
-    const trailer3_real_t _t308 = _t209*_t307;
-    const trailer3_real_t _t309 = -_t142 - _t143;
-    const trailer3_real_t _t310 = _t209*_t309;
-    const trailer3_real_t _t311 = -_t146 - _t147;
-    const trailer3_real_t _t312 = _t209*_t311;
-    const trailer3_real_t _t313 = -_t150 - _t151;
-    const trailer3_real_t _t314 = _t209*_t313;
-    const trailer3_real_t _t315 = -_t153 - _t154;
-    const trailer3_real_t _t316 = _t209*_t315;
-    const trailer3_real_t _t317 = -_t156 - _t157;
-    const trailer3_real_t _t318 = _t209*_t317;
-    const trailer3_real_t _t319 = _t112*_t308 + _t113*_t310 + _t114*_t312 + _t115*_t314
-            + _t116*_t316 + _t117*_t318;
-    const trailer3_real_t _t320 = _t160 - _t161;
-    const trailer3_real_t _t321 = _t221*_t320;
-    const trailer3_real_t _t322 = _t164 - _t165;
-    const trailer3_real_t _t323 = _t221*_t322;
-    const trailer3_real_t _t324 = _t168 - _t169;
-    const trailer3_real_t _t325 = _t221*_t324;
-    const trailer3_real_t _t326 = _t172 - _t173;
-    const trailer3_real_t _t327 = _t221*_t326;
-    const trailer3_real_t _t328 = _t176 - _t177;
-    const trailer3_real_t _t329 = _t221*_t328;
-    const trailer3_real_t _t330 = _t180 - _t181;
-    const trailer3_real_t _t331 = _t221*_t330;
-    const trailer3_real_t _t332 = _t183 - _t184;
-    const trailer3_real_t _t333 = _t221*_t332;
-    const trailer3_real_t _t334 = _t186 - _t187;
-    const trailer3_real_t _t335 = _t221*_t334;
-    const trailer3_real_t _t336 = _t112*_t321 + _t113*_t323 + _t114*_t325 + _t115*_t327
-            + _t116*_t329 + _t117*_t331 + _t118*_t333 + _t119*_t335;
-    const trailer3_real_t _t337 = -_t160 - _t161;
-    const trailer3_real_t _t338 = _t217*_t337;
-    const trailer3_real_t _t339 = -_t164 - _t165;
-    const trailer3_real_t _t340 = _t217*_t339;
-    const trailer3_real_t _t341 = -_t168 - _t169;
-    const trailer3_real_t _t342 = _t217*_t341;
-    const trailer3_real_t _t343 = -_t172 - _t173;
-    const trailer3_real_t _t344 = _t217*_t343;
-    const trailer3_real_t _t345 = -_t176 - _t177;
-    const trailer3_real_t _t346 = _t217*_t345;
-    const trailer3_real_t _t347 = -_t180 - _t181;
-    const trailer3_real_t _t348 = _t217*_t347;
-    const trailer3_real_t _t349 = -_t183 - _t184;
-    const trailer3_real_t _t350 = _t217*_t349;
-    const trailer3_real_t _t351 = -_t186 - _t187;
-    const trailer3_real_t _t352 = _t217*_t351;
-    const trailer3_real_t _t353 = _t112*_t338 + _t113*_t340 + _t114*_t342 + _t115*_t344
-            + _t116*_t346 + _t117*_t348 + _t118*_t350 + _t119*_t352;
+    const trailer3_real_t _t306 = -_t127 - _t128;
+    const trailer3_real_t _t307 = _t213*_t306;
+    const trailer3_real_t _t308 = -_t131 - _t132;
+    const trailer3_real_t _t309 = _t213*_t308;
+    const trailer3_real_t _t310 = -_t135 - _t136;
+    const trailer3_real_t _t311 = _t213*_t310;
+    const trailer3_real_t _t312 = -_t138 + _t40;
+    const trailer3_real_t _t313 = _t213*_t312;
+    const trailer3_real_t _t314 = -_t140 + _t45;
+    const trailer3_real_t _t315 = _t213*_t314;
+    const trailer3_real_t _t316 = _t20*thetadot_right + _t23*thetadot_left;
+    const trailer3_real_t _t317 = _t180*thetadot_right + _t183*thetadot_left;
+    const trailer3_real_t _t318 = _t187*thetadot_right + _t190*thetadot_left;
+    const trailer3_real_t _t319 = _t194*thetadot_right + _t197*thetadot_left;
+    const trailer3_real_t _t320 = _t201*thetadot_right + _t204*thetadot_left;
+    const trailer3_real_t _t321 = _t208*thetadot_right + _t211*thetadot_left;
+    const trailer3_real_t _t322 = _t215*thetadot_right + _t218*thetadot_left;
+    const trailer3_real_t _t323 = _t224*_t253 + _t225*_t255;
+    const trailer3_real_t _t324 = _t224*_t257 + _t225*_t259;
+    const trailer3_real_t _t325 = _t174*_t261 + _t175*_t263 + _t176*_t265 + _t177*_t267
+            + _t227*_t269 + _t228*_t271;
+    const trailer3_real_t _t326 = _t174*_t273 + _t175*_t275 + _t176*_t277 + _t177*_t279
+            + _t227*_t281 + _t228*_t283;
+    const trailer3_real_t _t327 = _t174*_t285 + _t175*_t287 + _t176*_t289 + _t177*_t291
+            + _t227*_t293 + _t228*_t295 + _t230*_t297 + _t231*_t299;
+    const trailer3_real_t _t328 = _t174*_t301 + _t175*_t303 + _t176*_t305 + _t177*_t307
+            + _t227*_t309 + _t228*_t311 + _t230*_t313 + _t231*_t315;
+    const trailer3_real_t J_x_tractor = pp->J_x_tractor;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t329 = J_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_t19 + _t220*_t26
+            + _t221*_t35 + _t222*_t67;
+    const trailer3_real_t _t330 = J_x_tractor*_t23 + K_theta_tractor_x_tractor_2*_t22 + _t220*_t30
+            + _t221*_t41 + _t222*_t76;
+    const trailer3_real_t J_theta_tractor = pp->J_theta_tractor;
+    const trailer3_real_t _t331 = J_theta_tractor*_t19 + K_theta_tractor_x_tractor_2*_t20
+            + _t234*_t26 + _t235*_t35 + _t236*_t67;
+    const trailer3_real_t _t332 = J_theta_tractor*_t22 + K_theta_tractor_x_tractor_2*_t23
+            + _t234*_t30 + _t235*_t41 + _t236*_t76;
+    const trailer3_real_t _t333 = J_theta_cart*_t26 + _t19*_t234 + _t20*_t220 + _t241*_t35
+            + _t242*_t67;
+    const trailer3_real_t _t334 = J_theta_cart*_t30 + _t22*_t234 + _t220*_t23 + _t241*_t41
+            + _t242*_t76;
+    const trailer3_real_t _t335 = J_theta_cart2*_t35 + _t19*_t235 + _t20*_t221 + _t241*_t26
+            + _t246*_t67;
+    const trailer3_real_t _t336 = J_theta_cart2*_t41 + _t22*_t235 + _t221*_t23 + _t241*_t30
+            + _t246*_t76;
+    const trailer3_real_t _t337 = J_theta_cart3*_t67 + _t19*_t236 + _t20*_t222 + _t242*_t26
+            + _t246*_t35;
+    const trailer3_real_t _t338 = J_theta_cart3*_t76 + _t22*_t236 + _t222*_t23 + _t242*_t30
+            + _t246*_t41;
     const trailer3_real_t J_theta_right = pp->J_theta_right;
-    const trailer3_real_t _t354 = J_theta_cart2_left*_t210*_t210 + J_theta_cart2_right*_t214*_t214
-            + J_theta_cart3_left*_t218*_t218 + J_theta_cart3_right*_t222*_t222
-            + J_theta_cart_left*_t226*_t226 + J_theta_cart_right*_t230*_t230 + J_theta_right
-            + _t192*_t33 + _t197*_t29 - _t201*_t26 + _t204*_t35 + _t206*_t44 + _t207*_t62;
-    const trailer3_real_t _t355 = _t192*_t38 + _t197*_t31 + _t201*_t27 + _t204*_t40 + _t206*_t49
-            + _t207*_t66 + _t244;
-    const trailer3_real_t _t356 = _t244 + _t245*_t33 - _t246*_t26 + _t247*_t29 + _t248*_t35
-            + _t249*_t44 + _t250*_t62;
+    const trailer3_real_t _t339 = J_theta_right + _t180*_t181 + _t187*_t188 + _t19*_t331
+            + _t194*_t195 + _t20*_t329 + _t201*_t202 + _t208*_t209 + _t215*_t216 + _t26*_t333
+            + _t335*_t35 + _t337*_t67;
+    const trailer3_real_t _t340 = _t180*_t184 + _t187*_t191 + _t19*_t332 + _t194*_t198 + _t20*_t330
+            + _t201*_t205 + _t208*_t212 + _t215*_t219 + _t26*_t334 + _t336*_t35 + _t338*_t67;
     const trailer3_real_t J_theta_left = pp->J_theta_left;
-    const trailer3_real_t _t357 = J_theta_cart2_left*_t239*_t239 + J_theta_cart2_right*_t237*_t237
-            + J_theta_cart3_left*_t243*_t243 + J_theta_cart3_right*_t241*_t241
-            + J_theta_cart_left*_t235*_t235 + J_theta_cart_right*_t233*_t233 + J_theta_left
-            + _t245*_t38 + _t246*_t27 + _t247*_t31 + _t248*_t40 + _t249*_t49 + _t250*_t66;
-    const trailer3_real_t _t358 = _t211*_t319 + _t215*_t306 + _t219*_t353 + _t223*_t336
-            + _t227*_t293 + _t231*_t284 + _t256*_t33 + _t259*_t29 - _t26*_t261 + _t263*_t35
-            + _t265*_t44 + _t267*_t62;
-    const trailer3_real_t _t359 = J_theta_cart2_left*_t239*_t319 + J_theta_cart2_right*_t237*_t306
-            + J_theta_cart3_left*_t243*_t353 + J_theta_cart3_right*_t241*_t336
-            + J_theta_cart_left*_t235*_t293 + J_theta_cart_right*_t233*_t284 + _t256*_t38
-            + _t259*_t31 + _t261*_t27 + _t263*_t40 + _t265*_t49 + _t267*_t66;
+    const trailer3_real_t _t341 = J_theta_left + _t183*_t184 + _t190*_t191 + _t197*_t198
+            + _t204*_t205 + _t211*_t212 + _t218*_t219 + _t22*_t332 + _t23*_t330 + _t30*_t334
+            + _t336*_t41 + _t338*_t76;
+    const trailer3_real_t _t342 = _t181*_t323 + _t188*_t324 + _t19*_t239 + _t195*_t325 + _t20*_t233
+            + _t202*_t326 + _t209*_t327 + _t216*_t328 + _t244*_t26 + _t248*_t35 + _t251*_t67;
+    const trailer3_real_t _t343 = _t184*_t323 + _t191*_t324 + _t198*_t325 + _t205*_t326
+            + _t212*_t327 + _t219*_t328 + _t22*_t239 + _t23*_t233 + _t244*_t30 + _t248*_t41
+            + _t251*_t76;
     const trailer3_real_t tau_right = tau[0];
-    const trailer3_real_t _t360 = -_t358 + tau_right;
+    const trailer3_real_t _t344 = -_t342 + tau_right;
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t361 = -_t359 + tau_left;
-    const trailer3_real_t _t362 = _t354*_t357 - _t355*_t356;
-    const trailer3_real_t _t363 = TRAILER3_LIT(1.0)/_t362;
-    const trailer3_real_t _t364 = _t363*(-_t355*_t361 + _t357*_t360);
-    const trailer3_real_t _t365 = _t363*(_t354*_t361 - _t356*_t360);
-    xdot[0] = _t268;
-    xdot[1] = _t269;
-    xdot[2] = _t95;
-    xdot[3] = _t93;
-    xdot[4] = _t88;
-    xdot[5] = _t90;
+    const trailer3_real_t _t345 = -_t343 + tau_left;
+    const trailer3_real_t _t346 = _t339*_t341 - _t340*_t340;
+    const trailer3_real_t _t347 = TRAILER3_LIT(1.0)/_t346;
+    const trailer3_real_t _t348 = _t347*(-_t340*_t345 + _t341*_t344);
+    const trailer3_real_t _t349 = _t347*(_t339*_t345 - _t340*_t344);
+    const trailer3_real_t _t350 = _t316*TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t351 = _t316*TRAILER3_SIN(theta_tractor);
+    xdot[0] = _t350;
+    xdot[1] = _t351;
+    xdot[2] = _t152;
+    xdot[3] = _t159;
+    xdot[4] = _t154;
+    xdot[5] = _t156;
     xdot[6] = thetadot_right;
     xdot[7] = thetadot_left;
-    xdot[8] = _t270;
-    xdot[9] = _t271;
-    xdot[10] = _t272;
-    xdot[11] = _t273;
-    xdot[12] = _t274;
-    xdot[13] = _t275;
-    xdot[14] = _t364;
-    xdot[15] = _t365;
+    xdot[8] = _t317;
+    xdot[9] = _t318;
+    xdot[10] = _t319;
+    xdot[11] = _t320;
+    xdot[12] = _t321;
+    xdot[13] = _t322;
+    xdot[14] = _t348;
+    xdot[15] = _t349;
 }
 
 /* trailer3_plant_params_with_payload: documented in trailer3_plant.h.

@@ -229,7 +229,7 @@ trailer3_status_t trailer3_tdc_init(trailer3_tdc_state_t *state,
     /* the values the step's minimal_tde keeps */
     trailer3_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
     /* the values the step's minimal_tdc_law keeps */
-    trailer3_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    trailer3_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
     trailer3_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;

@@ -66,7 +66,7 @@ trailer3_status_t trailer3_tdroc_check_config_detail(const trailer3_tdroc_config
                 TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0),
                 TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0),
                 TRAILER3_LIT(0.0), TRAILER3_LIT(0.0), TRAILER3_LIT(0.0)};
-        trailer3_real_t kept[30];  /* the step's copy, as _init would keep it */
+        trailer3_real_t kept[31];  /* the step's copy, as _init would keep it */
         trailer3_k_minimal_minv_norm_keep(&config->nominal, kept);
         trailer3_k_minimal_minv_norm(kept, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
@@ -272,7 +272,7 @@ trailer3_status_t trailer3_tdroc_init(trailer3_tdroc_state_t *state,
     /* the values the step's minimal_minv_norm keeps */
     trailer3_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
     /* the values the step's minimal_tdroc_law keeps */
-    trailer3_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    trailer3_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
     trailer3_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER3_OK;

@@ -70,10 +70,10 @@ typedef struct {
     trailer3_real_t weights[TRAILER3_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                      (at _init) */
     trailer3_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
-    trailer3_real_t k_minimal_tde[31]; /* minimal_tde's parameter-only values (at _init) */
-    trailer3_real_t k_minimal_minv_norm[30]; /* minimal_minv_norm's parameter-only values (at
+    trailer3_real_t k_minimal_tde[32]; /* minimal_tde's parameter-only values (at _init) */
+    trailer3_real_t k_minimal_minv_norm[31]; /* minimal_minv_norm's parameter-only values (at
                                                 _init) */
-    trailer3_real_t k_minimal_tdroc_law[30]; /* minimal_tdroc_law's parameter-only values (at
+    trailer3_real_t k_minimal_tdroc_law[31]; /* minimal_tdroc_law's parameter-only values (at
                                                 _init) */
     trailer3_real_t H1hat[14];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer3_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

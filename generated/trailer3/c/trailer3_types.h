@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0xc4d70652u
+#define TRAILER3_CODE_ID 0x55ac8889u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -317,19 +317,6 @@ static inline trailer3_real_t trailer3_norm2(trailer3_real_t x0, trailer3_real_t
     {
         const trailer3_real_t x[2] = {x0, x1};
         return trailer3_norm_scaled(x, 2);
-    }
-}
-
-static inline trailer3_real_t trailer3_norm4(trailer3_real_t x0, trailer3_real_t x1,
-    trailer3_real_t x2, trailer3_real_t x3)
-{
-    const trailer3_real_t sum = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3;
-    if (sum <= TRAILER3_REAL_MAX) {
-        return TRAILER3_SQRT(sum);
-    }
-    {
-        const trailer3_real_t x[4] = {x0, x1, x2, x3};
-        return trailer3_norm_scaled(x, 4);
     }
 }
 

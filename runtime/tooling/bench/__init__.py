@@ -13,7 +13,8 @@ Writes ``BENCHMARKS.md`` and ``benchmarks.json`` at the repository root.
 Modules: :mod:`.c_variants` (the functions, their inputs and the C of each variant),
 :mod:`.c_bench` (one executable for all of them, run and summarised),
 :mod:`.step_bench` (the complete TDROC step against the hand-written one),
-:mod:`.robot_c_bench` (every shipped robot's functions against CasADi's C),
+:mod:`.robot_c_bench` (every shipped robot's functions against CasADi's C, the trailer's
+forward dynamics against hand-written C),
 :mod:`.scale` (how cost grows with the robot),
 :mod:`.python_timings` (Python variants and cold-start toolchain times), :mod:`.op_counts`
 (CasADi's operation counts), :mod:`.report` (the reports and the command line).

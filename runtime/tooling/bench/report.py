@@ -127,7 +127,8 @@ def ratio_tables(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, An
 
 
 def robot_ratio_table(robots: dict[tuple[str, str, str], dict[str, float]]) -> list[str]:
-    """Per shipped robot: ours / CasADi's C (the same specs), double and float32."""
+    """Per shipped robot: ours / CasADi's C (the same specs), double and float32; and
+    ours / the hand-written C where a robot has one (the trailer's forward dynamics)."""
     names = list(dict.fromkeys(k[0] for k in robots))
     functions = ("forward_dynamics", "minimal_forward_dynamics", "tdroc_step_kernels")
     lines = [
@@ -141,6 +142,22 @@ def robot_ratio_table(robots: dict[tuple[str, str, str], dict[str, float]]) -> l
                  for key in ((robot, f, "ours/casadi"),
                              (robot, f, "ours_float32/casadi_float32"))]
         lines.append(f"| {robot} | " + " | ".join(cells) + " |")
+    hand_functions = functions[:2]
+    hand_robots = [r for r in names if any((r, f, "ours/hand") in robots
+                                           for f in hand_functions)]
+    if hand_robots:
+        lines += [
+            "",
+            "| ours / hand-written C, per robot (goal ≤ 1.0) | "
+            + " | ".join(f"{f}, {p}" for f in hand_functions for p in ("double", "float32"))
+            + " |",
+            "|---|" + "---:|" * (2 * len(hand_functions)),
+        ]
+        for robot in hand_robots:
+            cells = [_cell(robots[key], 2, "×") if key in robots else "—"
+                     for f in hand_functions
+                     for key in ((robot, f, "ours/hand"), (robot, f, "ours_float32/hand_float32"))]
+            lines.append(f"| {robot} | " + " | ".join(cells) + " |")
     return lines
 
 

@@ -3,8 +3,10 @@ dynamics (both formulations) and the kernels of one minimal-formulation TDROC st
 double and in float32 (CasADi's with ``casadi_real`` float), one process per robot,
 interleaved repetitions, every variant checked against ours (double) before it is timed.
 
-Drishti's functions also have hand-written competitors (:mod:`c_bench`); the trailers have
-CasADi's C, the competitor that grows with the robot at no cost to anyone.
+Drishti's functions have hand-written competitors in :mod:`c_bench`; the trailer's forward
+dynamics (both formulations) have one here (``csrc/hand_trailer.c``, double and float32,
+the same statuses), timed in the same process. The longer trains have CasADi's C, the
+competitor that grows with the robot at no cost to anyone.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from codegen.spec import FunctionSpec
 from modeling.robot_file import load_robot_model
 from modeling.robot_io import shipped_robot_file
 from modeling.robot_model import RobotModel
-from runtime.tooling.bench.c_bench import CFLAGS, renamed_objects, spread
+from runtime.tooling.bench.c_bench import BENCH_CSRC, CFLAGS, renamed_objects, spread
 from runtime.tooling.bench.c_variants import (
     HARNESS,
     casadi_wrapper,
@@ -42,6 +44,10 @@ STEP_KERNELS = ("minimal_tde", "minimal_omega_difference", "minimal_minv_norm",
 # variant: its C real type (the harness checks float against ours double to 1e-3, double to 1e-9)
 VARIANTS = {"ours": "double", "ours_float32": "float", "casadi": "double",
             "casadi_float32": "float"}
+# Hand-written competitors per robot (csrc/<file>, functions named hand_<robot>_<name> and,
+# with -DHAND_FLOAT32, handf32_<robot>_<name>): the forward dynamics, both formulations.
+HAND_WRITTEN = {"trailer": "hand_trailer.c"}
+HAND_VARIANTS = {"hand": "double", "hand_float32": "float"}
 PARAMETER_SPREAD = 0.05  # parameters drawn within ±5 % of the robot file's values
 
 
@@ -89,6 +95,13 @@ def build(workdir: Path, rf: RobotFunctions) -> Path:
         obj = workdir / f"{tag}_gen.o"
         subprocess.run(["gcc", *CFLAGS, "-c", str(c_file), "-o", str(obj)], check=True)
         objs.append(str(obj))
+    hand = HAND_WRITTEN.get(rf.model.name)
+    for define, tag in (((), "hand"), (("-DHAND_FLOAT32",), "handf32")):
+        if hand is not None:
+            obj = workdir / f"{tag}_{Path(hand).stem}.o"
+            subprocess.run(["gcc", *CFLAGS, *define, "-c", str(BENCH_CSRC / hand), "-o",
+                            str(obj)], check=True)
+            objs.append(str(obj))
     params = rf.specs[0].inputs[0]
     members = " ".join(f"float {f.c_field};" for f in params.fields)
     lines = [f'#include "{prefix}_model.h"', f'#include "{prefix}_laws.h"',
@@ -107,12 +120,18 @@ def build(workdir: Path, rf: RobotFunctions) -> Path:
             casadi_wrapper(spec, "casadi_", "double"),
             casadi_wrapper(spec, "casadif_", "float"),
         ]
+        if hand is not None and spec.name in FUNCTIONS:
+            for tag, real in (("hand", "double"), ("handf32", "float")):
+                fn = f"{tag}_{rf.model.name}_{spec.name}"
+                lines += [f"int {fn}(const {real} *in, {real} *out);",
+                          f"static void {tag}_w_{spec.name}(const void *in, void *out) "
+                          f"{{ (void){fn}((const {real} *)in, ({real} *)out); }}"]
     fns = {"ours": "ours_{}", "ours_float32": "ours32_{}", "casadi": "casadi_w_{}",
-           "casadi_float32": "casadif_w_{}"}
+           "casadi_float32": "casadif_w_{}", "hand": "hand_w_{}", "hand_float32": "handf32_w_{}"}
     cases = [
         f'        {{"{s.name}", "{v}", {fns[v].format(s.name)}, {input_size(s)}, '
         f"{sum(output_sizes(s))}, {int(real == 'float')}, lo_{s.name}, hi_{s.name}, 0}},"
-        for s in rf.specs for v, real in VARIANTS.items()
+        for s in rf.specs for v, real in variants(rf.model.name, s.name).items()
     ]
     lines += [
         "int main(int argc, char **argv) {",
@@ -128,6 +147,13 @@ def build(workdir: Path, rf: RobotFunctions) -> Path:
     subprocess.run(["gcc", *CFLAGS, f"-I{rf.c_dir}", str(src), *objs, "-lm", "-o", str(exe)],
                    check=True)
     return exe
+
+
+def variants(robot: str, function: str) -> dict[str, str]:
+    """The variants timed for ``robot``'s ``function`` and their C real types."""
+    if robot in HAND_WRITTEN and function in FUNCTIONS:
+        return {**VARIANTS, **HAND_VARIANTS}
+    return VARIANTS
 
 
 def run_robot(robot: str, calls: int, repeats: int, root: Path = ROOT) -> list[dict[str, Any]]:
@@ -154,8 +180,9 @@ def run(calls: int = 200_000, repeats: int = 7, robots: tuple[str, ...] = LADDER
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str, float]]:
-    """(robot, function, variant) → ns, and (robot, function, "ours/casadi" or
-    "ours_float32/casadi_float32") → the per-repetition ratio; function "tdroc_step_kernels"
+    """(robot, function, variant) → ns, and (robot, function, "ours/casadi",
+    "ours_float32/casadi_float32", and where a hand-written competitor exists "ours/hand",
+    "ours_float32/hand_float32") → the per-repetition ratio; function "tdroc_step_kernels"
     is the sum of the step's kernels per repetition."""
     ns = {(r["robot"], r["function"], r["variant"]): r["ns"] for r in rows}
     for robot in {r["robot"] for r in rows}:
@@ -165,10 +192,13 @@ def summarise(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str
                 sum(t) for t in zip(*(ns[(robot, k, v)] for k in kernels), strict=True)]
     out = {key: spread(t) for key, t in ns.items()}
     for (robot, function, variant), t in ns.items():
-        if variant.startswith("ours"):
-            other = variant.replace("ours", "casadi")
-            ratios = [a / b for a, b in zip(t, ns[(robot, function, other)], strict=True)]
-            out[(robot, function, f"{variant}/{other}")] = spread(ratios)
+        if not variant.startswith("ours"):
+            continue
+        for rival in ("casadi", "hand"):
+            other = variant.replace("ours", rival)
+            if (robot, function, other) in ns:
+                ratios = [a / b for a, b in zip(t, ns[(robot, function, other)], strict=True)]
+                out[(robot, function, f"{variant}/{other}")] = spread(ratios)
     return out
 
 
@@ -194,17 +224,39 @@ def section(s: dict[tuple[str, str, str], dict[str, float]], calls: int, repeats
         "| CasADi float | ratio |",
         "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
-    for robot in robots:
-        for function in (*FUNCTIONS, "tdroc_step_kernels"):
-            if (robot, function, "ours") not in s:
-                continue
-            cells = []
-            for v in ("ours", "ours_float32"):
-                other = v.replace("ours", "casadi")
-                cells += [f"{s[(robot, function, v)]['median']:.1f}",
-                          f"{s[(robot, function, other)]['median']:.1f}",
-                          _ratio_cell(s[(robot, function, f"{v}/{other}")])]
-            lines.append(f"| {robot} | {function} | " + " | ".join(cells) + " |")
+    lines += _rows(s, [(r, f) for r in robots for f in (*FUNCTIONS, "tdroc_step_kernels")
+                       if (r, f, "ours") in s], "casadi")
+    hand = [(r, f) for r in robots for f in FUNCTIONS if (r, f, "hand") in s]
+    if hand:
+        lines += [
+            "",
+            "Against hand-written C (`csrc/hand_trailer.c`: derived by hand from the robot's",
+            "kinetic energy in the tractor's forward speed and yaw rate, sin and cos of the",
+            "hitch angle and of the heading only, libm's sin/cos, the same statuses; checked",
+            "against ours first, and its statuses on bad inputs by the tests). Ratio: ours /",
+            "hand per repetition, median (min–max); goal ≤ 1.0 (issue 31).",
+            "",
+            "| robot | function | ours double | hand-written double | ratio | ours float32 "
+            "| hand-written float32 | ratio |",
+            "|---|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        lines += _rows(s, hand, "hand")
+    return lines
+
+
+def _rows(s: dict[tuple[str, str, str], dict[str, float]], cases: list[tuple[str, str]],
+          rival: str) -> list[str]:
+    """A table row per (robot, function): ours and ``rival``'s ns and their ratio, double
+    and float32."""
+    lines = []
+    for robot, function in cases:
+        cells = []
+        for v in ("ours", "ours_float32"):
+            other = v.replace("ours", rival)
+            cells += [f"{s[(robot, function, v)]['median']:.1f}",
+                      f"{s[(robot, function, other)]['median']:.1f}",
+                      _ratio_cell(s[(robot, function, f"{v}/{other}")])]
+        lines.append(f"| {robot} | {function} | " + " | ".join(cells) + " |")
     return lines
 
 
