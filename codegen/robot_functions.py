@@ -647,11 +647,10 @@ def _trig_of_inputs_only(spec: FunctionSpec) -> bool:
     """Whether every sin and cos of ``spec`` takes one input coordinate as it is, or the
     difference of two coordinates of one input array (a hitch angle θ_child − θ_root of
     the root-frame evaluation, ``ConstrainedSystem.root_frame_point``): then its argument is
-    a value a step has validated (|x| <= the steps' input bound), or a hitch angle, which
-    a real hitch keeps within a turn, and the bounded reduction serves
-    (``FunctionSpec.bounded_trig``; beyond the bound it gives NaN, which the step reports
-    as a non-finite result). An angle formed from two arrays (the PI's heading error
-    θ_des − θ, a reference against a measurement) keeps libm's."""
+    within twice the steps' input bound, which the bounded reduction covers
+    (``FunctionSpec.bounded_trig``, ``TRIG_BOUND``). An angle formed from two arrays (the
+    PI's heading error θ_des − θ, a reference against a measurement) keeps libm's, as
+    before."""
     exprs = [e for a in spec.outputs for e in a.exprs] + [e for _, e in spec.definitions]
     inputs = set(spec.input_symbols())
     arrays = [set(a.all_symbols()) for a in spec.inputs if a.kind == "array"]

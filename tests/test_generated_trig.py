@@ -8,6 +8,8 @@ libm's functions, and a build whose evaluation would break the reduction is refu
 from __future__ import annotations
 
 import json
+import math
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -55,19 +57,19 @@ int main(void)
     long i;
     unsigned long long state = 88172645463325252ull;
     for (i = -200000; i <= 200000; ++i) in_range(i * 5.0e-5);          /* |x| <= 10 */
-    for (i = 1; i <= 636000; i += 997) {                                 /* near k pi/2 */
+    for (i = 1; i <= 1272000; i += 997) {                                /* near k pi/2 */
         const double c = (double)i * 1.5707963267948966;
         in_range(c); in_range(-c);
         in_range(nextafter(c, 0.0)); in_range(nextafter(c, INFINITY));
         in_range(c + 1e-9); in_range(c - 0.7853981633974483);
     }
-    for (i = 0; i < 200000; ++i) {                                       /* random, |x| <= 1e6 */
+    for (i = 0; i < 200000; ++i) {                                       /* random, |x| <= 2e6 */
         state ^= state << 13; state ^= state >> 7; state ^= state << 17;
-        in_range(((double)(state >> 11) / 9007199254740992.0 * 2.0 - 1.0) * 1.0e6);
+        in_range(((double)(state >> 11) / 9007199254740992.0 * 2.0 - 1.0) * 2.0e6);
     }
-    in_range(1.0e6); in_range(-1.0e6); in_range(1e-300); in_range(4.9e-324);
+    in_range(2.0e6); in_range(-2.0e6); in_range(1e-300); in_range(4.9e-324);
     {
-        const double beyond[] = {1.0000001e6, -2.0e6, 1.0e10, 1.0e300, -1.0e308, INFINITY,
+        const double beyond[] = {2.0000001e6, -3.0e6, 1.0e10, 1.0e300, -1.0e308, INFINITY,
                                  -INFINITY, NAN, 0.0, -0.0};
         for (i = 0; i < (long)(sizeof beyond / sizeof beyond[0]); ++i) as_libm(beyond[i]);
     }
@@ -111,17 +113,17 @@ int main(void)
     float s, c;
     int beyond_nan = 1;
     for (i = -200000; i <= 200000; ++i) in_range((float)i * 5.0e-5f);
-    for (i = 1; i <= 636000; i += 997) {
+    for (i = 1; i <= 1272000; i += 997) {
         const float x = (float)((double)i * 1.5707963267948966);
         in_range(x); in_range(-x); in_range(nextafterf(x, 0.0f)); in_range(nextafterf(x, INFINITY));
     }
     for (i = 0; i < 200000; ++i) {
         state ^= state << 13; state ^= state >> 17; state ^= state << 5;
-        in_range(((float)state / 4294967296.0f * 2.0f - 1.0f) * 1.0e6f);
+        in_range(((float)state / 4294967296.0f * 2.0f - 1.0f) * 2.0e6f);
     }
-    in_range(1.0e6f); in_range(-1.0e6f); in_range(1e-30f);
+    in_range(2.0e6f); in_range(-2.0e6f); in_range(1e-30f);
     {
-        const float beyond[] = {1.0000001e6f, -2.0e6f, 1.0e30f, INFINITY, -INFINITY, NAN};
+        const float beyond[] = {2.0000002e6f, -3.0e6f, 1.0e30f, INFINITY, -INFINITY, NAN};
         for (i = 0; i < (long)(sizeof beyond / sizeof beyond[0]); ++i) {
             wmr_sincos_bounded(beyond[i], &s, &c);
             beyond_nan = beyond_nan && isnan(s) && isnan(c);
@@ -186,12 +188,24 @@ def test_float32_sincos_bounded_is_within_two_ulp_and_nan_beyond(tmp_path: Path)
 
 
 def test_the_bound_covers_the_steps_inputs() -> None:
-    """A step checks |q| <= MAX_ABS_INPUT before sincos_bounded, which is exact to its bound."""
+    """A step checks |q| <= MAX_ABS_INPUT before sincos_bounded, which is exact to its bound:
+    an input angle or the difference of two (a yaw relative to the root's). Exact: k times
+    each of pi/2's two leading parts (as wmr_types.h has them) fits in 53 bits."""
+    import struct
+
     from codegen.backends.c.render import TRIG_BOUND
     from codegen.controller_api import MAX_ABS_INPUT
 
-    assert float(MAX_ABS_INPUT) <= float(TRIG_BOUND)
-    assert float(TRIG_BOUND) * 2 / 3.141592653589793 < 2**20  # |k| < 2^20: exact products
+    assert 2 * float(MAX_ABS_INPUT) <= float(TRIG_BOUND)
+    k_bits = math.ceil(math.log2(float(TRIG_BOUND) * 2 / math.pi + 1))
+    types = (cbuild.GENERATED_C / "wmr_types.h").read_text()
+    kernel = types[types.index("sincos_kernel(double x"):]
+    parts = re.findall(r"k \* ([0-9.e+-]+)", kernel)[:2]
+    assert len(parts) == 2, parts
+    for text in parts:
+        mantissa = struct.unpack("<Q", struct.pack("<d", float(text)))[0] & ((1 << 52) - 1)
+        significant = 53 - ((mantissa & -mantissa).bit_length() - 1 if mantissa else 52)
+        assert significant + k_bits <= 53, (text, significant, k_bits)
 
 
 def test_float32_model_functions_keep_libm() -> None:

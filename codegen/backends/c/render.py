@@ -170,10 +170,12 @@ INLINE_MATH = ("fmax", "fmin")
 # and two polynomials, shared by a sin and a cos of one angle), unless -DWMR_LIBM_TRIG:
 # glibc's sincos is most of the forward dynamics' time. float32 keeps libm's sinf/cosf.
 GENERATED_TRIG = ("sin", "cos")
-# Where the generated reductions are exact (|k| < 2^20 in double, < 2^22 in float); at least
-# the controller steps' input bound (controller_api.MAX_ABS_INPUT), so that a step's
-# sincos_bounded never sees an argument beyond it.
-TRIG_BOUND = "1.0e6"
+# Where the generated sin/cos are the generated reductions' (exact for |k| < 2^21: pi/2's
+# first part has 31 significant bits, its second 32); twice the controller steps' input
+# bound (controller_api.MAX_ABS_INPUT), so that a step's sincos_bounded never sees an
+# argument beyond it: an input angle, or the difference of two (a trailer's yaw relative
+# to the root's, ConstrainedSystem.root_frame_point).
+TRIG_BOUND = "2.0e6"
 
 
 def _size_macros(spec: FunctionSpec, config: CConfig) -> list[tuple[str, int]]:

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x17674097u
+#define TRAILER2_CODE_ID 0xd668ec78u
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;
@@ -91,8 +91,9 @@ static inline trailer2_exp_bits_t trailer2_exp_carry(trailer2_real_t x)
     return (rep.bits & TRAILER2_EXP_FIELD) + TRAILER2_EXP_LOWEST;
 }
 
-/* sin and cos. trailer2_sincos_bounded(x, &s, &c): both, for |x| <= 1.0e6 (the controller steps'
-   input bound; NaN beyond, and for Inf and NaN), from one argument reduction and without a
+/* sin and cos. trailer2_sincos_bounded(x, &s, &c): both, for |x| <= 2.0e6 (twice the controller
+   steps' input bound: an input angle, or the difference of two, a yaw relative to the
+   root's; NaN beyond, and for Inf and NaN), from one argument reduction and without a
    library call: the steps use it. Double: trailer2_sin / trailer2_cos are the same within that
    bound and
    libm's beyond, and TRAILER2_SIN / TRAILER2_COS call them; float32's call sinf / cosf.
@@ -136,10 +137,10 @@ TRAILER2_TRIG_INLINE void trailer2_sincos_bounded(trailer2_real_t x, trailer2_re
 #if defined(__FAST_MATH__) || (defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD != 0))
 #error "the generated sin/cos need IEEE evaluation: define TRAILER2_LIBM_TRIG"
 #endif
-/* 1 where the reductions below are exact: |x| <= 1.0e6; 0 for Inf and NaN. */
+/* 1 where the reductions below are exact: |x| <= 2.0e6; 0 for Inf and NaN. */
 TRAILER2_TRIG_INLINE int trailer2_trig_in_range(trailer2_real_t x)
 {
-    return TRAILER2_FABS(x) <= TRAILER2_LIT(1.0e6);
+    return TRAILER2_FABS(x) <= TRAILER2_LIT(2.0e6);
 }
 
 #ifdef TRAILER2_FLOAT32
@@ -149,8 +150,8 @@ TRAILER2_TRIG_INLINE void trailer2_sincos_bounded(float x, float *s, float *c)
     const float k = ((x * 0.636619772f) + shift) - shift;
 #if !defined(__FP_FAST_FMAF) && defined(__SSE2_MATH__)
     /* An x86 host without -mfma, where fmaf is a library call and double arithmetic is
-       as fast as float's: the reduction in double, pi/2 in parts of 33 bits as in the
-       double build (k part1 and x - k part1 exact for |k| < 2^20), rounded to float once. */
+       as fast as float's: the reduction in double, pi/2 in parts as in the double build
+       (k part1 and x - k part1 exact for |k| < 2^21), rounded to float once. */
     const double kd = (double)k;
     const float rk = (float)((((double)x - (kd * 1.57079632673412561417e+00))
                               - (kd * 6.07710050630396597660e-11))
@@ -189,8 +190,9 @@ TRAILER2_TRIG_INLINE void trailer2_sincos_kernel(double x, double *s, double *c)
 {
     const double shift = 6755399441055744.0;
     const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
-    /* pi/2 in two parts of 33 bits and a tail: k * part is exact for |k| < 2^20, x - k part1
-       is exact (Sterbenz's lemma), and the next subtraction's rounding error is kept. */
+    /* pi/2 in two parts of 31 and 32 significant bits and a tail: k * part is exact for
+       |k| < 2^21, x - k part1 is exact (Sterbenz's lemma), and the next subtraction's
+       rounding error is kept. */
     const double r1 = x - (k * 1.57079632673412561417e+00);
     const double w = k * 6.07710050630396597660e-11;
     const double r2 = r1 - w;
@@ -250,8 +252,9 @@ TRAILER2_TRIG_INLINE double trailer2_cos(double x)
 #endif
 
 /* sin and cos in the controller kernels (trailer2_laws and the steps' own copies): their angles
-   are a step's validated inputs (|x| <= 1.0e6), so the bounded reduction above alone,
-   in both precisions (NaN beyond the bound, as trailer2_sincos_bounded): no libm sinf/cosf
+   are a step's validated inputs or differences of two (|x| <= 2.0e6), so the bounded
+   reduction above alone, in both precisions (NaN beyond the bound, as trailer2_sincos_bounded): no
+   libm sinf/cosf
    and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
 TRAILER2_TRIG_INLINE trailer2_real_t trailer2_sin_bounded(trailer2_real_t x)
 {
