@@ -262,9 +262,8 @@ class ConstrainedSystem:
         plane: tuple[int, int, sp.Symbol] | None = None
         if root_frame and self.planar_frame:
             at_root = self.root_frame_point()
-            flat = stage.substituted([*s, *slopes.values()], at_root)
-            s = sp.Matrix(n, k, flat[:n * k])
-            slopes = dict(zip(slopes, flat[n * k:], strict=True))
+            s, at = self.in_root_frame(stage, [s, sp.Matrix(list(slopes.values()))])
+            slopes = dict(zip(slopes, at, strict=True))
             mass, bias = mass.xreplace(at_root), bias.xreplace(at_root)
             plane = self.planar_frame[0], self.planar_frame[1], self.q[self.planar_frame[2]]
         v = stage.matrix(s * eta)  # q̇ on the manifold (independent rows: η itself)
@@ -272,14 +271,14 @@ class ConstrainedSystem:
         m = stage.matrix(mass)
         h = stage.matrix(bias.xreplace(on_manifold))
         # Ṡ η = Σ_j ∂S/∂q_j η (S η)_j, the terms of equal (or opposite) slopes gathered.
+        gathered: dict[int, dict[sp.Expr, sp.Expr]] = {i: {} for i in self.dependent}
+        for (i, j, a), d in slopes.items():
+            if d != 0:  # a slope can vanish in the root frame
+                sign, key = (-1, -d) if d.could_extract_minus_sign() else (1, d)
+                gathered[i][key] = gathered[i].get(key, sp.S.Zero) + sign * eta[a] * v[j]
         rate = sp.zeros(n, 1)
-        for i in self.dependent:
-            gathered: dict[sp.Expr, sp.Expr] = {}
-            for (row, j, a), d in slopes.items():
-                if row == i and d != 0:
-                    sign, key = (-1, -d) if d.could_extract_minus_sign() else (1, d)
-                    gathered[key] = gathered.get(key, sp.S.Zero) + sign * eta[a] * v[j]
-            rate[i] = stage.define(sp.Add(*(d * stage.define(c) for d, c in gathered.items())))
+        for i, terms in gathered.items():
+            rate[i] = stage.define(sp.Add(*(d * stage.define(c) for d, c in terms.items())))
         ms = stage.matrix(m * s)
         # M̄ is symmetric: each entry on and above the diagonal formed once
         mbar = sp.Matrix(k, k, lambda i, j: stage.define(
@@ -299,12 +298,12 @@ class ConstrainedSystem:
         return at_root
 
     def in_root_frame(self, stage: Stage, matrices: list[sp.Matrix]) -> list[sp.Matrix]:
-        """``matrices``, quantities of ``stage`` invariant under planar rigid motions (M̄,
-        H̄, η̇, a multiplier of (9): a force along a wheel's own axes), evaluated in the
-        root body's frame (``root_frame_point``): the same functions of q, written with the
-        sines and cosines of the yaws relative to the root's only. Unchanged without a
-        ``planar_frame``. (``staged_minimal(root_frame=True)`` evaluates its ingredients
-        there instead, which also halves Ṡ η.)"""
+        """``matrices`` (quantities of ``stage``) evaluated in the root body's frame
+        (``root_frame_point``), written with the sines and cosines of the yaws relative to
+        the root's only. For a quantity invariant under planar rigid motions (M̄, H̄, η̇, a
+        multiplier of (9): a force along a wheel's own axes) that is the same function of
+        q; ``staged_minimal(root_frame=True)`` also evaluates S and its slopes there.
+        Unchanged without a ``planar_frame``."""
         if not self.planar_frame:
             return matrices
         flat = stage.substituted([e for m in matrices for e in m], self.root_frame_point())

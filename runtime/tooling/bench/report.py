@@ -129,35 +129,31 @@ def ratio_tables(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, An
 def robot_ratio_table(robots: dict[tuple[str, str, str], dict[str, float]]) -> list[str]:
     """Per shipped robot: ours / CasADi's C (the same specs), double and float32; and
     ours / the hand-written C where a robot has one (the trailer's forward dynamics)."""
-    names = list(dict.fromkeys(k[0] for k in robots))
     functions = ("forward_dynamics", "minimal_forward_dynamics", "tdroc_step_kernels")
-    lines = [
-        "| ours / CasADi's C, per robot (goal ≤ 0.8) | "
-        + " | ".join(f"{f}, {p}" for f in functions for p in ("double", "float32")) + " |",
-        "|---|" + "---:|" * (2 * len(functions)),
-    ]
+    lines = _ratio_table(robots, "ours / CasADi's C, per robot (goal ≤ 0.8)", functions,
+                         "casadi")
+    hand = _ratio_table(robots, "ours / hand-written C, per robot (goal ≤ 1.0)",
+                        functions[:2], "hand")
+    return [*lines, "", *hand] if hand else lines
+
+
+def _ratio_table(robots: dict[tuple[str, str, str], dict[str, float]], title: str,
+                 functions: tuple[str, ...], rival: str) -> list[str]:
+    """A row per robot that has ``rival``'s ratios: ours / ``rival`` per function, double
+    and float32 ("—" where missing); no table when no robot has them."""
+    keys = [(f, f"ours/{rival}", f"ours_float32/{rival}_float32") for f in functions]
+    names = [r for r in dict.fromkeys(k[0] for k in robots)
+             if any((r, f, ratio) in robots for f, ratio, _ in keys)]
+    if not names:
+        return []
+    lines = [f"| {title} | " + " | ".join(f"{f}, {p}" for f in functions
+                                         for p in ("double", "float32")) + " |",
+             "|---|" + "---:|" * (2 * len(functions))]
     for robot in names:
         cells = [_cell(robots[key], 2, "×") if key in robots else "—"
-                 for f in functions
-                 for key in ((robot, f, "ours/casadi"),
-                             (robot, f, "ours_float32/casadi_float32"))]
+                 for f, double, single in keys
+                 for key in ((robot, f, double), (robot, f, single))]
         lines.append(f"| {robot} | " + " | ".join(cells) + " |")
-    hand_functions = functions[:2]
-    hand_robots = [r for r in names if any((r, f, "ours/hand") in robots
-                                           for f in hand_functions)]
-    if hand_robots:
-        lines += [
-            "",
-            "| ours / hand-written C, per robot (goal ≤ 1.0) | "
-            + " | ".join(f"{f}, {p}" for f in hand_functions for p in ("double", "float32"))
-            + " |",
-            "|---|" + "---:|" * (2 * len(hand_functions)),
-        ]
-        for robot in hand_robots:
-            cells = [_cell(robots[key], 2, "×") if key in robots else "—"
-                     for f in hand_functions
-                     for key in ((robot, f, "ours/hand"), (robot, f, "ours_float32/hand_float32"))]
-            lines.append(f"| {robot} | " + " | ".join(cells) + " |")
     return lines
 
 

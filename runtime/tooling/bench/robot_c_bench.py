@@ -96,8 +96,8 @@ def build(workdir: Path, rf: RobotFunctions) -> Path:
         subprocess.run(["gcc", *CFLAGS, "-c", str(c_file), "-o", str(obj)], check=True)
         objs.append(str(obj))
     hand = HAND_WRITTEN.get(rf.model.name)
-    for define, tag in (((), "hand"), (("-DHAND_FLOAT32",), "handf32")):
-        if hand is not None:
+    if hand is not None:  # the hand-written competitor, double and float32
+        for define, tag in (((), "hand"), (("-DHAND_FLOAT32",), "handf32")):
             obj = workdir / f"{tag}_{Path(hand).stem}.o"
             subprocess.run(["gcc", *CFLAGS, *define, "-c", str(BENCH_CSRC / hand), "-o",
                             str(obj)], check=True)
