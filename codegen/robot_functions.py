@@ -109,7 +109,7 @@ def _param_guards(model: RobotModel) -> tuple[Guard, ...]:
     bad = status(model, "ERR_BAD_PARAMS")
     positive = [Guard(bad, symbol, doc) for symbol, doc in positive_parameters(model)]
     # Sylvester: all leading minors of S^T M S positive <=> positive definite.
-    mbar = (staged_forms(model).mbar if model.staged
+    mbar = (staged_forms(model).solved_mbar if model.staged
             else guard_mass_matrix(model))
     minors = leading_minors(mbar)
     return (
@@ -184,6 +184,9 @@ class StagedForms:
     xdot: sp.Matrix
     jac_x: sp.Matrix
     jac_u: sp.Matrix
+    # the mass matrix the solve factors (M̄, or M̄_u in the root's twist): positive
+    # definite exactly when M̄ is, and what the guards' leading minors read
+    solved_mbar: sp.Matrix
 
     def with_definitions(self, spec: FunctionSpec) -> FunctionSpec:
         """``spec`` with the quantities its outputs and guards read."""
@@ -206,14 +209,15 @@ def staged_forms(model: RobotModel, plant: bool = False) -> StagedForms:
     stage = Stage("_ps" if plant else "_ms")
     # In the root body's frame (the same functions of q, with the hitch angles' sin and
     # cos only; q̇'s and q̈'s x, y rows rotated back once): so are their Jacobians.
-    sm = system.staged_minimal(stage, root_frame=True)
+    sm = system.staged_minimal(stage, root_frame=True, positive=model.positive_symbols)
     eta_dot, qdd = sm.forward_dynamics(model.tau)
     x = [*model.q, *system.eta]
     xdot = sp.Matrix([*sm.world_velocities(), *eta_dot])
     jac_x = sp.Matrix(len(xdot), len(x), lambda i, j: stage.derivative(xdot[i], x[j]))
     jac_u = sp.Matrix(len(xdot), model.nu, lambda i, j: stage.derivative(xdot[i],
                                                                           model.tau[j]))
-    return StagedForms(stage, sm.mass_matrix, sm.bias, eta_dot, qdd, xdot, jac_x, jac_u)
+    return StagedForms(stage, sm.mass_matrix, sm.bias, eta_dot, qdd, xdot, jac_x, jac_u,
+                       sm.solved_mass_matrix)
 
 
 @cache

@@ -128,7 +128,7 @@ def _control_model(formulation: Formulation, model: RobotModel) -> ControlModel:
         )
     if formulation == "minimal" and model.staged:
         stage = Stage("_c")
-        staged = s.staged_minimal(stage, root_frame=True)
+        staged = s.staged_minimal(stage, root_frame=True, positive=model.positive_symbols)
         return ControlModel(formulation, model.nu, model.actuated, staged.mass_matrix,
                             staged.bias, rates, s, stage)
     if formulation == "minimal":

@@ -19,8 +19,10 @@ the chain rule on (q, q̇, q̈).
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 from functools import cached_property
+from itertools import combinations
 
 import sympy as sp
 
@@ -62,10 +64,15 @@ def trig_canonical(expr: sp.Expr) -> sp.Expr:
 class StagedMinimal:
     """The minimal form through named quantities of a :class:`~modeling.staged.Stage`:
     S(q), v = S η (q̇ on the constraint manifold), M, H on the manifold, Ṡ η, then
-    M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B, entry by entry; never multiplied out."""
+    M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B, entry by entry; never multiplied out.
+
+    With a ``twist`` W the solve runs in the root body's twist u = W η instead
+    (``ConstrainedSystem.staged_minimal``): ``null_space`` is S_u (q̇ = S_u u),
+    ``solved`` holds M̄_u, H̄_u and S_uᵀ B, and the wheel-rate forms are
+    M̄ = Wᵀ M̄_u W, H̄ = Wᵀ H̄_u, Sᵀ B = Wᵀ S_uᵀ B (W constant)."""
 
     stage: Stage
-    null_space: sp.Matrix  # S, n × k
+    null_space: sp.Matrix  # S (or S_u), n × k
     velocities: sp.Matrix  # S η, n × 1
     null_space_rate: sp.Matrix  # Ṡ η, n × 1
     mass_matrix: sp.Matrix  # M̄ = Sᵀ M S, k × k
@@ -74,12 +81,24 @@ class StagedMinimal:
     # (x, y indices, the root yaw) when S, q̇ and Ṡ η are the root frame's (their x, y
     # rows rotate by R(θ_root) into the world's); None: they are the world frame's
     plane: tuple[int, int, sp.Symbol] | None = None
+    eta_rows: tuple[int, ...] = ()  # the rows of q̈ that are η̇
+    # (M̄_u, H̄_u, S_uᵀ B) in the coordinates the solve runs in; None: M̄, H̄, Sᵀ B
+    solved: tuple[sp.Matrix, sp.Matrix, sp.Matrix] | None = None
+
+    @property
+    def solved_mass_matrix(self) -> sp.Matrix:
+        """The mass matrix the forward dynamics factor: M̄_u with a twist, else M̄. It is
+        positive definite exactly when M̄ is (M̄ = Wᵀ M̄_u W, W invertible)."""
+        return self.mass_matrix if self.solved is None else self.solved[0]
 
     def forward_dynamics(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
-        """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ solved in the stage, q̈ = S η̇ + Ṡ η in the world
-        frame."""
-        eta_dot = self.stage.solve(self.mass_matrix, self.input_matrix * tau - self.bias)
-        qdd = self.stage.matrix(self.null_space * eta_dot + self.null_space_rate)
+        """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ (or M̄_u u̇ = S_uᵀ B τ − H̄_u) solved in the stage,
+        q̈ = S η̇ + Ṡ η in the world frame, η̇ its ``eta_rows``."""
+        mass, bias, inputs = ((self.mass_matrix, self.bias, self.input_matrix)
+                              if self.solved is None else self.solved)
+        rates = self.stage.solve(mass, inputs * tau - bias)
+        qdd = self.stage.matrix(self.null_space * rates + self.null_space_rate)
+        eta_dot = rates if self.solved is None else sp.Matrix([qdd[i] for i in self.eta_rows])
         return eta_dot, self.in_world(qdd)
 
     def world_velocities(self) -> sp.Matrix:
@@ -240,7 +259,8 @@ class ConstrainedSystem:
         """Sᵀ B: the Lagrange multipliers do no work along S, so only Sᵀ B τ drives η."""
         return (self.null_space.T * self.input_matrix).applyfunc(self.simplify)
 
-    def staged_minimal(self, stage: Stage, root_frame: bool = False) -> StagedMinimal:
+    def staged_minimal(self, stage: Stage, root_frame: bool = False,
+                       positive: Collection[sp.Symbol] = ()) -> StagedMinimal:
         """The minimal form through ``stage``'s quantities (see :class:`StagedMinimal`):
         the cost of S, M and H, which are small, plus one product per entry, where
         ``minimal_mass_matrix`` and ``minimal_bias`` multiply out (tens of thousands of
@@ -251,10 +271,20 @@ class ConstrainedSystem:
         M̄, H̄, Sᵀ B and η̇ are the same functions of q, S, q̇ and Ṡ η the root frame's
         (the result's ``plane`` rotates their x, y rows back). There S depends on the
         hitch angles only, so its slopes along a child's yaw and along the root's are
-        equal and opposite, and Ṡ η is written once per hitch angle."""
+        equal and opposite, and Ṡ η is written once per hitch angle.
+
+        When, in that frame, two (k) of the root's velocities (its forward speed and yaw
+        rate for a differential drive) are a constant map u = W η of the wheel rates with
+        det W a product of ``positive`` parameters (the caller's guards keep them
+        positive), the solve runs in u (``_staged_in_twist``): S_u carries no wheel
+        radius, so M̄_u and H̄_u are the short forms a hand derivation in (v, ω) writes."""
         n, k = len(self.q), len(self.independent)
         s = self.staged_null_space(stage)
         eta = sp.Matrix(self.eta)
+        if root_frame and self.planar_frame:
+            twist = self._root_twist(stage, self.in_root_frame(stage, [s])[0], positive)
+            if twist is not None:
+                return self._staged_in_twist(stage, *twist)
         # ∂S/∂q_j, S's own entries differentiated (each a quantity)
         slopes = {(i, j, a): d for i in self.dependent for j in range(n) for a in range(k)
                   if (d := stage.derivative(s[i, a], self.q[j])) != 0}
@@ -267,25 +297,108 @@ class ConstrainedSystem:
             mass, bias = mass.xreplace(at_root), bias.xreplace(at_root)
             plane = self.planar_frame[0], self.planar_frame[1], self.q[self.planar_frame[2]]
         v = stage.matrix(s * eta)  # q̇ on the manifold (independent rows: η itself)
-        on_manifold = {self.qdot[i]: v[i] for i in self.dependent}
-        m = stage.matrix(mass)
-        h = stage.matrix(bias.xreplace(on_manifold))
-        # Ṡ η = Σ_j ∂S/∂q_j η (S η)_j, the terms of equal (or opposite) slopes gathered.
-        gathered: dict[int, dict[sp.Expr, sp.Expr]] = {i: {} for i in self.dependent}
+        m, h = self._on_manifold(stage, v, mass, bias)
+        rate = self._gathered_rate(stage, slopes, eta, v, self.dependent)
+        return self._staged_products(stage, s, v, rate, m, h, plane)
+
+    def _on_manifold(self, stage: Stage, v: sp.Matrix, mass: sp.Matrix, bias: sp.Matrix
+                     ) -> tuple[sp.Matrix, sp.Matrix]:
+        """M and H (q̇ replaced by the velocities ``v``) as quantities of ``stage``."""
+        on_manifold = {self.qdot[i]: v[i] for i in range(len(self.q)) if v[i] != self.qdot[i]}
+        return stage.matrix(mass), stage.matrix(bias.xreplace(on_manifold))
+
+    def _gathered_rate(self, stage: Stage, slopes: dict[tuple[int, int, int], sp.Expr],
+                       rates: sp.Matrix, v: sp.Matrix, rows: tuple[int, ...]) -> sp.Matrix:
+        """Ṡ η = Σ_j ∂S/∂q_j η (S η)_j over ``slopes`` {(row, j, column): ∂S/∂q_j}, the
+        terms of equal (or opposite) slopes gathered (one product per hitch angle)."""
+        gathered: dict[int, dict[sp.Expr, sp.Expr]] = {i: {} for i in rows}
         for (i, j, a), d in slopes.items():
             if d != 0:  # a slope can vanish in the root frame
                 sign, key = (-1, -d) if d.could_extract_minus_sign() else (1, d)
-                gathered[i][key] = gathered[i].get(key, sp.S.Zero) + sign * eta[a] * v[j]
-        rate = sp.zeros(n, 1)
+                gathered[i][key] = gathered[i].get(key, sp.S.Zero) + sign * rates[a] * v[j]
+        rate = sp.zeros(len(self.q), 1)
         for i, terms in gathered.items():
             rate[i] = stage.define(sp.Add(*(d * stage.define(c) for d, c in terms.items())))
+        return rate
+
+    def _staged_products(self, stage: Stage, s: sp.Matrix, v: sp.Matrix, rate: sp.Matrix,
+                         m: sp.Matrix, h: sp.Matrix,
+                         plane: tuple[int, int, sp.Symbol] | None) -> StagedMinimal:
+        """M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B through the stage (M, H staged at
+        the velocities ``v``, ``_on_manifold``)."""
+        k = s.cols
         ms = stage.matrix(m * s)
         # M̄ is symmetric: each entry on and above the diagonal formed once
         mbar = sp.Matrix(k, k, lambda i, j: stage.define(
             (s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
         hbar = stage.matrix(s.T * (m * rate + h))
-        return StagedMinimal(stage, s, v, rate, mbar, hbar, stage.matrix(s.T * self.input_matrix),
-                             plane)
+        return StagedMinimal(stage, s, v, rate, mbar, hbar,
+                             stage.matrix(s.T * self.input_matrix.xreplace(
+                                 self.root_frame_point() if plane else {})),
+                             plane, self.independent)
+
+    def _root_twist(self, stage: Stage, s_root: sp.Matrix, positive: Collection[sp.Symbol]
+                    ) -> tuple[tuple[int, ...], sp.Matrix] | None:
+        """(rows, W): the first k of the root's (x, y, yaw) velocity rows of the root
+        frame's S (``s_root``) that are constant, W their entries, with det W a nonzero
+        number times powers of ``positive`` symbols; None when there are none."""
+        k = len(self.independent)
+        q = set(self.q)
+        wanted = set(positive)
+        for rows in combinations(self.planar_frame[:3], k):
+            w = sp.Matrix([[stage.expand(s_root[r, a]) for a in range(k)] for r in rows])
+            if w.free_symbols & q:
+                continue
+            det = sp.factor(sp.cancel(w.det(method="berkowitz")))
+            factors = [f.base if f.is_Pow else f for f in sp.Mul.make_args(det)]
+            if det != 0 and all(f.is_Number or f in wanted for f in factors):
+                return rows, w.applyfunc(lambda e: stage.define(sp.factor(e)))
+        return None
+
+    def _staged_in_twist(self, stage: Stage, rows: tuple[int, ...], w: sp.Matrix
+                         ) -> StagedMinimal:
+        """The minimal form solved in the root's twist u = W η (the velocities of ``rows``
+        in the root frame): S_u from A evaluated in the root frame with those velocities
+        independent (``_staged_solve``), its slopes along the relative yaws, and the root
+        frame's turning rate θ̇ J (S_u u) added to Ṡ_u u's x, y rows (the frame turns with
+        the root: d/dt R(θ) a = R(θ)(ȧ + θ̇ J a)). M̄ = Wᵀ M̄_u W, H̄ = Wᵀ H̄_u, Sᵀ B = Wᵀ S_uᵀ B
+        for the functions that speak in wheel rates; η̇ = q̈'s wheel rows."""
+        n = len(self.q)
+        at_root = self.root_frame_point()
+        a = stage.matrix(self.constraint_matrix.xreplace(at_root))
+        dependent = tuple(i for i in range(n) if i not in rows)
+        a_d = a.extract(list(range(a.rows)), list(dependent))
+        a_i = a.extract(list(range(a.rows)), list(rows))
+        s_dep = self._staged_solve(stage, a_d, -a_i)
+        s = sp.zeros(n, len(rows))
+        for r, i in enumerate(dependent):
+            s[i, :] = s_dep[r, :]
+        for col, i in enumerate(rows):
+            s[i, col] = sp.S.One
+        u = stage.matrix(w * sp.Matrix(self.eta))
+        v = stage.matrix(s * u)
+        m, h = self._on_manifold(stage, v, self.mass_matrix.xreplace(at_root),
+                                 self.bias.xreplace(at_root))
+        slopes = {(i, j, c): d for i in dependent for j in range(n) for c in range(len(rows))
+                  if (d := stage.derivative(s[i, c], self.q[j])) != 0}
+        rate = self._gathered_rate(stage, slopes, u, v, dependent)
+        x, y, yaw = self.planar_frame[:3]
+        turn = v[yaw]
+        rate[x] = stage.define(rate[x] - turn * v[y])
+        rate[y] = stage.define(rate[y] + turn * v[x])
+        in_u = self._staged_products(stage, s, v, rate, m, h, (x, y, self.q[yaw]))
+        k = len(rows)
+        mw = stage.matrix(in_u.mass_matrix * w)
+        mbar = sp.Matrix(k, k, lambda i, j: stage.define(
+            (w[:, min(i, j)].T * mw[:, max(i, j)])[0]))
+        return StagedMinimal(stage, s, v, rate, mbar, stage.matrix(w.T * in_u.bias),
+                             stage.matrix(w.T * in_u.input_matrix), in_u.plane,
+                             self.independent,
+                             (in_u.mass_matrix, in_u.bias, in_u.input_matrix))
+
+    def _staged_solve(self, stage: Stage, a_d: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
+        """x with A_d x = rhs in the stage (a described robot solves block by block)."""
+        return stage.solve_general(a_d, rhs, self.simplify)
 
     def root_frame_point(self) -> dict[sp.Symbol, sp.Expr]:
         """The substitution evaluating a function of q in the root body's frame: the

@@ -128,6 +128,13 @@ class RobotModel:
         return tuple(self.system.independent)
 
     @property
+    def positive_symbols(self) -> frozenset[sp.Symbol]:
+        """The symbols of the parameters the generated guards require positive
+        (``positive``), of the controllers' model and the plant's."""
+        keys = set(self.positive)
+        return frozenset(p.symbol for p in (*self.params, *self.plant_params) if p.key in keys)
+
+    @property
     def input_names(self) -> tuple[str, ...]:
         return tuple(str(t) for t in self.tau)
 

@@ -46,8 +46,8 @@ class Stage:
         negation for the negated one), or ``expr`` itself when it is a number or a
         symbol."""
         expr = sp.sympify(expr)
-        if expr.is_Number or expr.is_Symbol or not expr.free_symbols:
-            return expr
+        if expr.is_Number or expr.is_Symbol or not expr.free_symbols or (-expr).is_Symbol:
+            return expr  # a number, a symbol or a negated symbol: nothing to name
         hit = self._by_expr.get(expr)
         if hit is not None:
             return hit

@@ -26,21 +26,27 @@ from modeling.robot_io import shipped_robot_file
 from modeling.staged import Stage, evaluate
 
 
-def _forms(robot: str, frame: bool) -> tuple[Stage, list[sp.Matrix], Any]:
-    """M̄, H̄, η̇, q̈ and q̇ (world frame) staged, in the root frame or not."""
+def _forms(robot: str, frame: bool, twist: bool = True) -> tuple[Stage, list[sp.Matrix], Any]:
+    """M̄, H̄, η̇, q̈ and q̇ (world frame) staged, in the root frame or not; ``twist``: the
+    wheel radii declared positive, so that the root frame's solve may run in the root's
+    twist (``ConstrainedSystem._root_twist``)."""
     model, _ = load_robot_model(shipped_robot_file(robot))
     stage = Stage("_t")
-    sm = model.system.staged_minimal(stage, root_frame=frame)
+    sm = model.system.staged_minimal(stage, root_frame=frame,
+                                     positive=model.positive_symbols if twist else ())
+    assert (sm.solved is not None) == (frame and twist)
     eta_dot, qdd = sm.forward_dynamics(model.tau)
     return stage, [sm.mass_matrix, sm.bias, eta_dot, qdd, sm.world_velocities()], model
 
 
-@pytest.mark.parametrize("robot", ["trailer", "trailer2"])
-def test_root_frame_forms_are_the_world_frame_functions(robot: str) -> None:
-    """M̄, H̄, η̇, q̈ and q̇ in the root frame equal the world-frame forms at random states
-    (1e-12 relative), with only the relative yaws' sin and cos in M̄, H̄ and η̇."""
+@pytest.mark.parametrize(("robot", "twist"), [("trailer", True), ("trailer2", True),
+                                              ("trailer", False)])
+def test_root_frame_forms_are_the_world_frame_functions(robot: str, twist: bool) -> None:
+    """M̄, H̄, η̇, q̈ and q̇ in the root frame (solved in the root's twist, or in the wheel
+    rates when the twist is refused) equal the world-frame forms at random states (1e-12
+    relative), with only the relative yaws' sin and cos in M̄, H̄ and η̇."""
     world_stage, world, model = _forms(robot, frame=False)
-    root_stage, root, _ = _forms(robot, frame=True)
+    root_stage, root, _ = _forms(robot, frame=True, twist=twist)
     rng = random.Random(7)
     inputs = [*model.q, *(model.qdot[i] for i in model.actuated), *model.tau]
     for _ in range(5):
@@ -59,6 +65,57 @@ def test_root_frame_forms_are_the_world_frame_functions(robot: str) -> None:
                 for f in e.atoms(sp.sin, sp.cos)}
         assert args and not args & set(yaws), args  # differences of yaws only
         assert all(len(sp.Add.make_args(a)) == 2 for a in args), args
+
+
+@pytest.mark.parametrize("robot", ["trailer", "trailer2", "trailer3"])
+def test_twist_solve_is_the_hand_derivations_form(robot: str) -> None:
+    """In the root's twist u = (v, ω) = W η: S_u's root rows are the identity, no row of
+    S_u but the driven wheels' reads their radii (a hand derivation in (v, ω) has none),
+    W is the differential drive's (r/2, ±r/(2b)), and M̄ = Wᵀ M̄_u W."""
+    model, _ = load_robot_model(shipped_robot_file(robot))
+    stage = Stage("_t")
+    sm = model.system.staged_minimal(stage, root_frame=True, positive=model.positive_symbols)
+    assert sm.solved is not None
+    x, y, yaw = model.system.planar_frame[:3]
+    s_u = sm.null_space
+    assert s_u[x, :] == sp.Matrix([[1, 0]]) and s_u[yaw, :] == sp.Matrix([[0, 1]])
+    assert s_u[y, :] == sp.zeros(1, 2)  # the tractor's axle does not slip sideways
+    radii = {p.symbol for p in model.params if p.key in ("radius_right", "radius_left")}
+    for i in range(len(model.q)):
+        if i in model.actuated:
+            continue
+        read = {s for e in s_u.row(i) for s in stage.expand(e).free_symbols}
+        assert not read & radii, (model.q[i], read & radii)
+    r_r, r_l = (next(p.symbol for p in model.params if p.key == k)
+                for k in ("radius_right", "radius_left"))
+    # η = W⁻¹ u: the driven wheels' rows of S_u; W = [[r_R/2, r_L/2], [r_R/2b, −r_L/2b]]
+    w = s_u.extract(list(model.actuated), [0, 1]).applyfunc(stage.expand).inv()
+    w = w.applyfunc(sp.simplify)
+    assert w[0, :] == sp.Matrix([[r_r / 2, r_l / 2]])
+    inv_b = sp.simplify(w[1, 0] / w[0, 0])
+    assert inv_b.is_Number and inv_b > 0 and sp.simplify(w[1, 1] / w[0, 1] + inv_b) == 0
+    # M̄_u (from the twist's own constraint solve) = W⁻ᵀ M̄ W⁻¹ with M̄ the world frame's
+    world = Stage("_w")
+    mbar = model.system.staged_minimal(world).mass_matrix
+    rng = random.Random(11)
+    values = {s: rng.uniform(-3.0, 3.0) for s in model.q}
+    values.update({p.symbol: model.values[p.key] for p in model.params})
+    at = {k: sp.Float(v, 30) for k, v in values.items()}
+    w_inv = w.inv().xreplace(at)
+    expected = w_inv.T * sp.Matrix(2, 2, evaluate(world.definitions_for(list(mbar)),
+                                                  list(mbar), values)) * w_inv
+    got = evaluate(stage.definitions_for(list(sm.solved[0])), list(sm.solved[0]), values)
+    assert all(abs(float(e) - g) <= 1e-12 * max(1.0, abs(g))
+               for e, g in zip(expected, got, strict=True)), (expected, got)
+
+
+def test_twist_needs_its_map_invertible_by_the_guards() -> None:
+    """The twist is refused when det W is not a product of parameters the guards keep
+    positive (here: only one driven wheel's radius declared positive)."""
+    model, _ = load_robot_model(shipped_robot_file("trailer"))
+    one = {p.symbol for p in model.params if p.key == "radius_right"}
+    sm = model.system.staged_minimal(Stage("_t"), root_frame=True, positive=one)
+    assert sm.solved is None
 
 
 def test_root_frame_contact_forces_are_the_world_frame_functions() -> None:

@@ -100,7 +100,7 @@ class DescribedSystem(ConstrainedSystem):
         threefold a trailer)."""
         a = stage.matrix(self.constraint_matrix)
         a_d, a_i = self._cols(a, self.dependent), self._cols(a, self.independent)
-        s_dep = block_triangular_solve(stage, a_d, -a_i, self.simplify)
+        s_dep = self._staged_solve(stage, a_d, -a_i)
         n, k = len(self.q), len(self.independent)
         s = sp.zeros(n, k)
         for row, i in enumerate(self.dependent):
@@ -108,6 +108,10 @@ class DescribedSystem(ConstrainedSystem):
         for col, i in enumerate(self.independent):
             s[i, col] = sp.S.One
         return s
+
+    def _staged_solve(self, stage: Stage, a_d: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
+        """A_d x = rhs block by block (``block_triangular_solve``)."""
+        return block_triangular_solve(stage, a_d, rhs, self.simplify)
 
     def minimal_forward_dynamics(self, tau: sp.Matrix) -> sp.Matrix:
         """η̇ = adj(M̄)(Sᵀ B τ − H̄)/det(M̄) as in ``ConstrainedSystem``, but with det(M̄)

@@ -193,37 +193,29 @@ trailer_status_t trailer_check_nominal(const trailer_params_t *p, trailer_error_
     ok = ok && (p->J_theta_tractor > TRAILER_LIT(0.0));  /* J_theta_tractor > 0 */
     ok = ok && (p->J_x_tractor > TRAILER_LIT(0.0));  /* J_x_tractor > 0 */
     if (ok) {  /* S^T M S may divide by the positive parameters */
-        const trailer_real_t t0 = p->radius_right*p->radius_right;
-        const trailer_real_t t1 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
-        const trailer_real_t t2 = p->J_theta_cart_right/(p->radius_cart_right*p->radius_cart_right);
-        const trailer_real_t t3 = TRAILER_LIT(1.2077294685990339)*p->radius_right;
-        const trailer_real_t t4 = p->K_theta_cart_x_tractor*p->radius_right;
+        const trailer_real_t t0 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
+        const trailer_real_t t1 = p->J_theta_cart_right/(p->radius_cart_right*p->radius_cart_right);
+        const trailer_real_t t2 = p->J_theta_left/(p->radius_left*p->radius_left);
+        const trailer_real_t t3 = p->J_theta_right/(p->radius_right*p->radius_right);
+        const trailer_real_t t4 = p->J_x_tractor + t0 + t1 + t2 + t3;
         const trailer_real_t t5 = TRAILER_LIT(0.5)*p->radius_right;
-        const trailer_real_t t6 = TRAILER_LIT(2.4154589371980677)*p->radius_right;
-        const trailer_real_t t7 = TRAILER_LIT(0.1916555812270998)*p->radius_left*p->radius_right;
-        const trailer_real_t t8 = TRAILER_LIT(1.2077294685990339)*p->radius_left;
-        const trailer_real_t t9 = p->K_theta_cart_x_tractor*p->radius_left;
-        const trailer_real_t t10 = TRAILER_LIT(0.5)*p->radius_left;
-        const trailer_real_t t11 = p->J_theta_cart*t8 + p->K_theta_cart_x_tractor_2*t10
-                - TRAILER_LIT(0.7246376811594203)*t9;
-        const trailer_real_t t12 = TRAILER_LIT(2.4154589371980677)*p->radius_left;
-        const trailer_real_t t13 = -p->J_theta_tractor*t12 + p->K_theta_tractor_x_tractor_2*t10
-                + TRAILER_LIT(0.36231884057971014)*t9;
-        const trailer_real_t t14 = p->J_x_tractor*t10 + p->K_theta_cart_x_tractor_2*t8
-                - p->K_theta_tractor_x_tractor_2*t12;
-        const trailer_real_t t15 = t1*t7 - t11*t3 + t13*t6 + t14*t5 + t2*t7;
-        const trailer_real_t t16 = p->radius_left*p->radius_left;
+        const trailer_real_t t6 = -TRAILER_LIT(0.5)*p->K_theta_cart_x_tractor_2
+                + p->K_theta_tractor_x_tractor_2 + TRAILER_LIT(0.1)*t0 - TRAILER_LIT(0.1)*t1
+                - TRAILER_LIT(0.207)*t2 + TRAILER_LIT(0.207)*t3;
+        const trailer_real_t t7 = TRAILER_LIT(2.4154589371980677)*p->radius_right;
+        const trailer_real_t t8 = TRAILER_LIT(0.25)*p->J_theta_cart + p->J_theta_tractor
+                - TRAILER_LIT(0.3)*p->K_theta_cart_x_tractor + TRAILER_LIT(0.01)*t0
+                + TRAILER_LIT(0.01)*t1 + TRAILER_LIT(0.042849)*t2 + TRAILER_LIT(0.042849)*t3;
+        const trailer_real_t t9 = TRAILER_LIT(0.5)*p->radius_left;
+        const trailer_real_t t10 = TRAILER_LIT(2.4154589371980677)*p->radius_left;
+        const trailer_real_t t11 = -t10*t6 + t4*t9;
+        const trailer_real_t t12 = -t10*t8 + t6*t9;
+        const trailer_real_t t13 = t11*t5 + t12*t7;
         const trailer_real_t mbar[4] = {
-            p->J_theta_right + TRAILER_LIT(0.5498903124927069)*t0*t1
-                    + TRAILER_LIT(0.06679852505309342)*t0*t2 - t3*(-p->J_theta_cart*t3
-                    + p->K_theta_cart_x_tractor_2*t5 + TRAILER_LIT(0.7246376811594203)*t4)
-                    + t5*(p->J_x_tractor*t5 - p->K_theta_cart_x_tractor_2*t3
-                    + p->K_theta_tractor_x_tractor_2*t6) + t6*(p->J_theta_tractor*t6
-                    + p->K_theta_tractor_x_tractor_2*t5 - TRAILER_LIT(0.36231884057971014)*t4),
-            t15,
-            t15,
-            p->J_theta_left + TRAILER_LIT(0.06679852505309342)*t1*t16 + t10*t14 + t11*t8 - t12*t13
-                    + TRAILER_LIT(0.5498903124927069)*t16*t2
+            t5*(t4*t5 + t6*t7) + t7*(t5*t6 + t7*t8),
+            t13,
+            t13,
+            -t10*t12 + t11*t9
         };
         ok = ok && (mbar[0] > TRAILER_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */

@@ -31,7 +31,7 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
-   operations after CSE: 45 add, 71 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 40 add, 68 mul, 5 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 42 add, 70 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 37 add, 67 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
-   operations after CSE: 47 add, 73 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 42 add, 70 mul, 4 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -126,7 +126,7 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 52 add, 81 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 47 add, 78 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -140,7 +140,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 87 add, 137 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 82 add, 135 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -155,7 +155,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 83 add, 134 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 78 add, 132 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,

@@ -78,7 +78,7 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
  * @param[in]  span [1] row-major (TRAILER_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 45 add, 71 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 40 add, 68 mul, 5 div, 2 sin/cos, 0 sqrt
  */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
@@ -99,7 +99,7 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
  *     measured q
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 42 add, 70 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 37 add, 67 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm);
@@ -186,7 +186,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
  * @param[in]  H1hat [2] row-major (TRAILER_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 47 add, 73 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 42 add, 70 mul, 4 div, 2 sin/cos, 0 sqrt
  */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -236,7 +236,7 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 52 add, 81 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 47 add, 78 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -291,7 +291,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 87 add, 137 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 82 add, 135 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -349,7 +349,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 83 add, 134 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 78 add, 132 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,

@@ -7,7 +7,7 @@
 #include "trailer_model.h"
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 84 add, 135 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 119 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -47,15 +47,22 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t2 = TRAILER_LIT(0.5)*radius_right;
     const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
-    const trailer_real_t _t7 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
-    const trailer_real_t _t8 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t7 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t8 = J_theta_right*_t6;
+    const trailer_real_t _t9 = J_theta_left*_t7;
+    const trailer_real_t _t10 = _t6*_t8 + _t7*_t9;
+    const trailer_real_t _t11 = TRAILER_LIT(0.207)*_t6;
+    const trailer_real_t _t12 = J_theta_right*_t11;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t7;
+    const trailer_real_t _t14 = J_theta_left*_t13;
+    const trailer_real_t _t15 = _t12*_t6 + _t14*_t7;
+    const trailer_real_t _t16 = _t11*_t12 + _t13*_t14;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -89,114 +96,101 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t _t10 = theta_cart - theta_tractor;
-    const trailer_real_t _t11 = TRAILER_SIN(_t10);
-    const trailer_real_t _t12 = TRAILER_COS(_t10);
-    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
-    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
-    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
-    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
-    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
-    const trailer_real_t _t19 = _t1*_t12;
-    const trailer_real_t _t20 = _t0*_t14;
-    const trailer_real_t _t21 = _t19 - _t20;
-    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t17 = theta_cart - theta_tractor;
+    const trailer_real_t _t18 = TRAILER_SIN(_t17);
+    const trailer_real_t _t19 = TRAILER_COS(_t17);
+    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
+    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
     const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = _t12*_t3;
-    const trailer_real_t _t25 = _t14*_t2;
-    const trailer_real_t _t26 = _t24 - _t25;
-    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
-    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
-    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
-    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
-    const trailer_real_t _t33 = _t32*_t32;
-    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
-    const trailer_real_t _t35 = _t34*_t34;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
-    const trailer_real_t _t38 = _t32*thetadot_right;
-    const trailer_real_t _t39 = _t32*thetadot_left;
-    const trailer_real_t _t40 = _t18 + _t21;
-    const trailer_real_t _t41 = _t4*_t40;
-    const trailer_real_t _t42 = J_theta_cart_right*_t41;
-    const trailer_real_t _t43 = _t23 + _t26;
-    const trailer_real_t _t44 = _t4*_t43;
-    const trailer_real_t _t45 = J_theta_cart_right*_t44;
-    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
-    const trailer_real_t _t47 = _t46*_t5;
-    const trailer_real_t _t48 = J_theta_cart_left*_t47;
-    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
-    const trailer_real_t _t50 = _t49*_t5;
-    const trailer_real_t _t51 = J_theta_cart_left*_t50;
-    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
-    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
-            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
-    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
-    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
-    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
-    const trailer_real_t _t57 = _t52*_t56 + _t53;
-    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
-    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
-    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
-    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
-    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
-    const trailer_real_t _t63 = _t33*(_t36 + _t37);
-    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
-    const trailer_real_t _t65 = _t17*_t52 + _t6;
-    const trailer_real_t _t66 = _t17*_t58 + _t7;
-    const trailer_real_t _t67 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
-    const trailer_real_t _t68 = J_theta_right + _t0*_t66 + _t1*_t65 + _t17*_t67 + _t41*_t42
-            + _t47*_t48;
-    const trailer_real_t _t69 = _t22*_t52 + _t8;
-    const trailer_real_t _t70 = _t22*_t58 + _t9;
-    const trailer_real_t _t71 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
-    const trailer_real_t _t72 = _t0*_t70 + _t1*_t69 + _t17*_t71 + _t41*_t45 + _t47*_t51;
-    const trailer_real_t _t73 = J_theta_left + _t2*_t70 + _t22*_t71 + _t3*_t69 + _t44*_t45
-            + _t50*_t51;
-    const trailer_real_t _t74 = _t68*_t73 - _t72*_t72;
-    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t76 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t77 = -_t15 + _t28;
-    const trailer_real_t _t78 = _t4*_t77;
-    const trailer_real_t _t79 = -_t16 + _t30;
-    const trailer_real_t _t80 = _t4*_t79;
-    const trailer_real_t _t81 = -_t15 - _t28;
-    const trailer_real_t _t82 = _t5*_t81;
-    const trailer_real_t _t83 = -_t16 - _t30;
-    const trailer_real_t _t84 = _t5*_t83;
-    const trailer_real_t _t85 = _t54*_t78 + _t55*_t80;
-    const trailer_real_t _t86 = _t54*_t82 + _t55*_t84;
-    const trailer_real_t _t87 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t85 + _t48*_t86;
-    const trailer_real_t _t88 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t85 + _t51*_t86;
-    const trailer_real_t _t89 = -_t87 + tau_right;
-    const trailer_real_t _t90 = -_t88 + tau_left;
-    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t74;
-    const trailer_real_t _t92 = _t91*(-_t72*_t90 + _t73*_t89);
-    const trailer_real_t _t93 = _t91*(_t68*_t90 - _t72*_t89);
-    const trailer_real_t _t94 = _t1*_t92 + _t3*_t93;
-    const trailer_real_t _t95 = _t0*_t92 + _t2*_t93;
-    const trailer_real_t _t96 = _t17*_t92 + _t22*_t93 + _t56;
-    const trailer_real_t _t97 = _t41*_t92 + _t44*_t93 + _t85;
-    const trailer_real_t _t98 = _t47*_t92 + _t50*_t93 + _t86;
-    const trailer_real_t _t99 = -_t60*_t75 + _t76*_t94;
-    const trailer_real_t _t100 = _t60*_t76 + _t75*_t94;
-    if (!(_t68 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t19;
+    const trailer_real_t _t27 = _t0*thetadot_right + _t1*thetadot_left;
+    const trailer_real_t _t28 = _t27*_t27;
+    const trailer_real_t _t29 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer_real_t _t30 = _t22*_t29 + _t24*_t27;
+    const trailer_real_t _t31 = _t30*_t30;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t21;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t20;
+    const trailer_real_t _t34 = TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t35 = TRAILER_LIT(0.2)*_t34;
+    const trailer_real_t _t36 = -TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t37 = TRAILER_LIT(0.2)*_t36;
+    const trailer_real_t _t38 = _t27*_t29;
+    const trailer_real_t _t39 = _t19 + _t23;
+    const trailer_real_t _t40 = _t39*_t4;
+    const trailer_real_t _t41 = J_theta_cart_right*_t40;
+    const trailer_real_t _t42 = -_t21 + _t25;
+    const trailer_real_t _t43 = _t4*_t42;
+    const trailer_real_t _t44 = J_theta_cart_right*_t43;
+    const trailer_real_t _t45 = _t19 - _t23;
+    const trailer_real_t _t46 = _t45*_t5;
+    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t48 = -_t21 - _t25;
+    const trailer_real_t _t49 = _t48*_t5;
+    const trailer_real_t _t50 = J_theta_cart_left*_t49;
+    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t18 - _t26;
+    const trailer_real_t _t52 = _t28*(_t32 + _t33);
+    const trailer_real_t _t53 = -_t29*_t30 + _t38;
+    const trailer_real_t _t54 = -_t27*_t30 + _t28;
+    const trailer_real_t _t55 = _t34*_t53 + _t36*_t54;
+    const trailer_real_t _t56 = J_theta_cart*_t55 + _t38*_t51 + _t52;
+    const trailer_real_t _t57 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t _t58 = J_x_tractor + _t22*_t57;
+    const trailer_real_t _t59 = J_theta_cart*_t22 + _t57;
+    const trailer_real_t _t60 = _t10 + _t22*_t59 + _t40*_t41 + _t46*_t47 + _t58;
+    const trailer_real_t _t61 = K_theta_tractor_x_tractor_2 + _t24*_t57;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t _t63 = J_theta_cart*_t24 + _t62;
+    const trailer_real_t _t64 = _t15 + _t22*_t63 + _t40*_t44 + _t46*_t50 + _t61;
+    const trailer_real_t _t65 = J_theta_tractor + _t24*_t62;
+    const trailer_real_t _t66 = _t16 + _t24*_t63 + _t43*_t44 + _t49*_t50 + _t65;
+    const trailer_real_t _t67 = _t60*_t66 - _t64*_t64;
+    const trailer_real_t _t68 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t69 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t28
+            + _t31*(-K_theta_cart_x_tractor_2*_t18 + _t26);
+    const trailer_real_t _t71 = _t31*(-_t32 - _t33);
+    const trailer_real_t _t72 = _t18 + _t35;
+    const trailer_real_t _t73 = _t4*_t72;
+    const trailer_real_t _t74 = _t20 + _t37;
+    const trailer_real_t _t75 = _t4*_t74;
+    const trailer_real_t _t76 = _t18 - _t35;
+    const trailer_real_t _t77 = _t5*_t76;
+    const trailer_real_t _t78 = _t20 - _t37;
+    const trailer_real_t _t79 = _t5*_t78;
+    const trailer_real_t _t80 = _t53*_t73 + _t54*_t75;
+    const trailer_real_t _t81 = _t53*_t77 + _t54*_t79;
+    const trailer_real_t _t82 = _t22*_t56 + _t41*_t80 + _t47*_t81 + _t55*_t57 + _t70;
+    const trailer_real_t _t83 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t80 + _t50*_t81
+            + _t55*_t62 + _t71;
+    const trailer_real_t _t84 = _t6*tau_right + _t7*tau_left - _t82;
+    const trailer_real_t _t85 = _t11*tau_right + _t13*tau_left - _t83;
+    const trailer_real_t _t86 = TRAILER_LIT(1.0)/_t67;
+    const trailer_real_t _t87 = _t86*(-_t64*_t85 + _t66*_t84);
+    const trailer_real_t _t88 = _t86*(_t60*_t85 - _t64*_t84);
+    const trailer_real_t _t89 = _t22*_t87 + _t24*_t88 + _t55;
+    const trailer_real_t _t90 = _t11*_t88 + _t6*_t87;
+    const trailer_real_t _t91 = _t13*_t88 + _t7*_t87;
+    const trailer_real_t _t92 = _t40*_t87 + _t43*_t88 + _t80;
+    const trailer_real_t _t93 = _t46*_t87 + _t49*_t88 + _t81;
+    const trailer_real_t _t94 = -_t38*_t69 + _t68*_t87;
+    const trailer_real_t _t95 = _t38*_t68 + _t69*_t87;
+    if (!(_t60 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t74 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t67 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t99;
-    const trailer_real_t r_1 = _t100;
-    const trailer_real_t r_2 = _t95;
-    const trailer_real_t r_3 = _t96;
-    const trailer_real_t r_4 = _t92;
-    const trailer_real_t r_5 = _t93;
-    const trailer_real_t r_6 = _t97;
-    const trailer_real_t r_7 = _t98;
+    const trailer_real_t r_0 = _t94;
+    const trailer_real_t r_1 = _t95;
+    const trailer_real_t r_2 = _t88;
+    const trailer_real_t r_3 = _t89;
+    const trailer_real_t r_4 = _t90;
+    const trailer_real_t r_5 = _t91;
+    const trailer_real_t r_6 = _t92;
+    const trailer_real_t r_7 = _t93;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
@@ -214,7 +208,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -245,15 +239,22 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
         return TRAILER_ERR_NONFINITE_INPUT;
     }
     const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t2 = TRAILER_LIT(0.5)*radius_right;
     const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t6 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
-    const trailer_real_t _t7 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
-    const trailer_real_t _t8 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer_real_t _t9 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t7 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t8 = J_theta_right*_t6;
+    const trailer_real_t _t9 = J_theta_left*_t7;
+    const trailer_real_t _t10 = _t6*_t8 + _t7*_t9;
+    const trailer_real_t _t11 = TRAILER_LIT(0.207)*_t6;
+    const trailer_real_t _t12 = J_theta_right*_t11;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t7;
+    const trailer_real_t _t14 = J_theta_left*_t13;
+    const trailer_real_t _t15 = _t12*_t6 + _t14*_t7;
+    const trailer_real_t _t16 = _t11*_t12 + _t13*_t14;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -291,26 +292,30 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     prepared->forward_dynamics[0] = J_theta_cart;
     prepared->forward_dynamics[1] = J_theta_cart_left;
     prepared->forward_dynamics[2] = J_theta_cart_right;
-    prepared->forward_dynamics[3] = J_theta_left;
-    prepared->forward_dynamics[4] = J_theta_right;
+    prepared->forward_dynamics[3] = J_theta_tractor;
+    prepared->forward_dynamics[4] = J_x_tractor;
     prepared->forward_dynamics[5] = K_theta_cart_x_tractor;
     prepared->forward_dynamics[6] = K_theta_cart_x_tractor_2;
     prepared->forward_dynamics[7] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[8] = _t0;
-    prepared->forward_dynamics[9] = _t1;
-    prepared->forward_dynamics[10] = _t2;
-    prepared->forward_dynamics[11] = _t3;
-    prepared->forward_dynamics[12] = _t4;
-    prepared->forward_dynamics[13] = _t5;
-    prepared->forward_dynamics[14] = _t6;
-    prepared->forward_dynamics[15] = _t7;
-    prepared->forward_dynamics[16] = _t8;
-    prepared->forward_dynamics[17] = _t9;
+    prepared->forward_dynamics[8] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[9] = _t0;
+    prepared->forward_dynamics[10] = _t1;
+    prepared->forward_dynamics[11] = _t2;
+    prepared->forward_dynamics[12] = _t3;
+    prepared->forward_dynamics[13] = _t4;
+    prepared->forward_dynamics[14] = _t5;
+    prepared->forward_dynamics[15] = _t6;
+    prepared->forward_dynamics[16] = _t7;
+    prepared->forward_dynamics[17] = _t10;
+    prepared->forward_dynamics[18] = _t11;
+    prepared->forward_dynamics[19] = _t13;
+    prepared->forward_dynamics[20] = _t15;
+    prepared->forward_dynamics[21] = _t16;
     return TRAILER_OK;
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 80 add, 123 mul, 1 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 69 add, 103 mul, 1 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -322,8 +327,8 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     if (((trailer_exp_carry(theta_tractor)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t76 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t68 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t69 = TRAILER_SIN(theta_tractor);
     const trailer_real_t theta_cart = q[3];
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
@@ -334,130 +339,121 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t10 = theta_cart - theta_tractor;
-    const trailer_real_t _t11 = TRAILER_SIN(_t10);
-    const trailer_real_t _t12 = TRAILER_COS(_t10);
-    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t12;
-    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t11;
-    const trailer_real_t _t0 = prepared->forward_dynamics[8];
-    const trailer_real_t _t1 = prepared->forward_dynamics[9];
-    const trailer_real_t _t15 = -_t0*_t13 - _t1*_t11;
-    const trailer_real_t _t2 = prepared->forward_dynamics[10];
-    const trailer_real_t _t3 = prepared->forward_dynamics[11];
-    const trailer_real_t _t16 = -_t11*_t3 - _t13*_t2;
-    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t15;
-    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
-    const trailer_real_t _t19 = _t1*_t12;
-    const trailer_real_t _t20 = _t0*_t14;
-    const trailer_real_t _t21 = _t19 - _t20;
-    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
+    const trailer_real_t _t17 = theta_cart - theta_tractor;
+    const trailer_real_t _t18 = TRAILER_SIN(_t17);
+    const trailer_real_t _t19 = TRAILER_COS(_t17);
+    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
+    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
     const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = _t12*_t3;
-    const trailer_real_t _t25 = _t14*_t2;
-    const trailer_real_t _t26 = _t24 - _t25;
-    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
-    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
-    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
+    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
     const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[5];
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t12;
-    const trailer_real_t _t32 = _t0*thetadot_right + _t2*thetadot_left;
-    const trailer_real_t _t33 = _t32*_t32;
-    const trailer_real_t _t34 = _t17*thetadot_right + _t22*thetadot_left;
-    const trailer_real_t _t35 = _t34*_t34;
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t14;
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t19;
+    const trailer_real_t _t0 = prepared->forward_dynamics[9];
+    const trailer_real_t _t1 = prepared->forward_dynamics[10];
+    const trailer_real_t _t27 = _t0*thetadot_right + _t1*thetadot_left;
+    const trailer_real_t _t28 = _t27*_t27;
+    const trailer_real_t _t2 = prepared->forward_dynamics[11];
+    const trailer_real_t _t3 = prepared->forward_dynamics[12];
+    const trailer_real_t _t29 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer_real_t _t30 = _t22*_t29 + _t24*_t27;
+    const trailer_real_t _t31 = _t30*_t30;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t21;
     const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[6];
-    const trailer_real_t _t37 = K_theta_cart_x_tractor_2*_t13;
-    const trailer_real_t _t38 = _t32*thetadot_right;
-    const trailer_real_t _t39 = _t32*thetadot_left;
-    const trailer_real_t _t40 = _t18 + _t21;
-    const trailer_real_t _t4 = prepared->forward_dynamics[12];
-    const trailer_real_t _t41 = _t4*_t40;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t20;
+    const trailer_real_t _t34 = TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t35 = TRAILER_LIT(0.2)*_t34;
+    const trailer_real_t _t36 = -TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t37 = TRAILER_LIT(0.2)*_t36;
+    const trailer_real_t _t38 = _t27*_t29;
+    const trailer_real_t _t39 = _t19 + _t23;
+    const trailer_real_t _t4 = prepared->forward_dynamics[13];
+    const trailer_real_t _t40 = _t39*_t4;
     const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
-    const trailer_real_t _t42 = J_theta_cart_right*_t41;
-    const trailer_real_t _t43 = _t23 + _t26;
-    const trailer_real_t _t44 = _t4*_t43;
-    const trailer_real_t _t45 = J_theta_cart_right*_t44;
-    const trailer_real_t _t46 = -_t18 + _t19 - _t20;
-    const trailer_real_t _t5 = prepared->forward_dynamics[13];
-    const trailer_real_t _t47 = _t46*_t5;
+    const trailer_real_t _t41 = J_theta_cart_right*_t40;
+    const trailer_real_t _t42 = -_t21 + _t25;
+    const trailer_real_t _t43 = _t4*_t42;
+    const trailer_real_t _t44 = J_theta_cart_right*_t43;
+    const trailer_real_t _t45 = _t19 - _t23;
+    const trailer_real_t _t5 = prepared->forward_dynamics[14];
+    const trailer_real_t _t46 = _t45*_t5;
     const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
-    const trailer_real_t _t48 = J_theta_cart_left*_t47;
-    const trailer_real_t _t49 = -_t23 + _t24 - _t25;
-    const trailer_real_t _t50 = _t49*_t5;
-    const trailer_real_t _t51 = J_theta_cart_left*_t50;
-    const trailer_real_t _t52 = K_theta_cart_x_tractor*_t11 + K_theta_cart_x_tractor_2*_t12;
-    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[7];
-    const trailer_real_t _t53 = K_theta_tractor_x_tractor*_t33
-            + _t35*(-K_theta_cart_x_tractor_2*_t11 + _t31);
-    const trailer_real_t _t54 = -_t34*thetadot_right + _t38;
-    const trailer_real_t _t55 = -_t34*thetadot_left + _t39;
-    const trailer_real_t _t56 = _t27*_t54 + _t29*_t55;
-    const trailer_real_t _t57 = _t52*_t56 + _t53;
-    const trailer_real_t _t58 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t14;
-    const trailer_real_t _t59 = _t35*(-_t36 - _t37);
-    const trailer_real_t _t60 = _t1*_t38 + _t3*_t39;
-    const trailer_real_t _t61 = -K_theta_tractor_x_tractor*_t60 + _t56*_t58 + _t59;
-    const trailer_real_t _t62 = K_theta_cart_x_tractor_2*_t11 - _t31;
-    const trailer_real_t _t63 = _t33*(_t36 + _t37);
+    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t48 = -_t21 - _t25;
+    const trailer_real_t _t49 = _t48*_t5;
+    const trailer_real_t _t50 = J_theta_cart_left*_t49;
+    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t18 - _t26;
+    const trailer_real_t _t52 = _t28*(_t32 + _t33);
+    const trailer_real_t _t53 = -_t29*_t30 + _t38;
+    const trailer_real_t _t54 = -_t27*_t30 + _t28;
+    const trailer_real_t _t55 = _t34*_t53 + _t36*_t54;
     const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer_real_t _t64 = J_theta_cart*_t56 + _t60*_t62 + _t63;
-    const trailer_real_t _t6 = prepared->forward_dynamics[14];
-    const trailer_real_t _t65 = _t17*_t52 + _t6;
-    const trailer_real_t _t7 = prepared->forward_dynamics[15];
-    const trailer_real_t _t66 = _t17*_t58 + _t7;
-    const trailer_real_t _t67 = J_theta_cart*_t17 + _t0*_t58 + _t1*_t52;
-    const trailer_real_t J_theta_right = prepared->forward_dynamics[4];
-    const trailer_real_t _t68 = J_theta_right + _t0*_t66 + _t1*_t65 + _t17*_t67 + _t41*_t42
-            + _t47*_t48;
-    const trailer_real_t _t8 = prepared->forward_dynamics[16];
-    const trailer_real_t _t69 = _t22*_t52 + _t8;
-    const trailer_real_t _t9 = prepared->forward_dynamics[17];
-    const trailer_real_t _t70 = _t22*_t58 + _t9;
-    const trailer_real_t _t71 = J_theta_cart*_t22 + _t2*_t58 + _t3*_t52;
-    const trailer_real_t _t72 = _t0*_t70 + _t1*_t69 + _t17*_t71 + _t41*_t45 + _t47*_t51;
-    const trailer_real_t J_theta_left = prepared->forward_dynamics[3];
-    const trailer_real_t _t73 = J_theta_left + _t2*_t70 + _t22*_t71 + _t3*_t69 + _t44*_t45
-            + _t50*_t51;
-    const trailer_real_t _t74 = _t68*_t73 - _t72*_t72;
-    const trailer_real_t _t77 = -_t15 + _t28;
-    const trailer_real_t _t78 = _t4*_t77;
-    const trailer_real_t _t79 = -_t16 + _t30;
-    const trailer_real_t _t80 = _t4*_t79;
-    const trailer_real_t _t81 = -_t15 - _t28;
-    const trailer_real_t _t82 = _t5*_t81;
-    const trailer_real_t _t83 = -_t16 - _t30;
-    const trailer_real_t _t84 = _t5*_t83;
-    const trailer_real_t _t85 = _t54*_t78 + _t55*_t80;
-    const trailer_real_t _t86 = _t54*_t82 + _t55*_t84;
-    const trailer_real_t _t87 = _t0*_t61 + _t1*_t57 + _t17*_t64 + _t42*_t85 + _t48*_t86;
-    const trailer_real_t _t88 = _t2*_t61 + _t22*_t64 + _t3*_t57 + _t45*_t85 + _t51*_t86;
-    const trailer_real_t _t89 = -_t87 + tau_right;
-    const trailer_real_t _t90 = -_t88 + tau_left;
-    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t74;
-    const trailer_real_t _t92 = _t91*(-_t72*_t90 + _t73*_t89);
-    const trailer_real_t _t93 = _t91*(_t68*_t90 - _t72*_t89);
-    const trailer_real_t _t94 = _t1*_t92 + _t3*_t93;
-    const trailer_real_t _t95 = _t0*_t92 + _t2*_t93;
-    const trailer_real_t _t96 = _t17*_t92 + _t22*_t93 + _t56;
-    const trailer_real_t _t97 = _t41*_t92 + _t44*_t93 + _t85;
-    const trailer_real_t _t98 = _t47*_t92 + _t50*_t93 + _t86;
-    const trailer_real_t _t99 = -_t60*_t75 + _t76*_t94;
-    const trailer_real_t _t100 = _t60*_t76 + _t75*_t94;
-    if (!(_t68 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t56 = J_theta_cart*_t55 + _t38*_t51 + _t52;
+    const trailer_real_t _t57 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t J_x_tractor = prepared->forward_dynamics[4];
+    const trailer_real_t _t58 = J_x_tractor + _t22*_t57;
+    const trailer_real_t _t59 = J_theta_cart*_t22 + _t57;
+    const trailer_real_t _t10 = prepared->forward_dynamics[17];
+    const trailer_real_t _t60 = _t10 + _t22*_t59 + _t40*_t41 + _t46*_t47 + _t58;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[8];
+    const trailer_real_t _t61 = K_theta_tractor_x_tractor_2 + _t24*_t57;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t _t63 = J_theta_cart*_t24 + _t62;
+    const trailer_real_t _t15 = prepared->forward_dynamics[20];
+    const trailer_real_t _t64 = _t15 + _t22*_t63 + _t40*_t44 + _t46*_t50 + _t61;
+    const trailer_real_t J_theta_tractor = prepared->forward_dynamics[3];
+    const trailer_real_t _t65 = J_theta_tractor + _t24*_t62;
+    const trailer_real_t _t16 = prepared->forward_dynamics[21];
+    const trailer_real_t _t66 = _t16 + _t24*_t63 + _t43*_t44 + _t49*_t50 + _t65;
+    const trailer_real_t _t67 = _t60*_t66 - _t64*_t64;
+    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[7];
+    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t28
+            + _t31*(-K_theta_cart_x_tractor_2*_t18 + _t26);
+    const trailer_real_t _t71 = _t31*(-_t32 - _t33);
+    const trailer_real_t _t72 = _t18 + _t35;
+    const trailer_real_t _t73 = _t4*_t72;
+    const trailer_real_t _t74 = _t20 + _t37;
+    const trailer_real_t _t75 = _t4*_t74;
+    const trailer_real_t _t76 = _t18 - _t35;
+    const trailer_real_t _t77 = _t5*_t76;
+    const trailer_real_t _t78 = _t20 - _t37;
+    const trailer_real_t _t79 = _t5*_t78;
+    const trailer_real_t _t80 = _t53*_t73 + _t54*_t75;
+    const trailer_real_t _t81 = _t53*_t77 + _t54*_t79;
+    const trailer_real_t _t82 = _t22*_t56 + _t41*_t80 + _t47*_t81 + _t55*_t57 + _t70;
+    const trailer_real_t _t83 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t80 + _t50*_t81
+            + _t55*_t62 + _t71;
+    const trailer_real_t _t6 = prepared->forward_dynamics[15];
+    const trailer_real_t _t7 = prepared->forward_dynamics[16];
+    const trailer_real_t _t84 = _t6*tau_right + _t7*tau_left - _t82;
+    const trailer_real_t _t11 = prepared->forward_dynamics[18];
+    const trailer_real_t _t13 = prepared->forward_dynamics[19];
+    const trailer_real_t _t85 = _t11*tau_right + _t13*tau_left - _t83;
+    const trailer_real_t _t86 = TRAILER_LIT(1.0)/_t67;
+    const trailer_real_t _t87 = _t86*(-_t64*_t85 + _t66*_t84);
+    const trailer_real_t _t88 = _t86*(_t60*_t85 - _t64*_t84);
+    const trailer_real_t _t89 = _t22*_t87 + _t24*_t88 + _t55;
+    const trailer_real_t _t90 = _t11*_t88 + _t6*_t87;
+    const trailer_real_t _t91 = _t13*_t88 + _t7*_t87;
+    const trailer_real_t _t92 = _t40*_t87 + _t43*_t88 + _t80;
+    const trailer_real_t _t93 = _t46*_t87 + _t49*_t88 + _t81;
+    const trailer_real_t _t94 = -_t38*_t69 + _t68*_t87;
+    const trailer_real_t _t95 = _t38*_t68 + _t69*_t87;
+    if (!(_t60 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t74 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t67 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t99;
-    const trailer_real_t r_1 = _t100;
-    const trailer_real_t r_2 = _t95;
-    const trailer_real_t r_3 = _t96;
-    const trailer_real_t r_4 = _t92;
-    const trailer_real_t r_5 = _t93;
-    const trailer_real_t r_6 = _t97;
-    const trailer_real_t r_7 = _t98;
+    const trailer_real_t r_0 = _t94;
+    const trailer_real_t r_1 = _t95;
+    const trailer_real_t r_2 = _t88;
+    const trailer_real_t r_3 = _t89;
+    const trailer_real_t r_4 = _t90;
+    const trailer_real_t r_5 = _t91;
+    const trailer_real_t r_6 = _t92;
+    const trailer_real_t r_7 = _t93;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
@@ -475,7 +471,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 }
 
 /* trailer_kinematics: documented in trailer_model.h.
-   operations after CSE: 16 add, 36 mul, 2 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
@@ -484,53 +480,49 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN(_t0);
     const trailer_real_t _t2 = TRAILER_COS(_t0);
-    const trailer_real_t _t3 = -TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t3 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t4 = TRAILER_LIT(0.2)*_t3;
+    const trailer_real_t _t5 = -TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t6 = TRAILER_LIT(1.6666666666666667)*_t5;
+    const trailer_real_t _t7 = TRAILER_LIT(0.2)*_t6;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t4 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t6 = _t1*_t5 - _t3*_t4;
-    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t10 = _t4*_t9;
+    const trailer_real_t _t8 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t13 = _t1*_t12 - _t11*_t3;
-    const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
-    const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
-    const trailer_real_t _t16 = _t11*_t9;
+    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t10 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t19 = -_t10 + _t2*_t5 + _t8;
-    const trailer_real_t _t20 = _t12*_t2 + _t15 - _t16;
-    const trailer_real_t _t21 = _t17*_t19;
-    const trailer_real_t _t22 = _t17*_t20;
-    const trailer_real_t _t23 = -_t10 + _t2*_t5 - _t8;
-    const trailer_real_t _t24 = _t12*_t2 - _t15 - _t16;
-    const trailer_real_t _t25 = _t18*_t23;
-    const trailer_real_t _t26 = _t18*_t24;
+    const trailer_real_t _t11 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t13 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t15 = _t2 + _t4;
+    const trailer_real_t _t16 = -_t12 + _t7;
+    const trailer_real_t _t17 = _t10*_t15;
+    const trailer_real_t _t18 = _t10*_t16;
+    const trailer_real_t _t19 = _t2 - _t4;
+    const trailer_real_t _t20 = -_t12 - _t7;
+    const trailer_real_t _t21 = _t11*_t19;
+    const trailer_real_t _t22 = _t11*_t20;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t27 = _t12*thetadot_left + _t5*thetadot_right;
-    const trailer_real_t _t28 = _t11*thetadot_left + _t4*thetadot_right;
-    const trailer_real_t _t29 = _t14*thetadot_left + _t7*thetadot_right;
-    const trailer_real_t _t30 = _t21*thetadot_right + _t22*thetadot_left;
-    const trailer_real_t _t31 = _t25*thetadot_right + _t26*thetadot_left;
-    const trailer_real_t _t32 = _t27*TRAILER_COS(theta_tractor);
-    const trailer_real_t _t33 = _t27*TRAILER_SIN(theta_tractor);
-    pose_rates[0] = _t32;
-    pose_rates[1] = _t33;
-    pose_rates[2] = _t28;
-    pose_rates[3] = _t29;
-    pose_rates[4] = _t30;
-    pose_rates[5] = _t31;
+    const trailer_real_t _t23 = _t13*thetadot_right + _t14*thetadot_left;
+    const trailer_real_t _t24 = _t8*thetadot_right + _t9*thetadot_left;
+    const trailer_real_t _t25 = _t23*_t3 + _t24*_t6;
+    const trailer_real_t _t26 = _t17*_t23 + _t18*_t24;
+    const trailer_real_t _t27 = _t21*_t23 + _t22*_t24;
+    const trailer_real_t _t28 = _t23*TRAILER_COS(theta_tractor);
+    const trailer_real_t _t29 = _t23*TRAILER_SIN(theta_tractor);
+    pose_rates[0] = _t28;
+    pose_rates[1] = _t29;
+    pose_rates[2] = _t24;
+    pose_rates[3] = _t25;
+    pose_rates[4] = _t26;
+    pose_rates[5] = _t27;
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 39 add, 65 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
@@ -541,67 +533,75 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t2 = TRAILER_COS(_t0);
     const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t7 = _t1*_t6 + _t3*_t5;
-    const trailer_real_t _t8 = -TRAILER_LIT(1.6666666666666667)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(0.2)*_t8;
-    const trailer_real_t _t10 = _t4*_t5;
+    const trailer_real_t _t9 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t13 = _t1*_t12 + _t11*_t3;
-    const trailer_real_t _t14 = -TRAILER_LIT(1.6666666666666667)*_t13;
-    const trailer_real_t _t15 = TRAILER_LIT(0.2)*_t14;
-    const trailer_real_t _t16 = _t11*_t4;
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t11 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t19 = -_t10 + _t2*_t6 + _t9;
-    const trailer_real_t _t20 = _t12*_t2 + _t15 - _t16;
-    const trailer_real_t _t21 = _t17*_t19;
-    const trailer_real_t _t22 = _t17*_t20;
-    const trailer_real_t _t23 = -_t10 + _t2*_t6 - _t9;
-    const trailer_real_t _t24 = _t12*_t2 - _t15 - _t16;
-    const trailer_real_t _t25 = _t18*_t23;
-    const trailer_real_t _t26 = _t18*_t24;
+    const trailer_real_t _t12 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t13 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t16 = TRAILER_LIT(0.207)*_t15;
+    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t18 = -TRAILER_LIT(0.207)*_t17;
+    const trailer_real_t _t19 = _t2 + _t6;
+    const trailer_real_t _t20 = -_t4 + _t8;
+    const trailer_real_t _t21 = _t11*_t19;
+    const trailer_real_t _t22 = _t11*_t20;
+    const trailer_real_t _t23 = _t2 - _t6;
+    const trailer_real_t _t24 = -_t4 - _t8;
+    const trailer_real_t _t25 = _t12*_t23;
+    const trailer_real_t _t26 = _t12*_t24;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
     const trailer_real_t _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t29 = J_x_tractor + _t27*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t29 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t27*_t8;
-    const trailer_real_t _t30 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t14*_t27;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t31 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t28*_t8;
-    const trailer_real_t _t32 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t14*_t28;
+    const trailer_real_t _t31 = J_theta_tractor + _t28*_t7;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t33 = J_theta_cart*_t8 + _t27*_t6 + _t28*_t5;
-    const trailer_real_t _t34 = J_theta_cart*_t14 + _t11*_t28 + _t12*_t27;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t35 = J_theta_cart_right*_t21;
-    const trailer_real_t _t36 = J_theta_cart_right*_t22;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t37 = J_theta_cart_left*_t25;
-    const trailer_real_t _t38 = J_theta_cart_left*_t26;
+    const trailer_real_t _t32 = J_theta_cart*_t5 + _t27;
+    const trailer_real_t _t33 = J_theta_cart*_t7 + _t28;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t39 = J_theta_right + _t21*_t35 + _t25*_t37 + _t29*_t6 + _t31*_t5
-            + _t33*_t8;
-    const trailer_real_t _t40 = _t21*_t36 + _t25*_t38 + _t30*_t6 + _t32*_t5 + _t34*_t8;
+    const trailer_real_t _t34 = J_theta_right*_t15;
+    const trailer_real_t _t35 = J_theta_right*_t16;
     const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t41 = J_theta_left + _t11*_t32 + _t12*_t30 + _t14*_t34 + _t22*_t36
-            + _t26*_t38;
-    M[0] = _t39;
-    M[1] = _t40;
-    M[2] = _t40;
-    M[3] = _t41;
+    const trailer_real_t _t36 = J_theta_left*_t17;
+    const trailer_real_t _t37 = J_theta_left*_t18;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t38 = J_theta_cart_right*_t21;
+    const trailer_real_t _t39 = J_theta_cart_right*_t22;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t40 = J_theta_cart_left*_t25;
+    const trailer_real_t _t41 = J_theta_cart_left*_t26;
+    const trailer_real_t _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5;
+    const trailer_real_t _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5;
+    const trailer_real_t _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7;
+    const trailer_real_t _t45 = _t13*_t42 + _t43*_t9;
+    const trailer_real_t _t46 = _t10*_t43 + _t14*_t42;
+    const trailer_real_t _t47 = _t13*_t43 + _t44*_t9;
+    const trailer_real_t _t48 = _t10*_t44 + _t14*_t43;
+    const trailer_real_t _t49 = _t13*_t45 + _t47*_t9;
+    const trailer_real_t _t50 = _t13*_t46 + _t48*_t9;
+    const trailer_real_t _t51 = _t10*_t48 + _t14*_t46;
+    M[0] = _t49;
+    M[1] = _t50;
+    M[2] = _t50;
+    M[3] = _t51;
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 43 add, 81 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
@@ -612,91 +612,83 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t2 = TRAILER_COS(_t0);
     const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
-    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
-    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
-    const trailer_real_t _t13 = _t2*_t6;
-    const trailer_real_t _t14 = _t4*_t5;
-    const trailer_real_t _t15 = _t13 - _t14;
-    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
-    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
-    const trailer_real_t _t18 = _t2*_t9;
-    const trailer_real_t _t19 = _t4*_t8;
-    const trailer_real_t _t20 = _t18 - _t19;
-    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
-    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
-    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t _t9 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t10 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t26 = _t5*thetadot_right + _t8*thetadot_left;
-    const trailer_real_t _t27 = _t26*_t26;
-    const trailer_real_t _t28 = _t11*thetadot_right + _t16*thetadot_left;
-    const trailer_real_t _t29 = _t28*_t28;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t _t12 = _t10*thetadot_right + _t11*thetadot_left;
+    const trailer_real_t _t13 = _t12*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t15 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t16 = _t14*thetadot_right + _t15*thetadot_left;
+    const trailer_real_t _t17 = _t12*_t7 + _t16*_t5;
+    const trailer_real_t _t18 = _t17*_t17;
+    const trailer_real_t _t19 = K_theta_cart_x_tractor*_t4;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t3;
-    const trailer_real_t _t32 = _t26*thetadot_right;
-    const trailer_real_t _t33 = _t26*thetadot_left;
+    const trailer_real_t _t20 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t2;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t4;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
+    const trailer_real_t _t25 = _t12*_t16;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t34 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t35 = -_t22 - _t7;
-    const trailer_real_t _t36 = _t34*_t35;
-    const trailer_real_t _t37 = -_t10 - _t24;
-    const trailer_real_t _t38 = _t34*_t37;
-    const trailer_real_t _t39 = -_t28*thetadot_right + _t32;
-    const trailer_real_t _t40 = -_t28*thetadot_left + _t33;
-    const trailer_real_t _t41 = _t36*_t39 + _t38*_t40;
+    const trailer_real_t _t26 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t27 = _t1 - _t22;
+    const trailer_real_t _t28 = _t26*_t27;
+    const trailer_real_t _t29 = -_t24 + _t3;
+    const trailer_real_t _t30 = _t26*_t29;
+    const trailer_real_t _t31 = -_t16*_t17 + _t25;
+    const trailer_real_t _t32 = -_t12*_t17 + _t13;
+    const trailer_real_t _t33 = _t28*_t31 + _t30*_t32;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t42 = J_theta_cart_left*_t41;
+    const trailer_real_t _t34 = J_theta_cart_left*_t33;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t43 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t44 = _t22 - _t7;
-    const trailer_real_t _t45 = _t43*_t44;
-    const trailer_real_t _t46 = -_t10 + _t24;
-    const trailer_real_t _t47 = _t43*_t46;
-    const trailer_real_t _t48 = _t39*_t45 + _t40*_t47;
+    const trailer_real_t _t35 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t36 = _t1 + _t22;
+    const trailer_real_t _t37 = _t35*_t36;
+    const trailer_real_t _t38 = _t24 + _t3;
+    const trailer_real_t _t39 = _t35*_t38;
+    const trailer_real_t _t40 = _t31*_t37 + _t32*_t39;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t49 = J_theta_cart_right*_t48;
-    const trailer_real_t _t50 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t51 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27
-            + _t25*_t29;
-    const trailer_real_t _t52 = _t21*_t39 + _t23*_t40;
-    const trailer_real_t _t53 = _t50*_t52 + _t51;
-    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
-    const trailer_real_t _t55 = -_t29*_t30 - _t29*_t31;
-    const trailer_real_t _t56 = _t32*_t6 + _t33*_t9;
-    const trailer_real_t _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55;
-    const trailer_real_t _t58 = K_theta_cart_x_tractor_2*_t1 - _t25;
-    const trailer_real_t _t59 = _t27*_t30 + _t27*_t31;
+    const trailer_real_t _t41 = J_theta_cart_right*_t40;
+    const trailer_real_t _t42 = K_theta_cart_x_tractor_2*_t1 - _t9;
+    const trailer_real_t _t43 = _t13*_t19 + _t13*_t20;
+    const trailer_real_t _t44 = _t21*_t31 + _t23*_t32;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59;
-    const trailer_real_t _t61 = _t12 + _t15;
-    const trailer_real_t _t62 = _t17 + _t20;
-    const trailer_real_t _t63 = _t43*_t61;
-    const trailer_real_t _t64 = _t43*_t62;
-    const trailer_real_t _t65 = -_t12 + _t13 - _t14;
-    const trailer_real_t _t66 = -_t17 + _t18 - _t19;
-    const trailer_real_t _t67 = _t34*_t65;
-    const trailer_real_t _t68 = _t34*_t66;
-    const trailer_real_t _t69 = _t11*_t60 + _t42*_t67 + _t49*_t63 + _t5*_t57 + _t53*_t6;
-    const trailer_real_t _t70 = _t16*_t60 + _t42*_t68 + _t49*_t64 + _t53*_t9 + _t57*_t8;
-    H[0] = _t69;
-    H[1] = _t70;
+    const trailer_real_t _t45 = J_theta_cart*_t44 + _t25*_t42 + _t43;
+    const trailer_real_t _t46 = _t2 + _t6;
+    const trailer_real_t _t47 = -_t4 + _t8;
+    const trailer_real_t _t48 = _t35*_t46;
+    const trailer_real_t _t49 = _t35*_t47;
+    const trailer_real_t _t50 = _t2 - _t6;
+    const trailer_real_t _t51 = -_t4 - _t8;
+    const trailer_real_t _t52 = _t26*_t50;
+    const trailer_real_t _t53 = _t26*_t51;
+    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13
+            + _t18*_t9;
+    const trailer_real_t _t57 = -_t18*_t19 - _t18*_t20;
+    const trailer_real_t _t58 = _t34*_t52 + _t41*_t48 + _t44*_t54 + _t45*_t5 + _t56;
+    const trailer_real_t _t59 = -K_theta_tractor_x_tractor*_t25 + _t34*_t53 + _t41*_t49 + _t44*_t55
+            + _t45*_t7 + _t57;
+    const trailer_real_t _t60 = _t10*_t59 + _t14*_t58;
+    const trailer_real_t _t61 = _t11*_t59 + _t15*_t58;
+    H[0] = _t60;
+    H[1] = _t61;
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 74 add, 124 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -741,92 +733,89 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t _t2 = TRAILER_COS(_t0);
     const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
-    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
-    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
-    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
-    const trailer_real_t _t13 = _t2*_t6;
-    const trailer_real_t _t14 = _t4*_t5;
-    const trailer_real_t _t15 = _t13 - _t14;
-    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
-    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
-    const trailer_real_t _t18 = _t2*_t9;
-    const trailer_real_t _t19 = _t4*_t8;
-    const trailer_real_t _t20 = _t18 - _t19;
-    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
+    const trailer_real_t _t9 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t _t10 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t12 = _t10*thetadot_right + _t11*thetadot_left;
+    const trailer_real_t _t13 = _t12*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t15 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t16 = _t14*thetadot_right + _t15*thetadot_left;
+    const trailer_real_t _t17 = _t12*_t7 + _t16*_t5;
+    const trailer_real_t _t18 = _t17*_t17;
+    const trailer_real_t _t19 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t _t20 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t2;
     const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
-    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t4;
     const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t26 = _t5*thetadot_right + _t8*thetadot_left;
-    const trailer_real_t _t27 = _t26*_t26;
-    const trailer_real_t _t28 = _t11*thetadot_right + _t16*thetadot_left;
-    const trailer_real_t _t29 = _t28*_t28;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t4;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor_2*_t3;
-    const trailer_real_t _t32 = _t26*thetadot_right;
-    const trailer_real_t _t33 = _t26*thetadot_left;
-    const trailer_real_t _t34 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t35 = _t12 + _t15;
-    const trailer_real_t _t36 = _t34*_t35;
-    const trailer_real_t _t37 = J_theta_cart_right*_t36;
-    const trailer_real_t _t38 = _t17 + _t20;
-    const trailer_real_t _t39 = _t34*_t38;
-    const trailer_real_t _t40 = J_theta_cart_right*_t39;
-    const trailer_real_t _t41 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t42 = -_t12 + _t13 - _t14;
-    const trailer_real_t _t43 = _t41*_t42;
-    const trailer_real_t _t44 = J_theta_cart_left*_t43;
-    const trailer_real_t _t45 = -_t17 + _t18 - _t19;
-    const trailer_real_t _t46 = _t41*_t45;
-    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t25 = _t12*_t16;
+    const trailer_real_t _t26 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t27 = _t2 + _t6;
+    const trailer_real_t _t28 = _t26*_t27;
+    const trailer_real_t _t29 = J_theta_cart_right*_t28;
+    const trailer_real_t _t30 = -_t4 + _t8;
+    const trailer_real_t _t31 = _t26*_t30;
+    const trailer_real_t _t32 = J_theta_cart_right*_t31;
+    const trailer_real_t _t33 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t34 = _t2 - _t6;
+    const trailer_real_t _t35 = _t33*_t34;
+    const trailer_real_t _t36 = J_theta_cart_left*_t35;
+    const trailer_real_t _t37 = -_t4 - _t8;
+    const trailer_real_t _t38 = _t33*_t37;
+    const trailer_real_t _t39 = J_theta_cart_left*_t38;
+    const trailer_real_t _t40 = K_theta_cart_x_tractor_2*_t1 - _t9;
+    const trailer_real_t _t41 = _t13*_t19 + _t13*_t20;
+    const trailer_real_t _t42 = -_t16*_t17 + _t25;
+    const trailer_real_t _t43 = -_t12*_t17 + _t13;
+    const trailer_real_t _t44 = _t21*_t42 + _t23*_t43;
+    const trailer_real_t _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41;
+    const trailer_real_t _t46 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t47 = TRAILER_LIT(1.0)/radius_left;
     const trailer_real_t _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27
-            + _t25*_t29;
-    const trailer_real_t _t50 = -_t28*thetadot_right + _t32;
-    const trailer_real_t _t51 = -_t28*thetadot_left + _t33;
-    const trailer_real_t _t52 = _t21*_t50 + _t23*_t51;
-    const trailer_real_t _t53 = _t48*_t52 + _t49;
-    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
-    const trailer_real_t _t55 = -_t29*_t30 - _t29*_t31;
-    const trailer_real_t _t56 = _t32*_t6 + _t33*_t9;
-    const trailer_real_t _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55;
-    const trailer_real_t _t58 = K_theta_cart_x_tractor_2*_t1 - _t25;
-    const trailer_real_t _t59 = _t27*_t30 + _t27*_t31;
-    const trailer_real_t _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59;
-    const trailer_real_t _t61 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48;
-    const trailer_real_t _t62 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54;
-    const trailer_real_t _t63 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54;
-    const trailer_real_t _t64 = J_theta_right + _t11*_t63 + _t36*_t37 + _t43*_t44 + _t5*_t62
-            + _t6*_t61;
-    const trailer_real_t _t65 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48;
-    const trailer_real_t _t66 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54;
-    const trailer_real_t _t67 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8;
-    const trailer_real_t _t68 = _t11*_t67 + _t36*_t40 + _t43*_t47 + _t5*_t66 + _t6*_t65;
-    const trailer_real_t _t69 = J_theta_left + _t16*_t67 + _t39*_t40 + _t46*_t47 + _t65*_t9
-            + _t66*_t8;
-    const trailer_real_t _t70 = _t64*_t69 - _t68*_t68;
-    const trailer_real_t _t71 = _t22 - _t7;
-    const trailer_real_t _t72 = _t34*_t71;
-    const trailer_real_t _t73 = -_t10 + _t24;
-    const trailer_real_t _t74 = _t34*_t73;
-    const trailer_real_t _t75 = -_t22 - _t7;
-    const trailer_real_t _t76 = _t41*_t75;
-    const trailer_real_t _t77 = -_t10 - _t24;
-    const trailer_real_t _t78 = _t41*_t77;
-    const trailer_real_t _t79 = _t50*_t72 + _t51*_t74;
-    const trailer_real_t _t80 = _t50*_t76 + _t51*_t78;
-    const trailer_real_t _t81 = _t11*_t60 + _t37*_t79 + _t44*_t80 + _t5*_t57 + _t53*_t6;
-    const trailer_real_t _t82 = _t16*_t60 + _t40*_t79 + _t47*_t80 + _t53*_t9 + _t57*_t8;
-    const trailer_real_t _t83 = -_t81 + tau_right;
-    const trailer_real_t _t84 = -_t82 + tau_left;
-    const trailer_real_t _t85 = TRAILER_LIT(1.0)/_t70;
-    const trailer_real_t _t86 = _t85*(-_t68*_t84 + _t69*_t83);
-    const trailer_real_t _t87 = _t85*(_t64*_t84 - _t68*_t83);
+    const trailer_real_t _t49 = J_x_tractor + _t48*_t5;
+    const trailer_real_t _t50 = J_theta_cart*_t5 + _t48;
+    const trailer_real_t _t51 = J_theta_right*_t46;
+    const trailer_real_t _t52 = J_theta_left*_t47;
+    const trailer_real_t _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50;
+    const trailer_real_t _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7;
+    const trailer_real_t _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t56 = J_theta_cart*_t7 + _t55;
+    const trailer_real_t _t57 = TRAILER_LIT(0.207)*_t46;
+    const trailer_real_t _t58 = J_theta_right*_t57;
+    const trailer_real_t _t59 = -TRAILER_LIT(0.207)*_t47;
+    const trailer_real_t _t60 = J_theta_left*_t59;
+    const trailer_real_t _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54;
+    const trailer_real_t _t62 = J_theta_tractor + _t55*_t7;
+    const trailer_real_t _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62;
+    const trailer_real_t _t64 = _t53*_t63 - _t61*_t61;
+    const trailer_real_t _t65 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13
+            + _t18*_t9;
+    const trailer_real_t _t66 = -_t18*_t19 - _t18*_t20;
+    const trailer_real_t _t67 = _t1 + _t22;
+    const trailer_real_t _t68 = _t26*_t67;
+    const trailer_real_t _t69 = _t24 + _t3;
+    const trailer_real_t _t70 = _t26*_t69;
+    const trailer_real_t _t71 = _t1 - _t22;
+    const trailer_real_t _t72 = _t33*_t71;
+    const trailer_real_t _t73 = -_t24 + _t3;
+    const trailer_real_t _t74 = _t33*_t73;
+    const trailer_real_t _t75 = _t42*_t68 + _t43*_t70;
+    const trailer_real_t _t76 = _t42*_t72 + _t43*_t74;
+    const trailer_real_t _t77 = _t29*_t75 + _t36*_t76 + _t44*_t48 + _t45*_t5 + _t65;
+    const trailer_real_t _t78 = -K_theta_tractor_x_tractor*_t25 + _t32*_t75 + _t39*_t76 + _t44*_t55
+            + _t45*_t7 + _t66;
+    const trailer_real_t _t79 = _t46*tau_right + _t47*tau_left - _t77;
+    const trailer_real_t _t80 = _t57*tau_right + _t59*tau_left - _t78;
+    const trailer_real_t _t81 = TRAILER_LIT(1.0)/_t64;
+    const trailer_real_t _t82 = _t81*(-_t61*_t80 + _t63*_t79);
+    const trailer_real_t _t83 = _t81*(_t53*_t80 - _t61*_t79);
+    const trailer_real_t _t84 = _t46*_t82 + _t57*_t83;
+    const trailer_real_t _t85 = _t47*_t82 + _t59*_t83;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -860,14 +849,14 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t64 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t53 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t70 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t64 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t86;
-    const trailer_real_t r_1 = _t87;
+    const trailer_real_t r_0 = _t84;
+    const trailer_real_t r_1 = _t85;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -877,7 +866,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 209 add, 332 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
@@ -889,244 +878,250 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t2 = TRAILER_COS(_t0);
     const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
     const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t7 = -_t1*_t6 - _t3*_t5;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t10 = -_t1*_t9 - _t3*_t8;
-    const trailer_real_t _t11 = TRAILER_LIT(1.6666666666666667)*_t7;
-    const trailer_real_t _t12 = TRAILER_LIT(0.2)*_t11;
-    const trailer_real_t _t13 = _t2*_t6;
-    const trailer_real_t _t14 = _t4*_t5;
-    const trailer_real_t _t15 = _t13 - _t14;
-    const trailer_real_t _t16 = TRAILER_LIT(1.6666666666666667)*_t10;
-    const trailer_real_t _t17 = TRAILER_LIT(0.2)*_t16;
-    const trailer_real_t _t18 = _t2*_t9;
-    const trailer_real_t _t19 = _t4*_t8;
-    const trailer_real_t _t20 = _t18 - _t19;
-    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t15;
-    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
-    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t thetadot_right = wheel_rates[0];
-    const trailer_real_t _t25 = _t5*thetadot_right;
-    const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t26 = _t8*thetadot_left;
-    const trailer_real_t _t27 = _t11*thetadot_right;
-    const trailer_real_t _t28 = _t16*thetadot_left;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor*_t1;
+    const trailer_real_t _t9 = K_theta_cart_x_tractor*_t1;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t30 = K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t2;
-    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t3;
-    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t4;
-    const trailer_real_t _t34 = _t25 + _t26;
-    const trailer_real_t _t35 = _t34*_t34;
-    const trailer_real_t _t36 = _t27 + _t28;
-    const trailer_real_t _t37 = _t36*_t36;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t39 = K_theta_cart_x_tractor*_t4;
-    const trailer_real_t _t40 = K_theta_cart_x_tractor_2*_t3;
-    const trailer_real_t _t41 = _t34*thetadot_right;
-    const trailer_real_t _t42 = _t34*thetadot_left;
-    const trailer_real_t _t43 = _t29 + _t30;
-    const trailer_real_t _t44 = _t11*_t43;
-    const trailer_real_t _t45 = _t16*_t43;
-    const trailer_real_t _t46 = _t32 - _t33;
+    const trailer_real_t _t10 = K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t11 = K_theta_cart_x_tractor*_t2;
+    const trailer_real_t _t12 = K_theta_cart_x_tractor*_t3;
+    const trailer_real_t _t13 = K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t15 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t thetadot_right = wheel_rates[0];
+    const trailer_real_t thetadot_left = wheel_rates[1];
+    const trailer_real_t _t16 = _t14*thetadot_right + _t15*thetadot_left;
+    const trailer_real_t _t17 = _t16*_t16;
+    const trailer_real_t _t18 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t19 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t20 = _t18*thetadot_right + _t19*thetadot_left;
+    const trailer_real_t _t21 = _t16*_t7 + _t20*_t5;
+    const trailer_real_t _t22 = _t21*_t21;
+    const trailer_real_t _t23 = K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t24 = K_theta_cart_x_tractor*_t4;
+    const trailer_real_t _t25 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t26 = TRAILER_LIT(1.6666666666666667)*_t2;
+    const trailer_real_t _t27 = TRAILER_LIT(0.2)*_t26;
+    const trailer_real_t _t28 = -TRAILER_LIT(1.6666666666666667)*_t4;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
+    const trailer_real_t _t30 = _t16*_t20;
+    const trailer_real_t _t31 = _t10 + _t9;
+    const trailer_real_t _t32 = _t31*_t5;
+    const trailer_real_t _t33 = _t31*_t7;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t47 = J_theta_cart*_t11 + _t43*_t6 + _t46*_t5;
-    const trailer_real_t _t48 = J_theta_cart*_t16 + _t43*_t9 + _t46*_t8;
+    const trailer_real_t _t34 = J_theta_cart*_t5 + _t31;
+    const trailer_real_t _t35 = _t12 - _t13;
+    const trailer_real_t _t36 = J_theta_cart*_t7 + _t35;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t49 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t50 = _t12 + _t15;
-    const trailer_real_t _t51 = _t49*_t50;
+    const trailer_real_t _t37 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t38 = _t2 + _t6;
+    const trailer_real_t _t39 = _t37*_t38;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t52 = J_theta_cart_right*_t51;
-    const trailer_real_t _t53 = _t17 + _t20;
-    const trailer_real_t _t54 = _t49*_t53;
-    const trailer_real_t _t55 = J_theta_cart_right*_t54;
+    const trailer_real_t _t40 = J_theta_cart_right*_t39;
+    const trailer_real_t _t41 = -_t4 + _t8;
+    const trailer_real_t _t42 = _t37*_t41;
+    const trailer_real_t _t43 = J_theta_cart_right*_t42;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t56 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t57 = -_t12 + _t13 - _t14;
-    const trailer_real_t _t58 = _t56*_t57;
+    const trailer_real_t _t44 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t45 = _t2 - _t6;
+    const trailer_real_t _t46 = _t44*_t45;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t59 = J_theta_cart_left*_t58;
-    const trailer_real_t _t60 = -_t17 + _t18 - _t19;
-    const trailer_real_t _t61 = _t56*_t60;
-    const trailer_real_t _t62 = J_theta_cart_left*_t61;
-    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t63 = K_theta_tractor_x_tractor*_t35 + _t31*_t37 - _t37*_t38;
-    const trailer_real_t _t64 = -_t36*thetadot_right + _t41;
-    const trailer_real_t _t65 = -_t36*thetadot_left + _t42;
-    const trailer_real_t _t66 = _t21*_t64 + _t23*_t65;
-    const trailer_real_t _t67 = _t43*_t66 + _t63;
-    const trailer_real_t _t68 = -_t37*_t39 - _t37*_t40;
-    const trailer_real_t _t69 = _t41*_t6 + _t42*_t9;
-    const trailer_real_t _t70 = -K_theta_tractor_x_tractor*_t69 + _t46*_t66 + _t68;
-    const trailer_real_t _t71 = K_theta_cart_x_tractor_2*_t1 - _t31;
-    const trailer_real_t _t72 = _t35*_t39 + _t35*_t40;
-    const trailer_real_t _t73 = J_theta_cart*_t66 + _t69*_t71 + _t72;
-    const trailer_real_t _t74 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t75 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t76 = _t16*_t71;
-    const trailer_real_t _t77 = _t71*_t9;
-    const trailer_real_t _t78 = _t39 + _t40;
-    const trailer_real_t _t79 = _t78*_t8;
-    const trailer_real_t _t80 = -_t10 + _t24;
-    const trailer_real_t _t81 = _t49*_t80;
-    const trailer_real_t _t82 = J_theta_cart_right*_t81;
-    const trailer_real_t _t83 = -_t10 - _t24;
-    const trailer_real_t _t84 = _t56*_t83;
-    const trailer_real_t _t85 = J_theta_cart_left*_t84;
-    const trailer_real_t _t86 = TRAILER_LIT(2.0)*_t36;
-    const trailer_real_t _t87 = _t31*_t86 - _t38*_t86;
-    const trailer_real_t _t88 = TRAILER_LIT(0.6)*_t36;
-    const trailer_real_t _t89 = -_t29*_t88 - _t30*_t88;
-    const trailer_real_t _t90 = -_t22 - _t7;
-    const trailer_real_t _t91 = _t56*_t90;
-    const trailer_real_t _t92 = J_theta_cart_left*_t91;
-    const trailer_real_t _t93 = _t22 - _t7;
-    const trailer_real_t _t94 = _t49*_t93;
-    const trailer_real_t _t95 = J_theta_cart_right*_t94;
-    const trailer_real_t _t96 = _t6*_t71;
-    const trailer_real_t _t97 = _t5*_t78;
-    const trailer_real_t _t98 = _t11*_t71;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t48 = -_t4 - _t8;
+    const trailer_real_t _t49 = _t44*_t48;
+    const trailer_real_t _t50 = J_theta_cart_left*_t49;
+    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t1 - _t11;
+    const trailer_real_t _t52 = _t17*_t24 + _t17*_t25;
+    const trailer_real_t _t53 = -_t20*_t21 + _t30;
+    const trailer_real_t _t54 = -_t16*_t21 + _t17;
+    const trailer_real_t _t55 = _t26*_t53 + _t28*_t54;
+    const trailer_real_t _t56 = J_theta_cart*_t55 + _t30*_t51 + _t52;
+    const trailer_real_t _t57 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t58 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t59 = _t29 + _t3;
+    const trailer_real_t _t60 = _t37*_t59;
+    const trailer_real_t _t61 = J_theta_cart_right*_t60;
+    const trailer_real_t _t62 = -_t29 + _t3;
+    const trailer_real_t _t63 = _t44*_t62;
+    const trailer_real_t _t64 = J_theta_cart_left*_t63;
+    const trailer_real_t _t65 = TRAILER_LIT(2.0)*_t21;
+    const trailer_real_t _t66 = _t11*_t65 - _t23*_t65;
+    const trailer_real_t _t67 = _t1 - _t27;
+    const trailer_real_t _t68 = _t44*_t67;
+    const trailer_real_t _t69 = J_theta_cart_left*_t68;
+    const trailer_real_t _t70 = _t1 + _t27;
+    const trailer_real_t _t71 = _t37*_t70;
+    const trailer_real_t _t72 = J_theta_cart_right*_t71;
+    const trailer_real_t _t73 = TRAILER_LIT(0.6)*_t21;
+    const trailer_real_t _t74 = -_t10*_t73 - _t73*_t9;
+    const trailer_real_t _t75 = _t5*_t51;
+    const trailer_real_t _t76 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t77 = TRAILER_LIT(1.0)/radius_left;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t99 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t45;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t100 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t46;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t101 = J_theta_left + _t100*_t8 + _t16*_t48 + _t54*_t55 + _t61*_t62
-            + _t9*_t99;
-    const trailer_real_t _t102 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t44;
-    const trailer_real_t _t103 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t46;
+    const trailer_real_t _t78 = K_theta_tractor_x_tractor_2 + _t33;
+    const trailer_real_t _t79 = TRAILER_LIT(0.207)*_t76;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t104 = J_theta_right + _t102*_t6 + _t103*_t5 + _t11*_t47 + _t51*_t52
-            + _t58*_t59;
-    const trailer_real_t _t105 = _t100*_t5 + _t11*_t48 + _t51*_t55 + _t58*_t62 + _t6*_t99;
-    const trailer_real_t _t106 = _t101*_t104 - _t105*_t105;
-    const trailer_real_t _t107 = TRAILER_LIT(1.0)/_t106;
-    const trailer_real_t _t108 = _t107;
-    const trailer_real_t _t109 = _t101*_t108;
-    const trailer_real_t _t110 = _t105*_t108;
-    const trailer_real_t _t111 = _t64*_t94 + _t65*_t81;
-    const trailer_real_t _t112 = _t64*_t91 + _t65*_t84;
-    const trailer_real_t _t113 = _t11*_t73 + _t111*_t52 + _t112*_t59 + _t5*_t70 + _t6*_t67;
+    const trailer_real_t _t80 = J_theta_right*_t79;
+    const trailer_real_t _t81 = -TRAILER_LIT(0.207)*_t77;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t82 = J_theta_left*_t81;
+    const trailer_real_t _t83 = _t36*_t5 + _t39*_t43 + _t46*_t50 + _t76*_t80 + _t77*_t82 + _t78;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t84 = J_x_tractor + _t32;
+    const trailer_real_t _t85 = J_theta_right*_t76;
+    const trailer_real_t _t86 = J_theta_left*_t77;
+    const trailer_real_t _t87 = _t34*_t5 + _t39*_t40 + _t46*_t47 + _t76*_t85 + _t77*_t86 + _t84;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t88 = J_theta_tractor + _t35*_t7;
+    const trailer_real_t _t89 = _t36*_t7 + _t42*_t43 + _t49*_t50 + _t79*_t80 + _t81*_t82 + _t88;
+    const trailer_real_t _t90 = -_t83*_t83 + _t87*_t89;
+    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t90;
+    const trailer_real_t _t92 = _t91;
+    const trailer_real_t _t93 = _t83*_t92;
+    const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer_real_t _t94 = K_theta_tractor_x_tractor*_t17 + _t11*_t22 - _t22*_t23;
+    const trailer_real_t _t95 = _t53*_t71 + _t54*_t60;
+    const trailer_real_t _t96 = _t53*_t68 + _t54*_t63;
+    const trailer_real_t _t97 = _t31*_t55 + _t40*_t95 + _t47*_t96 + _t5*_t56 + _t94;
     const trailer_real_t tau_right = tau[0];
-    const trailer_real_t _t114 = -_t113 + tau_right;
-    const trailer_real_t _t115 = _t108*_t114;
-    const trailer_real_t _t116 = _t111*_t55 + _t112*_t62 + _t16*_t73 + _t67*_t9 + _t70*_t8;
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t117 = -_t116 + tau_left;
-    const trailer_real_t _t118 = _t108*_t117;
-    const trailer_real_t _t119 = _t23*_t43 + _t76;
-    const trailer_real_t _t120 = _t16*_t78 + _t23*_t46;
-    const trailer_real_t _t121 = J_theta_cart*_t23 + _t77 + _t79;
-    const trailer_real_t _t122 = _t11*_t121 + _t119*_t6 + _t120*_t5 + _t21*_t48 + _t51*_t82
-            + _t55*_t94 + _t58*_t85 + _t62*_t91;
-    const trailer_real_t _t123 = _t119*_t9 + _t120*_t8 + _t121*_t16 + _t23*_t48 + _t54*_t82
-            + _t55*_t81 + _t61*_t85 + _t62*_t84;
-    const trailer_real_t _t124 = _t21*_t43 + _t98;
-    const trailer_real_t _t125 = _t11*_t78 + _t21*_t46;
-    const trailer_real_t _t126 = J_theta_cart*_t21 + _t96 + _t97;
-    const trailer_real_t _t127 = _t11*_t126 + _t124*_t6 + _t125*_t5 + _t21*_t47 + _t51*_t95
-            + _t52*_t94 + _t58*_t92 + _t59*_t91;
-    const trailer_real_t _t128 = _t101*_t127 + _t104*_t123 - TRAILER_LIT(2.0)*_t105*_t122;
-    const trailer_real_t _t129 = -_t107*_t107*_t128;
-    const trailer_real_t _t130 = _t115*_t123 - _t118*_t122 + _t129*(_t101*_t114 - _t105*_t117);
-    const trailer_real_t _t131 = TRAILER_LIT(2.0)*K_theta_tractor_x_tractor*_t34;
-    const trailer_real_t _t132 = TRAILER_LIT(0.6)*_t34;
-    const trailer_real_t _t133 = _t132*_t29 + _t132*_t30;
-    const trailer_real_t _t134 = _t25 + _t34;
-    const trailer_real_t _t135 = _t5*thetadot_left;
-    const trailer_real_t _t136 = -_t36;
-    const trailer_real_t _t137 = -K_theta_tractor_x_tractor*_t5 + _t98;
-    const trailer_real_t _t138 = -K_theta_tractor_x_tractor*_t8 + _t76;
-    const trailer_real_t _t139 = _t8*thetadot_right;
-    const trailer_real_t _t140 = _t26 + _t34;
-    const trailer_real_t _t141 = _t104*_t108;
-    const trailer_real_t _t142 = -_t115*_t122 + _t118*_t127 + _t129*(_t104*_t117 - _t105*_t114);
-    const trailer_real_t _t143 = _t6*thetadot_right + _t9*thetadot_left;
-    const trailer_real_t _t144 = _t143*_t74;
-    const trailer_real_t _t145 = _t143*_t75;
-    const trailer_real_t _t146 = _t6*_t74;
-    const trailer_real_t _t147 = _t74*_t9;
-    const trailer_real_t _t148 = _t6*_t75;
-    const trailer_real_t _t149 = _t75*_t9;
-    const trailer_real_t _t150 = _t21*thetadot_right + _t23*thetadot_left;
-    const trailer_real_t _t151 = _t81*thetadot_left + _t94*thetadot_right;
-    const trailer_real_t _t152 = _t84*thetadot_left + _t91*thetadot_right;
-    const trailer_real_t _t153 = _t150*_t87 + _t29*_t37 + _t30*_t37;
-    const trailer_real_t _t154 = _t150*_t89 + _t32*_t37 - _t33*_t37;
-    const trailer_real_t _t155 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t35 - _t32*_t35;
-    const trailer_real_t _t156 = -_t150*thetadot_right;
-    const trailer_real_t _t157 = -_t150*thetadot_left;
-    const trailer_real_t _t158 = -_t11*_t64 + _t156*_t21 + _t157*_t23 - _t16*_t65;
-    const trailer_real_t _t159 = _t156*_t94 + _t157*_t81 - _t51*_t64 - _t54*_t65;
-    const trailer_real_t _t160 = _t156*_t91 + _t157*_t84 - _t58*_t64 - _t61*_t65;
-    const trailer_real_t _t161 = _t11*_t155 + _t111*_t95 + _t112*_t92 + _t153*_t6 + _t154*_t5
-            + _t158*_t47 + _t159*_t52 + _t160*_t59 + _t21*_t73 - _t44*_t69 + _t66*_t96 + _t66*_t97;
-    const trailer_real_t _t162 = _t111*_t82 + _t112*_t85 + _t153*_t9 + _t154*_t8 + _t155*_t16
-            + _t158*_t48 + _t159*_t55 + _t160*_t62 + _t23*_t73 - _t45*_t69 + _t66*_t77 + _t66*_t79;
-    const trailer_real_t _t163 = -_t109*_t161 + _t110*_t162 + _t130;
-    const trailer_real_t _t164 = _t101*_t108*_t161 - _t110*_t162 - _t130;
-    const trailer_real_t _t165 = _t11*_t87 + _t131*_t5;
-    const trailer_real_t _t166 = _t11*_t89;
-    const trailer_real_t _t167 = _t133*_t5;
-    const trailer_real_t _t168 = _t134*_t6 + _t135*_t9;
-    const trailer_real_t _t169 = _t134 + _t136 - _t27;
-    const trailer_real_t _t170 = -_t11*thetadot_left + _t135;
-    const trailer_real_t _t171 = _t169*_t21 + _t170*_t23;
-    const trailer_real_t _t172 = _t169*_t94 + _t170*_t81;
-    const trailer_real_t _t173 = _t169*_t91 + _t170*_t84;
-    const trailer_real_t _t174 = _t11*_t167 + _t137*_t168 + _t165*_t6 + _t166*_t5 + _t171*_t47
-            + _t172*_t52 + _t173*_t59;
-    const trailer_real_t _t175 = _t138*_t168 + _t16*_t167 + _t165*_t9 + _t166*_t8 + _t171*_t48
-            + _t172*_t55 + _t173*_t62;
-    const trailer_real_t _t176 = -_t101*_t108*_t174 + _t110*_t175;
-    const trailer_real_t _t177 = _t131*_t8 + _t16*_t87;
-    const trailer_real_t _t178 = _t16*_t89;
-    const trailer_real_t _t179 = _t133*_t8;
-    const trailer_real_t _t180 = _t139*_t6 + _t140*_t9;
-    const trailer_real_t _t181 = _t139 - _t16*thetadot_right;
-    const trailer_real_t _t182 = _t136 + _t140 - _t28;
-    const trailer_real_t _t183 = _t181*_t21 + _t182*_t23;
-    const trailer_real_t _t184 = _t181*_t94 + _t182*_t81;
-    const trailer_real_t _t185 = _t181*_t91 + _t182*_t84;
-    const trailer_real_t _t186 = _t11*_t179 + _t137*_t180 + _t177*_t6 + _t178*_t5 + _t183*_t47
-            + _t184*_t52 + _t185*_t59;
-    const trailer_real_t _t187 = _t138*_t180 + _t16*_t179 + _t177*_t9 + _t178*_t8 + _t183*_t48
-            + _t184*_t55 + _t185*_t62;
-    const trailer_real_t _t188 = -_t101*_t108*_t186 + _t110*_t187;
-    const trailer_real_t _t189 = _t110*_t161 - _t141*_t162 + _t142;
-    const trailer_real_t _t190 = _t104*_t108*_t162 - _t110*_t161 - _t142;
-    const trailer_real_t _t191 = _t110*_t174 - _t141*_t175;
-    const trailer_real_t _t192 = _t110*_t186 - _t141*_t187;
+    const trailer_real_t _t98 = _t76*tau_right + _t77*tau_left - _t97;
+    const trailer_real_t _t99 = _t92*_t98;
+    const trailer_real_t _t100 = _t89*_t92;
+    const trailer_real_t _t101 = -_t22*_t24 - _t22*_t25;
+    const trailer_real_t _t102 = -K_theta_tractor_x_tractor*_t30 + _t101 + _t35*_t55 + _t43*_t95
+            + _t50*_t96 + _t56*_t7;
+    const trailer_real_t _t103 = -_t102 + _t79*tau_right + _t81*tau_left;
+    const trailer_real_t _t104 = _t103*_t92;
+    const trailer_real_t _t105 = _t87*_t92;
+    const trailer_real_t _t106 = TRAILER_LIT(2.0)*_t16;
+    const trailer_real_t _t107 = K_theta_tractor_x_tractor*_t106;
+    const trailer_real_t _t108 = TRAILER_LIT(0.6)*_t16;
+    const trailer_real_t _t109 = _t10*_t108 + _t108*_t9;
+    const trailer_real_t _t110 = _t14*_t20;
+    const trailer_real_t _t111 = -_t21;
+    const trailer_real_t _t112 = _t111 + _t16;
+    const trailer_real_t _t113 = _t106 + _t111;
+    const trailer_real_t _t114 = -K_theta_tractor_x_tractor + _t51*_t7;
+    const trailer_real_t _t115 = _t15*_t20;
+    const trailer_real_t _t116 = _t14*_t79 + _t18*_t76;
+    const trailer_real_t _t117 = _t14*_t81 + _t18*_t77;
+    const trailer_real_t _t118 = _t15*_t79 + _t19*_t76;
+    const trailer_real_t _t119 = _t15*_t81 + _t19*_t77;
+    const trailer_real_t _t120 = _t20*_t57;
+    const trailer_real_t _t121 = _t20*_t58;
+    const trailer_real_t _t122 = _t18*_t57;
+    const trailer_real_t _t123 = _t19*_t57;
+    const trailer_real_t _t124 = _t18*_t58;
+    const trailer_real_t _t125 = _t19*_t58;
+    const trailer_real_t _t126 = _t16*_t28 + _t20*_t26;
+    const trailer_real_t _t127 = _t14*_t7 + _t18*_t5;
+    const trailer_real_t _t128 = _t15*_t7 + _t19*_t5;
+    const trailer_real_t _t129 = _t16*_t60 + _t20*_t71;
+    const trailer_real_t _t130 = _t14*_t42 + _t18*_t39;
+    const trailer_real_t _t131 = _t15*_t42 + _t19*_t39;
+    const trailer_real_t _t132 = _t16*_t63 + _t20*_t68;
+    const trailer_real_t _t133 = _t14*_t49 + _t18*_t46;
+    const trailer_real_t _t134 = _t15*_t49 + _t19*_t46;
+    const trailer_real_t _t135 = _t28*_t31 + _t51*_t7;
+    const trailer_real_t _t136 = _t24 + _t25;
+    const trailer_real_t _t137 = J_theta_cart*_t28 + _t136;
+    const trailer_real_t _t138 = _t135 + _t137*_t5 + _t26*_t36 + _t39*_t61 + _t43*_t71 + _t46*_t64
+            + _t50*_t68;
+    const trailer_real_t _t139 = _t136*_t7 + _t28*_t35;
+    const trailer_real_t _t140 = _t137*_t7 + _t139 + _t28*_t36 + _t42*_t61 + _t43*_t60 + _t49*_t64
+            + _t50*_t63;
+    const trailer_real_t _t141 = _t10*_t22 + _t126*_t66 + _t22*_t9;
+    const trailer_real_t _t142 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t1*_t17 - _t12*_t17;
+    const trailer_real_t _t143 = -_t126*_t20;
+    const trailer_real_t _t144 = -_t126*_t16;
+    const trailer_real_t _t145 = _t143*_t26 + _t144*_t28 - _t5*_t53 - _t54*_t7;
+    const trailer_real_t _t146 = _t143*_t71 + _t144*_t60 - _t39*_t53 - _t42*_t54;
+    const trailer_real_t _t147 = _t143*_t68 + _t144*_t63 - _t46*_t53 - _t49*_t54;
+    const trailer_real_t _t148 = _t141 + _t142*_t5 + _t145*_t34 + _t146*_t40 + _t147*_t47
+            + _t26*_t56 - _t30*_t32 + _t51*_t55 + _t69*_t96 + _t72*_t95;
+    const trailer_real_t _t149 = _t12*_t22 + _t126*_t74 - _t13*_t22;
+    const trailer_real_t _t150 = _t136*_t55 + _t142*_t7 + _t145*_t36 + _t146*_t43 + _t147*_t50
+            + _t149 + _t28*_t56 - _t30*_t33 + _t61*_t95 + _t64*_t96;
+    const trailer_real_t _t151 = _t26*_t31 + _t75;
+    const trailer_real_t _t152 = J_theta_cart*_t26 + _t51;
+    const trailer_real_t _t153 = _t151 + _t152*_t5 + _t26*_t34 + _t39*_t72 + _t40*_t71 + _t46*_t69
+            + _t47*_t68;
+    const trailer_real_t _t154 = -TRAILER_LIT(2.0)*_t138*_t83 + _t140*_t87 + _t153*_t89;
+    const trailer_real_t _t155 = -_t154*_t91*_t91;
+    const trailer_real_t _t156 = -_t100*_t148 - _t104*_t138 + _t140*_t99 + _t150*_t93
+            + _t155*(-_t103*_t83 + _t89*_t98);
+    const trailer_real_t _t157 = _t104*_t153 - _t105*_t150 - _t138*_t99 + _t148*_t93
+            + _t155*(_t103*_t87 - _t83*_t98);
+    const trailer_real_t _t158 = _t156*_t76 + _t157*_t79;
+    const trailer_real_t _t159 = _t107*_t14 + _t127*_t66;
+    const trailer_real_t _t160 = _t109*_t14;
+    const trailer_real_t _t161 = _t110 + _t112*_t18 - _t127*_t20;
+    const trailer_real_t _t162 = _t113*_t14 - _t127*_t16;
+    const trailer_real_t _t163 = _t161*_t26 + _t162*_t28;
+    const trailer_real_t _t164 = _t161*_t71 + _t162*_t60;
+    const trailer_real_t _t165 = _t161*_t68 + _t162*_t63;
+    const trailer_real_t _t166 = _t110 + _t16*_t18;
+    const trailer_real_t _t167 = _t159 + _t160*_t5 + _t163*_t34 + _t164*_t40 + _t165*_t47
+            + _t166*_t75;
+    const trailer_real_t _t168 = _t127*_t74;
+    const trailer_real_t _t169 = _t114*_t166 + _t160*_t7 + _t163*_t36 + _t164*_t43 + _t165*_t50
+            + _t168;
+    const trailer_real_t _t170 = -_t100*_t167 + _t169*_t93;
+    const trailer_real_t _t171 = -_t105*_t169 + _t167*_t83*_t92;
+    const trailer_real_t _t172 = _t170*_t76 + _t171*_t79;
+    const trailer_real_t _t173 = _t107*_t15 + _t128*_t66;
+    const trailer_real_t _t174 = _t109*_t15;
+    const trailer_real_t _t175 = _t112*_t19 + _t115 - _t128*_t20;
+    const trailer_real_t _t176 = _t113*_t15 - _t128*_t16;
+    const trailer_real_t _t177 = _t175*_t26 + _t176*_t28;
+    const trailer_real_t _t178 = _t175*_t71 + _t176*_t60;
+    const trailer_real_t _t179 = _t175*_t68 + _t176*_t63;
+    const trailer_real_t _t180 = _t115 + _t16*_t19;
+    const trailer_real_t _t181 = _t173 + _t174*_t5 + _t177*_t34 + _t178*_t40 + _t179*_t47
+            + _t180*_t75;
+    const trailer_real_t _t182 = _t128*_t74;
+    const trailer_real_t _t183 = _t114*_t180 + _t174*_t7 + _t177*_t36 + _t178*_t43 + _t179*_t50
+            + _t182;
+    const trailer_real_t _t184 = -_t100*_t181 + _t183*_t93;
+    const trailer_real_t _t185 = -_t105*_t183 + _t181*_t83*_t92;
+    const trailer_real_t _t186 = _t184*_t76 + _t185*_t79;
+    const trailer_real_t _t187 = _t156*_t77 + _t157*_t81;
+    const trailer_real_t _t188 = _t170*_t77 + _t171*_t81;
+    const trailer_real_t _t189 = _t184*_t77 + _t185*_t81;
+    const trailer_real_t _t190 = _t76*_t89*_t92 - _t79*_t93;
+    const trailer_real_t _t191 = _t105*_t79 - _t76*_t93;
+    const trailer_real_t _t192 = _t190*_t76 + _t191*_t79;
+    const trailer_real_t _t193 = _t77*_t89*_t92 - _t81*_t93;
+    const trailer_real_t _t194 = _t105*_t81 - _t77*_t93;
+    const trailer_real_t _t195 = _t193*_t76 + _t194*_t79;
+    const trailer_real_t _t196 = _t190*_t77 + _t191*_t81;
+    const trailer_real_t _t197 = _t193*_t77 + _t194*_t81;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
-    A[2] = -_t145;
+    A[2] = -_t121;
     A[3] = TRAILER_LIT(0.0);
     A[4] = TRAILER_LIT(0.0);
     A[5] = TRAILER_LIT(0.0);
     A[6] = TRAILER_LIT(0.0);
     A[7] = TRAILER_LIT(0.0);
-    A[8] = _t146;
-    A[9] = _t147;
+    A[8] = _t122;
+    A[9] = _t123;
     A[10] = TRAILER_LIT(0.0);
     A[11] = TRAILER_LIT(0.0);
-    A[12] = _t144;
+    A[12] = _t120;
     A[13] = TRAILER_LIT(0.0);
     A[14] = TRAILER_LIT(0.0);
     A[15] = TRAILER_LIT(0.0);
     A[16] = TRAILER_LIT(0.0);
     A[17] = TRAILER_LIT(0.0);
-    A[18] = _t148;
-    A[19] = _t149;
+    A[18] = _t124;
+    A[19] = _t125;
     A[20] = TRAILER_LIT(0.0);
     A[21] = TRAILER_LIT(0.0);
     A[22] = TRAILER_LIT(0.0);
@@ -1135,18 +1130,18 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[25] = TRAILER_LIT(0.0);
     A[26] = TRAILER_LIT(0.0);
     A[27] = TRAILER_LIT(0.0);
-    A[28] = _t5;
-    A[29] = _t8;
+    A[28] = _t14;
+    A[29] = _t15;
     A[30] = TRAILER_LIT(0.0);
     A[31] = TRAILER_LIT(0.0);
-    A[32] = _t150;
-    A[33] = -_t150;
+    A[32] = _t126;
+    A[33] = -_t126;
     A[34] = TRAILER_LIT(0.0);
     A[35] = TRAILER_LIT(0.0);
     A[36] = TRAILER_LIT(0.0);
     A[37] = TRAILER_LIT(0.0);
-    A[38] = _t11;
-    A[39] = _t16;
+    A[38] = _t127;
+    A[39] = _t128;
     A[40] = TRAILER_LIT(0.0);
     A[41] = TRAILER_LIT(0.0);
     A[42] = TRAILER_LIT(0.0);
@@ -1155,8 +1150,8 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[45] = TRAILER_LIT(0.0);
     A[46] = TRAILER_LIT(0.0);
     A[47] = TRAILER_LIT(0.0);
-    A[48] = TRAILER_LIT(1.0);
-    A[49] = TRAILER_LIT(0.0);
+    A[48] = _t116;
+    A[49] = _t118;
     A[50] = TRAILER_LIT(0.0);
     A[51] = TRAILER_LIT(0.0);
     A[52] = TRAILER_LIT(0.0);
@@ -1165,48 +1160,48 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[55] = TRAILER_LIT(0.0);
     A[56] = TRAILER_LIT(0.0);
     A[57] = TRAILER_LIT(0.0);
-    A[58] = TRAILER_LIT(0.0);
-    A[59] = TRAILER_LIT(1.0);
+    A[58] = _t117;
+    A[59] = _t119;
     A[60] = TRAILER_LIT(0.0);
     A[61] = TRAILER_LIT(0.0);
-    A[62] = _t151;
-    A[63] = -_t151;
+    A[62] = _t129;
+    A[63] = -_t129;
     A[64] = TRAILER_LIT(0.0);
     A[65] = TRAILER_LIT(0.0);
     A[66] = TRAILER_LIT(0.0);
     A[67] = TRAILER_LIT(0.0);
-    A[68] = _t51;
-    A[69] = _t54;
+    A[68] = _t130;
+    A[69] = _t131;
     A[70] = TRAILER_LIT(0.0);
     A[71] = TRAILER_LIT(0.0);
-    A[72] = _t152;
-    A[73] = -_t152;
+    A[72] = _t132;
+    A[73] = -_t132;
     A[74] = TRAILER_LIT(0.0);
     A[75] = TRAILER_LIT(0.0);
     A[76] = TRAILER_LIT(0.0);
     A[77] = TRAILER_LIT(0.0);
-    A[78] = _t58;
-    A[79] = _t61;
+    A[78] = _t133;
+    A[79] = _t134;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t163;
-    A[83] = _t164;
+    A[82] = _t158;
+    A[83] = -_t158;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t176;
-    A[89] = _t188;
+    A[88] = _t172;
+    A[89] = _t186;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t189;
-    A[93] = _t190;
+    A[92] = _t187;
+    A[93] = -_t187;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t191;
-    A[99] = _t192;
+    A[98] = _t188;
+    A[99] = _t189;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -1223,14 +1218,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t109;
-    B[17] = -_t110;
-    B[18] = -_t110;
-    B[19] = _t141;
+    B[16] = _t192;
+    B[17] = _t195;
+    B[18] = _t196;
+    B[19] = _t197;
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.
-   operations after CSE: 136 add, 202 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral)
@@ -1270,148 +1265,164 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = -radius_right;
-    const trailer_real_t _t1 = -radius_left;
-    const trailer_real_t _t2 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t4 = theta_cart - theta_tractor;
-    const trailer_real_t _t5 = TRAILER_SIN(_t4);
-    const trailer_real_t _t6 = -_t5;
-    const trailer_real_t _t7 = TRAILER_COS(_t4);
-    const trailer_real_t _t8 = TRAILER_LIT(0.3)*_t7;
+    const trailer_real_t _t0 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t1 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t2 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t3 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t4 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer_real_t _t5 = -_t4*thetadot_right;
+    const trailer_real_t _t6 = -_t4*thetadot_left;
+    const trailer_real_t _t7 = theta_cart - theta_tractor;
+    const trailer_real_t _t8 = TRAILER_SIN(_t7);
     const trailer_real_t _t9 = -_t8;
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t5;
-    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*_t0;
-    const trailer_real_t _t12 = -TRAILER_LIT(0.5)*_t0;
-    const trailer_real_t _t13 = _t11*_t9 + _t12*_t6;
-    const trailer_real_t _t14 = TRAILER_LIT(2.4154589371980677)*_t1;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.5)*_t1;
-    const trailer_real_t _t16 = _t14*_t9 + _t15*_t6;
-    const trailer_real_t _t17 = TRAILER_LIT(1.6666666666666667)*_t13;
-    const trailer_real_t _t18 = TRAILER_LIT(0.2)*_t17;
-    const trailer_real_t _t19 = _t12*_t7;
-    const trailer_real_t _t20 = _t10*_t11;
-    const trailer_real_t _t21 = _t19 - _t20;
-    const trailer_real_t _t22 = TRAILER_LIT(1.6666666666666667)*_t16;
-    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = _t15*_t7;
-    const trailer_real_t _t25 = _t10*_t14;
-    const trailer_real_t _t26 = _t24 - _t25;
-    const trailer_real_t _t27 = TRAILER_LIT(1.6666666666666667)*_t21;
-    const trailer_real_t _t28 = TRAILER_LIT(0.2)*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(1.6666666666666667)*_t26;
-    const trailer_real_t _t30 = TRAILER_LIT(0.2)*_t29;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t5;
-    const trailer_real_t _t32 = K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t33 = _t31 + _t32;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t7;
-    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t10;
-    const trailer_real_t _t36 = _t11*thetadot_right + _t14*thetadot_left;
-    const trailer_real_t _t37 = _t36*_t36;
-    const trailer_real_t _t38 = _t17*thetadot_right + _t22*thetadot_left;
+    const trailer_real_t _t10 = TRAILER_COS(_t7);
+    const trailer_real_t _t11 = TRAILER_LIT(0.3)*_t10;
+    const trailer_real_t _t12 = -_t11;
+    const trailer_real_t _t13 = TRAILER_LIT(0.3)*_t8;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t15 = _t12*_t2 + _t14*_t9;
+    const trailer_real_t _t16 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t17 = _t12*_t3 + _t16*_t9;
+    const trailer_real_t _t18 = TRAILER_LIT(1.6666666666666667)*_t15;
+    const trailer_real_t _t19 = TRAILER_LIT(0.2)*_t18;
+    const trailer_real_t _t20 = _t10*_t14;
+    const trailer_real_t _t21 = _t13*_t2;
+    const trailer_real_t _t22 = _t20 - _t21;
+    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t17;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
+    const trailer_real_t _t25 = _t10*_t16;
+    const trailer_real_t _t26 = _t13*_t3;
+    const trailer_real_t _t27 = _t25 - _t26;
+    const trailer_real_t _t28 = TRAILER_LIT(1.6666666666666667)*_t22;
+    const trailer_real_t _t29 = TRAILER_LIT(0.2)*_t28;
+    const trailer_real_t _t30 = TRAILER_LIT(1.6666666666666667)*_t27;
+    const trailer_real_t _t31 = TRAILER_LIT(0.2)*_t30;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t8;
+    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t10;
+    const trailer_real_t _t34 = _t32 + _t33;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t10;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t37 = _t4*_t4;
+    const trailer_real_t _t38 = _t18*thetadot_right + _t23*thetadot_left;
     const trailer_real_t _t39 = _t38*_t38;
-    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t10;
-    const trailer_real_t _t41 = K_theta_cart_x_tractor_2*_t8;
-    const trailer_real_t _t42 = _t18 + _t21;
-    const trailer_real_t _t43 = _t2*_t42;
+    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t13;
+    const trailer_real_t _t41 = K_theta_cart_x_tractor_2*_t11;
+    const trailer_real_t _t42 = _t19 + _t22;
+    const trailer_real_t _t43 = _t0*_t42;
     const trailer_real_t _t44 = J_theta_cart_right*_t43;
-    const trailer_real_t _t45 = _t23 + _t26;
-    const trailer_real_t _t46 = _t2*_t45;
+    const trailer_real_t _t45 = _t24 + _t27;
+    const trailer_real_t _t46 = _t0*_t45;
     const trailer_real_t _t47 = J_theta_cart_right*_t46;
-    const trailer_real_t _t48 = -_t18 + _t19 - _t20;
-    const trailer_real_t _t49 = _t3*_t48;
+    const trailer_real_t _t48 = -_t19 + _t20 - _t21;
+    const trailer_real_t _t49 = _t1*_t48;
     const trailer_real_t _t50 = J_theta_cart_left*_t49;
-    const trailer_real_t _t51 = -_t23 + _t24 - _t25;
-    const trailer_real_t _t52 = _t3*_t51;
+    const trailer_real_t _t51 = -_t24 + _t25 - _t26;
+    const trailer_real_t _t52 = _t1*_t51;
     const trailer_real_t _t53 = J_theta_cart_left*_t52;
-    const trailer_real_t _t54 = -K_theta_cart_x_tractor_2*_t39*_t5 + K_theta_tractor_x_tractor*_t37
-            + _t34*_t39;
-    const trailer_real_t _t55 = _t36*thetadot_right;
-    const trailer_real_t _t56 = _t36*thetadot_left;
-    const trailer_real_t _t57 = _t38*thetadot_right;
-    const trailer_real_t _t58 = _t38*thetadot_left;
-    const trailer_real_t _t59 = _t27*_t55 - _t27*_t57 + _t29*_t56 - _t29*_t58;
-    const trailer_real_t _t60 = _t33*_t59 + _t54;
-    const trailer_real_t _t61 = -_t39*_t40 - _t39*_t41;
-    const trailer_real_t _t62 = _t12*_t55 + _t15*_t56;
-    const trailer_real_t _t63 = -K_theta_tractor_x_tractor*_t62 + _t61;
-    const trailer_real_t _t64 = _t35*_t59 + _t63;
-    const trailer_real_t _t65 = K_theta_cart_x_tractor_2*_t5 - _t34;
-    const trailer_real_t _t66 = _t37*_t40 + _t37*_t41;
-    const trailer_real_t _t67 = _t62*_t65 + _t66;
-    const trailer_real_t _t68 = J_theta_cart*_t59 + _t67;
-    const trailer_real_t _t69 = J_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t14 + _t22*_t33;
-    const trailer_real_t _t70 = J_theta_tractor*_t14 + K_theta_tractor_x_tractor_2*_t15 + _t22*_t35;
-    const trailer_real_t _t71 = J_theta_cart*_t22 + _t14*_t35 + _t15*_t33;
-    const trailer_real_t _t72 = _t11*_t70 + _t12*_t69 + _t17*_t71 + _t43*_t47 + _t49*_t53;
-    const trailer_real_t _t73 = J_theta_left + _t14*_t70 + _t15*_t69 + _t22*_t71 + _t46*_t47
+    const trailer_real_t _t54 = -K_theta_cart_x_tractor_2*_t39*_t8 + K_theta_tractor_x_tractor*_t37
+            + _t35*_t39;
+    const trailer_real_t _t55 = -_t38*thetadot_right - _t5;
+    const trailer_real_t _t56 = -_t38*thetadot_left - _t6;
+    const trailer_real_t _t57 = _t28*_t55 + _t30*_t56;
+    const trailer_real_t _t58 = _t34*_t57 + _t54;
+    const trailer_real_t _t59 = K_theta_cart_x_tractor_2*_t8 - _t35;
+    const trailer_real_t _t60 = _t37*_t40 + _t37*_t41;
+    const trailer_real_t _t61 = -_t14*_t5 - _t16*_t6;
+    const trailer_real_t _t62 = _t59*_t61 + _t60;
+    const trailer_real_t _t63 = J_theta_cart*_t57 + _t62;
+    const trailer_real_t _t64 = -_t39*_t40 - _t39*_t41;
+    const trailer_real_t _t65 = -K_theta_tractor_x_tractor*_t61 + _t64;
+    const trailer_real_t _t66 = _t36*_t57 + _t65;
+    const trailer_real_t _t67 = J_x_tractor*_t16 + K_theta_tractor_x_tractor_2*_t3 + _t23*_t34;
+    const trailer_real_t _t68 = J_theta_tractor*_t3 + K_theta_tractor_x_tractor_2*_t16 + _t23*_t36;
+    const trailer_real_t _t69 = J_theta_cart*_t23 + _t16*_t34 + _t3*_t36;
+    const trailer_real_t _t70 = _t14*_t67 + _t18*_t69 + _t2*_t68 + _t43*_t47 + _t49*_t53;
+    const trailer_real_t _t71 = J_theta_left + _t16*_t67 + _t23*_t69 + _t3*_t68 + _t46*_t47
             + _t52*_t53;
-    const trailer_real_t _t74 = -_t13 + _t28;
-    const trailer_real_t _t75 = _t2*_t74;
-    const trailer_real_t _t76 = -_t16 + _t30;
-    const trailer_real_t _t77 = _t2*_t76;
-    const trailer_real_t _t78 = _t55*_t75 + _t56*_t77 - _t57*_t75 - _t58*_t77;
-    const trailer_real_t _t79 = -_t13 - _t28;
-    const trailer_real_t _t80 = _t3*_t79;
-    const trailer_real_t _t81 = -_t16 - _t30;
-    const trailer_real_t _t82 = _t3*_t81;
-    const trailer_real_t _t83 = _t55*_t80 + _t56*_t82 - _t57*_t80 - _t58*_t82;
-    const trailer_real_t _t84 = _t11*_t64 + _t12*_t60 + _t17*_t68 + _t44*_t78 + _t50*_t83;
-    const trailer_real_t _t85 = -_t84 + tau_right;
-    const trailer_real_t _t86 = _t14*_t64 + _t15*_t60 + _t22*_t68 + _t47*_t78 + _t53*_t83;
-    const trailer_real_t _t87 = -_t86 + tau_left;
-    const trailer_real_t _t88 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t17*_t33;
-    const trailer_real_t _t89 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t17*_t35;
-    const trailer_real_t _t90 = J_theta_cart*_t17 + _t11*_t35 + _t12*_t33;
-    const trailer_real_t _t91 = J_theta_right + _t11*_t89 + _t12*_t88 + _t17*_t90 + _t43*_t44
+    const trailer_real_t _t72 = -_t15 + _t29;
+    const trailer_real_t _t73 = _t0*_t72;
+    const trailer_real_t _t74 = -_t17 + _t31;
+    const trailer_real_t _t75 = _t0*_t74;
+    const trailer_real_t _t76 = _t55*_t73 + _t56*_t75;
+    const trailer_real_t _t77 = -_t15 - _t29;
+    const trailer_real_t _t78 = _t1*_t77;
+    const trailer_real_t _t79 = -_t17 - _t31;
+    const trailer_real_t _t80 = _t1*_t79;
+    const trailer_real_t _t81 = _t55*_t78 + _t56*_t80;
+    const trailer_real_t _t82 = _t14*_t58 + _t18*_t63 + _t2*_t66 + _t44*_t76 + _t50*_t81;
+    const trailer_real_t _t83 = -_t82 + tau_right;
+    const trailer_real_t _t84 = _t16*_t58 + _t23*_t63 + _t3*_t66 + _t47*_t76 + _t53*_t81;
+    const trailer_real_t _t85 = -_t84 + tau_left;
+    const trailer_real_t _t86 = J_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t2 + _t18*_t34;
+    const trailer_real_t _t87 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t14 + _t18*_t36;
+    const trailer_real_t _t88 = J_theta_cart*_t18 + _t14*_t34 + _t2*_t36;
+    const trailer_real_t _t89 = J_theta_right + _t14*_t86 + _t18*_t88 + _t2*_t87 + _t43*_t44
             + _t49*_t50;
-    const trailer_real_t _t92 = -_t72*_t72 + _t73*_t91;
-    const trailer_real_t _t93 = TRAILER_LIT(1.0)/_t92;
-    const trailer_real_t _t94 = _t93*(-_t72*_t87 + _t73*_t85);
-    const trailer_real_t _t95 = _t93*(-_t72*_t85 + _t87*_t91);
-    const trailer_real_t _t96 = _t12*_t94 + _t15*_t95;
-    const trailer_real_t _t97 = _t11*_t94 + _t14*_t95;
-    const trailer_real_t _t98 = _t17*_t94 + _t22*_t95 + _t59;
-    const trailer_real_t _t99 = -J_x_tractor*_t96 - K_theta_tractor_x_tractor_2*_t97 - _t33*_t98
+    const trailer_real_t _t90 = -_t70*_t70 + _t71*_t89;
+    const trailer_real_t _t91 = TRAILER_LIT(1.0)/_t90;
+    const trailer_real_t _t92 = _t91*(-_t70*_t85 + _t71*_t83);
+    const trailer_real_t _t93 = _t91*(-_t70*_t83 + _t85*_t89);
+    const trailer_real_t _t94 = _t14*_t92 + _t16*_t93;
+    const trailer_real_t _t95 = _t2*_t92 + _t3*_t93;
+    const trailer_real_t _t96 = _t18*_t92 + _t23*_t93 + _t57;
+    const trailer_real_t _t97 = -J_x_tractor*_t94 - K_theta_tractor_x_tractor_2*_t95 - _t34*_t96
             - _t54;
-    const trailer_real_t _t100 = _t43*_t94 + _t46*_t95 + _t78;
-    const trailer_real_t _t101 = -J_theta_cart_right*_t100;
-    const trailer_real_t _t102 = _t101*_t2;
-    const trailer_real_t _t103 = _t49*_t94 + _t52*_t95 + _t83;
-    const trailer_real_t _t104 = -J_theta_cart_left*_t103;
-    const trailer_real_t _t105 = _t104*_t3;
-    const trailer_real_t _t106 = -J_theta_cart*_t98 - _t33*_t96 - _t35*_t97 - _t67;
-    const trailer_real_t _t107 = TRAILER_LIT(0.2)*_t102 - TRAILER_LIT(0.2)*_t105 + _t106;
-    const trailer_real_t _t108 = -TRAILER_LIT(1.6666666666666667)*_t107;
-    const trailer_real_t _t109 = _t102*_t7 + _t105*_t7 + _t108*_t5 + _t99;
-    const trailer_real_t _t110 = TRAILER_LIT(0.5)*_t109;
-    const trailer_real_t _t111 = -J_theta_tractor*_t97 - K_theta_tractor_x_tractor_2*_t96
-            - _t35*_t98 - _t63;
-    const trailer_real_t _t112 = -_t10*_t102 - _t10*_t105 + _t108*_t8 + _t111;
-    const trailer_real_t _t113 = TRAILER_LIT(2.4154589371980677)*_t112;
-    const trailer_real_t _t114 = K_theta_tractor_x_tractor_2*_t37 + _t31*_t39 + _t32*_t39;
-    const trailer_real_t _t115 = -J_x_tractor*_t62 + K_theta_tractor_x_tractor*_t97 - _t114
-            - _t65*_t98;
-    const trailer_real_t _t116 = _t102*_t5 + _t105*_t5 - _t108*_t7 + _t115;
-    const trailer_real_t _t117 = -_t110 + _t113;
-    const trailer_real_t _t118 = -_t110 - _t113;
-    const trailer_real_t _t119 = _t12*_t7 + _t18 - _t20;
-    const trailer_real_t _t120 = _t15*_t7 + _t23 - _t25;
-    const trailer_real_t _t121 = _t119*_t2;
-    const trailer_real_t _t122 = _t120*_t2;
-    const trailer_real_t _t123 = _t12*_t7 - _t18 - _t20;
-    const trailer_real_t _t124 = _t15*_t7 - _t23 - _t25;
-    const trailer_real_t _t125 = _t123*_t3;
-    const trailer_real_t _t126 = _t124*_t3;
-    const trailer_real_t _t127 = J_theta_cart_right*_t121;
-    const trailer_real_t _t128 = J_theta_cart_right*_t122;
-    const trailer_real_t _t129 = J_theta_cart_left*_t125;
-    const trailer_real_t _t130 = J_theta_cart_left*_t126;
-    const trailer_real_t _t131 = J_theta_right + _t11*_t89 + _t12*_t88 + _t121*_t127 + _t125*_t129
-            + _t17*_t90;
-    const trailer_real_t _t132 = _t11*_t70 + _t12*_t69 + _t121*_t128 + _t125*_t130 + _t17*_t71;
-    const trailer_real_t _t133 = J_theta_left + _t122*_t128 + _t126*_t130 + _t14*_t70 + _t15*_t69
-            + _t22*_t71;
+    const trailer_real_t _t98 = _t43*_t92 + _t46*_t93 + _t76;
+    const trailer_real_t _t99 = -J_theta_cart_right*_t98;
+    const trailer_real_t _t100 = _t0*_t99;
+    const trailer_real_t _t101 = _t49*_t92 + _t52*_t93 + _t81;
+    const trailer_real_t _t102 = -J_theta_cart_left*_t101;
+    const trailer_real_t _t103 = _t1*_t102;
+    const trailer_real_t _t104 = -J_theta_cart*_t96 - _t34*_t94 - _t36*_t95 - _t62;
+    const trailer_real_t _t105 = TRAILER_LIT(0.2)*_t100 - TRAILER_LIT(0.2)*_t103 + _t104;
+    const trailer_real_t _t106 = -TRAILER_LIT(1.6666666666666667)*_t105;
+    const trailer_real_t _t107 = _t10*_t100 + _t10*_t103 + _t106*_t8 + _t97;
+    const trailer_real_t _t108 = TRAILER_LIT(0.5)*_t107;
+    const trailer_real_t _t109 = -J_theta_tractor*_t95 - K_theta_tractor_x_tractor_2*_t94
+            - _t36*_t96 - _t65;
+    const trailer_real_t _t110 = -_t100*_t13 - _t103*_t13 + _t106*_t11 + _t109;
+    const trailer_real_t _t111 = TRAILER_LIT(2.4154589371980677)*_t110;
+    const trailer_real_t _t112 = TRAILER_LIT(1.6666666666666667)*_t9;
+    const trailer_real_t _t113 = TRAILER_LIT(0.2)*_t112;
+    const trailer_real_t _t114 = TRAILER_LIT(1.6666666666666667)*_t12;
+    const trailer_real_t _t115 = TRAILER_LIT(0.2)*_t114;
+    const trailer_real_t _t116 = K_theta_tractor_x_tractor_2*_t37 + _t32*_t39 + _t33*_t39;
+    const trailer_real_t _t117 = -J_x_tractor*_t61 + K_theta_tractor_x_tractor*_t95 - _t116
+            - _t59*_t96;
+    const trailer_real_t _t118 = -_t10*_t106 + _t100*_t8 + _t103*_t8 + _t117;
+    const trailer_real_t _t119 = -_t108 + _t111;
+    const trailer_real_t _t120 = -_t108 - _t111;
+    const trailer_real_t _t121 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t122 = TRAILER_LIT(0.207)*_t121;
+    const trailer_real_t _t123 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t124 = -TRAILER_LIT(0.207)*_t123;
+    const trailer_real_t _t125 = _t10 + _t113;
+    const trailer_real_t _t126 = _t115 - _t13;
+    const trailer_real_t _t127 = _t0*_t125;
+    const trailer_real_t _t128 = _t0*_t126;
+    const trailer_real_t _t129 = _t10 - _t113;
+    const trailer_real_t _t130 = -_t115 - _t13;
+    const trailer_real_t _t131 = _t1*_t129;
+    const trailer_real_t _t132 = _t1*_t130;
+    const trailer_real_t _t133 = J_x_tractor + _t112*_t34;
+    const trailer_real_t _t134 = K_theta_tractor_x_tractor_2 + _t114*_t34;
+    const trailer_real_t _t135 = J_theta_tractor + _t114*_t36;
+    const trailer_real_t _t136 = J_theta_cart*_t112 + _t34;
+    const trailer_real_t _t137 = J_theta_cart*_t114 + _t36;
+    const trailer_real_t _t138 = J_theta_right*_t121;
+    const trailer_real_t _t139 = J_theta_right*_t122;
+    const trailer_real_t _t140 = J_theta_left*_t123;
+    const trailer_real_t _t141 = J_theta_left*_t124;
+    const trailer_real_t _t142 = J_theta_cart_right*_t127;
+    const trailer_real_t _t143 = J_theta_cart_right*_t128;
+    const trailer_real_t _t144 = J_theta_cart_left*_t131;
+    const trailer_real_t _t145 = J_theta_cart_left*_t132;
+    const trailer_real_t _t146 = _t112*_t136 + _t121*_t138 + _t123*_t140 + _t127*_t142 + _t131*_t144
+            + _t133;
+    const trailer_real_t _t147 = _t112*_t137 + _t121*_t139 + _t123*_t141 + _t127*_t143 + _t131*_t145
+            + _t134;
+    const trailer_real_t _t148 = _t114*_t137 + _t122*_t139 + _t124*_t141 + _t128*_t143 + _t132*_t145
+            + _t135;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1445,17 +1456,17 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t131 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t146 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t131*_t133 - _t132*_t132 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+    if (!(_t146*_t148 - _t147*_t147 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
                                                               model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t118;
-    const trailer_real_t r_1 = _t117;
-    const trailer_real_t r_2 = -_t116;
-    const trailer_real_t r_3 = -_t108;
+    const trailer_real_t r_0 = _t120;
+    const trailer_real_t r_1 = _t119;
+    const trailer_real_t r_2 = -_t118;
+    const trailer_real_t r_3 = -_t106;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;

@@ -21,11 +21,11 @@ extern "C" {
    only. */
 typedef struct {
     long magic; /* TRAILER_MODEL_PREPARED_MAGIC once prepared */
-    trailer_real_t forward_dynamics[18]; /* J_theta_cart, J_theta_cart_left, J_theta_cart_right,
-                                            J_theta_left, J_theta_right, K_theta_cart_x_tractor,
-                                            K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, 10
-                                            parameter-only subexpressions, for
-                                            trailer_forward_dynamics_prepared */
+    trailer_real_t forward_dynamics[22]; /* J_theta_cart, J_theta_cart_left, J_theta_cart_right,
+                                            J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor,
+                                            K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor,
+                                            K_theta_tractor_x_tractor_2, 13 parameter-only
+                                            subexpressions, for trailer_forward_dynamics_prepared */
 } trailer_model_prepared_t;
 
 #define TRAILER_FORWARD_DYNAMICS_Q_SIZE 8
@@ -75,7 +75,7 @@ typedef struct {
  * With fixed parameters, trailer_model_prepare once and trailer_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 84 add, 135 mul, 3 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 72 add, 119 mul, 5 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot);
@@ -102,7 +102,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
  *         TRAILER_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAILER_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 4 add, 12 mul, 2 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared);
@@ -137,7 +137,7 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 80 add, 123 mul, 1 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 69 add, 103 mul, 1 div, 4 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
@@ -162,7 +162,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [6] row-major (TRAILER_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 16 add, 36 mul, 2 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
  */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates);
@@ -184,7 +184,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
  *     theta_cart_left
  * @param[out] M [2x2] row-major (TRAILER_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 39 add, 65 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
  */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M);
@@ -207,7 +207,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAILER_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 43 add, 81 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
  */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H);
@@ -250,7 +250,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 74 add, 124 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
@@ -285,7 +285,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] A [10x10] row-major (TRAILER_LINEARIZATION_A_SIZE) -- 10x10 row-major
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
- * operations after CSE: 209 add, 332 mul, 3 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
  */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
@@ -341,7 +341,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 136 add, 202 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt
  */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,

@@ -31,7 +31,7 @@ extern "C" {
  *     wheel torques after friction
  * @param[out] xdot [10] row-major (TRAILER_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 77 add, 132 mul, 3 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 68 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
  */
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot);

@@ -65,7 +65,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 8 (shape 8x1, row-major)
 
-    operations after CSE: 84 add, 138 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 72 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -93,98 +93,94 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t2 = math.cos(_t0)
         _t3 = 0.3*_t2
         _t4 = 0.3*_t1
-        _t5 = 2.4154589371980677*radius_right
-        _t6 = 0.5*radius_right
-        _t7 = -_t1*_t6 - _t3*_t5
-        _t8 = -2.4154589371980677*radius_left
-        _t9 = 0.5*radius_left
-        _t10 = -_t1*_t9 - _t3*_t8
-        _t11 = 1.6666666666666667*_t7
-        _t12 = 0.2*_t11
-        _t13 = _t2*_t6
-        _t14 = _t4*_t5
-        _t15 = _t13 - _t14
-        _t16 = 1.6666666666666667*_t10
-        _t17 = 0.2*_t16
-        _t18 = _t2*_t9
-        _t19 = _t4*_t8
-        _t20 = _t18 - _t19
-        _t21 = 1.6666666666666667*_t15
+        _t5 = -1.6666666666666667*_t1
+        _t6 = 0.2*_t5
+        _t7 = -1.6666666666666667*_t3
+        _t8 = 0.2*_t7
+        _t9 = K_theta_cart_x_tractor*_t2
+        _t10 = 2.4154589371980677*radius_right
+        _t11 = -2.4154589371980677*radius_left
+        _t12 = _t10*thetadot_right + _t11*thetadot_left
+        _t13 = _t12*_t12
+        _t14 = 0.5*radius_right
+        _t15 = 0.5*radius_left
+        _t16 = _t14*thetadot_right + _t15*thetadot_left
+        _t17 = _t12*_t7 + _t16*_t5
+        _t18 = _t17*_t17
+        _t19 = K_theta_cart_x_tractor*_t4
+        _t20 = K_theta_cart_x_tractor_2*_t3
+        _t21 = 1.6666666666666667*_t2
         _t22 = 0.2*_t21
-        _t23 = 1.6666666666666667*_t20
+        _t23 = -1.6666666666666667*_t4
         _t24 = 0.2*_t23
-        _t25 = K_theta_cart_x_tractor*_t2
-        _t26 = _t5*thetadot_right + _t8*thetadot_left
-        _t27 = _t26*_t26
-        _t28 = _t11*thetadot_right + _t16*thetadot_left
-        _t29 = _t28*_t28
-        _t30 = K_theta_cart_x_tractor*_t4
-        _t31 = K_theta_cart_x_tractor_2*_t3
-        _t32 = _t26*thetadot_right
-        _t33 = _t26*thetadot_left
-        _t34 = 1.0/radius_cart_right
-        _t35 = _t12 + _t15
-        _t36 = _t34*_t35
-        _t37 = J_theta_cart_right*_t36
-        _t38 = _t17 + _t20
-        _t39 = _t34*_t38
-        _t40 = J_theta_cart_right*_t39
-        _t41 = 1.0/radius_cart_left
-        _t42 = -_t12 + _t13 - _t14
-        _t43 = _t41*_t42
-        _t44 = J_theta_cart_left*_t43
-        _t45 = -_t17 + _t18 - _t19
-        _t46 = _t41*_t45
-        _t47 = J_theta_cart_left*_t46
+        _t25 = _t12*_t16
+        _t26 = 1.0/radius_cart_right
+        _t27 = _t2 + _t6
+        _t28 = _t26*_t27
+        _t29 = J_theta_cart_right*_t28
+        _t30 = -_t4 + _t8
+        _t31 = _t26*_t30
+        _t32 = J_theta_cart_right*_t31
+        _t33 = 1.0/radius_cart_left
+        _t34 = _t2 - _t6
+        _t35 = _t33*_t34
+        _t36 = J_theta_cart_left*_t35
+        _t37 = -_t4 - _t8
+        _t38 = _t33*_t37
+        _t39 = J_theta_cart_left*_t38
+        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
+        _t41 = _t13*_t19 + _t13*_t20
+        _t42 = -_t16*_t17 + _t25
+        _t43 = -_t12*_t17 + _t13
+        _t44 = _t21*_t42 + _t23*_t43
+        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
+        _t46 = 1.0/radius_right
+        _t47 = 1.0/radius_left
         _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27 + _t25*_t29
-        _t50 = -_t28*thetadot_right + _t32
-        _t51 = -_t28*thetadot_left + _t33
-        _t52 = _t21*_t50 + _t23*_t51
-        _t53 = _t48*_t52 + _t49
-        _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-        _t55 = -_t29*_t30 - _t29*_t31
-        _t56 = _t32*_t6 + _t33*_t9
-        _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55
-        _t58 = K_theta_cart_x_tractor_2*_t1 - _t25
-        _t59 = _t27*_t30 + _t27*_t31
-        _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59
-        _t61 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48
-        _t62 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54
-        _t63 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54
-        _t64 = J_theta_right + _t11*_t63 + _t36*_t37 + _t43*_t44 + _t5*_t62 + _t6*_t61
-        _t65 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48
-        _t66 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54
-        _t67 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8
-        _t68 = _t11*_t67 + _t36*_t40 + _t43*_t47 + _t5*_t66 + _t6*_t65
-        _t69 = J_theta_left + _t16*_t67 + _t39*_t40 + _t46*_t47 + _t65*_t9 + _t66*_t8
-        _t70 = _t64*_t69 - _t68*_t68
-        _t71 = math.sin(theta_tractor)
-        _t72 = math.cos(theta_tractor)
-        _t73 = _t22 - _t7
-        _t74 = _t34*_t73
-        _t75 = -_t10 + _t24
-        _t76 = _t34*_t75
-        _t77 = -_t22 - _t7
-        _t78 = _t41*_t77
-        _t79 = -_t10 - _t24
-        _t80 = _t41*_t79
-        _t81 = _t50*_t74 + _t51*_t76
-        _t82 = _t50*_t78 + _t51*_t80
-        _t83 = _t11*_t60 + _t37*_t81 + _t44*_t82 + _t5*_t57 + _t53*_t6
-        _t84 = _t16*_t60 + _t40*_t81 + _t47*_t82 + _t53*_t9 + _t57*_t8
-        _t85 = -_t83 + tau_right
-        _t86 = -_t84 + tau_left
-        _t87 = 1.0/_t70
-        _t88 = _t87*(-_t68*_t86 + _t69*_t85)
-        _t89 = _t87*(_t64*_t86 - _t68*_t85)
-        _t90 = _t6*_t88 + _t89*_t9
-        _t91 = _t5*_t88 + _t8*_t89
-        _t92 = _t11*_t88 + _t16*_t89 + _t52
-        _t93 = _t36*_t88 + _t39*_t89 + _t81
-        _t94 = _t43*_t88 + _t46*_t89 + _t82
-        _t95 = -_t56*_t71 + _t72*_t90
-        _t96 = _t56*_t72 + _t71*_t90
+        _t49 = J_x_tractor + _t48*_t5
+        _t50 = J_theta_cart*_t5 + _t48
+        _t51 = J_theta_right*_t46
+        _t52 = J_theta_left*_t47
+        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
+        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
+        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+        _t56 = J_theta_cart*_t7 + _t55
+        _t57 = 0.207*_t46
+        _t58 = J_theta_right*_t57
+        _t59 = -0.207*_t47
+        _t60 = J_theta_left*_t59
+        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
+        _t62 = J_theta_tractor + _t55*_t7
+        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
+        _t64 = _t53*_t63 - _t61*_t61
+        _t65 = math.cos(theta_tractor)
+        _t66 = math.sin(theta_tractor)
+        _t67 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+        _t68 = -_t18*_t19 - _t18*_t20
+        _t69 = _t1 + _t22
+        _t70 = _t26*_t69
+        _t71 = _t24 + _t3
+        _t72 = _t26*_t71
+        _t73 = _t1 - _t22
+        _t74 = _t33*_t73
+        _t75 = -_t24 + _t3
+        _t76 = _t33*_t75
+        _t77 = _t42*_t70 + _t43*_t72
+        _t78 = _t42*_t74 + _t43*_t76
+        _t79 = _t29*_t77 + _t36*_t78 + _t44*_t48 + _t45*_t5 + _t67
+        _t80 = -K_theta_tractor_x_tractor*_t25 + _t32*_t77 + _t39*_t78 + _t44*_t55 + _t45*_t7 + _t68
+        _t81 = _t46*tau_right + _t47*tau_left - _t79
+        _t82 = _t57*tau_right + _t59*tau_left - _t80
+        _t83 = 1.0/_t64
+        _t84 = _t83*(-_t61*_t82 + _t63*_t81)
+        _t85 = _t83*(_t53*_t82 - _t61*_t81)
+        _t86 = _t44 + _t5*_t84 + _t7*_t85
+        _t87 = _t46*_t84 + _t57*_t85
+        _t88 = _t47*_t84 + _t59*_t85
+        _t89 = _t28*_t84 + _t31*_t85 + _t77
+        _t90 = _t35*_t84 + _t38*_t85 + _t78
+        _t91 = -_t25*_t66 + _t65*_t84
+        _t92 = _t25*_t65 + _t66*_t84
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -209,11 +205,11 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_x_tractor > 0")
-    if not (_t64 > 0.0):
+    if not (_t53 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t70 > 0.0):
+    if not (_t64 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    qddot = np.array([_t95, _t96, _t91, _t92, _t88, _t89, _t93, _t94])
+    qddot = np.array([_t91, _t92, _t85, _t86, _t87, _t88, _t89, _t90])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
     return qddot
@@ -232,7 +228,7 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     Returns:
         pose_rates: array of 6 (shape 6x1, row-major)
 
-    operations after CSE: 16 add, 36 mul, 2 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -243,38 +239,34 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = -0.3*_t2
-    _t4 = 2.4154589371980677*radius_right
-    _t5 = 0.5*radius_right
-    _t6 = _t1*_t5 - _t3*_t4
-    _t7 = -1.6666666666666667*_t6
-    _t8 = 0.2*_t7
-    _t9 = 0.3*_t1
-    _t10 = _t4*_t9
-    _t11 = -2.4154589371980677*radius_left
-    _t12 = 0.5*radius_left
-    _t13 = _t1*_t12 - _t11*_t3
-    _t14 = -1.6666666666666667*_t13
-    _t15 = 0.2*_t14
-    _t16 = _t11*_t9
-    _t17 = 1.0/radius_cart_right
-    _t18 = 1.0/radius_cart_left
-    _t19 = -_t10 + _t2*_t5 + _t8
-    _t20 = _t12*_t2 + _t15 - _t16
-    _t21 = _t17*_t19
-    _t22 = _t17*_t20
-    _t23 = -_t10 + _t2*_t5 - _t8
-    _t24 = _t12*_t2 - _t15 - _t16
-    _t25 = _t18*_t23
-    _t26 = _t18*_t24
-    _t27 = _t12*thetadot_left + _t5*thetadot_right
-    _t28 = _t11*thetadot_left + _t4*thetadot_right
-    _t29 = _t14*thetadot_left + _t7*thetadot_right
-    _t30 = _t21*thetadot_right + _t22*thetadot_left
-    _t31 = _t25*thetadot_right + _t26*thetadot_left
-    _t32 = _t27*math.cos(theta_tractor)
-    _t33 = _t27*math.sin(theta_tractor)
-    pose_rates = np.array([_t32, _t33, _t28, _t29, _t30, _t31])
+    _t3 = -1.6666666666666667*_t1
+    _t4 = 0.2*_t3
+    _t5 = -0.3*_t2
+    _t6 = 1.6666666666666667*_t5
+    _t7 = 0.2*_t6
+    _t8 = 2.4154589371980677*radius_right
+    _t9 = -2.4154589371980677*radius_left
+    _t10 = 1.0/radius_cart_right
+    _t11 = 1.0/radius_cart_left
+    _t12 = 0.3*_t1
+    _t13 = 0.5*radius_right
+    _t14 = 0.5*radius_left
+    _t15 = _t2 + _t4
+    _t16 = -_t12 + _t7
+    _t17 = _t10*_t15
+    _t18 = _t10*_t16
+    _t19 = _t2 - _t4
+    _t20 = -_t12 - _t7
+    _t21 = _t11*_t19
+    _t22 = _t11*_t20
+    _t23 = _t13*thetadot_right + _t14*thetadot_left
+    _t24 = _t8*thetadot_right + _t9*thetadot_left
+    _t25 = _t23*_t3 + _t24*_t6
+    _t26 = _t17*_t23 + _t18*_t24
+    _t27 = _t21*_t23 + _t22*_t24
+    _t28 = _t23*math.cos(theta_tractor)
+    _t29 = _t23*math.sin(theta_tractor)
+    pose_rates = np.array([_t28, _t29, _t24, _t25, _t26, _t27])
     return pose_rates
 
 
@@ -290,7 +282,7 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 2x2, row-major). 2x2 row-major
 
-    operations after CSE: 39 add, 65 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -312,46 +304,56 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t2 = math.cos(_t0)
     _t3 = 0.3*_t2
     _t4 = 0.3*_t1
-    _t5 = 2.4154589371980677*radius_right
-    _t6 = 0.5*radius_right
-    _t7 = _t1*_t6 + _t3*_t5
-    _t8 = -1.6666666666666667*_t7
-    _t9 = 0.2*_t8
-    _t10 = _t4*_t5
-    _t11 = -2.4154589371980677*radius_left
-    _t12 = 0.5*radius_left
-    _t13 = _t1*_t12 + _t11*_t3
-    _t14 = -1.6666666666666667*_t13
-    _t15 = 0.2*_t14
-    _t16 = _t11*_t4
-    _t17 = 1.0/radius_cart_right
-    _t18 = 1.0/radius_cart_left
-    _t19 = -_t10 + _t2*_t6 + _t9
-    _t20 = _t12*_t2 + _t15 - _t16
-    _t21 = _t17*_t19
-    _t22 = _t17*_t20
-    _t23 = -_t10 + _t2*_t6 - _t9
-    _t24 = _t12*_t2 - _t15 - _t16
-    _t25 = _t18*_t23
-    _t26 = _t18*_t24
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = 2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = 1.0/radius_cart_right
+    _t12 = 1.0/radius_cart_left
+    _t13 = 0.5*radius_right
+    _t14 = 0.5*radius_left
+    _t15 = 1.0/radius_right
+    _t16 = 0.207*_t15
+    _t17 = 1.0/radius_left
+    _t18 = -0.207*_t17
+    _t19 = _t2 + _t6
+    _t20 = -_t4 + _t8
+    _t21 = _t11*_t19
+    _t22 = _t11*_t20
+    _t23 = _t2 - _t6
+    _t24 = -_t4 - _t8
+    _t25 = _t12*_t23
+    _t26 = _t12*_t24
     _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
     _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t29 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t27*_t8
-    _t30 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t14*_t27
-    _t31 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t28*_t8
-    _t32 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t14*_t28
-    _t33 = J_theta_cart*_t8 + _t27*_t6 + _t28*_t5
-    _t34 = J_theta_cart*_t14 + _t11*_t28 + _t12*_t27
-    _t35 = J_theta_cart_right*_t21
-    _t36 = J_theta_cart_right*_t22
-    _t37 = J_theta_cart_left*_t25
-    _t38 = J_theta_cart_left*_t26
-    _t39 = J_theta_right + _t21*_t35 + _t25*_t37 + _t29*_t6 + _t31*_t5 + _t33*_t8
-    _t40 = _t21*_t36 + _t25*_t38 + _t30*_t6 + _t32*_t5 + _t34*_t8
-    _t41 = J_theta_left + _t11*_t32 + _t12*_t30 + _t14*_t34 + _t22*_t36 + _t26*_t38
+    _t29 = J_x_tractor + _t27*_t5
+    _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7
+    _t31 = J_theta_tractor + _t28*_t7
+    _t32 = J_theta_cart*_t5 + _t27
+    _t33 = J_theta_cart*_t7 + _t28
+    _t34 = J_theta_right*_t15
+    _t35 = J_theta_right*_t16
+    _t36 = J_theta_left*_t17
+    _t37 = J_theta_left*_t18
+    _t38 = J_theta_cart_right*_t21
+    _t39 = J_theta_cart_right*_t22
+    _t40 = J_theta_cart_left*_t25
+    _t41 = J_theta_cart_left*_t26
+    _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5
+    _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5
+    _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7
+    _t45 = _t13*_t42 + _t43*_t9
+    _t46 = _t10*_t43 + _t14*_t42
+    _t47 = _t13*_t43 + _t44*_t9
+    _t48 = _t10*_t44 + _t14*_t43
+    _t49 = _t13*_t45 + _t47*_t9
+    _t50 = _t13*_t46 + _t48*_t9
+    _t51 = _t10*_t48 + _t14*_t46
     M = np.array([
-        [_t39, _t40],
-        [_t40, _t41],
+        [_t49, _t50],
+        [_t50, _t51],
     ])
     return M
 
@@ -369,7 +371,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     Returns:
         H: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 43 add, 81 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -388,73 +390,64 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t2 = math.cos(_t0)
     _t3 = 0.3*_t2
     _t4 = 0.3*_t1
-    _t5 = 2.4154589371980677*radius_right
-    _t6 = 0.5*radius_right
-    _t7 = -_t1*_t6 - _t3*_t5
-    _t8 = -2.4154589371980677*radius_left
-    _t9 = 0.5*radius_left
-    _t10 = -_t1*_t9 - _t3*_t8
-    _t11 = 1.6666666666666667*_t7
-    _t12 = 0.2*_t11
-    _t13 = _t2*_t6
-    _t14 = _t4*_t5
-    _t15 = _t13 - _t14
-    _t16 = 1.6666666666666667*_t10
-    _t17 = 0.2*_t16
-    _t18 = _t2*_t9
-    _t19 = _t4*_t8
-    _t20 = _t18 - _t19
-    _t21 = 1.6666666666666667*_t15
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = K_theta_cart_x_tractor*_t2
+    _t10 = 2.4154589371980677*radius_right
+    _t11 = -2.4154589371980677*radius_left
+    _t12 = _t10*thetadot_right + _t11*thetadot_left
+    _t13 = _t12*_t12
+    _t14 = 0.5*radius_right
+    _t15 = 0.5*radius_left
+    _t16 = _t14*thetadot_right + _t15*thetadot_left
+    _t17 = _t12*_t7 + _t16*_t5
+    _t18 = _t17*_t17
+    _t19 = K_theta_cart_x_tractor*_t4
+    _t20 = K_theta_cart_x_tractor_2*_t3
+    _t21 = 1.6666666666666667*_t2
     _t22 = 0.2*_t21
-    _t23 = 1.6666666666666667*_t20
+    _t23 = -1.6666666666666667*_t4
     _t24 = 0.2*_t23
-    _t25 = K_theta_cart_x_tractor*_t2
-    _t26 = _t5*thetadot_right + _t8*thetadot_left
-    _t27 = _t26*_t26
-    _t28 = _t11*thetadot_right + _t16*thetadot_left
-    _t29 = _t28*_t28
-    _t30 = K_theta_cart_x_tractor*_t4
-    _t31 = K_theta_cart_x_tractor_2*_t3
-    _t32 = _t26*thetadot_right
-    _t33 = _t26*thetadot_left
-    _t34 = 1.0/radius_cart_left
-    _t35 = -_t22 - _t7
-    _t36 = _t34*_t35
-    _t37 = -_t10 - _t24
-    _t38 = _t34*_t37
-    _t39 = -_t28*thetadot_right + _t32
-    _t40 = -_t28*thetadot_left + _t33
-    _t41 = _t36*_t39 + _t38*_t40
-    _t42 = J_theta_cart_left*_t41
-    _t43 = 1.0/radius_cart_right
-    _t44 = _t22 - _t7
-    _t45 = _t43*_t44
-    _t46 = -_t10 + _t24
-    _t47 = _t43*_t46
-    _t48 = _t39*_t45 + _t40*_t47
-    _t49 = J_theta_cart_right*_t48
-    _t50 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t51 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27 + _t25*_t29
-    _t52 = _t21*_t39 + _t23*_t40
-    _t53 = _t50*_t52 + _t51
-    _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t55 = -_t29*_t30 - _t29*_t31
-    _t56 = _t32*_t6 + _t33*_t9
-    _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55
-    _t58 = K_theta_cart_x_tractor_2*_t1 - _t25
-    _t59 = _t27*_t30 + _t27*_t31
-    _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59
-    _t61 = _t12 + _t15
-    _t62 = _t17 + _t20
-    _t63 = _t43*_t61
-    _t64 = _t43*_t62
-    _t65 = -_t12 + _t13 - _t14
-    _t66 = -_t17 + _t18 - _t19
-    _t67 = _t34*_t65
-    _t68 = _t34*_t66
-    _t69 = _t11*_t60 + _t42*_t67 + _t49*_t63 + _t5*_t57 + _t53*_t6
-    _t70 = _t16*_t60 + _t42*_t68 + _t49*_t64 + _t53*_t9 + _t57*_t8
-    H = np.array([_t69, _t70])
+    _t25 = _t12*_t16
+    _t26 = 1.0/radius_cart_left
+    _t27 = _t1 - _t22
+    _t28 = _t26*_t27
+    _t29 = -_t24 + _t3
+    _t30 = _t26*_t29
+    _t31 = -_t16*_t17 + _t25
+    _t32 = -_t12*_t17 + _t13
+    _t33 = _t28*_t31 + _t30*_t32
+    _t34 = J_theta_cart_left*_t33
+    _t35 = 1.0/radius_cart_right
+    _t36 = _t1 + _t22
+    _t37 = _t35*_t36
+    _t38 = _t24 + _t3
+    _t39 = _t35*_t38
+    _t40 = _t31*_t37 + _t32*_t39
+    _t41 = J_theta_cart_right*_t40
+    _t42 = K_theta_cart_x_tractor_2*_t1 - _t9
+    _t43 = _t13*_t19 + _t13*_t20
+    _t44 = _t21*_t31 + _t23*_t32
+    _t45 = J_theta_cart*_t44 + _t25*_t42 + _t43
+    _t46 = _t2 + _t6
+    _t47 = -_t4 + _t8
+    _t48 = _t35*_t46
+    _t49 = _t35*_t47
+    _t50 = _t2 - _t6
+    _t51 = -_t4 - _t8
+    _t52 = _t26*_t50
+    _t53 = _t26*_t51
+    _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+    _t57 = -_t18*_t19 - _t18*_t20
+    _t58 = _t34*_t52 + _t41*_t48 + _t44*_t54 + _t45*_t5 + _t56
+    _t59 = -K_theta_tractor_x_tractor*_t25 + _t34*_t53 + _t41*_t49 + _t44*_t55 + _t45*_t7 + _t57
+    _t60 = _t10*_t59 + _t14*_t58
+    _t61 = _t11*_t59 + _t15*_t58
+    H = np.array([_t60, _t61])
     return H
 
 
@@ -472,7 +465,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 74 add, 124 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -500,89 +493,87 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t2 = math.cos(_t0)
         _t3 = 0.3*_t2
         _t4 = 0.3*_t1
-        _t5 = 2.4154589371980677*radius_right
-        _t6 = 0.5*radius_right
-        _t7 = -_t1*_t6 - _t3*_t5
-        _t8 = -2.4154589371980677*radius_left
-        _t9 = 0.5*radius_left
-        _t10 = -_t1*_t9 - _t3*_t8
-        _t11 = 1.6666666666666667*_t7
-        _t12 = 0.2*_t11
-        _t13 = _t2*_t6
-        _t14 = _t4*_t5
-        _t15 = _t13 - _t14
-        _t16 = 1.6666666666666667*_t10
-        _t17 = 0.2*_t16
-        _t18 = _t2*_t9
-        _t19 = _t4*_t8
-        _t20 = _t18 - _t19
-        _t21 = 1.6666666666666667*_t15
+        _t5 = -1.6666666666666667*_t1
+        _t6 = 0.2*_t5
+        _t7 = -1.6666666666666667*_t3
+        _t8 = 0.2*_t7
+        _t9 = K_theta_cart_x_tractor*_t2
+        _t10 = 2.4154589371980677*radius_right
+        _t11 = -2.4154589371980677*radius_left
+        _t12 = _t10*thetadot_right + _t11*thetadot_left
+        _t13 = _t12*_t12
+        _t14 = 0.5*radius_right
+        _t15 = 0.5*radius_left
+        _t16 = _t14*thetadot_right + _t15*thetadot_left
+        _t17 = _t12*_t7 + _t16*_t5
+        _t18 = _t17*_t17
+        _t19 = K_theta_cart_x_tractor*_t4
+        _t20 = K_theta_cart_x_tractor_2*_t3
+        _t21 = 1.6666666666666667*_t2
         _t22 = 0.2*_t21
-        _t23 = 1.6666666666666667*_t20
+        _t23 = -1.6666666666666667*_t4
         _t24 = 0.2*_t23
-        _t25 = K_theta_cart_x_tractor*_t2
-        _t26 = _t5*thetadot_right + _t8*thetadot_left
-        _t27 = _t26*_t26
-        _t28 = _t11*thetadot_right + _t16*thetadot_left
-        _t29 = _t28*_t28
-        _t30 = K_theta_cart_x_tractor*_t4
-        _t31 = K_theta_cart_x_tractor_2*_t3
-        _t32 = _t26*thetadot_right
-        _t33 = _t26*thetadot_left
-        _t34 = 1.0/radius_cart_right
-        _t35 = _t12 + _t15
-        _t36 = _t34*_t35
-        _t37 = J_theta_cart_right*_t36
-        _t38 = _t17 + _t20
-        _t39 = _t34*_t38
-        _t40 = J_theta_cart_right*_t39
-        _t41 = 1.0/radius_cart_left
-        _t42 = -_t12 + _t13 - _t14
-        _t43 = _t41*_t42
-        _t44 = J_theta_cart_left*_t43
-        _t45 = -_t17 + _t18 - _t19
-        _t46 = _t41*_t45
-        _t47 = J_theta_cart_left*_t46
+        _t25 = _t12*_t16
+        _t26 = 1.0/radius_cart_right
+        _t27 = _t2 + _t6
+        _t28 = _t26*_t27
+        _t29 = J_theta_cart_right*_t28
+        _t30 = -_t4 + _t8
+        _t31 = _t26*_t30
+        _t32 = J_theta_cart_right*_t31
+        _t33 = 1.0/radius_cart_left
+        _t34 = _t2 - _t6
+        _t35 = _t33*_t34
+        _t36 = J_theta_cart_left*_t35
+        _t37 = -_t4 - _t8
+        _t38 = _t33*_t37
+        _t39 = J_theta_cart_left*_t38
+        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
+        _t41 = _t13*_t19 + _t13*_t20
+        _t42 = -_t16*_t17 + _t25
+        _t43 = -_t12*_t17 + _t13
+        _t44 = _t21*_t42 + _t23*_t43
+        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
+        _t46 = 1.0/radius_right
+        _t47 = 1.0/radius_left
         _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27 + _t25*_t29
-        _t50 = -_t28*thetadot_right + _t32
-        _t51 = -_t28*thetadot_left + _t33
-        _t52 = _t21*_t50 + _t23*_t51
-        _t53 = _t48*_t52 + _t49
-        _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-        _t55 = -_t29*_t30 - _t29*_t31
-        _t56 = _t32*_t6 + _t33*_t9
-        _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55
-        _t58 = K_theta_cart_x_tractor_2*_t1 - _t25
-        _t59 = _t27*_t30 + _t27*_t31
-        _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59
-        _t61 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48
-        _t62 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54
-        _t63 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54
-        _t64 = J_theta_right + _t11*_t63 + _t36*_t37 + _t43*_t44 + _t5*_t62 + _t6*_t61
-        _t65 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48
-        _t66 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54
-        _t67 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8
-        _t68 = _t11*_t67 + _t36*_t40 + _t43*_t47 + _t5*_t66 + _t6*_t65
-        _t69 = J_theta_left + _t16*_t67 + _t39*_t40 + _t46*_t47 + _t65*_t9 + _t66*_t8
-        _t70 = _t64*_t69 - _t68*_t68
-        _t71 = _t22 - _t7
-        _t72 = _t34*_t71
-        _t73 = -_t10 + _t24
-        _t74 = _t34*_t73
-        _t75 = -_t22 - _t7
-        _t76 = _t41*_t75
-        _t77 = -_t10 - _t24
-        _t78 = _t41*_t77
-        _t79 = _t50*_t72 + _t51*_t74
-        _t80 = _t50*_t76 + _t51*_t78
-        _t81 = _t11*_t60 + _t37*_t79 + _t44*_t80 + _t5*_t57 + _t53*_t6
-        _t82 = _t16*_t60 + _t40*_t79 + _t47*_t80 + _t53*_t9 + _t57*_t8
-        _t83 = -_t81 + tau_right
-        _t84 = -_t82 + tau_left
-        _t85 = 1.0/_t70
-        _t86 = _t85*(-_t68*_t84 + _t69*_t83)
-        _t87 = _t85*(_t64*_t84 - _t68*_t83)
+        _t49 = J_x_tractor + _t48*_t5
+        _t50 = J_theta_cart*_t5 + _t48
+        _t51 = J_theta_right*_t46
+        _t52 = J_theta_left*_t47
+        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
+        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
+        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+        _t56 = J_theta_cart*_t7 + _t55
+        _t57 = 0.207*_t46
+        _t58 = J_theta_right*_t57
+        _t59 = -0.207*_t47
+        _t60 = J_theta_left*_t59
+        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
+        _t62 = J_theta_tractor + _t55*_t7
+        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
+        _t64 = _t53*_t63 - _t61*_t61
+        _t65 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+        _t66 = -_t18*_t19 - _t18*_t20
+        _t67 = _t1 + _t22
+        _t68 = _t26*_t67
+        _t69 = _t24 + _t3
+        _t70 = _t26*_t69
+        _t71 = _t1 - _t22
+        _t72 = _t33*_t71
+        _t73 = -_t24 + _t3
+        _t74 = _t33*_t73
+        _t75 = _t42*_t68 + _t43*_t70
+        _t76 = _t42*_t72 + _t43*_t74
+        _t77 = _t29*_t75 + _t36*_t76 + _t44*_t48 + _t45*_t5 + _t65
+        _t78 = -K_theta_tractor_x_tractor*_t25 + _t32*_t75 + _t39*_t76 + _t44*_t55 + _t45*_t7 + _t66
+        _t79 = _t46*tau_right + _t47*tau_left - _t77
+        _t80 = _t57*tau_right + _t59*tau_left - _t78
+        _t81 = 1.0/_t64
+        _t82 = _t81*(-_t61*_t80 + _t63*_t79)
+        _t83 = _t81*(_t53*_t80 - _t61*_t79)
+        _t84 = _t46*_t82 + _t57*_t83
+        _t85 = _t47*_t82 + _t59*_t83
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -607,11 +598,11 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_x_tractor > 0")
-    if not (_t64 > 0.0):
+    if not (_t53 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t70 > 0.0):
+    if not (_t64 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    wheel_accels = np.array([_t86, _t87])
+    wheel_accels = np.array([_t84, _t85])
     if not np.all(np.isfinite(wheel_accels)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of minimal_forward_dynamics is not finite")
     return wheel_accels
@@ -634,7 +625,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 100 (shape 10x10, row-major). 10x10 row-major
         B: array of 20 (shape 10x2, row-major). 10x2 row-major
 
-    operations after CSE: 209 add, 332 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -659,205 +650,210 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t2 = math.cos(_t0)
     _t3 = 0.3*_t2
     _t4 = 0.3*_t1
-    _t5 = 2.4154589371980677*radius_right
-    _t6 = 0.5*radius_right
-    _t7 = -_t1*_t6 - _t3*_t5
-    _t8 = -2.4154589371980677*radius_left
-    _t9 = 0.5*radius_left
-    _t10 = -_t1*_t9 - _t3*_t8
-    _t11 = 1.6666666666666667*_t7
-    _t12 = 0.2*_t11
-    _t13 = _t2*_t6
-    _t14 = _t4*_t5
-    _t15 = _t13 - _t14
-    _t16 = 1.6666666666666667*_t10
-    _t17 = 0.2*_t16
-    _t18 = _t2*_t9
-    _t19 = _t4*_t8
-    _t20 = _t18 - _t19
-    _t21 = 1.6666666666666667*_t15
-    _t22 = 0.2*_t21
-    _t23 = 1.6666666666666667*_t20
-    _t24 = 0.2*_t23
-    _t25 = _t5*thetadot_right
-    _t26 = _t8*thetadot_left
-    _t27 = _t11*thetadot_right
-    _t28 = _t16*thetadot_left
-    _t29 = K_theta_cart_x_tractor*_t1
-    _t30 = K_theta_cart_x_tractor_2*_t2
-    _t31 = K_theta_cart_x_tractor*_t2
-    _t32 = K_theta_cart_x_tractor*_t3
-    _t33 = K_theta_cart_x_tractor_2*_t4
-    _t34 = _t25 + _t26
-    _t35 = _t34*_t34
-    _t36 = _t27 + _t28
-    _t37 = _t36*_t36
-    _t38 = K_theta_cart_x_tractor_2*_t1
-    _t39 = K_theta_cart_x_tractor*_t4
-    _t40 = K_theta_cart_x_tractor_2*_t3
-    _t41 = _t34*thetadot_right
-    _t42 = _t34*thetadot_left
-    _t43 = _t29 + _t30
-    _t44 = _t11*_t43
-    _t45 = _t16*_t43
-    _t46 = _t32 - _t33
-    _t47 = J_theta_cart*_t11 + _t43*_t6 + _t46*_t5
-    _t48 = J_theta_cart*_t16 + _t43*_t9 + _t46*_t8
-    _t49 = 1.0/radius_cart_right
-    _t50 = _t12 + _t15
-    _t51 = _t49*_t50
-    _t52 = J_theta_cart_right*_t51
-    _t53 = _t17 + _t20
-    _t54 = _t49*_t53
-    _t55 = J_theta_cart_right*_t54
-    _t56 = 1.0/radius_cart_left
-    _t57 = -_t12 + _t13 - _t14
-    _t58 = _t56*_t57
-    _t59 = J_theta_cart_left*_t58
-    _t60 = -_t17 + _t18 - _t19
-    _t61 = _t56*_t60
-    _t62 = J_theta_cart_left*_t61
-    _t63 = K_theta_tractor_x_tractor*_t35 + _t31*_t37 - _t37*_t38
-    _t64 = -_t36*thetadot_right + _t41
-    _t65 = -_t36*thetadot_left + _t42
-    _t66 = _t21*_t64 + _t23*_t65
-    _t67 = _t43*_t66 + _t63
-    _t68 = -_t37*_t39 - _t37*_t40
-    _t69 = _t41*_t6 + _t42*_t9
-    _t70 = -K_theta_tractor_x_tractor*_t69 + _t46*_t66 + _t68
-    _t71 = K_theta_cart_x_tractor_2*_t1 - _t31
-    _t72 = _t35*_t39 + _t35*_t40
-    _t73 = J_theta_cart*_t66 + _t69*_t71 + _t72
-    _t74 = math.cos(theta_tractor)
-    _t75 = math.sin(theta_tractor)
-    _t76 = _t16*_t71
-    _t77 = _t71*_t9
-    _t78 = _t39 + _t40
-    _t79 = _t78*_t8
-    _t80 = -_t10 + _t24
-    _t81 = _t49*_t80
-    _t82 = J_theta_cart_right*_t81
-    _t83 = -_t10 - _t24
-    _t84 = _t56*_t83
-    _t85 = J_theta_cart_left*_t84
-    _t86 = 2.0*_t36
-    _t87 = _t31*_t86 - _t38*_t86
-    _t88 = 0.6*_t36
-    _t89 = -_t29*_t88 - _t30*_t88
-    _t90 = -_t22 - _t7
-    _t91 = _t56*_t90
-    _t92 = J_theta_cart_left*_t91
-    _t93 = _t22 - _t7
-    _t94 = _t49*_t93
-    _t95 = J_theta_cart_right*_t94
-    _t96 = _t6*_t71
-    _t97 = _t5*_t78
-    _t98 = _t11*_t71
-    _t99 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t45
-    _t100 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t46
-    _t101 = J_theta_left + _t100*_t8 + _t16*_t48 + _t54*_t55 + _t61*_t62 + _t9*_t99
-    _t102 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t44
-    _t103 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t46
-    _t104 = J_theta_right + _t102*_t6 + _t103*_t5 + _t11*_t47 + _t51*_t52 + _t58*_t59
-    _t105 = _t100*_t5 + _t11*_t48 + _t51*_t55 + _t58*_t62 + _t6*_t99
-    _t106 = _t101*_t104 - _t105*_t105
-    _t107 = 1.0/_t106
-    _t108 = _t107
-    _t109 = _t101*_t108
-    _t110 = _t105*_t108
-    _t111 = _t64*_t94 + _t65*_t81
-    _t112 = _t64*_t91 + _t65*_t84
-    _t113 = _t11*_t73 + _t111*_t52 + _t112*_t59 + _t5*_t70 + _t6*_t67
-    _t114 = -_t113 + tau_right
-    _t115 = _t108*_t114
-    _t116 = _t111*_t55 + _t112*_t62 + _t16*_t73 + _t67*_t9 + _t70*_t8
-    _t117 = -_t116 + tau_left
-    _t118 = _t108*_t117
-    _t119 = _t23*_t43 + _t76
-    _t120 = _t16*_t78 + _t23*_t46
-    _t121 = J_theta_cart*_t23 + _t77 + _t79
-    _t122 = _t11*_t121 + _t119*_t6 + _t120*_t5 + _t21*_t48 + _t51*_t82 + _t55*_t94 + _t58*_t85 + _t62*_t91
-    _t123 = _t119*_t9 + _t120*_t8 + _t121*_t16 + _t23*_t48 + _t54*_t82 + _t55*_t81 + _t61*_t85 + _t62*_t84
-    _t124 = _t21*_t43 + _t98
-    _t125 = _t11*_t78 + _t21*_t46
-    _t126 = J_theta_cart*_t21 + _t96 + _t97
-    _t127 = _t11*_t126 + _t124*_t6 + _t125*_t5 + _t21*_t47 + _t51*_t95 + _t52*_t94 + _t58*_t92 + _t59*_t91
-    _t128 = _t101*_t127 + _t104*_t123 - 2.0*_t105*_t122
-    _t129 = -_t107*_t107*_t128
-    _t130 = _t115*_t123 - _t118*_t122 + _t129*(_t101*_t114 - _t105*_t117)
-    _t131 = 2.0*K_theta_tractor_x_tractor*_t34
-    _t132 = 0.6*_t34
-    _t133 = _t132*_t29 + _t132*_t30
-    _t134 = _t25 + _t34
-    _t135 = _t5*thetadot_left
-    _t136 = -_t36
-    _t137 = -K_theta_tractor_x_tractor*_t5 + _t98
-    _t138 = -K_theta_tractor_x_tractor*_t8 + _t76
-    _t139 = _t8*thetadot_right
-    _t140 = _t26 + _t34
-    _t141 = _t104*_t108
-    _t142 = -_t115*_t122 + _t118*_t127 + _t129*(_t104*_t117 - _t105*_t114)
-    _t143 = _t6*thetadot_right + _t9*thetadot_left
-    _t144 = _t143*_t74
-    _t145 = _t143*_t75
-    _t146 = _t6*_t74
-    _t147 = _t74*_t9
-    _t148 = _t6*_t75
-    _t149 = _t75*_t9
-    _t150 = _t21*thetadot_right + _t23*thetadot_left
-    _t151 = _t81*thetadot_left + _t94*thetadot_right
-    _t152 = _t84*thetadot_left + _t91*thetadot_right
-    _t153 = _t150*_t87 + _t29*_t37 + _t30*_t37
-    _t154 = _t150*_t89 + _t32*_t37 - _t33*_t37
-    _t155 = 0.3*K_theta_cart_x_tractor_2*_t1*_t35 - _t32*_t35
-    _t156 = -_t150*thetadot_right
-    _t157 = -_t150*thetadot_left
-    _t158 = -_t11*_t64 + _t156*_t21 + _t157*_t23 - _t16*_t65
-    _t159 = _t156*_t94 + _t157*_t81 - _t51*_t64 - _t54*_t65
-    _t160 = _t156*_t91 + _t157*_t84 - _t58*_t64 - _t61*_t65
-    _t161 = _t11*_t155 + _t111*_t95 + _t112*_t92 + _t153*_t6 + _t154*_t5 + _t158*_t47 + _t159*_t52 + _t160*_t59 + _t21*_t73 - _t44*_t69 + _t66*_t96 + _t66*_t97
-    _t162 = _t111*_t82 + _t112*_t85 + _t153*_t9 + _t154*_t8 + _t155*_t16 + _t158*_t48 + _t159*_t55 + _t160*_t62 + _t23*_t73 - _t45*_t69 + _t66*_t77 + _t66*_t79
-    _t163 = -_t109*_t161 + _t110*_t162 + _t130
-    _t164 = _t101*_t108*_t161 - _t110*_t162 - _t130
-    _t165 = _t11*_t87 + _t131*_t5
-    _t166 = _t11*_t89
-    _t167 = _t133*_t5
-    _t168 = _t134*_t6 + _t135*_t9
-    _t169 = _t134 + _t136 - _t27
-    _t170 = -_t11*thetadot_left + _t135
-    _t171 = _t169*_t21 + _t170*_t23
-    _t172 = _t169*_t94 + _t170*_t81
-    _t173 = _t169*_t91 + _t170*_t84
-    _t174 = _t11*_t167 + _t137*_t168 + _t165*_t6 + _t166*_t5 + _t171*_t47 + _t172*_t52 + _t173*_t59
-    _t175 = _t138*_t168 + _t16*_t167 + _t165*_t9 + _t166*_t8 + _t171*_t48 + _t172*_t55 + _t173*_t62
-    _t176 = -_t101*_t108*_t174 + _t110*_t175
-    _t177 = _t131*_t8 + _t16*_t87
-    _t178 = _t16*_t89
-    _t179 = _t133*_t8
-    _t180 = _t139*_t6 + _t140*_t9
-    _t181 = _t139 - _t16*thetadot_right
-    _t182 = _t136 + _t140 - _t28
-    _t183 = _t181*_t21 + _t182*_t23
-    _t184 = _t181*_t94 + _t182*_t81
-    _t185 = _t181*_t91 + _t182*_t84
-    _t186 = _t11*_t179 + _t137*_t180 + _t177*_t6 + _t178*_t5 + _t183*_t47 + _t184*_t52 + _t185*_t59
-    _t187 = _t138*_t180 + _t16*_t179 + _t177*_t9 + _t178*_t8 + _t183*_t48 + _t184*_t55 + _t185*_t62
-    _t188 = -_t101*_t108*_t186 + _t110*_t187
-    _t189 = _t110*_t161 - _t141*_t162 + _t142
-    _t190 = _t104*_t108*_t162 - _t110*_t161 - _t142
-    _t191 = _t110*_t174 - _t141*_t175
-    _t192 = _t110*_t186 - _t141*_t187
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = K_theta_cart_x_tractor*_t1
+    _t10 = K_theta_cart_x_tractor_2*_t2
+    _t11 = K_theta_cart_x_tractor*_t2
+    _t12 = K_theta_cart_x_tractor*_t3
+    _t13 = K_theta_cart_x_tractor_2*_t4
+    _t14 = 2.4154589371980677*radius_right
+    _t15 = -2.4154589371980677*radius_left
+    _t16 = _t14*thetadot_right + _t15*thetadot_left
+    _t17 = _t16*_t16
+    _t18 = 0.5*radius_right
+    _t19 = 0.5*radius_left
+    _t20 = _t18*thetadot_right + _t19*thetadot_left
+    _t21 = _t16*_t7 + _t20*_t5
+    _t22 = _t21*_t21
+    _t23 = K_theta_cart_x_tractor_2*_t1
+    _t24 = K_theta_cart_x_tractor*_t4
+    _t25 = K_theta_cart_x_tractor_2*_t3
+    _t26 = 1.6666666666666667*_t2
+    _t27 = 0.2*_t26
+    _t28 = -1.6666666666666667*_t4
+    _t29 = 0.2*_t28
+    _t30 = _t16*_t20
+    _t31 = _t10 + _t9
+    _t32 = _t31*_t5
+    _t33 = _t31*_t7
+    _t34 = J_theta_cart*_t5 + _t31
+    _t35 = _t12 - _t13
+    _t36 = J_theta_cart*_t7 + _t35
+    _t37 = 1.0/radius_cart_right
+    _t38 = _t2 + _t6
+    _t39 = _t37*_t38
+    _t40 = J_theta_cart_right*_t39
+    _t41 = -_t4 + _t8
+    _t42 = _t37*_t41
+    _t43 = J_theta_cart_right*_t42
+    _t44 = 1.0/radius_cart_left
+    _t45 = _t2 - _t6
+    _t46 = _t44*_t45
+    _t47 = J_theta_cart_left*_t46
+    _t48 = -_t4 - _t8
+    _t49 = _t44*_t48
+    _t50 = J_theta_cart_left*_t49
+    _t51 = K_theta_cart_x_tractor_2*_t1 - _t11
+    _t52 = _t17*_t24 + _t17*_t25
+    _t53 = -_t20*_t21 + _t30
+    _t54 = -_t16*_t21 + _t17
+    _t55 = _t26*_t53 + _t28*_t54
+    _t56 = J_theta_cart*_t55 + _t30*_t51 + _t52
+    _t57 = math.cos(theta_tractor)
+    _t58 = math.sin(theta_tractor)
+    _t59 = _t29 + _t3
+    _t60 = _t37*_t59
+    _t61 = J_theta_cart_right*_t60
+    _t62 = -_t29 + _t3
+    _t63 = _t44*_t62
+    _t64 = J_theta_cart_left*_t63
+    _t65 = 2.0*_t21
+    _t66 = _t11*_t65 - _t23*_t65
+    _t67 = _t1 - _t27
+    _t68 = _t44*_t67
+    _t69 = J_theta_cart_left*_t68
+    _t70 = _t1 + _t27
+    _t71 = _t37*_t70
+    _t72 = J_theta_cart_right*_t71
+    _t73 = 0.6*_t21
+    _t74 = -_t10*_t73 - _t73*_t9
+    _t75 = _t5*_t51
+    _t76 = 1.0/radius_right
+    _t77 = 1.0/radius_left
+    _t78 = K_theta_tractor_x_tractor_2 + _t33
+    _t79 = 0.207*_t76
+    _t80 = J_theta_right*_t79
+    _t81 = -0.207*_t77
+    _t82 = J_theta_left*_t81
+    _t83 = _t36*_t5 + _t39*_t43 + _t46*_t50 + _t76*_t80 + _t77*_t82 + _t78
+    _t84 = J_x_tractor + _t32
+    _t85 = J_theta_right*_t76
+    _t86 = J_theta_left*_t77
+    _t87 = _t34*_t5 + _t39*_t40 + _t46*_t47 + _t76*_t85 + _t77*_t86 + _t84
+    _t88 = J_theta_tractor + _t35*_t7
+    _t89 = _t36*_t7 + _t42*_t43 + _t49*_t50 + _t79*_t80 + _t81*_t82 + _t88
+    _t90 = -_t83*_t83 + _t87*_t89
+    _t91 = 1.0/_t90
+    _t92 = _t91
+    _t93 = _t83*_t92
+    _t94 = K_theta_tractor_x_tractor*_t17 + _t11*_t22 - _t22*_t23
+    _t95 = _t53*_t71 + _t54*_t60
+    _t96 = _t53*_t68 + _t54*_t63
+    _t97 = _t31*_t55 + _t40*_t95 + _t47*_t96 + _t5*_t56 + _t94
+    _t98 = _t76*tau_right + _t77*tau_left - _t97
+    _t99 = _t92*_t98
+    _t100 = _t89*_t92
+    _t101 = -_t22*_t24 - _t22*_t25
+    _t102 = -K_theta_tractor_x_tractor*_t30 + _t101 + _t35*_t55 + _t43*_t95 + _t50*_t96 + _t56*_t7
+    _t103 = -_t102 + _t79*tau_right + _t81*tau_left
+    _t104 = _t103*_t92
+    _t105 = _t87*_t92
+    _t106 = 2.0*_t16
+    _t107 = K_theta_tractor_x_tractor*_t106
+    _t108 = 0.6*_t16
+    _t109 = _t10*_t108 + _t108*_t9
+    _t110 = _t14*_t20
+    _t111 = -_t21
+    _t112 = _t111 + _t16
+    _t113 = _t106 + _t111
+    _t114 = -K_theta_tractor_x_tractor + _t51*_t7
+    _t115 = _t15*_t20
+    _t116 = _t14*_t79 + _t18*_t76
+    _t117 = _t14*_t81 + _t18*_t77
+    _t118 = _t15*_t79 + _t19*_t76
+    _t119 = _t15*_t81 + _t19*_t77
+    _t120 = _t20*_t57
+    _t121 = _t20*_t58
+    _t122 = _t18*_t57
+    _t123 = _t19*_t57
+    _t124 = _t18*_t58
+    _t125 = _t19*_t58
+    _t126 = _t16*_t28 + _t20*_t26
+    _t127 = _t14*_t7 + _t18*_t5
+    _t128 = _t15*_t7 + _t19*_t5
+    _t129 = _t16*_t60 + _t20*_t71
+    _t130 = _t14*_t42 + _t18*_t39
+    _t131 = _t15*_t42 + _t19*_t39
+    _t132 = _t16*_t63 + _t20*_t68
+    _t133 = _t14*_t49 + _t18*_t46
+    _t134 = _t15*_t49 + _t19*_t46
+    _t135 = _t28*_t31 + _t51*_t7
+    _t136 = _t24 + _t25
+    _t137 = J_theta_cart*_t28 + _t136
+    _t138 = _t135 + _t137*_t5 + _t26*_t36 + _t39*_t61 + _t43*_t71 + _t46*_t64 + _t50*_t68
+    _t139 = _t136*_t7 + _t28*_t35
+    _t140 = _t137*_t7 + _t139 + _t28*_t36 + _t42*_t61 + _t43*_t60 + _t49*_t64 + _t50*_t63
+    _t141 = _t10*_t22 + _t126*_t66 + _t22*_t9
+    _t142 = 0.3*K_theta_cart_x_tractor_2*_t1*_t17 - _t12*_t17
+    _t143 = -_t126*_t20
+    _t144 = -_t126*_t16
+    _t145 = _t143*_t26 + _t144*_t28 - _t5*_t53 - _t54*_t7
+    _t146 = _t143*_t71 + _t144*_t60 - _t39*_t53 - _t42*_t54
+    _t147 = _t143*_t68 + _t144*_t63 - _t46*_t53 - _t49*_t54
+    _t148 = _t141 + _t142*_t5 + _t145*_t34 + _t146*_t40 + _t147*_t47 + _t26*_t56 - _t30*_t32 + _t51*_t55 + _t69*_t96 + _t72*_t95
+    _t149 = _t12*_t22 + _t126*_t74 - _t13*_t22
+    _t150 = _t136*_t55 + _t142*_t7 + _t145*_t36 + _t146*_t43 + _t147*_t50 + _t149 + _t28*_t56 - _t30*_t33 + _t61*_t95 + _t64*_t96
+    _t151 = _t26*_t31 + _t75
+    _t152 = J_theta_cart*_t26 + _t51
+    _t153 = _t151 + _t152*_t5 + _t26*_t34 + _t39*_t72 + _t40*_t71 + _t46*_t69 + _t47*_t68
+    _t154 = -2.0*_t138*_t83 + _t140*_t87 + _t153*_t89
+    _t155 = -_t154*_t91*_t91
+    _t156 = -_t100*_t148 - _t104*_t138 + _t140*_t99 + _t150*_t93 + _t155*(-_t103*_t83 + _t89*_t98)
+    _t157 = _t104*_t153 - _t105*_t150 - _t138*_t99 + _t148*_t93 + _t155*(_t103*_t87 - _t83*_t98)
+    _t158 = _t156*_t76 + _t157*_t79
+    _t159 = _t107*_t14 + _t127*_t66
+    _t160 = _t109*_t14
+    _t161 = _t110 + _t112*_t18 - _t127*_t20
+    _t162 = _t113*_t14 - _t127*_t16
+    _t163 = _t161*_t26 + _t162*_t28
+    _t164 = _t161*_t71 + _t162*_t60
+    _t165 = _t161*_t68 + _t162*_t63
+    _t166 = _t110 + _t16*_t18
+    _t167 = _t159 + _t160*_t5 + _t163*_t34 + _t164*_t40 + _t165*_t47 + _t166*_t75
+    _t168 = _t127*_t74
+    _t169 = _t114*_t166 + _t160*_t7 + _t163*_t36 + _t164*_t43 + _t165*_t50 + _t168
+    _t170 = -_t100*_t167 + _t169*_t93
+    _t171 = -_t105*_t169 + _t167*_t83*_t92
+    _t172 = _t170*_t76 + _t171*_t79
+    _t173 = _t107*_t15 + _t128*_t66
+    _t174 = _t109*_t15
+    _t175 = _t112*_t19 + _t115 - _t128*_t20
+    _t176 = _t113*_t15 - _t128*_t16
+    _t177 = _t175*_t26 + _t176*_t28
+    _t178 = _t175*_t71 + _t176*_t60
+    _t179 = _t175*_t68 + _t176*_t63
+    _t180 = _t115 + _t16*_t19
+    _t181 = _t173 + _t174*_t5 + _t177*_t34 + _t178*_t40 + _t179*_t47 + _t180*_t75
+    _t182 = _t128*_t74
+    _t183 = _t114*_t180 + _t174*_t7 + _t177*_t36 + _t178*_t43 + _t179*_t50 + _t182
+    _t184 = -_t100*_t181 + _t183*_t93
+    _t185 = -_t105*_t183 + _t181*_t83*_t92
+    _t186 = _t184*_t76 + _t185*_t79
+    _t187 = _t156*_t77 + _t157*_t81
+    _t188 = _t170*_t77 + _t171*_t81
+    _t189 = _t184*_t77 + _t185*_t81
+    _t190 = _t76*_t89*_t92 - _t79*_t93
+    _t191 = _t105*_t79 - _t76*_t93
+    _t192 = _t190*_t76 + _t191*_t79
+    _t193 = _t77*_t89*_t92 - _t81*_t93
+    _t194 = _t105*_t81 - _t77*_t93
+    _t195 = _t193*_t76 + _t194*_t79
+    _t196 = _t190*_t77 + _t191*_t81
+    _t197 = _t193*_t77 + _t194*_t81
     A = np.array([
-        [0.0, 0.0, -_t145, 0.0, 0.0, 0.0, 0.0, 0.0, _t146, _t147],
-        [0.0, 0.0, _t144, 0.0, 0.0, 0.0, 0.0, 0.0, _t148, _t149],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t5, _t8],
-        [0.0, 0.0, _t150, -_t150, 0.0, 0.0, 0.0, 0.0, _t11, _t16],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
-        [0.0, 0.0, _t151, -_t151, 0.0, 0.0, 0.0, 0.0, _t51, _t54],
-        [0.0, 0.0, _t152, -_t152, 0.0, 0.0, 0.0, 0.0, _t58, _t61],
-        [0.0, 0.0, _t163, _t164, 0.0, 0.0, 0.0, 0.0, _t176, _t188],
-        [0.0, 0.0, _t189, _t190, 0.0, 0.0, 0.0, 0.0, _t191, _t192],
+        [0.0, 0.0, -_t121, 0.0, 0.0, 0.0, 0.0, 0.0, _t122, _t123],
+        [0.0, 0.0, _t120, 0.0, 0.0, 0.0, 0.0, 0.0, _t124, _t125],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t14, _t15],
+        [0.0, 0.0, _t126, -_t126, 0.0, 0.0, 0.0, 0.0, _t127, _t128],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t116, _t118],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t117, _t119],
+        [0.0, 0.0, _t129, -_t129, 0.0, 0.0, 0.0, 0.0, _t130, _t131],
+        [0.0, 0.0, _t132, -_t132, 0.0, 0.0, 0.0, 0.0, _t133, _t134],
+        [0.0, 0.0, _t158, -_t158, 0.0, 0.0, 0.0, 0.0, _t172, _t186],
+        [0.0, 0.0, _t187, -_t187, 0.0, 0.0, 0.0, 0.0, _t188, _t189],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -868,8 +864,8 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t109, -_t110],
-        [-_t110, _t141],
+        [_t192, _t195],
+        [_t196, _t197],
     ])
     return A, B
 
@@ -897,7 +893,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 2 (shape 2x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 136 add, 202 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -920,140 +916,155 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
     if not all(map(math.isfinite, (theta_tractor, theta_cart, thetadot_right, thetadot_left, tau_right, tau_left, J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right,))):
         raise ValueError("TRAILER_ERR_NONFINITE_INPUT: an input of wheel_contact_forces is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = -radius_right
-        _t1 = -radius_left
-        _t2 = 1.0/radius_cart_right
-        _t3 = 1.0/radius_cart_left
-        _t4 = theta_cart - theta_tractor
-        _t5 = math.sin(_t4)
-        _t6 = -_t5
-        _t7 = math.cos(_t4)
-        _t8 = 0.3*_t7
+        _t0 = 1.0/radius_cart_right
+        _t1 = 1.0/radius_cart_left
+        _t2 = 2.4154589371980677*radius_right
+        _t3 = -2.4154589371980677*radius_left
+        _t4 = _t2*thetadot_right + _t3*thetadot_left
+        _t5 = -_t4*thetadot_right
+        _t6 = -_t4*thetadot_left
+        _t7 = theta_cart - theta_tractor
+        _t8 = math.sin(_t7)
         _t9 = -_t8
-        _t10 = 0.3*_t5
-        _t11 = -2.4154589371980677*_t0
-        _t12 = -0.5*_t0
-        _t13 = _t11*_t9 + _t12*_t6
-        _t14 = 2.4154589371980677*_t1
-        _t15 = -0.5*_t1
-        _t16 = _t14*_t9 + _t15*_t6
-        _t17 = 1.6666666666666667*_t13
-        _t18 = 0.2*_t17
-        _t19 = _t12*_t7
-        _t20 = _t10*_t11
-        _t21 = _t19 - _t20
-        _t22 = 1.6666666666666667*_t16
-        _t23 = 0.2*_t22
-        _t24 = _t15*_t7
-        _t25 = _t10*_t14
-        _t26 = _t24 - _t25
-        _t27 = 1.6666666666666667*_t21
-        _t28 = 0.2*_t27
-        _t29 = 1.6666666666666667*_t26
-        _t30 = 0.2*_t29
-        _t31 = K_theta_cart_x_tractor*_t5
-        _t32 = K_theta_cart_x_tractor_2*_t7
-        _t33 = _t31 + _t32
-        _t34 = K_theta_cart_x_tractor*_t7
-        _t35 = K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t10
-        _t36 = _t11*thetadot_right + _t14*thetadot_left
-        _t37 = _t36*_t36
-        _t38 = _t17*thetadot_right + _t22*thetadot_left
+        _t10 = math.cos(_t7)
+        _t11 = 0.3*_t10
+        _t12 = -_t11
+        _t13 = 0.3*_t8
+        _t14 = 0.5*radius_right
+        _t15 = _t12*_t2 + _t14*_t9
+        _t16 = 0.5*radius_left
+        _t17 = _t12*_t3 + _t16*_t9
+        _t18 = 1.6666666666666667*_t15
+        _t19 = 0.2*_t18
+        _t20 = _t10*_t14
+        _t21 = _t13*_t2
+        _t22 = _t20 - _t21
+        _t23 = 1.6666666666666667*_t17
+        _t24 = 0.2*_t23
+        _t25 = _t10*_t16
+        _t26 = _t13*_t3
+        _t27 = _t25 - _t26
+        _t28 = 1.6666666666666667*_t22
+        _t29 = 0.2*_t28
+        _t30 = 1.6666666666666667*_t27
+        _t31 = 0.2*_t30
+        _t32 = K_theta_cart_x_tractor*_t8
+        _t33 = K_theta_cart_x_tractor_2*_t10
+        _t34 = _t32 + _t33
+        _t35 = K_theta_cart_x_tractor*_t10
+        _t36 = K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t13
+        _t37 = _t4*_t4
+        _t38 = _t18*thetadot_right + _t23*thetadot_left
         _t39 = _t38*_t38
-        _t40 = K_theta_cart_x_tractor*_t10
-        _t41 = K_theta_cart_x_tractor_2*_t8
-        _t42 = _t18 + _t21
-        _t43 = _t2*_t42
+        _t40 = K_theta_cart_x_tractor*_t13
+        _t41 = K_theta_cart_x_tractor_2*_t11
+        _t42 = _t19 + _t22
+        _t43 = _t0*_t42
         _t44 = J_theta_cart_right*_t43
-        _t45 = _t23 + _t26
-        _t46 = _t2*_t45
+        _t45 = _t24 + _t27
+        _t46 = _t0*_t45
         _t47 = J_theta_cart_right*_t46
-        _t48 = -_t18 + _t19 - _t20
-        _t49 = _t3*_t48
+        _t48 = -_t19 + _t20 - _t21
+        _t49 = _t1*_t48
         _t50 = J_theta_cart_left*_t49
-        _t51 = -_t23 + _t24 - _t25
-        _t52 = _t3*_t51
+        _t51 = -_t24 + _t25 - _t26
+        _t52 = _t1*_t51
         _t53 = J_theta_cart_left*_t52
-        _t54 = -K_theta_cart_x_tractor_2*_t39*_t5 + K_theta_tractor_x_tractor*_t37 + _t34*_t39
-        _t55 = _t36*thetadot_right
-        _t56 = _t36*thetadot_left
-        _t57 = _t38*thetadot_right
-        _t58 = _t38*thetadot_left
-        _t59 = _t27*_t55 - _t27*_t57 + _t29*_t56 - _t29*_t58
-        _t60 = _t33*_t59 + _t54
-        _t61 = -_t39*_t40 - _t39*_t41
-        _t62 = _t12*_t55 + _t15*_t56
-        _t63 = -K_theta_tractor_x_tractor*_t62 + _t61
-        _t64 = _t35*_t59 + _t63
-        _t65 = K_theta_cart_x_tractor_2*_t5 - _t34
-        _t66 = _t37*_t40 + _t37*_t41
-        _t67 = _t62*_t65 + _t66
-        _t68 = J_theta_cart*_t59 + _t67
-        _t69 = J_x_tractor*_t15 + K_theta_tractor_x_tractor_2*_t14 + _t22*_t33
-        _t70 = J_theta_tractor*_t14 + K_theta_tractor_x_tractor_2*_t15 + _t22*_t35
-        _t71 = J_theta_cart*_t22 + _t14*_t35 + _t15*_t33
-        _t72 = _t11*_t70 + _t12*_t69 + _t17*_t71 + _t43*_t47 + _t49*_t53
-        _t73 = J_theta_left + _t14*_t70 + _t15*_t69 + _t22*_t71 + _t46*_t47 + _t52*_t53
-        _t74 = -_t13 + _t28
-        _t75 = _t2*_t74
-        _t76 = -_t16 + _t30
-        _t77 = _t2*_t76
-        _t78 = _t55*_t75 + _t56*_t77 - _t57*_t75 - _t58*_t77
-        _t79 = -_t13 - _t28
-        _t80 = _t3*_t79
-        _t81 = -_t16 - _t30
-        _t82 = _t3*_t81
-        _t83 = _t55*_t80 + _t56*_t82 - _t57*_t80 - _t58*_t82
-        _t84 = _t11*_t64 + _t12*_t60 + _t17*_t68 + _t44*_t78 + _t50*_t83
-        _t85 = -_t84 + tau_right
-        _t86 = _t14*_t64 + _t15*_t60 + _t22*_t68 + _t47*_t78 + _t53*_t83
-        _t87 = -_t86 + tau_left
-        _t88 = J_x_tractor*_t12 + K_theta_tractor_x_tractor_2*_t11 + _t17*_t33
-        _t89 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t12 + _t17*_t35
-        _t90 = J_theta_cart*_t17 + _t11*_t35 + _t12*_t33
-        _t91 = J_theta_right + _t11*_t89 + _t12*_t88 + _t17*_t90 + _t43*_t44 + _t49*_t50
-        _t92 = -_t72*_t72 + _t73*_t91
-        _t93 = 1.0/_t92
-        _t94 = _t93*(-_t72*_t87 + _t73*_t85)
-        _t95 = _t93*(-_t72*_t85 + _t87*_t91)
-        _t96 = _t12*_t94 + _t15*_t95
-        _t97 = _t11*_t94 + _t14*_t95
-        _t98 = _t17*_t94 + _t22*_t95 + _t59
-        _t99 = -J_x_tractor*_t96 - K_theta_tractor_x_tractor_2*_t97 - _t33*_t98 - _t54
-        _t100 = _t43*_t94 + _t46*_t95 + _t78
-        _t101 = -J_theta_cart_right*_t100
-        _t102 = _t101*_t2
-        _t103 = _t49*_t94 + _t52*_t95 + _t83
-        _t104 = -J_theta_cart_left*_t103
-        _t105 = _t104*_t3
-        _t106 = -J_theta_cart*_t98 - _t33*_t96 - _t35*_t97 - _t67
-        _t107 = 0.2*_t102 - 0.2*_t105 + _t106
-        _t108 = -1.6666666666666667*_t107
-        _t109 = _t102*_t7 + _t105*_t7 + _t108*_t5 + _t99
-        _t110 = 0.5*_t109
-        _t111 = -J_theta_tractor*_t97 - K_theta_tractor_x_tractor_2*_t96 - _t35*_t98 - _t63
-        _t112 = -_t10*_t102 - _t10*_t105 + _t108*_t8 + _t111
-        _t113 = 2.4154589371980677*_t112
-        _t114 = K_theta_tractor_x_tractor_2*_t37 + _t31*_t39 + _t32*_t39
-        _t115 = -J_x_tractor*_t62 + K_theta_tractor_x_tractor*_t97 - _t114 - _t65*_t98
-        _t116 = _t102*_t5 + _t105*_t5 - _t108*_t7 + _t115
-        _t117 = -_t110 + _t113
-        _t118 = -_t110 - _t113
-        _t119 = _t12*_t7 + _t18 - _t20
-        _t120 = _t15*_t7 + _t23 - _t25
-        _t121 = _t119*_t2
-        _t122 = _t120*_t2
-        _t123 = _t12*_t7 - _t18 - _t20
-        _t124 = _t15*_t7 - _t23 - _t25
-        _t125 = _t123*_t3
-        _t126 = _t124*_t3
-        _t127 = J_theta_cart_right*_t121
-        _t128 = J_theta_cart_right*_t122
-        _t129 = J_theta_cart_left*_t125
-        _t130 = J_theta_cart_left*_t126
-        _t131 = J_theta_right + _t11*_t89 + _t12*_t88 + _t121*_t127 + _t125*_t129 + _t17*_t90
-        _t132 = _t11*_t70 + _t12*_t69 + _t121*_t128 + _t125*_t130 + _t17*_t71
-        _t133 = J_theta_left + _t122*_t128 + _t126*_t130 + _t14*_t70 + _t15*_t69 + _t22*_t71
+        _t54 = -K_theta_cart_x_tractor_2*_t39*_t8 + K_theta_tractor_x_tractor*_t37 + _t35*_t39
+        _t55 = -_t38*thetadot_right - _t5
+        _t56 = -_t38*thetadot_left - _t6
+        _t57 = _t28*_t55 + _t30*_t56
+        _t58 = _t34*_t57 + _t54
+        _t59 = K_theta_cart_x_tractor_2*_t8 - _t35
+        _t60 = _t37*_t40 + _t37*_t41
+        _t61 = -_t14*_t5 - _t16*_t6
+        _t62 = _t59*_t61 + _t60
+        _t63 = J_theta_cart*_t57 + _t62
+        _t64 = -_t39*_t40 - _t39*_t41
+        _t65 = -K_theta_tractor_x_tractor*_t61 + _t64
+        _t66 = _t36*_t57 + _t65
+        _t67 = J_x_tractor*_t16 + K_theta_tractor_x_tractor_2*_t3 + _t23*_t34
+        _t68 = J_theta_tractor*_t3 + K_theta_tractor_x_tractor_2*_t16 + _t23*_t36
+        _t69 = J_theta_cart*_t23 + _t16*_t34 + _t3*_t36
+        _t70 = _t14*_t67 + _t18*_t69 + _t2*_t68 + _t43*_t47 + _t49*_t53
+        _t71 = J_theta_left + _t16*_t67 + _t23*_t69 + _t3*_t68 + _t46*_t47 + _t52*_t53
+        _t72 = -_t15 + _t29
+        _t73 = _t0*_t72
+        _t74 = -_t17 + _t31
+        _t75 = _t0*_t74
+        _t76 = _t55*_t73 + _t56*_t75
+        _t77 = -_t15 - _t29
+        _t78 = _t1*_t77
+        _t79 = -_t17 - _t31
+        _t80 = _t1*_t79
+        _t81 = _t55*_t78 + _t56*_t80
+        _t82 = _t14*_t58 + _t18*_t63 + _t2*_t66 + _t44*_t76 + _t50*_t81
+        _t83 = -_t82 + tau_right
+        _t84 = _t16*_t58 + _t23*_t63 + _t3*_t66 + _t47*_t76 + _t53*_t81
+        _t85 = -_t84 + tau_left
+        _t86 = J_x_tractor*_t14 + K_theta_tractor_x_tractor_2*_t2 + _t18*_t34
+        _t87 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t14 + _t18*_t36
+        _t88 = J_theta_cart*_t18 + _t14*_t34 + _t2*_t36
+        _t89 = J_theta_right + _t14*_t86 + _t18*_t88 + _t2*_t87 + _t43*_t44 + _t49*_t50
+        _t90 = -_t70*_t70 + _t71*_t89
+        _t91 = 1.0/_t90
+        _t92 = _t91*(-_t70*_t85 + _t71*_t83)
+        _t93 = _t91*(-_t70*_t83 + _t85*_t89)
+        _t94 = _t14*_t92 + _t16*_t93
+        _t95 = _t2*_t92 + _t3*_t93
+        _t96 = _t18*_t92 + _t23*_t93 + _t57
+        _t97 = -J_x_tractor*_t94 - K_theta_tractor_x_tractor_2*_t95 - _t34*_t96 - _t54
+        _t98 = _t43*_t92 + _t46*_t93 + _t76
+        _t99 = -J_theta_cart_right*_t98
+        _t100 = _t0*_t99
+        _t101 = _t49*_t92 + _t52*_t93 + _t81
+        _t102 = -J_theta_cart_left*_t101
+        _t103 = _t1*_t102
+        _t104 = -J_theta_cart*_t96 - _t34*_t94 - _t36*_t95 - _t62
+        _t105 = 0.2*_t100 - 0.2*_t103 + _t104
+        _t106 = -1.6666666666666667*_t105
+        _t107 = _t10*_t100 + _t10*_t103 + _t106*_t8 + _t97
+        _t108 = 0.5*_t107
+        _t109 = -J_theta_tractor*_t95 - K_theta_tractor_x_tractor_2*_t94 - _t36*_t96 - _t65
+        _t110 = -_t100*_t13 - _t103*_t13 + _t106*_t11 + _t109
+        _t111 = 2.4154589371980677*_t110
+        _t112 = 1.6666666666666667*_t9
+        _t113 = 0.2*_t112
+        _t114 = 1.6666666666666667*_t12
+        _t115 = 0.2*_t114
+        _t116 = K_theta_tractor_x_tractor_2*_t37 + _t32*_t39 + _t33*_t39
+        _t117 = -J_x_tractor*_t61 + K_theta_tractor_x_tractor*_t95 - _t116 - _t59*_t96
+        _t118 = -_t10*_t106 + _t100*_t8 + _t103*_t8 + _t117
+        _t119 = -_t108 + _t111
+        _t120 = -_t108 - _t111
+        _t121 = 1.0/radius_right
+        _t122 = 0.207*_t121
+        _t123 = 1.0/radius_left
+        _t124 = -0.207*_t123
+        _t125 = _t10 + _t113
+        _t126 = _t115 - _t13
+        _t127 = _t0*_t125
+        _t128 = _t0*_t126
+        _t129 = _t10 - _t113
+        _t130 = -_t115 - _t13
+        _t131 = _t1*_t129
+        _t132 = _t1*_t130
+        _t133 = J_x_tractor + _t112*_t34
+        _t134 = K_theta_tractor_x_tractor_2 + _t114*_t34
+        _t135 = J_theta_tractor + _t114*_t36
+        _t136 = J_theta_cart*_t112 + _t34
+        _t137 = J_theta_cart*_t114 + _t36
+        _t138 = J_theta_right*_t121
+        _t139 = J_theta_right*_t122
+        _t140 = J_theta_left*_t123
+        _t141 = J_theta_left*_t124
+        _t142 = J_theta_cart_right*_t127
+        _t143 = J_theta_cart_right*_t128
+        _t144 = J_theta_cart_left*_t131
+        _t145 = J_theta_cart_left*_t132
+        _t146 = _t112*_t136 + _t121*_t138 + _t123*_t140 + _t127*_t142 + _t131*_t144 + _t133
+        _t147 = _t112*_t137 + _t121*_t139 + _t123*_t141 + _t127*_t143 + _t131*_t145 + _t134
+        _t148 = _t114*_t137 + _t122*_t139 + _t124*_t141 + _t128*_t143 + _t132*_t145 + _t135
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -1078,12 +1089,12 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_x_tractor > 0")
-    if not (_t131 > 0.0):
+    if not (_t146 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t131*_t133 - _t132*_t132 > 0.0):
+    if not (_t146*_t148 - _t147*_t147 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t118, _t117])
-    lateral = np.array([-_t116, -_t108])
+    longitudinal = np.array([_t120, _t119])
+    lateral = np.array([-_t118, -_t106])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):

@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 10 (shape 10x1, row-major)
 
-    operations after CSE: 77 add, 132 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 68 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _, thetadot_right, thetadot_left = _flat(x, 10, "x")
     tau_right, tau_left = _flat(tau, 2, "tau")
@@ -85,106 +85,94 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t2 = math.cos(_t0)
     _t3 = 0.3*_t2
     _t4 = 0.3*_t1
-    _t5 = 2.4154589371980677*radius_right
-    _t6 = 0.5*radius_right
-    _t7 = -_t1*_t6 - _t3*_t5
-    _t8 = -2.4154589371980677*radius_left
-    _t9 = 0.5*radius_left
-    _t10 = -_t1*_t9 - _t3*_t8
-    _t11 = 1.6666666666666667*_t7
-    _t12 = 0.2*_t11
-    _t13 = _t2*_t6
-    _t14 = _t4*_t5
-    _t15 = _t13 - _t14
-    _t16 = 1.6666666666666667*_t10
-    _t17 = 0.2*_t16
-    _t18 = _t2*_t9
-    _t19 = _t4*_t8
-    _t20 = _t18 - _t19
-    _t21 = 1.6666666666666667*_t15
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = K_theta_cart_x_tractor*_t2
+    _t10 = 2.4154589371980677*radius_right
+    _t11 = -2.4154589371980677*radius_left
+    _t12 = _t10*thetadot_right + _t11*thetadot_left
+    _t13 = _t12*_t12
+    _t14 = 0.5*radius_right
+    _t15 = 0.5*radius_left
+    _t16 = _t14*thetadot_right + _t15*thetadot_left
+    _t17 = _t12*_t7 + _t16*_t5
+    _t18 = _t17*_t17
+    _t19 = K_theta_cart_x_tractor*_t4
+    _t20 = K_theta_cart_x_tractor_2*_t3
+    _t21 = 1.6666666666666667*_t2
     _t22 = 0.2*_t21
-    _t23 = 1.6666666666666667*_t20
+    _t23 = -1.6666666666666667*_t4
     _t24 = 0.2*_t23
-    _t25 = K_theta_cart_x_tractor*_t2
-    _t26 = _t5*thetadot_right + _t8*thetadot_left
-    _t27 = _t26*_t26
-    _t28 = _t11*thetadot_right + _t16*thetadot_left
-    _t29 = _t28*_t28
-    _t30 = K_theta_cart_x_tractor*_t4
-    _t31 = K_theta_cart_x_tractor_2*_t3
-    _t32 = _t26*thetadot_right
-    _t33 = _t26*thetadot_left
-    _t34 = 1.0/radius_cart_right
-    _t35 = _t12 + _t15
-    _t36 = _t34*_t35
-    _t37 = J_theta_cart_right*_t36
-    _t38 = _t17 + _t20
-    _t39 = _t34*_t38
-    _t40 = J_theta_cart_right*_t39
-    _t41 = 1.0/radius_cart_left
-    _t42 = -_t12 + _t13 - _t14
-    _t43 = _t41*_t42
-    _t44 = J_theta_cart_left*_t43
-    _t45 = -_t17 + _t18 - _t19
-    _t46 = _t41*_t45
-    _t47 = J_theta_cart_left*_t46
-    _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t49 = -K_theta_cart_x_tractor_2*_t1*_t29 + K_theta_tractor_x_tractor*_t27 + _t25*_t29
-    _t50 = -_t28*thetadot_right + _t32
-    _t51 = -_t28*thetadot_left + _t33
-    _t52 = _t21*_t50 + _t23*_t51
-    _t53 = _t48*_t52 + _t49
-    _t54 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t55 = -_t29*_t30 - _t29*_t31
-    _t56 = _t32*_t6 + _t33*_t9
-    _t57 = -K_theta_tractor_x_tractor*_t56 + _t52*_t54 + _t55
-    _t58 = K_theta_cart_x_tractor_2*_t1 - _t25
-    _t59 = _t27*_t30 + _t27*_t31
-    _t60 = J_theta_cart*_t52 + _t56*_t58 + _t59
-    _t61 = _t22 - _t7
-    _t62 = _t34*_t61
-    _t63 = -_t10 + _t24
-    _t64 = _t34*_t63
-    _t65 = -_t22 - _t7
-    _t66 = _t41*_t65
-    _t67 = -_t10 - _t24
-    _t68 = _t41*_t67
-    _t69 = _t6*thetadot_right + _t9*thetadot_left
-    _t70 = _t36*thetadot_right + _t39*thetadot_left
-    _t71 = _t43*thetadot_right + _t46*thetadot_left
-    _t72 = _t50*_t62 + _t51*_t64
-    _t73 = _t50*_t66 + _t51*_t68
-    _t74 = J_x_tractor*_t6 + K_theta_tractor_x_tractor_2*_t5 + _t11*_t48
-    _t75 = J_x_tractor*_t9 + K_theta_tractor_x_tractor_2*_t8 + _t16*_t48
-    _t76 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t6 + _t11*_t54
-    _t77 = J_theta_tractor*_t8 + K_theta_tractor_x_tractor_2*_t9 + _t16*_t54
-    _t78 = J_theta_cart*_t11 + _t48*_t6 + _t5*_t54
-    _t79 = J_theta_cart*_t16 + _t48*_t9 + _t54*_t8
-    _t80 = J_theta_right + _t11*_t78 + _t36*_t37 + _t43*_t44 + _t5*_t76 + _t6*_t74
-    _t81 = _t11*_t79 + _t36*_t40 + _t43*_t47 + _t5*_t77 + _t6*_t75
-    _t82 = J_theta_left + _t16*_t79 + _t39*_t40 + _t46*_t47 + _t75*_t9 + _t77*_t8
-    _t83 = _t11*_t60 + _t37*_t72 + _t44*_t73 + _t5*_t57 + _t53*_t6
-    _t84 = _t16*_t60 + _t40*_t72 + _t47*_t73 + _t53*_t9 + _t57*_t8
-    _t85 = -_t83 + tau_right
-    _t86 = -_t84 + tau_left
-    _t87 = _t80*_t82 - _t81*_t81
-    _t88 = 1.0/_t87
-    _t89 = _t88*(-_t81*_t86 + _t82*_t85)
-    _t90 = _t88*(_t80*_t86 - _t81*_t85)
-    _t91 = _t69*math.cos(theta_tractor)
-    _t92 = _t69*math.sin(theta_tractor)
-    xdot = np.array([
-        _t91,
-        _t92,
-        _t26,
-        _t28,
-        thetadot_right,
-        thetadot_left,
-        _t70,
-        _t71,
-        _t89,
-        _t90,
-    ])
+    _t25 = _t12*_t16
+    _t26 = 1.0/radius_cart_right
+    _t27 = _t2 + _t6
+    _t28 = _t26*_t27
+    _t29 = J_theta_cart_right*_t28
+    _t30 = -_t4 + _t8
+    _t31 = _t26*_t30
+    _t32 = J_theta_cart_right*_t31
+    _t33 = 1.0/radius_cart_left
+    _t34 = _t2 - _t6
+    _t35 = _t33*_t34
+    _t36 = J_theta_cart_left*_t35
+    _t37 = -_t4 - _t8
+    _t38 = _t33*_t37
+    _t39 = J_theta_cart_left*_t38
+    _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
+    _t41 = _t13*_t19 + _t13*_t20
+    _t42 = -_t16*_t17 + _t25
+    _t43 = -_t12*_t17 + _t13
+    _t44 = _t21*_t42 + _t23*_t43
+    _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
+    _t46 = 1.0/radius_right
+    _t47 = 0.207*_t46
+    _t48 = 1.0/radius_left
+    _t49 = -0.207*_t48
+    _t50 = _t12*_t47 + _t16*_t46
+    _t51 = _t12*_t49 + _t16*_t48
+    _t52 = _t12*_t31 + _t16*_t28
+    _t53 = _t12*_t38 + _t16*_t35
+    _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+    _t57 = -_t18*_t19 - _t18*_t20
+    _t58 = _t1 + _t22
+    _t59 = _t26*_t58
+    _t60 = _t24 + _t3
+    _t61 = _t26*_t60
+    _t62 = _t1 - _t22
+    _t63 = _t33*_t62
+    _t64 = -_t24 + _t3
+    _t65 = _t33*_t64
+    _t66 = _t42*_t59 + _t43*_t61
+    _t67 = _t42*_t63 + _t43*_t65
+    _t68 = J_x_tractor + _t5*_t54
+    _t69 = K_theta_tractor_x_tractor_2 + _t54*_t7
+    _t70 = J_theta_tractor + _t55*_t7
+    _t71 = J_theta_cart*_t5 + _t54
+    _t72 = J_theta_cart*_t7 + _t55
+    _t73 = J_theta_right*_t46
+    _t74 = J_theta_right*_t47
+    _t75 = J_theta_left*_t48
+    _t76 = J_theta_left*_t49
+    _t77 = _t28*_t29 + _t35*_t36 + _t46*_t73 + _t48*_t75 + _t5*_t71 + _t68
+    _t78 = _t28*_t32 + _t35*_t39 + _t46*_t74 + _t48*_t76 + _t5*_t72 + _t69
+    _t79 = _t31*_t32 + _t38*_t39 + _t47*_t74 + _t49*_t76 + _t7*_t72 + _t70
+    _t80 = _t29*_t66 + _t36*_t67 + _t44*_t54 + _t45*_t5 + _t56
+    _t81 = -K_theta_tractor_x_tractor*_t25 + _t32*_t66 + _t39*_t67 + _t44*_t55 + _t45*_t7 + _t57
+    _t82 = _t46*tau_right + _t48*tau_left - _t80
+    _t83 = _t47*tau_right + _t49*tau_left - _t81
+    _t84 = _t77*_t79 - _t78*_t78
+    _t85 = 1.0/_t84
+    _t86 = _t85*(-_t78*_t83 + _t79*_t82)
+    _t87 = _t85*(_t77*_t83 - _t78*_t82)
+    _t88 = _t46*_t86 + _t47*_t87
+    _t89 = _t48*_t86 + _t49*_t87
+    _t90 = _t16*math.cos(theta_tractor)
+    _t91 = _t16*math.sin(theta_tractor)
+    xdot = np.array([_t90, _t91, _t12, _t17, _t50, _t51, _t52, _t53, _t88, _t89])
     return xdot
 
 

@@ -220,59 +220,40 @@ trailer2_status_t trailer2_check_nominal(const trailer2_params_t *p,
     ok = ok && (p->J_theta_tractor > TRAILER2_LIT(0.0));  /* J_theta_tractor > 0 */
     ok = ok && (p->J_x_tractor > TRAILER2_LIT(0.0));  /* J_x_tractor > 0 */
     if (ok) {  /* S^T M S may divide by the positive parameters */
-        const trailer2_real_t t0 = p->radius_right*p->radius_right;
-        const trailer2_real_t t1 =
+        const trailer2_real_t t0 =
                 p->J_theta_cart2_left/(p->radius_cart2_left*p->radius_cart2_left);
-        const trailer2_real_t t2 =
+        const trailer2_real_t t1 =
                 p->J_theta_cart2_right/(p->radius_cart2_right*p->radius_cart2_right);
-        const trailer2_real_t t3 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
-        const trailer2_real_t t4 =
+        const trailer2_real_t t2 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
+        const trailer2_real_t t3 =
                 p->J_theta_cart_right/(p->radius_cart_right*p->radius_cart_right);
-        const trailer2_real_t t5 = TRAILER2_LIT(0.5032206119162641)*p->radius_right;
-        const trailer2_real_t t6 = p->K_theta_cart2_x_tractor*p->radius_right;
+        const trailer2_real_t t4 = p->J_theta_left/(p->radius_left*p->radius_left);
+        const trailer2_real_t t5 = p->J_theta_right/(p->radius_right*p->radius_right);
+        const trailer2_real_t t6 = p->J_x_tractor + t0 + t1 + t2 + t3 + t4 + t5;
         const trailer2_real_t t7 = TRAILER2_LIT(0.5)*p->radius_right;
-        const trailer2_real_t t8 = TRAILER2_LIT(1.2077294685990339)*p->radius_right;
-        const trailer2_real_t t9 = p->K_theta_cart_x_tractor*p->radius_right;
-        const trailer2_real_t t10 = TRAILER2_LIT(2.4154589371980677)*p->radius_right;
-        const trailer2_real_t t11 = p->radius_left*p->radius_right;
-        const trailer2_real_t t12 = TRAILER2_LIT(0.23987076062970483)*t11;
-        const trailer2_real_t t13 = TRAILER2_LIT(0.1916555812270998)*t11;
-        const trailer2_real_t t14 = TRAILER2_LIT(0.5032206119162641)*p->radius_left;
-        const trailer2_real_t t15 = p->K_theta_cart2_x_tractor*p->radius_left;
-        const trailer2_real_t t16 = TRAILER2_LIT(0.5)*p->radius_left;
-        const trailer2_real_t t17 = -p->J_theta_cart2*t14 + p->K_theta_cart2_x_tractor_2*t16
-                + TRAILER2_LIT(0.30193236714975846)*t15;
-        const trailer2_real_t t18 = TRAILER2_LIT(1.2077294685990339)*p->radius_left;
-        const trailer2_real_t t19 = p->J_theta_cart*t18
-                - TRAILER2_LIT(0.7246376811594203)*p->K_theta_cart_x_tractor*p->radius_left
-                + p->K_theta_cart_x_tractor_2*t16 - TRAILER2_LIT(0.4277375201288245)*t15;
-        const trailer2_real_t t20 = TRAILER2_LIT(2.4154589371980677)*p->radius_left;
-        const trailer2_real_t t21 = -p->J_theta_tractor*t20
-                + TRAILER2_LIT(0.36231884057971014)*p->K_theta_cart_x_tractor*p->radius_left
-                + TRAILER2_LIT(0.5)*p->K_theta_tractor_x_tractor_2*p->radius_left
-                - TRAILER2_LIT(0.15096618357487923)*t15;
-        const trailer2_real_t t22 = p->J_x_tractor*t16 - p->K_theta_cart2_x_tractor_2*t14
-                + p->K_theta_cart_x_tractor_2*t18 - p->K_theta_tractor_x_tractor_2*t20;
-        const trailer2_real_t t23 = t1*t12 + t10*t21 + t12*t2 + t13*t3 + t13*t4 + t17*t5 - t19*t8
-                + t22*t7;
-        const trailer2_real_t t24 = p->radius_left*p->radius_left;
+        const trailer2_real_t t8 = TRAILER2_LIT(0.20833333333333334)*p->K_theta_cart2_x_tractor_2
+                - TRAILER2_LIT(0.5)*p->K_theta_cart_x_tractor_2 + p->K_theta_tractor_x_tractor_2
+                - TRAILER2_LIT(0.041666666666666664)*t0 + TRAILER2_LIT(0.041666666666666664)*t1
+                + TRAILER2_LIT(0.1)*t2 - TRAILER2_LIT(0.1)*t3 - TRAILER2_LIT(0.207)*t4
+                + TRAILER2_LIT(0.207)*t5;
+        const trailer2_real_t t9 = TRAILER2_LIT(2.4154589371980677)*p->radius_right;
+        const trailer2_real_t t10 = TRAILER2_LIT(0.25)*p->J_theta_cart
+                + TRAILER2_LIT(0.043402777777777776)*p->J_theta_cart2 + p->J_theta_tractor
+                - TRAILER2_LIT(0.052083333333333336)*p->K_theta_cart2_x_tractor
+                - TRAILER2_LIT(0.3)*p->K_theta_cart_x_tractor
+                + TRAILER2_LIT(0.001736111111111111)*t0 + TRAILER2_LIT(0.001736111111111111)*t1
+                + TRAILER2_LIT(0.01)*t2 + TRAILER2_LIT(0.01)*t3 + TRAILER2_LIT(0.042849)*t4
+                + TRAILER2_LIT(0.042849)*t5;
+        const trailer2_real_t t11 = TRAILER2_LIT(0.5)*p->radius_left;
+        const trailer2_real_t t12 = TRAILER2_LIT(2.4154589371980677)*p->radius_left;
+        const trailer2_real_t t13 = t11*t6 - t12*t8;
+        const trailer2_real_t t14 = -t10*t12 + t11*t8;
+        const trailer2_real_t t15 = t13*t7 + t14*t9;
         const trailer2_real_t mbar[4] = {
-            p->J_theta_right + TRAILER2_LIT(0.15948511698704235)*t0*t1
-                    + TRAILER2_LIT(0.360773361753548)*t0*t2 + TRAILER2_LIT(0.5498903124927069)*t0*t3
-                    + TRAILER2_LIT(0.06679852505309342)*t0*t4 + t10*(p->J_theta_tractor*t10
-                    + p->K_theta_tractor_x_tractor_2*t7 + TRAILER2_LIT(0.15096618357487923)*t6
-                    - TRAILER2_LIT(0.36231884057971014)*t9) + t5*(p->J_theta_cart2*t5
-                    + p->K_theta_cart2_x_tractor_2*t7 - TRAILER2_LIT(0.30193236714975846)*t6)
-                    + t7*(p->J_x_tractor*t7 + p->K_theta_cart2_x_tractor_2*t5
-                    - p->K_theta_cart_x_tractor_2*t8 + p->K_theta_tractor_x_tractor_2*t10)
-                    - t8*(-p->J_theta_cart*t8 + p->K_theta_cart_x_tractor_2*t7
-                    + TRAILER2_LIT(0.4277375201288245)*t6 + TRAILER2_LIT(0.7246376811594203)*t9),
-            t23,
-            t23,
-            p->J_theta_left + TRAILER2_LIT(0.360773361753548)*t1*t24 - t14*t17 + t16*t22 + t18*t19
-                    + TRAILER2_LIT(0.15948511698704235)*t2*t24 - t20*t21
-                    + TRAILER2_LIT(0.06679852505309342)*t24*t3
-                    + TRAILER2_LIT(0.5498903124927069)*t24*t4
+            t7*(t6*t7 + t8*t9) + t9*(t10*t9 + t7*t8),
+            t15,
+            t15,
+            t11*t13 - t12*t14
         };
         ok = ok && (mbar[0] > TRAILER2_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */

@@ -31,7 +31,7 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.
-   operations after CSE: 86 add, 135 mul, 5 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 75 add, 119 mul, 7 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 87 add, 138 mul, 5 div, 4 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 72 add, 120 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
 }
 
 /* trailer2_minimal_tdc_law: documented in trailer2_laws.h.
-   operations after CSE: 92 add, 141 mul, 4 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 77 add, 123 mul, 6 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -126,7 +126,7 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 97 add, 149 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -140,7 +140,7 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 196 add, 288 mul, 6 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 181 add, 273 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -155,7 +155,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 192 add, 285 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 177 add, 270 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,

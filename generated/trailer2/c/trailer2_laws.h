@@ -79,7 +79,7 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
  * @param[in]  span [1] row-major (TRAILER2_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER2_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 86 add, 135 mul, 5 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 75 add, 119 mul, 7 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
@@ -100,7 +100,7 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
  *     theta_cart_left, theta_cart2_right, theta_cart2_left -- measured q
  * @param[out] norm [1] row-major (TRAILER2_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 87 add, 138 mul, 5 div, 4 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 72 add, 120 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm);
@@ -187,7 +187,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
  * @param[in]  H1hat [2] row-major (TRAILER2_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER2_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 92 add, 141 mul, 4 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 77 add, 123 mul, 6 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -237,7 +237,7 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
  * @param[out] s [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 97 add, 149 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -293,7 +293,7 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER2_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 196 add, 288 mul, 6 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 181 add, 273 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
@@ -352,7 +352,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 192 add, 285 mul, 5 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 177 add, 270 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,

@@ -246,79 +246,53 @@ trailer3_status_t trailer3_check_nominal(const trailer3_params_t *p,
     ok = ok && (p->J_theta_tractor > TRAILER3_LIT(0.0));  /* J_theta_tractor > 0 */
     ok = ok && (p->J_x_tractor > TRAILER3_LIT(0.0));  /* J_x_tractor > 0 */
     if (ok) {  /* S^T M S may divide by the positive parameters */
-        const trailer3_real_t t0 = p->radius_right*p->radius_right;
-        const trailer3_real_t t1 =
+        const trailer3_real_t t0 =
                 p->J_theta_cart2_left/(p->radius_cart2_left*p->radius_cart2_left);
-        const trailer3_real_t t2 =
-                p->J_theta_cart2_right/(p->radius_cart2_right*p->radius_cart2_right);
-        const trailer3_real_t t3 =
-                p->J_theta_cart3_left/(p->radius_cart3_left*p->radius_cart3_left);
-        const trailer3_real_t t4 =
+        const trailer3_real_t t1 = TRAILER3_LIT(1.0)/(p->radius_cart2_right*p->radius_cart2_right);
+        const trailer3_real_t t2 = p->J_theta_cart2_right*t1;
+        const trailer3_real_t t3 = TRAILER3_LIT(1.0)/(p->radius_cart3_left*p->radius_cart3_left);
+        const trailer3_real_t t4 = p->J_theta_cart3_left*t3;
+        const trailer3_real_t t5 =
                 p->J_theta_cart3_right/(p->radius_cart3_right*p->radius_cart3_right);
-        const trailer3_real_t t5 = p->J_theta_cart_left/(p->radius_cart_left*p->radius_cart_left);
-        const trailer3_real_t t6 =
+        const trailer3_real_t t6 = TRAILER3_LIT(1.0)/(p->radius_cart_left*p->radius_cart_left);
+        const trailer3_real_t t7 = p->J_theta_cart_left*t6;
+        const trailer3_real_t t8 =
                 p->J_theta_cart_right/(p->radius_cart_right*p->radius_cart_right);
-        const trailer3_real_t t7 = TRAILER3_LIT(0.20967525496511003)*p->radius_right;
-        const trailer3_real_t t8 = p->K_theta_cart3_x_tractor*p->radius_right;
-        const trailer3_real_t t9 = TRAILER3_LIT(0.5)*p->radius_right;
-        const trailer3_real_t t10 = TRAILER3_LIT(0.5032206119162641)*p->radius_right;
-        const trailer3_real_t t11 = p->K_theta_cart2_x_tractor*p->radius_right;
-        const trailer3_real_t t12 = -TRAILER3_LIT(0.17822396672034352)*t8;
-        const trailer3_real_t t13 = TRAILER3_LIT(1.2077294685990339)*p->radius_right;
-        const trailer3_real_t t14 = p->K_theta_cart_x_tractor*p->radius_right;
+        const trailer3_real_t t9 = p->J_theta_left/(p->radius_left*p->radius_left);
+        const trailer3_real_t t10 = TRAILER3_LIT(1.0)/(p->radius_right*p->radius_right);
+        const trailer3_real_t t11 = p->J_theta_right*t10;
+        const trailer3_real_t t12 = p->J_x_tractor + t0 + t11 + t2 + t4 + t5 + t7 + t8 + t9;
+        const trailer3_real_t t13 = TRAILER3_LIT(0.5)*p->radius_right;
+        const trailer3_real_t t14 = TRAILER3_LIT(0.041666666666666664)*p->J_theta_cart2_right*t1
+                + TRAILER3_LIT(0.017361111111111112)*p->J_theta_cart3_left*t3
+                + TRAILER3_LIT(0.1)*p->J_theta_cart_left*t6
+                + TRAILER3_LIT(0.207)*p->J_theta_right*t10
+                + TRAILER3_LIT(0.20833333333333334)*p->K_theta_cart2_x_tractor_2
+                - TRAILER3_LIT(0.08680555555555555)*p->K_theta_cart3_x_tractor_2
+                - TRAILER3_LIT(0.5)*p->K_theta_cart_x_tractor_2 + p->K_theta_tractor_x_tractor_2
+                - TRAILER3_LIT(0.041666666666666664)*t0 - TRAILER3_LIT(0.017361111111111112)*t5
+                - TRAILER3_LIT(0.1)*t8 - TRAILER3_LIT(0.207)*t9;
         const trailer3_real_t t15 = TRAILER3_LIT(2.4154589371980677)*p->radius_right;
-        const trailer3_real_t t16 = p->radius_left*p->radius_right;
-        const trailer3_real_t t17 = TRAILER3_LIT(0.23987076062970483)*t16;
-        const trailer3_real_t t18 = TRAILER3_LIT(0.24824145149821264)*t16;
-        const trailer3_real_t t19 = TRAILER3_LIT(0.1916555812270998)*t16;
-        const trailer3_real_t t20 = TRAILER3_LIT(0.20967525496511003)*p->radius_left;
-        const trailer3_real_t t21 = p->K_theta_cart3_x_tractor*p->radius_left;
-        const trailer3_real_t t22 = TRAILER3_LIT(0.5)*p->radius_left;
-        const trailer3_real_t t23 = p->J_theta_cart3*t20 + p->K_theta_cart3_x_tractor_2*t22
-                - TRAILER3_LIT(0.12580515297906603)*t21;
-        const trailer3_real_t t24 = TRAILER3_LIT(0.5032206119162641)*p->radius_left;
-        const trailer3_real_t t25 = p->K_theta_cart2_x_tractor*p->radius_left;
-        const trailer3_real_t t26 = TRAILER3_LIT(0.17822396672034352)*t21;
-        const trailer3_real_t t27 = -p->J_theta_cart2*t24 + p->K_theta_cart2_x_tractor_2*t22
-                + TRAILER3_LIT(0.30193236714975846)*t25 + t26;
-        const trailer3_real_t t28 = TRAILER3_LIT(1.2077294685990339)*p->radius_left;
-        const trailer3_real_t t29 = p->K_theta_cart_x_tractor*p->radius_left;
-        const trailer3_real_t t30 = p->J_theta_cart*t28 + p->K_theta_cart_x_tractor_2*t22
-                - TRAILER3_LIT(0.4277375201288245)*t25 + t26 - TRAILER3_LIT(0.7246376811594203)*t29;
-        const trailer3_real_t t31 = TRAILER3_LIT(2.4154589371980677)*p->radius_left;
-        const trailer3_real_t t32 = -p->J_theta_tractor*t31 + p->K_theta_tractor_x_tractor_2*t22
-                + TRAILER3_LIT(0.06290257648953301)*t21 - TRAILER3_LIT(0.15096618357487923)*t25
-                + TRAILER3_LIT(0.36231884057971014)*t29;
-        const trailer3_real_t t33 = p->J_x_tractor*t22 - p->K_theta_cart2_x_tractor_2*t24
-                + p->K_theta_cart3_x_tractor_2*t20 + p->K_theta_cart_x_tractor_2*t28
-                - p->K_theta_tractor_x_tractor_2*t31;
-        const trailer3_real_t t34 = t1*t17 + t10*t27 - t13*t30 + t15*t32 + t17*t2 + t18*t3 + t18*t4
-                + t19*t5 + t19*t6 - t23*t7 + t33*t9;
-        const trailer3_real_t t35 = p->radius_left*p->radius_left;
+        const trailer3_real_t t16 = TRAILER3_LIT(0.25)*p->J_theta_cart
+                + TRAILER3_LIT(0.043402777777777776)*p->J_theta_cart2
+                + TRAILER3_LIT(0.007535204475308642)*p->J_theta_cart3 + p->J_theta_tractor
+                - TRAILER3_LIT(0.052083333333333336)*p->K_theta_cart2_x_tractor
+                - TRAILER3_LIT(0.00904224537037037)*p->K_theta_cart3_x_tractor
+                - TRAILER3_LIT(0.3)*p->K_theta_cart_x_tractor
+                + TRAILER3_LIT(0.001736111111111111)*t0 + TRAILER3_LIT(0.042849)*t11
+                + TRAILER3_LIT(0.001736111111111111)*t2 + TRAILER3_LIT(0.00030140817901234566)*t4
+                + TRAILER3_LIT(0.00030140817901234566)*t5 + TRAILER3_LIT(0.01)*t7
+                + TRAILER3_LIT(0.01)*t8 + TRAILER3_LIT(0.042849)*t9;
+        const trailer3_real_t t17 = TRAILER3_LIT(0.5)*p->radius_left;
+        const trailer3_real_t t18 = TRAILER3_LIT(2.4154589371980677)*p->radius_left;
+        const trailer3_real_t t19 = t12*t17 - t14*t18;
+        const trailer3_real_t t20 = t14*t17 - t16*t18;
+        const trailer3_real_t t21 = t13*t19 + t15*t20;
         const trailer3_real_t mbar[4] = {
-            p->J_theta_right + TRAILER3_LIT(0.15948511698704235)*t0*t1
-                    + TRAILER3_LIT(0.360773361753548)*t0*t2 + TRAILER3_LIT(0.2936935994948094)*t0*t3
-                    + TRAILER3_LIT(0.20982349750876536)*t0*t4
-                    + TRAILER3_LIT(0.5498903124927069)*t0*t5
-                    + TRAILER3_LIT(0.06679852505309342)*t0*t6 + t10*(p->J_theta_cart2*t10
-                    + p->K_theta_cart2_x_tractor_2*t9 - TRAILER3_LIT(0.30193236714975846)*t11 + t12)
-                    - t13*(-p->J_theta_cart*t13 + p->K_theta_cart_x_tractor_2*t9
-                    + TRAILER3_LIT(0.4277375201288245)*t11 + t12
-                    + TRAILER3_LIT(0.7246376811594203)*t14) + t15*(p->J_theta_tractor*t15
-                    + p->K_theta_tractor_x_tractor_2*t9 + TRAILER3_LIT(0.15096618357487923)*t11
-                    - TRAILER3_LIT(0.36231884057971014)*t14 - TRAILER3_LIT(0.06290257648953301)*t8)
-                    - t7*(-p->J_theta_cart3*t7 + p->K_theta_cart3_x_tractor_2*t9
-                    + TRAILER3_LIT(0.12580515297906603)*t8) + t9*(p->J_x_tractor*t9
-                    + p->K_theta_cart2_x_tractor_2*t10 - p->K_theta_cart3_x_tractor_2*t7
-                    - p->K_theta_cart_x_tractor_2*t13 + p->K_theta_tractor_x_tractor_2*t15),
-            t34,
-            t34,
-            p->J_theta_left + TRAILER3_LIT(0.360773361753548)*t1*t35
-                    + TRAILER3_LIT(0.15948511698704235)*t2*t35 + t20*t23 + t22*t33 - t24*t27
-                    + t28*t30 + TRAILER3_LIT(0.20982349750876536)*t3*t35 - t31*t32
-                    + TRAILER3_LIT(0.2936935994948094)*t35*t4
-                    + TRAILER3_LIT(0.06679852505309342)*t35*t5
-                    + TRAILER3_LIT(0.5498903124927069)*t35*t6
+            t13*(t12*t13 + t14*t15) + t15*(t13*t14 + t15*t16),
+            t21,
+            t21,
+            t17*t19 - t18*t20
         };
         ok = ok && (mbar[0] > TRAILER3_LIT(0.0));  /* (S^T M S)[0][0] > 0 */
         /* det(S^T M S) > 0: a positive-definite model */

@@ -31,7 +31,7 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.
-   operations after CSE: 140 add, 215 mul, 7 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 124 add, 186 mul, 9 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
@@ -42,7 +42,7 @@ void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_p
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 141 add, 221 mul, 7 div, 6 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 119 add, 190 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
@@ -114,7 +114,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
 }
 
 /* trailer3_minimal_tdc_law: documented in trailer3_laws.h.
-   operations after CSE: 146 add, 224 mul, 6 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 124 add, 193 mul, 8 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -126,7 +126,7 @@ void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 151 add, 232 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 129 add, 201 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -140,7 +140,7 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 346 add, 501 mul, 8 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 322 add, 473 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -155,7 +155,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 342 add, 498 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 318 add, 470 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,

@@ -79,7 +79,7 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
  * @param[in]  span [1] row-major (TRAILER3_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER3_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 140 add, 215 mul, 7 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 124 add, 186 mul, 9 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
@@ -101,7 +101,7 @@ void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_p
  *     theta_cart3_left -- measured q
  * @param[out] norm [1] row-major (TRAILER3_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 141 add, 221 mul, 7 div, 6 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 119 add, 190 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm);
@@ -189,7 +189,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
  * @param[in]  H1hat [2] row-major (TRAILER3_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER3_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 146 add, 224 mul, 6 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 124 add, 193 mul, 8 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -240,7 +240,7 @@ void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t 
  * @param[out] s [2] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 151 add, 232 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 129 add, 201 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -297,7 +297,7 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER3_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 346 add, 501 mul, 8 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 322 add, 473 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
@@ -357,7 +357,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 342 add, 498 mul, 7 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 318 add, 470 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,

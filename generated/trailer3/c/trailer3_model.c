@@ -7,7 +7,7 @@
 #include "trailer3_model.h"
 
 /* trailer3_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 355 add, 489 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 324 add, 447 mul, 9 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *tau, trailer3_real_t *qddot)
 {
@@ -74,8 +74,8 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t2 = TRAILER3_LIT(0.5)*radius_right;
     const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
@@ -87,10 +87,17 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
     const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
-    const trailer3_real_t _t15 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
-    const trailer3_real_t _t16 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer3_real_t _t17 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer3_real_t _t14 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t15 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t16 = J_theta_right*_t14;
+    const trailer3_real_t _t17 = J_theta_left*_t15;
+    const trailer3_real_t _t18 = _t14*_t16 + _t15*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.207)*_t14;
+    const trailer3_real_t _t20 = J_theta_right*_t19;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.207)*_t15;
+    const trailer3_real_t _t22 = J_theta_left*_t21;
+    const trailer3_real_t _t23 = _t14*_t20 + _t15*_t22;
+    const trailer3_real_t _t24 = _t19*_t20 + _t21*_t22;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -154,402 +161,370 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t _t18 = -theta_tractor;
-    const trailer3_real_t _t19 = _t18 + theta_cart;
-    const trailer3_real_t _t20 = TRAILER3_SIN(_t19);
-    const trailer3_real_t _t21 = TRAILER3_COS(_t19);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
-    const trailer3_real_t _t23 = _t18 + theta_cart2;
-    const trailer3_real_t _t24 = TRAILER3_SIN(_t23);
-    const trailer3_real_t _t25 = TRAILER3_COS(_t23);
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
-    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t29 = _t18 + theta_cart3;
-    const trailer3_real_t _t30 = TRAILER3_SIN(_t29);
-    const trailer3_real_t _t31 = TRAILER3_COS(_t29);
-    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
-    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
-    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
-    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
-    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
-    const trailer3_real_t _t41 = _t39*_t40;
-    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
-    const trailer3_real_t _t43 = _t41 + _t42;
-    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
-    const trailer3_real_t _t45 = _t39*_t44;
-    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
-    const trailer3_real_t _t47 = _t45 + _t46;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
-    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t50 = _t48*_t49;
-    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
-    const trailer3_real_t _t52 = _t40*_t51;
-    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
-    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
-    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t56 = _t48*_t55;
-    const trailer3_real_t _t57 = _t44*_t51;
-    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
-    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t61 = _t1*_t21;
-    const trailer3_real_t _t62 = _t0*_t34;
-    const trailer3_real_t _t63 = _t61 - _t62;
-    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t65 = _t21*_t3;
-    const trailer3_real_t _t66 = _t2*_t34;
-    const trailer3_real_t _t67 = _t65 - _t66;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
-    const trailer3_real_t _t70 = _t40*_t69;
-    const trailer3_real_t _t71 = _t1*_t25;
-    const trailer3_real_t _t72 = _t0*_t35;
-    const trailer3_real_t _t73 = _t71 - _t72;
-    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t75 = _t44*_t69;
-    const trailer3_real_t _t76 = _t25*_t3;
-    const trailer3_real_t _t77 = _t2*_t35;
-    const trailer3_real_t _t78 = _t76 - _t77;
-    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
-    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
-    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
-    const trailer3_real_t _t83 = _t0*_t36;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
-    const trailer3_real_t _t85 = _t40*_t84;
-    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
-    const trailer3_real_t _t87 = _t49*_t86;
-    const trailer3_real_t _t88 = _t1*_t31;
-    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
-    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
-    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
-    const trailer3_real_t _t92 = _t2*_t36;
-    const trailer3_real_t _t93 = _t44*_t84;
-    const trailer3_real_t _t94 = _t55*_t86;
-    const trailer3_real_t _t95 = _t3*_t31;
-    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
-    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
-    const trailer3_real_t _t98 = _t39*_t97;
-    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
-    const trailer3_real_t _t100 = _t39*_t99;
-    const trailer3_real_t _t101 = _t51*_t97;
-    const trailer3_real_t _t102 = _t51*_t99;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
-    const trailer3_real_t _t105 = -_t73 - _t98;
-    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
-    const trailer3_real_t _t108 = _t69*_t97;
-    const trailer3_real_t _t109 = _t108 + _t42;
-    const trailer3_real_t _t110 = -_t100 - _t78;
-    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
-    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
-    const trailer3_real_t _t113 = _t69*_t99;
-    const trailer3_real_t _t114 = _t113 + _t46;
-    const trailer3_real_t _t115 = _t70 + _t98;
-    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
-    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
-    const trailer3_real_t _t118 = _t100 + _t75;
-    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
-    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
-    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
-    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
-    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
-    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
-    const trailer3_real_t _t128 = _t84*_t97;
-    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
-    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
-    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
-    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t133 = _t84*_t99;
-    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
-    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
-    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
-    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
-    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
-    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
-    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t25 = -theta_tractor;
+    const trailer3_real_t _t26 = _t25 + theta_cart;
+    const trailer3_real_t _t27 = TRAILER3_SIN(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t25 + theta_cart2;
+    const trailer3_real_t _t31 = TRAILER3_SIN(_t30);
+    const trailer3_real_t _t32 = TRAILER3_COS(_t30);
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.3)*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t28;
+    const trailer3_real_t _t36 = _t25 + theta_cart3;
+    const trailer3_real_t _t37 = TRAILER3_SIN(_t36);
+    const trailer3_real_t _t38 = TRAILER3_COS(_t36);
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.3)*_t38;
+    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t38;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.3)*_t37;
+    const trailer3_real_t _t44 = -_t31*_t34 - _t32*_t35;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t27;
+    const trailer3_real_t _t46 = _t44*_t45;
+    const trailer3_real_t _t47 = -_t31 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t49 = _t44*_t48;
+    const trailer3_real_t _t50 = -_t33 + _t49;
+    const trailer3_real_t _t51 = -_t34*_t37 - _t35*_t38;
+    const trailer3_real_t _t52 = _t45*_t51;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t31*_t37 - _t32*_t40;
+    const trailer3_real_t _t54 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t55 = _t53*_t54;
+    const trailer3_real_t _t56 = -_t37 + _t52 + _t55;
+    const trailer3_real_t _t57 = _t48*_t51;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.6666666666666667)*_t50;
+    const trailer3_real_t _t59 = _t53*_t58;
+    const trailer3_real_t _t60 = -_t39 + _t57 + _t59;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t48;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t54;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.85)*_t28*_t31 - _t32*_t34;
+    const trailer3_real_t _t65 = _t45*_t64;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*_t58;
+    const trailer3_real_t _t67 = _t48*_t64;
+    const trailer3_real_t _t68 = _t42 + _t67;
+    const trailer3_real_t _t69 = -_t32 + _t65;
+    const trailer3_real_t _t70 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t28*_t37 - _t34*_t38;
+    const trailer3_real_t _t73 = _t45*_t72;
+    const trailer3_real_t _t74 = -_t31*_t40 + TRAILER3_LIT(0.85)*_t32*_t37;
+    const trailer3_real_t _t75 = _t54*_t74;
+    const trailer3_real_t _t76 = -_t38 + _t73 + _t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t78 = TRAILER3_LIT(0.2)*_t77;
+    const trailer3_real_t _t79 = _t48*_t72;
+    const trailer3_real_t _t80 = _t58*_t74;
+    const trailer3_real_t _t81 = _t43 + _t79 + _t80;
+    const trailer3_real_t _t82 = K_theta_cart2_x_tractor*_t31;
+    const trailer3_real_t _t83 = K_theta_cart2_x_tractor_2*_t32;
+    const trailer3_real_t _t84 = K_theta_cart3_x_tractor*_t37;
+    const trailer3_real_t _t85 = K_theta_cart3_x_tractor_2*_t38;
+    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t28;
+    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t32;
+    const trailer3_real_t _t88 = K_theta_cart3_x_tractor*_t38;
+    const trailer3_real_t _t89 = K_theta_cart2_x_tractor_2*_t31;
+    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t37;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t92 = TRAILER3_LIT(0.85)*_t32;
+    const trailer3_real_t _t93 = _t0*thetadot_right + _t1*thetadot_left;
+    const trailer3_real_t _t94 = _t93*_t93;
+    const trailer3_real_t _t95 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer3_real_t _t96 = _t54*_t95 + _t58*_t93;
+    const trailer3_real_t _t97 = _t96*_t96;
+    const trailer3_real_t _t98 = _t70*_t95 + _t77*_t93;
+    const trailer3_real_t _t99 = _t98*_t98;
+    const trailer3_real_t _t100 = _t88*_t99;
+    const trailer3_real_t _t101 = _t45*_t95 + _t48*_t93;
+    const trailer3_real_t _t102 = _t101*_t101;
+    const trailer3_real_t _t103 = _t89*_t97;
+    const trailer3_real_t _t104 = _t90*_t99;
+    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t42;
+    const trailer3_real_t _t106 = K_theta_cart2_x_tractor_2*_t33;
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t43;
+    const trailer3_real_t _t108 = K_theta_cart3_x_tractor_2*_t39;
+    const trailer3_real_t _t109 = _t35*_t97;
+    const trailer3_real_t _t110 = _t35*_t99;
+    const trailer3_real_t _t111 = _t102*_t34;
+    const trailer3_real_t _t112 = _t102*_t35;
+    const trailer3_real_t _t113 = _t92*_t99;
+    const trailer3_real_t _t114 = _t91*_t97;
+    const trailer3_real_t _t115 = _t92*_t97;
+    const trailer3_real_t _t116 = TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t117 = _t116*_t44;
+    const trailer3_real_t _t118 = -TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t119 = _t118*_t44;
+    const trailer3_real_t _t120 = _t116*_t51;
+    const trailer3_real_t _t121 = _t118*_t51;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t118;
+    const trailer3_real_t _t124 = -_t117 - _t32;
+    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
+    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
+    const trailer3_real_t _t127 = _t116*_t64;
+    const trailer3_real_t _t128 = _t127 - _t31;
+    const trailer3_real_t _t129 = -_t119 + _t42;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
+    const trailer3_real_t _t132 = _t118*_t64;
+    const trailer3_real_t _t133 = _t132 - _t33;
+    const trailer3_real_t _t134 = _t117 + _t65;
+    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
+    const trailer3_real_t _t137 = _t119 + _t67;
+    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(1.6666666666666667)*_t69;
     const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
-    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
-    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
-    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
-    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
-    const trailer3_real_t _t146 = _t121*_t86 + _t50;
-    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
-    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
-    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
-    const trailer3_real_t _t150 = _t123*_t86 + _t56;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
-    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
-    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
-    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
-    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
-    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
-    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
-    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
-    const trailer3_real_t _t167 = _t166*_t166;
-    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
-    const trailer3_real_t _t169 = _t168*_t168;
-    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
-    const trailer3_real_t _t171 = _t170*_t170;
-    const trailer3_real_t _t172 = _t161*_t171;
-    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
-    const trailer3_real_t _t174 = _t173*_t173;
-    const trailer3_real_t _t175 = _t162*_t169;
-    const trailer3_real_t _t176 = _t163*_t171;
-    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
-    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
-    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
-    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
-    const trailer3_real_t _t181 = _t169*_t28;
-    const trailer3_real_t _t182 = _t171*_t28;
-    const trailer3_real_t _t183 = _t174*_t27;
-    const trailer3_real_t _t184 = _t174*_t28;
-    const trailer3_real_t _t185 = _t165*_t171;
-    const trailer3_real_t _t186 = _t164*_t169;
-    const trailer3_real_t _t187 = _t165*_t169;
-    const trailer3_real_t _t188 = _t166*thetadot_right;
-    const trailer3_real_t _t189 = _t166*thetadot_left;
-    const trailer3_real_t _t190 = _t173*thetadot_right;
-    const trailer3_real_t _t191 = _t173*thetadot_left;
-    const trailer3_real_t _t192 = _t60 + _t63;
-    const trailer3_real_t _t193 = _t192*_t4;
-    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
-    const trailer3_real_t _t195 = _t64 + _t67;
-    const trailer3_real_t _t196 = _t195*_t4;
-    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
-    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
-    const trailer3_real_t _t199 = _t198*_t5;
-    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
-    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
-    const trailer3_real_t _t202 = _t201*_t5;
-    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
-    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
-    const trailer3_real_t _t205 = _t204*_t6;
-    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
-    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
-    const trailer3_real_t _t208 = _t207*_t6;
-    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
-    const trailer3_real_t _t210 = -_t68 - _t79;
-    const trailer3_real_t _t211 = _t210*_t7;
-    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
-    const trailer3_real_t _t213 = -_t74 - _t80;
-    const trailer3_real_t _t214 = _t213*_t7;
-    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
-    const trailer3_real_t _t216 = _t82 - _t89;
-    const trailer3_real_t _t217 = _t216*_t8;
-    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
-    const trailer3_real_t _t219 = _t91 - _t96;
-    const trailer3_real_t _t220 = _t219*_t8;
-    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
-    const trailer3_real_t _t222 = -_t82 - _t89;
-    const trailer3_real_t _t223 = _t222*_t9;
-    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
-    const trailer3_real_t _t225 = -_t91 - _t96;
-    const trailer3_real_t _t226 = _t225*_t9;
-    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
-    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
-    const trailer3_real_t _t229 = _t155 + _t156;
-    const trailer3_real_t _t230 = _t157 + _t158;
-    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
-            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
-    const trailer3_real_t _t232 = _t188 - _t190;
-    const trailer3_real_t _t233 = _t189 - _t191;
-    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
-    const trailer3_real_t _t235 = _t168*thetadot_right;
-    const trailer3_real_t _t236 = _t168*thetadot_left;
-    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
-            + _t121*_t235 + _t123*_t236;
-    const trailer3_real_t _t238 = _t170*thetadot_right;
-    const trailer3_real_t _t239 = _t170*thetadot_left;
-    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
-            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
-    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
-    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
-    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
-    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
-    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
-            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
-    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
-    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
-            + _t240*_t244 + _t245;
-    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
-    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
-    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
-    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
-            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
-    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
-            + _t251;
-    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
-    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
-    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
-            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
-    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
-            + _t255;
-    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
-    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
-            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
-    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
-            + _t258;
-    const trailer3_real_t _t260 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
-    const trailer3_real_t _t261 = _t15 + _t242*_t40 + _t243*_t49 + _t244*_t81;
-    const trailer3_real_t _t262 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
-            + _t250*_t81;
-    const trailer3_real_t _t263 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
-            + _t254*_t81;
-    const trailer3_real_t _t264 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
-            + _t254*_t49;
-    const trailer3_real_t _t265 = J_theta_right + _t0*_t261 + _t1*_t260 + _t193*_t194 + _t199*_t200
-            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t262*_t40 + _t263*_t49
-            + _t264*_t81;
-    const trailer3_real_t _t266 = _t16 + _t228*_t44 + _t229*_t55 + _t230*_t90;
-    const trailer3_real_t _t267 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
-    const trailer3_real_t _t268 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
-            + _t250*_t90;
-    const trailer3_real_t _t269 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
-            + _t254*_t90;
-    const trailer3_real_t _t270 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
-            + _t254*_t55;
-    const trailer3_real_t _t271 = _t0*_t267 + _t1*_t266 + _t193*_t197 + _t199*_t203 + _t205*_t209
-            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t268*_t40 + _t269*_t49 + _t270*_t81;
-    const trailer3_real_t _t272 = J_theta_left + _t196*_t197 + _t2*_t267 + _t202*_t203 + _t208*_t209
-            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t266*_t3 + _t268*_t44 + _t269*_t55
-            + _t270*_t90;
-    const trailer3_real_t _t273 = _t265*_t272 - _t271*_t271;
-    const trailer3_real_t _t274 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t275 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t276 = _t103 - _t37;
-    const trailer3_real_t _t277 = _t276*_t4;
-    const trailer3_real_t _t278 = _t104 - _t38;
-    const trailer3_real_t _t279 = _t278*_t4;
-    const trailer3_real_t _t280 = -_t103 - _t37;
-    const trailer3_real_t _t281 = _t280*_t5;
-    const trailer3_real_t _t282 = -_t104 - _t38;
-    const trailer3_real_t _t283 = _t282*_t5;
-    const trailer3_real_t _t284 = _t107 - _t109;
-    const trailer3_real_t _t285 = _t284*_t6;
-    const trailer3_real_t _t286 = _t112 - _t114;
-    const trailer3_real_t _t287 = _t286*_t6;
-    const trailer3_real_t _t288 = _t108 + _t117 - _t41;
-    const trailer3_real_t _t289 = _t288*_t6;
-    const trailer3_real_t _t290 = _t113 + _t120 - _t45;
-    const trailer3_real_t _t291 = _t290*_t6;
-    const trailer3_real_t _t292 = _t122 + _t43;
-    const trailer3_real_t _t293 = _t292*_t6;
-    const trailer3_real_t _t294 = _t124 + _t47;
-    const trailer3_real_t _t295 = _t294*_t6;
-    const trailer3_real_t _t296 = -_t107 - _t109;
-    const trailer3_real_t _t297 = _t296*_t7;
-    const trailer3_real_t _t298 = -_t112 - _t114;
-    const trailer3_real_t _t299 = _t298*_t7;
-    const trailer3_real_t _t300 = _t108 - _t117 - _t41;
-    const trailer3_real_t _t301 = _t300*_t7;
-    const trailer3_real_t _t302 = _t113 - _t120 - _t45;
-    const trailer3_real_t _t303 = _t302*_t7;
-    const trailer3_real_t _t304 = -_t122 + _t43;
-    const trailer3_real_t _t305 = _t304*_t7;
-    const trailer3_real_t _t306 = -_t124 + _t47;
-    const trailer3_real_t _t307 = _t306*_t7;
-    const trailer3_real_t _t308 = _t127 - _t129;
-    const trailer3_real_t _t309 = _t308*_t8;
-    const trailer3_real_t _t310 = _t132 - _t134;
-    const trailer3_real_t _t311 = _t310*_t8;
-    const trailer3_real_t _t312 = _t137 - _t138;
-    const trailer3_real_t _t313 = _t312*_t8;
-    const trailer3_real_t _t314 = _t141 - _t142;
-    const trailer3_real_t _t315 = _t314*_t8;
-    const trailer3_real_t _t316 = _t145 - _t146;
-    const trailer3_real_t _t317 = _t316*_t8;
-    const trailer3_real_t _t318 = _t149 - _t150;
-    const trailer3_real_t _t319 = _t318*_t8;
-    const trailer3_real_t _t320 = _t152 + _t54;
-    const trailer3_real_t _t321 = _t320*_t8;
-    const trailer3_real_t _t322 = _t154 + _t59;
-    const trailer3_real_t _t323 = _t322*_t8;
-    const trailer3_real_t _t324 = -_t127 - _t129;
-    const trailer3_real_t _t325 = _t324*_t9;
-    const trailer3_real_t _t326 = -_t132 - _t134;
-    const trailer3_real_t _t327 = _t326*_t9;
-    const trailer3_real_t _t328 = -_t137 - _t138;
-    const trailer3_real_t _t329 = _t328*_t9;
-    const trailer3_real_t _t330 = -_t141 - _t142;
-    const trailer3_real_t _t331 = _t330*_t9;
-    const trailer3_real_t _t332 = -_t145 - _t146;
-    const trailer3_real_t _t333 = _t332*_t9;
-    const trailer3_real_t _t334 = -_t149 - _t150;
-    const trailer3_real_t _t335 = _t334*_t9;
-    const trailer3_real_t _t336 = -_t152 + _t54;
-    const trailer3_real_t _t337 = _t336*_t9;
-    const trailer3_real_t _t338 = -_t154 + _t59;
-    const trailer3_real_t _t339 = _t338*_t9;
-    const trailer3_real_t _t340 = _t232*_t277 + _t233*_t279;
-    const trailer3_real_t _t341 = _t232*_t281 + _t233*_t283;
-    const trailer3_real_t _t342 = _t188*_t285 + _t189*_t287 + _t190*_t289 + _t191*_t291
-            + _t235*_t293 + _t236*_t295;
-    const trailer3_real_t _t343 = _t188*_t297 + _t189*_t299 + _t190*_t301 + _t191*_t303
-            + _t235*_t305 + _t236*_t307;
-    const trailer3_real_t _t344 = _t188*_t309 + _t189*_t311 + _t190*_t313 + _t191*_t315
-            + _t235*_t317 + _t236*_t319 + _t238*_t321 + _t239*_t323;
-    const trailer3_real_t _t345 = _t188*_t325 + _t189*_t327 + _t190*_t329 + _t191*_t331
-            + _t235*_t333 + _t236*_t335 + _t238*_t337 + _t239*_t339;
-    const trailer3_real_t _t346 = _t0*_t247 + _t1*_t241 + _t194*_t340 + _t200*_t341 + _t206*_t342
-            + _t212*_t343 + _t218*_t344 + _t224*_t345 + _t252*_t40 + _t256*_t49 + _t259*_t81;
-    const trailer3_real_t _t347 = _t197*_t340 + _t2*_t247 + _t203*_t341 + _t209*_t342 + _t215*_t343
-            + _t221*_t344 + _t227*_t345 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
-    const trailer3_real_t _t348 = -_t346 + tau_right;
-    const trailer3_real_t _t349 = -_t347 + tau_left;
-    const trailer3_real_t _t350 = TRAILER3_LIT(1.0)/_t273;
-    const trailer3_real_t _t351 = _t350*(-_t271*_t349 + _t272*_t348);
-    const trailer3_real_t _t352 = _t350*(_t265*_t349 - _t271*_t348);
-    const trailer3_real_t _t353 = _t1*_t351 + _t3*_t352;
-    const trailer3_real_t _t354 = _t0*_t351 + _t2*_t352;
-    const trailer3_real_t _t355 = _t234 + _t351*_t40 + _t352*_t44;
-    const trailer3_real_t _t356 = _t237 + _t351*_t49 + _t352*_t55;
-    const trailer3_real_t _t357 = _t240 + _t351*_t81 + _t352*_t90;
-    const trailer3_real_t _t358 = _t193*_t351 + _t196*_t352 + _t340;
-    const trailer3_real_t _t359 = _t199*_t351 + _t202*_t352 + _t341;
-    const trailer3_real_t _t360 = _t205*_t351 + _t208*_t352 + _t342;
-    const trailer3_real_t _t361 = _t211*_t351 + _t214*_t352 + _t343;
-    const trailer3_real_t _t362 = _t217*_t351 + _t220*_t352 + _t344;
-    const trailer3_real_t _t363 = _t223*_t351 + _t226*_t352 + _t345;
-    const trailer3_real_t _t364 = -_t246*_t274 + _t275*_t353;
-    const trailer3_real_t _t365 = _t246*_t275 + _t274*_t353;
-    if (!(_t265 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = -_t120 - _t125*_t53 - _t38;
+    const trailer3_real_t _t145 = -TRAILER3_LIT(1.6666666666666667)*_t144;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
+    const trailer3_real_t _t147 = _t116*_t72;
+    const trailer3_real_t _t148 = _t125*_t74 + _t147 - _t37;
+    const trailer3_real_t _t149 = -_t121 - _t130*_t53 + _t43;
+    const trailer3_real_t _t150 = -TRAILER3_LIT(1.6666666666666667)*_t149;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
+    const trailer3_real_t _t152 = _t118*_t72;
+    const trailer3_real_t _t153 = _t130*_t74 + _t152 - _t39;
+    const trailer3_real_t _t154 = _t120 - _t135*_t53 + _t73;
+    const trailer3_real_t _t155 = -TRAILER3_LIT(1.6666666666666667)*_t154;
+    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
+    const trailer3_real_t _t157 = _t135*_t74 - _t147 + _t52;
+    const trailer3_real_t _t158 = _t121 - _t138*_t53 + _t79;
+    const trailer3_real_t _t159 = -TRAILER3_LIT(1.6666666666666667)*_t158;
+    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t159;
+    const trailer3_real_t _t161 = _t138*_t74 - _t152 + _t57;
+    const trailer3_real_t _t162 = -_t140*_t53 + _t75;
+    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
+    const trailer3_real_t _t165 = _t140*_t74 + _t55;
+    const trailer3_real_t _t166 = -_t142*_t53 + _t80;
+    const trailer3_real_t _t167 = -TRAILER3_LIT(1.6666666666666667)*_t166;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
+    const trailer3_real_t _t169 = _t142*_t74 + _t59;
+    const trailer3_real_t _t170 = TRAILER3_LIT(1.6666666666666667)*_t76;
+    const trailer3_real_t _t171 = TRAILER3_LIT(0.2)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(1.6666666666666667)*_t81;
+    const trailer3_real_t _t173 = TRAILER3_LIT(0.2)*_t172;
+    const trailer3_real_t _t174 = _t93*_t95;
+    const trailer3_real_t _t175 = _t101*_t95;
+    const trailer3_real_t _t176 = _t101*_t93;
+    const trailer3_real_t _t177 = _t28 + _t61;
+    const trailer3_real_t _t178 = _t177*_t4;
+    const trailer3_real_t _t179 = J_theta_cart_right*_t178;
+    const trailer3_real_t _t180 = -_t41 + _t62;
+    const trailer3_real_t _t181 = _t180*_t4;
+    const trailer3_real_t _t182 = J_theta_cart_right*_t181;
+    const trailer3_real_t _t183 = _t28 - _t61;
+    const trailer3_real_t _t184 = _t183*_t5;
+    const trailer3_real_t _t185 = J_theta_cart_left*_t184;
+    const trailer3_real_t _t186 = -_t41 - _t62;
+    const trailer3_real_t _t187 = _t186*_t5;
+    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
+    const trailer3_real_t _t189 = _t32 + _t63 - _t65;
+    const trailer3_real_t _t190 = _t189*_t6;
+    const trailer3_real_t _t191 = J_theta_cart2_right*_t190;
+    const trailer3_real_t _t192 = _t66 - _t68;
+    const trailer3_real_t _t193 = _t192*_t6;
+    const trailer3_real_t _t194 = J_theta_cart2_right*_t193;
+    const trailer3_real_t _t195 = -_t63 - _t69;
+    const trailer3_real_t _t196 = _t195*_t7;
+    const trailer3_real_t _t197 = J_theta_cart2_left*_t196;
+    const trailer3_real_t _t198 = -_t66 - _t68;
+    const trailer3_real_t _t199 = _t198*_t7;
+    const trailer3_real_t _t200 = J_theta_cart2_left*_t199;
+    const trailer3_real_t _t201 = _t71 - _t76;
+    const trailer3_real_t _t202 = _t201*_t8;
+    const trailer3_real_t _t203 = J_theta_cart3_right*_t202;
+    const trailer3_real_t _t204 = _t78 - _t81;
+    const trailer3_real_t _t205 = _t204*_t8;
+    const trailer3_real_t _t206 = J_theta_cart3_right*_t205;
+    const trailer3_real_t _t207 = -_t71 - _t76;
+    const trailer3_real_t _t208 = _t207*_t9;
+    const trailer3_real_t _t209 = J_theta_cart3_left*_t208;
+    const trailer3_real_t _t210 = -_t78 - _t81;
+    const trailer3_real_t _t211 = _t210*_t9;
+    const trailer3_real_t _t212 = J_theta_cart3_left*_t211;
+    const trailer3_real_t _t213 = K_theta_cart_x_tractor_2*_t27 - _t86;
+    const trailer3_real_t _t214 = _t34*(_t82 + _t83) + _t35*(_t87 - _t89);
+    const trailer3_real_t _t215 = _t34*(_t84 + _t85) + _t35*(_t88 - _t90);
+    const trailer3_real_t _t216 = _t109*(-_t82 - _t83) + _t110*(-_t84 - _t85) + _t13*_t28*_t94
+            + _t27*(_t10*_t94 + _t11*_t38*_t99 + _t12*_t32*_t97) + _t34*(-_t103 - _t104);
+    const trailer3_real_t _t217 = _t174 - _t175;
+    const trailer3_real_t _t218 = -_t176 + _t94;
+    const trailer3_real_t _t219 = _t116*_t217 + _t118*_t218;
+    const trailer3_real_t _t220 = _t95*_t96;
+    const trailer3_real_t _t221 = _t93*_t96;
+    const trailer3_real_t _t222 = _t125*_t174 + _t130*_t94 + _t135*_t175 + _t138*_t176 + _t140*_t220
+            + _t142*_t221;
+    const trailer3_real_t _t223 = _t95*_t98;
+    const trailer3_real_t _t224 = _t93*_t98;
+    const trailer3_real_t _t225 = _t145*_t174 + _t150*_t94 + _t155*_t175 + _t159*_t176 + _t163*_t220
+            + _t167*_t221 + _t170*_t223 + _t172*_t224;
+    const trailer3_real_t _t226 = J_theta_cart*_t219 + _t174*_t213 + _t214*_t222 + _t215*_t225
+            + _t216;
+    const trailer3_real_t _t227 = K_theta_cart2_x_tractor_2*_t31 - _t87;
+    const trailer3_real_t _t228 = _t91*(_t84 + _t85) + _t92*(_t88 - _t90);
+    const trailer3_real_t _t229 = _t111*(-_t87 + _t89) + _t112*(_t82 + _t83) + _t113*(-_t84 - _t85)
+            + _t91*(_t100 - _t104) + _t94*(_t105 + _t106);
+    const trailer3_real_t _t230 = J_theta_cart2*_t222 + _t174*_t227 + _t214*_t219 + _t225*_t228
+            + _t229;
+    const trailer3_real_t _t231 = K_theta_cart3_x_tractor_2*_t37 - _t88;
+    const trailer3_real_t _t232 = _t84*(_t112 + _t115) + _t85*(_t112 + _t115)
+            + _t88*(-_t111 - _t114) + _t90*(_t111 + _t114) + _t94*(_t107 + _t108);
+    const trailer3_real_t _t233 = J_theta_cart3*_t225 + _t174*_t231 + _t215*_t219 + _t222*_t228
+            + _t232;
+    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
+    const trailer3_real_t _t235 = _t82 + _t83;
+    const trailer3_real_t _t236 = _t84 + _t85;
+    const trailer3_real_t _t237 = J_x_tractor + _t234*_t45 + _t235*_t54 + _t236*_t70;
+    const trailer3_real_t _t238 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t234;
+    const trailer3_real_t _t239 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t235;
+    const trailer3_real_t _t240 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t236;
+    const trailer3_real_t _t241 = _t178*_t179 + _t18 + _t184*_t185 + _t190*_t191 + _t196*_t197
+            + _t202*_t203 + _t208*_t209 + _t237 + _t238*_t45 + _t239*_t54 + _t240*_t70;
+    const trailer3_real_t _t242 = K_theta_tractor_x_tractor_2 + _t234*_t48 + _t235*_t58
+            + _t236*_t77;
+    const trailer3_real_t _t243 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
+    const trailer3_real_t _t244 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t243;
+    const trailer3_real_t _t245 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
+    const trailer3_real_t _t246 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t245;
+    const trailer3_real_t _t247 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
+    const trailer3_real_t _t248 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t247;
+    const trailer3_real_t _t249 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
+            + _t202*_t206 + _t208*_t212 + _t23 + _t242 + _t244*_t45 + _t246*_t54 + _t248*_t70;
+    const trailer3_real_t _t250 = J_theta_tractor + _t243*_t48 + _t245*_t58 + _t247*_t77;
+    const trailer3_real_t _t251 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t24 + _t244*_t48 + _t246*_t58 + _t248*_t77 + _t250;
+    const trailer3_real_t _t252 = _t241*_t251 - _t249*_t249;
+    const trailer3_real_t _t253 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t254 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t255 = K_theta_tractor_x_tractor*_t94 + _t100
+            + _t102*(-K_theta_cart_x_tractor_2*_t27 + _t86) - _t103 - _t104 + _t87*_t97;
+    const trailer3_real_t _t256 = _t102*(-K_theta_cart_x_tractor*_t41
+            - K_theta_cart_x_tractor_2*_t29) + _t97*(-_t105 - _t106) + _t99*(-_t107 - _t108);
+    const trailer3_real_t _t257 = _t122 + _t27;
+    const trailer3_real_t _t258 = _t257*_t4;
+    const trailer3_real_t _t259 = _t123 + _t29;
+    const trailer3_real_t _t260 = _t259*_t4;
+    const trailer3_real_t _t261 = -_t122 + _t27;
+    const trailer3_real_t _t262 = _t261*_t5;
+    const trailer3_real_t _t263 = -_t123 + _t29;
+    const trailer3_real_t _t264 = _t263*_t5;
+    const trailer3_real_t _t265 = _t126 - _t128;
+    const trailer3_real_t _t266 = _t265*_t6;
+    const trailer3_real_t _t267 = _t131 - _t133;
+    const trailer3_real_t _t268 = _t267*_t6;
+    const trailer3_real_t _t269 = _t127 + _t136 - _t46;
+    const trailer3_real_t _t270 = _t269*_t6;
+    const trailer3_real_t _t271 = _t132 + _t139 - _t49;
+    const trailer3_real_t _t272 = _t271*_t6;
+    const trailer3_real_t _t273 = _t141 + _t47;
+    const trailer3_real_t _t274 = _t273*_t6;
+    const trailer3_real_t _t275 = _t143 + _t50;
+    const trailer3_real_t _t276 = _t275*_t6;
+    const trailer3_real_t _t277 = -_t126 - _t128;
+    const trailer3_real_t _t278 = _t277*_t7;
+    const trailer3_real_t _t279 = -_t131 - _t133;
+    const trailer3_real_t _t280 = _t279*_t7;
+    const trailer3_real_t _t281 = _t127 - _t136 - _t46;
+    const trailer3_real_t _t282 = _t281*_t7;
+    const trailer3_real_t _t283 = _t132 - _t139 - _t49;
+    const trailer3_real_t _t284 = _t283*_t7;
+    const trailer3_real_t _t285 = -_t141 + _t47;
+    const trailer3_real_t _t286 = _t285*_t7;
+    const trailer3_real_t _t287 = -_t143 + _t50;
+    const trailer3_real_t _t288 = _t287*_t7;
+    const trailer3_real_t _t289 = _t146 - _t148;
+    const trailer3_real_t _t290 = _t289*_t8;
+    const trailer3_real_t _t291 = _t151 - _t153;
+    const trailer3_real_t _t292 = _t291*_t8;
+    const trailer3_real_t _t293 = _t156 - _t157;
+    const trailer3_real_t _t294 = _t293*_t8;
+    const trailer3_real_t _t295 = _t160 - _t161;
+    const trailer3_real_t _t296 = _t295*_t8;
+    const trailer3_real_t _t297 = _t164 - _t165;
+    const trailer3_real_t _t298 = _t297*_t8;
+    const trailer3_real_t _t299 = _t168 - _t169;
+    const trailer3_real_t _t300 = _t299*_t8;
+    const trailer3_real_t _t301 = _t171 + _t56;
+    const trailer3_real_t _t302 = _t301*_t8;
+    const trailer3_real_t _t303 = _t173 + _t60;
+    const trailer3_real_t _t304 = _t303*_t8;
+    const trailer3_real_t _t305 = -_t146 - _t148;
+    const trailer3_real_t _t306 = _t305*_t9;
+    const trailer3_real_t _t307 = -_t151 - _t153;
+    const trailer3_real_t _t308 = _t307*_t9;
+    const trailer3_real_t _t309 = -_t156 - _t157;
+    const trailer3_real_t _t310 = _t309*_t9;
+    const trailer3_real_t _t311 = -_t160 - _t161;
+    const trailer3_real_t _t312 = _t311*_t9;
+    const trailer3_real_t _t313 = -_t164 - _t165;
+    const trailer3_real_t _t314 = _t313*_t9;
+    const trailer3_real_t _t315 = -_t168 - _t169;
+    const trailer3_real_t _t316 = _t315*_t9;
+    const trailer3_real_t _t317 = -_t171 + _t56;
+    const trailer3_real_t _t318 = _t317*_t9;
+    const trailer3_real_t _t319 = -_t173 + _t60;
+    const trailer3_real_t _t320 = _t319*_t9;
+    const trailer3_real_t _t321 = _t217*_t258 + _t218*_t260;
+    const trailer3_real_t _t322 = _t217*_t262 + _t218*_t264;
+    const trailer3_real_t _t323 = _t174*_t266 + _t175*_t270 + _t176*_t272 + _t220*_t274
+            + _t221*_t276 + _t268*_t94;
+    const trailer3_real_t _t324 = _t174*_t278 + _t175*_t282 + _t176*_t284 + _t220*_t286
+            + _t221*_t288 + _t280*_t94;
+    const trailer3_real_t _t325 = _t174*_t290 + _t175*_t294 + _t176*_t296 + _t220*_t298
+            + _t221*_t300 + _t223*_t302 + _t224*_t304 + _t292*_t94;
+    const trailer3_real_t _t326 = _t174*_t306 + _t175*_t310 + _t176*_t312 + _t220*_t314
+            + _t221*_t316 + _t223*_t318 + _t224*_t320 + _t308*_t94;
+    const trailer3_real_t _t327 = _t179*_t321 + _t185*_t322 + _t191*_t323 + _t197*_t324
+            + _t203*_t325 + _t209*_t326 + _t219*_t234 + _t222*_t235 + _t225*_t236 + _t226*_t45
+            + _t230*_t54 + _t233*_t70 + _t255;
+    const trailer3_real_t _t328 = -K_theta_tractor_x_tractor*_t174 + _t182*_t321 + _t188*_t322
+            + _t194*_t323 + _t200*_t324 + _t206*_t325 + _t212*_t326 + _t219*_t243 + _t222*_t245
+            + _t225*_t247 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t256;
+    const trailer3_real_t _t329 = _t14*tau_right + _t15*tau_left - _t327;
+    const trailer3_real_t _t330 = _t19*tau_right + _t21*tau_left - _t328;
+    const trailer3_real_t _t331 = TRAILER3_LIT(1.0)/_t252;
+    const trailer3_real_t _t332 = _t331*(-_t249*_t330 + _t251*_t329);
+    const trailer3_real_t _t333 = _t331*(_t241*_t330 - _t249*_t329);
+    const trailer3_real_t _t334 = _t219 + _t332*_t45 + _t333*_t48;
+    const trailer3_real_t _t335 = _t222 + _t332*_t54 + _t333*_t58;
+    const trailer3_real_t _t336 = _t225 + _t332*_t70 + _t333*_t77;
+    const trailer3_real_t _t337 = _t14*_t332 + _t19*_t333;
+    const trailer3_real_t _t338 = _t15*_t332 + _t21*_t333;
+    const trailer3_real_t _t339 = _t178*_t332 + _t181*_t333 + _t321;
+    const trailer3_real_t _t340 = _t184*_t332 + _t187*_t333 + _t322;
+    const trailer3_real_t _t341 = _t190*_t332 + _t193*_t333 + _t323;
+    const trailer3_real_t _t342 = _t196*_t332 + _t199*_t333 + _t324;
+    const trailer3_real_t _t343 = _t202*_t332 + _t205*_t333 + _t325;
+    const trailer3_real_t _t344 = _t208*_t332 + _t211*_t333 + _t326;
+    const trailer3_real_t _t345 = -_t174*_t253 + _t254*_t332;
+    const trailer3_real_t _t346 = _t174*_t254 + _t253*_t332;
+    if (!(_t241 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t273 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t252 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t364;
-    const trailer3_real_t r_1 = _t365;
-    const trailer3_real_t r_2 = _t354;
-    const trailer3_real_t r_3 = _t355;
-    const trailer3_real_t r_4 = _t356;
-    const trailer3_real_t r_5 = _t357;
-    const trailer3_real_t r_6 = _t351;
-    const trailer3_real_t r_7 = _t352;
-    const trailer3_real_t r_8 = _t358;
-    const trailer3_real_t r_9 = _t359;
-    const trailer3_real_t r_10 = _t360;
-    const trailer3_real_t r_11 = _t361;
-    const trailer3_real_t r_12 = _t362;
-    const trailer3_real_t r_13 = _t363;
+    const trailer3_real_t r_0 = _t345;
+    const trailer3_real_t r_1 = _t346;
+    const trailer3_real_t r_2 = _t333;
+    const trailer3_real_t r_3 = _t334;
+    const trailer3_real_t r_4 = _t335;
+    const trailer3_real_t r_5 = _t336;
+    const trailer3_real_t r_6 = _t337;
+    const trailer3_real_t r_7 = _t338;
+    const trailer3_real_t r_8 = _t339;
+    const trailer3_real_t r_9 = _t340;
+    const trailer3_real_t r_10 = _t341;
+    const trailer3_real_t r_11 = _t342;
+    const trailer3_real_t r_12 = _t343;
+    const trailer3_real_t r_13 = _t344;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
             | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
@@ -576,7 +551,7 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
 }
 
 /* trailer3_model_prepare: documented in trailer3_model.h.
-   operations after CSE: 4 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 3 add, 20 mul, 8 div, 0 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     trailer3_model_prepared_t *prepared)
 {
@@ -631,8 +606,8 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
     const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t2 = TRAILER3_LIT(0.5)*radius_right;
     const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
     const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
@@ -644,10 +619,17 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
     const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
     const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = J_x_tractor*_t1 + K_theta_tractor_x_tractor_2*_t0;
-    const trailer3_real_t _t15 = J_theta_tractor*_t0 + K_theta_tractor_x_tractor_2*_t1;
-    const trailer3_real_t _t16 = J_x_tractor*_t3 + K_theta_tractor_x_tractor_2*_t2;
-    const trailer3_real_t _t17 = J_theta_tractor*_t2 + K_theta_tractor_x_tractor_2*_t3;
+    const trailer3_real_t _t14 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t15 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t16 = J_theta_right*_t14;
+    const trailer3_real_t _t17 = J_theta_left*_t15;
+    const trailer3_real_t _t18 = _t14*_t16 + _t15*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.207)*_t14;
+    const trailer3_real_t _t20 = J_theta_right*_t19;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.207)*_t15;
+    const trailer3_real_t _t22 = J_theta_left*_t21;
+    const trailer3_real_t _t23 = _t14*_t20 + _t15*_t22;
+    const trailer3_real_t _t24 = _t19*_t20 + _t21*_t22;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -721,8 +703,8 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     prepared->forward_dynamics[6] = J_theta_cart3_right;
     prepared->forward_dynamics[7] = J_theta_cart_left;
     prepared->forward_dynamics[8] = J_theta_cart_right;
-    prepared->forward_dynamics[9] = J_theta_left;
-    prepared->forward_dynamics[10] = J_theta_right;
+    prepared->forward_dynamics[9] = J_theta_tractor;
+    prepared->forward_dynamics[10] = J_x_tractor;
     prepared->forward_dynamics[11] = K_theta_cart_x_tractor;
     prepared->forward_dynamics[12] = K_theta_cart_x_tractor_2;
     prepared->forward_dynamics[13] = K_theta_cart2_x_tractor;
@@ -730,29 +712,33 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     prepared->forward_dynamics[15] = K_theta_cart3_x_tractor;
     prepared->forward_dynamics[16] = K_theta_cart3_x_tractor_2;
     prepared->forward_dynamics[17] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[18] = _t0;
-    prepared->forward_dynamics[19] = _t1;
-    prepared->forward_dynamics[20] = _t2;
-    prepared->forward_dynamics[21] = _t3;
-    prepared->forward_dynamics[22] = _t4;
-    prepared->forward_dynamics[23] = _t5;
-    prepared->forward_dynamics[24] = _t6;
-    prepared->forward_dynamics[25] = _t7;
-    prepared->forward_dynamics[26] = _t8;
-    prepared->forward_dynamics[27] = _t9;
-    prepared->forward_dynamics[28] = _t10;
-    prepared->forward_dynamics[29] = _t11;
-    prepared->forward_dynamics[30] = _t12;
-    prepared->forward_dynamics[31] = _t13;
-    prepared->forward_dynamics[32] = _t14;
-    prepared->forward_dynamics[33] = _t15;
-    prepared->forward_dynamics[34] = _t16;
-    prepared->forward_dynamics[35] = _t17;
+    prepared->forward_dynamics[18] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[19] = _t0;
+    prepared->forward_dynamics[20] = _t1;
+    prepared->forward_dynamics[21] = _t2;
+    prepared->forward_dynamics[22] = _t3;
+    prepared->forward_dynamics[23] = _t4;
+    prepared->forward_dynamics[24] = _t5;
+    prepared->forward_dynamics[25] = _t6;
+    prepared->forward_dynamics[26] = _t7;
+    prepared->forward_dynamics[27] = _t8;
+    prepared->forward_dynamics[28] = _t9;
+    prepared->forward_dynamics[29] = _t10;
+    prepared->forward_dynamics[30] = _t11;
+    prepared->forward_dynamics[31] = _t12;
+    prepared->forward_dynamics[32] = _t13;
+    prepared->forward_dynamics[33] = _t14;
+    prepared->forward_dynamics[34] = _t15;
+    prepared->forward_dynamics[35] = _t18;
+    prepared->forward_dynamics[36] = _t19;
+    prepared->forward_dynamics[37] = _t21;
+    prepared->forward_dynamics[38] = _t23;
+    prepared->forward_dynamics[39] = _t24;
     return TRAILER3_OK;
 }
 
 /* trailer3_forward_dynamics_prepared: documented in trailer3_model.h.
-   operations after CSE: 351 add, 473 mul, 1 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 321 add, 427 mul, 1 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepared_t *prepared,
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *tau,
     trailer3_real_t *qddot)
@@ -764,8 +750,8 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
     if (((trailer3_exp_carry(theta_tractor)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t274 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t275 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t253 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t254 = TRAILER3_COS(theta_tractor);
     const trailer3_real_t theta_cart = q[3];
     const trailer3_real_t theta_cart2 = q[4];
     const trailer3_real_t theta_cart3 = q[5];
@@ -779,436 +765,408 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
             | trailer3_exp_carry(tau_left)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t18 = -theta_tractor;
-    const trailer3_real_t _t19 = _t18 + theta_cart;
-    const trailer3_real_t _t20 = TRAILER3_SIN(_t19);
-    const trailer3_real_t _t21 = TRAILER3_COS(_t19);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
-    const trailer3_real_t _t23 = _t18 + theta_cart2;
-    const trailer3_real_t _t24 = TRAILER3_SIN(_t23);
-    const trailer3_real_t _t25 = TRAILER3_COS(_t23);
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.3)*_t25;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.85)*_t20;
-    const trailer3_real_t _t28 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t29 = _t18 + theta_cart3;
-    const trailer3_real_t _t30 = TRAILER3_SIN(_t29);
-    const trailer3_real_t _t31 = TRAILER3_COS(_t29);
-    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t31;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.85)*_t31;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t20;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t24;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t30;
-    const trailer3_real_t _t0 = prepared->forward_dynamics[18];
-    const trailer3_real_t _t1 = prepared->forward_dynamics[19];
-    const trailer3_real_t _t37 = -_t0*_t22 - _t1*_t20;
-    const trailer3_real_t _t2 = prepared->forward_dynamics[20];
-    const trailer3_real_t _t3 = prepared->forward_dynamics[21];
-    const trailer3_real_t _t38 = -_t2*_t22 - _t20*_t3;
-    const trailer3_real_t _t39 = -_t24*_t27 - _t25*_t28;
-    const trailer3_real_t _t40 = TRAILER3_LIT(1.6666666666666667)*_t37;
-    const trailer3_real_t _t41 = _t39*_t40;
-    const trailer3_real_t _t42 = -_t0*_t26 - _t1*_t24;
-    const trailer3_real_t _t43 = _t41 + _t42;
-    const trailer3_real_t _t44 = TRAILER3_LIT(1.6666666666666667)*_t38;
-    const trailer3_real_t _t45 = _t39*_t44;
-    const trailer3_real_t _t46 = -_t2*_t26 - _t24*_t3;
-    const trailer3_real_t _t47 = _t45 + _t46;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(0.85)*_t24*_t30 - _t25*_t33;
-    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t50 = _t48*_t49;
-    const trailer3_real_t _t51 = -_t27*_t30 - _t28*_t31;
-    const trailer3_real_t _t52 = _t40*_t51;
-    const trailer3_real_t _t53 = -_t0*_t32 - _t1*_t30;
-    const trailer3_real_t _t54 = _t50 + _t52 + _t53;
-    const trailer3_real_t _t55 = TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t56 = _t48*_t55;
-    const trailer3_real_t _t57 = _t44*_t51;
-    const trailer3_real_t _t58 = -_t2*_t32 - _t3*_t30;
-    const trailer3_real_t _t59 = _t56 + _t57 + _t58;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t61 = _t1*_t21;
-    const trailer3_real_t _t62 = _t0*_t34;
-    const trailer3_real_t _t63 = _t61 - _t62;
-    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t65 = _t21*_t3;
-    const trailer3_real_t _t66 = _t2*_t34;
-    const trailer3_real_t _t67 = _t65 - _t66;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.85)*_t21*_t24 - _t25*_t27;
-    const trailer3_real_t _t70 = _t40*_t69;
-    const trailer3_real_t _t71 = _t1*_t25;
-    const trailer3_real_t _t72 = _t0*_t35;
-    const trailer3_real_t _t73 = _t71 - _t72;
-    const trailer3_real_t _t74 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t75 = _t44*_t69;
-    const trailer3_real_t _t76 = _t25*_t3;
-    const trailer3_real_t _t77 = _t2*_t35;
-    const trailer3_real_t _t78 = _t76 - _t77;
-    const trailer3_real_t _t79 = _t70 - _t71 + _t72;
-    const trailer3_real_t _t80 = _t75 - _t76 + _t77;
-    const trailer3_real_t _t81 = TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t82 = TRAILER3_LIT(0.2)*_t81;
-    const trailer3_real_t _t83 = _t0*_t36;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t21*_t30 - _t27*_t31;
-    const trailer3_real_t _t85 = _t40*_t84;
-    const trailer3_real_t _t86 = -_t24*_t33 + TRAILER3_LIT(0.85)*_t25*_t30;
-    const trailer3_real_t _t87 = _t49*_t86;
-    const trailer3_real_t _t88 = _t1*_t31;
-    const trailer3_real_t _t89 = _t83 + _t85 + _t87 - _t88;
-    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t59;
-    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
-    const trailer3_real_t _t92 = _t2*_t36;
-    const trailer3_real_t _t93 = _t44*_t84;
-    const trailer3_real_t _t94 = _t55*_t86;
-    const trailer3_real_t _t95 = _t3*_t31;
-    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
-    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t63;
-    const trailer3_real_t _t98 = _t39*_t97;
-    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t67;
-    const trailer3_real_t _t100 = _t39*_t99;
-    const trailer3_real_t _t101 = _t51*_t97;
-    const trailer3_real_t _t102 = _t51*_t99;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
-    const trailer3_real_t _t105 = -_t73 - _t98;
-    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
-    const trailer3_real_t _t108 = _t69*_t97;
-    const trailer3_real_t _t109 = _t108 + _t42;
-    const trailer3_real_t _t110 = -_t100 - _t78;
-    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
-    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
-    const trailer3_real_t _t113 = _t69*_t99;
-    const trailer3_real_t _t114 = _t113 + _t46;
-    const trailer3_real_t _t115 = _t70 + _t98;
-    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
-    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
-    const trailer3_real_t _t118 = _t100 + _t75;
-    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
-    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t79;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
-    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t80;
-    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
-    const trailer3_real_t _t125 = -_t101 - _t106*_t48 + _t83 - _t88;
-    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
-    const trailer3_real_t _t128 = _t84*_t97;
-    const trailer3_real_t _t129 = _t106*_t86 + _t128 + _t53;
-    const trailer3_real_t _t130 = -_t102 - _t111*_t48 + _t92 - _t95;
-    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
-    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t133 = _t84*_t99;
-    const trailer3_real_t _t134 = _t111*_t86 + _t133 + _t58;
-    const trailer3_real_t _t135 = _t101 - _t116*_t48 + _t85;
-    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
-    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
-    const trailer3_real_t _t138 = _t116*_t86 - _t128 + _t52;
-    const trailer3_real_t _t139 = _t102 - _t119*_t48 + _t93;
-    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
-    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
-    const trailer3_real_t _t142 = _t119*_t86 - _t133 + _t57;
-    const trailer3_real_t _t143 = -_t121*_t48 + _t87;
-    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
-    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
-    const trailer3_real_t _t146 = _t121*_t86 + _t50;
-    const trailer3_real_t _t147 = -_t123*_t48 + _t94;
-    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
-    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
-    const trailer3_real_t _t150 = _t123*_t86 + _t56;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
+    const trailer3_real_t _t25 = -theta_tractor;
+    const trailer3_real_t _t26 = _t25 + theta_cart;
+    const trailer3_real_t _t27 = TRAILER3_SIN(_t26);
+    const trailer3_real_t _t28 = TRAILER3_COS(_t26);
+    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t30 = _t25 + theta_cart2;
+    const trailer3_real_t _t31 = TRAILER3_SIN(_t30);
+    const trailer3_real_t _t32 = TRAILER3_COS(_t30);
+    const trailer3_real_t _t33 = TRAILER3_LIT(0.3)*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t28;
+    const trailer3_real_t _t36 = _t25 + theta_cart3;
+    const trailer3_real_t _t37 = TRAILER3_SIN(_t36);
+    const trailer3_real_t _t38 = TRAILER3_COS(_t36);
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.3)*_t38;
+    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t38;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t31;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.3)*_t37;
+    const trailer3_real_t _t44 = -_t31*_t34 - _t32*_t35;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t27;
+    const trailer3_real_t _t46 = _t44*_t45;
+    const trailer3_real_t _t47 = -_t31 + _t46;
+    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t29;
+    const trailer3_real_t _t49 = _t44*_t48;
+    const trailer3_real_t _t50 = -_t33 + _t49;
+    const trailer3_real_t _t51 = -_t34*_t37 - _t35*_t38;
+    const trailer3_real_t _t52 = _t45*_t51;
+    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t31*_t37 - _t32*_t40;
+    const trailer3_real_t _t54 = TRAILER3_LIT(1.6666666666666667)*_t47;
+    const trailer3_real_t _t55 = _t53*_t54;
+    const trailer3_real_t _t56 = -_t37 + _t52 + _t55;
+    const trailer3_real_t _t57 = _t48*_t51;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.6666666666666667)*_t50;
+    const trailer3_real_t _t59 = _t53*_t58;
+    const trailer3_real_t _t60 = -_t39 + _t57 + _t59;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t48;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t54;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.85)*_t28*_t31 - _t32*_t34;
+    const trailer3_real_t _t65 = _t45*_t64;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*_t58;
+    const trailer3_real_t _t67 = _t48*_t64;
+    const trailer3_real_t _t68 = _t42 + _t67;
+    const trailer3_real_t _t69 = -_t32 + _t65;
+    const trailer3_real_t _t70 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t28*_t37 - _t34*_t38;
+    const trailer3_real_t _t73 = _t45*_t72;
+    const trailer3_real_t _t74 = -_t31*_t40 + TRAILER3_LIT(0.85)*_t32*_t37;
+    const trailer3_real_t _t75 = _t54*_t74;
+    const trailer3_real_t _t76 = -_t38 + _t73 + _t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(1.6666666666666667)*_t60;
+    const trailer3_real_t _t78 = TRAILER3_LIT(0.2)*_t77;
+    const trailer3_real_t _t79 = _t48*_t72;
+    const trailer3_real_t _t80 = _t58*_t74;
+    const trailer3_real_t _t81 = _t43 + _t79 + _t80;
     const trailer3_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[13];
-    const trailer3_real_t _t155 = K_theta_cart2_x_tractor*_t24;
+    const trailer3_real_t _t82 = K_theta_cart2_x_tractor*_t31;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[14];
-    const trailer3_real_t _t156 = K_theta_cart2_x_tractor_2*_t25;
+    const trailer3_real_t _t83 = K_theta_cart2_x_tractor_2*_t32;
     const trailer3_real_t K_theta_cart3_x_tractor = prepared->forward_dynamics[15];
-    const trailer3_real_t _t157 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t _t84 = K_theta_cart3_x_tractor*_t37;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = prepared->forward_dynamics[16];
-    const trailer3_real_t _t158 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t _t85 = K_theta_cart3_x_tractor_2*_t38;
     const trailer3_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[11];
-    const trailer3_real_t _t159 = K_theta_cart_x_tractor*_t21;
-    const trailer3_real_t _t160 = K_theta_cart2_x_tractor*_t25;
-    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t31;
-    const trailer3_real_t _t162 = K_theta_cart2_x_tractor_2*_t24;
-    const trailer3_real_t _t163 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t164 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t165 = TRAILER3_LIT(0.85)*_t25;
-    const trailer3_real_t _t166 = _t0*thetadot_right + _t2*thetadot_left;
-    const trailer3_real_t _t167 = _t166*_t166;
-    const trailer3_real_t _t168 = _t49*thetadot_right + _t55*thetadot_left;
-    const trailer3_real_t _t169 = _t168*_t168;
-    const trailer3_real_t _t170 = _t81*thetadot_right + _t90*thetadot_left;
-    const trailer3_real_t _t171 = _t170*_t170;
-    const trailer3_real_t _t172 = _t161*_t171;
-    const trailer3_real_t _t173 = _t40*thetadot_right + _t44*thetadot_left;
-    const trailer3_real_t _t174 = _t173*_t173;
-    const trailer3_real_t _t175 = _t162*_t169;
-    const trailer3_real_t _t176 = _t163*_t171;
-    const trailer3_real_t _t177 = K_theta_cart2_x_tractor*_t35;
-    const trailer3_real_t _t178 = K_theta_cart2_x_tractor_2*_t26;
-    const trailer3_real_t _t179 = K_theta_cart3_x_tractor*_t36;
-    const trailer3_real_t _t180 = K_theta_cart3_x_tractor_2*_t32;
-    const trailer3_real_t _t181 = _t169*_t28;
-    const trailer3_real_t _t182 = _t171*_t28;
-    const trailer3_real_t _t183 = _t174*_t27;
-    const trailer3_real_t _t184 = _t174*_t28;
-    const trailer3_real_t _t185 = _t165*_t171;
-    const trailer3_real_t _t186 = _t164*_t169;
-    const trailer3_real_t _t187 = _t165*_t169;
-    const trailer3_real_t _t188 = _t166*thetadot_right;
-    const trailer3_real_t _t189 = _t166*thetadot_left;
-    const trailer3_real_t _t190 = _t173*thetadot_right;
-    const trailer3_real_t _t191 = _t173*thetadot_left;
-    const trailer3_real_t _t192 = _t60 + _t63;
-    const trailer3_real_t _t4 = prepared->forward_dynamics[22];
-    const trailer3_real_t _t193 = _t192*_t4;
+    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t28;
+    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t32;
+    const trailer3_real_t _t88 = K_theta_cart3_x_tractor*_t38;
+    const trailer3_real_t _t89 = K_theta_cart2_x_tractor_2*_t31;
+    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t37;
+    const trailer3_real_t _t91 = TRAILER3_LIT(0.85)*_t31;
+    const trailer3_real_t _t92 = TRAILER3_LIT(0.85)*_t32;
+    const trailer3_real_t _t0 = prepared->forward_dynamics[19];
+    const trailer3_real_t _t1 = prepared->forward_dynamics[20];
+    const trailer3_real_t _t93 = _t0*thetadot_right + _t1*thetadot_left;
+    const trailer3_real_t _t94 = _t93*_t93;
+    const trailer3_real_t _t2 = prepared->forward_dynamics[21];
+    const trailer3_real_t _t3 = prepared->forward_dynamics[22];
+    const trailer3_real_t _t95 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer3_real_t _t96 = _t54*_t95 + _t58*_t93;
+    const trailer3_real_t _t97 = _t96*_t96;
+    const trailer3_real_t _t98 = _t70*_t95 + _t77*_t93;
+    const trailer3_real_t _t99 = _t98*_t98;
+    const trailer3_real_t _t100 = _t88*_t99;
+    const trailer3_real_t _t101 = _t45*_t95 + _t48*_t93;
+    const trailer3_real_t _t102 = _t101*_t101;
+    const trailer3_real_t _t103 = _t89*_t97;
+    const trailer3_real_t _t104 = _t90*_t99;
+    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t42;
+    const trailer3_real_t _t106 = K_theta_cart2_x_tractor_2*_t33;
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t43;
+    const trailer3_real_t _t108 = K_theta_cart3_x_tractor_2*_t39;
+    const trailer3_real_t _t109 = _t35*_t97;
+    const trailer3_real_t _t110 = _t35*_t99;
+    const trailer3_real_t _t111 = _t102*_t34;
+    const trailer3_real_t _t112 = _t102*_t35;
+    const trailer3_real_t _t113 = _t92*_t99;
+    const trailer3_real_t _t114 = _t91*_t97;
+    const trailer3_real_t _t115 = _t92*_t97;
+    const trailer3_real_t _t116 = TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t117 = _t116*_t44;
+    const trailer3_real_t _t118 = -TRAILER3_LIT(1.6666666666666667)*_t41;
+    const trailer3_real_t _t119 = _t118*_t44;
+    const trailer3_real_t _t120 = _t116*_t51;
+    const trailer3_real_t _t121 = _t118*_t51;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t116;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t118;
+    const trailer3_real_t _t124 = -_t117 - _t32;
+    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
+    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
+    const trailer3_real_t _t127 = _t116*_t64;
+    const trailer3_real_t _t128 = _t127 - _t31;
+    const trailer3_real_t _t129 = -_t119 + _t42;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
+    const trailer3_real_t _t132 = _t118*_t64;
+    const trailer3_real_t _t133 = _t132 - _t33;
+    const trailer3_real_t _t134 = _t117 + _t65;
+    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
+    const trailer3_real_t _t137 = _t119 + _t67;
+    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(1.6666666666666667)*_t69;
+    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
+    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = -_t120 - _t125*_t53 - _t38;
+    const trailer3_real_t _t145 = -TRAILER3_LIT(1.6666666666666667)*_t144;
+    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
+    const trailer3_real_t _t147 = _t116*_t72;
+    const trailer3_real_t _t148 = _t125*_t74 + _t147 - _t37;
+    const trailer3_real_t _t149 = -_t121 - _t130*_t53 + _t43;
+    const trailer3_real_t _t150 = -TRAILER3_LIT(1.6666666666666667)*_t149;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
+    const trailer3_real_t _t152 = _t118*_t72;
+    const trailer3_real_t _t153 = _t130*_t74 + _t152 - _t39;
+    const trailer3_real_t _t154 = _t120 - _t135*_t53 + _t73;
+    const trailer3_real_t _t155 = -TRAILER3_LIT(1.6666666666666667)*_t154;
+    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
+    const trailer3_real_t _t157 = _t135*_t74 - _t147 + _t52;
+    const trailer3_real_t _t158 = _t121 - _t138*_t53 + _t79;
+    const trailer3_real_t _t159 = -TRAILER3_LIT(1.6666666666666667)*_t158;
+    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t159;
+    const trailer3_real_t _t161 = _t138*_t74 - _t152 + _t57;
+    const trailer3_real_t _t162 = -_t140*_t53 + _t75;
+    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
+    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
+    const trailer3_real_t _t165 = _t140*_t74 + _t55;
+    const trailer3_real_t _t166 = -_t142*_t53 + _t80;
+    const trailer3_real_t _t167 = -TRAILER3_LIT(1.6666666666666667)*_t166;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
+    const trailer3_real_t _t169 = _t142*_t74 + _t59;
+    const trailer3_real_t _t170 = TRAILER3_LIT(1.6666666666666667)*_t76;
+    const trailer3_real_t _t171 = TRAILER3_LIT(0.2)*_t170;
+    const trailer3_real_t _t172 = TRAILER3_LIT(1.6666666666666667)*_t81;
+    const trailer3_real_t _t173 = TRAILER3_LIT(0.2)*_t172;
+    const trailer3_real_t _t174 = _t93*_t95;
+    const trailer3_real_t _t175 = _t101*_t95;
+    const trailer3_real_t _t176 = _t101*_t93;
+    const trailer3_real_t _t177 = _t28 + _t61;
+    const trailer3_real_t _t4 = prepared->forward_dynamics[23];
+    const trailer3_real_t _t178 = _t177*_t4;
     const trailer3_real_t J_theta_cart_right = prepared->forward_dynamics[8];
-    const trailer3_real_t _t194 = J_theta_cart_right*_t193;
-    const trailer3_real_t _t195 = _t64 + _t67;
-    const trailer3_real_t _t196 = _t195*_t4;
-    const trailer3_real_t _t197 = J_theta_cart_right*_t196;
-    const trailer3_real_t _t198 = -_t60 + _t61 - _t62;
-    const trailer3_real_t _t5 = prepared->forward_dynamics[23];
-    const trailer3_real_t _t199 = _t198*_t5;
+    const trailer3_real_t _t179 = J_theta_cart_right*_t178;
+    const trailer3_real_t _t180 = -_t41 + _t62;
+    const trailer3_real_t _t181 = _t180*_t4;
+    const trailer3_real_t _t182 = J_theta_cart_right*_t181;
+    const trailer3_real_t _t183 = _t28 - _t61;
+    const trailer3_real_t _t5 = prepared->forward_dynamics[24];
+    const trailer3_real_t _t184 = _t183*_t5;
     const trailer3_real_t J_theta_cart_left = prepared->forward_dynamics[7];
-    const trailer3_real_t _t200 = J_theta_cart_left*_t199;
-    const trailer3_real_t _t201 = -_t64 + _t65 - _t66;
-    const trailer3_real_t _t202 = _t201*_t5;
-    const trailer3_real_t _t203 = J_theta_cart_left*_t202;
-    const trailer3_real_t _t204 = _t68 - _t70 + _t73;
-    const trailer3_real_t _t6 = prepared->forward_dynamics[24];
-    const trailer3_real_t _t205 = _t204*_t6;
+    const trailer3_real_t _t185 = J_theta_cart_left*_t184;
+    const trailer3_real_t _t186 = -_t41 - _t62;
+    const trailer3_real_t _t187 = _t186*_t5;
+    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
+    const trailer3_real_t _t189 = _t32 + _t63 - _t65;
+    const trailer3_real_t _t6 = prepared->forward_dynamics[25];
+    const trailer3_real_t _t190 = _t189*_t6;
     const trailer3_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
-    const trailer3_real_t _t206 = J_theta_cart2_right*_t205;
-    const trailer3_real_t _t207 = _t74 - _t75 + _t78;
-    const trailer3_real_t _t208 = _t207*_t6;
-    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
-    const trailer3_real_t _t210 = -_t68 - _t79;
-    const trailer3_real_t _t7 = prepared->forward_dynamics[25];
-    const trailer3_real_t _t211 = _t210*_t7;
+    const trailer3_real_t _t191 = J_theta_cart2_right*_t190;
+    const trailer3_real_t _t192 = _t66 - _t68;
+    const trailer3_real_t _t193 = _t192*_t6;
+    const trailer3_real_t _t194 = J_theta_cart2_right*_t193;
+    const trailer3_real_t _t195 = -_t63 - _t69;
+    const trailer3_real_t _t7 = prepared->forward_dynamics[26];
+    const trailer3_real_t _t196 = _t195*_t7;
     const trailer3_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
-    const trailer3_real_t _t212 = J_theta_cart2_left*_t211;
-    const trailer3_real_t _t213 = -_t74 - _t80;
-    const trailer3_real_t _t214 = _t213*_t7;
-    const trailer3_real_t _t215 = J_theta_cart2_left*_t214;
-    const trailer3_real_t _t216 = _t82 - _t89;
-    const trailer3_real_t _t8 = prepared->forward_dynamics[26];
-    const trailer3_real_t _t217 = _t216*_t8;
+    const trailer3_real_t _t197 = J_theta_cart2_left*_t196;
+    const trailer3_real_t _t198 = -_t66 - _t68;
+    const trailer3_real_t _t199 = _t198*_t7;
+    const trailer3_real_t _t200 = J_theta_cart2_left*_t199;
+    const trailer3_real_t _t201 = _t71 - _t76;
+    const trailer3_real_t _t8 = prepared->forward_dynamics[27];
+    const trailer3_real_t _t202 = _t201*_t8;
     const trailer3_real_t J_theta_cart3_right = prepared->forward_dynamics[6];
-    const trailer3_real_t _t218 = J_theta_cart3_right*_t217;
-    const trailer3_real_t _t219 = _t91 - _t96;
-    const trailer3_real_t _t220 = _t219*_t8;
-    const trailer3_real_t _t221 = J_theta_cart3_right*_t220;
-    const trailer3_real_t _t222 = -_t82 - _t89;
-    const trailer3_real_t _t9 = prepared->forward_dynamics[27];
-    const trailer3_real_t _t223 = _t222*_t9;
+    const trailer3_real_t _t203 = J_theta_cart3_right*_t202;
+    const trailer3_real_t _t204 = _t78 - _t81;
+    const trailer3_real_t _t205 = _t204*_t8;
+    const trailer3_real_t _t206 = J_theta_cart3_right*_t205;
+    const trailer3_real_t _t207 = -_t71 - _t76;
+    const trailer3_real_t _t9 = prepared->forward_dynamics[28];
+    const trailer3_real_t _t208 = _t207*_t9;
     const trailer3_real_t J_theta_cart3_left = prepared->forward_dynamics[5];
-    const trailer3_real_t _t224 = J_theta_cart3_left*_t223;
-    const trailer3_real_t _t225 = -_t91 - _t96;
-    const trailer3_real_t _t226 = _t225*_t9;
-    const trailer3_real_t _t227 = J_theta_cart3_left*_t226;
+    const trailer3_real_t _t209 = J_theta_cart3_left*_t208;
+    const trailer3_real_t _t210 = -_t78 - _t81;
+    const trailer3_real_t _t211 = _t210*_t9;
+    const trailer3_real_t _t212 = J_theta_cart3_left*_t211;
     const trailer3_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[12];
-    const trailer3_real_t _t228 = K_theta_cart_x_tractor*_t20 + K_theta_cart_x_tractor_2*_t21;
-    const trailer3_real_t _t229 = _t155 + _t156;
-    const trailer3_real_t _t230 = _t157 + _t158;
-    const trailer3_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[17];
-    const trailer3_real_t _t231 = K_theta_tractor_x_tractor*_t167 + _t160*_t169 + _t172
-            + _t174*(-K_theta_cart_x_tractor_2*_t20 + _t159) - _t175 - _t176;
-    const trailer3_real_t _t232 = _t188 - _t190;
-    const trailer3_real_t _t233 = _t189 - _t191;
-    const trailer3_real_t _t234 = _t232*_t97 + _t233*_t99;
-    const trailer3_real_t _t235 = _t168*thetadot_right;
-    const trailer3_real_t _t236 = _t168*thetadot_left;
-    const trailer3_real_t _t237 = _t106*_t188 + _t111*_t189 + _t116*_t190 + _t119*_t191
-            + _t121*_t235 + _t123*_t236;
-    const trailer3_real_t _t238 = _t170*thetadot_right;
-    const trailer3_real_t _t239 = _t170*thetadot_left;
-    const trailer3_real_t _t240 = _t126*_t188 + _t131*_t189 + _t136*_t190 + _t140*_t191
-            + _t144*_t235 + _t148*_t236 + _t151*_t238 + _t153*_t239;
-    const trailer3_real_t _t241 = _t228*_t234 + _t229*_t237 + _t230*_t240 + _t231;
-    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t22 - K_theta_cart_x_tractor_2*_t34;
-    const trailer3_real_t _t243 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t35;
-    const trailer3_real_t _t244 = K_theta_cart3_x_tractor*_t32 - K_theta_cart3_x_tractor_2*_t36;
-    const trailer3_real_t _t245 = _t169*(-_t177 - _t178) + _t171*(-_t179 - _t180)
-            + _t174*(-K_theta_cart_x_tractor*_t34 - K_theta_cart_x_tractor_2*_t22);
-    const trailer3_real_t _t246 = _t1*_t188 + _t189*_t3;
-    const trailer3_real_t _t247 = -K_theta_tractor_x_tractor*_t246 + _t234*_t242 + _t237*_t243
-            + _t240*_t244 + _t245;
-    const trailer3_real_t _t248 = K_theta_cart_x_tractor_2*_t20 - _t159;
-    const trailer3_real_t _t249 = _t27*(_t155 + _t156) + _t28*(_t160 - _t162);
-    const trailer3_real_t _t250 = _t27*(_t157 + _t158) + _t28*(_t161 - _t163);
-    const trailer3_real_t _t10 = prepared->forward_dynamics[28];
-    const trailer3_real_t _t11 = prepared->forward_dynamics[29];
-    const trailer3_real_t _t12 = prepared->forward_dynamics[30];
-    const trailer3_real_t _t13 = prepared->forward_dynamics[31];
-    const trailer3_real_t _t251 = _t13*_t167*_t21 + _t181*(-_t155 - _t156) + _t182*(-_t157 - _t158)
-            + _t20*(_t10*_t167 + _t11*_t171*_t31 + _t12*_t169*_t25) + _t27*(-_t175 - _t176);
+    const trailer3_real_t _t213 = K_theta_cart_x_tractor_2*_t27 - _t86;
+    const trailer3_real_t _t214 = _t34*(_t82 + _t83) + _t35*(_t87 - _t89);
+    const trailer3_real_t _t215 = _t34*(_t84 + _t85) + _t35*(_t88 - _t90);
+    const trailer3_real_t _t10 = prepared->forward_dynamics[29];
+    const trailer3_real_t _t11 = prepared->forward_dynamics[30];
+    const trailer3_real_t _t12 = prepared->forward_dynamics[31];
+    const trailer3_real_t _t13 = prepared->forward_dynamics[32];
+    const trailer3_real_t _t216 = _t109*(-_t82 - _t83) + _t110*(-_t84 - _t85) + _t13*_t28*_t94
+            + _t27*(_t10*_t94 + _t11*_t38*_t99 + _t12*_t32*_t97) + _t34*(-_t103 - _t104);
+    const trailer3_real_t _t217 = _t174 - _t175;
+    const trailer3_real_t _t218 = -_t176 + _t94;
+    const trailer3_real_t _t219 = _t116*_t217 + _t118*_t218;
+    const trailer3_real_t _t220 = _t95*_t96;
+    const trailer3_real_t _t221 = _t93*_t96;
+    const trailer3_real_t _t222 = _t125*_t174 + _t130*_t94 + _t135*_t175 + _t138*_t176 + _t140*_t220
+            + _t142*_t221;
+    const trailer3_real_t _t223 = _t95*_t98;
+    const trailer3_real_t _t224 = _t93*_t98;
+    const trailer3_real_t _t225 = _t145*_t174 + _t150*_t94 + _t155*_t175 + _t159*_t176 + _t163*_t220
+            + _t167*_t221 + _t170*_t223 + _t172*_t224;
     const trailer3_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer3_real_t _t252 = J_theta_cart*_t234 + _t237*_t249 + _t240*_t250 + _t246*_t248
-            + _t251;
-    const trailer3_real_t _t253 = K_theta_cart2_x_tractor_2*_t24 - _t160;
-    const trailer3_real_t _t254 = _t164*(_t157 + _t158) + _t165*(_t161 - _t163);
-    const trailer3_real_t _t255 = _t164*(_t172 - _t176) + _t167*(_t177 + _t178)
-            + _t183*(-_t160 + _t162) + _t184*(_t155 + _t156) + _t185*(-_t157 - _t158);
+    const trailer3_real_t _t226 = J_theta_cart*_t219 + _t174*_t213 + _t214*_t222 + _t215*_t225
+            + _t216;
+    const trailer3_real_t _t227 = K_theta_cart2_x_tractor_2*_t31 - _t87;
+    const trailer3_real_t _t228 = _t91*(_t84 + _t85) + _t92*(_t88 - _t90);
+    const trailer3_real_t _t229 = _t111*(-_t87 + _t89) + _t112*(_t82 + _t83) + _t113*(-_t84 - _t85)
+            + _t91*(_t100 - _t104) + _t94*(_t105 + _t106);
     const trailer3_real_t J_theta_cart2 = prepared->forward_dynamics[1];
-    const trailer3_real_t _t256 = J_theta_cart2*_t237 + _t234*_t249 + _t240*_t254 + _t246*_t253
-            + _t255;
-    const trailer3_real_t _t257 = K_theta_cart3_x_tractor_2*_t30 - _t161;
-    const trailer3_real_t _t258 = _t157*(_t184 + _t187) + _t158*(_t184 + _t187)
-            + _t161*(-_t183 - _t186) + _t163*(_t183 + _t186) + _t167*(_t179 + _t180);
+    const trailer3_real_t _t230 = J_theta_cart2*_t222 + _t174*_t227 + _t214*_t219 + _t225*_t228
+            + _t229;
+    const trailer3_real_t _t231 = K_theta_cart3_x_tractor_2*_t37 - _t88;
+    const trailer3_real_t _t232 = _t84*(_t112 + _t115) + _t85*(_t112 + _t115)
+            + _t88*(-_t111 - _t114) + _t90*(_t111 + _t114) + _t94*(_t107 + _t108);
     const trailer3_real_t J_theta_cart3 = prepared->forward_dynamics[4];
-    const trailer3_real_t _t259 = J_theta_cart3*_t240 + _t234*_t250 + _t237*_t254 + _t246*_t257
-            + _t258;
-    const trailer3_real_t _t14 = prepared->forward_dynamics[32];
-    const trailer3_real_t _t260 = _t14 + _t228*_t40 + _t229*_t49 + _t230*_t81;
-    const trailer3_real_t _t15 = prepared->forward_dynamics[33];
-    const trailer3_real_t _t261 = _t15 + _t242*_t40 + _t243*_t49 + _t244*_t81;
-    const trailer3_real_t _t262 = J_theta_cart*_t40 + _t0*_t242 + _t1*_t228 + _t249*_t49
-            + _t250*_t81;
-    const trailer3_real_t _t263 = J_theta_cart2*_t49 + _t0*_t243 + _t1*_t229 + _t249*_t40
-            + _t254*_t81;
-    const trailer3_real_t _t264 = J_theta_cart3*_t81 + _t0*_t244 + _t1*_t230 + _t250*_t40
-            + _t254*_t49;
-    const trailer3_real_t J_theta_right = prepared->forward_dynamics[10];
-    const trailer3_real_t _t265 = J_theta_right + _t0*_t261 + _t1*_t260 + _t193*_t194 + _t199*_t200
-            + _t205*_t206 + _t211*_t212 + _t217*_t218 + _t223*_t224 + _t262*_t40 + _t263*_t49
-            + _t264*_t81;
-    const trailer3_real_t _t16 = prepared->forward_dynamics[34];
-    const trailer3_real_t _t266 = _t16 + _t228*_t44 + _t229*_t55 + _t230*_t90;
-    const trailer3_real_t _t17 = prepared->forward_dynamics[35];
-    const trailer3_real_t _t267 = _t17 + _t242*_t44 + _t243*_t55 + _t244*_t90;
-    const trailer3_real_t _t268 = J_theta_cart*_t44 + _t2*_t242 + _t228*_t3 + _t249*_t55
-            + _t250*_t90;
-    const trailer3_real_t _t269 = J_theta_cart2*_t55 + _t2*_t243 + _t229*_t3 + _t249*_t44
-            + _t254*_t90;
-    const trailer3_real_t _t270 = J_theta_cart3*_t90 + _t2*_t244 + _t230*_t3 + _t250*_t44
-            + _t254*_t55;
-    const trailer3_real_t _t271 = _t0*_t267 + _t1*_t266 + _t193*_t197 + _t199*_t203 + _t205*_t209
-            + _t211*_t215 + _t217*_t221 + _t223*_t227 + _t268*_t40 + _t269*_t49 + _t270*_t81;
-    const trailer3_real_t J_theta_left = prepared->forward_dynamics[9];
-    const trailer3_real_t _t272 = J_theta_left + _t196*_t197 + _t2*_t267 + _t202*_t203 + _t208*_t209
-            + _t214*_t215 + _t220*_t221 + _t226*_t227 + _t266*_t3 + _t268*_t44 + _t269*_t55
-            + _t270*_t90;
-    const trailer3_real_t _t273 = _t265*_t272 - _t271*_t271;
-    const trailer3_real_t _t276 = _t103 - _t37;
-    const trailer3_real_t _t277 = _t276*_t4;
-    const trailer3_real_t _t278 = _t104 - _t38;
-    const trailer3_real_t _t279 = _t278*_t4;
-    const trailer3_real_t _t280 = -_t103 - _t37;
-    const trailer3_real_t _t281 = _t280*_t5;
-    const trailer3_real_t _t282 = -_t104 - _t38;
-    const trailer3_real_t _t283 = _t282*_t5;
-    const trailer3_real_t _t284 = _t107 - _t109;
-    const trailer3_real_t _t285 = _t284*_t6;
-    const trailer3_real_t _t286 = _t112 - _t114;
-    const trailer3_real_t _t287 = _t286*_t6;
-    const trailer3_real_t _t288 = _t108 + _t117 - _t41;
-    const trailer3_real_t _t289 = _t288*_t6;
-    const trailer3_real_t _t290 = _t113 + _t120 - _t45;
-    const trailer3_real_t _t291 = _t290*_t6;
-    const trailer3_real_t _t292 = _t122 + _t43;
-    const trailer3_real_t _t293 = _t292*_t6;
-    const trailer3_real_t _t294 = _t124 + _t47;
-    const trailer3_real_t _t295 = _t294*_t6;
-    const trailer3_real_t _t296 = -_t107 - _t109;
-    const trailer3_real_t _t297 = _t296*_t7;
-    const trailer3_real_t _t298 = -_t112 - _t114;
-    const trailer3_real_t _t299 = _t298*_t7;
-    const trailer3_real_t _t300 = _t108 - _t117 - _t41;
-    const trailer3_real_t _t301 = _t300*_t7;
-    const trailer3_real_t _t302 = _t113 - _t120 - _t45;
-    const trailer3_real_t _t303 = _t302*_t7;
-    const trailer3_real_t _t304 = -_t122 + _t43;
-    const trailer3_real_t _t305 = _t304*_t7;
-    const trailer3_real_t _t306 = -_t124 + _t47;
-    const trailer3_real_t _t307 = _t306*_t7;
-    const trailer3_real_t _t308 = _t127 - _t129;
-    const trailer3_real_t _t309 = _t308*_t8;
-    const trailer3_real_t _t310 = _t132 - _t134;
-    const trailer3_real_t _t311 = _t310*_t8;
-    const trailer3_real_t _t312 = _t137 - _t138;
-    const trailer3_real_t _t313 = _t312*_t8;
-    const trailer3_real_t _t314 = _t141 - _t142;
-    const trailer3_real_t _t315 = _t314*_t8;
-    const trailer3_real_t _t316 = _t145 - _t146;
-    const trailer3_real_t _t317 = _t316*_t8;
-    const trailer3_real_t _t318 = _t149 - _t150;
-    const trailer3_real_t _t319 = _t318*_t8;
-    const trailer3_real_t _t320 = _t152 + _t54;
-    const trailer3_real_t _t321 = _t320*_t8;
-    const trailer3_real_t _t322 = _t154 + _t59;
-    const trailer3_real_t _t323 = _t322*_t8;
-    const trailer3_real_t _t324 = -_t127 - _t129;
-    const trailer3_real_t _t325 = _t324*_t9;
-    const trailer3_real_t _t326 = -_t132 - _t134;
-    const trailer3_real_t _t327 = _t326*_t9;
-    const trailer3_real_t _t328 = -_t137 - _t138;
-    const trailer3_real_t _t329 = _t328*_t9;
-    const trailer3_real_t _t330 = -_t141 - _t142;
-    const trailer3_real_t _t331 = _t330*_t9;
-    const trailer3_real_t _t332 = -_t145 - _t146;
-    const trailer3_real_t _t333 = _t332*_t9;
-    const trailer3_real_t _t334 = -_t149 - _t150;
-    const trailer3_real_t _t335 = _t334*_t9;
-    const trailer3_real_t _t336 = -_t152 + _t54;
-    const trailer3_real_t _t337 = _t336*_t9;
-    const trailer3_real_t _t338 = -_t154 + _t59;
-    const trailer3_real_t _t339 = _t338*_t9;
-    const trailer3_real_t _t340 = _t232*_t277 + _t233*_t279;
-    const trailer3_real_t _t341 = _t232*_t281 + _t233*_t283;
-    const trailer3_real_t _t342 = _t188*_t285 + _t189*_t287 + _t190*_t289 + _t191*_t291
-            + _t235*_t293 + _t236*_t295;
-    const trailer3_real_t _t343 = _t188*_t297 + _t189*_t299 + _t190*_t301 + _t191*_t303
-            + _t235*_t305 + _t236*_t307;
-    const trailer3_real_t _t344 = _t188*_t309 + _t189*_t311 + _t190*_t313 + _t191*_t315
-            + _t235*_t317 + _t236*_t319 + _t238*_t321 + _t239*_t323;
-    const trailer3_real_t _t345 = _t188*_t325 + _t189*_t327 + _t190*_t329 + _t191*_t331
-            + _t235*_t333 + _t236*_t335 + _t238*_t337 + _t239*_t339;
-    const trailer3_real_t _t346 = _t0*_t247 + _t1*_t241 + _t194*_t340 + _t200*_t341 + _t206*_t342
-            + _t212*_t343 + _t218*_t344 + _t224*_t345 + _t252*_t40 + _t256*_t49 + _t259*_t81;
-    const trailer3_real_t _t347 = _t197*_t340 + _t2*_t247 + _t203*_t341 + _t209*_t342 + _t215*_t343
-            + _t221*_t344 + _t227*_t345 + _t241*_t3 + _t252*_t44 + _t256*_t55 + _t259*_t90;
-    const trailer3_real_t _t348 = -_t346 + tau_right;
-    const trailer3_real_t _t349 = -_t347 + tau_left;
-    const trailer3_real_t _t350 = TRAILER3_LIT(1.0)/_t273;
-    const trailer3_real_t _t351 = _t350*(-_t271*_t349 + _t272*_t348);
-    const trailer3_real_t _t352 = _t350*(_t265*_t349 - _t271*_t348);
-    const trailer3_real_t _t353 = _t1*_t351 + _t3*_t352;
-    const trailer3_real_t _t354 = _t0*_t351 + _t2*_t352;
-    const trailer3_real_t _t355 = _t234 + _t351*_t40 + _t352*_t44;
-    const trailer3_real_t _t356 = _t237 + _t351*_t49 + _t352*_t55;
-    const trailer3_real_t _t357 = _t240 + _t351*_t81 + _t352*_t90;
-    const trailer3_real_t _t358 = _t193*_t351 + _t196*_t352 + _t340;
-    const trailer3_real_t _t359 = _t199*_t351 + _t202*_t352 + _t341;
-    const trailer3_real_t _t360 = _t205*_t351 + _t208*_t352 + _t342;
-    const trailer3_real_t _t361 = _t211*_t351 + _t214*_t352 + _t343;
-    const trailer3_real_t _t362 = _t217*_t351 + _t220*_t352 + _t344;
-    const trailer3_real_t _t363 = _t223*_t351 + _t226*_t352 + _t345;
-    const trailer3_real_t _t364 = -_t246*_t274 + _t275*_t353;
-    const trailer3_real_t _t365 = _t246*_t275 + _t274*_t353;
-    if (!(_t265 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer3_real_t _t233 = J_theta_cart3*_t225 + _t174*_t231 + _t215*_t219 + _t222*_t228
+            + _t232;
+    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
+    const trailer3_real_t _t235 = _t82 + _t83;
+    const trailer3_real_t _t236 = _t84 + _t85;
+    const trailer3_real_t J_x_tractor = prepared->forward_dynamics[10];
+    const trailer3_real_t _t237 = J_x_tractor + _t234*_t45 + _t235*_t54 + _t236*_t70;
+    const trailer3_real_t _t238 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t234;
+    const trailer3_real_t _t239 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t235;
+    const trailer3_real_t _t240 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t236;
+    const trailer3_real_t _t18 = prepared->forward_dynamics[35];
+    const trailer3_real_t _t241 = _t178*_t179 + _t18 + _t184*_t185 + _t190*_t191 + _t196*_t197
+            + _t202*_t203 + _t208*_t209 + _t237 + _t238*_t45 + _t239*_t54 + _t240*_t70;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[18];
+    const trailer3_real_t _t242 = K_theta_tractor_x_tractor_2 + _t234*_t48 + _t235*_t58
+            + _t236*_t77;
+    const trailer3_real_t _t243 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
+    const trailer3_real_t _t244 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t243;
+    const trailer3_real_t _t245 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
+    const trailer3_real_t _t246 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t245;
+    const trailer3_real_t _t247 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
+    const trailer3_real_t _t248 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t247;
+    const trailer3_real_t _t23 = prepared->forward_dynamics[38];
+    const trailer3_real_t _t249 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
+            + _t202*_t206 + _t208*_t212 + _t23 + _t242 + _t244*_t45 + _t246*_t54 + _t248*_t70;
+    const trailer3_real_t J_theta_tractor = prepared->forward_dynamics[9];
+    const trailer3_real_t _t250 = J_theta_tractor + _t243*_t48 + _t245*_t58 + _t247*_t77;
+    const trailer3_real_t _t24 = prepared->forward_dynamics[39];
+    const trailer3_real_t _t251 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t24 + _t244*_t48 + _t246*_t58 + _t248*_t77 + _t250;
+    const trailer3_real_t _t252 = _t241*_t251 - _t249*_t249;
+    const trailer3_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[17];
+    const trailer3_real_t _t255 = K_theta_tractor_x_tractor*_t94 + _t100
+            + _t102*(-K_theta_cart_x_tractor_2*_t27 + _t86) - _t103 - _t104 + _t87*_t97;
+    const trailer3_real_t _t256 = _t102*(-K_theta_cart_x_tractor*_t41
+            - K_theta_cart_x_tractor_2*_t29) + _t97*(-_t105 - _t106) + _t99*(-_t107 - _t108);
+    const trailer3_real_t _t257 = _t122 + _t27;
+    const trailer3_real_t _t258 = _t257*_t4;
+    const trailer3_real_t _t259 = _t123 + _t29;
+    const trailer3_real_t _t260 = _t259*_t4;
+    const trailer3_real_t _t261 = -_t122 + _t27;
+    const trailer3_real_t _t262 = _t261*_t5;
+    const trailer3_real_t _t263 = -_t123 + _t29;
+    const trailer3_real_t _t264 = _t263*_t5;
+    const trailer3_real_t _t265 = _t126 - _t128;
+    const trailer3_real_t _t266 = _t265*_t6;
+    const trailer3_real_t _t267 = _t131 - _t133;
+    const trailer3_real_t _t268 = _t267*_t6;
+    const trailer3_real_t _t269 = _t127 + _t136 - _t46;
+    const trailer3_real_t _t270 = _t269*_t6;
+    const trailer3_real_t _t271 = _t132 + _t139 - _t49;
+    const trailer3_real_t _t272 = _t271*_t6;
+    const trailer3_real_t _t273 = _t141 + _t47;
+    const trailer3_real_t _t274 = _t273*_t6;
+    const trailer3_real_t _t275 = _t143 + _t50;
+    const trailer3_real_t _t276 = _t275*_t6;
+    const trailer3_real_t _t277 = -_t126 - _t128;
+    const trailer3_real_t _t278 = _t277*_t7;
+    const trailer3_real_t _t279 = -_t131 - _t133;
+    const trailer3_real_t _t280 = _t279*_t7;
+    const trailer3_real_t _t281 = _t127 - _t136 - _t46;
+    const trailer3_real_t _t282 = _t281*_t7;
+    const trailer3_real_t _t283 = _t132 - _t139 - _t49;
+    const trailer3_real_t _t284 = _t283*_t7;
+    const trailer3_real_t _t285 = -_t141 + _t47;
+    const trailer3_real_t _t286 = _t285*_t7;
+    const trailer3_real_t _t287 = -_t143 + _t50;
+    const trailer3_real_t _t288 = _t287*_t7;
+    const trailer3_real_t _t289 = _t146 - _t148;
+    const trailer3_real_t _t290 = _t289*_t8;
+    const trailer3_real_t _t291 = _t151 - _t153;
+    const trailer3_real_t _t292 = _t291*_t8;
+    const trailer3_real_t _t293 = _t156 - _t157;
+    const trailer3_real_t _t294 = _t293*_t8;
+    const trailer3_real_t _t295 = _t160 - _t161;
+    const trailer3_real_t _t296 = _t295*_t8;
+    const trailer3_real_t _t297 = _t164 - _t165;
+    const trailer3_real_t _t298 = _t297*_t8;
+    const trailer3_real_t _t299 = _t168 - _t169;
+    const trailer3_real_t _t300 = _t299*_t8;
+    const trailer3_real_t _t301 = _t171 + _t56;
+    const trailer3_real_t _t302 = _t301*_t8;
+    const trailer3_real_t _t303 = _t173 + _t60;
+    const trailer3_real_t _t304 = _t303*_t8;
+    const trailer3_real_t _t305 = -_t146 - _t148;
+    const trailer3_real_t _t306 = _t305*_t9;
+    const trailer3_real_t _t307 = -_t151 - _t153;
+    const trailer3_real_t _t308 = _t307*_t9;
+    const trailer3_real_t _t309 = -_t156 - _t157;
+    const trailer3_real_t _t310 = _t309*_t9;
+    const trailer3_real_t _t311 = -_t160 - _t161;
+    const trailer3_real_t _t312 = _t311*_t9;
+    const trailer3_real_t _t313 = -_t164 - _t165;
+    const trailer3_real_t _t314 = _t313*_t9;
+    const trailer3_real_t _t315 = -_t168 - _t169;
+    const trailer3_real_t _t316 = _t315*_t9;
+    const trailer3_real_t _t317 = -_t171 + _t56;
+    const trailer3_real_t _t318 = _t317*_t9;
+    const trailer3_real_t _t319 = -_t173 + _t60;
+    const trailer3_real_t _t320 = _t319*_t9;
+    const trailer3_real_t _t321 = _t217*_t258 + _t218*_t260;
+    const trailer3_real_t _t322 = _t217*_t262 + _t218*_t264;
+    const trailer3_real_t _t323 = _t174*_t266 + _t175*_t270 + _t176*_t272 + _t220*_t274
+            + _t221*_t276 + _t268*_t94;
+    const trailer3_real_t _t324 = _t174*_t278 + _t175*_t282 + _t176*_t284 + _t220*_t286
+            + _t221*_t288 + _t280*_t94;
+    const trailer3_real_t _t325 = _t174*_t290 + _t175*_t294 + _t176*_t296 + _t220*_t298
+            + _t221*_t300 + _t223*_t302 + _t224*_t304 + _t292*_t94;
+    const trailer3_real_t _t326 = _t174*_t306 + _t175*_t310 + _t176*_t312 + _t220*_t314
+            + _t221*_t316 + _t223*_t318 + _t224*_t320 + _t308*_t94;
+    const trailer3_real_t _t327 = _t179*_t321 + _t185*_t322 + _t191*_t323 + _t197*_t324
+            + _t203*_t325 + _t209*_t326 + _t219*_t234 + _t222*_t235 + _t225*_t236 + _t226*_t45
+            + _t230*_t54 + _t233*_t70 + _t255;
+    const trailer3_real_t _t328 = -K_theta_tractor_x_tractor*_t174 + _t182*_t321 + _t188*_t322
+            + _t194*_t323 + _t200*_t324 + _t206*_t325 + _t212*_t326 + _t219*_t243 + _t222*_t245
+            + _t225*_t247 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t256;
+    const trailer3_real_t _t14 = prepared->forward_dynamics[33];
+    const trailer3_real_t _t15 = prepared->forward_dynamics[34];
+    const trailer3_real_t _t329 = _t14*tau_right + _t15*tau_left - _t327;
+    const trailer3_real_t _t19 = prepared->forward_dynamics[36];
+    const trailer3_real_t _t21 = prepared->forward_dynamics[37];
+    const trailer3_real_t _t330 = _t19*tau_right + _t21*tau_left - _t328;
+    const trailer3_real_t _t331 = TRAILER3_LIT(1.0)/_t252;
+    const trailer3_real_t _t332 = _t331*(-_t249*_t330 + _t251*_t329);
+    const trailer3_real_t _t333 = _t331*(_t241*_t330 - _t249*_t329);
+    const trailer3_real_t _t334 = _t219 + _t332*_t45 + _t333*_t48;
+    const trailer3_real_t _t335 = _t222 + _t332*_t54 + _t333*_t58;
+    const trailer3_real_t _t336 = _t225 + _t332*_t70 + _t333*_t77;
+    const trailer3_real_t _t337 = _t14*_t332 + _t19*_t333;
+    const trailer3_real_t _t338 = _t15*_t332 + _t21*_t333;
+    const trailer3_real_t _t339 = _t178*_t332 + _t181*_t333 + _t321;
+    const trailer3_real_t _t340 = _t184*_t332 + _t187*_t333 + _t322;
+    const trailer3_real_t _t341 = _t190*_t332 + _t193*_t333 + _t323;
+    const trailer3_real_t _t342 = _t196*_t332 + _t199*_t333 + _t324;
+    const trailer3_real_t _t343 = _t202*_t332 + _t205*_t333 + _t325;
+    const trailer3_real_t _t344 = _t208*_t332 + _t211*_t333 + _t326;
+    const trailer3_real_t _t345 = -_t174*_t253 + _t254*_t332;
+    const trailer3_real_t _t346 = _t174*_t254 + _t253*_t332;
+    if (!(_t241 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t273 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t252 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t364;
-    const trailer3_real_t r_1 = _t365;
-    const trailer3_real_t r_2 = _t354;
-    const trailer3_real_t r_3 = _t355;
-    const trailer3_real_t r_4 = _t356;
-    const trailer3_real_t r_5 = _t357;
-    const trailer3_real_t r_6 = _t351;
-    const trailer3_real_t r_7 = _t352;
-    const trailer3_real_t r_8 = _t358;
-    const trailer3_real_t r_9 = _t359;
-    const trailer3_real_t r_10 = _t360;
-    const trailer3_real_t r_11 = _t361;
-    const trailer3_real_t r_12 = _t362;
-    const trailer3_real_t r_13 = _t363;
+    const trailer3_real_t r_0 = _t345;
+    const trailer3_real_t r_1 = _t346;
+    const trailer3_real_t r_2 = _t333;
+    const trailer3_real_t r_3 = _t334;
+    const trailer3_real_t r_4 = _t335;
+    const trailer3_real_t r_5 = _t336;
+    const trailer3_real_t r_6 = _t337;
+    const trailer3_real_t r_7 = _t338;
+    const trailer3_real_t r_8 = _t339;
+    const trailer3_real_t r_9 = _t340;
+    const trailer3_real_t r_10 = _t341;
+    const trailer3_real_t r_11 = _t342;
+    const trailer3_real_t r_12 = _t343;
+    const trailer3_real_t r_13 = _t344;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
             | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
@@ -1235,7 +1193,7 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
 }
 
 /* trailer3_kinematics: documented in trailer3_model.h.
-   operations after CSE: 62 add, 117 mul, 6 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 45 add, 89 mul, 6 div, 8 sin/cos, 0 sqrt */
 void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *pose_rates)
 {
@@ -1256,117 +1214,111 @@ void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t _t10 = TRAILER3_SIN(_t9);
     const trailer3_real_t _t11 = TRAILER3_COS(_t9);
     const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t11;
-    const trailer3_real_t _t13 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t13 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.2)*_t13;
+    const trailer3_real_t _t15 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t16 = TRAILER3_LIT(1.6666666666666667)*_t15;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.2)*_t16;
+    const trailer3_real_t _t18 = -_t5*_t7 - _t6*_t8;
+    const trailer3_real_t _t19 = -_t13*_t18 + _t5;
+    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t19;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.2)*_t20;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t3*_t5 - _t6*_t7;
+    const trailer3_real_t _t23 = _t13*_t22;
+    const trailer3_real_t _t24 = -TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t25 = -_t16*_t18 - _t24;
+    const trailer3_real_t _t26 = -TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t27 = TRAILER3_LIT(0.2)*_t26;
+    const trailer3_real_t _t28 = TRAILER3_LIT(0.3)*_t5;
+    const trailer3_real_t _t29 = _t16*_t22 + _t28;
+    const trailer3_real_t _t30 = -_t10*_t7 - _t11*_t8;
+    const trailer3_real_t _t31 = -TRAILER3_LIT(0.85)*_t10*_t5 - _t12*_t6;
+    const trailer3_real_t _t32 = _t10 - _t13*_t30 - _t20*_t31;
+    const trailer3_real_t _t33 = -TRAILER3_LIT(1.6666666666666667)*_t32;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.2)*_t33;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t10*_t3 - _t11*_t7;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t5;
+    const trailer3_real_t _t37 = -_t11 + _t13*_t35 + _t20*_t36;
+    const trailer3_real_t _t38 = -TRAILER3_LIT(0.3)*_t11;
+    const trailer3_real_t _t39 = -_t16*_t30 - _t26*_t31 - _t38;
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t10;
+    const trailer3_real_t _t43 = _t16*_t35 + _t26*_t36 + _t42;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t14 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t16 = -_t13*_t14 + _t15*_t2;
-    const trailer3_real_t _t17 = -TRAILER3_LIT(1.6666666666666667)*_t16;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.2)*_t17;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t20 = _t14*_t19;
+    const trailer3_real_t _t44 = TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t23 = -_t13*_t21 + _t2*_t22;
-    const trailer3_real_t _t24 = -TRAILER3_LIT(1.6666666666666667)*_t23;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.2)*_t24;
-    const trailer3_real_t _t26 = _t19*_t21;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t28 = -_t5*_t7 - _t6*_t8;
-    const trailer3_real_t _t29 = -_t14*_t27 + _t15*_t5 - _t17*_t28;
-    const trailer3_real_t _t30 = -TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.2)*_t30;
-    const trailer3_real_t _t32 = TRAILER3_LIT(0.3)*_t5;
-    const trailer3_real_t _t33 = _t14*_t32;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t3*_t5 - _t6*_t7;
-    const trailer3_real_t _t35 = _t17*_t34;
-    const trailer3_real_t _t36 = -_t21*_t27 + _t22*_t5 - _t24*_t28;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
-    const trailer3_real_t _t39 = _t21*_t32;
-    const trailer3_real_t _t40 = _t24*_t34;
-    const trailer3_real_t _t41 = -TRAILER3_LIT(0.3)*_t11;
-    const trailer3_real_t _t42 = -_t10*_t7 - _t11*_t8;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(0.85)*_t10*_t5 - _t12*_t6;
-    const trailer3_real_t _t44 = _t10*_t15 - _t14*_t41 - _t17*_t42 - _t30*_t43;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t44;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.3)*_t10;
-    const trailer3_real_t _t48 = TRAILER3_LIT(0.85)*_t10*_t3 - _t11*_t7;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t10*_t6 - _t12*_t5;
-    const trailer3_real_t _t50 = -_t11*_t15 + _t14*_t47 + _t17*_t48 + _t30*_t49;
-    const trailer3_real_t _t51 = _t10*_t22 - _t21*_t41 - _t24*_t42 - _t37*_t43;
-    const trailer3_real_t _t52 = -TRAILER3_LIT(1.6666666666666667)*_t51;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
-    const trailer3_real_t _t54 = -_t11*_t22 + _t21*_t47 + _t24*_t48 + _t37*_t49;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t55 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t46 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t56 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t47 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t57 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t48 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t49 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t50 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t61 = _t15*_t3 + _t18 - _t20;
-    const trailer3_real_t _t62 = _t22*_t3 + _t25 - _t26;
-    const trailer3_real_t _t63 = _t55*_t61;
-    const trailer3_real_t _t64 = _t55*_t62;
-    const trailer3_real_t _t65 = _t15*_t3 - _t18 - _t20;
-    const trailer3_real_t _t66 = _t22*_t3 - _t25 - _t26;
-    const trailer3_real_t _t67 = _t56*_t65;
-    const trailer3_real_t _t68 = _t56*_t66;
-    const trailer3_real_t _t69 = _t15*_t6 + _t31 - _t33 - _t35;
-    const trailer3_real_t _t70 = _t22*_t6 + _t38 - _t39 - _t40;
-    const trailer3_real_t _t71 = _t57*_t69;
-    const trailer3_real_t _t72 = _t57*_t70;
-    const trailer3_real_t _t73 = _t15*_t6 - _t31 - _t33 - _t35;
-    const trailer3_real_t _t74 = _t22*_t6 - _t38 - _t39 - _t40;
-    const trailer3_real_t _t75 = _t58*_t73;
-    const trailer3_real_t _t76 = _t58*_t74;
-    const trailer3_real_t _t77 = _t46 - _t50;
-    const trailer3_real_t _t78 = _t53 - _t54;
-    const trailer3_real_t _t79 = _t59*_t77;
-    const trailer3_real_t _t80 = _t59*_t78;
-    const trailer3_real_t _t81 = -_t46 - _t50;
-    const trailer3_real_t _t82 = -_t53 - _t54;
-    const trailer3_real_t _t83 = _t60*_t81;
-    const trailer3_real_t _t84 = _t60*_t82;
+    const trailer3_real_t _t51 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t52 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t54 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t55 = _t14 + _t3;
+    const trailer3_real_t _t56 = _t17 - _t52;
+    const trailer3_real_t _t57 = _t46*_t55;
+    const trailer3_real_t _t58 = _t46*_t56;
+    const trailer3_real_t _t59 = -_t14 + _t3;
+    const trailer3_real_t _t60 = -_t17 - _t52;
+    const trailer3_real_t _t61 = _t47*_t59;
+    const trailer3_real_t _t62 = _t47*_t60;
+    const trailer3_real_t _t63 = _t21 - _t23 + _t6;
+    const trailer3_real_t _t64 = _t27 - _t29;
+    const trailer3_real_t _t65 = _t48*_t63;
+    const trailer3_real_t _t66 = _t48*_t64;
+    const trailer3_real_t _t67 = -_t21 - _t23 + _t6;
+    const trailer3_real_t _t68 = -_t27 - _t29;
+    const trailer3_real_t _t69 = _t49*_t67;
+    const trailer3_real_t _t70 = _t49*_t68;
+    const trailer3_real_t _t71 = _t34 - _t37;
+    const trailer3_real_t _t72 = _t41 - _t43;
+    const trailer3_real_t _t73 = _t50*_t71;
+    const trailer3_real_t _t74 = _t50*_t72;
+    const trailer3_real_t _t75 = -_t34 - _t37;
+    const trailer3_real_t _t76 = -_t41 - _t43;
+    const trailer3_real_t _t77 = _t51*_t75;
+    const trailer3_real_t _t78 = _t51*_t76;
     const trailer3_real_t thetadot_right = wheel_rates[0];
     const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t85 = _t15*thetadot_right + _t22*thetadot_left;
-    const trailer3_real_t _t86 = _t14*thetadot_right + _t21*thetadot_left;
-    const trailer3_real_t _t87 = _t17*thetadot_right + _t24*thetadot_left;
-    const trailer3_real_t _t88 = _t30*thetadot_right + _t37*thetadot_left;
-    const trailer3_real_t _t89 = _t45*thetadot_right + _t52*thetadot_left;
-    const trailer3_real_t _t90 = _t63*thetadot_right + _t64*thetadot_left;
-    const trailer3_real_t _t91 = _t67*thetadot_right + _t68*thetadot_left;
-    const trailer3_real_t _t92 = _t71*thetadot_right + _t72*thetadot_left;
-    const trailer3_real_t _t93 = _t75*thetadot_right + _t76*thetadot_left;
-    const trailer3_real_t _t94 = _t79*thetadot_right + _t80*thetadot_left;
-    const trailer3_real_t _t95 = _t83*thetadot_right + _t84*thetadot_left;
-    const trailer3_real_t _t96 = _t85*TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t97 = _t85*TRAILER3_SIN(theta_tractor);
-    pose_rates[0] = _t96;
-    pose_rates[1] = _t97;
-    pose_rates[2] = _t86;
-    pose_rates[3] = _t87;
-    pose_rates[4] = _t88;
-    pose_rates[5] = _t89;
-    pose_rates[6] = _t90;
-    pose_rates[7] = _t91;
-    pose_rates[8] = _t92;
-    pose_rates[9] = _t93;
-    pose_rates[10] = _t94;
-    pose_rates[11] = _t95;
+    const trailer3_real_t _t79 = _t53*thetadot_right + _t54*thetadot_left;
+    const trailer3_real_t _t80 = _t44*thetadot_right + _t45*thetadot_left;
+    const trailer3_real_t _t81 = _t13*_t79 + _t16*_t80;
+    const trailer3_real_t _t82 = _t20*_t79 + _t26*_t80;
+    const trailer3_real_t _t83 = _t33*_t79 + _t40*_t80;
+    const trailer3_real_t _t84 = _t57*_t79 + _t58*_t80;
+    const trailer3_real_t _t85 = _t61*_t79 + _t62*_t80;
+    const trailer3_real_t _t86 = _t65*_t79 + _t66*_t80;
+    const trailer3_real_t _t87 = _t69*_t79 + _t70*_t80;
+    const trailer3_real_t _t88 = _t73*_t79 + _t74*_t80;
+    const trailer3_real_t _t89 = _t77*_t79 + _t78*_t80;
+    const trailer3_real_t _t90 = _t79*TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t91 = _t79*TRAILER3_SIN(theta_tractor);
+    pose_rates[0] = _t90;
+    pose_rates[1] = _t91;
+    pose_rates[2] = _t80;
+    pose_rates[3] = _t81;
+    pose_rates[4] = _t82;
+    pose_rates[5] = _t83;
+    pose_rates[6] = _t84;
+    pose_rates[7] = _t85;
+    pose_rates[8] = _t86;
+    pose_rates[9] = _t87;
+    pose_rates[10] = _t88;
+    pose_rates[11] = _t89;
 }
 
 /* trailer3_minimal_mass_matrix: documented in trailer3_model.h.
-   operations after CSE: 138 add, 216 mul, 6 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 116 add, 185 mul, 8 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *M)
 {
@@ -1397,165 +1349,164 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t6;
     const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t23 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t24 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t25 = _t2*_t24 + _t23*_t4;
-    const trailer3_real_t _t26 = -TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t27 = TRAILER3_LIT(0.2)*_t26;
-    const trailer3_real_t _t28 = _t20*_t23;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t31 = _t2*_t30 + _t29*_t4;
-    const trailer3_real_t _t32 = -TRAILER3_LIT(1.6666666666666667)*_t31;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.2)*_t32;
-    const trailer3_real_t _t34 = _t20*_t29;
-    const trailer3_real_t _t35 = -_t11 - _t6*_t9;
-    const trailer3_real_t _t36 = _t23*_t8 + _t24*_t6 - _t26*_t35;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(1.6666666666666667)*_t36;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t37;
-    const trailer3_real_t _t39 = _t21*_t23;
-    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t41 = _t26*_t40;
-    const trailer3_real_t _t42 = _t29*_t8 + _t30*_t6 - _t32*_t35;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(1.6666666666666667)*_t42;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*_t43;
-    const trailer3_real_t _t45 = _t21*_t29;
-    const trailer3_real_t _t46 = _t32*_t40;
-    const trailer3_real_t _t47 = -_t13*_t9 - _t16;
-    const trailer3_real_t _t48 = -_t17*_t6 - _t19;
-    const trailer3_real_t _t49 = _t13*_t24 + _t15*_t23 - _t26*_t47 - _t37*_t48;
-    const trailer3_real_t _t50 = -TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t51 = TRAILER3_LIT(0.2)*_t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
-    const trailer3_real_t _t54 = -_t14*_t24 + _t22*_t23 + _t26*_t52 + _t37*_t53;
-    const trailer3_real_t _t55 = _t13*_t30 + _t15*_t29 - _t32*_t47 - _t43*_t48;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(1.6666666666666667)*_t55;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*_t56;
-    const trailer3_real_t _t58 = -_t14*_t30 + _t22*_t29 + _t32*_t52 + _t43*_t53;
+    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.2)*_t23;
+    const trailer3_real_t _t25 = -TRAILER3_LIT(1.6666666666666667)*_t4;
+    const trailer3_real_t _t26 = TRAILER3_LIT(0.2)*_t25;
+    const trailer3_real_t _t27 = -_t11 - _t6*_t9;
+    const trailer3_real_t _t28 = -_t23*_t27 + _t6;
+    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
+    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t32 = _t23*_t31;
+    const trailer3_real_t _t33 = -_t25*_t27 + _t8;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
+    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
+    const trailer3_real_t _t36 = _t21 + _t25*_t31;
+    const trailer3_real_t _t37 = -_t13*_t9 - _t16;
+    const trailer3_real_t _t38 = -_t17*_t6 - _t19;
+    const trailer3_real_t _t39 = _t13 - _t23*_t37 - _t29*_t38;
+    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
+    const trailer3_real_t _t43 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
+    const trailer3_real_t _t44 = -_t14 + _t23*_t42 + _t29*_t43;
+    const trailer3_real_t _t45 = _t15 - _t25*_t37 - _t34*_t38;
+    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
+    const trailer3_real_t _t48 = _t22 + _t25*_t42 + _t34*_t43;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t59 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t _t49 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t60 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t50 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t61 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t51 = K_theta_cart3_x_tractor*_t13;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t62 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t52 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t54 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t _t55 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t56 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t57 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t70 = _t24*_t3 + _t27 - _t28;
-    const trailer3_real_t _t71 = _t3*_t30 + _t33 - _t34;
-    const trailer3_real_t _t72 = _t64*_t70;
-    const trailer3_real_t _t73 = _t64*_t71;
-    const trailer3_real_t _t74 = _t24*_t3 - _t27 - _t28;
-    const trailer3_real_t _t75 = _t3*_t30 - _t33 - _t34;
-    const trailer3_real_t _t76 = _t65*_t74;
-    const trailer3_real_t _t77 = _t65*_t75;
-    const trailer3_real_t _t78 = _t24*_t7 + _t38 - _t39 - _t41;
-    const trailer3_real_t _t79 = _t30*_t7 + _t44 - _t45 - _t46;
-    const trailer3_real_t _t80 = _t66*_t78;
-    const trailer3_real_t _t81 = _t66*_t79;
-    const trailer3_real_t _t82 = _t24*_t7 - _t38 - _t39 - _t41;
-    const trailer3_real_t _t83 = _t30*_t7 - _t44 - _t45 - _t46;
-    const trailer3_real_t _t84 = _t67*_t82;
-    const trailer3_real_t _t85 = _t67*_t83;
-    const trailer3_real_t _t86 = _t51 - _t54;
-    const trailer3_real_t _t87 = _t57 - _t58;
-    const trailer3_real_t _t88 = _t68*_t86;
-    const trailer3_real_t _t89 = _t68*_t87;
-    const trailer3_real_t _t90 = -_t51 - _t54;
-    const trailer3_real_t _t91 = -_t57 - _t58;
-    const trailer3_real_t _t92 = _t69*_t90;
-    const trailer3_real_t _t93 = _t69*_t91;
+    const trailer3_real_t _t61 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t65 = TRAILER3_LIT(0.207)*_t64;
+    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.207)*_t66;
+    const trailer3_real_t _t68 = _t24 + _t3;
+    const trailer3_real_t _t69 = -_t20 + _t26;
+    const trailer3_real_t _t70 = _t56*_t68;
+    const trailer3_real_t _t71 = _t56*_t69;
+    const trailer3_real_t _t72 = -_t24 + _t3;
+    const trailer3_real_t _t73 = -_t20 - _t26;
+    const trailer3_real_t _t74 = _t57*_t72;
+    const trailer3_real_t _t75 = _t57*_t73;
+    const trailer3_real_t _t76 = _t30 - _t32 + _t7;
+    const trailer3_real_t _t77 = _t35 - _t36;
+    const trailer3_real_t _t78 = _t58*_t76;
+    const trailer3_real_t _t79 = _t58*_t77;
+    const trailer3_real_t _t80 = -_t30 - _t32 + _t7;
+    const trailer3_real_t _t81 = -_t35 - _t36;
+    const trailer3_real_t _t82 = _t59*_t80;
+    const trailer3_real_t _t83 = _t59*_t81;
+    const trailer3_real_t _t84 = _t41 - _t44;
+    const trailer3_real_t _t85 = _t47 - _t48;
+    const trailer3_real_t _t86 = _t60*_t84;
+    const trailer3_real_t _t87 = _t60*_t85;
+    const trailer3_real_t _t88 = -_t41 - _t44;
+    const trailer3_real_t _t89 = -_t47 - _t48;
+    const trailer3_real_t _t90 = _t61*_t88;
+    const trailer3_real_t _t91 = _t61*_t89;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t94 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t95 = _t59 + _t60;
-    const trailer3_real_t _t96 = _t61 + _t62;
-    const trailer3_real_t _t97 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
-    const trailer3_real_t _t98 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t99 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t100 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t59*_t9 + _t60*_t9;
-    const trailer3_real_t _t101 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t61*_t9 + _t62*_t9;
-    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
-            + _t61*_t63 + _t62*_t63;
+    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t93 = _t49 + _t50;
+    const trailer3_real_t _t94 = _t51 + _t52;
+    const trailer3_real_t _t95 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
+    const trailer3_real_t _t96 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t _t97 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
+    const trailer3_real_t _t98 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
+            + _t49*_t9 + _t50*_t9;
+    const trailer3_real_t _t99 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
+            + _t51*_t9 + _t52*_t9;
+    const trailer3_real_t _t100 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
+            + _t51*_t53 + _t52*_t53;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t101 = J_x_tractor + _t23*_t92 + _t29*_t93 + _t40*_t94;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t103 = J_x_tractor*_t24 + K_theta_tractor_x_tractor_2*_t23 + _t26*_t94
-            + _t37*_t95 + _t50*_t96;
-    const trailer3_real_t _t104 = J_x_tractor*_t30 + K_theta_tractor_x_tractor_2*_t29 + _t32*_t94
-            + _t43*_t95 + _t56*_t96;
+    const trailer3_real_t _t102 = K_theta_tractor_x_tractor_2 + _t25*_t92 + _t34*_t93 + _t46*_t94;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t105 = J_theta_tractor*_t23 + K_theta_tractor_x_tractor_2*_t24
-            + _t26*_t97 + _t37*_t98 + _t50*_t99;
-    const trailer3_real_t _t106 = J_theta_tractor*_t29 + K_theta_tractor_x_tractor_2*_t30
-            + _t32*_t97 + _t43*_t98 + _t56*_t99;
+    const trailer3_real_t _t103 = J_theta_tractor + _t25*_t95 + _t34*_t96 + _t46*_t97;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t107 = J_theta_cart*_t26 + _t100*_t37 + _t101*_t50 + _t23*_t97
-            + _t24*_t94;
-    const trailer3_real_t _t108 = J_theta_cart*_t32 + _t100*_t43 + _t101*_t56 + _t29*_t97
-            + _t30*_t94;
+    const trailer3_real_t _t104 = J_theta_cart*_t23 + _t29*_t98 + _t40*_t99 + _t92;
+    const trailer3_real_t _t105 = J_theta_cart*_t25 + _t34*_t98 + _t46*_t99 + _t95;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t109 = J_theta_cart2*_t37 + _t100*_t26 + _t102*_t50 + _t23*_t98
-            + _t24*_t95;
-    const trailer3_real_t _t110 = J_theta_cart2*_t43 + _t100*_t32 + _t102*_t56 + _t29*_t98
-            + _t30*_t95;
+    const trailer3_real_t _t106 = J_theta_cart2*_t29 + _t100*_t40 + _t23*_t98 + _t93;
+    const trailer3_real_t _t107 = J_theta_cart2*_t34 + _t100*_t46 + _t25*_t98 + _t96;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t111 = J_theta_cart3*_t50 + _t101*_t26 + _t102*_t37 + _t23*_t99
-            + _t24*_t96;
-    const trailer3_real_t _t112 = J_theta_cart3*_t56 + _t101*_t32 + _t102*_t43 + _t29*_t99
-            + _t30*_t96;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t113 = J_theta_cart_right*_t72;
-    const trailer3_real_t _t114 = J_theta_cart_right*_t73;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t115 = J_theta_cart_left*_t76;
-    const trailer3_real_t _t116 = J_theta_cart_left*_t77;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t117 = J_theta_cart2_right*_t80;
-    const trailer3_real_t _t118 = J_theta_cart2_right*_t81;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t119 = J_theta_cart2_left*_t84;
-    const trailer3_real_t _t120 = J_theta_cart2_left*_t85;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t121 = J_theta_cart3_right*_t88;
-    const trailer3_real_t _t122 = J_theta_cart3_right*_t89;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t123 = J_theta_cart3_left*_t92;
-    const trailer3_real_t _t124 = J_theta_cart3_left*_t93;
+    const trailer3_real_t _t108 = J_theta_cart3*_t40 + _t100*_t29 + _t23*_t99 + _t94;
+    const trailer3_real_t _t109 = J_theta_cart3*_t46 + _t100*_t34 + _t25*_t99 + _t97;
     const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t125 = J_theta_right + _t103*_t24 + _t105*_t23 + _t107*_t26 + _t109*_t37
-            + _t111*_t50 + _t113*_t72 + _t115*_t76 + _t117*_t80 + _t119*_t84 + _t121*_t88
-            + _t123*_t92;
-    const trailer3_real_t _t126 = _t104*_t24 + _t106*_t23 + _t108*_t26 + _t110*_t37 + _t112*_t50
-            + _t114*_t72 + _t116*_t76 + _t118*_t80 + _t120*_t84 + _t122*_t88 + _t124*_t92;
+    const trailer3_real_t _t110 = J_theta_right*_t64;
+    const trailer3_real_t _t111 = J_theta_right*_t65;
     const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t127 = J_theta_left + _t104*_t30 + _t106*_t29 + _t108*_t32 + _t110*_t43
-            + _t112*_t56 + _t114*_t73 + _t116*_t77 + _t118*_t81 + _t120*_t85 + _t122*_t89
-            + _t124*_t93;
-    M[0] = _t125;
-    M[1] = _t126;
-    M[2] = _t126;
-    M[3] = _t127;
+    const trailer3_real_t _t112 = J_theta_left*_t66;
+    const trailer3_real_t _t113 = J_theta_left*_t67;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t _t114 = J_theta_cart_right*_t70;
+    const trailer3_real_t _t115 = J_theta_cart_right*_t71;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t _t116 = J_theta_cart_left*_t74;
+    const trailer3_real_t _t117 = J_theta_cart_left*_t75;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t _t118 = J_theta_cart2_right*_t78;
+    const trailer3_real_t _t119 = J_theta_cart2_right*_t79;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t _t120 = J_theta_cart2_left*_t82;
+    const trailer3_real_t _t121 = J_theta_cart2_left*_t83;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t _t122 = J_theta_cart3_right*_t86;
+    const trailer3_real_t _t123 = J_theta_cart3_right*_t87;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t _t124 = J_theta_cart3_left*_t90;
+    const trailer3_real_t _t125 = J_theta_cart3_left*_t91;
+    const trailer3_real_t _t126 = _t101 + _t104*_t23 + _t106*_t29 + _t108*_t40 + _t110*_t64
+            + _t112*_t66 + _t114*_t70 + _t116*_t74 + _t118*_t78 + _t120*_t82 + _t122*_t86
+            + _t124*_t90;
+    const trailer3_real_t _t127 = _t102 + _t105*_t23 + _t107*_t29 + _t109*_t40 + _t111*_t64
+            + _t113*_t66 + _t115*_t70 + _t117*_t74 + _t119*_t78 + _t121*_t82 + _t123*_t86
+            + _t125*_t90;
+    const trailer3_real_t _t128 = _t103 + _t105*_t25 + _t107*_t34 + _t109*_t46 + _t111*_t65
+            + _t113*_t67 + _t115*_t71 + _t117*_t75 + _t119*_t79 + _t121*_t83 + _t123*_t87
+            + _t125*_t91;
+    const trailer3_real_t _t129 = _t126*_t62 + _t127*_t54;
+    const trailer3_real_t _t130 = _t126*_t63 + _t127*_t55;
+    const trailer3_real_t _t131 = _t127*_t62 + _t128*_t54;
+    const trailer3_real_t _t132 = _t127*_t63 + _t128*_t55;
+    const trailer3_real_t _t133 = _t129*_t62 + _t131*_t54;
+    const trailer3_real_t _t134 = _t130*_t62 + _t132*_t54;
+    const trailer3_real_t _t135 = _t130*_t63 + _t132*_t55;
+    M[0] = _t133;
+    M[1] = _t134;
+    M[2] = _t134;
+    M[3] = _t135;
 }
 
 /* trailer3_minimal_bias_forces: documented in trailer3_model.h.
-   operations after CSE: 256 add, 391 mul, 6 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 237 add, 366 mul, 6 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *H)
 {
@@ -1582,358 +1533,335 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
     const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
     const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
-    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
-    const trailer3_real_t _t27 = _t25*_t26;
-    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
-    const trailer3_real_t _t29 = _t27 + _t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
-    const trailer3_real_t _t31 = _t25*_t30;
-    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
-    const trailer3_real_t _t33 = _t31 + _t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t36 = _t34*_t35;
-    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t38 = _t26*_t37;
-    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
-    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t42 = _t34*_t41;
-    const trailer3_real_t _t43 = _t30*_t37;
-    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
-    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
-    const trailer3_real_t _t47 = _t20*_t3;
-    const trailer3_real_t _t48 = _t16*_t19;
-    const trailer3_real_t _t49 = _t47 - _t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
-    const trailer3_real_t _t51 = _t23*_t3;
-    const trailer3_real_t _t52 = _t16*_t22;
-    const trailer3_real_t _t53 = _t51 - _t52;
-    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t56 = _t26*_t55;
-    const trailer3_real_t _t57 = _t20*_t7;
-    const trailer3_real_t _t58 = _t17*_t19;
-    const trailer3_real_t _t59 = _t57 - _t58;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
-    const trailer3_real_t _t61 = _t30*_t55;
-    const trailer3_real_t _t62 = _t23*_t7;
-    const trailer3_real_t _t63 = _t17*_t22;
-    const trailer3_real_t _t64 = _t62 - _t63;
-    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
-    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t69 = _t18*_t19;
-    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t71 = _t26*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t73 = _t35*_t72;
-    const trailer3_real_t _t74 = _t13*_t20;
-    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
-    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = _t18*_t22;
-    const trailer3_real_t _t79 = _t30*_t70;
-    const trailer3_real_t _t80 = _t41*_t72;
-    const trailer3_real_t _t81 = _t13*_t23;
-    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
-    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t84 = _t25*_t83;
-    const trailer3_real_t _t85 = TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t86 = _t25*_t85;
-    const trailer3_real_t _t87 = _t37*_t83;
-    const trailer3_real_t _t88 = _t37*_t85;
-    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t83;
-    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t85;
-    const trailer3_real_t _t91 = -_t59 - _t84;
-    const trailer3_real_t _t92 = -TRAILER3_LIT(1.6666666666666667)*_t91;
-    const trailer3_real_t _t93 = TRAILER3_LIT(0.2)*_t92;
-    const trailer3_real_t _t94 = _t55*_t83;
-    const trailer3_real_t _t95 = _t28 + _t94;
-    const trailer3_real_t _t96 = -_t64 - _t86;
-    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t96;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t99 = _t55*_t85;
-    const trailer3_real_t _t100 = _t32 + _t99;
-    const trailer3_real_t _t101 = _t56 + _t84;
-    const trailer3_real_t _t102 = -TRAILER3_LIT(1.6666666666666667)*_t101;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t102;
-    const trailer3_real_t _t104 = _t61 + _t86;
-    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
-    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t108 = TRAILER3_LIT(0.2)*_t107;
-    const trailer3_real_t _t109 = TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
-    const trailer3_real_t _t111 = -_t34*_t92 + _t69 - _t74 - _t87;
-    const trailer3_real_t _t112 = -TRAILER3_LIT(1.6666666666666667)*_t111;
-    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t112;
-    const trailer3_real_t _t114 = _t70*_t83;
-    const trailer3_real_t _t115 = _t114 + _t39 + _t72*_t92;
-    const trailer3_real_t _t116 = -_t34*_t97 + _t78 - _t81 - _t88;
-    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
-    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
-    const trailer3_real_t _t119 = _t70*_t85;
-    const trailer3_real_t _t120 = _t119 + _t44 + _t72*_t97;
-    const trailer3_real_t _t121 = -_t102*_t34 + _t71 + _t87;
-    const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
-    const trailer3_real_t _t124 = _t102*_t72 - _t114 + _t38;
-    const trailer3_real_t _t125 = -_t105*_t34 + _t79 + _t88;
-    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
-    const trailer3_real_t _t128 = _t105*_t72 - _t119 + _t43;
-    const trailer3_real_t _t129 = -_t107*_t34 + _t73;
-    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
-    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
-    const trailer3_real_t _t132 = _t107*_t72 + _t36;
-    const trailer3_real_t _t133 = -_t109*_t34 + _t80;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = _t109*_t72 + _t42;
-    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
-    const trailer3_real_t _t139 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
+    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t21 = _t19*_t20;
+    const trailer3_real_t _t22 = _t21 - _t6;
+    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
+    const trailer3_real_t _t24 = _t19*_t23;
+    const trailer3_real_t _t25 = _t24 - _t8;
+    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t27 = _t20*_t26;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
+    const trailer3_real_t _t30 = _t28*_t29;
+    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
+    const trailer3_real_t _t32 = _t23*_t26;
+    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t34 = _t28*_t33;
+    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t40 = _t20*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
+    const trailer3_real_t _t42 = _t23*_t39;
+    const trailer3_real_t _t43 = _t17 + _t42;
+    const trailer3_real_t _t44 = _t40 - _t7;
+    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t48 = _t20*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t50 = _t29*_t49;
+    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
+    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
+    const trailer3_real_t _t54 = _t23*_t47;
+    const trailer3_real_t _t55 = _t33*_t49;
+    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t141 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t _t57 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t142 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t58 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t143 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t _t59 = K_theta_cart3_x_tractor*_t12;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t144 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t60 = K_theta_cart3_x_tractor_2*_t13;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t145 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t146 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t147 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t148 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t149 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t61 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t62 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t63 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t64 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t65 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t68 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t _t69 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t thetadot_right = wheel_rates[0];
     const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t152 = _t19*thetadot_right + _t22*thetadot_left;
-    const trailer3_real_t _t153 = _t152*_t152;
-    const trailer3_real_t _t154 = _t35*thetadot_right + _t41*thetadot_left;
-    const trailer3_real_t _t155 = _t154*_t154;
-    const trailer3_real_t _t156 = _t67*thetadot_right + _t76*thetadot_left;
-    const trailer3_real_t _t157 = _t156*_t156;
-    const trailer3_real_t _t158 = _t147*_t157;
-    const trailer3_real_t _t159 = _t26*thetadot_right + _t30*thetadot_left;
-    const trailer3_real_t _t160 = _t159*_t159;
-    const trailer3_real_t _t161 = _t148*_t155;
-    const trailer3_real_t _t162 = _t149*_t157;
-    const trailer3_real_t _t163 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t164 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t166 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t167 = _t10*_t155;
-    const trailer3_real_t _t168 = _t10*_t157;
-    const trailer3_real_t _t169 = _t160*_t9;
-    const trailer3_real_t _t170 = _t10*_t160;
-    const trailer3_real_t _t171 = _t151*_t157;
-    const trailer3_real_t _t172 = _t150*_t155;
-    const trailer3_real_t _t173 = _t151*_t155;
-    const trailer3_real_t _t174 = _t152*thetadot_right;
-    const trailer3_real_t _t175 = _t152*thetadot_left;
-    const trailer3_real_t _t176 = _t159*thetadot_right;
-    const trailer3_real_t _t177 = _t159*thetadot_left;
+    const trailer3_real_t _t70 = _t68*thetadot_right + _t69*thetadot_left;
+    const trailer3_real_t _t71 = _t70*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t74 = _t72*thetadot_right + _t73*thetadot_left;
+    const trailer3_real_t _t75 = _t29*_t74 + _t33*_t70;
+    const trailer3_real_t _t76 = _t75*_t75;
+    const trailer3_real_t _t77 = _t45*_t74 + _t52*_t70;
+    const trailer3_real_t _t78 = _t77*_t77;
+    const trailer3_real_t _t79 = _t63*_t78;
+    const trailer3_real_t _t80 = _t20*_t74 + _t23*_t70;
+    const trailer3_real_t _t81 = _t80*_t80;
+    const trailer3_real_t _t82 = _t64*_t76;
+    const trailer3_real_t _t83 = _t65*_t78;
+    const trailer3_real_t _t84 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t85 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t86 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t87 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t88 = _t10*_t76;
+    const trailer3_real_t _t89 = _t10*_t78;
+    const trailer3_real_t _t90 = _t81*_t9;
+    const trailer3_real_t _t91 = _t10*_t81;
+    const trailer3_real_t _t92 = _t67*_t78;
+    const trailer3_real_t _t93 = _t66*_t76;
+    const trailer3_real_t _t94 = _t67*_t76;
+    const trailer3_real_t _t95 = TRAILER3_LIT(1.6666666666666667)*_t3;
+    const trailer3_real_t _t96 = _t19*_t95;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t16;
+    const trailer3_real_t _t98 = _t19*_t97;
+    const trailer3_real_t _t99 = _t26*_t95;
+    const trailer3_real_t _t100 = _t26*_t97;
+    const trailer3_real_t _t101 = TRAILER3_LIT(0.2)*_t95;
+    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t103 = -_t7 - _t96;
+    const trailer3_real_t _t104 = -TRAILER3_LIT(1.6666666666666667)*_t103;
+    const trailer3_real_t _t105 = TRAILER3_LIT(0.2)*_t104;
+    const trailer3_real_t _t106 = _t39*_t95;
+    const trailer3_real_t _t107 = _t106 - _t6;
+    const trailer3_real_t _t108 = _t17 - _t98;
+    const trailer3_real_t _t109 = -TRAILER3_LIT(1.6666666666666667)*_t108;
+    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
+    const trailer3_real_t _t111 = _t39*_t97;
+    const trailer3_real_t _t112 = _t111 - _t8;
+    const trailer3_real_t _t113 = _t40 + _t96;
+    const trailer3_real_t _t114 = -TRAILER3_LIT(1.6666666666666667)*_t113;
+    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t114;
+    const trailer3_real_t _t116 = _t42 + _t98;
+    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
+    const trailer3_real_t _t119 = TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = -_t104*_t28 - _t13 - _t99;
+    const trailer3_real_t _t124 = -TRAILER3_LIT(1.6666666666666667)*_t123;
+    const trailer3_real_t _t125 = TRAILER3_LIT(0.2)*_t124;
+    const trailer3_real_t _t126 = _t47*_t95;
+    const trailer3_real_t _t127 = _t104*_t49 - _t12 + _t126;
+    const trailer3_real_t _t128 = -_t100 - _t109*_t28 + _t18;
+    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
+    const trailer3_real_t _t130 = TRAILER3_LIT(0.2)*_t129;
+    const trailer3_real_t _t131 = _t47*_t97;
+    const trailer3_real_t _t132 = _t109*_t49 + _t131 - _t14;
+    const trailer3_real_t _t133 = -_t114*_t28 + _t48 + _t99;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
+    const trailer3_real_t _t136 = _t114*_t49 - _t126 + _t27;
+    const trailer3_real_t _t137 = _t100 - _t117*_t28 + _t54;
+    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
+    const trailer3_real_t _t140 = _t117*_t49 - _t131 + _t32;
+    const trailer3_real_t _t141 = -_t119*_t28 + _t50;
+    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t141;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = _t119*_t49 + _t30;
+    const trailer3_real_t _t145 = -_t121*_t28 + _t55;
+    const trailer3_real_t _t146 = -TRAILER3_LIT(1.6666666666666667)*_t145;
+    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t146;
+    const trailer3_real_t _t148 = _t121*_t49 + _t34;
+    const trailer3_real_t _t149 = TRAILER3_LIT(1.6666666666666667)*_t51;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = _t70*_t74;
+    const trailer3_real_t _t154 = _t74*_t80;
+    const trailer3_real_t _t155 = _t70*_t80;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t178 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t179 = -_t93 - _t95;
-    const trailer3_real_t _t180 = _t178*_t179;
-    const trailer3_real_t _t181 = -_t100 - _t98;
-    const trailer3_real_t _t182 = _t178*_t181;
-    const trailer3_real_t _t183 = -_t103 - _t27 + _t94;
-    const trailer3_real_t _t184 = _t178*_t183;
-    const trailer3_real_t _t185 = -_t106 - _t31 + _t99;
-    const trailer3_real_t _t186 = _t178*_t185;
-    const trailer3_real_t _t187 = -_t108 + _t29;
-    const trailer3_real_t _t188 = _t178*_t187;
-    const trailer3_real_t _t189 = -_t110 + _t33;
-    const trailer3_real_t _t190 = _t178*_t189;
-    const trailer3_real_t _t191 = _t154*thetadot_right;
-    const trailer3_real_t _t192 = _t154*thetadot_left;
-    const trailer3_real_t _t193 = _t174*_t180 + _t175*_t182 + _t176*_t184 + _t177*_t186
-            + _t188*_t191 + _t190*_t192;
+    const trailer3_real_t _t156 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t157 = -_t105 - _t107;
+    const trailer3_real_t _t158 = _t156*_t157;
+    const trailer3_real_t _t159 = -_t110 - _t112;
+    const trailer3_real_t _t160 = _t156*_t159;
+    const trailer3_real_t _t161 = _t106 - _t115 - _t21;
+    const trailer3_real_t _t162 = _t156*_t161;
+    const trailer3_real_t _t163 = _t111 - _t118 - _t24;
+    const trailer3_real_t _t164 = _t156*_t163;
+    const trailer3_real_t _t165 = -_t120 + _t22;
+    const trailer3_real_t _t166 = _t156*_t165;
+    const trailer3_real_t _t167 = -_t122 + _t25;
+    const trailer3_real_t _t168 = _t156*_t167;
+    const trailer3_real_t _t169 = _t74*_t75;
+    const trailer3_real_t _t170 = _t70*_t75;
+    const trailer3_real_t _t171 = _t153*_t158 + _t154*_t162 + _t155*_t164 + _t160*_t71 + _t166*_t169
+            + _t168*_t170;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t194 = J_theta_cart2_left*_t193;
+    const trailer3_real_t _t172 = J_theta_cart2_left*_t171;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t195 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t196 = _t93 - _t95;
-    const trailer3_real_t _t197 = _t195*_t196;
-    const trailer3_real_t _t198 = -_t100 + _t98;
-    const trailer3_real_t _t199 = _t195*_t198;
-    const trailer3_real_t _t200 = _t103 - _t27 + _t94;
-    const trailer3_real_t _t201 = _t195*_t200;
-    const trailer3_real_t _t202 = _t106 - _t31 + _t99;
-    const trailer3_real_t _t203 = _t195*_t202;
-    const trailer3_real_t _t204 = _t108 + _t29;
-    const trailer3_real_t _t205 = _t195*_t204;
-    const trailer3_real_t _t206 = _t110 + _t33;
-    const trailer3_real_t _t207 = _t195*_t206;
-    const trailer3_real_t _t208 = _t174*_t197 + _t175*_t199 + _t176*_t201 + _t177*_t203
-            + _t191*_t205 + _t192*_t207;
+    const trailer3_real_t _t173 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t174 = _t105 - _t107;
+    const trailer3_real_t _t175 = _t173*_t174;
+    const trailer3_real_t _t176 = _t110 - _t112;
+    const trailer3_real_t _t177 = _t173*_t176;
+    const trailer3_real_t _t178 = _t106 + _t115 - _t21;
+    const trailer3_real_t _t179 = _t173*_t178;
+    const trailer3_real_t _t180 = _t111 + _t118 - _t24;
+    const trailer3_real_t _t181 = _t173*_t180;
+    const trailer3_real_t _t182 = _t120 + _t22;
+    const trailer3_real_t _t183 = _t173*_t182;
+    const trailer3_real_t _t184 = _t122 + _t25;
+    const trailer3_real_t _t185 = _t173*_t184;
+    const trailer3_real_t _t186 = _t153*_t175 + _t154*_t179 + _t155*_t181 + _t169*_t183
+            + _t170*_t185 + _t177*_t71;
     const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t209 = J_theta_cart2_right*_t208;
+    const trailer3_real_t _t187 = J_theta_cart2_right*_t186;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t210 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t211 = -_t113 - _t115;
-    const trailer3_real_t _t212 = _t210*_t211;
-    const trailer3_real_t _t213 = -_t118 - _t120;
-    const trailer3_real_t _t214 = _t210*_t213;
-    const trailer3_real_t _t215 = -_t123 - _t124;
-    const trailer3_real_t _t216 = _t210*_t215;
-    const trailer3_real_t _t217 = -_t127 - _t128;
-    const trailer3_real_t _t218 = _t210*_t217;
-    const trailer3_real_t _t219 = -_t131 - _t132;
-    const trailer3_real_t _t220 = _t210*_t219;
-    const trailer3_real_t _t221 = -_t135 - _t136;
-    const trailer3_real_t _t222 = _t210*_t221;
-    const trailer3_real_t _t223 = -_t138 + _t40;
-    const trailer3_real_t _t224 = _t210*_t223;
-    const trailer3_real_t _t225 = -_t140 + _t45;
-    const trailer3_real_t _t226 = _t210*_t225;
-    const trailer3_real_t _t227 = _t156*thetadot_right;
-    const trailer3_real_t _t228 = _t156*thetadot_left;
-    const trailer3_real_t _t229 = _t174*_t212 + _t175*_t214 + _t176*_t216 + _t177*_t218
-            + _t191*_t220 + _t192*_t222 + _t224*_t227 + _t226*_t228;
+    const trailer3_real_t _t188 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t189 = -_t125 - _t127;
+    const trailer3_real_t _t190 = _t188*_t189;
+    const trailer3_real_t _t191 = -_t130 - _t132;
+    const trailer3_real_t _t192 = _t188*_t191;
+    const trailer3_real_t _t193 = -_t135 - _t136;
+    const trailer3_real_t _t194 = _t188*_t193;
+    const trailer3_real_t _t195 = -_t139 - _t140;
+    const trailer3_real_t _t196 = _t188*_t195;
+    const trailer3_real_t _t197 = -_t143 - _t144;
+    const trailer3_real_t _t198 = _t188*_t197;
+    const trailer3_real_t _t199 = -_t147 - _t148;
+    const trailer3_real_t _t200 = _t188*_t199;
+    const trailer3_real_t _t201 = -_t150 + _t31;
+    const trailer3_real_t _t202 = _t188*_t201;
+    const trailer3_real_t _t203 = -_t152 + _t35;
+    const trailer3_real_t _t204 = _t188*_t203;
+    const trailer3_real_t _t205 = _t74*_t77;
+    const trailer3_real_t _t206 = _t70*_t77;
+    const trailer3_real_t _t207 = _t153*_t190 + _t154*_t194 + _t155*_t196 + _t169*_t198
+            + _t170*_t200 + _t192*_t71 + _t202*_t205 + _t204*_t206;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t230 = J_theta_cart3_left*_t229;
+    const trailer3_real_t _t208 = J_theta_cart3_left*_t207;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t231 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t232 = _t113 - _t115;
-    const trailer3_real_t _t233 = _t231*_t232;
-    const trailer3_real_t _t234 = _t118 - _t120;
-    const trailer3_real_t _t235 = _t231*_t234;
-    const trailer3_real_t _t236 = _t123 - _t124;
-    const trailer3_real_t _t237 = _t231*_t236;
-    const trailer3_real_t _t238 = _t127 - _t128;
-    const trailer3_real_t _t239 = _t231*_t238;
-    const trailer3_real_t _t240 = _t131 - _t132;
-    const trailer3_real_t _t241 = _t231*_t240;
-    const trailer3_real_t _t242 = _t135 - _t136;
-    const trailer3_real_t _t243 = _t231*_t242;
-    const trailer3_real_t _t244 = _t138 + _t40;
-    const trailer3_real_t _t245 = _t231*_t244;
-    const trailer3_real_t _t246 = _t140 + _t45;
-    const trailer3_real_t _t247 = _t231*_t246;
-    const trailer3_real_t _t248 = _t174*_t233 + _t175*_t235 + _t176*_t237 + _t177*_t239
-            + _t191*_t241 + _t192*_t243 + _t227*_t245 + _t228*_t247;
+    const trailer3_real_t _t209 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t210 = _t125 - _t127;
+    const trailer3_real_t _t211 = _t209*_t210;
+    const trailer3_real_t _t212 = _t130 - _t132;
+    const trailer3_real_t _t213 = _t209*_t212;
+    const trailer3_real_t _t214 = _t135 - _t136;
+    const trailer3_real_t _t215 = _t209*_t214;
+    const trailer3_real_t _t216 = _t139 - _t140;
+    const trailer3_real_t _t217 = _t209*_t216;
+    const trailer3_real_t _t218 = _t143 - _t144;
+    const trailer3_real_t _t219 = _t209*_t218;
+    const trailer3_real_t _t220 = _t147 - _t148;
+    const trailer3_real_t _t221 = _t209*_t220;
+    const trailer3_real_t _t222 = _t150 + _t31;
+    const trailer3_real_t _t223 = _t209*_t222;
+    const trailer3_real_t _t224 = _t152 + _t35;
+    const trailer3_real_t _t225 = _t209*_t224;
+    const trailer3_real_t _t226 = _t153*_t211 + _t154*_t215 + _t155*_t217 + _t169*_t219
+            + _t170*_t221 + _t205*_t223 + _t206*_t225 + _t213*_t71;
     const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t249 = J_theta_cart3_right*_t248;
+    const trailer3_real_t _t227 = J_theta_cart3_right*_t226;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t250 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t251 = -_t21 - _t89;
-    const trailer3_real_t _t252 = _t250*_t251;
-    const trailer3_real_t _t253 = -_t24 - _t90;
-    const trailer3_real_t _t254 = _t250*_t253;
-    const trailer3_real_t _t255 = _t174 - _t176;
-    const trailer3_real_t _t256 = _t175 - _t177;
-    const trailer3_real_t _t257 = _t252*_t255 + _t254*_t256;
+    const trailer3_real_t _t228 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t229 = -_t101 + _t2;
+    const trailer3_real_t _t230 = _t228*_t229;
+    const trailer3_real_t _t231 = -_t102 + _t4;
+    const trailer3_real_t _t232 = _t228*_t231;
+    const trailer3_real_t _t233 = _t153 - _t154;
+    const trailer3_real_t _t234 = -_t155 + _t71;
+    const trailer3_real_t _t235 = _t230*_t233 + _t232*_t234;
     const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t258 = J_theta_cart_left*_t257;
+    const trailer3_real_t _t236 = J_theta_cart_left*_t235;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t259 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t260 = -_t21 + _t89;
-    const trailer3_real_t _t261 = _t259*_t260;
-    const trailer3_real_t _t262 = -_t24 + _t90;
-    const trailer3_real_t _t263 = _t259*_t262;
-    const trailer3_real_t _t264 = _t255*_t261 + _t256*_t263;
+    const trailer3_real_t _t237 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t238 = _t101 + _t2;
+    const trailer3_real_t _t239 = _t237*_t238;
+    const trailer3_real_t _t240 = _t102 + _t4;
+    const trailer3_real_t _t241 = _t237*_t240;
+    const trailer3_real_t _t242 = _t233*_t239 + _t234*_t241;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t265 = J_theta_cart_right*_t264;
+    const trailer3_real_t _t243 = J_theta_cart_right*_t242;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t266 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t267 = _t141 + _t142;
-    const trailer3_real_t _t268 = _t143 + _t144;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t269 = -K_theta_cart_x_tractor_2*_t160*_t2
-            + K_theta_tractor_x_tractor*_t153 + _t145*_t160 + _t146*_t155 + _t158 - _t161 - _t162;
-    const trailer3_real_t _t270 = _t255*_t83 + _t256*_t85;
-    const trailer3_real_t _t271 = _t102*_t176 + _t105*_t177 + _t107*_t191 + _t109*_t192 + _t174*_t92
-            + _t175*_t97;
-    const trailer3_real_t _t272 = _t112*_t174 + _t117*_t175 + _t122*_t176 + _t126*_t177
-            + _t130*_t191 + _t134*_t192 + _t137*_t227 + _t139*_t228;
-    const trailer3_real_t _t273 = _t266*_t270 + _t267*_t271 + _t268*_t272 + _t269;
-    const trailer3_real_t _t274 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t275 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t276 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t277 = -K_theta_cart_x_tractor*_t16*_t160
-            - K_theta_cart_x_tractor_2*_t160*_t4 - _t155*_t163 - _t155*_t164 - _t157*_t165
-            - _t157*_t166;
-    const trailer3_real_t _t278 = _t174*_t20 + _t175*_t23;
-    const trailer3_real_t _t279 = -K_theta_tractor_x_tractor*_t278 + _t270*_t274 + _t271*_t275
-            + _t272*_t276 + _t277;
-    const trailer3_real_t _t280 = K_theta_cart_x_tractor_2*_t2 - _t145;
-    const trailer3_real_t _t281 = _t10*_t146 - _t10*_t148 + _t141*_t9 + _t142*_t9;
-    const trailer3_real_t _t282 = _t10*_t147 - _t10*_t149 + _t143*_t9 + _t144*_t9;
-    const trailer3_real_t _t283 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t155*_t2*_t7
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t157*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t153*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t153*_t3 - _t141*_t167 - _t142*_t167
-            - _t143*_t168 - _t144*_t168 - _t161*_t9 - _t162*_t9;
+    const trailer3_real_t _t244 = K_theta_cart_x_tractor_2*_t2 - _t61;
+    const trailer3_real_t _t245 = _t10*_t62 - _t10*_t64 + _t57*_t9 + _t58*_t9;
+    const trailer3_real_t _t246 = _t10*_t63 - _t10*_t65 + _t59*_t9 + _t60*_t9;
+    const trailer3_real_t _t247 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t76
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t78
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t71
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t71 - _t57*_t88 - _t58*_t88
+            - _t59*_t89 - _t60*_t89 - _t82*_t9 - _t83*_t9;
+    const trailer3_real_t _t248 = _t233*_t95 + _t234*_t97;
+    const trailer3_real_t _t249 = _t104*_t153 + _t109*_t71 + _t114*_t154 + _t117*_t155 + _t119*_t169
+            + _t121*_t170;
+    const trailer3_real_t _t250 = _t124*_t153 + _t129*_t71 + _t134*_t154 + _t138*_t155 + _t142*_t169
+            + _t146*_t170 + _t149*_t205 + _t151*_t206;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t284 = J_theta_cart*_t270 + _t271*_t281 + _t272*_t282 + _t278*_t280
-            + _t283;
-    const trailer3_real_t _t285 = K_theta_cart2_x_tractor_2*_t6 - _t146;
-    const trailer3_real_t _t286 = _t143*_t150 + _t144*_t150 + _t147*_t151 - _t149*_t151;
-    const trailer3_real_t _t287 = _t141*_t170 + _t142*_t170 - _t143*_t171 - _t144*_t171
-            - _t146*_t169 + _t148*_t169 + _t150*_t158 - _t150*_t162 + _t153*_t163 + _t153*_t164;
+    const trailer3_real_t _t251 = J_theta_cart*_t248 + _t153*_t244 + _t245*_t249 + _t246*_t250
+            + _t247;
+    const trailer3_real_t _t252 = K_theta_cart2_x_tractor_2*_t6 - _t62;
+    const trailer3_real_t _t253 = _t59*_t66 + _t60*_t66 + _t63*_t67 - _t65*_t67;
+    const trailer3_real_t _t254 = _t57*_t91 + _t58*_t91 - _t59*_t92 - _t60*_t92 - _t62*_t90
+            + _t64*_t90 + _t66*_t79 - _t66*_t83 + _t71*_t84 + _t71*_t85;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t288 = J_theta_cart2*_t271 + _t270*_t281 + _t272*_t286 + _t278*_t285
-            + _t287;
-    const trailer3_real_t _t289 = K_theta_cart3_x_tractor_2*_t12 - _t147;
-    const trailer3_real_t _t290 = _t143*_t170 + _t143*_t173 + _t144*_t170 + _t144*_t173
-            - _t147*_t169 - _t147*_t172 + _t149*_t169 + _t149*_t172 + _t153*_t165 + _t153*_t166;
+    const trailer3_real_t _t255 = J_theta_cart2*_t249 + _t153*_t252 + _t245*_t248 + _t250*_t253
+            + _t254;
+    const trailer3_real_t _t256 = K_theta_cart3_x_tractor_2*_t12 - _t63;
+    const trailer3_real_t _t257 = _t59*_t91 + _t59*_t94 + _t60*_t91 + _t60*_t94 - _t63*_t90
+            - _t63*_t93 + _t65*_t90 + _t65*_t93 + _t71*_t86 + _t71*_t87;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t291 = J_theta_cart3*_t272 + _t270*_t282 + _t271*_t286 + _t278*_t289
-            + _t290;
-    const trailer3_real_t _t292 = _t46 + _t49;
-    const trailer3_real_t _t293 = _t50 + _t53;
-    const trailer3_real_t _t294 = _t259*_t292;
-    const trailer3_real_t _t295 = _t259*_t293;
-    const trailer3_real_t _t296 = -_t46 + _t47 - _t48;
-    const trailer3_real_t _t297 = -_t50 + _t51 - _t52;
-    const trailer3_real_t _t298 = _t250*_t296;
-    const trailer3_real_t _t299 = _t250*_t297;
-    const trailer3_real_t _t300 = _t54 - _t56 + _t59;
-    const trailer3_real_t _t301 = _t60 - _t61 + _t64;
-    const trailer3_real_t _t302 = _t195*_t300;
-    const trailer3_real_t _t303 = _t195*_t301;
-    const trailer3_real_t _t304 = -_t54 - _t65;
-    const trailer3_real_t _t305 = -_t60 - _t66;
-    const trailer3_real_t _t306 = _t178*_t304;
-    const trailer3_real_t _t307 = _t178*_t305;
-    const trailer3_real_t _t308 = _t68 - _t75;
-    const trailer3_real_t _t309 = _t77 - _t82;
-    const trailer3_real_t _t310 = _t231*_t308;
-    const trailer3_real_t _t311 = _t231*_t309;
-    const trailer3_real_t _t312 = -_t68 - _t75;
-    const trailer3_real_t _t313 = -_t77 - _t82;
-    const trailer3_real_t _t314 = _t210*_t312;
-    const trailer3_real_t _t315 = _t210*_t313;
-    const trailer3_real_t _t316 = _t19*_t279 + _t194*_t306 + _t20*_t273 + _t209*_t302 + _t230*_t314
-            + _t249*_t310 + _t258*_t298 + _t26*_t284 + _t265*_t294 + _t288*_t35 + _t291*_t67;
-    const trailer3_real_t _t317 = _t194*_t307 + _t209*_t303 + _t22*_t279 + _t23*_t273 + _t230*_t315
-            + _t249*_t311 + _t258*_t299 + _t265*_t295 + _t284*_t30 + _t288*_t41 + _t291*_t76;
-    H[0] = _t316;
-    H[1] = _t317;
+    const trailer3_real_t _t258 = J_theta_cart3*_t250 + _t153*_t256 + _t246*_t248 + _t249*_t253
+            + _t257;
+    const trailer3_real_t _t259 = _t3 + _t36;
+    const trailer3_real_t _t260 = -_t16 + _t37;
+    const trailer3_real_t _t261 = _t237*_t259;
+    const trailer3_real_t _t262 = _t237*_t260;
+    const trailer3_real_t _t263 = _t3 - _t36;
+    const trailer3_real_t _t264 = -_t16 - _t37;
+    const trailer3_real_t _t265 = _t228*_t263;
+    const trailer3_real_t _t266 = _t228*_t264;
+    const trailer3_real_t _t267 = _t38 - _t40 + _t7;
+    const trailer3_real_t _t268 = _t41 - _t43;
+    const trailer3_real_t _t269 = _t173*_t267;
+    const trailer3_real_t _t270 = _t173*_t268;
+    const trailer3_real_t _t271 = -_t38 - _t44;
+    const trailer3_real_t _t272 = -_t41 - _t43;
+    const trailer3_real_t _t273 = _t156*_t271;
+    const trailer3_real_t _t274 = _t156*_t272;
+    const trailer3_real_t _t275 = _t46 - _t51;
+    const trailer3_real_t _t276 = _t53 - _t56;
+    const trailer3_real_t _t277 = _t209*_t275;
+    const trailer3_real_t _t278 = _t209*_t276;
+    const trailer3_real_t _t279 = -_t46 - _t51;
+    const trailer3_real_t _t280 = -_t53 - _t56;
+    const trailer3_real_t _t281 = _t188*_t279;
+    const trailer3_real_t _t282 = _t188*_t280;
+    const trailer3_real_t _t283 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t284 = _t57 + _t58;
+    const trailer3_real_t _t285 = _t59 + _t60;
+    const trailer3_real_t _t286 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t287 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t288 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t289 = -K_theta_cart_x_tractor_2*_t2*_t81
+            + K_theta_tractor_x_tractor*_t71 + _t61*_t81 + _t62*_t76 + _t79 - _t82 - _t83;
+    const trailer3_real_t _t290 = -K_theta_cart_x_tractor*_t16*_t81
+            - K_theta_cart_x_tractor_2*_t4*_t81 - _t76*_t84 - _t76*_t85 - _t78*_t86 - _t78*_t87;
+    const trailer3_real_t _t291 = _t172*_t273 + _t187*_t269 + _t20*_t251 + _t208*_t281 + _t227*_t277
+            + _t236*_t265 + _t243*_t261 + _t248*_t283 + _t249*_t284 + _t250*_t285 + _t255*_t29
+            + _t258*_t45 + _t289;
+    const trailer3_real_t _t292 = -K_theta_tractor_x_tractor*_t153 + _t172*_t274 + _t187*_t270
+            + _t208*_t282 + _t227*_t278 + _t23*_t251 + _t236*_t266 + _t243*_t262 + _t248*_t286
+            + _t249*_t287 + _t250*_t288 + _t255*_t33 + _t258*_t52 + _t290;
+    const trailer3_real_t _t293 = _t291*_t72 + _t292*_t68;
+    const trailer3_real_t _t294 = _t291*_t73 + _t292*_t69;
+    H[0] = _t293;
+    H[1] = _t294;
 }
 
 /* trailer3_minimal_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 333 add, 488 mul, 7 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 304 add, 450 mul, 9 div, 6 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *wheel_accels)
@@ -2019,367 +1947,342 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
     const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
-    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
-    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
-    const trailer3_real_t _t27 = _t25*_t26;
-    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
-    const trailer3_real_t _t29 = _t27 + _t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
-    const trailer3_real_t _t31 = _t25*_t30;
-    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
-    const trailer3_real_t _t33 = _t31 + _t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t36 = _t34*_t35;
-    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t38 = _t26*_t37;
-    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
-    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t42 = _t34*_t41;
-    const trailer3_real_t _t43 = _t30*_t37;
-    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
-    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
-    const trailer3_real_t _t47 = _t20*_t3;
-    const trailer3_real_t _t48 = _t16*_t19;
-    const trailer3_real_t _t49 = _t47 - _t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
-    const trailer3_real_t _t51 = _t23*_t3;
-    const trailer3_real_t _t52 = _t16*_t22;
-    const trailer3_real_t _t53 = _t51 - _t52;
-    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t56 = _t26*_t55;
-    const trailer3_real_t _t57 = _t20*_t7;
-    const trailer3_real_t _t58 = _t17*_t19;
-    const trailer3_real_t _t59 = _t57 - _t58;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
-    const trailer3_real_t _t61 = _t30*_t55;
-    const trailer3_real_t _t62 = _t23*_t7;
-    const trailer3_real_t _t63 = _t17*_t22;
-    const trailer3_real_t _t64 = _t62 - _t63;
-    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
-    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t69 = _t18*_t19;
-    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t71 = _t26*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t73 = _t35*_t72;
-    const trailer3_real_t _t74 = _t13*_t20;
-    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
-    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = _t18*_t22;
-    const trailer3_real_t _t79 = _t30*_t70;
-    const trailer3_real_t _t80 = _t41*_t72;
-    const trailer3_real_t _t81 = _t13*_t23;
-    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
-    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t84 = _t25*_t83;
-    const trailer3_real_t _t85 = TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t86 = _t25*_t85;
-    const trailer3_real_t _t87 = _t37*_t83;
-    const trailer3_real_t _t88 = _t37*_t85;
-    const trailer3_real_t _t89 = TRAILER3_LIT(0.2)*_t83;
-    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t85;
-    const trailer3_real_t _t91 = -_t59 - _t84;
-    const trailer3_real_t _t92 = -TRAILER3_LIT(1.6666666666666667)*_t91;
-    const trailer3_real_t _t93 = TRAILER3_LIT(0.2)*_t92;
-    const trailer3_real_t _t94 = _t55*_t83;
-    const trailer3_real_t _t95 = _t28 + _t94;
-    const trailer3_real_t _t96 = -_t64 - _t86;
-    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t96;
-    const trailer3_real_t _t98 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t99 = _t55*_t85;
-    const trailer3_real_t _t100 = _t32 + _t99;
-    const trailer3_real_t _t101 = _t56 + _t84;
-    const trailer3_real_t _t102 = -TRAILER3_LIT(1.6666666666666667)*_t101;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t102;
-    const trailer3_real_t _t104 = _t61 + _t86;
-    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
-    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t108 = TRAILER3_LIT(0.2)*_t107;
-    const trailer3_real_t _t109 = TRAILER3_LIT(1.6666666666666667)*_t66;
+    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t21 = _t19*_t20;
+    const trailer3_real_t _t22 = _t21 - _t6;
+    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
+    const trailer3_real_t _t24 = _t19*_t23;
+    const trailer3_real_t _t25 = _t24 - _t8;
+    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t27 = _t20*_t26;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
+    const trailer3_real_t _t30 = _t28*_t29;
+    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
+    const trailer3_real_t _t32 = _t23*_t26;
+    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t34 = _t28*_t33;
+    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t40 = _t20*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
+    const trailer3_real_t _t42 = _t23*_t39;
+    const trailer3_real_t _t43 = _t17 + _t42;
+    const trailer3_real_t _t44 = _t40 - _t7;
+    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t48 = _t20*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t50 = _t29*_t49;
+    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
+    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
+    const trailer3_real_t _t54 = _t23*_t47;
+    const trailer3_real_t _t55 = _t33*_t49;
+    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
+    const trailer3_real_t _t57 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t _t58 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t59 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t _t60 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t61 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t62 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t63 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t64 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t65 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t68 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t69 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t70 = _t68*thetadot_right + _t69*thetadot_left;
+    const trailer3_real_t _t71 = _t70*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t74 = _t72*thetadot_right + _t73*thetadot_left;
+    const trailer3_real_t _t75 = _t29*_t74 + _t33*_t70;
+    const trailer3_real_t _t76 = _t75*_t75;
+    const trailer3_real_t _t77 = _t45*_t74 + _t52*_t70;
+    const trailer3_real_t _t78 = _t77*_t77;
+    const trailer3_real_t _t79 = _t63*_t78;
+    const trailer3_real_t _t80 = _t20*_t74 + _t23*_t70;
+    const trailer3_real_t _t81 = _t80*_t80;
+    const trailer3_real_t _t82 = _t64*_t76;
+    const trailer3_real_t _t83 = _t65*_t78;
+    const trailer3_real_t _t84 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t85 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t86 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t87 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t88 = _t10*_t76;
+    const trailer3_real_t _t89 = _t10*_t78;
+    const trailer3_real_t _t90 = _t81*_t9;
+    const trailer3_real_t _t91 = _t10*_t81;
+    const trailer3_real_t _t92 = _t67*_t78;
+    const trailer3_real_t _t93 = _t66*_t76;
+    const trailer3_real_t _t94 = _t67*_t76;
+    const trailer3_real_t _t95 = TRAILER3_LIT(1.6666666666666667)*_t3;
+    const trailer3_real_t _t96 = _t19*_t95;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t16;
+    const trailer3_real_t _t98 = _t19*_t97;
+    const trailer3_real_t _t99 = _t26*_t95;
+    const trailer3_real_t _t100 = _t26*_t97;
+    const trailer3_real_t _t101 = TRAILER3_LIT(0.2)*_t95;
+    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t103 = -_t7 - _t96;
+    const trailer3_real_t _t104 = -TRAILER3_LIT(1.6666666666666667)*_t103;
+    const trailer3_real_t _t105 = TRAILER3_LIT(0.2)*_t104;
+    const trailer3_real_t _t106 = _t39*_t95;
+    const trailer3_real_t _t107 = _t106 - _t6;
+    const trailer3_real_t _t108 = _t17 - _t98;
+    const trailer3_real_t _t109 = -TRAILER3_LIT(1.6666666666666667)*_t108;
     const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
-    const trailer3_real_t _t111 = -_t34*_t92 + _t69 - _t74 - _t87;
-    const trailer3_real_t _t112 = -TRAILER3_LIT(1.6666666666666667)*_t111;
-    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t112;
-    const trailer3_real_t _t114 = _t70*_t83;
-    const trailer3_real_t _t115 = _t114 + _t39 + _t72*_t92;
-    const trailer3_real_t _t116 = -_t34*_t97 + _t78 - _t81 - _t88;
+    const trailer3_real_t _t111 = _t39*_t97;
+    const trailer3_real_t _t112 = _t111 - _t8;
+    const trailer3_real_t _t113 = _t40 + _t96;
+    const trailer3_real_t _t114 = -TRAILER3_LIT(1.6666666666666667)*_t113;
+    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t114;
+    const trailer3_real_t _t116 = _t42 + _t98;
     const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
     const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
-    const trailer3_real_t _t119 = _t70*_t85;
-    const trailer3_real_t _t120 = _t119 + _t44 + _t72*_t97;
-    const trailer3_real_t _t121 = -_t102*_t34 + _t71 + _t87;
-    const trailer3_real_t _t122 = -TRAILER3_LIT(1.6666666666666667)*_t121;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
-    const trailer3_real_t _t124 = _t102*_t72 - _t114 + _t38;
-    const trailer3_real_t _t125 = -_t105*_t34 + _t79 + _t88;
-    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
-    const trailer3_real_t _t128 = _t105*_t72 - _t119 + _t43;
-    const trailer3_real_t _t129 = -_t107*_t34 + _t73;
-    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
-    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
-    const trailer3_real_t _t132 = _t107*_t72 + _t36;
-    const trailer3_real_t _t133 = -_t109*_t34 + _t80;
+    const trailer3_real_t _t119 = TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = -_t104*_t28 - _t13 - _t99;
+    const trailer3_real_t _t124 = -TRAILER3_LIT(1.6666666666666667)*_t123;
+    const trailer3_real_t _t125 = TRAILER3_LIT(0.2)*_t124;
+    const trailer3_real_t _t126 = _t47*_t95;
+    const trailer3_real_t _t127 = _t104*_t49 - _t12 + _t126;
+    const trailer3_real_t _t128 = -_t100 - _t109*_t28 + _t18;
+    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
+    const trailer3_real_t _t130 = TRAILER3_LIT(0.2)*_t129;
+    const trailer3_real_t _t131 = _t47*_t97;
+    const trailer3_real_t _t132 = _t109*_t49 + _t131 - _t14;
+    const trailer3_real_t _t133 = -_t114*_t28 + _t48 + _t99;
     const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
     const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = _t109*_t72 + _t42;
-    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
-    const trailer3_real_t _t139 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = K_theta_cart2_x_tractor*_t6;
-    const trailer3_real_t _t142 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t143 = K_theta_cart3_x_tractor*_t12;
-    const trailer3_real_t _t144 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t145 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t146 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t147 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t148 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t149 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t152 = _t19*thetadot_right + _t22*thetadot_left;
-    const trailer3_real_t _t153 = _t152*_t152;
-    const trailer3_real_t _t154 = _t35*thetadot_right + _t41*thetadot_left;
-    const trailer3_real_t _t155 = _t154*_t154;
-    const trailer3_real_t _t156 = _t67*thetadot_right + _t76*thetadot_left;
-    const trailer3_real_t _t157 = _t156*_t156;
-    const trailer3_real_t _t158 = _t147*_t157;
-    const trailer3_real_t _t159 = _t26*thetadot_right + _t30*thetadot_left;
-    const trailer3_real_t _t160 = _t159*_t159;
-    const trailer3_real_t _t161 = _t148*_t155;
-    const trailer3_real_t _t162 = _t149*_t157;
-    const trailer3_real_t _t163 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t164 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t166 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t167 = _t10*_t155;
-    const trailer3_real_t _t168 = _t10*_t157;
-    const trailer3_real_t _t169 = _t160*_t9;
-    const trailer3_real_t _t170 = _t10*_t160;
-    const trailer3_real_t _t171 = _t151*_t157;
-    const trailer3_real_t _t172 = _t150*_t155;
-    const trailer3_real_t _t173 = _t151*_t155;
-    const trailer3_real_t _t174 = _t152*thetadot_right;
-    const trailer3_real_t _t175 = _t152*thetadot_left;
-    const trailer3_real_t _t176 = _t159*thetadot_right;
-    const trailer3_real_t _t177 = _t159*thetadot_left;
-    const trailer3_real_t _t178 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t179 = _t46 + _t49;
-    const trailer3_real_t _t180 = _t178*_t179;
-    const trailer3_real_t _t181 = J_theta_cart_right*_t180;
-    const trailer3_real_t _t182 = _t50 + _t53;
-    const trailer3_real_t _t183 = _t178*_t182;
-    const trailer3_real_t _t184 = J_theta_cart_right*_t183;
-    const trailer3_real_t _t185 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t186 = -_t46 + _t47 - _t48;
-    const trailer3_real_t _t187 = _t185*_t186;
-    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
-    const trailer3_real_t _t189 = -_t50 + _t51 - _t52;
-    const trailer3_real_t _t190 = _t185*_t189;
-    const trailer3_real_t _t191 = J_theta_cart_left*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t193 = _t54 - _t56 + _t59;
-    const trailer3_real_t _t194 = _t192*_t193;
-    const trailer3_real_t _t195 = J_theta_cart2_right*_t194;
-    const trailer3_real_t _t196 = _t60 - _t61 + _t64;
-    const trailer3_real_t _t197 = _t192*_t196;
-    const trailer3_real_t _t198 = J_theta_cart2_right*_t197;
-    const trailer3_real_t _t199 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t200 = -_t54 - _t65;
-    const trailer3_real_t _t201 = _t199*_t200;
-    const trailer3_real_t _t202 = J_theta_cart2_left*_t201;
-    const trailer3_real_t _t203 = -_t60 - _t66;
-    const trailer3_real_t _t204 = _t199*_t203;
-    const trailer3_real_t _t205 = J_theta_cart2_left*_t204;
-    const trailer3_real_t _t206 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t207 = _t68 - _t75;
-    const trailer3_real_t _t208 = _t206*_t207;
-    const trailer3_real_t _t209 = J_theta_cart3_right*_t208;
-    const trailer3_real_t _t210 = _t77 - _t82;
-    const trailer3_real_t _t211 = _t206*_t210;
-    const trailer3_real_t _t212 = J_theta_cart3_right*_t211;
-    const trailer3_real_t _t213 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t214 = -_t68 - _t75;
-    const trailer3_real_t _t215 = _t213*_t214;
-    const trailer3_real_t _t216 = J_theta_cart3_left*_t215;
-    const trailer3_real_t _t217 = -_t77 - _t82;
-    const trailer3_real_t _t218 = _t213*_t217;
-    const trailer3_real_t _t219 = J_theta_cart3_left*_t218;
-    const trailer3_real_t _t220 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t221 = _t141 + _t142;
-    const trailer3_real_t _t222 = _t143 + _t144;
-    const trailer3_real_t _t223 = -K_theta_cart_x_tractor_2*_t160*_t2
-            + K_theta_tractor_x_tractor*_t153 + _t145*_t160 + _t146*_t155 + _t158 - _t161 - _t162;
-    const trailer3_real_t _t224 = _t174 - _t176;
-    const trailer3_real_t _t225 = _t175 - _t177;
-    const trailer3_real_t _t226 = _t224*_t83 + _t225*_t85;
-    const trailer3_real_t _t227 = _t154*thetadot_right;
-    const trailer3_real_t _t228 = _t154*thetadot_left;
-    const trailer3_real_t _t229 = _t102*_t176 + _t105*_t177 + _t107*_t227 + _t109*_t228 + _t174*_t92
-            + _t175*_t97;
-    const trailer3_real_t _t230 = _t156*thetadot_right;
-    const trailer3_real_t _t231 = _t156*thetadot_left;
-    const trailer3_real_t _t232 = _t112*_t174 + _t117*_t175 + _t122*_t176 + _t126*_t177
-            + _t130*_t227 + _t134*_t228 + _t137*_t230 + _t139*_t231;
-    const trailer3_real_t _t233 = _t220*_t226 + _t221*_t229 + _t222*_t232 + _t223;
-    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t235 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t136 = _t114*_t49 - _t126 + _t27;
+    const trailer3_real_t _t137 = _t100 - _t117*_t28 + _t54;
+    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
+    const trailer3_real_t _t140 = _t117*_t49 - _t131 + _t32;
+    const trailer3_real_t _t141 = -_t119*_t28 + _t50;
+    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t141;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = _t119*_t49 + _t30;
+    const trailer3_real_t _t145 = -_t121*_t28 + _t55;
+    const trailer3_real_t _t146 = -TRAILER3_LIT(1.6666666666666667)*_t145;
+    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t146;
+    const trailer3_real_t _t148 = _t121*_t49 + _t34;
+    const trailer3_real_t _t149 = TRAILER3_LIT(1.6666666666666667)*_t51;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = _t70*_t74;
+    const trailer3_real_t _t154 = _t74*_t80;
+    const trailer3_real_t _t155 = _t70*_t80;
+    const trailer3_real_t _t156 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t157 = _t3 + _t36;
+    const trailer3_real_t _t158 = _t156*_t157;
+    const trailer3_real_t _t159 = J_theta_cart_right*_t158;
+    const trailer3_real_t _t160 = -_t16 + _t37;
+    const trailer3_real_t _t161 = _t156*_t160;
+    const trailer3_real_t _t162 = J_theta_cart_right*_t161;
+    const trailer3_real_t _t163 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t164 = _t3 - _t36;
+    const trailer3_real_t _t165 = _t163*_t164;
+    const trailer3_real_t _t166 = J_theta_cart_left*_t165;
+    const trailer3_real_t _t167 = -_t16 - _t37;
+    const trailer3_real_t _t168 = _t163*_t167;
+    const trailer3_real_t _t169 = J_theta_cart_left*_t168;
+    const trailer3_real_t _t170 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t171 = _t38 - _t40 + _t7;
+    const trailer3_real_t _t172 = _t170*_t171;
+    const trailer3_real_t _t173 = J_theta_cart2_right*_t172;
+    const trailer3_real_t _t174 = _t41 - _t43;
+    const trailer3_real_t _t175 = _t170*_t174;
+    const trailer3_real_t _t176 = J_theta_cart2_right*_t175;
+    const trailer3_real_t _t177 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t178 = -_t38 - _t44;
+    const trailer3_real_t _t179 = _t177*_t178;
+    const trailer3_real_t _t180 = J_theta_cart2_left*_t179;
+    const trailer3_real_t _t181 = -_t41 - _t43;
+    const trailer3_real_t _t182 = _t177*_t181;
+    const trailer3_real_t _t183 = J_theta_cart2_left*_t182;
+    const trailer3_real_t _t184 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t185 = _t46 - _t51;
+    const trailer3_real_t _t186 = _t184*_t185;
+    const trailer3_real_t _t187 = J_theta_cart3_right*_t186;
+    const trailer3_real_t _t188 = _t53 - _t56;
+    const trailer3_real_t _t189 = _t184*_t188;
+    const trailer3_real_t _t190 = J_theta_cart3_right*_t189;
+    const trailer3_real_t _t191 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t192 = -_t46 - _t51;
+    const trailer3_real_t _t193 = _t191*_t192;
+    const trailer3_real_t _t194 = J_theta_cart3_left*_t193;
+    const trailer3_real_t _t195 = -_t53 - _t56;
+    const trailer3_real_t _t196 = _t191*_t195;
+    const trailer3_real_t _t197 = J_theta_cart3_left*_t196;
+    const trailer3_real_t _t198 = K_theta_cart_x_tractor_2*_t2 - _t61;
+    const trailer3_real_t _t199 = _t10*_t62 - _t10*_t64 + _t57*_t9 + _t58*_t9;
+    const trailer3_real_t _t200 = _t10*_t63 - _t10*_t65 + _t59*_t9 + _t60*_t9;
+    const trailer3_real_t _t201 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t76
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t78
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t71
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t71 - _t57*_t88 - _t58*_t88
+            - _t59*_t89 - _t60*_t89 - _t82*_t9 - _t83*_t9;
+    const trailer3_real_t _t202 = _t153 - _t154;
+    const trailer3_real_t _t203 = -_t155 + _t71;
+    const trailer3_real_t _t204 = _t202*_t95 + _t203*_t97;
+    const trailer3_real_t _t205 = _t74*_t75;
+    const trailer3_real_t _t206 = _t70*_t75;
+    const trailer3_real_t _t207 = _t104*_t153 + _t109*_t71 + _t114*_t154 + _t117*_t155 + _t119*_t205
+            + _t121*_t206;
+    const trailer3_real_t _t208 = _t74*_t77;
+    const trailer3_real_t _t209 = _t70*_t77;
+    const trailer3_real_t _t210 = _t124*_t153 + _t129*_t71 + _t134*_t154 + _t138*_t155 + _t142*_t205
+            + _t146*_t206 + _t149*_t208 + _t151*_t209;
+    const trailer3_real_t _t211 = J_theta_cart*_t204 + _t153*_t198 + _t199*_t207 + _t200*_t210
+            + _t201;
+    const trailer3_real_t _t212 = K_theta_cart2_x_tractor_2*_t6 - _t62;
+    const trailer3_real_t _t213 = _t59*_t66 + _t60*_t66 + _t63*_t67 - _t65*_t67;
+    const trailer3_real_t _t214 = _t57*_t91 + _t58*_t91 - _t59*_t92 - _t60*_t92 - _t62*_t90
+            + _t64*_t90 + _t66*_t79 - _t66*_t83 + _t71*_t84 + _t71*_t85;
+    const trailer3_real_t _t215 = J_theta_cart2*_t207 + _t153*_t212 + _t199*_t204 + _t210*_t213
+            + _t214;
+    const trailer3_real_t _t216 = K_theta_cart3_x_tractor_2*_t12 - _t63;
+    const trailer3_real_t _t217 = _t59*_t91 + _t59*_t94 + _t60*_t91 + _t60*_t94 - _t63*_t90
+            - _t63*_t93 + _t65*_t90 + _t65*_t93 + _t71*_t86 + _t71*_t87;
+    const trailer3_real_t _t218 = J_theta_cart3*_t210 + _t153*_t216 + _t200*_t204 + _t207*_t213
+            + _t217;
+    const trailer3_real_t _t219 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t220 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t221 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t222 = _t57 + _t58;
+    const trailer3_real_t _t223 = _t59 + _t60;
+    const trailer3_real_t _t224 = J_x_tractor + _t20*_t221 + _t222*_t29 + _t223*_t45;
+    const trailer3_real_t _t225 = J_theta_cart*_t20 + _t199*_t29 + _t200*_t45 + _t221;
+    const trailer3_real_t _t226 = J_theta_cart2*_t29 + _t199*_t20 + _t213*_t45 + _t222;
+    const trailer3_real_t _t227 = J_theta_cart3*_t45 + _t20*_t200 + _t213*_t29 + _t223;
+    const trailer3_real_t _t228 = J_theta_right*_t219;
+    const trailer3_real_t _t229 = J_theta_left*_t220;
+    const trailer3_real_t _t230 = _t158*_t159 + _t165*_t166 + _t172*_t173 + _t179*_t180
+            + _t186*_t187 + _t193*_t194 + _t20*_t225 + _t219*_t228 + _t220*_t229 + _t224
+            + _t226*_t29 + _t227*_t45;
+    const trailer3_real_t _t231 = K_theta_tractor_x_tractor_2 + _t221*_t23 + _t222*_t33
+            + _t223*_t52;
+    const trailer3_real_t _t232 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t233 = J_theta_cart*_t23 + _t199*_t33 + _t200*_t52 + _t232;
+    const trailer3_real_t _t234 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t235 = J_theta_cart2*_t33 + _t199*_t23 + _t213*_t52 + _t234;
     const trailer3_real_t _t236 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t237 = -K_theta_cart_x_tractor*_t16*_t160
-            - K_theta_cart_x_tractor_2*_t160*_t4 - _t155*_t163 - _t155*_t164 - _t157*_t165
-            - _t157*_t166;
-    const trailer3_real_t _t238 = _t174*_t20 + _t175*_t23;
-    const trailer3_real_t _t239 = -K_theta_tractor_x_tractor*_t238 + _t226*_t234 + _t229*_t235
-            + _t232*_t236 + _t237;
-    const trailer3_real_t _t240 = K_theta_cart_x_tractor_2*_t2 - _t145;
-    const trailer3_real_t _t241 = _t10*_t146 - _t10*_t148 + _t141*_t9 + _t142*_t9;
-    const trailer3_real_t _t242 = _t10*_t147 - _t10*_t149 + _t143*_t9 + _t144*_t9;
-    const trailer3_real_t _t243 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t155*_t2*_t7
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t157*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t153*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t153*_t3 - _t141*_t167 - _t142*_t167
-            - _t143*_t168 - _t144*_t168 - _t161*_t9 - _t162*_t9;
-    const trailer3_real_t _t244 = J_theta_cart*_t226 + _t229*_t241 + _t232*_t242 + _t238*_t240
-            + _t243;
-    const trailer3_real_t _t245 = K_theta_cart2_x_tractor_2*_t6 - _t146;
-    const trailer3_real_t _t246 = _t143*_t150 + _t144*_t150 + _t147*_t151 - _t149*_t151;
-    const trailer3_real_t _t247 = _t141*_t170 + _t142*_t170 - _t143*_t171 - _t144*_t171
-            - _t146*_t169 + _t148*_t169 + _t150*_t158 - _t150*_t162 + _t153*_t163 + _t153*_t164;
-    const trailer3_real_t _t248 = J_theta_cart2*_t229 + _t226*_t241 + _t232*_t246 + _t238*_t245
-            + _t247;
-    const trailer3_real_t _t249 = K_theta_cart3_x_tractor_2*_t12 - _t147;
-    const trailer3_real_t _t250 = _t143*_t170 + _t143*_t173 + _t144*_t170 + _t144*_t173
-            - _t147*_t169 - _t147*_t172 + _t149*_t169 + _t149*_t172 + _t153*_t165 + _t153*_t166;
-    const trailer3_real_t _t251 = J_theta_cart3*_t232 + _t226*_t242 + _t229*_t246 + _t238*_t249
-            + _t250;
-    const trailer3_real_t _t252 = J_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_t19 + _t220*_t26
-            + _t221*_t35 + _t222*_t67;
-    const trailer3_real_t _t253 = J_theta_tractor*_t19 + K_theta_tractor_x_tractor_2*_t20
-            + _t234*_t26 + _t235*_t35 + _t236*_t67;
-    const trailer3_real_t _t254 = J_theta_cart*_t26 + _t19*_t234 + _t20*_t220 + _t241*_t35
-            + _t242*_t67;
-    const trailer3_real_t _t255 = J_theta_cart2*_t35 + _t19*_t235 + _t20*_t221 + _t241*_t26
-            + _t246*_t67;
-    const trailer3_real_t _t256 = J_theta_cart3*_t67 + _t19*_t236 + _t20*_t222 + _t242*_t26
-            + _t246*_t35;
-    const trailer3_real_t _t257 = J_theta_right + _t180*_t181 + _t187*_t188 + _t19*_t253
-            + _t194*_t195 + _t20*_t252 + _t201*_t202 + _t208*_t209 + _t215*_t216 + _t254*_t26
-            + _t255*_t35 + _t256*_t67;
-    const trailer3_real_t _t258 = J_x_tractor*_t23 + K_theta_tractor_x_tractor_2*_t22 + _t220*_t30
-            + _t221*_t41 + _t222*_t76;
-    const trailer3_real_t _t259 = J_theta_tractor*_t22 + K_theta_tractor_x_tractor_2*_t23
-            + _t234*_t30 + _t235*_t41 + _t236*_t76;
-    const trailer3_real_t _t260 = J_theta_cart*_t30 + _t22*_t234 + _t220*_t23 + _t241*_t41
-            + _t242*_t76;
-    const trailer3_real_t _t261 = J_theta_cart2*_t41 + _t22*_t235 + _t221*_t23 + _t241*_t30
-            + _t246*_t76;
-    const trailer3_real_t _t262 = J_theta_cart3*_t76 + _t22*_t236 + _t222*_t23 + _t242*_t30
-            + _t246*_t41;
-    const trailer3_real_t _t263 = _t180*_t184 + _t187*_t191 + _t19*_t259 + _t194*_t198 + _t20*_t258
-            + _t201*_t205 + _t208*_t212 + _t215*_t219 + _t26*_t260 + _t261*_t35 + _t262*_t67;
-    const trailer3_real_t _t264 = J_theta_left + _t183*_t184 + _t190*_t191 + _t197*_t198
-            + _t204*_t205 + _t211*_t212 + _t218*_t219 + _t22*_t259 + _t23*_t258 + _t260*_t30
-            + _t261*_t41 + _t262*_t76;
-    const trailer3_real_t _t265 = _t257*_t264 - _t263*_t263;
-    const trailer3_real_t _t266 = -_t21 + _t89;
-    const trailer3_real_t _t267 = _t178*_t266;
-    const trailer3_real_t _t268 = -_t24 + _t90;
-    const trailer3_real_t _t269 = _t178*_t268;
-    const trailer3_real_t _t270 = -_t21 - _t89;
-    const trailer3_real_t _t271 = _t185*_t270;
-    const trailer3_real_t _t272 = -_t24 - _t90;
-    const trailer3_real_t _t273 = _t185*_t272;
-    const trailer3_real_t _t274 = _t93 - _t95;
-    const trailer3_real_t _t275 = _t192*_t274;
-    const trailer3_real_t _t276 = -_t100 + _t98;
-    const trailer3_real_t _t277 = _t192*_t276;
-    const trailer3_real_t _t278 = _t103 - _t27 + _t94;
-    const trailer3_real_t _t279 = _t192*_t278;
-    const trailer3_real_t _t280 = _t106 - _t31 + _t99;
-    const trailer3_real_t _t281 = _t192*_t280;
-    const trailer3_real_t _t282 = _t108 + _t29;
-    const trailer3_real_t _t283 = _t192*_t282;
-    const trailer3_real_t _t284 = _t110 + _t33;
-    const trailer3_real_t _t285 = _t192*_t284;
-    const trailer3_real_t _t286 = -_t93 - _t95;
-    const trailer3_real_t _t287 = _t199*_t286;
-    const trailer3_real_t _t288 = -_t100 - _t98;
-    const trailer3_real_t _t289 = _t199*_t288;
-    const trailer3_real_t _t290 = -_t103 - _t27 + _t94;
-    const trailer3_real_t _t291 = _t199*_t290;
-    const trailer3_real_t _t292 = -_t106 - _t31 + _t99;
-    const trailer3_real_t _t293 = _t199*_t292;
-    const trailer3_real_t _t294 = -_t108 + _t29;
-    const trailer3_real_t _t295 = _t199*_t294;
-    const trailer3_real_t _t296 = -_t110 + _t33;
-    const trailer3_real_t _t297 = _t199*_t296;
-    const trailer3_real_t _t298 = _t113 - _t115;
-    const trailer3_real_t _t299 = _t206*_t298;
-    const trailer3_real_t _t300 = _t118 - _t120;
-    const trailer3_real_t _t301 = _t206*_t300;
-    const trailer3_real_t _t302 = _t123 - _t124;
-    const trailer3_real_t _t303 = _t206*_t302;
-    const trailer3_real_t _t304 = _t127 - _t128;
-    const trailer3_real_t _t305 = _t206*_t304;
-    const trailer3_real_t _t306 = _t131 - _t132;
-    const trailer3_real_t _t307 = _t206*_t306;
-    const trailer3_real_t _t308 = _t135 - _t136;
-    const trailer3_real_t _t309 = _t206*_t308;
-    const trailer3_real_t _t310 = _t138 + _t40;
-    const trailer3_real_t _t311 = _t206*_t310;
-    const trailer3_real_t _t312 = _t140 + _t45;
-    const trailer3_real_t _t313 = _t206*_t312;
-    const trailer3_real_t _t314 = -_t113 - _t115;
-    const trailer3_real_t _t315 = _t213*_t314;
-    const trailer3_real_t _t316 = -_t118 - _t120;
-    const trailer3_real_t _t317 = _t213*_t316;
-    const trailer3_real_t _t318 = -_t123 - _t124;
-    const trailer3_real_t _t319 = _t213*_t318;
-    const trailer3_real_t _t320 = -_t127 - _t128;
-    const trailer3_real_t _t321 = _t213*_t320;
-    const trailer3_real_t _t322 = -_t131 - _t132;
-    const trailer3_real_t _t323 = _t213*_t322;
-    const trailer3_real_t _t324 = -_t135 - _t136;
-    const trailer3_real_t _t325 = _t213*_t324;
-    const trailer3_real_t _t326 = -_t138 + _t40;
-    const trailer3_real_t _t327 = _t213*_t326;
-    const trailer3_real_t _t328 = -_t140 + _t45;
-    const trailer3_real_t _t329 = _t213*_t328;
-    const trailer3_real_t _t330 = _t224*_t267 + _t225*_t269;
-    const trailer3_real_t _t331 = _t224*_t271 + _t225*_t273;
-    const trailer3_real_t _t332 = _t174*_t275 + _t175*_t277 + _t176*_t279 + _t177*_t281
-            + _t227*_t283 + _t228*_t285;
-    const trailer3_real_t _t333 = _t174*_t287 + _t175*_t289 + _t176*_t291 + _t177*_t293
-            + _t227*_t295 + _t228*_t297;
-    const trailer3_real_t _t334 = _t174*_t299 + _t175*_t301 + _t176*_t303 + _t177*_t305
-            + _t227*_t307 + _t228*_t309 + _t230*_t311 + _t231*_t313;
-    const trailer3_real_t _t335 = _t174*_t315 + _t175*_t317 + _t176*_t319 + _t177*_t321
-            + _t227*_t323 + _t228*_t325 + _t230*_t327 + _t231*_t329;
-    const trailer3_real_t _t336 = _t181*_t330 + _t188*_t331 + _t19*_t239 + _t195*_t332 + _t20*_t233
-            + _t202*_t333 + _t209*_t334 + _t216*_t335 + _t244*_t26 + _t248*_t35 + _t251*_t67;
-    const trailer3_real_t _t337 = _t184*_t330 + _t191*_t331 + _t198*_t332 + _t205*_t333
-            + _t212*_t334 + _t219*_t335 + _t22*_t239 + _t23*_t233 + _t244*_t30 + _t248*_t41
-            + _t251*_t76;
-    const trailer3_real_t _t338 = -_t336 + tau_right;
-    const trailer3_real_t _t339 = -_t337 + tau_left;
-    const trailer3_real_t _t340 = TRAILER3_LIT(1.0)/_t265;
-    const trailer3_real_t _t341 = _t340*(-_t263*_t339 + _t264*_t338);
-    const trailer3_real_t _t342 = _t340*(_t257*_t339 - _t263*_t338);
+    const trailer3_real_t _t237 = J_theta_cart3*_t52 + _t200*_t23 + _t213*_t33 + _t236;
+    const trailer3_real_t _t238 = TRAILER3_LIT(0.207)*_t219;
+    const trailer3_real_t _t239 = J_theta_right*_t238;
+    const trailer3_real_t _t240 = -TRAILER3_LIT(0.207)*_t220;
+    const trailer3_real_t _t241 = J_theta_left*_t240;
+    const trailer3_real_t _t242 = _t158*_t162 + _t165*_t169 + _t172*_t176 + _t179*_t183
+            + _t186*_t190 + _t193*_t197 + _t20*_t233 + _t219*_t239 + _t220*_t241 + _t231
+            + _t235*_t29 + _t237*_t45;
+    const trailer3_real_t _t243 = J_theta_tractor + _t23*_t232 + _t234*_t33 + _t236*_t52;
+    const trailer3_real_t _t244 = _t161*_t162 + _t168*_t169 + _t175*_t176 + _t182*_t183
+            + _t189*_t190 + _t196*_t197 + _t23*_t233 + _t235*_t33 + _t237*_t52 + _t238*_t239
+            + _t240*_t241 + _t243;
+    const trailer3_real_t _t245 = _t230*_t244 - _t242*_t242;
+    const trailer3_real_t _t246 = -K_theta_cart_x_tractor_2*_t2*_t81
+            + K_theta_tractor_x_tractor*_t71 + _t61*_t81 + _t62*_t76 + _t79 - _t82 - _t83;
+    const trailer3_real_t _t247 = -K_theta_cart_x_tractor*_t16*_t81
+            - K_theta_cart_x_tractor_2*_t4*_t81 - _t76*_t84 - _t76*_t85 - _t78*_t86 - _t78*_t87;
+    const trailer3_real_t _t248 = _t101 + _t2;
+    const trailer3_real_t _t249 = _t156*_t248;
+    const trailer3_real_t _t250 = _t102 + _t4;
+    const trailer3_real_t _t251 = _t156*_t250;
+    const trailer3_real_t _t252 = -_t101 + _t2;
+    const trailer3_real_t _t253 = _t163*_t252;
+    const trailer3_real_t _t254 = -_t102 + _t4;
+    const trailer3_real_t _t255 = _t163*_t254;
+    const trailer3_real_t _t256 = _t105 - _t107;
+    const trailer3_real_t _t257 = _t170*_t256;
+    const trailer3_real_t _t258 = _t110 - _t112;
+    const trailer3_real_t _t259 = _t170*_t258;
+    const trailer3_real_t _t260 = _t106 + _t115 - _t21;
+    const trailer3_real_t _t261 = _t170*_t260;
+    const trailer3_real_t _t262 = _t111 + _t118 - _t24;
+    const trailer3_real_t _t263 = _t170*_t262;
+    const trailer3_real_t _t264 = _t120 + _t22;
+    const trailer3_real_t _t265 = _t170*_t264;
+    const trailer3_real_t _t266 = _t122 + _t25;
+    const trailer3_real_t _t267 = _t170*_t266;
+    const trailer3_real_t _t268 = -_t105 - _t107;
+    const trailer3_real_t _t269 = _t177*_t268;
+    const trailer3_real_t _t270 = -_t110 - _t112;
+    const trailer3_real_t _t271 = _t177*_t270;
+    const trailer3_real_t _t272 = _t106 - _t115 - _t21;
+    const trailer3_real_t _t273 = _t177*_t272;
+    const trailer3_real_t _t274 = _t111 - _t118 - _t24;
+    const trailer3_real_t _t275 = _t177*_t274;
+    const trailer3_real_t _t276 = -_t120 + _t22;
+    const trailer3_real_t _t277 = _t177*_t276;
+    const trailer3_real_t _t278 = -_t122 + _t25;
+    const trailer3_real_t _t279 = _t177*_t278;
+    const trailer3_real_t _t280 = _t125 - _t127;
+    const trailer3_real_t _t281 = _t184*_t280;
+    const trailer3_real_t _t282 = _t130 - _t132;
+    const trailer3_real_t _t283 = _t184*_t282;
+    const trailer3_real_t _t284 = _t135 - _t136;
+    const trailer3_real_t _t285 = _t184*_t284;
+    const trailer3_real_t _t286 = _t139 - _t140;
+    const trailer3_real_t _t287 = _t184*_t286;
+    const trailer3_real_t _t288 = _t143 - _t144;
+    const trailer3_real_t _t289 = _t184*_t288;
+    const trailer3_real_t _t290 = _t147 - _t148;
+    const trailer3_real_t _t291 = _t184*_t290;
+    const trailer3_real_t _t292 = _t150 + _t31;
+    const trailer3_real_t _t293 = _t184*_t292;
+    const trailer3_real_t _t294 = _t152 + _t35;
+    const trailer3_real_t _t295 = _t184*_t294;
+    const trailer3_real_t _t296 = -_t125 - _t127;
+    const trailer3_real_t _t297 = _t191*_t296;
+    const trailer3_real_t _t298 = -_t130 - _t132;
+    const trailer3_real_t _t299 = _t191*_t298;
+    const trailer3_real_t _t300 = -_t135 - _t136;
+    const trailer3_real_t _t301 = _t191*_t300;
+    const trailer3_real_t _t302 = -_t139 - _t140;
+    const trailer3_real_t _t303 = _t191*_t302;
+    const trailer3_real_t _t304 = -_t143 - _t144;
+    const trailer3_real_t _t305 = _t191*_t304;
+    const trailer3_real_t _t306 = -_t147 - _t148;
+    const trailer3_real_t _t307 = _t191*_t306;
+    const trailer3_real_t _t308 = -_t150 + _t31;
+    const trailer3_real_t _t309 = _t191*_t308;
+    const trailer3_real_t _t310 = -_t152 + _t35;
+    const trailer3_real_t _t311 = _t191*_t310;
+    const trailer3_real_t _t312 = _t202*_t249 + _t203*_t251;
+    const trailer3_real_t _t313 = _t202*_t253 + _t203*_t255;
+    const trailer3_real_t _t314 = _t153*_t257 + _t154*_t261 + _t155*_t263 + _t205*_t265
+            + _t206*_t267 + _t259*_t71;
+    const trailer3_real_t _t315 = _t153*_t269 + _t154*_t273 + _t155*_t275 + _t205*_t277
+            + _t206*_t279 + _t271*_t71;
+    const trailer3_real_t _t316 = _t153*_t281 + _t154*_t285 + _t155*_t287 + _t205*_t289
+            + _t206*_t291 + _t208*_t293 + _t209*_t295 + _t283*_t71;
+    const trailer3_real_t _t317 = _t153*_t297 + _t154*_t301 + _t155*_t303 + _t205*_t305
+            + _t206*_t307 + _t208*_t309 + _t209*_t311 + _t299*_t71;
+    const trailer3_real_t _t318 = _t159*_t312 + _t166*_t313 + _t173*_t314 + _t180*_t315
+            + _t187*_t316 + _t194*_t317 + _t20*_t211 + _t204*_t221 + _t207*_t222 + _t210*_t223
+            + _t215*_t29 + _t218*_t45 + _t246;
+    const trailer3_real_t _t319 = -K_theta_tractor_x_tractor*_t153 + _t162*_t312 + _t169*_t313
+            + _t176*_t314 + _t183*_t315 + _t190*_t316 + _t197*_t317 + _t204*_t232 + _t207*_t234
+            + _t210*_t236 + _t211*_t23 + _t215*_t33 + _t218*_t52 + _t247;
+    const trailer3_real_t _t320 = _t219*tau_right + _t220*tau_left - _t318;
+    const trailer3_real_t _t321 = _t238*tau_right + _t240*tau_left - _t319;
+    const trailer3_real_t _t322 = TRAILER3_LIT(1.0)/_t245;
+    const trailer3_real_t _t323 = _t322*(-_t242*_t321 + _t244*_t320);
+    const trailer3_real_t _t324 = _t322*(_t230*_t321 - _t242*_t320);
+    const trailer3_real_t _t325 = _t219*_t323 + _t238*_t324;
+    const trailer3_real_t _t326 = _t220*_t323 + _t240*_t324;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -2443,14 +2346,14 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t257 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t230 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t265 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t245 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t341;
-    const trailer3_real_t r_1 = _t342;
+    const trailer3_real_t r_0 = _t325;
+    const trailer3_real_t r_1 = _t326;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
@@ -2460,7 +2363,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
 }
 
 /* trailer3_linearization: documented in trailer3_model.h.
-   operations after CSE: 1483 add, 1843 mul, 7 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 1443 add, 1827 mul, 9 div, 8 sin/cos, 0 sqrt */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B)
@@ -2488,1188 +2391,1167 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
     const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t19 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t21 = -_t19*_t4 - _t2*_t20;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t22 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t23 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t24 = -_t2*_t23 - _t22*_t4;
-    const trailer3_real_t _t25 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t26 = TRAILER3_LIT(1.6666666666666667)*_t21;
-    const trailer3_real_t _t27 = _t25*_t26;
-    const trailer3_real_t _t28 = -_t19*_t8 - _t20*_t6;
-    const trailer3_real_t _t29 = _t27 + _t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(1.6666666666666667)*_t24;
-    const trailer3_real_t _t31 = _t25*_t30;
-    const trailer3_real_t _t32 = -_t22*_t8 - _t23*_t6;
-    const trailer3_real_t _t33 = _t31 + _t32;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t35 = TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t36 = _t34*_t35;
-    const trailer3_real_t _t37 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t38 = _t26*_t37;
-    const trailer3_real_t _t39 = -_t12*_t20 - _t14*_t19;
-    const trailer3_real_t _t40 = _t36 + _t38 + _t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t42 = _t34*_t41;
-    const trailer3_real_t _t43 = _t30*_t37;
-    const trailer3_real_t _t44 = -_t12*_t23 - _t14*_t22;
-    const trailer3_real_t _t45 = _t42 + _t43 + _t44;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t26;
-    const trailer3_real_t _t47 = _t20*_t3;
-    const trailer3_real_t _t48 = _t16*_t19;
-    const trailer3_real_t _t49 = _t47 - _t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t30;
-    const trailer3_real_t _t51 = _t23*_t3;
-    const trailer3_real_t _t52 = _t16*_t22;
-    const trailer3_real_t _t53 = _t51 - _t52;
-    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t35;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t56 = _t26*_t55;
-    const trailer3_real_t _t57 = _t20*_t7;
-    const trailer3_real_t _t58 = _t17*_t19;
-    const trailer3_real_t _t59 = _t57 - _t58;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*_t41;
-    const trailer3_real_t _t61 = _t30*_t55;
-    const trailer3_real_t _t62 = _t23*_t7;
-    const trailer3_real_t _t63 = _t17*_t22;
-    const trailer3_real_t _t64 = _t62 - _t63;
-    const trailer3_real_t _t65 = _t56 - _t57 + _t58;
-    const trailer3_real_t _t66 = _t61 - _t62 + _t63;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.6666666666666667)*_t40;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t69 = _t18*_t19;
-    const trailer3_real_t _t70 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t71 = _t26*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t73 = _t35*_t72;
-    const trailer3_real_t _t74 = _t13*_t20;
-    const trailer3_real_t _t75 = _t69 + _t71 + _t73 - _t74;
-    const trailer3_real_t _t76 = TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t76;
-    const trailer3_real_t _t78 = _t18*_t22;
-    const trailer3_real_t _t79 = _t30*_t70;
-    const trailer3_real_t _t80 = _t41*_t72;
-    const trailer3_real_t _t81 = _t13*_t23;
-    const trailer3_real_t _t82 = _t78 + _t79 + _t80 - _t81;
-    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t84 = _t25*_t83;
-    const trailer3_real_t _t85 = _t59 + _t84;
-    const trailer3_real_t _t86 = TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t87 = _t25*_t86;
-    const trailer3_real_t _t88 = _t64 + _t87;
-    const trailer3_real_t _t89 = _t56 + _t84;
-    const trailer3_real_t _t90 = _t61 + _t87;
-    const trailer3_real_t _t91 = _t37*_t83;
-    const trailer3_real_t _t92 = TRAILER3_LIT(1.6666666666666667)*_t85;
-    const trailer3_real_t _t93 = _t34*_t92;
-    const trailer3_real_t _t94 = -_t69 + _t74 + _t91 + _t93;
-    const trailer3_real_t _t95 = _t37*_t86;
-    const trailer3_real_t _t96 = TRAILER3_LIT(1.6666666666666667)*_t88;
-    const trailer3_real_t _t97 = _t34*_t96;
-    const trailer3_real_t _t98 = -_t78 + _t81 + _t95 + _t97;
-    const trailer3_real_t _t99 = -TRAILER3_LIT(1.6666666666666667)*_t89;
-    const trailer3_real_t _t100 = _t34*_t99;
-    const trailer3_real_t _t101 = _t71 + _t91;
-    const trailer3_real_t _t102 = -_t100 + _t101;
-    const trailer3_real_t _t103 = -TRAILER3_LIT(1.6666666666666667)*_t90;
-    const trailer3_real_t _t104 = _t103*_t34;
-    const trailer3_real_t _t105 = _t79 + _t95;
-    const trailer3_real_t _t106 = -_t104 + _t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(1.6666666666666667)*_t65;
-    const trailer3_real_t _t108 = _t107*_t34;
-    const trailer3_real_t _t109 = _t108 - _t73;
-    const trailer3_real_t _t110 = TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t111 = _t110*_t34;
-    const trailer3_real_t _t112 = _t111 - _t80;
-    const trailer3_real_t _t113 = TRAILER3_LIT(0.2)*_t83;
-    const trailer3_real_t _t114 = TRAILER3_LIT(0.2)*_t86;
-    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t92;
-    const trailer3_real_t _t116 = _t55*_t83;
-    const trailer3_real_t _t117 = _t116 + _t28;
-    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t96;
-    const trailer3_real_t _t119 = _t55*_t86;
-    const trailer3_real_t _t120 = _t119 + _t32;
-    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t99;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t103;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t107;
-    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t110;
-    const trailer3_real_t _t125 = -_t116 + _t27;
-    const trailer3_real_t _t126 = -_t119 + _t31;
-    const trailer3_real_t _t127 = TRAILER3_LIT(1.6666666666666667)*_t94;
-    const trailer3_real_t _t128 = TRAILER3_LIT(0.2)*_t127;
-    const trailer3_real_t _t129 = _t70*_t83;
-    const trailer3_real_t _t130 = _t72*_t92;
-    const trailer3_real_t _t131 = _t129 + _t130 + _t39;
-    const trailer3_real_t _t132 = TRAILER3_LIT(1.6666666666666667)*_t98;
-    const trailer3_real_t _t133 = TRAILER3_LIT(0.2)*_t132;
-    const trailer3_real_t _t134 = _t70*_t86;
-    const trailer3_real_t _t135 = _t72*_t96;
-    const trailer3_real_t _t136 = _t134 + _t135 + _t44;
-    const trailer3_real_t _t137 = -TRAILER3_LIT(1.6666666666666667)*_t102;
-    const trailer3_real_t _t138 = TRAILER3_LIT(0.2)*_t137;
-    const trailer3_real_t _t139 = _t72*_t99;
-    const trailer3_real_t _t140 = -_t129 + _t38;
-    const trailer3_real_t _t141 = _t139 + _t140;
-    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t106;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = _t103*_t72;
-    const trailer3_real_t _t145 = -_t134 + _t43;
-    const trailer3_real_t _t146 = _t144 + _t145;
-    const trailer3_real_t _t147 = TRAILER3_LIT(1.6666666666666667)*_t109;
-    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
-    const trailer3_real_t _t149 = _t107*_t72;
-    const trailer3_real_t _t150 = _t149 + _t36;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t112;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = _t110*_t72;
-    const trailer3_real_t _t154 = _t153 + _t42;
-    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t75;
-    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
-    const trailer3_real_t _t157 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t157;
-    const trailer3_real_t thetadot_right = wheel_rates[0];
-    const trailer3_real_t _t159 = _t19*thetadot_right;
-    const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t160 = _t22*thetadot_left;
-    const trailer3_real_t _t161 = _t26*thetadot_right;
-    const trailer3_real_t _t162 = _t30*thetadot_left;
-    const trailer3_real_t _t163 = _t35*thetadot_right;
-    const trailer3_real_t _t164 = _t41*thetadot_left;
-    const trailer3_real_t _t165 = _t67*thetadot_right;
-    const trailer3_real_t _t166 = _t76*thetadot_left;
+    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t21 = _t19*_t20;
+    const trailer3_real_t _t22 = _t21 - _t6;
+    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
+    const trailer3_real_t _t24 = _t19*_t23;
+    const trailer3_real_t _t25 = _t24 - _t8;
+    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t27 = _t20*_t26;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
+    const trailer3_real_t _t30 = _t28*_t29;
+    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
+    const trailer3_real_t _t32 = _t23*_t26;
+    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t34 = _t28*_t33;
+    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t40 = _t20*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
+    const trailer3_real_t _t42 = _t23*_t39;
+    const trailer3_real_t _t43 = _t17 + _t42;
+    const trailer3_real_t _t44 = _t40 - _t7;
+    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t48 = _t20*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t50 = _t29*_t49;
+    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
+    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
+    const trailer3_real_t _t54 = _t23*_t47;
+    const trailer3_real_t _t55 = _t33*_t49;
+    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t167 = K_theta_cart_x_tractor*_t2;
+    const trailer3_real_t _t57 = K_theta_cart_x_tractor*_t2;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t168 = K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t58 = K_theta_cart_x_tractor_2*_t3;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t169 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t _t59 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t170 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t60 = K_theta_cart2_x_tractor_2*_t7;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t171 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t _t61 = K_theta_cart3_x_tractor*_t12;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t172 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t173 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t174 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t175 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t176 = K_theta_cart_x_tractor*_t4;
-    const trailer3_real_t _t177 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t178 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t179 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t180 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t181 = K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t182 = _t169*_t9;
-    const trailer3_real_t _t183 = _t10*_t174;
-    const trailer3_real_t _t184 = _t170*_t9;
-    const trailer3_real_t _t185 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t186 = _t10*_t185;
-    const trailer3_real_t _t187 = _t171*_t9;
-    const trailer3_real_t _t188 = _t10*_t175;
-    const trailer3_real_t _t189 = _t172*_t9;
-    const trailer3_real_t _t190 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t191 = _t10*_t190;
-    const trailer3_real_t _t192 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t193 = _t171*_t192;
-    const trailer3_real_t _t194 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t195 = _t175*_t194;
-    const trailer3_real_t _t196 = _t172*_t192;
-    const trailer3_real_t _t197 = _t190*_t194;
-    const trailer3_real_t _t198 = _t159 + _t160;
-    const trailer3_real_t _t199 = _t198*_t198;
-    const trailer3_real_t _t200 = _t163 + _t164;
-    const trailer3_real_t _t201 = _t200*_t200;
-    const trailer3_real_t _t202 = _t174*_t201;
-    const trailer3_real_t _t203 = _t165 + _t166;
-    const trailer3_real_t _t204 = _t203*_t203;
-    const trailer3_real_t _t205 = _t175*_t204;
-    const trailer3_real_t _t206 = _t161 + _t162;
-    const trailer3_real_t _t207 = _t206*_t206;
-    const trailer3_real_t _t208 = _t185*_t201;
-    const trailer3_real_t _t209 = _t190*_t204;
-    const trailer3_real_t _t210 = K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t _t211 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t212 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t213 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t214 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t215 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t _t216 = K_theta_cart_x_tractor_2*_t4;
-    const trailer3_real_t _t217 = _t169*_t201;
-    const trailer3_real_t _t218 = _t170*_t201;
-    const trailer3_real_t _t219 = _t171*_t204;
-    const trailer3_real_t _t220 = _t172*_t204;
-    const trailer3_real_t _t221 = _t174*_t9;
-    const trailer3_real_t _t222 = _t10*_t169;
-    const trailer3_real_t _t223 = _t185*_t9;
-    const trailer3_real_t _t224 = _t10*_t170;
-    const trailer3_real_t _t225 = _t175*_t9;
-    const trailer3_real_t _t226 = _t10*_t171;
-    const trailer3_real_t _t227 = _t175*_t192;
-    const trailer3_real_t _t228 = _t171*_t194;
-    const trailer3_real_t _t229 = _t190*_t9;
-    const trailer3_real_t _t230 = _t10*_t172;
-    const trailer3_real_t _t231 = _t190*_t192;
-    const trailer3_real_t _t232 = _t172*_t194;
-    const trailer3_real_t _t233 = _t198*thetadot_right;
-    const trailer3_real_t _t234 = _t198*thetadot_left;
-    const trailer3_real_t _t235 = _t206*thetadot_right;
-    const trailer3_real_t _t236 = _t206*thetadot_left;
-    const trailer3_real_t _t237 = _t167 + _t168;
-    const trailer3_real_t _t238 = _t237*_t26;
-    const trailer3_real_t _t239 = _t169 + _t170;
-    const trailer3_real_t _t240 = _t239*_t35;
-    const trailer3_real_t _t241 = _t171 + _t172;
-    const trailer3_real_t _t242 = _t241*_t67;
-    const trailer3_real_t _t243 = _t237*_t30;
-    const trailer3_real_t _t244 = _t239*_t41;
-    const trailer3_real_t _t245 = _t241*_t76;
-    const trailer3_real_t _t246 = _t176 - _t177;
-    const trailer3_real_t _t247 = _t182 + _t183 + _t184 - _t186;
-    const trailer3_real_t _t248 = _t187 + _t188 + _t189 - _t191;
+    const trailer3_real_t _t62 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t63 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t64 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t65 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t66 = K_theta_cart_x_tractor*_t4;
+    const trailer3_real_t _t67 = K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t68 = K_theta_cart2_x_tractor*_t8;
+    const trailer3_real_t _t69 = K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t70 = K_theta_cart3_x_tractor*_t14;
+    const trailer3_real_t _t71 = K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t _t72 = _t59*_t9;
+    const trailer3_real_t _t73 = _t10*_t64;
+    const trailer3_real_t _t74 = _t60*_t9;
+    const trailer3_real_t _t75 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t76 = _t10*_t75;
+    const trailer3_real_t _t77 = _t61*_t9;
+    const trailer3_real_t _t78 = _t10*_t65;
+    const trailer3_real_t _t79 = _t62*_t9;
+    const trailer3_real_t _t80 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t81 = _t10*_t80;
+    const trailer3_real_t _t82 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t83 = _t61*_t82;
+    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t85 = _t65*_t84;
+    const trailer3_real_t _t86 = _t62*_t82;
+    const trailer3_real_t _t87 = _t80*_t84;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t88 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t _t89 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t thetadot_right = wheel_rates[0];
+    const trailer3_real_t thetadot_left = wheel_rates[1];
+    const trailer3_real_t _t90 = _t88*thetadot_right + _t89*thetadot_left;
+    const trailer3_real_t _t91 = _t90*_t90;
+    const trailer3_real_t _t92 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t94 = _t92*thetadot_right + _t93*thetadot_left;
+    const trailer3_real_t _t95 = _t29*_t94 + _t33*_t90;
+    const trailer3_real_t _t96 = _t95*_t95;
+    const trailer3_real_t _t97 = _t64*_t96;
+    const trailer3_real_t _t98 = _t45*_t94 + _t52*_t90;
+    const trailer3_real_t _t99 = _t98*_t98;
+    const trailer3_real_t _t100 = _t65*_t99;
+    const trailer3_real_t _t101 = _t20*_t94 + _t23*_t90;
+    const trailer3_real_t _t102 = _t101*_t101;
+    const trailer3_real_t _t103 = _t75*_t96;
+    const trailer3_real_t _t104 = _t80*_t99;
+    const trailer3_real_t _t105 = K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t107 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t109 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t110 = K_theta_cart_x_tractor*_t16;
+    const trailer3_real_t _t111 = K_theta_cart_x_tractor_2*_t4;
+    const trailer3_real_t _t112 = _t59*_t96;
+    const trailer3_real_t _t113 = _t60*_t96;
+    const trailer3_real_t _t114 = _t61*_t99;
+    const trailer3_real_t _t115 = _t62*_t99;
+    const trailer3_real_t _t116 = _t64*_t9;
+    const trailer3_real_t _t117 = _t10*_t59;
+    const trailer3_real_t _t118 = _t75*_t9;
+    const trailer3_real_t _t119 = _t10*_t60;
+    const trailer3_real_t _t120 = _t65*_t9;
+    const trailer3_real_t _t121 = _t10*_t61;
+    const trailer3_real_t _t122 = _t65*_t82;
+    const trailer3_real_t _t123 = _t61*_t84;
+    const trailer3_real_t _t124 = _t80*_t9;
+    const trailer3_real_t _t125 = _t10*_t62;
+    const trailer3_real_t _t126 = _t80*_t82;
+    const trailer3_real_t _t127 = _t62*_t84;
+    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t3;
+    const trailer3_real_t _t129 = _t128*_t19;
+    const trailer3_real_t _t130 = _t129 + _t7;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t16;
+    const trailer3_real_t _t132 = _t131*_t19;
+    const trailer3_real_t _t133 = _t132 - _t17;
+    const trailer3_real_t _t134 = _t129 + _t40;
+    const trailer3_real_t _t135 = _t132 + _t42;
+    const trailer3_real_t _t136 = _t128*_t26;
+    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t138 = _t137*_t28;
+    const trailer3_real_t _t139 = _t13 + _t136 + _t138;
+    const trailer3_real_t _t140 = _t131*_t26;
+    const trailer3_real_t _t141 = TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t142 = _t141*_t28;
+    const trailer3_real_t _t143 = _t140 + _t142 - _t18;
+    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t145 = _t144*_t28;
+    const trailer3_real_t _t146 = _t136 + _t48;
+    const trailer3_real_t _t147 = -_t145 + _t146;
+    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t135;
+    const trailer3_real_t _t149 = _t148*_t28;
+    const trailer3_real_t _t150 = _t140 + _t54;
+    const trailer3_real_t _t151 = -_t149 + _t150;
+    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t153 = _t152*_t28;
+    const trailer3_real_t _t154 = -_t153 + _t50;
+    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t156 = _t155*_t28;
+    const trailer3_real_t _t157 = -_t156 + _t55;
+    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t128;
+    const trailer3_real_t _t159 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t137;
+    const trailer3_real_t _t161 = _t128*_t39;
+    const trailer3_real_t _t162 = _t161 - _t6;
+    const trailer3_real_t _t163 = TRAILER3_LIT(0.2)*_t141;
+    const trailer3_real_t _t164 = _t131*_t39;
+    const trailer3_real_t _t165 = _t164 - _t8;
+    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t144;
+    const trailer3_real_t _t167 = TRAILER3_LIT(0.2)*_t148;
+    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t152;
+    const trailer3_real_t _t169 = TRAILER3_LIT(0.2)*_t155;
+    const trailer3_real_t _t170 = -_t161 + _t21;
+    const trailer3_real_t _t171 = -_t164 + _t24;
+    const trailer3_real_t _t172 = TRAILER3_LIT(1.6666666666666667)*_t139;
+    const trailer3_real_t _t173 = TRAILER3_LIT(0.2)*_t172;
+    const trailer3_real_t _t174 = _t128*_t47;
+    const trailer3_real_t _t175 = _t137*_t49;
+    const trailer3_real_t _t176 = -_t12 + _t174 + _t175;
+    const trailer3_real_t _t177 = TRAILER3_LIT(1.6666666666666667)*_t143;
+    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
+    const trailer3_real_t _t179 = _t131*_t47;
+    const trailer3_real_t _t180 = _t141*_t49;
+    const trailer3_real_t _t181 = -_t14 + _t179 + _t180;
+    const trailer3_real_t _t182 = -TRAILER3_LIT(1.6666666666666667)*_t147;
+    const trailer3_real_t _t183 = TRAILER3_LIT(0.2)*_t182;
+    const trailer3_real_t _t184 = _t144*_t49;
+    const trailer3_real_t _t185 = -_t174 + _t27;
+    const trailer3_real_t _t186 = _t184 + _t185;
+    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t151;
+    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
+    const trailer3_real_t _t189 = _t148*_t49;
+    const trailer3_real_t _t190 = -_t179 + _t32;
+    const trailer3_real_t _t191 = _t189 + _t190;
+    const trailer3_real_t _t192 = -TRAILER3_LIT(1.6666666666666667)*_t154;
+    const trailer3_real_t _t193 = TRAILER3_LIT(0.2)*_t192;
+    const trailer3_real_t _t194 = _t152*_t49;
+    const trailer3_real_t _t195 = _t194 + _t30;
+    const trailer3_real_t _t196 = -TRAILER3_LIT(1.6666666666666667)*_t157;
+    const trailer3_real_t _t197 = TRAILER3_LIT(0.2)*_t196;
+    const trailer3_real_t _t198 = _t155*_t49;
+    const trailer3_real_t _t199 = _t198 + _t34;
+    const trailer3_real_t _t200 = TRAILER3_LIT(1.6666666666666667)*_t51;
+    const trailer3_real_t _t201 = TRAILER3_LIT(0.2)*_t200;
+    const trailer3_real_t _t202 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t203 = TRAILER3_LIT(0.2)*_t202;
+    const trailer3_real_t _t204 = _t90*_t94;
+    const trailer3_real_t _t205 = _t101*_t94;
+    const trailer3_real_t _t206 = _t101*_t90;
+    const trailer3_real_t _t207 = _t57 + _t58;
+    const trailer3_real_t _t208 = _t20*_t207;
+    const trailer3_real_t _t209 = _t59 + _t60;
+    const trailer3_real_t _t210 = _t209*_t29;
+    const trailer3_real_t _t211 = _t61 + _t62;
+    const trailer3_real_t _t212 = _t211*_t45;
+    const trailer3_real_t _t213 = _t207*_t23;
+    const trailer3_real_t _t214 = _t209*_t33;
+    const trailer3_real_t _t215 = _t211*_t52;
+    const trailer3_real_t _t216 = _t72 + _t73 + _t74 - _t76;
+    const trailer3_real_t _t217 = _t77 + _t78 + _t79 - _t81;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t249 = J_theta_cart*_t26 + _t19*_t246 + _t20*_t237 + _t247*_t35
-            + _t248*_t67;
-    const trailer3_real_t _t250 = J_theta_cart*_t30 + _t22*_t246 + _t23*_t237 + _t247*_t41
-            + _t248*_t76;
-    const trailer3_real_t _t251 = _t178 - _t179;
-    const trailer3_real_t _t252 = _t193 + _t195 + _t196 - _t197;
+    const trailer3_real_t _t218 = J_theta_cart*_t20 + _t207 + _t216*_t29 + _t217*_t45;
+    const trailer3_real_t _t219 = _t66 - _t67;
+    const trailer3_real_t _t220 = J_theta_cart*_t23 + _t216*_t33 + _t217*_t52 + _t219;
+    const trailer3_real_t _t221 = _t83 + _t85 + _t86 - _t87;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t253 = J_theta_cart2*_t35 + _t19*_t251 + _t20*_t239 + _t247*_t26
-            + _t252*_t67;
-    const trailer3_real_t _t254 = J_theta_cart2*_t41 + _t22*_t251 + _t23*_t239 + _t247*_t30
-            + _t252*_t76;
-    const trailer3_real_t _t255 = _t180 - _t181;
+    const trailer3_real_t _t222 = J_theta_cart2*_t29 + _t20*_t216 + _t209 + _t221*_t45;
+    const trailer3_real_t _t223 = _t68 - _t69;
+    const trailer3_real_t _t224 = J_theta_cart2*_t33 + _t216*_t23 + _t221*_t52 + _t223;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t256 = J_theta_cart3*_t67 + _t19*_t255 + _t20*_t241 + _t248*_t26
-            + _t252*_t35;
-    const trailer3_real_t _t257 = J_theta_cart3*_t76 + _t22*_t255 + _t23*_t241 + _t248*_t30
-            + _t252*_t41;
+    const trailer3_real_t _t225 = J_theta_cart3*_t45 + _t20*_t217 + _t211 + _t221*_t29;
+    const trailer3_real_t _t226 = _t70 - _t71;
+    const trailer3_real_t _t227 = J_theta_cart3*_t52 + _t217*_t23 + _t221*_t33 + _t226;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t258 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t259 = _t46 + _t49;
-    const trailer3_real_t _t260 = _t258*_t259;
+    const trailer3_real_t _t228 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t229 = _t3 + _t36;
+    const trailer3_real_t _t230 = _t228*_t229;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t261 = J_theta_cart_right*_t260;
-    const trailer3_real_t _t262 = _t50 + _t53;
-    const trailer3_real_t _t263 = _t258*_t262;
-    const trailer3_real_t _t264 = J_theta_cart_right*_t263;
+    const trailer3_real_t _t231 = J_theta_cart_right*_t230;
+    const trailer3_real_t _t232 = -_t16 + _t37;
+    const trailer3_real_t _t233 = _t228*_t232;
+    const trailer3_real_t _t234 = J_theta_cart_right*_t233;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t265 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t266 = -_t46 + _t47 - _t48;
-    const trailer3_real_t _t267 = _t265*_t266;
+    const trailer3_real_t _t235 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t236 = _t3 - _t36;
+    const trailer3_real_t _t237 = _t235*_t236;
     const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t268 = J_theta_cart_left*_t267;
-    const trailer3_real_t _t269 = -_t50 + _t51 - _t52;
-    const trailer3_real_t _t270 = _t265*_t269;
-    const trailer3_real_t _t271 = J_theta_cart_left*_t270;
+    const trailer3_real_t _t238 = J_theta_cart_left*_t237;
+    const trailer3_real_t _t239 = -_t16 - _t37;
+    const trailer3_real_t _t240 = _t235*_t239;
+    const trailer3_real_t _t241 = J_theta_cart_left*_t240;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t272 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t273 = _t54 - _t56 + _t59;
-    const trailer3_real_t _t274 = _t272*_t273;
+    const trailer3_real_t _t242 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t243 = _t38 - _t40 + _t7;
+    const trailer3_real_t _t244 = _t242*_t243;
     const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t275 = J_theta_cart2_right*_t274;
-    const trailer3_real_t _t276 = _t60 - _t61 + _t64;
-    const trailer3_real_t _t277 = _t272*_t276;
-    const trailer3_real_t _t278 = J_theta_cart2_right*_t277;
+    const trailer3_real_t _t245 = J_theta_cart2_right*_t244;
+    const trailer3_real_t _t246 = _t41 - _t43;
+    const trailer3_real_t _t247 = _t242*_t246;
+    const trailer3_real_t _t248 = J_theta_cart2_right*_t247;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t279 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t280 = -_t54 - _t65;
-    const trailer3_real_t _t281 = _t279*_t280;
+    const trailer3_real_t _t249 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t250 = -_t38 - _t44;
+    const trailer3_real_t _t251 = _t249*_t250;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t282 = J_theta_cart2_left*_t281;
-    const trailer3_real_t _t283 = -_t60 - _t66;
-    const trailer3_real_t _t284 = _t279*_t283;
-    const trailer3_real_t _t285 = J_theta_cart2_left*_t284;
+    const trailer3_real_t _t252 = J_theta_cart2_left*_t251;
+    const trailer3_real_t _t253 = -_t41 - _t43;
+    const trailer3_real_t _t254 = _t249*_t253;
+    const trailer3_real_t _t255 = J_theta_cart2_left*_t254;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t286 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t287 = _t68 - _t75;
-    const trailer3_real_t _t288 = _t286*_t287;
+    const trailer3_real_t _t256 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t257 = _t46 - _t51;
+    const trailer3_real_t _t258 = _t256*_t257;
     const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t289 = J_theta_cart3_right*_t288;
-    const trailer3_real_t _t290 = _t77 - _t82;
-    const trailer3_real_t _t291 = _t286*_t290;
-    const trailer3_real_t _t292 = J_theta_cart3_right*_t291;
+    const trailer3_real_t _t259 = J_theta_cart3_right*_t258;
+    const trailer3_real_t _t260 = _t53 - _t56;
+    const trailer3_real_t _t261 = _t256*_t260;
+    const trailer3_real_t _t262 = J_theta_cart3_right*_t261;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t293 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t294 = -_t68 - _t75;
-    const trailer3_real_t _t295 = _t293*_t294;
+    const trailer3_real_t _t263 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t264 = -_t46 - _t51;
+    const trailer3_real_t _t265 = _t263*_t264;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t296 = J_theta_cart3_left*_t295;
-    const trailer3_real_t _t297 = -_t77 - _t82;
-    const trailer3_real_t _t298 = _t293*_t297;
-    const trailer3_real_t _t299 = J_theta_cart3_left*_t298;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t300 = K_theta_tractor_x_tractor*_t199 + _t173*_t207 + _t202 + _t205
-            - _t207*_t210 - _t208 - _t209;
-    const trailer3_real_t _t301 = _t233 - _t235;
-    const trailer3_real_t _t302 = _t234 - _t236;
-    const trailer3_real_t _t303 = _t301*_t83 + _t302*_t86;
-    const trailer3_real_t _t304 = _t200*thetadot_right;
-    const trailer3_real_t _t305 = _t200*thetadot_left;
-    const trailer3_real_t _t306 = _t103*_t236 + _t107*_t304 + _t110*_t305 + _t233*_t92 + _t234*_t96
-            + _t235*_t99;
-    const trailer3_real_t _t307 = _t203*thetadot_right;
-    const trailer3_real_t _t308 = _t203*thetadot_left;
-    const trailer3_real_t _t309 = _t127*_t233 + _t132*_t234 + _t137*_t235 + _t142*_t236
-            + _t147*_t304 + _t151*_t305 + _t155*_t307 + _t157*_t308;
-    const trailer3_real_t _t310 = _t237*_t303 + _t239*_t306 + _t241*_t309 + _t300;
-    const trailer3_real_t _t311 = -_t201*_t211 - _t201*_t212 - _t204*_t213 - _t204*_t214
-            - _t207*_t215 - _t207*_t216;
-    const trailer3_real_t _t312 = _t20*_t233 + _t23*_t234;
-    const trailer3_real_t _t313 = -K_theta_tractor_x_tractor*_t312 + _t246*_t303 + _t251*_t306
-            + _t255*_t309 + _t311;
-    const trailer3_real_t _t314 = K_theta_cart_x_tractor_2*_t2 - _t173;
-    const trailer3_real_t _t315 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t201*_t7
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t204
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t199*_t2
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t199*_t3 - _t10*_t217 - _t10*_t218
-            - _t10*_t219 - _t10*_t220 - _t208*_t9 - _t209*_t9;
-    const trailer3_real_t _t316 = J_theta_cart*_t303 + _t247*_t306 + _t248*_t309 + _t312*_t314
-            + _t315;
-    const trailer3_real_t _t317 = K_theta_cart2_x_tractor_2*_t6 - _t174;
-    const trailer3_real_t _t318 = _t192*_t205 - _t192*_t209 - _t194*_t219 - _t194*_t220
-            + _t199*_t211 + _t199*_t212 - _t207*_t221 + _t207*_t222 + _t207*_t223 + _t207*_t224;
-    const trailer3_real_t _t319 = J_theta_cart2*_t306 + _t247*_t303 + _t252*_t309 + _t312*_t317
-            + _t318;
-    const trailer3_real_t _t320 = K_theta_cart3_x_tractor_2*_t12 - _t175;
-    const trailer3_real_t _t321 = _t199*_t213 + _t199*_t214 - _t201*_t227 + _t201*_t228
-            + _t201*_t231 + _t201*_t232 - _t207*_t225 + _t207*_t226 + _t207*_t229 + _t207*_t230;
-    const trailer3_real_t _t322 = J_theta_cart3*_t309 + _t248*_t303 + _t252*_t306 + _t312*_t320
-            + _t321;
-    const trailer3_real_t _t323 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t324 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t325 = _t30*_t314;
-    const trailer3_real_t _t326 = _t237*_t86 + _t325;
-    const trailer3_real_t _t327 = _t320*_t76;
-    const trailer3_real_t _t328 = _t317*_t41;
-    const trailer3_real_t _t329 = _t327 + _t328;
-    const trailer3_real_t _t330 = _t213 + _t214;
-    const trailer3_real_t _t331 = _t330*_t76;
-    const trailer3_real_t _t332 = _t211 + _t212;
-    const trailer3_real_t _t333 = _t332*_t41;
-    const trailer3_real_t _t334 = _t215 + _t216;
-    const trailer3_real_t _t335 = _t246*_t86 + _t30*_t334;
-    const trailer3_real_t _t336 = J_theta_cart*_t86;
-    const trailer3_real_t _t337 = _t22*_t334;
-    const trailer3_real_t _t338 = _t23*_t314;
-    const trailer3_real_t _t339 = _t22*_t332;
-    const trailer3_real_t _t340 = _t23*_t317;
-    const trailer3_real_t _t341 = _t247*_t86;
-    const trailer3_real_t _t342 = _t248*_t86;
-    const trailer3_real_t _t343 = _t22*_t330;
-    const trailer3_real_t _t344 = _t23*_t320;
-    const trailer3_real_t _t345 = _t343 + _t344;
-    const trailer3_real_t _t346 = _t114 - _t24;
-    const trailer3_real_t _t347 = _t258*_t346;
-    const trailer3_real_t _t348 = J_theta_cart_right*_t347;
-    const trailer3_real_t _t349 = -_t114 - _t24;
-    const trailer3_real_t _t350 = _t265*_t349;
-    const trailer3_real_t _t351 = J_theta_cart_left*_t350;
-    const trailer3_real_t _t352 = _t118 - _t120;
-    const trailer3_real_t _t353 = _t272*_t352;
-    const trailer3_real_t _t354 = J_theta_cart2_right*_t353;
-    const trailer3_real_t _t355 = -_t118 - _t120;
-    const trailer3_real_t _t356 = _t279*_t355;
-    const trailer3_real_t _t357 = J_theta_cart2_left*_t356;
-    const trailer3_real_t _t358 = _t133 - _t136;
-    const trailer3_real_t _t359 = _t286*_t358;
-    const trailer3_real_t _t360 = J_theta_cart3_right*_t359;
-    const trailer3_real_t _t361 = -_t133 - _t136;
-    const trailer3_real_t _t362 = _t293*_t361;
-    const trailer3_real_t _t363 = J_theta_cart3_left*_t362;
-    const trailer3_real_t _t364 = _t260*_t348;
-    const trailer3_real_t _t365 = _t267*_t351;
-    const trailer3_real_t _t366 = _t250*_t83;
-    const trailer3_real_t _t367 = _t113 - _t21;
-    const trailer3_real_t _t368 = _t258*_t367;
-    const trailer3_real_t _t369 = _t264*_t368;
-    const trailer3_real_t _t370 = -_t113 - _t21;
-    const trailer3_real_t _t371 = _t265*_t370;
-    const trailer3_real_t _t372 = _t271*_t371;
-    const trailer3_real_t _t373 = _t263*_t348;
-    const trailer3_real_t _t374 = _t270*_t351;
-    const trailer3_real_t _t375 = _t250*_t86;
-    const trailer3_real_t _t376 = _t264*_t347;
-    const trailer3_real_t _t377 = _t271*_t350;
-    const trailer3_real_t _t378 = TRAILER3_LIT(2.0)*_t200;
-    const trailer3_real_t _t379 = _t174*_t378 - _t185*_t378;
-    const trailer3_real_t _t380 = TRAILER3_LIT(2.0)*_t203;
-    const trailer3_real_t _t381 = _t175*_t380 - _t190*_t380;
-    const trailer3_real_t _t382 = _t219 + _t220;
-    const trailer3_real_t _t383 = _t217 + _t218;
-    const trailer3_real_t _t384 = TRAILER3_LIT(2.0)*_t206;
-    const trailer3_real_t _t385 = _t173*_t384 - _t210*_t384;
-    const trailer3_real_t _t386 = _t83*thetadot_right + _t86*thetadot_left;
-    const trailer3_real_t _t387 = _t167*_t207 + _t168*_t207 + _t385*_t386;
-    const trailer3_real_t _t388 = _t178*_t201;
-    const trailer3_real_t _t389 = _t179*_t201;
-    const trailer3_real_t _t390 = _t180*_t204;
-    const trailer3_real_t _t391 = _t181*_t204;
-    const trailer3_real_t _t392 = _t176*_t207;
-    const trailer3_real_t _t393 = _t177*_t207;
-    const trailer3_real_t _t394 = TRAILER3_LIT(0.6)*_t206;
-    const trailer3_real_t _t395 = -_t167*_t394 - _t168*_t394;
-    const trailer3_real_t _t396 = _t386*_t395;
-    const trailer3_real_t _t397 = TRAILER3_LIT(0.6)*_t200;
-    const trailer3_real_t _t398 = -_t169*_t397 - _t170*_t397;
-    const trailer3_real_t _t399 = TRAILER3_LIT(0.6)*_t203;
-    const trailer3_real_t _t400 = -_t171*_t399 - _t172*_t399;
-    const trailer3_real_t _t401 = _t176*_t199;
-    const trailer3_real_t _t402 = _t177*_t199;
-    const trailer3_real_t _t403 = TRAILER3_LIT(1.7)*_t200;
-    const trailer3_real_t _t404 = _t3*_t403;
-    const trailer3_real_t _t405 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t200*_t7
-            - _t169*_t404 - _t170*_t404 - _t185*_t2*_t403;
-    const trailer3_real_t _t406 = TRAILER3_LIT(1.7)*_t203;
-    const trailer3_real_t _t407 = _t3*_t406;
-    const trailer3_real_t _t408 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t2*_t203
-            - _t171*_t407 - _t172*_t407 - _t190*_t2*_t406;
-    const trailer3_real_t _t409 = _t178*_t199;
-    const trailer3_real_t _t410 = _t179*_t199;
-    const trailer3_real_t _t411 = TRAILER3_LIT(1.7)*_t206;
-    const trailer3_real_t _t412 = _t2*_t411;
-    const trailer3_real_t _t413 = _t3*_t411;
-    const trailer3_real_t _t414 = _t169*_t413 + _t170*_t413 - _t174*_t412 + _t185*_t412;
-    const trailer3_real_t _t415 = _t386*_t414;
-    const trailer3_real_t _t416 = _t406*_t7;
-    const trailer3_real_t _t417 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t203*_t6
-            - _t171*_t416 - _t172*_t416 - _t190*_t406*_t6;
-    const trailer3_real_t _t418 = _t180*_t199;
-    const trailer3_real_t _t419 = _t181*_t199;
-    const trailer3_real_t _t420 = _t171*_t413 + _t172*_t413 - _t175*_t412 + _t190*_t412;
-    const trailer3_real_t _t421 = _t386*_t420;
-    const trailer3_real_t _t422 = _t403*_t6;
-    const trailer3_real_t _t423 = _t403*_t7;
-    const trailer3_real_t _t424 = _t171*_t423 + _t172*_t423 - _t175*_t422 + _t190*_t422;
-    const trailer3_real_t _t425 = -_t386*thetadot_right;
-    const trailer3_real_t _t426 = _t425*_t99;
-    const trailer3_real_t _t427 = -_t386*thetadot_left;
-    const trailer3_real_t _t428 = _t103*_t427;
-    const trailer3_real_t _t429 = TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t430 = TRAILER3_LIT(1.6666666666666667)*_t126;
-    const trailer3_real_t _t431 = _t235*_t429 + _t236*_t430;
-    const trailer3_real_t _t432 = _t34*_t429;
-    const trailer3_real_t _t433 = _t34*_t430;
-    const trailer3_real_t _t434 = _t137*_t425;
-    const trailer3_real_t _t435 = _t142*_t427;
-    const trailer3_real_t _t436 = TRAILER3_LIT(0.2)*_t429;
-    const trailer3_real_t _t437 = TRAILER3_LIT(0.2)*_t430;
-    const trailer3_real_t _t438 = TRAILER3_LIT(1.6666666666666667)*_t117;
-    const trailer3_real_t _t439 = TRAILER3_LIT(0.2)*_t438;
-    const trailer3_real_t _t440 = TRAILER3_LIT(1.6666666666666667)*_t120;
-    const trailer3_real_t _t441 = TRAILER3_LIT(0.2)*_t440;
-    const trailer3_real_t _t442 = _t116 + _t121 - _t27;
-    const trailer3_real_t _t443 = _t272*_t442;
-    const trailer3_real_t _t444 = _t425*_t443;
-    const trailer3_real_t _t445 = _t119 + _t122 - _t31;
-    const trailer3_real_t _t446 = _t272*_t445;
-    const trailer3_real_t _t447 = _t427*_t446;
-    const trailer3_real_t _t448 = _t436 - _t89;
-    const trailer3_real_t _t449 = _t272*_t448;
-    const trailer3_real_t _t450 = _t437 - _t90;
-    const trailer3_real_t _t451 = _t272*_t450;
-    const trailer3_real_t _t452 = _t235*_t449 + _t236*_t451;
-    const trailer3_real_t _t453 = -_t121 - _t125;
-    const trailer3_real_t _t454 = _t279*_t453;
-    const trailer3_real_t _t455 = _t425*_t454;
-    const trailer3_real_t _t456 = -_t122 - _t126;
-    const trailer3_real_t _t457 = _t279*_t456;
-    const trailer3_real_t _t458 = _t427*_t457;
-    const trailer3_real_t _t459 = -_t436 - _t89;
-    const trailer3_real_t _t460 = _t279*_t459;
-    const trailer3_real_t _t461 = -_t437 - _t90;
-    const trailer3_real_t _t462 = _t279*_t461;
-    const trailer3_real_t _t463 = _t235*_t460 + _t236*_t462;
-    const trailer3_real_t _t464 = -_t140 - _t432;
-    const trailer3_real_t _t465 = -TRAILER3_LIT(1.6666666666666667)*_t464;
-    const trailer3_real_t _t466 = TRAILER3_LIT(0.2)*_t465;
-    const trailer3_real_t _t467 = _t429*_t72;
-    const trailer3_real_t _t468 = _t101 + _t467;
-    const trailer3_real_t _t469 = -_t145 - _t433;
-    const trailer3_real_t _t470 = -TRAILER3_LIT(1.6666666666666667)*_t469;
-    const trailer3_real_t _t471 = TRAILER3_LIT(0.2)*_t470;
-    const trailer3_real_t _t472 = _t430*_t72;
-    const trailer3_real_t _t473 = _t105 + _t472;
-    const trailer3_real_t _t474 = _t130 - _t34*_t438;
-    const trailer3_real_t _t475 = -TRAILER3_LIT(1.6666666666666667)*_t474;
-    const trailer3_real_t _t476 = TRAILER3_LIT(0.2)*_t475;
-    const trailer3_real_t _t477 = _t438*_t72 + _t93;
-    const trailer3_real_t _t478 = _t135 - _t34*_t440;
-    const trailer3_real_t _t479 = -TRAILER3_LIT(1.6666666666666667)*_t478;
-    const trailer3_real_t _t480 = TRAILER3_LIT(0.2)*_t479;
-    const trailer3_real_t _t481 = _t440*_t72 + _t97;
-    const trailer3_real_t _t482 = TRAILER3_LIT(1.6666666666666667)*_t131;
-    const trailer3_real_t _t483 = TRAILER3_LIT(0.2)*_t482;
-    const trailer3_real_t _t484 = TRAILER3_LIT(1.6666666666666667)*_t136;
-    const trailer3_real_t _t485 = TRAILER3_LIT(0.2)*_t484;
-    const trailer3_real_t _t486 = _t138 - _t141;
-    const trailer3_real_t _t487 = _t286*_t486;
-    const trailer3_real_t _t488 = _t425*_t487;
-    const trailer3_real_t _t489 = _t143 - _t146;
-    const trailer3_real_t _t490 = _t286*_t489;
-    const trailer3_real_t _t491 = _t427*_t490;
-    const trailer3_real_t _t492 = -_t138 - _t141;
-    const trailer3_real_t _t493 = _t293*_t492;
-    const trailer3_real_t _t494 = _t425*_t493;
-    const trailer3_real_t _t495 = -_t143 - _t146;
-    const trailer3_real_t _t496 = _t293*_t495;
-    const trailer3_real_t _t497 = _t427*_t496;
-    const trailer3_real_t _t498 = -_t115 - _t117;
-    const trailer3_real_t _t499 = _t279*_t498;
-    const trailer3_real_t _t500 = J_theta_cart2_left*_t499;
-    const trailer3_real_t _t501 = _t115 - _t117;
-    const trailer3_real_t _t502 = _t272*_t501;
-    const trailer3_real_t _t503 = J_theta_cart2_right*_t502;
-    const trailer3_real_t _t504 = -_t128 - _t131;
-    const trailer3_real_t _t505 = _t293*_t504;
-    const trailer3_real_t _t506 = J_theta_cart3_left*_t505;
-    const trailer3_real_t _t507 = _t128 - _t131;
-    const trailer3_real_t _t508 = _t286*_t507;
-    const trailer3_real_t _t509 = J_theta_cart3_right*_t508;
-    const trailer3_real_t _t510 = -_t267*_t301 - _t270*_t302 + _t350*_t427 + _t371*_t425;
-    const trailer3_real_t _t511 = _t268*_t510;
-    const trailer3_real_t _t512 = J_theta_cart_left*_t371;
-    const trailer3_real_t _t513 = _t301*_t371 + _t302*_t350;
-    const trailer3_real_t _t514 = _t512*_t513;
-    const trailer3_real_t _t515 = -_t260*_t301 - _t263*_t302 + _t347*_t427 + _t368*_t425;
-    const trailer3_real_t _t516 = _t261*_t515;
-    const trailer3_real_t _t517 = J_theta_cart_right*_t368;
-    const trailer3_real_t _t518 = _t301*_t368 + _t302*_t347;
-    const trailer3_real_t _t519 = _t517*_t518;
-    const trailer3_real_t _t520 = _t19*_t334;
-    const trailer3_real_t _t521 = _t303*_t520;
-    const trailer3_real_t _t522 = _t19*_t332;
-    const trailer3_real_t _t523 = _t306*_t522;
-    const trailer3_real_t _t524 = _t19*_t330;
-    const trailer3_real_t _t525 = _t309*_t524;
-    const trailer3_real_t _t526 = _t20*_t314;
-    const trailer3_real_t _t527 = _t303*_t526;
-    const trailer3_real_t _t528 = _t20*_t317;
-    const trailer3_real_t _t529 = _t306*_t528;
-    const trailer3_real_t _t530 = _t20*_t320;
-    const trailer3_real_t _t531 = _t309*_t530;
-    const trailer3_real_t _t532 = _t238*_t312;
-    const trailer3_real_t _t533 = _t240*_t312;
-    const trailer3_real_t _t534 = _t242*_t312;
-    const trailer3_real_t _t535 = _t316*_t83;
-    const trailer3_real_t _t536 = -_t26*_t301 - _t30*_t302 + _t425*_t83 + _t427*_t86;
-    const trailer3_real_t _t537 = _t249*_t536;
-    const trailer3_real_t _t538 = _t271*_t510;
-    const trailer3_real_t _t539 = _t351*_t513;
-    const trailer3_real_t _t540 = _t264*_t515;
-    const trailer3_real_t _t541 = _t348*_t518;
-    const trailer3_real_t _t542 = _t303*_t337;
-    const trailer3_real_t _t543 = _t306*_t339;
-    const trailer3_real_t _t544 = _t309*_t343;
-    const trailer3_real_t _t545 = _t303*_t338;
-    const trailer3_real_t _t546 = _t306*_t340;
-    const trailer3_real_t _t547 = _t309*_t344;
-    const trailer3_real_t _t548 = _t243*_t312;
-    const trailer3_real_t _t549 = _t244*_t312;
-    const trailer3_real_t _t550 = _t245*_t312;
-    const trailer3_real_t _t551 = _t316*_t86;
-    const trailer3_real_t _t552 = _t250*_t536;
-    const trailer3_real_t _t553 = _t26*_t314;
-    const trailer3_real_t _t554 = _t237*_t83 + _t553;
-    const trailer3_real_t _t555 = _t320*_t67;
-    const trailer3_real_t _t556 = _t317*_t35;
-    const trailer3_real_t _t557 = _t555 + _t556;
-    const trailer3_real_t _t558 = _t330*_t67;
-    const trailer3_real_t _t559 = _t332*_t35;
-    const trailer3_real_t _t560 = _t246*_t83 + _t26*_t334;
-    const trailer3_real_t _t561 = J_theta_cart*_t83;
-    const trailer3_real_t _t562 = _t247*_t83;
-    const trailer3_real_t _t563 = _t248*_t83;
-    const trailer3_real_t _t564 = _t524 + _t530;
-    const trailer3_real_t _t565 = _t260*_t517;
-    const trailer3_real_t _t566 = _t267*_t512;
-    const trailer3_real_t _t567 = _t249*_t83;
-    const trailer3_real_t _t568 = _t261*_t368;
-    const trailer3_real_t _t569 = _t268*_t371;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t266 = J_theta_cart3_left*_t265;
+    const trailer3_real_t _t267 = -_t53 - _t56;
+    const trailer3_real_t _t268 = _t263*_t267;
+    const trailer3_real_t _t269 = J_theta_cart3_left*_t268;
+    const trailer3_real_t _t270 = K_theta_cart_x_tractor_2*_t2 - _t63;
+    const trailer3_real_t _t271 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t96
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t99
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t91
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t91 - _t10*_t112 - _t10*_t113
+            - _t10*_t114 - _t10*_t115 - _t103*_t9 - _t104*_t9;
+    const trailer3_real_t _t272 = _t204 - _t205;
+    const trailer3_real_t _t273 = -_t206 + _t91;
+    const trailer3_real_t _t274 = _t128*_t272 + _t131*_t273;
+    const trailer3_real_t _t275 = _t94*_t95;
+    const trailer3_real_t _t276 = _t90*_t95;
+    const trailer3_real_t _t277 = _t137*_t204 + _t141*_t91 + _t144*_t205 + _t148*_t206 + _t152*_t275
+            + _t155*_t276;
+    const trailer3_real_t _t278 = _t94*_t98;
+    const trailer3_real_t _t279 = _t90*_t98;
+    const trailer3_real_t _t280 = _t172*_t204 + _t177*_t91 + _t182*_t205 + _t187*_t206 + _t192*_t275
+            + _t196*_t276 + _t200*_t278 + _t202*_t279;
+    const trailer3_real_t _t281 = J_theta_cart*_t274 + _t204*_t270 + _t216*_t277 + _t217*_t280
+            + _t271;
+    const trailer3_real_t _t282 = K_theta_cart2_x_tractor_2*_t6 - _t64;
+    const trailer3_real_t _t283 = _t100*_t82 - _t102*_t116 + _t102*_t117 + _t102*_t118 + _t102*_t119
+            - _t104*_t82 + _t106*_t91 + _t107*_t91 - _t114*_t84 - _t115*_t84;
+    const trailer3_real_t _t284 = J_theta_cart2*_t277 + _t204*_t282 + _t216*_t274 + _t221*_t280
+            + _t283;
+    const trailer3_real_t _t285 = K_theta_cart3_x_tractor_2*_t12 - _t65;
+    const trailer3_real_t _t286 = -_t102*_t120 + _t102*_t121 + _t102*_t124 + _t102*_t125
+            + _t108*_t91 + _t109*_t91 - _t122*_t96 + _t123*_t96 + _t126*_t96 + _t127*_t96;
+    const trailer3_real_t _t287 = J_theta_cart3*_t280 + _t204*_t285 + _t217*_t274 + _t221*_t277
+            + _t286;
+    const trailer3_real_t _t288 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t289 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t290 = _t23*_t270;
+    const trailer3_real_t _t291 = _t131*_t207 + _t290;
+    const trailer3_real_t _t292 = _t285*_t52;
+    const trailer3_real_t _t293 = _t282*_t33;
+    const trailer3_real_t _t294 = _t292 + _t293;
+    const trailer3_real_t _t295 = J_theta_cart*_t131;
+    const trailer3_real_t _t296 = _t131*_t216;
+    const trailer3_real_t _t297 = _t131*_t217;
+    const trailer3_real_t _t298 = _t159 + _t4;
+    const trailer3_real_t _t299 = _t228*_t298;
+    const trailer3_real_t _t300 = J_theta_cart_right*_t299;
+    const trailer3_real_t _t301 = -_t159 + _t4;
+    const trailer3_real_t _t302 = _t235*_t301;
+    const trailer3_real_t _t303 = J_theta_cart_left*_t302;
+    const trailer3_real_t _t304 = _t163 - _t165;
+    const trailer3_real_t _t305 = _t242*_t304;
+    const trailer3_real_t _t306 = J_theta_cart2_right*_t305;
+    const trailer3_real_t _t307 = -_t163 - _t165;
+    const trailer3_real_t _t308 = _t249*_t307;
+    const trailer3_real_t _t309 = J_theta_cart2_left*_t308;
+    const trailer3_real_t _t310 = _t178 - _t181;
+    const trailer3_real_t _t311 = _t256*_t310;
+    const trailer3_real_t _t312 = J_theta_cart3_right*_t311;
+    const trailer3_real_t _t313 = -_t178 - _t181;
+    const trailer3_real_t _t314 = _t263*_t313;
+    const trailer3_real_t _t315 = J_theta_cart3_left*_t314;
+    const trailer3_real_t _t316 = _t230*_t300;
+    const trailer3_real_t _t317 = _t237*_t303;
+    const trailer3_real_t _t318 = _t128*_t220;
+    const trailer3_real_t _t319 = _t158 + _t2;
+    const trailer3_real_t _t320 = _t228*_t319;
+    const trailer3_real_t _t321 = _t234*_t320;
+    const trailer3_real_t _t322 = -_t158 + _t2;
+    const trailer3_real_t _t323 = _t235*_t322;
+    const trailer3_real_t _t324 = _t241*_t323;
+    const trailer3_real_t _t325 = _t108 + _t109;
+    const trailer3_real_t _t326 = _t325*_t52;
+    const trailer3_real_t _t327 = _t106 + _t107;
+    const trailer3_real_t _t328 = _t327*_t33;
+    const trailer3_real_t _t329 = _t110 + _t111;
+    const trailer3_real_t _t330 = _t131*_t219 + _t23*_t329;
+    const trailer3_real_t _t331 = _t233*_t300;
+    const trailer3_real_t _t332 = _t240*_t303;
+    const trailer3_real_t _t333 = _t131*_t220;
+    const trailer3_real_t _t334 = _t234*_t299;
+    const trailer3_real_t _t335 = _t241*_t302;
+    const trailer3_real_t _t336 = TRAILER3_LIT(2.0)*_t95;
+    const trailer3_real_t _t337 = _t336*_t64 - _t336*_t75;
+    const trailer3_real_t _t338 = TRAILER3_LIT(2.0)*_t98;
+    const trailer3_real_t _t339 = _t338*_t65 - _t338*_t80;
+    const trailer3_real_t _t340 = _t114 + _t115;
+    const trailer3_real_t _t341 = _t112 + _t113;
+    const trailer3_real_t _t342 = TRAILER3_LIT(2.0)*_t101;
+    const trailer3_real_t _t343 = -_t105*_t342 + _t342*_t63;
+    const trailer3_real_t _t344 = _t128*_t94 + _t131*_t90;
+    const trailer3_real_t _t345 = _t102*_t57 + _t102*_t58 + _t343*_t344;
+    const trailer3_real_t _t346 = _t66*_t91;
+    const trailer3_real_t _t347 = _t67*_t91;
+    const trailer3_real_t _t348 = TRAILER3_LIT(1.7)*_t95;
+    const trailer3_real_t _t349 = _t3*_t348;
+    const trailer3_real_t _t350 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t7*_t95
+            - _t2*_t348*_t75 - _t349*_t59 - _t349*_t60;
+    const trailer3_real_t _t351 = TRAILER3_LIT(1.7)*_t98;
+    const trailer3_real_t _t352 = _t3*_t351;
+    const trailer3_real_t _t353 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t2*_t98
+            - _t2*_t351*_t80 - _t352*_t61 - _t352*_t62;
+    const trailer3_real_t _t354 = _t68*_t91;
+    const trailer3_real_t _t355 = _t69*_t91;
+    const trailer3_real_t _t356 = TRAILER3_LIT(1.7)*_t101;
+    const trailer3_real_t _t357 = _t2*_t356;
+    const trailer3_real_t _t358 = _t3*_t356;
+    const trailer3_real_t _t359 = -_t357*_t64 + _t357*_t75 + _t358*_t59 + _t358*_t60;
+    const trailer3_real_t _t360 = _t344*_t359;
+    const trailer3_real_t _t361 = _t351*_t7;
+    const trailer3_real_t _t362 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t6*_t98
+            - _t351*_t6*_t80 - _t361*_t61 - _t361*_t62;
+    const trailer3_real_t _t363 = _t70*_t91;
+    const trailer3_real_t _t364 = _t71*_t91;
+    const trailer3_real_t _t365 = -_t357*_t65 + _t357*_t80 + _t358*_t61 + _t358*_t62;
+    const trailer3_real_t _t366 = _t344*_t365;
+    const trailer3_real_t _t367 = _t348*_t6;
+    const trailer3_real_t _t368 = _t348*_t7;
+    const trailer3_real_t _t369 = -_t367*_t65 + _t367*_t80 + _t368*_t61 + _t368*_t62;
+    const trailer3_real_t _t370 = -_t344*_t94;
+    const trailer3_real_t _t371 = _t144*_t370;
+    const trailer3_real_t _t372 = -_t344*_t90;
+    const trailer3_real_t _t373 = _t148*_t372;
+    const trailer3_real_t _t374 = TRAILER3_LIT(1.6666666666666667)*_t170;
+    const trailer3_real_t _t375 = TRAILER3_LIT(1.6666666666666667)*_t171;
+    const trailer3_real_t _t376 = _t205*_t374 + _t206*_t375;
+    const trailer3_real_t _t377 = _t28*_t374;
+    const trailer3_real_t _t378 = _t28*_t375;
+    const trailer3_real_t _t379 = _t182*_t370;
+    const trailer3_real_t _t380 = _t187*_t372;
+    const trailer3_real_t _t381 = TRAILER3_LIT(0.2)*_t374;
+    const trailer3_real_t _t382 = TRAILER3_LIT(0.2)*_t375;
+    const trailer3_real_t _t383 = TRAILER3_LIT(1.6666666666666667)*_t162;
+    const trailer3_real_t _t384 = TRAILER3_LIT(0.2)*_t383;
+    const trailer3_real_t _t385 = TRAILER3_LIT(1.6666666666666667)*_t165;
+    const trailer3_real_t _t386 = TRAILER3_LIT(0.2)*_t385;
+    const trailer3_real_t _t387 = _t161 + _t166 - _t21;
+    const trailer3_real_t _t388 = _t242*_t387;
+    const trailer3_real_t _t389 = _t370*_t388;
+    const trailer3_real_t _t390 = _t164 + _t167 - _t24;
+    const trailer3_real_t _t391 = _t242*_t390;
+    const trailer3_real_t _t392 = _t372*_t391;
+    const trailer3_real_t _t393 = -_t134 + _t381;
+    const trailer3_real_t _t394 = _t242*_t393;
+    const trailer3_real_t _t395 = -_t135 + _t382;
+    const trailer3_real_t _t396 = _t242*_t395;
+    const trailer3_real_t _t397 = _t205*_t394 + _t206*_t396;
+    const trailer3_real_t _t398 = -_t166 - _t170;
+    const trailer3_real_t _t399 = _t249*_t398;
+    const trailer3_real_t _t400 = _t370*_t399;
+    const trailer3_real_t _t401 = -_t167 - _t171;
+    const trailer3_real_t _t402 = _t249*_t401;
+    const trailer3_real_t _t403 = _t372*_t402;
+    const trailer3_real_t _t404 = -_t134 - _t381;
+    const trailer3_real_t _t405 = _t249*_t404;
+    const trailer3_real_t _t406 = -_t135 - _t382;
+    const trailer3_real_t _t407 = _t249*_t406;
+    const trailer3_real_t _t408 = _t205*_t405 + _t206*_t407;
+    const trailer3_real_t _t409 = -_t185 - _t377;
+    const trailer3_real_t _t410 = -TRAILER3_LIT(1.6666666666666667)*_t409;
+    const trailer3_real_t _t411 = TRAILER3_LIT(0.2)*_t410;
+    const trailer3_real_t _t412 = _t374*_t49;
+    const trailer3_real_t _t413 = _t146 + _t412;
+    const trailer3_real_t _t414 = -_t190 - _t378;
+    const trailer3_real_t _t415 = -TRAILER3_LIT(1.6666666666666667)*_t414;
+    const trailer3_real_t _t416 = TRAILER3_LIT(0.2)*_t415;
+    const trailer3_real_t _t417 = _t375*_t49;
+    const trailer3_real_t _t418 = _t150 + _t417;
+    const trailer3_real_t _t419 = _t175 - _t28*_t383;
+    const trailer3_real_t _t420 = -TRAILER3_LIT(1.6666666666666667)*_t419;
+    const trailer3_real_t _t421 = TRAILER3_LIT(0.2)*_t420;
+    const trailer3_real_t _t422 = _t138 + _t383*_t49;
+    const trailer3_real_t _t423 = _t180 - _t28*_t385;
+    const trailer3_real_t _t424 = -TRAILER3_LIT(1.6666666666666667)*_t423;
+    const trailer3_real_t _t425 = TRAILER3_LIT(0.2)*_t424;
+    const trailer3_real_t _t426 = _t142 + _t385*_t49;
+    const trailer3_real_t _t427 = TRAILER3_LIT(1.6666666666666667)*_t176;
+    const trailer3_real_t _t428 = TRAILER3_LIT(0.2)*_t427;
+    const trailer3_real_t _t429 = TRAILER3_LIT(1.6666666666666667)*_t181;
+    const trailer3_real_t _t430 = TRAILER3_LIT(0.2)*_t429;
+    const trailer3_real_t _t431 = _t183 - _t186;
+    const trailer3_real_t _t432 = _t256*_t431;
+    const trailer3_real_t _t433 = _t370*_t432;
+    const trailer3_real_t _t434 = _t188 - _t191;
+    const trailer3_real_t _t435 = _t256*_t434;
+    const trailer3_real_t _t436 = _t372*_t435;
+    const trailer3_real_t _t437 = -_t183 - _t186;
+    const trailer3_real_t _t438 = _t263*_t437;
+    const trailer3_real_t _t439 = _t370*_t438;
+    const trailer3_real_t _t440 = -_t188 - _t191;
+    const trailer3_real_t _t441 = _t263*_t440;
+    const trailer3_real_t _t442 = _t372*_t441;
+    const trailer3_real_t _t443 = _t270*_t274;
+    const trailer3_real_t _t444 = _t277*_t282;
+    const trailer3_real_t _t445 = _t280*_t285;
+    const trailer3_real_t _t446 = -_t160 - _t162;
+    const trailer3_real_t _t447 = _t249*_t446;
+    const trailer3_real_t _t448 = J_theta_cart2_left*_t447;
+    const trailer3_real_t _t449 = _t160 - _t162;
+    const trailer3_real_t _t450 = _t242*_t449;
+    const trailer3_real_t _t451 = J_theta_cart2_right*_t450;
+    const trailer3_real_t _t452 = -_t173 - _t176;
+    const trailer3_real_t _t453 = _t263*_t452;
+    const trailer3_real_t _t454 = J_theta_cart3_left*_t453;
+    const trailer3_real_t _t455 = _t173 - _t176;
+    const trailer3_real_t _t456 = _t256*_t455;
+    const trailer3_real_t _t457 = J_theta_cart3_right*_t456;
+    const trailer3_real_t _t458 = -_t237*_t272 - _t240*_t273 + _t302*_t372 + _t323*_t370;
+    const trailer3_real_t _t459 = _t238*_t458;
+    const trailer3_real_t _t460 = J_theta_cart_left*_t323;
+    const trailer3_real_t _t461 = _t272*_t323 + _t273*_t302;
+    const trailer3_real_t _t462 = _t460*_t461;
+    const trailer3_real_t _t463 = -_t230*_t272 - _t233*_t273 + _t299*_t372 + _t320*_t370;
+    const trailer3_real_t _t464 = _t231*_t463;
+    const trailer3_real_t _t465 = J_theta_cart_right*_t320;
+    const trailer3_real_t _t466 = _t272*_t320 + _t273*_t299;
+    const trailer3_real_t _t467 = _t465*_t466;
+    const trailer3_real_t _t468 = _t204*_t208;
+    const trailer3_real_t _t469 = _t204*_t210;
+    const trailer3_real_t _t470 = _t204*_t212;
+    const trailer3_real_t _t471 = _t128*_t370 + _t131*_t372 - _t20*_t272 - _t23*_t273;
+    const trailer3_real_t _t472 = _t218*_t471;
+    const trailer3_real_t _t473 = _t128*_t281;
+    const trailer3_real_t _t474 = _t68*_t96;
+    const trailer3_real_t _t475 = _t69*_t96;
+    const trailer3_real_t _t476 = _t70*_t99;
+    const trailer3_real_t _t477 = _t71*_t99;
+    const trailer3_real_t _t478 = _t102*_t66;
+    const trailer3_real_t _t479 = _t102*_t67;
+    const trailer3_real_t _t480 = TRAILER3_LIT(0.6)*_t101;
+    const trailer3_real_t _t481 = -_t480*_t57 - _t480*_t58;
+    const trailer3_real_t _t482 = _t344*_t481;
+    const trailer3_real_t _t483 = TRAILER3_LIT(0.6)*_t95;
+    const trailer3_real_t _t484 = -_t483*_t59 - _t483*_t60;
+    const trailer3_real_t _t485 = TRAILER3_LIT(0.6)*_t98;
+    const trailer3_real_t _t486 = -_t485*_t61 - _t485*_t62;
+    const trailer3_real_t _t487 = _t274*_t329;
+    const trailer3_real_t _t488 = _t277*_t327;
+    const trailer3_real_t _t489 = _t280*_t325;
+    const trailer3_real_t _t490 = _t241*_t458;
+    const trailer3_real_t _t491 = _t303*_t461;
+    const trailer3_real_t _t492 = _t234*_t463;
+    const trailer3_real_t _t493 = _t300*_t466;
+    const trailer3_real_t _t494 = _t204*_t213;
+    const trailer3_real_t _t495 = _t204*_t214;
+    const trailer3_real_t _t496 = _t204*_t215;
+    const trailer3_real_t _t497 = _t220*_t471;
+    const trailer3_real_t _t498 = _t131*_t281;
+    const trailer3_real_t _t499 = _t128*_t207;
+    const trailer3_real_t _t500 = _t20*_t270;
+    const trailer3_real_t _t501 = _t282*_t29;
+    const trailer3_real_t _t502 = _t285*_t45;
+    const trailer3_real_t _t503 = _t500 + _t501 + _t502;
+    const trailer3_real_t _t504 = J_theta_cart*_t128;
+    const trailer3_real_t _t505 = _t128*_t216;
+    const trailer3_real_t _t506 = _t128*_t217;
+    const trailer3_real_t _t507 = _t230*_t465;
+    const trailer3_real_t _t508 = _t237*_t460;
+    const trailer3_real_t _t509 = _t128*_t218;
+    const trailer3_real_t _t510 = _t231*_t320;
+    const trailer3_real_t _t511 = _t238*_t323;
+    const trailer3_real_t _t512 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t513 = TRAILER3_LIT(1.0)/radius_left;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t570 = J_x_tractor*_t23 + K_theta_tractor_x_tractor_2*_t22 + _t243
-            + _t244 + _t245;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t571 = J_theta_tractor*_t22 + K_theta_tractor_x_tractor_2*_t23
-            + _t246*_t30 + _t251*_t41 + _t255*_t76;
-    const trailer3_real_t _t572 = _t19*_t571 + _t20*_t570 + _t250*_t26 + _t254*_t35 + _t257*_t67
-            + _t260*_t264 + _t267*_t271 + _t274*_t278 + _t281*_t285 + _t288*_t292 + _t295*_t299;
-    const trailer3_real_t _t573 = TRAILER3_LIT(2.0)*_t572;
-    const trailer3_real_t _t574 = J_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_t19 + _t238
-            + _t240 + _t242;
-    const trailer3_real_t _t575 = J_theta_tractor*_t19 + K_theta_tractor_x_tractor_2*_t20
-            + _t246*_t26 + _t251*_t35 + _t255*_t67;
+    const trailer3_real_t _t514 = K_theta_tractor_x_tractor_2 + _t213 + _t214 + _t215;
+    const trailer3_real_t _t515 = TRAILER3_LIT(0.207)*_t512;
     const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t576 = J_theta_right + _t19*_t575 + _t20*_t574 + _t249*_t26 + _t253*_t35
-            + _t256*_t67 + _t260*_t261 + _t267*_t268 + _t274*_t275 + _t281*_t282 + _t288*_t289
-            + _t295*_t296;
+    const trailer3_real_t _t516 = J_theta_right*_t515;
+    const trailer3_real_t _t517 = -TRAILER3_LIT(0.207)*_t513;
     const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t577 = J_theta_left + _t22*_t571 + _t23*_t570 + _t250*_t30 + _t254*_t41
-            + _t257*_t76 + _t263*_t264 + _t270*_t271 + _t277*_t278 + _t284*_t285 + _t291*_t292
-            + _t298*_t299;
-    const trailer3_real_t _t578 = -_t572*_t572 + _t576*_t577;
-    const trailer3_real_t _t579 = TRAILER3_LIT(1.0)/_t578;
-    const trailer3_real_t _t580 = _t579*_t579;
-    const trailer3_real_t _t581 = _t579;
-    const trailer3_real_t _t582 = _t577*_t581;
-    const trailer3_real_t _t583 = _t123 + _t29;
-    const trailer3_real_t _t584 = _t272*_t583;
-    const trailer3_real_t _t585 = _t124 + _t33;
-    const trailer3_real_t _t586 = _t272*_t585;
-    const trailer3_real_t _t587 = _t233*_t502 + _t234*_t353 + _t235*_t443 + _t236*_t446
-            + _t304*_t584 + _t305*_t586;
-    const trailer3_real_t _t588 = -_t123 + _t29;
-    const trailer3_real_t _t589 = _t279*_t588;
-    const trailer3_real_t _t590 = -_t124 + _t33;
-    const trailer3_real_t _t591 = _t279*_t590;
-    const trailer3_real_t _t592 = _t233*_t499 + _t234*_t356 + _t235*_t454 + _t236*_t457
-            + _t304*_t589 + _t305*_t591;
-    const trailer3_real_t _t593 = _t148 - _t150;
-    const trailer3_real_t _t594 = _t286*_t593;
-    const trailer3_real_t _t595 = _t152 - _t154;
-    const trailer3_real_t _t596 = _t286*_t595;
-    const trailer3_real_t _t597 = _t156 + _t40;
-    const trailer3_real_t _t598 = _t286*_t597;
-    const trailer3_real_t _t599 = _t158 + _t45;
-    const trailer3_real_t _t600 = _t286*_t599;
-    const trailer3_real_t _t601 = _t233*_t508 + _t234*_t359 + _t235*_t487 + _t236*_t490
-            + _t304*_t594 + _t305*_t596 + _t307*_t598 + _t308*_t600;
-    const trailer3_real_t _t602 = -_t148 - _t150;
-    const trailer3_real_t _t603 = _t293*_t602;
-    const trailer3_real_t _t604 = -_t152 - _t154;
-    const trailer3_real_t _t605 = _t293*_t604;
-    const trailer3_real_t _t606 = -_t156 + _t40;
-    const trailer3_real_t _t607 = _t293*_t606;
-    const trailer3_real_t _t608 = -_t158 + _t45;
-    const trailer3_real_t _t609 = _t293*_t608;
-    const trailer3_real_t _t610 = _t233*_t505 + _t234*_t362 + _t235*_t493 + _t236*_t496
-            + _t304*_t603 + _t305*_t605 + _t307*_t607 + _t308*_t609;
-    const trailer3_real_t _t611 = _t19*_t313 + _t20*_t310 + _t26*_t316 + _t261*_t518 + _t268*_t513
-            + _t275*_t587 + _t282*_t592 + _t289*_t601 + _t296*_t610 + _t319*_t35 + _t322*_t67;
+    const trailer3_real_t _t518 = J_theta_left*_t517;
+    const trailer3_real_t _t519 = _t20*_t220 + _t224*_t29 + _t227*_t45 + _t230*_t234 + _t237*_t241
+            + _t244*_t248 + _t251*_t255 + _t258*_t262 + _t265*_t269 + _t512*_t516 + _t513*_t518
+            + _t514;
+    const trailer3_real_t _t520 = TRAILER3_LIT(2.0)*_t519;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t521 = J_x_tractor + _t208 + _t210 + _t212;
+    const trailer3_real_t _t522 = J_theta_right*_t512;
+    const trailer3_real_t _t523 = J_theta_left*_t513;
+    const trailer3_real_t _t524 = _t20*_t218 + _t222*_t29 + _t225*_t45 + _t230*_t231 + _t237*_t238
+            + _t244*_t245 + _t251*_t252 + _t258*_t259 + _t265*_t266 + _t512*_t522 + _t513*_t523
+            + _t521;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t525 = J_theta_tractor + _t219*_t23 + _t223*_t33 + _t226*_t52;
+    const trailer3_real_t _t526 = _t220*_t23 + _t224*_t33 + _t227*_t52 + _t233*_t234 + _t240*_t241
+            + _t247*_t248 + _t254*_t255 + _t261*_t262 + _t268*_t269 + _t515*_t516 + _t517*_t518
+            + _t525;
+    const trailer3_real_t _t527 = -_t519*_t519 + _t524*_t526;
+    const trailer3_real_t _t528 = TRAILER3_LIT(1.0)/_t527;
+    const trailer3_real_t _t529 = _t528*_t528;
+    const trailer3_real_t _t530 = _t528;
+    const trailer3_real_t _t531 = _t519*_t530;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t532 = K_theta_tractor_x_tractor*_t91 + _t100 - _t102*_t105 + _t102*_t63
+            - _t103 - _t104 + _t97;
+    const trailer3_real_t _t533 = _t168 + _t22;
+    const trailer3_real_t _t534 = _t242*_t533;
+    const trailer3_real_t _t535 = _t169 + _t25;
+    const trailer3_real_t _t536 = _t242*_t535;
+    const trailer3_real_t _t537 = _t204*_t450 + _t205*_t388 + _t206*_t391 + _t275*_t534
+            + _t276*_t536 + _t305*_t91;
+    const trailer3_real_t _t538 = -_t168 + _t22;
+    const trailer3_real_t _t539 = _t249*_t538;
+    const trailer3_real_t _t540 = -_t169 + _t25;
+    const trailer3_real_t _t541 = _t249*_t540;
+    const trailer3_real_t _t542 = _t204*_t447 + _t205*_t399 + _t206*_t402 + _t275*_t539
+            + _t276*_t541 + _t308*_t91;
+    const trailer3_real_t _t543 = _t193 - _t195;
+    const trailer3_real_t _t544 = _t256*_t543;
+    const trailer3_real_t _t545 = _t197 - _t199;
+    const trailer3_real_t _t546 = _t256*_t545;
+    const trailer3_real_t _t547 = _t201 + _t31;
+    const trailer3_real_t _t548 = _t256*_t547;
+    const trailer3_real_t _t549 = _t203 + _t35;
+    const trailer3_real_t _t550 = _t256*_t549;
+    const trailer3_real_t _t551 = _t204*_t456 + _t205*_t432 + _t206*_t435 + _t275*_t544
+            + _t276*_t546 + _t278*_t548 + _t279*_t550 + _t311*_t91;
+    const trailer3_real_t _t552 = -_t193 - _t195;
+    const trailer3_real_t _t553 = _t263*_t552;
+    const trailer3_real_t _t554 = -_t197 - _t199;
+    const trailer3_real_t _t555 = _t263*_t554;
+    const trailer3_real_t _t556 = -_t201 + _t31;
+    const trailer3_real_t _t557 = _t263*_t556;
+    const trailer3_real_t _t558 = -_t203 + _t35;
+    const trailer3_real_t _t559 = _t263*_t558;
+    const trailer3_real_t _t560 = _t204*_t453 + _t205*_t438 + _t206*_t441 + _t275*_t553
+            + _t276*_t555 + _t278*_t557 + _t279*_t559 + _t314*_t91;
+    const trailer3_real_t _t561 = _t20*_t281 + _t207*_t274 + _t209*_t277 + _t211*_t280 + _t231*_t466
+            + _t238*_t461 + _t245*_t537 + _t252*_t542 + _t259*_t551 + _t266*_t560 + _t284*_t29
+            + _t287*_t45 + _t532;
     const trailer3_real_t tau_right = tau[0];
-    const trailer3_real_t _t612 = -_t611 + tau_right;
-    const trailer3_real_t _t613 = _t581*_t612;
-    const trailer3_real_t _t614 = _t572*_t581;
-    const trailer3_real_t _t615 = _t22*_t313 + _t23*_t310 + _t264*_t518 + _t271*_t513 + _t278*_t587
-            + _t285*_t592 + _t292*_t601 + _t299*_t610 + _t30*_t316 + _t319*_t41 + _t322*_t76;
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t616 = -_t615 + tau_left;
-    const trailer3_real_t _t617 = _t581*_t616;
-    const trailer3_real_t _t618 = -_t572*_t616 + _t577*_t612;
-    const trailer3_real_t _t619 = -_t221 + _t222 + _t223 + _t224;
-    const trailer3_real_t _t620 = _t41*_t619;
-    const trailer3_real_t _t621 = -_t225 + _t226 + _t229 + _t230;
-    const trailer3_real_t _t622 = _t621*_t76;
-    const trailer3_real_t _t623 = _t30*_t619;
-    const trailer3_real_t _t624 = _t30*_t621;
-    const trailer3_real_t _t625 = J_theta_cart2_right*_t446;
-    const trailer3_real_t _t626 = J_theta_cart2_left*_t457;
-    const trailer3_real_t _t627 = J_theta_cart3_right*_t490;
-    const trailer3_real_t _t628 = J_theta_cart3_left*_t496;
-    const trailer3_real_t _t629 = _t10*_t205 - _t10*_t209 + _t219*_t9 + _t220*_t9;
-    const trailer3_real_t _t630 = _t10*_t202 - _t10*_t208 + _t217*_t9 + _t218*_t9;
-    const trailer3_real_t _t631 = _t182*_t207 + _t183*_t207 + _t184*_t207 - _t186*_t207;
-    const trailer3_real_t _t632 = _t187*_t207 + _t188*_t207 + _t189*_t207 - _t191*_t207;
-    const trailer3_real_t _t633 = -TRAILER3_LIT(2.0)*_t116 + TRAILER3_LIT(2.0)*_t27;
-    const trailer3_real_t _t634 = -TRAILER3_LIT(1.6666666666666667)*_t633;
-    const trailer3_real_t _t635 = TRAILER3_LIT(0.2)*_t634;
-    const trailer3_real_t _t636 = TRAILER3_LIT(2.0)*_t56 + TRAILER3_LIT(2.0)*_t84;
-    const trailer3_real_t _t637 = -TRAILER3_LIT(2.0)*_t119 + TRAILER3_LIT(2.0)*_t31;
-    const trailer3_real_t _t638 = -TRAILER3_LIT(1.6666666666666667)*_t637;
-    const trailer3_real_t _t639 = TRAILER3_LIT(0.2)*_t638;
-    const trailer3_real_t _t640 = TRAILER3_LIT(2.0)*_t61 + TRAILER3_LIT(2.0)*_t87;
-    const trailer3_real_t _t641 = -TRAILER3_LIT(2.0)*_t129 + TRAILER3_LIT(2.0)*_t26*_t37
-            - _t34*_t634;
-    const trailer3_real_t _t642 = -TRAILER3_LIT(1.6666666666666667)*_t641;
-    const trailer3_real_t _t643 = TRAILER3_LIT(0.2)*_t642;
-    const trailer3_real_t _t644 = -_t634*_t72 + TRAILER3_LIT(2.0)*_t71 + TRAILER3_LIT(2.0)*_t91;
-    const trailer3_real_t _t645 = -TRAILER3_LIT(2.0)*_t134 + TRAILER3_LIT(2.0)*_t30*_t37
-            - _t34*_t638;
-    const trailer3_real_t _t646 = -TRAILER3_LIT(1.6666666666666667)*_t645;
-    const trailer3_real_t _t647 = TRAILER3_LIT(0.2)*_t646;
-    const trailer3_real_t _t648 = -_t638*_t72 + TRAILER3_LIT(2.0)*_t79 + TRAILER3_LIT(2.0)*_t95;
-    const trailer3_real_t _t649 = _t139 - _t432;
-    const trailer3_real_t _t650 = -TRAILER3_LIT(1.6666666666666667)*_t649;
-    const trailer3_real_t _t651 = TRAILER3_LIT(0.2)*_t650;
-    const trailer3_real_t _t652 = _t100 + _t467;
-    const trailer3_real_t _t653 = _t144 - _t433;
-    const trailer3_real_t _t654 = -TRAILER3_LIT(1.6666666666666667)*_t653;
-    const trailer3_real_t _t655 = TRAILER3_LIT(0.2)*_t654;
-    const trailer3_real_t _t656 = _t104 + _t472;
-    const trailer3_real_t _t657 = TRAILER3_LIT(1.6666666666666667)*_t141;
-    const trailer3_real_t _t658 = TRAILER3_LIT(0.2)*_t657;
-    const trailer3_real_t _t659 = TRAILER3_LIT(1.6666666666666667)*_t146;
-    const trailer3_real_t _t660 = TRAILER3_LIT(0.2)*_t659;
-    const trailer3_real_t _t661 = J_theta_cart2_left*_t454;
-    const trailer3_real_t _t662 = J_theta_cart2_right*_t443;
-    const trailer3_real_t _t663 = J_theta_cart3_left*_t493;
-    const trailer3_real_t _t664 = J_theta_cart3_right*_t487;
-    const trailer3_real_t _t665 = _t619*(_t26*_t306 + _t303*_t35);
-    const trailer3_real_t _t666 = _t621*(_t26*_t309 + _t303*_t67);
-    const trailer3_real_t _t667 = _t619*(_t30*_t306 + _t303*_t41);
-    const trailer3_real_t _t668 = _t621*(_t30*_t309 + _t303*_t76);
-    const trailer3_real_t _t669 = _t35*_t619;
-    const trailer3_real_t _t670 = _t621*_t67;
-    const trailer3_real_t _t671 = _t26*_t619;
-    const trailer3_real_t _t672 = _t26*_t621;
-    const trailer3_real_t _t673 = -_t227 + _t228 + _t231 + _t232;
-    const trailer3_real_t _t674 = _t673*_t76;
-    const trailer3_real_t _t675 = _t41*_t673;
-    const trailer3_real_t _t676 = J_theta_cart2_right*_t586;
-    const trailer3_real_t _t677 = J_theta_cart2_left*_t591;
-    const trailer3_real_t _t678 = J_theta_cart3_right*_t596;
-    const trailer3_real_t _t679 = J_theta_cart3_left*_t605;
-    const trailer3_real_t _t680 = _t192*_t219 + _t192*_t220 + _t194*_t205 - _t194*_t209;
-    const trailer3_real_t _t681 = _t193*_t201 + _t195*_t201 + _t196*_t201 - _t197*_t201;
-    const trailer3_real_t _t682 = TRAILER3_LIT(2.0)*_t149 + TRAILER3_LIT(2.0)*_t36;
-    const trailer3_real_t _t683 = -TRAILER3_LIT(1.6666666666666667)*_t682;
-    const trailer3_real_t _t684 = TRAILER3_LIT(0.2)*_t683;
-    const trailer3_real_t _t685 = TRAILER3_LIT(2.0)*_t108;
-    const trailer3_real_t _t686 = TRAILER3_LIT(2.0)*_t153 + TRAILER3_LIT(2.0)*_t42;
-    const trailer3_real_t _t687 = -TRAILER3_LIT(1.6666666666666667)*_t686;
-    const trailer3_real_t _t688 = TRAILER3_LIT(0.2)*_t687;
-    const trailer3_real_t _t689 = TRAILER3_LIT(2.0)*_t111;
-    const trailer3_real_t _t690 = TRAILER3_LIT(1.6666666666666667)*_t150;
-    const trailer3_real_t _t691 = TRAILER3_LIT(0.2)*_t690;
-    const trailer3_real_t _t692 = TRAILER3_LIT(1.6666666666666667)*_t154;
-    const trailer3_real_t _t693 = TRAILER3_LIT(0.2)*_t692;
-    const trailer3_real_t _t694 = J_theta_cart2_left*_t589;
-    const trailer3_real_t _t695 = J_theta_cart2_right*_t584;
-    const trailer3_real_t _t696 = J_theta_cart3_left*_t603;
-    const trailer3_real_t _t697 = J_theta_cart3_right*_t594;
-    const trailer3_real_t _t698 = _t673*(_t306*_t67 + _t309*_t35);
-    const trailer3_real_t _t699 = _t673*(_t306*_t76 + _t309*_t41);
-    const trailer3_real_t _t700 = _t67*_t673;
-    const trailer3_real_t _t701 = _t35*_t673;
-    const trailer3_real_t _t702 = J_theta_cart3_right*_t600;
-    const trailer3_real_t _t703 = J_theta_cart3_left*_t609;
-    const trailer3_real_t _t704 = J_theta_cart3_left*_t607;
-    const trailer3_real_t _t705 = J_theta_cart3_right*_t598;
-    const trailer3_real_t _t706 = TRAILER3_LIT(2.0)*K_theta_tractor_x_tractor*_t198;
-    const trailer3_real_t _t707 = TRAILER3_LIT(0.6)*_t198;
-    const trailer3_real_t _t708 = _t167*_t707 + _t168*_t707;
-    const trailer3_real_t _t709 = _t169*_t707 + _t170*_t707;
-    const trailer3_real_t _t710 = _t171*_t707 + _t172*_t707;
-    const trailer3_real_t _t711 = _t159 + _t198;
-    const trailer3_real_t _t712 = _t19*thetadot_left;
-    const trailer3_real_t _t713 = -_t206;
-    const trailer3_real_t _t714 = _t26*thetadot_left;
-    const trailer3_real_t _t715 = -K_theta_tractor_x_tractor*_t19 + _t553 + _t557;
-    const trailer3_real_t _t716 = -K_theta_tractor_x_tractor*_t22 + _t325 + _t329;
-    const trailer3_real_t _t717 = _t22*thetadot_right;
-    const trailer3_real_t _t718 = _t160 + _t198;
-    const trailer3_real_t _t719 = _t30*thetadot_right;
-    const trailer3_real_t _t720 = _t576*_t581;
-    const trailer3_real_t _t721 = -_t572*_t612 + _t576*_t616;
-    const trailer3_real_t _t722 = _t20*thetadot_right + _t23*thetadot_left;
-    const trailer3_real_t _t723 = _t323*_t722;
-    const trailer3_real_t _t724 = _t324*_t722;
-    const trailer3_real_t _t725 = _t20*_t323;
-    const trailer3_real_t _t726 = _t23*_t323;
-    const trailer3_real_t _t727 = _t20*_t324;
-    const trailer3_real_t _t728 = _t23*_t324;
-    const trailer3_real_t _t729 = _t92*thetadot_right + _t96*thetadot_left;
-    const trailer3_real_t _t730 = _t103*thetadot_left + _t99*thetadot_right;
-    const trailer3_real_t _t731 = _t107*thetadot_right + _t110*thetadot_left;
-    const trailer3_real_t _t732 = _t127*thetadot_right + _t132*thetadot_left;
-    const trailer3_real_t _t733 = _t137*thetadot_right + _t142*thetadot_left;
-    const trailer3_real_t _t734 = _t147*thetadot_right + _t151*thetadot_left;
-    const trailer3_real_t _t735 = _t155*thetadot_right + _t157*thetadot_left;
-    const trailer3_real_t _t736 = _t347*thetadot_left + _t368*thetadot_right;
-    const trailer3_real_t _t737 = _t350*thetadot_left + _t371*thetadot_right;
-    const trailer3_real_t _t738 = _t353*thetadot_left + _t502*thetadot_right;
-    const trailer3_real_t _t739 = _t443*thetadot_right + _t446*thetadot_left;
-    const trailer3_real_t _t740 = _t584*thetadot_right + _t586*thetadot_left;
-    const trailer3_real_t _t741 = _t356*thetadot_left + _t499*thetadot_right;
-    const trailer3_real_t _t742 = _t454*thetadot_right + _t457*thetadot_left;
-    const trailer3_real_t _t743 = _t589*thetadot_right + _t591*thetadot_left;
-    const trailer3_real_t _t744 = _t359*thetadot_left + _t508*thetadot_right;
-    const trailer3_real_t _t745 = _t487*thetadot_right + _t490*thetadot_left;
-    const trailer3_real_t _t746 = _t594*thetadot_right + _t596*thetadot_left;
-    const trailer3_real_t _t747 = _t598*thetadot_right + _t600*thetadot_left;
-    const trailer3_real_t _t748 = _t362*thetadot_left + _t505*thetadot_right;
-    const trailer3_real_t _t749 = _t493*thetadot_right + _t496*thetadot_left;
-    const trailer3_real_t _t750 = _t603*thetadot_right + _t605*thetadot_left;
-    const trailer3_real_t _t751 = _t607*thetadot_right + _t609*thetadot_left;
-    const trailer3_real_t _t752 = _t132*_t241 + _t239*_t96 + _t326 + _t329;
-    const trailer3_real_t _t753 = _t132*_t255 + _t251*_t96 + _t331 + _t333 + _t335;
-    const trailer3_real_t _t754 = _t132*_t248 + _t247*_t96 + _t336 + _t337 + _t338;
-    const trailer3_real_t _t755 = J_theta_cart2*_t96 + _t132*_t252 + _t339 + _t340 + _t341;
-    const trailer3_real_t _t756 = J_theta_cart3*_t132 + _t252*_t96 + _t342 + _t345;
-    const trailer3_real_t _t757 = _t127*_t257 + _t19*_t753 + _t20*_t752 + _t254*_t92 + _t26*_t754
-            + _t274*_t354 + _t278*_t502 + _t281*_t357 + _t285*_t499 + _t288*_t360 + _t292*_t508
-            + _t295*_t363 + _t299*_t505 + _t35*_t755 + _t364 + _t365 + _t366 + _t369 + _t372
-            + _t67*_t756;
-    const trailer3_real_t _t758 = _t132*_t257 + _t22*_t753 + _t23*_t752 + _t254*_t96 + _t277*_t354
-            + _t278*_t353 + _t284*_t357 + _t285*_t356 + _t291*_t360 + _t292*_t359 + _t298*_t363
-            + _t299*_t362 + _t30*_t754 + _t373 + _t374 + _t375 + _t376 + _t377 + _t41*_t755
-            + _t756*_t76;
-    const trailer3_real_t _t759 = _t379*_t729 + _t381*_t732 + _t382 + _t383 + _t387;
-    const trailer3_real_t _t760 = _t388 - _t389 + _t390 - _t391 + _t392 - _t393 + _t396
-            + _t398*_t729 + _t400*_t732;
-    const trailer3_real_t _t761 = -_t401 + _t402 + _t405*_t729 + _t408*_t732;
-    const trailer3_real_t _t762 = -_t409 + _t410 + _t415 + _t417*_t732;
-    const trailer3_real_t _t763 = -_t418 + _t419 + _t421 + _t424*_t729;
-    const trailer3_real_t _t764 = _t729*thetadot_right;
-    const trailer3_real_t _t765 = _t729*thetadot_left;
-    const trailer3_real_t _t766 = _t107*_t764 + _t110*_t765 - _t233*_t35 - _t234*_t41 + _t304*_t438
-            + _t305*_t440 - _t426 - _t428 + _t431;
-    const trailer3_real_t _t767 = _t732*thetadot_right;
-    const trailer3_real_t _t768 = _t732*thetadot_left;
-    const trailer3_real_t _t769 = _t147*_t764 + _t151*_t765 + _t155*_t767 + _t157*_t768 - _t233*_t67
-            - _t234*_t76 + _t235*_t465 + _t236*_t470 + _t304*_t475 + _t305*_t479 + _t307*_t482
-            + _t308*_t484 - _t434 - _t435;
-    const trailer3_real_t _t770 = _t439 + _t85;
-    const trailer3_real_t _t771 = _t272*_t770;
-    const trailer3_real_t _t772 = _t441 + _t88;
-    const trailer3_real_t _t773 = _t272*_t772;
-    const trailer3_real_t _t774 = -_t233*_t274 - _t234*_t277 + _t304*_t771 + _t305*_t773 - _t444
-            - _t447 + _t452 + _t584*_t764 + _t586*_t765;
-    const trailer3_real_t _t775 = -_t439 + _t85;
-    const trailer3_real_t _t776 = _t279*_t775;
-    const trailer3_real_t _t777 = -_t441 + _t88;
-    const trailer3_real_t _t778 = _t279*_t777;
-    const trailer3_real_t _t779 = -_t233*_t281 - _t234*_t284 + _t304*_t776 + _t305*_t778 - _t455
-            - _t458 + _t463 + _t589*_t764 + _t591*_t765;
-    const trailer3_real_t _t780 = _t466 - _t468;
-    const trailer3_real_t _t781 = _t286*_t780;
-    const trailer3_real_t _t782 = _t471 - _t473;
-    const trailer3_real_t _t783 = _t286*_t782;
-    const trailer3_real_t _t784 = _t476 - _t477;
-    const trailer3_real_t _t785 = _t286*_t784;
-    const trailer3_real_t _t786 = _t480 - _t481;
-    const trailer3_real_t _t787 = _t286*_t786;
-    const trailer3_real_t _t788 = _t483 + _t94;
-    const trailer3_real_t _t789 = _t286*_t788;
-    const trailer3_real_t _t790 = _t485 + _t98;
-    const trailer3_real_t _t791 = _t286*_t790;
-    const trailer3_real_t _t792 = -_t233*_t288 - _t234*_t291 + _t235*_t781 + _t236*_t783
-            + _t304*_t785 + _t305*_t787 + _t307*_t789 + _t308*_t791 - _t488 - _t491 + _t594*_t764
-            + _t596*_t765 + _t598*_t767 + _t600*_t768;
-    const trailer3_real_t _t793 = -_t466 - _t468;
-    const trailer3_real_t _t794 = _t293*_t793;
-    const trailer3_real_t _t795 = -_t471 - _t473;
-    const trailer3_real_t _t796 = _t293*_t795;
-    const trailer3_real_t _t797 = -_t476 - _t477;
-    const trailer3_real_t _t798 = _t293*_t797;
-    const trailer3_real_t _t799 = -_t480 - _t481;
-    const trailer3_real_t _t800 = _t293*_t799;
-    const trailer3_real_t _t801 = -_t483 + _t94;
-    const trailer3_real_t _t802 = _t293*_t801;
-    const trailer3_real_t _t803 = -_t485 + _t98;
-    const trailer3_real_t _t804 = _t293*_t803;
-    const trailer3_real_t _t805 = -_t233*_t295 - _t234*_t298 + _t235*_t794 + _t236*_t796
-            + _t304*_t798 + _t305*_t800 + _t307*_t802 + _t308*_t804 - _t494 - _t497 + _t603*_t764
-            + _t605*_t765 + _t607*_t767 + _t609*_t768;
-    const trailer3_real_t _t806 = _t127*_t322 + _t19*_t760 + _t20*_t759 + _t253*_t766 + _t256*_t769
-            + _t26*_t761 + _t275*_t774 + _t282*_t779 + _t289*_t792 + _t296*_t805 + _t319*_t92
-            + _t35*_t762 + _t500*_t592 + _t503*_t587 + _t506*_t610 + _t509*_t601 + _t511 + _t514
-            + _t516 + _t519 + _t521 + _t523 + _t525 + _t527 + _t529 + _t531 - _t532 - _t533 - _t534
-            + _t535 + _t537 + _t67*_t763;
-    const trailer3_real_t _t807 = _t132*_t322 + _t22*_t760 + _t23*_t759 + _t254*_t766 + _t257*_t769
-            + _t278*_t774 + _t285*_t779 + _t292*_t792 + _t299*_t805 + _t30*_t761 + _t319*_t96
-            + _t354*_t587 + _t357*_t592 + _t360*_t601 + _t363*_t610 + _t41*_t762 + _t538 + _t539
-            + _t540 + _t541 + _t542 + _t543 + _t544 + _t545 + _t546 + _t547 - _t548 - _t549 - _t550
-            + _t551 + _t552 + _t76*_t763;
-    const trailer3_real_t _t808 = _t127*_t241 + _t239*_t92 + _t554 + _t557;
-    const trailer3_real_t _t809 = _t127*_t255 + _t251*_t92 + _t558 + _t559 + _t560;
-    const trailer3_real_t _t810 = _t127*_t248 + _t247*_t92 + _t520 + _t526 + _t561;
-    const trailer3_real_t _t811 = J_theta_cart2*_t92 + _t127*_t252 + _t522 + _t528 + _t562;
-    const trailer3_real_t _t812 = J_theta_cart3*_t127 + _t252*_t92 + _t563 + _t564;
-    const trailer3_real_t _t813 = _t127*_t256 + _t19*_t809 + _t20*_t808 + _t253*_t92 + _t26*_t810
-            + _t274*_t503 + _t275*_t502 + _t281*_t500 + _t282*_t499 + _t288*_t509 + _t289*_t508
-            + _t295*_t506 + _t296*_t505 + _t35*_t811 + _t565 + _t566 + _t567 + _t568 + _t569
-            + _t67*_t812;
-    const trailer3_real_t _t814 = -_t573*_t757 + _t576*_t758 + _t577*_t813;
-    const trailer3_real_t _t815 = -_t580*_t814;
-    const trailer3_real_t _t816 = -_t582*_t806 + _t613*_t758 + _t614*_t807 - _t617*_t757
-            + _t618*_t815;
-    const trailer3_real_t _t817 = _t103*_t239 + _t142*_t241 - _t326;
-    const trailer3_real_t _t818 = _t103*_t251 + _t142*_t255 - _t335;
-    const trailer3_real_t _t819 = _t103*_t247 + _t142*_t248 - _t336 - _t337 - _t338 + _t620 + _t622;
-    const trailer3_real_t _t820 = J_theta_cart2*_t103 + _t142*_t252 - _t341 + _t623;
-    const trailer3_real_t _t821 = J_theta_cart3*_t142 + _t103*_t252 - _t342 + _t624;
-    const trailer3_real_t _t822 = _t137*_t257 + _t19*_t818 + _t20*_t817 + _t254*_t99 + _t26*_t819
-            + _t274*_t625 + _t278*_t443 + _t281*_t626 + _t285*_t454 + _t288*_t627 + _t292*_t487
-            + _t295*_t628 + _t299*_t493 + _t35*_t820 - _t364 - _t365 - _t366 - _t369 - _t372
-            + _t67*_t821;
-    const trailer3_real_t _t823 = _t103*_t254 + _t142*_t257 + _t22*_t818 + _t23*_t817 + _t277*_t625
-            + _t278*_t446 + _t284*_t626 + _t285*_t457 + _t291*_t627 + _t292*_t490 + _t298*_t628
-            + _t299*_t496 + _t30*_t819 - _t373 - _t374 - _t375 - _t376 - _t377 + _t41*_t820
-            + _t76*_t821;
-    const trailer3_real_t _t824 = _t379*_t730 + _t381*_t733 - _t387;
-    const trailer3_real_t _t825 = -_t392 + _t393 - _t396 + _t398*_t730 + _t400*_t733;
-    const trailer3_real_t _t826 = _t401 - _t402 + _t405*_t730 + _t408*_t733 + _t629 + _t630;
-    const trailer3_real_t _t827 = -_t415 + _t417*_t733 - _t631;
-    const trailer3_real_t _t828 = -_t421 + _t424*_t730 - _t632;
-    const trailer3_real_t _t829 = _t730*thetadot_right;
-    const trailer3_real_t _t830 = _t730*thetadot_left;
-    const trailer3_real_t _t831 = _t107*_t829 + _t110*_t830 + _t233*_t429 + _t234*_t430
-            + _t235*_t634 + _t236*_t638 + _t304*_t429 + _t305*_t430 + _t426 + _t428;
-    const trailer3_real_t _t832 = _t733*thetadot_right;
-    const trailer3_real_t _t833 = _t733*thetadot_left;
-    const trailer3_real_t _t834 = _t147*_t829 + _t151*_t830 + _t155*_t832 + _t157*_t833
-            + _t233*_t465 + _t234*_t470 + _t235*_t642 + _t236*_t646 + _t304*_t650 + _t305*_t654
-            + _t307*_t657 + _t308*_t659 + _t434 + _t435;
-    const trailer3_real_t _t835 = _t635 + _t636;
-    const trailer3_real_t _t836 = _t272*_t835;
-    const trailer3_real_t _t837 = _t639 + _t640;
-    const trailer3_real_t _t838 = _t272*_t837;
-    const trailer3_real_t _t839 = _t233*_t449 + _t234*_t451 + _t235*_t836 + _t236*_t838
-            + _t304*_t449 + _t305*_t451 + _t444 + _t447 + _t584*_t829 + _t586*_t830;
-    const trailer3_real_t _t840 = -_t635 + _t636;
-    const trailer3_real_t _t841 = _t279*_t840;
-    const trailer3_real_t _t842 = -_t639 + _t640;
-    const trailer3_real_t _t843 = _t279*_t842;
-    const trailer3_real_t _t844 = _t233*_t460 + _t234*_t462 + _t235*_t841 + _t236*_t843
-            + _t304*_t460 + _t305*_t462 + _t455 + _t458 + _t589*_t829 + _t591*_t830;
-    const trailer3_real_t _t845 = _t643 + _t644;
-    const trailer3_real_t _t846 = _t286*_t845;
-    const trailer3_real_t _t847 = _t647 + _t648;
-    const trailer3_real_t _t848 = _t286*_t847;
-    const trailer3_real_t _t849 = _t651 - _t652;
-    const trailer3_real_t _t850 = _t286*_t849;
-    const trailer3_real_t _t851 = _t655 - _t656;
-    const trailer3_real_t _t852 = _t286*_t851;
-    const trailer3_real_t _t853 = -_t102 + _t658;
-    const trailer3_real_t _t854 = _t286*_t853;
-    const trailer3_real_t _t855 = -_t106 + _t660;
-    const trailer3_real_t _t856 = _t286*_t855;
-    const trailer3_real_t _t857 = _t233*_t781 + _t234*_t783 + _t235*_t846 + _t236*_t848
-            + _t304*_t850 + _t305*_t852 + _t307*_t854 + _t308*_t856 + _t488 + _t491 + _t594*_t829
-            + _t596*_t830 + _t598*_t832 + _t600*_t833;
-    const trailer3_real_t _t858 = -_t643 + _t644;
-    const trailer3_real_t _t859 = _t293*_t858;
-    const trailer3_real_t _t860 = -_t647 + _t648;
-    const trailer3_real_t _t861 = _t293*_t860;
-    const trailer3_real_t _t862 = -_t651 - _t652;
-    const trailer3_real_t _t863 = _t293*_t862;
-    const trailer3_real_t _t864 = -_t655 - _t656;
-    const trailer3_real_t _t865 = _t293*_t864;
-    const trailer3_real_t _t866 = -_t102 - _t658;
-    const trailer3_real_t _t867 = _t293*_t866;
-    const trailer3_real_t _t868 = -_t106 - _t660;
-    const trailer3_real_t _t869 = _t293*_t868;
-    const trailer3_real_t _t870 = _t233*_t794 + _t234*_t796 + _t235*_t859 + _t236*_t861
-            + _t304*_t863 + _t305*_t865 + _t307*_t867 + _t308*_t869 + _t494 + _t497 + _t603*_t829
-            + _t605*_t830 + _t607*_t832 + _t609*_t833;
-    const trailer3_real_t _t871 = _t137*_t322 + _t19*_t825 + _t20*_t824 + _t253*_t831 + _t256*_t834
-            + _t26*_t826 + _t275*_t839 + _t282*_t844 + _t289*_t857 + _t296*_t870 + _t319*_t99
-            + _t35*_t827 - _t511 - _t514 - _t516 - _t519 - _t521 - _t527 + _t532 - _t535 - _t537
-            + _t587*_t662 + _t592*_t661 + _t601*_t664 + _t610*_t663 + _t665 + _t666 + _t67*_t828;
-    const trailer3_real_t _t872 = _t103*_t319 + _t142*_t322 + _t22*_t825 + _t23*_t824 + _t254*_t831
-            + _t257*_t834 + _t278*_t839 + _t285*_t844 + _t292*_t857 + _t299*_t870 + _t30*_t826
-            + _t41*_t827 - _t538 - _t539 - _t540 - _t541 - _t542 - _t545 + _t548 - _t551 - _t552
-            + _t587*_t625 + _t592*_t626 + _t601*_t627 + _t610*_t628 + _t667 + _t668 + _t76*_t828;
-    const trailer3_real_t _t873 = _t137*_t241 + _t239*_t99 - _t554;
-    const trailer3_real_t _t874 = _t137*_t255 + _t251*_t99 - _t560;
-    const trailer3_real_t _t875 = _t137*_t248 + _t247*_t99 - _t520 - _t526 - _t561 + _t669 + _t670;
-    const trailer3_real_t _t876 = J_theta_cart2*_t99 + _t137*_t252 - _t562 + _t671;
-    const trailer3_real_t _t877 = J_theta_cart3*_t137 + _t252*_t99 - _t563 + _t672;
-    const trailer3_real_t _t878 = _t137*_t256 + _t19*_t874 + _t20*_t873 + _t253*_t99 + _t26*_t875
-            + _t274*_t662 + _t275*_t443 + _t281*_t661 + _t282*_t454 + _t288*_t664 + _t289*_t487
-            + _t295*_t663 + _t296*_t493 + _t35*_t876 - _t565 - _t566 - _t567 - _t568 - _t569
-            + _t67*_t877;
-    const trailer3_real_t _t879 = -_t573*_t822 + _t576*_t823 + _t577*_t878;
-    const trailer3_real_t _t880 = -_t580*_t879;
-    const trailer3_real_t _t881 = -_t582*_t871 + _t613*_t823 + _t614*_t872 - _t617*_t822
-            + _t618*_t880;
-    const trailer3_real_t _t882 = _t110*_t239 + _t151*_t241 - _t328;
-    const trailer3_real_t _t883 = _t110*_t251 + _t151*_t255 - _t333;
-    const trailer3_real_t _t884 = _t110*_t247 + _t151*_t248 - _t620;
-    const trailer3_real_t _t885 = J_theta_cart2*_t110 + _t151*_t252 - _t339 - _t340 - _t623 + _t674;
-    const trailer3_real_t _t886 = J_theta_cart3*_t151 + _t110*_t252 + _t675;
-    const trailer3_real_t _t887 = _t107*_t254 + _t147*_t257 + _t19*_t883 + _t20*_t882 + _t26*_t884
-            + _t274*_t676 + _t278*_t584 + _t281*_t677 + _t285*_t589 + _t288*_t678 + _t292*_t594
-            + _t295*_t679 + _t299*_t603 + _t35*_t885 + _t67*_t886;
-    const trailer3_real_t _t888 = _t110*_t254 + _t151*_t257 + _t22*_t883 + _t23*_t882 + _t277*_t676
-            + _t278*_t586 + _t284*_t677 + _t285*_t591 + _t291*_t678 + _t292*_t596 + _t298*_t679
-            + _t299*_t605 + _t30*_t884 + _t41*_t885 + _t76*_t886;
-    const trailer3_real_t _t889 = _t379*_t731 + _t381*_t734 - _t383;
-    const trailer3_real_t _t890 = -_t388 + _t389 + _t398*_t731 + _t400*_t734;
-    const trailer3_real_t _t891 = _t405*_t731 + _t408*_t734 - _t630;
-    const trailer3_real_t _t892 = _t409 - _t410 + _t417*_t734 + _t631 + _t680;
-    const trailer3_real_t _t893 = _t424*_t731 - _t681;
-    const trailer3_real_t _t894 = _t731*thetadot_right;
-    const trailer3_real_t _t895 = _t731*thetadot_left;
-    const trailer3_real_t _t896 = _t107*_t894 + _t110*_t895 + _t233*_t438 + _t234*_t440 - _t304*_t35
-            - _t305*_t41 + _t431;
-    const trailer3_real_t _t897 = _t734*thetadot_right;
-    const trailer3_real_t _t898 = _t734*thetadot_left;
-    const trailer3_real_t _t899 = _t147*_t894 + _t151*_t895 + _t155*_t897 + _t157*_t898
-            + _t233*_t475 + _t234*_t479 + _t235*_t650 + _t236*_t654 + _t304*_t683 + _t305*_t687
-            + _t307*_t690 + _t308*_t692;
-    const trailer3_real_t _t900 = _t233*_t771 + _t234*_t773 - _t274*_t304 - _t277*_t305 + _t452
-            + _t584*_t894 + _t586*_t895;
-    const trailer3_real_t _t901 = _t233*_t776 + _t234*_t778 - _t281*_t304 - _t284*_t305 + _t463
-            + _t589*_t894 + _t591*_t895;
-    const trailer3_real_t _t902 = _t684 - _t685 + TRAILER3_LIT(2.0)*_t73;
-    const trailer3_real_t _t903 = _t286*_t902;
-    const trailer3_real_t _t904 = _t688 - _t689 + TRAILER3_LIT(2.0)*_t80;
-    const trailer3_real_t _t905 = _t286*_t904;
-    const trailer3_real_t _t906 = _t109 + _t691;
-    const trailer3_real_t _t907 = _t286*_t906;
-    const trailer3_real_t _t908 = _t112 + _t693;
-    const trailer3_real_t _t909 = _t286*_t908;
-    const trailer3_real_t _t910 = _t233*_t785 + _t234*_t787 + _t235*_t850 + _t236*_t852
-            + _t304*_t903 + _t305*_t905 + _t307*_t907 + _t308*_t909 + _t594*_t894 + _t596*_t895
-            + _t598*_t897 + _t600*_t898;
-    const trailer3_real_t _t911 = TRAILER3_LIT(2.0)*_t35*_t72 - _t684 - _t685;
-    const trailer3_real_t _t912 = _t293*_t911;
-    const trailer3_real_t _t913 = TRAILER3_LIT(2.0)*_t41*_t72 - _t688 - _t689;
-    const trailer3_real_t _t914 = _t293*_t913;
-    const trailer3_real_t _t915 = _t108 - _t691 - _t73;
-    const trailer3_real_t _t916 = _t293*_t915;
-    const trailer3_real_t _t917 = _t111 - _t693 - _t80;
-    const trailer3_real_t _t918 = _t293*_t917;
-    const trailer3_real_t _t919 = _t233*_t798 + _t234*_t800 + _t235*_t863 + _t236*_t865
-            + _t304*_t912 + _t305*_t914 + _t307*_t916 + _t308*_t918 + _t603*_t894 + _t605*_t895
-            + _t607*_t897 + _t609*_t898;
-    const trailer3_real_t _t920 = _t107*_t319 + _t147*_t322 + _t19*_t890 + _t20*_t889 + _t253*_t896
-            + _t256*_t899 + _t26*_t891 + _t275*_t900 + _t282*_t901 + _t289*_t910 + _t296*_t919
-            + _t35*_t892 - _t523 - _t529 + _t533 + _t587*_t695 + _t592*_t694 + _t601*_t697
-            + _t610*_t696 - _t665 + _t67*_t893 + _t698;
-    const trailer3_real_t _t921 = _t110*_t319 + _t151*_t322 + _t22*_t890 + _t23*_t889 + _t254*_t896
-            + _t257*_t899 + _t278*_t900 + _t285*_t901 + _t292*_t910 + _t299*_t919 + _t30*_t891
-            + _t41*_t892 - _t543 - _t546 + _t549 + _t587*_t676 + _t592*_t677 + _t601*_t678
-            + _t610*_t679 - _t667 + _t699 + _t76*_t893;
-    const trailer3_real_t _t922 = _t107*_t239 + _t147*_t241 - _t556;
-    const trailer3_real_t _t923 = _t107*_t251 + _t147*_t255 - _t559;
-    const trailer3_real_t _t924 = _t107*_t247 + _t147*_t248 - _t669;
-    const trailer3_real_t _t925 = J_theta_cart2*_t107 + _t147*_t252 - _t522 - _t528 - _t671 + _t700;
-    const trailer3_real_t _t926 = J_theta_cart3*_t147 + _t107*_t252 + _t701;
-    const trailer3_real_t _t927 = _t107*_t253 + _t147*_t256 + _t19*_t923 + _t20*_t922 + _t26*_t924
-            + _t274*_t695 + _t275*_t584 + _t281*_t694 + _t282*_t589 + _t288*_t697 + _t289*_t594
-            + _t295*_t696 + _t296*_t603 + _t35*_t925 + _t67*_t926;
-    const trailer3_real_t _t928 = -_t573*_t887 + _t576*_t888 + _t577*_t927;
-    const trailer3_real_t _t929 = -_t580*_t928;
-    const trailer3_real_t _t930 = -_t582*_t920 + _t613*_t888 + _t614*_t921 - _t617*_t887
-            + _t618*_t929;
-    const trailer3_real_t _t931 = _t157*_t241 - _t327;
-    const trailer3_real_t _t932 = _t157*_t255 - _t331;
-    const trailer3_real_t _t933 = _t157*_t248 - _t622;
-    const trailer3_real_t _t934 = _t157*_t252 - _t674;
-    const trailer3_real_t _t935 = J_theta_cart3*_t157 - _t345 - _t624 - _t675;
-    const trailer3_real_t _t936 = _t155*_t257 + _t19*_t932 + _t20*_t931 + _t26*_t933 + _t288*_t702
-            + _t292*_t598 + _t295*_t703 + _t299*_t607 + _t35*_t934 + _t67*_t935;
-    const trailer3_real_t _t937 = _t157*_t257 + _t22*_t932 + _t23*_t931 + _t291*_t702 + _t292*_t600
-            + _t298*_t703 + _t299*_t609 + _t30*_t933 + _t41*_t934 + _t76*_t935;
-    const trailer3_real_t _t938 = _t381*_t735 - _t382;
-    const trailer3_real_t _t939 = -_t390 + _t391 + _t400*_t735;
-    const trailer3_real_t _t940 = _t408*_t735 - _t629;
-    const trailer3_real_t _t941 = _t417*_t735 - _t680;
-    const trailer3_real_t _t942 = _t418 - _t419 + _t632 + _t681;
-    const trailer3_real_t _t943 = _t735*thetadot_right;
-    const trailer3_real_t _t944 = _t735*thetadot_left;
-    const trailer3_real_t _t945 = _t155*_t943 + _t157*_t944 + _t233*_t482 + _t234*_t484
-            + _t235*_t657 + _t236*_t659 + _t304*_t690 + _t305*_t692 - _t307*_t67 - _t308*_t76;
-    const trailer3_real_t _t946 = _t233*_t789 + _t234*_t791 + _t235*_t854 + _t236*_t856
-            - _t288*_t307 - _t291*_t308 + _t304*_t907 + _t305*_t909 + _t598*_t943 + _t600*_t944;
-    const trailer3_real_t _t947 = _t233*_t802 + _t234*_t804 + _t235*_t867 + _t236*_t869
-            - _t295*_t307 - _t298*_t308 + _t304*_t916 + _t305*_t918 + _t607*_t943 + _t609*_t944;
-    const trailer3_real_t _t948 = _t155*_t322 + _t19*_t939 + _t20*_t938 + _t256*_t945 + _t26*_t940
-            + _t289*_t946 + _t296*_t947 + _t35*_t941 - _t525 - _t531 + _t534 + _t601*_t705
-            + _t610*_t704 - _t666 + _t67*_t942 - _t698;
-    const trailer3_real_t _t949 = _t157*_t322 + _t22*_t939 + _t23*_t938 + _t257*_t945 + _t292*_t946
-            + _t299*_t947 + _t30*_t940 + _t41*_t941 - _t544 - _t547 + _t550 + _t601*_t702
-            + _t610*_t703 - _t668 - _t699 + _t76*_t942;
-    const trailer3_real_t _t950 = _t155*_t241 - _t555;
-    const trailer3_real_t _t951 = _t155*_t255 - _t558;
-    const trailer3_real_t _t952 = _t155*_t248 - _t670;
-    const trailer3_real_t _t953 = _t155*_t252 - _t700;
-    const trailer3_real_t _t954 = J_theta_cart3*_t155 - _t564 - _t672 - _t701;
-    const trailer3_real_t _t955 = _t155*_t256 + _t19*_t951 + _t20*_t950 + _t26*_t952 + _t288*_t705
-            + _t289*_t598 + _t295*_t704 + _t296*_t607 + _t35*_t953 + _t67*_t954;
-    const trailer3_real_t _t956 = -_t573*_t936 + _t576*_t937 + _t577*_t955;
-    const trailer3_real_t _t957 = -_t580*_t956;
-    const trailer3_real_t _t958 = -_t582*_t948 + _t613*_t937 + _t614*_t949 - _t617*_t936
-            + _t618*_t957;
-    const trailer3_real_t _t959 = _t19*_t706 + _t26*_t385 + _t35*_t379 + _t381*_t67;
-    const trailer3_real_t _t960 = _t26*_t395 + _t35*_t398 + _t400*_t67;
-    const trailer3_real_t _t961 = _t19*_t708 + _t35*_t405 + _t408*_t67;
-    const trailer3_real_t _t962 = _t19*_t709 + _t26*_t414 + _t417*_t67;
-    const trailer3_real_t _t963 = _t19*_t710 + _t26*_t420 + _t35*_t424;
-    const trailer3_real_t _t964 = _t20*_t711 + _t23*_t712;
-    const trailer3_real_t _t965 = -_t161 + _t711 + _t713;
-    const trailer3_real_t _t966 = _t712 - _t714;
-    const trailer3_real_t _t967 = _t83*_t965 + _t86*_t966;
-    const trailer3_real_t _t968 = _t161 + _t206;
-    const trailer3_real_t _t969 = _t163 + _t200;
-    const trailer3_real_t _t970 = _t35*thetadot_left;
-    const trailer3_real_t _t971 = _t103*_t714 + _t107*_t969 + _t110*_t970 + _t711*_t92 + _t712*_t96
-            + _t968*_t99;
-    const trailer3_real_t _t972 = _t165 + _t203;
-    const trailer3_real_t _t973 = _t67*thetadot_left;
-    const trailer3_real_t _t974 = _t127*_t711 + _t132*_t712 + _t137*_t968 + _t142*_t714
-            + _t147*_t969 + _t151*_t970 + _t155*_t972 + _t157*_t973;
-    const trailer3_real_t _t975 = _t347*_t966 + _t368*_t965;
-    const trailer3_real_t _t976 = _t350*_t966 + _t371*_t965;
-    const trailer3_real_t _t977 = _t353*_t712 + _t443*_t968 + _t446*_t714 + _t502*_t711
-            + _t584*_t969 + _t586*_t970;
-    const trailer3_real_t _t978 = _t356*_t712 + _t454*_t968 + _t457*_t714 + _t499*_t711
-            + _t589*_t969 + _t591*_t970;
-    const trailer3_real_t _t979 = _t359*_t712 + _t487*_t968 + _t490*_t714 + _t508*_t711
-            + _t594*_t969 + _t596*_t970 + _t598*_t972 + _t600*_t973;
-    const trailer3_real_t _t980 = _t362*_t712 + _t493*_t968 + _t496*_t714 + _t505*_t711
-            + _t603*_t969 + _t605*_t970 + _t607*_t972 + _t609*_t973;
-    const trailer3_real_t _t981 = _t19*_t960 + _t20*_t959 + _t249*_t967 + _t253*_t971 + _t256*_t974
-            + _t26*_t961 + _t261*_t975 + _t268*_t976 + _t275*_t977 + _t282*_t978 + _t289*_t979
-            + _t296*_t980 + _t35*_t962 + _t67*_t963 + _t715*_t964;
-    const trailer3_real_t _t982 = _t22*_t960 + _t23*_t959 + _t250*_t967 + _t254*_t971 + _t257*_t974
-            + _t264*_t975 + _t271*_t976 + _t278*_t977 + _t285*_t978 + _t292*_t979 + _t299*_t980
-            + _t30*_t961 + _t41*_t962 + _t716*_t964 + _t76*_t963;
-    const trailer3_real_t _t983 = -_t577*_t581*_t981 + _t614*_t982;
-    const trailer3_real_t _t984 = _t22*_t706 + _t30*_t385 + _t379*_t41 + _t381*_t76;
-    const trailer3_real_t _t985 = _t30*_t395 + _t398*_t41 + _t400*_t76;
-    const trailer3_real_t _t986 = _t22*_t708 + _t405*_t41 + _t408*_t76;
-    const trailer3_real_t _t987 = _t22*_t709 + _t30*_t414 + _t417*_t76;
-    const trailer3_real_t _t988 = _t22*_t710 + _t30*_t420 + _t41*_t424;
-    const trailer3_real_t _t989 = _t20*_t717 + _t23*_t718;
-    const trailer3_real_t _t990 = _t717 - _t719;
-    const trailer3_real_t _t991 = -_t162 + _t713 + _t718;
-    const trailer3_real_t _t992 = _t83*_t990 + _t86*_t991;
-    const trailer3_real_t _t993 = _t162 + _t206;
-    const trailer3_real_t _t994 = _t41*thetadot_right;
-    const trailer3_real_t _t995 = _t164 + _t200;
-    const trailer3_real_t _t996 = _t103*_t993 + _t107*_t994 + _t110*_t995 + _t717*_t92 + _t718*_t96
-            + _t719*_t99;
-    const trailer3_real_t _t997 = _t76*thetadot_right;
-    const trailer3_real_t _t998 = _t166 + _t203;
-    const trailer3_real_t _t999 = _t127*_t717 + _t132*_t718 + _t137*_t719 + _t142*_t993
-            + _t147*_t994 + _t151*_t995 + _t155*_t997 + _t157*_t998;
-    const trailer3_real_t _t1000 = _t347*_t991 + _t368*_t990;
-    const trailer3_real_t _t1001 = _t350*_t991 + _t371*_t990;
-    const trailer3_real_t _t1002 = _t353*_t718 + _t443*_t719 + _t446*_t993 + _t502*_t717
-            + _t584*_t994 + _t586*_t995;
-    const trailer3_real_t _t1003 = _t356*_t718 + _t454*_t719 + _t457*_t993 + _t499*_t717
-            + _t589*_t994 + _t591*_t995;
-    const trailer3_real_t _t1004 = _t359*_t718 + _t487*_t719 + _t490*_t993 + _t508*_t717
-            + _t594*_t994 + _t596*_t995 + _t598*_t997 + _t600*_t998;
-    const trailer3_real_t _t1005 = _t362*_t718 + _t493*_t719 + _t496*_t993 + _t505*_t717
-            + _t603*_t994 + _t605*_t995 + _t607*_t997 + _t609*_t998;
-    const trailer3_real_t _t1006 = _t1000*_t261 + _t1001*_t268 + _t1002*_t275 + _t1003*_t282
-            + _t1004*_t289 + _t1005*_t296 + _t19*_t985 + _t20*_t984 + _t249*_t992 + _t253*_t996
-            + _t256*_t999 + _t26*_t986 + _t35*_t987 + _t67*_t988 + _t715*_t989;
-    const trailer3_real_t _t1007 = _t1000*_t264 + _t1001*_t271 + _t1002*_t278 + _t1003*_t285
-            + _t1004*_t292 + _t1005*_t299 + _t22*_t985 + _t23*_t984 + _t250*_t992 + _t254*_t996
-            + _t257*_t999 + _t30*_t986 + _t41*_t987 + _t716*_t989 + _t76*_t988;
-    const trailer3_real_t _t1008 = -_t1006*_t577*_t581 + _t1007*_t614;
-    const trailer3_real_t _t1009 = -_t613*_t757 + _t614*_t806 + _t617*_t813 - _t720*_t807
-            + _t721*_t815;
-    const trailer3_real_t _t1010 = -_t613*_t822 + _t614*_t871 + _t617*_t878 - _t720*_t872
-            + _t721*_t880;
-    const trailer3_real_t _t1011 = -_t613*_t887 + _t614*_t920 + _t617*_t927 - _t720*_t921
-            + _t721*_t929;
-    const trailer3_real_t _t1012 = -_t613*_t936 + _t614*_t948 + _t617*_t955 - _t720*_t949
-            + _t721*_t957;
-    const trailer3_real_t _t1013 = _t614*_t981 - _t720*_t982;
-    const trailer3_real_t _t1014 = _t1006*_t614 - _t1007*_t720;
+    const trailer3_real_t _t562 = _t512*tau_right + _t513*tau_left - _t561;
+    const trailer3_real_t _t563 = _t530*_t562;
+    const trailer3_real_t _t564 = _t526*_t530;
+    const trailer3_real_t _t565 = -_t102*_t110 - _t102*_t111 - _t106*_t96 - _t107*_t96 - _t108*_t99
+            - _t109*_t99;
+    const trailer3_real_t _t566 = -K_theta_tractor_x_tractor*_t204 + _t219*_t274 + _t223*_t277
+            + _t226*_t280 + _t23*_t281 + _t234*_t466 + _t241*_t461 + _t248*_t537 + _t255*_t542
+            + _t262*_t551 + _t269*_t560 + _t284*_t33 + _t287*_t52 + _t565;
+    const trailer3_real_t _t567 = _t515*tau_right + _t517*tau_left - _t566;
+    const trailer3_real_t _t568 = _t530*_t567;
+    const trailer3_real_t _t569 = -_t519*_t567 + _t526*_t562;
+    const trailer3_real_t _t570 = _t524*_t530;
+    const trailer3_real_t _t571 = -_t519*_t562 + _t524*_t567;
+    const trailer3_real_t _t572 = -_t116 + _t117 + _t118 + _t119;
+    const trailer3_real_t _t573 = _t33*_t572;
+    const trailer3_real_t _t574 = -_t120 + _t121 + _t124 + _t125;
+    const trailer3_real_t _t575 = _t52*_t574;
+    const trailer3_real_t _t576 = _t23*_t572;
+    const trailer3_real_t _t577 = _t23*_t574;
+    const trailer3_real_t _t578 = J_theta_cart2_right*_t391;
+    const trailer3_real_t _t579 = J_theta_cart2_left*_t402;
+    const trailer3_real_t _t580 = J_theta_cart3_right*_t435;
+    const trailer3_real_t _t581 = J_theta_cart3_left*_t441;
+    const trailer3_real_t _t582 = _t10*_t100 - _t10*_t104 + _t114*_t9 + _t115*_t9;
+    const trailer3_real_t _t583 = -_t10*_t103 + _t10*_t97 + _t112*_t9 + _t113*_t9;
+    const trailer3_real_t _t584 = _t102*_t72 + _t102*_t73 + _t102*_t74 - _t102*_t76;
+    const trailer3_real_t _t585 = _t102*_t77 + _t102*_t78 + _t102*_t79 - _t102*_t81;
+    const trailer3_real_t _t586 = -TRAILER3_LIT(2.0)*_t161 + TRAILER3_LIT(2.0)*_t21;
+    const trailer3_real_t _t587 = -TRAILER3_LIT(1.6666666666666667)*_t586;
+    const trailer3_real_t _t588 = TRAILER3_LIT(0.2)*_t587;
+    const trailer3_real_t _t589 = TRAILER3_LIT(2.0)*_t129 + TRAILER3_LIT(2.0)*_t40;
+    const trailer3_real_t _t590 = -TRAILER3_LIT(2.0)*_t164 + TRAILER3_LIT(2.0)*_t24;
+    const trailer3_real_t _t591 = -TRAILER3_LIT(1.6666666666666667)*_t590;
+    const trailer3_real_t _t592 = TRAILER3_LIT(0.2)*_t591;
+    const trailer3_real_t _t593 = TRAILER3_LIT(2.0)*_t132 + TRAILER3_LIT(2.0)*_t42;
+    const trailer3_real_t _t594 = -TRAILER3_LIT(2.0)*_t174 + TRAILER3_LIT(2.0)*_t20*_t26
+            - _t28*_t587;
+    const trailer3_real_t _t595 = -TRAILER3_LIT(1.6666666666666667)*_t594;
+    const trailer3_real_t _t596 = TRAILER3_LIT(0.2)*_t595;
+    const trailer3_real_t _t597 = TRAILER3_LIT(2.0)*_t136 + TRAILER3_LIT(2.0)*_t48 - _t49*_t587;
+    const trailer3_real_t _t598 = -TRAILER3_LIT(2.0)*_t179 + TRAILER3_LIT(2.0)*_t23*_t26
+            - _t28*_t591;
+    const trailer3_real_t _t599 = -TRAILER3_LIT(1.6666666666666667)*_t598;
+    const trailer3_real_t _t600 = TRAILER3_LIT(0.2)*_t599;
+    const trailer3_real_t _t601 = TRAILER3_LIT(2.0)*_t140 - _t49*_t591 + TRAILER3_LIT(2.0)*_t54;
+    const trailer3_real_t _t602 = _t184 - _t377;
+    const trailer3_real_t _t603 = -TRAILER3_LIT(1.6666666666666667)*_t602;
+    const trailer3_real_t _t604 = TRAILER3_LIT(0.2)*_t603;
+    const trailer3_real_t _t605 = _t145 + _t412;
+    const trailer3_real_t _t606 = _t189 - _t378;
+    const trailer3_real_t _t607 = -TRAILER3_LIT(1.6666666666666667)*_t606;
+    const trailer3_real_t _t608 = TRAILER3_LIT(0.2)*_t607;
+    const trailer3_real_t _t609 = _t149 + _t417;
+    const trailer3_real_t _t610 = TRAILER3_LIT(1.6666666666666667)*_t186;
+    const trailer3_real_t _t611 = TRAILER3_LIT(0.2)*_t610;
+    const trailer3_real_t _t612 = TRAILER3_LIT(1.6666666666666667)*_t191;
+    const trailer3_real_t _t613 = TRAILER3_LIT(0.2)*_t612;
+    const trailer3_real_t _t614 = J_theta_cart2_left*_t399;
+    const trailer3_real_t _t615 = J_theta_cart2_right*_t388;
+    const trailer3_real_t _t616 = J_theta_cart3_left*_t438;
+    const trailer3_real_t _t617 = J_theta_cart3_right*_t432;
+    const trailer3_real_t _t618 = _t572*(_t20*_t277 + _t274*_t29);
+    const trailer3_real_t _t619 = _t574*(_t20*_t280 + _t274*_t45);
+    const trailer3_real_t _t620 = _t572*(_t23*_t277 + _t274*_t33);
+    const trailer3_real_t _t621 = _t574*(_t23*_t280 + _t274*_t52);
+    const trailer3_real_t _t622 = _t29*_t572;
+    const trailer3_real_t _t623 = _t45*_t574;
+    const trailer3_real_t _t624 = _t20*_t572;
+    const trailer3_real_t _t625 = _t20*_t574;
+    const trailer3_real_t _t626 = -_t122 + _t123 + _t126 + _t127;
+    const trailer3_real_t _t627 = _t52*_t626;
+    const trailer3_real_t _t628 = _t33*_t626;
+    const trailer3_real_t _t629 = J_theta_cart2_right*_t536;
+    const trailer3_real_t _t630 = J_theta_cart2_left*_t541;
+    const trailer3_real_t _t631 = J_theta_cart3_right*_t546;
+    const trailer3_real_t _t632 = J_theta_cart3_left*_t555;
+    const trailer3_real_t _t633 = _t100*_t84 - _t104*_t84 + _t114*_t82 + _t115*_t82;
+    const trailer3_real_t _t634 = _t83*_t96 + _t85*_t96 + _t86*_t96 - _t87*_t96;
+    const trailer3_real_t _t635 = TRAILER3_LIT(2.0)*_t194 + TRAILER3_LIT(2.0)*_t30;
+    const trailer3_real_t _t636 = -TRAILER3_LIT(1.6666666666666667)*_t635;
+    const trailer3_real_t _t637 = TRAILER3_LIT(0.2)*_t636;
+    const trailer3_real_t _t638 = TRAILER3_LIT(2.0)*_t153;
+    const trailer3_real_t _t639 = TRAILER3_LIT(2.0)*_t198 + TRAILER3_LIT(2.0)*_t34;
+    const trailer3_real_t _t640 = -TRAILER3_LIT(1.6666666666666667)*_t639;
+    const trailer3_real_t _t641 = TRAILER3_LIT(0.2)*_t640;
+    const trailer3_real_t _t642 = TRAILER3_LIT(2.0)*_t156;
+    const trailer3_real_t _t643 = TRAILER3_LIT(1.6666666666666667)*_t195;
+    const trailer3_real_t _t644 = TRAILER3_LIT(0.2)*_t643;
+    const trailer3_real_t _t645 = TRAILER3_LIT(1.6666666666666667)*_t199;
+    const trailer3_real_t _t646 = TRAILER3_LIT(0.2)*_t645;
+    const trailer3_real_t _t647 = J_theta_cart2_left*_t539;
+    const trailer3_real_t _t648 = J_theta_cart2_right*_t534;
+    const trailer3_real_t _t649 = J_theta_cart3_left*_t553;
+    const trailer3_real_t _t650 = J_theta_cart3_right*_t544;
+    const trailer3_real_t _t651 = _t626*(_t277*_t45 + _t280*_t29);
+    const trailer3_real_t _t652 = _t626*(_t277*_t52 + _t280*_t33);
+    const trailer3_real_t _t653 = _t45*_t626;
+    const trailer3_real_t _t654 = _t29*_t626;
+    const trailer3_real_t _t655 = J_theta_cart3_right*_t550;
+    const trailer3_real_t _t656 = J_theta_cart3_left*_t559;
+    const trailer3_real_t _t657 = J_theta_cart3_left*_t557;
+    const trailer3_real_t _t658 = J_theta_cart3_right*_t548;
+    const trailer3_real_t _t659 = TRAILER3_LIT(2.0)*_t90;
+    const trailer3_real_t _t660 = _t659*_t88;
+    const trailer3_real_t _t661 = TRAILER3_LIT(0.6)*_t90;
+    const trailer3_real_t _t662 = _t57*_t661 + _t58*_t661;
+    const trailer3_real_t _t663 = _t59*_t661 + _t60*_t661;
+    const trailer3_real_t _t664 = _t61*_t661 + _t62*_t661;
+    const trailer3_real_t _t665 = _t88*_t94;
+    const trailer3_real_t _t666 = _t20*_t92 + _t23*_t88;
+    const trailer3_real_t _t667 = _t666*_t94;
+    const trailer3_real_t _t668 = -_t101;
+    const trailer3_real_t _t669 = _t668 + _t90;
+    const trailer3_real_t _t670 = _t666*_t90;
+    const trailer3_real_t _t671 = _t659 + _t668;
+    const trailer3_real_t _t672 = -K_theta_tractor_x_tractor + _t290 + _t294;
+    const trailer3_real_t _t673 = _t659*_t89;
+    const trailer3_real_t _t674 = _t89*_t94;
+    const trailer3_real_t _t675 = _t20*_t93 + _t23*_t89;
+    const trailer3_real_t _t676 = _t675*_t94;
+    const trailer3_real_t _t677 = _t675*_t90;
+    const trailer3_real_t _t678 = _t512*_t92 + _t515*_t88;
+    const trailer3_real_t _t679 = _t513*_t92 + _t517*_t88;
+    const trailer3_real_t _t680 = _t512*_t93 + _t515*_t89;
+    const trailer3_real_t _t681 = _t513*_t93 + _t517*_t89;
+    const trailer3_real_t _t682 = _t288*_t94;
+    const trailer3_real_t _t683 = _t289*_t94;
+    const trailer3_real_t _t684 = _t288*_t92;
+    const trailer3_real_t _t685 = _t288*_t93;
+    const trailer3_real_t _t686 = _t289*_t92;
+    const trailer3_real_t _t687 = _t289*_t93;
+    const trailer3_real_t _t688 = _t137*_t94 + _t141*_t90;
+    const trailer3_real_t _t689 = _t144*_t94 + _t148*_t90;
+    const trailer3_real_t _t690 = _t152*_t94 + _t155*_t90;
+    const trailer3_real_t _t691 = _t29*_t92 + _t33*_t88;
+    const trailer3_real_t _t692 = _t29*_t93 + _t33*_t89;
+    const trailer3_real_t _t693 = _t172*_t94 + _t177*_t90;
+    const trailer3_real_t _t694 = _t182*_t94 + _t187*_t90;
+    const trailer3_real_t _t695 = _t192*_t94 + _t196*_t90;
+    const trailer3_real_t _t696 = _t200*_t94 + _t202*_t90;
+    const trailer3_real_t _t697 = _t45*_t92 + _t52*_t88;
+    const trailer3_real_t _t698 = _t45*_t93 + _t52*_t89;
+    const trailer3_real_t _t699 = _t299*_t90 + _t320*_t94;
+    const trailer3_real_t _t700 = _t230*_t92 + _t233*_t88;
+    const trailer3_real_t _t701 = _t230*_t93 + _t233*_t89;
+    const trailer3_real_t _t702 = _t302*_t90 + _t323*_t94;
+    const trailer3_real_t _t703 = _t237*_t92 + _t240*_t88;
+    const trailer3_real_t _t704 = _t237*_t93 + _t240*_t89;
+    const trailer3_real_t _t705 = _t305*_t90 + _t450*_t94;
+    const trailer3_real_t _t706 = _t388*_t94 + _t391*_t90;
+    const trailer3_real_t _t707 = _t534*_t94 + _t536*_t90;
+    const trailer3_real_t _t708 = _t244*_t92 + _t247*_t88;
+    const trailer3_real_t _t709 = _t244*_t93 + _t247*_t89;
+    const trailer3_real_t _t710 = _t308*_t90 + _t447*_t94;
+    const trailer3_real_t _t711 = _t399*_t94 + _t402*_t90;
+    const trailer3_real_t _t712 = _t539*_t94 + _t541*_t90;
+    const trailer3_real_t _t713 = _t251*_t92 + _t254*_t88;
+    const trailer3_real_t _t714 = _t251*_t93 + _t254*_t89;
+    const trailer3_real_t _t715 = _t311*_t90 + _t456*_t94;
+    const trailer3_real_t _t716 = _t432*_t94 + _t435*_t90;
+    const trailer3_real_t _t717 = _t544*_t94 + _t546*_t90;
+    const trailer3_real_t _t718 = _t548*_t94 + _t550*_t90;
+    const trailer3_real_t _t719 = _t258*_t92 + _t261*_t88;
+    const trailer3_real_t _t720 = _t258*_t93 + _t261*_t89;
+    const trailer3_real_t _t721 = _t314*_t90 + _t453*_t94;
+    const trailer3_real_t _t722 = _t438*_t94 + _t441*_t90;
+    const trailer3_real_t _t723 = _t553*_t94 + _t555*_t90;
+    const trailer3_real_t _t724 = _t557*_t94 + _t559*_t90;
+    const trailer3_real_t _t725 = _t265*_t92 + _t268*_t88;
+    const trailer3_real_t _t726 = _t265*_t93 + _t268*_t89;
+    const trailer3_real_t _t727 = _t141*_t209 + _t177*_t211 + _t291 + _t294;
+    const trailer3_real_t _t728 = _t141*_t216 + _t177*_t217 + _t295 + _t329;
+    const trailer3_real_t _t729 = J_theta_cart2*_t141 + _t177*_t221 + _t296 + _t327;
+    const trailer3_real_t _t730 = J_theta_cart3*_t177 + _t141*_t221 + _t297 + _t325;
+    const trailer3_real_t _t731 = _t137*_t224 + _t172*_t227 + _t20*_t728 + _t244*_t306 + _t248*_t450
+            + _t251*_t309 + _t255*_t447 + _t258*_t312 + _t262*_t456 + _t265*_t315 + _t269*_t453
+            + _t29*_t729 + _t316 + _t317 + _t318 + _t321 + _t324 + _t45*_t730 + _t727;
+    const trailer3_real_t _t732 = _t141*_t223 + _t177*_t226 + _t326 + _t328 + _t330;
+    const trailer3_real_t _t733 = _t141*_t224 + _t177*_t227 + _t23*_t728 + _t247*_t306 + _t248*_t305
+            + _t254*_t309 + _t255*_t308 + _t261*_t312 + _t262*_t311 + _t268*_t315 + _t269*_t314
+            + _t33*_t729 + _t331 + _t332 + _t333 + _t334 + _t335 + _t52*_t730 + _t732;
+    const trailer3_real_t _t734 = _t337*_t688 + _t339*_t693 + _t340 + _t341 + _t345;
+    const trailer3_real_t _t735 = -_t346 + _t347 + _t350*_t688 + _t353*_t693;
+    const trailer3_real_t _t736 = -_t354 + _t355 + _t360 + _t362*_t693;
+    const trailer3_real_t _t737 = -_t363 + _t364 + _t366 + _t369*_t688;
+    const trailer3_real_t _t738 = _t688*_t94;
+    const trailer3_real_t _t739 = _t688*_t90;
+    const trailer3_real_t _t740 = _t152*_t738 + _t155*_t739 - _t204*_t29 + _t275*_t383 + _t276*_t385
+            - _t33*_t91 - _t371 - _t373 + _t376;
+    const trailer3_real_t _t741 = _t693*_t94;
+    const trailer3_real_t _t742 = _t693*_t90;
+    const trailer3_real_t _t743 = _t192*_t738 + _t196*_t739 + _t200*_t741 + _t202*_t742 - _t204*_t45
+            + _t205*_t410 + _t206*_t415 + _t275*_t420 + _t276*_t424 + _t278*_t427 + _t279*_t429
+            - _t379 - _t380 - _t52*_t91;
+    const trailer3_real_t _t744 = _t130 + _t384;
+    const trailer3_real_t _t745 = _t242*_t744;
+    const trailer3_real_t _t746 = _t133 + _t386;
+    const trailer3_real_t _t747 = _t242*_t746;
+    const trailer3_real_t _t748 = -_t204*_t244 - _t247*_t91 + _t275*_t745 + _t276*_t747 - _t389
+            - _t392 + _t397 + _t534*_t738 + _t536*_t739;
+    const trailer3_real_t _t749 = _t130 - _t384;
+    const trailer3_real_t _t750 = _t249*_t749;
+    const trailer3_real_t _t751 = _t132 - _t17 - _t386;
+    const trailer3_real_t _t752 = _t249*_t751;
+    const trailer3_real_t _t753 = -_t204*_t251 - _t254*_t91 + _t275*_t750 + _t276*_t752 - _t400
+            - _t403 + _t408 + _t539*_t738 + _t541*_t739;
+    const trailer3_real_t _t754 = _t411 - _t413;
+    const trailer3_real_t _t755 = _t256*_t754;
+    const trailer3_real_t _t756 = _t416 - _t418;
+    const trailer3_real_t _t757 = _t256*_t756;
+    const trailer3_real_t _t758 = _t421 - _t422;
+    const trailer3_real_t _t759 = _t256*_t758;
+    const trailer3_real_t _t760 = _t425 - _t426;
+    const trailer3_real_t _t761 = _t256*_t760;
+    const trailer3_real_t _t762 = _t139 + _t428;
+    const trailer3_real_t _t763 = _t256*_t762;
+    const trailer3_real_t _t764 = _t143 + _t430;
+    const trailer3_real_t _t765 = _t256*_t764;
+    const trailer3_real_t _t766 = -_t204*_t258 + _t205*_t755 + _t206*_t757 - _t261*_t91
+            + _t275*_t759 + _t276*_t761 + _t278*_t763 + _t279*_t765 - _t433 - _t436 + _t544*_t738
+            + _t546*_t739 + _t548*_t741 + _t550*_t742;
+    const trailer3_real_t _t767 = -_t411 - _t413;
+    const trailer3_real_t _t768 = _t263*_t767;
+    const trailer3_real_t _t769 = -_t416 - _t418;
+    const trailer3_real_t _t770 = _t263*_t769;
+    const trailer3_real_t _t771 = -_t421 - _t422;
+    const trailer3_real_t _t772 = _t263*_t771;
+    const trailer3_real_t _t773 = -_t425 - _t426;
+    const trailer3_real_t _t774 = _t263*_t773;
+    const trailer3_real_t _t775 = _t139 - _t428;
+    const trailer3_real_t _t776 = _t263*_t775;
+    const trailer3_real_t _t777 = _t143 - _t430;
+    const trailer3_real_t _t778 = _t263*_t777;
+    const trailer3_real_t _t779 = -_t204*_t265 + _t205*_t768 + _t206*_t770 - _t268*_t91
+            + _t275*_t772 + _t276*_t774 + _t278*_t776 + _t279*_t778 - _t439 - _t442 + _t553*_t738
+            + _t555*_t739 + _t557*_t741 + _t559*_t742;
+    const trailer3_real_t _t780 = _t137*_t284 + _t172*_t287 + _t20*_t735 + _t222*_t740 + _t225*_t743
+            + _t245*_t748 + _t252*_t753 + _t259*_t766 + _t266*_t779 + _t29*_t736 + _t443 + _t444
+            + _t445 + _t448*_t542 + _t45*_t737 + _t451*_t537 + _t454*_t560 + _t457*_t551 + _t459
+            + _t462 + _t464 + _t467 - _t468 - _t469 - _t470 + _t472 + _t473 + _t734;
+    const trailer3_real_t _t781 = _t474 - _t475 + _t476 - _t477 + _t478 - _t479 + _t482
+            + _t484*_t688 + _t486*_t693;
+    const trailer3_real_t _t782 = _t141*_t284 + _t177*_t287 + _t224*_t740 + _t227*_t743 + _t23*_t735
+            + _t248*_t748 + _t255*_t753 + _t262*_t766 + _t269*_t779 + _t306*_t537 + _t309*_t542
+            + _t312*_t551 + _t315*_t560 + _t33*_t736 + _t487 + _t488 + _t489 + _t490 + _t491 + _t492
+            + _t493 - _t494 - _t495 - _t496 + _t497 + _t498 + _t52*_t737 + _t781;
+    const trailer3_real_t _t783 = _t137*_t209 + _t172*_t211 + _t499 + _t503;
+    const trailer3_real_t _t784 = _t137*_t216 + _t172*_t217 + _t270 + _t504;
+    const trailer3_real_t _t785 = J_theta_cart2*_t137 + _t172*_t221 + _t282 + _t505;
+    const trailer3_real_t _t786 = J_theta_cart3*_t172 + _t137*_t221 + _t285 + _t506;
+    const trailer3_real_t _t787 = _t137*_t222 + _t172*_t225 + _t20*_t784 + _t244*_t451 + _t245*_t450
+            + _t251*_t448 + _t252*_t447 + _t258*_t457 + _t259*_t456 + _t265*_t454 + _t266*_t453
+            + _t29*_t785 + _t45*_t786 + _t507 + _t508 + _t509 + _t510 + _t511 + _t783;
+    const trailer3_real_t _t788 = -_t520*_t731 + _t524*_t733 + _t526*_t787;
+    const trailer3_real_t _t789 = -_t529*_t788;
+    const trailer3_real_t _t790 = _t531*_t782 + _t563*_t733 - _t564*_t780 - _t568*_t731
+            + _t569*_t789;
+    const trailer3_real_t _t791 = _t531*_t780 - _t563*_t731 + _t568*_t787 - _t570*_t782
+            + _t571*_t789;
+    const trailer3_real_t _t792 = _t512*_t790 + _t515*_t791;
+    const trailer3_real_t _t793 = _t148*_t209 + _t187*_t211 - _t291;
+    const trailer3_real_t _t794 = _t148*_t216 + _t187*_t217 - _t295 - _t329 + _t573 + _t575;
+    const trailer3_real_t _t795 = J_theta_cart2*_t148 + _t187*_t221 - _t296 + _t576;
+    const trailer3_real_t _t796 = J_theta_cart3*_t187 + _t148*_t221 - _t297 + _t577;
+    const trailer3_real_t _t797 = _t144*_t224 + _t182*_t227 + _t20*_t794 + _t244*_t578 + _t248*_t388
+            + _t251*_t579 + _t255*_t399 + _t258*_t580 + _t262*_t432 + _t265*_t581 + _t269*_t438
+            + _t29*_t795 - _t316 - _t317 - _t318 - _t321 - _t324 + _t45*_t796 + _t793;
+    const trailer3_real_t _t798 = _t148*_t223 + _t187*_t226 - _t330;
+    const trailer3_real_t _t799 = _t148*_t224 + _t187*_t227 + _t23*_t794 + _t247*_t578 + _t248*_t391
+            + _t254*_t579 + _t255*_t402 + _t261*_t580 + _t262*_t435 + _t268*_t581 + _t269*_t441
+            + _t33*_t795 - _t331 - _t332 - _t333 - _t334 - _t335 + _t52*_t796 + _t798;
+    const trailer3_real_t _t800 = _t337*_t689 + _t339*_t694 - _t345;
+    const trailer3_real_t _t801 = _t346 - _t347 + _t350*_t689 + _t353*_t694 + _t582 + _t583;
+    const trailer3_real_t _t802 = -_t360 + _t362*_t694 - _t584;
+    const trailer3_real_t _t803 = -_t366 + _t369*_t689 - _t585;
+    const trailer3_real_t _t804 = _t689*_t94;
+    const trailer3_real_t _t805 = _t689*_t90;
+    const trailer3_real_t _t806 = _t152*_t804 + _t155*_t805 + _t204*_t374 + _t205*_t587
+            + _t206*_t591 + _t275*_t374 + _t276*_t375 + _t371 + _t373 + _t375*_t91;
+    const trailer3_real_t _t807 = _t694*_t94;
+    const trailer3_real_t _t808 = _t694*_t90;
+    const trailer3_real_t _t809 = _t192*_t804 + _t196*_t805 + _t200*_t807 + _t202*_t808
+            + _t204*_t410 + _t205*_t595 + _t206*_t599 + _t275*_t603 + _t276*_t607 + _t278*_t610
+            + _t279*_t612 + _t379 + _t380 + _t415*_t91;
+    const trailer3_real_t _t810 = _t588 + _t589;
+    const trailer3_real_t _t811 = _t242*_t810;
+    const trailer3_real_t _t812 = _t592 + _t593;
+    const trailer3_real_t _t813 = _t242*_t812;
+    const trailer3_real_t _t814 = _t204*_t394 + _t205*_t811 + _t206*_t813 + _t275*_t394
+            + _t276*_t396 + _t389 + _t392 + _t396*_t91 + _t534*_t804 + _t536*_t805;
+    const trailer3_real_t _t815 = -_t588 + _t589;
+    const trailer3_real_t _t816 = _t249*_t815;
+    const trailer3_real_t _t817 = -_t592 + _t593;
+    const trailer3_real_t _t818 = _t249*_t817;
+    const trailer3_real_t _t819 = _t204*_t405 + _t205*_t816 + _t206*_t818 + _t275*_t405
+            + _t276*_t407 + _t400 + _t403 + _t407*_t91 + _t539*_t804 + _t541*_t805;
+    const trailer3_real_t _t820 = _t596 + _t597;
+    const trailer3_real_t _t821 = _t256*_t820;
+    const trailer3_real_t _t822 = _t600 + _t601;
+    const trailer3_real_t _t823 = _t256*_t822;
+    const trailer3_real_t _t824 = _t604 - _t605;
+    const trailer3_real_t _t825 = _t256*_t824;
+    const trailer3_real_t _t826 = _t608 - _t609;
+    const trailer3_real_t _t827 = _t256*_t826;
+    const trailer3_real_t _t828 = -_t147 + _t611;
+    const trailer3_real_t _t829 = _t256*_t828;
+    const trailer3_real_t _t830 = -_t151 + _t613;
+    const trailer3_real_t _t831 = _t256*_t830;
+    const trailer3_real_t _t832 = _t204*_t755 + _t205*_t821 + _t206*_t823 + _t275*_t825
+            + _t276*_t827 + _t278*_t829 + _t279*_t831 + _t433 + _t436 + _t544*_t804 + _t546*_t805
+            + _t548*_t807 + _t550*_t808 + _t757*_t91;
+    const trailer3_real_t _t833 = -_t596 + _t597;
+    const trailer3_real_t _t834 = _t263*_t833;
+    const trailer3_real_t _t835 = -_t600 + _t601;
+    const trailer3_real_t _t836 = _t263*_t835;
+    const trailer3_real_t _t837 = -_t604 - _t605;
+    const trailer3_real_t _t838 = _t263*_t837;
+    const trailer3_real_t _t839 = -_t608 - _t609;
+    const trailer3_real_t _t840 = _t263*_t839;
+    const trailer3_real_t _t841 = -_t147 - _t611;
+    const trailer3_real_t _t842 = _t263*_t841;
+    const trailer3_real_t _t843 = -_t151 - _t613;
+    const trailer3_real_t _t844 = _t263*_t843;
+    const trailer3_real_t _t845 = _t204*_t768 + _t205*_t834 + _t206*_t836 + _t275*_t838
+            + _t276*_t840 + _t278*_t842 + _t279*_t844 + _t439 + _t442 + _t553*_t804 + _t555*_t805
+            + _t557*_t807 + _t559*_t808 + _t770*_t91;
+    const trailer3_real_t _t846 = _t144*_t284 + _t182*_t287 + _t20*_t801 + _t222*_t806 + _t225*_t809
+            + _t245*_t814 + _t252*_t819 + _t259*_t832 + _t266*_t845 + _t29*_t802 - _t443
+            + _t45*_t803 - _t459 - _t462 - _t464 - _t467 + _t468 - _t472 - _t473 + _t537*_t615
+            + _t542*_t614 + _t551*_t617 + _t560*_t616 + _t618 + _t619 + _t800;
+    const trailer3_real_t _t847 = -_t478 + _t479 - _t482 + _t484*_t689 + _t486*_t694;
+    const trailer3_real_t _t848 = _t148*_t284 + _t187*_t287 + _t224*_t806 + _t227*_t809 + _t23*_t801
+            + _t248*_t814 + _t255*_t819 + _t262*_t832 + _t269*_t845 + _t33*_t802 - _t487 - _t490
+            - _t491 - _t492 - _t493 + _t494 - _t497 - _t498 + _t52*_t803 + _t537*_t578 + _t542*_t579
+            + _t551*_t580 + _t560*_t581 + _t620 + _t621 + _t847;
+    const trailer3_real_t _t849 = _t144*_t209 + _t182*_t211 - _t499 - _t500;
+    const trailer3_real_t _t850 = _t144*_t216 + _t182*_t217 - _t270 - _t504 + _t622 + _t623;
+    const trailer3_real_t _t851 = J_theta_cart2*_t144 + _t182*_t221 - _t505 + _t624;
+    const trailer3_real_t _t852 = J_theta_cart3*_t182 + _t144*_t221 - _t506 + _t625;
+    const trailer3_real_t _t853 = _t144*_t222 + _t182*_t225 + _t20*_t850 + _t244*_t615 + _t245*_t388
+            + _t251*_t614 + _t252*_t399 + _t258*_t617 + _t259*_t432 + _t265*_t616 + _t266*_t438
+            + _t29*_t851 + _t45*_t852 - _t507 - _t508 - _t509 - _t510 - _t511 + _t849;
+    const trailer3_real_t _t854 = -_t520*_t797 + _t524*_t799 + _t526*_t853;
+    const trailer3_real_t _t855 = -_t529*_t854;
+    const trailer3_real_t _t856 = _t531*_t848 + _t563*_t799 - _t564*_t846 - _t568*_t797
+            + _t569*_t855;
+    const trailer3_real_t _t857 = _t531*_t846 - _t563*_t797 + _t568*_t853 - _t570*_t848
+            + _t571*_t855;
+    const trailer3_real_t _t858 = _t512*_t856 + _t515*_t857;
+    const trailer3_real_t _t859 = _t155*_t209 + _t196*_t211 - _t293;
+    const trailer3_real_t _t860 = _t155*_t216 + _t196*_t217 - _t573;
+    const trailer3_real_t _t861 = J_theta_cart2*_t155 + _t196*_t221 - _t327 - _t576 + _t627;
+    const trailer3_real_t _t862 = J_theta_cart3*_t196 + _t155*_t221 + _t628;
+    const trailer3_real_t _t863 = _t152*_t224 + _t192*_t227 + _t20*_t860 + _t244*_t629 + _t248*_t534
+            + _t251*_t630 + _t255*_t539 + _t258*_t631 + _t262*_t544 + _t265*_t632 + _t269*_t553
+            + _t29*_t861 + _t45*_t862 + _t859;
+    const trailer3_real_t _t864 = _t155*_t223 + _t196*_t226 - _t328;
+    const trailer3_real_t _t865 = _t155*_t224 + _t196*_t227 + _t23*_t860 + _t247*_t629 + _t248*_t536
+            + _t254*_t630 + _t255*_t541 + _t261*_t631 + _t262*_t546 + _t268*_t632 + _t269*_t555
+            + _t33*_t861 + _t52*_t862 + _t864;
+    const trailer3_real_t _t866 = _t337*_t690 + _t339*_t695 - _t341;
+    const trailer3_real_t _t867 = _t350*_t690 + _t353*_t695 - _t583;
+    const trailer3_real_t _t868 = _t354 - _t355 + _t362*_t695 + _t584 + _t633;
+    const trailer3_real_t _t869 = _t369*_t690 - _t634;
+    const trailer3_real_t _t870 = _t690*_t94;
+    const trailer3_real_t _t871 = _t690*_t90;
+    const trailer3_real_t _t872 = _t152*_t870 + _t155*_t871 + _t204*_t383 - _t275*_t29 - _t276*_t33
+            + _t376 + _t385*_t91;
+    const trailer3_real_t _t873 = _t695*_t94;
+    const trailer3_real_t _t874 = _t695*_t90;
+    const trailer3_real_t _t875 = _t192*_t870 + _t196*_t871 + _t200*_t873 + _t202*_t874
+            + _t204*_t420 + _t205*_t603 + _t206*_t607 + _t275*_t636 + _t276*_t640 + _t278*_t643
+            + _t279*_t645 + _t424*_t91;
+    const trailer3_real_t _t876 = _t204*_t745 - _t244*_t275 - _t247*_t276 + _t397 + _t534*_t870
+            + _t536*_t871 + _t747*_t91;
+    const trailer3_real_t _t877 = _t204*_t750 - _t251*_t275 - _t254*_t276 + _t408 + _t539*_t870
+            + _t541*_t871 + _t752*_t91;
+    const trailer3_real_t _t878 = TRAILER3_LIT(2.0)*_t50 + _t637 - _t638;
+    const trailer3_real_t _t879 = _t256*_t878;
+    const trailer3_real_t _t880 = TRAILER3_LIT(2.0)*_t55 + _t641 - _t642;
+    const trailer3_real_t _t881 = _t256*_t880;
+    const trailer3_real_t _t882 = _t153 - _t50 + _t644;
+    const trailer3_real_t _t883 = _t256*_t882;
+    const trailer3_real_t _t884 = _t156 - _t55 + _t646;
+    const trailer3_real_t _t885 = _t256*_t884;
+    const trailer3_real_t _t886 = _t204*_t759 + _t205*_t825 + _t206*_t827 + _t275*_t879
+            + _t276*_t881 + _t278*_t883 + _t279*_t885 + _t544*_t870 + _t546*_t871 + _t548*_t873
+            + _t550*_t874 + _t761*_t91;
+    const trailer3_real_t _t887 = TRAILER3_LIT(2.0)*_t29*_t49 - _t637 - _t638;
+    const trailer3_real_t _t888 = _t263*_t887;
+    const trailer3_real_t _t889 = TRAILER3_LIT(2.0)*_t33*_t49 - _t641 - _t642;
+    const trailer3_real_t _t890 = _t263*_t889;
+    const trailer3_real_t _t891 = -_t154 - _t644;
+    const trailer3_real_t _t892 = _t263*_t891;
+    const trailer3_real_t _t893 = -_t157 - _t646;
+    const trailer3_real_t _t894 = _t263*_t893;
+    const trailer3_real_t _t895 = _t204*_t772 + _t205*_t838 + _t206*_t840 + _t275*_t888
+            + _t276*_t890 + _t278*_t892 + _t279*_t894 + _t553*_t870 + _t555*_t871 + _t557*_t873
+            + _t559*_t874 + _t774*_t91;
+    const trailer3_real_t _t896 = _t152*_t284 + _t192*_t287 + _t20*_t867 + _t222*_t872 + _t225*_t875
+            + _t245*_t876 + _t252*_t877 + _t259*_t886 + _t266*_t895 + _t29*_t868 - _t444
+            + _t45*_t869 + _t469 + _t537*_t648 + _t542*_t647 + _t551*_t650 + _t560*_t649 - _t618
+            + _t651 + _t866;
+    const trailer3_real_t _t897 = -_t474 + _t475 + _t484*_t690 + _t486*_t695;
+    const trailer3_real_t _t898 = _t155*_t284 + _t196*_t287 + _t224*_t872 + _t227*_t875 + _t23*_t867
+            + _t248*_t876 + _t255*_t877 + _t262*_t886 + _t269*_t895 + _t33*_t868 - _t488 + _t495
+            + _t52*_t869 + _t537*_t629 + _t542*_t630 + _t551*_t631 + _t560*_t632 - _t620 + _t652
+            + _t897;
+    const trailer3_real_t _t899 = _t152*_t209 + _t192*_t211 - _t501;
+    const trailer3_real_t _t900 = _t152*_t216 + _t192*_t217 - _t622;
+    const trailer3_real_t _t901 = J_theta_cart2*_t152 + _t192*_t221 - _t282 - _t624 + _t653;
+    const trailer3_real_t _t902 = J_theta_cart3*_t192 + _t152*_t221 + _t654;
+    const trailer3_real_t _t903 = _t152*_t222 + _t192*_t225 + _t20*_t900 + _t244*_t648 + _t245*_t534
+            + _t251*_t647 + _t252*_t539 + _t258*_t650 + _t259*_t544 + _t265*_t649 + _t266*_t553
+            + _t29*_t901 + _t45*_t902 + _t899;
+    const trailer3_real_t _t904 = -_t520*_t863 + _t524*_t865 + _t526*_t903;
+    const trailer3_real_t _t905 = -_t529*_t904;
+    const trailer3_real_t _t906 = _t531*_t898 + _t563*_t865 - _t564*_t896 - _t568*_t863
+            + _t569*_t905;
+    const trailer3_real_t _t907 = _t531*_t896 - _t563*_t863 + _t568*_t903 - _t570*_t898
+            + _t571*_t905;
+    const trailer3_real_t _t908 = _t512*_t906 + _t515*_t907;
+    const trailer3_real_t _t909 = _t202*_t211 - _t292;
+    const trailer3_real_t _t910 = _t202*_t217 - _t575;
+    const trailer3_real_t _t911 = _t202*_t221 - _t627;
+    const trailer3_real_t _t912 = J_theta_cart3*_t202 - _t325 - _t577 - _t628;
+    const trailer3_real_t _t913 = _t20*_t910 + _t200*_t227 + _t258*_t655 + _t262*_t548 + _t265*_t656
+            + _t269*_t557 + _t29*_t911 + _t45*_t912 + _t909;
+    const trailer3_real_t _t914 = _t202*_t226 - _t326;
+    const trailer3_real_t _t915 = _t202*_t227 + _t23*_t910 + _t261*_t655 + _t262*_t550 + _t268*_t656
+            + _t269*_t559 + _t33*_t911 + _t52*_t912 + _t914;
+    const trailer3_real_t _t916 = _t339*_t696 - _t340;
+    const trailer3_real_t _t917 = _t353*_t696 - _t582;
+    const trailer3_real_t _t918 = _t362*_t696 - _t633;
+    const trailer3_real_t _t919 = _t363 - _t364 + _t585 + _t634;
+    const trailer3_real_t _t920 = _t696*_t94;
+    const trailer3_real_t _t921 = _t696*_t90;
+    const trailer3_real_t _t922 = _t200*_t920 + _t202*_t921 + _t204*_t427 + _t205*_t610
+            + _t206*_t612 + _t275*_t643 + _t276*_t645 - _t278*_t45 - _t279*_t52 + _t429*_t91;
+    const trailer3_real_t _t923 = _t204*_t763 + _t205*_t829 + _t206*_t831 - _t258*_t278
+            - _t261*_t279 + _t275*_t883 + _t276*_t885 + _t548*_t920 + _t550*_t921 + _t765*_t91;
+    const trailer3_real_t _t924 = _t204*_t776 + _t205*_t842 + _t206*_t844 - _t265*_t278
+            - _t268*_t279 + _t275*_t892 + _t276*_t894 + _t557*_t920 + _t559*_t921 + _t778*_t91;
+    const trailer3_real_t _t925 = _t20*_t917 + _t200*_t287 + _t225*_t922 + _t259*_t923 + _t266*_t924
+            + _t29*_t918 - _t445 + _t45*_t919 + _t470 + _t551*_t658 + _t560*_t657 - _t619 - _t651
+            + _t916;
+    const trailer3_real_t _t926 = -_t476 + _t477 + _t486*_t696;
+    const trailer3_real_t _t927 = _t202*_t287 + _t227*_t922 + _t23*_t917 + _t262*_t923 + _t269*_t924
+            + _t33*_t918 - _t489 + _t496 + _t52*_t919 + _t551*_t655 + _t560*_t656 - _t621 - _t652
+            + _t926;
+    const trailer3_real_t _t928 = _t200*_t211 - _t502;
+    const trailer3_real_t _t929 = _t200*_t217 - _t623;
+    const trailer3_real_t _t930 = _t200*_t221 - _t653;
+    const trailer3_real_t _t931 = J_theta_cart3*_t200 - _t285 - _t625 - _t654;
+    const trailer3_real_t _t932 = _t20*_t929 + _t200*_t225 + _t258*_t658 + _t259*_t548 + _t265*_t657
+            + _t266*_t557 + _t29*_t930 + _t45*_t931 + _t928;
+    const trailer3_real_t _t933 = -_t520*_t913 + _t524*_t915 + _t526*_t932;
+    const trailer3_real_t _t934 = -_t529*_t933;
+    const trailer3_real_t _t935 = _t531*_t927 + _t563*_t915 - _t564*_t925 - _t568*_t913
+            + _t569*_t934;
+    const trailer3_real_t _t936 = _t531*_t925 - _t563*_t913 + _t568*_t932 - _t570*_t927
+            + _t571*_t934;
+    const trailer3_real_t _t937 = _t512*_t935 + _t515*_t936;
+    const trailer3_real_t _t938 = K_theta_tractor_x_tractor*_t660 + _t337*_t691 + _t339*_t697
+            + _t343*_t666;
+    const trailer3_real_t _t939 = _t350*_t691 + _t353*_t697 + _t662*_t88;
+    const trailer3_real_t _t940 = _t359*_t666 + _t362*_t697 + _t663*_t88;
+    const trailer3_real_t _t941 = _t365*_t666 + _t369*_t691 + _t664*_t88;
+    const trailer3_real_t _t942 = _t665 - _t667 + _t669*_t92;
+    const trailer3_real_t _t943 = -_t670 + _t671*_t88;
+    const trailer3_real_t _t944 = _t128*_t942 + _t131*_t943;
+    const trailer3_real_t _t945 = _t665 + _t90*_t92;
+    const trailer3_real_t _t946 = _t101*_t92 + _t667;
+    const trailer3_real_t _t947 = _t101*_t88 + _t670;
+    const trailer3_real_t _t948 = _t691*_t94 + _t92*_t95;
+    const trailer3_real_t _t949 = _t691*_t90 + _t88*_t95;
+    const trailer3_real_t _t950 = _t137*_t945 + _t141*_t660 + _t144*_t946 + _t148*_t947
+            + _t152*_t948 + _t155*_t949;
+    const trailer3_real_t _t951 = _t697*_t94 + _t92*_t98;
+    const trailer3_real_t _t952 = _t697*_t90 + _t88*_t98;
+    const trailer3_real_t _t953 = _t172*_t945 + _t177*_t660 + _t182*_t946 + _t187*_t947
+            + _t192*_t948 + _t196*_t949 + _t200*_t951 + _t202*_t952;
+    const trailer3_real_t _t954 = _t299*_t943 + _t320*_t942;
+    const trailer3_real_t _t955 = _t302*_t943 + _t323*_t942;
+    const trailer3_real_t _t956 = _t305*_t660 + _t388*_t946 + _t391*_t947 + _t450*_t945
+            + _t534*_t948 + _t536*_t949;
+    const trailer3_real_t _t957 = _t308*_t660 + _t399*_t946 + _t402*_t947 + _t447*_t945
+            + _t539*_t948 + _t541*_t949;
+    const trailer3_real_t _t958 = _t311*_t660 + _t432*_t946 + _t435*_t947 + _t456*_t945
+            + _t544*_t948 + _t546*_t949 + _t548*_t951 + _t550*_t952;
+    const trailer3_real_t _t959 = _t314*_t660 + _t438*_t946 + _t441*_t947 + _t453*_t945
+            + _t553*_t948 + _t555*_t949 + _t557*_t951 + _t559*_t952;
+    const trailer3_real_t _t960 = _t20*_t939 + _t218*_t944 + _t222*_t950 + _t225*_t953 + _t231*_t954
+            + _t238*_t955 + _t245*_t956 + _t252*_t957 + _t259*_t958 + _t266*_t959 + _t29*_t940
+            + _t45*_t941 + _t503*_t945 + _t938;
+    const trailer3_real_t _t961 = _t481*_t666 + _t484*_t691 + _t486*_t697;
+    const trailer3_real_t _t962 = _t220*_t944 + _t224*_t950 + _t227*_t953 + _t23*_t939 + _t234*_t954
+            + _t241*_t955 + _t248*_t956 + _t255*_t957 + _t262*_t958 + _t269*_t959 + _t33*_t940
+            + _t52*_t941 + _t672*_t945 + _t961;
+    const trailer3_real_t _t963 = _t531*_t962 - _t564*_t960;
+    const trailer3_real_t _t964 = _t519*_t530*_t960 - _t570*_t962;
+    const trailer3_real_t _t965 = _t512*_t963 + _t515*_t964;
+    const trailer3_real_t _t966 = K_theta_tractor_x_tractor*_t673 + _t337*_t692 + _t339*_t698
+            + _t343*_t675;
+    const trailer3_real_t _t967 = _t350*_t692 + _t353*_t698 + _t662*_t89;
+    const trailer3_real_t _t968 = _t359*_t675 + _t362*_t698 + _t663*_t89;
+    const trailer3_real_t _t969 = _t365*_t675 + _t369*_t692 + _t664*_t89;
+    const trailer3_real_t _t970 = _t669*_t93 + _t674 - _t676;
+    const trailer3_real_t _t971 = _t671*_t89 - _t677;
+    const trailer3_real_t _t972 = _t128*_t970 + _t131*_t971;
+    const trailer3_real_t _t973 = _t674 + _t90*_t93;
+    const trailer3_real_t _t974 = _t101*_t93 + _t676;
+    const trailer3_real_t _t975 = _t101*_t89 + _t677;
+    const trailer3_real_t _t976 = _t692*_t94 + _t93*_t95;
+    const trailer3_real_t _t977 = _t692*_t90 + _t89*_t95;
+    const trailer3_real_t _t978 = _t137*_t973 + _t141*_t673 + _t144*_t974 + _t148*_t975
+            + _t152*_t976 + _t155*_t977;
+    const trailer3_real_t _t979 = _t698*_t94 + _t93*_t98;
+    const trailer3_real_t _t980 = _t698*_t90 + _t89*_t98;
+    const trailer3_real_t _t981 = _t172*_t973 + _t177*_t673 + _t182*_t974 + _t187*_t975
+            + _t192*_t976 + _t196*_t977 + _t200*_t979 + _t202*_t980;
+    const trailer3_real_t _t982 = _t299*_t971 + _t320*_t970;
+    const trailer3_real_t _t983 = _t302*_t971 + _t323*_t970;
+    const trailer3_real_t _t984 = _t305*_t673 + _t388*_t974 + _t391*_t975 + _t450*_t973
+            + _t534*_t976 + _t536*_t977;
+    const trailer3_real_t _t985 = _t308*_t673 + _t399*_t974 + _t402*_t975 + _t447*_t973
+            + _t539*_t976 + _t541*_t977;
+    const trailer3_real_t _t986 = _t311*_t673 + _t432*_t974 + _t435*_t975 + _t456*_t973
+            + _t544*_t976 + _t546*_t977 + _t548*_t979 + _t550*_t980;
+    const trailer3_real_t _t987 = _t314*_t673 + _t438*_t974 + _t441*_t975 + _t453*_t973
+            + _t553*_t976 + _t555*_t977 + _t557*_t979 + _t559*_t980;
+    const trailer3_real_t _t988 = _t20*_t967 + _t218*_t972 + _t222*_t978 + _t225*_t981 + _t231*_t982
+            + _t238*_t983 + _t245*_t984 + _t252*_t985 + _t259*_t986 + _t266*_t987 + _t29*_t968
+            + _t45*_t969 + _t503*_t973 + _t966;
+    const trailer3_real_t _t989 = _t481*_t675 + _t484*_t692 + _t486*_t698;
+    const trailer3_real_t _t990 = _t220*_t972 + _t224*_t978 + _t227*_t981 + _t23*_t967 + _t234*_t982
+            + _t241*_t983 + _t248*_t984 + _t255*_t985 + _t262*_t986 + _t269*_t987 + _t33*_t968
+            + _t52*_t969 + _t672*_t973 + _t989;
+    const trailer3_real_t _t991 = _t531*_t990 - _t564*_t988;
+    const trailer3_real_t _t992 = _t519*_t530*_t988 - _t570*_t990;
+    const trailer3_real_t _t993 = _t512*_t991 + _t515*_t992;
+    const trailer3_real_t _t994 = _t513*_t790 + _t517*_t791;
+    const trailer3_real_t _t995 = _t513*_t856 + _t517*_t857;
+    const trailer3_real_t _t996 = _t513*_t906 + _t517*_t907;
+    const trailer3_real_t _t997 = _t513*_t935 + _t517*_t936;
+    const trailer3_real_t _t998 = _t513*_t963 + _t517*_t964;
+    const trailer3_real_t _t999 = _t513*_t991 + _t517*_t992;
+    const trailer3_real_t _t1000 = _t512*_t564 - _t515*_t531;
+    const trailer3_real_t _t1001 = -_t512*_t531 + _t515*_t524*_t530;
+    const trailer3_real_t _t1002 = _t1000*_t512 + _t1001*_t515;
+    const trailer3_real_t _t1003 = _t513*_t564 - _t517*_t531;
+    const trailer3_real_t _t1004 = -_t513*_t531 + _t517*_t524*_t530;
+    const trailer3_real_t _t1005 = _t1003*_t512 + _t1004*_t515;
+    const trailer3_real_t _t1006 = _t1000*_t513 + _t1001*_t517;
+    const trailer3_real_t _t1007 = _t1003*_t513 + _t1004*_t517;
     A[0] = TRAILER3_LIT(0.0);
     A[1] = TRAILER3_LIT(0.0);
-    A[2] = -_t724;
+    A[2] = -_t683;
     A[3] = TRAILER3_LIT(0.0);
     A[4] = TRAILER3_LIT(0.0);
     A[5] = TRAILER3_LIT(0.0);
@@ -3681,11 +3563,11 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[11] = TRAILER3_LIT(0.0);
     A[12] = TRAILER3_LIT(0.0);
     A[13] = TRAILER3_LIT(0.0);
-    A[14] = _t725;
-    A[15] = _t726;
+    A[14] = _t684;
+    A[15] = _t685;
     A[16] = TRAILER3_LIT(0.0);
     A[17] = TRAILER3_LIT(0.0);
-    A[18] = _t723;
+    A[18] = _t682;
     A[19] = TRAILER3_LIT(0.0);
     A[20] = TRAILER3_LIT(0.0);
     A[21] = TRAILER3_LIT(0.0);
@@ -3697,8 +3579,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[27] = TRAILER3_LIT(0.0);
     A[28] = TRAILER3_LIT(0.0);
     A[29] = TRAILER3_LIT(0.0);
-    A[30] = _t727;
-    A[31] = _t728;
+    A[30] = _t686;
+    A[31] = _t687;
     A[32] = TRAILER3_LIT(0.0);
     A[33] = TRAILER3_LIT(0.0);
     A[34] = TRAILER3_LIT(0.0);
@@ -3713,12 +3595,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[43] = TRAILER3_LIT(0.0);
     A[44] = TRAILER3_LIT(0.0);
     A[45] = TRAILER3_LIT(0.0);
-    A[46] = _t19;
-    A[47] = _t22;
+    A[46] = _t88;
+    A[47] = _t89;
     A[48] = TRAILER3_LIT(0.0);
     A[49] = TRAILER3_LIT(0.0);
-    A[50] = _t386;
-    A[51] = -_t386;
+    A[50] = _t344;
+    A[51] = -_t344;
     A[52] = TRAILER3_LIT(0.0);
     A[53] = TRAILER3_LIT(0.0);
     A[54] = TRAILER3_LIT(0.0);
@@ -3729,13 +3611,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[59] = TRAILER3_LIT(0.0);
     A[60] = TRAILER3_LIT(0.0);
     A[61] = TRAILER3_LIT(0.0);
-    A[62] = _t26;
-    A[63] = _t30;
+    A[62] = _t666;
+    A[63] = _t675;
     A[64] = TRAILER3_LIT(0.0);
     A[65] = TRAILER3_LIT(0.0);
-    A[66] = _t729;
-    A[67] = _t730;
-    A[68] = _t731;
+    A[66] = _t688;
+    A[67] = _t689;
+    A[68] = _t690;
     A[69] = TRAILER3_LIT(0.0);
     A[70] = TRAILER3_LIT(0.0);
     A[71] = TRAILER3_LIT(0.0);
@@ -3745,14 +3627,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[75] = TRAILER3_LIT(0.0);
     A[76] = TRAILER3_LIT(0.0);
     A[77] = TRAILER3_LIT(0.0);
-    A[78] = _t35;
-    A[79] = _t41;
+    A[78] = _t691;
+    A[79] = _t692;
     A[80] = TRAILER3_LIT(0.0);
     A[81] = TRAILER3_LIT(0.0);
-    A[82] = _t732;
-    A[83] = _t733;
-    A[84] = _t734;
-    A[85] = _t735;
+    A[82] = _t693;
+    A[83] = _t694;
+    A[84] = _t695;
+    A[85] = _t696;
     A[86] = TRAILER3_LIT(0.0);
     A[87] = TRAILER3_LIT(0.0);
     A[88] = TRAILER3_LIT(0.0);
@@ -3761,8 +3643,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[91] = TRAILER3_LIT(0.0);
     A[92] = TRAILER3_LIT(0.0);
     A[93] = TRAILER3_LIT(0.0);
-    A[94] = _t67;
-    A[95] = _t76;
+    A[94] = _t697;
+    A[95] = _t698;
     A[96] = TRAILER3_LIT(0.0);
     A[97] = TRAILER3_LIT(0.0);
     A[98] = TRAILER3_LIT(0.0);
@@ -3777,8 +3659,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[107] = TRAILER3_LIT(0.0);
     A[108] = TRAILER3_LIT(0.0);
     A[109] = TRAILER3_LIT(0.0);
-    A[110] = TRAILER3_LIT(1.0);
-    A[111] = TRAILER3_LIT(0.0);
+    A[110] = _t678;
+    A[111] = _t680;
     A[112] = TRAILER3_LIT(0.0);
     A[113] = TRAILER3_LIT(0.0);
     A[114] = TRAILER3_LIT(0.0);
@@ -3793,12 +3675,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[123] = TRAILER3_LIT(0.0);
     A[124] = TRAILER3_LIT(0.0);
     A[125] = TRAILER3_LIT(0.0);
-    A[126] = TRAILER3_LIT(0.0);
-    A[127] = TRAILER3_LIT(1.0);
+    A[126] = _t679;
+    A[127] = _t681;
     A[128] = TRAILER3_LIT(0.0);
     A[129] = TRAILER3_LIT(0.0);
-    A[130] = _t736;
-    A[131] = -_t736;
+    A[130] = _t699;
+    A[131] = -_t699;
     A[132] = TRAILER3_LIT(0.0);
     A[133] = TRAILER3_LIT(0.0);
     A[134] = TRAILER3_LIT(0.0);
@@ -3809,12 +3691,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[139] = TRAILER3_LIT(0.0);
     A[140] = TRAILER3_LIT(0.0);
     A[141] = TRAILER3_LIT(0.0);
-    A[142] = _t260;
-    A[143] = _t263;
+    A[142] = _t700;
+    A[143] = _t701;
     A[144] = TRAILER3_LIT(0.0);
     A[145] = TRAILER3_LIT(0.0);
-    A[146] = _t737;
-    A[147] = -_t737;
+    A[146] = _t702;
+    A[147] = -_t702;
     A[148] = TRAILER3_LIT(0.0);
     A[149] = TRAILER3_LIT(0.0);
     A[150] = TRAILER3_LIT(0.0);
@@ -3825,13 +3707,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[155] = TRAILER3_LIT(0.0);
     A[156] = TRAILER3_LIT(0.0);
     A[157] = TRAILER3_LIT(0.0);
-    A[158] = _t267;
-    A[159] = _t270;
+    A[158] = _t703;
+    A[159] = _t704;
     A[160] = TRAILER3_LIT(0.0);
     A[161] = TRAILER3_LIT(0.0);
-    A[162] = _t738;
-    A[163] = _t739;
-    A[164] = _t740;
+    A[162] = _t705;
+    A[163] = _t706;
+    A[164] = _t707;
     A[165] = TRAILER3_LIT(0.0);
     A[166] = TRAILER3_LIT(0.0);
     A[167] = TRAILER3_LIT(0.0);
@@ -3841,13 +3723,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[171] = TRAILER3_LIT(0.0);
     A[172] = TRAILER3_LIT(0.0);
     A[173] = TRAILER3_LIT(0.0);
-    A[174] = _t274;
-    A[175] = _t277;
+    A[174] = _t708;
+    A[175] = _t709;
     A[176] = TRAILER3_LIT(0.0);
     A[177] = TRAILER3_LIT(0.0);
-    A[178] = _t741;
-    A[179] = _t742;
-    A[180] = _t743;
+    A[178] = _t710;
+    A[179] = _t711;
+    A[180] = _t712;
     A[181] = TRAILER3_LIT(0.0);
     A[182] = TRAILER3_LIT(0.0);
     A[183] = TRAILER3_LIT(0.0);
@@ -3857,14 +3739,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[187] = TRAILER3_LIT(0.0);
     A[188] = TRAILER3_LIT(0.0);
     A[189] = TRAILER3_LIT(0.0);
-    A[190] = _t281;
-    A[191] = _t284;
+    A[190] = _t713;
+    A[191] = _t714;
     A[192] = TRAILER3_LIT(0.0);
     A[193] = TRAILER3_LIT(0.0);
-    A[194] = _t744;
-    A[195] = _t745;
-    A[196] = _t746;
-    A[197] = _t747;
+    A[194] = _t715;
+    A[195] = _t716;
+    A[196] = _t717;
+    A[197] = _t718;
     A[198] = TRAILER3_LIT(0.0);
     A[199] = TRAILER3_LIT(0.0);
     A[200] = TRAILER3_LIT(0.0);
@@ -3873,14 +3755,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[203] = TRAILER3_LIT(0.0);
     A[204] = TRAILER3_LIT(0.0);
     A[205] = TRAILER3_LIT(0.0);
-    A[206] = _t288;
-    A[207] = _t291;
+    A[206] = _t719;
+    A[207] = _t720;
     A[208] = TRAILER3_LIT(0.0);
     A[209] = TRAILER3_LIT(0.0);
-    A[210] = _t748;
-    A[211] = _t749;
-    A[212] = _t750;
-    A[213] = _t751;
+    A[210] = _t721;
+    A[211] = _t722;
+    A[212] = _t723;
+    A[213] = _t724;
     A[214] = TRAILER3_LIT(0.0);
     A[215] = TRAILER3_LIT(0.0);
     A[216] = TRAILER3_LIT(0.0);
@@ -3889,14 +3771,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[219] = TRAILER3_LIT(0.0);
     A[220] = TRAILER3_LIT(0.0);
     A[221] = TRAILER3_LIT(0.0);
-    A[222] = _t295;
-    A[223] = _t298;
+    A[222] = _t725;
+    A[223] = _t726;
     A[224] = TRAILER3_LIT(0.0);
     A[225] = TRAILER3_LIT(0.0);
-    A[226] = _t816;
-    A[227] = _t881;
-    A[228] = _t930;
-    A[229] = _t958;
+    A[226] = _t792;
+    A[227] = _t858;
+    A[228] = _t908;
+    A[229] = _t937;
     A[230] = TRAILER3_LIT(0.0);
     A[231] = TRAILER3_LIT(0.0);
     A[232] = TRAILER3_LIT(0.0);
@@ -3905,14 +3787,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[235] = TRAILER3_LIT(0.0);
     A[236] = TRAILER3_LIT(0.0);
     A[237] = TRAILER3_LIT(0.0);
-    A[238] = _t983;
-    A[239] = _t1008;
+    A[238] = _t965;
+    A[239] = _t993;
     A[240] = TRAILER3_LIT(0.0);
     A[241] = TRAILER3_LIT(0.0);
-    A[242] = _t1009;
-    A[243] = _t1010;
-    A[244] = _t1011;
-    A[245] = _t1012;
+    A[242] = _t994;
+    A[243] = _t995;
+    A[244] = _t996;
+    A[245] = _t997;
     A[246] = TRAILER3_LIT(0.0);
     A[247] = TRAILER3_LIT(0.0);
     A[248] = TRAILER3_LIT(0.0);
@@ -3921,8 +3803,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[251] = TRAILER3_LIT(0.0);
     A[252] = TRAILER3_LIT(0.0);
     A[253] = TRAILER3_LIT(0.0);
-    A[254] = _t1013;
-    A[255] = _t1014;
+    A[254] = _t998;
+    A[255] = _t999;
     B[0] = TRAILER3_LIT(0.0);
     B[1] = TRAILER3_LIT(0.0);
     B[2] = TRAILER3_LIT(0.0);
@@ -3951,14 +3833,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     B[25] = TRAILER3_LIT(0.0);
     B[26] = TRAILER3_LIT(0.0);
     B[27] = TRAILER3_LIT(0.0);
-    B[28] = _t582;
-    B[29] = -_t614;
-    B[30] = -_t614;
-    B[31] = _t720;
+    B[28] = _t1002;
+    B[29] = _t1005;
+    B[30] = _t1006;
+    B[31] = _t1007;
 }
 
 /* trailer3_wheel_contact_forces: documented in trailer3_model.h.
-   operations after CSE: 550 add, 759 mul, 7 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 517 add, 722 mul, 9 div, 6 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *longitudinal, trailer3_real_t *lateral)
@@ -4025,531 +3907,534 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -radius_right;
-    const trailer3_real_t _t1 = -radius_left;
-    const trailer3_real_t _t2 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t8 = -theta_tractor;
-    const trailer3_real_t _t9 = _t8 + theta_cart;
-    const trailer3_real_t _t10 = TRAILER3_SIN(_t9);
-    const trailer3_real_t _t11 = -_t10;
-    const trailer3_real_t _t12 = TRAILER3_COS(_t9);
-    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*_t12;
+    const trailer3_real_t _t0 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t2 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t6 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t7 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t8 = _t6*thetadot_right + _t7*thetadot_left;
+    const trailer3_real_t _t9 = _t8*thetadot_right;
+    const trailer3_real_t _t10 = _t8*thetadot_left;
+    const trailer3_real_t _t11 = -theta_tractor;
+    const trailer3_real_t _t12 = _t11 + theta_cart;
+    const trailer3_real_t _t13 = TRAILER3_SIN(_t12);
     const trailer3_real_t _t14 = -_t13;
-    const trailer3_real_t _t15 = _t8 + theta_cart2;
-    const trailer3_real_t _t16 = TRAILER3_SIN(_t15);
+    const trailer3_real_t _t15 = TRAILER3_COS(_t12);
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t15;
     const trailer3_real_t _t17 = -_t16;
-    const trailer3_real_t _t18 = TRAILER3_COS(_t15);
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t18;
+    const trailer3_real_t _t18 = _t11 + theta_cart2;
+    const trailer3_real_t _t19 = TRAILER3_SIN(_t18);
     const trailer3_real_t _t20 = -_t19;
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t10;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t12;
-    const trailer3_real_t _t23 = -_t16*_t21 - _t18*_t22;
-    const trailer3_real_t _t24 = _t8 + theta_cart3;
-    const trailer3_real_t _t25 = TRAILER3_SIN(_t24);
-    const trailer3_real_t _t26 = -_t25;
-    const trailer3_real_t _t27 = TRAILER3_COS(_t24);
-    const trailer3_real_t _t28 = TRAILER3_LIT(0.3)*_t27;
+    const trailer3_real_t _t21 = TRAILER3_COS(_t18);
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
+    const trailer3_real_t _t23 = -_t22;
+    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t25 = TRAILER3_LIT(0.85)*_t15;
+    const trailer3_real_t _t26 = -_t19*_t24 - _t21*_t25;
+    const trailer3_real_t _t27 = _t11 + theta_cart3;
+    const trailer3_real_t _t28 = TRAILER3_SIN(_t27);
     const trailer3_real_t _t29 = -_t28;
-    const trailer3_real_t _t30 = -_t21*_t25 - _t22*_t27;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t27;
-    const trailer3_real_t _t32 = -TRAILER3_LIT(0.85)*_t16*_t25 - _t18*_t31;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.3)*_t10;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.3)*_t16;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t12*_t16 - _t18*_t21;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t25;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.85)*_t12*_t25 - _t21*_t27;
-    const trailer3_real_t _t38 = -_t16*_t31 + TRAILER3_LIT(0.85)*_t18*_t25;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(2.4154589371980677)*_t0;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(0.5)*_t0;
-    const trailer3_real_t _t41 = _t11*_t40 + _t14*_t39;
-    const trailer3_real_t _t42 = TRAILER3_LIT(2.4154589371980677)*_t1;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(0.5)*_t1;
-    const trailer3_real_t _t44 = _t11*_t43 + _t14*_t42;
-    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t41;
-    const trailer3_real_t _t46 = _t23*_t45;
-    const trailer3_real_t _t47 = _t17*_t40 + _t20*_t39;
-    const trailer3_real_t _t48 = _t46 + _t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(1.6666666666666667)*_t44;
-    const trailer3_real_t _t50 = _t23*_t49;
-    const trailer3_real_t _t51 = _t17*_t43 + _t20*_t42;
-    const trailer3_real_t _t52 = _t50 + _t51;
-    const trailer3_real_t _t53 = TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t54 = _t32*_t53;
-    const trailer3_real_t _t55 = _t30*_t45;
-    const trailer3_real_t _t56 = _t26*_t40 + _t29*_t39;
-    const trailer3_real_t _t57 = _t54 + _t55 + _t56;
-    const trailer3_real_t _t58 = TRAILER3_LIT(1.6666666666666667)*_t52;
-    const trailer3_real_t _t59 = _t32*_t58;
-    const trailer3_real_t _t60 = _t30*_t49;
-    const trailer3_real_t _t61 = _t26*_t43 + _t29*_t42;
-    const trailer3_real_t _t62 = _t59 + _t60 + _t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t64 = _t12*_t40;
-    const trailer3_real_t _t65 = _t33*_t39;
-    const trailer3_real_t _t66 = _t64 - _t65;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t68 = _t12*_t43;
-    const trailer3_real_t _t69 = _t33*_t42;
-    const trailer3_real_t _t70 = _t68 - _t69;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t53;
-    const trailer3_real_t _t72 = _t35*_t45;
-    const trailer3_real_t _t73 = _t18*_t40;
-    const trailer3_real_t _t74 = _t34*_t39;
-    const trailer3_real_t _t75 = _t73 - _t74;
-    const trailer3_real_t _t76 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t77 = _t35*_t49;
-    const trailer3_real_t _t78 = _t18*_t43;
-    const trailer3_real_t _t79 = _t34*_t42;
-    const trailer3_real_t _t80 = _t78 - _t79;
-    const trailer3_real_t _t81 = _t72 - _t73 + _t74;
-    const trailer3_real_t _t82 = _t77 - _t78 + _t79;
-    const trailer3_real_t _t83 = TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.2)*_t83;
-    const trailer3_real_t _t85 = _t36*_t39;
-    const trailer3_real_t _t86 = _t37*_t45;
-    const trailer3_real_t _t87 = _t38*_t53;
-    const trailer3_real_t _t88 = _t27*_t40;
-    const trailer3_real_t _t89 = _t85 + _t86 + _t87 - _t88;
-    const trailer3_real_t _t90 = TRAILER3_LIT(1.6666666666666667)*_t62;
-    const trailer3_real_t _t91 = TRAILER3_LIT(0.2)*_t90;
-    const trailer3_real_t _t92 = _t36*_t42;
-    const trailer3_real_t _t93 = _t37*_t49;
-    const trailer3_real_t _t94 = _t38*_t58;
-    const trailer3_real_t _t95 = _t27*_t43;
-    const trailer3_real_t _t96 = _t92 + _t93 + _t94 - _t95;
-    const trailer3_real_t _t97 = TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t98 = _t23*_t97;
-    const trailer3_real_t _t99 = TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t100 = _t23*_t99;
-    const trailer3_real_t _t101 = _t30*_t97;
-    const trailer3_real_t _t102 = _t30*_t99;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t104 = TRAILER3_LIT(0.2)*_t99;
-    const trailer3_real_t _t105 = -_t75 - _t98;
-    const trailer3_real_t _t106 = -TRAILER3_LIT(1.6666666666666667)*_t105;
-    const trailer3_real_t _t107 = TRAILER3_LIT(0.2)*_t106;
-    const trailer3_real_t _t108 = _t35*_t97;
-    const trailer3_real_t _t109 = _t108 + _t47;
-    const trailer3_real_t _t110 = -_t100 - _t80;
-    const trailer3_real_t _t111 = -TRAILER3_LIT(1.6666666666666667)*_t110;
-    const trailer3_real_t _t112 = TRAILER3_LIT(0.2)*_t111;
-    const trailer3_real_t _t113 = _t35*_t99;
-    const trailer3_real_t _t114 = _t113 + _t51;
-    const trailer3_real_t _t115 = _t72 + _t98;
-    const trailer3_real_t _t116 = -TRAILER3_LIT(1.6666666666666667)*_t115;
-    const trailer3_real_t _t117 = TRAILER3_LIT(0.2)*_t116;
-    const trailer3_real_t _t118 = _t100 + _t77;
-    const trailer3_real_t _t119 = -TRAILER3_LIT(1.6666666666666667)*_t118;
-    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t81;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
-    const trailer3_real_t _t123 = TRAILER3_LIT(1.6666666666666667)*_t82;
-    const trailer3_real_t _t124 = TRAILER3_LIT(0.2)*_t123;
-    const trailer3_real_t _t125 = -_t101 - _t106*_t32 + _t85 - _t88;
-    const trailer3_real_t _t126 = -TRAILER3_LIT(1.6666666666666667)*_t125;
-    const trailer3_real_t _t127 = TRAILER3_LIT(0.2)*_t126;
-    const trailer3_real_t _t128 = _t37*_t97;
-    const trailer3_real_t _t129 = _t106*_t38 + _t128 + _t56;
-    const trailer3_real_t _t130 = -_t102 - _t111*_t32 + _t92 - _t95;
-    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
-    const trailer3_real_t _t132 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t133 = _t37*_t99;
-    const trailer3_real_t _t134 = _t111*_t38 + _t133 + _t61;
-    const trailer3_real_t _t135 = _t101 - _t116*_t32 + _t86;
-    const trailer3_real_t _t136 = -TRAILER3_LIT(1.6666666666666667)*_t135;
-    const trailer3_real_t _t137 = TRAILER3_LIT(0.2)*_t136;
-    const trailer3_real_t _t138 = _t116*_t38 - _t128 + _t55;
-    const trailer3_real_t _t139 = _t102 - _t119*_t32 + _t93;
-    const trailer3_real_t _t140 = -TRAILER3_LIT(1.6666666666666667)*_t139;
-    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
-    const trailer3_real_t _t142 = _t119*_t38 - _t133 + _t60;
-    const trailer3_real_t _t143 = -_t121*_t32 + _t87;
-    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t143;
-    const trailer3_real_t _t145 = TRAILER3_LIT(0.2)*_t144;
-    const trailer3_real_t _t146 = _t121*_t38 + _t54;
-    const trailer3_real_t _t147 = -_t123*_t32 + _t94;
-    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t147;
-    const trailer3_real_t _t149 = TRAILER3_LIT(0.2)*_t148;
-    const trailer3_real_t _t150 = _t123*_t38 + _t59;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t89;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = TRAILER3_LIT(1.6666666666666667)*_t96;
-    const trailer3_real_t _t154 = TRAILER3_LIT(0.2)*_t153;
-    const trailer3_real_t _t155 = K_theta_cart_x_tractor*_t10;
-    const trailer3_real_t _t156 = K_theta_cart_x_tractor_2*_t12;
-    const trailer3_real_t _t157 = _t155 + _t156;
-    const trailer3_real_t _t158 = K_theta_cart2_x_tractor*_t16;
-    const trailer3_real_t _t159 = K_theta_cart2_x_tractor_2*_t18;
-    const trailer3_real_t _t160 = _t158 + _t159;
-    const trailer3_real_t _t161 = K_theta_cart3_x_tractor*_t25;
-    const trailer3_real_t _t162 = K_theta_cart3_x_tractor_2*_t27;
-    const trailer3_real_t _t163 = _t161 + _t162;
-    const trailer3_real_t _t164 = K_theta_cart_x_tractor*_t12;
-    const trailer3_real_t _t165 = K_theta_cart2_x_tractor*_t18;
-    const trailer3_real_t _t166 = K_theta_cart3_x_tractor*_t27;
-    const trailer3_real_t _t167 = K_theta_cart_x_tractor*_t13 - K_theta_cart_x_tractor_2*_t33;
-    const trailer3_real_t _t168 = K_theta_cart2_x_tractor*_t19 - K_theta_cart2_x_tractor_2*_t34;
-    const trailer3_real_t _t169 = K_theta_cart3_x_tractor*_t28 - K_theta_cart3_x_tractor_2*_t36;
-    const trailer3_real_t _t170 = K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t171 = _t158*_t21 + _t159*_t21 + _t165*_t22 - _t170*_t22;
-    const trailer3_real_t _t172 = K_theta_cart3_x_tractor_2*_t25;
-    const trailer3_real_t _t173 = _t161*_t21 + _t162*_t21 + _t166*_t22 - _t172*_t22;
-    const trailer3_real_t _t174 = TRAILER3_LIT(0.85)*_t16;
-    const trailer3_real_t _t175 = TRAILER3_LIT(0.85)*_t18;
-    const trailer3_real_t _t176 = _t161*_t174 + _t162*_t174 + _t166*_t175 - _t172*_t175;
-    const trailer3_real_t _t177 = _t39*thetadot_right + _t42*thetadot_left;
+    const trailer3_real_t _t30 = TRAILER3_COS(_t27);
+    const trailer3_real_t _t31 = TRAILER3_LIT(0.3)*_t30;
+    const trailer3_real_t _t32 = -_t31;
+    const trailer3_real_t _t33 = -_t24*_t28 - _t25*_t30;
+    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t30;
+    const trailer3_real_t _t35 = -TRAILER3_LIT(0.85)*_t19*_t28 - _t21*_t34;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.3)*_t19;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.85)*_t15*_t19 - _t21*_t24;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.3)*_t28;
+    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t15*_t28 - _t24*_t30;
+    const trailer3_real_t _t41 = -_t19*_t34 + TRAILER3_LIT(0.85)*_t21*_t28;
+    const trailer3_real_t _t42 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t43 = _t14*_t42 + _t17*_t6;
+    const trailer3_real_t _t44 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t45 = _t14*_t44 + _t17*_t7;
+    const trailer3_real_t _t46 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t47 = _t26*_t46;
+    const trailer3_real_t _t48 = _t20*_t42 + _t23*_t6;
+    const trailer3_real_t _t49 = _t47 + _t48;
+    const trailer3_real_t _t50 = TRAILER3_LIT(1.6666666666666667)*_t45;
+    const trailer3_real_t _t51 = _t26*_t50;
+    const trailer3_real_t _t52 = _t20*_t44 + _t23*_t7;
+    const trailer3_real_t _t53 = _t51 + _t52;
+    const trailer3_real_t _t54 = TRAILER3_LIT(1.6666666666666667)*_t49;
+    const trailer3_real_t _t55 = _t35*_t54;
+    const trailer3_real_t _t56 = _t33*_t46;
+    const trailer3_real_t _t57 = _t29*_t42 + _t32*_t6;
+    const trailer3_real_t _t58 = _t55 + _t56 + _t57;
+    const trailer3_real_t _t59 = TRAILER3_LIT(1.6666666666666667)*_t53;
+    const trailer3_real_t _t60 = _t35*_t59;
+    const trailer3_real_t _t61 = _t33*_t50;
+    const trailer3_real_t _t62 = _t29*_t44 + _t32*_t7;
+    const trailer3_real_t _t63 = _t60 + _t61 + _t62;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t46;
+    const trailer3_real_t _t65 = _t15*_t42;
+    const trailer3_real_t _t66 = _t36*_t6;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t50;
+    const trailer3_real_t _t68 = _t15*_t44;
+    const trailer3_real_t _t69 = _t36*_t7;
+    const trailer3_real_t _t70 = -_t65 + _t66;
+    const trailer3_real_t _t71 = -_t68 + _t69;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.2)*_t54;
+    const trailer3_real_t _t73 = _t37*_t6;
+    const trailer3_real_t _t74 = _t38*_t46;
+    const trailer3_real_t _t75 = _t21*_t42;
+    const trailer3_real_t _t76 = _t73 + _t74 - _t75;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t59;
+    const trailer3_real_t _t78 = _t37*_t7;
+    const trailer3_real_t _t79 = _t38*_t50;
+    const trailer3_real_t _t80 = _t21*_t44;
+    const trailer3_real_t _t81 = _t78 + _t79 - _t80;
+    const trailer3_real_t _t82 = TRAILER3_LIT(1.6666666666666667)*_t58;
+    const trailer3_real_t _t83 = TRAILER3_LIT(0.2)*_t82;
+    const trailer3_real_t _t84 = _t39*_t6;
+    const trailer3_real_t _t85 = _t40*_t46;
+    const trailer3_real_t _t86 = _t41*_t54;
+    const trailer3_real_t _t87 = _t30*_t42;
+    const trailer3_real_t _t88 = _t84 + _t85 + _t86 - _t87;
+    const trailer3_real_t _t89 = TRAILER3_LIT(1.6666666666666667)*_t63;
+    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t89;
+    const trailer3_real_t _t91 = _t39*_t7;
+    const trailer3_real_t _t92 = _t40*_t50;
+    const trailer3_real_t _t93 = _t41*_t59;
+    const trailer3_real_t _t94 = _t30*_t44;
+    const trailer3_real_t _t95 = _t91 + _t92 + _t93 - _t94;
+    const trailer3_real_t _t96 = -TRAILER3_LIT(1.6666666666666667)*_t70;
+    const trailer3_real_t _t97 = _t26*_t96;
+    const trailer3_real_t _t98 = -TRAILER3_LIT(1.6666666666666667)*_t71;
+    const trailer3_real_t _t99 = _t26*_t98;
+    const trailer3_real_t _t100 = _t33*_t96;
+    const trailer3_real_t _t101 = _t33*_t98;
+    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t96;
+    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t98;
+    const trailer3_real_t _t104 = _t73 - _t75 - _t97;
+    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
+    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
+    const trailer3_real_t _t107 = _t38*_t96;
+    const trailer3_real_t _t108 = _t107 + _t48;
+    const trailer3_real_t _t109 = _t78 - _t80 - _t99;
+    const trailer3_real_t _t110 = -TRAILER3_LIT(1.6666666666666667)*_t109;
+    const trailer3_real_t _t111 = TRAILER3_LIT(0.2)*_t110;
+    const trailer3_real_t _t112 = _t38*_t98;
+    const trailer3_real_t _t113 = _t112 + _t52;
+    const trailer3_real_t _t114 = _t74 + _t97;
+    const trailer3_real_t _t115 = -TRAILER3_LIT(1.6666666666666667)*_t114;
+    const trailer3_real_t _t116 = TRAILER3_LIT(0.2)*_t115;
+    const trailer3_real_t _t117 = _t79 + _t99;
+    const trailer3_real_t _t118 = -TRAILER3_LIT(1.6666666666666667)*_t117;
+    const trailer3_real_t _t119 = TRAILER3_LIT(0.2)*_t118;
+    const trailer3_real_t _t120 = TRAILER3_LIT(1.6666666666666667)*_t76;
+    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
+    const trailer3_real_t _t122 = TRAILER3_LIT(1.6666666666666667)*_t81;
+    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
+    const trailer3_real_t _t124 = -_t100 - _t105*_t35 + _t84 - _t87;
+    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
+    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
+    const trailer3_real_t _t127 = _t40*_t96;
+    const trailer3_real_t _t128 = _t105*_t41 + _t127 + _t57;
+    const trailer3_real_t _t129 = -_t101 - _t110*_t35 + _t91 - _t94;
+    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
+    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
+    const trailer3_real_t _t132 = _t40*_t98;
+    const trailer3_real_t _t133 = _t110*_t41 + _t132 + _t62;
+    const trailer3_real_t _t134 = _t100 - _t115*_t35 + _t85;
+    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
+    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
+    const trailer3_real_t _t137 = _t115*_t41 - _t127 + _t56;
+    const trailer3_real_t _t138 = _t101 - _t118*_t35 + _t92;
+    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
+    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
+    const trailer3_real_t _t141 = _t118*_t41 - _t132 + _t61;
+    const trailer3_real_t _t142 = -_t120*_t35 + _t86;
+    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
+    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
+    const trailer3_real_t _t145 = _t120*_t41 + _t55;
+    const trailer3_real_t _t146 = -_t122*_t35 + _t93;
+    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
+    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
+    const trailer3_real_t _t149 = _t122*_t41 + _t60;
+    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t88;
+    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
+    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t95;
+    const trailer3_real_t _t153 = TRAILER3_LIT(0.2)*_t152;
+    const trailer3_real_t _t154 = K_theta_cart_x_tractor*_t13;
+    const trailer3_real_t _t155 = K_theta_cart_x_tractor_2*_t15;
+    const trailer3_real_t _t156 = _t154 + _t155;
+    const trailer3_real_t _t157 = K_theta_cart2_x_tractor*_t19;
+    const trailer3_real_t _t158 = K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t _t159 = _t157 + _t158;
+    const trailer3_real_t _t160 = K_theta_cart3_x_tractor*_t28;
+    const trailer3_real_t _t161 = K_theta_cart3_x_tractor_2*_t30;
+    const trailer3_real_t _t162 = _t160 + _t161;
+    const trailer3_real_t _t163 = K_theta_cart_x_tractor*_t15;
+    const trailer3_real_t _t164 = K_theta_cart2_x_tractor*_t21;
+    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t30;
+    const trailer3_real_t _t166 = K_theta_cart_x_tractor*_t16 - K_theta_cart_x_tractor_2*_t36;
+    const trailer3_real_t _t167 = K_theta_cart2_x_tractor*_t22 - K_theta_cart2_x_tractor_2*_t37;
+    const trailer3_real_t _t168 = K_theta_cart3_x_tractor*_t31 - K_theta_cart3_x_tractor_2*_t39;
+    const trailer3_real_t _t169 = K_theta_cart2_x_tractor_2*_t19;
+    const trailer3_real_t _t170 = _t157*_t24 + _t158*_t24 + _t164*_t25 - _t169*_t25;
+    const trailer3_real_t _t171 = K_theta_cart3_x_tractor_2*_t28;
+    const trailer3_real_t _t172 = _t160*_t24 + _t161*_t24 + _t165*_t25 - _t171*_t25;
+    const trailer3_real_t _t173 = TRAILER3_LIT(0.85)*_t19;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.85)*_t21;
+    const trailer3_real_t _t175 = _t160*_t173 + _t161*_t173 + _t165*_t174 - _t171*_t174;
+    const trailer3_real_t _t176 = _t8*_t8;
+    const trailer3_real_t _t177 = _t54*thetadot_right + _t59*thetadot_left;
     const trailer3_real_t _t178 = _t177*_t177;
-    const trailer3_real_t _t179 = _t53*thetadot_right + _t58*thetadot_left;
+    const trailer3_real_t _t179 = _t82*thetadot_right + _t89*thetadot_left;
     const trailer3_real_t _t180 = _t179*_t179;
-    const trailer3_real_t _t181 = _t83*thetadot_right + _t90*thetadot_left;
-    const trailer3_real_t _t182 = _t181*_t181;
-    const trailer3_real_t _t183 = _t166*_t182;
-    const trailer3_real_t _t184 = _t45*thetadot_right + _t49*thetadot_left;
-    const trailer3_real_t _t185 = _t184*_t184;
-    const trailer3_real_t _t186 = _t170*_t180;
-    const trailer3_real_t _t187 = _t172*_t182;
-    const trailer3_real_t _t188 = _t158*_t180;
-    const trailer3_real_t _t189 = _t159*_t180;
-    const trailer3_real_t _t190 = _t161*_t182;
-    const trailer3_real_t _t191 = _t162*_t182;
-    const trailer3_real_t _t192 = K_theta_cart2_x_tractor*_t34;
-    const trailer3_real_t _t193 = K_theta_cart2_x_tractor_2*_t19;
-    const trailer3_real_t _t194 = K_theta_cart3_x_tractor*_t36;
-    const trailer3_real_t _t195 = K_theta_cart3_x_tractor_2*_t28;
-    const trailer3_real_t _t196 = _t185*_t21;
-    const trailer3_real_t _t197 = _t185*_t22;
-    const trailer3_real_t _t198 = _t174*_t180;
-    const trailer3_real_t _t199 = _t175*_t180;
-    const trailer3_real_t _t200 = _t63 + _t66;
-    const trailer3_real_t _t201 = _t2*_t200;
+    const trailer3_real_t _t181 = _t165*_t180;
+    const trailer3_real_t _t182 = _t46*thetadot_right + _t50*thetadot_left;
+    const trailer3_real_t _t183 = _t182*_t182;
+    const trailer3_real_t _t184 = _t169*_t178;
+    const trailer3_real_t _t185 = _t171*_t180;
+    const trailer3_real_t _t186 = _t157*_t178;
+    const trailer3_real_t _t187 = _t158*_t178;
+    const trailer3_real_t _t188 = _t160*_t180;
+    const trailer3_real_t _t189 = _t161*_t180;
+    const trailer3_real_t _t190 = K_theta_cart2_x_tractor*_t37;
+    const trailer3_real_t _t191 = K_theta_cart2_x_tractor_2*_t22;
+    const trailer3_real_t _t192 = K_theta_cart3_x_tractor*_t39;
+    const trailer3_real_t _t193 = K_theta_cart3_x_tractor_2*_t31;
+    const trailer3_real_t _t194 = _t183*_t24;
+    const trailer3_real_t _t195 = _t183*_t25;
+    const trailer3_real_t _t196 = _t173*_t178;
+    const trailer3_real_t _t197 = _t174*_t178;
+    const trailer3_real_t _t198 = _t182*thetadot_right;
+    const trailer3_real_t _t199 = _t182*thetadot_left;
+    const trailer3_real_t _t200 = _t64 + _t65 - _t66;
+    const trailer3_real_t _t201 = _t0*_t200;
     const trailer3_real_t _t202 = J_theta_cart_right*_t201;
-    const trailer3_real_t _t203 = _t67 + _t70;
-    const trailer3_real_t _t204 = _t2*_t203;
+    const trailer3_real_t _t203 = _t67 + _t68 - _t69;
+    const trailer3_real_t _t204 = _t0*_t203;
     const trailer3_real_t _t205 = J_theta_cart_right*_t204;
-    const trailer3_real_t _t206 = -_t63 + _t64 - _t65;
-    const trailer3_real_t _t207 = _t206*_t3;
+    const trailer3_real_t _t206 = -_t64 - _t70;
+    const trailer3_real_t _t207 = _t1*_t206;
     const trailer3_real_t _t208 = J_theta_cart_left*_t207;
-    const trailer3_real_t _t209 = -_t67 + _t68 - _t69;
-    const trailer3_real_t _t210 = _t209*_t3;
+    const trailer3_real_t _t209 = -_t67 - _t71;
+    const trailer3_real_t _t210 = _t1*_t209;
     const trailer3_real_t _t211 = J_theta_cart_left*_t210;
-    const trailer3_real_t _t212 = _t71 - _t72 + _t75;
-    const trailer3_real_t _t213 = _t212*_t4;
+    const trailer3_real_t _t212 = _t72 - _t76;
+    const trailer3_real_t _t213 = _t2*_t212;
     const trailer3_real_t _t214 = J_theta_cart2_right*_t213;
-    const trailer3_real_t _t215 = _t76 - _t77 + _t80;
-    const trailer3_real_t _t216 = _t215*_t4;
+    const trailer3_real_t _t215 = _t77 - _t81;
+    const trailer3_real_t _t216 = _t2*_t215;
     const trailer3_real_t _t217 = J_theta_cart2_right*_t216;
-    const trailer3_real_t _t218 = -_t71 - _t81;
-    const trailer3_real_t _t219 = _t218*_t5;
+    const trailer3_real_t _t218 = -_t72 - _t76;
+    const trailer3_real_t _t219 = _t218*_t3;
     const trailer3_real_t _t220 = J_theta_cart2_left*_t219;
-    const trailer3_real_t _t221 = -_t76 - _t82;
-    const trailer3_real_t _t222 = _t221*_t5;
+    const trailer3_real_t _t221 = -_t77 - _t81;
+    const trailer3_real_t _t222 = _t221*_t3;
     const trailer3_real_t _t223 = J_theta_cart2_left*_t222;
-    const trailer3_real_t _t224 = _t84 - _t89;
-    const trailer3_real_t _t225 = _t224*_t6;
+    const trailer3_real_t _t224 = _t83 - _t88;
+    const trailer3_real_t _t225 = _t224*_t4;
     const trailer3_real_t _t226 = J_theta_cart3_right*_t225;
-    const trailer3_real_t _t227 = _t91 - _t96;
-    const trailer3_real_t _t228 = _t227*_t6;
+    const trailer3_real_t _t227 = _t90 - _t95;
+    const trailer3_real_t _t228 = _t227*_t4;
     const trailer3_real_t _t229 = J_theta_cart3_right*_t228;
-    const trailer3_real_t _t230 = -_t84 - _t89;
-    const trailer3_real_t _t231 = _t230*_t7;
+    const trailer3_real_t _t230 = -_t83 - _t88;
+    const trailer3_real_t _t231 = _t230*_t5;
     const trailer3_real_t _t232 = J_theta_cart3_left*_t231;
-    const trailer3_real_t _t233 = -_t91 - _t96;
-    const trailer3_real_t _t234 = _t233*_t7;
+    const trailer3_real_t _t233 = -_t90 - _t95;
+    const trailer3_real_t _t234 = _t233*_t5;
     const trailer3_real_t _t235 = J_theta_cart3_left*_t234;
-    const trailer3_real_t _t236 = -K_theta_cart_x_tractor_2*_t10*_t185
-            + K_theta_tractor_x_tractor*_t178 + _t164*_t185 + _t165*_t180 + _t183 - _t186 - _t187;
-    const trailer3_real_t _t237 = _t177*thetadot_right;
-    const trailer3_real_t _t238 = _t177*thetadot_left;
-    const trailer3_real_t _t239 = _t184*thetadot_right;
-    const trailer3_real_t _t240 = _t184*thetadot_left;
-    const trailer3_real_t _t241 = _t237*_t97 + _t238*_t99 - _t239*_t97 - _t240*_t99;
-    const trailer3_real_t _t242 = _t179*thetadot_right;
-    const trailer3_real_t _t243 = _t179*thetadot_left;
-    const trailer3_real_t _t244 = _t106*_t237 + _t111*_t238 + _t116*_t239 + _t119*_t240
-            + _t121*_t242 + _t123*_t243;
-    const trailer3_real_t _t245 = _t181*thetadot_right;
-    const trailer3_real_t _t246 = _t181*thetadot_left;
-    const trailer3_real_t _t247 = _t126*_t237 + _t131*_t238 + _t136*_t239 + _t140*_t240
-            + _t144*_t242 + _t148*_t243 + _t151*_t245 + _t153*_t246;
-    const trailer3_real_t _t248 = _t157*_t241 + _t160*_t244 + _t163*_t247 + _t236;
-    const trailer3_real_t _t249 = -K_theta_cart_x_tractor*_t185*_t33
-            - K_theta_cart_x_tractor_2*_t13*_t185 - _t180*_t192 - _t180*_t193 - _t182*_t194
-            - _t182*_t195;
-    const trailer3_real_t _t250 = _t237*_t40 + _t238*_t43;
-    const trailer3_real_t _t251 = -K_theta_tractor_x_tractor*_t250 + _t249;
-    const trailer3_real_t _t252 = _t167*_t241 + _t168*_t244 + _t169*_t247 + _t251;
-    const trailer3_real_t _t253 = K_theta_cart_x_tractor_2*_t10 - _t164;
-    const trailer3_real_t _t254 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t10*_t18*_t180
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t10*_t182*_t27
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t10*_t178
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t12*_t178 - _t186*_t21 - _t187*_t21
-            - _t188*_t22 - _t189*_t22 - _t190*_t22 - _t191*_t22;
-    const trailer3_real_t _t255 = _t250*_t253 + _t254;
-    const trailer3_real_t _t256 = J_theta_cart*_t241 + _t171*_t244 + _t173*_t247 + _t255;
-    const trailer3_real_t _t257 = K_theta_cart2_x_tractor_2*_t16 - _t165;
-    const trailer3_real_t _t258 = _t158*_t197 + _t159*_t197 - _t165*_t196 + _t170*_t196
-            + _t174*_t183 - _t174*_t187 - _t175*_t190 - _t175*_t191 + _t178*_t192 + _t178*_t193;
-    const trailer3_real_t _t259 = _t250*_t257 + _t258;
-    const trailer3_real_t _t260 = J_theta_cart2*_t244 + _t171*_t241 + _t176*_t247 + _t259;
-    const trailer3_real_t _t261 = K_theta_cart3_x_tractor_2*_t25 - _t166;
-    const trailer3_real_t _t262 = _t161*_t197 + _t161*_t199 + _t162*_t197 + _t162*_t199
-            - _t166*_t196 - _t166*_t198 + _t172*_t196 + _t172*_t198 + _t178*_t194 + _t178*_t195;
-    const trailer3_real_t _t263 = _t250*_t261 + _t262;
-    const trailer3_real_t _t264 = J_theta_cart3*_t247 + _t173*_t241 + _t176*_t244 + _t263;
-    const trailer3_real_t _t265 = J_x_tractor*_t43 + K_theta_tractor_x_tractor_2*_t42 + _t157*_t49
-            + _t160*_t58 + _t163*_t90;
-    const trailer3_real_t _t266 = J_theta_tractor*_t42 + K_theta_tractor_x_tractor_2*_t43
-            + _t167*_t49 + _t168*_t58 + _t169*_t90;
-    const trailer3_real_t _t267 = J_theta_cart*_t49 + _t157*_t43 + _t167*_t42 + _t171*_t58
-            + _t173*_t90;
-    const trailer3_real_t _t268 = J_theta_cart2*_t58 + _t160*_t43 + _t168*_t42 + _t171*_t49
-            + _t176*_t90;
-    const trailer3_real_t _t269 = J_theta_cart3*_t90 + _t163*_t43 + _t169*_t42 + _t173*_t49
-            + _t176*_t58;
-    const trailer3_real_t _t270 = _t201*_t205 + _t207*_t211 + _t213*_t217 + _t219*_t223
-            + _t225*_t229 + _t231*_t235 + _t265*_t40 + _t266*_t39 + _t267*_t45 + _t268*_t53
-            + _t269*_t83;
-    const trailer3_real_t _t271 = J_theta_left + _t204*_t205 + _t210*_t211 + _t216*_t217
-            + _t222*_t223 + _t228*_t229 + _t234*_t235 + _t265*_t43 + _t266*_t42 + _t267*_t49
-            + _t268*_t58 + _t269*_t90;
-    const trailer3_real_t _t272 = _t103 - _t41;
-    const trailer3_real_t _t273 = _t2*_t272;
-    const trailer3_real_t _t274 = _t104 - _t44;
-    const trailer3_real_t _t275 = _t2*_t274;
-    const trailer3_real_t _t276 = _t237*_t273 + _t238*_t275 - _t239*_t273 - _t240*_t275;
-    const trailer3_real_t _t277 = -_t103 - _t41;
-    const trailer3_real_t _t278 = _t277*_t3;
-    const trailer3_real_t _t279 = -_t104 - _t44;
-    const trailer3_real_t _t280 = _t279*_t3;
-    const trailer3_real_t _t281 = _t237*_t278 + _t238*_t280 - _t239*_t278 - _t240*_t280;
-    const trailer3_real_t _t282 = _t107 - _t109;
-    const trailer3_real_t _t283 = _t282*_t4;
-    const trailer3_real_t _t284 = _t112 - _t114;
-    const trailer3_real_t _t285 = _t284*_t4;
-    const trailer3_real_t _t286 = _t108 + _t117 - _t46;
-    const trailer3_real_t _t287 = _t286*_t4;
-    const trailer3_real_t _t288 = _t113 + _t120 - _t50;
-    const trailer3_real_t _t289 = _t288*_t4;
-    const trailer3_real_t _t290 = _t122 + _t48;
-    const trailer3_real_t _t291 = _t290*_t4;
-    const trailer3_real_t _t292 = _t124 + _t52;
-    const trailer3_real_t _t293 = _t292*_t4;
-    const trailer3_real_t _t294 = _t237*_t283 + _t238*_t285 + _t239*_t287 + _t240*_t289
-            + _t242*_t291 + _t243*_t293;
-    const trailer3_real_t _t295 = -_t107 - _t109;
-    const trailer3_real_t _t296 = _t295*_t5;
-    const trailer3_real_t _t297 = -_t112 - _t114;
-    const trailer3_real_t _t298 = _t297*_t5;
-    const trailer3_real_t _t299 = _t108 - _t117 - _t46;
-    const trailer3_real_t _t300 = _t299*_t5;
-    const trailer3_real_t _t301 = _t113 - _t120 - _t50;
-    const trailer3_real_t _t302 = _t301*_t5;
-    const trailer3_real_t _t303 = -_t122 + _t48;
-    const trailer3_real_t _t304 = _t303*_t5;
-    const trailer3_real_t _t305 = -_t124 + _t52;
-    const trailer3_real_t _t306 = _t305*_t5;
-    const trailer3_real_t _t307 = _t237*_t296 + _t238*_t298 + _t239*_t300 + _t240*_t302
-            + _t242*_t304 + _t243*_t306;
-    const trailer3_real_t _t308 = _t127 - _t129;
-    const trailer3_real_t _t309 = _t308*_t6;
-    const trailer3_real_t _t310 = _t132 - _t134;
-    const trailer3_real_t _t311 = _t310*_t6;
-    const trailer3_real_t _t312 = _t137 - _t138;
-    const trailer3_real_t _t313 = _t312*_t6;
-    const trailer3_real_t _t314 = _t141 - _t142;
-    const trailer3_real_t _t315 = _t314*_t6;
-    const trailer3_real_t _t316 = _t145 - _t146;
-    const trailer3_real_t _t317 = _t316*_t6;
-    const trailer3_real_t _t318 = _t149 - _t150;
-    const trailer3_real_t _t319 = _t318*_t6;
-    const trailer3_real_t _t320 = _t152 + _t57;
-    const trailer3_real_t _t321 = _t320*_t6;
-    const trailer3_real_t _t322 = _t154 + _t62;
-    const trailer3_real_t _t323 = _t322*_t6;
-    const trailer3_real_t _t324 = _t237*_t309 + _t238*_t311 + _t239*_t313 + _t240*_t315
-            + _t242*_t317 + _t243*_t319 + _t245*_t321 + _t246*_t323;
-    const trailer3_real_t _t325 = -_t127 - _t129;
-    const trailer3_real_t _t326 = _t325*_t7;
-    const trailer3_real_t _t327 = -_t132 - _t134;
-    const trailer3_real_t _t328 = _t327*_t7;
-    const trailer3_real_t _t329 = -_t137 - _t138;
-    const trailer3_real_t _t330 = _t329*_t7;
-    const trailer3_real_t _t331 = -_t141 - _t142;
-    const trailer3_real_t _t332 = _t331*_t7;
-    const trailer3_real_t _t333 = -_t145 - _t146;
-    const trailer3_real_t _t334 = _t333*_t7;
-    const trailer3_real_t _t335 = -_t149 - _t150;
-    const trailer3_real_t _t336 = _t335*_t7;
-    const trailer3_real_t _t337 = -_t152 + _t57;
-    const trailer3_real_t _t338 = _t337*_t7;
-    const trailer3_real_t _t339 = -_t154 + _t62;
-    const trailer3_real_t _t340 = _t339*_t7;
-    const trailer3_real_t _t341 = _t237*_t326 + _t238*_t328 + _t239*_t330 + _t240*_t332
-            + _t242*_t334 + _t243*_t336 + _t245*_t338 + _t246*_t340;
-    const trailer3_real_t _t342 = _t202*_t276 + _t208*_t281 + _t214*_t294 + _t220*_t307
-            + _t226*_t324 + _t232*_t341 + _t248*_t40 + _t252*_t39 + _t256*_t45 + _t260*_t53
-            + _t264*_t83;
-    const trailer3_real_t _t343 = -_t342 + tau_right;
-    const trailer3_real_t _t344 = _t205*_t276 + _t211*_t281 + _t217*_t294 + _t223*_t307
-            + _t229*_t324 + _t235*_t341 + _t248*_t43 + _t252*_t42 + _t256*_t49 + _t260*_t58
-            + _t264*_t90;
-    const trailer3_real_t _t345 = -_t344 + tau_left;
-    const trailer3_real_t _t346 = J_x_tractor*_t40 + K_theta_tractor_x_tractor_2*_t39 + _t157*_t45
-            + _t160*_t53 + _t163*_t83;
-    const trailer3_real_t _t347 = J_theta_tractor*_t39 + K_theta_tractor_x_tractor_2*_t40
-            + _t167*_t45 + _t168*_t53 + _t169*_t83;
-    const trailer3_real_t _t348 = J_theta_cart*_t45 + _t157*_t40 + _t167*_t39 + _t171*_t53
-            + _t173*_t83;
-    const trailer3_real_t _t349 = J_theta_cart2*_t53 + _t160*_t40 + _t168*_t39 + _t171*_t45
-            + _t176*_t83;
-    const trailer3_real_t _t350 = J_theta_cart3*_t83 + _t163*_t40 + _t169*_t39 + _t173*_t45
-            + _t176*_t53;
-    const trailer3_real_t _t351 = J_theta_right + _t201*_t202 + _t207*_t208 + _t213*_t214
-            + _t219*_t220 + _t225*_t226 + _t231*_t232 + _t346*_t40 + _t347*_t39 + _t348*_t45
-            + _t349*_t53 + _t350*_t83;
-    const trailer3_real_t _t352 = -_t270*_t270 + _t271*_t351;
-    const trailer3_real_t _t353 = TRAILER3_LIT(1.0)/_t352;
-    const trailer3_real_t _t354 = _t353*(-_t270*_t345 + _t271*_t343);
-    const trailer3_real_t _t355 = _t353*(-_t270*_t343 + _t345*_t351);
-    const trailer3_real_t _t356 = _t354*_t40 + _t355*_t43;
-    const trailer3_real_t _t357 = _t354*_t39 + _t355*_t42;
-    const trailer3_real_t _t358 = _t241 + _t354*_t45 + _t355*_t49;
-    const trailer3_real_t _t359 = _t244 + _t354*_t53 + _t355*_t58;
-    const trailer3_real_t _t360 = _t247 + _t354*_t83 + _t355*_t90;
-    const trailer3_real_t _t361 = -J_x_tractor*_t356 - K_theta_tractor_x_tractor_2*_t357
-            - _t157*_t358 - _t160*_t359 - _t163*_t360 - _t236;
-    const trailer3_real_t _t362 = _t225*_t354 + _t228*_t355 + _t324;
-    const trailer3_real_t _t363 = -J_theta_cart3_right*_t362;
-    const trailer3_real_t _t364 = _t363*_t6;
-    const trailer3_real_t _t365 = _t231*_t354 + _t234*_t355 + _t341;
-    const trailer3_real_t _t366 = -J_theta_cart3_left*_t365;
-    const trailer3_real_t _t367 = _t366*_t7;
-    const trailer3_real_t _t368 = -J_theta_cart3*_t360 - _t163*_t356 - _t169*_t357 - _t173*_t358
-            - _t176*_t359 - _t263;
-    const trailer3_real_t _t369 = TRAILER3_LIT(0.2)*_t364 - TRAILER3_LIT(0.2)*_t367 + _t368;
-    const trailer3_real_t _t370 = -TRAILER3_LIT(1.6666666666666667)*_t369;
-    const trailer3_real_t _t371 = _t213*_t354 + _t216*_t355 + _t294;
-    const trailer3_real_t _t372 = -J_theta_cart2_right*_t371;
-    const trailer3_real_t _t373 = _t372*_t4;
-    const trailer3_real_t _t374 = _t219*_t354 + _t222*_t355 + _t307;
-    const trailer3_real_t _t375 = -J_theta_cart2_left*_t374;
-    const trailer3_real_t _t376 = _t375*_t5;
-    const trailer3_real_t _t377 = -J_theta_cart2*_t359 - _t160*_t356 - _t168*_t357 - _t171*_t358
-            - _t176*_t360 - _t259;
-    const trailer3_real_t _t378 = -_t32*_t370 - _t364*_t38 - _t367*_t38 + TRAILER3_LIT(0.2)*_t373
-            - TRAILER3_LIT(0.2)*_t376 + _t377;
-    const trailer3_real_t _t379 = -TRAILER3_LIT(1.6666666666666667)*_t378;
-    const trailer3_real_t _t380 = _t201*_t354 + _t204*_t355 + _t276;
-    const trailer3_real_t _t381 = -J_theta_cart_right*_t380;
-    const trailer3_real_t _t382 = _t2*_t381;
-    const trailer3_real_t _t383 = _t207*_t354 + _t210*_t355 + _t281;
-    const trailer3_real_t _t384 = -J_theta_cart_left*_t383;
-    const trailer3_real_t _t385 = _t3*_t384;
-    const trailer3_real_t _t386 = -J_theta_cart*_t358 - _t157*_t356 - _t167*_t357 - _t171*_t359
-            - _t173*_t360 - _t255;
-    const trailer3_real_t _t387 = -_t23*_t379 - _t30*_t370 - _t35*_t373 - _t35*_t376 - _t364*_t37
-            - _t367*_t37 + TRAILER3_LIT(0.2)*_t382 - TRAILER3_LIT(0.2)*_t385 + _t386;
-    const trailer3_real_t _t388 = -TRAILER3_LIT(1.6666666666666667)*_t387;
-    const trailer3_real_t _t389 = _t10*_t388 + _t12*_t382 + _t12*_t385 + _t16*_t379 + _t18*_t373
-            + _t18*_t376 + _t25*_t370 + _t27*_t364 + _t27*_t367 + _t361;
-    const trailer3_real_t _t390 = TRAILER3_LIT(0.5)*_t389;
-    const trailer3_real_t _t391 = -J_theta_tractor*_t357 - K_theta_tractor_x_tractor_2*_t356
-            - _t167*_t358 - _t168*_t359 - _t169*_t360 - _t251;
-    const trailer3_real_t _t392 = TRAILER3_LIT(0.3)*_t12*_t388 + TRAILER3_LIT(0.3)*_t18*_t379
-            + TRAILER3_LIT(0.3)*_t27*_t370 - _t33*_t382 - _t33*_t385 - _t34*_t373 - _t34*_t376
-            - _t36*_t364 - _t36*_t367 + _t391;
-    const trailer3_real_t _t393 = TRAILER3_LIT(2.4154589371980677)*_t392;
-    const trailer3_real_t _t394 = -_t17*_t40 - _t20*_t39 - _t23*_t45;
-    const trailer3_real_t _t395 = -TRAILER3_LIT(1.6666666666666667)*_t394;
-    const trailer3_real_t _t396 = TRAILER3_LIT(0.2)*_t395;
-    const trailer3_real_t _t397 = -_t17*_t43 - _t20*_t42 - _t23*_t49;
-    const trailer3_real_t _t398 = -TRAILER3_LIT(1.6666666666666667)*_t397;
-    const trailer3_real_t _t399 = TRAILER3_LIT(0.2)*_t398;
-    const trailer3_real_t _t400 = -_t26*_t40 - _t29*_t39 - _t30*_t45 - _t32*_t395;
+    const trailer3_real_t _t236 = -K_theta_cart_x_tractor_2*_t13*_t183
+            + K_theta_tractor_x_tractor*_t176 + _t163*_t183 + _t164*_t178 + _t181 - _t184 - _t185;
+    const trailer3_real_t _t237 = -_t198 + _t9;
+    const trailer3_real_t _t238 = _t10 - _t199;
+    const trailer3_real_t _t239 = _t237*_t96 + _t238*_t98;
+    const trailer3_real_t _t240 = _t177*thetadot_right;
+    const trailer3_real_t _t241 = _t177*thetadot_left;
+    const trailer3_real_t _t242 = _t10*_t110 + _t105*_t9 + _t115*_t198 + _t118*_t199 + _t120*_t240
+            + _t122*_t241;
+    const trailer3_real_t _t243 = _t179*thetadot_right;
+    const trailer3_real_t _t244 = _t179*thetadot_left;
+    const trailer3_real_t _t245 = _t10*_t130 + _t125*_t9 + _t135*_t198 + _t139*_t199 + _t143*_t240
+            + _t147*_t241 + _t150*_t243 + _t152*_t244;
+    const trailer3_real_t _t246 = _t156*_t239 + _t159*_t242 + _t162*_t245 + _t236;
+    const trailer3_real_t _t247 = K_theta_cart_x_tractor_2*_t13 - _t163;
+    const trailer3_real_t _t248 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t13*_t178*_t21
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t180*_t30
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t13*_t176
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t15*_t176 - _t184*_t24 - _t185*_t24
+            - _t186*_t25 - _t187*_t25 - _t188*_t25 - _t189*_t25;
+    const trailer3_real_t _t249 = _t10*_t44 + _t42*_t9;
+    const trailer3_real_t _t250 = _t247*_t249 + _t248;
+    const trailer3_real_t _t251 = J_theta_cart*_t239 + _t170*_t242 + _t172*_t245 + _t250;
+    const trailer3_real_t _t252 = K_theta_cart2_x_tractor_2*_t19 - _t164;
+    const trailer3_real_t _t253 = _t157*_t195 + _t158*_t195 - _t164*_t194 + _t169*_t194
+            + _t173*_t181 - _t173*_t185 - _t174*_t188 - _t174*_t189 + _t176*_t190 + _t176*_t191;
+    const trailer3_real_t _t254 = _t249*_t252 + _t253;
+    const trailer3_real_t _t255 = J_theta_cart2*_t242 + _t170*_t239 + _t175*_t245 + _t254;
+    const trailer3_real_t _t256 = K_theta_cart3_x_tractor_2*_t28 - _t165;
+    const trailer3_real_t _t257 = _t160*_t195 + _t160*_t197 + _t161*_t195 + _t161*_t197
+            - _t165*_t194 - _t165*_t196 + _t171*_t194 + _t171*_t196 + _t176*_t192 + _t176*_t193;
+    const trailer3_real_t _t258 = _t249*_t256 + _t257;
+    const trailer3_real_t _t259 = J_theta_cart3*_t245 + _t172*_t239 + _t175*_t242 + _t258;
+    const trailer3_real_t _t260 = -K_theta_cart_x_tractor*_t183*_t36
+            - K_theta_cart_x_tractor_2*_t16*_t183 - _t178*_t190 - _t178*_t191 - _t180*_t192
+            - _t180*_t193;
+    const trailer3_real_t _t261 = -K_theta_tractor_x_tractor*_t249 + _t260;
+    const trailer3_real_t _t262 = _t166*_t239 + _t167*_t242 + _t168*_t245 + _t261;
+    const trailer3_real_t _t263 = J_x_tractor*_t44 + K_theta_tractor_x_tractor_2*_t7 + _t156*_t50
+            + _t159*_t59 + _t162*_t89;
+    const trailer3_real_t _t264 = J_theta_tractor*_t7 + K_theta_tractor_x_tractor_2*_t44
+            + _t166*_t50 + _t167*_t59 + _t168*_t89;
+    const trailer3_real_t _t265 = J_theta_cart*_t50 + _t156*_t44 + _t166*_t7 + _t170*_t59
+            + _t172*_t89;
+    const trailer3_real_t _t266 = J_theta_cart2*_t59 + _t159*_t44 + _t167*_t7 + _t170*_t50
+            + _t175*_t89;
+    const trailer3_real_t _t267 = J_theta_cart3*_t89 + _t162*_t44 + _t168*_t7 + _t172*_t50
+            + _t175*_t59;
+    const trailer3_real_t _t268 = _t201*_t205 + _t207*_t211 + _t213*_t217 + _t219*_t223
+            + _t225*_t229 + _t231*_t235 + _t263*_t42 + _t264*_t6 + _t265*_t46 + _t266*_t54
+            + _t267*_t82;
+    const trailer3_real_t _t269 = J_theta_left + _t204*_t205 + _t210*_t211 + _t216*_t217
+            + _t222*_t223 + _t228*_t229 + _t234*_t235 + _t263*_t44 + _t264*_t7 + _t265*_t50
+            + _t266*_t59 + _t267*_t89;
+    const trailer3_real_t _t270 = _t102 - _t43;
+    const trailer3_real_t _t271 = _t0*_t270;
+    const trailer3_real_t _t272 = _t103 - _t45;
+    const trailer3_real_t _t273 = _t0*_t272;
+    const trailer3_real_t _t274 = _t237*_t271 + _t238*_t273;
+    const trailer3_real_t _t275 = -_t102 - _t43;
+    const trailer3_real_t _t276 = _t1*_t275;
+    const trailer3_real_t _t277 = -_t103 - _t45;
+    const trailer3_real_t _t278 = _t1*_t277;
+    const trailer3_real_t _t279 = _t237*_t276 + _t238*_t278;
+    const trailer3_real_t _t280 = _t106 - _t108;
+    const trailer3_real_t _t281 = _t2*_t280;
+    const trailer3_real_t _t282 = _t111 - _t113;
+    const trailer3_real_t _t283 = _t2*_t282;
+    const trailer3_real_t _t284 = _t107 + _t116 - _t47;
+    const trailer3_real_t _t285 = _t2*_t284;
+    const trailer3_real_t _t286 = _t112 + _t119 - _t51;
+    const trailer3_real_t _t287 = _t2*_t286;
+    const trailer3_real_t _t288 = _t121 + _t49;
+    const trailer3_real_t _t289 = _t2*_t288;
+    const trailer3_real_t _t290 = _t123 + _t53;
+    const trailer3_real_t _t291 = _t2*_t290;
+    const trailer3_real_t _t292 = _t10*_t283 + _t198*_t285 + _t199*_t287 + _t240*_t289 + _t241*_t291
+            + _t281*_t9;
+    const trailer3_real_t _t293 = -_t106 - _t108;
+    const trailer3_real_t _t294 = _t293*_t3;
+    const trailer3_real_t _t295 = -_t111 - _t113;
+    const trailer3_real_t _t296 = _t295*_t3;
+    const trailer3_real_t _t297 = _t107 - _t116 - _t47;
+    const trailer3_real_t _t298 = _t297*_t3;
+    const trailer3_real_t _t299 = _t112 - _t119 - _t51;
+    const trailer3_real_t _t300 = _t299*_t3;
+    const trailer3_real_t _t301 = -_t121 + _t49;
+    const trailer3_real_t _t302 = _t3*_t301;
+    const trailer3_real_t _t303 = -_t123 + _t53;
+    const trailer3_real_t _t304 = _t3*_t303;
+    const trailer3_real_t _t305 = _t10*_t296 + _t198*_t298 + _t199*_t300 + _t240*_t302 + _t241*_t304
+            + _t294*_t9;
+    const trailer3_real_t _t306 = _t126 - _t128;
+    const trailer3_real_t _t307 = _t306*_t4;
+    const trailer3_real_t _t308 = _t131 - _t133;
+    const trailer3_real_t _t309 = _t308*_t4;
+    const trailer3_real_t _t310 = _t136 - _t137;
+    const trailer3_real_t _t311 = _t310*_t4;
+    const trailer3_real_t _t312 = _t140 - _t141;
+    const trailer3_real_t _t313 = _t312*_t4;
+    const trailer3_real_t _t314 = _t144 - _t145;
+    const trailer3_real_t _t315 = _t314*_t4;
+    const trailer3_real_t _t316 = _t148 - _t149;
+    const trailer3_real_t _t317 = _t316*_t4;
+    const trailer3_real_t _t318 = _t151 + _t58;
+    const trailer3_real_t _t319 = _t318*_t4;
+    const trailer3_real_t _t320 = _t153 + _t63;
+    const trailer3_real_t _t321 = _t320*_t4;
+    const trailer3_real_t _t322 = _t10*_t309 + _t198*_t311 + _t199*_t313 + _t240*_t315 + _t241*_t317
+            + _t243*_t319 + _t244*_t321 + _t307*_t9;
+    const trailer3_real_t _t323 = -_t126 - _t128;
+    const trailer3_real_t _t324 = _t323*_t5;
+    const trailer3_real_t _t325 = -_t131 - _t133;
+    const trailer3_real_t _t326 = _t325*_t5;
+    const trailer3_real_t _t327 = -_t136 - _t137;
+    const trailer3_real_t _t328 = _t327*_t5;
+    const trailer3_real_t _t329 = -_t140 - _t141;
+    const trailer3_real_t _t330 = _t329*_t5;
+    const trailer3_real_t _t331 = -_t144 - _t145;
+    const trailer3_real_t _t332 = _t331*_t5;
+    const trailer3_real_t _t333 = -_t148 - _t149;
+    const trailer3_real_t _t334 = _t333*_t5;
+    const trailer3_real_t _t335 = -_t151 + _t58;
+    const trailer3_real_t _t336 = _t335*_t5;
+    const trailer3_real_t _t337 = -_t153 + _t63;
+    const trailer3_real_t _t338 = _t337*_t5;
+    const trailer3_real_t _t339 = _t10*_t326 + _t198*_t328 + _t199*_t330 + _t240*_t332 + _t241*_t334
+            + _t243*_t336 + _t244*_t338 + _t324*_t9;
+    const trailer3_real_t _t340 = _t202*_t274 + _t208*_t279 + _t214*_t292 + _t220*_t305
+            + _t226*_t322 + _t232*_t339 + _t246*_t42 + _t251*_t46 + _t255*_t54 + _t259*_t82
+            + _t262*_t6;
+    const trailer3_real_t _t341 = -_t340 + tau_right;
+    const trailer3_real_t _t342 = _t205*_t274 + _t211*_t279 + _t217*_t292 + _t223*_t305
+            + _t229*_t322 + _t235*_t339 + _t246*_t44 + _t251*_t50 + _t255*_t59 + _t259*_t89
+            + _t262*_t7;
+    const trailer3_real_t _t343 = -_t342 + tau_left;
+    const trailer3_real_t _t344 = J_x_tractor*_t42 + K_theta_tractor_x_tractor_2*_t6 + _t156*_t46
+            + _t159*_t54 + _t162*_t82;
+    const trailer3_real_t _t345 = J_theta_tractor*_t6 + K_theta_tractor_x_tractor_2*_t42
+            + _t166*_t46 + _t167*_t54 + _t168*_t82;
+    const trailer3_real_t _t346 = J_theta_cart*_t46 + _t156*_t42 + _t166*_t6 + _t170*_t54
+            + _t172*_t82;
+    const trailer3_real_t _t347 = J_theta_cart2*_t54 + _t159*_t42 + _t167*_t6 + _t170*_t46
+            + _t175*_t82;
+    const trailer3_real_t _t348 = J_theta_cart3*_t82 + _t162*_t42 + _t168*_t6 + _t172*_t46
+            + _t175*_t54;
+    const trailer3_real_t _t349 = J_theta_right + _t201*_t202 + _t207*_t208 + _t213*_t214
+            + _t219*_t220 + _t225*_t226 + _t231*_t232 + _t344*_t42 + _t345*_t6 + _t346*_t46
+            + _t347*_t54 + _t348*_t82;
+    const trailer3_real_t _t350 = -_t268*_t268 + _t269*_t349;
+    const trailer3_real_t _t351 = TRAILER3_LIT(1.0)/_t350;
+    const trailer3_real_t _t352 = _t351*(-_t268*_t343 + _t269*_t341);
+    const trailer3_real_t _t353 = _t351*(-_t268*_t341 + _t343*_t349);
+    const trailer3_real_t _t354 = _t352*_t42 + _t353*_t44;
+    const trailer3_real_t _t355 = _t352*_t6 + _t353*_t7;
+    const trailer3_real_t _t356 = _t239 + _t352*_t46 + _t353*_t50;
+    const trailer3_real_t _t357 = _t242 + _t352*_t54 + _t353*_t59;
+    const trailer3_real_t _t358 = _t245 + _t352*_t82 + _t353*_t89;
+    const trailer3_real_t _t359 = -J_x_tractor*_t354 - K_theta_tractor_x_tractor_2*_t355
+            - _t156*_t356 - _t159*_t357 - _t162*_t358 - _t236;
+    const trailer3_real_t _t360 = _t225*_t352 + _t228*_t353 + _t322;
+    const trailer3_real_t _t361 = -J_theta_cart3_right*_t360;
+    const trailer3_real_t _t362 = _t361*_t4;
+    const trailer3_real_t _t363 = _t231*_t352 + _t234*_t353 + _t339;
+    const trailer3_real_t _t364 = -J_theta_cart3_left*_t363;
+    const trailer3_real_t _t365 = _t364*_t5;
+    const trailer3_real_t _t366 = -J_theta_cart3*_t358 - _t162*_t354 - _t168*_t355 - _t172*_t356
+            - _t175*_t357 - _t258;
+    const trailer3_real_t _t367 = TRAILER3_LIT(0.2)*_t362 - TRAILER3_LIT(0.2)*_t365 + _t366;
+    const trailer3_real_t _t368 = -TRAILER3_LIT(1.6666666666666667)*_t367;
+    const trailer3_real_t _t369 = _t213*_t352 + _t216*_t353 + _t292;
+    const trailer3_real_t _t370 = -J_theta_cart2_right*_t369;
+    const trailer3_real_t _t371 = _t2*_t370;
+    const trailer3_real_t _t372 = _t219*_t352 + _t222*_t353 + _t305;
+    const trailer3_real_t _t373 = -J_theta_cart2_left*_t372;
+    const trailer3_real_t _t374 = _t3*_t373;
+    const trailer3_real_t _t375 = -J_theta_cart2*_t357 - _t159*_t354 - _t167*_t355 - _t170*_t356
+            - _t175*_t358 - _t254;
+    const trailer3_real_t _t376 = -_t35*_t368 - _t362*_t41 - _t365*_t41 + TRAILER3_LIT(0.2)*_t371
+            - TRAILER3_LIT(0.2)*_t374 + _t375;
+    const trailer3_real_t _t377 = -TRAILER3_LIT(1.6666666666666667)*_t376;
+    const trailer3_real_t _t378 = _t201*_t352 + _t204*_t353 + _t274;
+    const trailer3_real_t _t379 = -J_theta_cart_right*_t378;
+    const trailer3_real_t _t380 = _t0*_t379;
+    const trailer3_real_t _t381 = _t207*_t352 + _t210*_t353 + _t279;
+    const trailer3_real_t _t382 = -J_theta_cart_left*_t381;
+    const trailer3_real_t _t383 = _t1*_t382;
+    const trailer3_real_t _t384 = -J_theta_cart*_t356 - _t156*_t354 - _t166*_t355 - _t170*_t357
+            - _t172*_t358 - _t250;
+    const trailer3_real_t _t385 = -_t26*_t377 - _t33*_t368 - _t362*_t40 - _t365*_t40 - _t371*_t38
+            - _t374*_t38 + TRAILER3_LIT(0.2)*_t380 - TRAILER3_LIT(0.2)*_t383 + _t384;
+    const trailer3_real_t _t386 = -TRAILER3_LIT(1.6666666666666667)*_t385;
+    const trailer3_real_t _t387 = _t13*_t386 + _t15*_t380 + _t15*_t383 + _t19*_t377 + _t21*_t371
+            + _t21*_t374 + _t28*_t368 + _t30*_t362 + _t30*_t365 + _t359;
+    const trailer3_real_t _t388 = TRAILER3_LIT(0.5)*_t387;
+    const trailer3_real_t _t389 = -J_theta_tractor*_t355 - K_theta_tractor_x_tractor_2*_t354
+            - _t166*_t356 - _t167*_t357 - _t168*_t358 - _t261;
+    const trailer3_real_t _t390 = TRAILER3_LIT(0.3)*_t15*_t386 + TRAILER3_LIT(0.3)*_t21*_t377
+            + TRAILER3_LIT(0.3)*_t30*_t368 - _t36*_t380 - _t36*_t383 - _t362*_t39 - _t365*_t39
+            - _t37*_t371 - _t37*_t374 + _t389;
+    const trailer3_real_t _t391 = TRAILER3_LIT(2.4154589371980677)*_t390;
+    const trailer3_real_t _t392 = TRAILER3_LIT(1.6666666666666667)*_t14;
+    const trailer3_real_t _t393 = TRAILER3_LIT(0.2)*_t392;
+    const trailer3_real_t _t394 = TRAILER3_LIT(1.6666666666666667)*_t17;
+    const trailer3_real_t _t395 = TRAILER3_LIT(0.2)*_t394;
+    const trailer3_real_t _t396 = -_t20 - _t26*_t392;
+    const trailer3_real_t _t397 = -TRAILER3_LIT(1.6666666666666667)*_t396;
+    const trailer3_real_t _t398 = TRAILER3_LIT(0.2)*_t397;
+    const trailer3_real_t _t399 = _t38*_t392;
+    const trailer3_real_t _t400 = -_t23 - _t26*_t394;
     const trailer3_real_t _t401 = -TRAILER3_LIT(1.6666666666666667)*_t400;
     const trailer3_real_t _t402 = TRAILER3_LIT(0.2)*_t401;
-    const trailer3_real_t _t403 = -_t27*_t40 + _t36*_t39 + _t37*_t45 + _t38*_t395;
-    const trailer3_real_t _t404 = -_t26*_t43 - _t29*_t42 - _t30*_t49 - _t32*_t398;
+    const trailer3_real_t _t403 = _t37 + _t38*_t394;
+    const trailer3_real_t _t404 = -_t29 - _t33*_t392 - _t35*_t397;
     const trailer3_real_t _t405 = -TRAILER3_LIT(1.6666666666666667)*_t404;
     const trailer3_real_t _t406 = TRAILER3_LIT(0.2)*_t405;
-    const trailer3_real_t _t407 = -_t27*_t43 + _t36*_t42 + _t37*_t49 + _t38*_t398;
-    const trailer3_real_t _t408 = K_theta_tractor_x_tractor_2*_t178 + _t155*_t185 + _t156*_t185
-            + _t188 + _t189 + _t190 + _t191;
-    const trailer3_real_t _t409 = -J_x_tractor*_t250 + K_theta_tractor_x_tractor*_t357 - _t253*_t358
-            - _t257*_t359 - _t261*_t360 - _t408;
-    const trailer3_real_t _t410 = _t10*_t382 + _t10*_t385 - _t12*_t388 + _t16*_t373 + _t16*_t376
-            - _t18*_t379 + _t25*_t364 + _t25*_t367 - _t27*_t370 + _t409;
-    const trailer3_real_t _t411 = -_t390 + _t393;
-    const trailer3_real_t _t412 = -_t390 - _t393;
-    const trailer3_real_t _t413 = _t12*_t40 + _t63 - _t65;
-    const trailer3_real_t _t414 = _t12*_t43 + _t67 - _t69;
-    const trailer3_real_t _t415 = _t2*_t413;
-    const trailer3_real_t _t416 = _t2*_t414;
-    const trailer3_real_t _t417 = _t12*_t40 - _t63 - _t65;
-    const trailer3_real_t _t418 = _t12*_t43 - _t67 - _t69;
-    const trailer3_real_t _t419 = _t3*_t417;
-    const trailer3_real_t _t420 = _t3*_t418;
-    const trailer3_real_t _t421 = _t18*_t40 + _t396 - _t72 - _t74;
-    const trailer3_real_t _t422 = _t18*_t43 + _t399 - _t77 - _t79;
-    const trailer3_real_t _t423 = _t4*_t421;
-    const trailer3_real_t _t424 = _t4*_t422;
-    const trailer3_real_t _t425 = _t18*_t40 - _t396 - _t72 - _t74;
-    const trailer3_real_t _t426 = _t18*_t43 - _t399 - _t77 - _t79;
-    const trailer3_real_t _t427 = _t425*_t5;
-    const trailer3_real_t _t428 = _t426*_t5;
-    const trailer3_real_t _t429 = _t402 - _t403;
-    const trailer3_real_t _t430 = _t406 - _t407;
-    const trailer3_real_t _t431 = _t429*_t6;
-    const trailer3_real_t _t432 = _t430*_t6;
-    const trailer3_real_t _t433 = -_t402 - _t403;
-    const trailer3_real_t _t434 = -_t406 - _t407;
-    const trailer3_real_t _t435 = _t433*_t7;
-    const trailer3_real_t _t436 = _t434*_t7;
-    const trailer3_real_t _t437 = J_x_tractor*_t40 + K_theta_tractor_x_tractor_2*_t39 + _t157*_t45
-            + _t160*_t395 + _t163*_t401;
-    const trailer3_real_t _t438 = J_x_tractor*_t43 + K_theta_tractor_x_tractor_2*_t42 + _t157*_t49
-            + _t160*_t398 + _t163*_t405;
-    const trailer3_real_t _t439 = J_theta_tractor*_t39 + K_theta_tractor_x_tractor_2*_t40
-            + _t167*_t45 + _t168*_t395 + _t169*_t401;
-    const trailer3_real_t _t440 = J_theta_tractor*_t42 + K_theta_tractor_x_tractor_2*_t43
-            + _t167*_t49 + _t168*_t398 + _t169*_t405;
-    const trailer3_real_t _t441 = J_theta_cart*_t45 + _t157*_t40 + _t167*_t39 + _t171*_t395
-            + _t173*_t401;
-    const trailer3_real_t _t442 = J_theta_cart*_t49 + _t157*_t43 + _t167*_t42 + _t171*_t398
-            + _t173*_t405;
-    const trailer3_real_t _t443 = J_theta_cart2*_t395 + _t160*_t40 + _t168*_t39 + _t171*_t45
-            + _t176*_t401;
-    const trailer3_real_t _t444 = J_theta_cart2*_t398 + _t160*_t43 + _t168*_t42 + _t171*_t49
-            + _t176*_t405;
-    const trailer3_real_t _t445 = J_theta_cart3*_t401 + _t163*_t40 + _t169*_t39 + _t173*_t45
-            + _t176*_t395;
-    const trailer3_real_t _t446 = J_theta_cart3*_t405 + _t163*_t43 + _t169*_t42 + _t173*_t49
-            + _t176*_t398;
-    const trailer3_real_t _t447 = J_theta_cart_right*_t415;
-    const trailer3_real_t _t448 = J_theta_cart_right*_t416;
-    const trailer3_real_t _t449 = J_theta_cart_left*_t419;
-    const trailer3_real_t _t450 = J_theta_cart_left*_t420;
-    const trailer3_real_t _t451 = J_theta_cart2_right*_t423;
-    const trailer3_real_t _t452 = J_theta_cart2_right*_t424;
-    const trailer3_real_t _t453 = J_theta_cart2_left*_t427;
-    const trailer3_real_t _t454 = J_theta_cart2_left*_t428;
-    const trailer3_real_t _t455 = J_theta_cart3_right*_t431;
-    const trailer3_real_t _t456 = J_theta_cart3_right*_t432;
-    const trailer3_real_t _t457 = J_theta_cart3_left*_t435;
-    const trailer3_real_t _t458 = J_theta_cart3_left*_t436;
-    const trailer3_real_t _t459 = J_theta_right + _t39*_t439 + _t395*_t443 + _t40*_t437
-            + _t401*_t445 + _t415*_t447 + _t419*_t449 + _t423*_t451 + _t427*_t453 + _t431*_t455
-            + _t435*_t457 + _t441*_t45;
-    const trailer3_real_t _t460 = _t39*_t440 + _t395*_t444 + _t40*_t438 + _t401*_t446 + _t415*_t448
-            + _t419*_t450 + _t423*_t452 + _t427*_t454 + _t431*_t456 + _t435*_t458 + _t442*_t45;
-    const trailer3_real_t _t461 = J_theta_left + _t398*_t444 + _t405*_t446 + _t416*_t448
-            + _t42*_t440 + _t420*_t450 + _t424*_t452 + _t428*_t454 + _t43*_t438 + _t432*_t456
-            + _t436*_t458 + _t442*_t49;
+    const trailer3_real_t _t407 = -_t30 + _t392*_t40 + _t397*_t41;
+    const trailer3_real_t _t408 = -_t32 - _t33*_t394 - _t35*_t401;
+    const trailer3_real_t _t409 = -TRAILER3_LIT(1.6666666666666667)*_t408;
+    const trailer3_real_t _t410 = TRAILER3_LIT(0.2)*_t409;
+    const trailer3_real_t _t411 = _t39 + _t394*_t40 + _t401*_t41;
+    const trailer3_real_t _t412 = K_theta_tractor_x_tractor_2*_t176 + _t154*_t183 + _t155*_t183
+            + _t186 + _t187 + _t188 + _t189;
+    const trailer3_real_t _t413 = -J_x_tractor*_t249 + K_theta_tractor_x_tractor*_t355 - _t247*_t356
+            - _t252*_t357 - _t256*_t358 - _t412;
+    const trailer3_real_t _t414 = _t13*_t380 + _t13*_t383 - _t15*_t386 + _t19*_t371 + _t19*_t374
+            - _t21*_t377 + _t28*_t362 + _t28*_t365 - _t30*_t368 + _t413;
+    const trailer3_real_t _t415 = -_t388 + _t391;
+    const trailer3_real_t _t416 = -_t388 - _t391;
+    const trailer3_real_t _t417 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t418 = TRAILER3_LIT(0.207)*_t417;
+    const trailer3_real_t _t419 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t420 = -TRAILER3_LIT(0.207)*_t419;
+    const trailer3_real_t _t421 = _t15 + _t393;
+    const trailer3_real_t _t422 = -_t36 + _t395;
+    const trailer3_real_t _t423 = _t0*_t421;
+    const trailer3_real_t _t424 = _t0*_t422;
+    const trailer3_real_t _t425 = _t15 - _t393;
+    const trailer3_real_t _t426 = -_t36 - _t395;
+    const trailer3_real_t _t427 = _t1*_t425;
+    const trailer3_real_t _t428 = _t1*_t426;
+    const trailer3_real_t _t429 = _t21 + _t398 - _t399;
+    const trailer3_real_t _t430 = _t402 - _t403;
+    const trailer3_real_t _t431 = _t2*_t429;
+    const trailer3_real_t _t432 = _t2*_t430;
+    const trailer3_real_t _t433 = _t21 - _t398 - _t399;
+    const trailer3_real_t _t434 = -_t402 - _t403;
+    const trailer3_real_t _t435 = _t3*_t433;
+    const trailer3_real_t _t436 = _t3*_t434;
+    const trailer3_real_t _t437 = _t406 - _t407;
+    const trailer3_real_t _t438 = _t410 - _t411;
+    const trailer3_real_t _t439 = _t4*_t437;
+    const trailer3_real_t _t440 = _t4*_t438;
+    const trailer3_real_t _t441 = -_t406 - _t407;
+    const trailer3_real_t _t442 = -_t410 - _t411;
+    const trailer3_real_t _t443 = _t441*_t5;
+    const trailer3_real_t _t444 = _t442*_t5;
+    const trailer3_real_t _t445 = J_x_tractor + _t156*_t392 + _t159*_t397 + _t162*_t405;
+    const trailer3_real_t _t446 = K_theta_tractor_x_tractor_2 + _t156*_t394 + _t159*_t401
+            + _t162*_t409;
+    const trailer3_real_t _t447 = J_theta_tractor + _t166*_t394 + _t167*_t401 + _t168*_t409;
+    const trailer3_real_t _t448 = J_theta_cart*_t392 + _t156 + _t170*_t397 + _t172*_t405;
+    const trailer3_real_t _t449 = J_theta_cart*_t394 + _t166 + _t170*_t401 + _t172*_t409;
+    const trailer3_real_t _t450 = J_theta_cart2*_t397 + _t159 + _t170*_t392 + _t175*_t405;
+    const trailer3_real_t _t451 = J_theta_cart2*_t401 + _t167 + _t170*_t394 + _t175*_t409;
+    const trailer3_real_t _t452 = J_theta_cart3*_t405 + _t162 + _t172*_t392 + _t175*_t397;
+    const trailer3_real_t _t453 = J_theta_cart3*_t409 + _t168 + _t172*_t394 + _t175*_t401;
+    const trailer3_real_t _t454 = J_theta_right*_t417;
+    const trailer3_real_t _t455 = J_theta_right*_t418;
+    const trailer3_real_t _t456 = J_theta_left*_t419;
+    const trailer3_real_t _t457 = J_theta_left*_t420;
+    const trailer3_real_t _t458 = J_theta_cart_right*_t423;
+    const trailer3_real_t _t459 = J_theta_cart_right*_t424;
+    const trailer3_real_t _t460 = J_theta_cart_left*_t427;
+    const trailer3_real_t _t461 = J_theta_cart_left*_t428;
+    const trailer3_real_t _t462 = J_theta_cart2_right*_t431;
+    const trailer3_real_t _t463 = J_theta_cart2_right*_t432;
+    const trailer3_real_t _t464 = J_theta_cart2_left*_t435;
+    const trailer3_real_t _t465 = J_theta_cart2_left*_t436;
+    const trailer3_real_t _t466 = J_theta_cart3_right*_t439;
+    const trailer3_real_t _t467 = J_theta_cart3_right*_t440;
+    const trailer3_real_t _t468 = J_theta_cart3_left*_t443;
+    const trailer3_real_t _t469 = J_theta_cart3_left*_t444;
+    const trailer3_real_t _t470 = _t392*_t448 + _t397*_t450 + _t405*_t452 + _t417*_t454
+            + _t419*_t456 + _t423*_t458 + _t427*_t460 + _t431*_t462 + _t435*_t464 + _t439*_t466
+            + _t443*_t468 + _t445;
+    const trailer3_real_t _t471 = _t392*_t449 + _t397*_t451 + _t405*_t453 + _t417*_t455
+            + _t419*_t457 + _t423*_t459 + _t427*_t461 + _t431*_t463 + _t435*_t465 + _t439*_t467
+            + _t443*_t469 + _t446;
+    const trailer3_real_t _t472 = _t394*_t449 + _t401*_t451 + _t409*_t453 + _t418*_t455
+            + _t420*_t457 + _t424*_t459 + _t428*_t461 + _t432*_t463 + _t436*_t465 + _t440*_t467
+            + _t444*_t469 + _t447;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -4613,19 +4498,19 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t459 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t470 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t459*_t461 - _t460*_t460 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
+    if (!(_t470*_t472 - _t471*_t471 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
                                                                model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t412;
-    const trailer3_real_t r_1 = _t411;
-    const trailer3_real_t r_2 = -_t410;
-    const trailer3_real_t r_3 = -_t388;
-    const trailer3_real_t r_4 = -_t379;
-    const trailer3_real_t r_5 = -_t370;
+    const trailer3_real_t r_0 = _t416;
+    const trailer3_real_t r_1 = _t415;
+    const trailer3_real_t r_2 = -_t414;
+    const trailer3_real_t r_3 = -_t386;
+    const trailer3_real_t r_4 = -_t377;
+    const trailer3_real_t r_5 = -_t368;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5))
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
