@@ -60,9 +60,9 @@ def test_full_step_benchmark_checks_before_timing() -> None:
     formulations and precisions: the bad-input statuses are equal, on the recorded closed
     loop every status is equal and the torques agree (else nothing is timed), and all are
     timed; the ratios are per repetition."""
-    from runtime.tooling.bench.step_bench import summarise_steps
+    from runtime.tooling.bench.step_bench import STEP_ROBOTS, step_cases, summarise_steps
 
-    result = run_steps(601, 2)
+    result = run_steps(601, 2, cases=step_cases(STEP_ROBOTS[:1]))
     assert set(result["checks"]) == {f"{f}/{p}" for f in ("paper", "minimal")
                                      for p in ("double", "float32")}
     for case, check in result["checks"].items():
@@ -72,11 +72,36 @@ def test_full_step_benchmark_checks_before_timing() -> None:
         assert check["max_abs_tau_diff"] <= tol * check["tau_scale"], case
     for r in result["rows"]:
         assert len(r["ns"]) == 2 and min(r["ns"]) > 0.0
-    variants = {(r["formulation"], r["precision"], r["variant"]) for r in result["rows"]}
-    assert ("paper", "double", "ours_libm") in variants
-    assert ("minimal", "float32", "hand_frozen") in variants
+    variants = {(r["case"], r["variant"]) for r in result["rows"]}
+    assert ("paper/double", "ours_libm") in variants
+    assert ("minimal/float32", "hand_frozen") in variants
     st = summarise_steps(result)
     assert st[("paper/double", "ratio:ours/hand")]["median"] > 0.0
+
+
+def test_trailer_step_benchmark_checks_before_timing() -> None:
+    """The trailer's ``trailer_tdroc_step`` (minimal formulation, M-hat depending on the
+    hitch angle) against its hand-written step (``csrc/hand_trailer_tdroc.c``), both
+    precisions, run-time and frozen: the same statuses on every bad-input case and over
+    the recorded closed loop (with and without a bad input every seventh step), the
+    torques within the tolerance, then timed."""
+    from runtime.tooling.bench.step_bench import STEP_ROBOTS, step_cases, summarise_steps
+
+    trailer = [r for r in STEP_ROBOTS if r.code == "trailer"]
+    result = run_steps(601, 2, cases=step_cases(tuple(trailer)))
+    assert set(result["checks"]) == {"trailer minimal/double", "trailer minimal/float32"}
+    for case, check in result["checks"].items():
+        assert check["steps"] > 100 and check["tau_scale"] > 0.1
+        # ours run-time: 28 configuration cases (at _init and at a step), 40 inputs x 3
+        # values, 8 NULL pointers, a state never initialised; ours frozen: its one
+        # configuration (twice), the inputs, the pointers, the state
+        assert check["bad_input_cases"] == (2 * 28 + 40 * 3 + 9) + (2 + 40 * 3 + 9)
+        tol = 1e-4 if case.endswith("float32") else 1e-9
+        assert check["max_abs_tau_diff"] <= tol * check["tau_scale"], case
+    st = summarise_steps(result)
+    for v in ("ours", "hand", "ours_frozen", "hand_frozen"):
+        assert st[("trailer minimal/float32", v)]["median"] > 0.0
+    assert st[("trailer minimal/double", "ratio:ours_libm/hand")]["median"] > 0.0
 
 
 def test_step_benchmark_refuses_a_competitor_with_another_status(tmp_path: Path) -> None:

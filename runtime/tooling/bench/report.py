@@ -31,16 +31,16 @@ ROOT = default_output(".")  # BENCHMARKS.md and benchmarks.json: the repository'
 
 
 STEP_LABELS = {
-    "ours": "`wmr_tdroc_step` (ours)",
+    "ours": "`<P>_tdroc_step` (ours)",
     "hand": "hand-written step",
-    "ours_frozen": "`wmr_tdroc_step`, `-DWMR_TDROC_FROZEN` (`wmr freeze`)",
+    "ours_frozen": "`<P>_tdroc_step`, `-D<P>_TDROC_FROZEN` (`wmr freeze`)",
     "hand_frozen": "hand-written step, configuration compiled in",
-    "ours_libm": "`wmr_tdroc_step`, `-DWMR_LIBM_TRIG` (libm's sin/cos, as the hand-written step)",
+    "ours_libm": "`<P>_tdroc_step`, `-D<P>_LIBM_TRIG` (libm's sin/cos, as the hand-written step)",
 }
 RATIO_LABELS = {
-    "ratio:ours/hand": "`wmr_tdroc_step` / hand-written step",
-    "ratio:ours_frozen/hand_frozen": "frozen `wmr_tdroc_step` / frozen hand-written step",
-    "ratio:ours_libm/hand": "`wmr_tdroc_step` with libm's sin/cos / hand-written step",
+    "ratio:ours/hand": "`<P>_tdroc_step` / hand-written step",
+    "ratio:ours_frozen/hand_frozen": "frozen `<P>_tdroc_step` / frozen hand-written step",
+    "ratio:ours_libm/hand": "`<P>_tdroc_step` with libm's sin/cos / hand-written step",
 }
 
 
@@ -62,13 +62,15 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
     lines = [
         "## The complete TDROC step, ns per step (gcc -O2)",
         "",
-        "`wmr_tdroc_step` (what firmware calls) against a hand-written step written to be",
-        "fast under the same contract (`runtime/tooling/bench/csrc/hand_tdroc.c`: the same",
+        "`<P>_tdroc_step` (what firmware calls; `<P>` is `wmr` for Drishti, `trailer` for",
+        "the trailer) against a hand-written step written to be fast under the same contract",
+        "(`runtime/tooling/bench/csrc/hand_tdroc.c`, `hand_trailer_tdroc.c`: the same",
         "statuses in the same order, the configuration compared bit for bit with the copy",
-        "`_init` kept, commit on success; M-tilde's structure, everything that depends on",
+        "`_init` kept, commit on success; M-hat's structure, everything that depends on",
         "the configuration only kept by `_init`, the window's norms in a contiguous ring),",
-        "on the controller inputs of the recorded closed loop (lawn mower), per formulation",
-        "and precision; each also built with the configuration compiled in. Checked first,",
+        "on the controller inputs of the recorded closed loop (lawn mower; the trailer with",
+        "its own parameters as the nominal model), per robot, formulation and precision;",
+        "each also built with the configuration compiled in. Checked first,",
         "against ours: the statuses of every bad-input case (configuration fields, sign",
         "flips, NaN/Inf/out-of-bound inputs, NULL pointers, a state never initialised),",
         "the statuses and torques over the recording, and again with a bad input every",

@@ -1,7 +1,9 @@
-"""The full controller step benchmark: ``wmr_tdroc_step`` (what firmware calls) against a
-hand-written step written to be fast under the same contract (``csrc/hand_tdroc.c``), on
-the controller inputs of a recorded closed loop (consistent states, lawn-mower path), for
-each formulation (paper, minimal) and precision (double, float32).
+"""The full controller step benchmark: ``<prefix>_tdroc_step`` (what firmware calls) against
+a hand-written step written to be fast under the same contract (``csrc/hand_tdroc.c`` for
+Drishti, ``csrc/hand_trailer_tdroc.c`` for the trailer: :data:`STEP_ROBOTS`), on the
+controller inputs of a recorded closed loop (consistent states, lawn-mower path), for each
+robot, formulation (Drishti: paper, minimal; the trailer: minimal) and precision (double,
+float32).
 
 One executable per formulation and precision (gcc -O2) holds every variant: ours
 (run-time configuration), the hand-written step, both again built with the configuration
@@ -11,7 +13,7 @@ Before any timing it checks, against ours:
 
 * the statuses of the bad-input cases: every configuration field made invalid (at
   ``_init`` and at a step), valid changes and sign flips of the configuration, NaN, ±Inf
-  and out-of-bound values in each of the 25 inputs, each NULL pointer, a state never
+  and out-of-bound values in each of the 5 n inputs, each NULL pointer, a state never
   initialised (frozen variants: the configuration refused at another address);
 * the statuses and torques over the recording, and again with a bad input every seventh
   step (what an error step leaves behind: commit on success);
@@ -28,10 +30,10 @@ from __future__ import annotations
 import json
 import subprocess
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime.bindings.cbuild import GENERATED_C
 from runtime.tooling.bench.c_bench import renamed_objects, spread
 from runtime.tooling.firmware.build import frozen_define
 
@@ -57,14 +59,14 @@ HARNESS = r"""
 #include <string.h>
 #include <time.h>
 
-#include "hand_tdroc.h"
+#include "HAND_HEADER"
 #include "wmr_tdroc.h"
 
 typedef wmr_real_t real;
 typedef wmr_status_t (*init_fn)(void *state, const wmr_tdroc_config_t *config);
 typedef wmr_status_t (*step_fn)(void *state, const wmr_tdroc_config_t *config,
-    const real q[5], const real qdot[5], const real q_des[5], const real qdot_des[5],
-    const real qddot_des[5], real tau[2]);
+    const real q[NQ], const real qdot[NQ], const real q_des[NQ], const real qdot_des[NQ],
+    const real qddot_des[NQ], real tau[2]);
 
 PROTOTYPES
 
@@ -101,13 +103,13 @@ static double pass(int k, int *st, real *tq, int bad) {
     real tau[2] = {0, 0}, sink = 0;
     for (i = 0; i < NSTEPS; ++i) {
         const real *in = IN[i];
-        real spoiled[25];
+        real spoiled[5 * NQ];
         if (bad && i % 7 == 3) {
             memcpy(spoiled, in, sizeof spoiled);
-            spoiled[5 + i % 5] = (real)NAN;
+            spoiled[NQ + i % NQ] = (real)NAN;
             in = spoiled;
         }
-        s = v->step(&states[k], c, in, in + 5, in + 10, in + 15, in + 20, tau);
+        s = v->step(&states[k], c, in, in + NQ, in + 2 * NQ, in + 3 * NQ, in + 4 * NQ, tau);
         if (st != 0) { st[i] = s; tq[2 * i] = tau[0]; tq[2 * i + 1] = tau[1]; }
         sink += tau[0] + (real)s;
     }
@@ -115,37 +117,10 @@ static double pass(int k, int *st, real *tq, int bad) {
 }
 
 /* The bad-input cases: the status each variant returns. */
-#define NCFG 28
+#define NCFG CONFIG_CASE_COUNT
 static void spoil_config(wmr_tdroc_config_t *c, int j) {
     switch (j) {
-    case 0: c->formulation = 7; break;
-    case 1: c->h = 0; break;
-    case 2: c->h = (real)NAN; break;
-    case 3: c->k1[2] = -1; break;
-    case 4: c->k2[0] = 0; break;
-    case 5: c->q_pos = (real)INFINITY; break;
-    case 6: c->q_vel = (real)1e7; break;
-    case 7: c->tau_max = 0; break;
-    case 8: c->eps = 0; break;
-    case 9: c->eps = (real)1e-30; break;
-    case 10: c->accel_estimator = 9; break;
-    case 11: c->rate_window = 2 * c->h; break;
-    case 12: c->hold_gain = 2; break;
-    case 13: c->held_gain = -1; break;
-    case 14: c->n = 1; break;
-    case 15: c->n = WMR_MAX_WINDOW + 1; break;
-    case 16: c->a = 0; break;
-    case 17: c->a = (real)1.5; break;
-    case 18: c->nominal.m = (real)NAN; break;
-    case 19: c->nominal.r = 0; break;
-    case 20: c->nominal.b = (real)1e-9; break;
-    case 21: c->nominal.K = 100; break;        /* m I - K^2 < 0 */
-    case 22: c->nominal.Iw = 0; break;
-    case 23: c->k1[0] = -4; c->k2[0] = -4; break;  /* two sign flips */
-    case 24: c->tau_max = -c->tau_max; c->eps = -c->eps; break;
-    case 25: c->k1[0] *= (real)1.01; break;   /* valid, but changed */
-    case 26: c->hold_gain = 1 - c->hold_gain; break;
-    default: c->nominal.d = -c->nominal.d; break;  /* valid, but changed */
+CONFIG_CASES
     }
 }
 
@@ -155,8 +130,8 @@ static void warm(int k) {
     fresh(k);
     for (i = 0; i < 12 && i < NSTEPS; ++i) {
         const real *in = IN[i];
-        (void)VARIANTS[k].step(&states[k], config_of(&VARIANTS[k]), in, in + 5, in + 10,
-                               in + 15, in + 20, tau);
+        (void)VARIANTS[k].step(&states[k], config_of(&VARIANTS[k]), in, in + NQ, in + 2 * NQ,
+                               in + 3 * NQ, in + 4 * NQ, tau);
     }
 }
 
@@ -164,7 +139,7 @@ static void warm(int k) {
 static int bad_cases(int k, int *out) {
     const variant *v = &VARIANTS[k];
     const real vals[3] = {(real)NAN, (real)INFINITY, (real)2e6};
-    real in[25], tau[2];
+    real in[5 * NQ], tau[2];
     int n = 0, j, i, p;
     if (!v->frozen) {
         for (j = 0; j < NCFG; ++j) {
@@ -174,7 +149,8 @@ static int bad_cases(int k, int *out) {
             out[n++] = v->init(&s, &c);
             warm(k);
             memcpy(in, IN[12 % NSTEPS], sizeof in);
-            out[n++] = v->step(&states[k], &c, in, in + 5, in + 10, in + 15, in + 20, tau);
+            out[n++] = v->step(&states[k], &c, in, in + NQ, in + 2 * NQ, in + 3 * NQ, in + 4 * NQ,
+                               tau);
         }
     } else {  /* the compiled-in configuration only: the same values elsewhere are refused */
         wmr_tdroc_config_t c = *config_of(v);
@@ -182,21 +158,22 @@ static int bad_cases(int k, int *out) {
         out[n++] = v->init(&s, &c);
         warm(k);
         memcpy(in, IN[12 % NSTEPS], sizeof in);
-        out[n++] = v->step(&states[k], &c, in, in + 5, in + 10, in + 15, in + 20, tau);
+        out[n++] = v->step(&states[k], &c, in, in + NQ, in + 2 * NQ, in + 3 * NQ, in + 4 * NQ,
+                               tau);
     }
-    for (i = 0; i < 25; ++i) {
+    for (i = 0; i < 5 * NQ; ++i) {
         for (j = 0; j < 3; ++j) {
             warm(k);
             memcpy(in, IN[12 % NSTEPS], sizeof in);
             in[i] = (i % 2 ? -1 : 1) * vals[j];
-            out[n++] = v->step(&states[k], config_of(v), in, in + 5, in + 10, in + 15, in + 20,
-                               tau);
+            out[n++] = v->step(&states[k], config_of(v), in, in + NQ, in + 2 * NQ, in + 3 * NQ,
+                               in + 4 * NQ, tau);
         }
     }
     warm(k);
     memcpy(in, IN[12 % NSTEPS], sizeof in);
     for (p = 0; p < 8; ++p) {
-        const real *ptr[5] = {in, in + 5, in + 10, in + 15, in + 20};
+        const real *ptr[5] = {in, in + NQ, in + 2 * NQ, in + 3 * NQ, in + 4 * NQ};
         void *st = p == 0 ? 0 : (void *)&states[k];
         const wmr_tdroc_config_t *c = p == 1 ? 0 : config_of(v);
         if (p >= 2 && p < 7) ptr[p - 2] = 0;
@@ -205,7 +182,8 @@ static int bad_cases(int k, int *out) {
     {
         any_state s;
         memset(&s, 0, sizeof s);
-        out[n++] = v->step(&s, config_of(v), in, in + 5, in + 10, in + 15, in + 20, tau);
+        out[n++] = v->step(&s, config_of(v), in, in + NQ, in + 2 * NQ, in + 3 * NQ, in + 4 * NQ,
+                           tau);
     }
     return n;
 }
@@ -214,7 +192,7 @@ int main(int argc, char **argv) {
     long calls = argc > 1 ? atol(argv[1]) : 1000000;
     int repeats = argc > 2 ? atoi(argv[2]) : 5;
     long passes = calls / NSTEPS > 0 ? calls / NSTEPS : 1;
-    static int st[NV][NSTEPS], bad[NV][512];
+    static int st[NV][NSTEPS], bad[NV][1024];
     static real tq[NV][2 * NSTEPS];
     static double ns[NV][64];
     double scale = 0.0, worst = 0.0, sink = 0.0;
@@ -283,11 +261,54 @@ int main(int argc, char **argv) {
 """
 
 
-def _config_lines(config: dict[str, Any]) -> str:
-    from runtime.tooling.firmware.emulator import PARAM_FIELDS
+@dataclass(frozen=True)
+class StepRobot:
+    """A robot the step benchmark times: its generated code, its hand-written step (a
+    source in ``csrc`` with a header of the same stem, defining ``hand_tdroc_state_t``
+    and ``hand_``/``handfz_tdroc_init``/``_step``), the formulations it has, and the
+    configuration cases (C statements on ``c``, a copy of the recorded configuration),
+    each a field made invalid or a valid change."""
 
-    lines = [f"cfg.nominal.{p} = {v!r};" for p, v in zip(PARAM_FIELDS, config["params"],
-                                                          strict=True)]
+    label: str  # prefixed to its cases' names ("" for Drishti)
+    code: str  # ``load_robot_code``'s name ("" for Drishti)
+    hand: str
+    formulations: tuple[str, ...]
+    config_cases: tuple[str, ...]
+
+    def case(self, formulation: str, precision: str) -> str:
+        return f"{self.label}{formulation}/{precision}"
+
+
+# Invalid values of the fields every TDROC configuration has, then the robot's own.
+_COMMON_CONFIG_CASES = (
+    "c->formulation = 7;", "c->h = 0;", "c->h = (real)NAN;", "c->k1[2] = -1;",
+    "c->k2[0] = 0;", "c->q_pos = (real)INFINITY;", "c->q_vel = (real)1e7;",
+    "c->tau_max = 0;", "c->eps = 0;", "c->eps = (real)1e-30;", "c->accel_estimator = 9;",
+    "c->rate_window = 2 * c->h;", "c->hold_gain = 2;", "c->held_gain = -1;", "c->n = 1;",
+    "c->n = WMR_MAX_WINDOW + 1;", "c->a = 0;", "c->a = (real)1.5;",
+)
+# Valid changes: two sign flips, a gain, the gain mode.
+_CHANGES = ("c->k1[0] = -4; c->k2[0] = -4;", "c->tau_max = -c->tau_max; c->eps = -c->eps;",
+            "c->k1[0] *= (real)1.01;", "c->hold_gain = 1 - c->hold_gain;")
+STEP_ROBOTS = (
+    StepRobot("", "", "hand_tdroc.c", FORMULATIONS, (
+        *_COMMON_CONFIG_CASES, "c->nominal.m = (real)NAN;", "c->nominal.r = 0;",
+        "c->nominal.b = (real)1e-9;",
+        "c->nominal.K = 100;",  # m I - K^2 < 0
+        "c->nominal.Iw = 0;", *_CHANGES,
+        "c->nominal.d = -c->nominal.d;")),  # valid, but changed
+    StepRobot("trailer ", "trailer", "hand_trailer_tdroc.c", ("minimal",), (
+        *_COMMON_CONFIG_CASES, "c->nominal.J_x_tractor = (real)NAN;",
+        "c->nominal.radius_right = 0;", "c->nominal.radius_left = (real)1e-9;",
+        "c->nominal.K_theta_cart_x_tractor = 1000;",  # beyond its bound / M-hat indefinite
+        "c->nominal.J_theta_right = 0;", *_CHANGES,
+        # valid, but changed: 0 becomes -0 (another bit pattern)
+        "c->nominal.K_theta_cart_x_tractor_2 = -c->nominal.K_theta_cart_x_tractor_2;")),
+)
+
+
+def _config_lines(config: dict[str, Any], fields: list[str]) -> str:
+    lines = [f"cfg.nominal.{p} = {v!r};" for p, v in zip(fields, config["params"], strict=True)]
     for name, value in config.items():
         if name == "params":
             continue
@@ -298,39 +319,47 @@ def _config_lines(config: dict[str, Any]) -> str:
     return "\n    ".join(lines)
 
 
-def frozen_header(workdir: Path, config: dict[str, Any], float32: bool = False) -> Path:
-    """``wmr freeze`` of the recorded configuration into ``workdir``."""
-    from runtime.bindings import cbuild
+def frozen_header(workdir: Path, config: dict[str, Any], float32: bool = False,
+                  robot: str = "") -> Path:
+    """``wmr freeze`` of the recorded configuration of ``robot``'s TDROC into ``workdir``."""
     from runtime.bindings.generated import load_robot_code
     from runtime.freeze.header import freeze
+    from runtime.sim.plant import library_for
     from runtime.tooling.firmware.emulated_run import tdroc_config
 
-    lib = cbuild.build(float32)
-    frozen = freeze(lib, load_robot_code(""), "tdroc", tdroc_config(lib.ffi, config))
+    code = load_robot_code(robot)
+    lib = library_for(code, float32)
+    frozen = freeze(lib, code, "tdroc", tdroc_config(lib.ffi, config, code.prefix))
     path = workdir / frozen.filename
     path.write_text(frozen.text)
     return path
 
 
-def _variants(float32: bool) -> list[tuple[str, str, str, int]]:
+def _variants(float32: bool, pre: str) -> list[tuple[str, str, str, int]]:
     """(name, init symbol, step symbol, frozen: 0 run-time, 1 ours, 2 hand) in check order:
     ours first (the reference of the run-time variants), then the first frozen one."""
-    rows = [("ours", "wmr", 0), ("hand", "hand", 0), ("ours_frozen", "fz_wmr", 1),
+    rows = [("ours", pre, 0), ("hand", "hand", 0), ("ours_frozen", f"fz_{pre}", 1),
             ("hand_frozen", "handfz", 2)]
     if not float32:
-        rows.append(("ours_libm", "lm_wmr", 0))
-    return [(name, f"{pre}_tdroc_init", f"{pre}_tdroc_step", frozen) for name, pre, frozen in rows]
+        rows.append(("ours_libm", f"lm_{pre}", 0))
+    return [(name, f"{p}_tdroc_init", f"{p}_tdroc_step", frozen) for name, p, frozen in rows]
 
 
 def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[list[float]]],
-                     float32: bool = False) -> Path:
-    """Compile the generated controller C (ours; with the configuration frozen, renamed
-    ``fz_wmr_*``; in double with ``-DWMR_LIBM_TRIG``, renamed ``lm_wmr_*``), the hand-written
-    step (run-time and ``-DHAND_FROZEN``) and the harness with the recorded inputs into one
-    executable of that precision; returns its path."""
+                     float32: bool = False, robot: StepRobot = STEP_ROBOTS[0]) -> Path:
+    """Compile ``robot``'s generated controller C (ours; with the configuration frozen,
+    renamed ``fz_<prefix>_*``; in double with ``-D<PREFIX>_LIBM_TRIG``, renamed
+    ``lm_<prefix>_*``), its hand-written step (run-time and ``-DHAND_FROZEN``) and the
+    harness with the recorded inputs into one executable of that precision; returns its
+    path."""
+    from runtime.bindings.generated import load_robot_code
+    from runtime.sim.plant import library_for
+
+    code = load_robot_code(robot.code)
+    pre, c_dir = code.prefix, code.c_dir
     real = "float" if float32 else "double"
-    prec = ("-DWMR_FLOAT32",) if float32 else ()
-    variants = _variants(float32)
+    prec = (f"-D{pre.upper()}_FLOAT32",) if float32 else ()
+    variants = _variants(float32, pre)
     rows = ",\n".join("{" + ", ".join(repr(x) for v in step for x in v) + "}" for step in inputs)
     protos = []
     for _, init, step, _ in variants:
@@ -339,7 +368,7 @@ def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[li
             protos.append(
                 f"wmr_status_t {step}(wmr_tdroc_state_t *, const wmr_tdroc_config_t *, "
                 "const real *, const real *, const real *, const real *, const real *, real *);")
-    protos.append("extern const wmr_tdroc_config_t fz_wmr_tdroc_frozen_config;")
+    protos.append(f"extern const wmr_tdroc_config_t fz_{pre}_tdroc_frozen_config;")
     protos.append("wmr_status_t handfz_tdroc_init(hand_tdroc_state_t *, "
                   "const wmr_tdroc_config_t *);")
     protos.append("wmr_status_t handfz_tdroc_step(hand_tdroc_state_t *, "
@@ -352,73 +381,90 @@ def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[li
     protos.append(f"#define NSTEPS {len(inputs)}")
     protos.append(f"#define TOL {TORQUE_TOLERANCE['float32' if float32 else 'double']!r}")
     protos.append(f"#define FIRST_FROZEN {next(k for k, v in enumerate(variants) if v[3])}")
-    protos.append(f"static const {real} IN[NSTEPS][25] = {{\n{rows}\n}};")
+    protos.append(f"static const {real} IN[NSTEPS][5 * NQ] = {{\n{rows}\n}};")
     protos.append("struct variant_s;")
-    body = HARNESS.replace("PROTOTYPES", "\n".join(protos)).replace(
-        "CONFIG", _config_lines(config))
+    cases = "\n".join(f"    case {j}: {s} break;" for j, s in enumerate(robot.config_cases))
+    fields = [name for name, _ in library_for(code, float32).ffi.typeof(
+        f"{pre}_params_t").fields]
+    body = (HARNESS.replace("PROTOTYPES", "\n".join(protos))
+            .replace("CONFIG_CASES", cases)
+            .replace("CONFIG_CASE_COUNT", str(len(robot.config_cases)))
+            .replace("CONFIG", _config_lines(config, fields))
+            .replace("HAND_HEADER", Path(robot.hand).with_suffix(".h").name))
     body = body.replace("static wmr_tdroc_config_t cfg;",
                         "static wmr_tdroc_config_t cfg;\nstatic const variant VARIANTS[NV] = {\n"
                         f"    {table}\n}};")
+    body = f"#define NQ {code.nq}\n" + body.replace("wmr_", f"{pre}_").replace(
+        "WMR_", f"{pre.upper()}_")
     src = workdir / "step_main.c"
     src.write_text(body)
-    sources = [p for p in sorted(GENERATED_C.glob("wmr_*.c")) if p.name != "wmr_plant.c"]
+    sources = [p for p in sorted(c_dir.glob(f"{pre}_*.c")) if p.name != f"{pre}_plant.c"]
     objs: list[str] = []
     for s in sources:  # ours
         obj = workdir / f"d_{s.stem}.o"
-        subprocess.run(["gcc", *CFLAGS, *prec, "-c", f"-I{GENERATED_C}", str(s), "-o", str(obj)],
+        subprocess.run(["gcc", *CFLAGS, *prec, "-c", f"-I{c_dir}", str(s), "-o", str(obj)],
                        check=True)
         objs.append(str(obj))
     if not float32:
-        objs += renamed_objects(workdir, sources, ("-DWMR_LIBM_TRIG",), "lm_")
-    frozen_header(workdir, config, float32)
-    objs += renamed_objects(workdir, sources, (*prec, frozen_define("tdroc"), f"-I{workdir}"),
-                            "fz_")
+        objs += renamed_objects(workdir, sources, (f"-D{pre.upper()}_LIBM_TRIG",), "lm_",
+                                include=c_dir, symbols=f"{pre}_")
+    frozen_header(workdir, config, float32, robot.code)
+    objs += renamed_objects(workdir, sources, (*prec, frozen_define("tdroc", pre),
+                                               f"-I{workdir}"), "fz_", include=c_dir,
+                            symbols=f"{pre}_")
     for tag, defines in (("hand", ()), ("handfz", ("-DHAND_FROZEN",))):
         obj = workdir / f"{tag}.o"
-        subprocess.run(["gcc", *CFLAGS, *prec, *defines, "-c", f"-I{GENERATED_C}",
-                        f"-I{workdir}", f"-I{BENCH_CSRC}", str(BENCH_CSRC / "hand_tdroc.c"),
+        subprocess.run(["gcc", *CFLAGS, *prec, *defines, "-c", f"-I{c_dir}",
+                        f"-I{workdir}", f"-I{BENCH_CSRC}", str(BENCH_CSRC / robot.hand),
                         "-o", str(obj)], check=True)
         objs.append(str(obj))
     exe = workdir / "step_bench"
-    subprocess.run(["gcc", *CFLAGS, *prec, f"-I{GENERATED_C}", f"-I{BENCH_CSRC}", str(src),
+    subprocess.run(["gcc", *CFLAGS, *prec, f"-I{c_dir}", f"-I{BENCH_CSRC}", str(src),
                     *objs, "-lm", "-o", str(exe)], check=True)
     return exe
 
 
-def run_steps(calls: int, repeats: int, runs: int = 1,
-              cases: tuple[tuple[str, str], ...] | None = None) -> dict[str, Any]:
-    """For each (formulation, precision): record the closed loop, check the variants
-    agree, time them interleaved, ``runs`` times (separate processes).
+def step_cases(robots: tuple[StepRobot, ...] = STEP_ROBOTS
+               ) -> list[tuple[StepRobot, str, str]]:
+    """(robot, formulation, precision) of every case the benchmark times."""
+    return [(r, f, p) for r in robots for f in r.formulations for p in PRECISIONS]
 
-    Returns {"checks": {case: {...}}, "rows": [{"function", "variant", "formulation",
-    "precision", "ns": [...]}, ...]} (``ns`` pooled over the runs, ``run_of`` saying which
-    run each entry is from); raises RuntimeError when statuses or torques differ (nothing
-    is timed then).
+
+def run_steps(calls: int, repeats: int, runs: int = 1,
+              cases: list[tuple[StepRobot, str, str]] | None = None) -> dict[str, Any]:
+    """For each (robot, formulation, precision): record the closed loop, check the
+    variants agree, time them interleaved, ``runs`` times (separate processes).
+
+    Returns {"checks": {case: {...}}, "rows": [{"function", "variant", "case", "ns":
+    [...]}, ...]} (``ns`` pooled over the runs; a case is "formulation/precision", the
+    trailer's prefixed "trailer "); raises RuntimeError when statuses or torques differ
+    (nothing is timed then).
     """
     from runtime.tooling.firmware.emulated_run import record_closed_loop
 
     checks: dict[str, Any] = {}
     rows: list[dict[str, Any]] = []
-    for formulation, precision in cases or [(f, p) for f in FORMULATIONS for p in PRECISIONS]:
+    for robot, formulation, precision in cases or step_cases():
         float32 = precision == "float32"
-        rec = record_closed_loop("tdroc", formulation, eps=0.5, float32=float32)
+        case = robot.case(formulation, precision)
+        rec = record_closed_loop("tdroc", formulation, eps=0.5, float32=float32,
+                                 robot=robot.code)
         pooled: dict[str, list[float]] = {}
         with tempfile.TemporaryDirectory() as tmp:
-            exe = build_step_bench(Path(tmp), rec.config, rec.inputs, float32)
+            exe = build_step_bench(Path(tmp), rec.config, rec.inputs, float32, robot)
             for _ in range(runs):
                 proc = subprocess.run([str(exe), str(calls), str(repeats)], capture_output=True,
                                       text=True, check=False)
                 lines = [json.loads(x) for x in proc.stdout.splitlines() if x.startswith("{")]
                 if proc.returncode != 0:
-                    raise RuntimeError(f"step benchmark ({formulation}, {precision}) refused "
-                                       f"to time: {lines or proc.stderr}")
-                checks[f"{formulation}/{precision}"] = next(x["check"] for x in lines
-                                                            if "check" in x)
+                    raise RuntimeError(f"step benchmark ({case}) refused to time: "
+                                       f"{lines or proc.stderr}")
+                checks[case] = next(x["check"] for x in lines if "check" in x)
                 for x in lines:
                     if "function" in x:
                         pooled.setdefault(x["variant"], []).extend(x["ns"])
-        rows += [{"function": "tdroc_step", "variant": v, "formulation": formulation,
-                  "precision": precision, "ns": ns} for v, ns in pooled.items()]
+        rows += [{"function": "tdroc_step", "variant": v, "case": case, "ns": ns}
+                 for v, ns in pooled.items()]
     return {"checks": checks, "rows": rows}
 
 
@@ -428,7 +474,7 @@ def summarise_steps(result: dict[str, Any]) -> dict[tuple[str, str], dict[str, f
     out: dict[tuple[str, str], dict[str, float]] = {}
     by_case: dict[str, dict[str, list[float]]] = {}
     for r in result["rows"]:
-        case = f"{r['formulation']}/{r['precision']}"
+        case = r["case"]
         out[(case, r["variant"])] = spread(r["ns"])
         by_case.setdefault(case, {})[r["variant"]] = r["ns"]
     for case, ns in by_case.items():

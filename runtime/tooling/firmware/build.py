@@ -218,11 +218,11 @@ int main(void)
 """
 
 
-def frozen_define(name: str) -> str:
+def frozen_define(name: str, prefix: str = "wmr") -> str:
     """The define of a build with ``name``'s configuration compiled in (``wmr freeze``)."""
     from runtime.freeze.header import frozen_macro
 
-    return f"-D{frozen_macro('wmr', name)}"
+    return f"-D{frozen_macro(prefix, name)}"
 
 
 def link_controller(objs: Objects, name: str, formulation: str = "PAPER") -> Path:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from runtime.tooling.firmware.emulator import PARAM_FIELDS, Emulator
+from runtime.tooling.firmware.emulator import Emulator
 
 
 @dataclass(frozen=True)
@@ -28,11 +28,18 @@ class Recording:
 
 
 def record_closed_loop(
-    controller: str = "tdroc", formulation: str = "paper", eps: float = 0.5, float32: bool = True
+    controller: str = "tdroc", formulation: str = "paper", eps: float = 0.5, float32: bool = True,
+    robot: str = "",
 ) -> Recording:
     """Run the closed loop (:func:`runtime.sim.loop.run`) on the lawn-mower path and record
     every controller call: its configuration, and per step the inputs as the C received
-    them (rounded to float for a float32 build), the status, τ and the gain."""
+    them (rounded to float for a float32 build), the status, τ and the gain.
+
+    ``robot``: a shipped robot's generated code (``load_robot_code``'s name; "" Drishti,
+    whose loop also passes the toolchain's configuration checks). Another robot runs with
+    its own parameters as the nominal model and without them: a recording only needs the
+    inputs of a consistent closed loop (the trailer's default ±30 % box fails the TDE
+    condition, a statement about robustness, not about these inputs)."""
     from modeling.robot_file import load_robot
     from runtime.bindings.config import controller_config
     from runtime.bindings.generated import load_robot_code
@@ -40,14 +47,15 @@ def record_closed_loop(
     from runtime.sim import loop, paths
     from runtime.sim.plant import library_for
 
-    code = load_robot_code("")
-    robot = dict(load_robot().lumped)
+    code = load_robot_code(robot)
+    nominal = dict(load_robot().lumped) if not robot else dict(code.params)
     exp = Experiment()
     exp = replace(exp, controller=replace(exp.controller, eps=eps))
-    ref = paths.lawnmower(code, robot, exp)
-    r = loop.run(code, controller, formulation, ref, robot, exp, float32=float32, check=True)
+    ref = paths.lawnmower(code, nominal, exp)
+    r = loop.run(code, controller, formulation, ref, nominal, exp, float32=float32,
+                 check=not robot)
     lib = library_for(code, float32)
-    cfg = controller_config(lib, code, controller, formulation, robot, exp)
+    cfg = controller_config(lib, code, controller, formulation, nominal, exp)
 
     def as_c(v: Any) -> list[float]:
         return [float(np.float32(x)) if float32 else float(x) for x in v]
@@ -59,7 +67,10 @@ def record_closed_loop(
 
 
 def config_values(ffi: Any, cfg: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {"params": [float(getattr(cfg.nominal, p)) for p in PARAM_FIELDS]}
+    """A controller configuration's values: "params" the nominal parameters in their
+    struct's order (for Drishti ``emulator.PARAM_FIELDS``), then every other field by name."""
+    fields = [name for name, _ in ffi.typeof(cfg.nominal).fields]
+    out: dict[str, Any] = {"params": [float(getattr(cfg.nominal, p)) for p in fields]}
     for name, _ in ffi.typeof(cfg[0]).fields:
         if name == "nominal":
             continue
@@ -68,11 +79,13 @@ def config_values(ffi: Any, cfg: Any) -> dict[str, Any]:
     return out
 
 
-def tdroc_config(ffi: Any, values: dict[str, Any]) -> Any:
-    """A ``wmr_tdroc_config_t *`` of ``ffi`` holding :func:`config_values`' ``values``."""
-    cfg = ffi.new("wmr_tdroc_config_t *")
-    for i, p in enumerate(PARAM_FIELDS):
-        setattr(cfg.nominal, p, values["params"][i])
+def tdroc_config(ffi: Any, values: dict[str, Any], prefix: str = "wmr") -> Any:
+    """A ``<prefix>_tdroc_config_t *`` of ``ffi`` holding :func:`config_values`'
+    ``values``."""
+    cfg = ffi.new(f"{prefix}_tdroc_config_t *")
+    fields = [name for name, _ in ffi.typeof(cfg.nominal).fields]
+    for p, value in zip(fields, values["params"], strict=True):
+        setattr(cfg.nominal, p, value)
     for name, value in values.items():
         if name != "params":
             setattr(cfg, name, value)
