@@ -55,12 +55,7 @@ typedef double real;
 #define HAND_NAME(x) hand_trailer_##x
 #endif
 
-/* The robot file's geometry (modeling/robots/trailer/trailer.toml), compiled in as the
-   generated code compiles it in. */
-#define HB L(0.207) /* half the drive track */
-#define A L(0.30)   /* drive axle to hitch */
-#define LC L(0.60)  /* hitch to the cart's axle */
-#define CB L(0.20)  /* half the cart's track */
+#include "hand_trailer_geometry.h"
 
 enum { OK = 0, NONFINITE_INPUT = -2, BAD_PARAMS = -3, NONFINITE_OUTPUT = -4 };
 enum { J_C, J_CL, J_CR, J_L, J_R, J_TH, J_X, K1, K2, K3, K4, R_CL, R_CR, R_L, R_R, NPAR };

@@ -87,12 +87,7 @@ typedef uint64_t bits_t;
 #define HREAL_MAX DBL_MAX
 #endif
 
-/* The robot file's geometry (modeling/robots/trailer/trailer.toml), compiled in as the
-   generated code compiles it in. */
-#define HB L(0.207) /* half the drive track */
-#define A L(0.30)   /* drive axle to hitch */
-#define LC L(0.60)  /* hitch to the cart's axle */
-#define CB L(0.20)  /* half the cart's track */
+#include "hand_trailer_geometry.h"
 
 #define NNOM 15     /* nominal parameters */
 
