@@ -79,10 +79,17 @@ class ControllerLayout:
     # coordinates whose sin, cos the `_trig` TDE kernels take (robot_functions.trig_angles)
     paper_trig: tuple[int, ...] = ()
     minimal_trig: tuple[int, ...] = ()
+    # entries of M-hat the minimal form's `_mhat` kernels take (robot_functions.mhat_kernels;
+    # 0: none): the step evaluates M-hat(q) once and keeps it for the next step's (17)
+    minimal_mhat: int = 0
 
     def trig_of(self, formulation: str) -> tuple[int, ...]:
         """The `_trig` kernels' angles of ``formulation`` (() when it has none)."""
         return self.paper_trig if formulation == "paper" else self.minimal_trig
+
+    def mhat_of(self, formulation: str) -> int:
+        """Entries of M-hat the `_mhat` kernels of ``formulation`` take (0: none)."""
+        return 0 if formulation == "paper" else self.minimal_mhat
 
     @property
     def trig_size(self) -> int:

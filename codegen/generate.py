@@ -24,12 +24,14 @@ from codegen.controller_layout import ControllerLayout
 from codegen.progress import Progress, quiet
 from codegen.robot_functions import (
     law_specs,
+    mhat_kernels,
     minv_norm_needs_q,
     model_specs,
     plant_specs,
     trig_angles,
 )
 from codegen.template_util import generated_by
+from modeling import controllers as ctl
 from modeling.robot_file import Robot
 from modeling.robot_model import RobotModel
 
@@ -44,6 +46,7 @@ def layout_for(model: RobotModel) -> ControllerLayout:
         model.prefix, model.nq, model.nu, model.actuated, model.paper,
         minv_norm_needs_q(model), model.coordinate_names, model.input_names,
         trig_angles(model, "paper") if model.paper else (), trig_angles(model, "minimal"),
+        len(ctl.control_model("minimal", model).mass) if mhat_kernels(model, "minimal") else 0,
     )
 
 

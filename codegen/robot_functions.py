@@ -19,6 +19,7 @@ Modules (one C ``.h``/``.c`` pair, one Python module, one set of CasADi function
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import cache
 
@@ -473,6 +474,76 @@ def _minv_norm_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
     )
 
 
+@cache
+def mhat_kernels(model: RobotModel, formulation: ctl.Formulation) -> bool:
+    """Whether the steps of ``formulation`` take M̂(q)'s entries as an input (the
+    ``_mhat`` kernels): a staged control model whose M̂ depends on q (a robot with a
+    trailer: M̂ on the hitch angles). The step evaluates M̂(q) once (``<f>_mhat``), passes it
+    to ‖M̂⁻¹‖ of (25) and the law, and keeps it for the next step's (17), which needs
+    M̂(q(t − h)): one evaluation a step where the kernels of q made three."""
+    if formulation not in model.formulations:
+        return False
+    cm = ctl.control_model(formulation, model)
+    return cm.stage is not None and cm.depends_on(list(cm.mass), model.q)
+
+
+def _mhat_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
+    """``<f>_mhat``: M̂(q), k×k row-major, the nominal model's mass matrix."""
+    cm = ctl.control_model(f, model)
+    k = cm.mass.rows
+    return FunctionSpec(
+        f"{f}_mhat",
+        f"({f} formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step\n"
+        "evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next\n"
+        "step's (17), which needs Mhat(q(t-h)).",
+        (_nominal(model), array("q", model.q, "measured q")),
+        (out("M", list(cm.mass), f"{k}x{k} row-major"),),
+        ("(9)",),
+        definitions=cm.definitions(list(cm.mass)),
+    )
+
+
+def _mhat_variant(spec: FunctionSpec, coords: tuple[sp.Symbol, ...], mass: list[sp.Expr],
+                  name: str, when: str) -> FunctionSpec:
+    """``spec`` with its coordinates ``coords`` replaced by ``name``, M̂'s entries ``mass``
+    (quantities of the spec's stage: M̂ at those coordinates) as an input: the same outputs,
+    no M̂ evaluated. q must enter ``spec`` through M̂ only."""
+    entries = tuple(sp.Symbol(f"{name}_{i}", real=True) for i in range(len(mass)))
+    mapping: dict[sp.Basic, sp.Expr] = {}
+    for m, x in zip(mass, entries, strict=True):
+        if m.is_Symbol:
+            mapping[m] = x
+        elif (-m).is_Symbol:  # a stage names a negated quantity by its negation
+            mapping[-m] = -x
+    defs = {s: e.xreplace(mapping) for s, e in spec.definitions if s not in mapping}
+    outputs = tuple(replace(o, exprs=tuple(sp.sympify(e).xreplace(mapping) for e in o.exprs))
+                    for o in spec.outputs)
+    needed: set[sp.Symbol] = set()
+    todo = [s for o in outputs for e in o.exprs for s in sp.sympify(e).free_symbols if s in defs]
+    while todo:
+        s = todo.pop()
+        if s not in needed:
+            needed.add(s)
+            todo += [u for u in defs[s].free_symbols if u in defs]
+    definitions = tuple((s, defs[s]) for s, _ in spec.definitions if s in needed)
+    read = {s for o in outputs for e in o.exprs for s in sp.sympify(e).free_symbols}
+    read |= {s for _, e in definitions for s in e.free_symbols}
+    if read & set(coords):
+        raise ValueError(f"{spec.name}: q enters other than through Mhat")
+    k = math.isqrt(len(mass))
+    inputs = tuple(
+        array(name, entries, f"Mhat({when}), {k}x{k} row-major (<f>_mhat)")
+        if a.kind == "array" and a.symbols == tuple(coords) else a
+        for a in spec.inputs
+    )
+    return replace(
+        spec, name=f"{spec.name}_mhat", inputs=inputs, outputs=outputs,
+        definitions=definitions,
+        doc=spec.doc + f"\nThe same with {name} = Mhat({when}) in place of the coordinates:\n"
+        "no Mhat evaluated (a step evaluates it once and keeps it for the next).",
+    )
+
+
 def minv_norm_needs_q(model: RobotModel) -> bool:
     """Whether the minimal formulation's ‖M̂⁻¹‖ depends on q (a robot with a trailer)."""
     return len(_minv_norm_spec(model, "minimal").inputs) > 1
@@ -596,7 +667,18 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
         if angles:
             specs.append(_trig_variant(specs[-1], ts.q_prev, model, angles, "trig_prev",
                                        "q(t-h)"))
+        mhat = mhat_kernels(model, f)
+        if mhat:  # (17) reading the M-hat the previous step kept
+            cm = ctl.control_model(f, model)
+            assert cm.stage is not None
+            prev = cm.stage.substituted(list(cm.mass), dict(zip(model.q, ts.q_prev,
+                                                                 strict=True)))
+            specs.append(_mhat_variant(specs[-1], tuple(ts.q_prev), prev, "mhat_prev",
+                                       "q(t-h)"))
         specs.append(_minv_norm_spec(model, f))
+        if mhat:
+            specs.append(_mhat_variant(specs[-1], model.q, list(cm.mass), "mhat", "q"))
+            specs.append(_mhat_spec(model, f))
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW, model)
         specs.append(
             FunctionSpec(
@@ -644,6 +726,9 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             )
             if c.trig and angles:
                 specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
+            if c.trig and mhat:
+                specs.append(_mhat_variant(specs[-1], model.q,
+                                           list(ctl.control_model(f, model).mass), "mhat", "q"))
     return tuple(replace(s, bounded_trig=_trig_of_inputs_only(s)) for s in specs)
 
 

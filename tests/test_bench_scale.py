@@ -19,15 +19,17 @@ def test_operation_summaries_are_summed() -> None:
 
 
 def test_tdroc_step_counts_the_kernels_a_step_calls() -> None:
-    """The trailer's step evaluates ‖M̂⁻¹‖ at q (M̂ depends on the hitch angle); Drishti's
-    minimal step does not (its ‖M̂⁻¹‖ is computed at _init); no paper-form kernel counts."""
+    """The trailer's step evaluates M̂(q) once (it depends on the hitch angle) and ‖M̂⁻¹‖,
+    (17) and the law from it; Drishti's minimal step evaluates no M̂ (its ‖M̂⁻¹‖ is
+    computed at _init); no paper-form kernel counts."""
     def kernels(robot: str) -> list[str]:
         folder = scale.generated_folder(ROOT, robot)
         table = dict(scale.OP_ROW.findall((folder / "MODEL.md").read_text()))
         return scale.tdroc_step_kernels(folder, scale.prefix_of(folder), table)
 
-    assert kernels("trailer") == ["minimal_minv_norm", "minimal_omega_difference",
-                                  "minimal_tde", "minimal_tdroc_law", "tdroc_weighted_gain"]
+    assert kernels("trailer") == ["minimal_mhat", "minimal_minv_norm_mhat",
+                                  "minimal_omega_difference", "minimal_tde_mhat",
+                                  "minimal_tdroc_law_mhat", "tdroc_weighted_gain"]
     drishti = kernels("drishti")
     assert "minimal_minv_norm" not in drishti and "minimal_tdroc_law" in drishti
     assert not any(k.startswith("paper_") for k in drishti)

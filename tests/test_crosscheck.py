@@ -175,11 +175,11 @@ def test_trailer_crosscheck_detects_a_deviating_implementation(
 
 @needs_trailer
 def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> None:
-    """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law`` (the
-    TDC law kernel; it evaluates the staged M-hat at q) scales u[0] by 1 + 1e-6, and so
-    does the TDC step (both through ``trailer_k_minimal_tdc_law``): the crosscheck
-    of that folder fails for C double, in that function's row and in the TDC controller,
-    and nowhere else."""
+    """A copy of the trailer's generated code whose C ``trailer_minimal_tdc_law_mhat``
+    (the TDC law kernel the step calls, with the M-hat the step evaluated once) scales u[0]
+    by 1 + 1e-6, and so does the TDC step (both through ``trailer_k_minimal_tdc_law_mhat``):
+    the crosscheck of that folder fails for C double, in that function's row and in the
+    TDC controller, and nowhere else."""
     copy = tmp_path / "trailer"
     shutil.copytree(TRAILER / "python", copy / "python")
     shutil.copytree(TRAILER / "c", copy / "c")
@@ -187,7 +187,7 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     # the kernel is written once (trailer_kernels.h): the laws function wraps it
     kernels = copy / "c" / "trailer_kernels.h"
     text = kernels.read_text()
-    end = text.index("\n}\n", text.index("static inline void trailer_k_minimal_tdc_law("))
+    end = text.index("\n}\n", text.index("static inline void trailer_k_minimal_tdc_law_mhat("))
     kernels.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     out_file = tmp_path / "report.txt"
     status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])
@@ -195,9 +195,9 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     assert status == 1, out
     assert "Robot trailer (" in out and "FAILED" in out
     failing = [ln.split()[0] for ln in out.splitlines() if re.search(r"\bFAIL\b", ln)]
-    assert failing == ["minimal_tdc_law", "tdc/minimal"], out
+    assert failing == ["minimal_tdc_law_mhat", "tdc/minimal"], out
     for ln in out.splitlines():
-        if ln.startswith(("minimal_tdc_law ", "tdc/minimal")):
+        if ln.startswith(("minimal_tdc_law_mhat ", "tdc/minimal")):
             assert ln.count("FAIL") == 1, ln  # C double only: 1e-6 is float32 rounding
     # The unmodified folder passes (the failure is the modification, not the copy).
     assert not crosscheck.generated_crosscheck(target_of(TRAILER), quick=True).failing()

@@ -945,8 +945,10 @@ def kept_kernel(ir: FunctionIR, config: CConfig, name: str, kept_arg: str = "kep
     # keep: the parameters read, the parameter-only temporaries, the kept values stored
     param_args = [a for a in spec.inputs if a.kind == "params" or a.name in fixed_inputs]
     used_params = form.used_params()
-    body = [_decl(names[s.symbol], _access(s.arg, s.field, s.index))
-            for s in slots if s.symbol in used_params]
+    body = [_Line("void", a.name) for a in param_args  # (an `_mhat` kernel's p)
+            if not any(s in used_params for s in a.all_symbols())]
+    body += [_decl(names[s.symbol], _access(s.arg, s.field, s.index))
+             for s in slots if s.symbol in used_params]
     body += [_decl(str(s), printer.expr_code(e)) for s, e in form.param_temps]
     body += [_Line("store", f"{kept_arg}[{k}]", names.get(s, str(s)))
              for k, s in enumerate(form.kept)]

@@ -42,285 +42,60 @@ static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm
     gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
 }
 
-/* trailer_k_minimal_tde_keep: the parameter-only part of trailer_minimal_tde (trailer_laws.h
-   documents it).
-   operations after CSE: 3 add, 16 mul, 5 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tde_keep(const trailer_params_t *p, const trailer_real_t *span,
-    trailer_real_t kept[18])
+/* trailer_k_minimal_tde_mhat_keep: the parameter-only part of trailer_minimal_tde_mhat
+   (trailer_laws.h documents it).
+   operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tde_mhat_keep(const trailer_params_t *p,
+    const trailer_real_t *span, trailer_real_t kept[1])
 {
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
+    (void)p;
     const trailer_real_t span_1 = span[0];
     const trailer_real_t _t0 = TRAILER_LIT(1.0)/span_1;
-    const trailer_real_t _t1 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t6 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t7 = TRAILER_LIT(1.0)/radius_right;
-    const trailer_real_t _t8 = TRAILER_LIT(0.207)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/radius_left;
-    const trailer_real_t _t10 = -TRAILER_LIT(0.207)*_t9;
-    const trailer_real_t _t11 = J_theta_right*_t7;
-    const trailer_real_t _t12 = J_theta_right*_t8;
-    const trailer_real_t _t13 = J_theta_left*_t9;
-    const trailer_real_t _t14 = J_theta_left*_t10;
-    const trailer_real_t _t15 = _t11*_t7 + _t13*_t9;
-    const trailer_real_t _t16 = _t12*_t7 + _t14*_t9;
-    const trailer_real_t _t17 = _t10*_t14 + _t12*_t8;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_tractor;
-    kept[4] = J_x_tractor;
-    kept[5] = K_theta_cart_x_tractor;
-    kept[6] = K_theta_cart_x_tractor_2;
-    kept[7] = K_theta_tractor_x_tractor_2;
-    kept[8] = _t0;
-    kept[9] = _t1;
-    kept[10] = _t2;
-    kept[11] = _t3;
-    kept[12] = _t4;
-    kept[13] = _t5;
-    kept[14] = _t6;
-    kept[15] = _t15;
-    kept[16] = _t16;
-    kept[17] = _t17;
+    kept[0] = _t0;
 }
 
-/* trailer_k_minimal_tde: the per-step part of trailer_minimal_tde (trailer_laws.h documents it).
-   operations after CSE: 37 add, 52 mul, 0 div, 2 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tde(const trailer_real_t kept[18],
-    const trailer_real_t *q_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
+/* trailer_k_minimal_tde_mhat: the per-step part of trailer_minimal_tde_mhat (trailer_laws.h
+   documents it).
+   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tde_mhat(const trailer_real_t kept[1],
+    const trailer_real_t *mhat_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
     const trailer_real_t *qdot_then, trailer_real_t *H1hat)
 {
-    const trailer_real_t qp2 = q_prev[2];
-    const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t18 = qp2 - qp3;
-    const trailer_real_t _t19 = TRAILER_SIN_BOUNDED(_t18);
-    const trailer_real_t _t20 = TRAILER_COS_BOUNDED(_t18);
-    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t20;
-    const trailer_real_t _t22 = TRAILER_LIT(0.3)*_t19;
-    const trailer_real_t _t23 = TRAILER_LIT(1.6666666666666667)*_t19;
-    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
-    const trailer_real_t _t25 = -TRAILER_LIT(1.6666666666666667)*_t21;
-    const trailer_real_t _t26 = TRAILER_LIT(0.2)*_t25;
     const trailer_real_t qd_now0 = qdot_now[0];
     const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t0 = kept[8];
-    const trailer_real_t _t27 = _t0*(qd_now0 - qd_then0);
+    const trailer_real_t _t0 = kept[0];
+    const trailer_real_t _t1 = _t0*(qd_now0 - qd_then0);
     const trailer_real_t qd_now1 = qdot_now[1];
     const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t28 = _t0*(qd_now1 - qd_then1);
-    const trailer_real_t _t29 = _t20 + _t24;
-    const trailer_real_t _t30 = _t22 + _t26;
-    const trailer_real_t _t3 = kept[11];
-    const trailer_real_t _t31 = _t29*_t3;
-    const trailer_real_t _t32 = _t3*_t30;
-    const trailer_real_t _t33 = _t20 - _t24;
-    const trailer_real_t _t34 = _t22 - _t26;
-    const trailer_real_t _t4 = kept[12];
-    const trailer_real_t _t35 = _t33*_t4;
-    const trailer_real_t _t36 = _t34*_t4;
-    const trailer_real_t K_theta_cart_x_tractor = kept[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
-    const trailer_real_t _t37 = -K_theta_cart_x_tractor*_t19 + K_theta_cart_x_tractor_2*_t20;
-    const trailer_real_t _t38 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t39 = J_x_tractor + _t23*_t37;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
-    const trailer_real_t _t40 = K_theta_tractor_x_tractor_2 + _t25*_t37;
-    const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t41 = J_theta_tractor + _t25*_t38;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t42 = J_theta_cart*_t23 + _t37;
-    const trailer_real_t _t43 = J_theta_cart*_t25 + _t38;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t44 = J_theta_cart_right*_t31;
-    const trailer_real_t _t45 = J_theta_cart_right*_t32;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t46 = J_theta_cart_left*_t35;
-    const trailer_real_t _t47 = J_theta_cart_left*_t36;
-    const trailer_real_t _t15 = kept[15];
-    const trailer_real_t _t48 = _t15 + _t23*_t42 + _t31*_t44 + _t35*_t46 + _t39;
-    const trailer_real_t _t16 = kept[16];
-    const trailer_real_t _t49 = _t16 + _t23*_t43 + _t31*_t45 + _t35*_t47 + _t40;
-    const trailer_real_t _t17 = kept[17];
-    const trailer_real_t _t50 = _t17 + _t25*_t43 + _t32*_t45 + _t36*_t47 + _t41;
-    const trailer_real_t _t1 = kept[9];
-    const trailer_real_t _t5 = kept[13];
-    const trailer_real_t _t51 = _t1*_t49 + _t48*_t5;
-    const trailer_real_t _t2 = kept[10];
-    const trailer_real_t _t6 = kept[14];
-    const trailer_real_t _t52 = _t2*_t49 + _t48*_t6;
-    const trailer_real_t _t53 = _t1*_t50 + _t49*_t5;
-    const trailer_real_t _t54 = _t2*_t50 + _t49*_t6;
-    const trailer_real_t _t55 = _t1*_t53 + _t5*_t51;
-    const trailer_real_t _t56 = _t1*_t54 + _t5*_t52;
-    const trailer_real_t _t57 = _t2*_t54 + _t52*_t6;
+    const trailer_real_t _t2 = _t0*(qd_now1 - qd_then1);
+    const trailer_real_t mhat_prev_0 = mhat_prev[0];
+    const trailer_real_t mhat_prev_2 = mhat_prev[2];
+    const trailer_real_t mhat_prev_3 = mhat_prev[3];
     const trailer_real_t up0 = u_prev[0];
     const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t27*_t55 - _t28*_t56 + up0;
-    H1hat[1] = -_t27*_t56 - _t28*_t57 + up1;
+    H1hat[0] = -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0;
+    H1hat[1] = -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1;
 }
 
-/* trailer_k_minimal_minv_norm_keep: the parameter-only part of trailer_minimal_minv_norm
-   (trailer_laws.h documents it).
-   operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_minv_norm_keep(const trailer_params_t *p,
-    trailer_real_t kept[17])
-{
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t2 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_left;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t7 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t8 = J_theta_right*_t4;
-    const trailer_real_t _t9 = J_theta_left*_t5;
-    const trailer_real_t _t10 = _t4*_t8 + _t5*_t9;
-    const trailer_real_t _t11 = TRAILER_LIT(0.207)*_t4;
-    const trailer_real_t _t12 = J_theta_right*_t11;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t14 = J_theta_left*_t13;
-    const trailer_real_t _t15 = _t12*_t4 + _t14*_t5;
-    const trailer_real_t _t16 = _t11*_t12 + _t13*_t14;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_tractor;
-    kept[4] = J_x_tractor;
-    kept[5] = K_theta_cart_x_tractor;
-    kept[6] = K_theta_cart_x_tractor_2;
-    kept[7] = K_theta_tractor_x_tractor_2;
-    kept[8] = _t0;
-    kept[9] = _t1;
-    kept[10] = _t2;
-    kept[11] = _t3;
-    kept[12] = _t6;
-    kept[13] = _t7;
-    kept[14] = _t10;
-    kept[15] = _t15;
-    kept[16] = _t16;
-}
-
-/* trailer_k_minimal_minv_norm: the per-step part of trailer_minimal_minv_norm (trailer_laws.h
+/* trailer_k_minimal_minv_norm_mhat: the body of trailer_minimal_minv_norm_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 34 add, 51 mul, 1 div, 2 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer_k_minimal_minv_norm(const trailer_real_t kept[17],
-    const trailer_real_t *q, trailer_real_t *norm)
+   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
+    const trailer_real_t *mhat, trailer_real_t *norm)
 {
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t17 = theta_cart - theta_tractor;
-    const trailer_real_t _t18 = TRAILER_SIN_BOUNDED(_t17);
-    const trailer_real_t _t19 = TRAILER_COS_BOUNDED(_t17);
-    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
-    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
-    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
-    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
-    const trailer_real_t _t26 = _t19 + _t23;
-    const trailer_real_t _t6 = kept[12];
-    const trailer_real_t _t27 = _t26*_t6;
-    const trailer_real_t _t28 = _t19 - _t23;
-    const trailer_real_t _t7 = kept[13];
-    const trailer_real_t _t29 = _t28*_t7;
-    const trailer_real_t K_theta_cart_x_tractor = kept[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
-    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t31 = J_x_tractor + _t22*_t30;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t32 = J_theta_cart*_t22 + _t30;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t33 = J_theta_cart_right*_t27;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t34 = J_theta_cart_left*_t29;
-    const trailer_real_t _t10 = kept[14];
-    const trailer_real_t _t35 = _t10 + _t22*_t32 + _t27*_t33 + _t29*_t34 + _t31;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor_2 + _t24*_t30;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
-    const trailer_real_t _t38 = J_theta_cart*_t24 + _t37;
-    const trailer_real_t _t39 = -_t21 + _t25;
-    const trailer_real_t _t40 = _t39*_t6;
-    const trailer_real_t _t41 = J_theta_cart_right*_t40;
-    const trailer_real_t _t42 = -_t21 - _t25;
-    const trailer_real_t _t43 = _t42*_t7;
-    const trailer_real_t _t44 = J_theta_cart_left*_t43;
-    const trailer_real_t _t15 = kept[15];
-    const trailer_real_t _t45 = _t15 + _t22*_t38 + _t27*_t41 + _t29*_t44 + _t36;
-    const trailer_real_t _t2 = kept[10];
-    const trailer_real_t _t3 = kept[11];
-    const trailer_real_t _t46 = _t2*_t45 + _t3*_t35;
-    const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t47 = J_theta_tractor + _t24*_t37;
-    const trailer_real_t _t16 = kept[16];
-    const trailer_real_t _t48 = _t16 + _t24*_t38 + _t40*_t41 + _t43*_t44 + _t47;
-    const trailer_real_t _t49 = _t2*_t48 + _t3*_t45;
-    const trailer_real_t _t0 = kept[8];
-    const trailer_real_t _t1 = kept[9];
-    const trailer_real_t _t50 = _t0*_t49 + _t1*_t46;
-    const trailer_real_t _t51 = _t50*_t50;
-    const trailer_real_t _t52 = _t0*_t45 + _t1*_t35;
-    const trailer_real_t _t53 = _t0*_t48 + _t1*_t45;
-    const trailer_real_t _t54 = _t0*_t53 + _t1*_t52;
-    const trailer_real_t _t55 = _t2*_t49 + _t3*_t46;
-    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t51 + _t54*_t54 + _t55*_t55)/TRAILER_FABS(_t51
-            - _t54*_t55);
+    (void)p;
+    const trailer_real_t mhat_2 = mhat[2];
+    const trailer_real_t _t0 = mhat_2*mhat_2;
+    const trailer_real_t mhat_0 = mhat[0];
+    const trailer_real_t mhat_3 = mhat[3];
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/TRAILER_FABS(_t0
+            - mhat_0*mhat_3);
 }
 
-/* trailer_k_minimal_omega_difference: the body of trailer_minimal_omega_difference (trailer_laws.h
+/* trailer_k_minimal_mhat_keep: the parameter-only part of trailer_minimal_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newer,
-    const trailer_real_t *older, trailer_real_t *norm)
-{
-    const trailer_real_t Om_new0 = newer[0];
-    const trailer_real_t Om_old0 = older[0];
-    const trailer_real_t _t0 = Om_new0 - Om_old0;
-    const trailer_real_t Om_new1 = newer[1];
-    const trailer_real_t Om_old1 = older[1];
-    const trailer_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer_norm2(_t0, _t1);
-}
-
-/* trailer_k_minimal_tdc_law_keep: the parameter-only part of trailer_minimal_tdc_law
-   (trailer_laws.h documents it).
    operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tdc_law_keep(const trailer_params_t *p,
-    trailer_real_t kept[17])
+static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, trailer_real_t kept[17])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -372,16 +147,11 @@ static inline void trailer_k_minimal_tdc_law_keep(const trailer_params_t *p,
     kept[16] = _t16;
 }
 
-/* trailer_k_minimal_tdc_law: the per-step part of trailer_minimal_tdc_law (trailer_laws.h documents
-   it).
-   operations after CSE: 39 add, 54 mul, 0 div, 2 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[17], const trailer_real_t *q,
-    const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
-    const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
-    const trailer_real_t *p22, const trailer_real_t *H1hat, trailer_real_t *u)
+/* trailer_k_minimal_mhat: the per-step part of trailer_minimal_mhat (trailer_laws.h documents it).
+   operations after CSE: 31 add, 46 mul, 0 div, 2 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_mhat(const trailer_real_t kept[17], const trailer_real_t *q,
+    trailer_real_t *M)
 {
-    (void)p12;
-    (void)p22;
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
     const trailer_real_t _t17 = theta_cart - theta_tractor;
@@ -393,166 +163,149 @@ static inline void trailer_k_minimal_tdc_law(const trailer_real_t kept[17], cons
     const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
     const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
     const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
+    const trailer_real_t _t26 = _t19 + _t23;
+    const trailer_real_t _t27 = -_t21 + _t25;
+    const trailer_real_t _t2 = kept[10];
+    const trailer_real_t _t28 = _t2*_t26;
+    const trailer_real_t _t29 = _t2*_t27;
+    const trailer_real_t _t30 = _t19 - _t23;
+    const trailer_real_t _t31 = -_t21 - _t25;
+    const trailer_real_t _t3 = kept[11];
+    const trailer_real_t _t32 = _t3*_t30;
+    const trailer_real_t _t33 = _t3*_t31;
+    const trailer_real_t K_theta_cart_x_tractor = kept[5];
+    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
+    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t J_x_tractor = kept[4];
+    const trailer_real_t _t36 = J_x_tractor + _t22*_t34;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
+    const trailer_real_t _t37 = K_theta_tractor_x_tractor_2 + _t24*_t34;
+    const trailer_real_t J_theta_tractor = kept[3];
+    const trailer_real_t _t38 = J_theta_tractor + _t24*_t35;
+    const trailer_real_t J_theta_cart = kept[0];
+    const trailer_real_t _t39 = J_theta_cart*_t22 + _t34;
+    const trailer_real_t _t40 = J_theta_cart*_t24 + _t35;
+    const trailer_real_t J_theta_cart_right = kept[2];
+    const trailer_real_t _t41 = J_theta_cart_right*_t28;
+    const trailer_real_t _t42 = J_theta_cart_right*_t29;
+    const trailer_real_t J_theta_cart_left = kept[1];
+    const trailer_real_t _t43 = J_theta_cart_left*_t32;
+    const trailer_real_t _t44 = J_theta_cart_left*_t33;
+    const trailer_real_t _t14 = kept[14];
+    const trailer_real_t _t45 = _t14 + _t22*_t39 + _t28*_t41 + _t32*_t43 + _t36;
+    const trailer_real_t _t15 = kept[15];
+    const trailer_real_t _t46 = _t15 + _t22*_t40 + _t28*_t42 + _t32*_t44 + _t37;
+    const trailer_real_t _t16 = kept[16];
+    const trailer_real_t _t47 = _t16 + _t24*_t40 + _t29*_t42 + _t33*_t44 + _t38;
+    const trailer_real_t _t0 = kept[8];
+    const trailer_real_t _t4 = kept[12];
+    const trailer_real_t _t48 = _t0*_t46 + _t4*_t45;
+    const trailer_real_t _t1 = kept[9];
+    const trailer_real_t _t5 = kept[13];
+    const trailer_real_t _t49 = _t1*_t46 + _t45*_t5;
+    const trailer_real_t _t50 = _t0*_t47 + _t4*_t46;
+    const trailer_real_t _t51 = _t1*_t47 + _t46*_t5;
+    const trailer_real_t _t52 = _t0*_t50 + _t4*_t48;
+    const trailer_real_t _t53 = _t0*_t51 + _t4*_t49;
+    const trailer_real_t _t54 = _t1*_t51 + _t49*_t5;
+    M[0] = _t52;
+    M[1] = _t53;
+    M[2] = _t53;
+    M[3] = _t54;
+}
+
+/* trailer_k_minimal_omega_difference: the body of trailer_minimal_omega_difference (trailer_laws.h
+   documents it).
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
+static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newer,
+    const trailer_real_t *older, trailer_real_t *norm)
+{
+    const trailer_real_t Om_new0 = newer[0];
+    const trailer_real_t Om_old0 = older[0];
+    const trailer_real_t _t0 = Om_new0 - Om_old0;
+    const trailer_real_t Om_new1 = newer[1];
+    const trailer_real_t Om_old1 = older[1];
+    const trailer_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = trailer_norm2(_t0, _t1);
+}
+
+/* trailer_k_minimal_tdc_law_mhat: the body of trailer_minimal_tdc_law_mhat (trailer_laws.h
+   documents it).
+   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_tdc_law_mhat(const trailer_params_t *p,
+    const trailer_real_t *mhat, const trailer_real_t *e, const trailer_real_t *edot,
+    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
+    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
+    trailer_real_t *u)
+{
+    (void)p;
+    (void)p12;
+    (void)p22;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t26 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t27 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t28 = _t19 + _t23;
-    const trailer_real_t _t29 = -_t21 + _t25;
-    const trailer_real_t _t2 = kept[10];
-    const trailer_real_t _t30 = _t2*_t28;
-    const trailer_real_t _t31 = _t2*_t29;
-    const trailer_real_t _t32 = _t19 - _t23;
-    const trailer_real_t _t33 = -_t21 - _t25;
-    const trailer_real_t _t3 = kept[11];
-    const trailer_real_t _t34 = _t3*_t32;
-    const trailer_real_t _t35 = _t3*_t33;
-    const trailer_real_t K_theta_cart_x_tractor = kept[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
-    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
-    const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t38 = J_x_tractor + _t22*_t36;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
-    const trailer_real_t _t39 = K_theta_tractor_x_tractor_2 + _t24*_t36;
-    const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t40 = J_theta_tractor + _t24*_t37;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t41 = J_theta_cart*_t22 + _t36;
-    const trailer_real_t _t42 = J_theta_cart*_t24 + _t37;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t43 = J_theta_cart_right*_t30;
-    const trailer_real_t _t44 = J_theta_cart_right*_t31;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t45 = J_theta_cart_left*_t34;
-    const trailer_real_t _t46 = J_theta_cart_left*_t35;
-    const trailer_real_t _t14 = kept[14];
-    const trailer_real_t _t47 = _t14 + _t22*_t41 + _t30*_t43 + _t34*_t45 + _t38;
-    const trailer_real_t _t15 = kept[15];
-    const trailer_real_t _t48 = _t15 + _t22*_t42 + _t30*_t44 + _t34*_t46 + _t39;
-    const trailer_real_t _t16 = kept[16];
-    const trailer_real_t _t49 = _t16 + _t24*_t42 + _t31*_t44 + _t35*_t46 + _t40;
-    const trailer_real_t _t0 = kept[8];
-    const trailer_real_t _t4 = kept[12];
-    const trailer_real_t _t50 = _t0*_t48 + _t4*_t47;
-    const trailer_real_t _t1 = kept[9];
-    const trailer_real_t _t5 = kept[13];
-    const trailer_real_t _t51 = _t1*_t48 + _t47*_t5;
-    const trailer_real_t _t52 = _t0*_t49 + _t4*_t48;
-    const trailer_real_t _t53 = _t1*_t49 + _t48*_t5;
-    const trailer_real_t _t54 = _t0*_t52 + _t4*_t50;
-    const trailer_real_t _t55 = _t0*_t53 + _t4*_t51;
-    const trailer_real_t _t56 = _t1*_t53 + _t5*_t51;
+    const trailer_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t mhat_0 = mhat[0];
+    const trailer_real_t mhat_2 = mhat[2];
+    const trailer_real_t mhat_3 = mhat[3];
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t26*_t54 + _t27*_t55;
-    u[1] = H1hat1 + _t26*_t55 + _t27*_t56;
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2;
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3;
 }
 
-/* trailer_k_minimal_tdroc_law: the per-step part of trailer_minimal_tdroc_law (trailer_laws.h
+/* trailer_k_minimal_tdroc_law_mhat: the body of trailer_minimal_tdroc_law_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 44 add, 62 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_k_minimal_tdroc_law(const trailer_real_t kept[17],
-    const trailer_real_t *q, const trailer_real_t *e, const trailer_real_t *edot,
+   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
+    const trailer_real_t *mhat, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
     const trailer_real_t *gain, const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm)
 {
-    const trailer_real_t theta_tractor = q[2];
-    const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t17 = theta_cart - theta_tractor;
-    const trailer_real_t _t18 = TRAILER_SIN_BOUNDED(_t17);
-    const trailer_real_t _t19 = TRAILER_COS_BOUNDED(_t17);
-    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
-    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
-    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
-    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
+    (void)p;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t26 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t0 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t p12_1 = p12[1];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t27 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t28 = trailer_norm2(_t26, _t27);
+    const trailer_real_t _t1 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
     const trailer_real_t gain_1 = gain[0];
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t29 = gain_1/TRAILER_FMAX(_t28, eps_1);
+    const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t30 = _t26*_t29 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t31 = _t27*_t29 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t32 = _t19 + _t23;
-    const trailer_real_t _t33 = -_t21 + _t25;
-    const trailer_real_t _t2 = kept[10];
-    const trailer_real_t _t34 = _t2*_t32;
-    const trailer_real_t _t35 = _t2*_t33;
-    const trailer_real_t _t36 = _t19 - _t23;
-    const trailer_real_t _t37 = -_t21 - _t25;
-    const trailer_real_t _t3 = kept[11];
-    const trailer_real_t _t38 = _t3*_t36;
-    const trailer_real_t _t39 = _t3*_t37;
-    const trailer_real_t K_theta_cart_x_tractor = kept[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
-    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t _t41 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
-    const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t42 = J_x_tractor + _t22*_t40;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
-    const trailer_real_t _t43 = K_theta_tractor_x_tractor_2 + _t24*_t40;
-    const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t44 = J_theta_tractor + _t24*_t41;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t45 = J_theta_cart*_t22 + _t40;
-    const trailer_real_t _t46 = J_theta_cart*_t24 + _t41;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t47 = J_theta_cart_right*_t34;
-    const trailer_real_t _t48 = J_theta_cart_right*_t35;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t49 = J_theta_cart_left*_t38;
-    const trailer_real_t _t50 = J_theta_cart_left*_t39;
-    const trailer_real_t _t14 = kept[14];
-    const trailer_real_t _t51 = _t14 + _t22*_t45 + _t34*_t47 + _t38*_t49 + _t42;
-    const trailer_real_t _t15 = kept[15];
-    const trailer_real_t _t52 = _t15 + _t22*_t46 + _t34*_t48 + _t38*_t50 + _t43;
-    const trailer_real_t _t16 = kept[16];
-    const trailer_real_t _t53 = _t16 + _t24*_t46 + _t35*_t48 + _t39*_t50 + _t44;
-    const trailer_real_t _t0 = kept[8];
-    const trailer_real_t _t4 = kept[12];
-    const trailer_real_t _t54 = _t0*_t52 + _t4*_t51;
-    const trailer_real_t _t1 = kept[9];
-    const trailer_real_t _t5 = kept[13];
-    const trailer_real_t _t55 = _t1*_t52 + _t5*_t51;
-    const trailer_real_t _t56 = _t0*_t53 + _t4*_t52;
-    const trailer_real_t _t57 = _t1*_t53 + _t5*_t52;
-    const trailer_real_t _t58 = _t0*_t56 + _t4*_t54;
-    const trailer_real_t _t59 = _t0*_t57 + _t4*_t55;
-    const trailer_real_t _t60 = _t1*_t57 + _t5*_t55;
+    const trailer_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t mhat_0 = mhat[0];
+    const trailer_real_t mhat_2 = mhat[2];
+    const trailer_real_t mhat_3 = mhat[3];
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t30*_t58 + _t31*_t59;
-    u[1] = H1hat1 + _t30*_t59 + _t31*_t60;
-    s[0] = _t26;
-    s[1] = _t27;
-    s_norm[0] = _t28;
+    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
+    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
+    s[0] = _t0;
+    s[1] = _t1;
+    s_norm[0] = _t2;
 }
 
 /* trailer_k_minimal_roc_law_keep: the parameter-only part of trailer_minimal_roc_law

@@ -63,9 +63,7 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
         const trailer_real_t q0[8] = {TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
                 TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0), TRAILER_LIT(0.0),
                 TRAILER_LIT(0.0)}; /* evaluated at q in the steps */
-        trailer_real_t kept[17];  /* the step's copy, as _init would keep it */
-        trailer_k_minimal_minv_norm_keep(&config->nominal, kept);
-        trailer_k_minimal_minv_norm(kept, q0, &minv_norm);
+        trailer_minimal_minv_norm(&config->nominal, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
             return trailer_fail(detail, TRAILER_ERR_BAD_NOMINAL, TRAILER_FIELD_NOMINAL, -1);
         }
@@ -185,6 +183,9 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
         s->u_prev2[i] = TRAILER_LIT(0.0);
         s->H1hat[i] = TRAILER_LIT(0.0);
     }
+    for (i = 0; i < 4; ++i) {
+        s->mhat_prev[i] = TRAILER_LIT(0.0);
+    }
     s->omega_count = 0;
     s->omega_head = 0;
     for (i = 0; i < 2 * TRAILER_MAX_WINDOW; ++i) {
@@ -236,12 +237,10 @@ trailer_status_t trailer_tdroc_init(trailer_tdroc_state_t *state,
         ? TRAILER_LIT(2.0) * config->h : config->h;
     fresh.tde_c2 = config->accel_estimator == TRAILER_ACCEL_MATCHED
         ? config->rate_window / (TRAILER_LIT(2.0) * config->h) : TRAILER_LIT(0.0);
-    /* the values the step's minimal_tde keeps */
-    trailer_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
-    /* the values the step's minimal_minv_norm keeps */
-    trailer_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
-    /* the values the step's minimal_tdroc_law keeps */
-    trailer_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    /* the values the step's minimal_tde_mhat keeps */
+    trailer_k_minimal_tde_mhat_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde_mhat);
+    /* the values the step's minimal_mhat keeps */
+    trailer_k_minimal_mhat_keep(&config->nominal, fresh.k_minimal_mhat);
     trailer_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER_OK;
@@ -283,6 +282,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     trailer_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer_real_t H1hat[8];
+    trailer_real_t mhat[4];  /* Mhat(q): ||Mhat^-1||'s and the law's, then (17)'s next step */
     trailer_real_t gain, s_norm, u_discarded;
     trailer_real_t minv_norm;
     trailer_real_t dn_new;  /* the window's newest difference norm after this step */
@@ -337,9 +337,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     {
         /* the kernels' parameter-only values, kept by _init for the configuration compared
            above (a frozen build: by _init on the host, in the compiled-in state) */
-        const trailer_real_t *const kept_minimal_tde = state->k_minimal_tde;
-        const trailer_real_t *const kept_minimal_minv_norm = state->k_minimal_minv_norm;
-        const trailer_real_t *const kept_minimal_tdroc_law = state->k_minimal_tdroc_law;
+        const trailer_real_t *const kept_minimal_tde_mhat = state->k_minimal_tde_mhat;
+        const trailer_real_t *const kept_minimal_mhat = state->k_minimal_mhat;
     if (!trailer_tdroc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
         /* which input, and its status */
         return trailer_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
@@ -348,6 +347,9 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     gain = state->gain;
     s_norm = state->s_norm;
     minv_norm = state->minv_norm;
+    /* Mhat(q) once a step: ||Mhat^-1|| and the law read it, and (17) in the next step
+       (Mhat(q(t-h))), which the state keeps. */
+    trailer_k_minimal_mhat(kept_minimal_mhat, q, mhat);
     nc = trailer_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -375,7 +377,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
             up[i] = TRAILER_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER_LIT(0.0);
         }
-        trailer_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer_k_minimal_tde_mhat(kept_minimal_tde_mhat, state->mhat_prev, up, qdn, qdthen, H1hat);
     } else {
         for (i = 0; i < 8; ++i) {
             H1hat[i] = TRAILER_LIT(0.0);
@@ -418,7 +420,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
+        trailer_k_minimal_minv_norm_mhat(&cfg->nominal, mhat, &minv_norm);
         trailer_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer_cap_gain(gain);
@@ -428,7 +430,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     /* The law. */
     {
         trailer_real_t s[8];
-        trailer_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+        trailer_k_minimal_tdroc_law_mhat(&cfg->nominal, mhat, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                 &cfg->eps, u, s, &s_norm);
     }
@@ -460,6 +462,9 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 8; ++i) {
         state->H1hat[i] = H1hat[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        state->mhat_prev[i] = mhat[i];
     }
     if (pushed) {
         state->omega_ring[omega_head] = dn_new;

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_mhat", "minimal_minv_norm", "minimal_minv_norm_mhat", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_mhat", "minimal_tde", "minimal_tde_mhat", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_mhat", "tdroc_weighted_gain"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -195,6 +195,43 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     return H1hat
 
 
+def minimal_tde_mhat(mhat_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+    qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+    The same with mhat_prev = Mhat(q(t-h)) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (17).
+
+    Args:
+        mhat_prev: array of 4 (shape 4x1, row-major): mhat_prev_0, mhat_prev_1, mhat_prev_2, mhat_prev_3. Mhat(q(t-h)), 2x2 row-major (<f>_mhat)
+        u_prev: array of 2 (shape 2x1, row-major): up0, up1. u(t-h) applied
+        qdot_now: array of 2 (shape 2x1, row-major): qd_now0, qd_now1. qdot(t)
+        qdot_then: array of 2 (shape 2x1, row-major): qd_then0, qd_then1. qdot(t-span)
+        span: array of 1 (shape 1x1, row-major): span. h or 2h
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        H1hat: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_prev_0, _, mhat_prev_2, mhat_prev_3 = _flat(mhat_prev, 4, "mhat_prev")
+    up0, up1 = _flat(u_prev, 2, "u_prev")
+    qd_now0, qd_now1 = _flat(qdot_now, 2, "qdot_now")
+    qd_then0, qd_then1 = _flat(qdot_then, 2, "qdot_then")
+    span_1, = _flat(span, 1, "span")
+    del p  # not used by this function
+    _t0 = 1.0/span_1
+    _t1 = _t0*(qd_now0 - qd_then0)
+    _t2 = _t0*(qd_now1 - qd_then1)
+    H1hat = np.array([
+        -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0,
+        -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1,
+    ])
+    return H1hat
+
+
 def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
     so the norm is evaluated at the measured q in every step.
@@ -282,6 +319,119 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
         math.sqrt(2.0*_t48 + _t51*_t51 + _t52*_t52)/abs(_t48 - _t51*_t52),
     ])
     return norm
+
+
+def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
+    so the norm is evaluated at the measured q in every step.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    del p  # not used by this function
+    _t0 = mhat_2*mhat_2
+    norm = np.array([
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+    ])
+    return norm
+
+
+def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
+    evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
+    step's (17), which needs Mhat(q(t-h)).
+
+    Paper equations: (9).
+
+    Args:
+        q: array of 8 (shape 8x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left. measured q
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        M: array of 4 (shape 4x1, row-major). 2x2 row-major
+
+    operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
+    """
+    _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = theta_cart - theta_tractor
+    _t1 = math.sin(_t0)
+    _t2 = math.cos(_t0)
+    _t3 = 0.3*_t2
+    _t4 = 0.3*_t1
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = 2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = 1.0/radius_cart_right
+    _t12 = 1.0/radius_cart_left
+    _t13 = 0.5*radius_right
+    _t14 = 0.5*radius_left
+    _t15 = 1.0/radius_right
+    _t16 = 0.207*_t15
+    _t17 = 1.0/radius_left
+    _t18 = -0.207*_t17
+    _t19 = _t2 + _t6
+    _t20 = -_t4 + _t8
+    _t21 = _t11*_t19
+    _t22 = _t11*_t20
+    _t23 = _t2 - _t6
+    _t24 = -_t4 - _t8
+    _t25 = _t12*_t23
+    _t26 = _t12*_t24
+    _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t29 = J_x_tractor + _t27*_t5
+    _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7
+    _t31 = J_theta_tractor + _t28*_t7
+    _t32 = J_theta_cart*_t5 + _t27
+    _t33 = J_theta_cart*_t7 + _t28
+    _t34 = J_theta_right*_t15
+    _t35 = J_theta_right*_t16
+    _t36 = J_theta_left*_t17
+    _t37 = J_theta_left*_t18
+    _t38 = J_theta_cart_right*_t21
+    _t39 = J_theta_cart_right*_t22
+    _t40 = J_theta_cart_left*_t25
+    _t41 = J_theta_cart_left*_t26
+    _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5
+    _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5
+    _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7
+    _t45 = _t13*_t42 + _t43*_t9
+    _t46 = _t10*_t43 + _t14*_t42
+    _t47 = _t13*_t43 + _t44*_t9
+    _t48 = _t10*_t44 + _t14*_t43
+    _t49 = _t13*_t45 + _t47*_t9
+    _t50 = _t13*_t46 + _t48*_t9
+    _t51 = _t10*_t48 + _t14*_t46
+    M = np.array([_t49, _t50, _t50, _t51])
+    return M
 
 
 def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
@@ -455,6 +605,49 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     return u
 
 
+def minimal_tdc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (18).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    del p12  # not used by this function
+    del p22  # not used by this function
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    del p  # not used by this function
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t0*mhat_0 + _t1*mhat_2,
+        H1hat1 + _t0*mhat_2 + _t1*mhat_3,
+    ])
+    return u
+
+
 def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(minimal formulation) TDROC (16), (22), (25):
     u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
@@ -572,6 +765,63 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     ])
     s = np.array([_t9, _t10])
     s_norm = np.array([_t11])
+    return u, s, s_norm
+
+
+def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    + H1hat, s = B^T P e.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (22), (24), (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        gain: array of 1 (shape 1x1, row-major): gain. khat of (25)
+        eps: array of 1 (shape 1x1, row-major): eps. boundary layer
+        p: params with fields J_theta_cart, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        s: array of 2 (shape 2x1, row-major)
+        s_norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    p12_0, p12_1 = _flat(p12, 2, "p12")
+    p22_0, p22_1 = _flat(p22, 2, "p22")
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    gain_1, = _flat(gain, 1, "gain")
+    eps_1, = _flat(eps, 1, "eps")
+    del p  # not used by this function
+    _t0 = e0*p12_0 + edot0*p22_0
+    _t1 = e1*p12_1 + edot1*p22_1
+    _t2 = _norm(_t0, _t1)
+    _t3 = gain_1/max(_t2, eps_1)
+    _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t4*mhat_0 + _t5*mhat_2,
+        H1hat1 + _t4*mhat_2 + _t5*mhat_3,
+    ])
+    s = np.array([_t0, _t1])
+    s_norm = np.array([_t2])
     return u, s, s_norm
 
 

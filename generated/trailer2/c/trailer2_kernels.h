@@ -42,416 +42,60 @@ static inline void trailer2_k_tdroc_weighted_gain(const trailer2_real_t *minv_no
     gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
 }
 
-/* trailer2_k_minimal_tde_keep: the parameter-only part of trailer2_minimal_tde (trailer2_laws.h
-   documents it).
-   operations after CSE: 3 add, 16 mul, 7 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tde_keep(const trailer2_params_t *p,
-    const trailer2_real_t *span, trailer2_real_t kept[25])
+/* trailer2_k_minimal_tde_mhat_keep: the parameter-only part of trailer2_minimal_tde_mhat
+   (trailer2_laws.h documents it).
+   operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
+static inline void trailer2_k_minimal_tde_mhat_keep(const trailer2_params_t *p,
+    const trailer2_real_t *span, trailer2_real_t kept[1])
 {
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
+    (void)p;
     const trailer2_real_t span_1 = span[0];
     const trailer2_real_t _t0 = TRAILER2_LIT(1.0)/span_1;
-    const trailer2_real_t _t1 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t2 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t7 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t9 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.207)*_t9;
-    const trailer2_real_t _t11 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.207)*_t11;
-    const trailer2_real_t _t13 = J_theta_right*_t9;
-    const trailer2_real_t _t14 = J_theta_right*_t10;
-    const trailer2_real_t _t15 = J_theta_left*_t11;
-    const trailer2_real_t _t16 = J_theta_left*_t12;
-    const trailer2_real_t _t17 = _t11*_t15 + _t13*_t9;
-    const trailer2_real_t _t18 = _t11*_t16 + _t14*_t9;
-    const trailer2_real_t _t19 = _t10*_t14 + _t12*_t16;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart_left;
-    kept[5] = J_theta_cart_right;
-    kept[6] = J_theta_tractor;
-    kept[7] = J_x_tractor;
-    kept[8] = K_theta_cart_x_tractor;
-    kept[9] = K_theta_cart_x_tractor_2;
-    kept[10] = K_theta_cart2_x_tractor;
-    kept[11] = K_theta_cart2_x_tractor_2;
-    kept[12] = K_theta_tractor_x_tractor_2;
-    kept[13] = _t0;
-    kept[14] = _t1;
-    kept[15] = _t2;
-    kept[16] = _t3;
-    kept[17] = _t4;
-    kept[18] = _t5;
-    kept[19] = _t6;
-    kept[20] = _t7;
-    kept[21] = _t8;
-    kept[22] = _t17;
-    kept[23] = _t18;
-    kept[24] = _t19;
+    kept[0] = _t0;
 }
 
-/* trailer2_k_minimal_tde: the per-step part of trailer2_minimal_tde (trailer2_laws.h documents it).
-   operations after CSE: 72 add, 102 mul, 0 div, 4 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tde(const trailer2_real_t kept[25],
-    const trailer2_real_t *q_prev, const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
-    const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
+/* trailer2_k_minimal_tde_mhat: the per-step part of trailer2_minimal_tde_mhat (trailer2_laws.h
+   documents it).
+   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer2_k_minimal_tde_mhat(const trailer2_real_t kept[1],
+    const trailer2_real_t *mhat_prev, const trailer2_real_t *u_prev,
+    const trailer2_real_t *qdot_now, const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
 {
-    const trailer2_real_t qp2 = q_prev[2];
-    const trailer2_real_t qp3 = q_prev[3];
-    const trailer2_real_t _t20 = qp2 - qp3;
-    const trailer2_real_t _t21 = TRAILER2_SIN_BOUNDED(_t20);
-    const trailer2_real_t _t22 = TRAILER2_COS_BOUNDED(_t20);
-    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t22;
-    const trailer2_real_t qp4 = q_prev[4];
-    const trailer2_real_t _t24 = qp2 - qp4;
-    const trailer2_real_t _t25 = TRAILER2_SIN_BOUNDED(_t24);
-    const trailer2_real_t _t26 = TRAILER2_COS_BOUNDED(_t24);
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t26;
-    const trailer2_real_t _t28 = TRAILER2_LIT(0.85)*_t21;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.85)*_t22;
-    const trailer2_real_t _t30 = _t26*_t29;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.3)*_t21;
-    const trailer2_real_t _t32 = TRAILER2_LIT(0.3)*_t25;
-    const trailer2_real_t _t33 = _t25*_t29;
-    const trailer2_real_t _t34 = TRAILER2_LIT(1.6666666666666667)*_t21;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*_t34;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*_t36;
-    const trailer2_real_t _t38 = -_t25*_t28 - _t30;
-    const trailer2_real_t _t39 = -_t25 - _t34*_t38;
-    const trailer2_real_t _t40 = -TRAILER2_LIT(1.6666666666666667)*_t39;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t40;
-    const trailer2_real_t _t42 = _t26*_t28 - _t33;
-    const trailer2_real_t _t43 = _t34*_t42;
-    const trailer2_real_t _t44 = _t27 - _t36*_t38;
-    const trailer2_real_t _t45 = -TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.2)*_t45;
-    const trailer2_real_t _t47 = -_t32 + _t36*_t42;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[10];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor*_t25;
     const trailer2_real_t qd_now0 = qdot_now[0];
     const trailer2_real_t qd_then0 = qdot_then[0];
-    const trailer2_real_t _t0 = kept[13];
-    const trailer2_real_t _t49 = _t0*(qd_now0 - qd_then0);
+    const trailer2_real_t _t0 = kept[0];
+    const trailer2_real_t _t1 = _t0*(qd_now0 - qd_then0);
     const trailer2_real_t qd_now1 = qdot_now[1];
     const trailer2_real_t qd_then1 = qdot_then[1];
-    const trailer2_real_t _t50 = _t0*(qd_now1 - qd_then1);
-    const trailer2_real_t _t51 = _t22 + _t35;
-    const trailer2_real_t _t52 = _t31 + _t37;
-    const trailer2_real_t _t3 = kept[16];
-    const trailer2_real_t _t53 = _t3*_t51;
-    const trailer2_real_t _t54 = _t3*_t52;
-    const trailer2_real_t _t55 = _t22 - _t35;
-    const trailer2_real_t _t56 = _t31 - _t37;
-    const trailer2_real_t _t4 = kept[17];
-    const trailer2_real_t _t57 = _t4*_t55;
-    const trailer2_real_t _t58 = _t4*_t56;
-    const trailer2_real_t _t59 = _t26 + _t41 - _t43;
-    const trailer2_real_t _t60 = _t46 - _t47;
-    const trailer2_real_t _t5 = kept[18];
-    const trailer2_real_t _t61 = _t5*_t59;
-    const trailer2_real_t _t62 = _t5*_t60;
-    const trailer2_real_t _t63 = _t26 - _t41 - _t43;
-    const trailer2_real_t _t64 = -_t46 - _t47;
-    const trailer2_real_t _t6 = kept[19];
-    const trailer2_real_t _t65 = _t6*_t63;
-    const trailer2_real_t _t66 = _t6*_t64;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[8];
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[9];
-    const trailer2_real_t _t67 = -K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[11];
-    const trailer2_real_t _t68 = K_theta_cart2_x_tractor_2*_t26 - _t48;
-    const trailer2_real_t _t69 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t31;
-    const trailer2_real_t _t70 = K_theta_cart2_x_tractor*_t27 + K_theta_cart2_x_tractor_2*_t32;
-    const trailer2_real_t _t71 = K_theta_cart2_x_tractor*_t30
-            + K_theta_cart2_x_tractor_2*(-_t26*_t28 + _t33) + _t28*_t48;
-    const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t72 = J_x_tractor + _t34*_t67 + _t40*_t68;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[12];
-    const trailer2_real_t _t73 = K_theta_tractor_x_tractor_2 + _t36*_t67 + _t45*_t68;
-    const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t74 = J_theta_tractor + _t36*_t69 + _t45*_t70;
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t75 = J_theta_cart*_t34 + _t40*_t71 + _t67;
-    const trailer2_real_t _t76 = J_theta_cart*_t36 + _t45*_t71 + _t69;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t77 = J_theta_cart2*_t40 + _t34*_t71 + _t68;
-    const trailer2_real_t _t78 = J_theta_cart2*_t45 + _t36*_t71 + _t70;
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t79 = J_theta_cart_right*_t53;
-    const trailer2_real_t _t80 = J_theta_cart_right*_t54;
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t _t81 = J_theta_cart_left*_t57;
-    const trailer2_real_t _t82 = J_theta_cart_left*_t58;
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t _t83 = J_theta_cart2_right*_t61;
-    const trailer2_real_t _t84 = J_theta_cart2_right*_t62;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t _t85 = J_theta_cart2_left*_t65;
-    const trailer2_real_t _t86 = J_theta_cart2_left*_t66;
-    const trailer2_real_t _t17 = kept[22];
-    const trailer2_real_t _t87 = _t17 + _t34*_t75 + _t40*_t77 + _t53*_t79 + _t57*_t81 + _t61*_t83
-            + _t65*_t85 + _t72;
-    const trailer2_real_t _t18 = kept[23];
-    const trailer2_real_t _t88 = _t18 + _t34*_t76 + _t40*_t78 + _t53*_t80 + _t57*_t82 + _t61*_t84
-            + _t65*_t86 + _t73;
-    const trailer2_real_t _t19 = kept[24];
-    const trailer2_real_t _t89 = _t19 + _t36*_t76 + _t45*_t78 + _t54*_t80 + _t58*_t82 + _t62*_t84
-            + _t66*_t86 + _t74;
-    const trailer2_real_t _t1 = kept[14];
-    const trailer2_real_t _t7 = kept[20];
-    const trailer2_real_t _t90 = _t1*_t88 + _t7*_t87;
-    const trailer2_real_t _t2 = kept[15];
-    const trailer2_real_t _t8 = kept[21];
-    const trailer2_real_t _t91 = _t2*_t88 + _t8*_t87;
-    const trailer2_real_t _t92 = _t1*_t89 + _t7*_t88;
-    const trailer2_real_t _t93 = _t2*_t89 + _t8*_t88;
-    const trailer2_real_t _t94 = _t1*_t92 + _t7*_t90;
-    const trailer2_real_t _t95 = _t1*_t93 + _t7*_t91;
-    const trailer2_real_t _t96 = _t2*_t93 + _t8*_t91;
+    const trailer2_real_t _t2 = _t0*(qd_now1 - qd_then1);
+    const trailer2_real_t mhat_prev_0 = mhat_prev[0];
+    const trailer2_real_t mhat_prev_2 = mhat_prev[2];
+    const trailer2_real_t mhat_prev_3 = mhat_prev[3];
     const trailer2_real_t up0 = u_prev[0];
     const trailer2_real_t up1 = u_prev[1];
-    H1hat[0] = -_t49*_t94 - _t50*_t95 + up0;
-    H1hat[1] = -_t49*_t95 - _t50*_t96 + up1;
+    H1hat[0] = -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0;
+    H1hat[1] = -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1;
 }
 
-/* trailer2_k_minimal_minv_norm_keep: the parameter-only part of trailer2_minimal_minv_norm
-   (trailer2_laws.h documents it).
-   operations after CSE: 3 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_minv_norm_keep(const trailer2_params_t *p,
-    trailer2_real_t kept[24])
-{
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t0 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t1 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t2 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t7 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t8 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t9 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t10 = J_theta_right*_t4;
-    const trailer2_real_t _t11 = J_theta_left*_t5;
-    const trailer2_real_t _t12 = _t10*_t4 + _t11*_t5;
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.207)*_t4;
-    const trailer2_real_t _t14 = J_theta_right*_t13;
-    const trailer2_real_t _t15 = -TRAILER2_LIT(0.207)*_t5;
-    const trailer2_real_t _t16 = J_theta_left*_t15;
-    const trailer2_real_t _t17 = _t14*_t4 + _t16*_t5;
-    const trailer2_real_t _t18 = _t13*_t14 + _t15*_t16;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart_left;
-    kept[5] = J_theta_cart_right;
-    kept[6] = J_theta_tractor;
-    kept[7] = J_x_tractor;
-    kept[8] = K_theta_cart_x_tractor;
-    kept[9] = K_theta_cart_x_tractor_2;
-    kept[10] = K_theta_cart2_x_tractor;
-    kept[11] = K_theta_cart2_x_tractor_2;
-    kept[12] = K_theta_tractor_x_tractor_2;
-    kept[13] = _t0;
-    kept[14] = _t1;
-    kept[15] = _t2;
-    kept[16] = _t3;
-    kept[17] = _t6;
-    kept[18] = _t7;
-    kept[19] = _t8;
-    kept[20] = _t9;
-    kept[21] = _t12;
-    kept[22] = _t17;
-    kept[23] = _t18;
-}
-
-/* trailer2_k_minimal_minv_norm: the per-step part of trailer2_minimal_minv_norm (trailer2_laws.h
+/* trailer2_k_minimal_minv_norm_mhat: the body of trailer2_minimal_minv_norm_mhat (trailer2_laws.h
    documents it).
-   operations after CSE: 69 add, 103 mul, 1 div, 4 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer2_k_minimal_minv_norm(const trailer2_real_t kept[24],
-    const trailer2_real_t *q, trailer2_real_t *norm)
+   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+static inline void trailer2_k_minimal_minv_norm_mhat(const trailer2_params_t *p,
+    const trailer2_real_t *mhat, trailer2_real_t *norm)
 {
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t19 = -theta_tractor;
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t20 = _t19 + theta_cart;
-    const trailer2_real_t _t21 = TRAILER2_SIN_BOUNDED(_t20);
-    const trailer2_real_t _t22 = TRAILER2_COS_BOUNDED(_t20);
-    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t22;
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t24 = _t19 + theta_cart2;
-    const trailer2_real_t _t25 = TRAILER2_SIN_BOUNDED(_t24);
-    const trailer2_real_t _t26 = TRAILER2_COS_BOUNDED(_t24);
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t26;
-    const trailer2_real_t _t28 = TRAILER2_LIT(0.85)*_t25;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.85)*_t26;
-    const trailer2_real_t _t30 = _t22*_t29;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.3)*_t21;
-    const trailer2_real_t _t32 = TRAILER2_LIT(0.3)*_t25;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t21;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.2)*_t33;
-    const trailer2_real_t _t35 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t35;
-    const trailer2_real_t _t37 = -_t21*_t28 - _t30;
-    const trailer2_real_t _t38 = _t25 - _t33*_t37;
-    const trailer2_real_t _t39 = -TRAILER2_LIT(1.6666666666666667)*_t38;
-    const trailer2_real_t _t40 = TRAILER2_LIT(0.2)*_t39;
-    const trailer2_real_t _t41 = -_t21*_t29 + TRAILER2_LIT(0.85)*_t22*_t25;
-    const trailer2_real_t _t42 = _t33*_t41;
-    const trailer2_real_t _t43 = _t27 - _t35*_t37;
-    const trailer2_real_t _t44 = -TRAILER2_LIT(1.6666666666666667)*_t43;
-    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*_t44;
-    const trailer2_real_t _t46 = _t32 + _t35*_t41;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[10];
-    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t25;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[11];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t26;
-    const trailer2_real_t _t49 = TRAILER2_LIT(0.85)*_t21;
-    const trailer2_real_t _t50 = _t22 + _t34;
-    const trailer2_real_t _t6 = kept[17];
-    const trailer2_real_t _t51 = _t50*_t6;
-    const trailer2_real_t _t52 = _t22 - _t34;
-    const trailer2_real_t _t7 = kept[18];
-    const trailer2_real_t _t53 = _t52*_t7;
-    const trailer2_real_t _t54 = _t26 + _t40 - _t42;
-    const trailer2_real_t _t8 = kept[19];
-    const trailer2_real_t _t55 = _t54*_t8;
-    const trailer2_real_t _t56 = _t26 - _t40 - _t42;
-    const trailer2_real_t _t9 = kept[20];
-    const trailer2_real_t _t57 = _t56*_t9;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[8];
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[9];
-    const trailer2_real_t _t58 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t59 = _t47 + _t48;
-    const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t60 = J_x_tractor + _t33*_t58 + _t39*_t59;
-    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t30 - K_theta_cart2_x_tractor_2*_t22*_t28
-            + _t49*(_t47 + _t48);
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t62 = J_theta_cart*_t33 + _t39*_t61 + _t58;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t63 = J_theta_cart2*_t39 + _t33*_t61 + _t59;
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t64 = J_theta_cart_right*_t51;
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t _t65 = J_theta_cart_left*_t53;
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t _t66 = J_theta_cart2_right*_t55;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t _t67 = J_theta_cart2_left*_t57;
-    const trailer2_real_t _t12 = kept[21];
-    const trailer2_real_t _t68 = _t12 + _t33*_t62 + _t39*_t63 + _t51*_t64 + _t53*_t65 + _t55*_t66
-            + _t57*_t67 + _t60;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[12];
-    const trailer2_real_t _t69 = K_theta_tractor_x_tractor_2 + _t35*_t58 + _t44*_t59;
-    const trailer2_real_t _t70 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t31;
-    const trailer2_real_t _t71 = J_theta_cart*_t35 + _t44*_t61 + _t70;
-    const trailer2_real_t _t72 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t32;
-    const trailer2_real_t _t73 = J_theta_cart2*_t44 + _t35*_t61 + _t72;
-    const trailer2_real_t _t74 = -_t31 + _t36;
-    const trailer2_real_t _t75 = _t6*_t74;
-    const trailer2_real_t _t76 = J_theta_cart_right*_t75;
-    const trailer2_real_t _t77 = -_t31 - _t36;
-    const trailer2_real_t _t78 = _t7*_t77;
-    const trailer2_real_t _t79 = J_theta_cart_left*_t78;
-    const trailer2_real_t _t80 = _t45 - _t46;
-    const trailer2_real_t _t81 = _t8*_t80;
-    const trailer2_real_t _t82 = J_theta_cart2_right*_t81;
-    const trailer2_real_t _t83 = -_t45 - _t46;
-    const trailer2_real_t _t84 = _t83*_t9;
-    const trailer2_real_t _t85 = J_theta_cart2_left*_t84;
-    const trailer2_real_t _t17 = kept[22];
-    const trailer2_real_t _t86 = _t17 + _t33*_t71 + _t39*_t73 + _t51*_t76 + _t53*_t79 + _t55*_t82
-            + _t57*_t85 + _t69;
-    const trailer2_real_t _t2 = kept[15];
-    const trailer2_real_t _t3 = kept[16];
-    const trailer2_real_t _t87 = _t2*_t86 + _t3*_t68;
-    const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t88 = J_theta_tractor + _t35*_t70 + _t44*_t72;
-    const trailer2_real_t _t18 = kept[23];
-    const trailer2_real_t _t89 = _t18 + _t35*_t71 + _t44*_t73 + _t75*_t76 + _t78*_t79 + _t81*_t82
-            + _t84*_t85 + _t88;
-    const trailer2_real_t _t90 = _t2*_t89 + _t3*_t86;
-    const trailer2_real_t _t0 = kept[13];
-    const trailer2_real_t _t1 = kept[14];
-    const trailer2_real_t _t91 = _t0*_t90 + _t1*_t87;
-    const trailer2_real_t _t92 = _t91*_t91;
-    const trailer2_real_t _t93 = _t0*_t86 + _t1*_t68;
-    const trailer2_real_t _t94 = _t0*_t89 + _t1*_t86;
-    const trailer2_real_t _t95 = _t0*_t94 + _t1*_t93;
-    const trailer2_real_t _t96 = _t2*_t90 + _t3*_t87;
-    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t92 + _t95*_t95 + _t96*_t96)/TRAILER2_FABS(_t92
-            - _t95*_t96);
+    (void)p;
+    const trailer2_real_t mhat_2 = mhat[2];
+    const trailer2_real_t _t0 = mhat_2*mhat_2;
+    const trailer2_real_t mhat_0 = mhat[0];
+    const trailer2_real_t mhat_3 = mhat[3];
+    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/TRAILER2_FABS(_t0
+            - mhat_0*mhat_3);
 }
 
-/* trailer2_k_minimal_omega_difference: the body of trailer2_minimal_omega_difference
-   (trailer2_laws.h documents it).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer2_k_minimal_omega_difference(const trailer2_real_t *newer,
-    const trailer2_real_t *older, trailer2_real_t *norm)
-{
-    const trailer2_real_t Om_new0 = newer[0];
-    const trailer2_real_t Om_old0 = older[0];
-    const trailer2_real_t _t0 = Om_new0 - Om_old0;
-    const trailer2_real_t Om_new1 = newer[1];
-    const trailer2_real_t Om_old1 = older[1];
-    const trailer2_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer2_norm2(_t0, _t1);
-}
-
-/* trailer2_k_minimal_tdc_law_keep: the parameter-only part of trailer2_minimal_tdc_law
-   (trailer2_laws.h documents it).
+/* trailer2_k_minimal_mhat_keep: the parameter-only part of trailer2_minimal_mhat (trailer2_laws.h
+   documents it).
    operations after CSE: 3 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tdc_law_keep(const trailer2_params_t *p,
+static inline void trailer2_k_minimal_mhat_keep(const trailer2_params_t *p,
     trailer2_real_t kept[24])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -520,17 +164,12 @@ static inline void trailer2_k_minimal_tdc_law_keep(const trailer2_params_t *p,
     kept[23] = _t18;
 }
 
-/* trailer2_k_minimal_tdc_law: the per-step part of trailer2_minimal_tdc_law (trailer2_laws.h
-   documents it).
-   operations after CSE: 74 add, 106 mul, 0 div, 4 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[24],
-    const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
-    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
-    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
-    trailer2_real_t *u)
+/* trailer2_k_minimal_mhat: the per-step part of trailer2_minimal_mhat (trailer2_laws.h documents
+   it).
+   operations after CSE: 66 add, 98 mul, 0 div, 4 sin/cos, 0 sqrt */
+static inline void trailer2_k_minimal_mhat(const trailer2_real_t kept[24], const trailer2_real_t *q,
+    trailer2_real_t *M)
 {
-    (void)p12;
-    (void)p22;
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t19 = -theta_tractor;
     const trailer2_real_t theta_cart = q[3];
@@ -567,243 +206,175 @@ static inline void trailer2_k_minimal_tdc_law(const trailer2_real_t kept[24],
     const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[11];
     const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t26;
     const trailer2_real_t _t49 = TRAILER2_LIT(0.85)*_t21;
+    const trailer2_real_t _t50 = _t22 + _t34;
+    const trailer2_real_t _t51 = -_t31 + _t36;
+    const trailer2_real_t _t2 = kept[15];
+    const trailer2_real_t _t52 = _t2*_t50;
+    const trailer2_real_t _t53 = _t2*_t51;
+    const trailer2_real_t _t54 = _t22 - _t34;
+    const trailer2_real_t _t55 = -_t31 - _t36;
+    const trailer2_real_t _t3 = kept[16];
+    const trailer2_real_t _t56 = _t3*_t54;
+    const trailer2_real_t _t57 = _t3*_t55;
+    const trailer2_real_t _t58 = _t26 + _t40 - _t42;
+    const trailer2_real_t _t59 = _t45 - _t46;
+    const trailer2_real_t _t4 = kept[17];
+    const trailer2_real_t _t60 = _t4*_t58;
+    const trailer2_real_t _t61 = _t4*_t59;
+    const trailer2_real_t _t62 = _t26 - _t40 - _t42;
+    const trailer2_real_t _t63 = -_t45 - _t46;
+    const trailer2_real_t _t5 = kept[18];
+    const trailer2_real_t _t64 = _t5*_t62;
+    const trailer2_real_t _t65 = _t5*_t63;
+    const trailer2_real_t K_theta_cart_x_tractor = kept[8];
+    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[9];
+    const trailer2_real_t _t66 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
+    const trailer2_real_t _t67 = _t47 + _t48;
+    const trailer2_real_t _t68 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t31;
+    const trailer2_real_t _t69 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t32;
+    const trailer2_real_t _t70 = K_theta_cart2_x_tractor*_t30 - K_theta_cart2_x_tractor_2*_t22*_t28
+            + _t49*(_t47 + _t48);
+    const trailer2_real_t J_x_tractor = kept[7];
+    const trailer2_real_t _t71 = J_x_tractor + _t33*_t66 + _t39*_t67;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[12];
+    const trailer2_real_t _t72 = K_theta_tractor_x_tractor_2 + _t35*_t66 + _t44*_t67;
+    const trailer2_real_t J_theta_tractor = kept[6];
+    const trailer2_real_t _t73 = J_theta_tractor + _t35*_t68 + _t44*_t69;
+    const trailer2_real_t J_theta_cart = kept[0];
+    const trailer2_real_t _t74 = J_theta_cart*_t33 + _t39*_t70 + _t66;
+    const trailer2_real_t _t75 = J_theta_cart*_t35 + _t44*_t70 + _t68;
+    const trailer2_real_t J_theta_cart2 = kept[1];
+    const trailer2_real_t _t76 = J_theta_cart2*_t39 + _t33*_t70 + _t67;
+    const trailer2_real_t _t77 = J_theta_cart2*_t44 + _t35*_t70 + _t69;
+    const trailer2_real_t J_theta_cart_right = kept[5];
+    const trailer2_real_t _t78 = J_theta_cart_right*_t52;
+    const trailer2_real_t _t79 = J_theta_cart_right*_t53;
+    const trailer2_real_t J_theta_cart_left = kept[4];
+    const trailer2_real_t _t80 = J_theta_cart_left*_t56;
+    const trailer2_real_t _t81 = J_theta_cart_left*_t57;
+    const trailer2_real_t J_theta_cart2_right = kept[3];
+    const trailer2_real_t _t82 = J_theta_cart2_right*_t60;
+    const trailer2_real_t _t83 = J_theta_cart2_right*_t61;
+    const trailer2_real_t J_theta_cart2_left = kept[2];
+    const trailer2_real_t _t84 = J_theta_cart2_left*_t64;
+    const trailer2_real_t _t85 = J_theta_cart2_left*_t65;
+    const trailer2_real_t _t16 = kept[21];
+    const trailer2_real_t _t86 = _t16 + _t33*_t74 + _t39*_t76 + _t52*_t78 + _t56*_t80 + _t60*_t82
+            + _t64*_t84 + _t71;
+    const trailer2_real_t _t17 = kept[22];
+    const trailer2_real_t _t87 = _t17 + _t33*_t75 + _t39*_t77 + _t52*_t79 + _t56*_t81 + _t60*_t83
+            + _t64*_t85 + _t72;
+    const trailer2_real_t _t18 = kept[23];
+    const trailer2_real_t _t88 = _t18 + _t35*_t75 + _t44*_t77 + _t53*_t79 + _t57*_t81 + _t61*_t83
+            + _t65*_t85 + _t73;
+    const trailer2_real_t _t0 = kept[13];
+    const trailer2_real_t _t6 = kept[19];
+    const trailer2_real_t _t89 = _t0*_t87 + _t6*_t86;
+    const trailer2_real_t _t1 = kept[14];
+    const trailer2_real_t _t7 = kept[20];
+    const trailer2_real_t _t90 = _t1*_t87 + _t7*_t86;
+    const trailer2_real_t _t91 = _t0*_t88 + _t6*_t87;
+    const trailer2_real_t _t92 = _t1*_t88 + _t7*_t87;
+    const trailer2_real_t _t93 = _t0*_t91 + _t6*_t89;
+    const trailer2_real_t _t94 = _t0*_t92 + _t6*_t90;
+    const trailer2_real_t _t95 = _t1*_t92 + _t7*_t90;
+    M[0] = _t93;
+    M[1] = _t94;
+    M[2] = _t94;
+    M[3] = _t95;
+}
+
+/* trailer2_k_minimal_omega_difference: the body of trailer2_minimal_omega_difference
+   (trailer2_laws.h documents it).
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
+static inline void trailer2_k_minimal_omega_difference(const trailer2_real_t *newer,
+    const trailer2_real_t *older, trailer2_real_t *norm)
+{
+    const trailer2_real_t Om_new0 = newer[0];
+    const trailer2_real_t Om_old0 = older[0];
+    const trailer2_real_t _t0 = Om_new0 - Om_old0;
+    const trailer2_real_t Om_new1 = newer[1];
+    const trailer2_real_t Om_old1 = older[1];
+    const trailer2_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = trailer2_norm2(_t0, _t1);
+}
+
+/* trailer2_k_minimal_tdc_law_mhat: the body of trailer2_minimal_tdc_law_mhat (trailer2_laws.h
+   documents it).
+   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer2_k_minimal_tdc_law_mhat(const trailer2_params_t *p,
+    const trailer2_real_t *mhat, const trailer2_real_t *e, const trailer2_real_t *edot,
+    const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
+    const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
+    trailer2_real_t *u)
+{
+    (void)p;
+    (void)p12;
+    (void)p22;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t50 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t51 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t _t52 = _t22 + _t34;
-    const trailer2_real_t _t53 = -_t31 + _t36;
-    const trailer2_real_t _t2 = kept[15];
-    const trailer2_real_t _t54 = _t2*_t52;
-    const trailer2_real_t _t55 = _t2*_t53;
-    const trailer2_real_t _t56 = _t22 - _t34;
-    const trailer2_real_t _t57 = -_t31 - _t36;
-    const trailer2_real_t _t3 = kept[16];
-    const trailer2_real_t _t58 = _t3*_t56;
-    const trailer2_real_t _t59 = _t3*_t57;
-    const trailer2_real_t _t60 = _t26 + _t40 - _t42;
-    const trailer2_real_t _t61 = _t45 - _t46;
-    const trailer2_real_t _t4 = kept[17];
-    const trailer2_real_t _t62 = _t4*_t60;
-    const trailer2_real_t _t63 = _t4*_t61;
-    const trailer2_real_t _t64 = _t26 - _t40 - _t42;
-    const trailer2_real_t _t65 = -_t45 - _t46;
-    const trailer2_real_t _t5 = kept[18];
-    const trailer2_real_t _t66 = _t5*_t64;
-    const trailer2_real_t _t67 = _t5*_t65;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[8];
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[9];
-    const trailer2_real_t _t68 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t69 = _t47 + _t48;
-    const trailer2_real_t _t70 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t31;
-    const trailer2_real_t _t71 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t32;
-    const trailer2_real_t _t72 = K_theta_cart2_x_tractor*_t30 - K_theta_cart2_x_tractor_2*_t22*_t28
-            + _t49*(_t47 + _t48);
-    const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t73 = J_x_tractor + _t33*_t68 + _t39*_t69;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[12];
-    const trailer2_real_t _t74 = K_theta_tractor_x_tractor_2 + _t35*_t68 + _t44*_t69;
-    const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t75 = J_theta_tractor + _t35*_t70 + _t44*_t71;
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t76 = J_theta_cart*_t33 + _t39*_t72 + _t68;
-    const trailer2_real_t _t77 = J_theta_cart*_t35 + _t44*_t72 + _t70;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t78 = J_theta_cart2*_t39 + _t33*_t72 + _t69;
-    const trailer2_real_t _t79 = J_theta_cart2*_t44 + _t35*_t72 + _t71;
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t80 = J_theta_cart_right*_t54;
-    const trailer2_real_t _t81 = J_theta_cart_right*_t55;
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t _t82 = J_theta_cart_left*_t58;
-    const trailer2_real_t _t83 = J_theta_cart_left*_t59;
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t _t84 = J_theta_cart2_right*_t62;
-    const trailer2_real_t _t85 = J_theta_cart2_right*_t63;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t _t86 = J_theta_cart2_left*_t66;
-    const trailer2_real_t _t87 = J_theta_cart2_left*_t67;
-    const trailer2_real_t _t16 = kept[21];
-    const trailer2_real_t _t88 = _t16 + _t33*_t76 + _t39*_t78 + _t54*_t80 + _t58*_t82 + _t62*_t84
-            + _t66*_t86 + _t73;
-    const trailer2_real_t _t17 = kept[22];
-    const trailer2_real_t _t89 = _t17 + _t33*_t77 + _t39*_t79 + _t54*_t81 + _t58*_t83 + _t62*_t85
-            + _t66*_t87 + _t74;
-    const trailer2_real_t _t18 = kept[23];
-    const trailer2_real_t _t90 = _t18 + _t35*_t77 + _t44*_t79 + _t55*_t81 + _t59*_t83 + _t63*_t85
-            + _t67*_t87 + _t75;
-    const trailer2_real_t _t0 = kept[13];
-    const trailer2_real_t _t6 = kept[19];
-    const trailer2_real_t _t91 = _t0*_t89 + _t6*_t88;
-    const trailer2_real_t _t1 = kept[14];
-    const trailer2_real_t _t7 = kept[20];
-    const trailer2_real_t _t92 = _t1*_t89 + _t7*_t88;
-    const trailer2_real_t _t93 = _t0*_t90 + _t6*_t89;
-    const trailer2_real_t _t94 = _t1*_t90 + _t7*_t89;
-    const trailer2_real_t _t95 = _t0*_t93 + _t6*_t91;
-    const trailer2_real_t _t96 = _t0*_t94 + _t6*_t92;
-    const trailer2_real_t _t97 = _t1*_t94 + _t7*_t92;
+    const trailer2_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t mhat_0 = mhat[0];
+    const trailer2_real_t mhat_2 = mhat[2];
+    const trailer2_real_t mhat_3 = mhat[3];
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t50*_t95 + _t51*_t96;
-    u[1] = H1hat1 + _t50*_t96 + _t51*_t97;
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2;
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3;
 }
 
-/* trailer2_k_minimal_tdroc_law: the per-step part of trailer2_minimal_tdroc_law (trailer2_laws.h
+/* trailer2_k_minimal_tdroc_law_mhat: the body of trailer2_minimal_tdroc_law_mhat (trailer2_laws.h
    documents it).
-   operations after CSE: 79 add, 114 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer2_k_minimal_tdroc_law(const trailer2_real_t kept[24],
-    const trailer2_real_t *q, const trailer2_real_t *e, const trailer2_real_t *edot,
+   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
+    const trailer2_real_t *mhat, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
     const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
     const trailer2_real_t *gain, const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s,
     trailer2_real_t *s_norm)
 {
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t19 = -theta_tractor;
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t20 = _t19 + theta_cart;
-    const trailer2_real_t _t21 = TRAILER2_SIN_BOUNDED(_t20);
-    const trailer2_real_t _t22 = TRAILER2_COS_BOUNDED(_t20);
-    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t22;
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t24 = _t19 + theta_cart2;
-    const trailer2_real_t _t25 = TRAILER2_SIN_BOUNDED(_t24);
-    const trailer2_real_t _t26 = TRAILER2_COS_BOUNDED(_t24);
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t26;
-    const trailer2_real_t _t28 = TRAILER2_LIT(0.85)*_t25;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.85)*_t26;
-    const trailer2_real_t _t30 = _t22*_t29;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.3)*_t21;
-    const trailer2_real_t _t32 = TRAILER2_LIT(0.3)*_t25;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(1.6666666666666667)*_t21;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.2)*_t33;
-    const trailer2_real_t _t35 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t36 = TRAILER2_LIT(0.2)*_t35;
-    const trailer2_real_t _t37 = -_t21*_t28 - _t30;
-    const trailer2_real_t _t38 = _t25 - _t33*_t37;
-    const trailer2_real_t _t39 = -TRAILER2_LIT(1.6666666666666667)*_t38;
-    const trailer2_real_t _t40 = TRAILER2_LIT(0.2)*_t39;
-    const trailer2_real_t _t41 = -_t21*_t29 + TRAILER2_LIT(0.85)*_t22*_t25;
-    const trailer2_real_t _t42 = _t33*_t41;
-    const trailer2_real_t _t43 = _t27 - _t35*_t37;
-    const trailer2_real_t _t44 = -TRAILER2_LIT(1.6666666666666667)*_t43;
-    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*_t44;
-    const trailer2_real_t _t46 = _t32 + _t35*_t41;
-    const trailer2_real_t K_theta_cart2_x_tractor = kept[10];
-    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t25;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = kept[11];
-    const trailer2_real_t _t48 = K_theta_cart2_x_tractor_2*_t26;
-    const trailer2_real_t _t49 = TRAILER2_LIT(0.85)*_t21;
+    (void)p;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t p12_0 = p12[0];
     const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t50 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t _t0 = e0*p12_0 + edot0*p22_0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t p12_1 = p12[1];
     const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t51 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t52 = trailer2_norm2(_t50, _t51);
+    const trailer2_real_t _t1 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t2 = trailer2_norm2(_t0, _t1);
     const trailer2_real_t gain_1 = gain[0];
     const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t53 = gain_1/TRAILER2_FMAX(_t52, eps_1);
+    const trailer2_real_t _t3 = gain_1/TRAILER2_FMAX(_t2, eps_1);
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t54 = _t50*_t53 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t55 = _t51*_t53 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t _t56 = _t22 + _t34;
-    const trailer2_real_t _t57 = -_t31 + _t36;
-    const trailer2_real_t _t2 = kept[15];
-    const trailer2_real_t _t58 = _t2*_t56;
-    const trailer2_real_t _t59 = _t2*_t57;
-    const trailer2_real_t _t60 = _t22 - _t34;
-    const trailer2_real_t _t61 = -_t31 - _t36;
-    const trailer2_real_t _t3 = kept[16];
-    const trailer2_real_t _t62 = _t3*_t60;
-    const trailer2_real_t _t63 = _t3*_t61;
-    const trailer2_real_t _t64 = _t26 + _t40 - _t42;
-    const trailer2_real_t _t65 = _t45 - _t46;
-    const trailer2_real_t _t4 = kept[17];
-    const trailer2_real_t _t66 = _t4*_t64;
-    const trailer2_real_t _t67 = _t4*_t65;
-    const trailer2_real_t _t68 = _t26 - _t40 - _t42;
-    const trailer2_real_t _t69 = -_t45 - _t46;
-    const trailer2_real_t _t5 = kept[18];
-    const trailer2_real_t _t70 = _t5*_t68;
-    const trailer2_real_t _t71 = _t5*_t69;
-    const trailer2_real_t K_theta_cart_x_tractor = kept[8];
-    const trailer2_real_t K_theta_cart_x_tractor_2 = kept[9];
-    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t73 = _t47 + _t48;
-    const trailer2_real_t _t74 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t31;
-    const trailer2_real_t _t75 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t32;
-    const trailer2_real_t _t76 = K_theta_cart2_x_tractor*_t30 - K_theta_cart2_x_tractor_2*_t22*_t28
-            + _t49*(_t47 + _t48);
-    const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t77 = J_x_tractor + _t33*_t72 + _t39*_t73;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[12];
-    const trailer2_real_t _t78 = K_theta_tractor_x_tractor_2 + _t35*_t72 + _t44*_t73;
-    const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t79 = J_theta_tractor + _t35*_t74 + _t44*_t75;
-    const trailer2_real_t J_theta_cart = kept[0];
-    const trailer2_real_t _t80 = J_theta_cart*_t33 + _t39*_t76 + _t72;
-    const trailer2_real_t _t81 = J_theta_cart*_t35 + _t44*_t76 + _t74;
-    const trailer2_real_t J_theta_cart2 = kept[1];
-    const trailer2_real_t _t82 = J_theta_cart2*_t39 + _t33*_t76 + _t73;
-    const trailer2_real_t _t83 = J_theta_cart2*_t44 + _t35*_t76 + _t75;
-    const trailer2_real_t J_theta_cart_right = kept[5];
-    const trailer2_real_t _t84 = J_theta_cart_right*_t58;
-    const trailer2_real_t _t85 = J_theta_cart_right*_t59;
-    const trailer2_real_t J_theta_cart_left = kept[4];
-    const trailer2_real_t _t86 = J_theta_cart_left*_t62;
-    const trailer2_real_t _t87 = J_theta_cart_left*_t63;
-    const trailer2_real_t J_theta_cart2_right = kept[3];
-    const trailer2_real_t _t88 = J_theta_cart2_right*_t66;
-    const trailer2_real_t _t89 = J_theta_cart2_right*_t67;
-    const trailer2_real_t J_theta_cart2_left = kept[2];
-    const trailer2_real_t _t90 = J_theta_cart2_left*_t70;
-    const trailer2_real_t _t91 = J_theta_cart2_left*_t71;
-    const trailer2_real_t _t16 = kept[21];
-    const trailer2_real_t _t92 = _t16 + _t33*_t80 + _t39*_t82 + _t58*_t84 + _t62*_t86 + _t66*_t88
-            + _t70*_t90 + _t77;
-    const trailer2_real_t _t17 = kept[22];
-    const trailer2_real_t _t93 = _t17 + _t33*_t81 + _t39*_t83 + _t58*_t85 + _t62*_t87 + _t66*_t89
-            + _t70*_t91 + _t78;
-    const trailer2_real_t _t18 = kept[23];
-    const trailer2_real_t _t94 = _t18 + _t35*_t81 + _t44*_t83 + _t59*_t85 + _t63*_t87 + _t67*_t89
-            + _t71*_t91 + _t79;
-    const trailer2_real_t _t0 = kept[13];
-    const trailer2_real_t _t6 = kept[19];
-    const trailer2_real_t _t95 = _t0*_t93 + _t6*_t92;
-    const trailer2_real_t _t1 = kept[14];
-    const trailer2_real_t _t7 = kept[20];
-    const trailer2_real_t _t96 = _t1*_t93 + _t7*_t92;
-    const trailer2_real_t _t97 = _t0*_t94 + _t6*_t93;
-    const trailer2_real_t _t98 = _t1*_t94 + _t7*_t93;
-    const trailer2_real_t _t99 = _t0*_t97 + _t6*_t95;
-    const trailer2_real_t _t100 = _t0*_t98 + _t6*_t96;
-    const trailer2_real_t _t101 = _t1*_t98 + _t7*_t96;
+    const trailer2_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t mhat_0 = mhat[0];
+    const trailer2_real_t mhat_2 = mhat[2];
+    const trailer2_real_t mhat_3 = mhat[3];
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t100*_t55 + _t54*_t99;
-    u[1] = H1hat1 + _t100*_t54 + _t101*_t55;
-    s[0] = _t50;
-    s[1] = _t51;
-    s_norm[0] = _t52;
+    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
+    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
+    s[0] = _t0;
+    s[1] = _t1;
+    s_norm[0] = _t2;
 }
 
 /* trailer2_k_minimal_roc_law_keep: the parameter-only part of trailer2_minimal_roc_law

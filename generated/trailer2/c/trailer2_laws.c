@@ -36,9 +36,148 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
 {
-    trailer2_real_t kept[25];
-    trailer2_k_minimal_tde_keep(p, span, kept);
-    trailer2_k_minimal_tde(kept, q_prev, u_prev, qdot_now, qdot_then, H1hat);
+    const trailer2_real_t qp2 = q_prev[2];
+    const trailer2_real_t qp3 = q_prev[3];
+    const trailer2_real_t _t0 = qp2 - qp3;
+    const trailer2_real_t _t1 = TRAILER2_SIN_BOUNDED(_t0);
+    const trailer2_real_t _t2 = TRAILER2_COS_BOUNDED(_t0);
+    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t qp4 = q_prev[4];
+    const trailer2_real_t _t4 = qp2 - qp4;
+    const trailer2_real_t _t5 = TRAILER2_SIN_BOUNDED(_t4);
+    const trailer2_real_t _t6 = TRAILER2_COS_BOUNDED(_t4);
+    const trailer2_real_t _t7 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t1;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t10 = _t6*_t9;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t1;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t5;
+    const trailer2_real_t _t13 = _t5*_t9;
+    const trailer2_real_t _t14 = TRAILER2_LIT(1.6666666666666667)*_t1;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t3;
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
+    const trailer2_real_t _t18 = -_t10 - _t5*_t8;
+    const trailer2_real_t _t19 = -_t14*_t18 - _t5;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
+    const trailer2_real_t _t22 = -_t13 + _t6*_t8;
+    const trailer2_real_t _t23 = _t14*_t22;
+    const trailer2_real_t _t24 = -_t16*_t18 + _t7;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
+    const trailer2_real_t _t27 = -_t12 + _t16*_t22;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t5;
+    const trailer2_real_t span_1 = span[0];
+    const trailer2_real_t _t29 = TRAILER2_LIT(1.0)/span_1;
+    const trailer2_real_t qd_now0 = qdot_now[0];
+    const trailer2_real_t qd_then0 = qdot_then[0];
+    const trailer2_real_t _t30 = _t29*(qd_now0 - qd_then0);
+    const trailer2_real_t qd_now1 = qdot_now[1];
+    const trailer2_real_t qd_then1 = qdot_then[1];
+    const trailer2_real_t _t31 = _t29*(qd_now1 - qd_then1);
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t32 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t33 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t34 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.207)*_t40;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.207)*_t42;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t44 = J_theta_right*_t40;
+    const trailer2_real_t _t45 = J_theta_right*_t41;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t _t46 = J_theta_left*_t42;
+    const trailer2_real_t _t47 = J_theta_left*_t43;
+    const trailer2_real_t _t48 = _t15 + _t2;
+    const trailer2_real_t _t49 = _t11 + _t17;
+    const trailer2_real_t _t50 = _t34*_t48;
+    const trailer2_real_t _t51 = _t34*_t49;
+    const trailer2_real_t _t52 = -_t15 + _t2;
+    const trailer2_real_t _t53 = _t11 - _t17;
+    const trailer2_real_t _t54 = _t35*_t52;
+    const trailer2_real_t _t55 = _t35*_t53;
+    const trailer2_real_t _t56 = _t21 - _t23 + _t6;
+    const trailer2_real_t _t57 = _t26 - _t27;
+    const trailer2_real_t _t58 = _t36*_t56;
+    const trailer2_real_t _t59 = _t36*_t57;
+    const trailer2_real_t _t60 = -_t21 - _t23 + _t6;
+    const trailer2_real_t _t61 = -_t26 - _t27;
+    const trailer2_real_t _t62 = _t37*_t60;
+    const trailer2_real_t _t63 = _t37*_t61;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t64 = -K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t65 = K_theta_cart2_x_tractor_2*_t6 - _t28;
+    const trailer2_real_t _t66 = K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t11;
+    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t7 + K_theta_cart2_x_tractor_2*_t12;
+    const trailer2_real_t _t68 = K_theta_cart2_x_tractor*_t10 + K_theta_cart2_x_tractor_2*_t13
+            - K_theta_cart2_x_tractor_2*_t6*_t8 + _t28*_t8;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t69 = J_x_tractor + _t14*_t64 + _t20*_t65;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor_2 + _t16*_t64 + _t25*_t65;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t71 = J_theta_tractor + _t16*_t66 + _t25*_t67;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t72 = J_theta_cart*_t14 + _t20*_t68 + _t64;
+    const trailer2_real_t _t73 = J_theta_cart*_t16 + _t25*_t68 + _t66;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t74 = J_theta_cart2*_t20 + _t14*_t68 + _t65;
+    const trailer2_real_t _t75 = J_theta_cart2*_t25 + _t16*_t68 + _t67;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t76 = J_theta_cart_right*_t50;
+    const trailer2_real_t _t77 = J_theta_cart_right*_t51;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t78 = J_theta_cart_left*_t54;
+    const trailer2_real_t _t79 = J_theta_cart_left*_t55;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t80 = J_theta_cart2_right*_t58;
+    const trailer2_real_t _t81 = J_theta_cart2_right*_t59;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t82 = J_theta_cart2_left*_t62;
+    const trailer2_real_t _t83 = J_theta_cart2_left*_t63;
+    const trailer2_real_t _t84 = _t14*_t72 + _t20*_t74 + _t40*_t44 + _t42*_t46 + _t50*_t76
+            + _t54*_t78 + _t58*_t80 + _t62*_t82 + _t69;
+    const trailer2_real_t _t85 = _t14*_t73 + _t20*_t75 + _t40*_t45 + _t42*_t47 + _t50*_t77
+            + _t54*_t79 + _t58*_t81 + _t62*_t83 + _t70;
+    const trailer2_real_t _t86 = _t16*_t73 + _t25*_t75 + _t41*_t45 + _t43*_t47 + _t51*_t77
+            + _t55*_t79 + _t59*_t81 + _t63*_t83 + _t71;
+    const trailer2_real_t _t87 = _t32*_t85 + _t38*_t84;
+    const trailer2_real_t _t88 = _t33*_t85 + _t39*_t84;
+    const trailer2_real_t _t89 = _t32*_t86 + _t38*_t85;
+    const trailer2_real_t _t90 = _t33*_t86 + _t39*_t85;
+    const trailer2_real_t _t91 = _t32*_t89 + _t38*_t87;
+    const trailer2_real_t _t92 = _t32*_t90 + _t38*_t88;
+    const trailer2_real_t _t93 = _t33*_t90 + _t39*_t88;
+    const trailer2_real_t up0 = u_prev[0];
+    const trailer2_real_t up1 = u_prev[1];
+    H1hat[0] = -_t30*_t91 - _t31*_t92 + up0;
+    H1hat[1] = -_t30*_t92 - _t31*_t93 + up1;
+}
+
+/* trailer2_minimal_tde_mhat: documented in trailer2_laws.h.
+   operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt */
+void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat_prev,
+    const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
+    const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
+{
+    trailer2_real_t kept[1];
+    trailer2_k_minimal_tde_mhat_keep(p, span, kept);
+    trailer2_k_minimal_tde_mhat(kept, mhat_prev, u_prev, qdot_now, qdot_then, H1hat);
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
@@ -46,9 +185,147 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t11 = _t10*_t3;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
+    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
+    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
+    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t23 = _t14*_t22;
+    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
+    const trailer2_real_t _t27 = _t13 + _t16*_t22;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t31 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t32 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t33 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t34 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t38 = _t15 + _t3;
+    const trailer2_real_t _t39 = _t37*_t38;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t41 = -_t15 + _t3;
+    const trailer2_real_t _t42 = _t40*_t41;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t44 = _t21 - _t23 + _t7;
+    const trailer2_real_t _t45 = _t43*_t44;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t46 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t47 = -_t21 - _t23 + _t7;
+    const trailer2_real_t _t48 = _t46*_t47;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t50 = _t28 + _t29;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t51 = J_x_tractor + _t14*_t49 + _t20*_t50;
+    const trailer2_real_t _t52 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
+            + _t28*_t30 + _t29*_t30;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t53 = J_theta_cart*_t14 + _t20*_t52 + _t49;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t54 = J_theta_cart2*_t20 + _t14*_t52 + _t50;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t55 = J_theta_right*_t35;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t _t56 = J_theta_left*_t36;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t57 = J_theta_cart_right*_t39;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t58 = J_theta_cart_left*_t42;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t59 = J_theta_cart2_right*_t45;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t60 = J_theta_cart2_left*_t48;
+    const trailer2_real_t _t61 = _t14*_t53 + _t20*_t54 + _t35*_t55 + _t36*_t56 + _t39*_t57
+            + _t42*_t58 + _t45*_t59 + _t48*_t60 + _t51;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t62 = K_theta_tractor_x_tractor_2 + _t16*_t49 + _t25*_t50;
+    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
+    const trailer2_real_t _t64 = J_theta_cart*_t16 + _t25*_t52 + _t63;
+    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
+    const trailer2_real_t _t66 = J_theta_cart2*_t25 + _t16*_t52 + _t65;
+    const trailer2_real_t _t67 = TRAILER2_LIT(0.207)*_t35;
+    const trailer2_real_t _t68 = J_theta_right*_t67;
+    const trailer2_real_t _t69 = -TRAILER2_LIT(0.207)*_t36;
+    const trailer2_real_t _t70 = J_theta_left*_t69;
+    const trailer2_real_t _t71 = -_t12 + _t17;
+    const trailer2_real_t _t72 = _t37*_t71;
+    const trailer2_real_t _t73 = J_theta_cart_right*_t72;
+    const trailer2_real_t _t74 = -_t12 - _t17;
+    const trailer2_real_t _t75 = _t40*_t74;
+    const trailer2_real_t _t76 = J_theta_cart_left*_t75;
+    const trailer2_real_t _t77 = _t26 - _t27;
+    const trailer2_real_t _t78 = _t43*_t77;
+    const trailer2_real_t _t79 = J_theta_cart2_right*_t78;
+    const trailer2_real_t _t80 = -_t26 - _t27;
+    const trailer2_real_t _t81 = _t46*_t80;
+    const trailer2_real_t _t82 = J_theta_cart2_left*_t81;
+    const trailer2_real_t _t83 = _t14*_t64 + _t20*_t66 + _t35*_t68 + _t36*_t70 + _t39*_t73
+            + _t42*_t76 + _t45*_t79 + _t48*_t82 + _t62;
+    const trailer2_real_t _t84 = _t33*_t83 + _t34*_t61;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t85 = J_theta_tractor + _t16*_t63 + _t25*_t65;
+    const trailer2_real_t _t86 = _t16*_t64 + _t25*_t66 + _t67*_t68 + _t69*_t70 + _t72*_t73
+            + _t75*_t76 + _t78*_t79 + _t81*_t82 + _t85;
+    const trailer2_real_t _t87 = _t33*_t86 + _t34*_t83;
+    const trailer2_real_t _t88 = _t31*_t87 + _t32*_t84;
+    const trailer2_real_t _t89 = _t88*_t88;
+    const trailer2_real_t _t90 = _t31*_t83 + _t32*_t61;
+    const trailer2_real_t _t91 = _t31*_t86 + _t32*_t83;
+    const trailer2_real_t _t92 = _t31*_t91 + _t32*_t90;
+    const trailer2_real_t _t93 = _t33*_t87 + _t34*_t84;
+    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t89 + _t92*_t92 + _t93*_t93)/TRAILER2_FABS(_t89
+            - _t92*_t93);
+}
+
+/* trailer2_minimal_minv_norm_mhat: documented in trailer2_laws.h.
+   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
+    trailer2_real_t *norm)
+{
+    trailer2_k_minimal_minv_norm_mhat(p, mhat, norm);
+}
+
+/* trailer2_minimal_mhat: documented in trailer2_laws.h.
+   operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt */
+void trailer2_minimal_mhat(const trailer2_params_t *p, const trailer2_real_t *q, trailer2_real_t *M)
+{
     trailer2_real_t kept[24];
-    trailer2_k_minimal_minv_norm_keep(p, kept);
-    trailer2_k_minimal_minv_norm(kept, q, norm);
+    trailer2_k_minimal_mhat_keep(p, kept);
+    trailer2_k_minimal_mhat(kept, q, M);
 }
 
 /* trailer2_minimal_tdroc_gain: documented in trailer2_laws.h.
@@ -120,9 +397,155 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u)
 {
-    trailer2_real_t kept[24];
-    trailer2_k_minimal_tdc_law_keep(p, kept);
-    trailer2_k_minimal_tdc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
+    (void)p12;
+    (void)p22;
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t11 = _t10*_t3;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
+    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
+    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
+    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t23 = _t14*_t22;
+    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
+    const trailer2_real_t _t27 = _t13 + _t16*_t22;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t e0 = e[0];
+    const trailer2_real_t edot0 = edot[0];
+    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t k1_0 = k1[0];
+    const trailer2_real_t k2_0 = k2[0];
+    const trailer2_real_t _t31 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
+    const trailer2_real_t qdd_des1 = qddot_des[1];
+    const trailer2_real_t k1_1 = k1[1];
+    const trailer2_real_t k2_1 = k2[1];
+    const trailer2_real_t _t32 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t33 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t34 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t38 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.207)*_t41;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.207)*_t43;
+    const trailer2_real_t _t45 = _t15 + _t3;
+    const trailer2_real_t _t46 = -_t12 + _t17;
+    const trailer2_real_t _t47 = _t35*_t45;
+    const trailer2_real_t _t48 = _t35*_t46;
+    const trailer2_real_t _t49 = -_t15 + _t3;
+    const trailer2_real_t _t50 = -_t12 - _t17;
+    const trailer2_real_t _t51 = _t36*_t49;
+    const trailer2_real_t _t52 = _t36*_t50;
+    const trailer2_real_t _t53 = _t21 - _t23 + _t7;
+    const trailer2_real_t _t54 = _t26 - _t27;
+    const trailer2_real_t _t55 = _t37*_t53;
+    const trailer2_real_t _t56 = _t37*_t54;
+    const trailer2_real_t _t57 = -_t21 - _t23 + _t7;
+    const trailer2_real_t _t58 = -_t26 - _t27;
+    const trailer2_real_t _t59 = _t38*_t57;
+    const trailer2_real_t _t60 = _t38*_t58;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t61 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t62 = _t28 + _t29;
+    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
+    const trailer2_real_t _t64 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
+    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
+            + _t28*_t30 + _t29*_t30;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t66 = J_x_tractor + _t14*_t61 + _t20*_t62;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t67 = K_theta_tractor_x_tractor_2 + _t16*_t61 + _t25*_t62;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t68 = J_theta_tractor + _t16*_t63 + _t25*_t64;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t69 = J_theta_cart*_t14 + _t20*_t65 + _t61;
+    const trailer2_real_t _t70 = J_theta_cart*_t16 + _t25*_t65 + _t63;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t71 = J_theta_cart2*_t20 + _t14*_t65 + _t62;
+    const trailer2_real_t _t72 = J_theta_cart2*_t25 + _t16*_t65 + _t64;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t73 = J_theta_right*_t41;
+    const trailer2_real_t _t74 = J_theta_right*_t42;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t _t75 = J_theta_left*_t43;
+    const trailer2_real_t _t76 = J_theta_left*_t44;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t77 = J_theta_cart_right*_t47;
+    const trailer2_real_t _t78 = J_theta_cart_right*_t48;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t79 = J_theta_cart_left*_t51;
+    const trailer2_real_t _t80 = J_theta_cart_left*_t52;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t81 = J_theta_cart2_right*_t55;
+    const trailer2_real_t _t82 = J_theta_cart2_right*_t56;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t83 = J_theta_cart2_left*_t59;
+    const trailer2_real_t _t84 = J_theta_cart2_left*_t60;
+    const trailer2_real_t _t85 = _t14*_t69 + _t20*_t71 + _t41*_t73 + _t43*_t75 + _t47*_t77
+            + _t51*_t79 + _t55*_t81 + _t59*_t83 + _t66;
+    const trailer2_real_t _t86 = _t14*_t70 + _t20*_t72 + _t41*_t74 + _t43*_t76 + _t47*_t78
+            + _t51*_t80 + _t55*_t82 + _t59*_t84 + _t67;
+    const trailer2_real_t _t87 = _t16*_t70 + _t25*_t72 + _t42*_t74 + _t44*_t76 + _t48*_t78
+            + _t52*_t80 + _t56*_t82 + _t60*_t84 + _t68;
+    const trailer2_real_t _t88 = _t33*_t86 + _t39*_t85;
+    const trailer2_real_t _t89 = _t34*_t86 + _t40*_t85;
+    const trailer2_real_t _t90 = _t33*_t87 + _t39*_t86;
+    const trailer2_real_t _t91 = _t34*_t87 + _t40*_t86;
+    const trailer2_real_t _t92 = _t33*_t90 + _t39*_t88;
+    const trailer2_real_t _t93 = _t33*_t91 + _t39*_t89;
+    const trailer2_real_t _t94 = _t34*_t91 + _t40*_t89;
+    const trailer2_real_t H1hat0 = H1hat[0];
+    const trailer2_real_t H1hat1 = H1hat[1];
+    u[0] = H1hat0 + _t31*_t92 + _t32*_t93;
+    u[1] = H1hat1 + _t31*_t93 + _t32*_t94;
+}
+
+/* trailer2_minimal_tdc_law_mhat: documented in trailer2_laws.h.
+   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
+void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
+    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
+    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
+    const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u)
+{
+    trailer2_k_minimal_tdc_law_mhat(p, mhat, e, edot, qddot_des, k1, k2, p12, p22, H1hat, u);
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
@@ -133,10 +556,168 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, const trailer2_real_t *gain,
     const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm)
 {
-    trailer2_real_t kept[24];
-    trailer2_k_minimal_tdc_law_keep(p, kept);
-    trailer2_k_minimal_tdroc_law(kept, q, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain, eps, u,
-            s, s_norm);
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t11 = _t10*_t3;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
+    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
+    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
+    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
+    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
+    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t23 = _t14*_t22;
+    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
+    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
+    const trailer2_real_t _t27 = _t13 + _t16*_t22;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t e0 = e[0];
+    const trailer2_real_t edot0 = edot[0];
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t31 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t32 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t33 = trailer2_norm2(_t31, _t32);
+    const trailer2_real_t gain_1 = gain[0];
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t34 = gain_1/TRAILER2_FMAX(_t33, eps_1);
+    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t k1_0 = k1[0];
+    const trailer2_real_t k2_0 = k2[0];
+    const trailer2_real_t _t35 = _t31*_t34 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t qdd_des1 = qddot_des[1];
+    const trailer2_real_t k1_1 = k1[1];
+    const trailer2_real_t k2_1 = k2[1];
+    const trailer2_real_t _t36 = _t32*_t34 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t39 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t43 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t44 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t45 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t46 = TRAILER2_LIT(0.207)*_t45;
+    const trailer2_real_t _t47 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t48 = -TRAILER2_LIT(0.207)*_t47;
+    const trailer2_real_t _t49 = _t15 + _t3;
+    const trailer2_real_t _t50 = -_t12 + _t17;
+    const trailer2_real_t _t51 = _t39*_t49;
+    const trailer2_real_t _t52 = _t39*_t50;
+    const trailer2_real_t _t53 = -_t15 + _t3;
+    const trailer2_real_t _t54 = -_t12 - _t17;
+    const trailer2_real_t _t55 = _t40*_t53;
+    const trailer2_real_t _t56 = _t40*_t54;
+    const trailer2_real_t _t57 = _t21 - _t23 + _t7;
+    const trailer2_real_t _t58 = _t26 - _t27;
+    const trailer2_real_t _t59 = _t41*_t57;
+    const trailer2_real_t _t60 = _t41*_t58;
+    const trailer2_real_t _t61 = -_t21 - _t23 + _t7;
+    const trailer2_real_t _t62 = -_t26 - _t27;
+    const trailer2_real_t _t63 = _t42*_t61;
+    const trailer2_real_t _t64 = _t42*_t62;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t66 = _t28 + _t29;
+    const trailer2_real_t _t67 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
+    const trailer2_real_t _t68 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
+    const trailer2_real_t _t69 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
+            + _t28*_t30 + _t29*_t30;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t70 = J_x_tractor + _t14*_t65 + _t20*_t66;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t71 = K_theta_tractor_x_tractor_2 + _t16*_t65 + _t25*_t66;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t72 = J_theta_tractor + _t16*_t67 + _t25*_t68;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t73 = J_theta_cart*_t14 + _t20*_t69 + _t65;
+    const trailer2_real_t _t74 = J_theta_cart*_t16 + _t25*_t69 + _t67;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t75 = J_theta_cart2*_t20 + _t14*_t69 + _t66;
+    const trailer2_real_t _t76 = J_theta_cart2*_t25 + _t16*_t69 + _t68;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t77 = J_theta_right*_t45;
+    const trailer2_real_t _t78 = J_theta_right*_t46;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t _t79 = J_theta_left*_t47;
+    const trailer2_real_t _t80 = J_theta_left*_t48;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t81 = J_theta_cart_right*_t51;
+    const trailer2_real_t _t82 = J_theta_cart_right*_t52;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t83 = J_theta_cart_left*_t55;
+    const trailer2_real_t _t84 = J_theta_cart_left*_t56;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t85 = J_theta_cart2_right*_t59;
+    const trailer2_real_t _t86 = J_theta_cart2_right*_t60;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t87 = J_theta_cart2_left*_t63;
+    const trailer2_real_t _t88 = J_theta_cart2_left*_t64;
+    const trailer2_real_t _t89 = _t14*_t73 + _t20*_t75 + _t45*_t77 + _t47*_t79 + _t51*_t81
+            + _t55*_t83 + _t59*_t85 + _t63*_t87 + _t70;
+    const trailer2_real_t _t90 = _t14*_t74 + _t20*_t76 + _t45*_t78 + _t47*_t80 + _t51*_t82
+            + _t55*_t84 + _t59*_t86 + _t63*_t88 + _t71;
+    const trailer2_real_t _t91 = _t16*_t74 + _t25*_t76 + _t46*_t78 + _t48*_t80 + _t52*_t82
+            + _t56*_t84 + _t60*_t86 + _t64*_t88 + _t72;
+    const trailer2_real_t _t92 = _t37*_t90 + _t43*_t89;
+    const trailer2_real_t _t93 = _t38*_t90 + _t44*_t89;
+    const trailer2_real_t _t94 = _t37*_t91 + _t43*_t90;
+    const trailer2_real_t _t95 = _t38*_t91 + _t44*_t90;
+    const trailer2_real_t _t96 = _t37*_t94 + _t43*_t92;
+    const trailer2_real_t _t97 = _t37*_t95 + _t43*_t93;
+    const trailer2_real_t _t98 = _t38*_t95 + _t44*_t93;
+    const trailer2_real_t H1hat0 = H1hat[0];
+    const trailer2_real_t H1hat1 = H1hat[1];
+    u[0] = H1hat0 + _t35*_t96 + _t36*_t97;
+    u[1] = H1hat1 + _t35*_t97 + _t36*_t98;
+    s[0] = _t31;
+    s[1] = _t32;
+    s_norm[0] = _t33;
+}
+
+/* trailer2_minimal_tdroc_law_mhat: documented in trailer2_laws.h.
+   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
+    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
+    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
+    const trailer2_real_t *p22, const trailer2_real_t *H1hat, const trailer2_real_t *gain,
+    const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm)
+{
+    trailer2_k_minimal_tdroc_law_mhat(p, mhat, e, edot, qddot_des, k1, k2, p12, p22, H1hat, gain,
+            eps, u, s, s_norm);
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.

@@ -85,6 +85,39 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat);
 
+#define TRAILER2_MINIMAL_TDE_MHAT_MHAT_PREV_SIZE 4
+#define TRAILER2_MINIMAL_TDE_MHAT_U_PREV_SIZE 2
+#define TRAILER2_MINIMAL_TDE_MHAT_QDOT_NOW_SIZE 2
+#define TRAILER2_MINIMAL_TDE_MHAT_QDOT_THEN_SIZE 2
+#define TRAILER2_MINIMAL_TDE_MHAT_SPAN_SIZE 1
+#define TRAILER2_MINIMAL_TDE_MHAT_H1HAT_SIZE 2
+
+/**
+ * (minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+ * qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+ * The same with mhat_prev = Mhat(q(t-h)) in place of the coordinates:
+ * no Mhat evaluated (a step evaluates it once and keeps it for the next).
+ *
+ * Paper equations: (17).
+ *
+ * @param[in]  p trailer2_params_t -- nominal parameters of M-hat
+ * @param[in]  mhat_prev [4] row-major (TRAILER2_MINIMAL_TDE_MHAT_MHAT_PREV_SIZE): mhat_prev_0,
+ *     mhat_prev_1, mhat_prev_2, mhat_prev_3 -- Mhat(q(t-h)), 2x2 row-major (<f>_mhat)
+ * @param[in]  u_prev [2] row-major (TRAILER2_MINIMAL_TDE_MHAT_U_PREV_SIZE): up0, up1 -- u(t-h)
+ *     applied
+ * @param[in]  qdot_now [2] row-major (TRAILER2_MINIMAL_TDE_MHAT_QDOT_NOW_SIZE): qd_now0, qd_now1 --
+ *     qdot(t)
+ * @param[in]  qdot_then [2] row-major (TRAILER2_MINIMAL_TDE_MHAT_QDOT_THEN_SIZE): qd_then0,
+ *     qd_then1 -- qdot(t-span)
+ * @param[in]  span [1] row-major (TRAILER2_MINIMAL_TDE_MHAT_SPAN_SIZE): span -- h or 2h
+ * @param[out] H1hat [2] row-major (TRAILER2_MINIMAL_TDE_MHAT_H1HAT_SIZE)
+ *
+ * operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
+ */
+void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat_prev,
+    const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
+    const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat);
+
 #define TRAILER2_MINIMAL_MINV_NORM_Q_SIZE 11
 #define TRAILER2_MINIMAL_MINV_NORM_NORM_SIZE 1
 
@@ -104,6 +137,48 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
  */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm);
+
+#define TRAILER2_MINIMAL_MINV_NORM_MHAT_MHAT_SIZE 4
+#define TRAILER2_MINIMAL_MINV_NORM_MHAT_NORM_SIZE 1
+
+/**
+ * (minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
+ * so the norm is evaluated at the measured q in every step.
+ * The same with mhat = Mhat(q) in place of the coordinates:
+ * no Mhat evaluated (a step evaluates it once and keeps it for the next).
+ *
+ * Paper equations: (25).
+ *
+ * @param[in]  p trailer2_params_t -- nominal parameters of M-hat
+ * @param[in]  mhat [4] row-major (TRAILER2_MINIMAL_MINV_NORM_MHAT_MHAT_SIZE): mhat_0, mhat_1,
+ *     mhat_2, mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
+ * @param[out] norm [1] row-major (TRAILER2_MINIMAL_MINV_NORM_MHAT_NORM_SIZE)
+ *
+ * operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+ */
+void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
+    trailer2_real_t *norm);
+
+#define TRAILER2_MINIMAL_MHAT_Q_SIZE 11
+#define TRAILER2_MINIMAL_MHAT_M_SIZE 4
+
+/**
+ * (minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
+ * evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
+ * step's (17), which needs Mhat(q(t-h)).
+ *
+ * Paper equations: (9).
+ *
+ * @param[in]  p trailer2_params_t -- nominal parameters of M-hat
+ * @param[in]  q [11] row-major (TRAILER2_MINIMAL_MHAT_Q_SIZE): x_tractor, y_tractor, theta_tractor,
+ *     theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left,
+ *     theta_cart2_right, theta_cart2_left -- measured q
+ * @param[out] M [4] row-major (TRAILER2_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
+ *
+ * operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt
+ */
+void trailer2_minimal_mhat(const trailer2_params_t *p, const trailer2_real_t *q,
+    trailer2_real_t *M);
 
 #define TRAILER2_MINIMAL_TDROC_GAIN_MINV_NORM_SIZE 1
 #define TRAILER2_MINIMAL_TDROC_GAIN_OMEGA_SIZE 18
@@ -194,6 +269,50 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u);
 
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_MHAT_SIZE 4
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_E_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_EDOT_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_QDDOT_DES_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_K1_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_K2_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_P12_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_P22_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_H1HAT_SIZE 2
+#define TRAILER2_MINIMAL_TDC_LAW_MHAT_U_SIZE 2
+
+/**
+ * (minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+ * The same with mhat = Mhat(q) in place of the coordinates:
+ * no Mhat evaluated (a step evaluates it once and keeps it for the next).
+ *
+ * Paper equations: (16), (18).
+ *
+ * @param[in]  p trailer2_params_t -- nominal parameters of M-hat
+ * @param[in]  mhat [4] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_MHAT_SIZE): mhat_0, mhat_1, mhat_2,
+ *     mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
+ * @param[in]  e [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_E_SIZE): e0, e1 -- q_des - q
+ * @param[in]  edot [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_EDOT_SIZE): edot0, edot1 --
+ *     qdot_des - qdot
+ * @param[in]  qddot_des [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_QDDOT_DES_SIZE): qdd_des0,
+ *     qdd_des1 -- desired acceleration
+ * @param[in]  k1 [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_K1_SIZE): k1_0, k1_1 -- diagonal of
+ *     K1
+ * @param[in]  k2 [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_K2_SIZE): k2_0, k2_1 -- diagonal of
+ *     K2
+ * @param[in]  p12 [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_P12_SIZE): p12_0, p12_1 -- P entries
+ *     per coordinate
+ * @param[in]  p22 [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_P22_SIZE): p22_0, p22_1
+ * @param[in]  H1hat [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_H1HAT_SIZE): H1hat0, H1hat1 --
+ *     (17)
+ * @param[out] u [2] row-major (TRAILER2_MINIMAL_TDC_LAW_MHAT_U_SIZE)
+ *
+ * operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
+    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
+    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
+    const trailer2_real_t *p22, const trailer2_real_t *H1hat, trailer2_real_t *u);
+
 #define TRAILER2_MINIMAL_TDROC_LAW_Q_SIZE 11
 #define TRAILER2_MINIMAL_TDROC_LAW_E_SIZE 2
 #define TRAILER2_MINIMAL_TDROC_LAW_EDOT_SIZE 2
@@ -240,6 +359,61 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
  * operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
+    const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
+    const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
+    const trailer2_real_t *p22, const trailer2_real_t *H1hat, const trailer2_real_t *gain,
+    const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm);
+
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_MHAT_SIZE 4
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_E_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_EDOT_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_QDDOT_DES_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_K1_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_K2_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_P12_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_P22_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_H1HAT_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_GAIN_SIZE 1
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_EPS_SIZE 1
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_U_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_SIZE 2
+#define TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE 1
+
+/**
+ * (minimal formulation) TDROC (16), (22), (25):
+ * u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+ * + H1hat, s = B^T P e.
+ * The same with mhat = Mhat(q) in place of the coordinates:
+ * no Mhat evaluated (a step evaluates it once and keeps it for the next).
+ *
+ * Paper equations: (16), (22), (24), (25).
+ *
+ * @param[in]  p trailer2_params_t -- nominal parameters of M-hat
+ * @param[in]  mhat [4] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_MHAT_SIZE): mhat_0, mhat_1,
+ *     mhat_2, mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
+ * @param[in]  e [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_E_SIZE): e0, e1 -- q_des - q
+ * @param[in]  edot [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_EDOT_SIZE): edot0, edot1 --
+ *     qdot_des - qdot
+ * @param[in]  qddot_des [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_QDDOT_DES_SIZE): qdd_des0,
+ *     qdd_des1 -- desired acceleration
+ * @param[in]  k1 [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_K1_SIZE): k1_0, k1_1 -- diagonal of
+ *     K1
+ * @param[in]  k2 [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_K2_SIZE): k2_0, k2_1 -- diagonal of
+ *     K2
+ * @param[in]  p12 [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_P12_SIZE): p12_0, p12_1 -- P
+ *     entries per coordinate
+ * @param[in]  p22 [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_P22_SIZE): p22_0, p22_1
+ * @param[in]  H1hat [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_H1HAT_SIZE): H1hat0, H1hat1 --
+ *     (17)
+ * @param[in]  gain [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_GAIN_SIZE): gain -- khat of (25)
+ * @param[in]  eps [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_EPS_SIZE): eps -- boundary layer
+ * @param[out] u [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_U_SIZE)
+ * @param[out] s [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_SIZE)
+ * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE)
+ *
+ * operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ */
+void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
     const trailer2_real_t *p22, const trailer2_real_t *H1hat, const trailer2_real_t *gain,

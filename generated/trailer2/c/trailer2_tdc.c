@@ -168,6 +168,9 @@ static void trailer2_tdc_clear(trailer2_tdc_state_t *s)
         s->u_prev2[i] = TRAILER2_LIT(0.0);
         s->H1hat[i] = TRAILER2_LIT(0.0);
     }
+    for (i = 0; i < 4; ++i) {
+        s->mhat_prev[i] = TRAILER2_LIT(0.0);
+    }
     s->gain = TRAILER2_LIT(0.0);
     s->s_norm = TRAILER2_LIT(0.0);
     s->u_discarded = TRAILER2_LIT(0.0);
@@ -212,10 +215,10 @@ trailer2_status_t trailer2_tdc_init(trailer2_tdc_state_t *state,
         ? TRAILER2_LIT(2.0) * config->h : config->h;
     fresh.tde_c2 = config->accel_estimator == TRAILER2_ACCEL_MATCHED
         ? config->rate_window / (TRAILER2_LIT(2.0) * config->h) : TRAILER2_LIT(0.0);
-    /* the values the step's minimal_tde keeps */
-    trailer2_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
-    /* the values the step's minimal_tdc_law keeps */
-    trailer2_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdc_law);
+    /* the values the step's minimal_tde_mhat keeps */
+    trailer2_k_minimal_tde_mhat_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde_mhat);
+    /* the values the step's minimal_mhat keeps */
+    trailer2_k_minimal_mhat_keep(&config->nominal, fresh.k_minimal_mhat);
     trailer2_tdc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -258,6 +261,7 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     trailer2_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer2_real_t H1hat[11];
+    trailer2_real_t mhat[4];  /* Mhat(q): ||Mhat^-1||'s and the law's, then (17)'s next step */
     trailer2_real_t gain, s_norm, u_discarded;
     if (state == NULL) {
         return trailer2_fail(detail, TRAILER2_ERR_NULL_POINTER, TRAILER2_FIELD_STATE, -1);
@@ -308,8 +312,8 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     {
         /* the kernels' parameter-only values, kept by _init for the configuration compared
            above (a frozen build: by _init on the host, in the compiled-in state) */
-        const trailer2_real_t *const kept_minimal_tde = state->k_minimal_tde;
-        const trailer2_real_t *const kept_minimal_tdc_law = state->k_minimal_tdc_law;
+        const trailer2_real_t *const kept_minimal_tde_mhat = state->k_minimal_tde_mhat;
+        const trailer2_real_t *const kept_minimal_mhat = state->k_minimal_mhat;
     if (!trailer2_tdc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
         /* which input, and its status */
         return trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
@@ -317,6 +321,9 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     off = 5;
     gain = state->gain;
     s_norm = state->s_norm;
+    /* Mhat(q) once a step: ||Mhat^-1|| and the law read it, and (17) in the next step
+       (Mhat(q(t-h))), which the state keeps. */
+    trailer2_k_minimal_mhat(kept_minimal_mhat, q, mhat);
     nc = trailer2_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -344,7 +351,8 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
             up[i] = TRAILER2_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER2_LIT(0.0);
         }
-        trailer2_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer2_k_minimal_tde_mhat(kept_minimal_tde_mhat, state->mhat_prev, up, qdn, qdthen,
+                H1hat);
     } else {
         for (i = 0; i < 11; ++i) {
             H1hat[i] = TRAILER2_LIT(0.0);
@@ -352,8 +360,8 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     }
     /* The law. */
     {
-        trailer2_k_minimal_tdc_law(kept_minimal_tdc_law, q, e, edot, &qddot_des[off], &cfg->k1[off],
-                &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
+        trailer2_k_minimal_tdc_law_mhat(&cfg->nominal, mhat, e, edot, &qddot_des[off],
+                &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, u);
     }
     /* tau = u (the minimal formulation; the paper's tau = B^T u is not generated). */
     out_tau[0] = u[0];
@@ -383,6 +391,9 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 11; ++i) {
         state->H1hat[i] = H1hat[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        state->mhat_prev[i] = mhat[i];
     }
     state->gain = gain;
     state->s_norm = s_norm;

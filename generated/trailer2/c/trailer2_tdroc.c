@@ -65,9 +65,7 @@ trailer2_status_t trailer2_tdroc_check_config_detail(const trailer2_tdroc_config
         const trailer2_real_t q0[11] = {TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0),
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0),
                 TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0), TRAILER2_LIT(0.0)};
-        trailer2_real_t kept[24];  /* the step's copy, as _init would keep it */
-        trailer2_k_minimal_minv_norm_keep(&config->nominal, kept);
-        trailer2_k_minimal_minv_norm(kept, q0, &minv_norm);
+        trailer2_minimal_minv_norm(&config->nominal, q0, &minv_norm);
         if (!isfinite(minv_norm)) {
             return trailer2_fail(detail, TRAILER2_ERR_BAD_NOMINAL, TRAILER2_FIELD_NOMINAL, -1);
         }
@@ -201,6 +199,9 @@ static void trailer2_tdroc_clear(trailer2_tdroc_state_t *s)
         s->u_prev2[i] = TRAILER2_LIT(0.0);
         s->H1hat[i] = TRAILER2_LIT(0.0);
     }
+    for (i = 0; i < 4; ++i) {
+        s->mhat_prev[i] = TRAILER2_LIT(0.0);
+    }
     s->omega_count = 0;
     s->omega_head = 0;
     for (i = 0; i < 2 * TRAILER2_MAX_WINDOW; ++i) {
@@ -252,12 +253,10 @@ trailer2_status_t trailer2_tdroc_init(trailer2_tdroc_state_t *state,
         ? TRAILER2_LIT(2.0) * config->h : config->h;
     fresh.tde_c2 = config->accel_estimator == TRAILER2_ACCEL_MATCHED
         ? config->rate_window / (TRAILER2_LIT(2.0) * config->h) : TRAILER2_LIT(0.0);
-    /* the values the step's minimal_tde keeps */
-    trailer2_k_minimal_tde_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde);
-    /* the values the step's minimal_minv_norm keeps */
-    trailer2_k_minimal_minv_norm_keep(&config->nominal, fresh.k_minimal_minv_norm);
-    /* the values the step's minimal_tdroc_law keeps */
-    trailer2_k_minimal_tdc_law_keep(&config->nominal, fresh.k_minimal_tdroc_law);
+    /* the values the step's minimal_tde_mhat keeps */
+    trailer2_k_minimal_tde_mhat_keep(&config->nominal, &fresh.tde_span, fresh.k_minimal_tde_mhat);
+    /* the values the step's minimal_mhat keeps */
+    trailer2_k_minimal_mhat_keep(&config->nominal, fresh.k_minimal_mhat);
     trailer2_tdroc_clear(&fresh);
     *state = fresh;
     return TRAILER2_OK;
@@ -300,6 +299,7 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     trailer2_real_t out_tau[2];
     /* This step's results, in locals: the state is written only at the end, on success. */
     trailer2_real_t H1hat[11];
+    trailer2_real_t mhat[4];  /* Mhat(q): ||Mhat^-1||'s and the law's, then (17)'s next step */
     trailer2_real_t gain, s_norm, u_discarded;
     trailer2_real_t minv_norm;
     trailer2_real_t dn_new;  /* the window's newest difference norm after this step */
@@ -354,9 +354,8 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     {
         /* the kernels' parameter-only values, kept by _init for the configuration compared
            above (a frozen build: by _init on the host, in the compiled-in state) */
-        const trailer2_real_t *const kept_minimal_tde = state->k_minimal_tde;
-        const trailer2_real_t *const kept_minimal_minv_norm = state->k_minimal_minv_norm;
-        const trailer2_real_t *const kept_minimal_tdroc_law = state->k_minimal_tdroc_law;
+        const trailer2_real_t *const kept_minimal_tde_mhat = state->k_minimal_tde_mhat;
+        const trailer2_real_t *const kept_minimal_mhat = state->k_minimal_mhat;
     if (!trailer2_tdroc_inputs_bounded(q, qdot, q_des, qdot_des, qddot_des)) {
         /* which input, and its status */
         return trailer2_check_step_inputs(q, qdot, q_des, qdot_des, qddot_des, detail);
@@ -365,6 +364,9 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     gain = state->gain;
     s_norm = state->s_norm;
     minv_norm = state->minv_norm;
+    /* Mhat(q) once a step: ||Mhat^-1|| and the law read it, and (17) in the next step
+       (Mhat(q(t-h))), which the state keeps. */
+    trailer2_k_minimal_mhat(kept_minimal_mhat, q, mhat);
     nc = trailer2_controlled_slice(cfg->formulation, q, qdot, q_des, qdot_des, e, edot);
     /* (17): H1hat from the input that produced the estimated acceleration and a difference
        quotient of the rates. MATCHED: rates averaged over the last rate_window seconds make
@@ -392,7 +394,8 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
             up[i] = TRAILER2_LIT(0.0);  /* unread; set, as the compiler cannot see nc's range */
             H1hat[i] = TRAILER2_LIT(0.0);
         }
-        trailer2_k_minimal_tde(kept_minimal_tde, state->q_prev, up, qdn, qdthen, H1hat);
+        trailer2_k_minimal_tde_mhat(kept_minimal_tde_mhat, state->mhat_prev, up, qdn, qdthen,
+                H1hat);
     } else {
         for (i = 0; i < 11; ++i) {
             H1hat[i] = TRAILER2_LIT(0.0);
@@ -435,7 +438,7 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
-        trailer2_k_minimal_minv_norm(kept_minimal_minv_norm, q, &minv_norm);
+        trailer2_k_minimal_minv_norm_mhat(&cfg->nominal, mhat, &minv_norm);
         trailer2_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer2_cap_gain(gain);
@@ -445,7 +448,7 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     /* The law. */
     {
         trailer2_real_t s[11];
-        trailer2_k_minimal_tdroc_law(kept_minimal_tdroc_law, q, e, edot, &qddot_des[off],
+        trailer2_k_minimal_tdroc_law_mhat(&cfg->nominal, mhat, e, edot, &qddot_des[off],
                 &cfg->k1[off], &cfg->k2[off], &state->p12[off], &state->p22[off], H1hat, &gain,
                 &cfg->eps, u, s, &s_norm);
     }
@@ -477,6 +480,9 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     /* Commit. History for (17): the input actually applied, u = B tau. */
     for (i = 0; i < 11; ++i) {
         state->H1hat[i] = H1hat[i];
+    }
+    for (i = 0; i < 4; ++i) {
+        state->mhat_prev[i] = mhat[i];
     }
     if (pushed) {
         state->omega_ring[omega_head] = dn_new;

@@ -62,6 +62,7 @@ typedef struct {
                                     _init) */
     trailer2_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                     _init) */
+    trailer2_real_t mhat_prev[4]; /* Mhat(q(t-h)), row-major, for (17) */
     int omega_count;        /* Omega's seen, at most TRAILER2_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     int omega_head;         /* 0..TRAILER2_MAX_WINDOW - 1: where omega_ring holds the newest norm */
     /* ||Omega(i) - Omega(i+1)||, all (25) needs, each written at k and k + TRAILER2_MAX_WINDOW:
@@ -70,11 +71,8 @@ typedef struct {
     trailer2_real_t weights[TRAILER2_MAX_WINDOW]; /* normalised weights of (25) for the full window
                                                      (at _init) */
     trailer2_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
-    trailer2_real_t k_minimal_tde[25]; /* minimal_tde's parameter-only values (at _init) */
-    trailer2_real_t k_minimal_minv_norm[24]; /* minimal_minv_norm's parameter-only values (at
-                                                _init) */
-    trailer2_real_t k_minimal_tdroc_law[24]; /* minimal_tdroc_law's parameter-only values (at
-                                                _init) */
+    trailer2_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
+    trailer2_real_t k_minimal_mhat[24]; /* minimal_mhat's parameter-only values (at _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer2_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_mhat", "minimal_minv_norm", "minimal_minv_norm_mhat", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_mhat", "minimal_tde", "minimal_tde_mhat", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_mhat", "tdroc_weighted_gain"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -241,6 +241,43 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     return H1hat
 
 
+def minimal_tde_mhat(mhat_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+    qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+    The same with mhat_prev = Mhat(q(t-h)) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (17).
+
+    Args:
+        mhat_prev: array of 4 (shape 4x1, row-major): mhat_prev_0, mhat_prev_1, mhat_prev_2, mhat_prev_3. Mhat(q(t-h)), 2x2 row-major (<f>_mhat)
+        u_prev: array of 2 (shape 2x1, row-major): up0, up1. u(t-h) applied
+        qdot_now: array of 2 (shape 2x1, row-major): qd_now0, qd_now1. qdot(t)
+        qdot_then: array of 2 (shape 2x1, row-major): qd_then0, qd_then1. qdot(t-span)
+        span: array of 1 (shape 1x1, row-major): span. h or 2h
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        H1hat: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_prev_0, _, mhat_prev_2, mhat_prev_3 = _flat(mhat_prev, 4, "mhat_prev")
+    up0, up1 = _flat(u_prev, 2, "u_prev")
+    qd_now0, qd_now1 = _flat(qdot_now, 2, "qdot_now")
+    qd_then0, qd_then1 = _flat(qdot_then, 2, "qdot_then")
+    span_1, = _flat(span, 1, "span")
+    del p  # not used by this function
+    _t0 = 1.0/span_1
+    _t1 = _t0*(qd_now0 - qd_then0)
+    _t2 = _t0*(qd_now1 - qd_then1)
+    H1hat = np.array([
+        -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0,
+        -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1,
+    ])
+    return H1hat
+
+
 def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
     so the norm is evaluated at the measured q in every step.
@@ -376,6 +413,167 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
         math.sqrt(2.0*_t89 + _t92*_t92 + _t93*_t93)/abs(_t89 - _t92*_t93),
     ])
     return norm
+
+
+def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
+    so the norm is evaluated at the measured q in every step.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    del p  # not used by this function
+    _t0 = mhat_2*mhat_2
+    norm = np.array([
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+    ])
+    return norm
+
+
+def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
+    evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
+    step's (17), which needs Mhat(q(t-h)).
+
+    Paper equations: (9).
+
+    Args:
+        q: array of 11 (shape 11x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left. measured q
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        M: array of 4 (shape 4x1, row-major). 2x2 row-major
+
+    operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt
+    """
+    _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
+    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
+    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
+    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart2_left = float(_field(p, "radius_cart2_left"))
+    radius_cart2_right = float(_field(p, "radius_cart2_right"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = -theta_tractor
+    _t1 = _t0 + theta_cart
+    _t2 = math.sin(_t1)
+    _t3 = math.cos(_t1)
+    _t4 = 0.3*_t3
+    _t5 = _t0 + theta_cart2
+    _t6 = math.sin(_t5)
+    _t7 = math.cos(_t5)
+    _t8 = 0.3*_t7
+    _t9 = 0.85*_t6
+    _t10 = 0.85*_t7
+    _t11 = _t10*_t3
+    _t12 = 0.3*_t2
+    _t13 = 0.3*_t6
+    _t14 = -1.6666666666666667*_t2
+    _t15 = 0.2*_t14
+    _t16 = -1.6666666666666667*_t4
+    _t17 = 0.2*_t16
+    _t18 = -_t11 - _t2*_t9
+    _t19 = -_t14*_t18 + _t6
+    _t20 = -1.6666666666666667*_t19
+    _t21 = 0.2*_t20
+    _t22 = -_t10*_t2 + 0.85*_t3*_t6
+    _t23 = _t14*_t22
+    _t24 = -_t16*_t18 + _t8
+    _t25 = -1.6666666666666667*_t24
+    _t26 = 0.2*_t25
+    _t27 = _t13 + _t16*_t22
+    _t28 = K_theta_cart2_x_tractor*_t6
+    _t29 = K_theta_cart2_x_tractor_2*_t7
+    _t30 = 0.85*_t2
+    _t31 = 2.4154589371980677*radius_right
+    _t32 = -2.4154589371980677*radius_left
+    _t33 = 1.0/radius_cart_right
+    _t34 = 1.0/radius_cart_left
+    _t35 = 1.0/radius_cart2_right
+    _t36 = 1.0/radius_cart2_left
+    _t37 = 0.5*radius_right
+    _t38 = 0.5*radius_left
+    _t39 = 1.0/radius_right
+    _t40 = 0.207*_t39
+    _t41 = 1.0/radius_left
+    _t42 = -0.207*_t41
+    _t43 = _t15 + _t3
+    _t44 = -_t12 + _t17
+    _t45 = _t33*_t43
+    _t46 = _t33*_t44
+    _t47 = -_t15 + _t3
+    _t48 = -_t12 - _t17
+    _t49 = _t34*_t47
+    _t50 = _t34*_t48
+    _t51 = _t21 - _t23 + _t7
+    _t52 = _t26 - _t27
+    _t53 = _t35*_t51
+    _t54 = _t35*_t52
+    _t55 = -_t21 - _t23 + _t7
+    _t56 = -_t26 - _t27
+    _t57 = _t36*_t55
+    _t58 = _t36*_t56
+    _t59 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t60 = _t28 + _t29
+    _t61 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12
+    _t62 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13
+    _t63 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9 + _t28*_t30 + _t29*_t30
+    _t64 = J_x_tractor + _t14*_t59 + _t20*_t60
+    _t65 = K_theta_tractor_x_tractor_2 + _t16*_t59 + _t25*_t60
+    _t66 = J_theta_tractor + _t16*_t61 + _t25*_t62
+    _t67 = J_theta_cart*_t14 + _t20*_t63 + _t59
+    _t68 = J_theta_cart*_t16 + _t25*_t63 + _t61
+    _t69 = J_theta_cart2*_t20 + _t14*_t63 + _t60
+    _t70 = J_theta_cart2*_t25 + _t16*_t63 + _t62
+    _t71 = J_theta_right*_t39
+    _t72 = J_theta_right*_t40
+    _t73 = J_theta_left*_t41
+    _t74 = J_theta_left*_t42
+    _t75 = J_theta_cart_right*_t45
+    _t76 = J_theta_cart_right*_t46
+    _t77 = J_theta_cart_left*_t49
+    _t78 = J_theta_cart_left*_t50
+    _t79 = J_theta_cart2_right*_t53
+    _t80 = J_theta_cart2_right*_t54
+    _t81 = J_theta_cart2_left*_t57
+    _t82 = J_theta_cart2_left*_t58
+    _t83 = _t14*_t67 + _t20*_t69 + _t39*_t71 + _t41*_t73 + _t45*_t75 + _t49*_t77 + _t53*_t79 + _t57*_t81 + _t64
+    _t84 = _t14*_t68 + _t20*_t70 + _t39*_t72 + _t41*_t74 + _t45*_t76 + _t49*_t78 + _t53*_t80 + _t57*_t82 + _t65
+    _t85 = _t16*_t68 + _t25*_t70 + _t40*_t72 + _t42*_t74 + _t46*_t76 + _t50*_t78 + _t54*_t80 + _t58*_t82 + _t66
+    _t86 = _t31*_t84 + _t37*_t83
+    _t87 = _t32*_t84 + _t38*_t83
+    _t88 = _t31*_t85 + _t37*_t84
+    _t89 = _t32*_t85 + _t38*_t84
+    _t90 = _t31*_t88 + _t37*_t86
+    _t91 = _t31*_t89 + _t37*_t87
+    _t92 = _t32*_t89 + _t38*_t87
+    M = np.array([_t90, _t91, _t91, _t92])
+    return M
 
 
 def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
@@ -597,6 +795,49 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     return u
 
 
+def minimal_tdc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (18).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    del p12  # not used by this function
+    del p22  # not used by this function
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    del p  # not used by this function
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t0*mhat_0 + _t1*mhat_2,
+        H1hat1 + _t0*mhat_2 + _t1*mhat_3,
+    ])
+    return u
+
+
 def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(minimal formulation) TDROC (16), (22), (25):
     u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
@@ -762,6 +1003,63 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     ])
     s = np.array([_t31, _t32])
     s_norm = np.array([_t33])
+    return u, s, s_norm
+
+
+def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    + H1hat, s = B^T P e.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (22), (24), (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        gain: array of 1 (shape 1x1, row-major): gain. khat of (25)
+        eps: array of 1 (shape 1x1, row-major): eps. boundary layer
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        s: array of 2 (shape 2x1, row-major)
+        s_norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    p12_0, p12_1 = _flat(p12, 2, "p12")
+    p22_0, p22_1 = _flat(p22, 2, "p22")
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    gain_1, = _flat(gain, 1, "gain")
+    eps_1, = _flat(eps, 1, "eps")
+    del p  # not used by this function
+    _t0 = e0*p12_0 + edot0*p22_0
+    _t1 = e1*p12_1 + edot1*p22_1
+    _t2 = _norm(_t0, _t1)
+    _t3 = gain_1/max(_t2, eps_1)
+    _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t4*mhat_0 + _t5*mhat_2,
+        H1hat1 + _t4*mhat_2 + _t5*mhat_3,
+    ])
+    s = np.array([_t0, _t1])
+    s_norm = np.array([_t2])
     return u, s, s_norm
 
 

@@ -42,554 +42,60 @@ static inline void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_no
     gain[0] = minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7);
 }
 
-/* trailer3_k_minimal_tde_keep: the parameter-only part of trailer3_minimal_tde (trailer3_laws.h
-   documents it).
-   operations after CSE: 3 add, 16 mul, 9 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tde_keep(const trailer3_params_t *p,
-    const trailer3_real_t *span, trailer3_real_t kept[32])
+/* trailer3_k_minimal_tde_mhat_keep: the parameter-only part of trailer3_minimal_tde_mhat
+   (trailer3_laws.h documents it).
+   operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tde_mhat_keep(const trailer3_params_t *p,
+    const trailer3_real_t *span, trailer3_real_t kept[1])
 {
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
+    (void)p;
     const trailer3_real_t span_1 = span[0];
     const trailer3_real_t _t0 = TRAILER3_LIT(1.0)/span_1;
-    const trailer3_real_t _t1 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t11 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.207)*_t11;
-    const trailer3_real_t _t13 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t14 = -TRAILER3_LIT(0.207)*_t13;
-    const trailer3_real_t _t15 = J_theta_right*_t11;
-    const trailer3_real_t _t16 = J_theta_right*_t12;
-    const trailer3_real_t _t17 = J_theta_left*_t13;
-    const trailer3_real_t _t18 = J_theta_left*_t14;
-    const trailer3_real_t _t19 = _t11*_t15 + _t13*_t17;
-    const trailer3_real_t _t20 = _t11*_t16 + _t13*_t18;
-    const trailer3_real_t _t21 = _t12*_t16 + _t14*_t18;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart3;
-    kept[5] = J_theta_cart3_left;
-    kept[6] = J_theta_cart3_right;
-    kept[7] = J_theta_cart_left;
-    kept[8] = J_theta_cart_right;
-    kept[9] = J_theta_tractor;
-    kept[10] = J_x_tractor;
-    kept[11] = K_theta_cart_x_tractor;
-    kept[12] = K_theta_cart_x_tractor_2;
-    kept[13] = K_theta_cart2_x_tractor;
-    kept[14] = K_theta_cart2_x_tractor_2;
-    kept[15] = K_theta_cart3_x_tractor;
-    kept[16] = K_theta_cart3_x_tractor_2;
-    kept[17] = K_theta_tractor_x_tractor_2;
-    kept[18] = _t0;
-    kept[19] = _t1;
-    kept[20] = _t2;
-    kept[21] = _t3;
-    kept[22] = _t4;
-    kept[23] = _t5;
-    kept[24] = _t6;
-    kept[25] = _t7;
-    kept[26] = _t8;
-    kept[27] = _t9;
-    kept[28] = _t10;
-    kept[29] = _t19;
-    kept[30] = _t20;
-    kept[31] = _t21;
+    kept[0] = _t0;
 }
 
-/* trailer3_k_minimal_tde: the per-step part of trailer3_minimal_tde (trailer3_laws.h documents it).
-   operations after CSE: 121 add, 167 mul, 0 div, 6 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tde(const trailer3_real_t kept[32],
-    const trailer3_real_t *q_prev, const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
-    const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
+/* trailer3_k_minimal_tde_mhat: the per-step part of trailer3_minimal_tde_mhat (trailer3_laws.h
+   documents it).
+   operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tde_mhat(const trailer3_real_t kept[1],
+    const trailer3_real_t *mhat_prev, const trailer3_real_t *u_prev,
+    const trailer3_real_t *qdot_now, const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
 {
-    const trailer3_real_t qp2 = q_prev[2];
-    const trailer3_real_t qp3 = q_prev[3];
-    const trailer3_real_t _t22 = qp2 - qp3;
-    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(_t22);
-    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(_t22);
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.3)*_t24;
-    const trailer3_real_t qp4 = q_prev[4];
-    const trailer3_real_t _t26 = qp2 - qp4;
-    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
-    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t32 = _t28*_t31;
-    const trailer3_real_t qp5 = q_prev[5];
-    const trailer3_real_t _t33 = qp2 - qp5;
-    const trailer3_real_t _t34 = TRAILER3_SIN_BOUNDED(_t33);
-    const trailer3_real_t _t35 = TRAILER3_COS_BOUNDED(_t33);
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t35;
-    const trailer3_real_t _t37 = _t31*_t35;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.85)*_t27;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t28;
-    const trailer3_real_t _t40 = _t35*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t23;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t27;
-    const trailer3_real_t _t43 = _t27*_t31;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.3)*_t34;
-    const trailer3_real_t _t45 = _t31*_t34;
-    const trailer3_real_t _t46 = _t34*_t39;
-    const trailer3_real_t _t47 = TRAILER3_LIT(1.6666666666666667)*_t23;
-    const trailer3_real_t _t48 = TRAILER3_LIT(0.2)*_t47;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t51 = -_t27*_t30 - _t32;
-    const trailer3_real_t _t52 = -_t27 - _t47*_t51;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(1.6666666666666667)*_t52;
-    const trailer3_real_t _t54 = TRAILER3_LIT(0.2)*_t53;
-    const trailer3_real_t _t55 = _t28*_t30 - _t43;
-    const trailer3_real_t _t56 = _t47*_t55;
-    const trailer3_real_t _t57 = _t29 - _t49*_t51;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(1.6666666666666667)*_t57;
-    const trailer3_real_t _t59 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t60 = -_t42 + _t49*_t55;
-    const trailer3_real_t _t61 = -_t30*_t34 - _t37;
-    const trailer3_real_t _t62 = -_t34*_t38 - _t40;
-    const trailer3_real_t _t63 = -_t34 - _t47*_t61 - _t53*_t62;
-    const trailer3_real_t _t64 = -TRAILER3_LIT(1.6666666666666667)*_t63;
-    const trailer3_real_t _t65 = TRAILER3_LIT(0.2)*_t64;
-    const trailer3_real_t _t66 = _t30*_t35 - _t45;
-    const trailer3_real_t _t67 = _t47*_t66;
-    const trailer3_real_t _t68 = _t35*_t38 - _t46;
-    const trailer3_real_t _t69 = _t53*_t68;
-    const trailer3_real_t _t70 = _t36 - _t49*_t61 - _t58*_t62;
-    const trailer3_real_t _t71 = -TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.2)*_t71;
-    const trailer3_real_t _t73 = -_t44 + _t49*_t66 + _t58*_t68;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
-    const trailer3_real_t _t74 = K_theta_cart2_x_tractor*_t27;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
-    const trailer3_real_t _t75 = K_theta_cart3_x_tractor*_t34;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
-    const trailer3_real_t _t76 = K_theta_cart3_x_tractor_2*_t35;
     const trailer3_real_t qd_now0 = qdot_now[0];
     const trailer3_real_t qd_then0 = qdot_then[0];
-    const trailer3_real_t _t0 = kept[18];
-    const trailer3_real_t _t77 = _t0*(qd_now0 - qd_then0);
+    const trailer3_real_t _t0 = kept[0];
+    const trailer3_real_t _t1 = _t0*(qd_now0 - qd_then0);
     const trailer3_real_t qd_now1 = qdot_now[1];
     const trailer3_real_t qd_then1 = qdot_then[1];
-    const trailer3_real_t _t78 = _t0*(qd_now1 - qd_then1);
-    const trailer3_real_t _t79 = _t24 + _t48;
-    const trailer3_real_t _t80 = _t41 + _t50;
-    const trailer3_real_t _t3 = kept[21];
-    const trailer3_real_t _t81 = _t3*_t79;
-    const trailer3_real_t _t82 = _t3*_t80;
-    const trailer3_real_t _t83 = _t24 - _t48;
-    const trailer3_real_t _t84 = _t41 - _t50;
-    const trailer3_real_t _t4 = kept[22];
-    const trailer3_real_t _t85 = _t4*_t83;
-    const trailer3_real_t _t86 = _t4*_t84;
-    const trailer3_real_t _t87 = _t28 + _t54 - _t56;
-    const trailer3_real_t _t88 = _t59 - _t60;
-    const trailer3_real_t _t5 = kept[23];
-    const trailer3_real_t _t89 = _t5*_t87;
-    const trailer3_real_t _t90 = _t5*_t88;
-    const trailer3_real_t _t91 = _t28 - _t54 - _t56;
-    const trailer3_real_t _t92 = -_t59 - _t60;
-    const trailer3_real_t _t6 = kept[24];
-    const trailer3_real_t _t93 = _t6*_t91;
-    const trailer3_real_t _t94 = _t6*_t92;
-    const trailer3_real_t _t95 = _t35 + _t65 - _t67 - _t69;
-    const trailer3_real_t _t96 = _t72 - _t73;
-    const trailer3_real_t _t7 = kept[25];
-    const trailer3_real_t _t97 = _t7*_t95;
-    const trailer3_real_t _t98 = _t7*_t96;
-    const trailer3_real_t _t99 = _t35 - _t65 - _t67 - _t69;
-    const trailer3_real_t _t100 = -_t72 - _t73;
-    const trailer3_real_t _t8 = kept[26];
-    const trailer3_real_t _t101 = _t8*_t99;
-    const trailer3_real_t _t102 = _t100*_t8;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
-    const trailer3_real_t _t103 = -K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
-    const trailer3_real_t _t104 = K_theta_cart2_x_tractor_2*_t28 - _t74;
-    const trailer3_real_t _t105 = K_theta_cart3_x_tractor_2*_t35 - _t75;
-    const trailer3_real_t _t106 = K_theta_cart_x_tractor*_t25 + K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t107 = K_theta_cart2_x_tractor*_t29 + K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t36 + K_theta_cart3_x_tractor_2*_t44;
-    const trailer3_real_t _t109 = K_theta_cart2_x_tractor*_t32
-            + K_theta_cart2_x_tractor_2*(-_t28*_t30 + _t43) + _t30*_t74;
-    const trailer3_real_t _t110 = K_theta_cart3_x_tractor*_t37 + K_theta_cart3_x_tractor_2*_t45
-            + _t30*(_t75 - _t76);
-    const trailer3_real_t _t111 = K_theta_cart3_x_tractor*_t40 + K_theta_cart3_x_tractor_2*_t46
-            + _t38*(_t75 - _t76);
-    const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t112 = J_x_tractor + _t103*_t47 + _t104*_t53 + _t105*_t64;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[17];
-    const trailer3_real_t _t113 = K_theta_tractor_x_tractor_2 + _t103*_t49 + _t104*_t58
-            + _t105*_t71;
-    const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t114 = J_theta_tractor + _t106*_t49 + _t107*_t58 + _t108*_t71;
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t115 = J_theta_cart*_t47 + _t103 + _t109*_t53 + _t110*_t64;
-    const trailer3_real_t _t116 = J_theta_cart*_t49 + _t106 + _t109*_t58 + _t110*_t71;
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t117 = J_theta_cart2*_t53 + _t104 + _t109*_t47 + _t111*_t64;
-    const trailer3_real_t _t118 = J_theta_cart2*_t58 + _t107 + _t109*_t49 + _t111*_t71;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t119 = J_theta_cart3*_t64 + _t105 + _t110*_t47 + _t111*_t53;
-    const trailer3_real_t _t120 = J_theta_cart3*_t71 + _t108 + _t110*_t49 + _t111*_t58;
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t121 = J_theta_cart_right*_t81;
-    const trailer3_real_t _t122 = J_theta_cart_right*_t82;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t123 = J_theta_cart_left*_t85;
-    const trailer3_real_t _t124 = J_theta_cart_left*_t86;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t125 = J_theta_cart2_right*_t89;
-    const trailer3_real_t _t126 = J_theta_cart2_right*_t90;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t127 = J_theta_cart2_left*_t93;
-    const trailer3_real_t _t128 = J_theta_cart2_left*_t94;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t129 = J_theta_cart3_right*_t97;
-    const trailer3_real_t _t130 = J_theta_cart3_right*_t98;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t131 = J_theta_cart3_left*_t101;
-    const trailer3_real_t _t132 = J_theta_cart3_left*_t102;
-    const trailer3_real_t _t19 = kept[29];
-    const trailer3_real_t _t133 = _t101*_t131 + _t112 + _t115*_t47 + _t117*_t53 + _t119*_t64
-            + _t121*_t81 + _t123*_t85 + _t125*_t89 + _t127*_t93 + _t129*_t97 + _t19;
-    const trailer3_real_t _t20 = kept[30];
-    const trailer3_real_t _t134 = _t101*_t132 + _t113 + _t116*_t47 + _t118*_t53 + _t120*_t64
-            + _t122*_t81 + _t124*_t85 + _t126*_t89 + _t128*_t93 + _t130*_t97 + _t20;
-    const trailer3_real_t _t21 = kept[31];
-    const trailer3_real_t _t135 = _t102*_t132 + _t114 + _t116*_t49 + _t118*_t58 + _t120*_t71
-            + _t122*_t82 + _t124*_t86 + _t126*_t90 + _t128*_t94 + _t130*_t98 + _t21;
-    const trailer3_real_t _t1 = kept[19];
-    const trailer3_real_t _t9 = kept[27];
-    const trailer3_real_t _t136 = _t1*_t134 + _t133*_t9;
-    const trailer3_real_t _t2 = kept[20];
-    const trailer3_real_t _t10 = kept[28];
-    const trailer3_real_t _t137 = _t10*_t133 + _t134*_t2;
-    const trailer3_real_t _t138 = _t1*_t135 + _t134*_t9;
-    const trailer3_real_t _t139 = _t10*_t134 + _t135*_t2;
-    const trailer3_real_t _t140 = _t1*_t138 + _t136*_t9;
-    const trailer3_real_t _t141 = _t1*_t139 + _t137*_t9;
-    const trailer3_real_t _t142 = _t10*_t137 + _t139*_t2;
+    const trailer3_real_t _t2 = _t0*(qd_now1 - qd_then1);
+    const trailer3_real_t mhat_prev_0 = mhat_prev[0];
+    const trailer3_real_t mhat_prev_2 = mhat_prev[2];
+    const trailer3_real_t mhat_prev_3 = mhat_prev[3];
     const trailer3_real_t up0 = u_prev[0];
     const trailer3_real_t up1 = u_prev[1];
-    H1hat[0] = -_t140*_t77 - _t141*_t78 + up0;
-    H1hat[1] = -_t141*_t77 - _t142*_t78 + up1;
+    H1hat[0] = -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0;
+    H1hat[1] = -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1;
 }
 
-/* trailer3_k_minimal_minv_norm_keep: the parameter-only part of trailer3_minimal_minv_norm
-   (trailer3_laws.h documents it).
-   operations after CSE: 3 add, 16 mul, 8 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_minv_norm_keep(const trailer3_params_t *p,
-    trailer3_real_t kept[31])
-{
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t2 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t11 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t12 = J_theta_right*_t4;
-    const trailer3_real_t _t13 = J_theta_left*_t5;
-    const trailer3_real_t _t14 = _t12*_t4 + _t13*_t5;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.207)*_t4;
-    const trailer3_real_t _t16 = J_theta_right*_t15;
-    const trailer3_real_t _t17 = -TRAILER3_LIT(0.207)*_t5;
-    const trailer3_real_t _t18 = J_theta_left*_t17;
-    const trailer3_real_t _t19 = _t16*_t4 + _t18*_t5;
-    const trailer3_real_t _t20 = _t15*_t16 + _t17*_t18;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart2;
-    kept[2] = J_theta_cart2_left;
-    kept[3] = J_theta_cart2_right;
-    kept[4] = J_theta_cart3;
-    kept[5] = J_theta_cart3_left;
-    kept[6] = J_theta_cart3_right;
-    kept[7] = J_theta_cart_left;
-    kept[8] = J_theta_cart_right;
-    kept[9] = J_theta_tractor;
-    kept[10] = J_x_tractor;
-    kept[11] = K_theta_cart_x_tractor;
-    kept[12] = K_theta_cart_x_tractor_2;
-    kept[13] = K_theta_cart2_x_tractor;
-    kept[14] = K_theta_cart2_x_tractor_2;
-    kept[15] = K_theta_cart3_x_tractor;
-    kept[16] = K_theta_cart3_x_tractor_2;
-    kept[17] = K_theta_tractor_x_tractor_2;
-    kept[18] = _t0;
-    kept[19] = _t1;
-    kept[20] = _t2;
-    kept[21] = _t3;
-    kept[22] = _t6;
-    kept[23] = _t7;
-    kept[24] = _t8;
-    kept[25] = _t9;
-    kept[26] = _t10;
-    kept[27] = _t11;
-    kept[28] = _t14;
-    kept[29] = _t19;
-    kept[30] = _t20;
-}
-
-/* trailer3_k_minimal_minv_norm: the per-step part of trailer3_minimal_minv_norm (trailer3_laws.h
+/* trailer3_k_minimal_minv_norm_mhat: the body of trailer3_minimal_minv_norm_mhat (trailer3_laws.h
    documents it).
-   operations after CSE: 116 add, 171 mul, 1 div, 6 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer3_k_minimal_minv_norm(const trailer3_real_t kept[31],
-    const trailer3_real_t *q, trailer3_real_t *norm)
+   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+static inline void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
+    const trailer3_real_t *mhat, trailer3_real_t *norm)
 {
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t21 = -theta_tractor;
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t22 = _t21 + theta_cart;
-    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(_t22);
-    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(_t22);
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.3)*_t24;
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t26 = _t21 + theta_cart2;
-    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
-    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t32 = _t28*_t31;
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t33 = _t21 + theta_cart3;
-    const trailer3_real_t _t34 = TRAILER3_SIN_BOUNDED(_t33);
-    const trailer3_real_t _t35 = TRAILER3_COS_BOUNDED(_t33);
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t35;
-    const trailer3_real_t _t37 = _t31*_t35;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.85)*_t34;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t35;
-    const trailer3_real_t _t40 = _t28*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t23;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t27;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.3)*_t34;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t23;
-    const trailer3_real_t _t45 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t48 = -_t27*_t30 - _t32;
-    const trailer3_real_t _t49 = _t27 - _t44*_t48;
-    const trailer3_real_t _t50 = -TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t51 = TRAILER3_LIT(0.2)*_t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(0.85)*_t24*_t27 - _t28*_t30;
-    const trailer3_real_t _t53 = _t44*_t52;
-    const trailer3_real_t _t54 = _t29 - _t46*_t48;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t57 = _t42 + _t46*_t52;
-    const trailer3_real_t _t58 = -_t30*_t34 - _t37;
-    const trailer3_real_t _t59 = -_t27*_t38 - _t40;
-    const trailer3_real_t _t60 = _t34 - _t44*_t58 - _t50*_t59;
-    const trailer3_real_t _t61 = -TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.85)*_t24*_t34 - _t30*_t35;
-    const trailer3_real_t _t64 = -_t27*_t39 + TRAILER3_LIT(0.85)*_t28*_t34;
-    const trailer3_real_t _t65 = -_t35 + _t44*_t63 + _t50*_t64;
-    const trailer3_real_t _t66 = _t36 - _t46*_t58 - _t55*_t59;
-    const trailer3_real_t _t67 = -TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t69 = _t43 + _t46*_t63 + _t55*_t64;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
-    const trailer3_real_t _t70 = K_theta_cart2_x_tractor*_t27;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
-    const trailer3_real_t _t71 = K_theta_cart2_x_tractor_2*_t28;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
-    const trailer3_real_t _t72 = K_theta_cart3_x_tractor*_t34;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor_2*_t35;
-    const trailer3_real_t _t74 = TRAILER3_LIT(0.85)*_t27;
-    const trailer3_real_t _t75 = _t24 + _t45;
-    const trailer3_real_t _t6 = kept[22];
-    const trailer3_real_t _t76 = _t6*_t75;
-    const trailer3_real_t _t77 = _t24 - _t45;
-    const trailer3_real_t _t7 = kept[23];
-    const trailer3_real_t _t78 = _t7*_t77;
-    const trailer3_real_t _t79 = _t28 + _t51 - _t53;
-    const trailer3_real_t _t8 = kept[24];
-    const trailer3_real_t _t80 = _t79*_t8;
-    const trailer3_real_t _t81 = _t28 - _t51 - _t53;
-    const trailer3_real_t _t9 = kept[25];
-    const trailer3_real_t _t82 = _t81*_t9;
-    const trailer3_real_t _t83 = _t62 - _t65;
-    const trailer3_real_t _t10 = kept[26];
-    const trailer3_real_t _t84 = _t10*_t83;
-    const trailer3_real_t _t85 = -_t62 - _t65;
-    const trailer3_real_t _t11 = kept[27];
-    const trailer3_real_t _t86 = _t11*_t85;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
-    const trailer3_real_t _t87 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
-    const trailer3_real_t _t88 = _t70 + _t71;
-    const trailer3_real_t _t89 = _t72 + _t73;
-    const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t90 = J_x_tractor + _t44*_t87 + _t50*_t88 + _t61*_t89;
-    const trailer3_real_t _t91 = K_theta_cart2_x_tractor*_t32 - K_theta_cart2_x_tractor_2*_t27*_t31
-            + _t30*(_t70 + _t71);
-    const trailer3_real_t _t92 = K_theta_cart3_x_tractor*_t37 - K_theta_cart3_x_tractor_2*_t31*_t34
-            + _t30*(_t72 + _t73);
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t93 = J_theta_cart*_t44 + _t50*_t91 + _t61*_t92 + _t87;
-    const trailer3_real_t _t94 = K_theta_cart3_x_tractor*_t40 - K_theta_cart3_x_tractor_2*_t28*_t38
-            + _t74*(_t72 + _t73);
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t95 = J_theta_cart2*_t50 + _t44*_t91 + _t61*_t94 + _t88;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t96 = J_theta_cart3*_t61 + _t44*_t92 + _t50*_t94 + _t89;
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t97 = J_theta_cart_right*_t76;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t98 = J_theta_cart_left*_t78;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t99 = J_theta_cart2_right*_t80;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t100 = J_theta_cart2_left*_t82;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t101 = J_theta_cart3_right*_t84;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t102 = J_theta_cart3_left*_t86;
-    const trailer3_real_t _t14 = kept[28];
-    const trailer3_real_t _t103 = _t100*_t82 + _t101*_t84 + _t102*_t86 + _t14 + _t44*_t93
-            + _t50*_t95 + _t61*_t96 + _t76*_t97 + _t78*_t98 + _t80*_t99 + _t90;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[17];
-    const trailer3_real_t _t104 = K_theta_tractor_x_tractor_2 + _t46*_t87 + _t55*_t88 + _t67*_t89;
-    const trailer3_real_t _t105 = K_theta_cart_x_tractor*_t25 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t106 = J_theta_cart*_t46 + _t105 + _t55*_t91 + _t67*_t92;
-    const trailer3_real_t _t107 = K_theta_cart2_x_tractor*_t29 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t108 = J_theta_cart2*_t55 + _t107 + _t46*_t91 + _t67*_t94;
-    const trailer3_real_t _t109 = K_theta_cart3_x_tractor*_t36 - K_theta_cart3_x_tractor_2*_t43;
-    const trailer3_real_t _t110 = J_theta_cart3*_t67 + _t109 + _t46*_t92 + _t55*_t94;
-    const trailer3_real_t _t111 = -_t41 + _t47;
-    const trailer3_real_t _t112 = _t111*_t6;
-    const trailer3_real_t _t113 = J_theta_cart_right*_t112;
-    const trailer3_real_t _t114 = -_t41 - _t47;
-    const trailer3_real_t _t115 = _t114*_t7;
-    const trailer3_real_t _t116 = J_theta_cart_left*_t115;
-    const trailer3_real_t _t117 = _t56 - _t57;
-    const trailer3_real_t _t118 = _t117*_t8;
-    const trailer3_real_t _t119 = J_theta_cart2_right*_t118;
-    const trailer3_real_t _t120 = -_t56 - _t57;
-    const trailer3_real_t _t121 = _t120*_t9;
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t121;
-    const trailer3_real_t _t123 = _t68 - _t69;
-    const trailer3_real_t _t124 = _t10*_t123;
-    const trailer3_real_t _t125 = J_theta_cart3_right*_t124;
-    const trailer3_real_t _t126 = -_t68 - _t69;
-    const trailer3_real_t _t127 = _t11*_t126;
-    const trailer3_real_t _t128 = J_theta_cart3_left*_t127;
-    const trailer3_real_t _t19 = kept[29];
-    const trailer3_real_t _t129 = _t104 + _t106*_t44 + _t108*_t50 + _t110*_t61 + _t113*_t76
-            + _t116*_t78 + _t119*_t80 + _t122*_t82 + _t125*_t84 + _t128*_t86 + _t19;
-    const trailer3_real_t _t2 = kept[20];
-    const trailer3_real_t _t3 = kept[21];
-    const trailer3_real_t _t130 = _t103*_t3 + _t129*_t2;
-    const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t131 = J_theta_tractor + _t105*_t46 + _t107*_t55 + _t109*_t67;
-    const trailer3_real_t _t20 = kept[30];
-    const trailer3_real_t _t132 = _t106*_t46 + _t108*_t55 + _t110*_t67 + _t112*_t113 + _t115*_t116
-            + _t118*_t119 + _t121*_t122 + _t124*_t125 + _t127*_t128 + _t131 + _t20;
-    const trailer3_real_t _t133 = _t129*_t3 + _t132*_t2;
-    const trailer3_real_t _t0 = kept[18];
-    const trailer3_real_t _t1 = kept[19];
-    const trailer3_real_t _t134 = _t0*_t133 + _t1*_t130;
-    const trailer3_real_t _t135 = _t134*_t134;
-    const trailer3_real_t _t136 = _t0*_t129 + _t1*_t103;
-    const trailer3_real_t _t137 = _t0*_t132 + _t1*_t129;
-    const trailer3_real_t _t138 = _t0*_t137 + _t1*_t136;
-    const trailer3_real_t _t139 = _t130*_t3 + _t133*_t2;
-    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t135 + _t138*_t138 + _t139*_t139)/TRAILER3_FABS(_t135
-            - _t138*_t139);
+    (void)p;
+    const trailer3_real_t mhat_2 = mhat[2];
+    const trailer3_real_t _t0 = mhat_2*mhat_2;
+    const trailer3_real_t mhat_0 = mhat[0];
+    const trailer3_real_t mhat_3 = mhat[3];
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/TRAILER3_FABS(_t0
+            - mhat_0*mhat_3);
 }
 
-/* trailer3_k_minimal_omega_difference: the body of trailer3_minimal_omega_difference
-   (trailer3_laws.h documents it).
-   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *newer,
-    const trailer3_real_t *older, trailer3_real_t *norm)
-{
-    const trailer3_real_t Om_new0 = newer[0];
-    const trailer3_real_t Om_old0 = older[0];
-    const trailer3_real_t _t0 = Om_new0 - Om_old0;
-    const trailer3_real_t Om_new1 = newer[1];
-    const trailer3_real_t Om_old1 = older[1];
-    const trailer3_real_t _t1 = Om_new1 - Om_old1;
-    norm[0] = trailer3_norm2(_t0, _t1);
-}
-
-/* trailer3_k_minimal_tdc_law_keep: the parameter-only part of trailer3_minimal_tdc_law
-   (trailer3_laws.h documents it).
+/* trailer3_k_minimal_mhat_keep: the parameter-only part of trailer3_minimal_mhat (trailer3_laws.h
+   documents it).
    operations after CSE: 3 add, 16 mul, 8 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tdc_law_keep(const trailer3_params_t *p,
+static inline void trailer3_k_minimal_mhat_keep(const trailer3_params_t *p,
     trailer3_real_t kept[31])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -674,17 +180,12 @@ static inline void trailer3_k_minimal_tdc_law_keep(const trailer3_params_t *p,
     kept[30] = _t20;
 }
 
-/* trailer3_k_minimal_tdc_law: the per-step part of trailer3_minimal_tdc_law (trailer3_laws.h
-   documents it).
-   operations after CSE: 121 add, 174 mul, 0 div, 6 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[31],
-    const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
-    const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
-    const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
-    trailer3_real_t *u)
+/* trailer3_k_minimal_mhat: the per-step part of trailer3_minimal_mhat (trailer3_laws.h documents
+   it).
+   operations after CSE: 113 add, 166 mul, 0 div, 6 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_mhat(const trailer3_real_t kept[31], const trailer3_real_t *q,
+    trailer3_real_t *M)
 {
-    (void)p12;
-    (void)p22;
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t21 = -theta_tractor;
     const trailer3_real_t theta_cart = q[3];
@@ -747,321 +248,200 @@ static inline void trailer3_k_minimal_tdc_law(const trailer3_real_t kept[31],
     const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
     const trailer3_real_t _t73 = K_theta_cart3_x_tractor_2*_t35;
     const trailer3_real_t _t74 = TRAILER3_LIT(0.85)*_t27;
+    const trailer3_real_t _t75 = _t24 + _t45;
+    const trailer3_real_t _t76 = -_t41 + _t47;
+    const trailer3_real_t _t2 = kept[20];
+    const trailer3_real_t _t77 = _t2*_t75;
+    const trailer3_real_t _t78 = _t2*_t76;
+    const trailer3_real_t _t79 = _t24 - _t45;
+    const trailer3_real_t _t80 = -_t41 - _t47;
+    const trailer3_real_t _t3 = kept[21];
+    const trailer3_real_t _t81 = _t3*_t79;
+    const trailer3_real_t _t82 = _t3*_t80;
+    const trailer3_real_t _t83 = _t28 + _t51 - _t53;
+    const trailer3_real_t _t84 = _t56 - _t57;
+    const trailer3_real_t _t4 = kept[22];
+    const trailer3_real_t _t85 = _t4*_t83;
+    const trailer3_real_t _t86 = _t4*_t84;
+    const trailer3_real_t _t87 = _t28 - _t51 - _t53;
+    const trailer3_real_t _t88 = -_t56 - _t57;
+    const trailer3_real_t _t5 = kept[23];
+    const trailer3_real_t _t89 = _t5*_t87;
+    const trailer3_real_t _t90 = _t5*_t88;
+    const trailer3_real_t _t91 = _t62 - _t65;
+    const trailer3_real_t _t92 = _t68 - _t69;
+    const trailer3_real_t _t6 = kept[24];
+    const trailer3_real_t _t93 = _t6*_t91;
+    const trailer3_real_t _t94 = _t6*_t92;
+    const trailer3_real_t _t95 = -_t62 - _t65;
+    const trailer3_real_t _t96 = -_t68 - _t69;
+    const trailer3_real_t _t7 = kept[25];
+    const trailer3_real_t _t97 = _t7*_t95;
+    const trailer3_real_t _t98 = _t7*_t96;
+    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
+    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
+    const trailer3_real_t _t99 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
+    const trailer3_real_t _t100 = _t70 + _t71;
+    const trailer3_real_t _t101 = _t72 + _t73;
+    const trailer3_real_t _t102 = K_theta_cart_x_tractor*_t25 - K_theta_cart_x_tractor_2*_t41;
+    const trailer3_real_t _t103 = K_theta_cart2_x_tractor*_t29 - K_theta_cart2_x_tractor_2*_t42;
+    const trailer3_real_t _t104 = K_theta_cart3_x_tractor*_t36 - K_theta_cart3_x_tractor_2*_t43;
+    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t32 - K_theta_cart2_x_tractor_2*_t27*_t31
+            + _t30*(_t70 + _t71);
+    const trailer3_real_t _t106 = K_theta_cart3_x_tractor*_t37 - K_theta_cart3_x_tractor_2*_t31*_t34
+            + _t30*(_t72 + _t73);
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t40 - K_theta_cart3_x_tractor_2*_t28*_t38
+            + _t74*(_t72 + _t73);
+    const trailer3_real_t J_x_tractor = kept[10];
+    const trailer3_real_t _t108 = J_x_tractor + _t100*_t50 + _t101*_t61 + _t44*_t99;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[17];
+    const trailer3_real_t _t109 = K_theta_tractor_x_tractor_2 + _t100*_t55 + _t101*_t67 + _t46*_t99;
+    const trailer3_real_t J_theta_tractor = kept[9];
+    const trailer3_real_t _t110 = J_theta_tractor + _t102*_t46 + _t103*_t55 + _t104*_t67;
+    const trailer3_real_t J_theta_cart = kept[0];
+    const trailer3_real_t _t111 = J_theta_cart*_t44 + _t105*_t50 + _t106*_t61 + _t99;
+    const trailer3_real_t _t112 = J_theta_cart*_t46 + _t102 + _t105*_t55 + _t106*_t67;
+    const trailer3_real_t J_theta_cart2 = kept[1];
+    const trailer3_real_t _t113 = J_theta_cart2*_t50 + _t100 + _t105*_t44 + _t107*_t61;
+    const trailer3_real_t _t114 = J_theta_cart2*_t55 + _t103 + _t105*_t46 + _t107*_t67;
+    const trailer3_real_t J_theta_cart3 = kept[4];
+    const trailer3_real_t _t115 = J_theta_cart3*_t61 + _t101 + _t106*_t44 + _t107*_t50;
+    const trailer3_real_t _t116 = J_theta_cart3*_t67 + _t104 + _t106*_t46 + _t107*_t55;
+    const trailer3_real_t J_theta_cart_right = kept[8];
+    const trailer3_real_t _t117 = J_theta_cart_right*_t77;
+    const trailer3_real_t _t118 = J_theta_cart_right*_t78;
+    const trailer3_real_t J_theta_cart_left = kept[7];
+    const trailer3_real_t _t119 = J_theta_cart_left*_t81;
+    const trailer3_real_t _t120 = J_theta_cart_left*_t82;
+    const trailer3_real_t J_theta_cart2_right = kept[3];
+    const trailer3_real_t _t121 = J_theta_cart2_right*_t85;
+    const trailer3_real_t _t122 = J_theta_cart2_right*_t86;
+    const trailer3_real_t J_theta_cart2_left = kept[2];
+    const trailer3_real_t _t123 = J_theta_cart2_left*_t89;
+    const trailer3_real_t _t124 = J_theta_cart2_left*_t90;
+    const trailer3_real_t J_theta_cart3_right = kept[6];
+    const trailer3_real_t _t125 = J_theta_cart3_right*_t93;
+    const trailer3_real_t _t126 = J_theta_cart3_right*_t94;
+    const trailer3_real_t J_theta_cart3_left = kept[5];
+    const trailer3_real_t _t127 = J_theta_cart3_left*_t97;
+    const trailer3_real_t _t128 = J_theta_cart3_left*_t98;
+    const trailer3_real_t _t18 = kept[28];
+    const trailer3_real_t _t129 = _t108 + _t111*_t44 + _t113*_t50 + _t115*_t61 + _t117*_t77
+            + _t119*_t81 + _t121*_t85 + _t123*_t89 + _t125*_t93 + _t127*_t97 + _t18;
+    const trailer3_real_t _t19 = kept[29];
+    const trailer3_real_t _t130 = _t109 + _t112*_t44 + _t114*_t50 + _t116*_t61 + _t118*_t77
+            + _t120*_t81 + _t122*_t85 + _t124*_t89 + _t126*_t93 + _t128*_t97 + _t19;
+    const trailer3_real_t _t20 = kept[30];
+    const trailer3_real_t _t131 = _t110 + _t112*_t46 + _t114*_t55 + _t116*_t67 + _t118*_t78
+            + _t120*_t82 + _t122*_t86 + _t124*_t90 + _t126*_t94 + _t128*_t98 + _t20;
+    const trailer3_real_t _t0 = kept[18];
+    const trailer3_real_t _t8 = kept[26];
+    const trailer3_real_t _t132 = _t0*_t130 + _t129*_t8;
+    const trailer3_real_t _t1 = kept[19];
+    const trailer3_real_t _t9 = kept[27];
+    const trailer3_real_t _t133 = _t1*_t130 + _t129*_t9;
+    const trailer3_real_t _t134 = _t0*_t131 + _t130*_t8;
+    const trailer3_real_t _t135 = _t1*_t131 + _t130*_t9;
+    const trailer3_real_t _t136 = _t0*_t134 + _t132*_t8;
+    const trailer3_real_t _t137 = _t0*_t135 + _t133*_t8;
+    const trailer3_real_t _t138 = _t1*_t135 + _t133*_t9;
+    M[0] = _t136;
+    M[1] = _t137;
+    M[2] = _t137;
+    M[3] = _t138;
+}
+
+/* trailer3_k_minimal_omega_difference: the body of trailer3_minimal_omega_difference
+   (trailer3_laws.h documents it).
+   operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
+static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *newer,
+    const trailer3_real_t *older, trailer3_real_t *norm)
+{
+    const trailer3_real_t Om_new0 = newer[0];
+    const trailer3_real_t Om_old0 = older[0];
+    const trailer3_real_t _t0 = Om_new0 - Om_old0;
+    const trailer3_real_t Om_new1 = newer[1];
+    const trailer3_real_t Om_old1 = older[1];
+    const trailer3_real_t _t1 = Om_new1 - Om_old1;
+    norm[0] = trailer3_norm2(_t0, _t1);
+}
+
+/* trailer3_k_minimal_tdc_law_mhat: the body of trailer3_minimal_tdc_law_mhat (trailer3_laws.h
+   documents it).
+   operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
+static inline void trailer3_k_minimal_tdc_law_mhat(const trailer3_params_t *p,
+    const trailer3_real_t *mhat, const trailer3_real_t *e, const trailer3_real_t *edot,
+    const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
+    const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
+    trailer3_real_t *u)
+{
+    (void)p;
+    (void)p12;
+    (void)p22;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t75 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t76 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t _t77 = _t24 + _t45;
-    const trailer3_real_t _t78 = -_t41 + _t47;
-    const trailer3_real_t _t2 = kept[20];
-    const trailer3_real_t _t79 = _t2*_t77;
-    const trailer3_real_t _t80 = _t2*_t78;
-    const trailer3_real_t _t81 = _t24 - _t45;
-    const trailer3_real_t _t82 = -_t41 - _t47;
-    const trailer3_real_t _t3 = kept[21];
-    const trailer3_real_t _t83 = _t3*_t81;
-    const trailer3_real_t _t84 = _t3*_t82;
-    const trailer3_real_t _t85 = _t28 + _t51 - _t53;
-    const trailer3_real_t _t86 = _t56 - _t57;
-    const trailer3_real_t _t4 = kept[22];
-    const trailer3_real_t _t87 = _t4*_t85;
-    const trailer3_real_t _t88 = _t4*_t86;
-    const trailer3_real_t _t89 = _t28 - _t51 - _t53;
-    const trailer3_real_t _t90 = -_t56 - _t57;
-    const trailer3_real_t _t5 = kept[23];
-    const trailer3_real_t _t91 = _t5*_t89;
-    const trailer3_real_t _t92 = _t5*_t90;
-    const trailer3_real_t _t93 = _t62 - _t65;
-    const trailer3_real_t _t94 = _t68 - _t69;
-    const trailer3_real_t _t6 = kept[24];
-    const trailer3_real_t _t95 = _t6*_t93;
-    const trailer3_real_t _t96 = _t6*_t94;
-    const trailer3_real_t _t97 = -_t62 - _t65;
-    const trailer3_real_t _t98 = -_t68 - _t69;
-    const trailer3_real_t _t7 = kept[25];
-    const trailer3_real_t _t99 = _t7*_t97;
-    const trailer3_real_t _t100 = _t7*_t98;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
-    const trailer3_real_t _t101 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
-    const trailer3_real_t _t102 = _t70 + _t71;
-    const trailer3_real_t _t103 = _t72 + _t73;
-    const trailer3_real_t _t104 = K_theta_cart_x_tractor*_t25 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t29 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t106 = K_theta_cart3_x_tractor*_t36 - K_theta_cart3_x_tractor_2*_t43;
-    const trailer3_real_t _t107 = K_theta_cart2_x_tractor*_t32 - K_theta_cart2_x_tractor_2*_t27*_t31
-            + _t30*(_t70 + _t71);
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t37 - K_theta_cart3_x_tractor_2*_t31*_t34
-            + _t30*(_t72 + _t73);
-    const trailer3_real_t _t109 = K_theta_cart3_x_tractor*_t40 - K_theta_cart3_x_tractor_2*_t28*_t38
-            + _t74*(_t72 + _t73);
-    const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t110 = J_x_tractor + _t101*_t44 + _t102*_t50 + _t103*_t61;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[17];
-    const trailer3_real_t _t111 = K_theta_tractor_x_tractor_2 + _t101*_t46 + _t102*_t55
-            + _t103*_t67;
-    const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t112 = J_theta_tractor + _t104*_t46 + _t105*_t55 + _t106*_t67;
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t113 = J_theta_cart*_t44 + _t101 + _t107*_t50 + _t108*_t61;
-    const trailer3_real_t _t114 = J_theta_cart*_t46 + _t104 + _t107*_t55 + _t108*_t67;
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t115 = J_theta_cart2*_t50 + _t102 + _t107*_t44 + _t109*_t61;
-    const trailer3_real_t _t116 = J_theta_cart2*_t55 + _t105 + _t107*_t46 + _t109*_t67;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t117 = J_theta_cart3*_t61 + _t103 + _t108*_t44 + _t109*_t50;
-    const trailer3_real_t _t118 = J_theta_cart3*_t67 + _t106 + _t108*_t46 + _t109*_t55;
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t119 = J_theta_cart_right*_t79;
-    const trailer3_real_t _t120 = J_theta_cart_right*_t80;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t121 = J_theta_cart_left*_t83;
-    const trailer3_real_t _t122 = J_theta_cart_left*_t84;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t123 = J_theta_cart2_right*_t87;
-    const trailer3_real_t _t124 = J_theta_cart2_right*_t88;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t125 = J_theta_cart2_left*_t91;
-    const trailer3_real_t _t126 = J_theta_cart2_left*_t92;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t127 = J_theta_cart3_right*_t95;
-    const trailer3_real_t _t128 = J_theta_cart3_right*_t96;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t129 = J_theta_cart3_left*_t99;
-    const trailer3_real_t _t130 = J_theta_cart3_left*_t100;
-    const trailer3_real_t _t18 = kept[28];
-    const trailer3_real_t _t131 = _t110 + _t113*_t44 + _t115*_t50 + _t117*_t61 + _t119*_t79
-            + _t121*_t83 + _t123*_t87 + _t125*_t91 + _t127*_t95 + _t129*_t99 + _t18;
-    const trailer3_real_t _t19 = kept[29];
-    const trailer3_real_t _t132 = _t111 + _t114*_t44 + _t116*_t50 + _t118*_t61 + _t120*_t79
-            + _t122*_t83 + _t124*_t87 + _t126*_t91 + _t128*_t95 + _t130*_t99 + _t19;
-    const trailer3_real_t _t20 = kept[30];
-    const trailer3_real_t _t133 = _t100*_t130 + _t112 + _t114*_t46 + _t116*_t55 + _t118*_t67
-            + _t120*_t80 + _t122*_t84 + _t124*_t88 + _t126*_t92 + _t128*_t96 + _t20;
-    const trailer3_real_t _t0 = kept[18];
-    const trailer3_real_t _t8 = kept[26];
-    const trailer3_real_t _t134 = _t0*_t132 + _t131*_t8;
-    const trailer3_real_t _t1 = kept[19];
-    const trailer3_real_t _t9 = kept[27];
-    const trailer3_real_t _t135 = _t1*_t132 + _t131*_t9;
-    const trailer3_real_t _t136 = _t0*_t133 + _t132*_t8;
-    const trailer3_real_t _t137 = _t1*_t133 + _t132*_t9;
-    const trailer3_real_t _t138 = _t0*_t136 + _t134*_t8;
-    const trailer3_real_t _t139 = _t0*_t137 + _t135*_t8;
-    const trailer3_real_t _t140 = _t1*_t137 + _t135*_t9;
+    const trailer3_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t mhat_0 = mhat[0];
+    const trailer3_real_t mhat_2 = mhat[2];
+    const trailer3_real_t mhat_3 = mhat[3];
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t138*_t75 + _t139*_t76;
-    u[1] = H1hat1 + _t139*_t75 + _t140*_t76;
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2;
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3;
 }
 
-/* trailer3_k_minimal_tdroc_law: the per-step part of trailer3_minimal_tdroc_law (trailer3_laws.h
+/* trailer3_k_minimal_tdroc_law_mhat: the body of trailer3_minimal_tdroc_law_mhat (trailer3_laws.h
    documents it).
-   operations after CSE: 126 add, 182 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer3_k_minimal_tdroc_law(const trailer3_real_t kept[31],
-    const trailer3_real_t *q, const trailer3_real_t *e, const trailer3_real_t *edot,
+   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+static inline void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
+    const trailer3_real_t *mhat, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
     const trailer3_real_t *gain, const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s,
     trailer3_real_t *s_norm)
 {
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t21 = -theta_tractor;
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t22 = _t21 + theta_cart;
-    const trailer3_real_t _t23 = TRAILER3_SIN_BOUNDED(_t22);
-    const trailer3_real_t _t24 = TRAILER3_COS_BOUNDED(_t22);
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.3)*_t24;
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t26 = _t21 + theta_cart2;
-    const trailer3_real_t _t27 = TRAILER3_SIN_BOUNDED(_t26);
-    const trailer3_real_t _t28 = TRAILER3_COS_BOUNDED(_t26);
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.85)*_t23;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t24;
-    const trailer3_real_t _t32 = _t28*_t31;
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t33 = _t21 + theta_cart3;
-    const trailer3_real_t _t34 = TRAILER3_SIN_BOUNDED(_t33);
-    const trailer3_real_t _t35 = TRAILER3_COS_BOUNDED(_t33);
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t35;
-    const trailer3_real_t _t37 = _t31*_t35;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.85)*_t34;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t35;
-    const trailer3_real_t _t40 = _t28*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t23;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t27;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.3)*_t34;
-    const trailer3_real_t _t44 = -TRAILER3_LIT(1.6666666666666667)*_t23;
-    const trailer3_real_t _t45 = TRAILER3_LIT(0.2)*_t44;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t48 = -_t27*_t30 - _t32;
-    const trailer3_real_t _t49 = _t27 - _t44*_t48;
-    const trailer3_real_t _t50 = -TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t51 = TRAILER3_LIT(0.2)*_t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(0.85)*_t24*_t27 - _t28*_t30;
-    const trailer3_real_t _t53 = _t44*_t52;
-    const trailer3_real_t _t54 = _t29 - _t46*_t48;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(1.6666666666666667)*_t54;
-    const trailer3_real_t _t56 = TRAILER3_LIT(0.2)*_t55;
-    const trailer3_real_t _t57 = _t42 + _t46*_t52;
-    const trailer3_real_t _t58 = -_t30*_t34 - _t37;
-    const trailer3_real_t _t59 = -_t27*_t38 - _t40;
-    const trailer3_real_t _t60 = _t34 - _t44*_t58 - _t50*_t59;
-    const trailer3_real_t _t61 = -TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t61;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.85)*_t24*_t34 - _t30*_t35;
-    const trailer3_real_t _t64 = -_t27*_t39 + TRAILER3_LIT(0.85)*_t28*_t34;
-    const trailer3_real_t _t65 = -_t35 + _t44*_t63 + _t50*_t64;
-    const trailer3_real_t _t66 = _t36 - _t46*_t58 - _t55*_t59;
-    const trailer3_real_t _t67 = -TRAILER3_LIT(1.6666666666666667)*_t66;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.2)*_t67;
-    const trailer3_real_t _t69 = _t43 + _t46*_t63 + _t55*_t64;
-    const trailer3_real_t K_theta_cart2_x_tractor = kept[13];
-    const trailer3_real_t _t70 = K_theta_cart2_x_tractor*_t27;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = kept[14];
-    const trailer3_real_t _t71 = K_theta_cart2_x_tractor_2*_t28;
-    const trailer3_real_t K_theta_cart3_x_tractor = kept[15];
-    const trailer3_real_t _t72 = K_theta_cart3_x_tractor*_t34;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = kept[16];
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor_2*_t35;
-    const trailer3_real_t _t74 = TRAILER3_LIT(0.85)*_t27;
+    (void)p;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t75 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t0 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t76 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t77 = trailer3_norm2(_t75, _t76);
+    const trailer3_real_t _t1 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t2 = trailer3_norm2(_t0, _t1);
     const trailer3_real_t gain_1 = gain[0];
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t78 = gain_1/TRAILER3_FMAX(_t77, eps_1);
+    const trailer3_real_t _t3 = gain_1/TRAILER3_FMAX(_t2, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t79 = _t75*_t78 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t80 = _t76*_t78 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t _t81 = _t24 + _t45;
-    const trailer3_real_t _t82 = -_t41 + _t47;
-    const trailer3_real_t _t2 = kept[20];
-    const trailer3_real_t _t83 = _t2*_t81;
-    const trailer3_real_t _t84 = _t2*_t82;
-    const trailer3_real_t _t85 = _t24 - _t45;
-    const trailer3_real_t _t86 = -_t41 - _t47;
-    const trailer3_real_t _t3 = kept[21];
-    const trailer3_real_t _t87 = _t3*_t85;
-    const trailer3_real_t _t88 = _t3*_t86;
-    const trailer3_real_t _t89 = _t28 + _t51 - _t53;
-    const trailer3_real_t _t90 = _t56 - _t57;
-    const trailer3_real_t _t4 = kept[22];
-    const trailer3_real_t _t91 = _t4*_t89;
-    const trailer3_real_t _t92 = _t4*_t90;
-    const trailer3_real_t _t93 = _t28 - _t51 - _t53;
-    const trailer3_real_t _t94 = -_t56 - _t57;
-    const trailer3_real_t _t5 = kept[23];
-    const trailer3_real_t _t95 = _t5*_t93;
-    const trailer3_real_t _t96 = _t5*_t94;
-    const trailer3_real_t _t97 = _t62 - _t65;
-    const trailer3_real_t _t98 = _t68 - _t69;
-    const trailer3_real_t _t6 = kept[24];
-    const trailer3_real_t _t99 = _t6*_t97;
-    const trailer3_real_t _t100 = _t6*_t98;
-    const trailer3_real_t _t101 = -_t62 - _t65;
-    const trailer3_real_t _t102 = -_t68 - _t69;
-    const trailer3_real_t _t7 = kept[25];
-    const trailer3_real_t _t103 = _t101*_t7;
-    const trailer3_real_t _t104 = _t102*_t7;
-    const trailer3_real_t K_theta_cart_x_tractor = kept[11];
-    const trailer3_real_t K_theta_cart_x_tractor_2 = kept[12];
-    const trailer3_real_t _t105 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
-    const trailer3_real_t _t106 = _t70 + _t71;
-    const trailer3_real_t _t107 = _t72 + _t73;
-    const trailer3_real_t _t108 = K_theta_cart_x_tractor*_t25 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t109 = K_theta_cart2_x_tractor*_t29 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t110 = K_theta_cart3_x_tractor*_t36 - K_theta_cart3_x_tractor_2*_t43;
-    const trailer3_real_t _t111 = K_theta_cart2_x_tractor*_t32 - K_theta_cart2_x_tractor_2*_t27*_t31
-            + _t30*(_t70 + _t71);
-    const trailer3_real_t _t112 = K_theta_cart3_x_tractor*_t37 - K_theta_cart3_x_tractor_2*_t31*_t34
-            + _t30*(_t72 + _t73);
-    const trailer3_real_t _t113 = K_theta_cart3_x_tractor*_t40 - K_theta_cart3_x_tractor_2*_t28*_t38
-            + _t74*(_t72 + _t73);
-    const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t114 = J_x_tractor + _t105*_t44 + _t106*_t50 + _t107*_t61;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[17];
-    const trailer3_real_t _t115 = K_theta_tractor_x_tractor_2 + _t105*_t46 + _t106*_t55
-            + _t107*_t67;
-    const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t116 = J_theta_tractor + _t108*_t46 + _t109*_t55 + _t110*_t67;
-    const trailer3_real_t J_theta_cart = kept[0];
-    const trailer3_real_t _t117 = J_theta_cart*_t44 + _t105 + _t111*_t50 + _t112*_t61;
-    const trailer3_real_t _t118 = J_theta_cart*_t46 + _t108 + _t111*_t55 + _t112*_t67;
-    const trailer3_real_t J_theta_cart2 = kept[1];
-    const trailer3_real_t _t119 = J_theta_cart2*_t50 + _t106 + _t111*_t44 + _t113*_t61;
-    const trailer3_real_t _t120 = J_theta_cart2*_t55 + _t109 + _t111*_t46 + _t113*_t67;
-    const trailer3_real_t J_theta_cart3 = kept[4];
-    const trailer3_real_t _t121 = J_theta_cart3*_t61 + _t107 + _t112*_t44 + _t113*_t50;
-    const trailer3_real_t _t122 = J_theta_cart3*_t67 + _t110 + _t112*_t46 + _t113*_t55;
-    const trailer3_real_t J_theta_cart_right = kept[8];
-    const trailer3_real_t _t123 = J_theta_cart_right*_t83;
-    const trailer3_real_t _t124 = J_theta_cart_right*_t84;
-    const trailer3_real_t J_theta_cart_left = kept[7];
-    const trailer3_real_t _t125 = J_theta_cart_left*_t87;
-    const trailer3_real_t _t126 = J_theta_cart_left*_t88;
-    const trailer3_real_t J_theta_cart2_right = kept[3];
-    const trailer3_real_t _t127 = J_theta_cart2_right*_t91;
-    const trailer3_real_t _t128 = J_theta_cart2_right*_t92;
-    const trailer3_real_t J_theta_cart2_left = kept[2];
-    const trailer3_real_t _t129 = J_theta_cart2_left*_t95;
-    const trailer3_real_t _t130 = J_theta_cart2_left*_t96;
-    const trailer3_real_t J_theta_cart3_right = kept[6];
-    const trailer3_real_t _t131 = J_theta_cart3_right*_t99;
-    const trailer3_real_t _t132 = J_theta_cart3_right*_t100;
-    const trailer3_real_t J_theta_cart3_left = kept[5];
-    const trailer3_real_t _t133 = J_theta_cart3_left*_t103;
-    const trailer3_real_t _t134 = J_theta_cart3_left*_t104;
-    const trailer3_real_t _t18 = kept[28];
-    const trailer3_real_t _t135 = _t103*_t133 + _t114 + _t117*_t44 + _t119*_t50 + _t121*_t61
-            + _t123*_t83 + _t125*_t87 + _t127*_t91 + _t129*_t95 + _t131*_t99 + _t18;
-    const trailer3_real_t _t19 = kept[29];
-    const trailer3_real_t _t136 = _t103*_t134 + _t115 + _t118*_t44 + _t120*_t50 + _t122*_t61
-            + _t124*_t83 + _t126*_t87 + _t128*_t91 + _t130*_t95 + _t132*_t99 + _t19;
-    const trailer3_real_t _t20 = kept[30];
-    const trailer3_real_t _t137 = _t100*_t132 + _t104*_t134 + _t116 + _t118*_t46 + _t120*_t55
-            + _t122*_t67 + _t124*_t84 + _t126*_t88 + _t128*_t92 + _t130*_t96 + _t20;
-    const trailer3_real_t _t0 = kept[18];
-    const trailer3_real_t _t8 = kept[26];
-    const trailer3_real_t _t138 = _t0*_t136 + _t135*_t8;
-    const trailer3_real_t _t1 = kept[19];
-    const trailer3_real_t _t9 = kept[27];
-    const trailer3_real_t _t139 = _t1*_t136 + _t135*_t9;
-    const trailer3_real_t _t140 = _t0*_t137 + _t136*_t8;
-    const trailer3_real_t _t141 = _t1*_t137 + _t136*_t9;
-    const trailer3_real_t _t142 = _t0*_t140 + _t138*_t8;
-    const trailer3_real_t _t143 = _t0*_t141 + _t139*_t8;
-    const trailer3_real_t _t144 = _t1*_t141 + _t139*_t9;
+    const trailer3_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t mhat_0 = mhat[0];
+    const trailer3_real_t mhat_2 = mhat[2];
+    const trailer3_real_t mhat_3 = mhat[3];
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t142*_t79 + _t143*_t80;
-    u[1] = H1hat1 + _t143*_t79 + _t144*_t80;
-    s[0] = _t75;
-    s[1] = _t76;
-    s_norm[0] = _t77;
+    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
+    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
+    s[0] = _t0;
+    s[1] = _t1;
+    s_norm[0] = _t2;
 }
 
 /* trailer3_k_minimal_roc_law_keep: the parameter-only part of trailer3_minimal_roc_law

@@ -57,8 +57,9 @@ typedef struct {
                                     _init) */
     trailer3_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                     _init) */
-    trailer3_real_t k_minimal_tde[32]; /* minimal_tde's parameter-only values (at _init) */
-    trailer3_real_t k_minimal_tdc_law[31]; /* minimal_tdc_law's parameter-only values (at _init) */
+    trailer3_real_t mhat_prev[4]; /* Mhat(q(t-h)), row-major, for (17) */
+    trailer3_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
+    trailer3_real_t k_minimal_mhat[31]; /* minimal_mhat's parameter-only values (at _init) */
     trailer3_real_t H1hat[14];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer3_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

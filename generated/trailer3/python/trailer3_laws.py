@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_minv_norm", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tde", "minimal_tdroc_gain", "minimal_tdroc_law", "tdroc_weighted_gain"]
+__all__ = ["lyapunov_p", "minimal_asmc_law", "minimal_mhat", "minimal_minv_norm", "minimal_minv_norm_mhat", "minimal_omega_difference", "minimal_pi_law", "minimal_roc_law", "minimal_tdc_law", "minimal_tdc_law_mhat", "minimal_tde", "minimal_tde_mhat", "minimal_tdroc_gain", "minimal_tdroc_law", "minimal_tdroc_law_mhat", "tdroc_weighted_gain"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -297,6 +297,43 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     return H1hat
 
 
+def minimal_tde_mhat(mhat_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_then: ArrayLike, span: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) (17): H1hat = u(t-h) - Mhat(q(t-h)) qddot(t-h), with
+    qddot(t-h) = (qdot(t) - qdot(t-span)) / span (span = h backward, 2h central).
+    The same with mhat_prev = Mhat(q(t-h)) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (17).
+
+    Args:
+        mhat_prev: array of 4 (shape 4x1, row-major): mhat_prev_0, mhat_prev_1, mhat_prev_2, mhat_prev_3. Mhat(q(t-h)), 2x2 row-major (<f>_mhat)
+        u_prev: array of 2 (shape 2x1, row-major): up0, up1. u(t-h) applied
+        qdot_now: array of 2 (shape 2x1, row-major): qd_now0, qd_now1. qdot(t)
+        qdot_then: array of 2 (shape 2x1, row-major): qd_then0, qd_then1. qdot(t-span)
+        span: array of 1 (shape 1x1, row-major): span. h or 2h
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        H1hat: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_prev_0, _, mhat_prev_2, mhat_prev_3 = _flat(mhat_prev, 4, "mhat_prev")
+    up0, up1 = _flat(u_prev, 2, "u_prev")
+    qd_now0, qd_now1 = _flat(qdot_now, 2, "qdot_now")
+    qd_then0, qd_then1 = _flat(qdot_then, 2, "qdot_then")
+    span_1, = _flat(span, 1, "span")
+    del p  # not used by this function
+    _t0 = 1.0/span_1
+    _t1 = _t0*(qd_now0 - qd_then0)
+    _t2 = _t0*(qd_now1 - qd_then1)
+    H1hat = np.array([
+        -_t1*mhat_prev_0 - _t2*mhat_prev_2 + up0,
+        -_t1*mhat_prev_2 - _t2*mhat_prev_3 + up1,
+    ])
+    return H1hat
+
+
 def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
     so the norm is evaluated at the measured q in every step.
@@ -482,6 +519,217 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
         math.sqrt(2.0*_t132 + _t135*_t135 + _t136*_t136)/abs(_t132 - _t135*_t136),
     ])
     return norm
+
+
+def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) ||Mhat(q)^-1||_F of (25). Mhat depends on the hitch angles,
+    so the norm is evaluated at the measured q in every step.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    del p  # not used by this function
+    _t0 = mhat_2*mhat_2
+    norm = np.array([
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+    ])
+    return norm
+
+
+def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
+    evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
+    step's (17), which needs Mhat(q(t-h)).
+
+    Paper equations: (9).
+
+    Args:
+        q: array of 14 (shape 14x1, row-major): x_tractor, y_tractor, theta_tractor, theta_cart, theta_cart2, theta_cart3, theta_right, theta_left, theta_cart_right, theta_cart_left, theta_cart2_right, theta_cart2_left, theta_cart3_right, theta_cart3_left. measured q
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        M: array of 4 (shape 4x1, row-major). 2x2 row-major
+
+    operations after CSE: 116 add, 185 mul, 8 div, 6 sin/cos, 0 sqrt
+    """
+    _, _, theta_tractor, theta_cart, theta_cart2, theta_cart3, _, _, _, _, _, _, _, _ = _flat(q, 14, "q")
+    J_theta_cart = float(_field(p, "J_theta_cart"))
+    J_theta_cart2 = float(_field(p, "J_theta_cart2"))
+    J_theta_cart2_left = float(_field(p, "J_theta_cart2_left"))
+    J_theta_cart2_right = float(_field(p, "J_theta_cart2_right"))
+    J_theta_cart3 = float(_field(p, "J_theta_cart3"))
+    J_theta_cart3_left = float(_field(p, "J_theta_cart3_left"))
+    J_theta_cart3_right = float(_field(p, "J_theta_cart3_right"))
+    J_theta_cart_left = float(_field(p, "J_theta_cart_left"))
+    J_theta_cart_right = float(_field(p, "J_theta_cart_right"))
+    J_theta_left = float(_field(p, "J_theta_left"))
+    J_theta_right = float(_field(p, "J_theta_right"))
+    J_theta_tractor = float(_field(p, "J_theta_tractor"))
+    J_x_tractor = float(_field(p, "J_x_tractor"))
+    K_theta_cart_x_tractor = float(_field(p, "K_theta_cart_x_tractor"))
+    K_theta_cart_x_tractor_2 = float(_field(p, "K_theta_cart_x_tractor_2"))
+    K_theta_cart2_x_tractor = float(_field(p, "K_theta_cart2_x_tractor"))
+    K_theta_cart2_x_tractor_2 = float(_field(p, "K_theta_cart2_x_tractor_2"))
+    K_theta_cart3_x_tractor = float(_field(p, "K_theta_cart3_x_tractor"))
+    K_theta_cart3_x_tractor_2 = float(_field(p, "K_theta_cart3_x_tractor_2"))
+    K_theta_tractor_x_tractor_2 = float(_field(p, "K_theta_tractor_x_tractor_2"))
+    radius_cart2_left = float(_field(p, "radius_cart2_left"))
+    radius_cart2_right = float(_field(p, "radius_cart2_right"))
+    radius_cart3_left = float(_field(p, "radius_cart3_left"))
+    radius_cart3_right = float(_field(p, "radius_cart3_right"))
+    radius_cart_left = float(_field(p, "radius_cart_left"))
+    radius_cart_right = float(_field(p, "radius_cart_right"))
+    radius_left = float(_field(p, "radius_left"))
+    radius_right = float(_field(p, "radius_right"))
+    _t0 = -theta_tractor
+    _t1 = _t0 + theta_cart
+    _t2 = math.sin(_t1)
+    _t3 = math.cos(_t1)
+    _t4 = 0.3*_t3
+    _t5 = _t0 + theta_cart2
+    _t6 = math.sin(_t5)
+    _t7 = math.cos(_t5)
+    _t8 = 0.3*_t7
+    _t9 = 0.85*_t2
+    _t10 = 0.85*_t3
+    _t11 = _t10*_t7
+    _t12 = _t0 + theta_cart3
+    _t13 = math.sin(_t12)
+    _t14 = math.cos(_t12)
+    _t15 = 0.3*_t14
+    _t16 = _t10*_t14
+    _t17 = 0.85*_t13
+    _t18 = 0.85*_t14
+    _t19 = _t18*_t7
+    _t20 = 0.3*_t2
+    _t21 = 0.3*_t6
+    _t22 = 0.3*_t13
+    _t23 = -1.6666666666666667*_t2
+    _t24 = 0.2*_t23
+    _t25 = -1.6666666666666667*_t4
+    _t26 = 0.2*_t25
+    _t27 = -_t11 - _t6*_t9
+    _t28 = -_t23*_t27 + _t6
+    _t29 = -1.6666666666666667*_t28
+    _t30 = 0.2*_t29
+    _t31 = 0.85*_t3*_t6 - _t7*_t9
+    _t32 = _t23*_t31
+    _t33 = -_t25*_t27 + _t8
+    _t34 = -1.6666666666666667*_t33
+    _t35 = 0.2*_t34
+    _t36 = _t21 + _t25*_t31
+    _t37 = -_t13*_t9 - _t16
+    _t38 = -_t17*_t6 - _t19
+    _t39 = _t13 - _t23*_t37 - _t29*_t38
+    _t40 = -1.6666666666666667*_t39
+    _t41 = 0.2*_t40
+    _t42 = 0.85*_t13*_t3 - _t14*_t9
+    _t43 = 0.85*_t13*_t7 - _t18*_t6
+    _t44 = -_t14 + _t23*_t42 + _t29*_t43
+    _t45 = _t15 - _t25*_t37 - _t34*_t38
+    _t46 = -1.6666666666666667*_t45
+    _t47 = 0.2*_t46
+    _t48 = _t22 + _t25*_t42 + _t34*_t43
+    _t49 = K_theta_cart2_x_tractor*_t6
+    _t50 = K_theta_cart2_x_tractor_2*_t7
+    _t51 = K_theta_cart3_x_tractor*_t13
+    _t52 = K_theta_cart3_x_tractor_2*_t14
+    _t53 = 0.85*_t6
+    _t54 = 2.4154589371980677*radius_right
+    _t55 = -2.4154589371980677*radius_left
+    _t56 = 1.0/radius_cart_right
+    _t57 = 1.0/radius_cart_left
+    _t58 = 1.0/radius_cart2_right
+    _t59 = 1.0/radius_cart2_left
+    _t60 = 1.0/radius_cart3_right
+    _t61 = 1.0/radius_cart3_left
+    _t62 = 0.5*radius_right
+    _t63 = 0.5*radius_left
+    _t64 = 1.0/radius_right
+    _t65 = 0.207*_t64
+    _t66 = 1.0/radius_left
+    _t67 = -0.207*_t66
+    _t68 = _t24 + _t3
+    _t69 = -_t20 + _t26
+    _t70 = _t56*_t68
+    _t71 = _t56*_t69
+    _t72 = -_t24 + _t3
+    _t73 = -_t20 - _t26
+    _t74 = _t57*_t72
+    _t75 = _t57*_t73
+    _t76 = _t30 - _t32 + _t7
+    _t77 = _t35 - _t36
+    _t78 = _t58*_t76
+    _t79 = _t58*_t77
+    _t80 = -_t30 - _t32 + _t7
+    _t81 = -_t35 - _t36
+    _t82 = _t59*_t80
+    _t83 = _t59*_t81
+    _t84 = _t41 - _t44
+    _t85 = _t47 - _t48
+    _t86 = _t60*_t84
+    _t87 = _t60*_t85
+    _t88 = -_t41 - _t44
+    _t89 = -_t47 - _t48
+    _t90 = _t61*_t88
+    _t91 = _t61*_t89
+    _t92 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t93 = _t49 + _t50
+    _t94 = _t51 + _t52
+    _t95 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20
+    _t96 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21
+    _t97 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22
+    _t98 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6 + _t49*_t9 + _t50*_t9
+    _t99 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13 + _t51*_t9 + _t52*_t9
+    _t100 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7 + _t51*_t53 + _t52*_t53
+    _t101 = J_x_tractor + _t23*_t92 + _t29*_t93 + _t40*_t94
+    _t102 = K_theta_tractor_x_tractor_2 + _t25*_t92 + _t34*_t93 + _t46*_t94
+    _t103 = J_theta_tractor + _t25*_t95 + _t34*_t96 + _t46*_t97
+    _t104 = J_theta_cart*_t23 + _t29*_t98 + _t40*_t99 + _t92
+    _t105 = J_theta_cart*_t25 + _t34*_t98 + _t46*_t99 + _t95
+    _t106 = J_theta_cart2*_t29 + _t100*_t40 + _t23*_t98 + _t93
+    _t107 = J_theta_cart2*_t34 + _t100*_t46 + _t25*_t98 + _t96
+    _t108 = J_theta_cart3*_t40 + _t100*_t29 + _t23*_t99 + _t94
+    _t109 = J_theta_cart3*_t46 + _t100*_t34 + _t25*_t99 + _t97
+    _t110 = J_theta_right*_t64
+    _t111 = J_theta_right*_t65
+    _t112 = J_theta_left*_t66
+    _t113 = J_theta_left*_t67
+    _t114 = J_theta_cart_right*_t70
+    _t115 = J_theta_cart_right*_t71
+    _t116 = J_theta_cart_left*_t74
+    _t117 = J_theta_cart_left*_t75
+    _t118 = J_theta_cart2_right*_t78
+    _t119 = J_theta_cart2_right*_t79
+    _t120 = J_theta_cart2_left*_t82
+    _t121 = J_theta_cart2_left*_t83
+    _t122 = J_theta_cart3_right*_t86
+    _t123 = J_theta_cart3_right*_t87
+    _t124 = J_theta_cart3_left*_t90
+    _t125 = J_theta_cart3_left*_t91
+    _t126 = _t101 + _t104*_t23 + _t106*_t29 + _t108*_t40 + _t110*_t64 + _t112*_t66 + _t114*_t70 + _t116*_t74 + _t118*_t78 + _t120*_t82 + _t122*_t86 + _t124*_t90
+    _t127 = _t102 + _t105*_t23 + _t107*_t29 + _t109*_t40 + _t111*_t64 + _t113*_t66 + _t115*_t70 + _t117*_t74 + _t119*_t78 + _t121*_t82 + _t123*_t86 + _t125*_t90
+    _t128 = _t103 + _t105*_t25 + _t107*_t34 + _t109*_t46 + _t111*_t65 + _t113*_t67 + _t115*_t71 + _t117*_t75 + _t119*_t79 + _t121*_t83 + _t123*_t87 + _t125*_t91
+    _t129 = _t126*_t62 + _t127*_t54
+    _t130 = _t126*_t63 + _t127*_t55
+    _t131 = _t127*_t62 + _t128*_t54
+    _t132 = _t127*_t63 + _t128*_t55
+    _t133 = _t129*_t62 + _t131*_t54
+    _t134 = _t130*_t62 + _t132*_t54
+    _t135 = _t130*_t63 + _t132*_t55
+    M = np.array([_t133, _t134, _t134, _t135])
+    return M
 
 
 def minimal_tdroc_gain(minv_norm: ArrayLike, omega: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
@@ -753,6 +1001,49 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     return u
 
 
+def minimal_tdc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, p: Any) -> NDArray[np.float64]:
+    """(minimal formulation) TDC (16), (18): u = Mhat(q) ua_hat + H1hat.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (18).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+
+    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    del p12  # not used by this function
+    del p22  # not used by this function
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    del p  # not used by this function
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t0*mhat_0 + _t1*mhat_2,
+        H1hat1 + _t0*mhat_2 + _t1*mhat_3,
+    ])
+    return u
+
+
 def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """(minimal formulation) TDROC (16), (22), (25):
     u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
@@ -968,6 +1259,63 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     ])
     s = np.array([_t54, _t55])
     s_norm = np.array([_t56])
+    return u, s, s_norm
+
+
+def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: ArrayLike, k1: ArrayLike, k2: ArrayLike, p12: ArrayLike, p22: ArrayLike, H1hat: ArrayLike, gain: ArrayLike, eps: ArrayLike, p: Any) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(minimal formulation) TDROC (16), (22), (25):
+    u = Mhat(q)(ua_hat + gain s/max(|s|, eps))
+    + H1hat, s = B^T P e.
+    The same with mhat = Mhat(q) in place of the coordinates:
+    no Mhat evaluated (a step evaluates it once and keeps it for the next).
+
+    Paper equations: (16), (22), (24), (25).
+
+    Args:
+        mhat: array of 4 (shape 4x1, row-major): mhat_0, mhat_1, mhat_2, mhat_3. Mhat(q), 2x2 row-major (<f>_mhat)
+        e: array of 2 (shape 2x1, row-major): e0, e1. q_des - q
+        edot: array of 2 (shape 2x1, row-major): edot0, edot1. qdot_des - qdot
+        qddot_des: array of 2 (shape 2x1, row-major): qdd_des0, qdd_des1. desired acceleration
+        k1: array of 2 (shape 2x1, row-major): k1_0, k1_1. diagonal of K1
+        k2: array of 2 (shape 2x1, row-major): k2_0, k2_1. diagonal of K2
+        p12: array of 2 (shape 2x1, row-major): p12_0, p12_1. P entries per coordinate
+        p22: array of 2 (shape 2x1, row-major): p22_0, p22_1
+        H1hat: array of 2 (shape 2x1, row-major): H1hat0, H1hat1. (17)
+        gain: array of 1 (shape 1x1, row-major): gain. khat of (25)
+        eps: array of 1 (shape 1x1, row-major): eps. boundary layer
+        p: params with fields J_theta_cart, J_theta_cart2, J_theta_cart2_left, J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right, J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2, radius_cart2_left, radius_cart2_right, radius_cart3_left, radius_cart3_right, radius_cart_left, radius_cart_right, radius_left, radius_right. nominal parameters of M-hat
+
+    Returns:
+        u: array of 2 (shape 2x1, row-major)
+        s: array of 2 (shape 2x1, row-major)
+        s_norm: array of 1 (shape 1x1, row-major)
+
+    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    """
+    mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
+    e0, e1 = _flat(e, 2, "e")
+    edot0, edot1 = _flat(edot, 2, "edot")
+    qdd_des0, qdd_des1 = _flat(qddot_des, 2, "qddot_des")
+    k1_0, k1_1 = _flat(k1, 2, "k1")
+    k2_0, k2_1 = _flat(k2, 2, "k2")
+    p12_0, p12_1 = _flat(p12, 2, "p12")
+    p22_0, p22_1 = _flat(p22, 2, "p22")
+    H1hat0, H1hat1 = _flat(H1hat, 2, "H1hat")
+    gain_1, = _flat(gain, 1, "gain")
+    eps_1, = _flat(eps, 1, "eps")
+    del p  # not used by this function
+    _t0 = e0*p12_0 + edot0*p22_0
+    _t1 = e1*p12_1 + edot1*p22_1
+    _t2 = _norm(_t0, _t1)
+    _t3 = gain_1/max(_t2, eps_1)
+    _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    u = np.array([
+        H1hat0 + _t4*mhat_0 + _t5*mhat_2,
+        H1hat1 + _t4*mhat_2 + _t5*mhat_3,
+    ])
+    s = np.array([_t0, _t1])
+    s_norm = np.array([_t2])
     return u, s, s_norm
 
 

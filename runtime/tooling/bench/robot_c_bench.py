@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from codegen.backends.casadi import generate_c
-from codegen.robot_functions import law_specs, minv_norm_needs_q, model_specs
+from codegen.robot_functions import law_specs, mhat_kernels, minv_norm_needs_q, model_specs
 from codegen.spec import FunctionSpec
 from modeling.robot_file import load_robot_model
 from modeling.robot_io import shipped_robot_file
@@ -41,6 +41,10 @@ FUNCTIONS = ("forward_dynamics", "minimal_forward_dynamics")
 # nominal ||M^-1|| (per step when it depends on q), the gain (25), the law (22).
 STEP_KERNELS = ("minimal_tde", "minimal_omega_difference", "minimal_minv_norm",
                 "tdroc_weighted_gain", "minimal_tdroc_law")
+# A robot whose M-hat depends on q: the step evaluates M-hat once and the `_mhat` kernels
+# read it (robot_functions.mhat_kernels); (17) reads the M-hat the previous step kept.
+MHAT_STEP_KERNELS = ("minimal_mhat", "minimal_tde_mhat", "minimal_omega_difference",
+                     "minimal_minv_norm_mhat", "tdroc_weighted_gain", "minimal_tdroc_law_mhat")
 # variant: its C real type (the harness checks float against ours double to 1e-3, double to 1e-9)
 VARIANTS = {"ours": "double", "ours_float32": "float", "casadi": "double",
             "casadi_float32": "float"}
@@ -67,7 +71,8 @@ class RobotFunctions:
 def robot_functions(robot: str, root: Path = ROOT) -> RobotFunctions:
     model, _ = load_robot_model(shipped_robot_file(robot))
     by_name = {s.name: s for s in (*model_specs(model), *law_specs(model))}
-    kernels = [k for k in STEP_KERNELS if k != "minimal_minv_norm" or minv_norm_needs_q(model)]
+    kernels = (list(MHAT_STEP_KERNELS) if mhat_kernels(model, "minimal") else
+               [k for k in STEP_KERNELS if k != "minimal_minv_norm" or minv_norm_needs_q(model)])
     specs = tuple(by_name[n] for n in (*FUNCTIONS, *kernels))
     return RobotFunctions(model, specs, generated_folder(root, robot) / "c")
 
@@ -186,7 +191,8 @@ def summarise(rows: list[dict[str, Any]]) -> dict[tuple[str, str, str], dict[str
     is the sum of the step's kernels per repetition."""
     ns = {(r["robot"], r["function"], r["variant"]): r["ns"] for r in rows}
     for robot in {r["robot"] for r in rows}:
-        kernels = [k for k in STEP_KERNELS if (robot, k, "ours") in ns]
+        kernels = [k for k in dict.fromkeys((*STEP_KERNELS, *MHAT_STEP_KERNELS))
+                   if (robot, k, "ours") in ns]
         for v in VARIANTS:
             ns[(robot, "tdroc_step_kernels", v)] = [
                 sum(t) for t in zip(*(ns[(robot, k, v)] for k in kernels), strict=True)]
