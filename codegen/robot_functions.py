@@ -32,7 +32,7 @@ from modeling import controllers as ctl
 from modeling.description.derive import cofactor_determinant
 from modeling.lagrange import ConstrainedSystem
 from modeling.robot_model import Parameter, RobotModel
-from modeling.staged import Stage
+from modeling.staged import Stage, definitions_read
 
 MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
 
@@ -518,14 +518,7 @@ def _mhat_variant(spec: FunctionSpec, coords: tuple[sp.Symbol, ...], mass: list[
     defs = {s: e.xreplace(mapping) for s, e in spec.definitions if s not in mapping}
     outputs = tuple(replace(o, exprs=tuple(sp.sympify(e).xreplace(mapping) for e in o.exprs))
                     for o in spec.outputs)
-    needed: set[sp.Symbol] = set()
-    todo = [s for o in outputs for e in o.exprs for s in sp.sympify(e).free_symbols if s in defs]
-    while todo:
-        s = todo.pop()
-        if s not in needed:
-            needed.add(s)
-            todo += [u for u in defs[s].free_symbols if u in defs]
-    definitions = tuple((s, defs[s]) for s, _ in spec.definitions if s in needed)
+    definitions = definitions_read(defs, [e for o in outputs for e in o.exprs])
     read = {s for o in outputs for e in o.exprs for s in sp.sympify(e).free_symbols}
     read |= {s for _, e in definitions for s in e.free_symbols}
     if read & set(coords):
@@ -668,16 +661,16 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             specs.append(_trig_variant(specs[-1], ts.q_prev, model, angles, "trig_prev",
                                        "q(t-h)"))
         mhat = mhat_kernels(model, f)
+        mass = list(ctl.control_model(f, model).mass)
         if mhat:  # (17) reading the M-hat the previous step kept
-            cm = ctl.control_model(f, model)
-            assert cm.stage is not None
-            prev = cm.stage.substituted(list(cm.mass), dict(zip(model.q, ts.q_prev,
-                                                                 strict=True)))
+            stage = ctl.control_model(f, model).stage
+            assert stage is not None
+            prev = stage.substituted(mass, dict(zip(model.q, ts.q_prev, strict=True)))
             specs.append(_mhat_variant(specs[-1], tuple(ts.q_prev), prev, "mhat_prev",
                                        "q(t-h)"))
         specs.append(_minv_norm_spec(model, f))
         if mhat:
-            specs.append(_mhat_variant(specs[-1], model.q, list(cm.mass), "mhat", "q"))
+            specs.append(_mhat_variant(specs[-1], model.q, mass, "mhat", "q"))
             specs.append(_mhat_spec(model, f))
         gain, omega, w = ctl.tdroc_gain(f, MAX_WINDOW, model)
         specs.append(
@@ -727,8 +720,7 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             if c.trig and angles:
                 specs.append(_trig_variant(specs[-1], model.q, model, angles, "trig", "q"))
             if c.trig and mhat:
-                specs.append(_mhat_variant(specs[-1], model.q,
-                                           list(ctl.control_model(f, model).mass), "mhat", "q"))
+                specs.append(_mhat_variant(specs[-1], model.q, mass, "mhat", "q"))
     return tuple(replace(s, bounded_trig=_trig_of_inputs_only(s)) for s in specs)
 
 

@@ -118,6 +118,14 @@ class StagedMinimal:
         return out
 
 
+def _congruence(stage: Stage, s: sp.Matrix, m: sp.Matrix) -> sp.Matrix:
+    """Sᵀ M S for a symmetric M through the stage: M S once, then each entry on and above
+    the diagonal once (the result is symmetric)."""
+    k = s.cols
+    ms = stage.matrix(m * s)
+    return sp.Matrix(k, k, lambda i, j: stage.define((s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
+
+
 @dataclass(frozen=True)
 class ConstrainedSystem:
     """A mechanical system given by its energies, constraints and inputs.
@@ -278,16 +286,13 @@ class ConstrainedSystem:
         det W a product of ``positive`` parameters (the caller's guards keep them
         positive), the solve runs in u (``_staged_in_twist``): S_u carries no wheel
         radius, so M̄_u and H̄_u are the short forms a hand derivation in (v, ω) writes."""
-        n, k = len(self.q), len(self.independent)
         s = self.staged_null_space(stage)
         eta = sp.Matrix(self.eta)
         if root_frame and self.planar_frame:
             twist = self._root_twist(stage, self.in_root_frame(stage, [s])[0], positive)
             if twist is not None:
                 return self._staged_in_twist(stage, *twist)
-        # ∂S/∂q_j, S's own entries differentiated (each a quantity)
-        slopes = {(i, j, a): d for i in self.dependent for j in range(n) for a in range(k)
-                  if (d := stage.derivative(s[i, a], self.q[j])) != 0}
+        slopes = self._slopes(stage, s, self.dependent)
         mass, bias = self.mass_matrix, self.bias
         plane: tuple[int, int, sp.Symbol] | None = None
         if root_frame and self.planar_frame:
@@ -306,6 +311,13 @@ class ConstrainedSystem:
         """M and H (q̇ replaced by the velocities ``v``) as quantities of ``stage``."""
         on_manifold = {self.qdot[i]: v[i] for i in range(len(self.q)) if v[i] != self.qdot[i]}
         return stage.matrix(mass), stage.matrix(bias.xreplace(on_manifold))
+
+    def _slopes(self, stage: Stage, s: sp.Matrix, rows: tuple[int, ...]
+                ) -> dict[tuple[int, int, int], sp.Expr]:
+        """{(row, j, column): ∂S/∂q_j} of ``s``'s ``rows``, nonzero ones: S's own entries
+        differentiated (each a quantity)."""
+        return {(i, j, a): d for i in rows for j in range(len(self.q)) for a in range(s.cols)
+                if (d := stage.derivative(s[i, a], self.q[j])) != 0}
 
     def _gathered_rate(self, stage: Stage, slopes: dict[tuple[int, int, int], sp.Expr],
                        rates: sp.Matrix, v: sp.Matrix, rows: tuple[int, ...]) -> sp.Matrix:
@@ -326,11 +338,7 @@ class ConstrainedSystem:
                          plane: tuple[int, int, sp.Symbol] | None) -> StagedMinimal:
         """M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B through the stage (M, H staged at
         the velocities ``v``, ``_on_manifold``)."""
-        k = s.cols
-        ms = stage.matrix(m * s)
-        # M̄ is symmetric: each entry on and above the diagonal formed once
-        mbar = sp.Matrix(k, k, lambda i, j: stage.define(
-            (s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
+        mbar = _congruence(stage, s, m)
         hbar = stage.matrix(s.T * (m * rate + h))
         return StagedMinimal(stage, s, v, rate, mbar, hbar,
                              stage.matrix(s.T * self.input_matrix.xreplace(
@@ -365,36 +373,40 @@ class ConstrainedSystem:
         for the functions that speak in wheel rates; η̇ = q̈'s wheel rows."""
         n = len(self.q)
         at_root = self.root_frame_point()
-        a = stage.matrix(self.constraint_matrix.xreplace(at_root))
         dependent = tuple(i for i in range(n) if i not in rows)
-        a_d = a.extract(list(range(a.rows)), list(dependent))
-        a_i = a.extract(list(range(a.rows)), list(rows))
-        s_dep = self._staged_solve(stage, a_d, -a_i)
-        s = sp.zeros(n, len(rows))
-        for r, i in enumerate(dependent):
-            s[i, :] = s_dep[r, :]
-        for col, i in enumerate(rows):
-            s[i, col] = sp.S.One
+        s = self._solved_null_space(stage, self.constraint_matrix.xreplace(at_root), rows)
         u = stage.matrix(w * sp.Matrix(self.eta))
         v = stage.matrix(s * u)
         m, h = self._on_manifold(stage, v, self.mass_matrix.xreplace(at_root),
                                  self.bias.xreplace(at_root))
-        slopes = {(i, j, c): d for i in dependent for j in range(n) for c in range(len(rows))
-                  if (d := stage.derivative(s[i, c], self.q[j])) != 0}
-        rate = self._gathered_rate(stage, slopes, u, v, dependent)
+        rate = self._gathered_rate(stage, self._slopes(stage, s, dependent), u, v, dependent)
         x, y, yaw = self.planar_frame[:3]
         turn = v[yaw]
         rate[x] = stage.define(rate[x] - turn * v[y])
         rate[y] = stage.define(rate[y] + turn * v[x])
         in_u = self._staged_products(stage, s, v, rate, m, h, (x, y, self.q[yaw]))
-        k = len(rows)
-        mw = stage.matrix(in_u.mass_matrix * w)
-        mbar = sp.Matrix(k, k, lambda i, j: stage.define(
-            (w[:, min(i, j)].T * mw[:, max(i, j)])[0]))
-        return StagedMinimal(stage, s, v, rate, mbar, stage.matrix(w.T * in_u.bias),
+        return StagedMinimal(stage, s, v, rate, _congruence(stage, w, in_u.mass_matrix),
+                             stage.matrix(w.T * in_u.bias),
                              stage.matrix(w.T * in_u.input_matrix), in_u.plane,
                              self.independent,
                              (in_u.mass_matrix, in_u.bias, in_u.input_matrix))
+
+    def _solved_null_space(self, stage: Stage, a: sp.Matrix, independent: tuple[int, ...]
+                           ) -> sp.Matrix:
+        """S with A S = 0 for the constraint matrix ``a`` and the ``independent``
+        coordinates' velocities free: A_d S_d = −A_i solved in the stage
+        (``_staged_solve``), the independent rows the identity."""
+        a = stage.matrix(a)
+        n = len(self.q)
+        dependent = [i for i in range(n) if i not in independent]
+        s_dep = self._staged_solve(stage, self._cols(a, tuple(dependent)),
+                                   -self._cols(a, independent))
+        s = sp.zeros(n, len(independent))
+        for row, i in enumerate(dependent):
+            s[i, :] = s_dep[row, :]
+        for col, i in enumerate(independent):
+            s[i, col] = sp.S.One
+        return s
 
     def _staged_solve(self, stage: Stage, a_d: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
         """x with A_d x = rhs in the stage (a described robot solves block by block)."""

@@ -191,16 +191,7 @@ class Stage:
     def definitions_for(self, exprs: Iterable[sp.Expr]) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
         """The quantities ``exprs`` read, directly or through other quantities, in
         definition order."""
-        needed: set[sp.Symbol] = set()
-        todo = [s for e in exprs for s in sp.sympify(e).free_symbols if s in self.definitions]
-        while todo:
-            s = todo.pop()
-            if s in needed:
-                continue
-            needed.add(s)
-            todo += [t for t in self.definitions[s].free_symbols
-                     if t in self.definitions and t not in needed]
-        return tuple((s, e) for s, e in self.definitions.items() if s in needed)
+        return definitions_read(self.definitions, exprs)
 
     def expand(self, expr: sp.Expr, at: Mapping[sp.Symbol, sp.Expr] | None = None) -> sp.Expr:
         """``expr`` with every quantity it reads replaced by its definition, inputs replaced
@@ -210,6 +201,22 @@ class Stage:
         for s, e in self.definitions_for([expr]):
             subs[s] = e.xreplace(subs)
         return sp.sympify(expr).xreplace(subs)
+
+
+def definitions_read(definitions: Mapping[sp.Symbol, sp.Expr], exprs: Iterable[sp.Expr]
+                     ) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
+    """The ``definitions`` (in their order) that ``exprs`` read, directly or through other
+    definitions: a stage's (``Stage.definitions_for``), or a function spec's after a
+    rewrite."""
+    needed: set[sp.Symbol] = set()
+    todo = [s for e in exprs for s in sp.sympify(e).free_symbols if s in definitions]
+    while todo:
+        s = todo.pop()
+        if s in needed:
+            continue
+        needed.add(s)
+        todo += [t for t in definitions[s].free_symbols if t in definitions and t not in needed]
+    return tuple((s, e) for s, e in definitions.items() if s in needed)
 
 
 def evaluate(definitions: Iterable[tuple[sp.Symbol, sp.Expr]], exprs: Iterable[sp.Expr],

@@ -98,16 +98,7 @@ class DescribedSystem(ConstrainedSystem):
         (``block_triangular_solve``), so that each trailer's rates read its parent's as
         quantities; the closed form multiplies the chain out (its operations grow about
         threefold a trailer)."""
-        a = stage.matrix(self.constraint_matrix)
-        a_d, a_i = self._cols(a, self.dependent), self._cols(a, self.independent)
-        s_dep = self._staged_solve(stage, a_d, -a_i)
-        n, k = len(self.q), len(self.independent)
-        s = sp.zeros(n, k)
-        for row, i in enumerate(self.dependent):
-            s[i, :] = s_dep[row, :]
-        for col, i in enumerate(self.independent):
-            s[i, col] = sp.S.One
-        return s
+        return self._solved_null_space(stage, self.constraint_matrix, self.independent)
 
     def _staged_solve(self, stage: Stage, a_d: sp.Matrix, rhs: sp.Matrix) -> sp.Matrix:
         """A_d x = rhs block by block (``block_triangular_solve``)."""
