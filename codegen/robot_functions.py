@@ -27,12 +27,15 @@ import sympy as sp
 
 from codegen.contact_forces import contact_force_forms, contact_rows
 from codegen.controller_layout import row_span, words
+from codegen.cse import cse_function
+from codegen.prepare import prepared_form
 from codegen.spec import Argument, Field, FunctionSpec, Guard
 from modeling import controllers as ctl
 from modeling.description.derive import cofactor_determinant
 from modeling.lagrange import ConstrainedSystem
 from modeling.robot_model import Parameter, RobotModel
 from modeling.staged import Stage, definitions_read
+from modeling.trig_polynomial import trig_polynomial
 
 MAX_WINDOW = 8  # TDROC's largest n (compile-time history size)
 
@@ -487,11 +490,23 @@ def mhat_kernels(model: RobotModel, formulation: ctl.Formulation) -> bool:
     return cm.stage is not None and cm.depends_on(list(cm.mass), model.q)
 
 
+# The trigonometric-polynomial M-hat is taken only if its code (the coefficients _init keeps,
+# and the step's part) is at most this many times the staged form's: one trailer 160 ops
+# against 100 (the step's part 77 -> 17), two trailers 697 against 193 (168 -> 105 a step
+# for 2.4 kB more of Cortex-M4 code): near-linear code growth with the bodies first.
+POLYNOMIAL_CODE_GROWTH_MAX = 2
+
+
 def _mhat_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
-    """``<f>_mhat``: M̂(q), k×k row-major, the nominal model's mass matrix."""
+    """``<f>_mhat``: M̂(q), k×k row-major, the nominal model's mass matrix: the staged
+    quantities, or M̂'s entries as trigonometric polynomials of the hitch angles
+    (:mod:`modeling.trig_polynomial`: the coefficients kept by ``_init``, a step evaluates
+    the monomials and a multiply-add per coefficient) when a step evaluates that in fewer
+    operations and its code stays within :data:`POLYNOMIAL_CODE_GROWTH_MAX` of the staged
+    form's (one trailer: the polynomial; two and three: the staged form)."""
     cm = ctl.control_model(f, model)
     k = cm.mass.rows
-    return FunctionSpec(
+    staged = FunctionSpec(
         f"{f}_mhat",
         f"({f} formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step\n"
         "evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next\n"
@@ -501,6 +516,31 @@ def _mhat_spec(model: RobotModel, f: ctl.Formulation) -> FunctionSpec:
         ("(9)",),
         definitions=cm.definitions(list(cm.mass)),
     )
+    step_ops, kept_ops = _split_ops(staged)
+    # a polynomial with more monomials than the staged step has operations cannot win
+    polynomial = trig_polynomial(list(cm.mass), model.q, staged.definitions, step_ops)
+    if polynomial is None:
+        return staged
+    candidate = replace(
+        staged, outputs=(out("M", polynomial, f"{k}x{k} row-major"),), definitions=(),
+        doc=staged.doc + "\nEach entry a polynomial in sin and cos of the hitch angles, its\n"
+        "coefficients of the parameters only (a step's _init keeps them).")
+    poly_step, poly_kept = _split_ops(candidate)
+    if (poly_step < step_ops
+            and poly_step + poly_kept <= POLYNOMIAL_CODE_GROWTH_MAX * (step_ops + kept_ops)):
+        return candidate
+    return staged
+
+
+def _split_ops(spec: FunctionSpec) -> tuple[int, int]:
+    """The operations of ``spec`` (a kernel of the parameters and q) a step spends, and
+    those ``_init`` spends on the parameter-only subexpressions it keeps
+    (:mod:`codegen.prepare`)."""
+    form = prepared_form(cse_function(spec, reciprocals=True),
+                         replace(spec, returns_status=True))
+    step, kept = form.ops("per_call"), form.ops("prepare")
+    return (step.add + step.mul + step.div + step.sincos + step.sqrt,
+            kept.add + kept.mul + kept.div + kept.sincos + kept.sqrt)
 
 
 def _mhat_variant(spec: FunctionSpec, coords: tuple[sp.Symbol, ...], mass: list[sp.Expr],

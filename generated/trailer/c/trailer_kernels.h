@@ -94,8 +94,8 @@ static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
 
 /* trailer_k_minimal_mhat_keep: the parameter-only part of trailer_minimal_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, trailer_real_t kept[17])
+   operations after CSE: 51 add, 88 mul, 4 div, 0 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, trailer_real_t kept[9])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -111,108 +111,90 @@ static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, traile
     const trailer_real_t radius_cart_right = p->radius_cart_right;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t2 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t3 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t4 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t5 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_right;
-    const trailer_real_t _t7 = TRAILER_LIT(0.207)*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(1.0)/radius_left;
-    const trailer_real_t _t9 = -TRAILER_LIT(0.207)*_t8;
-    const trailer_real_t _t10 = J_theta_right*_t6;
-    const trailer_real_t _t11 = J_theta_right*_t7;
-    const trailer_real_t _t12 = J_theta_left*_t8;
-    const trailer_real_t _t13 = J_theta_left*_t9;
-    const trailer_real_t _t14 = _t10*_t6 + _t12*_t8;
-    const trailer_real_t _t15 = _t11*_t6 + _t13*_t8;
-    const trailer_real_t _t16 = _t11*_t7 + _t13*_t9;
-    kept[0] = J_theta_cart;
-    kept[1] = J_theta_cart_left;
-    kept[2] = J_theta_cart_right;
-    kept[3] = J_theta_tractor;
-    kept[4] = J_x_tractor;
-    kept[5] = K_theta_cart_x_tractor;
-    kept[6] = K_theta_cart_x_tractor_2;
-    kept[7] = K_theta_tractor_x_tractor_2;
-    kept[8] = _t0;
-    kept[9] = _t1;
-    kept[10] = _t2;
-    kept[11] = _t3;
-    kept[12] = _t4;
-    kept[13] = _t5;
-    kept[14] = _t14;
-    kept[15] = _t15;
-    kept[16] = _t16;
+    const trailer_real_t _t0 = TRAILER_LIT(1.0)/(radius_cart_left*radius_cart_left);
+    const trailer_real_t _t1 = J_theta_cart_left*_t0;
+    const trailer_real_t _t2 = J_theta_cart_right/(radius_cart_right*radius_cart_right);
+    const trailer_real_t _t3 = J_theta_left/(radius_left*radius_left);
+    const trailer_real_t _t4 = J_theta_right/(radius_right*radius_right);
+    const trailer_real_t _t5 = J_theta_tractor + TRAILER_LIT(0.09)*_t1 + TRAILER_LIT(0.09)*_t2
+            + TRAILER_LIT(0.042849)*_t3 + TRAILER_LIT(0.042849)*_t4;
+    const trailer_real_t _t6 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t7 = TRAILER_LIT(0.5)*K_theta_cart_x_tractor_2
+            + K_theta_tractor_x_tractor_2 - TRAILER_LIT(0.1)*_t1 + TRAILER_LIT(0.1)*_t2
+            - TRAILER_LIT(0.207)*_t3 + TRAILER_LIT(0.207)*_t4;
+    const trailer_real_t _t8 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t9 = TRAILER_LIT(2.7777777777777777)*J_theta_cart;
+    const trailer_real_t _t10 = TRAILER_LIT(3.3333333333333335)*K_theta_cart_x_tractor;
+    const trailer_real_t _t11 = J_x_tractor + TRAILER_LIT(0.1111111111111111)*_t1 - _t10
+            + TRAILER_LIT(0.1111111111111111)*_t2 + _t3 + _t4 + _t9;
+    const trailer_real_t _t12 = TRAILER_LIT(0.2)*J_theta_cart_left*_t0 - K_theta_cart_x_tractor_2
+            - TRAILER_LIT(0.2)*_t2;
+    const trailer_real_t _t13 = TRAILER_LIT(0.25)*J_theta_cart
+            - TRAILER_LIT(0.3)*K_theta_cart_x_tractor - TRAILER_LIT(0.08)*_t1
+            - TRAILER_LIT(0.08)*_t2;
+    const trailer_real_t _t14 = TRAILER_LIT(0.8888888888888888)*_t1 + _t10
+            + TRAILER_LIT(0.8888888888888888)*_t2 - _t9;
+    const trailer_real_t _t15 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2 - TRAILER_LIT(0.06)*_t1
+            + TRAILER_LIT(0.06)*_t2;
+    const trailer_real_t _t16 = TRAILER_LIT(0.8333333333333334)*J_theta_cart
+            - K_theta_cart_x_tractor - TRAILER_LIT(0.26666666666666666)*_t1
+            - TRAILER_LIT(0.26666666666666666)*_t2;
+    const trailer_real_t _t17 = TRAILER_LIT(0.6666666666666666)*J_theta_cart_left*_t0
+            - TRAILER_LIT(3.3333333333333335)*K_theta_cart_x_tractor_2
+            - TRAILER_LIT(0.6666666666666666)*_t2;
+    const trailer_real_t _t18 = TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t19 = -_t18*_t5 + TRAILER_LIT(0.5)*_t7*radius_left;
+    const trailer_real_t _t20 = TRAILER_LIT(0.5)*_t11*radius_left - _t18*_t7;
+    const trailer_real_t _t21 = -_t12*_t18 + TRAILER_LIT(0.5)*_t14*radius_left;
+    const trailer_real_t _t22 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t23 = _t12*_t22 - _t13*_t18;
+    const trailer_real_t _t24 = -_t15*_t18 + TRAILER_LIT(0.5)*_t16*radius_left;
+    const trailer_real_t _t25 = -_t16*_t18 + _t17*_t22;
+    const trailer_real_t _t26 = _t21*_t8 + _t23*_t6;
+    const trailer_real_t _t27 = _t24*_t6 + _t25*_t8;
+    const trailer_real_t _t28 = _t19*_t6 + _t20*_t8;
+    const trailer_real_t _t29 = _t6*(_t12*_t8 + _t13*_t6) + _t8*(_t12*_t6 + _t14*_t8);
+    const trailer_real_t _t30 = _t6*(_t15*_t6 + _t16*_t8) + _t8*(_t16*_t6 + _t17*_t8);
+    const trailer_real_t _t31 = _t6*(_t5*_t6 + _t7*_t8) + _t8*(_t11*_t8 + _t6*_t7);
+    const trailer_real_t _t32 = -_t18*_t23 + _t21*_t22;
+    const trailer_real_t _t33 = -_t18*_t24 + TRAILER_LIT(0.5)*_t25*radius_left;
+    const trailer_real_t _t34 = -_t18*_t19 + _t20*_t22;
+    kept[0] = _t26;
+    kept[1] = _t27;
+    kept[2] = _t28;
+    kept[3] = _t29;
+    kept[4] = _t30;
+    kept[5] = _t31;
+    kept[6] = _t32;
+    kept[7] = _t33;
+    kept[8] = _t34;
 }
 
 /* trailer_k_minimal_mhat: the per-step part of trailer_minimal_mhat (trailer_laws.h documents it).
-   operations after CSE: 31 add, 46 mul, 0 div, 2 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_mhat(const trailer_real_t kept[17], const trailer_real_t *q,
+   operations after CSE: 7 add, 8 mul, 0 div, 2 sin/cos, 0 sqrt */
+static inline void trailer_k_minimal_mhat(const trailer_real_t kept[9], const trailer_real_t *q,
     trailer_real_t *M)
 {
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
-    const trailer_real_t _t17 = theta_cart - theta_tractor;
-    const trailer_real_t _t18 = TRAILER_SIN_BOUNDED(_t17);
-    const trailer_real_t _t19 = TRAILER_COS_BOUNDED(_t17);
-    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
-    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
-    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
-    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
-    const trailer_real_t _t26 = _t19 + _t23;
-    const trailer_real_t _t27 = -_t21 + _t25;
-    const trailer_real_t _t2 = kept[10];
-    const trailer_real_t _t28 = _t2*_t26;
-    const trailer_real_t _t29 = _t2*_t27;
-    const trailer_real_t _t30 = _t19 - _t23;
-    const trailer_real_t _t31 = -_t21 - _t25;
-    const trailer_real_t _t3 = kept[11];
-    const trailer_real_t _t32 = _t3*_t30;
-    const trailer_real_t _t33 = _t3*_t31;
-    const trailer_real_t K_theta_cart_x_tractor = kept[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = kept[6];
-    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
-    const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t36 = J_x_tractor + _t22*_t34;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = kept[7];
-    const trailer_real_t _t37 = K_theta_tractor_x_tractor_2 + _t24*_t34;
-    const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t38 = J_theta_tractor + _t24*_t35;
-    const trailer_real_t J_theta_cart = kept[0];
-    const trailer_real_t _t39 = J_theta_cart*_t22 + _t34;
-    const trailer_real_t _t40 = J_theta_cart*_t24 + _t35;
-    const trailer_real_t J_theta_cart_right = kept[2];
-    const trailer_real_t _t41 = J_theta_cart_right*_t28;
-    const trailer_real_t _t42 = J_theta_cart_right*_t29;
-    const trailer_real_t J_theta_cart_left = kept[1];
-    const trailer_real_t _t43 = J_theta_cart_left*_t32;
-    const trailer_real_t _t44 = J_theta_cart_left*_t33;
-    const trailer_real_t _t14 = kept[14];
-    const trailer_real_t _t45 = _t14 + _t22*_t39 + _t28*_t41 + _t32*_t43 + _t36;
-    const trailer_real_t _t15 = kept[15];
-    const trailer_real_t _t46 = _t15 + _t22*_t40 + _t28*_t42 + _t32*_t44 + _t37;
-    const trailer_real_t _t16 = kept[16];
-    const trailer_real_t _t47 = _t16 + _t24*_t40 + _t29*_t42 + _t33*_t44 + _t38;
-    const trailer_real_t _t0 = kept[8];
-    const trailer_real_t _t4 = kept[12];
-    const trailer_real_t _t48 = _t0*_t46 + _t4*_t45;
-    const trailer_real_t _t1 = kept[9];
-    const trailer_real_t _t5 = kept[13];
-    const trailer_real_t _t49 = _t1*_t46 + _t45*_t5;
-    const trailer_real_t _t50 = _t0*_t47 + _t4*_t46;
-    const trailer_real_t _t51 = _t1*_t47 + _t46*_t5;
-    const trailer_real_t _t52 = _t0*_t50 + _t4*_t48;
-    const trailer_real_t _t53 = _t0*_t51 + _t4*_t49;
-    const trailer_real_t _t54 = _t1*_t51 + _t49*_t5;
-    M[0] = _t52;
-    M[1] = _t53;
-    M[2] = _t53;
-    M[3] = _t54;
+    const trailer_real_t _t35 = theta_cart - theta_tractor;
+    const trailer_real_t _t36 = TRAILER_COS_BOUNDED(_t35);
+    const trailer_real_t _t37 = _t36*_t36;
+    const trailer_real_t _t38 = _t36*TRAILER_SIN_BOUNDED(_t35);
+    const trailer_real_t _t26 = kept[0];
+    const trailer_real_t _t27 = kept[1];
+    const trailer_real_t _t28 = kept[2];
+    const trailer_real_t _t39 = _t26*_t37 + _t27*_t38 + _t28;
+    const trailer_real_t _t29 = kept[3];
+    const trailer_real_t _t30 = kept[4];
+    const trailer_real_t _t31 = kept[5];
+    const trailer_real_t _t32 = kept[6];
+    const trailer_real_t _t33 = kept[7];
+    const trailer_real_t _t34 = kept[8];
+    M[0] = _t29*_t37 + _t30*_t38 + _t31;
+    M[1] = _t39;
+    M[2] = _t39;
+    M[3] = _t32*_t37 + _t33*_t38 + _t34;
 }
 
 /* trailer_k_minimal_omega_difference: the body of trailer_minimal_omega_difference (trailer_laws.h

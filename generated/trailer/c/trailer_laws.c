@@ -216,10 +216,10 @@ void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_rea
 }
 
 /* trailer_minimal_mhat: documented in trailer_laws.h.
-   operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 58 add, 96 mul, 4 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_mhat(const trailer_params_t *p, const trailer_real_t *q, trailer_real_t *M)
 {
-    trailer_real_t kept[17];
+    trailer_real_t kept[9];
     trailer_k_minimal_mhat_keep(p, kept);
     trailer_k_minimal_mhat(kept, q, M);
 }

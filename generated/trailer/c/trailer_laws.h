@@ -165,6 +165,8 @@ void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_rea
  * (minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
  * evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
  * step's (17), which needs Mhat(q(t-h)).
+ * Each entry a polynomial in sin and cos of the hitch angles, its
+ * coefficients of the parameters only (a step's _init keeps them).
  *
  * Paper equations: (9).
  *
@@ -173,7 +175,7 @@ void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_rea
  *     theta_cart, theta_right, theta_left, theta_cart_right, theta_cart_left -- measured q
  * @param[out] M [4] row-major (TRAILER_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 58 add, 96 mul, 4 div, 2 sin/cos, 0 sqrt
  */
 void trailer_minimal_mhat(const trailer_params_t *p, const trailer_real_t *q, trailer_real_t *M);
 

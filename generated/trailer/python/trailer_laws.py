@@ -351,6 +351,8 @@ def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     """(minimal formulation) Mhat(q), the nominal mass matrix the laws and (17) use. A step
     evaluates it once, for ||Mhat^-1|| (25) and the law, and keeps it for the next
     step's (17), which needs Mhat(q(t-h)).
+    Each entry a polynomial in sin and cos of the hitch angles, its
+    coefficients of the parameters only (a step's _init keeps them).
 
     Paper equations: (9).
 
@@ -361,7 +363,7 @@ def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 4x1, row-major). 2x2 row-major
 
-    operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 58 add, 96 mul, 4 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -378,59 +380,43 @@ def minimal_mhat(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     radius_cart_right = float(_field(p, "radius_cart_right"))
     radius_left = float(_field(p, "radius_left"))
     radius_right = float(_field(p, "radius_right"))
-    _t0 = theta_cart - theta_tractor
-    _t1 = math.sin(_t0)
-    _t2 = math.cos(_t0)
-    _t3 = 0.3*_t2
-    _t4 = 0.3*_t1
-    _t5 = -1.6666666666666667*_t1
-    _t6 = 0.2*_t5
-    _t7 = -1.6666666666666667*_t3
-    _t8 = 0.2*_t7
-    _t9 = 2.4154589371980677*radius_right
-    _t10 = -2.4154589371980677*radius_left
-    _t11 = 1.0/radius_cart_right
-    _t12 = 1.0/radius_cart_left
-    _t13 = 0.5*radius_right
-    _t14 = 0.5*radius_left
-    _t15 = 1.0/radius_right
-    _t16 = 0.207*_t15
-    _t17 = 1.0/radius_left
-    _t18 = -0.207*_t17
-    _t19 = _t2 + _t6
-    _t20 = -_t4 + _t8
-    _t21 = _t11*_t19
-    _t22 = _t11*_t20
-    _t23 = _t2 - _t6
-    _t24 = -_t4 - _t8
-    _t25 = _t12*_t23
-    _t26 = _t12*_t24
-    _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t29 = J_x_tractor + _t27*_t5
-    _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7
-    _t31 = J_theta_tractor + _t28*_t7
-    _t32 = J_theta_cart*_t5 + _t27
-    _t33 = J_theta_cart*_t7 + _t28
-    _t34 = J_theta_right*_t15
-    _t35 = J_theta_right*_t16
-    _t36 = J_theta_left*_t17
-    _t37 = J_theta_left*_t18
-    _t38 = J_theta_cart_right*_t21
-    _t39 = J_theta_cart_right*_t22
-    _t40 = J_theta_cart_left*_t25
-    _t41 = J_theta_cart_left*_t26
-    _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5
-    _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5
-    _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7
-    _t45 = _t13*_t42 + _t43*_t9
-    _t46 = _t10*_t43 + _t14*_t42
-    _t47 = _t13*_t43 + _t44*_t9
-    _t48 = _t10*_t44 + _t14*_t43
-    _t49 = _t13*_t45 + _t47*_t9
-    _t50 = _t13*_t46 + _t48*_t9
-    _t51 = _t10*_t48 + _t14*_t46
-    M = np.array([_t49, _t50, _t50, _t51])
+    _t0 = 1.0/(radius_cart_left*radius_cart_left)
+    _t1 = J_theta_cart_left*_t0
+    _t2 = J_theta_cart_right/(radius_cart_right*radius_cart_right)
+    _t3 = J_theta_left/(radius_left*radius_left)
+    _t4 = J_theta_right/(radius_right*radius_right)
+    _t5 = J_theta_tractor + 0.09*_t1 + 0.09*_t2 + 0.042849*_t3 + 0.042849*_t4
+    _t6 = 2.4154589371980677*radius_right
+    _t7 = 0.5*K_theta_cart_x_tractor_2 + K_theta_tractor_x_tractor_2 - 0.1*_t1 + 0.1*_t2 - 0.207*_t3 + 0.207*_t4
+    _t8 = 0.5*radius_right
+    _t9 = 2.7777777777777777*J_theta_cart
+    _t10 = 3.3333333333333335*K_theta_cart_x_tractor
+    _t11 = J_x_tractor + 0.1111111111111111*_t1 - _t10 + 0.1111111111111111*_t2 + _t3 + _t4 + _t9
+    _t12 = theta_cart - theta_tractor
+    _t13 = math.cos(_t12)
+    _t14 = _t13*_t13
+    _t15 = 0.2*J_theta_cart_left*_t0 - K_theta_cart_x_tractor_2 - 0.2*_t2
+    _t16 = 0.25*J_theta_cart - 0.3*K_theta_cart_x_tractor - 0.08*_t1 - 0.08*_t2
+    _t17 = 0.8888888888888888*_t1 + _t10 + 0.8888888888888888*_t2 - _t9
+    _t18 = 0.3*K_theta_cart_x_tractor_2 - 0.06*_t1 + 0.06*_t2
+    _t19 = 0.8333333333333334*J_theta_cart - K_theta_cart_x_tractor - 0.26666666666666666*_t1 - 0.26666666666666666*_t2
+    _t20 = 0.6666666666666666*J_theta_cart_left*_t0 - 3.3333333333333335*K_theta_cart_x_tractor_2 - 0.6666666666666666*_t2
+    _t21 = _t13*math.sin(_t12)
+    _t22 = 2.4154589371980677*radius_left
+    _t23 = -_t22*_t5 + 0.5*_t7*radius_left
+    _t24 = 0.5*_t11*radius_left - _t22*_t7
+    _t25 = -_t15*_t22 + 0.5*_t17*radius_left
+    _t26 = 0.5*radius_left
+    _t27 = _t15*_t26 - _t16*_t22
+    _t28 = -_t18*_t22 + 0.5*_t19*radius_left
+    _t29 = -_t19*_t22 + _t20*_t26
+    _t30 = _t14*(_t25*_t8 + _t27*_t6) + _t21*(_t28*_t6 + _t29*_t8) + _t23*_t6 + _t24*_t8
+    M = np.array([
+        _t14*(_t6*(_t15*_t8 + _t16*_t6) + _t8*(_t15*_t6 + _t17*_t8)) + _t21*(_t6*(_t18*_t6 + _t19*_t8) + _t8*(_t19*_t6 + _t20*_t8)) + _t6*(_t5*_t6 + _t7*_t8) + _t8*(_t11*_t8 + _t6*_t7),
+        _t30,
+        _t30,
+        _t14*(-_t22*_t27 + _t25*_t26) + _t21*(-_t22*_t28 + 0.5*_t29*radius_left) - _t22*_t23 + _t24*_t26,
+    ])
     return M
 
 
