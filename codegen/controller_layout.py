@@ -92,6 +92,26 @@ class ControllerLayout:
         return 0 if formulation == "paper" else self.minimal_mhat
 
     @property
+    def history_offset(self) -> int:
+        """The first row of q whose rate and input the history for (17) keeps: 0 with the
+        paper formulation (it controls every row), else the minimal formulation's offset."""
+        return 0 if self.paper else self.offset
+
+    @property
+    def history_size(self) -> int:
+        """Rows of q(dot) and u the history for (17) keeps (from :attr:`history_offset`):
+        the controlled rows of either formulation, all of q with the paper one. A step
+        writes only these: a trailer's eight-row history was most of its commit."""
+        return self.nq if self.paper else self.nu
+
+    @property
+    def keeps_q_prev(self) -> bool:
+        """Whether a step reads q(t - h): a formulation whose (17) kernel takes q (neither
+        `_trig` nor `_mhat` kernels, which read the sin/cos or M-hat a step keeps)."""
+        forms = ("paper", "minimal") if self.paper else ("minimal",)
+        return any(not self.trig_of(f) and not self.mhat_of(f) for f in forms)
+
+    @property
     def trig_size(self) -> int:
         """Entries of a TDE controller's trig arrays: sin and cos per angle, the larger
         formulation's (0: no `_trig` kernels)."""

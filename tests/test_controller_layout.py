@@ -172,8 +172,12 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
     assert "off = 4;" in step
     assert "out_tau[1] = u[1];" in step
     history = _function_body(c_texts["controller.h"], "toy_push_history")  # static inline
-    assert "u_prev[4] = tau[0];" in history and "u_prev[5] = tau[1];" in history
-    assert "for (i = 0; i < 8; ++i)" in history
+    # the history keeps the controlled rows 4, 5 only (u = tau there); q(t-h) all 8 (the
+    # toy's (17) kernel reads q)
+    assert "qdot_prev[i] = qdot[4 + i];" in history and "u_prev[i] = tau[i];" in history
+    assert "for (i = 0; i < 2; ++i)" in history
+    assert "for (i = 0; i < 8; ++i) {\n        q_prev[i] = q[i];" in history
+    assert "toy_real_t qdot_prev[2];" in c_texts["tdroc.h"]
     assert (
         "toy_real_t k1[8];       /* diagonal of K1 (18), [GAIN_MIN, GAIN_MAX]; the minimal form "
         "uses k1[4], k1[5] */"
@@ -392,7 +396,7 @@ def test_python_controllers_run_on_the_layout(toy_controllers: tuple[Any, _Stubs
             tau = ctrl.step(q, zeros, zeros, zeros, zeros)
             assert tau.shape == (TOY.nu,)
         assert ctrl.last_status == "TOY_OK"
-        assert list(ctrl.u_prev) == [0.0] * 4 + [1.0, -1.0, 0.0, 0.0]
+        assert list(ctrl.u_prev) == [1.0, -1.0]  # the controlled rows 4, 5 only
         assert ctrl.u_discarded == 0.0
     # TDROC evaluated ||Mhat(q)^-1|| at q = 0 when its configuration was checked, then at the
     # measured q of each step once the gain was due.

@@ -49,11 +49,11 @@ typedef struct {
 #endif
     trailer_real_t p12[8];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer_real_t p22[8];
-    trailer_real_t q_prev[8];   /* q(t-h) */
-    trailer_real_t qdot_prev[8];  /* qdot(t-h) */
-    trailer_real_t qdot_prev2[8]; /* qdot(t-2h) */
-    trailer_real_t u_prev[8];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
-    trailer_real_t u_prev2[8];  /* u(t-2h) applied */
+    /* the history of the controlled rows 4..5 of q (the minimal formulation's) */
+    trailer_real_t qdot_prev[2];  /* qdot(t-h) */
+    trailer_real_t qdot_prev2[2]; /* qdot(t-2h) */
+    trailer_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    trailer_real_t u_prev2[2];  /* u(t-2h) applied */
     trailer_real_t k_minimal_asmc_law[18]; /* minimal_asmc_law's parameter-only values (at _init) */
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

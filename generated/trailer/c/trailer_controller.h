@@ -181,21 +181,20 @@ static inline int trailer_controlled_slice(int formulation, const trailer_real_t
     return nc;
 }
 
-/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-static inline void trailer_push_history(trailer_real_t q_prev[8], trailer_real_t qdot_prev[8],
-    trailer_real_t qdot_prev2[8], trailer_real_t u_prev[8], trailer_real_t u_prev2[8],
-    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t tau[2])
+/** Shift the history (17) needs: qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h) of q's rows 4..5
+    (the steps read M-hat or sin/cos of q(t-h), which they keep, not q(t-h)). */
+static inline void trailer_push_history(trailer_real_t qdot_prev[2], trailer_real_t qdot_prev2[2],
+    trailer_real_t u_prev[2], trailer_real_t u_prev2[2], const trailer_real_t qdot[8],
+    const trailer_real_t tau[2])
 {
     int i;
-    for (i = 0; i < 8; ++i) {
-        q_prev[i] = q[i];
+    /* the controlled rows: each an actuated coordinate, u = tau */
+    for (i = 0; i < 2; ++i) {
         qdot_prev2[i] = qdot_prev[i];
-        qdot_prev[i] = qdot[i];
+        qdot_prev[i] = qdot[4 + i];
         u_prev2[i] = u_prev[i];
-        u_prev[i] = TRAILER_LIT(0.0);
+        u_prev[i] = tau[i];
     }
-    u_prev[4] = tau[0];
-    u_prev[5] = tau[1];
 }
 
 /** Clip tau to +-tau_max: TRAILER_WARN_SATURATED if it had to, else TRAILER_OK. */

@@ -150,12 +150,13 @@ static void trailer_roc_clear(trailer_roc_state_t *s)
     int i;
     s->steps = 0u;
     for (i = 0; i < 8; ++i) {
-        s->q_prev[i] = TRAILER_LIT(0.0);
+        s->H1hat[i] = TRAILER_LIT(0.0);
+    }
+    for (i = 0; i < 2; ++i) {
         s->qdot_prev[i] = TRAILER_LIT(0.0);
         s->qdot_prev2[i] = TRAILER_LIT(0.0);
         s->u_prev[i] = TRAILER_LIT(0.0);
         s->u_prev2[i] = TRAILER_LIT(0.0);
-        s->H1hat[i] = TRAILER_LIT(0.0);
     }
     s->gain = TRAILER_LIT(0.0);
     s->s_norm = TRAILER_LIT(0.0);
@@ -330,8 +331,8 @@ trailer_status_t trailer_roc_step_detail(trailer_roc_state_t *state,
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    trailer_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
-                     state->u_prev2, q, qdot, out_tau);
+    trailer_push_history(state->qdot_prev, state->qdot_prev2, state->u_prev, state->u_prev2, qdot,
+                     out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */

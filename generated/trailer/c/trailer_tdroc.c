@@ -176,12 +176,13 @@ static void trailer_tdroc_clear(trailer_tdroc_state_t *s)
     int i;
     s->steps = 0u;
     for (i = 0; i < 8; ++i) {
-        s->q_prev[i] = TRAILER_LIT(0.0);
+        s->H1hat[i] = TRAILER_LIT(0.0);
+    }
+    for (i = 0; i < 2; ++i) {
         s->qdot_prev[i] = TRAILER_LIT(0.0);
         s->qdot_prev2[i] = TRAILER_LIT(0.0);
         s->u_prev[i] = TRAILER_LIT(0.0);
         s->u_prev2[i] = TRAILER_LIT(0.0);
-        s->H1hat[i] = TRAILER_LIT(0.0);
     }
     for (i = 0; i < 4; ++i) {
         s->mhat_prev[i] = TRAILER_LIT(0.0);
@@ -366,11 +367,11 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
 #endif
         /* the rates now and then, the controlled slice read in place */
         const trailer_real_t *const qdn = &qdot[off];
-        const trailer_real_t *const qdthen = central ? &state->qdot_prev2[off]
-                : &state->qdot_prev[off];
+        /* the history keeps the controlled rows only: its row i is q's row off + i */
+        const trailer_real_t *const qdthen = central ? state->qdot_prev2 : state->qdot_prev;
         trailer_real_t up[8];
         for (i = 0; i < nc; ++i) {
-            const int row = 4 + i;
+            const int row = i;
             up[i] = (TRAILER_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
         }
         for (i = nc; i < 8; ++i) {
@@ -476,8 +477,8 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    trailer_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
-                     state->u_prev2, q, qdot, out_tau);
+    trailer_push_history(state->qdot_prev, state->qdot_prev2, state->u_prev, state->u_prev2, qdot,
+                     out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */

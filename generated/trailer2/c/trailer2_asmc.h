@@ -49,11 +49,11 @@ typedef struct {
 #endif
     trailer2_real_t p12[11];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer2_real_t p22[11];
-    trailer2_real_t q_prev[11];   /* q(t-h) */
-    trailer2_real_t qdot_prev[11];  /* qdot(t-h) */
-    trailer2_real_t qdot_prev2[11]; /* qdot(t-2h) */
-    trailer2_real_t u_prev[11];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
-    trailer2_real_t u_prev2[11];  /* u(t-2h) applied */
+    /* the history of the controlled rows 5..6 of q (the minimal formulation's) */
+    trailer2_real_t qdot_prev[2];  /* qdot(t-h) */
+    trailer2_real_t qdot_prev2[2]; /* qdot(t-2h) */
+    trailer2_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    trailer2_real_t u_prev2[2];  /* u(t-2h) applied */
     trailer2_real_t k_minimal_asmc_law[25]; /* minimal_asmc_law's parameter-only values (at
                                                _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */

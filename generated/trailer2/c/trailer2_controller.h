@@ -184,21 +184,20 @@ static inline int trailer2_controlled_slice(int formulation, const trailer2_real
     return nc;
 }
 
-/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-static inline void trailer2_push_history(trailer2_real_t q_prev[11], trailer2_real_t qdot_prev[11],
-    trailer2_real_t qdot_prev2[11], trailer2_real_t u_prev[11], trailer2_real_t u_prev2[11],
-    const trailer2_real_t q[11], const trailer2_real_t qdot[11], const trailer2_real_t tau[2])
+/** Shift the history (17) needs: qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h) of q's rows 5..6
+    (the steps read M-hat or sin/cos of q(t-h), which they keep, not q(t-h)). */
+static inline void trailer2_push_history(trailer2_real_t qdot_prev[2],
+    trailer2_real_t qdot_prev2[2], trailer2_real_t u_prev[2], trailer2_real_t u_prev2[2],
+    const trailer2_real_t qdot[11], const trailer2_real_t tau[2])
 {
     int i;
-    for (i = 0; i < 11; ++i) {
-        q_prev[i] = q[i];
+    /* the controlled rows: each an actuated coordinate, u = tau */
+    for (i = 0; i < 2; ++i) {
         qdot_prev2[i] = qdot_prev[i];
-        qdot_prev[i] = qdot[i];
+        qdot_prev[i] = qdot[5 + i];
         u_prev2[i] = u_prev[i];
-        u_prev[i] = TRAILER2_LIT(0.0);
+        u_prev[i] = tau[i];
     }
-    u_prev[5] = tau[0];
-    u_prev[6] = tau[1];
 }
 
 /** Clip tau to +-tau_max: TRAILER2_WARN_SATURATED if it had to, else TRAILER2_OK. */

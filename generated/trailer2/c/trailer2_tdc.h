@@ -48,11 +48,11 @@ typedef struct {
 #endif
     trailer2_real_t p12[11];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer2_real_t p22[11];
-    trailer2_real_t q_prev[11];   /* q(t-h) */
-    trailer2_real_t qdot_prev[11];  /* qdot(t-h) */
-    trailer2_real_t qdot_prev2[11]; /* qdot(t-2h) */
-    trailer2_real_t u_prev[11];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
-    trailer2_real_t u_prev2[11];  /* u(t-2h) applied */
+    /* the history of the controlled rows 5..6 of q (the minimal formulation's) */
+    trailer2_real_t qdot_prev[2];  /* qdot(t-h) */
+    trailer2_real_t qdot_prev2[2]; /* qdot(t-2h) */
+    trailer2_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    trailer2_real_t u_prev2[2];  /* u(t-2h) applied */
     trailer2_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at
                                     _init) */
     trailer2_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at

@@ -260,10 +260,11 @@ class _Controller:
         """Back to the state the constructor left (mirrors ``trailer2_<ctrl>_reset``)."""
         self.steps = 0
         self.q_prev = np.zeros(11)
-        self.qdot_prev = np.zeros(11)
-        self.qdot_prev2 = np.zeros(11)
-        self.u_prev = np.zeros(11)
-        self.u_prev2 = np.zeros(11)
+        # the rates and inputs of q's rows 5..6 (the controlled ones), as the C state keeps them
+        self.qdot_prev = np.zeros(2)
+        self.qdot_prev2 = np.zeros(2)
+        self.u_prev = np.zeros(2)
+        self.u_prev2 = np.zeros(2)
         self.omega = np.zeros((MAX_WINDOW + 1, 11))
         self.omega_count = 0
         self.omega_head = 0  # where the C ring holds the newest norm (see omega_ring)
@@ -431,12 +432,13 @@ class _Controller:
             if self.steps >= 2:
                 # MATCHED: rates averaged over rate_window pair with a blend of the last two inputs.
                 c2 = c.rate_window / (2.0 * c.h) if c.accel_estimator == ACCEL_MATCHED else 0.0
-                up = ((1.0 - c2) * self.u_prev + c2 * self.u_prev2)[sl]
+                kept = slice(0, nc)  # the history keeps the controlled rows only
+                up = ((1.0 - c2) * self.u_prev + c2 * self.u_prev2)[kept]
                 tde_fn = laws.minimal_tde
                 central = c.accel_estimator == ACCEL_CENTRAL
                 then = self.qdot_prev2 if central else self.qdot_prev
                 span = 2.0 * c.h if central else c.h
-                H1hat[:nc] = tde_fn(self.q_prev, up, qdv[sl], then[sl], [span], p)
+                H1hat[:nc] = tde_fn(self.q_prev, up, qdv[sl], then[kept], [span], p)
         if self.window:
             if self.steps >= 2:
                 omega[1:] = self.omega[:-1]
@@ -485,9 +487,9 @@ class _Controller:
         self.gain, self.s_norm, self.u_discarded = gain, s_norm, u_discarded
         self.q_prev = qv.copy()
         self.qdot_prev2 = self.qdot_prev.copy()
-        self.qdot_prev = qdv.copy()
+        self.qdot_prev = qdv[sl].copy()
         self.u_prev2 = self.u_prev
-        self.u_prev = np.array([0.0, 0.0, 0.0, 0.0, 0.0, tau[0], tau[1], 0.0, 0.0, 0.0, 0.0])
+        self.u_prev = tau.copy()  # the controlled rows are the actuated ones: u = tau
         self.tau = tau.copy()
         for name, value in updates.items():  # the law's own state (an integral)
             setattr(self, name, value)

@@ -184,21 +184,20 @@ static inline int trailer3_controlled_slice(int formulation, const trailer3_real
     return nc;
 }
 
-/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-static inline void trailer3_push_history(trailer3_real_t q_prev[14], trailer3_real_t qdot_prev[14],
-    trailer3_real_t qdot_prev2[14], trailer3_real_t u_prev[14], trailer3_real_t u_prev2[14],
-    const trailer3_real_t q[14], const trailer3_real_t qdot[14], const trailer3_real_t tau[2])
+/** Shift the history (17) needs: qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h) of q's rows 6..7
+    (the steps read M-hat or sin/cos of q(t-h), which they keep, not q(t-h)). */
+static inline void trailer3_push_history(trailer3_real_t qdot_prev[2],
+    trailer3_real_t qdot_prev2[2], trailer3_real_t u_prev[2], trailer3_real_t u_prev2[2],
+    const trailer3_real_t qdot[14], const trailer3_real_t tau[2])
 {
     int i;
-    for (i = 0; i < 14; ++i) {
-        q_prev[i] = q[i];
+    /* the controlled rows: each an actuated coordinate, u = tau */
+    for (i = 0; i < 2; ++i) {
         qdot_prev2[i] = qdot_prev[i];
-        qdot_prev[i] = qdot[i];
+        qdot_prev[i] = qdot[6 + i];
         u_prev2[i] = u_prev[i];
-        u_prev[i] = TRAILER3_LIT(0.0);
+        u_prev[i] = tau[i];
     }
-    u_prev[6] = tau[0];
-    u_prev[7] = tau[1];
 }
 
 /** Clip tau to +-tau_max: TRAILER3_WARN_SATURATED if it had to, else TRAILER3_OK. */

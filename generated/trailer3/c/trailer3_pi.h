@@ -44,11 +44,11 @@ typedef struct {
 #ifndef TRAILER3_PI_FROZEN
     trailer3_pi_config_t config; /* the configuration _init validated; a step compares with it */
 #endif
-    trailer3_real_t q_prev[14];   /* q(t-h) */
-    trailer3_real_t qdot_prev[14];  /* qdot(t-h) */
-    trailer3_real_t qdot_prev2[14]; /* qdot(t-2h) */
-    trailer3_real_t u_prev[14];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
-    trailer3_real_t u_prev2[14];  /* u(t-2h) applied */
+    /* the history of the controlled rows 6..7 of q (the minimal formulation's) */
+    trailer3_real_t qdot_prev[2];  /* qdot(t-h) */
+    trailer3_real_t qdot_prev2[2]; /* qdot(t-2h) */
+    trailer3_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    trailer3_real_t u_prev2[2];  /* u(t-2h) applied */
     trailer3_real_t k_minimal_pi_law[2]; /* minimal_pi_law's parameter-only values (at _init) */
     trailer3_real_t H1hat[14];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer3_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=

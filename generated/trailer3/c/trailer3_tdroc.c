@@ -207,12 +207,13 @@ static void trailer3_tdroc_clear(trailer3_tdroc_state_t *s)
     int i;
     s->steps = 0u;
     for (i = 0; i < 14; ++i) {
-        s->q_prev[i] = TRAILER3_LIT(0.0);
+        s->H1hat[i] = TRAILER3_LIT(0.0);
+    }
+    for (i = 0; i < 2; ++i) {
         s->qdot_prev[i] = TRAILER3_LIT(0.0);
         s->qdot_prev2[i] = TRAILER3_LIT(0.0);
         s->u_prev[i] = TRAILER3_LIT(0.0);
         s->u_prev2[i] = TRAILER3_LIT(0.0);
-        s->H1hat[i] = TRAILER3_LIT(0.0);
     }
     for (i = 0; i < 4; ++i) {
         s->mhat_prev[i] = TRAILER3_LIT(0.0);
@@ -398,11 +399,11 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
 #endif
         /* the rates now and then, the controlled slice read in place */
         const trailer3_real_t *const qdn = &qdot[off];
-        const trailer3_real_t *const qdthen = central ? &state->qdot_prev2[off]
-                : &state->qdot_prev[off];
+        /* the history keeps the controlled rows only: its row i is q's row off + i */
+        const trailer3_real_t *const qdthen = central ? state->qdot_prev2 : state->qdot_prev;
         trailer3_real_t up[14];
         for (i = 0; i < nc; ++i) {
-            const int row = 6 + i;
+            const int row = i;
             up[i] = (TRAILER3_LIT(1.0) - c2) * state->u_prev[row] + c2 * state->u_prev2[row];
         }
         for (i = nc; i < 14; ++i) {
@@ -509,8 +510,8 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    trailer3_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
-                     state->u_prev2, q, qdot, out_tau);
+    trailer3_push_history(state->qdot_prev, state->qdot_prev2, state->u_prev, state->u_prev2, qdot,
+                     out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */

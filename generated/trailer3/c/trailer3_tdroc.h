@@ -53,11 +53,11 @@ typedef struct {
 #endif
     trailer3_real_t p12[14];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     trailer3_real_t p22[14];
-    trailer3_real_t q_prev[14];   /* q(t-h) */
-    trailer3_real_t qdot_prev[14];  /* qdot(t-h) */
-    trailer3_real_t qdot_prev2[14]; /* qdot(t-2h) */
-    trailer3_real_t u_prev[14];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
-    trailer3_real_t u_prev2[14];  /* u(t-2h) applied */
+    /* the history of the controlled rows 6..7 of q (the minimal formulation's) */
+    trailer3_real_t qdot_prev[2];  /* qdot(t-h) */
+    trailer3_real_t qdot_prev2[2]; /* qdot(t-2h) */
+    trailer3_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
+    trailer3_real_t u_prev2[2];  /* u(t-2h) applied */
     trailer3_real_t tde_span;    /* span of (17)'s difference quotient: h, or 2h central (at
                                     _init) */
     trailer3_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
