@@ -48,7 +48,8 @@ def test_lyapunov_solution_solves_the_equation_and_is_positive_definite() -> Non
 def test_switching_term_is_continuous_at_the_boundary_layer() -> None:
     law, ls = ctl.tde_law("minimal", switching=True, model=DRISHTI)
     s = ctl.sliding_variable(ls)
-    du, s_norm = ctl.switching_term(ls, ls.gain)
+    direction, s_norm = ctl.switching_direction(ls)
+    du = direction * ls.gain
     # On ‖s‖ = ε both branches of (25) give k s/ε.
     vals = {ls.e[0]: 0.3, ls.e[1]: -0.1, ls.edot[0]: 0.2, ls.edot[1]: 0.05,
             ls.p12[0]: 0.125, ls.p12[1]: 0.125, ls.p22[0]: 0.15625, ls.p22[1]: 0.15625,
@@ -58,6 +59,27 @@ def test_switching_term_is_continuous_at_the_boundary_layer() -> None:
     outside = du.subs({**vals, ls.eps: eps * (1 - 1e-12)})
     assert float((inside - outside).norm()) < 1e-9
     del law, s
+
+
+@pytest.mark.parametrize("formulation", ["paper", "minimal"])
+def test_the_law_is_mhat_times_ua_plus_the_switching_term_plus_h1(formulation: str) -> None:
+    """(22), (24): u = M̂ (u_a + k s / max(‖s‖, ε)) + Ĥ1 as printed in the paper; the law
+    is written (M̂ u_a + Ĥ1) + k M̂ s / max(‖s‖, ε) for the step's latency: the same value
+    at random inputs, inside and outside the boundary layer."""
+    law, ls = ctl.tde_law(formulation, switching=True, model=DRISHTI)  # type: ignore[arg-type]
+    cm = ctl.control_model(formulation, DRISHTI)  # type: ignore[arg-type]
+    s = ctl.sliding_variable(ls)
+    ua = ctl.nominal_acceleration(ls) + s * ls.gain / sp.Max(sp.sqrt(sum(x**2 for x in s)),
+                                                               ls.eps)
+    printed = cm.mass * ua + ls.h1
+    rng = np.random.default_rng(3)
+    free = sorted((law.u.free_symbols | printed.free_symbols), key=str)
+    for eps in (1e-3, 50.0):  # outside, inside the boundary layer
+        vals = {x: float(rng.uniform(0.1, 2.0)) for x in free}
+        vals[ls.eps] = eps
+        got = np.array(law.u.subs(vals), dtype=float)
+        want = np.array(printed.subs(vals), dtype=float)
+        assert np.allclose(got, want, rtol=1e-12, atol=1e-12)
 
 
 def test_tde_is_exact_for_a_constant_h1_under_zero_order_hold() -> None:

@@ -776,7 +776,7 @@ static inline void wmr_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_rea
 }
 
 /* wmr_k_minimal_tdroc_law: the per-step part of wmr_minimal_tdroc_law (wmr_laws.h documents it).
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void wmr_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
@@ -785,35 +785,37 @@ static inline void wmr_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_r
     (void)q;
     const wmr_real_t e0 = e[0];
     const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t7 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t8 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t9 = wmr_norm2(_t7, _t8);
-    const wmr_real_t gain_1 = gain[0];
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t10 = gain_1/WMR_FMAX(_t9, eps_1);
     const wmr_real_t qdd_des0 = qddot_des[0];
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t11 = _t10*_t7 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t _t7 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t edot1 = edot[1];
     const wmr_real_t qdd_des1 = qddot_des[1];
     const wmr_real_t k1_1 = k1[1];
     const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t12 = _t10*_t8 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t8 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t p12_0 = p12[0];
+    const wmr_real_t p22_0 = p22[0];
+    const wmr_real_t _t9 = e0*p12_0 + edot0*p22_0;
+    const wmr_real_t p12_1 = p12[1];
+    const wmr_real_t p22_1 = p22[1];
+    const wmr_real_t _t10 = e1*p12_1 + edot1*p22_1;
+    const wmr_real_t _t11 = wmr_norm2(_t10, _t9);
+    const wmr_real_t eps_1 = eps[0];
+    const wmr_real_t _t12 = WMR_LIT(1.0)/(WMR_FMAX(_t11, eps_1));
+    const wmr_real_t _t13 = _t12*_t9;
+    const wmr_real_t _t14 = _t10*_t12;
     const wmr_real_t H1hat0 = H1hat[0];
     const wmr_real_t H1hat1 = H1hat[1];
+    const wmr_real_t gain_1 = gain[0];
     const wmr_real_t _t5 = kept[0];
     const wmr_real_t _t6 = kept[1];
-    u[0] = H1hat0 + _t11*_t5 + _t12*_t6;
-    u[1] = H1hat1 + _t11*_t6 + _t12*_t5;
-    s[0] = _t7;
-    s[1] = _t8;
-    s_norm[0] = _t9;
+    u[0] = H1hat0 + _t5*_t7 + _t6*_t8 + gain_1*(_t13*_t5 + _t14*_t6);
+    u[1] = H1hat1 + _t5*_t8 + _t6*_t7 + gain_1*(_t13*_t6 + _t14*_t5);
+    s[0] = _t9;
+    s[1] = _t10;
+    s_norm[0] = _t11;
 }
 
 /* wmr_k_minimal_roc_law_keep: the parameter-only part of wmr_minimal_roc_law (wmr_laws.h documents
@@ -847,7 +849,7 @@ static inline void wmr_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t 
 }
 
 /* wmr_k_minimal_roc_law: the per-step part of wmr_minimal_roc_law (wmr_laws.h documents it).
-   operations after CSE: 20 add, 27 mul, 2 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 22 add, 33 mul, 2 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void wmr_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
@@ -857,51 +859,53 @@ static inline void wmr_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_rea
     (void)q;
     const wmr_real_t e0 = e[0];
     const wmr_real_t edot0 = edot[0];
-    const wmr_real_t p12_0 = p12[0];
-    const wmr_real_t p22_0 = p22[0];
-    const wmr_real_t _t12 = e0*p12_0 + edot0*p22_0;
-    const wmr_real_t e1 = e[1];
-    const wmr_real_t edot1 = edot[1];
-    const wmr_real_t p12_1 = p12[1];
-    const wmr_real_t p22_1 = p22[1];
-    const wmr_real_t _t13 = e1*p12_1 + edot1*p22_1;
-    const wmr_real_t _t14 = wmr_norm2(_t12, _t13);
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t15 = e0*k1_0 + edot0*k2_0;
+    const wmr_real_t _t12 = e0*k1_0 + edot0*k2_0;
+    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t _t13 = _t12 + qdd_des0;
+    const wmr_real_t e1 = e[1];
+    const wmr_real_t edot1 = edot[1];
     const wmr_real_t k1_1 = k1[1];
     const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t16 = e1*k1_1 + edot1*k2_1;
-    const wmr_real_t qdd_des0 = qddot_des[0];
+    const wmr_real_t _t14 = e1*k1_1 + edot1*k2_1;
     const wmr_real_t qdd_des1 = qddot_des[1];
+    const wmr_real_t _t15 = _t14 + qdd_des1;
+    const wmr_real_t p12_0 = p12[0];
+    const wmr_real_t p22_0 = p22[0];
+    const wmr_real_t _t16 = e0*p12_0 + edot0*p22_0;
+    const wmr_real_t p12_1 = p12[1];
+    const wmr_real_t p22_1 = p22[1];
+    const wmr_real_t _t17 = e1*p12_1 + edot1*p22_1;
+    const wmr_real_t _t18 = wmr_norm2(_t16, _t17);
+    const wmr_real_t eps_1 = eps[0];
+    const wmr_real_t _t19 = WMR_LIT(1.0)/(WMR_FMAX(_t18, eps_1));
+    const wmr_real_t _t20 = _t16*_t19;
+    const wmr_real_t _t21 = _t17*_t19;
     const wmr_real_t alpha = bounds[0];
     const wmr_real_t phi = bounds[1];
-    const wmr_real_t _t17 = (alpha*(wmr_norm2(_t15, _t16) + wmr_norm2(qdd_des0, qdd_des1))
+    const wmr_real_t _t22 = (alpha*(wmr_norm2(_t12, _t14) + wmr_norm2(qdd_des0, qdd_des1))
             + phi)/(WMR_LIT(1.0) - alpha);
-    const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t18 = _t17/WMR_FMAX(_t14, eps_1);
-    const wmr_real_t _t19 = _t12*_t18 + _t15 + qdd_des0;
-    const wmr_real_t _t20 = _t13*_t18 + _t16 + qdd_des1;
     const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t21 = thetadot_l*thetadot_l;
+    const wmr_real_t _t23 = thetadot_l*thetadot_l;
     const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t22 = thetadot_l*thetadot_r;
+    const wmr_real_t _t24 = thetadot_l*thetadot_r;
     const wmr_real_t _t10 = kept[2];
-    const wmr_real_t _t23 = _t10*_t22;
-    const wmr_real_t _t24 = thetadot_r*thetadot_r;
+    const wmr_real_t _t25 = _t10*_t24;
+    const wmr_real_t _t26 = thetadot_r*thetadot_r;
     const wmr_real_t _t5 = kept[0];
     const wmr_real_t _t6 = kept[1];
     const wmr_real_t _t11 = kept[3];
-    u[0] = _t11*_t21 + _t19*_t5 + _t20*_t6 + _t23;
-    u[1] = _t11*_t24 + _t19*_t6 + _t20*_t5 + _t23;
-    s[0] = _t12;
-    s[1] = _t13;
-    s_norm[0] = _t14;
-    gain[0] = _t17;
+    u[0] = _t11*_t23 + _t13*_t5 + _t15*_t6 + _t22*(_t20*_t5 + _t21*_t6) + _t25;
+    u[1] = _t11*_t26 + _t13*_t6 + _t15*_t5 + _t22*(_t20*_t6 + _t21*_t5) + _t25;
+    s[0] = _t16;
+    s[1] = _t17;
+    s_norm[0] = _t18;
+    gain[0] = _t22;
 }
 
 /* wmr_k_minimal_asmc_law: the per-step part of wmr_minimal_asmc_law (wmr_laws.h documents it).
-   operations after CSE: 16 add, 24 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 18 add, 30 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void wmr_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
@@ -920,31 +924,33 @@ static inline void wmr_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_re
     const wmr_real_t p22_1 = p22[1];
     const wmr_real_t _t13 = e1*p12_1 + edot1*p22_1;
     const wmr_real_t _t14 = wmr_norm2(_t12, _t13);
-    const wmr_real_t gain_1 = gain[0];
     const wmr_real_t eps_1 = eps[0];
-    const wmr_real_t _t15 = gain_1/WMR_FMAX(_t14, eps_1);
+    const wmr_real_t _t15 = WMR_LIT(1.0)/(WMR_FMAX(_t14, eps_1));
+    const wmr_real_t _t16 = _t12*_t15;
+    const wmr_real_t _t17 = _t13*_t15;
     const wmr_real_t qdd_des0 = qddot_des[0];
     const wmr_real_t k1_0 = k1[0];
     const wmr_real_t k2_0 = k2[0];
-    const wmr_real_t _t16 = _t12*_t15 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const wmr_real_t _t18 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const wmr_real_t qdd_des1 = qddot_des[1];
     const wmr_real_t k1_1 = k1[1];
     const wmr_real_t k2_1 = k2[1];
-    const wmr_real_t _t17 = _t13*_t15 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const wmr_real_t _t19 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const wmr_real_t thetadot_l = qdot[4];
-    const wmr_real_t _t18 = thetadot_l*thetadot_l;
+    const wmr_real_t _t20 = thetadot_l*thetadot_l;
     const wmr_real_t thetadot_r = qdot[3];
-    const wmr_real_t _t19 = thetadot_l*thetadot_r;
+    const wmr_real_t _t21 = thetadot_l*thetadot_r;
     const wmr_real_t _t10 = kept[2];
-    const wmr_real_t _t20 = _t10*_t19;
-    const wmr_real_t _t21 = thetadot_r*thetadot_r;
+    const wmr_real_t _t22 = _t10*_t21;
+    const wmr_real_t _t23 = thetadot_r*thetadot_r;
+    const wmr_real_t gain_1 = gain[0];
     const wmr_real_t adapt_0 = adapt[0];
     const wmr_real_t h = adapt[1];
     const wmr_real_t _t5 = kept[0];
     const wmr_real_t _t6 = kept[1];
     const wmr_real_t _t11 = kept[3];
-    u[0] = _t11*_t18 + _t16*_t5 + _t17*_t6 + _t20;
-    u[1] = _t11*_t21 + _t16*_t6 + _t17*_t5 + _t20;
+    u[0] = _t11*_t20 + _t18*_t5 + _t19*_t6 + _t22 + gain_1*(_t16*_t5 + _t17*_t6);
+    u[1] = _t11*_t23 + _t18*_t6 + _t19*_t5 + _t22 + gain_1*(_t16*_t6 + _t17*_t5);
     s[0] = _t12;
     s[1] = _t13;
     s_norm[0] = _t14;

@@ -650,7 +650,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 }
 
 /* wmr_minimal_tdroc_law: documented in wmr_laws.h.
-   operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 20 add, 36 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
     const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat, const wmr_real_t *gain,
@@ -663,7 +663,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
 }
 
 /* wmr_minimal_roc_law: documented in wmr_laws.h.
-   operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 30 add, 56 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *bounds,
@@ -676,7 +676,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
 }
 
 /* wmr_minimal_asmc_law: documented in wmr_laws.h.
-   operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 26 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *gain,

@@ -654,7 +654,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s [2] row-major (WMR_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 20 add, 36 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -705,7 +705,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (WMR_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 30 add, 56 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -758,7 +758,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (WMR_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 26 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,

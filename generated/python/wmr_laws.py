@@ -1208,7 +1208,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 18 add, 30 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 20 add, 36 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     del q  # not used by this function
     e0, e1 = _flat(e, 2, "e")
@@ -1228,25 +1228,27 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = r*r
-    _t1 = _t0*m
-    _t2 = 1.0/(b*b)
-    _t3 = _t0*_t2
-    _t4 = I*_t3 - 2.0*K*_t3*d + _t1*_t2*d*d
-    _t5 = I_w + 0.25*_t1 + _t4
-    _t6 = e0*p12_0 + edot0*p22_0
-    _t7 = e1*p12_1 + edot1*p22_1
-    _t8 = _norm(_t6, _t7)
-    _t9 = gain_1/max(_t8, eps_1)
-    _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t11 = 0.25*_t0*m - _t4
-    _t12 = _t7*_t9 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = r*r
+    _t2 = _t1*m
+    _t3 = 1.0/(b*b)
+    _t4 = _t1*_t3
+    _t5 = I*_t4 - 2.0*K*_t4*d + _t2*_t3*d*d
+    _t6 = I_w + 0.25*_t2 + _t5
+    _t7 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t8 = 0.25*_t1*m - _t5
+    _t9 = e0*p12_0 + edot0*p22_0
+    _t10 = e1*p12_1 + edot1*p22_1
+    _t11 = _norm(_t10, _t9)
+    _t12 = 1.0/(max(_t11, eps_1))
+    _t13 = _t12*_t9
+    _t14 = _t10*_t12
     u = np.array([
-        H1hat0 + _t10*_t5 + _t11*_t12,
-        H1hat1 + _t10*_t11 + _t12*_t5,
+        H1hat0 + _t0*_t6 + _t7*_t8 + gain_1*(_t13*_t6 + _t14*_t8),
+        H1hat1 + _t0*_t8 + _t6*_t7 + gain_1*(_t13*_t8 + _t14*_t6),
     ])
-    s = np.array([_t6, _t7])
-    s_norm = np.array([_t8])
+    s = np.array([_t9, _t10])
+    s_norm = np.array([_t11])
     return u, s, s_norm
 
 
@@ -1277,7 +1279,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 28 add, 50 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 30 add, 56 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     del q  # not used by this function
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -1297,36 +1299,38 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     r = float(_field(p, "r"))
     b = float(_field(p, "b"))
     d = float(_field(p, "d"))
-    _t0 = r*r
-    _t1 = _t0*m
-    _t2 = 1.0/(b*b)
-    _t3 = _t0*_t2
-    _t4 = I*_t3 - 2.0*K*_t3*d + _t1*_t2*d*d
-    _t5 = I_w + 0.25*_t1 + _t4
-    _t6 = e0*p12_0 + edot0*p22_0
-    _t7 = e1*p12_1 + edot1*p22_1
-    _t8 = _norm(_t6, _t7)
-    _t9 = e0*k1_0 + edot0*k2_0
-    _t10 = e1*k1_1 + edot1*k2_1
-    _t11 = (alpha*(_norm(_t10, _t9) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
-    _t12 = _t11/max(_t8, eps_1)
-    _t13 = _t12*_t6 + _t9 + qdd_des0
-    _t14 = 0.25*_t0*m - _t4
-    _t15 = _t10 + _t12*_t7 + qdd_des1
-    _t16 = thetadot_l*thetadot_l
-    _t17 = _t2*r*r*r
-    _t18 = K*_t17
-    _t19 = _t17*d*m
-    _t20 = thetadot_l*thetadot_r
-    _t21 = -_t18*_t20 + _t19*_t20
-    _t22 = thetadot_r*thetadot_r
+    _t0 = e0*k1_0 + edot0*k2_0
+    _t1 = _t0 + qdd_des0
+    _t2 = r*r
+    _t3 = _t2*m
+    _t4 = 1.0/(b*b)
+    _t5 = _t2*_t4
+    _t6 = I*_t5 - 2.0*K*_t5*d + _t3*_t4*d*d
+    _t7 = I_w + 0.25*_t3 + _t6
+    _t8 = e1*k1_1 + edot1*k2_1
+    _t9 = _t8 + qdd_des1
+    _t10 = 0.25*_t2*m - _t6
+    _t11 = e0*p12_0 + edot0*p22_0
+    _t12 = e1*p12_1 + edot1*p22_1
+    _t13 = _norm(_t11, _t12)
+    _t14 = 1.0/(max(_t13, eps_1))
+    _t15 = _t11*_t14
+    _t16 = _t12*_t14
+    _t17 = (alpha*(_norm(_t0, _t8) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
+    _t18 = thetadot_l*thetadot_l
+    _t19 = _t4*r*r*r
+    _t20 = K*_t19
+    _t21 = _t19*d*m
+    _t22 = thetadot_l*thetadot_r
+    _t23 = -_t20*_t22 + _t21*_t22
+    _t24 = thetadot_r*thetadot_r
     u = np.array([
-        _t13*_t5 + _t14*_t15 + _t16*_t18 - _t16*_t19 + _t21,
-        _t13*_t14 + _t15*_t5 + _t18*_t22 - _t19*_t22 + _t21,
+        _t1*_t7 + _t10*_t9 + _t17*(_t10*_t16 + _t15*_t7) + _t18*_t20 - _t18*_t21 + _t23,
+        _t1*_t10 + _t17*(_t10*_t15 + _t16*_t7) + _t20*_t24 - _t21*_t24 + _t23 + _t7*_t9,
     ])
-    s = np.array([_t6, _t7])
-    s_norm = np.array([_t8])
-    gain = np.array([_t11])
+    s = np.array([_t11, _t12])
+    s_norm = np.array([_t13])
+    gain = np.array([_t17])
     return u, s, s_norm, gain
 
 
@@ -1358,7 +1362,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 24 add, 47 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 26 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     del q  # not used by this function
     _, _, _, thetadot_r, thetadot_l = _flat(qdot, 5, "qdot")
@@ -1388,20 +1392,22 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t6 = e0*p12_0 + edot0*p22_0
     _t7 = e1*p12_1 + edot1*p22_1
     _t8 = _norm(_t6, _t7)
-    _t9 = gain_1/max(_t8, eps_1)
-    _t10 = _t6*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t9 = 1.0/(max(_t8, eps_1))
+    _t10 = _t6*_t9
     _t11 = 0.25*_t0*m - _t4
-    _t12 = _t7*_t9 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t13 = thetadot_l*thetadot_l
-    _t14 = _t2*r*r*r
-    _t15 = K*_t14
-    _t16 = _t14*d*m
-    _t17 = thetadot_l*thetadot_r
-    _t18 = -_t15*_t17 + _t16*_t17
-    _t19 = thetadot_r*thetadot_r
+    _t12 = _t7*_t9
+    _t13 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t14 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t15 = thetadot_l*thetadot_l
+    _t16 = _t2*r*r*r
+    _t17 = K*_t16
+    _t18 = _t16*d*m
+    _t19 = thetadot_l*thetadot_r
+    _t20 = -_t17*_t19 + _t18*_t19
+    _t21 = thetadot_r*thetadot_r
     u = np.array([
-        _t10*_t5 + _t11*_t12 + _t13*_t15 - _t13*_t16 + _t18,
-        _t10*_t11 + _t12*_t5 + _t15*_t19 - _t16*_t19 + _t18,
+        _t11*_t14 + _t13*_t5 + _t15*_t17 - _t15*_t18 + _t20 + gain_1*(_t10*_t5 + _t11*_t12),
+        _t11*_t13 + _t14*_t5 + _t17*_t21 - _t18*_t21 + _t20 + gain_1*(_t10*_t11 + _t12*_t5),
     ])
     s = np.array([_t6, _t7])
     s_norm = np.array([_t8])

@@ -247,7 +247,7 @@ static inline void trailer_k_minimal_tdc_law_mhat(const trailer_params_t *p,
 
 /* trailer_k_minimal_tdroc_law_mhat: the body of trailer_minimal_tdroc_law_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
     const trailer_real_t *mhat, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -258,36 +258,38 @@ static inline void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
     (void)p;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t0 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t1 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t2 = trailer_norm2(_t0, _t1);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t3 = gain_1/TRAILER_FMAX(_t2, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
+    const trailer_real_t _t2 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t3 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t4 = trailer_norm2(_t2, _t3);
+    const trailer_real_t eps_1 = eps[0];
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t4, eps_1));
+    const trailer_real_t _t6 = _t2*_t5;
+    const trailer_real_t _t7 = _t3*_t5;
     const trailer_real_t mhat_0 = mhat[0];
     const trailer_real_t mhat_2 = mhat[2];
     const trailer_real_t mhat_3 = mhat[3];
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
-    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
-    s[0] = _t0;
-    s[1] = _t1;
-    s_norm[0] = _t2;
+    const trailer_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2 + gain_1*(_t6*mhat_0 + _t7*mhat_2);
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3 + gain_1*(_t6*mhat_2 + _t7*mhat_3);
+    s[0] = _t2;
+    s[1] = _t3;
+    s_norm[0] = _t4;
 }
 
 /* trailer_k_minimal_roc_law_keep: the parameter-only part of trailer_minimal_roc_law
@@ -350,7 +352,7 @@ static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
 
 /* trailer_k_minimal_roc_law: the per-step part of trailer_minimal_roc_law (trailer_laws.h documents
    it).
-   operations after CSE: 79 add, 116 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 81 add, 122 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[18], const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -415,84 +417,86 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[18], cons
     const trailer_real_t _t56 = J_theta_cart*_t55 + _t38*_t51 + _t52;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t57 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t58 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t59 = trailer_norm2(_t57, _t58);
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t60 = e0*k1_0 + edot0*k2_0;
+    const trailer_real_t _t57 = e0*k1_0 + edot0*k2_0;
+    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t _t58 = _t57 + qdd_des0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t61 = e1*k1_1 + edot1*k2_1;
-    const trailer_real_t qdd_des0 = qddot_des[0];
+    const trailer_real_t _t59 = e1*k1_1 + edot1*k2_1;
     const trailer_real_t qdd_des1 = qddot_des[1];
+    const trailer_real_t _t60 = _t59 + qdd_des1;
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
+    const trailer_real_t _t61 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t62 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t63 = trailer_norm2(_t61, _t62);
+    const trailer_real_t eps_1 = eps[0];
+    const trailer_real_t _t64 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t63, eps_1));
+    const trailer_real_t _t65 = _t61*_t64;
+    const trailer_real_t _t66 = _t62*_t64;
     const trailer_real_t alpha = bounds[0];
     const trailer_real_t phi = bounds[1];
-    const trailer_real_t _t62 = (alpha*(trailer_norm2(_t60, _t61)
+    const trailer_real_t _t67 = (alpha*(trailer_norm2(_t57, _t59)
             + trailer_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER_LIT(1.0) - alpha);
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t63 = _t62/TRAILER_FMAX(_t59, eps_1);
-    const trailer_real_t _t64 = _t57*_t63 + _t60 + qdd_des0;
-    const trailer_real_t _t65 = _t58*_t63 + _t61 + qdd_des1;
-    const trailer_real_t _t66 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t _t67 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t _t68 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t _t69 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
     const trailer_real_t K_theta_tractor_x_tractor = kept[7];
-    const trailer_real_t _t68 = K_theta_tractor_x_tractor*_t28
+    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t28
             + _t31*(-K_theta_cart_x_tractor_2*_t18 + _t26);
-    const trailer_real_t _t69 = _t31*(-_t32 - _t33);
-    const trailer_real_t _t70 = _t18 + _t35;
-    const trailer_real_t _t71 = _t4*_t70;
-    const trailer_real_t _t72 = _t20 + _t37;
+    const trailer_real_t _t71 = _t31*(-_t32 - _t33);
+    const trailer_real_t _t72 = _t18 + _t35;
     const trailer_real_t _t73 = _t4*_t72;
-    const trailer_real_t _t74 = _t18 - _t35;
-    const trailer_real_t _t75 = _t5*_t74;
-    const trailer_real_t _t76 = _t20 - _t37;
+    const trailer_real_t _t74 = _t20 + _t37;
+    const trailer_real_t _t75 = _t4*_t74;
+    const trailer_real_t _t76 = _t18 - _t35;
     const trailer_real_t _t77 = _t5*_t76;
-    const trailer_real_t _t78 = _t53*_t71 + _t54*_t73;
-    const trailer_real_t _t79 = _t53*_t75 + _t54*_t77;
+    const trailer_real_t _t78 = _t20 - _t37;
+    const trailer_real_t _t79 = _t5*_t78;
+    const trailer_real_t _t80 = _t53*_t73 + _t54*_t75;
+    const trailer_real_t _t81 = _t53*_t77 + _t54*_t79;
     const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t80 = J_x_tractor + _t22*_t66;
+    const trailer_real_t _t82 = J_x_tractor + _t22*_t68;
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[8];
-    const trailer_real_t _t81 = K_theta_tractor_x_tractor_2 + _t24*_t66;
+    const trailer_real_t _t83 = K_theta_tractor_x_tractor_2 + _t24*_t68;
     const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t82 = J_theta_tractor + _t24*_t67;
-    const trailer_real_t _t83 = J_theta_cart*_t22 + _t66;
-    const trailer_real_t _t84 = J_theta_cart*_t24 + _t67;
+    const trailer_real_t _t84 = J_theta_tractor + _t24*_t69;
+    const trailer_real_t _t85 = J_theta_cart*_t22 + _t68;
+    const trailer_real_t _t86 = J_theta_cart*_t24 + _t69;
     const trailer_real_t _t14 = kept[15];
-    const trailer_real_t _t85 = _t14 + _t22*_t83 + _t40*_t41 + _t46*_t47 + _t80;
+    const trailer_real_t _t87 = _t14 + _t22*_t85 + _t40*_t41 + _t46*_t47 + _t82;
     const trailer_real_t _t15 = kept[16];
-    const trailer_real_t _t86 = _t15 + _t22*_t84 + _t40*_t44 + _t46*_t50 + _t81;
+    const trailer_real_t _t88 = _t15 + _t22*_t86 + _t40*_t44 + _t46*_t50 + _t83;
     const trailer_real_t _t16 = kept[17];
-    const trailer_real_t _t87 = _t16 + _t24*_t84 + _t43*_t44 + _t49*_t50 + _t82;
-    const trailer_real_t _t88 = _t22*_t56 + _t41*_t78 + _t47*_t79 + _t55*_t66 + _t68;
-    const trailer_real_t _t89 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t78 + _t50*_t79
-            + _t55*_t67 + _t69;
-    const trailer_real_t _t90 = _t0*_t86 + _t2*_t85;
-    const trailer_real_t _t91 = _t1*_t86 + _t3*_t85;
-    const trailer_real_t _t92 = _t0*_t87 + _t2*_t86;
-    const trailer_real_t _t93 = _t1*_t87 + _t3*_t86;
-    const trailer_real_t _t94 = _t0*_t92 + _t2*_t90;
-    const trailer_real_t _t95 = _t0*_t93 + _t2*_t91;
-    const trailer_real_t _t96 = _t1*_t93 + _t3*_t91;
-    const trailer_real_t _t97 = _t0*_t89 + _t2*_t88;
-    const trailer_real_t _t98 = _t1*_t89 + _t3*_t88;
-    u[0] = _t64*_t94 + _t65*_t95 + _t97;
-    u[1] = _t64*_t95 + _t65*_t96 + _t98;
-    s[0] = _t57;
-    s[1] = _t58;
-    s_norm[0] = _t59;
-    gain[0] = _t62;
+    const trailer_real_t _t89 = _t16 + _t24*_t86 + _t43*_t44 + _t49*_t50 + _t84;
+    const trailer_real_t _t90 = _t22*_t56 + _t41*_t80 + _t47*_t81 + _t55*_t68 + _t70;
+    const trailer_real_t _t91 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t80 + _t50*_t81
+            + _t55*_t69 + _t71;
+    const trailer_real_t _t92 = _t0*_t88 + _t2*_t87;
+    const trailer_real_t _t93 = _t1*_t88 + _t3*_t87;
+    const trailer_real_t _t94 = _t0*_t89 + _t2*_t88;
+    const trailer_real_t _t95 = _t1*_t89 + _t3*_t88;
+    const trailer_real_t _t96 = _t0*_t94 + _t2*_t92;
+    const trailer_real_t _t97 = _t0*_t95 + _t2*_t93;
+    const trailer_real_t _t98 = _t1*_t95 + _t3*_t93;
+    const trailer_real_t _t99 = _t0*_t91 + _t2*_t90;
+    const trailer_real_t _t100 = _t1*_t91 + _t3*_t90;
+    u[0] = _t58*_t96 + _t60*_t97 + _t67*(_t65*_t96 + _t66*_t97) + _t99;
+    u[1] = _t100 + _t58*_t97 + _t60*_t98 + _t67*(_t65*_t97 + _t66*_t98);
+    s[0] = _t61;
+    s[1] = _t62;
+    s_norm[0] = _t63;
+    gain[0] = _t67;
 }
 
 /* trailer_k_minimal_asmc_law: the per-step part of trailer_minimal_asmc_law (trailer_laws.h
    documents it).
-   operations after CSE: 75 add, 113 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 77 add, 119 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
     const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
@@ -557,76 +561,78 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
     const trailer_real_t _t56 = J_theta_cart*_t55 + _t38*_t51 + _t52;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t57 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t58 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t59 = trailer_norm2(_t57, _t58);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t60 = gain_1/TRAILER_FMAX(_t59, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t61 = _t57*_t60 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t57 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t62 = _t58*_t60 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t63 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
-    const trailer_real_t _t64 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t _t58 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
+    const trailer_real_t _t59 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t60 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t61 = trailer_norm2(_t59, _t60);
+    const trailer_real_t eps_1 = eps[0];
+    const trailer_real_t _t62 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t61, eps_1));
+    const trailer_real_t _t63 = _t59*_t62;
+    const trailer_real_t _t64 = _t60*_t62;
+    const trailer_real_t _t65 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t _t66 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
     const trailer_real_t K_theta_tractor_x_tractor = kept[7];
-    const trailer_real_t _t65 = K_theta_tractor_x_tractor*_t28
+    const trailer_real_t _t67 = K_theta_tractor_x_tractor*_t28
             + _t31*(-K_theta_cart_x_tractor_2*_t18 + _t26);
-    const trailer_real_t _t66 = _t31*(-_t32 - _t33);
-    const trailer_real_t _t67 = _t18 + _t35;
-    const trailer_real_t _t68 = _t4*_t67;
-    const trailer_real_t _t69 = _t20 + _t37;
+    const trailer_real_t _t68 = _t31*(-_t32 - _t33);
+    const trailer_real_t _t69 = _t18 + _t35;
     const trailer_real_t _t70 = _t4*_t69;
-    const trailer_real_t _t71 = _t18 - _t35;
-    const trailer_real_t _t72 = _t5*_t71;
-    const trailer_real_t _t73 = _t20 - _t37;
+    const trailer_real_t _t71 = _t20 + _t37;
+    const trailer_real_t _t72 = _t4*_t71;
+    const trailer_real_t _t73 = _t18 - _t35;
     const trailer_real_t _t74 = _t5*_t73;
-    const trailer_real_t _t75 = _t53*_t68 + _t54*_t70;
-    const trailer_real_t _t76 = _t53*_t72 + _t54*_t74;
+    const trailer_real_t _t75 = _t20 - _t37;
+    const trailer_real_t _t76 = _t5*_t75;
+    const trailer_real_t _t77 = _t53*_t70 + _t54*_t72;
+    const trailer_real_t _t78 = _t53*_t74 + _t54*_t76;
     const trailer_real_t J_x_tractor = kept[4];
-    const trailer_real_t _t77 = J_x_tractor + _t22*_t63;
+    const trailer_real_t _t79 = J_x_tractor + _t22*_t65;
     const trailer_real_t K_theta_tractor_x_tractor_2 = kept[8];
-    const trailer_real_t _t78 = K_theta_tractor_x_tractor_2 + _t24*_t63;
+    const trailer_real_t _t80 = K_theta_tractor_x_tractor_2 + _t24*_t65;
     const trailer_real_t J_theta_tractor = kept[3];
-    const trailer_real_t _t79 = J_theta_tractor + _t24*_t64;
-    const trailer_real_t _t80 = J_theta_cart*_t22 + _t63;
-    const trailer_real_t _t81 = J_theta_cart*_t24 + _t64;
+    const trailer_real_t _t81 = J_theta_tractor + _t24*_t66;
+    const trailer_real_t _t82 = J_theta_cart*_t22 + _t65;
+    const trailer_real_t _t83 = J_theta_cart*_t24 + _t66;
     const trailer_real_t _t14 = kept[15];
-    const trailer_real_t _t82 = _t14 + _t22*_t80 + _t40*_t41 + _t46*_t47 + _t77;
+    const trailer_real_t _t84 = _t14 + _t22*_t82 + _t40*_t41 + _t46*_t47 + _t79;
     const trailer_real_t _t15 = kept[16];
-    const trailer_real_t _t83 = _t15 + _t22*_t81 + _t40*_t44 + _t46*_t50 + _t78;
+    const trailer_real_t _t85 = _t15 + _t22*_t83 + _t40*_t44 + _t46*_t50 + _t80;
     const trailer_real_t _t16 = kept[17];
-    const trailer_real_t _t84 = _t16 + _t24*_t81 + _t43*_t44 + _t49*_t50 + _t79;
-    const trailer_real_t _t85 = _t22*_t56 + _t41*_t75 + _t47*_t76 + _t55*_t63 + _t65;
-    const trailer_real_t _t86 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t75 + _t50*_t76
-            + _t55*_t64 + _t66;
-    const trailer_real_t _t87 = _t0*_t83 + _t2*_t82;
-    const trailer_real_t _t88 = _t1*_t83 + _t3*_t82;
-    const trailer_real_t _t89 = _t0*_t84 + _t2*_t83;
-    const trailer_real_t _t90 = _t1*_t84 + _t3*_t83;
-    const trailer_real_t _t91 = _t0*_t89 + _t2*_t87;
-    const trailer_real_t _t92 = _t0*_t90 + _t2*_t88;
-    const trailer_real_t _t93 = _t1*_t90 + _t3*_t88;
-    const trailer_real_t _t94 = _t0*_t86 + _t2*_t85;
-    const trailer_real_t _t95 = _t1*_t86 + _t3*_t85;
+    const trailer_real_t _t86 = _t16 + _t24*_t83 + _t43*_t44 + _t49*_t50 + _t81;
+    const trailer_real_t _t87 = _t22*_t56 + _t41*_t77 + _t47*_t78 + _t55*_t65 + _t67;
+    const trailer_real_t _t88 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t77 + _t50*_t78
+            + _t55*_t66 + _t68;
+    const trailer_real_t _t89 = _t0*_t85 + _t2*_t84;
+    const trailer_real_t _t90 = _t1*_t85 + _t3*_t84;
+    const trailer_real_t _t91 = _t0*_t86 + _t2*_t85;
+    const trailer_real_t _t92 = _t1*_t86 + _t3*_t85;
+    const trailer_real_t _t93 = _t0*_t91 + _t2*_t89;
+    const trailer_real_t _t94 = _t0*_t92 + _t2*_t90;
+    const trailer_real_t _t95 = _t1*_t92 + _t3*_t90;
+    const trailer_real_t _t96 = _t0*_t88 + _t2*_t87;
+    const trailer_real_t _t97 = _t1*_t88 + _t3*_t87;
+    const trailer_real_t gain_1 = gain[0];
     const trailer_real_t adapt_0 = adapt[0];
     const trailer_real_t h = adapt[1];
-    u[0] = _t61*_t91 + _t62*_t92 + _t94;
-    u[1] = _t61*_t92 + _t62*_t93 + _t95;
-    s[0] = _t57;
-    s[1] = _t58;
-    s_norm[0] = _t59;
-    gain_next[0] = _t59*adapt_0*h + gain_1;
+    u[0] = _t57*_t93 + _t58*_t94 + _t96 + gain_1*(_t63*_t93 + _t64*_t94);
+    u[1] = _t57*_t94 + _t58*_t95 + _t97 + gain_1*(_t63*_t94 + _t64*_t95);
+    s[0] = _t59;
+    s[1] = _t60;
+    s_norm[0] = _t61;
+    gain_next[0] = _t61*adapt_0*h + gain_1;
 }
 
 /* trailer_k_minimal_pi_law_keep: the parameter-only part of trailer_minimal_pi_law (trailer_laws.h

@@ -392,7 +392,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 47 add, 78 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -412,94 +412,96 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
-    const trailer_real_t p12_0 = p12[0];
-    const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t9 = e0*p12_0 + edot0*p22_0;
-    const trailer_real_t e1 = e[1];
-    const trailer_real_t edot1 = edot[1];
-    const trailer_real_t p12_1 = p12[1];
-    const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t10 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t11 = trailer_norm2(_t10, _t9);
-    const trailer_real_t gain_1 = gain[0];
-    const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t12 = gain_1/TRAILER_FMAX(_t11, eps_1);
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t13 = _t12*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t9 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t e1 = e[1];
+    const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t14 = _t10*_t12 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t10 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t p12_0 = p12[0];
+    const trailer_real_t p22_0 = p22[0];
+    const trailer_real_t _t11 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t p12_1 = p12[1];
+    const trailer_real_t p22_1 = p22[1];
+    const trailer_real_t _t12 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t13 = trailer_norm2(_t11, _t12);
+    const trailer_real_t eps_1 = eps[0];
+    const trailer_real_t _t14 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t13, eps_1));
+    const trailer_real_t _t15 = _t11*_t14;
+    const trailer_real_t _t16 = _t12*_t14;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t15 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t17 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t16 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t18 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t19 = TRAILER_LIT(1.0)/radius_cart_right;
     const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t19 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t20 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t21 = TRAILER_LIT(1.0)/radius_right;
-    const trailer_real_t _t22 = TRAILER_LIT(0.207)*_t21;
-    const trailer_real_t _t23 = TRAILER_LIT(1.0)/radius_left;
-    const trailer_real_t _t24 = -TRAILER_LIT(0.207)*_t23;
-    const trailer_real_t _t25 = _t2 + _t6;
-    const trailer_real_t _t26 = -_t4 + _t8;
-    const trailer_real_t _t27 = _t17*_t25;
-    const trailer_real_t _t28 = _t17*_t26;
-    const trailer_real_t _t29 = _t2 - _t6;
-    const trailer_real_t _t30 = -_t4 - _t8;
-    const trailer_real_t _t31 = _t18*_t29;
-    const trailer_real_t _t32 = _t18*_t30;
+    const trailer_real_t _t20 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t21 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t22 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t23 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t24 = TRAILER_LIT(0.207)*_t23;
+    const trailer_real_t _t25 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t26 = -TRAILER_LIT(0.207)*_t25;
+    const trailer_real_t _t27 = _t2 + _t6;
+    const trailer_real_t _t28 = -_t4 + _t8;
+    const trailer_real_t _t29 = _t19*_t27;
+    const trailer_real_t _t30 = _t19*_t28;
+    const trailer_real_t _t31 = _t2 - _t6;
+    const trailer_real_t _t32 = -_t4 - _t8;
+    const trailer_real_t _t33 = _t20*_t31;
+    const trailer_real_t _t34 = _t20*_t32;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t33 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t34 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t35 = J_x_tractor + _t33*_t5;
+    const trailer_real_t _t37 = J_x_tractor + _t35*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor_2 + _t33*_t7;
+    const trailer_real_t _t38 = K_theta_tractor_x_tractor_2 + _t35*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t37 = J_theta_tractor + _t34*_t7;
+    const trailer_real_t _t39 = J_theta_tractor + _t36*_t7;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t38 = J_theta_cart*_t5 + _t33;
-    const trailer_real_t _t39 = J_theta_cart*_t7 + _t34;
+    const trailer_real_t _t40 = J_theta_cart*_t5 + _t35;
+    const trailer_real_t _t41 = J_theta_cart*_t7 + _t36;
     const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t40 = J_theta_right*_t21;
-    const trailer_real_t _t41 = J_theta_right*_t22;
+    const trailer_real_t _t42 = J_theta_right*_t23;
+    const trailer_real_t _t43 = J_theta_right*_t24;
     const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t42 = J_theta_left*_t23;
-    const trailer_real_t _t43 = J_theta_left*_t24;
+    const trailer_real_t _t44 = J_theta_left*_t25;
+    const trailer_real_t _t45 = J_theta_left*_t26;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t44 = J_theta_cart_right*_t27;
-    const trailer_real_t _t45 = J_theta_cart_right*_t28;
+    const trailer_real_t _t46 = J_theta_cart_right*_t29;
+    const trailer_real_t _t47 = J_theta_cart_right*_t30;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t46 = J_theta_cart_left*_t31;
-    const trailer_real_t _t47 = J_theta_cart_left*_t32;
-    const trailer_real_t _t48 = _t21*_t40 + _t23*_t42 + _t27*_t44 + _t31*_t46 + _t35 + _t38*_t5;
-    const trailer_real_t _t49 = _t21*_t41 + _t23*_t43 + _t27*_t45 + _t31*_t47 + _t36 + _t39*_t5;
-    const trailer_real_t _t50 = _t22*_t41 + _t24*_t43 + _t28*_t45 + _t32*_t47 + _t37 + _t39*_t7;
-    const trailer_real_t _t51 = _t15*_t49 + _t19*_t48;
-    const trailer_real_t _t52 = _t16*_t49 + _t20*_t48;
-    const trailer_real_t _t53 = _t15*_t50 + _t19*_t49;
-    const trailer_real_t _t54 = _t16*_t50 + _t20*_t49;
-    const trailer_real_t _t55 = _t15*_t53 + _t19*_t51;
-    const trailer_real_t _t56 = _t15*_t54 + _t19*_t52;
-    const trailer_real_t _t57 = _t16*_t54 + _t20*_t52;
+    const trailer_real_t _t48 = J_theta_cart_left*_t33;
+    const trailer_real_t _t49 = J_theta_cart_left*_t34;
+    const trailer_real_t _t50 = _t23*_t42 + _t25*_t44 + _t29*_t46 + _t33*_t48 + _t37 + _t40*_t5;
+    const trailer_real_t _t51 = _t23*_t43 + _t25*_t45 + _t29*_t47 + _t33*_t49 + _t38 + _t41*_t5;
+    const trailer_real_t _t52 = _t24*_t43 + _t26*_t45 + _t30*_t47 + _t34*_t49 + _t39 + _t41*_t7;
+    const trailer_real_t _t53 = _t17*_t51 + _t21*_t50;
+    const trailer_real_t _t54 = _t18*_t51 + _t22*_t50;
+    const trailer_real_t _t55 = _t17*_t52 + _t21*_t51;
+    const trailer_real_t _t56 = _t18*_t52 + _t22*_t51;
+    const trailer_real_t _t57 = _t17*_t55 + _t21*_t53;
+    const trailer_real_t _t58 = _t17*_t56 + _t21*_t54;
+    const trailer_real_t _t59 = _t18*_t56 + _t22*_t54;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t13*_t55 + _t14*_t56;
-    u[1] = H1hat1 + _t13*_t56 + _t14*_t57;
-    s[0] = _t9;
-    s[1] = _t10;
-    s_norm[0] = _t11;
+    const trailer_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t10*_t58 + _t57*_t9 + gain_1*(_t15*_t57 + _t16*_t58);
+    u[1] = H1hat1 + _t10*_t59 + _t58*_t9 + gain_1*(_t15*_t58 + _t16*_t59);
+    s[0] = _t11;
+    s[1] = _t12;
+    s_norm[0] = _t13;
 }
 
 /* trailer_minimal_tdroc_law_mhat: documented in trailer_laws.h.
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -511,7 +513,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 82 add, 135 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -526,7 +528,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 78 add, 132 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,

@@ -352,7 +352,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 47 add, 78 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -407,7 +407,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_MHAT_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE)
  *
- * operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -462,7 +462,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 82 add, 135 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -520,7 +520,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 78 add, 132 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,

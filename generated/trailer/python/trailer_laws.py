@@ -660,7 +660,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 47 add, 78 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -696,61 +696,63 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t6 = 0.2*_t5
     _t7 = -1.6666666666666667*_t3
     _t8 = 0.2*_t7
-    _t9 = e0*p12_0 + edot0*p22_0
-    _t10 = e1*p12_1 + edot1*p22_1
-    _t11 = _norm(_t10, _t9)
-    _t12 = gain_1/max(_t11, eps_1)
-    _t13 = _t12*_t9 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t14 = _t10*_t12 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t15 = 2.4154589371980677*radius_right
-    _t16 = -2.4154589371980677*radius_left
-    _t17 = 1.0/radius_cart_right
-    _t18 = 1.0/radius_cart_left
-    _t19 = 0.5*radius_right
-    _t20 = 0.5*radius_left
-    _t21 = 1.0/radius_right
-    _t22 = 0.207*_t21
-    _t23 = 1.0/radius_left
-    _t24 = -0.207*_t23
-    _t25 = _t2 + _t6
-    _t26 = -_t4 + _t8
-    _t27 = _t17*_t25
-    _t28 = _t17*_t26
-    _t29 = _t2 - _t6
-    _t30 = -_t4 - _t8
-    _t31 = _t18*_t29
-    _t32 = _t18*_t30
-    _t33 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t34 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t35 = J_x_tractor + _t33*_t5
-    _t36 = K_theta_tractor_x_tractor_2 + _t33*_t7
-    _t37 = J_theta_tractor + _t34*_t7
-    _t38 = J_theta_cart*_t5 + _t33
-    _t39 = J_theta_cart*_t7 + _t34
-    _t40 = J_theta_right*_t21
-    _t41 = J_theta_right*_t22
-    _t42 = J_theta_left*_t23
-    _t43 = J_theta_left*_t24
-    _t44 = J_theta_cart_right*_t27
-    _t45 = J_theta_cart_right*_t28
-    _t46 = J_theta_cart_left*_t31
-    _t47 = J_theta_cart_left*_t32
-    _t48 = _t21*_t40 + _t23*_t42 + _t27*_t44 + _t31*_t46 + _t35 + _t38*_t5
-    _t49 = _t21*_t41 + _t23*_t43 + _t27*_t45 + _t31*_t47 + _t36 + _t39*_t5
-    _t50 = _t22*_t41 + _t24*_t43 + _t28*_t45 + _t32*_t47 + _t37 + _t39*_t7
-    _t51 = _t15*_t49 + _t19*_t48
-    _t52 = _t16*_t49 + _t20*_t48
-    _t53 = _t15*_t50 + _t19*_t49
-    _t54 = _t16*_t50 + _t20*_t49
-    _t55 = _t15*_t53 + _t19*_t51
-    _t56 = _t15*_t54 + _t19*_t52
-    _t57 = _t16*_t54 + _t20*_t52
+    _t9 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t10 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t11 = e0*p12_0 + edot0*p22_0
+    _t12 = e1*p12_1 + edot1*p22_1
+    _t13 = _norm(_t11, _t12)
+    _t14 = 1.0/(max(_t13, eps_1))
+    _t15 = _t11*_t14
+    _t16 = _t12*_t14
+    _t17 = 2.4154589371980677*radius_right
+    _t18 = -2.4154589371980677*radius_left
+    _t19 = 1.0/radius_cart_right
+    _t20 = 1.0/radius_cart_left
+    _t21 = 0.5*radius_right
+    _t22 = 0.5*radius_left
+    _t23 = 1.0/radius_right
+    _t24 = 0.207*_t23
+    _t25 = 1.0/radius_left
+    _t26 = -0.207*_t25
+    _t27 = _t2 + _t6
+    _t28 = -_t4 + _t8
+    _t29 = _t19*_t27
+    _t30 = _t19*_t28
+    _t31 = _t2 - _t6
+    _t32 = -_t4 - _t8
+    _t33 = _t20*_t31
+    _t34 = _t20*_t32
+    _t35 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t36 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t37 = J_x_tractor + _t35*_t5
+    _t38 = K_theta_tractor_x_tractor_2 + _t35*_t7
+    _t39 = J_theta_tractor + _t36*_t7
+    _t40 = J_theta_cart*_t5 + _t35
+    _t41 = J_theta_cart*_t7 + _t36
+    _t42 = J_theta_right*_t23
+    _t43 = J_theta_right*_t24
+    _t44 = J_theta_left*_t25
+    _t45 = J_theta_left*_t26
+    _t46 = J_theta_cart_right*_t29
+    _t47 = J_theta_cart_right*_t30
+    _t48 = J_theta_cart_left*_t33
+    _t49 = J_theta_cart_left*_t34
+    _t50 = _t23*_t42 + _t25*_t44 + _t29*_t46 + _t33*_t48 + _t37 + _t40*_t5
+    _t51 = _t23*_t43 + _t25*_t45 + _t29*_t47 + _t33*_t49 + _t38 + _t41*_t5
+    _t52 = _t24*_t43 + _t26*_t45 + _t30*_t47 + _t34*_t49 + _t39 + _t41*_t7
+    _t53 = _t17*_t51 + _t21*_t50
+    _t54 = _t18*_t51 + _t22*_t50
+    _t55 = _t17*_t52 + _t21*_t51
+    _t56 = _t18*_t52 + _t22*_t51
+    _t57 = _t17*_t55 + _t21*_t53
+    _t58 = _t17*_t56 + _t21*_t54
+    _t59 = _t18*_t56 + _t22*_t54
     u = np.array([
-        H1hat0 + _t13*_t55 + _t14*_t56,
-        H1hat1 + _t13*_t56 + _t14*_t57,
+        H1hat0 + _t10*_t58 + _t57*_t9 + gain_1*(_t15*_t57 + _t16*_t58),
+        H1hat1 + _t10*_t59 + _t58*_t9 + gain_1*(_t15*_t58 + _t16*_t59),
     ])
-    s = np.array([_t9, _t10])
-    s_norm = np.array([_t11])
+    s = np.array([_t11, _t12])
+    s_norm = np.array([_t13])
     return u, s, s_norm
 
 
@@ -782,7 +784,7 @@ def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
     e0, e1 = _flat(e, 2, "e")
@@ -796,18 +798,20 @@ def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
     gain_1, = _flat(gain, 1, "gain")
     eps_1, = _flat(eps, 1, "eps")
     del p  # not used by this function
-    _t0 = e0*p12_0 + edot0*p22_0
-    _t1 = e1*p12_1 + edot1*p22_1
-    _t2 = _norm(_t0, _t1)
-    _t3 = gain_1/max(_t2, eps_1)
-    _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t2 = e0*p12_0 + edot0*p22_0
+    _t3 = e1*p12_1 + edot1*p22_1
+    _t4 = _norm(_t2, _t3)
+    _t5 = 1.0/(max(_t4, eps_1))
+    _t6 = _t2*_t5
+    _t7 = _t3*_t5
     u = np.array([
-        H1hat0 + _t4*mhat_0 + _t5*mhat_2,
-        H1hat1 + _t4*mhat_2 + _t5*mhat_3,
+        H1hat0 + _t0*mhat_0 + _t1*mhat_2 + gain_1*(_t6*mhat_0 + _t7*mhat_2),
+        H1hat1 + _t0*mhat_2 + _t1*mhat_3 + gain_1*(_t6*mhat_2 + _t7*mhat_3),
     ])
-    s = np.array([_t0, _t1])
-    s_norm = np.array([_t2])
+    s = np.array([_t2, _t3])
+    s_norm = np.array([_t4])
     return u, s, s_norm
 
 
@@ -838,7 +842,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 82 add, 135 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -912,60 +916,65 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t43 = -_t12*_t17 + _t13
     _t44 = _t21*_t42 + _t23*_t43
     _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
-    _t46 = e0*p12_0 + edot0*p22_0
-    _t47 = e1*p12_1 + edot1*p22_1
-    _t48 = _norm(_t46, _t47)
-    _t49 = e0*k1_0 + edot0*k2_0
-    _t50 = e1*k1_1 + edot1*k2_1
-    _t51 = (alpha*(_norm(_t49, _t50) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
-    _t52 = _t51/max(_t48, eps_1)
-    _t53 = _t46*_t52 + _t49 + qdd_des0
-    _t54 = _t47*_t52 + _t50 + qdd_des1
-    _t55 = 1.0/radius_right
-    _t56 = 0.207*_t55
-    _t57 = 1.0/radius_left
-    _t58 = -0.207*_t57
-    _t59 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t60 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t61 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
-    _t62 = -_t18*_t19 - _t18*_t20
-    _t63 = _t1 + _t22
-    _t64 = _t26*_t63
-    _t65 = _t24 + _t3
+    _t46 = e0*k1_0 + edot0*k2_0
+    _t47 = _t46 + qdd_des0
+    _t48 = e1*k1_1 + edot1*k2_1
+    _t49 = _t48 + qdd_des1
+    _t50 = e0*p12_0 + edot0*p22_0
+    _t51 = e1*p12_1 + edot1*p22_1
+    _t52 = _norm(_t50, _t51)
+    _t53 = 1.0/(max(_t52, eps_1))
+    _t54 = _t50*_t53
+    _t55 = _t51*_t53
+    _t56 = (alpha*(_norm(_t46, _t48) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
+    _t57 = 1.0/radius_right
+    _t58 = 0.207*_t57
+    _t59 = 1.0/radius_left
+    _t60 = -0.207*_t59
+    _t61 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t62 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t63 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+    _t64 = -_t18*_t19 - _t18*_t20
+    _t65 = _t1 + _t22
     _t66 = _t26*_t65
-    _t67 = _t1 - _t22
-    _t68 = _t33*_t67
-    _t69 = -_t24 + _t3
+    _t67 = _t24 + _t3
+    _t68 = _t26*_t67
+    _t69 = _t1 - _t22
     _t70 = _t33*_t69
-    _t71 = _t42*_t64 + _t43*_t66
-    _t72 = _t42*_t68 + _t43*_t70
-    _t73 = J_x_tractor + _t5*_t59
-    _t74 = K_theta_tractor_x_tractor_2 + _t59*_t7
-    _t75 = J_theta_tractor + _t60*_t7
-    _t76 = J_theta_cart*_t5 + _t59
-    _t77 = J_theta_cart*_t7 + _t60
-    _t78 = J_theta_right*_t55
-    _t79 = J_theta_right*_t56
-    _t80 = J_theta_left*_t57
-    _t81 = J_theta_left*_t58
-    _t82 = _t28*_t29 + _t35*_t36 + _t5*_t76 + _t55*_t78 + _t57*_t80 + _t73
-    _t83 = _t28*_t32 + _t35*_t39 + _t5*_t77 + _t55*_t79 + _t57*_t81 + _t74
-    _t84 = _t31*_t32 + _t38*_t39 + _t56*_t79 + _t58*_t81 + _t7*_t77 + _t75
-    _t85 = _t29*_t71 + _t36*_t72 + _t44*_t59 + _t45*_t5 + _t61
-    _t86 = -K_theta_tractor_x_tractor*_t25 + _t32*_t71 + _t39*_t72 + _t44*_t60 + _t45*_t7 + _t62
-    _t87 = _t10*_t83 + _t14*_t82
-    _t88 = _t11*_t83 + _t15*_t82
-    _t89 = _t10*_t84 + _t14*_t83
-    _t90 = _t11*_t84 + _t15*_t83
-    _t91 = _t10*_t89 + _t14*_t87
-    _t92 = _t10*_t90 + _t14*_t88
-    _t93 = _t11*_t90 + _t15*_t88
-    _t94 = _t10*_t86 + _t14*_t85
-    _t95 = _t11*_t86 + _t15*_t85
-    u = np.array([_t53*_t91 + _t54*_t92 + _t94, _t53*_t92 + _t54*_t93 + _t95])
-    s = np.array([_t46, _t47])
-    s_norm = np.array([_t48])
-    gain = np.array([_t51])
+    _t71 = -_t24 + _t3
+    _t72 = _t33*_t71
+    _t73 = _t42*_t66 + _t43*_t68
+    _t74 = _t42*_t70 + _t43*_t72
+    _t75 = J_x_tractor + _t5*_t61
+    _t76 = K_theta_tractor_x_tractor_2 + _t61*_t7
+    _t77 = J_theta_tractor + _t62*_t7
+    _t78 = J_theta_cart*_t5 + _t61
+    _t79 = J_theta_cart*_t7 + _t62
+    _t80 = J_theta_right*_t57
+    _t81 = J_theta_right*_t58
+    _t82 = J_theta_left*_t59
+    _t83 = J_theta_left*_t60
+    _t84 = _t28*_t29 + _t35*_t36 + _t5*_t78 + _t57*_t80 + _t59*_t82 + _t75
+    _t85 = _t28*_t32 + _t35*_t39 + _t5*_t79 + _t57*_t81 + _t59*_t83 + _t76
+    _t86 = _t31*_t32 + _t38*_t39 + _t58*_t81 + _t60*_t83 + _t7*_t79 + _t77
+    _t87 = _t29*_t73 + _t36*_t74 + _t44*_t61 + _t45*_t5 + _t63
+    _t88 = -K_theta_tractor_x_tractor*_t25 + _t32*_t73 + _t39*_t74 + _t44*_t62 + _t45*_t7 + _t64
+    _t89 = _t10*_t85 + _t14*_t84
+    _t90 = _t11*_t85 + _t15*_t84
+    _t91 = _t10*_t86 + _t14*_t85
+    _t92 = _t11*_t86 + _t15*_t85
+    _t93 = _t10*_t91 + _t14*_t89
+    _t94 = _t10*_t92 + _t14*_t90
+    _t95 = _t11*_t92 + _t15*_t90
+    _t96 = _t10*_t88 + _t14*_t87
+    _t97 = _t11*_t88 + _t15*_t87
+    u = np.array([
+        _t47*_t93 + _t49*_t94 + _t56*(_t54*_t93 + _t55*_t94) + _t96,
+        _t47*_t94 + _t49*_t95 + _t56*(_t54*_t94 + _t55*_t95) + _t97,
+    ])
+    s = np.array([_t50, _t51])
+    s_norm = np.array([_t52])
+    gain = np.array([_t56])
     return u, s, s_norm, gain
 
 
@@ -997,7 +1006,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 78 add, 132 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -1072,57 +1081,62 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t43 = -_t12*_t17 + _t13
     _t44 = _t21*_t42 + _t23*_t43
     _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
-    _t46 = e0*p12_0 + edot0*p22_0
-    _t47 = e1*p12_1 + edot1*p22_1
-    _t48 = _norm(_t46, _t47)
-    _t49 = gain_1/max(_t48, eps_1)
-    _t50 = _t46*_t49 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t51 = _t47*_t49 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t52 = 1.0/radius_right
-    _t53 = 0.207*_t52
-    _t54 = 1.0/radius_left
-    _t55 = -0.207*_t54
-    _t56 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t57 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t58 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
-    _t59 = -_t18*_t19 - _t18*_t20
-    _t60 = _t1 + _t22
-    _t61 = _t26*_t60
-    _t62 = _t24 + _t3
+    _t46 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t47 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t48 = e0*p12_0 + edot0*p22_0
+    _t49 = e1*p12_1 + edot1*p22_1
+    _t50 = _norm(_t48, _t49)
+    _t51 = 1.0/(max(_t50, eps_1))
+    _t52 = _t48*_t51
+    _t53 = _t49*_t51
+    _t54 = 1.0/radius_right
+    _t55 = 0.207*_t54
+    _t56 = 1.0/radius_left
+    _t57 = -0.207*_t56
+    _t58 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t59 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t60 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+    _t61 = -_t18*_t19 - _t18*_t20
+    _t62 = _t1 + _t22
     _t63 = _t26*_t62
-    _t64 = _t1 - _t22
-    _t65 = _t33*_t64
-    _t66 = -_t24 + _t3
+    _t64 = _t24 + _t3
+    _t65 = _t26*_t64
+    _t66 = _t1 - _t22
     _t67 = _t33*_t66
-    _t68 = _t42*_t61 + _t43*_t63
-    _t69 = _t42*_t65 + _t43*_t67
-    _t70 = J_x_tractor + _t5*_t56
-    _t71 = K_theta_tractor_x_tractor_2 + _t56*_t7
-    _t72 = J_theta_tractor + _t57*_t7
-    _t73 = J_theta_cart*_t5 + _t56
-    _t74 = J_theta_cart*_t7 + _t57
-    _t75 = J_theta_right*_t52
-    _t76 = J_theta_right*_t53
-    _t77 = J_theta_left*_t54
-    _t78 = J_theta_left*_t55
-    _t79 = _t28*_t29 + _t35*_t36 + _t5*_t73 + _t52*_t75 + _t54*_t77 + _t70
-    _t80 = _t28*_t32 + _t35*_t39 + _t5*_t74 + _t52*_t76 + _t54*_t78 + _t71
-    _t81 = _t31*_t32 + _t38*_t39 + _t53*_t76 + _t55*_t78 + _t7*_t74 + _t72
-    _t82 = _t29*_t68 + _t36*_t69 + _t44*_t56 + _t45*_t5 + _t58
-    _t83 = -K_theta_tractor_x_tractor*_t25 + _t32*_t68 + _t39*_t69 + _t44*_t57 + _t45*_t7 + _t59
-    _t84 = _t10*_t80 + _t14*_t79
-    _t85 = _t11*_t80 + _t15*_t79
-    _t86 = _t10*_t81 + _t14*_t80
-    _t87 = _t11*_t81 + _t15*_t80
-    _t88 = _t10*_t86 + _t14*_t84
-    _t89 = _t10*_t87 + _t14*_t85
-    _t90 = _t11*_t87 + _t15*_t85
-    _t91 = _t10*_t83 + _t14*_t82
-    _t92 = _t11*_t83 + _t15*_t82
-    u = np.array([_t50*_t88 + _t51*_t89 + _t91, _t50*_t89 + _t51*_t90 + _t92])
-    s = np.array([_t46, _t47])
-    s_norm = np.array([_t48])
-    gain_next = np.array([_t48*gamma*h + gain_1])
+    _t68 = -_t24 + _t3
+    _t69 = _t33*_t68
+    _t70 = _t42*_t63 + _t43*_t65
+    _t71 = _t42*_t67 + _t43*_t69
+    _t72 = J_x_tractor + _t5*_t58
+    _t73 = K_theta_tractor_x_tractor_2 + _t58*_t7
+    _t74 = J_theta_tractor + _t59*_t7
+    _t75 = J_theta_cart*_t5 + _t58
+    _t76 = J_theta_cart*_t7 + _t59
+    _t77 = J_theta_right*_t54
+    _t78 = J_theta_right*_t55
+    _t79 = J_theta_left*_t56
+    _t80 = J_theta_left*_t57
+    _t81 = _t28*_t29 + _t35*_t36 + _t5*_t75 + _t54*_t77 + _t56*_t79 + _t72
+    _t82 = _t28*_t32 + _t35*_t39 + _t5*_t76 + _t54*_t78 + _t56*_t80 + _t73
+    _t83 = _t31*_t32 + _t38*_t39 + _t55*_t78 + _t57*_t80 + _t7*_t76 + _t74
+    _t84 = _t29*_t70 + _t36*_t71 + _t44*_t58 + _t45*_t5 + _t60
+    _t85 = -K_theta_tractor_x_tractor*_t25 + _t32*_t70 + _t39*_t71 + _t44*_t59 + _t45*_t7 + _t61
+    _t86 = _t10*_t82 + _t14*_t81
+    _t87 = _t11*_t82 + _t15*_t81
+    _t88 = _t10*_t83 + _t14*_t82
+    _t89 = _t11*_t83 + _t15*_t82
+    _t90 = _t10*_t88 + _t14*_t86
+    _t91 = _t10*_t89 + _t14*_t87
+    _t92 = _t11*_t89 + _t15*_t87
+    _t93 = _t10*_t85 + _t14*_t84
+    _t94 = _t11*_t85 + _t15*_t84
+    u = np.array([
+        _t46*_t90 + _t47*_t91 + _t93 + gain_1*(_t52*_t90 + _t53*_t91),
+        _t46*_t91 + _t47*_t92 + _t94 + gain_1*(_t52*_t91 + _t53*_t92),
+    ])
+    s = np.array([_t48, _t49])
+    s_norm = np.array([_t50])
+    gain_next = np.array([_t50*gamma*h + gain_1])
     return u, s, s_norm, gain_next
 
 

@@ -334,7 +334,7 @@ static inline void trailer2_k_minimal_tdc_law_mhat(const trailer2_params_t *p,
 
 /* trailer2_k_minimal_tdroc_law_mhat: the body of trailer2_minimal_tdroc_law_mhat (trailer2_laws.h
    documents it).
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
     const trailer2_real_t *mhat, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -345,36 +345,38 @@ static inline void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
     (void)p;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
-    const trailer2_real_t p12_0 = p12[0];
-    const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t0 = e0*p12_0 + edot0*p22_0;
-    const trailer2_real_t e1 = e[1];
-    const trailer2_real_t edot1 = edot[1];
-    const trailer2_real_t p12_1 = p12[1];
-    const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t1 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t2 = trailer2_norm2(_t0, _t1);
-    const trailer2_real_t gain_1 = gain[0];
-    const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t3 = gain_1/TRAILER2_FMAX(_t2, eps_1);
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t2 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t3 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t4 = trailer2_norm2(_t2, _t3);
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t4, eps_1));
+    const trailer2_real_t _t6 = _t2*_t5;
+    const trailer2_real_t _t7 = _t3*_t5;
     const trailer2_real_t mhat_0 = mhat[0];
     const trailer2_real_t mhat_2 = mhat[2];
     const trailer2_real_t mhat_3 = mhat[3];
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
-    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
-    s[0] = _t0;
-    s[1] = _t1;
-    s_norm[0] = _t2;
+    const trailer2_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2 + gain_1*(_t6*mhat_0 + _t7*mhat_2);
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3 + gain_1*(_t6*mhat_2 + _t7*mhat_3);
+    s[0] = _t2;
+    s[1] = _t3;
+    s_norm[0] = _t4;
 }
 
 /* trailer2_k_minimal_roc_law_keep: the parameter-only part of trailer2_minimal_roc_law
@@ -453,7 +455,7 @@ static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
 
 /* trailer2_k_minimal_roc_law: the per-step part of trailer2_minimal_roc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 178 add, 246 mul, 2 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 180 add, 252 mul, 2 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
@@ -606,121 +608,123 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t137 = J_theta_cart2*_t133 + _t126*_t130 + _t135*_t98 + _t136;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
-    const trailer2_real_t p12_0 = p12[0];
-    const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t138 = e0*p12_0 + edot0*p22_0;
-    const trailer2_real_t e1 = e[1];
-    const trailer2_real_t edot1 = edot[1];
-    const trailer2_real_t p12_1 = p12[1];
-    const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t139 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t140 = trailer2_norm2(_t138, _t139);
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t141 = e0*k1_0 + edot0*k2_0;
+    const trailer2_real_t _t138 = e0*k1_0 + edot0*k2_0;
+    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t _t139 = _t138 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t142 = e1*k1_1 + edot1*k2_1;
-    const trailer2_real_t qdd_des0 = qddot_des[0];
+    const trailer2_real_t _t140 = e1*k1_1 + edot1*k2_1;
     const trailer2_real_t qdd_des1 = qddot_des[1];
+    const trailer2_real_t _t141 = _t140 + qdd_des1;
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t142 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t143 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t144 = trailer2_norm2(_t142, _t143);
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t145 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t144, eps_1));
+    const trailer2_real_t _t146 = _t142*_t145;
+    const trailer2_real_t _t147 = _t143*_t145;
     const trailer2_real_t alpha = bounds[0];
     const trailer2_real_t phi = bounds[1];
-    const trailer2_real_t _t143 = (alpha*(trailer2_norm2(_t141, _t142)
+    const trailer2_real_t _t148 = (alpha*(trailer2_norm2(_t138, _t140)
             + trailer2_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER2_LIT(1.0) - alpha);
-    const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t144 = _t143/TRAILER2_FMAX(_t140, eps_1);
-    const trailer2_real_t _t145 = _t138*_t144 + _t141 + qdd_des0;
-    const trailer2_real_t _t146 = _t139*_t144 + _t142 + qdd_des1;
-    const trailer2_real_t _t147 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t148 = _t49 + _t50;
-    const trailer2_real_t _t149 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t29;
-    const trailer2_real_t _t150 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t30;
+    const trailer2_real_t _t149 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
+    const trailer2_real_t _t150 = _t49 + _t50;
+    const trailer2_real_t _t151 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t29;
+    const trailer2_real_t _t152 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t30;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[12];
-    const trailer2_real_t _t151 = K_theta_tractor_x_tractor*_t57 + _t61
+    const trailer2_real_t _t153 = K_theta_tractor_x_tractor*_t57 + _t61
             + _t63*(-K_theta_cart_x_tractor_2*_t21 + _t51) - _t64;
-    const trailer2_real_t _t152 = _t60*(-_t65 - _t66) + _t63*(-_t67 - _t68);
-    const trailer2_real_t _t153 = _t21 + _t76;
-    const trailer2_real_t _t154 = _t153*_t4;
-    const trailer2_real_t _t155 = _t23 + _t77;
+    const trailer2_real_t _t154 = _t60*(-_t65 - _t66) + _t63*(-_t67 - _t68);
+    const trailer2_real_t _t155 = _t21 + _t76;
     const trailer2_real_t _t156 = _t155*_t4;
-    const trailer2_real_t _t157 = _t21 - _t76;
-    const trailer2_real_t _t158 = _t157*_t5;
-    const trailer2_real_t _t159 = _t23 - _t77;
+    const trailer2_real_t _t157 = _t23 + _t77;
+    const trailer2_real_t _t158 = _t157*_t4;
+    const trailer2_real_t _t159 = _t21 - _t76;
     const trailer2_real_t _t160 = _t159*_t5;
-    const trailer2_real_t _t161 = _t80 - _t82;
-    const trailer2_real_t _t162 = _t161*_t6;
-    const trailer2_real_t _t163 = _t85 - _t87;
+    const trailer2_real_t _t161 = _t23 - _t77;
+    const trailer2_real_t _t162 = _t161*_t5;
+    const trailer2_real_t _t163 = _t80 - _t82;
     const trailer2_real_t _t164 = _t163*_t6;
-    const trailer2_real_t _t165 = -_t33 + _t81 + _t90;
+    const trailer2_real_t _t165 = _t85 - _t87;
     const trailer2_real_t _t166 = _t165*_t6;
-    const trailer2_real_t _t167 = -_t36 + _t86 + _t93;
+    const trailer2_real_t _t167 = -_t33 + _t81 + _t90;
     const trailer2_real_t _t168 = _t167*_t6;
-    const trailer2_real_t _t169 = _t34 + _t95;
+    const trailer2_real_t _t169 = -_t36 + _t86 + _t93;
     const trailer2_real_t _t170 = _t169*_t6;
-    const trailer2_real_t _t171 = _t37 + _t97;
+    const trailer2_real_t _t171 = _t34 + _t95;
     const trailer2_real_t _t172 = _t171*_t6;
-    const trailer2_real_t _t173 = -_t80 - _t82;
-    const trailer2_real_t _t174 = _t173*_t7;
-    const trailer2_real_t _t175 = -_t85 - _t87;
+    const trailer2_real_t _t173 = _t37 + _t97;
+    const trailer2_real_t _t174 = _t173*_t6;
+    const trailer2_real_t _t175 = -_t80 - _t82;
     const trailer2_real_t _t176 = _t175*_t7;
-    const trailer2_real_t _t177 = -_t33 + _t81 - _t90;
+    const trailer2_real_t _t177 = -_t85 - _t87;
     const trailer2_real_t _t178 = _t177*_t7;
-    const trailer2_real_t _t179 = -_t36 + _t86 - _t93;
+    const trailer2_real_t _t179 = -_t33 + _t81 - _t90;
     const trailer2_real_t _t180 = _t179*_t7;
-    const trailer2_real_t _t181 = _t34 - _t95;
+    const trailer2_real_t _t181 = -_t36 + _t86 - _t93;
     const trailer2_real_t _t182 = _t181*_t7;
-    const trailer2_real_t _t183 = _t37 - _t97;
+    const trailer2_real_t _t183 = _t34 - _t95;
     const trailer2_real_t _t184 = _t183*_t7;
-    const trailer2_real_t _t185 = _t128*_t154 + _t129*_t156;
-    const trailer2_real_t _t186 = _t128*_t158 + _t129*_t160;
-    const trailer2_real_t _t187 = _t100*_t168 + _t131*_t170 + _t132*_t172 + _t162*_t98 + _t164*_t57
-            + _t166*_t99;
-    const trailer2_real_t _t188 = _t100*_t180 + _t131*_t182 + _t132*_t184 + _t174*_t98 + _t176*_t57
-            + _t178*_t99;
+    const trailer2_real_t _t185 = _t37 - _t97;
+    const trailer2_real_t _t186 = _t185*_t7;
+    const trailer2_real_t _t187 = _t128*_t156 + _t129*_t158;
+    const trailer2_real_t _t188 = _t128*_t160 + _t129*_t162;
+    const trailer2_real_t _t189 = _t100*_t170 + _t131*_t172 + _t132*_t174 + _t164*_t98 + _t166*_t57
+            + _t168*_t99;
+    const trailer2_real_t _t190 = _t100*_t182 + _t131*_t184 + _t132*_t186 + _t176*_t98 + _t178*_t57
+            + _t180*_t99;
     const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t189 = J_x_tractor + _t147*_t32 + _t148*_t40;
+    const trailer2_real_t _t191 = J_x_tractor + _t149*_t32 + _t150*_t40;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[13];
-    const trailer2_real_t _t190 = K_theta_tractor_x_tractor_2 + _t147*_t35 + _t148*_t45;
+    const trailer2_real_t _t192 = K_theta_tractor_x_tractor_2 + _t149*_t35 + _t150*_t45;
     const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t191 = J_theta_tractor + _t149*_t35 + _t150*_t45;
-    const trailer2_real_t _t192 = J_theta_cart*_t32 + _t126*_t40 + _t147;
-    const trailer2_real_t _t193 = J_theta_cart*_t35 + _t126*_t45 + _t149;
-    const trailer2_real_t _t194 = J_theta_cart2*_t40 + _t126*_t32 + _t148;
-    const trailer2_real_t _t195 = J_theta_cart2*_t45 + _t126*_t35 + _t150;
+    const trailer2_real_t _t193 = J_theta_tractor + _t151*_t35 + _t152*_t45;
+    const trailer2_real_t _t194 = J_theta_cart*_t32 + _t126*_t40 + _t149;
+    const trailer2_real_t _t195 = J_theta_cart*_t35 + _t126*_t45 + _t151;
+    const trailer2_real_t _t196 = J_theta_cart2*_t40 + _t126*_t32 + _t150;
+    const trailer2_real_t _t197 = J_theta_cart2*_t45 + _t126*_t35 + _t152;
     const trailer2_real_t _t16 = kept[22];
-    const trailer2_real_t _t196 = _t102*_t103 + _t108*_t109 + _t114*_t115 + _t120*_t121 + _t16
-            + _t189 + _t192*_t32 + _t194*_t40;
+    const trailer2_real_t _t198 = _t102*_t103 + _t108*_t109 + _t114*_t115 + _t120*_t121 + _t16
+            + _t191 + _t194*_t32 + _t196*_t40;
     const trailer2_real_t _t17 = kept[23];
-    const trailer2_real_t _t197 = _t102*_t106 + _t108*_t112 + _t114*_t118 + _t120*_t124 + _t17
-            + _t190 + _t193*_t32 + _t195*_t40;
+    const trailer2_real_t _t199 = _t102*_t106 + _t108*_t112 + _t114*_t118 + _t120*_t124 + _t17
+            + _t192 + _t195*_t32 + _t197*_t40;
     const trailer2_real_t _t18 = kept[24];
-    const trailer2_real_t _t198 = _t105*_t106 + _t111*_t112 + _t117*_t118 + _t123*_t124 + _t18
-            + _t191 + _t193*_t35 + _t195*_t45;
-    const trailer2_real_t _t199 = _t103*_t185 + _t109*_t186 + _t115*_t187 + _t121*_t188
-            + _t130*_t147 + _t133*_t148 + _t134*_t32 + _t137*_t40 + _t151;
-    const trailer2_real_t _t200 = -K_theta_tractor_x_tractor*_t98 + _t106*_t185 + _t112*_t186
-            + _t118*_t187 + _t124*_t188 + _t130*_t149 + _t133*_t150 + _t134*_t35 + _t137*_t45
-            + _t152;
-    const trailer2_real_t _t201 = _t0*_t197 + _t196*_t2;
-    const trailer2_real_t _t202 = _t1*_t197 + _t196*_t3;
-    const trailer2_real_t _t203 = _t0*_t198 + _t197*_t2;
-    const trailer2_real_t _t204 = _t1*_t198 + _t197*_t3;
-    const trailer2_real_t _t205 = _t0*_t203 + _t2*_t201;
-    const trailer2_real_t _t206 = _t0*_t204 + _t2*_t202;
-    const trailer2_real_t _t207 = _t1*_t204 + _t202*_t3;
-    const trailer2_real_t _t208 = _t0*_t200 + _t199*_t2;
-    const trailer2_real_t _t209 = _t1*_t200 + _t199*_t3;
-    u[0] = _t145*_t205 + _t146*_t206 + _t208;
-    u[1] = _t145*_t206 + _t146*_t207 + _t209;
-    s[0] = _t138;
-    s[1] = _t139;
-    s_norm[0] = _t140;
-    gain[0] = _t143;
+    const trailer2_real_t _t200 = _t105*_t106 + _t111*_t112 + _t117*_t118 + _t123*_t124 + _t18
+            + _t193 + _t195*_t35 + _t197*_t45;
+    const trailer2_real_t _t201 = _t103*_t187 + _t109*_t188 + _t115*_t189 + _t121*_t190
+            + _t130*_t149 + _t133*_t150 + _t134*_t32 + _t137*_t40 + _t153;
+    const trailer2_real_t _t202 = -K_theta_tractor_x_tractor*_t98 + _t106*_t187 + _t112*_t188
+            + _t118*_t189 + _t124*_t190 + _t130*_t151 + _t133*_t152 + _t134*_t35 + _t137*_t45
+            + _t154;
+    const trailer2_real_t _t203 = _t0*_t199 + _t198*_t2;
+    const trailer2_real_t _t204 = _t1*_t199 + _t198*_t3;
+    const trailer2_real_t _t205 = _t0*_t200 + _t199*_t2;
+    const trailer2_real_t _t206 = _t1*_t200 + _t199*_t3;
+    const trailer2_real_t _t207 = _t0*_t205 + _t2*_t203;
+    const trailer2_real_t _t208 = _t0*_t206 + _t2*_t204;
+    const trailer2_real_t _t209 = _t1*_t206 + _t204*_t3;
+    const trailer2_real_t _t210 = _t0*_t202 + _t2*_t201;
+    const trailer2_real_t _t211 = _t1*_t202 + _t201*_t3;
+    u[0] = _t139*_t207 + _t141*_t208 + _t148*(_t146*_t207 + _t147*_t208) + _t210;
+    u[1] = _t139*_t208 + _t141*_t209 + _t148*(_t146*_t208 + _t147*_t209) + _t211;
+    s[0] = _t142;
+    s[1] = _t143;
+    s_norm[0] = _t144;
+    gain[0] = _t148;
 }
 
 /* trailer2_k_minimal_asmc_law: the per-step part of trailer2_minimal_asmc_law (trailer2_laws.h
    documents it).
-   operations after CSE: 174 add, 243 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 176 add, 249 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
@@ -873,113 +877,115 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[25],
     const trailer2_real_t _t137 = J_theta_cart2*_t133 + _t126*_t130 + _t135*_t98 + _t136;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
-    const trailer2_real_t p12_0 = p12[0];
-    const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t138 = e0*p12_0 + edot0*p22_0;
-    const trailer2_real_t e1 = e[1];
-    const trailer2_real_t edot1 = edot[1];
-    const trailer2_real_t p12_1 = p12[1];
-    const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t139 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t140 = trailer2_norm2(_t138, _t139);
-    const trailer2_real_t gain_1 = gain[0];
-    const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t141 = gain_1/TRAILER2_FMAX(_t140, eps_1);
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t142 = _t138*_t141 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t138 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t143 = _t139*_t141 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t _t144 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t145 = _t49 + _t50;
-    const trailer2_real_t _t146 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t29;
-    const trailer2_real_t _t147 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t30;
+    const trailer2_real_t _t139 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t140 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t141 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t142 = trailer2_norm2(_t140, _t141);
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t143 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t142, eps_1));
+    const trailer2_real_t _t144 = _t140*_t143;
+    const trailer2_real_t _t145 = _t141*_t143;
+    const trailer2_real_t _t146 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
+    const trailer2_real_t _t147 = _t49 + _t50;
+    const trailer2_real_t _t148 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t29;
+    const trailer2_real_t _t149 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t30;
     const trailer2_real_t K_theta_tractor_x_tractor = kept[12];
-    const trailer2_real_t _t148 = K_theta_tractor_x_tractor*_t57 + _t61
+    const trailer2_real_t _t150 = K_theta_tractor_x_tractor*_t57 + _t61
             + _t63*(-K_theta_cart_x_tractor_2*_t21 + _t51) - _t64;
-    const trailer2_real_t _t149 = _t60*(-_t65 - _t66) + _t63*(-_t67 - _t68);
-    const trailer2_real_t _t150 = _t21 + _t76;
-    const trailer2_real_t _t151 = _t150*_t4;
-    const trailer2_real_t _t152 = _t23 + _t77;
+    const trailer2_real_t _t151 = _t60*(-_t65 - _t66) + _t63*(-_t67 - _t68);
+    const trailer2_real_t _t152 = _t21 + _t76;
     const trailer2_real_t _t153 = _t152*_t4;
-    const trailer2_real_t _t154 = _t21 - _t76;
-    const trailer2_real_t _t155 = _t154*_t5;
-    const trailer2_real_t _t156 = _t23 - _t77;
+    const trailer2_real_t _t154 = _t23 + _t77;
+    const trailer2_real_t _t155 = _t154*_t4;
+    const trailer2_real_t _t156 = _t21 - _t76;
     const trailer2_real_t _t157 = _t156*_t5;
-    const trailer2_real_t _t158 = _t80 - _t82;
-    const trailer2_real_t _t159 = _t158*_t6;
-    const trailer2_real_t _t160 = _t85 - _t87;
+    const trailer2_real_t _t158 = _t23 - _t77;
+    const trailer2_real_t _t159 = _t158*_t5;
+    const trailer2_real_t _t160 = _t80 - _t82;
     const trailer2_real_t _t161 = _t160*_t6;
-    const trailer2_real_t _t162 = -_t33 + _t81 + _t90;
+    const trailer2_real_t _t162 = _t85 - _t87;
     const trailer2_real_t _t163 = _t162*_t6;
-    const trailer2_real_t _t164 = -_t36 + _t86 + _t93;
+    const trailer2_real_t _t164 = -_t33 + _t81 + _t90;
     const trailer2_real_t _t165 = _t164*_t6;
-    const trailer2_real_t _t166 = _t34 + _t95;
+    const trailer2_real_t _t166 = -_t36 + _t86 + _t93;
     const trailer2_real_t _t167 = _t166*_t6;
-    const trailer2_real_t _t168 = _t37 + _t97;
+    const trailer2_real_t _t168 = _t34 + _t95;
     const trailer2_real_t _t169 = _t168*_t6;
-    const trailer2_real_t _t170 = -_t80 - _t82;
-    const trailer2_real_t _t171 = _t170*_t7;
-    const trailer2_real_t _t172 = -_t85 - _t87;
+    const trailer2_real_t _t170 = _t37 + _t97;
+    const trailer2_real_t _t171 = _t170*_t6;
+    const trailer2_real_t _t172 = -_t80 - _t82;
     const trailer2_real_t _t173 = _t172*_t7;
-    const trailer2_real_t _t174 = -_t33 + _t81 - _t90;
+    const trailer2_real_t _t174 = -_t85 - _t87;
     const trailer2_real_t _t175 = _t174*_t7;
-    const trailer2_real_t _t176 = -_t36 + _t86 - _t93;
+    const trailer2_real_t _t176 = -_t33 + _t81 - _t90;
     const trailer2_real_t _t177 = _t176*_t7;
-    const trailer2_real_t _t178 = _t34 - _t95;
+    const trailer2_real_t _t178 = -_t36 + _t86 - _t93;
     const trailer2_real_t _t179 = _t178*_t7;
-    const trailer2_real_t _t180 = _t37 - _t97;
+    const trailer2_real_t _t180 = _t34 - _t95;
     const trailer2_real_t _t181 = _t180*_t7;
-    const trailer2_real_t _t182 = _t128*_t151 + _t129*_t153;
-    const trailer2_real_t _t183 = _t128*_t155 + _t129*_t157;
-    const trailer2_real_t _t184 = _t100*_t165 + _t131*_t167 + _t132*_t169 + _t159*_t98 + _t161*_t57
-            + _t163*_t99;
-    const trailer2_real_t _t185 = _t100*_t177 + _t131*_t179 + _t132*_t181 + _t171*_t98 + _t173*_t57
-            + _t175*_t99;
+    const trailer2_real_t _t182 = _t37 - _t97;
+    const trailer2_real_t _t183 = _t182*_t7;
+    const trailer2_real_t _t184 = _t128*_t153 + _t129*_t155;
+    const trailer2_real_t _t185 = _t128*_t157 + _t129*_t159;
+    const trailer2_real_t _t186 = _t100*_t167 + _t131*_t169 + _t132*_t171 + _t161*_t98 + _t163*_t57
+            + _t165*_t99;
+    const trailer2_real_t _t187 = _t100*_t179 + _t131*_t181 + _t132*_t183 + _t173*_t98 + _t175*_t57
+            + _t177*_t99;
     const trailer2_real_t J_x_tractor = kept[7];
-    const trailer2_real_t _t186 = J_x_tractor + _t144*_t32 + _t145*_t40;
+    const trailer2_real_t _t188 = J_x_tractor + _t146*_t32 + _t147*_t40;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = kept[13];
-    const trailer2_real_t _t187 = K_theta_tractor_x_tractor_2 + _t144*_t35 + _t145*_t45;
+    const trailer2_real_t _t189 = K_theta_tractor_x_tractor_2 + _t146*_t35 + _t147*_t45;
     const trailer2_real_t J_theta_tractor = kept[6];
-    const trailer2_real_t _t188 = J_theta_tractor + _t146*_t35 + _t147*_t45;
-    const trailer2_real_t _t189 = J_theta_cart*_t32 + _t126*_t40 + _t144;
-    const trailer2_real_t _t190 = J_theta_cart*_t35 + _t126*_t45 + _t146;
-    const trailer2_real_t _t191 = J_theta_cart2*_t40 + _t126*_t32 + _t145;
-    const trailer2_real_t _t192 = J_theta_cart2*_t45 + _t126*_t35 + _t147;
+    const trailer2_real_t _t190 = J_theta_tractor + _t148*_t35 + _t149*_t45;
+    const trailer2_real_t _t191 = J_theta_cart*_t32 + _t126*_t40 + _t146;
+    const trailer2_real_t _t192 = J_theta_cart*_t35 + _t126*_t45 + _t148;
+    const trailer2_real_t _t193 = J_theta_cart2*_t40 + _t126*_t32 + _t147;
+    const trailer2_real_t _t194 = J_theta_cart2*_t45 + _t126*_t35 + _t149;
     const trailer2_real_t _t16 = kept[22];
-    const trailer2_real_t _t193 = _t102*_t103 + _t108*_t109 + _t114*_t115 + _t120*_t121 + _t16
-            + _t186 + _t189*_t32 + _t191*_t40;
+    const trailer2_real_t _t195 = _t102*_t103 + _t108*_t109 + _t114*_t115 + _t120*_t121 + _t16
+            + _t188 + _t191*_t32 + _t193*_t40;
     const trailer2_real_t _t17 = kept[23];
-    const trailer2_real_t _t194 = _t102*_t106 + _t108*_t112 + _t114*_t118 + _t120*_t124 + _t17
-            + _t187 + _t190*_t32 + _t192*_t40;
+    const trailer2_real_t _t196 = _t102*_t106 + _t108*_t112 + _t114*_t118 + _t120*_t124 + _t17
+            + _t189 + _t192*_t32 + _t194*_t40;
     const trailer2_real_t _t18 = kept[24];
-    const trailer2_real_t _t195 = _t105*_t106 + _t111*_t112 + _t117*_t118 + _t123*_t124 + _t18
-            + _t188 + _t190*_t35 + _t192*_t45;
-    const trailer2_real_t _t196 = _t103*_t182 + _t109*_t183 + _t115*_t184 + _t121*_t185
-            + _t130*_t144 + _t133*_t145 + _t134*_t32 + _t137*_t40 + _t148;
-    const trailer2_real_t _t197 = -K_theta_tractor_x_tractor*_t98 + _t106*_t182 + _t112*_t183
-            + _t118*_t184 + _t124*_t185 + _t130*_t146 + _t133*_t147 + _t134*_t35 + _t137*_t45
-            + _t149;
-    const trailer2_real_t _t198 = _t0*_t194 + _t193*_t2;
-    const trailer2_real_t _t199 = _t1*_t194 + _t193*_t3;
-    const trailer2_real_t _t200 = _t0*_t195 + _t194*_t2;
-    const trailer2_real_t _t201 = _t1*_t195 + _t194*_t3;
-    const trailer2_real_t _t202 = _t0*_t200 + _t198*_t2;
-    const trailer2_real_t _t203 = _t0*_t201 + _t199*_t2;
-    const trailer2_real_t _t204 = _t1*_t201 + _t199*_t3;
-    const trailer2_real_t _t205 = _t0*_t197 + _t196*_t2;
-    const trailer2_real_t _t206 = _t1*_t197 + _t196*_t3;
+    const trailer2_real_t _t197 = _t105*_t106 + _t111*_t112 + _t117*_t118 + _t123*_t124 + _t18
+            + _t190 + _t192*_t35 + _t194*_t45;
+    const trailer2_real_t _t198 = _t103*_t184 + _t109*_t185 + _t115*_t186 + _t121*_t187
+            + _t130*_t146 + _t133*_t147 + _t134*_t32 + _t137*_t40 + _t150;
+    const trailer2_real_t _t199 = -K_theta_tractor_x_tractor*_t98 + _t106*_t184 + _t112*_t185
+            + _t118*_t186 + _t124*_t187 + _t130*_t148 + _t133*_t149 + _t134*_t35 + _t137*_t45
+            + _t151;
+    const trailer2_real_t _t200 = _t0*_t196 + _t195*_t2;
+    const trailer2_real_t _t201 = _t1*_t196 + _t195*_t3;
+    const trailer2_real_t _t202 = _t0*_t197 + _t196*_t2;
+    const trailer2_real_t _t203 = _t1*_t197 + _t196*_t3;
+    const trailer2_real_t _t204 = _t0*_t202 + _t2*_t200;
+    const trailer2_real_t _t205 = _t0*_t203 + _t2*_t201;
+    const trailer2_real_t _t206 = _t1*_t203 + _t201*_t3;
+    const trailer2_real_t _t207 = _t0*_t199 + _t198*_t2;
+    const trailer2_real_t _t208 = _t1*_t199 + _t198*_t3;
+    const trailer2_real_t gain_1 = gain[0];
     const trailer2_real_t adapt_0 = adapt[0];
     const trailer2_real_t h = adapt[1];
-    u[0] = _t142*_t202 + _t143*_t203 + _t205;
-    u[1] = _t142*_t203 + _t143*_t204 + _t206;
-    s[0] = _t138;
-    s[1] = _t139;
-    s_norm[0] = _t140;
-    gain_next[0] = _t140*adapt_0*h + gain_1;
+    u[0] = _t138*_t204 + _t139*_t205 + _t207 + gain_1*(_t144*_t204 + _t145*_t205);
+    u[1] = _t138*_t205 + _t139*_t206 + _t208 + gain_1*(_t144*_t205 + _t145*_t206);
+    s[0] = _t140;
+    s[1] = _t141;
+    s_norm[0] = _t142;
+    gain_next[0] = _t142*adapt_0*h + gain_1;
 }
 
 /* trailer2_k_minimal_pi_law_keep: the parameter-only part of trailer2_minimal_pi_law

@@ -549,7 +549,7 @@ void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_re
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 84 add, 137 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -594,122 +594,124 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
-    const trailer2_real_t p12_0 = p12[0];
-    const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t31 = e0*p12_0 + edot0*p22_0;
-    const trailer2_real_t e1 = e[1];
-    const trailer2_real_t edot1 = edot[1];
-    const trailer2_real_t p12_1 = p12[1];
-    const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t32 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t33 = trailer2_norm2(_t31, _t32);
-    const trailer2_real_t gain_1 = gain[0];
-    const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t34 = gain_1/TRAILER2_FMAX(_t33, eps_1);
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t35 = _t31*_t34 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t31 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t e1 = e[1];
+    const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t36 = _t32*_t34 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t32 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t p12_0 = p12[0];
+    const trailer2_real_t p22_0 = p22[0];
+    const trailer2_real_t _t33 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t p12_1 = p12[1];
+    const trailer2_real_t p22_1 = p22[1];
+    const trailer2_real_t _t34 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t35 = trailer2_norm2(_t33, _t34);
+    const trailer2_real_t eps_1 = eps[0];
+    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t35, eps_1));
+    const trailer2_real_t _t37 = _t33*_t36;
+    const trailer2_real_t _t38 = _t34*_t36;
     const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t39 = TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t40 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
     const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t39 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart_right;
     const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_cart_left;
     const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_cart2_right;
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t43 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t44 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t45 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.207)*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t48 = -TRAILER2_LIT(0.207)*_t47;
-    const trailer2_real_t _t49 = _t15 + _t3;
-    const trailer2_real_t _t50 = -_t12 + _t17;
-    const trailer2_real_t _t51 = _t39*_t49;
-    const trailer2_real_t _t52 = _t39*_t50;
-    const trailer2_real_t _t53 = -_t15 + _t3;
-    const trailer2_real_t _t54 = -_t12 - _t17;
-    const trailer2_real_t _t55 = _t40*_t53;
-    const trailer2_real_t _t56 = _t40*_t54;
-    const trailer2_real_t _t57 = _t21 - _t23 + _t7;
-    const trailer2_real_t _t58 = _t26 - _t27;
-    const trailer2_real_t _t59 = _t41*_t57;
-    const trailer2_real_t _t60 = _t41*_t58;
-    const trailer2_real_t _t61 = -_t21 - _t23 + _t7;
-    const trailer2_real_t _t62 = -_t26 - _t27;
-    const trailer2_real_t _t63 = _t42*_t61;
-    const trailer2_real_t _t64 = _t42*_t62;
+    const trailer2_real_t _t44 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t46 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t47 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t48 = TRAILER2_LIT(0.207)*_t47;
+    const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.207)*_t49;
+    const trailer2_real_t _t51 = _t15 + _t3;
+    const trailer2_real_t _t52 = -_t12 + _t17;
+    const trailer2_real_t _t53 = _t41*_t51;
+    const trailer2_real_t _t54 = _t41*_t52;
+    const trailer2_real_t _t55 = -_t15 + _t3;
+    const trailer2_real_t _t56 = -_t12 - _t17;
+    const trailer2_real_t _t57 = _t42*_t55;
+    const trailer2_real_t _t58 = _t42*_t56;
+    const trailer2_real_t _t59 = _t21 - _t23 + _t7;
+    const trailer2_real_t _t60 = _t26 - _t27;
+    const trailer2_real_t _t61 = _t43*_t59;
+    const trailer2_real_t _t62 = _t43*_t60;
+    const trailer2_real_t _t63 = -_t21 - _t23 + _t7;
+    const trailer2_real_t _t64 = -_t26 - _t27;
+    const trailer2_real_t _t65 = _t44*_t63;
+    const trailer2_real_t _t66 = _t44*_t64;
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t66 = _t28 + _t29;
-    const trailer2_real_t _t67 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
-    const trailer2_real_t _t68 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
-    const trailer2_real_t _t69 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
+    const trailer2_real_t _t67 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t68 = _t28 + _t29;
+    const trailer2_real_t _t69 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
+    const trailer2_real_t _t70 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
+    const trailer2_real_t _t71 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
             + _t28*_t30 + _t29*_t30;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t70 = J_x_tractor + _t14*_t65 + _t20*_t66;
+    const trailer2_real_t _t72 = J_x_tractor + _t14*_t67 + _t20*_t68;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t71 = K_theta_tractor_x_tractor_2 + _t16*_t65 + _t25*_t66;
+    const trailer2_real_t _t73 = K_theta_tractor_x_tractor_2 + _t16*_t67 + _t25*_t68;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t72 = J_theta_tractor + _t16*_t67 + _t25*_t68;
+    const trailer2_real_t _t74 = J_theta_tractor + _t16*_t69 + _t25*_t70;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t73 = J_theta_cart*_t14 + _t20*_t69 + _t65;
-    const trailer2_real_t _t74 = J_theta_cart*_t16 + _t25*_t69 + _t67;
+    const trailer2_real_t _t75 = J_theta_cart*_t14 + _t20*_t71 + _t67;
+    const trailer2_real_t _t76 = J_theta_cart*_t16 + _t25*_t71 + _t69;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t75 = J_theta_cart2*_t20 + _t14*_t69 + _t66;
-    const trailer2_real_t _t76 = J_theta_cart2*_t25 + _t16*_t69 + _t68;
+    const trailer2_real_t _t77 = J_theta_cart2*_t20 + _t14*_t71 + _t68;
+    const trailer2_real_t _t78 = J_theta_cart2*_t25 + _t16*_t71 + _t70;
     const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t77 = J_theta_right*_t45;
-    const trailer2_real_t _t78 = J_theta_right*_t46;
+    const trailer2_real_t _t79 = J_theta_right*_t47;
+    const trailer2_real_t _t80 = J_theta_right*_t48;
     const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t79 = J_theta_left*_t47;
-    const trailer2_real_t _t80 = J_theta_left*_t48;
+    const trailer2_real_t _t81 = J_theta_left*_t49;
+    const trailer2_real_t _t82 = J_theta_left*_t50;
     const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t81 = J_theta_cart_right*_t51;
-    const trailer2_real_t _t82 = J_theta_cart_right*_t52;
+    const trailer2_real_t _t83 = J_theta_cart_right*_t53;
+    const trailer2_real_t _t84 = J_theta_cart_right*_t54;
     const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t83 = J_theta_cart_left*_t55;
-    const trailer2_real_t _t84 = J_theta_cart_left*_t56;
+    const trailer2_real_t _t85 = J_theta_cart_left*_t57;
+    const trailer2_real_t _t86 = J_theta_cart_left*_t58;
     const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t85 = J_theta_cart2_right*_t59;
-    const trailer2_real_t _t86 = J_theta_cart2_right*_t60;
+    const trailer2_real_t _t87 = J_theta_cart2_right*_t61;
+    const trailer2_real_t _t88 = J_theta_cart2_right*_t62;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t87 = J_theta_cart2_left*_t63;
-    const trailer2_real_t _t88 = J_theta_cart2_left*_t64;
-    const trailer2_real_t _t89 = _t14*_t73 + _t20*_t75 + _t45*_t77 + _t47*_t79 + _t51*_t81
-            + _t55*_t83 + _t59*_t85 + _t63*_t87 + _t70;
-    const trailer2_real_t _t90 = _t14*_t74 + _t20*_t76 + _t45*_t78 + _t47*_t80 + _t51*_t82
-            + _t55*_t84 + _t59*_t86 + _t63*_t88 + _t71;
-    const trailer2_real_t _t91 = _t16*_t74 + _t25*_t76 + _t46*_t78 + _t48*_t80 + _t52*_t82
-            + _t56*_t84 + _t60*_t86 + _t64*_t88 + _t72;
-    const trailer2_real_t _t92 = _t37*_t90 + _t43*_t89;
-    const trailer2_real_t _t93 = _t38*_t90 + _t44*_t89;
-    const trailer2_real_t _t94 = _t37*_t91 + _t43*_t90;
-    const trailer2_real_t _t95 = _t38*_t91 + _t44*_t90;
-    const trailer2_real_t _t96 = _t37*_t94 + _t43*_t92;
-    const trailer2_real_t _t97 = _t37*_t95 + _t43*_t93;
-    const trailer2_real_t _t98 = _t38*_t95 + _t44*_t93;
+    const trailer2_real_t _t89 = J_theta_cart2_left*_t65;
+    const trailer2_real_t _t90 = J_theta_cart2_left*_t66;
+    const trailer2_real_t _t91 = _t14*_t75 + _t20*_t77 + _t47*_t79 + _t49*_t81 + _t53*_t83
+            + _t57*_t85 + _t61*_t87 + _t65*_t89 + _t72;
+    const trailer2_real_t _t92 = _t14*_t76 + _t20*_t78 + _t47*_t80 + _t49*_t82 + _t53*_t84
+            + _t57*_t86 + _t61*_t88 + _t65*_t90 + _t73;
+    const trailer2_real_t _t93 = _t16*_t76 + _t25*_t78 + _t48*_t80 + _t50*_t82 + _t54*_t84
+            + _t58*_t86 + _t62*_t88 + _t66*_t90 + _t74;
+    const trailer2_real_t _t94 = _t39*_t92 + _t45*_t91;
+    const trailer2_real_t _t95 = _t40*_t92 + _t46*_t91;
+    const trailer2_real_t _t96 = _t39*_t93 + _t45*_t92;
+    const trailer2_real_t _t97 = _t40*_t93 + _t46*_t92;
+    const trailer2_real_t _t98 = _t39*_t96 + _t45*_t94;
+    const trailer2_real_t _t99 = _t39*_t97 + _t45*_t95;
+    const trailer2_real_t _t100 = _t40*_t97 + _t46*_t95;
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t35*_t96 + _t36*_t97;
-    u[1] = H1hat1 + _t35*_t97 + _t36*_t98;
-    s[0] = _t31;
-    s[1] = _t32;
-    s_norm[0] = _t33;
+    const trailer2_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t31*_t98 + _t32*_t99 + gain_1*(_t37*_t98 + _t38*_t99);
+    u[1] = H1hat1 + _t100*_t32 + _t31*_t99 + gain_1*(_t100*_t38 + _t37*_t99);
+    s[0] = _t33;
+    s[1] = _t34;
+    s_norm[0] = _t35;
 }
 
 /* trailer2_minimal_tdroc_law_mhat: documented in trailer2_laws.h.
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -721,7 +723,7 @@ void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 181 add, 273 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 183 add, 279 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -736,7 +738,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 177 add, 270 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 179 add, 276 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,

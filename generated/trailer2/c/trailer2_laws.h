@@ -356,7 +356,7 @@ void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_re
  * @param[out] s [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 84 add, 137 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -411,7 +411,7 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
  * @param[out] s [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE)
  *
- * operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -467,7 +467,7 @@ void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER2_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 181 add, 273 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 183 add, 279 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
@@ -526,7 +526,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 177 add, 270 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 179 add, 276 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,

@@ -864,7 +864,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 82 add, 131 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 84 add, 137 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -929,80 +929,82 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t28 = K_theta_cart2_x_tractor*_t6
     _t29 = K_theta_cart2_x_tractor_2*_t7
     _t30 = 0.85*_t2
-    _t31 = e0*p12_0 + edot0*p22_0
-    _t32 = e1*p12_1 + edot1*p22_1
-    _t33 = _norm(_t31, _t32)
-    _t34 = gain_1/max(_t33, eps_1)
-    _t35 = _t31*_t34 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t36 = _t32*_t34 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t37 = 2.4154589371980677*radius_right
-    _t38 = -2.4154589371980677*radius_left
-    _t39 = 1.0/radius_cart_right
-    _t40 = 1.0/radius_cart_left
-    _t41 = 1.0/radius_cart2_right
-    _t42 = 1.0/radius_cart2_left
-    _t43 = 0.5*radius_right
-    _t44 = 0.5*radius_left
-    _t45 = 1.0/radius_right
-    _t46 = 0.207*_t45
-    _t47 = 1.0/radius_left
-    _t48 = -0.207*_t47
-    _t49 = _t15 + _t3
-    _t50 = -_t12 + _t17
-    _t51 = _t39*_t49
-    _t52 = _t39*_t50
-    _t53 = -_t15 + _t3
-    _t54 = -_t12 - _t17
-    _t55 = _t40*_t53
-    _t56 = _t40*_t54
-    _t57 = _t21 - _t23 + _t7
-    _t58 = _t26 - _t27
-    _t59 = _t41*_t57
-    _t60 = _t41*_t58
-    _t61 = -_t21 - _t23 + _t7
-    _t62 = -_t26 - _t27
-    _t63 = _t42*_t61
-    _t64 = _t42*_t62
-    _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
-    _t66 = _t28 + _t29
-    _t67 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12
-    _t68 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13
-    _t69 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9 + _t28*_t30 + _t29*_t30
-    _t70 = J_x_tractor + _t14*_t65 + _t20*_t66
-    _t71 = K_theta_tractor_x_tractor_2 + _t16*_t65 + _t25*_t66
-    _t72 = J_theta_tractor + _t16*_t67 + _t25*_t68
-    _t73 = J_theta_cart*_t14 + _t20*_t69 + _t65
-    _t74 = J_theta_cart*_t16 + _t25*_t69 + _t67
-    _t75 = J_theta_cart2*_t20 + _t14*_t69 + _t66
-    _t76 = J_theta_cart2*_t25 + _t16*_t69 + _t68
-    _t77 = J_theta_right*_t45
-    _t78 = J_theta_right*_t46
-    _t79 = J_theta_left*_t47
-    _t80 = J_theta_left*_t48
-    _t81 = J_theta_cart_right*_t51
-    _t82 = J_theta_cart_right*_t52
-    _t83 = J_theta_cart_left*_t55
-    _t84 = J_theta_cart_left*_t56
-    _t85 = J_theta_cart2_right*_t59
-    _t86 = J_theta_cart2_right*_t60
-    _t87 = J_theta_cart2_left*_t63
-    _t88 = J_theta_cart2_left*_t64
-    _t89 = _t14*_t73 + _t20*_t75 + _t45*_t77 + _t47*_t79 + _t51*_t81 + _t55*_t83 + _t59*_t85 + _t63*_t87 + _t70
-    _t90 = _t14*_t74 + _t20*_t76 + _t45*_t78 + _t47*_t80 + _t51*_t82 + _t55*_t84 + _t59*_t86 + _t63*_t88 + _t71
-    _t91 = _t16*_t74 + _t25*_t76 + _t46*_t78 + _t48*_t80 + _t52*_t82 + _t56*_t84 + _t60*_t86 + _t64*_t88 + _t72
-    _t92 = _t37*_t90 + _t43*_t89
-    _t93 = _t38*_t90 + _t44*_t89
-    _t94 = _t37*_t91 + _t43*_t90
-    _t95 = _t38*_t91 + _t44*_t90
-    _t96 = _t37*_t94 + _t43*_t92
-    _t97 = _t37*_t95 + _t43*_t93
-    _t98 = _t38*_t95 + _t44*_t93
+    _t31 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t32 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t33 = e0*p12_0 + edot0*p22_0
+    _t34 = e1*p12_1 + edot1*p22_1
+    _t35 = _norm(_t33, _t34)
+    _t36 = 1.0/(max(_t35, eps_1))
+    _t37 = _t33*_t36
+    _t38 = _t34*_t36
+    _t39 = 2.4154589371980677*radius_right
+    _t40 = -2.4154589371980677*radius_left
+    _t41 = 1.0/radius_cart_right
+    _t42 = 1.0/radius_cart_left
+    _t43 = 1.0/radius_cart2_right
+    _t44 = 1.0/radius_cart2_left
+    _t45 = 0.5*radius_right
+    _t46 = 0.5*radius_left
+    _t47 = 1.0/radius_right
+    _t48 = 0.207*_t47
+    _t49 = 1.0/radius_left
+    _t50 = -0.207*_t49
+    _t51 = _t15 + _t3
+    _t52 = -_t12 + _t17
+    _t53 = _t41*_t51
+    _t54 = _t41*_t52
+    _t55 = -_t15 + _t3
+    _t56 = -_t12 - _t17
+    _t57 = _t42*_t55
+    _t58 = _t42*_t56
+    _t59 = _t21 - _t23 + _t7
+    _t60 = _t26 - _t27
+    _t61 = _t43*_t59
+    _t62 = _t43*_t60
+    _t63 = -_t21 - _t23 + _t7
+    _t64 = -_t26 - _t27
+    _t65 = _t44*_t63
+    _t66 = _t44*_t64
+    _t67 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t68 = _t28 + _t29
+    _t69 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12
+    _t70 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13
+    _t71 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9 + _t28*_t30 + _t29*_t30
+    _t72 = J_x_tractor + _t14*_t67 + _t20*_t68
+    _t73 = K_theta_tractor_x_tractor_2 + _t16*_t67 + _t25*_t68
+    _t74 = J_theta_tractor + _t16*_t69 + _t25*_t70
+    _t75 = J_theta_cart*_t14 + _t20*_t71 + _t67
+    _t76 = J_theta_cart*_t16 + _t25*_t71 + _t69
+    _t77 = J_theta_cart2*_t20 + _t14*_t71 + _t68
+    _t78 = J_theta_cart2*_t25 + _t16*_t71 + _t70
+    _t79 = J_theta_right*_t47
+    _t80 = J_theta_right*_t48
+    _t81 = J_theta_left*_t49
+    _t82 = J_theta_left*_t50
+    _t83 = J_theta_cart_right*_t53
+    _t84 = J_theta_cart_right*_t54
+    _t85 = J_theta_cart_left*_t57
+    _t86 = J_theta_cart_left*_t58
+    _t87 = J_theta_cart2_right*_t61
+    _t88 = J_theta_cart2_right*_t62
+    _t89 = J_theta_cart2_left*_t65
+    _t90 = J_theta_cart2_left*_t66
+    _t91 = _t14*_t75 + _t20*_t77 + _t47*_t79 + _t49*_t81 + _t53*_t83 + _t57*_t85 + _t61*_t87 + _t65*_t89 + _t72
+    _t92 = _t14*_t76 + _t20*_t78 + _t47*_t80 + _t49*_t82 + _t53*_t84 + _t57*_t86 + _t61*_t88 + _t65*_t90 + _t73
+    _t93 = _t16*_t76 + _t25*_t78 + _t48*_t80 + _t50*_t82 + _t54*_t84 + _t58*_t86 + _t62*_t88 + _t66*_t90 + _t74
+    _t94 = _t39*_t92 + _t45*_t91
+    _t95 = _t40*_t92 + _t46*_t91
+    _t96 = _t39*_t93 + _t45*_t92
+    _t97 = _t40*_t93 + _t46*_t92
+    _t98 = _t39*_t96 + _t45*_t94
+    _t99 = _t39*_t97 + _t45*_t95
+    _t100 = _t40*_t97 + _t46*_t95
     u = np.array([
-        H1hat0 + _t35*_t96 + _t36*_t97,
-        H1hat1 + _t35*_t97 + _t36*_t98,
+        H1hat0 + _t31*_t98 + _t32*_t99 + gain_1*(_t37*_t98 + _t38*_t99),
+        H1hat1 + _t100*_t32 + _t31*_t99 + gain_1*(_t100*_t38 + _t37*_t99),
     ])
-    s = np.array([_t31, _t32])
-    s_norm = np.array([_t33])
+    s = np.array([_t33, _t34])
+    s_norm = np.array([_t35])
     return u, s, s_norm
 
 
@@ -1034,7 +1036,7 @@ def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
     e0, e1 = _flat(e, 2, "e")
@@ -1048,18 +1050,20 @@ def minimal_tdroc_law_mhat(mhat: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot
     gain_1, = _flat(gain, 1, "gain")
     eps_1, = _flat(eps, 1, "eps")
     del p  # not used by this function
-    _t0 = e0*p12_0 + edot0*p22_0
-    _t1 = e1*p12_1 + edot1*p22_1
-    _t2 = _norm(_t0, _t1)
-    _t3 = gain_1/max(_t2, eps_1)
-    _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t2 = e0*p12_0 + edot0*p22_0
+    _t3 = e1*p12_1 + edot1*p22_1
+    _t4 = _norm(_t2, _t3)
+    _t5 = 1.0/(max(_t4, eps_1))
+    _t6 = _t2*_t5
+    _t7 = _t3*_t5
     u = np.array([
-        H1hat0 + _t4*mhat_0 + _t5*mhat_2,
-        H1hat1 + _t4*mhat_2 + _t5*mhat_3,
+        H1hat0 + _t0*mhat_0 + _t1*mhat_2 + gain_1*(_t6*mhat_0 + _t7*mhat_2),
+        H1hat1 + _t0*mhat_2 + _t1*mhat_3 + gain_1*(_t6*mhat_2 + _t7*mhat_3),
     ])
-    s = np.array([_t0, _t1])
-    s_norm = np.array([_t2])
+    s = np.array([_t2, _t3])
+    s_norm = np.array([_t4])
     return u, s, s_norm
 
 
@@ -1090,7 +1094,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 181 add, 273 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 183 add, 279 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     _, _, _, _, _, thetadot_right, thetadot_left, _, _, _, _ = _flat(qdot, 11, "qdot")
@@ -1252,93 +1256,95 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t124 = K_theta_cart2_x_tractor_2*_t6 - _t33
     _t125 = _t30*_t56 + _t31*_t56 - _t33*_t55 + _t36*_t55 + _t40*_t50 + _t40*_t51
     _t126 = J_theta_cart2*_t122 + _t115*_t119 + _t124*_t83 + _t125
-    _t127 = e0*p12_0 + edot0*p22_0
-    _t128 = e1*p12_1 + edot1*p22_1
-    _t129 = _norm(_t127, _t128)
-    _t130 = e0*k1_0 + edot0*k2_0
-    _t131 = e1*k1_1 + edot1*k2_1
-    _t132 = (alpha*(_norm(_t130, _t131) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
-    _t133 = _t132/max(_t129, eps_1)
-    _t134 = _t127*_t133 + _t130 + qdd_des0
-    _t135 = _t128*_t133 + _t131 + qdd_des1
-    _t136 = 1.0/radius_right
-    _t137 = 0.207*_t136
-    _t138 = 1.0/radius_left
-    _t139 = -0.207*_t138
-    _t140 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
-    _t141 = _t30 + _t31
-    _t142 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10
-    _t143 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11
-    _t144 = -K_theta_cart_x_tractor_2*_t2*_t48 + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49
-    _t145 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53
-    _t146 = _t2 + _t61
-    _t147 = _t146*_t86
-    _t148 = _t4 + _t62
+    _t127 = e0*k1_0 + edot0*k2_0
+    _t128 = _t127 + qdd_des0
+    _t129 = e1*k1_1 + edot1*k2_1
+    _t130 = _t129 + qdd_des1
+    _t131 = e0*p12_0 + edot0*p22_0
+    _t132 = e1*p12_1 + edot1*p22_1
+    _t133 = _norm(_t131, _t132)
+    _t134 = 1.0/(max(_t133, eps_1))
+    _t135 = _t131*_t134
+    _t136 = _t132*_t134
+    _t137 = (alpha*(_norm(_t127, _t129) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
+    _t138 = 1.0/radius_right
+    _t139 = 0.207*_t138
+    _t140 = 1.0/radius_left
+    _t141 = -0.207*_t140
+    _t142 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t143 = _t30 + _t31
+    _t144 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10
+    _t145 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11
+    _t146 = -K_theta_cart_x_tractor_2*_t2*_t48 + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49
+    _t147 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53
+    _t148 = _t2 + _t61
     _t149 = _t148*_t86
-    _t150 = _t2 - _t61
-    _t151 = _t150*_t93
-    _t152 = _t4 - _t62
+    _t150 = _t4 + _t62
+    _t151 = _t150*_t86
+    _t152 = _t2 - _t61
     _t153 = _t152*_t93
-    _t154 = _t65 - _t67
-    _t155 = _t100*_t154
-    _t156 = _t70 - _t72
+    _t154 = _t4 - _t62
+    _t155 = _t154*_t93
+    _t156 = _t65 - _t67
     _t157 = _t100*_t156
-    _t158 = -_t14 + _t66 + _t75
+    _t158 = _t70 - _t72
     _t159 = _t100*_t158
-    _t160 = -_t17 + _t71 + _t78
+    _t160 = -_t14 + _t66 + _t75
     _t161 = _t100*_t160
-    _t162 = _t15 + _t80
+    _t162 = -_t17 + _t71 + _t78
     _t163 = _t100*_t162
-    _t164 = _t18 + _t82
+    _t164 = _t15 + _t80
     _t165 = _t100*_t164
-    _t166 = -_t65 - _t67
-    _t167 = _t107*_t166
-    _t168 = -_t70 - _t72
+    _t166 = _t18 + _t82
+    _t167 = _t100*_t166
+    _t168 = -_t65 - _t67
     _t169 = _t107*_t168
-    _t170 = -_t14 + _t66 - _t75
+    _t170 = -_t70 - _t72
     _t171 = _t107*_t170
-    _t172 = -_t17 + _t71 - _t78
+    _t172 = -_t14 + _t66 - _t75
     _t173 = _t107*_t172
-    _t174 = _t15 - _t80
+    _t174 = -_t17 + _t71 - _t78
     _t175 = _t107*_t174
-    _t176 = _t18 - _t82
+    _t176 = _t15 - _t80
     _t177 = _t107*_t176
-    _t178 = _t117*_t147 + _t118*_t149
-    _t179 = _t117*_t151 + _t118*_t153
-    _t180 = _t120*_t163 + _t121*_t165 + _t155*_t83 + _t157*_t40 + _t159*_t84 + _t161*_t85
-    _t181 = _t120*_t175 + _t121*_t177 + _t167*_t83 + _t169*_t40 + _t171*_t84 + _t173*_t85
-    _t182 = J_x_tractor + _t13*_t140 + _t141*_t21
-    _t183 = K_theta_tractor_x_tractor_2 + _t140*_t16 + _t141*_t26
-    _t184 = J_theta_tractor + _t142*_t16 + _t143*_t26
-    _t185 = J_theta_cart*_t13 + _t115*_t21 + _t140
-    _t186 = J_theta_cart*_t16 + _t115*_t26 + _t142
-    _t187 = J_theta_cart2*_t21 + _t115*_t13 + _t141
-    _t188 = J_theta_cart2*_t26 + _t115*_t16 + _t143
-    _t189 = J_theta_right*_t136
-    _t190 = J_theta_right*_t137
-    _t191 = J_theta_left*_t138
-    _t192 = J_theta_left*_t139
-    _t193 = _t102*_t103 + _t109*_t110 + _t13*_t185 + _t136*_t189 + _t138*_t191 + _t182 + _t187*_t21 + _t88*_t89 + _t95*_t96
-    _t194 = _t102*_t106 + _t109*_t113 + _t13*_t186 + _t136*_t190 + _t138*_t192 + _t183 + _t188*_t21 + _t88*_t92 + _t95*_t99
-    _t195 = _t105*_t106 + _t112*_t113 + _t137*_t190 + _t139*_t192 + _t16*_t186 + _t184 + _t188*_t26 + _t91*_t92 + _t98*_t99
-    _t196 = _t103*_t180 + _t110*_t181 + _t119*_t140 + _t122*_t141 + _t123*_t13 + _t126*_t21 + _t144 + _t178*_t89 + _t179*_t96
-    _t197 = -K_theta_tractor_x_tractor*_t83 + _t106*_t180 + _t113*_t181 + _t119*_t142 + _t122*_t143 + _t123*_t16 + _t126*_t26 + _t145 + _t178*_t92 + _t179*_t99
-    _t198 = _t193*_t41 + _t194*_t37
-    _t199 = _t193*_t42 + _t194*_t38
-    _t200 = _t194*_t41 + _t195*_t37
-    _t201 = _t194*_t42 + _t195*_t38
-    _t202 = _t198*_t41 + _t200*_t37
-    _t203 = _t199*_t41 + _t201*_t37
-    _t204 = _t199*_t42 + _t201*_t38
-    _t205 = _t196*_t41 + _t197*_t37
-    _t206 = _t196*_t42 + _t197*_t38
+    _t178 = _t18 - _t82
+    _t179 = _t107*_t178
+    _t180 = _t117*_t149 + _t118*_t151
+    _t181 = _t117*_t153 + _t118*_t155
+    _t182 = _t120*_t165 + _t121*_t167 + _t157*_t83 + _t159*_t40 + _t161*_t84 + _t163*_t85
+    _t183 = _t120*_t177 + _t121*_t179 + _t169*_t83 + _t171*_t40 + _t173*_t84 + _t175*_t85
+    _t184 = J_x_tractor + _t13*_t142 + _t143*_t21
+    _t185 = K_theta_tractor_x_tractor_2 + _t142*_t16 + _t143*_t26
+    _t186 = J_theta_tractor + _t144*_t16 + _t145*_t26
+    _t187 = J_theta_cart*_t13 + _t115*_t21 + _t142
+    _t188 = J_theta_cart*_t16 + _t115*_t26 + _t144
+    _t189 = J_theta_cart2*_t21 + _t115*_t13 + _t143
+    _t190 = J_theta_cart2*_t26 + _t115*_t16 + _t145
+    _t191 = J_theta_right*_t138
+    _t192 = J_theta_right*_t139
+    _t193 = J_theta_left*_t140
+    _t194 = J_theta_left*_t141
+    _t195 = _t102*_t103 + _t109*_t110 + _t13*_t187 + _t138*_t191 + _t140*_t193 + _t184 + _t189*_t21 + _t88*_t89 + _t95*_t96
+    _t196 = _t102*_t106 + _t109*_t113 + _t13*_t188 + _t138*_t192 + _t140*_t194 + _t185 + _t190*_t21 + _t88*_t92 + _t95*_t99
+    _t197 = _t105*_t106 + _t112*_t113 + _t139*_t192 + _t141*_t194 + _t16*_t188 + _t186 + _t190*_t26 + _t91*_t92 + _t98*_t99
+    _t198 = _t103*_t182 + _t110*_t183 + _t119*_t142 + _t122*_t143 + _t123*_t13 + _t126*_t21 + _t146 + _t180*_t89 + _t181*_t96
+    _t199 = -K_theta_tractor_x_tractor*_t83 + _t106*_t182 + _t113*_t183 + _t119*_t144 + _t122*_t145 + _t123*_t16 + _t126*_t26 + _t147 + _t180*_t92 + _t181*_t99
+    _t200 = _t195*_t41 + _t196*_t37
+    _t201 = _t195*_t42 + _t196*_t38
+    _t202 = _t196*_t41 + _t197*_t37
+    _t203 = _t196*_t42 + _t197*_t38
+    _t204 = _t200*_t41 + _t202*_t37
+    _t205 = _t201*_t41 + _t203*_t37
+    _t206 = _t201*_t42 + _t203*_t38
+    _t207 = _t198*_t41 + _t199*_t37
+    _t208 = _t198*_t42 + _t199*_t38
     u = np.array([
-        _t134*_t202 + _t135*_t203 + _t205,
-        _t134*_t203 + _t135*_t204 + _t206,
+        _t128*_t204 + _t130*_t205 + _t137*(_t135*_t204 + _t136*_t205) + _t207,
+        _t128*_t205 + _t130*_t206 + _t137*(_t135*_t205 + _t136*_t206) + _t208,
     ])
-    s = np.array([_t127, _t128])
-    s_norm = np.array([_t129])
-    gain = np.array([_t132])
+    s = np.array([_t131, _t132])
+    s_norm = np.array([_t133])
+    gain = np.array([_t137])
     return u, s, s_norm, gain
 
 
@@ -1370,7 +1376,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 177 add, 270 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 179 add, 276 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     _, _, _, _, _, thetadot_right, thetadot_left, _, _, _, _ = _flat(qdot, 11, "qdot")
@@ -1533,90 +1539,92 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t124 = K_theta_cart2_x_tractor_2*_t6 - _t33
     _t125 = _t30*_t56 + _t31*_t56 - _t33*_t55 + _t36*_t55 + _t40*_t50 + _t40*_t51
     _t126 = J_theta_cart2*_t122 + _t115*_t119 + _t124*_t83 + _t125
-    _t127 = e0*p12_0 + edot0*p22_0
-    _t128 = e1*p12_1 + edot1*p22_1
-    _t129 = _norm(_t127, _t128)
-    _t130 = gain_1/max(_t129, eps_1)
-    _t131 = _t127*_t130 + e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t132 = _t128*_t130 + e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t133 = 1.0/radius_right
-    _t134 = 0.207*_t133
-    _t135 = 1.0/radius_left
-    _t136 = -0.207*_t135
-    _t137 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
-    _t138 = _t30 + _t31
-    _t139 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10
-    _t140 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11
-    _t141 = -K_theta_cart_x_tractor_2*_t2*_t48 + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49
-    _t142 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53
-    _t143 = _t2 + _t61
-    _t144 = _t143*_t86
-    _t145 = _t4 + _t62
+    _t127 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t128 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t129 = e0*p12_0 + edot0*p22_0
+    _t130 = e1*p12_1 + edot1*p22_1
+    _t131 = _norm(_t129, _t130)
+    _t132 = 1.0/(max(_t131, eps_1))
+    _t133 = _t129*_t132
+    _t134 = _t130*_t132
+    _t135 = 1.0/radius_right
+    _t136 = 0.207*_t135
+    _t137 = 1.0/radius_left
+    _t138 = -0.207*_t137
+    _t139 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t140 = _t30 + _t31
+    _t141 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10
+    _t142 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11
+    _t143 = -K_theta_cart_x_tractor_2*_t2*_t48 + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49
+    _t144 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53
+    _t145 = _t2 + _t61
     _t146 = _t145*_t86
-    _t147 = _t2 - _t61
-    _t148 = _t147*_t93
-    _t149 = _t4 - _t62
+    _t147 = _t4 + _t62
+    _t148 = _t147*_t86
+    _t149 = _t2 - _t61
     _t150 = _t149*_t93
-    _t151 = _t65 - _t67
-    _t152 = _t100*_t151
-    _t153 = _t70 - _t72
+    _t151 = _t4 - _t62
+    _t152 = _t151*_t93
+    _t153 = _t65 - _t67
     _t154 = _t100*_t153
-    _t155 = -_t14 + _t66 + _t75
+    _t155 = _t70 - _t72
     _t156 = _t100*_t155
-    _t157 = -_t17 + _t71 + _t78
+    _t157 = -_t14 + _t66 + _t75
     _t158 = _t100*_t157
-    _t159 = _t15 + _t80
+    _t159 = -_t17 + _t71 + _t78
     _t160 = _t100*_t159
-    _t161 = _t18 + _t82
+    _t161 = _t15 + _t80
     _t162 = _t100*_t161
-    _t163 = -_t65 - _t67
-    _t164 = _t107*_t163
-    _t165 = -_t70 - _t72
+    _t163 = _t18 + _t82
+    _t164 = _t100*_t163
+    _t165 = -_t65 - _t67
     _t166 = _t107*_t165
-    _t167 = -_t14 + _t66 - _t75
+    _t167 = -_t70 - _t72
     _t168 = _t107*_t167
-    _t169 = -_t17 + _t71 - _t78
+    _t169 = -_t14 + _t66 - _t75
     _t170 = _t107*_t169
-    _t171 = _t15 - _t80
+    _t171 = -_t17 + _t71 - _t78
     _t172 = _t107*_t171
-    _t173 = _t18 - _t82
+    _t173 = _t15 - _t80
     _t174 = _t107*_t173
-    _t175 = _t117*_t144 + _t118*_t146
-    _t176 = _t117*_t148 + _t118*_t150
-    _t177 = _t120*_t160 + _t121*_t162 + _t152*_t83 + _t154*_t40 + _t156*_t84 + _t158*_t85
-    _t178 = _t120*_t172 + _t121*_t174 + _t164*_t83 + _t166*_t40 + _t168*_t84 + _t170*_t85
-    _t179 = J_x_tractor + _t13*_t137 + _t138*_t21
-    _t180 = K_theta_tractor_x_tractor_2 + _t137*_t16 + _t138*_t26
-    _t181 = J_theta_tractor + _t139*_t16 + _t140*_t26
-    _t182 = J_theta_cart*_t13 + _t115*_t21 + _t137
-    _t183 = J_theta_cart*_t16 + _t115*_t26 + _t139
-    _t184 = J_theta_cart2*_t21 + _t115*_t13 + _t138
-    _t185 = J_theta_cart2*_t26 + _t115*_t16 + _t140
-    _t186 = J_theta_right*_t133
-    _t187 = J_theta_right*_t134
-    _t188 = J_theta_left*_t135
-    _t189 = J_theta_left*_t136
-    _t190 = _t102*_t103 + _t109*_t110 + _t13*_t182 + _t133*_t186 + _t135*_t188 + _t179 + _t184*_t21 + _t88*_t89 + _t95*_t96
-    _t191 = _t102*_t106 + _t109*_t113 + _t13*_t183 + _t133*_t187 + _t135*_t189 + _t180 + _t185*_t21 + _t88*_t92 + _t95*_t99
-    _t192 = _t105*_t106 + _t112*_t113 + _t134*_t187 + _t136*_t189 + _t16*_t183 + _t181 + _t185*_t26 + _t91*_t92 + _t98*_t99
-    _t193 = _t103*_t177 + _t110*_t178 + _t119*_t137 + _t122*_t138 + _t123*_t13 + _t126*_t21 + _t141 + _t175*_t89 + _t176*_t96
-    _t194 = -K_theta_tractor_x_tractor*_t83 + _t106*_t177 + _t113*_t178 + _t119*_t139 + _t122*_t140 + _t123*_t16 + _t126*_t26 + _t142 + _t175*_t92 + _t176*_t99
-    _t195 = _t190*_t41 + _t191*_t37
-    _t196 = _t190*_t42 + _t191*_t38
-    _t197 = _t191*_t41 + _t192*_t37
-    _t198 = _t191*_t42 + _t192*_t38
-    _t199 = _t195*_t41 + _t197*_t37
-    _t200 = _t196*_t41 + _t198*_t37
-    _t201 = _t196*_t42 + _t198*_t38
-    _t202 = _t193*_t41 + _t194*_t37
-    _t203 = _t193*_t42 + _t194*_t38
+    _t175 = _t18 - _t82
+    _t176 = _t107*_t175
+    _t177 = _t117*_t146 + _t118*_t148
+    _t178 = _t117*_t150 + _t118*_t152
+    _t179 = _t120*_t162 + _t121*_t164 + _t154*_t83 + _t156*_t40 + _t158*_t84 + _t160*_t85
+    _t180 = _t120*_t174 + _t121*_t176 + _t166*_t83 + _t168*_t40 + _t170*_t84 + _t172*_t85
+    _t181 = J_x_tractor + _t13*_t139 + _t140*_t21
+    _t182 = K_theta_tractor_x_tractor_2 + _t139*_t16 + _t140*_t26
+    _t183 = J_theta_tractor + _t141*_t16 + _t142*_t26
+    _t184 = J_theta_cart*_t13 + _t115*_t21 + _t139
+    _t185 = J_theta_cart*_t16 + _t115*_t26 + _t141
+    _t186 = J_theta_cart2*_t21 + _t115*_t13 + _t140
+    _t187 = J_theta_cart2*_t26 + _t115*_t16 + _t142
+    _t188 = J_theta_right*_t135
+    _t189 = J_theta_right*_t136
+    _t190 = J_theta_left*_t137
+    _t191 = J_theta_left*_t138
+    _t192 = _t102*_t103 + _t109*_t110 + _t13*_t184 + _t135*_t188 + _t137*_t190 + _t181 + _t186*_t21 + _t88*_t89 + _t95*_t96
+    _t193 = _t102*_t106 + _t109*_t113 + _t13*_t185 + _t135*_t189 + _t137*_t191 + _t182 + _t187*_t21 + _t88*_t92 + _t95*_t99
+    _t194 = _t105*_t106 + _t112*_t113 + _t136*_t189 + _t138*_t191 + _t16*_t185 + _t183 + _t187*_t26 + _t91*_t92 + _t98*_t99
+    _t195 = _t103*_t179 + _t110*_t180 + _t119*_t139 + _t122*_t140 + _t123*_t13 + _t126*_t21 + _t143 + _t177*_t89 + _t178*_t96
+    _t196 = -K_theta_tractor_x_tractor*_t83 + _t106*_t179 + _t113*_t180 + _t119*_t141 + _t122*_t142 + _t123*_t16 + _t126*_t26 + _t144 + _t177*_t92 + _t178*_t99
+    _t197 = _t192*_t41 + _t193*_t37
+    _t198 = _t192*_t42 + _t193*_t38
+    _t199 = _t193*_t41 + _t194*_t37
+    _t200 = _t193*_t42 + _t194*_t38
+    _t201 = _t197*_t41 + _t199*_t37
+    _t202 = _t198*_t41 + _t200*_t37
+    _t203 = _t198*_t42 + _t200*_t38
+    _t204 = _t195*_t41 + _t196*_t37
+    _t205 = _t195*_t42 + _t196*_t38
     u = np.array([
-        _t131*_t199 + _t132*_t200 + _t202,
-        _t131*_t200 + _t132*_t201 + _t203,
+        _t127*_t201 + _t128*_t202 + _t204 + gain_1*(_t133*_t201 + _t134*_t202),
+        _t127*_t202 + _t128*_t203 + _t205 + gain_1*(_t133*_t202 + _t134*_t203),
     ])
-    s = np.array([_t127, _t128])
-    s_norm = np.array([_t129])
-    gain_next = np.array([_t129*gamma*h + gain_1])
+    s = np.array([_t129, _t130])
+    s_norm = np.array([_t131])
+    gain_next = np.array([_t131*gamma*h + gain_1])
     return u, s, s_norm, gain_next
 
 

@@ -401,7 +401,7 @@ static inline void trailer3_k_minimal_tdc_law_mhat(const trailer3_params_t *p,
 
 /* trailer3_k_minimal_tdroc_law_mhat: the body of trailer3_minimal_tdroc_law_mhat (trailer3_laws.h
    documents it).
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
     const trailer3_real_t *mhat, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -412,36 +412,38 @@ static inline void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
     (void)p;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
-    const trailer3_real_t p12_0 = p12[0];
-    const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t0 = e0*p12_0 + edot0*p22_0;
-    const trailer3_real_t e1 = e[1];
-    const trailer3_real_t edot1 = edot[1];
-    const trailer3_real_t p12_1 = p12[1];
-    const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t1 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t2 = trailer3_norm2(_t0, _t1);
-    const trailer3_real_t gain_1 = gain[0];
-    const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t3 = gain_1/TRAILER3_FMAX(_t2, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t4 = _t0*_t3 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t0 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t5 = _t1*_t3 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t1 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t p12_0 = p12[0];
+    const trailer3_real_t p22_0 = p22[0];
+    const trailer3_real_t _t2 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t p12_1 = p12[1];
+    const trailer3_real_t p22_1 = p22[1];
+    const trailer3_real_t _t3 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t4 = trailer3_norm2(_t2, _t3);
+    const trailer3_real_t eps_1 = eps[0];
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t4, eps_1));
+    const trailer3_real_t _t6 = _t2*_t5;
+    const trailer3_real_t _t7 = _t3*_t5;
     const trailer3_real_t mhat_0 = mhat[0];
     const trailer3_real_t mhat_2 = mhat[2];
     const trailer3_real_t mhat_3 = mhat[3];
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t4*mhat_0 + _t5*mhat_2;
-    u[1] = H1hat1 + _t4*mhat_2 + _t5*mhat_3;
-    s[0] = _t0;
-    s[1] = _t1;
-    s_norm[0] = _t2;
+    const trailer3_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t0*mhat_0 + _t1*mhat_2 + gain_1*(_t6*mhat_0 + _t7*mhat_2);
+    u[1] = H1hat1 + _t0*mhat_2 + _t1*mhat_3 + gain_1*(_t6*mhat_2 + _t7*mhat_3);
+    s[0] = _t2;
+    s[1] = _t3;
+    s_norm[0] = _t4;
 }
 
 /* trailer3_k_minimal_roc_law_keep: the parameter-only part of trailer3_minimal_roc_law
@@ -544,7 +546,7 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
 
 /* trailer3_k_minimal_roc_law: the per-step part of trailer3_minimal_roc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 319 add, 428 mul, 2 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 321 add, 434 mul, 2 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -806,164 +808,166 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[36],
             + _t232;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
-    const trailer3_real_t p12_0 = p12[0];
-    const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t234 = e0*p12_0 + edot0*p22_0;
-    const trailer3_real_t e1 = e[1];
-    const trailer3_real_t edot1 = edot[1];
-    const trailer3_real_t p12_1 = p12[1];
-    const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t235 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t236 = trailer3_norm2(_t234, _t235);
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t237 = e0*k1_0 + edot0*k2_0;
+    const trailer3_real_t _t234 = e0*k1_0 + edot0*k2_0;
+    const trailer3_real_t qdd_des0 = qddot_des[0];
+    const trailer3_real_t _t235 = _t234 + qdd_des0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t238 = e1*k1_1 + edot1*k2_1;
-    const trailer3_real_t qdd_des0 = qddot_des[0];
+    const trailer3_real_t _t236 = e1*k1_1 + edot1*k2_1;
     const trailer3_real_t qdd_des1 = qddot_des[1];
+    const trailer3_real_t _t237 = _t236 + qdd_des1;
+    const trailer3_real_t p12_0 = p12[0];
+    const trailer3_real_t p22_0 = p22[0];
+    const trailer3_real_t _t238 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t p12_1 = p12[1];
+    const trailer3_real_t p22_1 = p22[1];
+    const trailer3_real_t _t239 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t240 = trailer3_norm2(_t238, _t239);
+    const trailer3_real_t eps_1 = eps[0];
+    const trailer3_real_t _t241 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t240, eps_1));
+    const trailer3_real_t _t242 = _t238*_t241;
+    const trailer3_real_t _t243 = _t239*_t241;
     const trailer3_real_t alpha = bounds[0];
     const trailer3_real_t phi = bounds[1];
-    const trailer3_real_t _t239 = (alpha*(trailer3_norm2(_t237, _t238)
+    const trailer3_real_t _t244 = (alpha*(trailer3_norm2(_t234, _t236)
             + trailer3_norm2(qdd_des0, qdd_des1)) + phi)/(TRAILER3_LIT(1.0) - alpha);
-    const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t240 = _t239/TRAILER3_FMAX(_t236, eps_1);
-    const trailer3_real_t _t241 = _t234*_t240 + _t237 + qdd_des0;
-    const trailer3_real_t _t242 = _t235*_t240 + _t238 + qdd_des1;
-    const trailer3_real_t _t243 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
-    const trailer3_real_t _t244 = _t82 + _t83;
-    const trailer3_real_t _t245 = _t84 + _t85;
-    const trailer3_real_t _t246 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t247 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t248 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
+    const trailer3_real_t _t245 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
+    const trailer3_real_t _t246 = _t82 + _t83;
+    const trailer3_real_t _t247 = _t84 + _t85;
+    const trailer3_real_t _t248 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
+    const trailer3_real_t _t249 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
+    const trailer3_real_t _t250 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[17];
-    const trailer3_real_t _t249 = K_theta_tractor_x_tractor*_t94 + _t100
+    const trailer3_real_t _t251 = K_theta_tractor_x_tractor*_t94 + _t100
             + _t102*(-K_theta_cart_x_tractor_2*_t27 + _t86) - _t103 - _t104 + _t87*_t97;
-    const trailer3_real_t _t250 = _t102*(-K_theta_cart_x_tractor*_t41
+    const trailer3_real_t _t252 = _t102*(-K_theta_cart_x_tractor*_t41
             - K_theta_cart_x_tractor_2*_t29) + _t97*(-_t105 - _t106) + _t99*(-_t107 - _t108);
-    const trailer3_real_t _t251 = _t122 + _t27;
-    const trailer3_real_t _t252 = _t251*_t4;
-    const trailer3_real_t _t253 = _t123 + _t29;
+    const trailer3_real_t _t253 = _t122 + _t27;
     const trailer3_real_t _t254 = _t253*_t4;
-    const trailer3_real_t _t255 = -_t122 + _t27;
-    const trailer3_real_t _t256 = _t255*_t5;
-    const trailer3_real_t _t257 = -_t123 + _t29;
+    const trailer3_real_t _t255 = _t123 + _t29;
+    const trailer3_real_t _t256 = _t255*_t4;
+    const trailer3_real_t _t257 = -_t122 + _t27;
     const trailer3_real_t _t258 = _t257*_t5;
-    const trailer3_real_t _t259 = _t126 - _t128;
-    const trailer3_real_t _t260 = _t259*_t6;
-    const trailer3_real_t _t261 = _t131 - _t133;
+    const trailer3_real_t _t259 = -_t123 + _t29;
+    const trailer3_real_t _t260 = _t259*_t5;
+    const trailer3_real_t _t261 = _t126 - _t128;
     const trailer3_real_t _t262 = _t261*_t6;
-    const trailer3_real_t _t263 = _t127 + _t136 - _t46;
+    const trailer3_real_t _t263 = _t131 - _t133;
     const trailer3_real_t _t264 = _t263*_t6;
-    const trailer3_real_t _t265 = _t132 + _t139 - _t49;
+    const trailer3_real_t _t265 = _t127 + _t136 - _t46;
     const trailer3_real_t _t266 = _t265*_t6;
-    const trailer3_real_t _t267 = _t141 + _t47;
+    const trailer3_real_t _t267 = _t132 + _t139 - _t49;
     const trailer3_real_t _t268 = _t267*_t6;
-    const trailer3_real_t _t269 = _t143 + _t50;
+    const trailer3_real_t _t269 = _t141 + _t47;
     const trailer3_real_t _t270 = _t269*_t6;
-    const trailer3_real_t _t271 = -_t126 - _t128;
-    const trailer3_real_t _t272 = _t271*_t7;
-    const trailer3_real_t _t273 = -_t131 - _t133;
+    const trailer3_real_t _t271 = _t143 + _t50;
+    const trailer3_real_t _t272 = _t271*_t6;
+    const trailer3_real_t _t273 = -_t126 - _t128;
     const trailer3_real_t _t274 = _t273*_t7;
-    const trailer3_real_t _t275 = _t127 - _t136 - _t46;
+    const trailer3_real_t _t275 = -_t131 - _t133;
     const trailer3_real_t _t276 = _t275*_t7;
-    const trailer3_real_t _t277 = _t132 - _t139 - _t49;
+    const trailer3_real_t _t277 = _t127 - _t136 - _t46;
     const trailer3_real_t _t278 = _t277*_t7;
-    const trailer3_real_t _t279 = -_t141 + _t47;
+    const trailer3_real_t _t279 = _t132 - _t139 - _t49;
     const trailer3_real_t _t280 = _t279*_t7;
-    const trailer3_real_t _t281 = -_t143 + _t50;
+    const trailer3_real_t _t281 = -_t141 + _t47;
     const trailer3_real_t _t282 = _t281*_t7;
-    const trailer3_real_t _t283 = _t146 - _t148;
-    const trailer3_real_t _t284 = _t283*_t8;
-    const trailer3_real_t _t285 = _t151 - _t153;
+    const trailer3_real_t _t283 = -_t143 + _t50;
+    const trailer3_real_t _t284 = _t283*_t7;
+    const trailer3_real_t _t285 = _t146 - _t148;
     const trailer3_real_t _t286 = _t285*_t8;
-    const trailer3_real_t _t287 = _t156 - _t157;
+    const trailer3_real_t _t287 = _t151 - _t153;
     const trailer3_real_t _t288 = _t287*_t8;
-    const trailer3_real_t _t289 = _t160 - _t161;
+    const trailer3_real_t _t289 = _t156 - _t157;
     const trailer3_real_t _t290 = _t289*_t8;
-    const trailer3_real_t _t291 = _t164 - _t165;
+    const trailer3_real_t _t291 = _t160 - _t161;
     const trailer3_real_t _t292 = _t291*_t8;
-    const trailer3_real_t _t293 = _t168 - _t169;
+    const trailer3_real_t _t293 = _t164 - _t165;
     const trailer3_real_t _t294 = _t293*_t8;
-    const trailer3_real_t _t295 = _t171 + _t56;
+    const trailer3_real_t _t295 = _t168 - _t169;
     const trailer3_real_t _t296 = _t295*_t8;
-    const trailer3_real_t _t297 = _t173 + _t60;
+    const trailer3_real_t _t297 = _t171 + _t56;
     const trailer3_real_t _t298 = _t297*_t8;
-    const trailer3_real_t _t299 = -_t146 - _t148;
-    const trailer3_real_t _t300 = _t299*_t9;
-    const trailer3_real_t _t301 = -_t151 - _t153;
+    const trailer3_real_t _t299 = _t173 + _t60;
+    const trailer3_real_t _t300 = _t299*_t8;
+    const trailer3_real_t _t301 = -_t146 - _t148;
     const trailer3_real_t _t302 = _t301*_t9;
-    const trailer3_real_t _t303 = -_t156 - _t157;
+    const trailer3_real_t _t303 = -_t151 - _t153;
     const trailer3_real_t _t304 = _t303*_t9;
-    const trailer3_real_t _t305 = -_t160 - _t161;
+    const trailer3_real_t _t305 = -_t156 - _t157;
     const trailer3_real_t _t306 = _t305*_t9;
-    const trailer3_real_t _t307 = -_t164 - _t165;
+    const trailer3_real_t _t307 = -_t160 - _t161;
     const trailer3_real_t _t308 = _t307*_t9;
-    const trailer3_real_t _t309 = -_t168 - _t169;
+    const trailer3_real_t _t309 = -_t164 - _t165;
     const trailer3_real_t _t310 = _t309*_t9;
-    const trailer3_real_t _t311 = -_t171 + _t56;
+    const trailer3_real_t _t311 = -_t168 - _t169;
     const trailer3_real_t _t312 = _t311*_t9;
-    const trailer3_real_t _t313 = -_t173 + _t60;
+    const trailer3_real_t _t313 = -_t171 + _t56;
     const trailer3_real_t _t314 = _t313*_t9;
-    const trailer3_real_t _t315 = _t217*_t252 + _t218*_t254;
-    const trailer3_real_t _t316 = _t217*_t256 + _t218*_t258;
-    const trailer3_real_t _t317 = _t174*_t260 + _t175*_t264 + _t176*_t266 + _t220*_t268
-            + _t221*_t270 + _t262*_t94;
-    const trailer3_real_t _t318 = _t174*_t272 + _t175*_t276 + _t176*_t278 + _t220*_t280
-            + _t221*_t282 + _t274*_t94;
-    const trailer3_real_t _t319 = _t174*_t284 + _t175*_t288 + _t176*_t290 + _t220*_t292
-            + _t221*_t294 + _t223*_t296 + _t224*_t298 + _t286*_t94;
-    const trailer3_real_t _t320 = _t174*_t300 + _t175*_t304 + _t176*_t306 + _t220*_t308
-            + _t221*_t310 + _t223*_t312 + _t224*_t314 + _t302*_t94;
+    const trailer3_real_t _t315 = -_t173 + _t60;
+    const trailer3_real_t _t316 = _t315*_t9;
+    const trailer3_real_t _t317 = _t217*_t254 + _t218*_t256;
+    const trailer3_real_t _t318 = _t217*_t258 + _t218*_t260;
+    const trailer3_real_t _t319 = _t174*_t262 + _t175*_t266 + _t176*_t268 + _t220*_t270
+            + _t221*_t272 + _t264*_t94;
+    const trailer3_real_t _t320 = _t174*_t274 + _t175*_t278 + _t176*_t280 + _t220*_t282
+            + _t221*_t284 + _t276*_t94;
+    const trailer3_real_t _t321 = _t174*_t286 + _t175*_t290 + _t176*_t292 + _t220*_t294
+            + _t221*_t296 + _t223*_t298 + _t224*_t300 + _t288*_t94;
+    const trailer3_real_t _t322 = _t174*_t302 + _t175*_t306 + _t176*_t308 + _t220*_t310
+            + _t221*_t312 + _t223*_t314 + _t224*_t316 + _t304*_t94;
     const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t321 = J_x_tractor + _t243*_t45 + _t244*_t54 + _t245*_t70;
+    const trailer3_real_t _t323 = J_x_tractor + _t245*_t45 + _t246*_t54 + _t247*_t70;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[18];
-    const trailer3_real_t _t322 = K_theta_tractor_x_tractor_2 + _t243*_t48 + _t244*_t58
-            + _t245*_t77;
+    const trailer3_real_t _t324 = K_theta_tractor_x_tractor_2 + _t245*_t48 + _t246*_t58
+            + _t247*_t77;
     const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t323 = J_theta_tractor + _t246*_t48 + _t247*_t58 + _t248*_t77;
-    const trailer3_real_t _t324 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t243;
-    const trailer3_real_t _t325 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t246;
-    const trailer3_real_t _t326 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t244;
-    const trailer3_real_t _t327 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t247;
-    const trailer3_real_t _t328 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t245;
-    const trailer3_real_t _t329 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t248;
+    const trailer3_real_t _t325 = J_theta_tractor + _t248*_t48 + _t249*_t58 + _t250*_t77;
+    const trailer3_real_t _t326 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t245;
+    const trailer3_real_t _t327 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t248;
+    const trailer3_real_t _t328 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t246;
+    const trailer3_real_t _t329 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t249;
+    const trailer3_real_t _t330 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t247;
+    const trailer3_real_t _t331 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t250;
     const trailer3_real_t _t22 = kept[33];
-    const trailer3_real_t _t330 = _t178*_t179 + _t184*_t185 + _t190*_t191 + _t196*_t197
-            + _t202*_t203 + _t208*_t209 + _t22 + _t321 + _t324*_t45 + _t326*_t54 + _t328*_t70;
+    const trailer3_real_t _t332 = _t178*_t179 + _t184*_t185 + _t190*_t191 + _t196*_t197
+            + _t202*_t203 + _t208*_t209 + _t22 + _t323 + _t326*_t45 + _t328*_t54 + _t330*_t70;
     const trailer3_real_t _t23 = kept[34];
-    const trailer3_real_t _t331 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
-            + _t202*_t206 + _t208*_t212 + _t23 + _t322 + _t325*_t45 + _t327*_t54 + _t329*_t70;
+    const trailer3_real_t _t333 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
+            + _t202*_t206 + _t208*_t212 + _t23 + _t324 + _t327*_t45 + _t329*_t54 + _t331*_t70;
     const trailer3_real_t _t24 = kept[35];
-    const trailer3_real_t _t332 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
-            + _t205*_t206 + _t211*_t212 + _t24 + _t323 + _t325*_t48 + _t327*_t58 + _t329*_t77;
-    const trailer3_real_t _t333 = _t179*_t315 + _t185*_t316 + _t191*_t317 + _t197*_t318
-            + _t203*_t319 + _t209*_t320 + _t219*_t243 + _t222*_t244 + _t225*_t245 + _t226*_t45
-            + _t230*_t54 + _t233*_t70 + _t249;
-    const trailer3_real_t _t334 = -K_theta_tractor_x_tractor*_t174 + _t182*_t315 + _t188*_t316
-            + _t194*_t317 + _t200*_t318 + _t206*_t319 + _t212*_t320 + _t219*_t246 + _t222*_t247
-            + _t225*_t248 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t250;
-    const trailer3_real_t _t335 = _t0*_t331 + _t2*_t330;
-    const trailer3_real_t _t336 = _t1*_t331 + _t3*_t330;
-    const trailer3_real_t _t337 = _t0*_t332 + _t2*_t331;
-    const trailer3_real_t _t338 = _t1*_t332 + _t3*_t331;
-    const trailer3_real_t _t339 = _t0*_t337 + _t2*_t335;
-    const trailer3_real_t _t340 = _t0*_t338 + _t2*_t336;
-    const trailer3_real_t _t341 = _t1*_t338 + _t3*_t336;
-    const trailer3_real_t _t342 = _t0*_t334 + _t2*_t333;
-    const trailer3_real_t _t343 = _t1*_t334 + _t3*_t333;
-    u[0] = _t241*_t339 + _t242*_t340 + _t342;
-    u[1] = _t241*_t340 + _t242*_t341 + _t343;
-    s[0] = _t234;
-    s[1] = _t235;
-    s_norm[0] = _t236;
-    gain[0] = _t239;
+    const trailer3_real_t _t334 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t24 + _t325 + _t327*_t48 + _t329*_t58 + _t331*_t77;
+    const trailer3_real_t _t335 = _t179*_t317 + _t185*_t318 + _t191*_t319 + _t197*_t320
+            + _t203*_t321 + _t209*_t322 + _t219*_t245 + _t222*_t246 + _t225*_t247 + _t226*_t45
+            + _t230*_t54 + _t233*_t70 + _t251;
+    const trailer3_real_t _t336 = -K_theta_tractor_x_tractor*_t174 + _t182*_t317 + _t188*_t318
+            + _t194*_t319 + _t200*_t320 + _t206*_t321 + _t212*_t322 + _t219*_t248 + _t222*_t249
+            + _t225*_t250 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t252;
+    const trailer3_real_t _t337 = _t0*_t333 + _t2*_t332;
+    const trailer3_real_t _t338 = _t1*_t333 + _t3*_t332;
+    const trailer3_real_t _t339 = _t0*_t334 + _t2*_t333;
+    const trailer3_real_t _t340 = _t1*_t334 + _t3*_t333;
+    const trailer3_real_t _t341 = _t0*_t339 + _t2*_t337;
+    const trailer3_real_t _t342 = _t0*_t340 + _t2*_t338;
+    const trailer3_real_t _t343 = _t1*_t340 + _t3*_t338;
+    const trailer3_real_t _t344 = _t0*_t336 + _t2*_t335;
+    const trailer3_real_t _t345 = _t1*_t336 + _t3*_t335;
+    u[0] = _t235*_t341 + _t237*_t342 + _t244*(_t242*_t341 + _t243*_t342) + _t344;
+    u[1] = _t235*_t342 + _t237*_t343 + _t244*(_t242*_t342 + _t243*_t343) + _t345;
+    s[0] = _t238;
+    s[1] = _t239;
+    s_norm[0] = _t240;
+    gain[0] = _t244;
 }
 
 /* trailer3_k_minimal_asmc_law: the per-step part of trailer3_minimal_asmc_law (trailer3_laws.h
    documents it).
-   operations after CSE: 315 add, 425 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 317 add, 431 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
@@ -1225,156 +1229,158 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[36],
             + _t232;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
-    const trailer3_real_t p12_0 = p12[0];
-    const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t234 = e0*p12_0 + edot0*p22_0;
-    const trailer3_real_t e1 = e[1];
-    const trailer3_real_t edot1 = edot[1];
-    const trailer3_real_t p12_1 = p12[1];
-    const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t235 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t236 = trailer3_norm2(_t234, _t235);
-    const trailer3_real_t gain_1 = gain[0];
-    const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t237 = gain_1/TRAILER3_FMAX(_t236, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t238 = _t234*_t237 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t234 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t239 = _t235*_t237 + e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t _t240 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
-    const trailer3_real_t _t241 = _t82 + _t83;
-    const trailer3_real_t _t242 = _t84 + _t85;
-    const trailer3_real_t _t243 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t244 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t245 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
+    const trailer3_real_t _t235 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t p12_0 = p12[0];
+    const trailer3_real_t p22_0 = p22[0];
+    const trailer3_real_t _t236 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t p12_1 = p12[1];
+    const trailer3_real_t p22_1 = p22[1];
+    const trailer3_real_t _t237 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t238 = trailer3_norm2(_t236, _t237);
+    const trailer3_real_t eps_1 = eps[0];
+    const trailer3_real_t _t239 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t238, eps_1));
+    const trailer3_real_t _t240 = _t236*_t239;
+    const trailer3_real_t _t241 = _t237*_t239;
+    const trailer3_real_t _t242 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
+    const trailer3_real_t _t243 = _t82 + _t83;
+    const trailer3_real_t _t244 = _t84 + _t85;
+    const trailer3_real_t _t245 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
+    const trailer3_real_t _t246 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
+    const trailer3_real_t _t247 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
     const trailer3_real_t K_theta_tractor_x_tractor = kept[17];
-    const trailer3_real_t _t246 = K_theta_tractor_x_tractor*_t94 + _t100
+    const trailer3_real_t _t248 = K_theta_tractor_x_tractor*_t94 + _t100
             + _t102*(-K_theta_cart_x_tractor_2*_t27 + _t86) - _t103 - _t104 + _t87*_t97;
-    const trailer3_real_t _t247 = _t102*(-K_theta_cart_x_tractor*_t41
+    const trailer3_real_t _t249 = _t102*(-K_theta_cart_x_tractor*_t41
             - K_theta_cart_x_tractor_2*_t29) + _t97*(-_t105 - _t106) + _t99*(-_t107 - _t108);
-    const trailer3_real_t _t248 = _t122 + _t27;
-    const trailer3_real_t _t249 = _t248*_t4;
-    const trailer3_real_t _t250 = _t123 + _t29;
+    const trailer3_real_t _t250 = _t122 + _t27;
     const trailer3_real_t _t251 = _t250*_t4;
-    const trailer3_real_t _t252 = -_t122 + _t27;
-    const trailer3_real_t _t253 = _t252*_t5;
-    const trailer3_real_t _t254 = -_t123 + _t29;
+    const trailer3_real_t _t252 = _t123 + _t29;
+    const trailer3_real_t _t253 = _t252*_t4;
+    const trailer3_real_t _t254 = -_t122 + _t27;
     const trailer3_real_t _t255 = _t254*_t5;
-    const trailer3_real_t _t256 = _t126 - _t128;
-    const trailer3_real_t _t257 = _t256*_t6;
-    const trailer3_real_t _t258 = _t131 - _t133;
+    const trailer3_real_t _t256 = -_t123 + _t29;
+    const trailer3_real_t _t257 = _t256*_t5;
+    const trailer3_real_t _t258 = _t126 - _t128;
     const trailer3_real_t _t259 = _t258*_t6;
-    const trailer3_real_t _t260 = _t127 + _t136 - _t46;
+    const trailer3_real_t _t260 = _t131 - _t133;
     const trailer3_real_t _t261 = _t260*_t6;
-    const trailer3_real_t _t262 = _t132 + _t139 - _t49;
+    const trailer3_real_t _t262 = _t127 + _t136 - _t46;
     const trailer3_real_t _t263 = _t262*_t6;
-    const trailer3_real_t _t264 = _t141 + _t47;
+    const trailer3_real_t _t264 = _t132 + _t139 - _t49;
     const trailer3_real_t _t265 = _t264*_t6;
-    const trailer3_real_t _t266 = _t143 + _t50;
+    const trailer3_real_t _t266 = _t141 + _t47;
     const trailer3_real_t _t267 = _t266*_t6;
-    const trailer3_real_t _t268 = -_t126 - _t128;
-    const trailer3_real_t _t269 = _t268*_t7;
-    const trailer3_real_t _t270 = -_t131 - _t133;
+    const trailer3_real_t _t268 = _t143 + _t50;
+    const trailer3_real_t _t269 = _t268*_t6;
+    const trailer3_real_t _t270 = -_t126 - _t128;
     const trailer3_real_t _t271 = _t270*_t7;
-    const trailer3_real_t _t272 = _t127 - _t136 - _t46;
+    const trailer3_real_t _t272 = -_t131 - _t133;
     const trailer3_real_t _t273 = _t272*_t7;
-    const trailer3_real_t _t274 = _t132 - _t139 - _t49;
+    const trailer3_real_t _t274 = _t127 - _t136 - _t46;
     const trailer3_real_t _t275 = _t274*_t7;
-    const trailer3_real_t _t276 = -_t141 + _t47;
+    const trailer3_real_t _t276 = _t132 - _t139 - _t49;
     const trailer3_real_t _t277 = _t276*_t7;
-    const trailer3_real_t _t278 = -_t143 + _t50;
+    const trailer3_real_t _t278 = -_t141 + _t47;
     const trailer3_real_t _t279 = _t278*_t7;
-    const trailer3_real_t _t280 = _t146 - _t148;
-    const trailer3_real_t _t281 = _t280*_t8;
-    const trailer3_real_t _t282 = _t151 - _t153;
+    const trailer3_real_t _t280 = -_t143 + _t50;
+    const trailer3_real_t _t281 = _t280*_t7;
+    const trailer3_real_t _t282 = _t146 - _t148;
     const trailer3_real_t _t283 = _t282*_t8;
-    const trailer3_real_t _t284 = _t156 - _t157;
+    const trailer3_real_t _t284 = _t151 - _t153;
     const trailer3_real_t _t285 = _t284*_t8;
-    const trailer3_real_t _t286 = _t160 - _t161;
+    const trailer3_real_t _t286 = _t156 - _t157;
     const trailer3_real_t _t287 = _t286*_t8;
-    const trailer3_real_t _t288 = _t164 - _t165;
+    const trailer3_real_t _t288 = _t160 - _t161;
     const trailer3_real_t _t289 = _t288*_t8;
-    const trailer3_real_t _t290 = _t168 - _t169;
+    const trailer3_real_t _t290 = _t164 - _t165;
     const trailer3_real_t _t291 = _t290*_t8;
-    const trailer3_real_t _t292 = _t171 + _t56;
+    const trailer3_real_t _t292 = _t168 - _t169;
     const trailer3_real_t _t293 = _t292*_t8;
-    const trailer3_real_t _t294 = _t173 + _t60;
+    const trailer3_real_t _t294 = _t171 + _t56;
     const trailer3_real_t _t295 = _t294*_t8;
-    const trailer3_real_t _t296 = -_t146 - _t148;
-    const trailer3_real_t _t297 = _t296*_t9;
-    const trailer3_real_t _t298 = -_t151 - _t153;
+    const trailer3_real_t _t296 = _t173 + _t60;
+    const trailer3_real_t _t297 = _t296*_t8;
+    const trailer3_real_t _t298 = -_t146 - _t148;
     const trailer3_real_t _t299 = _t298*_t9;
-    const trailer3_real_t _t300 = -_t156 - _t157;
+    const trailer3_real_t _t300 = -_t151 - _t153;
     const trailer3_real_t _t301 = _t300*_t9;
-    const trailer3_real_t _t302 = -_t160 - _t161;
+    const trailer3_real_t _t302 = -_t156 - _t157;
     const trailer3_real_t _t303 = _t302*_t9;
-    const trailer3_real_t _t304 = -_t164 - _t165;
+    const trailer3_real_t _t304 = -_t160 - _t161;
     const trailer3_real_t _t305 = _t304*_t9;
-    const trailer3_real_t _t306 = -_t168 - _t169;
+    const trailer3_real_t _t306 = -_t164 - _t165;
     const trailer3_real_t _t307 = _t306*_t9;
-    const trailer3_real_t _t308 = -_t171 + _t56;
+    const trailer3_real_t _t308 = -_t168 - _t169;
     const trailer3_real_t _t309 = _t308*_t9;
-    const trailer3_real_t _t310 = -_t173 + _t60;
+    const trailer3_real_t _t310 = -_t171 + _t56;
     const trailer3_real_t _t311 = _t310*_t9;
-    const trailer3_real_t _t312 = _t217*_t249 + _t218*_t251;
-    const trailer3_real_t _t313 = _t217*_t253 + _t218*_t255;
-    const trailer3_real_t _t314 = _t174*_t257 + _t175*_t261 + _t176*_t263 + _t220*_t265
-            + _t221*_t267 + _t259*_t94;
-    const trailer3_real_t _t315 = _t174*_t269 + _t175*_t273 + _t176*_t275 + _t220*_t277
-            + _t221*_t279 + _t271*_t94;
-    const trailer3_real_t _t316 = _t174*_t281 + _t175*_t285 + _t176*_t287 + _t220*_t289
-            + _t221*_t291 + _t223*_t293 + _t224*_t295 + _t283*_t94;
-    const trailer3_real_t _t317 = _t174*_t297 + _t175*_t301 + _t176*_t303 + _t220*_t305
-            + _t221*_t307 + _t223*_t309 + _t224*_t311 + _t299*_t94;
+    const trailer3_real_t _t312 = -_t173 + _t60;
+    const trailer3_real_t _t313 = _t312*_t9;
+    const trailer3_real_t _t314 = _t217*_t251 + _t218*_t253;
+    const trailer3_real_t _t315 = _t217*_t255 + _t218*_t257;
+    const trailer3_real_t _t316 = _t174*_t259 + _t175*_t263 + _t176*_t265 + _t220*_t267
+            + _t221*_t269 + _t261*_t94;
+    const trailer3_real_t _t317 = _t174*_t271 + _t175*_t275 + _t176*_t277 + _t220*_t279
+            + _t221*_t281 + _t273*_t94;
+    const trailer3_real_t _t318 = _t174*_t283 + _t175*_t287 + _t176*_t289 + _t220*_t291
+            + _t221*_t293 + _t223*_t295 + _t224*_t297 + _t285*_t94;
+    const trailer3_real_t _t319 = _t174*_t299 + _t175*_t303 + _t176*_t305 + _t220*_t307
+            + _t221*_t309 + _t223*_t311 + _t224*_t313 + _t301*_t94;
     const trailer3_real_t J_x_tractor = kept[10];
-    const trailer3_real_t _t318 = J_x_tractor + _t240*_t45 + _t241*_t54 + _t242*_t70;
+    const trailer3_real_t _t320 = J_x_tractor + _t242*_t45 + _t243*_t54 + _t244*_t70;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = kept[18];
-    const trailer3_real_t _t319 = K_theta_tractor_x_tractor_2 + _t240*_t48 + _t241*_t58
-            + _t242*_t77;
+    const trailer3_real_t _t321 = K_theta_tractor_x_tractor_2 + _t242*_t48 + _t243*_t58
+            + _t244*_t77;
     const trailer3_real_t J_theta_tractor = kept[9];
-    const trailer3_real_t _t320 = J_theta_tractor + _t243*_t48 + _t244*_t58 + _t245*_t77;
-    const trailer3_real_t _t321 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t240;
-    const trailer3_real_t _t322 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t243;
-    const trailer3_real_t _t323 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t241;
-    const trailer3_real_t _t324 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t244;
-    const trailer3_real_t _t325 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t242;
-    const trailer3_real_t _t326 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t245;
+    const trailer3_real_t _t322 = J_theta_tractor + _t245*_t48 + _t246*_t58 + _t247*_t77;
+    const trailer3_real_t _t323 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t242;
+    const trailer3_real_t _t324 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t245;
+    const trailer3_real_t _t325 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t243;
+    const trailer3_real_t _t326 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t246;
+    const trailer3_real_t _t327 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t244;
+    const trailer3_real_t _t328 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t247;
     const trailer3_real_t _t22 = kept[33];
-    const trailer3_real_t _t327 = _t178*_t179 + _t184*_t185 + _t190*_t191 + _t196*_t197
-            + _t202*_t203 + _t208*_t209 + _t22 + _t318 + _t321*_t45 + _t323*_t54 + _t325*_t70;
+    const trailer3_real_t _t329 = _t178*_t179 + _t184*_t185 + _t190*_t191 + _t196*_t197
+            + _t202*_t203 + _t208*_t209 + _t22 + _t320 + _t323*_t45 + _t325*_t54 + _t327*_t70;
     const trailer3_real_t _t23 = kept[34];
-    const trailer3_real_t _t328 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
-            + _t202*_t206 + _t208*_t212 + _t23 + _t319 + _t322*_t45 + _t324*_t54 + _t326*_t70;
+    const trailer3_real_t _t330 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
+            + _t202*_t206 + _t208*_t212 + _t23 + _t321 + _t324*_t45 + _t326*_t54 + _t328*_t70;
     const trailer3_real_t _t24 = kept[35];
-    const trailer3_real_t _t329 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
-            + _t205*_t206 + _t211*_t212 + _t24 + _t320 + _t322*_t48 + _t324*_t58 + _t326*_t77;
-    const trailer3_real_t _t330 = _t179*_t312 + _t185*_t313 + _t191*_t314 + _t197*_t315
-            + _t203*_t316 + _t209*_t317 + _t219*_t240 + _t222*_t241 + _t225*_t242 + _t226*_t45
-            + _t230*_t54 + _t233*_t70 + _t246;
-    const trailer3_real_t _t331 = -K_theta_tractor_x_tractor*_t174 + _t182*_t312 + _t188*_t313
-            + _t194*_t314 + _t200*_t315 + _t206*_t316 + _t212*_t317 + _t219*_t243 + _t222*_t244
-            + _t225*_t245 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t247;
-    const trailer3_real_t _t332 = _t0*_t328 + _t2*_t327;
-    const trailer3_real_t _t333 = _t1*_t328 + _t3*_t327;
-    const trailer3_real_t _t334 = _t0*_t329 + _t2*_t328;
-    const trailer3_real_t _t335 = _t1*_t329 + _t3*_t328;
-    const trailer3_real_t _t336 = _t0*_t334 + _t2*_t332;
-    const trailer3_real_t _t337 = _t0*_t335 + _t2*_t333;
-    const trailer3_real_t _t338 = _t1*_t335 + _t3*_t333;
-    const trailer3_real_t _t339 = _t0*_t331 + _t2*_t330;
-    const trailer3_real_t _t340 = _t1*_t331 + _t3*_t330;
+    const trailer3_real_t _t331 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
+            + _t205*_t206 + _t211*_t212 + _t24 + _t322 + _t324*_t48 + _t326*_t58 + _t328*_t77;
+    const trailer3_real_t _t332 = _t179*_t314 + _t185*_t315 + _t191*_t316 + _t197*_t317
+            + _t203*_t318 + _t209*_t319 + _t219*_t242 + _t222*_t243 + _t225*_t244 + _t226*_t45
+            + _t230*_t54 + _t233*_t70 + _t248;
+    const trailer3_real_t _t333 = -K_theta_tractor_x_tractor*_t174 + _t182*_t314 + _t188*_t315
+            + _t194*_t316 + _t200*_t317 + _t206*_t318 + _t212*_t319 + _t219*_t245 + _t222*_t246
+            + _t225*_t247 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t249;
+    const trailer3_real_t _t334 = _t0*_t330 + _t2*_t329;
+    const trailer3_real_t _t335 = _t1*_t330 + _t3*_t329;
+    const trailer3_real_t _t336 = _t0*_t331 + _t2*_t330;
+    const trailer3_real_t _t337 = _t1*_t331 + _t3*_t330;
+    const trailer3_real_t _t338 = _t0*_t336 + _t2*_t334;
+    const trailer3_real_t _t339 = _t0*_t337 + _t2*_t335;
+    const trailer3_real_t _t340 = _t1*_t337 + _t3*_t335;
+    const trailer3_real_t _t341 = _t0*_t333 + _t2*_t332;
+    const trailer3_real_t _t342 = _t1*_t333 + _t3*_t332;
+    const trailer3_real_t gain_1 = gain[0];
     const trailer3_real_t adapt_0 = adapt[0];
     const trailer3_real_t h = adapt[1];
-    u[0] = _t238*_t336 + _t239*_t337 + _t339;
-    u[1] = _t238*_t337 + _t239*_t338 + _t340;
-    s[0] = _t234;
-    s[1] = _t235;
-    s_norm[0] = _t236;
-    gain_next[0] = _t236*adapt_0*h + gain_1;
+    u[0] = _t234*_t338 + _t235*_t339 + _t341 + gain_1*(_t240*_t338 + _t241*_t339);
+    u[1] = _t234*_t339 + _t235*_t340 + _t342 + gain_1*(_t240*_t339 + _t241*_t340);
+    s[0] = _t236;
+    s[1] = _t237;
+    s_norm[0] = _t238;
+    gain_next[0] = _t238*adapt_0*h + gain_1;
 }
 
 /* trailer3_k_minimal_pi_law_keep: the parameter-only part of trailer3_minimal_pi_law

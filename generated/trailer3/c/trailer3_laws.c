@@ -719,7 +719,7 @@ void trailer3_minimal_tdc_law_mhat(const trailer3_params_t *p, const trailer3_re
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 129 add, 201 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 131 add, 207 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -790,152 +790,155 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t6;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
-    const trailer3_real_t p12_0 = p12[0];
-    const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t54 = e0*p12_0 + edot0*p22_0;
-    const trailer3_real_t e1 = e[1];
-    const trailer3_real_t edot1 = edot[1];
-    const trailer3_real_t p12_1 = p12[1];
-    const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t55 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t56 = trailer3_norm2(_t54, _t55);
-    const trailer3_real_t gain_1 = gain[0];
-    const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t57 = gain_1/TRAILER3_FMAX(_t56, eps_1);
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t58 = _t54*_t57 + e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t54 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t e1 = e[1];
+    const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t59 = _t55*_t57 + e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t55 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t p12_0 = p12[0];
+    const trailer3_real_t p22_0 = p22[0];
+    const trailer3_real_t _t56 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t p12_1 = p12[1];
+    const trailer3_real_t p22_1 = p22[1];
+    const trailer3_real_t _t57 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t58 = trailer3_norm2(_t56, _t57);
+    const trailer3_real_t eps_1 = eps[0];
+    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t58, eps_1));
+    const trailer3_real_t _t60 = _t56*_t59;
+    const trailer3_real_t _t61 = _t57*_t59;
     const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t60 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t62 = TRAILER3_LIT(2.4154589371980677)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t61 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t63 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
     const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t62 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t63 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart_left;
     const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart2_right;
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t67 = TRAILER3_LIT(1.0)/radius_cart2_left;
     const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_cart3_right;
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t68 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t70 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.207)*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t73 = -TRAILER3_LIT(0.207)*_t72;
-    const trailer3_real_t _t74 = _t24 + _t3;
-    const trailer3_real_t _t75 = -_t20 + _t26;
-    const trailer3_real_t _t76 = _t62*_t74;
-    const trailer3_real_t _t77 = _t62*_t75;
-    const trailer3_real_t _t78 = -_t24 + _t3;
-    const trailer3_real_t _t79 = -_t20 - _t26;
-    const trailer3_real_t _t80 = _t63*_t78;
-    const trailer3_real_t _t81 = _t63*_t79;
-    const trailer3_real_t _t82 = _t30 - _t32 + _t7;
-    const trailer3_real_t _t83 = _t35 - _t36;
-    const trailer3_real_t _t84 = _t64*_t82;
-    const trailer3_real_t _t85 = _t64*_t83;
-    const trailer3_real_t _t86 = -_t30 - _t32 + _t7;
-    const trailer3_real_t _t87 = -_t35 - _t36;
-    const trailer3_real_t _t88 = _t65*_t86;
-    const trailer3_real_t _t89 = _t65*_t87;
-    const trailer3_real_t _t90 = _t41 - _t44;
-    const trailer3_real_t _t91 = _t47 - _t48;
-    const trailer3_real_t _t92 = _t66*_t90;
-    const trailer3_real_t _t93 = _t66*_t91;
-    const trailer3_real_t _t94 = -_t41 - _t44;
-    const trailer3_real_t _t95 = -_t47 - _t48;
-    const trailer3_real_t _t96 = _t67*_t94;
-    const trailer3_real_t _t97 = _t67*_t95;
+    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t72 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.207)*_t72;
+    const trailer3_real_t _t74 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.207)*_t74;
+    const trailer3_real_t _t76 = _t24 + _t3;
+    const trailer3_real_t _t77 = -_t20 + _t26;
+    const trailer3_real_t _t78 = _t64*_t76;
+    const trailer3_real_t _t79 = _t64*_t77;
+    const trailer3_real_t _t80 = -_t24 + _t3;
+    const trailer3_real_t _t81 = -_t20 - _t26;
+    const trailer3_real_t _t82 = _t65*_t80;
+    const trailer3_real_t _t83 = _t65*_t81;
+    const trailer3_real_t _t84 = _t30 - _t32 + _t7;
+    const trailer3_real_t _t85 = _t35 - _t36;
+    const trailer3_real_t _t86 = _t66*_t84;
+    const trailer3_real_t _t87 = _t66*_t85;
+    const trailer3_real_t _t88 = -_t30 - _t32 + _t7;
+    const trailer3_real_t _t89 = -_t35 - _t36;
+    const trailer3_real_t _t90 = _t67*_t88;
+    const trailer3_real_t _t91 = _t67*_t89;
+    const trailer3_real_t _t92 = _t41 - _t44;
+    const trailer3_real_t _t93 = _t47 - _t48;
+    const trailer3_real_t _t94 = _t68*_t92;
+    const trailer3_real_t _t95 = _t68*_t93;
+    const trailer3_real_t _t96 = -_t41 - _t44;
+    const trailer3_real_t _t97 = -_t47 - _t48;
+    const trailer3_real_t _t98 = _t69*_t96;
+    const trailer3_real_t _t99 = _t69*_t97;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t98 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t99 = _t49 + _t50;
-    const trailer3_real_t _t100 = _t51 + _t52;
-    const trailer3_real_t _t101 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
-    const trailer3_real_t _t102 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t103 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t104 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
+    const trailer3_real_t _t100 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t101 = _t49 + _t50;
+    const trailer3_real_t _t102 = _t51 + _t52;
+    const trailer3_real_t _t103 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
+    const trailer3_real_t _t104 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
+    const trailer3_real_t _t105 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
+    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
             + _t49*_t9 + _t50*_t9;
-    const trailer3_real_t _t105 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
+    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
             + _t51*_t9 + _t52*_t9;
-    const trailer3_real_t _t106 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
+    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
             + _t51*_t53 + _t52*_t53;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t107 = J_x_tractor + _t100*_t40 + _t23*_t98 + _t29*_t99;
+    const trailer3_real_t _t109 = J_x_tractor + _t100*_t23 + _t101*_t29 + _t102*_t40;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t108 = K_theta_tractor_x_tractor_2 + _t100*_t46 + _t25*_t98 + _t34*_t99;
+    const trailer3_real_t _t110 = K_theta_tractor_x_tractor_2 + _t100*_t25 + _t101*_t34
+            + _t102*_t46;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t109 = J_theta_tractor + _t101*_t25 + _t102*_t34 + _t103*_t46;
+    const trailer3_real_t _t111 = J_theta_tractor + _t103*_t25 + _t104*_t34 + _t105*_t46;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t110 = J_theta_cart*_t23 + _t104*_t29 + _t105*_t40 + _t98;
-    const trailer3_real_t _t111 = J_theta_cart*_t25 + _t101 + _t104*_t34 + _t105*_t46;
+    const trailer3_real_t _t112 = J_theta_cart*_t23 + _t100 + _t106*_t29 + _t107*_t40;
+    const trailer3_real_t _t113 = J_theta_cart*_t25 + _t103 + _t106*_t34 + _t107*_t46;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t112 = J_theta_cart2*_t29 + _t104*_t23 + _t106*_t40 + _t99;
-    const trailer3_real_t _t113 = J_theta_cart2*_t34 + _t102 + _t104*_t25 + _t106*_t46;
+    const trailer3_real_t _t114 = J_theta_cart2*_t29 + _t101 + _t106*_t23 + _t108*_t40;
+    const trailer3_real_t _t115 = J_theta_cart2*_t34 + _t104 + _t106*_t25 + _t108*_t46;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t114 = J_theta_cart3*_t40 + _t100 + _t105*_t23 + _t106*_t29;
-    const trailer3_real_t _t115 = J_theta_cart3*_t46 + _t103 + _t105*_t25 + _t106*_t34;
+    const trailer3_real_t _t116 = J_theta_cart3*_t40 + _t102 + _t107*_t23 + _t108*_t29;
+    const trailer3_real_t _t117 = J_theta_cart3*_t46 + _t105 + _t107*_t25 + _t108*_t34;
     const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t116 = J_theta_right*_t70;
-    const trailer3_real_t _t117 = J_theta_right*_t71;
+    const trailer3_real_t _t118 = J_theta_right*_t72;
+    const trailer3_real_t _t119 = J_theta_right*_t73;
     const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t118 = J_theta_left*_t72;
-    const trailer3_real_t _t119 = J_theta_left*_t73;
+    const trailer3_real_t _t120 = J_theta_left*_t74;
+    const trailer3_real_t _t121 = J_theta_left*_t75;
     const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t120 = J_theta_cart_right*_t76;
-    const trailer3_real_t _t121 = J_theta_cart_right*_t77;
+    const trailer3_real_t _t122 = J_theta_cart_right*_t78;
+    const trailer3_real_t _t123 = J_theta_cart_right*_t79;
     const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t122 = J_theta_cart_left*_t80;
-    const trailer3_real_t _t123 = J_theta_cart_left*_t81;
+    const trailer3_real_t _t124 = J_theta_cart_left*_t82;
+    const trailer3_real_t _t125 = J_theta_cart_left*_t83;
     const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t124 = J_theta_cart2_right*_t84;
-    const trailer3_real_t _t125 = J_theta_cart2_right*_t85;
+    const trailer3_real_t _t126 = J_theta_cart2_right*_t86;
+    const trailer3_real_t _t127 = J_theta_cart2_right*_t87;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t126 = J_theta_cart2_left*_t88;
-    const trailer3_real_t _t127 = J_theta_cart2_left*_t89;
+    const trailer3_real_t _t128 = J_theta_cart2_left*_t90;
+    const trailer3_real_t _t129 = J_theta_cart2_left*_t91;
     const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t128 = J_theta_cart3_right*_t92;
-    const trailer3_real_t _t129 = J_theta_cart3_right*_t93;
+    const trailer3_real_t _t130 = J_theta_cart3_right*_t94;
+    const trailer3_real_t _t131 = J_theta_cart3_right*_t95;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t130 = J_theta_cart3_left*_t96;
-    const trailer3_real_t _t131 = J_theta_cart3_left*_t97;
-    const trailer3_real_t _t132 = _t107 + _t110*_t23 + _t112*_t29 + _t114*_t40 + _t116*_t70
-            + _t118*_t72 + _t120*_t76 + _t122*_t80 + _t124*_t84 + _t126*_t88 + _t128*_t92
-            + _t130*_t96;
-    const trailer3_real_t _t133 = _t108 + _t111*_t23 + _t113*_t29 + _t115*_t40 + _t117*_t70
-            + _t119*_t72 + _t121*_t76 + _t123*_t80 + _t125*_t84 + _t127*_t88 + _t129*_t92
-            + _t131*_t96;
-    const trailer3_real_t _t134 = _t109 + _t111*_t25 + _t113*_t34 + _t115*_t46 + _t117*_t71
-            + _t119*_t73 + _t121*_t77 + _t123*_t81 + _t125*_t85 + _t127*_t89 + _t129*_t93
-            + _t131*_t97;
-    const trailer3_real_t _t135 = _t132*_t68 + _t133*_t60;
-    const trailer3_real_t _t136 = _t132*_t69 + _t133*_t61;
-    const trailer3_real_t _t137 = _t133*_t68 + _t134*_t60;
-    const trailer3_real_t _t138 = _t133*_t69 + _t134*_t61;
-    const trailer3_real_t _t139 = _t135*_t68 + _t137*_t60;
-    const trailer3_real_t _t140 = _t136*_t68 + _t138*_t60;
-    const trailer3_real_t _t141 = _t136*_t69 + _t138*_t61;
+    const trailer3_real_t _t132 = J_theta_cart3_left*_t98;
+    const trailer3_real_t _t133 = J_theta_cart3_left*_t99;
+    const trailer3_real_t _t134 = _t109 + _t112*_t23 + _t114*_t29 + _t116*_t40 + _t118*_t72
+            + _t120*_t74 + _t122*_t78 + _t124*_t82 + _t126*_t86 + _t128*_t90 + _t130*_t94
+            + _t132*_t98;
+    const trailer3_real_t _t135 = _t110 + _t113*_t23 + _t115*_t29 + _t117*_t40 + _t119*_t72
+            + _t121*_t74 + _t123*_t78 + _t125*_t82 + _t127*_t86 + _t129*_t90 + _t131*_t94
+            + _t133*_t98;
+    const trailer3_real_t _t136 = _t111 + _t113*_t25 + _t115*_t34 + _t117*_t46 + _t119*_t73
+            + _t121*_t75 + _t123*_t79 + _t125*_t83 + _t127*_t87 + _t129*_t91 + _t131*_t95
+            + _t133*_t99;
+    const trailer3_real_t _t137 = _t134*_t70 + _t135*_t62;
+    const trailer3_real_t _t138 = _t134*_t71 + _t135*_t63;
+    const trailer3_real_t _t139 = _t135*_t70 + _t136*_t62;
+    const trailer3_real_t _t140 = _t135*_t71 + _t136*_t63;
+    const trailer3_real_t _t141 = _t137*_t70 + _t139*_t62;
+    const trailer3_real_t _t142 = _t138*_t70 + _t140*_t62;
+    const trailer3_real_t _t143 = _t138*_t71 + _t140*_t63;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t139*_t58 + _t140*_t59;
-    u[1] = H1hat1 + _t140*_t58 + _t141*_t59;
-    s[0] = _t54;
-    s[1] = _t55;
-    s_norm[0] = _t56;
+    const trailer3_real_t gain_1 = gain[0];
+    u[0] = H1hat0 + _t141*_t54 + _t142*_t55 + gain_1*(_t141*_t60 + _t142*_t61);
+    u[1] = H1hat1 + _t142*_t54 + _t143*_t55 + gain_1*(_t142*_t60 + _t143*_t61);
+    s[0] = _t56;
+    s[1] = _t57;
+    s_norm[0] = _t58;
 }
 
 /* trailer3_minimal_tdroc_law_mhat: documented in trailer3_laws.h.
-   operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_real_t *mhat,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -947,7 +950,7 @@ void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 322 add, 473 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 324 add, 479 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -962,7 +965,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 318 add, 470 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 320 add, 476 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,

@@ -360,7 +360,7 @@ void trailer3_minimal_tdc_law_mhat(const trailer3_params_t *p, const trailer3_re
  * @param[out] s [2] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 129 add, 201 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 131 add, 207 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -415,7 +415,7 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
  * @param[out] s [2] row-major (TRAILER3_MINIMAL_TDROC_LAW_MHAT_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE)
  *
- * operations after CSE: 13 add, 16 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_real_t *mhat,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -472,7 +472,7 @@ void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER3_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 322 add, 473 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 324 add, 479 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
@@ -532,7 +532,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 318 add, 470 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 320 add, 476 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
