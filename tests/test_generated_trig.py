@@ -87,7 +87,7 @@ FLOAT_PROGRAM = r"""
 #include "wmr_types.h"
 
 static double worst = 0.0, worst_x = 0.0;
-static long checked = 0;
+static long checked = 0, model_mismatch = 0;
 
 static double ulps(float got, double exact)
 {
@@ -103,6 +103,8 @@ static void in_range(float x)
     wmr_sincos_bounded(x, &s, &c);
     e = fmax(ulps(s, sin((double)x)), ulps(c, cos((double)x)));
     if (!(e <= worst)) { worst = e; worst_x = (double)x; }
+    /* the model functions' WMR_SIN / WMR_COS: the same kernel within the bound */
+    model_mismatch += WMR_SIN(x) != s || WMR_COS(x) != c;
     ++checked;
 }
 
@@ -127,12 +129,17 @@ int main(void)
         for (i = 0; i < (long)(sizeof beyond / sizeof beyond[0]); ++i) {
             wmr_sincos_bounded(beyond[i], &s, &c);
             beyond_nan = beyond_nan && isnan(s) && isnan(c);
+            /* the model functions' beyond the bound: libm's sinf / cosf, bit for bit */
+            model_mismatch += !((WMR_SIN(beyond[i]) == sinf(beyond[i])
+                                 || (isnan(WMR_SIN(beyond[i])) && isnan(sinf(beyond[i]))))
+                                && (WMR_COS(beyond[i]) == cosf(beyond[i])
+                                    || (isnan(WMR_COS(beyond[i])) && isnan(cosf(beyond[i])))));
         }
     }
     wmr_sincos_bounded(-0.0f, &s, &c);
     printf("{\"checked\": %ld, \"worst_ulp\": %.3f, \"worst_x\": %.9g, \"beyond_nan\": %d, "
-           "\"neg_zero\": %d}\n", checked, worst, worst_x, beyond_nan,
-           signbit(s) != 0 && c == 1.0f);
+           "\"neg_zero\": %d, \"model_mismatch\": %ld}\n", checked, worst, worst_x, beyond_nan,
+           signbit(s) != 0 && c == 1.0f, model_mismatch);
     return 0;
 }
 """
@@ -185,6 +192,7 @@ def test_float32_sincos_bounded_is_within_two_ulp_and_nan_beyond(tmp_path: Path)
     assert result["checked"] > 600_000
     assert result["worst_ulp"] <= 1.5, result  # within 2 ulp of the exact value
     assert result["beyond_nan"] == 1 and result["neg_zero"] == 1
+    assert result["model_mismatch"] == 0  # WMR_SIN/WMR_COS: the kernel, libm's beyond
 
 
 def test_the_bound_covers_the_steps_inputs() -> None:
@@ -208,11 +216,16 @@ def test_the_bound_covers_the_steps_inputs() -> None:
         assert significant + k_bits <= 53, (text, significant, k_bits)
 
 
-def test_float32_model_functions_keep_libm() -> None:
+def test_float32_model_functions_use_the_generated_sin_cos() -> None:
+    """Both precisions' model functions call <prefix>_sin / _cos (the kernel within the
+    bound, libm's beyond: test_float32_sincos_bounded_is_within_two_ulp_and_nan_beyond
+    checks the values); -DWMR_LIBM_TRIG, libm's throughout."""
     types = (cbuild.GENERATED_C / "wmr_types.h").read_text()
     float_part = types[types.index("#ifdef WMR_FLOAT32"):types.index("#else")]
-    assert "#define WMR_SIN(x) sinf(x)" in float_part
-    assert "#define WMR_COS(x) cosf(x)" in float_part
+    assert "#define WMR_SIN(x) wmr_sin(x)" in float_part
+    assert "#define WMR_COS(x) wmr_cos(x)" in float_part
+    libm = types[types.index("#ifdef WMR_LIBM_TRIG"):]
+    assert "return sinf(x);" in libm[:libm.index("#else\n#if defined(__FAST_MATH__)")]
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")

@@ -87,16 +87,20 @@ static inline bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t
     const wmr_bits_t mask = UINT64_C(0x7fffffffffffffff);
 #endif
     const wmr_bits_t bound = wmr_real_bits(WMR_LIT(1.0e6)) & mask;
-    unsigned int beyond = 0u;
+    wmr_bits_t beyond = 0u;
     int i;
+    /* |x| > bound exactly when bound - |x|'s bits wraps and sets the top bit (both below
+       it; +Inf and every NaN lie above every finite magnitude): subtractions OR-ed, which
+       the compiler vectorises, and one test, where a comparison each is a branch-free
+       but serial flag per value. */
     for (i = 0; i < 5; ++i) {
-        beyond |= ((wmr_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((wmr_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((wmr_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((wmr_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((wmr_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= bound - (wmr_real_bits(q[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qdot[i]) & mask);
+        beyond |= bound - (wmr_real_bits(q_des[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qdot_des[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qddot_des[i]) & mask);
     }
-    return beyond == 0u;
+    return (beyond & ~mask) == 0u;  /* the top bit */
 }
 
 #ifndef WMR_PI_FROZEN

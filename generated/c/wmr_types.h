@@ -20,14 +20,14 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x7ef12892u
+#define WMR_CODE_ID 0x900c21a5u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
 /* Floating literal in the working precision: WMR_LIT(0.5) is 0.5f. */
 #define WMR_LIT(x) x##f
-#define WMR_SIN(x) sinf(x)
-#define WMR_COS(x) cosf(x)
+#define WMR_SIN(x) wmr_sin(x)
+#define WMR_COS(x) wmr_cos(x)
 #define WMR_TAN(x) tanf(x)
 #define WMR_ASIN(x) asinf(x)
 #define WMR_ACOS(x) acosf(x)
@@ -93,9 +93,10 @@ static inline wmr_exp_bits_t wmr_exp_carry(wmr_real_t x)
 /* sin and cos. wmr_sincos_bounded(x, &s, &c): both, for |x| <= 2.0e6 (twice the controller
    steps' input bound: an input angle, or the difference of two, a yaw relative to the
    root's; NaN beyond, and for Inf and NaN), from one argument reduction and without a
-   library call: the steps use it. Double: wmr_sin / wmr_cos are the same within that bound and
-   libm's beyond, and WMR_SIN / WMR_COS call them; float32's call sinf / cosf. -DWMR_LIBM_TRIG:
-   libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then minimax polynomials
+   library call: the steps use it. wmr_sin / wmr_cos are the same within that bound and
+   libm's beyond (sin, cos; sinf, cosf in float32), and WMR_SIN / WMR_COS (the model
+   functions) call them. -DWMR_LIBM_TRIG: libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and
+   Waite), then minimax polynomials
    in r^2 by Estrin's scheme (fdlibm's in double, degree 13 and 14; degree 7 and 8 in
    float32; each within a small fraction of an ulp for |r| <= pi/4):
    within 2.5 ulp of the exact values in double (2 ulp of glibc's) and 2 ulp in float32
@@ -122,6 +123,16 @@ WMR_TRIG_INLINE double wmr_cos(double x)
 {
     return cos(x);
 }
+#else
+WMR_TRIG_INLINE float wmr_sin(float x)
+{
+    return sinf(x);
+}
+
+WMR_TRIG_INLINE float wmr_cos(float x)
+{
+    return cosf(x);
+}
 #endif
 
 WMR_TRIG_INLINE void wmr_sincos_bounded(wmr_real_t x, wmr_real_t *s, wmr_real_t *c)
@@ -140,7 +151,8 @@ WMR_TRIG_INLINE int wmr_trig_in_range(wmr_real_t x)
 }
 
 #ifdef WMR_FLOAT32
-WMR_TRIG_INLINE void wmr_sincos_bounded(float x, float *s, float *c)
+/* sin and cos of x within the bound (anything finite beyond it). */
+WMR_TRIG_INLINE void wmr_sincos_kernel(float x, float *s, float *c)
 {
     const float shift = 12582912.0f;
     const float k = ((x * 0.636619772f) + shift) - shift;
@@ -172,13 +184,39 @@ WMR_TRIG_INLINE void wmr_sincos_bounded(float x, float *s, float *c)
     /* sin r = r below 2^-12 (the correction is under half an ulp). */
     const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
     const float cr = 1.0f + (z * pc);
-    const int in_range = wmr_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0f)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((wmr_trig_in_range(x) != 0) ? k : 0.0f)) & 3u;
     const float sq = ((q & 1u) != 0u) ? cr : sr;
     const float cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = (in_range == 0) ? (float)NAN : (((q & 2u) != 0u) ? -sq : sq);
-    *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+    *s = ((q & 2u) != 0u) ? -sq : sq;
+    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+}
+
+WMR_TRIG_INLINE void wmr_sincos_bounded(float x, float *s, float *c)
+{
+    float sk;
+    float ck;
+    wmr_sincos_kernel(x, &sk, &ck);
+    *s = (wmr_trig_in_range(x) != 0) ? sk : (float)NAN;
+    *c = (wmr_trig_in_range(x) != 0) ? ck : (float)NAN;
+}
+
+/* As in double: the kernel within the bound, libm's beyond; once inlined, a sin and a cos
+   of one angle share the kernel. */
+WMR_TRIG_INLINE float wmr_sin(float x)
+{
+    float s;
+    float c;
+    wmr_sincos_kernel(x, &s, &c);
+    return (wmr_trig_in_range(x) != 0) ? s : sinf(x);
+}
+
+WMR_TRIG_INLINE float wmr_cos(float x)
+{
+    float s;
+    float c;
+    wmr_sincos_kernel(x, &s, &c);
+    return (wmr_trig_in_range(x) != 0) ? c : cosf(x);
 }
 #else
 /* sin and cos of x within the bound (anything finite beyond it). */

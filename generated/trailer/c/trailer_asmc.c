@@ -78,16 +78,20 @@ static inline bool trailer_asmc_inputs_bounded(const trailer_real_t q[8],
     const trailer_bits_t mask = UINT64_C(0x7fffffffffffffff);
 #endif
     const trailer_bits_t bound = trailer_real_bits(TRAILER_LIT(1.0e6)) & mask;
-    unsigned int beyond = 0u;
+    trailer_bits_t beyond = 0u;
     int i;
+    /* |x| > bound exactly when bound - |x|'s bits wraps and sets the top bit (both below
+       it; +Inf and every NaN lie above every finite magnitude): subtractions OR-ed, which
+       the compiler vectorises, and one test, where a comparison each is a branch-free
+       but serial flag per value. */
     for (i = 0; i < 8; ++i) {
-        beyond |= ((trailer_real_bits(q[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((trailer_real_bits(qdot[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((trailer_real_bits(q_des[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((trailer_real_bits(qdot_des[i]) & mask) > bound) ? 1u : 0u;
-        beyond |= ((trailer_real_bits(qddot_des[i]) & mask) > bound) ? 1u : 0u;
+        beyond |= bound - (trailer_real_bits(q[i]) & mask);
+        beyond |= bound - (trailer_real_bits(qdot[i]) & mask);
+        beyond |= bound - (trailer_real_bits(q_des[i]) & mask);
+        beyond |= bound - (trailer_real_bits(qdot_des[i]) & mask);
+        beyond |= bound - (trailer_real_bits(qddot_des[i]) & mask);
     }
-    return beyond == 0u;
+    return (beyond & ~mask) == 0u;  /* the top bit */
 }
 
 #ifndef TRAILER_ASMC_FROZEN

@@ -21,14 +21,14 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0xac088ad9u
+#define TRAILER_CODE_ID 0x2e8d879du
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
 /* Floating literal in the working precision: TRAILER_LIT(0.5) is 0.5f. */
 #define TRAILER_LIT(x) x##f
-#define TRAILER_SIN(x) sinf(x)
-#define TRAILER_COS(x) cosf(x)
+#define TRAILER_SIN(x) trailer_sin(x)
+#define TRAILER_COS(x) trailer_cos(x)
 #define TRAILER_TAN(x) tanf(x)
 #define TRAILER_ASIN(x) asinf(x)
 #define TRAILER_ACOS(x) acosf(x)
@@ -94,11 +94,10 @@ static inline trailer_exp_bits_t trailer_exp_carry(trailer_real_t x)
 /* sin and cos. trailer_sincos_bounded(x, &s, &c): both, for |x| <= 2.0e6 (twice the controller
    steps' input bound: an input angle, or the difference of two, a yaw relative to the
    root's; NaN beyond, and for Inf and NaN), from one argument reduction and without a
-   library call: the steps use it. Double: trailer_sin / trailer_cos are the same within that bound
-   and
-   libm's beyond, and TRAILER_SIN / TRAILER_COS call them; float32's call sinf / cosf.
-   -DTRAILER_LIBM_TRIG:
-   libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody and Waite), then minimax polynomials
+   library call: the steps use it. trailer_sin / trailer_cos are the same within that bound and
+   libm's beyond (sin, cos; sinf, cosf in float32), and TRAILER_SIN / TRAILER_COS (the model
+   functions) call them. -DTRAILER_LIBM_TRIG: libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody
+   and Waite), then minimax polynomials
    in r^2 by Estrin's scheme (fdlibm's in double, degree 13 and 14; degree 7 and 8 in
    float32; each within a small fraction of an ulp for |r| <= pi/4):
    within 2.5 ulp of the exact values in double (2 ulp of glibc's) and 2 ulp in float32
@@ -125,6 +124,16 @@ TRAILER_TRIG_INLINE double trailer_cos(double x)
 {
     return cos(x);
 }
+#else
+TRAILER_TRIG_INLINE float trailer_sin(float x)
+{
+    return sinf(x);
+}
+
+TRAILER_TRIG_INLINE float trailer_cos(float x)
+{
+    return cosf(x);
+}
 #endif
 
 TRAILER_TRIG_INLINE void trailer_sincos_bounded(trailer_real_t x, trailer_real_t *s,
@@ -144,7 +153,8 @@ TRAILER_TRIG_INLINE int trailer_trig_in_range(trailer_real_t x)
 }
 
 #ifdef TRAILER_FLOAT32
-TRAILER_TRIG_INLINE void trailer_sincos_bounded(float x, float *s, float *c)
+/* sin and cos of x within the bound (anything finite beyond it). */
+TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
 {
     const float shift = 12582912.0f;
     const float k = ((x * 0.636619772f) + shift) - shift;
@@ -176,13 +186,39 @@ TRAILER_TRIG_INLINE void trailer_sincos_bounded(float x, float *s, float *c)
     /* sin r = r below 2^-12 (the correction is under half an ulp). */
     const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
     const float cr = 1.0f + (z * pc);
-    const int in_range = trailer_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0f)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((trailer_trig_in_range(x) != 0) ? k : 0.0f)) & 3u;
     const float sq = ((q & 1u) != 0u) ? cr : sr;
     const float cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = (in_range == 0) ? (float)NAN : (((q & 2u) != 0u) ? -sq : sq);
-    *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+    *s = ((q & 2u) != 0u) ? -sq : sq;
+    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+}
+
+TRAILER_TRIG_INLINE void trailer_sincos_bounded(float x, float *s, float *c)
+{
+    float sk;
+    float ck;
+    trailer_sincos_kernel(x, &sk, &ck);
+    *s = (trailer_trig_in_range(x) != 0) ? sk : (float)NAN;
+    *c = (trailer_trig_in_range(x) != 0) ? ck : (float)NAN;
+}
+
+/* As in double: the kernel within the bound, libm's beyond; once inlined, a sin and a cos
+   of one angle share the kernel. */
+TRAILER_TRIG_INLINE float trailer_sin(float x)
+{
+    float s;
+    float c;
+    trailer_sincos_kernel(x, &s, &c);
+    return (trailer_trig_in_range(x) != 0) ? s : sinf(x);
+}
+
+TRAILER_TRIG_INLINE float trailer_cos(float x)
+{
+    float s;
+    float c;
+    trailer_sincos_kernel(x, &s, &c);
+    return (trailer_trig_in_range(x) != 0) ? c : cosf(x);
 }
 #else
 /* sin and cos of x within the bound (anything finite beyond it). */
