@@ -35,6 +35,23 @@ def test_tdroc_step_counts_the_kernels_a_step_calls() -> None:
     assert not any(k.startswith("paper_") for k in drishti)
 
 
+def test_tdroc_step_counts_each_kernels_per_step_part() -> None:
+    """A kernel's parameter-only part runs at _init (its ``_keep``): the step count reads
+    the per-step part ``<prefix>_kernels.h`` documents, not the whole function (the
+    trailer's ``minimal_mhat``: 17 operations a step, 160 with the coefficients its _init
+    keeps)."""
+    folder = scale.generated_folder(ROOT, "trailer")
+    per_step = scale.step_operations(folder, "trailer")
+    table = dict(scale.OP_ROW.findall((folder / "MODEL.md").read_text()))
+    assert scale.operations(per_step["minimal_mhat"]) == 17
+    assert scale.operations(per_step["minimal_mhat_keep"]) > 100
+    assert scale.operations(table["minimal_mhat"]) > 100
+    rung = scale.Rung("trailer", 1, 8)
+    scale.measure_operations(folder, rung)
+    kernels = scale.tdroc_step_kernels(folder, "trailer", table)
+    assert rung.tdroc_step_ops == sum(scale.operations(per_step[k]) for k in kernels)
+
+
 def test_step_signature_gives_the_sizes() -> None:
     assert scale.coordinates(scale.generated_folder(ROOT, "trailer3"), "trailer3") == (14, 2)
     assert scale.coordinates(scale.generated_folder(ROOT, "drishti"), "wmr") == (5, 2)

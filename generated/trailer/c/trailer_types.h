@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0x2e8d879du
+#define TRAILER_CODE_ID 0x534b56c7u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -153,8 +153,7 @@ TRAILER_TRIG_INLINE int trailer_trig_in_range(trailer_real_t x)
 }
 
 #ifdef TRAILER_FLOAT32
-/* sin and cos of x within the bound (anything finite beyond it). */
-TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
+TRAILER_TRIG_INLINE void trailer_sincos_bounded(float x, float *s, float *c)
 {
     const float shift = 12582912.0f;
     const float k = ((x * 0.636619772f) + shift) - shift;
@@ -186,30 +185,22 @@ TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
     /* sin r = r below 2^-12 (the correction is under half an ulp). */
     const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
     const float cr = 1.0f + (z * pc);
+    const int in_range = trailer_trig_in_range(x);
     /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((trailer_trig_in_range(x) != 0) ? k : 0.0f)) & 3u;
+    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0f)) & 3u;
     const float sq = ((q & 1u) != 0u) ? cr : sr;
     const float cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = ((q & 2u) != 0u) ? -sq : sq;
-    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+    *s = (in_range == 0) ? (float)NAN : (((q & 2u) != 0u) ? -sq : sq);
+    *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
 }
 
-TRAILER_TRIG_INLINE void trailer_sincos_bounded(float x, float *s, float *c)
-{
-    float sk;
-    float ck;
-    trailer_sincos_kernel(x, &sk, &ck);
-    *s = (trailer_trig_in_range(x) != 0) ? sk : (float)NAN;
-    *c = (trailer_trig_in_range(x) != 0) ? ck : (float)NAN;
-}
-
-/* As in double: the kernel within the bound, libm's beyond; once inlined, a sin and a cos
-   of one angle share the kernel. */
+/* As in double: the bounded reduction within the bound, libm's beyond (where the bounded
+   one's NaN is not used); once inlined, a sin and a cos of one angle share it. */
 TRAILER_TRIG_INLINE float trailer_sin(float x)
 {
     float s;
     float c;
-    trailer_sincos_kernel(x, &s, &c);
+    trailer_sincos_bounded(x, &s, &c);
     return (trailer_trig_in_range(x) != 0) ? s : sinf(x);
 }
 
@@ -217,7 +208,7 @@ TRAILER_TRIG_INLINE float trailer_cos(float x)
 {
     float s;
     float c;
-    trailer_sincos_kernel(x, &s, &c);
+    trailer_sincos_bounded(x, &s, &c);
     return (trailer_trig_in_range(x) != 0) ? c : cosf(x);
 }
 #else

@@ -148,8 +148,8 @@ def operations(summary: str) -> int:
 def tdroc_step_kernels(folder: Path, prefix: str, table: dict[str, str]) -> list[str]:
     """The kernels (functions of the op table) ``<prefix>_tdroc_step_detail`` calls for the
     minimal formulation: what a step evaluates (those _init calls once are not counted). The
-    step calls them as ``<prefix>_k_<kernel>`` (``<prefix>_kernels.h``); their parameter-only
-    part is evaluated by _init, but the whole kernel's operations are counted here."""
+    step calls them as ``<prefix>_k_<kernel>`` (``<prefix>_kernels.h``), a kernel's
+    parameter-only part split off into a ``_keep`` that _init calls."""
     text = (folder / "c" / f"{prefix}_tdroc.c").read_text()
     # the step's body: specialised per formulation (step_as) where it has two, else inline
     marker = next(m for m in (f"{prefix}_status_t {prefix}_tdroc_step_as(",
@@ -159,11 +159,21 @@ def tdroc_step_kernels(folder: Path, prefix: str, table: dict[str, str]) -> list
     return sorted(k for k in table if k in called and not k.startswith("paper_"))
 
 
+def step_operations(folder: Path, prefix: str) -> dict[str, str]:
+    """The operations of each kernel's per-step part as ``<prefix>_kernels.h`` documents it
+    (``<prefix>_k_<kernel>``: the body, or the part after ``_keep``), by kernel name."""
+    text = (folder / "c" / f"{prefix}_kernels.h").read_text()
+    pattern = rf"/\* {prefix}_k_(\w+): .*?operations after CSE: ([^*]+)\*/"
+    found: list[tuple[str, str]] = re.findall(pattern, text, re.S)
+    return dict(found)
+
+
 def measure_operations(folder: Path, rung: Rung) -> None:
     table = dict(OP_ROW.findall((folder / "MODEL.md").read_text()))
     rung.forward_dynamics_ops = operations(table["forward_dynamics"])
     prefix = prefix_of(folder)
-    rung.tdroc_step_ops = sum(operations(table[k])
+    per_step = step_operations(folder, prefix)  # a kernel's _keep runs at _init, not a step
+    rung.tdroc_step_ops = sum(operations(per_step[k] if k in per_step else table[k])
                               for k in tdroc_step_kernels(folder, prefix, table))
 
 
