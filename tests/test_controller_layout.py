@@ -9,6 +9,7 @@ given. Drishti's byte-identical output is ``python -m codegen --check``.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import sys
 import types
@@ -47,6 +48,9 @@ TOY = ControllerLayout(
     coordinate_names=("x", "y", "theta", "phi", "theta_r", "theta_l", "psi", "chi"),
     input_names=("tau_r", "tau_l"),
 )
+# The same robot with its driven wheels first in q: the minimal formulation's slice (and
+# the history it keeps) starts at row 0.
+TOY_WHEELS_FIRST = dataclasses.replace(TOY, actuated=(0, 1))
 TOY_PARAMS = ("J_theta", "J_phi", "K_x", "K_y", "radius_r", "radius_l")
 TOY_CONDITION = ("p->J_theta * p->J_phi - p->K_x * p->K_x", "J_theta J_phi - K_x^2 > 0")
 DRISHTI_LAYOUT = layout_for(robot_model())
@@ -349,9 +353,9 @@ class _Stubs:
         return mod
 
 
-@pytest.fixture
-def toy_controllers() -> Iterator[tuple[Any, _Stubs]]:
-    text = _python_text(TOY)
+@pytest.fixture(params=[TOY, TOY_WHEELS_FIRST], ids=["wheels at 4", "wheels first"])
+def toy_controllers(request: pytest.FixtureRequest) -> Iterator[tuple[Any, _Stubs]]:
+    text = _python_text(request.param)
     code = compile(text, "toy_controllers.py", "exec")
     stubs = _Stubs()
     saved = {k: sys.modules.get(k) for k in ("toy_laws", "toy_model")}
@@ -396,7 +400,8 @@ def test_python_controllers_run_on_the_layout(toy_controllers: tuple[Any, _Stubs
             tau = ctrl.step(q, zeros, zeros, zeros, zeros)
             assert tau.shape == (TOY.nu,)
         assert ctrl.last_status == "TOY_OK"
-        assert list(ctrl.u_prev) == [1.0, -1.0]  # the controlled rows 4, 5 only
+        assert list(ctrl.u_prev) == [1.0, -1.0]  # the controlled rows only
+        assert np.shape(ctrl.qdot_prev) == np.shape(ctrl.u_prev2) == (TOY.nu,)
         assert ctrl.u_discarded == 0.0
     # TDROC evaluated ||Mhat(q)^-1|| at q = 0 when its configuration was checked, then at the
     # measured q of each step once the gain was due.
