@@ -60,6 +60,12 @@ class OpCount:
     sqrt: int = 0
     other: tuple[tuple[str, int], ...] = ()
 
+    @property
+    def arithmetic(self) -> int:
+        """Additions, multiplications, divisions, sin/cos and square roots together (not
+        the comparisons and other calls)."""
+        return self.add + self.mul + self.div + self.sincos + self.sqrt
+
     def summary(self) -> str:
         """E.g. ``41 add, 63 mul, 2 div, 2 sin/cos, 0 sqrt`` (+ ``, 1 fmax`` if any)."""
         text = (

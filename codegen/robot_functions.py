@@ -538,9 +538,7 @@ def _split_ops(spec: FunctionSpec) -> tuple[int, int]:
     (:mod:`codegen.prepare`)."""
     form = prepared_form(cse_function(spec, reciprocals=True),
                          replace(spec, returns_status=True))
-    step, kept = form.ops("per_call"), form.ops("prepare")
-    return (step.add + step.mul + step.div + step.sincos + step.sqrt,
-            kept.add + kept.mul + kept.div + kept.sincos + kept.sqrt)
+    return form.ops("per_call").arithmetic, form.ops("prepare").arithmetic
 
 
 def _mhat_variant(spec: FunctionSpec, coords: tuple[sp.Symbol, ...], mass: list[sp.Expr],

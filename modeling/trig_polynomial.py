@@ -84,7 +84,7 @@ class _Builder:
         if isinstance(e, sp.Add):
             total: Polynomial = {}
             for a in e.args:
-                _accumulate(total, self.of(a), sp.S.One)
+                _accumulate(total, self.of(a))
             return total
         if isinstance(e, sp.Mul):
             product: Polynomial = {(): sp.S.One}
@@ -127,10 +127,11 @@ class _Builder:
                         for m, c in terms if c != 0))
 
 
-def _accumulate(total: Polynomial, part: Polynomial, factor: sp.Expr) -> None:
+def _accumulate(total: Polynomial, part: Polynomial) -> None:
+    """``total += part``, dropping the monomials that cancel."""
     for m, c in part.items():
         key = _trimmed(m)
-        total[key] = total.get(key, sp.S.Zero) + factor * c
+        total[key] = total.get(key, sp.S.Zero) + c
         if total[key] == 0:
             del total[key]
 

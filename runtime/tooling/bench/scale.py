@@ -173,7 +173,7 @@ def measure_operations(folder: Path, rung: Rung) -> None:
     rung.forward_dynamics_ops = operations(table["forward_dynamics"])
     prefix = prefix_of(folder)
     per_step = step_operations(folder, prefix)  # a kernel's _keep runs at _init, not a step
-    rung.tdroc_step_ops = sum(operations(per_step[k] if k in per_step else table[k])
+    rung.tdroc_step_ops = sum(operations(per_step[k])
                               for k in tdroc_step_kernels(folder, prefix, table))
 
 
