@@ -658,7 +658,14 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(20)",),
         )
     )
-    dgain, dnorms, dweights = ctl.tdroc_weighted_gain(MAX_WINDOW)
+    _, dnorms, dweights = ctl.tdroc_weighted_gain(MAX_WINDOW)
+    # The older norms' weighted sum first, the newest norm's term added last: dn_0 comes
+    # from this step's H1hat (through u(t-h)), the others from the state, so one add
+    # instead of the whole sum waits for it (a chain through every step).
+    older = sp.Symbol("dn_older_sum")
+    older_sum = sum((dweights[i] * dnorms[i] for i in range(1, MAX_WINDOW)), sp.S.Zero)
+    minv_norm = sp.Symbol("minv_norm", positive=True)
+    dgain_staged = minv_norm * (older + dweights[0] * dnorms[0])
     specs.append(
         FunctionSpec(
             "tdroc_weighted_gain",
@@ -666,12 +673,13 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             "khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the\n"
             "active window). Each dn_i is evaluated once, by <f>_omega_difference.",
             (
-                array("minv_norm", (sp.Symbol("minv_norm", positive=True),), "from _minv_norm"),
+                array("minv_norm", (minv_norm,), "from _minv_norm"),
                 array("dn", tuple(dnorms), "dn_i, newest first"),
                 array("w", tuple(dweights), "weights"),
             ),
-            (out("gain", [dgain]),),
+            (out("gain", [dgain_staged]),),
             ("(25)",),
+            definitions=((older, older_sum),),
         )
     )
     for f in model.formulations:

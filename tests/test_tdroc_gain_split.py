@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 import sympy as sp
 
-from codegen.robot_functions import MAX_WINDOW
+from codegen.robot_functions import MAX_WINDOW, law_specs
 from modeling import controllers as ctl
 from modeling.robots.drishti import model as wmr
 
@@ -26,3 +26,14 @@ def test_weighted_gain_of_difference_norms_is_tdroc_gain(formulation: ctl.Formul
     }
     composed = split.xreplace(norms).xreplace(dict(zip(w2, w, strict=True)))
     assert sp.expand(composed - gain) == 0
+
+
+def test_generated_weighted_gain_adds_the_newest_norm_last() -> None:
+    """The kernel's staging (the older norms' sum, then the newest norm's term: one add
+    waits for this step's norm) is (25)'s weighted sum, rearranged only."""
+    spec = next(s for s in law_specs(DRISHTI) if s.name == "tdroc_weighted_gain")
+    (older, older_sum), = spec.definitions
+    gain = spec.outputs[0].exprs[0]
+    split, dn, _ = ctl.tdroc_weighted_gain(MAX_WINDOW)
+    assert dn[0] not in older_sum.free_symbols and older in gain.free_symbols
+    assert sp.expand(gain.xreplace({older: older_sum}) - split) == 0

@@ -145,9 +145,11 @@ static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     diff |= wmr_real_bits(config->eps) ^ wmr_real_bits(kept->eps);
     diff |= wmr_real_bits(config->a) ^ wmr_real_bits(kept->a);
     diff |= wmr_real_bits(config->held_gain) ^ wmr_real_bits(kept->held_gain);
-    return (diff == 0u) && (config->formulation == kept->formulation)
-            && (config->accel_estimator == kept->accel_estimator) && (config->n == kept->n)
-            && (config->hold_gain == kept->hold_gain);
+    diff |= (wmr_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
+    diff |= (wmr_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
+    diff |= (wmr_bits_t)(unsigned int)(config->n ^ kept->n);
+    diff |= (wmr_bits_t)(unsigned int)(config->hold_gain ^ kept->hold_gain);
+    return diff == 0u;  /* one test */
 }
 #endif
 
@@ -480,19 +482,17 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     out_tau[0] = paper ? u[3] : u[0];
     out_tau[1] = paper ? u[4] : u[1];
     u_discarded = paper ? wmr_norm3(u[0], u[1], u[2]) : WMR_LIT(0.0);  /* cannot overflow */
-    /* ||s|| and ||u rows 1-3|| can overflow (float32, large gains) while tau is finite:
-       then s/||s|| in the switching term is 0, so that step is not done either. One test for
-       all (x - x is NaN exactly when x is not finite), then which one, in the status order. */
-    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
-              + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+    /* The outputs that can be non-finite: out_tau[0], out_tau[1], s_norm, u_discarded (||s|| and
+       ||u rows 1-3|| can overflow in float32 with large gains while tau is finite: then s/||s|| in
+       the switching term is 0, so that step is not done either). One test for all (x - x is NaN
+       exactly when x is not finite), then which one, in the status order. */
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (s_norm - s_norm)
+            + (u_discarded - u_discarded)) != 0) {
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }
         if (!isfinite(out_tau[1])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 1);
-        }
-        if (!isfinite(gain)) {
-            return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_GAIN, -1);
         }
         if (!isfinite(s_norm)) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_S_NORM, -1);

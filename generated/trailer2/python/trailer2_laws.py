@@ -92,9 +92,8 @@ def tdroc_weighted_gain(minv_norm: ArrayLike, dn: ArrayLike, w: ArrayLike) -> ND
     minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
     dn0, dn1, dn2, dn3, dn4, dn5, dn6, dn7 = _flat(dn, 8, "dn")
     w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
-    gain = np.array([
-        minv_norm_1*(dn0*w0 + dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7),
-    ])
+    _t0 = dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7
+    gain = np.array([minv_norm_1*(_t0 + dn0*w0)])
     return gain
 
 
