@@ -71,7 +71,9 @@ def sympy_c(specs: Sequence[FunctionSpec]) -> str:
     lines = ["#include <math.h>", ""]
     for spec in specs:
         syms = spec.input_symbols()
-        names = {s: sp.Symbol(f"in[{k}]") for k, s in enumerate(syms)}
+        names: dict[sp.Basic, sp.Expr] = {s: sp.Symbol(f"in[{k}]") for k, s in enumerate(syms)}
+        for symbol, definition in spec.definitions:  # plain SymPy sees the expanded outputs
+            names[symbol] = definition.xreplace(names)
         exprs = [e.xreplace(names) for a in spec.outputs for e in a.exprs]
         temps, reduced = sp.cse(exprs)
         lines.append(f"void sympy_{spec.name}(const double *in, double *out)\n{{")
