@@ -659,25 +659,27 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
         )
     )
     _, dnorms, dweights = ctl.tdroc_weighted_gain(MAX_WINDOW)
-    # The older norms' weighted sum first, the newest norm's term added last: dn_0 comes
-    # from this step's H1hat (through u(t-h)), the others from the state, so one add
-    # instead of the whole sum waits for it (a chain through every step).
+    # The newest norm apart from the kept ones, and its term added last: dn_1 is this
+    # step's (from H1hat, through u(t-h): a chain through every step), the others are the
+    # state's, read in place (the window after a push is the new norm, then the ring from
+    # its new head's second entry); so one add, not the whole sum, waits for dn_1.
     older = sp.Symbol("dn_older_sum")
     older_sum = sum((dweights[i] * dnorms[i] for i in range(1, MAX_WINDOW)), sp.S.Zero)
     minv_norm = sp.Symbol("minv_norm", positive=True)
-    dgain_staged = minv_norm * (older + dweights[0] * dnorms[0])
     specs.append(
         FunctionSpec(
             "tdroc_weighted_gain",
             "(25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:\n"
             "khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the\n"
-            "active window). Each dn_i is evaluated once, by <f>_omega_difference.",
+            "active window). Each dn_i is evaluated once, by <f>_omega_difference, when\n"
+            "its newer Omega joins: dn_new is this step's, dn_kept the window's others.",
             (
                 array("minv_norm", (minv_norm,), "from _minv_norm"),
-                array("dn", tuple(dnorms), "dn_i, newest first"),
+                array("dn_new", (dnorms[0],), "dn_1, this step's"),
+                array("dn_kept", tuple(dnorms[1:]), "dn_2 ..., newest first"),
                 array("w", tuple(dweights), "weights"),
             ),
-            (out("gain", [dgain_staged]),),
+            (out("gain", [minv_norm * (older + dweights[0] * dnorms[0])]),),
             ("(25)",),
             definitions=((older, older_sum),),
         )

@@ -236,7 +236,11 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
                 in compared), value
     assert "for (i = 0; i < 8; ++i) {" in compared  # every entry of an nq-vector
     assert "diff |= toy_real_bits(config->k1[i]) ^ toy_real_bits(kept->k1[i]);" in compared
-    assert "(config->formulation == kept->formulation)" in compared  # the ints as they are
+    # the ints as they are, their bits XOR-ed into the same word (one test for all)
+    assert ("diff |= ((toy_bits_t)(unsigned int)config->formulation) ^ ((toy_bits_t)(unsigned "
+            "int)kept->formulation);" in " ".join(compared.split()))
+    # a float32 build (words of one size, no padding) compares the struct as one array
+    assert "toy_tdroc_words_diff(config, kept, 0, " in compared
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:

@@ -23,10 +23,10 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P)
 
 /* wmr_tdroc_weighted_gain: documented in wmr_laws.h.
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn, const wmr_real_t *w,
-    wmr_real_t *gain)
+void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn_new,
+    const wmr_real_t *dn_kept, const wmr_real_t *w, wmr_real_t *gain)
 {
-    wmr_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
+    wmr_k_tdroc_weighted_gain(minv_norm, dn_new, dn_kept, w, gain);
 }
 
 /* wmr_paper_tde: documented in wmr_laws.h.

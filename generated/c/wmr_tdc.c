@@ -6,6 +6,7 @@
 #include "wmr_tdc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "wmr_controller.h"
 #include "wmr_laws.h"
@@ -92,31 +93,60 @@ static inline bool wmr_tdc_inputs_bounded(const wmr_real_t q[5], const wmr_real_
 }
 
 #ifndef WMR_TDC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline wmr_bits_t wmr_tdc_words_diff(const wmr_tdc_config_t *a,
+    const wmr_tdc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    wmr_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        wmr_bits_t x;
+        wmr_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
     const wmr_tdc_config_t *kept)
 {
     wmr_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 5; ++i) {
-        diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
-        diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(wmr_bits_t))
+        && (sizeof(wmr_tdc_config_t) == (24u * sizeof(wmr_bits_t)))) {
+        /* Its 24 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = wmr_tdc_words_diff(config, kept, 0, 24);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 5; ++i) {
+            diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
+            diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
+        }
+        diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
+        diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
+        diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
+        diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
+        diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
+        diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
+        diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
+        diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
+        diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
+        diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);
+        diff |= wmr_real_bits(config->tau_max) ^ wmr_real_bits(kept->tau_max);
+        diff |= wmr_real_bits(config->rate_window) ^ wmr_real_bits(kept->rate_window);
+        diff |= ((wmr_bits_t)(unsigned int)config->formulation)
+                ^ ((wmr_bits_t)(unsigned int)kept->formulation);
+        diff |= ((wmr_bits_t)(unsigned int)config->accel_estimator)
+                ^ ((wmr_bits_t)(unsigned int)kept->accel_estimator);
     }
-    diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
-    diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
-    diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
-    diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
-    diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
-    diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
-    diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
-    diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
-    diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
-    diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);
-    diff |= wmr_real_bits(config->tau_max) ^ wmr_real_bits(kept->tau_max);
-    diff |= wmr_real_bits(config->rate_window) ^ wmr_real_bits(kept->rate_window);
-    diff |= (wmr_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
-    diff |= (wmr_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
     return diff == 0u;  /* one test */
 }
 #endif

@@ -6,6 +6,7 @@
 #include "wmr_tdroc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "wmr_controller.h"
 #include "wmr_laws.h"
@@ -119,36 +120,67 @@ static inline bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_rea
 }
 
 #ifndef WMR_TDROC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline wmr_bits_t wmr_tdroc_words_diff(const wmr_tdroc_config_t *a,
+    const wmr_tdroc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    wmr_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        wmr_bits_t x;
+        wmr_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     const wmr_tdroc_config_t *kept)
 {
     wmr_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 5; ++i) {
-        diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
-        diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(wmr_bits_t))
+        && (sizeof(wmr_tdroc_config_t) == (29u * sizeof(wmr_bits_t)))) {
+        /* Its 29 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = wmr_tdroc_words_diff(config, kept, 0, 28)            | wmr_tdroc_words_diff(config,
+                kept, 28, 1);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 5; ++i) {
+            diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
+            diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
+        }
+        diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
+        diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
+        diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
+        diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
+        diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
+        diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
+        diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
+        diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
+        diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
+        diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);
+        diff |= wmr_real_bits(config->tau_max) ^ wmr_real_bits(kept->tau_max);
+        diff |= wmr_real_bits(config->rate_window) ^ wmr_real_bits(kept->rate_window);
+        diff |= wmr_real_bits(config->eps) ^ wmr_real_bits(kept->eps);
+        diff |= wmr_real_bits(config->a) ^ wmr_real_bits(kept->a);
+        diff |= wmr_real_bits(config->held_gain) ^ wmr_real_bits(kept->held_gain);
+        diff |= ((wmr_bits_t)(unsigned int)config->formulation)
+                ^ ((wmr_bits_t)(unsigned int)kept->formulation);
+        diff |= ((wmr_bits_t)(unsigned int)config->accel_estimator)
+                ^ ((wmr_bits_t)(unsigned int)kept->accel_estimator);
+        diff |= ((wmr_bits_t)(unsigned int)config->n) ^ ((wmr_bits_t)(unsigned int)kept->n);
+        diff |= ((wmr_bits_t)(unsigned int)config->hold_gain)
+                ^ ((wmr_bits_t)(unsigned int)kept->hold_gain);
     }
-    diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
-    diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
-    diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
-    diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
-    diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
-    diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
-    diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
-    diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
-    diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
-    diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);
-    diff |= wmr_real_bits(config->tau_max) ^ wmr_real_bits(kept->tau_max);
-    diff |= wmr_real_bits(config->rate_window) ^ wmr_real_bits(kept->rate_window);
-    diff |= wmr_real_bits(config->eps) ^ wmr_real_bits(kept->eps);
-    diff |= wmr_real_bits(config->a) ^ wmr_real_bits(kept->a);
-    diff |= wmr_real_bits(config->held_gain) ^ wmr_real_bits(kept->held_gain);
-    diff |= (wmr_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
-    diff |= (wmr_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
-    diff |= (wmr_bits_t)(unsigned int)(config->n ^ kept->n);
-    diff |= (wmr_bits_t)(unsigned int)(config->hold_gain ^ kept->hold_gain);
     return diff == 0u;  /* one test */
 }
 #endif
@@ -446,11 +478,9 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
-        /* the window after this step, newest first: read in place but for the new norm (a
-           local array of constant indices, which the inlined kernel keeps in registers) */
-        const wmr_real_t *const older = &state->omega_ring[omega_head];
-        const wmr_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
-                older[6], older[7]};
+        /* the window after this step, newest first: the new norm, then the ring from the
+           head's second entry on, read in place */
+        const wmr_real_t *const dn_kept = &state->omega_ring[omega_head + 1];
         wmr_real_t w_warm[WMR_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const wmr_real_t *w = state->weights;  /* the full window's, from _init */
@@ -459,7 +489,7 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
             w = w_warm;
         }
         /* ||Mhat^-1|| depends on the nominal parameters only: computed by _init. */
-        wmr_k_tdroc_weighted_gain(&state->minv_norm, dn, w, &gain);
+        wmr_k_tdroc_weighted_gain(&state->minv_norm, &dn_new, dn_kept, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = wmr_cap_gain(gain);
     } else {

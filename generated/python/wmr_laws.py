@@ -72,16 +72,18 @@ def lyapunov_p(gains: ArrayLike) -> NDArray[np.float64]:
     return P
 
 
-def tdroc_weighted_gain(minv_norm: ArrayLike, dn: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
+def tdroc_weighted_gain(minv_norm: ArrayLike, dn_new: ArrayLike, dn_kept: ArrayLike, w: ArrayLike) -> NDArray[np.float64]:
     """(25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:
     khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the
-    active window). Each dn_i is evaluated once, by <f>_omega_difference.
+    active window). Each dn_i is evaluated once, by <f>_omega_difference, when
+    its newer Omega joins: dn_new is this step's, dn_kept the window's others.
 
     Paper equations: (25).
 
     Args:
         minv_norm: array of 1 (shape 1x1, row-major): minv_norm. from _minv_norm
-        dn: array of 8 (shape 8x1, row-major): dn0, dn1, dn2, dn3, dn4, dn5, dn6, dn7. dn_i, newest first
+        dn_new: array of 1 (shape 1x1, row-major): dn0. dn_1, this step's
+        dn_kept: array of 7 (shape 7x1, row-major): dn1, dn2, dn3, dn4, dn5, dn6, dn7. dn_2 ..., newest first
         w: array of 8 (shape 8x1, row-major): w0, w1, w2, w3, w4, w5, w6, w7. weights
 
     Returns:
@@ -90,7 +92,8 @@ def tdroc_weighted_gain(minv_norm: ArrayLike, dn: ArrayLike, w: ArrayLike) -> ND
     operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
     """
     minv_norm_1, = _flat(minv_norm, 1, "minv_norm")
-    dn0, dn1, dn2, dn3, dn4, dn5, dn6, dn7 = _flat(dn, 8, "dn")
+    dn0, = _flat(dn_new, 1, "dn_new")
+    dn1, dn2, dn3, dn4, dn5, dn6, dn7 = _flat(dn_kept, 7, "dn_kept")
     w0, w1, w2, w3, w4, w5, w6, w7 = _flat(w, 8, "w")
     _t0 = dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7
     gain = np.array([minv_norm_1*(_t0 + dn0*w0)])

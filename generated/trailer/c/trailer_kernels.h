@@ -20,15 +20,16 @@
    it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
 static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
-    const trailer_real_t *dn, const trailer_real_t *w, trailer_real_t *gain)
+    const trailer_real_t *dn_new, const trailer_real_t *dn_kept, const trailer_real_t *w,
+    trailer_real_t *gain)
 {
-    const trailer_real_t dn1 = dn[1];
-    const trailer_real_t dn2 = dn[2];
-    const trailer_real_t dn3 = dn[3];
-    const trailer_real_t dn4 = dn[4];
-    const trailer_real_t dn5 = dn[5];
-    const trailer_real_t dn6 = dn[6];
-    const trailer_real_t dn7 = dn[7];
+    const trailer_real_t dn1 = dn_kept[0];
+    const trailer_real_t dn2 = dn_kept[1];
+    const trailer_real_t dn3 = dn_kept[2];
+    const trailer_real_t dn4 = dn_kept[3];
+    const trailer_real_t dn5 = dn_kept[4];
+    const trailer_real_t dn6 = dn_kept[5];
+    const trailer_real_t dn7 = dn_kept[6];
     const trailer_real_t w1 = w[1];
     const trailer_real_t w2 = w[2];
     const trailer_real_t w3 = w[3];
@@ -38,7 +39,7 @@ static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm
     const trailer_real_t w7 = w[7];
     const trailer_real_t _t0 = dn1*w1 + dn2*w2 + dn3*w3 + dn4*w4 + dn5*w5 + dn6*w6 + dn7*w7;
     const trailer_real_t minv_norm_1 = minv_norm[0];
-    const trailer_real_t dn0 = dn[0];
+    const trailer_real_t dn0 = dn_new[0];
     const trailer_real_t w0 = w[0];
     gain[0] = minv_norm_1*(_t0 + dn0*w0);
 }

@@ -24,10 +24,10 @@ void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P)
 
 /* trailer_tdroc_weighted_gain: documented in trailer_laws.h.
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn,
-    const trailer_real_t *w, trailer_real_t *gain)
+void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn_new,
+    const trailer_real_t *dn_kept, const trailer_real_t *w, trailer_real_t *gain)
 {
-    trailer_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
+    trailer_k_tdroc_weighted_gain(minv_norm, dn_new, dn_kept, w, gain);
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.

@@ -6,6 +6,7 @@
 #include "trailer_tdc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "trailer_controller.h"
 #include "trailer_laws.h"
@@ -93,54 +94,84 @@ static inline bool trailer_tdc_inputs_bounded(const trailer_real_t q[8],
 }
 
 #ifndef TRAILER_TDC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline trailer_bits_t trailer_tdc_words_diff(const trailer_tdc_config_t *a,
+    const trailer_tdc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    trailer_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        trailer_bits_t x;
+        trailer_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer_tdc_config_unchanged(const trailer_tdc_config_t *config,
     const trailer_tdc_config_t *kept)
 {
     trailer_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 8; ++i) {
-        diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
-        diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(trailer_bits_t))
+        && (sizeof(trailer_tdc_config_t) == (38u * sizeof(trailer_bits_t)))) {
+        /* Its 38 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = trailer_tdc_words_diff(config, kept, 0, 36)
+                | trailer_tdc_words_diff(config, kept, 36, 2);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 8; ++i) {
+            diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
+            diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
+        }
+        diff |= trailer_real_bits(config->nominal.J_theta_cart)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart);
+        diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
+        diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
+        diff |= trailer_real_bits(config->nominal.J_theta_left)
+                ^ trailer_real_bits(kept->nominal.J_theta_left);
+        diff |= trailer_real_bits(config->nominal.J_theta_right)
+                ^ trailer_real_bits(kept->nominal.J_theta_right);
+        diff |= trailer_real_bits(config->nominal.J_theta_tractor)
+                ^ trailer_real_bits(kept->nominal.J_theta_tractor);
+        diff |= trailer_real_bits(config->nominal.J_x_tractor)
+                ^ trailer_real_bits(kept->nominal.J_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
+                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
+                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+        diff |= trailer_real_bits(config->nominal.radius_cart_left)
+                ^ trailer_real_bits(kept->nominal.radius_cart_left);
+        diff |= trailer_real_bits(config->nominal.radius_cart_right)
+                ^ trailer_real_bits(kept->nominal.radius_cart_right);
+        diff |= trailer_real_bits(config->nominal.radius_left)
+                ^ trailer_real_bits(kept->nominal.radius_left);
+        diff |= trailer_real_bits(config->nominal.radius_right)
+                ^ trailer_real_bits(kept->nominal.radius_right);
+        diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
+        diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
+        diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);
+        diff |= trailer_real_bits(config->tau_max) ^ trailer_real_bits(kept->tau_max);
+        diff |= trailer_real_bits(config->rate_window) ^ trailer_real_bits(kept->rate_window);
+        diff |= ((trailer_bits_t)(unsigned int)config->formulation)
+                ^ ((trailer_bits_t)(unsigned int)kept->formulation);
+        diff |= ((trailer_bits_t)(unsigned int)config->accel_estimator)
+                ^ ((trailer_bits_t)(unsigned int)kept->accel_estimator);
     }
-    diff |= trailer_real_bits(config->nominal.J_theta_cart)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart);
-    diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
-    diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
-    diff |= trailer_real_bits(config->nominal.J_theta_left)
-            ^ trailer_real_bits(kept->nominal.J_theta_left);
-    diff |= trailer_real_bits(config->nominal.J_theta_right)
-            ^ trailer_real_bits(kept->nominal.J_theta_right);
-    diff |= trailer_real_bits(config->nominal.J_theta_tractor)
-            ^ trailer_real_bits(kept->nominal.J_theta_tractor);
-    diff |= trailer_real_bits(config->nominal.J_x_tractor)
-            ^ trailer_real_bits(kept->nominal.J_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
-            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
-            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-    diff |= trailer_real_bits(config->nominal.radius_cart_left)
-            ^ trailer_real_bits(kept->nominal.radius_cart_left);
-    diff |= trailer_real_bits(config->nominal.radius_cart_right)
-            ^ trailer_real_bits(kept->nominal.radius_cart_right);
-    diff |= trailer_real_bits(config->nominal.radius_left)
-            ^ trailer_real_bits(kept->nominal.radius_left);
-    diff |= trailer_real_bits(config->nominal.radius_right)
-            ^ trailer_real_bits(kept->nominal.radius_right);
-    diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
-    diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
-    diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);
-    diff |= trailer_real_bits(config->tau_max) ^ trailer_real_bits(kept->tau_max);
-    diff |= trailer_real_bits(config->rate_window) ^ trailer_real_bits(kept->rate_window);
-    diff |= (trailer_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
-    diff |= (trailer_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
     return diff == 0u;  /* one test */
 }
 #endif

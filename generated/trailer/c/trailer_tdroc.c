@@ -6,6 +6,7 @@
 #include "trailer_tdroc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "trailer_controller.h"
 #include "trailer_laws.h"
@@ -119,59 +120,90 @@ static inline bool trailer_tdroc_inputs_bounded(const trailer_real_t q[8],
 }
 
 #ifndef TRAILER_TDROC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline trailer_bits_t trailer_tdroc_words_diff(const trailer_tdroc_config_t *a,
+    const trailer_tdroc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    trailer_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        trailer_bits_t x;
+        trailer_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer_tdroc_config_unchanged(const trailer_tdroc_config_t *config,
     const trailer_tdroc_config_t *kept)
 {
     trailer_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 8; ++i) {
-        diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
-        diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(trailer_bits_t))
+        && (sizeof(trailer_tdroc_config_t) == (43u * sizeof(trailer_bits_t)))) {
+        /* Its 43 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = trailer_tdroc_words_diff(config, kept, 0, 40)
+                | trailer_tdroc_words_diff(config, kept, 40, 3);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 8; ++i) {
+            diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
+            diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
+        }
+        diff |= trailer_real_bits(config->nominal.J_theta_cart)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart);
+        diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
+        diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
+                ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
+        diff |= trailer_real_bits(config->nominal.J_theta_left)
+                ^ trailer_real_bits(kept->nominal.J_theta_left);
+        diff |= trailer_real_bits(config->nominal.J_theta_right)
+                ^ trailer_real_bits(kept->nominal.J_theta_right);
+        diff |= trailer_real_bits(config->nominal.J_theta_tractor)
+                ^ trailer_real_bits(kept->nominal.J_theta_tractor);
+        diff |= trailer_real_bits(config->nominal.J_x_tractor)
+                ^ trailer_real_bits(kept->nominal.J_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
+                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
+                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+        diff |= trailer_real_bits(config->nominal.radius_cart_left)
+                ^ trailer_real_bits(kept->nominal.radius_cart_left);
+        diff |= trailer_real_bits(config->nominal.radius_cart_right)
+                ^ trailer_real_bits(kept->nominal.radius_cart_right);
+        diff |= trailer_real_bits(config->nominal.radius_left)
+                ^ trailer_real_bits(kept->nominal.radius_left);
+        diff |= trailer_real_bits(config->nominal.radius_right)
+                ^ trailer_real_bits(kept->nominal.radius_right);
+        diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
+        diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
+        diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);
+        diff |= trailer_real_bits(config->tau_max) ^ trailer_real_bits(kept->tau_max);
+        diff |= trailer_real_bits(config->rate_window) ^ trailer_real_bits(kept->rate_window);
+        diff |= trailer_real_bits(config->eps) ^ trailer_real_bits(kept->eps);
+        diff |= trailer_real_bits(config->a) ^ trailer_real_bits(kept->a);
+        diff |= trailer_real_bits(config->held_gain) ^ trailer_real_bits(kept->held_gain);
+        diff |= ((trailer_bits_t)(unsigned int)config->formulation)
+                ^ ((trailer_bits_t)(unsigned int)kept->formulation);
+        diff |= ((trailer_bits_t)(unsigned int)config->accel_estimator)
+                ^ ((trailer_bits_t)(unsigned int)kept->accel_estimator);
+        diff |= ((trailer_bits_t)(unsigned int)config->n) ^ ((trailer_bits_t)(unsigned int)kept->n);
+        diff |= ((trailer_bits_t)(unsigned int)config->hold_gain)
+                ^ ((trailer_bits_t)(unsigned int)kept->hold_gain);
     }
-    diff |= trailer_real_bits(config->nominal.J_theta_cart)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart);
-    diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
-    diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
-            ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
-    diff |= trailer_real_bits(config->nominal.J_theta_left)
-            ^ trailer_real_bits(kept->nominal.J_theta_left);
-    diff |= trailer_real_bits(config->nominal.J_theta_right)
-            ^ trailer_real_bits(kept->nominal.J_theta_right);
-    diff |= trailer_real_bits(config->nominal.J_theta_tractor)
-            ^ trailer_real_bits(kept->nominal.J_theta_tractor);
-    diff |= trailer_real_bits(config->nominal.J_x_tractor)
-            ^ trailer_real_bits(kept->nominal.J_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
-            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-            ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
-            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-    diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-            ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-    diff |= trailer_real_bits(config->nominal.radius_cart_left)
-            ^ trailer_real_bits(kept->nominal.radius_cart_left);
-    diff |= trailer_real_bits(config->nominal.radius_cart_right)
-            ^ trailer_real_bits(kept->nominal.radius_cart_right);
-    diff |= trailer_real_bits(config->nominal.radius_left)
-            ^ trailer_real_bits(kept->nominal.radius_left);
-    diff |= trailer_real_bits(config->nominal.radius_right)
-            ^ trailer_real_bits(kept->nominal.radius_right);
-    diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
-    diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
-    diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);
-    diff |= trailer_real_bits(config->tau_max) ^ trailer_real_bits(kept->tau_max);
-    diff |= trailer_real_bits(config->rate_window) ^ trailer_real_bits(kept->rate_window);
-    diff |= trailer_real_bits(config->eps) ^ trailer_real_bits(kept->eps);
-    diff |= trailer_real_bits(config->a) ^ trailer_real_bits(kept->a);
-    diff |= trailer_real_bits(config->held_gain) ^ trailer_real_bits(kept->held_gain);
-    diff |= (trailer_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
-    diff |= (trailer_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
-    diff |= (trailer_bits_t)(unsigned int)(config->n ^ kept->n);
-    diff |= (trailer_bits_t)(unsigned int)(config->hold_gain ^ kept->hold_gain);
     return diff == 0u;  /* one test */
 }
 #endif
@@ -414,11 +446,9 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
-        /* the window after this step, newest first: read in place but for the new norm (a
-           local array of constant indices, which the inlined kernel keeps in registers) */
-        const trailer_real_t *const older = &state->omega_ring[omega_head];
-        const trailer_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
-                older[6], older[7]};
+        /* the window after this step, newest first: the new norm, then the ring from the
+           head's second entry on, read in place */
+        const trailer_real_t *const dn_kept = &state->omega_ring[omega_head + 1];
         trailer_real_t w_warm[TRAILER_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer_real_t *w = state->weights;  /* the full window's, from _init */
@@ -428,7 +458,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
         trailer_k_minimal_minv_norm_mhat(&cfg->nominal, mhat, &minv_norm);
-        trailer_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
+        trailer_k_tdroc_weighted_gain(&minv_norm, &dn_new, dn_kept, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer_cap_gain(gain);
     } else {

@@ -24,10 +24,10 @@ void trailer2_lyapunov_p(const trailer2_real_t *gains, trailer2_real_t *P)
 
 /* trailer2_tdroc_weighted_gain: documented in trailer2_laws.h.
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const trailer2_real_t *dn,
-    const trailer2_real_t *w, trailer2_real_t *gain)
+void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const trailer2_real_t *dn_new,
+    const trailer2_real_t *dn_kept, const trailer2_real_t *w, trailer2_real_t *gain)
 {
-    trailer2_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
+    trailer2_k_tdroc_weighted_gain(minv_norm, dn_new, dn_kept, w, gain);
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.

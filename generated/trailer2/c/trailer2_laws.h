@@ -31,29 +31,33 @@ extern "C" {
 void trailer2_lyapunov_p(const trailer2_real_t *gains, trailer2_real_t *P);
 
 #define TRAILER2_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE 1
-#define TRAILER2_TDROC_WEIGHTED_GAIN_DN_SIZE 8
+#define TRAILER2_TDROC_WEIGHTED_GAIN_DN_NEW_SIZE 1
+#define TRAILER2_TDROC_WEIGHTED_GAIN_DN_KEPT_SIZE 7
 #define TRAILER2_TDROC_WEIGHTED_GAIN_W_SIZE 8
 #define TRAILER2_TDROC_WEIGHTED_GAIN_GAIN_SIZE 1
 
 /**
  * (25) from the window's difference norms dn_i = ||Omega(i) - Omega(i+1)||:
  * khat = ||Mhat^-1||_F sum_i w_i dn_i (normalised weights, zero beyond the
- * active window). Each dn_i is evaluated once, by <f>_omega_difference.
+ * active window). Each dn_i is evaluated once, by <f>_omega_difference, when
+ * its newer Omega joins: dn_new is this step's, dn_kept the window's others.
  *
  * Paper equations: (25).
  *
  * @param[in]  minv_norm [1] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_MINV_NORM_SIZE): minv_norm --
  *     from _minv_norm
- * @param[in]  dn [8] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_DN_SIZE): dn0, dn1, dn2, dn3, dn4,
- *     dn5, dn6, dn7 -- dn_i, newest first
+ * @param[in]  dn_new [1] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_DN_NEW_SIZE): dn0 -- dn_1, this
+ *     step's
+ * @param[in]  dn_kept [7] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_DN_KEPT_SIZE): dn1, dn2, dn3,
+ *     dn4, dn5, dn6, dn7 -- dn_2 ..., newest first
  * @param[in]  w [8] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_W_SIZE): w0, w1, w2, w3, w4, w5, w6, w7
  *     -- weights
  * @param[out] gain [1] row-major (TRAILER2_TDROC_WEIGHTED_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
  */
-void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const trailer2_real_t *dn,
-    const trailer2_real_t *w, trailer2_real_t *gain);
+void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const trailer2_real_t *dn_new,
+    const trailer2_real_t *dn_kept, const trailer2_real_t *w, trailer2_real_t *gain);
 
 #define TRAILER2_MINIMAL_TDE_Q_PREV_SIZE 11
 #define TRAILER2_MINIMAL_TDE_U_PREV_SIZE 2

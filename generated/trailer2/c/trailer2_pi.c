@@ -6,6 +6,7 @@
 #include "trailer2_pi.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "trailer2_controller.h"
 #include "trailer2_laws.h"
@@ -106,64 +107,93 @@ static inline bool trailer2_pi_inputs_bounded(const trailer2_real_t q[11],
 }
 
 #ifndef TRAILER2_PI_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline trailer2_bits_t trailer2_pi_words_diff(const trailer2_pi_config_t *a,
+    const trailer2_pi_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    trailer2_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        trailer2_bits_t x;
+        trailer2_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer2_pi_config_unchanged(const trailer2_pi_config_t *config,
     const trailer2_pi_config_t *kept)
 {
     trailer2_bits_t diff = 0u;
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart);
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart2)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart2);
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart2_left)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart2_left);
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart2_right)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart2_right);
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart_left)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart_left);
-    diff |= trailer2_real_bits(config->nominal.J_theta_cart_right)
-            ^ trailer2_real_bits(kept->nominal.J_theta_cart_right);
-    diff |= trailer2_real_bits(config->nominal.J_theta_left)
-            ^ trailer2_real_bits(kept->nominal.J_theta_left);
-    diff |= trailer2_real_bits(config->nominal.J_theta_right)
-            ^ trailer2_real_bits(kept->nominal.J_theta_right);
-    diff |= trailer2_real_bits(config->nominal.J_theta_tractor)
-            ^ trailer2_real_bits(kept->nominal.J_theta_tractor);
-    diff |= trailer2_real_bits(config->nominal.J_x_tractor)
-            ^ trailer2_real_bits(kept->nominal.J_x_tractor);
-    diff |= trailer2_real_bits(config->nominal.K_theta_cart_x_tractor)
-            ^ trailer2_real_bits(kept->nominal.K_theta_cart_x_tractor);
-    diff |= trailer2_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-            ^ trailer2_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-    diff |= trailer2_real_bits(config->nominal.K_theta_cart2_x_tractor)
-            ^ trailer2_real_bits(kept->nominal.K_theta_cart2_x_tractor);
-    diff |= trailer2_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
-            ^ trailer2_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
-    diff |= trailer2_real_bits(config->nominal.K_theta_tractor_x_tractor)
-            ^ trailer2_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-    diff |= trailer2_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-            ^ trailer2_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-    diff |= trailer2_real_bits(config->nominal.radius_cart2_left)
-            ^ trailer2_real_bits(kept->nominal.radius_cart2_left);
-    diff |= trailer2_real_bits(config->nominal.radius_cart2_right)
-            ^ trailer2_real_bits(kept->nominal.radius_cart2_right);
-    diff |= trailer2_real_bits(config->nominal.radius_cart_left)
-            ^ trailer2_real_bits(kept->nominal.radius_cart_left);
-    diff |= trailer2_real_bits(config->nominal.radius_cart_right)
-            ^ trailer2_real_bits(kept->nominal.radius_cart_right);
-    diff |= trailer2_real_bits(config->nominal.radius_left)
-            ^ trailer2_real_bits(kept->nominal.radius_left);
-    diff |= trailer2_real_bits(config->nominal.radius_right)
-            ^ trailer2_real_bits(kept->nominal.radius_right);
-    diff |= trailer2_real_bits(config->h) ^ trailer2_real_bits(kept->h);
-    diff |= trailer2_real_bits(config->tau_max) ^ trailer2_real_bits(kept->tau_max);
-    diff |= trailer2_real_bits(config->kx) ^ trailer2_real_bits(kept->kx);
-    diff |= trailer2_real_bits(config->ky) ^ trailer2_real_bits(kept->ky);
-    diff |= trailer2_real_bits(config->ktheta) ^ trailer2_real_bits(kept->ktheta);
-    diff |= trailer2_real_bits(config->kp) ^ trailer2_real_bits(kept->kp);
-    diff |= trailer2_real_bits(config->ki) ^ trailer2_real_bits(kept->ki);
-    diff |= (trailer2_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
+    if ((sizeof(int) == sizeof(trailer2_bits_t))
+        && (sizeof(trailer2_pi_config_t) == (30u * sizeof(trailer2_bits_t)))) {
+        /* Its 30 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = trailer2_pi_words_diff(config, kept, 0, 28)
+                | trailer2_pi_words_diff(config, kept, 28, 2);
+    } else {
+        /* value by value (a double build pads after each int) */
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart);
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart2)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart2);
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart2_left)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart2_left);
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart2_right)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart2_right);
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart_left)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart_left);
+        diff |= trailer2_real_bits(config->nominal.J_theta_cart_right)
+                ^ trailer2_real_bits(kept->nominal.J_theta_cart_right);
+        diff |= trailer2_real_bits(config->nominal.J_theta_left)
+                ^ trailer2_real_bits(kept->nominal.J_theta_left);
+        diff |= trailer2_real_bits(config->nominal.J_theta_right)
+                ^ trailer2_real_bits(kept->nominal.J_theta_right);
+        diff |= trailer2_real_bits(config->nominal.J_theta_tractor)
+                ^ trailer2_real_bits(kept->nominal.J_theta_tractor);
+        diff |= trailer2_real_bits(config->nominal.J_x_tractor)
+                ^ trailer2_real_bits(kept->nominal.J_x_tractor);
+        diff |= trailer2_real_bits(config->nominal.K_theta_cart_x_tractor)
+                ^ trailer2_real_bits(kept->nominal.K_theta_cart_x_tractor);
+        diff |= trailer2_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+                ^ trailer2_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+        diff |= trailer2_real_bits(config->nominal.K_theta_cart2_x_tractor)
+                ^ trailer2_real_bits(kept->nominal.K_theta_cart2_x_tractor);
+        diff |= trailer2_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
+                ^ trailer2_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
+        diff |= trailer2_real_bits(config->nominal.K_theta_tractor_x_tractor)
+                ^ trailer2_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+        diff |= trailer2_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+                ^ trailer2_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+        diff |= trailer2_real_bits(config->nominal.radius_cart2_left)
+                ^ trailer2_real_bits(kept->nominal.radius_cart2_left);
+        diff |= trailer2_real_bits(config->nominal.radius_cart2_right)
+                ^ trailer2_real_bits(kept->nominal.radius_cart2_right);
+        diff |= trailer2_real_bits(config->nominal.radius_cart_left)
+                ^ trailer2_real_bits(kept->nominal.radius_cart_left);
+        diff |= trailer2_real_bits(config->nominal.radius_cart_right)
+                ^ trailer2_real_bits(kept->nominal.radius_cart_right);
+        diff |= trailer2_real_bits(config->nominal.radius_left)
+                ^ trailer2_real_bits(kept->nominal.radius_left);
+        diff |= trailer2_real_bits(config->nominal.radius_right)
+                ^ trailer2_real_bits(kept->nominal.radius_right);
+        diff |= trailer2_real_bits(config->h) ^ trailer2_real_bits(kept->h);
+        diff |= trailer2_real_bits(config->tau_max) ^ trailer2_real_bits(kept->tau_max);
+        diff |= trailer2_real_bits(config->kx) ^ trailer2_real_bits(kept->kx);
+        diff |= trailer2_real_bits(config->ky) ^ trailer2_real_bits(kept->ky);
+        diff |= trailer2_real_bits(config->ktheta) ^ trailer2_real_bits(kept->ktheta);
+        diff |= trailer2_real_bits(config->kp) ^ trailer2_real_bits(kept->kp);
+        diff |= trailer2_real_bits(config->ki) ^ trailer2_real_bits(kept->ki);
+        diff |= ((trailer2_bits_t)(unsigned int)config->formulation)
+                ^ ((trailer2_bits_t)(unsigned int)kept->formulation);
+    }
     return diff == 0u;  /* one test */
 }
 #endif

@@ -24,10 +24,10 @@ void trailer3_lyapunov_p(const trailer3_real_t *gains, trailer3_real_t *P)
 
 /* trailer3_tdroc_weighted_gain: documented in trailer3_laws.h.
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const trailer3_real_t *dn,
-    const trailer3_real_t *w, trailer3_real_t *gain)
+void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const trailer3_real_t *dn_new,
+    const trailer3_real_t *dn_kept, const trailer3_real_t *w, trailer3_real_t *gain)
 {
-    trailer3_k_tdroc_weighted_gain(minv_norm, dn, w, gain);
+    trailer3_k_tdroc_weighted_gain(minv_norm, dn_new, dn_kept, w, gain);
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.

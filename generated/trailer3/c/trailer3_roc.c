@@ -6,6 +6,7 @@
 #include "trailer3_roc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "trailer3_controller.h"
 #include "trailer3_laws.h"
@@ -96,83 +97,112 @@ static inline bool trailer3_roc_inputs_bounded(const trailer3_real_t q[14],
 }
 
 #ifndef TRAILER3_ROC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline trailer3_bits_t trailer3_roc_words_diff(const trailer3_roc_config_t *a,
+    const trailer3_roc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    trailer3_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        trailer3_bits_t x;
+        trailer3_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer3_roc_config_unchanged(const trailer3_roc_config_t *config,
     const trailer3_roc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 14; ++i) {
-        diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
-        diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(trailer3_bits_t))
+        && (sizeof(trailer3_roc_config_t) == (65u * sizeof(trailer3_bits_t)))) {
+        /* Its 65 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = trailer3_roc_words_diff(config, kept, 0, 64)
+                | trailer3_roc_words_diff(config, kept, 64, 1);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 14; ++i) {
+            diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
+            diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
+        }
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
+                ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
+        diff |= trailer3_real_bits(config->nominal.J_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.J_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
+        diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
+        diff |= trailer3_real_bits(config->nominal.radius_cart_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart_right);
+        diff |= trailer3_real_bits(config->nominal.radius_left)
+                ^ trailer3_real_bits(kept->nominal.radius_left);
+        diff |= trailer3_real_bits(config->nominal.radius_right)
+                ^ trailer3_real_bits(kept->nominal.radius_right);
+        diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
+        diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);
+        diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
+        diff |= trailer3_real_bits(config->tau_max) ^ trailer3_real_bits(kept->tau_max);
+        diff |= trailer3_real_bits(config->eps) ^ trailer3_real_bits(kept->eps);
+        diff |= trailer3_real_bits(config->alpha) ^ trailer3_real_bits(kept->alpha);
+        diff |= trailer3_real_bits(config->phi) ^ trailer3_real_bits(kept->phi);
+        diff |= ((trailer3_bits_t)(unsigned int)config->formulation)
+                ^ ((trailer3_bits_t)(unsigned int)kept->formulation);
     }
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
-            ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
-    diff |= trailer3_real_bits(config->nominal.J_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.J_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
-    diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
-    diff |= trailer3_real_bits(config->nominal.radius_cart_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart_right);
-    diff |= trailer3_real_bits(config->nominal.radius_left)
-            ^ trailer3_real_bits(kept->nominal.radius_left);
-    diff |= trailer3_real_bits(config->nominal.radius_right)
-            ^ trailer3_real_bits(kept->nominal.radius_right);
-    diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
-    diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);
-    diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
-    diff |= trailer3_real_bits(config->tau_max) ^ trailer3_real_bits(kept->tau_max);
-    diff |= trailer3_real_bits(config->eps) ^ trailer3_real_bits(kept->eps);
-    diff |= trailer3_real_bits(config->alpha) ^ trailer3_real_bits(kept->alpha);
-    diff |= trailer3_real_bits(config->phi) ^ trailer3_real_bits(kept->phi);
-    diff |= (trailer3_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
     return diff == 0u;  /* one test */
 }
 #endif

@@ -6,6 +6,7 @@
 #include "trailer3_tdroc.h"
 #include <stdbool.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "trailer3_controller.h"
 #include "trailer3_laws.h"
@@ -122,87 +123,119 @@ static inline bool trailer3_tdroc_inputs_bounded(const trailer3_real_t q[14],
 }
 
 #ifndef TRAILER3_TDROC_FROZEN
+/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
+   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
+static inline trailer3_bits_t trailer3_tdroc_words_diff(const trailer3_tdroc_config_t *a,
+    const trailer3_tdroc_config_t *b, int first, int n)
+{
+    const unsigned char *const bytes_a = (const unsigned char *)a;
+    const unsigned char *const bytes_b = (const unsigned char *)b;
+    trailer3_bits_t diff = 0u;
+    int i;
+    for (i = first; i < (first + n); ++i) {
+        trailer3_bits_t x;
+        trailer3_bits_t y;
+        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
+        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
+        diff |= x ^ y;
+    }
+    return diff;
+}
+
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer3_tdroc_config_unchanged(const trailer3_tdroc_config_t *config,
     const trailer3_tdroc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
-    int i;
-    for (i = 0; i < 14; ++i) {
-        diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
-        diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
+    if ((sizeof(int) == sizeof(trailer3_bits_t))
+        && (sizeof(trailer3_tdroc_config_t) == (69u * sizeof(trailer3_bits_t)))) {
+        /* Its 69 reals and ints are words of one size and it has no padding (a
+           float32 build): the struct is one array of words, compared four to a vector. */
+        diff = trailer3_tdroc_words_diff(config, kept, 0, 68)
+                | trailer3_tdroc_words_diff(config, kept, 68, 1);
+    } else {
+        /* value by value (a double build pads after each int) */
+        int i;
+        for (i = 0; i < 14; ++i) {
+            diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
+            diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
+        }
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_left)
+                ^ trailer3_real_bits(kept->nominal.J_theta_left);
+        diff |= trailer3_real_bits(config->nominal.J_theta_right)
+                ^ trailer3_real_bits(kept->nominal.J_theta_right);
+        diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
+                ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
+        diff |= trailer3_real_bits(config->nominal.J_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.J_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
+                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
+        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
+                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
+        diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
+        diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
+        diff |= trailer3_real_bits(config->nominal.radius_cart_left)
+                ^ trailer3_real_bits(kept->nominal.radius_cart_left);
+        diff |= trailer3_real_bits(config->nominal.radius_cart_right)
+                ^ trailer3_real_bits(kept->nominal.radius_cart_right);
+        diff |= trailer3_real_bits(config->nominal.radius_left)
+                ^ trailer3_real_bits(kept->nominal.radius_left);
+        diff |= trailer3_real_bits(config->nominal.radius_right)
+                ^ trailer3_real_bits(kept->nominal.radius_right);
+        diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
+        diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);
+        diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
+        diff |= trailer3_real_bits(config->tau_max) ^ trailer3_real_bits(kept->tau_max);
+        diff |= trailer3_real_bits(config->rate_window) ^ trailer3_real_bits(kept->rate_window);
+        diff |= trailer3_real_bits(config->eps) ^ trailer3_real_bits(kept->eps);
+        diff |= trailer3_real_bits(config->a) ^ trailer3_real_bits(kept->a);
+        diff |= trailer3_real_bits(config->held_gain) ^ trailer3_real_bits(kept->held_gain);
+        diff |= ((trailer3_bits_t)(unsigned int)config->formulation)
+                ^ ((trailer3_bits_t)(unsigned int)kept->formulation);
+        diff |= ((trailer3_bits_t)(unsigned int)config->accel_estimator)
+                ^ ((trailer3_bits_t)(unsigned int)kept->accel_estimator);
+        diff |= ((trailer3_bits_t)(unsigned int)config->n)
+                ^ ((trailer3_bits_t)(unsigned int)kept->n);
+        diff |= ((trailer3_bits_t)(unsigned int)config->hold_gain)
+                ^ ((trailer3_bits_t)(unsigned int)kept->hold_gain);
     }
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_left)
-            ^ trailer3_real_bits(kept->nominal.J_theta_left);
-    diff |= trailer3_real_bits(config->nominal.J_theta_right)
-            ^ trailer3_real_bits(kept->nominal.J_theta_right);
-    diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
-            ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
-    diff |= trailer3_real_bits(config->nominal.J_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.J_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
-            ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-    diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-            ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-    diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
-    diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
-    diff |= trailer3_real_bits(config->nominal.radius_cart_left)
-            ^ trailer3_real_bits(kept->nominal.radius_cart_left);
-    diff |= trailer3_real_bits(config->nominal.radius_cart_right)
-            ^ trailer3_real_bits(kept->nominal.radius_cart_right);
-    diff |= trailer3_real_bits(config->nominal.radius_left)
-            ^ trailer3_real_bits(kept->nominal.radius_left);
-    diff |= trailer3_real_bits(config->nominal.radius_right)
-            ^ trailer3_real_bits(kept->nominal.radius_right);
-    diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
-    diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);
-    diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
-    diff |= trailer3_real_bits(config->tau_max) ^ trailer3_real_bits(kept->tau_max);
-    diff |= trailer3_real_bits(config->rate_window) ^ trailer3_real_bits(kept->rate_window);
-    diff |= trailer3_real_bits(config->eps) ^ trailer3_real_bits(kept->eps);
-    diff |= trailer3_real_bits(config->a) ^ trailer3_real_bits(kept->a);
-    diff |= trailer3_real_bits(config->held_gain) ^ trailer3_real_bits(kept->held_gain);
-    diff |= (trailer3_bits_t)(unsigned int)(config->formulation ^ kept->formulation);
-    diff |= (trailer3_bits_t)(unsigned int)(config->accel_estimator ^ kept->accel_estimator);
-    diff |= (trailer3_bits_t)(unsigned int)(config->n ^ kept->n);
-    diff |= (trailer3_bits_t)(unsigned int)(config->hold_gain ^ kept->hold_gain);
     return diff == 0u;  /* one test */
 }
 #endif
@@ -447,11 +480,9 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
     if (cfg->hold_gain != 0) {
         gain = cfg->held_gain;  /* commissioning / stability analysis: k-hat held */
     } else if (omega_count >= 2) {
-        /* the window after this step, newest first: read in place but for the new norm (a
-           local array of constant indices, which the inlined kernel keeps in registers) */
-        const trailer3_real_t *const older = &state->omega_ring[omega_head];
-        const trailer3_real_t dn[8] = {dn_new, older[1], older[2], older[3], older[4], older[5],
-                older[6], older[7]};
+        /* the window after this step, newest first: the new norm, then the ring from the
+           head's second entry on, read in place */
+        const trailer3_real_t *const dn_kept = &state->omega_ring[omega_head + 1];
         trailer3_real_t w_warm[TRAILER3_MAX_WINDOW];
         const int active = omega_count - 1 < cfg->n ? omega_count - 1 : cfg->n;
         const trailer3_real_t *w = state->weights;  /* the full window's, from _init */
@@ -461,7 +492,7 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
         }
         /* ||Mhat(q)^-1|| depends on q (Mhat on the hitch angles): evaluated at the measured q. */
         trailer3_k_minimal_minv_norm_mhat(&cfg->nominal, mhat, &minv_norm);
-        trailer3_k_tdroc_weighted_gain(&minv_norm, dn, w, &gain);
+        trailer3_k_tdroc_weighted_gain(&minv_norm, &dn_new, dn_kept, w, &gain);
         /* k-hat capped: omega's entries from earlier steps cannot make later steps fail. */
         gain = trailer3_cap_gain(gain);
     } else {
