@@ -96,6 +96,16 @@ static inline bool wmr_roc_inputs_bounded(const wmr_real_t q[5], const wmr_real_
 }
 
 #ifndef WMR_ROC_FROZEN
+/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a configuration of
+   32-bit words is then compared as one array, four words to an instruction. Elsewhere (a
+   Cortex-M4) that loop costs more instructions than the member compares (measured: about
+   100 a step), so it is not used. */
+#if defined(__SSE2__) || defined(__ARM_NEON)
+#define WMR_ROC_CONFIG_AS_WORDS 1
+#else
+#define WMR_ROC_CONFIG_AS_WORDS 0
+#endif
+
 /* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
    count is a multiple of four, which gcc -O2 vectorises, or the rest. */
 static inline wmr_bits_t wmr_roc_words_diff(const wmr_roc_config_t *a,
@@ -121,10 +131,10 @@ static inline bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
     const wmr_roc_config_t *kept)
 {
     wmr_bits_t diff = 0u;
-    if ((sizeof(int) == sizeof(wmr_bits_t))
+    if ((WMR_ROC_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_roc_config_t) == (25u * sizeof(wmr_bits_t)))) {
         /* Its 25 reals and ints are words of one size and it has no padding (a
-           float32 build): the struct is one array of words, compared four to a vector. */
+           float32 build) on a core with vectors: one array of words, four to a vector. */
         diff = wmr_roc_words_diff(config, kept, 0, 24)            | wmr_roc_words_diff(config, kept,
                 24, 1);
     } else {

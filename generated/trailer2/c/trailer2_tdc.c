@@ -95,6 +95,16 @@ static inline bool trailer2_tdc_inputs_bounded(const trailer2_real_t q[11],
 }
 
 #ifndef TRAILER2_TDC_FROZEN
+/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a configuration of
+   32-bit words is then compared as one array, four words to an instruction. Elsewhere (a
+   Cortex-M4) that loop costs more instructions than the member compares (measured: about
+   100 a step), so it is not used. */
+#if defined(__SSE2__) || defined(__ARM_NEON)
+#define TRAILER2_TDC_CONFIG_AS_WORDS 1
+#else
+#define TRAILER2_TDC_CONFIG_AS_WORDS 0
+#endif
+
 /* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
    count is a multiple of four, which gcc -O2 vectorises, or the rest. */
 static inline trailer2_bits_t trailer2_tdc_words_diff(const trailer2_tdc_config_t *a,
@@ -120,10 +130,10 @@ static inline bool trailer2_tdc_config_unchanged(const trailer2_tdc_config_t *co
     const trailer2_tdc_config_t *kept)
 {
     trailer2_bits_t diff = 0u;
-    if ((sizeof(int) == sizeof(trailer2_bits_t))
+    if ((TRAILER2_TDC_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer2_bits_t))
         && (sizeof(trailer2_tdc_config_t) == (51u * sizeof(trailer2_bits_t)))) {
         /* Its 51 reals and ints are words of one size and it has no padding (a
-           float32 build): the struct is one array of words, compared four to a vector. */
+           float32 build) on a core with vectors: one array of words, four to a vector. */
         diff = trailer2_tdc_words_diff(config, kept, 0, 48)
                 | trailer2_tdc_words_diff(config, kept, 48, 3);
     } else {
