@@ -6,7 +6,6 @@
 #include "wmr_pi.h"
 #include <stdbool.h>
 #include <stddef.h>
-#include <string.h>
 
 #include "wmr_controller.h"
 #include "wmr_laws.h"
@@ -105,47 +104,20 @@ static inline bool wmr_pi_inputs_bounded(const wmr_real_t q[5], const wmr_real_t
 }
 
 #ifndef WMR_PI_FROZEN
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a configuration of
-   32-bit words is then compared as one array, four words to an instruction. Elsewhere (a
-   Cortex-M4) that loop costs more instructions than the member compares (measured: about
-   100 a step), so it is not used. */
-#if defined(__SSE2__) || defined(__ARM_NEON)
-#define WMR_PI_CONFIG_AS_WORDS 1
-#else
-#define WMR_PI_CONFIG_AS_WORDS 0
-#endif
-
-/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
-   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
-static inline wmr_bits_t wmr_pi_words_diff(const wmr_pi_config_t *a,
-    const wmr_pi_config_t *b, int first, int n)
-{
-    const unsigned char *const bytes_a = (const unsigned char *)a;
-    const unsigned char *const bytes_b = (const unsigned char *)b;
-    wmr_bits_t diff = 0u;
-    int i;
-    for (i = first; i < (first + n); ++i) {
-        wmr_bits_t x;
-        wmr_bits_t y;
-        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
-        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
-        diff |= x ^ y;
-    }
-    return diff;
-}
-
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool wmr_pi_config_unchanged(const wmr_pi_config_t *config,
     const wmr_pi_config_t *kept)
 {
     wmr_bits_t diff = 0u;
-    if ((WMR_PI_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
+    if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_pi_config_t) == (15u * sizeof(wmr_bits_t)))) {
         /* Its 15 reals and ints are words of one size and it has no padding (a
            float32 build) on a core with vectors: one array of words, four to a vector. */
-        diff = wmr_pi_words_diff(config, kept, 0, 12)            | wmr_pi_words_diff(config, kept,
-                12, 3);
+        const unsigned char *const bytes = (const unsigned char *)config;
+        const unsigned char *const kept_bytes = (const unsigned char *)kept;
+        diff = wmr_words_diff(bytes, kept_bytes, 0, 12)            | wmr_words_diff(bytes,
+                kept_bytes, 12, 3);
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);

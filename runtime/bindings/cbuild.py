@@ -143,8 +143,9 @@ def declarations(
     prefix: str = "wmr",
     defines: tuple[str, ...] = (),
 ) -> str:
-    """The generated headers, preprocessed for ``cffi.FFI.cdef`` (with empty ``<math.h>``
-    and ``<stdint.h>``: cffi declares the fixed-width integer types itself), without the
+    """The generated headers, preprocessed for ``cffi.FFI.cdef`` (with empty ``<math.h>``,
+    ``<stdint.h>``, ``<stddef.h>`` and ``<string.h>``: cffi declares the fixed-width
+    integer types and size_t itself), without the
     ``static inline`` functions a header defines (the double build's sin and cos): a cdef
     only declares. ``defines`` (``-D...``) are those the library was compiled with, so that
     what they declare (a frozen build's configuration) is declared. ``headers`` default:
@@ -155,6 +156,8 @@ def declarations(
         (fake / "math.h").write_text("")
         (fake / "float.h").write_text("")
         (fake / "stdint.h").write_text("")  # cffi knows uint32_t and friends itself
+        (fake / "stddef.h").write_text("")  # and size_t
+        (fake / "string.h").write_text("")  # memcpy: only in static inline bodies, dropped
         src = fake / "all.h"
         includes = [f'#include "{c_dir / h}"' for h in headers]
         includes += [f'#include "{h}"' for h in extra_headers]

@@ -6,7 +6,6 @@
 #include "trailer_asmc.h"
 #include <stdbool.h>
 #include <stddef.h>
-#include <string.h>
 
 #include "trailer_controller.h"
 #include "trailer_laws.h"
@@ -96,47 +95,20 @@ static inline bool trailer_asmc_inputs_bounded(const trailer_real_t q[8],
 }
 
 #ifndef TRAILER_ASMC_FROZEN
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a configuration of
-   32-bit words is then compared as one array, four words to an instruction. Elsewhere (a
-   Cortex-M4) that loop costs more instructions than the member compares (measured: about
-   100 a step), so it is not used. */
-#if defined(__SSE2__) || defined(__ARM_NEON)
-#define TRAILER_ASMC_CONFIG_AS_WORDS 1
-#else
-#define TRAILER_ASMC_CONFIG_AS_WORDS 0
-#endif
-
-/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
-   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
-static inline trailer_bits_t trailer_asmc_words_diff(const trailer_asmc_config_t *a,
-    const trailer_asmc_config_t *b, int first, int n)
-{
-    const unsigned char *const bytes_a = (const unsigned char *)a;
-    const unsigned char *const bytes_b = (const unsigned char *)b;
-    trailer_bits_t diff = 0u;
-    int i;
-    for (i = first; i < (first + n); ++i) {
-        trailer_bits_t x;
-        trailer_bits_t y;
-        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
-        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
-        diff |= x ^ y;
-    }
-    return diff;
-}
-
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer_asmc_config_unchanged(const trailer_asmc_config_t *config,
     const trailer_asmc_config_t *kept)
 {
     trailer_bits_t diff = 0u;
-    if ((TRAILER_ASMC_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer_bits_t))
+    if ((TRAILER_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer_bits_t))
         && (sizeof(trailer_asmc_config_t) == (39u * sizeof(trailer_bits_t)))) {
         /* Its 39 reals and ints are words of one size and it has no padding (a
            float32 build) on a core with vectors: one array of words, four to a vector. */
-        diff = trailer_asmc_words_diff(config, kept, 0, 36)
-                | trailer_asmc_words_diff(config, kept, 36, 3);
+        const unsigned char *const bytes = (const unsigned char *)config;
+        const unsigned char *const kept_bytes = (const unsigned char *)kept;
+        diff = trailer_words_diff(bytes, kept_bytes, 0, 36)            | trailer_words_diff(bytes,
+                kept_bytes, 36, 3);
     } else {
         /* value by value (a double build pads after each int) */
         int i;

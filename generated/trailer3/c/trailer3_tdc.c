@@ -6,7 +6,6 @@
 #include "trailer3_tdc.h"
 #include <stdbool.h>
 #include <stddef.h>
-#include <string.h>
 
 #include "trailer3_controller.h"
 #include "trailer3_laws.h"
@@ -95,46 +94,19 @@ static inline bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14],
 }
 
 #ifndef TRAILER3_TDC_FROZEN
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a configuration of
-   32-bit words is then compared as one array, four words to an instruction. Elsewhere (a
-   Cortex-M4) that loop costs more instructions than the member compares (measured: about
-   100 a step), so it is not used. */
-#if defined(__SSE2__) || defined(__ARM_NEON)
-#define TRAILER3_TDC_CONFIG_AS_WORDS 1
-#else
-#define TRAILER3_TDC_CONFIG_AS_WORDS 0
-#endif
-
-/* The XOR of the bits of n words of *a and *b from word `first` on, OR-ed: a loop whose
-   count is a multiple of four, which gcc -O2 vectorises, or the rest. */
-static inline trailer3_bits_t trailer3_tdc_words_diff(const trailer3_tdc_config_t *a,
-    const trailer3_tdc_config_t *b, int first, int n)
-{
-    const unsigned char *const bytes_a = (const unsigned char *)a;
-    const unsigned char *const bytes_b = (const unsigned char *)b;
-    trailer3_bits_t diff = 0u;
-    int i;
-    for (i = first; i < (first + n); ++i) {
-        trailer3_bits_t x;
-        trailer3_bits_t y;
-        (void)memcpy((unsigned char *)&x, &bytes_a[(size_t)i * sizeof x], sizeof x);
-        (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
-        diff |= x ^ y;
-    }
-    return diff;
-}
-
 /* Whether *config is, value by value and bit for bit, the configuration _init validated and
    kept in the state (padding is never compared): exact, so no change goes unnoticed. */
 static inline bool trailer3_tdc_config_unchanged(const trailer3_tdc_config_t *config,
     const trailer3_tdc_config_t *kept)
 {
     trailer3_bits_t diff = 0u;
-    if ((TRAILER3_TDC_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer3_bits_t))
+    if ((TRAILER3_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer3_bits_t))
         && (sizeof(trailer3_tdc_config_t) == (64u * sizeof(trailer3_bits_t)))) {
         /* Its 64 reals and ints are words of one size and it has no padding (a
            float32 build) on a core with vectors: one array of words, four to a vector. */
-        diff = trailer3_tdc_words_diff(config, kept, 0, 64);
+        const unsigned char *const bytes = (const unsigned char *)config;
+        const unsigned char *const kept_bytes = (const unsigned char *)kept;
+        diff = trailer3_words_diff(bytes, kept_bytes, 0, 64);
     } else {
         /* value by value (a double build pads after each int) */
         int i;
