@@ -193,6 +193,33 @@ static inline wmr_bits_t wmr_words_diff(const unsigned char *bytes_a,
     return diff;
 }
 
+/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
+static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
+{
+    union {
+        wmr_real_t value;
+        wmr_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits;
+}
+
+/** The XOR of the bits of two sets of nominal parameters, OR-ed: 0 exactly when they are
+    equal value by value and bit for bit (the steps' configuration compare; written once
+    here for every controller). */
+static inline wmr_bits_t wmr_nominal_diff(const wmr_params_t *a, const wmr_params_t *b)
+{
+    wmr_bits_t diff = 0u;
+    diff |= wmr_real_bits(a->m) ^ wmr_real_bits(b->m);
+    diff |= wmr_real_bits(a->Iz) ^ wmr_real_bits(b->Iz);
+    diff |= wmr_real_bits(a->K) ^ wmr_real_bits(b->K);
+    diff |= wmr_real_bits(a->Iw) ^ wmr_real_bits(b->Iw);
+    diff |= wmr_real_bits(a->r) ^ wmr_real_bits(b->r);
+    diff |= wmr_real_bits(a->b) ^ wmr_real_bits(b->b);
+    diff |= wmr_real_bits(a->d) ^ wmr_real_bits(b->d);
+    return diff;
+}
+
 /** Cap an adaptive gain at WMR_GAIN_MAX (NaN and +Inf count as beyond it). */
 static inline wmr_real_t wmr_cap_gain(wmr_real_t gain)
 {

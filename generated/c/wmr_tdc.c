@@ -50,17 +50,6 @@ wmr_status_t wmr_tdc_check_config(const wmr_tdc_config_t *config)
     return wmr_tdc_check_config_detail(config, 0);
 }
 
-/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static inline wmr_bits_t wmr_real_bits(wmr_real_t x)
-{
-    union {
-        wmr_real_t value;
-        wmr_bits_t bits;
-    } rep;
-    rep.value = x;
-    return rep.bits;
-}
-
 /* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
    +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
@@ -112,13 +101,7 @@ static inline bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
             diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
             diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
         }
-        diff |= wmr_real_bits(config->nominal.m) ^ wmr_real_bits(kept->nominal.m);
-        diff |= wmr_real_bits(config->nominal.Iz) ^ wmr_real_bits(kept->nominal.Iz);
-        diff |= wmr_real_bits(config->nominal.K) ^ wmr_real_bits(kept->nominal.K);
-        diff |= wmr_real_bits(config->nominal.Iw) ^ wmr_real_bits(kept->nominal.Iw);
-        diff |= wmr_real_bits(config->nominal.r) ^ wmr_real_bits(kept->nominal.r);
-        diff |= wmr_real_bits(config->nominal.b) ^ wmr_real_bits(kept->nominal.b);
-        diff |= wmr_real_bits(config->nominal.d) ^ wmr_real_bits(kept->nominal.d);
+        diff |= wmr_nominal_diff(&config->nominal, &kept->nominal);
         diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
         diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);
         diff |= wmr_real_bits(config->h) ^ wmr_real_bits(kept->h);

@@ -184,6 +184,46 @@ static inline trailer_bits_t trailer_words_diff(const unsigned char *bytes_a,
     return diff;
 }
 
+/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
+static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
+{
+    union {
+        trailer_real_t value;
+        trailer_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits;
+}
+
+/** The XOR of the bits of two sets of nominal parameters, OR-ed: 0 exactly when they are
+    equal value by value and bit for bit (the steps' configuration compare; written once
+    here for every controller). */
+static inline trailer_bits_t trailer_nominal_diff(const trailer_params_t *a,
+    const trailer_params_t *b)
+{
+    trailer_bits_t diff = 0u;
+    diff |= trailer_real_bits(a->J_theta_cart) ^ trailer_real_bits(b->J_theta_cart);
+    diff |= trailer_real_bits(a->J_theta_cart_left) ^ trailer_real_bits(b->J_theta_cart_left);
+    diff |= trailer_real_bits(a->J_theta_cart_right) ^ trailer_real_bits(b->J_theta_cart_right);
+    diff |= trailer_real_bits(a->J_theta_left) ^ trailer_real_bits(b->J_theta_left);
+    diff |= trailer_real_bits(a->J_theta_right) ^ trailer_real_bits(b->J_theta_right);
+    diff |= trailer_real_bits(a->J_theta_tractor) ^ trailer_real_bits(b->J_theta_tractor);
+    diff |= trailer_real_bits(a->J_x_tractor) ^ trailer_real_bits(b->J_x_tractor);
+    diff |= trailer_real_bits(a->K_theta_cart_x_tractor)
+            ^ trailer_real_bits(b->K_theta_cart_x_tractor);
+    diff |= trailer_real_bits(a->K_theta_cart_x_tractor_2)
+            ^ trailer_real_bits(b->K_theta_cart_x_tractor_2);
+    diff |= trailer_real_bits(a->K_theta_tractor_x_tractor)
+            ^ trailer_real_bits(b->K_theta_tractor_x_tractor);
+    diff |= trailer_real_bits(a->K_theta_tractor_x_tractor_2)
+            ^ trailer_real_bits(b->K_theta_tractor_x_tractor_2);
+    diff |= trailer_real_bits(a->radius_cart_left) ^ trailer_real_bits(b->radius_cart_left);
+    diff |= trailer_real_bits(a->radius_cart_right) ^ trailer_real_bits(b->radius_cart_right);
+    diff |= trailer_real_bits(a->radius_left) ^ trailer_real_bits(b->radius_left);
+    diff |= trailer_real_bits(a->radius_right) ^ trailer_real_bits(b->radius_right);
+    return diff;
+}
+
 /** Cap an adaptive gain at TRAILER_GAIN_MAX (NaN and +Inf count as beyond it). */
 static inline trailer_real_t trailer_cap_gain(trailer_real_t gain)
 {

@@ -53,17 +53,6 @@ trailer_status_t trailer_roc_check_config(const trailer_roc_config_t *config)
     return trailer_roc_check_config_detail(config, 0);
 }
 
-/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static inline trailer_bits_t trailer_real_bits(trailer_real_t x)
-{
-    union {
-        trailer_real_t value;
-        trailer_bits_t bits;
-    } rep;
-    rep.value = x;
-    return rep.bits;
-}
-
 /* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
    +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
@@ -117,36 +106,7 @@ static inline bool trailer_roc_config_unchanged(const trailer_roc_config_t *conf
             diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
             diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
         }
-        diff |= trailer_real_bits(config->nominal.J_theta_cart)
-                ^ trailer_real_bits(kept->nominal.J_theta_cart);
-        diff |= trailer_real_bits(config->nominal.J_theta_cart_left)
-                ^ trailer_real_bits(kept->nominal.J_theta_cart_left);
-        diff |= trailer_real_bits(config->nominal.J_theta_cart_right)
-                ^ trailer_real_bits(kept->nominal.J_theta_cart_right);
-        diff |= trailer_real_bits(config->nominal.J_theta_left)
-                ^ trailer_real_bits(kept->nominal.J_theta_left);
-        diff |= trailer_real_bits(config->nominal.J_theta_right)
-                ^ trailer_real_bits(kept->nominal.J_theta_right);
-        diff |= trailer_real_bits(config->nominal.J_theta_tractor)
-                ^ trailer_real_bits(kept->nominal.J_theta_tractor);
-        diff |= trailer_real_bits(config->nominal.J_x_tractor)
-                ^ trailer_real_bits(kept->nominal.J_x_tractor);
-        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor)
-                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor);
-        diff |= trailer_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-                ^ trailer_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor)
-                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-        diff |= trailer_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-                ^ trailer_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-        diff |= trailer_real_bits(config->nominal.radius_cart_left)
-                ^ trailer_real_bits(kept->nominal.radius_cart_left);
-        diff |= trailer_real_bits(config->nominal.radius_cart_right)
-                ^ trailer_real_bits(kept->nominal.radius_cart_right);
-        diff |= trailer_real_bits(config->nominal.radius_left)
-                ^ trailer_real_bits(kept->nominal.radius_left);
-        diff |= trailer_real_bits(config->nominal.radius_right)
-                ^ trailer_real_bits(kept->nominal.radius_right);
+        diff |= trailer_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
         diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);
         diff |= trailer_real_bits(config->h) ^ trailer_real_bits(kept->h);

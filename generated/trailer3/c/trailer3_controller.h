@@ -187,6 +187,64 @@ static inline trailer3_bits_t trailer3_words_diff(const unsigned char *bytes_a,
     return diff;
 }
 
+/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
+static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
+{
+    union {
+        trailer3_real_t value;
+        trailer3_bits_t bits;
+    } rep;
+    rep.value = x;
+    return rep.bits;
+}
+
+/** The XOR of the bits of two sets of nominal parameters, OR-ed: 0 exactly when they are
+    equal value by value and bit for bit (the steps' configuration compare; written once
+    here for every controller). */
+static inline trailer3_bits_t trailer3_nominal_diff(const trailer3_params_t *a,
+    const trailer3_params_t *b)
+{
+    trailer3_bits_t diff = 0u;
+    diff |= trailer3_real_bits(a->J_theta_cart) ^ trailer3_real_bits(b->J_theta_cart);
+    diff |= trailer3_real_bits(a->J_theta_cart2) ^ trailer3_real_bits(b->J_theta_cart2);
+    diff |= trailer3_real_bits(a->J_theta_cart2_left) ^ trailer3_real_bits(b->J_theta_cart2_left);
+    diff |= trailer3_real_bits(a->J_theta_cart2_right) ^ trailer3_real_bits(b->J_theta_cart2_right);
+    diff |= trailer3_real_bits(a->J_theta_cart3) ^ trailer3_real_bits(b->J_theta_cart3);
+    diff |= trailer3_real_bits(a->J_theta_cart3_left) ^ trailer3_real_bits(b->J_theta_cart3_left);
+    diff |= trailer3_real_bits(a->J_theta_cart3_right) ^ trailer3_real_bits(b->J_theta_cart3_right);
+    diff |= trailer3_real_bits(a->J_theta_cart_left) ^ trailer3_real_bits(b->J_theta_cart_left);
+    diff |= trailer3_real_bits(a->J_theta_cart_right) ^ trailer3_real_bits(b->J_theta_cart_right);
+    diff |= trailer3_real_bits(a->J_theta_left) ^ trailer3_real_bits(b->J_theta_left);
+    diff |= trailer3_real_bits(a->J_theta_right) ^ trailer3_real_bits(b->J_theta_right);
+    diff |= trailer3_real_bits(a->J_theta_tractor) ^ trailer3_real_bits(b->J_theta_tractor);
+    diff |= trailer3_real_bits(a->J_x_tractor) ^ trailer3_real_bits(b->J_x_tractor);
+    diff |= trailer3_real_bits(a->K_theta_cart_x_tractor)
+            ^ trailer3_real_bits(b->K_theta_cart_x_tractor);
+    diff |= trailer3_real_bits(a->K_theta_cart_x_tractor_2)
+            ^ trailer3_real_bits(b->K_theta_cart_x_tractor_2);
+    diff |= trailer3_real_bits(a->K_theta_cart2_x_tractor)
+            ^ trailer3_real_bits(b->K_theta_cart2_x_tractor);
+    diff |= trailer3_real_bits(a->K_theta_cart2_x_tractor_2)
+            ^ trailer3_real_bits(b->K_theta_cart2_x_tractor_2);
+    diff |= trailer3_real_bits(a->K_theta_cart3_x_tractor)
+            ^ trailer3_real_bits(b->K_theta_cart3_x_tractor);
+    diff |= trailer3_real_bits(a->K_theta_cart3_x_tractor_2)
+            ^ trailer3_real_bits(b->K_theta_cart3_x_tractor_2);
+    diff |= trailer3_real_bits(a->K_theta_tractor_x_tractor)
+            ^ trailer3_real_bits(b->K_theta_tractor_x_tractor);
+    diff |= trailer3_real_bits(a->K_theta_tractor_x_tractor_2)
+            ^ trailer3_real_bits(b->K_theta_tractor_x_tractor_2);
+    diff |= trailer3_real_bits(a->radius_cart2_left) ^ trailer3_real_bits(b->radius_cart2_left);
+    diff |= trailer3_real_bits(a->radius_cart2_right) ^ trailer3_real_bits(b->radius_cart2_right);
+    diff |= trailer3_real_bits(a->radius_cart3_left) ^ trailer3_real_bits(b->radius_cart3_left);
+    diff |= trailer3_real_bits(a->radius_cart3_right) ^ trailer3_real_bits(b->radius_cart3_right);
+    diff |= trailer3_real_bits(a->radius_cart_left) ^ trailer3_real_bits(b->radius_cart_left);
+    diff |= trailer3_real_bits(a->radius_cart_right) ^ trailer3_real_bits(b->radius_cart_right);
+    diff |= trailer3_real_bits(a->radius_left) ^ trailer3_real_bits(b->radius_left);
+    diff |= trailer3_real_bits(a->radius_right) ^ trailer3_real_bits(b->radius_right);
+    return diff;
+}
+
 /** Cap an adaptive gain at TRAILER3_GAIN_MAX (NaN and +Inf count as beyond it). */
 static inline trailer3_real_t trailer3_cap_gain(trailer3_real_t gain)
 {

@@ -63,17 +63,6 @@ trailer3_status_t trailer3_pi_check_config(const trailer3_pi_config_t *config)
     return trailer3_pi_check_config_detail(config, 0);
 }
 
-/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
-{
-    union {
-        trailer3_real_t value;
-        trailer3_bits_t bits;
-    } rep;
-    rep.value = x;
-    return rep.bits;
-}
-
 /* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
    +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
@@ -122,64 +111,7 @@ static inline bool trailer3_pi_config_unchanged(const trailer3_pi_config_t *conf
                 kept_bytes, 36, 1);
     } else {
         /* value by value (a double build pads after each int) */
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
-                ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
-        diff |= trailer3_real_bits(config->nominal.J_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.J_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
-        diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
-        diff |= trailer3_real_bits(config->nominal.radius_cart_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart_right);
-        diff |= trailer3_real_bits(config->nominal.radius_left)
-                ^ trailer3_real_bits(kept->nominal.radius_left);
-        diff |= trailer3_real_bits(config->nominal.radius_right)
-                ^ trailer3_real_bits(kept->nominal.radius_right);
+        diff |= trailer3_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
         diff |= trailer3_real_bits(config->tau_max) ^ trailer3_real_bits(kept->tau_max);
         diff |= trailer3_real_bits(config->kx) ^ trailer3_real_bits(kept->kx);

@@ -53,17 +53,6 @@ trailer3_status_t trailer3_roc_check_config(const trailer3_roc_config_t *config)
     return trailer3_roc_check_config_detail(config, 0);
 }
 
-/* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
-static inline trailer3_bits_t trailer3_real_bits(trailer3_real_t x)
-{
-    union {
-        trailer3_real_t value;
-        trailer3_bits_t bits;
-    } rep;
-    rep.value = x;
-    return rep.bits;
-}
-
 /* Whether every entry of the step's inputs is within 1.0e6 in magnitude (NaN and
    +-Inf are not), by the magnitude's bits: for IEEE 754 values of one sign the order of the
    numbers is that of their bits, and +Inf and every NaN lie above every finite value. One
@@ -117,64 +106,7 @@ static inline bool trailer3_roc_config_unchanged(const trailer3_roc_config_t *co
             diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
             diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
         }
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart2_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart2_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart3_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart3_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_cart_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_cart_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_left)
-                ^ trailer3_real_bits(kept->nominal.J_theta_left);
-        diff |= trailer3_real_bits(config->nominal.J_theta_right)
-                ^ trailer3_real_bits(kept->nominal.J_theta_right);
-        diff |= trailer3_real_bits(config->nominal.J_theta_tractor)
-                ^ trailer3_real_bits(kept->nominal.J_theta_tractor);
-        diff |= trailer3_real_bits(config->nominal.J_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.J_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart2_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart2_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_cart3_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_cart3_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor)
-                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor);
-        diff |= trailer3_real_bits(config->nominal.K_theta_tractor_x_tractor_2)
-                ^ trailer3_real_bits(kept->nominal.K_theta_tractor_x_tractor_2);
-        diff |= trailer3_real_bits(config->nominal.radius_cart2_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart2_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart2_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart2_right);
-        diff |= trailer3_real_bits(config->nominal.radius_cart3_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart3_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart3_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart3_right);
-        diff |= trailer3_real_bits(config->nominal.radius_cart_left)
-                ^ trailer3_real_bits(kept->nominal.radius_cart_left);
-        diff |= trailer3_real_bits(config->nominal.radius_cart_right)
-                ^ trailer3_real_bits(kept->nominal.radius_cart_right);
-        diff |= trailer3_real_bits(config->nominal.radius_left)
-                ^ trailer3_real_bits(kept->nominal.radius_left);
-        diff |= trailer3_real_bits(config->nominal.radius_right)
-                ^ trailer3_real_bits(kept->nominal.radius_right);
+        diff |= trailer3_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
         diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);
         diff |= trailer3_real_bits(config->h) ^ trailer3_real_bits(kept->h);
