@@ -175,9 +175,9 @@ void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 #define WMR_CONFIG_AS_WORDS 0
 #endif
 
-/** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed (a loop whose
-   count
-    is a multiple of four is what gcc -O2 vectorises; the rest in a second call). */
+/** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed (a
+    loop whose count is a multiple of four is what gcc -O2 vectorises; the rest in a
+    second call). */
 static inline wmr_bits_t wmr_words_diff(const unsigned char *bytes_a,
     const unsigned char *bytes_b, int first, int n)
 {

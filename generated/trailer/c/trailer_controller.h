@@ -166,9 +166,9 @@ void trailer_window_weights(int active, trailer_real_t a, trailer_real_t w[TRAIL
 #define TRAILER_CONFIG_AS_WORDS 0
 #endif
 
-/** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed (a loop whose
-   count
-    is a multiple of four is what gcc -O2 vectorises; the rest in a second call). */
+/** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed (a
+    loop whose count is a multiple of four is what gcc -O2 vectorises; the rest in a
+    second call). */
 static inline trailer_bits_t trailer_words_diff(const unsigned char *bytes_a,
     const unsigned char *bytes_b, int first, int n)
 {

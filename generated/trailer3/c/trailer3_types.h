@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0x68b5c76eu
+#define TRAILER3_CODE_ID 0x9d961a53u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -96,14 +96,14 @@ static inline trailer3_exp_bits_t trailer3_exp_carry(trailer3_real_t x)
    root's; NaN beyond, and for Inf and NaN), from one argument reduction and without a
    library call: the steps use it. trailer3_sin / trailer3_cos are the same within that bound and
    libm's beyond (sin, cos; sinf, cosf in float32), and TRAILER3_SIN / TRAILER3_COS (the model
-   functions) call them. -DTRAILER3_LIBM_TRIG: libm's throughout. x = k pi/2 + r, |r| <= pi/4 (Cody
-   and Waite), then minimax polynomials
-   in r^2 by Estrin's scheme (fdlibm's in double, degree 13 and 14; degree 7 and 8 in
-   float32; each within a small fraction of an ulp for |r| <= pi/4):
-   within 2.5 ulp of the exact values in double (2 ulp of glibc's) and 2 ulp in float32
-   (tests). Needs IEEE evaluation: round-to-nearest, no -ffast-math, FLT_EVAL_METHOD 0 (k =
-   round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23; an x87 build is refused
-   below); FMA contraction (-ffp-contract=fast) costs double up to about 3.4 ulp. */
+   functions) call them. -DTRAILER3_LIBM_TRIG: libm's throughout. x = k pi/2 + r, |r| <= pi/4
+   (Cody and Waite), then minimax polynomials in r^2 by Estrin's scheme (fdlibm's in
+   double, degree 13 and 14; degree 7 and 8 in float32; each within a small fraction of an
+   ulp for |r| <= pi/4): within 2.5 ulp of the exact values in double (2 ulp of glibc's)
+   and 2 ulp in float32 (tests). Needs IEEE evaluation: round-to-nearest, no -ffast-math,
+   FLT_EVAL_METHOD 0 (k = round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23; an
+   x87 build is refused below); FMA contraction (-ffp-contract=fast) costs double up to
+   about 3.4 ulp. */
 /* The trig helpers are inlined wherever they are called, however large the caller (at -O2
    gcc declines to inline them into a large function): a sin and a cos of one angle then
    share one reduction and one pair of polynomials instead of two calls computing both.

@@ -92,7 +92,7 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
                      + " | ".join(cells) + " |")
     by_case: dict[str, dict[str, list[float]]] = {}
     for row in steps["rows"]:
-        by_case.setdefault(row["case"], {})[row["variant"]] = row.get("run_medians", [])
+        by_case.setdefault(row["case"], {})[row["variant"]] = row["run_medians"]
     lines += [
         "",
         "Every process's ratio of medians, in the order they ran (the median one is the table's):",
@@ -104,8 +104,7 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         med = by_case[case]
         pairs = [("ours", "hand"), ("ours_frozen", "hand_frozen")]
         lines.append(f"| {case} | " + " | ".join(
-            ", ".join(f"{a / b:.2f}" for a, b in zip(med.get(n, []), med.get(d, []),
-                                                      strict=True)) or "—"
+            ", ".join(f"{a / b:.2f}" for a, b in zip(med[n], med[d], strict=True))
             for n, d in pairs) + " |")
     lines += [
         "",
