@@ -556,7 +556,7 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
 }
 
 /* wmr_minimal_minv_norm: documented in wmr_laws.h.
-   operations after CSE: 7 add, 19 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs */
 void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
 {
     const wmr_real_t r = p->r;
@@ -574,7 +574,8 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm)
     const wmr_real_t I_w = p->Iw;
     const wmr_real_t _t6 = I_w + WMR_LIT(0.25)*_t3 + _t4;
     const wmr_real_t _t7 = _t6*_t6;
-    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t5*_t5 + WMR_LIT(2.0)*_t7)/WMR_FABS(_t5*_t5 - _t7);
+    norm[0] = WMR_SQRT(WMR_LIT(2.0)*_t5*_t5 + WMR_LIT(2.0)*_t7)*(WMR_LIT(1.0)/WMR_FABS(_t5*_t5
+            - _t7));
 }
 
 /* wmr_minimal_tdroc_gain: documented in wmr_laws.h.

@@ -526,7 +526,7 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
  * @param[in]  p wmr_params_t -- nominal parameters of M-hat
  * @param[out] norm [1] row-major (WMR_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 7 add, 19 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
  */
 void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
 

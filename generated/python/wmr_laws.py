@@ -1047,7 +1047,7 @@ def minimal_minv_norm(p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 7 add, 19 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
     """
     m = float(_field(p, "m"))
     I = float(_field(p, "I"))
@@ -1064,7 +1064,7 @@ def minimal_minv_norm(p: Any) -> NDArray[np.float64]:
     _t5 = -0.25*_t0*m + _t4
     _t6 = I_w + 0.25*_t3 + _t4
     _t7 = _t6*_t6
-    norm = np.array([math.sqrt(2.0*_t5*_t5 + 2.0*_t7)/abs(_t5*_t5 - _t7)])
+    norm = np.array([math.sqrt(2.0*_t5*_t5 + 2.0*_t7)*(1.0/abs(_t5*_t5 - _t7))])
     return norm
 
 

@@ -81,7 +81,7 @@ static inline void trailer_k_minimal_tde_mhat(const trailer_real_t kept[1],
 
 /* trailer_k_minimal_minv_norm_mhat: the body of trailer_minimal_minv_norm_mhat (trailer_laws.h
    documents it).
-   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
 static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
     const trailer_real_t *mhat, trailer_real_t *norm)
 {
@@ -90,8 +90,8 @@ static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
     const trailer_real_t _t0 = mhat_2*mhat_2;
     const trailer_real_t mhat_0 = mhat[0];
     const trailer_real_t mhat_3 = mhat[3];
-    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/TRAILER_FABS(_t0
-            - mhat_0*mhat_3);
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t0 + mhat_0*mhat_0
+            + mhat_3*mhat_3)*(TRAILER_LIT(1.0)/TRAILER_FABS(_t0 - mhat_0*mhat_3));
 }
 
 /* trailer_k_minimal_mhat_keep: the parameter-only part of trailer_minimal_mhat (trailer_laws.h

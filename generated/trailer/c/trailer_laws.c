@@ -130,7 +130,7 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 37 add, 67 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
@@ -203,12 +203,12 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t50 = _t10*_t42 + _t45*_t9;
     const trailer_real_t _t51 = _t10*_t49 + _t50*_t9;
     const trailer_real_t _t52 = _t11*_t46 + _t12*_t43;
-    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t48 + _t51*_t51 + _t52*_t52)/TRAILER_FABS(_t48
-            - _t51*_t52);
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t48 + _t51*_t51
+            + _t52*_t52)*(TRAILER_LIT(1.0)/TRAILER_FABS(_t48 - _t51*_t52));
 }
 
 /* trailer_minimal_minv_norm_mhat: documented in trailer_laws.h.
-   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     trailer_real_t *norm)
 {

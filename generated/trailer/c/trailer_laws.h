@@ -136,7 +136,7 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
  *     measured q
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 37 add, 67 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm);
@@ -157,7 +157,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  *     mhat_2, mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_MHAT_NORM_SIZE)
  *
- * operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     trailer_real_t *norm);

@@ -247,7 +247,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 37 add, 67 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -318,7 +318,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t51 = _t10*_t49 + _t50*_t9
     _t52 = _t11*_t46 + _t12*_t43
     norm = np.array([
-        math.sqrt(2.0*_t48 + _t51*_t51 + _t52*_t52)/abs(_t48 - _t51*_t52),
+        math.sqrt(2.0*_t48 + _t51*_t51 + _t52*_t52)*(1.0/abs(_t48 - _t51*_t52)),
     ])
     return norm
 
@@ -338,13 +338,13 @@ def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
     """
     mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
     del p  # not used by this function
     _t0 = mhat_2*mhat_2
     norm = np.array([
-        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)*(1.0/abs(_t0 - mhat_0*mhat_3)),
     ])
     return norm
 

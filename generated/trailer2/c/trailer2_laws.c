@@ -181,7 +181,7 @@ void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 72 add, 120 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 72 add, 121 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
@@ -307,12 +307,12 @@ void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t91 = _t31*_t86 + _t32*_t83;
     const trailer2_real_t _t92 = _t31*_t91 + _t32*_t90;
     const trailer2_real_t _t93 = _t33*_t87 + _t34*_t84;
-    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t89 + _t92*_t92 + _t93*_t93)/TRAILER2_FABS(_t89
-            - _t92*_t93);
+    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t89 + _t92*_t92
+            + _t93*_t93)*(TRAILER2_LIT(1.0)/TRAILER2_FABS(_t89 - _t92*_t93));
 }
 
 /* trailer2_minimal_minv_norm_mhat: documented in trailer2_laws.h.
-   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
     trailer2_real_t *norm)
 {

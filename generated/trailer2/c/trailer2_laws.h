@@ -137,7 +137,7 @@ void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t
  *     theta_cart_left, theta_cart2_right, theta_cart2_left -- measured q
  * @param[out] norm [1] row-major (TRAILER2_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 72 add, 120 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 72 add, 121 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm);
@@ -158,7 +158,7 @@ void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_
  *     mhat_2, mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
  * @param[out] norm [1] row-major (TRAILER2_MINIMAL_MINV_NORM_MHAT_NORM_SIZE)
  *
- * operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_real_t *mhat,
     trailer2_real_t *norm);

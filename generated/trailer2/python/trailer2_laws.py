@@ -293,7 +293,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 72 add, 120 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 72 add, 121 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _ = _flat(q, 11, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -412,7 +412,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t92 = _t31*_t91 + _t32*_t90
     _t93 = _t33*_t87 + _t34*_t84
     norm = np.array([
-        math.sqrt(2.0*_t89 + _t92*_t92 + _t93*_t93)/abs(_t89 - _t92*_t93),
+        math.sqrt(2.0*_t89 + _t92*_t92 + _t93*_t93)*(1.0/abs(_t89 - _t92*_t93)),
     ])
     return norm
 
@@ -432,13 +432,13 @@ def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
     """
     mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
     del p  # not used by this function
     _t0 = mhat_2*mhat_2
     norm = np.array([
-        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)*(1.0/abs(_t0 - mhat_0*mhat_3)),
     ])
     return norm
 

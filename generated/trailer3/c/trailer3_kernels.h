@@ -81,7 +81,7 @@ static inline void trailer3_k_minimal_tde_mhat(const trailer3_real_t kept[1],
 
 /* trailer3_k_minimal_minv_norm_mhat: the body of trailer3_minimal_minv_norm_mhat (trailer3_laws.h
    documents it).
-   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
 static inline void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
     const trailer3_real_t *mhat, trailer3_real_t *norm)
 {
@@ -90,8 +90,8 @@ static inline void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
     const trailer3_real_t _t0 = mhat_2*mhat_2;
     const trailer3_real_t mhat_0 = mhat[0];
     const trailer3_real_t mhat_3 = mhat[3];
-    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/TRAILER3_FABS(_t0
-            - mhat_0*mhat_3);
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t0 + mhat_0*mhat_0
+            + mhat_3*mhat_3)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t0 - mhat_0*mhat_3));
 }
 
 /* trailer3_k_minimal_mhat_keep: the parameter-only part of trailer3_minimal_mhat (trailer3_laws.h

@@ -241,7 +241,7 @@ void trailer3_minimal_tde_mhat(const trailer3_params_t *p, const trailer3_real_t
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 119 add, 190 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 119 add, 191 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
@@ -421,12 +421,12 @@ void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t134 = _t126*_t55 + _t129*_t54;
     const trailer3_real_t _t135 = _t133*_t55 + _t134*_t54;
     const trailer3_real_t _t136 = _t127*_t57 + _t130*_t56;
-    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t132 + _t135*_t135 + _t136*_t136)/TRAILER3_FABS(_t132
-            - _t135*_t136);
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t132 + _t135*_t135
+            + _t136*_t136)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t132 - _t135*_t136));
 }
 
 /* trailer3_minimal_minv_norm_mhat: documented in trailer3_laws.h.
-   operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm_mhat(const trailer3_params_t *p, const trailer3_real_t *mhat,
     trailer3_real_t *norm)
 {

@@ -138,7 +138,7 @@ void trailer3_minimal_tde_mhat(const trailer3_params_t *p, const trailer3_real_t
  *     theta_cart3_left -- measured q
  * @param[out] norm [1] row-major (TRAILER3_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 119 add, 190 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 119 add, 191 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm);
@@ -159,7 +159,7 @@ void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_
  *     mhat_2, mhat_3 -- Mhat(q), 2x2 row-major (<f>_mhat)
  * @param[out] norm [1] row-major (TRAILER3_MINIMAL_MINV_NORM_MHAT_NORM_SIZE)
  *
- * operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer3_minimal_minv_norm_mhat(const trailer3_params_t *p, const trailer3_real_t *mhat,
     trailer3_real_t *norm);

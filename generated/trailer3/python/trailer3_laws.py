@@ -349,7 +349,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 119 add, 190 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 119 add, 191 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
     """
     _, _, theta_tractor, theta_cart, theta_cart2, theta_cart3, _, _, _, _, _, _, _, _ = _flat(q, 14, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -518,7 +518,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t135 = _t133*_t55 + _t134*_t54
     _t136 = _t127*_t57 + _t130*_t56
     norm = np.array([
-        math.sqrt(2.0*_t132 + _t135*_t135 + _t136*_t136)/abs(_t132 - _t135*_t136),
+        math.sqrt(2.0*_t132 + _t135*_t135 + _t136*_t136)*(1.0/abs(_t132 - _t135*_t136)),
     ])
     return norm
 
@@ -538,13 +538,13 @@ def minimal_minv_norm_mhat(mhat: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 3 add, 5 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
     """
     mhat_0, _, mhat_2, mhat_3 = _flat(mhat, 4, "mhat")
     del p  # not used by this function
     _t0 = mhat_2*mhat_2
     norm = np.array([
-        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)/abs(_t0 - mhat_0*mhat_3),
+        math.sqrt(2.0*_t0 + mhat_0*mhat_0 + mhat_3*mhat_3)*(1.0/abs(_t0 - mhat_0*mhat_3)),
     ])
     return norm
 
