@@ -57,7 +57,7 @@ def test_variants_agree(checksums: dict[str, dict[str, float]]) -> None:
 
 def test_full_step_benchmark_checks_before_timing() -> None:
     """The complete ``wmr_tdroc_step`` and the hand-written step, each also with the
-    configuration compiled in (and ours with libm's sin/cos in double), in both
+    configuration compiled in (and ours with libm's sin/cos), in both
     formulations and precisions: the bad-input statuses are equal, on the recorded closed
     loop every status is equal and the torques agree (else nothing is timed), and all are
     timed; the ratios are per repetition."""
@@ -75,6 +75,7 @@ def test_full_step_benchmark_checks_before_timing() -> None:
         assert len(r["ns"]) == 2 and min(r["ns"]) > 0.0
     variants = {(r["case"], r["variant"]) for r in result["rows"]}
     assert ("paper/double", "ours_libm") in variants
+    assert ("minimal/float32", "ours_libm") in variants
     assert ("minimal/float32", "hand_frozen") in variants
     st = summarise_steps(result)
     assert st[("paper/double", "ratio:ours/hand")]["median"] > 0.0
@@ -112,7 +113,8 @@ def test_trailer_step_benchmark_checks_before_timing() -> None:
     st = summarise_steps(result)
     for v in ("ours", "hand", "ours_frozen", "hand_frozen"):
         assert st[("trailer minimal/float32", v)]["median"] > 0.0
-    assert st[("trailer minimal/double", "ratio:ours_libm/hand")]["median"] > 0.0
+    for p in ("double", "float32"):
+        assert st[(f"trailer minimal/{p}", "ratio:ours_libm/hand")]["median"] > 0.0
 
 
 def test_step_benchmark_refuses_a_competitor_with_another_status(tmp_path: Path) -> None:

@@ -8,7 +8,7 @@ float32).
 One executable per formulation and precision (gcc -O2) holds every variant: ours
 (run-time configuration), the hand-written step, both again built with the configuration
 compiled in (ours: ``wmr freeze``'s header and ``-DWMR_TDROC_FROZEN``; hand: the same
-configuration as a constant, ``-DHAND_FROZEN``) and, in double, ours with libm's sin/cos.
+configuration as a constant, ``-DHAND_FROZEN``) and ours with libm's sin/cos.
 Before any timing it checks, against ours:
 
 * the statuses of the bad-input cases: every configuration field made invalid (at
@@ -43,8 +43,9 @@ CFLAGS = ["-std=c99", "-O2"]
 FORMULATIONS = ("paper", "minimal")
 PRECISIONS = ("double", "float32")
 # ours = wmr_tdroc_step; hand = hand_tdroc_step; ours_frozen / hand_frozen = each with the
-# configuration compiled in; ours_libm (double only) = wmr_tdroc_step built with
-# -DWMR_LIBM_TRIG (libm's sin/cos, as the hand-written step uses).
+# configuration compiled in; ours_libm = wmr_tdroc_step built with -DWMR_LIBM_TRIG
+# (libm's sin/cos, as the hand-written step uses), in both precisions: on an x86-64 host
+# glibc's float32 sincosf is an FMA build that our portable one is not.
 VARIANTS = ("ours", "hand", "ours_frozen", "hand_frozen", "ours_libm")
 # The torques of every variant against ours over the recording, relative to the largest
 # |tau|: double agrees to rounding; float32 to float rounding amplified by (17)'s 1/h.
@@ -341,18 +342,16 @@ def _variants(float32: bool, pre: str) -> list[tuple[str, str, str, int]]:
     ours first (the reference of the run-time variants), then the first frozen one."""
     rows = [("ours", pre, 0), ("hand", "hand", 0), ("ours_frozen", f"fz_{pre}", 1),
             ("hand_frozen", "handfz", 2)]
-    if not float32:
-        rows.append(("ours_libm", f"lm_{pre}", 0))
+    rows.append(("ours_libm", f"lm_{pre}", 0))
     return [(name, f"{p}_tdroc_init", f"{p}_tdroc_step", frozen) for name, p, frozen in rows]
 
 
 def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[list[float]]],
                      float32: bool = False, robot: StepRobot = STEP_ROBOTS[0]) -> Path:
     """Compile ``robot``'s generated controller C (ours; with the configuration frozen,
-    renamed ``fz_<prefix>_*``; in double with ``-D<PREFIX>_LIBM_TRIG``, renamed
-    ``lm_<prefix>_*``), its hand-written step (run-time and ``-DHAND_FROZEN``) and the
-    harness with the recorded inputs into one executable of that precision; returns its
-    path."""
+    renamed ``fz_<prefix>_*``; with ``-D<PREFIX>_LIBM_TRIG``, renamed ``lm_<prefix>_*``),
+    its hand-written step (run-time and ``-DHAND_FROZEN``) and the harness with the
+    recorded inputs into one executable of that precision; returns its path."""
     from runtime.bindings.generated import load_robot_code
     from runtime.sim.plant import library_for
 
@@ -406,9 +405,8 @@ def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[li
         subprocess.run(["gcc", *CFLAGS, *prec, "-c", f"-I{c_dir}", str(s), "-o", str(obj)],
                        check=True)
         objs.append(str(obj))
-    if not float32:
-        objs += renamed_objects(workdir, sources, (f"-D{pre.upper()}_LIBM_TRIG",), "lm_",
-                                include=c_dir, symbols=f"{pre}_")
+    objs += renamed_objects(workdir, sources, (*prec, f"-D{pre.upper()}_LIBM_TRIG"), "lm_",
+                            include=c_dir, symbols=f"{pre}_")
     frozen_header(workdir, config, float32, robot.code)
     objs += renamed_objects(workdir, sources, (*prec, frozen_define("tdroc", pre),
                                                f"-I{workdir}"), "fz_", include=c_dir,
