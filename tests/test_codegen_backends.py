@@ -468,6 +468,28 @@ def test_c_printing_rules() -> None:
         assert "DO NOT EDIT" in f.splitlines()[1] and SOURCE not in f  # no source given
 
 
+def test_a_root_over_a_divisor_prints_the_reciprocal_beside_it() -> None:
+    """sqrt(a)/d prints as sqrt(a)*(1/d), in C and Python alike: the reciprocal need not
+    wait for the root (||Mhat^-1||_F of (25), sqrt(...)/|det Mhat|, is on a step's chain to
+    tau), and the count has the one multiplication more. A quotient without a root stays
+    one division."""
+    spec = FunctionSpec(
+        "root_ratio",
+        "A root over a divisor, and a quotient without one.",
+        (Argument("q", "array", (3, 1), (x, y, theta)),),
+        (Argument("out", "array", (2, 1),
+                  exprs=(sp.sqrt(x**2 + 2 * y**2) / sp.Abs(x * y - theta), x / (y + theta))),),
+    )
+    c_text = c_backend.render([spec], MODULE)[f"{MODULE}.c"]
+    assert re.search(r"WMR_SQRT\([^;]*\)\*\(WMR_LIT\(1\.0\)/WMR_FABS\(", c_text), c_text
+    assert re.search(r"= x/\((theta \+ y|y \+ theta)\);", c_text), c_text
+    py_text = py_backend.render([spec], MODULE)[f"{MODULE}.py"]
+    assert re.search(r"math\.sqrt\([^\n]*\)\*\(1\.0/abs\(", py_text), py_text
+    # x*x + 2.0*y*y and x*y: 4 mul, then the product with the reciprocal
+    ops = count_ops(cse_function(spec)).summary()
+    assert ops == "3 add, 5 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs", ops
+
+
 def test_types_header_contents() -> None:
     files = c_backend.render_all({MODULE: SPECS, "wmr_other": [CTRL_STEP]}, source=SOURCE)
     types = files["wmr_types.h"]
