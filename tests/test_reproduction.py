@@ -213,12 +213,6 @@ def test_payload_changes_the_true_mass(paper: Reproduction) -> None:
     assert masses == {PARAMS["m"] + 6.0, PARAMS["m"] + 9.0}
 
 
-def test_reproduction_is_fast(paper: Reproduction) -> None:
-    """The simulations of the whole reproduction (32 runs + 16 new sweep runs, ≈ 10 s on
-    the 2-core machine) within 30 s; `make reproduce` with figures is measured separately."""
-    assert paper.seconds < 30.0
-
-
 # --------------------------------------------------------------------------- stability
 
 
