@@ -59,9 +59,10 @@ def test_general_solve_matches_a_dense_solve(n: int) -> None:
     for a non-symmetric a, with structural zeros below the diagonal (the skipped
     eliminations) and a full one."""
     rng = np.random.default_rng(200 + n)
+    full = _symbols("g", n, n)
     for zeros in (False, True):
-        full = _symbols("g", n, n)
-        a = sp.Matrix(n, n, lambda i, j: 0 if (zeros and i > j + 1) else full[i, j])
+        a = sp.Matrix(n, n, [0 if (zeros and i > j + 1) else full[i, j]
+                             for i in range(n) for j in range(n)])
         b = _symbols("c", n, 1)
         a_num = rng.normal(size=(n, n)) + 3 * n * np.eye(n)  # diagonally dominant: no pivot
         if zeros:
