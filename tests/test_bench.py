@@ -145,6 +145,28 @@ def test_step_benchmark_refuses_a_competitor_with_another_status(tmp_path: Path)
     assert "bad-input case" in proc.stdout and '"ns"' not in proc.stdout
 
 
+def test_step_benchmark_refuses_a_competitor_with_other_torques(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A hand-written step whose torque is off by one part in a million (every status
+    right) is refused by the harness before any timing, and ``run_steps`` raises: the
+    benchmark never times a competitor that computes something else."""
+    from runtime.tooling.bench import step_bench
+
+    csrc = tmp_path / "csrc"
+    shutil.copytree(step_bench.BENCH_CSRC, csrc)
+    src = csrc / "hand_tdroc.c"
+    text = src.read_text()
+    write = "    tau[0] = t0;\n    tau[1] = t1;\n    return st;"
+    assert text.count(write) == 1
+    src.write_text(text.replace(write, "    tau[0] = t0 * (1.0 + 1e-6);\n"
+                                       "    tau[1] = t1;\n    return st;"))
+    monkeypatch.setattr(step_bench, "BENCH_CSRC", csrc)
+    case = [(step_bench.STEP_ROBOTS[0], "paper", "double")]
+    with pytest.raises(RuntimeError, match=r"refused to time: \[\{'check'") as caught:
+        step_bench.run_steps(601, 1, cases=case)
+    assert "max_abs_tau_diff" in str(caught.value) and "'ns'" not in str(caught.value)
+
+
 def test_casadi_op_counts_are_counted() -> None:
     spec = specs_by_name()["forward_dynamics"]
     counts = casadi_op_count(spec)
