@@ -68,7 +68,7 @@ def test_odometry_of_a_straight_step() -> None:
 
 def test_odometry_turns_the_way_the_wheels_do() -> None:
     """The right wheel (the first driven one) ahead of the left turns the robot left."""
-    s, exp = sensors("encoder-average")
+    s, _ = sensors("encoder-average")
     q, _ = s.measure(np.array([0.6, 0.4]), TRUE_RATES)
     assert q[2] > 0.0
     s2, _ = sensors("encoder-average")

@@ -40,7 +40,6 @@ T_FAULTS_MJ = "tests/test_faults_mujoco.py"
 T_JITTER = "tests/test_jitter.py"
 T_SENSING = "tests/test_sensing_estimator.py"
 T_REPRO = "tests/test_reproduction.py"
-T_PHYSICS = "tests/test_physics.py"
 T_STAB = "tests/test_stability_any_robot.py"
 T_SAT = "tests/test_saturation_payload.py"
 T_FROZEN = "tests/test_frozen_config.py"
@@ -65,7 +64,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("euler-lagrange-sign", LAGRANGE,
            "h.append(self.simplify(d_dt - sp.diff(t, qi) + sp.diff(self.potential_energy, qi)))",
            "h.append(self.simplify(d_dt + sp.diff(t, qi) + sp.diff(self.potential_energy, qi)))",
-           (T_KKT,), "H(q, q̇) of (9) with the wrong sign of ∂T/∂q"),
+           (T_KKT, T_KANE), "H(q, q̇) of (9) with the wrong sign of ∂T/∂q"),
     Mutant("minimal-bias-drops-sdot", LAGRANGE,
            "return (s.T * (self.mass_matrix * self.null_space_rate + h)).applyfunc(self.simplify)",
            "return (s.T * h).applyfunc(self.simplify)",
@@ -77,12 +76,13 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("root-twist-transport", LAGRANGE,
            "rate[x] = stage.define(rate[x] - turn * v[y])",
            "rate[x] = stage.define(rate[x] + turn * v[y])",
-           (T_ROOT,), "the trailers' root-twist rate without its transport term's sign"),
+           (T_ROOT, T_KANE), "the trailers' root-twist rate with its transport term's sign wrong"),
     # --- codegen ------------------------------------------------------------------------
-    Mutant("printer-sqrt-power", PRINTER,
-           'parts.append(self.call("sqrt", [self._print(base)]))',
-           'parts.append(self.call("sqrt", [self._print(base * base)]))',
-           (T_GEN_SYMPY,), "half-integer powers printed as the root of the square"),
+    Mutant("printer-negative-half-power", PRINTER,
+           "                return f\"{self.lit(1.0)}/{text if single else f'({text})'}\", False",
+           "                return text, single",
+           ("tests/test_codegen_backends.py", T_GEN_SYMPY),
+           "x^(-3/2) printed as x^(3/2): the reciprocal dropped"),
     # --- runtime: sensing, faults, payload, the loop ----------------------------------------
     Mutant("encoder-rounds", SENSORS,
            "counts = np.floor(angles * self.counts_per_rad)",
@@ -91,7 +91,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("encoder-average-over-window", SENSORS,
            'if v == "sample-instant":\n            return true_rates.copy()',
            'if v == "encoder-average":\n            return true_rates.copy()',
-           (T_SENSING,), "the encoder average read as the true instantaneous rate"),
+           ("tests/test_sensors.py", T_SENSING),
+           "the encoder average read as the true instantaneous rate"),
     Mutant("fault-window-one-late", FAULTS,
            "k0 = max(1, math.ceil(self.start / h - tol))",
            "k0 = max(1, math.ceil(self.start / h - tol) + 1)",
@@ -115,7 +116,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("rk4-weight", RK4,
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(2.0) * k3[i]",
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(1.0) * k3[i]",
-           (T_PHYSICS,), "RK4 with a wrong weight: a plant that loses energy"),
+           ("tests/test_plant_integrator.py",), "RK4 with a wrong weight: a first-order plant"),
     Mutant("jitter-not-drawn", LOOP,
            "d += float(self.rng.uniform(-self.jitter, self.jitter))",
            "d += 0.0 * float(self.rng.uniform(-self.jitter, self.jitter))",
