@@ -2,7 +2,15 @@
 
 ``c/``: ``<prefix>_types.h``, one ``.h``/``.c`` pair per module, the controllers
 (``<prefix>_controller.{h,c}`` and ``<prefix>_<controller>.{h,c}`` from the layout),
-``<prefix>_robot.h`` (the robot file's numbers) and ``example_main.c``.
+``<prefix>_kernels.h`` (the steps' kernels), ``<prefix>_robot.h`` (the robot file's
+numbers) and ``example_main.c``.
+
+This module wires the backend's jobs, each its own module: :mod:`.lowering` (a function's
+IR as C statements), :mod:`.prepared` (the prepare-parameters API), :mod:`.kernels` (which
+kernels each controller step calls, from its declaration, and which are split at their
+parameters), :mod:`.files` (the module files and the types header); the controllers' own
+contexts (their nominal checks) are written here. Everything is decided before any
+template is rendered, and each template is rendered once per file it writes.
 """
 
 from __future__ import annotations

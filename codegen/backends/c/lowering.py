@@ -350,7 +350,6 @@ def function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, 
     }
 
 
-
 def with_late_check(lines: list[Line], late: Sequence[str], status: str,
                      config: CConfig) -> list[Line]:
     """``lines`` (checks) that, failing, first return ``status`` if a late input is not
