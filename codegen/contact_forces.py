@@ -2,8 +2,9 @@
 
 (9) reads M q̈ + H = B τ − Aᵀ λ, and the multipliers follow from its dependent rows once
 q̈ is known (the route of (10)–(12)): A_dᵀ λ = (B τ − H − M q̈)_d, with q̈ = S η̇ + Ṡ η and
-η̇ the minimal form's forward dynamics. Each row of A is one wheel constraint
-(``ConstrainedSystem.constraint_labels``), built from a contact velocity:
+η̇ the minimal form's forward dynamics. Each row of A is one wheel constraint, declared with
+the wheels it holds where the row is built (``ConstrainedSystem.wheel_constraints``), from
+a contact velocity:
 
 * a rolling row s (r_w θ̇_w − v_w · e) = 0: its generalised force −Aᵀλ pushes the wheel
   centre by +s λ e and brakes its spin by s λ r_w, so the ground's force on the wheel
@@ -21,7 +22,6 @@ slip_monitor``). ``contact_rows`` says which row belongs to which wheel.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import cache
 
@@ -30,9 +30,7 @@ import sympy as sp
 from modeling.description.elimination import block_triangular_solve
 from modeling.robot_model import RobotModel
 from modeling.staged import Stage
-
-ROLLING = "rolling of wheel"
-SIDE = "no side slip of wheel"
+from modeling.wheel_constraints import NO_SIDE_SLIP, ROLLING
 
 
 @dataclass(frozen=True)
@@ -47,37 +45,34 @@ class ContactRows:
     lateral_wheels: tuple[tuple[str, ...], ...]
 
 
-def _names(label: str) -> list[str]:
-    return re.findall(r"'([^']+)'", label)
-
-
 @cache
 def contact_rows(model: RobotModel) -> ContactRows:
-    """The rows of ``model``'s A by wheel (see :class:`ContactRows`). A no-side-slip row
-    dropped as redundant goes to the kept row of the wheel on the same body and axle (same
-    position along the body's x axis). ``ValueError`` naming the row otherwise."""
+    """The rows of ``model``'s A by wheel (see :class:`ContactRows`), from what each row
+    declares it constrains. A no-side-slip row dropped as redundant goes to the kept row of
+    the wheel on the same body and axle (same position along the body's x axis).
+    ``ValueError`` naming the row otherwise."""
     s = model.system
-    labels = s.constraint_labels
+    rows = s.wheel_constraints
     where = f"robot '{model.name}'"
-    if len(labels) != s.constraint_matrix.rows:
-        raise ValueError(f"{where}: its constraint rows are not labelled (A has "
-                         f"{s.constraint_matrix.rows} rows, {len(labels)} labels)")
+    if len(rows) != s.constraint_matrix.rows:
+        raise ValueError(f"{where}: its constraint rows are not declared (A has "
+                         f"{s.constraint_matrix.rows} rows, {len(rows)} wheel constraints)")
     a = s.constraint_matrix
     rolling, driven = [], []
     for col in model.actuated:
-        rows = [i for i in range(a.rows) if a[i, col] != 0]
-        if len(rows) != 1 or not labels[rows[0]].startswith(ROLLING):
+        found = [i for i in range(a.rows) if a[i, col] != 0]
+        if len(found) != 1 or rows[found[0]].kind != ROLLING:
             raise ValueError(f"{where}: driven coordinate {model.coordinate_names[col]} is "
                              "not in exactly one rolling row of A")
-        rolling.append(rows[0])
-        driven.append(_names(labels[rows[0]])[0])
-    lateral = [i for i, lab in enumerate(labels) if lab.startswith(SIDE)]
-    wheels = [_names(labels[i]) for i in lateral]
-    dropped = [lab for lab in getattr(s, "dropped_constraints", ()) if lab.startswith(SIDE)]
+        rolling.append(found[0])
+        driven.append(rows[found[0]].wheels[0])
+    lateral = [i for i, row in enumerate(rows) if row.kind == NO_SIDE_SLIP]
+    wheels = [list(rows[i].wheels) for i in lateral]
+    dropped = [row for row in s.dropped_wheel_constraints if row.kind == NO_SIDE_SLIP]
     if dropped:
         layout = {w[0]: (w[1], float(w[2][0])) for w in (model.layout or {}).get("wheels", [])}
-        for lab in dropped:
-            name = _names(lab)[0]
+        for row in dropped:
+            name = row.wheels[0]
             axle = layout.get(name)
             match = [k for k, ws in enumerate(wheels)
                      if axle is not None and layout.get(ws[0]) is not None

@@ -33,8 +33,8 @@ def render(model: RobotModel, robot: Robot, op_counts: dict[str, str]) -> str:
     """MODEL.md for ``model`` with the robot file's parameter values."""
     values = robot.lumped
     s = model.system
-    labels = getattr(s, "constraint_labels", ())
-    dropped = getattr(s, "dropped_constraints", ())
+    labels = s.constraint_labels
+    dropped = s.dropped_constraints
     if model.staged:  # the closed form is what a staged robot never builds
         mbar = staged_forms(model)
         mbar_q = sorted(str(v) for v in model.q if mbar.depends_on(mbar.mbar, (v,)))

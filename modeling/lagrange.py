@@ -13,8 +13,8 @@ V(q)), Pfaffian velocity constraints A(q) q̇ = 0 and an input map B, this modul
   (9) with λ solved from the dependent rows);
 * the minimal form in η:  Sᵀ M S η̇ + Sᵀ(M Ṡ η + H) = Sᵀ B τ.
 
-Nothing here knows about wheels. Symbols are plain ``sympy.Symbol``; time derivatives use
-the chain rule on (q, q̇, q̈).
+Nothing here computes with wheels (what each row of A constrains is only carried). Symbols
+are plain ``sympy.Symbol``; time derivatives use the chain rule on (q, q̇, q̈).
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from modeling.symbolic_linalg import (
     inverse_by_cofactors,
     time_derivative,
 )
+from modeling.wheel_constraints import WheelConstraint
 
 
 def default_simplify(expr: sp.Expr) -> sp.Expr:
@@ -144,9 +145,11 @@ class ConstrainedSystem:
     independent: tuple[int, ...]
     potential_energy: sp.Expr = sp.S.Zero
     simplify: Simplifier = default_simplify
-    # What each row of A constrains ("no side slip of wheel 'right'", "rolling of wheel
-    # 'right'"): the wheel contact forces (codegen.contact_forces) read it.
-    constraint_labels: tuple[str, ...] = ()
+    # What each row of A constrains (the rolling or no side slip of which wheels), and the
+    # redundant rows left out of A: carried for the wheel contact forces
+    # (codegen.contact_forces), which read the wheels from here.
+    wheel_constraints: tuple[WheelConstraint, ...] = ()
+    dropped_wheel_constraints: tuple[WheelConstraint, ...] = ()
     # Indices of (x, y, the root body's yaw, the other bodies' absolute yaws) when T, A
     # and B are invariant under a rigid planar motion of the whole robot (x, y rotated and
     # shifted, every yaw turned by the same angle): ``staged_minimal(root_frame=True)``
@@ -164,6 +167,16 @@ class ConstrainedSystem:
                 "the number of independent coordinates plus the number of constraints "
                 "must equal the number of coordinates"
             )
+
+    @property
+    def constraint_labels(self) -> tuple[str, ...]:
+        """Each row of A in words ("rolling of wheel 'right'"), for reports."""
+        return tuple(c.label for c in self.wheel_constraints)
+
+    @property
+    def dropped_constraints(self) -> tuple[str, ...]:
+        """The redundant rows left out of A, in words."""
+        return tuple(c.label for c in self.dropped_wheel_constraints)
 
     # --- index bookkeeping -------------------------------------------------------------
     @cached_property

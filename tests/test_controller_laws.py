@@ -149,7 +149,7 @@ def test_staged_mass_and_its_inverse_norm_match_the_closed_form() -> None:
 
 def test_generated_law_reads_every_input_before_writing_an_output() -> None:
     """A function without input checks reads each input just before its first use
-    (codegen/backends/c/render.py, _LazyLoads), yet every read before the first store: the
+    (codegen/backends/c/lowering.py, LazyLoads), yet every read before the first store: the
     TDROC law writing u one entry ahead over H1hat (u[k] is H1hat[k + 1]) and s over e gives
     what it gives into fresh arrays (a read of H1hat[1] after the store of u[0] would not)."""
     from runtime.bindings import cbuild

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from codegen import template_util
-from codegen.backends.c.render import TEMPLATE_DIR as C_TEMPLATES
+from codegen.backends.c.files import TEMPLATE_DIR as C_TEMPLATES
 from codegen.backends.python.render import TEMPLATE_DIR as PY_TEMPLATES
 from codegen.controller_api import (
     CONTROLLERS,

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from codegen.backends.c.render import CODE_ID_UNSET, stamp_code_id
+from codegen.backends.c.files import CODE_ID_UNSET, stamp_code_id
 from runtime.bindings import cbuild
 from runtime.bindings.config import controller_config
 from runtime.bindings.generated import RobotCode, load_robot_code

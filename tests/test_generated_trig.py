@@ -201,7 +201,7 @@ def test_the_bound_covers_the_steps_inputs() -> None:
     each of pi/2's two leading parts (as wmr_types.h has them) fits in 53 bits."""
     import struct
 
-    from codegen.backends.c.render import TRIG_BOUND
+    from codegen.backends.c.files import TRIG_BOUND
     from codegen.controller_api import MAX_ABS_INPUT
 
     assert 2 * float(MAX_ABS_INPUT) <= float(TRIG_BOUND)

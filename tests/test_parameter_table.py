@@ -12,7 +12,7 @@ import pytest
 import sympy as sp
 
 from codegen.backends.c.config import CConfig
-from codegen.backends.c.render import cdef
+from codegen.backends.c.files import cdef
 from codegen.spec import Argument, Field, FunctionSpec
 from modeling.parameter_table import ParameterInfo, c_field_names
 from modeling.robot_file import RobotFileError, parse_robot

@@ -50,6 +50,7 @@ from modeling.description.schema import (
 )
 from modeling.lagrange import ConstrainedSystem
 from modeling.staged import Stage
+from modeling.wheel_constraints import NO_SIDE_SLIP, ROLLING, WheelConstraint
 
 HALF = sp.Rational(1, 2)
 N_GENERIC_POINTS = 2  # rank decisions: full rank at any of these ⇒ generically full rank
@@ -76,16 +77,14 @@ class DescribedSystem(ConstrainedSystem):
     """A ``ConstrainedSystem`` derived from a description, with its bookkeeping.
 
     ``description`` is the symbolised description (its ``values`` give the parameters'
-    numbers), ``inputs`` the torque symbols of the driven wheels (the columns of B),
-    ``constraint_labels`` names the rows of A and ``dropped_constraints`` the redundant
-    rows left out.
+    numbers), ``inputs`` the torque symbols of the driven wheels (the columns of B);
+    ``wheel_constraints`` says what each row of A constrains and
+    ``dropped_wheel_constraints`` the redundant rows left out.
     """
 
     description: RobotDescription | None = field(default=None, compare=False)
     coordinate_names: tuple[str, ...] = ()
     inputs: tuple[sp.Symbol, ...] = ()
-    constraint_labels: tuple[str, ...] = ()
-    dropped_constraints: tuple[str, ...] = ()
 
     @cached_property
     def dependent_block_inverse(self) -> sp.Matrix:
@@ -174,9 +173,9 @@ def description_kinetic_energy(desc: RobotDescription, numeric: bool = False) ->
 # ---------------------------------------------------------------------------------------
 def constraint_candidates(
     desc: RobotDescription, coords: Coordinates, poses: dict[str, Pose]
-) -> list[tuple[str, sp.Matrix]]:
-    """(label, row of A) for every wheel constraint, in the fixed order of the module
-    docstring, before redundant rows are dropped."""
+) -> list[tuple[WheelConstraint, sp.Matrix]]:
+    """(what it constrains, row of A) for every wheel constraint, in the fixed order of
+    the module docstring, before redundant rows are dropped."""
 
     def row(expr: sp.Expr) -> sp.Matrix:
         # expr is linear in q̇ (velocities are Jacobians times q̇): its gradient is the row.
@@ -184,14 +183,14 @@ def constraint_candidates(
 
     centre = {w.name: velocity(poses[w.body].point(w.position), coords)
               for w in desc.wheels}
-    out: list[tuple[str, sp.Matrix]] = []
+    out: list[tuple[WheelConstraint, sp.Matrix]] = []
     for w in desc.wheels:
         _, n = heading(poses[w.body].angle)
-        out.append((f"no side slip of wheel '{w.name}'", row((centre[w.name].T * n)[0])))
+        out.append((WheelConstraint(NO_SIDE_SLIP, (w.name,)), row((centre[w.name].T * n)[0])))
     for w in sorted(desc.wheels, key=lambda w: coords.wheel_angle[w.name]):
         e, _ = heading(poses[w.body].angle)
         rate = coords.qdot[coords.wheel_angle[w.name]]
-        out.append((f"rolling of wheel '{w.name}'",
+        out.append((WheelConstraint(ROLLING, (w.name,)),
                     row(w.radius * rate - (centre[w.name].T * e)[0])))
     return out
 
@@ -301,9 +300,9 @@ def _system(sym: RobotDescription) -> DescribedSystem:
         description=sym,
         coordinate_names=coords.names,
         inputs=tuple(sp.Symbol(f"tau_{w.name}", real=True) for w in sym.wheels if w.driven),
-        constraint_labels=tuple(candidates[i][0] for i in kept),
-        dropped_constraints=tuple(
-            label for i, (label, _) in enumerate(candidates) if i not in kept),
+        wheel_constraints=tuple(candidates[i][0] for i in kept),
+        dropped_wheel_constraints=tuple(
+            what for i, (what, _) in enumerate(candidates) if i not in kept),
     )
 
 

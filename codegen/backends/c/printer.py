@@ -29,6 +29,7 @@ class CPrinter(ExpressionPrinterMixin, C99CodePrinter):
         self.config = config
         self.symbol_names = symbol_names
         self.ops = Counter()
+        self.norms: set[int] = set()  # the n of every <prefix>norm<n> written (the types header's)
         self._macros = {m.name: m.arity for m in config.math_macros}
         self.bounded_trig = bounded_trig  # FunctionSpec.bounded_trig
 
@@ -49,4 +50,5 @@ class CPrinter(ExpressionPrinterMixin, C99CodePrinter):
 
     def norm_call(self, args: Sequence[str]) -> str:
         # <prefix>_norm<n>, a static inline function of the types header (render_types)
+        self.norms.add(len(args))
         return f"{self.config.prefix}norm{len(args)}({', '.join(args)})"

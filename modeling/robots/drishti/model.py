@@ -37,6 +37,7 @@ import sympy as sp
 from modeling.lagrange import ConstrainedSystem, trig_canonical
 from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
 from modeling.robots.drishti import parameters
+from modeling.wheel_constraints import NO_SIDE_SLIP, ROLLING, WheelConstraint
 
 SOURCE = "modeling/robots/drishti/model.py"  # this file, as generated preambles name it
 
@@ -189,8 +190,8 @@ def constraint_matrix() -> sp.Matrix:
 
 
 # Row 1 is the axle's: the two wheels' no-side-slip rows are one row (same axle, same n).
-CONSTRAINT_LABELS = ("no side slip of wheels 'right', 'left' (the axle)",
-                     "rolling of wheel 'right'", "rolling of wheel 'left'")
+WHEEL_CONSTRAINTS = (WheelConstraint(NO_SIDE_SLIP, ("right", "left")),
+                     WheelConstraint(ROLLING, ("right",)), WheelConstraint(ROLLING, ("left",)))
 
 
 def input_matrix() -> sp.Matrix:
@@ -216,7 +217,7 @@ def wmr_system(lateral_moment: bool = False) -> ConstrainedSystem:
         constraint_matrix=constraint_matrix(),
         input_matrix=input_matrix(),
         independent=(3, 4),
-        constraint_labels=CONSTRAINT_LABELS,
+        wheel_constraints=WHEEL_CONSTRAINTS,
     )
 
 
