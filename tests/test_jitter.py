@@ -75,3 +75,23 @@ def test_the_loop_applies_the_jitter() -> None:
     jittered, constant = run(D, J), run(D, 0.0)
     assert not np.allclose(jittered.tau_applied, constant.tau_applied)
     assert jittered.failed_at is None and _late_error(jittered) < 0.01
+
+
+def test_a_radius_just_above_one_reads_unstable() -> None:
+    """Bisect the constant delay between 51 ms (stable) and 77 ms (unstable) to a loop whose
+    spectral radius is within 0.5 % above 1: the verdict reads the radius as it is (a
+    tolerance on 1 would call it stable)."""
+    lo, hi = D, D + J
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        rho = radius(mid, 0.0)
+        if rho < 1.0:
+            lo = mid
+        elif rho > 1.005:
+            hi = mid
+        else:
+            break
+    a = analysis.analyse(DRISHTI, "tdc", "minimal", NOMINAL, experiment(mid, 0.0),
+                         measure=False)
+    assert 1.0 < a.spectral_radius <= 1.005, a.spectral_radius
+    assert not a.stable

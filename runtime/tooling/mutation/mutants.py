@@ -150,7 +150,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("slip-needs-least-wheel", SLIP,
            "return float(np.max(np.abs(forces) / n)) if np.all(n > 0) else math.inf",
            "return float(np.min(np.abs(forces) / n)) if np.all(n > 0) else math.inf",
-           ("tests/test_mujoco.py", "tests/test_contact_forces.py"),
+           ("tests/test_slip_asymmetric.py", "tests/test_mujoco.py"),
            "the friction needed read off the wheel that needs the least"),
     Mutant("contact-timeconst-one-step", SETTINGS,
            'if pl.model == "mujoco" and pl.contact_timeconst < 2 * dt:',
