@@ -31,7 +31,6 @@ from codegen.backends.c.render import (
     stamp_code_id,
 )
 from codegen.controller_api import (
-    CONTROLLERS,
     MAX_ABS_INPUT,
     c_common_context,
     c_controller_context,
@@ -266,14 +265,14 @@ class CBackend:
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
                 nominal_conditions=nominal_conditions(target, config),
                 nominal_guards=nominal_guards(target, config),
-                nominal_bounds=nominal_bounds(target), **c_common_context(),
+                nominal_bounds=nominal_bounds(target), **c_common_context(target.controllers),
             )
         laws = next(m for m in target.modules if m.name == f"{pre}_laws")
         kp = f"{pre}_k_"  # the steps' kernels, written once in <prefix>_kernels.h
         kernels_h = f"{pre}_kernels.h"
         contexts: dict[str, dict[str, object]] = {}
         firsts: dict[str, str] = {}
-        for info in CONTROLLERS:
+        for info in target.controllers:
             contexts[info.name] = dict(
                 layout=layout, c=info, max_abs_input=MAX_ABS_INPUT, step_kernel_prefix=kp,
                 **c_controller_context(info, param_fields, layout, target.model))
@@ -293,7 +292,7 @@ class CBackend:
         files.update(render_module(
             laws.functions, laws.name, config, source=source, includes=[kernels_h],
             wrappers=law_wrappers(laws.functions, text, kp, kept, config)))
-        for info in CONTROLLERS:
+        for info in target.controllers:
             context = contexts[info.name]
             first = firsts[info.name]
             called = called_kernels(first, kp)
