@@ -325,5 +325,6 @@ def config_struct_lines(spec: ControllerSpec, layout: ControllerLayout) -> list[
     return lines
 
 
-# The controllers, as codegen sees them: the registry's entries (modeling.controllers).
+# The registry's controllers (modeling.controllers.REGISTRY), the default of the functions
+# above; a generation reads its own (``RobotTarget.controllers``).
 CONTROLLERS: tuple[ControllerSpec, ...] = REGISTRY

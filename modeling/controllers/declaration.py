@@ -38,12 +38,15 @@ from modeling.robot_model import RobotModel
 
 
 class Estimate(Enum):
-    """What the law takes for the part of the model it does not compute."""
+    """What the law takes for the part of the model it does not compute. ``TDE``: Ĥ1, the
+    time-delay estimate (17), with a history in the state and the estimator's fields; the
+    law then depends on q through M̂(q) only (its ``_trig``/``_mhat`` kernels). ``MODEL``:
+    Ĥ(q, q̇) of the nominal model. ``NONE``: no model of the dynamics (a kinematic law,
+    the PI baseline)."""
 
-    TDE = "tde"  # H1hat, the time-delay estimate (17): a history, the estimator's fields;
-    # the law then depends on q through Mhat(q) only (its ``_trig``/``_mhat`` kernels)
-    MODEL = "model"  # Hhat(q, qdot) of the nominal model
-    NONE = "none"  # no model of the dynamics (a kinematic law: the PI baseline)
+    TDE = "tde"
+    MODEL = "model"
+    NONE = "none"
 
     @property
     def fields(self) -> tuple[ConfigField, ...]:
@@ -81,7 +84,9 @@ class LawState(Enum):
 @dataclass(frozen=True)
 class KernelArg:
     """One argument of a law kernel: its name (the kernel's parameter), what the step passes
-    (``source``: ``codegen.controller_api.STEP_SOURCES``) and the symbols or expressions."""
+    (``source``: ``codegen.controller_api.STEP_SOURCES``) and the symbols or expressions.
+    A ``config`` argument's values are symbols named as the configuration fields the step
+    passes (one field: a pointer to it; several: an array packed from them)."""
 
     name: str
     source: str
