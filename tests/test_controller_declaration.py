@@ -73,7 +73,8 @@ PACKAGE = "toy_declared_controller"
 
 
 def test_template_switches_are_derived_not_stored() -> None:
-    """A ControllerSpec stores what a law is; the eight switches are read from it."""
+    """A ControllerSpec stores what a law is (estimate, gain, error dynamics, states, own
+    fields); the template switches are read from it, none is stored beside it."""
     stored = {f.name for f in dataclasses.fields(ControllerSpec)}
     switches = {"tde", "switching", "window", "bounds", "adaptive", "trig", "integrator"}
     assert not stored & switches
