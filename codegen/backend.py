@@ -26,6 +26,7 @@ from codegen.spec import FunctionSpec
 
 if TYPE_CHECKING:
     from codegen.controller_layout import ControllerLayout
+    from modeling.controllers import ControllerSpec
     from modeling.robot_file import Robot
     from modeling.robot_model import RobotModel
 
@@ -87,7 +88,8 @@ class RobotTarget:
     the robot file's numbers (defaults written into the generated code); ``layout``: what
     the controller templates need; ``modules``: the generated functions in shared form;
     ``model_source`` / ``law_source``: what the model and the controller laws come from
-    (for file preambles).
+    (for file preambles); ``controllers``: the controllers generated (the registry's,
+    ``modeling.controllers.REGISTRY``), whose law kernels ``modules`` hold.
     """
 
     model: RobotModel
@@ -96,6 +98,7 @@ class RobotTarget:
     modules: tuple[Module, ...]
     model_source: str
     law_source: str
+    controllers: tuple[ControllerSpec, ...]
 
     def functions(self) -> Iterator[FunctionIR]:
         """Every generated function, module by module."""

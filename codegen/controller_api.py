@@ -8,12 +8,21 @@ sizes come from the robot's ``codegen.controller_layout.ControllerLayout``.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from codegen.controller_layout import ControllerLayout, words
 from codegen.robot_functions import MAX_WINDOW
 from codegen.spec import StatusCode
-from modeling.controllers import BASE_CHECKS, REGISTRY, ControllerSpec, KernelArg, kernel
+from modeling.controllers import (
+    BASE_CHECKS,
+    REGISTRY,
+    SHARED_FIELDS,
+    ConfigField,
+    ControllerSpec,
+    KernelArg,
+    kernel,
+)
 from modeling.robot_model import RobotModel
 
 # Input magnitudes beyond this are rejected as absurd (a lying sensor), not clipped.
@@ -34,47 +43,60 @@ NOMINAL_FACTOR = "1.0e3"  # |nominal p| <= NOMINAL_FACTOR * max(|robot file's p|
 # wheel radius of 1e-30 m was accepted and overflowed M-hat in float32)
 STEPS_MAX = "4294967295"  # the saturating step counter (uint32_t)
 
-# Which input or field an error is about (``<prefix>_error_detail_t.field``). Stable values:
-# append, never renumber.
-FIELDS: tuple[tuple[str, str], ...] = (
-    ("NONE", "no error"),
-    ("STATE", "the state pointer, or a state never initialised"),
-    ("CONFIG", "the config pointer, or a config changed since _init"),
-    ("Q", "q[index]"),
-    ("QDOT", "qdot[index]"),
-    ("Q_DES", "q_des[index]"),
-    ("QDOT_DES", "qdot_des[index]"),
-    ("QDDOT_DES", "qddot_des[index]"),
-    ("TAU", "tau (NULL), or the torque tau[index] computed"),
-    ("NOMINAL", "nominal parameter index (struct order); -1: the parameters together"),
-    ("FORMULATION", "formulation"),
-    ("K1", "k1[index]"),
-    ("K2", "k2[index]"),
-    ("Q_POS", "q_pos"),
-    ("Q_VEL", "q_vel"),
-    ("H", "h"),
-    ("TAU_MAX", "tau_max"),
-    ("ACCEL_ESTIMATOR", "accel_estimator"),
-    ("RATE_WINDOW", "rate_window"),
-    ("EPS", "eps"),
-    ("N", "n"),
-    ("A", "a"),
-    ("HOLD_GAIN", "hold_gain"),
-    ("HELD_GAIN", "held_gain"),
-    ("ALPHA", "alpha"),
-    ("PHI", "phi"),
-    ("GAMMA", "gamma"),
-    ("GAIN0", "gain0"),
-    ("GAIN", "the switching gain computed"),
-    ("S_NORM", "||s|| computed"),
-    ("U_DISCARDED", "||u rows dropped by tau = B^T u|| computed"),
-    ("P", "P of (20) from k1[index], k2[index], q_pos, q_vel is not finite"),
-    ("KX", "kx (the path tracker's along-track gain)"),
-    ("KY", "ky (the path tracker's cross-track gain)"),
-    ("KTHETA", "ktheta (the path tracker's heading gain)"),
-    ("KP", "kp (the wheel-velocity PI's proportional gain)"),
-    ("KI", "ki (the wheel-velocity PI's integral gain)"),
+# What an error can be about besides a configuration field (``<prefix>_field_t``), with its
+# stable number: (number, name, doc). The configuration fields bring their own
+# (``ConfigField.field_id``); ``detail_fields`` merges them. Append, never renumber.
+STEP_SUBJECTS: tuple[tuple[int, str, str], ...] = (
+    (0, "NONE", "no error"),
+    (1, "STATE", "the state pointer, or a state never initialised"),
+    (2, "CONFIG", "the config pointer, or a config changed since _init"),
+    (3, "Q", "q[index]"),
+    (4, "QDOT", "qdot[index]"),
+    (5, "Q_DES", "q_des[index]"),
+    (6, "QDOT_DES", "qdot_des[index]"),
+    (7, "QDDOT_DES", "qddot_des[index]"),
+    (8, "TAU", "tau (NULL), or the torque tau[index] computed"),
+    (9, "NOMINAL", "nominal parameter index (struct order); -1: the parameters together"),
+    (28, "GAIN", "the switching gain computed"),
+    (29, "S_NORM", "||s|| computed"),
+    (30, "U_DISCARDED", "||u rows dropped by tau = B^T u|| computed"),
+    (31, "P", "P of (20) from k1[index], k2[index], q_pos, q_vel is not finite"),
 )
+
+
+def registry_fields(controllers: Sequence[ControllerSpec]) -> tuple[ConfigField, ...]:
+    """Every configuration field of ``controllers``, once each, in registry order (a field
+    that two controllers have is one declaration: two different ones of one name are
+    refused)."""
+    seen: dict[str, ConfigField] = {}
+    for c in controllers:
+        for f in c.fields:
+            if seen.setdefault(f.name, f) != f:
+                raise ValueError(f"controller {c.name}: field {f.name!r} differs from "
+                                 "another controller's field of that name")
+    return tuple(seen.values())
+
+
+def detail_fields(controllers: Sequence[ControllerSpec]) -> tuple[tuple[str, str], ...]:
+    """``<prefix>_field_t`` in value order, (name, doc): ``STEP_SUBJECTS`` and every
+    configuration field of ``controllers`` at its ``field_id``, then the fields without one
+    in registry order. The numbered ones must be 0, 1, ... without a gap or a repeat."""
+    numbered = [(i, name, doc) for i, name, doc in STEP_SUBJECTS]
+    rest = []
+    for f in registry_fields(controllers):
+        if f.field_id is None:
+            rest.append((f.name.upper(), f.detail_doc))
+        else:
+            numbered.append((f.field_id, f.name.upper(), f.detail_doc))
+    numbered.sort()
+    if [i for i, _, _ in numbered] != list(range(len(numbered))):
+        raise ValueError("the field_id of the configuration fields and STEP_SUBJECTS must "
+                         f"number 0..{len(numbered) - 1} once each: {numbered}")
+    return (*((name, doc) for _, name, doc in numbered), *rest)
+
+
+# Which input or field an error is about (``<prefix>_field_t``), for the registry.
+FIELDS: tuple[tuple[str, str], ...] = detail_fields(REGISTRY)
 FIELD_IDS: dict[str, int] = {name: i for i, (name, _) in enumerate(FIELDS)}
 
 
@@ -163,9 +185,10 @@ def real_bounds() -> tuple[tuple[str, str, str], ...]:
     )
 
 
-def c_common_context() -> dict[str, object]:
-    """What ``controller_common.{h,c}.jinja`` needs besides the robot: bounds and fields."""
-    return {"real_bounds": real_bounds(), "fields": FIELDS}
+def c_common_context(controllers: Sequence[ControllerSpec] = REGISTRY) -> dict[str, object]:
+    """What ``controller_common.{h,c}.jinja`` needs besides the robot: bounds and the fields
+    an error can be about (of ``controllers``)."""
+    return {"real_bounds": real_bounds(), "fields": detail_fields(controllers)}
 
 
 @dataclass(frozen=True)
@@ -225,14 +248,26 @@ def config_values(spec: ControllerSpec, param_fields: list[str]) -> list[tuple[s
     return [(f"nominal.{f}", "real", 1) for f in param_fields] + list(config_fields(spec))
 
 
-def python_context() -> dict[str, object]:
-    """What ``controllers.py.jinja`` needs besides the robot (the C constants, mirrored)."""
+def python_context(controllers: Sequence[ControllerSpec] = REGISTRY) -> dict[str, object]:
+    """What ``controllers.py.jinja`` needs besides the robot (the C constants, mirrored) for
+    ``controllers``."""
     return {
         "real_bounds": real_bounds(),
         "steps_max": STEPS_MAX,
-        "fields": FIELDS,
-        "config_fields": {c.name: config_fields(c) for c in CONTROLLERS},
+        "fields": detail_fields(controllers),
+        "config_fields": {c.name: config_fields(c) for c in controllers},
+        "mirror_fields": mirror_fields(controllers),
     }
+
+
+def mirror_fields(controllers: Sequence[ControllerSpec]) -> tuple[ConfigField, ...]:
+    """The members of the Python mirror's ``Config`` after ``nominal``: every field of
+    ``controllers``, the shared ones first in their order (``SHARED_FIELDS``), then each
+    law's own in registry order."""
+    fields = registry_fields(controllers)
+    shared = [f for f in SHARED_FIELDS if f in fields]
+    return (*shared, *(f for f in fields if f not in SHARED_FIELDS))
+
 
 
 def nominal_bound(default: float) -> float:
@@ -270,7 +305,7 @@ def config_struct_lines(spec: ControllerSpec, layout: ControllerLayout) -> list[
     actuated_k1 = ", ".join(f"k1[{a}]" for a in layout.actuated)
     lines = []
     for f in spec.fields:
-        ctype = "int" if f.kind == "int" else f"{pre}_real_t"
+        ctype = f.c_type(pre)
         dims = f"[{layout.nq}]" if f.kind == "vector" else ""
         decl = f"{ctype} {f.name}{dims};"
         doc = f.doc.format(PRE=layout.PREFIX, actuated_k1=actuated_k1,
@@ -278,7 +313,7 @@ def config_struct_lines(spec: ControllerSpec, layout: ControllerLayout) -> list[
         if not doc:
             lines.append(f"    {decl}")
             continue
-        width = len(("int" if f.kind == "int" else "wmr_real_t") + f" {f.name}"
+        width = len(f.c_type("wmr") + f" {f.name}"
                     + ("[5]" if f.kind == "vector" else "") + ";")
         first, *rest = doc.split("\n")
         pad = " " * max(1, _COMMENT_COLUMN - width)
@@ -290,5 +325,6 @@ def config_struct_lines(spec: ControllerSpec, layout: ControllerLayout) -> list[
     return lines
 
 
-# The controllers, as codegen sees them: the registry's entries (modeling.controllers).
+# The registry's controllers (modeling.controllers.REGISTRY), the default of the functions
+# above; a generation reads its own (``RobotTarget.controllers``).
 CONTROLLERS: tuple[ControllerSpec, ...] = REGISTRY

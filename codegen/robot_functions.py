@@ -643,8 +643,10 @@ def _kernel_input(arg: ctl.KernelArg, model: RobotModel) -> Argument:
 
 
 @cache
-def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
-    """``<prefix>_laws``: pure kernels of the four controllers, each formulation."""
+def law_specs(model: RobotModel, controllers: tuple[ctl.ControllerSpec, ...] = ctl.REGISTRY
+              ) -> tuple[FunctionSpec, ...]:
+    """``<prefix>_laws``: the estimate's and the gains' pure kernels, and the law kernel of
+    each of ``controllers`` (the registry's), each formulation."""
     specs: list[FunctionSpec] = []
     k1, k2, q1, q2 = sp.symbols("k1 k2 q1 q2", positive=True)
     p11, p12, p22 = ctl.lyapunov_p(k1, k2, q1, q2)
@@ -751,7 +753,7 @@ def law_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 ("(25)",),
             )
         )
-        for c in ctl.REGISTRY:
+        for c in controllers:
             if f not in c.formulations:
                 continue
             kernel = ctl.kernel(c, f, model)

@@ -1,4 +1,4 @@
-"""The symbolic controller laws (modeling/controllers.py) — facts the generated code uses."""
+"""The symbolic controller laws (modeling/controllers/) — facts the generated code uses."""
 
 from __future__ import annotations
 

@@ -100,7 +100,7 @@ def _sympy_laws(name: str, form: str) -> SympyLaws:
     if name in ("tdc", "tdroc"):
         law, ls = ctl.tde_law(f, switching=name == "tdroc", model=DRISHTI)
     else:
-        law, ls = ctl.model_law(f, name, DRISHTI)  # type: ignore[arg-type]
+        law, ls = {"roc": ctl.roc_law, "asmc": ctl.asmc_law}[name](f, DRISHTI)
     law_args = [
         *PARAM_SYMBOLS, *wmr.q, *wmr.qdot, *ls.e, *ls.edot, *ls.qddot_des, *ls.k1, *ls.k2,
         *ls.p12, *ls.p22, *ls.h1, ls.gain, ls.eps, ls.alpha, ls.phi,

@@ -33,7 +33,6 @@ from codegen.backends.c.format import format_c
 from codegen.backends.c.kernels import law_wrappers, step_kernels, step_norms
 from codegen.backends.c.printer import CPrinter
 from codegen.controller_api import (
-    CONTROLLERS,
     MAX_ABS_INPUT,
     c_common_context,
     c_controller_context,
@@ -171,7 +170,7 @@ class CBackend:
         laws = next(m for m in target.modules if m.name == f"{pre}_laws")
         kp = f"{pre}_k_"  # the steps' kernels, written once in <prefix>_kernels.h
         kernels_h = f"{pre}_kernels.h"
-        kernels = step_kernels(CONTROLLERS, layout, laws.functions, laws.name, kp, config)
+        kernels = step_kernels(target.controllers, layout, laws.functions, laws.name, kp, config)
         modules = [
             module_context(m.functions, m.name, config,
                            law_wrappers(m.functions, kernels, kp, config) if m is laws else None)
@@ -189,7 +188,7 @@ class CBackend:
                 param_fields=param_fields, max_abs_input=MAX_ABS_INPUT,
                 nominal_conditions=nominal_conditions(target, config),
                 nominal_guards=nominal_guards(target, config),
-                nominal_bounds=nominal_bounds(target), **c_common_context(),
+                nominal_bounds=nominal_bounds(target), **c_common_context(target.controllers),
             )
         text = template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja",
                                     functions=list(kernels.contexts), laws=laws.name,
@@ -198,7 +197,7 @@ class CBackend:
             "kernels.h.jinja", law, guard=f"{pre.upper()}_KERNELS_H", kernels=text,
             laws=laws.name, prefix=pre, types_header=config.types_header)
         norms = set(kernels.norms).union(*(ctx.norms for ctx in modules))
-        for info in CONTROLLERS:
+        for info in target.controllers:
             context = dict(
                 layout=layout, c=info, max_abs_input=MAX_ABS_INPUT, step_kernel_prefix=kp,
                 **c_controller_context(info, param_fields, layout, target.model),

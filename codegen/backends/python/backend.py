@@ -16,7 +16,6 @@ from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
 from codegen.contact_forces import contact_rows
 from codegen.controller_api import (
-    CONTROLLERS,
     MAX_ABS_INPUT,
     law_signature,
     nominal_range,
@@ -25,7 +24,7 @@ from codegen.controller_api import (
 )
 from codegen.robot_functions import MAX_WINDOW
 from codegen.template_util import generated_by
-from modeling.controllers import BASE_CHECKS
+from modeling.controllers import BASE_CHECKS, ControllerSpec
 from modeling.version import VERSION
 
 
@@ -64,19 +63,20 @@ def robot_py(target: RobotTarget) -> str:
         "# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.\n"
         f"DRIVEN_WHEELS = {rows.driven!r}\n"
         f"LATERAL_WHEELS = {rows.lateral_wheels!r}\n"
-        + controllers_py()
+        + controllers_py(target.controllers)
     )
 
 
-def controllers_py() -> str:
-    """``CONTROLLERS`` of robot.py: the registry (``modeling.controllers.REGISTRY``) as data,
-    so that the runtime iterates the controllers without importing SymPy or retyping them:
-    name, label, title, equations, step features and configuration fields (name, kind,
-    unit, where the runtime takes the value)."""
+def controllers_py(controllers: tuple[ControllerSpec, ...]) -> str:
+    """``CONTROLLERS`` of robot.py: the controllers generated (the registry,
+    ``modeling.controllers.REGISTRY``) as data, so that the runtime iterates them without
+    importing SymPy or retyping them: name, label, title, equations, the step features
+    derived from each declaration and configuration fields (name, kind, unit, where the
+    runtime takes the value)."""
     lines = ["# The controllers generated for this robot (modeling.controllers.REGISTRY): name,",
              "# labels, step features, configuration fields (name, kind, unit, value source).",
              "CONTROLLERS: tuple[dict[str, Any], ...] = ("]
-    for c in CONTROLLERS:
+    for c in controllers:
         fields = ", ".join(f"({f.name!r}, {f.kind!r}, {f.unit!r}, {f.source!r})"
                            for f in c.fields)
         lines += [
@@ -120,8 +120,9 @@ class PythonBackend:
             preamble=template_util.preamble_lines(target.law_source, TEMPLATE_DIR, template),
             layout=layout,
             status_codes=status_codes(layout),
-            controllers=CONTROLLERS,
-            law_signatures={c.name: law_signature(c, target.model) for c in CONTROLLERS},
+            controllers=target.controllers,
+            law_signatures={c.name: law_signature(c, target.model)
+                            for c in target.controllers},
             base_checks=BASE_CHECKS,
             formulation_paper=0,
             formulation_minimal=1,
@@ -134,7 +135,7 @@ class PythonBackend:
             nominal_ranges={p.key: nominal_range(target.robot.lumped[p.key],
                                                  p.key in target.model.positive)
                             for p in target.model.params},
-            **python_context(),
+            **python_context(target.controllers),
         )
         files["robot.py"] = robot_py(target)
         files["__init__.py"] = (
