@@ -18,7 +18,7 @@ model: $(STAMP)
 
 ## Lint, type-check and run the test suite on both cores (one worker per test file); the
 ## suite regenerates every robot and fails with the diff if generated/ is stale
-## (tests/test_codegen_cli.py, the same check as `python -m codegen --check`).
+## (tests/codegen/test_codegen_cli.py, the same check as `python -m codegen --check`).
 test: $(STAMP) lint
 	$(PY) -m pytest -q -n 2 --dist loadfile
 

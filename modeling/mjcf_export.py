@@ -4,7 +4,7 @@
 (``wmr mjcf``, and the MuJoCo plant of ``runtime.mujoco``). The inertias are chosen so that
 MuJoCo's mass matrix, restricted to the planar motions (root x, y, yaw; each hitch's yaw;
 each wheel's spin) and mapped to the derived model's coordinates, is the derived M(q) of
-(9) (``tests/test_mujoco.py`` checks it with ``mj_fullM`` at random states):
+(9) (``tests/runtime/test_mujoco.py`` checks it with ``mj_fullM`` at random states):
 
 * the root is a free body (``root``: its frame origin is the robot's (x, y), e.g.
   Drishti's C); every further body hangs from its parent on a vertical hinge at the hitch

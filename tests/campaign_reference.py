@@ -1,6 +1,6 @@
 """A campaign's summary recomputed from its run records alone, to check ``summary.json`` and
-``summary.md`` (:mod:`runtime.campaign.summary`) against (``tests/test_campaign_summary.py``,
-``tests/test_campaign.py``).
+``summary.md`` (:mod:`runtime.campaign.summary`) against
+(``tests/runtime/test_campaign_summary.py``, ``tests/runtime/test_campaign.py``).
 
 Written apart from the code under test on purpose: plain Python over the rows of
 ``results.parquet`` (percentiles by hand, linear between order statistics, numpy's default),

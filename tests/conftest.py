@@ -103,7 +103,8 @@ def drishti() -> np.ndarray:
 @pytest.fixture(scope="session")
 def c_builds(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The generated C compiled with the strict flags in both precisions (see
-    ``generated_code_support.build_generated_c``), shared by ``tests/test_generated_*.py``."""
+    ``generated_code_support.build_generated_c``), shared by
+    ``tests/generated/test_generated_*.py``."""
     from generated_code_support import build_generated_c
 
     return build_generated_c(tmp_path_factory)

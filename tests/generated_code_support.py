@@ -1,5 +1,5 @@
-"""Shared by the tests of the checked-in generated code (``tests/test_generated_*.py``,
-``tests/test_codegen_cli.py``): constants, the strict-flag C builds (the session fixture
+"""Shared by the tests of the checked-in generated code (``tests/generated/test_generated_*.py``,
+``tests/codegen/test_codegen_cli.py``): constants, the strict-flag C builds (the session fixture
 ``c_builds`` of ``conftest.py`` calls :func:`build_generated_c`), the C and Python
 controller configurations, a cffi controller wrapper and smooth input sequences.
 

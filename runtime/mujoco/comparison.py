@@ -10,7 +10,7 @@ floors of :data:`CASES`: μ = 1, 0.2, 0.1, and μ = 0.1 with the traction-aware 
 wheels' measured slip (rim speed less the centre's speed along the heading): its largest
 value and the first instant it exceeds :data:`SLIP_THRESHOLD`. The document also states the
 wheels' static loads (``modeling.mjcf_export.static_loads``) against the engine's at rest,
-and the run time of a run on each plant. Not a test: ``tests/test_mujoco.py`` runs a
+and the run time of a run on each plant. Not a test: ``tests/runtime/test_mujoco.py`` runs a
 shortened experiment through :func:`compare` and :func:`markdown`.
 """
 
@@ -273,7 +273,7 @@ def markdown(comp: Comparison) -> str:
         "controller, encoders and odometry, the payload schedule) on two plants: the "
         "derived model integrated by RK4 (ideal rolling: a wheel never slips) and MuJoCo on "
         "the MJCF `wmr mjcf` writes from the robot's description (the same planar inertias, "
-        "checked to 1e-6 by `tests/test_mujoco.py`; point-contact wheels, contact time "
+        "checked to 1e-6 by `tests/runtime/test_mujoco.py`; point-contact wheels, contact time "
         f"constant {pl.contact_timeconst:g} s, frictionless supports for a single axle). "
         "Errors in mm (RMS / max of the reference point's distance from the reference); "
         "outcome as `wmr reproduce` classifies it; slip: the driven wheels' largest rim "
@@ -309,7 +309,7 @@ def markdown(comp: Comparison) -> str:
                   "proportion to their static loads: an assumption, the rigid model does not "
                   "split it), and compares √(F_x² + F_y²) with μ N (friction circle; N: the "
                   "stated static load with the payload on board). Against MuJoCo's contact "
-                  "forces on a turn from rest (tests/test_mujoco.py): F_x within 0.2 % "
+                  "forces on a turn from rest (tests/runtime/test_mujoco.py): F_x within 0.2 % "
                   "(Drishti), the axle's F_y within 1.3 %, each wheel's share of it within "
                   "1.5 % until the engine's load transfer in fast turns loads the outer "
                   "wheel. Run on the model plant (which cannot slip), the monitor "

@@ -7,7 +7,7 @@ and ``figures`` (its metrics, report and figures), ``printed_paths`` (the paper'
 inconsistent path definitions, drawn beside ours), and ``handwritten`` (the paper's
 equations typed by hand, the independent witness of the cross-check and the benchmarks,
 with ``csrc/hand_model.c``). ``csrc/fuzz_driver.c`` drives the ``wmr_`` controllers under
-sanitizers (tests/test_firmware_sanitizers.py).
+sanitizers (tests/firmware/test_firmware_sanitizers.py).
 
 No imports here: each module is imported on its own.
 """

@@ -8,7 +8,7 @@ from the minimal forward dynamics (the route of (10)–(12)), in newtons. Per dr
 * F_x, the ground's force along the wheel's heading (its rolling row's multiplier), given
   the net torque τ − τ_f (τ_f the bearing friction the plant applies: viscous and
   tanh-smoothed Coulomb, as ``runtime.sim.plant.GeneratedPlant``); it equals
-  (τ − τ_f − J θ̈)/r, the wheel's own row of (9) (tests/test_contact_forces.py);
+  (τ − τ_f − J θ̈)/r, the wheel's own row of (9) (tests/generated/test_contact_forces.py);
 * F_y, the ground's force along the axle (positive to the left): an axle's wheels share
   one no-side-slip row, whose multiplier is the axle's lateral force. The rigid model does
   not split it (statically indeterminate); **assumption**: it is split between that axle's

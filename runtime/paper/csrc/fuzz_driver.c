@@ -1,6 +1,6 @@
 /*
  * Randomised driver of the generated controllers and forward dynamics, for sanitizer
- * builds (tests/test_firmware_sanitizers.py):
+ * builds (tests/firmware/test_firmware_sanitizers.py):
  *
  *   cc -std=c99 -fsanitize=address,undefined -fno-sanitize-recover=all \
  *      -Igenerated/c generated/c/wmr_*.c runtime/paper/csrc/fuzz_driver.c -lm

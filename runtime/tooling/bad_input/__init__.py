@@ -2,7 +2,7 @@
 
 ``python -m runtime.tooling.bad_input.table`` runs all cases on the double build of
 ``generated/c`` (through cffi) and writes ``docs/BAD_INPUT.md``; ``--check`` exits 1 if
-the committed file differs. ``tests/test_firmware_bad_input.py`` runs the same cases,
+the committed file differs. ``tests/firmware/test_firmware_bad_input.py`` runs the same cases,
 asserts each expectation and that the committed document equals :func:`render`'s output,
 so the table cannot drift from the code.
 

@@ -365,7 +365,7 @@ def main(argv: list[str] | None = None) -> int:
                         robot_calls, args.runs)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "BENCHMARKS.md").write_text(text)
-    # the README's ratio tables are BENCHMARKS.md's (tests/test_bench.py compares them)
+    # the README's ratio tables are BENCHMARKS.md's (tests/runtime/test_bench.py compares them)
     sync_readme(args.out / "README.md", ratio_tables(c, steps, robots))
     (args.out / "benchmarks.json").write_text(
         json.dumps(

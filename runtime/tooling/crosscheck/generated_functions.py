@@ -59,7 +59,7 @@ PARAM_SPREAD = 0.3  # parameters scaled by a factor in [1 - spread, 1 + spread]
 PHYSICAL_CHECKS = 16  # configurations at which drawn parameters must give S^T M S > 0
 RANGES: dict[str, tuple[float, float]] = {
     # traction check: a floor and loads that hold the random states' contact forces (the
-    # warning path, which writes nothing, is tests/test_contact_forces.py's)
+    # warning path, which writes nothing, is tests/generated/test_contact_forces.py's)
     "mu": (0.5, 1.0), "loads": (3000.0, 6000.0), "shares": (0.0, 1.0),
     "tau": (-30.0, 30.0), "u_prev": (-30.0, 30.0), "qdot_now": (-10.0, 10.0),
     "qdot_then": (-10.0, 10.0), "span": (0.05, 0.3), "e": (-1.0, 1.0), "edot": (-3.0, 3.0),

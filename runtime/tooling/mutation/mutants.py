@@ -31,21 +31,24 @@ SLIP = "runtime/sim/slip_monitor.py"
 SETTINGS = "runtime/experiment/settings.py"
 ANALYSIS = "runtime/stability/analysis.py"
 
-T_STAGED = "tests/test_staged_solves.py"
-T_KKT = "tests/test_derivation_kkt.py"
-T_KANE = "tests/test_description_kane.py"
-T_ROOT = "tests/test_root_frame.py"
-T_FAULTS = "tests/test_faults.py"
-T_FAULTS_MJ = "tests/test_faults_mujoco.py"
-T_JITTER = "tests/test_jitter.py"
-T_SENSING = "tests/test_sensing_estimator.py"
-T_REPRO = "tests/test_reproduction.py"
-T_STAB = "tests/test_stability_any_robot.py"
-T_SAT = "tests/test_saturation_payload.py"
-T_FROZEN = "tests/test_frozen_config.py"
-T_OUTCOME = "tests/test_outcome.py"
-T_ONE_LOOP = "tests/test_one_loop.py"
-T_GEN_SYMPY = "tests/test_generated_vs_sympy.py"
+T_STAGED = "tests/derivation/test_staged_solves.py"
+T_KKT = "tests/derivation/test_derivation_kkt.py"
+T_KANE = "tests/derivation/test_description_kane.py"
+T_ROOT = "tests/derivation/test_root_frame.py"
+T_FAULTS = "tests/runtime/test_faults.py"
+T_FAULTS_MJ = "tests/runtime/test_faults_mujoco.py"
+T_JITTER = "tests/runtime/test_jitter.py"
+T_SENSING = "tests/runtime/test_sensing_estimator.py"
+T_REPRO = "tests/reproduction/test_reproduction.py"
+T_STAB = "tests/runtime/test_stability_any_robot.py"
+T_SAT = "tests/runtime/test_saturation_payload.py"
+T_FROZEN = "tests/firmware/test_frozen_config.py"
+T_OUTCOME = "tests/runtime/test_outcome.py"
+T_ONE_LOOP = "tests/runtime/test_one_loop.py"
+T_GEN_SYMPY = "tests/generated/test_generated_vs_sympy.py"
+T_MUJOCO = "tests/runtime/test_mujoco.py"
+T_RK4 = "tests/runtime/test_plant_integrator.py"
+T_CLI = "tests/runtime/test_cli.py"
 
 MUTANTS: tuple[Mutant, ...] = (
     # --- modeling: the derivation ---------------------------------------------------------
@@ -81,7 +84,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("printer-negative-half-power", PRINTER,
            "                return f\"{self.lit(1.0)}/{text if single else f'({text})'}\", False",
            "                return text, single",
-           ("tests/test_codegen_backends.py", T_GEN_SYMPY),
+           ("tests/codegen/test_codegen_backends.py", T_GEN_SYMPY),
            "x^(-3/2) printed as x^(3/2): the reciprocal dropped"),
     # --- runtime: sensing, faults, payload, the loop ----------------------------------------
     Mutant("encoder-rounds", SENSORS,
@@ -91,7 +94,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("encoder-average-over-window", SENSORS,
            'if v == "sample-instant":\n            return true_rates.copy()',
            'if v == "encoder-average":\n            return true_rates.copy()',
-           ("tests/test_sensors.py", T_SENSING),
+           ("tests/runtime/test_sensors.py", T_SENSING),
            "the encoder average read as the true instantaneous rate"),
     Mutant("fault-window-one-late", FAULTS,
            "k0 = max(1, math.ceil(self.start / h - tol))",
@@ -112,11 +115,11 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("extra-payload-engine-always", PAYLOAD,
            "return np.array([pl.fixed_payload, pl.extra_payload if pl.extra_on(t) else 0.0])",
            "return np.array([pl.fixed_payload, pl.extra_payload])",
-           (T_FAULTS_MJ, "tests/test_mujoco.py"), "the engine carrying the extra payload always"),
+           (T_FAULTS_MJ, T_MUJOCO), "the engine carrying the extra payload always"),
     Mutant("rk4-weight", RK4,
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(2.0) * k3[i]",
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(1.0) * k3[i]",
-           ("tests/test_plant_integrator.py",), "RK4 with a wrong weight: a first-order plant"),
+           (T_RK4,), "RK4 with a wrong weight: a first-order plant"),
     Mutant("jitter-not-drawn", LOOP,
            "d += float(self.rng.uniform(-self.jitter, self.jitter))",
            "d += 0.0 * float(self.rng.uniform(-self.jitter, self.jitter))",
@@ -150,16 +153,16 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("slip-needs-least-wheel", SLIP,
            "return float(np.max(np.abs(forces) / n)) if np.all(n > 0) else math.inf",
            "return float(np.min(np.abs(forces) / n)) if np.all(n > 0) else math.inf",
-           ("tests/test_slip_asymmetric.py", "tests/test_mujoco.py"),
+           ("tests/runtime/test_slip_asymmetric.py", T_MUJOCO),
            "the friction needed read off the wheel that needs the least"),
     Mutant("contact-timeconst-one-step", SETTINGS,
            'if pl.model == "mujoco" and pl.contact_timeconst < 2 * dt:',
            'if pl.model == "mujoco" and pl.contact_timeconst < dt:',
-           ("tests/test_mujoco.py",), "a contact MuJoCo stiffens silently, accepted"),
+           (T_MUJOCO,), "a contact MuJoCo stiffens silently, accepted"),
     Mutant("pre-run-check-skips-tde", CHECKS,
            "    if info.tde:\n        check_tde(",
            "    if not info.tde:\n        check_tde(",
-           (T_STAB, T_FAULTS, "tests/test_cli.py"), "TDC/TDROC run where (17)'s condition fails"),
+           (T_STAB, T_FAULTS, T_CLI), "TDC/TDROC run where (17)'s condition fails"),
     Mutant("freeze-ignores-verdict", FREEZE,
            "chosen = next((v for v in verdicts if v[0] in candidates and v[2].stable), None)",
            "chosen = next((v for v in verdicts if v[0] in candidates), None)",
@@ -176,11 +179,11 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("bench-times-disagreeing", STEP_BENCH,
            "    if (!(worst <= TOL * (scale > 1.0 ? scale : 1.0))) return 3;",
            "    (void)TOL;",
-           ("tests/test_bench.py::test_step_benchmark_refuses_a_competitor_with_other_torques",),
+           ("tests/runtime/test_bench.py::test_step_benchmark_refuses_a_competitor_with_other_torques",),
            "make bench timing a competitor that computes other torques"),
     Mutant("campaign-connect-unbounded", EXECUTION,
            'client = Client(scheduler, timeout=f"{timeout}s")',
            "client = Client(scheduler)",
-           ("tests/test_campaign.py::test_out_file_and_bad_spec_and_unreachable_scheduler",),
+           ("tests/runtime/test_campaign.py::test_out_file_and_bad_spec_and_unreachable_scheduler",),
            "an unreachable scheduler waited for with Dask's default"),
 )
