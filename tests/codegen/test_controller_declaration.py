@@ -114,8 +114,8 @@ def mirror(generated: Path) -> ModuleType:
 
 @pytest.fixture(scope="module")
 def c_lib(generated: Path) -> cbuild.CLibrary:
-    """Every generated .c compiled with the strict flags (as tests/test_generated_c_build.py,
-    at -O0), linked and bound."""
+    """Every generated .c compiled with the strict flags (as
+    tests/generated/test_generated_c_build.py, at -O0), linked and bound."""
     src = generated / "c"
     out = generated / "build"
     out.mkdir()
