@@ -22,9 +22,9 @@ import pytest
 from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
 from runtime.bindings.robots import RobotSourceError, resolve
 from runtime.bindings.uncertainty import body_yaws, inertial_keys
-from runtime.experiment.scale import RobotScale, paper_scale, robot_scale, scaled_experiment
+from runtime.commands.reproduce import main
 from runtime.experiment.settings import Experiment, parse_experiment
-from runtime.reproduce_command import main
+from runtime.setting.scale import RobotScale, paper_scale, robot_scale, scaled_experiment
 from runtime.sim.paths import circle, lawnmower
 from runtime.sim.sensors import Sensors
 
@@ -236,7 +236,7 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
                     ignore=shutil.ignore_patterns("__pycache__"))
     probe = ("import runtime.bindings.generated as g\n"
              "assert g.load_robot_code('').name == 'trailer'\n"
-             "import runtime.experiment.reproduction  # the generic runtime needs no paper "
+             "import runtime.reproduction.robot  # the generic runtime needs no paper "
              "robot\n"
              "from runtime.bindings.generated import wmr_model\n")
     result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
@@ -253,7 +253,7 @@ def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
 
     probe = (
         "import sys\nfrom pathlib import Path\n"
-        "import runtime.reproduce_command, runtime.experiment.reproduction\n"
+        "import runtime.commands.reproduce, runtime.reproduction.robot\n"
         "from runtime.bindings.robots import resolve\n"
         f"resolve(Path({str(SMALL)!r})); resolve(Path({str(TRAILER)!r}))\n"
         "print(sorted(m for m in ('sympy', 'codegen', 'casadi') if m in sys.modules))\n"

@@ -34,8 +34,8 @@ import scipy.linalg as sla
 from numpy.typing import NDArray
 
 from runtime.bindings.generated import load_robot_code
-from runtime.experiment.arguments import robot_setting
 from runtime.experiment.settings import Experiment
+from runtime.setting.robot import robot_setting
 from runtime.stability import analysis as stability
 from runtime.stability.sampled_loop import GAIN_CEILING, layout
 

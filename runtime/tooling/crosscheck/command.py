@@ -19,7 +19,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from runtime.output_folder import OutputFolderError, writable_file
+from runtime.commands.output_folder import OutputFolderError, writable_file
 from runtime.tooling.crosscheck.deviation import IMPLS
 from runtime.tooling.crosscheck.generated_check import generated_crosscheck
 from runtime.tooling.crosscheck.handwritten_check import applies_to, handwritten_crosscheck
