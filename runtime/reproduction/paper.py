@@ -14,7 +14,7 @@ them; the outputs are built by the modules of the floors above it:
 * :mod:`runtime.commands.reproduce`: the command line, which writes them all.
 
 For each sensing model chosen with ``--sensing`` (default: ``sample-instant`` and
-``encoder-average``, see :class:`runtime.experiment.SensingSettings`; the experiment file's
+``encoder-average``, see :class:`runtime.experiment.settings.SensingSettings`; the experiment file's
 other ``[sensing]`` fields, the estimator of q̈(t − h) in (17) among them, apply to each):
 2 paths (circle, lawn mower) × 4 controllers (TDC, TDROC, ROC, ASMC) × 2 formulations
 (paper, minimal), closed loop through the generated C. Then a sweep of TDROC's boundary
@@ -102,7 +102,8 @@ class Metrics:
 
 
 def rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x**2)))
+    """Root mean square (NaN for a run with no sample: refused)."""
+    return float(np.sqrt(np.mean(x**2))) if len(x) else float("nan")
 
 
 def metrics(r: Run, ref: Reference, sensing: str,

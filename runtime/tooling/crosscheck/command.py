@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="wmr crosscheck",
         description="Compare the generated Python, C (double, float32) and CasADi code of every "
-        "robot: with the hand-written equations (runtime/paper/handwritten) where they exist, "
+        "robot: with the hand-written equations (runtime/tooling/witness) where they exist, "
         "and C and CasADi with the generated NumPy for every robot.",
     )
     parser.add_argument(
