@@ -32,6 +32,7 @@ from runtime.cli import main as wmr
 from runtime.experiment.settings import ExperimentFileError, parse_experiment
 from runtime.mujoco.coordinates import CoordinateMap
 from runtime.mujoco.plant import mujoco_plant
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -74,7 +75,8 @@ def _circle(model: str, friction: float = 1.0) -> loop.Run:
     exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model=model,
                                                                friction=friction))
     ref = paths.circle(setup.code, setup.nominal, exp)
-    return loop.run(setup.code, "tdroc", "paper", ref, setup.nominal, exp)
+    return loop.run(setup.code, "tdroc", "paper", ref, setup.nominal, exp,
+                    plant=plant_for(setup.code, exp, setup.nominal))
 
 
 def test_drishti_on_mujoco_tracks_as_on_the_generated_plant() -> None:
@@ -256,7 +258,10 @@ def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
     import csv
 
     experiment = tmp_path / "short.toml"
-    experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n")
+    # A ±20 % box: over the default ±30 % the trailer's TDC and TDROC fail the TDE
+    # condition and the reproduction refuses them (tests/test_reproduce_refusal.py).
+    experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n"
+                          "[controller]\nuncertainty = 0.2\n")
     out = tmp_path / "out"
     assert wmr(["reproduce", "--robot", str(ROBOTS["trailer"]), "--plant", "mujoco",
                 "--experiment", str(experiment), "--sensing", "sample-instant", "--no-plots",
