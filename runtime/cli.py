@@ -16,9 +16,9 @@ ROBOT, for every command that runs one: a robot file (lumped, physical, or bodie
 wheels), a generated folder (``wmr model --out DIR``), or the name of a robot generated
 under ``generated/``; ``--generated DIR`` says where a robot file's code is, and
 ``--experiment FILE`` the experiment, scaled to the robot the same way by every command
-(``runtime.experiment.arguments``). Each subcommand has its own ``--help``. A command's
-module is imported only when it runs, so ``wmr reproduce`` never imports SymPy or the code
-generator.
+(``runtime.commands.options``). Each subcommand has its own ``--help``. A command's
+module (``runtime.commands.*``, or a tool's) is named here as a string and imported only
+when it runs, so ``wmr reproduce`` never imports SymPy or the code generator.
 """
 
 from __future__ import annotations
@@ -49,22 +49,22 @@ COMMANDS: dict[str, Command] = {
         "codegen.__main__", "exit 1 with a diff if generated code is stale", ("--check",)
     ),
     "reproduce": Command(
-        "runtime.reproduce_command", "run the paper's experiments, write plots and tables"
+        "runtime.commands.reproduce", "run the paper's experiments, write plots and tables"
     ),
     "crosscheck": Command(
         "runtime.tooling.crosscheck.command",
         "compare every implementation with the hand-written one",
     ),
     "stability": Command(
-        "runtime.stability.analysis",
+        "runtime.commands.stability",
         "predict each controller's sampled-data stability on a robot",
     ),
     "faults": Command(
-        "runtime.fault_table",
+        "runtime.commands.faults",
         "sensor and actuator faults in the closed loop: what each controller reports",
     ),
     "campaign": Command(
-        "runtime.campaign.command",
+        "runtime.commands.campaign",
         "thousands of closed-loop runs over the uncertainty box, on Dask",
         extra="campaign",
         needs=("dask", "distributed", "pyarrow", "tqdm"),
@@ -75,7 +75,7 @@ COMMANDS: dict[str, Command] = {
         "Cortex-M4 code size, stack and emulated instructions of the generated C",
     ),
     "freeze": Command(
-        "runtime.freeze.command",
+        "runtime.commands.freeze",
         "validate a controller configuration and write it as a header firmware compiles in",
     ),
 }

@@ -1,7 +1,7 @@
 """``wmr faults``: what each controller reports under sensor and actuator faults, and how
 many samples it needs to recover, on any robot with two driven wheels.
 
-Each fault (``runtime.sim.faults``; the experiment file's ``[[fault]]`` tables, or
+Each fault (``runtime.experiment.faults``; the experiment file's ``[[fault]]`` tables, or
 :data:`DEFAULT_FAULTS`) is injected into the closed loop (``runtime.sim.loop``) on the
 paper's circle scaled to the robot, for each controller generated for it in each
 formulation, beside the same run without the fault. Per run the table gives:
@@ -20,16 +20,15 @@ formulation, beside the same run without the fault. Per run the table gives:
   (the run stopped on a status < 0 or a non-finite state).
 
 Written: ``FAULTS.md`` and ``faults.csv`` (default folder: ``docs`` for the paper's robot,
-``faults/<robot>`` for another); the same inputs give the same bytes.
+``faults/<robot>`` for another; the command line is :mod:`runtime.commands.faults`); the
+same inputs give the same bytes.
 """
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import math
-import sys
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -40,17 +39,10 @@ from numpy.typing import NDArray
 
 from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode, load_robot_code
-from runtime.experiment.arguments import (
-    add_experiment_option,
-    add_plant_option,
-    add_robot_options,
-    load_setting,
-    output_folder,
-)
-from runtime.experiment.settings import Experiment, ExperimentFileError
-from runtime.output_folder import OutputFolderError, writable_folder
+from runtime.experiment.faults import Fault
+from runtime.experiment.settings import Experiment
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
-from runtime.sim.faults import Fault
 from runtime.sim.loop import NOT_CALLED, Run
 from runtime.sim.plant import spin_inertia_keys
 
@@ -331,7 +323,8 @@ def fault_table(
     pairs = [(f, c.name) for f, c in code.runs(tuple(formulations or code.formulations))
              if controllers is None or c.name in controllers]
     for i, (form, ctrl) in enumerate(pairs, 1):
-        base = loop.run(code, ctrl, form, ref, robot, exp, plant_params=plant)
+        base = loop.run(code, ctrl, form, ref, robot, exp, plant_params=plant,
+                        plant=plant_for(code, exp, robot, plant))
         if base.failed_at is not None and base.failed_at < SETTLE:
             not_run[(ctrl, form)] = (f"the fault-free run stopped at {base.failed_at:g} s: "
                                      f"{base.stop_reason}")
@@ -342,7 +335,7 @@ def fault_table(
         thresholds[(ctrl, form)] = Monitors.calibrate(base, exp, code.actuated).thresholds
         for fault in chosen:
             faulted = loop.run(code, ctrl, form, ref, robot, exp, plant_params=plant,
-                               faults=[fault])
+                               plant=plant_for(code, exp, robot, plant), faults=[fault])
             rows.append(fault_row(code, fault, base, faulted, exp, n))
         if progress:
             print(f"[{i}/{len(pairs)}] {ctrl}/{form}: {len(chosen)} faults", flush=True)
@@ -460,7 +453,7 @@ def markdown(table: FaultTable) -> str:
         "",
         "## Faults",
         "",
-        "Faults act at sample granularity (see `runtime/sim/faults.py`):",
+        "Faults act at sample granularity (see `runtime/experiment/faults.py`):",
         "",
     ]
     lines += [f"* {f.describe()}" for f in table.faults]
@@ -580,39 +573,3 @@ def write(table: FaultTable, out: Path) -> list[Path]:
     md.write_text(markdown(table), encoding="utf-8")
     cs.write_text(csv_text(table), encoding="utf-8")
     return [md, cs]
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="wmr faults",
-        description="Inject sensor and actuator faults; write FAULTS.md and faults.csv.",
-    )
-    add_experiment_option(parser)
-    add_plant_option(parser)
-    add_robot_options(parser)
-    parser.add_argument(
-        "--out", type=Path, default=None,
-        help="output folder (default: docs/ of a source checkout, the working directory when "
-        "installed, for the paper's robot; ./faults/<robot> for another)",
-    )  # fmt: skip
-    args = parser.parse_args(argv)
-    try:
-        setting = load_setting(args)
-        out = writable_folder(output_folder(setting, args.out, DEFAULT_OUT, "faults"))
-    except (ExperimentFileError, OutputFolderError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    setup = setting.robot
-    if not setting.is_paper_robot:
-        print(f"robot '{setup.name}' from {setup.source}:", *setting.scaling, sep="\n  ",
-              flush=True)
-    try:
-        table = fault_table(setting.experiment, robot=setup.nominal, code=setup.code,
-                            plant=None if setting.is_paper_robot else setup.plant,
-                            progress=True)
-    except ValueError as exc:  # a robot or fault the faults cannot be simulated on
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    for path in write(table, out):
-        print(f"wrote {path}")
-    return 0

@@ -1,6 +1,6 @@
 """Robustness campaigns: thousands of closed-loop runs over the uncertainty box on Dask.
 
-``python -m runtime campaign`` (:mod:`runtime.campaign.command`). One module per job:
+``python -m runtime campaign`` (:mod:`runtime.commands.campaign`). One module per job:
 
 * :mod:`~runtime.campaign.spec`: the campaign file (TOML), checked field by field, and its hash;
 * :mod:`~runtime.campaign.sampling`: each run's parameters from (campaign seed, run index);

@@ -80,7 +80,7 @@ def target(robot: str | None, generated: str | None = None) -> Target:
     """The robot ``--robot`` names (None: Drishti), its code under ``generated`` (cached
     per process)."""
     from runtime.bindings.uncertainty import inertial_keys
-    from runtime.experiment.scale import robot_scale
+    from runtime.setting.scale import robot_scale
 
     setup = resolve(robot, Path(generated) if generated is not None else None)
     scale = robot_scale(setup.code, setup.nominal)
@@ -168,13 +168,14 @@ def _outcome(rec: dict[str, Any], result: Any, failed_at: float | None,
 def _run(rec: dict[str, Any], c: Campaign, tgt: Target, exp: Experiment,
          plant: dict[str, float]) -> None:
     """One run of controller ``rec["controller"]`` on the campaign's path."""
+    from runtime.plants import plant_for
     from runtime.sim import loop
     from runtime.sim.outcome import outcome
 
     setup = tgt.setup
     ref = reference(c, tgt, exp)
     r = loop.run(setup.code, rec["controller"], c.formulation, ref, tgt.nominal, exp,
-                 plant_params=plant)
+                 plant_params=plant, plant=plant_for(setup.code, exp, tgt.nominal, plant))
     if r.init_status != 0:
         rec.update(status="init_refused", status_code=r.init_status, error=r.stop_reason)
         return

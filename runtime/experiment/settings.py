@@ -9,7 +9,7 @@
                    that (17) pairs with them (see :class:`SensingSettings`)
     [paths]        the circle and the lawn mower: sizes, wheel rates, durations
     [[fault]]      (optional, repeatable) a sensor or actuator fault for
-                   ``python -m runtime faults`` (see :mod:`runtime.sim.faults`)
+                   ``python -m runtime faults`` (see :mod:`runtime.experiment.faults`)
     robot = "F"    (top level, optional) the robot file the experiment is for, relative to
                    the experiment file; ``reproduce`` then runs it on that robot
 
@@ -17,7 +17,7 @@ A field that is unknown, missing its type, non-finite or out of range is rejecte
 error naming it (``section.field``).
 
 The defaults are the paper's setting for its robot, :data:`PAPER_ROBOT` (Drishti): sizes,
-masses, torques and wheel rates are Drishti's. :mod:`runtime.experiment.scale` scales the
+masses, torques and wheel rates are Drishti's. :mod:`runtime.setting.scale` scales the
 fields an experiment file leaves at these defaults to any other robot, measuring both
 robots on their generated code: no number of Drishti's is typed here.
 """
@@ -30,7 +30,7 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-from runtime.sim.faults import Fault, FaultSpecError, fault_from_table
+from runtime.experiment.faults import Fault, FaultSpecError, fault_from_table
 
 
 class ExperimentFileError(ValueError):
@@ -56,7 +56,7 @@ class ControllerSettings:
     roc_max_rate: float = 8.0  # rad/s: ROC's bounds are sampled over wheel rates up to this
     gamma: float = 2.0  # ASMC adaptation rate
     tau_max: float = 40.0  # N m per wheel
-    # Traction-aware torque limit (runtime.mujoco.layout.traction_torque_limit): the floor's
+    # Traction-aware torque limit (runtime.setting.layout.traction_torque_limit): the floor's
     # friction coefficient to stay under; tau_max becomes min(tau_max, traction_mu N r) with
     # N the driven wheel's static load (fixed payload only). 0: off.
     traction_mu: float = 0.0

@@ -39,7 +39,7 @@ from modeling.planar_robot import PlanarRobot
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.mujoco.coordinates import CoordinateMap
-from runtime.mujoco.layout import robot_layout
+from runtime.setting.layout import robot_layout
 
 LOG = logging.getLogger("wmr.mujoco")
 

@@ -38,7 +38,7 @@ from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
 from runtime.paper import printed_paths
-from runtime.paper.reproduce import COLORS, LABELS, Figure, Reproduction
+from runtime.reproduction.paper import COLORS, LABELS, Figure, Reproduction
 from runtime.sim.loop import Run
 from runtime.sim.payload import plant_params_at
 from runtime.sim.reference import Reference

@@ -1,4 +1,4 @@
-"""``REPORT.md`` of the reproduction (:mod:`runtime.paper.reproduce`): the sections of
+"""``REPORT.md`` of the reproduction (:mod:`runtime.reproduction.paper`): the sections of
 ``REPORT_SECTIONS``, each a function of the reproduction and the written figures returning
 Markdown lines. In order: the setting; the figures, each captioned with the paper's figure
 (Figures 3–14) it reproduces; the reference paths as printed in Section 5 and ours; the
@@ -15,7 +15,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from runtime.paper import printed_paths
-from runtime.paper.reproduce import (
+from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, sensing_label
+from runtime.paper.reproduction_verdicts import best, claims, stability, stable_on_all_paths
+from runtime.reproduction.paper import (
     CONTRAST,
     LABELS,
     UNSTABLE_FACTOR,
@@ -23,8 +25,6 @@ from runtime.paper.reproduce import (
     Reproduction,
     slip_monitor,
 )
-from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, sensing_label
-from runtime.paper.reproduction_verdicts import best, claims, stability, stable_on_all_paths
 from runtime.sim.reference import RAMP, Reference
 
 Section = Callable[[Reproduction, Sequence[Figure]], list[str]]
@@ -145,7 +145,7 @@ def circle_centre(ref: Reference) -> np.ndarray:
 
 def _load_split(rep: Reproduction) -> str:
     """The stated static loads of the driven wheels, fixed payload on board (N): the slip
-    monitor's (:func:`runtime.paper.reproduce.slip_monitor`), which the runs used."""
+    monitor's (:func:`runtime.reproduction.paper.slip_monitor`), which the runs used."""
     monitor = slip_monitor(rep.code, rep.experiment, rep.robot)
     if monitor is None:
         return ""

@@ -1,4 +1,4 @@
-"""The metrics tables of the reproduction (:mod:`runtime.paper.reproduce`), one row per run:
+"""The metrics tables of the reproduction (:mod:`runtime.reproduction.paper`), one row per run:
 ``metrics.md``, one Markdown table per sensing model, and ``metrics.csv``, every run in one
 file. The CSV keeps the columns it always had, in the same order, with ``sensing`` and then
 ``friction_needed`` appended, so readers of the older file still work. Also the formatting
@@ -12,7 +12,7 @@ import math
 from collections.abc import Iterable
 from pathlib import Path
 
-from runtime.paper.reproduce import LABELS, Metrics, Reproduction
+from runtime.reproduction.paper import LABELS, Metrics, Reproduction
 
 
 def fmt_mm(x: float) -> str:

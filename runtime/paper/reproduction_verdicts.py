@@ -1,4 +1,4 @@
-"""Verdicts on the runs of the reproduction (:mod:`runtime.paper.reproduce`), per sensing
+"""Verdicts on the runs of the reproduction (:mod:`runtime.reproduction.paper`), per sensing
 model:
 
 * :func:`claims`: the paper's three claims (Section 5, Figures 4–8 and 11–14), each with
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.paper.reproduce import FORMULATIONS, LABELS, Reproduction
 from runtime.paper.reproduction_tables import fmt_mm
+from runtime.reproduction.paper import FORMULATIONS, LABELS, Reproduction
 
 
 @dataclass(frozen=True)

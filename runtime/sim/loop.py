@@ -5,19 +5,25 @@ Each sample k (t = k h), in this order:
 
 1. the sensors (:class:`runtime.sim.sensors.Sensors`) read the plant's driven-wheel
    encoders and give (q, q̇) as measured (sample 0: the reference's start at rest);
-   faults (:mod:`runtime.sim.faults`) miscount encoders, repeat or drop the sample;
+   faults (:mod:`runtime.experiment.faults`) miscount encoders, repeat or drop the sample;
 2. the controller's ``_step`` (:class:`runtime.bindings.controller.Controller`, configured
    by :func:`runtime.bindings.config.controller_config`) turns them and the reference into
    τ; a status < 0 stops the run there; a dropped sample keeps the last τ (zero-order hold);
-3. the plant (:class:`runtime.sim.plant.Plant`, the one ``[plant] model`` names; default
-   the generated model in C, :class:`runtime.sim.plant.GeneratedPlant`) gets its true
+3. the plant (:class:`runtime.sim.plant.Plant`, the one ``[plant] model`` names, built by
+   the registry :mod:`runtime.plants`; default the generated model in C,
+   :class:`runtime.sim.plant.GeneratedPlant`) gets its true
    parameters and payload (payload schedule, :mod:`runtime.sim.payload`) when they change, the
    actuators deliver τ (a torque limit fault clips it), and the robot moves for h under it
    (``substeps`` RK4 steps; the motor-encoder's window start is read on the way). With a
    delay (``controller.delay``/``delay_time``, each sample's within ± the jitter bound,
    drawn by a seeded generator), the torque computed at t_k reaches the actuators at
    t_k + D_k: until then the plant gets the latest command that has arrived
-   (:class:`Latency`).
+   (:class:`Latency`; without a delay, the command of t_k from t_k on). The plant
+   advances over the sample piece by piece (:func:`advance_pieces`).
+
+The switching term Δu_a of (24)/(25) recorded per sample (:attr:`Run.wheel_switching`) is
+computed here from the state's P, gain and ‖s‖ (:func:`_switching`): the generated C state
+keeps ‖s‖ and the gain, not Δu_a itself.
 
 Nothing here knows the robot or the controller: sizes, actuated coordinates, controller
 features and state fields come from the generated code.
@@ -28,7 +34,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -37,10 +43,10 @@ from numpy.typing import NDArray
 from runtime.bindings.config import controller_config
 from runtime.bindings.controller import Controller
 from runtime.bindings.generated import RobotCode
+from runtime.experiment.faults import Fault, schedule
 from runtime.experiment.settings import Experiment
-from runtime.sim.faults import Fault, schedule
 from runtime.sim.payload import payload_mass, payload_masses, plant_params_at
-from runtime.sim.plant import Plant, library_for, make_plant
+from runtime.sim.plant import Plant, generated_plant, library_for, plant_base
 from runtime.sim.reference import Reference
 from runtime.sim.sensors import Sensors
 
@@ -53,7 +59,9 @@ JITTER_SEED = 29  # the jitter's draws: the same run every time
 class Latency:
     """The commands in flight between the controller and the actuators: each command is
     delivered ``delay`` s after its sample, ± a uniform draw within ``jitter`` (never
-    before its sample); a command overtaken by a later one that arrived first is dropped."""
+    before its sample); a command overtaken by a later one that arrived first is dropped.
+    Without delay nor jitter each command acts from its own sample on: one piece per
+    sample, the zero-order hold (every run goes through here, delayed or not)."""
 
     def __init__(self, delay: float, jitter: float, initial: Array) -> None:
         self.delay, self.jitter = delay, jitter
@@ -112,6 +120,7 @@ class Run:
     stop_status: int | None = None  # the status < 0 that stopped it, if a step did
     stop_reason: str | None = None  # why it stopped (a status name, NON_FINITE, init refused)
     init_status: int = 0  # what _init returned (not 0: refused, no sample ran)
+    refused: str | None = None  # why the configuration checks refused it (no sample ran)
 
     @property
     def position_error(self) -> Array:
@@ -131,24 +140,20 @@ def run(
     plant: Plant | None = None,
     float32: bool = False,
     held_gain: float | None = None,
-    check: bool = False,
     faults: Sequence[Fault] = (),
     bounds: tuple[float, float] | None = None,
 ) -> Run:
     """Simulate controller ``name`` in ``formulation`` on ``ref`` with the nominal model
     ``nominal``. ``plant_params``: the simulated robot before payload (default: the nominal
-    model with the plant-only parameters at the robot's defaults, e.g. K_lat = 0); ``plant``:
-    a :class:`Plant` instance (default: the one the experiment's ``[plant] model`` names,
-    :func:`runtime.sim.plant.make_plant`); ``float32``: the single-precision build of the
-    controllers and the plant; ``held_gain``: k̂ held at that value (the stability
-    analysis' verification); ``check``: refuse a configuration the toolchain's checks refuse
-    (``ValueError``: the TDE condition over the uncertainty box, the sampled loop's
-    predicted stability); ``faults``: injected as ``runtime.sim.faults`` describes;
-    ``bounds``: ROC's (α, φ) if not sampled."""
-    if check:
-        from runtime.stability.checks import check_configuration
-
-        check_configuration(code, name, formulation, nominal, exp)
+    model with the plant-only parameters at the robot's defaults,
+    :func:`runtime.sim.plant.plant_base`); ``plant``: the :class:`Plant` to run (default:
+    the generated model, the default ``[plant] model``; another model's plant is built by
+    the registry, :func:`runtime.plants.plant_for`); ``float32``: the single-precision
+    build of the controllers and the plant; ``held_gain``: k̂ held at that value (the
+    stability analysis' verification); ``faults``: injected as ``runtime.experiment.faults``
+    describes; ``bounds``: ROC's (α, φ) if not sampled. The run does not judge the
+    configuration: refusing one the toolchain predicts will fail is the caller's
+    (:func:`runtime.stability.checks.check_configuration`)."""
     lib = library_for(code, float32)
     info = code.controller(name)
     cfg = controller_config(lib, code, name, formulation, nominal, exp, held_gain=held_gain,
@@ -156,35 +161,33 @@ def run(
     ctl = Controller(lib, code.prefix, name, cfg, code.nq, code.nu)
     status = ctl.init()
     if status != 0:  # the configuration is refused (e.g. ROC's bounds): nothing runs
-        return _refused(code, name, formulation, ref, status, ctl.status_name(status))
-    base = dict({**code.plant_defaults, **nominal} if plant_params is None else plant_params)
+        return not_run(code, name, formulation, ref, "init refused the configuration: "
+                       f"{ctl.status_name(status)} ({status})", status)
+    base = plant_base(code, nominal, plant_params)
     if plant is None:
-        plant = make_plant(code, lib, exp, base)
-    h, nsub = exp.controller.h, exp.plant.substeps
+        if exp.plant.model != "generated":
+            raise ValueError(f"[plant] model {exp.plant.model!r}: pass its plant "
+                             "(runtime.plants.plant_for); the loop builds only the generated one")
+        plant = generated_plant(code, lib, exp)
+    h, nsub, n = exp.controller.h, exp.plant.substeps, len(ref.t)
     plant.start(ref.q[0])
     sensors = Sensors(code, np.array(ref.q[0]), exp, dict(nominal))
-    # Substeps before the motor-encoder window opens (none for the other models).
-    motor = exp.sensing.velocity == "motor-encoder"
-    n_window = round(sensors.window / (h / nsub)) if motor else 0
+    # The motor encoder's rate spans the sample's last `window` s: the plant is read there.
+    window = sensors.window if exp.sensing.velocity == "motor-encoder" else 0.0
     window_start: Array | None = None
-    n = len(ref.t)
     sched = schedule(faults, h, n)
     if sched.encoder_offset.shape[1] != code.nu:
         raise ValueError(f"robot '{code.name}': the faults are written for two driven wheels, "
                          f"it has {code.nu}")
     act = list(code.actuated)
     rows = list(range(code.nq)) if formulation == "paper" else act
-    delay, jitter = exp.controller.delay_seconds(), exp.controller.jitter_seconds()
-    latency = Latency(delay, jitter, np.zeros(code.nu)) if delay or jitter else None
-    rec: dict[str, list[Any]] = {k: [] for k in (
-        "q", "qm", "qdm", "tau", "ta", "gain", "s", "ud", "h1", "en", "sw", "load", "st")}
+    # Without a delay each command acts from its own sample on (one piece per sample).
+    latency = Latency(exp.controller.delay_seconds(), exp.controller.jitter_seconds(),
+                      np.zeros(code.nu))
+    rec = _Record()
     delivered = (ref.q[0].copy(), np.zeros(code.nq))
-    saturated, failed_at = 0, None
-    stop_status: int | None = None
-    stop_reason: str | None = None
     prev_gain = float(ctl.read("gain"))  # an adaptive gain before each step's adaptation
     payload_on: bool | None = None  # the payload state the plant's parameters were set for
-    eps = exp.controller.eps
     for k in range(n):
         t = float(ref.t[k])
         true_q = plant.q
@@ -201,79 +204,112 @@ def run(
         else:
             status = ctl.step((q_meas, qdot_meas, ref.q[k], ref.qdot[k], ref.qddot[k]))
             if status < 0:
-                failed_at, stop_status = t, status
-                stop_reason = ctl.status_name(status)
+                rec.stop = (t, status, ctl.status_name(status))
                 break
-            saturated += status == 1
+            rec.saturated += status == 1
+            latency.send(t, k, ctl.torque())
         if exp.plant.extra_on(t) != payload_on:  # the payload changes at its switches
             payload_on = exp.plant.extra_on(t)
             plant.set_parameters(plant_params_at(code, exp, t, base))
             plant.set_payload(payload_masses(exp, t))
-        tau = [ctl.tau[i] for i in range(code.nu)]
-        gain = ctl.read("gain")
-        s_norm = ctl.read("s_norm")
-        rec["q"].append(true_q)
-        rec["qm"].append(q_meas)
-        rec["qdm"].append(qdot_meas)
-        rec["tau"].append(tau)
-        rec["gain"].append(gain)
-        rec["s"].append(s_norm)
-        rec["ud"].append(ctl.read("u_discarded"))
-        h1 = ctl.read("H1hat", None)
-        rec["h1"].append([h1[i] for i in range(code.nq)] if h1 is not None
-                         else [0.0] * code.nq)
-        rec["load"].append(payload_mass(exp, t))
-        err = np.concatenate([ref.q[k, rows] - q_meas[rows], ref.qdot[k, rows] - qdot_meas[rows]])
-        rec["en"].append(float(np.linalg.norm(err)))
-        rec["sw"].append(_switching(ctl, info.switching, prev_gain if info.adaptive else gain,
-                                    s_norm, eps, ref, k, q_meas, qdot_meas, act))
-        prev_gain = gain
         plant.set_faults(sched.traction_loss[k], sched.torque_limit[k])
-        if latency is None:
-            applied = plant.actuate(np.asarray(tau))
-            rec["st"].append(status)
-            rec["ta"].append(applied)
-            if k == n - 1:
-                break
-            ok = plant.advance(applied, h / nsub, nsub - n_window)
-            if ok and n_window:  # the motor encoder's window opens n_window substeps before t + h
-                window_start = plant.wheels()[0]
-                ok = plant.advance(applied, h / nsub, n_window)
-        else:
-            if not sched.dropped[k]:
-                latency.send(t, k, np.asarray(tau))
-            pieces = [(a - t, plant.actuate(cmd)) for a, cmd in latency.pieces(t, t + h)]
-            rec["st"].append(status)
-            rec["ta"].append(pieces[-1][1])
-            if k == n - 1:
-                break
-            ok, start = advance_pieces(plant, pieces, h, nsub, sensors.window if motor else 0.0)
-            window_start = start if motor else None
-        if not ok:
-            failed_at, stop_reason = t, NON_FINITE
+        # What the actuators deliver over [t, t + h): (start within the sample, τ) pieces.
+        pieces = [(a - t, plant.actuate(cmd)) for a, cmd in latency.pieces(t, t + h)]
+        gain, s_norm = ctl.read("gain"), ctl.read("s_norm")
+        h1 = ctl.read("H1hat", None)
+        err = np.concatenate([ref.q[k, rows] - q_meas[rows], ref.qdot[k, rows] - qdot_meas[rows]])
+        rec.add(
+            q=true_q, q_meas=q_meas, qdot_meas=qdot_meas, tau=ctl.torque(),
+            tau_applied=pieces[-1][1], gain=gain, s_norm=s_norm,
+            u_discarded=ctl.read("u_discarded"),
+            h1hat=[h1[i] for i in range(code.nq)] if h1 is not None else [0.0] * code.nq,
+            error_norm=float(np.linalg.norm(err)),
+            wheel_switching=_switching(ctl, info.switching,
+                                       prev_gain if info.adaptive else gain, s_norm,
+                                       exp.controller.eps, ref, k, q_meas, qdot_meas, act),
+            payload=payload_mass(exp, t), status=status,
+        )
+        prev_gain = gain
+        if k == n - 1:
             break
-    m = len(rec["q"])
-    return Run(
-        name, formulation, ref.name, ref.t[:m],
-        np.array(rec["q"]).reshape(-1, code.nq),
-        np.array(rec["qm"]).reshape(-1, code.nq),
-        np.array(rec["qdm"]).reshape(-1, code.nq),
-        ref.q[:m],
-        np.array(rec["tau"]).reshape(-1, code.nu),
-        np.array(rec["ta"]).reshape(-1, code.nu),
-        np.array(rec["gain"]), np.array(rec["s"]), np.array(rec["ud"]),
-        np.array(rec["h1"]).reshape(-1, code.nq), np.array(rec["en"]),
-        np.array(rec["sw"]).reshape(-1, code.nu), np.array(rec["load"]),
-        np.array(rec["st"], dtype=np.int64), int(saturated), failed_at, stop_status,
-        stop_reason,
-    )
+        ok, window_start = advance_pieces(plant, pieces, h, nsub, window)
+        if not ok:
+            rec.stop = (t, None, NON_FINITE)
+            break
+    return rec.run(code, name, formulation, ref)
+
+
+@dataclass
+class _Record:
+    """What :func:`run` records: one entry per sample in each list, named as :class:`Run`
+    names its arrays; ``saturated``: samples whose torque was clipped; ``stop``: (t, the
+    status < 0 or None, reason) of what stopped the run."""
+
+    q: list[Array] = field(default_factory=list)
+    q_meas: list[Array] = field(default_factory=list)
+    qdot_meas: list[Array] = field(default_factory=list)
+    tau: list[Array] = field(default_factory=list)
+    tau_applied: list[list[float]] = field(default_factory=list)
+    gain: list[float] = field(default_factory=list)
+    s_norm: list[float] = field(default_factory=list)
+    u_discarded: list[float] = field(default_factory=list)
+    h1hat: list[list[float]] = field(default_factory=list)
+    error_norm: list[float] = field(default_factory=list)
+    wheel_switching: list[list[float]] = field(default_factory=list)
+    payload: list[float] = field(default_factory=list)
+    status: list[int] = field(default_factory=list)
+    saturated: int = 0
+    stop: tuple[float, int | None, str] | None = None
+
+    def add(self, *, q: Array, q_meas: Array, qdot_meas: Array, tau: Array,
+            tau_applied: list[float], gain: float, s_norm: float, u_discarded: float,
+            h1hat: list[float], error_norm: float, wheel_switching: list[float],
+            payload: float, status: int) -> None:
+        """One sample's values, one per list."""
+        self.q.append(q)
+        self.q_meas.append(q_meas)
+        self.qdot_meas.append(qdot_meas)
+        self.tau.append(tau)
+        self.tau_applied.append(tau_applied)
+        self.gain.append(gain)
+        self.s_norm.append(s_norm)
+        self.u_discarded.append(u_discarded)
+        self.h1hat.append(h1hat)
+        self.error_norm.append(error_norm)
+        self.wheel_switching.append(wheel_switching)
+        self.payload.append(payload)
+        self.status.append(status)
+
+    def run(self, code: RobotCode, name: str, formulation: str, ref: Reference) -> Run:
+        """The :class:`Run` of the samples recorded (N × nq, N × nu arrays)."""
+        m = len(self.q)
+
+        def rows(values: Sequence[Any], width: int) -> Array:
+            return np.array(values).reshape(-1, width)
+
+        failed_at, stop_status, stop_reason = self.stop or (None, None, None)
+        return Run(
+            controller=name, formulation=formulation, path=ref.name, t=ref.t[:m],
+            q=rows(self.q, code.nq), q_meas=rows(self.q_meas, code.nq),
+            qdot_meas=rows(self.qdot_meas, code.nq), q_des=ref.q[:m],
+            tau=rows(self.tau, code.nu), tau_applied=rows(self.tau_applied, code.nu),
+            gain=np.array(self.gain), s_norm=np.array(self.s_norm),
+            u_discarded=np.array(self.u_discarded), h1hat=rows(self.h1hat, code.nq),
+            error_norm=np.array(self.error_norm),
+            wheel_switching=rows(self.wheel_switching, code.nu),
+            payload=np.array(self.payload), status=np.array(self.status, dtype=np.int64),
+            saturated=int(self.saturated), failed_at=failed_at, stop_status=stop_status,
+            stop_reason=stop_reason,
+        )
 
 
 def advance_pieces(plant: Plant, pieces: list[tuple[float, list[float]]], h: float,
                    nsub: int, window: float) -> tuple[bool, Array | None]:
     """The plant over one sample under piecewise-constant torques ((start within the sample,
-    τ) pieces), each piece in RK4 steps no longer than h / nsub; (finite, the driven wheels'
-    angles at the window's start h − ``window`` if ``window``)."""
+    τ) pieces), each piece in RK4 steps no longer than h / nsub (exactly h / nsub where the
+    piece is a whole number of them); (finite, the driven wheels' angles at the window's
+    start h − ``window`` if ``window``)."""
+    dt = h / nsub
     marks = sorted({0.0, h, *(a for a, _ in pieces if 0 < a < h),
                     *([h - window] if window > 0 else [])})
     start: Array | None = None
@@ -281,8 +317,9 @@ def advance_pieces(plant: Plant, pieces: list[tuple[float, list[float]]], h: flo
         if window > 0 and abs(a - (h - window)) < 1e-12:
             start = plant.wheels()[0]
         tau = [cmd for t0, cmd in pieces if t0 <= a + 1e-12][-1]
-        steps = max(1, math.ceil((b - a) / (h / nsub) - 1e-9))
-        if not plant.advance(tau, (b - a) / steps, steps):
+        steps = max(1, math.ceil((b - a) / dt - 1e-9))
+        step = dt if abs(steps * dt - (b - a)) < 1e-12 else (b - a) / steps
+        if not plant.advance(tau, step, steps):
             return False, start
     return True, start
 
@@ -302,9 +339,11 @@ def _switching(ctl: Controller, switching: bool, gain: float, s_norm: float, eps
     return [gain * v / denom for v in s_w]
 
 
-def _refused(code: RobotCode, name: str, formulation: str, ref: Reference, status: int,
-             status_name: str) -> Run:
-    """The record of a run whose configuration ``_init`` refused: no sample."""
+def not_run(code: RobotCode, name: str, formulation: str, ref: Reference, reason: str,
+            init_status: int = 0) -> Run:
+    """The record of a run that did not start: no sample, ``reason`` as its stop reason;
+    ``init_status``: what ``_init`` returned if it refused the configuration, else the run
+    was refused before it (:attr:`Run.refused`, the caller's configuration checks)."""
     def empty(width: int) -> Array:
         return np.zeros((0, width))
 
@@ -312,5 +351,5 @@ def _refused(code: RobotCode, name: str, formulation: str, ref: Reference, statu
     return Run(name, formulation, ref.name, ref.t[:0], empty(code.nq), empty(code.nq),
                empty(code.nq), ref.q[:0], empty(code.nu), empty(code.nu), none, none, none,
                empty(code.nq), none, empty(code.nu), none, np.zeros(0, dtype=np.int64), 0,
-               0.0, status, f"init refused the configuration: {status_name} ({status})",
-               status)
+               0.0, init_status or None, reason, init_status,
+               None if init_status else reason)

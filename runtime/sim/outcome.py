@@ -1,10 +1,10 @@
 """Whether a closed-loop run is "ok", said the same way by every command.
 
-A run is ``ok`` only if its configuration was accepted, no step failed, the plant stayed
-finite, and the root's frame origin stayed on its path: its final and RMS distance from the
-reference are both within :data:`OFF_PATH_FRACTION` of the path's scale (the circle's
-radius, the spacing of the lawn mower's legs). A run that ends a path's size away from it
-has not tracked it, whatever its controller reported.
+A run is ``ok`` only if its configuration was accepted (by the checks, then by ``_init``),
+no step failed, the plant stayed finite, and the root's frame origin stayed on its path:
+its final and RMS distance from the reference are both within :data:`OFF_PATH_FRACTION` of
+the path's scale (the circle's radius, the spacing of the lawn mower's legs). A run that
+ends a path's size away from it has not tracked it, whatever its controller reported.
 """
 
 from __future__ import annotations
@@ -23,8 +23,9 @@ OFF_PATH_FRACTION = 0.10
 
 @dataclass(frozen=True)
 class Outcome:
-    """``status``: ``ok``, ``off path``, ``failed`` or ``init refused``; ``detail``: the
-    sentence saying why (empty for ``ok``)."""
+    """``status``: ``ok``, ``off path``, ``failed``, ``init refused`` (by the C ``_init``) or
+    ``refused`` (by the configuration checks, before the run); ``detail``: the sentence
+    saying why (empty for ``ok``)."""
 
     status: str
     detail: str
@@ -41,6 +42,8 @@ def outcome(run: Run, scale: float) -> Outcome:
     """The outcome of ``run`` on a path of scale ``scale`` (m)."""
     if run.init_status != 0:
         return Outcome("init refused", run.stop_reason or f"status {run.init_status}")
+    if run.refused is not None:
+        return Outcome("refused", run.refused)
     if run.failed_at is not None:
         return Outcome("failed", f"at {run.failed_at:g} s, {run.stop_reason}")
     e = run.position_error

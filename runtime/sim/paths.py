@@ -1,10 +1,10 @@
 """The paper's two paths for any robot with two driven wheels, from the experiment's
-``[paths]`` (already scaled to the robot: ``runtime.experiment.scale``).
+``[paths]`` (already scaled to the robot: ``runtime.setting.scale``).
 
 Both are driven-wheel rate profiles integrated through the robot's generated kinematics
 (:mod:`runtime.sim.reference`), so every body of the robot (a trailer too) follows a motion
 it can make. The wheel rates come from the robot's geometry as measured on its generated
-code (:func:`runtime.experiment.scale.robot_scale`: wheel radius r, track b, offset d of the
+code (:func:`runtime.setting.scale.robot_scale`: wheel radius r, track b, offset d of the
 root's frame origin ahead of the driven axle). The first driven wheel is the right one.
 
 * Circle: the root's frame origin (Drishti's C) exactly on a circle of radius R =
@@ -26,8 +26,8 @@ import math
 import numpy as np
 
 from runtime.bindings.generated import RobotCode
-from runtime.experiment.scale import RobotScale, robot_scale
 from runtime.experiment.settings import Experiment, PathSettings
+from runtime.setting.scale import RobotScale, robot_scale
 from runtime.sim.reference import START_AT, Reference, WheelProfile, integrate
 
 PATHS = ("circle", "lawnmower")

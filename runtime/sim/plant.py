@@ -18,23 +18,22 @@ calls):
 * :attr:`Plant.q` and :meth:`Plant.wheels`: the true configuration, and the driven wheels'
   angles and rates as encoders on them see them (rolling plus slip).
 
-Which plant a loop runs is the experiment's ``[plant] model``: :data:`PLANTS` maps each
-name of ``runtime.experiment.settings.PLANT_MODELS`` to the function that builds it for a
-robot (its generated code, the library of its generated C, the experiment, the robot's
-plant parameters before payload). A new plant is
-a module with its class, one entry here and its name there; the loop does not change.
+Which plant a loop runs is the experiment's ``[plant] model``: the registry
+:data:`runtime.plants.PLANTS`, above every plant, builds it. A new plant is a module with its
+class, one entry there and its name in ``runtime.experiment.settings.PLANT_MODELS``; the loop
+does not change.
 
 :class:`GeneratedPlant` integrates the robot's generated ``<prefix>_plant_state_derivative``
 (x = (q, driven-wheel rates), the constrained dynamics in the minimal form) with fixed-step
 RK4 in C (``csrc/plant_rk4.c``, compiled for the robot's prefix beside its generated code:
 :func:`sim_library`), with viscous and tanh-smoothed Coulomb friction on each driven wheel,
 unknown to the controllers, and the slip proxy of a traction loss (see
-``runtime.sim.faults``) with each driven wheel's spin inertia (:func:`spin_inertia_keys`).
+``runtime.experiment.faults``) with each driven wheel's spin inertia (:func:`spin_inertia_keys`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
 from typing import Protocol
@@ -197,26 +196,14 @@ class GeneratedPlant:
         return angles, rates
 
 
-PlantFactory = Callable[[RobotCode, cbuild.CLibrary, Experiment, Mapping[str, float]], Plant]
+def plant_base(code: RobotCode, nominal: Mapping[str, float],
+               plant_params: Mapping[str, float] | None = None) -> dict[str, float]:
+    """The simulated robot's plant parameters before payload: ``plant_params``, else the
+    nominal model with the plant-only parameters at the robot's defaults (e.g. K_lat = 0)."""
+    return dict({**code.plant_defaults, **nominal} if plant_params is None else plant_params)
 
 
-def _mujoco(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment,
-            base: Mapping[str, float]) -> Plant:
-    from runtime.mujoco.plant import mujoco_plant  # MuJoCo is imported only when it runs
-
-    return mujoco_plant(code, exp, base)
-
-
-# [plant] model -> the plant a closed loop runs (the keys are PLANT_MODELS).
-PLANTS: dict[str, PlantFactory] = {
-    "generated": lambda code, lib, exp, base: GeneratedPlant(code, lib, exp.plant.viscous,
-                                                             exp.plant.coulomb),
-    "mujoco": _mujoco,
-}
-
-
-def make_plant(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment,
-               base: Mapping[str, float]) -> Plant:
-    """The plant the experiment names (``[plant] model``) for this robot, whose plant
-    parameters before payload are ``base``."""
-    return PLANTS[exp.plant.model](code, lib, exp, base)
+def generated_plant(code: RobotCode, lib: cbuild.CLibrary, exp: Experiment) -> GeneratedPlant:
+    """The ``[plant] model = "generated"`` plant: the generated model with the experiment's
+    wheel friction."""
+    return GeneratedPlant(code, lib, exp.plant.viscous, exp.plant.coulomb)

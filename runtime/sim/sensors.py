@@ -13,7 +13,7 @@ experiment's sensing model, and every other coordinate by odometry.
 * q̇ as measured: S(q) applied to the measured rates.
 
 ``offset`` and ``window_offset`` are counts added to the encoder readings at the sample
-instant and at the motor-encoder window's start (an encoder fault, ``runtime.sim.faults``).
+instant and at the motor-encoder window's start (an encoder fault, ``runtime.experiment.faults``).
 """
 
 from __future__ import annotations

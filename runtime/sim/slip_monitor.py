@@ -22,7 +22,7 @@ board included). The wheel keeps grip while √(F_x² + F_y²) ≤ μ N_w; the m
 max_w √(F_x² + F_y²)/N_w is the friction coefficient the sample needs. The true parameters
 enter through the controllers' model (Drishti: the lateral first moment K_lat of an
 off-axis payload is left out). :class:`MonitoredPlant` puts the monitor on any plant of
-the loop and records it along a run; ``runtime.mujoco.comparison`` checks its predicted
+the loop and records it along a run; ``runtime.plant_comparison`` checks its predicted
 onset of slip against the wheel slip MuJoCo measures.
 """
 

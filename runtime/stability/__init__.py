@@ -4,12 +4,13 @@
   linearised about a steady motion (delay included), its pencil J(g) = J₀ + g J₁ in the
   boundary-layer gain, the largest tolerated delay;
 * :mod:`~runtime.stability.analysis`: verdicts per controller and formulation, k̂ measured
-  in closed loop, ``wmr stability``, and the verdict of a filled configuration (``wmr freeze``);
+  in closed loop, the tables of ``wmr stability`` (:mod:`runtime.commands.stability`), and
+  the verdict of a filled configuration (``wmr freeze``);
 * :mod:`~runtime.stability.saturation`: the torque and wind-up verdict, predicted along the
   paths and simulated;
 * :mod:`~runtime.stability.verification`: the predicted boundary checked by simulation;
-* :mod:`~runtime.stability.checks`: what a configuration must pass before it is run with
-  ``check=True`` (the TDE condition over the uncertainty box, the sampled loop).
+* :mod:`~runtime.stability.checks`: what a configuration must pass before it is run (the
+  TDE condition over the uncertainty box, the sampled loop), called by the reproduction.
 
 No imports here: each module is imported on its own.
 """

@@ -6,16 +6,14 @@ conditions a verdict holds for are stated there). This module turns it into verd
 largest stable g per controller and formulation, the spectral radius at the experiment's
 setting (k̂ measured in closed loop, :mod:`runtime.sim.loop`, for the adaptive and
 windowed gains of TDROC and ASMC, ρ/ε for ROC), TDROC's predicted stable range
-ε > k̂ / g_max, and the ``wmr stability`` command. The controllers, their labels and which
+ε > k̂ / g_max, and the tables ``wmr stability`` prints (:mod:`runtime.commands.stability`).
+The controllers, their labels and which
 gain each has come from the robot's generated code (``CONTROLLERS``).
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
-import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from typing import Any
@@ -23,26 +21,16 @@ from typing import Any
 import numpy as np
 
 from runtime.bindings.generated import RobotCode
-from runtime.bindings.robots import RobotSourceError
 from runtime.bindings.uncertainty import tde_alpha
-from runtime.experiment.arguments import add_experiment_option, add_robot_options, robot_setting
-from runtime.experiment.settings import (
-    ACCEL_CODES,
-    VELOCITY_MODELS,
-    Experiment,
-    ExperimentFileError,
-    check_sensing,
-    load_experiment,
-)
+from runtime.experiment.settings import ACCEL_CODES, Experiment
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
 from runtime.stability.sampled_loop import (
     FORMULATIONS,
-    OPERATING_POINTS,
     ClosedLoop,
     LoopSetting,
     Pencil,
     analysed,
-    covers,
     delay_radius,
     is_pi,
     max_delay,
@@ -53,7 +41,7 @@ from runtime.stability.sampled_loop import (
 )
 
 __all__ = ["FORMULATIONS", "Analysis", "ClosedLoop", "LoopSetting", "Pencil", "analyse",
-           "analyse_all", "main", "pencil", "setting"]
+           "analyse_all", "pencil", "setting"]
 
 
 @dataclass(frozen=True)
@@ -94,7 +82,8 @@ def measured_gain(
     loop's stability is what is analysed here, and the TDE condition over the uncertainty
     box is reported apart (:func:`tde_notes`)."""
     ref = paths.circle(code, robot, exp)
-    r = loop.run(code, controller, formulation, ref, robot, exp)
+    r = loop.run(code, controller, formulation, ref, robot, exp,
+                 plant=plant_for(code, exp, robot))
     if r.init_status != 0:
         raise ValueError(r.stop_reason)
     late = r.t >= min(5.0, 0.5 * r.t[-1])
@@ -387,75 +376,3 @@ def table(rows: Sequence[Analysis], code: RobotCode) -> str:
     notes += [f"* {label[r.controller]} {r.formulation} {r.saturation}: {r.saturation_reason}"
               for r in rows if r.saturation_reason]
     return "\n".join(lines + (["", *notes] if notes else [])) + "\n"
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="wmr stability",
-        description="Predict whether each generated controller is stable on a robot with the "
-        "experiment's sampling, sensing and estimator (linearised sampled-data loop).",
-    )
-    add_experiment_option(parser)
-    add_robot_options(parser)
-    parser.add_argument(
-        "--sensing", default=None, choices=VELOCITY_MODELS,
-        help="override the experiment's [sensing] velocity",
-    )  # fmt: skip
-    parser.add_argument(
-        "--plant", choices=("nominal", "payload"), default="nominal",
-        help="analysed robot: as the controllers model it, or with the experiment's payload",
-    )  # fmt: skip
-    parser.add_argument(
-        "--no-measure", action="store_true",
-        help="do not simulate to measure TDROC/ASMC's k̂ (faster; their setting gain is 0)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--path", choices=OPERATING_POINTS, default="circle",
-        help="linearise about the circle's steady motion, or the lawn mower's leg and turns "
-        "(the worst decides)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--no-delay", action="store_true",
-        help="do not search the largest tolerated delay (faster)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--no-saturation", action="store_true",
-        help="do not check the torque demand and the adaptive gain's start-up (faster)",
-    )  # fmt: skip
-    parser.add_argument("--json", action="store_true", help="print JSON")
-    args = parser.parse_args(argv)
-    try:
-        exp = load_experiment(args.experiment)
-        if args.sensing is not None:
-            exp = replace(exp, sensing=replace(exp.sensing, velocity=args.sensing))
-            check_sensing(exp, "--sensing")
-        setting_ = robot_setting(args.robot, args.generated, exp)
-        setup = setting_.robot
-        if not covers(setup.code):
-            raise RobotSourceError(
-                f"{setup.source}: robot '{setup.name}': the sampled-loop analysis needs the "
-                "root's pose (x, y, θ) as the first coordinates and driven wheels. Simulate "
-                f"this robot with `wmr reproduce --robot {setup.source}`"
-            )
-    except (ExperimentFileError, ValueError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    exp, code, robot = setting_.experiment, setup.code, setup.nominal
-    if (args.robot or exp.robot) is not None and not args.json:
-        print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
-    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
-                       path=args.path, delays=not args.no_delay,
-                       saturation=not args.no_saturation)
-    if args.json:
-        print(json.dumps(as_json(rows, setup.name), indent=2))
-    else:
-        print(
-            f"robot {setup.name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
-            f"plant {args.plant}, ε = {exp.controller.eps}"
-        )
-        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), sep="\n")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,5 +1,6 @@
-"""What a controller configuration must pass before a run with ``check=True``
-(``runtime.sim.loop.run``): the toolchain refuses to build one it predicts will fail.
+"""What a controller configuration must pass before it is run: the toolchain refuses to
+run one it predicts will fail (every reproduction run,
+:func:`runtime.reproduction.runs.checked_run`, on every robot).
 
 * The TDE condition ‖M⁻¹ M̂ − I‖ < 1 of (17) over the experiment's uncertainty box
   (``controller.uncertainty``), for the controllers with the time-delay estimate

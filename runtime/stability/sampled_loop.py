@@ -67,8 +67,8 @@ from runtime.bindings.config import ConfigInputs
 from runtime.bindings.generated import ControllerInfo, RobotCode
 from runtime.bindings.robots import code_in
 from runtime.bindings.uncertainty import roc_bounds
-from runtime.experiment.scale import robot_scale
 from runtime.experiment.settings import Experiment
+from runtime.setting.scale import robot_scale
 from runtime.sim import paths
 from runtime.sim.payload import plant_params_at
 from runtime.sim.plant import library_for

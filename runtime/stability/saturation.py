@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
 from runtime.sim.reference import Reference
 from runtime.stability.sampled_loop import plant_parameters, roc_gain
@@ -165,7 +166,8 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
     if not simulate:
         return out
     ref = paths.circle(code, nominal, exp)
-    r = loop.run(code, controller, formulation, ref, nominal, exp)
+    r = loop.run(code, controller, formulation, ref, nominal, exp,
+                 plant=plant_for(code, exp, nominal))
     if r.init_status != 0:
         return SaturationVerdict(verdict, f"{why}; not simulated: {r.stop_reason}", demand,
                                  switching, tau_max, gain_peak)

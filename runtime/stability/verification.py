@@ -18,6 +18,7 @@ import numpy as np
 
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
 
 GROWTH = 3.0
@@ -47,7 +48,8 @@ def simulated_unstable(
     ref = paths.circle(code, robot, lin)
     # The configuration checks are not run: the TDE condition over the uncertainty box
     # (which a trailer's lumped coefficients fail) is not what is bisected here.
-    r = loop.run(code, controller, formulation, ref, robot, lin, held_gain=gain * EPS)
+    r = loop.run(code, controller, formulation, ref, robot, lin, held_gain=gain * EPS,
+                 plant=plant_for(code, lin, robot))
     if r.failed_at is not None or r.saturated > 0 or float(r.error_norm.max()) > DIVERGED:
         return True
     n = len(r.error_norm)

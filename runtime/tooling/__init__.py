@@ -1,4 +1,6 @@
-"""Tools that measure and document the generated code — benchmarks, firmware size/stack
-reports, the bad-input table, the C-vs-Python cross-check — as opposed to the simulation
-runtime (``runtime`` for any generated robot, ``runtime.paper`` for the paper's robot).
+"""Tools that measure and document the generated code — the hand-written witness
+(``witness``) and the C-vs-Python cross-check (``crosscheck``), the fuzz driver, benchmarks
+(``bench``), firmware size/stack reports (``firmware``), the bad-input table, MISRA — as
+opposed to the simulation runtime below them. The top floor of ``runtime``: it may import
+any other floor, and none imports it.
 """

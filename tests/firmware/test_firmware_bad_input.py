@@ -3,7 +3,7 @@
 bytes and tau unchanged, and the next valid step equals that of a twin that never saw
 the bad input; saturation is clipped and reported. ``docs/BAD_INPUT.md`` is the table
 the same code produces. Also the TDE condition ‖M⁻¹M̂ − I‖ < 1 over a parameter box
-(``runtime.bindings.uncertainty``) and the checks of a configuration run with ``check=True``
+(``runtime.bindings.uncertainty``) and the checks a configuration passes before it is run
 (``runtime.stability.checks``)."""
 
 from __future__ import annotations

@@ -30,6 +30,7 @@ from runtime.experiment.settings import Experiment, SensingSettings
 from runtime.sim import loop, paths
 from runtime.sim.plant import library_for
 from runtime.sim.reference import Reference
+from runtime.stability.checks import check_configuration
 from runtime.tooling.bad_input.runner import to_python
 
 CODE = load_robot_code("")
@@ -130,8 +131,9 @@ def test_float32_in_the_loop(
 ) -> None:
     robot, exp, ref = setting
     exp = _experiment(exp, CASES[name])
-    double = loop.run(CODE, name, "paper", ref, robot, exp, float32=False, check=True)
-    full = loop.run(CODE, name, "paper", ref, robot, exp, float32=True, check=True)
+    check_configuration(CODE, name, "paper", robot, exp)  # a configuration the toolchain runs
+    double = loop.run(CODE, name, "paper", ref, robot, exp, float32=False)
+    full = loop.run(CODE, name, "paper", ref, robot, exp, float32=True)
     deviation_full = _path_deviation(full, double)
 
     hybrid_lib = float_controller_library(name)
@@ -140,7 +142,7 @@ def test_float32_in_the_loop(
         return hybrid_lib
 
     monkeypatch.setattr(loop, "library_for", hybrid_library)
-    hybrid = loop.run(CODE, name, "paper", ref, robot, exp, float32=False, check=True)
+    hybrid = loop.run(CODE, name, "paper", ref, robot, exp, float32=False)
     monkeypatch.undo()
     deviation_controller = _path_deviation(hybrid, double)
 

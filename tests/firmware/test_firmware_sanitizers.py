@@ -1,16 +1,16 @@
 """The generated C under AddressSanitizer and UndefinedBehaviorSanitizer.
 
-``runtime/paper/csrc/fuzz_driver.c`` (a seeded xorshift inside C) runs every controller in both
-formulations for ``STEPS`` randomised steps (random valid configurations, re-initialised
-every 20..400 steps, and now and then invalid configurations, NaN/Inf/huge/subnormal
-inputs, NULL arguments, a wrong magic) and ``FD_CALLS`` calls to each of
-``wmr_forward_dynamics`` and ``wmr_minimal_forward_dynamics`` with random, sometimes
-extreme, parameters and arguments. The driver checks that every successful call's outputs
-(tau within ±tau_max, every real in the state, every acceleration) are finite and that a
-failed call leaves the state/outputs untouched with the right code; it exits 1 on any
-violation. Built with ``-fsanitize=address,undefined -fno-sanitize-recover=all``, any
-sanitizer finding aborts the run. Double and float32 builds, compiled in parallel
-(about 10 s on two cores).
+``runtime/tooling/witness/csrc/fuzz_driver.c`` (a seeded xorshift inside C) runs every
+controller in both formulations for ``STEPS`` randomised steps (random valid
+configurations, re-initialised every 20..400 steps, and now and then invalid
+configurations, NaN/Inf/huge/subnormal inputs, NULL arguments, a wrong magic) and
+``FD_CALLS`` calls to each of ``wmr_forward_dynamics`` and ``wmr_minimal_forward_dynamics``
+with random, sometimes extreme, parameters and arguments. The driver checks that every
+successful call's outputs (tau within ±tau_max, every real in the state, every
+acceleration) are finite and that a failed call leaves the state/outputs untouched with the
+right code; it exits 1 on any violation. Built with ``-fsanitize=address,undefined
+-fno-sanitize-recover=all``, any sanitizer finding aborts the run. Double and float32
+builds, compiled in parallel (about 10 s on two cores).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import pytest
 
 from runtime.bindings.cbuild import GENERATED_C
 
-CSRC = Path(__file__).resolve().parents[2] / "runtime" / "paper" / "csrc"
+CSRC = Path(__file__).resolve().parents[2] / "runtime" / "tooling" / "witness" / "csrc"
 DRIVER = CSRC / "fuzz_driver.c"
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all")
 CFLAGS = ("-std=c99", "-O1", "-g", "-fno-omit-frame-pointer", "-Wall", "-Wextra", "-Werror")

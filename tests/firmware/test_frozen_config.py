@@ -22,8 +22,8 @@ from codegen.backends.c.files import CODE_ID_UNSET, stamp_code_id
 from runtime.bindings import cbuild
 from runtime.bindings.config import controller_config
 from runtime.bindings.generated import RobotCode, load_robot_code
+from runtime.commands.freeze import main as freeze_main
 from runtime.experiment.settings import Experiment
-from runtime.freeze.command import main as freeze_main
 from runtime.freeze.header import (
     FROZEN_STATE_OMITS,
     FreezeError,

@@ -13,7 +13,7 @@ import pytest
 from test_controller_contract import CLANG_EXCLUSIONS
 
 from runtime.bindings import cbuild
-from runtime.freeze.command import main as freeze_main
+from runtime.commands.freeze import main as freeze_main
 from runtime.tooling.misra.check import DOC, documented_rules, run_cppcheck
 
 

@@ -166,7 +166,7 @@ def test_the_traction_check_warns_where_a_wheel_slips(name: str) -> None:
     import dataclasses
 
     from runtime.experiment.settings import parse_experiment
-    from runtime.mujoco.layout import robot_layout
+    from runtime.setting.layout import robot_layout
     from runtime.sim.slip_monitor import SlipMonitor
 
     target = _target(name)

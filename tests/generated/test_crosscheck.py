@@ -1,5 +1,5 @@
 """The crosscheck: for the paper's robot, generated Python, C (double, float32) and CasADi
-against the hand-written equations (runtime/paper/handwritten); for every generated robot, C and
+against the hand-written equations (runtime/tooling/witness); for every generated robot, C and
 CasADi against its generated NumPy and the C controllers against its Python classes; and
 that each comparison would notice a deviating implementation."""
 
@@ -14,8 +14,6 @@ import numpy as np
 import pytest
 
 from runtime.bindings.generated import GENERATED
-from runtime.paper.handwritten import controllers as hc
-from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck import command as crosscheck
 from runtime.tooling.crosscheck import generated_functions
 from runtime.tooling.crosscheck.deviation import (
@@ -27,6 +25,8 @@ from runtime.tooling.crosscheck.deviation import (
 )
 from runtime.tooling.crosscheck.report import CrosscheckReport
 from runtime.tooling.crosscheck.targets import Target, all_targets, resolve, target_of
+from runtime.tooling.witness import controllers as hc
+from runtime.tooling.witness import model as hw
 
 HANDWRITTEN = Path(hw.__file__).resolve().parent
 TRAILER = GENERATED / "trailer"
@@ -231,7 +231,7 @@ def test_handwritten_is_independent_of_modeling_and_codegen() -> None:
                 root = name.split(".")[0]
                 assert root not in {"modeling", "codegen", "generated", "sympy"}, (path, name)
                 if root == "runtime":
-                    assert name.startswith("runtime.paper.handwritten"), (path, name)
+                    assert name.startswith("runtime.tooling.witness"), (path, name)
 
 
 def test_printed_31_violates_the_rolling_constraints() -> None:

@@ -198,9 +198,9 @@ def test_controller_steps_match_sympy_laws(
 
 def test_wheel_pi_matches_the_hand_written_witness(c_builds: dict[str, CBuild]) -> None:
     """The generated wheel-velocity PI (C and Python) against the one typed by hand for the
-    differential drive (runtime.paper.handwritten.wheel_pi): the same torques and integral
+    differential drive (runtime.tooling.witness.wheel_pi): the same torques and integral
     along a smooth tracking sequence, saturation included (a tight torque limit)."""
-    from runtime.paper.handwritten.wheel_pi import WheelPI, WheelPIGains
+    from runtime.tooling.witness.wheel_pi import WheelPI, WheelPIGains
 
     for tau_max in (200.0, 0.5):
         config = _config("pi", FORMULATIONS["minimal"], kx=1.5, ky=6.0, ktheta=3.0, kp=2.5,

@@ -22,10 +22,10 @@ import pytest
 
 from runtime.bindings.generated import load_robot_code
 from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
-from runtime.paper.reproduce import CONTRAST, Reproduction, SweepRow, reproduce
 from runtime.paper.reproduction_report import report_markdown
 from runtime.paper.reproduction_tables import CSV_COLUMNS, metrics_markdown, write_csv
 from runtime.paper.reproduction_verdicts import claims, stability
+from runtime.reproduction.paper import CONTRAST, Reproduction, SweepRow, reproduce
 from runtime.sim import paths
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -22,9 +22,9 @@ import pytest
 from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
 from runtime.bindings.robots import RobotSourceError, resolve
 from runtime.bindings.uncertainty import body_yaws, inertial_keys
-from runtime.experiment.scale import RobotScale, paper_scale, robot_scale, scaled_experiment
+from runtime.commands.reproduce import main
 from runtime.experiment.settings import Experiment, parse_experiment
-from runtime.reproduce_command import main
+from runtime.setting.scale import RobotScale, paper_scale, robot_scale, scaled_experiment
 from runtime.sim.paths import circle, lawnmower
 from runtime.sim.sensors import Sensors
 
@@ -136,9 +136,9 @@ def test_odometry_follows_the_true_motion(velocity: str) -> None:
     assert worst_rate == 0.0  # the driven wheels' rates are passed through
 
 
-def _run_cli(tmp_path: Path, *args: str) -> tuple[int, Path]:
+def _run_cli(tmp_path: Path, *args: str, experiment: str = "") -> tuple[int, Path]:
     exp = tmp_path / "short.toml"
-    exp.write_text(SHORT)
+    exp.write_text(SHORT + experiment)
     out = tmp_path / "out"
     code = main(["--experiment", str(exp), "--sensing", "sample-instant", "--out", str(out),
                  *args])
@@ -146,7 +146,12 @@ def _run_cli(tmp_path: Path, *args: str) -> tuple[int, Path]:
 
 
 def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    code, out = _run_cli(tmp_path, "--robot", str(SMALL), "--no-plots")
+    """The small robot, with a ±10 % uncertainty box (over the default ±30 % box the TDE
+    condition fails for its TDC and TDROC, which the reproduction then refuses): the paper
+    formulation is refused as predicted unstable on this robot (docs/CONTROLLERS.md), the
+    minimal one runs and TDC tracks."""
+    code, out = _run_cli(tmp_path, "--robot", str(SMALL), "--no-plots",
+                         experiment="[controller]\nuncertainty = 0.1\n")
     assert code == 0
     printed = capsys.readouterr().out
     assert "controller.tau_max = 0.2179 (paper 40 x 0.005448, torque)" in printed
@@ -154,12 +159,18 @@ def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert "robot 'small_robot'" in report and "τ_max = 0.2179 N m" in report
     rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
     assert len(rows) == 2 * len(load_robot_code("").runs())  # paths × (formulation, ctrl)
+    assert all((r[12] == "refused") == (r[2] == "paper") for r in rows)
+    assert "predicted unstable on this robot" in report
     minimal_tdc = [r for r in rows if r[2] == "minimal" and r[3] == "tdc"]
     assert all(float(r[4]) < 0.01 for r in minimal_tdc)  # metres
 
 
 def test_trailer_end_to_end_with_plot(tmp_path: Path) -> None:
-    code, out = _run_cli(tmp_path, "--robot", str(TRAILER))
+    """The trailer, with a ±20 % uncertainty box: over the default ±30 % its lumped
+    coefficients fail the TDE condition for TDC and TDROC, which the reproduction refuses
+    (a statement about robustness, tests/test_reproduce_refusal.py)."""
+    code, out = _run_cli(tmp_path, "--robot", str(TRAILER),
+                         experiment="[controller]\nuncertainty = 0.2\n")
     assert code == 0
     rows = [line.split(",") for line in (out / "metrics.csv").read_text().splitlines()[1:]]
     assert len(rows) == 2 * len(load_robot_code("trailer").runs())
@@ -213,7 +224,7 @@ def test_generated_folder_outside_the_repository(tmp_path: Path) -> None:
 def test_stability_analyses_a_robot_of_bodies(capsys: pytest.CaptureFixture[str]) -> None:
     """The trailer (issue 29): every controller in its one formulation, with the scaling
     printed as `reproduce` prints it."""
-    from runtime.stability import analysis as stability
+    from runtime.commands import stability
 
     assert stability.main(["--robot", str(TRAILER), "--no-measure", "--no-delay",
                            "--no-saturation"]) == 0
@@ -236,7 +247,7 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
                     ignore=shutil.ignore_patterns("__pycache__"))
     probe = ("import runtime.bindings.generated as g\n"
              "assert g.load_robot_code('').name == 'trailer'\n"
-             "import runtime.experiment.reproduction  # the generic runtime needs no paper "
+             "import runtime.reproduction.robot  # the generic runtime needs no paper "
              "robot\n"
              "from runtime.bindings.generated import wmr_model\n")
     result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
@@ -253,7 +264,7 @@ def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
 
     probe = (
         "import sys\nfrom pathlib import Path\n"
-        "import runtime.reproduce_command, runtime.experiment.reproduction\n"
+        "import runtime.commands.reproduce, runtime.reproduction.robot\n"
         "from runtime.bindings.robots import resolve\n"
         f"resolve(Path({str(SMALL)!r})); resolve(Path({str(TRAILER)!r}))\n"
         "print(sorted(m for m in ('sympy', 'codegen', 'casadi') if m in sys.modules))\n"

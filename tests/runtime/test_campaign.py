@@ -18,9 +18,9 @@ import pyarrow.parquet as pq
 import pytest
 
 from runtime.campaign import store
-from runtime.campaign.command import main, report, resolve_campaign
 from runtime.campaign.execution import Cluster, connect, execute, project_root
 from runtime.campaign.prediction import predict
+from runtime.commands.campaign import main, report, resolve_campaign
 
 # Short runs, two controllers, a drawn ε wide enough to cross ROC's predicted boundary.
 SPEC = """

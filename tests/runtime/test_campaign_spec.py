@@ -136,9 +136,9 @@ def test_robot_of_bodies_on_mujoco_draws_what_the_engine_can_carry(
     """A bodies-and-wheels robot is its description on MuJoCo: the default campaign leaves
     its base parameters out (and says so) and its runs complete on the engine; a campaign
     file drawing one is refused before any run, naming the field."""
-    from runtime.campaign.command import resolve_campaign
     from runtime.campaign.runner import run_one
     from runtime.campaign.spec import CampaignSpecError
+    from runtime.commands.campaign import resolve_campaign
 
     trailer = Path(__file__).resolve().parents[2] / "modeling/robots/trailer/trailer.toml"
     default, tgt = resolve_campaign(None, trailer, 2, plant="mujoco")
@@ -161,9 +161,9 @@ def test_robot_of_bodies_on_mujoco_draws_what_the_engine_can_carry(
 
 
 def test_robot_of_bodies_runs_and_draws_its_predicted_boundary(tmp_path: Path) -> None:
-    from runtime.campaign.command import resolve_campaign
     from runtime.campaign.prediction import predict
     from runtime.campaign.runner import run_one
+    from runtime.commands.campaign import resolve_campaign
 
     trailer = Path(__file__).resolve().parents[2] / "modeling/robots/trailer/trailer.toml"
     default, _ = resolve_campaign(None, trailer, 1)  # its inertial parameters drawn, none at 0

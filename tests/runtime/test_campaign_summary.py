@@ -32,11 +32,11 @@ from campaign_reference import (
 )
 
 from runtime.campaign import store
-from runtime.campaign.command import report, resolve_campaign
 from runtime.campaign.execution import chunks
 from runtime.campaign.prediction import predict
 from runtime.campaign.runner import run_chunk
 from runtime.campaign.spec import Campaign
+from runtime.commands.campaign import report, resolve_campaign
 
 SPEC = """
 seed = 11

@@ -1,4 +1,4 @@
-"""Fault injection in the closed loop (runtime.sim.faults, runtime.sim.loop) and the fault
+"""Fault injection in the closed loop (runtime.experiment.faults, runtime.sim.loop) and the fault
 table (runtime.fault_table, docs/FAULTS.md)."""
 
 from __future__ import annotations
@@ -12,11 +12,13 @@ import pytest
 
 from runtime import fault_table as ft
 from runtime.bindings.generated import load_robot_code
+from runtime.commands import faults as faults_command
+from runtime.experiment.faults import Fault, FaultSpecError, schedule
 from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
 from runtime.sim import loop, paths
-from runtime.sim.faults import Fault, FaultSpecError, schedule
 from runtime.sim.loop import NOT_CALLED, Run
 from runtime.sim.reference import Reference
+from runtime.stability.checks import check_configuration
 
 ROOT = Path(__file__).resolve().parents[2]
 EXP = Experiment()
@@ -30,7 +32,8 @@ K0 = round(START / H)
 def run(ctrl: str, form: str, ref: Reference, robot: dict[str, float], exp: Experiment,
         faults: list[Fault] | None = None) -> Run:
     """The checked closed loop on the paper's robot."""
-    return loop.run(CODE, ctrl, form, ref, robot, exp, check=True, faults=faults or ())
+    check_configuration(CODE, ctrl, form, robot, exp)
+    return loop.run(CODE, ctrl, form, ref, robot, exp, faults=faults or ())
 
 
 @pytest.fixture(scope="module")
@@ -281,7 +284,7 @@ def test_command_runs_the_experiments_faults(tmp_path: Path) -> None:
         '[paths]\ncircle_duration = 6.0\n[[fault]]\nkind = "repeated-sample"\nstart = 2.0\n',
         encoding="utf-8",
     )
-    assert ft.main(["--experiment", str(exp_file), "--out", str(tmp_path / "out")]) == 0
+    assert faults_command.main(["--experiment", str(exp_file), "--out", str(tmp_path / "out")]) == 0
     text = (tmp_path / "out" / "FAULTS.md").read_text(encoding="utf-8")
     rows = [line for line in text.splitlines() if line.startswith("| repeated-sample")]
     assert len(rows) == len(CODE.runs())
@@ -293,7 +296,7 @@ def test_command_rejects_a_bad_experiment(
 ) -> None:
     exp_file = tmp_path / "e.toml"
     exp_file.write_text('[[fault]]\nkind = "dropped"\nstart = 1\n', encoding="utf-8")
-    assert ft.main(["--experiment", str(exp_file), "--out", str(tmp_path)]) == 2
+    assert faults_command.main(["--experiment", str(exp_file), "--out", str(tmp_path)]) == 2
     assert "[[fault]] #1: field 'kind'" in capsys.readouterr().err
 
 

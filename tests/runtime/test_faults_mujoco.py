@@ -27,9 +27,10 @@ import numpy as np
 import pytest
 
 from runtime.bindings.generated import load_robot_code
+from runtime.experiment.faults import Fault
 from runtime.experiment.settings import Experiment
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
-from runtime.sim.faults import Fault
 from runtime.sim.loop import NOT_CALLED, Run
 
 CODE = load_robot_code("")
@@ -46,8 +47,9 @@ def reference() -> object:
 
 
 def run(*faults: Fault) -> Run:
+    """A run on a new engine (the plant carries the faults' state)."""
     return loop.run(CODE, "tdc", "paper", reference(), ROBOT, EXP,  # type: ignore[arg-type]
-                    faults=faults)
+                    faults=faults, plant=plant_for(CODE, EXP, ROBOT))
 
 
 @cache

@@ -32,6 +32,7 @@ from runtime.cli import main as wmr
 from runtime.experiment.settings import ExperimentFileError, parse_experiment
 from runtime.mujoco.coordinates import CoordinateMap
 from runtime.mujoco.plant import mujoco_plant
+from runtime.plants import plant_for
 from runtime.sim import loop, paths
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -74,7 +75,8 @@ def _circle(model: str, friction: float = 1.0) -> loop.Run:
     exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model=model,
                                                                friction=friction))
     ref = paths.circle(setup.code, setup.nominal, exp)
-    return loop.run(setup.code, "tdroc", "paper", ref, setup.nominal, exp)
+    return loop.run(setup.code, "tdroc", "paper", ref, setup.nominal, exp,
+                    plant=plant_for(setup.code, exp, setup.nominal))
 
 
 def test_drishti_on_mujoco_tracks_as_on_the_generated_plant() -> None:
@@ -144,7 +146,7 @@ def test_static_loads_are_the_engines_where_the_split_is_determinate() -> None:
     split and MuJoCo's at rest agree; Drishti's two supports make its split depend on the
     contacts' stiffness (stated, and printed in docs/MUJOCO.md, not asserted)."""
     from modeling.mjcf_export import static_loads
-    from runtime.mujoco.comparison import engine_loads
+    from runtime.plant_comparison import engine_loads
 
     setup = resolve(ROBOTS["trailer"])
     exp = dataclasses.replace(SHORT, plant=dataclasses.replace(SHORT.plant, model="mujoco"))
@@ -186,8 +188,8 @@ def test_the_slip_monitor_predicts_the_engines_contact_forces(
     wheel's share of it by static load within 3 % + 0.5 N (measured 1.5 %; at higher
     speeds, beyond the test, MuJoCo's load transfer loads the outer wheel: Drishti at
     30 rad/s, 87 against 72 N, the axle's sum still within 0.2 %)."""
-    from runtime.mujoco.layout import robot_layout
     from runtime.mujoco.plant import MujocoPlant
+    from runtime.setting.layout import robot_layout
     from runtime.sim.payload import plant_params_at
     from runtime.sim.slip_monitor import SlipMonitor
 
@@ -227,7 +229,7 @@ def test_the_slip_monitor_predicts_the_engines_contact_forces(
 
 
 def test_traction_mu_lowers_the_torque_limit() -> None:
-    from runtime.experiment.arguments import robot_setting
+    from runtime.setting.robot import robot_setting
 
     exp = parse_experiment("[controller]\ntraction_mu = 0.1\n", "exp.toml")
     setting = robot_setting(None, None, exp)
@@ -238,8 +240,8 @@ def test_traction_mu_lowers_the_torque_limit() -> None:
 
 def test_the_comparison_document_runs_both_plants() -> None:
     """A shortened comparison (one sensing, one floor, one μ of the onset check)."""
-    from runtime.experiment.arguments import robot_setting
-    from runtime.mujoco.comparison import compare, markdown
+    from runtime.plant_comparison import compare, markdown
+    from runtime.setting.robot import robot_setting
 
     exp = parse_experiment("[paths]\ncircle_duration = 2.0\nlawnmower_duration = 2.0\n")
     setting = robot_setting(ROBOTS["small_robot"], None, exp)
@@ -256,7 +258,10 @@ def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
     import csv
 
     experiment = tmp_path / "short.toml"
-    experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n")
+    # A ±20 % box: over the default ±30 % the trailer's TDC and TDROC fail the TDE
+    # condition and the reproduction refuses them (tests/test_reproduce_refusal.py).
+    experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n"
+                          "[controller]\nuncertainty = 0.2\n")
     out = tmp_path / "out"
     assert wmr(["reproduce", "--robot", str(ROBOTS["trailer"]), "--plant", "mujoco",
                 "--experiment", str(experiment), "--sensing", "sample-instant", "--no-plots",
@@ -334,7 +339,7 @@ def test_the_traction_limit_leaves_the_minimal_formulation_off_path_without_slip
     off the circle for good (measured 196 mm at the end), the paper formulation on it
     (measured 8 mm): the minimal formulation's wheel angles catch up, its position does
     not."""
-    from runtime.experiment.arguments import robot_setting
+    from runtime.setting.robot import robot_setting
 
     exp = parse_experiment("[controller]\ntraction_mu = 0.1\n", "exp.toml")
     setting = robot_setting(None, None, exp)

@@ -23,8 +23,8 @@ import pytest
 from runtime.bindings.config import EXPERIMENT_SOURCE, SOURCES
 from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
 from runtime.bindings.robots import resolve
-from runtime.experiment.arguments import robot_setting
 from runtime.experiment.settings import Experiment
+from runtime.setting.robot import robot_setting
 from runtime.sim import loop, paths
 from runtime.sim.outcome import OFF_PATH_FRACTION, outcome
 from runtime.sim.plant import GeneratedPlant, library_for, spin_inertia_keys
@@ -150,9 +150,9 @@ def test_a_one_kilogram_robot_gets_its_own_payload_and_torque() -> None:
     assert paper.is_paper_robot and paper.experiment == Experiment()
 
 
-@pytest.mark.parametrize("module", ["runtime.reproduce_command", "runtime.fault_table",
-                                    "runtime.stability.analysis", "runtime.campaign.command",
-                                    "runtime.freeze.command",
+@pytest.mark.parametrize("module", ["runtime.commands.reproduce", "runtime.commands.faults",
+                                    "runtime.commands.stability", "runtime.commands.campaign",
+                                    "runtime.commands.freeze",
                                     "runtime.tooling.crosscheck.command"])
 def test_every_command_takes_the_same_robot_options(module: str,
                                                      capsys: pytest.CaptureFixture[str]) -> None:
@@ -175,6 +175,6 @@ def test_code_carries_its_controllers() -> None:
 
 def test_every_plant_model_has_a_factory() -> None:
     from runtime.experiment.settings import PLANT_MODELS
-    from runtime.sim.plant import PLANTS
+    from runtime.plants import PLANTS
 
     assert tuple(PLANTS) == PLANT_MODELS

@@ -15,7 +15,7 @@ import pytest
 
 from runtime.bindings.generated import load_robot_code
 from runtime.experiment.settings import Experiment
-from runtime.mujoco.layout import robot_layout
+from runtime.setting.layout import robot_layout
 from runtime.sim.slip_monitor import SlipMonitor
 
 CODE = load_robot_code("")

@@ -19,10 +19,12 @@ import pytest
 
 from runtime.bindings.generated import load_robot_code
 from runtime.bindings.robots import resolve
+from runtime.commands import stability as stability_command
 from runtime.experiment.settings import Experiment, SensingSettings
 from runtime.sim import loop, paths
 from runtime.stability import analysis as stability
 from runtime.stability import verification
+from runtime.stability.checks import check_configuration
 from runtime.stability.sampled_loop import UnstableConfiguration, analysed
 
 CODE = load_robot_code("")  # Drishti's, and every [lumped] robot's, generated code
@@ -91,7 +93,7 @@ def test_jacobian_is_the_same_along_the_circle() -> None:
 
 
 def test_json_output_has_the_fixed_keys(capsys: pytest.CaptureFixture[str]) -> None:
-    assert stability.main(["--json", "--no-measure", "--no-delay"]) == 0
+    assert stability_command.main(["--json", "--no-measure", "--no-delay"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = data["controllers"]
     assert {(r["controller"], r["formulation"]) for r in rows} == {
@@ -111,8 +113,8 @@ def test_json_output_has_the_fixed_keys(capsys: pytest.CaptureFixture[str]) -> N
 
 def test_cli_rejects_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
-        stability.main(["--sensing", "telepathy"])
-    assert stability.main(["--robot", "/nonexistent/robot.toml"]) == 2
+        stability_command.main(["--sensing", "telepathy"])
+    assert stability_command.main(["--robot", "/nonexistent/robot.toml"]) == 2
     assert "robot.toml" in capsys.readouterr().err
 
 
@@ -147,7 +149,9 @@ def test_small_robot_is_refused_in_paper_form_and_tracks_in_minimal_form() -> No
     ref = paths.circle(CODE, SMALL, exp)
 
     def run(name: str, form: str, check: bool = True) -> loop.Run:
-        return loop.run(CODE, name, form, ref, SMALL, exp, check=check)
+        if check:  # what a reproduction checks before it runs (runtime.reproduction.runs)
+            check_configuration(CODE, name, form, SMALL, exp)
+        return loop.run(CODE, name, form, ref, SMALL, exp)
 
     # Refused in the paper formulation: ROC/ASMC by the sampled-loop analysis; TDC/TDROC
     # already by the TDE condition over the box (α ≈ 12: m I − K² is small, so M̃ of (14)

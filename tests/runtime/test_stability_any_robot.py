@@ -24,8 +24,9 @@ from pathlib import Path
 import pytest
 
 from runtime.bindings.generated import load_robot_code
-from runtime.experiment.arguments import robot_setting
+from runtime.commands import stability as stability_command
 from runtime.experiment.settings import Experiment, ExperimentFileError, parse_experiment
+from runtime.setting.robot import robot_setting
 from runtime.stability import analysis as stability
 from runtime.stability import verification
 from runtime.stability.sampled_loop import (
@@ -64,7 +65,7 @@ def scaled(robot: str, generated: str | None, velocity: str) -> tuple:  # type: 
 
 def test_trailer_reports_every_controller_and_formulation(
         capsys: pytest.CaptureFixture[str]) -> None:
-    assert stability.main(["--robot", str(TRAILER), "--json", "--no-measure", "--no-delay",
+    assert stability_command.main(["--robot", str(TRAILER), "--json", "--no-measure", "--no-delay",
                            "--no-saturation"]) == 0
     data = json.loads(capsys.readouterr().out)
     code = load_robot_code("trailer")
@@ -180,10 +181,10 @@ def test_one_verdict_in_every_command(tmp_path: Path, capsys: pytest.CaptureFixt
     """The trailer, one short experiment: `wmr stability`, the verdict `wmr reproduce` writes
     (its REPORT.md section), the boundary a campaign draws and the verdict `wmr freeze`
     writes in its header are the same numbers."""
-    from runtime.campaign.command import resolve_campaign
     from runtime.campaign.prediction import predict
     from runtime.cli import main as wmr
-    from runtime.experiment.reproduction import sampled_data_table
+    from runtime.commands.campaign import resolve_campaign
+    from runtime.reproduction.robot import sampled_data_table
 
     experiment = tmp_path / "short.toml"
     experiment.write_text("[paths]\ncircle_duration = 6.0\nlawnmower_duration = 6.0\n")

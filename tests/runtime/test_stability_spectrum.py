@@ -34,8 +34,9 @@ import scipy.linalg as sla
 from numpy.typing import NDArray
 
 from runtime.bindings.generated import load_robot_code
-from runtime.experiment.arguments import robot_setting
+from runtime.commands import stability as stability_command
 from runtime.experiment.settings import Experiment
+from runtime.setting.robot import robot_setting
 from runtime.stability import analysis as stability
 from runtime.stability.sampled_loop import GAIN_CEILING, layout
 
@@ -208,7 +209,7 @@ def test_wmr_stability_report_by_another_route(name: str,
     setting's gain, and the largest stable gain where the radius computed here crosses 1."""
     argv = ["--json", "--no-measure", "--no-delay"] + (
         ["--robot", str(SMALL_ROBOT)] if name == "small" else [])
-    assert stability.main(argv) == 0
+    assert stability_command.main(argv) == 0
     rows = json.loads(capsys.readouterr().out)["controllers"]
     params, _ = robot_and_experiment(name)
     assert len(rows) == 9  # four laws of (18) in two formulations, the PI in one

@@ -30,9 +30,18 @@ The rules (:func:`rule_broken`; each failure names the file, the line and the ru
   runtime module (module-level edges, followed transitively through every package)
   contains neither SymPy nor ``codegen/`` nor ``runtime/tooling/``.
 
-``runtime/tooling/`` (crosscheck, bench, firmware, bad-input table) may import anything
-above it. ``runtime.cli`` names the commands' modules as strings and imports the one a
-command runs: the command line sits above every layer, and such a name is not an edge.
+* ``runtime/`` is built on floors (:data:`RUNTIME_FLOORS`, from the bottom): each of its
+  sub-packages and top-level modules imports only from itself and from the floors below,
+  anywhere (a function-local import included: an upward import deferred into a function is
+  a cycle waiting to close); the sub-packages and modules of one floor import none of each
+  other. So no two of them import each other (:func:`mutual_pairs`), and none needs a
+  function-local import to dodge a circle. Only the command line (:data:`COMMAND_LINE`:
+  ``commands``, ``cli``, ``tooling``) imports ``argparse``: every ``main`` is a command's.
+  ``runtime/tooling/`` (witness, fuzz driver, bench, firmware) is the top floor: it may
+  import anything below it.
+
+``runtime.cli`` names the commands' modules (``runtime.commands.*``) as strings and imports
+the one a command runs: such a name is not an edge.
 """
 
 from __future__ import annotations
@@ -66,6 +75,30 @@ RUNTIME_MODELING: dict[str, frozenset[str] | None] = {
 }
 
 RUNTIME_MODELING_NEEDS = frozenset({"jinja2"})
+
+# The floors of runtime/, from the bottom: its sub-packages (runtime/<name>/) and top-level
+# modules (runtime/<name>.py). A module imports only from its own and from lower floors;
+# those sharing a floor import none of each other. Every one is listed (a new one is put on
+# its floor here).
+RUNTIME_FLOORS: tuple[tuple[str, ...], ...] = (
+    ("runtime",),  # the package's __init__ (no code)
+    ("experiment",),  # experiment data: settings, faults
+    ("bindings",),  # the generated code built, loaded, configured; --robot resolved
+    ("setting",),  # a robot and its experiment scaled to it: scale, layout, the run setting
+    ("sim",),  # the one closed loop (no check), the generated-model plant
+    ("mujoco",),  # the other plants
+    ("plants",),  # the plant registry, above every plant
+    ("stability",),  # verdicts and the configuration checks (no main)
+    ("reproduction", "fault_table", "plant_comparison"),  # the drivers
+    ("paper", "campaign", "freeze"),  # reports, campaigns, frozen configurations
+    ("commands",),  # every main and argparse parser
+    ("cli",),  # wmr: names the commands as strings
+    ("__main__",),  # python -m runtime
+    ("tooling",),  # witness, fuzz driver, bench, firmware: above everything
+)
+
+# The entries that parse a command line (argparse): every command's main is in commands/.
+COMMAND_LINE = frozenset({"commands", "cli", "__main__", "tooling"})
 
 # Violations being removed on another branch (each with the reason). The test fails when an
 # entry no longer occurs, so that the list only shrinks.
@@ -297,6 +330,47 @@ def rule_broken(i: Import) -> str | None:
     return None
 
 
+def runtime_unit(module: str) -> str | None:
+    """The floor entry a module belongs to: its runtime sub-package or top-level module
+    (``runtime.sim.loop`` → ``sim``, ``runtime.cli`` → ``cli``, ``runtime`` → ``runtime``),
+    None outside runtime/."""
+    parts = module.split(".")
+    if parts[0] != "runtime":
+        return None
+    return parts[1] if len(parts) > 1 else "runtime"
+
+
+def floor_of(unit: str, floors: tuple[tuple[str, ...], ...] = RUNTIME_FLOORS) -> int:
+    return next(n for n, floor in enumerate(floors) if unit in floor)
+
+
+def floor_broken(i: Import, floors: tuple[tuple[str, ...], ...] = RUNTIME_FLOORS
+                 ) -> str | None:
+    """Which floor rule an import breaks (an import upwards, or between two entries of one
+    floor; argparse below the command line), or None."""
+    src, dst = runtime_unit(i.source), runtime_unit(i.target)
+    if i.target == "argparse" and src is not None and src not in COMMAND_LINE:
+        return (f"runtime.{src} imports argparse: a command's parser and main belong to "
+                "runtime.commands")
+    if src is None or dst is None or src == dst:
+        return None
+    up, down = floor_of(src, floors), floor_of(dst, floors)
+    if down > up:
+        return (f"runtime.{src} (floor {up}) imports runtime.{dst}, a floor above it "
+                f"({down})")
+    if down == up:
+        return f"runtime.{src} imports runtime.{dst}, on its own floor ({up})"
+    return None
+
+
+def mutual_pairs(imports: list[Import]) -> list[tuple[str, str]]:
+    """The pairs of runtime sub-packages or top-level modules that import each other
+    (function-local imports included)."""
+    edges = {(a, b) for i in imports
+             if (a := runtime_unit(i.source)) and (b := runtime_unit(i.target)) and a != b}
+    return sorted((a, b) for a, b in edges if a < b and (b, a) in edges)
+
+
 def violations() -> list[tuple[Import, str]]:
     return [(i, r) for i in all_imports() if (r := rule_broken(i)) is not None]
 
@@ -349,6 +423,49 @@ def test_the_checker_finds_a_planted_cycle_and_a_planted_violation() -> None:
     assert rule_broken(Import("runtime.bindings.cbuild", "modeling.robot_file",
                               ("load_robot_model",), 1, True)) is not None
     assert rule_broken(Import("runtime.tooling.bench.report", "sympy", (), 1, False)) is None
+
+
+def test_every_runtime_package_is_on_one_floor() -> None:
+    units = {u for m in module_files() if (u := runtime_unit(m)) is not None}
+    declared = [u for floor in RUNTIME_FLOORS for u in floor]
+    assert len(declared) == len(set(declared)), "an entry is on two floors"
+    assert units == set(declared), (f"not on a floor: {sorted(units - set(declared))}; "
+                                    f"no such package: {sorted(set(declared) - units)}")
+    assert RUNTIME_FLOORS[-1] == ("tooling",)  # tooling stays above everything
+
+
+def test_runtime_imports_only_the_floors_below() -> None:
+    broken = [(i, r) for i in all_imports() if (r := floor_broken(i)) is not None]
+    assert not broken, "imports against runtime/'s floors (RUNTIME_FLOORS):\n" + "\n".join(
+        f"{i.where}: {i.source} imports {i.target}"
+        f"{' (inside a function)' if i.local else ''}: {r}" for i, r in broken
+    )
+    assert mutual_pairs(all_imports()) == []
+
+
+def test_the_floor_rule_fails_on_a_planted_upward_import() -> None:
+    """The floor rule and the pair finder on made-up imports: an upward import (at module
+    level or inside a function), one between two entries of a floor, and a mutual pair are
+    found; a downward one is not."""
+    up = Import("runtime.sim.loop", "runtime.stability.checks", (), 149, True)
+    assert floor_broken(up) == ("runtime.sim (floor 4) imports runtime.stability, a floor "
+                                "above it (7)")
+    assert floor_broken(Import("runtime.experiment.settings", "runtime.sim.faults", (), 33,
+                               False)) is not None
+    assert floor_broken(Import("runtime.paper.figures", "runtime.campaign.store", (), 1,
+                               False)) == ("runtime.paper imports runtime.campaign, on its own "
+                                           "floor (9)")
+    assert floor_broken(Import("runtime.tooling.bench.report", "runtime.cli", (), 1,
+                               False)) is None
+    assert floor_broken(Import("runtime.stability.checks", "runtime.sim.loop", (), 1,
+                               False)) is None
+    assert floor_broken(Import("runtime.sim.loop", "runtime.sim.plant", (), 1, False)) is None
+    assert floor_broken(Import("runtime.stability.analysis", "argparse", (), 15, False))
+    assert floor_broken(Import("runtime.commands.stability", "argparse", (), 8, False)) is None
+    planted = [*all_imports(), up]
+    assert mutual_pairs(planted) == [("sim", "stability")]
+    broken = [i for i in planted if floor_broken(i) is not None]
+    assert broken == [up]
 
 
 def test_no_import_cycle() -> None:

@@ -29,7 +29,7 @@ typedef struct {
 int sim_plant_advance(const SIM_PARAMS *pp, const sim_friction_t *friction, SIM_REAL *x,
                       const SIM_REAL *tau, SIM_REAL dt, int nsub);
 
-/* The same with wheel slip (runtime/sim/faults.py, traction loss): driven wheel i passes
+/* The same with wheel slip (runtime/experiment/faults.py, traction loss): driven wheel i passes
  * (1 - loss[i]) of its net torque to the ground, the rest spins it relative to the ground on
  * its spin inertia spin_inertia[i]. slip = (the SIM_NU slip angles, then their rates): the
  * wheels' angles and rates relative to rolling, which an encoder on the wheel adds to the

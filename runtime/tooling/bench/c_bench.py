@@ -38,7 +38,7 @@ from runtime.tooling.bench.c_variants import (
     sympy_c,
 )
 
-CSRC = Path(__file__).resolve().parents[2] / "paper" / "csrc"  # runtime/paper/csrc
+CSRC = Path(__file__).resolve().parents[1] / "witness" / "csrc"  # runtime/tooling/witness/csrc
 BENCH_CSRC = Path(__file__).resolve().parent / "csrc"  # hand-written with the same checks
 CFLAGS = ["-std=c99", "-O2"]
 # (function, numerator, denominator): the ratios reported per repetition (goals of issue 31).

@@ -28,9 +28,9 @@ from pathlib import Path
 from typing import Any
 
 from runtime.campaign import store
-from runtime.campaign.command import resolve_campaign
 from runtime.campaign.execution import connect, execute
 from runtime.campaign.runner import base_values, run_one, target
+from runtime.commands.campaign import resolve_campaign
 
 
 def in_process_rate(runs: int) -> float:
@@ -70,7 +70,7 @@ def cluster_rate(workers: int, runs: int) -> dict[str, float]:
 
 def big_campaign(runs: int, workers: int) -> float:
     """Wall time of ``python -m runtime campaign --runs N`` (summary and map included)."""
-    from runtime.campaign.command import main
+    from runtime.commands.campaign import main
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()

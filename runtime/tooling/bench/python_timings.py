@@ -49,7 +49,7 @@ def python_bench(number: int) -> list[dict[str, Any]]:
         "casadi.Function": lambda: f_ca(ca.DM(pvec), ca.DM(q), ca.DM(qdot), ca.DM(tau)),
     }
     try:
-        from runtime.paper.handwritten import model as hand
+        from runtime.tooling.witness import model as hand
 
         cases["hand-written NumPy"] = lambda: hand.forward_dynamics(q, qdot, tau, p)
     except (ImportError, AttributeError):

@@ -29,8 +29,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from runtime.bindings.generated import RobotCode
-from runtime.experiment.arguments import robot_setting
 from runtime.experiment.settings import VELOCITY_MODELS, Experiment
+from runtime.setting.robot import robot_setting
 from runtime.stability import verification
 from runtime.stability.analysis import analyse_all
 from runtime.stability.sampled_loop import max_delay, pencil, setting

@@ -5,7 +5,7 @@ with a ``python/robot.py``), or those named by ``--robot NAME_OR_DIR`` (:mod:`.t
 Each robot's section of the report names it (robot name, folder, C prefix).
 
 **Against the hand-written equations** (the paper's robot only; :mod:`.handwritten_check`).
-Reference: ``runtime/paper/handwritten`` (the paper's equations typed by hand in NumPy,
+Reference: ``runtime/tooling/witness`` (the paper's equations typed by hand in NumPy,
 independent of modeling/ and codegen/). Compared with it, on identical inputs:
 
 * ``gen-python`` — the robot's generated Python (model functions, ``controllers`` classes);

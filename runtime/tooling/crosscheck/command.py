@@ -19,7 +19,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from runtime.output_folder import OutputFolderError, writable_file
+from runtime.commands.output_folder import OutputFolderError, writable_file
 from runtime.tooling.crosscheck.deviation import IMPLS
 from runtime.tooling.crosscheck.generated_check import generated_crosscheck
 from runtime.tooling.crosscheck.handwritten_check import applies_to, handwritten_crosscheck
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="wmr crosscheck",
         description="Compare the generated Python, C (double, float32) and CasADi code of every "
-        "robot: with the hand-written equations (runtime/paper/handwritten) where they exist, "
+        "robot: with the hand-written equations (runtime/tooling/witness) where they exist, "
         "and C and CasADi with the generated NumPy for every robot.",
     )
     parser.add_argument(

@@ -12,13 +12,13 @@ from typing import Any
 
 import numpy as np
 
-from runtime.paper.handwritten import controllers as hc
 from runtime.tooling.crosscheck.bindings import casadi_call as call
 from runtime.tooling.crosscheck.bindings import casadi_function, pvec
 from runtime.tooling.crosscheck.controller_runs import c32_synced_run, c_run, hand_run, python_run
 from runtime.tooling.crosscheck.deviation import IMPLS, Deviation, Params, Row, Trace, perturbed
 from runtime.tooling.crosscheck.inputs import Sequence_
 from runtime.tooling.crosscheck.targets import Target
+from runtime.tooling.witness import controllers as hc
 
 
 def compare_traces(dev: Deviation, got: Trace, ref: Trace, nc: int, check_status: bool) -> None:

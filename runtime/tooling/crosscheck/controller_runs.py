@@ -13,12 +13,12 @@ import numpy as np
 
 from runtime.bindings.controller import Controller
 from runtime.bindings.generated import controllers as pyctl
-from runtime.paper.handwritten import controllers as hc
-from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel
 from runtime.tooling.crosscheck.deviation import Arr, Params, Trace, f32, f32_params, perturbed
 from runtime.tooling.crosscheck.inputs import Sequence_, accel_code
 from runtime.tooling.crosscheck.targets import Target
+from runtime.tooling.witness import controllers as hc
+from runtime.tooling.witness import model as hw
 
 
 def hand_run(seq: Sequence_, kind: hc.Kind) -> tuple[Trace, list[hc.StepRecord]]:

@@ -1,5 +1,5 @@
 """The hand-written comparison, for the robot whose equations are typed by hand in
-``runtime/paper/handwritten`` (the paper's robot, Drishti): derivation self-checks, the model
+``runtime/tooling/witness`` (the paper's robot, Drishti): derivation self-checks, the model
 functions and the four controllers of every implementation (generated NumPy, C double and
 float32, CasADi) against the hand-written equations.
 """
@@ -11,13 +11,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from runtime.paper.handwritten import controllers as hc
-from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.controller_checks import check_controllers
 from runtime.tooling.crosscheck.inputs import Sequence_, closed_loop, model_samples, random_sequence
 from runtime.tooling.crosscheck.model_checks import check_models, self_checks
 from runtime.tooling.crosscheck.report import Report
 from runtime.tooling.crosscheck.targets import Target
+from runtime.tooling.witness import controllers as hc
+from runtime.tooling.witness import model as hw
 
 #: The generated robot the hand-written equations describe (its robot.py NAME).
 HANDWRITTEN_ROBOT = "drishti"

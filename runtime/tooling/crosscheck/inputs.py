@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.paper.handwritten import controllers as hc
-from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.deviation import Arr, Params
 from runtime.tooling.crosscheck.targets import Target
+from runtime.tooling.witness import controllers as hc
+from runtime.tooling.witness import model as hw
 
 ACCEL_NAMES: tuple[hc.Accel, ...] = ("backward", "central", "matched")
 

@@ -11,8 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from runtime.paper.handwritten import controllers as hc
-from runtime.paper.handwritten import model as hw
 from runtime.tooling.crosscheck.bindings import CModel, casadi_call, pvec
 from runtime.tooling.crosscheck.deviation import (
     IMPLS,
@@ -26,6 +24,8 @@ from runtime.tooling.crosscheck.deviation import (
 )
 from runtime.tooling.crosscheck.inputs import model_args
 from runtime.tooling.crosscheck.targets import Target
+from runtime.tooling.witness import controllers as hc
+from runtime.tooling.witness import model as hw
 
 ModelFn = Callable[[str, Params, tuple[Arr, ...]], Arr]
 # name, hand-written function, generated function (argument layout, NumPy and CasADi name),

@@ -46,14 +46,16 @@ def record_closed_loop(
     from runtime.experiment.settings import Experiment
     from runtime.sim import loop, paths
     from runtime.sim.plant import library_for
+    from runtime.stability.checks import check_configuration
 
     code = load_robot_code(robot)
     nominal = dict(load_robot().lumped) if not robot else dict(code.params)
     exp = Experiment()
     exp = replace(exp, controller=replace(exp.controller, eps=eps))
     ref = paths.lawnmower(code, nominal, exp)
-    r = loop.run(code, controller, formulation, ref, nominal, exp, float32=float32,
-                 check=not robot)
+    if not robot:
+        check_configuration(code, controller, formulation, nominal, exp)
+    r = loop.run(code, controller, formulation, ref, nominal, exp, float32=float32)
     lib = library_for(code, float32)
     cfg = controller_config(lib, code, controller, formulation, nominal, exp)
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from modeling.package_paths import default_output
-from runtime.output_folder import OutputFolderError, writable_file
+from runtime.commands.output_folder import OutputFolderError, writable_file
 from runtime.tooling.firmware.build import (
     ARM_FLAGS,
     ARM_GCC,

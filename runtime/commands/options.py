@@ -4,27 +4,25 @@
 or a robot generated under ``generated/`` by name (:func:`runtime.bindings.robots.resolve`);
 ``--generated DIR`` is where a robot file's code is; ``--experiment FILE`` the experiment
 (default: the paper's setting; its ``robot = "FILE"`` names the robot when ``--robot`` is
-not given). The experiment is then scaled to the robot (:mod:`runtime.experiment.scale`;
-the identity for the paper's robot). :func:`output_folder` is where a command writes by
-default: its folder for the paper's robot, ``./<command>/<robot name>`` for another.
+not given); ``--plant MODEL`` the plant. :func:`load_setting` resolves them into a
+:class:`runtime.setting.robot.Setting` (the experiment scaled to the robot).
+:func:`output_folder` is where a command writes by default: its folder for the paper's
+robot, ``./<command>/<robot name>`` for another.
 """
 
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
-from runtime.bindings.robots import RobotSetup, RobotSourceError, resolve
-from runtime.experiment.scale import robot_scale, scaled_experiment
 from runtime.experiment.settings import (
-    PAPER_ROBOT,
     PLANT_MODELS,
-    Experiment,
     ExperimentFileError,
     check_contact,
     load_experiment,
 )
+from runtime.setting.robot import RobotSourceError, Setting, robot_setting
 
 ROBOT_HELP = ("a robot file (lumped, physical, or bodies and wheels), a generated folder, or "
               "the name of a robot generated under generated/ (default: the experiment's "
@@ -56,43 +54,6 @@ def add_plant_option(parser: argparse.ArgumentParser) -> None:
                         "mjcf` writes, with the experiment's contact settings)")
 
 
-@dataclass(frozen=True)
-class Setting:
-    """A command's robot and its experiment, scaled to it; ``scaling``: one line per scaled
-    field (what :func:`runtime.experiment.scale.scaled_experiment` did)."""
-
-    robot: RobotSetup
-    experiment: Experiment
-    scaling: tuple[str, ...]
-
-    @property
-    def is_paper_robot(self) -> bool:
-        """The paper's own robot with its own numbers (the experiment is not scaled)."""
-        return (self.robot.name == PAPER_ROBOT and self.robot.code.prefix == "wmr"
-                and self.robot.nominal == self.robot.code.params)
-
-
-def robot_setting(robot: str | Path | None, generated: Path | None,
-                  exp: Experiment) -> Setting:
-    """The robot ``--robot``/``--generated`` name (else the experiment's ``robot``, else the
-    default robot) and ``exp`` scaled to it. ``RobotSourceError`` (a ``ValueError``) with a
-    sentence if the robot cannot be run; ``ValueError`` if the experiment cannot be scaled
-    to it."""
-    named = robot if robot is not None else exp.robot
-    setup = resolve(named, generated)
-    scaled, lines = scaled_experiment(exp, robot_scale(setup.code, setup.nominal))
-    mu = scaled.controller.traction_mu
-    if mu > 0:  # the traction-aware torque limit
-        from runtime.mujoco.layout import traction_torque_limit
-
-        limit = traction_torque_limit(setup.code, setup.plant, scaled, mu)
-        if limit < scaled.controller.tau_max:
-            scaled = replace(scaled, controller=replace(scaled.controller, tau_max=limit))
-            lines.append(f"controller.tau_max = {limit:.4g} (traction limit: traction_mu "
-                         f"{mu:g} x the lightest driven wheel's static load x its radius)")
-    return Setting(setup, scaled, tuple(lines))
-
-
 def load_setting(args: argparse.Namespace) -> Setting:
     """:func:`robot_setting` of a command's parsed ``--robot``, ``--generated`` and
     ``--experiment`` (``ExperimentFileError`` or ``RobotSourceError``, both ``ValueError``)."""
@@ -120,5 +81,4 @@ def output_folder(setting: Setting, out: Path | None, paper_default: Path,
 
 
 __all__ = ["RobotSourceError", "Setting", "add_experiment_option", "add_plant_option",
-           "add_robot_options",
-           "load_setting", "output_folder", "robot_setting"]
+           "add_robot_options", "load_setting", "output_folder", "robot_setting"]

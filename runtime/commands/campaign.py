@@ -23,9 +23,9 @@ from typing import Any
 
 from runtime.campaign import store
 from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
-from runtime.experiment.arguments import add_plant_option, add_robot_options
+from runtime.commands.options import add_plant_option, add_robot_options
+from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import PLANT_MODELS, check_contact
-from runtime.output_folder import OutputFolderError, writable_folder
 
 
 def _positive_int(option: str) -> Any:
@@ -78,7 +78,7 @@ def with_plant(campaign: Campaign, model: str) -> Campaign:
 def engine_draws(campaign: Campaign, code: Any, default: bool) -> Campaign:
     """On MuJoCo a ``[lumped]`` or ``[physical]`` robot is built from each run's drawn
     parameters (``modeling.planar_robot.from_lumped``), but a bodies-and-wheels robot is
-    its description's bodies and wheels (``runtime.mujoco.layout.robot_layout``): a drawn
+    its description's bodies and wheels (``runtime.setting.layout.robot_layout``): a drawn
     base parameter has no masses and inertias to become there. Its default campaign draws
     what the engine can carry (payload masses and places, bearing friction, gains, h, ε,
     sensing) and not ``robot.*``; a campaign file that draws ``robot.*`` is refused here,
@@ -111,7 +111,7 @@ def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | No
     robot as every command scales it (identity for the paper's robot). ``plant``
     (``--plant``) overrides the experiment's ``[plant] model`` (:func:`engine_draws`)."""
     from runtime.campaign.runner import target
-    from runtime.experiment.scale import robot_scale, scaled_experiment
+    from runtime.setting.scale import robot_scale, scaled_experiment
 
     # an absolute path for the workers (a robot's name stays a name)
     named = str(robot) if robot is not None else None

@@ -1,18 +1,20 @@
 """``python -m runtime reproduce``: the paper's experiments (Section "Experimental results
-and comparison"), with figures, a metrics table and a report. This module runs them; the
-outputs are built by the modules below it, each importing only those above it:
+and comparison") on its robot, with figures, a metrics table and a report. This module runs
+them; the outputs are built by the modules of the floors above it:
 
-* :mod:`runtime.paper.reproduce` (here): the runs, their :class:`Metrics` and TDROC's ε
-  sweep, gathered in a :class:`Reproduction` by :func:`reproduce` (no files written);
+* :mod:`runtime.reproduction.paper` (here): the runs, their :class:`Metrics` and TDROC's ε
+  sweep, gathered in a :class:`Reproduction` by :func:`reproduce` (no files written); each
+  run through :func:`runtime.reproduction.runs.checked_run`, as on any robot (a
+  configuration the checks refuse is not run);
 * :mod:`runtime.paper.reproduction_tables`: ``metrics.md`` and ``metrics.csv``;
 * :mod:`runtime.paper.reproduction_verdicts`: the paper's claims and the stability bounds,
   evaluated on the runs;
 * :mod:`runtime.paper.reproduction_report`: ``REPORT.md``;
 * :mod:`runtime.paper.figures`: the figures;
-* :mod:`runtime.reproduce_command`: the command line, which writes them all.
+* :mod:`runtime.commands.reproduce`: the command line, which writes them all.
 
 For each sensing model chosen with ``--sensing`` (default: ``sample-instant`` and
-``encoder-average``, see :class:`runtime.experiment.SensingSettings`; the experiment file's
+``encoder-average``, see :class:`runtime.experiment.settings.SensingSettings`; the experiment file's
 other ``[sensing]`` fields, the estimator of q̈(t − h) in (17) among them, apply to each):
 2 paths (circle, lawn mower) × 4 controllers (TDC, TDROC, ROC, ASMC) × 2 formulations
 (paper, minimal), closed loop through the generated C. Then a sweep of TDROC's boundary
@@ -37,12 +39,13 @@ import numpy as np
 
 from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode, load_robot_code
-from runtime.experiment.reproduction import PALETTE
 from runtime.experiment.settings import Experiment
-from runtime.mujoco.layout import robot_layout
-from runtime.sim import loop, paths
+from runtime.plants import plant_for
+from runtime.reproduction.robot import PALETTE
+from runtime.reproduction.runs import checked_run
+from runtime.setting.layout import robot_layout
+from runtime.sim import paths
 from runtime.sim.loop import Run
-from runtime.sim.plant import library_for, make_plant
 from runtime.sim.reference import Reference
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 
@@ -99,7 +102,8 @@ class Metrics:
 
 
 def rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x**2)))
+    """Root mean square (NaN for a run with no sample: refused)."""
+    return float(np.sqrt(np.mean(x**2))) if len(x) else float("nan")
 
 
 def metrics(r: Run, ref: Reference, sensing: str,
@@ -108,6 +112,10 @@ def metrics(r: Run, ref: Reference, sensing: str,
     of the reference's scale: R1 for the circle, the spacing of the lawn mower's legs; the
     figures use the paper's own scales), torque, k̂."""
     e = r.position_error
+    if not len(e):  # refused: no sample ran
+        nan = float("nan")
+        return Metrics(sensing, r.controller, r.formulation, r.path, nan, nan, nan, nan, nan,
+                       nan, nan, 0, nan, r.failed_at, friction_needed)
     return Metrics(
         sensing=sensing,
         controller=r.controller,
@@ -220,11 +228,9 @@ class _Simulator:
             e = with_eps(with_sensing(self.exp, sensing, estimator), eps)
             plant = None
             if self.monitor is not None:
-                base = {**self.code.plant_defaults, **self.robot}
-                plant = MonitoredPlant(make_plant(self.code, library_for(self.code), e, base),
-                                       self.monitor)
-            run = loop.run(self.code, ctrl, form, self.refs[path], self.robot, e, check=True,
-                           plant=plant)
+                plant = MonitoredPlant(plant_for(self.code, e, self.robot), self.monitor)
+            run = checked_run(self.code, ctrl, form, self.refs[path], self.robot, e,
+                              plant=plant)
             if plant is not None and plant.needed:
                 self.needed[id(run)] = float(np.max(plant.needed))
             self.cache[key] = run

@@ -1,13 +1,14 @@
 """``wmr reproduce --robot ROBOT``: the paper's experiment on any robot.
 
-The experiment of :mod:`runtime.paper.reproduce` — circle and lawn mower, every controller
+The experiment of :mod:`runtime.reproduction.paper` — circle and lawn mower, every controller
 generated for the robot in every formulation it has, each ``--sensing`` model, payload put
 on and taken off, friction the controllers do not know — scaled to the robot
-(:mod:`runtime.experiment.scale`; the scaled settings are printed and written), on the one
-closed loop (:mod:`runtime.sim.loop`). Each run's outcome is classified
-(:mod:`runtime.sim.outcome`: a run off its path is not ``ok``). Writes ``REPORT.md``,
-``metrics.md``, ``metrics.csv`` and ``tracking.png`` to the output folder; nothing written
-depends on the clock.
+(:mod:`runtime.setting.scale`; the scaled settings are printed and written), on the one
+closed loop (:mod:`runtime.sim.loop`), each configuration checked first as on the paper's
+robot (:func:`runtime.reproduction.runs.checked_run`: a refused one is not run). Each run's
+outcome is classified (:mod:`runtime.sim.outcome`: a run off its path is not ``ok``).
+Writes ``REPORT.md``, ``metrics.md``, ``metrics.csv`` and ``tracking.png`` to the output
+folder; nothing written depends on the clock.
 """
 
 from __future__ import annotations
@@ -23,13 +24,16 @@ import numpy as np
 
 from runtime.bindings.robots import RobotSetup
 from runtime.bindings.uncertainty import inertial_keys, roc_bounds, schedule_tde, tde_alpha
-from runtime.experiment.arguments import Setting
 from runtime.experiment.settings import Experiment
-from runtime.sim import loop, paths
+from runtime.reproduction.runs import checked_run
+from runtime.setting.robot import Setting
+from runtime.sim import paths
 from runtime.sim.loop import Run
 from runtime.sim.outcome import OFF_PATH_FRACTION, outcome
 from runtime.sim.payload import plant_params_at
 from runtime.sim.reference import Reference
+from runtime.stability.analysis import analyse_all, table
+from runtime.stability.sampled_loop import covers
 
 # One colour per controller, in the registry's order (as the paper's figures).
 PALETTE = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown",
@@ -63,7 +67,7 @@ class Row:
     max_torque: float
     saturated_steps: int
     failed_at: float | None
-    status: str  # the outcome: ok, off path, failed, init refused (runtime.sim.outcome)
+    status: str  # the outcome: ok, off path, failed, (init) refused (runtime.sim.outcome)
     detail: str  # why it is not ok
 
 
@@ -132,8 +136,8 @@ def reproduce_robot(setting: Setting, sensings: Sequence[str],
         for name, ref in refs.items():
             for form, info in pairs:
                 # the simulated robot: the file's numbers, with the experiment's payloads
-                r = loop.run(code, info.name, form, ref, setup.nominal, e,
-                             plant_params=setup.plant)
+                r = checked_run(code, info.name, form, ref, setup.nominal, e,
+                                plant_params=setup.plant)
                 runs[(sensing, name, form, info.name)] = r
                 rows.append(_row(r, sensing, ref.scale))
                 if progress:
@@ -149,9 +153,6 @@ def sampled_data_table(setting: Setting, sensing: str) -> str:
     """The sampled-data verdict of every controller and formulation with this sensing model:
     ``wmr stability``'s table for the same robot, scaled experiment and code
     (:func:`runtime.stability.analysis.analyse_all`, k̂ measured as it measures it)."""
-    from runtime.stability.analysis import analyse_all, table
-    from runtime.stability.sampled_loop import covers
-
     code, exp = setting.robot.code, setting.experiment
     if not covers(code):
         return "No sampled-data verdict: the root's pose is not the first coordinates.\n"

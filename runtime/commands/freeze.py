@@ -43,10 +43,11 @@ from runtime.bindings import cbuild
 from runtime.bindings.config import controller_config
 from runtime.bindings.generated import RobotCode
 from runtime.bindings.robots import RobotSetup, RobotSourceError
-from runtime.experiment.arguments import GENERATED_HELP, ROBOT_HELP, robot_setting
+from runtime.commands.options import GENERATED_HELP, ROBOT_HELP
+from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
-from runtime.output_folder import OutputFolderError, writable_folder
+from runtime.setting.robot import robot_setting
 from runtime.stability.sampled_loop import analysed, covers
 
 

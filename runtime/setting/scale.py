@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from runtime.bindings.generated import RobotCode
+from runtime.bindings.robots import code_in, generated_folder
 from runtime.experiment.settings import (
     PAPER_ROBOT,
     ControllerSettings,
@@ -74,8 +75,6 @@ def robot_scale(code: RobotCode, params: dict[str, float]) -> RobotScale:
 @cache
 def paper_scale() -> RobotScale:
     """The measures of the robot the experiment's defaults are written for."""
-    from runtime.bindings.robots import code_in, generated_folder
-
     code = code_in(generated_folder(PAPER_ROBOT))
     return robot_scale(code, code.params)
 

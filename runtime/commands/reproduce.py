@@ -1,5 +1,5 @@
-"""``wmr reproduce``: the command line of :mod:`runtime.paper.reproduce` (the paper's
-experiments on its robot, Drishti) and of :mod:`runtime.experiment.reproduction` (``--robot``
+"""``wmr reproduce``: the command line of :mod:`runtime.reproduction.paper` (the paper's
+experiments on its robot, Drishti) and of :mod:`runtime.reproduction.robot` (``--robot``
 another robot: the experiment scaled to it). Checks every argument before any simulation
 runs; for the paper's robot it writes the figures, the tables of
 :mod:`runtime.paper.reproduction_tables` and the report of
@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from runtime.experiment.arguments import (
+from runtime.commands.options import (
     Setting,
     add_experiment_option,
     add_plant_option,
@@ -22,13 +22,18 @@ from runtime.experiment.arguments import (
     load_setting,
     output_folder,
 )
+from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import (
     VELOCITY_MODELS,
     ExperimentFileError,
     check_sensing,
 )
-from runtime.output_folder import OutputFolderError, writable_folder
-from runtime.paper.reproduce import (
+from runtime.paper.reproduction_report import report_markdown
+from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, write_csv
+from runtime.paper.reproduction_verdicts import claims, stability
+from runtime.plant_comparison import compare, report_section
+from runtime.reproduction import robot
+from runtime.reproduction.paper import (
     DEFAULT_OUT,
     DEFAULT_SENSINGS,
     LABELS,
@@ -37,9 +42,6 @@ from runtime.paper.reproduce import (
     reproduce,
     with_sensing,
 )
-from runtime.paper.reproduction_report import report_markdown
-from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, write_csv
-from runtime.paper.reproduction_verdicts import claims, stability
 
 # --------------------------------------------------------------------------- CLI
 
@@ -60,7 +62,7 @@ def write_outputs(rep: Reproduction, out: Path, plots: bool) -> list[Figure]:
     """Figures, ``metrics.md``, ``metrics.csv`` and ``REPORT.md`` into ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     figures: list[Figure] = []
-    if plots:
+    if plots:  # Matplotlib is imported only when the figures are drawn
         from runtime.paper import figures as figs
 
         figures = figs.render_all(rep, out)
@@ -152,10 +154,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _compare_plant(setting: Setting, sensings: tuple[str, ...], out: Path) -> None:
     """``--compare-plant mujoco``: every run again on the model plant and on MuJoCo at the
-    experiment's floor (:func:`runtime.mujoco.comparison.compare`), appended to
-    ``REPORT.md`` side by side (:func:`runtime.mujoco.comparison.report_section`)."""
-    from runtime.mujoco.comparison import compare, report_section
-
+    experiment's floor (:func:`runtime.plant_comparison.compare`), appended to
+    ``REPORT.md`` side by side (:func:`runtime.plant_comparison.report_section`)."""
     friction = setting.experiment.plant.friction
     t0 = time.perf_counter()
     comp = compare(setting, sensings, ((f"μ = {friction:g}", friction, 0.0),),
@@ -169,18 +169,16 @@ def _compare_plant(setting: Setting, sensings: tuple[str, ...], out: Path) -> No
 
 def _main_robot(setting: Setting, sensings: tuple[str, ...], out: Path, plots: bool,
                 start: float) -> int:
-    """Another robot: the experiment scaled to it (:mod:`runtime.experiment.reproduction`)."""
-    from runtime.experiment.reproduction import reproduce_robot, write_outputs
-
+    """Another robot: the experiment scaled to it (:mod:`runtime.reproduction.robot`)."""
     setup = setting.robot
     print(f"robot '{setup.name}' from {setup.source}:", *setting.scaling, sep="\n  ",
           flush=True)
     try:
-        rep = reproduce_robot(setting, sensings, progress=True)
+        rep = robot.reproduce_robot(setting, sensings, progress=True)
     except ValueError as exc:  # a robot the scaled experiment does not apply to
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    write_outputs(rep, out, plots=plots)
+    robot.write_outputs(rep, out, plots=plots)
     bad = [r for r in rep.rows if r.status != "ok"]
     print(f"{len(rep.rows) - len(bad)} of {len(rep.rows)} runs ok"
           + (f"; not ok: {', '.join(sorted({r.status for r in bad}))}" if bad else ""))

@@ -3,7 +3,7 @@
  * builds (tests/firmware/test_firmware_sanitizers.py):
  *
  *   cc -std=c99 -fsanitize=address,undefined -fno-sanitize-recover=all \
- *      -Igenerated/c generated/c/wmr_*.c runtime/paper/csrc/fuzz_driver.c -lm
+ *      -Igenerated/c generated/c/wmr_*.c runtime/tooling/witness/csrc/fuzz_driver.c -lm
  *   ./a.out SEED STEPS FD_CALLS
  *
  * Every controller runs STEPS steps in each formulation, FD_CALLS calls go to each of

@@ -39,7 +39,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from runtime.paper.handwritten import model
+from runtime.tooling.witness import model
 
 Vec = NDArray[np.float64]
 Kind = Literal["tdc", "tdroc", "roc", "asmc"]

@@ -1,6 +1,0 @@
-"""The paper's equations typed by hand (NumPy), independent of modeling/ and codegen/.
-
-``model``: (9), (6)–(8), (13), (14), (31) and the minimal form SᵀMS; ``controllers``:
-TDC, TDROC, ROC, ASMC. Used by ``runtime.tooling.crosscheck`` as the reference that every
-generated implementation is compared with, and timed by ``runtime.tooling.bench``.
-"""
