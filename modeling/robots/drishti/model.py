@@ -35,6 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
+from modeling.robot_io import DEFAULT_ROBOT, SHIPPED_NAMING
 from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
 from modeling.robots.drishti import parameters
 
@@ -245,17 +246,20 @@ def default_values() -> dict[str, float]:
 
 @cache
 def robot_model() -> RobotModel:
-    """The paper's robot in its lumped parameters: prefix ``wmr``, output at the root of
-    ``generated/``, the plant with the lateral first moment K_lat the controllers lack,
-    the payload ``payload_relations``, and the paper formulation."""
+    """The paper's robot in its lumped parameters: named by the shipped-robot table
+    (``modeling.robot_io.SHIPPED_NAMING``: prefix ``wmr``, output at the root of
+    ``generated/``, the paper's own robot), the plant with the lateral first moment K_lat
+    the controllers lack, the payload ``payload_relations``, and the paper formulation."""
     params = PARAMETERS
     plant = (*params[:3], K_LAT_PARAMETER, *params[3:])
     rel = payload_relations()
     defaults = default_values()
+    naming = SHIPPED_NAMING[DEFAULT_ROBOT]
     return RobotModel(
-        name="drishti",
-        prefix="wmr",
-        output_dir="",
+        name=DEFAULT_ROBOT,
+        prefix=naming.prefix,
+        output_dir=naming.output_dir,
+        paper_robot=naming.paper_robot,
         source=SOURCE,
         system=wmr_system(),
         plant_system=wmr_system(lateral_moment=True),

@@ -142,6 +142,12 @@ def read_tables(text: str, where: str = "<string>") -> RobotTables:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{where}: not valid TOML: {exc}") from None
+    return tables_of(data, where)
+
+
+def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
+    """:func:`read_tables` of a file's TOML already parsed (``modeling.robot_file`` parses
+    a robot file once)."""
     unknown = sorted(set(data) - {"name", "lumped", "physical"})
     if unknown:
         raise RobotFileError(
