@@ -27,7 +27,7 @@ import pytest
 from generated_code_support import C_FLAGS, GENERATED
 
 from codegen.__main__ import main as model_main
-from codegen.output_plan import Placed, folder_collision
+from codegen.output_plan import Placed, folder_collision, shared_path
 from modeling.robot_file import KINDS, kind_of, read_robot_file, shipped_robot_file
 from modeling.robot_io import SHIPPED_NAMING, naming_of
 from runtime.bindings import cbuild
@@ -186,6 +186,11 @@ def test_regenerating_a_robot_in_place_is_not_a_collision() -> None:
     assert folder_collision(placed, GENERATED) is None
     clash = folder_collision([Placed("other", "", "x.toml")], GENERATED)
     assert clash is not None and "'drishti'" in clash and "'other'" in clash
+    # The rendered paths are checked too, before writing: one path from two robots.
+    a, b = Placed("a", "x", "a.toml"), Placed("b", "y", "b.toml")
+    assert shared_path([(a, ["x/c/a.c"]), (b, ["y/c/b.c"])], Path("out")) is None
+    shared = shared_path([(a, ["x/c/a.c", "z/MODEL.md"]), (b, ["z/MODEL.md"])], Path("out"))
+    assert shared is not None and "'a'" in shared and "'b'" in shared and "z/MODEL.md" in shared
 
 
 def test_kinds_and_names_come_from_the_file_and_the_shipped_table(tmp_path: Path) -> None:
