@@ -3,7 +3,9 @@
 It may name
 
 * a robot file: ``[lumped]``/``[physical]`` (the paper's differential drive with other
-  numbers: the default robot's generated code, ``wmr_``, with the file's parameters) or
+  numbers: generated code that declares the paper's model, ``PAPER_MODEL``, with the
+  file's parameters: the default robot's, or with ``--generated DIR`` the folder DIR or
+  DIR/<name>/ that ``wmr model --robot FILE --out DIR`` wrote) or
   ``[[body]]``/``[[wheel]]`` (code of its own: the generated folder whose ``robot.py``
   names the robot, refused when it was generated from another version of the file,
   ``SOURCE_SHA256``; its parameters are then the file's);
@@ -186,6 +188,10 @@ def _lumped(source: RobotSource, generated: Path | None) -> RobotSetup:
         robot = load_robot(source)
     except RobotFileError as exc:
         raise RobotSourceError(str(exc)) from None
+    if generated is not None and not _holds_robot(generated):
+        # the folder `wmr model --robot FILE --out DIR` wrote this robot in: DIR/<name>/
+        generated = next((d for d in generated_robots(generated)
+                          if _robot_name(d / "python" / "robot.py") == robot.name), generated)
     try:
         code = code_in(generated) if generated is not None else load_robot_code("")
     except FileNotFoundError:
