@@ -14,6 +14,7 @@ import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -137,19 +138,29 @@ class RobotSource:
 
 
 def read_robot_file(path: str | Path | None = None) -> RobotSource:
-    """Read and parse a robot file once (``None``: Drishti's, named as in the package);
+    """Read and parse a robot file once (``None``: Drishti's, :func:`packaged_source`);
     ``RobotFileError`` naming the file if it cannot be read or is not TOML."""
     if path is None:
-        file = shipped_robot_file(DEFAULT_ROBOT)
-        where = source_label(file)
-        text = read_robot_text(file)
-    else:
-        where, text = str(path), read_robot_text(path)
+        return packaged_source()
+    return _parsed(Path(path), str(path), read_robot_text(path))
+
+
+@cache
+def packaged_source() -> RobotSource:
+    """Drishti's own robot file, named as in the package, read once per process: the robot
+    file of ``wmr model`` and the defaults of Drishti's model are one reading (package data
+    does not change under a running command)."""
+    file = shipped_robot_file(DEFAULT_ROBOT)
+    source = _parsed(file, source_label(file), read_robot_text(file))
+    return RobotSource(None, source.where, source.text, source.data)
+
+
+def _parsed(path: Path, where: str, text: str) -> RobotSource:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{where}: not valid TOML: {exc}") from None
-    return RobotSource(None if path is None else Path(path), where, text, data)
+    return RobotSource(path, where, text, data)
 
 
 def describes_bodies(data: Mapping[str, Any]) -> bool:

@@ -28,8 +28,14 @@ from generated_code_support import C_FLAGS, GENERATED
 
 from codegen.__main__ import main as model_main
 from codegen.output_plan import Placed, folder_collision, shared_path
-from modeling.robot_file import KINDS, kind_of, read_robot_file, shipped_robot_file
-from modeling.robot_io import SHIPPED_NAMING, naming_of
+from modeling.robot_file import (
+    KINDS,
+    kind_of,
+    read_robot_file,
+    robot_source,
+    shipped_robot_file,
+)
+from modeling.robot_io import SHIPPED_NAMING, naming_of, packaged_source
 from runtime.bindings import cbuild
 from runtime.bindings import generated as generated_bindings
 from runtime.bindings.generated import RobotCode, load_robot_code
@@ -196,6 +202,8 @@ def test_regenerating_a_robot_in_place_is_not_a_collision() -> None:
 def test_kinds_and_names_come_from_the_file_and_the_shipped_table(tmp_path: Path) -> None:
     assert [k.name for k in KINDS] == ["bodies", "physical", "lumped"]
     assert naming_of("drishti", DRISHTI_FILE) == SHIPPED_NAMING["drishti"]
+    # Drishti's own file, by any path, is one reading per process (its model's defaults too).
+    assert robot_source(DRISHTI_FILE) is robot_source(None) is packaged_source()
     copy = _copy(tmp_path, "drishti")  # Drishti's name, not its file: its own folder
     source = read_robot_file(copy)
     assert (kind_of(source).name, source.naming.prefix, source.naming.output_dir,

@@ -35,7 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
-from modeling.robot_io import DEFAULT_ROBOT, SHIPPED_NAMING
+from modeling.robot_io import DEFAULT_ROBOT, SHIPPED_NAMING, packaged_source
 from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
 from modeling.robots.drishti import parameters
 
@@ -237,8 +237,9 @@ K_LAT_PARAMETER = Parameter.of(parameters.K_LAT, K_lat)
 def default_values() -> dict[str, float]:
     """The plant parameters of ``drishti.toml`` (beside this file): its ``[lumped]`` table
     and K_lat = 0 (read through ``parameters``, which needs no model)."""
-    text, where = parameters.packaged_text()
-    lumped = parameters.read_tables(text, where).lumped
+    source = packaged_source()  # the robot file wmr model reads: one reading, one parse
+    where = source.where
+    lumped = parameters.tables_of(source.data, where).lumped
     if lumped is None:
         raise ValueError(f"{where}: Drishti's own robot file must give [lumped] parameters")
     return {**lumped, K_LAT_PARAMETER.key: 0.0}
