@@ -2,11 +2,17 @@
 
     wmr model                    # every shipped robot (modeling/robots/): Drishti at the
                                  # root of the output, others in <out>/<name>/
-    wmr model --robot my.toml    # one robot: a [lumped]/[physical] file is the paper's
-                                 # robot with its numbers (code at the root of the output),
-                                 # a [[body]] file goes to <out>/<name>/
+    wmr model --robot my.toml    # one robot, whatever its kind, in <out>/<name>/ with
+                                 # prefix <name>_ (a [lumped]/[physical] file is the
+                                 # paper's model with its numbers); --robot again: several
     wmr model --check            # exit 1 with a diff if the output is stale
     wmr model --out DIR          # write to DIR
+
+Each robot file is read once, and its name, prefix and folder come from it
+(``modeling.robot_file``; Drishti's own file keeps ``wmr`` and the root). Two robots that
+would write the same path (two names with one prefix, or a robot already in ``--out``
+under another name) are refused with exit 2 before anything is derived or written
+(``codegen.output_plan``).
 
 Where output goes (``--out``'s default): the shipped robots regenerate the package's own
 ``generated/`` in a source checkout (what ``make model`` does) and ``./generated`` in the
@@ -27,9 +33,16 @@ import time
 from pathlib import Path
 
 from codegen.generate import generate_files
+from codegen.output_plan import Placed, folder_collision, shared_path
 from codegen.progress import to_stderr
 from modeling.package_paths import SHIPPED_GENERATED, inside, source_checkout
-from modeling.robot_file import RobotFileError, load_robot_model, shipped_robot_files
+from modeling.robot_file import (
+    RobotFileError,
+    RobotSource,
+    model_of,
+    robot_source,
+    shipped_robot_files,
+)
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
@@ -41,8 +54,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument(
         "--robot",
         type=Path,
+        action="append",
         default=None,
-        help="one robot TOML file (default: every robot in modeling/robots/)",
+        help="a robot TOML file, again for several (default: every robot in "
+        "modeling/robots/)",
     )
     parser.add_argument(
         "--check",
@@ -108,35 +123,55 @@ def _diff(name: str, old: bytes | None, new: bytes | None) -> str:
     return "".join(difflib.unified_diff(a, b, f"generated/{name}", f"regenerated/{name}"))
 
 
+def _placed(source: RobotSource) -> Placed:
+    return Placed(source.name, source.naming.output_dir, source.where)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parse(argv)
+    robots: list[Path] | None = args.robot
     try:
-        args.out = output_folder(args.out, args.robot, args.check)
+        args.out = output_folder(args.out, robots[0] if robots else None, args.check)
     except OutputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    paths: list[Path | None] = [args.robot] if args.robot is not None else list(
-        shipped_robot_files())
+    paths: list[Path] = robots if robots else list(shipped_robot_files())
+    try:  # each file read once; the name, prefix and folder come from it
+        sources = [robot_source(path) for path in paths]
+        placed = [_placed(source) for source in sources]
+    except RobotFileError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    refusal = folder_collision(placed, args.out)
+    if refusal is not None:
+        print(f"error: {refusal}", file=sys.stderr)
+        return 2
     files: dict[str, bytes] = {}
+    produced: list[tuple[Placed, list[str]]] = []
     summary: list[str] = []
-    for path in paths:
+    for path, source, place in zip(paths, sources, placed, strict=True):
         start = time.perf_counter()
-        progress = to_stderr(path.stem if path is not None else "drishti")
+        progress = to_stderr(path.stem)
         try:
             with progress.step("reading the robot file (kinetic energy, constraints)"):
-                model, robot = load_robot_model(path)
+                model, robot = model_of(source)
         except RobotFileError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-        produced = generate_files(robot, model, progress=progress)
-        files.update(produced)
+        rendered = generate_files(robot, model, progress=progress)
+        produced.append((place, list(rendered)))
+        files.update(rendered)
         where = args.out / model.output_dir if model.output_dir else args.out
-        summary.append(f"{robot.name}: {len(produced)} files for {where} "
+        summary.append(f"{robot.name}: {len(rendered)} files for {where} "
                        f"({time.perf_counter() - start:.1f} s)")
+    refusal = shared_path(produced, args.out)
+    if refusal is not None:
+        print(f"error: {refusal}", file=sys.stderr)
+        return 2
     # Regenerating every robot into the shipped generated/ owns all of it (files of removed
     # robots go); otherwise only the top-level entries written are owned, so nothing else in
     # a user's --out folder is ever deleted.
-    owns_all = args.robot is None and inside(args.out, SHIPPED_GENERATED)
+    owns_all = robots is None and inside(args.out, SHIPPED_GENERATED)
     old = _existing(args.out, None if owns_all else {_top(n) for n in files})
     stale = sorted(n for n in set(files) | set(old) if files.get(n) != old.get(n))
     if args.check:

@@ -21,19 +21,26 @@ from pathlib import Path
 
 from modeling.mjcf_export import ContactSettings, mjcf
 from modeling.planar_robot import PlanarRobot, from_description, from_lumped
-from modeling.robot_io import DEFAULT_ROBOT, RobotFileError, is_description, shipped_robot_file
+from modeling.robot_io import (
+    DEFAULT_ROBOT,
+    RobotFileError,
+    describes_bodies,
+    read_robot_file,
+    shipped_robot_file,
+)
 
 
 def planar_robot(path: Path) -> PlanarRobot:
     """The robot a robot file describes, in numbers (``RobotFileError`` naming the file
     and field if it is refused)."""
-    if is_description(path):
-        from modeling.description import load_description
+    source = read_robot_file(path)  # read once; each reader below takes what was read
+    if describes_bodies(source.data):
+        from modeling.description.files import description_of
 
-        return from_description(load_description(path))
+        return from_description(description_of(source.data, source.where))
     from modeling.robot_file import load_robot
 
-    robot = load_robot(path)
+    robot = load_robot(source)
     return from_lumped(robot.name, robot.plant_values())
 
 

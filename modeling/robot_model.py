@@ -14,12 +14,11 @@ parameters (``modeling.base_parameters``) and wheel radii.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cache
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import sympy as sp
 
@@ -28,6 +27,10 @@ from modeling.base_parameters import reduce_to_base, split_terms
 from modeling.lagrange import ConstrainedSystem
 from modeling.parameter_table import ParameterInfo
 from modeling.planar_robot import from_description
+from modeling.robot_io import Naming, c_identifier
+
+if TYPE_CHECKING:
+    from modeling.description.schema import RobotDescription
 
 # A described robot with at least this many bodies is generated through staged quantities
 # (modeling.staged); below, closed forms (measured: see codegen.robot_functions).
@@ -105,6 +108,9 @@ class RobotModel:
     # .to_data()), written into robot.py as LAYOUT for an engine's model of it (None: a
     # [lumped]/[physical] robot, whose layout follows from its parameters).
     layout: dict[str, Any] | None = None
+    # The paper's own robot (modeling.robot_io.SHIPPED_NAMING), not merely its model: the
+    # generated robot.py declares it (PAPER_ROBOT) for the runtime.
+    paper_robot: bool = False
 
     @property
     def q(self) -> tuple[sp.Symbol, ...]:
@@ -152,23 +158,18 @@ class RobotModel:
         return parameter_table.c_field_names((*self.params, *self.plant_params))
 
 
-def c_identifier(name: str) -> str:
-    """A C/Python identifier prefix from a robot name: ``my-robot`` → ``my_robot``."""
-    ident = re.sub(r"\W+", "_", name.strip()).strip("_").lower()
-    if not ident or ident[0].isdigit():
-        ident = f"robot_{ident}"
-    return ident
-
-
 # ---------------------------------------------------------------------------------------
 # Robots described as bodies, joints and wheels
 # ---------------------------------------------------------------------------------------
 PAYLOAD = sp.symbols("m_L x_L y_L", real=True)
 
 
-@cache
-def described_model(path: str, label: str = "") -> RobotModel:
-    """The model of a robot file with ``[[body]]`` tables (``modeling.description``).
+def described_model(path: str | Path | RobotDescription, label: str = "",
+                    naming: Naming | None = None) -> RobotModel:
+    """The model of a robot file with ``[[body]]`` tables (``modeling.description``): of
+    the file at ``path``, or of its description already read (``modeling.robot_file``
+    reads a file once). ``naming``: its prefix and folder (default: ``c_identifier`` of
+    its name, see ``modeling.robot_io.naming_of``).
 
     Run-time parameters: the base inertial parameters of T (``J_*`` generalised
     inertias, ``K_*`` first moments) and the wheel radii. The plant is the same model (a
@@ -179,12 +180,21 @@ def described_model(path: str, label: str = "") -> RobotModel:
     function of the parameters alone (see docs/CONTROLLERS.md). ``label`` names the file
     in generated preambles (default: ``path``).
     """
-    from modeling.description import description_system, load_description
+    from modeling.description import load_description
+
+    if not isinstance(path, str | Path):
+        return _described_model(path, label, naming)
+    return _described_model(load_description(path), label or Path(path).as_posix(), naming)
+
+
+@cache
+def _described_model(desc: RobotDescription, label: str, naming: Naming | None
+                     ) -> RobotModel:
+    from modeling.description import description_system
     from modeling.description.canonical import trig_reduce
     from modeling.description.kinematics import body_poses, coordinates, velocity
     from modeling.description.schema import symbolize
 
-    desc = load_description(path)
     base_system = description_system(desc)
     names = dict(zip(base_system.qdot, base_system.coordinate_names, strict=True))
     variables = [*base_system.q, *base_system.qdot]
@@ -230,12 +240,13 @@ def described_model(path: str, label: str = "") -> RobotModel:
     positive = tuple(p.key for p in radii) + tuple(
         p.key for p in params if p.key.startswith("J_")
     )
-    prefix = c_identifier(desc.name)
+    if naming is None:
+        naming = Naming(c_identifier(desc.name), c_identifier(desc.name))
     return RobotModel(
         name=desc.name,
-        prefix=prefix,
-        output_dir=prefix,
-        source=label or Path(path).as_posix(),
+        prefix=naming.prefix,
+        output_dir=naming.output_dir,
+        source=label,
         system=system,
         plant_system=system,
         coordinate_names=base_system.coordinate_names,
@@ -250,4 +261,5 @@ def described_model(path: str, label: str = "") -> RobotModel:
         paper=len(desc.bodies) == 1,
         staged=len(desc.bodies) > STAGED_FROM_BODIES - 1,
         layout=from_description(desc).to_data(),
+        paper_robot=naming.paper_robot,
     )

@@ -11,6 +11,13 @@ SOURCE_SHA256 = "91bfc79ed80c90fd1be3783155134531d602a9220145bfeca2ec8090cae5e08
 PARAMS: dict[str, float] = {"m": 36.0, "I": 5.72, "K": 0.34, "Iw": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
 PLANT_PARAMS: dict[str, float] = {"m": 36.0, "I": 5.72, "K": 0.34, "K_lat": 0.0, "Iw": 0.07, "r": 0.096, "b": 0.414, "d": 0.12}
 PREFIX = "wmr"
+# What the robot is (modeling.robot_file.KINDS), declared for the runtime, which reads
+# these and never the prefix: its robot file's kind; whether it is the paper's
+# differential drive (parameters m, I, K, Iw, r, b, d, the layout following from
+# them); whether it is the paper's own robot (modeling.robot_io.SHIPPED_NAMING).
+KIND = "lumped"
+PAPER_MODEL = True
+PAPER_ROBOT = True
 NQ = 5  # generalised coordinates
 NU = 2  # inputs (driven wheels)
 ACTUATED = (3, 4)  # index in q of each input's wheel angle

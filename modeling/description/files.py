@@ -110,6 +110,12 @@ def parse_description(text: str, where: str = "<string>") -> RobotDescription:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise fail(where, f"not valid TOML: {exc}") from None
+    return description_of(data, where)
+
+
+def description_of(data: dict[str, Any], where: str = "<string>") -> RobotDescription:
+    """:func:`parse_description` of a file's TOML already parsed (``modeling.robot_file``
+    parses a robot file once)."""
     unknown = sorted(set(data) - {"name", "import", *SECTIONS})
     if unknown:
         raise fail(where, f"unknown field '{unknown[0]}' (expected name, [[body]], "

@@ -10,7 +10,9 @@ whatever else belongs to that robot alone sits beside it.
 
 The generic machinery (``modeling.lagrange``, ``modeling.description``,
 ``modeling.robot_model``, ``codegen``) does not import a robot from here. The exceptions
-name the default robot, Drishti: ``modeling.robot_file``, the dispatcher between robot-file
-formats (a ``[lumped]``/``[physical]`` file is Drishti's structure with other numbers, read
-by ``drishti/robot_file.py``), and the transitional default of ``modeling.controllers``.
+name the default robot, Drishti: ``modeling.robot_file``, whose table of robot kinds sends a
+``[lumped]``/``[physical]`` file to Drishti's model with other numbers (read by
+``drishti/robot_file.py``; named after its own file, not Drishti), the shipped-robot table
+of ``modeling.robot_io`` (Drishti's own file: prefix ``wmr``, the root of ``generated/``,
+the paper's robot), and the transitional default of ``modeling.controllers``.
 """

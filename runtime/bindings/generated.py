@@ -52,7 +52,7 @@ def __getattr__(name: str) -> ModuleType:
     except ImportError as exc:
         raise ImportError(f"{GENERATED / 'python'}: no generated default robot ({exc}); "
                           "run `make model`") from None
-    if prefix != "wmr":
+    if not getattr(robot_mod, "PAPER_ROBOT", False):  # declared, not read off the prefix
         raise ImportError(
             f"{GENERATED / 'python'} holds robot '{robot_mod.NAME}' (prefix {prefix}_), not "
             "the paper's differential drive (wmr_) this command is written for; regenerate "
@@ -128,6 +128,17 @@ class RobotCode:
     @property
     def c_dir(self) -> Path:
         return self.folder / "c"
+
+    @property
+    def paper_model(self) -> bool:
+        """The paper's differential drive (lumped parameters, layout from them), as its
+        ``robot.py`` declares (``PAPER_MODEL``; code generated before it: False)."""
+        return bool(getattr(self.robot, "PAPER_MODEL", False))
+
+    @property
+    def is_paper_robot(self) -> bool:
+        """The paper's own robot, as its ``robot.py`` declares (``PAPER_ROBOT``)."""
+        return bool(getattr(self.robot, "PAPER_ROBOT", False))
 
     @property
     def nq(self) -> int:

@@ -3,7 +3,9 @@
 It may name
 
 * a robot file: ``[lumped]``/``[physical]`` (the paper's differential drive with other
-  numbers: the default robot's generated code, ``wmr_``, with the file's parameters) or
+  numbers: generated code that declares the paper's model, ``PAPER_MODEL``, with the
+  file's parameters: the default robot's, or with ``--generated DIR`` the folder DIR or
+  DIR/<name>/ that ``wmr model --robot FILE --out DIR`` wrote) or
   ``[[body]]``/``[[wheel]]`` (code of its own: the generated folder whose ``robot.py``
   names the robot, refused when it was generated from another version of the file,
   ``SOURCE_SHA256``; its parameters are then the file's);
@@ -27,7 +29,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from modeling.robot_file import load_robot
-from modeling.robot_io import RobotFileError, describes_bodies, read_robot_text, text_digest
+from modeling.robot_io import (
+    RobotFileError,
+    RobotSource,
+    describes_bodies,
+    read_robot_text,
+    text_digest,
+)
 from runtime.bindings.generated import GENERATED, RobotCode, load_robot_code
 
 
@@ -121,7 +129,7 @@ def resolve(robot: str | Path | None = None, generated: Path | None = None) -> R
         text, data = _read(path)
         if describes_bodies(data):
             return _described(path, text, data, root)
-        return _lumped(path, text, generated)
+        return _lumped(RobotSource(path, str(path), text, data), generated)
     return _folder(generated_folder(str(robot), root), "--robot")
 
 
@@ -174,23 +182,28 @@ def _robot_name(robot_py: Path) -> str | None:
     return None
 
 
-def _lumped(path: Path, text: str, generated: Path | None) -> RobotSetup:
+def _lumped(source: RobotSource, generated: Path | None) -> RobotSetup:
+    path = source.path  # read once, by resolve: not read again here
     try:
-        robot = load_robot(path)
+        robot = load_robot(source)
     except RobotFileError as exc:
         raise RobotSourceError(str(exc)) from None
+    if generated is not None and not _holds_robot(generated):
+        # the folder `wmr model --robot FILE --out DIR` wrote this robot in: DIR/<name>/
+        generated = next((d for d in generated_robots(generated)
+                          if _robot_name(d / "python" / "robot.py") == robot.name), generated)
     try:
         code = code_in(generated) if generated is not None else load_robot_code("")
     except FileNotFoundError:
         raise RobotSourceError(f"--generated {generated}: no generated robot there "
                                "(python/robot.py missing)") from None
-    if code.prefix != "wmr" or set(code.params) != set(robot.lumped):
+    if not code.paper_model or set(code.params) != set(robot.lumped):
         raise RobotSourceError(
-            f"{path}: a lumped robot file runs on the paper robot's generated code (wmr_, "
-            f"parameters {', '.join(robot.lumped)}), but {code.folder} holds robot "
+            f"{path}: a lumped robot file runs on generated code of the paper's model "
+            f"(parameters {', '.join(robot.lumped)}), but {code.folder} holds robot "
             f"'{code.name}' ({code.prefix}_); regenerate it with `wmr model`"
         )
     values = robot.plant_values()
     plant = {k: float(values.get(k, 0.0)) for k in code.plant_defaults}
     return RobotSetup(robot.name, str(path), code, dict(robot.lumped), plant,
-                      text_digest(text))
+                      source.digest)

@@ -20,7 +20,7 @@ def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
     masses and inertias, not the derived model's base parameters)."""
     layout = getattr(code.robot, "LAYOUT", None)
     if layout is None:
-        if code.prefix != "wmr":
+        if not code.paper_model:
             raise ValueError(f"robot '{code.name}': its generated robot.py has no LAYOUT "
                              "(generated before the MuJoCo plant); regenerate it with "
                              "`wmr model`")

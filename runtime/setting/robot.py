@@ -32,7 +32,7 @@ class Setting:
     @property
     def is_paper_robot(self) -> bool:
         """The paper's own robot with its own numbers (the experiment is not scaled)."""
-        return (self.robot.name == PAPER_ROBOT and self.robot.code.prefix == "wmr"
+        return (self.robot.name == PAPER_ROBOT and self.robot.code.is_paper_robot
                 and self.robot.nominal == self.robot.code.params)
 
 

@@ -106,10 +106,11 @@ def test_tutorial_runs_from_an_installed_wheel(tmp_path: Path) -> None:
     assert all(f"generated/{p.split('/', 1)[1]}" in wheel_files or (site / p).is_dir()
                for p in shipped), "files appeared in the installed generated/"
 
-    # Step 3: the robot's code.
-    code = work / "my_robot_code"
-    assert (code / "c" / "wmr_tdroc.c").is_file() and (code / "MODEL.md").is_file()
-    assert '"my_robot"' in (code / "c" / "wmr_robot.h").read_text()
+    # Step 3: the robot's code, in a folder and with a prefix of its own.
+    code = work / "my_robot_code" / "my_robot"
+    assert (code / "c" / "my_robot_tdroc.c").is_file() and (code / "MODEL.md").is_file()
+    assert '"my_robot"' in (code / "c" / "my_robot_robot.h").read_text()
+    assert not (work / "my_robot_code" / "c").exists()
 
     # Step 4: what the tutorial says about the verdicts.
     stability = next(v for k, v in outputs.items() if k.startswith("wmr stability"))

@@ -378,7 +378,7 @@ def small_robot_code(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
     out = tmp_path_factory.mktemp("small_robot_code")
     assert model_main(["--robot", str(SMALL_ROBOT), "--out", str(out)]) == 0
-    return out
+    return out / "small_robot"  # its own folder and prefix (modeling.robot_file.KINDS)
 
 
 def test_freeze_refuses_what_stability_calls_unstable(
@@ -400,12 +400,12 @@ def test_freeze_refuses_what_stability_calls_unstable(
     assert not out.exists()
     assert freeze_main(base) == 0
     assert "freezing the minimal formulation" in capsys.readouterr().err
-    text = (out / "wmr_tdroc_frozen.h").read_text()
+    text = (out / "small_robot_tdroc_frozen.h").read_text()
     assert "--formulation minimal" in text and ".formulation = 1," in text
     assert "Sampled-data verdict: tdroc/minimal stable: spectral radius 0.863" in text
     assert freeze_main([*base, "--formulation", "paper", "--force"]) == 0
     assert "frozen anyway (--force)" in capsys.readouterr().err
-    text = (out / "wmr_tdroc_frozen.h").read_text()
+    text = (out / "small_robot_tdroc_frozen.h").read_text()
     assert ".formulation = 0," in text and "UNSTABLE" in text and "(frozen with --force)" in text
 
 

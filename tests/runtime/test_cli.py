@@ -87,17 +87,21 @@ def test_robot_output_never_defaults_into_the_shipped_folder(
 
 def test_model_into_a_users_folder_keeps_their_files(tmp_path: Path) -> None:
     out = tmp_path / "code"
-    (out / "c").mkdir(parents=True)
+    own = out / "small_robot"  # the robot's folder in --out: named after it
+    (own / "c").mkdir(parents=True)
+    (out / "c").mkdir()
     (out / "notes.txt").write_text("mine")
-    (out / "c" / "stale.c").write_text("/* a file of the robot's own folder: replaced */")
+    (out / "c" / "mine.c").write_text("/* not the robot's */")
+    (own / "c" / "stale.c").write_text("/* a file of the robot's own folder: replaced */")
     done = subprocess.run(
         [sys.executable, "-m", "runtime", "model", "--robot", str(SMALL), "--out", str(out)],
         capture_output=True, text=True, cwd=tmp_path, timeout=300,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert (out / "notes.txt").read_text() == "mine"
-    assert not (out / "c" / "stale.c").exists()  # c/ is the robot's: regenerated whole
-    assert (out / "c" / "wmr_tdroc.c").is_file()
+    assert (out / "c" / "mine.c").is_file()
+    assert not (own / "c" / "stale.c").exists()  # its folder is the robot's: regenerated whole
+    assert (own / "c" / "small_robot_tdroc.c").is_file()
     check = subprocess.run(
         [sys.executable, "-m", "runtime", "check", "--robot", str(SMALL), "--out", str(out)],
         capture_output=True, text=True, cwd=tmp_path, timeout=300,

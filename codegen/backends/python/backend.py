@@ -25,6 +25,7 @@ from codegen.controller_api import (
 from codegen.robot_functions import MAX_WINDOW
 from codegen.template_util import generated_by
 from modeling.controllers import BASE_CHECKS, ControllerSpec
+from modeling.robot_file import kind_named
 from modeling.version import VERSION
 
 
@@ -49,6 +50,13 @@ def robot_py(target: RobotTarget) -> str:
     return text + (
         f'PLANT_PARAMS: dict[str, float] = {{{plant}}}\n'
         f'PREFIX = "{model.prefix}"\n'
+        "# What the robot is (modeling.robot_file.KINDS), declared for the runtime, which reads\n"
+        "# these and never the prefix: its robot file's kind; whether it is the paper's\n"
+        "# differential drive (parameters m, I, K, Iw, r, b, d, the layout following from\n"
+        "# them); whether it is the paper's own robot (modeling.robot_io.SHIPPED_NAMING).\n"
+        f'KIND = "{robot.kind}"\n'
+        f"PAPER_MODEL = {kind_named(robot.kind).paper_model}\n"
+        f"PAPER_ROBOT = {model.paper_robot}\n"
         f"NQ = {model.nq}  # generalised coordinates\n"
         f"NU = {model.nu}  # inputs (driven wheels)\n"
         f"ACTUATED = {model.actuated!r}  # index in q of each input's wheel angle\n"

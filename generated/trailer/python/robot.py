@@ -11,6 +11,13 @@ SOURCE_SHA256 = "2fa08a3b7391ce7eafd832a0b60874de177e12b4f49a161a865925f64f7410e
 PARAMS: dict[str, float] = {"J_theta_cart": 5.141500000000001, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 3.421094, "J_x_tractor": 53.5, "K_theta_cart_x_tractor": 8.25, "K_theta_cart_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 3.75, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PLANT_PARAMS: dict[str, float] = {"J_theta_cart": 5.141500000000001, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 3.421094, "J_x_tractor": 53.5, "K_theta_cart_x_tractor": 8.25, "K_theta_cart_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 3.75, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PREFIX = "trailer"
+# What the robot is (modeling.robot_file.KINDS), declared for the runtime, which reads
+# these and never the prefix: its robot file's kind; whether it is the paper's
+# differential drive (parameters m, I, K, Iw, r, b, d, the layout following from
+# them); whether it is the paper's own robot (modeling.robot_io.SHIPPED_NAMING).
+KIND = "bodies"
+PAPER_MODEL = False
+PAPER_ROBOT = False
 NQ = 8  # generalised coordinates
 NU = 2  # inputs (driven wheels)
 ACTUATED = (4, 5)  # index in q of each input's wheel angle

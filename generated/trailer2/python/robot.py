@@ -11,6 +11,13 @@ SOURCE_SHA256 = "63575b8d1b7741e4b525e576e4d68656bf67b17ca903de3c1aa54653e422674
 PARAMS: dict[str, float] = {"J_theta_cart": 17.78525, "J_theta_cart2": 5.141500000000001, "J_theta_cart2_left": 0.004, "J_theta_cart2_right": 0.004, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 4.996093999999999, "J_x_tractor": 71.0, "K_theta_cart_x_tractor": 23.125, "K_theta_cart_x_tractor_2": 0.0, "K_theta_cart2_x_tractor": 8.25, "K_theta_cart2_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 9.0, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart2_left": 0.08, "radius_cart2_right": 0.08, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PLANT_PARAMS: dict[str, float] = {"J_theta_cart": 17.78525, "J_theta_cart2": 5.141500000000001, "J_theta_cart2_left": 0.004, "J_theta_cart2_right": 0.004, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 4.996093999999999, "J_x_tractor": 71.0, "K_theta_cart_x_tractor": 23.125, "K_theta_cart_x_tractor_2": 0.0, "K_theta_cart2_x_tractor": 8.25, "K_theta_cart2_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 9.0, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart2_left": 0.08, "radius_cart2_right": 0.08, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PREFIX = "trailer2"
+# What the robot is (modeling.robot_file.KINDS), declared for the runtime, which reads
+# these and never the prefix: its robot file's kind; whether it is the paper's
+# differential drive (parameters m, I, K, Iw, r, b, d, the layout following from
+# them); whether it is the paper's own robot (modeling.robot_io.SHIPPED_NAMING).
+KIND = "bodies"
+PAPER_MODEL = False
+PAPER_ROBOT = False
 NQ = 11  # generalised coordinates
 NU = 2  # inputs (driven wheels)
 ACTUATED = (5, 6)  # index in q of each input's wheel angle

@@ -11,6 +11,13 @@ SOURCE_SHA256 = "d673a7c012d9f86eb30fcbde033c09a2fbff94d088749f9f5687c1465bb5a08
 PARAMS: dict[str, float] = {"J_theta_cart": 30.429000000000002, "J_theta_cart2": 17.78525, "J_theta_cart2_left": 0.004, "J_theta_cart2_right": 0.004, "J_theta_cart3": 5.141500000000001, "J_theta_cart3_left": 0.004, "J_theta_cart3_right": 0.004, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 6.571093999999999, "J_x_tractor": 88.5, "K_theta_cart_x_tractor": 38.0, "K_theta_cart_x_tractor_2": 0.0, "K_theta_cart2_x_tractor": 23.125, "K_theta_cart2_x_tractor_2": 0.0, "K_theta_cart3_x_tractor": 8.25, "K_theta_cart3_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 14.25, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart2_left": 0.08, "radius_cart2_right": 0.08, "radius_cart3_left": 0.08, "radius_cart3_right": 0.08, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PLANT_PARAMS: dict[str, float] = {"J_theta_cart": 30.429000000000002, "J_theta_cart2": 17.78525, "J_theta_cart2_left": 0.004, "J_theta_cart2_right": 0.004, "J_theta_cart3": 5.141500000000001, "J_theta_cart3_left": 0.004, "J_theta_cart3_right": 0.004, "J_theta_cart_left": 0.004, "J_theta_cart_right": 0.004, "J_theta_left": 0.07, "J_theta_right": 0.07, "J_theta_tractor": 6.571093999999999, "J_x_tractor": 88.5, "K_theta_cart_x_tractor": 38.0, "K_theta_cart_x_tractor_2": 0.0, "K_theta_cart2_x_tractor": 23.125, "K_theta_cart2_x_tractor_2": 0.0, "K_theta_cart3_x_tractor": 8.25, "K_theta_cart3_x_tractor_2": 0.0, "K_theta_tractor_x_tractor": 14.25, "K_theta_tractor_x_tractor_2": 0.0, "radius_cart2_left": 0.08, "radius_cart2_right": 0.08, "radius_cart3_left": 0.08, "radius_cart3_right": 0.08, "radius_cart_left": 0.08, "radius_cart_right": 0.08, "radius_left": 0.096, "radius_right": 0.096}
 PREFIX = "trailer3"
+# What the robot is (modeling.robot_file.KINDS), declared for the runtime, which reads
+# these and never the prefix: its robot file's kind; whether it is the paper's
+# differential drive (parameters m, I, K, Iw, r, b, d, the layout following from
+# them); whether it is the paper's own robot (modeling.robot_io.SHIPPED_NAMING).
+KIND = "bodies"
+PAPER_MODEL = False
+PAPER_ROBOT = False
 NQ = 14  # generalised coordinates
 NU = 2  # inputs (driven wheels)
 ACTUATED = (6, 7)  # index in q of each input's wheel angle

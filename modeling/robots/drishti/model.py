@@ -35,6 +35,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.lagrange import ConstrainedSystem, trig_canonical
+from modeling.robot_io import DEFAULT_ROBOT, SHIPPED_NAMING, packaged_source
 from modeling.robot_model import PAYLOAD, NominalCondition, Parameter, RobotModel
 from modeling.robots.drishti import parameters
 from modeling.wheel_constraints import NO_SIDE_SLIP, ROLLING, WheelConstraint
@@ -237,8 +238,9 @@ K_LAT_PARAMETER = Parameter.of(parameters.K_LAT, K_lat)
 def default_values() -> dict[str, float]:
     """The plant parameters of ``drishti.toml`` (beside this file): its ``[lumped]`` table
     and K_lat = 0 (read through ``parameters``, which needs no model)."""
-    text, where = parameters.packaged_text()
-    lumped = parameters.read_tables(text, where).lumped
+    source = packaged_source()  # the robot file wmr model reads: one reading, one parse
+    where = source.where
+    lumped = parameters.tables_of(source.data, where).lumped
     if lumped is None:
         raise ValueError(f"{where}: Drishti's own robot file must give [lumped] parameters")
     return {**lumped, K_LAT_PARAMETER.key: 0.0}
@@ -246,17 +248,20 @@ def default_values() -> dict[str, float]:
 
 @cache
 def robot_model() -> RobotModel:
-    """The paper's robot in its lumped parameters: prefix ``wmr``, output at the root of
-    ``generated/``, the plant with the lateral first moment K_lat the controllers lack,
-    the payload ``payload_relations``, and the paper formulation."""
+    """The paper's robot in its lumped parameters: named by the shipped-robot table
+    (``modeling.robot_io.SHIPPED_NAMING``: prefix ``wmr``, output at the root of
+    ``generated/``, the paper's own robot), the plant with the lateral first moment K_lat
+    the controllers lack, the payload ``payload_relations``, and the paper formulation."""
     params = PARAMETERS
     plant = (*params[:3], K_LAT_PARAMETER, *params[3:])
     rel = payload_relations()
     defaults = default_values()
+    naming = SHIPPED_NAMING[DEFAULT_ROBOT]
     return RobotModel(
-        name="drishti",
-        prefix="wmr",
-        output_dir="",
+        name=DEFAULT_ROBOT,
+        prefix=naming.prefix,
+        output_dir=naming.output_dir,
+        paper_robot=naming.paper_robot,
         source=SOURCE,
         system=wmr_system(),
         plant_system=wmr_system(lateral_moment=True),

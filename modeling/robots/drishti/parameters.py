@@ -27,12 +27,11 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from modeling.parameter_table import ParameterInfo
-from modeling.robot_io import RobotFileError
+from modeling.robot_io import RobotFileError, packaged_source
 
 # The order of the generated structs.
 LUMPED: tuple[ParameterInfo, ...] = (
@@ -69,7 +68,6 @@ PHYSICAL_FIELDS: dict[str, str] = {p.key: p.with_unit for p in PHYSICAL}
 POSITIVE = {"m", "I", "Iw", "r", "b", "m_P", "I_P", "m_w"}
 NON_NEGATIVE = {"d", "Im"}
 
-PACKAGED = "robots/drishti/drishti.toml"  # Drishti's robot file, inside the package
 
 
 @dataclass(frozen=True)
@@ -82,8 +80,10 @@ class RobotTables:
 
 
 def packaged_text() -> tuple[str, str]:
-    """The text of Drishti's own robot file and the name errors give it."""
-    return resources.files("modeling").joinpath(PACKAGED).read_text(), f"modeling/{PACKAGED}"
+    """The text of Drishti's own robot file and the name errors give it (read once per
+    process: ``modeling.robot_io.packaged_source``)."""
+    source = packaged_source()
+    return source.text, source.where
 
 
 def _number(where: str, key: str, value: Any) -> float:
@@ -142,6 +142,12 @@ def read_tables(text: str, where: str = "<string>") -> RobotTables:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(f"{where}: not valid TOML: {exc}") from None
+    return tables_of(data, where)
+
+
+def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
+    """:func:`read_tables` of a file's TOML already parsed (``modeling.robot_file`` parses
+    a robot file once)."""
     unknown = sorted(set(data) - {"name", "lumped", "physical"})
     if unknown:
         raise RobotFileError(

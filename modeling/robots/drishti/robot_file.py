@@ -13,7 +13,12 @@ from pathlib import Path
 
 from modeling.audit import audit_lumped, audit_physical
 from modeling.robot_io import Robot, read_robot_text, text_digest
-from modeling.robots.drishti.parameters import check_lumped, packaged_text, read_tables
+from modeling.robots.drishti.parameters import (
+    RobotTables,
+    check_lumped,
+    packaged_text,
+    read_tables,
+)
 
 
 def lumped_from_physical(phys: dict[str, float]) -> tuple[dict[str, float], float]:
@@ -51,17 +56,22 @@ def parse_robot(text: str, where: str = "<string>") -> Robot:
     """The robot of a ``[lumped]`` or ``[physical]`` file's text; ``RobotFileError`` names
     ``where`` and the field. The physics audit (``modeling.audit``) runs first: an
     implausible file is refused before any work, its warnings go into ``Robot.warnings``."""
-    tables = read_tables(text, where)
+    return robot_of(read_tables(text, where), text, where)
+
+
+def robot_of(tables: RobotTables, text: str, where: str) -> Robot:
+    """The robot of a ``[lumped]``/``[physical]`` file's checked tables (``read_tables`` or
+    ``tables_of``) and its ``text`` (for the digest); see :func:`parse_robot`."""
     if tables.lumped is not None:
         warnings = audit_lumped(where, tables.lumped)
         return Robot(tables.name, tables.lumped, source=where, digest=text_digest(text),
-                     warnings=warnings)
+                     warnings=warnings, kind="lumped")
     assert tables.physical is not None  # read_tables gives exactly one table
     warnings = audit_physical(where, tables.physical)
     lumped, k_lat = lumped_from_physical(tables.physical)
     check_lumped(where, lumped, k_lat)
     return Robot(tables.name, lumped, tables.physical, k_lat, source=where,
-                 digest=text_digest(text), warnings=warnings)
+                 digest=text_digest(text), warnings=warnings, kind="physical")
 
 
 def load_robot(path: str | Path | None = None) -> Robot:
