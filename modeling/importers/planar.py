@@ -645,6 +645,23 @@ def _supports(plan: _Plan) -> list[str]:
     return out
 
 
+OMNI_NAMES = re.compile(r"mecanum|omni|swedish", re.IGNORECASE)
+
+
+def _refuse_omnidirectional(b: _Builder, plan: _Plan) -> None:
+    """Mecanum and omni wheels (named so, or on a base a Gazebo planar_move plugin
+    drives) roll freely sideways on their rollers: the format's wheels are standard fixed
+    wheels, which do not, so such a base would be modelled as a locked skid-steer."""
+    named = [g.joint.label for g in plan.wheels if g.joint is not None
+             and OMNI_NAMES.search(g.joint.name + " " + g.top)]
+    if named or b.mech.omnidirectional:
+        what = (f"mecanum/omni wheels ({', '.join(named[:4])})" if named else
+                f"an omnidirectional base ({b.mech.omnidirectional} moves it sideways)")
+        raise b.fail(f"{what}: the rollers of mecanum and omni wheels let them slip "
+                     "sideways, which the format's standard fixed wheels (no side slip) cannot "
+                     "model; an omnidirectional base is not supported")
+
+
 def _why_no_wheels(b: _Builder) -> str:
     """What a file without wheels has instead: continuous joints without a collision
     cylinder (a mesh the importer does not read, or visuals only), or wheel links welded by
@@ -676,6 +693,7 @@ def build(mech: Mechanism, options: Options | None = None) -> PlanarRobot:
         raise b.fail("no wheels found: a wheel is a continuous or revolute joint with a "
                      "horizontal axis whose child link has a collision cylinder along it"
                      + _why_no_wheels(b))
+    _refuse_omnidirectional(b, plan)
     for group in plan.wheels:
         assert group.joint is not None
         found = b.wheel_cylinder(group.joint)

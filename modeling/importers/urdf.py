@@ -220,6 +220,8 @@ def _drive(mech: Mechanism, root: ET.Element) -> None:
                 drive(j.get("name", ""), f"<ros2_control name=\"{rc.get('name', '')}\">")
     for plugin in root.iter("plugin"):
         filename = (plugin.get("filename") or "") + (plugin.get("name") or "")
+        if re.search(r"planar_move|mecanum|omni", filename, re.IGNORECASE):
+            mech.omnidirectional = f"<plugin filename=\"{plugin.get('filename', '')}\">"
         if not re.search(r"diff_?drive|skid_?steer|DiffDrive|SkidSteer", filename):
             continue
         for el in plugin.iter():
