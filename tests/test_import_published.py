@@ -190,3 +190,23 @@ def test_a_refused_import_names_the_input(tmp_path: Path) -> None:
     with pytest.raises(RobotFileError, match=r"bad\.xml: neither URDF"):
         (tmp_path / "bad.xml").write_text("<sdf version='1.6'/>")
         import_robot(tmp_path / "bad.xml")
+
+
+def test_a_mesh_without_inertia_is_reported(tmp_path: Path) -> None:
+    """A link whose only geometry is a mesh (its file absent, never needed) and that has no
+    <inertial>: its mass is not in the file; imported massless, with a finding."""
+    lidar = """
+  <joint name="lidar_joint" type="fixed">
+    <parent link="base_link"/><child link="lidar"/><origin xyz="0 0 0.2"/>
+  </joint>
+  <link name="lidar">
+    <collision><geometry><mesh filename="package://absent/meshes/lidar.stl"/></geometry>
+    </collision>
+  </link>
+</robot>"""
+    path = tmp_path / "burger_lidar.urdf"
+    path.write_text((TB3 / "turtlebot3_burger_2019.urdf").read_text().replace("</robot>", lidar))
+    findings = import_robot(path).robot.findings
+    assert any(f.startswith("link 'lidar': a mesh without inertia (link 'lidar' <collision> is "
+                            "a mesh, and the link has no <inertial>): imported massless")
+               for f in findings), findings

@@ -286,6 +286,12 @@ class _Builder:
     def audit_links(self) -> None:
         for link in self.mech.links.values():
             if link.inertial is None:
+                meshes = [g.label for g in link.geoms if g.kind == "mesh"]
+                if meshes:
+                    self.findings.append(
+                        f"{link.label}: a mesh without inertia ({meshes[0]} is a mesh, and "
+                        "the link has no <inertial>): imported massless; its mass is not in "
+                        "the file, and mesh files are not read")
                 continue
             where = f"{link.label} ({link.inertial_label})" if link.inertial_label else link.label
             self.findings += checks.check_tensor(self.mech.path, where, link.inertial)
