@@ -29,12 +29,14 @@ The checks and their thresholds (the constants below):
   wheel's diameter): a uniform plate has m L²/12, a ring m L²/4; outside [0.01, 100] m L²
   the number is a placeholder or in other units (warning). A wheel's diameter inertia above
   1.5 m r² fits no wheel (a wheel of width w ≤ 2r has at most m (r²/2 + w²/4)); its spin
-  inertia below 1 % of a disc's m r²/2 is a placeholder (warnings). **Unit slips** are
-  errors: an inertia 1,000 × or more what its mass and size allow (m L² for a body, m r² for
-  a wheel's spin, 1.5 m r² about its diameter) is no body's; the error names the unit that
-  brings it closest to a typical body's (m L²/12, a disc's m r²/2 and m r²/4): 1 kg m² is
-  1e3 g m², 1e4 kg cm², 1e6 kg mm², 1e7 g cm² (a 6 kg chassis with I = 80000 is in kg mm²,
-  a 28 g wheel with Iw = 207 in g cm²). The 3D tensors of an
+  inertia below 1 % of a disc's m r²/2 is a placeholder (warnings), or, if a thousandth of
+  its mass makes it 0.3–3 × a disc's, a wheel mass in grams (the warning says so). **Unit
+  slips** are errors: an inertia 1,000 × or more what its mass and size allow is no body's
+  (m L² for a body; M r² for a wheel's spin, M the robot's mass, which bounds a geared
+  rotor's J_r N² too; 1.5 m r² about its diameter); the error names the unit that brings it
+  closest to a typical body's (m L²/12, a disc's m r²/2 and m r²/4): 1 kg m² is 1e3 g m²,
+  1e4 kg cm², 1e6 kg mm², 1e7 g cm² (a 6 kg chassis with I = 80000 is in kg mm², a 28 g
+  wheel with Iw = 207 in g cm²). The 3D tensors of an
   imported file (triangle inequality, positive definiteness, the 0.001 kg m² placeholder,
   the spin axis) are checked by the importer (``modeling.importers.checks``).
 * **Layout.** Fixed wheels on one body at more than one axle position (a skid-steer: four
@@ -79,6 +81,7 @@ INERTIA_UNITS = (("g m^2", 1e3), ("kg cm^2", 1e4), ("kg mm^2", 1e6), ("g cm^2", 
                  ("g mm^2", 1e9))  # how many of each make 1 kg m²
 DIAMETER_RATIO_MAX = 1.5
 SPIN_RATIO_MIN = 0.01
+GRAMS_SPIN = (0.3, 3.0)  # × a disc's m r²/2 with the mass read as grams: a wheel in grams
 WHEEL_ALONE = 1.5  # spin ≤ 1.5 × m r²/2: the wheel without its motor's rotor
 # The assumed typical small-robot gearmotor of the rotor warning.
 TYPICAL_ROTOR_INERTIA = 1e-6  # kg m², J_r
@@ -247,10 +250,14 @@ def _wheel_inertias(spin_label: str, diameter_label: str, mass: float, radius: f
             f"m r^2/4 = {_g(mr2 / 4)})"
         )
     if spin < SPIN_RATIO_MIN * mr2 / 2:
+        in_grams = spin / (mr2 / 2 / 1000)  # × a disc, were the mass in grams
+        grams = (f"; or the wheel's mass in grams: m = {_g(mass / 1000)} kg gives "
+                 f"{in_grams:.2g} × a disc" if GRAMS_SPIN[0] <= in_grams <= GRAMS_SPIN[1]
+                 else "")
         warnings.append(
             f"{spin_label} = {_g(spin)} kg m^2 is {spin / (mr2 / 2):.2g} × a solid "
             f"disc's m r^2/2 = {_g(mr2 / 2)} kg m^2 (m = {_g(mass)} kg, r = {_g(radius)} m): "
-            "a placeholder, or another unit"
+            f"a placeholder, or another unit{grams}"
         )
 
 

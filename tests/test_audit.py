@@ -420,3 +420,14 @@ def test_thresholds_are_what_the_docstring_says() -> None:
     assert dict(audit.INERTIA_UNITS)["g cm^2"] == 1e7 and "1e7 g cm²" in doc
     reflected = audit.TYPICAL_ROTOR_INERTIA * audit.TYPICAL_GEAR_RATIO**2
     assert reflected == pytest.approx(2.5e-3)
+
+
+def test_a_wheel_mass_in_grams_is_named() -> None:
+    """The 28 g wheel typed as m_w = 28: its Iw = 2.07e-5 kg m^2 is 0.0014 × the disc of a
+    28 kg wheel, 1.4 × that of a 28 g one: the warning names grams."""
+    robot = parse_robot(CHASSIS.replace("m_w = 0.028", "m_w = 28.0"), "grams.toml")
+    (spin,) = [w for w in robot.warnings if w.startswith("field 'physical.Iw' = ")]
+    assert spin.endswith("a placeholder, or another unit; or the wheel's mass in grams: m = "
+                         "0.028 kg gives 1.4 × a disc")
+    placeholder = parse_robot(CHASSIS.replace("Iw = 2.07e-5", "Iw = 1e-9"), "p.toml")
+    assert not any("in grams" in w for w in placeholder.warnings)

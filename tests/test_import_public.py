@@ -5,8 +5,8 @@ as published, is imported or refused with its reason.
   masses, computed here from the file (expanded by xacro where it is a template) without
   the importer, and its track (the distance between its driven wheels) the file's.
 * A refusal: one line naming the file and the reason recorded in sources.toml.
-* Two (the 2019 Burger, the Kobuki) go on through ``wmr model`` and ``wmr stability``
-  (marked ``slow``).
+* Three (the 2019 Burger, the Kobuki, the MiR100 with its four swivel casters: five bodies)
+  go on through ``wmr model`` and ``wmr stability`` (marked ``slow``).
 * The corpus: at least 20 files, each with its repository, path, 40-digit commit and a
   licence that allows redistribution, all in README.md's table; no mesh files.
 """
@@ -59,7 +59,7 @@ def test_public_robot(entry: dict[str, Any]) -> None:
                                                                              rel=1e-9)
 
 
-@pytest.mark.slow  # about 40 s each on a loaded machine (the derivation)
+@pytest.mark.slow  # 40-60 s each on a loaded machine (the derivation)
 @pytest.mark.parametrize("entry", [r for r in ROBOTS if r.get("through") == "stability"],
                          ids=lambda r: r["file"])
 def test_public_robot_through_model_and_stability(entry: dict[str, Any], tmp_path: Path,
