@@ -29,7 +29,14 @@ The checks and their thresholds (the constants below):
   wheel's diameter): a uniform plate has m L²/12, a ring m L²/4; outside [0.01, 100] m L²
   the number is a placeholder or in other units (warning). A wheel's diameter inertia above
   1.5 m r² fits no wheel (a wheel of width w ≤ 2r has at most m (r²/2 + w²/4)); its spin
-  inertia below 1 % of a disc's m r²/2 is a placeholder (warnings). The 3D tensors of an
+  inertia below 1 % of a disc's m r²/2 is a placeholder (warnings), or, if a thousandth of
+  its mass makes it 0.3–3 × a disc's, a wheel mass in grams (the warning says so). **Unit
+  slips** are errors: an inertia 1,000 × or more what its mass and size allow is no body's
+  (m L² for a body; M r² for a wheel's spin, M the robot's mass, which bounds a geared
+  rotor's J_r N² too; 1.5 m r² about its diameter); the error names the unit that brings it
+  closest to a typical body's (m L²/12, a disc's m r²/2 and m r²/4): 1 kg m² is 1e3 g m²,
+  1e4 kg cm², 1e6 kg mm², 1e7 g cm² (a 6 kg chassis with I = 80000 is in kg mm², a 28 g
+  wheel with Iw = 207 in g cm²). The 3D tensors of an
   imported file (triangle inequality, positive definiteness, the 0.001 kg m² placeholder,
   the spin axis) are checked by the importer (``modeling.importers.checks``).
 * **Layout.** Fixed wheels on one body at more than one axle position (a skid-steer: four
@@ -69,8 +76,12 @@ DENSITY_MAX, DENSITY_WARN_MAX = 22_600.0, 8_000.0  # osmium; steel
 DENSITY_MIN, DENSITY_WARN_MIN = 1.2, 10.0  # air
 # Inertias: I / (m L²) of a body, diameter / (m r²) and spin / (m r²/2) of a wheel.
 YAW_RATIO = (0.01, 100.0)
+UNIT_SLIP = 1e3  # × what the mass and size allow: an error, an inertia in other units
+INERTIA_UNITS = (("g m^2", 1e3), ("kg cm^2", 1e4), ("kg mm^2", 1e6), ("g cm^2", 1e7),
+                 ("g mm^2", 1e9))  # how many of each make 1 kg m²
 DIAMETER_RATIO_MAX = 1.5
 SPIN_RATIO_MIN = 0.01
+GRAMS_SPIN = (0.3, 3.0)  # × a disc's m r²/2 with the mass read as grams: a wheel in grams
 WHEEL_ALONE = 1.5  # spin ≤ 1.5 × m r²/2: the wheel without its motor's rotor
 # The assumed typical small-robot gearmotor of the rotor warning.
 TYPICAL_ROTOR_INERTIA = 1e-6  # kg m², J_r
@@ -183,11 +194,28 @@ def _mass_and_size(where: str, label: str, mass: float, size: float,
                         "the masses' unit")
 
 
+def _unit_slip(where: str, label: str, inertia: float, allowed: float, typical: float,
+               what: str) -> None:
+    """Refuse an inertia ``UNIT_SLIP`` × or more above ``allowed`` (the most its mass and
+    size allow), naming the unit that brings it nearest ``typical`` (module docstring)."""
+    if allowed <= 0 or inertia < UNIT_SLIP * allowed:
+        return
+    unit, factor = min(INERTIA_UNITS,
+                       key=lambda u: abs(math.log10(inertia / u[1] / typical)))
+    raise refuse(where, (
+        f"{label} = {inertia!r} kg m^2 is {inertia / allowed:.3g} × the most {what} can have "
+        f"({_g(allowed)} kg m^2): no body has it; an inertia in {unit} typed as kg m^2? "
+        f"({_g(inertia)} {unit} = {_g(inertia / factor)} kg m^2, near the "
+        f"{_g(typical)} kg m^2 such a body has); give inertias in kg m^2"))
+
+
 def _yaw_ratio(label: str, inertia: float, mass: float, size: float,
-               warnings: list[str]) -> None:
-    """I against m L² (module docstring)."""
+               warnings: list[str], where: str) -> None:
+    """I against m L² (module docstring): a unit slip refused, a far value a warning."""
     if mass <= 0 or size <= 0:
         return
+    _unit_slip(where, label, inertia, mass * size**2, mass * size**2 / 12,
+               f"a body of m = {_g(mass)} kg and size L = {_g(size)} m (m L^2)")
     ratio = inertia / (mass * size**2)
     low, high = YAW_RATIO
     if not low <= ratio <= high:
@@ -200,10 +228,20 @@ def _yaw_ratio(label: str, inertia: float, mass: float, size: float,
 
 
 def _wheel_inertias(spin_label: str, diameter_label: str, mass: float, radius: float,
-                    spin: float, diameter: float, warnings: list[str]) -> None:
+                    spin: float, diameter: float, warnings: list[str], where: str,
+                    total: float) -> None:
+    """A wheel's inertias against m r² (module docstring); ``total``: the robot's mass,
+    which bounds a spin inertia holding a geared rotor's J_r N² (as an equivalent mass
+    J_r N²/r² at the rim, which no drive makes 1,000 × the robot's)."""
     if mass <= 0:
         return  # a massless wheel: its inertias are lumped elsewhere
     mr2 = mass * radius**2
+    wheel = f"a wheel of m = {_g(mass)} kg and r = {_g(radius)} m"
+    _unit_slip(where, spin_label, spin, max(mr2, total * radius**2), mr2 / 2,
+               f"{wheel} about its axle, with its motor's rotor, on a {_g(total)} kg robot "
+               "(M r^2)")
+    _unit_slip(where, diameter_label, diameter, DIAMETER_RATIO_MAX * mr2, mr2 / 4,
+               f"{wheel} about a diameter ({DIAMETER_RATIO_MAX:g} m r^2)")
     if diameter > DIAMETER_RATIO_MAX * mr2:
         warnings.append(
             f"{diameter_label} = {_g(diameter)} kg m^2 is {diameter / mr2:.3g} m r^2 "
@@ -212,10 +250,14 @@ def _wheel_inertias(spin_label: str, diameter_label: str, mass: float, radius: f
             f"m r^2/4 = {_g(mr2 / 4)})"
         )
     if spin < SPIN_RATIO_MIN * mr2 / 2:
+        in_grams = spin / (mr2 / 2 / 1000)  # × a disc, were the mass in grams
+        grams = (f"; or the wheel's mass in grams: m = {_g(mass / 1000)} kg gives "
+                 f"{in_grams:.2g} × a disc" if GRAMS_SPIN[0] <= in_grams <= GRAMS_SPIN[1]
+                 else "")
         warnings.append(
             f"{spin_label} = {_g(spin)} kg m^2 is {spin / (mr2 / 2):.2g} × a solid "
             f"disc's m r^2/2 = {_g(mr2 / 2)} kg m^2 (m = {_g(mass)} kg, r = {_g(radius)} m): "
-            "a placeholder, or another unit"
+            f"a placeholder, or another unit{grams}"
         )
 
 
@@ -254,7 +296,7 @@ def audit_lumped(where: str, p: Mapping[str, float]) -> tuple[str, ...]:
     _mass_and_size(where, "field 'lumped.m'", p["m"], size, warnings)
     inertia_com = p["I"] - p["K"] ** 2 / p["m"]  # about the centre of mass, not C
     _yaw_ratio("field 'lumped.I' less K^2/m (the yaw inertia about the centre of mass)",
-               inertia_com, p["m"], size, warnings)
+               inertia_com, p["m"], size, warnings, where)
     return report(where, warnings)
 
 
@@ -268,9 +310,9 @@ def audit_physical(where: str, p: Mapping[str, float]) -> tuple[str, ...]:
     size = max(p["b"], 2 * p["r"], abs(p["d"]))
     _mass_and_size(where, "the total mass m_P + 2 m_w", p["m_P"] + 2 * p["m_w"], size,
                    warnings)
-    _yaw_ratio("field 'physical.I_P'", p["I_P"], p["m_P"], size, warnings)
+    _yaw_ratio("field 'physical.I_P'", p["I_P"], p["m_P"], size, warnings, where)
     _wheel_inertias("field 'physical.Iw'", "field 'physical.Im'", p["m_w"], p["r"], p["Iw"],
-                    p["Im"], warnings)
+                    p["Im"], warnings, where, p["m_P"] + 2 * p["m_w"])
     rotor = rotor_warning("field 'physical.Iw' (each driven wheel)", p["Iw"], p["m_w"], p["r"],
                           "add J_r N^2 to Iw, with the rotor inertia J_r and gear ratio N")
     if rotor:
@@ -383,14 +425,15 @@ def audit_description(
 
     for i, (b, body_size) in enumerate(zip(desc.bodies, body_sizes, strict=True)):
         _yaw_ratio(f"field 'body[{i}].yaw_inertia' (body '{b.name}')", num(b.yaw_inertia),
-                   num(b.mass), body_size, warnings)
+                   num(b.mass), body_size, warnings, where)
     for w in desc.wheels:
         i = index[w.name]
         rotor = rotors.get(w.name)
         spin = num(w.spin_inertia) - (rotor.reflected if rotor else 0.0)
         _wheel_inertias(f"field 'wheel[{i}].spin_inertia' (wheel '{w.name}')",
                         f"field 'wheel[{i}].diameter_inertia' (wheel '{w.name}')",
-                        num(w.mass), num(w.radius), spin, num(w.diameter_inertia), warnings)
+                        num(w.mass), num(w.radius), spin, num(w.diameter_inertia), warnings,
+                        where, total)
         if w.driven and rotor is None:
             missing = rotor_warning(f"wheel[{i}] (driven wheel '{w.name}')", spin, num(w.mass),
                                     num(w.radius))

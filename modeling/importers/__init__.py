@@ -1,8 +1,10 @@
 """Robots from URDF (ROS) and MJCF (MuJoCo) files: ``wmr import``.
 
-A file is read into a neutral 3D mechanism (``urdf``, ``mjcf``: standard library XML, no
-ROS or MuJoCo needed), checked for non-physical and placeholder inertias (``checks``),
-turned into a planar bodies-and-wheels robot with a provenance note per value (``planar``:
+A file is read as published: a xacro template is expanded first (``expand``: the ROS
+``xacro`` package, no ROS install), then read into a neutral 3D mechanism (``urdf``,
+``mjcf``: standard library XML, no ROS or MuJoCo needed), checked for non-physical and
+placeholder inertias (``checks``), turned into a planar bodies-and-wheels robot with a
+provenance note per value (``planar``:
 fixed joints merged, 3D inertias composed and projected, wheels, casters and hitches
 recognised), written as a robot file (``writer``), and read back through
 ``modeling.description.parse_description``, which runs the physics audit of
@@ -13,12 +15,16 @@ accept (``command``: the command line, which writes nothing on refusal).
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from modeling.description import RobotDescription, parse_description
+from modeling.importers.expand import expand, uses_xacro, without_comments
 from modeling.importers.mechanism import ImportFileError, Mechanism
+from modeling.importers.mjcf import read_mjcf
 from modeling.importers.planar import Options, PlanarRobot, build
+from modeling.importers.urdf import read_urdf
 from modeling.importers.writer import robot_file_text
 from modeling.robot_io import RobotFileError, read_robot_text
 
@@ -35,28 +41,35 @@ class Imported:
     description: RobotDescription
 
 
-def read_mechanism(path: Path) -> Mechanism:
-    """The mechanism of a URDF or MJCF file (by its root element); xacro refused."""
-    from modeling.importers.mjcf import read_mjcf
-    from modeling.importers.urdf import read_urdf, xacro_refusal
-
+def read_mechanism(path: Path, package_path: Sequence[Path] = (),
+                   xacro_args: Mapping[str, str] | None = None) -> Mechanism:
+    """The mechanism of a URDF (xacro expanded, see ``expand``) or MJCF file, by its root
+    element; ``package_path``: folders holding the ROS packages ``$(find PKG)`` names;
+    ``xacro_args``: values of the file's ``xacro:arg``s."""
     text = read_robot_text(path)
-    refusal = xacro_refusal(path, text)
-    if refusal:
-        raise ImportFileError(refusal)
-    first = re.search(r"<(robot|mujoco)[\s>/]", text)
+    skipped: list[str] = []
+    if uses_xacro(path, text):
+        text, skipped = expand(path, dict(xacro_args or {}), package_path)
+    first = re.search(r"<(robot|mujoco)[\s>/]", without_comments(text))
     if first and first.group(1) == "mujoco":
         return read_mjcf(path, text)
     if first:
-        return read_urdf(path, text)
+        mech = read_urdf(path, text)
+        if skipped:
+            mech.notes.append("xacro includes skipped, their packages found nowhere (give "
+                              "--package-path to read them): " + ", ".join(skipped))
+        return mech
     raise ImportFileError(f"{path}: neither URDF (<robot>) nor MJCF (<mujoco>): cannot "
                           "import it")
 
 
-def import_robot(path: Path, options: Options | None = None, where: str = "") -> Imported:
+def import_robot(path: Path, options: Options | None = None, where: str = "",
+                 package_path: Sequence[Path] = (),
+                 xacro_args: Mapping[str, str] | None = None) -> Imported:
     """Import ``path`` (see the module docstring); ``where`` names the output in the
-    audit's messages. Raises ``RobotFileError`` (one line) on anything it refuses."""
-    robot = build(read_mechanism(Path(path)), options)
+    audit's messages; ``package_path`` and ``xacro_args`` as for :func:`read_mechanism`.
+    Raises ``RobotFileError`` (one line) on anything it refuses."""
+    robot = build(read_mechanism(Path(path), package_path, xacro_args), options)
     text = robot_file_text(robot)
     where = where or f"{Path(path).stem}.toml"
     try:

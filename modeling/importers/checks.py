@@ -11,6 +11,13 @@ them (``modeling.audit`` has the rest and runs on the imported robot file too).
   the link's mass filling its collision shapes, outside [0.1, 10]; or a principal moment
   above m R², R the radius of a sphere about the centre of mass holding every collision
   shape: no mass inside those shapes can have it.
+* **A centre of mass left at the link origin** (a warning): an ``<inertial>`` at exactly
+  (0, 0, 0) of its link, more than 10 mm (and 10 % of the shapes' extent) from the centre
+  of the link's collision shapes, whose tensor fits a uniform body of those shapes about
+  their own centre better than about that origin (by the trace, on a log scale): the
+  tensor was computed for the shape while the origin was left at its default. ROBOTIS'
+  TurtleBot3 ``base_link`` is one: its centre of mass at the wheel axle, 77 mm below and
+  behind its box's centre.
 * **Wheels** (warnings): the spin axis (the tensor's symmetry axis, its odd principal
   moment) not along the joint axis; the centre of mass off the axle.
 """
@@ -39,6 +46,7 @@ TRIANGLE_TOLERANCE = 1e-3  # relative: files round thin-disc values (I_spin = 2 
 SPIN_AXIS_TOLERANCE = math.radians(10.0)
 SYMMETRIC_SPREAD = 0.05  # principal moments within 5 %: no symmetry axis to speak of
 OFF_AXLE = 1e-3  # m
+ORIGIN_OFFSET = (0.01, 0.1)  # m, × the shapes' extent: a CoM this far from the shapes
 
 
 def _g(x: float) -> str:
@@ -93,13 +101,7 @@ def check_geometry(where: str, inertial: Inertial, geoms: list[tuple[Geom, Frame
                                                       "ellipsoid")]
     if inertial.mass <= 0 or not shapes:
         return None
-    vols = [volume(g.kind, g.size) for g, _ in shapes]
-    total = sum(vols)
-    uniform = compose(
-        Inertial(inertial.mass * v / total, np.zeros(3),
-                 uniform_tensor(g.kind, g.size, inertial.mass * v / total)).moved(f)
-        for (g, f), v in zip(shapes, vols, strict=True))
-    expected = uniform.about(inertial.com)
+    expected = _uniform(inertial, shapes).about(inertial.com)
     ratio = float(np.trace(inertial.tensor) / np.trace(expected))
     reach = max(float(np.linalg.norm(f.origin - inertial.com)) + bounding_radius(g.kind, g.size)
                 for g, f in shapes)
@@ -133,3 +135,40 @@ def wheel_axis(inertial: Inertial, axle: Vec) -> tuple[float, float, Vec] | None
         return None
     others = [float(m) for i, m in enumerate(moments) if i != odd]
     return float(moments[odd]), sum(others) / 2, axis
+
+
+def _uniform(inertial: Inertial, shapes: list[tuple[Geom, Frame]]) -> Inertial:
+    """A uniform body of ``inertial``'s mass filling the primitive ``shapes``."""
+    vols = [volume(g.kind, g.size) for g, _ in shapes]
+    total = sum(vols)
+    return compose(
+        Inertial(inertial.mass * v / total, np.zeros(3),
+                 uniform_tensor(g.kind, g.size, inertial.mass * v / total)).moved(f)
+        for (g, f), v in zip(shapes, vols, strict=True))
+
+
+def check_default_origin(where: str, inertial: Inertial,
+                         geoms: list[tuple[Geom, Frame]]) -> str | None:
+    """The centre-of-mass-left-at-the-origin finding (module docstring), or None;
+    ``inertial`` and ``geoms`` in the link frame."""
+    shapes = [(g, f) for g, f in geoms if g.kind in ("box", "cylinder", "sphere", "capsule",
+                                                      "ellipsoid")]
+    if inertial.mass <= 0 or not shapes or np.any(inertial.com != 0):
+        return None
+    uniform = _uniform(inertial, shapes)
+    offset = float(np.linalg.norm(uniform.com))
+    extent = max(float(np.linalg.norm(f.origin - uniform.com)) + bounding_radius(g.kind, g.size)
+                 for g, f in shapes)
+    if offset <= max(ORIGIN_OFFSET[0], ORIGIN_OFFSET[1] * extent):
+        return None
+    given = float(np.trace(inertial.tensor))
+    about_shape = float(np.trace(uniform.tensor))
+    about_origin = float(np.trace(uniform.about(inertial.com)))
+    if given <= 0 or abs(math.log(given / about_shape)) >= abs(math.log(given / about_origin)):
+        return None
+    return (f"{where}: its centre of mass is exactly at the link origin, {1000 * offset:.0f} mm "
+            f"from the centre of its collision shapes, and its tensor (trace {_g(given)} "
+            f"kg m^2) fits a uniform body of those shapes about their centre (trace "
+            f"{_g(about_shape)}), not about that origin ({_g(about_origin)}): the "
+            "<inertial> origin looks left at its default; the centre of mass, and the yaw "
+            "inertia composed from it, are then wrong")

@@ -89,6 +89,8 @@ class Mechanism:
     joints: list[Joint]
     driven: list[str] = field(default_factory=list)
     driven_source: dict[str, str] = field(default_factory=dict)
+    missing_driven: list[str] = field(default_factory=list)  # named by actuators, absent
+    omnidirectional: str = ""  # what says the base is holonomic (a planar_move plugin)
     motors: dict[str, Motor] = field(default_factory=dict)
     ground: float | None = None  # the ground plane's height (world z), if the file says
     ground_link: str = ""  # ... or a frame on the ground (URDF: a massless *footprint* link)

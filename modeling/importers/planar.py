@@ -286,13 +286,20 @@ class _Builder:
     def audit_links(self) -> None:
         for link in self.mech.links.values():
             if link.inertial is None:
+                meshes = [g.label for g in link.geoms if g.kind == "mesh"]
+                if meshes:
+                    self.findings.append(
+                        f"{link.label}: a mesh without inertia ({meshes[0]} is a mesh, and "
+                        "the link has no <inertial>): imported massless; its mass is not in "
+                        "the file, and mesh files are not read")
                 continue
             where = f"{link.label} ({link.inertial_label})" if link.inertial_label else link.label
             self.findings += checks.check_tensor(self.mech.path, where, link.inertial)
             shapes = [(g, g.frame) for g in link.geoms]
-            found = checks.check_geometry(where, link.inertial, shapes)
-            if found:
-                self.findings.append(found)
+            for found in (checks.check_geometry(where, link.inertial, shapes),
+                          checks.check_default_origin(where, link.inertial, shapes)):
+                if found:
+                    self.findings.append(found)
 
     # ----------------------------------------------------------------- names
     def names(self, groups: list[_Group]) -> dict[str, str]:
@@ -578,10 +585,24 @@ def _drive(plan: _Plan, wheels: list[PlanarWheel]) -> list[PlanarWheel]:
         if ignored:
             b.header.append(f"actuated joints that are not wheels (ignored): "
                             f"{', '.join(ignored)}")
+    base = [w for w in wheels if w.body == plan.names[mech.root]]
+    if not order and not mech.driven and not mech.missing_driven and len(base) == 2:
+        # A file without actuators (ROBOTIS keeps them in separate Gazebo files): the two
+        # wheels of the base are a differential drive's, the only kind that has two.
+        source = ("assumed: the file names no actuator, and the base's two wheels are a "
+                  "differential drive's")
+        order = [(w, source) for w in base]
+        b.findings.append(f"driven wheels {base[0].name} and {base[1].name} {source}; name "
+                          "others with --driven")
     if not order:
         raise b.fail("no driven wheel: the file has no <transmission>, <ros2_control> joint, "
                      "drive plugin or actuator on a wheel joint; name them with --driven "
                      f"NAME,NAME (wheels: {', '.join(w.name for w in wheels)})")
+    if len({id(w) for w, _ in order}) == 1:
+        w, source = order[0]
+        raise b.fail(f"one driven wheel ('{w.name}', {source}): a planar robot of wheels on "
+                     "one axle and casters has two degrees of freedom, driven by two wheels "
+                     f"(wheels: {', '.join(x.name for x in wheels)})")
     driven: list[PlanarWheel] = []
     for w, source in order:
         if not w.driven:
@@ -630,6 +651,42 @@ def _supports(plan: _Plan) -> list[str]:
     return out
 
 
+OMNI_NAMES = re.compile(r"mecanum|omni|swedish", re.IGNORECASE)
+
+
+def _refuse_omnidirectional(b: _Builder, plan: _Plan) -> None:
+    """Mecanum and omni wheels (named so, or on a base a Gazebo planar_move plugin
+    drives) roll freely sideways on their rollers: the format's wheels are standard fixed
+    wheels, which do not, so such a base would be modelled as a locked skid-steer."""
+    named = [g.joint.label for g in plan.wheels if g.joint is not None
+             and OMNI_NAMES.search(g.joint.name + " " + g.top)]
+    if named or b.mech.omnidirectional:
+        what = (f"mecanum/omni wheels ({', '.join(named[:4])})" if named else
+                f"an omnidirectional base ({b.mech.omnidirectional} moves it sideways)")
+        raise b.fail(f"{what}: the rollers of mecanum and omni wheels let them slip "
+                     "sideways, which the format's standard fixed wheels (no side slip) cannot "
+                     "model; an omnidirectional base is not supported")
+
+
+def _why_no_wheels(b: _Builder) -> str:
+    """What a file without wheels has instead: continuous joints without a collision
+    cylinder (a mesh the importer does not read, or visuals only), or wheel links welded by
+    fixed joints."""
+    joints = [j for j in b.mech.joints if j.kind == "continuous"]
+    if joints:
+        j = joints[0]
+        kinds = sorted({g.kind for g in b.mech.links[j.child].geoms})
+        what = (f"a collision {' and '.join(kinds)}" if kinds else "no collision geometry")
+        return (f"; {j.label} (continuous) has {what} on its child "
+                f"{b.mech.links[j.child].label} (mesh files are not read: a wheel needs a "
+                "collision cylinder)")
+    welded = [j for j in b.mech.joints if j.kind == "fixed" and "wheel" in j.child.lower()]
+    if welded:
+        return (f"; the file welds its wheels: {', '.join(j.label for j in welded[:4])} "
+                "are fixed joints (a wheel on a fixed joint does not turn)")
+    return ""
+
+
 def build(mech: Mechanism, options: Options | None = None) -> PlanarRobot:
     """The planar robot of ``mech`` (module docstring); ``ImportFileError`` naming the
     element when it cannot be one."""
@@ -640,7 +697,9 @@ def build(mech: Mechanism, options: Options | None = None) -> PlanarRobot:
     plan = _Plan(b, groups, b.names(groups), {n: g for g in groups for n in g.links}, {})
     if not plan.wheels:
         raise b.fail("no wheels found: a wheel is a continuous or revolute joint with a "
-                     "horizontal axis whose child link has a collision cylinder along it")
+                     "horizontal axis whose child link has a collision cylinder along it"
+                     + _why_no_wheels(b))
+    _refuse_omnidirectional(b, plan)
     for group in plan.wheels:
         assert group.joint is not None
         found = b.wheel_cylinder(group.joint)

@@ -8,10 +8,9 @@ gear ratio), ``<ros2_control>`` joints with a command interface, and the joints 
 Gazebo differential-drive or skid-steer plugin. ``<gazebo>`` sensors are dropped and
 listed; ``<visual>`` is ignored (collision geometry says where a wheel touches the ground).
 
-A xacro file (a macro template, recognised by its extension or by xacro elements or
-``${...}``/``$(...)`` substitutions) is refused with how to expand it: this reader does
-not run xacro. A plain URDF that merely declares the xacro namespace (ROBOTIS'
-``turtlebot3_burger.urdf`` does) is read.
+The text is plain URDF: a xacro template is expanded before it gets here
+(``modeling.importers.expand``). Comments, namespace declarations and elements of other
+namespaces (an unused ``<xacro:arg>``) are ignored.
 """
 
 from __future__ import annotations
@@ -38,22 +37,7 @@ from modeling.importers.mechanism import (
     Motor,
 )
 
-XACRO_NS = "http://www.ros.org/wiki/xacro"
-XACRO_NAMESPACES = (XACRO_NS, "http://ros.org/wiki/xacro")
 JOINT_KINDS = ("fixed", "revolute", "continuous", "prismatic", "floating", "planar")
-
-
-def xacro_refusal(path: Path, text: str) -> str | None:
-    """Why ``text`` is a xacro template and how to expand it, or None."""
-    uses = bool(re.search(r"<\s*xacro:", text) or re.search(r"\$\{|\$\(", text))
-    if path.name.endswith(".xacro") or uses:
-        what = "its extension" if path.name.endswith(".xacro") else "xacro elements or " \
-            "${...}/$(...) substitutions"
-        stem = path.name.removesuffix(".xacro").removesuffix(".urdf")
-        return (f"{path}: a xacro file ({what}): a macro template, not a robot; expand it "
-                f"first with `xacro {path.name} > {stem}.urdf` (xacro comes with ROS, or "
-                f"`pip install xacro`), then import {stem}.urdf")
-    return None
 
 
 def _floats(path: Path, where: str, attr: str, text: str | None, n: int,
@@ -129,9 +113,6 @@ def _geometry(path: Path, where: str, element: ET.Element) -> Geom | None:
 
 def read_urdf(path: Path, text: str) -> Mechanism:
     """The mechanism of a URDF file's text; ``ImportFileError`` naming the element."""
-    refusal = xacro_refusal(path, text)
-    if refusal:
-        raise ImportFileError(refusal)
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
@@ -209,6 +190,7 @@ def _drive(mech: Mechanism, root: ET.Element) -> None:
     def drive(joint: str, source: str) -> None:
         if joint not in names:
             mech.notes.append(f"{source} names joint '{joint}', which does not exist: ignored")
+            mech.missing_driven.append(joint)
             return
         if joint not in mech.driven:
             mech.driven.append(joint)
@@ -238,6 +220,8 @@ def _drive(mech: Mechanism, root: ET.Element) -> None:
                 drive(j.get("name", ""), f"<ros2_control name=\"{rc.get('name', '')}\">")
     for plugin in root.iter("plugin"):
         filename = (plugin.get("filename") or "") + (plugin.get("name") or "")
+        if re.search(r"planar_move|mecanum|omni", filename, re.IGNORECASE):
+            mech.omnidirectional = f"<plugin filename=\"{plugin.get('filename', '')}\">"
         if not re.search(r"diff_?drive|skid_?steer|DiffDrive|SkidSteer", filename):
             continue
         for el in plugin.iter():

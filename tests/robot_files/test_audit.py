@@ -134,7 +134,7 @@ def test_a_total_mass_above_five_tonnes_is_grams() -> None:
 
 
 def test_lumped_yaw_inertia_far_from_mass_and_size_is_a_warning() -> None:
-    odd = SMALL.read_text().replace("I  = 0.016654", "I  = 300.0")
+    odd = SMALL.read_text().replace("I  = 0.016654", "I  = 20.0")
     robot = parse_robot(odd, "odd.toml")
     assert len(robot.warnings) == 1
     assert "field 'lumped.I' less K^2/m" in robot.warnings[0]
@@ -149,6 +149,47 @@ def test_physical_file_without_the_motor_is_asked_for_it() -> None:
     assert "add J_r N^2 to Iw" in warning
     # The size of the omission for the assumed gearmotor: 2.5e-3 / 1.5e-4.
     assert "J_r N^2 = 0.0025 kg m^2) the inertia left out is 16.7 × the one given" in warning
+
+
+# A 6 kg chassis (0.3 m track) on 28 g wheels of r = 0.033 m, every number in kg and m.
+CHASSIS = TUTORIAL_PHYSICAL.replace("m_P = 4.0", "m_P = 6.0").replace(
+    "I_P = 0.05", "I_P = 0.08").replace("m_w = 0.3", "m_w = 0.028").replace(
+    "Iw = 1.5e-4", "Iw = 2.07e-5").replace("Im = 8e-5", "Im = 1e-5").replace(
+    "r = 0.05", "r = 0.033").replace("b = 0.25", "b = 0.3")
+
+
+@pytest.mark.parametrize("field, typed, message", [
+    # kg mm^2 typed as kg m^2: 1.48e5 × m L^2; in kg mm^2 it is 0.08 kg m^2, a chassis's.
+    ("I_P = 0.08", "I_P = 80000.0", "field 'physical.I_P' = 80000.0 kg m^2 is 1.48e+05 × the "
+     "most a body of m = 6 kg and size L = 0.3 m (m L^2) can have (0.54 kg m^2): no body has "
+     "it; an inertia in kg mm^2 typed as kg m^2? (8e+04 kg mm^2 = 0.08 kg m^2"),
+    # g cm^2 typed as kg m^2: 3.1e4 × what the wheel with any rotor can have.
+    ("Iw = 2.07e-5", "Iw = 207.0", "field 'physical.Iw' = 207.0 kg m^2 is 3.14e+04 × the most "
+     "a wheel of m = 0.028 kg and r = 0.033 m about its axle, with its motor's rotor, on a "
+     "6.056 kg robot (M r^2) can have (0.006595 kg m^2): no body has it; an inertia in g cm^2 "
+     "typed as kg m^2? (207 g cm^2 = 2.07e-05 kg m^2"),
+    ("Im = 1e-5", "Im = 100.0", "field 'physical.Im' = 100.0 kg m^2 is 2.19e+06 × the most a "
+     "wheel of m = 0.028 kg and r = 0.033 m about a diameter (1.5 m r^2) can have"),
+])
+def test_inertia_unit_slips_are_refused_naming_the_unit(field: str, typed: str,
+                                                        message: str) -> None:
+    assert parse_robot(CHASSIS, "chassis.toml").warnings is not None  # in kg m^2: accepted
+    with pytest.raises(RobotFileError) as exc:
+        parse_robot(CHASSIS.replace(field, typed), "chassis.toml")
+    assert one_line(exc).startswith(f"chassis.toml: {message}"), one_line(exc)
+
+
+def test_inertia_unit_slip_threshold_in_a_description() -> None:
+    """1,000 × m L^2 is the line: below it a warning (a placeholder), at it an error. The
+    1 kg base's size is 0.16 m (its wheels' spread): m L^2 = 0.0256 kg m^2."""
+    below = parse_description(diff_drive(yaw_inertia="25.5"), "dd.toml")
+    assert any("is 996 m L^2" in w for w in below.warnings)
+    with pytest.raises(RobotFileError) as exc:
+        parse_description(diff_drive(yaw_inertia="25.6"), "dd.toml")
+    assert "field 'body[0].yaw_inertia' (body 'base') = 25.6 kg m^2 is 1e+03 × the most" in (
+        one_line(exc))
+    with pytest.raises(RobotFileError, match=r"an inertia in kg mm\^2 typed as kg m\^2"):
+        parse_description(diff_drive(yaw_inertia="5000.0"), "dd.toml")
 
 
 def test_shipped_and_test_robots_pass_clean() -> None:
@@ -189,7 +230,7 @@ def test_reproduce_refuses_a_gram_file_and_writes_nothing(
 
 
 def test_warnings_are_logged_once_per_file(caplog: pytest.LogCaptureFixture) -> None:
-    odd = SMALL.read_text().replace("I  = 0.016654", "I  = 301.0")
+    odd = SMALL.read_text().replace("I  = 0.016654", "I  = 21.0")
     with caplog.at_level(logging.WARNING, logger="wmr.audit"):
         parse_robot(odd, "logged.toml")
         parse_robot(odd, "logged.toml")
@@ -251,10 +292,10 @@ def test_yaw_inertia_placeholder_is_a_warning() -> None:
 
 
 def test_wheel_inertias_no_wheel_can_have_are_warnings() -> None:
-    desc = parse_description(diff_drive(diameter="0.5", spin="1e-9",
+    desc = parse_description(diff_drive(diameter="0.005", spin="1e-9",
                                         motor="rotor_inertia = 0.0\ngear_ratio = 1.0"), "dd.toml")
     text = "\n".join(desc.warnings)
-    assert "field 'wheel[0].diameter_inertia' (wheel 'right') = 0.5 kg m^2" in text
+    assert "field 'wheel[0].diameter_inertia' (wheel 'right') = 0.005 kg m^2" in text
     assert "no wheel of that mass and radius has more than about 1.5 m r^2" in text
     assert "field 'wheel[1].spin_inertia' (wheel 'left') = 1e-09 kg m^2" in text
 
@@ -374,5 +415,19 @@ def test_thresholds_are_what_the_docstring_says() -> None:
     assert (audit.RADIUS_MAX, audit.LENGTH_MAX, audit.MASS_MAX, audit.DENSITY_MAX) == (
         5.0, 20.0, 5000.0, 22_600.0)
     assert audit.YAW_RATIO == (0.01, 100.0)
+    assert audit.UNIT_SLIP == 1e3 and "1,000 ×" in doc
+    assert dict(audit.INERTIA_UNITS)["kg mm^2"] == 1e6 and "1e6 kg mm²" in doc
+    assert dict(audit.INERTIA_UNITS)["g cm^2"] == 1e7 and "1e7 g cm²" in doc
     reflected = audit.TYPICAL_ROTOR_INERTIA * audit.TYPICAL_GEAR_RATIO**2
     assert reflected == pytest.approx(2.5e-3)
+
+
+def test_a_wheel_mass_in_grams_is_named() -> None:
+    """The 28 g wheel typed as m_w = 28: its Iw = 2.07e-5 kg m^2 is 0.0014 × the disc of a
+    28 kg wheel, 1.4 × that of a 28 g one: the warning names grams."""
+    robot = parse_robot(CHASSIS.replace("m_w = 0.028", "m_w = 28.0"), "grams.toml")
+    (spin,) = [w for w in robot.warnings if w.startswith("field 'physical.Iw' = ")]
+    assert spin.endswith("a placeholder, or another unit; or the wheel's mass in grams: m = "
+                         "0.028 kg gives 1.4 × a disc")
+    placeholder = parse_robot(CHASSIS.replace("Iw = 2.07e-5", "Iw = 1e-9"), "p.toml")
+    assert not any("in grams" in w for w in placeholder.warnings)
