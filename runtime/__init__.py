@@ -2,7 +2,7 @@
 
 Split by job, never by robot, and built on floors: each sub-package (or top-level module)
 imports only from the floors below it, never from its own floor's neighbours, never upwards,
-not even inside a function (``tests/test_import_structure.py``, ``RUNTIME_FLOORS``). From
+not even inside a function (``tests/structure/test_import_structure.py``, ``RUNTIME_FLOORS``). From
 the bottom:
 
 1. ``experiment``: experiment files and the faults they inject (data);

@@ -168,7 +168,7 @@ def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[s
 def test_trailer_end_to_end_with_plot(tmp_path: Path) -> None:
     """The trailer, with a ±20 % uncertainty box: over the default ±30 % its lumped
     coefficients fail the TDE condition for TDC and TDROC, which the reproduction refuses
-    (a statement about robustness, tests/test_reproduce_refusal.py)."""
+    (a statement about robustness, tests/reproduction/test_reproduce_refusal.py)."""
     code, out = _run_cli(tmp_path, "--robot", str(TRAILER),
                          experiment="[controller]\nuncertainty = 0.2\n")
     assert code == 0

@@ -259,7 +259,7 @@ def test_wmr_reproduce_runs_the_trailer_on_mujoco(tmp_path: Path) -> None:
 
     experiment = tmp_path / "short.toml"
     # A ±20 % box: over the default ±30 % the trailer's TDC and TDROC fail the TDE
-    # condition and the reproduction refuses them (tests/test_reproduce_refusal.py).
+    # condition and the reproduction refuses them (tests/reproduction/test_reproduce_refusal.py).
     experiment.write_text("[paths]\ncircle_duration = 4.0\nlawnmower_duration = 4.0\n"
                           "[controller]\nuncertainty = 0.2\n")
     out = tmp_path / "out"

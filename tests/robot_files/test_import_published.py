@@ -25,7 +25,7 @@ from modeling.importers import import_robot
 from modeling.robot_io import RobotFileError
 from runtime.cli import main as wmr
 
-TB3 = Path(__file__).resolve().parent / "robots" / "public" / "turtlebot3"
+TB3 = Path(__file__).resolve().parents[1] / "robots" / "public" / "turtlebot3"
 
 
 def total_mass_and_track(path: Path) -> tuple[float, float, tuple[str, ...]]:

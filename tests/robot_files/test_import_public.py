@@ -26,7 +26,7 @@ from modeling.importers.expand import expand, uses_xacro
 from modeling.robot_io import RobotFileError
 from runtime.cli import main as wmr
 
-PUBLIC = Path(__file__).resolve().parent / "robots" / "public"
+PUBLIC = Path(__file__).resolve().parents[1] / "robots" / "public"
 ROBOTS: list[dict[str, Any]] = tomllib.loads((PUBLIC / "sources.toml").read_text())["robot"]
 FREE = ("Apache-2.0", "BSD-3-Clause", "MIT")
 
