@@ -48,7 +48,6 @@ T_ONE_LOOP = "tests/runtime/test_one_loop.py"
 T_GEN_SYMPY = "tests/generated/test_generated_vs_sympy.py"
 T_MUJOCO = "tests/runtime/test_mujoco.py"
 T_RK4 = "tests/runtime/test_plant_integrator.py"
-T_CLI = "tests/runtime/test_cli.py"
 
 MUTANTS: tuple[Mutant, ...] = (
     # --- modeling: the derivation ---------------------------------------------------------
@@ -162,7 +161,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant("pre-run-check-skips-tde", CHECKS,
            "    if info.tde:\n        check_tde(",
            "    if not info.tde:\n        check_tde(",
-           (T_STAB, T_FAULTS, T_CLI), "TDC/TDROC run where (17)'s condition fails"),
+           ("tests/reproduction/test_reproduce_refusal.py", T_STAB),
+           "TDC/TDROC run where (17)'s condition fails"),
     Mutant("freeze-ignores-verdict", FREEZE,
            "chosen = next((v for v in verdicts if v[0] in candidates and v[2].stable), None)",
            "chosen = next((v for v in verdicts if v[0] in candidates), None)",
