@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -26,12 +27,15 @@ from modeling.robot_file import load_robot_model
 from modeling.robot_io import shipped_robot_file
 from modeling.staged import Stage, evaluate
 
+OFF_AXLE = Path(__file__).resolve().parents[1] / "robots" / "drishti_bodies.toml"
+
 
 def _forms(robot: str, frame: bool, twist: bool = True) -> tuple[Stage, list[sp.Matrix], Any]:
     """M̄, H̄, η̇, q̈ and q̇ (world frame) staged, in the root frame or not; ``twist``: the
     wheel radii declared positive, so that the root frame's solve may run in the root's
     twist (``ConstrainedSystem._root_twist``)."""
-    model, _ = load_robot_model(shipped_robot_file(robot))
+    path = OFF_AXLE if robot == "drishti_bodies" else shipped_robot_file(robot)
+    model, _ = load_robot_model(path)
     stage = Stage("_t")
     sm = model.system.staged_minimal(stage, root_frame=frame,
                                      positive=model.positive_symbols if twist else ())
@@ -41,11 +45,14 @@ def _forms(robot: str, frame: bool, twist: bool = True) -> tuple[Stage, list[sp.
 
 
 @pytest.mark.parametrize(("robot", "twist"), [("trailer", True), ("trailer2", True),
-                                              ("trailer", False)])
+                                              ("trailer", False), ("drishti_bodies", True)])
 def test_root_frame_forms_are_the_world_frame_functions(robot: str, twist: bool) -> None:
     """M̄, H̄, η̇, q̈ and q̇ in the root frame (solved in the root's twist, or in the wheel
     rates when the twist is refused) equal the world-frame forms at random states (1e-12
-    relative), with only the relative yaws' sin and cos in M̄, H̄ and η̇."""
+    relative), with only the relative yaws' sin and cos in M̄, H̄ and η̇. Drishti as bodies
+    has its root frame's origin 0.12 m ahead of the driven axle: its lateral velocity d ω is
+    not zero, so the twist's transport terms (ω v_y, ω v_x) are exercised; the trailers'
+    origins are on their axles."""
     world_stage, world, model = _forms(robot, frame=False)
     root_stage, root, _ = _forms(robot, frame=True, twist=twist)
     rng = random.Random(7)
@@ -64,8 +71,9 @@ def test_root_frame_forms_are_the_world_frame_functions(robot: str, twist: bool)
     for m in root[:3]:
         args = {f.args[0] for _, e in root_stage.definitions_for(list(m))
                 for f in e.atoms(sp.sin, sp.cos)}
-        assert args and not args & set(yaws), args  # differences of yaws only
+        assert not args & set(yaws), args  # differences of yaws only ...
         assert all(len(sp.Add.make_args(a)) == 2 for a in args), args
+        assert bool(args) == (len(yaws) > 1), args  # ... and none without a hitch
 
 
 @pytest.mark.parametrize("robot", ["trailer", "trailer2", "trailer3"])
@@ -73,7 +81,8 @@ def test_twist_solve_is_the_hand_derivations_form(robot: str) -> None:
     """In the root's twist u = (v, ω) = W η: S_u's root rows are the identity, no row of
     S_u but the driven wheels' reads their radii (a hand derivation in (v, ω) has none),
     W is the differential drive's (r/2, ±r/(2b)), and M̄ = Wᵀ M̄_u W."""
-    model, _ = load_robot_model(shipped_robot_file(robot))
+    path = OFF_AXLE if robot == "drishti_bodies" else shipped_robot_file(robot)
+    model, _ = load_robot_model(path)
     stage = Stage("_t")
     sm = model.system.staged_minimal(stage, root_frame=True, positive=model.positive_symbols)
     assert sm.solved is not None
