@@ -9,8 +9,9 @@ once per process (``warning: FILE: ...`` on stderr when nothing configured loggi
 returned to the caller (``Robot.warnings``, ``RobotDescription.warnings``) and written
 into the generated MODEL.md. Standard library only: the runtime reads ``[lumped]`` files
 through this module without SymPy or NumPy. (The runtime runs a bodies-and-wheels file only
-on code generated from it, which records the file's digest: the audit ran when that code
-was generated.)
+on code generated from it, which records the file's digest and the audit's warnings,
+``AUDIT_WARNINGS`` of its ``robot.py``: the audit ran when that code was generated; every
+command prints them again through :func:`report`.)
 
 The checks and their thresholds (the constants below):
 

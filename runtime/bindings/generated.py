@@ -141,6 +141,12 @@ class RobotCode:
         return bool(getattr(self.robot, "PAPER_ROBOT", False))
 
     @property
+    def audit_warnings(self) -> tuple[str, ...]:
+        """The physics audit's warnings on the robot file this code was generated from, as
+        its ``robot.py`` declares (``AUDIT_WARNINGS``; code generated before it: none)."""
+        return tuple(getattr(self.robot, "AUDIT_WARNINGS", ()))
+
+    @property
     def nq(self) -> int:
         return int(self.robot.NQ)
 

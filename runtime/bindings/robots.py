@@ -47,7 +47,9 @@ class RobotSourceError(ValueError):
 class RobotSetup:
     """A robot to run: its generated code, the controllers' nominal parameters and the
     simulated robot's (before any payload); ``source`` is what ``--robot`` named, ``sha256``
-    the robot file's text digest (for generated code: the one it was generated from)."""
+    the robot file's text digest (for generated code: the one it was generated from),
+    ``warnings`` the physics audit's on the robot file (``modeling.audit``: a lumped file's
+    own, else those its generated ``robot.py`` declares)."""
 
     name: str
     source: str
@@ -55,6 +57,7 @@ class RobotSetup:
     nominal: dict[str, float]
     plant: dict[str, float]
     sha256: str | None = None
+    warnings: tuple[str, ...] = ()
 
 
 def _read(path: Path) -> tuple[str, dict[str, object]]:
@@ -146,7 +149,7 @@ def _folder(folder: Path, option: str) -> RobotSetup:
                                "missing); `wmr model --robot FILE --out DIR` writes one"
                                ) from None
     return RobotSetup(code.name, str(folder), code, code.params, code.plant_defaults,
-                      getattr(code.robot, "SOURCE_SHA256", None))
+                      getattr(code.robot, "SOURCE_SHA256", None), code.audit_warnings)
 
 
 def _described(path: Path, text: str, data: dict[str, object], root: Path) -> RobotSetup:
@@ -170,7 +173,8 @@ def _described(path: Path, text: str, data: dict[str, object], root: Path) -> Ro
             f"{'another version of this file' if recorded else 'an unrecorded source'} "
             f"(robot.py SOURCE_SHA256); regenerate: {hint}"
         )
-    return RobotSetup(name, str(path), code, code.params, code.plant_defaults, digest)
+    return RobotSetup(name, str(path), code, code.params, code.plant_defaults, digest,
+                      code.audit_warnings)
 
 
 def _robot_name(robot_py: Path) -> str | None:
@@ -206,4 +210,4 @@ def _lumped(source: RobotSource, generated: Path | None) -> RobotSetup:
     values = robot.plant_values()
     plant = {k: float(values.get(k, 0.0)) for k in code.plant_defaults}
     return RobotSetup(robot.name, str(path), code, dict(robot.lumped), plant,
-                      source.digest)
+                      source.digest, robot.warnings)

@@ -23,7 +23,7 @@ from typing import Any
 
 from runtime.campaign import store
 from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
-from runtime.commands.options import add_plant_option, add_robot_options
+from runtime.commands.options import add_plant_option, add_robot_options, print_audit
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import PLANT_MODELS, check_contact
 
@@ -119,6 +119,7 @@ def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | No
         named = str(Path(named).resolve())
     folder = str(generated.resolve()) if generated is not None else None
     tgt = target(named, folder)
+    print_audit(tgt.setup)
     code = tgt.setup.code
 
     def available(formulation: str) -> tuple[str, ...]:

@@ -43,11 +43,10 @@ from runtime.bindings import cbuild
 from runtime.bindings.config import controller_config
 from runtime.bindings.generated import RobotCode
 from runtime.bindings.robots import RobotSetup, RobotSourceError
-from runtime.commands.options import GENERATED_HELP, ROBOT_HELP
+from runtime.commands.options import GENERATED_HELP, ROBOT_HELP, loaded_setting
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
-from runtime.setting.robot import robot_setting
 from runtime.stability.sampled_loop import analysed, covers
 
 
@@ -145,7 +144,7 @@ def set_fields(ffi: Any, config: Any, items: list[str]) -> None:
 def _setup(args: argparse.Namespace) -> tuple[RobotSetup, Experiment]:
     """The robot ``--robot``/``--generated`` name and the experiment scaled to it."""
     try:
-        setting = robot_setting(args.robot, args.generated, load_experiment(args.experiment))
+        setting = loaded_setting(args.robot, args.generated, load_experiment(args.experiment))
     except RobotSourceError as exc:
         raise FreezeError(str(exc)) from None
     try:
@@ -239,6 +238,16 @@ def _validated(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any) ->
         raise FreezeError(f"the {name} configuration is refused: {describe_error(code, detail)}")
 
 
+def audit_lines(setup: RobotSetup) -> list[str]:
+    """The header comment's record of the physics audit's warnings on the robot file (as
+    MODEL.md lists them): the firmware carries what was doubtful about its numbers."""
+    if not setup.warnings:
+        return []
+    return [f"Robot file audit ({len(setup.warnings)} warning"
+            f"{'s' if len(setup.warnings) > 1 else ''}; see MODEL.md):",
+            *[f"  warning: {w}" for w in setup.warnings]]
+
+
 def header_body(text: str) -> str:
     """What ``--check`` compares: the header from its include guard on (the configuration,
     the state and the code identity), not the provenance comment above it."""
@@ -288,6 +297,7 @@ def main(argv: list[str] | None = None) -> int:
             "Nominal parameters: " + ", ".join(f"{k} = {v!r}" for k, v in nominal.items()),
             *([f"Set: {' '.join(args.set)}"] if args.set else []),
             *verdict,
+            *audit_lines(setup),
         )
         frozen = freeze(lib, code, args.controller, config, made_from)
         target = args.out / frozen.filename

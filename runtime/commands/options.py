@@ -7,7 +7,9 @@ or a robot generated under ``generated/`` by name (:func:`runtime.bindings.robot
 not given); ``--plant MODEL`` the plant. :func:`load_setting` resolves them into a
 :class:`runtime.setting.robot.Setting` (the experiment scaled to the robot).
 :func:`output_folder` is where a command writes by default: its folder for the paper's
-robot, ``./<command>/<robot name>`` for another.
+robot, ``./<command>/<robot name>`` for another. :func:`print_audit` prints the physics
+audit's warnings on the robot file, as every command that runs a robot does (issue 47: the
+warnings travel with the robot, not only with `wmr model`).
 """
 
 from __future__ import annotations
@@ -16,8 +18,11 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from modeling import audit
+from runtime.bindings.robots import RobotSetup
 from runtime.experiment.settings import (
     PLANT_MODELS,
+    Experiment,
     ExperimentFileError,
     check_contact,
     load_experiment,
@@ -65,7 +70,23 @@ def load_setting(args: argparse.Namespace) -> Setting:
                                       f"{', '.join(PLANT_MODELS)}")
         exp = replace(exp, plant=replace(exp.plant, model=model))
         check_contact(exp, "--plant")
-    return robot_setting(args.robot, args.generated, exp)
+    return loaded_setting(args.robot, args.generated, exp)
+
+
+def loaded_setting(robot: str | Path | None, generated: Path | None,
+                   exp: Experiment) -> Setting:
+    """:func:`robot_setting`, its robot file's audit warnings printed (:func:`print_audit`)."""
+    setting = robot_setting(robot, generated, exp)
+    print_audit(setting.robot)
+    return setting
+
+
+def print_audit(setup: RobotSetup) -> None:
+    """The physics audit's warnings on the robot file (``RobotSetup.warnings``: a lumped
+    file's own, else those its generated ``robot.py`` declares), on stderr as ``wmr model``
+    prints them (``warning: ROBOT: ...``, once per process: through ``modeling.audit``,
+    which has already printed a lumped file's when the runtime read it)."""
+    audit.report(setup.source, setup.warnings)
 
 
 def output_folder(setting: Setting, out: Path | None, paper_default: Path,
@@ -81,4 +102,5 @@ def output_folder(setting: Setting, out: Path | None, paper_default: Path,
 
 
 __all__ = ["RobotSourceError", "Setting", "add_experiment_option", "add_plant_option",
-           "add_robot_options", "load_setting", "output_folder", "robot_setting"]
+           "add_robot_options", "load_setting", "loaded_setting", "output_folder",
+           "print_audit", "robot_setting"]

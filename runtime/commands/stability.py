@@ -10,14 +10,13 @@ import sys
 from dataclasses import replace
 
 from runtime.bindings.robots import RobotSourceError
-from runtime.commands.options import add_experiment_option, add_robot_options
+from runtime.commands.options import add_experiment_option, add_robot_options, loaded_setting
 from runtime.experiment.settings import (
     VELOCITY_MODELS,
     ExperimentFileError,
     check_sensing,
     load_experiment,
 )
-from runtime.setting.robot import robot_setting
 from runtime.stability.analysis import analyse_all, as_json, not_analysed, table, tde_notes
 from runtime.stability.sampled_loop import OPERATING_POINTS, covers
 
@@ -62,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.sensing is not None:
             exp = replace(exp, sensing=replace(exp.sensing, velocity=args.sensing))
             check_sensing(exp, "--sensing")
-        setting_ = robot_setting(args.robot, args.generated, exp)
+        setting_ = loaded_setting(args.robot, args.generated, exp)
         setup = setting_.robot
         if not covers(setup.code):
             raise RobotSourceError(

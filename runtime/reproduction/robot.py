@@ -219,6 +219,15 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         "",
         *[f"- {line}" for line in rep.settings],
         "",
+        *([  # the warnings travel with the robot (modeling.audit; MODEL.md lists them)
+            "## Robot file audit",
+            "",
+            "The physics audit of the robot file warned (check each before trusting these "
+            "results):",
+            "",
+            *[f"- {w}" for w in s.warnings],
+            "",
+        ] if s.warnings else []),
         "## Model checks",
         "",
         f"Inertial parameters (those the kinematics does not depend on): {', '.join(inertial)}.",

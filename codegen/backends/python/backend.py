@@ -71,8 +71,21 @@ def robot_py(target: RobotTarget) -> str:
         "# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.\n"
         f"DRIVEN_WHEELS = {rows.driven!r}\n"
         f"LATERAL_WHEELS = {rows.lateral_wheels!r}\n"
+        + audit_py(robot.warnings)
         + controllers_py(target.controllers)
     )
+
+
+def audit_py(warnings: tuple[str, ...]) -> str:
+    """``AUDIT_WARNINGS`` of robot.py: the physics audit's warnings on the robot file
+    (``modeling.audit``; MODEL.md lists them too), one line each, so that every command
+    that runs the robot prints them and its reports carry them without re-reading or
+    re-auditing the file."""
+    lines = ["# The physics audit's warnings on the robot file (modeling.audit), as MODEL.md",
+             "# lists them: every command that runs this robot prints them.",
+             "AUDIT_WARNINGS: tuple[str, ...] = ("]
+    lines += [f"    {' '.join(w.split())!r}," for w in warnings]
+    return "\n".join([*lines, ")", ""])
 
 
 def controllers_py(controllers: tuple[ControllerSpec, ...]) -> str:

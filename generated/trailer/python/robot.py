@@ -32,6 +32,10 @@ LAYOUT: dict[str, Any] | None = {'name': 'trailer', 'bodies': [['tractor', 30.0,
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')
 LATERAL_WHEELS = (('right', 'left'), ('cart_right', 'cart_left'))
+# The physics audit's warnings on the robot file (modeling.audit), as MODEL.md
+# lists them: every command that runs this robot prints them.
+AUDIT_WARNINGS: tuple[str, ...] = (
+)
 # The controllers generated for this robot (modeling.controllers.REGISTRY): name,
 # labels, step features, configuration fields (name, kind, unit, value source).
 CONTROLLERS: tuple[dict[str, Any], ...] = (
