@@ -1,10 +1,11 @@
-"""``wmr reproduce``: the command line of :mod:`runtime.reproduction.paper` (the paper's
-experiments on its robot, Drishti) and of :mod:`runtime.reproduction.robot` (``--robot``
-another robot: the experiment scaled to it). Checks every argument before any simulation
-runs; for the paper's robot it writes the figures, the tables of
-:mod:`runtime.paper.reproduction_tables` and the report of
+"""``wmr reproduce``: the command line of the one reproduce driver,
+:mod:`runtime.reproduction.driver` (the paper's experiments on the setting's robot, the
+experiment scaled to it). Checks every argument before any simulation runs. On the paper's
+robot (:attr:`runtime.setting.robot.Setting.is_paper_robot`) it writes the figures, the
+tables of :mod:`runtime.paper.reproduction_tables` and the report of
 :mod:`runtime.paper.reproduction_report`, and prints the verdicts of
-:mod:`runtime.paper.reproduction_verdicts`.
+:mod:`runtime.paper.reproduction_verdicts`; on another, the report of
+:mod:`runtime.reproduction.robot_report`.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from modeling.package_paths import default_output
 from runtime.commands.options import (
     Setting,
     add_experiment_option,
@@ -28,20 +30,14 @@ from runtime.experiment.settings import (
     ExperimentFileError,
     check_sensing,
 )
-from runtime.paper.reproduction_report import report_markdown
+from runtime.paper.reproduction_report import Figure, report_markdown
 from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, write_csv
 from runtime.paper.reproduction_verdicts import claims, stability
 from runtime.plant_comparison import compare, report_section
-from runtime.reproduction import robot
-from runtime.reproduction.paper import (
-    DEFAULT_OUT,
-    DEFAULT_SENSINGS,
-    LABELS,
-    Figure,
-    Reproduction,
-    reproduce,
-    with_sensing,
-)
+from runtime.reproduction import robot_report
+from runtime.reproduction.driver import DEFAULT_SENSINGS, Reproduction, reproduce, with_sensing
+
+DEFAULT_OUT = default_output("docs/reproduction")  # ./reproduction when installed
 
 # --------------------------------------------------------------------------- CLI
 
@@ -58,8 +54,9 @@ def parse_sensings(text: str) -> tuple[str, ...]:
     return names
 
 
-def write_outputs(rep: Reproduction, out: Path, plots: bool) -> list[Figure]:
-    """Figures, ``metrics.md``, ``metrics.csv`` and ``REPORT.md`` into ``out``."""
+def write_paper_outputs(rep: Reproduction, out: Path, plots: bool) -> list[Figure]:
+    """The paper's robot: figures, ``metrics.md``, ``metrics.csv`` and ``REPORT.md`` into
+    ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     figures: list[Figure] = []
     if plots:  # Matplotlib is imported only when the figures are drawn
@@ -76,7 +73,7 @@ def print_summary(rep: Reproduction) -> None:
     for sensing in rep.sensings:
         for s in stability(rep, sensing):
             print(
-                f"stability [{sensing}]: {LABELS[s.controller]:5s} {s.path:9s} ultimate "
+                f"stability [{sensing}]: {rep.labels[s.controller]:5s} {s.path:9s} ultimate "
                 f"bound {s.ultimate_bound:.3g}, measured {s.measured:.3g}"
             )
         for cl in claims(rep, sensing):
@@ -134,22 +131,29 @@ def main(argv: list[str] | None = None) -> int:
             "`wmr faults` runs them",
             file=sys.stderr,
         )
-    if not setting.is_paper_robot:
-        status = _main_robot(setting, sensings, out, not args.no_plots, start)
-    else:
-        rep = reproduce(exp, progress=True, sensings=sensings)
-        t_plot = time.perf_counter()
-        write_outputs(rep, out, plots=not args.no_plots)
-        end = time.perf_counter()
+    if not setting.is_paper_robot:  # what scaling did (the identity on the paper's robot)
+        print(f"robot '{setting.robot.name}' from {setting.robot.source}:", *setting.scaling,
+              sep="\n  ", flush=True)
+    try:
+        rep = reproduce(setting, sensings, progress=True)
+        t_write = time.perf_counter()
+        if not setting.is_paper_robot:
+            robot_report.write_outputs(rep, out, plots=not args.no_plots)
+    except ValueError as exc:  # a robot the scaled experiment does not apply to
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if setting.is_paper_robot:  # the paper's extras: its tables, verdicts, report, figures
+        write_paper_outputs(rep, out, plots=not args.no_plots)
         print_summary(rep)
-        print(
-            f"wrote {out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
-            f"figures and files {end - t_plot:.1f} s)"
-        )
-        status = 0
-    if status == 0 and args.compare_plant is not None:
+    bad = [m for m in rep.table if m.status != "ok"]
+    print(f"{len(rep.table) - len(bad)} of {len(rep.table)} runs ok"
+          + (f"; not ok: {', '.join(sorted({m.status for m in bad}))}" if bad else ""))
+    end = time.perf_counter()
+    print(f"wrote {out}: wall time {end - start:.1f} s (simulation {rep.seconds:.1f} s, "
+          f"figures and files {end - t_write:.1f} s)")
+    if args.compare_plant is not None:
         _compare_plant(setting, sensings, out)
-    return status
+    return 0
 
 
 def _compare_plant(setting: Setting, sensings: tuple[str, ...], out: Path) -> None:
@@ -166,22 +170,3 @@ def _compare_plant(setting: Setting, sensings: tuple[str, ...], out: Path) -> No
     print(f"wrote {report}: the model plant against MuJoCo, {len(comp.rows)} runs each "
           f"({time.perf_counter() - t0:.1f} s)")
 
-
-def _main_robot(setting: Setting, sensings: tuple[str, ...], out: Path, plots: bool,
-                start: float) -> int:
-    """Another robot: the experiment scaled to it (:mod:`runtime.reproduction.robot`)."""
-    setup = setting.robot
-    print(f"robot '{setup.name}' from {setup.source}:", *setting.scaling, sep="\n  ",
-          flush=True)
-    try:
-        rep = robot.reproduce_robot(setting, sensings, progress=True)
-    except ValueError as exc:  # a robot the scaled experiment does not apply to
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    robot.write_outputs(rep, out, plots=plots)
-    bad = [r for r in rep.rows if r.status != "ok"]
-    print(f"{len(rep.rows) - len(bad)} of {len(rep.rows)} runs ok"
-          + (f"; not ok: {', '.join(sorted({r.status for r in bad}))}" if bad else ""))
-    print(f"wrote {out}: wall time {time.perf_counter() - start:.1f} s "
-          f"(simulation {rep.seconds:.1f} s)")
-    return 0

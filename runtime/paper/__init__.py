@@ -1,6 +1,6 @@
 """The paper's reproduction (Roy et al. 2017, Section 5) written out: the report, tables,
-verdicts and figures of the runs :mod:`runtime.reproduction.paper` made on its robot,
-Drishti.
+verdicts and figures of the runs the one driver,
+:mod:`runtime.reproduction.driver`, made on its robot, Drishti.
 
 ``reproduction_tables``, ``reproduction_verdicts`` (the paper's claims and the stability
 bounds), ``reproduction_report`` and ``figures`` (its metrics, report and figures), and

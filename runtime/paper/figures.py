@@ -38,7 +38,8 @@ from matplotlib.ticker import MaxNLocator
 from numpy.typing import NDArray
 
 from runtime.paper import printed_paths
-from runtime.reproduction.paper import COLORS, LABELS, Figure, Reproduction
+from runtime.paper.reproduction_report import Figure
+from runtime.reproduction.driver import Reproduction
 from runtime.sim.loop import Run
 from runtime.sim.payload import plant_params_at
 from runtime.sim.reference import Reference
@@ -129,6 +130,7 @@ def add_zoom(
 
 
 def add_value_zoom(
+    rep: Reproduction,
     ax: Axes,
     bounds: Bounds,
     series: Sequence[tuple[Run, NDArray[np.float64]]],
@@ -140,13 +142,13 @@ def add_value_zoom(
     lo, hi = 0.0, 0.0
     for r, y in series:
         late = r.t >= t_from
-        ins.plot(r.t[late], y[late], color=COLORS[r.controller], lw=0.9)
+        ins.plot(r.t[late], y[late], color=rep.colors[r.controller], lw=0.9)
         lo, hi = min(lo, float(y[late].min())), max(hi, float(y[late].max()))
     pad = 0.1 * (hi - lo) + 1e-6
     ins.set_xlim(t_from, float(series[0][0].t[-1]))
     ins.set_ylim(lo - pad, hi + pad)
     ins.tick_params(labelsize=6)
-    ins.set_title("zoom: " + ", ".join(LABELS[r.controller] for r, _ in series), fontsize=6.5)
+    ins.set_title("zoom: " + ", ".join(rep.labels[r.controller] for r, _ in series), fontsize=6.5)
     ax.indicate_inset_zoom(ins, edgecolor="0.3")
     return ins
 
@@ -231,7 +233,7 @@ def draw_tracking(ax: Axes, rep: Reproduction, path: str, sensing: str, printed:
     ax.plot(ref.q[:, 0], ref.q[:, 1], **REF_STYLE, label="reference (ours, consistent)")
     for c in rep.controllers():
         r = main_run(rep, c, path, sensing)
-        ax.plot(r.q[:, 0], r.q[:, 1], color=COLORS[c], lw=1.0, label=LABELS[c])
+        ax.plot(r.q[:, 0], r.q[:, 1], color=rep.colors[c], lw=1.0, label=rep.labels[c])
 
 
 def fig_tracking(rep: Reproduction, out: Path, sensing: str) -> Figure:
@@ -282,13 +284,13 @@ def fig_circle_xy(rep: Reproduction, out: Path, sensing: str) -> Figure:
         for c in rep.controllers():
             r = main_run(rep, c, "circle", sensing)
             e = 1000 * (ref.q[: len(r.t), row] - r.q[:, row])
-            ax.plot(r.t, e, color=COLORS[c], label=LABELS[c])
+            ax.plot(r.t, e, color=rep.colors[c], label=rep.labels[c])
             if c in ("tdc", "tdroc"):
                 series.append((r, e))
         ax.set_ylabel(f"{name},d − {name} [mm]")
         percent_axis(ax, diameter, "% of the diameter 2R1")
         ax.set_title(f"Paper Figure {5 + row}: {name} position error")
-        add_value_zoom(ax, (0.55, 0.58, 0.42, 0.38), series, 0.5 * float(ref.t[-1]))
+        add_value_zoom(rep, ax, (0.55, 0.58, 0.42, 0.38), series, 0.5 * float(ref.t[-1]))
     axes[0].legend(loc="lower left", ncol=4)
     axes[1].set_xlabel("t [s]")
     path = out / "fig05_06_circle_xy_error.png"
@@ -307,16 +309,17 @@ def draw_switching(ax: Axes, rep: Reproduction, path: str, sensing: str, wheel: 
     for c in rep.switching():
         r = main_run(rep, c, path, sensing)
         ax.plot(
-            r.t, r.wheel_switching[:, wheel], color=COLORS[c], lw=0.8, label=f"{LABELS[c]}: Δu_a"
+            r.t, r.wheel_switching[:, wheel], color=rep.colors[c], lw=0.8,
+            label=f"{rep.labels[c]}: Δu_a",
         )
         ax.plot(
             r.t,
             r.gain,
-            color=COLORS[c],
+            color=rep.colors[c],
             lw=0.8,
             ls="--",
             alpha=0.7,
-            label=f"{LABELS[c]}: k̂ (bound on |Δu_a|)",
+            label=f"{rep.labels[c]}: k̂ (bound on |Δu_a|)",
         )
     ax.set_yscale("symlog", linthresh=LINTHRESH)
 
@@ -413,13 +416,13 @@ def fig_path_error(rep: Reproduction, out: Path, sensing: str) -> Figure:
     for c in rep.controllers():
         r = main_run(rep, c, "lawnmower", sensing)
         e = 1000 * r.position_error
-        ax.plot(r.t, e, color=COLORS[c], label=LABELS[c])
+        ax.plot(r.t, e, color=rep.colors[c], label=rep.labels[c])
         if c in ("tdc", "tdroc"):
             series.append((r, e))
     ax.set_xlabel("t [s]")
     ax.set_ylabel("‖(x_c, y_c) − (x_dc, y_dc)‖ [mm]")
     percent_axis(ax, scale, f"% of {scale:.2f} m")
-    add_value_zoom(ax, (0.45, 0.55, 0.45, 0.4), series, 0.5 * float(ref.t[-1]))
+    add_value_zoom(rep, ax, (0.45, 0.55, 0.45, 0.4), series, 0.5 * float(ref.t[-1]))
     ax.legend(loc="upper left", ncol=4)
     path = out / "fig12_lawnmower_path_error.png"
     save(fig, path)
@@ -446,7 +449,7 @@ def fig_torques(rep: Reproduction, out: Path, sensing: str) -> Figure:
             r = main_run(rep, c, path, sensing)
             ax.plot(r.t, r.tau[:, 0], color="tab:red", lw=0.8, label="τ_r (right)")
             ax.plot(r.t, r.tau[:, 1], color="tab:blue", lw=0.8, label="τ_l (left)")
-            ax.set_title(f"{LABELS[c]}, {path}: {r.saturated} saturated steps")
+            ax.set_title(f"{rep.labels[c]}, {path}: {r.saturated} saturated steps")
             if col == 0:
                 ax.set_ylabel("τ [N m]")
         axes[-1, col].set_xlabel("t [s]")

@@ -1,31 +1,36 @@
-"""``REPORT.md`` of the reproduction (:mod:`runtime.reproduction.paper`): the sections of
-``REPORT_SECTIONS``, each a function of the reproduction and the written figures returning
-Markdown lines. In order: the setting; the figures, each captioned with the paper's figure
-(Figures 3–14) it reproduces; the reference paths as printed in Section 5 and ours; the
-metrics tables (:mod:`runtime.paper.reproduction_tables`); the paper's claims and the
-stability numbers of (21), (27), (30) (:mod:`runtime.paper.reproduction_verdicts`); TDROC's
-boundary layer ε of (25) with the estimator contrast. Nothing in it depends on the wall
-time or the machine's clock, so two runs give the same bytes.
+"""``REPORT.md`` of the paper's robot's reproduction (:mod:`runtime.reproduction.driver`):
+the sections of ``REPORT_SECTIONS``, each a function of the reproduction and the written
+figures returning Markdown lines. In order: the setting; the figures, each captioned with
+the paper's figure (Figures 3–14) it reproduces; the reference paths as printed in Section 5
+and ours; the metrics tables (:mod:`runtime.paper.reproduction_tables`); the paper's claims
+and the stability numbers of (21), (27), (30) (:mod:`runtime.paper.reproduction_verdicts`);
+TDROC's boundary layer ε of (25) with the estimator contrast. Nothing in it depends on the
+wall time or the machine's clock, so two runs give the same bytes.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from runtime.paper import printed_paths
 from runtime.paper.reproduction_tables import fmt_mm, metrics_markdown, sensing_label
 from runtime.paper.reproduction_verdicts import best, claims, stability, stable_on_all_paths
-from runtime.reproduction.paper import (
-    CONTRAST,
-    LABELS,
-    UNSTABLE_FACTOR,
-    Figure,
-    Reproduction,
-    slip_monitor,
-)
+from runtime.reproduction.driver import CONTRAST, UNSTABLE_FACTOR, Reproduction, slip_monitor
 from runtime.sim.reference import RAMP, Reference
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A written figure: its file, the title (naming the paper's figure) and a caption."""
+
+    path: Path
+    title: str
+    caption: str
+
 
 Section = Callable[[Reproduction, Sequence[Figure]], list[str]]
 
@@ -145,8 +150,8 @@ def circle_centre(ref: Reference) -> np.ndarray:
 
 def _load_split(rep: Reproduction) -> str:
     """The stated static loads of the driven wheels, fixed payload on board (N): the slip
-    monitor's (:func:`runtime.reproduction.paper.slip_monitor`), which the runs used."""
-    monitor = slip_monitor(rep.code, rep.experiment, rep.robot)
+    monitor's (:func:`runtime.reproduction.driver.slip_monitor`), which the runs used."""
+    monitor = slip_monitor(rep.code, rep.experiment, {**rep.robot, **rep.setting.robot.plant})
     if monitor is None:
         return ""
     loads = monitor.normal_loads(np.array([rep.experiment.plant.fixed_payload, 0.0]))
@@ -200,7 +205,7 @@ def section_claims(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
             "",
             "Not part of the claims: in the minimal formulation the lowest RMS error is "
             + "; ".join(
-                f"{LABELS[best(rep, sensing, p, 'minimal')]}'s on the {p}" for p in rep.refs
+                f"{rep.labels[best(rep, sensing, p, 'minimal')]}'s on the {p}" for p in rep.refs
             )
             + ".",
             "",
@@ -230,7 +235,7 @@ def section_stability(rep: Reproduction, figures: Sequence[Figure]) -> list[str]
             "| measured max ‖(e, ė)‖ | within bound? |",
             "|---|---|---:|---:|---:|---:|---:|---|",
             *[
-                f"| {LABELS[s.controller]} | {s.path} | {s.tde_bound:.3g} | {s.varpi:.3g} "
+                f"| {rep.labels[s.controller]} | {s.path} | {s.tde_bound:.3g} | {s.varpi:.3g} "
                 f"| {'' if s.varpi2 is None else f'{s.varpi2:.3g}'} | {s.ultimate_bound:.3g} "
                 f"| {s.measured:.3g} | {'yes' if s.measured <= s.ultimate_bound else '**no**'} |"
                 for s in stability(rep, sensing)

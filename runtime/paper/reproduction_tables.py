@@ -1,8 +1,9 @@
-"""The metrics tables of the reproduction (:mod:`runtime.reproduction.paper`), one row per run:
-``metrics.md``, one Markdown table per sensing model, and ``metrics.csv``, every run in one
-file. The CSV keeps the columns it always had, in the same order, with ``sensing`` and then
-``friction_needed`` appended, so readers of the older file still work. Also the formatting
-the report shares (:func:`fmt_mm`, :func:`fmt_mu`, :func:`sensing_label`).
+"""The metrics tables of the paper's robot's reproduction
+(:mod:`runtime.reproduction.driver`), one row per run: ``metrics.md``, one Markdown table
+per sensing model, and ``metrics.csv``, every run in one file. The CSV keeps the columns it
+always had, in the same order, with ``sensing`` and then ``friction_needed`` appended, so
+readers of the older file still work. Also the formatting the report shares (:func:`fmt_mm`,
+:func:`fmt_mu`, :func:`sensing_label`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import math
 from collections.abc import Iterable
 from pathlib import Path
 
-from runtime.reproduction.paper import LABELS, Metrics, Reproduction
+from runtime.reproduction.driver import Metrics, Reproduction
 
 
 def fmt_mm(x: float) -> str:
@@ -33,7 +34,7 @@ def sensing_label(rep: Reproduction, sensing: str, estimator: str | None = None)
     )
 
 
-def metrics_table(rows: Iterable[Metrics]) -> list[str]:
+def metrics_table(rep: Reproduction, rows: Iterable[Metrics]) -> list[str]:
     lines = [
         "| path | form | controller | RMS error [mm] | max error [mm] | RMS [% of scale] "
         "| RMS τ [N m] | TV(τ) [N m] | median k̂ | max k̂ | saturated steps | RMS ‖u₁₋₃‖ "
@@ -42,7 +43,7 @@ def metrics_table(rows: Iterable[Metrics]) -> list[str]:
     ]
     for m in rows:
         lines.append(
-            f"| {m.path} | {m.formulation} | {LABELS[m.controller]} | {fmt_mm(m.rms_error)} "
+            f"| {m.path} | {m.formulation} | {rep.labels[m.controller]} | {fmt_mm(m.rms_error)} "
             f"| {fmt_mm(m.max_error)} | {m.rms_percent:.2f} | {m.rms_torque:.2f} "
             f"| {m.torque_variation:.1f} | {m.median_gain:.3f} | {m.max_gain:.3f} "
             f"| {m.saturated_steps} | {m.discarded_u:.2f} | {fmt_mu(m.friction_needed)} |"
@@ -54,7 +55,8 @@ def metrics_markdown(rep: Reproduction) -> str:
     """``metrics.md``: one table per sensing model (headed ``### sensing …``)."""
     parts: list[str] = []
     for sensing in rep.sensings:
-        parts += [f"### {sensing_label(rep, sensing)}", "", *metrics_table(rep.rows(sensing)), ""]
+        parts += [f"### {sensing_label(rep, sensing)}", "", *metrics_table(rep, rep.rows(sensing)),
+                  ""]
     return "\n".join(parts)
 
 

@@ -1,5 +1,5 @@
-"""Verdicts on the runs of the reproduction (:mod:`runtime.reproduction.paper`), per sensing
-model:
+"""Verdicts on the runs of the paper's robot's reproduction (:mod:`runtime.reproduction.driver`),
+per sensing model:
 
 * :func:`claims`: the paper's three claims (Section 5, Figures 4–8 and 11–14), each with
   whether it reproduces and the evidence; :func:`best`: the controller with the lowest RMS
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from runtime.paper.reproduction_tables import fmt_mm
-from runtime.reproduction.paper import FORMULATIONS, LABELS, Reproduction
+from runtime.reproduction.driver import Reproduction
 
 
 @dataclass(frozen=True)
@@ -47,7 +47,7 @@ def claims(rep: Reproduction, sensing: str) -> list[Claim]:
             "TDROC has the lowest tracking error of the four controllers on both paths",
             all(w == "tdroc" for w in winners.values()),
             "; ".join(
-                f"{p}: lowest RMS by {LABELS[w]} (TDROC {fmt_mm(rms_of[(p, 'tdroc')])} mm, "
+                f"{p}: lowest RMS by {rep.labels[w]} (TDROC {fmt_mm(rms_of[(p, 'tdroc')])} mm, "
                 f"TDC {fmt_mm(rms_of[(p, 'tdc')])} mm, ROC {fmt_mm(rms_of[(p, 'roc')])} mm, "
                 f"ASMC {fmt_mm(rms_of[(p, 'asmc')])} mm; TDROC/TDC "
                 f"{rms_of[(p, 'tdroc')] / rms_of[(p, 'tdc')]:.3f})"
@@ -57,7 +57,7 @@ def claims(rep: Reproduction, sensing: str) -> list[Claim]:
     )
     diffs = [
         float(np.diff(rep.runs[(sensing, "asmc", f, p)].gain).min())
-        for f in FORMULATIONS
+        for f in rep.code.formulations
         for p in rep.refs
     ]
     out.append(
@@ -79,7 +79,7 @@ def claims(rep: Reproduction, sensing: str) -> list[Claim]:
             "TDROC's switching gain is the lowest of TDROC, ROC and ASMC",
             all(c == "tdroc" for c, _ in lowest.values()),
             "; ".join(
-                f"{p}: median k̂ " + ", ".join(f"{LABELS[c]} {v:.3g}" for c, v in med.items())
+                f"{p}: median k̂ " + ", ".join(f"{rep.labels[c]} {v:.3g}" for c, v in med.items())
                 for p, (_, med) in lowest.items()
             ),
         )

@@ -3,11 +3,10 @@ closed loop on the plant the experiment names.
 
 The toolchain refuses to run a configuration it predicts will fail
 (:func:`runtime.stability.checks.check_configuration`: the TDE condition of (17) over the
-uncertainty box, the sampled loop's predicted stability). Both drivers (the paper's robot,
-:mod:`runtime.reproduction.paper`, and any other, :mod:`runtime.reproduction.robot`) run
-through :func:`checked_run`, so a refused configuration is refused the same way on every
-robot: it is not simulated, and its record (no sample) says why (outcome ``refused``,
-:mod:`runtime.sim.outcome`).
+uncertainty box, the sampled loop's predicted stability). The one driver
+(:mod:`runtime.reproduction.driver`) runs every robot's runs through :func:`checked_run`, so
+a refused configuration is refused the same way on every robot: it is not simulated, and
+its record (no sample) says why (outcome ``refused``, :mod:`runtime.sim.outcome`).
 """
 
 from __future__ import annotations

@@ -25,7 +25,8 @@ from runtime.experiment.settings import Experiment, ExperimentFileError, parse_e
 from runtime.paper.reproduction_report import report_markdown
 from runtime.paper.reproduction_tables import CSV_COLUMNS, metrics_markdown, write_csv
 from runtime.paper.reproduction_verdicts import claims, stability
-from runtime.reproduction.paper import CONTRAST, Reproduction, SweepRow, reproduce
+from runtime.reproduction.driver import CONTRAST, Reproduction, SweepRow, reproduce
+from runtime.setting.robot import robot_setting
 from runtime.sim import paths
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -54,7 +55,7 @@ OLD_CSV_COLUMNS = [
 @pytest.fixture(scope="module")
 def paper() -> Reproduction:
     """The paper's setting under both default sensing models (≈ 10 s)."""
-    return reproduce(Experiment(), sensings=SENSINGS)
+    return reproduce(robot_setting(None, None, Experiment()), SENSINGS)
 
 
 def rms(rep: Reproduction, sensing: str, ctrl: str, path: str, form: str = "paper") -> float:

@@ -247,7 +247,7 @@ def test_runtime_names_a_generated_folder_of_another_robot(tmp_path: Path) -> No
                     ignore=shutil.ignore_patterns("__pycache__"))
     probe = ("import runtime.bindings.generated as g\n"
              "assert g.load_robot_code('').name == 'trailer'\n"
-             "import runtime.reproduction.robot  # the generic runtime needs no paper "
+             "import runtime.reproduction.driver  # the one driver needs no paper "
              "robot\n"
              "from runtime.bindings.generated import wmr_model\n")
     result = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
@@ -264,7 +264,7 @@ def test_running_a_robot_needs_neither_sympy_nor_codegen() -> None:
 
     probe = (
         "import sys\nfrom pathlib import Path\n"
-        "import runtime.commands.reproduce, runtime.reproduction.robot\n"
+        "import runtime.commands.reproduce, runtime.reproduction.driver\n"
         "from runtime.bindings.robots import resolve\n"
         f"resolve(Path({str(SMALL)!r})); resolve(Path({str(TRAILER)!r}))\n"
         "print(sorted(m for m in ('sympy', 'codegen', 'casadi') if m in sys.modules))\n"

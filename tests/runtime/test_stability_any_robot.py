@@ -184,7 +184,7 @@ def test_one_verdict_in_every_command(tmp_path: Path, capsys: pytest.CaptureFixt
     from runtime.campaign.prediction import predict
     from runtime.cli import main as wmr
     from runtime.commands.campaign import resolve_campaign
-    from runtime.reproduction.robot import sampled_data_table
+    from runtime.reproduction.robot_report import sampled_data_table
 
     experiment = tmp_path / "short.toml"
     experiment.write_text("[paths]\ncircle_duration = 6.0\nlawnmower_duration = 6.0\n")

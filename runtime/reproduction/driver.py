@@ -1,101 +1,100 @@
-"""``python -m runtime reproduce``: the paper's experiments (Section "Experimental results
-and comparison") on its robot, with figures, a metrics table and a report. This module runs
-them; the outputs are built by the modules of the floors above it:
+"""The one reproduce driver (``wmr reproduce``), for every robot: the paper's experiment
+(Section "Experimental results and comparison") run on the setting's robot, with the
+experiment scaled to it (:mod:`runtime.setting.scale`; the identity on the paper's robot).
 
-* :mod:`runtime.reproduction.paper` (here): the runs, their :class:`Metrics` and TDROC's ε
-  sweep, gathered in a :class:`Reproduction` by :func:`reproduce` (no files written); each
-  run through :func:`runtime.reproduction.runs.checked_run`, as on any robot (a
-  configuration the checks refuse is not run);
-* :mod:`runtime.paper.reproduction_tables`: ``metrics.md`` and ``metrics.csv``;
-* :mod:`runtime.paper.reproduction_verdicts`: the paper's claims and the stability bounds,
-  evaluated on the runs;
-* :mod:`runtime.paper.reproduction_report`: ``REPORT.md``;
-* :mod:`runtime.paper.figures`: the figures;
-* :mod:`runtime.commands.reproduce`: the command line, which writes them all.
+For each sensing model chosen (default: ``sample-instant`` and ``encoder-average``, see
+:class:`runtime.experiment.settings.SensingSettings`; the experiment's other ``[sensing]``
+fields, the estimator of q̈(t − h) in (17) among them, apply to each): 2 paths (circle, lawn
+mower) × every controller generated for the robot × every formulation it has, closed loop
+through the generated C (:mod:`runtime.sim.loop`), payload put on and taken off, friction
+the controllers do not know. The same code for every robot:
 
-For each sensing model chosen with ``--sensing`` (default: ``sample-instant`` and
-``encoder-average``, see :class:`runtime.experiment.settings.SensingSettings`; the experiment file's
-other ``[sensing]`` fields, the estimator of q̈(t − h) in (17) among them, apply to each):
-2 paths (circle, lawn mower) × 4 controllers (TDC, TDROC, ROC, ASMC) × 2 formulations
-(paper, minimal), closed loop through the generated C. Then a sweep of TDROC's boundary
-layer ε of (25) per sensing model, and, when ``encoder-average`` is chosen, the same sweep
-with the plain ``backward`` estimator: the pairing that made TDROC unstable at ε = 0.1
-before the matched estimator existed.
+* each run through :func:`runtime.reproduction.runs.checked_run` (a configuration the
+  checks refuse is not run), on the experiment's plant under the slip monitor
+  (:mod:`runtime.sim.slip_monitor`) where the robot's layout can be had;
+* each run's :class:`Metrics`, with its outcome (:mod:`runtime.sim.outcome`: a run off
+  its path is not ``ok``).
 
-Written to the output folder (default ``docs/reproduction``): the figures of
-:mod:`runtime.paper.figures` (PNG), ``metrics.csv``, ``metrics.md`` and ``REPORT.md``. Nothing
-written depends on the wall time or the machine's clock, so two runs give the same bytes.
-The wall time (:attr:`Reproduction.seconds`) is printed on the console only.
+The paper's extras are switched on by the setting, not by another driver: on the paper's
+robot (:attr:`runtime.setting.robot.Setting.is_paper_robot`, declared in the generated
+``robot.py``) :func:`reproduce` also sweeps TDROC's boundary layer ε of (25) per sensing
+model, and, when ``encoder-average`` is chosen, with the plain ``backward`` estimator: the
+pairing that made TDROC unstable at ε = 0.1 before the matched estimator existed.
+
+Nothing is written here: :mod:`runtime.reproduction.robot_report` writes any robot's
+report, :mod:`runtime.paper` the paper's tables, verdicts, report and figures. Nothing
+computed depends on the clock but :attr:`Reproduction.seconds` (printed, never written).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
-from modeling.package_paths import default_output
-from runtime.bindings.generated import RobotCode, load_robot_code
+from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.plants import plant_for
-from runtime.reproduction.robot import PALETTE
 from runtime.reproduction.runs import checked_run
 from runtime.setting.layout import robot_layout
+from runtime.setting.robot import Setting
 from runtime.sim import paths
 from runtime.sim.loop import Run
+from runtime.sim.outcome import outcome
 from runtime.sim.reference import Reference
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 
-
-@dataclass(frozen=True)
-class Figure:
-    """A written figure: its file, the title (naming the paper's figure) and a caption."""
-
-    path: Path
-    title: str
-    caption: str
-
-
-DEFAULT_OUT = default_output("docs/reproduction")  # ./reproduction when installed
 DEFAULT_SENSINGS = ("sample-instant", "encoder-average")
 EPS_SWEEP = (0.1, 0.2, 0.5, 1.0)
-FORMULATIONS = ("paper", "minimal")
 # The contrast of the ε sweep: encoder-average rates with the plain backward quotient.
 CONTRAST = ("encoder-average", "backward")
 # A TDROC run is called unstable when its RMS error exceeds this multiple of TDC's under
 # the same sensing, estimator and path (the measured unstable runs are ≥ 50× TDC's).
 UNSTABLE_FACTOR = 10.0
-PAPER_CODE = load_robot_code("")  # the paper's robot: the default generated code
-LABELS = {c.name: c.label for c in PAPER_CODE.controller_infos}
 # One colour per controller, in the registry's order (TDC blue, TDROC red, ROC green, ASMC
-# purple).
-COLORS = {name: PALETTE[i % len(PALETTE)] for i, name in enumerate(LABELS)}
+# purple, ...), in every robot's figures.
+PALETTE = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown",
+           "tab:pink", "tab:olive", "tab:cyan")
 
 RunKey = tuple[str, str, str, str]  # (sensing, controller, formulation, path)
 SweepKey = tuple[str, str, float, str]  # (sensing, estimator, ε, path)
 
 
+def labels(code: RobotCode) -> dict[str, str]:
+    """Each controller's label (``tdroc`` → ``TDROC``), in the registry's order."""
+    return {c.name: c.label for c in code.controller_infos}
+
+
+def colors(code: RobotCode) -> dict[str, str]:
+    """Each controller's colour in the figures, from :data:`PALETTE` in the registry's
+    order."""
+    return {c.name: PALETTE[i % len(PALETTE)] for i, c in enumerate(code.controller_infos)}
+
+
 @dataclass(frozen=True)
 class Metrics:
-    """One run's numbers (the row of ``metrics.csv``)."""
+    """One run's numbers (a row of the metrics tables)."""
 
     sensing: str  # velocity model of [sensing]
     controller: str
     formulation: str
     path: str
-    rms_error: float  # m
+    rms_error: float  # m, the root frame origin's distance from its reference
     max_error: float  # m
+    final_error: float  # m
     rms_percent: float  # RMS error in % of the path's scale (R1, or the lawn-mower legs)
     rms_torque: float  # N m
+    max_torque: float  # N m, max |τ|
     torque_variation: float  # N m, total variation of tau (chattering)
     median_gain: float  # k̂: units of the switching term Δu_a (see figures.GAIN_UNIT)
     max_gain: float
     saturated_steps: int
     discarded_u: float  # RMS of ||u rows 1-3|| (paper formulation)
     failed_at: float | None
+    status: str  # the outcome: ok, off path, failed, (init) refused (runtime.sim.outcome)
+    detail: str  # why it is not ok
     # The slip monitor (runtime.sim.slip_monitor): the largest friction coefficient the run
     # needs, max over samples and driven wheels of sqrt(F_x² + F_y²)/N (NaN: not monitored).
     friction_needed: float = float("nan")
@@ -110,12 +109,14 @@ def metrics(r: Run, ref: Reference, sensing: str,
             friction_needed: float = float("nan")) -> Metrics:
     """The metrics of one run on ``ref``: position error ‖(x_c, y_c) − (x_dc, y_dc)‖ (in %
     of the reference's scale: R1 for the circle, the spacing of the lawn mower's legs; the
-    figures use the paper's own scales), torque, k̂."""
+    paper's figures use the paper's own scales), torque, k̂, and the run's outcome."""
     e = r.position_error
+    result = outcome(r, ref.scale)
     if not len(e):  # refused: no sample ran
         nan = float("nan")
         return Metrics(sensing, r.controller, r.formulation, r.path, nan, nan, nan, nan, nan,
-                       nan, nan, 0, nan, r.failed_at, friction_needed)
+                       nan, nan, nan, nan, 0, nan, r.failed_at, result.status, result.detail,
+                       friction_needed)
     return Metrics(
         sensing=sensing,
         controller=r.controller,
@@ -123,14 +124,18 @@ def metrics(r: Run, ref: Reference, sensing: str,
         path=r.path,
         rms_error=rms(e),
         max_error=float(e.max()),
+        final_error=float(e[-1]),
         rms_percent=100.0 * rms(e) / ref.scale,
         rms_torque=rms(r.tau),
+        max_torque=float(np.abs(r.tau).max()),
         torque_variation=float(np.abs(np.diff(r.tau, axis=0)).sum()),
         median_gain=float(np.median(r.gain)),
         max_gain=float(r.gain.max()),
         saturated_steps=r.saturated,
         discarded_u=rms(r.u_discarded),
         failed_at=r.failed_at,
+        status=result.status,
+        detail=result.detail,
         friction_needed=friction_needed,
     )
 
@@ -158,16 +163,39 @@ class SweepRow:
 
 @dataclass(frozen=True)
 class Reproduction:
-    experiment: Experiment  # as loaded; per-sensing copies from :meth:`experiment_for`
+    """The runs on the setting's robot; ``sweep`` and ``sweep_runs`` are the paper's extras
+    (empty on another robot)."""
+
+    setting: Setting  # the robot and its (scaled) experiment, as run
     sensings: tuple[str, ...]
     refs: dict[str, Reference]
     runs: dict[RunKey, Run]
-    table: list[Metrics]
-    sweep: list[SweepRow]
-    sweep_runs: dict[SweepKey, Run]  # TDROC, paper formulation
+    table: list[Metrics]  # in the order run: sensing, path, (formulation, controller)
     seconds: float  # simulation wall time (printed, never written to a file)
-    robot: dict[str, float] = field(default_factory=dict)
-    code: RobotCode = PAPER_CODE
+    sweep: list[SweepRow] = field(default_factory=list)
+    sweep_runs: dict[SweepKey, Run] = field(default_factory=dict)  # TDROC, paper formulation
+
+    @property
+    def experiment(self) -> Experiment:
+        """The experiment as run (per-sensing copies from :meth:`experiment_for`)."""
+        return self.setting.experiment
+
+    @property
+    def code(self) -> RobotCode:
+        return self.setting.robot.code
+
+    @property
+    def robot(self) -> dict[str, float]:
+        """The controllers' nominal parameters."""
+        return self.setting.robot.nominal
+
+    @property
+    def labels(self) -> dict[str, str]:
+        return labels(self.code)
+
+    @property
+    def colors(self) -> dict[str, str]:
+        return colors(self.code)
 
     def controllers(self, formulation: str = "paper") -> tuple[str, ...]:
         """The controllers run in ``formulation``, in the registry's order."""
@@ -207,16 +235,17 @@ def with_eps(exp: Experiment, eps: float) -> Experiment:
 
 
 class _Simulator:
-    """Runs each distinct (sensing, estimator, ε, controller, formulation, path) once."""
+    """Runs each distinct (sensing, estimator, ε, controller, formulation, path) once, on the
+    setting's robot: the controllers get its nominal parameters, the plant its simulated
+    ones."""
 
-    def __init__(
-        self, code: RobotCode, exp: Experiment, robot: dict[str, float],
-        refs: dict[str, Reference]
-    ):
-        self.code, self.exp, self.robot, self.refs = code, exp, robot, refs
+    def __init__(self, setting: Setting, refs: dict[str, Reference]):
+        setup = setting.robot
+        self.code, self.exp, self.refs = setup.code, setting.experiment, refs
+        self.nominal, self.plant = setup.nominal, setup.plant
         self.cache: dict[tuple[str, str, float, str, str, str], Run] = {}
         self.needed: dict[int, float] = {}  # id(run) -> friction coefficient it needs
-        self.monitor = slip_monitor(code, exp, robot)
+        self.monitor = slip_monitor(self.code, self.exp, {**self.nominal, **self.plant})
 
     def __call__(
         self, sensing: str, estimator: str, eps: float, ctrl: str, form: str, path: str
@@ -228,9 +257,10 @@ class _Simulator:
             e = with_eps(with_sensing(self.exp, sensing, estimator), eps)
             plant = None
             if self.monitor is not None:
-                plant = MonitoredPlant(plant_for(self.code, e, self.robot), self.monitor)
-            run = checked_run(self.code, ctrl, form, self.refs[path], self.robot, e,
-                              plant=plant)
+                plant = MonitoredPlant(plant_for(self.code, e, self.nominal, self.plant),
+                                       self.monitor)
+            run = checked_run(self.code, ctrl, form, self.refs[path], self.nominal, e,
+                              plant_params=self.plant, plant=plant)
             if plant is not None and plant.needed:
                 self.needed[id(run)] = float(np.max(plant.needed))
             self.cache[key] = run
@@ -240,9 +270,10 @@ class _Simulator:
         return self.needed.get(id(run), float("nan"))
 
 
-def slip_monitor(code: RobotCode, exp: Experiment, robot: dict[str, float]
+def slip_monitor(code: RobotCode, exp: Experiment, robot: Mapping[str, float]
                  ) -> SlipMonitor | None:
-    """The slip monitor of the runs (None where the robot's layout cannot be had at these
+    """The slip monitor of the runs on the simulated robot ``robot`` (plant-only parameters
+    at the robot's defaults unless given; None where its layout cannot be had at these
     parameters: a bodies-and-wheels robot with drawn parameters)."""
     try:
         return SlipMonitor(code, robot_layout(code, {**code.plant_defaults, **robot}), exp)
@@ -265,23 +296,19 @@ def sweep_eps(exp: Experiment) -> tuple[float, ...]:
     return tuple(sorted({*EPS_SWEEP, exp.controller.eps}))
 
 
-def reproduce(
-    exp: Experiment,
-    robot: dict[str, float] | None = None,
-    progress: bool = False,
-    sensings: Sequence[str] = DEFAULT_SENSINGS,
-    code: RobotCode = PAPER_CODE,
-) -> Reproduction:
-    """Run every experiment (no files written) on the robot ``code`` with the nominal and
-    simulated parameters ``robot`` (default: the paper's robot's own)."""
+def reproduce(setting: Setting, sensings: Sequence[str] = DEFAULT_SENSINGS,
+              progress: bool = False) -> Reproduction:
+    """Run the experiment on the setting's robot (no files written); on the paper's robot,
+    TDROC's ε sweep too."""
     start = time.perf_counter()
-    robot = dict(robot or code.params)
+    code, exp = setting.robot.code, setting.experiment
     est, eps0 = exp.sensing.accel_estimator, exp.controller.eps
-    refs = {name: paths.reference(code, robot, exp, name) for name in paths.PATHS}
-    sim = _Simulator(code, exp, robot, refs)
+    refs = {name: paths.reference(code, setting.robot.nominal, exp, name)
+            for name in paths.PATHS}
+    sim = _Simulator(setting, refs)
     runs: dict[RunKey, Run] = {}
     table: list[Metrics] = []
-    pairs = code.runs(FORMULATIONS)
+    pairs = code.runs()
     total = len(sensings) * len(refs) * len(pairs)
     for sensing in sensings:
         for path in refs:
@@ -291,23 +318,18 @@ def reproduce(
                 table.append(metrics(r, refs[path], sensing, sim.friction_needed(r)))
                 if progress:
                     m = table[-1]
-                    print(
-                        f"[{len(table):2d}/{total}] {sensing:15s} {path:9s} {form:7s} "
-                        f"{info.label:5s} RMS {m.rms_error * 1000:8.2f} mm",
-                        flush=True,
-                    )
+                    print(f"[{len(table):2d}/{total}] {sensing:15s} {path:9s} {form:7s} "
+                          f"{info.label:5s} RMS {m.rms_error * 1000:9.2f} mm {m.status}",
+                          flush=True)
     sweep: list[SweepRow] = []
     sweep_runs: dict[SweepKey, Run] = {}
-    for sensing, estimator in sweep_sets(exp, sensings):
+    for sensing, estimator in sweep_sets(exp, sensings) if setting.is_paper_robot else ():
         for eps in sweep_eps(exp):
             for path in refs:
                 r = sim(sensing, estimator, eps, "tdroc", "paper", path)
                 tdc = sim(sensing, estimator, eps0, "tdc", "paper", path)
                 sweep_runs[(sensing, estimator, eps, path)] = r
-                sweep.append(
-                    SweepRow(sensing, estimator, eps, metrics(r, refs[path], sensing),
-                             rms(tdc.position_error))
-                )
-    seconds = time.perf_counter() - start
-    return Reproduction(exp, tuple(sensings), refs, runs, table, sweep, sweep_runs, seconds, robot,
-                        code)
+                sweep.append(SweepRow(sensing, estimator, eps, metrics(r, refs[path], sensing),
+                                      rms(tdc.position_error)))
+    return Reproduction(setting, tuple(sensings), refs, runs, table,
+                        time.perf_counter() - start, sweep, sweep_runs)

@@ -1,23 +1,15 @@
-"""``wmr reproduce --robot ROBOT``: the paper's experiment on any robot.
-
-The experiment of :mod:`runtime.reproduction.paper` — circle and lawn mower, every controller
-generated for the robot in every formulation it has, each ``--sensing`` model, payload put
-on and taken off, friction the controllers do not know — scaled to the robot
-(:mod:`runtime.setting.scale`; the scaled settings are printed and written), on the one
-closed loop (:mod:`runtime.sim.loop`), each configuration checked first as on the paper's
-robot (:func:`runtime.reproduction.runs.checked_run`: a refused one is not run). Each run's
-outcome is classified (:mod:`runtime.sim.outcome`: a run off its path is not ``ok``).
-Writes ``REPORT.md``, ``metrics.md``, ``metrics.csv`` and ``tracking.png`` to the output
-folder; nothing written depends on the clock.
+"""The report of ``wmr reproduce`` on a robot other than the paper's: ``REPORT.md``,
+``metrics.md``, ``metrics.csv`` and ``tracking.png`` written from the runs of the one driver
+(:func:`runtime.reproduction.driver.reproduce`), with the model checks and the sampled-data
+verdict of the robot's nominal model and scaled experiment. (The paper's robot's report is
+:mod:`runtime.paper`'s.) Nothing written depends on the clock.
 """
 
 from __future__ import annotations
 
 import csv
 import math
-import time
-from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -25,19 +17,12 @@ import numpy as np
 from runtime.bindings.robots import RobotSetup
 from runtime.bindings.uncertainty import inertial_keys, roc_bounds, schedule_tde, tde_alpha
 from runtime.experiment.settings import Experiment
-from runtime.reproduction.runs import checked_run
+from runtime.reproduction.driver import Reproduction, colors
 from runtime.setting.robot import Setting
-from runtime.sim import paths
-from runtime.sim.loop import Run
-from runtime.sim.outcome import OFF_PATH_FRACTION, outcome
+from runtime.sim.outcome import OFF_PATH_FRACTION
 from runtime.sim.payload import plant_params_at
-from runtime.sim.reference import Reference
 from runtime.stability.analysis import analyse_all, table
 from runtime.stability.sampled_loop import covers
-
-# One colour per controller, in the registry's order (as the paper's figures).
-PALETTE = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange", "tab:brown",
-           "tab:pink", "tab:olive", "tab:cyan")
 
 
 @dataclass(frozen=True)
@@ -51,58 +36,6 @@ class ModelChecks:
     phi: float
 
 
-@dataclass(frozen=True)
-class Row:
-    """One run's numbers."""
-
-    sensing: str
-    path: str
-    formulation: str
-    controller: str
-    rms_error: float  # m, root frame origin
-    max_error: float
-    final_error: float
-    rms_percent: float  # of the path's scale
-    rms_torque: float
-    max_torque: float
-    saturated_steps: int
-    failed_at: float | None
-    status: str  # the outcome: ok, off path, failed, (init) refused (runtime.sim.outcome)
-    detail: str  # why it is not ok
-
-
-@dataclass(frozen=True)
-class RobotReproduction:
-    setup: RobotSetup
-    experiment: Experiment  # scaled
-    settings: tuple[str, ...]  # what scaling did, one line per field
-    sensings: tuple[str, ...]
-    refs: dict[str, Reference]
-    checks: dict[str, ModelChecks]  # per formulation, over the uncertainty box
-    schedule_tde: dict[str, float]  # per formulation: ‖M⁻¹M̂ − I‖ with the payloads on
-    runs: dict[tuple[str, str, str, str], Run]  # (sensing, path, form, controller)
-    rows: list[Row]
-    seconds: float
-    verdicts: dict[str, str] = field(default_factory=dict)  # sensing -> `wmr stability` table
-
-    @property
-    def labels(self) -> dict[str, str]:
-        return {c.name: c.label for c in self.setup.code.controller_infos}
-
-
-def _row(r: Run, sensing: str, scale: float) -> Row:
-    e = r.position_error
-    result = outcome(r, scale)
-    if not len(e):  # refused at init
-        nan = float("nan")
-        return Row(sensing, r.path, r.formulation, r.controller, nan, nan, nan, nan, nan, nan,
-                   0, r.failed_at, result.status, result.detail)
-    rms = float(np.sqrt(np.mean(e**2)))
-    return Row(sensing, r.path, r.formulation, r.controller, rms, float(e.max()), float(e[-1]),
-               100 * rms / scale, float(np.sqrt(np.mean(r.tau**2))), float(np.abs(r.tau).max()),
-               r.saturated, r.failed_at, result.status, result.detail)
-
-
 def model_checks(setup: RobotSetup, exp: Experiment, formulation: str) -> ModelChecks:
     """The TDE condition and ROC's bounds of the robot's nominal model over the box."""
     c = exp.controller
@@ -113,40 +46,6 @@ def model_checks(setup: RobotSetup, exp: Experiment, formulation: str) -> ModelC
     alpha, phi = roc_bounds(setup.code, setup.nominal, c.uncertainty, formulation,
                             c.roc_max_rate)
     return ModelChecks(tde, alpha, phi)
-
-
-def reproduce_robot(setting: Setting, sensings: Sequence[str],
-                    progress: bool = False) -> RobotReproduction:
-    """Run the experiment, already scaled to the robot (no files written)."""
-    start = time.perf_counter()
-    setup, exp = setting.robot, setting.experiment
-    code = setup.code
-    refs = {name: paths.reference(code, setup.nominal, exp, name) for name in paths.PATHS}
-    forms = code.formulations
-    checks = {f: model_checks(setup, exp, f) for f in forms}
-    loaded = [plant_params_at(code, exp, 0.0, setup.plant),
-              plant_params_at(code, exp, exp.plant.extra_on_at, setup.plant)]
-    tde = {f: schedule_tde(code, setup.nominal, loaded, f) for f in forms}
-    runs: dict[tuple[str, str, str, str], Run] = {}
-    rows: list[Row] = []
-    pairs = code.runs()
-    total = len(sensings) * len(refs) * len(pairs)
-    for sensing in sensings:
-        e = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
-        for name, ref in refs.items():
-            for form, info in pairs:
-                # the simulated robot: the file's numbers, with the experiment's payloads
-                r = checked_run(code, info.name, form, ref, setup.nominal, e,
-                                plant_params=setup.plant)
-                runs[(sensing, name, form, info.name)] = r
-                rows.append(_row(r, sensing, ref.scale))
-                if progress:
-                    print(f"[{len(rows):2d}/{total}] {sensing:15s} {name:9s} {form:7s} "
-                          f"{info.label:5s} RMS {rows[-1].rms_error * 1000:9.2f} mm "
-                          f"{rows[-1].status}", flush=True)
-    verdicts = {s: sampled_data_table(setting, s) for s in sensings}
-    return RobotReproduction(setup, exp, setting.scaling, tuple(sensings), refs, checks, tde,
-                             runs, rows, time.perf_counter() - start, verdicts)
 
 
 def sampled_data_table(setting: Setting, sensing: str) -> str:
@@ -167,14 +66,14 @@ def _fmt(x: float) -> str:
     return f"{x * 1000:.2f}"
 
 
-def metrics_lines(rep: RobotReproduction) -> list[str]:
+def metrics_lines(rep: Reproduction) -> list[str]:
     lines = [
         "| sensing | path | form | controller | RMS error [mm] | max [mm] | final [mm] "
         "| RMS [% of scale] | RMS τ [N m] | max |τ| [N m] | saturated steps | outcome |",
         "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     labels = rep.labels
-    for r in rep.rows:
+    for r in rep.table:
         result = r.status if r.status == "ok" else f"{r.status}: {r.detail}"
         lines.append(
             f"| {r.sensing} | {r.path} | {r.formulation} | {labels[r.controller]} "
@@ -185,8 +84,20 @@ def metrics_lines(rep: RobotReproduction) -> list[str]:
     return lines
 
 
-def report_lines(rep: RobotReproduction) -> list[str]:
-    s, exp = rep.setup, rep.experiment
+def schedule_tdes(setup: RobotSetup, exp: Experiment) -> dict[str, float]:
+    """Per formulation: ‖M⁻¹M̂ − I‖ of the nominal model against the simulated robot with
+    the experiment's payloads off and on."""
+    code = setup.code
+    loaded = [plant_params_at(code, exp, 0.0, setup.plant),
+              plant_params_at(code, exp, exp.plant.extra_on_at, setup.plant)]
+    return {f: schedule_tde(code, setup.nominal, loaded, f) for f in code.formulations}
+
+
+def report_lines(rep: Reproduction) -> list[str]:
+    s, exp = rep.setting.robot, rep.experiment
+    checks = {f: model_checks(s, exp, f) for f in s.code.formulations}
+    tde = schedule_tdes(s, exp)
+    verdicts = {sensing: sampled_data_table(rep.setting, sensing) for sensing in rep.sensings}
     c, pl, se = exp.controller, exp.plant, exp.sensing
     inertial = inertial_keys(s.code, s.nominal)
     out = [
@@ -217,7 +128,7 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         "",
         "Scaled from the paper's setting (fields an experiment file sets are kept):",
         "",
-        *[f"- {line}" for line in rep.settings],
+        *[f"- {line}" for line in rep.setting.scaling],
         "",
         *([  # the warnings travel with the robot (modeling.audit; MODEL.md lists them)
             "## Robot file audit",
@@ -236,9 +147,9 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         f"{100 * c.uncertainty:g} % box | ROC α | ROC φ |",
         "|---|---:|---:|---:|---:|",
     ]
-    for f, b in rep.checks.items():
+    for f, b in checks.items():
         box = "—" if math.isnan(b.tde) else f"{b.tde:.3g}"
-        out.append(f"| {f} | {rep.schedule_tde[f]:.3g} | {box} | {b.alpha:.3g} "
+        out.append(f"| {f} | {tde[f]:.3g} | {box} | {b.alpha:.3g} "
                    f"| {b.phi:.3g} |")
     out += [
         "",
@@ -248,7 +159,7 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         "is this experiment's."
         + (" —: the box holds robots the controllers would not accept as a model (a mass "
            "matrix that is not positive definite, e.g. m I ≤ K²), so the condition is not "
-           "defined over it." if any(math.isnan(b.tde) for b in rep.checks.values()) else ""),
+           "defined over it." if any(math.isnan(b.tde) for b in checks.values()) else ""),
         "",
         "## Results",
         "",
@@ -263,30 +174,30 @@ def report_lines(rep: RobotReproduction) -> list[str]:
         "![tracking](tracking.png)",
         "",
     ]
-    if rep.verdicts:
+    if verdicts:
         out += ["## Sampled-data verdict", "",
                 "Predicted as `wmr stability` predicts it for this robot and scaled experiment "
                 "(nominal robot, no friction, linearised about the circle's steady motion; "
                 "`runtime/stability/`):", ""]
-        for sensing, text in rep.verdicts.items():
+        for sensing, text in verdicts.items():
             out += [f"{sensing}:", "", *text.rstrip("\n").split("\n"), ""]
     return out
 
 
-def write_csv(rep: RobotReproduction, path: Path) -> None:
+def write_csv(rep: Reproduction, path: Path) -> None:
     with path.open("w", newline="", encoding="utf-8") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(["sensing", "path", "formulation", "controller", "rms_error_m",
                     "max_error_m", "final_error_m", "rms_percent", "rms_torque_Nm",
                     "max_torque_Nm", "saturated_steps", "failed_at_s", "status"])
-        for r in rep.rows:
+        for r in rep.table:
             w.writerow([r.sensing, r.path, r.formulation, r.controller, f"{r.rms_error:.6g}",
                         f"{r.max_error:.6g}", f"{r.final_error:.6g}", f"{r.rms_percent:.4g}",
                         f"{r.rms_torque:.6g}", f"{r.max_torque:.6g}", r.saturated_steps,
                         "" if r.failed_at is None else f"{r.failed_at:g}", r.status])
 
 
-def plot(rep: RobotReproduction, path: Path) -> None:
+def plot(rep: Reproduction, path: Path) -> None:
     """Paths in the plane (reference and each controller) and the error over time, for the
     first sensing model and the minimal formulation."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -296,8 +207,8 @@ def plot(rep: RobotReproduction, path: Path) -> None:
     fig = Figure(figsize=(11, 7.5), dpi=110, layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(2, 2)
-    infos = rep.setup.code.controller_infos
-    colors = {c.name: PALETTE[i % len(PALETTE)] for i, c in enumerate(infos)}
+    infos = rep.code.controller_infos
+    color = colors(rep.code)
     for col, name in enumerate(rep.refs):
         ref = rep.refs[name]
         ax = axes[0, col]
@@ -305,25 +216,26 @@ def plot(rep: RobotReproduction, path: Path) -> None:
         for info in infos:
             if form not in info.formulations:
                 continue
-            r = rep.runs[(sensing, name, form, info.name)]
-            ax.plot(r.q[:, 0], r.q[:, 1], color=colors[info.name], lw=1, label=info.label)
+            r = rep.runs[(sensing, info.name, form, name)]
+            ax.plot(r.q[:, 0], r.q[:, 1], color=color[info.name], lw=1, label=info.label)
             axes[1, col].semilogy(r.t, np.maximum(r.position_error, 1e-7) * 1000,
-                                  color=colors[info.name], lw=1, label=info.label)
+                                  color=color[info.name], lw=1, label=info.label)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title(f"{name}: root frame origin (x, y) [m]")
         ax.legend(fontsize=8)
         axes[1, col].set_title(f"{name}: position error [mm]")
         axes[1, col].set_xlabel("t [s]")
-    fig.suptitle(f"robot '{rep.setup.name}', {sensing}, {form} formulation, h = "
+    fig.suptitle(f"robot '{rep.setting.robot.name}', {sensing}, {form} formulation, h = "
                  f"{rep.experiment.controller.h:g} s, payload schedule and friction as in "
                  "REPORT.md")
     fig.savefig(path, metadata={"Software": None})
 
 
-def write_outputs(rep: RobotReproduction, out: Path, plots: bool = True) -> None:
+def write_outputs(rep: Reproduction, out: Path, plots: bool = True) -> None:
+    report = "\n".join(report_lines(rep))  # its checks may refuse the robot: before any file
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.md").write_text("\n".join(metrics_lines(rep)) + "\n", encoding="utf-8")
     write_csv(rep, out / "metrics.csv")
-    (out / "REPORT.md").write_text("\n".join(report_lines(rep)), encoding="utf-8")
+    (out / "REPORT.md").write_text(report, encoding="utf-8")
     if plots:
         plot(rep, out / "tracking.png")
