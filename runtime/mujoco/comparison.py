@@ -9,7 +9,7 @@ floors of :data:`CASES`: μ = 1, 0.2, 0.1, and μ = 0.1 with the traction-aware 
 (``runtime.sim.outcome``), samples whose torque was clipped, and in MuJoCo the driven
 wheels' measured slip (rim speed less the centre's speed along the heading): its largest
 value and the first instant it exceeds :data:`SLIP_THRESHOLD`. The document also states the
-wheels' static loads (``modeling.mjcf_export.static_loads``) against the engine's at rest,
+wheels' static loads (``modeling.contact_loads.static_loads``) against the engine's at rest,
 and the run time of a run on each plant. Not a test: ``tests/test_mujoco.py`` runs a
 shortened experiment through :func:`compare` and :func:`markdown`.
 """
@@ -28,7 +28,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from modeling.mjcf_export import static_loads
+from modeling.contact_loads import static_loads
 from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.arguments import (
@@ -135,10 +135,14 @@ def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
     return Cell(rms, peak, o.status, r.saturated, slip_max, onset, seconds)
 
 
-def engine_loads(code: RobotCode, exp: Experiment, base: dict[str, float]) -> dict[str, float]:
-    """The normal force on each contact of the MuJoCo robot at rest (fixed payload on)."""
+def engine_loads(code: RobotCode, exp: Experiment, base: dict[str, float],
+                 masses: Sequence[float] | None = None) -> dict[str, float]:
+    """The normal force on each contact of the MuJoCo robot at rest, with the payloads of
+    ``masses`` (kg: fixed, extra; default: the fixed payload on); a contact that lifted
+    off is absent."""
     plant = MujocoPlant(code, exp, robot_layout(code, base))
-    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0]))
+    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0] if masses is None
+                               else masses, dtype=np.float64))
     plant.start(np.zeros(code.nq))
     m, d = plant.model, plant.data
     mujoco.mj_step(m, d, nstep=round(0.5 / m.opt.timestep))
@@ -289,12 +293,15 @@ def markdown(comp: Comparison) -> str:
     lines += _summary(comp)
     lines += ["", "## Every run", "", *_runs_table(comp)]
     lines += ["", "## Wheel loads at rest (N)", "",
-              "The slip monitor and the traction limit take each wheel's normal load from a "
-              "stated static split (`modeling.mjcf_export.static_loads`: the robot as one "
-              "rigid assembly on equal contact springs); MuJoCo's soft contacts are not equal "
-              "springs (their stiffness scales with each contact's effective mass), so the "
-              "engine at rest splits the load differently where the split is statically "
-              "indeterminate (three contacts or more off one plane's worth of equations):", "",
+              "The slip monitor, the traction limit and the grip verdict take each "
+              "contact's normal load from one load model (`modeling.contact_loads`: the "
+              "robot as one rigid assembly on equal contact springs, a support in tension "
+              "lifted off). Where the split is statically indeterminate (three contacts or "
+              "more off one plane's worth of equations) it depends on the springs: MuJoCo "
+              "scales a contact's stiffness by its body's inverse weight, so the MJCF gives "
+              "each contact geom the time constant that makes the springs equal "
+              "(`modeling.mjcf_export.contact_time_constants`), and the engine carries the "
+              "stated loads (tests/test_contact_loads.py: within 2 %):", "",
               "| contact | stated | MuJoCo at rest |", "|---|---|---|"]
     for k, (stated, measured) in comp.loads.items():
         lines.append(f"| {k} | {stated:.1f} | {measured:.1f} |")

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from modeling.mjcf_export import static_loads
+from modeling.contact_loads import static_loads
 from modeling.planar_robot import PlanarRobot, from_lumped
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
@@ -40,7 +40,7 @@ def traction_torque_limit(code: RobotCode, base: Mapping[str, float], exp: Exper
                           mu: float) -> float:
     """The largest wheel torque no driven wheel can spend on slipping at friction ``mu``:
     min over the driven wheels of μ N r, N the wheel's normal load at rest with the fixed
-    payload only (the lightest the schedule makes it; ``modeling.mjcf_export.static_loads``,
+    payload only (the lightest the schedule makes it; ``modeling.contact_loads.static_loads``,
     the stated static load split). A wheel at rest whose torque stays below it cannot spin
     on the floor (its own spin inertia and bearing friction only lower what reaches the
     contact); accelerating the body, turning and load transfer take part of μ N too, so
