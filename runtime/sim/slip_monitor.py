@@ -89,9 +89,12 @@ class SlipMonitor:
         key = tuple(float(m) for m in masses)
         if accel == (0.0, 0.0) and key in self._cache:
             return self._cache[key]
-        loads = support_loads(self.robot, tuple((m, x, y) for m, (x, y)
-                                                in zip(key, self.points, strict=True)),
-                              accel).loads
+        try:
+            loads = support_loads(self.robot, tuple((m, x, y) for m, (x, y)
+                                                    in zip(key, self.points, strict=True)),
+                                  accel).loads
+        except ValueError:  # it would tip over: no wheel can count on its load
+            loads = dict.fromkeys((w.name for w in self.robot.wheels), 0.0)
         share = np.zeros((len(self.driven), len(self.rows)))
         for k, row in enumerate(self.rows):
             total = sum(loads[w] for w in row)

@@ -1,0 +1,63 @@
+"""Grip in the verdict (issue 45): the saturation verdict compares each driven wheel's
+torque with what the floor can react, μ N r (μ: the experiment's ``[plant] friction``, N
+from ``modeling.contact_loads`` with load transfer), along the tracked path and in the
+monitored simulation, and ``wmr stability`` never prints "stable" where a wheel is
+predicted to lose grip.
+
+* The done-when case: Drishti, h = 0.25 s, TDROC in the paper formulation on a μ = 1
+  floor. The linear verdict is stable (ρ = 0.966) and the tracked path's torque is far
+  under τ_max and μ N r; in closed loop k̂ grows and the simulated wheel needs μ = 2.2 from
+  3.25 s (both MuJoCo plants slip from about 3.3 s): ``slips``, with the time, wheel and
+  margin, and the traction limit that keeps grip (``traction_mu`` = 1).
+* No false alarm: the same controller at the paper's h = 0.1 s keeps grip (``ok``).
+* On a μ = 0.1 floor the circle itself needs about 0.21: predicted (not simulated) slip.
+About 10 s on one core.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from runtime.bindings.generated import load_robot_code
+from runtime.experiment.settings import Experiment
+from runtime.stability.analysis import analyse, table
+from runtime.stability.saturation import saturation_verdict
+
+DRISHTI = load_robot_code("")
+NOMINAL = dict(DRISHTI.params)
+
+
+def _exp(h: float, friction: float = 1.0) -> Experiment:
+    exp = Experiment()
+    return replace(exp, controller=replace(exp.controller, h=h),
+                   plant=replace(exp.plant, friction=friction))
+
+
+def test_tdroc_at_a_quarter_second_is_flagged_as_slipping() -> None:
+    row = analyse(DRISHTI, "tdroc", "paper", NOMINAL, _exp(0.25), saturation=True)
+    assert row.stable and row.spectral_radius < 1.0  # the linear verdict alone says stable
+    assert row.saturation == "slips" and row.verdict == "slips", row
+    assert "loses grip at t = " in row.saturation_reason
+    assert "traction_mu = 1" in row.saturation_reason and "keeps grip" in row.saturation_reason
+    line = next(x for x in table([row], DRISHTI).splitlines() if x.startswith("| TDROC"))
+    assert "| yes |" not in line and "**no: slips**" in line
+    sat = saturation_verdict(DRISHTI, "tdroc", "paper", NOMINAL, _exp(0.25), simulate=True)
+    assert sat.slip is not None and sat.slip.simulated
+    assert 2.5 <= sat.slip.t <= 4.0 and sat.slip.margin < 0
+    assert sat.slip.wheel in ("right", "left")
+    assert sat.friction_needed is not None and sat.friction_needed > 1.5
+    assert sat.traction_mu == 1.0
+
+
+def test_the_paper_sampling_keeps_grip() -> None:
+    sat = saturation_verdict(DRISHTI, "tdroc", "paper", NOMINAL, _exp(0.1), simulate=True)
+    assert sat.verdict == "ok" and sat.slip is None, sat.reason
+    assert sat.friction_needed is not None and 0.15 < sat.friction_needed < 0.5
+    assert sat.grip_margin > 0
+
+
+def test_a_low_floor_is_predicted_to_slip_on_the_tracked_path() -> None:
+    sat = saturation_verdict(DRISHTI, "tdc", "paper", NOMINAL, _exp(0.1, friction=0.1))
+    assert sat.verdict == "slips", sat.reason
+    assert sat.slip is not None and not sat.slip.simulated and sat.grip_margin < 0
+    assert "predicted" in sat.reason and "μ = 0.1" in sat.reason
