@@ -61,3 +61,22 @@ def test_a_low_floor_is_predicted_to_slip_on_the_tracked_path() -> None:
     assert sat.verdict == "slips", sat.reason
     assert sat.slip is not None and not sat.slip.simulated and sat.grip_margin < 0
     assert "predicted" in sat.reason and "μ = 0.1" in sat.reason
+
+
+def test_the_flagged_case_slips_on_the_engine_and_agrees() -> None:
+    """The done-when case on MuJoCo (``runtime.mujoco.agreement``, the table of
+    docs/MUJOCO.md): the verdict ``slips`` meets a wheel that slips on the engine."""
+    from runtime.experiment.arguments import robot_setting
+    from runtime.mujoco import agreement
+    from runtime.mujoco.comparison import engine_outcome
+
+    setting = robot_setting(None, None, Experiment())
+    found = agreement.cases(setting, lambda e, path, form, ctrl:
+                            engine_outcome(setting, e, path, form, ctrl),
+                            hs=(0.25,), frictions=(1.0,), only=[("tdroc", "paper")])
+    assert len(found) == 1
+    case = found[0]
+    assert case.verdict == "slips" and case.outcome == "slips" and case.agrees, case
+    assert "circle: slips from" in case.detail
+    lines = agreement.markdown(found, {"tdroc": "TDROC"})
+    assert "Agreement: **1 of 1** (100%)." in lines

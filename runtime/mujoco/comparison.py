@@ -38,6 +38,7 @@ from runtime.experiment.arguments import (
     load_setting,
 )
 from runtime.experiment.settings import Experiment
+from runtime.mujoco import agreement
 from runtime.mujoco.layout import robot_layout, traction_torque_limit
 from runtime.mujoco.plant import MujocoPlant
 from runtime.sim import loop, paths
@@ -118,6 +119,7 @@ class Comparison:
     loads: dict[str, tuple[float, float]]  # contact -> (stated static load, engine at rest)
     onsets: tuple[Onset, ...] = ()  # the slip monitor against the engine
     onset_frictions: tuple[float, ...] = ()  # the μ of each onset column
+    verdicts: tuple[agreement.Case, ...] = ()  # wmr stability against the engine
 
 
 def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
@@ -172,11 +174,25 @@ def _one(setting: Setting, exp: Experiment, run: tuple[str, str, str, str],
                  e.controller.h)
 
 
+def engine_outcome(setting: Setting, exp: Experiment, path: str, formulation: str,
+                   controller: str) -> tuple[str, str]:
+    """One MuJoCo run's outcome for :mod:`runtime.mujoco.agreement`: (``slips``,
+    ``unstable`` or ``ok``, a few words with its numbers)."""
+    c = _one(setting, exp, (exp.sensing.velocity, path, formulation, controller), engine=True)
+    if c.slip_onset is not None:
+        return "slips", f"slips from {c.slip_onset:g} s, {c.status}, {_mm(c.rms)} mm RMS"
+    if c.status != "ok":
+        return "unstable", f"{c.status}, {_mm(c.rms)} mm RMS"
+    return "ok", f"ok, {_mm(c.rms)} mm RMS, slip ≤ {c.slip_max * 1e3:.0f} mm/s"
+
+
 def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
             cases: Sequence[tuple[str, float, float]] = CASES,
             progress: bool = False,
-            onset_frictions: Sequence[float] = ONSET_FRICTIONS) -> Comparison:
-    """Run every setting on both plants (see the module docstring)."""
+            onset_frictions: Sequence[float] = ONSET_FRICTIONS,
+            verdicts: bool = False) -> Comparison:
+    """Run every setting on both plants (see the module docstring); ``verdicts``: also
+    :mod:`runtime.mujoco.agreement`'s table (slow: 20 settings of h and μ)."""
     setup, exp = setting.robot, setting.experiment
     code = setup.code
     exps = []
@@ -205,10 +221,13 @@ def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
                             exp.plant.fixed_payload_y),))
     measured = engine_loads(code, exps[0], setup.plant)
     loads = {k: (v, measured.get(k, math.nan)) for k, v in stated.items()}
+    found = (agreement.cases(setting, lambda e, path, form, ctrl:
+                             engine_outcome(setting, e, path, form, ctrl), progress=progress)
+             if verdicts else ())
     return Comparison(setting, tuple(cases), tuple(rows),
                       tuple(e.controller.tau_max for e in exps), loads,
                       onsets(setting, onset_frictions, sensings[0]) if onset_frictions else (),
-                      tuple(onset_frictions))
+                      tuple(onset_frictions), found)
 
 
 def onsets(setting: Setting, frictions: Sequence[float], sensing: str) -> tuple[Onset, ...]:
@@ -362,6 +381,8 @@ def markdown(comp: Comparison) -> str:
                           "reaching the threshold).")
         if unseen:
             lines[-1] += f" Measured but not predicted in {len(unseen)} runs."
+    if comp.verdicts:
+        lines += ["", *agreement.markdown(comp.verdicts, labels)]
     model_t = [r.model.seconds for r in comp.rows]
     engine_t = [c.seconds for r in comp.rows for c in r.engine]
     lines += ["", "## Run time", "",
@@ -438,6 +459,17 @@ def report_section(comp: Comparison) -> list[str]:
     ]
 
 
+def _lowest_floor(comp: Comparison) -> str:
+    """How many runs the lowest floor without a traction limit leaves on the path."""
+    plain = [(mu, i) for i, (_, mu, traction) in enumerate(comp.cases) if traction == 0]
+    if not plain or not comp.rows:
+        return ""
+    mu, i = min(plain)
+    ok = sum(r.engine[i].status == "ok" for r in comp.rows)
+    return (f" (μ = {mu:g}: {ok} of {len(comp.rows)} runs stay on the path, the others "
+            "lose it for good)")
+
+
 def _summary(comp: Comparison) -> list[str]:
     """Where and why the plants differ, with the numbers of this run."""
     out = ["## Where they differ, and why", ""]
@@ -454,8 +486,8 @@ def _summary(comp: Comparison) -> list[str]:
         "slips the model plant has nothing to say: it cannot slip. Where the start-up "
         "torque exceeds μ N r (the low floors' counts above) the wheel spins, the encoders "
         "report motion the robot does not make, and a controller that answers with more "
-        "torque spins it further into the torque limit: grip does not come back (Drishti "
-        "at μ = 0.1: every controller). A torque limit under μ N r (`traction_mu`) keeps "
+        "torque spins it further into the torque limit: grip seldom comes back"
+        + _lowest_floor(comp) + ". A torque limit under μ N r (`traction_mu`) keeps "
         "the start-up from spinning the wheels (counts above); the limit is also all the "
         "authority the controllers have, so runs converge slowly and some may stay more "
         "than a tenth of the path's size off it (the outcome column): on such a floor the "
@@ -496,6 +528,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=None,
                    help="the document (default: docs/MUJOCO.md for the paper's robot, "
                    "./mujoco/<robot>/MUJOCO.md for another)")
+    p.add_argument("--no-verdicts", action="store_true",
+                   help="leave out the verdicts of wmr stability against the engine (h and μ "
+                   "swept: the slow part)")
     args = p.parse_args(argv)
     try:
         setting = load_setting(args)
@@ -505,7 +540,8 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or (default_output("docs/MUJOCO.md") if setting.is_paper_robot
                        else Path("mujoco") / setting.robot.name / "MUJOCO.md")
     start = time.perf_counter()
-    comp = compare(setting, tuple(args.sensing.split(",")), progress=True)
+    comp = compare(setting, tuple(args.sensing.split(",")), progress=True,
+                   verdicts=not args.no_verdicts)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(markdown(comp), encoding="utf-8")
     print(f"wrote {out}: wall time {time.perf_counter() - start:.1f} s")

@@ -44,7 +44,9 @@ from modeling.contact_loads import support_loads
 from modeling.planar_robot import PlanarRobot
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
+from runtime.sim.payload import payload_masses, plant_params_at
 from runtime.sim.plant import COULOMB_SPEED, Plant
+from runtime.sim.reference import Reference
 
 Array = NDArray[np.float64]
 
@@ -150,13 +152,44 @@ class SlipMonitor:
         m = self._mass + float(np.sum(masses))
         return float(total[0] / m), float(total[1] / m)
 
+    def traction_parts(self, q: Array, rates: Array, tau: Array,
+                       params: Mapping[str, float], masses: Array
+                       ) -> tuple[Array, Array, Array]:
+        """(F_x, F_y, N_w) (N) of each driven wheel with load transfer (module docstring)."""
+        fx, rows = self._multipliers(q, rates, tau, params)
+        n, share = self._loads(masses, self.acceleration(q, fx, rows, masses))
+        return fx, share @ rows, n
+
     def traction(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
                  masses: Array) -> tuple[Array, Array]:
         """(|F_w|, N_w) (N) of each driven wheel with load transfer (module docstring):
         the force it must transmit to roll and the normal load it has for it."""
-        fx, rows = self._multipliers(q, rates, tau, params)
-        n, share = self._loads(masses, self.acceleration(q, fx, rows, masses))
-        return np.asarray(np.hypot(fx, share @ rows)), n
+        fx, fy, n = self.traction_parts(q, rates, tau, params, masses)
+        return np.asarray(np.hypot(fx, fy)), n
+
+    def along(self, ref: Reference, nominal: Mapping[str, float], exp: Experiment
+              ) -> tuple[Array, Array, Array]:
+        """(F_x, F_y, N_w) (samples × driven wheels, N) of a robot that tracks ``ref``
+        exactly: the torque of the minimal-form inverse dynamics, M̄ η̇_d + H̄, with the
+        payload the experiment's schedule has on board at each sample (its point masses
+        on ``nominal``), and the load transfer of that motion."""
+        act = list(self.code.actuated)
+        base = {**self.code.plant_defaults, **nominal}
+        out: tuple[list[Array], list[Array], list[Array]] = ([], [], [])
+        for t, q, qd, qdd in zip(ref.t, ref.q, ref.qdot, ref.qddot, strict=True):
+            params = plant_params_at(self.code, exp, float(t), base)
+            model = {k: v for k, v in params.items() if k in nominal}
+            m_bar = np.asarray(self.code.model.minimal_mass_matrix(q, model),
+                               dtype=np.float64)
+            h_bar = np.asarray(self.code.model.minimal_bias_forces(q, qd[act], model))
+            rates = qd[act]
+            # the plant's bearing friction on top: the monitor takes it off again
+            tau = (m_bar @ qdd[act] + h_bar + self.viscous * rates
+                   + self.coulomb * np.tanh(rates / COULOMB_SPEED))
+            parts = self.traction_parts(q, rates, tau, params, payload_masses(exp, float(t)))
+            for acc, part in zip(out, parts, strict=True):
+                acc.append(part)
+        return np.array(out[0]), np.array(out[1]), np.array(out[2])
 
     def forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
                masses: Array | None = None) -> Array:

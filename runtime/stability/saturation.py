@@ -57,8 +57,7 @@ from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.mujoco.layout import robot_layout, traction_torque_limit
 from runtime.sim import loop, paths
-from runtime.sim.payload import payload_masses, plant_params_at
-from runtime.sim.plant import COULOMB_SPEED, library_for, make_plant
+from runtime.sim.plant import library_for, make_plant
 from runtime.sim.reference import Reference
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 from runtime.stability.sampled_loop import plant_parameters, roc_gain
@@ -171,30 +170,15 @@ def slip_monitor(code: RobotCode, exp: Experiment, nominal: dict[str, float]
         return None
 
 
-def grip_along(code: RobotCode, monitor: SlipMonitor, nominal: dict[str, float],
-               exp: Experiment, ref: Reference, switching: Array) -> tuple[Array, Array]:
+def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
+               ref: Reference, switching: Array) -> tuple[Array, Array]:
     """(torque each driven wheel's ground force needs, r |F| + ``switching``; its grip
     μ N r) at each sample of ``ref`` (samples × driven wheels, N m) for a robot that
     tracks it, with the payload the schedule has on board (see the module docstring)."""
-    act = list(code.actuated)
-    base = {**code.plant_defaults, **nominal}
     radius = {w.name: w.radius for w in monitor.robot.wheels}
     r = np.array([radius[w] for w in monitor.driven])
-    need, grip = [], []
-    for t, q, qd, qdd, sw in zip(ref.t, ref.q, ref.qdot, ref.qddot, switching, strict=True):
-        params = plant_params_at(code, exp, float(t), base)
-        p = {k: v for k, v in params.items() if k in nominal}
-        m_bar = np.asarray(code.model.minimal_mass_matrix(q, p), dtype=np.float64)
-        h_bar = np.asarray(code.model.minimal_bias_forces(q, qd[act], p))
-        tau = m_bar @ qdd[act] + h_bar
-        # The demand is the net torque: the bearing friction the plant applies is added so
-        # the monitor, which takes it off, sees the same net torque.
-        rates = qd[act]
-        tau = tau + monitor.viscous * rates + monitor.coulomb * np.tanh(rates / COULOMB_SPEED)
-        forces, loads = monitor.traction(q, rates, tau, params, payload_masses(exp, float(t)))
-        need.append(r * forces + sw)
-        grip.append(exp.plant.friction * loads * r)
-    return np.array(need), np.array(grip)
+    fx, fy, n = monitor.along(ref, nominal, exp)
+    return r * np.hypot(fx, fy) + switching[:, None], exp.plant.friction * n * r
 
 
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
@@ -233,7 +217,7 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
             switching, gain_peak = float(total[k] - peak[k]), float(gains.max())
             when, path_of = float(ref.t[int(np.argmax(gains))]), name
         if monitor is not None:
-            need, grip = grip_along(code, monitor, nominal, exp, ref, norms * gains)
+            need, grip = grip_along(monitor, nominal, exp, ref, norms * gains)
             margins = grip - need
             grip_margin = min(grip_margin, float(margins.min()))
             # a slip where the grip binds before τ_max (beyond it: saturation, wind-up)
