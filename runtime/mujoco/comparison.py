@@ -305,8 +305,9 @@ def markdown(comp: Comparison) -> str:
         "",
         "Torque limits: " + ", ".join(f"{label}: {lim:.3g} N m" for (label, _, _), lim
                                       in zip(comp.cases, comp.limits, strict=True))
-        + " (the traction limit is `[controller] traction_mu` = 0.1: μ N r of the lightest "
-        "driven wheel at rest, fixed payload on).",
+        + " (the traction limit is `[controller] traction_mu` = 0.1: the least "
+        "r √((μ N)² − F_y²) of the driven wheels on the tracked paths, N from the load model "
+        "with the payload on board and the load transfer, F_y the wheel's lateral force).",
         "",
     ]
     lines += _summary(comp)
@@ -332,13 +333,14 @@ def markdown(comp: Comparison) -> str:
                   "solved as (10)–(12) do, in newtons): F_x along the wheel's heading (its "
                   "rolling row; equal to (τ − τ_f − J θ̈)/r, tested) and F_y along its axle "
                   "(the axle's no-side-slip row, split between the axle's wheels in "
-                  "proportion to their static loads: an assumption, the rigid model does not "
+                  "proportion to their normal loads: an assumption, the rigid model does not "
                   "split it), and compares √(F_x² + F_y²) with μ N (friction circle; N: the "
-                  "stated static load with the payload on board). Against MuJoCo's contact "
-                  "forces on a turn from rest (tests/test_mujoco.py): F_x within 0.2 % "
-                  "(Drishti), the axle's F_y within 1.3 %, each wheel's share of it within "
-                  "1.5 % until the engine's load transfer in fast turns loads the outer "
-                  "wheel. Run on the model plant (which cannot slip), the monitor "
+                  "load model's, with the payload on board and the load transfer of the "
+                  "acceleration ΣF/m). Against MuJoCo's contact forces on a turn from rest "
+                  "(tests/test_mujoco.py, tests/test_contact_loads.py): F_x within 0.2 % "
+                  "(Drishti), the axle's F_y within 1.3 %, each wheel's normal load within "
+                  "3 % once the start's transient has passed. Run on the model plant (which "
+                  "cannot slip), the monitor "
                   "gives the friction coefficient each run needs (its largest |F|/N) and the "
                   "first instant it needs more than μ: the predicted onset of slip. MuJoCo "
                   "at that μ measures when a wheel's slip first exceeds "
