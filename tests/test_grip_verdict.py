@@ -80,3 +80,13 @@ def test_the_flagged_case_slips_on_the_engine_and_agrees() -> None:
     assert "circle: slips from" in case.detail
     lines = agreement.markdown(found, {"tdroc": "TDROC"})
     assert "Agreement: **1 of 1** (100%)." in lines
+
+
+def test_the_reproductions_tables_say_where_a_run_slips() -> None:
+    """``wmr reproduce``'s metrics: a run whose μ needed (the slip monitor's) is above the
+    experiment's floor is marked as slipping; one under it, or not monitored, is not."""
+    from runtime.paper.reproduction_tables import fmt_mu
+
+    assert fmt_mu(0.212, 0.1) == "**0.212 > μ: slips**"
+    assert fmt_mu(0.212, 1.0) == fmt_mu(0.212) == "0.212"
+    assert fmt_mu(float("nan"), 0.1) == "—"
