@@ -44,6 +44,7 @@ from modeling.mjcf_export import GRAVITY, body_origins, support_names, supports
 from modeling.planar_robot import PlanarRobot, Point
 
 Payload = tuple[float, float, float]  # (mass kg, x m, y m) on the root body
+LOAD_MODEL = "equal contact springs under a rigid assembly; the MJCF realises them"
 
 
 @dataclass(frozen=True)
@@ -110,3 +111,9 @@ def support_loads(robot: PlanarRobot, payloads: tuple[Payload, ...] = (),
 def static_loads(robot: PlanarRobot, payloads: tuple[Payload, ...] = ()) -> dict[str, float]:
     """The loads at rest (N; lifted supports 0) of :func:`support_loads`."""
     return support_loads(robot, payloads).loads
+
+
+def describe_loads(loads: SupportLoads) -> str:
+    """``name N`` per contact, the lifted ones said as lifted off (never a negative load)."""
+    return ", ".join(f"{k} lifted off" if k in loads.lifted else f"{k} {v:.1f}"
+                     for k, v in loads.loads.items())

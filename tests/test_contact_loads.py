@@ -77,20 +77,20 @@ def test_the_engine_carries_the_stated_loads_at_rest(name: str) -> None:
 
 
 def test_a_support_in_tension_lifts_off_in_the_model_and_the_engine() -> None:
-    """Drishti with both payloads on: the equal-spring plane would pull the rear support
-    down (−1.9 N); it lifts off, the other three carry the weight (determinate), and
-    MuJoCo's rear support carries nothing."""
+    """Drishti with both payloads on (and bare): the equal-spring plane would pull the rear
+    support down (−1.9 N with both payloads); it lifts off, the other three carry the
+    weight (determinate), and MuJoCo's rear support carries nothing."""
     setup = resolve(ROBOTS["drishti"])
     robot = robot_layout(setup.code, setup.plant)
-    masses = (EXP.plant.fixed_payload, EXP.plant.extra_payload)
-    stated = support_loads(robot, _payloads(masses))
-    assert stated.lifted == ("support_rear",)
-    assert stated["support_rear"] == 0.0 and min(stated.loads.values()) >= 0.0
-    measured = engine_loads(setup.code, EXP, setup.plant, masses)
-    assert measured.get("support_rear", 0.0) < 0.01 * stated["support_front"]
-    for contact in ("right", "left", "support_front"):
-        assert abs(measured[contact] - stated[contact]) <= LOAD_RTOL * stated[contact], (
-            contact, stated, measured)
+    for masses in ((EXP.plant.fixed_payload, EXP.plant.extra_payload), (0.0, 0.0)):
+        stated = support_loads(robot, _payloads(masses))
+        assert stated.lifted == ("support_rear",)
+        assert stated["support_rear"] == 0.0 and min(stated.loads.values()) >= 0.0
+        measured = engine_loads(setup.code, EXP, setup.plant, masses)
+        assert measured.get("support_rear", 0.0) < 0.01 * stated["support_front"]
+        for contact in ("right", "left", "support_front"):
+            assert abs(measured[contact] - stated[contact]) <= LOAD_RTOL * stated[contact], (
+                contact, stated, measured)
 
 
 def test_load_transfer_and_tipping() -> None:

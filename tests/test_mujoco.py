@@ -130,6 +130,10 @@ def test_wmr_mjcf_writes_a_model_mujoco_compiles(tmp_path: Path,
     drishti = mujoco.MjModel.from_xml_path(str(tmp_path / "d.xml"))
     assert drishti.geom("support_front").condim == 1
     assert abs(sum(drishti.body_mass) - 36.0) < 1e-9
+    # the load model's split at rest (bare Drishti: its rear support carries nothing)
+    said = capsys.readouterr().out
+    assert "normal loads at rest (N; equal contact springs" in said
+    assert "right 88.3, left 88.3, support_rear lifted off, support_front 176.6" in said, said
     capsys.readouterr()
     for args, message in (
         (["--robot", str(tmp_path / "none.toml"), "--out", str(out)], "robot file not found"),
