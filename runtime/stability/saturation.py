@@ -21,8 +21,10 @@ Grip (μ: the experiment's ``[plant] friction``): each driven wheel can react at
 transfer of the reference's acceleration; :class:`runtime.sim.slip_monitor.SlipMonitor`).
 Along the reference, the torque a wheel's ground force needs is r |F| (F from the
 constraint multipliers of (9) under τ_ff: the rolling and the axle's lateral force, a
-friction circle) plus the switching torque ‖M̂‖ k; where it exceeds μ N r (and is under
-τ_max) the wheel is predicted to slip.
+friction circle); where it exceeds μ N r (and is under τ_max) the wheel is predicted to
+slip: no controller follows the path on that floor. The switching torque's bound ‖M̂‖ k
+is reached only while ‖s‖ ≥ ε, so where it would exceed the grip it is said as a risk;
+the simulation (below) carries the switching term the loop really applies.
 
 Verdict: ``saturates`` if the demand alone exceeds τ_max (no controller follows the path),
 ``slips`` if a wheel's torque exceeds its grip μ N r before τ_max (the time, wheel and
@@ -171,14 +173,14 @@ def slip_monitor(code: RobotCode, exp: Experiment, nominal: dict[str, float]
 
 
 def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
-               ref: Reference, switching: Array) -> tuple[Array, Array]:
-    """(torque each driven wheel's ground force needs, r |F| + ``switching``; its grip
-    μ N r) at each sample of ``ref`` (samples × driven wheels, N m) for a robot that
-    tracks it, with the payload the schedule has on board (see the module docstring)."""
+               ref: Reference) -> tuple[Array, Array]:
+    """(torque each driven wheel's ground force needs, r |F|; its grip μ N r) at each
+    sample of ``ref`` (samples × driven wheels, N m) for a robot that tracks it, with the
+    payload the schedule has on board (see the module docstring)."""
     radius = {w.name: w.radius for w in monitor.robot.wheels}
     r = np.array([radius[w] for w in monitor.driven])
     fx, fy, n = monitor.along(ref, nominal, exp)
-    return r * np.hypot(fx, fy) + switching[:, None], exp.plant.friction * n * r
+    return r * np.hypot(fx, fy), exp.plant.friction * n * r
 
 
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
@@ -193,7 +195,7 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
     mu = exp.plant.friction
     monitor = slip_monitor(code, exp, nominal)
     demand, switching, gain_peak, when, path_of = 0.0, 0.0, 0.0, 0.0, ""
-    grip_margin, slip = math.inf, None
+    grip_margin, risk, slip = math.inf, math.inf, None
     for name in paths.PATHS:
         ref = paths.reference(code, nominal, exp, name)
         tau_ff = torque_demand(code, heavy, ref)
@@ -217,9 +219,12 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
             switching, gain_peak = float(total[k] - peak[k]), float(gains.max())
             when, path_of = float(ref.t[int(np.argmax(gains))]), name
         if monitor is not None:
-            need, grip = grip_along(monitor, nominal, exp, ref, norms * gains)
+            need, grip = grip_along(monitor, nominal, exp, ref)
             margins = grip - need
             grip_margin = min(grip_margin, float(margins.min()))
+            # the switching torque's bound ‖M̂‖ k is reached only while ‖s‖ ≥ ε: a risk
+            # (said in the reason), not a slip; the simulation carries the real one
+            risk = min(risk, float((margins - (norms * gains)[:, None]).min()))
             # a slip where the grip binds before τ_max (beyond it: saturation, wind-up)
             lost = np.nonzero(((margins < 0) & (grip < tau_max)).any(axis=1))[0]
             if len(lost) and (slip is None or ref.t[lost[0]] < slip.t):
@@ -246,6 +251,9 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
                f"switching {switching:.3g}) of τ_max = {tau_max:.3g} N m")
     if monitor is not None and math.isfinite(grip_margin):
         why += f"; grip margin {grip_margin:.3g} N m at μ = {mu:g}"
+        if risk < 0 <= grip_margin:
+            why += (f" (with the switching torque at its bound ‖M̂‖ k it would be "
+                    f"{risk:.3g} N m: grip then rests on the loop's error staying under ε)")
     out = SaturationVerdict(verdict, why, demand, switching, tau_max, gain_peak,
                             friction=mu, grip_margin=grip_margin, slip=slip)
     if not simulate:
