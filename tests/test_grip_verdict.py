@@ -11,6 +11,7 @@ predicted to lose grip.
   margin, and the traction limit that keeps grip (``traction_mu`` = 1).
 * No false alarm: the same controller at the paper's h = 0.1 s keeps grip (``ok``).
 * On a μ = 0.1 floor the circle itself needs about 0.21: predicted (not simulated) slip.
+* The switching term's bound is a risk, not a slip: ROC on μ = 0.3 keeps grip.
 About 10 s on one core.
 """
 
@@ -54,6 +55,17 @@ def test_the_paper_sampling_keeps_grip() -> None:
     assert sat.verdict == "ok" and sat.slip is None, sat.reason
     assert sat.friction_needed is not None and 0.15 < sat.friction_needed < 0.5
     assert sat.grip_margin > 0
+
+
+def test_the_switching_bound_is_a_risk_not_a_slip() -> None:
+    """ROC at h = 0.1 s on μ = 0.3: its switching torque's bound ‖M̂‖ k (3.6 N m) would
+    exceed the grip, but it is reached only while ‖s‖ ≥ ε; the simulated loop needs
+    μ = 0.2 and MuJoCo keeps grip: ``ok``, the risk said in the reason."""
+    sat = saturation_verdict(DRISHTI, "roc", "paper", NOMINAL, _exp(0.1, friction=0.3),
+                             simulate=True)
+    assert sat.verdict == "ok" and sat.slip is None, sat.reason
+    assert "rests on the loop's error" in sat.reason
+    assert sat.friction_needed is not None and sat.friction_needed < 0.3
 
 
 def test_a_low_floor_is_predicted_to_slip_on_the_tracked_path() -> None:
