@@ -50,6 +50,15 @@ def test_tdroc_at_a_quarter_second_is_flagged_as_slipping() -> None:
     assert sat.traction_mu == 1.0
 
 
+def test_a_slip_on_the_long_path_is_found() -> None:
+    """ASMC (minimal) at h = 0.25 s on μ = 1: the circle keeps grip (μ needed 0.24), but
+    over the lawn mower's long run its gain grows until a wheel needs 2.8 (MuJoCo: slips
+    from 45.75 s); the verdict simulates grip on every path."""
+    sat = saturation_verdict(DRISHTI, "asmc", "minimal", NOMINAL, _exp(0.25), simulate=True)
+    assert sat.verdict == "slips" and sat.slip is not None, sat.reason
+    assert sat.slip.path == "lawnmower" and 40.0 <= sat.slip.t <= 50.0, sat.slip
+
+
 def test_the_paper_sampling_keeps_grip() -> None:
     sat = saturation_verdict(DRISHTI, "tdroc", "paper", NOMINAL, _exp(0.1), simulate=True)
     assert sat.verdict == "ok" and sat.slip is None, sat.reason

@@ -265,13 +265,30 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
     early = r.t <= START_UP
     sim_peak = float(np.abs(r.tau).max()) if len(r.tau) else math.nan
     sim_gain = float(r.gain[early].max()) if early.any() else math.nan
-    sim = (f"; simulated on the circle: peak {sim_peak:.3g} N m, {r.saturated} samples at "
+    sim = (f"; simulated on the circle (and, for grip, every path): peak {sim_peak:.3g} N m, "
+           f"{r.saturated} samples at "
            f"τ_max, switching gain up to {sim_gain:.3g} in the first {START_UP:g} s"
            + (f", stopped at t = {r.failed_at:g} s ({r.stop_reason})" if r.failed_at is not None
               else ""))
     sim_slip, mu_needed = _first_slip(monitor, needed, r, mu)
     if mu_needed is not None:
-        sim += f", μ needed {mu_needed:.3g}"
+        sim += f", μ needed {mu_needed:.3g} on the circle"
+    refs = {ref.name: ref}
+    if monitor is not None:
+        # grip on the other paths too: ASMC's gain, integrating ‖s‖, grows over the lawn
+        # mower's long run until its chattering torque spins a wheel (h = 0.25 s: at 31 s)
+        for name in paths.PATHS:
+            if name in refs:
+                continue
+            refs[name] = paths.reference(code, nominal, exp, name)
+            other, plant_other = _monitored_run(code, controller, formulation, refs[name],
+                                                nominal, exp, monitor)
+            slip_other, need_other = _first_slip(monitor, plant_other, other, mu)
+            if need_other is not None:
+                sim += f", μ needed {need_other:.3g} on the {name}"
+                mu_needed = max(mu_needed or 0.0, need_other)
+            if sim_slip is None:
+                sim_slip = slip_other
     if r.saturated and verdict == "ok":  # the prediction missed it: say so, the run decides
         verdict = "saturates (simulated)"
         sim += (" — not predicted from the tracked path: the loop left it (see the linear "
@@ -283,8 +300,9 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
         sim += f"; {sim_slip.describe(mu)}"
         slip = sim_slip
     if verdict == "slips" and monitor is not None:
-        advice, traction_mu = _traction_advice(code, controller, formulation, ref, nominal,
-                                               exp, monitor)
+        advice, traction_mu = _traction_advice(code, controller, formulation,
+                                               refs.get(slip.path if slip else "", ref),
+                                               nominal, exp, monitor)
         sim += f"; {advice}"
     return replace(out, verdict=verdict, reason=why + sim, simulated_peak=sim_peak,
                    simulated_saturated=r.saturated, simulated_gain_peak=sim_gain, slip=slip,
