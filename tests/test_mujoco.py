@@ -339,9 +339,9 @@ def test_a_diverging_run_is_reported_not_printed(capfd: pytest.CaptureFixture[st
 
 def test_the_traction_limit_leaves_the_minimal_formulation_off_path_without_slip() -> None:
     """docs/MUJOCO.md's reason for the runs off path under the traction limit: on the model
-    plant, which cannot slip, the same limit leaves TDC's minimal formulation about 0.2 m
-    off the circle for good (measured 196 mm at the end), the paper formulation on it
-    (measured 8 mm): the minimal formulation's wheel angles catch up, its position does
+    plant, which cannot slip, the same limit leaves TDC's minimal formulation about 0.3 m
+    off the circle for good (measured 290 mm at the end), the paper formulation on it
+    (measured 13 mm): the minimal formulation's wheel angles catch up, its position does
     not."""
     from runtime.experiment.arguments import robot_setting
 
