@@ -237,11 +237,11 @@ def test_traction_mu_lowers_the_torque_limit() -> None:
 
     exp = parse_experiment("[controller]\ntraction_mu = 0.1\n", "exp.toml")
     setting = robot_setting(None, None, exp)
-    # Under 0.1 x the lightest driven wheel's load at rest (99.9 N with both payloads on:
-    # the extra one, ahead and left, unloads the right wheel) x r (0.096 m) = 0.959 N m:
-    # the paths' load transfer and lateral forces take more (measured 0.915 N m).
+    # 0.1 x the lightest driven wheel's load at rest (99.9 N with both payloads on: the
+    # extra one, ahead and left, unloads the right wheel; 103.0 N with the fixed one only)
+    # x r (0.096 m)
     limit = setting.experiment.controller.tau_max
-    assert 0.85 < limit < 0.1 * 99.95 * 0.096 - 0.02, limit
+    assert abs(limit - 0.1 * 99.946 * 0.096) < 1e-3, limit
     assert any("traction limit" in line for line in setting.scaling)
 
 
@@ -339,9 +339,9 @@ def test_a_diverging_run_is_reported_not_printed(capfd: pytest.CaptureFixture[st
 
 def test_the_traction_limit_leaves_the_minimal_formulation_off_path_without_slip() -> None:
     """docs/MUJOCO.md's reason for the runs off path under the traction limit: on the model
-    plant, which cannot slip, the same limit leaves TDC's minimal formulation about 0.3 m
-    off the circle for good (measured 290 mm at the end), the paper formulation on it
-    (measured 13 mm): the minimal formulation's wheel angles catch up, its position does
+    plant, which cannot slip, the same limit leaves TDC's minimal formulation about 0.2 m
+    off the circle for good (measured 228 mm at the end), the paper formulation on it
+    (measured 9 mm): the minimal formulation's wheel angles catch up, its position does
     not."""
     from runtime.experiment.arguments import robot_setting
 

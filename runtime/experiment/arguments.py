@@ -89,8 +89,8 @@ def robot_setting(robot: str | Path | None, generated: Path | None,
         if limit < scaled.controller.tau_max:
             scaled = replace(scaled, controller=replace(scaled.controller, tau_max=limit))
             lines.append(f"controller.tau_max = {limit:.4g} (traction limit: traction_mu "
-                         f"{mu:g}: the least r sqrt((mu N)^2 - F_y^2) of the driven wheels "
-                         "on the tracked paths)")
+                         f"{mu:g} x the lightest driven wheel's load at rest over the payload "
+                         "states x its radius)")
     return Setting(setup, scaled, tuple(lines))
 
 

@@ -57,9 +57,9 @@ class ControllerSettings:
     gamma: float = 2.0  # ASMC adaptation rate
     tau_max: float = 40.0  # N m per wheel
     # Traction-aware torque limit (runtime.mujoco.layout.traction_torque_limit): the floor's
-    # friction coefficient to stay under; tau_max becomes min(tau_max, the least
-    # r sqrt((traction_mu N)^2 - F_y^2) of the driven wheels on the tracked paths: N from the
-    # one load model, F_y the wheel's lateral force). 0: off.
+    # friction coefficient to stay under; tau_max becomes min(tau_max, traction_mu N r) with
+    # N the driven wheel's load at rest (one load model), lightest over the payload states.
+    # 0: off.
     traction_mu: float = 0.0
     # The wheel-velocity PI baseline (modeling.controllers.wheel_pi_law): the path tracker's
     # gains and the wheel loop's bandwidth, from which kp = J bandwidth and

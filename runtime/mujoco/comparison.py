@@ -305,9 +305,8 @@ def markdown(comp: Comparison) -> str:
         "",
         "Torque limits: " + ", ".join(f"{label}: {lim:.3g} N m" for (label, _, _), lim
                                       in zip(comp.cases, comp.limits, strict=True))
-        + " (the traction limit is `[controller] traction_mu` = 0.1: the least "
-        "r √((μ N)² − F_y²) of the driven wheels on the tracked paths, N from the load model "
-        "with the payload on board and the load transfer, F_y the wheel's lateral force).",
+        + " (the traction limit is `[controller] traction_mu` = 0.1: μ N r of the lightest "
+        "driven wheel at rest over the payload states, N from the one load model).",
         "",
     ]
     lines += _summary(comp)
@@ -507,8 +506,8 @@ def _summary(comp: Comparison) -> list[str]:
             f"Off path under the traction limit ({comp.cases[i][0]}): {counts}. That is "
             "not slip: the same limit on the model plant, which cannot slip, leaves a run as "
             "far off (measured on Drishti, TDC on the circle, sample-instant: minimal "
-            "formulation 287 mm RMS and 290 mm off at the end on the model plant, 284 and "
-            "287 mm on MuJoCo; paper formulation 13 and 12 mm off at the end). The paper's "
+            "formulation 227 mm RMS and 228 mm off at the end on the model plant, 225 and "
+            "226 mm on MuJoCo; paper formulation 9 mm off at the end on both). The paper's "
             "controllers in the minimal formulation feed back the wheel angles only (the PI "
             "has a tracker that corrects the pose): while the start-up saturates, the "
             "wheels lag the reference and the robot rolls a different path; the heading is "

@@ -7,14 +7,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-import numpy as np
-
 from modeling.contact_loads import static_loads
 from modeling.planar_robot import PlanarRobot, from_lumped
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
-from runtime.sim import paths
-from runtime.sim.slip_monitor import SlipMonitor
 
 
 def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
@@ -42,33 +38,18 @@ def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
 
 def traction_torque_limit(code: RobotCode, base: Mapping[str, float], exp: Experiment,
                           mu: float) -> float:
-    """The largest wheel torque that keeps every driven wheel inside its friction circle at
-    friction ``mu`` on the experiment's paths: min over the paths' samples and the driven
-    wheels of r √((μ N)² − F_y²), N the wheel's normal load (the one load model,
-    ``modeling.contact_loads``: the payload the schedule has on board at that sample, the
-    load transfer of the tracked motion) and F_y its share of its axle's lateral force
-    on the tracked path (:meth:`runtime.sim.slip_monitor.SlipMonitor.along`): a rolling
-    force F_x ≈ τ/r under it leaves |F| ≤ μ N. What the wheel's own inertia and bearing
-    friction take only lowers F_x; a controller that leaves the path turns harder than
-    the path does, so this is a ceiling to stay under, not a guarantee. A robot whose
-    generated code has no contact forces gets the static rule: μ N r of the lightest
-    driven wheel at rest over the payload states."""
+    """The largest wheel torque no driven wheel can spend on slipping at friction ``mu``:
+    min over the driven wheels and the payload states the schedule makes (fixed payload;
+    fixed and extra) of μ N r, N the wheel's normal load at rest from the one load model
+    (``modeling.contact_loads``; the extra payload, ahead and left on Drishti, unloads the
+    right wheel to 99.9 N). A wheel at rest whose torque stays below it cannot spin on the
+    floor (its own spin inertia and bearing friction only lower what reaches the contact);
+    accelerating the body, turning and load transfer take part of μ N too (the grip
+    verdict, ``runtime.stability.saturation``, simulates them), so this is a ceiling to
+    stay under, not a guarantee."""
     robot = robot_layout(code, base)
     pl = exp.plant
-    driven = [w for w in robot.wheels if w.driven]
     states = ((pl.fixed_payload, 0.0), (pl.fixed_payload, pl.extra_payload))
-    static = min(mu * static_loads(robot, ((m0, pl.fixed_payload_x, pl.fixed_payload_y),
-                                           (m1, pl.extra_payload_x, pl.extra_payload_y)))[w.name]
-                 * w.radius for m0, m1 in states for w in driven)
-    try:
-        monitor = SlipMonitor(code, robot, exp)
-    except ValueError:  # generated before the contact forces: the static rule
-        return static
-    radius = np.array([{w.name: w.radius for w in driven}[w] for w in monitor.driven])
-    nominal = {k: float(base.get(k, v)) for k, v in code.params.items()}
-    limit = static
-    for name in paths.PATHS:
-        _, fy, n = monitor.along(paths.reference(code, nominal, exp, name), nominal, exp)
-        room = np.sqrt(np.maximum((mu * n) ** 2 - fy**2, 0.0))
-        limit = min(limit, float((room * radius).min()))
-    return limit
+    return min(mu * static_loads(robot, ((m0, pl.fixed_payload_x, pl.fixed_payload_y),
+                                         (m1, pl.extra_payload_x, pl.extra_payload_y)))[w.name]
+               * w.radius for m0, m1 in states for w in robot.wheels if w.driven)
