@@ -85,14 +85,15 @@ def test_a_low_floor_is_predicted_to_slip_on_the_tracked_path() -> None:
 
 
 def test_the_flagged_case_slips_on_the_engine_and_agrees() -> None:
-    """The done-when case on MuJoCo (``runtime.mujoco.agreement``, the table of
+    """The done-when case on MuJoCo (``runtime.stability.agreement``, the table of
     docs/MUJOCO.md): the verdict ``slips`` meets a wheel that slips on the engine."""
     from runtime.experiment.arguments import robot_setting
-    from runtime.mujoco import agreement
     from runtime.mujoco.comparison import engine_outcome
+    from runtime.stability import agreement
 
     setting = robot_setting(None, None, Experiment())
-    found = agreement.cases(setting, lambda e, path, form, ctrl:
+    found = agreement.cases(setting.robot.code, setting.robot.nominal, setting.experiment,
+                            lambda e, path, form, ctrl:
                             engine_outcome(setting, e, path, form, ctrl),
                             hs=(0.25,), frictions=(1.0,), only=[("tdroc", "paper")])
     assert len(found) == 1

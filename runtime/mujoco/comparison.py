@@ -38,13 +38,13 @@ from runtime.experiment.arguments import (
     load_setting,
 )
 from runtime.experiment.settings import Experiment
-from runtime.mujoco import agreement
 from runtime.mujoco.layout import robot_layout, traction_torque_limit
 from runtime.mujoco.plant import MujocoPlant
 from runtime.sim import loop, paths
 from runtime.sim.outcome import outcome
 from runtime.sim.plant import GeneratedPlant, library_for
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
+from runtime.stability import agreement
 
 Array = NDArray[np.float64]
 # (label, floor's μ, traction_mu of the controllers' torque limit; 0: the experiment's)
@@ -176,7 +176,7 @@ def _one(setting: Setting, exp: Experiment, run: tuple[str, str, str, str],
 
 def engine_outcome(setting: Setting, exp: Experiment, path: str, formulation: str,
                    controller: str) -> tuple[str, str]:
-    """One MuJoCo run's outcome for :mod:`runtime.mujoco.agreement`: (``slips``,
+    """One MuJoCo run's outcome for :mod:`runtime.stability.agreement`: (``slips``,
     ``unstable`` or ``ok``, a few words with its numbers)."""
     c = _one(setting, exp, (exp.sensing.velocity, path, formulation, controller), engine=True)
     if c.slip_onset is not None:
@@ -192,7 +192,7 @@ def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
             onset_frictions: Sequence[float] = ONSET_FRICTIONS,
             verdicts: bool = False) -> Comparison:
     """Run every setting on both plants (see the module docstring); ``verdicts``: also
-    :mod:`runtime.mujoco.agreement`'s table (slow: 20 settings of h and μ)."""
+    :mod:`runtime.stability.agreement`'s table (slow: 20 settings of h and μ)."""
     setup, exp = setting.robot, setting.experiment
     code = setup.code
     exps = []
@@ -221,7 +221,7 @@ def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
                             exp.plant.fixed_payload_y),))
     measured = engine_loads(code, exps[0], setup.plant)
     loads = {k: (v, measured.get(k, math.nan)) for k, v in stated.items()}
-    found = (agreement.cases(setting, lambda e, path, form, ctrl:
+    found = (agreement.cases(code, setup.nominal, exp, lambda e, path, form, ctrl:
                              engine_outcome(setting, e, path, form, ctrl), progress=progress)
              if verdicts else ())
     return Comparison(setting, tuple(cases), tuple(rows),

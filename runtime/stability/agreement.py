@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
-from runtime.experiment.arguments import Setting
+from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim import paths
 from runtime.stability.analysis import analyse
@@ -59,20 +59,20 @@ def experiment_at(exp: Experiment, h: float, mu: float, model: str) -> Experimen
                                  substeps=max(1, round(h / ENGINE_STEP))))
 
 
-def cases(setting: Setting, engine_run: Callable[[Experiment, str, str, str], tuple[str, str]],
+def cases(code: RobotCode, nominal: dict[str, float], exp: Experiment,
+          engine_run: Callable[[Experiment, str, str, str], tuple[str, str]],
           hs: Sequence[float] = HS, frictions: Sequence[float] = FRICTIONS,
           progress: bool = False, only: Sequence[tuple[str, str]] | None = None
           ) -> tuple[Case, ...]:
-    """Every case (see the module docstring; ``only``: these (controller, formulation));
+    """Every case of the robot ``code`` whose controllers' model is ``nominal``, around the
+    experiment ``exp`` (see the module docstring; ``only``: these (controller, formulation));
     ``engine_run(exp, path, formulation, controller)`` gives one MuJoCo run's (status,
     detail): status ``slips``, ``unstable`` or ``ok``."""
-    setup = setting.robot
-    code = setup.code
     out = []
     for h in hs:
         for mu in frictions:
-            model_exp = experiment_at(setting.experiment, h, mu, "generated")
-            engine_exp = experiment_at(setting.experiment, h, mu, "mujoco")
+            model_exp = experiment_at(exp, h, mu, "generated")
+            engine_exp = experiment_at(exp, h, mu, "mujoco")
             for info in code.controller_infos:
                 if not analysed(info):
                     continue
@@ -80,7 +80,7 @@ def cases(setting: Setting, engine_run: Callable[[Experiment, str, str, str], tu
                     if form not in FORMULATIONS or (
                             only is not None and (info.name, form) not in only):
                         continue
-                    row = analyse(code, info.name, form, setup.nominal, model_exp,
+                    row = analyse(code, info.name, form, nominal, model_exp,
                                   saturation=True)
                     reason = row.reason or row.saturation_reason
                     runs = [engine_run(engine_exp, name, form, info.name)
@@ -128,7 +128,7 @@ def markdown(found: Sequence[Case], labels: dict[str, str]) -> list[str]:
         "same controller on MuJoCo at that h and μ on both paths (sample-instant rates, "
         "1 kHz engine): ok, slips (a wheel's slip above the threshold on either path), "
         "unstable (off path or stopped). Agreement: stable with ok, slips with slips, any "
-        "other verdict with an outcome that is not ok (`runtime/mujoco/agreement.py`). "
+        "other verdict with an outcome that is not ok (`runtime/stability/agreement.py`). "
         "Cells: verdict / outcome; **bold** where they disagree.", "",
         f"Agreement: **{agree} of {len(found)}** ({agree / len(found):.0%}).", "",
         "| h (s) | μ | " + " | ".join(f"{labels[ctrl]} {f}" for ctrl, f in runs) + " |",
