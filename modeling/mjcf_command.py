@@ -19,6 +19,7 @@ import math
 import sys
 from pathlib import Path
 
+from modeling.contact_loads import LOAD_MODEL, describe_loads, support_loads
 from modeling.mjcf_export import ContactSettings, mjcf
 from modeling.planar_robot import PlanarRobot, from_description, from_lumped
 from modeling.robot_io import (
@@ -112,4 +113,5 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print(f"wrote {args.out}: robot '{robot.name}', {len(robot.bodies)} bodies, "
           f"{len(robot.wheels)} wheels, friction {args.friction:g}")
+    print(f"normal loads at rest (N; {LOAD_MODEL}): {describe_loads(support_loads(robot))}")
     return 0

@@ -32,7 +32,12 @@ tyre (``tyre_width`` 0: a sphere, one point contact under the wheel centre, as t
 model's rolling constraints assume; > 0: a capsule across the tyre, two contact points
 ± width/2 from the wheel's mid-plane, which scrub when the robot turns), and the contact's
 softness (``contact_timeconst``, MuJoCo's ``solref`` time constant: the larger, the softer
-the contact, the deeper the tyres sink and the more they creep under traction). The wheel
+the contact, the deeper the tyres sink and the more they creep under traction). Every
+support is the same spring (the compliance ``modeling.contact_loads`` states for the
+normal loads): MuJoCo scales a contact's stiffness by the inverse of its body's inverse
+weight, so each contact geom gets its own time constant (:func:`contact_time_constants`:
+the softest by that scale keeps ``contact_timeconst``, the others are slower) and the
+engine carries the loads the load model states. The wheel
 geoms take precedence over the ground's (``priority``), so their friction is the contact's.
 Each driven wheel has a torque motor (``motor_<name>``, gear 1, limited to ± ``tau_max``),
 bearing friction as joint ``damping`` (viscous, N m s/rad) and ``frictionloss`` (Coulomb,
@@ -44,6 +49,8 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+
+import numpy as np
 
 from modeling.planar_robot import PlanarBody, PlanarRobot, PlanarWheel, Point
 
@@ -156,47 +163,121 @@ def supports(robot: PlanarRobot) -> tuple[tuple[Point, float], ...]:
                  for s in (1.0, -1.0))
 
 
-def static_loads(robot: PlanarRobot, payloads: tuple[tuple[float, float, float], ...] = ()
-                 ) -> dict[str, float]:
-    """The normal load (N) on each wheel and support of the robot at rest, hitches straight,
-    carrying point ``payloads`` (m, x, y on the root body): the stated static load split.
-    The whole robot is one rigid assembly on its contacts (hitches are vertical hinges);
-    with three contacts or more the split is statically indeterminate, and this takes the
-    one of equal contact springs (MuJoCo's contacts share one ``solref``): the loads are
-    a plane a + b x + c y over the contact points that balances the weight and its two
-    moments. Keys: wheel names and ``support_front``/``support_rear``."""
+def support_names(robot: PlanarRobot) -> tuple[str, ...]:
+    """The names of :func:`supports`' spheres, in its order: ``support_front`` for the one
+    ahead of the axle (or left of it), ``support_rear`` for the other."""
+    return tuple("support_front" if sx > 0 or (sx == 0 and sy > 0) else "support_rear"
+                 for (sx, sy), _ in supports(robot))
+
+
+def engine_inverse_weights(robot: PlanarRobot, contact: ContactSettings = ContactSettings()
+                           ) -> dict[str, float]:
+    """The translational inverse weight MuJoCo gives each body of :func:`mjcf`'s model
+    (``body_invweight0``: trace(J M⁻¹ Jᵀ)/3 at the body's centre of mass, in the model's
+    reference pose, payload bodies at their placeholder mass), computed from the same
+    numbers the MJCF states: the free root, the hitches' and wheels' hinges (armature
+    included), every body's mass and diagonal inertia. Keys: the root body's name (its
+    supports) and ``wheel_<name>``. ``tests/runtime/test_contact_loads.py`` checks it against
+    MuJoCo's."""
+    height = sum(w.radius for w in robot.wheels) / len(robot.wheels)
+    # nodes: (name, parent node, origin, joint (kind, axis, anchor) or None, mass, com, diag)
+    nodes: list[tuple[str, int, np.ndarray, tuple[str, np.ndarray, np.ndarray] | None,
+                      float, np.ndarray, np.ndarray]] = []
+    index: dict[str, int] = {}
+    armature: dict[int, float] = {}
     origins = body_origins(robot)
-    points = {w.name: (origins[w.body][0] + w.position[0], origins[w.body][1] + w.position[1])
-              for w in robot.wheels}
-    for (sx, sy), _ in supports(robot):
-        points["support_front" if sx > 0 or (sx == 0 and sy > 0) else "support_rear"] = (sx, sy)
-    masses = [(b.mass, origins[b.name][0] + b.com[0], origins[b.name][1] + b.com[1])
-              for b in robot.bodies]
-    masses += [(w.mass, *points[w.name]) for w in robot.wheels]
-    masses += list(payloads)
-    weight = GRAVITY * sum(m for m, _, _ in masses)
-    mx = GRAVITY * sum(m * x for m, x, _ in masses)
-    my = GRAVITY * sum(m * y for m, _, y in masses)
-    rows = [(1.0, x, y) for x, y in points.values()]
-    normal = [[sum(r[i] * r[j] for r in rows) for j in range(3)] for i in range(3)]
-    coef = _solve3(normal, [weight, mx, my])
-    return {name: coef[0] + coef[1] * x + coef[2] * y for name, (x, y) in points.items()}
+    ez, ey = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    for body in robot.bodies:
+        o = np.array([*origins[body.name], 0.0])
+        eb = engine_body(robot, body)
+        side = 0.6 * eb.yaw_inertia
+        joint: tuple[str, np.ndarray, np.ndarray] | None
+        if body is robot.root:
+            parent, joint = -1, ("free", ez, o)
+        else:
+            j = robot.joint_of(body.name)
+            parent = index[j.parent]
+            joint = ("hinge", ez, o + np.array([*j.child_point, 0.0]))
+        index[body.name] = len(nodes)
+        nodes.append((body.name, parent, o, joint, eb.mass, o + np.array([*eb.com, height]),
+                      np.array([side, side, eb.yaw_inertia])))
+        if body is robot.root:
+            tiny = PAYLOAD_PLACEHOLDER_MASS
+            for px, py in contact.payloads:
+                c = o + np.array([px, py, height])
+                nodes.append(("payload", index[body.name], c, None, tiny, c,
+                              np.full(3, tiny)))
+        for w in robot.wheels:
+            if w.body != body.name:
+                continue
+            mass, diameter, spin = wheel_body_inertia(robot, w)
+            c = o + np.array([*w.position, w.radius])
+            armature[len(nodes)] = max(w.spin_inertia - spin, 0.0)
+            nodes.append((f"wheel_{w.name}", index[body.name], c, ("hinge", ey, c), mass, c,
+                          np.array([diameter, spin, diameter])))
+    # the degrees of freedom: (owner node, kind, axis, anchor)
+    dofs: list[tuple[int, str, np.ndarray, np.ndarray]] = []
+    for n, (_, _, _, joint, _, _, _) in enumerate(nodes):
+        if joint is None:
+            continue
+        kind, axis, anchor = joint
+        if kind == "free":
+            dofs += [(n, "slide", e, anchor) for e in np.eye(3)]
+            dofs += [(n, "hinge", e, anchor) for e in np.eye(3)]
+        else:
+            dofs.append((n, "hinge", axis, anchor))
 
+    def ancestors(n: int) -> set[int]:
+        out = set()
+        while n >= 0:
+            out.add(n)
+            n = nodes[n][1]
+        return out
 
-def _solve3(a: list[list[float]], b: list[float]) -> list[float]:
-    """x of a x = b (3 × 3, Cramer's rule; a line of contacts leaves it singular: the
-    supports of :func:`supports` prevent that)."""
-    def det(m: list[list[float]]) -> float:
-        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+    def jacobian(n: int, point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        up = ancestors(n)
+        jp, jr = np.zeros((3, len(dofs))), np.zeros((3, len(dofs)))
+        for k, (owner, kind, axis, anchor) in enumerate(dofs):
+            if owner in up:
+                if kind == "slide":
+                    jp[:, k] = axis
+                else:
+                    jp[:, k], jr[:, k] = np.cross(axis, point - anchor), axis
+        return jp, jr
 
-    d = det(a)
-    out = []
-    for k in range(3):
-        mk = [[b[i] if j == k else a[i][j] for j in range(3)] for i in range(3)]
-        out.append(det(mk) / d)
+    mass_matrix = np.zeros((len(dofs), len(dofs)))
+    for n, (_, _, _, _, mass, com, diag) in enumerate(nodes):
+        jp, jr = jacobian(n, com)
+        mass_matrix += mass * jp.T @ jp + jr.T @ np.diag(diag) @ jr
+    for k, (owner, kind, _, _) in enumerate(dofs):
+        if kind == "hinge" and owner in armature:
+            mass_matrix[k, k] += armature[owner]
+    inverse = np.linalg.inv(mass_matrix)
+    out = {}
+    for n, (name, _, _, _, _, com, _) in enumerate(nodes):
+        if name == robot.root.name or name.startswith("wheel_"):
+            jp, _ = jacobian(n, com)
+            out[name] = float(np.trace(jp @ inverse @ jp.T)) / 3
     return out
+
+
+def contact_time_constants(robot: PlanarRobot, contact: ContactSettings = ContactSettings()
+                           ) -> dict[str, float]:
+    """The ``solref`` time constant of each contact geom (``tyre_<wheel>``, the supports)
+    that makes every support the same spring, as ``modeling.contact_loads`` assumes.
+    MuJoCo's contact at rest is a spring of stiffness d k / ((1 − d) A) per contact point,
+    k = 1/(d_max τ ζ)² from ``solref`` = (τ, ζ) and A the contact body's inverse weight
+    (:func:`engine_inverse_weights`; the ground's is 0): so τ² A / n (n contact points of
+    the geom: 2 for a capsule tyre, else 1) is made equal across geoms; the geom of the
+    largest A / n keeps the experiment's ``contact_timeconst``, every other one is
+    slower by √ of the ratio (never faster than the experiment's)."""
+    weights = engine_inverse_weights(robot, contact)
+    points = 2.0 if contact.tyre_width > 0 else 1.0
+    per = {f"tyre_{w.name}": points / weights[f"wheel_{w.name}"] for w in robot.wheels}
+    for name in support_names(robot):
+        per[name] = 1.0 / weights[robot.root.name]
+    least = min(per.values())
+    return {k: contact.contact_timeconst * math.sqrt(v / least) for k, v in per.items()}
 
 
 def _f(x: float) -> str:
@@ -223,6 +304,8 @@ def mjcf(robot: PlanarRobot, contact: ContactSettings = ContactSettings()) -> st
                   rgba="0.6 0.6 0.7 0.5")
     world = ET.SubElement(root, "worldbody")
     solref = _v(contact.contact_timeconst, contact.contact_dampratio)
+    timeconst = contact_time_constants(robot, contact)
+    names = dict(zip(supports(robot), support_names(robot), strict=True))
     mu = _v(contact.friction, 0.0, 0.0)
     ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", contype="1",
                   conaffinity="1", condim="3", friction=mu, solref=solref, group="0",
@@ -255,18 +338,19 @@ def mjcf(robot: PlanarRobot, contact: ContactSettings = ContactSettings()) -> st
                       size=_v(max((max(xs) - min(xs)) / 2, 0.02),
                               max((max(ys) - min(ys)) / 2, 0.02), 0.02), mass="0")
         if body is robot.root:
-            for (sx, sy), radius in supports(robot):
-                ET.SubElement(el, "geom", name="support_front" if sx > 0 or (sx == 0 and sy > 0)
-                              else "support_rear", type="sphere", size=_f(radius),
+            for ((sx, sy), radius), name in names.items():
+                ET.SubElement(el, "geom", name=name, type="sphere", size=_f(radius),
                               pos=_v(sx, sy, radius), contype="1", conaffinity="1",
-                              condim="1", priority="1", solref=solref, mass="0")
+                              condim="1", priority="1", mass="0",
+                              solref=_v(timeconst[name], contact.contact_dampratio))
             for i, (px, py) in enumerate(contact.payloads):
                 pl = ET.SubElement(el, "body", name=f"payload_{i}", pos=_v(px, py, height))
                 tiny = PAYLOAD_PLACEHOLDER_MASS
                 ET.SubElement(pl, "inertial", pos="0 0 0", mass=_f(tiny),
                               diaginertia=_v(tiny, tiny, tiny))
         for w in own:
-            _wheel(el, robot, w, contact, solref)
+            _wheel(el, robot, w, contact,
+                   _v(timeconst[f"tyre_{w.name}"], contact.contact_dampratio))
     actuators = ET.SubElement(root, "actuator")
     for w in robot.ordered_wheels():
         if not w.driven:

@@ -9,7 +9,7 @@ floors of :data:`CASES`: μ = 1, 0.2, 0.1, and μ = 0.1 with the traction-aware 
 (``runtime.sim.outcome``), samples whose torque was clipped, and in MuJoCo the driven
 wheels' measured slip (rim speed less the centre's speed along the heading): its largest
 value and the first instant it exceeds :data:`SLIP_THRESHOLD`. The document also states the
-wheels' static loads (``modeling.mjcf_export.static_loads``) against the engine's at rest,
+wheels' static loads (``modeling.contact_loads.static_loads``) against the engine's at rest,
 and the run time of a run on each plant. Not a test: ``tests/runtime/test_mujoco.py`` runs a
 shortened experiment through :func:`compare` and :func:`markdown`.
 """
@@ -25,7 +25,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from modeling.mjcf_export import static_loads
+from modeling.contact_loads import static_loads
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.mujoco.plant import MujocoPlant
@@ -35,6 +35,7 @@ from runtime.sim import loop, paths
 from runtime.sim.outcome import outcome
 from runtime.sim.plant import GeneratedPlant, library_for
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
+from runtime.stability import agreement
 
 Array = NDArray[np.float64]
 # (label, floor's μ, traction_mu of the controllers' torque limit; 0: the experiment's)
@@ -109,6 +110,7 @@ class Comparison:
     loads: dict[str, tuple[float, float]]  # contact -> (stated static load, engine at rest)
     onsets: tuple[Onset, ...] = ()  # the slip monitor against the engine
     onset_frictions: tuple[float, ...] = ()  # the μ of each onset column
+    verdicts: tuple[agreement.Case, ...] = ()  # wmr stability against the engine
 
 
 def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
@@ -126,10 +128,14 @@ def _cell(r: loop.Run, scale: float, seconds: float, slips: list[Array] | None,
     return Cell(rms, peak, o.status, r.saturated, slip_max, onset, seconds)
 
 
-def engine_loads(code: RobotCode, exp: Experiment, base: dict[str, float]) -> dict[str, float]:
-    """The normal force on each contact of the MuJoCo robot at rest (fixed payload on)."""
+def engine_loads(code: RobotCode, exp: Experiment, base: dict[str, float],
+                 masses: Sequence[float] | None = None) -> dict[str, float]:
+    """The normal force on each contact of the MuJoCo robot at rest, with the payloads of
+    ``masses`` (kg: fixed, extra; default: the fixed payload on); a contact that lifted
+    off is absent."""
     plant = MujocoPlant(code, exp, robot_layout(code, base))
-    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0]))
+    plant.set_payload(np.array([exp.plant.fixed_payload, 0.0] if masses is None
+                               else masses, dtype=np.float64))
     plant.start(np.zeros(code.nq))
     m, d = plant.model, plant.data
     mujoco.mj_step(m, d, nstep=round(0.5 / m.opt.timestep))
@@ -159,11 +165,25 @@ def _one(setting: Setting, exp: Experiment, run: tuple[str, str, str, str],
                  e.controller.h)
 
 
+def engine_outcome(setting: Setting, exp: Experiment, path: str, formulation: str,
+                   controller: str) -> tuple[str, str]:
+    """One MuJoCo run's outcome for :mod:`runtime.stability.agreement`: (``slips``,
+    ``unstable`` or ``ok``, a few words with its numbers)."""
+    c = _one(setting, exp, (exp.sensing.velocity, path, formulation, controller), engine=True)
+    if c.slip_onset is not None:
+        return "slips", f"slips from {c.slip_onset:g} s, {c.status}, {_mm(c.rms)} mm RMS"
+    if c.status != "ok":
+        return "unstable", f"{c.status}, {_mm(c.rms)} mm RMS"
+    return "ok", f"ok, {_mm(c.rms)} mm RMS, slip ≤ {c.slip_max * 1e3:.0f} mm/s"
+
+
 def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
             cases: Sequence[tuple[str, float, float]] = CASES,
             progress: bool = False,
-            onset_frictions: Sequence[float] = ONSET_FRICTIONS) -> Comparison:
-    """Run every setting on both plants (see the module docstring)."""
+            onset_frictions: Sequence[float] = ONSET_FRICTIONS,
+            verdicts: bool = False) -> Comparison:
+    """Run every setting on both plants (see the module docstring); ``verdicts``: also
+    :mod:`runtime.stability.agreement`'s table (slow: 20 settings of h and μ)."""
     setup, exp = setting.robot, setting.experiment
     code = setup.code
     exps = []
@@ -192,10 +212,13 @@ def compare(setting: Setting, sensings: Sequence[str] = SENSINGS,
                             exp.plant.fixed_payload_y),))
     measured = engine_loads(code, exps[0], setup.plant)
     loads = {k: (v, measured.get(k, math.nan)) for k, v in stated.items()}
+    found = (agreement.cases(code, setup.nominal, exp, lambda e, path, form, ctrl:
+                             engine_outcome(setting, e, path, form, ctrl), progress=progress)
+             if verdicts else ())
     return Comparison(setting, tuple(cases), tuple(rows),
                       tuple(e.controller.tau_max for e in exps), loads,
                       onsets(setting, onset_frictions, sensings[0]) if onset_frictions else (),
-                      tuple(onset_frictions))
+                      tuple(onset_frictions), found)
 
 
 def onsets(setting: Setting, frictions: Sequence[float], sensing: str) -> tuple[Onset, ...]:
@@ -274,18 +297,21 @@ def markdown(comp: Comparison) -> str:
         "Torque limits: " + ", ".join(f"{label}: {lim:.3g} N m" for (label, _, _), lim
                                       in zip(comp.cases, comp.limits, strict=True))
         + " (the traction limit is `[controller] traction_mu` = 0.1: μ N r of the lightest "
-        "driven wheel at rest, fixed payload on).",
+        "driven wheel at rest over the payload states, N from the one load model).",
         "",
     ]
     lines += _summary(comp)
     lines += ["", "## Every run", "", *_runs_table(comp)]
     lines += ["", "## Wheel loads at rest (N)", "",
-              "The slip monitor and the traction limit take each wheel's normal load from a "
-              "stated static split (`modeling.mjcf_export.static_loads`: the robot as one "
-              "rigid assembly on equal contact springs); MuJoCo's soft contacts are not equal "
-              "springs (their stiffness scales with each contact's effective mass), so the "
-              "engine at rest splits the load differently where the split is statically "
-              "indeterminate (three contacts or more off one plane's worth of equations):", "",
+              "The slip monitor, the traction limit and the grip verdict take each "
+              "contact's normal load from one load model (`modeling.contact_loads`: the "
+              "robot as one rigid assembly on equal contact springs, a support in tension "
+              "lifted off). Where the split is statically indeterminate (three contacts or "
+              "more off one plane's worth of equations) it depends on the springs: MuJoCo "
+              "scales a contact's stiffness by its body's inverse weight, so the MJCF gives "
+              "each contact geom the time constant that makes the springs equal "
+              "(`modeling.mjcf_export.contact_time_constants`), and the engine carries the "
+              "stated loads (tests/runtime/test_contact_loads.py: within 2 %):", "",
               "| contact | stated | MuJoCo at rest |", "|---|---|---|"]
     for k, (stated, measured) in comp.loads.items():
         lines.append(f"| {k} | {stated:.1f} | {measured:.1f} |")
@@ -297,13 +323,15 @@ def markdown(comp: Comparison) -> str:
                   "solved as (10)–(12) do, in newtons): F_x along the wheel's heading (its "
                   "rolling row; equal to (τ − τ_f − J θ̈)/r, tested) and F_y along its axle "
                   "(the axle's no-side-slip row, split between the axle's wheels in "
-                  "proportion to their static loads: an assumption, the rigid model does not "
+                  "proportion to their normal loads: an assumption, the rigid model does not "
                   "split it), and compares √(F_x² + F_y²) with μ N (friction circle; N: the "
-                  "stated static load with the payload on board). Against MuJoCo's contact "
-                  "forces on a turn from rest (tests/runtime/test_mujoco.py): F_x within 0.2 % "
-                  "(Drishti), the axle's F_y within 1.3 %, each wheel's share of it within "
-                  "1.5 % until the engine's load transfer in fast turns loads the outer "
-                  "wheel. Run on the model plant (which cannot slip), the monitor "
+                  "load model's, with the payload on board and the load transfer of the "
+                  "acceleration ΣF/m). Against MuJoCo's contact forces on a turn from rest "
+                  "(tests/runtime/test_mujoco.py, tests/runtime/test_contact_loads.py): "
+                  "F_x within 0.2 % "
+                  "(Drishti), the axle's F_y within 1.3 %, each wheel's normal load within "
+                  "3 % once the start's transient has passed. Run on the model plant (which "
+                  "cannot slip), the monitor "
                   "gives the friction coefficient each run needs (its largest |F|/N) and the "
                   "first instant it needs more than μ: the predicted onset of slip. MuJoCo "
                   "at that μ measures when a wheel's slip first exceeds "
@@ -346,6 +374,8 @@ def markdown(comp: Comparison) -> str:
                           "reaching the threshold).")
         if unseen:
             lines[-1] += f" Measured but not predicted in {len(unseen)} runs."
+    if comp.verdicts:
+        lines += ["", *agreement.markdown(comp.verdicts, labels)]
     model_t = [r.model.seconds for r in comp.rows]
     engine_t = [c.seconds for r in comp.rows for c in r.engine]
     lines += ["", "## Run time", "",
@@ -422,6 +452,17 @@ def report_section(comp: Comparison) -> list[str]:
     ]
 
 
+def _lowest_floor(comp: Comparison) -> str:
+    """How many runs the lowest floor without a traction limit leaves on the path."""
+    plain = [(mu, i) for i, (_, mu, traction) in enumerate(comp.cases) if traction == 0]
+    if not plain or not comp.rows:
+        return ""
+    mu, i = min(plain)
+    ok = sum(r.engine[i].status == "ok" for r in comp.rows)
+    return (f" (μ = {mu:g}: {ok} of {len(comp.rows)} runs stay on the path, the others "
+            "lose it for good)")
+
+
 def _summary(comp: Comparison) -> list[str]:
     """Where and why the plants differ, with the numbers of this run."""
     out = ["## Where they differ, and why", ""]
@@ -438,8 +479,8 @@ def _summary(comp: Comparison) -> list[str]:
         "slips the model plant has nothing to say: it cannot slip. Where the start-up "
         "torque exceeds μ N r (the low floors' counts above) the wheel spins, the encoders "
         "report motion the robot does not make, and a controller that answers with more "
-        "torque spins it further into the torque limit: grip does not come back (Drishti "
-        "at μ = 0.1: every controller). A torque limit under μ N r (`traction_mu`) keeps "
+        "torque spins it further into the torque limit: grip seldom comes back"
+        + _lowest_floor(comp) + ". A torque limit under μ N r (`traction_mu`) keeps "
         "the start-up from spinning the wheels (counts above); the limit is also all the "
         "authority the controllers have, so runs converge slowly and some may stay more "
         "than a tenth of the path's size off it (the outcome column): on such a floor the "
@@ -457,8 +498,8 @@ def _summary(comp: Comparison) -> list[str]:
             f"Off path under the traction limit ({comp.cases[i][0]}): {counts}. That is "
             "not slip: the same limit on the model plant, which cannot slip, leaves a run as "
             "far off (measured on Drishti, TDC on the circle, sample-instant: minimal "
-            "formulation 197 mm RMS and 196 mm off at the end on the model plant, 194 and "
-            "195 mm on MuJoCo; paper formulation 8 and 7 mm off at the end). The paper's "
+            "formulation 227 mm RMS and 228 mm off at the end on the model plant, 225 and "
+            "226 mm on MuJoCo; paper formulation 9 mm off at the end on both). The paper's "
             "controllers in the minimal formulation feed back the wheel angles only (the PI "
             "has a tracker that corrects the pose): while the start-up saturates, the "
             "wheels lag the reference and the robot rolls a different path; the heading is "

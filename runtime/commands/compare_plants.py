@@ -24,6 +24,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=None,
                    help="the document (default: docs/MUJOCO.md for the paper's robot, "
                    "./mujoco/<robot>/MUJOCO.md for another)")
+    p.add_argument("--no-verdicts", action="store_true",
+                   help="leave out the verdicts of wmr stability against the engine (h and μ "
+                   "swept: the slow part)")
     args = p.parse_args(argv)
     try:
         setting = load_setting(args)
@@ -33,7 +36,8 @@ def main(argv: list[str] | None = None) -> int:
     out = args.out or (default_output("docs/MUJOCO.md") if setting.is_paper_robot
                        else Path("mujoco") / setting.robot.name / "MUJOCO.md")
     start = time.perf_counter()
-    comp = compare(setting, tuple(args.sensing.split(",")), progress=True)
+    comp = compare(setting, tuple(args.sensing.split(",")), progress=True,
+                   verdicts=not args.no_verdicts)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(markdown(comp), encoding="utf-8")
     print(f"wrote {out}: wall time {time.perf_counter() - start:.1f} s")

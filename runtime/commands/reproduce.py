@@ -79,6 +79,13 @@ def print_summary(rep: Reproduction) -> None:
         for cl in claims(rep, sensing):
             verdict = "reproduces" if cl.holds else "does NOT reproduce"
             print(f"claim [{sensing}]: {cl.text}: {verdict} ({cl.evidence})")
+    mu = rep.experiment.plant.friction
+    for sensing in rep.sensings:
+        for m in rep.rows(sensing):
+            if m.friction_needed > mu:  # nan (not monitored) is never above
+                print(f"grip [{sensing}]: {rep.labels[m.controller]:5s} {m.path:9s} "
+                      f"{m.formulation:7s} needs μ = {m.friction_needed:.3g} > the floor's "
+                      f"{mu:g}: slips")
     for row in rep.sweep:
         print(
             f"sweep: {row.sensing:15s} {row.estimator:8s} eps {row.eps:<4g} "

@@ -58,7 +58,8 @@ class ControllerSettings:
     tau_max: float = 40.0  # N m per wheel
     # Traction-aware torque limit (runtime.setting.layout.traction_torque_limit): the floor's
     # friction coefficient to stay under; tau_max becomes min(tau_max, traction_mu N r) with
-    # N the driven wheel's static load (fixed payload only). 0: off.
+    # N the driven wheel's load at rest (one load model), lightest over the payload states.
+    # 0: off.
     traction_mu: float = 0.0
     # The wheel-velocity PI baseline (modeling.controllers.wheel_pi_law): the path tracker's
     # gains and the wheel loop's bandwidth, from which kp = J bandwidth and

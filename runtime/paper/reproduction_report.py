@@ -174,7 +174,7 @@ def section_metrics(rep: Reproduction, figures: Sequence[Figure]) -> list[str]:
         "force on the wheel from the constraint multipliers of (9) (the generated",
         "`<prefix>_wheel_contact_forces`), the axle's lateral force split between its wheels in",
         "proportion to their static loads (an assumption: the rigid model does not split it),",
-        "N the wheel's static load with the payload on board (`modeling.mjcf_export.static_loads`:",
+        "N the wheel's load at rest with the payload on board (`modeling.contact_loads`:",
         "the robot as one rigid assembly on equal contact springs"
         + _load_split(rep) + "). On a floor of a smaller μ a wheel slips (see docs/MUJOCO.md); the",
         "smallest traction margin of the run at friction μ is μ N − |F| ≥ (μ − μ needed) N.",

@@ -20,9 +20,14 @@ def fmt_mm(x: float) -> str:
     return f"{x * 1000:.2f}"
 
 
-def fmt_mu(x: float) -> str:
-    """A friction coefficient the slip monitor found a run needs (— : not monitored)."""
-    return "—" if math.isnan(x) else f"{x:.3f}"
+def fmt_mu(x: float, floor: float | None = None) -> str:
+    """A friction coefficient the slip monitor found a run needs (— : not monitored); above
+    the floor's μ (``floor``) the run is predicted to slip, and says so."""
+    if math.isnan(x):
+        return "—"
+    if floor is not None and x > floor:
+        return f"**{x:.3f} > μ: slips**"
+    return f"{x:.3f}"
 
 
 def sensing_label(rep: Reproduction, sensing: str, estimator: str | None = None) -> str:
@@ -34,7 +39,9 @@ def sensing_label(rep: Reproduction, sensing: str, estimator: str | None = None)
     )
 
 
-def metrics_table(rep: Reproduction, rows: Iterable[Metrics]) -> list[str]:
+def metrics_table(rep: Reproduction, rows: Iterable[Metrics],
+                  friction: float | None = None) -> list[str]:
+    """The metrics of ``rows``; ``friction``: the floor's μ the μ needed is read against."""
     lines = [
         "| path | form | controller | RMS error [mm] | max error [mm] | RMS [% of scale] "
         "| RMS τ [N m] | TV(τ) [N m] | median k̂ | max k̂ | saturated steps | RMS ‖u₁₋₃‖ "
@@ -46,7 +53,8 @@ def metrics_table(rep: Reproduction, rows: Iterable[Metrics]) -> list[str]:
             f"| {m.path} | {m.formulation} | {rep.labels[m.controller]} | {fmt_mm(m.rms_error)} "
             f"| {fmt_mm(m.max_error)} | {m.rms_percent:.2f} | {m.rms_torque:.2f} "
             f"| {m.torque_variation:.1f} | {m.median_gain:.3f} | {m.max_gain:.3f} "
-            f"| {m.saturated_steps} | {m.discarded_u:.2f} | {fmt_mu(m.friction_needed)} |"
+            f"| {m.saturated_steps} | {m.discarded_u:.2f} "
+            f"| {fmt_mu(m.friction_needed, friction)} |"
         )
     return lines
 
@@ -55,8 +63,8 @@ def metrics_markdown(rep: Reproduction) -> str:
     """``metrics.md``: one table per sensing model (headed ``### sensing …``)."""
     parts: list[str] = []
     for sensing in rep.sensings:
-        parts += [f"### {sensing_label(rep, sensing)}", "", *metrics_table(rep, rep.rows(sensing)),
-                  ""]
+        parts += [f"### {sensing_label(rep, sensing)}", "",
+                  *metrics_table(rep, rep.rows(sensing), rep.experiment.plant.friction), ""]
     return "\n".join(parts)
 
 

@@ -1,13 +1,13 @@
 """The robot a physics engine builds, from generated code and plant parameters (no MuJoCo,
-no SymPy), and what its contacts can carry: the static load split and the traction-aware
-torque limit of ``[controller] traction_mu``."""
+no SymPy), and what its contacts can carry: the traction-aware torque limit of
+``[controller] traction_mu``."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
 
-from modeling.mjcf_export import static_loads
+from modeling.contact_loads import static_loads
 from modeling.planar_robot import PlanarRobot, from_lumped
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
@@ -39,13 +39,17 @@ def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
 def traction_torque_limit(code: RobotCode, base: Mapping[str, float], exp: Experiment,
                           mu: float) -> float:
     """The largest wheel torque no driven wheel can spend on slipping at friction ``mu``:
-    min over the driven wheels of μ N r, N the wheel's normal load at rest with the fixed
-    payload only (the lightest the schedule makes it; ``modeling.mjcf_export.static_loads``,
-    the stated static load split). A wheel at rest whose torque stays below it cannot spin
-    on the floor (its own spin inertia and bearing friction only lower what reaches the
-    contact); accelerating the body, turning and load transfer take part of μ N too, so
-    this is a ceiling to stay under, not a guarantee."""
+    min over the driven wheels and the payload states the schedule makes (fixed payload;
+    fixed and extra) of μ N r, N the wheel's normal load at rest from the one load model
+    (``modeling.contact_loads``; the extra payload, ahead and left on Drishti, unloads the
+    right wheel to 99.9 N). A wheel at rest whose torque stays below it cannot spin on the
+    floor (its own spin inertia and bearing friction only lower what reaches the contact);
+    accelerating the body, turning and load transfer take part of μ N too (the grip
+    verdict, ``runtime.stability.saturation``, simulates them), so this is a ceiling to
+    stay under, not a guarantee."""
     robot = robot_layout(code, base)
     pl = exp.plant
-    loads = static_loads(robot, ((pl.fixed_payload, pl.fixed_payload_x, pl.fixed_payload_y),))
-    return min(mu * loads[w.name] * w.radius for w in robot.wheels if w.driven)
+    states = ((pl.fixed_payload, 0.0), (pl.fixed_payload, pl.extra_payload))
+    return min(mu * static_loads(robot, ((m0, pl.fixed_payload_x, pl.fixed_payload_y),
+                                         (m1, pl.extra_payload_x, pl.extra_payload_y)))[w.name]
+               * w.radius for m0, m1 in states for w in robot.wheels if w.driven)

@@ -51,7 +51,8 @@ def robot_setting(robot: str | Path | None, generated: Path | None,
         if limit < scaled.controller.tau_max:
             scaled = replace(scaled, controller=replace(scaled.controller, tau_max=limit))
             lines.append(f"controller.tau_max = {limit:.4g} (traction limit: traction_mu "
-                         f"{mu:g} x the lightest driven wheel's static load x its radius)")
+                         f"{mu:g} x the lightest driven wheel's load at rest over the payload "
+                         "states x its radius)")
     return Setting(setup, scaled, tuple(lines))
 
 

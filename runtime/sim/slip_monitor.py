@@ -16,8 +16,14 @@ from the minimal forward dynamics (the route of (10)–(12)), in newtons. Per dr
   (equal friction use across the axle; ``LATERAL_WHEELS`` of the generated robot.py says
   which wheels share a row).
 
-N_w is the wheel's static load (``modeling.mjcf_export.static_loads``, the payload on
-board included). The wheel keeps grip while √(F_x² + F_y²) ≤ μ N_w; the margin
+N_w is the wheel's normal load from the one load model (``modeling.contact_loads``: equal
+contact springs, a support in tension lifted off), the payload on board included, and with
+load transfer (:meth:`SlipMonitor.traction`, what :class:`MonitoredPlant` records): the
+assembly's horizontal acceleration is the ground's total force on it over its mass (Newton:
+the driven wheels' F_x along their bodies' headings and every axle's F_y along its axle;
+passive wheels roll freely and the supports are frictionless), and the inertia at the
+axle height moves load across the contacts. The wheel keeps grip while
+√(F_x² + F_y²) ≤ μ N_w; the margin
 μ N_w − √(F_x² + F_y²) (N) says how close each sample runs to slipping, and
 max_w √(F_x² + F_y²)/N_w is the friction coefficient the sample needs. The true parameters
 enter through the controllers' model (Drishti: the lateral first moment K_lat of an
@@ -34,11 +40,13 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from modeling.mjcf_export import static_loads
+from modeling.contact_loads import support_loads
 from modeling.planar_robot import PlanarRobot
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
+from runtime.sim.payload import payload_masses, plant_params_at
 from runtime.sim.plant import COULOMB_SPEED, Plant
+from runtime.sim.reference import Reference
 
 Array = NDArray[np.float64]
 
@@ -66,22 +74,39 @@ class SlipMonitor:
         self.points = ((pl.fixed_payload_x, pl.fixed_payload_y),
                        (pl.extra_payload_x, pl.extra_payload_y))
         self._cache: dict[tuple[float, ...], tuple[Array, Array]] = {}
+        order = robot.coordinate_order()
+        yaw = {c[4:]: i for i, c in enumerate(order) if c.startswith("yaw:")}
+        body = {w.name: w.body for w in robot.wheels}
+        root = yaw[robot.root.name]
+        # where each force's body heading sits in q, relative to the root's
+        self._driven_yaw = [(yaw[body[w]], root) for w in self.driven]
+        self._row_yaw = [(yaw[body[r[0]]], root) for r in self.rows]
+        self._mass = robot.total_mass()
 
-    def _loads(self, masses: Array) -> tuple[Array, Array]:
+    def _loads(self, masses: Array, accel: tuple[float, float] = (0.0, 0.0)
+               ) -> tuple[Array, Array]:
         """(N_w of each driven wheel, the share of its axle's lateral force it takes:
-        a (driven × rows) matrix), with the payloads of ``masses`` on board."""
+        a (driven × rows) matrix), with the payloads of ``masses`` on board and the
+        assembly accelerating at ``accel`` (root frame; at rest: cached)."""
         key = tuple(float(m) for m in masses)
-        if key not in self._cache:
-            loads = static_loads(self.robot, tuple((m, x, y) for m, (x, y)
-                                                   in zip(key, self.points, strict=True)))
-            share = np.zeros((len(self.driven), len(self.rows)))
-            for k, row in enumerate(self.rows):
-                total = sum(loads[w] for w in row)
-                for i, w in enumerate(self.driven):
-                    if w in row:
-                        share[i, k] = loads[w] / total
-            self._cache[key] = (np.array([loads[w] for w in self.driven]), share)
-        return self._cache[key]
+        if accel == (0.0, 0.0) and key in self._cache:
+            return self._cache[key]
+        try:
+            loads = support_loads(self.robot, tuple((m, x, y) for m, (x, y)
+                                                    in zip(key, self.points, strict=True)),
+                                  accel).loads
+        except ValueError:  # it would tip over: no wheel can count on its load
+            loads = dict.fromkeys((w.name for w in self.robot.wheels), 0.0)
+        share = np.zeros((len(self.driven), len(self.rows)))
+        for k, row in enumerate(self.rows):
+            total = sum(loads[w] for w in row)
+            for i, w in enumerate(self.driven):
+                if w in row and total > 0:
+                    share[i, k] = loads[w] / total
+        out = (np.array([loads[w] for w in self.driven]), share)
+        if accel == (0.0, 0.0):
+            self._cache[key] = out
+        return out
 
     def normal_loads(self, masses: Array) -> Array:
         """N_w (N) of each driven wheel with the experiment's payloads of ``masses`` (kg:
@@ -93,18 +118,78 @@ class SlipMonitor:
         ``shares`` input of the generated ``<prefix>_traction_check``)."""
         return np.asarray(self._loads(masses)[1].sum(axis=1))
 
-    def contact_forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
-                       masses: Array) -> tuple[Array, Array]:
-        """(F_x, F_y) (N) of each driven wheel at the true state (q, driven-wheel rates)
-        under the applied torque ``tau``, with the true parameters ``params``: the generated
-        contact forces, the axle's lateral force split by static load (module docstring)."""
+    def _multipliers(self, q: Array, rates: Array, tau: Array,
+                     params: Mapping[str, float]) -> tuple[Array, Array]:
+        """(F_x of each driven wheel, F_y of each axle row) from the generated forces."""
         rates = np.asarray(rates, dtype=np.float64)
         friction = self.viscous * rates + self.coulomb * np.tanh(rates / COULOMB_SPEED)
         net = np.asarray(tau, dtype=np.float64) - friction
         fx, fy = self.code.model.wheel_contact_forces(q, rates, net, dict(params))
-        share = self._loads(masses)[1]
         return (np.asarray(fx, dtype=np.float64),
-                share @ np.asarray(fy, dtype=np.float64).reshape(-1))
+                np.asarray(fy, dtype=np.float64).reshape(-1))
+
+    def contact_forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
+                       masses: Array) -> tuple[Array, Array]:
+        """(F_x, F_y) (N) of each driven wheel at the true state (q, driven-wheel rates)
+        under the applied torque ``tau``, with the true parameters ``params``: the generated
+        contact forces, the axle's lateral force split by the loads at rest (module
+        docstring; :meth:`traction` splits it by the loads under load transfer)."""
+        fx, rows = self._multipliers(q, rates, tau, params)
+        return fx, self._loads(masses)[1] @ rows
+
+    def acceleration(self, q: Array, fx: Array, rows: Array, masses: Array
+                     ) -> tuple[float, float]:
+        """The assembly's horizontal acceleration (m/s², root frame): the ground's force on
+        it (driven wheels' F_x along their bodies' headings, each axle's F_y along its
+        axle) over its mass, payloads of ``masses`` included."""
+        total = np.zeros(2)
+        for f, (i, r) in zip(fx, self._driven_yaw, strict=True):
+            a = float(q[i] - q[r])
+            total += f * np.array([np.cos(a), np.sin(a)])
+        for f, (i, r) in zip(rows, self._row_yaw, strict=True):
+            a = float(q[i] - q[r])
+            total += f * np.array([-np.sin(a), np.cos(a)])
+        m = self._mass + float(np.sum(masses))
+        return float(total[0] / m), float(total[1] / m)
+
+    def traction_parts(self, q: Array, rates: Array, tau: Array,
+                       params: Mapping[str, float], masses: Array
+                       ) -> tuple[Array, Array, Array]:
+        """(F_x, F_y, N_w) (N) of each driven wheel with load transfer (module docstring)."""
+        fx, rows = self._multipliers(q, rates, tau, params)
+        n, share = self._loads(masses, self.acceleration(q, fx, rows, masses))
+        return fx, share @ rows, n
+
+    def traction(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
+                 masses: Array) -> tuple[Array, Array]:
+        """(|F_w|, N_w) (N) of each driven wheel with load transfer (module docstring):
+        the force it must transmit to roll and the normal load it has for it."""
+        fx, fy, n = self.traction_parts(q, rates, tau, params, masses)
+        return np.asarray(np.hypot(fx, fy)), n
+
+    def along(self, ref: Reference, nominal: Mapping[str, float], exp: Experiment
+              ) -> tuple[Array, Array, Array]:
+        """(F_x, F_y, N_w) (samples × driven wheels, N) of a robot that tracks ``ref``
+        exactly: the torque of the minimal-form inverse dynamics, M̄ η̇_d + H̄, with the
+        payload the experiment's schedule has on board at each sample (its point masses
+        on ``nominal``), and the load transfer of that motion."""
+        act = list(self.code.actuated)
+        base = {**self.code.plant_defaults, **nominal}
+        out: tuple[list[Array], list[Array], list[Array]] = ([], [], [])
+        for t, q, qd, qdd in zip(ref.t, ref.q, ref.qdot, ref.qddot, strict=True):
+            params = plant_params_at(self.code, exp, float(t), base)
+            model = {k: v for k, v in params.items() if k in nominal}
+            m_bar = np.asarray(self.code.model.minimal_mass_matrix(q, model),
+                               dtype=np.float64)
+            h_bar = np.asarray(self.code.model.minimal_bias_forces(q, qd[act], model))
+            rates = qd[act]
+            # the plant's bearing friction on top: the monitor takes it off again
+            tau = (m_bar @ qdd[act] + h_bar + self.viscous * rates
+                   + self.coulomb * np.tanh(rates / COULOMB_SPEED))
+            parts = self.traction_parts(q, rates, tau, params, payload_masses(exp, float(t)))
+            for acc, part in zip(out, parts, strict=True):
+                acc.append(part)
+        return np.array(out[0]), np.array(out[1]), np.array(out[2])
 
     def forces(self, q: Array, rates: Array, tau: Array, params: Mapping[str, float],
                masses: Array | None = None) -> Array:
@@ -113,20 +198,26 @@ class SlipMonitor:
                                      np.zeros(2) if masses is None else masses)
         return np.asarray(np.hypot(fx, fy))
 
-    def margin(self, forces: Array, mu: float, masses: Array) -> Array:
-        """μ N_w − |F_w| (N): negative where the wheel needs more traction than it has."""
-        return np.asarray(mu * self.normal_loads(masses) - np.abs(forces))
+    def margin(self, forces: Array, mu: float, masses: Array,
+               loads: Array | None = None) -> Array:
+        """μ N_w − |F_w| (N): negative where the wheel needs more traction than it has
+        (N_w: ``loads``, else the loads at rest)."""
+        n = self.normal_loads(masses) if loads is None else loads
+        return np.asarray(mu * n - np.abs(forces))
 
-    def friction_needed(self, forces: Array, masses: Array) -> float:
-        """The smallest μ at which every driven wheel keeps grip: max_w |F_w| / N_w."""
-        n = self.normal_loads(masses)
+    def friction_needed(self, forces: Array, masses: Array,
+                        loads: Array | None = None) -> float:
+        """The smallest μ at which every driven wheel keeps grip: max_w |F_w| / N_w
+        (N_w: ``loads``, else the loads at rest); inf if a driven wheel lifted off."""
+        n = self.normal_loads(masses) if loads is None else loads
         return float(np.max(np.abs(forces) / n)) if np.all(n > 0) else math.inf
 
 
 class MonitoredPlant:
     """Any plant with the slip monitor on it: at every sample, when the actuators deliver
-    a torque, the traction each driven wheel needs (``forces``, N) and the friction
-    coefficient that needs (``needed``) at the plant's true state and parameters."""
+    a torque, the traction each driven wheel needs (``forces``, N), its normal load under
+    load transfer (``loads``, N) and the friction coefficient that needs (``needed``) at
+    the plant's true state and parameters."""
 
     def __init__(self, inner: Plant, monitor: SlipMonitor) -> None:
         self.inner, self.monitor = inner, monitor
@@ -134,6 +225,7 @@ class MonitoredPlant:
         self.params: dict[str, float] = {}
         self.masses = np.zeros(2)
         self.forces: list[Array] = []
+        self.loads: list[Array] = []
         self.needed: list[float] = []
 
     def start(self, q0: Array) -> None:
@@ -152,10 +244,11 @@ class MonitoredPlant:
 
     def actuate(self, tau: Array) -> list[float]:
         applied = self.inner.actuate(tau)
-        forces = self.monitor.forces(self.inner.q, self.inner.wheels()[1],
-                                     np.array(applied), self.params, self.masses)
+        forces, loads = self.monitor.traction(self.inner.q, self.inner.wheels()[1],
+                                              np.array(applied), self.params, self.masses)
         self.forces.append(forces)
-        self.needed.append(self.monitor.friction_needed(forces, self.masses))
+        self.loads.append(loads)
+        self.needed.append(self.monitor.friction_needed(forces, self.masses, loads))
         return applied
 
     def advance(self, tau: list[float], dt: float, nsub: int) -> bool:

@@ -69,8 +69,12 @@ class Analysis:
     delay: float = 0.0  # s: the experiment's delay from a sample to its torque
     jitter: float = 0.0  # s: the bound on each sample's deviation from it
     max_delay: float | None = None  # s: largest constant delay stable at the setting's gain
-    saturation: str = "not checked"  # the torque and wind-up verdict (saturation.py)
+    saturation: str = "not checked"  # the torque, grip and wind-up verdict (saturation.py)
     saturation_reason: str = ""
+    # The row's one word: unstable (the linear verdict), else slips / winds up / saturates
+    # (the saturation verdict), else stable; "stable" is never the word of a loop predicted
+    # to lose grip.
+    verdict: str = ""
 
 
 def measured_gain(
@@ -183,7 +187,18 @@ def analyse(
         max_delay=tolerated,
         saturation=verdict[0] or "not checked",
         saturation_reason=verdict[1],
+        verdict=overall(radius < 1.0, verdict[0]),
     )
+
+
+def overall(stable: bool, saturation: str) -> str:
+    """The row's one word (see :attr:`Analysis.verdict`)."""
+    if not stable:
+        return "unstable"
+    for word in ("slips", "winds up", "saturates"):
+        if saturation.startswith(word):
+            return word
+    return "stable"
 
 
 def reason(radius: float, radius0: float, g: float, g_max: float, source: str,
@@ -352,6 +367,14 @@ def _delay_text(x: float | None) -> str:
     return "≥ 2 h" if math.isinf(x) else f"{x * 1e3:.3g} ms"
 
 
+def _stable_text(r: Analysis) -> str:
+    """The stable column: yes, **no**, or, where the loop is linearly stable but predicted
+    to lose grip, **no: slips** (never "yes" there)."""
+    if not r.stable:
+        return "**no**"
+    return "**no: slips**" if r.verdict == "slips" else "yes"
+
+
 def table(rows: Sequence[Analysis], code: RobotCode) -> str:
     """The Markdown table of :func:`analyse_all`'s rows (labels from the robot's code), the
     reason of every row not stable and every saturation verdict below it."""
@@ -366,7 +389,7 @@ def table(rows: Sequence[Analysis], code: RobotCode) -> str:
         lines.append(
             f"| {label[r.controller]} | {r.formulation} | {r.sensing} | {r.estimator} "
             f"| {r.max_stable_gain:.4g} | {r.gain_at_setting:.4g} | {r.spectral_radius:.4f} "
-            f"| {'yes' if r.stable else '**no**'} | {eps_min} | {_delay_text(r.max_delay)} "
+            f"| {_stable_text(r)} | {eps_min} | {_delay_text(r.max_delay)} "
             f"| {r.saturation} |"
         )
     notes = [f"* {label[r.controller]} {r.formulation}: {r.gain_source}" for r in rows

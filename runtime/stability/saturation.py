@@ -15,22 +15,42 @@ module predicts both along the experiment's paths, without simulating:
   first estimate, as the C state starts), the discounted window, ‖M̂⁻¹‖; ROC adds its ρ
   at zero error; TDC and the PI none; ASMC's gain integrates ‖s‖, zero on a tracked path.
 
+Grip (μ: the experiment's ``[plant] friction``): each driven wheel can react at most
+μ N r of torque on the floor, N its normal load from the one load model
+(``modeling.contact_loads``, with the payload the schedule has on board and the load
+transfer of the reference's acceleration; :class:`runtime.sim.slip_monitor.SlipMonitor`).
+Along the reference, the torque a wheel's ground force needs is r |F| (F from the
+constraint multipliers of (9) under τ_ff: the rolling and the axle's lateral force, a
+friction circle); where it exceeds μ N r (and is under τ_max) the wheel is predicted to
+slip: no controller follows the path on that floor. The switching torque's bound ‖M̂‖ k
+is reached only while ‖s‖ ≥ ε, so where it would exceed the grip it is said as a risk;
+the simulation (below) carries the switching term the loop really applies.
+
 Verdict: ``saturates`` if the demand alone exceeds τ_max (no controller follows the path),
-``winds up`` if demand plus switching torque does (the switching term drives the actuators
-into the limit; the error it leaves grows the adaptive gains further), else ``ok``. With
+``slips`` if a wheel's torque exceeds its grip μ N r before τ_max (the time, wheel and
+margin in the reason), ``winds up`` if demand plus switching torque exceeds τ_max (the
+switching term drives the actuators into the limit; the error it leaves grows the adaptive
+gains further), else ``ok``. With
 ``simulate``, the closed loop of :mod:`runtime.sim.loop` on the circle (the experiment's
 plant: payload, friction, encoders) gives the simulated counterpart: the peak torque, the
 samples clipped to τ_max and the peak switching gain, in the reason beside the prediction;
 a run that saturates where ``ok`` was predicted turns the verdict into ``saturates
 (simulated)`` (a loop the linear verdict calls unstable leaves the tracked path that the
-prediction assumes: the small robot's ROC).
+prediction assumes: the small robot's ROC). The simulation carries the slip monitor: a run
+whose wheel needs more than μ (|F| > μ N, TDROC's k̂ or ASMC's gain grown past the
+tracked path's) turns ``ok`` or ``winds up`` into ``slips`` (simulated; a run that
+saturates keeps that verdict and says where it slipped), with the first instant, the
+wheel and its margin. Where a wheel slips, the same run with the traction
+limit ``[controller] traction_mu`` = μ (τ_max → μ N r of the lightest driven wheel at
+rest, :func:`runtime.setting.layout.traction_torque_limit`) is simulated too, and the
+reason says whether that limit keeps grip.
 """
 
 from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,8 +58,10 @@ from numpy.typing import NDArray
 from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.plants import plant_for
+from runtime.setting.layout import robot_layout, traction_torque_limit
 from runtime.sim import loop, paths
 from runtime.sim.reference import Reference
+from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 from runtime.stability.sampled_loop import plant_parameters, roc_gain
 
 Array = NDArray[np.float64]
@@ -59,6 +81,28 @@ class SaturationVerdict:
     simulated_peak: float | None = None  # N m: largest |τ| commanded in the simulation
     simulated_saturated: int | None = None  # samples clipped to τ_max
     simulated_gain_peak: float | None = None
+    friction: float = math.nan  # μ of the floor ([plant] friction)
+    grip_margin: float = math.nan  # N m: smallest μ N r − torque over wheels and paths
+    slip: Slip | None = None  # the first loss of grip (predicted, else simulated)
+    friction_needed: float | None = None  # the simulation's largest |F|/N
+    traction_mu: float | None = None  # the traction limit that keeps grip (simulated)
+
+
+@dataclass(frozen=True)
+class Slip:
+    """Where a wheel first needs more than μ N: time (s), path, wheel, its margin there
+    (μ N r − torque, N m, negative) and whether a simulation (not the tracked path) says so."""
+
+    t: float
+    path: str
+    wheel: str
+    margin: float
+    simulated: bool
+
+    def describe(self, mu: float) -> str:
+        return (f"wheel '{self.wheel}' loses grip at t = {self.t:.2f} s on the {self.path} "
+                f"({'simulated' if self.simulated else 'predicted'}: its torque exceeds "
+                f"μ N r by {-self.margin:.3g} N m at μ = {mu:g})")
 
 
 def torque_demand(code: RobotCode, params: dict[str, float], ref: Reference) -> Array:
@@ -117,6 +161,28 @@ def mass_norm(code: RobotCode, formulation: str, q: Array, p: dict[str, float]) 
     return float(np.linalg.norm(m_bar, 2))
 
 
+def slip_monitor(code: RobotCode, exp: Experiment, nominal: dict[str, float]
+                 ) -> SlipMonitor | None:
+    """The slip monitor of the robot (None where its layout cannot be had at these
+    parameters: a bodies-and-wheels robot with drawn parameters, or generated before the
+    contact forces)."""
+    try:
+        return SlipMonitor(code, robot_layout(code, {**code.plant_defaults, **nominal}), exp)
+    except ValueError:
+        return None
+
+
+def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
+               ref: Reference) -> tuple[Array, Array]:
+    """(torque each driven wheel's ground force needs, r |F|; its grip μ N r) at each
+    sample of ``ref`` (samples × driven wheels, N m) for a robot that tracks it, with the
+    payload the schedule has on board (see the module docstring)."""
+    radius = {w.name: w.radius for w in monitor.robot.wheels}
+    r = np.array([radius[w] for w in monitor.driven])
+    fx, fy, n = monitor.along(ref, nominal, exp)
+    return r * np.hypot(fx, fy), exp.plant.friction * n * r
+
+
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
                        nominal: dict[str, float], exp: Experiment, plant: str = "payload",
                        simulate: bool = False) -> SaturationVerdict:
@@ -126,7 +192,10 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
     heavy = plant_parameters(code, nominal, exp, "payload" if plant == "payload" else plant)
     heavy = {k: v for k, v in heavy.items() if k in nominal}
     tau_max = exp.controller.tau_max
+    mu = exp.plant.friction
+    monitor = slip_monitor(code, exp, nominal)
     demand, switching, gain_peak, when, path_of = 0.0, 0.0, 0.0, 0.0, ""
+    grip_margin, risk, slip = math.inf, math.inf, None
     for name in paths.PATHS:
         ref = paths.reference(code, nominal, exp, name)
         tau_ff = torque_demand(code, heavy, ref)
@@ -149,10 +218,28 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
         if total[k] - peak[k] > switching or (gain_peak == 0 and gains.max() > 0):
             switching, gain_peak = float(total[k] - peak[k]), float(gains.max())
             when, path_of = float(ref.t[int(np.argmax(gains))]), name
+        if monitor is not None:
+            need, grip = grip_along(monitor, nominal, exp, ref)
+            margins = grip - need
+            grip_margin = min(grip_margin, float(margins.min()))
+            # the switching torque's bound ‖M̂‖ k is reached only while ‖s‖ ≥ ε: a risk
+            # (said in the reason), not a slip; the simulation carries the real one
+            risk = min(risk, float((margins - (norms * gains)[:, None]).min()))
+            # a slip where the grip binds before τ_max (beyond it: saturation, wind-up)
+            lost = np.nonzero(((margins < 0) & (grip < tau_max)).any(axis=1))[0]
+            if len(lost) and (slip is None or ref.t[lost[0]] < slip.t):
+                i = int(lost[0])
+                w = int(np.argmin(np.where(grip[i] < tau_max, margins[i], np.inf)))
+                slip = Slip(float(ref.t[i]), name, monitor.driven[w], float(margins[i, w]),
+                            False)
     if demand > tau_max:
         verdict = "saturates"
         why = (f"the paths need {demand:.3g} N m (inverse dynamics with the payload on) "
                f"> τ_max = {tau_max:.3g} N m")
+    elif slip is not None:
+        verdict = "slips"
+        why = (f"{slip.describe(mu)}; predicted peak {demand + switching:.3g} N m (demand "
+               f"{demand:.3g} + switching {switching:.3g}) of τ_max = {tau_max:.3g} N m")
     elif demand + switching > tau_max:
         verdict = "winds up"
         why = (f"the switching gain reaches {gain_peak:.3g} (t = {when:.2f} s, {path_of}): "
@@ -162,25 +249,114 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
         verdict = "ok"
         why = (f"predicted peak {demand + switching:.3g} N m (demand {demand:.3g} + "
                f"switching {switching:.3g}) of τ_max = {tau_max:.3g} N m")
-    out = SaturationVerdict(verdict, why, demand, switching, tau_max, gain_peak)
+    if monitor is not None and math.isfinite(grip_margin):
+        why += f"; grip margin {grip_margin:.3g} N m at μ = {mu:g}"
+        if risk < 0 <= grip_margin:
+            why += (f" (with the switching torque at its bound ‖M̂‖ k it would be "
+                    f"{risk:.3g} N m: grip then rests on the loop's error staying under ε)")
+    out = SaturationVerdict(verdict, why, demand, switching, tau_max, gain_peak,
+                            friction=mu, grip_margin=grip_margin, slip=slip)
     if not simulate:
         return out
     ref = paths.circle(code, nominal, exp)
-    r = loop.run(code, controller, formulation, ref, nominal, exp,
-                 plant=plant_for(code, exp, nominal))
+    r, needed = _monitored_run(code, controller, formulation, ref, nominal, exp, monitor)
     if r.init_status != 0:
-        return SaturationVerdict(verdict, f"{why}; not simulated: {r.stop_reason}", demand,
-                                 switching, tau_max, gain_peak)
+        return replace(out, reason=f"{why}; not simulated: {r.stop_reason}")
     early = r.t <= START_UP
     sim_peak = float(np.abs(r.tau).max()) if len(r.tau) else math.nan
     sim_gain = float(r.gain[early].max()) if early.any() else math.nan
-    sim = (f"; simulated on the circle: peak {sim_peak:.3g} N m, {r.saturated} samples at "
+    sim = (f"; simulated on the circle (and, for grip, every path): peak {sim_peak:.3g} N m, "
+           f"{r.saturated} samples at "
            f"τ_max, switching gain up to {sim_gain:.3g} in the first {START_UP:g} s"
            + (f", stopped at t = {r.failed_at:g} s ({r.stop_reason})" if r.failed_at is not None
               else ""))
+    sim_slip, mu_needed = _first_slip(monitor, needed, r, mu)
+    if mu_needed is not None:
+        sim += f", μ needed {mu_needed:.3g} on the circle"
+    refs = {ref.name: ref}
+    if monitor is not None:
+        # grip on the other paths too: ASMC's gain, integrating ‖s‖, grows over the lawn
+        # mower's long run until its chattering torque spins a wheel (h = 0.25 s: at 31 s)
+        for name in paths.PATHS:
+            if name in refs:
+                continue
+            refs[name] = paths.reference(code, nominal, exp, name)
+            other, plant_other = _monitored_run(code, controller, formulation, refs[name],
+                                                nominal, exp, monitor)
+            slip_other, need_other = _first_slip(monitor, plant_other, other, mu)
+            if need_other is not None:
+                sim += f", μ needed {need_other:.3g} on the {name}"
+                mu_needed = max(mu_needed or 0.0, need_other)
+            if sim_slip is None:
+                sim_slip = slip_other
     if r.saturated and verdict == "ok":  # the prediction missed it: say so, the run decides
         verdict = "saturates (simulated)"
         sim += (" — not predicted from the tracked path: the loop left it (see the linear "
                 "verdict)")
-    return SaturationVerdict(verdict, why + sim, demand, switching, tau_max, gain_peak,
-                             sim_peak, r.saturated, sim_gain)
+    traction_mu = None
+    if sim_slip is not None and slip is None:
+        # a run that left the path into τ_max keeps that verdict; its slip is said too
+        verdict = verdict if verdict.startswith("saturates") else "slips"
+        sim += f"; {sim_slip.describe(mu)}"
+        slip = sim_slip
+    if verdict == "slips" and monitor is not None:
+        advice, traction_mu = _traction_advice(code, controller, formulation,
+                                               refs.get(slip.path if slip else "", ref),
+                                               nominal, exp, monitor)
+        sim += f"; {advice}"
+    return replace(out, verdict=verdict, reason=why + sim, simulated_peak=sim_peak,
+                   simulated_saturated=r.saturated, simulated_gain_peak=sim_gain, slip=slip,
+                   friction_needed=mu_needed, traction_mu=traction_mu)
+
+
+def _monitored_run(code: RobotCode, controller: str, formulation: str, ref: Reference,
+                   nominal: dict[str, float], exp: Experiment, monitor: SlipMonitor | None
+                   ) -> tuple[loop.Run, MonitoredPlant | None]:
+    """The closed loop on the experiment's plant, with the slip monitor on it if any."""
+    plant = plant_for(code, exp, nominal)
+    if monitor is None:
+        return loop.run(code, controller, formulation, ref, nominal, exp, plant=plant), None
+    monitored = MonitoredPlant(plant, monitor)
+    return (loop.run(code, controller, formulation, ref, nominal, exp, plant=monitored),
+            monitored)
+
+
+def _first_slip(monitor: SlipMonitor | None, plant: MonitoredPlant | None, r: loop.Run,
+                mu: float) -> tuple[Slip | None, float | None]:
+    """(The first sample whose wheel needs more than μ, the run's largest need)."""
+    if monitor is None or plant is None or not plant.needed:
+        return None, None
+    needed = np.array(plant.needed)
+    radius = {w.name: w.radius for w in monitor.robot.wheels}
+    lost = np.nonzero(needed > mu)[0]
+    slip = None
+    if len(lost):
+        i = int(lost[0])
+        margins = mu * plant.loads[i] - plant.forces[i]
+        w = int(np.argmin(margins))
+        slip = Slip(float(r.t[i]), r.path or "circle", monitor.driven[w],
+                    float(margins[w] * radius[monitor.driven[w]]), True)
+    return slip, float(needed.max())
+
+
+def _traction_advice(code: RobotCode, controller: str, formulation: str, ref: Reference,
+                     nominal: dict[str, float], exp: Experiment, monitor: SlipMonitor
+                     ) -> tuple[str, float | None]:
+    """Whether ``traction_mu`` = μ keeps grip on ``ref`` (simulated), in a sentence, and
+    that μ if it does."""
+    mu = exp.plant.friction
+    c = exp.controller
+    limit = traction_torque_limit(code, {**code.plant_defaults, **nominal}, exp, mu)
+    if limit >= c.tau_max:
+        return (f"a traction limit cannot help: μ N r = {limit:.3g} N m is not under "
+                f"τ_max", None)
+    limited = replace(exp, controller=replace(c, tau_max=limit))
+    r, plant = _monitored_run(code, controller, formulation, ref, nominal, limited, monitor)
+    slip, needed = _first_slip(monitor, plant, r, mu)
+    held = (f"[controller] traction_mu = {mu:g} (τ_max → {limit:.3g} N m): simulated, "
+            f"μ needed {needed:.3g}" if needed is not None else "")
+    if r.init_status == 0 and r.failed_at is None and slip is None:
+        return f"set {held}, it keeps grip", mu
+    return (f"{held or 'traction_mu'} does not keep grip either"
+            + (f" (stopped at t = {r.failed_at:g} s)" if r.failed_at is not None else "")
+            + ": slow the path down, or make the loop stable first", None)

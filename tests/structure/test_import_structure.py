@@ -69,13 +69,14 @@ RUNTIME_MODELING: dict[str, frozenset[str] | None] = {
     "modeling.rendering": None,  # the strict Jinja2 environment (wmr freeze's header)
     "modeling.planar_robot": None,  # a robot's layout in numbers (the MuJoCo plant)
     "modeling.mjcf_export": None,  # its MJCF (the MuJoCo plant)
+    "modeling.contact_loads": None,  # the one load model (slip monitor, traction limit)
     "modeling.audit": None,  # the physics audit's warnings, printed once as `wmr model` does
     # A robot file's numbers; [physical] → lumped is the one run-time use of SymPy here.
     # Not load_robot_model: that derives a model (SymPy), which is codegen's job.
     "modeling.robot_file": frozenset({"load_robot"}),
 }
 
-RUNTIME_MODELING_NEEDS = frozenset({"jinja2"})
+RUNTIME_MODELING_NEEDS = frozenset({"jinja2", "numpy"})
 
 # The floors of runtime/, from the bottom: its sub-packages (runtime/<name>/) and top-level
 # modules (runtime/<name>.py). A module imports only from its own and from lower floors;
