@@ -28,6 +28,7 @@ STEP_BENCH = "runtime/tooling/bench/step_bench.py"
 EXECUTION = "runtime/campaign/execution.py"
 PRINTER = "codegen/printer_base.py"
 SLIP = "runtime/sim/slip_monitor.py"
+PLANAR = "modeling/importers/planar.py"
 SETTINGS = "runtime/experiment/settings.py"
 ANALYSIS = "runtime/stability/analysis.py"
 
@@ -79,6 +80,14 @@ MUTANTS: tuple[Mutant, ...] = (
            "rate[x] = stage.define(rate[x] - turn * v[y])",
            "rate[x] = stage.define(rate[x] + turn * v[y])",
            (T_ROOT, T_KANE), "the trailers' root-twist rate with its transport term's sign wrong"),
+    # --- modeling: robot files -------------------------------------------------------------
+    Mutant("ground-through-wheel-tops", PLANAR,
+           "plan.ground = min(float(f.origin[2]) - geom.size[0] for geom, f in "
+           "plan.cylinders.values())",
+           "plan.ground = min(float(f.origin[2]) + geom.size[0] for geom, f in "
+           "plan.cylinders.values())",
+           ("tests/robot_files/test_import.py", "tests/robot_files/test_import_public.py"),
+           "a file without a ground frame read with its ground through the wheels' tops"),
     # --- codegen ------------------------------------------------------------------------
     Mutant("printer-negative-half-power", PRINTER,
            "                return f\"{self.lit(1.0)}/{text if single else f'({text})'}\", False",
