@@ -121,7 +121,8 @@ def test_tutorial_runs_from_an_installed_wheel(tmp_path: Path) -> None:
     assert len(rows) == 8, stability
     assert all(rows[(c, "minimal")] == "yes" for c in ("TDC", "TDROC", "ROC", "ASMC")), rows
     assert all(rows[(c, "paper")] == "**no**" for c in ("TDC", "TDROC", "ASMC")), rows
-    assert "TDE condition, minimal formulation" in stability
+    assert "TDE condition, paper formulation" in stability
+    assert "TDE condition, minimal formulation" not in stability  # it holds over ±15 %
 
     # Step 5: the firmware loop built and tracked (it exits 1 otherwise).
     assert "worst wheel-angle error after 5 s" in outputs["./firmware_loop"]
@@ -140,6 +141,9 @@ def test_tutorial_runs_from_an_installed_wheel(tmp_path: Path) -> None:
     assert len(circle_minimal) == sum(f == "minimal" for f, _ in pairs)
     assert all(r["status"] == "ok" for r in circle_minimal), circle_minimal
     assert all(float(r["rms_error_m"]) < 0.02 for r in circle_minimal), circle_minimal
+    # ... and the paper formulation, predicted unstable in step 4, is refused, not run
+    paper_rows = [r for r in metrics if r["formulation"] == "paper"]
+    assert paper_rows and all(r["status"] == "refused" for r in paper_rows), paper_rows
 
     # Step 7: the URDF, imported twice (the second time with the motors), modelled and run.
     imported = (work / "my_urdf_robot.toml").read_text()
@@ -152,4 +156,5 @@ def test_tutorial_runs_from_an_installed_wheel(tmp_path: Path) -> None:
     with (work / "urdf_results" / "metrics.csv").open() as f:
         urdf_runs = list(csv.DictReader(f))
     assert len(urdf_runs) == 2 * len(pairs), urdf_runs
-    assert all(r["status"] == "ok" for r in urdf_runs), urdf_runs
+    assert all(r["status"] == ("ok" if r["formulation"] == "minimal" else "refused")
+               for r in urdf_runs), urdf_runs
