@@ -29,6 +29,7 @@ EXECUTION = "runtime/campaign/execution.py"
 PRINTER = "codegen/printer_base.py"
 SLIP = "runtime/sim/slip_monitor.py"
 PLANAR = "modeling/importers/planar.py"
+AUDIT = "modeling/audit.py"
 SETTINGS = "runtime/experiment/settings.py"
 ANALYSIS = "runtime/stability/analysis.py"
 
@@ -88,6 +89,11 @@ MUTANTS: tuple[Mutant, ...] = (
            "plan.cylinders.values())",
            ("tests/robot_files/test_import.py", "tests/robot_files/test_import_public.py"),
            "a file without a ground frame read with its ground through the wheels' tops"),
+    Mutant("audit-unit-slip-lenient", AUDIT,
+           "UNIT_SLIP = 1e3  # × what the mass and size allow",
+           "UNIT_SLIP = 1e4  # × what the mass and size allow",
+           ("tests/robot_files/test_audit.py", "tests/robot_files/test_import_published.py"),
+           "an inertia typed in g m² (1,000×) passing the audit as kg m²"),
     # --- codegen ------------------------------------------------------------------------
     Mutant("printer-negative-half-power", PRINTER,
            "                return f\"{self.lit(1.0)}/{text if single else f'({text})'}\", False",
