@@ -30,6 +30,7 @@ PRINTER = "codegen/printer_base.py"
 SLIP = "runtime/sim/slip_monitor.py"
 PLANAR = "modeling/importers/planar.py"
 AUDIT = "modeling/audit.py"
+TDROC_C = "generated/c/wmr_tdroc.c"
 SETTINGS = "runtime/experiment/settings.py"
 ANALYSIS = "runtime/stability/analysis.py"
 
@@ -100,6 +101,13 @@ MUTANTS: tuple[Mutant, ...] = (
            "                return text, single",
            ("tests/codegen/test_codegen_backends.py", T_GEN_SYMPY),
            "x^(-3/2) printed as x^(3/2): the reciprocal dropped"),
+    # --- generated: the firmware C's documented ranges ----------------------------------
+    Mutant("tdroc-window-over-strict", TDROC_C,
+           "if (config->n < 2 || config->n > WMR_MAX_WINDOW) {",
+           "if (config->n < 3 || config->n > WMR_MAX_WINDOW) {",
+           ("tests/firmware/test_controller_contract.py::"
+            "test_accepted_inputs_never_give_a_nonfinite_output",),
+           "TDROC's documented window n = 2 refused by the firmware"),
     # --- runtime: sensing, faults, payload, the loop ----------------------------------------
     Mutant("encoder-rounds", SENSORS,
            "counts = np.floor(angles * self.counts_per_rad)",
