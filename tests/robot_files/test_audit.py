@@ -51,20 +51,9 @@ r = 0.033
 b = 0.16
 d = 0.05
 """
-# docs/TUTORIAL.md's robot: Iw is the bare wheel's (less than a disc of 0.3 kg, r = 0.05 m).
-TUTORIAL_PHYSICAL = """name = "my_robot"
-[physical]
-m_P = 4.0
-I_P = 0.05
-x_P = -0.02
-y_P = 0.0
-m_w = 0.3
-Iw = 1.5e-4
-Im = 8e-5
-r = 0.05
-b = 0.25
-d = 0.05
-"""
+# docs/TUTORIAL.md's robot: Iw is the bare wheel's (the file says why).
+TUTORIAL_PHYSICAL = (ROOT / "tests" / "robots" / "tutorial_physical.toml").read_text(
+    encoding="utf-8")
 
 
 def one_line(exc: pytest.ExceptionInfo[BaseException]) -> str:

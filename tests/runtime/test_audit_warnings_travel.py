@@ -26,20 +26,8 @@ CASTER = ROOT / "tests" / "robots" / "caster_robot.toml"
 # The warning the bare wheels draw (modeling.audit), in the words every output repeats.
 WARNING = re.compile(r"wheel\[0\] \(driven wheel 'right'\): spin inertia 0\.003 kg m\^2 "
                      r"[^\n]*without its motor")
-# A physical file of docs/TUTORIAL.md's robot whose Iw is the bare wheel's (test_audit.py).
-PHYSICAL = """name = "my_robot"
-[physical]
-m_P = 4.0
-I_P = 0.05
-x_P = -0.02
-y_P = 0.0
-m_w = 0.3
-Iw = 1.5e-4
-Im = 8e-5
-r = 0.05
-b = 0.25
-d = 0.05
-"""
+# docs/TUTORIAL.md's robot, its Iw the bare wheel's (the file test_audit.py reads too).
+PHYSICAL = (ROOT / "tests" / "robots" / "tutorial_physical.toml").read_text(encoding="utf-8")
 
 
 def wmr(*args: str) -> subprocess.CompletedProcess[str]:
