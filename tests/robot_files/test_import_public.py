@@ -5,8 +5,8 @@ as published, is imported or refused with its reason.
   masses, computed here from the file (expanded by xacro where it is a template) without
   the importer, and its track (the distance between its driven wheels) the file's.
 * A refusal: one line naming the file and the reason recorded in sources.toml.
-* Three (the 2019 Burger, the Kobuki, the MiR100 with its four swivel casters: five bodies)
-  go on through ``wmr model`` and ``wmr stability`` (marked ``slow``).
+* The imported ones go on through ``wmr model``, ``wmr stability`` and a short ``wmr
+  reproduce`` in tests/robot_files/test_public_pipeline.py.
 * The corpus: at least 20 files, each with its repository, path, 40-digit commit and a
   licence that allows redistribution, all in README.md's table; no mesh files.
 """
@@ -24,7 +24,6 @@ import pytest
 from modeling.importers import import_robot
 from modeling.importers.expand import expand, uses_xacro
 from modeling.robot_io import RobotFileError
-from runtime.cli import main as wmr
 
 PUBLIC = Path(__file__).resolve().parents[1] / "robots" / "public"
 ROBOTS: list[dict[str, Any]] = tomllib.loads((PUBLIC / "sources.toml").read_text())["robot"]
@@ -57,21 +56,6 @@ def test_public_robot(entry: dict[str, Any]) -> None:
     driven = [float(w.position[1]) for w in desc.wheels if w.driven]
     assert len(driven) == 2 and abs(driven[0] - driven[1]) == pytest.approx(entry["track"],
                                                                              rel=1e-9)
-
-
-@pytest.mark.slow  # 40-60 s each on a loaded machine (the derivation)
-@pytest.mark.parametrize("entry", [r for r in ROBOTS if r.get("through") == "stability"],
-                         ids=lambda r: r["file"])
-def test_public_robot_through_model_and_stability(entry: dict[str, Any], tmp_path: Path,
-                                                  capsys: pytest.CaptureFixture[str]) -> None:
-    robot = tmp_path / "robot.toml"
-    assert wmr(["import", str(PUBLIC / entry["file"]), "--out", str(robot)]) == 0
-    code = tmp_path / "code"
-    assert wmr(["model", "--robot", str(robot), "--out", str(code)]) == 0
-    capsys.readouterr()
-    assert wmr(["stability", "--robot", str(robot), "--generated", str(code), "--no-measure",
-                "--no-delay", "--no-saturation"]) == 0
-    assert "| TDROC | minimal |" in capsys.readouterr().out
 
 
 def test_the_corpus_is_recorded() -> None:
