@@ -126,6 +126,20 @@ def report(where: str, warnings: Iterable[str]) -> tuple[str, ...]:
     return out
 
 
+SECTION_INTRO = ("The physics audit of the robot file warned (check each before trusting "
+                 "these results):")
+
+
+def section(warnings: Sequence[str], heading: str = "## Robot file audit") -> list[str]:
+    """The warnings as a written output carries them (REPORT.md, FAULTS.md, a campaign's
+    summary.md, the crosscheck's report): a heading, one sentence, one ``- `` line per
+    warning and a blank line; nothing for a robot without warnings. One function, so that
+    every output words them alike."""
+    if not warnings:
+        return []
+    return [heading, "", SECTION_INTRO, "", *[f"- {w}" for w in warnings], ""]
+
+
 # ---------------------------------------------------------------------------------------
 # Shared checks
 # ---------------------------------------------------------------------------------------

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from modeling import audit
 from modeling.package_paths import default_output
 from runtime.bindings.generated import RobotCode, load_robot_code
 from runtime.experiment.faults import Fault
@@ -291,6 +292,8 @@ class FaultTable:
     # (its init refused the configuration, or it stopped or diverged): no fault is injected
     # into a controller that does not run without one.
     not_run: dict[tuple[str, str], str] = field(default_factory=dict)
+    # the physics audit's warnings on the robot file (modeling.audit), written into FAULTS.md
+    warnings: tuple[str, ...] = ()
 
     @property
     def labels(self) -> dict[str, str]:
@@ -306,12 +309,13 @@ def fault_table(
     code: RobotCode | None = None,
     plant: dict[str, float] | None = None,
     progress: bool = False,
+    warnings: Sequence[str] = (),
 ) -> FaultTable:
     """Run every fault on every controller and formulation (default: all generated for the
     robot; no files written); ``faults`` default to the experiment's ``[[fault]]`` tables,
     or :data:`DEFAULT_FAULTS`. ``code``: the robot's generated code (default: the paper's
     robot), ``robot`` its nominal parameters, ``plant`` the simulated robot's (before
-    payload)."""
+    payload); ``warnings``: the physics audit's on the robot file, for FAULTS.md."""
     code = load_robot_code("") if code is None else code
     robot = dict(robot or code.params)
     chosen = tuple(faults if faults is not None else exp.faults or DEFAULT_FAULTS)
@@ -341,7 +345,7 @@ def fault_table(
             print(f"[{i}/{len(pairs)}] {ctrl}/{form}: {len(chosen)} faults", flush=True)
     order = {f: i for i, f in enumerate(chosen)}
     rows.sort(key=lambda r: order[r.fault])
-    return FaultTable(exp, robot, chosen, rows, n, thresholds, code, not_run)
+    return FaultTable(exp, robot, chosen, rows, n, thresholds, code, not_run, tuple(warnings))
 
 
 def _statuses(r: Row, prefix: str) -> str:
@@ -451,6 +455,7 @@ def markdown(table: FaultTable) -> str:
         f"ASMC γ = {c.gamma:g}, τ_max = {c.tau_max:g} N m (the controllers' own limit).",
         f"* Experiment: {exp.source}.",
         "",
+        *audit.section(table.warnings),
         "## Faults",
         "",
         "Faults act at sample granularity (see `runtime/experiment/faults.py`):",

@@ -5,12 +5,14 @@ the simulated outcome (``summary.md``, ``summary.json``)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
+from modeling import audit
 from runtime.campaign.prediction import Prediction
 from runtime.campaign.spec import Campaign
 from runtime.sim.outcome import OFF_PATH_FRACTION
@@ -127,8 +129,10 @@ def _mm(x: float) -> str:
     return "–" if not math.isfinite(x) else f"{1000 * x:.2f}"
 
 
-def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: list[str]) -> str:
-    """``summary.md``."""
+def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: list[str],
+             warnings: Sequence[str] = ()) -> str:
+    """``summary.md``; ``warnings``: the physics audit's on the campaign's robot file
+    (``modeling.audit``), written after the opening lines."""
     lines = [
         f"# Campaign summary: {summary['runs']} runs",
         "",
@@ -137,6 +141,7 @@ def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: lis
         f"seed {campaign.seed}; run on {where}.",
         f"Drawn: {', '.join(name for name, _ in campaign.vary) or 'nothing'}.",
         "",
+        *audit.section(warnings),
         "Outcome: ok; diverged (a step failed, the plant became non-finite, the position error "
         f"exceeded {campaign.diverged_error:g} m, or the final or RMS error exceeded "
         f"{100 * OFF_PATH_FRACTION:g} % of the path's size); init refused (the C init's "

@@ -206,7 +206,7 @@ def report(out: Path, campaign: Campaign, tgt: Any, where: str, plots: bool = Tr
 
         stability_map(table, campaign, pred, summary, out / "stability_map.png")
         names.append("stability_map.png")
-    text = markdown(summary, campaign, where, names)
+    text = markdown(summary, campaign, where, names, tgt.setup.warnings)
     store.atomic_write_text(out / "summary.md", text)
     store.atomic_write_text(out / "summary.json",
                             json.dumps(_json_safe(summary), indent=2, sort_keys=True))

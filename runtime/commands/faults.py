@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         table = fault_table(setting.experiment, robot=setup.nominal, code=setup.code,
                             plant=None if setting.is_paper_robot else setup.plant,
-                            progress=True)
+                            progress=True, warnings=setup.warnings)
     except ValueError as exc:  # a robot or fault the faults cannot be simulated on
         print(f"error: {exc}", file=sys.stderr)
         return 2

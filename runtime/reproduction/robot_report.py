@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from modeling import audit
 from runtime.bindings.robots import RobotSetup
 from runtime.bindings.uncertainty import inertial_keys, roc_bounds, schedule_tde, tde_alpha
 from runtime.experiment.settings import Experiment
@@ -130,15 +131,7 @@ def report_lines(rep: Reproduction) -> list[str]:
         "",
         *[f"- {line}" for line in rep.setting.scaling],
         "",
-        *([  # the warnings travel with the robot (modeling.audit; MODEL.md lists them)
-            "## Robot file audit",
-            "",
-            "The physics audit of the robot file warned (check each before trusting these "
-            "results):",
-            "",
-            *[f"- {w}" for w in s.warnings],
-            "",
-        ] if s.warnings else []),
+        *audit.section(s.warnings),  # the warnings travel with the robot (MODEL.md too)
         "## Model checks",
         "",
         f"Inertial parameters (those the kinematics does not depend on): {', '.join(inertial)}.",

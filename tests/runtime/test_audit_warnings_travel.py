@@ -1,7 +1,9 @@
 """The physics audit's warnings travel with the robot (issue 47): the generated ``robot.py``
 declares them (``AUDIT_WARNINGS``), every command that runs the robot prints them on stderr
-(``runtime.commands.options.print_audit``), ``wmr reproduce`` writes them into REPORT.md and
-``wmr freeze`` into the frozen header's comment.
+(``runtime.commands.options.print_audit``), ``wmr reproduce`` writes them into REPORT.md,
+``wmr faults`` into FAULTS.md, a campaign into its summary.md and ``wmr crosscheck`` into its
+report (all four through ``modeling.audit.section``), and ``wmr freeze`` into the frozen
+header's comment.
 
 The robot: tests/robots/caster_robot.toml with bare driven wheels (spin inertia below a
 disc's 1.5 m r²/2, no motor given: the audit asks for the rotor), derived once here (about
@@ -135,3 +137,56 @@ def test_a_clean_robot_prints_nothing() -> None:
     assert done.returncode == 0, done.stderr
     assert "warning:" not in done.stderr
     assert load_robot_code("").audit_warnings == ()
+
+
+def audit_section_of(text: str, heading: str = "## Robot file audit") -> str:
+    """The text under the audit's heading, up to the next heading."""
+    assert heading in text, text[:2000]
+    return text.split(heading, 1)[1].split("\n## ", 1)[0]
+
+
+def test_faults_writes_them_into_faults_md(bare: tuple[Path, Path], tmp_path: Path) -> None:
+    robot, out = bare
+    experiment = tmp_path / "short.toml"
+    experiment.write_text('[paths]\ncircle_duration = 3.0\n[[fault]]\nkind = "repeated-sample"'
+                          '\nstart = 2.5\n')
+    results = tmp_path / "faults"
+    done = wmr("faults", "--robot", str(robot), "--generated", str(out), "--experiment",
+               str(experiment), "--out", str(results))
+    assert done.returncode == 0, done.stderr
+    section = audit_section_of((results / "FAULTS.md").read_text(encoding="utf-8"))
+    assert WARNING.search(section) and section.count("\n- ") == 2, section
+
+
+def test_a_campaigns_summary_md_carries_them(bare: tuple[Path, Path], tmp_path: Path) -> None:
+    """One 3 s run, in this process (the function a Dask task runs), then the report."""
+    import json
+
+    from runtime.campaign import store
+    from runtime.campaign.runner import run_chunk
+    from runtime.commands.campaign import report, resolve_campaign
+
+    _, out = bare
+    spec = tmp_path / "campaign.toml"
+    spec.write_text('seed = 1\ncontrollers = ["tdc"]\nduration = 3.0\n[vary."controller.eps"]'
+                    '\nmin = 0.05\nmax = 0.1\n')
+    campaign, tgt = resolve_campaign(spec, out / "bare_caster", 1)
+    folder = tmp_path / "campaign"
+    folder.mkdir()
+    store.prepare(folder, campaign)
+    payload = json.dumps(campaign.to_payload(), sort_keys=True)
+    store.write_part(folder, run_chunk(payload, range(1)), store.schema(campaign))
+    report(folder, campaign, tgt, "this process", plots=False)
+    section = audit_section_of((folder / "summary.md").read_text(encoding="utf-8"))
+    assert WARNING.search(section) and section.count("\n- ") == 2, section
+
+
+def test_crosscheck_reports_them(bare: tuple[Path, Path]) -> None:
+    """The quick crosscheck of the robot's generated code: its report opens with them."""
+    _, out = bare
+    done = wmr("crosscheck", "--robot", str(out / "bare_caster"), "--quick")
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr
+    title = done.stdout.index("Robot bare_caster")
+    section = done.stdout[title:].split("Robot file audit", 1)[1].split("\n\n", 3)
+    assert WARNING.search(section[2]) and section[2].count("- ") == 2, section
+    assert "Robot file audit" not in wmr("crosscheck", "--robot", "drishti", "--quick").stdout

@@ -64,7 +64,7 @@ def crosscheck(
     for target in targets:
         hand = handwritten_crosscheck(target, seed, quick, pert) if applies_to(target) else None
         gen = generated_crosscheck(target, seed, quick, pert)
-        robots.append(RobotReport(target.name, target.label, hand, gen))
+        robots.append(RobotReport(target.name, target.label, hand, gen, target.warnings))
     return CrosscheckReport(robots, time.perf_counter() - t0, pert)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from modeling import audit
 from runtime.tooling.crosscheck.deviation import (
     CONTROLLER_IMPLS,
     DOUBLE_TOL,
@@ -158,6 +159,7 @@ class RobotReport:
     label: str
     handwritten: Report | None
     generated: GeneratedReport
+    warnings: tuple[str, ...] = ()  # the physics audit's on the robot file
 
     def failing(self) -> set[tuple[str, str, str]]:
         """(section, row, implementation) above tolerance."""
@@ -168,7 +170,7 @@ class RobotReport:
 
     def render(self) -> str:
         title = f"Robot {self.label}"
-        out = [title, "=" * len(title)]
+        out = [title, "=" * len(title), *audit.section(self.warnings, "Robot file audit")]
         if self.handwritten is not None:
             out += self.handwritten.sections()
             out.append("")

@@ -11,7 +11,7 @@ folder outside ``generated/`` (e.g. a modified copy) is imported as a package of
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from runtime.bindings.generated import GENERATED, RobotCode
@@ -21,12 +21,15 @@ from runtime.bindings.robots import resolve as resolve_robot
 
 @dataclass(frozen=True)
 class Target:
-    """One robot's generated code: its Python (``code``) and where its C and CasADi are."""
+    """One robot's generated code: its Python (``code``) and where its C and CasADi are;
+    ``warnings``: the physics audit's on the robot file (a robot file's own, else those its
+    generated ``robot.py`` records)."""
 
     code: RobotCode
     folder: Path
     c_dir: Path
     casadi_dir: Path
+    warnings: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
@@ -55,16 +58,17 @@ def target_of(folder: Path) -> Target:
     """The target of a robot folder (``python/``, ``c/``, ``casadi/`` inside)."""
     code = code_in(folder)
     folder = folder.resolve()
-    return Target(code, folder, folder / "c", folder / "casadi")
+    return Target(code, folder, folder / "c", folder / "casadi", code.audit_warnings)
 
 
 def resolve(robot: str, generated: Path | None = None) -> Target:
     """``--robot`` (and ``--generated``) as every command resolves them; exits with its
     sentence otherwise."""
     try:
-        return target_of(resolve_robot(robot, generated).code.folder)
+        setup = resolve_robot(robot, generated)
     except RobotSourceError as exc:
         raise SystemExit(str(exc)) from None
+    return replace(target_of(setup.code.folder), warnings=setup.warnings)
 
 
 def all_targets() -> list[Target]:
