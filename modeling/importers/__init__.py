@@ -3,9 +3,10 @@
 A file is read as published: a xacro template is expanded first (``expand``: the ROS
 ``xacro`` package, no ROS install), then read into a neutral 3D mechanism (``urdf``,
 ``mjcf``: standard library XML, no ROS or MuJoCo needed), checked for non-physical and
-placeholder inertias (``checks``), turned into a planar bodies-and-wheels robot with a
-provenance note per value (``planar``:
-fixed joints merged, 3D inertias composed and projected, wheels, casters and hitches
+placeholder inertias (``checks``), wheels whose collision is a mesh given the cylinder of
+its bounds (``meshes``, when the mesh file is found and is STL or OBJ), turned into a
+planar bodies-and-wheels robot with a provenance note per value (``planar``: fixed joints
+merged, 3D inertias composed and projected, wheels, casters and hitches
 recognised), written as a robot file (``writer``), and read back through
 ``modeling.description.parse_description``, which runs the physics audit of
 ``modeling.audit`` on it: what ``wmr import`` writes is exactly what ``wmr model`` will
@@ -22,6 +23,7 @@ from pathlib import Path
 from modeling.description import RobotDescription, parse_description
 from modeling.importers.expand import expand, uses_xacro, without_comments
 from modeling.importers.mechanism import ImportFileError, Mechanism
+from modeling.importers.meshes import add_wheel_cylinders
 from modeling.importers.mjcf import read_mjcf
 from modeling.importers.planar import Options, PlanarRobot, build
 from modeling.importers.urdf import read_urdf
@@ -55,6 +57,7 @@ def read_mechanism(path: Path, package_path: Sequence[Path] = (),
         return read_mjcf(path, text)
     if first:
         mech = read_urdf(path, text)
+        add_wheel_cylinders(mech, path, package_path)
         if skipped:
             mech.notes.append("xacro includes skipped, their packages found nowhere (give "
                               "--package-path to read them): " + ", ".join(skipped))

@@ -23,12 +23,16 @@ class ImportFileError(RobotFileError):
 @dataclass(frozen=True)
 class Geom:
     """A collision shape: ``kind`` (box, cylinder, sphere, capsule, ellipsoid, mesh, plane),
-    ``size`` as ``modeling.importers.geometry`` defines it, and its pose in its link."""
+    ``size`` as ``modeling.importers.geometry`` defines it, and its pose in its link; a
+    mesh's ``source`` (its file name as written) and ``scale`` (its attribute's text: read
+    only when the mesh is, ``modeling.importers.meshes``)."""
 
     kind: str
     size: tuple[float, ...]
     frame: Frame
     label: str
+    source: str = ""
+    scale: str = ""
 
 
 @dataclass

@@ -291,7 +291,7 @@ class _Builder:
                     self.findings.append(
                         f"{link.label}: a mesh without inertia ({meshes[0]} is a mesh, and "
                         "the link has no <inertial>): imported massless; its mass is not in "
-                        "the file, and mesh files are not read")
+                        "the file, and a mesh file gives a shape, not a mass")
                 continue
             where = f"{link.label} ({link.inertial_label})" if link.inertial_label else link.label
             self.findings += checks.check_tensor(self.mech.path, where, link.inertial)
@@ -677,9 +677,13 @@ def _why_no_wheels(b: _Builder) -> str:
         j = joints[0]
         kinds = sorted({g.kind for g in b.mech.links[j.child].geoms})
         what = (f"a collision {' and '.join(kinds)}" if kinds else "no collision geometry")
-        return (f"; {j.label} (continuous) has {what} on its child "
-                f"{b.mech.links[j.child].label} (mesh files are not read: a wheel needs a "
-                "collision cylinder)")
+        link = b.mech.links[j.child].label
+        # why its mesh gave no cylinder (modeling.importers.meshes), if it has one
+        mesh = next((n.removeprefix(f"{link} ") for n in b.mech.notes
+                     if n.startswith(f"{link} <collision>")), "")
+        return (f"; {j.label} (continuous) has {what} on its child {link} (a wheel needs a "
+                "collision cylinder, or a round STL or OBJ collision mesh"
+                + (f"; {mesh}" if mesh else "") + ")")
     welded = [j for j in b.mech.joints if j.kind == "fixed" and "wheel" in j.child.lower()]
     if welded:
         return (f"; the file welds its wheels: {', '.join(j.label for j in welded[:4])} "

@@ -102,7 +102,8 @@ def _geometry(path: Path, where: str, element: ET.Element) -> Geom | None:
     elif shape.tag == "sphere":
         size = _floats(path, f"{where} <sphere>", "radius", shape.get("radius"), 1)
     elif shape.tag == "mesh":
-        size = ()
+        return Geom("mesh", (), frame, where, shape.get("filename", ""),
+                    shape.get("scale", ""))
     else:
         raise ImportFileError(f"{path}: {where}: unknown geometry <{shape.tag}>")
     if any(s <= 0 for s in size):
