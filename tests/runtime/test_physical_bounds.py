@@ -114,3 +114,16 @@ def test_a_part_the_robot_lacks_is_named() -> None:
         box_of(code, parse_physical({"tractor": {"mass": [0.0, 10.0]}}, "t"))
     with pytest.raises(ValueError, match=r"controller\.uncertainty"):
         box_of(load_robot_code(""), parse_physical({"mass": 0.1}, "t"))
+
+
+def test_the_stability_verdict_takes_roc_gain_over_the_physical_box() -> None:
+    """The verdict's ROC gain is refused over the lumped ±30 % box on trailer2 (α ≈ 1.9)
+    and exists over ±20 % on every body's mass and inertia."""
+    from runtime.stability.sampled_loop import roc_gain
+
+    code = load_robot_code("trailer2")
+    with pytest.raises(ValueError, match="alpha < 1 over the ±30% box"):
+        roc_gain(code, "minimal", code.params, Experiment())
+    exp = Experiment(physical=parse_physical({"mass": 0.2, "yaw_inertia": 0.2}, "t"))
+    gain = roc_gain(code, "minimal", code.params, exp)
+    assert 0.0 < gain < float("inf")
