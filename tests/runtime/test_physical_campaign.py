@@ -7,10 +7,12 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import pytest
+
 from runtime.bindings.physical_bounds import box_of
 from runtime.campaign.runner import run_one, target
 from runtime.campaign.sampling import base_values
-from runtime.campaign.spec import parse_campaign
+from runtime.campaign.spec import CampaignSpecError, parse_campaign
 from runtime.commands.campaign import with_plant
 
 SPEC = """
@@ -82,3 +84,31 @@ def test_summary_says_which_draws_each_plant_took() -> None:
     assert "generated plant, through the generated map" in model
     assert "mujoco plant, as the bodies of the exported MJCF" in engine
     assert "mass ±20%" in engine
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('[vary."physical.mass_trolley"]\nspread = 0.2\n',
+     "unknown parameter 'vary.\"physical.mass_trolley\"' (the robot's physical quantities "
+     "are physical.mass_tractor"),
+    ('[vary."physical.mass_cart"]\nspread = 0.2\n[vary."robot.J_x_tractor"]\nspread = 0.2\n',
+     "draw either the robot's physical quantities (physical.*) or its model parameters"),
+    ("[physical_uncertainty]\nmass = 2.0\n",
+     "field 'physical_uncertainty.mass' must be a relative half-width in [0, 1)"),
+    ("[physical_uncertainty.carriage]\nmass = 0.1\n",
+     "robot 'trailer' has no body or wheel 'carriage'"),
+])
+def test_bad_physical_campaigns_get_one_line(text: str, message: str) -> None:
+    tgt = target("trailer")
+    code = tgt.setup.code
+    with pytest.raises(CampaignSpecError) as err:
+        parse_campaign(text, "c.toml", tgt.plant, available=lambda f: code.controller_names,
+                       physical_box=lambda d: box_of(code, d))
+    assert str(err.value).startswith("c.toml: ") and message in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+def test_a_lumped_robot_keeps_its_lumped_box() -> None:
+    tgt = target(None)  # Drishti, a [lumped] robot: no physical quantities
+    with pytest.raises(CampaignSpecError, match="needs a bodies-and-wheels robot"):
+        parse_campaign("[physical_uncertainty]\nmass = 0.1\n", "c.toml", tgt.plant,
+                       available=lambda f: tgt.setup.code.controller_names)
