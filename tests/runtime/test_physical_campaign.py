@@ -112,3 +112,53 @@ def test_a_lumped_robot_keeps_its_lumped_box() -> None:
     with pytest.raises(CampaignSpecError, match="needs a bodies-and-wheels robot"):
         parse_campaign("[physical_uncertainty]\nmass = 0.1\n", "c.toml", tgt.plant,
                        available=lambda f: tgt.setup.code.controller_names)
+
+
+def test_the_declaration_travels_to_the_workers() -> None:
+    """What a Dask worker rebuilds (``from_payload``) has the declaration (ROC's bounds)
+    and the draws; the campaign's identity depends on it."""
+    import json
+
+    from runtime.campaign.spec import from_payload
+
+    tgt = target("trailer")
+    code = tgt.setup.code
+    c = parse_campaign(SPEC.format(ctrl="roc"), "c.toml", tgt.plant,
+                       available=lambda f: code.controller_names,
+                       physical_box=lambda d: box_of(code, d))
+    back = from_payload(json.loads(json.dumps(c.to_payload())))
+    assert back.experiment.physical == c.experiment.physical
+    assert back.vary == c.vary and back.digest() == c.digest()
+    plain = replace(c, experiment=replace(c.experiment, physical=type(c.experiment.physical)()))
+    assert plain.digest() != c.digest()
+
+
+@pytest.mark.parametrize("plant", ["generated", "mujoco"])
+def test_a_run_simulates_its_drawn_robot(plant: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The runner hands the loop the drawn robot: the mapped parameters, and on MuJoCo the
+    drawn bodies (not the robot file's)."""
+    from runtime.campaign.physical_draws import physical_params
+    from runtime.sim import loop
+
+    seen: dict[str, object] = {}
+    original = loop.run
+
+    def spy(*args: object, **kwargs: object) -> object:
+        seen.update(kwargs)
+        return original(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(loop, "run", spy)
+    tgt = target("trailer")
+    code = tgt.setup.code
+    c = parse_campaign(SPEC.format(ctrl="tdc").replace("duration = 4.0", "duration = 0.5"),
+                       "c.toml", tgt.plant, available=lambda f: code.controller_names,
+                       physical_box=lambda d: box_of(code, d))
+    c = replace(with_plant(c, plant), robot="trailer")
+    rec = run_one(c, 0, tgt, base_values(c, tgt.plant, tgt.physical))
+    drawn = {k.removeprefix("p.physical."): float(v) for k, v in rec.items()
+             if k.startswith("p.physical.")}
+    assert seen["plant_params"] == physical_params(code, drawn)
+    if plant == "mujoco":
+        engine = seen["plant"]
+        model = engine.model  # type: ignore[attr-defined]
+        assert model.body_mass[model.body("cart").id] == drawn["mass_cart"]
