@@ -853,4 +853,27 @@ def plant_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             (out("params", base),),
             (),
         ),
+        *physical_specs(model),
+    )
+
+
+def physical_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
+    """``plant_params_from_physical`` of a described robot (none for a lumped one): its
+    base inertial parameters, payload included, from its physical quantities
+    (``modeling.physical_map``; the wheel radii are not among them)."""
+    pm = model.physical
+    if pm is None:
+        return ()
+    keys = ", ".join(q.key for q in pm.inputs)
+    return (
+        FunctionSpec(
+            "plant_params_from_physical",
+            _wrap(f"Base inertial parameters ({', '.join(pm.outputs)}) of the robot whose "
+                  "bodies, wheels and root payload have the given physical quantities "
+                  "(modeling.physical_map: the same reduction as the model's)."),
+            (array("phys", tuple(q.symbol for q in pm.inputs),
+                   _wrap(f"{keys} (kg, kg m^2, m)")),),
+            (out("base", list(pm.exprs)),),
+            (),
+        ),
     )

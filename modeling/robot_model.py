@@ -26,6 +26,7 @@ from modeling import parameter_table
 from modeling.base_parameters import reduce_to_base, split_terms
 from modeling.lagrange import ConstrainedSystem
 from modeling.parameter_table import ParameterInfo
+from modeling.physical_map import PhysicalMap, physical_map
 from modeling.planar_robot import from_description
 from modeling.robot_io import Naming, c_identifier
 
@@ -111,6 +112,10 @@ class RobotModel:
     # The paper's own robot (modeling.robot_io.SHIPPED_NAMING), not merely its model: the
     # generated robot.py declares it (PAPER_ROBOT) for the runtime.
     paper_robot: bool = False
+    # A described robot's map from its physical quantities (bodies' masses, inertias,
+    # centres of mass, a payload) to its plant parameters (modeling.physical_map); None
+    # for a [lumped]/[physical] robot, whose parameters are the lumped ones themselves.
+    physical: PhysicalMap | None = None
 
     @property
     def q(self) -> tuple[sp.Symbol, ...]:
@@ -262,4 +267,6 @@ def _described_model(desc: RobotDescription, label: str, naming: Naming | None
         staged=len(desc.bodies) > STAGED_FROM_BODIES - 1,
         layout=from_description(desc).to_data(),
         paper_robot=naming.paper_robot,
+        physical=physical_map(sym, reduction.relations(), relations, PAYLOAD,
+                              tuple(b.symbol for b in reduction.parameters)),
     )

@@ -32,6 +32,11 @@ LAYOUT: dict[str, Any] | None = None
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')
 LATERAL_WHEELS = (('right', 'left'),)
+# The physical quantities of plant_params_from_physical (modeling.physical_map):
+# key -> (nominal, unit, what), in input order; each output's polynomial terms
+# (coefficient, ((input index, power), ...)). None: a [lumped]/[physical] robot.
+PHYSICAL: dict[str, tuple[float, str, str]] | None = None
+PHYSICAL_TERMS: dict[str, Any] | None = None
 # The physics audit's warnings on the robot file (modeling.audit), as MODEL.md
 # lists them: every command that runs this robot prints them.
 AUDIT_WARNINGS: tuple[str, ...] = (

@@ -21,6 +21,7 @@ import numpy as np
 
 from runtime.bindings import cbuild
 from runtime.bindings.generated import ControllerInfo, RobotCode
+from runtime.bindings.physical_bounds import check_physical_roc
 from runtime.bindings.uncertainty import roc_bounds
 from runtime.experiment.settings import ACCEL_CODES, Experiment
 
@@ -33,7 +34,9 @@ class ConfigInputs:
     this value instead (the stability analysis' verification; controllers with a
     ``hold_gain`` field); ``bounds``: ROC's (α, φ) if given, else :func:`roc_bounds` of the
     nominal model over the experiment's box (``controller.uncertainty``, wheel rates up to
-    ``controller.roc_max_rate``)."""
+    ``controller.roc_max_rate``), or, when the experiment declares
+    ``[physical_uncertainty]``, :func:`runtime.bindings.physical_bounds.check_physical_roc`
+    over that physical box (``ValueError`` naming the range where α < 1 cannot be shown)."""
 
     code: RobotCode
     controller: ControllerInfo
@@ -48,6 +51,9 @@ class ConfigInputs:
         if self.bounds is not None:
             return self.bounds
         c = self.experiment.controller
+        if self.experiment.physical:
+            return check_physical_roc(self.code, self.nominal, self.experiment.physical,
+                                      self.formulation, c.roc_max_rate)
         return roc_bounds(self.code, self.nominal, c.uncertainty, self.formulation,
                           c.roc_max_rate)
 

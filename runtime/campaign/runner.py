@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from runtime.bindings.robots import RobotSetup, resolve
+from runtime.campaign.physical_draws import drawn, physical_params
 from runtime.campaign.sampling import base_values, controller_of, draw, run_seed
 from runtime.campaign.spec import Campaign, Value, from_payload, with_values
 from runtime.experiment.settings import (
@@ -73,6 +74,13 @@ class Target:
     @property
     def sha256(self) -> str | None:
         return self.setup.sha256
+
+    @property
+    def physical(self) -> dict[str, float]:
+        """The robot file's physical quantities (``physical.KEY`` may be drawn; none for a
+        ``[lumped]`` robot)."""
+        phys = getattr(self.setup.code.robot, "PHYSICAL", None) or {}
+        return {k: float(v[0]) for k, v in phys.items()}
 
 
 @cache
@@ -166,16 +174,24 @@ def _outcome(rec: dict[str, Any], result: Any, failed_at: float | None,
 
 
 def _run(rec: dict[str, Any], c: Campaign, tgt: Target, exp: Experiment,
-         plant: dict[str, float]) -> None:
-    """One run of controller ``rec["controller"]`` on the campaign's path."""
+         plant: dict[str, float], physical: dict[str, float] | None = None) -> None:
+    """One run of controller ``rec["controller"]`` on the campaign's path; ``physical``:
+    the run's drawn physical quantities (the same robot on either plant:
+    :mod:`runtime.campaign.physical_draws`)."""
+    from runtime.campaign.physical_draws import physical_layout
+    from runtime.mujoco.plant import MujocoPlant
     from runtime.plants import plant_for
     from runtime.sim import loop
     from runtime.sim.outcome import outcome
 
     setup = tgt.setup
     ref = reference(c, tgt, exp)
+    if physical and exp.plant.model == "mujoco":
+        engine: Any = MujocoPlant(setup.code, exp, physical_layout(setup.code, physical))
+    else:
+        engine = plant_for(setup.code, exp, tgt.nominal, plant)
     r = loop.run(setup.code, rec["controller"], c.formulation, ref, tgt.nominal, exp,
-                 plant_params=plant, plant=plant_for(setup.code, exp, tgt.nominal, plant))
+                 plant_params=plant, plant=engine)
     if r.init_status != 0:
         rec.update(status="init_refused", status_code=r.init_status, error=r.stop_reason)
         return
@@ -207,7 +223,10 @@ def run_one(c: Campaign, index: int, tgt: Target, base: dict[str, Value]) -> dic
         check_sample_count(exp, "drawn setting")
         plant = {**tgt.plant, **{k.removeprefix("robot."): float(v) for k, v in values.items()
                                  if k.startswith("robot.")}}
-        _run(rec, c, tgt, exp, plant)
+        physical = drawn(values)
+        if physical:
+            plant = physical_params(tgt.setup.code, physical)
+        _run(rec, c, tgt, exp, plant, physical)
     except Exception as exc:  # recorded, not dropped: the campaign goes on
         rec.update(status="error", error=f"{type(exc).__name__}: {exc}", stable=False)
     for k in METRICS:
@@ -219,5 +238,5 @@ def run_chunk(payload: str, indices: list[int]) -> list[dict[str, Any]]:
     """The Dask task: the runs ``indices`` of the campaign ``payload`` (its JSON)."""
     c = _campaign(payload)
     tgt = target(c.robot, c.generated)
-    base = base_values(c, tgt.plant)
+    base = base_values(c, tgt.plant, tgt.physical)
     return [run_one(c, i, tgt, base) for i in indices]

@@ -50,11 +50,16 @@ def draw_one(dist: Distribution, base: Value, rng: np.random.Generator, kind: st
     return round(float(value)) if kind == "int" else float(value)
 
 
-def base_values(campaign: Campaign, robot: dict[str, float]) -> dict[str, Value]:
-    """The value each drawn parameter has before drawing."""
+def base_values(campaign: Campaign, robot: dict[str, float],
+                physical: dict[str, float] | None = None) -> dict[str, Value]:
+    """The value each drawn parameter has before drawing (``physical``: the robot file's
+    physical quantities, for ``physical.KEY``)."""
     out: dict[str, Value] = {}
     for name, _ in campaign.vary:
         section, _, key = name.partition(".")
+        if section == "physical":
+            out[name] = (physical or {})[key]
+            continue
         out[name] = robot[key] if section == "robot" else getattr(
             getattr(campaign.experiment, section), key)
     return out

@@ -42,6 +42,14 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
+from runtime.experiment.physical import (
+    SECTION as PHYSICAL_SECTION,
+)
+from runtime.experiment.physical import (
+    PhysicalUncertainty,
+    PhysicalUncertaintyError,
+    parse_physical,
+)
 from runtime.experiment.settings import (
     ControllerSettings,
     Experiment,
@@ -126,6 +134,8 @@ class Campaign:
         exp = asdict(self.experiment)
         exp.pop("source")
         exp.pop("robot")
+        if not exp["physical"]["entries"]:
+            exp.pop("physical")  # digests of campaigns without it unchanged
         return {
             "seed": self.seed,
             "controllers": list(self.controllers),
@@ -161,6 +171,7 @@ def from_payload(data: dict[str, Any]) -> Campaign:
         plant=PlantSettings(**e["plant"]),
         sensing=SensingSettings(**e["sensing"]),
         paths=PathSettings(**e["paths"]),
+        physical=PhysicalUncertainty.from_data(e.get("physical")),
     )
     vary = tuple(
         (name, Distribution(**{**d, "choices": tuple(d["choices"])}))
@@ -190,16 +201,22 @@ def _number(where: str, label: str, value: Any, *, integer: bool = False,
 def field_type(name: str) -> str:
     """'int', 'float' or 'str': the type of a drawn parameter ``section.field``/``robot.K``."""
     section, _, key = name.partition(".")
-    if section == "robot":
+    if section in ("robot", "physical"):
         return "float"
     types = {f.name: f.type for f in fields(SECTIONS[section])}
     return {"int": "int", "str": "str"}.get(str(types[key]), "float")
 
 
-def _distribution(where: str, name: str, data: Any, robot_keys: tuple[str, ...]) -> Distribution:
+def _distribution(where: str, name: str, data: Any, robot_keys: tuple[str, ...],
+                  physical_keys: tuple[str, ...] = ()) -> Distribution:
     label = f'vary."{name}"'
     section, _, key = name.partition(".")
-    if section == "robot":
+    if section == "physical":
+        if key not in physical_keys:
+            have = ", ".join("physical." + k for k in physical_keys) or "none: a [lumped] robot"
+            raise CampaignSpecError(f"{where}: unknown parameter '{label}' (the robot's "
+                                    f"physical quantities are {have})")
+    elif section == "robot":
         if key not in robot_keys:
             raise CampaignSpecError(f"{where}: unknown parameter '{label}' (the robot's are "
                                     f"{', '.join('robot.' + k for k in robot_keys)})")
@@ -287,6 +304,8 @@ def check_ranges(where: str, vary: tuple[tuple[str, Distribution], ...], exp: Ex
     for name, dist in vary:
         section, _, key = name.partition(".")
         label = f'vary."{name}"'
+        if section == "physical":
+            continue  # a physical range is checked where the robot resolves it
         if section == "robot":
             lo, hi = dist.bounds(robot[key])
             if robot[key] > 0 and not lo > 0:  # a mass or inertia (a first moment may be < 0)
@@ -312,7 +331,9 @@ def check_ranges(where: str, vary: tuple[tuple[str, Distribution], ...], exp: Ex
 # ----------------------------------------------------------------------------- parsing
 
 _TOP = {"seed", "runs", "controllers", "formulation", "path", "duration", "chunk", "experiment",
-        "diverged_error", "chatter_limit", "vary", "map"}
+        "diverged_error", "chatter_limit", "vary", "map", PHYSICAL_SECTION}
+# A robot's physical box from a declaration (runtime.bindings.physical_bounds.box_of).
+PhysicalBox = Callable[[PhysicalUncertainty], dict[str, tuple[float, float]]]
 
 
 def generated_controllers(formulation: str) -> tuple[str, ...]:
@@ -325,7 +346,7 @@ def generated_controllers(formulation: str) -> tuple[str, ...]:
 def parse_campaign(text: str, where: str, robot: dict[str, float],
                    base_dir: Path | None = None,
                    available: Callable[[str], Sequence[str]] = generated_controllers,
-                   ) -> Campaign:
+                   physical_box: PhysicalBox | None = None) -> Campaign:
     """A campaign from TOML text; ``robot`` is the nominal robot (its keys are the
     ``robot.*`` parameters one may draw), ``available(formulation)`` the controllers
     generated for it in a formulation (default: the paper robot's). The robot itself is
@@ -376,8 +397,31 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
     vary_data = data.get("vary", {})
     if not isinstance(vary_data, dict):
         raise CampaignSpecError(f"{where}: [vary] must be a table of parameter tables")
-    vary = tuple(sorted((name, _distribution(where, name, d, tuple(robot)))
-                        for name, d in vary_data.items()))
+    physical_keys = tuple(physical_box(PhysicalUncertainty())) if physical_box else ()
+    vary_list = [(name, _distribution(where, name, d, tuple(robot), physical_keys))
+                 for name, d in vary_data.items()]
+    if PHYSICAL_SECTION in data or exp.physical:
+        # the declaration is ROC's box and, for every quantity it gives a range, the draws
+        try:
+            decl = (parse_physical(data[PHYSICAL_SECTION], where) if PHYSICAL_SECTION in data
+                    else exp.physical)
+            if physical_box is None:
+                raise PhysicalUncertaintyError(f"{where}: [{PHYSICAL_SECTION}] needs a "
+                                               "bodies-and-wheels robot")
+            box = physical_box(decl)
+        except PhysicalUncertaintyError as exc:
+            raise CampaignSpecError(str(exc) if str(exc).startswith(where)
+                                    else f"{where}: {exc}") from None
+        exp = replace(exp, physical=decl)
+        drawn = {n for n, _ in vary_list}
+        vary_list += [(f"physical.{k}", Distribution(low=lo, high=hi))
+                      for k, (lo, hi) in box.items()
+                      if hi > lo and f"physical.{k}" not in drawn]
+    if any(n.startswith("physical.") for n, _ in vary_list) and any(
+            n.startswith("robot.") for n, _ in vary_list):
+        raise CampaignSpecError(f"{where}: draw either the robot's physical quantities "
+                                "(physical.*) or its model parameters (robot.*), not both")
+    vary = tuple(sorted(vary_list))
     map_data = data.get("map", {})
     if not isinstance(map_data, dict):
         raise CampaignSpecError(f"{where}: [map] must be a table")
@@ -403,15 +447,15 @@ def parse_campaign(text: str, where: str, robot: dict[str, float],
 
 
 def load_campaign(path: Path, robot: dict[str, float],
-                  available: Callable[[str], Sequence[str]] = generated_controllers
-                  ) -> Campaign:
+                  available: Callable[[str], Sequence[str]] = generated_controllers,
+                  physical_box: PhysicalBox | None = None) -> Campaign:
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CampaignSpecError(f"{path}: campaign file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CampaignSpecError(f"{path}: cannot read campaign file: {exc}") from None
-    return parse_campaign(text, str(path), robot, path.parent, available)
+    return parse_campaign(text, str(path), robot, path.parent, available, physical_box)
 
 
 def default_campaign(robot: dict[str, float], inertial: tuple[str, ...], track: float,

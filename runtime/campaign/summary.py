@@ -129,6 +129,23 @@ def _mm(x: float) -> str:
     return "–" if not math.isfinite(x) else f"{1000 * x:.2f}"
 
 
+def physical_lines(campaign: Campaign) -> list[str]:
+    """What the physical draws became on this campaign's plant (none: no line)."""
+    drawn = [name.removeprefix("physical.") for name, _ in campaign.vary
+             if name.startswith("physical.")]
+    if not drawn:
+        return []
+    plant = campaign.experiment.plant.model
+    how = ("as the bodies of the exported MJCF (masses, yaw inertias, centres of mass; a "
+           "payload merged into the root body)" if plant == "mujoco" else
+           "through the generated map plant_params_from_physical to the model's base "
+           "parameters")
+    declared = campaign.experiment.physical
+    box = f" ROC's bounds over [physical_uncertainty]: {declared.describe()}." if declared else ""
+    return [f"Physical draws ({', '.join(drawn)}) on the {plant} plant, {how}; run i draws "
+            f"the same robot on either plant (seed, i).{box}"]
+
+
 def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: list[str],
              warnings: Sequence[str] = ()) -> str:
     """``summary.md``; ``warnings``: the physics audit's on the campaign's robot file
@@ -140,6 +157,7 @@ def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: lis
         f"{campaign.path} of {campaign.duration:g} s, {campaign.formulation} formulation, "
         f"seed {campaign.seed}; run on {where}.",
         f"Drawn: {', '.join(name for name, _ in campaign.vary) or 'nothing'}.",
+        *physical_lines(campaign),
         "",
         *audit.section(warnings),
         "Outcome: ok; diverged (a step failed, the plant became non-finite, the position error "

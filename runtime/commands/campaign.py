@@ -21,8 +21,15 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from runtime.bindings.physical_bounds import box_of
 from runtime.campaign import store
-from runtime.campaign.spec import Campaign, CampaignSpecError, default_campaign, load_campaign
+from runtime.campaign.spec import (
+    Campaign,
+    CampaignSpecError,
+    Distribution,
+    default_campaign,
+    load_campaign,
+)
 from runtime.commands.options import add_plant_option, add_robot_options, print_audit
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import PLANT_MODELS, check_contact
@@ -93,14 +100,17 @@ def engine_draws(campaign: Campaign, code: Any, default: bool) -> Campaign:
         raise CampaignSpecError(
             f"{campaign.source}: vary.\"{drawn[0]}\": robot '{code.name}' runs on MuJoCo as "
             "its description's bodies and wheels, which a drawn base parameter cannot "
-            "change; draw the payloads (plant.fixed_payload, plant.extra_payload and their "
-            "places) for inertial uncertainty on the engine, or run it on the generated "
-            "plant")
+            "change; draw its physical quantities (physical.*, or [physical_uncertainty]: "
+            "masses, inertias, centres of mass, as bodies on the engine and through the map "
+            "on the generated plant)")
     print(f"note: robot '{code.name}' on MuJoCo: its description's bodies and wheels are "
-          f"the engine's robot; the default campaign does not draw {', '.join(drawn)}",
-          file=sys.stderr)
-    return replace(campaign, vary=tuple((k, d) for k, d in campaign.vary
-                                        if not k.startswith("robot.")))
+          f"the engine's robot; the default campaign draws each body's mass and yaw inertia "
+          f"(±30 %, physical.*) instead of {', '.join(drawn)}", file=sys.stderr)
+    bodies = [b[0] for b in code.robot.LAYOUT["bodies"]]
+    physical = [(f"physical.{f}_{b}", Distribution(spread=0.3)) for b in bodies
+                for f in ("mass", "yaw_inertia")]
+    return replace(campaign, vary=tuple(sorted(
+        [(k, d) for k, d in campaign.vary if not k.startswith("robot.")] + physical)))
 
 
 def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | None,
@@ -133,7 +143,9 @@ def resolve_campaign(spec: Path | None, robot: str | Path | None, runs: int | No
         campaign = default_campaign(tgt.plant, tgt.inertial, tgt.track,
                                     controllers=available(Campaign().formulation))
     else:
-        campaign = load_campaign(spec, tgt.plant, available)
+        box = ((lambda decl: box_of(code, decl))
+               if getattr(code.robot, "PHYSICAL", None) else None)
+        campaign = load_campaign(spec, tgt.plant, available, box)
     exp, _ = scaled_experiment(campaign.experiment, robot_scale(code, tgt.nominal))
     campaign = replace(campaign, experiment=exp, runs=runs or campaign.runs, robot=named,
                        generated=folder, robot_sha256=tgt.sha256,

@@ -26,11 +26,17 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 from runtime.experiment.faults import Fault, FaultSpecError, fault_from_table
+from runtime.experiment.physical import SECTION as PHYSICAL_SECTION
+from runtime.experiment.physical import (
+    PhysicalUncertainty,
+    PhysicalUncertaintyError,
+    parse_physical,
+)
 
 
 class ExperimentFileError(ValueError):
@@ -201,6 +207,9 @@ class Experiment:
     source: str = "<paper defaults>"
     robot: str | None = None  # robot file named by the experiment (resolved path)
     faults: tuple[Fault, ...] = ()  # [[fault]] tables, in file order
+    # [physical_uncertainty] (runtime.experiment.physical): ROC's bounds over these ranges of
+    # a bodies-and-wheels robot's masses, inertias, centres of mass instead of the lumped box
+    physical: PhysicalUncertainty = field(default_factory=PhysicalUncertainty)
 
 
 _POSITIVE = {
@@ -355,6 +364,11 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     }
     robot = data.pop("robot", None)
     faults = parse_faults(data.pop("fault", []), where)
+    try:
+        physical = parse_physical(data.pop(PHYSICAL_SECTION), where) if (
+            PHYSICAL_SECTION in data) else PhysicalUncertainty()
+    except PhysicalUncertaintyError as exc:
+        raise ExperimentFileError(str(exc)) from None
     if robot is not None and (not isinstance(robot, str) or not robot.strip()):
         raise ExperimentFileError(
             f"{where}: field 'robot' must be the path of a robot file, got {robot!r}"
@@ -363,10 +377,10 @@ def parse_experiment(text: str, where: str = "<string>") -> Experiment:
     if unknown:
         raise ExperimentFileError(
             f"{where}: unknown section '{unknown[0]}' (expected {', '.join(sections)}, "
-            "[[fault]], or a top-level robot = \"FILE\")"
+            f"[{PHYSICAL_SECTION}], [[fault]], or a top-level robot = \"FILE\")"
         )
     parts = {k: _section(where, k, data.get(k, {}), cls) for k, cls in sections.items()}
-    exp = Experiment(**parts, source=where, robot=robot, faults=faults)
+    exp = Experiment(**parts, source=where, robot=robot, faults=faults, physical=physical)
     check_sensing(exp, where)
     check_sample_count(exp, where)
     check_contact(exp, where)

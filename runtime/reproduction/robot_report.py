@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from modeling import audit
+from runtime.bindings.physical_bounds import box_of, physical_roc_bounds
 from runtime.bindings.robots import RobotSetup
 from runtime.bindings.uncertainty import inertial_keys, roc_bounds, schedule_tde, tde_alpha
 from runtime.experiment.settings import Experiment
@@ -44,6 +45,10 @@ def model_checks(setup: RobotSetup, exp: Experiment, formulation: str) -> ModelC
         tde = tde_alpha(setup.code, setup.nominal, c.uncertainty, formulation=formulation)[0]
     except ValueError:  # the box holds robots the controllers would not accept as models
         tde = float("nan")
+    if exp.physical:  # ROC's bounds over the declared physical box, as ROC takes them
+        b = physical_roc_bounds(setup.code, setup.nominal, box_of(setup.code, exp.physical),
+                                formulation, c.roc_max_rate)
+        return ModelChecks(tde, b.alpha, b.phi)
     alpha, phi = roc_bounds(setup.code, setup.nominal, c.uncertainty, formulation,
                             c.roc_max_rate)
     return ModelChecks(tde, alpha, phi)
@@ -152,7 +157,10 @@ def report_lines(rep: Reproduction) -> list[str]:
         "is this experiment's."
         + (" —: the box holds robots the controllers would not accept as a model (a mass "
            "matrix that is not positive definite, e.g. m I ≤ K²), so the condition is not "
-           "defined over it." if any(math.isnan(b.tde) for b in checks.values()) else ""),
+           "defined over it." if any(math.isnan(b.tde) for b in checks.values()) else "")
+        + (f" ROC's α and φ are sound bounds over the experiment's [physical_uncertainty] "
+           f"({exp.physical.describe()}; runtime.bindings.physical_bounds), not the box."
+           if exp.physical else ""),
         "",
         "## Results",
         "",

@@ -65,6 +65,7 @@ from numpy.typing import NDArray
 from runtime.bindings import cbuild
 from runtime.bindings.config import ConfigInputs
 from runtime.bindings.generated import ControllerInfo, RobotCode
+from runtime.bindings.physical_bounds import check_physical_roc
 from runtime.bindings.robots import code_in
 from runtime.bindings.uncertainty import roc_bounds
 from runtime.experiment.settings import Experiment
@@ -638,7 +639,14 @@ def max_delay(s: LoopSetting, gain: float, rel_tol: float = 0.02) -> float:
 def roc_gain(code: RobotCode, formulation: str, robot: dict[str, float],
              exp: Experiment) -> float:
     """ROC's boundary-layer gain at zero error, ρ/ε, with ρ = φ/(1 − α) (q̈_d = 0 on the
-    wheels) and (α, φ) of :func:`runtime.bindings.uncertainty.roc_bounds`."""
+    wheels) and (α, φ) of :func:`runtime.bindings.uncertainty.roc_bounds`, or over the
+    experiment's ``[physical_uncertainty]`` where it declares one
+    (:func:`runtime.bindings.physical_bounds.check_physical_roc`, which refuses naming the
+    physical range that breaks α < 1), as ROC's configuration takes them."""
+    if exp.physical:
+        alpha, phi = check_physical_roc(code, robot, exp.physical, formulation,
+                                        exp.controller.roc_max_rate)
+        return phi / (1 - alpha) / exp.controller.eps
     alpha, phi = roc_bounds(code, robot, exp.controller.uncertainty, formulation,
                             exp.controller.roc_max_rate)
     if not alpha < 1.0:  # ρ = φ/(1 − α) exists only for α < 1; ROC's init refuses the rest

@@ -133,9 +133,10 @@ def test_a_failing_run_is_recorded_with_its_error() -> None:
 
 def test_robot_of_bodies_on_mujoco_draws_what_the_engine_can_carry(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """A bodies-and-wheels robot is its description on MuJoCo: the default campaign leaves
-    its base parameters out (and says so) and its runs complete on the engine; a campaign
-    file drawing one is refused before any run, naming the field."""
+    """A bodies-and-wheels robot is its description on MuJoCo: the default campaign draws
+    its bodies' masses and yaw inertias instead of its base parameters (and says so) and
+    its runs complete on the engine; a campaign file drawing a base parameter is refused
+    before any run, naming the field."""
     from runtime.campaign.runner import run_one
     from runtime.campaign.spec import CampaignSpecError
     from runtime.commands.campaign import resolve_campaign
@@ -146,11 +147,13 @@ def test_robot_of_bodies_on_mujoco_draws_what_the_engine_can_carry(
     assert default.experiment.plant.model == "mujoco"
     assert not [k for k in drawn if k.startswith("robot.")] and "plant.extra_payload" in drawn
     note = capsys.readouterr().err
-    assert "the default campaign does not draw" in note and "robot.J_theta_tractor" in note
+    assert "draws each body's mass and yaw inertia" in note and "robot.J_theta_tractor" in note
+    assert {"physical.mass_cart", "physical.yaw_inertia_tractor"} <= set(drawn)
     short = replace(default, duration=1.5, controllers=("tdroc",))
     for i in range(2):  # drawn payloads, friction, gains, h, ε, sensing: on the engine
-        rec = run_one(short, i, tgt, base_values(short, tgt.plant))
+        rec = run_one(short, i, tgt, base_values(short, tgt.plant, tgt.physical))
         assert rec["status"] != "error", rec["error"]  # not the engine refusing a draw
+        assert rec["p.physical.mass_cart"] != 15.0
         assert rec["status"] == "ok" or "diverged_error" in rec["error"], rec
     spec = tmp_path / "c.toml"
     spec.write_text('[vary."robot.J_theta_tractor"]\nspread = 0.3\n')

@@ -8,6 +8,7 @@ functions, from the layout), ``robot.py`` (the robot file's numbers, sizes and n
 from __future__ import annotations
 
 import json
+from typing import Any
 
 from codegen import template_util
 from codegen.backend import RobotTarget
@@ -71,9 +72,29 @@ def robot_py(target: RobotTarget) -> str:
         "# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.\n"
         f"DRIVEN_WHEELS = {rows.driven!r}\n"
         f"LATERAL_WHEELS = {rows.lateral_wheels!r}\n"
+        + physical_py(model)
         + audit_py(robot.warnings)
         + controllers_py(target.controllers)
     )
+
+
+def physical_py(model: Any) -> str:
+    """``PHYSICAL`` and ``PHYSICAL_TERMS`` of robot.py: the inputs of
+    ``plant_params_from_physical`` (key -> (nominal, unit, what), in input order) and each
+    output's polynomial as (coefficient, ((input index, power), ...)) terms
+    (``modeling.physical_map``), for the runtime's interval enclosures of its range; None
+    for a [lumped]/[physical] robot."""
+    pm = model.physical
+    head = ("# The physical quantities of plant_params_from_physical (modeling.physical_map):\n"
+            "# key -> (nominal, unit, what), in input order; each output's polynomial terms\n"
+            "# (coefficient, ((input index, power), ...)). None: a [lumped]/[physical] robot.\n")
+    if pm is None:
+        return head + ("PHYSICAL: dict[str, tuple[float, str, str]] | None = None\n"
+                       "PHYSICAL_TERMS: dict[str, Any] | None = None\n")
+    inputs = ", ".join(f"{q.key!r}: ({q.nominal!r}, {q.unit!r}, {q.doc!r})" for q in pm.inputs)
+    terms = ",\n".join(f"    {k!r}: {v!r}" for k, v in pm.terms().items())
+    return head + (f"PHYSICAL: dict[str, tuple[float, str, str]] | None = {{{inputs}}}\n"
+                   f"PHYSICAL_TERMS: dict[str, Any] | None = {{\n{terms},\n}}\n")
 
 
 def audit_py(warnings: tuple[str, ...]) -> str:

@@ -177,3 +177,54 @@ void trailer_plant_params_with_payload(const trailer_plant_params_t *base,
     params[13] = radius_left;
     params[14] = radius_right;
 }
+
+/* trailer_plant_params_from_physical: documented in trailer_plant.h.
+   operations after CSE: 34 add, 34 mul, 0 div, 0 sin/cos, 0 sqrt */
+void trailer_plant_params_from_physical(const trailer_real_t *phys, trailer_real_t *base)
+{
+    const trailer_real_t mass_tractor = phys[0];
+    const trailer_real_t yaw_inertia_tractor = phys[1];
+    const trailer_real_t com_x_tractor = phys[2];
+    const trailer_real_t com_y_tractor = phys[3];
+    const trailer_real_t mass_cart = phys[4];
+    const trailer_real_t yaw_inertia_cart = phys[5];
+    const trailer_real_t com_x_cart = phys[6];
+    const trailer_real_t com_y_cart = phys[7];
+    const trailer_real_t mass_right = phys[8];
+    const trailer_real_t spin_inertia_right = phys[9];
+    const trailer_real_t diameter_inertia_right = phys[10];
+    const trailer_real_t mass_left = phys[11];
+    const trailer_real_t spin_inertia_left = phys[12];
+    const trailer_real_t diameter_inertia_left = phys[13];
+    const trailer_real_t mass_cart_right = phys[14];
+    const trailer_real_t spin_inertia_cart_right = phys[15];
+    const trailer_real_t diameter_inertia_cart_right = phys[16];
+    const trailer_real_t mass_cart_left = phys[17];
+    const trailer_real_t spin_inertia_cart_left = phys[18];
+    const trailer_real_t diameter_inertia_cart_left = phys[19];
+    const trailer_real_t m_L = phys[20];
+    const trailer_real_t x_L = phys[21];
+    const trailer_real_t y_L = phys[22];
+    base[0] = com_x_cart*com_x_cart*mass_cart + com_y_cart*com_y_cart*mass_cart
+            + diameter_inertia_cart_left + diameter_inertia_cart_right
+            + TRAILER_LIT(0.4)*mass_cart_left + TRAILER_LIT(0.4)*mass_cart_right + yaw_inertia_cart;
+    base[1] = spin_inertia_cart_left;
+    base[2] = spin_inertia_cart_right;
+    base[3] = spin_inertia_left;
+    base[4] = spin_inertia_right;
+    base[5] = com_x_tractor*com_x_tractor*mass_tractor + com_y_tractor*com_y_tractor*mass_tractor
+            + diameter_inertia_left + diameter_inertia_right + m_L*x_L*x_L + m_L*y_L*y_L
+            + TRAILER_LIT(0.09)*mass_cart + TRAILER_LIT(0.09)*mass_cart_left
+            + TRAILER_LIT(0.09)*mass_cart_right + TRAILER_LIT(0.042849)*mass_left
+            + TRAILER_LIT(0.042849)*mass_right + yaw_inertia_tractor;
+    base[6] = m_L + mass_cart + mass_cart_left + mass_cart_right + mass_left + mass_right
+            + mass_tractor;
+    base[7] = -com_x_cart*mass_cart + TRAILER_LIT(0.6)*mass_cart_left
+            + TRAILER_LIT(0.6)*mass_cart_right;
+    base[8] = -com_y_cart*mass_cart - TRAILER_LIT(0.2)*mass_cart_left
+            + TRAILER_LIT(0.2)*mass_cart_right;
+    base[9] = -com_x_tractor*mass_tractor - m_L*x_L + TRAILER_LIT(0.3)*mass_cart
+            + TRAILER_LIT(0.3)*mass_cart_left + TRAILER_LIT(0.3)*mass_cart_right;
+    base[10] = -com_y_tractor*mass_tractor - m_L*y_L - TRAILER_LIT(0.207)*mass_left
+            + TRAILER_LIT(0.207)*mass_right;
+}

@@ -57,6 +57,35 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
 void trailer_plant_params_with_payload(const trailer_plant_params_t *base,
     const trailer_real_t *payload, trailer_real_t *params);
 
+#define TRAILER_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE 23
+#define TRAILER_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE 11
+
+/**
+ * Base inertial parameters (J_theta_cart, J_theta_cart_left, J_theta_cart_right,
+ * J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor,
+ * K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_tractor_x_tractor,
+ * K_theta_tractor_x_tractor_2) of the robot whose bodies, wheels and root payload
+ * have the given physical quantities (modeling.physical_map: the same reduction
+ * as the model's).
+ *
+ * @param[in]  phys [23] row-major (TRAILER_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE): mass_tractor,
+ *     yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart, yaw_inertia_cart, com_x_cart,
+ *     com_y_cart, mass_right, spin_inertia_right, diameter_inertia_right, mass_left,
+ *     spin_inertia_left, diameter_inertia_left, mass_cart_right, spin_inertia_cart_right,
+ *     diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left,
+ *     diameter_inertia_cart_left, m_L, x_L, y_L -- mass_tractor, yaw_inertia_tractor,
+ *     com_x_tractor, com_y_tractor, mass_cart,
+yaw_inertia_cart, com_x_cart, com_y_cart, mass_right, spin_inertia_right,
+diameter_inertia_right, mass_left, spin_inertia_left, diameter_inertia_left,
+mass_cart_right, spin_inertia_cart_right, diameter_inertia_cart_right,
+mass_cart_left, spin_inertia_cart_left, diameter_inertia_cart_left,
+payload_mass, payload_x, payload_y (kg, kg m^2, m)
+ * @param[out] base [11] row-major (TRAILER_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE)
+ *
+ * operations after CSE: 34 add, 34 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void trailer_plant_params_from_physical(const trailer_real_t *phys, trailer_real_t *base);
+
 #ifdef __cplusplus
 }
 #endif

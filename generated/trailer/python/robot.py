@@ -32,6 +32,23 @@ LAYOUT: dict[str, Any] | None = {'name': 'trailer', 'bodies': [['tractor', 30.0,
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')
 LATERAL_WHEELS = (('right', 'left'), ('cart_right', 'cart_left'))
+# The physical quantities of plant_params_from_physical (modeling.physical_map):
+# key -> (nominal, unit, what), in input order; each output's polynomial terms
+# (coefficient, ((input index, power), ...)). None: a [lumped]/[physical] robot.
+PHYSICAL: dict[str, tuple[float, str, str]] | None = {'mass_tractor': (30.0, 'kg', "body 'tractor': mass"), 'yaw_inertia_tractor': (1.5, 'kg m^2', "body 'tractor': yaw inertia about its centre of mass"), 'com_x_tractor': (0.05, 'm', "body 'tractor': centre of mass, x in its frame"), 'com_y_tractor': (0.0, 'm', "body 'tractor': centre of mass, y in its frame"), 'mass_cart': (15.0, 'kg', "body 'cart': mass"), 'yaw_inertia_cart': (1.1, 'kg m^2', "body 'cart': yaw inertia about its centre of mass"), 'com_x_cart': (-0.45, 'm', "body 'cart': centre of mass, x in its frame"), 'com_y_cart': (0.0, 'm', "body 'cart': centre of mass, y in its frame"), 'mass_right': (3.0, 'kg', "wheel 'right': mass"), 'spin_inertia_right': (0.07, 'kg m^2', "wheel 'right': spin inertia"), 'diameter_inertia_right': (0.007, 'kg m^2', "wheel 'right': diameter inertia"), 'mass_left': (3.0, 'kg', "wheel 'left': mass"), 'spin_inertia_left': (0.07, 'kg m^2', "wheel 'left': spin inertia"), 'diameter_inertia_left': (0.007, 'kg m^2', "wheel 'left': diameter inertia"), 'mass_cart_right': (1.25, 'kg', "wheel 'cart_right': mass"), 'spin_inertia_cart_right': (0.004, 'kg m^2', "wheel 'cart_right': spin inertia"), 'diameter_inertia_cart_right': (0.002, 'kg m^2', "wheel 'cart_right': diameter inertia"), 'mass_cart_left': (1.25, 'kg', "wheel 'cart_left': mass"), 'spin_inertia_cart_left': (0.004, 'kg m^2', "wheel 'cart_left': spin inertia"), 'diameter_inertia_cart_left': (0.002, 'kg m^2', "wheel 'cart_left': diameter inertia"), 'payload_mass': (0.0, 'kg', "payload on 'tractor': mass"), 'payload_x': (0.0, 'm', "payload on 'tractor': x in its frame"), 'payload_y': (0.0, 'm', "payload on 'tractor': y in its frame")}
+PHYSICAL_TERMS: dict[str, Any] | None = {
+    'J_theta_cart': ((1.0, ((19, 1),)), (0.4, ((17, 1),)), (1.0, ((16, 1),)), (0.4, ((14, 1),)), (1.0, ((5, 1),)), (1.0, ((4, 1), (7, 2))), (1.0, ((4, 1), (6, 2)))),
+    'J_theta_cart_left': ((1.0, ((18, 1),)),),
+    'J_theta_cart_right': ((1.0, ((15, 1),)),),
+    'J_theta_left': ((1.0, ((12, 1),)),),
+    'J_theta_right': ((1.0, ((9, 1),)),),
+    'J_theta_tractor': ((1.0, ((20, 1), (22, 2))), (1.0, ((20, 1), (21, 2))), (0.09, ((17, 1),)), (0.09, ((14, 1),)), (1.0, ((13, 1),)), (0.042849, ((11, 1),)), (1.0, ((10, 1),)), (0.042849, ((8, 1),)), (0.09, ((4, 1),)), (1.0, ((1, 1),)), (1.0, ((0, 1), (3, 2))), (1.0, ((0, 1), (2, 2)))),
+    'J_x_tractor': ((1.0, ((20, 1),)), (1.0, ((17, 1),)), (1.0, ((14, 1),)), (1.0, ((11, 1),)), (1.0, ((8, 1),)), (1.0, ((4, 1),)), (1.0, ((0, 1),))),
+    'K_theta_cart_x_tractor': ((0.6, ((17, 1),)), (0.6, ((14, 1),)), (-1.0, ((4, 1), (6, 1)))),
+    'K_theta_cart_x_tractor_2': ((-0.2, ((17, 1),)), (0.2, ((14, 1),)), (-1.0, ((4, 1), (7, 1)))),
+    'K_theta_tractor_x_tractor': ((-1.0, ((20, 1), (21, 1))), (0.3, ((17, 1),)), (0.3, ((14, 1),)), (0.3, ((4, 1),)), (-1.0, ((0, 1), (2, 1)))),
+    'K_theta_tractor_x_tractor_2': ((-1.0, ((20, 1), (22, 1))), (-0.207, ((11, 1),)), (0.207, ((8, 1),)), (-1.0, ((0, 1), (3, 1)))),
+}
 # The physics audit's warnings on the robot file (modeling.audit), as MODEL.md
 # lists them: every command that runs this robot prints them.
 AUDIT_WARNINGS: tuple[str, ...] = (

@@ -324,3 +324,81 @@ void trailer2_plant_params_with_payload(const trailer2_plant_params_t *base,
     params[20] = radius_left;
     params[21] = radius_right;
 }
+
+/* trailer2_plant_params_from_physical: documented in trailer2_plant.h.
+   operations after CSE: 59 add, 58 mul, 0 div, 0 sin/cos, 0 sqrt */
+void trailer2_plant_params_from_physical(const trailer2_real_t *phys, trailer2_real_t *base)
+{
+    const trailer2_real_t mass_tractor = phys[0];
+    const trailer2_real_t yaw_inertia_tractor = phys[1];
+    const trailer2_real_t com_x_tractor = phys[2];
+    const trailer2_real_t com_y_tractor = phys[3];
+    const trailer2_real_t mass_cart = phys[4];
+    const trailer2_real_t yaw_inertia_cart = phys[5];
+    const trailer2_real_t com_x_cart = phys[6];
+    const trailer2_real_t com_y_cart = phys[7];
+    const trailer2_real_t mass_cart2 = phys[8];
+    const trailer2_real_t yaw_inertia_cart2 = phys[9];
+    const trailer2_real_t com_x_cart2 = phys[10];
+    const trailer2_real_t com_y_cart2 = phys[11];
+    const trailer2_real_t mass_right = phys[12];
+    const trailer2_real_t spin_inertia_right = phys[13];
+    const trailer2_real_t diameter_inertia_right = phys[14];
+    const trailer2_real_t mass_left = phys[15];
+    const trailer2_real_t spin_inertia_left = phys[16];
+    const trailer2_real_t diameter_inertia_left = phys[17];
+    const trailer2_real_t mass_cart_right = phys[18];
+    const trailer2_real_t spin_inertia_cart_right = phys[19];
+    const trailer2_real_t diameter_inertia_cart_right = phys[20];
+    const trailer2_real_t mass_cart_left = phys[21];
+    const trailer2_real_t spin_inertia_cart_left = phys[22];
+    const trailer2_real_t diameter_inertia_cart_left = phys[23];
+    const trailer2_real_t mass_cart2_right = phys[24];
+    const trailer2_real_t spin_inertia_cart2_right = phys[25];
+    const trailer2_real_t diameter_inertia_cart2_right = phys[26];
+    const trailer2_real_t mass_cart2_left = phys[27];
+    const trailer2_real_t spin_inertia_cart2_left = phys[28];
+    const trailer2_real_t diameter_inertia_cart2_left = phys[29];
+    const trailer2_real_t m_L = phys[30];
+    const trailer2_real_t x_L = phys[31];
+    const trailer2_real_t y_L = phys[32];
+    base[0] = com_x_cart*com_x_cart*mass_cart + com_y_cart*com_y_cart*mass_cart
+            + diameter_inertia_cart_left + diameter_inertia_cart_right
+            + TRAILER2_LIT(0.7225)*mass_cart2 + TRAILER2_LIT(0.7225)*mass_cart2_left
+            + TRAILER2_LIT(0.7225)*mass_cart2_right + TRAILER2_LIT(0.4)*mass_cart_left
+            + TRAILER2_LIT(0.4)*mass_cart_right + yaw_inertia_cart;
+    base[1] = com_x_cart2*com_x_cart2*mass_cart2 + com_y_cart2*com_y_cart2*mass_cart2
+            + diameter_inertia_cart2_left + diameter_inertia_cart2_right
+            + TRAILER2_LIT(0.4)*mass_cart2_left + TRAILER2_LIT(0.4)*mass_cart2_right
+            + yaw_inertia_cart2;
+    base[2] = spin_inertia_cart2_left;
+    base[3] = spin_inertia_cart2_right;
+    base[4] = spin_inertia_cart_left;
+    base[5] = spin_inertia_cart_right;
+    base[6] = spin_inertia_left;
+    base[7] = spin_inertia_right;
+    base[8] = com_x_tractor*com_x_tractor*mass_tractor + com_y_tractor*com_y_tractor*mass_tractor
+            + diameter_inertia_left + diameter_inertia_right + m_L*x_L*x_L + m_L*y_L*y_L
+            + TRAILER2_LIT(0.09)*mass_cart + TRAILER2_LIT(0.09)*mass_cart2
+            + TRAILER2_LIT(0.09)*mass_cart2_left + TRAILER2_LIT(0.09)*mass_cart2_right
+            + TRAILER2_LIT(0.09)*mass_cart_left + TRAILER2_LIT(0.09)*mass_cart_right
+            + TRAILER2_LIT(0.042849)*mass_left + TRAILER2_LIT(0.042849)*mass_right
+            + yaw_inertia_tractor;
+    base[9] = m_L + mass_cart + mass_cart2 + mass_cart2_left + mass_cart2_right + mass_cart_left
+            + mass_cart_right + mass_left + mass_right + mass_tractor;
+    base[10] = -com_x_cart*mass_cart + TRAILER2_LIT(0.85)*mass_cart2
+            + TRAILER2_LIT(0.85)*mass_cart2_left + TRAILER2_LIT(0.85)*mass_cart2_right
+            + TRAILER2_LIT(0.6)*mass_cart_left + TRAILER2_LIT(0.6)*mass_cart_right;
+    base[11] = -com_y_cart*mass_cart - TRAILER2_LIT(0.2)*mass_cart_left
+            + TRAILER2_LIT(0.2)*mass_cart_right;
+    base[12] = -com_x_cart2*mass_cart2 + TRAILER2_LIT(0.6)*mass_cart2_left
+            + TRAILER2_LIT(0.6)*mass_cart2_right;
+    base[13] = -com_y_cart2*mass_cart2 - TRAILER2_LIT(0.2)*mass_cart2_left
+            + TRAILER2_LIT(0.2)*mass_cart2_right;
+    base[14] = -com_x_tractor*mass_tractor - m_L*x_L + TRAILER2_LIT(0.3)*mass_cart
+            + TRAILER2_LIT(0.3)*mass_cart2 + TRAILER2_LIT(0.3)*mass_cart2_left
+            + TRAILER2_LIT(0.3)*mass_cart2_right + TRAILER2_LIT(0.3)*mass_cart_left
+            + TRAILER2_LIT(0.3)*mass_cart_right;
+    base[15] = -com_y_tractor*mass_tractor - m_L*y_L - TRAILER2_LIT(0.207)*mass_left
+            + TRAILER2_LIT(0.207)*mass_right;
+}

@@ -32,6 +32,28 @@ LAYOUT: dict[str, Any] | None = {'name': 'trailer2', 'bodies': [['tractor', 30.0
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')
 LATERAL_WHEELS = (('right', 'left'), ('cart_right', 'cart_left'), ('cart2_right', 'cart2_left'))
+# The physical quantities of plant_params_from_physical (modeling.physical_map):
+# key -> (nominal, unit, what), in input order; each output's polynomial terms
+# (coefficient, ((input index, power), ...)). None: a [lumped]/[physical] robot.
+PHYSICAL: dict[str, tuple[float, str, str]] | None = {'mass_tractor': (30.0, 'kg', "body 'tractor': mass"), 'yaw_inertia_tractor': (1.5, 'kg m^2', "body 'tractor': yaw inertia about its centre of mass"), 'com_x_tractor': (0.05, 'm', "body 'tractor': centre of mass, x in its frame"), 'com_y_tractor': (0.0, 'm', "body 'tractor': centre of mass, y in its frame"), 'mass_cart': (15.0, 'kg', "body 'cart': mass"), 'yaw_inertia_cart': (1.1, 'kg m^2', "body 'cart': yaw inertia about its centre of mass"), 'com_x_cart': (-0.45, 'm', "body 'cart': centre of mass, x in its frame"), 'com_y_cart': (0.0, 'm', "body 'cart': centre of mass, y in its frame"), 'mass_cart2': (15.0, 'kg', "body 'cart2': mass"), 'yaw_inertia_cart2': (1.1, 'kg m^2', "body 'cart2': yaw inertia about its centre of mass"), 'com_x_cart2': (-0.45, 'm', "body 'cart2': centre of mass, x in its frame"), 'com_y_cart2': (0.0, 'm', "body 'cart2': centre of mass, y in its frame"), 'mass_right': (3.0, 'kg', "wheel 'right': mass"), 'spin_inertia_right': (0.07, 'kg m^2', "wheel 'right': spin inertia"), 'diameter_inertia_right': (0.007, 'kg m^2', "wheel 'right': diameter inertia"), 'mass_left': (3.0, 'kg', "wheel 'left': mass"), 'spin_inertia_left': (0.07, 'kg m^2', "wheel 'left': spin inertia"), 'diameter_inertia_left': (0.007, 'kg m^2', "wheel 'left': diameter inertia"), 'mass_cart_right': (1.25, 'kg', "wheel 'cart_right': mass"), 'spin_inertia_cart_right': (0.004, 'kg m^2', "wheel 'cart_right': spin inertia"), 'diameter_inertia_cart_right': (0.002, 'kg m^2', "wheel 'cart_right': diameter inertia"), 'mass_cart_left': (1.25, 'kg', "wheel 'cart_left': mass"), 'spin_inertia_cart_left': (0.004, 'kg m^2', "wheel 'cart_left': spin inertia"), 'diameter_inertia_cart_left': (0.002, 'kg m^2', "wheel 'cart_left': diameter inertia"), 'mass_cart2_right': (1.25, 'kg', "wheel 'cart2_right': mass"), 'spin_inertia_cart2_right': (0.004, 'kg m^2', "wheel 'cart2_right': spin inertia"), 'diameter_inertia_cart2_right': (0.002, 'kg m^2', "wheel 'cart2_right': diameter inertia"), 'mass_cart2_left': (1.25, 'kg', "wheel 'cart2_left': mass"), 'spin_inertia_cart2_left': (0.004, 'kg m^2', "wheel 'cart2_left': spin inertia"), 'diameter_inertia_cart2_left': (0.002, 'kg m^2', "wheel 'cart2_left': diameter inertia"), 'payload_mass': (0.0, 'kg', "payload on 'tractor': mass"), 'payload_x': (0.0, 'm', "payload on 'tractor': x in its frame"), 'payload_y': (0.0, 'm', "payload on 'tractor': y in its frame")}
+PHYSICAL_TERMS: dict[str, Any] | None = {
+    'J_theta_cart': ((0.7225, ((27, 1),)), (0.7225, ((24, 1),)), (1.0, ((23, 1),)), (0.4, ((21, 1),)), (1.0, ((20, 1),)), (0.4, ((18, 1),)), (0.7225, ((8, 1),)), (1.0, ((5, 1),)), (1.0, ((4, 1), (7, 2))), (1.0, ((4, 1), (6, 2)))),
+    'J_theta_cart2': ((1.0, ((29, 1),)), (0.4, ((27, 1),)), (1.0, ((26, 1),)), (0.4, ((24, 1),)), (1.0, ((9, 1),)), (1.0, ((8, 1), (11, 2))), (1.0, ((8, 1), (10, 2)))),
+    'J_theta_cart2_left': ((1.0, ((28, 1),)),),
+    'J_theta_cart2_right': ((1.0, ((25, 1),)),),
+    'J_theta_cart_left': ((1.0, ((22, 1),)),),
+    'J_theta_cart_right': ((1.0, ((19, 1),)),),
+    'J_theta_left': ((1.0, ((16, 1),)),),
+    'J_theta_right': ((1.0, ((13, 1),)),),
+    'J_theta_tractor': ((1.0, ((30, 1), (32, 2))), (1.0, ((30, 1), (31, 2))), (0.09, ((27, 1),)), (0.09, ((24, 1),)), (0.09, ((21, 1),)), (0.09, ((18, 1),)), (1.0, ((17, 1),)), (0.042849, ((15, 1),)), (1.0, ((14, 1),)), (0.042849, ((12, 1),)), (0.09, ((8, 1),)), (0.09, ((4, 1),)), (1.0, ((1, 1),)), (1.0, ((0, 1), (3, 2))), (1.0, ((0, 1), (2, 2)))),
+    'J_x_tractor': ((1.0, ((30, 1),)), (1.0, ((27, 1),)), (1.0, ((24, 1),)), (1.0, ((21, 1),)), (1.0, ((18, 1),)), (1.0, ((15, 1),)), (1.0, ((12, 1),)), (1.0, ((8, 1),)), (1.0, ((4, 1),)), (1.0, ((0, 1),))),
+    'K_theta_cart_x_tractor': ((0.85, ((27, 1),)), (0.85, ((24, 1),)), (0.6, ((21, 1),)), (0.6, ((18, 1),)), (0.85, ((8, 1),)), (-1.0, ((4, 1), (6, 1)))),
+    'K_theta_cart_x_tractor_2': ((-0.2, ((21, 1),)), (0.2, ((18, 1),)), (-1.0, ((4, 1), (7, 1)))),
+    'K_theta_cart2_x_tractor': ((0.6, ((27, 1),)), (0.6, ((24, 1),)), (-1.0, ((8, 1), (10, 1)))),
+    'K_theta_cart2_x_tractor_2': ((-0.2, ((27, 1),)), (0.2, ((24, 1),)), (-1.0, ((8, 1), (11, 1)))),
+    'K_theta_tractor_x_tractor': ((-1.0, ((30, 1), (31, 1))), (0.3, ((27, 1),)), (0.3, ((24, 1),)), (0.3, ((21, 1),)), (0.3, ((18, 1),)), (0.3, ((8, 1),)), (0.3, ((4, 1),)), (-1.0, ((0, 1), (2, 1)))),
+    'K_theta_tractor_x_tractor_2': ((-1.0, ((30, 1), (32, 1))), (-0.207, ((15, 1),)), (0.207, ((12, 1),)), (-1.0, ((0, 1), (3, 1)))),
+}
 # The physics audit's warnings on the robot file (modeling.audit), as MODEL.md
 # lists them: every command that runs this robot prints them.
 AUDIT_WARNINGS: tuple[str, ...] = (

@@ -498,3 +498,108 @@ void trailer3_plant_params_with_payload(const trailer3_plant_params_t *base,
     params[27] = radius_left;
     params[28] = radius_right;
 }
+
+/* trailer3_plant_params_from_physical: documented in trailer3_plant.h.
+   operations after CSE: 86 add, 82 mul, 0 div, 0 sin/cos, 0 sqrt */
+void trailer3_plant_params_from_physical(const trailer3_real_t *phys, trailer3_real_t *base)
+{
+    const trailer3_real_t mass_cart3 = phys[12];
+    const trailer3_real_t mass_cart3_right = phys[34];
+    const trailer3_real_t mass_cart3_left = phys[37];
+    const trailer3_real_t _t0 = TRAILER3_LIT(0.7225)*mass_cart3
+            + TRAILER3_LIT(0.7225)*mass_cart3_left + TRAILER3_LIT(0.7225)*mass_cart3_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(0.85)*mass_cart3 + TRAILER3_LIT(0.85)*mass_cart3_left
+            + TRAILER3_LIT(0.85)*mass_cart3_right;
+    const trailer3_real_t mass_tractor = phys[0];
+    const trailer3_real_t yaw_inertia_tractor = phys[1];
+    const trailer3_real_t com_x_tractor = phys[2];
+    const trailer3_real_t com_y_tractor = phys[3];
+    const trailer3_real_t mass_cart = phys[4];
+    const trailer3_real_t yaw_inertia_cart = phys[5];
+    const trailer3_real_t com_x_cart = phys[6];
+    const trailer3_real_t com_y_cart = phys[7];
+    const trailer3_real_t mass_cart2 = phys[8];
+    const trailer3_real_t yaw_inertia_cart2 = phys[9];
+    const trailer3_real_t com_x_cart2 = phys[10];
+    const trailer3_real_t com_y_cart2 = phys[11];
+    const trailer3_real_t yaw_inertia_cart3 = phys[13];
+    const trailer3_real_t com_x_cart3 = phys[14];
+    const trailer3_real_t com_y_cart3 = phys[15];
+    const trailer3_real_t mass_right = phys[16];
+    const trailer3_real_t spin_inertia_right = phys[17];
+    const trailer3_real_t diameter_inertia_right = phys[18];
+    const trailer3_real_t mass_left = phys[19];
+    const trailer3_real_t spin_inertia_left = phys[20];
+    const trailer3_real_t diameter_inertia_left = phys[21];
+    const trailer3_real_t mass_cart_right = phys[22];
+    const trailer3_real_t spin_inertia_cart_right = phys[23];
+    const trailer3_real_t diameter_inertia_cart_right = phys[24];
+    const trailer3_real_t mass_cart_left = phys[25];
+    const trailer3_real_t spin_inertia_cart_left = phys[26];
+    const trailer3_real_t diameter_inertia_cart_left = phys[27];
+    const trailer3_real_t mass_cart2_right = phys[28];
+    const trailer3_real_t spin_inertia_cart2_right = phys[29];
+    const trailer3_real_t diameter_inertia_cart2_right = phys[30];
+    const trailer3_real_t mass_cart2_left = phys[31];
+    const trailer3_real_t spin_inertia_cart2_left = phys[32];
+    const trailer3_real_t diameter_inertia_cart2_left = phys[33];
+    const trailer3_real_t spin_inertia_cart3_right = phys[35];
+    const trailer3_real_t diameter_inertia_cart3_right = phys[36];
+    const trailer3_real_t spin_inertia_cart3_left = phys[38];
+    const trailer3_real_t diameter_inertia_cart3_left = phys[39];
+    const trailer3_real_t m_L = phys[40];
+    const trailer3_real_t x_L = phys[41];
+    const trailer3_real_t y_L = phys[42];
+    base[0] = _t0 + com_x_cart*com_x_cart*mass_cart + com_y_cart*com_y_cart*mass_cart
+            + diameter_inertia_cart_left + diameter_inertia_cart_right
+            + TRAILER3_LIT(0.7225)*mass_cart2 + TRAILER3_LIT(0.7225)*mass_cart2_left
+            + TRAILER3_LIT(0.7225)*mass_cart2_right + TRAILER3_LIT(0.4)*mass_cart_left
+            + TRAILER3_LIT(0.4)*mass_cart_right + yaw_inertia_cart;
+    base[1] = _t0 + com_x_cart2*com_x_cart2*mass_cart2 + com_y_cart2*com_y_cart2*mass_cart2
+            + diameter_inertia_cart2_left + diameter_inertia_cart2_right
+            + TRAILER3_LIT(0.4)*mass_cart2_left + TRAILER3_LIT(0.4)*mass_cart2_right
+            + yaw_inertia_cart2;
+    base[2] = spin_inertia_cart2_left;
+    base[3] = spin_inertia_cart2_right;
+    base[4] = com_x_cart3*com_x_cart3*mass_cart3 + com_y_cart3*com_y_cart3*mass_cart3
+            + diameter_inertia_cart3_left + diameter_inertia_cart3_right
+            + TRAILER3_LIT(0.4)*mass_cart3_left + TRAILER3_LIT(0.4)*mass_cart3_right
+            + yaw_inertia_cart3;
+    base[5] = spin_inertia_cart3_left;
+    base[6] = spin_inertia_cart3_right;
+    base[7] = spin_inertia_cart_left;
+    base[8] = spin_inertia_cart_right;
+    base[9] = spin_inertia_left;
+    base[10] = spin_inertia_right;
+    base[11] = com_x_tractor*com_x_tractor*mass_tractor + com_y_tractor*com_y_tractor*mass_tractor
+            + diameter_inertia_left + diameter_inertia_right + m_L*x_L*x_L + m_L*y_L*y_L
+            + TRAILER3_LIT(0.09)*mass_cart + TRAILER3_LIT(0.09)*mass_cart2
+            + TRAILER3_LIT(0.09)*mass_cart2_left + TRAILER3_LIT(0.09)*mass_cart2_right
+            + TRAILER3_LIT(0.09)*mass_cart3 + TRAILER3_LIT(0.09)*mass_cart3_left
+            + TRAILER3_LIT(0.09)*mass_cart3_right + TRAILER3_LIT(0.09)*mass_cart_left
+            + TRAILER3_LIT(0.09)*mass_cart_right + TRAILER3_LIT(0.042849)*mass_left
+            + TRAILER3_LIT(0.042849)*mass_right + yaw_inertia_tractor;
+    base[12] = m_L + mass_cart + mass_cart2 + mass_cart2_left + mass_cart2_right + mass_cart3
+            + mass_cart3_left + mass_cart3_right + mass_cart_left + mass_cart_right + mass_left
+            + mass_right + mass_tractor;
+    base[13] = _t1 - com_x_cart*mass_cart + TRAILER3_LIT(0.85)*mass_cart2
+            + TRAILER3_LIT(0.85)*mass_cart2_left + TRAILER3_LIT(0.85)*mass_cart2_right
+            + TRAILER3_LIT(0.6)*mass_cart_left + TRAILER3_LIT(0.6)*mass_cart_right;
+    base[14] = -com_y_cart*mass_cart - TRAILER3_LIT(0.2)*mass_cart_left
+            + TRAILER3_LIT(0.2)*mass_cart_right;
+    base[15] = _t1 - com_x_cart2*mass_cart2 + TRAILER3_LIT(0.6)*mass_cart2_left
+            + TRAILER3_LIT(0.6)*mass_cart2_right;
+    base[16] = -com_y_cart2*mass_cart2 - TRAILER3_LIT(0.2)*mass_cart2_left
+            + TRAILER3_LIT(0.2)*mass_cart2_right;
+    base[17] = -com_x_cart3*mass_cart3 + TRAILER3_LIT(0.6)*mass_cart3_left
+            + TRAILER3_LIT(0.6)*mass_cart3_right;
+    base[18] = -com_y_cart3*mass_cart3 - TRAILER3_LIT(0.2)*mass_cart3_left
+            + TRAILER3_LIT(0.2)*mass_cart3_right;
+    base[19] = -com_x_tractor*mass_tractor - m_L*x_L + TRAILER3_LIT(0.3)*mass_cart
+            + TRAILER3_LIT(0.3)*mass_cart2 + TRAILER3_LIT(0.3)*mass_cart2_left
+            + TRAILER3_LIT(0.3)*mass_cart2_right + TRAILER3_LIT(0.3)*mass_cart3
+            + TRAILER3_LIT(0.3)*mass_cart3_left + TRAILER3_LIT(0.3)*mass_cart3_right
+            + TRAILER3_LIT(0.3)*mass_cart_left + TRAILER3_LIT(0.3)*mass_cart_right;
+    base[20] = -com_y_tractor*mass_tractor - m_L*y_L - TRAILER3_LIT(0.207)*mass_left
+            + TRAILER3_LIT(0.207)*mass_right;
+}

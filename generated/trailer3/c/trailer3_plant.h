@@ -63,6 +63,49 @@ void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const tr
 void trailer3_plant_params_with_payload(const trailer3_plant_params_t *base,
     const trailer3_real_t *payload, trailer3_real_t *params);
 
+#define TRAILER3_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE 43
+#define TRAILER3_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE 21
+
+/**
+ * Base inertial parameters (J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+ * J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right,
+ * J_theta_cart_left, J_theta_cart_right, J_theta_left, J_theta_right,
+ * J_theta_tractor, J_x_tractor, K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
+ * K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor,
+ * K_theta_cart3_x_tractor_2, K_theta_tractor_x_tractor,
+ * K_theta_tractor_x_tractor_2) of the robot whose bodies, wheels and root payload
+ * have the given physical quantities (modeling.physical_map: the same reduction
+ * as the model's).
+ *
+ * @param[in]  phys [43] row-major (TRAILER3_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE): mass_tractor,
+ *     yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart, yaw_inertia_cart, com_x_cart,
+ *     com_y_cart, mass_cart2, yaw_inertia_cart2, com_x_cart2, com_y_cart2, mass_cart3,
+ *     yaw_inertia_cart3, com_x_cart3, com_y_cart3, mass_right, spin_inertia_right,
+ *     diameter_inertia_right, mass_left, spin_inertia_left, diameter_inertia_left, mass_cart_right,
+ *     spin_inertia_cart_right, diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left,
+ *     diameter_inertia_cart_left, mass_cart2_right, spin_inertia_cart2_right,
+ *     diameter_inertia_cart2_right, mass_cart2_left, spin_inertia_cart2_left,
+ *     diameter_inertia_cart2_left, mass_cart3_right, spin_inertia_cart3_right,
+ *     diameter_inertia_cart3_right, mass_cart3_left, spin_inertia_cart3_left,
+ *     diameter_inertia_cart3_left, m_L, x_L, y_L -- mass_tractor, yaw_inertia_tractor,
+ *     com_x_tractor, com_y_tractor, mass_cart,
+yaw_inertia_cart, com_x_cart, com_y_cart, mass_cart2, yaw_inertia_cart2,
+com_x_cart2, com_y_cart2, mass_cart3, yaw_inertia_cart3, com_x_cart3,
+com_y_cart3, mass_right, spin_inertia_right, diameter_inertia_right, mass_left,
+spin_inertia_left, diameter_inertia_left, mass_cart_right,
+spin_inertia_cart_right, diameter_inertia_cart_right, mass_cart_left,
+spin_inertia_cart_left, diameter_inertia_cart_left, mass_cart2_right,
+spin_inertia_cart2_right, diameter_inertia_cart2_right, mass_cart2_left,
+spin_inertia_cart2_left, diameter_inertia_cart2_left, mass_cart3_right,
+spin_inertia_cart3_right, diameter_inertia_cart3_right, mass_cart3_left,
+spin_inertia_cart3_left, diameter_inertia_cart3_left, payload_mass, payload_x,
+payload_y (kg, kg m^2, m)
+ * @param[out] base [21] row-major (TRAILER3_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE)
+ *
+ * operations after CSE: 86 add, 82 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void trailer3_plant_params_from_physical(const trailer3_real_t *phys, trailer3_real_t *base);
+
 #ifdef __cplusplus
 }
 #endif

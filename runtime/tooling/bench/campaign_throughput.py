@@ -36,7 +36,7 @@ from runtime.commands.campaign import resolve_campaign
 def in_process_rate(runs: int) -> float:
     """Runs per second of :func:`runtime.campaign.runner.run_one` in this process."""
     campaign, tgt = resolve_campaign(None, None, runs)
-    base = base_values(campaign, tgt.plant)
+    base = base_values(campaign, tgt.plant, tgt.physical)
     run_one(campaign, 0, tgt, base)  # library, first reference
     t0 = time.perf_counter()
     for i in range(runs):
