@@ -31,7 +31,9 @@ from pathlib import Path
 from typing import Any
 
 from modeling.parameter_table import ParameterInfo
+from modeling.planar_robot import PlanarSupport
 from modeling.robot_io import RobotFileError, packaged_source
+from modeling.supports import supports_of
 
 # The order of the generated structs.
 LUMPED: tuple[ParameterInfo, ...] = (
@@ -77,6 +79,7 @@ class RobotTables:
     name: str
     lumped: dict[str, float] | None
     physical: dict[str, float] | None
+    supports: tuple[PlanarSupport, ...] | None = None  # [[support]] (modeling.supports)
 
 
 def packaged_text() -> tuple[str, str]:
@@ -148,10 +151,11 @@ def read_tables(text: str, where: str = "<string>") -> RobotTables:
 def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
     """:func:`read_tables` of a file's TOML already parsed (``modeling.robot_file`` parses
     a robot file once)."""
-    unknown = sorted(set(data) - {"name", "lumped", "physical"})
+    unknown = sorted(set(data) - {"name", "lumped", "physical", "support"})
     if unknown:
         raise RobotFileError(
-            f"{where}: unknown field '{unknown[0]}' (expected name and [lumped] or [physical])"
+            f"{where}: unknown field '{unknown[0]}' (expected name, [lumped] or [physical], "
+            "and optionally [[support]])"
         )
     name = data.get("name", Path(where).stem)
     if not isinstance(name, str) or not name:
@@ -161,5 +165,12 @@ def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
     if "lumped" in data:
         lumped = _table(where, "lumped", data["lumped"], LUMPED_FIELDS)
         check_lumped(where, lumped)
-        return RobotTables(name, lumped, None)
-    return RobotTables(name, None, _table(where, "physical", data["physical"], PHYSICAL_FIELDS))
+        return RobotTables(name, lumped, None, _supports(data, where, lumped["r"]))
+    physical = _table(where, "physical", data["physical"], PHYSICAL_FIELDS)
+    return RobotTables(name, None, physical, _supports(data, where, physical["r"]))
+
+
+def _supports(data: dict[str, Any], where: str, r: float) -> tuple[PlanarSupport, ...] | None:
+    """The file's ``[[support]]`` on the one body, ``platform`` (frame origin C; see
+    ``modeling.supports``; default radius r/2)."""
+    return supports_of(data, where, ("platform",), r / 2)
