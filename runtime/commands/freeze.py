@@ -47,7 +47,9 @@ from runtime.commands.options import GENERATED_HELP, ROBOT_HELP, loaded_setting
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
+from runtime.stability.analysis import configured_experiment
 from runtime.stability.sampled_loop import analysed, covers
+from runtime.stability.saturation import grip_line, saturation_verdict
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -231,6 +233,24 @@ def choose_formulation(
     return chosen[0], chosen[1], [f"Sampled-data verdict: {chosen[2].describe()}"]
 
 
+def grip_verdict_line(code: RobotCode, controller: str, formulation: str,
+                      nominal: dict[str, float], exp: Experiment, config: Any) -> str:
+    """The header's grip line: ``wmr stability``'s saturation and grip verdict
+    (:func:`runtime.stability.saturation.saturation_verdict`, simulated) at the
+    configuration's own h, gains and τ_max and the experiment's floor, in
+    :func:`~runtime.stability.saturation.grip_line`'s words; a slip is also printed as a
+    warning (the floor is the experiment's, not the firmware's: it is not refused)."""
+    try:
+        v = saturation_verdict(code, controller, formulation, nominal,
+                               configured_experiment(exp, config), simulate=True)
+    except ValueError as exc:
+        return f"Grip verdict: not available ({exc})"
+    line = f"Grip verdict: {grip_line(v)}"
+    if v.verdict != "ok":
+        print(f"warning: {line}", file=sys.stderr)
+    return line
+
+
 def _validated(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any) -> None:
     """The C's check of ``config``, so that only a valid configuration is analysed."""
     detail = lib.ffi.new(f"{code.prefix}_error_detail_t *")
@@ -289,6 +309,8 @@ def main(argv: list[str] | None = None) -> int:
         nominal = nominal_params(setup.nominal, args.nominal)
         lib = cbuild.build(args.float32, c_dir=code.c_dir, prefix=code.prefix)
         formulation, config, verdict = choose_formulation(lib, code, args, nominal, exp)
+        verdict = [*verdict, grip_verdict_line(code, args.controller, formulation, nominal,
+                                               exp, config)]
         made_from = (
             f"Made by: wmr freeze --controller {args.controller} --formulation "
             f"{formulation}{' --float32' if args.float32 else ''}"
