@@ -16,6 +16,10 @@ meaning, unit and C spelling from here. ``K_LAT`` is the plant's extra parameter
     m_P = 30.0  I_P = 2.0  x_P = 0.0  y_P = 0.0  m_w = 3.0  Iw = 0.07  Im = 0.04
     r = 0.096  b = 0.414  d = 0.12
 
+Either may state where the robot stands besides its two wheels: ``[[support]]`` tables on
+the one body, ``platform`` (frame origin C, x forward; ``modeling.supports``: format, the
+default of a file that states none, which Drishti's own file is, and the checks).
+
 :func:`read_tables` checks such a file's numbers field by field (every error names the
 file and the field); turning them into a robot is ``robot_file``'s, which needs SymPy only
 for a ``[physical]`` table. ``model`` reads its defaults (``drishti.toml``) through here,
