@@ -64,6 +64,9 @@ def test_the_frozen_header_carries_the_grip_verdict(verdict: object, tmp_path: P
     header = next(out.glob("*_tdroc_frozen.h")).read_text(encoding="utf-8")
     assert " ".join(line.split()) in " ".join(header.split())
     assert f"warning: {line}" in capsys.readouterr().err
+    # the sampled-data line does not call it stable where a wheel slips
+    assert "tdroc/paper stable:" not in header
+    assert "tdroc/paper linearly stable but slips" in header
 
 
 def test_the_campaign_summary_carries_the_grip_verdict(verdict: object) -> None:
