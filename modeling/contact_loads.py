@@ -5,9 +5,9 @@ Every tool that needs a normal load takes it from :func:`support_loads`: the sli
 (``runtime.sim.slip_monitor``), the traction-aware torque limit (``[controller]
 traction_mu``, ``runtime.setting.layout``), the saturation and grip verdict
 (``runtime.stability.saturation``) and the MuJoCo comparison. Its inputs are the robot's
-description (:class:`modeling.planar_robot.PlanarRobot`: bodies, wheels; the supports of
-:func:`modeling.mjcf_export.supports`), the payload state (point masses on the root body)
-and the assembly's horizontal acceleration.
+description (:class:`modeling.planar_robot.PlanarRobot`: bodies, wheels, and the supports
+its robot file states, or their default: ``modeling.supports``), the payload state
+(point masses on the root body) and the assembly's horizontal acceleration.
 
 Model (stated; ``modeling.mjcf_export`` writes an MJCF that realises it):
 
@@ -40,8 +40,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from modeling.mjcf_export import GRAVITY, body_origins, support_names, supports
-from modeling.planar_robot import PlanarRobot, Point
+from modeling.mjcf_export import GRAVITY
+from modeling.planar_robot import PlanarRobot, Point, body_origins
+from modeling.robot_io import RobotFileError
+from modeling.supports import check_supports, support_points, wheel_points
 
 Payload = tuple[float, float, float]  # (mass kg, x m, y m) on the root body
 LOAD_MODEL = "equal contact springs under a rigid assembly; the MJCF realises them"
@@ -59,14 +61,9 @@ class SupportLoads:
 
 
 def contact_points(robot: PlanarRobot) -> dict[str, Point]:
-    """Every support's point (root frame, hitches straight): wheel names, then the
-    engine's supports (``support_front``/``support_rear``, :func:`supports`)."""
-    origins = body_origins(robot)
-    points = {w.name: (origins[w.body][0] + w.position[0], origins[w.body][1] + w.position[1])
-              for w in robot.wheels}
-    for name, ((sx, sy), _) in zip(support_names(robot), supports(robot), strict=True):
-        points[name] = (sx, sy)
-    return points
+    """Every contact's point (root frame, hitches straight): wheel names, then the
+    supports' (the robot file's ``[[support]]``, else the default: ``modeling.supports``)."""
+    return {**wheel_points(robot), **support_points(robot)}
 
 
 def masses(robot: PlanarRobot, payloads: tuple[Payload, ...] = ()
@@ -106,6 +103,19 @@ def support_loads(robot: PlanarRobot, payloads: tuple[Payload, ...] = (),
         del active[worst]  # a spring cannot pull: it lifts off, solve over the rest
     return SupportLoads({k: loads.get(k, 0.0) for k in points},
                         tuple(k for k in points if k not in active))
+
+
+def checked_supports(robot: PlanarRobot, where: str) -> None:
+    """A robot file's supports checked (``modeling.supports.check_supports``) and the robot
+    standing at rest on its contacts without payload: ``RobotFileError``, one line naming
+    ``where``, if it would tip over (every contact but a line of them lifted)."""
+    check_supports(robot, where)
+    try:
+        support_loads(robot)
+    except ValueError as exc:
+        field = "support" if robot.supports is not None else "wheel"
+        raise RobotFileError(f"{where}: field '{field}': {exc}; its supports cannot "
+                             "carry it") from None
 
 
 def static_loads(robot: PlanarRobot, payloads: tuple[Payload, ...] = ()) -> dict[str, float]:

@@ -42,7 +42,7 @@ def planar_robot(path: Path) -> PlanarRobot:
     from modeling.robot_file import load_robot
 
     robot = load_robot(source)
-    return from_lumped(robot.name, robot.plant_values())
+    return from_lumped(robot.name, robot.plant_values(), robot.supports)
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:

@@ -19,10 +19,10 @@ each wheel's spin) and mapped to the derived model's coordinates, is the derived
   (mass, centre of mass and yaw inertia, by the parallel-axis theorem), so the assembly's
   planar inertia is unchanged, and the spin inertia beyond the wheel body's own is the
   hinge's ``armature`` (MuJoCo adds it to the wheel's diagonal of M);
-* a robot whose wheels all stand on one line (a differential drive) would pitch over: two
-  frictionless spheres on the root body (``support_front``/``support_rear``, normal force
-  only: ``condim`` 1) stand in for its casters, across the axle at
-  max(half the axle's span, twice the centre of mass's distance from the axle);
+* every support (``modeling.supports``: a caster or skid the robot file states, else the
+  default, two across the axle of a robot whose wheels all stand on one line) is a
+  frictionless sphere on its body (named as the support, normal force only: ``condim``
+  1) touching the ground at the stated point;
 * payload bodies (``payload_<i>``) are welded to the root body at the stated points with
   a negligible mass; the plant sets their mass at run time (the payload schedule).
 
@@ -52,7 +52,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from modeling.planar_robot import PlanarBody, PlanarRobot, PlanarWheel, Point
+from modeling.planar_robot import (
+    PlanarBody,
+    PlanarRobot,
+    PlanarWheel,
+    Point,
+    body_origins,
+)
+from modeling.supports import robot_supports, support_points
 
 MIN_WHEEL_MASS_FRACTION = 1e-4  # of the robot's mass: the lightest wheel body MuJoCo gets
 PAYLOAD_PLACEHOLDER_MASS = 1e-9  # kg: a payload body before the plant sets its mass
@@ -81,20 +88,6 @@ class EngineBody:
     mass: float
     com: Point
     yaw_inertia: float
-
-
-def body_origins(robot: PlanarRobot) -> dict[str, Point]:
-    """Each body frame's origin in the root frame with every hitch straight."""
-    out: dict[str, Point] = {robot.root.name: (0.0, 0.0)}
-    pending = list(robot.joints)
-    while pending:
-        for j in list(pending):
-            if j.parent in out:
-                px, py = out[j.parent]
-                out[j.child] = (px + j.parent_point[0] - j.child_point[0],
-                                py + j.parent_point[1] - j.child_point[1])
-                pending.remove(j)
-    return out
 
 
 def wheel_body_inertia(robot: PlanarRobot, w: PlanarWheel) -> tuple[float, float, float]:
@@ -134,40 +127,16 @@ def engine_body(robot: PlanarRobot, body: PlanarBody) -> EngineBody:
 
 
 def supports(robot: PlanarRobot) -> tuple[tuple[Point, float], ...]:
-    """Frictionless supports (centre in the root frame, radius) the robot needs to stand:
-    none unless every wheel contact is on one line (see the module docstring)."""
-    origins = body_origins(robot)
-    pts = [(origins[w.body][0] + w.position[0], origins[w.body][1] + w.position[1])
-           for w in robot.wheels]
-    a, b = max(((p, q) for p in pts for q in pts),
-               key=lambda pq: math.dist(pq[0], pq[1]))
-    span = math.dist(a, b)
-    if span == 0:
-        raise ValueError(f"robot '{robot.name}': all its wheels touch the ground at one point")
-    ux, uy = (b[0] - a[0]) / span, (b[1] - a[1]) / span
-    nx, ny = -uy, ux
-    off_line = max(abs((p[0] - a[0]) * nx + (p[1] - a[1]) * ny) for p in pts)
-    if off_line > 1e-6 * span:
-        return ()
-    mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-    total, mx, my = 0.0, 0.0, 0.0
-    for body in robot.bodies:
-        ox, oy = origins[body.name]
-        total += body.mass
-        mx += body.mass * (ox + body.com[0])
-        my += body.mass * (oy + body.com[1])
-    com_off = abs((mx / total - mid[0]) * nx + (my / total - mid[1]) * ny)
-    reach = max(span / 2, 2 * com_off)
-    radius = min(w.radius for w in robot.wheels) / 2
-    return tuple(((mid[0] + s * reach * nx, mid[1] + s * reach * ny), radius)
-                 for s in (1.0, -1.0))
+    """The frictionless supports' centres (root frame, hitches straight) and radii, in
+    :func:`modeling.supports.robot_supports` order: the robot file's stated supports, else
+    the default (two across the axle of a robot whose wheels are all on one line)."""
+    points = support_points(robot)
+    return tuple((points[s.name], s.radius) for s in robot_supports(robot))
 
 
 def support_names(robot: PlanarRobot) -> tuple[str, ...]:
-    """The names of :func:`supports`' spheres, in its order: ``support_front`` for the one
-    ahead of the axle (or left of it), ``support_rear`` for the other."""
-    return tuple("support_front" if sx > 0 or (sx == 0 and sy > 0) else "support_rear"
-                 for (sx, sy), _ in supports(robot))
+    """The names of :func:`supports`' spheres, in its order."""
+    return tuple(s.name for s in robot_supports(robot))
 
 
 def engine_inverse_weights(robot: PlanarRobot, contact: ContactSettings = ContactSettings()
@@ -176,7 +145,7 @@ def engine_inverse_weights(robot: PlanarRobot, contact: ContactSettings = Contac
     (``body_invweight0``: trace(J M⁻¹ Jᵀ)/3 at the body's centre of mass, in the model's
     reference pose, payload bodies at their placeholder mass), computed from the same
     numbers the MJCF states: the free root, the hitches' and wheels' hinges (armature
-    included), every body's mass and diagonal inertia. Keys: the root body's name (its
+    included), every body's mass and diagonal inertia. Keys: every body's name (its
     supports) and ``wheel_<name>``. ``tests/runtime/test_contact_loads.py`` checks it against
     MuJoCo's."""
     height = sum(w.radius for w in robot.wheels) / len(robot.wheels)
@@ -255,7 +224,7 @@ def engine_inverse_weights(robot: PlanarRobot, contact: ContactSettings = Contac
     inverse = np.linalg.inv(mass_matrix)
     out = {}
     for n, (name, _, _, _, _, com, _) in enumerate(nodes):
-        if name == robot.root.name or name.startswith("wheel_"):
+        if name != "payload":
             jp, _ = jacobian(n, com)
             out[name] = float(np.trace(jp @ inverse @ jp.T)) / 3
     return out
@@ -274,8 +243,8 @@ def contact_time_constants(robot: PlanarRobot, contact: ContactSettings = Contac
     weights = engine_inverse_weights(robot, contact)
     points = 2.0 if contact.tyre_width > 0 else 1.0
     per = {f"tyre_{w.name}": points / weights[f"wheel_{w.name}"] for w in robot.wheels}
-    for name in support_names(robot):
-        per[name] = 1.0 / weights[robot.root.name]
+    for support in robot_supports(robot):
+        per[support.name] = 1.0 / weights[support.body]
     least = min(per.values())
     return {k: contact.contact_timeconst * math.sqrt(v / least) for k, v in per.items()}
 
@@ -305,7 +274,7 @@ def mjcf(robot: PlanarRobot, contact: ContactSettings = ContactSettings()) -> st
     world = ET.SubElement(root, "worldbody")
     solref = _v(contact.contact_timeconst, contact.contact_dampratio)
     timeconst = contact_time_constants(robot, contact)
-    names = dict(zip(supports(robot), support_names(robot), strict=True))
+    stands = robot_supports(robot)
     mu = _v(contact.friction, 0.0, 0.0)
     ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", contype="1",
                   conaffinity="1", condim="3", friction=mu, solref=solref, group="0",
@@ -337,12 +306,12 @@ def mjcf(robot: PlanarRobot, contact: ContactSettings = ContactSettings()) -> st
                       pos=_v((max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2, height),
                       size=_v(max((max(xs) - min(xs)) / 2, 0.02),
                               max((max(ys) - min(ys)) / 2, 0.02), 0.02), mass="0")
+        for support in (s for s in stands if s.body == body.name):
+            ET.SubElement(el, "geom", name=support.name, type="sphere",
+                          size=_f(support.radius), pos=_v(*support.position, support.radius),
+                          contype="1", conaffinity="1", condim="1", priority="1", mass="0",
+                          solref=_v(timeconst[support.name], contact.contact_dampratio))
         if body is robot.root:
-            for ((sx, sy), radius), name in names.items():
-                ET.SubElement(el, "geom", name=name, type="sphere", size=_f(radius),
-                              pos=_v(sx, sy, radius), contype="1", conaffinity="1",
-                              condim="1", priority="1", mass="0",
-                              solref=_v(timeconst[name], contact.contact_dampratio))
             for i, (px, py) in enumerate(contact.payloads):
                 pl = ET.SubElement(el, "body", name=f"payload_{i}", pos=_v(px, py, height))
                 tiny = PAYLOAD_PLACEHOLDER_MASS

@@ -65,13 +65,36 @@ class PlanarWheel:
 
 
 @dataclass(frozen=True)
+class PlanarSupport:
+    """A frictionless support (a caster or skid: it carries a normal load, no traction):
+    a sphere of ``radius`` on ``body`` touching the ground under ``position`` (body
+    frame). A robot file's ``[[support]]`` (``modeling.supports``)."""
+
+    name: str
+    body: str
+    position: Point
+    radius: float
+
+    def to_data(self) -> list[Any]:
+        return [self.name, self.body, list(self.position), self.radius]
+
+    @classmethod
+    def from_data(cls, data: Any) -> PlanarSupport:
+        name, body, (x, y), radius = data
+        return cls(str(name), str(body), (float(x), float(y)), float(radius))
+
+
+@dataclass(frozen=True)
 class PlanarRobot:
-    """Bodies (the first is the root), hitches and wheels, in numbers."""
+    """Bodies (the first is the root), hitches and wheels, in numbers; ``supports``: the
+    robot file's stated supports (None: not stated, ``modeling.supports.default_supports``
+    derives them; ``()``: stated as none)."""
 
     name: str
     bodies: tuple[PlanarBody, ...]
     joints: tuple[PlanarJoint, ...]
     wheels: tuple[PlanarWheel, ...]
+    supports: tuple[PlanarSupport, ...] | None = None
 
     @property
     def root(self) -> PlanarBody:
@@ -95,7 +118,9 @@ class PlanarRobot:
         return sum(b.mass for b in self.bodies) + sum(w.mass for w in self.wheels)
 
     def to_data(self) -> dict[str, Any]:
-        """Plain data (str, float, bool, lists) for a generated ``robot.py``."""
+        """Plain data (str, float, bool, lists) for a generated ``robot.py``: bodies,
+        hitches and wheels (its ``LAYOUT``; the supports are its ``SUPPORTS``, for every
+        kind of robot file)."""
         return {
             "name": self.name,
             "bodies": [[b.name, b.mass, b.yaw_inertia, list(b.com)] for b in self.bodies],
@@ -120,10 +145,25 @@ class PlanarRobot:
         )
 
 
+def body_origins(robot: PlanarRobot) -> dict[str, Point]:
+    """Each body frame's origin in the root frame with every hitch straight."""
+    out: dict[str, Point] = {robot.root.name: (0.0, 0.0)}
+    pending = list(robot.joints)
+    while pending:
+        for j in list(pending):
+            if j.parent in out:
+                px, py = out[j.parent]
+                out[j.child] = (px + j.parent_point[0] - j.child_point[0],
+                                py + j.parent_point[1] - j.child_point[1])
+                pending.remove(j)
+    return out
+
+
 LUMPED_KEYS = ("m", "I", "K", "Iw", "r", "b", "d")
 
 
-def from_lumped(name: str, params: Mapping[str, float]) -> PlanarRobot:
+def from_lumped(name: str, params: Mapping[str, float],
+                supports: tuple[PlanarSupport, ...] | None = None) -> PlanarRobot:
     """The paper's differential drive from its lumped parameters (m, I, K, I_w, r, b, d and
     optionally the lateral first moment K_lat): one platform of mass m whose centre of mass
     is K/m behind and K_lat/m left of C (the body frame's origin, d ahead of the axle
@@ -147,7 +187,7 @@ def from_lumped(name: str, params: Mapping[str, float]) -> PlanarRobot:
                     True)
         for side, sign in (("right", -1.0), ("left", 1.0))
     )
-    return PlanarRobot(name, (platform,), (), wheels)
+    return PlanarRobot(name, (platform,), (), wheels, supports)
 
 
 def from_description(desc: Any) -> PlanarRobot:
@@ -172,4 +212,5 @@ def from_description(desc: Any) -> PlanarRobot:
                           num(w.spin_inertia, "spin_inertia"),
                           num(w.diameter_inertia, "diameter_inertia"), num(w.mass, "mass"),
                           bool(w.driven)) for w in desc.wheels),
+        desc.supports,
     )

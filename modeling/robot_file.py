@@ -131,7 +131,8 @@ def _described(source: RobotSource) -> tuple[RobotModel, Robot]:
     label = source_label(source.path) if source.path is not None else source.where
     model = robot_model.described_model(audited, label, source.naming)
     return model, Robot(model.name, model.param_values(), source=model.source,
-                        digest=source.digest, warnings=audited.warnings, kind="bodies")
+                        digest=source.digest, warnings=audited.warnings, kind="bodies",
+                        supports=audited.supports)
 
 
 # Robot kinds, looked up by marker in this order: a file with both [lumped] and [physical]

@@ -18,6 +18,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from modeling.planar_robot import PlanarSupport
+
 DEFAULT_ROBOT = "drishti"
 ROBOTS_DIR = Path(__file__).resolve().parent / "robots"
 
@@ -41,6 +43,8 @@ class Robot:
     digest: str = ""  # text_digest of the file it was read from ("" if none)
     warnings: tuple[str, ...] = ()
     kind: str = "lumped"  # the robot file's kind (modeling.robot_file.KINDS)
+    # its [[support]] (modeling.supports; None: not stated, the default)
+    supports: tuple[PlanarSupport, ...] | None = None
 
     def plant_values(self) -> dict[str, float]:
         """The numbers the file gives the simulated robot: the lumped parameters and the

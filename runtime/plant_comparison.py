@@ -311,7 +311,16 @@ def markdown(comp: Comparison) -> str:
               "scales a contact's stiffness by its body's inverse weight, so the MJCF gives "
               "each contact geom the time constant that makes the springs equal "
               "(`modeling.mjcf_export.contact_time_constants`), and the engine carries the "
-              "stated loads (tests/runtime/test_contact_loads.py: within 2 %):", "",
+              "stated loads (tests/runtime/test_contact_loads.py: within 2 %). The contacts "
+              "are the wheels and the supports the robot file states (`[[support]]`, "
+              "`modeling.supports`: name, body, position in the body frame, radius); a "
+              "file that states none, Drishti's included, stands on the default the "
+              "exporter always used: none if the wheel contacts are not all on one line, "
+              "else two frictionless spheres on the root body on the normal to the wheels' "
+              "line through its midpoint, at ± max(half the wheels' span, twice the bodies' "
+              "centre of mass's distance from the line), radius half the smallest wheel "
+              "radius (Drishti: 0.2211 m ahead of and behind the axle midpoint, i.e. "
+              "x = +0.1011 and −0.3411 m from C):", "",
               "| contact | stated | MuJoCo at rest |", "|---|---|---|"]
     for k, (stated, measured) in comp.loads.items():
         lines.append(f"| {k} | {stated:.1f} | {measured:.1f} |")
@@ -453,14 +462,31 @@ def report_section(comp: Comparison) -> list[str]:
 
 
 def _lowest_floor(comp: Comparison) -> str:
-    """How many runs the lowest floor without a traction limit leaves on the path."""
+    """How many runs the lowest floor without a traction limit leaves on the path, as
+    measured (the others end the run diverged or off the path: not said to be for good)."""
     plain = [(mu, i) for i, (_, mu, traction) in enumerate(comp.cases) if traction == 0]
     if not plain or not comp.rows:
         return ""
     mu, i = min(plain)
     ok = sum(r.engine[i].status == "ok" for r in comp.rows)
-    return (f" (μ = {mu:g}: {ok} of {len(comp.rows)} runs stay on the path, the others "
-            "lose it for good)")
+    return (f" (μ = {mu:g}: {ok} of {len(comp.rows)} runs end on the path, the others "
+            "end the run diverged or off it)")
+
+
+def _traction_slips(comp: Comparison) -> str:
+    """How many runs still slip under the traction limit, as measured."""
+    limited = [i for i, (_, _, traction) in enumerate(comp.cases) if traction > 0]
+    if not limited or not comp.rows:
+        return ""
+    i = limited[-1]
+    onsets = [t for r in comp.rows if (t := r.engine[i].slip_onset) is not None]
+    if not onsets:
+        return f" (measured: no run slips under it, {comp.cases[i][0]})"
+    return (f"; it does not keep every wheel inside its friction circle: {len(onsets)} of "
+            f"{len(comp.rows)} runs still slip under it ({comp.cases[i][0]}; first slip "
+            f"{min(onsets):g} … {max(onsets):g} s), the limit is μ N r of a wheel at rest, "
+            "and turning, load transfer and the controllers' sample-to-sample torque "
+            "reversals take more of μ N than that")
 
 
 def _summary(comp: Comparison) -> list[str]:
@@ -481,7 +507,8 @@ def _summary(comp: Comparison) -> list[str]:
         "report motion the robot does not make, and a controller that answers with more "
         "torque spins it further into the torque limit: grip seldom comes back"
         + _lowest_floor(comp) + ". A torque limit under μ N r (`traction_mu`) keeps "
-        "the start-up from spinning the wheels (counts above); the limit is also all the "
+        "the start-up from spinning the wheels (counts above)" + _traction_slips(comp)
+        + "; the limit is also all the "
         "authority the controllers have, so runs converge slowly and some may stay more "
         "than a tenth of the path's size off it (the outcome column): on such a floor the "
         "path must be slower, not the controller stronger.",

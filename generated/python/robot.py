@@ -28,6 +28,9 @@ FORMULATIONS = ('paper', 'minimal')
 # engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose
 # layout follows from its parameters.
 LAYOUT: dict[str, Any] | None = None
+# Its supports as the robot file states them ([[support]], modeling.supports: name,
+# body, position in the body frame, radius); None: not stated, the default rule.
+SUPPORTS: list[Any] | None = None
 # The wheels of <prefix>_wheel_contact_forces' outputs (codegen.contact_forces):
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')

@@ -46,11 +46,19 @@ Lengths in m, masses in kg, inertias in kg m², body frames with x forward and y
     rotor_inertia = 1.2e-6           # optional, driven wheels, with gear_ratio: the motor's
     gear_ratio = 30.0                # J_r (kg m²) and N; J_r N² is added to spin_inertia
 
+    [[support]]                      # optional: a caster or skid (frictionless: a normal
+    name = "skid"                    # load, no traction) where the robot touches the ground
+    body = "cart"                    # besides its wheels (default body: the root), at
+    position = [-0.2, 0.0]           # this point of the body's frame; radius optional (m,
+    radius = 0.03                    # default half the smallest wheel radius). A file
+                                     # with none stands on modeling.supports' default
+
     [import]                         # optional: written by `wmr import` (the source file and
     source = "robot.urdf"            # the importer's findings, which become warnings)
     findings = []
 
-All fields are required except ``joint.kind``, the motor pair and ``[import]``. Names are
+All fields are required except ``joint.kind``, the motor pair, ``[[support]]`` (format,
+default and checks: ``modeling.supports``) and ``[import]``. Names are
 unique across bodies and wheels (they name the coordinates). Numbers must be finite.
 Errors are ``DescriptionError`` (a ``modeling.robot_io.RobotFileError``, so a
 ``ValueError``) naming the file and the field,

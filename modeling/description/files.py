@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from modeling.audit import Rotor, audit_description
+from modeling.contact_loads import checked_supports
 from modeling.description.schema import (
     OPTIONAL,
     SECTIONS,
@@ -33,7 +34,9 @@ from modeling.description.schema import (
     fail,
     validate,
 )
+from modeling.planar_robot import from_description
 from modeling.robot_io import shipped_robot_file
+from modeling.supports import default_radius, supports_of
 
 # A wheel's motor, optional (both or neither): J_r (kg m²) and N; see the module docstring.
 MOTOR_FIELDS = {"rotor_inertia": "non-negative", "gear_ratio": "positive"}
@@ -116,10 +119,10 @@ def parse_description(text: str, where: str = "<string>") -> RobotDescription:
 def description_of(data: dict[str, Any], where: str = "<string>") -> RobotDescription:
     """:func:`parse_description` of a file's TOML already parsed (``modeling.robot_file``
     parses a robot file once)."""
-    unknown = sorted(set(data) - {"name", "import", *SECTIONS})
+    unknown = sorted(set(data) - {"name", "import", "support", *SECTIONS})
     if unknown:
         raise fail(where, f"unknown field '{unknown[0]}' (expected name, [[body]], "
-                    "[[joint]], [[wheel]] and optionally [import])")
+                    "[[joint]], [[wheel]] and optionally [[support]], [import])")
     name = data.get("name", Path(where).stem)
     if not isinstance(name, str) or not name:
         raise fail(where, "field 'name' must be a non-empty string")
@@ -144,6 +147,10 @@ def description_of(data: dict[str, Any], where: str = "<string>") -> RobotDescri
         wheels=tuple(WheelSpec(**w) for w in parts["wheel"]),
     )
     validate(desc, where)
+    stands = supports_of(data, where, tuple(b.name for b in desc.bodies),
+                         default_radius([float(w.radius) for w in desc.wheels]))
+    desc = replace(desc, supports=stands)
+    checked_supports(from_description(desc), where)
     rotors = {desc.wheels[i].name: m for i, m in motors.items()}
     warnings = audit_description(where, desc, rotors, findings)
     return replace(desc, warnings=warnings)

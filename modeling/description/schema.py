@@ -31,6 +31,7 @@ from typing import Any, TypeAlias
 
 import sympy as sp
 
+from modeling.planar_robot import PlanarSupport
 from modeling.robot_io import RobotFileError
 
 Value: TypeAlias = float | sp.Expr
@@ -86,7 +87,9 @@ class RobotDescription:
     """Bodies (the first is the root), joints and wheels; ``values`` holds the numbers of
     the parameter symbols (empty for a purely symbolic description). ``warnings``: the
     physics audit's findings on the file it was read from (``modeling.audit``; not part of
-    the robot: ignored by equality and hashing, dropped by ``symbolize``)."""
+    the robot: ignored by equality and hashing, dropped by ``symbolize``). ``supports``:
+    the file's ``[[support]]`` (``modeling.supports``; None: not stated, the default), in
+    numbers: where it stands, not part of the derivation (dropped by ``symbolize``)."""
 
     name: str
     bodies: tuple[BodySpec, ...]
@@ -94,6 +97,7 @@ class RobotDescription:
     wheels: tuple[WheelSpec, ...] = ()
     values: Mapping[sp.Symbol, float] = field(default_factory=dict, hash=False)
     warnings: tuple[str, ...] = field(default=(), compare=False)
+    supports: tuple[PlanarSupport, ...] | None = field(default=None, compare=False)
 
     @property
     def root(self) -> BodySpec:

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from modeling.package_paths import SHIPPED_GENERATED
+from modeling.planar_robot import PlanarSupport
 
 GENERATED = SHIPPED_GENERATED  # the generated package Python finds (see package_paths)
 ROOT = GENERATED.parent
@@ -139,6 +140,14 @@ class RobotCode:
     def is_paper_robot(self) -> bool:
         """The paper's own robot, as its ``robot.py`` declares (``PAPER_ROBOT``)."""
         return bool(getattr(self.robot, "PAPER_ROBOT", False))
+
+    @property
+    def supports(self) -> tuple[PlanarSupport, ...] | None:
+        """The supports the robot file states (``SUPPORTS`` of its ``robot.py``,
+        ``modeling.supports``); None: not stated (or code generated before the field),
+        the default rule derives them from the layout."""
+        stated = getattr(self.robot, "SUPPORTS", None)
+        return None if stated is None else tuple(PlanarSupport.from_data(s) for s in stated)
 
     @property
     def audit_warnings(self) -> tuple[str, ...]:

@@ -11,17 +11,23 @@ in between. Every robot whose first coordinates are its pose (Drishti, [lumped] 
 [physical] robots, bodies and wheels: trailers, casters) has the analysis, for the laws of
 (18): a controller without a switching term (the PI) or one the analysis does not model
 gets no boundary.
+
+Grip: beside the boundary, each controller's saturation and grip verdict at the
+campaign's base setting (:func:`grip_verdicts`: ``wmr stability``'s, the same function),
+which the summary states (``slips``: the time, wheel and margin, and the ``traction_mu``
+to set). The map's runs are drawn over many settings; the verdict is the base one's.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from runtime.campaign.runner import Target
 from runtime.campaign.spec import Campaign, with_values
+from runtime.stability.saturation import grip_data, saturation_verdict
 
 BIG = 1e12
 
@@ -48,6 +54,28 @@ class Boundary:
 class Prediction:
     boundaries: dict[tuple[str, str], Boundary]
     unavailable: str | None = None  # why there is no prediction
+    # controller -> the grip verdict at the campaign's base setting (grip_data of
+    # runtime.stability.saturation: verdict, first slip, traction_mu to set), or why not
+    grip: dict[str, dict[str, object]] = field(default_factory=dict)
+
+
+def grip_verdicts(campaign: Campaign, tgt: Target) -> dict[str, dict[str, object]]:
+    """Every controller's saturation and grip verdict at the campaign's base setting (its
+    experiment, the path's duration, the nominal robot): ``wmr stability``'s
+    :func:`~runtime.stability.saturation.saturation_verdict`, simulated, the same verdict
+    with the first slip (time, wheel, margin) and the ``traction_mu`` that keeps grip."""
+    exp = replace(campaign.experiment, paths=replace(
+        campaign.experiment.paths, circle_duration=campaign.duration))
+    out: dict[str, dict[str, object]] = {}
+    for ctrl in campaign.controllers:
+        try:
+            v = saturation_verdict(tgt.setup.code, ctrl, campaign.formulation, tgt.nominal,
+                                   exp, simulate=True)
+        except ValueError as exc:
+            out[ctrl] = {"verdict": "not checked", "line": f"not available ({exc})"}
+            continue
+        out[ctrl] = grip_data(v)
+    return out
 
 
 def y_grid(campaign: Campaign, base: float) -> list[float]:
@@ -76,10 +104,11 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
     from runtime.stability.sampled_loop import analysed, covers
 
     code = tgt.setup.code
+    grip = grip_verdicts(campaign, tgt)
     if not covers(code):
         return Prediction({}, unavailable=(
             f"robot '{tgt.name}': the sampled-data analysis needs the root's pose as the "
-            "first coordinates, so no boundary is predicted"))
+            "first coordinates, so no boundary is predicted"), grip=grip)
 
     section, _, key = campaign.map_y.partition(".")
     base_y = float(getattr(getattr(campaign.experiment, section), key))
@@ -103,4 +132,4 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
                 else:
                     eps_min.append(numerator / a.max_stable_gain)
             out[(ctrl, velocity)] = Boundary(ctrl, velocity, tuple(ys), tuple(eps_min))
-    return Prediction(out)
+    return Prediction(out, grip=grip)

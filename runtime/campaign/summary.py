@@ -119,6 +119,7 @@ def summarise(table: pa.Table, campaign: Campaign, pred: Prediction) -> dict[str
         "controllers": per,
         "agreement": None if pred.unavailable else {
             "runs": total.runs, "agree": total.agree, "fraction": total.fraction},
+        "grip": pred.grip,
         "prediction": pred.unavailable or (
             f"ε_min(y) from runtime.stability.analysis over {campaign.map_y}, nominal robot, no "
             "payload or friction, other parameters at their base values"),
@@ -204,6 +205,13 @@ def markdown(summary: dict[str, Any], campaign: Campaign, where: str, plots: lis
                          f"{g['predicted_unstable_simulated_stable']} |")
     for p in plots:
         lines += ["", f"![stability map]({p})"]
+    if summary.get("grip"):
+        lines += ["", "## Grip at the base setting", "",
+                  "`wmr stability`'s saturation and grip verdict "
+                  "(runtime.stability.saturation, simulated) for each controller at the "
+                  "campaign's base experiment and nominal robot; the drawn runs vary around "
+                  "it.", ""]
+        lines += [f"- {c.upper()}: {g['line']}" for c, g in summary["grip"].items()]
     errs = {c: s["errors"] for c, s in summary["controllers"].items() if s["errors"]}
     if errs:
         lines += ["", "## Errors (first distinct messages)", ""]

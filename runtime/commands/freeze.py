@@ -47,7 +47,9 @@ from runtime.commands.options import GENERATED_HELP, ROBOT_HELP, loaded_setting
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
+from runtime.stability.analysis import configured_experiment
 from runtime.stability.sampled_loop import analysed, covers
+from runtime.stability.saturation import SaturationVerdict, grip_line, saturation_verdict
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -231,6 +233,38 @@ def choose_formulation(
     return chosen[0], chosen[1], [f"Sampled-data verdict: {chosen[2].describe()}"]
 
 
+def grip_verdict(code: RobotCode, controller: str, formulation: str,
+                 nominal: dict[str, float], exp: Experiment, config: Any
+                 ) -> SaturationVerdict | None:
+    """``wmr stability``'s saturation and grip verdict
+    (:func:`runtime.stability.saturation.saturation_verdict`, simulated) at the
+    configuration's own h, gains and τ_max and the experiment's floor; None if it cannot
+    be computed for this robot (the header then says why not)."""
+    try:
+        return saturation_verdict(code, controller, formulation, nominal,
+                                  configured_experiment(exp, config), simulate=True)
+    except ValueError:
+        return None
+
+
+def grip_verdict_line(grip: SaturationVerdict | None) -> str:
+    """The header's grip line, in :func:`~runtime.stability.saturation.grip_line`'s words;
+    anything but ``ok`` is printed as a warning too (the floor is the experiment's, not
+    the firmware's: it is not refused)."""
+    if grip is None:
+        return "Grip verdict: not available (no saturation verdict for this robot)"
+    line = f"Grip verdict: {grip_line(grip)}"
+    if grip.verdict != "ok":
+        print(f"warning: {line}", file=sys.stderr)
+    return line
+
+
+def _not_stable(line: str) -> str:
+    """A sampled-data verdict line without "stable" where the grip verdict says slips."""
+    return line.replace(" stable: spectral radius",
+                        " linearly stable but slips (grip verdict below): spectral radius")
+
+
 def _validated(lib: cbuild.CLibrary, code: RobotCode, name: str, config: Any) -> None:
     """The C's check of ``config``, so that only a valid configuration is analysed."""
     detail = lib.ffi.new(f"{code.prefix}_error_detail_t *")
@@ -289,6 +323,10 @@ def main(argv: list[str] | None = None) -> int:
         nominal = nominal_params(setup.nominal, args.nominal)
         lib = cbuild.build(args.float32, c_dir=code.c_dir, prefix=code.prefix)
         formulation, config, verdict = choose_formulation(lib, code, args, nominal, exp)
+        grip = grip_verdict(code, args.controller, formulation, nominal, exp, config)
+        if grip is not None and grip.verdict == "slips":  # "stable" is not said then
+            verdict = [_not_stable(line) for line in verdict]
+        verdict = [*verdict, grip_verdict_line(grip)]
         made_from = (
             f"Made by: wmr freeze --controller {args.controller} --formulation "
             f"{formulation}{' --float32' if args.float32 else ''}"

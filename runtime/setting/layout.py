@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 from modeling.contact_loads import static_loads
 from modeling.planar_robot import PlanarRobot, from_lumped
@@ -15,7 +16,9 @@ from runtime.experiment.settings import Experiment
 
 def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
     """The robot the engine simulates: the generated ``LAYOUT`` of a bodies-and-wheels
-    robot, else the lumped robot of the plant parameters ``base``. ``ValueError`` if a
+    robot, else the lumped robot of the plant parameters ``base``; standing on the
+    supports its robot file states (``SUPPORTS``; not stated: the default rule of
+    ``modeling.supports``, applied to these numbers). ``ValueError`` if a
     bodies-and-wheels robot is asked with other parameters than its own (the engine takes
     masses and inertias, not the derived model's base parameters)."""
     layout = getattr(code.robot, "LAYOUT", None)
@@ -24,7 +27,7 @@ def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
             raise ValueError(f"robot '{code.name}': its generated robot.py has no LAYOUT "
                              "(generated before the MuJoCo plant); regenerate it with "
                              "`wmr model`")
-        return from_lumped(code.name, base)
+        return from_lumped(code.name, base, code.supports)
     own = code.plant_defaults
     moved = [k for k in own if not math.isclose(float(base.get(k, own[k])), own[k],
                                                 rel_tol=1e-12, abs_tol=1e-15)]
@@ -33,7 +36,7 @@ def robot_layout(code: RobotCode, base: Mapping[str, float]) -> PlanarRobot:
                          f"bodies and wheels; plant parameter '{moved[0]}' = "
                          f"{base[moved[0]]!r} differs from the robot's {own[moved[0]]!r} "
                          "(perturbed parameters run on the generated plant)")
-    return PlanarRobot.from_data(layout)
+    return replace(PlanarRobot.from_data(layout), supports=code.supports)
 
 
 def traction_torque_limit(code: RobotCode, base: Mapping[str, float], exp: Experiment,

@@ -244,6 +244,26 @@ class ConfigurationVerdict:
 ESTIMATOR_NAMES = {code: name for name, code in ACCEL_CODES.items()}
 
 
+def configured_experiment(exp: Experiment, config: Any) -> Experiment:
+    """``exp`` with the fields a filled configuration holds: h, quantisation, τ_max, the
+    switching fields, the PI's gains and (when uniform over the coordinates) K1, K2: the
+    setting the configuration runs at (``wmr freeze``'s verdicts, sampled-data and grip,
+    are at it)."""
+    changes: dict[str, Any] = {}
+    for name, field in (("h", "h"), ("q_pos", "q_pos"), ("q_vel", "q_vel"),
+                        ("tau_max", "tau_max"), ("eps", "eps"), ("n", "n"), ("a", "a"),
+                        ("gamma", "gamma"), ("kx", "pi_kx"), ("ky", "pi_ky"),
+                        ("ktheta", "pi_ktheta")):
+        if hasattr(config, name):
+            changes[field] = type(getattr(exp.controller, field))(getattr(config, name))
+    if hasattr(config, "k1"):
+        k1 = tuple(float(x) for x in config.k1)
+        k2 = tuple(float(x) for x in config.k2)
+        if len(set(k1)) == 1 and len(set(k2)) == 1:
+            changes.update(k1=k1[0], k2=k2[0])
+    return replace(exp, controller=replace(exp.controller, **changes))
+
+
 def configuration_verdict(
     code: RobotCode, controller: str, formulation: str, nominal: dict[str, float],
     exp: Experiment, config: Any,
@@ -270,14 +290,7 @@ def configuration_verdict(
     k1 = tuple(float(x) for x in config.k1)
     k2 = tuple(float(x) for x in config.k2)
     uniform = len(set(k1)) == 1 and len(set(k2)) == 1
-    changes: dict[str, Any] = {"h": float(config.h), "q_pos": float(config.q_pos),
-                               "q_vel": float(config.q_vel), "tau_max": float(config.tau_max)}
-    for name in ("eps", "n", "a", "gamma"):
-        if hasattr(config, name):
-            changes[name] = type(getattr(exp.controller, name))(getattr(config, name))
-    if uniform:
-        changes.update(k1=k1[0], k2=k2[0])
-    exp = replace(exp, controller=replace(exp.controller, **changes))
+    exp = configured_experiment(exp, config)
     loop_setting = replace(setting(code, controller, formulation, nominal, exp), k1=k1, k2=k2)
     if hasattr(config, "accel_estimator"):
         loop_setting = replace(loop_setting,

@@ -360,3 +360,37 @@ def _traction_advice(code: RobotCode, controller: str, formulation: str, ref: Re
     return (f"{held or 'traction_mu'} does not keep grip either"
             + (f" (stopped at t = {r.failed_at:g} s)" if r.failed_at is not None else "")
             + ": slow the path down, or make the loop stable first", None)
+
+
+def grip_line(v: SaturationVerdict) -> str:
+    """The grip part of a verdict in one line, as ``wmr freeze``'s header and the campaign
+    summary carry it (the verdict is :func:`saturation_verdict`'s, not recomputed): the
+    verdict at the floor's μ, the first slip (time, path, wheel, margin) and the
+    ``traction_mu`` that keeps grip, if the simulation found one."""
+    mu = v.friction
+    head = f"{v.verdict} at μ = {mu:g} ([plant] friction)"
+    needed = ("" if v.friction_needed is None
+              else f", μ needed {v.friction_needed:.3g} (simulated)")
+    if v.slip is None:
+        margin = (f"grip margin {v.grip_margin:.3g} N m" if math.isfinite(v.grip_margin)
+                  else "grip not checked (no slip monitor for this robot)")
+        return f"{head}: {margin}{needed}"
+    advice = (f"set [controller] traction_mu = {v.traction_mu:g}: it keeps grip (simulated)"
+              if v.traction_mu is not None else
+              "no traction_mu keeps grip (simulated): slow the path down or make the loop "
+              "stable first")
+    return f"{head}: {v.slip.describe(mu)}{needed}; {advice}"
+
+
+def grip_data(v: SaturationVerdict) -> dict[str, object]:
+    """The grip part of a verdict as JSON-able data (the campaign's ``summary.json``)."""
+    slip = v.slip
+    return {
+        "verdict": v.verdict, "friction": v.friction,
+        "grip_margin_Nm": v.grip_margin if math.isfinite(v.grip_margin) else None,
+        "friction_needed": v.friction_needed, "traction_mu": v.traction_mu,
+        "slip": None if slip is None else {
+            "t": slip.t, "path": slip.path, "wheel": slip.wheel, "margin_Nm": slip.margin,
+            "simulated": slip.simulated},
+        "line": grip_line(v),
+    }

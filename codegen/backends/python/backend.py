@@ -36,6 +36,8 @@ def robot_py(target: RobotTarget) -> str:
     rows = contact_rows(model)
     params = ", ".join(f'"{p.key}": {robot.lumped[p.key]!r}' for p in model.params)
     name = json.dumps(robot.name)  # a quote in a name cannot end the string
+    supports = (None if robot.supports is None
+                else [s.to_data() for s in robot.supports])
     text = (
         f'"""Default parameters of robot {name} (from {robot.source}).\n\n'
         f'{generated_by()} DO NOT EDIT.\n"""\n\n'
@@ -68,6 +70,9 @@ def robot_py(target: RobotTarget) -> str:
         "# engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose\n"
         "# layout follows from its parameters.\n"
         f"LAYOUT: dict[str, Any] | None = {model.layout!r}\n"
+        "# Its supports as the robot file states them ([[support]], modeling.supports: name,\n"
+        "# body, position in the body frame, radius); None: not stated, the default rule.\n"
+        f"SUPPORTS: list[Any] | None = {supports!r}\n"
         "# The wheels of <prefix>_wheel_contact_forces' outputs (codegen.contact_forces):\n"
         "# the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.\n"
         f"DRIVEN_WHEELS = {rows.driven!r}\n"

@@ -28,6 +28,9 @@ FORMULATIONS = ('minimal',)
 # engine's model of it (runtime.mujoco); None: a [lumped]/[physical] robot, whose
 # layout follows from its parameters.
 LAYOUT: dict[str, Any] | None = {'name': 'trailer', 'bodies': [['tractor', 30.0, 1.5, [0.05, 0.0]], ['cart', 15.0, 1.1, [-0.45, 0.0]]], 'joints': [['tractor', 'cart', [-0.3, 0.0], [0.0, 0.0]]], 'wheels': [['right', 'tractor', [0.0, -0.207], 0.096, 0.07, 0.007, 3.0, True], ['left', 'tractor', [0.0, 0.207], 0.096, 0.07, 0.007, 3.0, True], ['cart_right', 'cart', [-0.6, -0.2], 0.08, 0.004, 0.002, 1.25, False], ['cart_left', 'cart', [-0.6, 0.2], 0.08, 0.004, 0.002, 1.25, False]]}
+# Its supports as the robot file states them ([[support]], modeling.supports: name,
+# body, position in the body frame, radius); None: not stated, the default rule.
+SUPPORTS: list[Any] | None = None
 # The wheels of <prefix>_wheel_contact_forces' outputs (codegen.contact_forces):
 # the driven wheels of 'longitudinal', the wheels of each row of 'lateral'.
 DRIVEN_WHEELS = ('right', 'left')

@@ -16,6 +16,10 @@ meaning, unit and C spelling from here. ``K_LAT`` is the plant's extra parameter
     m_P = 30.0  I_P = 2.0  x_P = 0.0  y_P = 0.0  m_w = 3.0  Iw = 0.07  Im = 0.04
     r = 0.096  b = 0.414  d = 0.12
 
+Either may state where the robot stands besides its two wheels: ``[[support]]`` tables on
+the one body, ``platform`` (frame origin C, x forward; ``modeling.supports``: format, the
+default of a file that states none, which Drishti's own file is, and the checks).
+
 :func:`read_tables` checks such a file's numbers field by field (every error names the
 file and the field); turning them into a robot is ``robot_file``'s, which needs SymPy only
 for a ``[physical]`` table. ``model`` reads its defaults (``drishti.toml``) through here,
@@ -31,7 +35,9 @@ from pathlib import Path
 from typing import Any
 
 from modeling.parameter_table import ParameterInfo
+from modeling.planar_robot import PlanarSupport
 from modeling.robot_io import RobotFileError, packaged_source
+from modeling.supports import supports_of
 
 # The order of the generated structs.
 LUMPED: tuple[ParameterInfo, ...] = (
@@ -77,6 +83,7 @@ class RobotTables:
     name: str
     lumped: dict[str, float] | None
     physical: dict[str, float] | None
+    supports: tuple[PlanarSupport, ...] | None = None  # [[support]] (modeling.supports)
 
 
 def packaged_text() -> tuple[str, str]:
@@ -148,10 +155,11 @@ def read_tables(text: str, where: str = "<string>") -> RobotTables:
 def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
     """:func:`read_tables` of a file's TOML already parsed (``modeling.robot_file`` parses
     a robot file once)."""
-    unknown = sorted(set(data) - {"name", "lumped", "physical"})
+    unknown = sorted(set(data) - {"name", "lumped", "physical", "support"})
     if unknown:
         raise RobotFileError(
-            f"{where}: unknown field '{unknown[0]}' (expected name and [lumped] or [physical])"
+            f"{where}: unknown field '{unknown[0]}' (expected name, [lumped] or [physical], "
+            "and optionally [[support]])"
         )
     name = data.get("name", Path(where).stem)
     if not isinstance(name, str) or not name:
@@ -161,5 +169,12 @@ def tables_of(data: dict[str, Any], where: str = "<string>") -> RobotTables:
     if "lumped" in data:
         lumped = _table(where, "lumped", data["lumped"], LUMPED_FIELDS)
         check_lumped(where, lumped)
-        return RobotTables(name, lumped, None)
-    return RobotTables(name, None, _table(where, "physical", data["physical"], PHYSICAL_FIELDS))
+        return RobotTables(name, lumped, None, _supports(data, where, lumped["r"]))
+    physical = _table(where, "physical", data["physical"], PHYSICAL_FIELDS)
+    return RobotTables(name, None, physical, _supports(data, where, physical["r"]))
+
+
+def _supports(data: dict[str, Any], where: str, r: float) -> tuple[PlanarSupport, ...] | None:
+    """The file's ``[[support]]`` on the one body, ``platform`` (frame origin C; see
+    ``modeling.supports``; default radius r/2)."""
+    return supports_of(data, where, ("platform",), r / 2)

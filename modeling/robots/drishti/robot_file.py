@@ -12,6 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from modeling.audit import audit_lumped, audit_physical
+from modeling.contact_loads import checked_supports
+from modeling.planar_robot import from_lumped
 from modeling.robot_io import Robot, read_robot_text, text_digest
 from modeling.robots.drishti.parameters import (
     RobotTables,
@@ -64,14 +66,19 @@ def robot_of(tables: RobotTables, text: str, where: str) -> Robot:
     ``tables_of``) and its ``text`` (for the digest); see :func:`parse_robot`."""
     if tables.lumped is not None:
         warnings = audit_lumped(where, tables.lumped)
-        return Robot(tables.name, tables.lumped, source=where, digest=text_digest(text),
-                     warnings=warnings, kind="lumped")
-    assert tables.physical is not None  # read_tables gives exactly one table
-    warnings = audit_physical(where, tables.physical)
-    lumped, k_lat = lumped_from_physical(tables.physical)
-    check_lumped(where, lumped, k_lat)
-    return Robot(tables.name, lumped, tables.physical, k_lat, source=where,
-                 digest=text_digest(text), warnings=warnings, kind="physical")
+        robot = Robot(tables.name, tables.lumped, source=where, digest=text_digest(text),
+                      warnings=warnings, kind="lumped", supports=tables.supports)
+    else:
+        assert tables.physical is not None  # read_tables gives exactly one table
+        warnings = audit_physical(where, tables.physical)
+        lumped, k_lat = lumped_from_physical(tables.physical)
+        check_lumped(where, lumped, k_lat)
+        robot = Robot(tables.name, lumped, tables.physical, k_lat, source=where,
+                      digest=text_digest(text), warnings=warnings, kind="physical",
+                      supports=tables.supports)
+    # where it stands: the stated supports (or the default) under its numbers
+    checked_supports(from_lumped(robot.name, robot.plant_values(), robot.supports), where)
+    return robot
 
 
 def load_robot(path: str | Path | None = None) -> Robot:

@@ -12,8 +12,10 @@ and each sensing model, with the paper's experiment scaled to the robot:
   bisection, :mod:`runtime.stability.verification`);
 * TDC in the minimal formulation, sample-instant rates: the predicted largest delay against
   the simulated one (TDROC with k̂ held at 0 is TDC; bisection on the delay of the loop);
-* the saturation and wind-up verdict of every controller (sample-instant rates), predicted
-  and simulated (:mod:`runtime.stability.saturation`).
+* the saturation, wind-up and grip verdict of every controller (sample-instant rates),
+  predicted and simulated (:mod:`runtime.stability.saturation`: ``ok``, ``saturates``,
+  ``winds up`` or ``slips``, the grip margin min(μ N r − torque) at the experiment's floor
+  and the μ the simulated runs needed on each path).
 
 Run: ``python -m runtime.tooling.bench.stability_note [--out FILE] [--robots a,b]``
 (about ten minutes on one core; the tests check the same things on cheaper cases).
@@ -118,7 +120,8 @@ def robot_section(name: str, robot: str | None, generated: Path | None) -> list[
         lines.append(f"- {velocity}: `analyse_all` with the largest delays took {took:.1f} s "
                      f"({len(result)} rows, {code.nq} coordinates).")
         if velocity == "sample-instant":
-            sat = ["", "| controller | form | saturation (predicted; simulated) |", "|---|---|---|"]
+            sat = ["", f"| controller | form | saturation and grip at μ = {exp.plant.friction:g} "
+                   "(predicted; simulated) |", "|---|---|---|"]
             for form, info in code.runs():
                 v = saturation_verdict(code, info.name, form, nominal, exp, simulate=True)
                 sat.append(f"| {info.name} | {form} | {v.verdict}: {v.reason} |")
@@ -137,7 +140,14 @@ def main(argv: list[str] | None = None) -> int:
            "delay from a sample to its torque at the wheels with the loop stable at the "
            "setting's gain (∞: beyond 2 h). TDROC k̂/ε simulated: k̂ held, bisection "
            "between diverging and bounded runs (`runtime/stability/verification.py`); "
-           "TDC delay simulated: bisection on the delay the closed loop applies.", ""]
+           "TDC delay simulated: bisection on the delay the closed loop applies. "
+           "Saturation and grip: `wmr stability`'s verdict (`ok`, `saturates`, `winds up`, "
+           "`slips`) against min(τ_max, μ N r) per driven wheel, μ the experiment's "
+           "`[plant] friction` (1 here), N from the one load "
+           "model (`modeling.contact_loads`, the robot file's supports); grip margin: the "
+           "smallest μ N r − torque along the tracked paths; μ needed: the simulated runs' "
+           "largest |F|/N on each path. Where grip ends (h = 0.25 s TDROC, μ = 0.1 floors) "
+           "see tests/runtime/test_grip_verdict.py and docs/MUJOCO.md.", ""]
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.robots.split(","):
             robot, gen = ROBOTS[name]
