@@ -16,7 +16,7 @@ from shipped_robots import derivable_robot_files
 from codegen.robot_functions import law_specs, trig_angles
 from modeling.robot_file import load_robot_model
 
-ROBOTS = derivable_robot_files()  # each is derived here: not train5 (its own tests)
+ROBOTS = derivable_robot_files()  # laws derived here: not train5 (tests/shipped_robots.py)
 
 
 def _laws(prefix: str, name: str) -> object:
