@@ -31,6 +31,8 @@ from modeling.description.elimination import (
     block_triangular_inverse,
     block_triangular_solve,
     evaluate_exactly,
+    exact_det_is_zero,
+    exact_rank,
     rational_point,
 )
 from modeling.description.kinematics import (
@@ -208,7 +210,8 @@ def independent_rows(rows: sp.Matrix) -> list[int]:
     kept: list[int] = []
     for i in range(rows.rows):
         trial = [*kept, i]
-        if any(p.extract(trial, list(range(p.cols))).rank() == len(trial) for p in points):
+        if any(exact_rank(p.extract(trial, list(range(p.cols)))) == len(trial)
+               for p in points):
             kept.append(i)
     return kept
 
@@ -242,13 +245,13 @@ def _check_minimal_form(
     dep_names = [names[i] for i in dependent]
     if a_d.rows == 0:
         return
-    if all(p.det() == 0 for p in _generic_points(a_d)):
+    if all(exact_det_is_zero(p) for p in _generic_points(a_d)):
         raise DescriptionError(
             f"{where}: S(q) does not exist: the driven wheel rates do not determine the "
             f"velocities {', '.join(_undetermined(a_d, dep_names))} (the constraint block "
             "of the dependent velocities is singular)"
         )
-    if values and evaluate_exactly(a_d, rational_point(a_d, SEED, values)).det() == 0:
+    if values and exact_det_is_zero(evaluate_exactly(a_d, rational_point(a_d, SEED, values))):
         raise DescriptionError(
             f"{where}: S(q) does not exist at the given parameter values (the constraint "
             "block of the dependent velocities is singular there, though not generically)"
@@ -278,7 +281,7 @@ def _system(sym: RobotDescription) -> DescribedSystem:
     a = all_rows.extract(kept, list(range(all_rows.cols)))
     if sym.values and kept:
         at_values = evaluate_exactly(a, rational_point(a, SEED, sym.values))
-        if at_values.rank() < len(kept):
+        if exact_rank(at_values) < len(kept):
             raise DescriptionError(
                 f"{where}: the wheel constraints are dependent at the given parameter values "
                 "but not generically: the symbolic model would not hold there (give the "

@@ -133,22 +133,31 @@ def _scaled(params: Mapping[str, float], rng: np.random.Generator, spread: float
 
 
 def test_prepared_equals_unprepared_bit_for_bit(api: Api) -> None:
-    """Random valid parameters (±30 %), 50 states each: equal statuses (OK) and equal
-    bits; the example's plant (payload parameters 20 % heavier) too."""
+    """Random parameters (±30 %), 50 states each: equal statuses and equal bits; the
+    example's plant (payload parameters 20 % heavier) too. The base parameters of five carts
+    drawn one by one can give an indefinite S^T M S at some configurations (train5: 64 of
+    the 350 states; the ±30 % box of its base parameters is far wider than its physical
+    set); both functions must refuse those alike (BAD_PARAMS), and most states must be a
+    compared OK."""
     rng = np.random.default_rng(3)
     parameter_sets = [dict(api.code.params)] + [_scaled(api.code.params, rng, 0.3)
                                                for _ in range(6)]
-    compared = 0
+    compared = refused = 0
     for p in parameter_sets:
         status, prepared = api.prepare(p)
         assert status == api.status("OK"), p
         for q, qdot, tau in _states(api, rng, p):
             want = api.unprepared(p, q, qdot, tau)
             got = api.prepared(prepared, q, qdot, tau)
-            assert want[0] == api.status("OK")
             assert got == want, (p, q, qdot, tau)
-            compared += 1
-    assert compared == 350
+            if want[0] == api.status("OK"):
+                compared += 1
+            else:
+                assert want[0] == api.status("ERR_BAD_PARAMS") and p != api.code.params
+                refused += 1
+    assert compared + refused == 350 and compared >= 250, (compared, refused)
+    if api.name != "train5":  # the chains up to three carts: every draw is physical here
+        assert refused == 0
 
 
 def test_small_robot_numbers_prepare_and_match() -> None:

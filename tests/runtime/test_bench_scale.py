@@ -92,3 +92,44 @@ def test_step_harness_runs_every_robot_and_agrees_across_builds(tmp_path: Path) 
     (ns1, check1), (ns2, check2) = scale.step_times([exe, exe], rounds=1)
     assert check1 == check2 and float(check1) != 0.0
     assert 0 < ns1 < 1e6 and 0 < ns2 < 1e6
+
+
+def test_trailers_are_the_towed_bodies_of_the_robot_file() -> None:
+    assert [scale.trailers(ROOT, r) for r in scale.SCALING] == [0, 1, 2, 3, 5]
+
+
+def _rung(robot: str, carts: int, ops: int) -> scale.Rung:
+    rung = scale.Rung(robot, carts, 5 + 3 * carts)
+    rung.forward_dynamics_ops = rung.minimal_forward_dynamics_ops = ops
+    rung.contact_forces_ops = rung.tdroc_step_ops = ops
+    return rung
+
+
+def test_growth_is_per_added_cart_and_flatness_is_judged() -> None:
+    """Linear cost (100 a cart) is flat, with the three-to-five gap averaged over its two
+    carts; the quadratic growth of the staged code (a cart costs more than the last) is
+    not; Drishti (no cart) takes no part."""
+    linear = [_rung("drishti", 0, 7), *[_rung(f"t{n}", n, 50 + 100 * n) for n in (1, 2, 3, 5)]]
+    found = scale.growth(linear)
+    assert [g.figure for g in found] == [f for f, _ in scale.GROWTH_FIGURES]
+    assert found[0].steps == ((1, 2, 100.0), (2, 3, 100.0), (3, 5, 100.0))
+    assert all(g.flat for g in found)
+    quadratic = [_rung(f"t{n}", n, 40 * n * n) for n in (1, 2, 3, 5)]
+    g = scale.growth(quadratic)[0]
+    assert [s[2] for s in g.steps] == [120.0, 200.0, 320.0] and not g.flat
+    assert "| no |" in "\n".join(scale.growth_section(quadratic))
+
+
+def test_budgets_are_issue_51s_and_a_miss_is_shown() -> None:
+    t5 = _rung("train5", 5, 1000)
+    t5.model_cpu_s, t5.model_peak_mb, t5.c_bytes = 61.0, 180.0, 999_000
+    t5.m4_tdroc_code, t5.m4_tdroc_stack, t5.x86_step_ns = 15_000, None, 900.0
+    t2 = _rung("trailer2", 2, 100)
+    t2.c_bytes = 500_000
+    met = {b.what: b.met for b in scale.budgets([t2, t5])}
+    assert met["train5 `wmr model` CPU"] is False and met["train5 generated C"] is True
+    assert met["trailer2 generated C"] is False  # < 500 kB is strict
+    assert met["train5 M4 TDROC stack"] is None and met["train5 x86 TDROC step"] is True
+    text = "\n".join(scale.budget_section([t2, t5]))
+    assert "| train5 `wmr model` CPU | 61.0 s | 60 s | **no** |" in text
+    assert "not measured" in text

@@ -5,7 +5,8 @@
   generated kinematics (31)), equals the generated M̄ = Sᵀ M S at random states, to 1e-6
   relative (measured: 1e-10 for Drishti and the trailer, 5e-8 for the 2 kg small robot;
   what is left is the wheels' minimum engine mass and the payload placeholders), for the
-  three robots of the issue.
+  three robots of the issue and the tugger train of five carts (train5, 20 coordinates:
+  its generated M̄ is the staged SᵀMS, ``modeling.staged``).
 * A short Drishti circle on MuJoCo (μ = 1, point contacts) against the generated plant:
   the same controller tracks within 1 mm RMS of it (measured 0.3–0.5 mm); at μ = 0.02 the
   wheels spin on the floor and the run is nothing like the rolling one (the engine is not a
@@ -40,6 +41,7 @@ ROBOTS = {
     "drishti": ROOT / "modeling" / "robots" / "drishti" / "drishti.toml",
     "trailer": ROOT / "modeling" / "robots" / "trailer" / "trailer.toml",
     "small_robot": ROOT / "tests" / "robots" / "small_robot.toml",
+    "train5": ROOT / "modeling" / "robots" / "train5" / "train5.toml",
 }
 MASS_MATRIX_RTOL = 1e-6
 

@@ -22,7 +22,7 @@ from runtime.tooling.bench.python_timings import python_bench, toolchain_times
 from runtime.tooling.bench.robot_c_bench import run as run_robots
 from runtime.tooling.bench.robot_c_bench import section as robots_section
 from runtime.tooling.bench.robot_c_bench import summarise as summarise_robots
-from runtime.tooling.bench.scale import Rung
+from runtime.tooling.bench.scale import Rung, budget_section, growth_section
 from runtime.tooling.bench.scale import measure as measure_scaling
 from runtime.tooling.bench.scale import section as scale_section
 from runtime.tooling.bench.step_bench import run_steps, summarise_steps
@@ -299,7 +299,8 @@ def write_report(
         "",
         "## How cost grows with the robot",
         "",
-        "Drishti and the tractor with one, two and three trailers (`modeling/robots/`), each",
+        "Drishti, the tractor with one, two and three trailers and the tugger train of five",
+        "carts (`modeling/robots/`), each",
         "measured as a user meets it (`runtime/tooling/bench/scale.py`): `wmr model --robot`",
         "in a fresh process (wall and CPU time, peak memory: CPU time is the figure a",
         "shared machine disturbs least), the generated folder's bytes, the operations after",
@@ -310,6 +311,13 @@ def write_report(
         "of interleaved passes).",
         "",
         *scale_section(scaling),
+        "",
+        "Operations added per cart between consecutive robots (three to five carts: the",
+        "mean of the two carts), and issue 51's budgets against the measurements:",
+        "",
+        *growth_section(scaling),
+        "",
+        *budget_section(scaling),
         "",
         "## Toolchain",
         "",

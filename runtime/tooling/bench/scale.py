@@ -1,5 +1,6 @@
-"""How the toolchain's cost grows with the robot (issue 30): the shipped ladder Drishti, a
-tractor with one, two and three trailers, measured the way a user meets each cost.
+"""How the toolchain's cost grows with the robot (issues 30, 51): the shipped ladder Drishti, a
+tractor with one, two and three trailers and the five-cart tugger train (train5), measured
+the way a user meets each cost.
 
 * ``wmr model --robot`` (a fresh process per robot): wall time, peak memory, the time of
   each step it reports, and the bytes it writes (C, Python, CasADi; the longest Python line);
@@ -9,7 +10,10 @@ tractor with one, two and three trailers, measured the way a user meets each cos
   memory;
 * a Cortex-M4 float32 image with TDROC alone (``arm-none-eabi-gcc -Os``, newlib-nano,
   --gc-sections): the generated code's bytes and the step's worst-case stack;
-* x86 ``<prefix>_tdroc_step`` (gcc -O2, double): ns a step, best of interleaved passes.
+* x86 ``<prefix>_tdroc_step`` (gcc -O2, double): ns a step, best of interleaved passes;
+* the growth per added cart of the operations of forward dynamics, the minimal form, the
+  contact forces and the TDROC step (:func:`growth`), and issue 51's budgets against the
+  measurements (:func:`budgets`).
 
 Everything reads a generated folder (the shipped ``generated/`` by default), so that the
 same measurement can be run on another checkout (``--root``): the before/after of a change.
@@ -25,12 +29,17 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from dataclasses import asdict, dataclass, field
+from itertools import pairwise
 from pathlib import Path
 from typing import NamedTuple
 
 ROOT = Path(__file__).resolve().parents[3]
 LADDER = ("drishti", "trailer", "trailer2", "trailer3")  # 0, 1, 2, 3 trailers
+# The scaling section's robots: the ladder and the tugger train of five carts (issue 51).
+# LADDER stays the per-function benchmarks' set (robot_c_bench: CasADi's C of every robot).
+SCALING = (*LADDER, "train5")
 STEP_LINE = re.compile(r"^\S+: (.+?) \.\.\. ([0-9.]+) s$", re.M)
 OP_ROW = re.compile(r"^\| `?(\w+)`? \| operations after CSE: ([^|]+)\|", re.M)
 # The values of the TDROC configuration a measured image and step use (valid, not tuned).
@@ -55,6 +64,8 @@ class Rung:
     longest_python_line: int = 0
     forward_dynamics_ops: int = 0
     tdroc_step_ops: int = 0
+    minimal_forward_dynamics_ops: int = 0
+    contact_forces_ops: int = 0
     gcc_slowest_s: float = 0.0  # CPU seconds of the slowest file
     gcc_slowest_file: str = ""
     gcc_peak_mb: float = 0.0
@@ -107,6 +118,12 @@ def run_with_peak(cmd: list[str], cwd: Path) -> Measured:
 
 def robot_file(root: Path, robot: str) -> Path:
     return root / "modeling" / "robots" / robot / f"{robot}.toml"
+
+
+def trailers(root: Path, robot: str) -> int:
+    """The robot file's towed bodies: its ``[[body]]`` tables but the root."""
+    with robot_file(root, robot).open("rb") as f:
+        return max(len(tomllib.load(f).get("body", [])) - 1, 0)
 
 
 def generated_folder(root: Path, robot: str) -> Path:
@@ -171,6 +188,8 @@ def step_operations(folder: Path, prefix: str) -> dict[str, str]:
 def measure_operations(folder: Path, rung: Rung) -> None:
     table = dict(OP_ROW.findall((folder / "MODEL.md").read_text()))
     rung.forward_dynamics_ops = operations(table["forward_dynamics"])
+    rung.minimal_forward_dynamics_ops = operations(table["minimal_forward_dynamics"])
+    rung.contact_forces_ops = operations(table["wheel_contact_forces"])
     prefix = prefix_of(folder)
     per_step = step_operations(folder, prefix)  # a kernel's _keep runs at _init, not a step
     rung.tdroc_step_ops = sum(operations(per_step[k])
@@ -354,14 +373,15 @@ def step_times(executables: list[Path], rounds: int = 3) -> list[tuple[float, st
     return list(zip(best, checks, strict=True))
 
 
-def measure(root: Path = ROOT, robots: tuple[str, ...] = LADDER,
+def measure(root: Path = ROOT, robots: tuple[str, ...] = SCALING,
             generation: bool = True) -> list[Rung]:
-    """The ladder's measurements (progress on stdout: the whole takes a minute or two)."""
+    """The robots' measurements (progress on stdout: train5's derivation alone takes
+    minutes)."""
     rungs = []
-    for trailers, robot in enumerate(robots):
+    for robot in robots:
         folder = generated_folder(root, robot)
         prefix = prefix_of(folder)
-        rung = Rung(robot, trailers, coordinates(folder, prefix)[0])
+        rung = Rung(robot, trailers(root, robot), coordinates(folder, prefix)[0])
         print(f"scaling: {robot} ...", flush=True)
         if generation:
             measure_generation(root, robot, rung)
@@ -402,18 +422,128 @@ def section(rungs: list[Rung]) -> list[str]:
     return lines
 
 
+# The figures whose growth per added cart issue 51 asks to be flat (within ±20 %).
+GROWTH_FIGURES = (("forward dynamics", "forward_dynamics_ops"),
+                  ("minimal forward dynamics", "minimal_forward_dynamics_ops"),
+                  ("contact forces", "contact_forces_ops"),
+                  ("TDROC step", "tdroc_step_ops"))
+FLAT = 0.20
+
+
+class Growth(NamedTuple):
+    """One figure's operations added per cart between consecutive towing robots."""
+
+    figure: str
+    steps: tuple[tuple[int, int, float], ...]  # (carts before, carts after, ops a cart)
+
+    @property
+    def spread(self) -> tuple[float, float]:
+        """(lowest, highest) step over their mean, minus one: (−0.2, +0.2) is ±20 %."""
+        per_cart = [s[2] for s in self.steps]
+        mean = sum(per_cart) / len(per_cart)
+        return min(per_cart) / mean - 1.0, max(per_cart) / mean - 1.0
+
+    @property
+    def flat(self) -> bool:
+        low, high = self.spread
+        return low >= -FLAT and high <= FLAT
+
+
+def growth(rungs: list[Rung]) -> list[Growth]:
+    """Operations added per cart, (ops(n) − ops(m)) / (n − m) between consecutive robots
+    with at least one cart (a gap, e.g. three to five carts, is averaged over its carts)."""
+    towing = sorted((r for r in rungs if r.trailers >= 1), key=lambda r: r.trailers)
+    out = []
+    for figure, attribute in GROWTH_FIGURES:
+        steps = tuple(
+            (a.trailers, b.trailers,
+             (getattr(b, attribute) - getattr(a, attribute)) / (b.trailers - a.trailers))
+            for a, b in pairwise(towing) if b.trailers > a.trailers)
+        if steps:
+            out.append(Growth(figure, steps))
+    return out
+
+
+class Budget(NamedTuple):
+    """One of issue 51's budgets against its measurement (``None``: not measured)."""
+
+    what: str
+    measured: float | None
+    limit: float
+    unit: str
+
+    @property
+    def met(self) -> bool | None:
+        return None if self.measured is None else self.measured < self.limit
+
+
+def budgets(rungs: list[Rung]) -> list[Budget]:
+    """Issue 51's budgets for the robots measured: five carts derived in < 60 s (CPU, the
+    figure a shared machine disturbs least) and < 1 GB, its generated C < 1 MB and two
+    trailers' < 500 kB, gcc -O2 of any file < 30 s, the M4 TDROC step < 16 KB code and
+    < 1 KB stack, the x86 TDROC step of five carts < 2 µs."""
+    by = {r.robot: r for r in rungs}
+    out = []
+    if "train5" in by:
+        t = by["train5"]
+        out += [Budget("train5 `wmr model` CPU", t.model_cpu_s or None, 60.0, "s"),
+                Budget("train5 `wmr model` peak memory", t.model_peak_mb or None, 1000.0,
+                       "MB"),
+                Budget("train5 generated C", t.c_bytes / 1000, 1000.0, "kB")]
+    if "trailer2" in by:
+        out.append(Budget("trailer2 generated C", by["trailer2"].c_bytes / 1000, 500.0, "kB"))
+    if rungs:
+        out.append(Budget("gcc -O2 slowest file CPU (any robot)",
+                          max(r.gcc_slowest_s for r in rungs), 30.0, "s"))
+    for r in rungs:
+        if r.trailers >= 1:
+            out += [Budget(f"{r.robot} M4 TDROC code", r.m4_tdroc_code, 16_000.0, "B"),
+                    Budget(f"{r.robot} M4 TDROC stack", r.m4_tdroc_stack, 1024.0, "B")]
+    if "train5" in by:
+        ns = by["train5"].x86_step_ns
+        out.append(Budget("train5 x86 TDROC step", ns, 2000.0, "ns"))
+    return out
+
+
+def growth_section(rungs: list[Rung]) -> list[str]:
+    """Operations added per cart, and whether each figure's growth is flat within ±20 %."""
+    found = growth(rungs)
+    if not found:
+        return []
+    steps = [f"{a} → {b}" for a, b, _ in found[0].steps]
+    lines = ["| operations added per cart | " + " | ".join(steps)
+             + " | spread around the mean | flat within ±20 % |",
+             "|---|" + "---:|" * (len(steps) + 2)]
+    for g in found:
+        low, high = g.spread
+        lines.append(f"| {g.figure} | " + " | ".join(f"{s[2]:,.0f}" for s in g.steps)
+                     + f" | {100 * low:+.0f} % / {100 * high:+.0f} % "
+                     f"| {'yes' if g.flat else 'no'} |")
+    return lines
+
+
+def budget_section(rungs: list[Rung]) -> list[str]:
+    lines = ["| budget (issue 51) | measured | limit | met |", "|---|---:|---:|---|"]
+    for b in budgets(rungs):
+        measured = "—" if b.measured is None else f"{b.measured:,.1f} {b.unit}"
+        met = "not measured" if b.met is None else ("yes" if b.met else "**no**")
+        lines.append(f"| {b.what} | {measured} | {b.limit:,.0f} {b.unit} | {met} |")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m runtime.tooling.bench.scale",
         description="Measure how generation, code size, compile time and step cost grow "
-        "with the robot (Drishti, one, two, three trailers).")
+        "with the robot (Drishti, one, two, three trailers, five carts).")
     parser.add_argument("--root", type=Path, default=ROOT,
                         help="checkout to measure (its modeling/robots and generated/)")
-    parser.add_argument("--robots", nargs="+", default=list(LADDER), choices=LADDER)
+    parser.add_argument("--robots", nargs="+", default=list(SCALING), choices=SCALING)
     parser.add_argument("--json", type=Path, default=None, help="write the rows here")
     args = parser.parse_args(argv)
     rungs = measure(args.root.resolve(), tuple(args.robots))
-    print("\n".join(section(rungs)))
+    print("\n".join([*section(rungs), "", *growth_section(rungs), "",
+                     *budget_section(rungs)]))
     if args.json is not None:
         args.json.write_text(json.dumps([asdict(r) for r in rungs], indent=1) + "\n")
     return 0
