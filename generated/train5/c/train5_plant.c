@@ -939,3 +939,163 @@ void train5_plant_params_with_payload(const train5_plant_params_t *base,
     params[41] = radius_left;
     params[42] = radius_right;
 }
+
+/* train5_plant_params_from_physical: documented in train5_plant.h.
+   operations after CSE: 140 add, 130 mul, 0 div, 0 sin/cos, 0 sqrt */
+void train5_plant_params_from_physical(const train5_real_t *phys, train5_real_t *base)
+{
+    const train5_real_t mass_cart5 = phys[20];
+    const train5_real_t mass_cart5_right = phys[54];
+    const train5_real_t mass_cart5_left = phys[57];
+    const train5_real_t _t0 = TRAIN5_LIT(0.7225)*mass_cart5 + TRAIN5_LIT(0.7225)*mass_cart5_left
+            + TRAIN5_LIT(0.7225)*mass_cart5_right;
+    const train5_real_t mass_cart4 = phys[16];
+    const train5_real_t mass_cart4_right = phys[48];
+    const train5_real_t mass_cart4_left = phys[51];
+    const train5_real_t _t1 = _t0 + TRAIN5_LIT(0.7225)*mass_cart4
+            + TRAIN5_LIT(0.7225)*mass_cart4_left + TRAIN5_LIT(0.7225)*mass_cart4_right;
+    const train5_real_t mass_cart3 = phys[12];
+    const train5_real_t mass_cart3_right = phys[42];
+    const train5_real_t mass_cart3_left = phys[45];
+    const train5_real_t _t2 = _t1 + TRAIN5_LIT(0.7225)*mass_cart3
+            + TRAIN5_LIT(0.7225)*mass_cart3_left + TRAIN5_LIT(0.7225)*mass_cart3_right;
+    const train5_real_t _t3 = TRAIN5_LIT(0.85)*mass_cart5 + TRAIN5_LIT(0.85)*mass_cart5_left
+            + TRAIN5_LIT(0.85)*mass_cart5_right;
+    const train5_real_t _t4 = _t3 + TRAIN5_LIT(0.85)*mass_cart4 + TRAIN5_LIT(0.85)*mass_cart4_left
+            + TRAIN5_LIT(0.85)*mass_cart4_right;
+    const train5_real_t _t5 = _t4 + TRAIN5_LIT(0.85)*mass_cart3 + TRAIN5_LIT(0.85)*mass_cart3_left
+            + TRAIN5_LIT(0.85)*mass_cart3_right;
+    const train5_real_t mass_tractor = phys[0];
+    const train5_real_t yaw_inertia_tractor = phys[1];
+    const train5_real_t com_x_tractor = phys[2];
+    const train5_real_t com_y_tractor = phys[3];
+    const train5_real_t mass_cart = phys[4];
+    const train5_real_t yaw_inertia_cart = phys[5];
+    const train5_real_t com_x_cart = phys[6];
+    const train5_real_t com_y_cart = phys[7];
+    const train5_real_t mass_cart2 = phys[8];
+    const train5_real_t yaw_inertia_cart2 = phys[9];
+    const train5_real_t com_x_cart2 = phys[10];
+    const train5_real_t com_y_cart2 = phys[11];
+    const train5_real_t yaw_inertia_cart3 = phys[13];
+    const train5_real_t com_x_cart3 = phys[14];
+    const train5_real_t com_y_cart3 = phys[15];
+    const train5_real_t yaw_inertia_cart4 = phys[17];
+    const train5_real_t com_x_cart4 = phys[18];
+    const train5_real_t com_y_cart4 = phys[19];
+    const train5_real_t yaw_inertia_cart5 = phys[21];
+    const train5_real_t com_x_cart5 = phys[22];
+    const train5_real_t com_y_cart5 = phys[23];
+    const train5_real_t mass_right = phys[24];
+    const train5_real_t spin_inertia_right = phys[25];
+    const train5_real_t diameter_inertia_right = phys[26];
+    const train5_real_t mass_left = phys[27];
+    const train5_real_t spin_inertia_left = phys[28];
+    const train5_real_t diameter_inertia_left = phys[29];
+    const train5_real_t mass_cart_right = phys[30];
+    const train5_real_t spin_inertia_cart_right = phys[31];
+    const train5_real_t diameter_inertia_cart_right = phys[32];
+    const train5_real_t mass_cart_left = phys[33];
+    const train5_real_t spin_inertia_cart_left = phys[34];
+    const train5_real_t diameter_inertia_cart_left = phys[35];
+    const train5_real_t mass_cart2_right = phys[36];
+    const train5_real_t spin_inertia_cart2_right = phys[37];
+    const train5_real_t diameter_inertia_cart2_right = phys[38];
+    const train5_real_t mass_cart2_left = phys[39];
+    const train5_real_t spin_inertia_cart2_left = phys[40];
+    const train5_real_t diameter_inertia_cart2_left = phys[41];
+    const train5_real_t spin_inertia_cart3_right = phys[43];
+    const train5_real_t diameter_inertia_cart3_right = phys[44];
+    const train5_real_t spin_inertia_cart3_left = phys[46];
+    const train5_real_t diameter_inertia_cart3_left = phys[47];
+    const train5_real_t spin_inertia_cart4_right = phys[49];
+    const train5_real_t diameter_inertia_cart4_right = phys[50];
+    const train5_real_t spin_inertia_cart4_left = phys[52];
+    const train5_real_t diameter_inertia_cart4_left = phys[53];
+    const train5_real_t spin_inertia_cart5_right = phys[55];
+    const train5_real_t diameter_inertia_cart5_right = phys[56];
+    const train5_real_t spin_inertia_cart5_left = phys[58];
+    const train5_real_t diameter_inertia_cart5_left = phys[59];
+    const train5_real_t m_L = phys[60];
+    const train5_real_t x_L = phys[61];
+    const train5_real_t y_L = phys[62];
+    base[0] = _t2 + com_x_cart*com_x_cart*mass_cart + com_y_cart*com_y_cart*mass_cart
+            + diameter_inertia_cart_left + diameter_inertia_cart_right
+            + TRAIN5_LIT(0.7225)*mass_cart2 + TRAIN5_LIT(0.7225)*mass_cart2_left
+            + TRAIN5_LIT(0.7225)*mass_cart2_right + TRAIN5_LIT(0.4)*mass_cart_left
+            + TRAIN5_LIT(0.4)*mass_cart_right + yaw_inertia_cart;
+    base[1] = _t2 + com_x_cart2*com_x_cart2*mass_cart2 + com_y_cart2*com_y_cart2*mass_cart2
+            + diameter_inertia_cart2_left + diameter_inertia_cart2_right
+            + TRAIN5_LIT(0.4)*mass_cart2_left + TRAIN5_LIT(0.4)*mass_cart2_right
+            + yaw_inertia_cart2;
+    base[2] = spin_inertia_cart2_left;
+    base[3] = spin_inertia_cart2_right;
+    base[4] = _t1 + com_x_cart3*com_x_cart3*mass_cart3 + com_y_cart3*com_y_cart3*mass_cart3
+            + diameter_inertia_cart3_left + diameter_inertia_cart3_right
+            + TRAIN5_LIT(0.4)*mass_cart3_left + TRAIN5_LIT(0.4)*mass_cart3_right
+            + yaw_inertia_cart3;
+    base[5] = spin_inertia_cart3_left;
+    base[6] = spin_inertia_cart3_right;
+    base[7] = _t0 + com_x_cart4*com_x_cart4*mass_cart4 + com_y_cart4*com_y_cart4*mass_cart4
+            + diameter_inertia_cart4_left + diameter_inertia_cart4_right
+            + TRAIN5_LIT(0.4)*mass_cart4_left + TRAIN5_LIT(0.4)*mass_cart4_right
+            + yaw_inertia_cart4;
+    base[8] = spin_inertia_cart4_left;
+    base[9] = spin_inertia_cart4_right;
+    base[10] = com_x_cart5*com_x_cart5*mass_cart5 + com_y_cart5*com_y_cart5*mass_cart5
+            + diameter_inertia_cart5_left + diameter_inertia_cart5_right
+            + TRAIN5_LIT(0.4)*mass_cart5_left + TRAIN5_LIT(0.4)*mass_cart5_right
+            + yaw_inertia_cart5;
+    base[11] = spin_inertia_cart5_left;
+    base[12] = spin_inertia_cart5_right;
+    base[13] = spin_inertia_cart_left;
+    base[14] = spin_inertia_cart_right;
+    base[15] = spin_inertia_left;
+    base[16] = spin_inertia_right;
+    base[17] = com_x_tractor*com_x_tractor*mass_tractor + com_y_tractor*com_y_tractor*mass_tractor
+            + diameter_inertia_left + diameter_inertia_right + m_L*x_L*x_L + m_L*y_L*y_L
+            + TRAIN5_LIT(0.09)*mass_cart + TRAIN5_LIT(0.09)*mass_cart2
+            + TRAIN5_LIT(0.09)*mass_cart2_left + TRAIN5_LIT(0.09)*mass_cart2_right
+            + TRAIN5_LIT(0.09)*mass_cart3 + TRAIN5_LIT(0.09)*mass_cart3_left
+            + TRAIN5_LIT(0.09)*mass_cart3_right + TRAIN5_LIT(0.09)*mass_cart4
+            + TRAIN5_LIT(0.09)*mass_cart4_left + TRAIN5_LIT(0.09)*mass_cart4_right
+            + TRAIN5_LIT(0.09)*mass_cart5 + TRAIN5_LIT(0.09)*mass_cart5_left
+            + TRAIN5_LIT(0.09)*mass_cart5_right + TRAIN5_LIT(0.09)*mass_cart_left
+            + TRAIN5_LIT(0.09)*mass_cart_right + TRAIN5_LIT(0.042849)*mass_left
+            + TRAIN5_LIT(0.042849)*mass_right + yaw_inertia_tractor;
+    base[18] = m_L + mass_cart + mass_cart2 + mass_cart2_left + mass_cart2_right + mass_cart3
+            + mass_cart3_left + mass_cart3_right + mass_cart4 + mass_cart4_left + mass_cart4_right
+            + mass_cart5 + mass_cart5_left + mass_cart5_right + mass_cart_left + mass_cart_right
+            + mass_left + mass_right + mass_tractor;
+    base[19] = _t5 - com_x_cart*mass_cart + TRAIN5_LIT(0.85)*mass_cart2
+            + TRAIN5_LIT(0.85)*mass_cart2_left + TRAIN5_LIT(0.85)*mass_cart2_right
+            + TRAIN5_LIT(0.6)*mass_cart_left + TRAIN5_LIT(0.6)*mass_cart_right;
+    base[20] = -com_y_cart*mass_cart - TRAIN5_LIT(0.2)*mass_cart_left
+            + TRAIN5_LIT(0.2)*mass_cart_right;
+    base[21] = _t5 - com_x_cart2*mass_cart2 + TRAIN5_LIT(0.6)*mass_cart2_left
+            + TRAIN5_LIT(0.6)*mass_cart2_right;
+    base[22] = -com_y_cart2*mass_cart2 - TRAIN5_LIT(0.2)*mass_cart2_left
+            + TRAIN5_LIT(0.2)*mass_cart2_right;
+    base[23] = _t4 - com_x_cart3*mass_cart3 + TRAIN5_LIT(0.6)*mass_cart3_left
+            + TRAIN5_LIT(0.6)*mass_cart3_right;
+    base[24] = -com_y_cart3*mass_cart3 - TRAIN5_LIT(0.2)*mass_cart3_left
+            + TRAIN5_LIT(0.2)*mass_cart3_right;
+    base[25] = _t3 - com_x_cart4*mass_cart4 + TRAIN5_LIT(0.6)*mass_cart4_left
+            + TRAIN5_LIT(0.6)*mass_cart4_right;
+    base[26] = -com_y_cart4*mass_cart4 - TRAIN5_LIT(0.2)*mass_cart4_left
+            + TRAIN5_LIT(0.2)*mass_cart4_right;
+    base[27] = -com_x_cart5*mass_cart5 + TRAIN5_LIT(0.6)*mass_cart5_left
+            + TRAIN5_LIT(0.6)*mass_cart5_right;
+    base[28] = -com_y_cart5*mass_cart5 - TRAIN5_LIT(0.2)*mass_cart5_left
+            + TRAIN5_LIT(0.2)*mass_cart5_right;
+    base[29] = -com_x_tractor*mass_tractor - m_L*x_L + TRAIN5_LIT(0.3)*mass_cart
+            + TRAIN5_LIT(0.3)*mass_cart2 + TRAIN5_LIT(0.3)*mass_cart2_left
+            + TRAIN5_LIT(0.3)*mass_cart2_right + TRAIN5_LIT(0.3)*mass_cart3
+            + TRAIN5_LIT(0.3)*mass_cart3_left + TRAIN5_LIT(0.3)*mass_cart3_right
+            + TRAIN5_LIT(0.3)*mass_cart4 + TRAIN5_LIT(0.3)*mass_cart4_left
+            + TRAIN5_LIT(0.3)*mass_cart4_right + TRAIN5_LIT(0.3)*mass_cart5
+            + TRAIN5_LIT(0.3)*mass_cart5_left + TRAIN5_LIT(0.3)*mass_cart5_right
+            + TRAIN5_LIT(0.3)*mass_cart_left + TRAIN5_LIT(0.3)*mass_cart_right;
+    base[30] = -com_y_tractor*mass_tractor - m_L*y_L - TRAIN5_LIT(0.207)*mass_left
+            + TRAIN5_LIT(0.207)*mass_right;
+}

@@ -68,6 +68,62 @@ void train5_plant_state_derivative(const train5_plant_params_t *pp, const train5
 void train5_plant_params_with_payload(const train5_plant_params_t *base,
     const train5_real_t *payload, train5_real_t *params);
 
+#define TRAIN5_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE 63
+#define TRAIN5_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE 31
+
+/**
+ * Base inertial parameters (J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+ * J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right,
+ * J_theta_cart4, J_theta_cart4_left, J_theta_cart4_right, J_theta_cart5,
+ * J_theta_cart5_left, J_theta_cart5_right, J_theta_cart_left, J_theta_cart_right,
+ * J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor,
+ * K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor,
+ * K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2,
+ * K_theta_cart4_x_tractor, K_theta_cart4_x_tractor_2, K_theta_cart5_x_tractor,
+ * K_theta_cart5_x_tractor_2, K_theta_tractor_x_tractor,
+ * K_theta_tractor_x_tractor_2) of the robot whose bodies, wheels and root payload
+ * have the given physical quantities (modeling.physical_map: the same reduction
+ * as the model's).
+ *
+ * @param[in]  phys [63] row-major (TRAIN5_PLANT_PARAMS_FROM_PHYSICAL_PHYS_SIZE): mass_tractor,
+ *     yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart, yaw_inertia_cart, com_x_cart,
+ *     com_y_cart, mass_cart2, yaw_inertia_cart2, com_x_cart2, com_y_cart2, mass_cart3,
+ *     yaw_inertia_cart3, com_x_cart3, com_y_cart3, mass_cart4, yaw_inertia_cart4, com_x_cart4,
+ *     com_y_cart4, mass_cart5, yaw_inertia_cart5, com_x_cart5, com_y_cart5, mass_right,
+ *     spin_inertia_right, diameter_inertia_right, mass_left, spin_inertia_left,
+ *     diameter_inertia_left, mass_cart_right, spin_inertia_cart_right, diameter_inertia_cart_right,
+ *     mass_cart_left, spin_inertia_cart_left, diameter_inertia_cart_left, mass_cart2_right,
+ *     spin_inertia_cart2_right, diameter_inertia_cart2_right, mass_cart2_left,
+ *     spin_inertia_cart2_left, diameter_inertia_cart2_left, mass_cart3_right,
+ *     spin_inertia_cart3_right, diameter_inertia_cart3_right, mass_cart3_left,
+ *     spin_inertia_cart3_left, diameter_inertia_cart3_left, mass_cart4_right,
+ *     spin_inertia_cart4_right, diameter_inertia_cart4_right, mass_cart4_left,
+ *     spin_inertia_cart4_left, diameter_inertia_cart4_left, mass_cart5_right,
+ *     spin_inertia_cart5_right, diameter_inertia_cart5_right, mass_cart5_left,
+ *     spin_inertia_cart5_left, diameter_inertia_cart5_left, m_L, x_L, y_L -- mass_tractor,
+ *     yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart,
+yaw_inertia_cart, com_x_cart, com_y_cart, mass_cart2, yaw_inertia_cart2,
+com_x_cart2, com_y_cart2, mass_cart3, yaw_inertia_cart3, com_x_cart3,
+com_y_cart3, mass_cart4, yaw_inertia_cart4, com_x_cart4, com_y_cart4,
+mass_cart5, yaw_inertia_cart5, com_x_cart5, com_y_cart5, mass_right,
+spin_inertia_right, diameter_inertia_right, mass_left, spin_inertia_left,
+diameter_inertia_left, mass_cart_right, spin_inertia_cart_right,
+diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left,
+diameter_inertia_cart_left, mass_cart2_right, spin_inertia_cart2_right,
+diameter_inertia_cart2_right, mass_cart2_left, spin_inertia_cart2_left,
+diameter_inertia_cart2_left, mass_cart3_right, spin_inertia_cart3_right,
+diameter_inertia_cart3_right, mass_cart3_left, spin_inertia_cart3_left,
+diameter_inertia_cart3_left, mass_cart4_right, spin_inertia_cart4_right,
+diameter_inertia_cart4_right, mass_cart4_left, spin_inertia_cart4_left,
+diameter_inertia_cart4_left, mass_cart5_right, spin_inertia_cart5_right,
+diameter_inertia_cart5_right, mass_cart5_left, spin_inertia_cart5_left,
+diameter_inertia_cart5_left, payload_mass, payload_x, payload_y (kg, kg m^2, m)
+ * @param[out] base [31] row-major (TRAIN5_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE)
+ *
+ * operations after CSE: 140 add, 130 mul, 0 div, 0 sin/cos, 0 sqrt
+ */
+void train5_plant_params_from_physical(const train5_real_t *phys, train5_real_t *base);
+
 #ifdef __cplusplus
 }
 #endif

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["plant_params_with_payload", "plant_state_derivative"]
+__all__ = ["plant_params_from_physical", "plant_params_with_payload", "plant_state_derivative"]
 
 
 _REAL_MAX = 1.7976931348623157e308
@@ -928,3 +928,84 @@ def plant_params_with_payload(payload: ArrayLike, base: Any) -> NDArray[np.float
         radius_right,
     ])
     return params
+
+
+def plant_params_from_physical(phys: ArrayLike) -> NDArray[np.float64]:
+    """Base inertial parameters (J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+    J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left, J_theta_cart3_right,
+    J_theta_cart4, J_theta_cart4_left, J_theta_cart4_right, J_theta_cart5,
+    J_theta_cart5_left, J_theta_cart5_right, J_theta_cart_left, J_theta_cart_right,
+    J_theta_left, J_theta_right, J_theta_tractor, J_x_tractor,
+    K_theta_cart_x_tractor, K_theta_cart_x_tractor_2, K_theta_cart2_x_tractor,
+    K_theta_cart2_x_tractor_2, K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2,
+    K_theta_cart4_x_tractor, K_theta_cart4_x_tractor_2, K_theta_cart5_x_tractor,
+    K_theta_cart5_x_tractor_2, K_theta_tractor_x_tractor,
+    K_theta_tractor_x_tractor_2) of the robot whose bodies, wheels and root payload
+    have the given physical quantities (modeling.physical_map: the same reduction
+    as the model's).
+
+    Args:
+        phys: array of 63 (shape 63x1, row-major): mass_tractor, yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart, yaw_inertia_cart, com_x_cart, com_y_cart, mass_cart2, yaw_inertia_cart2, com_x_cart2, com_y_cart2, mass_cart3, yaw_inertia_cart3, com_x_cart3, com_y_cart3, mass_cart4, yaw_inertia_cart4, com_x_cart4, com_y_cart4, mass_cart5, yaw_inertia_cart5, com_x_cart5, com_y_cart5, mass_right, spin_inertia_right, diameter_inertia_right, mass_left, spin_inertia_left, diameter_inertia_left, mass_cart_right, spin_inertia_cart_right, diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left, diameter_inertia_cart_left, mass_cart2_right, spin_inertia_cart2_right, diameter_inertia_cart2_right, mass_cart2_left, spin_inertia_cart2_left, diameter_inertia_cart2_left, mass_cart3_right, spin_inertia_cart3_right, diameter_inertia_cart3_right, mass_cart3_left, spin_inertia_cart3_left, diameter_inertia_cart3_left, mass_cart4_right, spin_inertia_cart4_right, diameter_inertia_cart4_right, mass_cart4_left, spin_inertia_cart4_left, diameter_inertia_cart4_left, mass_cart5_right, spin_inertia_cart5_right, diameter_inertia_cart5_right, mass_cart5_left, spin_inertia_cart5_left, diameter_inertia_cart5_left, m_L, x_L, y_L. mass_tractor, yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart,
+yaw_inertia_cart, com_x_cart, com_y_cart, mass_cart2, yaw_inertia_cart2,
+com_x_cart2, com_y_cart2, mass_cart3, yaw_inertia_cart3, com_x_cart3,
+com_y_cart3, mass_cart4, yaw_inertia_cart4, com_x_cart4, com_y_cart4,
+mass_cart5, yaw_inertia_cart5, com_x_cart5, com_y_cart5, mass_right,
+spin_inertia_right, diameter_inertia_right, mass_left, spin_inertia_left,
+diameter_inertia_left, mass_cart_right, spin_inertia_cart_right,
+diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left,
+diameter_inertia_cart_left, mass_cart2_right, spin_inertia_cart2_right,
+diameter_inertia_cart2_right, mass_cart2_left, spin_inertia_cart2_left,
+diameter_inertia_cart2_left, mass_cart3_right, spin_inertia_cart3_right,
+diameter_inertia_cart3_right, mass_cart3_left, spin_inertia_cart3_left,
+diameter_inertia_cart3_left, mass_cart4_right, spin_inertia_cart4_right,
+diameter_inertia_cart4_right, mass_cart4_left, spin_inertia_cart4_left,
+diameter_inertia_cart4_left, mass_cart5_right, spin_inertia_cart5_right,
+diameter_inertia_cart5_right, mass_cart5_left, spin_inertia_cart5_left,
+diameter_inertia_cart5_left, payload_mass, payload_x, payload_y (kg, kg m^2, m)
+
+    Returns:
+        base: array of 31 (shape 31x1, row-major)
+
+    operations after CSE: 140 add, 130 mul, 0 div, 0 sin/cos, 0 sqrt
+    """
+    mass_tractor, yaw_inertia_tractor, com_x_tractor, com_y_tractor, mass_cart, yaw_inertia_cart, com_x_cart, com_y_cart, mass_cart2, yaw_inertia_cart2, com_x_cart2, com_y_cart2, mass_cart3, yaw_inertia_cart3, com_x_cart3, com_y_cart3, mass_cart4, yaw_inertia_cart4, com_x_cart4, com_y_cart4, mass_cart5, yaw_inertia_cart5, com_x_cart5, com_y_cart5, mass_right, spin_inertia_right, diameter_inertia_right, mass_left, spin_inertia_left, diameter_inertia_left, mass_cart_right, spin_inertia_cart_right, diameter_inertia_cart_right, mass_cart_left, spin_inertia_cart_left, diameter_inertia_cart_left, mass_cart2_right, spin_inertia_cart2_right, diameter_inertia_cart2_right, mass_cart2_left, spin_inertia_cart2_left, diameter_inertia_cart2_left, mass_cart3_right, spin_inertia_cart3_right, diameter_inertia_cart3_right, mass_cart3_left, spin_inertia_cart3_left, diameter_inertia_cart3_left, mass_cart4_right, spin_inertia_cart4_right, diameter_inertia_cart4_right, mass_cart4_left, spin_inertia_cart4_left, diameter_inertia_cart4_left, mass_cart5_right, spin_inertia_cart5_right, diameter_inertia_cart5_right, mass_cart5_left, spin_inertia_cart5_left, diameter_inertia_cart5_left, m_L, x_L, y_L = _flat(phys, 63, "phys")
+    _t0 = 0.7225*mass_cart5 + 0.7225*mass_cart5_left + 0.7225*mass_cart5_right
+    _t1 = _t0 + 0.7225*mass_cart4 + 0.7225*mass_cart4_left + 0.7225*mass_cart4_right
+    _t2 = _t1 + 0.7225*mass_cart3 + 0.7225*mass_cart3_left + 0.7225*mass_cart3_right
+    _t3 = 0.85*mass_cart5 + 0.85*mass_cart5_left + 0.85*mass_cart5_right
+    _t4 = _t3 + 0.85*mass_cart4 + 0.85*mass_cart4_left + 0.85*mass_cart4_right
+    _t5 = _t4 + 0.85*mass_cart3 + 0.85*mass_cart3_left + 0.85*mass_cart3_right
+    base = np.array([
+        _t2 + com_x_cart*com_x_cart*mass_cart + com_y_cart*com_y_cart*mass_cart + diameter_inertia_cart_left + diameter_inertia_cart_right + 0.7225*mass_cart2 + 0.7225*mass_cart2_left + 0.7225*mass_cart2_right + 0.4*mass_cart_left + 0.4*mass_cart_right + yaw_inertia_cart,
+        _t2 + com_x_cart2*com_x_cart2*mass_cart2 + com_y_cart2*com_y_cart2*mass_cart2 + diameter_inertia_cart2_left + diameter_inertia_cart2_right + 0.4*mass_cart2_left + 0.4*mass_cart2_right + yaw_inertia_cart2,
+        spin_inertia_cart2_left,
+        spin_inertia_cart2_right,
+        _t1 + com_x_cart3*com_x_cart3*mass_cart3 + com_y_cart3*com_y_cart3*mass_cart3 + diameter_inertia_cart3_left + diameter_inertia_cart3_right + 0.4*mass_cart3_left + 0.4*mass_cart3_right + yaw_inertia_cart3,
+        spin_inertia_cart3_left,
+        spin_inertia_cart3_right,
+        _t0 + com_x_cart4*com_x_cart4*mass_cart4 + com_y_cart4*com_y_cart4*mass_cart4 + diameter_inertia_cart4_left + diameter_inertia_cart4_right + 0.4*mass_cart4_left + 0.4*mass_cart4_right + yaw_inertia_cart4,
+        spin_inertia_cart4_left,
+        spin_inertia_cart4_right,
+        com_x_cart5*com_x_cart5*mass_cart5 + com_y_cart5*com_y_cart5*mass_cart5 + diameter_inertia_cart5_left + diameter_inertia_cart5_right + 0.4*mass_cart5_left + 0.4*mass_cart5_right + yaw_inertia_cart5,
+        spin_inertia_cart5_left,
+        spin_inertia_cart5_right,
+        spin_inertia_cart_left,
+        spin_inertia_cart_right,
+        spin_inertia_left,
+        spin_inertia_right,
+        com_x_tractor*com_x_tractor*mass_tractor + com_y_tractor*com_y_tractor*mass_tractor + diameter_inertia_left + diameter_inertia_right + m_L*x_L*x_L + m_L*y_L*y_L + 0.09*mass_cart + 0.09*mass_cart2 + 0.09*mass_cart2_left + 0.09*mass_cart2_right + 0.09*mass_cart3 + 0.09*mass_cart3_left + 0.09*mass_cart3_right + 0.09*mass_cart4 + 0.09*mass_cart4_left + 0.09*mass_cart4_right + 0.09*mass_cart5 + 0.09*mass_cart5_left + 0.09*mass_cart5_right + 0.09*mass_cart_left + 0.09*mass_cart_right + 0.042849*mass_left + 0.042849*mass_right + yaw_inertia_tractor,
+        m_L + mass_cart + mass_cart2 + mass_cart2_left + mass_cart2_right + mass_cart3 + mass_cart3_left + mass_cart3_right + mass_cart4 + mass_cart4_left + mass_cart4_right + mass_cart5 + mass_cart5_left + mass_cart5_right + mass_cart_left + mass_cart_right + mass_left + mass_right + mass_tractor,
+        _t5 - com_x_cart*mass_cart + 0.85*mass_cart2 + 0.85*mass_cart2_left + 0.85*mass_cart2_right + 0.6*mass_cart_left + 0.6*mass_cart_right,
+        -com_y_cart*mass_cart - 0.2*mass_cart_left + 0.2*mass_cart_right,
+        _t5 - com_x_cart2*mass_cart2 + 0.6*mass_cart2_left + 0.6*mass_cart2_right,
+        -com_y_cart2*mass_cart2 - 0.2*mass_cart2_left + 0.2*mass_cart2_right,
+        _t4 - com_x_cart3*mass_cart3 + 0.6*mass_cart3_left + 0.6*mass_cart3_right,
+        -com_y_cart3*mass_cart3 - 0.2*mass_cart3_left + 0.2*mass_cart3_right,
+        _t3 - com_x_cart4*mass_cart4 + 0.6*mass_cart4_left + 0.6*mass_cart4_right,
+        -com_y_cart4*mass_cart4 - 0.2*mass_cart4_left + 0.2*mass_cart4_right,
+        -com_x_cart5*mass_cart5 + 0.6*mass_cart5_left + 0.6*mass_cart5_right,
+        -com_y_cart5*mass_cart5 - 0.2*mass_cart5_left + 0.2*mass_cart5_right,
+        -com_x_tractor*mass_tractor - m_L*x_L + 0.3*mass_cart + 0.3*mass_cart2 + 0.3*mass_cart2_left + 0.3*mass_cart2_right + 0.3*mass_cart3 + 0.3*mass_cart3_left + 0.3*mass_cart3_right + 0.3*mass_cart4 + 0.3*mass_cart4_left + 0.3*mass_cart4_right + 0.3*mass_cart5 + 0.3*mass_cart5_left + 0.3*mass_cart5_right + 0.3*mass_cart_left + 0.3*mass_cart_right,
+        -com_y_tractor*mass_tractor - m_L*y_L - 0.207*mass_left + 0.207*mass_right,
+    ])
+    return base
