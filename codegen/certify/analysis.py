@@ -26,6 +26,7 @@ undecided guard. The certificate requires no unsafe node in any box.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -33,6 +34,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
+from codegen.certify.affine import affine_bounds
 from codegen.certify.program import Node, Program
 
 Array = npt.NDArray[np.float64]
@@ -127,8 +129,12 @@ class Analysis:
     """Evaluates a program over a batch of boxes. ``unsafe[k]`` collects, per box, whether
     any node might be non-finite, and ``why`` the first such node's description."""
 
-    def __init__(self, program: Program) -> None:
+    def __init__(self, program: Program, affine: bool = True) -> None:
         self.program = program
+        self.affine = affine
+        self._tight: tuple[Array, Array] | None = None
+        self._norm_parts: dict[int, tuple[Array, float]] = {}
+        self.open_guards: list[str] = []  # statuses of guards the last run did not prove
 
     def run(self, lo: Mapping[int, Array], hi: Mapping[int, Array],
             in_err: Mapping[int, Array] | None = None,
@@ -157,18 +163,24 @@ class Analysis:
             assert isinstance(v, Truth), f"node {i} is not a condition"
             return v
 
+        self._norm_parts = {}
+        tight = affine_bounds(self.program, lo, hi) if self.affine else []
         for idx, node in enumerate(self.program.nodes):
+            self._tight = tight[idx] if tight else None
             values.append(self._node(idx, node, val, truth, lo, hi, in_err, zero, flag))
         out = [val(i) for _, i in self.program.outputs]
-        for g, status in self.program.guards:
-            gv = val(g)
-            flag(~(gv.flo > 0), f"guard {status} not proved to pass")
+        # a guard that may fail is no overflow: the function then returns its status and
+        # writes nothing; the certificate holds for the calls that return OK
+        self.open_guards = sorted({status for g, status in self.program.guards
+                                   if not np.all(val(g).flo > 0)})
         return out, unsafe, why
 
     def _rounded(self, rlo: Array, rhi: Array, prop: Array, xlo: Array, xhi: Array,
                  flag: object, text: str, rel: float = U, floor: float = TINY) -> Value:
         """A float32 result whose exact-operand image is [rlo, rhi] (of the float
         operands), propagated error ``prop``, exact enclosure [xlo, xhi]."""
+        if self._tight is not None:  # the affine enclosure of the exact value
+            xlo, xhi = np.maximum(xlo, self._tight[0]), np.minimum(xhi, self._tight[1])
         mag = _mag(rlo, rhi)
         assert callable(flag)
         flag(~(mag < FLT_MAX), f"{text}: may overflow")
@@ -217,6 +229,12 @@ class Analysis:
             return self._rounded(rlo, rhi, a.err + b.err, xlo, xhi, flag, where)
         if op == "mul":
             a, b = val(node.args[0]), val(node.args[1])
+            for ia, ib in (node.args, node.args[::-1]):
+                normalised = self._normalised(ia, ib)
+                if normalised is not None:
+                    g, m = normalised
+                    return self._scaled_component(val(ia), val(g), val(m), flag, where,
+                                                  self._relative_part(m, val))
             if node.args[0] == node.args[1]:  # a square of one value: never negative
                 xlo, xhi = _sq_iv(a.xlo, a.xhi)
                 rlo, rhi = _sq_iv(a.flo, a.fhi)
@@ -225,6 +243,8 @@ class Analysis:
                 xlo, xhi = _mul_iv(a.xlo, a.xhi, b.xlo, b.xhi)
                 rlo, rhi = _mul_iv(a.flo, a.fhi, b.flo, b.fhi)
                 prop = _mag(a.flo, a.fhi) * b.err + _mag(b.xlo, b.xhi) * a.err
+                if self._nonnegative(idx):  # (x*y)*y with x >= 0: never negative
+                    xlo, rlo = np.maximum(xlo, 0.0), np.maximum(rlo, 0.0)
             return self._rounded(rlo, rhi, prop, xlo, xhi, flag, where)
         if op == "div":
             a, b = val(node.args[0]), val(node.args[1])
@@ -237,7 +257,15 @@ class Analysis:
             prop = np.where((fmig > 0) & (xmig > 0), prop, np.inf)
             return self._rounded(rlo, rhi, prop, xlo, xhi, flag, where)
         if op == "call":
-            return self._call(node, [val(i) for i in node.args], where, flag)
+            value = self._call(node, [val(i) for i in node.args], where, flag)
+            members = self._square_sum(node.args[0]) if node.name == "sqrt" else None
+            if members:  # a 2-norm: 1-Lipschitz in its entries, see _norm_error
+                lip, rel = self._norm_error([val(i) for i in members], value)
+                self._norm_parts[idx] = (lip, rel)
+                value.err = np.minimum(value.err, (lip + (_mag(value.xlo, value.xhi) + lip)
+                                                   * rel + math.sqrt(len(members) * TINY))
+                                       * UP)
+            return value
         if op == "cond":
             c = truth(node.args[0])
             a, b = val(node.args[1]), val(node.args[2])
@@ -280,6 +308,122 @@ class Analysis:
             return Truth(p.f_true | q.f_true, p.f_false & q.f_false,
                          p.x_true | q.x_true, p.x_false & q.x_false)
         raise ValueError(f"cannot analyse {where}")
+
+    def _norm_members(self, nid: int) -> set[int]:
+        """The nodes x whose x*x the square root ``nid`` sums (empty if it is not one)."""
+        node = self.program.nodes[nid]
+        if node.op != "call" or node.name != "sqrt":
+            return set()
+        members: set[int] = set()
+        stack = [node.args[0]]
+        while stack:
+            n = self.program.nodes[stack.pop()]
+            if n.op == "add":
+                stack += list(n.args)
+            elif n.op == "mul" and n.args[0] == n.args[1]:
+                members.add(n.args[0])
+        return members
+
+    def _nonnegative(self, nid: int) -> bool:
+        """Whether node ``nid`` is >= 0 by its structure, in exact and in float32 arithmetic
+        (rounding to nearest keeps signs): a square, (x*y)*y with x >= 0, a product or sum
+        of such, a square root, an absolute value, a non-negative literal."""
+        node = self.program.nodes[nid]
+        if node.op == "lit":
+            return node.value >= 0
+        if node.op == "call":
+            return node.name in ("sqrt", "fabs")
+        if node.op == "add":
+            return all(self._nonnegative(a) for a in node.args)
+        if node.op != "mul":
+            return False
+        a, b = node.args
+        if a == b:
+            return True
+        inner = self.program.nodes[a]
+        if inner.op == "mul" and inner.args[1] == b and self._nonnegative(inner.args[0]):
+            return True
+        return self._nonnegative(a) and self._nonnegative(b)
+
+    def _square_sum(self, nid: int) -> list[int] | None:
+        """The entries x_i of a sum of squares x_0*x_0 + x_1*x_1 + ... (None otherwise)."""
+        members: list[int] = []
+        stack = [nid]
+        while stack:
+            n = self.program.nodes[stack.pop()]
+            if n.op == "add":
+                stack += list(n.args)
+            elif n.op == "mul" and n.args[0] == n.args[1]:
+                members.append(n.args[0])
+            else:
+                return None
+        return members
+
+    @staticmethod
+    def _norm_error(entries: Sequence[Value], norm: Value) -> tuple[Array, float]:
+        """|fl(sqrt(sum fl(x^2))) - ||x||| for entries with errors E_i: the norm is
+        1-Lipschitz (<= sqrt(sum E_i^2)), and the squares, the n - 1 additions and the root
+        round by at most gamma_n + 2u relative (gamma_n = n u / (1 - n u)), plus the
+        squares' subnormal floors (sqrt(n) 2^-75)."""
+        n = len(entries)
+        lip = np.sqrt(sum((e.err * e.err for e in entries), np.zeros_like(norm.err)))
+        gamma = n * U / (1 - n * U)
+        rel = (gamma + 2 * U) * (1 + gamma)
+        return lip * UP, rel  # |error| <= lip + (|N| + lip) rel + sqrt(n) 2^-75
+
+    def _normalised(self, ia: int, ib: int) -> tuple[int, int] | None:
+        """``(g, M)`` when node ``ib`` is ``g / M`` with ``M`` = fmax(N, c) or N, N a
+        2-norm one of whose entries is node ``ia``: then |a| <= M exactly, and a * b is
+        a component of a normalised vector times g (the switching term s/max(||s||, eps)
+        of the robust laws), bounded by |g| whatever the box."""
+        b = self.program.nodes[ib]
+        if b.op != "div":
+            return None
+        g, m = b.args
+        mn = self.program.nodes[m]
+        norms = [m]
+        if mn.op == "call" and mn.name == "fmax":
+            norms = list(mn.args)
+        if any(ia in self._norm_members(n) for n in norms):
+            return g, m
+        return None
+
+    def _relative_part(self, m: int, val: object) -> tuple[Array, float] | None:
+        """M = fmax(N, c) or N, N a 2-norm: (absolute part, relative part) of M's error
+        (|fM - xM| <= max(|fN - xN|, Ec) <= abs + rel |fN| <= abs + rel |fM|)."""
+        assert callable(val)
+        node = self.program.nodes[m]
+        if m in self._norm_parts:
+            return self._norm_parts[m]
+        if node.op == "call" and node.name == "fmax":
+            a, b = node.args
+            if a in self._norm_parts or b in self._norm_parts:
+                n, c = (a, b) if a in self._norm_parts else (b, a)
+                lip, rel = self._norm_parts[n]
+                tiny = math.sqrt(8 * TINY)
+                return np.maximum(lip, val(c).err) + tiny, rel
+        return None
+
+    def _scaled_component(self, a: Value, g: Value, m: Value, flag: object,
+                          where: str, parts: tuple[Array, float] | None = None) -> Value:
+        """fl(a * fl(g / M)) with |a| <= M in exact arithmetic (see :meth:`_normalised`):
+        |fa fg/fM - xa xg/xM| <= Ea |fg|/|fM| + |xa| |fg/fM - xg/xM|, and
+        |xa| |fg/fM - xg/xM| <= Eg xM/|fM| + |xg| EM/|fM| because |xa|/xM <= 1."""
+        assert callable(flag)
+        fm = _mig(m.flo, m.fhi)
+        flag(~(fm > 0), f"{where}: normalising divisor may be 0")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = 1.0 + (m.err + a.err) / fm  # bounds |fa / fM|
+            gmag_f, gmag_x = _mag(g.flo, g.fhi), _mag(g.xlo, g.xhi)
+            m_rel = m.err / fm  # bounds |fM - xM| / |fM|
+            if parts is not None:
+                m_rel = np.minimum(m_rel, parts[0] / fm + parts[1] * (1 + U))
+            prop = (a.err * gmag_f / fm + g.err * (1.0 + m_rel) + gmag_x * m_rel)
+            # fl(g/M) = (fg/fM)(1 + d): times fa, u |fg| |fa/fM| (and a subnormal's floor)
+            quotient_round = U * gmag_f * ratio + TINY * _mag(a.flo, a.fhi)
+        prop = np.where(fm > 0, prop + quotient_round, np.inf)
+        bound_f = np.where(fm > 0, gmag_f * ratio * (1 + U) ** 2, np.inf)
+        return self._rounded(-bound_f, bound_f, prop, -gmag_x, gmag_x, flag, where)
 
     def _call(self, node: Node, args: Sequence[Value], where: str, flag: object) -> Value:
         assert callable(flag)

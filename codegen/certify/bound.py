@@ -36,6 +36,9 @@ class Certificate:
     reason: str  # "" when proved, else the first unsafe node
     boxes: int
     seconds: float
+    # guards that may fail somewhere in the box (the function then returns that status
+    # and writes nothing): the bounds hold for the calls that return OK
+    open_guards: tuple[str, ...] = ()
 
 
 def _arrays(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.float64],
@@ -112,6 +115,7 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
         xhi = np.concatenate([xhi[keep], cxhi[pick]])
         unsafe = np.concatenate([unsafe[keep], cunsafe[pick]])
         why = [w for w, k in zip(why, keep, strict=True) if k] + [cwhy[i] for i in pick]
+    run(lo, hi)  # the final boxes: which guards may refuse somewhere in them
     proved = not bool(unsafe.any())
     reason = "" if proved else next(w for w, u in zip(why, unsafe, strict=True) if u)
     return Certificate(
@@ -119,4 +123,4 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
         tuple(float(e) for e in err.max(axis=0)),
         tuple((float(a), float(b)) for a, b in zip(xlo.min(axis=0), xhi.max(axis=0),
                                                       strict=True)),
-        proved, reason, len(lo), time.perf_counter() - start)
+        proved, reason, len(lo), time.perf_counter() - start, tuple(analysis.open_guards))

@@ -76,7 +76,7 @@ def _tokens(text: str) -> list[str]:
     return out
 
 
-class _Parser:
+class ExpressionParser:
     """Recursive descent over C's expression grammar (the subset the printer writes)."""
 
     def __init__(self, program: Program, scope: Mapping[str, int], config: CConfig) -> None:
@@ -211,7 +211,7 @@ def program_of(ir: FunctionIR, config: CConfig, module: str = "") -> Program:
     by_access = {access(s.arg, s.field, s.index): s.symbol for s in slots}
     prog = Program(spec.name)
     scope: dict[str, int] = {}
-    parser = _Parser(prog, scope, config)
+    parser = ExpressionParser(prog, scope, config)
     body = ctx["body"]
     assert isinstance(body, list)
     results: dict[str, int] = {}
@@ -254,5 +254,5 @@ def parse_only(text: str, names: Sequence[str], config: CConfig) -> Program:
     scope = {n: prog.add(Node("in", name=n)) for n in names}
     prog.inputs = {sp.Symbol(n): scope[n] for n in names}
     prog.input_names = {sp.Symbol(n): n for n in names}
-    prog.outputs.append(("out", _Parser(prog, scope, config).parse(text)))
+    prog.outputs.append(("out", ExpressionParser(prog, scope, config).parse(text)))
     return prog

@@ -58,7 +58,7 @@ def certify_robot(target: RobotTarget, env: Envelope = ENVELOPE, seconds: float 
         box = box_of(prog, angles, params, derived, env)
         cert = certify(prog, box, input_errors(prog), seconds=seconds)
         for arg, (fn, stores) in DERIVED.items():
-            if fn == ir.name:
+            if fn == ir.name and all(s in cert.outputs for s in stores):
                 rng = [cert.ranges[cert.outputs.index(s)] for s in stores]
                 derived[arg] = (min(r[0] for r in rng), max(r[1] for r in rng))
         if only is None or ir.name in only:
