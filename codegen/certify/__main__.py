@@ -23,8 +23,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from codegen.certify.report import RESULTS_DIR, certify_and_search, render_markdown
+from codegen.certify.report import certify_and_search, render_markdown
 from codegen.certify.steps import step_certificates
+from codegen.certify.stored import RESULTS_DIR
 from codegen.generate import robot_target
 from modeling.robot_file import model_of, robot_source
 from modeling.robot_io import shipped_robot_file
@@ -61,7 +62,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name:8s} step {st.controller}/{st.formulation} ({st.law}): torque bound "
                   f"{st.bound:.3g} N m of tau_max {st.tau_max:g}, proved={st.proved}",
                   flush=True)
-        results[name] = {"robot": name, "seconds": time.perf_counter() - start,
+        results[name] = {"robot": name, "prefix": target.layout.prefix,
+                         "seconds": time.perf_counter() - start,
                          "functions": rows, "steps": steps}
         if not args.no_write:
             RESULTS_DIR.mkdir(exist_ok=True)

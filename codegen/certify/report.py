@@ -2,27 +2,18 @@
 
 from __future__ import annotations
 
-import hashlib
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 from codegen.backend import RobotTarget
+from codegen.backends.c.backend import config_for
+from codegen.backends.c.lowering import function_context
 from codegen.certify.analysis import TRIG_ULPS
 from codegen.certify.boxes import ENVELOPE
-from codegen.certify.program import Program
+from codegen.certify.header import body_hash
 from codegen.certify.robot import certify_robot
 from codegen.certify.search import search
-
-RESULTS_DIR = Path(__file__).resolve().parent / "results"
-
-
-def program_hash(program: Program, box: Mapping[Any, tuple[float, float]]) -> str:
-    """A hash of the printed program and its box: a result is stale when it changes."""
-    text = repr(program.nodes) + repr(program.outputs) + repr(program.guards) + repr(
-        sorted((program.input_names[s], b) for s, b in box.items()))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 def certify_and_search(target: RobotTarget, seconds: float, points: int,
@@ -39,7 +30,7 @@ def certify_and_search(target: RobotTarget, seconds: float, points: int,
         worst = max(range(len(cert.bounds)), key=lambda j: cert.bounds[j])
         yield {
             "function": ir.name,
-            "hash": program_hash(prog, box),
+            "hash": body_hash(function_context(ir, config_for(target.layout), "")["body"]),
             "box": {prog.input_names[s]: list(b) for s, b in box.items()},
             "proved": cert.proved,
             "reason": cert.reason,
