@@ -44,7 +44,7 @@ def programs(target: RobotTarget) -> Iterator[tuple[FunctionIR, Program]]:
 
 
 def certify_robot(target: RobotTarget, env: Envelope = ENVELOPE, seconds: float = 4.0,
-                  only: Collection[str] | None = None
+                  only: Collection[str] | None = None, max_boxes: int = 4096
                   ) -> Iterator[tuple[FunctionIR, Program, dict[sp.Symbol, Interval],
                                       Certificate]]:
     """Each function's program, box and certificate."""
@@ -56,7 +56,7 @@ def certify_robot(target: RobotTarget, env: Envelope = ENVELOPE, seconds: float 
         if only is not None and ir.name not in only and ir.name not in needed:
             continue
         box = box_of(prog, angles, params, derived, env)
-        cert = certify(prog, box, input_errors(prog), seconds=seconds)
+        cert = certify(prog, box, input_errors(prog), seconds=seconds, max_boxes=max_boxes)
         for arg, (fn, stores) in DERIVED.items():
             if fn == ir.name and all(s in cert.outputs for s in stores):
                 rng = [cert.ranges[cert.outputs.index(s)] for s in stores]

@@ -10,11 +10,16 @@ import pytest
 import sympy as sp
 
 from codegen.backend import FunctionIR, function_ir
+from codegen.backends.c.backend import config_for
 from codegen.backends.c.config import CConfig
+from codegen.backends.c.lowering import function_context
+from codegen.certify import header
 from codegen.certify.bound import Certificate, certify
+from codegen.certify.header import body_hash
 from codegen.certify.program import ExpressionParser, Program, parse_only, program_of
 from codegen.certify.robot import certify_robot
 from codegen.certify.search import float32_eval, search
+from codegen.certify.stored import robot_results
 from codegen.generate import robot_target
 from codegen.printer_base import ExpressionPrinterMixin
 from codegen.spec import Argument, FunctionSpec
@@ -26,6 +31,8 @@ SEARCHED = ("lyapunov_p", "mass_matrix", "kinematics", "minimal_tdc_law", "paper
 # Searched for soundness only: the norm and normalised-vector rules (s/max(||s||, eps)),
 # whose bound is looser (docs/FLOAT32.md says why).
 SEARCHED_SOUND = ("minimal_tdroc_law", "minimal_omega_difference")
+# Subdivision stopped at a box count, not a time: the same certificate on any machine.
+BOXES = 200
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +41,8 @@ def drishti() -> list[tuple[FunctionIR, Program, dict[sp.Symbol, tuple[float, fl
     model, robot = load_robot_model(None)
     target = robot_target(model, robot)
     return [(ir, prog, box, cert) for ir, prog, box, cert
-            in certify_robot(target, seconds=1.0, only=SEARCHED + SEARCHED_SOUND)]
+            in certify_robot(target, seconds=600.0, only=SEARCHED + SEARCHED_SOUND,
+                             max_boxes=BOXES)]
 
 
 def test_search_never_beats_the_bound_and_the_bound_is_tight(
@@ -71,7 +79,7 @@ def test_norm_and_switching_rules_hold(
                     near[s] = (box[s][0], box[s][0] * 1.01)
                 if str(s) == "gain":
                     near[s] = (box[s][1] * 0.99, box[s][1])
-        tight = certify(prog, near, seconds=1.0)
+        tight = certify(prog, near, seconds=600.0, max_boxes=BOXES)
         for b in (box, near):
             c = cert if b is box else tight
             found = search(prog, ir, b, random_points=60, climbs=1, rounds=2)
@@ -102,7 +110,7 @@ def test_loosened_printing_fails_the_bound(monkeypatch: pytest.MonkeyPatch) -> N
     config = CConfig()
     ir = function_ir(spec)
     printed = program_of(ir, config)
-    cert = certify(printed, box, seconds=0.5)
+    cert = certify(printed, box, seconds=600.0, max_boxes=BOXES)
     assert cert.proved
     honest = search(printed, ir, box, random_points=40, climbs=1, rounds=1)
     assert honest.errors[0] <= cert.bounds[0]
@@ -122,7 +130,7 @@ def test_loosened_printing_fails_the_bound(monkeypatch: pytest.MonkeyPatch) -> N
     found = search(loosened, ir, box, random_points=40, climbs=1, rounds=1)
     assert found.errors[0] > cert.bounds[0], (found.errors, cert.bounds)
     # and the certificate of the loosened printing itself says so
-    assert certify(loosened, box, seconds=0.5).bounds[0] > 10 * cert.bounds[0]
+    assert certify(loosened, box, seconds=600.0, max_boxes=BOXES).bounds[0] > 10 * cert.bounds[0]
 
 
 def test_float32_eval_rounds_every_operation() -> None:
@@ -156,7 +164,7 @@ def test_switching_rule_holds_near_the_boundary_layer() -> None:
     box = {syms["a"]: (100.0, 100.01), syms["b"]: (100.0, 100.01),
            syms["c"]: (100.0, 100.01), syms["d"]: (100.0, 100.01),
            syms["e"]: (0.0, 1e-3), syms["g"]: (90.0, 100.0), syms["eps"]: (0.02, 0.021)}
-    cert = certify(prog, box, seconds=0.5)
+    cert = certify(prog, box, seconds=600.0, max_boxes=BOXES)
     assert cert.proved
     rng = np.random.default_rng(1)
     pts = {s: rng.uniform(lo, hi, 400).astype(np.float32) for s, (lo, hi) in box.items()}
@@ -170,3 +178,32 @@ def test_switching_rule_holds_near_the_boundary_layer() -> None:
             worst = max(worst, float(abs(mpmath.mpf(float(got[k])) - exact)))
     assert worst <= cert.bounds[0], (worst, cert.bounds[0])
     assert cert.bounds[0] <= 100 * worst
+
+
+def test_header_lines_follow_the_printed_body(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A result whose hash matches the printed body is stated with its bounds; any other
+    body (the printing changed) is stated as having no current certificate."""
+    body = ["decl x = a*b", "store out[0] = x"]
+    row = {"function": "f", "hash": body_hash(body), "proved": True, "reason": "",
+           "open_guards": [], "outputs": [{"output": "out[0]", "bound": 1.5e-6}]}
+    monkeypatch.setattr(header, "robot_results", lambda prefix: {"functions": [row]})
+    text = " ".join(header.certificate_doc("f", body, "wmr"))
+    assert "out 1.5e-06" in text and "no intermediate overflows" in text
+    stale = " ".join(header.certificate_doc("f", [*body, "store out[1] = x"], "wmr"))
+    assert "no current certificate" in stale and "1.5e-06" not in stale
+
+
+def test_committed_results_are_current_and_hold() -> None:
+    """codegen/certify/results/drishti.json was computed from the code printed now, and
+    its search never beat its bounds."""
+    data = robot_results("wmr")
+    if not data:
+        pytest.fail("no committed results: run `python -m codegen.certify`")
+    model, robot = load_robot_model(None)
+    target = robot_target(model, robot)
+    config = config_for(target.layout)
+    rows = {row["function"]: row for row in data["functions"]}
+    for ir in target.functions():
+        row = rows[ir.name]
+        assert row["hash"] == body_hash(function_context(ir, config, "")["body"]), ir.name
+        assert not row["found_above_bound"], ir.name
