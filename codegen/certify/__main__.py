@@ -43,7 +43,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--search", type=int, default=150,
                         help="random points per function (default 150)")
     parser.add_argument("--no-write", action="store_true")
+    parser.add_argument("--render-only", action="store_true",
+                        help="only rewrite docs/FLOAT32.md from the committed results")
     args = parser.parse_args(argv)
+    if args.render_only:
+        DOC.write_text(render_markdown([json.loads((RESULTS_DIR / f"{r}.json").read_text())
+                                        for r in ROBOTS]))
+        return 0
     results = {}
     for name in args.robot or ROBOTS:
         start = time.perf_counter()

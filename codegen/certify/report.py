@@ -109,6 +109,30 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
         "Each function's exact box is in the JSON (`box`).",
         "",
     ]
+    out += [
+        "## Where a bound is loose or a proof missing, and why",
+        "",
+        "* **Not proved** (the table names the operation): an enclosure of a divisor that",
+        "  still contains 0 when the subdivision budget ends, although the divisor never",
+        "  vanishes in the box. `wheel_contact_forces` divides by a determinant that varies",
+        "  with θ over two turns and with every parameter; interval and affine",
+        "  enclosures only exclude 0 on small pieces of that box. At ±20 % parameters",
+        "  (instead of ±10 %) the forward dynamics' mass-matrix determinants are in the",
+        "  same case.",
+        "* **Ratio above 100**: (a) the robust laws (TDROC, ROC, ASMC) scale s/max(‖s‖, ε)",
+        "  by the gain: where ‖s‖ is near ε and s's entries cancel, s's rounding is",
+        "  amplified by gain/ε (the synthetic test in",
+        "  tests/codegen/test_float32_certificate.py finds exactly that, within 100× of",
+        "  the rule's bound), but a random and coordinate search over a 50-dimensional box",
+        "  does not reach that corner, so the largest error *found* stays small; (b) the",
+        "  traction margins μN − √(Fx² + (share·Fy)²): near Fx = Fy = 0 the square root",
+        "  has no Lipschitz bound and the certificate uses √E; (c) a bound over a box",
+        "  whose largest error sits in a thin region the search rarely samples",
+        "  (`linearization`, ~1e2).",
+        "* The bound is for the exact function of the float32 inputs; inputs that a step",
+        "  computes in float32 carry their own certified errors only in the steps' table.",
+        "",
+    ]
     for res in results:
         out += [f"## {res['robot']}", "",
                 "| function | proved | certified bound (output) | largest found | ratio |"
@@ -129,7 +153,8 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
                 "| controller | formulation | law | torque bound (N m) | τ_max (N m) |"
                 " bound / τ_max | proved |", "|---|---|---|---|---|---|---|"]
         for st in res["steps"]:
-            proved = "yes" if st["proved"] else f"**no**: {st['reason']}"
+            reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
+            proved = "yes" if st["proved"] else f"**no**: {reason}"
             out.append(f"| {st['controller'].upper()} | {st['formulation']} | `{st['law']}` "
                        f"| {st['bound']:.3g} | {st['tau_max']:g} | "
                        f"{st['bound'] / st['tau_max']:.2g} | {proved} |")

@@ -102,6 +102,6 @@ def step_certificates(target: RobotTarget,
                     else tuple(f"u[{i}]" for i in range(layout.nu)))
             bounds = [cert.bounds[cert.outputs.index(r)] for r in rows if r in cert.outputs]
             yield StepBound(ctrl, form, law_name, rows, max(bounds) if bounds else float("inf"),
-                            cert.proved and not notes, "; ".join(
-                                [cert.reason] * (not cert.proved) + notes),
+                            cert.proved and not notes, "; ".join(dict.fromkeys(
+                                [cert.reason] * (not cert.proved) + notes)),
                             env.torque)

@@ -39,9 +39,14 @@ def model_section(prefix: str) -> str:
     for row in data["functions"]:
         proved = "proved" if row["proved"] else f"not proved ({row['reason']})"
         lines.append(f"| `{row['function']}` | {row['bound']:.3g} | {proved} |")
-    lines += ["", "Controller steps, torque per driven wheel (N m) against τ_max:", "",
-              "| controller | formulation | torque bound | τ_max |", "|---|---|---|---|"]
+    lines += ["", "Controller steps, torque per driven wheel (N m) against τ_max, with the",
+              "errors the law's inputs carry from the rest of the step:", "",
+              "| controller | formulation | torque bound | τ_max | holds |",
+              "|---|---|---|---|---|"]
     for st in data.get("steps", []):
+        reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
+        holds = "proved" if st["proved"] else f"if {reason.replace('leaves', 'stays in')}" if (
+            "leaves the declared" in reason) else f"not proved ({reason})"
         lines.append(f"| {st['controller'].upper()} | {st['formulation']} | {st['bound']:.3g} "
-                     f"| {st['tau_max']:g} |")
+                     f"| {st['tau_max']:g} | {holds} |")
     return "\n".join(lines) + "\n"
