@@ -1,6 +1,6 @@
 """The certificate as a comment in each generated header, read from the committed results.
 
-``python -m codegen.certify`` writes ``results/<robot>.json`` (it takes minutes);
+``python -m codegen.backends.c.certify`` writes ``results/<robot>.json`` (it takes minutes);
 ``python -m codegen`` only reads it here: each function's documentation gains its box's
 name, the certified bound per output and the no-overflow verdict, when the result's hash
 of the printed program matches the program printed now, and says the result is stale
@@ -28,7 +28,7 @@ def certificate_doc(name: str, body: object, prefix: str) -> list[str]:
     row = results.get(name)
     if not results:
         return []
-    head = "float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):"
+    head = "float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):"
     if row is None or row["hash"] != body_hash(body):
         return ["", head + " no current certificate (the printed code changed since the",
                 "last run: run it again)."]

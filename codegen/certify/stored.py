@@ -1,6 +1,6 @@
-"""The committed results of ``python -m codegen.certify`` (``results/<robot>.json``), read
-by the generated headers and MODEL.md; nothing here imports a backend, so the generator
-may import it."""
+"""The committed results of ``python -m codegen.backends.c.certify``
+(``results/<robot>.json``), read by the generated headers and MODEL.md; nothing here
+imports a backend, so the generator may import it."""
 
 from __future__ import annotations
 
@@ -24,17 +24,19 @@ def robot_results(prefix: str) -> dict[str, Any]:
 def model_section(prefix: str) -> str:
     """The MODEL.md section of the robot with ``prefix`` ("" without results): the
     declared box and, per function, the certified bound and verdict, and the steps'
-    torque bounds against tau_max, as the last ``python -m codegen.certify`` found them."""
+    torque bounds against tau_max, as the last ``python -m codegen.backends.c.certify``
+    found them."""
     data = robot_results(prefix)
     if not data:
         return ""
     lines = [
         "", "## float32 certificate", "",
-        "From `python -m codegen.certify` (method, searches and ratios: docs/FLOAT32.md). Over",
-        "the declared operating box (the parameters above within ±10 %, angles within two",
-        "turns, rates, torques and gains in the controllers' operating ranges: the box of each",
-        "function is in `codegen/certify/results/`), |float32 − exact| per generated function",
-        "(largest output) and whether no intermediate can overflow or be NaN:", "",
+        "From `python -m codegen.backends.c.certify` (method, searches and ratios:",
+        "docs/FLOAT32.md). Over the declared operating box (the parameters above within",
+        "±10 %, angles within two turns, rates, torques and gains in the controllers'",
+        "operating ranges: the box of each function is in `codegen/certify/results/`),",
+        "|float32 − exact| per generated function (largest output) and whether no",
+        "intermediate can overflow or be NaN:", "",
         "| function | certified bound | no overflow / NaN |", "|---|---|---|"]
     for row in data["functions"]:
         proved = "proved" if row["proved"] else f"not proved ({row['reason']})"

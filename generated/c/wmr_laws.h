@@ -26,7 +26,7 @@ extern "C" {
  *
  * operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * P 2.4e-05 (largest entry).
  */
@@ -57,7 +57,7 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
  *
  * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * gain 0.0003 (largest entry).
  */
@@ -90,7 +90,7 @@ void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn_n
  *
  * operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H1hat 0.057 (largest entry).
  */
@@ -127,7 +127,7 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
  *
  * operations after CSE: 35 add, 48 mul, 2 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H1hat 0.056 (largest entry).
  */
@@ -148,7 +148,7 @@ void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
  *
  * operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * norm 1.5e-05 (largest entry).
  */
@@ -181,7 +181,7 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *
  * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * gain 0.031 (largest entry).
  */
@@ -206,7 +206,7 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
  *
  * operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * norm 0.00021 (largest entry).
  */
@@ -249,7 +249,7 @@ void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older
  *
  * operations after CSE: 40 add, 46 mul, 1 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.00063 (largest entry).
  */
@@ -297,7 +297,7 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * operations after CSE: 40 add, 46 mul, 1 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.00064 (largest entry).
  */
@@ -352,7 +352,7 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
  *
  * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.42, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
@@ -411,7 +411,7 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.41, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
@@ -469,7 +469,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
  *
  * operations after CSE: 74 add, 110 mul, 3 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.39, s 5.4e-07, s_norm 5.4e-06, gain 7.7e-05 (largest entry).
  */
@@ -529,7 +529,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * operations after CSE: 64 add, 101 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.42, s 5.4e-07, s_norm 5.4e-06, gain_next 1.3e-05 (largest entry).
  */
@@ -563,7 +563,7 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
  *
  * operations after CSE: 11 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H1hat 0.00062 (largest entry).
  */
@@ -584,7 +584,7 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
  *
  * operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * norm 2e-05 (largest entry).
  */
@@ -615,7 +615,7 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  *
  * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * gain 0.015 (largest entry).
  */
@@ -640,7 +640,7 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
  *
  * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * norm 8.4e-05 (largest entry).
  */
@@ -680,7 +680,7 @@ void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *old
  *
  * operations after CSE: 13 add, 22 mul, 1 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 3.6e-05 (largest entry).
  */
@@ -731,7 +731,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 20 add, 36 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.0082, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
@@ -786,7 +786,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  *
  * operations after CSE: 30 add, 56 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.0051, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
@@ -843,7 +843,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * operations after CSE: 26 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.0081, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
@@ -888,7 +888,7 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
  *
  * operations after CSE: 17 add, 21 mul, 1 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.49, integral_next 0.17 (largest entry).
  */

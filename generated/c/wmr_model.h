@@ -40,7 +40,7 @@ typedef struct {
  *
  * operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * M 1.7e-06 (largest entry).
  */
@@ -65,7 +65,7 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
  *
  * operations after CSE: 9 add, 38 mul, 1 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H 0.0025 (largest entry).
  */
@@ -108,7 +108,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *
  * operations after CSE: 20 add, 44 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * qddot 0.0031 (largest entry).
  */
@@ -181,7 +181,7 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
  *
  * operations after CSE: 7 add, 14 mul, 1 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * pose_rates 4.1e-06 (largest entry).
  */
@@ -205,7 +205,7 @@ void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t
  *
  * operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * M 3.1e-07 (largest entry).
  */
@@ -229,7 +229,7 @@ void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_rea
  *
  * operations after CSE: 6 add, 23 mul, 1 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H 5.7e-05 (largest entry).
  */
@@ -265,7 +265,7 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
  *
  * operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * wheel_accels 0.0024 (largest entry).
  */
@@ -300,7 +300,7 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
  *
  * operations after CSE: 20 add, 46 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * A 0.00028, B 6.9e-05 (largest entry).
  */
@@ -348,7 +348,7 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 134 (div): divisor may be 0); |float32 - exact|
  * <= longitudinal 0, lateral 0 (largest entry).
  */
@@ -392,7 +392,7 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
  *
  * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * margins 0.3 (largest entry).
  */
@@ -440,7 +440,7 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
  *
  * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * margins 0.3 (largest entry) when it returns OK (it may return WMR_WARN_TRACTION there).
  */

@@ -31,7 +31,7 @@ extern "C" {
  *
  * operations after CSE: 22 add, 47 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * xdot 0.013 (largest entry).
  */
@@ -53,7 +53,7 @@ void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *
  *
  * operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * params 3.6e-06 (largest entry).
  */

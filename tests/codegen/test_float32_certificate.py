@@ -1,6 +1,6 @@
-"""The float32 certificate (codegen.certify): the bound holds against a search at 113 bits,
-means something (within 100x of the largest error found), and bites when the printing is
-loosened (an addition reordered so that it loses precision)."""
+"""The float32 certificate (codegen.backends.c.certify): the bound holds against a search
+at 113 bits, means something (within 100x of the largest error found), and bites when the
+printing is loosened (an addition reordered so that it loses precision)."""
 
 from __future__ import annotations
 
@@ -11,14 +11,14 @@ import sympy as sp
 
 from codegen.backend import FunctionIR, function_ir
 from codegen.backends.c.backend import config_for
+from codegen.backends.c.certify.bound import Certificate, certify
+from codegen.backends.c.certify.program import ExpressionParser, Program, parse_only, program_of
+from codegen.backends.c.certify.robot import certify_robot
+from codegen.backends.c.certify.search import float32_eval, search
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.lowering import function_context
 from codegen.certify import header
-from codegen.certify.bound import Certificate, certify
 from codegen.certify.header import body_hash
-from codegen.certify.program import ExpressionParser, Program, parse_only, program_of
-from codegen.certify.robot import certify_robot
-from codegen.certify.search import float32_eval, search
 from codegen.certify.stored import robot_results
 from codegen.generate import robot_target
 from codegen.printer_base import ExpressionPrinterMixin
@@ -198,7 +198,7 @@ def test_committed_results_are_current_and_hold() -> None:
     its search never beat its bounds."""
     data = robot_results("wmr")
     if not data:
-        pytest.fail("no committed results: run `python -m codegen.certify`")
+        pytest.fail("no committed results: run `python -m codegen.backends.c.certify`")
     model, robot = load_robot_model(None)
     target = robot_target(model, robot)
     config = config_for(target.layout)

@@ -27,7 +27,7 @@ extern "C" {
  *
  * operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * P 2.4e-05 (largest entry).
  */
@@ -59,7 +59,7 @@ void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P);
  *
  * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * gain 0.0003 (largest entry).
  */
@@ -92,7 +92,7 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
  *
  * operations after CSE: 40 add, 68 mul, 5 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H1hat 0.0037 (largest entry).
  */
@@ -129,7 +129,7 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
  *
  * operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H1hat 0.00027 (largest entry).
  */
@@ -154,7 +154,7 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
  *
  * operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 152 (div): divisor may be 0); |float32 - exact|
  * <= norm inf (largest entry).
  */
@@ -179,7 +179,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  *
  * operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 15 (div): divisor may be 0); |float32 - exact| <=
  * norm inf (largest entry).
  */
@@ -205,7 +205,7 @@ void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_rea
  *
  * operations after CSE: 58 add, 96 mul, 4 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * M 1e-06 (largest entry).
  */
@@ -236,7 +236,7 @@ void trailer_minimal_mhat(const trailer_params_t *p, const trailer_real_t *q, tr
  *
  * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * gain 0.015 (largest entry).
  */
@@ -261,7 +261,7 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
  *
  * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * norm 8.4e-05 (largest entry).
  */
@@ -303,7 +303,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
  *
  * operations after CSE: 42 add, 70 mul, 4 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.00016 (largest entry).
  */
@@ -348,7 +348,7 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
  *
  * operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 2.1e-05 (largest entry).
  */
@@ -402,7 +402,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
  *
  * operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.016, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
@@ -461,7 +461,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  *
  * operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.008, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
@@ -520,7 +520,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
  *
  * operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.016, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
@@ -582,7 +582,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  *
  * operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.022, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
@@ -630,7 +630,7 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
  *
  * operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * u 0.43, integral_next 0.15 (largest entry).
  */

@@ -77,7 +77,7 @@ typedef struct {
  *
  * operations after CSE: 72 add, 119 mul, 5 div, 4 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 221 (div): divisor may be 0); |float32 - exact|
  * <= qddot inf (largest entry) when it returns OK (it may return TRAILER_ERR_BAD_PARAMS
  * there).
@@ -169,7 +169,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
  *
  * operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * pose_rates 0.00023 (largest entry).
  */
@@ -195,7 +195,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
  *
  * operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * M 2.7e-06 (largest entry).
  */
@@ -222,7 +222,7 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
  *
  * operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * H 0.0034 (largest entry).
  */
@@ -269,7 +269,7 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *
  * operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 223 (div): divisor may be 0); |float32 - exact|
  * <= wheel_accels inf (largest entry) when it returns OK (it may return
  * TRAILER_ERR_BAD_PARAMS there).
@@ -309,7 +309,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  *
  * operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 196 (div): divisor may be 0); |float32 - exact|
  * <= A inf, B inf (largest entry).
  */
@@ -369,7 +369,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
  *
  * operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 252 (div): divisor may be 0); |float32 - exact|
  * <= longitudinal 0, lateral 0 (largest entry) when it returns OK (it may return
  * TRAILER_ERR_BAD_PARAMS there).
@@ -415,7 +415,7 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
  *
  * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * margins 0.3 (largest entry).
  */
@@ -465,7 +465,7 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
  *
  * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * margins 0.3 (largest entry) when it returns OK (it may return TRAILER_WARN_TRACTION
  * there).

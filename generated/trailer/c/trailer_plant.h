@@ -33,7 +33,7 @@ extern "C" {
  *
  * operations after CSE: 68 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * NOT proved over its declared box (node 235 (div): divisor may be 0); |float32 - exact|
  * <= xdot inf (largest entry).
  */
@@ -58,7 +58,7 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
  *
  * operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.certify; box and method: docs/FLOAT32.md):
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
  * params 4.7e-06 (largest entry).
  */

@@ -8,8 +8,8 @@ import sympy as sp
 
 from codegen.backend import FunctionIR, RobotTarget
 from codegen.backends.c.backend import config_for
-from codegen.certify.bound import Certificate, certify
-from codegen.certify.boxes import (
+from codegen.backends.c.certify.bound import Certificate, certify
+from codegen.backends.c.certify.boxes import (
     DERIVED,
     ENVELOPE,
     Envelope,
@@ -18,7 +18,7 @@ from codegen.certify.boxes import (
     input_errors,
     parameter_ranges,
 )
-from codegen.certify.program import Program, program_of
+from codegen.backends.c.certify.program import Program, program_of
 
 
 def robot_angles(target: RobotTarget) -> tuple[bool, ...]:

@@ -9,7 +9,7 @@ arithmetic) keeps that first-order dependency: products and the nonlinear functi
 (``1/y``, sin, cos, sqrt) by a Taylor expansion at the centre with a rigorous remainder
 (``|f''| w²/2`` over the enclosure). Every double computation adds ``2^-50`` of its
 operands' magnitude to ``r``. The result is intersected with the interval enclosure by
-:class:`~codegen.certify.analysis.Analysis`; it only ever narrows what is sound.
+:class:`~codegen.backends.c.certify.analysis.Analysis`; it only ever narrows what is sound.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from codegen.certify.program import Program
+from codegen.backends.c.certify.program import Program
 
 Array = npt.NDArray[np.float64]
 SLACK = 2.0**-50

@@ -1,8 +1,8 @@
-"""``python -m codegen.certify``: certify every generated C function of Drishti and the
+"""``python -m codegen.backends.c.certify``: certify every generated C function of Drishti and the
 trailer in float32, search for the largest error, and write the results.
 
-    python -m codegen.certify                 # both robots; writes the results
-    python -m codegen.certify --robot trailer --seconds 2 --no-write
+    python -m codegen.backends.c.certify                 # both robots; writes the results
+    python -m codegen.backends.c.certify --robot trailer --seconds 2 --no-write
 
 Writes ``codegen/certify/results/<robot>.json`` (per function: the box, the certified bound
 and the enclosure of each output, the no-overflow verdict, the largest error found and
@@ -23,19 +23,19 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from codegen.certify.report import certify_and_search, render_markdown
-from codegen.certify.steps import step_certificates
+from codegen.backends.c.certify.report import certify_and_search, render_markdown
+from codegen.backends.c.certify.steps import step_certificates
 from codegen.certify.stored import RESULTS_DIR
 from codegen.generate import robot_target
 from modeling.robot_file import model_of, robot_source
 from modeling.robot_io import shipped_robot_file
 
 ROBOTS = ("drishti", "trailer")
-DOC = Path(__file__).resolve().parents[2] / "docs" / "FLOAT32.md"
+DOC = Path(__file__).resolve().parents[4] / "docs" / "FLOAT32.md"
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m codegen.certify",
+    parser = argparse.ArgumentParser(prog="python -m codegen.backends.c.certify",
                                      description="Certify the generated C in float32.")
     parser.add_argument("--robot", action="append", choices=ROBOTS, default=None)
     parser.add_argument("--seconds", type=float, default=4.0,

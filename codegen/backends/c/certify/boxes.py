@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from codegen.certify.analysis import U
-from codegen.certify.program import Program
+from codegen.backends.c.certify.analysis import U
+from codegen.backends.c.certify.program import Program
 
 Interval = tuple[float, float]
 

@@ -34,8 +34,8 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
-from codegen.certify.affine import affine_bounds
-from codegen.certify.program import Node, Program
+from codegen.backends.c.certify.affine import affine_bounds
+from codegen.backends.c.certify.program import Node, Program
 
 Array = npt.NDArray[np.float64]
 U = 2.0**-24  # float32 unit roundoff

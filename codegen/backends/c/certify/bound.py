@@ -1,6 +1,6 @@
 """A certified float32 error bound per output over a box, tightened by subdivision.
 
-:func:`certify` runs :class:`~codegen.certify.analysis.Analysis` on the whole box, then
+:func:`certify` runs :class:`~codegen.backends.c.certify.analysis.Analysis` on the whole box, then
 repeatedly splits the boxes whose bound is worst (relative to each output's current
 bound) along the dimension that helps them most: all ``2 d`` halves of each chosen box are
 analysed in one batch and the split with the smallest worse half is kept. The bound of an
@@ -18,8 +18,8 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
-from codegen.certify.analysis import Analysis
-from codegen.certify.program import Program
+from codegen.backends.c.certify.analysis import Analysis
+from codegen.backends.c.certify.program import Program
 
 Box = Mapping[sp.Symbol, tuple[float, float]]
 

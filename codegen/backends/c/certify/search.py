@@ -19,7 +19,7 @@ import numpy.typing as npt
 import sympy as sp
 
 from codegen.backend import FunctionIR
-from codegen.certify.program import Program
+from codegen.backends.c.certify.program import Program
 
 F32 = npt.NDArray[np.float32]
 EXACT_BITS = 113

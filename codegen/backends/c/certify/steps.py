@@ -21,10 +21,10 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from codegen.backend import RobotTarget
-from codegen.certify.analysis import U
-from codegen.certify.bound import Certificate, certify
-from codegen.certify.boxes import ENVELOPE, Envelope, Interval
-from codegen.certify.program import Program
+from codegen.backends.c.certify.analysis import U
+from codegen.backends.c.certify.bound import Certificate, certify
+from codegen.backends.c.certify.boxes import ENVELOPE, Envelope, Interval
+from codegen.backends.c.certify.program import Program
 
 # controller -> (estimator, gain, law) name stems; "{f}" is the formulation
 CHAINS: Mapping[str, tuple[str, str, str]] = {
